@@ -1,0 +1,39 @@
+# make demo: create .venv, install meshcol, run the main job on the bundled samples.
+# make test: create .venv, install meshcol with its test extras, run the test suite.
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+PIP    := $(BIN)/python -m pip --disable-pip-version-check
+BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4"
+
+.PHONY: demo test install install-test bench clean
+
+$(BIN)/python:
+	$(PYTHON) -m venv $(VENV)
+
+# Editable install without build isolation: the C++ build directory (build/) persists, so a
+# second `make` only recompiles what changed.
+install: $(BIN)/python
+	$(PIP) install -q $(BUILD_DEPS)
+	$(PIP) install -q --no-build-isolation -e .
+
+install-test: $(BIN)/python
+	$(PIP) install -q $(BUILD_DEPS)
+	$(PIP) install -q --no-build-isolation -e ".[test]"
+
+demo: install
+	@rm -rf demo-out && mkdir -p demo-out
+	$(BIN)/meshcol inspect samples/level/props/*.obj --report demo-out/inspect.json
+	$(BIN)/meshcol hull samples/bowl/bowl.obj --max-vertices 64 -o demo-out/bowl_hull.obj --report demo-out/hull.json
+	@echo "reports written to demo-out/"
+
+# pytest exits 5 when it collected nothing: that fails here like any other error.
+test: install-test
+	$(BIN)/pytest -q -p no:cacheprovider
+
+bench: install-test
+	$(BIN)/python benchmarks/bench_narrowphase.py
+	$(BIN)/python benchmarks/bench_broadphase.py
+
+clean:
+	rm -rf build dist $(VENV) demo-out *.egg-info

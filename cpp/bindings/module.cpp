@@ -1,0 +1,11 @@
+// meshcol._core: the private native module. Each area binds itself in bind_<area>.cpp.
+#include <nanobind/nanobind.h>
+
+namespace nb = nanobind;
+
+void bind_defaults(nb::module_& m);
+
+NB_MODULE(_core, m) {
+    m.doc() = "meshcol native core (private: use the meshcol package API)";
+    bind_defaults(m);
+}

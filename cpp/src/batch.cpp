@@ -1,0 +1,44 @@
+#include "meshcol/batch.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <thread>
+#include <vector>
+
+namespace meshcol {
+
+int hardware_threads() {
+    const unsigned n = std::thread::hardware_concurrency();
+    return n == 0 ? 1 : static_cast<int>(n);
+}
+
+int resolve_threads(int requested, long long n, long long min_items) {
+    int threads = requested <= 0 ? hardware_threads() : requested;
+    const long long useful = std::max<long long>(1, n / std::max<long long>(1, min_items));
+    return static_cast<int>(std::max<long long>(1, std::min<long long>(threads, useful)));
+}
+
+void parallel_for(long long n, int threads, const std::function<void(long long, long long)>& body) {
+    if (n <= 0) return;
+    if (threads <= 1) {
+        body(0, n);
+        return;
+    }
+    // Dynamic chunks, about 8 per thread: pairs differ a lot in cost (separated vs deep).
+    const long long chunk = std::max<long long>(1, n / (static_cast<long long>(threads) * 8));
+    std::atomic<long long> next{0};
+    auto worker = [&]() {
+        for (;;) {
+            const long long begin = next.fetch_add(chunk);
+            if (begin >= n) return;
+            body(begin, std::min(n, begin + chunk));
+        }
+    };
+    std::vector<std::thread> pool;
+    pool.reserve(static_cast<size_t>(threads - 1));
+    for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
+    worker();
+    for (auto& t : pool) t.join();
+}
+
+}  // namespace meshcol

@@ -1,0 +1,85 @@
+"""meshcol: mesh collision analysis for asset pipelines.
+
+The public API is re-exported here and imported lazily, so ``import meshcol`` (and the
+command line's ``--help``) stays fast: trimesh, scipy and the native core load on first use.
+
+Frames and signs are fixed once for the whole package: every point is in the world frame;
+``distance >= 0``; penetration ``depth >= 0``; ``signed_distance = distance - depth``; a
+``normal`` is a unit vector pointing from shape ``a`` towards shape ``b``.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+from meshcol.errors import (
+    InputFileError,
+    InvalidMeshError,
+    MeshcolError,
+    MissingDependencyError,
+    SceneError,
+)
+from meshcol.types import Body, Primitive, Scene, Status, ToiStatus
+
+__version__ = "0.1.0"
+
+# public name -> module that defines it
+_LAZY: dict[str, str] = {
+    # mesh and scene loading
+    "load_mesh": "meshcol.mesh_io",
+    "load_scene": "meshcol.scene",
+    "load_inputs": "meshcol.scene",
+    # hulls and inspection
+    "convex_hull": "meshcol.hulls",
+    "HullResult": "meshcol.hulls",
+    "inspect_body": "meshcol.inspect",
+    # narrow phase
+    "ConvexSet": "meshcol.query",
+    "Sphere": "meshcol.query",
+    "Box": "meshcol.query",
+    "Capsule": "meshcol.query",
+    "Cylinder": "meshcol.query",
+    "DistanceResult": "meshcol.query",
+    "PenetrationResult": "meshcol.query",
+    "distance": "meshcol.query",
+    "penetration": "meshcol.query",
+    "intersects": "meshcol.query",
+    "signed_distance": "meshcol.query",
+    "distance_batch": "meshcol.query",
+    "penetration_batch": "meshcol.query",
+    "intersects_batch": "meshcol.query",
+    "signed_distance_batch": "meshcol.query",
+    # broad phase
+    "sort_and_sweep": "meshcol.broadphase",
+    "SweepAndPrune": "meshcol.broadphase",
+    "AabbTree": "meshcol.broadphase",
+}
+
+__all__ = [
+    "__version__",
+    "MeshcolError",
+    "InputFileError",
+    "InvalidMeshError",
+    "SceneError",
+    "MissingDependencyError",
+    "Body",
+    "Primitive",
+    "Scene",
+    "Status",
+    "ToiStatus",
+    *_LAZY,
+]
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'meshcol' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)

@@ -1,0 +1,77 @@
+"""The ``meshcol`` command: a click group whose subcommands load on demand.
+
+Errors are mapped to exit codes here and nowhere else:
+
+- 0: ran and passed; 1: ran and found what the policy fails on;
+- 2: a usage error or unusable input, reported as one line on stderr
+  (``meshcol: error: FILE: problem``), with a traceback only under ``--debug``.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+from typing import Any
+
+import click
+
+from meshcol import __version__
+from meshcol.errors import MeshcolError
+
+# command name -> "module:function". Modules import heavy dependencies inside the command
+# function, never at module level, so `meshcol --help` stays fast.
+COMMANDS: dict[str, str] = {}
+
+CONTEXT_SETTINGS = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
+
+
+class MeshcolGroup(click.Group):
+    """A group that imports each subcommand on first use and maps errors to exit codes."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        return sorted(COMMANDS)
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        target = COMMANDS.get(cmd_name)
+        if target is None:
+            return None
+        module_name, attr = target.split(":")
+        return getattr(importlib.import_module(module_name), attr)
+
+    def invoke(self, ctx: click.Context) -> Any:
+        debug = bool(ctx.params.get("debug"))
+        try:
+            return super().invoke(ctx)
+        except MeshcolError as exc:
+            if debug:
+                raise
+            fail(str(exc))
+        except OSError as exc:
+            # Output folder missing, disk full, permission denied: unusable, not a crash.
+            if debug:
+                raise
+            where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
+            fail(f"{where}{exc.strerror or exc}")
+        except KeyboardInterrupt:
+            click.echo("meshcol: interrupted", err=True)
+            sys.exit(130)
+
+
+def fail(message: str) -> None:
+    """Print ``meshcol: error: MESSAGE`` on stderr and exit 2."""
+    click.echo(f"meshcol: error: {message}", err=True)
+    sys.exit(2)
+
+
+@click.group(cls=MeshcolGroup, context_settings=CONTEXT_SETTINGS)
+@click.version_option(__version__, "--version", prog_name="meshcol")
+@click.option("--debug", is_flag=True, help="Show full tracebacks on errors.")
+def main(debug: bool) -> None:
+    """Mesh collision analysis for asset pipelines.
+
+    \b
+    Examples:
+      meshcol inspect props/*.obj --fail-on not-watertight
+      meshcol hull chair.obj --max-vertices 64 -o chair_hull.obj
+      meshcol COMMAND -h      help and examples for one command
+    """

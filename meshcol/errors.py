@@ -1,0 +1,50 @@
+"""Exceptions raised by meshcol.
+
+Library code raises subclasses of :class:`MeshcolError`; the command line maps every one of
+them, in one place (``meshcol/cli/__init__.py``), to a one-line message and exit code 2.
+"""
+
+from __future__ import annotations
+
+import os
+
+__all__ = [
+    "MeshcolError",
+    "InputFileError",
+    "InvalidMeshError",
+    "SceneError",
+    "MissingDependencyError",
+]
+
+
+class MeshcolError(Exception):
+    """Base class of every error meshcol raises on purpose.
+
+    Parameters
+    ----------
+    message : str
+        What is wrong, in one line, without the file name.
+    path : str or os.PathLike, optional
+        The file at fault; it prefixes the message.
+    """
+
+    def __init__(self, message: str, path: str | os.PathLike[str] | None = None) -> None:
+        self.message = message
+        self.path = None if path is None else os.fspath(path)
+        super().__init__(f"{self.path}: {message}" if self.path is not None else message)
+
+
+class InputFileError(MeshcolError, ValueError):
+    """An input file is missing, unreadable, or of an unknown type."""
+
+
+class InvalidMeshError(MeshcolError, ValueError):
+    """A mesh is unusable: empty, non-finite, or otherwise broken."""
+
+
+class SceneError(MeshcolError, ValueError):
+    """A scene manifest is malformed or refers to something that does not exist."""
+
+
+class MissingDependencyError(MeshcolError, ImportError):
+    """An optional dependency needed for the requested feature is not installed."""

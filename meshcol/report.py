@@ -1,0 +1,108 @@
+"""Writing reports and output files safely.
+
+Every output goes to a temporary file in the destination folder and is renamed into place, so
+an interrupted or failed run never leaves a half-written file behind.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import io
+import json
+import math
+import os
+import sys
+import tempfile
+from collections.abc import Iterator, Mapping, Sequence
+from typing import Any
+
+__all__ = ["atomic_path", "atomic_write", "dumps_json", "dumps_csv", "emit", "report_format"]
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iterator[str]:
+    """Yield a temporary path beside ``path``; rename it onto ``path`` if the block succeeds.
+
+    The temporary file keeps ``path``'s extension (or ``suffix``) so writers that pick a format
+    from the name still work. On any exception the temporary file is removed.
+    """
+    path = os.fspath(path)
+    folder = os.path.dirname(os.path.abspath(path))
+    ext = suffix if suffix is not None else os.path.splitext(path)[1]
+    fd, tmp = tempfile.mkstemp(prefix=".meshcol-", suffix=ext, dir=folder)
+    os.close(fd)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise
+
+
+def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file and a rename."""
+    with atomic_path(path) as tmp:
+        mode = "wb" if isinstance(data, bytes) else "w"
+        with open(tmp, mode, **({} if isinstance(data, bytes) else {"encoding": "utf-8", "newline": ""})) as f:
+            f.write(data)
+
+
+def _finite_or_none(value: Any) -> Any:
+    """JSON has no NaN or infinity: write them as null."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, Mapping):
+        return {str(k): _finite_or_none(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite_or_none(v) for v in value]
+    if hasattr(value, "tolist") and not isinstance(value, (str, bytes)):
+        return _finite_or_none(value.tolist())
+    if hasattr(value, "item") and not isinstance(value, (str, bytes)):
+        return _finite_or_none(value.item())
+    return value
+
+
+def dumps_json(obj: Any) -> str:
+    """Deterministic JSON: sorted keys, two-space indent, NaN/inf as null, trailing newline."""
+    return json.dumps(_finite_or_none(obj), sort_keys=True, indent=2, allow_nan=False) + "\n"
+
+
+def dumps_csv(rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> str:
+    """CSV text with a header row; lists become space-separated numbers, None an empty cell."""
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(columns)
+    for row in rows:
+        cells = []
+        for c in columns:
+            v = _finite_or_none(row.get(c))
+            if v is None:
+                cells.append("")
+            elif isinstance(v, list):
+                cells.append(" ".join(repr(x) if isinstance(x, float) else str(x) for x in v))
+            elif isinstance(v, float):
+                cells.append(repr(v))
+            else:
+                cells.append(str(v))
+        writer.writerow(cells)
+    return buf.getvalue()
+
+
+def report_format(path: str | None, fmt: str | None) -> str:
+    """The report format: ``fmt`` if given, else from ``path``'s extension, else ``json``."""
+    if fmt:
+        return fmt.lower()
+    if path and path.lower().endswith(".csv"):
+        return "csv"
+    return "json"
+
+
+def emit(text: str, output: str | os.PathLike[str] | None) -> None:
+    """Write report text to ``output`` atomically, or to stdout when ``output`` is None or '-'."""
+    if output is None or os.fspath(output) == "-":
+        sys.stdout.write(text)
+        sys.stdout.flush()
+    else:
+        atomic_write(output, text)

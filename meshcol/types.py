@@ -1,0 +1,121 @@
+"""Types shared across meshcol: status enums and the body/scene containers.
+
+Frames and signs, fixed once for the whole package:
+
+- A body's ``vertices`` are in its local frame, with any scale already applied, so its
+  ``transform`` is always rigid (rotation and translation only).
+- ``transform`` maps local to world: ``world = R @ local + t`` (row-major 4x4).
+- Every point a query or report returns is in the world frame.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["Status", "ToiStatus", "Primitive", "Body", "Scene"]
+
+
+class Status(enum.IntEnum):
+    """Outcome of a distance, penetration or intersection query (mirrors ``status.hpp``)."""
+
+    CONVERGED = 0
+    MAX_ITERATIONS = 1
+    DEGENERATE = 2
+    INVALID_INPUT = 3
+    NOT_RUN = 4
+
+
+class ToiStatus(enum.IntEnum):
+    """Outcome of a time-of-impact query (mirrors ``status.hpp``)."""
+
+    HIT = 0
+    SEPARATED = 1
+    OVERLAPPED_AT_START = 2
+    FAILED = 3
+    INVALID_INPUT = 4
+
+
+@dataclass(frozen=True)
+class Primitive:
+    """An analytic shape from a scene manifest, centred on its body's origin.
+
+    Attributes
+    ----------
+    kind : str
+        ``"sphere"``, ``"box"``, ``"capsule"`` or ``"cylinder"``.
+    radius : float
+        Sphere, capsule and cylinder radius (0 for a box).
+    size : (3,) float
+        Box full side lengths (zeros otherwise).
+    length : float
+        Capsule and cylinder length along local z (the capsule's cylindrical part only).
+    """
+
+    kind: str
+    radius: float = 0.0
+    size: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    length: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class Body:
+    """One rigid body: a triangle mesh (or primitive) and its pose.
+
+    Attributes
+    ----------
+    name : str
+        Unique within its scene.
+    source : str or None
+        The file it came from, as given by the user (relative paths stay relative).
+    vertices : (n, 3) float64
+        Local frame, scale applied.
+    faces : (m, 3) int64
+        Triangles, indices into ``vertices``. For a primitive, a tessellation.
+    transform : (4, 4) float64
+        Rigid world-from-local pose at the start (and only) instant.
+    end_transform : (4, 4) float64 or None
+        Rigid pose at the end of the motion, for continuous collision.
+    primitive : Primitive or None
+        Set when the body is an analytic shape; queries then use it exactly.
+    shape : str or None
+        Per-body collision shape override (``hull``, ``decomposed``, ``mesh``).
+    """
+
+    name: str
+    source: str | None
+    vertices: np.ndarray
+    faces: np.ndarray
+    transform: np.ndarray = field(default_factory=lambda: np.eye(4))
+    end_transform: np.ndarray | None = None
+    primitive: Primitive | None = None
+    shape: str | None = None
+
+    def world_vertices(self, end: bool = False) -> np.ndarray:
+        """Vertices in the world frame, (n, 3) float64, at the start (or end) pose."""
+        m = self.end_transform if end and self.end_transform is not None else self.transform
+        return self.vertices @ m[:3, :3].T + m[:3, 3]
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """Bodies to analyse together.
+
+    Attributes
+    ----------
+    bodies : tuple of Body
+        In input order; names are unique.
+    units : str or None
+        Length unit declared by the manifest (reported back verbatim), or None.
+    source : str or None
+        Manifest or scene file, when there was one.
+    duration : float or None
+        Seconds the start-to-end motion takes, when the manifest gives one.
+    """
+
+    bodies: tuple[Body, ...]
+    units: str | None = None
+    source: str | None = None
+    duration: float | None = None

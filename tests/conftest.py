@@ -1,0 +1,66 @@
+"""Shared fixtures: corpus and oracle paths, golden files, hypothesis profiles."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, settings
+
+REPO = Path(__file__).resolve().parent.parent
+SHARED = REPO.parent / "shared"
+CORPUS = SHARED / "corpus"
+ORACLES = SHARED / "oracles" / "cases.json"
+SAMPLES = REPO / "samples"
+GOLDEN = Path(__file__).resolve().parent / "golden"
+
+# `ci` is derandomized so CI runs are repeatable; `dev` explores more.
+settings.register_profile(
+    "ci", derandomize=True, max_examples=150, deadline=None,
+    suppress_health_check=[HealthCheck.too_slow],
+)
+settings.register_profile("dev", max_examples=400, deadline=None)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption("--update-golden", action="store_true", help="Rewrite tests/golden/ files.")
+
+
+@pytest.fixture
+def corpus() -> Path:
+    """The shared corpus of real meshes (../shared/corpus); skips when absent."""
+    if not CORPUS.is_dir():
+        pytest.skip("shared corpus not present (../shared/corpus)")
+    return CORPUS
+
+
+@pytest.fixture(scope="session")
+def oracle_cases() -> list[dict]:
+    """The peer test cases in ../shared/oracles/cases.json; skips when absent."""
+    if not ORACLES.is_file():
+        pytest.skip("shared oracle cases not present (../shared/oracles/cases.json)")
+    return json.loads(ORACLES.read_text())["cases"]
+
+
+@pytest.fixture
+def samples() -> Path:
+    return SAMPLES
+
+
+@pytest.fixture
+def golden(request: pytest.FixtureRequest):
+    """Compare text with tests/golden/NAME, or rewrite it under --update-golden."""
+
+    def check(name: str, text: str) -> None:
+        path = GOLDEN / name
+        if request.config.getoption("--update-golden"):
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(text)
+            return
+        assert path.is_file(), f"golden file {path} missing: run pytest --update-golden"
+        assert text == path.read_text(), f"output differs from golden {name}"
+
+    return check
