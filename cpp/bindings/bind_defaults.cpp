@@ -10,5 +10,13 @@ void bind_defaults(nb::module_& m) {
     nb::module_ d = m.def_submodule("defaults", "Defaults and caps of the core (cpp/include/meshcol/defaults.hpp).");
     d.attr("rigid_tolerance") = meshcol::defaults::rigid_tolerance;
     d.attr("min_pairs_per_thread") = meshcol::defaults::min_pairs_per_thread;
+    d.attr("hill_climbing_min_vertices") = meshcol::defaults::hill_climbing_min_vertices;
+    d.attr("gjk_max_iterations") = meshcol::defaults::gjk_max_iterations;
+    d.attr("gjk_relative_tolerance") = meshcol::defaults::gjk_relative_tolerance;
+    d.attr("contact_tolerance") = meshcol::defaults::contact_tolerance;
+    d.attr("epa_max_iterations") = meshcol::defaults::epa_max_iterations;
+    d.attr("epa_max_vertices") = meshcol::defaults::epa_max_vertices;
+    d.attr("epa_relative_tolerance") = meshcol::defaults::epa_relative_tolerance;
+    d.attr("sat_max_work") = meshcol::defaults::sat_max_work;
     m.def("hardware_threads", &meshcol::hardware_threads, "Number of hardware threads (at least 1).");
 }

@@ -10,4 +10,32 @@ constexpr double rigid_tolerance = 1e-6;
 /// Batches smaller than this run on the calling thread: starting threads costs more.
 constexpr long long min_pairs_per_thread = 64;
 
+/// Polytopes with more vertices than this use hill climbing on their hull adjacency (with a
+/// warm start) for support points; smaller ones scan every vertex.
+constexpr int hill_climbing_min_vertices = 32;
+
+/// GJK iteration cap. Polytopes end exactly (a support point repeats) long before it.
+constexpr int gjk_max_iterations = 128;
+
+/// GJK stops when v.v - v.w <= tolerance * v.v: the distance is then within this relative
+/// error (van den Bergen 2003). Curved shapes (cylinders) converge to it; polytopes end
+/// exactly.
+constexpr double gjk_relative_tolerance = 1e-13;
+
+/// Two shapes closer than this times the pair's length scale (bounding radii plus centre
+/// distance) touch: distance 0, `intersects` true.
+constexpr double contact_tolerance = 1e-14;
+
+/// EPA expansion cap (iterations) and polytope size cap (vertices).
+constexpr int epa_max_iterations = 128;
+constexpr int epa_max_vertices = 160;
+
+/// EPA stops when the support along the closest face's normal is within this relative
+/// distance of the face: the depth is then within this relative error.
+constexpr double epa_relative_tolerance = 1e-12;
+
+/// Exact SAT runs (to verify or replace EPA) when (candidate axes) x (vertices of both
+/// shapes) is at most this: boxes and small hulls.
+constexpr long long sat_max_work = 40000;
+
 }  // namespace meshcol::defaults
