@@ -206,6 +206,10 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
             break;
         }
         const EpaFace closest = poly.faces[best_face];
+        // Warm start: the new support point lies near the face's own support points.
+        const SimplexVertex& near = poly.vertices[closest.v[0]];
+        if (near.index_a >= 0) md.hint_a = near.index_a;
+        if (near.index_b >= 0) md.hint_b = near.index_b;
         const SimplexVertex w = md.support(closest.normal);
         const double upper = dot(closest.normal, w.w);
         bool repeated = false;

@@ -7,12 +7,14 @@ namespace meshcol {
 
 MinkowskiDifference::MinkowskiDifference(const ShapeView& shape_a, const Pose& pose_a,
                                          const ShapeView& shape_b, const Pose& pose_b,
-                                         bool margins)
+                                         bool margins, double radius_a, double radius_b)
     : a(&shape_a), b(&shape_b), with_margins(margins) {
     // b in a's frame: x_a = Ra^T (Rb x_b + tb - ta).
     rotation_b = pose_a.rotation.transposed() * pose_b.rotation;
     translation_b = pose_a.rotation.transpose_times(pose_b.translation - pose_a.translation);
-    scale = bounding_radius(shape_a) + bounding_radius(shape_b) + norm(translation_b);
+    if (radius_a < 0.0) radius_a = bounding_radius(shape_a);
+    if (radius_b < 0.0) radius_b = bounding_radius(shape_b);
+    scale = radius_a + radius_b + norm(translation_b);
     if (!(scale > 0.0)) scale = 1.0;
 }
 

@@ -53,9 +53,9 @@ Status worse(Status x, Status y) {
 // added exactly afterwards); EPA on the full shapes only when the cores overlap; for small
 // polytopes an exact SAT that verifies EPA's depth and replaces it when they disagree.
 PairResult query_pair(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
-                      const Pose& pose_b, QueryKind kind) {
+                      const Pose& pose_b, QueryKind kind, double radius_a, double radius_b) {
     PairResult r;
-    MinkowskiDifference core(a, pose_a, b, pose_b, false);
+    MinkowskiDifference core(a, pose_a, b, pose_b, false, radius_a, radius_b);
     GjkOptions opt;
     opt.stop_when_separated = kind == QueryKind::INTERSECTS;
     const GjkResult g = gjk_run(core, opt);
@@ -147,9 +147,11 @@ void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t
     // Each shape and pose is checked once, not once per pair.
     std::vector<char> ok(static_cast<size_t>(h_count), 0);
     std::vector<Pose> pose(static_cast<size_t>(h_count));
+    std::vector<double> radius(static_cast<size_t>(h_count), 0.0);
     for (std::int64_t h = 0; h < h_count; ++h) {
         const ShapeView s = set.shape(h);
         bool good = is_valid(s);
+        if (good) radius[h] = bounding_radius(s);
         if (poses != nullptr) {
             const double* m = poses + 16 * h;
             if (!is_rigid_matrix4(m, defaults::rigid_tolerance)) good = false;
@@ -167,7 +169,8 @@ void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t
                 r.distance = r.depth = kNaN;
                 r.normal = r.point_a = r.point_b = Vec3{kNaN, kNaN, kNaN};
             } else {
-                r = query_pair(set.shape(ia), pose[ia], set.shape(ib), pose[ib], kind);
+                r = query_pair(set.shape(ia), pose[ia], set.shape(ib), pose[ib], kind,
+                               radius[ia], radius[ib]);
             }
             if (out.distance) out.distance[i] = r.distance;
             if (out.depth) out.depth[i] = r.depth;

@@ -17,6 +17,16 @@ SupportPoint polytope_support(const ShapeView& s, const Vec3& d, int hint) {
         // cap hit we fall back to the scan below.
         int best = (hint >= 0 && hint < n) ? hint : 0;
         double best_dot = dot(v[best], d);
+        // A few strided samples first: the climb then starts near the top and takes few
+        // dependent (latency-bound) steps.
+        const int stride = n / 8;
+        for (int i = stride / 2; i < n; i += stride) {
+            const double di = dot(v[i], d);
+            if (di > best_dot) {
+                best_dot = di;
+                best = i;
+            }
+        }
         for (int step = 0; step < n; ++step) {
             int next = -1;
             const std::int64_t begin = s.adjacency_offsets[best];

@@ -39,8 +39,11 @@ struct MinkowskiDifference {
     int hint_a = -1;       ///< warm start for hill climbing on a
     int hint_b = -1;       ///< warm start for hill climbing on b
 
+    /// `radius_a` and `radius_b` are the shapes' `bounding_radius` when the caller has them
+    /// (negative: computed here, O(vertices)).
     MinkowskiDifference(const ShapeView& shape_a, const Pose& pose_a, const ShapeView& shape_b,
-                        const Pose& pose_b, bool margins);
+                        const Pose& pose_b, bool margins, double radius_a = -1.0,
+                        double radius_b = -1.0);
 
     /// Support point of a - b in `direction` (a's local frame, need not be unit).
     SimplexVertex support(const Vec3& direction);

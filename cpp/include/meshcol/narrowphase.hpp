@@ -56,8 +56,10 @@ struct PairResult {
 };
 
 /// One pair query. Shapes must be valid and poses rigid (the batch checks both).
+/// `radius_a`/`radius_b`: the shapes' `bounding_radius` if known (negative: computed).
 PairResult query_pair(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
-                      const Pose& pose_b, QueryKind kind);
+                      const Pose& pose_b, QueryKind kind, double radius_a = -1.0,
+                      double radius_b = -1.0);
 
 /// Output arrays of a batch (null pointers are skipped): P entries, or P x 3 for vectors.
 struct BatchOutput {
