@@ -10,5 +10,15 @@ void bind_defaults(nb::module_& m) {
     nb::module_ d = m.def_submodule("defaults", "Defaults and caps of the core (cpp/include/meshcol/defaults.hpp).");
     d.attr("rigid_tolerance") = meshcol::defaults::rigid_tolerance;
     d.attr("min_pairs_per_thread") = meshcol::defaults::min_pairs_per_thread;
+    d.attr("broadphase_min_boxes_per_thread") = meshcol::defaults::broadphase_min_boxes_per_thread;
+    d.attr("sweep_cell_extent_ratio") = meshcol::defaults::sweep_cell_extent_ratio;
+    d.attr("sweep_max_cells_per_axis") = meshcol::defaults::sweep_max_cells_per_axis;
+    d.attr("sweep_min_boxes_per_cell") = meshcol::defaults::sweep_min_boxes_per_cell;
+    d.attr("sweep_max_entries_per_box") = meshcol::defaults::sweep_max_entries_per_box;
+    d.attr("sweep_min_candidates_for_grid") = meshcol::defaults::sweep_min_candidates_for_grid;
+    d.attr("sweep_max_shifts_per_box") = meshcol::defaults::sweep_max_shifts_per_box;
+    d.attr("tree_bin_count") = meshcol::defaults::tree_bin_count;
+    d.attr("tree_max_height_imbalance") = meshcol::defaults::tree_max_height_imbalance;
+    d.attr("tree_max_objects") = meshcol::defaults::tree_max_objects;
     m.def("hardware_threads", &meshcol::hardware_threads, "Number of hardware threads (at least 1).");
 }
