@@ -54,6 +54,7 @@ _LAZY: dict[str, str] = {
     "sort_and_sweep": "meshcol.broadphase",
     "SweepAndPrune": "meshcol.broadphase",
     "AabbTree": "meshcol.broadphase",
+    "brute_force_pairs": "meshcol.broadphase",
 }
 
 __all__ = [

@@ -2,6 +2,7 @@
 // Python wrappers in meshcol/broadphase.py check shapes first with friendly messages.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/pair.h>
 
 #include <algorithm>
 #include <stdexcept>

@@ -236,7 +236,19 @@ void AabbTree::rotate(std::int32_t a) {
             }
         }
     }
-    if (best_down >= 0) swap_children(a, best_down, best_up);
+    if (best_down < 0) return;
+    swap_children(a, best_down, best_up);
+    // The node that received a subtree may now be the unbalanced one (inserting at the root
+    // again and again, as identical boxes do, would otherwise grow a caterpillar below it):
+    // fix it the same way, then refresh A's height. Depth is bounded by the height.
+    const Node& n = nodes_[static_cast<size_t>(a)];
+    const std::int32_t y = best_down == 0 ? n.child2 : n.child1;
+    const Node& ny = nodes_[static_cast<size_t>(y)];
+    if (std::abs(nodes_[static_cast<size_t>(ny.child1)].height - nodes_[static_cast<size_t>(ny.child2)].height) > limit) {
+        rotate(y);
+        Node& na2 = nodes_[static_cast<size_t>(a)];
+        na2.height = 1 + std::max(nodes_[static_cast<size_t>(na2.child1)].height, nodes_[static_cast<size_t>(na2.child2)].height);
+    }
 }
 
 void AabbTree::refit_upwards(std::int32_t index) {
@@ -363,8 +375,9 @@ std::int64_t partition_sah(std::int32_t* ids, Aabb* boxes, std::int64_t m, Aabb&
     for (std::int64_t i = 1; i < m; ++i) {
         bounds = merge(bounds, boxes[i]);
         const Vec3 c = center(boxes[i]);
-        cmin = component_min(cmin, c);
-        cmax = component_max(cmax, c);
+        // std::min, not fmin: no NaN here, and fmin is a library call in this hot loop.
+        cmin = {std::min(cmin.x, c.x), std::min(cmin.y, c.y), std::min(cmin.z, c.z)};
+        cmax = {std::max(cmax.x, c.x), std::max(cmax.y, c.y), std::max(cmax.z, c.z)};
     }
     const Vec3 ext = cmax - cmin;
     int axis = 0;

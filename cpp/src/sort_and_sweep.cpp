@@ -12,6 +12,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "meshcol/batch.hpp"
 #include "meshcol/broadphase.hpp"
@@ -230,13 +231,30 @@ void sweep_cell(const Entry* e, std::int64_t count, int cu, int cv, bool single_
         const Entry& a = e[i];
         for (std::int64_t j = i + 1; j < count && e[j].lo_a <= a.hi_a; ++j) {
             const Entry& b = e[j];
-            if (b.lo_u > a.hi_u || a.lo_u > b.hi_u || b.lo_v > a.hi_v || a.lo_v > b.hi_v) continue;
+            // Non-short-circuit tests: about half the candidates fail, at random, so a branch
+            // per test would mispredict often.
+            const bool hit = (b.lo_u <= a.hi_u) & (a.lo_u <= b.hi_u) & (b.lo_v <= a.hi_v) &
+                             (a.lo_v <= b.hi_v);
+            if (!hit) continue;
             if (!single_cell && (std::max(a.cu0, b.cu0) != cu || std::max(a.cv0, b.cv0) != cv))
                 continue;  // reported by the cell holding the intersection's minimum corner
             const std::uint64_t i0 = std::min(a.id, b.id), j0 = std::max(a.id, b.id);
             out.push_back(i0 << 32 | j0);
         }
     }
+}
+
+/// Sorts the entries of one cell by lo_a: sorts 16-byte (key, slot) records, then moves the
+/// 56-byte entries once.
+void sort_cell(Entry* e, std::int64_t count, std::vector<std::pair<double, std::uint32_t>>& keys,
+               std::vector<Entry>& scratch) {
+    if (count < 2) return;
+    keys.resize(static_cast<size_t>(count));
+    for (std::int64_t k = 0; k < count; ++k) keys[k] = {e[k].lo_a, static_cast<std::uint32_t>(k)};
+    std::sort(keys.begin(), keys.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    scratch.assign(e, e + count);
+    for (std::int64_t k = 0; k < count; ++k) e[k] = scratch[keys[k].second];
 }
 
 /// Sorts (when asked) and sweeps every cell on `threads` threads; returns sorted pair keys.
@@ -255,13 +273,13 @@ std::vector<std::uint64_t> sweep_all(const Grid& g, std::vector<Entry>& entries,
     const long long tasks = static_cast<long long>(task_begin.size()) - 1;
     std::vector<std::vector<std::uint64_t>> found(static_cast<size_t>(tasks));
     parallel_for(tasks, threads > 1 ? threads : 1, [&](long long t0, long long t1) {
+        std::vector<std::pair<double, std::uint32_t>> keys;
+        std::vector<Entry> scratch;
         for (long long t = t0; t < t1; ++t)
             for (int c = task_begin[t]; c < task_begin[t + 1]; ++c) {
                 Entry* first = entries.data() + offsets[c];
                 const std::int64_t count = offsets[c + 1] - offsets[c];
-                if (sort_cells)
-                    std::sort(first, first + count,
-                              [](const Entry& a, const Entry& b) { return a.lo_a < b.lo_a; });
+                if (sort_cells) sort_cell(first, count, keys, scratch);
                 sweep_cell(first, count, c / g.cells_v, c % g.cells_v, cells == 1,
                            found[static_cast<size_t>(t)]);
             }
