@@ -32,7 +32,7 @@ constexpr double sweep_min_candidates_for_grid = 16.0;
 
 /// Incremental sweep: the insertion sort gives up and sorts afresh after this many element
 /// moves per box (large motions are not "nearly sorted").
-constexpr long long sweep_max_shifts_per_box = 8;
+constexpr long long sweep_max_shifts_per_box = 32;
 
 /// AABB tree: bins of the binned SAH top-down build (Wald 2007; Box2D v3).
 constexpr int tree_bin_count = 32;
