@@ -85,9 +85,9 @@ def test_axis_choice_by_variance():
 
 
 def test_lattice_of_touching_unit_cubes_uses_threads_and_grid():
-    # 32^3 unit cubes on the integer lattice: each touches its 26 neighbours exactly.
+    # 40^3 unit cubes on the integer lattice: each touches its 26 neighbours exactly.
     # Large enough for the multi-threaded paths and the cross-axis grid.
-    k = 32
+    k = 40
     lo = np.stack(np.meshgrid(*[np.arange(k, dtype=float)] * 3, indexing="ij"), -1).reshape(-1, 3)
     expected_count = ((3 * k - 2) ** 3 - k**3) // 2
     pairs = sort_and_sweep(lo, lo + 1.0)
