@@ -243,9 +243,11 @@ void bind_mesh_query(nb::module_& m) {
             double* out;
             auto arr = new_array<double>({n}, &out);
             const double* p = points.data();
-            nb::gil_scoped_release release;
-            for (size_t k = 0; k < n; ++k)
-                out[k] = meshcol::winding_number(mesh, Vec3{p[3 * k], p[3 * k + 1], p[3 * k + 2]});
+            {
+                nb::gil_scoped_release release;
+                for (size_t k = 0; k < n; ++k)
+                    out[k] = meshcol::winding_number(mesh, Vec3{p[3 * k], p[3 * k + 1], p[3 * k + 2]});
+            }
             return arr;
         }, "i"_a, "points"_a, "Generalized winding numbers of points (mesh i's local frame).")
         .def("distance_batch", &distance_batch, "poses"_a, "pairs"_a, "threads"_a = 0,
@@ -268,19 +270,21 @@ void bind_mesh_query(nb::module_& m) {
         auto i_arr = new_array<bool>({n}, &intersecting);
         const double* pa = a.data();
         const double* pb = b.data();
-        nb::gil_scoped_release release;
-        for (size_t k = 0; k < n; ++k) {
-            Vec3 ta[3], tb[3];
-            for (int c = 0; c < 3; ++c) {
-                ta[c] = Vec3{pa[9 * k + 3 * c], pa[9 * k + 3 * c + 1], pa[9 * k + 3 * c + 2]};
-                tb[c] = Vec3{pb[9 * k + 3 * c], pb[9 * k + 3 * c + 1], pb[9 * k + 3 * c + 2]};
-            }
-            const meshcol::TriangleDistanceOutput r = meshcol::triangle_distance(ta, tb);
-            distance[k] = r.distance;
-            intersecting[k] = r.intersecting;
-            for (int c = 0; c < 3; ++c) {
-                point_a[3 * k + c] = r.point_a[c];
-                point_b[3 * k + c] = r.point_b[c];
+        {
+            nb::gil_scoped_release release;
+            for (size_t k = 0; k < n; ++k) {
+                Vec3 ta[3], tb[3];
+                for (int c = 0; c < 3; ++c) {
+                    ta[c] = Vec3{pa[9 * k + 3 * c], pa[9 * k + 3 * c + 1], pa[9 * k + 3 * c + 2]};
+                    tb[c] = Vec3{pb[9 * k + 3 * c], pb[9 * k + 3 * c + 1], pb[9 * k + 3 * c + 2]};
+                }
+                const meshcol::TriangleDistanceOutput r = meshcol::triangle_distance(ta, tb);
+                distance[k] = r.distance;
+                intersecting[k] = r.intersecting;
+                for (int c = 0; c < 3; ++c) {
+                    point_a[3 * k + c] = r.point_a[c];
+                    point_b[3 * k + c] = r.point_b[c];
+                }
             }
         }
         return nb::make_tuple(d_arr, pa_arr, pb_arr, i_arr);
