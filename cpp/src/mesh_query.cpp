@@ -23,7 +23,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kPi = 3.14159265358979323846;
 
-// The rigid map from b's local frame to a's local frame.
+// The rigid map from b's local frame to a's local frame, and back.
 struct Relative {
     Mat3 rotation;
     Mat3 abs_rotation;  // |rotation| element-wise, maps half extents to enclosing half extents
@@ -36,6 +36,7 @@ struct Relative {
             for (int j = 0; j < 3; ++j) abs_rotation.m[i][j] = std::fabs(rotation.m[i][j]);
     }
     Vec3 apply(const Vec3& p) const { return rotation * p + translation; }
+    Vec3 apply_inverse(const Vec3& p) const { return rotation.transpose_times(p - translation); }
 };
 
 struct CenteredBox {
@@ -48,19 +49,40 @@ inline CenteredBox centered(const BvhNode& n) {
     return {(lo + hi) * 0.5, (hi - lo) * 0.5};
 }
 
-// Squared distance between node box a (a's frame) and node box b mapped into a's frame: a lower
-// bound of the squared distance between any triangle under a and any triangle under b.
-inline double box_squared_distance(const BvhNode& na, const BvhNode& nb, const Relative& rel) {
-    const CenteredBox a = centered(na);
-    const CenteredBox b = centered(nb);
-    const Vec3 center = rel.apply(b.center);
-    const Vec3 half = rel.abs_rotation * b.half;
+inline double squared_gap(const Vec3& c1, const Vec3& h1, const Vec3& c2, const Vec3& h2) {
     double d2 = 0.0;
     for (int k = 0; k < 3; ++k) {
-        const double gap = std::fabs(a.center[k] - center[k]) - a.half[k] - half[k];
+        const double gap = std::fabs(c1[k] - c2[k]) - h1[k] - h2[k];
         if (gap > 0.0) d2 += gap * gap;
     }
     return d2;
+}
+
+// A lower bound of the squared distance between any triangle under node a and any under node b,
+// the largest of three valid ones: the box distance in a's frame (b's box replaced by the
+// axis-aligned box enclosing it there), the same in b's frame, and the gap of the two boxes'
+// projections on the line through their centres (a separating-axis bound, Gottschalk et al.
+// 1996). Under pure translation the first is the exact box distance; under rotation the first
+// two can be loose by up to a factor sqrt(3), while the third tends to the box distance as the
+// boxes get farther apart relative to their size.
+inline double box_squared_distance(const BvhNode& na, const BvhNode& nb, const Relative& rel) {
+    const CenteredBox a = centered(na);
+    const CenteredBox b = centered(nb);
+    const Vec3 b_center = rel.apply(b.center);
+    const double in_a = squared_gap(a.center, a.half, b_center, rel.abs_rotation * b.half);
+    const double in_b = squared_gap(rel.apply_inverse(a.center), rel.abs_rotation.transpose_times(a.half),
+                                    b.center, b.half);
+    double best = std::fmax(in_a, in_b);
+    const Vec3 axis = b_center - a.center;  // a's frame
+    const double length = norm(axis);
+    if (length > 0.0) {
+        const Vec3 axis_b = rel.rotation.transpose_times(axis);  // b's frame
+        const double reach = (std::fabs(axis.x) * a.half.x + std::fabs(axis.y) * a.half.y + std::fabs(axis.z) * a.half.z +
+                              std::fabs(axis_b.x) * b.half.x + std::fabs(axis_b.y) * b.half.y + std::fabs(axis_b.z) * b.half.z) / length;
+        const double gap = length - reach;
+        if (gap > 0.0) best = std::fmax(best, gap * gap);
+    }
+    return best;
 }
 
 inline double node_size(const BvhNode& n) {
@@ -84,6 +106,17 @@ inline double triangle_box_squared_distance(const TriangleBox& a, const Triangle
         if (gap > 0.0) d2 += gap * gap;
     }
     return d2;
+}
+
+// Lower bound of the distance between triangles a and b from their projections on the line
+// through their centroids (separating-axis bound): tight when the triangles are far apart
+// relative to their size, where the box bound is loose. Returns a squared distance.
+inline double triangle_axis_squared_distance(const Vec3 a[3], const Vec3 b[3]) {
+    const Vec3 axis = (b[0] + b[1] + b[2]) - (a[0] + a[1] + a[2]);
+    const double a_max = std::fmax(dot(axis, a[0]), std::fmax(dot(axis, a[1]), dot(axis, a[2])));
+    const double b_min = std::fmin(dot(axis, b[0]), std::fmin(dot(axis, b[1]), dot(axis, b[2])));
+    const double gap = b_min - a_max;
+    return gap > 0.0 ? gap * gap / dot(axis, axis) : 0.0;
 }
 
 struct StackItem {
@@ -153,7 +186,7 @@ SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative&
                             return r;
                         }
                     }
-                    if (pruned(lb2)) continue;
+                    if (pruned(lb2) || pruned(triangle_axis_squared_distance(ta, leaf_b.corners[j]))) continue;
                     Vec3 pa, pb;
                     const double d2 = triangle_separated_squared_distance(ta, leaf_b.corners[j], &pa, &pb);
                     if (!pruned(d2)) {
