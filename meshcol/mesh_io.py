@@ -116,6 +116,8 @@ def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]
         raise InvalidMeshError("mesh has no faces", source)
     if file_type == "obj":
         nodes = _obj_file_order(file, nodes)
+    elif file_type in ("glb", "gltf"):
+        nodes = _gltf_file_order(file, file_type, nodes)
 
     stem = file.stem
     bodies: list[Body] = []
@@ -263,13 +265,55 @@ def _read_scene(file: Path, file_type: str, source: str):
             split_objects=True,
             split_groups=not has_objects,
         )
+    elif file_type == "stl":
+        _check_stl(file, source)
+    elif file_type == "gltf":
+        _check_json(file, source)
     try:
         return trimesh.load_scene(str(file), file_type=file_type, **options)
+    except FileNotFoundError as error:
+        # a glTF buffer or image the file refers to
+        raise InvalidMeshError(
+            f"cannot parse {file_type.upper()} file: referenced file {error.args[-1]!r} not found",
+            source,
+        ) from None
     except _PARSE_ERRORS as error:
         detail = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
         raise InvalidMeshError(
             f"cannot parse {file_type.upper()} file: {detail[:200]}", source
         ) from None
+
+
+def _check_stl(file: Path, source: str) -> None:
+    """Reject what is neither a binary STL nor text before trimesh guesses an encoding."""
+    size = file.stat().st_size
+    with open(file, "rb") as stream:
+        header = stream.read(84)
+    if size >= 84 and 84 + 50 * struct.unpack("<I", header[80:84])[0] == size:
+        return
+    try:
+        file.read_bytes().decode("utf-8")
+    except UnicodeDecodeError:
+        raise InvalidMeshError(
+            "cannot parse STL file: neither binary STL (size does not match the triangle "
+            "count) nor ASCII text",
+            source,
+        ) from None
+
+
+def _check_json(file: Path, source: str) -> None:
+    import json
+
+    try:
+        json.loads(file.read_bytes())
+    except json.JSONDecodeError as error:
+        raise InvalidMeshError(
+            f"cannot parse GLTF file: invalid JSON at line {error.lineno} column {error.colno}: "
+            f"{error.msg}",
+            source,
+        ) from None
+    except UnicodeDecodeError:
+        raise InvalidMeshError("cannot parse GLTF file: not UTF-8 text", source) from None
 
 
 def _obj_file_order(file: Path, nodes: list) -> list:
@@ -278,10 +322,27 @@ def _obj_file_order(file: Path, nodes: list) -> list:
 
     def position(item) -> int:
         name = item[0]
+        if name == "default":
+            return -1
         match = re.search(rf"^\s*[og]\s+{re.escape(name)}\s*$", text, flags=re.MULTILINE)
         return match.start() if match else len(text)
 
     return sorted(nodes, key=position)
+
+
+def _gltf_file_order(file: Path, file_type: str, nodes: list) -> list:
+    """Order glTF mesh nodes as the file's node list does (trimesh's graph order differs)."""
+    import json
+
+    data = file.read_bytes()
+    if file_type == "glb":
+        length = struct.unpack("<I", data[12:16])[0]
+        data = data[20 : 20 + length]
+    index: dict[str, int] = {}
+    for k, node in enumerate(json.loads(data).get("nodes", [])):
+        index.setdefault(str(node.get("name", "")), k)
+    # unnamed nodes keep trimesh's relative order, after the named ones
+    return sorted(nodes, key=lambda item: index.get(item[0], len(index)))
 
 
 def _unique(name: str, used: set[str]) -> str:
