@@ -295,13 +295,31 @@ def _simplify(hull_vertices, facets, equations, budget, scale):
             trial_offsets = np.append(offsets, offset)
             trial = _intersect(trial_normals, trial_offsets, interior, scale)
             if trial is not None and len(trial) <= budget:
+                distances, closest = _update_distances(
+                    polytope, distances, closest, trial, facets, equations, scale)
                 normals, offsets, polytope = trial_normals, trial_offsets, trial
-                distances, closest = _distances_to_hull(polytope, facets, equations)
                 accepted = True
                 break
         if not accepted:
             break
+    # the loop reused distances of vertices that survived a cut; report a fresh, exact one
+    distances, _ = _distances_to_hull(polytope, facets, equations)
     return polytope, float(distances.max())
+
+
+def _update_distances(old, old_distances, old_closest, new, facets, equations, scale):
+    """Distances of ``new`` vertices, reusing those of vertices ``old`` already had."""
+    from scipy.spatial import cKDTree
+
+    gap, match = cKDTree(old).query(new, distance_upper_bound=MERGE_RELATIVE_DISTANCE * scale)
+    known = np.isfinite(gap)
+    distances = np.empty(len(new))
+    closest = np.empty_like(new)
+    distances[known] = old_distances[match[known]]
+    closest[known] = old_closest[match[known]]
+    if (~known).any():
+        distances[~known], closest[~known] = _distances_to_hull(new[~known], facets, equations)
+    return distances, closest
 
 
 def _start_simplex(hull_vertices: np.ndarray) -> np.ndarray:
