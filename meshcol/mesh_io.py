@@ -133,7 +133,10 @@ def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]
             raise InvalidMeshError("scene graph has a non-finite transform", source)
         if faces.min() < 0 or faces.max() >= len(vertices):
             raise InvalidMeshError("face index out of range", source)
-        transform, linear = split_rigid(matrix)
+        try:
+            transform, linear = split_rigid(matrix)
+        except InvalidMeshError as error:
+            raise InvalidMeshError(error.message, source) from None
         if linear is not None:
             vertices = vertices @ linear.T
             if np.linalg.det(linear) < 0:
