@@ -376,13 +376,12 @@ def self_intersecting_pairs(vertices: np.ndarray, faces: np.ndarray,
     Notes
     -----
     Candidate pairs come from a uniform grid over the faces' bounding boxes (cell size: the
-    median face extent), filtered by box overlap. Each pair is then tested exactly in the
-    sense of strict crossings (Moller 1997 reduced to segment tests): two triangles in
-    different planes intersect beyond a shared boundary iff an edge of one crosses the
-    other's plane strictly inside the other triangle; coplanar triangles overlap iff two
-    edges cross properly or a vertex lies strictly inside the other. Contacts at shared
-    vertices and edges (every mesh has them) and touching within
-    ``CROSSING_RELATIVE_TOLERANCE`` are not crossings. Faces on the same three vertices are
+    median face extent), filtered by box overlap. Two triangles in different planes cross
+    when they share a segment of positive length (Moller's interval test, Moller 1997):
+    meeting at one point (shared vertex, T-junction) or along their shared edge is not a
+    crossing. Coplanar triangles cross when two edges cross properly or a vertex lies
+    strictly inside the other. Distances within ``CROSSING_RELATIVE_TOLERANCE`` of the
+    diagonal count as contact. Faces on the same three vertices are
     duplicates (reported apart), not crossings.
     """
     vertices = np.asarray(vertices, dtype=np.float64)
@@ -396,10 +395,11 @@ def self_intersecting_pairs(vertices: np.ndarray, faces: np.ndarray,
     tolerance = CROSSING_RELATIVE_TOLERANCE * diagonal
     found = []
     for i, j in _candidate_pairs(tri, diagonal):
-        same = np.sort(faces[index[i]], axis=1) == np.sort(faces[index[j]], axis=1)
-        distinct = ~same.all(axis=1)
-        i, j = i[distinct], j[distinct]
-        hit = _triangles_cross(tri[i], tri[j], tolerance)
+        fi, fj = faces[index[i]], faces[index[j]]
+        shared = (fi[:, :, None] == fj[:, None, :]).any(axis=2).sum(axis=1)
+        distinct = shared < 3
+        i, j, shared = i[distinct], j[distinct], shared[distinct]
+        hit = _triangles_cross(tri[i], tri[j], shared, tolerance)
         found.append(np.stack([index[i[hit]], index[j[hit]]], axis=1))
     pairs = np.concatenate(found) if found else np.zeros((0, 2), np.int64)
     pairs = np.sort(pairs, axis=1)
@@ -461,46 +461,57 @@ def _candidate_pairs(tri: np.ndarray, diagonal: float):
         yield chunk // m, chunk % m
 
 
-def _triangles_cross(t1: np.ndarray, t2: np.ndarray, tolerance: float) -> np.ndarray:
-    """Strict crossing test of triangle pairs (k, 3, 3) x (k, 3, 3): (k,) bool."""
+def _triangles_cross(t1: np.ndarray, t2: np.ndarray, shared: np.ndarray,
+                     tolerance: float) -> np.ndarray:
+    """Crossing test of triangle pairs (k, 3, 3) x (k, 3, 3) sharing ``shared`` vertices.
+
+    Non-coplanar pairs: Moller's interval test (Moller 1997). Both triangles meet the line
+    where their planes cross in an interval; they cross when the intervals overlap over
+    more than ``tolerance``. A single common point (a shared vertex, a vertex on the other
+    triangle, a T-junction) is a touch, and two faces sharing an edge meet only along it.
+    """
     n1 = np.cross(t1[:, 1] - t1[:, 0], t1[:, 2] - t1[:, 0])
     n2 = np.cross(t2[:, 1] - t2[:, 0], t2[:, 2] - t2[:, 0])
     n1 /= np.linalg.norm(n1, axis=1)[:, None]
     n2 /= np.linalg.norm(n2, axis=1)[:, None]
-    # signed distances of each triangle's vertices to the other's plane
+    # signed distances of each triangle's vertices to the other's plane, snapped to 0
     d2 = np.einsum("kij,kj->ki", t2 - t1[:, :1], n1)
     d1 = np.einsum("kij,kj->ki", t1 - t2[:, :1], n2)
-    coplanar = (np.abs(d2) <= tolerance).all(axis=1) & (np.abs(d1) <= tolerance).all(axis=1)
+    d2[np.abs(d2) <= tolerance] = 0.0
+    d1[np.abs(d1) <= tolerance] = 0.0
+    coplanar = (d2 == 0).all(axis=1) & (d1 == 0).all(axis=1)
+    straddle = ~((d2 > 0).all(axis=1) | (d2 < 0).all(axis=1)
+                 | (d1 > 0).all(axis=1) | (d1 < 0).all(axis=1))
     hit = np.zeros(len(t1), bool)
-    general = ~coplanar
-    if general.any():
-        g = np.nonzero(general)[0]
-        h = np.zeros(len(g), bool)
-        for e in range(3):
-            f = (e + 1) % 3
-            h |= _segment_crosses_triangle(t2[g, e], t2[g, f], d2[g, e], d2[g, f], t1[g], n1[g], tolerance)
-            h |= _segment_crosses_triangle(t1[g, e], t1[g, f], d1[g, e], d1[g, f], t2[g], n2[g], tolerance)
-        hit[g] = h
+    general = np.nonzero(~coplanar & straddle & (shared < 2))[0]
+    if len(general):
+        line = np.cross(n1[general], n2[general])
+        length = np.linalg.norm(line, axis=1)
+        ok = length > 0
+        general, line = general[ok], line[ok] / length[ok][:, None]
+        lo1, hi1 = _interval(t1[general], d1[general], line)
+        lo2, hi2 = _interval(t2[general], d2[general], line)
+        hit[general] = np.minimum(hi1, hi2) - np.maximum(lo1, lo2) > tolerance
     if coplanar.any():
         c = np.nonzero(coplanar)[0]
         hit[c] = _coplanar_overlap(t1[c], t2[c], n1[c], tolerance)
     return hit
 
 
-def _segment_crosses_triangle(p, q, dp, dq, tri, normal, tolerance):
-    """Segment pq crosses the plane strictly and meets the triangle strictly inside."""
-    crosses = ((dp > tolerance) & (dq < -tolerance)) | ((dp < -tolerance) & (dq > tolerance))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(crosses, dp / (dp - dq), 0.0)
-    x = p + t[:, None] * (q - p)
-    inside = crosses.copy()
-    for e in range(3):
-        a, b = tri[:, e], tri[:, (e + 1) % 3]
-        edge = b - a
-        length = np.linalg.norm(edge, axis=1)
-        side = np.einsum("kj,kj->k", np.cross(edge, x - a), normal)
-        inside &= side > tolerance * length
-    return inside
+def _interval(tri: np.ndarray, distance: np.ndarray, line: np.ndarray):
+    """Extent along ``line`` of where a triangle meets a plane (its vertices' ``distance``)."""
+    along = np.einsum("kij,kj->ki", tri, line)
+    points = np.full((len(tri), 6), np.nan)
+    for i in range(3):
+        j = (i + 1) % 3
+        on_plane = distance[:, i] == 0
+        points[on_plane, i] = along[on_plane, i]
+        crosses = distance[:, i] * distance[:, j] < 0
+        di, dj = distance[crosses, i], distance[crosses, j]
+        ai, aj = along[crosses, i], along[crosses, j]
+        points[crosses, 3 + i] = ai + (aj - ai) * di / (di - dj)
+    # a straddling triangle always meets the plane, so no row is all NaN
+    return np.nanmin(points, axis=1), np.nanmax(points, axis=1)
 
 
 def _coplanar_overlap(t1, t2, normal, tolerance):
