@@ -282,6 +282,8 @@ def _simplify(hull_vertices, facets, equations, budget, scale):
     normals = _start_simplex(hull_vertices)
     offsets = (normals @ hull_vertices.T).max(axis=1)
     polytope = _intersect(normals, offsets, interior, scale)
+    if polytope is None:  # qhull failed on four planes: not seen, but never crash on it
+        raise InvalidMeshError(f"qhull could not build a hull within {budget} vertices")
     distances, closest = _distances_to_hull(polytope, facets, equations)
     for _ in range(4 * budget + 16):
         order = np.argsort(-distances, kind="stable")

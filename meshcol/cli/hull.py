@@ -44,7 +44,7 @@ CSV_COLUMNS = (
               help="Report format (default: from the --report extension, else json).")
 def hull(inputs: tuple[str, ...], output: str | None, out_dir: str | None,
          max_vertices: int | None, report: str | None, fmt: str | None) -> None:
-    """Convex hull of each body: meshcol hull INPUT... [options].
+    """Convex hull of each body, optionally within a vertex budget.
 
     INPUT is mesh files (OBJ, STL, PLY, OFF, glTF, GLB; every object, solid or mesh node is
     a body) or one scene manifest. Hulls are in the WORLD frame: each body's scene transform

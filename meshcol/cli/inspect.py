@@ -44,7 +44,7 @@ def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) 
                    + ", ".join(RULES) + " (or all).")
 def inspect(inputs: tuple[str, ...], report: str | None, fmt: str | None,
             fail_on: tuple[str, ...]) -> None:
-    """Health check of each body's mesh: meshcol inspect INPUT... [options].
+    """Health check of each body's mesh: fit to be a collider?
 
     INPUT is mesh files (OBJ, STL, PLY, OFF, glTF, GLB; every object, solid or mesh node is
     a body) or one scene manifest. Per body: vertices, faces, connected components,
