@@ -410,7 +410,8 @@ def _candidate_pairs(tri: np.ndarray, diagonal: float):
     """Yield chunks (i, j), i < j, of faces whose bounding boxes overlap."""
     lo, hi = tri.min(axis=1), tri.max(axis=1)
     extent = (hi - lo).max(axis=1)
-    cell = max(float(np.median(extent)), diagonal / 512.0, 1e-300)
+    # the floor keeps cell keys (dims ** 3) well inside int64
+    cell = max(float(np.median(extent)), diagonal / 4096.0, 1e-300)
     origin = lo.min(axis=0)
     m = len(tri)
     while True:
