@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from meshcol.errors import InvalidMeshError
 from meshcol.inspect import (
@@ -219,3 +221,19 @@ def test_corpus_soup_and_open_meshes(corpus) -> None:
     assert not r.watertight and r.components == 100 and r.volume is None
     (shared,) = load_mesh(corpus / "trimesh-models" / "shared.STL")
     assert inspect_body(shared).non_manifold_edges > 0
+
+
+@settings(max_examples=30)
+@given(st.integers(0, 2**32 - 1))
+def test_crossings_are_invariant_under_rigid_motion_and_face_order(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    vertices = rng.uniform(0, 10, size=(60, 3))
+    faces = rng.integers(0, 60, size=(25, 3))
+    faces = faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])]
+    rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    moved = vertices @ rotation.T + rng.normal(size=3) * 100
+    order = rng.permutation(len(faces))
+    base = {tuple(p) for p in self_intersecting_pairs(vertices, faces).tolist()}
+    shuffled = {tuple(sorted((int(order[i]), int(order[j]))))
+                for i, j in self_intersecting_pairs(moved, faces[order]).tolist()}
+    assert base == shuffled
