@@ -45,4 +45,17 @@ constexpr int tree_max_height_imbalance = 2;
 /// AABB tree: most objects one tree holds (ids are 32-bit).
 constexpr long long tree_max_objects = 1000000000;
 
+/// Most triangles in one leaf of a mesh hierarchy (MeshBvh).
+constexpr int mesh_bvh_leaf_size = 4;
+
+/// Bins per axis of the binned surface area heuristic that builds a MeshBvh.
+constexpr int mesh_bvh_bins = 16;
+
+/// Mesh pairs cost far more than convex pairs: fewer of them justify a thread.
+constexpr long long mesh_min_pairs_per_thread = 4;
+
+/// A point is inside a closed mesh when |generalized winding number| >= this (Jacobson et al.
+/// 2013): 1 inside, 0 outside, fractional near holes in the surface.
+constexpr double winding_number_inside = 0.5;
+
 }  // namespace meshcol::defaults
