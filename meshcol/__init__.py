@@ -34,6 +34,7 @@ _LAZY: dict[str, str] = {
     "convex_hull": "meshcol.hulls",
     "HullResult": "meshcol.hulls",
     "inspect_body": "meshcol.inspect",
+    "MeshInspection": "meshcol.inspect",
     # narrow phase
     "ConvexSet": "meshcol.query",
     "Sphere": "meshcol.query",
@@ -56,10 +57,19 @@ _LAZY: dict[str, str] = {
     "PenetrationBatch": "meshcol.query",
     "SignedDistanceBatch": "meshcol.query",
     "IntersectsBatch": "meshcol.query",
+    # exact triangle-mesh queries
+    "MeshSet": "meshcol.mesh_query",
+    "MeshDistanceBatch": "meshcol.mesh_query",
+    "MeshDistanceResult": "meshcol.mesh_query",
+    "MeshIntersectsBatch": "meshcol.mesh_query",
+    "mesh_distance": "meshcol.mesh_query",
+    "mesh_distance_batch": "meshcol.mesh_query",
+    "mesh_intersects_batch": "meshcol.mesh_query",
     # broad phase
     "sort_and_sweep": "meshcol.broadphase",
     "SweepAndPrune": "meshcol.broadphase",
     "AabbTree": "meshcol.broadphase",
+    "brute_force_pairs": "meshcol.broadphase",
 }
 
 __all__ = [

@@ -20,7 +20,10 @@ from meshcol.errors import MeshcolError
 
 # command name -> "module:function". Modules import heavy dependencies inside the command
 # function, never at module level, so `meshcol --help` stays fast.
-COMMANDS: dict[str, str] = {}
+COMMANDS: dict[str, str] = {
+    "hull": "meshcol.cli.hull:hull",
+    "inspect": "meshcol.cli.inspect:inspect",
+}
 
 CONTEXT_SETTINGS = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 

@@ -42,4 +42,52 @@ constexpr double epa_curved_relative_tolerance = 1e-7;
 /// shapes) is at most this: boxes and small hulls.
 constexpr long long sat_max_work = 40000;
 
+/// Broad phase: fewer boxes than this run on the calling thread.
+constexpr long long broadphase_min_boxes_per_thread = 20000;
+
+/// Sort and sweep: grid cells on the two cross axes are at least this many median box
+/// extents wide (wider cells duplicate fewer boxes, narrower ones prune more).
+constexpr double sweep_cell_extent_ratio = 4.0;
+
+/// Sort and sweep: at most this many grid cells per cross axis.
+constexpr int sweep_max_cells_per_axis = 1024;
+
+/// Sort and sweep: at least this many boxes per grid cell on average.
+constexpr long long sweep_min_boxes_per_cell = 16;
+
+/// Sort and sweep: the grid is coarsened until it holds at most this many box entries per
+/// box (a box spanning several cells is entered in each).
+constexpr double sweep_max_entries_per_box = 3.0;
+
+/// Sort and sweep: no grid when the sweep axis alone leaves fewer candidates per box.
+constexpr double sweep_min_candidates_for_grid = 16.0;
+
+/// Incremental sweep: the insertion sort gives up and sorts afresh after this many element
+/// moves per box (large motions are not "nearly sorted").
+constexpr long long sweep_max_shifts_per_box = 32;
+
+/// AABB tree: bins of the binned SAH top-down build (Wald 2007; Box2D v3).
+constexpr int tree_bin_count = 32;
+
+/// AABB tree: a node whose children's heights differ by more than this is rebalanced by
+/// height even when the area heuristic would not rotate (guards degenerate inputs such as
+/// many identical boxes, where every area is equal).
+constexpr int tree_max_height_imbalance = 2;
+
+/// AABB tree: most objects one tree holds (ids are 32-bit).
+constexpr long long tree_max_objects = 1000000000;
+
+/// Most triangles in one leaf of a mesh hierarchy (MeshBvh).
+constexpr int mesh_bvh_leaf_size = 4;
+
+/// Bins per axis of the binned surface area heuristic that builds a MeshBvh.
+constexpr int mesh_bvh_bins = 16;
+
+/// Mesh pairs cost far more than convex pairs: fewer of them justify a thread.
+constexpr long long mesh_min_pairs_per_thread = 4;
+
+/// A point is inside a closed mesh when |generalized winding number| >= this (Jacobson et al.
+/// 2013): 1 inside, 0 outside, fractional near holes in the surface.
+constexpr double winding_number_inside = 0.5;
+
 }  // namespace meshcol::defaults
