@@ -38,4 +38,12 @@ constexpr double epa_relative_tolerance = 1e-12;
 /// shapes) is at most this: boxes and small hulls.
 constexpr long long sat_max_work = 40000;
 
+/// Time of impact: default absolute contact distance (world units). The sweep command scales
+/// it to the scene instead (1e-6 x the scene's bounding diagonal) unless `--tolerance` is given.
+constexpr double toi_tolerance = 1e-6;
+
+/// Time of impact: cap on ray-cast or conservative-advancement steps per pair. A pair that
+/// reaches it is FAILED with its last safe lower bound.
+constexpr int toi_max_iterations = 1000;
+
 }  // namespace meshcol::defaults
