@@ -50,6 +50,15 @@ _LAZY: dict[str, str] = {
     "penetration_batch": "meshcol.query",
     "intersects_batch": "meshcol.query",
     "signed_distance_batch": "meshcol.query",
+    # continuous collision
+    "TimeOfImpactResult": "meshcol.sweep",
+    "TimeOfImpactBatch": "meshcol.sweep",
+    "SweepReport": "meshcol.sweep",
+    "SweepHit": "meshcol.sweep",
+    "interpolate_pose": "meshcol.sweep",
+    "time_of_impact": "meshcol.sweep",
+    "time_of_impact_batch": "meshcol.sweep",
+    "sweep": "meshcol.sweep",
     # broad phase
     "sort_and_sweep": "meshcol.broadphase",
     "SweepAndPrune": "meshcol.broadphase",
