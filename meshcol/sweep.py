@@ -42,6 +42,8 @@ separating slab: relative linear speed along the normal plus, per body,
 from __future__ import annotations
 
 import os
+import sys
+import types
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
@@ -309,13 +311,27 @@ class SweepHit:
     iterations: int
 
     def as_dict(self) -> dict[str, Any]:
-        """JSON-ready fields (lists for arrays, the status by name)."""
+        """JSON-ready fields (lists for arrays, the status by name), numbers rounded to 12
+        significant digits (far below the tolerance) so reports compare across machines."""
         return {
-            "a": self.a, "b": self.b, "status": self.status.name, "toi": self.toi,
-            "time": self.time, "point": self.point.tolist(), "normal": self.normal.tolist(),
-            "pose_a": self.pose_a.tolist(), "pose_b": self.pose_b.tolist(),
-            "tunnelled": self.tunnelled, "iterations": self.iterations,
+            "a": self.a, "b": self.b, "status": self.status.name, "toi": _round(self.toi),
+            "time": _round(self.time), "point": _round(self.point),
+            "normal": _round(self.normal), "pose_a": _round(self.pose_a),
+            "pose_b": _round(self.pose_b), "tunnelled": self.tunnelled,
+            "iterations": self.iterations,
         }
+
+
+def _round(value: Any) -> Any:
+    """Floats (or nested arrays of them) to 12 significant digits, -0.0 as 0.0."""
+    if value is None:
+        return None
+    if isinstance(value, np.ndarray):
+        return [_round(v) for v in value.tolist()]
+    if isinstance(value, list):
+        return [_round(v) for v in value]
+    value = float(value)
+    return float(f"{value:.12g}") + 0.0 if np.isfinite(value) else value
 
 
 @dataclass(frozen=True)
@@ -476,10 +492,10 @@ def _triangle_set(body: Body) -> tuple[ConvexSet, int]:
     ), int(np.count_nonzero(~keep))
 
 
-def _body_shapes(bodies: Sequence[Body], mode: str) -> tuple[ConvexSet, np.ndarray]:
-    """All convex pieces of the bodies and the owner (body index) of each."""
-    if mode == "hull":
-        return ConvexSet.from_meshes(list(bodies)), np.arange(len(bodies), dtype=np.int64)
+def _body_pieces(body: Body, mode: str) -> ConvexSet:
+    """The convex pieces of one body under a shape mode (primitives are always exact)."""
+    if body.primitive is not None or mode == "hull":
+        return ConvexSet.from_meshes([body])
     if mode == "decomposed":
         try:
             from meshcol.decompose import cached_decomposition
@@ -487,25 +503,19 @@ def _body_shapes(bodies: Sequence[Body], mode: str) -> tuple[ConvexSet, np.ndarr
             raise MissingDependencyError(
                 "--shape decomposed: convex decomposition (meshcol.decompose) is not "
                 "available in this build") from None
-        sets, owner = [], []
-        for i, body in enumerate(bodies):
-            if body.primitive is not None:
-                parts = [body]
-            else:
-                decomposition = cached_decomposition(body)
-                parts = list(getattr(decomposition, "parts", decomposition))
-            sets.append(ConvexSet._from_packed([_pack_any(p, f"{body.name} part") for p in parts]))
-            owner += [i] * len(parts)
-        return ConvexSet.concatenate(*sets), np.asarray(owner, dtype=np.int64)
-    sets, owner = [], []
-    for i, body in enumerate(bodies):
-        if body.primitive is not None:
-            cs = ConvexSet.from_meshes([body])
-        else:
-            cs, _ = _triangle_set(body)
-        sets.append(cs)
-        owner += [i] * len(cs)
-    return ConvexSet.concatenate(*sets), np.asarray(owner, dtype=np.int64)
+        decomposition = cached_decomposition(body)
+        parts = list(getattr(decomposition, "parts", decomposition))
+        return ConvexSet._from_packed([_pack_any(p, f"{body.name} part") for p in parts])
+    return _triangle_set(body)[0]
+
+
+def _body_shapes(bodies: Sequence[Body], mode: str) -> tuple[ConvexSet, np.ndarray]:
+    """All convex pieces of the bodies (a body's own ``shape`` overrides ``mode``) and the
+    owner (body index) of each."""
+    sets = [_body_pieces(b, b.shape or mode) for b in bodies]
+    owner = np.concatenate([np.full(len(s), i, dtype=np.int64) for i, s in enumerate(sets)]
+                           or [np.zeros(0, np.int64)])
+    return ConvexSet.concatenate(*sets), owner
 
 
 def _load(inputs: Any) -> Scene:
@@ -520,7 +530,11 @@ def _load(inputs: Any) -> Scene:
         return Scene(bodies=tuple(inputs))
     from meshcol.scene import load_inputs
 
-    return load_inputs(inputs)
+    scene = load_inputs(inputs)
+    if scene.source is None and len(inputs) == 1:
+        scene = Scene(bodies=scene.bodies, units=scene.units, source=os.fspath(inputs[0]),
+                      duration=scene.duration)
+    return scene
 
 
 def sweep(
@@ -648,3 +662,15 @@ def sweep(
     return SweepReport(scene=scene, shape=shape, tolerance=tol, hits=tuple(hits),
                        candidate_pairs=len(groups), shape_pairs=len(pairs),
                        moving=tuple(bool(m) for m in moving))
+
+
+class _CallableModule(types.ModuleType):
+    """``meshcol.sweep`` names both this module and its main function: importing the module
+    (``import meshcol.sweep``) rebinds the package attribute to the module, so the module is
+    made callable as :func:`sweep` and ``meshcol.sweep(...)`` works either way."""
+
+    def __call__(self, *args: Any, **kwargs: Any) -> SweepReport:
+        return sweep(*args, **kwargs)
+
+
+sys.modules[__name__].__class__ = _CallableModule
