@@ -59,6 +59,14 @@ _LAZY: dict[str, str] = {
     "time_of_impact": "meshcol.sweep",
     "time_of_impact_batch": "meshcol.sweep",
     "sweep": "meshcol.sweep",
+    # exact triangle-mesh queries
+    "MeshSet": "meshcol.mesh_query",
+    "MeshDistanceBatch": "meshcol.mesh_query",
+    "MeshDistanceResult": "meshcol.mesh_query",
+    "MeshIntersectsBatch": "meshcol.mesh_query",
+    "mesh_distance": "meshcol.mesh_query",
+    "mesh_distance_batch": "meshcol.mesh_query",
+    "mesh_intersects_batch": "meshcol.mesh_query",
     # broad phase
     "sort_and_sweep": "meshcol.broadphase",
     "SweepAndPrune": "meshcol.broadphase",

@@ -20,5 +20,9 @@ void bind_defaults(nb::module_& m) {
     d.attr("sat_max_work") = meshcol::defaults::sat_max_work;
     d.attr("toi_tolerance") = meshcol::defaults::toi_tolerance;
     d.attr("toi_max_iterations") = meshcol::defaults::toi_max_iterations;
+    d.attr("mesh_bvh_leaf_size") = meshcol::defaults::mesh_bvh_leaf_size;
+    d.attr("mesh_bvh_bins") = meshcol::defaults::mesh_bvh_bins;
+    d.attr("mesh_min_pairs_per_thread") = meshcol::defaults::mesh_min_pairs_per_thread;
+    d.attr("winding_number_inside") = meshcol::defaults::winding_number_inside;
     m.def("hardware_threads", &meshcol::hardware_threads, "Number of hardware threads (at least 1).");
 }
