@@ -50,6 +50,12 @@ _LAZY: dict[str, str] = {
     "penetration_batch": "meshcol.query",
     "intersects_batch": "meshcol.query",
     "signed_distance_batch": "meshcol.query",
+    "ShapeKind": "meshcol.query",
+    "SignedDistanceResult": "meshcol.query",
+    "DistanceBatch": "meshcol.query",
+    "PenetrationBatch": "meshcol.query",
+    "SignedDistanceBatch": "meshcol.query",
+    "IntersectsBatch": "meshcol.query",
     # continuous collision
     "TimeOfImpactResult": "meshcol.sweep",
     "TimeOfImpactBatch": "meshcol.sweep",

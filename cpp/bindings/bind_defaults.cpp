@@ -17,6 +17,7 @@ void bind_defaults(nb::module_& m) {
     d.attr("epa_max_iterations") = meshcol::defaults::epa_max_iterations;
     d.attr("epa_max_vertices") = meshcol::defaults::epa_max_vertices;
     d.attr("epa_relative_tolerance") = meshcol::defaults::epa_relative_tolerance;
+    d.attr("epa_curved_relative_tolerance") = meshcol::defaults::epa_curved_relative_tolerance;
     d.attr("sat_max_work") = meshcol::defaults::sat_max_work;
     d.attr("toi_tolerance") = meshcol::defaults::toi_tolerance;
     d.attr("toi_max_iterations") = meshcol::defaults::toi_max_iterations;

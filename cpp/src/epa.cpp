@@ -9,20 +9,27 @@ namespace meshcol {
 namespace {
 
 struct EpaFace {
-    int v[3];
+    int v[3];        // counter-clockwise seen from outside
+    int adj[3];      // face across edge (v[e], v[e + 1])
+    int adj_edge[3]; // that edge's index in the neighbour
     Vec3 normal;     // outward unit normal (zero when the face is a sliver)
     double distance; // distance of its plane from the origin (+inf for a sliver)
     bool alive;
 };
 
+struct HorizonEdge {
+    int face;  // the living face beyond the edge
+    int edge;  // edge index in that face
+};
+
 struct Polytope {
     std::vector<SimplexVertex> vertices;
     std::vector<EpaFace> faces;
-    std::vector<std::pair<int, int>> edges;  // scratch: directed edges of the visible faces
-    std::vector<std::pair<int, int>> horizon;
+    std::vector<HorizonEdge> horizon;
 
-    void add_face(int i, int j, int k) {
-        EpaFace f{{i, j, k}, Vec3{}, std::numeric_limits<double>::infinity(), true};
+    int add_face(int i, int j, int k) {
+        EpaFace f{{i, j, k}, {-1, -1, -1}, {-1, -1, -1}, Vec3{},
+                  std::numeric_limits<double>::infinity(), true};
         const Vec3& a = vertices[i].w;
         const Vec3 n = cross(vertices[j].w - a, vertices[k].w - a);
         const double len = norm(n);
@@ -31,6 +38,30 @@ struct Polytope {
             f.distance = dot(f.normal, a);
         }
         faces.push_back(f);
+        return static_cast<int>(faces.size()) - 1;
+    }
+
+    void link(int f, int e, int g, int h) {
+        faces[f].adj[e] = g;
+        faces[f].adj_edge[e] = h;
+        faces[g].adj[h] = f;
+        faces[g].adj_edge[h] = e;
+    }
+
+    // Depth-first walk over the faces that see w (van den Bergen 2003, sec. 4.3.9): the
+    // visible region stays connected, so its border is one loop, collected in order.
+    void silhouette(int f, int e, const Vec3& w) {
+        EpaFace& face = faces[f];
+        if (!face.alive) return;
+        if (dot(face.normal, w - vertices[face.v[0]].w) <= 0.0) {
+            horizon.push_back({f, e});
+            return;
+        }
+        face.alive = false;
+        for (int k = 1; k <= 2; ++k) {
+            const int edge = (e + k) % 3;
+            silhouette(faces[f].adj[edge], faces[f].adj_edge[edge], w);
+        }
     }
 };
 
@@ -124,7 +155,16 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
         }
         res.point_a = pa;
         res.point_b = pa;
+        // The normal of the flat set when it has one, oriented from a to b.
         Vec3 n = md.translation_b;
+        if (s.size == 3) {
+            const Vec3 c = cross(s.vertices[1].w - s.vertices[0].w, s.vertices[2].w - s.vertices[0].w);
+            if (norm(c) > 0.0) n = dot(c, md.translation_b) < 0.0 ? -c : c;
+        } else if (s.size == 2) {
+            const Vec3 d = s.vertices[1].w - s.vertices[0].w;
+            const Vec3 c = n - d * (dot(n, d) / std::fmax(squared_norm(d), 1e-300));
+            if (norm(c) > 0.0) n = c;
+        }
         const double nn = norm(n);
         res.normal = nn > 0.0 ? n / nn : Vec3{1.0, 0.0, 0.0};
         return res;
@@ -142,6 +182,13 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
     poly.add_face(0, 3, 1);
     poly.add_face(0, 2, 3);
     poly.add_face(1, 3, 2);
+    for (int f = 0; f < 4; ++f)
+        for (int e = 0; e < 3; ++e)
+            for (int g = 0; g < 4; ++g)
+                for (int h = 0; h < 3; ++h)
+                    if (poly.faces[f].v[e] == poly.faces[g].v[(h + 1) % 3] &&
+                        poly.faces[f].v[(e + 1) % 3] == poly.faces[g].v[h])
+                        poly.link(f, e, g, h);
 
     res.status = Status::MAX_ITERATIONS;
     int best_face = -1;
@@ -159,11 +206,6 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
             break;
         }
         const EpaFace closest = poly.faces[best_face];
-        if (closest.distance <= tol) {
-            // The origin is on the boundary: the shapes only touch.
-            res.status = Status::CONVERGED;
-            break;
-        }
         const SimplexVertex w = md.support(closest.normal);
         const double upper = dot(closest.normal, w.w);
         bool repeated = false;
@@ -177,44 +219,35 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
         if (static_cast<int>(poly.vertices.size()) >= defaults::epa_max_vertices) break;
         const int nw = static_cast<int>(poly.vertices.size());
         poly.vertices.push_back(w);
-        // Faces the new point sees; the closest face sees it by construction.
-        poly.edges.clear();
-        for (int f = 0; f < static_cast<int>(poly.faces.size()); ++f) {
-            EpaFace& face = poly.faces[f];
-            if (!face.alive) continue;
-            const bool visible =
-                f == best_face ||
-                dot(face.normal, w.w - poly.vertices[face.v[0]].w) > tol * 1e-3;
-            if (!visible) continue;
-            face.alive = false;
-            for (int e = 0; e < 3; ++e) poly.edges.emplace_back(face.v[e], face.v[(e + 1) % 3]);
-        }
+        // Remove the faces the new point sees (the closest one does, by construction) and
+        // close the hole with a fan of faces over the silhouette.
         poly.horizon.clear();
-        for (const auto& e : poly.edges) {
-            bool shared = false;
-            for (const auto& o : poly.edges)
-                if (o.first == e.second && o.second == e.first) {
-                    shared = true;
-                    break;
-                }
-            if (!shared) poly.horizon.push_back(e);
+        poly.faces[best_face].alive = false;
+        for (int e = 0; e < 3; ++e)
+            poly.silhouette(poly.faces[best_face].adj[e], poly.faces[best_face].adj_edge[e], w.w);
+        const int first = static_cast<int>(poly.faces.size());
+        const int count = static_cast<int>(poly.horizon.size());
+        bool ok = count >= 3;
+        for (int k = 0; k < count && ok; ++k) {
+            const HorizonEdge& h = poly.horizon[k];
+            const EpaFace& beyond = poly.faces[h.face];
+            // The edge runs b -> a in the living face, so a -> b in the new one.
+            const int a = beyond.v[(h.edge + 1) % 3], b = beyond.v[h.edge];
+            const int f = poly.add_face(a, b, nw);
+            poly.link(f, 0, h.face, h.edge);
+            if (poly.faces[f].distance < -tol) ok = false;
         }
-        // A silhouette must be one simple loop: every vertex starts exactly one edge.
-        bool loop_ok = poly.horizon.size() >= 3;
-        for (size_t i = 0; i < poly.horizon.size() && loop_ok; ++i)
-            for (size_t j = i + 1; j < poly.horizon.size(); ++j)
-                if (poly.horizon[i].first == poly.horizon[j].first) {
-                    loop_ok = false;
-                    break;
-                }
-        if (!loop_ok) {
+        if (!ok) {
             res.status = Status::DEGENERATE;
             break;
         }
-        bool ok = true;
-        for (const auto& e : poly.horizon) {
-            poly.add_face(e.first, e.second, nw);
-            if (poly.faces.back().distance < -tol) ok = false;
+        for (int k = 0; k < count; ++k) {
+            const int f = first + k, g = first + (k + 1) % count;
+            if (poly.faces[f].v[1] != poly.faces[g].v[0]) {
+                ok = false;
+                break;
+            }
+            poly.link(f, 1, g, 2);
         }
         if (!ok) {
             res.status = Status::DEGENERATE;

@@ -87,24 +87,19 @@ PairResult query_pair(const ShapeView& a, const Pose& pose_a, const ShapeView& b
     r.point_b = g.point_a;
     if (kind != QueryKind::PENETRATION) return to_world(r, pose_a);
 
-    EpaResult e;
-    MinkowskiDifference full(a, pose_a, b, pose_b, true);
-    if (msum > 0.0) {
-        GjkOptions fopt;
-        const GjkResult gf = gjk_run(full, fopt);
-        r.iterations += gf.iterations;
-        e = epa_penetration(full, gf.simplex);
-    } else {
-        full.hint_a = core.hint_a;
-        full.hint_b = core.hint_b;
-        e = epa_penetration(full, g.simplex);
-    }
+    // EPA on the cores: for swept shapes the depth of (core_a + ball) - (core_b + ball) is the
+    // core depth plus both radii (the support function gains the radii in every direction),
+    // so spheres and capsules stay exact and EPA only meets curved surfaces on cylinders.
+    EpaOptions eopt;
+    if (a.kind == ShapeKind::CYLINDER || b.kind == ShapeKind::CYLINDER)
+        eopt.relative_tolerance = defaults::epa_curved_relative_tolerance;
+    const EpaResult e = epa_penetration(core, g.simplex, eopt);
     r.iterations += e.iterations;
     r.status = worse(r.status, e.status);
-    r.depth = e.depth;
+    r.depth = e.depth + msum;
     r.normal = e.normal;
-    r.point_a = e.point_a;
-    r.point_b = e.point_b;
+    r.point_a = e.point_a + e.normal * ma;
+    r.point_b = e.point_b - e.normal * mb;
     PairResult world = to_world(r, pose_a);
 
     const SatResult sat = sat_penetration(a, pose_a, b, pose_b);

@@ -27,12 +27,16 @@ constexpr double gjk_relative_tolerance = 1e-13;
 constexpr double contact_tolerance = 1e-14;
 
 /// EPA expansion cap (iterations) and polytope size cap (vertices).
-constexpr int epa_max_iterations = 128;
-constexpr int epa_max_vertices = 160;
+constexpr int epa_max_iterations = 250;
+constexpr int epa_max_vertices = 256;
 
 /// EPA stops when the support along the closest face's normal is within this relative
 /// distance of the face: the depth is then within this relative error.
 constexpr double epa_relative_tolerance = 1e-12;
+
+/// The same for pairs with a cylinder (spheres and capsules are exact: EPA runs on their
+/// cores): EPA converges only slowly on smooth surfaces.
+constexpr double epa_curved_relative_tolerance = 1e-7;
 
 /// Exact SAT runs (to verify or replace EPA) when (candidate axes) x (vertices of both
 /// shapes) is at most this: boxes and small hulls.
