@@ -34,6 +34,7 @@ _LAZY: dict[str, str] = {
     "convex_hull": "meshcol.hulls",
     "HullResult": "meshcol.hulls",
     "inspect_body": "meshcol.inspect",
+    "MeshInspection": "meshcol.inspect",
     # narrow phase
     "ConvexSet": "meshcol.query",
     "Sphere": "meshcol.query",

@@ -21,6 +21,8 @@ from meshcol.errors import MeshcolError
 # command name -> "module:function". Modules import heavy dependencies inside the command
 # function, never at module level, so `meshcol --help` stays fast.
 COMMANDS: dict[str, str] = {
+    "hull": "meshcol.cli.hull:hull",
+    "inspect": "meshcol.cli.inspect:inspect",
     "sweep": "meshcol.cli.sweep:sweep",
 }
 
