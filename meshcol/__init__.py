@@ -57,6 +57,15 @@ _LAZY: dict[str, str] = {
     "PenetrationBatch": "meshcol.query",
     "SignedDistanceBatch": "meshcol.query",
     "IntersectsBatch": "meshcol.query",
+    # continuous collision
+    "TimeOfImpactResult": "meshcol.sweep",
+    "TimeOfImpactBatch": "meshcol.sweep",
+    "SweepReport": "meshcol.sweep",
+    "SweepHit": "meshcol.sweep",
+    "interpolate_pose": "meshcol.sweep",
+    "time_of_impact": "meshcol.sweep",
+    "time_of_impact_batch": "meshcol.sweep",
+    "sweep": "meshcol.sweep",
     # exact triangle-mesh queries
     "MeshSet": "meshcol.mesh_query",
     "MeshDistanceBatch": "meshcol.mesh_query",

@@ -29,6 +29,8 @@ void bind_defaults(nb::module_& m) {
     d.attr("tree_bin_count") = meshcol::defaults::tree_bin_count;
     d.attr("tree_max_height_imbalance") = meshcol::defaults::tree_max_height_imbalance;
     d.attr("tree_max_objects") = meshcol::defaults::tree_max_objects;
+    d.attr("toi_tolerance") = meshcol::defaults::toi_tolerance;
+    d.attr("toi_max_iterations") = meshcol::defaults::toi_max_iterations;
     d.attr("mesh_bvh_leaf_size") = meshcol::defaults::mesh_bvh_leaf_size;
     d.attr("mesh_bvh_bins") = meshcol::defaults::mesh_bvh_bins;
     d.attr("mesh_min_pairs_per_thread") = meshcol::defaults::mesh_min_pairs_per_thread;

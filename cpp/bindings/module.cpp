@@ -6,6 +6,7 @@ namespace nb = nanobind;
 void bind_defaults(nb::module_& m);
 void bind_narrowphase(nb::module_& m);
 void bind_broadphase(nb::module_& m);
+void bind_toi(nb::module_& m);
 void bind_mesh_query(nb::module_& m);
 
 NB_MODULE(_core, m) {
@@ -13,5 +14,6 @@ NB_MODULE(_core, m) {
     bind_defaults(m);
     bind_narrowphase(m);
     bind_broadphase(m);
+    bind_toi(m);
     bind_mesh_query(m);
 }

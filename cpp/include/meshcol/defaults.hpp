@@ -76,6 +76,13 @@ constexpr int tree_max_height_imbalance = 2;
 
 /// AABB tree: most objects one tree holds (ids are 32-bit).
 constexpr long long tree_max_objects = 1000000000;
+/// Time of impact: default absolute contact distance (world units). The sweep command scales
+/// it to the scene instead (1e-6 x the scene's bounding diagonal) unless `--tolerance` is given.
+constexpr double toi_tolerance = 1e-6;
+
+/// Time of impact: cap on ray-cast or conservative-advancement steps per pair. A pair that
+/// reaches it is FAILED with its last safe lower bound.
+constexpr int toi_max_iterations = 1000;
 
 /// Most triangles in one leaf of a mesh hierarchy (MeshBvh).
 constexpr int mesh_bvh_leaf_size = 4;
