@@ -453,14 +453,9 @@ def swept_aabbs(cs: ConvexSet, start_poses: np.ndarray, end_poses: np.ndarray,
 
 def _candidate_pairs(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """(K, 2) int64 pairs i < j whose AABBs overlap (sort and sweep)."""
-    try:
-        from meshcol.broadphase import sort_and_sweep
-    except ImportError:
-        # TODO(#7): temporary all-pairs test until meshcol.broadphase lands on main.
-        i, j = np.triu_indices(len(lo), k=1)
-        keep = np.all((lo[i] <= hi[j]) & (lo[j] <= hi[i]), axis=1)
-        return np.stack([i[keep], j[keep]], axis=1).astype(np.int64)
-    return np.asarray(sort_and_sweep(lo, hi), dtype=np.int64).reshape(-1, 2)
+    from meshcol.broadphase import sort_and_sweep
+
+    return sort_and_sweep(lo, hi)
 
 
 def _triangle_set(body: Body) -> tuple[ConvexSet, int]:
