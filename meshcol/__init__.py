@@ -50,6 +50,10 @@ _LAZY: dict[str, str] = {
     "penetration_batch": "meshcol.query",
     "intersects_batch": "meshcol.query",
     "signed_distance_batch": "meshcol.query",
+    # scene checks
+    "check": "meshcol.check",
+    "CheckOptions": "meshcol.check",
+    "CheckReport": "meshcol.check",
     # broad phase
     "sort_and_sweep": "meshcol.broadphase",
     "SweepAndPrune": "meshcol.broadphase",

@@ -306,7 +306,7 @@ def _build_shapes(bodies: Sequence[Body], ucx: dict[str, list[Body]], options: C
             part_body.append(b)
             part_index.append(i)
 
-    unique_set = ConvexSet.from_shapes(unique) if unique else ConvexSet.from_vertices([])
+    unique_set = ConvexSet.from_shapes(unique)
     convex = unique_set.take(np.asarray(part_unique, dtype=np.int64))
     part_body_arr = np.asarray(part_body, dtype=np.int64)
     counts = np.bincount(part_body_arr, minlength=len(bodies))
