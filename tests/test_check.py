@@ -101,7 +101,8 @@ def test_clearance_band_and_policy(tmp_path: Path) -> None:
     assert pair(check([m], clearance=1.0), "a", "b")["status"] == "clearance"
     assert check([m], clearance=1.0).passed
     assert not check([m], clearance=1.0, fail_on="clearance").passed
-    assert pair(check([m], clearance=0.4), "a", "b")["status"] == "separated"
+    assert check([m], clearance=0.4).pairs == []  # gap 0.5: outside the band, not a candidate
+    assert pair(check([m], clearance=0.6), "a", "b")["status"] == "clearance"
     assert check([m], clearance=0.4, fail_on="clearance").passed
 
 
