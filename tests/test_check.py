@@ -165,7 +165,8 @@ def test_axis_aligned_boxes_match_exact_answers(boxes) -> None:
         assert key in got, f"missed pair {key} at distance {dist}"
         p = got[key]
         if np.all(overlap > 0):
-            depth = float(overlap.min())
+            # minimum translation distance: per axis, the shorter way out of the overlap
+            depth = float(np.minimum(hi[i] - lo[j], hi[j] - lo[i]).min())
             assert p["depth"] == pytest.approx(depth, rel=1e-9, abs=1e-12)
         else:
             assert p["distance"] == pytest.approx(dist, rel=1e-9, abs=1e-12)
