@@ -29,9 +29,16 @@ SHAPE_CHOICES = ("hull", "decomposed", "mesh")
               help="Previous JSON report: fail only on pairs that are new or worse.")
 @click.option("--threads", type=click.IntRange(min=0), default=0, show_default=True,
               help="Threads for the native queries (0: all cores).")
+@click.option("--engine", type=click.Choice(["coacd", "vhacd"]), default="coacd", show_default=True,
+              help="Decomposition engine for 'decomposed' bodies missing from the cache.")
+@click.option("--threshold", type=click.FloatRange(min=0.0, min_open=True), default=None,
+              help="Decomposition concavity threshold (as in 'meshcol decompose').")
+@click.option("--cache-dir", type=click.Path(file_okay=False), default=None,
+              help="Decompose cache folder (default: the user cache, as 'meshcol decompose').")
 @report_options
 def check(inputs: tuple[str, ...], shape: str, tolerance: float, clearance: float, fail_on: str,
-          ignore: tuple[str, ...], baseline: str | None, threads: int, report: str | None,
+          ignore: tuple[str, ...], baseline: str | None, threads: int, engine: str,
+          threshold: float | None, cache_dir: str | None, report: str | None,
           report_format: str | None) -> None:
     """Check every pair of bodies for contact, clearance and interpenetration.
 
@@ -63,7 +70,8 @@ def check(inputs: tuple[str, ...], shape: str, tolerance: float, clearance: floa
     scene = load_inputs(list(inputs))
     load_seconds = time.perf_counter() - started
     options = CheckOptions(shape=shape, tolerance=tolerance, clearance=clearance, fail_on=fail_on,
-                           ignore=ignore, baseline=old, baseline_source=baseline, threads=threads)
+                           ignore=ignore, baseline=old, baseline_source=baseline, threads=threads,
+                           decompose_options=_decompose_options(engine, threshold, cache_dir))
     result = check_scene(scene, options, progress=progress.message, load_seconds=load_seconds)
     progress.done()
 
@@ -73,6 +81,15 @@ def check(inputs: tuple[str, ...], shape: str, tolerance: float, clearance: floa
     summary_stream = sys.stderr if report == "-" else sys.stdout
     click.echo(summary_table(result), file=summary_stream)
     sys.exit(result.exit_code)
+
+
+def _decompose_options(engine: str, threshold: float | None, cache_dir: str | None) -> dict:
+    options: dict = {"engine": engine}
+    if threshold is not None:
+        options["threshold"] = threshold
+    if cache_dir is not None:
+        options["cache_dir"] = cache_dir
+    return options
 
 
 def summary_table(result) -> str:
