@@ -473,7 +473,12 @@ def check_scene(scene: Scene, options: CheckOptions | None = None, *,
 
     # Exact triangle-mesh queries: pairs involving a `mesh` body, and containment of
     # convex pairs that overlap (judged on the real surfaces).
+    # One body can only lie inside another if its box lies inside the other's box.
     overlap = (sd <= options.tolerance) & ~use_mesh
+    if k:
+        a_in_b = np.all((body_min[ca] >= body_min[cb]) & (body_max[ca] <= body_max[cb]), axis=1)
+        b_in_a = np.all((body_min[cb] >= body_min[ca]) & (body_max[cb] <= body_max[ca]), axis=1)
+        overlap &= a_in_b | b_in_a
     exact = use_mesh | overlap
     if exact.any():
         from meshcol.mesh_query import MeshSet, mesh_distance_batch
@@ -539,17 +544,13 @@ def check_scene(scene: Scene, options: CheckOptions | None = None, *,
     ]
     pairs.sort(key=lambda p: (p["a"], p["b"]))
 
-    body_rows = []
-    for i, body in enumerate(bodies):
-        lo, hi = shapes.body_part_offsets[i], shapes.body_part_offsets[i + 1]
-        body_rows.append({
-            "name": body.name,
-            "file": _relative(body.source),
-            "shape": shapes.body_shape[i],
-            "parts": int(hi - lo),
-            "vertices": int(len(body.vertices)),
-            "aabb": [_vec(body_min[i]), _vec(body_max[i])],
-        })
+    part_counts = np.diff(shapes.body_part_offsets).tolist()
+    body_rows = [
+        {"name": body.name, "file": _relative(body.source), "shape": shape, "parts": parts,
+         "vertices": len(body.vertices), "aabb": [lo, hi]}
+        for body, shape, parts, lo, hi in zip(bodies, shapes.body_shape, part_counts,
+                                             _vecs(body_min), _vecs(body_max))
+    ]
     body_rows.sort(key=lambda r: r["name"])
 
     by_status = {s: int(np.count_nonzero(status_index == SEVERITY[s])) for s in PAIR_STATUSES}
@@ -679,12 +680,6 @@ def _vecs(values: np.ndarray) -> list[list[float] | None]:
 def _num(x: float) -> float | None:
     x = float(x)
     return x if math.isfinite(x) else None
-
-
-def _vec(v: np.ndarray) -> list[float] | None:
-    if not np.all(np.isfinite(v)):
-        return None
-    return [float(c) for c in v]
 
 
 def _relative(path: str | None) -> str | None:
