@@ -34,7 +34,7 @@ def level_scene(n: int, seed: int = 0):
     ]
     protos = [(np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)) for m in protos]
     side = int(np.ceil(np.sqrt(n)))
-    spacing = 1.9
+    spacing = 2.0
     bodies = []
     for i in range(n):
         gx, gy = divmod(i, side)
