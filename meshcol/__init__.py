@@ -74,6 +74,10 @@ _LAZY: dict[str, str] = {
     "mesh_distance": "meshcol.mesh_query",
     "mesh_distance_batch": "meshcol.mesh_query",
     "mesh_intersects_batch": "meshcol.mesh_query",
+    # scene checks
+    "check": "meshcol.check",
+    "CheckOptions": "meshcol.check",
+    "CheckReport": "meshcol.check",
     # broad phase
     "sort_and_sweep": "meshcol.broadphase",
     "SweepAndPrune": "meshcol.broadphase",
