@@ -42,8 +42,6 @@ separating slab: relative linear speed along the normal plus, per body,
 from __future__ import annotations
 
 import os
-import sys
-import types
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
@@ -657,15 +655,3 @@ def sweep(
     return SweepReport(scene=scene, shape=shape, tolerance=tol, hits=tuple(hits),
                        candidate_pairs=len(groups), shape_pairs=len(pairs),
                        moving=tuple(bool(m) for m in moving))
-
-
-class _CallableModule(types.ModuleType):
-    """``meshcol.sweep`` names both this module and its main function: importing the module
-    (``import meshcol.sweep``) rebinds the package attribute to the module, so the module is
-    made callable as :func:`sweep` and ``meshcol.sweep(...)`` works either way."""
-
-    def __call__(self, *args: Any, **kwargs: Any) -> SweepReport:
-        return sweep(*args, **kwargs)
-
-
-sys.modules[__name__].__class__ = _CallableModule
