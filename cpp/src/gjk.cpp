@@ -46,150 +46,136 @@ SimplexVertex MinkowskiDifference::support(const Vec3& d) {
 
 namespace {
 
-void set_vertex(Simplex& s, const SimplexVertex& v) {
-    s.vertices[0] = v;
-    s.weights[0] = 1.0;
-    s.size = 1;
+// The closest feature of a simplex to the origin: which of its points span it (in the order
+// the subalgorithm visits them) and their barycentric weights. It works on the Minkowski
+// points alone, so the simplex itself (three points per vertex) is rearranged once, at the
+// end, and only when it shrinks.
+struct Feature {
+    int count = 0;
+    int index[4] = {0, 1, 2, 3};
+    double weight[4] = {1.0, 0.0, 0.0, 0.0};
+};
+
+void vertex_feature(Feature& f, int i) {
+    f.count = 1;
+    f.index[0] = i;
+    f.weight[0] = 1.0;
 }
 
-void set_edge(Simplex& s, const SimplexVertex& p, const SimplexVertex& q, double t) {
-    s.vertices[0] = p;
-    s.vertices[1] = q;
-    s.weights[0] = 1.0 - t;
-    s.weights[1] = t;
-    s.size = 2;
-}
-
-// Closest point of segment pq to the origin (Ericson 2004, sec. 5.1.2).
-Vec3 closest_segment(Simplex& s, const SimplexVertex p, const SimplexVertex q) {
-    const Vec3 pq = q.w - p.w;
+// Closest point of segment w[i] w[j] to the origin (Ericson 2004, sec. 5.1.2).
+Vec3 closest_segment(const Vec3* w, int i, int j, Feature& f) {
+    const Vec3 p = w[i], q = w[j];
+    const Vec3 pq = q - p;
     const double len2 = squared_norm(pq);
-    const double t_num = -dot(p.w, pq);
+    const double t_num = -dot(p, pq);
     if (t_num <= 0.0 || len2 <= 0.0) {
-        set_vertex(s, p);
-        return p.w;
+        vertex_feature(f, i);
+        return p;
     }
     if (t_num >= len2) {
-        set_vertex(s, q);
-        return q.w;
+        vertex_feature(f, j);
+        return q;
     }
     const double t = t_num / len2;
-    set_edge(s, p, q, t);
-    return p.w + pq * t;
+    f.count = 2;
+    f.index[0] = i;
+    f.index[1] = j;
+    f.weight[0] = 1.0 - t;
+    f.weight[1] = t;
+    return p + pq * t;
 }
 
-// Closest point of triangle pqr to the origin by Voronoi regions (Ericson 2004, sec. 5.1.5).
-// In the face region the point is the plane projection n (n.p)/(n.n), which is more accurate
-// than a barycentric sum when the face is far from the origin (parallel faces).
-Vec3 closest_triangle(Simplex& s, const SimplexVertex p, const SimplexVertex q,
-                      const SimplexVertex r) {
-    const Vec3 a = p.w, b = q.w, c = r.w;
+// Closest point of triangle w[i] w[j] w[k] to the origin by Voronoi regions (Ericson 2004,
+// sec. 5.1.5). In the face region the point is the plane projection n (n.p)/(n.n), which is
+// more accurate than a barycentric sum when the face is far from the origin (parallel faces).
+Vec3 closest_triangle(const Vec3* w, int i, int j, int k, Feature& f) {
+    const Vec3 a = w[i], b = w[j], c = w[k];
     const Vec3 ab = b - a, ac = c - a;
     const double d1 = -dot(ab, a), d2 = -dot(ac, a);
     if (d1 <= 0.0 && d2 <= 0.0) {
-        set_vertex(s, p);
+        vertex_feature(f, i);
         return a;
     }
     const double d3 = -dot(ab, b), d4 = -dot(ac, b);
     if (d3 >= 0.0 && d4 <= d3) {
-        set_vertex(s, q);
+        vertex_feature(f, j);
         return b;
     }
     const double vc = d1 * d4 - d3 * d2;
-    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return closest_segment(s, p, q);
+    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return closest_segment(w, i, j, f);
     const double d5 = -dot(ab, c), d6 = -dot(ac, c);
     if (d6 >= 0.0 && d5 <= d6) {
-        set_vertex(s, r);
+        vertex_feature(f, k);
         return c;
     }
     const double vb = d5 * d2 - d1 * d6;
-    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return closest_segment(s, p, r);
+    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return closest_segment(w, i, k, f);
     const double va = d3 * d6 - d5 * d4;
-    if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) return closest_segment(s, q, r);
+    if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) return closest_segment(w, j, k, f);
     const double sum = va + vb + vc;
     const Vec3 n = cross(ab, ac);
     const double nn = squared_norm(n);
     if (!(sum > 0.0) || !(nn > 0.0)) {
         // Flat (collinear) triangle: the best of its three edges.
-        Simplex s1, s2, s3;
-        const Vec3 x1 = closest_segment(s1, p, q);
-        const Vec3 x2 = closest_segment(s2, p, r);
-        const Vec3 x3 = closest_segment(s3, q, r);
+        Feature f1, f2, f3;
+        const Vec3 x1 = closest_segment(w, i, j, f1);
+        const Vec3 x2 = closest_segment(w, i, k, f2);
+        const Vec3 x3 = closest_segment(w, j, k, f3);
         const double n1 = squared_norm(x1), n2 = squared_norm(x2), n3 = squared_norm(x3);
         if (n1 <= n2 && n1 <= n3) {
-            s = s1;
+            f = f1;
             return x1;
         }
         if (n2 <= n3) {
-            s = s2;
+            f = f2;
             return x2;
         }
-        s = s3;
+        f = f3;
         return x3;
     }
-    s.vertices[0] = p;
-    s.vertices[1] = q;
-    s.vertices[2] = r;
-    s.weights[0] = va / sum;
-    s.weights[1] = vb / sum;
-    s.weights[2] = vc / sum;
-    s.size = 3;
+    f.count = 3;
+    f.index[0] = i;
+    f.index[1] = j;
+    f.index[2] = k;
+    f.weight[0] = va / sum;
+    f.weight[1] = vb / sum;
+    f.weight[2] = vc / sum;
     return n * (dot(n, a) / nn);
 }
 
-}  // namespace
-
-bool closest_point_on_simplex(Simplex& s, Vec3& closest) {
-    const SimplexVertex* v = s.vertices;
-    switch (s.size) {
-        case 1:
-            s.weights[0] = 1.0;
-            closest = v[0].w;
-            return true;
-        case 2:
-            closest = closest_segment(s, v[0], v[1]);
-            return true;
-        case 3:
-            closest = closest_triangle(s, v[0], v[1], v[2]);
-            return true;
-        default:
-            break;
-    }
-    // Tetrahedron (Ericson 2004, sec. 5.1.6): test the origin against each face plane,
-    // oriented away from the opposite vertex; the closest of the faces it lies outside of.
-    const SimplexVertex p = v[0], q = v[1], r = v[2], t = v[3];
-    const Vec3 a = p.w, b = q.w, c = r.w, d = t.w;
+// Tetrahedron (Ericson 2004, sec. 5.1.6): test the origin against each face plane, oriented
+// away from the opposite vertex; the closest of the faces it lies outside of. Returns false
+// when the origin is inside: `f` then holds all four points with the origin's barycentric
+// weights.
+bool closest_tetrahedron(const Vec3* w, Feature& f, Vec3& closest) {
+    const Vec3 a = w[0], b = w[1], c = w[2], d = w[3];
     const double volume = dot(d - a, cross(b - a, c - a));
     const double size = std::fmax(std::fmax(max_abs(b - a), max_abs(c - a)), max_abs(d - a));
     const bool flat = std::fabs(volume) <= 1e-14 * size * size * size;
-    struct Face {
-        const SimplexVertex *x, *y, *z;
-        const SimplexVertex* opposite;
-    };
-    const Face faces[4] = {{&p, &q, &r, &t}, {&p, &r, &t, &q}, {&p, &t, &q, &r}, {&q, &t, &r, &p}};
-    // Barycentric weights of the origin (signed sub-volumes), kept for an inside answer.
+    static constexpr int kFaces[4][4] = {{0, 1, 2, 3}, {0, 2, 3, 1}, {0, 3, 1, 2}, {1, 3, 2, 0}};
     double best = std::numeric_limits<double>::infinity();
     bool outside_any = false;
-    Simplex best_s;
+    Feature best_f;
     Vec3 best_x;
-    for (const Face& f : faces) {
-        const Vec3 n = cross(f.y->w - f.x->w, f.z->w - f.x->w);
-        const double side_origin = -dot(n, f.x->w);
-        const double side_opposite = dot(n, f.opposite->w - f.x->w);
+    for (const auto& face : kFaces) {
+        const Vec3 x0 = w[face[0]];
+        const Vec3 n = cross(w[face[1]] - x0, w[face[2]] - x0);
+        const double side_origin = -dot(n, x0);
+        const double side_opposite = dot(n, w[face[3]] - x0);
         const bool outside = flat || side_origin * side_opposite < 0.0;
         if (!outside) continue;
         outside_any = true;
-        Simplex fs;
-        const Vec3 x = closest_triangle(fs, *f.x, *f.y, *f.z);
+        Feature ff;
+        const Vec3 x = closest_triangle(w, face[0], face[1], face[2], ff);
         const double dist = squared_norm(x);
         if (dist < best) {
             best = dist;
-            best_s = fs;
+            best_f = ff;
             best_x = x;
         }
     }
     if (outside_any && !(flat && best == 0.0)) {
-        s = best_s;
+        f = best_f;
         closest = best_x;
         return true;
     }
@@ -201,16 +187,60 @@ bool closest_point_on_simplex(Simplex& s, Vec3& closest) {
     const double w0 = sub_volume(o, b, c, d), w1 = sub_volume(a, o, c, d);
     const double w2 = sub_volume(a, b, o, d), w3 = sub_volume(a, b, c, o);
     const double total = w0 + w1 + w2 + w3;
+    f.count = 4;
+    for (int k = 0; k < 4; ++k) f.index[k] = k;
     if (total != 0.0 && std::isfinite(total)) {
-        s.weights[0] = w0 / total;
-        s.weights[1] = w1 / total;
-        s.weights[2] = w2 / total;
-        s.weights[3] = w3 / total;
+        f.weight[0] = w0 / total;
+        f.weight[1] = w1 / total;
+        f.weight[2] = w2 / total;
+        f.weight[3] = w3 / total;
     } else {
-        s.weights[0] = s.weights[1] = s.weights[2] = s.weights[3] = 0.25;
+        f.weight[0] = f.weight[1] = f.weight[2] = f.weight[3] = 0.25;
     }
     closest = Vec3{0.0, 0.0, 0.0};
     return false;
+}
+
+// Closest feature of the `size` points `w`; false when the origin is inside a tetrahedron.
+bool closest_feature(const Vec3* w, int size, Feature& f, Vec3& closest) {
+    switch (size) {
+        case 1:
+            vertex_feature(f, 0);
+            closest = w[0];
+            return true;
+        case 2:
+            closest = closest_segment(w, 0, 1, f);
+            return true;
+        case 3:
+            closest = closest_triangle(w, 0, 1, 2, f);
+            return true;
+        default:
+            return closest_tetrahedron(w, f, closest);
+    }
+}
+
+// Shrinks `s` to the feature and sets its weights. Vertices move only when they change.
+void apply_feature(Simplex& s, const Feature& f) {
+    bool same = f.count == s.size;
+    for (int k = 0; k < f.count && same; ++k) same = f.index[k] == k;
+    if (!same) {
+        SimplexVertex kept[4];
+        for (int k = 0; k < f.count; ++k) kept[k] = s.vertices[f.index[k]];
+        for (int k = 0; k < f.count; ++k) s.vertices[k] = kept[k];
+        s.size = f.count;
+    }
+    for (int k = 0; k < f.count; ++k) s.weights[k] = f.weight[k];
+}
+
+}  // namespace
+
+bool closest_point_on_simplex(Simplex& s, Vec3& closest) {
+    Vec3 w[4];
+    for (int i = 0; i < s.size; ++i) w[i] = s.vertices[i].w;
+    Feature f;
+    const bool outside = closest_feature(w, s.size, f, closest);
+    apply_feature(s, f);
+    return outside;
 }
 
 namespace {
@@ -242,7 +272,7 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt) {
     const double separation_gap =
         touch + (opt.with_margins && !md.with_margins ? margin(*md.a) + margin(*md.b) : 0.0);
     // Start from the support in the direction of b's centre as seen from a: a good first guess.
-    Vec3 dir = -md.translation_b;
+    Vec3 dir = md.translation_b;
     if (!(squared_norm(dir) > 0.0)) dir = Vec3{1.0, 0.0, 0.0};
     s.vertices[0] = md.support(dir);
     s.weights[0] = 1.0;
@@ -275,10 +305,12 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt) {
         }
         s.vertices[s.size] = w;
         ++s.size;
-        Simplex trial = s;
+        Vec3 points[4];
+        for (int i = 0; i < s.size; ++i) points[i] = s.vertices[i].w;
+        Feature feature;
         Vec3 nv;
-        if (!closest_point_on_simplex(trial, nv)) {
-            s = trial;
+        if (!closest_feature(points, s.size, feature, nv)) {
+            apply_feature(s, feature);
             inside = true;
             res.status = Status::CONVERGED;
             v = Vec3{};
@@ -292,7 +324,7 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt) {
             res.status = Status::CONVERGED;
             break;
         }
-        s = trial;
+        apply_feature(s, feature);
         v = nv;
         vv = nvv;
     }

@@ -8,6 +8,20 @@ namespace meshcol {
 
 namespace {
 
+// Index of the vertex maximising dot(v[i], d), the first one on ties.
+int scan_support(const Vec3* v, int n, const Vec3& d) {
+    int best = 0;
+    double best_dot = dot(v[0], d);
+    for (int i = 1; i < n; ++i) {
+        const double di = dot(v[i], d);
+        if (di > best_dot) {
+            best_dot = di;
+            best = i;
+        }
+    }
+    return best;
+}
+
 SupportPoint polytope_support(const ShapeView& s, const Vec3& d, int hint) {
     const Vec3* v = s.vertices;
     const int n = s.vertex_count;
@@ -17,14 +31,17 @@ SupportPoint polytope_support(const ShapeView& s, const Vec3& d, int hint) {
         // cap hit we fall back to the scan below.
         int best = (hint >= 0 && hint < n) ? hint : 0;
         double best_dot = dot(v[best], d);
-        // A few strided samples first: the climb then starts near the top and takes few
-        // dependent (latency-bound) steps.
-        const int stride = n / 8;
-        for (int i = stride / 2; i < n; i += stride) {
-            const double di = dot(v[i], d);
-            if (di > best_dot) {
-                best_dot = di;
-                best = i;
+        if (hint < 0 || hint >= n) {
+            // Cold start: a few strided samples first, so the climb starts near the top and
+            // takes few dependent (latency-bound) steps. A warm start (the previous support
+            // point of this shape, GJK's directions turn little) is closer still.
+            const int stride = n / 8;
+            for (int i = stride / 2; i < n; i += stride) {
+                const double di = dot(v[i], d);
+                if (di > best_dot) {
+                    best_dot = di;
+                    best = i;
+                }
             }
         }
         for (int step = 0; step < n; ++step) {
@@ -43,15 +60,7 @@ SupportPoint polytope_support(const ShapeView& s, const Vec3& d, int hint) {
             best = next;
         }
     }
-    int best = 0;
-    double best_dot = dot(v[0], d);
-    for (int i = 1; i < n; ++i) {
-        const double di = dot(v[i], d);
-        if (di > best_dot) {
-            best_dot = di;
-            best = i;
-        }
-    }
+    const int best = scan_support(v, n, d);
     return {v[best], best};
 }
 
