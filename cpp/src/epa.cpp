@@ -1,8 +1,9 @@
 #include "meshcol/epa.hpp"
 
 #include <cmath>
+#include <initializer_list>
 #include <limits>
-#include <vector>
+#include <utility>
 
 namespace meshcol {
 
@@ -13,7 +14,7 @@ struct EpaFace {
     int adj[3];      // face across edge (v[e], v[e + 1])
     int adj_edge[3]; // that edge's index in the neighbour
     Vec3 normal;     // outward unit normal (zero when the face is a sliver)
-    double distance; // distance of its plane from the origin (+inf for a sliver)
+    double distance; // distance of its plane from the origin (+inf for a sliver or dead face)
     bool alive;
 };
 
@@ -22,23 +23,47 @@ struct HorizonEdge {
     int edge;  // edge index in that face
 };
 
-struct Polytope {
-    std::vector<SimplexVertex> vertices;
-    std::vector<EpaFace> faces;
-    std::vector<HorizonEdge> horizon;
+// A closed triangulated polytope of V vertices has 2V - 4 faces; dead faces' slots are reused,
+// so this many slots always suffice.
+constexpr int kMaxFaces = 2 * defaults::epa_max_vertices;
 
+// The expanding polytope in fixed-capacity arrays: trivially constructible, so one
+// thread_local instance serves every pair on a thread with no allocation and no guard.
+struct Polytope {
+    SimplexVertex vertices[defaults::epa_max_vertices];
+    EpaFace faces[kMaxFaces];
+    HorizonEdge horizon[kMaxFaces];
+    int free_faces[kMaxFaces];
+    int vertex_count;
+    int face_count;  // slots in use, alive or dead
+    int free_count;  // dead slots ready for reuse
+    int horizon_count;
+
+    void reset() { vertex_count = face_count = free_count = horizon_count = dead_count = 0; }
+
+    // -1 when out of slots.
     int add_face(int i, int j, int k) {
-        EpaFace f{{i, j, k}, {-1, -1, -1}, {-1, -1, -1}, Vec3{},
-                  std::numeric_limits<double>::infinity(), true};
+        int f;
+        if (free_count > 0) f = free_faces[--free_count];
+        else if (face_count < kMaxFaces) f = face_count++;
+        else return -1;
+        EpaFace& face = faces[f];
+        face.v[0] = i;
+        face.v[1] = j;
+        face.v[2] = k;
+        face.adj[0] = face.adj[1] = face.adj[2] = -1;
+        face.adj_edge[0] = face.adj_edge[1] = face.adj_edge[2] = -1;
+        face.normal = Vec3{};
+        face.distance = std::numeric_limits<double>::infinity();
+        face.alive = true;
         const Vec3& a = vertices[i].w;
         const Vec3 n = cross(vertices[j].w - a, vertices[k].w - a);
         const double len = norm(n);
         if (len > 0.0 && std::isfinite(len)) {
-            f.normal = n / len;
-            f.distance = dot(f.normal, a);
+            face.normal = n / len;
+            face.distance = dot(face.normal, a);
         }
-        faces.push_back(f);
-        return static_cast<int>(faces.size()) - 1;
+        return f;
     }
 
     void link(int f, int e, int g, int h) {
@@ -49,19 +74,31 @@ struct Polytope {
     }
 
     // Depth-first walk over the faces that see w (van den Bergen 2003, sec. 4.3.9): the
-    // visible region stays connected, so its border is one loop, collected in order.
+    // visible region stays connected, so its border is one loop, collected in order. Killed
+    // faces are freed only after the new faces are made (`release`), so none is reused while
+    // the walk still reads it.
     void silhouette(int f, int e, const Vec3& w) {
         EpaFace& face = faces[f];
         if (!face.alive) return;
         if (dot(face.normal, w - vertices[face.v[0]].w) <= 0.0) {
-            horizon.push_back({f, e});
+            horizon[horizon_count++] = {f, e};
             return;
         }
         face.alive = false;
+        face.distance = std::numeric_limits<double>::infinity();
+        dead[dead_count++] = f;
         for (int k = 1; k <= 2; ++k) {
             const int edge = (e + k) % 3;
-            silhouette(faces[f].adj[edge], faces[f].adj_edge[edge], w);
+            silhouette(face.adj[edge], face.adj_edge[edge], w);
         }
+    }
+
+    int dead[kMaxFaces];
+    int dead_count;
+
+    void release() {
+        for (int k = 0; k < dead_count; ++k) free_faces[free_count++] = dead[k];
+        dead_count = 0;
     }
 };
 
@@ -169,35 +206,41 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
         res.normal = nn > 0.0 ? n / nn : Vec3{1.0, 0.0, 0.0};
         return res;
     }
-    thread_local Polytope poly;
-    poly.vertices.clear();
-    poly.faces.clear();
-    for (int i = 0; i < 4; ++i) poly.vertices.push_back(s.vertices[i]);
+    thread_local Polytope scratch;
+    // One TLS lookup per call. Read through a volatile pointer so the compiler cannot see the
+    // helpers work on the thread_local and specialise them to look it up on every access.
+    Polytope* volatile scratch_address = &scratch;
+    Polytope& poly = *scratch_address;
+    poly.reset();
+    for (int i = 0; i < 4; ++i) poly.vertices[i] = s.vertices[i];
+    poly.vertex_count = 4;
     {
         const Vec3 a = s.vertices[0].w, b = s.vertices[1].w, c = s.vertices[2].w, d = s.vertices[3].w;
         if (dot(cross(b - a, c - a), d - a) > 0.0) std::swap(poly.vertices[1], poly.vertices[2]);
     }
-    // Outward orientation: (0,1,2) has the opposite vertex 3 behind it.
+    // Outward orientation: (0,1,2) has the opposite vertex 3 behind it. Each edge i -> j of a
+    // face meets j -> i of its neighbour.
     poly.add_face(0, 1, 2);
     poly.add_face(0, 3, 1);
     poly.add_face(0, 2, 3);
     poly.add_face(1, 3, 2);
-    for (int f = 0; f < 4; ++f)
-        for (int e = 0; e < 3; ++e)
-            for (int g = 0; g < 4; ++g)
-                for (int h = 0; h < 3; ++h)
-                    if (poly.faces[f].v[e] == poly.faces[g].v[(h + 1) % 3] &&
-                        poly.faces[f].v[(e + 1) % 3] == poly.faces[g].v[h])
-                        poly.link(f, e, g, h);
+    poly.link(0, 0, 1, 2);
+    poly.link(0, 1, 3, 2);
+    poly.link(0, 2, 2, 0);
+    poly.link(1, 0, 2, 2);
+    poly.link(1, 1, 3, 0);
+    poly.link(2, 1, 3, 1);
 
     res.status = Status::MAX_ITERATIONS;
-    int best_face = -1;
+    EpaFace closest{};
+    bool have_face = false;
     int it = 0;
     for (; it < opt.max_iterations; ++it) {
-        best_face = -1;
+        // The closest face: a linear scan over a few dozen slots (dead ones hold +inf).
+        int best_face = -1;
         double best = std::numeric_limits<double>::infinity();
-        for (int f = 0; f < static_cast<int>(poly.faces.size()); ++f)
-            if (poly.faces[f].alive && poly.faces[f].distance < best) {
+        for (int f = 0; f < poly.face_count; ++f)
+            if (poly.faces[f].distance < best) {
                 best = poly.faces[f].distance;
                 best_face = f;
             }
@@ -205,7 +248,8 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
             res.status = Status::DEGENERATE;
             break;
         }
-        const EpaFace closest = poly.faces[best_face];
+        closest = poly.faces[best_face];
+        have_face = true;
         // Warm start: the new support point lies near the face's own support points.
         const SimplexVertex& near = poly.vertices[closest.v[0]];
         if (near.index_a >= 0) md.hint_a = near.index_a;
@@ -214,23 +258,28 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
         const double upper = dot(closest.normal, w.w);
         bool repeated = false;
         if (w.index_a >= 0 && w.index_b >= 0)
-            for (const SimplexVertex& x : poly.vertices)
-                if (x.index_a == w.index_a && x.index_b == w.index_b) repeated = true;
+            for (int i = 0; i < poly.vertex_count; ++i)
+                if (poly.vertices[i].index_a == w.index_a && poly.vertices[i].index_b == w.index_b)
+                    repeated = true;
         if (repeated || upper - closest.distance <= opt.relative_tolerance * upper + tol * 1e-2) {
             res.status = Status::CONVERGED;
             break;
         }
-        if (static_cast<int>(poly.vertices.size()) >= defaults::epa_max_vertices) break;
-        const int nw = static_cast<int>(poly.vertices.size());
-        poly.vertices.push_back(w);
+        if (poly.vertex_count >= defaults::epa_max_vertices) break;
+        const int nw = poly.vertex_count++;
+        poly.vertices[nw] = w;
         // Remove the faces the new point sees (the closest one does, by construction) and
         // close the hole with a fan of faces over the silhouette.
-        poly.horizon.clear();
+        poly.horizon_count = 0;
+        poly.dead_count = 0;
         poly.faces[best_face].alive = false;
+        poly.faces[best_face].distance = std::numeric_limits<double>::infinity();
+        poly.dead[poly.dead_count++] = best_face;
         for (int e = 0; e < 3; ++e)
-            poly.silhouette(poly.faces[best_face].adj[e], poly.faces[best_face].adj_edge[e], w.w);
-        const int first = static_cast<int>(poly.faces.size());
-        const int count = static_cast<int>(poly.horizon.size());
+            poly.silhouette(closest.adj[e], closest.adj_edge[e], w.w);
+        poly.release();
+        const int count = poly.horizon_count;
+        int fan[kMaxFaces];
         bool ok = count >= 3;
         for (int k = 0; k < count && ok; ++k) {
             const HorizonEdge& h = poly.horizon[k];
@@ -238,6 +287,11 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
             // The edge runs b -> a in the living face, so a -> b in the new one.
             const int a = beyond.v[(h.edge + 1) % 3], b = beyond.v[h.edge];
             const int f = poly.add_face(a, b, nw);
+            if (f < 0) {
+                ok = false;
+                break;
+            }
+            fan[k] = f;
             poly.link(f, 0, h.face, h.edge);
             if (poly.faces[f].distance < -tol) ok = false;
         }
@@ -246,7 +300,7 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
             break;
         }
         for (int k = 0; k < count; ++k) {
-            const int f = first + k, g = first + (k + 1) % count;
+            const int f = fan[k], g = fan[k + 1 == count ? 0 : k + 1];
             if (poly.faces[f].v[1] != poly.faces[g].v[0]) {
                 ok = false;
                 break;
@@ -259,11 +313,11 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
         }
     }
     res.iterations = it;
-    if (best_face < 0) {
+    if (!have_face) {
         res.status = Status::DEGENERATE;
         return res;
     }
-    const EpaFace& f = poly.faces[best_face];
+    const EpaFace& f = closest;
     double wts[3];
     face_weights(poly, f, wts);
     Vec3 pa{}, pb{};
