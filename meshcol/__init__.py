@@ -34,6 +34,10 @@ _LAZY: dict[str, str] = {
     "convex_hull": "meshcol.hulls",
     "HullResult": "meshcol.hulls",
     "inspect_body": "meshcol.inspect",
+    # convex decomposition
+    "decompose": "meshcol.decompose",
+    "Decomposition": "meshcol.decompose",
+    "cached_decomposition": "meshcol.decompose",
     # narrow phase
     "ConvexSet": "meshcol.query",
     "Sphere": "meshcol.query",

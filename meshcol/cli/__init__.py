@@ -20,7 +20,9 @@ from meshcol.errors import MeshcolError
 
 # command name -> "module:function". Modules import heavy dependencies inside the command
 # function, never at module level, so `meshcol --help` stays fast.
-COMMANDS: dict[str, str] = {}
+COMMANDS: dict[str, str] = {
+    "decompose": "meshcol.cli.decompose:decompose_command",
+}
 
 CONTEXT_SETTINGS = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 
