@@ -746,9 +746,11 @@ def points_to_parts(
 def points_to_triangles(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Exact distance from each point to the nearest triangle, (n,) float64.
 
-    Candidates come from a k-d tree over triangle centroids: a triangle farther than (nearest
-    vertex distance + its bounding radius) cannot be nearest. Closest point on a triangle
-    follows Ericson, Real-Time Collision Detection (2004), 5.1.5.
+    An upper bound comes from the exact distances to the triangles with the nearest
+    centroids; then every triangle whose centroid lies within (bound + its bounding radius) is
+    measured. Triangles are binned by radius (powers of two) so a few large triangles do not
+    widen the search for all. Closest point on a triangle follows Ericson, Real-Time Collision
+    Detection (2004), 5.1.5.
     """
     from scipy.spatial import cKDTree
 
@@ -756,20 +758,24 @@ def points_to_triangles(points: np.ndarray, vertices: np.ndarray, faces: np.ndar
     tri = vertices[faces]
     centroid = tri.mean(axis=1)
     radius = np.linalg.norm(tri - centroid[:, None], axis=2).max(axis=1)
-    upper, _ = cKDTree(vertices).query(points)
-    tree = cKDTree(centroid)
-    rmax = float(radius.max())
-    result = upper.copy()
-    candidates = tree.query_ball_point(points, upper + rmax)
-    lengths = np.fromiter((len(c) for c in candidates), dtype=np.int64, count=len(points))
-    if lengths.sum() == 0:
-        return result
-    pi = np.repeat(np.arange(len(points)), lengths)
-    ti = np.fromiter((t for c in candidates for t in c), dtype=np.int64, count=int(lengths.sum()))
-    for start in range(0, len(pi), 2_000_000):
-        a, b = pi[start:start + 2_000_000], ti[start:start + 2_000_000]
-        d = _point_triangle_distance(points[a], tri[b])
-        np.minimum.at(result, a, d)
+    k = min(8, len(faces))
+    _, near = cKDTree(centroid).query(points, k=k)
+    near = near.reshape(len(points), k)
+    upper = _point_triangle_distance(np.repeat(points, k, axis=0), tri[near.reshape(-1)])
+    result = upper.reshape(len(points), k).min(axis=1)
+    level = np.floor(np.log2(np.maximum(radius, 1e-300))).astype(np.int64)
+    for lv in np.unique(level):
+        members = np.nonzero(level == lv)[0]
+        reach = result + float(radius[members].max())
+        candidates = cKDTree(centroid[members]).query_ball_point(points, reach, return_sorted=False)
+        lengths = np.fromiter(map(len, candidates), dtype=np.int64, count=len(points))
+        if lengths.sum() == 0:
+            continue
+        pi = np.repeat(np.arange(len(points)), lengths)
+        ti = members[np.concatenate([np.asarray(c, dtype=np.int64) for c in candidates])]
+        for start in range(0, len(pi), 1_000_000):
+            a, b = pi[start:start + 1_000_000], ti[start:start + 1_000_000]
+            np.minimum.at(result, a, _point_triangle_distance(points[a], tri[b]))
     return result
 
 
