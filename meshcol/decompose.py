@@ -241,9 +241,9 @@ def canonical_geometry(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndar
     used = np.unique(faces)
     if not np.isfinite(vertices[used]).all():
         raise InvalidMeshError("mesh has non-finite vertex coordinates")
-    unique, inverse = np.unique(vertices[used] + 0.0, axis=0, return_inverse=True)
+    unique, inverse = _unique_rows(vertices[used] + 0.0)
     remap = np.empty(len(vertices), dtype=np.int64)
-    remap[used] = inverse.reshape(-1)
+    remap[used] = inverse
     f = remap[faces]
     f = f[(f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 0] != f[:, 2])]
     if len(f) == 0:
@@ -251,7 +251,7 @@ def canonical_geometry(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndar
     shift = np.argmin(f, axis=1)
     rows = np.arange(len(f))[:, None]
     f = f[rows, (shift[:, None] + np.arange(3)) % 3]
-    f = np.unique(f, axis=0)
+    f, _ = _unique_rows(f)
     # Vertices only referenced by dropped triangles go too.
     used = np.unique(f)
     if len(used) != len(unique):
@@ -267,12 +267,30 @@ def canonical_geometry(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndar
 
 def is_closed_manifold(faces: np.ndarray) -> bool:
     """True when every edge is shared by exactly two triangles with opposite directions."""
-    directed = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    if len(np.unique(directed, axis=0)) != len(directed):
+    faces = np.asarray(faces, dtype=np.int64)
+    n = int(faces.max()) + 1
+    a = faces.reshape(-1)
+    b = faces[:, [1, 2, 0]].reshape(-1)
+    directed = np.sort(a * n + b)
+    if (directed[1:] == directed[:-1]).any():
         return False
-    undirected = np.sort(directed, axis=1)
-    _, counts = np.unique(undirected, axis=0, return_counts=True)
+    _, counts = np.unique(np.minimum(a, b) * n + np.maximum(a, b), return_counts=True)
     return bool((counts == 2).all())
+
+
+def _unique_rows(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Distinct rows in lexicographic order and, per input row, its index among them.
+
+    The same result as ``np.unique(rows, axis=0, return_inverse=True)``, several times faster.
+    """
+    order = np.lexsort(rows.T[::-1])
+    ordered = rows[order]
+    start = np.ones(len(rows), dtype=bool)
+    start[1:] = (ordered[1:] != ordered[:-1]).any(axis=1)
+    group = np.cumsum(start) - 1
+    inverse = np.empty(len(rows), dtype=np.int64)
+    inverse[order] = group
+    return ordered[start], inverse
 
 
 # --------------------------------------------------------------------------------------------
