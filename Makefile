@@ -34,6 +34,7 @@ test: install-test
 bench: install-test
 	$(BIN)/python benchmarks/bench_narrowphase.py
 	$(BIN)/python benchmarks/bench_broadphase.py
+	$(BIN)/python benchmarks/bench_mesh_query.py
 
 clean:
 	rm -rf build dist $(VENV) demo-out *.egg-info

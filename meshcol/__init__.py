@@ -34,6 +34,7 @@ _LAZY: dict[str, str] = {
     "convex_hull": "meshcol.hulls",
     "HullResult": "meshcol.hulls",
     "inspect_body": "meshcol.inspect",
+    "MeshInspection": "meshcol.inspect",
     # convex decomposition
     "decompose": "meshcol.decompose",
     "Decomposition": "meshcol.decompose",
@@ -54,6 +55,14 @@ _LAZY: dict[str, str] = {
     "penetration_batch": "meshcol.query",
     "intersects_batch": "meshcol.query",
     "signed_distance_batch": "meshcol.query",
+    # exact triangle-mesh queries
+    "MeshSet": "meshcol.mesh_query",
+    "MeshDistanceBatch": "meshcol.mesh_query",
+    "MeshDistanceResult": "meshcol.mesh_query",
+    "MeshIntersectsBatch": "meshcol.mesh_query",
+    "mesh_distance": "meshcol.mesh_query",
+    "mesh_distance_batch": "meshcol.mesh_query",
+    "mesh_intersects_batch": "meshcol.mesh_query",
     # broad phase
     "sort_and_sweep": "meshcol.broadphase",
     "SweepAndPrune": "meshcol.broadphase",

@@ -4,8 +4,10 @@
 namespace nb = nanobind;
 
 void bind_defaults(nb::module_& m);
+void bind_mesh_query(nb::module_& m);
 
 NB_MODULE(_core, m) {
     m.doc() = "meshcol native core (private: use the meshcol package API)";
     bind_defaults(m);
+    bind_mesh_query(m);
 }

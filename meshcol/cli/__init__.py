@@ -22,6 +22,8 @@ from meshcol.errors import MeshcolError
 # function, never at module level, so `meshcol --help` stays fast.
 COMMANDS: dict[str, str] = {
     "decompose": "meshcol.cli.decompose:decompose_command",
+    "hull": "meshcol.cli.hull:hull",
+    "inspect": "meshcol.cli.inspect:inspect",
 }
 
 CONTEXT_SETTINGS = {"help_option_names": ["-h", "--help"], "max_content_width": 100}

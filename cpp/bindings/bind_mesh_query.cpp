@@ -1,0 +1,293 @@
+// Exposes mesh_bvh.hpp and mesh_query.hpp: a set of mesh hierarchies built once, and batched
+// mesh-pair queries over it.
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/tuple.h>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "meshcol/batch.hpp"
+#include "meshcol/defaults.hpp"
+#include "meshcol/mesh_bvh.hpp"
+#include "meshcol/mesh_query.hpp"
+#include "meshcol/triangle.hpp"
+
+namespace nb = nanobind;
+using namespace nb::literals;
+
+namespace {
+
+using meshcol::Vec3;
+
+template <class T>
+using In1 = nb::ndarray<const T, nb::shape<-1>, nb::c_contig, nb::device::cpu>;
+using Points = nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
+using Faces = nb::ndarray<const std::int64_t, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
+using Poses = nb::ndarray<const double, nb::shape<-1, 4, 4>, nb::c_contig, nb::device::cpu>;
+using Pairs = nb::ndarray<const std::int64_t, nb::shape<-1, 2>, nb::c_contig, nb::device::cpu>;
+using Triangles = nb::ndarray<const double, nb::shape<-1, 3, 3>, nb::c_contig, nb::device::cpu>;
+
+// A new numpy array that owns its buffer.
+template <class T>
+nb::ndarray<nb::numpy, T> new_array(std::initializer_list<size_t> shape, T** data) {
+    size_t n = 1;
+    for (size_t s : shape) n *= s;
+    T* p = new T[n == 0 ? 1 : n];
+    nb::capsule owner(p, [](void* q) noexcept { delete[] static_cast<T*>(q); });
+    *data = p;
+    return nb::ndarray<nb::numpy, T>(p, shape, owner);
+}
+
+/// The hierarchies of M meshes, packed as in meshcol.mesh_query.MeshSet.
+struct MeshBvhSet {
+    std::vector<meshcol::MeshBvh> meshes;
+
+    const meshcol::MeshBvh& at(std::int64_t i) const {
+        if (i < 0 || i >= static_cast<std::int64_t>(meshes.size()))
+            throw std::invalid_argument("mesh index " + std::to_string(i) + " out of range [0, " +
+                                        std::to_string(meshes.size()) + ")");
+        return meshes[static_cast<size_t>(i)];
+    }
+};
+
+void check_offsets(const std::int64_t* offsets, size_t count, std::int64_t total, const char* name,
+                   const char* what) {
+    if (offsets[0] != 0 || offsets[count - 1] != total)
+        throw std::invalid_argument(std::string(name) + " must start at 0 and end at the number of " + what);
+    for (size_t i = 1; i < count; ++i)
+        if (offsets[i] < offsets[i - 1])
+            throw std::invalid_argument(std::string(name) + " must be non-decreasing");
+}
+
+void build_set(MeshBvhSet* self, Points vertices, Faces faces, In1<std::int64_t> vertex_offsets,
+               In1<std::int64_t> face_offsets, int threads) {
+    const size_t m1 = vertex_offsets.shape(0);
+    if (m1 == 0 || face_offsets.shape(0) != m1)
+        throw std::invalid_argument("vertex_offsets and face_offsets must both be (M + 1,), got (" +
+                                    std::to_string(m1) + ",) and (" +
+                                    std::to_string(face_offsets.shape(0)) + ",)");
+    const std::int64_t* vo = vertex_offsets.data();
+    const std::int64_t* fo = face_offsets.data();
+    check_offsets(vo, m1, static_cast<std::int64_t>(vertices.shape(0)), "vertex_offsets", "vertices");
+    check_offsets(fo, m1, static_cast<std::int64_t>(faces.shape(0)), "face_offsets", "faces");
+    const auto m = static_cast<long long>(m1 - 1);
+    const double* v = vertices.data();
+    const std::int64_t* f = faces.data();
+    // Index checks first, on this thread, so the parallel build cannot throw.
+    for (long long i = 0; i < m; ++i) {
+        const std::int64_t nv = vo[i + 1] - vo[i];
+        for (std::int64_t k = 3 * fo[i]; k < 3 * fo[i + 1]; ++k)
+            if (f[k] < 0 || f[k] >= nv)
+                throw std::invalid_argument("mesh " + std::to_string(i) + ": face " +
+                                            std::to_string(k / 3 - fo[i]) + " has vertex index " +
+                                            std::to_string(f[k]) + " out of range [0, " +
+                                            std::to_string(nv) + ")");
+        if (fo[i + 1] - fo[i] > std::numeric_limits<std::int32_t>::max() / 2)
+            throw std::invalid_argument("mesh " + std::to_string(i) + " has too many faces");
+    }
+    new (self) MeshBvhSet();
+    self->meshes.resize(static_cast<size_t>(m));
+    nb::gil_scoped_release release;
+    meshcol::parallel_for(m, meshcol::resolve_threads(threads, m, 1), [&](long long begin, long long end) {
+        for (long long i = begin; i < end; ++i)
+            self->meshes[static_cast<size_t>(i)] =
+                meshcol::MeshBvh(v + 3 * vo[i], vo[i + 1] - vo[i], f + 3 * fo[i], fo[i + 1] - fo[i]);
+    });
+}
+
+struct PosedPairs {
+    std::vector<meshcol::Pose> poses;
+    std::vector<char> rigid;
+    const std::int64_t* pairs;
+    long long count;
+};
+
+PosedPairs read_pairs(const MeshBvhSet& set, const Poses& poses, const Pairs& pairs) {
+    const size_t m = set.meshes.size();
+    if (poses.shape(0) != m)
+        throw std::invalid_argument("poses must be (" + std::to_string(m) + ", 4, 4), got (" +
+                                    std::to_string(poses.shape(0)) + ", 4, 4)");
+    PosedPairs out;
+    out.poses.resize(m);
+    out.rigid.resize(m);
+    for (size_t i = 0; i < m; ++i) {
+        const double* p = poses.data() + 16 * i;
+        out.rigid[i] = meshcol::is_rigid_matrix4(p, meshcol::defaults::rigid_tolerance);
+        out.poses[i] = meshcol::Pose::from_matrix4(p);
+    }
+    out.pairs = pairs.data();
+    out.count = static_cast<long long>(pairs.shape(0));
+    for (long long k = 0; k < out.count; ++k)
+        for (int s = 0; s < 2; ++s)
+            if (out.pairs[2 * k + s] < 0 || out.pairs[2 * k + s] >= static_cast<std::int64_t>(m))
+                throw std::invalid_argument("pairs[" + std::to_string(k) + "] = (" +
+                                            std::to_string(out.pairs[2 * k]) + ", " +
+                                            std::to_string(out.pairs[2 * k + 1]) +
+                                            ") is out of range for " + std::to_string(m) + " meshes");
+    return out;
+}
+
+nb::tuple distance_batch(const MeshBvhSet& set, Poses poses, Pairs pairs, int threads, double max_distance) {
+    if (!(max_distance >= 0.0))
+        throw std::invalid_argument("max_distance must be >= 0, got " + std::to_string(max_distance));
+    const PosedPairs in = read_pairs(set, poses, pairs);
+    const auto n = static_cast<size_t>(in.count);
+    double *distance, *point_a, *point_b;
+    bool *intersecting, *a_inside_b, *b_inside_a;
+    std::int64_t *triangle_a, *triangle_b;
+    std::int8_t* status;
+    auto distance_arr = new_array<double>({n}, &distance);
+    auto point_a_arr = new_array<double>({n, 3}, &point_a);
+    auto point_b_arr = new_array<double>({n, 3}, &point_b);
+    auto intersecting_arr = new_array<bool>({n}, &intersecting);
+    auto a_inside_b_arr = new_array<bool>({n}, &a_inside_b);
+    auto b_inside_a_arr = new_array<bool>({n}, &b_inside_a);
+    auto triangle_a_arr = new_array<std::int64_t>({n}, &triangle_a);
+    auto triangle_b_arr = new_array<std::int64_t>({n}, &triangle_b);
+    auto status_arr = new_array<std::int8_t>({n}, &status);
+    {
+        nb::gil_scoped_release release;
+        const int t = meshcol::resolve_threads(threads, in.count, meshcol::defaults::mesh_min_pairs_per_thread);
+        meshcol::parallel_for(in.count, t, [&](long long begin, long long end) {
+            for (long long k = begin; k < end; ++k) {
+                const std::int64_t i = in.pairs[2 * k], j = in.pairs[2 * k + 1];
+                meshcol::MeshDistanceInput q;
+                q.a = &set.meshes[static_cast<size_t>(i)];
+                q.b = &set.meshes[static_cast<size_t>(j)];
+                q.pose_a = in.poses[static_cast<size_t>(i)];
+                q.pose_b = in.poses[static_cast<size_t>(j)];
+                q.max_distance = max_distance;
+                meshcol::MeshDistanceOutput r;
+                if (in.rigid[static_cast<size_t>(i)] && in.rigid[static_cast<size_t>(j)]) {
+                    r = meshcol::mesh_distance(q);
+                } else {
+                    const double nan = std::numeric_limits<double>::quiet_NaN();
+                    r.distance = nan;
+                    r.point_a = r.point_b = Vec3{nan, nan, nan};
+                    r.status = meshcol::Status::INVALID_INPUT;
+                }
+                distance[k] = r.distance;
+                for (int c = 0; c < 3; ++c) {
+                    point_a[3 * k + c] = r.point_a[c];
+                    point_b[3 * k + c] = r.point_b[c];
+                }
+                intersecting[k] = r.intersecting;
+                a_inside_b[k] = r.a_inside_b;
+                b_inside_a[k] = r.b_inside_a;
+                triangle_a[k] = r.triangle_a;
+                triangle_b[k] = r.triangle_b;
+                status[k] = static_cast<std::int8_t>(r.status);
+            }
+        });
+    }
+    return nb::make_tuple(distance_arr, point_a_arr, point_b_arr, intersecting_arr, a_inside_b_arr,
+                          b_inside_a_arr, triangle_a_arr, triangle_b_arr, status_arr);
+}
+
+nb::tuple intersects_batch(const MeshBvhSet& set, Poses poses, Pairs pairs, int threads) {
+    const PosedPairs in = read_pairs(set, poses, pairs);
+    const auto n = static_cast<size_t>(in.count);
+    bool* intersecting;
+    std::int8_t* status;
+    auto intersecting_arr = new_array<bool>({n}, &intersecting);
+    auto status_arr = new_array<std::int8_t>({n}, &status);
+    {
+        nb::gil_scoped_release release;
+        const int t = meshcol::resolve_threads(threads, in.count, meshcol::defaults::mesh_min_pairs_per_thread);
+        meshcol::parallel_for(in.count, t, [&](long long begin, long long end) {
+            for (long long k = begin; k < end; ++k) {
+                const auto i = static_cast<size_t>(in.pairs[2 * k]);
+                const auto j = static_cast<size_t>(in.pairs[2 * k + 1]);
+                const meshcol::MeshBvh& a = set.meshes[i];
+                const meshcol::MeshBvh& b = set.meshes[j];
+                if (!a.valid() || !b.valid() || !in.rigid[i] || !in.rigid[j]) {
+                    intersecting[k] = false;
+                    status[k] = static_cast<std::int8_t>(meshcol::Status::INVALID_INPUT);
+                    continue;
+                }
+                intersecting[k] = meshcol::mesh_intersects(a, in.poses[i], b, in.poses[j]);
+                status[k] = static_cast<std::int8_t>(meshcol::Status::CONVERGED);
+            }
+        });
+    }
+    return nb::make_tuple(intersecting_arr, status_arr);
+}
+
+}  // namespace
+
+void bind_mesh_query(nb::module_& m) {
+    nb::class_<MeshBvhSet>(m, "MeshBvhSet",
+                           "Bounding volume hierarchies of M triangle meshes, built once (mesh_bvh.hpp).")
+        .def("__init__", &build_set, "vertices"_a, "faces"_a, "vertex_offsets"_a, "face_offsets"_a,
+             "threads"_a = 0,
+             "Builds every mesh's hierarchy. vertices (V, 3) local frames; faces (F, 3) indices "
+             "local to each mesh's vertex block; offsets (M + 1,).")
+        .def("__len__", [](const MeshBvhSet& s) { return s.meshes.size(); })
+        .def("valid", [](const MeshBvhSet& s, std::int64_t i) { return s.at(i).valid(); }, "i"_a,
+             "Whether mesh i has finite vertices and at least one face.")
+        .def("node_count", [](const MeshBvhSet& s, std::int64_t i) { return s.at(i).nodes().size(); }, "i"_a)
+        .def("validate", [](const MeshBvhSet& s) {
+            for (const auto& mesh : s.meshes)
+                if (!mesh.validate()) return false;
+            return true;
+        }, "Checks every hierarchy's invariants (for tests).")
+        .def("winding_number", [](const MeshBvhSet& s, std::int64_t i, Points points) {
+            const meshcol::MeshBvh& mesh = s.at(i);
+            if (!mesh.valid()) throw std::invalid_argument("mesh " + std::to_string(i) + " is not valid");
+            const size_t n = points.shape(0);
+            double* out;
+            auto arr = new_array<double>({n}, &out);
+            const double* p = points.data();
+            {
+                nb::gil_scoped_release release;
+                for (size_t k = 0; k < n; ++k)
+                    out[k] = meshcol::winding_number(mesh, Vec3{p[3 * k], p[3 * k + 1], p[3 * k + 2]});
+            }
+            return arr;
+        }, "i"_a, "points"_a, "Generalized winding numbers of points (mesh i's local frame).")
+        .def("distance_batch", &distance_batch, "poses"_a, "pairs"_a, "threads"_a = 0,
+             "max_distance"_a = std::numeric_limits<double>::infinity(),
+             "Mesh-pair distances: (distance, point_a, point_b, intersecting, a_inside_b, "
+             "b_inside_a, triangle_a, triangle_b, status).")
+        .def("intersects_batch", &intersects_batch, "poses"_a, "pairs"_a, "threads"_a = 0,
+             "Mesh-pair surface intersection tests: (intersecting, status).");
+
+    m.def("triangle_distance_batch", [](Triangles a, Triangles b) {
+        if (a.shape(0) != b.shape(0))
+            throw std::invalid_argument("a and b must have the same number of triangles, got " +
+                                        std::to_string(a.shape(0)) + " and " + std::to_string(b.shape(0)));
+        const size_t n = a.shape(0);
+        double *distance, *point_a, *point_b;
+        bool* intersecting;
+        auto d_arr = new_array<double>({n}, &distance);
+        auto pa_arr = new_array<double>({n, 3}, &point_a);
+        auto pb_arr = new_array<double>({n, 3}, &point_b);
+        auto i_arr = new_array<bool>({n}, &intersecting);
+        const double* pa = a.data();
+        const double* pb = b.data();
+        {
+            nb::gil_scoped_release release;
+            for (size_t k = 0; k < n; ++k) {
+                Vec3 ta[3], tb[3];
+                for (int c = 0; c < 3; ++c) {
+                    ta[c] = Vec3{pa[9 * k + 3 * c], pa[9 * k + 3 * c + 1], pa[9 * k + 3 * c + 2]};
+                    tb[c] = Vec3{pb[9 * k + 3 * c], pb[9 * k + 3 * c + 1], pb[9 * k + 3 * c + 2]};
+                }
+                const meshcol::TriangleDistanceOutput r = meshcol::triangle_distance(ta, tb);
+                distance[k] = r.distance;
+                intersecting[k] = r.intersecting;
+                for (int c = 0; c < 3; ++c) {
+                    point_a[3 * k + c] = r.point_a[c];
+                    point_b[3 * k + c] = r.point_b[c];
+                }
+            }
+        }
+        return nb::make_tuple(d_arr, pa_arr, pb_arr, i_arr);
+    }, "a"_a, "b"_a,
+       "Exact distances of triangle pairs a[k], b[k] (n, 3, 3): (distance, point_a, point_b, intersecting).");
+}

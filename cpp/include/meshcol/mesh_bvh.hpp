@@ -1,0 +1,58 @@
+#pragma once
+/// A static bounding volume hierarchy over the triangles of one mesh, in the mesh's local
+/// frame: axis-aligned boxes, built top-down with a binned surface area heuristic (Wald 2007),
+/// stored flat in depth-first order (32-byte nodes), with the triangles copied in leaf order so
+/// a leaf reads one contiguous block.
+
+#include <cstdint>
+#include <vector>
+
+#include "meshcol/vec.hpp"
+
+namespace meshcol {
+
+/// One node. A leaf holds triangles [index, index + count); an internal node (count == 0) has
+/// its left child right after it (depth-first order) and its right child at `index`.
+struct BvhNode {
+    float lower[3];       ///< box minimum, local frame, rounded outwards from the doubles
+    float upper[3];       ///< box maximum, local frame, rounded outwards from the doubles
+    std::int32_t index;   ///< leaf: first triangle (leaf order); internal: right child
+    std::int32_t count;   ///< leaf: number of triangles (>= 1); internal: 0
+
+    bool is_leaf() const { return count > 0; }
+};
+static_assert(sizeof(BvhNode) == 32, "BvhNode must stay 32 bytes");
+
+/// The hierarchy of one triangle mesh. Immutable once built; safe to share between threads.
+class MeshBvh {
+public:
+    MeshBvh() = default;
+
+    /// Builds the hierarchy of `face_count` triangles `faces` (3 indices each, into the
+    /// `vertex_count` points `vertices`, 3 doubles each, local frame).
+    /// Throws std::invalid_argument when a face index is out of [0, vertex_count).
+    /// A mesh with a non-finite vertex or no face is kept but marked not `valid()` (no nodes).
+    MeshBvh(const double* vertices, std::int64_t vertex_count, const std::int64_t* faces,
+            std::int64_t face_count);
+
+    /// Finite vertices and at least one face.
+    bool valid() const { return !nodes_.empty(); }
+    const std::vector<BvhNode>& nodes() const { return nodes_; }
+    std::int32_t triangle_count() const { return static_cast<std::int32_t>(face_index_.size()); }
+    /// The three corners of triangle `i` (leaf order), local frame.
+    const Vec3* triangle(std::int32_t i) const { return &corners_[3 * static_cast<size_t>(i)]; }
+    /// The input face index of triangle `i` (leaf order).
+    std::int64_t face_index(std::int32_t i) const { return face_index_[static_cast<size_t>(i)]; }
+
+    /// Checks the invariants (for tests): every box contains its triangles and children, every
+    /// triangle sits in exactly one leaf, leaves are no larger than the leaf size, the layout is
+    /// depth-first. Returns false on the first violation.
+    bool validate() const;
+
+private:
+    std::vector<BvhNode> nodes_;
+    std::vector<Vec3> corners_;            ///< 3 per triangle, leaf order
+    std::vector<std::int64_t> face_index_;  ///< leaf order -> input face
+};
+
+}  // namespace meshcol

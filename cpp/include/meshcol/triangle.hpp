@@ -1,0 +1,51 @@
+#pragma once
+/// Exact queries on one pair of triangles: closest points and intersection.
+///
+/// A triangle is three points `t[0], t[1], t[2]` in the caller's frame; both triangles of a
+/// query must be in the same frame. Degenerate triangles (collinear or repeated vertices) are
+/// accepted: they behave as the segment or point they are.
+
+#include "meshcol/vec.hpp"
+
+namespace meshcol {
+
+/// Closest points of two segments [p1, q1] and [p2, q2].
+struct SegmentClosestPoints {
+    double squared_distance;  ///< >= 0, squared length of point_b - point_a
+    Vec3 point_a;             ///< on [p1, q1]
+    Vec3 point_b;             ///< on [p2, q2]
+};
+
+/// Closest points of two segments (Ericson 2004, 5.1.9); degenerate segments are points.
+SegmentClosestPoints segment_closest_points(const Vec3& p1, const Vec3& q1, const Vec3& p2,
+                                            const Vec3& q2);
+
+/// Whether two closed triangles share at least one point (touching counts).
+///
+/// Non-coplanar triangles intersect exactly when an edge of one meets the other; coplanar ones
+/// when an edge of one meets the other in their plane or one contains the other. The tests are
+/// sign tests on triple products (as Guigue and Devillers 2003), exact whenever those products
+/// are computed exactly (e.g. small-integer coordinates), and otherwise wrong only for pairs
+/// whose distance is at rounding level. When the triangles intersect and `witness` is not null,
+/// writes a point they share (up to rounding).
+bool triangles_intersect(const Vec3 a[3], const Vec3 b[3], Vec3* witness);
+
+/// Squared distance between two triangles, as the minimum over the 9 edge-edge pairs and the 6
+/// vertex-face pairs (Ericson 2004, 5.1.9 and 5.1.5); writes the closest points. This is the
+/// exact distance when the triangles do not intersect, and an upper bound otherwise (call
+/// `triangles_intersect` first).
+double triangle_separated_squared_distance(const Vec3 a[3], const Vec3 b[3], Vec3* point_a,
+                                           Vec3* point_b);
+
+/// Distance between two triangles and their closest points.
+struct TriangleDistanceOutput {
+    double distance = 0.0;      ///< >= 0; 0 when the triangles intersect or touch
+    Vec3 point_a;               ///< on triangle a, caller's frame
+    Vec3 point_b;               ///< on triangle b, caller's frame; equals point_a when intersecting
+    bool intersecting = false;  ///< the closed triangles share a point
+};
+
+/// Exact distance between two triangles: `triangles_intersect`, then the 15 feature pairs.
+TriangleDistanceOutput triangle_distance(const Vec3 a[3], const Vec3 b[3]);
+
+}  // namespace meshcol

@@ -1,0 +1,277 @@
+// Triangle-triangle distance and intersection.
+//
+// Distance: for two triangles that do not intersect, the closest pair of points is attained on
+// an edge of each (9 segment pairs) or at a vertex of one and the interior of the other (6
+// vertex-face pairs); Ericson 2004, 5.1.9. Intersection: sign tests on triple products in the
+// manner of Guigue and Devillers 2003 (edge-against-triangle formulation, which also covers the
+// coplanar and degenerate cases).
+#include "meshcol/triangle.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace meshcol {
+namespace {
+
+inline double clamp01(double x) { return x < 0.0 ? 0.0 : (x > 1.0 ? 1.0 : x); }
+
+// Largest component of |n|: the axis dropped when projecting a plane with normal n to 2D.
+inline int dominant_axis(const Vec3& n) {
+    const double ax = std::fabs(n.x), ay = std::fabs(n.y), az = std::fabs(n.z);
+    if (ax >= ay && ax >= az) return 0;
+    return ay >= az ? 1 : 2;
+}
+
+struct Vec2 {
+    double x, y;
+};
+
+inline Vec2 project(const Vec3& p, int drop) {
+    switch (drop) {
+        case 0: return {p.y, p.z};
+        case 1: return {p.z, p.x};
+        default: return {p.x, p.y};
+    }
+}
+
+// Twice the signed area of (a, b, c): > 0 counter-clockwise.
+inline double orient2d(const Vec2& a, const Vec2& b, const Vec2& c) {
+    return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+}
+
+inline bool same_sign_or_zero(double a, double b, double c) {
+    return (a >= 0.0 && b >= 0.0 && c >= 0.0) || (a <= 0.0 && b <= 0.0 && c <= 0.0);
+}
+
+// 2D point in closed triangle (t0, t1, t2) of non-zero area.
+inline bool point_in_triangle_2d(const Vec2& p, const Vec2& t0, const Vec2& t1, const Vec2& t2) {
+    return same_sign_or_zero(orient2d(t0, t1, p), orient2d(t1, t2, p), orient2d(t2, t0, p));
+}
+
+// Whether closed 2D segments [p, q] and [a, b] meet; on success writes the parameter along
+// [p, q] of a common point.
+bool segments_meet_2d(const Vec2& p, const Vec2& q, const Vec2& a, const Vec2& b, double* s) {
+    const double o1 = orient2d(p, q, a), o2 = orient2d(p, q, b);
+    if ((o1 > 0.0 && o2 > 0.0) || (o1 < 0.0 && o2 < 0.0)) return false;
+    const double o3 = orient2d(a, b, p), o4 = orient2d(a, b, q);
+    if ((o3 > 0.0 && o4 > 0.0) || (o3 < 0.0 && o4 < 0.0)) return false;
+    if (o1 == 0.0 && o2 == 0.0) {
+        // Collinear: compare intervals along the longer axis of [p, q] (or of [a, b]).
+        const double dx = std::fabs(q.x - p.x) + std::fabs(b.x - a.x);
+        const double dy = std::fabs(q.y - p.y) + std::fabs(b.y - a.y);
+        const bool use_x = dx >= dy;
+        const double p0 = use_x ? p.x : p.y, p1 = use_x ? q.x : q.y;
+        const double a0 = use_x ? a.x : a.y, a1 = use_x ? b.x : b.y;
+        const double lo = std::max(std::min(p0, p1), std::min(a0, a1));
+        const double hi = std::min(std::max(p0, p1), std::max(a0, a1));
+        if (lo > hi) return false;
+        *s = p1 != p0 ? clamp01((lo - p0) / (p1 - p0)) : 0.0;
+        return true;
+    }
+    *s = o3 != o4 ? clamp01(o3 / (o3 - o4)) : 0.0;
+    return true;
+}
+
+// Segment [p, q] against triangle t, all in the plane of t (normal n, non-zero).
+bool segment_triangle_coplanar(const Vec3& p, const Vec3& q, const Vec3 t[3], const Vec3& n,
+                               Vec3* witness) {
+    const int drop = dominant_axis(n);
+    const Vec2 p2 = project(p, drop), q2 = project(q, drop);
+    const Vec2 t0 = project(t[0], drop), t1 = project(t[1], drop), t2 = project(t[2], drop);
+    if (point_in_triangle_2d(p2, t0, t1, t2)) {
+        if (witness) *witness = p;
+        return true;
+    }
+    const Vec2 tt[3] = {t0, t1, t2};
+    for (int i = 0; i < 3; ++i) {
+        double s = 0.0;
+        if (segments_meet_2d(p2, q2, tt[i], tt[(i + 1) % 3], &s)) {
+            if (witness) *witness = p + (q - p) * s;
+            return true;
+        }
+    }
+    return false;
+}
+
+// Segment [p, q] with plane sides sp, sq (w.r.t. triangle t, normal n) against triangle t.
+bool segment_triangle(const Vec3& p, const Vec3& q, double sp, double sq, const Vec3 t[3],
+                      const Vec3& n, Vec3* witness) {
+    if ((sp > 0.0 && sq > 0.0) || (sp < 0.0 && sq < 0.0)) return false;
+    if (sp == 0.0 && sq == 0.0) return segment_triangle_coplanar(p, q, t, n, witness);
+    // The line pq meets the plane; it passes through the closed triangle iff the three triple
+    // products (signed volumes of pq with each edge) agree in sign.
+    const Vec3 d = q - p;
+    const Vec3 a = t[0] - p, b = t[1] - p, c = t[2] - p;
+    const double s0 = dot(d, cross(a, b)), s1 = dot(d, cross(b, c)), s2 = dot(d, cross(c, a));
+    if (!same_sign_or_zero(s0, s1, s2)) return false;
+    if (witness) *witness = p + d * clamp01(sp / (sp - sq));
+    return true;
+}
+
+// Triangles a (any) and b (non-degenerate, normal nb) that lie in one plane.
+bool coplanar_triangles_intersect(const Vec3 a[3], const Vec3 b[3], const Vec3& nb,
+                                  Vec3* witness) {
+    for (int i = 0; i < 3; ++i)
+        if (segment_triangle_coplanar(a[i], a[(i + 1) % 3], b, nb, witness)) return true;
+    // No edge of a meets b: they intersect only if b lies inside a.
+    const int drop = dominant_axis(nb);
+    const Vec2 a0 = project(a[0], drop), a1 = project(a[1], drop), a2 = project(a[2], drop);
+    if (orient2d(a0, a1, a2) != 0.0 && point_in_triangle_2d(project(b[0], drop), a0, a1, a2)) {
+        if (witness) *witness = b[0];
+        return true;
+    }
+    return false;
+}
+
+// Triangle a against triangle b, b non-degenerate (normal nb != 0).
+bool triangles_intersect_nondegenerate_b(const Vec3 a[3], const Vec3 b[3], const Vec3& na,
+                                         const Vec3& nb, bool a_degenerate, Vec3* witness) {
+    double da[3];
+    for (int i = 0; i < 3; ++i) da[i] = dot(a[i] - b[0], nb);
+    if ((da[0] > 0.0 && da[1] > 0.0 && da[2] > 0.0) || (da[0] < 0.0 && da[1] < 0.0 && da[2] < 0.0))
+        return false;
+    if (da[0] == 0.0 && da[1] == 0.0 && da[2] == 0.0)
+        return coplanar_triangles_intersect(a, b, nb, witness);
+    double db[3] = {0.0, 0.0, 0.0};
+    if (!a_degenerate) {
+        for (int i = 0; i < 3; ++i) db[i] = dot(b[i] - a[0], na);
+        if ((db[0] > 0.0 && db[1] > 0.0 && db[2] > 0.0) ||
+            (db[0] < 0.0 && db[1] < 0.0 && db[2] < 0.0))
+            return false;
+    }
+    // Non-coplanar triangles meet along a segment whose ends lie on edges: some edge of one
+    // triangle meets the other.
+    for (int i = 0; i < 3; ++i) {
+        const int j = (i + 1) % 3;
+        if (segment_triangle(a[i], a[j], da[i], da[j], b, nb, witness)) return true;
+    }
+    if (a_degenerate) return false;  // a is a segment: its edges were the whole of it
+    for (int i = 0; i < 3; ++i) {
+        const int j = (i + 1) % 3;
+        if (segment_triangle(b[i], b[j], db[i], db[j], a, na, witness)) return true;
+    }
+    return false;
+}
+
+}  // namespace
+
+SegmentClosestPoints segment_closest_points(const Vec3& p1, const Vec3& q1, const Vec3& p2,
+                                            const Vec3& q2) {
+    // Ericson 2004, 5.1.9 (ClosestPtSegmentSegment), with exact zero tests for degenerate
+    // segments: a tiny but non-zero length is still a valid segment.
+    const Vec3 d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
+    const double a = dot(d1, d1), e = dot(d2, d2), f = dot(d2, r);
+    double s = 0.0, t = 0.0;
+    if (a == 0.0 && e == 0.0) {
+        s = t = 0.0;
+    } else if (a == 0.0) {
+        t = clamp01(f / e);
+    } else {
+        const double c = dot(d1, r);
+        if (e == 0.0) {
+            s = clamp01(-c / a);
+        } else {
+            const double b = dot(d1, d2);
+            const double denom = a * e - b * b;  // >= 0; 0 when parallel
+            s = denom > 0.0 ? clamp01((b * f - c * e) / denom) : 0.0;
+            t = (b * s + f) / e;
+            if (t < 0.0) {
+                t = 0.0;
+                s = clamp01(-c / a);
+            } else if (t > 1.0) {
+                t = 1.0;
+                s = clamp01((b - c) / a);
+            }
+        }
+    }
+    SegmentClosestPoints out;
+    out.point_a = p1 + d1 * s;
+    out.point_b = p2 + d2 * t;
+    out.squared_distance = squared_norm(out.point_b - out.point_a);
+    return out;
+}
+
+double triangle_separated_squared_distance(const Vec3 a[3], const Vec3 b[3], Vec3* point_a,
+                                           Vec3* point_b) {
+    double best = std::numeric_limits<double>::infinity();
+    Vec3 best_a = a[0], best_b = b[0];
+    for (int i = 0; i < 3; ++i) {
+        const Vec3& p1 = a[i];
+        const Vec3& q1 = a[(i + 1) % 3];
+        for (int j = 0; j < 3; ++j) {
+            const SegmentClosestPoints s = segment_closest_points(p1, q1, b[j], b[(j + 1) % 3]);
+            if (s.squared_distance < best) {
+                best = s.squared_distance;
+                best_a = s.point_a;
+                best_b = s.point_b;
+            }
+        }
+    }
+    // Vertex-face: only a vertex whose projection falls inside the other triangle can beat the
+    // edge pairs (otherwise the closest point of the face is on its boundary, already covered).
+    // Degenerate faces (zero normal) have no interior and are skipped.
+    for (int side = 0; side < 2; ++side) {
+        const Vec3* face = side == 0 ? b : a;
+        const Vec3* verts = side == 0 ? a : b;
+        const Vec3 e0 = face[1] - face[0], e1 = face[2] - face[1], e2 = face[0] - face[2];
+        const Vec3 n = cross(e0, face[2] - face[0]);
+        const double nn = dot(n, n);
+        if (!(nn > 0.0)) continue;
+        for (int i = 0; i < 3; ++i) {
+            const Vec3& p = verts[i];
+            if (dot(cross(e0, p - face[0]), n) < 0.0 || dot(cross(e1, p - face[1]), n) < 0.0 ||
+                dot(cross(e2, p - face[2]), n) < 0.0)
+                continue;
+            const Vec3 q = p - n * (dot(p - face[0], n) / nn);
+            const double d2 = squared_norm(p - q);
+            if (d2 < best) {
+                best = d2;
+                best_a = side == 0 ? p : q;
+                best_b = side == 0 ? q : p;
+            }
+        }
+    }
+    if (point_a) *point_a = best_a;
+    if (point_b) *point_b = best_b;
+    return best;
+}
+
+bool triangles_intersect(const Vec3 a[3], const Vec3 b[3], Vec3* witness) {
+    const Vec3 na = cross(a[1] - a[0], a[2] - a[0]);
+    const Vec3 nb = cross(b[1] - b[0], b[2] - b[0]);
+    const bool a_degenerate = !(dot(na, na) > 0.0);
+    const bool b_degenerate = !(dot(nb, nb) > 0.0);
+    if (a_degenerate && b_degenerate) {
+        // Two segments (or points): they meet iff some pair of edges is at distance zero.
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) {
+                const SegmentClosestPoints s =
+                    segment_closest_points(a[i], a[(i + 1) % 3], b[j], b[(j + 1) % 3]);
+                if (s.squared_distance == 0.0) {
+                    if (witness) *witness = s.point_a;
+                    return true;
+                }
+            }
+        return false;
+    }
+    if (b_degenerate) return triangles_intersect_nondegenerate_b(b, a, nb, na, true, witness);
+    return triangles_intersect_nondegenerate_b(a, b, na, nb, a_degenerate, witness);
+}
+
+TriangleDistanceOutput triangle_distance(const Vec3 a[3], const Vec3 b[3]) {
+    TriangleDistanceOutput out;
+    Vec3 w;
+    if (triangles_intersect(a, b, &w)) {
+        out.distance = 0.0;
+        out.point_a = out.point_b = w;
+        out.intersecting = true;
+        return out;
+    }
+    const double d2 = triangle_separated_squared_distance(a, b, &out.point_a, &out.point_b);
+    out.distance = std::sqrt(d2);
+    out.intersecting = d2 == 0.0;
+    return out;
+}
+
+}  // namespace meshcol

@@ -1,0 +1,549 @@
+"""Mesh health checks: topology, degeneracies, self-intersections and a guess at the units.
+
+:func:`inspect_body` answers "is this mesh fit to be a collider?": is it closed, consistently
+wound, free of degenerate, duplicate and non-manifold faces and of self-intersections, in one
+piece, and plausibly in metres.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from meshcol.errors import InvalidMeshError
+from meshcol.types import Body
+
+__all__ = [
+    "MeshInspection",
+    "RULES",
+    "inspect_body",
+    "self_intersecting_pairs",
+    "guess_units",
+    "closed_volume",
+]
+
+#: ``--fail-on`` rules, each the name of a finding.
+RULES: tuple[str, ...] = (
+    "not-watertight",
+    "self-intersecting",
+    "inconsistent-winding",
+    "degenerate-faces",
+    "non-manifold",
+    "duplicate-faces",
+    "multiple-components",
+    "suspect-units",
+)
+#: A face is degenerate when its height (twice its area over its longest edge) is at most
+#: this fraction of the mesh's bounding-box diagonal: it then has no usable normal. 1e-7 is
+#: just above float32 rounding, the precision of STL files.
+DEGENERATE_RELATIVE_HEIGHT = 1e-7
+#: Self-intersection tests treat distances up to this fraction of the diagonal as contact,
+#: not crossing: faces that merely touch (shared vertices, T-junctions) are not reported.
+CROSSING_RELATIVE_TOLERANCE = 1e-10
+#: Largest extent, in units, above which a body is probably in millimetres, not metres
+#: (a 400-unit chair), and above which no unit makes it a plausible single asset.
+MILLIMETRE_EXTENT = 100.0
+IMPLAUSIBLE_EXTENT = 10_000.0
+#: Below this largest extent a body in metres would be under a centimetre.
+TINY_EXTENT = 0.01
+#: Candidate pairs are tested in chunks of this many, to bound memory.
+PAIR_CHUNK = 200_000
+
+
+@dataclass(frozen=True)
+class MeshInspection:
+    """Findings on one body's mesh.
+
+    Attributes
+    ----------
+    name, source : str, str or None
+        The body and the file it came from.
+    vertices, faces : int
+        Counts (after the loader merged duplicate vertices).
+    components : int
+        Connected pieces (faces linked through shared vertices).
+    watertight : bool
+        Every edge has exactly two faces.
+    winding_consistent : bool
+        Every edge shared by two faces is traversed in opposite directions by them.
+    volume : float or None
+        Signed volume (positive when the faces point outward), only when the mesh is
+        watertight and consistently wound; None otherwise (it would mean nothing).
+    bounds : (2, 3) list of float
+        World-frame axis-aligned bounding box, ``[min, max]``.
+    size : (3,) list of float
+        ``max - min``.
+    degenerate_faces : int
+        Faces with repeated vertices or a height at most ``DEGENERATE_RELATIVE_HEIGHT`` of
+        the bounding-box diagonal.
+    duplicate_faces : int
+        Faces on the same three vertices as an earlier face (either winding).
+    boundary_edges, non_manifold_edges : int
+        Edges with one face; edges with more than two faces.
+    self_intersecting : bool
+        Two non-adjacent parts of the surface cross each other.
+    self_intersecting_pairs : int
+        Pairs of faces that cross.
+    manifold_status : str
+        ``manifold3d.Manifold``'s verdict on the mesh (``NoError``, ``NotManifold``, ...).
+    units_guess : str
+        ``"m"``, ``"mm"`` or ``"unknown"`` (see :func:`guess_units`).
+    units_reason : str
+        Why.
+    declared_units : str or None
+        Units the scene declared, when it did.
+    findings : list of str
+        The rules of :data:`RULES` this mesh breaks.
+    """
+
+    name: str
+    source: str | None
+    vertices: int
+    faces: int
+    components: int
+    watertight: bool
+    winding_consistent: bool
+    volume: float | None
+    bounds: list
+    size: list
+    degenerate_faces: int
+    duplicate_faces: int
+    boundary_edges: int
+    non_manifold_edges: int
+    self_intersecting: bool
+    self_intersecting_pairs: int
+    manifold_status: str
+    units_guess: str
+    units_reason: str
+    declared_units: str | None = None
+    findings: list = field(default_factory=list)
+
+    def as_dict(self) -> dict:
+        """Plain JSON-ready dictionary of every field."""
+        return asdict(self)
+
+
+def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspection:
+    """Inspect one body's mesh.
+
+    Parameters
+    ----------
+    body : Body
+        Its ``vertices`` (local frame) and ``faces``; the bounding box and unit guess use
+        the world frame (``body.transform`` applied).
+    declared_units : str, optional
+        Units a scene manifest declared (``"m"``, ``"mm"``, ...): ``suspect-units`` then
+        fires when the guess disagrees. Without it, anything but a metre-sized body is
+        suspect.
+
+    Returns
+    -------
+    MeshInspection
+
+    Raises
+    ------
+    InvalidMeshError
+        The body has no faces or non-finite coordinates.
+
+    Notes
+    -----
+    Topology comes from the edge table: each undirected edge with its face count (1:
+    boundary, 2: manifold, > 2: non-manifold) and, for two-face edges, whether the faces
+    traverse it in opposite directions (consistent winding). The volume is the divergence
+    theorem sum over the triangles. manifold3d's ``Manifold(Mesh64)`` status is reported as
+    a second opinion on the topology; manifold3d assumes (and does not check) that its input
+    is free of self-intersections, so those come from :func:`self_intersecting_pairs`.
+    """
+    vertices = np.asarray(body.vertices, dtype=np.float64)
+    faces = np.asarray(body.faces, dtype=np.int64)
+    if len(faces) == 0:
+        raise InvalidMeshError(f"body '{body.name}': mesh has no faces", body.source)
+    if not np.isfinite(vertices).all():
+        raise InvalidMeshError(
+            f"body '{body.name}': vertices contain NaN or infinite coordinates", body.source)
+
+    world = body.world_vertices()
+    used = world[np.unique(faces)]
+    lo, hi = used.min(axis=0), used.max(axis=0)
+    size = hi - lo
+    diagonal = float(np.linalg.norm(size))
+
+    edges, counts, inconsistent = _edge_table(faces)
+    boundary = int((counts == 1).sum())
+    non_manifold = int((counts > 2).sum())
+    watertight = boundary == 0 and non_manifold == 0
+    winding_consistent = inconsistent == 0
+    volume = None
+    if watertight and winding_consistent:
+        tri = vertices[faces]
+        volume = float(np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum() / 6.0)
+
+    degenerate = _degenerate_mask(vertices, faces, diagonal)
+    pairs = self_intersecting_pairs(vertices, faces, skip=degenerate)
+    units, reason = guess_units(float(size.max()))
+
+    findings = []
+    if not watertight:
+        findings.append("not-watertight")
+    if len(pairs):
+        findings.append("self-intersecting")
+    if not winding_consistent:
+        findings.append("inconsistent-winding")
+    if degenerate.any():
+        findings.append("degenerate-faces")
+    if non_manifold:
+        findings.append("non-manifold")
+    duplicates = _duplicate_count(faces)
+    if duplicates:
+        findings.append("duplicate-faces")
+    components = _component_count(faces, len(vertices))
+    if components > 1:
+        findings.append("multiple-components")
+    if _units_suspect(units, declared_units):
+        findings.append("suspect-units")
+
+    return MeshInspection(
+        name=body.name,
+        source=body.source,
+        vertices=len(vertices),
+        faces=len(faces),
+        components=components,
+        watertight=watertight,
+        winding_consistent=winding_consistent,
+        volume=volume,
+        bounds=[lo.tolist(), hi.tolist()],
+        size=size.tolist(),
+        degenerate_faces=int(degenerate.sum()),
+        duplicate_faces=duplicates,
+        boundary_edges=boundary,
+        non_manifold_edges=non_manifold,
+        self_intersecting=bool(len(pairs)),
+        self_intersecting_pairs=len(pairs),
+        manifold_status=_manifold_status(vertices, faces),
+        units_guess=units,
+        units_reason=reason,
+        declared_units=declared_units,
+        findings=findings,
+    )
+
+
+def closed_volume(vertices: np.ndarray, faces: np.ndarray) -> float | None:
+    """Signed volume of a closed, consistently wound mesh; None when it is not.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+    faces : (m, 3) int
+
+    Returns
+    -------
+    float or None
+        Positive when the faces point outward. None when an edge has other than two faces
+        or two faces traverse an edge the same way: the volume would mean nothing.
+
+    Notes
+    -----
+    Divergence theorem: the sum over the triangles of ``a . (b x c) / 6``.
+    """
+    faces = np.asarray(faces, dtype=np.int64)
+    if len(faces) == 0:
+        return None
+    _, counts, inconsistent = _edge_table(faces)
+    if (counts != 2).any() or inconsistent:
+        return None
+    tri = np.asarray(vertices, dtype=np.float64)[faces]
+    return float(np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum() / 6.0)
+
+
+def guess_units(largest_extent: float) -> tuple[str, str]:
+    """Guess a mesh's length unit from its largest extent.
+
+    Parameters
+    ----------
+    largest_extent : float
+        Largest side of the bounding box, in file units.
+
+    Returns
+    -------
+    (units, reason) : (str, str)
+        ``"m"``, ``"mm"`` or ``"unknown"``, and a one-line reason.
+
+    Notes
+    -----
+    Assets are usually between a centimetre and a hundred metres. Between
+    ``MILLIMETRE_EXTENT`` (100) and ``IMPLAUSIBLE_EXTENT`` (10,000) units, metres would make
+    a stadium-sized prop while millimetres make a 0.1 to 10 m object: a 400-unit chair is
+    millimetres. Centimetre files (Unreal) fall in the same band and are reported as
+    millimetres: either way the file is not in metres, which is what the check is for.
+    """
+    e = largest_extent
+    if e > IMPLAUSIBLE_EXTENT:
+        return "unknown", f"largest extent {e:.6g} units: over 10 m even in millimetres"
+    if e > MILLIMETRE_EXTENT:
+        return "mm", f"largest extent {e:.6g} units: {e / 1000:.3g} m in millimetres, over 100 m in metres"
+    if e < TINY_EXTENT:
+        return "unknown", f"largest extent {e:.6g} units: under 1 cm in metres"
+    return "m", f"largest extent {e:.6g} units: a plausible size in metres"
+
+
+_UNIT_ALIASES = {
+    "m": "m", "meter": "m", "meters": "m", "metre": "m", "metres": "m",
+    "mm": "mm", "millimeter": "mm", "millimeters": "mm", "millimetre": "mm", "millimetres": "mm",
+}
+
+
+def _units_suspect(guess: str, declared: str | None) -> bool:
+    if guess == "unknown":
+        return True
+    if declared is None:
+        return guess != "m"
+    declared_unit = _UNIT_ALIASES.get(declared.strip().lower())
+    # a declared unit the heuristic does not know (cm, inch) cannot be contradicted
+    return declared_unit is not None and declared_unit != guess
+
+
+def _edge_table(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """Unique undirected edges, their face counts, and the number of wrongly wound edges."""
+    directed = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    directed = directed[directed[:, 0] != directed[:, 1]]
+    undirected = np.sort(directed, axis=1)
+    edges, inverse, counts = np.unique(undirected, axis=0, return_inverse=True, return_counts=True)
+    inverse = inverse.reshape(-1)
+    # +1 for an edge traversed low->high, -1 high->low: a consistently wound manifold edge
+    # sums to 0
+    direction = np.where(directed[:, 0] < directed[:, 1], 1, -1)
+    balance = np.bincount(inverse, weights=direction, minlength=len(edges))
+    inconsistent = int(((counts == 2) & (balance != 0)).sum())
+    return edges, counts, inconsistent
+
+
+def _degenerate_mask(vertices: np.ndarray, faces: np.ndarray, diagonal: float) -> np.ndarray:
+    tri = vertices[faces]
+    twice_area = np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    longest = np.linalg.norm(tri - tri[:, [1, 2, 0]], axis=2).max(axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        height = np.where(longest > 0, twice_area / longest, 0.0)
+    repeated = (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 2] == faces[:, 0])
+    return repeated | (height <= DEGENERATE_RELATIVE_HEIGHT * diagonal)
+
+
+def _duplicate_count(faces: np.ndarray) -> int:
+    unique = np.unique(np.sort(faces, axis=1), axis=0)
+    return int(len(faces) - len(unique))
+
+
+def _component_count(faces: np.ndarray, vertex_count: int) -> int:
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    edges = faces[:, [0, 1, 1, 2]].reshape(-1, 2)
+    graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])),
+                       shape=(vertex_count, vertex_count))
+    _, labels = connected_components(graph, directed=False)
+    return int(len(np.unique(labels[np.unique(faces)])))
+
+
+def _manifold_status(vertices: np.ndarray, faces: np.ndarray) -> str:
+    import manifold3d
+
+    mesh = manifold3d.Mesh64(vert_properties=np.ascontiguousarray(vertices),
+                             tri_verts=np.ascontiguousarray(faces, dtype=np.uint64))
+    status = manifold3d.Manifold(mesh).status()
+    return str(getattr(status, "name", status)).split(".")[-1]
+
+
+# ---------------------------------------------------------------------------------------
+# self-intersection
+
+
+def self_intersecting_pairs(vertices: np.ndarray, faces: np.ndarray,
+                            skip: np.ndarray | None = None) -> np.ndarray:
+    """Pairs of faces of a mesh that cross each other.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+    faces : (m, 3) int
+    skip : (m,) bool, optional
+        Faces to leave out (degenerate faces have no plane to cross).
+
+    Returns
+    -------
+    (k, 2) int64
+        Face index pairs ``i < j``, sorted.
+
+    Notes
+    -----
+    Candidate pairs come from a uniform grid over the faces' bounding boxes (cell size: the
+    median face extent), filtered by box overlap. Two triangles in different planes cross
+    when they share a segment of positive length (Moller's interval test, Moller 1997):
+    meeting at one point (shared vertex, T-junction) or along their shared edge is not a
+    crossing. Coplanar triangles cross when two edges cross properly or a vertex lies
+    strictly inside the other. Distances within ``CROSSING_RELATIVE_TOLERANCE`` of the
+    diagonal count as contact. Faces on the same three vertices are
+    duplicates (reported apart), not crossings.
+    """
+    vertices = np.asarray(vertices, dtype=np.float64)
+    faces = np.asarray(faces, dtype=np.int64)
+    keep = np.ones(len(faces), bool) if skip is None else ~np.asarray(skip, bool)
+    index = np.nonzero(keep)[0]
+    if len(index) < 2:
+        return np.zeros((0, 2), np.int64)
+    tri = vertices[faces[index]]
+    diagonal = float(np.linalg.norm(np.ptp(tri.reshape(-1, 3), axis=0)))
+    tolerance = CROSSING_RELATIVE_TOLERANCE * diagonal
+    found = []
+    for i, j in _candidate_pairs(tri, diagonal):
+        fi, fj = faces[index[i]], faces[index[j]]
+        shared = (fi[:, :, None] == fj[:, None, :]).any(axis=2).sum(axis=1)
+        distinct = shared < 3
+        i, j, shared = i[distinct], j[distinct], shared[distinct]
+        hit = _triangles_cross(tri[i], tri[j], shared, tolerance)
+        found.append(np.stack([index[i[hit]], index[j[hit]]], axis=1))
+    pairs = np.concatenate(found) if found else np.zeros((0, 2), np.int64)
+    pairs = np.sort(pairs, axis=1)
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+
+
+def _candidate_pairs(tri: np.ndarray, diagonal: float):
+    """Yield chunks (i, j), i < j, of faces whose bounding boxes overlap."""
+    lo, hi = tri.min(axis=1), tri.max(axis=1)
+    extent = (hi - lo).max(axis=1)
+    # the floor keeps cell keys (dims ** 3) well inside int64
+    cell = max(float(np.median(extent)), diagonal / 4096.0, 1e-300)
+    origin = lo.min(axis=0)
+    m = len(tri)
+    while True:
+        first = np.floor((lo - origin) / cell).astype(np.int64)
+        last = np.floor((hi - origin) / cell).astype(np.int64)
+        span = last - first + 1
+        per_face = span.prod(axis=1)
+        if per_face.sum() <= 16 * m + 1_000_000:
+            break
+        cell *= 2.0
+    total = int(per_face.sum())
+    owner = np.repeat(np.arange(m), per_face)
+    local = np.arange(total) - np.repeat(np.cumsum(per_face) - per_face, per_face)
+    sx, sy = span[owner, 0], span[owner, 1]
+    ix = first[owner, 0] + local % sx
+    iy = first[owner, 1] + (local // sx) % sy
+    iz = first[owner, 2] + local // (sx * sy)
+    dims = last.max(axis=0) + 1
+    key = (iz * dims[1] + iy) * dims[0] + ix
+    order = np.argsort(key, kind="stable")
+    key, owner = key[order], owner[order]
+    # pair every entry with the later entries of its cell
+    starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
+    ends = np.r_[starts[1:], len(key)]
+    group_end = np.repeat(ends, ends - starts)
+    later = group_end - np.arange(len(key)) - 1
+    # slice the entries so each slice expands to about PAIR_CHUNK pairs
+    bounds = np.searchsorted(np.cumsum(later), np.arange(PAIR_CHUNK, int(later.sum()), PAIR_CHUNK))
+    cuts = np.unique(np.r_[0, bounds + 1, len(key)].clip(0, len(key)))
+    keys = []
+    for start, stop in zip(cuts[:-1], cuts[1:]):
+        rows = np.arange(start, stop)
+        count = later[rows]
+        a = np.repeat(rows, count)
+        offset = np.arange(len(a)) - np.repeat(np.cumsum(count) - count, count)
+        b = a + 1 + offset
+        i, j = owner[a], owner[b]
+        i, j = np.minimum(i, j), np.maximum(i, j)
+        keep = i != j
+        keep[keep] = np.all((lo[i[keep]] <= hi[j[keep]]) & (lo[j[keep]] <= hi[i[keep]]), axis=1)
+        keys.append(i[keep] * m + j[keep])
+    # a pair sharing several cells recurs: keep one (sort + neighbour test, cheaper than
+    # np.unique's hashing on millions of keys)
+    pair_keys = np.sort(np.concatenate(keys)) if keys else np.zeros(0, np.int64)
+    pair_keys = pair_keys[np.r_[True, pair_keys[1:] != pair_keys[:-1]]] if len(pair_keys) else pair_keys
+    for start in range(0, len(pair_keys), PAIR_CHUNK):
+        chunk = pair_keys[start:start + PAIR_CHUNK]
+        yield chunk // m, chunk % m
+
+
+def _triangles_cross(t1: np.ndarray, t2: np.ndarray, shared: np.ndarray,
+                     tolerance: float) -> np.ndarray:
+    """Crossing test of triangle pairs (k, 3, 3) x (k, 3, 3) sharing ``shared`` vertices.
+
+    Non-coplanar pairs: Moller's interval test (Moller 1997). Both triangles meet the line
+    where their planes cross in an interval; they cross when the intervals overlap over
+    more than ``tolerance``. A single common point (a shared vertex, a vertex on the other
+    triangle, a T-junction) is a touch, and two faces sharing an edge meet only along it.
+    """
+    n1 = np.cross(t1[:, 1] - t1[:, 0], t1[:, 2] - t1[:, 0])
+    n2 = np.cross(t2[:, 1] - t2[:, 0], t2[:, 2] - t2[:, 0])
+    n1 /= np.linalg.norm(n1, axis=1)[:, None]
+    n2 /= np.linalg.norm(n2, axis=1)[:, None]
+    # signed distances of each triangle's vertices to the other's plane, snapped to 0
+    d2 = np.einsum("kij,kj->ki", t2 - t1[:, :1], n1)
+    d1 = np.einsum("kij,kj->ki", t1 - t2[:, :1], n2)
+    d2[np.abs(d2) <= tolerance] = 0.0
+    d1[np.abs(d1) <= tolerance] = 0.0
+    coplanar = (d2 == 0).all(axis=1) & (d1 == 0).all(axis=1)
+    straddle = ~((d2 > 0).all(axis=1) | (d2 < 0).all(axis=1)
+                 | (d1 > 0).all(axis=1) | (d1 < 0).all(axis=1))
+    hit = np.zeros(len(t1), bool)
+    general = np.nonzero(~coplanar & straddle & (shared < 2))[0]
+    if len(general):
+        line = np.cross(n1[general], n2[general])
+        length = np.linalg.norm(line, axis=1)
+        ok = length > 0
+        general, line = general[ok], line[ok] / length[ok][:, None]
+        lo1, hi1 = _interval(t1[general], d1[general], line)
+        lo2, hi2 = _interval(t2[general], d2[general], line)
+        hit[general] = np.minimum(hi1, hi2) - np.maximum(lo1, lo2) > tolerance
+    if coplanar.any():
+        c = np.nonzero(coplanar)[0]
+        hit[c] = _coplanar_overlap(t1[c], t2[c], n1[c], tolerance)
+    return hit
+
+
+def _interval(tri: np.ndarray, distance: np.ndarray, line: np.ndarray):
+    """Extent along ``line`` of where a triangle meets a plane (its vertices' ``distance``)."""
+    along = np.einsum("kij,kj->ki", tri, line)
+    points = np.full((len(tri), 6), np.nan)
+    for i in range(3):
+        j = (i + 1) % 3
+        on_plane = distance[:, i] == 0
+        points[on_plane, i] = along[on_plane, i]
+        crosses = distance[:, i] * distance[:, j] < 0
+        di, dj = distance[crosses, i], distance[crosses, j]
+        ai, aj = along[crosses, i], along[crosses, j]
+        points[crosses, 3 + i] = ai + (aj - ai) * di / (di - dj)
+    # a straddling triangle always meets the plane, so no row is all NaN
+    return np.nanmin(points, axis=1), np.nanmax(points, axis=1)
+
+
+def _coplanar_overlap(t1, t2, normal, tolerance):
+    """Coplanar triangles overlap: edges cross properly or a vertex is strictly inside."""
+    axis = np.abs(normal).argmax(axis=1)
+    keep = np.array([[1, 2], [0, 2], [0, 1]])[axis]
+    rows = np.arange(len(t1))[:, None, None]
+    a2 = t1[rows, np.arange(3)[None, :, None], keep[:, None, :]]
+    b2 = t2[rows, np.arange(3)[None, :, None], keep[:, None, :]]
+    scale = np.abs(normal[np.arange(len(t1)), axis])  # projection shrinks distances by this
+
+    def orient(a, b, c):
+        return (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+
+    def strict(a, b, c):
+        """Sign of orient(a, b, c), 0 within tolerance of the line ab."""
+        value = orient(a, b, c)
+        limit = tolerance * scale * np.linalg.norm(b - a, axis=1)
+        return np.where(value > limit, 1, np.where(value < -limit, -1, 0))
+
+    hit = np.zeros(len(t1), bool)
+    for e in range(3):
+        p, q = a2[:, e], a2[:, (e + 1) % 3]
+        for f in range(3):
+            r, s = b2[:, f], b2[:, (f + 1) % 3]
+            hit |= (strict(p, q, r) * strict(p, q, s) < 0) & (strict(r, s, p) * strict(r, s, q) < 0)
+    for inner, outer in ((a2, b2), (b2, a2)):
+        winding = np.sign(orient(outer[:, 0], outer[:, 1], outer[:, 2]))
+        for v in range(3):
+            inside = np.ones(len(t1), bool)
+            for e in range(3):
+                inside &= strict(outer[:, e], outer[:, (e + 1) % 3], inner[:, v]) * winding > 0
+            hit |= inside
+    return hit

@@ -1,0 +1,357 @@
+"""Load mesh files (OBJ, STL, PLY, OFF, glTF, GLB) as rigid bodies, geometry only.
+
+A file may hold several bodies: OBJ objects (or groups, when the file has no objects), STL
+solids, glTF mesh nodes. Each becomes one :class:`meshcol.types.Body` whose vertices are in its
+local frame with any scale, shear or mirror of the scene graph baked in, and whose
+``transform`` is the rigid rest of the node's world matrix.
+
+Materials, textures, normals and UVs are never loaded: a textured file loads without Pillow,
+and vertices split along UV or normal seams are merged back by position.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import struct
+import zlib
+from pathlib import Path
+
+import numpy as np
+
+from meshcol.errors import InputFileError, InvalidMeshError
+from meshcol.types import Body
+
+__all__ = ["MESH_EXTENSIONS", "load_mesh", "split_rigid", "merge_vertices"]
+
+#: File extensions (lower case) that :func:`load_mesh` reads, mapped to trimesh's file type.
+MESH_EXTENSIONS: dict[str, str] = {
+    ".obj": "obj",
+    ".stl": "stl",
+    ".ply": "ply",
+    ".off": "off",
+    ".glb": "glb",
+    ".gltf": "gltf",
+}
+
+# A matrix whose linear part is orthonormal to this tolerance is taken as rigid as it is,
+# so exact rotations (and identity) stay exact instead of going through an SVD.
+_RIGID_TOL = 1e-12
+
+# Vertices closer than this (per coordinate, absolute) are merged: trimesh's own merge
+# tolerance (trimesh.constants.tol.merge), so watertightness agrees with trimesh's processing.
+_MERGE_DIGITS = 8
+
+# What trimesh's parsers raise on corrupt content. Listed explicitly rather than catching
+# Exception, so programming errors still surface with a traceback.
+_PARSE_ERRORS = (
+    ValueError,  # includes json.JSONDecodeError and UnicodeDecodeError
+    IndexError,
+    KeyError,
+    TypeError,
+    AttributeError,
+    AssertionError,
+    EOFError,
+    OverflowError,
+    NotImplementedError,
+    struct.error,
+    zlib.error,
+)
+
+
+def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]:
+    """Load every body of one mesh file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        An ``.obj``, ``.stl`` (ascii or binary), ``.ply``, ``.off``, ``.glb`` or ``.gltf``
+        file. Kept verbatim as each body's ``source``.
+    merge : bool, optional
+        Merge vertices at the same position (to 1e-8, per coordinate), also across UV and
+        normal seams, and drop unreferenced vertices. On by default: topology checks
+        (watertight, manifold) are only meaningful after it.
+
+    Returns
+    -------
+    list of Body
+        In file order (glTF: scene-graph order). Named after the file stem when the file holds
+        one body, else ``<stem>/<object, solid or node name>``; names are unique.
+        ``vertices`` (n, 3) float64 are in the body's local frame with scale baked in;
+        ``faces`` (m, 3) int64; ``transform`` (4, 4) is rigid, world from local.
+
+    Raises
+    ------
+    InputFileError
+        Missing, unreadable, a directory, or an unknown extension.
+    InvalidMeshError
+        Corrupt content, no faces, non-finite coordinates, face indices out of range.
+
+    Notes
+    -----
+    A node matrix ``M`` with scale, shear or mirror is split by polar decomposition
+    (Higham 1986; computed from the SVD ``A = W S V^T``): ``A = R B`` with ``R`` a rotation
+    (det +1) and ``B`` symmetric. ``B`` is baked into the vertices and ``R`` with ``M``'s
+    translation becomes the transform; when ``det B < 0`` (a mirror) the face winding is
+    flipped so that outward normals stay outward.
+    """
+    source = os.fspath(path)
+    file = Path(source)
+    file_type = _check_file(file, source)
+    scene = _read_scene(file, file_type, source)
+
+    # (name, matrix, trimesh geometry) for every mesh node, in file order
+    nodes = []
+    for node in scene.graph.nodes_geometry:
+        matrix, geometry_name = scene.graph[node]
+        geometry = scene.geometry[geometry_name]
+        faces = getattr(geometry, "faces", None)
+        if faces is None or len(faces) == 0:
+            continue  # point clouds, paths, faceless meshes: not bodies
+        name = geometry_name if file_type in ("obj", "stl", "ply", "off") else str(node)
+        if file_type == "obj" and name == file.name:
+            name = "default"  # faces before any `o`/`g` line: OBJ's default group
+        nodes.append((name, np.asarray(matrix, dtype=np.float64), geometry))
+    if not nodes:
+        raise InvalidMeshError("mesh has no faces", source)
+    if file_type == "obj":
+        nodes = _obj_file_order(file, nodes)
+    elif file_type in ("glb", "gltf"):
+        nodes = _gltf_file_order(file, file_type, nodes)
+
+    stem = file.stem
+    bodies: list[Body] = []
+    used: set[str] = set()
+    for name, matrix, geometry in nodes:
+        vertices = np.asarray(geometry.vertices, dtype=np.float64)
+        faces = np.asarray(geometry.faces, dtype=np.int64)
+        if vertices.ndim != 2 or vertices.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3:
+            raise InvalidMeshError("mesh is not made of triangles", source)
+        if not np.isfinite(vertices).all():
+            raise InvalidMeshError("mesh has non-finite vertex coordinates", source)
+        if not np.isfinite(matrix).all():
+            raise InvalidMeshError("scene graph has a non-finite transform", source)
+        if faces.min() < 0 or faces.max() >= len(vertices):
+            raise InvalidMeshError("face index out of range", source)
+        try:
+            transform, linear = split_rigid(matrix)
+        except InvalidMeshError as error:
+            raise InvalidMeshError(error.message, source) from None
+        if linear is not None:
+            vertices = vertices @ linear.T
+            if np.linalg.det(linear) < 0:
+                faces = faces[:, ::-1]
+        if merge:
+            vertices, faces = merge_vertices(vertices, faces)
+        full = stem if len(nodes) == 1 else f"{stem}/{name}"
+        full = _unique(full, used)
+        bodies.append(
+            Body(
+                name=full,
+                source=source,
+                vertices=np.ascontiguousarray(vertices),
+                faces=np.ascontiguousarray(faces),
+                transform=transform,
+            )
+        )
+    return bodies
+
+
+def split_rigid(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """Split an affine 4x4 matrix into a rigid transform and a linear part to bake.
+
+    Parameters
+    ----------
+    matrix : (4, 4) float
+        Affine, world from local (row-major; last row ``0 0 0 1``).
+
+    Returns
+    -------
+    rigid : (4, 4) float64
+        Rotation (det +1) and the matrix's translation.
+    linear : (3, 3) float64 or None
+        Symmetric part ``B`` with ``matrix[:3, :3] == rigid[:3, :3] @ B``, to apply to local
+        vertices; None when the matrix is already rigid (to 1e-12).
+
+    Raises
+    ------
+    InvalidMeshError
+        When the linear part is singular (a zero scale flattens the mesh).
+
+    Notes
+    -----
+    Polar decomposition from the SVD ``A = W S V^T``: ``R = W V^T`` and ``B = V S V^T``
+    (Higham 1986). If ``det R < 0`` the singular vector of the smallest singular value is
+    negated, which moves the mirror into ``B`` (then ``det B < 0``) and keeps ``R`` proper.
+    """
+    matrix = np.asarray(matrix, dtype=np.float64)
+    linear = matrix[:3, :3]
+    rigid = np.eye(4)
+    rigid[:3, 3] = matrix[:3, 3]
+    if np.abs(linear.T @ linear - np.eye(3)).max() <= _RIGID_TOL and np.linalg.det(linear) > 0:
+        rigid[:3, :3] = linear
+        return rigid, None
+    w, s, vt = np.linalg.svd(linear)
+    if s[-1] <= s[0] * 1e-12:
+        raise InvalidMeshError("scene graph transform is singular (zero scale)")
+    if np.linalg.det(w @ vt) < 0:
+        w[:, -1] = -w[:, -1]
+        s = s.copy()
+        s[-1] = -s[-1]
+    rigid[:3, :3] = w @ vt
+    return rigid, (vt.T * s) @ vt
+
+
+def merge_vertices(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Merge vertices at the same position and drop unreferenced ones.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+    faces : (m, 3) int
+
+    Returns
+    -------
+    vertices : (k, 3) float64
+        Unique positions, in the input order of their first occurrence.
+    faces : (m, 3) int64
+        The same triangles (none removed, even if one becomes degenerate).
+
+    Notes
+    -----
+    Positions are compared after rounding to 8 decimals, trimesh's merge tolerance, and
+    only positions count: normals and UVs are ignored, so UV seams close.
+    """
+    from trimesh.grouping import unique_rows
+
+    vertices = np.asarray(vertices, dtype=np.float64)
+    faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    used, corner = np.unique(faces.ravel(), return_inverse=True)
+    if len(used) == 0:
+        return np.zeros((0, 3)), faces
+    # keep_order: the first of each group of equal positions, in file order
+    keep, group = unique_rows(vertices[used], digits=_MERGE_DIGITS, keep_order=True)
+    merged_faces = np.asarray(group, dtype=np.int64)[corner].reshape(-1, 3)
+    return vertices[used][keep], merged_faces
+
+
+def _check_file(file: Path, source: str) -> str:
+    if not file.exists():
+        raise InputFileError("file not found", source)
+    if file.is_dir():
+        raise InputFileError("is a directory, not a mesh file", source)
+    file_type = MESH_EXTENSIONS.get(file.suffix.lower())
+    if file_type is None:
+        known = ", ".join(MESH_EXTENSIONS)
+        suffix = file.suffix or "(none)"
+        raise InputFileError(f"unknown mesh file extension {suffix!r} (expected {known})", source)
+    try:
+        with open(file, "rb"):
+            pass
+    except OSError as error:
+        raise InputFileError(f"cannot read file: {error.strerror or error}", source) from None
+    return file_type
+
+
+def _read_scene(file: Path, file_type: str, source: str):
+    import trimesh
+
+    options: dict = {"process": False}
+    if file_type == "obj":
+        # Geometry only: no .mtl, no textures (so no Pillow), one body per object, or per
+        # group when the file has no objects.
+        text = file.read_bytes().decode("utf-8", errors="replace")
+        has_objects = re.search(r"^\s*o\s", text, flags=re.MULTILINE) is not None
+        options.update(
+            skip_materials=True,
+            group_material=False,
+            split_objects=True,
+            split_groups=not has_objects,
+        )
+    elif file_type == "stl":
+        _check_stl(file, source)
+    elif file_type == "gltf":
+        _check_json(file, source)
+    try:
+        return trimesh.load_scene(str(file), file_type=file_type, **options)
+    except FileNotFoundError as error:
+        # a glTF buffer or image the file refers to
+        raise InvalidMeshError(
+            f"cannot parse {file_type.upper()} file: referenced file {error.args[-1]!r} not found",
+            source,
+        ) from None
+    except _PARSE_ERRORS as error:
+        detail = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+        raise InvalidMeshError(
+            f"cannot parse {file_type.upper()} file: {detail[:200]}", source
+        ) from None
+
+
+def _check_stl(file: Path, source: str) -> None:
+    """Reject what is neither a binary STL nor text before trimesh guesses an encoding."""
+    size = file.stat().st_size
+    with open(file, "rb") as stream:
+        header = stream.read(84)
+    if size >= 84 and 84 + 50 * struct.unpack("<I", header[80:84])[0] == size:
+        return
+    try:
+        file.read_bytes().decode("utf-8")
+    except UnicodeDecodeError:
+        raise InvalidMeshError(
+            "cannot parse STL file: neither binary STL (size does not match the triangle "
+            "count) nor ASCII text",
+            source,
+        ) from None
+
+
+def _check_json(file: Path, source: str) -> None:
+    import json
+
+    try:
+        json.loads(file.read_bytes())
+    except json.JSONDecodeError as error:
+        raise InvalidMeshError(
+            f"cannot parse GLTF file: invalid JSON at line {error.lineno} column {error.colno}: "
+            f"{error.msg}",
+            source,
+        ) from None
+    except UnicodeDecodeError:
+        raise InvalidMeshError("cannot parse GLTF file: not UTF-8 text", source) from None
+
+
+def _obj_file_order(file: Path, nodes: list) -> list:
+    """trimesh returns OBJ objects last-first: put them back in the order the file has them."""
+    text = file.read_bytes().decode("utf-8", errors="replace")
+
+    def position(item) -> int:
+        name = item[0]
+        if name == "default":
+            return -1
+        match = re.search(rf"^\s*[og]\s+{re.escape(name)}\s*$", text, flags=re.MULTILINE)
+        return match.start() if match else len(text)
+
+    return sorted(nodes, key=position)
+
+
+def _gltf_file_order(file: Path, file_type: str, nodes: list) -> list:
+    """Order glTF mesh nodes as the file's node list does (trimesh's graph order differs)."""
+    import json
+
+    data = file.read_bytes()
+    if file_type == "glb":
+        length = struct.unpack("<I", data[12:16])[0]
+        data = data[20 : 20 + length]
+    index: dict[str, int] = {}
+    for k, node in enumerate(json.loads(data).get("nodes", [])):
+        index.setdefault(str(node.get("name", "")), k)
+    # unnamed nodes keep trimesh's relative order, after the named ones
+    return sorted(nodes, key=lambda item: index.get(item[0], len(index)))
+
+
+def _unique(name: str, used: set[str]) -> str:
+    candidate, k = name, 2
+    while candidate in used:
+        candidate = f"{name}#{k}"
+        k += 1
+    used.add(candidate)
+    return candidate

@@ -1,0 +1,246 @@
+"""``meshcol inspect``: reports, --fail-on, bad input; both commands over the whole corpus."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from meshcol.cli import main
+from meshcol.inspect import RULES
+
+from test_cli_hull import CUBE_OBJ, MANIFESTS, assert_clean_failure, outside_distance, write
+
+
+def run(*args: str):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def test_report_on_stdout(tmp_path: Path) -> None:
+    cube = write(tmp_path, "cube.obj", CUBE_OBJ)
+    result = run("inspect", cube)
+    assert result.exit_code == 0, result.output
+    assert result.stderr == ""
+    report = json.loads(result.stdout)
+    assert report["schema_version"] == 1 and report["command"] == "inspect"
+    assert report["settings"] == {"bounds_frame": "world", "fail_on": []}
+    assert report["failed"] is False
+    (body,) = report["bodies"]
+    assert body["name"] == "cube" and body["source"] == str(cube)
+    assert body["watertight"] is True and body["winding_consistent"] is True
+    assert body["volume"] == pytest.approx(1.0)
+    assert body["size"] == [1.0, 1.0, 1.0]
+    assert body["findings"] == [] and body["failed_rules"] == []
+
+
+def test_report_file_prints_a_table(corpus, tmp_path: Path) -> None:
+    teapot = corpus / "trimesh-models" / "teapot.stl"
+    result = run("inspect", teapot, "--report", tmp_path / "r.csv")
+    assert result.exit_code == 0
+    assert result.stdout == ""
+    table = result.stderr.splitlines()
+    assert table[0].split() == ["body", "faces", "closed", "volume", "size", "units", "findings"]
+    assert table[1].startswith("teapot") and "not-watertight" in table[1]
+    header, row = (tmp_path / "r.csv").read_text().splitlines()
+    cells = dict(zip(header.split(","), row.split(",")))
+    assert cells["watertight"] == "False" and cells["volume"] == ""
+
+
+def test_fail_on_exits_one_after_writing_the_report(corpus, tmp_path: Path) -> None:
+    teapot = corpus / "trimesh-models" / "teapot.stl"
+    cube = corpus / "trimesh-models" / "unit_cube.STL"
+    result = run("inspect", cube, teapot, "--fail-on", "not-watertight,duplicate-faces",
+                 "--report", tmp_path / "r.json")
+    assert result.exit_code == 1
+    assert result.stderr.splitlines()[-1] == f"meshcol: fail: {teapot}: body 'teapot': not-watertight"
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["failed"] is True
+    assert [b["failed_rules"] for b in report["bodies"]] == [[], ["not-watertight"]]
+    # the same mesh passes a policy it does not break
+    assert run("inspect", cube, "--fail-on", "all").exit_code == 0
+    assert run("inspect", teapot, "--fail-on", "non-manifold,degenerate-faces").exit_code == 0
+
+
+def test_fail_on_all_lists_every_rule(tmp_path: Path) -> None:
+    cube = write(tmp_path, "cube.obj", CUBE_OBJ)
+    report = json.loads(run("inspect", cube, "--fail-on", "all").stdout)
+    assert report["settings"]["fail_on"] == list(RULES)
+
+
+def test_unknown_rule_is_a_usage_error(tmp_path: Path) -> None:
+    cube = write(tmp_path, "cube.obj", CUBE_OBJ)
+    result = run("inspect", cube, "--fail-on", "not-watertight,leaky")
+    assert result.exit_code == 2
+    assert result.stderr.endswith(
+        "Error: Invalid value for '--fail-on': unknown rule 'leaky' (valid rules: all, "
+        + ", ".join(RULES) + ")\n")
+
+
+def test_single_triangle_and_soup_are_reported(corpus) -> None:
+    result = run("inspect", corpus / "trimesh-models" / "notenoughindices.obj",
+                 corpus / "trimesh-models" / "soup.stl", "--fail-on", "not-watertight")
+    assert result.exit_code == 1
+    triangle, soup = json.loads(result.stdout)["bodies"]
+    assert triangle["faces"] == 1 and triangle["boundary_edges"] == 3
+    assert soup["components"] == 100 and not soup["watertight"]
+
+
+def test_manifest_units_are_reported(tmp_path: Path) -> None:
+    chair = "".join(line.replace(" 1", " 400") if line.startswith("v ") else line
+                    for line in CUBE_OBJ.splitlines(keepends=True))
+    write(tmp_path, "cube.obj", chair)
+    manifest = write(tmp_path, "scene.json", '{"units": "mm", "bodies": [{"name": "a", "mesh": "cube.obj"}]}')
+    report = json.loads(run("inspect", manifest, "--fail-on", "suspect-units").stdout)
+    assert report["units"] == "mm"
+    (body,) = report["bodies"]
+    assert body["units_guess"] == "mm" and body["declared_units"] == "mm"
+    assert "suspect-units" not in body["findings"]
+
+
+@pytest.mark.parametrize("name", sorted(MANIFESTS))
+def test_broken_manifest(tmp_path: Path, name: str) -> None:
+    from meshcol.errors import SceneError
+    from meshcol.scene import load_inputs
+
+    write(tmp_path, "cube.obj", CUBE_OBJ)
+    manifest = write(tmp_path, name, MANIFESTS[name])
+    with pytest.raises(SceneError) as info:
+        load_inputs([str(manifest)])
+    out = tmp_path / "out"
+    out.mkdir()
+    result = run("inspect", manifest, "--report", out / "r.json")
+    assert_clean_failure(result, manifest, info.value.message, out)
+
+
+@pytest.mark.parametrize(
+    ("name", "text", "message"),
+    [
+        ("nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n", "mesh has non-finite vertex coordinates"),
+        ("inf.obj", "v 0 0 0\nv 1 -inf 0\nv 0 1 0\nf 1 2 3\n", "mesh has non-finite vertex coordinates"),
+        ("mesh.dae", "<xml/>\n",
+         "unknown mesh file extension '.dae' (expected .obj, .stl, .ply, .off, .glb, .gltf)"),
+    ],
+)
+def test_bad_mesh(tmp_path: Path, name: str, text: str, message: str) -> None:
+    source = write(tmp_path, name, text)
+    out = tmp_path / "out"
+    out.mkdir()
+    result = run("inspect", source, "--report", out / "r.json")
+    assert_clean_failure(result, source, message, out)
+
+
+@pytest.mark.parametrize("name", ["empty.obj", "empty.stl"])
+def test_empty_and_missing(corpus, tmp_path: Path, name: str) -> None:
+    source = corpus / "trimesh-models" / name
+    assert_clean_failure(run("inspect", source, "--report", tmp_path / "r.json"), source,
+                         "mesh has no faces", tmp_path)
+    missing = tmp_path / "missing.obj"
+    assert_clean_failure(run("inspect", missing), missing, "file not found", tmp_path)
+
+
+# ---------------------------------------------------------------------------------------
+# the whole corpus, once per session: every loadable mesh through both commands
+
+CLOSED = [
+    "fandisk.obj", "featuretype.STL", "torus.STL", "octagonal_pocket.stl", "plate_holes.STL",
+    "1002_tray_bottom.STL", "idler_riser.STL", "angle_block.STL", "busted.STL", "round.stl",
+    "ballA.off", "ballB.off", "unit_cube.STL", "unit_sphere.STL", "cylinder.stl", "tet.ply",
+    "7_8ths_cube.stl", "counter.unitsmm.STL", "Octocat-v2.obj", "SnowFlake.obj",
+]
+
+
+@pytest.fixture(scope="module")
+def corpus_run(tmp_path_factory):
+    from conftest import CORPUS
+
+    from meshcol.errors import MeshcolError
+    from meshcol.mesh_io import MESH_EXTENSIONS, load_mesh
+
+    if not CORPUS.is_dir():
+        pytest.skip("shared corpus not present (../shared/corpus)")
+    files, rejected, bodies = [], [], []
+    for path in sorted(CORPUS.rglob("*")):
+        if path.suffix.lower() not in MESH_EXTENSIONS:
+            continue
+        try:
+            bodies.extend(load_mesh(path))
+        except MeshcolError:
+            rejected.append(path.name)
+            continue
+        files.append(str(path))
+    out = tmp_path_factory.mktemp("corpus")
+    inspect = run("inspect", *files, "--report", out / "inspect.json")
+    hull = run("hull", *files, "--max-vertices", "64", "--out-dir", out / "hulls",
+               "--report", out / "hull.json")
+    return {
+        "rejected": rejected,
+        "bodies": bodies,  # the corpus' file stems are unique: no renaming by load_inputs
+        "inspect": inspect,
+        "hull": hull,
+        "inspect_report": json.loads((out / "inspect.json").read_text()),
+        "hull_report": json.loads((out / "hull.json").read_text()),
+    }
+
+
+def by_file(report: dict, name: str) -> list[dict]:
+    return [b for b in report["bodies"] if Path(b["source"]).name == name]
+
+
+def test_corpus_rejects_only_the_empty_files(corpus_run) -> None:
+    assert sorted(corpus_run["rejected"]) == ["empty.obj", "empty.stl"]
+
+
+def test_corpus_inspect(corpus_run) -> None:
+    assert corpus_run["inspect"].exit_code == 0, corpus_run["inspect"].output
+    report = corpus_run["inspect_report"]
+    assert len(report["bodies"]) == len(corpus_run["bodies"])
+    (cube,) = by_file(report, "unit_cube.STL")
+    assert cube["volume"] == pytest.approx(1.0, abs=1e-6) and cube["findings"] == []
+    for name in CLOSED:
+        for body in by_file(report, name):
+            assert body["watertight"], name
+            assert body["winding_consistent"], name
+            assert body["volume"] > 0, name
+    (counter,) = by_file(report, "counter.unitsmm.STL")
+    assert counter["units_guess"] == "mm"
+    assert "suspect-units" in counter["findings"]
+    # its five knobs are separate shells sunk into the base: crossing, but each one clean
+    assert counter["components"] == 6 and counter["self_intersecting"]
+    (soup,) = by_file(report, "soup.stl")
+    assert not soup["watertight"] and soup["components"] == 100
+    (shared,) = by_file(report, "shared.STL")
+    assert shared["non_manifold_edges"] > 0 and "non-manifold" in shared["findings"]
+    (bottle,) = by_file(report, "Bottle.obj")
+    assert not bottle["watertight"]
+    for name in ("unit_sphere.STL", "torus.STL", "Octocat-v2.obj", "SnowFlake.obj", "fandisk.obj"):
+        (body,) = by_file(report, name)
+        assert not body["self_intersecting"], name
+        assert body["units_guess"] == "m", name
+
+
+def test_corpus_hull_within_64_vertices_encloses(corpus_run) -> None:
+    assert corpus_run["hull"].exit_code == 0, corpus_run["hull"].output
+    from meshcol.mesh_io import load_mesh
+
+    report = corpus_run["hull_report"]
+    bodies = {b.name: b for b in corpus_run["bodies"]}
+    assert [row["name"] for row in report["bodies"]] == list(bodies)
+    for row in report["bodies"]:
+        body = bodies[row["name"]]
+        assert row["hull_vertices"] <= 64, row["name"]
+        assert row["added_volume"] >= 0 and row["max_distance"] >= 0
+        (written,) = load_mesh(row["output"], merge=False)
+        assert len(written.vertices) == row["hull_vertices"]
+        world = body.world_vertices()
+        if row["flat"]:
+            assert row["hull_volume"] == 0.0
+            continue
+        scale = float(np.linalg.norm(np.ptp(world, axis=0)))
+        assert outside_distance(world, written.world_vertices()) <= 1e-9 * scale, row["name"]
+    (cube,) = by_file(report, "unit_cube.STL")
+    assert cube["hull_volume"] == pytest.approx(1.0) and cube["max_distance"] == 0.0
+    (triangle,) = by_file(report, "notenoughindices.obj")
+    assert triangle["flat"] is True

@@ -1,0 +1,239 @@
+"""Mesh health checks: topology, volume, degeneracies, self-intersections, units."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from meshcol.errors import InvalidMeshError
+from meshcol.inspect import (
+    RULES,
+    closed_volume,
+    guess_units,
+    inspect_body,
+    self_intersecting_pairs,
+)
+from meshcol.types import Body
+
+CUBE_VERTICES = np.array([[x, y, z] for x in (0.0, 1.0) for y in (0.0, 1.0) for z in (0.0, 1.0)])
+# outward-wound triangles of the unit cube (vertex index = 4x + 2y + z)
+CUBE_FACES = np.array([
+    [0, 1, 3], [0, 3, 2],  # x = 0
+    [4, 6, 7], [4, 7, 5],  # x = 1
+    [0, 4, 5], [0, 5, 1],  # y = 0
+    [2, 3, 7], [2, 7, 6],  # y = 1
+    [0, 2, 6], [0, 6, 4],  # z = 0
+    [1, 5, 7], [1, 7, 3],  # z = 1
+])
+
+
+def body(vertices, faces, name="b", transform=None) -> Body:
+    kwargs = {} if transform is None else {"transform": transform}
+    return Body(name=name, source="test.obj", vertices=np.asarray(vertices, float),
+                faces=np.asarray(faces, np.int64), **kwargs)
+
+
+def two_cubes(offset) -> tuple[np.ndarray, np.ndarray]:
+    return (np.vstack([CUBE_VERTICES, CUBE_VERTICES + offset]),
+            np.vstack([CUBE_FACES, CUBE_FACES + 8]))
+
+
+def test_unit_cube_is_clean() -> None:
+    r = inspect_body(body(CUBE_VERTICES, CUBE_FACES))
+    assert (r.vertices, r.faces, r.components) == (8, 12, 1)
+    assert r.watertight and r.winding_consistent
+    assert r.volume == pytest.approx(1.0, abs=1e-15)
+    assert r.bounds == [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]] and r.size == [1.0, 1.0, 1.0]
+    assert (r.degenerate_faces, r.duplicate_faces, r.boundary_edges, r.non_manifold_edges) == (0, 0, 0, 0)
+    assert not r.self_intersecting and r.self_intersecting_pairs == 0
+    assert r.manifold_status == "NoError"
+    assert r.units_guess == "m"
+    assert r.findings == []
+
+
+def test_inside_out_cube_has_negative_volume() -> None:
+    r = inspect_body(body(CUBE_VERTICES, CUBE_FACES[:, ::-1]))
+    assert r.winding_consistent and r.volume == pytest.approx(-1.0)
+
+
+def test_one_flipped_face_is_inconsistent_winding() -> None:
+    faces = CUBE_FACES.copy()
+    faces[0] = faces[0][::-1]
+    r = inspect_body(body(CUBE_VERTICES, faces))
+    assert r.watertight and not r.winding_consistent
+    assert r.volume is None
+    assert r.findings == ["inconsistent-winding"]
+    assert r.manifold_status == "NotManifold"
+
+
+def test_open_cube() -> None:
+    r = inspect_body(body(CUBE_VERTICES, CUBE_FACES[:-2]))
+    assert not r.watertight and r.boundary_edges == 4 and r.volume is None
+    assert r.findings == ["not-watertight"]
+
+
+def test_duplicate_face_is_duplicate_and_non_manifold() -> None:
+    r = inspect_body(body(CUBE_VERTICES, np.vstack([CUBE_FACES, CUBE_FACES[:1]])))
+    assert r.duplicate_faces == 1
+    assert r.non_manifold_edges == 3
+    assert not r.self_intersecting  # a duplicate is reported as such, not as a crossing
+    assert r.findings == ["not-watertight", "non-manifold", "duplicate-faces"]
+
+
+def test_degenerate_faces() -> None:
+    vertices = np.vstack([CUBE_VERTICES, [[0.5, 0.0, 0.0]]])
+    faces = np.vstack([CUBE_FACES, [[0, 0, 1]], [[0, 4, 8]]])  # repeated index; collinear
+    r = inspect_body(body(vertices, faces))
+    assert r.degenerate_faces == 2
+    assert "degenerate-faces" in r.findings
+
+
+def test_disjoint_cubes_are_two_clean_components() -> None:
+    r = inspect_body(body(*two_cubes([2.0, 0.0, 0.0])))
+    assert r.components == 2 and r.watertight
+    assert r.volume == pytest.approx(2.0)
+    assert not r.self_intersecting
+    assert r.findings == ["multiple-components"]
+
+
+def test_overlapping_cubes_self_intersect() -> None:
+    vertices, faces = two_cubes([0.5, 0.5, 0.5])
+    r = inspect_body(body(vertices, faces))
+    assert r.self_intersecting and r.self_intersecting_pairs > 0
+    pairs = self_intersecting_pairs(vertices, faces)
+    # every crossing pair has one face from each cube: each cube alone is clean
+    assert ((pairs[:, 0] < 12) & (pairs[:, 1] >= 12)).all()
+    assert r.watertight  # closed and crossing: only the self-intersection test sees it
+    assert "self-intersecting" in r.findings
+
+
+def test_vertex_pushed_through_opposite_face_self_intersects() -> None:
+    vertices = CUBE_VERTICES.copy()
+    vertices[7] = [-0.5, 0.6, 0.4]  # corner (1, 1, 1) pushed through the x = 0 face
+    r = inspect_body(body(vertices, CUBE_FACES))
+    assert r.components == 1 and r.watertight
+    assert r.self_intersecting
+
+
+def test_coplanar_overlap_and_fold_over() -> None:
+    # two overlapping triangles in z = 0 sharing no vertex
+    v = np.array([[0, 0, 0], [2, 0, 0], [0, 2, 0], [1, 1, 0], [-1, 1, 0], [1, -1, 0]], float)
+    assert self_intersecting_pairs(v, [[0, 1, 2], [3, 4, 5]]).tolist() == [[0, 1]]
+    # folded over a shared edge: both triangles on the same side of it
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.5, 0.8, 0]], float)
+    assert self_intersecting_pairs(v, [[0, 1, 2], [1, 0, 3]]).tolist() == [[0, 1]]
+    # unfolded: the other side of the edge: no crossing
+    v[3] = [0.5, -0.8, 0.0]
+    assert len(self_intersecting_pairs(v, [[0, 1, 2], [1, 0, 3]])) == 0
+
+
+def test_touching_is_not_crossing() -> None:
+    # a vertex of one triangle lies on the other (T-junction), and a shared vertex
+    v = np.array([[0, 0, 0], [2, 0, 0], [0, 2, 0], [1, 0, 0], [1, 0, 1], [1, 1, 1]], float)
+    assert len(self_intersecting_pairs(v, [[0, 1, 2], [3, 4, 5]])) == 0
+    v2 = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [-1, 0, 1]], float)
+    assert len(self_intersecting_pairs(v2, [[0, 1, 2], [0, 3, 4]])) == 0
+
+
+def test_crossing_pairs_match_brute_force_on_random_soup() -> None:
+    rng = np.random.default_rng(4)
+    vertices = rng.uniform(0, 10, size=(150, 3))
+    faces = np.arange(150).reshape(50, 3)
+    fast = {tuple(p) for p in self_intersecting_pairs(vertices, faces).tolist()}
+    from meshcol.inspect import _triangles_cross
+
+    i, j = np.triu_indices(50, 1)
+    tri = vertices[faces]
+    hit = _triangles_cross(tri[i], tri[j], np.zeros(len(i), int), 1e-10 * 17.3)
+    assert fast == set(zip(i[hit].tolist(), j[hit].tolist()))
+    assert len(fast) > 0
+
+
+def test_bounds_are_in_the_world_frame() -> None:
+    transform = np.eye(4)
+    transform[:3, 3] = [10.0, 0.0, -5.0]
+    r = inspect_body(body(CUBE_VERTICES, CUBE_FACES, transform=transform))
+    assert r.bounds == [[10.0, 0.0, -5.0], [11.0, 1.0, -4.0]]
+    assert r.volume == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize(
+    ("extent", "units"),
+    [(1.8, "m"), (0.02, "m"), (99.0, "m"), (400.0, "mm"), (9000.0, "mm"), (50000.0, "unknown"),
+     (0.005, "unknown")],
+)
+def test_units_guess(extent: float, units: str) -> None:
+    assert guess_units(extent)[0] == units
+
+
+def test_units_reason_and_declared_units() -> None:
+    assert guess_units(400.0) == ("mm", "largest extent 400 units: 0.4 m in millimetres, over 100 m in metres")
+    chair = CUBE_VERTICES * [450.0, 500.0, 900.0]
+    assert inspect_body(body(chair, CUBE_FACES)).findings == ["suspect-units"]
+    assert inspect_body(body(chair, CUBE_FACES), declared_units="mm").findings == []
+    assert inspect_body(body(chair, CUBE_FACES), declared_units="millimetres").findings == []
+    assert inspect_body(body(chair, CUBE_FACES), declared_units="m").findings == ["suspect-units"]
+
+
+def test_closed_volume() -> None:
+    assert closed_volume(CUBE_VERTICES * 2, CUBE_FACES) == pytest.approx(8.0)
+    assert closed_volume(CUBE_VERTICES, CUBE_FACES[:-1]) is None
+
+
+def test_rules_are_the_finding_names() -> None:
+    vertices, faces = two_cubes([0.5, 0.5, 0.5])
+    findings = inspect_body(body(vertices, faces)).findings
+    assert set(findings) <= set(RULES)
+
+
+def test_no_faces_and_non_finite_raise() -> None:
+    with pytest.raises(InvalidMeshError, match=r"^test.obj: body 'b': mesh has no faces$"):
+        inspect_body(body(CUBE_VERTICES, np.zeros((0, 3))))
+    bad = CUBE_VERTICES.copy()
+    bad[3, 1] = np.nan
+    with pytest.raises(InvalidMeshError, match="NaN or infinite"):
+        inspect_body(body(bad, CUBE_FACES))
+
+
+@pytest.mark.parametrize(
+    "name",
+    ["unit_sphere.STL", "torus.STL", "fandisk.obj", "featuretype.STL", "idler_riser.STL",
+     "angle_block.STL", "ballA.off", "round.stl", "cylinder.stl", "busted.STL"],
+)
+def test_closed_corpus_meshes_are_clean(corpus, name: str) -> None:
+    from meshcol.mesh_io import load_mesh
+
+    (b,) = load_mesh(corpus / "trimesh-models" / name)
+    r = inspect_body(b)
+    assert r.watertight and r.winding_consistent and r.components == 1
+    assert r.volume > 0
+    assert not r.self_intersecting, name
+    assert r.manifold_status == "NoError"
+
+
+def test_corpus_soup_and_open_meshes(corpus) -> None:
+    from meshcol.mesh_io import load_mesh
+
+    (soup,) = load_mesh(corpus / "trimesh-models" / "soup.stl")
+    r = inspect_body(soup)
+    assert not r.watertight and r.components == 100 and r.volume is None
+    (shared,) = load_mesh(corpus / "trimesh-models" / "shared.STL")
+    assert inspect_body(shared).non_manifold_edges > 0
+
+
+@settings(max_examples=30)
+@given(st.integers(0, 2**32 - 1))
+def test_crossings_are_invariant_under_rigid_motion_and_face_order(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    vertices = rng.uniform(0, 10, size=(60, 3))
+    faces = rng.integers(0, 60, size=(25, 3))
+    faces = faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])]
+    rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    moved = vertices @ rotation.T + rng.normal(size=3) * 100
+    order = rng.permutation(len(faces))
+    base = {tuple(p) for p in self_intersecting_pairs(vertices, faces).tolist()}
+    shuffled = {tuple(sorted((int(order[i]), int(order[j]))))
+                for i, j in self_intersecting_pairs(moved, faces[order]).tolist()}
+    assert base == shuffled

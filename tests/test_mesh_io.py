@@ -1,0 +1,510 @@
+"""Tests for meshcol.mesh_io: every format, multi-body files, scene-graph transforms, bad input."""
+
+from __future__ import annotations
+
+import base64
+import json
+import os
+import struct
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import meshcol
+from meshcol.errors import InputFileError, InvalidMeshError
+from meshcol.mesh_io import load_mesh, merge_vertices, split_rigid
+
+trimesh = pytest.importorskip("trimesh")
+
+# A unit cube, 8 positions, with per-face UVs: trimesh splits it along the UV seams.
+CUBE_OBJ_WITH_UVS = """\
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+v 0 0 1
+v 1 0 1
+v 1 1 1
+v 0 1 1
+vt 0 0
+vt 1 0
+vt 1 1
+vt 0 1
+vn 0 0 -1
+vn 0 0 1
+vn 0 -1 0
+vn 1 0 0
+vn 0 1 0
+vn -1 0 0
+f 1/1/1 4/4/1 3/3/1 2/2/1
+f 5/1/2 6/2/2 7/3/2 8/4/2
+f 1/1/3 2/2/3 6/3/3 5/4/3
+f 2/1/4 3/2/4 7/3/4 6/4/4
+f 3/1/5 4/2/5 8/3/5 7/4/5
+f 4/1/6 1/2/6 5/3/6 8/4/6
+"""
+
+TWO_OBJECTS_OBJ = """\
+o first
+v 0 0 0
+v 1 0 0
+v 0 1 0
+v 0 0 1
+f 1 3 2
+f 1 2 4
+f 1 4 3
+f 2 3 4
+o second
+v 2 0 0
+v 3 0 0
+v 2 1 0
+v 2 0 1
+f 5 7 6
+f 5 6 8
+f 5 8 7
+f 6 7 8
+"""
+
+
+def signed_volume(vertices: np.ndarray, faces: np.ndarray) -> float:
+    """Divergence theorem: sum of signed tetrahedra from the origin."""
+    a, b, c = (vertices[faces[:, k]] for k in range(3))
+    return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
+
+
+def is_closed(faces: np.ndarray) -> bool:
+    """Every directed edge has exactly one opposite: closed and consistently wound."""
+    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    directed = {tuple(e) for e in edges.tolist()}
+    return len(directed) == len(edges) and all((b, a) in directed for a, b in directed)
+
+
+def is_watertight(faces: np.ndarray) -> bool:
+    """Every undirected edge is shared by exactly two faces."""
+    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    return bool((counts == 2).all())
+
+
+def is_rigid(matrix: np.ndarray) -> bool:
+    r = matrix[:3, :3]
+    return (
+        np.allclose(r.T @ r, np.eye(3), atol=1e-12)
+        and np.isclose(np.linalg.det(r), 1.0)
+        and np.array_equal(matrix[3], [0, 0, 0, 1])
+    )
+
+
+def write_box_glb(path: Path, matrices: list[np.ndarray]) -> None:
+    """A GLB holding one unit box instanced at each matrix (any affine matrix)."""
+    scene = trimesh.Scene()
+    box = trimesh.creation.box(extents=(1.0, 2.0, 3.0))
+    for k, matrix in enumerate(matrices):
+        scene.add_geometry(box, geom_name="box", node_name=f"node{k}", transform=matrix)
+    path.write_bytes(trimesh.exchange.gltf.export_glb(scene))
+
+
+# --- formats --------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("name", "vertices", "faces"),
+    [
+        ("fandisk.obj", 6475 - 3598, 5750),  # OBJ
+        ("unit_cube.STL", 8, 12),  # binary STL
+        ("tet.ply", 4, 4),  # PLY
+        ("ballA.off", 1900, 3796),  # OFF
+    ],
+)
+def test_single_body_formats(corpus, name, vertices, faces):
+    path = corpus / "trimesh-models" / name
+    bodies = load_mesh(path)
+    assert len(bodies) == 1
+    body = bodies[0]
+    assert body.name == Path(name).stem
+    assert body.source == os.fspath(path)
+    assert body.vertices.shape == (vertices, 3) and body.vertices.dtype == np.float64
+    assert body.faces.shape == (faces, 3) and body.faces.dtype == np.int64
+    assert np.array_equal(body.transform, np.eye(4))
+    assert body.end_transform is None and body.primitive is None
+
+
+def test_closed_corpus_meshes_are_closed_after_merging(corpus):
+    # binary STL stores three corners per triangle: only merging makes it watertight
+    for name in ("unit_cube.STL", "unit_sphere.STL", "torus.STL", "tet.ply", "ballA.off"):
+        body = load_mesh(corpus / "trimesh-models" / name)[0]
+        assert is_closed(body.faces), name
+        assert signed_volume(body.vertices, body.faces) > 0, name
+    unmerged = load_mesh(corpus / "trimesh-models" / "unit_cube.STL", merge=False)[0]
+    assert len(unmerged.vertices) == 36
+
+
+def test_ascii_stl_multibody(corpus):
+    path = corpus / "trimesh-models" / "multibody.stl"
+    assert path.read_bytes().startswith(b"solid")
+    bodies = load_mesh(path)
+    assert [b.name for b in bodies] == ["multibody/bodyB", "multibody/bodyA"]  # file order
+    assert [len(b.faces) for b in bodies] == [12, 20]
+    # closed (every edge has two faces) but, as in the file, not consistently wound
+    assert all(is_watertight(b.faces) and not is_closed(b.faces) for b in bodies)
+
+
+def test_obj_objects_are_bodies_in_file_order(tmp_path):
+    path = tmp_path / "pair.obj"
+    path.write_text(TWO_OBJECTS_OBJ)
+    first, second = load_mesh(path)
+    assert (first.name, second.name) == ("pair/first", "pair/second")
+    assert np.allclose(first.vertices.min(axis=0), [0, 0, 0])
+    assert np.allclose(second.vertices.min(axis=0), [2, 0, 0])
+    assert len(first.vertices) == len(second.vertices) == 4  # unreferenced vertices dropped
+    assert all(is_closed(b.faces) for b in (first, second))
+
+
+def test_obj_groups_are_bodies_when_no_objects(tmp_path):
+    path = tmp_path / "groups.obj"
+    path.write_text(TWO_OBJECTS_OBJ.replace("o first", "g left").replace("o second", "g right"))
+    assert [b.name for b in load_mesh(path)] == ["groups/left", "groups/right"]
+
+
+def test_obj_faces_before_any_object_form_the_default_group(corpus):
+    bodies = load_mesh(corpus / "trimesh-models" / "joined_tetrahedra.obj")
+    assert [b.name for b in bodies] == ["joined_tetrahedra/default", "joined_tetrahedra/bottom"]
+    assert all(len(b.vertices) == 4 and is_closed(b.faces) for b in bodies)
+
+
+def test_pins_glb_seven_instances(corpus):
+    bodies = load_mesh(corpus / "trimesh-models" / "pins.glb")
+    assert len(bodies) == 7
+    assert len({b.name for b in bodies}) == 7
+    assert all(b.name.startswith("pins/") for b in bodies)
+    assert sorted(len(b.faces) for b in bodies) == [314] * 6 + [1524]
+    assert all(is_rigid(b.transform) for b in bodies)
+
+
+def test_boolean_glb_28_bodies(corpus):
+    bodies = load_mesh(corpus / "trimesh-models" / "boolean.glb")
+    assert len(bodies) == 28
+    assert len({b.name for b in bodies}) == 28
+
+
+def world_points(bodies) -> np.ndarray:
+    points = np.concatenate([b.world_vertices() for b in bodies])
+    return np.unique(np.round(points, 9), axis=0)
+
+
+def test_nested_glb_world_vertices_match_trimesh(corpus):
+    path = corpus / "trimesh-models" / "nested.glb"
+    bodies = load_mesh(path)
+    assert [b.name for b in bodies] == ["nested/block03", "nested/block02", "nested/block01"]  # file order
+    assert all(is_rigid(b.transform) for b in bodies)
+    reference = trimesh.load_scene(path, process=False).to_mesh()  # transforms composed
+    expected = np.unique(np.round(np.asarray(reference.vertices), 9), axis=0)
+    assert np.array_equal(world_points(bodies), expected)
+
+
+def test_nested_glb_manual_composition(corpus):
+    # compose the node chain by hand from the glTF JSON (no trimesh graph involved)
+    path = corpus / "trimesh-models" / "nested.glb"
+    data = path.read_bytes()
+    length = struct.unpack("<I", data[12:16])[0]
+    gltf = json.loads(data[20 : 20 + length])
+    parent = {c: i for i, node in enumerate(gltf["nodes"]) for c in node.get("children", [])}
+
+    def local(node):
+        if "matrix" in node:
+            return np.array(node["matrix"], dtype=float).reshape(4, 4).T
+        x, y, z, w = node.get("rotation", [0, 0, 0, 1])
+        r = np.array(trimesh.transformations.quaternion_matrix([w, x, y, z]))
+        s = np.diag(node.get("scale", [1, 1, 1]) + [1])
+        t = trimesh.transformations.translation_matrix(node.get("translation", [0, 0, 0]))
+        return t @ r @ s
+
+    bodies = {b.name.split("/")[1]: b for b in load_mesh(path)}
+    for index, node in enumerate(gltf["nodes"]):
+        if "mesh" not in node:
+            continue
+        matrix, k = np.eye(4), index
+        while k is not None:
+            matrix = local(gltf["nodes"][k]) @ matrix
+            k = parent.get(k)
+        body = bodies[node["name"]]
+        # the loaded local vertices are the file's, stretched by the baked part
+        rest = body.transform[:3, :3].T @ matrix[:3, :3]
+        file_vertices = body.vertices @ np.linalg.inv(rest).T
+        expected = file_vertices @ matrix[:3, :3].T + matrix[:3, 3]
+        assert np.allclose(body.world_vertices(), expected, atol=1e-12)
+        assert np.allclose(body.transform[:3, 3], matrix[:3, 3])
+
+
+def test_mirror_and_shear_are_baked_and_winding_kept_outward(tmp_path):
+    shear = np.eye(4)
+    shear[0, 1] = 0.5
+    mirror = np.diag([-1.0, 1.0, 1.0, 1.0])
+    rotation = trimesh.transformations.rotation_matrix(0.7, [1, 2, 3], point=[0.5, 0, 0])
+    stretch = np.diag([2.0, 0.5, 3.0, 1.0])
+    matrices = [rotation @ mirror, rotation @ shear @ stretch, rotation]
+    matrices[0][:3, 3] += [4, 5, 6]
+    path = tmp_path / "affine.glb"
+    write_box_glb(path, matrices)
+    box = trimesh.creation.box(extents=(1.0, 2.0, 3.0))
+    bodies = load_mesh(path)
+    assert len(bodies) == 3
+    for body, matrix in zip(bodies, matrices):
+        assert is_rigid(body.transform)
+        expected = np.asarray(box.vertices) @ matrix[:3, :3].T + matrix[:3, 3]
+        got = body.world_vertices()
+        assert np.allclose(np.unique(np.round(got, 9), axis=0),
+                           np.unique(np.round(expected, 9), axis=0))
+        assert is_closed(body.faces)
+        volume = signed_volume(body.vertices, body.faces)
+        assert volume == pytest.approx(6.0 * abs(np.linalg.det(matrix[:3, :3])), rel=1e-9)
+    # the pure rotation is kept exactly, nothing baked
+    assert np.array_equal(bodies[2].transform, matrices[2])
+
+
+def test_gltf_with_external_buffer(tmp_path):
+    scene = trimesh.Scene()
+    scene.add_geometry(trimesh.creation.box(extents=(1, 1, 1)), geom_name="box", node_name="b1")
+    scene.add_geometry(
+        trimesh.creation.icosphere(subdivisions=1), geom_name="ball", node_name="b2",
+        transform=trimesh.transformations.translation_matrix([3, 0, 0]),
+    )
+    for name, blob in trimesh.exchange.gltf.export_gltf(scene).items():
+        (tmp_path / name).write_bytes(blob)
+    bodies = load_mesh(tmp_path / "model.gltf")
+    assert [b.name for b in bodies] == ["model/b1", "model/b2"]
+    assert np.allclose(bodies[1].transform[:3, 3], [3, 0, 0])
+    (tmp_path / "gltf_buffer_0.bin").unlink()
+    with pytest.raises(InvalidMeshError) as info:
+        load_mesh(tmp_path / "model.gltf")
+    assert "not found" in str(info.value)
+
+
+# --- merging ----------------------------------------------------------------------------------
+
+
+def test_uv_seams_are_merged(tmp_path):
+    path = tmp_path / "cube.obj"
+    path.write_text(CUBE_OBJ_WITH_UVS)
+    split = load_mesh(path, merge=False)[0]
+    assert len(split.vertices) > 8  # trimesh splits along the UV/normal seams
+    body = load_mesh(path)[0]
+    assert len(body.vertices) == 8 and len(body.faces) == 12
+    assert is_closed(body.faces)
+    assert signed_volume(body.vertices, body.faces) == pytest.approx(1.0)
+    assert np.array_equal(body.vertices[0], [0, 0, 0])  # file order kept
+
+
+def test_merge_vertices_keeps_degenerate_faces():
+    vertices = np.array([[0, 0, 0], [1, 0, 0], [1, 0, 0], [0, 1, 0], [9, 9, 9]], dtype=float)
+    faces = np.array([[0, 1, 3], [0, 1, 2]])
+    merged, new_faces = merge_vertices(vertices, faces)
+    assert merged.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+    assert new_faces.tolist() == [[0, 1, 2], [0, 1, 1]]
+
+
+def test_textured_files_load_without_pillow(corpus, tmp_path):
+    # a glTF with a texture (garbage image bytes: never decoded without Pillow)
+    positions = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=np.float32)
+    uvs = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=np.float32)
+    indices = np.array([0, 1, 2, 0, 2, 3], dtype=np.uint16)
+    blob = positions.tobytes() + uvs.tobytes() + indices.tobytes()
+    uri = "data:application/octet-stream;base64," + base64.b64encode(blob).decode()
+    gltf = {
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0, "name": "quad"}],
+        "meshes": [{"primitives": [{
+            "attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+        "textures": [{"source": 0}],
+        "images": [{"uri": "data:image/png;base64," + base64.b64encode(b"\x89PNGjunk").decode()}],
+        "buffers": [{"byteLength": len(blob), "uri": uri}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+            {"buffer": 0, "byteOffset": 80, "byteLength": 12},
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+             "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"},
+        ],
+    }
+    textured = tmp_path / "textured.gltf"
+    textured.write_text(json.dumps(gltf))
+    files = [corpus / "trimesh-models" / "wallhole.obj", corpus / "trimesh-models" / "plane.ply",
+             textured]
+    script = textwrap.dedent("""
+        import sys
+        sys.modules["PIL"] = None  # any `import PIL...` now raises ImportError
+        from meshcol.mesh_io import load_mesh
+        for path in sys.argv[1:]:
+            body, = load_mesh(path)
+            print(body.name, len(body.vertices), len(body.faces))
+        assert sys.modules["PIL"] is None
+    """)
+    result = subprocess.run([sys.executable, "-c", script, *map(str, files)],
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split("\n")[:3] == ["wallhole 35 66", "plane 4 2", "textured 4 2"]
+
+
+# --- awkward meshes that must load -----------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("name", "faces"),
+    [("nancolor.obj", 12), ("soup.stl", 100), ("notenoughindices.obj", 1), ("shared.STL", 24),
+     ("teapot.stl", 894)],
+)
+def test_awkward_meshes_load(corpus, name, faces):
+    (body,) = load_mesh(corpus / "trimesh-models" / name)
+    assert len(body.faces) == faces
+    assert np.isfinite(body.vertices).all()
+
+
+def test_source_is_the_path_as_given(corpus, monkeypatch):
+    monkeypatch.chdir(corpus / "trimesh-models")
+    assert load_mesh("tet.ply")[0].source == "tet.ply"
+    assert load_mesh(Path("tet.ply"))[0].source == "tet.ply"
+
+
+def test_exported_from_package():
+    assert meshcol.load_mesh is load_mesh
+
+
+# --- bad input ----------------------------------------------------------------------------------
+
+TRIANGLE = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
+
+
+@pytest.mark.parametrize(
+    ("file_name", "content", "error", "message"),
+    [
+        ("missing.obj", None, InputFileError, "file not found"),
+        ("mesh.xyz", TRIANGLE, InputFileError,
+         "unknown mesh file extension '.xyz' (expected .obj, .stl, .ply, .off, .glb, .gltf)"),
+        ("noext", TRIANGLE, InputFileError,
+         "unknown mesh file extension '(none)' (expected .obj, .stl, .ply, .off, .glb, .gltf)"),
+        ("empty.obj", "", InvalidMeshError, "mesh has no faces"),
+        ("points.obj", "v 0 0 0\nv 1 0 0\n", InvalidMeshError, "mesh has no faces"),
+        ("nan.obj", TRIANGLE.replace("v 1 0 0", "v nan 0 0"), InvalidMeshError,
+         "mesh has non-finite vertex coordinates"),
+        ("inf.obj", TRIANGLE.replace("v 1 0 0", "v 1 inf 0"), InvalidMeshError,
+         "mesh has non-finite vertex coordinates"),
+        ("index.obj", TRIANGLE.replace("f 1 2 3", "f 1 2 9"), InvalidMeshError,
+         "cannot parse OBJ file: index 8 is out of bounds for axis 0 with size 3"),
+        ("text.stl", "hello", InvalidMeshError, "mesh has no faces"),
+        ("bad.gltf", '{"asset": {"version": "2.0"}, "meshes": [', InvalidMeshError,
+         "cannot parse GLTF file: invalid JSON at line 1 column 42: Expecting value"),
+        ("bad.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n", InvalidMeshError,
+         "cannot parse OFF file: cannot reshape array of size 6 into shape (3,3)"),
+    ],
+)
+def test_bad_input(tmp_path, file_name, content, error, message):
+    path = tmp_path / file_name
+    if content is not None:
+        path.write_text(content)
+    with pytest.raises(error) as info:
+        load_mesh(path)
+    assert info.value.message == message
+    assert info.value.path == os.fspath(path)
+    assert str(info.value) == f"{path}: {message}"
+    assert "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (b"garbage\x00\x01\x02", "cannot parse GLB file: buffer size must be a multiple of element size"),
+    ],
+)
+def test_corrupt_binary_glb(tmp_path, content, message):
+    path = tmp_path / "bad.glb"
+    path.write_bytes(content)
+    with pytest.raises(InvalidMeshError) as info:
+        load_mesh(path)
+    assert info.value.message == message
+
+
+def test_truncated_binary_stl(corpus, tmp_path):
+    path = tmp_path / "truncated.stl"
+    path.write_bytes((corpus / "trimesh-models" / "unit_cube.STL").read_bytes()[:120])
+    with pytest.raises(InvalidMeshError) as info:
+        load_mesh(path)
+    assert info.value.message == (
+        "cannot parse STL file: neither binary STL (size does not match the triangle count) "
+        "nor ASCII text"
+    )
+
+
+@pytest.mark.parametrize("name", ["empty.obj", "empty.stl"])
+def test_corpus_empty_files(corpus, name):
+    path = corpus / "trimesh-models" / name
+    with pytest.raises(InvalidMeshError, match="^.*: mesh has no faces$"):
+        load_mesh(path)
+
+
+def test_directory(tmp_path):
+    folder = tmp_path / "folder.obj"
+    folder.mkdir()
+    with pytest.raises(InputFileError) as info:
+        load_mesh(folder)
+    assert info.value.message == "is a directory, not a mesh file"
+
+
+def test_unreadable_file(tmp_path, monkeypatch):
+    path = tmp_path / "locked.obj"
+    path.write_text(TRIANGLE)
+    real_open = open
+
+    def refusing_open(file, *args, **kwargs):
+        if os.fspath(file) == os.fspath(path):
+            raise PermissionError(13, "Permission denied")
+        return real_open(file, *args, **kwargs)
+
+    monkeypatch.setattr("builtins.open", refusing_open)
+    with pytest.raises(InputFileError) as info:
+        load_mesh(path)
+    assert info.value.message == "cannot read file: Permission denied"
+
+
+@pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0, reason="root reads any file")
+def test_unreadable_file_by_permissions(tmp_path):
+    path = tmp_path / "locked.obj"
+    path.write_text(TRIANGLE)
+    path.chmod(0)
+    with pytest.raises(InputFileError, match="cannot read file: Permission denied"):
+        load_mesh(path)
+
+
+# --- split_rigid ----------------------------------------------------------------------------------
+
+
+def test_split_rigid_identity_and_rotation_pass_through():
+    rigid, linear = split_rigid(np.eye(4))
+    assert linear is None and np.array_equal(rigid, np.eye(4))
+    rotation = trimesh.transformations.rotation_matrix(1.1, [0, 1, 1], point=[1, 2, 3])
+    rigid, linear = split_rigid(rotation)
+    assert linear is None and np.array_equal(rigid, rotation)
+
+
+def test_split_rigid_mirror_goes_into_the_baked_part():
+    matrix = trimesh.transformations.rotation_matrix(0.3, [1, 0, 0]) @ np.diag([2, -3, 4, 1])
+    rigid, linear = split_rigid(matrix)
+    assert is_rigid(rigid)
+    assert np.allclose(rigid[:3, :3] @ linear, matrix[:3, :3])
+    assert np.allclose(linear, linear.T)
+    assert np.linalg.det(linear) == pytest.approx(-24.0)
+
+
+def test_split_rigid_rejects_zero_scale():
+    with pytest.raises(InvalidMeshError, match="singular"):
+        split_rigid(np.diag([1.0, 0.0, 1.0, 1.0]))

@@ -1,0 +1,575 @@
+"""Exact triangle-mesh queries: known answers, exact oracles, properties, python-fcl, bad input."""
+
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+
+import numpy as np
+import pytest
+import trimesh
+from hypothesis import given
+from hypothesis import strategies as st
+
+import meshcol
+from meshcol import _core
+from meshcol.mesh_query import MeshSet, mesh_distance, mesh_distance_batch, mesh_intersects_batch
+from meshcol.types import Body, Status
+
+# --------------------------------------------------------------------------- helpers
+
+
+def box(lower, upper) -> trimesh.Trimesh:
+    return trimesh.creation.box(bounds=[lower, upper])
+
+
+def pose(rotation=None, translation=(0.0, 0.0, 0.0)) -> np.ndarray:
+    m = np.eye(4)
+    if rotation is not None:
+        m[:3, :3] = rotation
+    m[:3, 3] = translation
+    return m
+
+
+def rotation_about(axis: str, angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return {
+        "x": np.array([[1, 0, 0], [0, c, -s], [0, s, c]]),
+        "y": np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]]),
+        "z": np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]),
+    }[axis]
+
+
+def rotation_from_quaternion(q) -> np.ndarray:
+    w, x, y, z = np.asarray(q, dtype=float) / np.linalg.norm(q)
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def bowl(outer: float = 1.0, inner: float = 0.9, n: int = 24, sections: int = 48) -> trimesh.Trimesh:
+    """A closed hemispherical shell, opening upwards, rim at z = 0 (revolved profile)."""
+    th = np.linspace(0.0, np.pi / 2, n)
+    outer_arc = np.c_[outer * np.sin(th), -outer * np.cos(th)]
+    inner_arc = np.c_[inner * np.sin(th[::-1]), -inner * np.cos(th[::-1])]
+    return trimesh.creation.revolve(np.vstack([outer_arc, inner_arc]), sections=sections)
+
+
+# Exact-in-numpy oracle for triangle pairs (independent of the C++ code): closest points of two
+# segments by checking the interior stationary point and the four boundary edges of [0, 1]^2.
+
+
+def _point_segment(p, a, b):
+    d = b - a
+    dd = np.einsum("...i,...i", d, d)
+    t = np.where(dd > 0, np.einsum("...i,...i", p - a, d) / np.where(dd > 0, dd, 1), 0.0)
+    t = np.clip(t, 0, 1)
+    return np.linalg.norm(p - (a + t[..., None] * d), axis=-1)
+
+
+def _segment_segment(p1, q1, p2, q2):
+    d1, d2, r = q1 - p1, q2 - p2, p1 - p2
+    best = np.minimum.reduce([
+        _point_segment(p1, p2, q2), _point_segment(q1, p2, q2),
+        _point_segment(p2, p1, q1), _point_segment(q2, p1, q1),
+    ])
+    a, b, c = d1 @ d1, d1 @ d2, d2 @ d2
+    e, f = d1 @ r, d2 @ r
+    det = a * c - b * b
+    if det > 1e-12 * a * c:
+        s = (b * f - c * e) / det
+        t = (a * f - b * e) / det
+        if 0 <= s <= 1 and 0 <= t <= 1:
+            best = min(best, np.linalg.norm(p1 + s * d1 - p2 - t * d2))
+    return float(best)
+
+
+def _point_triangle(p, t):
+    e1, e2 = t[1] - t[0], t[2] - t[0]
+    n = np.cross(e1, e2)
+    if n @ n > 0:
+        m = np.column_stack([e1, e2, n])
+        u, v, w = np.linalg.solve(m, p - t[0])
+        if u >= 0 and v >= 0 and u + v <= 1:
+            return float(abs(w) * np.linalg.norm(n))
+    return float(min(_point_segment(p, t[i], t[(i + 1) % 3]) for i in range(3)))
+
+
+def oracle_separated_distance(a, b) -> float:
+    """Exact distance of two non-intersecting triangles: 6 vertex-face and 9 edge-edge pairs."""
+    d = min(_point_triangle(p, b) for p in a)
+    d = min(d, min(_point_triangle(p, a) for p in b))
+    for i in range(3):
+        for j in range(3):
+            d = min(d, _segment_segment(a[i], a[(i + 1) % 3], b[j], b[(j + 1) % 3]))
+    return d
+
+
+def _edge_crossings(a, b, exact: bool):
+    """Margins of each edge of a crossing triangle b, solving p + t d = b0 + u e1 + v e2."""
+    out = []
+    for i in range(3):
+        p, q = a[i], a[(i + 1) % 3]
+        cols = [[q[k] - p[k] for k in range(3)], [b[0][k] - b[1][k] for k in range(3)],
+                [b[0][k] - b[2][k] for k in range(3)]]
+        rhs = [b[0][k] - p[k] for k in range(3)]
+        if exact:
+            det = _det3(cols)
+            if det == 0:
+                out.append(None)
+                continue
+            sol = [Fraction(_det3([rhs if c == j else cols[c] for c in range(3)]), det) for j in range(3)]
+        else:
+            m = np.array(cols, dtype=float).T
+            if abs(np.linalg.det(m)) < 1e-9:
+                out.append(None)
+                continue
+            sol = np.linalg.solve(m, np.array(rhs, dtype=float))
+        t, u, v = sol
+        out.append(min(t, 1 - t, u, v, 1 - u - v))
+    return out
+
+
+def _det3(c):
+    (a, b, cc), (d, e, f), (g, h, i) = c[0], c[1], c[2]
+    # columns given: determinant of [c0 c1 c2] as columns
+    return a * (e * i - f * h) - d * (b * i - cc * h) + g * (b * f - cc * e)
+
+
+# --------------------------------------------------------------------------- known answers
+
+
+def test_unit_cubes_one_apart_along_x() -> None:
+    r = mesh_distance(box([0, 0, 0], [1, 1, 1]), box([2, 0, 0], [3, 1, 1]))
+    assert r.status == Status.CONVERGED
+    assert r.distance == pytest.approx(1.0, abs=1e-12)
+    assert r.point_a[0] == pytest.approx(1.0, abs=1e-12)
+    assert r.point_b[0] == pytest.approx(2.0, abs=1e-12)
+    assert np.linalg.norm(r.point_b - r.point_a) == pytest.approx(1.0, abs=1e-12)
+    assert not (r.intersecting or r.a_inside_b or r.b_inside_a)
+    a, b = box([0, 0, 0], [1, 1, 1]), box([2, 0, 0], [3, 1, 1])
+    # the reported triangles hold the reported points
+    assert _point_triangle(r.point_a, a.vertices[a.faces[r.triangle_a]]) == pytest.approx(0, abs=1e-12)
+    assert _point_triangle(r.point_b, b.vertices[b.faces[r.triangle_b]]) == pytest.approx(0, abs=1e-12)
+
+
+def test_parallel_faces_partially_overlapping_and_posed() -> None:
+    a, b = box([0, 0, 0], [1, 1, 1]), box([0, 0, 0], [1, 1, 1])
+    r = mesh_distance(a, b, pose(), pose(translation=(2.0, 0.5, 0.25)))
+    assert r.distance == pytest.approx(1.0, abs=1e-12)
+    assert r.point_a[0] == pytest.approx(1.0, abs=1e-12)
+
+
+def test_edge_edge_crossing() -> None:
+    # a: cube rotated 45 degrees about y (top edge along y at z = sqrt(2)/2); b: cube rotated 45
+    # degrees about x (bottom edge along x), centred above at height sqrt(2) + gap.
+    gap = 0.3
+    a = b = box([-0.5] * 3, [0.5] * 3)
+    h = math.sqrt(2) / 2
+    r = mesh_distance(a, b, pose(rotation_about("y", math.pi / 4)),
+                      pose(rotation_about("x", math.pi / 4), (0, 0, 2 * h + gap)))
+    assert r.distance == pytest.approx(gap, abs=1e-12)
+    assert r.point_a == pytest.approx([0, 0, h], abs=1e-12)
+    assert r.point_b == pytest.approx([0, 0, h + gap], abs=1e-12)
+
+
+def test_vertex_face() -> None:
+    # b's body diagonal along z: its lowest vertex is sqrt(3)/2 below its centre.
+    gap = 0.125
+    diagonal = np.array([1.0, 1.0, 1.0]) / math.sqrt(3)
+    axis = np.cross(diagonal, [0, 0, -1.0])
+    angle = math.acos(diagonal @ [0, 0, -1.0])
+    rot = trimesh.transformations.rotation_matrix(angle, axis)[:3, :3]
+    cube = box([-0.5] * 3, [0.5] * 3)
+    slab = box([-2, -2, -1], [2, 2, 0])
+    r = mesh_distance(slab, cube, None, pose(rot, (0.1, -0.2, math.sqrt(3) / 2 + gap)))
+    assert r.distance == pytest.approx(gap, abs=1e-12)
+    assert r.point_a == pytest.approx([0.1, -0.2, 0.0], abs=1e-12)
+    assert r.point_b == pytest.approx([0.1, -0.2, gap], abs=1e-12)
+
+
+def test_touching_faces_is_distance_zero_and_intersecting() -> None:
+    r = mesh_distance(box([0, 0, 0], [1, 1, 1]), box([1, 0.5, 0.5], [2, 1.5, 1.5]))
+    assert r.distance == 0.0
+    assert r.intersecting
+    assert r.point_a[0] == pytest.approx(1.0, abs=1e-12)
+    assert np.array_equal(r.point_a, r.point_b)
+    assert not (r.a_inside_b or r.b_inside_a)
+
+
+def test_touching_at_a_vertex() -> None:
+    r = mesh_distance(box([0, 0, 0], [1, 1, 1]), box([1, 1, 1], [2, 2, 2]))
+    assert r.distance == 0.0 and r.intersecting
+    assert r.point_a == pytest.approx([1, 1, 1], abs=1e-12)
+
+
+def test_overlapping_boxes_intersect() -> None:
+    r = mesh_distance(box([0, 0, 0], [1, 1, 1]), box([0.5, 0.5, 0.5], [1.5, 1.5, 1.5]))
+    assert r.distance == 0.0 and r.intersecting and not r.a_inside_b
+
+
+def test_small_cube_inside_big_cube() -> None:
+    small, big = box([0.4, 0.4, 0.4], [0.6, 0.6, 0.6]), box([0, 0, 0], [1, 1, 1])
+    r = mesh_distance(small, big)
+    assert not r.intersecting
+    assert r.a_inside_b and not r.b_inside_a
+    assert r.distance == pytest.approx(0.4, abs=1e-12)
+    swapped = mesh_distance(big, small)
+    assert swapped.b_inside_a and not swapped.a_inside_b
+    assert swapped.distance == pytest.approx(0.4, abs=1e-12)
+
+
+def test_inside_an_inward_wound_mesh_counts() -> None:
+    big = box([0, 0, 0], [1, 1, 1])
+    r = mesh_distance(box([0.4] * 3, [0.6] * 3), (big.vertices, big.faces[:, ::-1]))
+    assert r.a_inside_b
+
+
+def test_containment_beyond_max_distance() -> None:
+    small, big = box([0.4] * 3, [0.6] * 3), box([0, 0, 0], [1, 1, 1])
+    r = mesh_distance(small, big, max_distance=0.1)
+    assert r.distance == math.inf and r.status == Status.CONVERGED
+    assert np.isnan(r.point_a).all() and r.triangle_a == -1
+    assert r.a_inside_b
+
+
+def test_ball_in_bowl_is_separated_not_inside() -> None:
+    shell = bowl()
+    assert shell.is_watertight and shell.volume > 0
+    ball = trimesh.creation.icosphere(subdivisions=3, radius=0.3)
+    r = mesh_distance(ball, shell, pose(translation=(0, 0, -0.55)))
+    assert not r.intersecting
+    assert not (r.a_inside_b or r.b_inside_a)
+    # 0.05 for the smooth shapes; the tessellations differ from them by less than 1e-3 there
+    assert r.distance == pytest.approx(0.05, abs=1e-3)
+    # while the ball is inside the bowl's convex hull
+    hull = shell.convex_hull
+    assert mesh_distance(ball, hull, pose(translation=(0, 0, -0.55))).a_inside_b
+
+
+def test_max_distance_cut_off() -> None:
+    meshes = MeshSet.from_arrays([box([0, 0, 0], [1, 1, 1])] * 3,
+                                 [pose(), pose(translation=(2, 0, 0)), pose(translation=(5, 0, 0))])
+    r = mesh_distance_batch(meshes, None, [[0, 1], [0, 2]], max_distance=2.0)
+    assert r.distance[0] == pytest.approx(1.0, abs=1e-12)
+    assert r.distance[1] == math.inf and np.isnan(r.point_a[1]).all()
+    assert (r.status == Status.CONVERGED).all()
+    exact = mesh_distance_batch(meshes, None, [[0, 1], [0, 2]], max_distance=4.0)
+    assert exact.distance[1] == pytest.approx(4.0, abs=1e-12)  # the bound itself counts
+
+
+def test_from_bodies_uses_body_transforms() -> None:
+    cube = box([0, 0, 0], [1, 1, 1])
+    bodies = [Body("a", None, cube.vertices, cube.faces),
+              Body("b", None, cube.vertices, cube.faces, transform=pose(translation=(0, 0, 3)))]
+    meshes = MeshSet.from_bodies(bodies)
+    assert mesh_distance_batch(meshes, None, [[0, 1]]).distance[0] == pytest.approx(2.0, abs=1e-12)
+    assert mesh_distance(bodies[0], bodies[1]).distance == pytest.approx(2.0, abs=1e-12)
+
+
+def test_public_names_are_exported() -> None:
+    for name in ("MeshSet", "mesh_distance", "mesh_distance_batch", "mesh_intersects_batch",
+                 "MeshDistanceBatch", "MeshDistanceResult", "MeshIntersectsBatch"):
+        assert getattr(meshcol, name) is not None
+    assert _core.defaults.mesh_bvh_leaf_size == 4
+    assert _core.defaults.winding_number_inside == 0.5
+
+
+# --------------------------------------------------------------------------- triangle oracle
+
+
+def test_triangle_distance_matches_numpy_oracle_on_random_pairs() -> None:
+    rng = np.random.default_rng(7)
+    n = 1200
+    a = rng.normal(size=(n, 3, 3))
+    b = rng.normal(size=(n, 3, 3)) + rng.normal(size=(n, 1, 3)) * 0.8
+    d, pa, pb, hit = _core.triangle_distance_batch(a, b)
+    checked_apart = checked_hit = 0
+    for k in range(n):
+        crossings = _edge_crossings(a[k], b[k], False) + _edge_crossings(b[k], a[k], False)
+        margins = [c for c in crossings if c is not None]
+        if any(c > 1e-7 for c in margins):  # clearly intersecting
+            checked_hit += 1
+            assert hit[k] and d[k] == 0.0, k
+            assert _point_triangle(pa[k], a[k]) < 1e-9 and _point_triangle(pa[k], b[k]) < 1e-9
+        elif all(c < -1e-7 for c in margins) and len(margins) == 6:  # clearly apart
+            checked_apart += 1
+            expected = oracle_separated_distance(a[k], b[k])
+            assert not hit[k], k
+            assert d[k] == pytest.approx(expected, rel=1e-9, abs=1e-12), k
+            assert np.linalg.norm(pb[k] - pa[k]) == pytest.approx(d[k], rel=1e-9, abs=1e-12)
+            assert _point_triangle(pa[k], a[k]) < 1e-9 and _point_triangle(pb[k], b[k]) < 1e-9
+    assert checked_apart > 400 and checked_hit > 100
+
+
+def test_triangle_special_cases() -> None:
+    def tri_d(a, b):
+        d, pa, pb, hit = _core.triangle_distance_batch(np.array([a], float), np.array([b], float))
+        return d[0], hit[0]
+
+    t = [[0, 0, 0], [2, 0, 0], [0, 2, 0]]
+    assert tri_d(t, [[0.5, 0.5, 0], [1, 0.5, 0], [0.5, 1, 0]]) == (0.0, True)  # coplanar, inside
+    assert tri_d(t, [[-1, 1, 0], [3, 1, 0], [1, 3, 0]]) == (0.0, True)  # coplanar, crossing edges
+    assert tri_d(t, [[3, 3, 0], [4, 3, 0], [3, 4, 0]])[1] is np.False_  # coplanar, apart
+    assert tri_d(t, [[3, 3, 0], [4, 3, 0], [3, 4, 0]])[0] == pytest.approx(math.sqrt(8), abs=1e-12)
+    assert tri_d(t, [[2, 0, 0], [3, 0, 1], [3, 1, 1]]) == (0.0, True)  # shared vertex
+    assert tri_d(t, [[0.5, 0.5, -1], [0.5, 0.5, 1], [0.6, 0.6, 1]]) == (0.0, True)  # pierced
+    assert tri_d(t, [[0.5, 0.5, 0.5], [0.5, 0.5, 1], [0.5, 0.5, 2]])[0] == pytest.approx(0.5)  # degenerate
+    assert tri_d(t, [[0.5, 0.5, -1], [0.5, 0.5, 1], [0.5, 0.5, 2]]) == (0.0, True)  # degenerate pierces
+    assert tri_d(t, [[1, 1, 1], [1, 1, 1], [1, 1, 1]])[0] == pytest.approx(1.0)  # a point
+
+
+integer_triangle = st.lists(st.lists(st.integers(-2, 2), min_size=3, max_size=3), min_size=3, max_size=3)
+
+
+@given(integer_triangle, integer_triangle, st.permutations(range(3)), st.booleans())
+def test_integer_triangles_exact_and_order_independent(a, b, perm, swap) -> None:
+    """Small-integer triangles (coplanar, touching, degenerate cases galore) are exact."""
+    a, b = np.array(a, float), np.array(b, float)
+    d, pa, pb, hit = _core.triangle_distance_batch(np.array([a, b]), np.array([b, a[perm]]))
+    # independent of argument order and vertex order
+    assert hit[0] == hit[1]
+    assert d[0] == pytest.approx(d[1], rel=1e-12, abs=1e-15)
+    if hit[0]:
+        assert d[0] == 0.0
+        assert _point_triangle(pa[0], a) < 1e-9 and _point_triangle(pa[0], b) < 1e-9
+    else:
+        assert d[0] == pytest.approx(oracle_separated_distance(a, b), rel=1e-9, abs=1e-12)
+        # exact rational check: no edge of one crosses the other (non-coplanar edges only)
+        ia, ib = a.astype(int).tolist(), b.astype(int).tolist()
+        for x, y in ((ia, ib), (ib, ia)):
+            for margin in _edge_crossings(x, y, True):
+                assert margin is None or margin < 0
+
+
+# --------------------------------------------------------------------------- mesh properties
+
+
+def _mesh_library() -> list[trimesh.Trimesh]:
+    return [
+        box([-0.5, -0.3, -0.2], [0.5, 0.3, 0.2]),
+        trimesh.creation.icosphere(subdivisions=1, radius=0.6),
+        trimesh.creation.torus(0.6, 0.2, major_sections=16, minor_sections=8),
+        trimesh.creation.cylinder(radius=0.3, height=1.2, sections=12),
+        bowl(n=6, sections=12),
+    ]
+
+
+LIBRARY = _mesh_library()
+LIBRARY_SET = MeshSet.from_arrays(LIBRARY)
+
+
+def brute_force(a: trimesh.Trimesh, pa, b: trimesh.Trimesh, pb) -> tuple[float, bool]:
+    ta = trimesh.transform_points(a.vertices, pa)[a.faces]
+    tb = trimesh.transform_points(b.vertices, pb)[b.faces]
+    ia, ib = np.meshgrid(np.arange(len(ta)), np.arange(len(tb)), indexing="ij")
+    d, _, _, hit = _core.triangle_distance_batch(
+        np.ascontiguousarray(ta[ia.ravel()]), np.ascontiguousarray(tb[ib.ravel()]))
+    return float(d.min()), bool(hit.any())
+
+
+quaternion = st.tuples(*[st.floats(-1, 1) for _ in range(4)]).filter(
+    lambda q: sum(x * x for x in q) > 0.01)
+translation = st.tuples(*[st.floats(-1.5, 1.5) for _ in range(3)])
+poses = st.builds(lambda q, t: pose(rotation_from_quaternion(q), t), quaternion, translation)
+mesh_index = st.integers(0, len(LIBRARY) - 1)
+
+
+@given(mesh_index, mesh_index, poses, poses)
+def test_bvh_distance_equals_brute_force_over_triangle_pairs(i, j, pa, pb) -> None:
+    if i == j:
+        return  # one mesh posed twice: see the symmetry test
+    r = mesh_distance_batch(LIBRARY_SET, _poses_for(i, j, pa, pb), [[i, j]])
+    d, hit = brute_force(LIBRARY[i], pa, LIBRARY[j], pb)
+    assert bool(r.intersecting[0]) == (hit or d == 0.0)
+    assert r.distance[0] == pytest.approx(0.0 if hit else d, rel=1e-9, abs=1e-12)
+    assert np.linalg.norm(r.point_b[0] - r.point_a[0]) == pytest.approx(r.distance[0], rel=1e-9, abs=1e-12)
+
+
+def _poses_for(i, j, pa, pb) -> np.ndarray:
+    p = np.tile(np.eye(4), (len(LIBRARY), 1, 1))
+    p[i], p[j] = pa, pb
+    return p
+
+
+@given(mesh_index, mesh_index, poses, poses, poses)
+def test_symmetry_and_rigid_invariance(i, j, pa, pb, motion) -> None:
+    if i == j:
+        return  # the pose array holds one pose per mesh
+    p = _poses_for(i, j, pa, pb)
+    moved = p.copy()
+    moved[i], moved[j] = motion @ pa, motion @ pb
+    r = mesh_distance_batch(LIBRARY_SET, p, [[i, j], [j, i]])
+    m = mesh_distance_batch(LIBRARY_SET, moved, [[i, j]])
+    assert r.distance[0] == pytest.approx(r.distance[1], rel=1e-9, abs=1e-12)
+    assert r.intersecting[0] == r.intersecting[1]
+    assert r.a_inside_b[0] == r.b_inside_a[1] and r.b_inside_a[0] == r.a_inside_b[1]
+    assert m.distance[0] == pytest.approx(r.distance[0], rel=1e-9, abs=1e-9)
+    assert m.intersecting[0] == r.intersecting[0] or r.distance[0] < 1e-9
+    # AABB gap is a lower bound
+    wa = trimesh.transform_points(LIBRARY[i].vertices, pa)
+    wb = trimesh.transform_points(LIBRARY[j].vertices, pb)
+    gap = np.maximum(0, np.maximum(wa.min(0) - wb.max(0), wb.min(0) - wa.max(0)))
+    assert r.distance[0] >= np.linalg.norm(gap) - 1e-12
+    # intersects-only query agrees
+    assert mesh_intersects_batch(LIBRARY_SET, p, [[i, j]]).intersecting[0] == r.intersecting[0]
+
+
+@given(st.lists(st.tuples(mesh_index, mesh_index), min_size=1, max_size=12),
+       st.lists(poses, min_size=len(LIBRARY), max_size=len(LIBRARY)), st.integers(0, 3),
+       st.floats(0.0, 2.0))
+def test_batch_equals_loop_of_singles(pairs, pose_list, threads, max_distance) -> None:
+    p = np.stack(pose_list)
+    r = mesh_distance_batch(LIBRARY_SET, p, pairs, threads=threads, max_distance=max_distance)
+    full = mesh_distance_batch(LIBRARY_SET, p, pairs, threads=1)
+    for k, (i, j) in enumerate(pairs):
+        s = mesh_distance(LIBRARY[i], LIBRARY[j], p[i], p[j], max_distance=max_distance)
+        assert s.distance == r.distance[k] or (np.isnan(s.distance) and np.isnan(r.distance[k]))
+        assert s.intersecting == r.intersecting[k] and s.a_inside_b == r.a_inside_b[k]
+        assert s.b_inside_a == r.b_inside_a[k] and s.status == r.status[k]
+        if full.distance[k] <= max_distance:
+            assert r.distance[k] == full.distance[k]
+        else:
+            assert r.distance[k] == math.inf
+        assert r.a_inside_b[k] == full.a_inside_b[k]
+
+
+def test_bvh_validates_on_corpus_and_library(corpus) -> None:
+    assert LIBRARY_SET.validate()
+    meshes = [trimesh.load(corpus / "trimesh-models" / name, force="mesh")
+              for name in ("torus.STL", "fandisk.obj", "soup.stl", "ballA.off")]
+    assert MeshSet.from_arrays(meshes).validate()
+
+
+def test_winding_number_inside_outside() -> None:
+    w = LIBRARY_SET.winding_number(1, [[0, 0, 0], [2, 0, 0], [0.1, 0.2, -0.3]])
+    assert w == pytest.approx([1.0, 0.0, 1.0], abs=1e-9)
+
+
+# --------------------------------------------------------------------------- python-fcl
+
+
+def _fcl_model(fcl, mesh: trimesh.Trimesh):
+    m = fcl.BVHModel()
+    m.beginModel(len(mesh.vertices), len(mesh.faces))
+    m.addSubModel(np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.int32))
+    m.endModel()
+    return m
+
+
+def _fcl_distance(fcl, ma, pa, mb, pb) -> tuple[float, bool]:
+    oa = fcl.CollisionObject(ma, fcl.Transform(pa[:3, :3], pa[:3, 3]))
+    ob = fcl.CollisionObject(mb, fcl.Transform(pb[:3, :3], pb[:3, 3]))
+    collision = fcl.CollisionResult()
+    fcl.collide(oa, ob, fcl.CollisionRequest(), collision)
+    return fcl.distance(oa, ob, fcl.DistanceRequest(), fcl.DistanceResult()), collision.is_collision
+
+
+def test_ball_pair_from_corpus_intersects(corpus) -> None:
+    fcl = pytest.importorskip("fcl")
+    a = trimesh.load(corpus / "trimesh-models" / "ballA.off", force="mesh")
+    b = trimesh.load(corpus / "trimesh-models" / "ballB.off", force="mesh")
+    r = mesh_distance(a, b)
+    assert r.intersecting and r.distance == 0.0
+    assert _fcl_distance(fcl, _fcl_model(fcl, a), np.eye(4), _fcl_model(fcl, b), np.eye(4))[1]
+    # the witness lies on both reported triangles
+    assert _point_triangle(r.point_a, a.vertices[a.faces[r.triangle_a]]) < 1e-9
+    assert _point_triangle(r.point_a, b.vertices[b.faces[r.triangle_b]]) < 1e-9
+    # moved apart along x by 20 (their extents overlap by about 13.8): separated, as fcl says
+    d, hit = _fcl_distance(fcl, _fcl_model(fcl, a), np.eye(4), _fcl_model(fcl, b), pose(translation=(20, 0, 0)))
+    apart = mesh_distance(a, b, None, pose(translation=(20, 0, 0)))
+    assert not hit and not apart.intersecting
+    assert apart.distance == pytest.approx(d, rel=1e-9)
+
+
+def test_pins_scene_matches_fcl(corpus) -> None:
+    fcl = pytest.importorskip("fcl")
+    parts = trimesh.load(corpus / "trimesh-models" / "pins.glb").dump()
+    meshes = MeshSet.from_arrays(parts)
+    models = [_fcl_model(fcl, m) for m in parts]
+    pairs = np.array([(i, j) for i in range(len(parts)) for j in range(i + 1, len(parts))])
+    r = mesh_distance_batch(meshes, None, pairs)
+    for k, (i, j) in enumerate(pairs):
+        d, hit = _fcl_distance(fcl, models[i], np.eye(4), models[j], np.eye(4))
+        assert bool(r.intersecting[k]) == hit, (i, j)
+        if not hit:
+            assert r.distance[k] == pytest.approx(d, rel=1e-9), (i, j)
+
+
+@pytest.mark.parametrize("name", ["torus.STL", "fandisk.obj"])
+def test_posed_copies_match_fcl(corpus, name) -> None:
+    fcl = pytest.importorskip("fcl")
+    mesh = trimesh.load(corpus / "trimesh-models" / name, force="mesh")
+    model = _fcl_model(fcl, mesh)
+    meshes = MeshSet.from_arrays([mesh])
+    rng = np.random.default_rng(3)
+    extent = float(mesh.extents.max())
+    agreed_apart = 0
+    for _ in range(12):
+        pb = pose(rotation_from_quaternion(rng.normal(size=4)), rng.normal(size=3) * extent * 0.8)
+        d, hit = _fcl_distance(fcl, model, np.eye(4), model, pb)
+        two = MeshSet.from_arrays([mesh, mesh], np.stack([np.eye(4), pb]))
+        r = mesh_distance_batch(two, None, [[0, 1]])
+        assert bool(r.intersecting[0]) == hit
+        if not hit:
+            agreed_apart += 1
+            assert r.distance[0] == pytest.approx(d, rel=1e-9)
+    assert agreed_apart >= 3
+    assert len(meshes) == 1
+
+
+# --------------------------------------------------------------------------- bad input
+
+
+def test_face_index_out_of_range_names_the_mesh() -> None:
+    cube = box([0, 0, 0], [1, 1, 1])
+    bad_faces = cube.faces.copy()
+    bad_faces[3, 1] = 8
+    with pytest.raises(ValueError, match=r"^meshes\[1\]: face vertex index 8 out of range \[0, 8\)$"):
+        MeshSet.from_arrays([cube, (cube.vertices, bad_faces)])
+    with pytest.raises(ValueError, match=r"^mesh 1: face 3 has vertex index 8 out of range \[0, 8\)$"):
+        _core.MeshBvhSet(np.vstack([cube.vertices] * 2), np.vstack([cube.faces, bad_faces]).astype(np.int64),
+                         np.array([0, 8, 16]), np.array([0, 12, 24]))
+
+
+def test_malformed_calls_raise_value_error() -> None:
+    cube = box([0, 0, 0], [1, 1, 1])
+    meshes = MeshSet.from_arrays([cube, cube])
+    with pytest.raises(ValueError, match=r"^poses must be \(2, 4, 4\), got \(3, 3\)$"):
+        mesh_distance_batch(meshes, np.eye(3), [[0, 1]])
+    with pytest.raises(ValueError, match=r"^pairs must be \(P, 2\), got \(3,\)$"):
+        mesh_distance_batch(meshes, None, [0, 1, 1])
+    with pytest.raises(ValueError, match=r"^pairs\[0\] = \(0, 2\) is out of range for 2 meshes$"):
+        mesh_distance_batch(meshes, None, [[0, 2]])
+    with pytest.raises(ValueError, match=r"^max_distance must be >= 0, got -1.0$"):
+        mesh_distance_batch(meshes, None, [[0, 1]], max_distance=-1)
+    with pytest.raises(ValueError, match=r"^meshes\[0\]: vertices must be \(n, 3\), got \(8, 2\)$"):
+        MeshSet.from_arrays([(cube.vertices[:, :2], cube.faces)])
+    with pytest.raises(ValueError, match=r"^meshes\[0\]: faces must be integers, got float64$"):
+        MeshSet.from_arrays([(cube.vertices, cube.faces.astype(float))])
+    assert len(mesh_distance_batch(meshes, None, np.zeros((0, 2), int))) == 0
+
+
+def test_bad_data_sets_pair_status_only() -> None:
+    cube = box([0, 0, 0], [1, 1, 1])
+    nan_vertices = cube.vertices.copy()
+    nan_vertices[2, 1] = np.nan
+    inf_vertices = cube.vertices.copy()
+    inf_vertices[0, 0] = np.inf
+    meshes = MeshSet.from_arrays([cube, (nan_vertices, cube.faces), (inf_vertices, cube.faces),
+                                  (cube.vertices, np.zeros((0, 3), int)), cube])
+    assert meshes.valid.tolist() == [True, False, False, False, True]
+    p = np.tile(np.eye(4), (5, 1, 1))
+    p[4, :3, 3] = (3, 0, 0)
+    r = mesh_distance_batch(meshes, p, [[0, 1], [2, 0], [0, 3], [0, 4]])
+    assert r.status.tolist() == [Status.INVALID_INPUT] * 3 + [Status.CONVERGED]
+    assert np.isnan(r.distance[:3]).all() and r.distance[3] == pytest.approx(2.0)
+    assert mesh_intersects_batch(meshes, p, [[0, 1], [0, 4]]).status.tolist() == [3, 0]
+    for bad in (np.diag([2.0, 1, 1, 1]), np.full((4, 4), np.nan)):
+        q = p.copy()
+        q[4] = bad
+        r = mesh_distance_batch(meshes, q, [[0, 4], [0, 0]])
+        assert r.status.tolist() == [Status.INVALID_INPUT, Status.CONVERGED]
+        assert r.distance[1] == 0.0 and r.intersecting[1]
