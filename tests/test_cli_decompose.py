@@ -230,7 +230,7 @@ def test_corpus_snowflake_thin_features(corpus, tmp_path) -> None:
 def test_bad_inputs_exit_2_with_one_line(meshes, tmp_path) -> None:
     out = str(tmp_path / "o")
     cases = {
-        str(tmp_path / "missing.obj"): "no such file",
+        str(tmp_path / "missing.obj"): "file not found",
         str(meshes["empty"]): "mesh has no faces",
         str(meshes["flat"]): "mesh is flat (all vertices lie in one plane): it encloses no volume",
     }
@@ -260,14 +260,29 @@ def test_usage_errors(meshes, tmp_path, extra, message) -> None:
     assert message in stderr
 
 
-def test_duplicate_body_names_are_refused(meshes, tmp_path) -> None:
+def test_same_stem_in_two_folders_gets_two_names(meshes, tmp_path) -> None:
     other = tmp_path / "again"
     other.mkdir()
     copy = other / "box.obj"
     copy.write_bytes(meshes["box"].read_bytes())
-    code, _, stderr = run([str(meshes["box"]), str(copy), "-o", str(tmp_path / "o"), "--no-cache"])
+    code, stdout, _ = run([str(meshes["box"]), str(copy), "-o", str(tmp_path / "o"), "--no-cache"])
+    assert code == 0
+    names = [b["name"] for f in json.loads(stdout)["files"] for b in f["bodies"]]
+    assert names == ["box", "box#2"]
+    assert sorted(files(tmp_path / "o")) == ["box_00.obj", "box_2_00.obj"]
+    first, second = (files(tmp_path / "o")[n].decode() for n in ("box_00.obj", "box_2_00.obj"))
+    assert first.replace("o box_00", "o box_2_00") == second
+
+
+def test_clashing_output_names_are_refused(meshes, tmp_path) -> None:
+    clash = tmp_path / "box_2.obj"  # box#2 and box_2 would both write box_2_NN.obj
+    clash.write_bytes(meshes["box"].read_bytes())
+    copy = tmp_path / "sub" / "box.obj"
+    copy.parent.mkdir()
+    copy.write_bytes(meshes["box"].read_bytes())
+    code, _, stderr = run([str(meshes["box"]), str(copy), str(clash), "-o", str(tmp_path / "o"), "--no-cache"])
     assert code == 2
-    assert stderr == f"meshcol: error: {copy}: two bodies would write 'box' (also from {meshes['box']}): rename one\n"
+    assert stderr == f"meshcol: error: {clash}: two bodies would write 'box_2' (also from {copy}): rename one\n"
 
 
 def test_obj_numbers_round_trip_exactly(meshes, tmp_path) -> None:

@@ -198,27 +198,25 @@ def decompose_command(
 
 
 def _load(inputs: tuple[str, ...]) -> list[tuple[str, list[tuple[str, Any, Any, Any]]]]:
-    """[(path, [(body name, canonical vertices, canonical faces, transform)])] per input."""
-    import numpy as np
-    import trimesh
+    """[(file, [(body name, canonical vertices, canonical faces, transform)])], files in order.
 
+    Bodies are grouped by the file they came from (one task per file); a manifest's bodies
+    without a file of their own (primitives) belong to the manifest.
+    """
     from meshcol.decompose import canonical_geometry
-    from meshcol.errors import InputFileError
+    from meshcol.scene import load_inputs
 
-    files = []
-    for path in inputs:
-        if not os.path.isfile(path):
-            raise InputFileError("no such file", path)
-        mesh = trimesh.load(path, force="mesh")
-        name = os.path.splitext(os.path.basename(path))[0]
-        vertices = np.asarray(getattr(mesh, "vertices", np.empty((0, 3))), dtype=np.float64)
-        faces = np.asarray(getattr(mesh, "faces", np.empty((0, 3))), dtype=np.int64)
+    scene = load_inputs(list(inputs))
+    files: dict[str, list[tuple[str, Any, Any, Any]]] = {}
+    for body in scene.bodies:
+        source = body.source or scene.source or body.name
         try:
-            v, f = canonical_geometry(vertices, faces)
+            v, f = canonical_geometry(body.vertices, body.faces)
         except InvalidMeshError as exc:
-            raise InvalidMeshError(exc.message, path) from None
-        files.append((path, [(name, v, f, np.eye(4))]))
-    return files
+            where = source if body.name == os.path.splitext(os.path.basename(source))[0] else f"{source}: {body.name}"
+            raise InvalidMeshError(exc.message, where) from None
+        files.setdefault(source, []).append((body.name, v, f, body.transform))
+    return list(files.items())
 
 
 class _Progress:
