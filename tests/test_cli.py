@@ -65,3 +65,17 @@ def test_native_core_loads() -> None:
 
     assert _core.hardware_threads() >= 1
     assert 0 < _core.defaults.rigid_tolerance < 1e-3
+
+
+def test_output_files_get_the_usual_permissions(tmp_path) -> None:
+    import os
+    import stat
+
+    from meshcol.report import atomic_write
+
+    target = tmp_path / "out.json"
+    atomic_write(target, "{}\n")
+    mask = os.umask(0)
+    os.umask(mask)
+    assert stat.S_IMODE(target.stat().st_mode) == 0o666 & ~mask
+    assert [p.name for p in tmp_path.iterdir()] == ["out.json"]
