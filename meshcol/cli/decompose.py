@@ -118,15 +118,22 @@ def decompose_command(
     task_file: list[int] = []
     for i, (path, bodies) in enumerate(files):
         lookup = {}
+        start = time.perf_counter()
         if not no_cache:
             key_options = {k: v for k, v in options.items() if k != "use_cache"}
             lookup = {name: cached_decomposition((v, f), **key_options) for name, v, f, _ in bodies}
         if lookup and all(d is not None and d.metrics is not None for d in lookup.values()):
-            results[i] = ("ok", [(name, lookup[name]) for name, _, _, _ in bodies], None, 0.0)
+            hits = [(name, lookup[name]) for name, _, _, _ in bodies]
+            results[i] = ("ok", hits, None, time.perf_counter() - start)
         else:
             tasks.append((path, [(name, v, f) for name, v, f, _ in bodies], options))
             task_file.append(i)
 
+    # Largest files first (by triangle count): the longest task starts early, so parallel
+    # runs finish sooner (LPT scheduling). Outputs do not depend on the order.
+    order = sorted(range(len(tasks)), key=lambda k: -sum(len(f) for _, _, f in tasks[k][1]))
+    tasks = [tasks[k] for k in order]
+    task_file = [task_file[k] for k in order]
     progress = _Progress(len(files), len(results))
     for outcome in run_tasks(decompose_task, tasks, jobs=jobs, timeout=timeout):
         i = task_file[outcome.index]
@@ -139,7 +146,8 @@ def decompose_command(
     failed = exceeded = 0
     for i, (path, bodies) in enumerate(files):
         status, value, message, seconds = results[i]
-        entry: dict[str, Any] = {"path": path, "status": status, "message": message, "bodies": []}
+        entry: dict[str, Any] = {"path": path, "status": status, "message": message, "bodies": [],
+                                 "seconds": round(seconds, 3)}
         if status != "ok":
             failed += 1
         else:
