@@ -15,6 +15,7 @@ frame); nothing here applies a body's transform.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import importlib.metadata
 import json
@@ -614,7 +615,12 @@ def decompose(
     tol = _tolerance(vertices, tolerance)
     if use_cache:
         hit = decompose_cache.load(key, cache_dir)
-        if hit is not None and (not metrics or _metrics_match(hit.metrics, samples, tol)):
+        if hit is not None:
+            if not metrics or _metrics_match(hit.metrics, samples, tol):
+                return hit
+            # Same parts, other sampling settings: measure again, keep the parts.
+            hit = dataclasses.replace(hit, metrics=fidelity(vertices, faces, hit.parts, samples=samples, tolerance=tol))
+            decompose_cache.store(hit, cache_dir)
             return hit
 
     raw = _run_engine(engine, vertices, faces, params)
@@ -640,6 +646,9 @@ def decompose(
         by_volume = sorted(order, key=lambda i: -parts[i][2])[:max_hulls]
         keep = set(by_volume)
         parts_sorted = tuple((parts[i][0], parts[i][1]) for i in order if i in keep)
+        truncated = len(parts) - max_hulls
+    else:
+        truncated = 0
     notes = []
     repaired = engine == "coacd" and params["preprocess_mode"] == "on" and not closed
     if repaired:
@@ -648,6 +657,8 @@ def decompose(
         notes.append("input is not a closed manifold: the engine decomposed it as given")
     if dropped:
         notes.append(f"dropped {dropped} flat part(s) the engine returned")
+    if truncated:
+        notes.append(f"{engine} returned {len(parts)} parts: kept the {max_hulls} largest (max_hulls)")
     if reduced:
         notes.append(f"reduced {reduced} part(s) to at most {budget} vertices (greedy hull subset)")
     result = Decomposition(

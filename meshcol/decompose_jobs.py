@@ -103,7 +103,10 @@ def _context() -> Any:
     methods = multiprocessing.get_all_start_methods()
     ctx = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
     if ctx.get_start_method() == "forkserver":
-        ctx.set_forkserver_preload(["meshcol.decompose", "meshcol.decompose_jobs"])
+        # Workers fork from a server that has already imported the heavy modules.
+        ctx.set_forkserver_preload(
+            ["meshcol.decompose", "meshcol.decompose_jobs", "scipy.spatial", "manifold3d", "coacd", "trimesh"]
+        )
     return ctx
 
 

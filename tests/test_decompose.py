@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import shutil
 import time
 from pathlib import Path
 
@@ -296,6 +297,16 @@ def test_cache_hit_is_fast_and_equal(torus_result) -> None:
     assert looked_up is not None and looked_up.cache_key == d.cache_key
     assert cached_decomposition(_torus(), cache_dir=str(cache), seed=1, **FAST) is None
     assert meshcol.cached_decomposition is cached_decomposition
+
+
+def test_cache_hit_with_other_sampling_measures_again_without_the_engine(torus_result, tmp_path) -> None:
+    d, _, cache = torus_result
+    shutil.copytree(cache, tmp_path / "cache")
+    hit = decompose(_torus(), cache_dir=str(tmp_path / "cache"), samples=300, **FAST)
+    assert hit.from_cache and hit.metrics.samples == 300 and d.metrics.samples == 2000
+    assert all(np.array_equal(a[0], b[0]) for a, b in zip(hit.parts, d.parts))
+    again = decompose(_torus(), cache_dir=str(tmp_path / "cache"), samples=300, **FAST)
+    assert again.metrics == hit.metrics
 
 
 def test_cache_write_interrupted_before_rename_leaves_nothing(torus_result, tmp_path, monkeypatch) -> None:
