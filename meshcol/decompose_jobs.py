@@ -53,7 +53,11 @@ def _call(fn: Callable[[Any], Any], task: Any) -> tuple[str, Any]:
         return "failed", f"{type(exc).__name__}: {exc}"
 
 
-def _worker_main(conn: multiprocessing.connection.Connection, fn: Callable[[Any], Any]) -> None:
+def _worker_main(
+    conn: multiprocessing.connection.Connection, fn: Callable[[Any], Any], env: dict[str, str]
+) -> None:
+    # Before any engine loads: OpenMP reads OMP_NUM_THREADS once, when its library loads.
+    os.environ.update(env)
     while True:
         try:
             message = conn.recv()
@@ -67,9 +71,9 @@ def _worker_main(conn: multiprocessing.connection.Connection, fn: Callable[[Any]
 
 
 class _Worker:
-    def __init__(self, ctx: Any, fn: Callable[[Any], Any]) -> None:
+    def __init__(self, ctx: Any, fn: Callable[[Any], Any], env: dict[str, str]) -> None:
         self.conn, child = ctx.Pipe()
-        self.process = ctx.Process(target=_worker_main, args=(child, fn), daemon=True)
+        self.process = ctx.Process(target=_worker_main, args=(child, fn, env), daemon=True)
         self.process.start()
         child.close()
         self.index: int | None = None
@@ -103,9 +107,10 @@ def _context() -> Any:
     methods = multiprocessing.get_all_start_methods()
     ctx = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
     if ctx.get_start_method() == "forkserver":
-        # Workers fork from a server that has already imported the heavy modules.
+        # Workers fork from a server that has already imported the heavy modules (not the
+        # engines: they load OpenMP, whose thread count each worker sets first).
         ctx.set_forkserver_preload(
-            ["meshcol.decompose", "meshcol.decompose_jobs", "scipy.spatial", "manifold3d", "coacd", "trimesh"]
+            ["meshcol.decompose", "meshcol.decompose_jobs", "scipy.spatial", "manifold3d", "trimesh"]
         )
     return ctx
 
@@ -116,6 +121,7 @@ def run_tasks(
     *,
     jobs: int = 1,
     timeout: float | None = None,
+    threads_per_job: int | None = None,
 ) -> Iterator[TaskOutcome]:
     """Run ``fn(task)`` for every task; yield outcomes as they complete.
 
@@ -130,6 +136,9 @@ def run_tasks(
     timeout : float, optional
         Seconds one task may take; its worker is then killed and replaced, and the task's
         status is ``timeout``.
+    threads_per_job : int, optional
+        OpenMP threads per worker (CoACD is parallel inside); default ``cores // jobs``, at
+        least 1, unless ``OMP_NUM_THREADS`` is set. Results do not depend on it.
     """
     if jobs < 1:
         raise ValueError(f"jobs must be at least 1, got {jobs}")
@@ -145,13 +154,18 @@ def run_tasks(
         return
 
     ctx = _context()
+    env: dict[str, str] = {}
+    if threads_per_job is not None:
+        env["OMP_NUM_THREADS"] = str(threads_per_job)
+    elif "OMP_NUM_THREADS" not in os.environ:
+        env["OMP_NUM_THREADS"] = str(max(1, (os.cpu_count() or 1) // jobs))
     pending = deque(enumerate(tasks))
     idle: list[_Worker] = []
     busy: list[_Worker] = []
     try:
         while pending or busy:
             while pending and len(busy) < jobs:
-                worker = idle.pop() if idle else _Worker(ctx, fn)
+                worker = idle.pop() if idle else _Worker(ctx, fn, env)
                 worker.assign(*pending.popleft())
                 busy.append(worker)
             now = time.perf_counter()
