@@ -202,6 +202,18 @@ def test_points_to_triangles_pruning_equals_brute_force() -> None:
     assert np.allclose(points_to_triangles(points, v, f), brute, atol=1e-12)
 
 
+def test_points_to_triangles_agrees_with_mesh_query() -> None:
+    mesh_query = pytest.importorskip("meshcol.mesh_query")
+    m = _torus()
+    v, f = np.asarray(m.vertices), np.asarray(m.faces)
+    points = np.random.default_rng(4).uniform(-1.6, 1.6, (100, 3))
+    # A point is a degenerate one-triangle mesh for the BVH-pair distance.
+    meshes = mesh_query.MeshSet.from_arrays([(v, f)] + [(np.repeat(p[None], 3, 0), [[0, 1, 2]]) for p in points])
+    pairs = np.stack([np.arange(1, 101), np.zeros(100, dtype=np.int64)], axis=1)
+    expected = mesh_query.mesh_distance_batch(meshes, None, pairs).distance
+    assert np.allclose(points_to_triangles(points, v, f), expected, rtol=0, atol=1e-12)
+
+
 def test_points_to_parts_known_distances() -> None:
     parts = (_box((0, 0, 0), (1, 1, 1)), _box((3, 0, 0), (4, 1, 1)))
     points = np.array([[0.5, 0.5, 0.5], [2.0, 0.5, 0.5], [1.5, 0.5, 0.5], [0.5, 0.5, 3.0], [5.0, 2.0, 1.0]])
