@@ -883,7 +883,8 @@ def fidelity(
 
     Notes
     -----
-    mesh -> parts: sampled mesh surface points plus the mesh vertices, distance to the union of
+    mesh -> parts: sampled mesh surface points plus the mesh vertices (at most ``samples`` of
+    them, chosen with the same seed), distance to the union of
     the parts by :func:`points_to_parts` (our GJK distance queries).
     parts -> mesh: sampled part surface points on the boundary of the union (a point within
     ``SHARED_FACE_FRACTION`` of the diagonal of another part lies on a cut shared between parts
@@ -897,7 +898,8 @@ def fidelity(
     tol = _tolerance(vertices, tolerance)
     diag = float(np.linalg.norm(np.ptp(vertices, axis=0)))
     rng = np.random.default_rng(seed)
-    mesh_points = np.concatenate([_sample_surface(vertices, faces, samples, rng), vertices[: samples]])
+    corners = vertices if len(vertices) <= samples else vertices[np.sort(rng.choice(len(vertices), samples, replace=False))]
+    mesh_points = np.concatenate([_sample_surface(vertices, faces, samples, rng), corners])
     to_parts = points_to_parts(mesh_points, parts)
 
     areas = np.array([_area(v, f) for v, f in parts])
