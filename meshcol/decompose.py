@@ -559,6 +559,7 @@ def decompose(
     tolerance: float | None = None,
     cache_dir: str | None = None,
     use_cache: bool = True,
+    threads: int = 0,
 ) -> Decomposition:
     """Convex decomposition of a mesh, from the cache when possible, stored in it otherwise.
 
@@ -582,6 +583,8 @@ def decompose(
         Cache folder; default :func:`meshcol.decompose_cache.default_cache_dir`.
     use_cache : bool
         Read and write the cache.
+    threads : int
+        Threads for the metrics' distance queries; 0 uses all cores.
 
     Returns
     -------
@@ -619,7 +622,8 @@ def decompose(
             if not metrics or _metrics_match(hit.metrics, samples, tol):
                 return hit
             # Same parts, other sampling settings: measure again, keep the parts.
-            hit = dataclasses.replace(hit, metrics=fidelity(vertices, faces, hit.parts, samples=samples, tolerance=tol))
+            remeasured = fidelity(vertices, faces, hit.parts, samples=samples, tolerance=tol, threads=threads)
+            hit = dataclasses.replace(hit, metrics=remeasured)
             decompose_cache.store(hit, cache_dir)
             return hit
 
@@ -667,7 +671,8 @@ def decompose(
         engine_version=version,
         params=params,
         cache_key=key,
-        metrics=fidelity(vertices, faces, parts_sorted, samples=samples, tolerance=tol) if metrics else None,
+        metrics=(fidelity(vertices, faces, parts_sorted, samples=samples, tolerance=tol, threads=threads)
+                 if metrics else None),
         repaired=repaired,
         notes=tuple(notes),
     )
@@ -680,11 +685,11 @@ def cached_decomposition(mesh: Any, *, cache_dir: str | None = None, **options: 
     """The cached decomposition of ``mesh`` for these options, or None; never runs an engine.
 
     Takes the same options as :func:`decompose` (``metrics``, ``samples``, ``tolerance`` and
-    ``use_cache`` are ignored: metrics come back as stored).
+    ``use_cache``, ``threads`` are ignored: metrics come back as stored).
     """
     from meshcol import decompose_cache
 
-    for ignored in ("metrics", "samples", "tolerance", "use_cache"):
+    for ignored in ("metrics", "samples", "tolerance", "use_cache", "threads"):
         options.pop(ignored, None)
     engine = options.pop("engine", "coacd")
     vertices, faces = canonical_geometry(*_as_arrays(mesh))
@@ -727,6 +732,8 @@ def points_to_parts(
     points: np.ndarray,
     parts: tuple[tuple[np.ndarray, np.ndarray], ...],
     owner: np.ndarray | None = None,
+    *,
+    threads: int = 0,
 ) -> np.ndarray:
     """Distance from each point to the union of convex parts (0 inside a part), (n,) float64.
 
@@ -767,7 +774,7 @@ def points_to_parts(
         ConvexSet.from_vertices([v for v, _ in parts]),
     )
     pairs = np.stack([i, n + j], axis=1).astype(np.int64)
-    batch = distance_batch(shapes, None, pairs)
+    batch = distance_batch(shapes, None, pairs, threads=threads)
     np.minimum.at(result, i, np.asarray(batch.distance, dtype=np.float64))
     return result
 
@@ -865,6 +872,7 @@ def fidelity(
     samples: int = DEFAULT_SAMPLES,
     seed: int = DEFAULT_METRIC_SEED,
     tolerance: float | None = None,
+    threads: int = 0,
 ) -> Fidelity:
     """Fidelity metrics of ``parts`` against the mesh (``vertices``, ``faces``).
 
@@ -880,6 +888,8 @@ def fidelity(
         Sampling seed (fixed: the metrics are deterministic).
     tolerance : float, optional
         Coverage tolerance; default 1% of the bounding-box diagonal.
+    threads : int
+        Threads for the distance queries; 0 uses all cores.
 
     Notes
     -----
@@ -900,14 +910,14 @@ def fidelity(
     rng = np.random.default_rng(seed)
     corners = vertices if len(vertices) <= samples else vertices[np.sort(rng.choice(len(vertices), samples, replace=False))]
     mesh_points = np.concatenate([_sample_surface(vertices, faces, samples, rng), corners])
-    to_parts = points_to_parts(mesh_points, parts)
+    to_parts = points_to_parts(mesh_points, parts, threads=threads)
 
     areas = np.array([_area(v, f) for v, f in parts])
     counts = np.maximum(1, np.round(samples * areas / areas.sum()).astype(np.int64))
     part_points = np.concatenate([_sample_surface(v, f, int(c), rng) for (v, f), c in zip(parts, counts)])
     owner = np.repeat(np.arange(len(parts)), counts)
     if len(parts) > 1:
-        shared = points_to_parts(part_points, parts, owner) <= SHARED_FACE_FRACTION * diag
+        shared = points_to_parts(part_points, parts, owner, threads=threads) <= SHARED_FACE_FRACTION * diag
         part_points = part_points[~shared]
     to_mesh = points_to_triangles(part_points, vertices, faces) if len(part_points) else np.zeros(1)
 

@@ -100,6 +100,8 @@ def decompose_command(
         "max_vertices": max_vertices, "preprocess": preprocess, "resolution": resolution,
         "seed": seed, "engine_options": engine_options,
         "cache_dir": cache_dir, "use_cache": not no_cache,
+        # Parallel files share the cores: each worker's distance queries get its share.
+        "threads": 0 if jobs == 1 else max(1, (os.cpu_count() or 1) // jobs),
     }
 
     # Unusable input stops the run before any work (exit 2); engine failures are per file.
