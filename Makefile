@@ -35,6 +35,7 @@ bench: install-test
 	$(BIN)/python benchmarks/bench_narrowphase.py
 	$(BIN)/python benchmarks/bench_broadphase.py
 	$(BIN)/python benchmarks/bench_mesh_query.py
+	$(BIN)/python benchmarks/bench_sweep.py
 
 clean:
 	rm -rf build dist $(VENV) demo-out *.egg-info

@@ -55,6 +55,21 @@ _LAZY: dict[str, str] = {
     "penetration_batch": "meshcol.query",
     "intersects_batch": "meshcol.query",
     "signed_distance_batch": "meshcol.query",
+    "ShapeKind": "meshcol.query",
+    "SignedDistanceResult": "meshcol.query",
+    "DistanceBatch": "meshcol.query",
+    "PenetrationBatch": "meshcol.query",
+    "SignedDistanceBatch": "meshcol.query",
+    "IntersectsBatch": "meshcol.query",
+    # continuous collision
+    "TimeOfImpactResult": "meshcol.sweep",
+    "TimeOfImpactBatch": "meshcol.sweep",
+    "SweepReport": "meshcol.sweep",
+    "SweepHit": "meshcol.sweep",
+    "interpolate_pose": "meshcol.sweep",
+    "time_of_impact": "meshcol.sweep",
+    "time_of_impact_batch": "meshcol.sweep",
+    "sweep": "meshcol.sweep",
     # exact triangle-mesh queries
     "MeshSet": "meshcol.mesh_query",
     "MeshDistanceBatch": "meshcol.mesh_query",
@@ -67,6 +82,7 @@ _LAZY: dict[str, str] = {
     "sort_and_sweep": "meshcol.broadphase",
     "SweepAndPrune": "meshcol.broadphase",
     "AabbTree": "meshcol.broadphase",
+    "brute_force_pairs": "meshcol.broadphase",
 }
 
 __all__ = [

@@ -24,6 +24,7 @@ COMMANDS: dict[str, str] = {
     "decompose": "meshcol.cli.decompose:decompose_command",
     "hull": "meshcol.cli.hull:hull",
     "inspect": "meshcol.cli.inspect:inspect",
+    "sweep": "meshcol.cli.sweep:sweep",
 }
 
 CONTEXT_SETTINGS = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
