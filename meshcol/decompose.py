@@ -775,7 +775,8 @@ def points_to_parts(
     )
     pairs = np.stack([i, n + j], axis=1).astype(np.int64)
     batch = distance_batch(shapes, None, pairs, threads=threads)
-    np.minimum.at(result, i, np.asarray(batch.distance, dtype=np.float64))
+    # fmin skips NaN (a pair the query rejected): a point whose pairs all failed stays inf.
+    np.fmin.at(result, i, np.asarray(batch.distance, dtype=np.float64))
     return result
 
 
