@@ -316,7 +316,8 @@ def test_cli_exit_codes_and_reports(tmp_path: Path) -> None:
     out = tmp_path / "r.json"
     result = run(["check", str(m), "--report", str(out)])
     assert result.exit_code == 1, result.output
-    assert "FAIL" in result.output
+    assert result.stdout == ""
+    assert result.stderr.splitlines()[-1] == "FAIL: 1 pair(s) violate --fail-on"
     data = json.loads(out.read_text())
     assert data["summary"]["passed"] is False and data["units"] == "m"
     assert run(["check", str(m), "--fail-on", "none"]).exit_code == 0
@@ -329,11 +330,12 @@ def test_cli_exit_codes_and_reports(tmp_path: Path) -> None:
 
 def test_cli_report_to_stdout_keeps_summary_on_stderr(tmp_path: Path) -> None:
     m = write_manifest(tmp_path, [box("a", (1, 1, 1), (0, 0, 0)), box("b", (1, 1, 1), (3, 0, 0))])
-    result = run(["check", str(m), "--report", "-"])
-    assert result.exit_code == 0
-    data = json.loads(result.stdout)
-    assert "PASS" in result.stderr
-    assert data["summary"]["candidate_pairs"] == 0
+    for args in ([], ["--report", "-"]):
+        result = run(["check", str(m), *args])
+        assert result.exit_code == 0
+        data = json.loads(result.stdout)
+        assert data["summary"]["candidate_pairs"] == 0
+        assert result.stderr.splitlines()[-1] == "PASS"
 
 
 @pytest.mark.parametrize("args, message", [
