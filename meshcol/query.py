@@ -454,6 +454,51 @@ class ConvexSet:
             edge_directions=np.concatenate([s.edge_directions for s in sets]),
         )
 
+    def take(self, indices: Any) -> ConvexSet:
+        """A set of the shapes at ``indices`` (repeats allowed), in that order.
+
+        Packing is vectorised, so replicating a few unique hulls into many instances (a level's
+        props) costs no per-shape Python work and no hull computation.
+
+        Parameters
+        ----------
+        indices : (K,) int
+            Shape indices into this set.
+        """
+        idx = np.asarray(indices, dtype=np.int64).reshape(-1)
+        if len(idx) and (idx.min() < 0 or idx.max() >= len(self)):
+            raise ValueError(f"indices must be in [0, {len(self)}), got {idx.min()}..{idx.max()}")
+
+        def blocks(offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            # rows of the contiguous blocks [offsets[h], offsets[h + 1]) for h in idx
+            starts = offsets[idx]
+            lengths = offsets[idx + 1] - starts
+            new_offsets = np.zeros(len(idx) + 1, dtype=np.int64)
+            np.cumsum(lengths, out=new_offsets[1:])
+            rows = np.repeat(starts - new_offsets[:-1], lengths)
+            rows += np.arange(new_offsets[-1], dtype=np.int64)
+            return new_offsets, rows
+
+        offsets, vertex_rows = blocks(self.offsets)
+        # A shape's adjacency lists are one block too: its vertices' lists, in vertex order.
+        _, adjacency_rows = blocks(self.adjacency_offsets[self.offsets])
+        adjacency_offsets = np.zeros(len(vertex_rows) + 1, dtype=np.int64)
+        np.cumsum(np.diff(self.adjacency_offsets)[vertex_rows], out=adjacency_offsets[1:])
+        face_offsets, face_rows = blocks(self.face_offsets)
+        edge_offsets, edge_rows = blocks(self.edge_offsets)
+        return ConvexSet(
+            vertices=self.vertices[vertex_rows],
+            offsets=offsets,
+            kinds=self.kinds[idx],
+            params=self.params[idx],
+            adjacency_offsets=adjacency_offsets,
+            adjacency=self.adjacency[adjacency_rows],
+            face_offsets=face_offsets,
+            face_normals=self.face_normals[face_rows],
+            edge_offsets=edge_offsets,
+            edge_directions=self.edge_directions[edge_rows],
+        )
+
     def aabbs(self, poses: Any = None, *, threads: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """World axis-aligned bounding boxes.
 

@@ -42,8 +42,6 @@ separating slab: relative linear speed along the normal plus, per body,
 from __future__ import annotations
 
 import os
-import sys
-import types
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
@@ -453,14 +451,9 @@ def swept_aabbs(cs: ConvexSet, start_poses: np.ndarray, end_poses: np.ndarray,
 
 def _candidate_pairs(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """(K, 2) int64 pairs i < j whose AABBs overlap (sort and sweep)."""
-    try:
-        from meshcol.broadphase import sort_and_sweep
-    except ImportError:
-        # TODO(#7): temporary all-pairs test until meshcol.broadphase lands on main.
-        i, j = np.triu_indices(len(lo), k=1)
-        keep = np.all((lo[i] <= hi[j]) & (lo[j] <= hi[i]), axis=1)
-        return np.stack([i[keep], j[keep]], axis=1).astype(np.int64)
-    return np.asarray(sort_and_sweep(lo, hi), dtype=np.int64).reshape(-1, 2)
+    from meshcol.broadphase import sort_and_sweep
+
+    return sort_and_sweep(lo, hi)
 
 
 def _triangle_set(body: Body) -> tuple[ConvexSet, int]:
@@ -662,15 +655,3 @@ def sweep(
     return SweepReport(scene=scene, shape=shape, tolerance=tol, hits=tuple(hits),
                        candidate_pairs=len(groups), shape_pairs=len(pairs),
                        moving=tuple(bool(m) for m in moving))
-
-
-class _CallableModule(types.ModuleType):
-    """``meshcol.sweep`` names both this module and its main function: importing the module
-    (``import meshcol.sweep``) rebinds the package attribute to the module, so the module is
-    made callable as :func:`sweep` and ``meshcol.sweep(...)`` works either way."""
-
-    def __call__(self, *args: Any, **kwargs: Any) -> SweepReport:
-        return sweep(*args, **kwargs)
-
-
-sys.modules[__name__].__class__ = _CallableModule
