@@ -10,6 +10,7 @@
 // whatever the grid; the grid only decides the speed.
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -190,10 +191,9 @@ Grid make_grid(const double* lo, const double* hi, std::int64_t n, int axis) {
     return g;
 }
 
-/// Enters every box in the cells it spans, visiting boxes in `order` (all of 0..n-1 when
-/// null). Entries of one cell are contiguous: [offsets[c], offsets[c + 1]).
+/// Enters every box in the cells it spans. Entries of one cell are contiguous: [offsets[c], offsets[c + 1]).
 void fill_cells(const double* lo, const double* hi, std::int64_t n, const Grid& g,
-                const std::uint32_t* order, std::vector<Entry>& entries,
+                std::vector<Entry>& entries,
                 std::vector<std::int64_t>& offsets) {
     const int cells = g.cells();
     offsets.assign(static_cast<size_t>(cells) + 1, 0);
@@ -210,8 +210,7 @@ void fill_cells(const double* lo, const double* hi, std::int64_t n, const Grid& 
     }
     entries.resize(static_cast<size_t>(offsets[cells]));
     std::vector<std::int64_t> next(offsets.begin(), offsets.end() - 1);
-    for (std::int64_t k = 0; k < n; ++k) {
-        const std::int64_t i = order ? order[k] : k;
+    for (std::int64_t i = 0; i < n; ++i) {
         const double* a = lo + 3 * i;
         const double* b = hi + 3 * i;
         const int u0 = g.cell_u(a[g.u]), u1 = g.cell_u(b[g.u]);
@@ -257,19 +256,87 @@ void sort_cell(Entry* e, std::int64_t count, std::vector<std::pair<double, std::
     for (std::int64_t k = 0; k < count; ++k) e[k] = scratch[keys[k].second];
 }
 
-/// Sorts (when asked) and sweeps every cell on `threads` threads; returns sorted pair keys.
-std::vector<std::uint64_t> sweep_all(const Grid& g, std::vector<Entry>& entries,
-                                     const std::vector<std::int64_t>& offsets, bool sort_cells,
-                                     int threads) {
-    const int cells = g.cells();
-    // Tasks of consecutive cells holding similar numbers of entries.
-    const std::int64_t total = offsets[cells];
+/// Splits cells 0..cells-1 into runs of consecutive cells holding similar numbers of entries
+/// (`size(c)`), about 16 per thread, so parallel_for balances uneven cells.
+template <class Size>
+std::vector<int> make_tasks(int cells, std::int64_t total, int threads, Size size) {
     const std::int64_t target = std::max<std::int64_t>(1, total / (std::max(1, threads) * 16));
     std::vector<int> task_begin{0};
-    for (int c = 0; c < cells; ++c)
-        if (offsets[c + 1] - offsets[task_begin.back()] >= target && c + 1 < cells)
+    std::int64_t run = 0;
+    for (int c = 0; c < cells; ++c) {
+        run += size(c);
+        if (run >= target && c + 1 < cells) {
             task_begin.push_back(c + 1);
+            run = 0;
+        }
+    }
     task_begin.push_back(cells);
+    return task_begin;
+}
+
+/// The pair keys ((i << 32) | j, i < j, no duplicates) found by every task, as flat sorted
+/// pairs [i0, j0, i1, j1, ...]. A counting sort on i (rows are short: a box overlaps a few
+/// others) writes straight into the output, then each row is sorted on j: three passes
+/// instead of the four 16-bit digits a radix sort of the keys needs past 2^16 boxes.
+/// `row` is scratch of n + 1 counters.
+std::vector<std::int64_t> sorted_pairs(const std::vector<std::vector<std::uint64_t>>& found,
+                                       std::int64_t n, std::vector<std::uint32_t>& row) {
+    size_t k = 0;
+    for (const auto& f : found) k += f.size();
+    std::vector<std::int64_t> pairs(2 * k);
+    if (k == 0) return pairs;
+    if (static_cast<std::int64_t>(k) * 8 < n) {  // few pairs among many boxes: sort the keys
+        std::vector<std::uint64_t> keys;
+        keys.reserve(k);
+        for (const auto& f : found) keys.insert(keys.end(), f.begin(), f.end());
+        sort_pair_keys(keys);
+        for (size_t p = 0; p < k; ++p) {
+            pairs[2 * p] = static_cast<std::int64_t>(keys[p] >> 32);
+            pairs[2 * p + 1] = static_cast<std::int64_t>(keys[p] & 0xFFFFFFFFu);
+        }
+        return pairs;
+    }
+    row.assign(static_cast<size_t>(n) + 1, 0u);
+    for (const auto& f : found)
+        for (const std::uint64_t key : f) ++row[(key >> 32) + 1];
+    for (std::int64_t i = 0; i < n; ++i) row[i + 1] += row[i];
+    for (const auto& f : found)
+        for (const std::uint64_t key : f)
+            pairs[2 * static_cast<size_t>(row[key >> 32]++) + 1] =
+                static_cast<std::int64_t>(key & 0xFFFFFFFFu);
+    // row[i] is now the end of row i, which is the start of row i + 1.
+    std::vector<std::int64_t> js;
+    size_t begin = 0;
+    for (std::int64_t i = 0; i < n; ++i) {
+        const size_t end = row[i];
+        std::int64_t* p = pairs.data() + 2 * begin;
+        const size_t len = end - begin;
+        if (len > 32) {  // a large box (a level's floor) overlaps many: no quadratic sort
+            js.resize(len);
+            for (size_t q = 0; q < len; ++q) js[q] = p[2 * q + 1];
+            std::sort(js.begin(), js.end());
+            for (size_t q = 0; q < len; ++q) p[2 * q + 1] = js[q];
+        } else {
+            for (size_t q = 1; q < len; ++q) {
+                const std::int64_t j = p[2 * q + 1];
+                size_t r = q;
+                for (; r > 0 && p[2 * r - 1] > j; --r) p[2 * r + 1] = p[2 * r - 1];
+                p[2 * r + 1] = j;
+            }
+        }
+        for (size_t q = 0; q < len; ++q) p[2 * q] = i;
+        begin = end;
+    }
+    return pairs;
+}
+
+/// Sorts (when asked) and sweeps every cell on `threads` threads; returns the sorted pairs.
+std::vector<std::int64_t> sweep_all(const Grid& g, std::vector<Entry>& entries,
+                                    const std::vector<std::int64_t>& offsets, bool sort_cells,
+                                    std::int64_t n, int threads) {
+    const int cells = g.cells();
+    const std::vector<int> task_begin = make_tasks(
+        cells, offsets[cells], threads, [&](int c) { return offsets[c + 1] - offsets[c]; });
     const long long tasks = static_cast<long long>(task_begin.size()) - 1;
     std::vector<std::vector<std::uint64_t>> found(static_cast<size_t>(tasks));
     parallel_for(tasks, threads > 1 ? threads : 1, [&](long long t0, long long t1) {
@@ -284,22 +351,8 @@ std::vector<std::uint64_t> sweep_all(const Grid& g, std::vector<Entry>& entries,
                            found[static_cast<size_t>(t)]);
             }
     });
-    size_t k = 0;
-    for (const auto& f : found) k += f.size();
-    std::vector<std::uint64_t> keys;
-    keys.reserve(k);
-    for (const auto& f : found) keys.insert(keys.end(), f.begin(), f.end());
-    sort_pair_keys(keys);
-    return keys;
-}
-
-std::vector<std::int64_t> unpack(const std::vector<std::uint64_t>& keys) {
-    std::vector<std::int64_t> pairs(2 * keys.size());
-    for (size_t k = 0; k < keys.size(); ++k) {
-        pairs[2 * k] = static_cast<std::int64_t>(keys[k] >> 32);
-        pairs[2 * k + 1] = static_cast<std::int64_t>(keys[k] & 0xFFFFFFFFu);
-    }
-    return pairs;
+    std::vector<std::uint32_t> row;
+    return sorted_pairs(found, n, row);
 }
 
 void check_axis(int axis) {
@@ -323,9 +376,66 @@ std::vector<std::int64_t> sort_and_sweep(const double* lo, const double* hi, std
     const Grid g = make_grid(lo, hi, n, axis);
     std::vector<Entry> entries;
     std::vector<std::int64_t> offsets;
-    fill_cells(lo, hi, n, g, nullptr, entries, offsets);
-    return unpack(sweep_all(g, entries, offsets, /*sort_cells=*/true, threads));
+    fill_cells(lo, hi, n, g, entries, offsets);
+    return sweep_all(g, entries, offsets, /*sort_cells=*/true, n, threads);
 }
+
+/// The incremental sweep's memory between steps: the grid of the first step (or of the last
+/// rebuild), each cell's entries sorted by lo_a, and the block of cells each box spans.
+struct SweepAndPrune::State {
+    Grid grid;
+    std::vector<std::vector<Entry>> cells;
+    std::vector<std::uint16_t> span;  ///< per box: u0, u1, v0, v1
+    std::vector<std::uint8_t> moved;  ///< per box: left its block of cells this step
+    std::vector<std::uint32_t> row;   ///< scratch of sorted_pairs
+
+    /// Grid, cells and spans from scratch; returns the pairs.
+    std::vector<std::int64_t> build(const double* lo, const double* hi, std::int64_t n, int axis,
+                                    int threads) {
+        grid = make_grid(lo, hi, n, axis);
+        const Grid& g = grid;
+        std::vector<Entry> entries;
+        std::vector<std::int64_t> offsets;
+        fill_cells(lo, hi, n, g, entries, offsets);
+        span.resize(4 * static_cast<size_t>(n));
+        moved.assign(static_cast<size_t>(n), 0);
+        for (std::int64_t i = 0; i < n; ++i) {
+            std::uint16_t* s = span.data() + 4 * i;
+            s[0] = static_cast<std::uint16_t>(g.cell_u(lo[3 * i + g.u]));
+            s[1] = static_cast<std::uint16_t>(g.cell_u(hi[3 * i + g.u]));
+            s[2] = static_cast<std::uint16_t>(g.cell_v(lo[3 * i + g.v]));
+            s[3] = static_cast<std::uint16_t>(g.cell_v(hi[3 * i + g.v]));
+        }
+        std::vector<std::int64_t> pairs = sweep_all(g, entries, offsets, true, n, threads);
+        cells.assign(static_cast<size_t>(g.cells()), {});
+        for (int c = 0; c < g.cells(); ++c)
+            cells[c].assign(entries.begin() + offsets[c], entries.begin() + offsets[c + 1]);
+        return pairs;
+    }
+};
+
+namespace {
+
+/// Insertion sort of a nearly sorted cell by lo_a; gives up past `budget` element moves
+/// (then returns -1 and leaves the cell partly sorted).
+std::int64_t insertion_sort(Entry* e, std::int64_t count, std::int64_t budget) {
+    std::int64_t shifts = 0;
+    for (std::int64_t k = 1; k < count; ++k) {
+        if (!(e[k].lo_a < e[k - 1].lo_a)) continue;
+        const Entry x = e[k];
+        std::int64_t j = k;
+        do {
+            e[j] = e[j - 1];
+            --j;
+        } while (j > 0 && x.lo_a < e[j - 1].lo_a);
+        e[j] = x;
+        shifts += k - j;
+        if (shifts > budget) return -1;
+    }
+    return shifts;
+}
+
+}  // namespace
 
 SweepAndPrune::SweepAndPrune(const double* lo, const double* hi, std::int64_t n, int axis,
                              int threads) {
@@ -334,21 +444,16 @@ SweepAndPrune::SweepAndPrune(const double* lo, const double* hi, std::int64_t n,
     validate_boxes(lo, hi, n);
     axis_ = axis < 0 ? choose_sweep_axis(lo, hi, n) : axis;
     threads_ = threads;
-    order_.resize(static_cast<size_t>(n));
-    keys_.resize(static_cast<size_t>(n));
-    for (std::int64_t i = 0; i < n; ++i) order_[i] = static_cast<std::uint32_t>(i);
-    std::sort(order_.begin(), order_.end(), [&](std::uint32_t a, std::uint32_t b) {
-        return lo[3 * a + axis_] < lo[3 * b + axis_];
-    });
-    for (std::int64_t k = 0; k < n; ++k) keys_[k] = lo[3 * order_[k] + axis_];
+    n_ = n;
+    state_ = std::make_unique<State>();
     last_shifts_ = -1;
     const int t = resolve_threads(threads_, n, defaults::broadphase_min_boxes_per_thread);
-    const Grid g = make_grid(lo, hi, n, axis_);
-    std::vector<Entry> entries;
-    std::vector<std::int64_t> offsets;
-    fill_cells(lo, hi, n, g, order_.data(), entries, offsets);
-    pairs_ = unpack(sweep_all(g, entries, offsets, /*sort_cells=*/false, t));
+    pairs_ = state_->build(lo, hi, n, axis_, t);
 }
+
+SweepAndPrune::~SweepAndPrune() = default;
+SweepAndPrune::SweepAndPrune(SweepAndPrune&&) noexcept = default;
+SweepAndPrune& SweepAndPrune::operator=(SweepAndPrune&&) noexcept = default;
 
 const std::vector<std::int64_t>& SweepAndPrune::update(const double* lo, const double* hi,
                                                        std::int64_t n) {
@@ -356,40 +461,103 @@ const std::vector<std::int64_t>& SweepAndPrune::update(const double* lo, const d
         throw std::invalid_argument("aabb_min must hold the same " + std::to_string(size()) +
                                     " boxes as before, got " + std::to_string(n));
     validate_boxes(lo, hi, n);
-    for (std::int64_t k = 0; k < n; ++k) keys_[k] = lo[3 * order_[k] + axis_];
-    // Insertion sort of the previous order: O(n + moves) on nearly sorted keys. A budget
-    // bounds the moves; past it the motion was not small and a full sort is cheaper.
-    const std::int64_t budget = defaults::sweep_max_shifts_per_box * std::max<std::int64_t>(n, 1);
-    std::int64_t shifts = 0;
-    bool gave_up = false;
-    for (std::int64_t k = 1; k < n && !gave_up; ++k) {
-        const double key = keys_[k];
-        const std::uint32_t id = order_[k];
-        std::int64_t j = k;
-        while (j > 0 && keys_[j - 1] > key) {
-            keys_[j] = keys_[j - 1];
-            order_[j] = order_[j - 1];
-            --j;
+    const int threads = resolve_threads(threads_, n, defaults::broadphase_min_boxes_per_thread);
+    State& st = *state_;
+    const Grid& g = st.grid;
+    // Boxes that left their block of cells are removed from the old cells and entered in the
+    // new ones. The grid keeps the bounds of the step that built it; boxes outside clamp to
+    // the border cells, which stays exact (cell_of is monotonic) and only slows those cells.
+    std::vector<std::uint32_t> changed;
+    if (g.cells() > 1) {
+        for (std::int64_t i = 0; i < n; ++i) {
+            std::uint16_t* s = st.span.data() + 4 * i;
+            const auto u0 = static_cast<std::uint16_t>(g.cell_u(lo[3 * i + g.u]));
+            const auto u1 = static_cast<std::uint16_t>(g.cell_u(hi[3 * i + g.u]));
+            const auto v0 = static_cast<std::uint16_t>(g.cell_v(lo[3 * i + g.v]));
+            const auto v1 = static_cast<std::uint16_t>(g.cell_v(hi[3 * i + g.v]));
+            const bool left = (u0 != s[0]) | (u1 != s[1]) | (v0 != s[2]) | (v1 != s[3]);
+            st.moved[i] = left;
+            if (!left) continue;
+            changed.push_back(static_cast<std::uint32_t>(i));
+            s[0] = u0, s[1] = u1, s[2] = v0, s[3] = v1;
         }
-        keys_[j] = key;
-        order_[j] = id;
-        shifts += k - j;
-        gave_up = shifts > budget;
     }
-    if (gave_up) {
-        std::sort(order_.begin(), order_.end(), [&](std::uint32_t a, std::uint32_t b) {
-            return lo[3 * a + axis_] < lo[3 * b + axis_];
-        });
-        for (std::int64_t k = 0; k < n; ++k) keys_[k] = lo[3 * order_[k] + axis_];
+    if (static_cast<double>(changed.size()) > defaults::sweep_max_cell_changes * static_cast<double>(n)) {
+        pairs_ = st.build(lo, hi, n, axis_, threads);
+        last_shifts_ = -1;
+        return pairs_;
     }
-    last_shifts_ = gave_up ? -1 : shifts;
-    const int t = resolve_threads(threads_, n, defaults::broadphase_min_boxes_per_thread);
-    const Grid g = make_grid(lo, hi, n, axis_);
-    std::vector<Entry> entries;
-    std::vector<std::int64_t> offsets;
-    // Entering boxes in sorted order leaves every cell sorted: no per-cell sort.
-    fill_cells(lo, hi, n, g, order_.data(), entries, offsets);
-    pairs_ = unpack(sweep_all(g, entries, offsets, /*sort_cells=*/false, t));
+    // New entries of the boxes that changed cells, grouped by cell, sorted by lo_a.
+    const int cells = g.cells();
+    std::vector<std::pair<int, Entry>> added;
+    for (const std::uint32_t i : changed) {
+        const double* a = lo + 3 * static_cast<size_t>(i);
+        const double* b = hi + 3 * static_cast<size_t>(i);
+        const std::uint16_t* s = st.span.data() + 4 * static_cast<size_t>(i);
+        const Entry e{a[g.axis], b[g.axis], a[g.u], b[g.u], a[g.v], b[g.v], i, s[0], s[2]};
+        for (int cu = s[0]; cu <= s[1]; ++cu)
+            for (int cv = s[2]; cv <= s[3]; ++cv) added.push_back({cu * g.cells_v + cv, e});
+    }
+    std::sort(added.begin(), added.end(), [](const auto& x, const auto& y) {
+        return x.first != y.first ? x.first < y.first : x.second.lo_a < y.second.lo_a;
+    });
+    std::vector<size_t> added_begin(static_cast<size_t>(cells) + 1, 0);
+    for (const auto& a : added) ++added_begin[static_cast<size_t>(a.first) + 1];
+    for (int c = 0; c < cells; ++c) added_begin[c + 1] += added_begin[c];
+
+    std::int64_t total = 0;
+    for (const auto& cell : st.cells) total += static_cast<std::int64_t>(cell.size());
+    const std::vector<int> task_begin = make_tasks(
+        cells, total, threads, [&](int c) { return static_cast<std::int64_t>(st.cells[c].size()); });
+    const long long tasks = static_cast<long long>(task_begin.size()) - 1;
+    std::vector<std::vector<std::uint64_t>> found(static_cast<size_t>(tasks));
+    std::vector<std::uint8_t> gave_up(static_cast<size_t>(tasks), 0);
+    std::vector<std::int64_t> shifts(static_cast<size_t>(tasks), 0);
+    parallel_for(tasks, threads > 1 ? threads : 1, [&](long long t0, long long t1) {
+        std::vector<std::pair<double, std::uint32_t>> keys;
+        std::vector<Entry> scratch;
+        for (long long t = t0; t < t1; ++t)
+            for (int c = task_begin[t]; c < task_begin[t + 1]; ++c) {
+                std::vector<Entry>& cell = st.cells[c];
+                // Refresh the coordinates in the kept order; drop the boxes that left.
+                size_t w = 0;
+                for (size_t r = 0; r < cell.size(); ++r) {
+                    const std::uint32_t i = cell[r].id;
+                    if (st.moved[i]) continue;
+                    const double* a = lo + 3 * static_cast<size_t>(i);
+                    const double* b = hi + 3 * static_cast<size_t>(i);
+                    const std::uint16_t cu0 = cell[r].cu0, cv0 = cell[r].cv0;
+                    cell[w++] = {a[g.axis], b[g.axis], a[g.u], b[g.u], a[g.v], b[g.v], i, cu0, cv0};
+                }
+                cell.resize(w);
+                const auto count = static_cast<std::int64_t>(w);
+                const std::int64_t moves =
+                    insertion_sort(cell.data(), count, defaults::sweep_max_shifts_per_box * count);
+                if (moves < 0) {  // not nearly sorted after all
+                    sort_cell(cell.data(), count, keys, scratch);
+                    gave_up[t] = 1;
+                } else {
+                    shifts[t] += moves;
+                }
+                // Merge the sorted newcomers in, from the back.
+                const size_t m = added_begin[c + 1] - added_begin[c];
+                if (m > 0) {
+                    const auto* in = added.data() + added_begin[c];
+                    cell.resize(w + m);
+                    auto x = static_cast<std::int64_t>(w) - 1;
+                    auto y = static_cast<std::int64_t>(m) - 1;
+                    for (auto out = static_cast<std::int64_t>(w + m) - 1; y >= 0; --out)
+                        cell[out] = (x >= 0 && cell[x].lo_a > in[y].second.lo_a) ? cell[x--] : in[y--].second;
+                }
+                sweep_cell(cell.data(), static_cast<std::int64_t>(cell.size()), c / g.cells_v,
+                           c % g.cells_v, cells == 1, found[static_cast<size_t>(t)]);
+            }
+    });
+    std::int64_t total_shifts = 0;
+    for (const std::int64_t s : shifts) total_shifts += s;
+    const bool any_gave_up = std::find(gave_up.begin(), gave_up.end(), 1) != gave_up.end();
+    last_shifts_ = any_gave_up ? -1 : total_shifts;
+    pairs_ = sorted_pairs(found, n, st.row);
     return pairs_;
 }
 

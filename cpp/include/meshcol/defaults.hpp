@@ -34,6 +34,10 @@ constexpr double sweep_min_candidates_for_grid = 16.0;
 /// moves per box (large motions are not "nearly sorted").
 constexpr long long sweep_max_shifts_per_box = 32;
 
+/// Incremental sweep: a step where more than this fraction of the boxes left the grid cells
+/// they spanned rebuilds the grid and sorts afresh (the motion was not small).
+constexpr double sweep_max_cell_changes = 0.25;
+
 /// AABB tree: bins of the binned SAH top-down build (Wald 2007; Box2D v3).
 constexpr int tree_bin_count = 32;
 
