@@ -96,9 +96,10 @@ struct Entry {
 };
 
 inline int clamp_cell(double t, int cells) {
-    // Monotonic in t: this is what makes the duplicate rule exact. NaN maps to 0.
-    if (!(t > 0.0)) return 0;
-    if (t >= static_cast<double>(cells)) return cells - 1;
+    // Monotonic in t: this is what makes the duplicate rule exact. NaN maps to 0. Written
+    // without branches: cell boundaries fall at random for random boxes.
+    t = t > 0.0 ? t : 0.0;
+    t = t < static_cast<double>(cells - 1) ? t : static_cast<double>(cells - 1);
     return static_cast<int>(t);
 }
 
@@ -113,12 +114,19 @@ struct Grid {
     int cells() const { return cells_u * cells_v; }
 };
 
-std::int64_t count_entries(const double* lo, const double* hi, std::int64_t n, const Grid& g) {
+/// Writes the block of cells each box spans (u0, u1, v0, v1 per box) and returns the number
+/// of (box, cell) entries.
+std::int64_t compute_spans(const double* lo, const double* hi, std::int64_t n, const Grid& g,
+                           std::vector<std::uint16_t>& span) {
+    span.resize(4 * static_cast<size_t>(n));
     std::int64_t total = 0;
     for (std::int64_t i = 0; i < n; ++i) {
-        const std::int64_t su = g.cell_u(hi[3 * i + g.u]) - g.cell_u(lo[3 * i + g.u]) + 1;
-        const std::int64_t sv = g.cell_v(hi[3 * i + g.v]) - g.cell_v(lo[3 * i + g.v]) + 1;
-        total += su * sv;
+        std::uint16_t* s = span.data() + 4 * i;
+        const int u0 = g.cell_u(lo[3 * i + g.u]), u1 = g.cell_u(hi[3 * i + g.u]);
+        const int v0 = g.cell_v(lo[3 * i + g.v]), v1 = g.cell_v(hi[3 * i + g.v]);
+        s[0] = static_cast<std::uint16_t>(u0), s[1] = static_cast<std::uint16_t>(u1);
+        s[2] = static_cast<std::uint16_t>(v0), s[3] = static_cast<std::uint16_t>(v1);
+        total += static_cast<std::int64_t>(u1 - u0 + 1) * (v1 - v0 + 1);
     }
     return total;
 }
@@ -134,7 +142,10 @@ double median_extent(const double* lo, const double* hi, std::int64_t n, int axi
     return *mid;
 }
 
-Grid make_grid(const double* lo, const double* hi, std::int64_t n, int axis) {
+/// The grid for these boxes; when it has several cells, `span` holds every box's block of
+/// cells in it (compute_spans).
+Grid make_grid(const double* lo, const double* hi, std::int64_t n, int axis,
+               std::vector<std::uint16_t>& span) {
     namespace d = defaults;
     Grid g;
     g.axis = axis;
@@ -183,7 +194,7 @@ Grid make_grid(const double* lo, const double* hi, std::int64_t n, int axis) {
     // Boxes much larger than the median (a level's floor) enter many cells: coarsen until
     // the duplicates stay bounded.
     const double max_entries = d::sweep_max_entries_per_box * static_cast<double>(n);
-    while (g.cells() > 1 && static_cast<double>(count_entries(lo, hi, n, g)) > max_entries) {
+    while (g.cells() > 1 && static_cast<double>(compute_spans(lo, hi, n, g, span)) > max_entries) {
         g.cells_u = std::max(1, g.cells_u / 2);
         g.cells_v = std::max(1, g.cells_v / 2);
         set_scale();
@@ -191,69 +202,75 @@ Grid make_grid(const double* lo, const double* hi, std::int64_t n, int axis) {
     return g;
 }
 
-/// Enters every box in the cells it spans. Entries of one cell are contiguous: [offsets[c], offsets[c + 1]).
+/// Enters every box in the cells it spans (`span`, unused for a single cell), in box order.
+/// Entries of one cell are contiguous: [offsets[c], offsets[c + 1]).
 void fill_cells(const double* lo, const double* hi, std::int64_t n, const Grid& g,
-                std::vector<Entry>& entries,
+                const std::vector<std::uint16_t>& span, std::unique_ptr<Entry[]>& entries,
                 std::vector<std::int64_t>& offsets) {
     const int cells = g.cells();
     offsets.assign(static_cast<size_t>(cells) + 1, 0);
     if (cells == 1) {
         offsets[1] = n;
-    } else {
+        entries.reset(new Entry[static_cast<size_t>(n)]);  // no zeroing: all written below
         for (std::int64_t i = 0; i < n; ++i) {
-            const int u0 = g.cell_u(lo[3 * i + g.u]), u1 = g.cell_u(hi[3 * i + g.u]);
-            const int v0 = g.cell_v(lo[3 * i + g.v]), v1 = g.cell_v(hi[3 * i + g.v]);
-            for (int cu = u0; cu <= u1; ++cu)
-                for (int cv = v0; cv <= v1; ++cv) ++offsets[static_cast<size_t>(cu * g.cells_v + cv) + 1];
+            const double* a = lo + 3 * i;
+            const double* b = hi + 3 * i;
+            entries[i] = {a[g.axis], b[g.axis], a[g.u], b[g.u], a[g.v], b[g.v],
+                          static_cast<std::uint32_t>(i), 0, 0};
         }
-        for (int c = 0; c < cells; ++c) offsets[c + 1] += offsets[c];
+        return;
     }
-    entries.resize(static_cast<size_t>(offsets[cells]));
+    for (std::int64_t i = 0; i < n; ++i) {
+        const std::uint16_t* s = span.data() + 4 * i;
+        for (int cu = s[0]; cu <= s[1]; ++cu)
+            for (int cv = s[2]; cv <= s[3]; ++cv) ++offsets[static_cast<size_t>(cu * g.cells_v + cv) + 1];
+    }
+    for (int c = 0; c < cells; ++c) offsets[c + 1] += offsets[c];
+    entries.reset(new Entry[static_cast<size_t>(offsets[cells])]);
     std::vector<std::int64_t> next(offsets.begin(), offsets.end() - 1);
     for (std::int64_t i = 0; i < n; ++i) {
         const double* a = lo + 3 * i;
         const double* b = hi + 3 * i;
-        const int u0 = g.cell_u(a[g.u]), u1 = g.cell_u(b[g.u]);
-        const int v0 = g.cell_v(a[g.v]), v1 = g.cell_v(b[g.v]);
+        const std::uint16_t* s = span.data() + 4 * i;
         const Entry e{a[g.axis], b[g.axis], a[g.u], b[g.u], a[g.v], b[g.v],
-                      static_cast<std::uint32_t>(i), static_cast<std::uint16_t>(u0),
-                      static_cast<std::uint16_t>(v0)};
-        for (int cu = u0; cu <= u1; ++cu)
-            for (int cv = v0; cv <= v1; ++cv) entries[static_cast<size_t>(next[cu * g.cells_v + cv]++)] = e;
+                      static_cast<std::uint32_t>(i), s[0], s[2]};
+        for (int cu = s[0]; cu <= s[1]; ++cu)
+            for (int cv = s[2]; cv <= s[3]; ++cv) entries[next[cu * g.cells_v + cv]++] = e;
     }
 }
 
 /// Sweeps one cell whose entries are sorted by lo_a, appending pair keys.
 void sweep_cell(const Entry* e, std::int64_t count, int cu, int cv, bool single_cell,
                 std::vector<std::uint64_t>& out) {
-    for (std::int64_t i = 0; i < count; ++i) {
-        const Entry& a = e[i];
-        for (std::int64_t j = i + 1; j < count && e[j].lo_a <= a.hi_a; ++j) {
-            const Entry& b = e[j];
+    const Entry* const end = e + count;
+    for (const Entry* a = e; a < end; ++a) {
+        // Locals, so the inner loop keeps them in registers across the push_back.
+        const double hi_a = a->hi_a, lo_u = a->lo_u, hi_u = a->hi_u, lo_v = a->lo_v, hi_v = a->hi_v;
+        const std::uint32_t id = a->id;
+        const int acu = a->cu0, acv = a->cv0;
+        for (const Entry* b = a + 1; b < end && b->lo_a <= hi_a; ++b) {
             // Non-short-circuit tests: about half the candidates fail, at random, so a branch
             // per test would mispredict often.
-            const bool hit = (b.lo_u <= a.hi_u) & (a.lo_u <= b.hi_u) & (b.lo_v <= a.hi_v) &
-                             (a.lo_v <= b.hi_v);
+            const bool hit = (b->lo_u <= hi_u) & (lo_u <= b->hi_u) & (b->lo_v <= hi_v) &
+                             (lo_v <= b->hi_v);
             if (!hit) continue;
-            if (!single_cell && (std::max(a.cu0, b.cu0) != cu || std::max(a.cv0, b.cv0) != cv))
+            if (!single_cell && (std::max<int>(acu, b->cu0) != cu || std::max<int>(acv, b->cv0) != cv))
                 continue;  // reported by the cell holding the intersection's minimum corner
-            const std::uint64_t i0 = std::min(a.id, b.id), j0 = std::max(a.id, b.id);
+            const std::uint64_t i0 = std::min(id, b->id), j0 = std::max(id, b->id);
             out.push_back(i0 << 32 | j0);
         }
     }
 }
 
-/// Sorts the entries of one cell by lo_a: sorts 16-byte (key, slot) records, then moves the
-/// 56-byte entries once.
-void sort_cell(Entry* e, std::int64_t count, std::vector<std::pair<double, std::uint32_t>>& keys,
-               std::vector<Entry>& scratch) {
-    if (count < 2) return;
+/// Writes the `count` entries of `src` to `dst` sorted by lo_a: sorts 16-byte (key, slot)
+/// records, then moves each 56-byte entry once.
+void sort_into(const Entry* src, std::int64_t count, Entry* dst,
+               std::vector<std::pair<double, std::uint32_t>>& keys) {
     keys.resize(static_cast<size_t>(count));
-    for (std::int64_t k = 0; k < count; ++k) keys[k] = {e[k].lo_a, static_cast<std::uint32_t>(k)};
+    for (std::int64_t k = 0; k < count; ++k) keys[k] = {src[k].lo_a, static_cast<std::uint32_t>(k)};
     std::sort(keys.begin(), keys.end(),
               [](const auto& a, const auto& b) { return a.first < b.first; });
-    scratch.assign(e, e + count);
-    for (std::int64_t k = 0; k < count; ++k) e[k] = scratch[keys[k].second];
+    for (std::int64_t k = 0; k < count; ++k) dst[k] = src[keys[k].second];
 }
 
 /// Splits cells 0..cells-1 into runs of consecutive cells holding similar numbers of entries
@@ -330,10 +347,11 @@ std::vector<std::int64_t> sorted_pairs(const std::vector<std::vector<std::uint64
     return pairs;
 }
 
-/// Sorts (when asked) and sweeps every cell on `threads` threads; returns the sorted pairs.
-std::vector<std::int64_t> sweep_all(const Grid& g, std::vector<Entry>& entries,
-                                    const std::vector<std::int64_t>& offsets, bool sort_cells,
-                                    std::int64_t n, int threads) {
+/// Sorts every cell of `raw` into `sorted` (same offsets) and sweeps it, on `threads`
+/// threads; returns the sorted pairs.
+std::vector<std::int64_t> sort_and_sweep_cells(const Grid& g, const Entry* raw, Entry* sorted,
+                                               const std::vector<std::int64_t>& offsets,
+                                               std::int64_t n, int threads) {
     const int cells = g.cells();
     const std::vector<int> task_begin = make_tasks(
         cells, offsets[cells], threads, [&](int c) { return offsets[c + 1] - offsets[c]; });
@@ -341,15 +359,16 @@ std::vector<std::int64_t> sweep_all(const Grid& g, std::vector<Entry>& entries,
     std::vector<std::vector<std::uint64_t>> found(static_cast<size_t>(tasks));
     parallel_for(tasks, threads > 1 ? threads : 1, [&](long long t0, long long t1) {
         std::vector<std::pair<double, std::uint32_t>> keys;
-        std::vector<Entry> scratch;
-        for (long long t = t0; t < t1; ++t)
+        for (long long t = t0; t < t1; ++t) {
+            auto& out = found[static_cast<size_t>(t)];
+            // About 1.2 pairs per entry for boxes that overlap 2 to 3 others: one allocation.
+            out.reserve(static_cast<size_t>(offsets[task_begin[t + 1]] - offsets[task_begin[t]]) * 3 / 2);
             for (int c = task_begin[t]; c < task_begin[t + 1]; ++c) {
-                Entry* first = entries.data() + offsets[c];
                 const std::int64_t count = offsets[c + 1] - offsets[c];
-                if (sort_cells) sort_cell(first, count, keys, scratch);
-                sweep_cell(first, count, c / g.cells_v, c % g.cells_v, cells == 1,
-                           found[static_cast<size_t>(t)]);
+                sort_into(raw + offsets[c], count, sorted + offsets[c], keys);
+                sweep_cell(sorted + offsets[c], count, c / g.cells_v, c % g.cells_v, cells == 1, out);
             }
+        }
     });
     std::vector<std::uint32_t> row;
     return sorted_pairs(found, n, row);
@@ -373,11 +392,13 @@ std::vector<std::int64_t> sort_and_sweep(const double* lo, const double* hi, std
     validate_boxes(lo, hi, n);
     if (axis < 0) axis = choose_sweep_axis(lo, hi, n);
     threads = resolve_threads(threads, n, defaults::broadphase_min_boxes_per_thread);
-    const Grid g = make_grid(lo, hi, n, axis);
-    std::vector<Entry> entries;
+    std::vector<std::uint16_t> span;
+    const Grid g = make_grid(lo, hi, n, axis, span);
+    std::unique_ptr<Entry[]> raw;
     std::vector<std::int64_t> offsets;
-    fill_cells(lo, hi, n, g, entries, offsets);
-    return sweep_all(g, entries, offsets, /*sort_cells=*/true, n, threads);
+    fill_cells(lo, hi, n, g, span, raw, offsets);
+    std::unique_ptr<Entry[]> sorted(new Entry[static_cast<size_t>(offsets.back())]);
+    return sort_and_sweep_cells(g, raw.get(), sorted.get(), offsets, n, threads);
 }
 
 /// The incremental sweep's memory between steps: the grid of the first step (or of the last
@@ -392,24 +413,18 @@ struct SweepAndPrune::State {
     /// Grid, cells and spans from scratch; returns the pairs.
     std::vector<std::int64_t> build(const double* lo, const double* hi, std::int64_t n, int axis,
                                     int threads) {
-        grid = make_grid(lo, hi, n, axis);
+        grid = make_grid(lo, hi, n, axis, span);
         const Grid& g = grid;
-        std::vector<Entry> entries;
-        std::vector<std::int64_t> offsets;
-        fill_cells(lo, hi, n, g, entries, offsets);
-        span.resize(4 * static_cast<size_t>(n));
+        if (g.cells() == 1) span.clear();  // update() needs no spans for a single cell
         moved.assign(static_cast<size_t>(n), 0);
-        for (std::int64_t i = 0; i < n; ++i) {
-            std::uint16_t* s = span.data() + 4 * i;
-            s[0] = static_cast<std::uint16_t>(g.cell_u(lo[3 * i + g.u]));
-            s[1] = static_cast<std::uint16_t>(g.cell_u(hi[3 * i + g.u]));
-            s[2] = static_cast<std::uint16_t>(g.cell_v(lo[3 * i + g.v]));
-            s[3] = static_cast<std::uint16_t>(g.cell_v(hi[3 * i + g.v]));
-        }
-        std::vector<std::int64_t> pairs = sweep_all(g, entries, offsets, true, n, threads);
+        std::unique_ptr<Entry[]> raw;
+        std::vector<std::int64_t> offsets;
+        fill_cells(lo, hi, n, g, span, raw, offsets);
+        std::unique_ptr<Entry[]> sorted(new Entry[static_cast<size_t>(offsets.back())]);
+        std::vector<std::int64_t> pairs = sort_and_sweep_cells(g, raw.get(), sorted.get(), offsets, n, threads);
         cells.assign(static_cast<size_t>(g.cells()), {});
         for (int c = 0; c < g.cells(); ++c)
-            cells[c].assign(entries.begin() + offsets[c], entries.begin() + offsets[c + 1]);
+            cells[c].assign(sorted.get() + offsets[c], sorted.get() + offsets[c + 1]);
         return pairs;
     }
 };
@@ -534,7 +549,8 @@ const std::vector<std::int64_t>& SweepAndPrune::update(const double* lo, const d
                 const std::int64_t moves =
                     insertion_sort(cell.data(), count, defaults::sweep_max_shifts_per_box * count);
                 if (moves < 0) {  // not nearly sorted after all
-                    sort_cell(cell.data(), count, keys, scratch);
+                    scratch.assign(cell.begin(), cell.end());
+                    sort_into(scratch.data(), count, cell.data(), keys);
                     gave_up[t] = 1;
                 } else {
                     shifts[t] += moves;
