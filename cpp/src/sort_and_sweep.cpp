@@ -95,6 +95,15 @@ struct Entry {
     std::uint16_t cv0;  ///< grid cell of lo_v
 };
 
+/// A hint to load the cache line holding `p` (no effect where the compiler has no builtin).
+inline void prefetch(const void* p) {
+#if defined(__GNUC__) || defined(__clang__)
+    __builtin_prefetch(p);
+#else
+    (void)p;
+#endif
+}
+
 inline int clamp_cell(double t, int cells) {
     // Monotonic in t: this is what makes the duplicate rule exact. NaN maps to 0. Written
     // without branches: cell boundaries fall at random for random boxes.
@@ -239,27 +248,45 @@ void fill_cells(const double* lo, const double* hi, std::int64_t n, const Grid& 
     }
 }
 
-/// Sweeps one cell whose entries are sorted by lo_a, appending pair keys.
-void sweep_cell(const Entry* e, std::int64_t count, int cu, int cv, bool single_cell,
-                std::vector<std::uint64_t>& out) {
+/// Sweeps one cell whose entries are sorted by lo_a, appending pair keys to out[0, k) (out
+/// grows as needed; its size is capacity, not content).
+///
+/// Each box's window (the entries that start inside its interval on the sweep axis) is found
+/// first, then its candidates are tested without a branch: about one in five passes, at
+/// random, so branches on the tests and on the window end mispredicted on most boxes. Every
+/// candidate's key is written and the end advanced by the test's result.
+template <bool single_cell>
+void sweep_cell(const Entry* e, std::int64_t count, int cu, int cv, std::vector<std::uint64_t>& out,
+                size_t& k_out) {
+    size_t k = k_out;  // a local: the key stores could alias a reference
     const Entry* const end = e + count;
     for (const Entry* a = e; a < end; ++a) {
-        // Locals, so the inner loop keeps them in registers across the push_back.
         const double hi_a = a->hi_a, lo_u = a->lo_u, hi_u = a->hi_u, lo_v = a->lo_v, hi_v = a->hi_v;
-        const std::uint32_t id = a->id;
+        const std::uint64_t id = a->id;
         const int acu = a->cu0, acv = a->cv0;
-        for (const Entry* b = a + 1; b < end && b->lo_a <= hi_a; ++b) {
-            // Non-short-circuit tests: about half the candidates fail, at random, so a branch
-            // per test would mispredict often.
-            const bool hit = (b->lo_u <= hi_u) & (lo_u <= b->hi_u) & (b->lo_v <= hi_v) &
-                             (lo_v <= b->hi_v);
-            if (!hit) continue;
-            if (!single_cell && (std::max<int>(acu, b->cu0) != cu || std::max<int>(acv, b->cv0) != cv))
-                continue;  // reported by the cell holding the intersection's minimum corner
-            const std::uint64_t i0 = std::min(id, b->id), j0 = std::max(id, b->id);
-            out.push_back(i0 << 32 | j0);
+        const Entry* stop = a + 1;
+        while (stop < end && stop->lo_a <= hi_a) ++stop;
+        const size_t m = static_cast<size_t>(stop - a - 1);
+        if (k + m > out.size()) out.resize(std::max(2 * out.size(), k + m + 1024));
+        std::uint64_t* w = out.data();
+        for (const Entry* b = a + 1; b < stop; ++b) {
+            bool hit = (b->lo_u <= hi_u) & (lo_u <= b->hi_u) & (b->lo_v <= hi_v) & (lo_v <= b->hi_v);
+            // A pair seen in several cells is reported by the cell holding the minimum corner
+            // of the pair's intersection.
+            if (!single_cell) hit &= (std::max<int>(acu, b->cu0) == cu) & (std::max<int>(acv, b->cv0) == cv);
+            const std::uint64_t bid = b->id;
+            w[k] = id < bid ? (id << 32 | bid) : (bid << 32 | id);
+            k += hit;
         }
     }
+    k_out = k;
+}
+
+/// Sweeps cell `c` of grid `g`, appending to out[0, k).
+inline void sweep_cell(const Entry* e, std::int64_t count, const Grid& g, int c,
+                       std::vector<std::uint64_t>& out, size_t& k) {
+    if (g.cells() == 1) sweep_cell<true>(e, count, 0, 0, out, k);
+    else sweep_cell<false>(e, count, c / g.cells_v, c % g.cells_v, out, k);
 }
 
 /// Writes the `count` entries of `src` to `dst` sorted by lo_a: sorts 16-byte (key, slot)
@@ -362,12 +389,14 @@ std::vector<std::int64_t> sort_and_sweep_cells(const Grid& g, const Entry* raw, 
         for (long long t = t0; t < t1; ++t) {
             auto& out = found[static_cast<size_t>(t)];
             // About 1.2 pairs per entry for boxes that overlap 2 to 3 others: one allocation.
-            out.reserve(static_cast<size_t>(offsets[task_begin[t + 1]] - offsets[task_begin[t]]) * 3 / 2);
+            out.resize(static_cast<size_t>(offsets[task_begin[t + 1]] - offsets[task_begin[t]]) * 3 / 2);
+            size_t k = 0;
             for (int c = task_begin[t]; c < task_begin[t + 1]; ++c) {
                 const std::int64_t count = offsets[c + 1] - offsets[c];
                 sort_into(raw + offsets[c], count, sorted + offsets[c], keys);
-                sweep_cell(sorted + offsets[c], count, c / g.cells_v, c % g.cells_v, cells == 1, out);
+                sweep_cell(sorted + offsets[c], count, g, c, out, k);
             }
+            out.resize(k);
         }
     });
     std::vector<std::uint32_t> row;
@@ -528,6 +557,7 @@ const std::vector<std::int64_t>& SweepAndPrune::update(const double* lo, const d
     std::vector<std::vector<std::uint64_t>> found(static_cast<size_t>(tasks));
     std::vector<std::uint8_t> gave_up(static_cast<size_t>(tasks), 0);
     std::vector<std::int64_t> shifts(static_cast<size_t>(tasks), 0);
+    std::vector<size_t> k(static_cast<size_t>(tasks), 0);  // pairs in found[t]
     parallel_for(tasks, threads > 1 ? threads : 1, [&](long long t0, long long t1) {
         std::vector<std::pair<double, std::uint32_t>> keys;
         std::vector<Entry> scratch;
@@ -535,8 +565,17 @@ const std::vector<std::int64_t>& SweepAndPrune::update(const double* lo, const d
             for (int c = task_begin[t]; c < task_begin[t + 1]; ++c) {
                 std::vector<Entry>& cell = st.cells[c];
                 // Refresh the coordinates in the kept order; drop the boxes that left.
+                // The boxes of a cell are scattered over the input arrays: fetch a few
+                // entries ahead, or every entry waits for two cache misses in turn.
                 size_t w = 0;
+                constexpr size_t ahead = 8;
                 for (size_t r = 0; r < cell.size(); ++r) {
+                    if (r + ahead < cell.size()) {
+                        const size_t f = 3 * static_cast<size_t>(cell[r + ahead].id);
+                        prefetch(lo + f);
+                        prefetch(hi + f);
+                        prefetch(st.moved.data() + cell[r + ahead].id);
+                    }
                     const std::uint32_t i = cell[r].id;
                     if (st.moved[i]) continue;
                     const double* a = lo + 3 * static_cast<size_t>(i);
@@ -565,10 +604,11 @@ const std::vector<std::int64_t>& SweepAndPrune::update(const double* lo, const d
                     for (auto out = static_cast<std::int64_t>(w + m) - 1; y >= 0; --out)
                         cell[out] = (x >= 0 && cell[x].lo_a > in[y].second.lo_a) ? cell[x--] : in[y--].second;
                 }
-                sweep_cell(cell.data(), static_cast<std::int64_t>(cell.size()), c / g.cells_v,
-                           c % g.cells_v, cells == 1, found[static_cast<size_t>(t)]);
+                sweep_cell(cell.data(), static_cast<std::int64_t>(cell.size()), g, c,
+                           found[static_cast<size_t>(t)], k[t]);
             }
     });
+    for (long long t = 0; t < tasks; ++t) found[static_cast<size_t>(t)].resize(k[t]);
     std::int64_t total_shifts = 0;
     for (const std::int64_t s : shifts) total_shifts += s;
     const bool any_gave_up = std::find(gave_up.begin(), gave_up.end(), 1) != gave_up.end();
