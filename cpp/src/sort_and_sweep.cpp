@@ -438,6 +438,7 @@ struct SweepAndPrune::State {
     std::vector<std::uint16_t> span;  ///< per box: u0, u1, v0, v1
     std::vector<std::uint8_t> moved;  ///< per box: left its block of cells this step
     std::vector<std::uint32_t> row;   ///< scratch of sorted_pairs
+    std::vector<std::vector<std::uint64_t>> found;  ///< scratch: pair keys of each task
 
     /// Grid, cells and spans from scratch; returns the pairs.
     std::vector<std::int64_t> build(const double* lo, const double* hi, std::int64_t n, int axis,
@@ -492,7 +493,7 @@ SweepAndPrune::SweepAndPrune(const double* lo, const double* hi, std::int64_t n,
     state_ = std::make_unique<State>();
     last_shifts_ = -1;
     const int t = resolve_threads(threads_, n, defaults::broadphase_min_boxes_per_thread);
-    pairs_ = state_->build(lo, hi, n, axis_, t);
+    pairs_ = std::make_shared<const std::vector<std::int64_t>>(state_->build(lo, hi, n, axis_, t));
 }
 
 SweepAndPrune::~SweepAndPrune() = default;
@@ -527,9 +528,9 @@ const std::vector<std::int64_t>& SweepAndPrune::update(const double* lo, const d
         }
     }
     if (static_cast<double>(changed.size()) > defaults::sweep_max_cell_changes * static_cast<double>(n)) {
-        pairs_ = st.build(lo, hi, n, axis_, threads);
+        pairs_ = std::make_shared<const std::vector<std::int64_t>>(st.build(lo, hi, n, axis_, threads));
         last_shifts_ = -1;
-        return pairs_;
+        return *pairs_;
     }
     // New entries of the boxes that changed cells, grouped by cell, sorted by lo_a.
     const int cells = g.cells();
@@ -554,7 +555,9 @@ const std::vector<std::int64_t>& SweepAndPrune::update(const double* lo, const d
     const std::vector<int> task_begin = make_tasks(
         cells, total, threads, [&](int c) { return static_cast<std::int64_t>(st.cells[c].size()); });
     const long long tasks = static_cast<long long>(task_begin.size()) - 1;
-    std::vector<std::vector<std::uint64_t>> found(static_cast<size_t>(tasks));
+    // Kept between steps: the key buffers are allocated (and their pages touched) once.
+    std::vector<std::vector<std::uint64_t>>& found = st.found;
+    found.resize(static_cast<size_t>(tasks));
     std::vector<std::uint8_t> gave_up(static_cast<size_t>(tasks), 0);
     std::vector<std::int64_t> shifts(static_cast<size_t>(tasks), 0);
     std::vector<size_t> k(static_cast<size_t>(tasks), 0);  // pairs in found[t]
@@ -613,8 +616,8 @@ const std::vector<std::int64_t>& SweepAndPrune::update(const double* lo, const d
     for (const std::int64_t s : shifts) total_shifts += s;
     const bool any_gave_up = std::find(gave_up.begin(), gave_up.end(), 1) != gave_up.end();
     last_shifts_ = any_gave_up ? -1 : total_shifts;
-    pairs_ = sorted_pairs(found, n, st.row);
-    return pairs_;
+    pairs_ = std::make_shared<const std::vector<std::int64_t>>(sorted_pairs(found, n, st.row));
+    return *pairs_;
 }
 
 }  // namespace meshcol

@@ -52,7 +52,10 @@ public:
     /// Replaces the boxes (same count) and returns the overlapping pairs.
     const std::vector<std::int64_t>& update(const double* lo, const double* hi, std::int64_t n);
 
-    const std::vector<std::int64_t>& pairs() const { return pairs_; }  ///< pairs of the last step
+    const std::vector<std::int64_t>& pairs() const { return *pairs_; }  ///< pairs of the last step
+    /// The pairs of the last step, shared: a later update() makes a new vector and leaves this
+    /// one alone, so a caller may keep it (the Python binding hands it to numpy without a copy).
+    std::shared_ptr<const std::vector<std::int64_t>> shared_pairs() const { return pairs_; }
     int axis() const { return axis_; }                                 ///< the sweep axis
     std::int64_t size() const { return n_; }                           ///< n
     /// Element moves the last insertion sorts made (-1 when the step rebuilt the grid and
@@ -65,7 +68,7 @@ private:
     int threads_;
     std::int64_t n_;
     std::unique_ptr<State> state_;
-    std::vector<std::int64_t> pairs_;
+    std::shared_ptr<const std::vector<std::int64_t>> pairs_;
     std::int64_t last_shifts_ = 0;
 };
 

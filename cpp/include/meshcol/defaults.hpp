@@ -15,7 +15,7 @@ constexpr long long broadphase_min_boxes_per_thread = 20000;
 
 /// Sort and sweep: grid cells on the two cross axes are at least this many median box
 /// extents wide (wider cells duplicate fewer boxes, narrower ones prune more).
-constexpr double sweep_cell_extent_ratio = 4.0;
+constexpr double sweep_cell_extent_ratio = 2.0;
 
 /// Sort and sweep: at most this many grid cells per cross axis.
 constexpr int sweep_max_cells_per_axis = 1024;
