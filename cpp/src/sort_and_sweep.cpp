@@ -7,7 +7,9 @@
 // several cells is reported only in the cell holding the minimum corner of the pairs'
 // intersection (a box spans a contiguous block of cells, and the cell of a max of
 // coordinates is the max of their cells because cell_of is monotonic). The result is exact
-// whatever the grid; the grid only decides the speed.
+// whatever the grid; the grid only decides the speed. In cell (cu, cv) that rule reads
+// max(a.cu0, b.cu0) == cu and the same on v; as cu0 <= cu for both, it is "a or b starts in
+// column cu" and "a or b starts in row cv": two bits per entry, or-ed.
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -91,8 +93,7 @@ struct Entry {
     double lo_u, hi_u;  ///< interval on the first cross axis
     double lo_v, hi_v;  ///< interval on the second cross axis
     std::uint32_t id;   ///< box index
-    std::uint16_t cu0;  ///< grid cell of lo_u
-    std::uint16_t cv0;  ///< grid cell of lo_v
+    std::uint8_t home;  ///< bit 0: lo_u falls in this cell's column; bit 1: lo_v in its row
 };
 
 /// A hint to load the cache line holding `p` (no effect where the compiler has no builtin).
@@ -225,7 +226,7 @@ void fill_cells(const double* lo, const double* hi, std::int64_t n, const Grid& 
             const double* a = lo + 3 * i;
             const double* b = hi + 3 * i;
             entries[i] = {a[g.axis], b[g.axis], a[g.u], b[g.u], a[g.v], b[g.v],
-                          static_cast<std::uint32_t>(i), 0, 0};
+                          static_cast<std::uint32_t>(i), 3};
         }
         return;
     }
@@ -241,52 +242,62 @@ void fill_cells(const double* lo, const double* hi, std::int64_t n, const Grid& 
         const double* a = lo + 3 * i;
         const double* b = hi + 3 * i;
         const std::uint16_t* s = span.data() + 4 * i;
-        const Entry e{a[g.axis], b[g.axis], a[g.u], b[g.u], a[g.v], b[g.v],
-                      static_cast<std::uint32_t>(i), s[0], s[2]};
+        Entry e{a[g.axis], b[g.axis], a[g.u], b[g.u], a[g.v], b[g.v], static_cast<std::uint32_t>(i), 0};
         for (int cu = s[0]; cu <= s[1]; ++cu)
-            for (int cv = s[2]; cv <= s[3]; ++cv) entries[next[cu * g.cells_v + cv]++] = e;
+            for (int cv = s[2]; cv <= s[3]; ++cv) {
+                e.home = static_cast<std::uint8_t>((cu == s[0]) | (cv == s[2]) << 1);
+                entries[next[cu * g.cells_v + cv]++] = e;
+            }
     }
 }
 
-/// Sweeps one cell whose entries are sorted by lo_a, appending pair keys to out[0, k) (out
-/// grows as needed; its size is capacity, not content).
+/// Pair keys found by one task: a growable array that is never zeroed (every key is written
+/// before it is read).
+struct KeyBuffer {
+    std::unique_ptr<std::uint64_t[]> data;
+    size_t capacity = 0;
+    size_t size = 0;
+
+    /// Room for `more` keys past `size`.
+    void reserve_more(size_t more) {
+        if (size + more <= capacity) return;
+        const size_t grown = std::max(2 * capacity, size + more + 1024);
+        std::unique_ptr<std::uint64_t[]> bigger(new std::uint64_t[grown]);
+        std::copy(data.get(), data.get() + size, bigger.get());
+        data.swap(bigger);
+        capacity = grown;
+    }
+};
+
+/// Sweeps one cell whose entries are sorted by lo_a, appending pair keys to `out`.
 ///
 /// Each box's window (the entries that start inside its interval on the sweep axis) is found
 /// first, then its candidates are tested without a branch: about one in five passes, at
 /// random, so branches on the tests and on the window end mispredicted on most boxes. Every
 /// candidate's key is written and the end advanced by the test's result.
-template <bool single_cell>
-void sweep_cell(const Entry* e, std::int64_t count, int cu, int cv, std::vector<std::uint64_t>& out,
-                size_t& k_out) {
-    size_t k = k_out;  // a local: the key stores could alias a reference
+void sweep_cell(const Entry* e, std::int64_t count, KeyBuffer& out) {
+    size_t k = out.size;  // a local: the key stores could alias the member
     const Entry* const end = e + count;
     for (const Entry* a = e; a < end; ++a) {
         const double hi_a = a->hi_a, lo_u = a->lo_u, hi_u = a->hi_u, lo_v = a->lo_v, hi_v = a->hi_v;
         const std::uint64_t id = a->id;
-        const int acu = a->cu0, acv = a->cv0;
+        const unsigned home = a->home;
         const Entry* stop = a + 1;
         while (stop < end && stop->lo_a <= hi_a) ++stop;
         const size_t m = static_cast<size_t>(stop - a - 1);
-        if (k + m > out.size()) out.resize(std::max(2 * out.size(), k + m + 1024));
-        std::uint64_t* w = out.data();
+        out.size = k;
+        out.reserve_more(m);
+        std::uint64_t* w = out.data.get();
         for (const Entry* b = a + 1; b < stop; ++b) {
-            bool hit = (b->lo_u <= hi_u) & (lo_u <= b->hi_u) & (b->lo_v <= hi_v) & (lo_v <= b->hi_v);
-            // A pair seen in several cells is reported by the cell holding the minimum corner
-            // of the pair's intersection.
-            if (!single_cell) hit &= (std::max<int>(acu, b->cu0) == cu) & (std::max<int>(acv, b->cv0) == cv);
+            // Overlap on the cross axes, and this cell reports the pair (see the top).
+            const bool hit = (b->lo_u <= hi_u) & (lo_u <= b->hi_u) & (b->lo_v <= hi_v) &
+                             (lo_v <= b->hi_v) & ((home | b->home) == 3u);
             const std::uint64_t bid = b->id;
             w[k] = id < bid ? (id << 32 | bid) : (bid << 32 | id);
             k += hit;
         }
     }
-    k_out = k;
-}
-
-/// Sweeps cell `c` of grid `g`, appending to out[0, k).
-inline void sweep_cell(const Entry* e, std::int64_t count, const Grid& g, int c,
-                       std::vector<std::uint64_t>& out, size_t& k) {
-    if (g.cells() == 1) sweep_cell<true>(e, count, 0, 0, out, k);
-    else sweep_cell<false>(e, count, c / g.cells_v, c % g.cells_v, out, k);
+    out.size = k;
 }
 
 /// Writes the `count` entries of `src` to `dst` sorted by lo_a: sorts 16-byte (key, slot)
@@ -323,16 +334,16 @@ std::vector<int> make_tasks(int cells, std::int64_t total, int threads, Size siz
 /// others) writes straight into the output, then each row is sorted on j: three passes
 /// instead of the four 16-bit digits a radix sort of the keys needs past 2^16 boxes.
 /// `row` is scratch of n + 1 counters.
-std::vector<std::int64_t> sorted_pairs(const std::vector<std::vector<std::uint64_t>>& found,
+std::vector<std::int64_t> sorted_pairs(const std::vector<KeyBuffer>& found,
                                        std::int64_t n, std::vector<std::uint32_t>& row) {
     size_t k = 0;
-    for (const auto& f : found) k += f.size();
+    for (const auto& f : found) k += f.size;
     std::vector<std::int64_t> pairs(2 * k);
     if (k == 0) return pairs;
     if (static_cast<std::int64_t>(k) * 8 < n) {  // few pairs among many boxes: sort the keys
         std::vector<std::uint64_t> keys;
         keys.reserve(k);
-        for (const auto& f : found) keys.insert(keys.end(), f.begin(), f.end());
+        for (const auto& f : found) keys.insert(keys.end(), f.data.get(), f.data.get() + f.size);
         sort_pair_keys(keys);
         for (size_t p = 0; p < k; ++p) {
             pairs[2 * p] = static_cast<std::int64_t>(keys[p] >> 32);
@@ -342,12 +353,13 @@ std::vector<std::int64_t> sorted_pairs(const std::vector<std::vector<std::uint64
     }
     row.assign(static_cast<size_t>(n) + 1, 0u);
     for (const auto& f : found)
-        for (const std::uint64_t key : f) ++row[(key >> 32) + 1];
+        for (size_t q = 0; q < f.size; ++q) ++row[(f.data[q] >> 32) + 1];
     for (std::int64_t i = 0; i < n; ++i) row[i + 1] += row[i];
     for (const auto& f : found)
-        for (const std::uint64_t key : f)
-            pairs[2 * static_cast<size_t>(row[key >> 32]++) + 1] =
-                static_cast<std::int64_t>(key & 0xFFFFFFFFu);
+        for (size_t q = 0; q < f.size; ++q) {
+            const std::uint64_t key = f.data[q];
+            pairs[2 * static_cast<size_t>(row[key >> 32]++) + 1] = static_cast<std::int64_t>(key & 0xFFFFFFFFu);
+        }
     // row[i] is now the end of row i, which is the start of row i + 1.
     std::vector<std::int64_t> js;
     size_t begin = 0;
@@ -383,20 +395,18 @@ std::vector<std::int64_t> sort_and_sweep_cells(const Grid& g, const Entry* raw, 
     const std::vector<int> task_begin = make_tasks(
         cells, offsets[cells], threads, [&](int c) { return offsets[c + 1] - offsets[c]; });
     const long long tasks = static_cast<long long>(task_begin.size()) - 1;
-    std::vector<std::vector<std::uint64_t>> found(static_cast<size_t>(tasks));
+    std::vector<KeyBuffer> found(static_cast<size_t>(tasks));
     parallel_for(tasks, threads > 1 ? threads : 1, [&](long long t0, long long t1) {
         std::vector<std::pair<double, std::uint32_t>> keys;
         for (long long t = t0; t < t1; ++t) {
             auto& out = found[static_cast<size_t>(t)];
             // About 1.2 pairs per entry for boxes that overlap 2 to 3 others: one allocation.
-            out.resize(static_cast<size_t>(offsets[task_begin[t + 1]] - offsets[task_begin[t]]) * 3 / 2);
-            size_t k = 0;
+            out.reserve_more(static_cast<size_t>(offsets[task_begin[t + 1]] - offsets[task_begin[t]]) * 3 / 2);
             for (int c = task_begin[t]; c < task_begin[t + 1]; ++c) {
                 const std::int64_t count = offsets[c + 1] - offsets[c];
                 sort_into(raw + offsets[c], count, sorted + offsets[c], keys);
-                sweep_cell(sorted + offsets[c], count, g, c, out, k);
+                sweep_cell(sorted + offsets[c], count, out);
             }
-            out.resize(k);
         }
     });
     std::vector<std::uint32_t> row;
@@ -438,7 +448,7 @@ struct SweepAndPrune::State {
     std::vector<std::uint16_t> span;  ///< per box: u0, u1, v0, v1
     std::vector<std::uint8_t> moved;  ///< per box: left its block of cells this step
     std::vector<std::uint32_t> row;   ///< scratch of sorted_pairs
-    std::vector<std::vector<std::uint64_t>> found;  ///< scratch: pair keys of each task
+    std::vector<KeyBuffer> found;  ///< scratch: pair keys of each task
 
     /// Grid, cells and spans from scratch; returns the pairs.
     std::vector<std::int64_t> build(const double* lo, const double* hi, std::int64_t n, int axis,
@@ -453,8 +463,11 @@ struct SweepAndPrune::State {
         std::unique_ptr<Entry[]> sorted(new Entry[static_cast<size_t>(offsets.back())]);
         std::vector<std::int64_t> pairs = sort_and_sweep_cells(g, raw.get(), sorted.get(), offsets, n, threads);
         cells.assign(static_cast<size_t>(g.cells()), {});
-        for (int c = 0; c < g.cells(); ++c)
+        for (int c = 0; c < g.cells(); ++c) {
+            const auto count = static_cast<size_t>(offsets[c + 1] - offsets[c]);
+            cells[c].reserve(count + count / 8 + 8);  // room for boxes moving in
             cells[c].assign(sorted.get() + offsets[c], sorted.get() + offsets[c + 1]);
+        }
         return pairs;
     }
 };
@@ -539,9 +552,12 @@ const std::vector<std::int64_t>& SweepAndPrune::update(const double* lo, const d
         const double* a = lo + 3 * static_cast<size_t>(i);
         const double* b = hi + 3 * static_cast<size_t>(i);
         const std::uint16_t* s = st.span.data() + 4 * static_cast<size_t>(i);
-        const Entry e{a[g.axis], b[g.axis], a[g.u], b[g.u], a[g.v], b[g.v], i, s[0], s[2]};
+        Entry e{a[g.axis], b[g.axis], a[g.u], b[g.u], a[g.v], b[g.v], i, 0};
         for (int cu = s[0]; cu <= s[1]; ++cu)
-            for (int cv = s[2]; cv <= s[3]; ++cv) added.push_back({cu * g.cells_v + cv, e});
+            for (int cv = s[2]; cv <= s[3]; ++cv) {
+                e.home = static_cast<std::uint8_t>((cu == s[0]) | (cv == s[2]) << 1);
+                added.push_back({cu * g.cells_v + cv, e});
+            }
     }
     std::sort(added.begin(), added.end(), [](const auto& x, const auto& y) {
         return x.first != y.first ? x.first < y.first : x.second.lo_a < y.second.lo_a;
@@ -556,11 +572,11 @@ const std::vector<std::int64_t>& SweepAndPrune::update(const double* lo, const d
         cells, total, threads, [&](int c) { return static_cast<std::int64_t>(st.cells[c].size()); });
     const long long tasks = static_cast<long long>(task_begin.size()) - 1;
     // Kept between steps: the key buffers are allocated (and their pages touched) once.
-    std::vector<std::vector<std::uint64_t>>& found = st.found;
+    std::vector<KeyBuffer>& found = st.found;
     found.resize(static_cast<size_t>(tasks));
+    for (KeyBuffer& f : found) f.size = 0;
     std::vector<std::uint8_t> gave_up(static_cast<size_t>(tasks), 0);
     std::vector<std::int64_t> shifts(static_cast<size_t>(tasks), 0);
-    std::vector<size_t> k(static_cast<size_t>(tasks), 0);  // pairs in found[t]
     parallel_for(tasks, threads > 1 ? threads : 1, [&](long long t0, long long t1) {
         std::vector<std::pair<double, std::uint32_t>> keys;
         std::vector<Entry> scratch;
@@ -583,8 +599,8 @@ const std::vector<std::int64_t>& SweepAndPrune::update(const double* lo, const d
                     if (st.moved[i]) continue;
                     const double* a = lo + 3 * static_cast<size_t>(i);
                     const double* b = hi + 3 * static_cast<size_t>(i);
-                    const std::uint16_t cu0 = cell[r].cu0, cv0 = cell[r].cv0;
-                    cell[w++] = {a[g.axis], b[g.axis], a[g.u], b[g.u], a[g.v], b[g.v], i, cu0, cv0};
+                    const std::uint8_t home = cell[r].home;
+                    cell[w++] = {a[g.axis], b[g.axis], a[g.u], b[g.u], a[g.v], b[g.v], i, home};
                 }
                 cell.resize(w);
                 const auto count = static_cast<std::int64_t>(w);
@@ -607,11 +623,9 @@ const std::vector<std::int64_t>& SweepAndPrune::update(const double* lo, const d
                     for (auto out = static_cast<std::int64_t>(w + m) - 1; y >= 0; --out)
                         cell[out] = (x >= 0 && cell[x].lo_a > in[y].second.lo_a) ? cell[x--] : in[y--].second;
                 }
-                sweep_cell(cell.data(), static_cast<std::int64_t>(cell.size()), g, c,
-                           found[static_cast<size_t>(t)], k[t]);
+                sweep_cell(cell.data(), static_cast<std::int64_t>(cell.size()), found[static_cast<size_t>(t)]);
             }
     });
-    for (long long t = 0; t < tasks; ++t) found[static_cast<size_t>(t)].resize(k[t]);
     std::int64_t total_shifts = 0;
     for (const std::int64_t s : shifts) total_shifts += s;
     const bool any_gave_up = std::find(gave_up.begin(), gave_up.end(), 1) != gave_up.end();
