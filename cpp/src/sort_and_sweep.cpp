@@ -386,11 +386,13 @@ std::vector<std::int64_t> sorted_pairs(const std::vector<KeyBuffer>& found,
     return pairs;
 }
 
-/// Sorts every cell of `raw` into `sorted` (same offsets) and sweeps it, on `threads`
-/// threads; returns the sorted pairs.
-std::vector<std::int64_t> sort_and_sweep_cells(const Grid& g, const Entry* raw, Entry* sorted,
+/// Sorts every cell of `raw` into a per-thread buffer (one cell at a time: it stays in cache,
+/// and no second array of all entries is allocated) and sweeps it, on `threads` threads;
+/// returns the sorted pairs. With `keep`, each sorted cell is also copied to (*keep)[c].
+std::vector<std::int64_t> sort_and_sweep_cells(const Grid& g, const Entry* raw,
                                                const std::vector<std::int64_t>& offsets,
-                                               std::int64_t n, int threads) {
+                                               std::int64_t n, int threads,
+                                               std::vector<std::vector<Entry>>* keep) {
     const int cells = g.cells();
     const std::vector<int> task_begin = make_tasks(
         cells, offsets[cells], threads, [&](int c) { return offsets[c + 1] - offsets[c]; });
@@ -398,14 +400,21 @@ std::vector<std::int64_t> sort_and_sweep_cells(const Grid& g, const Entry* raw, 
     std::vector<KeyBuffer> found(static_cast<size_t>(tasks));
     parallel_for(tasks, threads > 1 ? threads : 1, [&](long long t0, long long t1) {
         std::vector<std::pair<double, std::uint32_t>> keys;
+        std::vector<Entry> sorted;
         for (long long t = t0; t < t1; ++t) {
             auto& out = found[static_cast<size_t>(t)];
             // About 1.2 pairs per entry for boxes that overlap 2 to 3 others: one allocation.
             out.reserve_more(static_cast<size_t>(offsets[task_begin[t + 1]] - offsets[task_begin[t]]) * 3 / 2);
             for (int c = task_begin[t]; c < task_begin[t + 1]; ++c) {
                 const std::int64_t count = offsets[c + 1] - offsets[c];
-                sort_into(raw + offsets[c], count, sorted + offsets[c], keys);
-                sweep_cell(sorted + offsets[c], count, out);
+                if (static_cast<std::int64_t>(sorted.size()) < count) sorted.resize(static_cast<size_t>(count));
+                sort_into(raw + offsets[c], count, sorted.data(), keys);
+                sweep_cell(sorted.data(), count, out);
+                if (keep) {
+                    std::vector<Entry>& cell = (*keep)[static_cast<size_t>(c)];
+                    cell.reserve(static_cast<size_t>(count + count / 8 + 8));  // room for boxes moving in
+                    cell.assign(sorted.data(), sorted.data() + count);
+                }
             }
         }
     });
@@ -436,8 +445,7 @@ std::vector<std::int64_t> sort_and_sweep(const double* lo, const double* hi, std
     std::unique_ptr<Entry[]> raw;
     std::vector<std::int64_t> offsets;
     fill_cells(lo, hi, n, g, span, raw, offsets);
-    std::unique_ptr<Entry[]> sorted(new Entry[static_cast<size_t>(offsets.back())]);
-    return sort_and_sweep_cells(g, raw.get(), sorted.get(), offsets, n, threads);
+    return sort_and_sweep_cells(g, raw.get(), offsets, n, threads, nullptr);
 }
 
 /// The incremental sweep's memory between steps: the grid of the first step (or of the last
@@ -460,15 +468,8 @@ struct SweepAndPrune::State {
         std::unique_ptr<Entry[]> raw;
         std::vector<std::int64_t> offsets;
         fill_cells(lo, hi, n, g, span, raw, offsets);
-        std::unique_ptr<Entry[]> sorted(new Entry[static_cast<size_t>(offsets.back())]);
-        std::vector<std::int64_t> pairs = sort_and_sweep_cells(g, raw.get(), sorted.get(), offsets, n, threads);
         cells.assign(static_cast<size_t>(g.cells()), {});
-        for (int c = 0; c < g.cells(); ++c) {
-            const auto count = static_cast<size_t>(offsets[c + 1] - offsets[c]);
-            cells[c].reserve(count + count / 8 + 8);  // room for boxes moving in
-            cells[c].assign(sorted.get() + offsets[c], sorted.get() + offsets[c + 1]);
-        }
-        return pairs;
+        return sort_and_sweep_cells(g, raw.get(), offsets, n, threads, &cells);
     }
 };
 
