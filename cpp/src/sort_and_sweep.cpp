@@ -272,10 +272,10 @@ struct KeyBuffer {
 
 /// Sweeps one cell whose entries are sorted by lo_a, appending pair keys to `out`.
 ///
-/// Each box's window (the entries that start inside its interval on the sweep axis) is found
-/// first, then its candidates are tested without a branch: about one in five passes, at
-/// random, so branches on the tests and on the window end mispredicted on most boxes. Every
-/// candidate's key is written and the end advanced by the test's result.
+/// The candidates of a box (the entries that start inside its interval on the sweep axis) are
+/// tested without a branch: about one in five passes, at random, so a branch on the tests
+/// would mispredict often. Every candidate's key is written and the end advanced by the
+/// test's result.
 void sweep_cell(const Entry* e, std::int64_t count, KeyBuffer& out) {
     size_t k = out.size;  // a local: the key stores could alias the member
     const Entry* const end = e + count;
@@ -283,13 +283,12 @@ void sweep_cell(const Entry* e, std::int64_t count, KeyBuffer& out) {
         const double hi_a = a->hi_a, lo_u = a->lo_u, hi_u = a->hi_u, lo_v = a->lo_v, hi_v = a->hi_v;
         const std::uint64_t id = a->id;
         const unsigned home = a->home;
-        const Entry* stop = a + 1;
-        while (stop < end && stop->lo_a <= hi_a) ++stop;
-        const size_t m = static_cast<size_t>(stop - a - 1);
+        // Room for every later entry of the cell: one comparison per box, a reallocation
+        // seldom. The loop then stores without a capacity check.
         out.size = k;
-        out.reserve_more(m);
+        out.reserve_more(static_cast<size_t>(end - a - 1));
         std::uint64_t* w = out.data.get();
-        for (const Entry* b = a + 1; b < stop; ++b) {
+        for (const Entry* b = a + 1; b < end && b->lo_a <= hi_a; ++b) {
             // Overlap on the cross axes, and this cell reports the pair (see the top).
             const bool hit = (b->lo_u <= hi_u) & (lo_u <= b->hi_u) & (b->lo_v <= hi_v) &
                              (lo_v <= b->hi_v) & ((home | b->home) == 3u);
