@@ -51,6 +51,20 @@ _LAZY: dict[str, str] = {
     "penetration_batch": "meshcol.query",
     "intersects_batch": "meshcol.query",
     "signed_distance_batch": "meshcol.query",
+    "ShapeKind": "meshcol.query",
+    "SignedDistanceResult": "meshcol.query",
+    "DistanceBatch": "meshcol.query",
+    "PenetrationBatch": "meshcol.query",
+    "SignedDistanceBatch": "meshcol.query",
+    "IntersectsBatch": "meshcol.query",
+    # continuous collision
+    "TimeOfImpactResult": "meshcol.sweep",
+    "TimeOfImpactBatch": "meshcol.sweep",
+    "SweepReport": "meshcol.sweep",
+    "SweepHit": "meshcol.sweep",
+    "interpolate_pose": "meshcol.sweep",
+    "time_of_impact": "meshcol.sweep",
+    "time_of_impact_batch": "meshcol.sweep",
     # exact triangle-mesh queries
     "MeshSet": "meshcol.mesh_query",
     "MeshDistanceBatch": "meshcol.mesh_query",
@@ -59,6 +73,9 @@ _LAZY: dict[str, str] = {
     "mesh_distance": "meshcol.mesh_query",
     "mesh_distance_batch": "meshcol.mesh_query",
     "mesh_intersects_batch": "meshcol.mesh_query",
+    # scene checks
+    "CheckOptions": "meshcol.check",
+    "CheckReport": "meshcol.check",
     # broad phase
     "sort_and_sweep": "meshcol.broadphase",
     "SweepAndPrune": "meshcol.broadphase",
@@ -78,8 +95,18 @@ __all__ = [
     "Scene",
     "Status",
     "ToiStatus",
+    "check",
+    "sweep",
     *_LAZY,
 ]
+
+
+# `check` and `sweep` name both a submodule and its main function. The submodules are light
+# (numpy only), so import them now and bind the functions afterwards: `meshcol.check(...)`
+# then works whatever else was imported first (a later `import meshcol.check` finds the module
+# in sys.modules and leaves the package attribute alone).
+from meshcol.check import check  # noqa: E402
+from meshcol.sweep import sweep  # noqa: E402
 
 
 def __getattr__(name: str) -> Any:

@@ -79,3 +79,19 @@ def test_output_files_get_the_usual_permissions(tmp_path) -> None:
     os.umask(mask)
     assert stat.S_IMODE(target.stat().st_mode) == 0o666 & ~mask
     assert [p.name for p in tmp_path.iterdir()] == ["out.json"]
+
+
+def test_same_named_functions_stay_callable() -> None:
+    """`meshcol.check` / `meshcol.sweep` are the functions even after their modules load."""
+    code = (
+        "import meshcol.check, meshcol.sweep, meshcol\n"
+        "from meshcol.cli import check as _c, sweep as _s\n"
+        "import meshcol.check\n"
+        "print(callable(meshcol.check), callable(meshcol.sweep), meshcol.check.__module__, meshcol.sweep.__module__)\n"
+        "import sys\n"
+        "print('HEAVY=' + ','.join(m for m in ('trimesh', 'scipy', 'meshcol._core') if m in sys.modules))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    first, heavy = out.stdout.strip().splitlines()
+    assert first == "True True meshcol.check meshcol.sweep"
+    assert heavy == "HEAVY="

@@ -4,12 +4,16 @@
 namespace nb = nanobind;
 
 void bind_defaults(nb::module_& m);
+void bind_narrowphase(nb::module_& m);
 void bind_broadphase(nb::module_& m);
+void bind_toi(nb::module_& m);
 void bind_mesh_query(nb::module_& m);
 
 NB_MODULE(_core, m) {
     m.doc() = "meshcol native core (private: use the meshcol package API)";
     bind_defaults(m);
+    bind_narrowphase(m);
     bind_broadphase(m);
+    bind_toi(m);
     bind_mesh_query(m);
 }

@@ -23,6 +23,8 @@ from meshcol.errors import MeshcolError
 COMMANDS: dict[str, str] = {
     "hull": "meshcol.cli.hull:hull",
     "inspect": "meshcol.cli.inspect:inspect",
+    "sweep": "meshcol.cli.sweep:sweep",
+    "check": "meshcol.cli.check:check",
 }
 
 CONTEXT_SETTINGS = {"help_option_names": ["-h", "--help"], "max_content_width": 100}

@@ -1,0 +1,179 @@
+"""Narrow-phase benchmark: meshcol batched queries vs python-fcl (and coal, if installed),
+per call, on the same pairs of convex hulls (32, 64, 128 and 512 vertices), separated and
+penetrating, with meshcol on one thread and on all threads. Also reports the worst accuracy
+seen against the exact brute-force oracles (tests/oracles.py) on a subset of the pairs.
+
+Run: .venv/bin/python benchmarks/bench_narrowphase.py [--pairs 4000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+
+from meshcol import _core  # noqa: E402
+from meshcol.query import ConvexSet, distance_batch, signed_distance_batch  # noqa: E402
+
+
+def sphere_hull(n: int, rng: np.random.Generator) -> np.ndarray:
+    """n points on an ellipsoid: every one is a hull vertex."""
+    p = rng.normal(size=(n, 3))
+    p /= np.linalg.norm(p, axis=1)[:, None]
+    return p * rng.uniform(0.7, 1.3, size=3)
+
+
+def random_rotation(rng: np.random.Generator) -> np.ndarray:
+    q = rng.normal(size=4)
+    w, x, y, z = q / np.linalg.norm(q)
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def make_case(n_vertices: int, n_pairs: int, penetrating: bool, seed: int):
+    """A scene of 256 hulls at random poses in a 9 x 9 x 9 box (each hull in several pairs,
+    as broad-phase output is); pairs drawn from those that are separated (centres at most 4
+    apart) or that overlap, as asked."""
+    rng = np.random.default_rng(seed)
+    n_shapes = 256
+    shapes = [sphere_hull(n_vertices, rng) for _ in range(n_shapes)]
+    cs = ConvexSet.from_vertices(shapes)
+    poses = np.tile(np.eye(4), (n_shapes, 1, 1))
+    for p in poses:
+        p[:3, :3] = random_rotation(rng)
+        p[:3, 3] = rng.uniform(0, 9, size=3)
+    i, j = np.triu_indices(n_shapes, 1)
+    near = np.linalg.norm(poses[i, :3, 3] - poses[j, :3, 3], axis=1) < 4.0
+    candidates = np.stack([i[near], j[near]], axis=1)
+    depth = signed_distance_batch(cs, poses, candidates).signed_distance
+    chosen = candidates[depth < 0] if penetrating else candidates[depth > 0]
+    pairs = chosen[rng.integers(0, len(chosen), size=n_pairs)]
+    return cs, poses, np.ascontiguousarray(pairs), shapes
+
+
+def time_it(fn, repeat: int = 3) -> float:
+    best = np.inf
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def fcl_objects(shapes, poses):
+    import fcl
+    from scipy.spatial import ConvexHull
+
+    objects = []
+    for pts, pose in zip(shapes, poses):
+        hull = ConvexHull(pts)
+        faces = np.hstack([np.full((len(hull.simplices), 1), 3), hull.simplices]).ravel()
+        geom = fcl.Convex(pts, len(hull.simplices), faces)
+        objects.append(fcl.CollisionObject(geom, fcl.Transform(pose[:3, :3], pose[:3, 3])))
+    return objects
+
+
+def coal_objects(shapes, poses):
+    import coal
+
+    out = []
+    for pts, pose in zip(shapes, poses):
+        vec = coal.StdVec_Vec3s()
+        for q in np.asarray(pts):
+            vec.append(q)
+        geom = coal.ConvexBase.convexHull(vec, False, "")
+        tf = coal.Transform3s(pose[:3, :3], pose[:3, 3])
+        out.append((geom, tf))
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--pairs", type=int, default=4000)
+    parser.add_argument("--peer-pairs", type=int, default=1000, help="pairs timed for peers")
+    parser.add_argument("--accuracy-pairs", type=int, default=40)
+    args = parser.parse_args()
+    try:
+        import fcl
+    except ImportError:
+        fcl = None
+    try:
+        import coal
+    except ImportError:
+        coal = None
+    from oracles import polytope_distance, sat_depth, transform
+
+    threads = _core.hardware_threads()
+    print(f"hardware threads: {threads}; pairs per case: {args.pairs}; "
+          f"peers timed on {args.peer_pairs} pairs (per call from Python)")
+    header = (f"{'hull':>5} {'case':>11} {'query':>11} {'mc 1t us':>9} {'mc all us':>9} "
+              f"{'fcl us':>8} {'coal us':>8} {'fcl/mc1':>8} {'coal/mc1':>8} {'worst rel err':>13}")
+    print(header)
+    worst_overall = 0.0
+    for n in (32, 64, 128, 512):
+        for penetrating in (False, True):
+            cs, poses, pairs, shapes = make_case(n, args.pairs, penetrating, seed=n)
+            label = "penetrating" if penetrating else "separated"
+            if penetrating:
+                query, fn = "penetration", signed_distance_batch
+            else:
+                query, fn = "distance", distance_batch
+            t1 = time_it(lambda: fn(cs, poses, pairs, threads=1)) / len(pairs) * 1e6
+            tn = time_it(lambda: fn(cs, poses, pairs, threads=0)) / len(pairs) * 1e6
+            res = fn(cs, poses, pairs, threads=1)
+            # Accuracy against the exact oracles on a subset.
+            worst = 0.0
+            k_acc = min(args.accuracy_pairs, len(pairs)) if n <= 128 else 6
+            for k in range(k_acc):
+                ia, ib = pairs[k]
+                wa, wb = transform(shapes[ia], poses[ia]), transform(shapes[ib], poses[ib])
+                if penetrating:
+                    truth = max(sat_depth(wa, wb), 0.0)
+                    got = res.depth[k]
+                else:
+                    truth = polytope_distance(wa, wb)
+                    got = res.distance[k]
+                worst = max(worst, abs(got - truth) / max(truth, 1e-300))
+            worst_overall = max(worst_overall, worst)
+            n_peer = min(args.peer_pairs, len(pairs))
+            t_fcl = t_coal = float("nan")
+            if fcl is not None:
+                objs = fcl_objects(shapes, poses)
+                if penetrating:
+                    def run_fcl():
+                        for ia, ib in pairs[:n_peer]:
+                            req = fcl.CollisionRequest(enable_contact=True, num_max_contacts=1)
+                            fcl.collide(objs[ia], objs[ib], req, fcl.CollisionResult())
+                else:
+                    def run_fcl():
+                        for ia, ib in pairs[:n_peer]:
+                            fcl.distance(objs[ia], objs[ib], fcl.DistanceRequest(),
+                                         fcl.DistanceResult())
+                t_fcl = time_it(run_fcl, 2) / n_peer * 1e6
+            if coal is not None:
+                objs_c = coal_objects(shapes, poses)
+                req = coal.DistanceRequest()
+                res_c = coal.DistanceResult()
+
+                def run_coal():
+                    for ia, ib in pairs[:n_peer]:
+                        res_c.clear()
+                        ga, ta = objs_c[ia]
+                        gb, tb = objs_c[ib]
+                        coal.distance(ga, ta, gb, tb, req, res_c)
+                t_coal = time_it(run_coal, 2) / n_peer * 1e6
+            print(f"{n:>5} {label:>11} {query:>11} {t1:>9.3f} {tn:>9.3f} {t_fcl:>8.2f} "
+                  f"{t_coal:>8.2f} {t_fcl / t1:>8.1f} {t_coal / t1:>8.1f} {worst:>13.2e}")
+    print(f"worst relative error vs exact oracles: {worst_overall:.2e}")
+
+
+if __name__ == "__main__":
+    main()

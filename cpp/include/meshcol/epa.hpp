@@ -1,0 +1,36 @@
+#pragma once
+/// EPA penetration depth (van den Bergen 2003, sec. 4.3.9; Montaut et al. 2022 for the
+/// tolerances): grows GJK's final simplex into a polytope inside the Minkowski difference,
+/// replacing every face the new support point sees by a fan over the silhouette (horizon).
+
+#include "meshcol/defaults.hpp"
+#include "meshcol/gjk.hpp"
+#include "meshcol/shapes.hpp"
+#include "meshcol/status.hpp"
+#include "meshcol/vec.hpp"
+
+namespace meshcol {
+
+/// Options of `epa_penetration` (defaults from defaults.hpp).
+struct EpaOptions {
+    int max_iterations = defaults::epa_max_iterations;
+    double relative_tolerance = defaults::epa_relative_tolerance;  ///< on the depth
+    double contact_tolerance = defaults::contact_tolerance;  ///< x pair scale
+};
+
+/// Result of `epa_penetration`. Frame: as the Minkowski difference (shape a's local frame).
+struct EpaResult {
+    Status status = Status::NOT_RUN;
+    double depth = 0.0;  ///< >= 0; moving b by depth * normal brings the shapes to contact
+    Vec3 normal;         ///< unit, from a to b
+    Vec3 point_a;        ///< deepest point of a inside b
+    Vec3 point_b;        ///< deepest point of b inside a; point_a - point_b = depth * normal
+    int iterations = 0;
+};
+
+/// EPA on `difference` (built with margins) starting from `simplex`, a simplex of GJK that
+/// touches or contains the origin. Frame: shape a's local frame.
+EpaResult epa_penetration(MinkowskiDifference& difference, const Simplex& simplex,
+                          const EpaOptions& options = {});
+
+}  // namespace meshcol

@@ -1,0 +1,87 @@
+#pragma once
+/// The narrow phase over a packed set of convex shapes: per-pair queries (distance,
+/// penetration, intersection) and their batched loops over (P, 2) index pairs.
+///
+/// Frames and signs: shapes in their local frames, poses world-from-local; every returned
+/// point and normal is in the world frame; `distance >= 0`, `depth >= 0`; the normal is unit
+/// and points from a to b; moving b by `depth * normal` brings the shapes to contact.
+
+#include <cstdint>
+
+#include "meshcol/shapes.hpp"
+#include "meshcol/status.hpp"
+#include "meshcol/vec.hpp"
+
+namespace meshcol {
+
+/// Non-owning view of a packed convex set (the arrays of the Python `ConvexSet`).
+struct ConvexSetView {
+    const double* vertices = nullptr;     ///< (V, 3) local frames
+    std::int64_t vertex_count = 0;        ///< V
+    const std::int64_t* offsets = nullptr;  ///< (H + 1,) shape h owns [offsets[h], offsets[h+1])
+    std::int64_t shape_count = 0;         ///< H
+    const std::int8_t* kinds = nullptr;   ///< (H,) `ShapeKind`
+    const double* params = nullptr;       ///< (H, 4) see `ShapeKind`
+    /// Optional (V + 1,) CSR offsets into `adjacency` ((K,) local vertex indices), or null.
+    const std::int64_t* adjacency_offsets = nullptr;
+    const std::int32_t* adjacency = nullptr;
+    /// Optional SAT features: (H + 1,) offsets into (F, 3) unit face normals and (H + 1,)
+    /// offsets into (E, 3) unit edge directions, or null.
+    const std::int64_t* face_offsets = nullptr;
+    const double* face_normals = nullptr;
+    const std::int64_t* edge_offsets = nullptr;
+    const double* edge_directions = nullptr;
+
+    /// The view of shape `h` (0 <= h < H).
+    ShapeView shape(std::int64_t h) const;
+};
+
+/// What a pair query computes.
+enum class QueryKind : std::int8_t {
+    DISTANCE = 0,     ///< GJK only: distance (0 when overlapping) and closest points
+    PENETRATION = 1,  ///< GJK, then EPA (+ SAT) for overlapping pairs: distance and depth
+    INTERSECTS = 2,   ///< boolean GJK with early exit
+};
+
+/// Everything a pair query can report. Unset fields hold 0.
+struct PairResult {
+    Status status = Status::NOT_RUN;
+    bool intersects = false;  ///< touching counts
+    double distance = 0.0;    ///< >= 0, 0 when intersecting
+    double depth = 0.0;       ///< >= 0, 0 when separated (PENETRATION only)
+    Vec3 normal;              ///< world, unit, a to b (zero for an overlap under DISTANCE)
+    Vec3 point_a;             ///< world: closest point (separated) or deepest point (overlap)
+    Vec3 point_b;             ///< world
+    int iterations = 0;       ///< GJK plus EPA iterations
+};
+
+/// One pair query. Shapes must be valid and poses rigid (the batch checks both).
+/// `radius_a`/`radius_b`: the shapes' `bounding_radius` if known (negative: computed).
+PairResult query_pair(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
+                      const Pose& pose_b, QueryKind kind, double radius_a = -1.0,
+                      double radius_b = -1.0);
+
+/// Output arrays of a batch (null pointers are skipped): P entries, or P x 3 for vectors.
+struct BatchOutput {
+    double* distance = nullptr;
+    double* depth = nullptr;
+    double* normal = nullptr;
+    double* point_a = nullptr;
+    double* point_b = nullptr;
+    std::int32_t* iterations = nullptr;
+    std::int8_t* status = nullptr;
+    bool* intersects = nullptr;
+};
+
+/// Runs `kind` on every pair (P, 2) of `set` under `poses` ((H, 4, 4) row-major, or null for
+/// identity) on `threads` threads (0: all cores). Pairs with a bad shape or pose get
+/// `Status::INVALID_INPUT` and NaN fields. Pair indices must be in range (callers check).
+void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t* pairs,
+               long long pair_count, QueryKind kind, int threads, const BatchOutput& out);
+
+/// World AABBs (H, 3) + (H, 3) of every shape under `poses` (null: identity). A bad shape or
+/// pose gives NaN bounds.
+void world_aabbs(const ConvexSetView& set, const double* poses, double* aabb_min,
+                 double* aabb_max, int threads);
+
+}  // namespace meshcol

@@ -1,0 +1,88 @@
+#pragma once
+/// Convex shapes as the narrow phase sees them: a non-owning view per shape and its support
+/// function, kept apart from GJK/EPA as coal does (support_functions.h).
+///
+/// Every shape lives in its own local frame; a `Pose` maps it to the world. Spheres and capsules
+/// are handled as a *core* (a point, a segment) swept by a *margin* (the radius), so GJK on the
+/// cores is exact and the radius is added afterwards (van den Bergen 2003, sec. 4.3.8).
+
+#include <cstdint>
+
+#include "meshcol/vec.hpp"
+
+namespace meshcol {
+
+/// Kind of a shape. The numeric values are part of the binary interface (mirrored by the
+/// Python `meshcol.query.ShapeKind`): never renumber.
+enum class ShapeKind : std::int8_t {
+    POLYTOPE = 0,  ///< convex hull of `vertices` (a point, segment and polygon are valid)
+    SPHERE = 1,    ///< params[0] = radius, centred on the origin
+    BOX = 2,       ///< params[0..2] = half extents along local x, y, z, centred
+    CAPSULE = 3,   ///< params[0] = radius, params[1] = half length of the segment along z
+    CYLINDER = 4,  ///< params[0] = radius, params[1] = half length along z, centred
+};
+
+/// Non-owning view of one convex shape (local frame). Polytope data belong to the caller.
+struct ShapeView {
+    ShapeKind kind = ShapeKind::POLYTOPE;
+    const Vec3* vertices = nullptr;  ///< polytope vertices, local frame
+    int vertex_count = 0;            ///< number of `vertices`
+    /// Optional hull adjacency for hill climbing (CSR): the neighbours of vertex i are
+    /// `adjacency[adjacency_offsets[i] .. adjacency_offsets[i + 1])`, local vertex indices.
+    /// Null when absent: the support function then scans every vertex.
+    const std::int64_t* adjacency_offsets = nullptr;
+    const std::int32_t* adjacency = nullptr;
+    /// Optional data for exact SAT (polytopes and boxes): outward unit face normals and unit
+    /// edge directions (one per parallel class, sign arbitrary), local frame.
+    bool has_features = false;  ///< true when the two arrays below describe the polytope
+    const Vec3* face_normals = nullptr;
+    int face_count = 0;
+    const Vec3* edge_directions = nullptr;
+    int edge_count = 0;
+    double params[4] = {0.0, 0.0, 0.0, 0.0};  ///< see `ShapeKind`
+};
+
+/// A support point of a shape's core with the feature that produced it.
+struct SupportPoint {
+    Vec3 point;     ///< local frame
+    int index = -1; ///< vertex index (polytope), corner code (box, segment end), -1 when curved
+};
+
+/// Radius swept around the core: sphere and capsule radius, 0 for the other kinds.
+inline double margin(const ShapeView& shape) {
+    return (shape.kind == ShapeKind::SPHERE || shape.kind == ShapeKind::CAPSULE) ? shape.params[0]
+                                                                                 : 0.0;
+}
+
+/// Support point of the shape's core in `direction` (local frame, need not be unit): a point
+/// of the core maximising dot(point, direction). `hint` is a warm-start vertex for hill
+/// climbing on polytopes with adjacency (pass -1 when none).
+SupportPoint support_core(const ShapeView& shape, const Vec3& direction, int hint = -1);
+
+/// Support point of the full shape (core plus margin) in `direction` (local frame).
+Vec3 support(const ShapeView& shape, const Vec3& direction);
+
+/// Local axis-aligned bounding box of the full shape: (min, max).
+void local_aabb(const ShapeView& shape, Vec3& aabb_min, Vec3& aabb_max);
+
+/// World AABB of the full shape under `pose` (exact for boxes, spheres, capsules and
+/// cylinders; tight for polytopes: computed from the rotated vertices).
+void world_aabb(const ShapeView& shape, const Pose& pose, Vec3& aabb_min, Vec3& aabb_max);
+
+/// Radius of a ball centred on the local origin that holds the whole shape.
+double bounding_radius(const ShapeView& shape);
+
+/// True when the shape has usable data: finite vertices and parameters, at least one vertex
+/// for a polytope, non-negative radii and extents.
+bool is_valid(const ShapeView& shape);
+
+/// A triangle as a three-vertex polytope (for exact mesh queries). `vertices` must outlive it.
+inline ShapeView triangle_view(const Vec3* vertices) {
+    ShapeView v;
+    v.kind = ShapeKind::POLYTOPE;
+    v.vertices = vertices;
+    v.vertex_count = 3;
+    return v;
+}
+
+}  // namespace meshcol

@@ -1,0 +1,207 @@
+#include "meshcol/narrowphase.hpp"
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "meshcol/batch.hpp"
+#include "meshcol/defaults.hpp"
+#include "meshcol/epa.hpp"
+#include "meshcol/gjk.hpp"
+#include "meshcol/sat.hpp"
+
+namespace meshcol {
+
+ShapeView ConvexSetView::shape(std::int64_t h) const {
+    ShapeView s;
+    s.kind = static_cast<ShapeKind>(kinds[h]);
+    const std::int64_t begin = offsets[h];
+    s.vertices = reinterpret_cast<const Vec3*>(vertices + 3 * begin);
+    s.vertex_count = static_cast<int>(offsets[h + 1] - begin);
+    if (s.vertex_count == 0) s.vertices = nullptr;
+    if (adjacency_offsets != nullptr && adjacency != nullptr) {
+        s.adjacency_offsets = adjacency_offsets + begin;
+        s.adjacency = adjacency;
+    }
+    if (face_offsets != nullptr && edge_offsets != nullptr) {
+        s.has_features = true;
+        s.face_normals = reinterpret_cast<const Vec3*>(face_normals + 3 * face_offsets[h]);
+        s.face_count = static_cast<int>(face_offsets[h + 1] - face_offsets[h]);
+        s.edge_directions = reinterpret_cast<const Vec3*>(edge_directions + 3 * edge_offsets[h]);
+        s.edge_count = static_cast<int>(edge_offsets[h + 1] - edge_offsets[h]);
+    }
+    for (int k = 0; k < 4; ++k) s.params[k] = params[4 * h + k];
+    return s;
+}
+
+namespace {
+
+PairResult to_world(PairResult r, const Pose& pose_a) {
+    r.point_a = pose_a.apply(r.point_a);
+    r.point_b = pose_a.apply(r.point_b);
+    r.normal = pose_a.rotate(r.normal);
+    return r;
+}
+
+Status worse(Status x, Status y) {
+    return static_cast<int>(x) >= static_cast<int>(y) ? x : y;
+}
+
+}  // namespace
+
+// The pipeline (as coal and parry): GJK on the cores (sphere and capsule radii are margins,
+// added exactly afterwards); EPA on the full shapes only when the cores overlap; for small
+// polytopes an exact SAT that verifies EPA's depth and replaces it when they disagree.
+PairResult query_pair(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
+                      const Pose& pose_b, QueryKind kind, double radius_a, double radius_b) {
+    PairResult r;
+    MinkowskiDifference core(a, pose_a, b, pose_b, false, radius_a, radius_b);
+    GjkOptions opt;
+    opt.stop_when_separated = kind == QueryKind::INTERSECTS;
+    const GjkResult g = gjk_run(core, opt);
+    const double ma = margin(a), mb = margin(b), msum = ma + mb;
+    const double touch = defaults::contact_tolerance * core.scale;
+    r.status = g.status;
+    r.iterations = g.iterations;
+    if (!g.overlap) {
+        const double d = g.distance - msum;
+        const Vec3 n = g.normal;  // a's frame, a to b
+        r.normal = n;
+        r.point_a = g.point_a + n * ma;
+        r.point_b = g.point_b - n * mb;
+        if (d > touch) {
+            r.distance = d;
+            r.intersects = false;
+        } else {
+            // The cores are apart but the radii overlap: the depth is exact.
+            r.intersects = true;
+            r.distance = 0.0;
+            if (kind == QueryKind::PENETRATION) r.depth = std::fmax(0.0, -d);
+            else if (kind == QueryKind::DISTANCE) r.normal = Vec3{};
+        }
+        return to_world(r, pose_a);
+    }
+    r.intersects = true;
+    r.distance = 0.0;
+    r.point_a = g.point_a;
+    r.point_b = g.point_a;
+    if (kind != QueryKind::PENETRATION) return to_world(r, pose_a);
+
+    // EPA on the cores: for swept shapes the depth of (core_a + ball) - (core_b + ball) is the
+    // core depth plus both radii (the support function gains the radii in every direction),
+    // so spheres and capsules stay exact and EPA only meets curved surfaces on cylinders.
+    EpaOptions eopt;
+    if (a.kind == ShapeKind::CYLINDER || b.kind == ShapeKind::CYLINDER)
+        eopt.relative_tolerance = defaults::epa_curved_relative_tolerance;
+    const EpaResult e = epa_penetration(core, g.simplex, eopt);
+    r.iterations += e.iterations;
+    r.status = worse(r.status, e.status);
+    r.depth = e.depth + msum;
+    r.normal = e.normal;
+    r.point_a = e.point_a + e.normal * ma;
+    r.point_b = e.point_b - e.normal * mb;
+    PairResult world = to_world(r, pose_a);
+
+    const SatResult sat = sat_penetration(a, pose_a, b, pose_b);
+    if (sat.ran) {
+        const bool agree = e.status == Status::CONVERGED &&
+                           std::fabs(e.depth - sat.depth) <= 1e-9 * std::fmax(sat.depth, touch) &&
+                           dot(world.normal, sat.normal) >= 1.0 - 1e-9;
+        world.status = Status::CONVERGED;
+        if (agree) {
+            world.depth = sat.depth;
+        } else {
+            // SAT is exact: take its depth and axis, and find witness points by bringing the
+            // shapes into contact along the axis (b moved by depth * normal) and asking GJK
+            // for a common point.
+            world.depth = sat.depth;
+            world.normal = sat.normal;
+            Pose moved = pose_b;
+            moved.translation += sat.normal * sat.depth;
+            MinkowskiDifference contact(a, pose_a, b, moved, true);
+            const GjkResult gc = gjk_run(contact, GjkOptions{});
+            world.iterations += gc.iterations;
+            world.point_a = pose_a.apply(gc.point_a);
+            world.point_b = pose_a.apply(gc.point_b) - sat.normal * sat.depth;
+        }
+    }
+    return world;
+}
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+void write_vec(double* out, long long i, const Vec3& v) {
+    if (out == nullptr) return;
+    out[3 * i] = v.x;
+    out[3 * i + 1] = v.y;
+    out[3 * i + 2] = v.z;
+}
+
+}  // namespace
+
+void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t* pairs,
+               long long pair_count, QueryKind kind, int threads, const BatchOutput& out) {
+    const std::int64_t h_count = set.shape_count;
+    // Each shape and pose is checked once, not once per pair.
+    std::vector<char> ok(static_cast<size_t>(h_count), 0);
+    std::vector<Pose> pose(static_cast<size_t>(h_count));
+    std::vector<double> radius(static_cast<size_t>(h_count), 0.0);
+    for (std::int64_t h = 0; h < h_count; ++h) {
+        const ShapeView s = set.shape(h);
+        bool good = is_valid(s);
+        if (good) radius[h] = bounding_radius(s);
+        if (poses != nullptr) {
+            const double* m = poses + 16 * h;
+            if (!is_rigid_matrix4(m, defaults::rigid_tolerance)) good = false;
+            else pose[h] = Pose::from_matrix4(m);
+        }
+        ok[h] = good ? 1 : 0;
+    }
+    const int n_threads = resolve_threads(threads, pair_count, defaults::min_pairs_per_thread);
+    parallel_for(pair_count, n_threads, [&](long long begin, long long end) {
+        for (long long i = begin; i < end; ++i) {
+            const std::int64_t ia = pairs[2 * i], ib = pairs[2 * i + 1];
+            PairResult r;
+            if (!ok[ia] || !ok[ib]) {
+                r.status = Status::INVALID_INPUT;
+                r.distance = r.depth = kNaN;
+                r.normal = r.point_a = r.point_b = Vec3{kNaN, kNaN, kNaN};
+            } else {
+                r = query_pair(set.shape(ia), pose[ia], set.shape(ib), pose[ib], kind,
+                               radius[ia], radius[ib]);
+            }
+            if (out.distance) out.distance[i] = r.distance;
+            if (out.depth) out.depth[i] = r.depth;
+            write_vec(out.normal, i, r.normal);
+            write_vec(out.point_a, i, r.point_a);
+            write_vec(out.point_b, i, r.point_b);
+            if (out.iterations) out.iterations[i] = r.iterations;
+            if (out.status) out.status[i] = static_cast<std::int8_t>(r.status);
+            if (out.intersects) out.intersects[i] = r.intersects;
+        }
+    });
+}
+
+void world_aabbs(const ConvexSetView& set, const double* poses, double* lo, double* hi,
+                 int threads) {
+    const int n_threads = resolve_threads(threads, set.shape_count, 256);
+    parallel_for(set.shape_count, n_threads, [&](long long begin, long long end) {
+        for (long long h = begin; h < end; ++h) {
+            const ShapeView s = set.shape(h);
+            Pose p;
+            bool good = is_valid(s);
+            if (poses != nullptr) {
+                if (!is_rigid_matrix4(poses + 16 * h, defaults::rigid_tolerance)) good = false;
+                else p = Pose::from_matrix4(poses + 16 * h);
+            }
+            Vec3 a{kNaN, kNaN, kNaN}, b{kNaN, kNaN, kNaN};
+            if (good) world_aabb(s, p, a, b);
+            write_vec(lo, h, a);
+            write_vec(hi, h, b);
+        }
+    });
+}
+
+}  // namespace meshcol

@@ -1,0 +1,181 @@
+#include "meshcol/shapes.hpp"
+
+#include <cmath>
+
+#include "meshcol/defaults.hpp"
+
+namespace meshcol {
+
+namespace {
+
+SupportPoint polytope_support(const ShapeView& s, const Vec3& d, int hint) {
+    const Vec3* v = s.vertices;
+    const int n = s.vertex_count;
+    if (s.adjacency_offsets != nullptr && n > defaults::hill_climbing_min_vertices) {
+        // Hill climbing on the hull's edge graph: a local maximum of a linear function over the
+        // 1-skeleton of a convex polytope is global (Ericson 2004, sec. 9.5.4). Capped: on a
+        // cap hit we fall back to the scan below.
+        int best = (hint >= 0 && hint < n) ? hint : 0;
+        double best_dot = dot(v[best], d);
+        // A few strided samples first: the climb then starts near the top and takes few
+        // dependent (latency-bound) steps.
+        const int stride = n / 8;
+        for (int i = stride / 2; i < n; i += stride) {
+            const double di = dot(v[i], d);
+            if (di > best_dot) {
+                best_dot = di;
+                best = i;
+            }
+        }
+        for (int step = 0; step < n; ++step) {
+            int next = -1;
+            const std::int64_t begin = s.adjacency_offsets[best];
+            const std::int64_t end = s.adjacency_offsets[best + 1];
+            for (std::int64_t k = begin; k < end; ++k) {
+                const int j = s.adjacency[k];
+                const double dj = dot(v[j], d);
+                if (dj > best_dot) {
+                    best_dot = dj;
+                    next = j;
+                }
+            }
+            if (next < 0) return {v[best], best};
+            best = next;
+        }
+    }
+    int best = 0;
+    double best_dot = dot(v[0], d);
+    for (int i = 1; i < n; ++i) {
+        const double di = dot(v[i], d);
+        if (di > best_dot) {
+            best_dot = di;
+            best = i;
+        }
+    }
+    return {v[best], best};
+}
+
+}  // namespace
+
+SupportPoint support_core(const ShapeView& s, const Vec3& d, int hint) {
+    switch (s.kind) {
+        case ShapeKind::POLYTOPE:
+            return polytope_support(s, d, hint);
+        case ShapeKind::SPHERE:
+            return {Vec3{0.0, 0.0, 0.0}, 0};
+        case ShapeKind::BOX: {
+            // Ties (d component == 0) pick the + side: a fixed choice keeps the corner code
+            // stable so GJK recognises a repeated support point exactly.
+            const Vec3 p{d.x >= 0.0 ? s.params[0] : -s.params[0],
+                         d.y >= 0.0 ? s.params[1] : -s.params[1],
+                         d.z >= 0.0 ? s.params[2] : -s.params[2]};
+            return {p, (d.x >= 0.0 ? 1 : 0) | (d.y >= 0.0 ? 2 : 0) | (d.z >= 0.0 ? 4 : 0)};
+        }
+        case ShapeKind::CAPSULE:
+            return d.z >= 0.0 ? SupportPoint{Vec3{0.0, 0.0, s.params[1]}, 1}
+                              : SupportPoint{Vec3{0.0, 0.0, -s.params[1]}, 0};
+        case ShapeKind::CYLINDER: {
+            const double r = s.params[0], h = s.params[1];
+            const double z = d.z >= 0.0 ? h : -h;
+            const double planar = std::sqrt(d.x * d.x + d.y * d.y);
+            if (planar <= 1e-300) return {Vec3{0.0, 0.0, z}, -1};
+            return {Vec3{r * d.x / planar, r * d.y / planar, z}, -1};
+        }
+    }
+    return {Vec3{}, -1};
+}
+
+Vec3 support(const ShapeView& s, const Vec3& d) {
+    Vec3 p = support_core(s, d).point;
+    const double m = margin(s);
+    if (m > 0.0) {
+        const double n = norm(d);
+        if (n > 0.0) p += d * (m / n);
+    }
+    return p;
+}
+
+void local_aabb(const ShapeView& s, Vec3& lo, Vec3& hi) {
+    const double m = margin(s);
+    switch (s.kind) {
+        case ShapeKind::POLYTOPE:
+            lo = hi = s.vertices[0];
+            for (int i = 1; i < s.vertex_count; ++i) {
+                lo = component_min(lo, s.vertices[i]);
+                hi = component_max(hi, s.vertices[i]);
+            }
+            return;
+        case ShapeKind::SPHERE:
+            hi = {m, m, m};
+            break;
+        case ShapeKind::BOX:
+            hi = {s.params[0], s.params[1], s.params[2]};
+            break;
+        case ShapeKind::CAPSULE:
+            hi = {m, m, s.params[1] + m};
+            break;
+        case ShapeKind::CYLINDER:
+            hi = {s.params[0], s.params[0], s.params[1]};
+            break;
+    }
+    lo = -hi;
+}
+
+void world_aabb(const ShapeView& s, const Pose& pose, Vec3& lo, Vec3& hi) {
+    if (s.kind == ShapeKind::POLYTOPE) {
+        lo = hi = pose.apply(s.vertices[0]);
+        for (int i = 1; i < s.vertex_count; ++i) {
+            const Vec3 p = pose.apply(s.vertices[i]);
+            lo = component_min(lo, p);
+            hi = component_max(hi, p);
+        }
+        return;
+    }
+    // Exact extents: the support in +-world axis e_k is pose.apply(support(R^T e_k)).
+    for (int k = 0; k < 3; ++k) {
+        const Vec3 axis = pose.rotation.row(k);  // R^T e_k
+        hi[k] = dot(axis, support(s, axis)) + pose.translation[k];
+        lo[k] = dot(axis, support(s, -axis)) + pose.translation[k];
+    }
+}
+
+double bounding_radius(const ShapeView& s) {
+    switch (s.kind) {
+        case ShapeKind::POLYTOPE: {
+            double r2 = 0.0;
+            for (int i = 0; i < s.vertex_count; ++i) r2 = std::fmax(r2, squared_norm(s.vertices[i]));
+            return std::sqrt(r2);
+        }
+        case ShapeKind::SPHERE:
+            return s.params[0];
+        case ShapeKind::BOX:
+            return norm(Vec3{s.params[0], s.params[1], s.params[2]});
+        case ShapeKind::CAPSULE:
+            return s.params[0] + s.params[1];
+        case ShapeKind::CYLINDER:
+            return std::hypot(s.params[0], s.params[1]);
+    }
+    return 0.0;
+}
+
+bool is_valid(const ShapeView& s) {
+    for (double p : s.params)
+        if (!std::isfinite(p)) return false;
+    switch (s.kind) {
+        case ShapeKind::POLYTOPE:
+            if (s.vertex_count <= 0 || s.vertices == nullptr) return false;
+            for (int i = 0; i < s.vertex_count; ++i)
+                if (!is_finite(s.vertices[i])) return false;
+            return true;
+        case ShapeKind::SPHERE:
+            return s.params[0] >= 0.0;
+        case ShapeKind::BOX:
+            return s.params[0] >= 0.0 && s.params[1] >= 0.0 && s.params[2] >= 0.0;
+        case ShapeKind::CAPSULE:
+        case ShapeKind::CYLINDER:
+            return s.params[0] >= 0.0 && s.params[1] >= 0.0;
+    }
+    return false;
+}
+
+}  // namespace meshcol
