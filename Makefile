@@ -48,6 +48,7 @@ bench: install-test
 	$(BIN)/python benchmarks/bench_mesh_query.py
 	$(BIN)/python benchmarks/bench_sweep.py
 	$(BIN)/python benchmarks/bench_check.py
+	$(BIN)/python benchmarks/bench_decompose.py
 
 clean:
 	rm -rf build dist $(VENV) demo-out *.egg-info
