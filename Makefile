@@ -29,8 +29,10 @@ demo: install
 	$(BIN)/meshcol check samples/level/scene.json --report demo-out/level.json; test $$? -eq 1
 	@echo "== ball in a bowl with convex hulls: a phantom collision (expect exit 1)"
 	$(BIN)/meshcol check samples/bowl/scene.json --shape hull --report demo-out/bowl_hull.json; test $$? -eq 1
-	@echo "== the same with exact meshes: apart (expect exit 0)"
+	@echo "== the same with exact meshes, then with convex decompositions (CoACD): apart (expect exit 0)"
 	$(BIN)/meshcol check samples/bowl/scene.json --shape mesh --report demo-out/bowl_mesh.json
+	$(BIN)/meshcol decompose samples/bowl/bowl.obj --out-dir demo-out/bowl_parts --cache-dir demo-out/cache --report demo-out/bowl_parts.json
+	$(BIN)/meshcol check samples/bowl/scene.json --shape decomposed --cache-dir demo-out/cache --report demo-out/bowl_decomposed.json
 	@echo "== a fast bullet through a thin wall: missed by discrete checks, found by the sweep (expect exit 1)"
 	$(BIN)/meshcol sweep samples/bullet/scene.json --report demo-out/bullet.json; test $$? -eq 1
 	@echo "== mesh health and engine-budget hulls"

@@ -189,6 +189,7 @@ def test_ball_in_bowl_is_phantom_with_hull_only(samples: Path) -> None:
 def test_ball_in_bowl_is_separated_when_decomposed(samples: Path, tmp_path: Path) -> None:
     pytest.importorskip("coacd")
     scene = samples / "bowl" / "scene.json"
+    # default decomposition parameters, as `meshcol check --shape decomposed` uses them
     report = check([scene], shape="decomposed",
                    decompose_options={"cache_dir": str(tmp_path / "cache")})
     assert all(p["status"] in ("separated", "clearance") for p in report.pairs)
@@ -382,4 +383,6 @@ def test_ucx_parts_are_used_as_given(tmp_path: Path) -> None:
     p = report.pairs[0]
     assert p["status"] == "penetrating"
     assert p["depth"] == pytest.approx(0.25, rel=1e-9)
-    assert check([path], shape="hull").pairs[0]["status"] in ("separated", "clearance")
+    # with hulls the UCX part is ignored: crate [0, 1] and wall [1.25, 2] are 0.25 apart
+    hull = check([path], shape="hull", clearance=0.5)
+    assert [(p["status"], p["distance"]) for p in hull.pairs] == [("clearance", pytest.approx(0.25))]
