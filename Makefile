@@ -21,8 +21,21 @@ install-test: $(BIN)/python
 	$(PIP) install -q $(BUILD_DEPS)
 	$(PIP) install -q --no-build-isolation -e ".[test]"
 
+# The main job on the samples. Each step states the verdict it must give (the level has four
+# planted interpenetrations, so `check` must exit 1 there): the demo fails if one changes.
 demo: install
 	@rm -rf demo-out && mkdir -p demo-out
+	@echo "== check the level: 25 props, 4 planted interpenetrations (expect exit 1)"
+	$(BIN)/meshcol check samples/level/scene.json --report demo-out/level.json; test $$? -eq 1
+	@echo "== ball in a bowl with convex hulls: a phantom collision (expect exit 1)"
+	$(BIN)/meshcol check samples/bowl/scene.json --shape hull --report demo-out/bowl_hull.json; test $$? -eq 1
+	@echo "== the same with exact meshes, then with convex decompositions (CoACD): apart (expect exit 0)"
+	$(BIN)/meshcol check samples/bowl/scene.json --shape mesh --report demo-out/bowl_mesh.json
+	$(BIN)/meshcol decompose samples/bowl/bowl.obj --out-dir demo-out/bowl_parts --cache-dir demo-out/cache --report demo-out/bowl_parts.json
+	$(BIN)/meshcol check samples/bowl/scene.json --shape decomposed --cache-dir demo-out/cache --report demo-out/bowl_decomposed.json
+	@echo "== a fast bullet through a thin wall: missed by discrete checks, found by the sweep (expect exit 1)"
+	$(BIN)/meshcol sweep samples/bullet/scene.json --report demo-out/bullet.json; test $$? -eq 1
+	@echo "== mesh health and engine-budget hulls"
 	$(BIN)/meshcol inspect samples/level/props/*.obj --report demo-out/inspect.json
 	$(BIN)/meshcol hull samples/bowl/bowl.obj --max-vertices 64 -o demo-out/bowl_hull.obj --report demo-out/hull.json
 	@echo "reports written to demo-out/"
@@ -36,6 +49,8 @@ bench: install-test
 	$(BIN)/python benchmarks/bench_broadphase.py
 	$(BIN)/python benchmarks/bench_mesh_query.py
 	$(BIN)/python benchmarks/bench_sweep.py
+	$(BIN)/python benchmarks/bench_check.py
+	$(BIN)/python benchmarks/bench_decompose.py
 
 clean:
 	rm -rf build dist $(VENV) demo-out *.egg-info

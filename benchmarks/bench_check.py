@@ -6,7 +6,10 @@ python-fcl) is used as a user would: a CollisionManager for the collisions, then
 `fcl.distance` call per candidate pair, on the manager's own objects. The candidate pairs are
 handed to the peer for free (taken from meshcol's broad phase), which favours the peer.
 
-Run:  .venv/bin/python benchmarks/bench_check.py [--sizes 100 1000 10000] [--peer-max 1000]
+Times exclude loading; the last column is loading the same scene from a manifest of OBJ
+instances (`meshcol.load_inputs`), measured apart.
+
+Run:  .venv/bin/python benchmarks/bench_check.py [--sizes 100 1000 10000] [--clearance 0.25]
 """
 
 from __future__ import annotations
@@ -49,11 +52,43 @@ def level_scene(n: int, seed: int = 0):
     return Scene(tuple(bodies), units="m")
 
 
-def run_meshcol(scene, threads: int):
+def load_seconds(scene) -> float:
+    """Loading, reported apart: the same scene written as a manifest of OBJ instances, then
+    read back with `meshcol.load_inputs`."""
+    import json
+    import tempfile
+    from pathlib import Path
+
+    import trimesh
+
+    from meshcol.scene import load_inputs
+
+    with tempfile.TemporaryDirectory() as tmp:
+        files: dict[int, str] = {}
+        bodies = []
+        for body in scene.bodies:
+            key = body.vertices.ctypes.data
+            if key not in files:
+                files[key] = f"proto_{len(files)}.obj"
+                trimesh.Trimesh(body.vertices, body.faces, process=False).export(Path(tmp) / files[key])
+            r = body.transform[:3, :3]
+            w = np.sqrt(max(0.0, 1.0 + np.trace(r))) / 2  # rotations here are about z only
+            z = (r[1, 0] - r[0, 1]) / (4 * w)
+            bodies.append({"name": body.name, "mesh": files[key],
+                           "position": body.transform[:3, 3].tolist(),
+                           "rotation": {"quaternion": [w, 0.0, 0.0, z]}})
+        manifest = Path(tmp) / "scene.json"
+        manifest.write_text(json.dumps({"units": "m", "bodies": bodies}))
+        start = time.perf_counter()
+        load_inputs([manifest])
+        return time.perf_counter() - start
+
+
+def run_meshcol(scene, threads: int, clearance: float = 0.0):
     from meshcol.check import CheckOptions, check_scene
 
     start = time.perf_counter()
-    report = check_scene(scene, CheckOptions(shape="hull", threads=threads))
+    report = check_scene(scene, CheckOptions(shape="hull", threads=threads, clearance=clearance))
     return time.perf_counter() - start, report
 
 
@@ -85,19 +120,22 @@ def main() -> None:
     parser.add_argument("--sizes", type=int, nargs="+", default=[100, 1000, 10000])
     parser.add_argument("--peer-max", type=int, default=10000, help="largest scene given to the peer")
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--clearance", type=float, default=0.25,
+                        help="clearance band: pairs closer than this are candidates too")
     args = parser.parse_args()
 
     from meshcol import _core
 
     print(f"meshcol check vs trimesh CollisionManager (+ fcl.distance per candidate pair); "
-          f"{_core.hardware_threads()} hardware threads")
+          f"{_core.hardware_threads()} hardware threads; clearance {args.clearance}")
     print(f"{'bodies':>7} {'pairs':>7} {'hits':>5} {'meshcol 1T s':>13} {'meshcol all s':>14} "
-          f"{'trimesh s':>10} {'ratio':>7} {'hits agree':>10}")
+          f"{'trimesh s':>10} {'ratio':>7} {'hits agree':>10} {'load s':>7}")
     for n in args.sizes:
         scene = level_scene(n)
-        run_meshcol(scene, 1)  # warm up: imports, first native call
-        t1 = min(run_meshcol(scene, 1)[0] for _ in range(args.repeat))
-        tall, report = min((run_meshcol(scene, 0) for _ in range(args.repeat)), key=lambda r: r[0])
+        run_meshcol(scene, 1, args.clearance)  # warm up: imports, first native call
+        t1 = min(run_meshcol(scene, 1, args.clearance)[0] for _ in range(args.repeat))
+        tall, report = min((run_meshcol(scene, 0, args.clearance) for _ in range(args.repeat)),
+                           key=lambda r: r[0])
         hits = {(p["a"], p["b"]) for p in report.pairs if p["status"] in ("penetrating", "contained", "contact")}
         if n <= args.peer_max:
             tp, names, _ = run_trimesh(scene, report)
@@ -107,7 +145,8 @@ def main() -> None:
             tps = f"{tp:10.3f}"
         else:
             ratio, tps, agree = "   n/a", "       n/a", "n/a"
-        print(f"{n:>7} {len(report.pairs):>7} {len(hits):>5} {t1:>13.4f} {tall:>14.4f} {tps} {ratio:>7} {agree:>10}")
+        print(f"{n:>7} {len(report.pairs):>7} {len(hits):>5} {t1:>13.4f} {tall:>14.4f} {tps} {ratio:>7} "
+              f"{agree:>10} {load_seconds(scene):>7.2f}")
 
 
 if __name__ == "__main__":

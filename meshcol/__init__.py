@@ -35,6 +35,10 @@ _LAZY: dict[str, str] = {
     "HullResult": "meshcol.hulls",
     "inspect_body": "meshcol.inspect",
     "MeshInspection": "meshcol.inspect",
+    # convex decomposition
+    "decompose": "meshcol.decompose",
+    "Decomposition": "meshcol.decompose",
+    "cached_decomposition": "meshcol.decompose",
     # narrow phase
     "ConvexSet": "meshcol.query",
     "Sphere": "meshcol.query",

@@ -158,12 +158,18 @@ class SweepAndPrune:
 
     Notes
     -----
-    The classic incremental method (Baraff 1992; Cohen et al. 1995): the boxes' order on the
-    sweep axis from the previous step is kept, and :meth:`update` re-sorts it by insertion
-    sort, which costs O(n + moves) on nearly sorted end points instead of O(n log n). When the
-    boxes moved so much that the insertion sort would exceed
-    ``_core.defaults.sweep_max_shifts_per_box`` moves per box, it falls back to a full sort
-    (``last_shifts`` is then -1). Results equal :func:`sort_and_sweep` exactly.
+    The classic incremental method (Baraff 1992; Cohen et al. 1995), per cell of the
+    cross-axis grid of :func:`sort_and_sweep`: the grid of the first step is kept, and so is
+    each cell's order on the sweep axis. :meth:`update` refreshes the coordinates in that
+    order, re-sorts each cell by insertion sort (O(entries + moves) on nearly sorted cells
+    instead of a fresh grid, scatter and O(n log n) sort), moves the few boxes that left
+    their cells by merging them into their new cells, and sweeps. When more than
+    ``_core.defaults.sweep_max_cell_changes`` of the boxes changed cells, or a cell's
+    insertion sort would exceed ``_core.defaults.sweep_max_shifts_per_box`` moves per entry,
+    the motion was not small: the step rebuilds the grid or sorts that cell afresh
+    (``last_shifts`` is then -1). Results equal :func:`sort_and_sweep` exactly, whatever the
+    motion. The pair arrays returned are read-only views of what the object keeps for
+    :meth:`pairs` (no copy); a later :meth:`update` leaves them unchanged.
 
     Examples
     --------
@@ -176,11 +182,11 @@ class SweepAndPrune:
         self._sweep = _core.SweepAndPrune(lo, hi, _axis(axis))
 
     def pairs(self) -> np.ndarray:
-        """Overlapping pairs of the last step: (k, 2) int64, i < j, sorted."""
+        """Overlapping pairs of the last step: (k, 2) int64 (read-only), i < j, sorted."""
         return self._sweep.pairs()
 
     def update(self, aabb_min: Any, aabb_max: Any) -> np.ndarray:
-        """Moves the boxes (same count) and returns the new (k, 2) int64 pairs."""
+        """Moves the boxes (same count) and returns the new (k, 2) int64 pairs (read-only)."""
         lo, hi = _boxes(aabb_min, aabb_max)
         if lo.shape[0] != len(self._sweep):
             raise ValueError(f"aabb_min must be ({len(self._sweep)}, 3) as before, got {lo.shape}")
@@ -193,7 +199,7 @@ class SweepAndPrune:
 
     @property
     def last_shifts(self) -> int:
-        """Element moves of the last insertion sort; -1 when it fell back to a full sort."""
+        """Element moves of the last step's insertion sorts; -1 when the step sorted afresh."""
         return self._sweep.last_shifts
 
     def __len__(self) -> int:

@@ -206,21 +206,6 @@ def _geometry_key(vertices: np.ndarray, faces: np.ndarray | None = None) -> byte
     return h.digest()
 
 
-def _primitive_shape(body: Body) -> Any:
-    from meshcol.query import Box, Capsule, Cylinder, Sphere
-
-    p = body.primitive
-    if p.kind == "sphere":
-        return Sphere(p.radius)
-    if p.kind == "box":
-        return Box(tuple(p.size))
-    if p.kind == "capsule":
-        return Capsule(p.radius, p.length)
-    if p.kind == "cylinder":
-        return Cylinder(p.radius, p.length)
-    raise MeshcolError(f"body {body.name!r}: unknown primitive {p.kind!r}", body.source)
-
-
 def _split_ucx(bodies: Sequence[Body]) -> tuple[list[Body], dict[str, list[Body]]]:
     """Separate ``UCX_<body>_NN`` collision parts from the bodies they belong to."""
     names = {b.name for b in bodies}
@@ -288,7 +273,7 @@ def _build_shapes(bodies: Sequence[Body], ucx: dict[str, list[Body]], options: C
         shape = body.shape or options.shape
         if body.primitive is not None:
             shape = "primitive"
-            keys = [add(("primitive", body.primitive), lambda body=body: _primitive_shape(body))]
+            keys = [add(("primitive", body.primitive), lambda body=body: body.primitive)]
         elif shape == "decomposed":
             if body.name in ucx:
                 parts = _ucx_parts(body, ucx[body.name])

@@ -111,6 +111,8 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
 
     bodies: list[Body] = []
     names: set[str] = set()
+    taken: set[str] = set()  # names of the bodies made so far (sub-bodies included)
+    files: dict[str, list[Body]] = {}  # each mesh file is read once, however many instances
     for spec in document["bodies"]:
         label = f"body {spec['name']!r}"
         if spec["name"] in names:
@@ -122,12 +124,13 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
         end = _end_pose(spec, start, duration, label, source)
         scale = _scale(spec.get("scale"))
         if "mesh" in spec:
-            new = _mesh_bodies(spec, file, source, label, start, end, scale)
+            new = _mesh_bodies(spec, file, source, label, start, end, scale, files)
         else:
             new = [_primitive_body(spec, source, label, start, end, scale)]
         for body in new:
-            if any(body.name == other.name for other in bodies):
+            if body.name in taken:
                 raise SceneError(f"{label}: body name {body.name!r} is already taken", source)
+            taken.add(body.name)
         bodies.extend(new)
     return Scene(bodies=tuple(bodies), units=units, source=source, duration=duration)
 
@@ -310,15 +313,20 @@ def _scale(value) -> np.ndarray:
     return np.full(3, float(value))
 
 
-def _mesh_bodies(spec, manifest: Path, source, label, start, end, scale) -> list[Body]:
+def _mesh_bodies(spec, manifest: Path, source, label, start, end, scale,
+                 files: dict[str, list[Body]]) -> list[Body]:
     mesh = spec["mesh"]
     mesh_source = os.path.join(os.path.dirname(source), mesh)
-    if not Path(mesh_source).is_file() and not Path(mesh_source).is_dir():
-        raise SceneError(f"{label}: mesh file {mesh!r} not found", source)
-    try:
-        loaded = load_mesh(mesh_source)
-    except MeshcolError as error:
-        raise SceneError(f"{label}: mesh file {mesh!r}: {error.message}", source) from None
+    key = os.path.normpath(mesh_source)
+    loaded = files.get(key)
+    if loaded is None:
+        if not Path(mesh_source).is_file() and not Path(mesh_source).is_dir():
+            raise SceneError(f"{label}: mesh file {mesh!r} not found", source)
+        try:
+            loaded = load_mesh(mesh_source)
+        except MeshcolError as error:
+            raise SceneError(f"{label}: mesh file {mesh!r}: {error.message}", source) from None
+        files[key] = loaded
     stretch = np.diag([*scale, 1.0])
     bodies = []
     for sub in loaded:

@@ -458,3 +458,25 @@ def test_incremental_sweep_reuses_the_order():
     assert np.array_equal(sweep.update(shuffled, shuffled + 1), sort_and_sweep(shuffled, shuffled + 1))
     assert sweep.last_shifts == -1  # not nearly sorted: fell back to a full sort
     assert len(sweep) == 5000
+
+
+@settings(max_examples=15)
+@given(st.integers(0, 2**32 - 1), st.sampled_from([1e-3, 0.05, 0.5, 3.0]))
+def test_incremental_sweep_with_grid_cells_equals_brute_force(seed, motion):
+    # Enough boxes for the cross-axis grid; motions from "stays in its cells" to "many boxes
+    # change cells" (merged into their new cells) to "rebuild"; some boxes leave the first
+    # step's bounds (clamped to the border cells) and some grow.
+    rng = np.random.default_rng(seed)
+    n = 1500
+    lo = rng.random((n, 3)) * 40
+    hi = lo + rng.uniform(0.0, 1.5, size=lo.shape)
+    sweep = SweepAndPrune(lo, hi)
+    for step in range(3):
+        delta = rng.normal(size=lo.shape) * motion
+        delta[rng.random(n) < 0.3] = 0.0
+        lo = lo + delta
+        hi = hi + delta + (rng.random((n, 1)) < 0.01) * 5.0 * step
+        assert np.array_equal(sweep.update(lo, hi), brute_force_pairs(lo, hi))
+        assert np.array_equal(sweep.pairs(), brute_force_pairs(lo, hi))
+    if motion == 1e-3:
+        assert sweep.last_shifts >= 0  # kept the cells: no rebuild for small motions

@@ -189,6 +189,7 @@ def test_ball_in_bowl_is_phantom_with_hull_only(samples: Path) -> None:
 def test_ball_in_bowl_is_separated_when_decomposed(samples: Path, tmp_path: Path) -> None:
     pytest.importorskip("coacd")
     scene = samples / "bowl" / "scene.json"
+    # default decomposition parameters, as `meshcol check --shape decomposed` uses them
     report = check([scene], shape="decomposed",
                    decompose_options={"cache_dir": str(tmp_path / "cache")})
     assert all(p["status"] in ("separated", "clearance") for p in report.pairs)
@@ -316,7 +317,8 @@ def test_cli_exit_codes_and_reports(tmp_path: Path) -> None:
     out = tmp_path / "r.json"
     result = run(["check", str(m), "--report", str(out)])
     assert result.exit_code == 1, result.output
-    assert "FAIL" in result.output
+    assert result.stdout == ""
+    assert result.stderr.splitlines()[-1] == "FAIL: 1 pair(s) violate --fail-on"
     data = json.loads(out.read_text())
     assert data["summary"]["passed"] is False and data["units"] == "m"
     assert run(["check", str(m), "--fail-on", "none"]).exit_code == 0
@@ -329,11 +331,12 @@ def test_cli_exit_codes_and_reports(tmp_path: Path) -> None:
 
 def test_cli_report_to_stdout_keeps_summary_on_stderr(tmp_path: Path) -> None:
     m = write_manifest(tmp_path, [box("a", (1, 1, 1), (0, 0, 0)), box("b", (1, 1, 1), (3, 0, 0))])
-    result = run(["check", str(m), "--report", "-"])
-    assert result.exit_code == 0
-    data = json.loads(result.stdout)
-    assert "PASS" in result.stderr
-    assert data["summary"]["candidate_pairs"] == 0
+    for args in ([], ["--report", "-"]):
+        result = run(["check", str(m), *args])
+        assert result.exit_code == 0
+        data = json.loads(result.stdout)
+        assert data["summary"]["candidate_pairs"] == 0
+        assert result.stderr.splitlines()[-1] == "PASS"
 
 
 @pytest.mark.parametrize("args, message", [
@@ -380,4 +383,6 @@ def test_ucx_parts_are_used_as_given(tmp_path: Path) -> None:
     p = report.pairs[0]
     assert p["status"] == "penetrating"
     assert p["depth"] == pytest.approx(0.25, rel=1e-9)
-    assert check([path], shape="hull").pairs[0]["status"] in ("separated", "clearance")
+    # with hulls the UCX part is ignored: crate [0, 1] and wall [1.25, 2] are 0.25 apart
+    hull = check([path], shape="hull", clearance=0.5)
+    assert [(p["status"], p["distance"]) for p in hull.pairs] == [("clearance", pytest.approx(0.25))]

@@ -5,6 +5,7 @@
 #include <nanobind/stl/pair.h>
 
 #include <algorithm>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -36,6 +37,19 @@ nb::ndarray<nb::numpy, T> to_numpy(std::vector<T>&& v, size_t rows, size_t cols)
 nb::ndarray<nb::numpy, std::int64_t> pairs_array(std::vector<std::int64_t>&& flat) {
     const size_t k = flat.size() / 2;
     return to_numpy(std::move(flat), k, 2);
+}
+
+/// A read-only (k, 2) view of pairs the sweep keeps sharing; the capsule holds a reference.
+nb::ndarray<nb::numpy, const std::int64_t> shared_pairs_array(
+    std::shared_ptr<const std::vector<std::int64_t>> pairs) {
+    static const std::int64_t empty = 0;
+    auto* holder = new std::shared_ptr<const std::vector<std::int64_t>>(std::move(pairs));
+    nb::capsule owner(holder, [](void* p) noexcept {
+        delete static_cast<std::shared_ptr<const std::vector<std::int64_t>>*>(p);
+    });
+    const std::vector<std::int64_t>& flat = **holder;
+    const size_t shape[2] = {flat.size() / 2, 2};
+    return nb::ndarray<nb::numpy, const std::int64_t>(flat.empty() ? &empty : flat.data(), 2, shape, owner);
 }
 
 nb::ndarray<nb::numpy, std::int64_t> keys_array(const std::vector<std::uint64_t>& keys) {
@@ -100,18 +114,15 @@ void bind_broadphase(nb::module_& m) {
                  new (self) meshcol::SweepAndPrune(lo.data(), hi.data(), n, axis, threads);
              },
              "aabb_min"_a, "aabb_max"_a, "axis"_a = -1, "threads"_a = 0)
-        .def("pairs", [](const meshcol::SweepAndPrune& s) {
-            return pairs_array(std::vector<std::int64_t>(s.pairs()));
-        })
+        .def("pairs", [](const meshcol::SweepAndPrune& s) { return shared_pairs_array(s.shared_pairs()); })
         .def("update",
              [](meshcol::SweepAndPrune& s, const Boxes& lo, const Boxes& hi) {
                  const std::int64_t n = box_count(lo, hi);
-                 std::vector<std::int64_t> flat;
                  {
                      nb::gil_scoped_release release;
-                     flat = s.update(lo.data(), hi.data(), n);
+                     s.update(lo.data(), hi.data(), n);
                  }
-                 return pairs_array(std::move(flat));
+                 return shared_pairs_array(s.shared_pairs());
              },
              "aabb_min"_a, "aabb_max"_a)
         .def_prop_ro("axis", &meshcol::SweepAndPrune::axis)

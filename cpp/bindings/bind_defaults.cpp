@@ -26,6 +26,7 @@ void bind_defaults(nb::module_& m) {
     d.attr("sweep_max_entries_per_box") = meshcol::defaults::sweep_max_entries_per_box;
     d.attr("sweep_min_candidates_for_grid") = meshcol::defaults::sweep_min_candidates_for_grid;
     d.attr("sweep_max_shifts_per_box") = meshcol::defaults::sweep_max_shifts_per_box;
+    d.attr("sweep_max_cell_changes") = meshcol::defaults::sweep_max_cell_changes;
     d.attr("tree_bin_count") = meshcol::defaults::tree_bin_count;
     d.attr("tree_max_height_imbalance") = meshcol::defaults::tree_max_height_imbalance;
     d.attr("tree_max_objects") = meshcol::defaults::tree_max_objects;

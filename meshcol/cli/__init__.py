@@ -21,6 +21,7 @@ from meshcol.errors import MeshcolError
 # command name -> "module:function". Modules import heavy dependencies inside the command
 # function, never at module level, so `meshcol --help` stays fast.
 COMMANDS: dict[str, str] = {
+    "decompose": "meshcol.cli.decompose:decompose_command",
     "hull": "meshcol.cli.hull:hull",
     "inspect": "meshcol.cli.inspect:inspect",
     "sweep": "meshcol.cli.sweep:sweep",

@@ -44,15 +44,16 @@ def check(inputs: tuple[str, ...], shape: str, tolerance: float, clearance: floa
 
     INPUT is mesh files (each body at its own coordinates, as parts exported in place), one
     scene manifest (JSON/TOML) or glTF/GLB scenes. Statuses per pair: separated, clearance,
-    contact, penetrating, contained. Exit 0 when the policy passes, 1 when it fails, 2 on bad
-    input. Points are world coordinates; normals point from a to b.
+    contact, penetrating, contained. The report (JSON or CSV) goes to --report FILE or to
+    stdout; a short summary goes to stderr. Exit 0 when the policy passes, 1 when it fails,
+    2 on bad input. Points are world coordinates; normals point from a to b.
 
     \b
     Examples:
       meshcol check level/scene.json
       meshcol check parts/*.stl --clearance 0.5 --fail-on clearance --report out.json
       meshcol check scene.glb --shape decomposed --ignore 'door*:frame*'
-      meshcol check scene.json --baseline last_week.json --report - > today.json
+      meshcol check scene.json --baseline last_week.json > today.json
     """
     from meshcol.check import CheckOptions, check_scene, load_baseline, parse_ignore_rule
     from meshcol.report import emit, report_format as pick_format
@@ -75,11 +76,8 @@ def check(inputs: tuple[str, ...], shape: str, tolerance: float, clearance: floa
     result = check_scene(scene, options, progress=progress.message, load_seconds=load_seconds)
     progress.done()
 
-    text = result.to_csv() if fmt == "csv" else result.to_json()
-    if report is not None:
-        emit(text, report)
-    summary_stream = sys.stderr if report == "-" else sys.stdout
-    click.echo(summary_table(result), file=summary_stream)
+    emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+    click.echo(summary_table(result), err=True)
     sys.exit(result.exit_code)
 
 

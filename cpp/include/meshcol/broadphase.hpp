@@ -14,6 +14,7 @@
 /// out as a flat vector [i0, j0, i1, j1, ...] with i < j, sorted lexicographically.
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "meshcol/aabb.hpp"
@@ -36,29 +37,38 @@ void sort_pair_keys(std::vector<std::uint64_t>& keys);
 std::vector<std::int64_t> sort_and_sweep(const double* lo, const double* hi, std::int64_t n,
                                          int axis, int threads);
 
-/// Incremental sort and sweep for a moving scene: keeps the order of the previous step, so a
-/// step where boxes move a little costs an insertion sort over nearly sorted end points
-/// instead of a fresh sort (Baraff 1992; Cohen et al. 1995).
+/// Incremental sort and sweep for a moving scene: keeps the grid of the first step and the
+/// sorted order of every grid cell, so a step where boxes move a little costs an insertion
+/// sort over nearly sorted cells (plus moving the few boxes that changed cells) instead of a
+/// fresh grid, scatter and sort (Baraff 1992; Cohen et al. 1995).
 class SweepAndPrune {
 public:
     /// Sorts the boxes from scratch. `axis` -1 chooses by variance, then stays fixed.
     SweepAndPrune(const double* lo, const double* hi, std::int64_t n, int axis, int threads);
+    ~SweepAndPrune();
+    SweepAndPrune(SweepAndPrune&&) noexcept;
+    SweepAndPrune& operator=(SweepAndPrune&&) noexcept;
 
     /// Replaces the boxes (same count) and returns the overlapping pairs.
     const std::vector<std::int64_t>& update(const double* lo, const double* hi, std::int64_t n);
 
-    const std::vector<std::int64_t>& pairs() const { return pairs_; }  ///< pairs of the last step
+    const std::vector<std::int64_t>& pairs() const { return *pairs_; }  ///< pairs of the last step
+    /// The pairs of the last step, shared: a later update() makes a new vector and leaves this
+    /// one alone, so a caller may keep it (the Python binding hands it to numpy without a copy).
+    std::shared_ptr<const std::vector<std::int64_t>> shared_pairs() const { return pairs_; }
     int axis() const { return axis_; }                                 ///< the sweep axis
-    std::int64_t size() const { return static_cast<std::int64_t>(order_.size()); }  ///< n
-    /// Element moves the last insertion sort made (-1 when it fell back to a full sort).
+    std::int64_t size() const { return n_; }                           ///< n
+    /// Element moves the last insertion sorts made (-1 when the step rebuilt the grid and
+    /// sorted afresh because too many boxes moved too far).
     std::int64_t last_shifts() const { return last_shifts_; }
 
 private:
+    struct State;  ///< the grid and the sorted cells (sort_and_sweep.cpp)
     int axis_;
     int threads_;
-    std::vector<std::uint32_t> order_;  ///< box indices sorted by lo[axis] at the last step
-    std::vector<double> keys_;          ///< lo[axis] of order_[k]
-    std::vector<std::int64_t> pairs_;
+    std::int64_t n_;
+    std::unique_ptr<State> state_;
+    std::shared_ptr<const std::vector<std::int64_t>> pairs_;
     std::int64_t last_shifts_ = 0;
 };
 

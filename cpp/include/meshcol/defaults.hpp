@@ -47,7 +47,7 @@ constexpr long long broadphase_min_boxes_per_thread = 20000;
 
 /// Sort and sweep: grid cells on the two cross axes are at least this many median box
 /// extents wide (wider cells duplicate fewer boxes, narrower ones prune more).
-constexpr double sweep_cell_extent_ratio = 4.0;
+constexpr double sweep_cell_extent_ratio = 2.0;
 
 /// Sort and sweep: at most this many grid cells per cross axis.
 constexpr int sweep_max_cells_per_axis = 1024;
@@ -62,9 +62,13 @@ constexpr double sweep_max_entries_per_box = 3.0;
 /// Sort and sweep: no grid when the sweep axis alone leaves fewer candidates per box.
 constexpr double sweep_min_candidates_for_grid = 16.0;
 
-/// Incremental sweep: the insertion sort gives up and sorts afresh after this many element
-/// moves per box (large motions are not "nearly sorted").
+/// Incremental sweep: a cell's insertion sort gives up and sorts the cell afresh after this many
+/// element moves per entry (large motions are not "nearly sorted").
 constexpr long long sweep_max_shifts_per_box = 32;
+
+/// Incremental sweep: a step where more than this fraction of the boxes left the grid cells
+/// they spanned rebuilds the grid and sorts afresh (the motion was not small).
+constexpr double sweep_max_cell_changes = 0.25;
 
 /// AABB tree: bins of the binned SAH top-down build (Wald 2007; Box2D v3).
 constexpr int tree_bin_count = 32;

@@ -1,0 +1,338 @@
+"""Running decompositions over many files, and writing their parts.
+
+:func:`run_tasks` runs one task per file in worker processes (``forkserver`` where available,
+else ``spawn``: CoACD is C++ that holds the GIL, so threads would not help), kills a worker that
+exceeds the per-file timeout and replaces it, and reports every task's outcome, so one failing
+or stuck file never stops the others. The writers produce byte-identical files for identical
+parts: fixed float formatting (shortest round-trip ``repr``), no timestamps, fixed JSON key
+order in GLB.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import multiprocessing.connection
+import os
+import re
+import struct
+import time
+from collections import deque
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from meshcol.report import atomic_path
+
+__all__ = ["TaskOutcome", "run_tasks", "write_parts", "obj_text", "glb_bytes", "safe_name"]
+
+LAYOUTS = ("parts", "combined", "ucx")
+# Seconds a worker gets to exit after terminate() before kill().
+_TERMINATE_GRACE = 2.0
+
+
+@dataclass(frozen=True)
+class TaskOutcome:
+    """What became of one task: ``status`` is ``ok``, ``failed`` or ``timeout``."""
+
+    index: int
+    status: str
+    value: Any = None
+    message: str | None = None
+    seconds: float = 0.0
+
+
+def _call(fn: Callable[[Any], Any], task: Any) -> tuple[str, Any]:
+    # The process boundary: any error in one task becomes that task's status so that the
+    # others still run (the message keeps the exception type for the report).
+    try:
+        return "ok", fn(task)
+    except Exception as exc:  # noqa: BLE001 - reported per task, never swallowed
+        return "failed", f"{type(exc).__name__}: {exc}"
+
+
+def _worker_main(
+    conn: multiprocessing.connection.Connection, fn: Callable[[Any], Any], env: dict[str, str]
+) -> None:
+    # Before any engine loads: OpenMP reads OMP_NUM_THREADS once, when its library loads.
+    os.environ.update(env)
+    while True:
+        try:
+            message = conn.recv()
+        except EOFError:
+            return
+        if message is None:
+            return
+        index, task = message
+        status, value = _call(fn, task)
+        conn.send((index, status, value))
+
+
+class _Worker:
+    def __init__(self, ctx: Any, fn: Callable[[Any], Any], env: dict[str, str]) -> None:
+        self.conn, child = ctx.Pipe()
+        self.process = ctx.Process(target=_worker_main, args=(child, fn, env), daemon=True)
+        self.process.start()
+        child.close()
+        self.index: int | None = None
+        self.started = 0.0
+
+    def assign(self, index: int, task: Any) -> None:
+        self.index, self.started = index, time.perf_counter()
+        self.conn.send((index, task))
+
+    def kill(self) -> None:
+        self.process.terminate()
+        self.process.join(_TERMINATE_GRACE)
+        if self.process.is_alive():
+            self.process.kill()
+            self.process.join()
+        self.conn.close()
+
+    def close(self) -> None:
+        try:
+            self.conn.send(None)
+        except OSError:
+            pass
+        self.process.join(_TERMINATE_GRACE)
+        if self.process.is_alive():
+            self.kill()
+        else:
+            self.conn.close()
+
+
+def _context() -> Any:
+    methods = multiprocessing.get_all_start_methods()
+    ctx = multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+    if ctx.get_start_method() == "forkserver":
+        # Workers fork from a server that has already imported the heavy modules (not the
+        # engines: they load OpenMP, whose thread count each worker sets first).
+        ctx.set_forkserver_preload(
+            ["meshcol.decompose", "meshcol.decompose_jobs", "scipy.spatial", "manifold3d", "trimesh"]
+        )
+    return ctx
+
+
+def run_tasks(
+    fn: Callable[[Any], Any],
+    tasks: Sequence[Any],
+    *,
+    jobs: int = 1,
+    timeout: float | None = None,
+    threads_per_job: int | None = None,
+) -> Iterator[TaskOutcome]:
+    """Run ``fn(task)`` for every task; yield outcomes as they complete.
+
+    Parameters
+    ----------
+    fn : callable
+        A module-level function (it is sent to worker processes).
+    tasks : sequence
+        Picklable task arguments.
+    jobs : int
+        Worker processes. With ``jobs == 1`` and no timeout, tasks run in this process.
+    timeout : float, optional
+        Seconds one task may take; its worker is then killed and replaced, and the task's
+        status is ``timeout``.
+    threads_per_job : int, optional
+        OpenMP threads per worker (CoACD is parallel inside); default ``cores // jobs``, at
+        least 1, unless ``OMP_NUM_THREADS`` is set. Results do not depend on it.
+    """
+    if jobs < 1:
+        raise ValueError(f"jobs must be at least 1, got {jobs}")
+    if jobs == 1 and timeout is None:
+        for index, task in enumerate(tasks):
+            start = time.perf_counter()
+            status, value = _call(fn, task)
+            seconds = time.perf_counter() - start
+            if status == "ok":
+                yield TaskOutcome(index, status, value, seconds=seconds)
+            else:
+                yield TaskOutcome(index, status, message=value, seconds=seconds)
+        return
+
+    ctx = _context()
+    env: dict[str, str] = {}
+    if threads_per_job is not None:
+        env["OMP_NUM_THREADS"] = str(threads_per_job)
+    elif "OMP_NUM_THREADS" not in os.environ:
+        env["OMP_NUM_THREADS"] = str(max(1, (os.cpu_count() or 1) // jobs))
+    pending = deque(enumerate(tasks))
+    idle: list[_Worker] = []
+    busy: list[_Worker] = []
+    try:
+        while pending or busy:
+            while pending and len(busy) < jobs:
+                worker = idle.pop() if idle else _Worker(ctx, fn, env)
+                worker.assign(*pending.popleft())
+                busy.append(worker)
+            now = time.perf_counter()
+            wait_for = None
+            if timeout is not None:
+                wait_for = max(0.0, min(w.started + timeout for w in busy) - now)
+            handles: list[Any] = [w.conn for w in busy] + [w.process.sentinel for w in busy]
+            ready = set(multiprocessing.connection.wait(handles, wait_for))
+            now = time.perf_counter()
+            for worker in list(busy):
+                seconds = now - worker.started
+                if worker.conn in ready:
+                    try:
+                        index, status, value = worker.conn.recv()
+                    except (EOFError, OSError):
+                        ready.add(worker.process.sentinel)
+                    else:
+                        busy.remove(worker)
+                        idle.append(worker)
+                        if status == "ok":
+                            yield TaskOutcome(index, status, value, seconds=seconds)
+                        else:
+                            yield TaskOutcome(index, status, message=value, seconds=seconds)
+                        continue
+                if worker.process.sentinel in ready:
+                    busy.remove(worker)
+                    worker.process.join()
+                    code = worker.process.exitcode
+                    worker.conn.close()
+                    yield TaskOutcome(
+                        worker.index, "failed", message=f"worker process died (exit code {code})", seconds=seconds
+                    )
+                elif timeout is not None and seconds >= timeout:
+                    busy.remove(worker)
+                    worker.kill()
+                    yield TaskOutcome(
+                        worker.index, "timeout", message=f"timed out after {timeout:g} s", seconds=seconds
+                    )
+    finally:
+        for worker in busy:
+            worker.kill()
+        for worker in idle:
+            worker.close()
+
+
+# --------------------------------------------------------------------------------------------
+# writers
+
+_UNSAFE = re.compile(r"[^A-Za-z0-9_.-]+")
+
+
+def safe_name(name: str) -> str:
+    """``name`` reduced to characters that are safe in file and object names."""
+    cleaned = _UNSAFE.sub("_", name).strip("._")
+    return cleaned or "body"
+
+
+def _number(x: float) -> str:
+    return repr(float(x) + 0.0)  # +0.0 turns -0.0 into 0.0
+
+
+def obj_text(objects: Sequence[tuple[str, np.ndarray, np.ndarray]]) -> str:
+    """Wavefront OBJ with one ``o`` object per (name, vertices, faces), 1-based global indices."""
+    lines = ["# meshcol decompose"]
+    base = 1
+    for name, vertices, faces in objects:
+        lines.append(f"o {name}")
+        lines.extend(f"v {_number(x)} {_number(y)} {_number(z)}" for x, y, z in vertices.tolist())
+        lines.extend(f"f {a + base} {b + base} {c + base}" for a, b, c in faces.tolist())
+        base += len(vertices)
+    return "\n".join(lines) + "\n"
+
+
+def glb_bytes(objects: Sequence[tuple[str, np.ndarray, np.ndarray]]) -> bytes:
+    """Binary glTF 2.0 with one node (and mesh) per (name, vertices, faces).
+
+    Positions are float32 (as glTF requires), indices uint32; no timestamps, sorted JSON keys.
+    """
+    blob = bytearray()
+    views: list[dict[str, Any]] = []
+    accessors: list[dict[str, Any]] = []
+    meshes: list[dict[str, Any]] = []
+    nodes: list[dict[str, Any]] = []
+    for i, (name, vertices, faces) in enumerate(objects):
+        position = np.ascontiguousarray(vertices, dtype="<f4")
+        index = np.ascontiguousarray(faces, dtype="<u4").reshape(-1)
+        for data, target in ((position, 34962), (index, 34963)):
+            views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": data.nbytes, "target": target})
+            blob += data.tobytes()
+            blob += b"\0" * (-len(blob) % 4)
+        accessors.append({
+            "bufferView": 2 * i, "componentType": 5126, "count": len(position), "type": "VEC3",
+            "min": position.min(axis=0).astype(float).tolist(),
+            "max": position.max(axis=0).astype(float).tolist(),
+        })
+        accessors.append({"bufferView": 2 * i + 1, "componentType": 5125, "count": len(index), "type": "SCALAR"})
+        meshes.append({"name": name, "primitives": [{"attributes": {"POSITION": 2 * i}, "indices": 2 * i + 1, "mode": 4}]})
+        nodes.append({"name": name, "mesh": i})
+    doc = {
+        "asset": {"version": "2.0", "generator": "meshcol decompose"},
+        "scene": 0,
+        "scenes": [{"nodes": list(range(len(nodes)))}],
+        "nodes": nodes,
+        "meshes": meshes,
+        "accessors": accessors,
+        "bufferViews": views,
+        "buffers": [{"byteLength": len(blob)}],
+    }
+    text = json.dumps(doc, sort_keys=True, separators=(",", ":")).encode()
+    text += b" " * (-len(text) % 4)
+    total = 12 + 8 + len(text) + 8 + len(blob)
+    out = bytearray(struct.pack("<4sII", b"glTF", 2, total))
+    out += struct.pack("<I4s", len(text), b"JSON") + text
+    out += struct.pack("<I4s", len(blob), b"BIN\0") + bytes(blob)
+    return bytes(out)
+
+
+def part_names(body: str, count: int, prefix: str = "") -> list[str]:
+    """``[prefix]<body>_NN`` for each part, NN zero-padded to at least two digits."""
+    width = max(2, len(str(count - 1)))
+    return [f"{prefix}{body}_{i:0{width}d}" for i in range(count)]
+
+
+def write_parts(
+    body: str,
+    parts: Sequence[tuple[np.ndarray, np.ndarray]],
+    out_dir: str | os.PathLike[str],
+    layout: str = "parts",
+    fmt: str = "obj",
+) -> list[str]:
+    """Write parts in a layout; returns the paths written, in order.
+
+    ``parts``: one file per part, ``<body>_NN.obj`` (or ``.glb``); ``combined``: one
+    ``<body>.obj`` with one object per part, or one ``<body>.glb`` with one node per part;
+    ``ucx``: one ``<body>_ucx.obj`` whose objects are named ``UCX_<body>_NN`` (Unreal's
+    convention for custom collision). Every file is written atomically.
+    """
+    if layout not in LAYOUTS:
+        raise ValueError(f"unknown layout {layout!r}")
+    if fmt not in ("obj", "glb"):
+        raise ValueError(f"unknown format {fmt!r}")
+    body = safe_name(body)
+    out_dir = os.fspath(out_dir)
+    written: list[str] = []
+
+    def emit(path: str, objects: list[tuple[str, np.ndarray, np.ndarray]]) -> None:
+        data: str | bytes = glb_bytes(objects) if path.endswith(".glb") else obj_text(objects)
+        with atomic_path(path) as tmp:
+            with open(tmp, "wb") as f:
+                f.write(data if isinstance(data, bytes) else data.encode())
+        written.append(path)
+
+    if layout == "parts":
+        for name, (v, f) in zip(part_names(body, len(parts)), parts):
+            emit(os.path.join(out_dir, f"{name}.{fmt}"), [(name, v, f)])
+    elif layout == "combined":
+        names = part_names(body, len(parts))
+        emit(os.path.join(out_dir, f"{body}.{fmt}"), [(n, v, f) for n, (v, f) in zip(names, parts)])
+    else:
+        names = part_names(body, len(parts), prefix="UCX_")
+        emit(os.path.join(out_dir, f"{body}_ucx.obj"), [(n, v, f) for n, (v, f) in zip(names, parts)])
+    return written
+
+
+def decompose_task(task: tuple[str, list[tuple[str, np.ndarray, np.ndarray]], dict[str, Any]]) -> list[tuple[str, Any]]:
+    """Worker entry: decompose every body of one file. ``task`` = (path, bodies, options)."""
+    from meshcol.decompose import decompose
+
+    _, bodies, options = task
+    return [(name, decompose((vertices, faces), **options)) for name, vertices, faces in bodies]

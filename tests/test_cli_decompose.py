@@ -1,0 +1,294 @@
+"""``meshcol decompose``: layouts, determinism, cache, jobs, timeouts, kills, errors."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from click.testing import CliRunner
+
+from meshcol.cli import main
+
+FAST = ["--threshold", "0.2", "--resolution", "500",
+        "-E", "mcts_iterations=20", "-E", "mcts_nodes=8", "-E", "mcts_max_depth=2"]
+
+
+@pytest.fixture(scope="module")
+def meshes(tmp_path_factory) -> dict[str, Path]:
+    folder = tmp_path_factory.mktemp("inputs")
+    shapes = {
+        "torus": trimesh.creation.torus(1.0, 0.3, major_sections=24, minor_sections=12),
+        "box": trimesh.creation.box(extents=(2, 1, 1)),
+        "flat": trimesh.creation.box(extents=(1, 1, 0)),
+        "l_shape": trimesh.creation.box(bounds=[(0, 0, 0), (2, 1, 1)]).union(
+            trimesh.creation.box(bounds=[(0, 0, 0.5), (1, 1, 2)]), engine="manifold"),
+    }
+    paths = {}
+    for name, mesh in shapes.items():
+        paths[name] = folder / f"{name}.obj"
+        mesh.export(paths[name])
+    paths["empty"] = folder / "empty.obj"
+    paths["empty"].write_text("# nothing\n")
+    return paths
+
+
+def run(args: list[str]) -> tuple[int, str, str]:
+    result = CliRunner().invoke(main, ["decompose", *args])
+    if result.exception and not isinstance(result.exception, SystemExit):
+        raise result.exception
+    return result.exit_code, result.stdout, result.stderr
+
+
+def files(folder: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir()) if p.is_file()}
+
+
+def object_names(path: Path) -> list[str]:
+    return [line[2:] for line in path.read_text().splitlines() if line.startswith("o ")]
+
+
+def test_parts_layout_and_report(meshes, tmp_path) -> None:
+    out = tmp_path / "out"
+    code, stdout, _ = run([str(meshes["torus"]), "-o", str(out), "--no-cache", *FAST])
+    assert code == 0
+    report = json.loads(stdout)
+    (entry,) = report["files"]
+    assert entry["status"] == "ok" and entry["message"] is None
+    (body,) = entry["bodies"]
+    n = body["metrics"]["parts"]
+    assert n >= 2
+    assert body["outputs"] == [f"torus_{i:02d}.obj" for i in range(n)]
+    assert sorted(files(out)) == body["outputs"]
+    for name in body["outputs"]:
+        part = trimesh.load(out / name, force="mesh")
+        assert part.is_convex and part.is_watertight and part.volume > 0
+    assert body["metrics"]["vertices_per_part"] == [len(trimesh.load(out / p).vertices) for p in body["outputs"]]
+    assert report["summary"] == {"bodies": 1, "failed": 0, "files": 1, "hausdorff_exceeded": 0, "ok": 1,
+                                 "parts": n, "timeout": 0}
+
+
+def test_combined_ucx_and_glb_layouts(meshes, tmp_path) -> None:
+    base = [str(meshes["l_shape"]), "--cache-dir", str(tmp_path / "cache"), *FAST]
+    code, stdout, _ = run([*base, "-o", str(tmp_path / "c"), "--layout", "combined"])
+    assert code == 0
+    n = json.loads(stdout)["summary"]["parts"]
+    assert n >= 2
+    assert object_names(tmp_path / "c" / "l_shape.obj") == [f"l_shape_{i:02d}" for i in range(n)]
+    code, _, _ = run([*base, "-o", str(tmp_path / "u"), "--layout", "ucx"])
+    assert code == 0
+    assert object_names(tmp_path / "u" / "l_shape_ucx.obj") == [f"UCX_l_shape_{i:02d}" for i in range(n)]
+    code, _, _ = run([*base, "-o", str(tmp_path / "g"), "--layout", "combined", "--format", "glb"])
+    assert code == 0
+    scene = trimesh.load(tmp_path / "g" / "l_shape.glb")
+    assert sorted(scene.graph.nodes_geometry) == [f"l_shape_{i:02d}" for i in range(n)]
+    code, _, _ = run([*base, "-o", str(tmp_path / "p")])
+    assert code == 0
+    for node in scene.graph.nodes_geometry:
+        glb_part = scene.geometry[scene.graph[node][1]]
+        obj_part = trimesh.load(tmp_path / "p" / f"{node}.obj")
+        assert np.allclose(glb_part.vertices, obj_part.vertices, atol=1e-6)  # float32 in glTF
+        assert np.array_equal(glb_part.faces, obj_part.faces)
+    code, _, _ = run([*base, "-o", str(tmp_path / "pg"), "--format", "glb"])
+    assert code == 0
+    assert sorted(files(tmp_path / "pg")) == [f"l_shape_{i:02d}.glb" for i in range(n)]
+
+
+def test_same_input_gives_identical_bytes_and_cache_hit_is_fast(meshes, tmp_path) -> None:
+    cache = tmp_path / "cache"
+    args = [str(meshes["torus"]), "--cache-dir", str(cache), "--layout", "combined", *FAST]
+    start = time.perf_counter()
+    code, first, _ = run([*args, "-o", str(tmp_path / "a")])
+    miss = time.perf_counter() - start
+    code2, _, _ = run([str(meshes["torus"]), "--no-cache", "--layout", "combined", *FAST, "-o", str(tmp_path / "b")])
+    start = time.perf_counter()
+    code3, third, _ = run([*args, "-o", str(tmp_path / "c")])
+    hit = time.perf_counter() - start
+    assert code == code2 == code3 == 0
+    assert files(tmp_path / "a") == files(tmp_path / "b") == files(tmp_path / "c")
+    assert json.loads(first)["files"][0]["bodies"][0]["from_cache"] is False
+    assert json.loads(third)["files"][0]["bodies"][0]["from_cache"] is True
+    assert hit < miss / 5
+    assert len(list(cache.rglob("*.npz"))) == 1
+
+
+def test_jobs_two_gives_the_same_output_as_jobs_one(meshes, tmp_path) -> None:
+    inputs = [str(meshes["torus"]), str(meshes["l_shape"]), str(meshes["box"])]
+    code1, r1, _ = run([*inputs, "--no-cache", "-o", str(tmp_path / "j1"), "--jobs", "1", *FAST])
+    code2, r2, _ = run([*inputs, "--no-cache", "-o", str(tmp_path / "j2"), "--jobs", "2", *FAST])
+    assert code1 == code2 == 0
+    assert files(tmp_path / "j1") == files(tmp_path / "j2")
+    strip = lambda report: [{k: v for k, v in f.items() if k != "seconds"} for f in report["files"]]  # noqa: E731
+    assert strip(json.loads(r1)) == strip(json.loads(r2))
+
+
+def test_timeout_stops_one_file_and_the_others_finish(meshes, corpus, tmp_path) -> None:
+    slow = corpus / "coacd-examples" / "Octocat-v2.obj"  # minutes with CoACD's defaults
+    start = time.perf_counter()
+    code, stdout, stderr = run([str(slow), str(meshes["box"]), "--no-cache", "-o", str(tmp_path / "o"),
+                                "--jobs", "2", "--timeout", "5", "--preprocess", "off"])
+    assert time.perf_counter() - start < 60
+    assert code == 1
+    report = json.loads(stdout)
+    assert [f["status"] for f in report["files"]] == ["timeout", "ok"]
+    assert report["files"][0]["message"] == "timed out after 5 s"
+    assert report["summary"]["timeout"] == 1 and report["summary"]["ok"] == 1
+    assert f"meshcol: timeout: {slow}: timed out after 5 s" in stderr
+    assert sorted(files(tmp_path / "o")) == ["box_00.obj"]
+
+
+def test_killed_run_leaves_no_cache_entry_or_output(corpus, tmp_path) -> None:
+    slow = corpus / "coacd-examples" / "Octocat-v2.obj"
+    cache, out = tmp_path / "cache", tmp_path / "out"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "meshcol", "decompose", str(slow), "-o", str(out), "--cache-dir", str(cache),
+         "--jobs", "2", "--timeout", "600", "--preprocess", "off"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True,
+    )
+    try:
+        time.sleep(4.0)
+        assert proc.poll() is None, "the run finished before it could be killed"
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+    assert [p for p in cache.rglob("*") if p.is_file()] == []  # rglob of a missing folder is empty
+    assert [p for p in out.rglob("*") if p.is_file()] == []
+
+
+def test_max_hausdorff_fails_the_run(meshes, tmp_path) -> None:
+    args = [str(meshes["torus"]), "--cache-dir", str(tmp_path / "cache"), "-o", str(tmp_path / "o"), *FAST]
+    code, stdout, _ = run([*args, "--max-hausdorff", "1e-9"])
+    assert code == 1
+    report = json.loads(stdout)
+    assert report["files"][0]["bodies"][0]["hausdorff_ok"] is False
+    assert report["summary"]["hausdorff_exceeded"] == 1
+    code, stdout, _ = run([*args, "--max-hausdorff", "10"])
+    assert code == 0 and json.loads(stdout)["summary"]["hausdorff_exceeded"] == 0
+
+
+def test_csv_report(meshes, tmp_path) -> None:
+    report = tmp_path / "r.csv"
+    code, stdout, _ = run([str(meshes["box"]), "--no-cache", "-o", str(tmp_path / "o"), "--report", str(report)])
+    assert code == 0 and stdout == ""
+    header, row = report.read_text().splitlines()
+    assert header.startswith("path,body,status,message,parts,vertices_per_part,")
+    assert row.startswith(f"{meshes['box']},box,ok,,1,8,")
+
+
+def test_vhacd_engine(meshes, tmp_path) -> None:
+    pytest.importorskip("vhacdx")
+    code, stdout, _ = run([str(meshes["torus"]), "--no-cache", "-o", str(tmp_path / "o"), "--engine", "vhacd",
+                           "--max-hulls", "8", "--resolution", "20000"])
+    assert code == 0
+    body = json.loads(stdout)["files"][0]["bodies"][0]
+    assert body["engine"] == "vhacd" and 1 <= body["metrics"]["parts"] <= 8
+
+
+def test_corpus_torus_and_octocat(corpus, tmp_path) -> None:
+    inputs = [corpus / "trimesh-models" / "torus.STL", corpus / "coacd-examples" / "Octocat-v2.obj"]
+    code, stdout, _ = run([*map(str, inputs), "--no-cache", "-o", str(tmp_path / "o"), "--preprocess", "off",
+                           "--jobs", "2", *FAST])
+    assert code == 0
+    for entry in json.loads(stdout)["files"]:
+        (body,) = entry["bodies"]
+        m = body["metrics"]
+        assert m["parts"] >= 2
+        assert m["uncovered_fraction"] < 0.02
+        assert 0.98 < m["volume_ratio"] < 2.0  # coarse threshold 0.2: loose hulls
+
+
+def test_corpus_bottle_is_repaired(corpus, tmp_path) -> None:
+    code, stdout, _ = run([str(corpus / "coacd-examples" / "Bottle.obj"), "--no-cache", "-o", str(tmp_path / "o"),
+                           "--threshold", "0.3", "--resolution", "300", "-E", "preprocess_resolution=20",
+                           "-E", "mcts_iterations=10", "-E", "mcts_nodes=4", "-E", "mcts_max_depth=1"])
+    assert code == 0
+    body = json.loads(stdout)["files"][0]["bodies"][0]
+    assert body["repaired"] is True and body["params"]["preprocess_mode"] == "on"
+    assert body["notes"] == ["input is not a closed manifold: CoACD's preprocessing rebuilt it before decomposing"]
+
+
+@pytest.mark.slow
+def test_corpus_snowflake_thin_features(corpus, tmp_path) -> None:
+    code, stdout, _ = run([str(corpus / "coacd-examples" / "SnowFlake.obj"), "--no-cache", "-o", str(tmp_path / "o"),
+                           "--preprocess", "off", "--threshold", "0.02", "--resolution", "500",
+                           "-E", "mcts_iterations=20", "-E", "mcts_nodes=8", "-E", "mcts_max_depth=2"])
+    assert code == 0
+    m = json.loads(stdout)["files"][0]["bodies"][0]["metrics"]
+    assert m["parts"] >= 20
+    assert m["uncovered_fraction"] < 0.02
+    assert m["volume_ratio"] < 1.2
+
+
+# ---------------------------------------------------------------------------- errors
+
+def test_bad_inputs_exit_2_with_one_line(meshes, tmp_path) -> None:
+    out = str(tmp_path / "o")
+    cases = {
+        str(tmp_path / "missing.obj"): "file not found",
+        str(meshes["empty"]): "mesh has no faces",
+        str(meshes["flat"]): "mesh is flat (all vertices lie in one plane): it encloses no volume",
+    }
+    for path, message in cases.items():
+        code, stdout, stderr = run([path, "-o", out, "--no-cache"])
+        assert code == 2
+        assert stderr == f"meshcol: error: {path}: {message}\n"
+        assert stdout == ""
+    assert not Path(out).exists() or not files(Path(out))
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--layout", "ucx", "--format", "glb"], "--layout ucx writes OBJ only: drop --format glb"),
+        (["--no-cache", "--cache-dir", "x"], "--cache-dir and --no-cache exclude each other"),
+        (["--engine", "vhacd", "--threshold", "0.1"], "--threshold applies to --engine coacd only"),
+        (["-E", "bogus=1"], "Invalid value for '--engine-option': unknown coacd option 'bogus': known options are"),
+        (["-E", "mcts_nodes"], "Invalid value for '--engine-option' / '-E': expected KEY=VALUE, got 'mcts_nodes'"),
+        (["--max-vertices", "3"], "Invalid value for '--max-vertices': 3 is not in the range x>=4."),
+        (["--threshold", "0"], "Invalid value for '--threshold': 0.0 is not in the range 0<x<=1."),
+    ],
+)
+def test_usage_errors(meshes, tmp_path, extra, message) -> None:
+    code, _, stderr = run([str(meshes["box"]), "-o", str(tmp_path / "o"), *extra])
+    assert code == 2
+    assert message in stderr
+
+
+def test_same_stem_in_two_folders_gets_two_names(meshes, tmp_path) -> None:
+    other = tmp_path / "again"
+    other.mkdir()
+    copy = other / "box.obj"
+    copy.write_bytes(meshes["box"].read_bytes())
+    code, stdout, _ = run([str(meshes["box"]), str(copy), "-o", str(tmp_path / "o"), "--no-cache"])
+    assert code == 0
+    names = [b["name"] for f in json.loads(stdout)["files"] for b in f["bodies"]]
+    assert names == ["box", "box#2"]
+    assert sorted(files(tmp_path / "o")) == ["box_00.obj", "box_2_00.obj"]
+    first, second = (files(tmp_path / "o")[n].decode() for n in ("box_00.obj", "box_2_00.obj"))
+    assert first.replace("o box_00", "o box_2_00") == second
+
+
+def test_clashing_output_names_are_refused(meshes, tmp_path) -> None:
+    clash = tmp_path / "box_2.obj"  # box#2 and box_2 would both write box_2_NN.obj
+    clash.write_bytes(meshes["box"].read_bytes())
+    copy = tmp_path / "sub" / "box.obj"
+    copy.parent.mkdir()
+    copy.write_bytes(meshes["box"].read_bytes())
+    code, _, stderr = run([str(meshes["box"]), str(copy), str(clash), "-o", str(tmp_path / "o"), "--no-cache"])
+    assert code == 2
+    assert stderr == f"meshcol: error: {clash}: two bodies would write 'box_2' (also from {copy}): rename one\n"
+
+
+def test_obj_numbers_round_trip_exactly(meshes, tmp_path) -> None:
+    from meshcol.decompose_jobs import obj_text
+
+    v = np.array([[0.1, -0.0, 1e-300], [1 / 3, 2.5, -7.0]])
+    text = obj_text([("a", v, np.array([[0, 1, 1]]))])
+    assert text == f"# meshcol decompose\no a\nv 0.1 0.0 1e-300\nv {1 / 3!r} 2.5 -7.0\nf 1 2 2\n"

@@ -1,0 +1,388 @@
+"""meshcol.decompose: canonical geometry, parts, cache, fidelity metrics, engines."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from scipy.spatial import ConvexHull
+
+import meshcol
+from meshcol import decompose_cache
+from meshcol.decompose import (
+    Decomposition,
+    _canonical_part,
+    _point_triangle_distance,
+    cache_key,
+    cached_decomposition,
+    canonical_geometry,
+    decompose,
+    fidelity,
+    is_closed_manifold,
+    points_to_parts,
+    points_to_triangles,
+    resolve_params,
+)
+from meshcol.errors import InvalidMeshError
+
+# Coarse CoACD settings: seconds, not minutes (the suite has a time budget).
+FAST = {"threshold": 0.2, "resolution": 500,
+        "engine_options": {"mcts_iterations": 20, "mcts_nodes": 8, "mcts_max_depth": 2}}
+
+
+def _torus() -> trimesh.Trimesh:
+    return trimesh.creation.torus(1.0, 0.3, major_sections=24, minor_sections=12)
+
+
+def _box(lo=(0, 0, 0), hi=(1, 1, 1)) -> tuple[np.ndarray, np.ndarray]:
+    b = trimesh.creation.box(bounds=[lo, hi])
+    return np.asarray(b.vertices), np.asarray(b.faces)
+
+
+def _signed_volume(v: np.ndarray, f: np.ndarray) -> float:
+    t = v[f]
+    return float(np.einsum("ij,ij->i", t[:, 0], np.cross(t[:, 1], t[:, 2])).sum() / 6.0)
+
+
+def _inside_union(points: np.ndarray, parts, tol: float) -> np.ndarray:
+    """Brute force: a point is covered when it is within tol of some part's halfspaces."""
+    covered = np.zeros(len(points), dtype=bool)
+    for v, _ in parts:
+        eq = ConvexHull(v).equations
+        covered |= (points @ eq[:, :3].T + eq[:, 3]).max(axis=1) <= tol
+    return covered
+
+
+# ---------------------------------------------------------------------------- canonical input
+
+def test_canonical_geometry_merges_duplicates_known_cube() -> None:
+    v, f = _box()
+    soup_v = v[f].reshape(-1, 3)  # 36 vertices, one per corner of each triangle
+    soup_f = np.arange(36).reshape(12, 3)
+    cv, cf = canonical_geometry(soup_v, soup_f)
+    assert cv.shape == (8, 3) and cf.shape == (12, 3)
+    assert np.array_equal(cv, np.unique(v, axis=0))
+    assert is_closed_manifold(cf)
+    assert _signed_volume(cv, cf) == pytest.approx(1.0, abs=1e-12)
+
+
+def test_canonical_geometry_ignores_vertex_and_face_order() -> None:
+    m = _torus()
+    v, f = np.asarray(m.vertices), np.asarray(m.faces)
+    rng = np.random.default_rng(3)
+    perm = rng.permutation(len(v))
+    inverse = np.argsort(perm)
+    f2 = inverse[f][rng.permutation(len(f))]
+    f2 = np.roll(f2, 1, axis=1)  # same winding, another starting corner
+    a, b = canonical_geometry(v, f), canonical_geometry(v[perm], f2)
+    assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
+    params = resolve_params("coacd")
+    assert cache_key(*a, "coacd", "1", params) == cache_key(*b, "coacd", "1", params)
+    assert cache_key(*a, "coacd", "1", params) != cache_key(*a, "coacd", "2", params)
+    assert cache_key(*a, "coacd", "1", params) != cache_key(*a, "coacd", "1", resolve_params("coacd", seed=1))
+
+
+@pytest.mark.parametrize(
+    ("vertices", "faces", "message"),
+    [
+        (np.zeros((0, 3)), np.zeros((0, 3), dtype=int), "mesh has no faces"),
+        (np.eye(3), np.array([[0, 1, 2]]), "mesh is flat (all vertices lie in one plane): it encloses no volume"),
+        (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0]], float),
+         np.array([[0, 1, 2], [1, 4, 2]]), "mesh is flat (all vertices lie in one plane): it encloses no volume"),
+        (np.array([[0, 0, 0], [1, 0, 0], [0, np.nan, 0], [0, 0, 1]]), np.array([[0, 1, 2], [0, 1, 3]]),
+         "mesh has non-finite vertex coordinates"),
+        (np.eye(3), np.array([[0, 1, 5]]), "face indices out of range"),
+        (np.eye(3), np.array([[0, 0, 1]]), "mesh has no faces with three distinct vertices"),
+    ],
+)
+def test_canonical_geometry_rejects_unusable_meshes(vertices, faces, message) -> None:
+    with pytest.raises(InvalidMeshError) as info:
+        canonical_geometry(vertices, faces)
+    assert str(info.value) == message
+
+
+def test_is_closed_manifold() -> None:
+    v, f = _box()
+    assert is_closed_manifold(f)
+    assert not is_closed_manifold(f[1:])  # a hole
+    flipped = f.copy()
+    flipped[0] = flipped[0][::-1]
+    assert not is_closed_manifold(flipped)  # inconsistent winding
+
+
+# ---------------------------------------------------------------------------- parameters
+
+def test_resolve_params_auto_preprocess_and_budgets() -> None:
+    assert resolve_params("coacd", closed=True)["preprocess_mode"] == "off"
+    assert resolve_params("coacd", closed=False)["preprocess_mode"] == "on"
+    assert resolve_params("coacd", preprocess="on", closed=True)["preprocess_mode"] == "on"
+    p = resolve_params("coacd", max_hulls=5, max_vertices=12, engine_options={"mcts_nodes": "7", "pca": "true"})
+    assert (p["max_convex_hull"], p["decimate"], p["max_ch_vertex"], p["mcts_nodes"], p["pca"]) == (5, True, 12, 7, True)
+    q = resolve_params("vhacd", max_hulls=5, max_vertices=12, resolution=10000)
+    assert (q["max_convex_hulls"], q["max_num_vertices_per_ch"], q["resolution"]) == (5, 12, 10000)
+
+
+@pytest.mark.parametrize(
+    ("engine", "kwargs", "message"),
+    [
+        ("bullet", {}, "unknown engine 'bullet': choose one of coacd, vhacd"),
+        ("coacd", {"engine_options": {"bogus": 1}}, "unknown coacd option 'bogus': known options are "),
+        ("coacd", {"engine_options": {"mcts_nodes": "many"}}, "coacd option 'mcts_nodes' must be int, got 'many'"),
+        ("coacd", {"max_vertices": 3}, "max_vertices must be at least 4, got 3"),
+        ("coacd", {"threshold": 0.0}, "threshold must be in (0, 1], got 0.0"),
+        ("vhacd", {"threshold": 0.1}, "threshold applies to the coacd engine only"),
+        ("coacd", {"preprocess": "maybe"}, "preprocess must be auto, on or off, got 'maybe'"),
+    ],
+)
+def test_resolve_params_errors(engine, kwargs, message) -> None:
+    with pytest.raises(ValueError) as info:
+        resolve_params(engine, **kwargs)
+    assert str(info.value).startswith(message)
+
+
+# ---------------------------------------------------------------------------- canonical parts
+
+def test_canonical_part_is_the_outward_hull_in_lexicographic_order() -> None:
+    rng = np.random.default_rng(0)
+    v, _ = _box()
+    points = np.concatenate([v, rng.random((50, 3)) * 0.8 + 0.1])[rng.permutation(58)]
+    pv, pf, volume, reduced = _canonical_part(points, None)
+    assert np.array_equal(pv, np.unique(v, axis=0))
+    assert len(pf) == 12 and not reduced
+    assert volume == pytest.approx(1.0, abs=1e-12)
+    assert _signed_volume(pv, pf) == pytest.approx(1.0, abs=1e-12)  # outward triangles
+    again = _canonical_part(points[::-1], None)
+    assert np.array_equal(again[0], pv) and np.array_equal(again[1], pf)
+
+
+def test_canonical_part_enforces_vertex_budget_from_inside() -> None:
+    sphere = trimesh.creation.icosphere(subdivisions=3)
+    points = np.asarray(sphere.vertices)  # 642 points on the unit sphere
+    pv, pf, volume, reduced = _canonical_part(points, 20)
+    assert reduced and len(pv) <= 20
+    # Every kept vertex is an input point: the reduced part lies inside the original hull.
+    assert np.isin(pv.view([("", pv.dtype)] * 3), points.view([("", points.dtype)] * 3)).all()
+    assert 0.5 * (4 / 3 * np.pi) < volume < ConvexHull(points).volume
+    assert _signed_volume(pv, pf) == pytest.approx(volume, rel=1e-9)
+
+
+def test_canonical_part_of_flat_points_is_none() -> None:
+    assert _canonical_part(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.0]]), None) is None
+    assert _canonical_part(np.zeros((3, 3)), None) is None
+
+
+# ---------------------------------------------------------------------------- distances
+
+def test_point_triangle_distance_known_regions() -> None:
+    tri = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], float)
+    cases = {  # point -> distance: face, three vertices, three edges
+        (0.2, 0.2, 2.0): 2.0,
+        (-1.0, -1.0, 0.0): np.sqrt(2),
+        (2.0, 0.0, 0.0): 1.0,
+        (0.0, 3.0, 0.0): 2.0,
+        (0.5, -2.0, 0.0): 2.0,
+        (-3.0, 0.5, 0.0): 3.0,
+        (1.0, 1.0, 0.0): np.sqrt(2) / 2,
+    }
+    for point, expected in cases.items():
+        d = _point_triangle_distance(np.array([point]), tri)
+        assert d[0] == pytest.approx(expected, abs=1e-12), point
+
+
+def test_points_to_triangles_pruning_equals_brute_force() -> None:
+    m = _torus()
+    v, f = np.asarray(m.vertices), np.asarray(m.faces)
+    points = np.random.default_rng(1).uniform(-1.6, 1.6, (300, 3))
+    brute = np.array([_point_triangle_distance(np.repeat(p[None], len(f), 0), v[f]).min() for p in points])
+    assert np.allclose(points_to_triangles(points, v, f), brute, atol=1e-12)
+
+
+def test_points_to_triangles_agrees_with_mesh_query() -> None:
+    mesh_query = pytest.importorskip("meshcol.mesh_query")
+    m = _torus()
+    v, f = np.asarray(m.vertices), np.asarray(m.faces)
+    points = np.random.default_rng(4).uniform(-1.6, 1.6, (100, 3))
+    # A point is a degenerate one-triangle mesh for the BVH-pair distance.
+    meshes = mesh_query.MeshSet.from_arrays([(v, f)] + [(np.repeat(p[None], 3, 0), [[0, 1, 2]]) for p in points])
+    pairs = np.stack([np.arange(1, 101), np.zeros(100, dtype=np.int64)], axis=1)
+    expected = mesh_query.mesh_distance_batch(meshes, None, pairs).distance
+    assert np.allclose(points_to_triangles(points, v, f), expected, rtol=0, atol=1e-12)
+
+
+def test_points_to_parts_known_distances() -> None:
+    parts = (_box((0, 0, 0), (1, 1, 1)), _box((3, 0, 0), (4, 1, 1)))
+    points = np.array([[0.5, 0.5, 0.5], [2.0, 0.5, 0.5], [1.5, 0.5, 0.5], [0.5, 0.5, 3.0], [5.0, 2.0, 1.0]])
+    d = points_to_parts(points, parts)
+    assert d == pytest.approx([0.0, 1.0, 0.5, 2.0, np.sqrt(2)], abs=1e-6)
+    owner = np.array([0, 0, 1, 0, 1])  # exclude the owner part
+    d = points_to_parts(points, parts, owner)
+    assert d == pytest.approx([2.5, 1.0, 0.5, np.sqrt(2.5**2 + 2**2), np.sqrt(17)], abs=1e-6)
+
+
+# ---------------------------------------------------------------------------- fidelity
+
+def test_fidelity_of_the_mesh_itself_is_perfect() -> None:
+    v, f = canonical_geometry(*_box())
+    m = fidelity(v, f, ((v, f),), samples=500)
+    assert (m.parts, m.vertices_per_part) == (1, (8,))
+    assert m.mesh_volume == pytest.approx(1.0, abs=1e-12)
+    assert m.union_volume == pytest.approx(1.0, abs=1e-12)
+    assert m.hausdorff_mesh_to_parts == pytest.approx(0.0, abs=1e-6)
+    assert m.hausdorff_parts_to_mesh == pytest.approx(0.0, abs=1e-12)
+    assert m.uncovered_fraction == 0.0
+    assert m.tolerance == pytest.approx(0.01 * np.sqrt(3))
+
+
+def test_fidelity_two_halves_share_a_cut_and_half_misses() -> None:
+    v, f = canonical_geometry(*_box())
+    halves = (_box((0, 0, 0), (0.5, 1, 1)), _box((0.5, 0, 0), (1, 1, 1)))
+    m = fidelity(v, f, halves, samples=500)
+    # The cut at x = 0.5 is shared: it is not boundary of the union, so parts -> mesh is 0.
+    assert m.hausdorff_parts_to_mesh == pytest.approx(0.0, abs=1e-12)
+    assert m.hausdorff_mesh_to_parts == pytest.approx(0.0, abs=1e-6)
+    assert m.union_volume == pytest.approx(1.0, abs=1e-9)
+    half = fidelity(v, f, halves[:1], samples=2000, tolerance=0.01)
+    assert half.hausdorff_mesh_to_parts == pytest.approx(0.5, abs=1e-6)  # the corners at x = 1
+    assert 0.4 < half.hausdorff_parts_to_mesh <= 0.5  # the middle of the face x = 0.5
+    assert half.volume_ratio == pytest.approx(0.5, abs=1e-9)
+    # Uncovered: the face x = 1 and the x > 0.51 halves of four faces: (1 + 4 * 0.49) / 6.
+    assert half.uncovered_fraction == pytest.approx((1 + 4 * 0.49) / 6, abs=0.04)
+
+
+# ---------------------------------------------------------------------------- decompose
+
+@pytest.fixture(scope="module")
+def torus_result(tmp_path_factory) -> tuple[Decomposition, float, Path]:
+    cache = tmp_path_factory.mktemp("cache")
+    start = time.perf_counter()
+    d = decompose(_torus(), cache_dir=str(cache), **FAST)
+    return d, time.perf_counter() - start, cache
+
+
+def test_parts_are_convex_and_cover_the_torus(torus_result) -> None:
+    d, _, _ = torus_result
+    m = _torus()
+    assert 2 <= len(d.parts) == d.metrics.parts
+    for v, f in d.parts:
+        hull = ConvexHull(v)
+        assert len(hull.vertices) == len(v)  # every vertex is a hull vertex
+        assert _signed_volume(v, f) == pytest.approx(hull.volume, rel=1e-9)  # faces = its hull
+    points = trimesh.sample.sample_surface(m, 1000, seed=5)[0]
+    tol = 0.01 * np.linalg.norm(np.ptp(m.vertices, axis=0))
+    assert _inside_union(points, d.parts, tol).mean() >= 0.99
+    assert d.metrics.uncovered_fraction <= 0.01
+    assert d.metrics.volume_ratio >= 0.98
+    assert d.metrics.hausdorff_mesh_to_parts < 0.1
+    assert not d.repaired and d.notes == ()
+    centroids = [tuple(v.mean(axis=0)) for v, _ in d.parts]
+    assert centroids == sorted(centroids)
+
+
+def test_decompose_is_deterministic_and_independent_of_input_order(torus_result) -> None:
+    d, _, _ = torus_result
+    m = _torus()
+    perm = np.random.default_rng(2).permutation(len(m.vertices))
+    shuffled = (np.asarray(m.vertices)[perm], np.argsort(perm)[np.asarray(m.faces)])
+    again = decompose(shuffled, use_cache=False, metrics=False, **FAST)
+    assert again.cache_key == d.cache_key
+    assert len(again.parts) == len(d.parts)
+    for (v1, f1), (v2, f2) in zip(again.parts, d.parts):
+        assert np.array_equal(v1, v2) and np.array_equal(f1, f2)
+
+
+def test_cache_hit_is_fast_and_equal(torus_result) -> None:
+    d, miss_seconds, cache = torus_result
+    start = time.perf_counter()
+    hit = decompose(_torus(), cache_dir=str(cache), **FAST)
+    hit_seconds = time.perf_counter() - start
+    assert hit.from_cache and not d.from_cache
+    assert hit_seconds < miss_seconds / 5
+    assert hit.metrics == d.metrics and hit.params == d.params and hit.notes == d.notes
+    for (v1, f1), (v2, f2) in zip(hit.parts, d.parts):
+        assert np.array_equal(v1, v2) and np.array_equal(f1, f2)
+    looked_up = cached_decomposition(_torus(), cache_dir=str(cache), **FAST)
+    assert looked_up is not None and looked_up.cache_key == d.cache_key
+    assert cached_decomposition(_torus(), cache_dir=str(cache), seed=1, **FAST) is None
+    assert meshcol.cached_decomposition is cached_decomposition
+
+
+def test_cache_hit_with_other_sampling_measures_again_without_the_engine(torus_result, tmp_path) -> None:
+    d, _, cache = torus_result
+    shutil.copytree(cache, tmp_path / "cache")
+    hit = decompose(_torus(), cache_dir=str(tmp_path / "cache"), samples=300, **FAST)
+    assert hit.from_cache and hit.metrics.samples == 300 and d.metrics.samples == 2000
+    assert all(np.array_equal(a[0], b[0]) for a, b in zip(hit.parts, d.parts))
+    again = decompose(_torus(), cache_dir=str(tmp_path / "cache"), samples=300, **FAST)
+    assert again.metrics == hit.metrics
+
+
+def test_cache_write_interrupted_before_rename_leaves_nothing(torus_result, tmp_path, monkeypatch) -> None:
+    d, _, _ = torus_result
+
+    def broken_replace(src, dst):
+        raise KeyboardInterrupt  # as if the run were stopped between write and rename
+
+    monkeypatch.setattr(os, "replace", broken_replace)
+    with pytest.raises(KeyboardInterrupt):
+        decompose_cache.store(d, tmp_path)
+    monkeypatch.undo()
+    assert [p for p in tmp_path.rglob("*") if p.is_file()] == []
+    assert decompose_cache.load(d.cache_key, tmp_path) is None
+
+
+def test_cache_ignores_corrupt_entries(torus_result, tmp_path) -> None:
+    d, _, _ = torus_result
+    path = decompose_cache.store(d, tmp_path)
+    data = path.read_bytes()
+    path.write_bytes(data[: len(data) // 2])
+    assert decompose_cache.load(d.cache_key, tmp_path) is None
+    path.write_bytes(data)
+    assert decompose_cache.load(d.cache_key, tmp_path) is not None
+
+
+def test_default_cache_dir_follows_xdg(monkeypatch, tmp_path) -> None:
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    assert decompose_cache.default_cache_dir() == tmp_path / "meshcol" / "decompose"
+
+
+def test_vertex_and_hull_budgets_are_respected() -> None:
+    d = decompose(_torus(), max_vertices=8, max_hulls=3, use_cache=False, metrics=False, **FAST)
+    assert 1 <= len(d.parts) <= 3
+    assert max(len(v) for v, _ in d.parts) <= 8
+
+
+def test_vhacd_engine_budgets() -> None:
+    pytest.importorskip("vhacdx")
+    d = decompose(_torus(), engine="vhacd", max_hulls=12, max_vertices=40, resolution=50000,
+                  use_cache=False, samples=500)
+    assert d.engine == "vhacd" and 1 <= len(d.parts) <= 12
+    assert max(len(v) for v, _ in d.parts) <= 40
+    assert d.metrics.uncovered_fraction < 0.1
+
+
+def test_decompose_rejects_flat_mesh() -> None:
+    with pytest.raises(InvalidMeshError, match="mesh is flat"):
+        decompose(trimesh.creation.box(extents=(1, 1, 0)), use_cache=False)
+
+
+def test_decompose_accepts_a_body() -> None:
+    v, f = _box()
+    body = meshcol.Body("box", None, v * 2.0, f)
+    d = decompose(body, use_cache=False, **FAST)
+    assert len(d.parts) == 1
+    assert d.metrics.volume_ratio == pytest.approx(1.0, abs=1e-6)
+
+
+def test_bottle_soup_is_repaired(corpus) -> None:
+    bottle = trimesh.load(corpus / "coacd-examples" / "Bottle.obj", force="mesh")
+    d = decompose(bottle, threshold=0.3, resolution=300, use_cache=False, samples=500,
+                  engine_options={"preprocess_resolution": 20, "mcts_iterations": 10, "mcts_nodes": 4,
+                                  "mcts_max_depth": 1})
+    assert d.repaired and d.params["preprocess_mode"] == "on"
+    assert d.notes[0] == "input is not a closed manifold: CoACD's preprocessing rebuilt it before decomposing"
+    assert d.metrics.mesh_volume is None  # a triangle soup bounds no volume
