@@ -217,9 +217,8 @@ def time_of_impact_batch(
     end = _as_pose_stack(end_poses, h, "end_poses")
     idx = _as_pairs(pairs, h)
     cap = int(_defaults().toi_max_iterations if max_iterations is None else max_iterations)
-    r = _core.time_of_impact_batch(
-        cs.vertices, cs.offsets, cs.kinds, cs.params, cs.adjacency_offsets, cs.adjacency,
-        start, end, idx, _tolerance(tolerance), cap, int(threads))
+    r = _core.time_of_impact_batch(cs._core, start, end, idx, _tolerance(tolerance), cap,
+                                   int(threads))
     return TimeOfImpactBatch(r["toi"], r["point"], r["normal"], r["iterations"], r["status"])
 
 

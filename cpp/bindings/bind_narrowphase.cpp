@@ -1,5 +1,5 @@
-// Exposes narrowphase.hpp: a packed convex set built once from numpy arrays (checked here),
-// and its batched queries. The Python API is meshcol/query.py.
+// Exposes narrowphase.hpp: the packed convex set (packed_convex_set.hpp) and its batched
+// queries. The Python API is meshcol/query.py.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/optional.h>
@@ -12,188 +12,68 @@
 
 #include "meshcol/defaults.hpp"
 #include "meshcol/narrowphase.hpp"
+#include "packed_convex_set.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
+using namespace meshcol::bindings;
 
 namespace {
 
-
-using Points = nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
-using Params = nb::ndarray<const double, nb::shape<-1, 4>, nb::c_contig, nb::device::cpu>;
-using Index64 = nb::ndarray<const std::int64_t, nb::shape<-1>, nb::c_contig, nb::device::cpu>;
-using Index32 = nb::ndarray<const std::int32_t, nb::shape<-1>, nb::c_contig, nb::device::cpu>;
-using Kinds = nb::ndarray<const std::int8_t, nb::shape<-1>, nb::c_contig, nb::device::cpu>;
-using Poses = nb::ndarray<const double, nb::shape<-1, 4, 4>, nb::c_contig, nb::device::cpu>;
-using Pairs = nb::ndarray<const std::int64_t, nb::shape<-1, 2>, nb::c_contig, nb::device::cpu>;
-
-template <class T>
-nb::ndarray<nb::numpy, T> new_array(size_t rows, size_t cols) {
-    T* data = new T[rows * (cols == 0 ? 1 : cols) + 1];
-    nb::capsule owner(data, [](void* p) noexcept { delete[] static_cast<T*>(p); });
-    if (cols == 0) return nb::ndarray<nb::numpy, T>(data, {rows}, owner);
-    return nb::ndarray<nb::numpy, T>(data, {rows, cols}, owner);
+nb::dict query(const PackedConvexSet& set, int kind, std::optional<Poses> poses, Pairs pairs,
+               int threads) {
+    const double* pose_data = set.check_poses(poses);
+    set.check_pairs(pairs);
+    const long long p = static_cast<long long>(pairs.shape(0));
+    const std::int64_t* idx = pairs.data();
+    const auto q = static_cast<meshcol::QueryKind>(kind);
+    nb::dict d;
+    meshcol::BatchOutput out;
+    const size_t n = static_cast<size_t>(p);
+    auto status = new_array<std::int8_t>({n});
+    out.status = status.data();
+    d["status"] = status;
+    if (q == meshcol::QueryKind::INTERSECTS) {
+        auto hit = new_array<bool>({n});
+        out.intersects = hit.data();
+        d["intersects"] = hit;
+    } else {
+        auto distance = new_array<double>({n}), normal = new_array<double>({n, 3}),
+             pa = new_array<double>({n, 3}), pb = new_array<double>({n, 3});
+        auto iterations = new_array<std::int32_t>({n});
+        out.distance = distance.data();
+        out.normal = normal.data();
+        out.point_a = pa.data();
+        out.point_b = pb.data();
+        out.iterations = iterations.data();
+        d["distance"] = distance;
+        d["normal"] = normal;
+        d["point_a"] = pa;
+        d["point_b"] = pb;
+        d["iterations"] = iterations;
+        if (q == meshcol::QueryKind::PENETRATION) {
+            auto depth = new_array<double>({n});
+            out.depth = depth.data();
+            d["depth"] = depth;
+        }
+    }
+    {
+        nb::gil_scoped_release release;
+        meshcol::run_batch(set.view(), pose_data, idx, p, q, threads, out);
+    }
+    return d;
 }
 
-void check_offsets(const std::int64_t* off, size_t n, std::int64_t total, const char* name) {
-    if (n == 0 || off[0] != 0 || off[n - 1] != total)
-        throw std::invalid_argument(std::string(name) + " must start at 0 and end at " +
-                                    std::to_string(total));
-    for (size_t i = 1; i < n; ++i)
-        if (off[i] < off[i - 1])
-            throw std::invalid_argument(std::string(name) + " must be non-decreasing");
+nb::tuple aabbs(const PackedConvexSet& set, std::optional<Poses> poses, int threads) {
+    const double* pose_data = set.check_poses(poses);
+    const size_t h = static_cast<size_t>(set.view().shape_count);
+    auto lo = new_array<double>({h, 3}), hi = new_array<double>({h, 3});
+    {
+        nb::gil_scoped_release release;
+        meshcol::world_aabbs(set.view(), pose_data, lo.data(), hi.data(), threads);
+    }
+    return nb::make_tuple(lo, hi);
 }
-
-/// Owns (references to) the arrays of a Python ConvexSet and the view over them.
-class PackedConvexSet {
-  public:
-    PackedConvexSet(Points vertices, Index64 offsets, Kinds kinds, Params params,
-                    std::optional<Index64> adjacency_offsets, std::optional<Index32> adjacency,
-                    std::optional<Index64> face_offsets, std::optional<Points> face_normals,
-                    std::optional<Index64> edge_offsets, std::optional<Points> edge_directions)
-        : vertices_(vertices), offsets_(offsets), kinds_(kinds), params_(params),
-          adjacency_offsets_(adjacency_offsets), adjacency_(adjacency),
-          face_offsets_(face_offsets), face_normals_(face_normals), edge_offsets_(edge_offsets),
-          edge_directions_(edge_directions) {
-        const std::int64_t v = static_cast<std::int64_t>(vertices.shape(0));
-        const std::int64_t h = static_cast<std::int64_t>(kinds.shape(0));
-        if (static_cast<std::int64_t>(offsets.shape(0)) != h + 1)
-            throw std::invalid_argument("offsets must be (H + 1,) with H = len(kinds)");
-        if (static_cast<std::int64_t>(params.shape(0)) != h)
-            throw std::invalid_argument("params must be (H, 4) with H = len(kinds)");
-        check_offsets(offsets.data(), offsets.shape(0), v, "offsets");
-        for (std::int64_t i = 0; i < h; ++i)
-            if (kinds.data()[i] < 0 || kinds.data()[i] > 4)
-                throw std::invalid_argument("kinds must be in 0..4, got " +
-                                            std::to_string(int(kinds.data()[i])));
-        view_.vertices = vertices.data();
-        view_.vertex_count = v;
-        view_.offsets = offsets.data();
-        view_.shape_count = h;
-        view_.kinds = kinds.data();
-        view_.params = params.data();
-        if (adjacency_offsets.has_value() != adjacency.has_value())
-            throw std::invalid_argument("adjacency_offsets and adjacency go together");
-        if (adjacency_offsets) {
-            const std::int64_t k = static_cast<std::int64_t>(adjacency->shape(0));
-            if (static_cast<std::int64_t>(adjacency_offsets->shape(0)) != v + 1)
-                throw std::invalid_argument("adjacency_offsets must be (V + 1,)");
-            check_offsets(adjacency_offsets->data(), adjacency_offsets->shape(0), k,
-                          "adjacency_offsets");
-            // Every neighbour must be a vertex of the same shape.
-            for (std::int64_t s = 0; s < h; ++s) {
-                const std::int64_t begin = offsets.data()[s], end = offsets.data()[s + 1];
-                for (std::int64_t j = adjacency_offsets->data()[begin];
-                     j < adjacency_offsets->data()[end]; ++j) {
-                    const std::int32_t n = adjacency->data()[j];
-                    if (n < 0 || n >= end - begin)
-                        throw std::invalid_argument("adjacency holds an index out of range");
-                }
-            }
-            view_.adjacency_offsets = adjacency_offsets->data();
-            view_.adjacency = adjacency->data();
-        }
-        const bool any_features = face_offsets || face_normals || edge_offsets || edge_directions;
-        if (any_features) {
-            if (!(face_offsets && face_normals && edge_offsets && edge_directions))
-                throw std::invalid_argument(
-                    "face_offsets, face_normals, edge_offsets and edge_directions go together");
-            if (static_cast<std::int64_t>(face_offsets->shape(0)) != h + 1 ||
-                static_cast<std::int64_t>(edge_offsets->shape(0)) != h + 1)
-                throw std::invalid_argument("face_offsets and edge_offsets must be (H + 1,)");
-            check_offsets(face_offsets->data(), face_offsets->shape(0),
-                          static_cast<std::int64_t>(face_normals->shape(0)), "face_offsets");
-            check_offsets(edge_offsets->data(), edge_offsets->shape(0),
-                          static_cast<std::int64_t>(edge_directions->shape(0)), "edge_offsets");
-            view_.face_offsets = face_offsets->data();
-            view_.face_normals = face_normals->data();
-            view_.edge_offsets = edge_offsets->data();
-            view_.edge_directions = edge_directions->data();
-        }
-    }
-
-    std::int64_t size() const { return view_.shape_count; }
-
-    nb::dict query(int kind, std::optional<Poses> poses, Pairs pairs, int threads) const {
-        const double* pose_data = check_poses(poses);
-        const long long p = static_cast<long long>(pairs.shape(0));
-        const std::int64_t* idx = pairs.data();
-        for (long long i = 0; i < 2 * p; ++i)
-            if (idx[i] < 0 || idx[i] >= view_.shape_count)
-                throw std::invalid_argument("pairs: index " + std::to_string(idx[i]) +
-                                            " out of range for " +
-                                            std::to_string(view_.shape_count) + " shapes");
-        const auto q = static_cast<meshcol::QueryKind>(kind);
-        nb::dict d;
-        meshcol::BatchOutput out;
-        const size_t n = static_cast<size_t>(p);
-        auto status = new_array<std::int8_t>(n, 0);
-        out.status = status.data();
-        d["status"] = status;
-        if (q == meshcol::QueryKind::INTERSECTS) {
-            auto hit = new_array<bool>(n, 0);
-            out.intersects = hit.data();
-            d["intersects"] = hit;
-        } else {
-            auto distance = new_array<double>(n, 0), normal = new_array<double>(n, 3),
-                 pa = new_array<double>(n, 3), pb = new_array<double>(n, 3);
-            auto iterations = new_array<std::int32_t>(n, 0);
-            out.distance = distance.data();
-            out.normal = normal.data();
-            out.point_a = pa.data();
-            out.point_b = pb.data();
-            out.iterations = iterations.data();
-            d["distance"] = distance;
-            d["normal"] = normal;
-            d["point_a"] = pa;
-            d["point_b"] = pb;
-            d["iterations"] = iterations;
-            if (q == meshcol::QueryKind::PENETRATION) {
-                auto depth = new_array<double>(n, 0);
-                out.depth = depth.data();
-                d["depth"] = depth;
-            }
-        }
-        {
-            nb::gil_scoped_release release;
-            meshcol::run_batch(view_, pose_data, idx, p, q, threads, out);
-        }
-        return d;
-    }
-
-    nb::tuple aabbs(std::optional<Poses> poses, int threads) const {
-        const double* pose_data = check_poses(poses);
-        const size_t h = static_cast<size_t>(view_.shape_count);
-        auto lo = new_array<double>(h, 3), hi = new_array<double>(h, 3);
-        {
-            nb::gil_scoped_release release;
-            meshcol::world_aabbs(view_, pose_data, lo.data(), hi.data(), threads);
-        }
-        return nb::make_tuple(lo, hi);
-    }
-
-  private:
-    const double* check_poses(const std::optional<Poses>& poses) const {
-        if (!poses) return nullptr;
-        if (static_cast<std::int64_t>(poses->shape(0)) != view_.shape_count)
-            throw std::invalid_argument("poses must be (" + std::to_string(view_.shape_count) +
-                                        ", 4, 4), got (" + std::to_string(poses->shape(0)) +
-                                        ", 4, 4)");
-        return poses->data();
-    }
-
-    Points vertices_;
-    Index64 offsets_;
-    Kinds kinds_;
-    Params params_;
-    std::optional<Index64> adjacency_offsets_;
-    std::optional<Index32> adjacency_;
-    std::optional<Index64> face_offsets_;
-    std::optional<Points> face_normals_;
-    std::optional<Index64> edge_offsets_;
-    std::optional<Points> edge_directions_;
-    meshcol::ConvexSetView view_;
-};
 
 }  // namespace
 
@@ -207,10 +87,10 @@ void bind_narrowphase(nb::module_& m) {
              "adjacency"_a.none(), "face_offsets"_a.none(), "face_normals"_a.none(),
              "edge_offsets"_a.none(), "edge_directions"_a.none())
         .def("__len__", &PackedConvexSet::size)
-        .def("query", &PackedConvexSet::query, "kind"_a, "poses"_a.none(), "pairs"_a,
+        .def("query", &query, "kind"_a, "poses"_a.none(), "pairs"_a,
              "threads"_a = 0,
              "Runs query kind (0 distance, 1 penetration, 2 intersects) on (P, 2) pairs; "
              "returns a dict of numpy arrays.")
-        .def("aabbs", &PackedConvexSet::aabbs, "poses"_a.none(), "threads"_a = 0,
+        .def("aabbs", &aabbs, "poses"_a.none(), "threads"_a = 0,
              "World AABBs (H, 3), (H, 3) under poses (None: identity).");
 }

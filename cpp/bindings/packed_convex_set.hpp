@@ -1,0 +1,155 @@
+#pragma once
+// A packed convex set as the bindings see it: the arrays of a Python meshcol.query.ConvexSet,
+// checked once when the set is made, and the view the core reads. Shared by every binding
+// that takes convex shapes (narrow phase, time of impact). Bindings only: no nanobind code
+// outside cpp/bindings/.
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/optional.h>
+
+#include <cstdint>
+#include <initializer_list>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "meshcol/narrowphase.hpp"
+
+namespace meshcol::bindings {
+
+namespace nb = nanobind;
+
+using Points = nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
+using Params = nb::ndarray<const double, nb::shape<-1, 4>, nb::c_contig, nb::device::cpu>;
+using Index64 = nb::ndarray<const std::int64_t, nb::shape<-1>, nb::c_contig, nb::device::cpu>;
+using Index32 = nb::ndarray<const std::int32_t, nb::shape<-1>, nb::c_contig, nb::device::cpu>;
+using Kinds = nb::ndarray<const std::int8_t, nb::shape<-1>, nb::c_contig, nb::device::cpu>;
+using Poses = nb::ndarray<const double, nb::shape<-1, 4, 4>, nb::c_contig, nb::device::cpu>;
+using Pairs = nb::ndarray<const std::int64_t, nb::shape<-1, 2>, nb::c_contig, nb::device::cpu>;
+
+/// A new numpy array of `shape` that owns its (uninitialised) data.
+template <class T>
+nb::ndarray<nb::numpy, T> new_array(std::initializer_list<size_t> shape) {
+    size_t n = 1;
+    for (size_t s : shape) n *= s;
+    T* data = new T[n + 1];
+    nb::capsule owner(data, [](void* p) noexcept { delete[] static_cast<T*>(p); });
+    return nb::ndarray<nb::numpy, T>(data, shape, owner);
+}
+
+/// Throws unless `off` (n entries) starts at 0, ends at `total` and never decreases.
+inline void check_offsets(const std::int64_t* off, size_t n, std::int64_t total, const char* name) {
+    if (n == 0 || off[0] != 0 || off[n - 1] != total)
+        throw std::invalid_argument(std::string(name) + " must start at 0 and end at " +
+                                    std::to_string(total));
+    for (size_t i = 1; i < n; ++i)
+        if (off[i] < off[i - 1])
+            throw std::invalid_argument(std::string(name) + " must be non-decreasing");
+}
+
+/// Owns (references to) the arrays of a Python ConvexSet and the view over them.
+class PackedConvexSet {
+  public:
+    PackedConvexSet(Points vertices, Index64 offsets, Kinds kinds, Params params,
+                    std::optional<Index64> adjacency_offsets, std::optional<Index32> adjacency,
+                    std::optional<Index64> face_offsets, std::optional<Points> face_normals,
+                    std::optional<Index64> edge_offsets, std::optional<Points> edge_directions)
+        : vertices_(vertices), offsets_(offsets), kinds_(kinds), params_(params),
+          adjacency_offsets_(adjacency_offsets), adjacency_(adjacency),
+          face_offsets_(face_offsets), face_normals_(face_normals), edge_offsets_(edge_offsets),
+          edge_directions_(edge_directions) {
+        const std::int64_t v = static_cast<std::int64_t>(vertices.shape(0));
+        const std::int64_t h = static_cast<std::int64_t>(kinds.shape(0));
+        if (static_cast<std::int64_t>(offsets.shape(0)) != h + 1)
+            throw std::invalid_argument("offsets must be (H + 1,) with H = len(kinds)");
+        if (static_cast<std::int64_t>(params.shape(0)) != h)
+            throw std::invalid_argument("params must be (H, 4) with H = len(kinds)");
+        check_offsets(offsets.data(), offsets.shape(0), v, "offsets");
+        for (std::int64_t i = 0; i < h; ++i)
+            if (kinds.data()[i] < 0 || kinds.data()[i] > 4)
+                throw std::invalid_argument("kinds must be in 0..4, got " +
+                                            std::to_string(int(kinds.data()[i])));
+        view_.vertices = vertices.data();
+        view_.vertex_count = v;
+        view_.offsets = offsets.data();
+        view_.shape_count = h;
+        view_.kinds = kinds.data();
+        view_.params = params.data();
+        if (adjacency_offsets.has_value() != adjacency.has_value())
+            throw std::invalid_argument("adjacency_offsets and adjacency go together");
+        if (adjacency_offsets) {
+            const std::int64_t k = static_cast<std::int64_t>(adjacency->shape(0));
+            if (static_cast<std::int64_t>(adjacency_offsets->shape(0)) != v + 1)
+                throw std::invalid_argument("adjacency_offsets must be (V + 1,)");
+            check_offsets(adjacency_offsets->data(), adjacency_offsets->shape(0), k,
+                          "adjacency_offsets");
+            // Every neighbour must be a vertex of the same shape.
+            for (std::int64_t s = 0; s < h; ++s) {
+                const std::int64_t begin = offsets.data()[s], end = offsets.data()[s + 1];
+                for (std::int64_t j = adjacency_offsets->data()[begin];
+                     j < adjacency_offsets->data()[end]; ++j) {
+                    const std::int32_t n = adjacency->data()[j];
+                    if (n < 0 || n >= end - begin)
+                        throw std::invalid_argument("adjacency holds an index out of range");
+                }
+            }
+            view_.adjacency_offsets = adjacency_offsets->data();
+            view_.adjacency = adjacency->data();
+        }
+        const bool any_features = face_offsets || face_normals || edge_offsets || edge_directions;
+        if (any_features) {
+            if (!(face_offsets && face_normals && edge_offsets && edge_directions))
+                throw std::invalid_argument(
+                    "face_offsets, face_normals, edge_offsets and edge_directions go together");
+            if (static_cast<std::int64_t>(face_offsets->shape(0)) != h + 1 ||
+                static_cast<std::int64_t>(edge_offsets->shape(0)) != h + 1)
+                throw std::invalid_argument("face_offsets and edge_offsets must be (H + 1,)");
+            check_offsets(face_offsets->data(), face_offsets->shape(0),
+                          static_cast<std::int64_t>(face_normals->shape(0)), "face_offsets");
+            check_offsets(edge_offsets->data(), edge_offsets->shape(0),
+                          static_cast<std::int64_t>(edge_directions->shape(0)), "edge_offsets");
+            view_.face_offsets = face_offsets->data();
+            view_.face_normals = face_normals->data();
+            view_.edge_offsets = edge_offsets->data();
+            view_.edge_directions = edge_directions->data();
+        }
+    }
+
+    std::int64_t size() const { return view_.shape_count; }
+    const ConvexSetView& view() const { return view_; }
+
+    /// The pose data, after checking there is one (4, 4) pose per shape (null: identity).
+    const double* check_poses(const std::optional<Poses>& poses, const char* name = "poses") const {
+        if (!poses) return nullptr;
+        if (static_cast<std::int64_t>(poses->shape(0)) != view_.shape_count)
+            throw std::invalid_argument(std::string(name) + " must be (" +
+                                        std::to_string(view_.shape_count) + ", 4, 4), got (" +
+                                        std::to_string(poses->shape(0)) + ", 4, 4)");
+        return poses->data();
+    }
+
+    /// Throws unless every index of the (P, 2) pairs names a shape of the set.
+    void check_pairs(const Pairs& pairs) const {
+        const std::int64_t* idx = pairs.data();
+        for (size_t i = 0; i < 2 * pairs.shape(0); ++i)
+            if (idx[i] < 0 || idx[i] >= view_.shape_count)
+                throw std::invalid_argument("pairs: index " + std::to_string(idx[i]) +
+                                            " out of range for " +
+                                            std::to_string(view_.shape_count) + " shapes");
+    }
+
+  private:
+    Points vertices_;
+    Index64 offsets_;
+    Kinds kinds_;
+    Params params_;
+    std::optional<Index64> adjacency_offsets_;
+    std::optional<Index32> adjacency_;
+    std::optional<Index64> face_offsets_;
+    std::optional<Points> face_normals_;
+    std::optional<Index64> edge_offsets_;
+    std::optional<Points> edge_directions_;
+    ConvexSetView view_;
+};
+
+}  // namespace meshcol::bindings
