@@ -304,13 +304,10 @@ def _build_shapes(bodies: Sequence[Body], ucx: dict[str, list[Body]], options: C
 
 
 def _decomposed_parts(body: Body, options: CheckOptions, progress: Callable[[str], None]) -> list[np.ndarray]:
-    from meshcol.decompose import cached_decomposition, decompose
+    from meshcol.decompose import convex_parts
 
-    result = cached_decomposition(body, **options.decompose_options)
-    if result is None:
-        progress(f"decomposing {body.name} (not in the decompose cache)")
-        result = decompose(body, **options.decompose_options)
-    return [np.asarray(v, dtype=np.float64) for v, _ in result.parts]
+    progress(f"convex parts of {body.name}")
+    return convex_parts(body, **options.decompose_options)
 
 
 # ---------------------------------------------------------------------------------------------

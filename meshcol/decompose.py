@@ -34,6 +34,7 @@ __all__ = [
     "Fidelity",
     "decompose",
     "cached_decomposition",
+    "convex_parts",
     "resolve_params",
     "canonical_geometry",
     "cache_key",
@@ -943,3 +944,25 @@ def fidelity(
 def _area(vertices: np.ndarray, faces: np.ndarray) -> float:
     t = vertices[faces]
     return float(0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1).sum())
+
+
+def convex_parts(mesh: Any, **options: Any) -> list[np.ndarray]:
+    """Vertices of the convex parts of ``mesh`` (its frame), for collision queries.
+
+    Taken from the cache when ``meshcol decompose`` (or an earlier call) stored them for the
+    same geometry and options; otherwise decomposed now, without fidelity metrics, and cached.
+
+    Parameters
+    ----------
+    mesh : Body, trimesh mesh or (vertices, faces)
+    **options
+        As :func:`decompose` (``engine``, ``threshold``, ``cache_dir``, ...).
+
+    Returns
+    -------
+    list of (n_i, 3) float64
+    """
+    result = cached_decomposition(mesh, **options)
+    if result is None:
+        result = decompose(mesh, **{**options, "metrics": False})
+    return [np.asarray(v, dtype=np.float64) for v, _ in result.parts]

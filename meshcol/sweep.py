@@ -47,7 +47,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from meshcol.errors import MeshcolError, MissingDependencyError, SceneError
+from meshcol.errors import MeshcolError, SceneError
 from meshcol.query import ConvexSet, ShapeKind, _as_pairs, _as_set, _pack_any
 from meshcol.types import Body, Scene, ToiStatus
 
@@ -484,27 +484,22 @@ def _triangle_set(body: Body) -> tuple[ConvexSet, int]:
     ), int(np.count_nonzero(~keep))
 
 
-def _body_pieces(body: Body, mode: str) -> ConvexSet:
+def _body_pieces(body: Body, mode: str, decompose_options: dict | None = None) -> ConvexSet:
     """The convex pieces of one body under a shape mode (primitives are always exact)."""
     if body.primitive is not None or mode == "hull":
         return ConvexSet.from_meshes([body])
     if mode == "decomposed":
-        try:
-            from meshcol.decompose import cached_decomposition
-        except ImportError:
-            raise MissingDependencyError(
-                "--shape decomposed: convex decomposition (meshcol.decompose) is not "
-                "available in this build") from None
-        decomposition = cached_decomposition(body)
-        parts = list(getattr(decomposition, "parts", decomposition))
-        return ConvexSet._from_packed([_pack_any(p, f"{body.name} part") for p in parts])
+        from meshcol.decompose import convex_parts
+
+        return ConvexSet.from_vertices(convex_parts(body, **(decompose_options or {})))
     return _triangle_set(body)[0]
 
 
-def _body_shapes(bodies: Sequence[Body], mode: str) -> tuple[ConvexSet, np.ndarray]:
+def _body_shapes(bodies: Sequence[Body], mode: str,
+                 decompose_options: dict | None = None) -> tuple[ConvexSet, np.ndarray]:
     """All convex pieces of the bodies (a body's own ``shape`` overrides ``mode``) and the
     owner (body index) of each."""
-    sets = [_body_pieces(b, b.shape or mode) for b in bodies]
+    sets = [_body_pieces(b, b.shape or mode, decompose_options) for b in bodies]
     owner = np.concatenate([np.full(len(s), i, dtype=np.int64) for i, s in enumerate(sets)]
                            or [np.zeros(0, np.int64)])
     return ConvexSet.concatenate(*sets), owner
@@ -536,6 +531,7 @@ def sweep(
     tolerance: float | None = None,
     max_iterations: int | None = None,
     threads: int = 0,
+    decompose_options: dict | None = None,
 ) -> SweepReport:
     """Continuous collision over a scene: the first contact of every pair of bodies.
 
@@ -555,6 +551,9 @@ def sweep(
         Per-pair step cap (see :func:`time_of_impact_batch`).
     threads : int
         Worker threads; 0 uses all cores.
+    decompose_options : dict, optional
+        Options of :func:`meshcol.decompose.convex_parts` for ``decomposed`` bodies (from the
+        decompose cache when present, else decomposed now).
 
     Returns
     -------
@@ -585,7 +584,7 @@ def sweep(
     if not any(b.end_transform is not None for b in bodies):
         raise SceneError("no body has an end pose or a velocity: nothing moves, nothing to sweep",
                          scene.source)
-    cs, owner = _body_shapes(bodies, shape)
+    cs, owner = _body_shapes(bodies, shape, decompose_options)
     start_body = np.stack([np.asarray(b.transform, dtype=np.float64) for b in bodies])
     end_body = np.stack([np.asarray(b.transform if b.end_transform is None else b.end_transform,
                                     dtype=np.float64) for b in bodies])

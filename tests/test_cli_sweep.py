@@ -200,3 +200,23 @@ def test_cli_bullet_sample_golden(samples, golden, monkeypatch):
     (pair,) = report["pairs"]
     assert pair["status"] == "HIT" and pair["tunnelled"] is True
     golden("sweep_bullet.json", result.stdout)
+
+
+def test_sweep_decomposed_uses_the_decompose_cache(tmp_path, samples) -> None:
+    """--shape decomposed: parts come from the cache `meshcol decompose` fills (or are made)."""
+    pytest.importorskip("coacd")
+    scene = samples / "bullet" / "scene.json"
+    cache = tmp_path / "cache"
+    runner = CliRunner()
+    out = tmp_path / "parts"
+    made = runner.invoke(main, ["decompose", str(samples / "bullet" / "wall.obj"), "-o", str(out),
+                                "--cache-dir", str(cache), "--report", str(tmp_path / "d.json")])
+    assert made.exit_code == 0, made.output
+    result = runner.invoke(main, ["sweep", str(scene), "--shape", "decomposed", "--cache-dir", str(cache),
+                                  "--report", str(tmp_path / "s.json")])
+    assert result.exit_code == 1, result.output
+    data = json.loads((tmp_path / "s.json").read_text())
+    [hit] = data["pairs"]
+    assert hit["status"] == "HIT" and hit["tunnelled"]
+    hull = json.loads(runner.invoke(main, ["sweep", str(scene), "--report", "-"]).stdout)
+    assert hit["toi"] == pytest.approx(hull["pairs"][0]["toi"], abs=1e-6)  # convex wall: same parts

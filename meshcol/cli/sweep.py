@@ -41,8 +41,11 @@ def _positive(ctx: click.Context, param: click.Parameter, value: float | None) -
                    "decided; 'none': always exit 0 after a successful run.")
 @click.option("--threads", type=click.IntRange(min=0), default=0, show_default=True,
               help="Worker threads (0: all cores).")
+@click.option("--cache-dir", type=click.Path(file_okay=False), default=None,
+              help="Decompose cache folder for --shape decomposed (default: the user cache, "
+                   "as 'meshcol decompose'); bodies missing from it are decomposed now.")
 def sweep(manifest: str, shape: str, tolerance: float | None, report: str | None,
-          fmt: str | None, fail_on: str, threads: int) -> None:
+          fmt: str | None, fail_on: str, threads: int, cache_dir: str | None) -> None:
     """First contact of moving bodies: meshcol sweep MANIFEST [options].
 
     MANIFEST is a scene manifest whose bodies have start poses and end poses
@@ -65,7 +68,9 @@ def sweep(manifest: str, shape: str, tolerance: float | None, report: str | None
     """
     from meshcol.sweep import sweep as run_sweep
 
-    result = run_sweep(manifest, shape=shape, tolerance=tolerance, threads=threads)
+    decompose_options = {} if cache_dir is None else {"cache_dir": cache_dir}
+    result = run_sweep(manifest, shape=shape, tolerance=tolerance, threads=threads,
+                       decompose_options=decompose_options)
     kind = report_format(report, fmt)
     rows = [h.as_dict() for h in result.hits]
     if kind == "csv":
