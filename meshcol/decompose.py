@@ -818,39 +818,10 @@ def points_to_triangles(points: np.ndarray, vertices: np.ndarray, faces: np.ndar
 
 
 def _point_triangle_distance(p: np.ndarray, tri: np.ndarray) -> np.ndarray:
-    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
-    ab, ac, ap = b - a, c - a, p - a
-    dot = lambda x, y: np.einsum("ij,ij->i", x, y)  # noqa: E731
-    d1, d2 = dot(ab, ap), dot(ac, ap)
-    bp = p - b
-    d3, d4 = dot(ab, bp), dot(ac, bp)
-    cp = p - c
-    d5, d6 = dot(ab, cp), dot(ac, cp)
-    va = d3 * d6 - d5 * d4
-    vb = d5 * d2 - d1 * d6
-    vc = d1 * d4 - d3 * d2
-    with np.errstate(divide="ignore", invalid="ignore"):
-        denom = va + vb + vc
-        v = np.where(denom != 0, vb / denom, 0.0)
-        w = np.where(denom != 0, vc / denom, 0.0)
-        closest = a + ab * v[:, None] + ac * w[:, None]
-        # Edge regions (the order matters: later assignments are the more specific regions).
-        t_ab = np.clip(d1 / np.where(d1 - d3 != 0, d1 - d3, 1), 0, 1)
-        m = (vc <= 0) & (d1 >= 0) & (d3 <= 0)
-        closest[m] = (a + ab * t_ab[:, None])[m]
-        t_ac = np.clip(d2 / np.where(d2 - d6 != 0, d2 - d6, 1), 0, 1)
-        m = (vb <= 0) & (d2 >= 0) & (d6 <= 0)
-        closest[m] = (a + ac * t_ac[:, None])[m]
-        den_bc = (d4 - d3) + (d5 - d6)
-        t_bc = np.clip((d4 - d3) / np.where(den_bc != 0, den_bc, 1), 0, 1)
-        m = (va <= 0) & ((d4 - d3) >= 0) & ((d5 - d6) >= 0)
-        closest[m] = (b + (c - b) * t_bc[:, None])[m]
-    closest[(d1 <= 0) & (d2 <= 0)] = a[(d1 <= 0) & (d2 <= 0)]
-    m = (d3 >= 0) & (d4 <= d3)
-    closest[m] = b[m]
-    m = (d6 >= 0) & (d5 <= d6)
-    closest[m] = c[m]
-    return np.linalg.norm(p - closest, axis=1)
+    """Distance from each point (n, 3) to its triangle (n, 3, 3) (Ericson 2004, 5.1.5)."""
+    from meshcol.hulls import closest_points_on_triangles
+
+    return np.linalg.norm(p - closest_points_on_triangles(p, tri), axis=1)
 
 
 def _manifold_volume(vertices: np.ndarray, faces: np.ndarray) -> float | None:
