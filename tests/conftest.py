@@ -64,3 +64,15 @@ def golden(request: pytest.FixtureRequest):
         assert text == path.read_text(), f"output differs from golden {name}"
 
     return check
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _private_user_cache(tmp_path_factory: pytest.TempPathFactory):
+    """Tests never read or fill the user's real decompose cache (~/.cache/meshcol)."""
+    previous = os.environ.get("XDG_CACHE_HOME")
+    os.environ["XDG_CACHE_HOME"] = str(tmp_path_factory.mktemp("user-cache"))
+    yield
+    if previous is None:
+        os.environ.pop("XDG_CACHE_HOME", None)
+    else:
+        os.environ["XDG_CACHE_HOME"] = previous
