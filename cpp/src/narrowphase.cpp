@@ -132,13 +132,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-void write_vec(double* out, long long i, const Vec3& v) {
-    if (out == nullptr) return;
-    out[3 * i] = v.x;
-    out[3 * i + 1] = v.y;
-    out[3 * i + 2] = v.z;
-}
-
 }  // namespace
 
 void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t* pairs,
@@ -174,9 +167,9 @@ void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t
             }
             if (out.distance) out.distance[i] = r.distance;
             if (out.depth) out.depth[i] = r.depth;
-            write_vec(out.normal, i, r.normal);
-            write_vec(out.point_a, i, r.point_a);
-            write_vec(out.point_b, i, r.point_b);
+            store_row(out.normal, i, r.normal);
+            store_row(out.point_a, i, r.point_a);
+            store_row(out.point_b, i, r.point_b);
             if (out.iterations) out.iterations[i] = r.iterations;
             if (out.status) out.status[i] = static_cast<std::int8_t>(r.status);
             if (out.intersects) out.intersects[i] = r.intersects;
@@ -198,8 +191,8 @@ void world_aabbs(const ConvexSetView& set, const double* poses, double* lo, doub
             }
             Vec3 a{kNaN, kNaN, kNaN}, b{kNaN, kNaN, kNaN};
             if (good) world_aabb(s, p, a, b);
-            write_vec(lo, h, a);
-            write_vec(hi, h, b);
+            store_row(lo, h, a);
+            store_row(hi, h, b);
         }
     });
 }

@@ -390,17 +390,6 @@ ToiResult time_of_impact(const ShapeView& a, const Motion& motion_a, const Shape
                     make_mover(b, motion_b, bounding_radius(b)), options);
 }
 
-namespace {
-
-void write_vec(double* out, long long i, const Vec3& v) {
-    if (out == nullptr) return;
-    out[3 * i] = v.x;
-    out[3 * i + 1] = v.y;
-    out[3 * i + 2] = v.z;
-}
-
-}  // namespace
-
 void run_toi_batch(const ConvexSetView& set, const double* start_poses, const double* end_poses,
                    const std::int64_t* pairs, long long pair_count, const ToiOptions& options,
                    int threads, const ToiBatchOutput& out) {
@@ -436,8 +425,8 @@ void run_toi_batch(const ConvexSetView& set, const double* start_poses, const do
                              make_mover(shapes[ib], motions[ib], radius[ib]), options);
             }
             if (out.toi) out.toi[i] = r.toi;
-            write_vec(out.point, i, r.point);
-            write_vec(out.normal, i, r.normal);
+            store_row(out.point, i, r.point);
+            store_row(out.normal, i, r.normal);
             if (out.iterations) out.iterations[i] = r.iterations;
             if (out.status) out.status[i] = static_cast<std::int8_t>(r.status);
         }

@@ -35,11 +35,11 @@ SHAPE_CHOICES = ("hull", "decomposed", "mesh")
               help="Decomposition concavity threshold (as in 'meshcol decompose').")
 @click.option("--cache-dir", type=click.Path(file_okay=False), default=None,
               help="Decompose cache folder (default: the user cache, as 'meshcol decompose').")
-@report_options
+@report_options(default="the report on stdout; the summary on stderr")
 def check(inputs: tuple[str, ...], shape: str, tolerance: float, clearance: float, fail_on: str,
           ignore: tuple[str, ...], baseline: str | None, threads: int, engine: str,
           threshold: float | None, cache_dir: str | None, report: str | None,
-          report_format: str | None) -> None:
+          fmt: str | None) -> None:
     """Check every pair of bodies for contact, clearance and interpenetration.
 
     INPUT is mesh files (each body at its own coordinates, as parts exported in place), one
@@ -64,7 +64,7 @@ def check(inputs: tuple[str, ...], shape: str, tolerance: float, clearance: floa
             parse_ignore_rule(rule)
         except ValueError as exc:
             raise click.BadParameter(str(exc), param_hint="'--ignore'") from None
-    fmt = pick_format(report, report_format)
+    fmt = pick_format(report, fmt)
     old = load_baseline(baseline) if baseline else None
     progress = Progress()
     started = time.perf_counter()

@@ -10,13 +10,24 @@ from typing import Any
 import click
 
 
-def report_options(func: Callable[..., Any]) -> Callable[..., Any]:
-    """Add ``--report FILE`` (``-`` for stdout) and ``--format json|csv``."""
-    func = click.option("--format", "report_format", type=click.Choice(["json", "csv"]), default=None,
-                        help="Report format (default: from the report's extension, else json).")(func)
-    func = click.option("--report", type=click.Path(dir_okay=False, allow_dash=True), default=None,
-                        metavar="FILE", help="Write the report to FILE ('-' for stdout).")(func)
-    return func
+def report_options(default: str = "the report on stdout") -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Add ``--report FILE`` (``-`` for stdout) and ``--format json|csv`` (parameter ``fmt``).
+
+    Parameters
+    ----------
+    default : str
+        Where the report goes without ``--report``, for the help text.
+    """
+
+    def decorate(func: Callable[..., Any]) -> Callable[..., Any]:
+        func = click.option("--format", "fmt", type=click.Choice(["json", "csv"]), default=None,
+                            help="Report format (default: from the --report extension, else json).")(func)
+        func = click.option("--report", type=click.Path(dir_okay=False, allow_dash=True), default=None,
+                            metavar="FILE",
+                            help=f"Write the report to FILE ('-': stdout). Default: {default}.")(func)
+        return func
+
+    return decorate
 
 
 class Progress:

@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 
 from meshcol import __version__
+from meshcol.cli.common import report_options
 from meshcol.report import atomic_path, dumps_csv, dumps_json, emit, report_format
 
 #: Mesh formats the hull can be written in (by output extension).
@@ -37,11 +38,7 @@ CSV_COLUMNS = (
 @click.option("--max-vertices", type=click.IntRange(min=4), metavar="N",
               help="At most N vertices per hull (PhysX: 255, GPU pipelines: 64), still "
                    "enclosing the input.")
-@click.option("--report", metavar="FILE",
-              help="Write the report to FILE ('-': stdout). Default: stdout when no mesh is "
-                   "written, else no report.")
-@click.option("--format", "fmt", type=click.Choice(["json", "csv"]),
-              help="Report format (default: from the --report extension, else json).")
+@report_options(default="stdout when no mesh is written, else no report")
 def hull(inputs: tuple[str, ...], output: str | None, out_dir: str | None,
          max_vertices: int | None, report: str | None, fmt: str | None) -> None:
     """Convex hull of each body, optionally within a vertex budget.

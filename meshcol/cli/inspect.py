@@ -7,6 +7,7 @@ import sys
 import click
 
 from meshcol import __version__
+from meshcol.cli.common import report_options
 from meshcol.inspect import RULES
 from meshcol.report import dumps_csv, dumps_json, emit, report_format
 
@@ -34,11 +35,7 @@ def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) 
 
 @click.command("inspect", context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
-@click.option("--report", metavar="FILE",
-              help="Write the report to FILE ('-': stdout) and print a summary table on "
-                   "stderr. Default: the report on stdout.")
-@click.option("--format", "fmt", type=click.Choice(["json", "csv"]),
-              help="Report format (default: from the --report extension, else json).")
+@report_options(default="the report on stdout; a summary table on stderr")
 @click.option("--fail-on", "fail_on", metavar="RULES", callback=_parse_rules,
               help="Comma-separated findings that make the run exit 1: "
                    + ", ".join(RULES) + " (or all).")

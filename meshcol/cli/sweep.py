@@ -7,6 +7,7 @@ import sys
 import click
 
 from meshcol import __version__
+from meshcol.cli.common import report_options
 from meshcol.report import dumps_csv, dumps_json, emit, report_format
 
 SCHEMA_VERSION = 1
@@ -30,11 +31,7 @@ def _positive(ctx: click.Context, param: click.Parameter, value: float | None) -
 @click.option("--tolerance", type=float, callback=_positive, metavar="T",
               help="Contact distance in scene units (default: 1e-6 x the diagonal of the "
                    "scene's swept bounds).")
-@click.option("--report", metavar="FILE",
-              help="Write the report to FILE ('-': stdout) and print a summary on stderr. "
-                   "Default: the report on stdout.")
-@click.option("--format", "fmt", type=click.Choice(["json", "csv"]),
-              help="Report format (default: from the --report extension, else json).")
+@report_options(default="the report on stdout; a summary on stderr")
 @click.option("--fail-on", "fail_on", type=click.Choice(["hit", "none"]), default="hit",
               show_default=True,
               help="'hit': exit 1 when a pair hits, overlaps at the start or cannot be "

@@ -48,6 +48,15 @@ inline double max_abs(const Vec3& v) {
     return std::fmax(std::fabs(v.x), std::fmax(std::fabs(v.y), std::fabs(v.z)));
 }
 
+/// Writes `v` as row `i` of a row-major (n, 3) array; does nothing when `out` is null (an
+/// output the caller did not ask for).
+inline void store_row(double* out, long long i, const Vec3& v) {
+    if (out == nullptr) return;
+    out[3 * i] = v.x;
+    out[3 * i + 1] = v.y;
+    out[3 * i + 2] = v.z;
+}
+
 /// A 3x3 matrix, row-major: m[r][c].
 struct Mat3 {
     double m[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
