@@ -1,6 +1,7 @@
 #include "meshcol/epa.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <initializer_list>
 #include <limits>
 #include <utility>
@@ -13,9 +14,8 @@ struct EpaFace {
     int v[3];        // counter-clockwise seen from outside
     int adj[3];      // face across edge (v[e], v[e + 1])
     int adj_edge[3]; // that edge's index in the neighbour
-    Vec3 normal;     // outward unit normal (zero when the face is a sliver)
-    double distance; // distance of its plane from the origin (+inf for a sliver or dead face)
     bool alive;
+    Vec3 normal;     // outward unit normal (zero when the face is a sliver)
 };
 
 struct HorizonEdge {
@@ -23,23 +23,56 @@ struct HorizonEdge {
     int edge;  // edge index in that face
 };
 
+constexpr int kNext[3] = {1, 2, 0};
+constexpr int kPrev[3] = {2, 0, 1};
+
 // A closed triangulated polytope of V vertices has 2V - 4 faces; dead faces' slots are reused,
 // so this many slots always suffice.
 constexpr int kMaxFaces = 2 * defaults::epa_max_vertices;
 
 // The expanding polytope in fixed-capacity arrays: trivially constructible, so one
-// thread_local instance serves every pair on a thread with no allocation and no guard.
+// thread_local instance serves every pair on a thread with no allocation and no guard. The
+// faces' plane distances sit in their own array, so the search for the closest face reads
+// one contiguous run of doubles.
 struct Polytope {
     SimplexVertex vertices[defaults::epa_max_vertices];
+    // (index_a, index_b) of each vertex packed in one word, for the repeated-point test;
+    // kNoKey when a support point came from a curved surface (never equal to another).
+    std::uint64_t keys[defaults::epa_max_vertices];
     EpaFace faces[kMaxFaces];
+    double distance[kMaxFaces];  // plane distance from the origin (+inf: sliver or dead)
     HorizonEdge horizon[kMaxFaces];
     int free_faces[kMaxFaces];
+    int dead[kMaxFaces];
+    HorizonEdge stack[kMaxFaces + 2];
     int vertex_count;
     int face_count;  // slots in use, alive or dead
     int free_count;  // dead slots ready for reuse
     int horizon_count;
+    int dead_count;
+
+    static constexpr std::uint64_t kNoKey = ~std::uint64_t{0};
+
+    static std::uint64_t key_of(const SimplexVertex& w) {
+        if (w.index_a < 0 || w.index_b < 0) return kNoKey;
+        return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(w.index_a)) << 32) |
+               static_cast<std::uint32_t>(w.index_b);
+    }
 
     void reset() { vertex_count = face_count = free_count = horizon_count = dead_count = 0; }
+
+    void add_vertex(const SimplexVertex& w) {
+        vertices[vertex_count] = w;
+        keys[vertex_count] = key_of(w);
+        ++vertex_count;
+    }
+
+    bool has_vertex(std::uint64_t key) const {
+        if (key == kNoKey) return false;
+        bool found = false;
+        for (int i = 0; i < vertex_count; ++i) found |= keys[i] == key;
+        return found;
+    }
 
     // -1 when out of slots.
     int add_face(int i, int j, int k) {
@@ -51,17 +84,16 @@ struct Polytope {
         face.v[0] = i;
         face.v[1] = j;
         face.v[2] = k;
-        face.adj[0] = face.adj[1] = face.adj[2] = -1;
-        face.adj_edge[0] = face.adj_edge[1] = face.adj_edge[2] = -1;
-        face.normal = Vec3{};
-        face.distance = std::numeric_limits<double>::infinity();
         face.alive = true;
         const Vec3& a = vertices[i].w;
         const Vec3 n = cross(vertices[j].w - a, vertices[k].w - a);
         const double len = norm(n);
         if (len > 0.0 && std::isfinite(len)) {
-            face.normal = n / len;
-            face.distance = dot(face.normal, a);
+            face.normal = n * (1.0 / len);
+            distance[f] = dot(face.normal, a);
+        } else {
+            face.normal = Vec3{};
+            distance[f] = std::numeric_limits<double>::infinity();
         }
         return f;
     }
@@ -73,28 +105,37 @@ struct Polytope {
         faces[g].adj_edge[h] = e;
     }
 
-    // Depth-first walk over the faces that see w (van den Bergen 2003, sec. 4.3.9): the
-    // visible region stays connected, so its border is one loop, collected in order. Killed
-    // faces are freed only after the new faces are made (`release`), so none is reused while
-    // the walk still reads it.
-    void silhouette(int f, int e, const Vec3& w) {
-        EpaFace& face = faces[f];
-        if (!face.alive) return;
-        if (dot(face.normal, w - vertices[face.v[0]].w) <= 0.0) {
-            horizon[horizon_count++] = {f, e};
-            return;
-        }
-        face.alive = false;
-        face.distance = std::numeric_limits<double>::infinity();
+    void kill(int f) {
+        faces[f].alive = false;
+        distance[f] = std::numeric_limits<double>::infinity();
         dead[dead_count++] = f;
-        for (int k = 1; k <= 2; ++k) {
-            const int edge = (e + k) % 3;
-            silhouette(face.adj[edge], face.adj_edge[edge], w);
-        }
     }
 
-    int dead[kMaxFaces];
-    int dead_count;
+    // Walk over the faces that see w, starting from the edges of face `first` (already
+    // killed), depth first (van den Bergen 2003, sec. 4.3.9): the visible region stays
+    // connected, so its border is one loop, collected in order. An explicit stack instead
+    // of recursion; edges are pushed in reverse so they are visited in the recursive order.
+    // Killed faces are freed only after the new faces are made (`release`), so none is
+    // reused while the walk still reads it, and the closest face keeps its data.
+    void silhouette(int first, const Vec3& w) {
+        int top = 0;
+        const EpaFace& start = faces[first];
+        for (int e = 2; e >= 0; --e) stack[top++] = {start.adj[e], start.adj_edge[e]};
+        while (top > 0) {
+            const HorizonEdge h = stack[--top];
+            EpaFace& face = faces[h.face];
+            if (!face.alive) continue;
+            if (dot(face.normal, w - vertices[face.v[0]].w) <= 0.0) {
+                horizon[horizon_count++] = h;
+                continue;
+            }
+            kill(h.face);
+            // Recursion visited edge e+1, then e+2: push e+2 first.
+            const int e2 = kPrev[h.edge], e1 = kNext[h.edge];
+            stack[top++] = {face.adj[e2], face.adj_edge[e2]};
+            stack[top++] = {face.adj[e1], face.adj_edge[e1]};
+        }
+    }
 
     void release() {
         for (int k = 0; k < dead_count; ++k) free_faces[free_count++] = dead[k];
@@ -103,8 +144,8 @@ struct Polytope {
 };
 
 // Barycentric weights of the projection p of the origin on face f (Ericson 2004, sec. 3.4).
-void face_weights(const Polytope& poly, const EpaFace& f, double w[3]) {
-    const Vec3 p = f.normal * f.distance;
+void face_weights(const Polytope& poly, const EpaFace& f, double distance, double w[3]) {
+    const Vec3 p = f.normal * distance;
     const Vec3 a = poly.vertices[f.v[0]].w, b = poly.vertices[f.v[1]].w, c = poly.vertices[f.v[2]].w;
     const double u = dot(cross(b - p, c - p), f.normal);
     const double v = dot(cross(c - p, a - p), f.normal);
@@ -212,12 +253,11 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
     Polytope* volatile scratch_address = &scratch;
     Polytope& poly = *scratch_address;
     poly.reset();
-    for (int i = 0; i < 4; ++i) poly.vertices[i] = s.vertices[i];
-    poly.vertex_count = 4;
     {
         const Vec3 a = s.vertices[0].w, b = s.vertices[1].w, c = s.vertices[2].w, d = s.vertices[3].w;
-        if (dot(cross(b - a, c - a), d - a) > 0.0) std::swap(poly.vertices[1], poly.vertices[2]);
+        if (dot(cross(b - a, c - a), d - a) > 0.0) std::swap(s.vertices[1], s.vertices[2]);
     }
+    for (int i = 0; i < 4; ++i) poly.add_vertex(s.vertices[i]);
     // Outward orientation: (0,1,2) has the opposite vertex 3 behind it. Each edge i -> j of a
     // face meets j -> i of its neighbour.
     poly.add_face(0, 1, 2);
@@ -232,52 +272,47 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
     poly.link(2, 1, 3, 1);
 
     res.status = Status::MAX_ITERATIONS;
-    EpaFace closest{};
-    bool have_face = false;
+    // The closest face of the last iteration: its slot keeps its data to the end (a killed
+    // face is released only after the new faces are made, and nothing is added after that).
+    int last_face = -1;
+    double last_distance = 0.0;
     int it = 0;
     for (; it < opt.max_iterations; ++it) {
         // The closest face: a linear scan over a few dozen slots (dead ones hold +inf).
         int best_face = -1;
         double best = std::numeric_limits<double>::infinity();
         for (int f = 0; f < poly.face_count; ++f)
-            if (poly.faces[f].distance < best) {
-                best = poly.faces[f].distance;
+            if (poly.distance[f] < best) {
+                best = poly.distance[f];
                 best_face = f;
             }
         if (best_face < 0 || !std::isfinite(best)) {
             res.status = Status::DEGENERATE;
             break;
         }
-        closest = poly.faces[best_face];
-        have_face = true;
+        last_face = best_face;
+        last_distance = best;
+        const EpaFace& closest = poly.faces[best_face];
         // Warm start: the new support point lies near the face's own support points.
         const SimplexVertex& near = poly.vertices[closest.v[0]];
         if (near.index_a >= 0) md.hint_a = near.index_a;
         if (near.index_b >= 0) md.hint_b = near.index_b;
         const SimplexVertex w = md.support(closest.normal);
         const double upper = dot(closest.normal, w.w);
-        bool repeated = false;
-        if (w.index_a >= 0 && w.index_b >= 0)
-            for (int i = 0; i < poly.vertex_count; ++i)
-                if (poly.vertices[i].index_a == w.index_a && poly.vertices[i].index_b == w.index_b)
-                    repeated = true;
-        if (repeated || upper - closest.distance <= opt.relative_tolerance * upper + tol * 1e-2) {
+        const std::uint64_t key = Polytope::key_of(w);
+        if (upper - best <= opt.relative_tolerance * upper + tol * 1e-2 || poly.has_vertex(key)) {
             res.status = Status::CONVERGED;
             break;
         }
         if (poly.vertex_count >= defaults::epa_max_vertices) break;
-        const int nw = poly.vertex_count++;
-        poly.vertices[nw] = w;
+        const int nw = poly.vertex_count;
+        poly.add_vertex(w);
         // Remove the faces the new point sees (the closest one does, by construction) and
         // close the hole with a fan of faces over the silhouette.
         poly.horizon_count = 0;
         poly.dead_count = 0;
-        poly.faces[best_face].alive = false;
-        poly.faces[best_face].distance = std::numeric_limits<double>::infinity();
-        poly.dead[poly.dead_count++] = best_face;
-        for (int e = 0; e < 3; ++e)
-            poly.silhouette(closest.adj[e], closest.adj_edge[e], w.w);
-        poly.release();
+        poly.kill(best_face);
+        poly.silhouette(best_face, w.w);
         const int count = poly.horizon_count;
         int fan[kMaxFaces];
         bool ok = count >= 3;
@@ -285,7 +320,7 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
             const HorizonEdge& h = poly.horizon[k];
             const EpaFace& beyond = poly.faces[h.face];
             // The edge runs b -> a in the living face, so a -> b in the new one.
-            const int a = beyond.v[(h.edge + 1) % 3], b = beyond.v[h.edge];
+            const int a = beyond.v[kNext[h.edge]], b = beyond.v[h.edge];
             const int f = poly.add_face(a, b, nw);
             if (f < 0) {
                 ok = false;
@@ -293,13 +328,9 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
             }
             fan[k] = f;
             poly.link(f, 0, h.face, h.edge);
-            if (poly.faces[f].distance < -tol) ok = false;
+            if (poly.distance[f] < -tol) ok = false;
         }
-        if (!ok) {
-            res.status = Status::DEGENERATE;
-            break;
-        }
-        for (int k = 0; k < count; ++k) {
+        for (int k = 0; k < count && ok; ++k) {
             const int f = fan[k], g = fan[k + 1 == count ? 0 : k + 1];
             if (poly.faces[f].v[1] != poly.faces[g].v[0]) {
                 ok = false;
@@ -311,21 +342,22 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
             res.status = Status::DEGENERATE;
             break;
         }
+        poly.release();
     }
     res.iterations = it;
-    if (!have_face) {
+    if (last_face < 0) {
         res.status = Status::DEGENERATE;
         return res;
     }
-    const EpaFace& f = closest;
+    const EpaFace& f = poly.faces[last_face];
     double wts[3];
-    face_weights(poly, f, wts);
+    face_weights(poly, f, last_distance, wts);
     Vec3 pa{}, pb{};
     for (int i = 0; i < 3; ++i) {
         pa += poly.vertices[f.v[i]].a * wts[i];
         pb += poly.vertices[f.v[i]].b * wts[i];
     }
-    res.depth = std::fmax(0.0, f.distance);
+    res.depth = std::fmax(0.0, last_distance);
     res.normal = f.normal;
     res.point_a = pa;
     res.point_b = pb;
