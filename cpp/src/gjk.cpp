@@ -14,14 +14,28 @@ MinkowskiDifference::MinkowskiDifference(const ShapeView& shape_a, const Pose& p
     translation_b = pose_a.rotation.transpose_times(pose_b.translation - pose_a.translation);
     if (radius_a < 0.0) radius_a = bounding_radius(shape_a);
     if (radius_b < 0.0) radius_b = bounding_radius(shape_b);
+    climb_both = climbs(shape_a) && climbs(shape_b);
     scale = radius_a + radius_b + norm(translation_b);
     if (!(scale > 0.0)) scale = 1.0;
 }
 
 SimplexVertex MinkowskiDifference::support(const Vec3& d) {
     SimplexVertex v;
-    const SupportPoint sa = support_core(*a, d, hint_a);
-    const SupportPoint sb = support_core(*b, rotation_b.transpose_times(-d), hint_b);
+    SupportPoint sa, sb;
+    if (climb_both) {
+        // The previous support points are good starts when the direction turned little (as
+        // in EPA and late GJK); after a turn of more than about 60 degrees (early GJK) a few
+        // strided samples start the climbs nearer the top.
+        const double dd = dot(d, last_direction);
+        const bool near =
+            dd > 0.0 && 4.0 * dd * dd > squared_norm(d) * squared_norm(last_direction);
+        last_direction = d;
+        climb_pair(*a, d, near ? hint_a : -1, *b, rotation_b.transpose_times(-d),
+                   near ? hint_b : -1, sa, sb);
+    } else {
+        sa = support_core(*a, d, hint_a);
+        sb = support_core(*b, rotation_b.transpose_times(-d), hint_b);
+    }
     hint_a = sa.index;
     hint_b = sb.index;
     v.a = sa.point;
