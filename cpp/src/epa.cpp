@@ -295,9 +295,7 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
         const EpaFace& closest = poly.faces[best_face];
         // Warm start: the new support point lies near the face's own support points.
         const SimplexVertex& near = poly.vertices[closest.v[0]];
-        if (near.index_a >= 0) md.hint_a = near.index_a;
-        if (near.index_b >= 0) md.hint_b = near.index_b;
-        const SimplexVertex w = md.support(closest.normal);
+        const SimplexVertex w = md.support_from(closest.normal, near.index_a, near.index_b);
         const double upper = dot(closest.normal, w.w);
         const std::uint64_t key = Polytope::key_of(w);
         if (upper - best <= opt.relative_tolerance * upper + tol * 1e-2 || poly.has_vertex(key)) {

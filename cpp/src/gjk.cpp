@@ -3,6 +3,8 @@
 #include <cmath>
 #include <limits>
 
+#include "climb.hpp"
+
 namespace meshcol {
 
 MinkowskiDifference::MinkowskiDifference(const ShapeView& shape_a, const Pose& pose_a,
@@ -30,8 +32,8 @@ SimplexVertex MinkowskiDifference::support(const Vec3& d) {
         const bool near =
             dd > 0.0 && 4.0 * dd * dd > squared_norm(d) * squared_norm(last_direction);
         last_direction = d;
-        climb_pair(*a, d, near ? hint_a : -1, *b, rotation_b.transpose_times(-d),
-                   near ? hint_b : -1, sa, sb);
+        climb::climb_pair(*a, d, near ? hint_a : -1, *b, rotation_b.transpose_times(-d),
+                          near ? hint_b : -1, sa, sb);
     } else {
         sa = support_core(*a, d, hint_a);
         sb = support_core(*b, rotation_b.transpose_times(-d), hint_b);
@@ -57,6 +59,14 @@ SimplexVertex MinkowskiDifference::support(const Vec3& d) {
     v.w = v.a - v.b;
     return v;
 }
+
+SimplexVertex MinkowskiDifference::support_from(const Vec3& d, int start_a, int start_b) {
+    if (start_a >= 0) hint_a = start_a;
+    if (start_b >= 0) hint_b = start_b;
+    last_direction = d;
+    return support(d);
+}
+
 
 namespace {
 

@@ -47,8 +47,14 @@ struct MinkowskiDifference {
                         const Pose& pose_b, bool margins, double radius_a = -1.0,
                         double radius_b = -1.0);
 
-    /// Support point of a - b in `direction` (a's local frame, need not be unit).
+    /// Support point of a - b in `direction` (a's local frame, need not be unit). Climbs
+    /// start from the previous support points when the direction turned less than about 60
+    /// degrees since the last call, else from a few samples.
     SimplexVertex support(const Vec3& direction);
+
+    /// The same, with the climbs starting from vertices `hint_a` and `hint_b` (negative:
+    /// none), known to be near the answer whatever the last direction was.
+    SimplexVertex support_from(const Vec3& direction, int hint_a, int hint_b);
 
     /// A length scale of the pair (bounding radii plus centre distance) for relative
     /// tolerances. Always > 0.

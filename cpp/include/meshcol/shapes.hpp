@@ -63,12 +63,6 @@ SupportPoint support_core(const ShapeView& shape, const Vec3& direction, int hin
 /// adjacency and more than `defaults::hill_climbing_min_vertices` vertices).
 bool climbs(const ShapeView& shape);
 
-/// `support_core` of two climbing shapes at once (`climbs` true for both): a in `direction_a`
-/// from `hint_a`, b in `direction_b` from `hint_b`. Same answers as two calls, faster: the
-/// two climbs advance side by side.
-void climb_pair(const ShapeView& a, const Vec3& direction_a, int hint_a, const ShapeView& b,
-                const Vec3& direction_b, int hint_b, SupportPoint& out_a, SupportPoint& out_b);
-
 /// Support point of the full shape (core plus margin) in `direction` (local frame).
 Vec3 support(const ShapeView& shape, const Vec3& direction);
 

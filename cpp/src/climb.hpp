@@ -1,0 +1,122 @@
+#pragma once
+/// Hill climbing on a polytope's edge graph for support points: the shared inner loops of
+/// `support_core` (shapes.cpp) and of the Minkowski difference's support (gjk.cpp), inline in
+/// both so the climbs' results stay in registers. Private to the core's sources.
+
+#include <cstdint>
+
+#include "meshcol/shapes.hpp"
+#include "meshcol/vec.hpp"
+
+namespace meshcol {
+namespace climb {
+
+// Index of the vertex maximising dot(v[i], d), the first one on ties.
+inline int scan_support(const Vec3* v, int n, const Vec3& d) {
+    int best = 0;
+    double best_dot = dot(v[0], d);
+    for (int i = 1; i < n; ++i) {
+        const double di = dot(v[i], d);
+        if (di > best_dot) {
+            best_dot = di;
+            best = i;
+        }
+    }
+    return best;
+}
+
+// Forced inlining: as plain functions shared by two callers, GCC stops inlining them and the
+// climbs slow down by a tenth.
+#if defined(__GNUC__) || defined(__clang__)
+#define MESHCOL_CLIMB_INLINE inline __attribute__((always_inline))
+#else
+#define MESHCOL_CLIMB_INLINE inline
+#endif
+
+// The climb's start: the hint when valid (a previous support point of this shape, when the
+// direction turned little), else the best of a few strided samples, so the climb starts near
+// the top and takes few dependent (latency-bound) steps.
+MESHCOL_CLIMB_INLINE int climb_start(const ShapeView& s, const Vec3& d, int hint,
+                                     double& best_dot) {
+    const Vec3* v = s.vertices;
+    const int n = s.vertex_count;
+    if (hint >= 0 && hint < n) {
+        best_dot = dot(v[hint], d);
+        return hint;
+    }
+    int best = 0;
+    best_dot = dot(v[0], d);
+    const int stride = n / 8;
+    for (int i = stride / 2; i < n; i += stride) {
+        const double di = dot(v[i], d);
+        if (di > best_dot) {
+            best_dot = di;
+            best = i;
+        }
+    }
+    return best;
+}
+
+// One step of steepest ascent from `best`: the best neighbour strictly above `best_dot`
+// (first in list order on ties), or -1 at a local (hence global) maximum.
+MESHCOL_CLIMB_INLINE int climb_step(const ShapeView& s, const Vec3& d, int best,
+                                    double& best_dot) {
+    const Vec3* v = s.vertices;
+    int next = -1;
+    const std::int64_t begin = s.adjacency_offsets[best];
+    const std::int64_t end = s.adjacency_offsets[best + 1];
+    // Blocks of four (meshcol pads each list with the vertex itself to a multiple of four),
+    // then any remainder (lists packed by other means).
+    std::int64_t k = begin;
+    for (; k + 3 < end; k += 4) {
+        for (int l = 0; l < 4; ++l) {
+            const int j = s.adjacency[k + l];
+            const double dj = dot(v[j], d);
+            if (dj > best_dot) {
+                best_dot = dj;
+                next = j;
+            }
+        }
+    }
+    for (; k < end; ++k) {
+        const int j = s.adjacency[k];
+        const double dj = dot(v[j], d);
+        if (dj > best_dot) {
+            best_dot = dj;
+            next = j;
+        }
+    }
+    return next;
+}
+
+/// `support_core` of two climbing shapes at once (`climbs` true for both): a in `da` from
+/// `hint_a`, b in `db` from `hint_b` (negative: no hint). Same answers as two calls, faster.
+MESHCOL_CLIMB_INLINE void climb_pair(const ShapeView& a, const Vec3& da, int hint_a, const ShapeView& b,
+                const Vec3& db, int hint_b, SupportPoint& out_a, SupportPoint& out_b) {
+    // Both climbs advance in one loop: each step is a chain of dependent loads and compares,
+    // and two independent chains side by side keep the core busy while either waits.
+    double dot_a, dot_b;
+    int best_a = climb_start(a, da, hint_a, dot_a);
+    int best_b = climb_start(b, db, hint_b, dot_b);
+    // Both take a step every round (one that has arrived repeats its last, finding nothing
+    // better): the only data-dependent branch is the end of the loop.
+    bool up_a = true, up_b = true;
+    const int cap = a.vertex_count + b.vertex_count;
+    for (int step = 0; step < cap && (up_a || up_b); ++step) {
+        const int next_a = climb_step(a, da, best_a, dot_a);
+        const int next_b = climb_step(b, db, best_b, dot_b);
+        up_a = next_a >= 0;
+        up_b = next_b >= 0;
+        best_a = up_a ? next_a : best_a;
+        best_b = up_b ? next_b : best_b;
+    }
+    // A capped climb (never seen: the edge graph is finite and every step goes up) falls
+    // back to the scan.
+    if (up_a) best_a = scan_support(a.vertices, a.vertex_count, da);
+    if (up_b) best_b = scan_support(b.vertices, b.vertex_count, db);
+    out_a = {a.vertices[best_a], best_a};
+    out_b = {b.vertices[best_b], best_b};
+}
+
+}  // namespace climb
+}  // namespace meshcol
