@@ -15,7 +15,8 @@ struct EpaFace {
     int adj[3];      // face across edge (v[e], v[e + 1])
     int adj_edge[3]; // that edge's index in the neighbour
     bool alive;
-    Vec3 normal;     // outward unit normal (zero when the face is a sliver)
+    Vec3 normal;     // outward normal, not normalised (zero when the face is a sliver)
+    double offset;   // dot(normal, vertex): the plane's distance from the origin times |normal|
 };
 
 struct HorizonEdge {
@@ -40,7 +41,9 @@ struct Polytope {
     // kNoKey when a support point came from a curved surface (never equal to another).
     std::uint64_t keys[defaults::epa_max_vertices];
     EpaFace faces[kMaxFaces];
-    double distance[kMaxFaces];  // plane distance from the origin (+inf: sliver or dead)
+    // The plane's signed squared distance from the origin, d |d| (+inf: sliver or dead face):
+    // ordered as the distance, and found with one division and no square root per face.
+    double distance[kMaxFaces];
     HorizonEdge horizon[kMaxFaces];
     int free_faces[kMaxFaces];
     int dead[kMaxFaces];
@@ -87,12 +90,14 @@ struct Polytope {
         face.alive = true;
         const Vec3& a = vertices[i].w;
         const Vec3 n = cross(vertices[j].w - a, vertices[k].w - a);
-        const double len = norm(n);
-        if (len > 0.0 && std::isfinite(len)) {
-            face.normal = n * (1.0 / len);
-            distance[f] = dot(face.normal, a);
+        const double nn = squared_norm(n);
+        if (nn > 0.0 && std::isfinite(nn)) {
+            face.normal = n;
+            face.offset = dot(n, a);
+            distance[f] = face.offset * std::fabs(face.offset) / nn;
         } else {
             face.normal = Vec3{};
+            face.offset = 0.0;
             distance[f] = std::numeric_limits<double>::infinity();
         }
         return f;
@@ -143,13 +148,15 @@ struct Polytope {
     }
 };
 
-// Barycentric weights of the projection p of the origin on face f (Ericson 2004, sec. 3.4).
-void face_weights(const Polytope& poly, const EpaFace& f, double distance, double w[3]) {
-    const Vec3 p = f.normal * distance;
+// Barycentric weights of the projection p of the origin on face f (Ericson 2004, sec. 3.4);
+// `normal` is the face's unit normal, `distance` its plane's distance from the origin.
+void face_weights(const Polytope& poly, const EpaFace& f, const Vec3& normal, double distance,
+                  double w[3]) {
+    const Vec3 p = normal * distance;
     const Vec3 a = poly.vertices[f.v[0]].w, b = poly.vertices[f.v[1]].w, c = poly.vertices[f.v[2]].w;
-    const double u = dot(cross(b - p, c - p), f.normal);
-    const double v = dot(cross(c - p, a - p), f.normal);
-    const double x = dot(cross(a - p, b - p), f.normal);
+    const double u = dot(cross(b - p, c - p), normal);
+    const double v = dot(cross(c - p, a - p), normal);
+    const double x = dot(cross(a - p, b - p), normal);
     const double total = u + v + x;
     if (total > 0.0 && std::isfinite(total)) {
         w[0] = u / total;
@@ -275,7 +282,6 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
     // The closest face of the last iteration: its slot keeps its data to the end (a killed
     // face is released only after the new faces are made, and nothing is added after that).
     int last_face = -1;
-    double last_distance = 0.0;
     int it = 0;
     for (; it < opt.max_iterations; ++it) {
         // The closest face: a linear scan over a few dozen slots (dead ones hold +inf).
@@ -291,14 +297,17 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
             break;
         }
         last_face = best_face;
-        last_distance = best;
         const EpaFace& closest = poly.faces[best_face];
         // Warm start: the new support point lies near the face's own support points.
         const SimplexVertex& near = poly.vertices[closest.v[0]];
         const SimplexVertex w = md.support_from(closest.normal, near.index_a, near.index_b);
+        // Lower (the face's plane) and upper (the support plane) bounds on the depth, both
+        // times |normal|: the test needs no normalised normal.
         const double upper = dot(closest.normal, w.w);
+        const double scale = std::sqrt(squared_norm(closest.normal));
         const std::uint64_t key = Polytope::key_of(w);
-        if (upper - best <= opt.relative_tolerance * upper + tol * 1e-2 || poly.has_vertex(key)) {
+        if (upper - closest.offset <= opt.relative_tolerance * upper + tol * 1e-2 * scale ||
+            poly.has_vertex(key)) {
             res.status = Status::CONVERGED;
             break;
         }
@@ -326,7 +335,7 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
             }
             fan[k] = f;
             poly.link(f, 0, h.face, h.edge);
-            if (poly.distance[f] < -tol) ok = false;
+            if (poly.distance[f] < -tol * tol) ok = false;
         }
         for (int k = 0; k < count && ok; ++k) {
             const int f = fan[k], g = fan[k + 1 == count ? 0 : k + 1];
@@ -348,15 +357,18 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
         return res;
     }
     const EpaFace& f = poly.faces[last_face];
+    const double length = std::sqrt(squared_norm(f.normal));
+    const Vec3 normal = f.normal * (1.0 / length);
+    const double distance = f.offset / length;
     double wts[3];
-    face_weights(poly, f, last_distance, wts);
+    face_weights(poly, f, normal, distance, wts);
     Vec3 pa{}, pb{};
     for (int i = 0; i < 3; ++i) {
         pa += poly.vertices[f.v[i]].a * wts[i];
         pb += poly.vertices[f.v[i]].b * wts[i];
     }
-    res.depth = std::fmax(0.0, last_distance);
-    res.normal = f.normal;
+    res.depth = std::fmax(0.0, distance);
+    res.normal = normal;
     res.point_a = pa;
     res.point_b = pb;
     return res;
