@@ -130,7 +130,9 @@ struct Polytope {
             const HorizonEdge h = stack[--top];
             EpaFace& face = faces[h.face];
             if (!face.alive) continue;
-            if (dot(face.normal, w - vertices[face.v[0]].w) <= 0.0) {
+            // w sees the face when it lies beyond the face's plane (a sliver's zero normal
+            // and offset: never); the stored offset saves loading a vertex.
+            if (!(dot(face.normal, w) > face.offset)) {
                 horizon[horizon_count++] = h;
                 continue;
             }
