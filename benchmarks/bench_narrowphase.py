@@ -126,8 +126,8 @@ def main() -> None:
                 query, fn = "penetration", signed_distance_batch
             else:
                 query, fn = "distance", distance_batch
-            t1 = time_it(lambda: fn(cs, poses, pairs, threads=1)) / len(pairs) * 1e6
-            tn = time_it(lambda: fn(cs, poses, pairs, threads=0)) / len(pairs) * 1e6
+            t1 = time_it(lambda: fn(cs, poses, pairs, threads=1), 5) / len(pairs) * 1e6
+            tn = time_it(lambda: fn(cs, poses, pairs, threads=0), 5) / len(pairs) * 1e6
             res = fn(cs, poses, pairs, threads=1)
             # Accuracy against the exact oracles on a subset.
             worst = 0.0

@@ -273,11 +273,14 @@ def is_closed_manifold(faces: np.ndarray) -> bool:
     n = int(faces.max()) + 1
     a = faces.reshape(-1)
     b = faces[:, [1, 2, 0]].reshape(-1)
-    directed = np.sort(a * n + b)
-    if (directed[1:] == directed[:-1]).any():
+    # One sort of (undirected edge, direction bit): closed and consistently oriented exactly
+    # when the sorted keys come in pairs, each edge once in each direction.
+    keys = np.sort((np.minimum(a, b) * n + np.maximum(a, b)) * 2 + (a < b))
+    if len(keys) % 2:
         return False
-    _, counts = np.unique(np.minimum(a, b) * n + np.maximum(a, b), return_counts=True)
-    return bool((counts == 2).all())
+    edge, forward = keys >> 1, keys & 1
+    paired = (edge[0::2] == edge[1::2]).all() and (edge[2::2] != edge[1:-1:2]).all()
+    return bool(paired and (forward[0::2] != forward[1::2]).all())
 
 
 def _unique_rows(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -292,3 +292,44 @@ def test_obj_numbers_round_trip_exactly(meshes, tmp_path) -> None:
     v = np.array([[0.1, -0.0, 1e-300], [1 / 3, 2.5, -7.0]])
     text = obj_text([("a", v, np.array([[0, 1, 1]]))])
     assert text == f"# meshcol decompose\no a\nv 0.1 0.0 1e-300\nv {1 / 3!r} 2.5 -7.0\nf 1 2 2\n"
+
+
+def test_worker_threads_share_the_cores(monkeypatch) -> None:
+    from meshcol import decompose_jobs
+
+    for name in ("OMP_NUM_THREADS", "OMP_WAIT_POLICY", "OPENBLAS_NUM_THREADS"):
+        monkeypatch.delenv(name, raising=False)
+    monkeypatch.setattr(decompose_jobs.os, "cpu_count", lambda: 8)
+    # Engines get 2 * cores / jobs sleeping threads (at most all cores); BLAS its plain share.
+    assert decompose_jobs.worker_env(2) == {
+        "OMP_NUM_THREADS": "8", "OMP_WAIT_POLICY": "PASSIVE", "OPENBLAS_NUM_THREADS": "4"}
+    assert decompose_jobs.worker_env(3)["OMP_NUM_THREADS"] == "6"
+    assert decompose_jobs.worker_env(16)["OMP_NUM_THREADS"] == "1"
+    assert decompose_jobs.worker_env(16)["OPENBLAS_NUM_THREADS"] == "1"
+    assert decompose_jobs.worker_env(4, threads_per_job=3)["OMP_NUM_THREADS"] == "3"
+    # The user's own settings win.
+    monkeypatch.setenv("OMP_NUM_THREADS", "5")
+    monkeypatch.setenv("OMP_WAIT_POLICY", "ACTIVE")
+    assert decompose_jobs.worker_env(2) == {"OPENBLAS_NUM_THREADS": "4"}
+
+
+def test_worker_pool_starts_before_its_tasks() -> None:
+    import functools
+
+    from meshcol.decompose_jobs import WorkerPool, prepare_engine, safe_name
+
+    with WorkerPool(safe_name, 2, prepare=functools.partial(prepare_engine, "coacd")) as pool:
+        pool.start()
+        workers = list(pool._idle)
+        assert len(workers) == 2 and all(w.process.is_alive() for w in workers)
+        outcomes = sorted(pool.run(["a b", "c", "d/e"]), key=lambda o: o.index)
+        assert [(o.status, o.value) for o in outcomes] == [("ok", "a_b"), ("ok", "c"), ("ok", "d_e")]
+        assert set(pool._idle) == set(workers)  # the early workers ran the tasks
+    assert not any(w.process.is_alive() for w in workers)
+    # A pool that never gets a task stops at once, even while its workers still load.
+    start = time.perf_counter()
+    with WorkerPool(safe_name, 2, prepare=functools.partial(prepare_engine, "coacd")) as pool:
+        pool.start()
+        workers = list(pool._idle)
+    assert time.perf_counter() - start < 1.5
+    assert not any(w.process.is_alive() for w in workers)

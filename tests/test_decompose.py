@@ -113,6 +113,11 @@ def test_is_closed_manifold() -> None:
     flipped = f.copy()
     flipped[0] = flipped[0][::-1]
     assert not is_closed_manifold(flipped)  # inconsistent winding
+    assert is_closed_manifold(f[:, ::-1])  # inside out, but consistent
+    assert not is_closed_manifold(np.vstack([f, f]))  # every edge four times
+    assert not is_closed_manifold(np.vstack([f, f[:, ::-1]]))  # two directions, twice each
+    assert not is_closed_manifold(np.vstack([f, f[:1]]))  # a repeated triangle
+    assert not is_closed_manifold(np.vstack([f, f[:1, ::-1]]))  # a triangle and its back
 
 
 # ---------------------------------------------------------------------------- parameters

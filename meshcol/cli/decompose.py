@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 import sys
 import time
@@ -80,9 +81,8 @@ def decompose_command(
       meshcol decompose bottle.obj -o out/ --engine vhacd --layout combined --format glb
       meshcol decompose snowflake.obj -o out/ --preprocess off --threshold 0.02 -E mcts_iterations=50
     """
-    from meshcol.decompose import cached_decomposition, resolve_params
-    from meshcol.decompose_jobs import decompose_task, run_tasks, safe_name, write_parts
-    from meshcol.report import dumps_csv, dumps_json, emit, report_format
+    from meshcol.decompose import resolve_params
+    from meshcol.decompose_jobs import WorkerPool, decompose_task, prepare_engine
 
     if layout == "ucx" and fmt == "glb":
         raise click.UsageError("--layout ucx writes OBJ only: drop --format glb")
@@ -103,6 +103,34 @@ def decompose_command(
         # Parallel files share the cores: each worker's distance queries get its share.
         "threads": 0 if jobs == 1 else max(1, (os.cpu_count() or 1) // jobs),
     }
+
+    pool = None
+    if jobs > 1 or timeout is not None:
+        # Workers start now and load the engine while this process reads the files.
+        pool = WorkerPool(decompose_task, jobs, timeout=timeout,
+                          prepare=functools.partial(prepare_engine, engine))
+        pool.start(min(jobs, len(inputs)))
+    try:
+        code = _decompose_files(inputs, out_dir, options, pool, jobs=jobs, timeout=timeout,
+                                no_cache=no_cache, layout=layout, fmt=fmt,
+                                max_hausdorff=max_hausdorff, report=report)
+    finally:
+        if pool is not None:
+            pool.close()
+    if code:
+        ctx.exit(code)
+
+
+def _decompose_files(
+    inputs: tuple[str, ...], out_dir: str, options: dict[str, Any], pool: Any, *, jobs: int,
+    timeout: float | None, no_cache: bool, layout: str, fmt: str, max_hausdorff: float | None,
+    report: str | None,
+) -> int:
+    """The run after option checks: load, look up the cache, decompose, write, report.
+    Returns the exit code (1 when a file failed or a body exceeds ``max_hausdorff``)."""
+    from meshcol.decompose import cached_decomposition
+    from meshcol.decompose_jobs import decompose_task, run_tasks, safe_name, write_parts
+    from meshcol.report import dumps_csv, dumps_json, emit, report_format
 
     # Unusable input stops the run before any work (exit 2); engine failures are per file.
     files = _load(inputs)
@@ -137,7 +165,7 @@ def decompose_command(
     tasks = [tasks[k] for k in order]
     task_file = [task_file[k] for k in order]
     progress = _Progress(len(files), len(results))
-    for outcome in run_tasks(decompose_task, tasks, jobs=jobs, timeout=timeout):
+    for outcome in run_tasks(decompose_task, tasks, jobs=jobs, timeout=timeout, pool=pool):
         i = task_file[outcome.index]
         results[i] = (outcome.status, outcome.value, outcome.message, outcome.seconds)
         progress.step()
@@ -203,8 +231,7 @@ def decompose_command(
     for f in file_reports:
         if f["status"] != "ok":
             click.echo(f"meshcol: {f['status']}: {f['path']}: {f['message']}", err=True)
-    if failed or exceeded:
-        ctx.exit(1)
+    return 1 if failed or exceeded else 0
 
 
 def _load(inputs: tuple[str, ...]) -> list[tuple[str, list[tuple[str, Any, Any, Any]]]]:
