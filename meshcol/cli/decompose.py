@@ -34,7 +34,7 @@ def _engine_option(ctx: click.Context, param: click.Parameter, values: tuple[str
 @click.option("--resolution", type=click.IntRange(min=1), default=None, help="CoACD sampling resolution or V-HACD voxel count.")
 @click.option("--seed", type=int, default=0, show_default=True, help="CoACD random seed.")
 @click.option("--engine-option", "-E", "engine_options", multiple=True, callback=_engine_option, metavar="KEY=VALUE", help="Any other engine parameter, e.g. -E mcts_iterations=50 (repeatable).")
-@click.option("--jobs", "-j", type=click.IntRange(min=1), default=1, show_default=True, help="Files decomposed in parallel processes.")
+@click.option("--jobs", "-j", type=click.IntRange(min=1), default=1, show_default=True, help="Files decomposed in parallel processes (1: one at a time, CoACD using every core).")
 @click.option("--timeout", type=click.FloatRange(0, min_open=True), default=None, help="Seconds allowed per file; a file over it is stopped and reported.")
 @click.option("--cache-dir", type=click.Path(file_okay=False), default=None, help="Cache folder (default: the user cache folder, meshcol/decompose).")
 @click.option("--no-cache", is_flag=True, help="Neither read nor write the cache.")
