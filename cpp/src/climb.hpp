@@ -98,17 +98,28 @@ MESHCOL_CLIMB_INLINE void climb_pair(const ShapeView& a, const Vec3& da, int hin
     double dot_a, dot_b;
     int best_a = climb_start(a, da, hint_a, dot_a);
     int best_b = climb_start(b, db, hint_b, dot_b);
-    // Both take a step every round (one that has arrived repeats its last, finding nothing
-    // better): the only data-dependent branch is the end of the loop.
+    // Side by side while both go up, then the one still climbing alone.
     bool up_a = true, up_b = true;
-    const int cap = a.vertex_count + b.vertex_count;
-    for (int step = 0; step < cap && (up_a || up_b); ++step) {
+    int steps_a = 0, steps_b = 0;
+    while (up_a && up_b && steps_a < a.vertex_count) {
         const int next_a = climb_step(a, da, best_a, dot_a);
         const int next_b = climb_step(b, db, best_b, dot_b);
         up_a = next_a >= 0;
         up_b = next_b >= 0;
         best_a = up_a ? next_a : best_a;
         best_b = up_b ? next_b : best_b;
+        ++steps_a;
+        ++steps_b;
+    }
+    for (; up_a && steps_a < a.vertex_count; ++steps_a) {
+        const int next = climb_step(a, da, best_a, dot_a);
+        up_a = next >= 0;
+        best_a = up_a ? next : best_a;
+    }
+    for (; up_b && steps_b < b.vertex_count; ++steps_b) {
+        const int next = climb_step(b, db, best_b, dot_b);
+        up_b = next >= 0;
+        best_b = up_b ? next : best_b;
     }
     // A capped climb (never seen: the edge graph is finite and every step goes up) falls
     // back to the scan.
