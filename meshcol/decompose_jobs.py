@@ -19,7 +19,7 @@ import re
 import struct
 import time
 from collections import deque
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -213,20 +213,42 @@ class WorkerPool:
     def _new_worker(self) -> _Worker:
         return _Worker(self._ctx, self.fn, self.env, self.prepare)
 
-    def run(self, tasks: Sequence[Any]) -> Iterator[TaskOutcome]:
-        """Run every task; yield outcomes as they complete."""
+    def run(self, tasks: Iterable[Any]) -> Iterator[TaskOutcome]:
+        """Run every task; yield outcomes as they complete.
+
+        ``tasks`` may be a generator that reads a file per task: it is read ahead as fast as
+        it goes, one task between polls of the workers, and each task goes to a worker as
+        soon as one is free. So the first files are decomposed while the rest are read, and
+        an exception from the generator (unusable input) comes as early as reading allows
+        (busy workers are then killed on ``close()``).
+        """
         self.start(0)
-        pending = deque(enumerate(tasks))
+        source = enumerate(tasks)
+        more = True
+        pending: deque[tuple[int, Any]] = deque()
         idle, busy, timeout = self._idle, self._busy, self.timeout
-        while pending or busy:
+        while True:
             while pending and len(busy) < self.jobs:
                 worker = idle.pop() if idle else self._new_worker()
                 worker.assign(*pending.popleft())
                 busy.append(worker)
+            if more:
+                item = next(source, None)
+                if item is None:
+                    more = False
+                else:
+                    pending.append(item)
+                if not busy:
+                    continue
+                wait_for: float | None = 0.0  # poll, then read on
+            elif not busy:
+                return
+            else:
+                wait_for = None
             now = time.perf_counter()
-            wait_for = None
             if timeout is not None:
-                wait_for = max(0.0, min(w.started + timeout for w in busy) - now)
+                limit = max(0.0, min(w.started + timeout for w in busy) - now)
+                wait_for = limit if wait_for is None else min(wait_for, limit)
             handles: list[Any] = [w.conn for w in busy] + [w.process.sentinel for w in busy]
             ready = set(multiprocessing.connection.wait(handles, wait_for))
             now = time.perf_counter()
@@ -282,7 +304,7 @@ class WorkerPool:
 
 def run_tasks(
     fn: Callable[[Any], Any],
-    tasks: Sequence[Any],
+    tasks: Iterable[Any],
     *,
     jobs: int = 1,
     timeout: float | None = None,
@@ -295,8 +317,8 @@ def run_tasks(
     ----------
     fn : callable
         A module-level function (it is sent to worker processes).
-    tasks : sequence
-        Picklable task arguments.
+    tasks : iterable
+        Picklable task arguments, read lazily (one whenever a worker is free).
     jobs : int
         Worker processes. With ``jobs == 1`` and no timeout, tasks run in this process.
     timeout : float, optional
@@ -314,7 +336,8 @@ def run_tasks(
     if jobs < 1:
         raise ValueError(f"jobs must be at least 1, got {jobs}")
     if jobs == 1 and timeout is None:
-        for index, task in enumerate(tasks):
+        # In this process: every task is read (and checked) before the first runs.
+        for index, task in enumerate(list(tasks)):
             start = time.perf_counter()
             status, value = _call(fn, task)
             seconds = time.perf_counter() - start

@@ -14,7 +14,7 @@ import json
 import math
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -30,6 +30,7 @@ __all__ = [
     "SCHEMA_PATH",
     "load_scene",
     "load_inputs",
+    "iter_inputs",
     "rotation_from_quaternion",
     "rotation_from_euler",
 ]
@@ -159,19 +160,47 @@ def load_inputs(paths: Sequence[str | os.PathLike[str]]) -> Scene:
     InvalidMeshError
         A mesh file with unusable content.
     """
+    manifest = _single_manifest(paths)
+    if manifest is not None:
+        return load_scene(manifest)
+    bodies = [body for _, file_bodies in iter_inputs(paths) for body in file_bodies]
+    source = os.fspath(paths[0]) if len(paths) == 1 else None
+    return Scene(bodies=tuple(bodies), units=None, source=source)
+
+
+def _single_manifest(paths: Sequence[str | os.PathLike[str]]) -> str | os.PathLike[str] | None:
+    """The manifest among ``paths`` (it must come alone), or None."""
     if len(paths) == 0:
         raise InputFileError("no input files given")
     manifests = [p for p in paths if Path(os.fspath(p)).suffix.lower() in MANIFEST_EXTENSIONS]
-    if manifests:
-        if len(paths) > 1:
-            raise SceneError(
-                "a scene manifest cannot be combined with other inputs: give it alone",
-                manifests[0],
-            )
-        return load_scene(manifests[0])
-    bodies: list[Body] = []
+    if manifests and len(paths) > 1:
+        raise SceneError(
+            "a scene manifest cannot be combined with other inputs: give it alone", manifests[0]
+        )
+    return manifests[0] if manifests else None
+
+
+def iter_inputs(
+    paths: Sequence[str | os.PathLike[str]],
+) -> Iterator[tuple[str, list[Body]]]:
+    """:func:`load_inputs` one file at a time: ``(file, its bodies)`` as each file is read.
+
+    The same bodies, names and errors as :func:`load_inputs`, but a caller can start work on
+    the first file while the next is read (``meshcol decompose``). A manifest is read whole
+    and its bodies come grouped by mesh file (primitives under the manifest's path), in order
+    of first appearance.
+    """
+    manifest = _single_manifest(paths)
+    if manifest is not None:
+        scene = load_scene(manifest)
+        groups: dict[str, list[Body]] = {}
+        for body in scene.bodies:
+            groups.setdefault(body.source or scene.source or body.name, []).append(body)
+        yield from groups.items()
+        return
     used: set[str] = set()
     for path in paths:
+        bodies: list[Body] = []
         for body in load_mesh(path):
             name, k = body.name, 2
             while name in used:
@@ -179,8 +208,7 @@ def load_inputs(paths: Sequence[str | os.PathLike[str]]) -> Scene:
                 k += 1
             used.add(name)
             bodies.append(body if name == body.name else dataclasses.replace(body, name=name))
-    source = os.fspath(paths[0]) if len(paths) == 1 else None
-    return Scene(bodies=tuple(bodies), units=None, source=source)
+        yield os.fspath(path), bodies
 
 
 def rotation_from_quaternion(quaternion: Sequence[float]) -> np.ndarray:

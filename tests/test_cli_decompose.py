@@ -333,3 +333,46 @@ def test_worker_pool_starts_before_its_tasks() -> None:
         workers = list(pool._idle)
     assert time.perf_counter() - start < 1.5
     assert not any(w.process.is_alive() for w in workers)
+
+
+def test_worker_pool_reads_tasks_ahead_and_fails_fast() -> None:
+    from meshcol.decompose_jobs import WorkerPool
+    from meshcol.errors import MeshcolError
+
+    pulled = []
+
+    def tasks():
+        for k in range(3):
+            pulled.append(k)
+            yield 0.3  # time.sleep(0.3) in the worker
+
+    with WorkerPool(time.sleep, 1) as pool:
+        pool.start()
+        outcomes = pool.run(tasks())
+        first = next(outcomes)
+        # The generator (a file read per task, in the CLI) ran ahead while the worker slept.
+        assert first.status == "ok" and len(pulled) == 3
+        assert len(list(outcomes)) == 2
+
+    def broken():
+        yield 0.3
+        raise MeshcolError("mesh has no faces", "bad.obj")
+
+    start = time.perf_counter()
+    with WorkerPool(time.sleep, 2) as pool:
+        with pytest.raises(MeshcolError):
+            list(pool.run(broken()))
+        workers = list(pool._busy)
+    # Raised while the first task was still running, which close() then killed.
+    assert time.perf_counter() - start < 0.3 + 1.0
+    assert not any(w.process.is_alive() for w in workers)
+
+
+def test_decompose_bad_file_after_good_ones_fails_before_writing(meshes, tmp_path) -> None:
+    for jobs in ("1", "2"):
+        out = tmp_path / f"out{jobs}"
+        code, _, stderr = run([str(meshes["torus"]), str(meshes["l_shape"]), str(meshes["empty"]),
+                               "-o", str(out), "--no-cache", "--jobs", jobs, *FAST])
+        assert code == 2
+        assert stderr.startswith(f"meshcol: error: {meshes['empty']}: ")
+        assert not out.exists()

@@ -6,6 +6,7 @@ import functools
 import os
 import sys
 import time
+from collections.abc import Iterator
 from typing import Any
 
 import click
@@ -132,44 +133,47 @@ def _decompose_files(
     from meshcol.decompose_jobs import decompose_task, run_tasks, safe_name, write_parts
     from meshcol.report import dumps_csv, dumps_json, emit, report_format
 
-    # Unusable input stops the run before any work (exit 2); engine failures are per file.
-    files = _load(inputs)
+    # Files are read one by one and each goes to a worker as soon as it is read, so work
+    # starts at once and a library is never held in memory whole. Unusable input (exit 2)
+    # still stops the run before anything is written: outputs are written at the end, and
+    # the workers' cache entries for the files before it are valid entries.
+    files: list[tuple[str, list[tuple[str, Any, Any, Any]]]] = []
     names: dict[str, str] = {}
-    for path, bodies in files:
-        for name, _, _, _ in bodies:
-            clean = safe_name(name)
-            if clean in names:
-                raise MeshcolError(f"two bodies would write {clean!r} (also from {names[clean]}): rename one", path)
-            names[clean] = path
-    os.makedirs(out_dir, exist_ok=True)
-
     results: dict[int, Any] = {}
-    tasks: list[tuple[str, list, dict]] = []
     task_file: list[int] = []
-    for i, (path, bodies) in enumerate(files):
-        lookup = {}
-        start = time.perf_counter()
-        if not no_cache:
-            key_options = {k: v for k, v in options.items() if k != "use_cache"}
-            lookup = {name: cached_decomposition((v, f), **key_options) for name, v, f, _ in bodies}
-        if lookup and all(d is not None and d.metrics is not None for d in lookup.values()):
-            hits = [(name, lookup[name]) for name, _, _, _ in bodies]
-            results[i] = ("ok", hits, None, time.perf_counter() - start)
-        else:
-            tasks.append((path, [(name, v, f) for name, v, f, _ in bodies], options))
-            task_file.append(i)
+    key_options = {k: v for k, v in options.items() if k != "use_cache"}
+    progress = _Progress(None if _is_manifest(inputs) else len(inputs))
 
-    # Largest files first (by triangle count): the longest task starts early, so parallel
-    # runs finish sooner (LPT scheduling). Outputs do not depend on the order.
-    order = sorted(range(len(tasks)), key=lambda k: -sum(len(f) for _, _, f in tasks[k][1]))
-    tasks = [tasks[k] for k in order]
-    task_file = [task_file[k] for k in order]
-    progress = _Progress(len(files), len(results))
-    for outcome in run_tasks(decompose_task, tasks, jobs=jobs, timeout=timeout, pool=pool):
+    def tasks() -> Iterator[tuple[str, list, dict]]:
+        for path, bodies in _iter_load(inputs):
+            for name, _, _, _ in bodies:
+                clean = safe_name(name)
+                if clean in names:
+                    raise MeshcolError(
+                        f"two bodies would write {clean!r} (also from {names[clean]}): rename one", path
+                    )
+                names[clean] = path
+            i = len(files)
+            files.append((path, bodies))
+            start = time.perf_counter()
+            lookup = {}
+            if not no_cache:
+                lookup = {name: cached_decomposition((v, f), **key_options) for name, v, f, _ in bodies}
+            if lookup and all(d is not None and d.metrics is not None for d in lookup.values()):
+                hits = [(name, lookup[name]) for name, _, _, _ in bodies]
+                results[i] = ("ok", hits, None, time.perf_counter() - start)
+                progress.step()
+                continue
+            task_file.append(i)
+            yield (path, [(name, v, f) for name, v, f, _ in bodies], options)
+        progress.total = len(files)
+
+    for outcome in run_tasks(decompose_task, tasks(), jobs=jobs, timeout=timeout, pool=pool):
         i = task_file[outcome.index]
         results[i] = (outcome.status, outcome.value, outcome.message, outcome.seconds)
         progress.step()
     progress.close()
+    os.makedirs(out_dir, exist_ok=True)
 
     rows: list[dict[str, Any]] = []
     file_reports: list[dict[str, Any]] = []
@@ -234,41 +238,47 @@ def _decompose_files(
     return 1 if failed or exceeded else 0
 
 
-def _load(inputs: tuple[str, ...]) -> list[tuple[str, list[tuple[str, Any, Any, Any]]]]:
-    """[(file, [(body name, canonical vertices, canonical faces, transform)])], files in order.
+def _is_manifest(inputs: tuple[str, ...]) -> bool:
+    from meshcol.scene import MANIFEST_EXTENSIONS
 
-    Bodies are grouped by the file they came from (one task per file); a manifest's bodies
-    without a file of their own (primitives) belong to the manifest.
-    """
+    return any(os.path.splitext(p)[1].lower() in MANIFEST_EXTENSIONS for p in inputs)
+
+
+def _iter_load(inputs: tuple[str, ...]) -> Iterator[tuple[str, list[tuple[str, Any, Any, Any]]]]:
+    """(file, [(body name, canonical vertices, canonical faces, transform)]) per input file,
+    as each is read (:func:`meshcol.scene.iter_inputs`): one task per file; a manifest's
+    bodies without a file of their own (primitives) belong to the manifest."""
     from meshcol.decompose import canonical_geometry
-    from meshcol.scene import load_inputs
+    from meshcol.scene import iter_inputs
 
-    scene = load_inputs(list(inputs))
-    files: dict[str, list[tuple[str, Any, Any, Any]]] = {}
-    for body in scene.bodies:
-        source = body.source or scene.source or body.name
-        try:
-            v, f = canonical_geometry(body.vertices, body.faces)
-        except InvalidMeshError as exc:
-            where = source if body.name == os.path.splitext(os.path.basename(source))[0] else f"{source}: {body.name}"
-            raise InvalidMeshError(exc.message, where) from None
-        files.setdefault(source, []).append((body.name, v, f, body.transform))
-    return list(files.items())
+    for source, bodies in iter_inputs(list(inputs)):
+        canonical = []
+        for body in bodies:
+            try:
+                v, f = canonical_geometry(body.vertices, body.faces)
+            except InvalidMeshError as exc:
+                where = source if body.name == os.path.splitext(os.path.basename(source))[0] else f"{source}: {body.name}"
+                raise InvalidMeshError(exc.message, where) from None
+            canonical.append((body.name, v, f, body.transform))
+        yield source, canonical
 
 
 class _Progress:
-    """``decompose: k/n files`` on stderr, only on a terminal and after the first second."""
+    """``decompose: k/n files`` on stderr (``k files`` while n is unknown), only on a
+    terminal and after the first second."""
 
-    def __init__(self, total: int, done: int) -> None:
-        self.total, self.done = total, done
+    def __init__(self, total: int | None) -> None:
+        self.total: int | None = total
+        self.done = 0
         self.start = time.perf_counter()
         self.shown = False
-        self.enabled = sys.stderr.isatty() and total > 1
+        self.enabled = sys.stderr.isatty() and total != 1
 
     def step(self) -> None:
         self.done += 1
         if self.enabled and time.perf_counter() - self.start > 1.0:
-            sys.stderr.write(f"\rdecompose: {self.done}/{self.total} files")
+            of = f"/{self.total}" if self.total is not None else ""
+            sys.stderr.write(f"\rdecompose: {self.done}{of} files")
             sys.stderr.flush()
             self.shown = True
 
