@@ -46,7 +46,7 @@ MESHCOL_CLIMB_INLINE int climb_start(const ShapeView& s, const Vec3& d, int hint
     }
     int best = 0;
     best_dot = dot(v[0], d);
-    const int stride = n / 8;
+    const int stride = n >= 8 ? n / 8 : 1;
     for (int i = stride / 2; i < n; i += stride) {
         const double di = dot(v[i], d);
         if (di > best_dot) {
@@ -91,8 +91,9 @@ MESHCOL_CLIMB_INLINE int climb_step(const ShapeView& s, const Vec3& d, int best,
 
 /// `support_core` of two climbing shapes at once (`climbs` true for both): a in `da` from
 /// `hint_a`, b in `db` from `hint_b` (negative: no hint). Same answers as two calls, faster.
-MESHCOL_CLIMB_INLINE void climb_pair(const ShapeView& a, const Vec3& da, int hint_a, const ShapeView& b,
-                const Vec3& db, int hint_b, SupportPoint& out_a, SupportPoint& out_b) {
+MESHCOL_CLIMB_INLINE void climb_pair(const ShapeView& a, const Vec3& da, int hint_a,
+                                     const ShapeView& b, const Vec3& db, int hint_b,
+                                     SupportPoint& out_a, SupportPoint& out_b) {
     // Both climbs advance in one loop: each step is a chain of dependent loads and compares,
     // and two independent chains side by side keep the core busy while either waits.
     double dot_a, dot_b;
