@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from meshcol.errors import InvalidMeshError, MissingDependencyError
+from meshcol.inspect import is_closed_manifold
 
 __all__ = [
     "ENGINES",
@@ -265,22 +266,6 @@ def canonical_geometry(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndar
     if len(unique) < 4 or singular[-1] <= FLAT_FRACTION * max(singular[0], 1e-300):
         raise InvalidMeshError("mesh is flat (all vertices lie in one plane): it encloses no volume")
     return np.ascontiguousarray(unique), np.ascontiguousarray(f)
-
-
-def is_closed_manifold(faces: np.ndarray) -> bool:
-    """True when every edge is shared by exactly two triangles with opposite directions."""
-    faces = np.asarray(faces, dtype=np.int64)
-    n = int(faces.max()) + 1
-    a = faces.reshape(-1)
-    b = faces[:, [1, 2, 0]].reshape(-1)
-    # One sort of (undirected edge, direction bit): closed and consistently oriented exactly
-    # when the sorted keys come in pairs, each edge once in each direction.
-    keys = np.sort((np.minimum(a, b) * n + np.maximum(a, b)) * 2 + (a < b))
-    if len(keys) % 2:
-        return False
-    edge, forward = keys >> 1, keys & 1
-    paired = (edge[0::2] == edge[1::2]).all() and (edge[2::2] != edge[1:-1:2]).all()
-    return bool(paired and (forward[0::2] != forward[1::2]).all())
 
 
 def _unique_rows(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

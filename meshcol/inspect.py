@@ -21,6 +21,7 @@ __all__ = [
     "self_intersecting_pairs",
     "guess_units",
     "closed_volume",
+    "is_closed_manifold",
 ]
 
 #: ``--fail-on`` rules, each the name of a finding.
@@ -228,6 +229,28 @@ def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspectio
     )
 
 
+def is_closed_manifold(faces: np.ndarray) -> bool:
+    """True when every edge is shared by exactly two triangles with opposite directions
+    (a closed, consistently wound surface). Edges of collapsed triangles (a repeated index)
+    are ignored."""
+    faces = np.asarray(faces, dtype=np.int64)
+    if len(faces) == 0:
+        return False
+    n = int(faces.max()) + 1
+    a = faces.reshape(-1)
+    b = faces[:, [1, 2, 0]].reshape(-1)
+    real = a != b
+    a, b = a[real], b[real]
+    # One sort of (undirected edge, direction bit): closed and consistently oriented exactly
+    # when the sorted keys come in pairs, each edge once in each direction.
+    keys = np.sort((np.minimum(a, b) * n + np.maximum(a, b)) * 2 + (a < b))
+    if len(keys) == 0 or len(keys) % 2:
+        return False
+    edge, forward = keys >> 1, keys & 1
+    paired = (edge[0::2] == edge[1::2]).all() and (edge[2::2] != edge[1:-1:2]).all()
+    return bool(paired and (forward[0::2] != forward[1::2]).all())
+
+
 def closed_volume(vertices: np.ndarray, faces: np.ndarray) -> float | None:
     """Signed volume of a closed, consistently wound mesh; None when it is not.
 
@@ -247,10 +270,7 @@ def closed_volume(vertices: np.ndarray, faces: np.ndarray) -> float | None:
     Divergence theorem: the sum over the triangles of ``a . (b x c) / 6``.
     """
     faces = np.asarray(faces, dtype=np.int64)
-    if len(faces) == 0:
-        return None
-    _, counts, inconsistent = _edge_table(faces)
-    if (counts != 2).any() or inconsistent:
+    if not is_closed_manifold(faces):
         return None
     tri = np.asarray(vertices, dtype=np.float64)[faces]
     return float(np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum() / 6.0)

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from meshcol.query import _as_pairs, _as_poses
 from meshcol.types import Body, Status
 
 __all__ = [
@@ -63,13 +64,6 @@ def _mesh_arrays(index: int, mesh: Any) -> tuple[np.ndarray, np.ndarray]:
             f"meshes[{index}]: face vertex index {bad} out of range [0, {len(vertices)})"
         )
     return vertices, faces
-
-
-def _check_poses(poses: Any, count: int) -> np.ndarray:
-    poses = np.ascontiguousarray(poses, dtype=np.float64)
-    if poses.shape != (count, 4, 4):
-        raise ValueError(f"poses must be ({count}, 4, 4), got {poses.shape}")
-    return poses
 
 
 @dataclass(frozen=True, eq=False)
@@ -145,7 +139,7 @@ class MeshSet:
         faces = np.ascontiguousarray(faces, dtype=np.int64)
         if poses is None:
             poses = np.tile(np.eye(4), (count, 1, 1))
-        poses = _check_poses(poses, count)
+        poses = _as_poses(poses, count)
         handle = _core().MeshBvhSet(vertices, faces, vertex_offsets, face_offsets, threads=threads)
         valid = np.array([handle.valid(i) for i in range(count)], dtype=bool)
         for array in (vertices, faces, vertex_offsets, face_offsets, poses, valid):
@@ -248,17 +242,6 @@ class MeshIntersectsBatch:
         return len(self.intersecting)
 
 
-def _check_pairs(pairs: Any) -> np.ndarray:
-    pairs = np.asarray(pairs)
-    if pairs.size == 0:
-        pairs = pairs.reshape(0, 2)
-    if pairs.ndim != 2 or pairs.shape[1] != 2:
-        raise ValueError(f"pairs must be (P, 2), got {pairs.shape}")
-    if not np.issubdtype(pairs.dtype, np.integer):
-        raise ValueError(f"pairs must be integers, got {pairs.dtype}")
-    return np.ascontiguousarray(pairs, dtype=np.int64)
-
-
 def mesh_distance_batch(
     meshes: MeshSet,
     poses: np.ndarray | None,
@@ -309,8 +292,8 @@ def mesh_distance_batch(
     """
     if not isinstance(meshes, MeshSet):
         raise TypeError(f"meshes must be a MeshSet, got {type(meshes).__name__}")
-    poses = meshes.poses if poses is None else _check_poses(poses, len(meshes))
-    pairs = _check_pairs(pairs)
+    poses = meshes.poses if poses is None else _as_poses(poses, len(meshes))
+    pairs = _as_pairs(pairs, len(meshes), "meshes")
     max_distance = float(max_distance)
     if not max_distance >= 0.0:
         raise ValueError(f"max_distance must be >= 0, got {max_distance}")
@@ -333,8 +316,8 @@ def mesh_intersects_batch(
     """
     if not isinstance(meshes, MeshSet):
         raise TypeError(f"meshes must be a MeshSet, got {type(meshes).__name__}")
-    poses = meshes.poses if poses is None else _check_poses(poses, len(meshes))
-    pairs = _check_pairs(pairs)
+    poses = meshes.poses if poses is None else _as_poses(poses, len(meshes))
+    pairs = _as_pairs(pairs, len(meshes), "meshes")
     intersecting, status = meshes._handle.intersects_batch(poses, pairs, threads=threads)
     return MeshIntersectsBatch(intersecting, status)
 

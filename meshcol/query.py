@@ -538,7 +538,9 @@ def _as_poses(poses: Any, h: int) -> np.ndarray | None:
     return arr
 
 
-def _as_pairs(pairs: Any, h: int) -> np.ndarray:
+def _as_pairs(pairs: Any, h: int, items: str = "shapes") -> np.ndarray:
+    """``pairs`` as a C-contiguous (P, 2) int64 array of indices below ``h`` (the ``items``,
+    named in the error), or ValueError."""
     arr = np.asarray(pairs)
     if arr.size == 0:
         arr = arr.reshape(-1, 2) if arr.ndim == 2 or arr.ndim == 1 else arr
@@ -549,7 +551,7 @@ def _as_pairs(pairs: Any, h: int) -> np.ndarray:
     arr = np.ascontiguousarray(arr, dtype=np.int64)
     if arr.size and (arr.min() < 0 or arr.max() >= h):
         bad = arr[(arr < 0) | (arr >= h)][0]
-        raise ValueError(f"pairs: index {bad} out of range for {h} shapes")
+        raise ValueError(f"pairs: index {bad} out of range for {h} {items}")
     return arr
 
 

@@ -355,16 +355,18 @@ def test_worker_pool_reads_tasks_ahead_and_fails_fast() -> None:
         assert len(list(outcomes)) == 2
 
     def broken():
-        yield 0.3
+        yield 5.0
         raise MeshcolError("mesh has no faces", "bad.obj")
 
+    # One worker, busy for 5 s with the first task: the bad second "file" is read at once,
+    # not when the worker is free, and close() kills the busy worker.
     start = time.perf_counter()
-    with WorkerPool(time.sleep, 2) as pool:
+    with WorkerPool(time.sleep, 1) as pool:
         with pytest.raises(MeshcolError):
             list(pool.run(broken()))
         workers = list(pool._busy)
-    # Raised while the first task was still running, which close() then killed.
-    assert time.perf_counter() - start < 0.3 + 1.0
+        assert len(workers) == 1
+    assert time.perf_counter() - start < 2.5
     assert not any(w.process.is_alive() for w in workers)
 
 

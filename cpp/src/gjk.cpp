@@ -23,20 +23,20 @@ MinkowskiDifference::MinkowskiDifference(const ShapeView& shape_a, const Pose& p
 
 SimplexVertex MinkowskiDifference::support(const Vec3& d) {
     SimplexVertex v;
+    // The previous support points are good starts for the climbs when the direction turned
+    // little (as in EPA and late GJK); after a turn of more than about 60 degrees (early GJK)
+    // a few strided samples start them nearer the top.
+    const double dd = dot(d, last_direction);
+    const bool near = dd > 0.0 && 4.0 * dd * dd > squared_norm(d) * squared_norm(last_direction);
+    last_direction = d;
+    const int start_a = near ? hint_a : -1, start_b = near ? hint_b : -1;
+    const Vec3 db = rotation_b.transpose_times(-d);
     SupportPoint sa, sb;
     if (climb_both) {
-        // The previous support points are good starts when the direction turned little (as
-        // in EPA and late GJK); after a turn of more than about 60 degrees (early GJK) a few
-        // strided samples start the climbs nearer the top.
-        const double dd = dot(d, last_direction);
-        const bool near =
-            dd > 0.0 && 4.0 * dd * dd > squared_norm(d) * squared_norm(last_direction);
-        last_direction = d;
-        climb::climb_pair(*a, d, near ? hint_a : -1, *b, rotation_b.transpose_times(-d),
-                          near ? hint_b : -1, sa, sb);
+        climb::climb_pair(*a, d, start_a, *b, db, start_b, sa, sb);
     } else {
-        sa = support_core(*a, d, hint_a);
-        sb = support_core(*b, rotation_b.transpose_times(-d), hint_b);
+        sa = support_core(*a, d, start_a);
+        sb = support_core(*b, db, start_b);
     }
     hint_a = sa.index;
     hint_b = sb.index;

@@ -12,17 +12,15 @@ namespace {
 SupportPoint polytope_support(const ShapeView& s, const Vec3& d, int hint) {
     const Vec3* v = s.vertices;
     const int n = s.vertex_count;
-    if (s.adjacency_offsets != nullptr && n > defaults::hill_climbing_min_vertices) {
+    if (climbs(s)) {
         // Hill climbing on the hull's edge graph: a local maximum of a linear function over the
         // 1-skeleton of a convex polytope is global (Ericson 2004, sec. 9.5.4). Capped: on a
         // cap hit we fall back to the scan below.
         double best_dot;
         int best = climb::climb_start(s, d, hint, best_dot);
-        for (int step = 0; step < n; ++step) {
-            const int next = climb::climb_step(s, d, best, best_dot);
-            if (next < 0) return {v[best], best};
-            best = next;
-        }
+        bool up = true;
+        for (int step = 0; up && step < n; ++step) climb::advance(s, d, best, best_dot, up);
+        if (!up) return {v[best], best};
     }
     const int best = climb::scan_support(v, n, d);
     return {v[best], best};

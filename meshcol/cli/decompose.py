@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import functools
 import os
-import sys
 import time
 from collections.abc import Iterator
 from typing import Any
@@ -130,6 +129,7 @@ def _decompose_files(
     """The run after option checks: load, look up the cache, decompose, write, report.
     Returns the exit code (1 when a file failed or a body exceeds ``max_hausdorff``)."""
     from meshcol.decompose import cached_decomposition
+    from meshcol.cli.common import Progress
     from meshcol.decompose_jobs import decompose_task, run_tasks, safe_name, write_parts
     from meshcol.report import dumps_csv, dumps_json, emit, report_format
 
@@ -142,9 +142,16 @@ def _decompose_files(
     results: dict[int, Any] = {}
     task_file: list[int] = []
     key_options = {k: v for k, v in options.items() if k != "use_cache"}
-    progress = _Progress(None if _is_manifest(inputs) else len(inputs))
+    progress = Progress()
+    done, total = 0, None if _is_manifest(inputs) else len(inputs)
+
+    def step() -> None:
+        nonlocal done
+        done += 1
+        progress.message(f"decompose: {done}{'' if total is None else f'/{total}'} files")
 
     def tasks() -> Iterator[tuple[str, list, dict]]:
+        nonlocal total
         for path, bodies in _iter_load(inputs):
             for name, _, _, _ in bodies:
                 clean = safe_name(name)
@@ -162,17 +169,17 @@ def _decompose_files(
             if lookup and all(d is not None and d.metrics is not None for d in lookup.values()):
                 hits = [(name, lookup[name]) for name, _, _, _ in bodies]
                 results[i] = ("ok", hits, None, time.perf_counter() - start)
-                progress.step()
+                step()
                 continue
             task_file.append(i)
             yield (path, [(name, v, f) for name, v, f, _ in bodies], options)
-        progress.total = len(files)
+        total = len(files)
 
     for outcome in run_tasks(decompose_task, tasks(), jobs=jobs, timeout=timeout, pool=pool):
         i = task_file[outcome.index]
         results[i] = (outcome.status, outcome.value, outcome.message, outcome.seconds)
-        progress.step()
-    progress.close()
+        step()
+    progress.done()
     os.makedirs(out_dir, exist_ok=True)
 
     rows: list[dict[str, Any]] = []
@@ -261,28 +268,3 @@ def _iter_load(inputs: tuple[str, ...]) -> Iterator[tuple[str, list[tuple[str, A
                 raise InvalidMeshError(exc.message, where) from None
             canonical.append((body.name, v, f, body.transform))
         yield source, canonical
-
-
-class _Progress:
-    """``decompose: k/n files`` on stderr (``k files`` while n is unknown), only on a
-    terminal and after the first second."""
-
-    def __init__(self, total: int | None) -> None:
-        self.total: int | None = total
-        self.done = 0
-        self.start = time.perf_counter()
-        self.shown = False
-        self.enabled = sys.stderr.isatty() and total != 1
-
-    def step(self) -> None:
-        self.done += 1
-        if self.enabled and time.perf_counter() - self.start > 1.0:
-            of = f"/{self.total}" if self.total is not None else ""
-            sys.stderr.write(f"\rdecompose: {self.done}{of} files")
-            sys.stderr.flush()
-            self.shown = True
-
-    def close(self) -> None:
-        if self.shown:
-            sys.stderr.write("\n")
-            sys.stderr.flush()
