@@ -24,7 +24,7 @@ import time
 
 import numpy as np
 
-from meshcol.broadphase import AabbTree, SweepAndPrune, sort_and_sweep
+from meshcol.collision.broadphase import AabbTree, SortAndSweep, sort_and_sweep
 
 try:
     import fcl
@@ -143,7 +143,7 @@ def run_scene(label, lo, hi, repeats, peers):
 def incremental(n, rng, repeats):
     """A moving scene: every box moves by a normal step of `fraction` x its size, and back.
 
-    One SweepAndPrune is built before timing; each timed update() is one step of the scene
+    One SortAndSweep is built before timing; each timed update() is one step of the scene
     (a small motion from the previous step). A fresh sort_and_sweep of the same boxes is timed
     right before each update, so both see the same machine load; the ratio printed is the
     median of the per-step ratios (robust on a shared machine), the times the best of each.
@@ -155,7 +155,7 @@ def incremental(n, rng, repeats):
     for fraction in (0.001, 0.01, 0.1):
         step = rng.normal(scale=fraction * side, size=lo.shape)
         moved_lo, moved_hi = lo + step, hi + step
-        sweep = SweepAndPrune(lo, hi)
+        sweep = SortAndSweep(lo, hi)
         fresh_times, update_times = [], []
         for _ in range(repeats):
             t_fresh, fresh = best_of(lambda: sort_and_sweep(moved_lo, moved_hi), 1)

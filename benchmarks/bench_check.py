@@ -61,7 +61,7 @@ def load_seconds(scene) -> float:
 
     import trimesh
 
-    from meshcol.scene import load_inputs
+    from meshcol.io.scene import load_inputs
 
     with tempfile.TemporaryDirectory() as tmp:
         files: dict[int, str] = {}
@@ -85,7 +85,7 @@ def load_seconds(scene) -> float:
 
 
 def run_meshcol(scene, threads: int, clearance: float = 0.0):
-    from meshcol.check import CheckOptions, check_scene
+    from meshcol.analysis.check import CheckOptions, check_scene
 
     start = time.perf_counter()
     report = check_scene(scene, CheckOptions(shape="hull", threads=threads, clearance=clearance))
@@ -104,7 +104,7 @@ def run_trimesh(scene, report):
         key = body.vertices.ctypes.data
         if key not in hulls:  # instances share a hull, as in meshcol
             hulls[key] = trimesh.Trimesh(body.vertices, body.faces).convex_hull
-        manager.add_object(body.name, hulls[key], transform=body.transform)
+        manager.add_object(body.name, hulls[key], pose=body.transform)
     colliding, names = manager.in_collision_internal(return_names=True)
     objs = {name: manager._objs[name]["obj"] for name in manager._objs}
     request = fcl.DistanceRequest()
@@ -124,7 +124,7 @@ def main() -> None:
                         help="clearance band: pairs closer than this are candidates too")
     args = parser.parse_args()
 
-    from meshcol import _core
+    from meshcol._native import core as _core
 
     print(f"meshcol check vs trimesh CollisionManager (+ fcl.distance per candidate pair); "
           f"{_core.hardware_threads()} hardware threads; clearance {args.clearance}")

@@ -117,8 +117,8 @@ def main() -> None:
     print("\n## cache miss vs hit")
     print(f"whole command (includes ~1 s of Python start-up, imports and file parsing): miss {miss:.2f} s, "
           f"hit {hit:.3f} s, ratio {miss / hit:.0f}x, identical outputs: {same_tree(work / 'miss', work / 'hit')}")
-    from meshcol.decompose import decompose
-    from meshcol.mesh_io import load_mesh
+    from meshcol import decompose
+    from meshcol.io.mesh_read import load_mesh
 
     options = {"threshold": 0.1, "preprocess": "off", "resolution": 1000, "cache_dir": str(cache),
                "engine_options": {"mcts_iterations": 60, "mcts_nodes": 12, "mcts_max_depth": 2}}

@@ -17,7 +17,7 @@ import fcl
 import numpy as np
 import trimesh
 
-from meshcol.mesh_query import MeshSet, mesh_distance_batch, mesh_intersects_batch
+from meshcol.collision.mesh_query import MeshSet, mesh_distance_batch, mesh_intersects_batch
 
 CORPUS = Path(__file__).resolve().parents[1].parent / "shared" / "corpus" / "trimesh-models"
 

@@ -19,9 +19,9 @@ import time
 
 import numpy as np
 
-from meshcol.query import ConvexSet, distance_batch
-from meshcol.sweep import interpolate_pose, time_of_impact_batch
-from meshcol.types import ToiStatus
+from meshcol import ConvexSet, distance_batch
+from meshcol import interpolate_pose, time_of_impact_batch
+from meshcol.types import TimeOfImpactStatus
 
 TOLERANCE = 1e-6
 
@@ -119,12 +119,12 @@ def run(n, pairs, samples, rotate, rng, fcl):
     for _ in range(repeat):
         r = time_of_impact_batch(big, start, end, idx, tolerance=TOLERANCE, threads=1)
     ours = (time.perf_counter() - t0) / repeat / len(keep)
-    hits = [s == ToiStatus.HIT for s in r.status]
-    failed = int(np.sum(r.status == ToiStatus.FAILED))
+    hits = [s == TimeOfImpactStatus.HIT for s in r.status]
+    failed = int(np.sum(r.status == TimeOfImpactStatus.FAILED))
     print(f"{n}-vertex hulls, {'rotation + translation' if rotate else 'translation'}: "
           f"{len(keep)} pairs, {sum(t is not None for t in truth)} touch (ground truth: "
           f"{samples} samples + bisection)")
-    print(summarise("meshcol", hits, truth, list(r.toi), ours)
+    print(summarise("meshcol", hits, truth, list(r.time_of_impact), ours)
           + f"  failed {failed}  mean iterations {r.iterations.mean():.1f}")
     if fcl is None or rotate:
         return ours, None

@@ -13,6 +13,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+from meshcol._version import __version__
 from meshcol.errors import (
     InputFileError,
     InvalidMeshError,
@@ -20,71 +21,78 @@ from meshcol.errors import (
     MissingDependencyError,
     SceneError,
 )
-from meshcol.types import Body, Primitive, Scene, Status, ToiStatus
+from meshcol.types import Body, Primitive, Scene, Status, TimeOfImpactStatus
 
-__version__ = "0.1.0"
-
-# public name -> module that defines it
+# public name -> module that defines it (imported on first use)
 _LAZY: dict[str, str] = {
-    # mesh and scene loading
-    "load_mesh": "meshcol.mesh_io",
-    "load_scene": "meshcol.scene",
-    "load_inputs": "meshcol.scene",
+    # mesh and scene loading, writing
+    "load_mesh": "meshcol.io.mesh_read",
+    "load_scene": "meshcol.io.scene",
+    "load_inputs": "meshcol.io.scene",
+    "write_meshes": "meshcol.io.mesh_write",
     # hulls and inspection
-    "convex_hull": "meshcol.hulls",
-    "HullResult": "meshcol.hulls",
-    "inspect_body": "meshcol.inspect",
-    "MeshInspection": "meshcol.inspect",
+    "convex_hull": "meshcol.geometry.hull",
+    "HullResult": "meshcol.geometry.hull",
+    "hull": "meshcol.analysis.hull",
+    "HullReport": "meshcol.analysis.hull",
+    "inspect_body": "meshcol.analysis.inspect",
+    "MeshInspection": "meshcol.analysis.inspect",
     # convex decomposition
-    "decompose": "meshcol.decompose",
-    "Decomposition": "meshcol.decompose",
-    "cached_decomposition": "meshcol.decompose",
-    # narrow phase
-    "ConvexSet": "meshcol.query",
-    "Sphere": "meshcol.query",
-    "Box": "meshcol.query",
-    "Capsule": "meshcol.query",
-    "Cylinder": "meshcol.query",
-    "DistanceResult": "meshcol.query",
-    "PenetrationResult": "meshcol.query",
-    "distance": "meshcol.query",
-    "penetration": "meshcol.query",
-    "intersects": "meshcol.query",
-    "signed_distance": "meshcol.query",
-    "distance_batch": "meshcol.query",
-    "penetration_batch": "meshcol.query",
-    "intersects_batch": "meshcol.query",
-    "signed_distance_batch": "meshcol.query",
-    "ShapeKind": "meshcol.query",
-    "SignedDistanceResult": "meshcol.query",
-    "DistanceBatch": "meshcol.query",
-    "PenetrationBatch": "meshcol.query",
-    "SignedDistanceBatch": "meshcol.query",
-    "IntersectsBatch": "meshcol.query",
+    "decompose": "meshcol.decomposition.decompose",
+    "cached_decomposition": "meshcol.decomposition.decompose",
+    "Decomposition": "meshcol.decomposition.result",
+    "Fidelity": "meshcol.decomposition.result",
+    # shapes and the narrow phase
+    "ConvexSet": "meshcol.collision.shapes",
+    "ShapeKind": "meshcol.collision.shapes",
+    "Sphere": "meshcol.collision.shapes",
+    "Box": "meshcol.collision.shapes",
+    "Capsule": "meshcol.collision.shapes",
+    "Cylinder": "meshcol.collision.shapes",
+    "DistanceResult": "meshcol.collision.narrowphase",
+    "PenetrationResult": "meshcol.collision.narrowphase",
+    "SignedDistanceResult": "meshcol.collision.narrowphase",
+    "DistanceBatch": "meshcol.collision.narrowphase",
+    "PenetrationBatch": "meshcol.collision.narrowphase",
+    "SignedDistanceBatch": "meshcol.collision.narrowphase",
+    "IntersectsBatch": "meshcol.collision.narrowphase",
+    "distance": "meshcol.collision.narrowphase",
+    "penetration": "meshcol.collision.narrowphase",
+    "intersects": "meshcol.collision.narrowphase",
+    "signed_distance": "meshcol.collision.narrowphase",
+    "distance_batch": "meshcol.collision.narrowphase",
+    "penetration_batch": "meshcol.collision.narrowphase",
+    "intersects_batch": "meshcol.collision.narrowphase",
+    "signed_distance_batch": "meshcol.collision.narrowphase",
     # continuous collision
-    "TimeOfImpactResult": "meshcol.sweep",
-    "TimeOfImpactBatch": "meshcol.sweep",
-    "SweepReport": "meshcol.sweep",
-    "SweepHit": "meshcol.sweep",
-    "interpolate_pose": "meshcol.sweep",
-    "time_of_impact": "meshcol.sweep",
-    "time_of_impact_batch": "meshcol.sweep",
+    "TimeOfImpactResult": "meshcol.collision.time_of_impact",
+    "TimeOfImpactBatch": "meshcol.collision.time_of_impact",
+    "interpolate_pose": "meshcol.collision.time_of_impact",
+    "time_of_impact": "meshcol.collision.time_of_impact",
+    "time_of_impact_batch": "meshcol.collision.time_of_impact",
     # exact triangle-mesh queries
-    "MeshSet": "meshcol.mesh_query",
-    "MeshDistanceBatch": "meshcol.mesh_query",
-    "MeshDistanceResult": "meshcol.mesh_query",
-    "MeshIntersectsBatch": "meshcol.mesh_query",
-    "mesh_distance": "meshcol.mesh_query",
-    "mesh_distance_batch": "meshcol.mesh_query",
-    "mesh_intersects_batch": "meshcol.mesh_query",
-    # scene checks
-    "CheckOptions": "meshcol.check",
-    "CheckReport": "meshcol.check",
+    "MeshSet": "meshcol.collision.mesh_query",
+    "MeshDistanceBatch": "meshcol.collision.mesh_query",
+    "MeshDistanceResult": "meshcol.collision.mesh_query",
+    "MeshIntersectsBatch": "meshcol.collision.mesh_query",
+    "mesh_distance": "meshcol.collision.mesh_query",
+    "mesh_distance_batch": "meshcol.collision.mesh_query",
+    "mesh_intersects_batch": "meshcol.collision.mesh_query",
     # broad phase
-    "sort_and_sweep": "meshcol.broadphase",
-    "SweepAndPrune": "meshcol.broadphase",
-    "AabbTree": "meshcol.broadphase",
-    "brute_force_pairs": "meshcol.broadphase",
+    "sort_and_sweep": "meshcol.collision.broadphase",
+    "SortAndSweep": "meshcol.collision.broadphase",
+    "AabbTree": "meshcol.collision.broadphase",
+    "brute_force_pairs": "meshcol.collision.broadphase",
+    # analyses
+    "Colliders": "meshcol.analysis.colliders",
+    "build_colliders": "meshcol.analysis.colliders",
+    "check": "meshcol.analysis.check",
+    "check_scene": "meshcol.analysis.check",
+    "CheckOptions": "meshcol.analysis.check",
+    "CheckReport": "meshcol.analysis.check",
+    "sweep": "meshcol.analysis.sweep",
+    "SweepReport": "meshcol.analysis.sweep",
+    "SweepHit": "meshcol.analysis.sweep",
 }
 
 __all__ = [
@@ -98,19 +106,9 @@ __all__ = [
     "Primitive",
     "Scene",
     "Status",
-    "ToiStatus",
-    "check",
-    "sweep",
+    "TimeOfImpactStatus",
     *_LAZY,
 ]
-
-
-# `check` and `sweep` name both a submodule and its main function. The submodules are light
-# (numpy only), so import them now and bind the functions afterwards: `meshcol.check(...)`
-# then works whatever else was imported first (a later `import meshcol.check` finds the module
-# in sys.modules and leaves the package attribute alone).
-from meshcol.check import check  # noqa: E402
-from meshcol.sweep import sweep  # noqa: E402
 
 
 def __getattr__(name: str) -> Any:

@@ -3,8 +3,8 @@
 Frames and signs, fixed once for the whole package:
 
 - A body's ``vertices`` are in its local frame, with any scale already applied, so its
-  ``transform`` is always rigid (rotation and translation only).
-- ``transform`` maps local to world: ``world = R @ local + t`` (row-major 4x4).
+  ``pose`` is always rigid (rotation and translation only).
+- ``pose`` maps local to world: ``world = R @ local + t`` (row-major 4x4).
 - Every point a query or report returns is in the world frame.
 """
 
@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Status", "ToiStatus", "Primitive", "Body", "Scene"]
+__all__ = ["Status", "TimeOfImpactStatus", "Primitive", "Body", "Scene"]
 
 
 class Status(enum.IntEnum):
@@ -28,7 +28,7 @@ class Status(enum.IntEnum):
     NOT_RUN = 4
 
 
-class ToiStatus(enum.IntEnum):
+class TimeOfImpactStatus(enum.IntEnum):
     """Outcome of a time-of-impact query (mirrors ``status.hpp``)."""
 
     HIT = 0
@@ -74,28 +74,28 @@ class Body:
         Local frame, scale applied.
     faces : (m, 3) int64
         Triangles, indices into ``vertices``. For a primitive, a tessellation.
-    transform : (4, 4) float64
+    pose : (4, 4) float64
         Rigid world-from-local pose at the start (and only) instant.
-    end_transform : (4, 4) float64 or None
+    end_pose : (4, 4) float64 or None
         Rigid pose at the end of the motion, for continuous collision.
     primitive : Primitive or None
         Set when the body is an analytic shape; queries then use it exactly.
-    shape : str or None
-        Per-body collision shape override (``hull``, ``decomposed``, ``mesh``).
+    collider : str or None
+        Per-body collider kind, the manifest field ``shape`` (``hull``, ``decomposed``, ``mesh``).
     """
 
     name: str
     source: str | None
     vertices: np.ndarray
     faces: np.ndarray
-    transform: np.ndarray = field(default_factory=lambda: np.eye(4))
-    end_transform: np.ndarray | None = None
+    pose: np.ndarray = field(default_factory=lambda: np.eye(4))
+    end_pose: np.ndarray | None = None
     primitive: Primitive | None = None
-    shape: str | None = None
+    collider: str | None = None
 
     def world_vertices(self, end: bool = False) -> np.ndarray:
         """Vertices in the world frame, (n, 3) float64, at the start (or end) pose."""
-        m = self.end_transform if end and self.end_transform is not None else self.transform
+        m = self.end_pose if end and self.end_pose is not None else self.pose
         return self.vertices @ m[:3, :3].T + m[:3, 3]
 
 

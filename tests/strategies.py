@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from hypothesis import strategies as st
 
-from meshcol.query import Box, Capsule, Cylinder, Sphere
+from meshcol import Box, Capsule, Cylinder, Sphere
 
 
 def rotation_from_quaternion(q: np.ndarray) -> np.ndarray:

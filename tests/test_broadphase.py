@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, initialize, invariant, precondition, rule
 
 import meshcol
-from meshcol.broadphase import AabbTree, SweepAndPrune, brute_force_pairs, sort_and_sweep
+from meshcol.collision.broadphase import AabbTree, SortAndSweep, brute_force_pairs, sort_and_sweep
 
 
 def _pairs(*rows):
@@ -29,7 +29,7 @@ def _all_pairs(lo, hi):
     yield "sort_and_sweep", sort_and_sweep(lo, hi)
     for axis in range(3):
         yield f"sort_and_sweep axis={axis}", sort_and_sweep(lo, hi, axis=axis)
-    yield "SweepAndPrune", SweepAndPrune(lo, hi).pairs()
+    yield "SortAndSweep", SortAndSweep(lo, hi).pairs()
     tree = AabbTree()
     ids = tree.insert(lo, hi)
     tree.validate()
@@ -49,7 +49,7 @@ def _all_pairs(lo, hi):
 def test_public_names():
     assert meshcol.sort_and_sweep is sort_and_sweep
     assert meshcol.AabbTree is AabbTree
-    assert meshcol.SweepAndPrune is SweepAndPrune
+    assert meshcol.SortAndSweep is SortAndSweep
     assert meshcol.brute_force_pairs is brute_force_pairs
 
 
@@ -80,8 +80,8 @@ def test_empty_and_single():
 def test_axis_choice_by_variance():
     rng = np.random.default_rng(0)
     lo = rng.random((50, 3)) * [1.0, 100.0, 10.0]
-    assert SweepAndPrune(lo, lo + 0.1).axis == 1
-    assert SweepAndPrune(lo, lo + 0.1, axis=2).axis == 2
+    assert SortAndSweep(lo, lo + 0.1).axis == 1
+    assert SortAndSweep(lo, lo + 0.1, axis=2).axis == 2
 
 
 def test_lattice_of_touching_unit_cubes_uses_threads_and_grid():
@@ -97,7 +97,7 @@ def test_lattice_of_touching_unit_cubes_uses_threads_and_grid():
     assert np.array_equal(np.unique(pairs, axis=0), pairs)  # sorted, no duplicates
     tree = AabbTree.from_boxes(lo, lo + 1.0)
     assert np.array_equal(tree.query_pairs(), pairs)
-    sweep = SweepAndPrune(lo, lo + 1.0)
+    sweep = SortAndSweep(lo, lo + 1.0)
     assert np.array_equal(sweep.pairs(), pairs)
     # Shrinking every box a little separates all of them.
     assert sort_and_sweep(lo + 1e-9, lo + 1.0 - 1e-9).shape == (0, 2)
@@ -123,7 +123,7 @@ def test_level_layout_with_large_boxes_matches_brute_force():
     "call",
     [
         lambda lo, hi: sort_and_sweep(lo, hi),
-        lambda lo, hi: SweepAndPrune(lo, hi),
+        lambda lo, hi: SortAndSweep(lo, hi),
         lambda lo, hi: AabbTree().insert(lo, hi),
         lambda lo, hi: AabbTree.from_boxes(lo, hi),
         lambda lo, hi: brute_force_pairs(lo, hi),
@@ -152,7 +152,7 @@ def test_other_argument_errors():
     lo, hi = np.zeros((3, 3)), np.ones((3, 3))
     with pytest.raises(ValueError, match=r"^axis must be None, 0, 1 or 2, got 3$"):
         sort_and_sweep(lo, hi, axis=3)
-    sweep = SweepAndPrune(lo, hi)
+    sweep = SortAndSweep(lo, hi)
     with pytest.raises(ValueError, match=r"^aabb_min must be \(3, 3\) as before, got \(2, 3\)$"):
         sweep.update(lo[:2], hi[:2])
     with pytest.raises(ValueError, match=r"^margin must be finite and >= 0, got -1.0$"):
@@ -222,7 +222,7 @@ def test_larger_sets_use_the_grid_and_equal_brute_force(boxes, seed):
 def test_incremental_sweep_equals_brute_force_over_steps(boxes, seed, motion):
     lo, hi = boxes
     rng = np.random.default_rng(seed)
-    sweep = SweepAndPrune(lo, hi)
+    sweep = SortAndSweep(lo, hi)
     scale = max(np.abs(hi).max(initial=1.0), 1e-300)
     for _ in range(3):
         step = rng.normal(size=lo.shape) * motion * (hi - lo).max(initial=1.0)
@@ -450,7 +450,7 @@ def test_rebuild_keeps_ids_and_lowers_sah_cost():
 def test_incremental_sweep_reuses_the_order():
     rng = np.random.default_rng(2)
     lo = rng.random((5000, 3)) * 100
-    sweep = SweepAndPrune(lo, lo + 1)
+    sweep = SortAndSweep(lo, lo + 1)
     small = lo + rng.normal(scale=1e-4, size=lo.shape)
     assert np.array_equal(sweep.update(small, small + 1), sort_and_sweep(small, small + 1))
     assert 0 <= sweep.last_shifts < len(lo)
@@ -470,7 +470,7 @@ def test_incremental_sweep_with_grid_cells_equals_brute_force(seed, motion):
     n = 1500
     lo = rng.random((n, 3)) * 40
     hi = lo + rng.uniform(0.0, 1.5, size=lo.shape)
-    sweep = SweepAndPrune(lo, hi)
+    sweep = SortAndSweep(lo, hi)
     for step in range(3):
         delta = rng.normal(size=lo.shape) * motion
         delta[rng.random(n) < 0.3] = 0.0

@@ -12,9 +12,9 @@ from click.testing import CliRunner
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from meshcol.check import CSV_COLUMNS, CheckOptions, check, check_scene
+from meshcol.analysis.check import CSV_COLUMNS, CheckOptions, check, check_scene
 from meshcol.cli import main
-from meshcol.scene import load_inputs
+from meshcol.io.scene import load_inputs
 
 SCHEMA = Path(__file__).resolve().parent.parent / "meshcol" / "schemas" / "check_report.schema.json"
 
@@ -90,7 +90,7 @@ def test_box_inside_box_is_contained(tmp_path: Path) -> None:
     write_box_obj(tmp_path / "outer.obj", [-2, -2, -2], [2, 2, 2])
     write_box_obj(tmp_path / "inner.obj", [-0.5, -0.5, -0.5], [0.5, 0.5, 0.5])
     for shape in ("hull", "mesh"):
-        report = check([tmp_path / "outer.obj", tmp_path / "inner.obj"], shape=shape)
+        report = check([tmp_path / "outer.obj", tmp_path / "inner.obj"], collider=shape)
         p = pair(report, "inner", "outer")
         assert p["status"] == "contained", shape
         assert not report.passed
@@ -178,19 +178,18 @@ def test_axis_aligned_boxes_match_exact_answers(boxes) -> None:
 
 def test_ball_in_bowl_is_phantom_with_hull_only(samples: Path) -> None:
     scene = samples / "bowl" / "scene.json"
-    hull = check([scene], shape="hull")
+    hull = check([scene], collider="hull")
     assert [p["status"] for p in hull.pairs] == ["penetrating"]
-    mesh = check([scene], shape="mesh")
+    mesh = check([scene], collider="mesh")
     assert [p["status"] for p in mesh.pairs] in (["separated"], [])
     assert mesh.passed
 
 
 @pytest.mark.slow
 def test_ball_in_bowl_is_separated_when_decomposed(samples: Path, tmp_path: Path) -> None:
-    pytest.importorskip("coacd")
     scene = samples / "bowl" / "scene.json"
     # default decomposition parameters, as `meshcol check --shape decomposed` uses them
-    report = check([scene], shape="decomposed",
+    report = check([scene], collider="decomposed",
                    decompose_options={"cache_dir": str(tmp_path / "cache")})
     assert all(p["status"] in ("separated", "clearance") for p in report.pairs)
     assert report.passed
@@ -233,7 +232,7 @@ def _round_floats(obj):
 
 
 def test_report_matches_schema(samples: Path) -> None:
-    jsonschema = pytest.importorskip("jsonschema")
+    import jsonschema
     schema = json.loads(SCHEMA.read_text())
     data = json.loads(check([samples / "level" / "scene.json"], clearance=0.05).to_json())
     jsonschema.validate(data, schema)
@@ -260,7 +259,7 @@ def _fcl_mesh_distance(body_a, body_b) -> float:
 def test_corpus_balls_overlap(corpus: Path) -> None:
     d = corpus / "trimesh-models"
     for shape in ("hull", "mesh"):
-        report = check([d / "ballA.off", d / "ballB.off"], shape=shape)
+        report = check([d / "ballA.off", d / "ballB.off"], collider=shape)
         assert [p["status"] for p in report.pairs] == ["penetrating"], shape
 
 
@@ -269,7 +268,7 @@ def test_corpus_scene_distances_match_fcl(corpus: Path, name: str) -> None:
     path = corpus / "trimesh-models" / name
     scene = load_inputs([path])
     bodies = {b.name: b for b in scene.bodies}
-    report = check_scene(scene, CheckOptions(shape="mesh", clearance=1e9))
+    report = check_scene(scene, CheckOptions(collider="mesh", clearance=1e9))
     n = len(scene.bodies)
     assert len(report.pairs) == n * (n - 1) // 2  # the huge clearance makes every pair a candidate
     compared = 0
@@ -375,14 +374,14 @@ def test_ucx_parts_are_used_as_given(tmp_path: Path) -> None:
     scene.add_geometry(trimesh.creation.box(bounds=[[1.25, 0, 0], [2, 1, 1]]), node_name="wall", geom_name="wall")
     path = tmp_path / "crate.glb"
     scene.export(path)
-    report = check([path], shape="decomposed")
+    report = check([path], collider="decomposed")
     names = {b["name"] for b in report.bodies}
     assert not any("UCX" in n for n in names)
     crate = next(b for b in report.bodies if b["name"].endswith("crate"))
-    assert crate["shape"] == "ucx"
+    assert crate["collider"] == "ucx"
     p = report.pairs[0]
     assert p["status"] == "penetrating"
     assert p["depth"] == pytest.approx(0.25, rel=1e-9)
     # with hulls the UCX part is ignored: crate [0, 1] and wall [1.25, 2] are 0.25 apart
-    hull = check([path], shape="hull", clearance=0.5)
+    hull = check([path], collider="hull", clearance=0.5)
     assert [(p["status"], p["distance"]) for p in hull.pairs] == [("clearance", pytest.approx(0.25))]

@@ -61,7 +61,7 @@ def test_python_dash_m_runs() -> None:
 
 
 def test_native_core_loads() -> None:
-    from meshcol import _core
+    from meshcol._native import core as _core
 
     assert _core.hardware_threads() >= 1
     assert 0 < _core.defaults.rigid_tolerance < 1e-3
@@ -71,7 +71,7 @@ def test_output_files_get_the_usual_permissions(tmp_path) -> None:
     import os
     import stat
 
-    from meshcol.report import atomic_write
+    from meshcol.io.report import atomic_write
 
     target = tmp_path / "out.json"
     atomic_write(target, "{}\n")
@@ -82,16 +82,16 @@ def test_output_files_get_the_usual_permissions(tmp_path) -> None:
 
 
 def test_same_named_functions_stay_callable() -> None:
-    """`meshcol.check` / `meshcol.sweep` are the functions even after their modules load."""
+    """`meshcol.check`, `meshcol.sweep` and `meshcol.decompose` are the functions whatever was
+    imported first: no module shares their names."""
     code = (
-        "import meshcol.check, meshcol.sweep, meshcol\n"
+        "import meshcol.analysis.check, meshcol.analysis.sweep, meshcol.decomposition, meshcol\n"
         "from meshcol.cli import check as _c, sweep as _s\n"
-        "import meshcol.check\n"
         "print(callable(meshcol.check), callable(meshcol.sweep), meshcol.check.__module__, meshcol.sweep.__module__)\n"
         "import sys\n"
         "print('HEAVY=' + ','.join(m for m in ('trimesh', 'scipy', 'meshcol._core') if m in sys.modules))\n"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     first, heavy = out.stdout.strip().splitlines()
-    assert first == "True True meshcol.check meshcol.sweep"
+    assert first == "True True meshcol.analysis.check meshcol.analysis.sweep"
     assert heavy == "HEAVY="

@@ -287,15 +287,15 @@ def test_clashing_output_names_are_refused(meshes, tmp_path) -> None:
 
 
 def test_obj_numbers_round_trip_exactly(meshes, tmp_path) -> None:
-    from meshcol.decompose_jobs import obj_text
+    from meshcol.io.mesh_write import obj_text
 
     v = np.array([[0.1, -0.0, 1e-300], [1 / 3, 2.5, -7.0]])
     text = obj_text([("a", v, np.array([[0, 1, 1]]))])
-    assert text == f"# meshcol decompose\no a\nv 0.1 0.0 1e-300\nv {1 / 3!r} 2.5 -7.0\nf 1 2 2\n"
+    assert text == f"# meshcol\no a\nv 0.1 0.0 1e-300\nv {1 / 3!r} 2.5 -7.0\nf 1 2 2\n"
 
 
 def test_worker_threads_share_the_cores(monkeypatch) -> None:
-    from meshcol import decompose_jobs
+    from meshcol.decomposition import jobs as decompose_jobs
 
     for name in ("OMP_NUM_THREADS", "OMP_WAIT_POLICY", "OPENBLAS_NUM_THREADS"):
         monkeypatch.delenv(name, raising=False)
@@ -316,7 +316,9 @@ def test_worker_threads_share_the_cores(monkeypatch) -> None:
 def test_worker_pool_starts_before_its_tasks() -> None:
     import functools
 
-    from meshcol.decompose_jobs import WorkerPool, prepare_engine, safe_name
+    from meshcol.decomposition.engines import prepare_engine
+    from meshcol.decomposition.jobs import WorkerPool
+    from meshcol.io.mesh_write import safe_name
 
     with WorkerPool(safe_name, 2, prepare=functools.partial(prepare_engine, "coacd")) as pool:
         pool.start()
@@ -336,7 +338,7 @@ def test_worker_pool_starts_before_its_tasks() -> None:
 
 
 def test_worker_pool_reads_tasks_ahead_and_fails_fast() -> None:
-    from meshcol.decompose_jobs import WorkerPool
+    from meshcol.decomposition.jobs import WorkerPool
     from meshcol.errors import MeshcolError
 
     pulled = []

@@ -75,7 +75,7 @@ def test_report_on_stdout_without_mesh_output(tmp_path: Path) -> None:
 
 
 def test_budget_writes_an_enclosing_mesh(corpus, tmp_path: Path) -> None:
-    from meshcol.mesh_io import load_mesh
+    from meshcol.io.mesh_read import load_mesh
 
     source = corpus / "trimesh-models" / "unit_sphere.STL"
     out = tmp_path / "hull.obj"
@@ -96,7 +96,7 @@ def test_budget_writes_an_enclosing_mesh(corpus, tmp_path: Path) -> None:
 
 def test_output_is_in_the_world_frame(corpus, tmp_path: Path) -> None:
     """nested.glb bodies carry node transforms: the hulls sit over the world vertices."""
-    from meshcol.mesh_io import load_mesh
+    from meshcol.io.mesh_read import load_mesh
 
     source = corpus / "trimesh-models" / "nested.glb"
     out = tmp_path / "hulls.glb"
@@ -107,7 +107,7 @@ def test_output_is_in_the_world_frame(corpus, tmp_path: Path) -> None:
     written = trimesh.load(out, force="scene")
     bodies = load_mesh(source)
     assert len(written.geometry) == len(bodies)
-    assert any(not np.allclose(b.transform, np.eye(4)) for b in bodies)  # else this proves nothing
+    assert any(not np.allclose(b.pose, np.eye(4)) for b in bodies)  # else this proves nothing
     for body in bodies:
         world = body.world_vertices()
         hull = written.geometry[body.name]
@@ -292,7 +292,7 @@ MANIFESTS = {
 @pytest.mark.parametrize("name", sorted(MANIFESTS))
 def test_broken_manifest_maps_the_scene_error(tmp_path: Path, name: str) -> None:
     from meshcol.errors import SceneError
-    from meshcol.scene import load_inputs
+    from meshcol.io.scene import load_inputs
 
     write(tmp_path, "cube.obj", CUBE_OBJ)
     manifest = write(tmp_path, name, MANIFESTS[name])

@@ -10,7 +10,7 @@ import pytest
 from click.testing import CliRunner
 
 from meshcol.cli import main
-from meshcol.inspect import RULES
+from meshcol.analysis.inspect import RULES
 
 from test_cli_hull import CUBE_OBJ, MANIFESTS, assert_clean_failure, outside_distance, write
 
@@ -103,7 +103,7 @@ def test_manifest_units_are_reported(tmp_path: Path) -> None:
 @pytest.mark.parametrize("name", sorted(MANIFESTS))
 def test_broken_manifest(tmp_path: Path, name: str) -> None:
     from meshcol.errors import SceneError
-    from meshcol.scene import load_inputs
+    from meshcol.io.scene import load_inputs
 
     write(tmp_path, "cube.obj", CUBE_OBJ)
     manifest = write(tmp_path, name, MANIFESTS[name])
@@ -157,27 +157,31 @@ def corpus_run(tmp_path_factory):
     from conftest import CORPUS
 
     from meshcol.errors import MeshcolError
-    from meshcol.mesh_io import MESH_EXTENSIONS, load_mesh
+    from meshcol.io.mesh_read import MESH_EXTENSIONS, load_mesh
 
     if not CORPUS.is_dir():
         pytest.skip("shared corpus not present (../shared/corpus)")
-    files, rejected, bodies = [], [], []
+    from meshcol.io.scene import load_inputs
+
+    files, rejected = [], []
     for path in sorted(CORPUS.rglob("*")):
         if path.suffix.lower() not in MESH_EXTENSIONS:
             continue
         try:
-            bodies.extend(load_mesh(path))
+            load_mesh(path)
         except MeshcolError:
             rejected.append(path.name)
             continue
         files.append(str(path))
+    # Names as the commands give them (a clash between files gets a '#2' suffix).
+    bodies = list(load_inputs(files).bodies)
     out = tmp_path_factory.mktemp("corpus")
     inspect = run("inspect", *files, "--report", out / "inspect.json")
     hull = run("hull", *files, "--max-vertices", "64", "--out-dir", out / "hulls",
                "--report", out / "hull.json")
     return {
         "rejected": rejected,
-        "bodies": bodies,  # the corpus' file stems are unique: no renaming by load_inputs
+        "bodies": bodies,
         "inspect": inspect,
         "hull": hull,
         "inspect_report": json.loads((out / "inspect.json").read_text()),
@@ -223,7 +227,7 @@ def test_corpus_inspect(corpus_run) -> None:
 
 def test_corpus_hull_within_64_vertices_encloses(corpus_run) -> None:
     assert corpus_run["hull"].exit_code == 0, corpus_run["hull"].output
-    from meshcol.mesh_io import load_mesh
+    from meshcol.io.mesh_read import load_mesh
 
     report = corpus_run["hull_report"]
     bodies = {b.name: b for b in corpus_run["bodies"]}

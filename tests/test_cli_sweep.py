@@ -12,9 +12,9 @@ from click.testing import CliRunner
 import meshcol
 from meshcol.cli import main
 from meshcol.errors import SceneError
-from meshcol.query import ConvexSet
-from meshcol.sweep import interpolate_pose, swept_aabbs
-from meshcol.types import Body, Primitive, Scene, ToiStatus
+from meshcol import ConvexSet
+from meshcol.collision.time_of_impact import interpolate_pose, swept_aabbs
+from meshcol.types import Body, Primitive, Scene, TimeOfImpactStatus
 
 
 def pose(position=(0.0, 0.0, 0.0), angle_z=0.0) -> np.ndarray:
@@ -46,12 +46,12 @@ def test_bullet_through_wall_is_a_tunnelled_hit():
     report = meshcol.sweep(bullet_and_wall())
     assert report.summary()["hits"] == 1 and report.summary()["tunnelled"] == 1
     (hit,) = report.hits
-    assert (hit.a, hit.b, hit.status) == ("wall", "bullet", ToiStatus.HIT)
+    assert (hit.a, hit.b, hit.status) == ("wall", "bullet", TimeOfImpactStatus.HIT)
     # Contact when the bullet's centre is at x = -0.02 (its vertices reach 0.01).
-    assert hit.toi == pytest.approx(0.98 / 2.0, abs=1e-5) and hit.toi <= 0.49
-    assert hit.time == pytest.approx(hit.toi * 0.01)
+    assert hit.time_of_impact == pytest.approx(0.98 / 2.0, abs=1e-5) and hit.time_of_impact <= 0.49
+    assert hit.time == pytest.approx(hit.time_of_impact * 0.01)
     np.testing.assert_allclose(hit.normal, [-1, 0, 0], atol=1e-9)
-    np.testing.assert_allclose(hit.pose_b[:3, 3], [-1 + 2 * hit.toi, 0, 1], atol=1e-12)
+    np.testing.assert_allclose(hit.pose_b[:3, 3], [-1 + 2 * hit.time_of_impact, 0, 1], atol=1e-12)
     np.testing.assert_allclose(hit.pose_a, pose((0, 0, 1)), atol=0)
     assert hit.point[0] == pytest.approx(-0.01, abs=1e-5)
 
@@ -59,15 +59,15 @@ def test_bullet_through_wall_is_a_tunnelled_hit():
 def test_hit_that_ends_inside_is_not_tunnelled():
     report = meshcol.sweep(bullet_and_wall(end_x=0.0))
     (hit,) = report.hits
-    assert hit.status == ToiStatus.HIT and not hit.tunnelled
+    assert hit.status == TimeOfImpactStatus.HIT and not hit.tunnelled
 
 
 def test_mesh_mode_sweeps_triangles():
-    report = meshcol.sweep(bullet_and_wall(), shape="mesh")
+    report = meshcol.sweep(bullet_and_wall(), collider="mesh")
     (hit,) = report.hits
-    assert hit.status == ToiStatus.HIT and hit.tunnelled
-    assert hit.toi == pytest.approx(0.49, abs=1e-5)
-    assert report.shape_pairs > 100  # triangle pairs, not hulls
+    assert hit.status == TimeOfImpactStatus.HIT and hit.tunnelled
+    assert hit.time_of_impact == pytest.approx(0.49, abs=1e-5)
+    assert report.part_pairs > 100  # triangle pairs, not hulls
 
 
 def test_mesh_mode_differs_from_hull_for_a_concave_body():
@@ -80,8 +80,8 @@ def test_mesh_mode_differs_from_hull_for_a_concave_body():
     scene = Scene((mesh_body("u", u, pose()),
                    mesh_body("ball", trimesh.creation.icosphere(2, radius=0.3),
                              pose((0, -3, 0.2)), pose((0, 3, 0.2)))))
-    assert meshcol.sweep(scene, shape="hull").hits[0].status == ToiStatus.HIT
-    assert meshcol.sweep(scene, shape="mesh").hits == ()
+    assert meshcol.sweep(scene, collider="hull").hits[0].status == TimeOfImpactStatus.HIT
+    assert meshcol.sweep(scene, collider="mesh").hits == ()
 
 
 def test_bar_rotating_past_box_in_a_scene():
@@ -93,9 +93,9 @@ def test_bar_rotating_past_box_in_a_scene():
                pose((2.05, 2.05, 0)), primitive=Primitive("box", size=(0.5, 0.5, 0.5)))
     report = meshcol.sweep(Scene((bar, near, far)), tolerance=1e-7)
     assert [(h.a, h.b, h.status, h.tunnelled) for h in report.hits] == [
-        ("bar", "near", ToiStatus.HIT, True)]
+        ("bar", "near", TimeOfImpactStatus.HIT, True)]
     hit = report.hits[0]
-    expected = interpolate_pose(pose(), pose(angle_z=np.pi / 2), hit.toi)
+    expected = interpolate_pose(pose(), pose(angle_z=np.pi / 2), hit.time_of_impact)
     np.testing.assert_allclose(hit.pose_a, expected, atol=1e-15)
     d = meshcol.distance(meshcol.Box((4.0, 0.2, 0.2)), meshcol.Box((0.5, 0.5, 0.5)),
                          hit.pose_a, hit.pose_b).distance
@@ -146,7 +146,6 @@ BAR_SCENE = [
 
 
 def test_cli_rotating_bar_hits_and_exits_1(tmp_path):
-    pytest.importorskip("meshcol.scene")
     path = _write_manifest(tmp_path, BAR_SCENE, duration=2.0, units="m")
     result = CliRunner().invoke(main, ["sweep", str(path), "--tolerance", "1e-7"])
     assert result.exit_code == 1, result.output
@@ -155,27 +154,25 @@ def test_cli_rotating_bar_hits_and_exits_1(tmp_path):
     assert report["settings"]["tolerance"] == 1e-7 and report["failed"] is True
     (pair,) = report["pairs"]
     assert (pair["a"], pair["b"], pair["status"], pair["tunnelled"]) == ("bar", "block", "HIT", True)
-    assert pair["time"] == pytest.approx(2.0 * pair["toi"])
+    assert pair["time"] == pytest.approx(2.0 * pair["time_of_impact"])
     assert report["summary"]["hits"] == 1 and report["units"] == "m"
-    assert f"meshcol: fail: {path}: 'bar' and 'block': HIT at toi" in result.stderr
+    assert f"meshcol: fail: {path}: 'bar' and 'block': HIT at time of impact" in result.stderr
 
 
 def test_cli_fail_on_none_and_csv_report(tmp_path):
-    pytest.importorskip("meshcol.scene")
     path = _write_manifest(tmp_path, BAR_SCENE, duration=2.0)
     out = tmp_path / "sweep.csv"
     result = CliRunner().invoke(main, ["sweep", str(path), "--report", str(out),
                                        "--fail-on", "none", "--threads", "1"])
     assert result.exit_code == 0, result.output
     lines = out.read_text().splitlines()
-    assert lines[0] == "a,b,status,toi,time,point,normal,tunnelled,pose_a,pose_b,iterations"
+    assert lines[0] == "a,b,status,time_of_impact,time,point,normal,tunnelled,pose_a,pose_b,iterations"
     assert lines[1].startswith("bar,block,HIT,") and len(lines) == 2
     assert "1 hits (1 tunnelled)" in result.stderr
     assert not list(tmp_path.glob(".meshcol-*"))  # no temporary left behind
 
 
 def test_cli_manifest_without_motion_exits_2(tmp_path):
-    pytest.importorskip("meshcol.scene")
     path = _write_manifest(tmp_path, [BAR_SCENE[1]])
     result = CliRunner().invoke(main, ["sweep", str(path)])
     assert result.exit_code == 2
@@ -190,7 +187,6 @@ def test_cli_bad_tolerance_is_a_usage_error(tmp_path):
 
 
 def test_cli_bullet_sample_golden(samples, golden, monkeypatch):
-    pytest.importorskip("meshcol.scene")
     if not (samples / "bullet" / "scene.json").is_file():
         pytest.skip("samples/bullet not present")
     monkeypatch.chdir(samples.parent)
@@ -204,7 +200,6 @@ def test_cli_bullet_sample_golden(samples, golden, monkeypatch):
 
 def test_sweep_decomposed_uses_the_decompose_cache(tmp_path, samples) -> None:
     """--shape decomposed: parts come from the cache `meshcol decompose` fills (or are made)."""
-    pytest.importorskip("coacd")
     scene = samples / "bullet" / "scene.json"
     cache = tmp_path / "cache"
     runner = CliRunner()
@@ -219,4 +214,4 @@ def test_sweep_decomposed_uses_the_decompose_cache(tmp_path, samples) -> None:
     [hit] = data["pairs"]
     assert hit["status"] == "HIT" and hit["tunnelled"]
     hull = json.loads(runner.invoke(main, ["sweep", str(scene), "--report", "-"]).stdout)
-    assert hit["toi"] == pytest.approx(hull["pairs"][0]["toi"], abs=1e-6)  # convex wall: same parts
+    assert hit["time_of_impact"] == pytest.approx(hull["pairs"][0]["time_of_impact"], abs=1e-6)  # convex wall: same parts

@@ -13,21 +13,14 @@ import trimesh
 from scipy.spatial import ConvexHull
 
 import meshcol
-from meshcol import decompose_cache
-from meshcol.decompose import (
-    Decomposition,
-    _canonical_part,
-    _point_triangle_distance,
-    cache_key,
-    cached_decomposition,
-    canonical_geometry,
-    decompose,
-    fidelity,
-    is_closed_manifold,
-    points_to_parts,
-    points_to_triangles,
-    resolve_params,
-)
+from meshcol.decomposition import cache as decompose_cache
+from meshcol.decomposition.canonical import cache_key, canonical_geometry, canonical_part
+from meshcol.decomposition.decompose import cached_decomposition, decompose
+from meshcol.decomposition.engines import resolve_params
+from meshcol.decomposition.fidelity import fidelity, points_to_parts, points_to_triangles
+from meshcol.decomposition.result import Decomposition
+from meshcol.geometry.topology import is_closed_manifold
+from meshcol.geometry.triangles import point_triangle_distances
 from meshcol.errors import InvalidMeshError
 
 # Coarse CoACD settings: seconds, not minutes (the suite has a time budget).
@@ -156,29 +149,30 @@ def test_canonical_part_is_the_outward_hull_in_lexicographic_order() -> None:
     rng = np.random.default_rng(0)
     v, _ = _box()
     points = np.concatenate([v, rng.random((50, 3)) * 0.8 + 0.1])[rng.permutation(58)]
-    pv, pf, volume, reduced = _canonical_part(points, None)
+    pv, pf, volume, reduced = canonical_part(points, None)
     assert np.array_equal(pv, np.unique(v, axis=0))
     assert len(pf) == 12 and not reduced
     assert volume == pytest.approx(1.0, abs=1e-12)
     assert _signed_volume(pv, pf) == pytest.approx(1.0, abs=1e-12)  # outward triangles
-    again = _canonical_part(points[::-1], None)
+    again = canonical_part(points[::-1], None)
     assert np.array_equal(again[0], pv) and np.array_equal(again[1], pf)
 
 
-def test_canonical_part_enforces_vertex_budget_from_inside() -> None:
+def test_canonical_part_enforces_vertex_budget_enclosing() -> None:
     sphere = trimesh.creation.icosphere(subdivisions=3)
     points = np.asarray(sphere.vertices)  # 642 points on the unit sphere
-    pv, pf, volume, reduced = _canonical_part(points, 20)
+    pv, pf, volume, reduced = canonical_part(points, 20)
     assert reduced and len(pv) <= 20
-    # Every kept vertex is an input point: the reduced part lies inside the original hull.
-    assert np.isin(pv.view([("", pv.dtype)] * 3), points.view([("", points.dtype)] * 3)).all()
-    assert 0.5 * (4 / 3 * np.pi) < volume < ConvexHull(points).volume
+    # The budgeted part is meshcol's one budgeted hull: it still encloses every input point.
+    eq = ConvexHull(pv).equations
+    assert (points @ eq[:, :3].T + eq[:, 3]).max() <= 1e-9
+    assert ConvexHull(points).volume < volume < 2.0 * ConvexHull(points).volume
     assert _signed_volume(pv, pf) == pytest.approx(volume, rel=1e-9)
 
 
 def test_canonical_part_of_flat_points_is_none() -> None:
-    assert _canonical_part(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.0]]), None) is None
-    assert _canonical_part(np.zeros((3, 3)), None) is None
+    assert canonical_part(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.0]]), None) is None
+    assert canonical_part(np.zeros((3, 3)), None) is None
 
 
 # ---------------------------------------------------------------------------- distances
@@ -195,7 +189,7 @@ def test_point_triangle_distance_known_regions() -> None:
         (1.0, 1.0, 0.0): np.sqrt(2) / 2,
     }
     for point, expected in cases.items():
-        d = _point_triangle_distance(np.array([point]), tri)
+        d = point_triangle_distances(np.array([point]), tri)
         assert d[0] == pytest.approx(expected, abs=1e-12), point
 
 
@@ -203,12 +197,12 @@ def test_points_to_triangles_pruning_equals_brute_force() -> None:
     m = _torus()
     v, f = np.asarray(m.vertices), np.asarray(m.faces)
     points = np.random.default_rng(1).uniform(-1.6, 1.6, (300, 3))
-    brute = np.array([_point_triangle_distance(np.repeat(p[None], len(f), 0), v[f]).min() for p in points])
+    brute = np.array([point_triangle_distances(np.repeat(p[None], len(f), 0), v[f]).min() for p in points])
     assert np.allclose(points_to_triangles(points, v, f), brute, atol=1e-12)
 
 
 def test_points_to_triangles_agrees_with_mesh_query() -> None:
-    mesh_query = pytest.importorskip("meshcol.mesh_query")
+    from meshcol.collision import mesh_query
     m = _torus()
     v, f = np.asarray(m.vertices), np.asarray(m.faces)
     points = np.random.default_rng(4).uniform(-1.6, 1.6, (100, 3))

@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from meshcol.errors import InvalidMeshError
-from meshcol.hulls import HullResult, closest_points_on_triangles, convex_hull
+from meshcol.geometry.hull import HullResult, closest_points_on_triangles, convex_hull
 
 CUBE = np.array([[x, y, z] for x in (0.0, 1.0) for y in (0.0, 1.0) for z in (0.0, 1.0)])
 
@@ -192,7 +192,7 @@ def test_distance_is_bracketed_by_plane_and_vertex_distances(sphere_points: np.n
 @pytest.mark.parametrize("name", ["unit_sphere.STL", "torus.STL", "fandisk.obj", "busted.STL"])
 @pytest.mark.parametrize("budget", [4, 8, 16, 32, 64, 255])
 def test_budget_encloses_corpus_meshes(corpus, name: str, budget: int) -> None:
-    from meshcol.mesh_io import load_mesh
+    from meshcol.io.mesh_read import load_mesh
 
     (body,) = load_mesh(corpus / "trimesh-models" / name)
     points = body.world_vertices()

@@ -8,13 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from meshcol.errors import InvalidMeshError
-from meshcol.inspect import (
-    RULES,
-    closed_volume,
-    guess_units,
-    inspect_body,
-    self_intersecting_pairs,
-)
+from meshcol.analysis.inspect import RULES, guess_units, inspect_body, self_intersecting_pairs
+from meshcol.geometry.topology import closed_volume
 from meshcol.types import Body
 
 CUBE_VERTICES = np.array([[x, y, z] for x in (0.0, 1.0) for y in (0.0, 1.0) for z in (0.0, 1.0)])
@@ -29,8 +24,8 @@ CUBE_FACES = np.array([
 ])
 
 
-def body(vertices, faces, name="b", transform=None) -> Body:
-    kwargs = {} if transform is None else {"transform": transform}
+def body(vertices, faces, name="b", pose=None) -> Body:
+    kwargs = {} if pose is None else {"pose": pose}
     return Body(name=name, source="test.obj", vertices=np.asarray(vertices, float),
                 faces=np.asarray(faces, np.int64), **kwargs)
 
@@ -142,7 +137,7 @@ def test_crossing_pairs_match_brute_force_on_random_soup() -> None:
     vertices = rng.uniform(0, 10, size=(150, 3))
     faces = np.arange(150).reshape(50, 3)
     fast = {tuple(p) for p in self_intersecting_pairs(vertices, faces).tolist()}
-    from meshcol.inspect import _triangles_cross
+    from meshcol.analysis.inspect import _triangles_cross
 
     i, j = np.triu_indices(50, 1)
     tri = vertices[faces]
@@ -154,7 +149,7 @@ def test_crossing_pairs_match_brute_force_on_random_soup() -> None:
 def test_bounds_are_in_the_world_frame() -> None:
     transform = np.eye(4)
     transform[:3, 3] = [10.0, 0.0, -5.0]
-    r = inspect_body(body(CUBE_VERTICES, CUBE_FACES, transform=transform))
+    r = inspect_body(body(CUBE_VERTICES, CUBE_FACES, pose=transform))
     assert r.bounds == [[10.0, 0.0, -5.0], [11.0, 1.0, -4.0]]
     assert r.volume == pytest.approx(1.0)
 
@@ -203,7 +198,7 @@ def test_no_faces_and_non_finite_raise() -> None:
      "angle_block.STL", "ballA.off", "round.stl", "cylinder.stl", "busted.STL"],
 )
 def test_closed_corpus_meshes_are_clean(corpus, name: str) -> None:
-    from meshcol.mesh_io import load_mesh
+    from meshcol.io.mesh_read import load_mesh
 
     (b,) = load_mesh(corpus / "trimesh-models" / name)
     r = inspect_body(b)
@@ -214,7 +209,7 @@ def test_closed_corpus_meshes_are_clean(corpus, name: str) -> None:
 
 
 def test_corpus_soup_and_open_meshes(corpus) -> None:
-    from meshcol.mesh_io import load_mesh
+    from meshcol.io.mesh_read import load_mesh
 
     (soup,) = load_mesh(corpus / "trimesh-models" / "soup.stl")
     r = inspect_body(soup)

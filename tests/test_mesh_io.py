@@ -16,9 +16,9 @@ import pytest
 
 import meshcol
 from meshcol.errors import InputFileError, InvalidMeshError
-from meshcol.mesh_io import load_mesh, merge_vertices, split_rigid
+from meshcol.io.mesh_read import load_mesh, merge_vertices, split_rigid
 
-trimesh = pytest.importorskip("trimesh")
+import trimesh
 
 # A unit cube, 8 positions, with per-face UVs: trimesh splits it along the UV seams.
 CUBE_OBJ_WITH_UVS = """\
@@ -129,8 +129,8 @@ def test_single_body_formats(corpus, name, vertices, faces):
     assert body.source == os.fspath(path)
     assert body.vertices.shape == (vertices, 3) and body.vertices.dtype == np.float64
     assert body.faces.shape == (faces, 3) and body.faces.dtype == np.int64
-    assert np.array_equal(body.transform, np.eye(4))
-    assert body.end_transform is None and body.primitive is None
+    assert np.array_equal(body.pose, np.eye(4))
+    assert body.end_pose is None and body.primitive is None
 
 
 def test_closed_corpus_meshes_are_closed_after_merging(corpus):
@@ -182,7 +182,7 @@ def test_pins_glb_seven_instances(corpus):
     assert len({b.name for b in bodies}) == 7
     assert all(b.name.startswith("pins/") for b in bodies)
     assert sorted(len(b.faces) for b in bodies) == [314] * 6 + [1524]
-    assert all(is_rigid(b.transform) for b in bodies)
+    assert all(is_rigid(b.pose) for b in bodies)
 
 
 def test_boolean_glb_28_bodies(corpus):
@@ -200,7 +200,7 @@ def test_nested_glb_world_vertices_match_trimesh(corpus):
     path = corpus / "trimesh-models" / "nested.glb"
     bodies = load_mesh(path)
     assert [b.name for b in bodies] == ["nested/block03", "nested/block02", "nested/block01"]  # file order
-    assert all(is_rigid(b.transform) for b in bodies)
+    assert all(is_rigid(b.pose) for b in bodies)
     reference = trimesh.load_scene(path, process=False).to_mesh()  # transforms composed
     expected = np.unique(np.round(np.asarray(reference.vertices), 9), axis=0)
     assert np.array_equal(world_points(bodies), expected)
@@ -233,11 +233,11 @@ def test_nested_glb_manual_composition(corpus):
             k = parent.get(k)
         body = bodies[node["name"]]
         # the loaded local vertices are the file's, stretched by the baked part
-        rest = body.transform[:3, :3].T @ matrix[:3, :3]
+        rest = body.pose[:3, :3].T @ matrix[:3, :3]
         file_vertices = body.vertices @ np.linalg.inv(rest).T
         expected = file_vertices @ matrix[:3, :3].T + matrix[:3, 3]
         assert np.allclose(body.world_vertices(), expected, atol=1e-12)
-        assert np.allclose(body.transform[:3, 3], matrix[:3, 3])
+        assert np.allclose(body.pose[:3, 3], matrix[:3, 3])
 
 
 def test_mirror_and_shear_are_baked_and_winding_kept_outward(tmp_path):
@@ -254,7 +254,7 @@ def test_mirror_and_shear_are_baked_and_winding_kept_outward(tmp_path):
     bodies = load_mesh(path)
     assert len(bodies) == 3
     for body, matrix in zip(bodies, matrices):
-        assert is_rigid(body.transform)
+        assert is_rigid(body.pose)
         expected = np.asarray(box.vertices) @ matrix[:3, :3].T + matrix[:3, 3]
         got = body.world_vertices()
         assert np.allclose(np.unique(np.round(got, 9), axis=0),
@@ -263,7 +263,7 @@ def test_mirror_and_shear_are_baked_and_winding_kept_outward(tmp_path):
         volume = signed_volume(body.vertices, body.faces)
         assert volume == pytest.approx(6.0 * abs(np.linalg.det(matrix[:3, :3])), rel=1e-9)
     # the pure rotation is kept exactly, nothing baked
-    assert np.array_equal(bodies[2].transform, matrices[2])
+    assert np.array_equal(bodies[2].pose, matrices[2])
 
 
 def test_gltf_with_external_buffer(tmp_path):
@@ -277,7 +277,7 @@ def test_gltf_with_external_buffer(tmp_path):
         (tmp_path / name).write_bytes(blob)
     bodies = load_mesh(tmp_path / "model.gltf")
     assert [b.name for b in bodies] == ["model/b1", "model/b2"]
-    assert np.allclose(bodies[1].transform[:3, 3], [3, 0, 0])
+    assert np.allclose(bodies[1].pose[:3, 3], [3, 0, 0])
     (tmp_path / "gltf_buffer_0.bin").unlink()
     with pytest.raises(InvalidMeshError) as info:
         load_mesh(tmp_path / "model.gltf")
@@ -344,7 +344,7 @@ def test_textured_files_load_without_pillow(corpus, tmp_path):
     script = textwrap.dedent("""
         import sys
         sys.modules["PIL"] = None  # any `import PIL...` now raises ImportError
-        from meshcol.mesh_io import load_mesh
+        from meshcol.io.mesh_read import load_mesh
         for path in sys.argv[1:]:
             body, = load_mesh(path)
             print(body.name, len(body.vertices), len(body.faces))

@@ -12,8 +12,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import meshcol
-from meshcol import _core
-from meshcol.mesh_query import MeshSet, mesh_distance, mesh_distance_batch, mesh_intersects_batch
+from meshcol._native import core as _core
+from meshcol.collision.mesh_query import MeshSet, mesh_distance, mesh_distance_batch, mesh_intersects_batch
 from meshcol.types import Body, Status
 
 # --------------------------------------------------------------------------- helpers
@@ -263,7 +263,7 @@ def test_max_distance_cut_off() -> None:
 def test_from_bodies_uses_body_transforms() -> None:
     cube = box([0, 0, 0], [1, 1, 1])
     bodies = [Body("a", None, cube.vertices, cube.faces),
-              Body("b", None, cube.vertices, cube.faces, transform=pose(translation=(0, 0, 3)))]
+              Body("b", None, cube.vertices, cube.faces, pose=pose(translation=(0, 0, 3)))]
     meshes = MeshSet.from_bodies(bodies)
     assert mesh_distance_batch(meshes, None, [[0, 1]]).distance[0] == pytest.approx(2.0, abs=1e-12)
     assert mesh_distance(bodies[0], bodies[1]).distance == pytest.approx(2.0, abs=1e-12)

@@ -12,7 +12,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import meshcol
-from meshcol.query import (
+from meshcol import (
     Box,
     Capsule,
     ConvexSet,
@@ -172,7 +172,7 @@ def test_convex_set_layout_and_constructors():
 
 
 def test_from_meshes_trimesh_and_body():
-    trimesh = pytest.importorskip("trimesh")
+    import trimesh
     sphere_mesh = trimesh.creation.icosphere(subdivisions=2)
     body = Body("ball", None, np.zeros((0, 3)), np.zeros((0, 3), np.int64),
                 primitive=Primitive("sphere", radius=1.0))
@@ -364,7 +364,7 @@ def test_hill_climbing_large_hulls_match_oracle():
 def test_hill_climbing_matches_vertex_scan():
     """The climbs (one shape or both at once, warm or cold starts, padded neighbour lists)
     give the same answers as scanning every vertex: the same set packed without adjacency."""
-    from meshcol import _core
+    from meshcol._native import core as _core
 
     rng = np.random.default_rng(11)
     clouds = []
@@ -540,7 +540,7 @@ def test_malformed_calls_raise_value_error_naming_the_argument():
         intersects_batch(cs, None, [0, 1, 1])
     with pytest.raises(ValueError, match=r"pairs must hold integer indices"):
         signed_distance_batch(cs, None, [[0.0, 1.0]])
-    with pytest.raises(ValueError, match=r"shapes must be a ConvexSet"):
+    with pytest.raises(TypeError, match=r"shapes must be a ConvexSet"):
         distance_batch([CUBE, CUBE], None, [[0, 1]])
     with pytest.raises(ValueError, match=r"vertex_lists\[1\] must be \(n, 3\)"):
         ConvexSet.from_vertices([CUBE, np.zeros((4, 2))])
@@ -553,7 +553,7 @@ def test_malformed_calls_raise_value_error_naming_the_argument():
     with pytest.raises(ValueError, match=r"b must be a Sphere"):
         distance(CUBE, object())
     # The native layer checks again (a hand-made set).
-    from meshcol import _core
+    from meshcol._native import core as _core
 
     with pytest.raises(ValueError, match="offsets"):
         _core.PackedConvexSet(CUBE, np.array([0, 9]), np.zeros(1, np.int8), np.zeros((1, 4)),
@@ -596,11 +596,15 @@ def test_bad_data_gives_invalid_input_per_pair():
 
 
 def test_public_names_are_exported():
+    import meshcol.collision.narrowphase
+    import meshcol.collision.shapes
+
     for name in ("ConvexSet", "Sphere", "Box", "Capsule", "Cylinder", "DistanceResult",
                  "PenetrationResult", "distance", "penetration", "intersects",
                  "signed_distance", "distance_batch", "penetration_batch", "intersects_batch",
                  "signed_distance_batch", "ShapeKind", "SignedDistanceResult"):
-        assert getattr(meshcol, name) is getattr(meshcol.query, name)
-    from meshcol import _core
+        module = meshcol.collision.shapes if name in ("ConvexSet", "Sphere", "Box", "Capsule", "Cylinder", "ShapeKind") else meshcol.collision.narrowphase
+        assert getattr(meshcol, name) is getattr(module, name)
+    from meshcol._native import core as _core
 
     assert _core.defaults.gjk_max_iterations > 0 and _core.defaults.contact_tolerance < 1e-12

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from meshcol.scene import load_scene
+from meshcol.io.scene import load_scene
 
 
 def test_regenerating_gives_identical_files(samples, tmp_path):
@@ -81,7 +81,7 @@ def test_bullet_tunnels_through_the_wall(samples):
     assert start[:, 0].max() < low[0] - 0.5 and end[:, 0].min() > high[0] + 0.5
     # the swept path crosses the wall's slab inside its y/z extent
     assert (low[1:] < start.min(axis=0)[1:]).all() and (start.max(axis=0)[1:] < high[1:]).all()
-    assert np.allclose(bullet.end_transform[:3, 3] - bullet.transform[:3, 3], [2, 0, 0])
+    assert np.allclose(bullet.end_pose[:3, 3] - bullet.pose[:3, 3], [2, 0, 0])
     assert high[0] - low[0] == pytest.approx(0.05)
     assert start[:, 1].max() - start[:, 1].min() == pytest.approx(0.02)
 

@@ -13,7 +13,7 @@ import pytest
 
 import meshcol
 from meshcol.errors import InputFileError, InvalidMeshError, SceneError
-from meshcol.scene import (
+from meshcol.io.scene import (
     SCHEMA_PATH,
     load_inputs,
     load_scene,
@@ -86,7 +86,7 @@ def test_euler_extrinsic_known_rotations():
 
 
 def test_euler_matches_scipy_extrinsic():
-    rotation = pytest.importorskip("scipy.spatial.transform").Rotation
+    from scipy.spatial.transform import Rotation as rotation
     rng = np.random.default_rng(7)
     for order in ("xyz", "zyx", "yzx", "xzx", "zxz"):
         angles = rng.uniform(-180, 180, 3)
@@ -95,7 +95,7 @@ def test_euler_matches_scipy_extrinsic():
 
 
 def test_quaternion_matches_scipy():
-    rotation = pytest.importorskip("scipy.spatial.transform").Rotation
+    from scipy.spatial.transform import Rotation as rotation
     rng = np.random.default_rng(3)
     for _ in range(5):
         w, x, y, z = rng.normal(size=4)
@@ -112,8 +112,8 @@ def test_manifest_basics(folder):
     assert scene.source == os.fspath(folder / "scene.json")
     tet, ball = scene.bodies
     assert tet.name == "tet" and tet.source == os.path.join(folder, "tet.obj")
-    assert np.array_equal(tet.transform[:3, 3], [1, 2, 3])
-    assert tet.end_transform is None and tet.primitive is None
+    assert np.array_equal(tet.pose[:3, 3], [1, 2, 3])
+    assert tet.end_pose is None and tet.primitive is None
     assert ball.primitive == meshcol.Primitive("sphere", radius=0.5)
     assert np.linalg.norm(ball.vertices, axis=1) == pytest.approx(0.5)
 
@@ -136,7 +136,7 @@ def test_pose_scale_and_rotation(folder):
     (body,) = load_scene(write(folder, document)).bodies
     assert np.array_equal(body.vertices.max(axis=0), [2, 3, 4])  # scale baked in
     rz90 = np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1]], dtype=float)
-    assert np.array_equal(body.transform[:3, :3], rz90)
+    assert np.array_equal(body.pose[:3, :3], rz90)
     assert np.allclose(body.world_vertices()[1], [1, 2, 0])  # (2, 0, 0) turned to +y, moved
 
 
@@ -145,7 +145,7 @@ def test_multibody_mesh_gives_named_sub_bodies(folder):
                             "position": [0, 0, 10], "shape": "hull"}]}
     left, right = load_scene(write(folder, document)).bodies
     assert (left.name, right.name) == ("pair/left", "pair/right")
-    assert left.shape == right.shape == "hull"
+    assert left.collider == right.collider == "hull"
     assert np.allclose(right.world_vertices().min(axis=0), [4, 0, 10])
 
 
@@ -161,7 +161,7 @@ def test_glb_sub_bodies_keep_their_node_transforms(corpus, tmp_path):
         assert body.name == "n/" + plain.name.split("/")[1]
         expected = 2 * plain.world_vertices() @ turn.T + [1, 0, 0]
         assert np.allclose(body.world_vertices(), expected, atol=1e-12)
-        r = body.transform[:3, :3]
+        r = body.pose[:3, :3]
         assert np.allclose(r.T @ r, np.eye(3), atol=1e-12) and np.isclose(np.linalg.det(r), 1)
 
 
@@ -170,10 +170,10 @@ def test_end_pose_from_end_position_and_rotation(folder):
                             "end_position": [5, 0, 0],
                             "end_rotation": {"quaternion": [0, 0, 0, 1]}}]}
     (body,) = load_scene(write(folder, document)).bodies
-    assert np.array_equal(body.transform, np.eye(4))
+    assert np.array_equal(body.pose, np.eye(4))
     expected = np.diag([-1.0, -1.0, 1.0, 1.0])  # half turn about z
     expected[0, 3] = 5.0
-    assert np.allclose(body.end_transform, expected, atol=1e-15)
+    assert np.allclose(body.end_pose, expected, atol=1e-15)
 
 
 def test_end_pose_from_velocities(folder):
@@ -182,16 +182,16 @@ def test_end_pose_from_velocities(folder):
         "rotation": {"euler_deg": [90, 0, 0], "order": "xyz"},
         "velocity": [2, 0, 0], "angular_velocity": [0, 0, math.pi]}]}
     (body,) = load_scene(write(folder, document)).bodies
-    assert np.allclose(body.end_transform[:3, 3], [2, 0, 0])
+    assert np.allclose(body.end_pose[:3, 3], [2, 0, 0])
     # a quarter turn about world z after the start rotation (angular velocity in world frame)
     expected = rotation_from_euler([90, 0, 90], "xyz")
-    assert np.allclose(body.end_transform[:3, :3], expected, atol=1e-15)
+    assert np.allclose(body.end_pose[:3, :3], expected, atol=1e-15)
     only_linear = {"duration": 2.0, "bodies": [{"name": "t", "mesh": "tet.obj",
                                                "velocity": [0, 1, 0]}]}
     (body,) = load_scene(write(folder, only_linear)).bodies
     expected = np.eye(4)
     expected[1, 3] = 2.0
-    assert np.array_equal(body.end_transform, expected)
+    assert np.array_equal(body.end_pose, expected)
 
 
 @pytest.mark.parametrize(
@@ -235,11 +235,11 @@ velocity = [0, 0, -1]
 """
     scene = load_scene(write(folder, text, "scene.toml"))
     assert scene.units == "m" and [b.name for b in scene.bodies] == ["tet", "box"]
-    assert np.allclose(scene.bodies[1].end_transform[:3, 3], [0, 0, -1])
+    assert np.allclose(scene.bodies[1].end_pose[:3, 3], [0, 0, -1])
 
 
 def test_samples_manifests_validate_against_the_published_schema(samples):
-    jsonschema = pytest.importorskip("jsonschema")
+    import jsonschema
     schema = json.loads(SCHEMA_PATH.read_text())
     jsonschema.validators.validator_for(schema).check_schema(schema)
     for manifest in samples.glob("*/scene.json"):

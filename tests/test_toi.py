@@ -7,9 +7,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from meshcol.query import Box, Capsule, ConvexSet, Sphere, distance, distance_batch
-from meshcol.sweep import interpolate_pose, time_of_impact, time_of_impact_batch
-from meshcol.types import ToiStatus
+from meshcol import Box, Capsule, ConvexSet, Sphere, distance, distance_batch
+from meshcol import interpolate_pose, time_of_impact, time_of_impact_batch
+from meshcol.types import TimeOfImpactStatus
 
 
 def pose(position=(0.0, 0.0, 0.0), rotation=None) -> np.ndarray:
@@ -49,9 +49,9 @@ def test_boxes_translation_face_contact():
     # Unit boxes, b from x = 3 to x = 0: faces meet when the centres are 1 apart, t = 2/3.
     r = time_of_impact(Box((1, 1, 1)), Box((1, 1, 1)), pose(), pose(), pose((3, 0, 0)), pose(),
                        tolerance=1e-9)
-    assert r.status == ToiStatus.HIT
-    assert r.toi == pytest.approx(2.0 / 3.0, abs=1e-9)
-    assert r.toi <= 2.0 / 3.0
+    assert r.status == TimeOfImpactStatus.HIT
+    assert r.time_of_impact == pytest.approx(2.0 / 3.0, abs=1e-9)
+    assert r.time_of_impact <= 2.0 / 3.0
     np.testing.assert_allclose(r.normal, [1.0, 0.0, 0.0], atol=1e-12)
     assert r.point[0] == pytest.approx(0.5, abs=1e-8)
 
@@ -60,8 +60,8 @@ def test_spheres_head_on_closed_form():
     # a (r 0.5) from x = 0 to x = 2, b (r 0.25) resting at x = 2: contact at a = 1.25, t = 0.625.
     r = time_of_impact(Sphere(0.5), Sphere(0.25), pose(), pose((2, 0, 0)), pose((2, 0, 0)),
                        pose((2, 0, 0)))
-    assert r.status == ToiStatus.HIT
-    assert r.toi == pytest.approx(0.625, abs=1e-15)
+    assert r.status == TimeOfImpactStatus.HIT
+    assert r.time_of_impact == pytest.approx(0.625, abs=1e-15)
     np.testing.assert_allclose(r.point, [1.75, 0, 0], atol=1e-15)
     np.testing.assert_allclose(r.normal, [1, 0, 0], atol=1e-15)
 
@@ -69,16 +69,16 @@ def test_spheres_head_on_closed_form():
 def test_receding_and_parallel_motion_are_separated():
     r = time_of_impact(Box((1, 1, 1)), Box((1, 1, 1)), pose(), pose((-1, 0, 0)), pose((2, 0, 0)),
                        pose((2, 0, 0)))
-    assert r.status == ToiStatus.SEPARATED and r.toi is None
+    assert r.status == TimeOfImpactStatus.SEPARATED and r.time_of_impact is None
     r = time_of_impact(Box((1, 1, 1)), Box((1, 1, 1)), pose(), pose((0, 5, 0)), pose((2, 0, 0)),
                        pose((2, 5, 0)))
-    assert r.status == ToiStatus.SEPARATED
+    assert r.status == TimeOfImpactStatus.SEPARATED
 
 
 def test_overlapped_at_start():
     r = time_of_impact(Box((1, 1, 1)), Sphere(1), pose(), pose((1, 0, 0)), pose((1, 0, 0)),
                        pose((1, 0, 0)))
-    assert r.status == ToiStatus.OVERLAPPED_AT_START and r.toi == 0.0
+    assert r.status == TimeOfImpactStatus.OVERLAPPED_AT_START and r.time_of_impact == 0.0
     np.testing.assert_array_equal(r.normal, [0.0, 0.0, 0.0])
 
 
@@ -88,10 +88,10 @@ def test_invalid_input_and_bad_arguments():
     end = start.copy()
     end[1, 0, 0] = np.nan
     r = time_of_impact_batch(cs, start, end, [[0, 1]])
-    assert r.status[0] == ToiStatus.INVALID_INPUT and np.isnan(r.toi[0])
+    assert r.status[0] == TimeOfImpactStatus.INVALID_INPUT and np.isnan(r.time_of_impact[0])
     skew = start.copy()
     skew[0, :3, :3] *= 2.0  # not rigid
-    assert time_of_impact_batch(cs, skew, start, [[0, 1]]).status[0] == ToiStatus.INVALID_INPUT
+    assert time_of_impact_batch(cs, skew, start, [[0, 1]]).status[0] == TimeOfImpactStatus.INVALID_INPUT
     with pytest.raises(ValueError, match=r"tolerance must be finite and > 0, got 0"):
         time_of_impact_batch(cs, start, start, [[0, 1]], tolerance=0)
     with pytest.raises(ValueError, match=r"start_poses must be \(2, 4, 4\), got \(1, 4, 4\)"):
@@ -152,10 +152,10 @@ def test_oracle_time_of_impact(case, oracle_cases):
                        *poses["b"], tolerance=1e-10)
     expected = case["expect"]["toi"]
     if expected is None:
-        assert r.status == ToiStatus.SEPARATED and r.toi is None
+        assert r.status == TimeOfImpactStatus.SEPARATED and r.time_of_impact is None
     else:
-        assert r.status == ToiStatus.HIT
-        assert r.toi == pytest.approx(expected, abs=max(case["tolerance"], 1e-12))
+        assert r.status == TimeOfImpactStatus.HIT
+        assert r.time_of_impact == pytest.approx(expected, abs=max(case["tolerance"], 1e-12))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -192,18 +192,18 @@ def test_sphere_pairs_match_the_quadratic(ca, cb, va, vb, ra, rb, as_capsule):
     expected = analytic_sphere_toi(c0, dv, ra + rb)
     speed = np.linalg.norm(dv)
     if expected is not None:
-        assert r.status == ToiStatus.HIT
-        assert r.toi <= expected + 1e-12
+        assert r.status == TimeOfImpactStatus.HIT
+        assert r.time_of_impact <= expected + 1e-12
         # Within the tolerance in distance: the time error is at most tol / closing speed
         # (+ rounding); grazing contacts close slowly, so compare distances there.
-        d = np.linalg.norm(c0 + r.toi * dv) - (ra + rb)
+        d = np.linalg.norm(c0 + r.time_of_impact * dv) - (ra + rb)
         assert d <= tol * (1 + 1e-6) + 1e-12
     else:
         closest = min(np.linalg.norm(c0 + t * dv) for t in np.linspace(0, 1, 2001))
-        if r.status == ToiStatus.HIT:
+        if r.status == TimeOfImpactStatus.HIT:
             assert closest - (ra + rb) <= tol + 1e-6 * speed  # a near miss within reach
         else:
-            assert r.status == ToiStatus.SEPARATED
+            assert r.status == TimeOfImpactStatus.SEPARATED
 
 
 # ---------------------------------------------------------------------------------------------
@@ -231,9 +231,9 @@ def test_bar_rotating_into_a_box_hits_where_dense_sampling_does():
     assert _distance_at(case, 0.0) > 0.1 and _distance_at(case, 1.0) > 0.1
     tol = 1e-7
     r = time_of_impact(**case, tolerance=tol)
-    assert r.status == ToiStatus.HIT
-    assert _distance_at(case, r.toi) <= tol
-    assert _distance_at(case, max(0.0, r.toi - 1e-4)) > 0.0
+    assert r.status == TimeOfImpactStatus.HIT
+    assert _distance_at(case, r.time_of_impact) <= tol
+    assert _distance_at(case, max(0.0, r.time_of_impact - 1e-4)) > 0.0
     # First contact by sampling + bisection: toi is a lower bound, close to it.
     ts = np.linspace(0, 1, 2001)
     first = next(i for i, t in enumerate(ts) if _distance_at(case, t) == 0.0)
@@ -241,8 +241,8 @@ def test_bar_rotating_into_a_box_hits_where_dense_sampling_does():
     for _ in range(40):
         mid = 0.5 * (lo + hi)
         lo, hi = (lo, mid) if _distance_at(case, mid) == 0.0 else (mid, hi)
-    assert r.toi <= hi
-    assert hi - r.toi < 1e-5
+    assert r.time_of_impact <= hi
+    assert hi - r.time_of_impact < 1e-5
     # The contact is on the bar's leading face (+y side), near the box's corner region.
     assert r.normal @ (np.array([1.5, 1.5, 0.0]) - r.point) > 0.0
 
@@ -252,21 +252,21 @@ def test_bar_rotating_past_a_box_near_miss_is_separated():
     # radius |(1.25, 1.25) + 0.8 (1, 1)| ~ 2.90: clear miss, but the swept bounds overlap.
     case = _bar_case((2.05, 2.05, 0.0))
     r = time_of_impact(**case, tolerance=1e-7)
-    assert r.status == ToiStatus.SEPARATED
+    assert r.status == TimeOfImpactStatus.SEPARATED
     # Grazing: the nearest box corner just inside the circle swept by the bar's corners.
     case = _bar_case((1.66, 0.9, 0.0))
     r = time_of_impact(**case, tolerance=1e-7)
     ts = np.linspace(0, 1, 2001)
     touches = any(_distance_at(case, t) == 0.0 for t in ts)
-    assert touches == (r.status == ToiStatus.HIT)
+    assert touches == (r.status == TimeOfImpactStatus.HIT)
 
 
 def test_failed_gives_a_safe_lower_bound():
     case = _bar_case((1.5, 1.5, 0.0))
     r = time_of_impact(**case, tolerance=1e-7, max_iterations=2)
-    assert r.status == ToiStatus.FAILED
-    assert 0.0 < r.toi < 1.0
-    assert all(_distance_at(case, t) > 0.0 for t in np.linspace(0.0, r.toi, 200))
+    assert r.status == TimeOfImpactStatus.FAILED
+    assert 0.0 < r.time_of_impact < 1.0
+    assert all(_distance_at(case, t) > 0.0 for t in np.linspace(0.0, r.time_of_impact, 200))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -310,15 +310,15 @@ def test_random_hulls_never_miss_a_sampled_contact(seed):
             ends[:, :3, :3] = np.stack([_random_rotation(rng), _random_rotation(rng)])
         tol = 1e-7
         r = time_of_impact_batch(cs, starts, ends, [[0, 1]], tolerance=tol, threads=1)
-        status = ToiStatus(int(r.status[0]))
+        status = TimeOfImpactStatus(int(r.status[0]))
         d = _dense_distances(cs, starts, ends, ts)
         if d[0] <= tol:
-            assert status == ToiStatus.OVERLAPPED_AT_START
+            assert status == TimeOfImpactStatus.OVERLAPPED_AT_START
             continue
         checked += 1
         touching = np.flatnonzero(d == 0.0)
         if len(touching):
-            assert status == ToiStatus.HIT, f"missed a sampled contact at t={ts[touching[0]]}"
+            assert status == TimeOfImpactStatus.HIT, f"missed a sampled contact at t={ts[touching[0]]}"
             hits += 1
             # Bisection between the last free sample and the first touching one.
             i = touching[0]
@@ -327,14 +327,14 @@ def test_random_hulls_never_miss_a_sampled_contact(seed):
                 mid = 0.5 * (lo + hi)
                 dm = _dense_distances(cs, starts, ends, [mid])[0]
                 lo, hi = (lo, mid) if dm == 0.0 else (mid, hi)
-            assert r.toi[0] <= hi
-        if status == ToiStatus.HIT:
-            t = float(r.toi[0])
+            assert r.time_of_impact[0] <= hi
+        if status == TimeOfImpactStatus.HIT:
+            t = float(r.time_of_impact[0])
             at, before = _dense_distances(cs, starts, ends, [t, max(0.0, t - 1e-6)])
             assert at <= tol * (1 + 1e-9)
             assert before > 0.0
         else:
-            assert status == ToiStatus.SEPARATED
+            assert status == TimeOfImpactStatus.SEPARATED
             assert d.min() > tol / 2
     assert checked >= 6 and hits >= 2  # the sample exercises both outcomes
 
@@ -350,7 +350,7 @@ def test_batch_equals_loop_of_singles():
     for k, (i, j) in enumerate(pairs):
         single = time_of_impact(hulls[i], hulls[j], starts[i], ends[i], starts[j], ends[j])
         assert batch.status[k] == single.status
-        if single.toi is None:
-            assert np.isnan(batch.toi[k])
+        if single.time_of_impact is None:
+            assert np.isnan(batch.time_of_impact[k])
         else:
-            assert batch.toi[k] == single.toi
+            assert batch.time_of_impact[k] == single.time_of_impact

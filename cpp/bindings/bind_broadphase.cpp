@@ -1,4 +1,4 @@
-// Binds broadphase.hpp: sort_and_sweep, SweepAndPrune, AabbTree. Arrays in, arrays out; the
+// Binds broadphase.hpp: sort_and_sweep, SortAndSweep, AabbTree. Arrays in, arrays out; the
 // Python wrappers in meshcol/broadphase.py check shapes first with friendly messages.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
@@ -106,17 +106,17 @@ void bind_broadphase(nb::module_& m) {
         return meshcol::choose_sweep_axis(lo.data(), hi.data(), n);
     }, "aabb_min"_a, "aabb_max"_a, "The axis of largest variance of the box centres.");
 
-    nb::class_<meshcol::SweepAndPrune>(m, "SweepAndPrune", "Incremental sort and sweep.")
+    nb::class_<meshcol::SortAndSweep>(m, "SortAndSweep", "Incremental sort and sweep.")
         .def("__init__",
-             [](meshcol::SweepAndPrune* self, const Boxes& lo, const Boxes& hi, int axis, int threads) {
+             [](meshcol::SortAndSweep* self, const Boxes& lo, const Boxes& hi, int axis, int threads) {
                  const std::int64_t n = box_count(lo, hi);
                  nb::gil_scoped_release release;
-                 new (self) meshcol::SweepAndPrune(lo.data(), hi.data(), n, axis, threads);
+                 new (self) meshcol::SortAndSweep(lo.data(), hi.data(), n, axis, threads);
              },
              "aabb_min"_a, "aabb_max"_a, "axis"_a = -1, "threads"_a = 0)
-        .def("pairs", [](const meshcol::SweepAndPrune& s) { return shared_pairs_array(s.shared_pairs()); })
+        .def("pairs", [](const meshcol::SortAndSweep& s) { return shared_pairs_array(s.shared_pairs()); })
         .def("update",
-             [](meshcol::SweepAndPrune& s, const Boxes& lo, const Boxes& hi) {
+             [](meshcol::SortAndSweep& s, const Boxes& lo, const Boxes& hi) {
                  const std::int64_t n = box_count(lo, hi);
                  {
                      nb::gil_scoped_release release;
@@ -125,9 +125,9 @@ void bind_broadphase(nb::module_& m) {
                  return shared_pairs_array(s.shared_pairs());
              },
              "aabb_min"_a, "aabb_max"_a)
-        .def_prop_ro("axis", &meshcol::SweepAndPrune::axis)
-        .def_prop_ro("last_shifts", &meshcol::SweepAndPrune::last_shifts)
-        .def("__len__", &meshcol::SweepAndPrune::size);
+        .def_prop_ro("axis", &meshcol::SortAndSweep::axis)
+        .def_prop_ro("last_shifts", &meshcol::SortAndSweep::last_shifts)
+        .def("__len__", &meshcol::SortAndSweep::size);
 
     using Tree = meshcol::AabbTree;
     nb::class_<Tree>(m, "AabbTree", "Dynamic AABB tree (Box2D v3 style).")

@@ -466,7 +466,7 @@ std::vector<std::int64_t> sort_and_sweep(const double* lo, const double* hi, std
 
 /// The incremental sweep's memory between steps: the grid of the first step (or of the last
 /// rebuild), each cell's entries sorted by lo_a, and the block of cells each box spans.
-struct SweepAndPrune::State {
+struct SortAndSweep::State {
     Grid grid;
     std::vector<std::vector<Entry>> cells;
     std::vector<std::uint16_t> span;  ///< per box: u0, u1, v0, v1
@@ -512,7 +512,7 @@ std::int64_t insertion_sort(Entry* e, std::int64_t count, std::int64_t budget) {
 
 }  // namespace
 
-SweepAndPrune::SweepAndPrune(const double* lo, const double* hi, std::int64_t n, int axis,
+SortAndSweep::SortAndSweep(const double* lo, const double* hi, std::int64_t n, int axis,
                              int threads) {
     check_axis(axis);
     check_count(n);
@@ -526,11 +526,11 @@ SweepAndPrune::SweepAndPrune(const double* lo, const double* hi, std::int64_t n,
     pairs_ = std::make_shared<const std::vector<std::int64_t>>(state_->build(lo, hi, n, axis_, t));
 }
 
-SweepAndPrune::~SweepAndPrune() = default;
-SweepAndPrune::SweepAndPrune(SweepAndPrune&&) noexcept = default;
-SweepAndPrune& SweepAndPrune::operator=(SweepAndPrune&&) noexcept = default;
+SortAndSweep::~SortAndSweep() = default;
+SortAndSweep::SortAndSweep(SortAndSweep&&) noexcept = default;
+SortAndSweep& SortAndSweep::operator=(SortAndSweep&&) noexcept = default;
 
-const std::vector<std::int64_t>& SweepAndPrune::update(const double* lo, const double* hi,
+const std::vector<std::int64_t>& SortAndSweep::update(const double* lo, const double* hi,
                                                        std::int64_t n) {
     if (n != size())
         throw std::invalid_argument("aabb_min must hold the same " + std::to_string(size()) +

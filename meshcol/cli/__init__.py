@@ -15,7 +15,7 @@ from typing import Any
 
 import click
 
-from meshcol import __version__
+from meshcol._version import __version__
 from meshcol.errors import MeshcolError
 
 # command name -> "module:function". Modules import heavy dependencies inside the command

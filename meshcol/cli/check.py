@@ -55,9 +55,9 @@ def check(inputs: tuple[str, ...], shape: str, tolerance: float, clearance: floa
       meshcol check scene.glb --shape decomposed --ignore 'door*:frame*'
       meshcol check scene.json --baseline last_week.json > today.json
     """
-    from meshcol.check import CheckOptions, check_scene, load_baseline, parse_ignore_rule
-    from meshcol.report import emit, report_format as pick_format
-    from meshcol.scene import load_inputs
+    from meshcol.analysis.check import CheckOptions, check_scene, load_baseline, parse_ignore_rule
+    from meshcol.io.report import emit, report_format as pick_format
+    from meshcol.io.scene import load_inputs
 
     for rule in ignore:
         try:
@@ -70,7 +70,7 @@ def check(inputs: tuple[str, ...], shape: str, tolerance: float, clearance: floa
     started = time.perf_counter()
     scene = load_inputs(list(inputs))
     load_seconds = time.perf_counter() - started
-    options = CheckOptions(shape=shape, tolerance=tolerance, clearance=clearance, fail_on=fail_on,
+    options = CheckOptions(collider=shape, tolerance=tolerance, clearance=clearance, fail_on=fail_on,
                            ignore=ignore, baseline=old, baseline_source=baseline, threads=threads,
                            decompose_options=_decompose_options(engine, threshold, cache_dir))
     result = check_scene(scene, options, progress=progress.message, load_seconds=load_seconds)

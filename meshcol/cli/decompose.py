@@ -81,8 +81,8 @@ def decompose_command(
       meshcol decompose bottle.obj -o out/ --engine vhacd --layout combined --format glb
       meshcol decompose snowflake.obj -o out/ --preprocess off --threshold 0.02 -E mcts_iterations=50
     """
-    from meshcol.decompose import resolve_params
-    from meshcol.decompose_jobs import WorkerPool, decompose_task, prepare_engine
+    from meshcol.decomposition.engines import prepare_engine, resolve_params
+    from meshcol.decomposition.jobs import WorkerPool, decompose_task
 
     if layout == "ucx" and fmt == "glb":
         raise click.UsageError("--layout ucx writes OBJ only: drop --format glb")
@@ -128,10 +128,11 @@ def _decompose_files(
 ) -> int:
     """The run after option checks: load, look up the cache, decompose, write, report.
     Returns the exit code (1 when a file failed or a body exceeds ``max_hausdorff``)."""
-    from meshcol.decompose import cached_decomposition
+    from meshcol.decomposition.decompose import cached_decomposition
     from meshcol.cli.common import Progress
-    from meshcol.decompose_jobs import decompose_task, run_tasks, safe_name, write_parts
-    from meshcol.report import dumps_csv, dumps_json, emit, report_format
+    from meshcol.decomposition.jobs import decompose_task, run_tasks
+    from meshcol.io.mesh_write import safe_name, write_parts
+    from meshcol.io.report import dumps_csv, dumps_json, emit, report_format
 
     # Files are read one by one and each goes to a worker as soon as it is read, so work
     # starts at once and a library is never held in memory whole. Unusable input (exit 2)
@@ -197,7 +198,7 @@ def _decompose_files(
                 t = transforms[name]
                 world = [(v @ t[:3, :3].T + t[:3, 3], f) for v, f in d.parts]
                 written = write_parts(name, world, out_dir, layout, fmt)
-                m = d.metrics.as_dict() if d.metrics is not None else {}
+                m = d.metrics.to_dict() if d.metrics is not None else {}
                 worst = max(m.get("hausdorff_mesh_to_parts", 0.0), m.get("hausdorff_parts_to_mesh", 0.0))
                 ok = max_hausdorff is None or worst <= max_hausdorff
                 exceeded += not ok
@@ -246,7 +247,7 @@ def _decompose_files(
 
 
 def _is_manifest(inputs: tuple[str, ...]) -> bool:
-    from meshcol.scene import MANIFEST_EXTENSIONS
+    from meshcol.io.scene import MANIFEST_EXTENSIONS
 
     return any(os.path.splitext(p)[1].lower() in MANIFEST_EXTENSIONS for p in inputs)
 
@@ -255,8 +256,8 @@ def _iter_load(inputs: tuple[str, ...]) -> Iterator[tuple[str, list[tuple[str, A
     """(file, [(body name, canonical vertices, canonical faces, transform)]) per input file,
     as each is read (:func:`meshcol.scene.iter_inputs`): one task per file; a manifest's
     bodies without a file of their own (primitives) belong to the manifest."""
-    from meshcol.decompose import canonical_geometry
-    from meshcol.scene import iter_inputs
+    from meshcol.decomposition.canonical import canonical_geometry
+    from meshcol.io.scene import iter_inputs
 
     for source, bodies in iter_inputs(list(inputs)):
         canonical = []
@@ -266,5 +267,5 @@ def _iter_load(inputs: tuple[str, ...]) -> Iterator[tuple[str, list[tuple[str, A
             except InvalidMeshError as exc:
                 where = source if body.name == os.path.splitext(os.path.basename(source))[0] else f"{source}: {body.name}"
                 raise InvalidMeshError(exc.message, where) from None
-            canonical.append((body.name, v, f, body.transform))
+            canonical.append((body.name, v, f, body.pose))
         yield source, canonical

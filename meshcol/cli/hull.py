@@ -8,9 +8,9 @@ from pathlib import Path
 
 import click
 
-from meshcol import __version__
+from meshcol._version import __version__
 from meshcol.cli.common import report_options
-from meshcol.report import atomic_path, dumps_csv, dumps_json, emit, report_format
+from meshcol.io.report import atomic_path, dumps_csv, dumps_json, emit, report_format
 
 #: Mesh formats the hull can be written in (by output extension).
 OUTPUT_EXTENSIONS = (".obj", ".stl", ".ply", ".off", ".glb")
@@ -75,9 +75,9 @@ def hull(inputs: tuple[str, ...], output: str | None, out_dir: str | None,
                 f"(expected {', '.join(OUTPUT_EXTENSIONS)})", param_hint="'-o' / '--output'")
 
     from meshcol.errors import InvalidMeshError
-    from meshcol.hulls import convex_hull
-    from meshcol.inspect import closed_volume
-    from meshcol.scene import load_inputs
+    from meshcol.geometry.hull import convex_hull
+    from meshcol.geometry.topology import closed_volume
+    from meshcol.io.scene import load_inputs
 
     scene = load_inputs(list(inputs))
     bodies = scene.bodies

@@ -6,10 +6,10 @@ import sys
 
 import click
 
-from meshcol import __version__
+from meshcol._version import __version__
 from meshcol.cli.common import report_options
-from meshcol.inspect import RULES
-from meshcol.report import dumps_csv, dumps_json, emit, report_format
+from meshcol.analysis.inspect import RULES
+from meshcol.io.report import dumps_csv, dumps_json, emit, report_format
 
 SCHEMA_VERSION = 1
 CSV_COLUMNS = (
@@ -60,14 +60,14 @@ def inspect(inputs: tuple[str, ...], report: str | None, fmt: str | None,
       meshcol inspect level.json --fail-on not-watertight,self-intersecting
       meshcol inspect props/*.obj --report - --format csv --fail-on all
     """
-    from meshcol.inspect import inspect_body
-    from meshcol.scene import load_inputs
+    from meshcol.analysis.inspect import inspect_body
+    from meshcol.io.scene import load_inputs
 
     scene = load_inputs(list(inputs))
     results = [inspect_body(body, declared_units=scene.units) for body in scene.bodies]
     rows = []
     for result in results:
-        row = result.as_dict()
+        row = result.to_dict()
         row["failed_rules"] = [rule for rule in result.findings if rule in fail_on]
         rows.append(row)
 

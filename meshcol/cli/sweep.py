@@ -6,12 +6,12 @@ import sys
 
 import click
 
-from meshcol import __version__
+from meshcol._version import __version__
 from meshcol.cli.common import report_options
-from meshcol.report import dumps_csv, dumps_json, emit, report_format
+from meshcol.io.report import dumps_csv, dumps_json, emit, report_format
 
 SCHEMA_VERSION = 1
-CSV_COLUMNS = ("a", "b", "status", "toi", "time", "point", "normal", "tunnelled", "pose_a",
+CSV_COLUMNS = ("a", "b", "status", "time_of_impact", "time", "point", "normal", "tunnelled", "pose_a",
                "pose_b", "iterations")
 
 
@@ -63,13 +63,13 @@ def sweep(manifest: str, shape: str, tolerance: float | None, report: str | None
       meshcol sweep level.json --report sweep.csv --fail-on none
       meshcol sweep level.json --shape mesh --tolerance 1e-5 --report -
     """
-    from meshcol.sweep import sweep as run_sweep
+    from meshcol.analysis.sweep import sweep as run_sweep
 
     decompose_options = {} if cache_dir is None else {"cache_dir": cache_dir}
-    result = run_sweep(manifest, shape=shape, tolerance=tolerance, threads=threads,
+    result = run_sweep(manifest, collider=shape, tolerance=tolerance, threads=threads,
                        decompose_options=decompose_options)
     kind = report_format(report, fmt)
-    rows = [h.as_dict() for h in result.hits]
+    rows = [h.to_dict() for h in result.hits]
     if kind == "csv":
         flat = [dict(row, pose_a=sum(row["pose_a"], []), pose_b=sum(row["pose_b"], []))
                 for row in rows]
@@ -84,7 +84,7 @@ def sweep(manifest: str, shape: str, tolerance: float | None, report: str | None
                                    "local origin",
                          "frame": "world"},
             "failed": fail_on == "hit" and result.failed,
-            **result.as_dict(),
+            **result.to_dict(),
         })
     emit(text, report)
 
@@ -98,6 +98,6 @@ def sweep(manifest: str, shape: str, tolerance: float | None, report: str | None
         for h in result.hits:
             when = "" if h.time is None else f" (t = {h.time:.6g} s)"
             extra = ", tunnelled" if h.tunnelled else ""
-            click.echo(f"meshcol: fail: {manifest}: '{h.a}' and '{h.b}': {h.status.name} at toi "
-                       f"{h.toi:.6g}{when}{extra}", err=True)
+            click.echo(f"meshcol: fail: {manifest}: '{h.a}' and '{h.b}': {h.status.name} at time of impact "
+                       f"{h.time_of_impact:.6g}{when}{extra}", err=True)
         sys.exit(1)

@@ -2,7 +2,7 @@
 /// Broad phase: find the few overlapping pairs among many axis-aligned boxes.
 ///
 /// Two structures, as the classic literature describes them (Ericson 2004, ch. 6 and 7):
-/// - `sort_and_sweep` / `SweepAndPrune`: sort the boxes on one axis and sweep (Baraff 1992;
+/// - `sort_and_sweep` / `SortAndSweep`: sort the boxes on one axis and sweep (Baraff 1992;
 ///   Cohen et al. 1995, I-COLLIDE), refined by a coarse grid on the two other axes
 ///   ("multi box pruning", Terdiman's PhysX MBP) so a uniform 3D cloud does not degrade into
 ///   a quadratic scan of one long slab.
@@ -41,13 +41,13 @@ std::vector<std::int64_t> sort_and_sweep(const double* lo, const double* hi, std
 /// sorted order of every grid cell, so a step where boxes move a little costs an insertion
 /// sort over nearly sorted cells (plus moving the few boxes that changed cells) instead of a
 /// fresh grid, scatter and sort (Baraff 1992; Cohen et al. 1995).
-class SweepAndPrune {
+class SortAndSweep {
 public:
     /// Sorts the boxes from scratch. `axis` -1 chooses by variance, then stays fixed.
-    SweepAndPrune(const double* lo, const double* hi, std::int64_t n, int axis, int threads);
-    ~SweepAndPrune();
-    SweepAndPrune(SweepAndPrune&&) noexcept;
-    SweepAndPrune& operator=(SweepAndPrune&&) noexcept;
+    SortAndSweep(const double* lo, const double* hi, std::int64_t n, int axis, int threads);
+    ~SortAndSweep();
+    SortAndSweep(SortAndSweep&&) noexcept;
+    SortAndSweep& operator=(SortAndSweep&&) noexcept;
 
     /// Replaces the boxes (same count) and returns the overlapping pairs.
     const std::vector<std::int64_t>& update(const double* lo, const double* hi, std::int64_t n);

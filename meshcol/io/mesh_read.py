@@ -3,7 +3,7 @@
 A file may hold several bodies: OBJ objects (or groups, when the file has no objects), STL
 solids, glTF mesh nodes. Each becomes one :class:`meshcol.types.Body` whose vertices are in its
 local frame with any scale, shear or mirror of the scene graph baked in, and whose
-``transform`` is the rigid rest of the node's world matrix.
+``pose`` is the rigid rest of the node's world matrix.
 
 Materials, textures, normals and UVs are never loaded: a textured file loads without Pillow,
 and vertices split along UV or normal seams are merged back by position.
@@ -78,7 +78,7 @@ def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]
         In file order (glTF: scene-graph order). Named after the file stem when the file holds
         one body, else ``<stem>/<object, solid or node name>``; names are unique.
         ``vertices`` (n, 3) float64 are in the body's local frame with scale baked in;
-        ``faces`` (m, 3) int64; ``transform`` (4, 4) is rigid, world from local.
+        ``faces`` (m, 3) int64; ``pose`` (4, 4) is rigid, world from local.
 
     Raises
     ------
@@ -151,7 +151,7 @@ def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]
                 source=source,
                 vertices=np.ascontiguousarray(vertices),
                 faces=np.ascontiguousarray(faces),
-                transform=transform,
+                pose=transform,
             )
         )
     return bodies

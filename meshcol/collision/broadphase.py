@@ -2,7 +2,7 @@
 
 Two structures, both in the C++ core and both exact (no false positives, no misses):
 
-- :func:`sort_and_sweep` and its incremental form :class:`SweepAndPrune`: sort the boxes on
+- :func:`sort_and_sweep` and its incremental form :class:`SortAndSweep`: sort the boxes on
   one axis and sweep, with a coarse grid over the two other axes so that a uniform cloud of
   boxes does not degrade into a quadratic scan.
 - :class:`AabbTree`: a dynamic bounding volume tree (insert, remove, move with a fat margin,
@@ -19,9 +19,9 @@ from typing import Any
 
 import numpy as np
 
-from meshcol import _core
+from meshcol._native import core as _core
 
-__all__ = ["sort_and_sweep", "SweepAndPrune", "AabbTree", "brute_force_pairs"]
+__all__ = ["sort_and_sweep", "SortAndSweep", "AabbTree", "brute_force_pairs"]
 
 
 def _boxes(aabb_min: Any, aabb_max: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -146,7 +146,7 @@ def brute_force_pairs(aabb_min: Any, aabb_max: Any) -> np.ndarray:
     return np.concatenate(found).astype(np.int64, copy=False)
 
 
-class SweepAndPrune:
+class SortAndSweep:
     """Incremental sort and sweep for a scene whose boxes move a little between steps.
 
     Parameters
@@ -173,13 +173,13 @@ class SweepAndPrune:
 
     Examples
     --------
-    >>> sweep = SweepAndPrune(aabb_min, aabb_max)        # doctest: +SKIP
+    >>> sweep = SortAndSweep(aabb_min, aabb_max)        # doctest: +SKIP
     >>> pairs = sweep.update(aabb_min + dt * v, aabb_max + dt * v)  # doctest: +SKIP
     """
 
     def __init__(self, aabb_min: Any, aabb_max: Any, axis: int | None = None) -> None:
         lo, hi = _boxes(aabb_min, aabb_max)
-        self._sweep = _core.SweepAndPrune(lo, hi, _axis(axis))
+        self._sweep = _core.SortAndSweep(lo, hi, _axis(axis))
 
     def pairs(self) -> np.ndarray:
         """Overlapping pairs of the last step: (k, 2) int64 (read-only), i < j, sorted."""

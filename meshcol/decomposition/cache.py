@@ -1,6 +1,6 @@
 """The content-addressed cache of convex decompositions.
 
-One entry per key (:func:`meshcol.decompose.cache_key`): ``<dir>/<key[:2]>/<key>.npz`` holding
+One entry per key (:func:`meshcol.decomposition.canonical.cache_key`): ``<dir>/<key[:2]>/<key>.npz`` holding
 all part vertices and faces concatenated, their offsets, and a JSON header (engine, version,
 parameters, metrics, notes). An entry is written to a temporary file in the same folder and
 renamed into place (``os.replace`` is atomic on POSIX and Windows), so concurrent runs never
@@ -15,14 +15,12 @@ import os
 import sys
 import zipfile
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from meshcol.report import atomic_path
+from meshcol.decomposition.result import Decomposition, Fidelity
+from meshcol.io.report import atomic_path
 
-if TYPE_CHECKING:
-    from meshcol.decompose import Decomposition
 
 __all__ = ["default_cache_dir", "entry_path", "load", "store"]
 
@@ -50,8 +48,6 @@ def entry_path(key: str, cache_dir: str | os.PathLike[str] | None = None) -> Pat
 
 def load(key: str, cache_dir: str | os.PathLike[str] | None = None) -> Decomposition | None:
     """The cached decomposition for ``key``, or None when absent or unreadable."""
-    from meshcol.decompose import Decomposition, Fidelity
-
     path = entry_path(key, cache_dir)
     try:
         with np.load(path, allow_pickle=False) as z:
@@ -92,7 +88,7 @@ def store(result: Decomposition, cache_dir: str | os.PathLike[str] | None = None
         "engine": result.engine,
         "engine_version": result.engine_version,
         "params": dict(result.params),
-        "metrics": None if result.metrics is None else result.metrics.as_dict(),
+        "metrics": None if result.metrics is None else result.metrics.to_dict(),
         "repaired": result.repaired,
         "notes": list(result.notes),
     }

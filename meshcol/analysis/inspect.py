@@ -12,6 +12,8 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from meshcol.errors import InvalidMeshError
+from meshcol.geometry.topology import component_count, duplicate_face_count, edge_table
+from meshcol.geometry.triangles import degenerate_faces
 from meshcol.types import Body
 
 __all__ = [
@@ -20,8 +22,6 @@ __all__ = [
     "inspect_body",
     "self_intersecting_pairs",
     "guess_units",
-    "closed_volume",
-    "is_closed_manifold",
 ]
 
 #: ``--fail-on`` rules, each the name of a finding.
@@ -35,10 +35,6 @@ RULES: tuple[str, ...] = (
     "multiple-components",
     "suspect-units",
 )
-#: A face is degenerate when its height (twice its area over its longest edge) is at most
-#: this fraction of the mesh's bounding-box diagonal: it then has no usable normal. 1e-7 is
-#: just above float32 rounding, the precision of STL files.
-DEGENERATE_RELATIVE_HEIGHT = 1e-7
 #: Self-intersection tests treat distances up to this fraction of the diagonal as contact,
 #: not crossing: faces that merely touch (shared vertices, T-junctions) are not reported.
 CROSSING_RELATIVE_TOLERANCE = 1e-10
@@ -120,7 +116,7 @@ class MeshInspection:
     declared_units: str | None = None
     findings: list = field(default_factory=list)
 
-    def as_dict(self) -> dict:
+    def to_dict(self) -> dict:
         """Plain JSON-ready dictionary of every field."""
         return asdict(self)
 
@@ -132,7 +128,7 @@ def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspectio
     ----------
     body : Body
         Its ``vertices`` (local frame) and ``faces``; the bounding box and unit guess use
-        the world frame (``body.transform`` applied).
+        the world frame (``body.pose`` applied).
     declared_units : str, optional
         Units a scene manifest declared (``"m"``, ``"mm"``, ...): ``suspect-units`` then
         fires when the guess disagrees. Without it, anything but a metre-sized body is
@@ -170,7 +166,7 @@ def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspectio
     size = hi - lo
     diagonal = float(np.linalg.norm(size))
 
-    edges, counts, inconsistent = _edge_table(faces)
+    edges, counts, inconsistent = edge_table(faces)
     boundary = int((counts == 1).sum())
     non_manifold = int((counts > 2).sum())
     watertight = boundary == 0 and non_manifold == 0
@@ -180,7 +176,7 @@ def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspectio
         tri = vertices[faces]
         volume = float(np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum() / 6.0)
 
-    degenerate = _degenerate_mask(vertices, faces, diagonal)
+    degenerate = degenerate_faces(vertices, faces, diagonal)
     pairs = self_intersecting_pairs(vertices, faces, skip=degenerate)
     units, reason = guess_units(float(size.max()))
 
@@ -195,10 +191,10 @@ def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspectio
         findings.append("degenerate-faces")
     if non_manifold:
         findings.append("non-manifold")
-    duplicates = _duplicate_count(faces)
+    duplicates = duplicate_face_count(faces)
     if duplicates:
         findings.append("duplicate-faces")
-    components = _component_count(faces, len(vertices))
+    components = component_count(faces, len(vertices))
     if components > 1:
         findings.append("multiple-components")
     if _units_suspect(units, declared_units):
@@ -227,53 +223,6 @@ def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspectio
         declared_units=declared_units,
         findings=findings,
     )
-
-
-def is_closed_manifold(faces: np.ndarray) -> bool:
-    """True when every edge is shared by exactly two triangles with opposite directions
-    (a closed, consistently wound surface). Edges of collapsed triangles (a repeated index)
-    are ignored."""
-    faces = np.asarray(faces, dtype=np.int64)
-    if len(faces) == 0:
-        return False
-    n = int(faces.max()) + 1
-    a = faces.reshape(-1)
-    b = faces[:, [1, 2, 0]].reshape(-1)
-    real = a != b
-    a, b = a[real], b[real]
-    # One sort of (undirected edge, direction bit): closed and consistently oriented exactly
-    # when the sorted keys come in pairs, each edge once in each direction.
-    keys = np.sort((np.minimum(a, b) * n + np.maximum(a, b)) * 2 + (a < b))
-    if len(keys) == 0 or len(keys) % 2:
-        return False
-    edge, forward = keys >> 1, keys & 1
-    paired = (edge[0::2] == edge[1::2]).all() and (edge[2::2] != edge[1:-1:2]).all()
-    return bool(paired and (forward[0::2] != forward[1::2]).all())
-
-
-def closed_volume(vertices: np.ndarray, faces: np.ndarray) -> float | None:
-    """Signed volume of a closed, consistently wound mesh; None when it is not.
-
-    Parameters
-    ----------
-    vertices : (n, 3) float
-    faces : (m, 3) int
-
-    Returns
-    -------
-    float or None
-        Positive when the faces point outward. None when an edge has other than two faces
-        or two faces traverse an edge the same way: the volume would mean nothing.
-
-    Notes
-    -----
-    Divergence theorem: the sum over the triangles of ``a . (b x c) / 6``.
-    """
-    faces = np.asarray(faces, dtype=np.int64)
-    if not is_closed_manifold(faces):
-        return None
-    tri = np.asarray(vertices, dtype=np.float64)[faces]
-    return float(np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum() / 6.0)
 
 
 def guess_units(largest_extent: float) -> tuple[str, str]:
@@ -321,47 +270,6 @@ def _units_suspect(guess: str, declared: str | None) -> bool:
     declared_unit = _UNIT_ALIASES.get(declared.strip().lower())
     # a declared unit the heuristic does not know (cm, inch) cannot be contradicted
     return declared_unit is not None and declared_unit != guess
-
-
-def _edge_table(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
-    """Unique undirected edges, their face counts, and the number of wrongly wound edges."""
-    directed = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-    directed = directed[directed[:, 0] != directed[:, 1]]
-    undirected = np.sort(directed, axis=1)
-    edges, inverse, counts = np.unique(undirected, axis=0, return_inverse=True, return_counts=True)
-    inverse = inverse.reshape(-1)
-    # +1 for an edge traversed low->high, -1 high->low: a consistently wound manifold edge
-    # sums to 0
-    direction = np.where(directed[:, 0] < directed[:, 1], 1, -1)
-    balance = np.bincount(inverse, weights=direction, minlength=len(edges))
-    inconsistent = int(((counts == 2) & (balance != 0)).sum())
-    return edges, counts, inconsistent
-
-
-def _degenerate_mask(vertices: np.ndarray, faces: np.ndarray, diagonal: float) -> np.ndarray:
-    tri = vertices[faces]
-    twice_area = np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
-    longest = np.linalg.norm(tri - tri[:, [1, 2, 0]], axis=2).max(axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        height = np.where(longest > 0, twice_area / longest, 0.0)
-    repeated = (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 2] == faces[:, 0])
-    return repeated | (height <= DEGENERATE_RELATIVE_HEIGHT * diagonal)
-
-
-def _duplicate_count(faces: np.ndarray) -> int:
-    unique = np.unique(np.sort(faces, axis=1), axis=0)
-    return int(len(faces) - len(unique))
-
-
-def _component_count(faces: np.ndarray, vertex_count: int) -> int:
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    edges = faces[:, [0, 1, 1, 2]].reshape(-1, 2)
-    graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])),
-                       shape=(vertex_count, vertex_count))
-    _, labels = connected_components(graph, directed=False)
-    return int(len(np.unique(labels[np.unique(faces)])))
 
 
 def _manifold_status(vertices: np.ndarray, faces: np.ndarray) -> str:

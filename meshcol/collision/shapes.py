@@ -1,42 +1,22 @@
-"""Narrow phase: distance, penetration and intersection of convex shapes.
+"""Convex shapes and the packed :class:`ConvexSet` the native narrow phase runs on.
 
-Frames and signs (fixed once, here, for every function of this module):
-
-- Each shape is given in its own local frame; a pose is a rigid row-major 4x4 matrix mapping
-  local to world (``world = R @ local + t``); ``None`` means identity.
-- Every returned point and normal is in the world frame.
-- ``distance >= 0`` (0 when the shapes touch or overlap); ``depth >= 0`` (0 when they are
-  apart); ``signed_distance = distance - depth``.
-- ``normal`` is a unit vector from shape ``a`` towards shape ``b``. When separated,
-  ``point_b - point_a = distance * normal``; when overlapping, moving ``b`` by
-  ``depth * normal`` brings the shapes into contact and ``point_a - point_b = depth * normal``
-  (``point_a`` is the deepest point of ``a`` inside ``b`` and vice versa).
-- Touching counts as intersecting. Two shapes closer than ``defaults.contact_tolerance``
-  times the pair's length scale (bounding radii plus centre distance) touch.
-
-Shapes are packed into a :class:`ConvexSet` (arrays, built once) and the ``*_batch`` functions
-query (P, 2) index pairs in one native call (GIL released, threads over pairs). The
-single-pair functions (:func:`distance`, ...) build a two-shape set and call the same code.
-
-Notes
------
-Distance is GJK (van den Bergen 2003) with Ericson's (2004) Voronoi-region closest-point
-subalgorithm, in shape ``a``'s frame, ending exactly on polytopes when a support point
-repeats. Spheres and capsules are a point or segment swept by a radius, added exactly.
-Penetration is EPA from GJK's final simplex with silhouette expansion (van den Bergen 2003),
-verified, and replaced when they disagree, by an exact separating-axis test over face normals
-and edge-edge cross products for boxes and small polytopes (Ericson 2004, sec. 5.2.1).
+A shape is a primitive (:class:`Sphere`, :class:`Box`, :class:`Capsule`, :class:`Cylinder`,
+exact) or a polytope, the convex hull of points (:func:`meshcol.geometry.hull.exact_hull`).
+Shapes live in their local frames; queries take one rigid world-from-local pose per shape.
 """
 
 from __future__ import annotations
 
 import enum
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import Any, Iterable, Sequence
+from typing import Any
 
 import numpy as np
 
-from meshcol.types import Body, Primitive, Status
+from meshcol.collision.arrays import as_points, as_poses
+from meshcol.geometry.hull import exact_hull
+from meshcol.types import Body, Primitive
 
 __all__ = [
     "ShapeKind",
@@ -45,21 +25,8 @@ __all__ = [
     "Capsule",
     "Cylinder",
     "ConvexSet",
-    "DistanceBatch",
-    "PenetrationBatch",
-    "SignedDistanceBatch",
-    "IntersectsBatch",
-    "DistanceResult",
-    "PenetrationResult",
-    "SignedDistanceResult",
-    "distance",
-    "penetration",
-    "intersects",
-    "signed_distance",
-    "distance_batch",
-    "penetration_batch",
-    "intersects_batch",
-    "signed_distance_batch",
+    "as_convex_set",
+    "pack_shape",
 ]
 
 
@@ -154,10 +121,6 @@ class Cylinder:
         object.__setattr__(self, "length", _check_length("length", self.length))
 
 
-# ---------------------------------------------------------------------------------------------
-# Packing
-
-
 @dataclass
 class _Packed:
     """One shape before packing: hull vertices and the data the core uses."""
@@ -209,60 +172,33 @@ def _pack_polytope(points: Any) -> _Packed:
     if len(pts) == 0 or not np.all(np.isfinite(pts)):
         # Kept as given: the core reports INVALID_INPUT for every pair that uses it.
         return _Packed(0, params, np.ascontiguousarray(pts), [], _EMPTY3, _EMPTY3)
-    pts = np.unique(pts, axis=0)
-    if len(pts) == 1:
-        return _Packed(0, params, pts, [np.zeros(0, np.int32)], _EMPTY3, _EMPTY3)
-    centre = pts.mean(axis=0)
-    _, sv, vt = np.linalg.svd(pts - centre, full_matrices=False)
-    extent = sv[0]
-    if len(sv) < 3 or sv[1] <= 1e-12 * extent:
-        # Segment: its two extreme points along the principal direction.
-        t = (pts - centre) @ vt[0]
-        ends = pts[[np.argmin(t), np.argmax(t)]]
+    hull = exact_hull(pts)
+    verts = hull.vertices
+    if hull.dimension == 0:
+        return _Packed(0, params, verts, [np.zeros(0, np.int32)], _EMPTY3, _EMPTY3)
+    if hull.dimension == 1:
         adj = [np.array([1], np.int32), np.array([0], np.int32)]
-        return _Packed(0, params, ends, adj, _EMPTY3, _unique_directions(ends[1:] - ends[:1], False))
-    from scipy.spatial import ConvexHull, QhullError
-
-    if sv[2] <= 1e-12 * extent:
-        # Polygon: a 2D hull in the plane of the two principal directions.
-        uv = (pts - centre) @ vt[:2].T
-        try:
-            hull2 = ConvexHull(uv)
-        except QhullError:
-            return _Packed(0, params, pts, [], _EMPTY3, _EMPTY3)
-        ring = hull2.vertices  # counter-clockwise order
-        verts = pts[ring]
+        edges = _unique_directions(verts[1:] - verts[:1], False)
+        return _Packed(0, params, verts, adj, _EMPTY3, edges)
+    if hull.dimension == 2:
         n = len(verts)
         loop = np.stack([np.arange(n), (np.arange(n) + 1) % n], axis=1)
-        normal = np.cross(vt[0], vt[1])
-        faces = np.stack([normal, -normal]) / np.linalg.norm(normal)
+        faces = np.stack([hull.normal, -hull.normal])
         edges = _unique_directions(verts[loop[:, 1]] - verts[loop[:, 0]], False)
         return _Packed(0, params, verts, _adjacency_from_edges(n, loop), faces, edges)
-    try:
-        hull = ConvexHull(pts)
-    except QhullError:
-        return _Packed(0, params, pts, [], _EMPTY3, _EMPTY3)
-    keep = hull.vertices
-    remap = np.full(len(pts), -1, dtype=np.int64)
-    remap[keep] = np.arange(len(keep))
-    verts = np.ascontiguousarray(pts[keep])
-    tri = remap[hull.simplices]
+    tri = hull.faces
     planes = np.round(hull.equations[:, :3], 12)
     # Edges of the triangulation (all of them drive hill climbing); those between facets of
     # different planes are the polytope's true edges (SAT).
     tri_edges, real = [], []
     for j in range(3):
-        e = tri[:, [(j + 1) % 3, (j + 2) % 3]]
-        tri_edges.append(e)
-        neighbour = hull.neighbors[:, j]
-        real.append(np.any(planes != planes[neighbour], axis=1))
-    tri_edges = np.concatenate(tri_edges)
-    real = np.concatenate(real)
-    sat_edges = tri_edges[real]
+        tri_edges.append(tri[:, [(j + 1) % 3, (j + 2) % 3]])
+        real.append(np.any(planes != planes[hull.neighbors[:, j]], axis=1))
+    all_edges = np.concatenate(tri_edges)
+    sat_edges = all_edges[np.concatenate(real)]
     faces = _unique_directions(hull.equations[:, :3], True)
     edges = _unique_directions(verts[sat_edges[:, 1]] - verts[sat_edges[:, 0]], False)
-    adjacency = _adjacency_from_edges(len(verts), tri_edges)
-    return _Packed(0, params, verts, adjacency, faces, edges)
+    return _Packed(0, params, verts, _adjacency_from_edges(len(verts), all_edges), faces, edges)
 
 
 def _pack_primitive(shape: Any) -> _Packed:
@@ -295,7 +231,7 @@ def _from_primitive_record(p: Primitive) -> Sphere | Box | Capsule | Cylinder:
 _PRIMITIVES = (Sphere, Box, Capsule, Cylinder)
 
 
-def _pack_any(shape: Any, name: str) -> _Packed:
+def pack_shape(shape: Any, name: str) -> _Packed:
     """Packs a primitive, a Primitive record, a Body, a trimesh mesh or an (n, 3) array."""
     if isinstance(shape, _PRIMITIVES):
         return _pack_primitive(shape)
@@ -364,11 +300,11 @@ class ConvexSet:
     )
 
     def __init__(self, **arrays: np.ndarray) -> None:
-        from meshcol import _core
+        from meshcol._native import core
 
         for name in self._FIELDS:
             setattr(self, name, _readonly(arrays[name]))
-        self._core = _core.PackedConvexSet(
+        self._core = core.PackedConvexSet(
             self.vertices, self.offsets, self.kinds, self.params,
             self.adjacency_offsets, self.adjacency,
             self.face_offsets, self.face_normals, self.edge_offsets, self.edge_directions,
@@ -417,20 +353,22 @@ class ConvexSet:
             valid).
         """
         return cls._from_packed(
-            [_pack_polytope(_as_points(v, f"vertex_lists[{i}]")) for i, v in enumerate(vertex_lists)]
+            [_pack_polytope(as_points(v, f"vertex_lists[{i}]")) for i, v in enumerate(vertex_lists)]
         )
 
     @classmethod
-    def from_shapes(cls, shapes: Sequence[Any]) -> ConvexSet:
-        """Primitives (:class:`Sphere`, :class:`Box`, :class:`Capsule`, :class:`Cylinder`)
-        and (n, 3) point arrays (convex hulls), in any mix."""
-        return cls._from_packed([_pack_any(s, f"shapes[{i}]") for i, s in enumerate(shapes)])
+    def from_shapes(cls, shapes: Sequence[Any], names: Sequence[str] | None = None) -> ConvexSet:
+        """Primitives (:class:`Sphere`, :class:`Box`, :class:`Capsule`, :class:`Cylinder`),
+        :class:`meshcol.types.Body` objects, meshes and (n, 3) point arrays (convex hulls), in
+        any mix; ``names`` (default ``shapes[i]``) name them in errors."""
+        labels = names if names is not None else [f"shapes[{i}]" for i in range(len(shapes))]
+        return cls._from_packed([pack_shape(s, n) for s, n in zip(shapes, labels)])
 
     @classmethod
     def from_meshes(cls, meshes: Sequence[Any]) -> ConvexSet:
         """Convex hulls of ``trimesh.Trimesh`` meshes or :class:`meshcol.types.Body`
         objects, in their local frames (a Body with a primitive uses the primitive)."""
-        return cls._from_packed([_pack_any(m, f"meshes[{i}]") for i, m in enumerate(meshes)])
+        return cls._from_packed([pack_shape(m, f"meshes[{i}]") for i, m in enumerate(meshes)])
 
     @classmethod
     def concatenate(cls, *sets: ConvexSet) -> ConvexSet:
@@ -517,328 +455,11 @@ class ConvexSet:
         aabb_min, aabb_max : (H, 3) float64
             World frame; NaN rows for a shape or pose that is invalid.
         """
-        return self._core.aabbs(_as_poses(poses, len(self)), int(threads))
+        return self._core.aabbs(as_poses(poses, len(self)), int(threads))
 
 
-def _as_points(v: Any, name: str) -> np.ndarray:
-    arr = np.asarray(v, dtype=np.float64)
-    if arr.ndim == 1 and arr.shape == (3,):
-        arr = arr.reshape(1, 3)
-    if arr.ndim != 2 or arr.shape[1] != 3:
-        raise ValueError(f"{name} must be (n, 3), got {arr.shape}")
-    return arr
-
-
-def _as_poses(poses: Any, h: int) -> np.ndarray | None:
-    if poses is None:
-        return None
-    arr = np.ascontiguousarray(poses, dtype=np.float64)
-    if arr.shape != (h, 4, 4):
-        raise ValueError(f"poses must be ({h}, 4, 4), got {arr.shape}")
-    return arr
-
-
-def _as_pairs(pairs: Any, h: int, items: str = "shapes") -> np.ndarray:
-    """``pairs`` as a C-contiguous (P, 2) int64 array of indices below ``h`` (the ``items``,
-    named in the error), or ValueError."""
-    arr = np.asarray(pairs)
-    if arr.size == 0:
-        arr = arr.reshape(-1, 2) if arr.ndim == 2 or arr.ndim == 1 else arr
-    if arr.ndim != 2 or arr.shape[1] != 2:
-        raise ValueError(f"pairs must be (P, 2), got {arr.shape}")
-    if arr.size and arr.dtype.kind not in "iu":
-        raise ValueError(f"pairs must hold integer indices, got dtype {arr.dtype}")
-    arr = np.ascontiguousarray(arr, dtype=np.int64)
-    if arr.size and (arr.min() < 0 or arr.max() >= h):
-        bad = arr[(arr < 0) | (arr >= h)][0]
-        raise ValueError(f"pairs: index {bad} out of range for {h} {items}")
-    return arr
-
-
-def _as_set(shapes: Any) -> ConvexSet:
+def as_convex_set(shapes: Any) -> ConvexSet:
+    """``shapes`` itself when it is a ConvexSet, else TypeError (the wrong container)."""
     if not isinstance(shapes, ConvexSet):
-        raise ValueError(f"shapes must be a ConvexSet, got {type(shapes).__name__}")
+        raise TypeError(f"shapes must be a ConvexSet, got {type(shapes).__name__}")
     return shapes
-
-
-# ---------------------------------------------------------------------------------------------
-# Results
-
-
-@dataclass(frozen=True)
-class DistanceBatch:
-    """Per-pair distances, in pair order.
-
-    Attributes
-    ----------
-    distance : (P,) float64
-        >= 0; 0 for touching or overlapping pairs.
-    point_a, point_b : (P, 3) float64
-        World closest points (a common point when overlapping).
-    normal : (P, 3) float64
-        World unit normal from a to b; zero for overlapping pairs.
-    iterations : (P,) int32
-    status : (P,) int8
-        :class:`meshcol.types.Status` values.
-    """
-
-    distance: np.ndarray
-    point_a: np.ndarray
-    point_b: np.ndarray
-    normal: np.ndarray
-    iterations: np.ndarray
-    status: np.ndarray
-
-
-@dataclass(frozen=True)
-class PenetrationBatch:
-    """Per-pair penetration, in pair order.
-
-    Attributes
-    ----------
-    depth : (P,) float64
-        >= 0; 0 for separated pairs.
-    normal : (P, 3) float64
-        World unit normal from a to b: moving b by ``depth * normal`` brings the pair into
-        contact (for separated pairs: the direction of the closest points).
-    point_a, point_b : (P, 3) float64
-        World witness points, ``point_a - point_b = depth * normal`` (closest points when
-        separated).
-    iterations : (P,) int32
-    status : (P,) int8
-    """
-
-    depth: np.ndarray
-    normal: np.ndarray
-    point_a: np.ndarray
-    point_b: np.ndarray
-    iterations: np.ndarray
-    status: np.ndarray
-
-
-@dataclass(frozen=True)
-class SignedDistanceBatch:
-    """Per-pair signed distance (``distance - depth``) with both parts, in pair order.
-
-    Fields as in :class:`DistanceBatch` and :class:`PenetrationBatch`; ``point_a``,
-    ``point_b`` and ``normal`` are closest points when separated and witness points when
-    overlapping.
-    """
-
-    signed_distance: np.ndarray
-    distance: np.ndarray
-    depth: np.ndarray
-    normal: np.ndarray
-    point_a: np.ndarray
-    point_b: np.ndarray
-    iterations: np.ndarray
-    status: np.ndarray
-
-
-@dataclass(frozen=True)
-class IntersectsBatch:
-    """Per-pair intersection test (touching counts), in pair order.
-
-    Attributes
-    ----------
-    intersects : (P,) bool
-    status : (P,) int8
-    """
-
-    intersects: np.ndarray
-    status: np.ndarray
-
-
-@dataclass(frozen=True)
-class DistanceResult:
-    """Distance between two shapes (see the module docstring for frames and signs)."""
-
-    distance: float
-    point_a: np.ndarray
-    point_b: np.ndarray
-    normal: np.ndarray
-    iterations: int
-    status: Status
-
-
-@dataclass(frozen=True)
-class PenetrationResult:
-    """Penetration of two shapes (see the module docstring for frames and signs)."""
-
-    depth: float
-    normal: np.ndarray
-    point_a: np.ndarray
-    point_b: np.ndarray
-    iterations: int
-    status: Status
-
-
-@dataclass(frozen=True)
-class SignedDistanceResult:
-    """Signed distance ``distance - depth`` of two shapes, with both parts."""
-
-    signed_distance: float
-    distance: float
-    depth: float
-    normal: np.ndarray
-    point_a: np.ndarray
-    point_b: np.ndarray
-    iterations: int
-    status: Status
-
-
-# ---------------------------------------------------------------------------------------------
-# Batched queries
-
-_DISTANCE, _PENETRATION, _INTERSECTS = 0, 1, 2
-
-
-def _run(kind: int, shapes: Any, poses: Any, pairs: Any, threads: int) -> dict[str, np.ndarray]:
-    cs = _as_set(shapes)
-    h = len(cs)
-    return cs._core.query(kind, _as_poses(poses, h), _as_pairs(pairs, h), int(threads))
-
-
-def distance_batch(shapes: ConvexSet, poses: Any, pairs: Any, *, threads: int = 0) -> DistanceBatch:
-    """Distance between the shapes of each pair (GJK).
-
-    Parameters
-    ----------
-    shapes : ConvexSet
-    poses : (H, 4, 4) float or None
-        Rigid world-from-local poses, row-major (None: identity).
-    pairs : (P, 2) int
-        Indices into ``shapes``.
-    threads : int
-        Worker threads; 0 uses all cores.
-
-    Returns
-    -------
-    DistanceBatch
-        One array per field, in pair order; a pair whose shape or pose is invalid (NaN/inf,
-        empty, non-rigid) gets ``Status.INVALID_INPUT`` and NaN fields.
-
-    Raises
-    ------
-    ValueError
-        Wrong array shapes, non-integer pairs or an index out of range.
-    """
-    r = _run(_DISTANCE, shapes, poses, pairs, threads)
-    return DistanceBatch(r["distance"], r["point_a"], r["point_b"], r["normal"],
-                         r["iterations"], r["status"])
-
-
-def penetration_batch(
-    shapes: ConvexSet, poses: Any, pairs: Any, *, threads: int = 0
-) -> PenetrationBatch:
-    """Penetration depth of each pair (GJK, then EPA and exact SAT where overlapping).
-
-    Parameters and errors as :func:`distance_batch`. Separated pairs get ``depth = 0`` and
-    their closest points.
-    """
-    r = _run(_PENETRATION, shapes, poses, pairs, threads)
-    return PenetrationBatch(r["depth"], r["normal"], r["point_a"], r["point_b"],
-                            r["iterations"], r["status"])
-
-
-def signed_distance_batch(
-    shapes: ConvexSet, poses: Any, pairs: Any, *, threads: int = 0
-) -> SignedDistanceBatch:
-    """Signed distance ``distance - depth`` of each pair: GJK for all, EPA (+ exact SAT for
-    small polytopes) only for the overlapping ones.
-
-    Parameters and errors as :func:`distance_batch`.
-    """
-    r = _run(_PENETRATION, shapes, poses, pairs, threads)
-    return SignedDistanceBatch(r["distance"] - r["depth"], r["distance"], r["depth"],
-                               r["normal"], r["point_a"], r["point_b"], r["iterations"],
-                               r["status"])
-
-
-def intersects_batch(
-    shapes: ConvexSet, poses: Any, pairs: Any, *, threads: int = 0
-) -> IntersectsBatch:
-    """Whether each pair touches or overlaps (boolean GJK with early exit).
-
-    Parameters and errors as :func:`distance_batch`; invalid pairs give ``False`` with
-    ``Status.INVALID_INPUT``.
-    """
-    r = _run(_INTERSECTS, shapes, poses, pairs, threads)
-    return IntersectsBatch(r["intersects"], r["status"])
-
-
-# ---------------------------------------------------------------------------------------------
-# Single pairs
-
-_PAIR = np.array([[0, 1]], dtype=np.int64)
-
-
-def _pair_set(a: Any, b: Any, pose_a: Any, pose_b: Any) -> tuple[ConvexSet, np.ndarray | None]:
-    cs = ConvexSet._from_packed([_pack_any(a, "a"), _pack_any(b, "b")])
-    if pose_a is None and pose_b is None:
-        return cs, None
-    poses = []
-    for name, pose in (("pose_a", pose_a), ("pose_b", pose_b)):
-        m = np.eye(4) if pose is None else np.asarray(pose, dtype=np.float64)
-        if m.shape != (4, 4):
-            raise ValueError(f"{name} must be (4, 4), got {m.shape}")
-        poses.append(m)
-    return cs, np.stack(poses)
-
-
-def distance(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> DistanceResult:
-    """Distance between two convex shapes.
-
-    Parameters
-    ----------
-    a, b : Sphere, Box, Capsule, Cylinder, trimesh.Trimesh, Body or (n, 3) float
-        Shapes in their local frames (meshes and point sets by their convex hull).
-    pose_a, pose_b : (4, 4) float or None
-        Rigid world-from-local poses (None: identity).
-
-    Returns
-    -------
-    DistanceResult
-        See :class:`DistanceBatch` for the fields.
-    """
-    cs, poses = _pair_set(a, b, pose_a, pose_b)
-    r = distance_batch(cs, poses, _PAIR, threads=1)
-    return DistanceResult(float(r.distance[0]), r.point_a[0], r.point_b[0], r.normal[0],
-                          int(r.iterations[0]), Status(int(r.status[0])))
-
-
-def penetration(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> PenetrationResult:
-    """Penetration depth of two convex shapes (0 when apart); arguments as :func:`distance`."""
-    cs, poses = _pair_set(a, b, pose_a, pose_b)
-    r = penetration_batch(cs, poses, _PAIR, threads=1)
-    return PenetrationResult(float(r.depth[0]), r.normal[0], r.point_a[0], r.point_b[0],
-                             int(r.iterations[0]), Status(int(r.status[0])))
-
-
-def signed_distance(
-    a: Any, b: Any, pose_a: Any = None, pose_b: Any = None
-) -> SignedDistanceResult:
-    """Signed distance (distance - depth) of two convex shapes; arguments as
-    :func:`distance`."""
-    cs, poses = _pair_set(a, b, pose_a, pose_b)
-    r = signed_distance_batch(cs, poses, _PAIR, threads=1)
-    return SignedDistanceResult(float(r.signed_distance[0]), float(r.distance[0]),
-                                float(r.depth[0]), r.normal[0], r.point_a[0], r.point_b[0],
-                                int(r.iterations[0]), Status(int(r.status[0])))
-
-
-def intersects(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> bool:
-    """True when two convex shapes touch or overlap; arguments as :func:`distance`.
-
-    Raises
-    ------
-    ValueError
-        Also for invalid data (NaN/inf, an empty shape, a non-rigid pose): a bool cannot
-        carry a status (the batch form reports ``Status.INVALID_INPUT`` instead).
-    """
-    cs, poses = _pair_set(a, b, pose_a, pose_b)
-    r = intersects_batch(cs, poses, _PAIR, threads=1)
-    if r.status[0] == Status.INVALID_INPUT:
-        raise ValueError("a, b, pose_a or pose_b: NaN/inf coordinates, an empty shape or a "
-                         "non-rigid pose")
-    return bool(r.intersects[0])

@@ -24,11 +24,9 @@ body ``a`` to body ``b``, ``signed_distance = distance - depth``.
 from __future__ import annotations
 
 import fnmatch
-import hashlib
 import json
 import math
 import os
-import re
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -37,13 +35,13 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.errors import InputFileError, MeshcolError
-from meshcol.types import Body, Scene
+from meshcol.analysis.colliders import COLLIDER_KINDS, build_colliders
+from meshcol.errors import InputFileError
+from meshcol.types import Scene, Status
 
 __all__ = [
     "PAIR_STATUSES",
     "FAIL_ON",
-    "SHAPES",
     "CheckOptions",
     "CheckReport",
     "check",
@@ -55,8 +53,6 @@ PAIR_STATUSES = ("separated", "clearance", "contact", "penetrating", "contained"
 SEVERITY = {name: i for i, name in enumerate(PAIR_STATUSES)}
 # --fail-on value -> least severe status that violates the policy
 FAIL_ON = {"penetration": "penetrating", "contact": "contact", "clearance": "clearance", "none": None}
-SHAPES = ("hull", "decomposed", "mesh")
-_UCX = re.compile(r"^UCX_(?P<body>.+)_(?P<index>\d+)$")
 
 
 @dataclass(frozen=True)
@@ -65,9 +61,10 @@ class CheckOptions:
 
     Attributes
     ----------
-    shape : str
-        Default collision shape: ``hull``, ``decomposed`` or ``mesh``; a manifest's per-body
-        ``shape`` overrides it; primitives are always exact.
+    collider : str
+        Default collider kind: ``hull``, ``decomposed`` or ``mesh``
+        (:mod:`meshcol.analysis.colliders`); a manifest's per-body ``shape`` overrides it;
+        primitives are always exact.
     tolerance : float
         Contact band, in scene units: pairs with ``|signed_distance| <= tolerance`` touch.
     clearance : float
@@ -86,7 +83,7 @@ class CheckOptions:
         Options for on-the-fly convex decomposition (``decomposed`` bodies not in the cache).
     """
 
-    shape: str = "hull"
+    collider: str = "hull"
     tolerance: float = 1e-6
     clearance: float = 0.0
     fail_on: str = "penetration"
@@ -97,8 +94,9 @@ class CheckOptions:
     decompose_options: dict = field(default_factory=dict)
 
     def validate(self) -> None:
-        if self.shape not in SHAPES:
-            raise ValueError(f"shape must be one of {', '.join(SHAPES)}, got {self.shape!r}")
+        if self.collider not in COLLIDER_KINDS:
+            raise ValueError(f"collider must be one of {', '.join(COLLIDER_KINDS)}, "
+                             f"got {self.collider!r}")
         if not (math.isfinite(self.tolerance) and self.tolerance >= 0):
             raise ValueError(f"tolerance must be a finite number >= 0, got {self.tolerance!r}")
         if not (math.isfinite(self.clearance) and self.clearance >= 0):
@@ -124,7 +122,7 @@ class CheckReport:
     Attributes
     ----------
     bodies : list of dict
-        Per body: name, file, shape, parts, vertices, aabb (world ``[[min], [max]]``).
+        Per body: name, file, collider, parts, vertices, aabb (world ``[[min], [max]]``).
     pairs : list of dict
         Per candidate body pair, sorted by (a, b): a, b, status, distance, depth,
         signed_distance, normal, point_a, point_b, part_a, part_b, ignored, violation.
@@ -167,12 +165,12 @@ class CheckReport:
         }
 
     def to_json(self) -> str:
-        from meshcol.report import dumps_json
+        from meshcol.io.report import dumps_json
 
         return dumps_json(self.to_dict())
 
     def to_csv(self) -> str:
-        from meshcol.report import dumps_csv
+        from meshcol.io.report import dumps_csv
 
         rows = []
         for p in self.pairs:
@@ -196,118 +194,6 @@ CSV_COLUMNS = [
 
 # ---------------------------------------------------------------------------------------------
 # Shapes
-
-
-def _geometry_key(vertices: np.ndarray, faces: np.ndarray | None = None) -> bytes:
-    h = hashlib.blake2b(digest_size=16)
-    h.update(np.ascontiguousarray(vertices, dtype=np.float64).tobytes())
-    if faces is not None:
-        h.update(np.ascontiguousarray(faces, dtype=np.int64).tobytes())
-    return h.digest()
-
-
-def _split_ucx(bodies: Sequence[Body]) -> tuple[list[Body], dict[str, list[Body]]]:
-    """Separate ``UCX_<body>_NN`` collision parts from the bodies they belong to."""
-    names = {b.name for b in bodies}
-    ucx: dict[str, list[Body]] = {}
-    kept: list[Body] = []
-    for body in bodies:
-        head, _, last = body.name.rpartition("/")
-        match = _UCX.match(last)
-        if match:
-            target = f"{head}/{match['body']}" if head else match["body"]
-            if target in names:
-                ucx.setdefault(target, []).append(body)
-                continue
-        kept.append(body)
-    for parts in ucx.values():
-        parts.sort(key=lambda b: int(_UCX.match(b.name.rpartition("/")[2])["index"]))
-    return kept, ucx
-
-
-def _ucx_parts(owner: Body, parts: list[Body]) -> list[np.ndarray]:
-    """UCX part vertices expressed in the owner's local frame."""
-    inverse = np.linalg.inv(owner.transform)
-    out = []
-    for part in parts:
-        m = inverse @ part.transform
-        out.append(part.vertices @ m[:3, :3].T + m[:3, 3])
-    return out
-
-
-@dataclass
-class _Shapes:
-    """Convex parts of every body, packed for the native core."""
-
-    convex: Any  # meshcol.query.ConvexSet, all parts of all bodies
-    part_body: np.ndarray  # (n_parts,) int64 body index of each part
-    part_index: np.ndarray  # (n_parts,) int64 index of the part within its body
-    body_part_offsets: np.ndarray  # (n_bodies + 1,)
-    poses: np.ndarray  # (n_parts, 4, 4)
-    body_shape: list[str]  # effective shape per body
-    notes: list[str]
-
-
-def _build_shapes(bodies: Sequence[Body], ucx: dict[str, list[Body]], options: CheckOptions,
-                  progress: Callable[[str], None]) -> _Shapes:
-    from meshcol.query import ConvexSet
-
-    # Unique geometry -> index into `unique`: instanced props are hulled once.
-    unique: list[Any] = []
-    unique_index: dict[Any, int] = {}
-    part_unique: list[int] = []
-    part_body: list[int] = []
-    part_index: list[int] = []
-    body_shape: list[str] = []
-    notes: list[str] = []
-
-    def add(key: Any, make: Callable[[], Any]) -> int:
-        idx = unique_index.get(key)
-        if idx is None:
-            idx = len(unique)
-            unique.append(make())
-            unique_index[key] = idx
-        return idx
-
-    for b, body in enumerate(bodies):
-        shape = body.shape or options.shape
-        if body.primitive is not None:
-            shape = "primitive"
-            keys = [add(("primitive", body.primitive), lambda body=body: body.primitive)]
-        elif shape == "decomposed":
-            if body.name in ucx:
-                parts = _ucx_parts(body, ucx[body.name])
-                keys = [add(("ucx", _geometry_key(p)), lambda p=p: p) for p in parts]
-                shape = "ucx"
-            else:
-                parts = _decomposed_parts(body, options, progress)
-                keys = [add(("part", _geometry_key(p)), lambda p=p: p) for p in parts]
-        else:
-            key = ("hull", _geometry_key(body.vertices))
-            keys = [add(key, lambda body=body: body.vertices)]
-        body_shape.append(shape)
-        for i, k in enumerate(keys):
-            part_unique.append(k)
-            part_body.append(b)
-            part_index.append(i)
-
-    unique_set = ConvexSet.from_shapes(unique)
-    convex = unique_set.take(np.asarray(part_unique, dtype=np.int64))
-    part_body_arr = np.asarray(part_body, dtype=np.int64)
-    counts = np.bincount(part_body_arr, minlength=len(bodies))
-    offsets = np.zeros(len(bodies) + 1, dtype=np.int64)
-    np.cumsum(counts, out=offsets[1:])
-    transforms = np.stack([b.transform for b in bodies]) if bodies else np.zeros((0, 4, 4))
-    poses = np.ascontiguousarray(transforms[part_body_arr], dtype=np.float64)
-    return _Shapes(convex, part_body_arr, np.asarray(part_index, dtype=np.int64), offsets, poses,
-                   body_shape, notes)
-
-
-def _decomposed_parts(body: Body, options: CheckOptions, progress: Callable[[str], None]) -> list[np.ndarray]:
-    from meshcol.decompose import convex_parts
-
-    progress(f"convex parts of {body.name}")
-    return convex_parts(body, **options.decompose_options)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -372,23 +258,24 @@ def check_scene(scene: Scene, options: CheckOptions | None = None, *,
     -------
     CheckReport
     """
-    from meshcol.broadphase import sort_and_sweep
-    from meshcol.query import signed_distance_batch
-    from meshcol.types import Status
+    from meshcol.collision.broadphase import sort_and_sweep
+    from meshcol.collision.narrowphase import signed_distance_batch
 
     options = options or CheckOptions()
     options.validate()
     progress = progress or (lambda message: None)
     start = time.perf_counter()
 
-    bodies, ucx = _split_ucx(scene.bodies)
+    shapes = build_colliders(scene.bodies, options.collider, mesh_parts="hull",
+                             decompose_options=options.decompose_options, progress=progress)
+    bodies = shapes.bodies
     n = len(bodies)
     names = [b.name for b in bodies]
-    shapes = _build_shapes(bodies, ucx, options, progress)
+    part_poses = shapes.part_poses()
     progress(f"{n} bodies, {len(shapes.part_body)} convex parts")
 
     # World AABBs: parts, then bodies (parts of a body are contiguous).
-    part_min, part_max = shapes.convex.aabbs(shapes.poses, threads=options.threads)
+    part_min, part_max = shapes.shapes.aabbs(part_poses, threads=options.threads)
     if n:
         starts = shapes.body_part_offsets[:-1]
         body_min = np.minimum.reduceat(part_min, starts, axis=0)
@@ -396,7 +283,7 @@ def check_scene(scene: Scene, options: CheckOptions | None = None, *,
     else:
         body_min = body_max = np.zeros((0, 3))
     # A mesh body's hull AABB equals its mesh AABB, so the broad phase is the same for it.
-    mesh_bodies = np.array([s == "mesh" for s in shapes.body_shape], dtype=bool)
+    mesh_bodies = np.array([s == "mesh" for s in shapes.kinds], dtype=bool)
 
     band = options.clearance + options.tolerance
     half = 0.5 * band
@@ -438,7 +325,7 @@ def check_scene(scene: Scene, options: CheckOptions | None = None, *,
         if len(extra):
             part_pairs = np.concatenate([part_pairs, extra])
             part_key = np.concatenate([part_key, shapes.part_body[extra[:, 0]] * max(n, 1) + shapes.part_body[extra[:, 1]]])
-        result = signed_distance_batch(shapes.convex, shapes.poses, part_pairs, threads=options.threads)
+        result = signed_distance_batch(shapes.shapes, part_poses, part_pairs, threads=options.threads)
         bad = result.status == int(Status.INVALID_INPUT)
         value = np.where(bad, np.inf, result.signed_distance)
         best = _first_per_group(part_key, value)
@@ -463,13 +350,13 @@ def check_scene(scene: Scene, options: CheckOptions | None = None, *,
         overlap &= a_in_b | b_in_a
     exact = use_mesh | overlap
     if exact.any():
-        from meshcol.mesh_query import MeshSet, mesh_distance_batch
+        from meshcol.collision.mesh_query import MeshSet, mesh_distance_batch
 
         involved = np.unique(candidates[exact].ravel())
         local = np.full(n, -1, dtype=np.int64)
         local[involved] = np.arange(len(involved))
         meshes = MeshSet.from_bodies([bodies[i] for i in involved])
-        poses = np.stack([bodies[i].transform for i in involved])
+        poses = np.stack([bodies[i].pose for i in involved])
         idx = np.flatnonzero(exact)
         mres = mesh_distance_batch(meshes, poses, local[candidates[idx]], threads=options.threads)
         inside = (mres.a_inside_b | mres.b_inside_a) & ~mres.intersecting
@@ -528,9 +415,9 @@ def check_scene(scene: Scene, options: CheckOptions | None = None, *,
 
     part_counts = np.diff(shapes.body_part_offsets).tolist()
     body_rows = [
-        {"name": body.name, "file": _relative(body.source), "shape": shape, "parts": parts,
+        {"name": body.name, "file": _relative(body.source), "collider": kind, "parts": parts,
          "vertices": len(body.vertices), "aabb": [lo, hi]}
-        for body, shape, parts, lo, hi in zip(bodies, shapes.body_shape, part_counts,
+        for body, kind, parts, lo, hi in zip(bodies, shapes.kinds, part_counts,
                                              _vecs(body_min), _vecs(body_max))
     ]
     body_rows.sort(key=lambda r: r["name"])
@@ -551,7 +438,7 @@ def check_scene(scene: Scene, options: CheckOptions | None = None, *,
         "load_seconds": None if load_seconds is None else round(load_seconds, 6),
     }
     settings = {
-        "shape": options.shape,
+        "collider": options.collider,
         "tolerance": options.tolerance,
         "clearance": options.clearance,
         "fail_on": options.fail_on,
@@ -618,7 +505,7 @@ def check(inputs: Sequence[str | os.PathLike[str]] | str | os.PathLike[str], **o
         Mesh files (each body at its own coordinates), one scene manifest (JSON/TOML) or
         glTF/GLB scenes.
     **options
-        Fields of :class:`CheckOptions` (``shape``, ``tolerance``, ``clearance``, ``fail_on``,
+        Fields of :class:`CheckOptions` (``collider``, ``tolerance``, ``clearance``, ``fail_on``,
         ``ignore``, ``baseline`` (a path or a report dict), ``threads``).
 
     Returns
@@ -632,7 +519,7 @@ def check(inputs: Sequence[str | os.PathLike[str]] | str | os.PathLike[str], **o
     2003) and EPA with exact SAT on small polytopes; exact triangle-mesh distance and a winding
     number containment test (Jacobson et al. 2013) for ``mesh`` shapes.
     """
-    from meshcol.scene import load_inputs
+    from meshcol.io.scene import load_inputs
 
     if isinstance(inputs, (str, os.PathLike)):
         inputs = [inputs]

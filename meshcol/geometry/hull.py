@@ -14,13 +14,25 @@ from dataclasses import dataclass
 import numpy as np
 
 from meshcol.errors import InvalidMeshError
+from meshcol.geometry.triangles import closest_points_on_triangles
 
-__all__ = ["HullResult", "convex_hull", "MIN_MAX_VERTICES"]
+__all__ = [
+    "FLAT_RELATIVE_TOLERANCE",
+    "MIN_MAX_VERTICES",
+    "ExactHull",
+    "HullResult",
+    "convex_hull",
+    "dimension_of",
+    "exact_hull",
+    "principal_widths",
+]
 
 #: The smallest vertex budget: a tetrahedron.
 MIN_MAX_VERTICES = 4
-#: Points are flat (collinear) when their extent across the best-fit plane (line) is at most
-#: this fraction of their bounding-box diagonal.
+#: The one flatness rule of meshcol. Points are flat (coplanar), collinear or one point when
+#: their width across their best-fit plane (line) is at most this fraction of their
+#: bounding-box diagonal: hulls, collision shapes, decomposition input and swept triangles
+#: all decide with it (:func:`dimension_of`).
 FLAT_RELATIVE_TOLERANCE = 1e-9
 #: The budget loop stops early once the simplified hull is within this fraction of the
 #: diagonal of the exact hull.
@@ -143,49 +155,36 @@ def convex_hull(points: np.ndarray, max_vertices: int | None = None) -> HullResu
         raise InvalidMeshError("mesh has no vertices: there is no hull")
     if not np.isfinite(pts).all():
         raise InvalidMeshError("vertices contain NaN or infinite coordinates")
-
-    scale = float(np.linalg.norm(np.ptp(pts, axis=0)))
-    if scale == 0.0:
+    exact = exact_hull(pts)
+    if exact.dimension == 0:
         raise InvalidMeshError("all vertices coincide: there is no meaningful hull")
-    centre = pts.mean(axis=0)
-    _, _, axes = np.linalg.svd(pts - centre, full_matrices=False)
-    widths = np.ptp((pts - centre) @ axes.T, axis=0)
-    if widths[1] <= FLAT_RELATIVE_TOLERANCE * scale:
+    if exact.dimension == 1:
         raise InvalidMeshError("all vertices are collinear: there is no meaningful hull")
+    if exact.dimension == 2:
+        return _flat_hull(exact, max_vertices)
 
-    exact = None
-    if widths[2] > FLAT_RELATIVE_TOLERANCE * scale:
-        exact = _exact_hull_3d(pts)
-    if exact is None:
-        return _flat_hull(pts, centre, axes[:2], scale, max_vertices)
-
-    hull_points, simplices, equations, volume, area = exact
+    volume = exact.volume
     result_kwargs = dict(
         flat=False,
-        exact_vertex_count=len(np.unique(simplices)),
-        exact_face_count=len(simplices),
+        exact_vertex_count=len(exact.vertices),
+        exact_face_count=len(exact.faces),
         exact_volume=volume,
         max_vertices=None if max_vertices is None else int(max_vertices),
     )
-    vertices, faces = _compact(hull_points, simplices)
+    vertices, faces = exact.vertices, exact.faces
     if max_vertices is None or len(vertices) <= max_vertices:
-        return HullResult(vertices=vertices, faces=faces, volume=volume, area=area,
+        return HullResult(vertices=vertices.copy(), faces=faces.copy(), volume=volume,
+                          area=exact.area,
                           added_volume_fraction=0.0 if max_vertices is not None else None,
                           **result_kwargs)
 
-    facets = vertices[faces]
-    eq = equations
-    q_vertices, distance = _simplify(vertices, facets, eq, int(max_vertices), scale)
-    from scipy.spatial import ConvexHull
-
-    q_hull = ConvexHull(q_vertices, qhull_options="Qt")
-    q_faces = _orient(q_vertices, q_hull.simplices, q_hull.equations)
-    q_vertices, q_faces = _compact(q_vertices, q_faces)
-    added = max(float(q_hull.volume) - volume, 0.0)
+    q_vertices, distance = _simplify(vertices, vertices[faces], exact.equations,
+                                     int(max_vertices), exact.diagonal)
+    q = exact_hull(q_vertices)
+    added = max(q.volume - volume, 0.0)
     return HullResult(
-        vertices=q_vertices, faces=q_faces, volume=float(q_hull.volume),
-        area=float(q_hull.area), added_volume=added, added_volume_fraction=added / volume,
-        max_distance=distance, **result_kwargs,
+        vertices=q.vertices, faces=q.faces, volume=q.volume, area=q.area, added_volume=added,
+        added_volume_fraction=added / volume, max_distance=distance, **result_kwargs,
     )
 
 
@@ -193,41 +192,165 @@ def convex_hull(points: np.ndarray, max_vertices: int | None = None) -> HullResu
 # exact hulls
 
 
-def _exact_hull_3d(pts: np.ndarray):
-    """qhull in 3-D: (points, oriented simplices, equations, volume, area), None when flat."""
+@dataclass(frozen=True, eq=False)
+class ExactHull:
+    """The exact convex hull of a point set, in every dimension it can have.
+
+    Attributes
+    ----------
+    dimension : int
+        0 (one point), 1 (collinear), 2 (coplanar) or 3, by :data:`FLAT_RELATIVE_TOLERANCE`.
+    vertices : (k, 3) float64
+        The hull's vertices, a subset of the distinct input points (``-0.0`` as ``0.0``). In
+        3-D they are in lexicographic order; in 2-D they are the polygon's ring,
+        counter-clockwise about ``normal``; in 1-D the segment's two ends; in 0-D the point.
+    faces : (m, 3) int64
+        3-D: triangles wound counter-clockwise seen from outside. 2-D: a fan triangulation of
+        the ring (one side). Empty otherwise.
+    equations : (m, 4) float64
+        3-D: each face's outward plane ``n . x + c = 0`` (unit ``n``). Empty otherwise.
+    neighbors : (m, 3) int64
+        3-D: ``neighbors[f, j]`` is the face across the edge opposite corner ``j`` of face
+        ``f``. Empty otherwise.
+    normal : (3,) float64
+        2-D: the unit normal of the polygon's plane. Zero otherwise.
+    volume, area : float
+        Enclosed volume (0 below 3-D) and surface area (2-D: the polygon's area, one side).
+    diagonal : float
+        Bounding-box diagonal of the input points (the scale of the tolerances).
+    """
+
+    dimension: int
+    vertices: np.ndarray
+    faces: np.ndarray
+    equations: np.ndarray
+    neighbors: np.ndarray
+    normal: np.ndarray
+    volume: float
+    area: float
+    diagonal: float
+
+
+def principal_widths(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """Centre, principal axes (3, 3), widths along them (3,) and bounding-box diagonal.
+
+    The widths are the extents of the points along the axes of their best-fit plane (SVD of
+    the centred points), largest first: the point set's thickness is ``widths[2]``.
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    diagonal = float(np.linalg.norm(np.ptp(pts, axis=0))) if len(pts) else 0.0
+    centre = pts.mean(axis=0) if len(pts) else np.zeros(3)
+    if diagonal == 0.0 or not np.isfinite(diagonal):
+        return centre, np.eye(3), np.zeros(3), diagonal
+    centred = pts - centre
+    if len(centred) < 3:  # rows at the centre change no width but give a full frame
+        centred = np.vstack([centred, np.zeros((3 - len(centred), 3))])
+    _, _, axes = np.linalg.svd(centred, full_matrices=False)
+    widths = np.ptp((pts - centre) @ axes.T, axis=0)
+    return centre, axes, widths, diagonal
+
+
+def dimension_of(widths: np.ndarray, diagonal: float) -> int:
+    """How many dimensions points with these principal widths span (the flatness rule)."""
+    if diagonal == 0.0:
+        return 0
+    return int(np.count_nonzero(widths > FLAT_RELATIVE_TOLERANCE * diagonal))
+
+
+_NO_FACES = np.zeros((0, 3), dtype=np.int64)
+
+
+def exact_hull(points: np.ndarray) -> ExactHull:
+    """The exact convex hull of finite points (qhull), flat and degenerate inputs included.
+
+    Parameters
+    ----------
+    points : (n, 3) float
+        At least one point, all finite (callers validate and name the input).
+
+    Returns
+    -------
+    ExactHull
+
+    Notes
+    -----
+    Quickhull (Barber, Dobkin and Huhdanpaa 1996) through ``scipy.spatial.ConvexHull``, retried
+    with joggled input (``QJ``) when qhull reports a precision problem. The dimension comes
+    from the one flatness rule (:data:`FLAT_RELATIVE_TOLERANCE`); coplanar points get a 2-D
+    hull computed by qhull on their plane coordinates. Every convex hull in meshcol (collision
+    shapes, ``meshcol hull``, decomposition parts) is this one.
+    """
     from scipy.spatial import ConvexHull, QhullError
 
-    for options in ("Qt", "QJ"):
+    pts = np.unique(np.asarray(points, dtype=np.float64) + 0.0, axis=0)
+    centre, axes, widths, diagonal = principal_widths(pts)
+    dim = dimension_of(widths, diagonal)
+    empty4 = np.zeros((0, 4))
+    zero3 = np.zeros(3)
+    if dim == 3:
+        hull = None
+        for options in (None, "QJ"):
+            try:
+                hull = ConvexHull(pts, qhull_options=options)
+                break
+            except QhullError:
+                continue
+        if hull is not None and hull.volume > 0.0:
+            keep = hull.vertices  # sorted input order, as the input is sorted
+            remap = np.full(len(pts), -1, dtype=np.int64)
+            remap[keep] = np.arange(len(keep))
+            faces = remap[hull.simplices]
+            neighbors = np.asarray(hull.neighbors, dtype=np.int64)
+            equations = np.asarray(hull.equations, dtype=np.float64)
+            vertices = np.ascontiguousarray(pts[keep])
+            tri = vertices[faces]
+            normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+            flip = np.einsum("ij,ij->i", normal, equations[:, :3]) < 0
+            # Reversing a triangle swaps corners 0 and 2, and so the edges opposite them.
+            faces[flip] = faces[flip][:, ::-1]
+            neighbors[flip] = neighbors[flip][:, ::-1]
+            return ExactHull(3, vertices, faces, equations, neighbors, zero3,
+                             float(hull.volume), float(hull.area), diagonal)
+        dim = 2
+    if dim == 2:
+        uv = (pts - centre) @ axes[:2].T
         try:
-            hull = ConvexHull(pts, qhull_options=options)
+            polygon = ConvexHull(uv)
         except QhullError:
-            continue
-        if hull.volume <= 0.0:
-            return None
-        simplices = _orient(pts, hull.simplices, hull.equations)
-        return pts, simplices, hull.equations, float(hull.volume), float(hull.area)
-    return None
+            dim = 1
+        else:
+            ring = polygon.vertices  # counter-clockwise in the plane coordinates
+            area = float(polygon.volume)  # qhull's 2-D "volume" is the area
+            normal = np.cross(axes[0], axes[1])
+            normal /= np.linalg.norm(normal)
+            return ExactHull(2, np.ascontiguousarray(pts[ring]), _fan(len(ring)), empty4,
+                             _NO_FACES, normal, 0.0, area, diagonal)
+    if dim == 1:
+        t = (pts - centre) @ axes[0]
+        ends = np.ascontiguousarray(pts[[int(np.argmin(t)), int(np.argmax(t))]])
+        return ExactHull(1, ends, _NO_FACES, empty4, _NO_FACES, zero3, 0.0, 0.0, diagonal)
+    return ExactHull(0, np.ascontiguousarray(pts[:1]), _NO_FACES, empty4, _NO_FACES, zero3,
+                     0.0, 0.0, diagonal)
 
 
-def _flat_hull(pts, centre, plane_axes, scale, max_vertices) -> HullResult:
-    """2-D hull of coplanar points, as a fan-triangulated polygon in their plane."""
-    from scipy.spatial import ConvexHull, QhullError
+def _flat_hull(exact: ExactHull, max_vertices: int | None) -> HullResult:
+    """The 2-D hull of coplanar points as a fan-triangulated polygon, within a budget."""
+    from scipy.spatial import ConvexHull
 
-    coords = (pts - centre) @ plane_axes.T
-    try:
-        hull = ConvexHull(coords)
-    except QhullError as exc:  # unreachable after the collinearity test; kept as a message
-        raise InvalidMeshError("all vertices are collinear: there is no meaningful hull") from exc
-    ring = hull.vertices  # counter-clockwise in the plane coordinates
-    exact_area = float(hull.volume)  # qhull's 2-D "volume" is the area
+    ring = exact.vertices
     exact_count = len(ring)
     kwargs = dict(flat=True, exact_vertex_count=exact_count, exact_face_count=exact_count - 2,
                   exact_volume=0.0, volume=0.0,
                   max_vertices=None if max_vertices is None else int(max_vertices))
     if max_vertices is None or exact_count <= max_vertices:
-        return HullResult(vertices=pts[ring].copy(), faces=_fan(len(ring)), area=exact_area, **kwargs)
-
-    ring_points = coords[ring]
+        return HullResult(vertices=ring.copy(), faces=exact.faces.copy(), area=exact.area,
+                          **kwargs)
+    # Plane coordinates with the ring counter-clockwise about the normal.
+    u = ring[1] - ring[0]
+    u /= np.linalg.norm(u)
+    plane_axes = np.stack([u, np.cross(exact.normal, u)])
+    centre = ring.mean(axis=0)
+    ring_points = (ring - centre) @ plane_axes.T
     n = len(ring_points)
     segments = np.stack([ring_points, ring_points[np.r_[1:n, 0]]], axis=1)
     edges = segments[:, 1] - segments[:, 0]
@@ -235,7 +358,8 @@ def _flat_hull(pts, centre, plane_axes, scale, max_vertices) -> HullResult:
     normals /= np.linalg.norm(normals, axis=1)[:, None]
     offsets = -np.einsum("ij,ij->i", normals, segments[:, 0])
     equations = np.hstack([normals, offsets[:, None]])
-    q_coords, distance = _simplify(ring_points, segments, equations, int(max_vertices), scale)
+    q_coords, distance = _simplify(ring_points, segments, equations, int(max_vertices),
+                                   exact.diagonal)
     q_hull = ConvexHull(q_coords)
     q_ring = q_coords[q_hull.vertices]
     return HullResult(vertices=centre + q_ring @ plane_axes, faces=_fan(len(q_ring)),
@@ -246,22 +370,6 @@ def _fan(n: int) -> np.ndarray:
     """Fan triangulation of a convex polygon with ``n`` vertices in order."""
     i = np.arange(1, n - 1, dtype=np.int64)
     return np.stack([np.zeros_like(i), i, i + 1], axis=1)
-
-
-def _orient(points: np.ndarray, simplices: np.ndarray, equations: np.ndarray) -> np.ndarray:
-    """Wind each triangle counter-clockwise seen from outside (along its facet normal)."""
-    simplices = np.asarray(simplices, dtype=np.int64).copy()
-    tri = points[simplices]
-    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    flip = np.einsum("ij,ij->i", normal, equations[:, :3]) < 0
-    simplices[flip] = simplices[flip][:, ::-1]
-    return simplices
-
-
-def _compact(points: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Keep only the points ``faces`` use, renumbered."""
-    used, inverse = np.unique(faces, return_inverse=True)
-    return points[used].copy(), inverse.reshape(faces.shape).astype(np.int64)
 
 
 # ---------------------------------------------------------------------------------------
@@ -427,59 +535,3 @@ def _closest_points_on_segments(p: np.ndarray, segments: np.ndarray) -> np.ndarr
     return a + np.clip(t, 0.0, 1.0)[:, None] * ab
 
 
-def closest_points_on_triangles(p: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """Closest point on each triangle to each point, vectorised.
-
-    Parameters
-    ----------
-    p : (n, 3) float
-    triangles : (n, 3, 3) float
-
-    Returns
-    -------
-    (n, 3) float
-
-    Notes
-    -----
-    Ericson, Real-Time Collision Detection (2004), 5.1.5: Voronoi regions of the vertices,
-    then the edges, else the projection onto the face.
-    """
-    a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
-    ab, ac, ap = b - a, c - a, p - a
-    dot = lambda u, v: np.einsum("ij,ij->i", u, v)  # noqa: E731
-    d1, d2 = dot(ab, ap), dot(ac, ap)
-    bp = p - b
-    d3, d4 = dot(ab, bp), dot(ac, bp)
-    cp = p - c
-    d5, d6 = dot(ab, cp), dot(ac, cp)
-    va = d3 * d6 - d5 * d4
-    vb = d5 * d2 - d1 * d6
-    vc = d1 * d4 - d3 * d2
-
-    with np.errstate(divide="ignore", invalid="ignore"):
-        denom = va + vb + vc
-        v = vb / denom
-        w = vc / denom
-        result = a + v[:, None] * ab + w[:, None] * ac  # face region
-        # edge regions
-        t_ab = d1 / (d1 - d3)
-        t_ac = d2 / (d2 - d6)
-        t_bc = (d4 - d3) / ((d4 - d3) + (d5 - d6))
-    on_bc = (va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0)
-    result = np.where(on_bc[:, None], b + np.nan_to_num(t_bc)[:, None] * (c - b), result)
-    on_ac = (vb <= 0) & (d2 >= 0) & (d6 <= 0)
-    result = np.where(on_ac[:, None], a + np.nan_to_num(t_ac)[:, None] * ac, result)
-    # applied in reverse order of Ericson's early returns, so the first test wins
-    result = np.where(((d6 >= 0) & (d5 <= d6))[:, None], c, result)
-    on_ab = (vc <= 0) & (d1 >= 0) & (d3 <= 0)
-    result = np.where(on_ab[:, None], a + np.nan_to_num(t_ab)[:, None] * ab, result)
-    result = np.where(((d3 >= 0) & (d4 <= d3))[:, None], b, result)
-    result = np.where(((d1 <= 0) & (d2 <= 0))[:, None], a, result)
-    # a degenerate (zero-area) triangle leaves NaN in the face region: fall back to its
-    # closest vertex
-    bad = ~np.isfinite(result).all(axis=1)
-    if bad.any():
-        corners = triangles[bad]
-        d = ((corners - p[bad][:, None, :]) ** 2).sum(axis=2)
-        result[bad] = corners[np.arange(len(corners)), d.argmin(axis=1)]
-    return result

@@ -1,38 +1,30 @@
-"""Running decompositions over many files, and writing their parts.
+"""Running decompositions over many files in worker processes.
 
 :func:`run_tasks` runs one task per file in worker processes (``forkserver`` where available,
 else ``spawn``: CoACD is C++ that holds the GIL, so threads would not help), kills a worker that
 exceeds the per-file timeout and replaces it, and reports every task's outcome, so one failing
 or stuck file never stops the others. A :class:`WorkerPool` can be started before the tasks
-are known, so the workers' start-up overlaps the caller's reading of the input files. The writers produce byte-identical files for identical
-parts: fixed float formatting (shortest round-trip ``repr``), no timestamps, fixed JSON key
-order in GLB.
+are known, so the workers' start-up overlaps the caller's reading of the input files.
 """
 
 from __future__ import annotations
 
-import json
 import multiprocessing
 import multiprocessing.connection
 import os
-import re
-import struct
 import time
 from collections import deque
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from meshcol.report import atomic_path
 
 __all__ = [
-    "TaskOutcome", "WorkerPool", "run_tasks", "worker_env", "write_parts", "obj_text", "glb_bytes",
-    "safe_name", "decompose_task", "prepare_engine",
+    "TaskOutcome", "WorkerPool", "run_tasks", "worker_env", "decompose_task",
 ]
 
-LAYOUTS = ("parts", "combined", "ucx")
 # Seconds a worker gets to exit after terminate() before kill().
 _TERMINATE_GRACE = 2.0
 
@@ -129,7 +121,8 @@ def _context(env: dict[str, str]) -> Any:
     # process's environment when it starts, and its preloaded numpy sizes its thread pool
     # then: start it with the workers' thread settings.
     ctx.set_forkserver_preload(
-        ["meshcol.decompose", "meshcol.decompose_jobs", "scipy.spatial", "manifold3d", "trimesh"]
+        ["meshcol.decomposition.decompose", "meshcol.decomposition.jobs", "scipy.spatial",
+         "manifold3d", "trimesh"]
     )
     saved = {key: os.environ.get(key) for key in env}
     os.environ.update(env)
@@ -353,134 +346,10 @@ def run_tasks(
 # --------------------------------------------------------------------------------------------
 # writers
 
-_UNSAFE = re.compile(r"[^A-Za-z0-9_.-]+")
-
-
-def safe_name(name: str) -> str:
-    """``name`` reduced to characters that are safe in file and object names."""
-    cleaned = _UNSAFE.sub("_", name).strip("._")
-    return cleaned or "body"
-
-
-def _number(x: float) -> str:
-    return repr(float(x) + 0.0)  # +0.0 turns -0.0 into 0.0
-
-
-def obj_text(objects: Sequence[tuple[str, np.ndarray, np.ndarray]]) -> str:
-    """Wavefront OBJ with one ``o`` object per (name, vertices, faces), 1-based global indices."""
-    lines = ["# meshcol decompose"]
-    base = 1
-    for name, vertices, faces in objects:
-        lines.append(f"o {name}")
-        lines.extend(f"v {_number(x)} {_number(y)} {_number(z)}" for x, y, z in vertices.tolist())
-        lines.extend(f"f {a + base} {b + base} {c + base}" for a, b, c in faces.tolist())
-        base += len(vertices)
-    return "\n".join(lines) + "\n"
-
-
-def glb_bytes(objects: Sequence[tuple[str, np.ndarray, np.ndarray]]) -> bytes:
-    """Binary glTF 2.0 with one node (and mesh) per (name, vertices, faces).
-
-    Positions are float32 (as glTF requires), indices uint32; no timestamps, sorted JSON keys.
-    """
-    blob = bytearray()
-    views: list[dict[str, Any]] = []
-    accessors: list[dict[str, Any]] = []
-    meshes: list[dict[str, Any]] = []
-    nodes: list[dict[str, Any]] = []
-    for i, (name, vertices, faces) in enumerate(objects):
-        position = np.ascontiguousarray(vertices, dtype="<f4")
-        index = np.ascontiguousarray(faces, dtype="<u4").reshape(-1)
-        for data, target in ((position, 34962), (index, 34963)):
-            views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": data.nbytes, "target": target})
-            blob += data.tobytes()
-            blob += b"\0" * (-len(blob) % 4)
-        accessors.append({
-            "bufferView": 2 * i, "componentType": 5126, "count": len(position), "type": "VEC3",
-            "min": position.min(axis=0).astype(float).tolist(),
-            "max": position.max(axis=0).astype(float).tolist(),
-        })
-        accessors.append({"bufferView": 2 * i + 1, "componentType": 5125, "count": len(index), "type": "SCALAR"})
-        meshes.append({"name": name, "primitives": [{"attributes": {"POSITION": 2 * i}, "indices": 2 * i + 1, "mode": 4}]})
-        nodes.append({"name": name, "mesh": i})
-    doc = {
-        "asset": {"version": "2.0", "generator": "meshcol decompose"},
-        "scene": 0,
-        "scenes": [{"nodes": list(range(len(nodes)))}],
-        "nodes": nodes,
-        "meshes": meshes,
-        "accessors": accessors,
-        "bufferViews": views,
-        "buffers": [{"byteLength": len(blob)}],
-    }
-    text = json.dumps(doc, sort_keys=True, separators=(",", ":")).encode()
-    text += b" " * (-len(text) % 4)
-    total = 12 + 8 + len(text) + 8 + len(blob)
-    out = bytearray(struct.pack("<4sII", b"glTF", 2, total))
-    out += struct.pack("<I4s", len(text), b"JSON") + text
-    out += struct.pack("<I4s", len(blob), b"BIN\0") + bytes(blob)
-    return bytes(out)
-
-
-def part_names(body: str, count: int, prefix: str = "") -> list[str]:
-    """``[prefix]<body>_NN`` for each part, NN zero-padded to at least two digits."""
-    width = max(2, len(str(count - 1)))
-    return [f"{prefix}{body}_{i:0{width}d}" for i in range(count)]
-
-
-def write_parts(
-    body: str,
-    parts: Sequence[tuple[np.ndarray, np.ndarray]],
-    out_dir: str | os.PathLike[str],
-    layout: str = "parts",
-    fmt: str = "obj",
-) -> list[str]:
-    """Write parts in a layout; returns the paths written, in order.
-
-    ``parts``: one file per part, ``<body>_NN.obj`` (or ``.glb``); ``combined``: one
-    ``<body>.obj`` with one object per part, or one ``<body>.glb`` with one node per part;
-    ``ucx``: one ``<body>_ucx.obj`` whose objects are named ``UCX_<body>_NN`` (Unreal's
-    convention for custom collision). Every file is written atomically.
-    """
-    if layout not in LAYOUTS:
-        raise ValueError(f"unknown layout {layout!r}")
-    if fmt not in ("obj", "glb"):
-        raise ValueError(f"unknown format {fmt!r}")
-    body = safe_name(body)
-    out_dir = os.fspath(out_dir)
-    written: list[str] = []
-
-    def emit(path: str, objects: list[tuple[str, np.ndarray, np.ndarray]]) -> None:
-        data: str | bytes = glb_bytes(objects) if path.endswith(".glb") else obj_text(objects)
-        with atomic_path(path) as tmp:
-            with open(tmp, "wb") as f:
-                f.write(data if isinstance(data, bytes) else data.encode())
-        written.append(path)
-
-    if layout == "parts":
-        for name, (v, f) in zip(part_names(body, len(parts)), parts):
-            emit(os.path.join(out_dir, f"{name}.{fmt}"), [(name, v, f)])
-    elif layout == "combined":
-        names = part_names(body, len(parts))
-        emit(os.path.join(out_dir, f"{body}.{fmt}"), [(n, v, f) for n, (v, f) in zip(names, parts)])
-    else:
-        names = part_names(body, len(parts), prefix="UCX_")
-        emit(os.path.join(out_dir, f"{body}_ucx.obj"), [(n, v, f) for n, (v, f) in zip(names, parts)])
-    return written
-
-
-def prepare_engine(engine: str) -> None:
-    """Worker start-up: import the engine's module (and so its OpenMP runtime) ahead of the
-    first task."""
-    if engine == "coacd":
-        import coacd  # noqa: F401
-    elif engine == "vhacd":
-        import vhacdx  # noqa: F401
-
 
 def decompose_task(task: tuple[str, list[tuple[str, np.ndarray, np.ndarray]], dict[str, Any]]) -> list[tuple[str, Any]]:
     """Worker entry: decompose every body of one file. ``task`` = (path, bodies, options)."""
-    from meshcol.decompose import decompose
+    from meshcol.decomposition.decompose import decompose
 
     _, bodies, options = task
     return [(name, decompose((vertices, faces), **options)) for name, vertices, faces in bodies]

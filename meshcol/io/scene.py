@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from meshcol.errors import InputFileError, MeshcolError, SceneError
-from meshcol.mesh_io import load_mesh, split_rigid
+from meshcol.io.mesh_read import load_mesh, split_rigid
 from meshcol.types import Body, Primitive, Scene
 
 __all__ = [
@@ -39,7 +39,7 @@ __all__ = [
 MANIFEST_EXTENSIONS = (".json", ".toml")
 
 #: The JSON Schema of a manifest.
-SCHEMA_PATH = Path(__file__).resolve().parent / "schemas" / "scene.schema.json"
+SCHEMA_PATH = Path(__file__).resolve().parent.parent / "schemas" / "scene.schema.json"
 
 # Tessellation of primitive bodies (their exact shape is in Body.primitive).
 _SPHERE_SUBDIVISIONS = 3  # icosphere: 642 vertices
@@ -100,7 +100,7 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     A body's world pose is ``T = [R | p]`` from ``rotation`` and ``position``; its ``scale``
     ``S`` and any transform ``L`` a mesh file gives a sub-body are combined as ``T S L`` and
     split again into a rigid transform and a part baked into the vertices (see
-    :func:`meshcol.mesh_io.split_rigid`), so every ``Body.transform`` is rigid.
+    :func:`meshcol.mesh_io.split_rigid`), so every ``Body.pose`` is rigid.
     """
     source = os.fspath(path)
     file = Path(source)
@@ -358,7 +358,7 @@ def _mesh_bodies(spec, manifest: Path, source, label, start, end, scale,
     stretch = np.diag([*scale, 1.0])
     bodies = []
     for sub in loaded:
-        rigid, linear = split_rigid(stretch @ sub.transform)
+        rigid, linear = split_rigid(stretch @ sub.pose)
         vertices, faces = sub.vertices, sub.faces
         if linear is not None:
             vertices = vertices @ linear.T
@@ -371,9 +371,9 @@ def _mesh_bodies(spec, manifest: Path, source, label, start, end, scale,
                 source=mesh_source,
                 vertices=np.ascontiguousarray(vertices),
                 faces=np.ascontiguousarray(faces),
-                transform=start @ rigid,
-                end_transform=None if end is None else end @ rigid,
-                shape=spec.get("shape"),
+                pose=start @ rigid,
+                end_pose=None if end is None else end @ rigid,
+                collider=spec.get("shape"),
             )
         )
     return bodies
@@ -407,10 +407,10 @@ def _primitive_body(spec, source, label, start, end, scale) -> Body:
         source=source,
         vertices=np.ascontiguousarray(mesh.vertices, dtype=np.float64),
         faces=np.ascontiguousarray(mesh.faces, dtype=np.int64),
-        transform=start,
-        end_transform=end,
+        pose=start,
+        end_pose=end,
         primitive=primitive,
-        shape=spec.get("shape"),
+        collider=spec.get("shape"),
     )
 
 

@@ -19,7 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.query import _as_pairs, _as_poses
+from meshcol._native import core
+from meshcol.collision.arrays import as_pairs, as_poses
 from meshcol.types import Body, Status
 
 __all__ = [
@@ -31,12 +32,6 @@ __all__ = [
     "mesh_distance_batch",
     "mesh_intersects_batch",
 ]
-
-
-def _core() -> Any:
-    from meshcol import _core
-
-    return _core
 
 
 def _mesh_arrays(index: int, mesh: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -85,7 +80,7 @@ class MeshSet:
     face_offsets : (M + 1,) int64
     poses : (M, 4, 4) float64
         Default world-from-local poses, used when a query passes ``poses=None``: identity from
-        :meth:`from_arrays` unless given, each body's ``transform`` from :meth:`from_bodies`.
+        :meth:`from_arrays` unless given, each body's ``pose`` from :meth:`from_bodies`.
     valid : (M,) bool
         Whether each mesh is usable: finite vertices and at least one face. Pairs involving an
         invalid mesh report ``Status.INVALID_INPUT``.
@@ -139,8 +134,8 @@ class MeshSet:
         faces = np.ascontiguousarray(faces, dtype=np.int64)
         if poses is None:
             poses = np.tile(np.eye(4), (count, 1, 1))
-        poses = _as_poses(poses, count)
-        handle = _core().MeshBvhSet(vertices, faces, vertex_offsets, face_offsets, threads=threads)
+        poses = as_poses(poses, count)
+        handle = core.MeshBvhSet(vertices, faces, vertex_offsets, face_offsets, threads=threads)
         valid = np.array([handle.valid(i) for i in range(count)], dtype=bool)
         for array in (vertices, faces, vertex_offsets, face_offsets, poses, valid):
             array.flags.writeable = False
@@ -148,11 +143,11 @@ class MeshSet:
 
     @classmethod
     def from_bodies(cls, bodies: Sequence[Body], *, threads: int = 0) -> MeshSet:
-        """Pack bodies' meshes (local frames); their ``transform`` become the default poses.
+        """Pack bodies' meshes (local frames); their ``pose`` become the default poses.
 
         A primitive body contributes its tessellation.
         """
-        poses = np.array([np.asarray(b.transform, dtype=np.float64) for b in bodies]).reshape(-1, 4, 4)
+        poses = np.array([np.asarray(b.pose, dtype=np.float64) for b in bodies]).reshape(-1, 4, 4)
         return cls.from_arrays([(b.vertices, b.faces) for b in bodies], poses, threads=threads)
 
     def __len__(self) -> int:
@@ -292,8 +287,8 @@ def mesh_distance_batch(
     """
     if not isinstance(meshes, MeshSet):
         raise TypeError(f"meshes must be a MeshSet, got {type(meshes).__name__}")
-    poses = meshes.poses if poses is None else _as_poses(poses, len(meshes))
-    pairs = _as_pairs(pairs, len(meshes), "meshes")
+    poses = meshes.poses if poses is None else as_poses(poses, len(meshes))
+    pairs = as_pairs(pairs, len(meshes), "meshes")
     max_distance = float(max_distance)
     if not max_distance >= 0.0:
         raise ValueError(f"max_distance must be >= 0, got {max_distance}")
@@ -316,8 +311,8 @@ def mesh_intersects_batch(
     """
     if not isinstance(meshes, MeshSet):
         raise TypeError(f"meshes must be a MeshSet, got {type(meshes).__name__}")
-    poses = meshes.poses if poses is None else _as_poses(poses, len(meshes))
-    pairs = _as_pairs(pairs, len(meshes), "meshes")
+    poses = meshes.poses if poses is None else as_poses(poses, len(meshes))
+    pairs = as_pairs(pairs, len(meshes), "meshes")
     intersecting, status = meshes._handle.intersects_batch(poses, pairs, threads=threads)
     return MeshIntersectsBatch(intersecting, status)
 
@@ -326,7 +321,7 @@ def _pose_of(mesh: Any, pose: np.ndarray | None) -> np.ndarray:
     if pose is not None:
         return np.asarray(pose, dtype=np.float64)
     if isinstance(mesh, Body):
-        return np.asarray(mesh.transform, dtype=np.float64)
+        return np.asarray(mesh.pose, dtype=np.float64)
     return np.eye(4)
 
 
@@ -345,7 +340,7 @@ def mesh_distance(
     a, b : (vertices (n, 3), faces (m, 3)) pairs, or objects with ``.vertices`` and ``.faces``
         Local frames (a :class:`meshcol.types.Body` or a ``trimesh.Trimesh`` works).
     pose_a, pose_b : (4, 4) float, optional
-        Rigid world-from-local poses; default the body's ``transform`` for a Body, else identity.
+        Rigid world-from-local poses; default the body's ``pose`` for a Body, else identity.
     max_distance : float
         As in :func:`mesh_distance_batch`.
 

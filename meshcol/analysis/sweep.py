@@ -1,0 +1,321 @@
+"""The scene sweep behind ``meshcol sweep``: first contact of every pair of moving bodies.
+
+Each body's collider comes from :func:`meshcol.analysis.colliders.build_colliders` (``mesh``
+bodies as their triangles); every pair of parts of different bodies, at least one moving, goes
+to :func:`meshcol.collision.time_of_impact.time_of_impact_batch`. The motion model, the
+statuses and their guarantees are those of :mod:`meshcol.collision.time_of_impact`.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from meshcol.analysis.colliders import COLLIDER_KINDS, build_colliders
+from meshcol.errors import MeshcolError, SceneError
+from meshcol.types import Body, Scene, TimeOfImpactStatus
+
+__all__ = ["SweepHit", "SweepReport", "sweep"]
+
+
+#: Scene-relative default tolerance of :func:`sweep`: this times the scene's bounding diagonal.
+RELATIVE_TOLERANCE = 1e-6
+
+
+# ---------------------------------------------------------------------------------------------
+# Scene sweep
+
+
+@dataclass(frozen=True)
+class SweepHit:
+    """One body pair that is not separated during the motion.
+
+    Attributes
+    ----------
+    a, b : str
+        Body names (``a`` comes first in the scene).
+    status : TimeOfImpactStatus
+        ``HIT``, ``OVERLAPPED_AT_START`` or ``FAILED``.
+    time_of_impact : float
+        Fraction of the motion (for ``FAILED``: the last safe lower bound).
+    time : float or None
+        ``time_of_impact * duration`` in seconds, when the scene has a duration.
+    point : (3,) float64
+        World contact point at the time of impact.
+    normal : (3,) float64
+        World unit normal from a towards b at the time of impact.
+    pose_a, pose_b : (4, 4) float64
+        Both bodies' world-from-local poses at the time of impact.
+    tunnelled : bool
+        True for a hit that a discrete check at the start and end poses alone misses (the
+        bodies overlap neither at the start nor at the end).
+    iterations : int
+        Steps of the pair query that decided the pair.
+    """
+
+    a: str
+    b: str
+    status: TimeOfImpactStatus
+    time_of_impact: float
+    time: float | None
+    point: np.ndarray
+    normal: np.ndarray
+    pose_a: np.ndarray
+    pose_b: np.ndarray
+    tunnelled: bool
+    iterations: int
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready fields (lists for arrays, the status by name), numbers rounded to 12
+        significant digits (far below the tolerance) so reports compare across machines."""
+        return {
+            "a": self.a, "b": self.b, "status": self.status.name,
+            "time_of_impact": _round(self.time_of_impact),
+            "time": _round(self.time), "point": _round(self.point),
+            "normal": _round(self.normal), "pose_a": _round(self.pose_a),
+            "pose_b": _round(self.pose_b), "tunnelled": self.tunnelled,
+            "iterations": self.iterations,
+        }
+
+
+def _round(value: Any) -> Any:
+    """Floats (or nested arrays of them) to 12 significant digits, -0.0 as 0.0."""
+    if value is None:
+        return None
+    if isinstance(value, np.ndarray):
+        return [_round(v) for v in value.tolist()]
+    if isinstance(value, list):
+        return [_round(v) for v in value]
+    value = float(value)
+    return float(f"{value:.12g}") + 0.0 if np.isfinite(value) else value
+
+
+@dataclass(frozen=True)
+class SweepReport:
+    """What :func:`sweep` found.
+
+    Attributes
+    ----------
+    scene : Scene
+    bodies : tuple of Body
+        The scene's bodies less the ``UCX_`` parts that became colliders.
+    collider : str
+        Default collider kind (``hull``, ``decomposed`` or ``mesh``).
+    tolerance : float
+        Contact distance used (world units).
+    hits : tuple of SweepHit
+        Every body pair that is not ``SEPARATED``, sorted by (a, b) names.
+    candidate_pairs : int
+        Body pairs whose swept bounds overlap (the pairs the narrow phase ran on).
+    part_pairs : int
+        Pairs of convex parts the narrow phase ran on.
+    moving : tuple of bool
+        Per body of ``bodies``: whether it moves.
+    """
+
+    scene: Scene
+    bodies: tuple[Body, ...]
+    collider: str
+    tolerance: float
+    hits: tuple[SweepHit, ...]
+    candidate_pairs: int
+    part_pairs: int
+    moving: tuple[bool, ...] = field(default=())
+
+    @property
+    def failed(self) -> bool:
+        """True when any pair hits, overlaps at the start or could not be decided."""
+        return bool(self.hits)
+
+    def summary(self) -> dict[str, int]:
+        count = {s: sum(h.status == s for h in self.hits) for s in TimeOfImpactStatus}
+        return {
+            "bodies": len(self.bodies),
+            "moving_bodies": int(sum(self.moving)),
+            "candidate_pairs": self.candidate_pairs,
+            "part_pairs": self.part_pairs,
+            "hits": count[TimeOfImpactStatus.HIT],
+            "tunnelled": sum(h.tunnelled for h in self.hits),
+            "overlapped_at_start": count[TimeOfImpactStatus.OVERLAPPED_AT_START],
+            "failed": count[TimeOfImpactStatus.FAILED],
+        }
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON report body (without tool and settings headers)."""
+        return {
+            "units": self.scene.units,
+            "duration": self.scene.duration,
+            "bodies": [{"name": b.name, "source": b.source, "moving": m}
+                       for b, m in zip(self.bodies, self.moving)],
+            "summary": self.summary(),
+            "pairs": [h.to_dict() for h in self.hits],
+        }
+
+
+def _is_moving(body: Body) -> bool:
+    return body.end_pose is not None and not np.array_equal(body.end_pose, body.pose)
+
+
+def _load(inputs: Any) -> Scene:
+    if isinstance(inputs, Scene):
+        return inputs
+    if isinstance(inputs, Body):
+        return Scene(bodies=(inputs,))
+    if isinstance(inputs, (str, os.PathLike)):
+        inputs = [inputs]
+    inputs = list(inputs)
+    if inputs and all(isinstance(b, Body) for b in inputs):
+        return Scene(bodies=tuple(inputs))
+    from meshcol.io.scene import load_inputs
+
+    scene = load_inputs(inputs)
+    if scene.source is None and len(inputs) == 1:
+        scene = Scene(bodies=scene.bodies, units=scene.units, source=os.fspath(inputs[0]),
+                      duration=scene.duration)
+    return scene
+
+
+def sweep(
+    inputs: Any,
+    *,
+    collider: str = "hull",
+    tolerance: float | None = None,
+    max_iterations: int | None = None,
+    threads: int = 0,
+    decompose_options: dict | None = None,
+) -> SweepReport:
+    """Continuous collision over a scene: the first contact of every pair of bodies.
+
+    Parameters
+    ----------
+    inputs : Scene, sequence of Body, or path(s) of a scene manifest / meshes
+        Bodies with start poses (``Body.pose``) and end poses (``Body.end_pose``; None for a
+        static body).
+    collider : {"hull", "decomposed", "mesh"}
+        Default collider kind (:mod:`meshcol.analysis.colliders`): the convex hull
+        (primitives exactly); the convex decomposition (``UCX_`` parts when given); or the
+        triangles, each swept as a polytope (surface contact: a body that starts wholly
+        inside another is not found).
+    tolerance : float, optional
+        Contact distance in world units (default ``1e-6`` x the diagonal of the scene's swept
+        bounds).
+    max_iterations : int, optional
+        Per-pair step cap (see :func:`time_of_impact_batch`).
+    threads : int
+        Worker threads; 0 uses all cores.
+    decompose_options : dict, optional
+        Options of :func:`meshcol.analysis.colliders.convex_parts` for ``decomposed`` bodies
+        (from the decompose cache when present, else decomposed now).
+
+    Returns
+    -------
+    SweepReport
+
+    Raises
+    ------
+    SceneError
+        When no body moves (no end pose or velocity anywhere).
+
+    Notes
+    -----
+    Broad phase: sort and sweep on conservative swept AABBs (:func:`swept_aabbs`), widened by
+    the tolerance. Narrow phase: :func:`time_of_impact_batch` on every pair of convex parts of
+    different bodies, at least one of them moving; a body pair takes the earliest contact of
+    its parts (``FAILED`` when an undecided part pair could come earlier). Static-static
+    pairs are skipped: they cannot start touching. ``tunnelled``: a discrete check
+    (:func:`meshcol.collision.narrowphase.intersects_batch`) finds no overlap at the start
+    poses nor at the end poses.
+    """
+    from meshcol.collision.broadphase import sort_and_sweep
+    from meshcol.collision.narrowphase import intersects_batch
+    from meshcol.collision.time_of_impact import (
+        contact_tolerance,
+        interpolate_pose,
+        swept_aabbs,
+        time_of_impact_batch,
+    )
+
+    if collider not in COLLIDER_KINDS:
+        raise ValueError(f"collider must be one of {', '.join(COLLIDER_KINDS)}, "
+                         f"got {collider!r}")
+    scene = _load(inputs)
+    if not any(b.end_pose is not None for b in scene.bodies):
+        raise SceneError("no body has an end pose or a velocity: nothing moves, nothing to sweep",
+                         scene.source)
+    colliders = build_colliders(scene.bodies, collider, mesh_parts="triangles",
+                                decompose_options=decompose_options)
+    bodies = colliders.bodies
+    moving = np.array([_is_moving(b) for b in bodies], dtype=bool)
+    cs, owner = colliders.shapes, colliders.part_body
+    start_body = np.stack([np.asarray(b.pose, dtype=np.float64) for b in bodies])
+    end_body = np.stack([np.asarray(b.pose if b.end_pose is None else b.end_pose,
+                                    dtype=np.float64) for b in bodies])
+    start, end = colliders.part_poses(), colliders.part_poses(end=True)
+    lo, hi = swept_aabbs(cs, start, end, threads)
+    if tolerance is None:
+        finite = np.all(np.isfinite(lo), axis=1) & np.all(np.isfinite(hi), axis=1)
+        diagonal = (float(np.linalg.norm(hi[finite].max(axis=0) - lo[finite].min(axis=0)))
+                    if np.any(finite) else 0.0)
+        tol = RELATIVE_TOLERANCE * diagonal if diagonal > 0.0 else contact_tolerance(None)
+    else:
+        tol = contact_tolerance(tolerance)
+    bad = ~(np.all(np.isfinite(lo), axis=1) & np.all(np.isfinite(hi), axis=1))
+    if np.any(bad):
+        body = bodies[int(owner[np.argmax(bad)])]
+        raise MeshcolError(f"body '{body.name}': invalid shape or pose (NaN/inf, empty or not "
+                           "rigid)", body.source or scene.source)
+    pairs = sort_and_sweep(lo - 0.5 * tol, hi + 0.5 * tol)
+    if len(pairs):
+        oa, ob = owner[pairs[:, 0]], owner[pairs[:, 1]]
+        keep = (oa != ob) & (moving[oa] | moving[ob])
+        pairs = pairs[keep]
+        # Part pairs ordered as their bodies (a first in the scene).
+        swap = owner[pairs[:, 0]] > owner[pairs[:, 1]]
+        pairs[swap] = pairs[swap][:, ::-1]
+    toi = time_of_impact_batch(cs, start, end, pairs, tolerance=tol,
+                               max_iterations=max_iterations, threads=threads)
+    at_start = intersects_batch(cs, start, pairs, threads=threads).intersects
+    at_end = intersects_batch(cs, end, pairs, threads=threads).intersects
+
+    body_pairs = owner[pairs] if len(pairs) else np.zeros((0, 2), np.int64)
+    groups: dict[tuple[int, int], list[int]] = {}
+    for k, (i, j) in enumerate(body_pairs.tolist()):
+        groups.setdefault((i, j), []).append(k)
+    hits = []
+    fraction = toi.time_of_impact
+    for (i, j), ks in groups.items():
+        ks = np.asarray(ks)
+        status = toi.status[ks]
+        if np.any(status == TimeOfImpactStatus.INVALID_INPUT):
+            raise MeshcolError(f"bodies '{bodies[i].name}' and '{bodies[j].name}': invalid "
+                               "shape or pose", scene.source)
+        live = ks[status != TimeOfImpactStatus.SEPARATED]
+        if len(live) == 0:
+            continue
+        best = live[np.argmin(fraction[live])]
+        best_status = TimeOfImpactStatus(int(toi.status[best]))
+        if np.any(status == TimeOfImpactStatus.OVERLAPPED_AT_START):
+            best = ks[np.argmax(status == TimeOfImpactStatus.OVERLAPPED_AT_START)]
+            best_status = TimeOfImpactStatus.OVERLAPPED_AT_START
+        elif best_status == TimeOfImpactStatus.HIT:
+            failed = live[toi.status[live] == TimeOfImpactStatus.FAILED]
+            if len(failed) and fraction[failed].min() < fraction[best]:
+                best_status = TimeOfImpactStatus.FAILED
+        t = float(fraction[best])
+        poses = interpolate_pose(np.stack([start_body[i], start_body[j]]),
+                                 np.stack([end_body[i], end_body[j]]), [t, t])
+        tunnelled = (best_status == TimeOfImpactStatus.HIT and not np.any(at_start[ks])
+                     and not np.any(at_end[ks]))
+        hits.append(SweepHit(
+            a=bodies[i].name, b=bodies[j].name, status=best_status, time_of_impact=t,
+            time=None if scene.duration is None else t * float(scene.duration),
+            point=toi.point[best].copy(), normal=toi.normal[best].copy(),
+            pose_a=poses[0], pose_b=poses[1], tunnelled=bool(tunnelled),
+            iterations=int(toi.iterations[best])))
+    hits.sort(key=lambda h: (h.a, h.b))
+    return SweepReport(scene=scene, bodies=bodies, collider=collider, tolerance=tol,
+                       hits=tuple(hits), candidate_pairs=len(groups), part_pairs=len(pairs),
+                       moving=tuple(bool(m) for m in moving))

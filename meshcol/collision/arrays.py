@@ -1,0 +1,59 @@
+"""Validation of the arrays every collision query takes: points, poses and index pairs.
+
+Each function normalises its input once (C-contiguous float64 or int64) and raises
+``ValueError`` naming the argument and the shape it got, so every query reports wrong input
+the same way.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+__all__ = ["as_points", "as_pose", "as_poses", "as_pairs"]
+
+
+def as_points(v: Any, name: str) -> np.ndarray:
+    """Points as an (n, 3) float64 array (a single (3,) point becomes (1, 3))."""
+    arr = np.asarray(v, dtype=np.float64)
+    if arr.ndim == 1 and arr.shape == (3,):
+        arr = arr.reshape(1, 3)
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise ValueError(f"{name} must be (n, 3), got {arr.shape}")
+    return arr
+
+
+def as_pose(pose: Any, name: str) -> np.ndarray:
+    """One rigid pose as a (4, 4) float64 array (None: identity)."""
+    m = np.eye(4) if pose is None else np.asarray(pose, dtype=np.float64)
+    if m.shape != (4, 4):
+        raise ValueError(f"{name} must be (4, 4), got {m.shape}")
+    return m
+
+
+def as_poses(poses: Any, h: int, name: str = "poses") -> np.ndarray | None:
+    """``poses`` as a C-contiguous (h, 4, 4) float64 array, or None (identity)."""
+    if poses is None:
+        return None
+    arr = np.ascontiguousarray(poses, dtype=np.float64)
+    if arr.shape != (h, 4, 4):
+        raise ValueError(f"{name} must be ({h}, 4, 4), got {arr.shape}")
+    return arr
+
+
+def as_pairs(pairs: Any, h: int, items: str = "shapes") -> np.ndarray:
+    """``pairs`` as a C-contiguous (P, 2) int64 array of indices below ``h`` (the ``items``,
+    named in the error), or ValueError."""
+    arr = np.asarray(pairs)
+    if arr.size == 0:
+        arr = arr.reshape(-1, 2) if arr.ndim == 2 or arr.ndim == 1 else arr
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise ValueError(f"pairs must be (P, 2), got {arr.shape}")
+    if arr.size and arr.dtype.kind not in "iu":
+        raise ValueError(f"pairs must hold integer indices, got dtype {arr.dtype}")
+    arr = np.ascontiguousarray(arr, dtype=np.int64)
+    if arr.size and (arr.min() < 0 or arr.max() >= h):
+        bad = arr[(arr < 0) | (arr >= h)][0]
+        raise ValueError(f"pairs: index {bad} out of range for {h} {items}")
+    return arr

@@ -1,0 +1,136 @@
+"""Canonical forms: the input mesh and the parts, independent of vertex and face order, and
+the content key of the cache."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from meshcol.errors import InvalidMeshError
+from meshcol.geometry.hull import convex_hull, dimension_of, exact_hull, principal_widths
+from meshcol.geometry.topology import unique_rows
+
+__all__ = ["CACHE_FORMAT", "as_mesh_arrays", "cache_key", "canonical_geometry", "canonical_part"]
+
+
+# Bump when the cache entry layout or the canonicalisation of inputs or parts changes.
+CACHE_FORMAT = 2
+
+
+def as_mesh_arrays(mesh: Any) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices, faces) of a Body, a trimesh.Trimesh or a (vertices, faces) pair."""
+    if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
+        vertices, faces = mesh.vertices, mesh.faces
+    elif isinstance(mesh, (tuple, list)) and len(mesh) == 2:
+        vertices, faces = mesh
+    else:
+        raise TypeError("mesh must be a Body, a trimesh.Trimesh or a (vertices, faces) pair")
+    vertices = np.asarray(vertices, dtype=np.float64)
+    faces = np.asarray(faces)
+    if vertices.ndim != 2 or vertices.shape[1] != 3:
+        raise InvalidMeshError(f"vertices must be (n, 3), got {vertices.shape}")
+    if faces.size == 0:
+        raise InvalidMeshError("mesh has no faces")
+    if faces.ndim != 2 or faces.shape[1] != 3:
+        raise InvalidMeshError(f"faces must be (m, 3), got {faces.shape}")
+    return vertices, faces.astype(np.int64, copy=False)
+
+
+def canonical_geometry(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The mesh in a canonical form that does not depend on vertex or face order.
+
+    Vertices with bit-identical coordinates are merged (``-0.0`` counts as ``0.0``), unused
+    vertices dropped, and the rest sorted lexicographically; each triangle is rotated so its
+    smallest index comes first (winding kept), triangles that collapsed are dropped, duplicates
+    removed, and triangles sorted.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+    faces : (m, 3) int
+
+    Returns
+    -------
+    vertices : (k, 3) float64, C-contiguous
+    faces : (l, 3) int64, C-contiguous
+
+    Raises
+    ------
+    InvalidMeshError
+        No faces, indices out of range, non-finite coordinates, or a flat mesh.
+    """
+    vertices, faces = as_mesh_arrays((vertices, faces))
+    if faces.min() < 0 or faces.max() >= len(vertices):
+        raise InvalidMeshError("face indices out of range")
+    used = np.unique(faces)
+    if not np.isfinite(vertices[used]).all():
+        raise InvalidMeshError("mesh has non-finite vertex coordinates")
+    unique, inverse = unique_rows(vertices[used] + 0.0)
+    remap = np.empty(len(vertices), dtype=np.int64)
+    remap[used] = inverse
+    f = remap[faces]
+    f = f[(f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 0] != f[:, 2])]
+    if len(f) == 0:
+        raise InvalidMeshError("mesh has no faces with three distinct vertices")
+    shift = np.argmin(f, axis=1)
+    rows = np.arange(len(f))[:, None]
+    f = f[rows, (shift[:, None] + np.arange(3)) % 3]
+    f, _ = unique_rows(f)
+    # Vertices only referenced by dropped triangles go too.
+    used = np.unique(f)
+    if len(used) != len(unique):
+        remap = np.full(len(unique), -1, dtype=np.int64)
+        remap[used] = np.arange(len(used))
+        unique, f = unique[used], remap[f]
+    _, _, widths, diagonal = principal_widths(unique)
+    if len(unique) < 4 or dimension_of(widths, diagonal) < 3:
+        raise InvalidMeshError("mesh is flat (all vertices lie in one plane): it encloses no volume")
+    return np.ascontiguousarray(unique), np.ascontiguousarray(f)
+
+
+def cache_key(
+    vertices: np.ndarray, faces: np.ndarray, engine: str, version: str, params: Mapping[str, Any]
+) -> str:
+    """sha256 hex digest of canonical geometry, engine, engine version and parameters.
+
+    ``vertices`` and ``faces`` must already be canonical (:func:`canonical_geometry`); their
+    exact float64 and int64 little-endian bytes are hashed.
+    """
+    h = hashlib.sha256()
+    header = {"format": CACHE_FORMAT, "engine": engine, "version": version, "params": dict(params)}
+    h.update(json.dumps(header, sort_keys=True).encode())
+    h.update(np.int64(len(vertices)).tobytes())
+    h.update(np.ascontiguousarray(vertices, dtype="<f8").tobytes())
+    h.update(np.ascontiguousarray(faces, dtype="<i8").tobytes())
+    return h.hexdigest()
+
+
+def canonical_part(
+    points: np.ndarray, budget: int | None
+) -> tuple[np.ndarray, np.ndarray, float, bool] | None:
+    """(vertices, faces, volume, reduced) of the hull of ``points``, or None when it is flat.
+
+    The hull is :func:`meshcol.geometry.hull.exact_hull` (vertices in lexicographic order);
+    past ``budget`` vertices, the enclosing budgeted hull
+    (:func:`meshcol.geometry.hull.convex_hull`), and ``reduced`` is True. Each triangle starts
+    at its smallest index (winding kept) and the triangles are sorted, so equal point sets give
+    equal parts.
+    """
+    points = np.asarray(points, dtype=np.float64)
+    if len(points) < 4 or not np.isfinite(points).all():
+        return None
+    hull = exact_hull(points)
+    if hull.dimension < 3:
+        return None
+    vertices, faces, volume, reduced = hull.vertices, hull.faces.copy(), hull.volume, False
+    if budget is not None and len(vertices) > budget:
+        budgeted = convex_hull(vertices, max_vertices=budget)
+        vertices, faces, volume, reduced = budgeted.vertices, budgeted.faces, budgeted.volume, True
+    shift = np.argmin(faces, axis=1)
+    faces = faces[np.arange(len(faces))[:, None], (shift[:, None] + np.arange(3)) % 3]
+    faces = faces[np.lexsort(faces.T[::-1])]
+    return np.ascontiguousarray(vertices), np.ascontiguousarray(faces), float(volume), reduced
