@@ -303,8 +303,8 @@ def self_intersecting_pairs(vertices: np.ndarray, faces: np.ndarray,
 
     Notes
     -----
-    Candidate pairs come from a uniform grid over the faces' bounding boxes (cell size: the
-    median face extent), filtered by box overlap. Two triangles in different planes cross
+    Candidate pairs are the faces whose bounding boxes overlap (the native sort and sweep).
+    Two triangles in different planes cross
     when they share a segment of positive length (Moller's interval test, Moller 1997):
     meeting at one point (shared vertex, T-junction) or along their shared edge is not a
     crossing. Coplanar triangles cross when two edges cross properly or a vertex lies
@@ -322,7 +322,7 @@ def self_intersecting_pairs(vertices: np.ndarray, faces: np.ndarray,
     diagonal = float(np.linalg.norm(np.ptp(tri.reshape(-1, 3), axis=0)))
     tolerance = CROSSING_RELATIVE_TOLERANCE * diagonal
     found = []
-    for i, j in _candidate_pairs(tri, diagonal):
+    for i, j in _candidate_pairs(tri):
         fi, fj = faces[index[i]], faces[index[j]]
         shared = (fi[:, :, None] == fj[:, None, :]).any(axis=2).sum(axis=1)
         distinct = shared < 3
@@ -334,60 +334,18 @@ def self_intersecting_pairs(vertices: np.ndarray, faces: np.ndarray,
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
 
-def _candidate_pairs(tri: np.ndarray, diagonal: float):
-    """Yield chunks (i, j), i < j, of faces whose bounding boxes overlap."""
-    lo, hi = tri.min(axis=1), tri.max(axis=1)
-    extent = (hi - lo).max(axis=1)
-    # the floor keeps cell keys (dims ** 3) well inside int64
-    cell = max(float(np.median(extent)), diagonal / 4096.0, 1e-300)
-    origin = lo.min(axis=0)
-    m = len(tri)
-    while True:
-        first = np.floor((lo - origin) / cell).astype(np.int64)
-        last = np.floor((hi - origin) / cell).astype(np.int64)
-        span = last - first + 1
-        per_face = span.prod(axis=1)
-        if per_face.sum() <= 16 * m + 1_000_000:
-            break
-        cell *= 2.0
-    total = int(per_face.sum())
-    owner = np.repeat(np.arange(m), per_face)
-    local = np.arange(total) - np.repeat(np.cumsum(per_face) - per_face, per_face)
-    sx, sy = span[owner, 0], span[owner, 1]
-    ix = first[owner, 0] + local % sx
-    iy = first[owner, 1] + (local // sx) % sy
-    iz = first[owner, 2] + local // (sx * sy)
-    dims = last.max(axis=0) + 1
-    key = (iz * dims[1] + iy) * dims[0] + ix
-    order = np.argsort(key, kind="stable")
-    key, owner = key[order], owner[order]
-    # pair every entry with the later entries of its cell
-    starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
-    ends = np.r_[starts[1:], len(key)]
-    group_end = np.repeat(ends, ends - starts)
-    later = group_end - np.arange(len(key)) - 1
-    # slice the entries so each slice expands to about PAIR_CHUNK pairs
-    bounds = np.searchsorted(np.cumsum(later), np.arange(PAIR_CHUNK, int(later.sum()), PAIR_CHUNK))
-    cuts = np.unique(np.r_[0, bounds + 1, len(key)].clip(0, len(key)))
-    keys = []
-    for start, stop in zip(cuts[:-1], cuts[1:]):
-        rows = np.arange(start, stop)
-        count = later[rows]
-        a = np.repeat(rows, count)
-        offset = np.arange(len(a)) - np.repeat(np.cumsum(count) - count, count)
-        b = a + 1 + offset
-        i, j = owner[a], owner[b]
-        i, j = np.minimum(i, j), np.maximum(i, j)
-        keep = i != j
-        keep[keep] = np.all((lo[i[keep]] <= hi[j[keep]]) & (lo[j[keep]] <= hi[i[keep]]), axis=1)
-        keys.append(i[keep] * m + j[keep])
-    # a pair sharing several cells recurs: keep one (sort + neighbour test, cheaper than
-    # np.unique's hashing on millions of keys)
-    pair_keys = np.sort(np.concatenate(keys)) if keys else np.zeros(0, np.int64)
-    pair_keys = pair_keys[np.r_[True, pair_keys[1:] != pair_keys[:-1]]] if len(pair_keys) else pair_keys
-    for start in range(0, len(pair_keys), PAIR_CHUNK):
-        chunk = pair_keys[start:start + PAIR_CHUNK]
-        yield chunk // m, chunk % m
+def _candidate_pairs(tri: np.ndarray):
+    """Yield chunks (i, j), i < j, of faces whose bounding boxes overlap (touching counts).
+
+    The native sort and sweep (:func:`meshcol.collision.broadphase.sort_and_sweep`) finds
+    them; they are handed out ``PAIR_CHUNK`` at a time to bound the memory of the tests.
+    """
+    from meshcol.collision.broadphase import sort_and_sweep
+
+    pairs = sort_and_sweep(tri.min(axis=1), tri.max(axis=1))
+    for start in range(0, len(pairs), PAIR_CHUNK):
+        chunk = pairs[start:start + PAIR_CHUNK]
+        yield chunk[:, 0], chunk[:, 1]
 
 
 def _triangles_cross(t1: np.ndarray, t2: np.ndarray, shared: np.ndarray,
