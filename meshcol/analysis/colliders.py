@@ -184,6 +184,11 @@ def triangle_parts(body: Body) -> ConvexSet:
     return solid if flat is None else ConvexSet.concatenate(solid, flat)
 
 
+def _constant(value: Any) -> Callable[[], Any]:
+    """A function returning ``value``: packs a unique shape only when it is first seen."""
+    return lambda: value
+
+
 def build_colliders(
     bodies: Sequence[Body],
     kind: str = "hull",
@@ -246,20 +251,20 @@ def build_colliders(
         triangles = -1
         if body.primitive is not None:
             body_kind = "primitive"
-            singles.append(add(("primitive", body.primitive), lambda body=body: body.primitive))
+            singles.append(add(("primitive", body.primitive), _constant(body.primitive)))
         elif body_kind == "decomposed" and body.name in ucx:
             body_kind = "ucx"
             for p in _in_owner_frame(body, ucx[body.name]):
-                singles.append(add(("part", _geometry_key(p)), lambda p=p: p))
+                singles.append(add(("part", _geometry_key(p)), _constant(p)))
         elif body_kind == "decomposed":
             report(f"convex parts of {body.name}")
             for p in convex_parts(body, **options):
-                singles.append(add(("part", _geometry_key(p)), lambda p=p: p))
+                singles.append(add(("part", _geometry_key(p)), _constant(p)))
         elif body_kind == "mesh" and mesh_parts == "triangles":
             triangles = len(triangle_sets)
             triangle_sets.append(triangle_parts(body))
         else:
-            singles.append(add(("hull", _geometry_key(body.vertices)), lambda body=body: body.vertices))
+            singles.append(add(("hull", _geometry_key(body.vertices)), _constant(body.vertices)))
         kinds.append(body_kind)
         blocks.append((triangles, singles))
 

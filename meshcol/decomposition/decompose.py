@@ -19,6 +19,8 @@ import dataclasses
 from collections.abc import Mapping
 from typing import Any
 
+import numpy as np
+
 from meshcol.decomposition import cache
 from meshcol.decomposition.canonical import (
     as_mesh_arrays,

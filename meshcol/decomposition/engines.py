@@ -182,21 +182,20 @@ def run_engine(engine: str, vertices: np.ndarray, faces: np.ndarray, params: Map
         raise MissingDependencyError(
             "engine 'vhacd' needs the vhacdx package: pip install 'meshcol[vhacd]'"
         ) from None
-    p = params
     hulls = vhacdx.compute_vhacd(
         np.ascontiguousarray(vertices, dtype=np.float64),
         np.ascontiguousarray(faces, dtype=np.uint32),
-        maxConvexHulls=p["max_convex_hulls"],
-        resolution=p["resolution"],
-        minimumVolumePercentErrorAllowed=p["minimum_volume_percent_error_allowed"],
-        maxRecursionDepth=p["max_recursion_depth"],
-        shrinkWrap=p["shrink_wrap"],
-        fillMode=p["fill_mode"],
-        maxNumVerticesPerCH=p["max_num_vertices_per_ch"],
+        maxConvexHulls=params["max_convex_hulls"],
+        resolution=params["resolution"],
+        minimumVolumePercentErrorAllowed=params["minimum_volume_percent_error_allowed"],
+        maxRecursionDepth=params["max_recursion_depth"],
+        shrinkWrap=params["shrink_wrap"],
+        fillMode=params["fill_mode"],
+        maxNumVerticesPerCH=params["max_num_vertices_per_ch"],
         # Synchronous: the asynchronous mode's thread timing must not change the result.
         asyncACD=False,
-        minEdgeLength=p["min_edge_length"],
-        findBestPlane=p["find_best_plane"],
+        minEdgeLength=params["min_edge_length"],
+        findBestPlane=params["find_best_plane"],
     )
     # vhacdx returns (vertices (n, 3) float64, faces (m, 3) uint32); older builds returned a
     # flat face list: accept both.

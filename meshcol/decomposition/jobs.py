@@ -87,6 +87,12 @@ class _Worker:
         self.started = 0.0
         self.used = False
 
+    @property
+    def task_index(self) -> int:
+        """Index of the task this (busy) worker runs."""
+        assert self.index is not None, "the worker has no task"
+        return self.index
+
     def assign(self, index: int, task: Any) -> None:
         self.index, self.started, self.used = index, time.perf_counter(), True
         self.conn.send((index, task))
@@ -266,13 +272,15 @@ class WorkerPool:
                     code = worker.process.exitcode
                     worker.conn.close()
                     yield TaskOutcome(
-                        worker.index, "failed", message=f"worker process died (exit code {code})", seconds=seconds
+                        worker.task_index, "failed",
+                        message=f"worker process died (exit code {code})", seconds=seconds,
                     )
                 elif timeout is not None and seconds >= timeout:
                     busy.remove(worker)
                     worker.kill()
                     yield TaskOutcome(
-                        worker.index, "timeout", message=f"timed out after {timeout:g} s", seconds=seconds
+                        worker.task_index, "timeout", message=f"timed out after {timeout:g} s",
+                        seconds=seconds,
                     )
 
     def close(self) -> None:

@@ -10,6 +10,7 @@ sink in.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -164,7 +165,7 @@ def convex_hull(points: np.ndarray, max_vertices: int | None = None) -> HullResu
         return _flat_hull(exact, max_vertices)
 
     volume = exact.volume
-    result_kwargs = dict(
+    result_kwargs: dict[str, Any] = dict(
         flat=False,
         exact_vertex_count=len(exact.vertices),
         exact_face_count=len(exact.faces),
@@ -339,7 +340,7 @@ def _flat_hull(exact: ExactHull, max_vertices: int | None) -> HullResult:
 
     ring = exact.vertices
     exact_count = len(ring)
-    kwargs = dict(flat=True, exact_vertex_count=exact_count, exact_face_count=exact_count - 2,
+    kwargs: dict[str, Any] = dict(flat=True, exact_vertex_count=exact_count, exact_face_count=exact_count - 2,
                   exact_volume=0.0, volume=0.0,
                   max_vertices=None if max_vertices is None else int(max_vertices))
     if max_vertices is None or exact_count <= max_vertices:
@@ -449,15 +450,15 @@ def _start_simplex(hull_vertices: np.ndarray) -> np.ndarray:
         for t in np.linspace(0, 2 * np.pi / 3, START_ORIENTATIONS, endpoint=False):
             c, s = np.cos(t), np.sin(t)
             rotations.append(np.array([[c, -s], [s, c]]))
-    best, best_size = None, np.inf
+    best, best_size = base, np.inf
     for rotation in rotations:
         normals = base @ rotation.T
         offsets = (normals @ hull_vertices.T).max(axis=1)
-        corners = []
-        for skip in range(dim + 1):
-            keep = [i for i in range(dim + 1) if i != skip]
-            corners.append(np.linalg.solve(normals[keep], offsets[keep]))
-        corners = np.array(corners)
+        corners = np.array([
+            np.linalg.solve(normals[[i for i in range(dim + 1) if i != skip]],
+                            offsets[[i for i in range(dim + 1) if i != skip]])
+            for skip in range(dim + 1)
+        ])
         size = abs(np.linalg.det(corners[1:] - corners[0]))
         if size < best_size:
             best, best_size = normals, size
