@@ -6,7 +6,7 @@ BIN    := $(VENV)/bin
 PIP    := $(BIN)/python -m pip --disable-pip-version-check
 BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4"
 
-.PHONY: demo test install install-test bench clean
+.PHONY: demo test test-fast lint install install-test bench clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -40,9 +40,20 @@ demo: install
 	$(BIN)/meshcol hull samples/bowl/bowl.obj --max-vertices 64 -o demo-out/bowl_hull.obj --report demo-out/hull.json
 	@echo "reports written to demo-out/"
 
+# Lint first: ruff (rules and formatting) and mypy, zero findings.
+lint: install-test
+	$(BIN)/ruff check meshcol tests benchmarks
+	$(BIN)/ruff format --check meshcol tests benchmarks
+	$(BIN)/mypy
+
 # pytest exits 5 when it collected nothing: that fails here like any other error.
-test: install-test
+test: lint
+	@test -d ../shared/corpus || echo "WARNING: ../shared/corpus is absent: every corpus test will SKIP (see the skip summary)"
 	$(BIN)/pytest -q -p no:cacheprovider
+
+# The fast lane (under a minute): no slow or corpus tests, fewer hypothesis examples.
+test-fast: install-test
+	HYPOTHESIS_PROFILE=fast $(BIN)/pytest -q -p no:cacheprovider -m "not slow"
 
 bench: install-test
 	$(BIN)/python benchmarks/bench_narrowphase.py

@@ -22,6 +22,11 @@ settings.register_profile(
     suppress_health_check=[HealthCheck.too_slow],
 )
 settings.register_profile("dev", max_examples=400, deadline=None)
+# `fast` is the `make test-fast` lane: the same properties, fewer examples.
+settings.register_profile(
+    "fast", derandomize=True, max_examples=25, deadline=None,
+    suppress_health_check=[HealthCheck.too_slow],
+)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 
@@ -76,3 +81,31 @@ def _private_user_cache(tmp_path_factory: pytest.TempPathFactory):
         os.environ.pop("XDG_CACHE_HOME", None)
     else:
         os.environ["XDG_CACHE_HOME"] = previous
+
+
+#: Tests of more than about two seconds on 2 cores (``--durations``): ``make test-fast``
+#: leaves them out with ``-m "not slow"``; ``make test`` runs everything. Tests on the shared
+#: corpus are slow too (marked from their fixtures below).
+SLOW_TESTS = {
+    "test_ball_in_bowl_is_separated_when_decomposed",
+    "test_incremental_sweep_with_grid_cells_equals_brute_force",
+    "test_timeout_stops_one_file_and_the_others_finish",
+    "test_triangle_distance_matches_numpy_oracle_on_random_pairs",
+    "test_jobs_two_gives_the_same_output_as_jobs_one",
+    "test_larger_sets_use_the_grid_and_equal_brute_force",
+    "test_killed_run_leaves_no_cache_entry_or_output",
+    "test_vhacd_engine_budgets",
+    "test_vhacd_engine",
+    "test_same_input_gives_identical_bytes_and_cache_hit_is_fast",
+    "test_tree_against_tree_equals_brute_force",
+    "test_incremental_sweep_equals_brute_force_over_steps",
+    "test_parts_are_convex_and_cover_the_torus",
+}
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    slow = pytest.mark.slow
+    for item in items:
+        fixtures = set(getattr(item, "fixturenames", ()))
+        if item.originalname in SLOW_TESTS or fixtures & {"corpus", "corpus_run"}:  # type: ignore[attr-defined]
+            item.add_marker(slow)
