@@ -48,7 +48,7 @@ def points_to_parts(
 
     Each point is a one-vertex polytope; candidate (point, part) pairs are pruned with AABBs
     (a part whose box is farther than the point's nearest part centroid cannot be the closest)
-    and measured in one :func:`meshcol.query.distance_batch` call. ``owner[i]`` (optional)
+    and measured in one :func:`meshcol.collision.narrowphase.distance_batch` call. ``owner[i]`` (optional)
     excludes part ``owner[i]`` from point ``i``'s candidates.
     """
     from meshcol.collision.narrowphase import distance_batch

@@ -151,8 +151,8 @@ def worker_env(jobs: int, threads_per_job: int | None = None) -> dict[str, str]:
     Each engine (CoACD is parallel inside, with OpenMP) gets ``2 * cores / jobs`` threads, at
     most ``cores``, that sleep when idle (``OMP_WAIT_POLICY=PASSIVE``): while one worker is
     in a serial stretch, or has no file left, the others' parallel loops take up its cores,
-    and a last long file does not run on one core while the rest idle (measured on 2 cores,
-    10 corpus meshes: 17.6 s with two threads per worker against 19.1 s with one). numpy's
+    and a last long file does not run on one core while the rest idle (the measurement is in
+    benchmarks/RESULTS.md, "decompose"). numpy's
     OpenBLAS pool, which spins, gets ``cores // jobs``.
     """
     cores = os.cpu_count() or 1
@@ -167,8 +167,7 @@ def worker_env(jobs: int, threads_per_job: int | None = None) -> dict[str, str]:
     if "OPENBLAS_NUM_THREADS" not in os.environ:
         # numpy's OpenBLAS sizes its pool from OMP_NUM_THREADS unless this is set, and only
         # when it loads: in the forkserver, before any worker runs. Unlimited, every worker's
-        # BLAS spins on every core and the workers slow each other down (measured: --jobs 2
-        # at 0.93x).
+        # BLAS spins on every core and the workers slow each other down (benchmarks/RESULTS.md).
         env["OPENBLAS_NUM_THREADS"] = str(share)
     return env
 

@@ -29,7 +29,7 @@ class Fidelity:
         ``union_volume / mesh_volume``.
     hausdorff_mesh_to_parts : float
         Largest distance from a sampled point of the mesh surface to the union of the parts
-        (0 inside a part), computed with :func:`meshcol.query.distance_batch`.
+        (0 inside a part), computed with :func:`meshcol.collision.narrowphase.distance_batch`.
     hausdorff_parts_to_mesh : float
         Largest distance from a sampled point of the boundary of the union of the parts to the
         mesh surface (exact point-triangle distances).

@@ -100,7 +100,7 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     A body's world pose is ``T = [R | p]`` from ``rotation`` and ``position``; its ``scale``
     ``S`` and any transform ``L`` a mesh file gives a sub-body are combined as ``T S L`` and
     split again into a rigid transform and a part baked into the vertices (see
-    :func:`meshcol.mesh_io.split_rigid`), so every ``Body.pose`` is rigid.
+    :func:`meshcol.io.mesh_read.split_rigid`), so every ``Body.pose`` is rigid.
     """
     source = os.fspath(path)
     file = Path(source)
@@ -154,7 +154,7 @@ def load_inputs(paths: Sequence[str | os.PathLike[str]]) -> Scene:
     Raises
     ------
     InputFileError
-        No inputs, or a file that cannot be read (see :func:`meshcol.mesh_io.load_mesh`).
+        No inputs, or a file that cannot be read (see :func:`meshcol.io.mesh_read.load_mesh`).
     SceneError
         A manifest given together with other inputs, or a malformed manifest.
     InvalidMeshError
