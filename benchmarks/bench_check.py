@@ -71,11 +71,11 @@ def load_seconds(scene) -> float:
             if key not in files:
                 files[key] = f"proto_{len(files)}.obj"
                 trimesh.Trimesh(body.vertices, body.faces, process=False).export(Path(tmp) / files[key])
-            r = body.transform[:3, :3]
+            r = body.pose[:3, :3]
             w = np.sqrt(max(0.0, 1.0 + np.trace(r))) / 2  # rotations here are about z only
             z = (r[1, 0] - r[0, 1]) / (4 * w)
             bodies.append({"name": body.name, "mesh": files[key],
-                           "position": body.transform[:3, 3].tolist(),
+                           "position": body.pose[:3, 3].tolist(),
                            "rotation": {"quaternion": [w, 0.0, 0.0, z]}})
         manifest = Path(tmp) / "scene.json"
         manifest.write_text(json.dumps({"units": "m", "bodies": bodies}))
@@ -104,8 +104,8 @@ def run_trimesh(scene, report):
         key = body.vertices.ctypes.data
         if key not in hulls:  # instances share a hull, as in meshcol
             hulls[key] = trimesh.Trimesh(body.vertices, body.faces).convex_hull
-        manager.add_object(body.name, hulls[key], pose=body.transform)
-    colliding, names = manager.in_collision_internal(return_names=True)
+        manager.add_object(body.name, hulls[key], transform=body.pose)
+    _, names = manager.in_collision_internal(return_names=True)
     objs = {name: manager._objs[name]["obj"] for name in manager._objs}
     request = fcl.DistanceRequest()
     distances = []

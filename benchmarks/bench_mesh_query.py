@@ -126,7 +126,7 @@ def batch_case(mesh: trimesh.Trimesh, count: int, rng) -> None:
 
 def main() -> None:
     rng = np.random.default_rng(1)
-    load = lambda name: trimesh.load(CORPUS / name, force="mesh")  # noqa: E731
+    load = lambda name: trimesh.load(CORPUS / name, force="mesh")
     torus, fandisk = load("torus.STL"), load("fandisk.obj")
     counter = load("counter.unitsmm.STL")
     ball_a, ball_b = load("ballA.off"), load("ballB.off")

@@ -17,8 +17,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-from meshcol._native import core as _core  # noqa: E402
-from meshcol import ConvexSet, distance_batch, signed_distance_batch  # noqa: E402
+from meshcol import ConvexSet, distance_batch, signed_distance_batch
+from meshcol._native import core as _core
 
 
 def sphere_hull(n: int, rng: np.random.Generator) -> np.ndarray:

@@ -19,8 +19,7 @@ import time
 
 import numpy as np
 
-from meshcol import ConvexSet, distance_batch
-from meshcol import interpolate_pose, time_of_impact_batch
+from meshcol import ConvexSet, distance_batch, interpolate_pose, time_of_impact_batch
 from meshcol.types import TimeOfImpactStatus
 
 TOLERANCE = 1e-6

@@ -9,11 +9,11 @@ from __future__ import annotations
 import os
 
 __all__ = [
-    "MeshcolError",
     "InputFileError",
     "InvalidMeshError",
-    "SceneError",
+    "MeshcolError",
     "MissingDependencyError",
+    "SceneError",
 ]
 
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Status", "TimeOfImpactStatus", "Primitive", "Body", "Scene"]
+__all__ = ["Body", "Primitive", "Scene", "Status", "TimeOfImpactStatus"]
 
 
 class Status(enum.IntEnum):

@@ -39,7 +39,7 @@ def cos_sin(angle: float) -> tuple[float, float]:
     """cos and sin, exact at multiples of 90 degrees."""
     quarter = angle / (math.pi / 2)
     if abs(quarter - round(quarter)) < 1e-12:
-        return [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)][int(round(quarter)) % 4]
+        return [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)][round(quarter) % 4]
     return math.cos(angle), math.sin(angle)
 
 

@@ -13,12 +13,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import trimesh
 
 import meshcol
 from meshcol.errors import InputFileError, InvalidMeshError
 from meshcol.io.mesh_read import load_mesh, merge_vertices, split_rigid
-
-import trimesh
 
 # A unit cube, 8 positions, with per-face UVs: trimesh splits it along the UV seams.
 CUBE_OBJ_WITH_UVS = """\
@@ -448,7 +447,7 @@ def test_truncated_binary_stl(corpus, tmp_path):
 @pytest.mark.parametrize("name", ["empty.obj", "empty.stl"])
 def test_corpus_empty_files(corpus, name):
     path = corpus / "trimesh-models" / name
-    with pytest.raises(InvalidMeshError, match="^.*: mesh has no faces$"):
+    with pytest.raises(InvalidMeshError, match=r"^.*: mesh has no faces$"):
         load_mesh(path)
 
 

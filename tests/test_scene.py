@@ -422,7 +422,7 @@ def test_load_inputs_mesh_files(folder, corpus):
 
 
 def test_load_inputs_errors(folder):
-    with pytest.raises(InputFileError, match="^no input files given$"):
+    with pytest.raises(InputFileError, match=r"^no input files given$"):
         load_inputs([])
     manifest = write(folder, BASE)
     with pytest.raises(SceneError) as info:

@@ -21,7 +21,6 @@ import numpy as np
 from meshcol.decomposition.result import Decomposition, Fidelity
 from meshcol.io.report import atomic_path
 
-
 __all__ = ["default_cache_dir", "entry_path", "load", "store"]
 
 def default_cache_dir() -> Path:

@@ -20,9 +20,12 @@ from typing import Any
 
 import numpy as np
 
-
 __all__ = [
-    "TaskOutcome", "WorkerPool", "run_tasks", "worker_env", "decompose_task",
+    "TaskOutcome",
+    "WorkerPool",
+    "decompose_task",
+    "run_tasks",
+    "worker_env",
 ]
 
 # Seconds a worker gets to exit after terminate() before kill().

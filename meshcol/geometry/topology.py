@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
-    "is_closed_manifold",
     "closed_volume",
-    "edge_table",
-    "duplicate_face_count",
     "component_count",
+    "duplicate_face_count",
+    "edge_table",
+    "is_closed_manifold",
     "unique_rows",
 ]
 
@@ -89,7 +89,7 @@ def component_count(faces: np.ndarray, vertex_count: int) -> int:
     graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])),
                        shape=(vertex_count, vertex_count))
     _, labels = connected_components(graph, directed=False)
-    return int(len(np.unique(labels[np.unique(faces)])))
+    return len(np.unique(labels[np.unique(faces)]))
 
 
 def unique_rows(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

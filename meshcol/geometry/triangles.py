@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
-    "closest_points_on_triangles",
-    "point_triangle_distances",
-    "triangle_areas",
-    "sample_surface",
-    "degenerate_faces",
     "DEGENERATE_RELATIVE_HEIGHT",
+    "closest_points_on_triangles",
+    "degenerate_faces",
+    "point_triangle_distances",
+    "sample_surface",
+    "triangle_areas",
 ]
 
 
@@ -33,7 +33,7 @@ def closest_points_on_triangles(p: np.ndarray, triangles: np.ndarray) -> np.ndar
     """
     a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
     ab, ac, ap = b - a, c - a, p - a
-    dot = lambda u, v: np.einsum("ij,ij->i", u, v)  # noqa: E731
+    dot = lambda u, v: np.einsum("ij,ij->i", u, v)
     d1, d2 = dot(ab, ap), dot(ac, ap)
     bp = p - b
     d3, d4 = dot(ab, bp), dot(ac, bp)

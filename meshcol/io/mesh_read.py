@@ -22,7 +22,7 @@ import numpy as np
 from meshcol.errors import InputFileError, InvalidMeshError
 from meshcol.types import Body
 
-__all__ = ["MESH_EXTENSIONS", "load_mesh", "split_rigid", "merge_vertices"]
+__all__ = ["MESH_EXTENSIONS", "load_mesh", "merge_vertices", "split_rigid"]
 
 #: File extensions (lower case) that :func:`load_mesh` reads, mapped to trimesh's file type.
 MESH_EXTENSIONS: dict[str, str] = {

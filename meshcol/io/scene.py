@@ -28,11 +28,11 @@ from meshcol.types import Body, Primitive, Scene
 __all__ = [
     "MANIFEST_EXTENSIONS",
     "SCHEMA_PATH",
-    "load_scene",
-    "load_inputs",
     "iter_inputs",
-    "rotation_from_quaternion",
+    "load_inputs",
+    "load_scene",
     "rotation_from_euler",
+    "rotation_from_quaternion",
 ]
 
 #: Extensions read as scene manifests; anything else is a mesh or glTF scene file.
@@ -272,7 +272,7 @@ def _axis_rotation(axis: int, angle: float) -> np.ndarray:
 def _exact_cos_sin(angle: float) -> tuple[float, float]:
     quarter = angle / (math.pi / 2)
     if quarter == round(quarter):
-        return [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)][int(round(quarter)) % 4]
+        return [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)][round(quarter) % 4]
     return math.cos(angle), math.sin(angle)
 
 
