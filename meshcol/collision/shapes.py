@@ -220,7 +220,7 @@ def _from_primitive_record(p: Primitive) -> Sphere | Box | Capsule | Cylinder:
     if p.kind == "sphere":
         return Sphere(p.radius)
     if p.kind == "box":
-        return Box(tuple(p.size))
+        return Box(p.size)
     if p.kind == "capsule":
         return Capsule(p.radius, p.length)
     if p.kind == "cylinder":
@@ -298,6 +298,17 @@ class ConvexSet:
         "vertices", "offsets", "kinds", "params", "adjacency_offsets", "adjacency",
         "face_offsets", "face_normals", "edge_offsets", "edge_directions",
     )
+
+    vertices: np.ndarray
+    offsets: np.ndarray
+    kinds: np.ndarray
+    params: np.ndarray
+    adjacency_offsets: np.ndarray
+    adjacency: np.ndarray
+    face_offsets: np.ndarray
+    face_normals: np.ndarray
+    edge_offsets: np.ndarray
+    edge_directions: np.ndarray
 
     def __init__(self, **arrays: np.ndarray) -> None:
         from meshcol._native import core
