@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from meshcol.errors import InvalidMeshError
+from meshcol.geometry.topology import unique_rows
 from meshcol.geometry.triangles import closest_points_on_triangles
 
 __all__ = [
@@ -283,7 +284,7 @@ def exact_hull(points: np.ndarray) -> ExactHull:
     """
     from scipy.spatial import ConvexHull, QhullError
 
-    pts = np.unique(np.asarray(points, dtype=np.float64) + 0.0, axis=0)
+    pts, _ = unique_rows(np.asarray(points, dtype=np.float64) + 0.0)
     centre, axes, widths, diagonal = principal_widths(pts)
     dim = dimension_of(widths, diagonal)
     empty4 = np.zeros((0, 4))
