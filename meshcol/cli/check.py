@@ -9,6 +9,7 @@ import click
 from meshcol.analysis.check import FAIL_ON
 from meshcol.analysis.colliders import COLLIDER_KINDS
 from meshcol.cli.common import Progress, report_options
+from meshcol.decomposition.engines import ENGINES
 
 FAIL_ON_CHOICES = tuple(FAIL_ON)
 SHAPE_CHOICES = COLLIDER_KINDS
@@ -30,7 +31,7 @@ SHAPE_CHOICES = COLLIDER_KINDS
               help="Previous JSON report: fail only on pairs that are new or worse.")
 @click.option("--threads", type=click.IntRange(min=0), default=0, show_default=True,
               help="Threads for the native queries (0: all cores).")
-@click.option("--engine", type=click.Choice(["coacd", "vhacd"]), default="coacd", show_default=True,
+@click.option("--engine", type=click.Choice(ENGINES), default="coacd", show_default=True,
               help="Decomposition engine for 'decomposed' bodies missing from the cache.")
 @click.option("--threshold", type=click.FloatRange(min=0.0, min_open=True), default=None,
               help="Decomposition concavity threshold (as in 'meshcol decompose').")
