@@ -13,7 +13,7 @@ import functools
 import os
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 from meshcol.errors import InvalidMeshError, MeshcolError
@@ -43,6 +43,10 @@ class DecomposeReport:
         The options of the run.
     units : str or None
         Always None for now: parts keep the coordinates (and units) of their input files.
+    layout, fmt : str
+        Files per body and their format (as :func:`decompose_files` took them).
+    max_hausdorff : float or None
+        Hausdorff limit that fails the run.
     """
 
     files: list[dict[str, Any]]
