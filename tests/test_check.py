@@ -385,3 +385,34 @@ def test_ucx_parts_are_used_as_given(tmp_path: Path) -> None:
     # with hulls the UCX part is ignored: crate [0, 1] and wall [1.25, 2] are 0.25 apart
     hull = check([path], collider="hull", clearance=0.5)
     assert [(p["status"], p["distance"]) for p in hull.pairs] == [("clearance", pytest.approx(0.25))]
+
+
+def test_cli_choices_are_the_library_constants() -> None:
+    from meshcol.analysis.check import FAIL_ON
+    from meshcol.analysis.colliders import COLLIDER_KINDS
+    from meshcol.cli.check import FAIL_ON_CHOICES, SHAPE_CHOICES
+
+    assert FAIL_ON_CHOICES == tuple(FAIL_ON)
+    assert SHAPE_CHOICES is COLLIDER_KINDS
+
+
+def test_cli_runs_the_library_check(tmp_path: Path, monkeypatch) -> None:
+    """The command parses, calls meshcol.analysis.check.check and prints: nothing else."""
+    import meshcol.analysis.check as library
+
+    m = write_manifest(tmp_path, [box("a", (1, 1, 1), (0, 0, 0)), box("b", (1, 1, 1), (0.5, 0, 0))])
+    calls = []
+    real = library.check
+
+    def spy(inputs, **options):
+        calls.append((list(inputs), options))
+        return real(inputs, **options)
+
+    monkeypatch.setattr(library, "check", spy)
+    result = run(["check", str(m), "--clearance", "0.1", "--ignore", "x:y", "--report", "-"])
+    assert result.exit_code == 1
+    ((inputs, options),) = calls
+    assert inputs == [str(m)]
+    assert options["clearance"] == 0.1 and options["ignore"] == ("x:y",)
+    assert options["collider"] == "hull" and options["baseline"] is None
+    assert json.loads(result.stdout)["command"] == "check"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -315,3 +316,21 @@ def test_debug_shows_a_traceback(tmp_path: Path) -> None:
     assert loud.returncode != 0
     assert "Traceback (most recent call last)" in loud.stderr
     assert "InputFileError" in loud.stderr
+
+
+def test_library_hull_returns_the_report_and_writes_meshes(tmp_path: Path) -> None:
+    from meshcol.analysis.hull import HullReport, OutputDestinationError, hull, out_dir_paths
+
+    cube = write(tmp_path, "cube.obj", CUBE_OBJ)
+    report = hull([cube], out_dir=tmp_path / "hulls")
+    assert isinstance(report, HullReport) and report.exit_code == 0
+    assert report.summary == {"bodies": 1, "flat": 0, "hull_vertices": 8, "files_written": 1}
+    assert report.to_dict()["command"] == "hull"
+    assert [p.name for p in (tmp_path / "hulls").iterdir()] == ["cube.obj"]
+    assert out_dir_paths("d", ["a/b", "A/B", "é"]) == [
+        os.path.join("d", "a_b.obj"), os.path.join("d", "A_B-2.obj"), os.path.join("d", "body.obj")]
+    with pytest.raises(ValueError, match="either output or out_dir"):
+        hull([cube], output=tmp_path / "a.obj", out_dir=tmp_path / "d")
+    two = write(tmp_path, "two.obj", CUBE_OBJ)
+    with pytest.raises(OutputDestinationError):
+        hull([cube, two], output=tmp_path / "both.stl")

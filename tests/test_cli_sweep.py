@@ -44,7 +44,7 @@ def bullet_and_wall(end_x=1.0) -> Scene:
 
 def test_bullet_through_wall_is_a_tunnelled_hit():
     report = meshcol.sweep(bullet_and_wall())
-    assert report.summary()["hits"] == 1 and report.summary()["tunnelled"] == 1
+    assert report.summary["hits"] == 1 and report.summary["tunnelled"] == 1
     (hit,) = report.hits
     assert (hit.a, hit.b, hit.status) == ("wall", "bullet", TimeOfImpactStatus.HIT)
     # Contact when the bullet's centre is at x = -0.02 (its vertices reach 0.01).

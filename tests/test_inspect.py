@@ -232,3 +232,23 @@ def test_crossings_are_invariant_under_rigid_motion_and_face_order(seed: int) ->
     shuffled = {tuple(sorted((int(order[i]), int(order[j]))))
                 for i, j in self_intersecting_pairs(moved, faces[order]).tolist()}
     assert base == shuffled
+
+
+def test_inspect_report_applies_the_policy(tmp_path) -> None:
+    from meshcol.analysis.inspect import InspectReport, inspect
+
+    path = tmp_path / "open.obj"
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\n")
+    report = inspect(path)
+    assert isinstance(report, InspectReport)
+    assert report.exit_code == 0 and report.failed == []
+    assert "not-watertight" in report.inspections[0].findings
+    strict = inspect([path], fail_on=["not-watertight"])
+    assert strict.exit_code == 1
+    assert strict.bodies[0]["failed_rules"] == ["not-watertight"]
+    assert strict.summary["failed"] == 1 and strict.summary["findings"]["not-watertight"] == 1
+    data = strict.to_dict()
+    assert data["command"] == "inspect" and data["failed"] is True
+    assert strict.to_csv().splitlines()[0].endswith(",findings,failed_rules")
+    with pytest.raises(ValueError, match="unknown rule 'nope'"):
+        inspect([path], fail_on=["nope"])

@@ -48,7 +48,6 @@ __all__ = [
     "check_scene",
 ]
 
-SCHEMA_VERSION = 1
 PAIR_STATUSES = ("separated", "clearance", "contact", "penetrating", "contained")
 SEVERITY = {name: i for i, name in enumerate(PAIR_STATUSES)}
 # --fail-on value -> least severe status that violates the policy
@@ -151,18 +150,23 @@ class CheckReport:
         return 0 if self.passed else 1
 
     def to_dict(self) -> dict:
-        from meshcol import __version__
+        """The JSON report: the common envelope, ``generated_at``, bodies, summary, pairs."""
+        from meshcol.io.report import envelope
 
         return {
-            "schema_version": SCHEMA_VERSION,
-            "tool": {"name": "meshcol", "version": __version__},
+            **envelope("check", self.settings, self.units),
             "generated_at": self.generated_at,
-            "settings": self.settings,
-            "units": self.units,
             "bodies": self.bodies,
             "summary": self.summary,
             "pairs": self.pairs,
         }
+
+    def worst_pairs(self, count: int = 10) -> list[dict]:
+        """Up to ``count`` pairs that are not separated, most penetrating (smallest signed
+        distance) first."""
+        touching = (p for p in self.pairs if p["status"] != "separated")
+        return sorted(touching, key=lambda p: (p["signed_distance"] if p["signed_distance"]
+                                               is not None else float("inf")))[:count]
 
     def to_json(self) -> str:
         from meshcol.io.report import dumps_json
@@ -496,7 +500,8 @@ def load_baseline(path: str) -> dict:
     return data
 
 
-def check(inputs: Sequence[str | os.PathLike[str]] | str | os.PathLike[str], **options: Any) -> CheckReport:
+def check(inputs: Sequence[str | os.PathLike[str]] | str | os.PathLike[str], *,
+          progress: Callable[[str], None] | None = None, **options: Any) -> CheckReport:
     """Load inputs and check every pair of bodies.
 
     Parameters
@@ -506,7 +511,9 @@ def check(inputs: Sequence[str | os.PathLike[str]] | str | os.PathLike[str], **o
         glTF/GLB scenes.
     **options
         Fields of :class:`CheckOptions` (``collider``, ``tolerance``, ``clearance``, ``fail_on``,
-        ``ignore``, ``baseline`` (a path or a report dict), ``threads``).
+        ``ignore``, ``baseline`` (a path or a report dict), ``threads``, ``decompose_options``).
+    progress : callable, optional
+        Receives one-line progress messages.
 
     Returns
     -------
@@ -532,7 +539,7 @@ def check(inputs: Sequence[str | os.PathLike[str]] | str | os.PathLike[str], **o
     opts = CheckOptions(baseline=baseline, **options)
     started = time.perf_counter()
     scene = load_inputs(list(inputs))
-    return check_scene(scene, opts, load_seconds=time.perf_counter() - started)
+    return check_scene(scene, opts, progress=progress, load_seconds=time.perf_counter() - started)
 
 
 def _nums(values: np.ndarray) -> list[float | None]:

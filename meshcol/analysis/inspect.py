@@ -7,7 +7,10 @@ piece, and plausibly in metres.
 
 from __future__ import annotations
 
+import os
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -17,8 +20,10 @@ from meshcol.geometry.triangles import degenerate_faces
 from meshcol.types import Body
 
 __all__ = [
+    "InspectReport",
     "MeshInspection",
     "RULES",
+    "inspect",
     "inspect_body",
     "self_intersecting_pairs",
     "guess_units",
@@ -433,3 +438,132 @@ def _coplanar_overlap(t1, t2, normal, tolerance):
                 inside &= strict(outer[:, e], outer[:, (e + 1) % 3], inner[:, v]) * winding > 0
             hit |= inside
     return hit
+
+
+# ---------------------------------------------------------------------------------------------
+# The report behind ``meshcol inspect``
+
+#: Columns of :meth:`InspectReport.to_csv`, one row per body.
+CSV_COLUMNS = (
+    "name", "source", "vertices", "faces", "components", "watertight", "winding_consistent",
+    "volume", "bounds_min", "bounds_max", "size", "degenerate_faces", "duplicate_faces",
+    "boundary_edges", "non_manifold_edges", "self_intersecting", "self_intersecting_pairs",
+    "manifold_status", "units_guess", "units_reason", "declared_units", "findings", "failed_rules",
+)
+
+
+@dataclass(frozen=True)
+class InspectReport:
+    """What :func:`inspect` found: one :class:`MeshInspection` per body and the policy.
+
+    Attributes
+    ----------
+    inspections : tuple of MeshInspection
+        Per body, in input order.
+    fail_on : tuple of str
+        The :data:`RULES` whose findings fail the run.
+    units : str or None
+        Units the scene manifest declared.
+    """
+
+    inspections: tuple[MeshInspection, ...]
+    fail_on: tuple[str, ...] = ()
+    units: str | None = None
+
+    @property
+    def bodies(self) -> list[dict[str, Any]]:
+        """Per body: every :class:`MeshInspection` field and ``failed_rules``, the findings
+        listed in ``fail_on``."""
+        rows = []
+        for result in self.inspections:
+            row = result.to_dict()
+            row["failed_rules"] = [rule for rule in result.findings if rule in self.fail_on]
+            rows.append(row)
+        return rows
+
+    @property
+    def failed(self) -> list[dict[str, Any]]:
+        """The rows of :attr:`bodies` with a finding listed in ``fail_on``."""
+        return [row for row in self.bodies if row["failed_rules"]]
+
+    @property
+    def exit_code(self) -> int:
+        """1 when a body has a finding listed in ``fail_on``, else 0."""
+        return 1 if self.failed else 0
+
+    @property
+    def summary(self) -> dict[str, Any]:
+        """Counts: bodies, bodies with findings, failing bodies, bodies per finding."""
+        return {
+            "bodies": len(self.inspections),
+            "with_findings": sum(1 for r in self.inspections if r.findings),
+            "failed": len(self.failed),
+            "findings": {rule: sum(rule in r.findings for r in self.inspections) for rule in RULES},
+        }
+
+    @property
+    def settings(self) -> dict[str, Any]:
+        return {"fail_on": list(self.fail_on), "bounds_frame": "world"}
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON report: the common envelope, ``failed`` (the policy verdict), the
+        summary and one entry per body."""
+        from meshcol.io.report import envelope
+
+        return {
+            **envelope("inspect", self.settings, self.units),
+            "failed": self.exit_code == 1,
+            "summary": self.summary,
+            "bodies": self.bodies,
+        }
+
+    def to_json(self) -> str:
+        from meshcol.io.report import dumps_json
+
+        return dumps_json(self.to_dict())
+
+    def to_csv(self) -> str:
+        """One row per body (:data:`CSV_COLUMNS`); bounds split into min and max."""
+        from meshcol.io.report import dumps_csv
+
+        flat = [dict(row, bounds_min=row["bounds"][0], bounds_max=row["bounds"][1])
+                for row in self.bodies]
+        return dumps_csv(flat, CSV_COLUMNS)
+
+
+def inspect(inputs: Any, *, fail_on: Sequence[str] = ()) -> InspectReport:
+    """Inspect every body of the inputs: is each mesh fit to be a collider?
+
+    Parameters
+    ----------
+    inputs : path or sequence of paths
+        Mesh files (every object, solid or mesh node is a body) or one scene manifest.
+    fail_on : sequence of str
+        Names of :data:`RULES` whose findings fail the run (:attr:`InspectReport.exit_code`).
+
+    Returns
+    -------
+    InspectReport
+
+    Raises
+    ------
+    ValueError
+        An unknown rule in ``fail_on``.
+    InvalidMeshError
+        A body has no faces or non-finite coordinates.
+
+    Notes
+    -----
+    Each body goes through :func:`inspect_body`; a manifest's declared units are passed on,
+    so ``suspect-units`` compares the guess with them.
+    """
+    from meshcol.io.scene import load_inputs
+
+    unknown = [rule for rule in fail_on if rule not in RULES]
+    if unknown:
+        raise ValueError(f"unknown rule {unknown[0]!r} (valid rules: {', '.join(RULES)})")
+    if isinstance(inputs, (str, os.PathLike)):
+        inputs = [inputs]
+    scene = load_inputs(list(inputs))
+    results = tuple(inspect_body(body, declared_units=scene.units) for body in scene.bodies)
+    return InspectReport(results, tuple(dict.fromkeys(fail_on)), scene.units)

@@ -18,7 +18,15 @@ from meshcol.analysis.colliders import COLLIDER_KINDS, build_colliders
 from meshcol.errors import MeshcolError, SceneError
 from meshcol.types import Body, Scene, TimeOfImpactStatus
 
-__all__ = ["SweepHit", "SweepReport", "sweep"]
+__all__ = ["FAIL_ON", "SweepHit", "SweepReport", "sweep"]
+
+#: ``fail_on`` policies: ``hit`` fails the run on any pair that is not separated.
+FAIL_ON = ("hit", "none")
+#: The motion model, as the report states it.
+MOTION = "linear translation, constant-rate rotation about the local origin"
+#: Columns of :meth:`SweepReport.to_csv`, one row per pair (poses flattened row-major).
+CSV_COLUMNS = ("a", "b", "status", "time_of_impact", "time", "point", "normal", "tunnelled",
+               "pose_a", "pose_b", "iterations")
 
 
 #: Scene-relative default tolerance of :func:`sweep`: this times the scene's bounding diagonal.
@@ -114,6 +122,8 @@ class SweepReport:
         Pairs of convex parts the narrow phase ran on.
     moving : tuple of bool
         Per body of ``bodies``: whether it moves.
+    fail_on : str
+        ``hit`` (any pair that is not separated fails the run) or ``none``.
     """
 
     scene: Scene
@@ -124,13 +134,21 @@ class SweepReport:
     candidate_pairs: int
     part_pairs: int
     moving: tuple[bool, ...] = field(default=())
+    fail_on: str = "hit"
 
     @property
     def failed(self) -> bool:
         """True when any pair hits, overlaps at the start or could not be decided."""
         return bool(self.hits)
 
+    @property
+    def exit_code(self) -> int:
+        """1 when ``fail_on`` is ``hit`` and a pair is not separated, else 0."""
+        return 1 if self.fail_on == "hit" and self.failed else 0
+
+    @property
     def summary(self) -> dict[str, int]:
+        """Counts: bodies, moving bodies, candidate and part pairs, hits by status."""
         count = {s: sum(h.status == s for h in self.hits) for s in TimeOfImpactStatus}
         return {
             "bodies": len(self.bodies),
@@ -143,16 +161,40 @@ class SweepReport:
             "failed": count[TimeOfImpactStatus.FAILED],
         }
 
+    @property
+    def settings(self) -> dict[str, Any]:
+        """The options of the run, as the report states them."""
+        return {"shape": self.collider, "tolerance": float(f"{self.tolerance:.12g}"),
+                "fail_on": self.fail_on, "motion": MOTION, "frame": "world"}
+
     def to_dict(self) -> dict[str, Any]:
-        """The JSON report body (without tool and settings headers)."""
+        """The JSON report: the common envelope, ``failed`` (the policy verdict), duration,
+        bodies, summary and one entry per pair that is not separated."""
+        from meshcol.io.report import envelope
+
         return {
-            "units": self.scene.units,
+            **envelope("sweep", self.settings, self.scene.units),
+            "failed": self.exit_code == 1,
             "duration": self.scene.duration,
             "bodies": [{"name": b.name, "source": b.source, "moving": m}
                        for b, m in zip(self.bodies, self.moving)],
-            "summary": self.summary(),
+            "summary": self.summary,
             "pairs": [h.to_dict() for h in self.hits],
         }
+
+    def to_json(self) -> str:
+        from meshcol.io.report import dumps_json
+
+        return dumps_json(self.to_dict())
+
+    def to_csv(self) -> str:
+        """One row per pair (:data:`CSV_COLUMNS`); poses as 16 numbers, row-major."""
+        from meshcol.io.report import dumps_csv
+
+        rows = [h.to_dict() for h in self.hits]
+        flat = [dict(row, pose_a=sum(row["pose_a"], []), pose_b=sum(row["pose_b"], []))
+                for row in rows]
+        return dumps_csv(flat, CSV_COLUMNS)
 
 
 def _is_moving(body: Body) -> bool:
@@ -186,6 +228,7 @@ def sweep(
     max_iterations: int | None = None,
     threads: int = 0,
     decompose_options: dict | None = None,
+    fail_on: str = "hit",
 ) -> SweepReport:
     """Continuous collision over a scene: the first contact of every pair of bodies.
 
@@ -209,6 +252,9 @@ def sweep(
     decompose_options : dict, optional
         Options of :func:`meshcol.analysis.colliders.convex_parts` for ``decomposed`` bodies
         (from the decompose cache when present, else decomposed now).
+    fail_on : {"hit", "none"}
+        Policy of :attr:`SweepReport.exit_code`: ``hit`` fails on any pair that is not
+        separated.
 
     Returns
     -------
@@ -241,6 +287,8 @@ def sweep(
     if collider not in COLLIDER_KINDS:
         raise ValueError(f"collider must be one of {', '.join(COLLIDER_KINDS)}, "
                          f"got {collider!r}")
+    if fail_on not in FAIL_ON:
+        raise ValueError(f"fail_on must be one of {', '.join(FAIL_ON)}, got {fail_on!r}")
     scene = _load(inputs)
     if not any(b.end_pose is not None for b in scene.bodies):
         raise SceneError("no body has an end pose or a velocity: nothing moves, nothing to sweep",
@@ -318,4 +366,4 @@ def sweep(
     hits.sort(key=lambda h: (h.a, h.b))
     return SweepReport(scene=scene, bodies=bodies, collider=collider, tolerance=tol,
                        hits=tuple(hits), candidate_pairs=len(groups), part_pairs=len(pairs),
-                       moving=tuple(bool(m) for m in moving))
+                       moving=tuple(bool(m) for m in moving), fail_on=fail_on)

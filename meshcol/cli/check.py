@@ -3,14 +3,16 @@
 from __future__ import annotations
 
 import sys
-import time
 
 import click
 
+from meshcol.analysis.check import FAIL_ON
+from meshcol.analysis.colliders import COLLIDER_KINDS
 from meshcol.cli.common import Progress, report_options
+from meshcol.decomposition.engines import ENGINES
 
-FAIL_ON_CHOICES = ("penetration", "contact", "clearance", "none")
-SHAPE_CHOICES = ("hull", "decomposed", "mesh")
+FAIL_ON_CHOICES = tuple(FAIL_ON)
+SHAPE_CHOICES = COLLIDER_KINDS
 
 
 @click.command("check")
@@ -29,7 +31,7 @@ SHAPE_CHOICES = ("hull", "decomposed", "mesh")
               help="Previous JSON report: fail only on pairs that are new or worse.")
 @click.option("--threads", type=click.IntRange(min=0), default=0, show_default=True,
               help="Threads for the native queries (0: all cores).")
-@click.option("--engine", type=click.Choice(["coacd", "vhacd"]), default="coacd", show_default=True,
+@click.option("--engine", type=click.Choice(ENGINES), default="coacd", show_default=True,
               help="Decomposition engine for 'decomposed' bodies missing from the cache.")
 @click.option("--threshold", type=click.FloatRange(min=0.0, min_open=True), default=None,
               help="Decomposition concavity threshold (as in 'meshcol decompose').")
@@ -55,9 +57,8 @@ def check(inputs: tuple[str, ...], shape: str, tolerance: float, clearance: floa
       meshcol check scene.glb --shape decomposed --ignore 'door*:frame*'
       meshcol check scene.json --baseline last_week.json > today.json
     """
-    from meshcol.analysis.check import CheckOptions, check_scene, load_baseline, parse_ignore_rule
+    from meshcol.analysis.check import check as run_check, parse_ignore_rule
     from meshcol.io.report import emit, report_format as pick_format
-    from meshcol.io.scene import load_inputs
 
     for rule in ignore:
         try:
@@ -65,15 +66,11 @@ def check(inputs: tuple[str, ...], shape: str, tolerance: float, clearance: floa
         except ValueError as exc:
             raise click.BadParameter(str(exc), param_hint="'--ignore'") from None
     fmt = pick_format(report, fmt)
-    old = load_baseline(baseline) if baseline else None
     progress = Progress()
-    started = time.perf_counter()
-    scene = load_inputs(list(inputs))
-    load_seconds = time.perf_counter() - started
-    options = CheckOptions(collider=shape, tolerance=tolerance, clearance=clearance, fail_on=fail_on,
-                           ignore=ignore, baseline=old, baseline_source=baseline, threads=threads,
-                           decompose_options=_decompose_options(engine, threshold, cache_dir))
-    result = check_scene(scene, options, progress=progress.message, load_seconds=load_seconds)
+    result = run_check(list(inputs), progress=progress.message, collider=shape,
+                       tolerance=tolerance, clearance=clearance, fail_on=fail_on, ignore=ignore,
+                       baseline=baseline, threads=threads,
+                       decompose_options=_decompose_options(engine, threshold, cache_dir))
     progress.done()
 
     emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
@@ -99,10 +96,7 @@ def summary_table(result) -> str:
         f"({s['seconds']:.3f} s check, {s['load_seconds'] or 0:.3f} s load)",
         "  " + "  ".join(f"{name}: {count}" for name, count in s["pairs_by_status"].items()),
     ]
-    worst = sorted(
-        (p for p in result.pairs if p["status"] != "separated"),
-        key=lambda p: (p["signed_distance"] if p["signed_distance"] is not None else float("inf")),
-    )[:10]
+    worst = result.worst_pairs(10)
     if worst:
         lines.append(f"  {'status':<12} {'signed dist':>12}  pair")
         for p in worst:

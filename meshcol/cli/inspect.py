@@ -6,18 +6,8 @@ import sys
 
 import click
 
-from meshcol._version import __version__
-from meshcol.cli.common import report_options
 from meshcol.analysis.inspect import RULES
-from meshcol.io.report import dumps_csv, dumps_json, emit, report_format
-
-SCHEMA_VERSION = 1
-CSV_COLUMNS = (
-    "name", "source", "vertices", "faces", "components", "watertight", "winding_consistent",
-    "volume", "bounds_min", "bounds_max", "size", "degenerate_faces", "duplicate_faces",
-    "boundary_edges", "non_manifold_edges", "self_intersecting", "self_intersecting_pairs",
-    "manifold_status", "units_guess", "units_reason", "declared_units", "findings", "failed_rules",
-)
+from meshcol.cli.common import report_options
 
 
 def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) -> tuple[str, ...]:
@@ -60,41 +50,18 @@ def inspect(inputs: tuple[str, ...], report: str | None, fmt: str | None,
       meshcol inspect level.json --fail-on not-watertight,self-intersecting
       meshcol inspect props/*.obj --report - --format csv --fail-on all
     """
-    from meshcol.analysis.inspect import inspect_body
-    from meshcol.io.scene import load_inputs
+    from meshcol.analysis.inspect import inspect as run_inspect
+    from meshcol.io.report import emit, report_format
 
-    scene = load_inputs(list(inputs))
-    results = [inspect_body(body, declared_units=scene.units) for body in scene.bodies]
-    rows = []
-    for result in results:
-        row = result.to_dict()
-        row["failed_rules"] = [rule for rule in result.findings if rule in fail_on]
-        rows.append(row)
-
-    kind = report_format(report, fmt)
-    if kind == "csv":
-        flat = [dict(row, bounds_min=row["bounds"][0], bounds_max=row["bounds"][1]) for row in rows]
-        text = dumps_csv(flat, CSV_COLUMNS)
-    else:
-        text = dumps_json({
-            "schema_version": SCHEMA_VERSION,
-            "tool": {"name": "meshcol", "version": __version__},
-            "command": "inspect",
-            "settings": {"fail_on": list(fail_on), "bounds_frame": "world"},
-            "units": scene.units,
-            "failed": any(row["failed_rules"] for row in rows),
-            "bodies": rows,
-        })
-    emit(text, report)
+    result = run_inspect(list(inputs), fail_on=fail_on)
+    emit(result.to_csv() if report_format(report, fmt) == "csv" else result.to_json(), report)
 
     if report is not None and report != "-":
-        _print_table(rows)
-    failed = [row for row in rows if row["failed_rules"]]
-    for row in failed:
+        _print_table(result.bodies)
+    for row in result.failed:
         click.echo(f"meshcol: fail: {row['source']}: body '{row['name']}': "
                    + ", ".join(row["failed_rules"]), err=True)
-    if failed:
-        sys.exit(1)
+    sys.exit(result.exit_code)
 
 
 def _print_table(rows: list[dict]) -> None:

@@ -6,13 +6,9 @@ import sys
 
 import click
 
-from meshcol._version import __version__
+from meshcol.analysis.colliders import COLLIDER_KINDS
+from meshcol.analysis.sweep import FAIL_ON
 from meshcol.cli.common import report_options
-from meshcol.io.report import dumps_csv, dumps_json, emit, report_format
-
-SCHEMA_VERSION = 1
-CSV_COLUMNS = ("a", "b", "status", "time_of_impact", "time", "point", "normal", "tunnelled", "pose_a",
-               "pose_b", "iterations")
 
 
 def _positive(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
@@ -24,7 +20,7 @@ def _positive(ctx: click.Context, param: click.Parameter, value: float | None) -
 @click.command("sweep", context_settings={"help_option_names": ["-h", "--help"],
                                           "max_content_width": 100})
 @click.argument("manifest", metavar="MANIFEST")
-@click.option("--shape", type=click.Choice(["hull", "decomposed", "mesh"]), default="hull",
+@click.option("--shape", type=click.Choice(COLLIDER_KINDS), default="hull",
               show_default=True,
               help="Collision shape of each body: convex hull, convex decomposition, or the "
                    "triangles of the mesh (surface contact).")
@@ -32,7 +28,7 @@ def _positive(ctx: click.Context, param: click.Parameter, value: float | None) -
               help="Contact distance in scene units (default: 1e-6 x the diagonal of the "
                    "scene's swept bounds).")
 @report_options(default="the report on stdout; a summary on stderr")
-@click.option("--fail-on", "fail_on", type=click.Choice(["hit", "none"]), default="hit",
+@click.option("--fail-on", "fail_on", type=click.Choice(FAIL_ON), default="hit",
               show_default=True,
               help="'hit': exit 1 when a pair hits, overlaps at the start or cannot be "
                    "decided; 'none': always exit 0 after a successful run.")
@@ -64,40 +60,23 @@ def sweep(manifest: str, shape: str, tolerance: float | None, report: str | None
       meshcol sweep level.json --shape mesh --tolerance 1e-5 --report -
     """
     from meshcol.analysis.sweep import sweep as run_sweep
+    from meshcol.io.report import emit, report_format
 
     decompose_options = {} if cache_dir is None else {"cache_dir": cache_dir}
     result = run_sweep(manifest, collider=shape, tolerance=tolerance, threads=threads,
-                       decompose_options=decompose_options)
-    kind = report_format(report, fmt)
-    rows = [h.to_dict() for h in result.hits]
-    if kind == "csv":
-        flat = [dict(row, pose_a=sum(row["pose_a"], []), pose_b=sum(row["pose_b"], []))
-                for row in rows]
-        text = dumps_csv(flat, CSV_COLUMNS)
-    else:
-        text = dumps_json({
-            "schema_version": SCHEMA_VERSION,
-            "tool": {"name": "meshcol", "version": __version__},
-            "command": "sweep",
-            "settings": {"shape": shape, "tolerance": float(f"{result.tolerance:.12g}"), "fail_on": fail_on,
-                         "motion": "linear translation, constant-rate rotation about the "
-                                   "local origin",
-                         "frame": "world"},
-            "failed": fail_on == "hit" and result.failed,
-            **result.to_dict(),
-        })
-    emit(text, report)
+                       decompose_options=decompose_options, fail_on=fail_on)
+    emit(result.to_csv() if report_format(report, fmt) == "csv" else result.to_json(), report)
 
     if report is not None and report != "-":
-        summary = result.summary()
+        summary = result.summary
         click.echo(f"meshcol: sweep: {summary['bodies']} bodies, {summary['candidate_pairs']} "
                    f"candidate pairs, {summary['hits']} hits ({summary['tunnelled']} tunnelled), "
                    f"{summary['overlapped_at_start']} overlapped at start, "
                    f"{summary['failed']} undecided", err=True)
-    if fail_on == "hit" and result.failed:
+    if result.exit_code:
         for h in result.hits:
             when = "" if h.time is None else f" (t = {h.time:.6g} s)"
             extra = ", tunnelled" if h.tunnelled else ""
             click.echo(f"meshcol: fail: {manifest}: '{h.a}' and '{h.b}': {h.status.name} at time of impact "
                        f"{h.time_of_impact:.6g}{when}{extra}", err=True)
-        sys.exit(1)
+    sys.exit(result.exit_code)

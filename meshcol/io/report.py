@@ -17,7 +17,54 @@ import tempfile
 from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
-__all__ = ["atomic_path", "atomic_write", "dumps_json", "dumps_csv", "emit", "report_format"]
+__all__ = [
+    "ENVELOPE_KEYS",
+    "SCHEMA_VERSION",
+    "atomic_path",
+    "atomic_write",
+    "dumps_csv",
+    "dumps_json",
+    "emit",
+    "envelope",
+    "report_format",
+]
+
+#: Version of the report layout shared by every command's JSON report (see
+#: ``meshcol/schemas/*_report.schema.json``); raised when a field changes meaning or goes.
+SCHEMA_VERSION = 1
+#: The keys every report starts with, in the order :func:`envelope` gives them.
+ENVELOPE_KEYS = ("schema_version", "tool", "command", "settings", "units")
+
+
+def envelope(command: str, settings: Mapping[str, Any], units: str | None) -> dict[str, Any]:
+    """The fields every JSON report starts with: one header for all five commands.
+
+    Parameters
+    ----------
+    command : str
+        ``check``, ``sweep``, ``decompose``, ``hull`` or ``inspect``; picks the report's schema
+        (``meshcol/schemas/<command>_report.schema.json``).
+    settings : mapping
+        The options of the run, JSON-ready.
+    units : str or None
+        Length unit of every coordinate in the report (the scene manifest's, verbatim), None
+        when the input does not say.
+
+    Returns
+    -------
+    dict
+        ``schema_version``, ``tool`` (``name``, ``version``), ``command``, ``settings``,
+        ``units``: a new dict the caller extends with the command's own fields.
+    """
+    from meshcol._version import __version__
+
+    return {
+        "schema_version": SCHEMA_VERSION,
+        "tool": {"name": "meshcol", "version": __version__},
+        "command": command,
+        "settings": dict(settings),
+        "units": units,
+    }
 
 
 @contextlib.contextmanager

@@ -1,0 +1,271 @@
+"""Convex hulls of a scene's bodies, optionally within a vertex budget: ``meshcol hull``.
+
+Each body's hull comes from :func:`meshcol.geometry.hull.convex_hull` on its world vertices
+(the scene transform applied, so exported colliders sit in place over the input); the meshes
+are written through :func:`meshcol.io.mesh_write.write_meshes`, after every hull is computed,
+so a bad body stops the run before any file is written.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from meshcol.errors import InvalidMeshError
+from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS, safe_name
+from meshcol.types import Body
+
+__all__ = ["CSV_COLUMNS", "HullReport", "OutputDestinationError", "hull", "out_dir_paths"]
+
+#: Columns of :meth:`HullReport.to_csv`, one row per body.
+CSV_COLUMNS = (
+    "name", "source", "input_vertices", "input_faces", "hull_vertices", "hull_faces",
+    "hull_volume", "hull_area", "mesh_volume", "volume_ratio", "flat", "max_vertices",
+    "exact_hull_vertices", "exact_hull_faces", "exact_hull_volume", "added_volume",
+    "added_volume_fraction", "max_distance", "output",
+)
+
+
+class OutputDestinationError(ValueError):
+    """The hulls cannot go where they were asked to: several bodies for a single-mesh format.
+
+    Attributes
+    ----------
+    output : str
+        The requested file.
+    bodies : int
+        How many bodies the input has.
+    """
+
+    def __init__(self, output: str, bodies: int) -> None:
+        self.output = output
+        self.bodies = bodies
+        super().__init__(f"{output}: {bodies} bodies need a file that holds several meshes "
+                         f"({', '.join(MULTI_MESH_EXTENSIONS)}) or out_dir")
+
+
+@dataclass(frozen=True)
+class HullReport:
+    """What :func:`hull` computed and wrote.
+
+    Attributes
+    ----------
+    bodies : list of dict
+        Per body (:data:`CSV_COLUMNS` and ``note``): input and hull sizes, hull volume and
+        area, mesh volume (closed meshes only), ``volume_ratio = mesh / hull volume``, ``flat``
+        and, with a budget, ``added_volume``, ``added_volume_fraction``, ``max_distance``;
+        ``output``, the file the hull went to (None when not written).
+    hulls : tuple of HullResult
+        The hulls, world frame, in the order of ``bodies``.
+    max_vertices : int or None
+        The vertex budget.
+    output, out_dir : str or None
+        Where the meshes went (one file, or one file per body in a folder).
+    units : str or None
+        The scene manifest's units.
+    warnings : tuple of str
+        One line per flat body (``FILE: body 'NAME' is flat: ...``).
+    """
+
+    bodies: list[dict[str, Any]]
+    hulls: tuple[Any, ...]
+    max_vertices: int | None
+    output: str | None
+    out_dir: str | None
+    units: str | None
+    warnings: tuple[str, ...] = ()
+
+    @property
+    def exit_code(self) -> int:
+        """Always 0: hull has no policy (unusable input raises instead)."""
+        return 0
+
+    @property
+    def summary(self) -> dict[str, Any]:
+        """Counts: bodies, flat bodies, total hull vertices, files written."""
+        files = {row["output"] for row in self.bodies if row["output"] is not None}
+        return {
+            "bodies": len(self.bodies),
+            "flat": sum(1 for row in self.bodies if row["flat"]),
+            "hull_vertices": sum(row["hull_vertices"] for row in self.bodies),
+            "files_written": len(files),
+        }
+
+    @property
+    def settings(self) -> dict[str, Any]:
+        return {"max_vertices": self.max_vertices, "frame": "world", "output": self.output,
+                "out_dir": self.out_dir}
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON report: the common envelope, the summary and one entry per body."""
+        from meshcol.io.report import envelope
+
+        return {**envelope("hull", self.settings, self.units), "summary": self.summary,
+                "bodies": self.bodies}
+
+    def to_json(self) -> str:
+        from meshcol.io.report import dumps_json
+
+        return dumps_json(self.to_dict())
+
+    def to_csv(self) -> str:
+        """One row per body (:data:`CSV_COLUMNS`)."""
+        from meshcol.io.report import dumps_csv
+
+        return dumps_csv(self.bodies, CSV_COLUMNS)
+
+
+def out_dir_paths(out_dir: str | os.PathLike[str], names: Sequence[str]) -> list[str]:
+    """``DIR/<name>.obj`` per body: names made file-safe (:func:`safe_name`) and unique
+    (``-2``, ``-3``, ... on a clash, case-insensitively)."""
+    paths, used = [], set()
+    for name in names:
+        safe = safe_name(name)
+        candidate, k = safe, 2
+        while candidate.lower() in used:
+            candidate = f"{safe}-{k}"
+            k += 1
+        used.add(candidate.lower())
+        paths.append(os.path.join(os.fspath(out_dir), candidate + ".obj"))
+    return paths
+
+
+def _load(inputs: Any):
+    from meshcol.io.scene import load_inputs
+    from meshcol.types import Scene
+
+    if isinstance(inputs, Scene):
+        return inputs
+    if isinstance(inputs, Body):
+        return Scene(bodies=(inputs,))
+    if isinstance(inputs, (str, os.PathLike)):
+        inputs = [inputs]
+    inputs = list(inputs)
+    if inputs and all(isinstance(b, Body) for b in inputs):
+        return Scene(bodies=tuple(inputs))
+    return load_inputs(inputs)
+
+
+def hull(
+    inputs: Any,
+    *,
+    max_vertices: int | None = None,
+    output: str | os.PathLike[str] | None = None,
+    out_dir: str | os.PathLike[str] | None = None,
+    warn: Callable[[str], None] | None = None,
+) -> HullReport:
+    """Convex hull of each body, in the world frame, optionally within a vertex budget.
+
+    Parameters
+    ----------
+    inputs : Scene, sequence of Body, or path(s) of meshes / one scene manifest
+        The bodies; each body's pose is applied to its vertices.
+    max_vertices : int, optional
+        At most this many vertices per hull (>= 4); the hull still contains every input
+        vertex (faces are grown outward, never pulled in).
+    output : path, optional
+        Write every hull to this file (format from the extension, one named object or node
+        per body; several bodies need ``.obj`` or ``.glb``).
+    out_dir : path, optional
+        Write ``out_dir/<body>.obj`` per body (see :func:`out_dir_paths`); created if missing.
+    warn : callable, optional
+        Receives one line per flat body as it is found (also kept in ``warnings``).
+
+    Returns
+    -------
+    HullReport
+
+    Raises
+    ------
+    ValueError
+        Both ``output`` and ``out_dir``, or an unknown output extension.
+    OutputDestinationError
+        Several bodies for a single-mesh output format.
+    InvalidMeshError
+        A body has no hull (collinear or single-point input, non-finite coordinates).
+
+    Notes
+    -----
+    Hulls by :func:`meshcol.geometry.hull.convex_hull` (Quickhull, Barber, Dobkin and
+    Huhdanpaa 1996, through qhull; the budget by outward face growth). Mesh volumes by
+    :func:`meshcol.geometry.topology.closed_volume` (closed meshes only).
+    """
+    from meshcol.geometry.hull import convex_hull
+    from meshcol.geometry.topology import closed_volume
+    from meshcol.io.mesh_write import write_meshes
+
+    if output is not None and out_dir is not None:
+        raise ValueError("give either output or out_dir, not both")
+    output = None if output is None else os.fspath(output)
+    out_dir = None if out_dir is None else os.fspath(out_dir)
+    if output is not None:
+        extension = os.path.splitext(output)[1].lower()
+        if extension not in MESH_OUTPUT_EXTENSIONS:
+            raise ValueError(f"unknown mesh extension {extension or '(none)'!r} in {output!r} "
+                             f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})")
+    scene = _load(inputs)
+    bodies = scene.bodies
+    if (output is not None and len(bodies) > 1
+            and os.path.splitext(output)[1].lower() not in MULTI_MESH_EXTENSIONS):
+        raise OutputDestinationError(output, len(bodies))
+
+    # Compute everything first: a bad body stops the run before any file is written.
+    hulls, warnings = [], []
+    for body in bodies:
+        try:
+            result = convex_hull(body.world_vertices(), max_vertices=max_vertices)
+        except InvalidMeshError as exc:
+            raise InvalidMeshError(f"body '{body.name}': {exc.message}", body.source) from exc
+        if result.flat:
+            message = f"{body.source}: body '{body.name}' is flat: the hull is a 2-D polygon"
+            warnings.append(message)
+            if warn is not None:
+                warn(message)
+        hulls.append(result)
+
+    names = [b.name for b in bodies]
+    destinations: list[str | None] = [None] * len(bodies)
+    if output is not None:
+        write_meshes(output, [(n, h.vertices, h.faces) for n, h in zip(names, hulls)])
+        destinations = [output] * len(bodies)
+    elif out_dir is not None:
+        destinations = out_dir_paths(out_dir, names)
+        os.makedirs(out_dir, exist_ok=True)
+        for name, path, result in zip(names, destinations, hulls):
+            write_meshes(path, [(name, result.vertices, result.faces)])
+
+    rows = [_row(body, result, closed_volume(body.vertices, body.faces), destination)
+            for body, result, destination in zip(bodies, hulls, destinations)]
+    return HullReport(rows, tuple(hulls), max_vertices, output, out_dir, scene.units,
+                      tuple(warnings))
+
+
+def _row(body: Body, result: Any, mesh_volume: float | None, destination: str | None) -> dict:
+    budget = result.max_vertices is not None
+    ratio = None
+    if mesh_volume is not None and result.volume > 0:
+        ratio = abs(mesh_volume) / result.volume
+    return {
+        "name": body.name,
+        "source": body.source,
+        "input_vertices": int(len(body.vertices)),
+        "input_faces": int(len(body.faces)),
+        "hull_vertices": int(len(result.vertices)),
+        "hull_faces": int(len(result.faces)),
+        "hull_volume": result.volume,
+        "hull_area": result.area,
+        "mesh_volume": mesh_volume,
+        "volume_ratio": ratio,
+        "flat": result.flat,
+        "note": "coplanar input: the hull is a 2-D polygon (volume 0)" if result.flat else None,
+        "max_vertices": result.max_vertices,
+        "exact_hull_vertices": result.exact_vertex_count,
+        "exact_hull_faces": result.exact_face_count,
+        "exact_hull_volume": result.exact_volume,
+        "added_volume": result.added_volume if budget else None,
+        "added_volume_fraction": result.added_volume_fraction if budget else None,
+        "max_distance": result.max_distance if budget else None,
+        "output": destination,
+    }
