@@ -35,11 +35,15 @@ _LAZY: dict[str, str] = {
     "HullResult": "meshcol.geometry.hull",
     "hull": "meshcol.analysis.hull",
     "HullReport": "meshcol.analysis.hull",
+    "inspect": "meshcol.analysis.inspect",
+    "InspectReport": "meshcol.analysis.inspect",
     "inspect_body": "meshcol.analysis.inspect",
     "MeshInspection": "meshcol.analysis.inspect",
     # convex decomposition
     "decompose": "meshcol.decomposition.decompose",
     "cached_decomposition": "meshcol.decomposition.decompose",
+    "decompose_files": "meshcol.decomposition.batch",
+    "DecomposeReport": "meshcol.decomposition.batch",
     "Decomposition": "meshcol.decomposition.result",
     "Fidelity": "meshcol.decomposition.result",
     # shapes and the narrow phase

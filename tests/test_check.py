@@ -392,7 +392,7 @@ def test_cli_choices_are_the_library_constants() -> None:
     from meshcol.analysis.colliders import COLLIDER_KINDS
     from meshcol.cli.check import FAIL_ON_CHOICES, SHAPE_CHOICES
 
-    assert FAIL_ON_CHOICES == tuple(FAIL_ON)
+    assert tuple(FAIL_ON) == FAIL_ON_CHOICES
     assert SHAPE_CHOICES is COLLIDER_KINDS
 
 

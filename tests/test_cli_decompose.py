@@ -125,7 +125,7 @@ def test_jobs_two_gives_the_same_output_as_jobs_one(meshes, tmp_path) -> None:
     code2, r2, _ = run([*inputs, "--no-cache", "-o", str(tmp_path / "j2"), "--jobs", "2", *FAST])
     assert code1 == code2 == 0
     assert files(tmp_path / "j1") == files(tmp_path / "j2")
-    strip = lambda report: [{k: v for k, v in f.items() if k != "seconds"} for f in report["files"]]  # noqa: E731
+    strip = lambda report: [{k: v for k, v in f.items() if k != "seconds"} for f in report["files"]]
     assert strip(json.loads(r1)) == strip(json.loads(r2))
 
 

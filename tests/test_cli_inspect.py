@@ -8,11 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
-
-from meshcol.cli import main
-from meshcol.analysis.inspect import RULES
-
 from test_cli_hull import CUBE_OBJ, MANIFESTS, assert_clean_failure, outside_distance, write
+
+from meshcol.analysis.inspect import RULES
+from meshcol.cli import main
 
 
 def run(*args: str):

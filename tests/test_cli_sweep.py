@@ -10,10 +10,10 @@ import trimesh
 from click.testing import CliRunner
 
 import meshcol
-from meshcol.cli import main
-from meshcol.errors import SceneError
 from meshcol import ConvexSet
+from meshcol.cli import main
 from meshcol.collision.time_of_impact import interpolate_pose, swept_aabbs
+from meshcol.errors import SceneError
 from meshcol.types import Body, Primitive, Scene, TimeOfImpactStatus
 
 

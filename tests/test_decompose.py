@@ -19,9 +19,9 @@ from meshcol.decomposition.decompose import cached_decomposition, decompose
 from meshcol.decomposition.engines import resolve_params
 from meshcol.decomposition.fidelity import fidelity, points_to_parts, points_to_triangles
 from meshcol.decomposition.result import Decomposition
+from meshcol.errors import InvalidMeshError
 from meshcol.geometry.topology import is_closed_manifold
 from meshcol.geometry.triangles import point_triangle_distances
-from meshcol.errors import InvalidMeshError
 
 # Coarse CoACD settings: seconds, not minutes (the suite has a time budget).
 FAST = {"threshold": 0.2, "resolution": 500,

@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from meshcol.errors import InvalidMeshError
 from meshcol.analysis.inspect import RULES, guess_units, inspect_body, self_intersecting_pairs
+from meshcol.errors import InvalidMeshError
 from meshcol.geometry.topology import closed_volume
 from meshcol.types import Body
 

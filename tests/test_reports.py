@@ -153,6 +153,7 @@ def test_schema_rejects_broken_reports(path: Path) -> None:
     for what, broken in _mutations(report):
         with pytest.raises(jsonschema.ValidationError):
             validate(broken)
+            pytest.fail(f"{path.name}: {what} was accepted")
         count += 1
     assert count >= 9, what
 

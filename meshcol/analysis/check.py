@@ -448,7 +448,7 @@ def check_scene(scene: Scene, options: CheckOptions | None = None, *,
         "fail_on": options.fail_on,
         "ignore": list(options.ignore),
         "baseline": _relative(options.baseline_source),
-        "inputs": [_relative(scene.source)] if scene.source else sorted({_relative(b.source) for b in bodies if b.source}),
+        "inputs": [_relative(scene.source)] if scene.source else sorted({_relative(b.source) or "" for b in bodies if b.source}),
     }
     return CheckReport(body_rows, pairs, summary, settings, scene.units,
                        datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"))

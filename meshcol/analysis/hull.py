@@ -231,10 +231,11 @@ def hull(
         write_meshes(output, [(n, h.vertices, h.faces) for n, h in zip(names, hulls)])
         destinations = [output] * len(bodies)
     elif out_dir is not None:
-        destinations = out_dir_paths(out_dir, names)
+        paths = out_dir_paths(out_dir, names)
         os.makedirs(out_dir, exist_ok=True)
-        for name, path, result in zip(names, destinations, hulls):
+        for name, path, result in zip(names, paths, hulls):
             write_meshes(path, [(name, result.vertices, result.faces)])
+        destinations = list(paths)
 
     rows = [_row(body, result, closed_volume(body.vertices, body.faces), destination)
             for body, result, destination in zip(bodies, hulls, destinations)]
@@ -250,10 +251,10 @@ def _row(body: Body, result: Any, mesh_volume: float | None, destination: str | 
     return {
         "name": body.name,
         "source": body.source,
-        "input_vertices": int(len(body.vertices)),
-        "input_faces": int(len(body.faces)),
-        "hull_vertices": int(len(result.vertices)),
-        "hull_faces": int(len(result.faces)),
+        "input_vertices": len(body.vertices),
+        "input_faces": len(body.faces),
+        "hull_vertices": len(result.vertices),
+        "hull_faces": len(result.faces),
         "hull_volume": result.volume,
         "hull_area": result.area,
         "mesh_volume": mesh_volume,

@@ -192,8 +192,8 @@ class SweepReport:
         from meshcol.io.report import dumps_csv
 
         rows = [h.to_dict() for h in self.hits]
-        flat = [dict(row, pose_a=sum(row["pose_a"], []), pose_b=sum(row["pose_b"], []))
-                for row in rows]
+        flat = [dict(row, pose_a=[x for r in row["pose_a"] for x in r],
+                     pose_b=[x for r in row["pose_b"] for x in r]) for row in rows]
         return dumps_csv(flat, CSV_COLUMNS)
 
 
@@ -334,8 +334,8 @@ def sweep(
         groups.setdefault((i, j), []).append(k)
     hits = []
     fraction = toi.time_of_impact
-    for (i, j), ks in groups.items():
-        ks = np.asarray(ks)
+    for (i, j), members in groups.items():
+        ks = np.asarray(members)
         status = toi.status[ks]
         if np.any(status == TimeOfImpactStatus.INVALID_INPUT):
             raise MeshcolError(f"bodies '{bodies[i].name}' and '{bodies[j].name}': invalid "

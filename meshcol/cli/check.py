@@ -57,8 +57,10 @@ def check(inputs: tuple[str, ...], shape: str, tolerance: float, clearance: floa
       meshcol check scene.glb --shape decomposed --ignore 'door*:frame*'
       meshcol check scene.json --baseline last_week.json > today.json
     """
-    from meshcol.analysis.check import check as run_check, parse_ignore_rule
-    from meshcol.io.report import emit, report_format as pick_format
+    from meshcol.analysis.check import check as run_check
+    from meshcol.analysis.check import parse_ignore_rule
+    from meshcol.io.report import emit
+    from meshcol.io.report import report_format as pick_format
 
     for rule in ignore:
         try:

@@ -57,7 +57,8 @@ def hull(inputs: tuple[str, ...], output: str | None, out_dir: str | None,
                 f"unknown mesh extension {extension or '(none)'!r} in {output!r} "
                 f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})", param_hint="'-o' / '--output'")
 
-    from meshcol.analysis.hull import OutputDestinationError, hull as run_hull
+    from meshcol.analysis.hull import OutputDestinationError
+    from meshcol.analysis.hull import hull as run_hull
     from meshcol.io.report import emit, report_format
 
     try:

@@ -196,7 +196,7 @@ def decompose_files(
                           prepare=functools.partial(prepare_engine, engine))
         pool.start(min(jobs, len(inputs)))
     try:
-        files, rows = _run(inputs, out_dir, options, pool, jobs=jobs, timeout=timeout,
+        files, rows = _run([os.fspath(p) for p in inputs], out_dir, options, pool, jobs=jobs, timeout=timeout,
                                   use_cache=use_cache, layout=layout, fmt=fmt,
                                   max_hausdorff=max_hausdorff, progress=progress)
     finally:

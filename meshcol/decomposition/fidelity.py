@@ -126,7 +126,7 @@ def points_to_triangles(points: np.ndarray, vertices: np.ndarray, faces: np.ndar
     return result
 
 
-def _manifold(vertices: np.ndarray, faces: np.ndarray):  # noqa: ANN202 - manifold3d.Manifold
+def _manifold(vertices: np.ndarray, faces: np.ndarray):
     import manifold3d
 
     return manifold3d.Manifold(manifold3d.Mesh64(

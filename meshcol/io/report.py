@@ -99,9 +99,12 @@ def _umask() -> int:
 def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> None:
     """Write ``data`` to ``path`` through a temporary file and a rename."""
     with atomic_path(path) as tmp:
-        mode = "wb" if isinstance(data, bytes) else "w"
-        with open(tmp, mode, **({} if isinstance(data, bytes) else {"encoding": "utf-8", "newline": ""})) as f:
-            f.write(data)
+        if isinstance(data, bytes):
+            with open(tmp, "wb") as binary:
+                binary.write(data)
+        else:
+            with open(tmp, "w", encoding="utf-8", newline="") as text:
+                text.write(data)
 
 
 def _finite_or_none(value: Any) -> Any:
