@@ -15,6 +15,7 @@ from typing import Any
 
 from meshcol.errors import InvalidMeshError
 from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS, safe_name
+from meshcol.io.scene import as_scene
 from meshcol.types import Body
 
 __all__ = ["CSV_COLUMNS", "HullReport", "OutputDestinationError", "hull", "out_dir_paths"]
@@ -132,22 +133,6 @@ def out_dir_paths(out_dir: str | os.PathLike[str], names: Sequence[str]) -> list
     return paths
 
 
-def _load(inputs: Any):
-    from meshcol.io.scene import load_inputs
-    from meshcol.types import Scene
-
-    if isinstance(inputs, Scene):
-        return inputs
-    if isinstance(inputs, Body):
-        return Scene(bodies=(inputs,))
-    if isinstance(inputs, (str, os.PathLike)):
-        inputs = [inputs]
-    inputs = list(inputs)
-    if inputs and all(isinstance(b, Body) for b in inputs):
-        return Scene(bodies=tuple(inputs))
-    return load_inputs(inputs)
-
-
 def hull(
     inputs: Any,
     *,
@@ -205,7 +190,7 @@ def hull(
         if extension not in MESH_OUTPUT_EXTENSIONS:
             raise ValueError(f"unknown mesh extension {extension or '(none)'!r} in {output!r} "
                              f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})")
-    scene = _load(inputs)
+    scene = as_scene(inputs)
     bodies = scene.bodies
     if (output is not None and len(bodies) > 1
             and os.path.splitext(output)[1].lower() not in MULTI_MESH_EXTENSIONS):

@@ -8,7 +8,6 @@ statuses and their guarantees are those of :mod:`meshcol.collision.time_of_impac
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -16,6 +15,7 @@ import numpy as np
 
 from meshcol.analysis.colliders import COLLIDER_KINDS, build_colliders
 from meshcol.errors import MeshcolError, SceneError
+from meshcol.io.scene import as_scene
 from meshcol.types import Body, Scene, TimeOfImpactStatus
 
 __all__ = ["FAIL_ON", "SweepHit", "SweepReport", "sweep"]
@@ -201,25 +201,6 @@ def _is_moving(body: Body) -> bool:
     return body.end_pose is not None and not np.array_equal(body.end_pose, body.pose)
 
 
-def _load(inputs: Any) -> Scene:
-    if isinstance(inputs, Scene):
-        return inputs
-    if isinstance(inputs, Body):
-        return Scene(bodies=(inputs,))
-    if isinstance(inputs, (str, os.PathLike)):
-        inputs = [inputs]
-    inputs = list(inputs)
-    if inputs and all(isinstance(b, Body) for b in inputs):
-        return Scene(bodies=tuple(inputs))
-    from meshcol.io.scene import load_inputs
-
-    scene = load_inputs(inputs)
-    if scene.source is None and len(inputs) == 1:
-        scene = Scene(bodies=scene.bodies, units=scene.units, source=os.fspath(inputs[0]),
-                      duration=scene.duration)
-    return scene
-
-
 def sweep(
     inputs: Any,
     *,
@@ -289,7 +270,7 @@ def sweep(
                          f"got {collider!r}")
     if fail_on not in FAIL_ON:
         raise ValueError(f"fail_on must be one of {', '.join(FAIL_ON)}, got {fail_on!r}")
-    scene = _load(inputs)
+    scene = as_scene(inputs)
     if not any(b.end_pose is not None for b in scene.bodies):
         raise SceneError("no body has an end pose or a velocity: nothing moves, nothing to sweep",
                          scene.source)

@@ -30,6 +30,7 @@ __all__ = [
     "SCHEMA_PATH",
     "iter_inputs",
     "load_inputs",
+    "as_scene",
     "load_scene",
     "rotation_from_euler",
     "rotation_from_quaternion",
@@ -134,6 +135,33 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
             taken.add(body.name)
         bodies.extend(new)
     return Scene(bodies=tuple(bodies), units=units, source=source, duration=duration)
+
+
+def as_scene(inputs: Any) -> Scene:
+    """A scene from what the library's analyses accept: a Scene, a Body, a sequence of
+    Bodies, or input paths (:func:`load_inputs`; a single mesh file becomes the source).
+
+    Parameters
+    ----------
+    inputs : Scene, Body, sequence of Body, path or sequence of paths
+
+    Returns
+    -------
+    Scene
+    """
+    if isinstance(inputs, Scene):
+        return inputs
+    if isinstance(inputs, Body):
+        return Scene(bodies=(inputs,))
+    if isinstance(inputs, (str, os.PathLike)):
+        inputs = [inputs]
+    inputs = list(inputs)
+    if inputs and all(isinstance(b, Body) for b in inputs):
+        return Scene(bodies=tuple(inputs))
+    scene = load_inputs(inputs)
+    if scene.source is None and len(inputs) == 1:
+        scene = dataclasses.replace(scene, source=os.fspath(inputs[0]))
+    return scene
 
 
 def load_inputs(paths: Sequence[str | os.PathLike[str]]) -> Scene:
