@@ -18,13 +18,19 @@ GOLDEN = Path(__file__).resolve().parent / "golden"
 
 # `ci` is derandomized so CI runs are repeatable; `dev` explores more.
 settings.register_profile(
-    "ci", derandomize=True, max_examples=150, deadline=None,
+    "ci",
+    derandomize=True,
+    max_examples=150,
+    deadline=None,
     suppress_health_check=[HealthCheck.too_slow],
 )
 settings.register_profile("dev", max_examples=400, deadline=None)
 # `fast` is the `make test-fast` lane: the same properties, fewer examples.
 settings.register_profile(
-    "fast", derandomize=True, max_examples=25, deadline=None,
+    "fast",
+    derandomize=True,
+    max_examples=25,
+    deadline=None,
     suppress_health_check=[HealthCheck.too_slow],
 )
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))

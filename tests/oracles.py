@@ -18,8 +18,9 @@ def hull_features(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarra
     """Triangles (t, 3, 3), edges (e, 2, 3) and outward unit normals (t, 3) of a 3D hull."""
     hull = ConvexHull(points)
     tris = points[hull.simplices]
-    e = np.concatenate([hull.simplices[:, [0, 1]], hull.simplices[:, [1, 2]],
-                        hull.simplices[:, [2, 0]]])
+    e = np.concatenate(
+        [hull.simplices[:, [0, 1]], hull.simplices[:, [1, 2]], hull.simplices[:, [2, 0]]]
+    )
     e = np.unique(np.sort(e, axis=1), axis=0)
     return tris, points[e], hull.equations[:, :3]
 
@@ -50,12 +51,18 @@ def point_triangle_distance(p: np.ndarray, tri: np.ndarray) -> np.ndarray:
         t_ac = np.where(d2 - d6 != 0, d2 / (d2 - d6), 0.0)
         t_bc = np.where((d4 - d3) + (d5 - d6) != 0, (d4 - d3) / ((d4 - d3) + (d5 - d6)), 0.0)
     regions = [
-        (d1 <= 0) & (d2 <= 0), a,
-        (d3 >= 0) & (d4 <= d3), b,
-        (vc <= 0) & (d1 >= 0) & (d3 <= 0), a + ab * t_ab[:, None],
-        (d6 >= 0) & (d5 <= d6), c,
-        (vb <= 0) & (d2 >= 0) & (d6 <= 0), a + ac * t_ac[:, None],
-        (va <= 0) & ((d4 - d3) >= 0) & ((d5 - d6) >= 0), b + (c - b) * t_bc[:, None],
+        (d1 <= 0) & (d2 <= 0),
+        a,
+        (d3 >= 0) & (d4 <= d3),
+        b,
+        (vc <= 0) & (d1 >= 0) & (d3 <= 0),
+        a + ab * t_ab[:, None],
+        (d6 >= 0) & (d5 <= d6),
+        c,
+        (vb <= 0) & (d2 >= 0) & (d6 <= 0),
+        a + ac * t_ac[:, None],
+        (va <= 0) & ((d4 - d3) >= 0) & ((d5 - d6) >= 0),
+        b + (c - b) * t_bc[:, None],
     ]
     out = q.copy()
     done = np.zeros(len(p), dtype=bool)

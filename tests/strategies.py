@@ -10,11 +10,13 @@ from meshcol import Box, Capsule, Cylinder, Sphere
 
 def rotation_from_quaternion(q: np.ndarray) -> np.ndarray:
     w, x, y, z = q / np.linalg.norm(q)
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ])
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def pose_matrix(rotation: np.ndarray, translation) -> np.ndarray:
@@ -51,8 +53,9 @@ def hulls(draw, min_points: int = 4, max_points: int = 14) -> np.ndarray:
 
 primitives = st.one_of(
     st.builds(Sphere, st.floats(0.1, 1.5)),
-    st.builds(lambda x, y, z: Box((x, y, z)), st.floats(0.1, 2), st.floats(0.1, 2),
-              st.floats(0.1, 2)),
+    st.builds(
+        lambda x, y, z: Box((x, y, z)), st.floats(0.1, 2), st.floats(0.1, 2), st.floats(0.1, 2)
+    ),
     st.builds(Capsule, st.floats(0.1, 1), st.floats(0.0, 2)),
     st.builds(Cylinder, st.floats(0.1, 1), st.floats(0.1, 2)),
 )

@@ -103,8 +103,11 @@ def test_only_collision_uses_the_native_module() -> None:
 def test_no_import_cycles() -> None:
     # The package root re-exports everything lazily and is imported first by every module;
     # edges into it are not dependencies of the layers.
-    graph = {m: {d for d in deps if d != "meshcol" and d in GRAPH} for m, deps in GRAPH.items()
-             if m != "meshcol"}
+    graph = {
+        m: {d for d in deps if d != "meshcol" and d in GRAPH}
+        for m, deps in GRAPH.items()
+        if m != "meshcol"
+    }
     state: dict[str, int] = {}
     stack: list[str] = []
 
@@ -113,7 +116,7 @@ def test_no_import_cycles() -> None:
         stack.append(node)
         for nxt in sorted(graph.get(node, ())):
             if state.get(nxt) == 1:
-                cycle = stack[stack.index(nxt):] + [nxt]
+                cycle = stack[stack.index(nxt) :] + [nxt]
                 pytest.fail("import cycle: " + " -> ".join(cycle))
             if nxt not in state:
                 visit(nxt)

@@ -19,14 +19,21 @@ from meshcol.io.scene import load_inputs
 SCHEMA = Path(__file__).resolve().parent.parent / "meshcol" / "schemas" / "check_report.schema.json"
 
 
-def write_manifest(folder: Path, bodies: list[dict], units: str = "m", name: str = "scene.json") -> Path:
+def write_manifest(
+    folder: Path, bodies: list[dict], units: str = "m", name: str = "scene.json"
+) -> Path:
     path = folder / name
     path.write_text(json.dumps({"units": units, "bodies": bodies}))
     return path
 
 
 def box(name: str, size, position, **extra) -> dict:
-    return {"name": name, "primitive": {"type": "box", "size": list(size)}, "position": list(position), **extra}
+    return {
+        "name": name,
+        "primitive": {"type": "box", "size": list(size)},
+        "position": list(position),
+        **extra,
+    }
 
 
 def pair(report, a: str, b: str) -> dict:
@@ -68,7 +75,9 @@ def test_far_pairs_are_not_candidates(tmp_path: Path) -> None:
 
 
 def test_overlapping_boxes_penetrate_with_exact_depth_and_normal(tmp_path: Path) -> None:
-    m = write_manifest(tmp_path, [box("a", (1, 1, 1), (0, 0, 0)), box("b", (1, 1, 1), (0.75, 0.1, 0))])
+    m = write_manifest(
+        tmp_path, [box("a", (1, 1, 1), (0, 0, 0)), box("b", (1, 1, 1), (0.75, 0.1, 0))]
+    )
     report = check([m])
     p = pair(report, "a", "b")
     assert p["status"] == "penetrating"
@@ -107,7 +116,9 @@ def test_clearance_band_and_policy(tmp_path: Path) -> None:
 
 
 def test_ignore_globs_either_order(tmp_path: Path) -> None:
-    m = write_manifest(tmp_path, [box("door_1", (1, 1, 1), (0, 0, 0)), box("frame_1", (1, 1, 1), (0.5, 0, 0))])
+    m = write_manifest(
+        tmp_path, [box("door_1", (1, 1, 1), (0, 0, 0)), box("frame_1", (1, 1, 1), (0.5, 0, 0))]
+    )
     report = check([m], ignore=["frame*:door*"])
     p = pair(report, "door_1", "frame_1")
     assert p["status"] == "penetrating" and p["ignored"] and not p["violation"]
@@ -121,18 +132,37 @@ def test_fail_on_none_always_passes(tmp_path: Path) -> None:
 
 
 def test_mixed_primitives(tmp_path: Path) -> None:
-    m = write_manifest(tmp_path, [
-        {"name": "ball", "primitive": {"type": "sphere", "radius": 1.0}, "position": [0, 0, 0]},
-        {"name": "pill", "primitive": {"type": "capsule", "radius": 0.5, "length": 2.0}, "position": [3, 0, 0]},
-    ])
+    m = write_manifest(
+        tmp_path,
+        [
+            {"name": "ball", "primitive": {"type": "sphere", "radius": 1.0}, "position": [0, 0, 0]},
+            {
+                "name": "pill",
+                "primitive": {"type": "capsule", "radius": 0.5, "length": 2.0},
+                "position": [3, 0, 0],
+            },
+        ],
+    )
     p = pair(check([m], clearance=2.0), "ball", "pill")
     assert p["distance"] == pytest.approx(1.5, abs=1e-9)
 
 
 @settings(max_examples=25)
-@given(st.lists(st.tuples(st.integers(-4, 4), st.integers(-4, 4), st.integers(0, 2),
-                          st.integers(1, 3), st.integers(1, 3), st.integers(1, 3)),
-                min_size=2, max_size=7, unique_by=lambda t: t[:3]))
+@given(
+    st.lists(
+        st.tuples(
+            st.integers(-4, 4),
+            st.integers(-4, 4),
+            st.integers(0, 2),
+            st.integers(1, 3),
+            st.integers(1, 3),
+            st.integers(1, 3),
+        ),
+        min_size=2,
+        max_size=7,
+        unique_by=lambda t: t[:3],
+    )
+)
 def test_axis_aligned_boxes_match_exact_answers(boxes) -> None:
     """Every pair's distance/depth equals the exact axis-aligned answer; no pair is missed."""
     import trimesh
@@ -147,8 +177,16 @@ def test_axis_aligned_boxes_match_exact_answers(boxes) -> None:
         t = np.eye(4)
         t[:3, 3] = c
         mesh = trimesh.creation.box(extents=s)
-        bodies.append(Body(f"b{i}", None, np.asarray(mesh.vertices), np.asarray(mesh.faces, np.int64), t,
-                           primitive=Primitive("box", size=tuple(s))))
+        bodies.append(
+            Body(
+                f"b{i}",
+                None,
+                np.asarray(mesh.vertices),
+                np.asarray(mesh.faces, np.int64),
+                t,
+                primitive=Primitive("box", size=tuple(s)),
+            )
+        )
         lo.append(c - s / 2)
         hi.append(c + s / 2)
     clearance = 0.75
@@ -189,8 +227,9 @@ def test_ball_in_bowl_is_phantom_with_hull_only(samples: Path) -> None:
 def test_ball_in_bowl_is_separated_when_decomposed(samples: Path, tmp_path: Path) -> None:
     scene = samples / "bowl" / "scene.json"
     # default decomposition parameters, as `meshcol check --shape decomposed` uses them
-    report = check([scene], collider="decomposed",
-                   decompose_options={"cache_dir": str(tmp_path / "cache")})
+    report = check(
+        [scene], collider="decomposed", decompose_options={"cache_dir": str(tmp_path / "cache")}
+    )
     assert all(p["status"] in ("separated", "clearance") for p in report.pairs)
     assert report.passed
 
@@ -199,7 +238,11 @@ def test_level_finds_exactly_the_planted_interpenetrations(samples: Path) -> Non
     expected = json.loads((samples / "level" / "expected.json").read_text())
     report = check([samples / "level" / "scene.json"])
     planted = {tuple(sorted((e["a"], e["b"]))): e for e in expected["interpenetrations"]}
-    found = {tuple(sorted((p["a"], p["b"]))): p for p in report.pairs if p["status"] in ("penetrating", "contained")}
+    found = {
+        tuple(sorted((p["a"], p["b"]))): p
+        for p in report.pairs
+        if p["status"] in ("penetrating", "contained")
+    }
     assert set(found) == set(planted)
     for key, e in planted.items():
         assert found[key]["depth"] == pytest.approx(e["depth"], rel=1e-9, abs=1e-12), key
@@ -233,6 +276,7 @@ def _round_floats(obj):
 
 def test_report_matches_schema(samples: Path) -> None:
     import jsonschema
+
     schema = json.loads(SCHEMA.read_text())
     data = json.loads(check([samples / "level" / "scene.json"], clearance=0.05).to_json())
     jsonschema.validate(data, schema)
@@ -286,20 +330,30 @@ def test_corpus_scene_distances_match_fcl(corpus: Path, name: str) -> None:
 
 
 def test_baseline_fails_only_new_or_worse_pairs(tmp_path: Path) -> None:
-    bodies = [box("a", (1, 1, 1), (0, 0, 0)), box("b", (1, 1, 1), (0.8, 0, 0)), box("c", (1, 1, 1), (5, 0, 0))]
+    bodies = [
+        box("a", (1, 1, 1), (0, 0, 0)),
+        box("b", (1, 1, 1), (0.8, 0, 0)),
+        box("c", (1, 1, 1), (5, 0, 0)),
+    ]
     m = write_manifest(tmp_path, bodies)
     first = check([m])
     assert not first.passed
     old = tmp_path / "old.json"
     old.write_text(first.to_json())
     assert check([m], baseline=str(old)).passed  # same penetration: not new, not worse
-    deeper = write_manifest(tmp_path, [bodies[0], box("b", (1, 1, 1), (0.6, 0, 0)), bodies[2]], name="deeper.json")
+    deeper = write_manifest(
+        tmp_path, [bodies[0], box("b", (1, 1, 1), (0.6, 0, 0)), bodies[2]], name="deeper.json"
+    )
     assert not check([deeper], baseline=str(old)).passed
-    new = write_manifest(tmp_path, [bodies[0], bodies[1], box("c", (1, 1, 1), (-0.9, 0, 0))], name="new.json")
+    new = write_manifest(
+        tmp_path, [bodies[0], bodies[1], box("c", (1, 1, 1), (-0.9, 0, 0))], name="new.json"
+    )
     report = check([new], baseline=str(old))
     assert not report.passed
     assert {(p["a"], p["b"]) for p in report.pairs if p["violation"]} == {("a", "c")}
-    better = write_manifest(tmp_path, [bodies[0], box("b", (1, 1, 1), (0.9, 0, 0)), bodies[2]], name="better.json")
+    better = write_manifest(
+        tmp_path, [bodies[0], box("b", (1, 1, 1), (0.9, 0, 0)), bodies[2]], name="better.json"
+    )
     assert check([better], baseline=str(old)).passed
 
 
@@ -338,12 +392,21 @@ def test_cli_report_to_stdout_keeps_summary_on_stderr(tmp_path: Path) -> None:
         assert result.stderr.splitlines()[-1] == "PASS"
 
 
-@pytest.mark.parametrize("args, message", [
-    (["missing.json"], "meshcol: error: missing.json:"),
-    (["scene.json", "--ignore", "nocolon"], "Invalid value for '--ignore': ignore rule must look like A:B"),
-    (["scene.json", "--tolerance", "-1"], "Invalid value for '--tolerance'"),
-    (["scene.json", "--baseline", "nothere.json"], "meshcol: error: nothere.json: baseline report not found"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["missing.json"], "meshcol: error: missing.json:"),
+        (
+            ["scene.json", "--ignore", "nocolon"],
+            "Invalid value for '--ignore': ignore rule must look like A:B",
+        ),
+        (["scene.json", "--tolerance", "-1"], "Invalid value for '--tolerance'"),
+        (
+            ["scene.json", "--baseline", "nothere.json"],
+            "meshcol: error: nothere.json: baseline report not found",
+        ),
+    ],
+)
 def test_cli_bad_input_exits_2(tmp_path: Path, monkeypatch, args, message) -> None:
     monkeypatch.chdir(tmp_path)
     write_manifest(tmp_path, [box("a", (1, 1, 1), (0, 0, 0))])
@@ -361,7 +424,8 @@ def test_cli_bad_baseline_content(tmp_path: Path, monkeypatch) -> None:
     result = run(["check", "scene.json", "--baseline", "old.json"])
     assert result.exit_code == 2
     assert result.output.strip().endswith(
-        "meshcol: error: old.json: baseline is not valid JSON (line 1 column 2)")
+        "meshcol: error: old.json: baseline is not valid JSON (line 1 column 2)"
+    )
 
 
 def test_ucx_parts_are_used_as_given(tmp_path: Path) -> None:
@@ -369,9 +433,17 @@ def test_ucx_parts_are_used_as_given(tmp_path: Path) -> None:
     import trimesh
 
     scene = trimesh.Scene()
-    scene.add_geometry(trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 1]]), node_name="crate", geom_name="crate")
-    scene.add_geometry(trimesh.creation.box(bounds=[[0, 0, 0], [1.5, 1, 1]]), node_name="UCX_crate_00", geom_name="UCX_crate_00")
-    scene.add_geometry(trimesh.creation.box(bounds=[[1.25, 0, 0], [2, 1, 1]]), node_name="wall", geom_name="wall")
+    scene.add_geometry(
+        trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 1]]), node_name="crate", geom_name="crate"
+    )
+    scene.add_geometry(
+        trimesh.creation.box(bounds=[[0, 0, 0], [1.5, 1, 1]]),
+        node_name="UCX_crate_00",
+        geom_name="UCX_crate_00",
+    )
+    scene.add_geometry(
+        trimesh.creation.box(bounds=[[1.25, 0, 0], [2, 1, 1]]), node_name="wall", geom_name="wall"
+    )
     path = tmp_path / "crate.glb"
     scene.export(path)
     report = check([path], collider="decomposed")
@@ -384,7 +456,9 @@ def test_ucx_parts_are_used_as_given(tmp_path: Path) -> None:
     assert p["depth"] == pytest.approx(0.25, rel=1e-9)
     # with hulls the UCX part is ignored: crate [0, 1] and wall [1.25, 2] are 0.25 apart
     hull = check([path], collider="hull", clearance=0.5)
-    assert [(p["status"], p["distance"]) for p in hull.pairs] == [("clearance", pytest.approx(0.25))]
+    assert [(p["status"], p["distance"]) for p in hull.pairs] == [
+        ("clearance", pytest.approx(0.25))
+    ]
 
 
 def test_cli_choices_are_the_library_constants() -> None:

@@ -55,7 +55,9 @@ def test_help_does_not_import_heavy_modules() -> None:
 
 
 def test_python_dash_m_runs() -> None:
-    out = subprocess.run([sys.executable, "-m", "meshcol", "--version"], capture_output=True, text=True)
+    out = subprocess.run(
+        [sys.executable, "-m", "meshcol", "--version"], capture_output=True, text=True
+    )
     assert out.returncode == 0
     assert out.stdout.strip() == f"meshcol, version {meshcol.__version__}"
 

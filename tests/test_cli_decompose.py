@@ -17,8 +17,18 @@ from click.testing import CliRunner
 
 from meshcol.cli import main
 
-FAST = ["--threshold", "0.2", "--resolution", "500",
-        "-E", "mcts_iterations=20", "-E", "mcts_nodes=8", "-E", "mcts_max_depth=2"]
+FAST = [
+    "--threshold",
+    "0.2",
+    "--resolution",
+    "500",
+    "-E",
+    "mcts_iterations=20",
+    "-E",
+    "mcts_nodes=8",
+    "-E",
+    "mcts_max_depth=2",
+]
 
 
 @pytest.fixture(scope="module")
@@ -29,7 +39,8 @@ def meshes(tmp_path_factory) -> dict[str, Path]:
         "box": trimesh.creation.box(extents=(2, 1, 1)),
         "flat": trimesh.creation.box(extents=(1, 1, 0)),
         "l_shape": trimesh.creation.box(bounds=[(0, 0, 0), (2, 1, 1)]).union(
-            trimesh.creation.box(bounds=[(0, 0, 0.5), (1, 1, 2)]), engine="manifold"),
+            trimesh.creation.box(bounds=[(0, 0, 0.5), (1, 1, 2)]), engine="manifold"
+        ),
     }
     paths = {}
     for name, mesh in shapes.items():
@@ -70,9 +81,18 @@ def test_parts_layout_and_report(meshes, tmp_path) -> None:
     for name in body["outputs"]:
         part = trimesh.load(out / name, force="mesh")
         assert part.is_convex and part.is_watertight and part.volume > 0
-    assert body["metrics"]["vertices_per_part"] == [len(trimesh.load(out / p).vertices) for p in body["outputs"]]
-    assert report["summary"] == {"bodies": 1, "failed": 0, "files": 1, "hausdorff_exceeded": 0, "ok": 1,
-                                 "parts": n, "timeout": 0}
+    assert body["metrics"]["vertices_per_part"] == [
+        len(trimesh.load(out / p).vertices) for p in body["outputs"]
+    ]
+    assert report["summary"] == {
+        "bodies": 1,
+        "failed": 0,
+        "files": 1,
+        "hausdorff_exceeded": 0,
+        "ok": 1,
+        "parts": n,
+        "timeout": 0,
+    }
 
 
 def test_combined_ucx_and_glb_layouts(meshes, tmp_path) -> None:
@@ -84,7 +104,9 @@ def test_combined_ucx_and_glb_layouts(meshes, tmp_path) -> None:
     assert object_names(tmp_path / "c" / "l_shape.obj") == [f"l_shape_{i:02d}" for i in range(n)]
     code, _, _ = run([*base, "-o", str(tmp_path / "u"), "--layout", "ucx"])
     assert code == 0
-    assert object_names(tmp_path / "u" / "l_shape_ucx.obj") == [f"UCX_l_shape_{i:02d}" for i in range(n)]
+    assert object_names(tmp_path / "u" / "l_shape_ucx.obj") == [
+        f"UCX_l_shape_{i:02d}" for i in range(n)
+    ]
     code, _, _ = run([*base, "-o", str(tmp_path / "g"), "--layout", "combined", "--format", "glb"])
     assert code == 0
     scene = trimesh.load(tmp_path / "g" / "l_shape.glb")
@@ -107,7 +129,17 @@ def test_same_input_gives_identical_bytes_and_cache_hit_is_fast(meshes, tmp_path
     start = time.perf_counter()
     code, first, _ = run([*args, "-o", str(tmp_path / "a")])
     miss = time.perf_counter() - start
-    code2, _, _ = run([str(meshes["torus"]), "--no-cache", "--layout", "combined", *FAST, "-o", str(tmp_path / "b")])
+    code2, _, _ = run(
+        [
+            str(meshes["torus"]),
+            "--no-cache",
+            "--layout",
+            "combined",
+            *FAST,
+            "-o",
+            str(tmp_path / "b"),
+        ]
+    )
     start = time.perf_counter()
     code3, third, _ = run([*args, "-o", str(tmp_path / "c")])
     hit = time.perf_counter() - start
@@ -132,8 +164,21 @@ def test_jobs_two_gives_the_same_output_as_jobs_one(meshes, tmp_path) -> None:
 def test_timeout_stops_one_file_and_the_others_finish(meshes, corpus, tmp_path) -> None:
     slow = corpus / "coacd-examples" / "Octocat-v2.obj"  # minutes with CoACD's defaults
     start = time.perf_counter()
-    code, stdout, stderr = run([str(slow), str(meshes["box"]), "--no-cache", "-o", str(tmp_path / "o"),
-                                "--jobs", "2", "--timeout", "5", "--preprocess", "off"])
+    code, stdout, stderr = run(
+        [
+            str(slow),
+            str(meshes["box"]),
+            "--no-cache",
+            "-o",
+            str(tmp_path / "o"),
+            "--jobs",
+            "2",
+            "--timeout",
+            "5",
+            "--preprocess",
+            "off",
+        ]
+    )
     assert time.perf_counter() - start < 60
     assert code == 1
     report = json.loads(stdout)
@@ -148,9 +193,26 @@ def test_killed_run_leaves_no_cache_entry_or_output(corpus, tmp_path) -> None:
     slow = corpus / "coacd-examples" / "Octocat-v2.obj"
     cache, out = tmp_path / "cache", tmp_path / "out"
     proc = subprocess.Popen(
-        [sys.executable, "-m", "meshcol", "decompose", str(slow), "-o", str(out), "--cache-dir", str(cache),
-         "--jobs", "2", "--timeout", "600", "--preprocess", "off"],
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True,
+        [
+            sys.executable,
+            "-m",
+            "meshcol",
+            "decompose",
+            str(slow),
+            "-o",
+            str(out),
+            "--cache-dir",
+            str(cache),
+            "--jobs",
+            "2",
+            "--timeout",
+            "600",
+            "--preprocess",
+            "off",
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        start_new_session=True,
     )
     try:
         time.sleep(4.0)
@@ -163,7 +225,14 @@ def test_killed_run_leaves_no_cache_entry_or_output(corpus, tmp_path) -> None:
 
 
 def test_max_hausdorff_fails_the_run(meshes, tmp_path) -> None:
-    args = [str(meshes["torus"]), "--cache-dir", str(tmp_path / "cache"), "-o", str(tmp_path / "o"), *FAST]
+    args = [
+        str(meshes["torus"]),
+        "--cache-dir",
+        str(tmp_path / "cache"),
+        "-o",
+        str(tmp_path / "o"),
+        *FAST,
+    ]
     code, stdout, _ = run([*args, "--max-hausdorff", "1e-9"])
     assert code == 1
     report = json.loads(stdout)
@@ -175,7 +244,9 @@ def test_max_hausdorff_fails_the_run(meshes, tmp_path) -> None:
 
 def test_csv_report(meshes, tmp_path) -> None:
     report = tmp_path / "r.csv"
-    code, stdout, _ = run([str(meshes["box"]), "--no-cache", "-o", str(tmp_path / "o"), "--report", str(report)])
+    code, stdout, _ = run(
+        [str(meshes["box"]), "--no-cache", "-o", str(tmp_path / "o"), "--report", str(report)]
+    )
     assert code == 0 and stdout == ""
     header, row = report.read_text().splitlines()
     assert header.startswith("path,body,status,message,parts,vertices_per_part,")
@@ -184,8 +255,20 @@ def test_csv_report(meshes, tmp_path) -> None:
 
 def test_vhacd_engine(meshes, tmp_path) -> None:
     pytest.importorskip("vhacdx")
-    code, stdout, _ = run([str(meshes["torus"]), "--no-cache", "-o", str(tmp_path / "o"), "--engine", "vhacd",
-                           "--max-hulls", "8", "--resolution", "20000"])
+    code, stdout, _ = run(
+        [
+            str(meshes["torus"]),
+            "--no-cache",
+            "-o",
+            str(tmp_path / "o"),
+            "--engine",
+            "vhacd",
+            "--max-hulls",
+            "8",
+            "--resolution",
+            "20000",
+        ]
+    )
     assert code == 0
     body = json.loads(stdout)["files"][0]["bodies"][0]
     assert body["engine"] == "vhacd" and 1 <= body["metrics"]["parts"] <= 8
@@ -193,8 +276,19 @@ def test_vhacd_engine(meshes, tmp_path) -> None:
 
 def test_corpus_torus_and_octocat(corpus, tmp_path) -> None:
     inputs = [corpus / "trimesh-models" / "torus.STL", corpus / "coacd-examples" / "Octocat-v2.obj"]
-    code, stdout, _ = run([*map(str, inputs), "--no-cache", "-o", str(tmp_path / "o"), "--preprocess", "off",
-                           "--jobs", "2", *FAST])
+    code, stdout, _ = run(
+        [
+            *map(str, inputs),
+            "--no-cache",
+            "-o",
+            str(tmp_path / "o"),
+            "--preprocess",
+            "off",
+            "--jobs",
+            "2",
+            *FAST,
+        ]
+    )
     assert code == 0
     for entry in json.loads(stdout)["files"]:
         (body,) = entry["bodies"]
@@ -205,20 +299,56 @@ def test_corpus_torus_and_octocat(corpus, tmp_path) -> None:
 
 
 def test_corpus_bottle_is_repaired(corpus, tmp_path) -> None:
-    code, stdout, _ = run([str(corpus / "coacd-examples" / "Bottle.obj"), "--no-cache", "-o", str(tmp_path / "o"),
-                           "--threshold", "0.3", "--resolution", "300", "-E", "preprocess_resolution=20",
-                           "-E", "mcts_iterations=10", "-E", "mcts_nodes=4", "-E", "mcts_max_depth=1"])
+    code, stdout, _ = run(
+        [
+            str(corpus / "coacd-examples" / "Bottle.obj"),
+            "--no-cache",
+            "-o",
+            str(tmp_path / "o"),
+            "--threshold",
+            "0.3",
+            "--resolution",
+            "300",
+            "-E",
+            "preprocess_resolution=20",
+            "-E",
+            "mcts_iterations=10",
+            "-E",
+            "mcts_nodes=4",
+            "-E",
+            "mcts_max_depth=1",
+        ]
+    )
     assert code == 0
     body = json.loads(stdout)["files"][0]["bodies"][0]
     assert body["repaired"] is True and body["params"]["preprocess_mode"] == "on"
-    assert body["notes"] == ["input is not a closed manifold: CoACD's preprocessing rebuilt it before decomposing"]
+    assert body["notes"] == [
+        "input is not a closed manifold: CoACD's preprocessing rebuilt it before decomposing"
+    ]
 
 
 @pytest.mark.slow
 def test_corpus_snowflake_thin_features(corpus, tmp_path) -> None:
-    code, stdout, _ = run([str(corpus / "coacd-examples" / "SnowFlake.obj"), "--no-cache", "-o", str(tmp_path / "o"),
-                           "--preprocess", "off", "--threshold", "0.02", "--resolution", "500",
-                           "-E", "mcts_iterations=20", "-E", "mcts_nodes=8", "-E", "mcts_max_depth=2"])
+    code, stdout, _ = run(
+        [
+            str(corpus / "coacd-examples" / "SnowFlake.obj"),
+            "--no-cache",
+            "-o",
+            str(tmp_path / "o"),
+            "--preprocess",
+            "off",
+            "--threshold",
+            "0.02",
+            "--resolution",
+            "500",
+            "-E",
+            "mcts_iterations=20",
+            "-E",
+            "mcts_nodes=8",
+            "-E",
+            "mcts_max_depth=2",
+        ]
+    )
     assert code == 0
     m = json.loads(stdout)["files"][0]["bodies"][0]["metrics"]
     assert m["parts"] >= 20
@@ -227,6 +357,7 @@ def test_corpus_snowflake_thin_features(corpus, tmp_path) -> None:
 
 
 # ---------------------------------------------------------------------------- errors
+
 
 def test_bad_inputs_exit_2_with_one_line(meshes, tmp_path) -> None:
     out = str(tmp_path / "o")
@@ -249,9 +380,18 @@ def test_bad_inputs_exit_2_with_one_line(meshes, tmp_path) -> None:
         (["--layout", "ucx", "--format", "glb"], "--layout ucx writes OBJ only: drop --format glb"),
         (["--no-cache", "--cache-dir", "x"], "--cache-dir and --no-cache exclude each other"),
         (["--engine", "vhacd", "--threshold", "0.1"], "--threshold applies to --engine coacd only"),
-        (["-E", "bogus=1"], "Invalid value for '--engine-option': unknown coacd option 'bogus': known options are"),
-        (["-E", "mcts_nodes"], "Invalid value for '--engine-option' / '-E': expected KEY=VALUE, got 'mcts_nodes'"),
-        (["--max-vertices", "3"], "Invalid value for '--max-vertices': 3 is not in the range x>=4."),
+        (
+            ["-E", "bogus=1"],
+            "Invalid value for '--engine-option': unknown coacd option 'bogus': known options are",
+        ),
+        (
+            ["-E", "mcts_nodes"],
+            "Invalid value for '--engine-option' / '-E': expected KEY=VALUE, got 'mcts_nodes'",
+        ),
+        (
+            ["--max-vertices", "3"],
+            "Invalid value for '--max-vertices': 3 is not in the range x>=4.",
+        ),
         (["--threshold", "0"], "Invalid value for '--threshold': 0.0 is not in the range 0<x<=1."),
     ],
 )
@@ -281,9 +421,14 @@ def test_clashing_output_names_are_refused(meshes, tmp_path) -> None:
     copy = tmp_path / "sub" / "box.obj"
     copy.parent.mkdir()
     copy.write_bytes(meshes["box"].read_bytes())
-    code, _, stderr = run([str(meshes["box"]), str(copy), str(clash), "-o", str(tmp_path / "o"), "--no-cache"])
+    code, _, stderr = run(
+        [str(meshes["box"]), str(copy), str(clash), "-o", str(tmp_path / "o"), "--no-cache"]
+    )
     assert code == 2
-    assert stderr == f"meshcol: error: {clash}: two bodies would write 'box_2' (also from {copy}): rename one\n"
+    assert (
+        stderr
+        == f"meshcol: error: {clash}: two bodies would write 'box_2' (also from {copy}): rename one\n"
+    )
 
 
 def test_obj_numbers_round_trip_exactly(meshes, tmp_path) -> None:
@@ -302,7 +447,10 @@ def test_worker_threads_share_the_cores(monkeypatch) -> None:
     monkeypatch.setattr(decompose_jobs.os, "cpu_count", lambda: 8)
     # Engines get 2 * cores / jobs sleeping threads (at most all cores); BLAS its plain share.
     assert decompose_jobs.worker_env(2) == {
-        "OMP_NUM_THREADS": "8", "OMP_WAIT_POLICY": "PASSIVE", "OPENBLAS_NUM_THREADS": "4"}
+        "OMP_NUM_THREADS": "8",
+        "OMP_WAIT_POLICY": "PASSIVE",
+        "OPENBLAS_NUM_THREADS": "4",
+    }
     assert decompose_jobs.worker_env(3)["OMP_NUM_THREADS"] == "6"
     assert decompose_jobs.worker_env(16)["OMP_NUM_THREADS"] == "1"
     assert decompose_jobs.worker_env(16)["OPENBLAS_NUM_THREADS"] == "1"
@@ -325,7 +473,11 @@ def test_worker_pool_starts_before_its_tasks() -> None:
         workers = list(pool._idle)
         assert len(workers) == 2 and all(w.process.is_alive() for w in workers)
         outcomes = sorted(pool.run(["a b", "c", "d/e"]), key=lambda o: o.index)
-        assert [(o.status, o.value) for o in outcomes] == [("ok", "a_b"), ("ok", "c"), ("ok", "d_e")]
+        assert [(o.status, o.value) for o in outcomes] == [
+            ("ok", "a_b"),
+            ("ok", "c"),
+            ("ok", "d_e"),
+        ]
         assert set(pool._idle) == set(workers)  # the early workers ran the tasks
     assert not any(w.process.is_alive() for w in workers)
     # A pool that never gets a task stops at once, even while its workers still load.
@@ -375,8 +527,19 @@ def test_worker_pool_reads_tasks_ahead_and_fails_fast() -> None:
 def test_decompose_bad_file_after_good_ones_fails_before_writing(meshes, tmp_path) -> None:
     for jobs in ("1", "2"):
         out = tmp_path / f"out{jobs}"
-        code, _, stderr = run([str(meshes["torus"]), str(meshes["l_shape"]), str(meshes["empty"]),
-                               "-o", str(out), "--no-cache", "--jobs", jobs, *FAST])
+        code, _, stderr = run(
+            [
+                str(meshes["torus"]),
+                str(meshes["l_shape"]),
+                str(meshes["empty"]),
+                "-o",
+                str(out),
+                "--no-cache",
+                "--jobs",
+                jobs,
+                *FAST,
+            ]
+        )
         assert code == 2
         assert stderr.startswith(f"meshcol: error: {meshes['empty']}: ")
         assert not out.exists()

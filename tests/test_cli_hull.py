@@ -63,7 +63,12 @@ def test_report_on_stdout_without_mesh_output(tmp_path: Path) -> None:
     report = json.loads(result.stdout)
     assert report["schema_version"] == 1 and report["command"] == "hull"
     assert report["tool"]["name"] == "meshcol"
-    assert report["settings"] == {"frame": "world", "max_vertices": None, "out_dir": None, "output": None}
+    assert report["settings"] == {
+        "frame": "world",
+        "max_vertices": None,
+        "out_dir": None,
+        "output": None,
+    }
     (body,) = report["bodies"]
     assert body["name"] == "cube" and body["source"] == str(cube)
     assert (body["input_vertices"], body["input_faces"]) == (8, 12)
@@ -90,7 +95,9 @@ def test_budget_writes_an_enclosing_mesh(corpus, tmp_path: Path) -> None:
     (row,) = json.loads((tmp_path / "r.json").read_text())["bodies"]
     assert row["hull_vertices"] == len(hull.vertices)
     assert row["added_volume"] == pytest.approx(row["hull_volume"] - row["exact_hull_volume"])
-    assert row["added_volume_fraction"] == pytest.approx(row["added_volume"] / row["exact_hull_volume"])
+    assert row["added_volume_fraction"] == pytest.approx(
+        row["added_volume"] / row["exact_hull_volume"]
+    )
     assert 0 < row["max_distance"] < 0.2
     assert row["output"] == str(out)
 
@@ -120,14 +127,22 @@ def test_several_bodies_in_one_obj(corpus, tmp_path: Path) -> None:
     out = tmp_path / "both.obj"
     result = run("hull", corpus / "trimesh-models" / "multibody.stl", "-o", out)
     assert result.exit_code == 0, result.output
-    objects = [line.split(" ", 1)[1] for line in out.read_text().splitlines() if line.startswith("o ")]
+    objects = [
+        line.split(" ", 1)[1] for line in out.read_text().splitlines() if line.startswith("o ")
+    ]
     assert sorted(objects) == ["multibody/bodyA", "multibody/bodyB"]
 
 
 def test_out_dir_writes_one_file_per_body(corpus, tmp_path: Path) -> None:
     out = tmp_path / "hulls"
-    result = run("hull", corpus / "trimesh-models" / "multibody.stl", "--out-dir", out,
-                 "--report", tmp_path / "r.csv")
+    result = run(
+        "hull",
+        corpus / "trimesh-models" / "multibody.stl",
+        "--out-dir",
+        out,
+        "--report",
+        tmp_path / "r.csv",
+    )
     assert result.exit_code == 0, result.output
     assert sorted(p.name for p in out.iterdir()) == ["multibody_bodyA.obj", "multibody_bodyB.obj"]
     lines = (tmp_path / "r.csv").read_text().splitlines()
@@ -141,7 +156,9 @@ def test_csv_report_on_stdout(tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     header, row = result.stdout.splitlines()
     cells = dict(zip(header.split(","), row.split(",")))
-    assert cells["name"] == "cube" and cells["hull_vertices"] == "4" and cells["max_vertices"] == "4"
+    assert (
+        cells["name"] == "cube" and cells["hull_vertices"] == "4" and cells["max_vertices"] == "4"
+    )
     assert float(cells["added_volume"]) > 0
 
 
@@ -149,7 +166,10 @@ def test_flat_mesh_warns_and_reports_flat(tmp_path: Path) -> None:
     flat = write(tmp_path, "flat.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n")
     result = run("hull", flat)
     assert result.exit_code == 0
-    assert result.stderr == f"meshcol: warning: {flat}: body 'flat' is flat: the hull is a 2-D polygon\n"
+    assert (
+        result.stderr
+        == f"meshcol: warning: {flat}: body 'flat' is flat: the hull is a 2-D polygon\n"
+    )
     (body,) = json.loads(result.stdout)["bodies"]
     assert body["flat"] is True and body["hull_volume"] == 0.0
     assert body["hull_area"] == pytest.approx(1.0)
@@ -160,8 +180,9 @@ def test_single_triangle_is_flat(corpus) -> None:
     source = corpus / "trimesh-models" / "notenoughindices.obj"
     result = run("hull", source)
     assert result.exit_code == 0
-    assert result.stderr == (f"meshcol: warning: {source}: body 'notenoughindices' is flat: "
-                             "the hull is a 2-D polygon\n")
+    assert result.stderr == (
+        f"meshcol: warning: {source}: body 'notenoughindices' is flat: the hull is a 2-D polygon\n"
+    )
     assert json.loads(result.stdout)["bodies"][0]["hull_faces"] == 1
 
 
@@ -190,7 +211,8 @@ def test_unknown_output_extension(tmp_path: Path) -> None:
     assert result.exit_code == 2
     assert result.stderr.endswith(
         "Error: Invalid value for '-o' / '--output': unknown mesh extension '.xyz' in 'hull.xyz' "
-        "(expected .obj, .stl, .ply, .off, .glb)\n")
+        "(expected .obj, .stl, .ply, .off, .glb)\n"
+    )
 
 
 def test_several_bodies_into_stl_is_refused(corpus, tmp_path: Path) -> None:
@@ -200,7 +222,8 @@ def test_several_bodies_into_stl_is_refused(corpus, tmp_path: Path) -> None:
     assert result.exit_code == 2
     assert result.stderr.endswith(
         f"Error: -o {out / 'h.stl'}: 2 bodies need a file that holds several meshes "
-        "(.obj, .glb) or --out-dir\n")
+        "(.obj, .glb) or --out-dir\n"
+    )
     assert list(out.iterdir()) == []
 
 
@@ -221,15 +244,26 @@ def test_no_input_is_a_usage_error() -> None:
 # bad input: exit 2, one line naming the file, no traceback, no output left behind
 
 BAD_MESHES = {
-    "nan.obj": ("v 0 0 0\nv 1 nan 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\n",
-                "mesh has non-finite vertex coordinates"),
-    "inf.obj": ("v 0 0 0\nv 1 inf 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\n",
-                "mesh has non-finite vertex coordinates"),
-    "line.obj": ("v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n",
-                 "body 'line': all vertices are collinear: there is no meaningful hull"),
-    "point.obj": ("v 1 1 1\nv 1 1 1\nv 1 1 1\nf 1 2 3\n",
-                  "body 'point': all vertices coincide: there is no meaningful hull"),
-    "unknown.xyz": ("x\n", "unknown mesh file extension '.xyz' (expected .obj, .stl, .ply, .off, .glb, .gltf)"),
+    "nan.obj": (
+        "v 0 0 0\nv 1 nan 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\n",
+        "mesh has non-finite vertex coordinates",
+    ),
+    "inf.obj": (
+        "v 0 0 0\nv 1 inf 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\n",
+        "mesh has non-finite vertex coordinates",
+    ),
+    "line.obj": (
+        "v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n",
+        "body 'line': all vertices are collinear: there is no meaningful hull",
+    ),
+    "point.obj": (
+        "v 1 1 1\nv 1 1 1\nv 1 1 1\nf 1 2 3\n",
+        "body 'point': all vertices coincide: there is no meaningful hull",
+    ),
+    "unknown.xyz": (
+        "x\n",
+        "unknown mesh file extension '.xyz' (expected .obj, .stl, .ply, .off, .glb, .gltf)",
+    ),
 }
 
 
@@ -270,9 +304,11 @@ def test_unreadable_inputs(tmp_path: Path) -> None:
     corrupt.write_bytes(bytes(range(256)) * 2)
     result = run("hull", corrupt, "-o", out / "hull.obj")
     assert_clean_failure(
-        result, corrupt,
+        result,
+        corrupt,
         "cannot parse STL file: neither binary STL (size does not match the triangle count) nor ASCII text",
-        out)
+        out,
+    )
 
 
 @pytest.mark.parametrize("name", ["empty.obj", "empty.stl"])
@@ -307,12 +343,16 @@ def test_broken_manifest_maps_the_scene_error(tmp_path: Path, name: str) -> None
 
 def test_debug_shows_a_traceback(tmp_path: Path) -> None:
     missing = tmp_path / "nope.obj"
-    quiet = subprocess.run([sys.executable, "-m", "meshcol", "hull", str(missing)],
-                           capture_output=True, text=True)
+    quiet = subprocess.run(
+        [sys.executable, "-m", "meshcol", "hull", str(missing)], capture_output=True, text=True
+    )
     assert quiet.returncode == 2
     assert quiet.stderr == f"meshcol: error: {missing}: file not found\n"
-    loud = subprocess.run([sys.executable, "-m", "meshcol", "--debug", "hull", str(missing)],
-                          capture_output=True, text=True)
+    loud = subprocess.run(
+        [sys.executable, "-m", "meshcol", "--debug", "hull", str(missing)],
+        capture_output=True,
+        text=True,
+    )
     assert loud.returncode != 0
     assert "Traceback (most recent call last)" in loud.stderr
     assert "InputFileError" in loud.stderr
@@ -328,7 +368,10 @@ def test_library_hull_returns_the_report_and_writes_meshes(tmp_path: Path) -> No
     assert report.to_dict()["command"] == "hull"
     assert [p.name for p in (tmp_path / "hulls").iterdir()] == ["cube.obj"]
     assert out_dir_paths("d", ["a/b", "A/B", "é"]) == [
-        os.path.join("d", "a_b.obj"), os.path.join("d", "A_B-2.obj"), os.path.join("d", "body.obj")]
+        os.path.join("d", "a_b.obj"),
+        os.path.join("d", "A_B-2.obj"),
+        os.path.join("d", "body.obj"),
+    ]
     with pytest.raises(ValueError, match="either output or out_dir"):
         hull([cube], output=tmp_path / "a.obj", out_dir=tmp_path / "d")
     two = write(tmp_path, "two.obj", CUBE_OBJ)

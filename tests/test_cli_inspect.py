@@ -51,10 +51,19 @@ def test_report_file_prints_a_table(corpus, tmp_path: Path) -> None:
 def test_fail_on_exits_one_after_writing_the_report(corpus, tmp_path: Path) -> None:
     teapot = corpus / "trimesh-models" / "teapot.stl"
     cube = corpus / "trimesh-models" / "unit_cube.STL"
-    result = run("inspect", cube, teapot, "--fail-on", "not-watertight,duplicate-faces",
-                 "--report", tmp_path / "r.json")
+    result = run(
+        "inspect",
+        cube,
+        teapot,
+        "--fail-on",
+        "not-watertight,duplicate-faces",
+        "--report",
+        tmp_path / "r.json",
+    )
     assert result.exit_code == 1
-    assert result.stderr.splitlines()[-1] == f"meshcol: fail: {teapot}: body 'teapot': not-watertight"
+    assert (
+        result.stderr.splitlines()[-1] == f"meshcol: fail: {teapot}: body 'teapot': not-watertight"
+    )
     report = json.loads((tmp_path / "r.json").read_text())
     assert report["failed"] is True
     assert [b["failed_rules"] for b in report["bodies"]] == [[], ["not-watertight"]]
@@ -75,12 +84,19 @@ def test_unknown_rule_is_a_usage_error(tmp_path: Path) -> None:
     assert result.exit_code == 2
     assert result.stderr.endswith(
         "Error: Invalid value for '--fail-on': unknown rule 'leaky' (valid rules: all, "
-        + ", ".join(RULES) + ")\n")
+        + ", ".join(RULES)
+        + ")\n"
+    )
 
 
 def test_single_triangle_and_soup_are_reported(corpus) -> None:
-    result = run("inspect", corpus / "trimesh-models" / "notenoughindices.obj",
-                 corpus / "trimesh-models" / "soup.stl", "--fail-on", "not-watertight")
+    result = run(
+        "inspect",
+        corpus / "trimesh-models" / "notenoughindices.obj",
+        corpus / "trimesh-models" / "soup.stl",
+        "--fail-on",
+        "not-watertight",
+    )
     assert result.exit_code == 1
     triangle, soup = json.loads(result.stdout)["bodies"]
     assert triangle["faces"] == 1 and triangle["boundary_edges"] == 3
@@ -88,10 +104,14 @@ def test_single_triangle_and_soup_are_reported(corpus) -> None:
 
 
 def test_manifest_units_are_reported(tmp_path: Path) -> None:
-    chair = "".join(line.replace(" 1", " 400") if line.startswith("v ") else line
-                    for line in CUBE_OBJ.splitlines(keepends=True))
+    chair = "".join(
+        line.replace(" 1", " 400") if line.startswith("v ") else line
+        for line in CUBE_OBJ.splitlines(keepends=True)
+    )
     write(tmp_path, "cube.obj", chair)
-    manifest = write(tmp_path, "scene.json", '{"units": "mm", "bodies": [{"name": "a", "mesh": "cube.obj"}]}')
+    manifest = write(
+        tmp_path, "scene.json", '{"units": "mm", "bodies": [{"name": "a", "mesh": "cube.obj"}]}'
+    )
     report = json.loads(run("inspect", manifest, "--fail-on", "suspect-units").stdout)
     assert report["units"] == "mm"
     (body,) = report["bodies"]
@@ -117,10 +137,21 @@ def test_broken_manifest(tmp_path: Path, name: str) -> None:
 @pytest.mark.parametrize(
     ("name", "text", "message"),
     [
-        ("nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n", "mesh has non-finite vertex coordinates"),
-        ("inf.obj", "v 0 0 0\nv 1 -inf 0\nv 0 1 0\nf 1 2 3\n", "mesh has non-finite vertex coordinates"),
-        ("mesh.dae", "<xml/>\n",
-         "unknown mesh file extension '.dae' (expected .obj, .stl, .ply, .off, .glb, .gltf)"),
+        (
+            "nan.obj",
+            "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n",
+            "mesh has non-finite vertex coordinates",
+        ),
+        (
+            "inf.obj",
+            "v 0 0 0\nv 1 -inf 0\nv 0 1 0\nf 1 2 3\n",
+            "mesh has non-finite vertex coordinates",
+        ),
+        (
+            "mesh.dae",
+            "<xml/>\n",
+            "unknown mesh file extension '.dae' (expected .obj, .stl, .ply, .off, .glb, .gltf)",
+        ),
     ],
 )
 def test_bad_mesh(tmp_path: Path, name: str, text: str, message: str) -> None:
@@ -134,8 +165,12 @@ def test_bad_mesh(tmp_path: Path, name: str, text: str, message: str) -> None:
 @pytest.mark.parametrize("name", ["empty.obj", "empty.stl"])
 def test_empty_and_missing(corpus, tmp_path: Path, name: str) -> None:
     source = corpus / "trimesh-models" / name
-    assert_clean_failure(run("inspect", source, "--report", tmp_path / "r.json"), source,
-                         "mesh has no faces", tmp_path)
+    assert_clean_failure(
+        run("inspect", source, "--report", tmp_path / "r.json"),
+        source,
+        "mesh has no faces",
+        tmp_path,
+    )
     missing = tmp_path / "missing.obj"
     assert_clean_failure(run("inspect", missing), missing, "file not found", tmp_path)
 
@@ -144,10 +179,26 @@ def test_empty_and_missing(corpus, tmp_path: Path, name: str) -> None:
 # the whole corpus, once per session: every loadable mesh through both commands
 
 CLOSED = [
-    "fandisk.obj", "featuretype.STL", "torus.STL", "octagonal_pocket.stl", "plate_holes.STL",
-    "1002_tray_bottom.STL", "idler_riser.STL", "angle_block.STL", "busted.STL", "round.stl",
-    "ballA.off", "ballB.off", "unit_cube.STL", "unit_sphere.STL", "cylinder.stl", "tet.ply",
-    "7_8ths_cube.stl", "counter.unitsmm.STL", "Octocat-v2.obj", "SnowFlake.obj",
+    "fandisk.obj",
+    "featuretype.STL",
+    "torus.STL",
+    "octagonal_pocket.stl",
+    "plate_holes.STL",
+    "1002_tray_bottom.STL",
+    "idler_riser.STL",
+    "angle_block.STL",
+    "busted.STL",
+    "round.stl",
+    "ballA.off",
+    "ballB.off",
+    "unit_cube.STL",
+    "unit_sphere.STL",
+    "cylinder.stl",
+    "tet.ply",
+    "7_8ths_cube.stl",
+    "counter.unitsmm.STL",
+    "Octocat-v2.obj",
+    "SnowFlake.obj",
 ]
 
 
@@ -176,8 +227,16 @@ def corpus_run(tmp_path_factory):
     bodies = list(load_inputs(files).bodies)
     out = tmp_path_factory.mktemp("corpus")
     inspect = run("inspect", *files, "--report", out / "inspect.json")
-    hull = run("hull", *files, "--max-vertices", "64", "--out-dir", out / "hulls",
-               "--report", out / "hull.json")
+    hull = run(
+        "hull",
+        *files,
+        "--max-vertices",
+        "64",
+        "--out-dir",
+        out / "hulls",
+        "--report",
+        out / "hull.json",
+    )
     return {
         "rejected": rejected,
         "bodies": bodies,

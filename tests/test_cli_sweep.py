@@ -26,15 +26,15 @@ def pose(position=(0.0, 0.0, 0.0), angle_z=0.0) -> np.ndarray:
 
 
 def mesh_body(name, mesh, start, end=None) -> Body:
-    return Body(name, f"{name}.obj", np.asarray(mesh.vertices), np.asarray(mesh.faces),
-                start, end)
+    return Body(name, f"{name}.obj", np.asarray(mesh.vertices), np.asarray(mesh.faces), start, end)
 
 
 def bullet_and_wall(end_x=1.0) -> Scene:
     """A 2 cm bullet crossing a 2 cm wall at x = 0 in one step (as samples/bullet)."""
     wall = mesh_body("wall", trimesh.creation.box((0.02, 2.0, 2.0)), pose((0, 0, 1)))
-    bullet = mesh_body("bullet", trimesh.creation.icosphere(2, radius=0.01), pose((-1, 0, 1)),
-                       pose((end_x, 0, 1)))
+    bullet = mesh_body(
+        "bullet", trimesh.creation.icosphere(2, radius=0.01), pose((-1, 0, 1)), pose((end_x, 0, 1))
+    )
     return Scene((wall, bullet), units="m", duration=0.01)
 
 
@@ -72,33 +72,64 @@ def test_mesh_mode_sweeps_triangles():
 
 def test_mesh_mode_differs_from_hull_for_a_concave_body():
     # A ball passing through the opening of a U: the hull is hit, the mesh is not.
-    u = trimesh.util.concatenate([
-        trimesh.creation.box((0.2, 2, 2)).apply_translation((-0.9, 0, 0)),
-        trimesh.creation.box((0.2, 2, 2)).apply_translation((0.9, 0, 0)),
-        trimesh.creation.box((2, 2, 0.2)).apply_translation((0, 0, -0.9)),
-    ])
-    scene = Scene((mesh_body("u", u, pose()),
-                   mesh_body("ball", trimesh.creation.icosphere(2, radius=0.3),
-                             pose((0, -3, 0.2)), pose((0, 3, 0.2)))))
+    u = trimesh.util.concatenate(
+        [
+            trimesh.creation.box((0.2, 2, 2)).apply_translation((-0.9, 0, 0)),
+            trimesh.creation.box((0.2, 2, 2)).apply_translation((0.9, 0, 0)),
+            trimesh.creation.box((2, 2, 0.2)).apply_translation((0, 0, -0.9)),
+        ]
+    )
+    scene = Scene(
+        (
+            mesh_body("u", u, pose()),
+            mesh_body(
+                "ball",
+                trimesh.creation.icosphere(2, radius=0.3),
+                pose((0, -3, 0.2)),
+                pose((0, 3, 0.2)),
+            ),
+        )
+    )
     assert meshcol.sweep(scene, collider="hull").hits[0].status == TimeOfImpactStatus.HIT
     assert meshcol.sweep(scene, collider="mesh").hits == ()
 
 
 def test_bar_rotating_past_box_in_a_scene():
-    bar = Body("bar", None, np.zeros((0, 3)), np.zeros((0, 3), np.int64), pose(),
-               pose(angle_z=np.pi / 2), primitive=Primitive("box", size=(4.0, 0.2, 0.2)))
-    near = Body("near", None, np.zeros((0, 3)), np.zeros((0, 3), np.int64),
-                pose((1.5, 1.5, 0)), primitive=Primitive("box", size=(0.5, 0.5, 0.5)))
-    far = Body("far", None, np.zeros((0, 3)), np.zeros((0, 3), np.int64),
-               pose((2.05, 2.05, 0)), primitive=Primitive("box", size=(0.5, 0.5, 0.5)))
+    bar = Body(
+        "bar",
+        None,
+        np.zeros((0, 3)),
+        np.zeros((0, 3), np.int64),
+        pose(),
+        pose(angle_z=np.pi / 2),
+        primitive=Primitive("box", size=(4.0, 0.2, 0.2)),
+    )
+    near = Body(
+        "near",
+        None,
+        np.zeros((0, 3)),
+        np.zeros((0, 3), np.int64),
+        pose((1.5, 1.5, 0)),
+        primitive=Primitive("box", size=(0.5, 0.5, 0.5)),
+    )
+    far = Body(
+        "far",
+        None,
+        np.zeros((0, 3)),
+        np.zeros((0, 3), np.int64),
+        pose((2.05, 2.05, 0)),
+        primitive=Primitive("box", size=(0.5, 0.5, 0.5)),
+    )
     report = meshcol.sweep(Scene((bar, near, far)), tolerance=1e-7)
     assert [(h.a, h.b, h.status, h.tunnelled) for h in report.hits] == [
-        ("bar", "near", TimeOfImpactStatus.HIT, True)]
+        ("bar", "near", TimeOfImpactStatus.HIT, True)
+    ]
     hit = report.hits[0]
     expected = interpolate_pose(pose(), pose(angle_z=np.pi / 2), hit.time_of_impact)
     np.testing.assert_allclose(hit.pose_a, expected, atol=1e-15)
-    d = meshcol.distance(meshcol.Box((4.0, 0.2, 0.2)), meshcol.Box((0.5, 0.5, 0.5)),
-                         hit.pose_a, hit.pose_b).distance
+    d = meshcol.distance(
+        meshcol.Box((4.0, 0.2, 0.2)), meshcol.Box((0.5, 0.5, 0.5)), hit.pose_a, hit.pose_b
+    ).distance
     assert d <= 1e-7
     # The far box is a broad-phase candidate (bounds overlap) that the narrow phase clears.
     assert report.candidate_pairs == 2
@@ -138,10 +169,16 @@ def _write_manifest(tmp_path, bodies, **extra):
 
 
 BAR_SCENE = [
-    {"name": "bar", "primitive": {"type": "box", "size": [4, 0.2, 0.2]},
-     "angular_velocity": [0, 0, 1.5707963267948966]},
-    {"name": "block", "primitive": {"type": "box", "size": [0.5, 0.5, 0.5]},
-     "position": [1.5, 1.5, 0]},
+    {
+        "name": "bar",
+        "primitive": {"type": "box", "size": [4, 0.2, 0.2]},
+        "angular_velocity": [0, 0, 1.5707963267948966],
+    },
+    {
+        "name": "block",
+        "primitive": {"type": "box", "size": [0.5, 0.5, 0.5]},
+        "position": [1.5, 1.5, 0],
+    },
 ]
 
 
@@ -153,7 +190,12 @@ def test_cli_rotating_bar_hits_and_exits_1(tmp_path):
     assert report["command"] == "sweep" and report["schema_version"] == 1
     assert report["settings"]["tolerance"] == 1e-7 and report["failed"] is True
     (pair,) = report["pairs"]
-    assert (pair["a"], pair["b"], pair["status"], pair["tunnelled"]) == ("bar", "block", "HIT", True)
+    assert (pair["a"], pair["b"], pair["status"], pair["tunnelled"]) == (
+        "bar",
+        "block",
+        "HIT",
+        True,
+    )
     assert pair["time"] == pytest.approx(2.0 * pair["time_of_impact"])
     assert report["summary"]["hits"] == 1 and report["units"] == "m"
     assert f"meshcol: fail: {path}: 'bar' and 'block': HIT at time of impact" in result.stderr
@@ -162,11 +204,14 @@ def test_cli_rotating_bar_hits_and_exits_1(tmp_path):
 def test_cli_fail_on_none_and_csv_report(tmp_path):
     path = _write_manifest(tmp_path, BAR_SCENE, duration=2.0)
     out = tmp_path / "sweep.csv"
-    result = CliRunner().invoke(main, ["sweep", str(path), "--report", str(out),
-                                       "--fail-on", "none", "--threads", "1"])
+    result = CliRunner().invoke(
+        main, ["sweep", str(path), "--report", str(out), "--fail-on", "none", "--threads", "1"]
+    )
     assert result.exit_code == 0, result.output
     lines = out.read_text().splitlines()
-    assert lines[0] == "a,b,status,time_of_impact,time,point,normal,tunnelled,pose_a,pose_b,iterations"
+    assert (
+        lines[0] == "a,b,status,time_of_impact,time,point,normal,tunnelled,pose_a,pose_b,iterations"
+    )
     assert lines[1].startswith("bar,block,HIT,") and len(lines) == 2
     assert "1 hits (1 tunnelled)" in result.stderr
     assert not list(tmp_path.glob(".meshcol-*"))  # no temporary left behind
@@ -176,8 +221,10 @@ def test_cli_manifest_without_motion_exits_2(tmp_path):
     path = _write_manifest(tmp_path, [BAR_SCENE[1]])
     result = CliRunner().invoke(main, ["sweep", str(path)])
     assert result.exit_code == 2
-    assert result.stderr == (f"meshcol: error: {path}: no body has an end pose or a velocity: "
-                             "nothing moves, nothing to sweep\n")
+    assert result.stderr == (
+        f"meshcol: error: {path}: no body has an end pose or a velocity: "
+        "nothing moves, nothing to sweep\n"
+    )
 
 
 def test_cli_bad_tolerance_is_a_usage_error(tmp_path):
@@ -204,14 +251,38 @@ def test_sweep_decomposed_uses_the_decompose_cache(tmp_path, samples) -> None:
     cache = tmp_path / "cache"
     runner = CliRunner()
     out = tmp_path / "parts"
-    made = runner.invoke(main, ["decompose", str(samples / "bullet" / "wall.obj"), "-o", str(out),
-                                "--cache-dir", str(cache), "--report", str(tmp_path / "d.json")])
+    made = runner.invoke(
+        main,
+        [
+            "decompose",
+            str(samples / "bullet" / "wall.obj"),
+            "-o",
+            str(out),
+            "--cache-dir",
+            str(cache),
+            "--report",
+            str(tmp_path / "d.json"),
+        ],
+    )
     assert made.exit_code == 0, made.output
-    result = runner.invoke(main, ["sweep", str(scene), "--shape", "decomposed", "--cache-dir", str(cache),
-                                  "--report", str(tmp_path / "s.json")])
+    result = runner.invoke(
+        main,
+        [
+            "sweep",
+            str(scene),
+            "--shape",
+            "decomposed",
+            "--cache-dir",
+            str(cache),
+            "--report",
+            str(tmp_path / "s.json"),
+        ],
+    )
     assert result.exit_code == 1, result.output
     data = json.loads((tmp_path / "s.json").read_text())
     [hit] = data["pairs"]
     assert hit["status"] == "HIT" and hit["tunnelled"]
     hull = json.loads(runner.invoke(main, ["sweep", str(scene), "--report", "-"]).stdout)
-    assert hit["time_of_impact"] == pytest.approx(hull["pairs"][0]["time_of_impact"], abs=1e-6)  # convex wall: same parts
+    assert hit["time_of_impact"] == pytest.approx(
+        hull["pairs"][0]["time_of_impact"], abs=1e-6
+    )  # convex wall: same parts

@@ -33,7 +33,9 @@ def assert_encloses(points: np.ndarray, result: HullResult, budget: int) -> None
     assert outside_distance(points, result.vertices) <= 1e-9 * scale
     # faces wound outward: the divergence-theorem volume is the (positive) hull volume
     assert signed_volume(result.vertices, result.faces) == pytest.approx(result.volume, rel=1e-9)
-    assert result.added_volume == pytest.approx(result.volume - result.exact_volume, abs=1e-12 * scale**3)
+    assert result.added_volume == pytest.approx(
+        result.volume - result.exact_volume, abs=1e-12 * scale**3
+    )
     assert result.added_volume >= 0.0
     assert result.max_distance >= 0.0
 
@@ -122,7 +124,8 @@ def test_flat_budget_encloses_in_the_plane() -> None:
     ring = (result.vertices - [3.0, -1.0, 2.0]) @ rotation[:, :2]
     edges = np.roll(ring, -1, axis=0) - ring
     cross = edges[:, 0][:, None] * (local[:, 1] - ring[:, 1][:, None]) - edges[:, 1][:, None] * (
-        local[:, 0] - ring[:, 0][:, None])
+        local[:, 0] - ring[:, 0][:, None]
+    )
     orientation = np.sign(cross.sum())
     assert (cross * orientation >= -1e-12).all()
     # a circumscribed octagon of a unit circle reaches 1/cos(pi/8) at its corners
@@ -134,11 +137,18 @@ def test_flat_budget_encloses_in_the_plane() -> None:
     [
         (np.zeros((0, 3)), "mesh has no vertices: there is no hull"),
         (np.ones((5, 3)), "all vertices coincide: there is no meaningful hull"),
-        (np.outer(np.arange(5.0), [1, 2, 3]), "all vertices are collinear: there is no meaningful hull"),
-        (np.array([[0, 0, 0], [1, np.nan, 0], [0, 1, 0], [0, 0, 1]]),
-         "vertices contain NaN or infinite coordinates"),
-        (np.array([[0, 0, 0], [1, np.inf, 0], [0, 1, 0], [0, 0, 1]]),
-         "vertices contain NaN or infinite coordinates"),
+        (
+            np.outer(np.arange(5.0), [1, 2, 3]),
+            "all vertices are collinear: there is no meaningful hull",
+        ),
+        (
+            np.array([[0, 0, 0], [1, np.nan, 0], [0, 1, 0], [0, 0, 1]]),
+            "vertices contain NaN or infinite coordinates",
+        ),
+        (
+            np.array([[0, 0, 0], [1, np.inf, 0], [0, 1, 0], [0, 0, 1]]),
+            "vertices contain NaN or infinite coordinates",
+        ),
     ],
 )
 def test_unusable_points_raise(points: np.ndarray, message: str) -> None:
@@ -202,8 +212,11 @@ def test_budget_encloses_corpus_meshes(corpus, name: str, budget: int) -> None:
 
 @settings(max_examples=40)
 @given(
-    arrays(np.float64, st.tuples(st.integers(5, 60), st.just(3)),
-           elements=st.floats(-100, 100, allow_nan=False, width=32)),
+    arrays(
+        np.float64,
+        st.tuples(st.integers(5, 60), st.just(3)),
+        elements=st.floats(-100, 100, allow_nan=False, width=32),
+    ),
     st.sampled_from([4, 5, 8, 16, 64]),
 )
 def test_budget_encloses_random_clouds(points: np.ndarray, budget: int) -> None:

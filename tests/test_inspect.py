@@ -14,25 +14,40 @@ from meshcol.types import Body
 
 CUBE_VERTICES = np.array([[x, y, z] for x in (0.0, 1.0) for y in (0.0, 1.0) for z in (0.0, 1.0)])
 # outward-wound triangles of the unit cube (vertex index = 4x + 2y + z)
-CUBE_FACES = np.array([
-    [0, 1, 3], [0, 3, 2],  # x = 0
-    [4, 6, 7], [4, 7, 5],  # x = 1
-    [0, 4, 5], [0, 5, 1],  # y = 0
-    [2, 3, 7], [2, 7, 6],  # y = 1
-    [0, 2, 6], [0, 6, 4],  # z = 0
-    [1, 5, 7], [1, 7, 3],  # z = 1
-])
+CUBE_FACES = np.array(
+    [
+        [0, 1, 3],
+        [0, 3, 2],  # x = 0
+        [4, 6, 7],
+        [4, 7, 5],  # x = 1
+        [0, 4, 5],
+        [0, 5, 1],  # y = 0
+        [2, 3, 7],
+        [2, 7, 6],  # y = 1
+        [0, 2, 6],
+        [0, 6, 4],  # z = 0
+        [1, 5, 7],
+        [1, 7, 3],  # z = 1
+    ]
+)
 
 
 def body(vertices, faces, name="b", pose=None) -> Body:
     kwargs = {} if pose is None else {"pose": pose}
-    return Body(name=name, source="test.obj", vertices=np.asarray(vertices, float),
-                faces=np.asarray(faces, np.int64), **kwargs)
+    return Body(
+        name=name,
+        source="test.obj",
+        vertices=np.asarray(vertices, float),
+        faces=np.asarray(faces, np.int64),
+        **kwargs,
+    )
 
 
 def two_cubes(offset) -> tuple[np.ndarray, np.ndarray]:
-    return (np.vstack([CUBE_VERTICES, CUBE_VERTICES + offset]),
-            np.vstack([CUBE_FACES, CUBE_FACES + 8]))
+    return (
+        np.vstack([CUBE_VERTICES, CUBE_VERTICES + offset]),
+        np.vstack([CUBE_FACES, CUBE_FACES + 8]),
+    )
 
 
 def test_unit_cube_is_clean() -> None:
@@ -41,7 +56,12 @@ def test_unit_cube_is_clean() -> None:
     assert r.watertight and r.winding_consistent
     assert r.volume == pytest.approx(1.0, abs=1e-15)
     assert r.bounds == [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]] and r.size == [1.0, 1.0, 1.0]
-    assert (r.degenerate_faces, r.duplicate_faces, r.boundary_edges, r.non_manifold_edges) == (0, 0, 0, 0)
+    assert (r.degenerate_faces, r.duplicate_faces, r.boundary_edges, r.non_manifold_edges) == (
+        0,
+        0,
+        0,
+        0,
+    )
     assert not r.self_intersecting and r.self_intersecting_pairs == 0
     assert r.manifold_status == "NoError"
     assert r.units_guess == "m"
@@ -156,15 +176,25 @@ def test_bounds_are_in_the_world_frame() -> None:
 
 @pytest.mark.parametrize(
     ("extent", "units"),
-    [(1.8, "m"), (0.02, "m"), (99.0, "m"), (400.0, "mm"), (9000.0, "mm"), (50000.0, "unknown"),
-     (0.005, "unknown")],
+    [
+        (1.8, "m"),
+        (0.02, "m"),
+        (99.0, "m"),
+        (400.0, "mm"),
+        (9000.0, "mm"),
+        (50000.0, "unknown"),
+        (0.005, "unknown"),
+    ],
 )
 def test_units_guess(extent: float, units: str) -> None:
     assert guess_units(extent)[0] == units
 
 
 def test_units_reason_and_declared_units() -> None:
-    assert guess_units(400.0) == ("mm", "largest extent 400 units: 0.4 m in millimetres, over 100 m in metres")
+    assert guess_units(400.0) == (
+        "mm",
+        "largest extent 400 units: 0.4 m in millimetres, over 100 m in metres",
+    )
     chair = CUBE_VERTICES * [450.0, 500.0, 900.0]
     assert inspect_body(body(chair, CUBE_FACES)).findings == ["suspect-units"]
     assert inspect_body(body(chair, CUBE_FACES), declared_units="mm").findings == []
@@ -194,8 +224,18 @@ def test_no_faces_and_non_finite_raise() -> None:
 
 @pytest.mark.parametrize(
     "name",
-    ["unit_sphere.STL", "torus.STL", "fandisk.obj", "featuretype.STL", "idler_riser.STL",
-     "angle_block.STL", "ballA.off", "round.stl", "cylinder.stl", "busted.STL"],
+    [
+        "unit_sphere.STL",
+        "torus.STL",
+        "fandisk.obj",
+        "featuretype.STL",
+        "idler_riser.STL",
+        "angle_block.STL",
+        "ballA.off",
+        "round.stl",
+        "cylinder.stl",
+        "busted.STL",
+    ],
 )
 def test_closed_corpus_meshes_are_clean(corpus, name: str) -> None:
     from meshcol.io.mesh_read import load_mesh
@@ -224,13 +264,17 @@ def test_crossings_are_invariant_under_rigid_motion_and_face_order(seed: int) ->
     rng = np.random.default_rng(seed)
     vertices = rng.uniform(0, 10, size=(60, 3))
     faces = rng.integers(0, 60, size=(25, 3))
-    faces = faces[(faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])]
+    faces = faces[
+        (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])
+    ]
     rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
     moved = vertices @ rotation.T + rng.normal(size=3) * 100
     order = rng.permutation(len(faces))
     base = {tuple(p) for p in self_intersecting_pairs(vertices, faces).tolist()}
-    shuffled = {tuple(sorted((int(order[i]), int(order[j]))))
-                for i, j in self_intersecting_pairs(moved, faces[order]).tolist()}
+    shuffled = {
+        tuple(sorted((int(order[i]), int(order[j]))))
+        for i, j in self_intersecting_pairs(moved, faces[order]).tolist()
+    }
     assert base == shuffled
 
 

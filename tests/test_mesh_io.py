@@ -198,7 +198,11 @@ def world_points(bodies) -> np.ndarray:
 def test_nested_glb_world_vertices_match_trimesh(corpus):
     path = corpus / "trimesh-models" / "nested.glb"
     bodies = load_mesh(path)
-    assert [b.name for b in bodies] == ["nested/block03", "nested/block02", "nested/block01"]  # file order
+    assert [b.name for b in bodies] == [
+        "nested/block03",
+        "nested/block02",
+        "nested/block01",
+    ]  # file order
     assert all(is_rigid(b.pose) for b in bodies)
     reference = trimesh.load_scene(path, process=False).to_mesh()  # transforms composed
     expected = np.unique(np.round(np.asarray(reference.vertices), 9), axis=0)
@@ -256,8 +260,9 @@ def test_mirror_and_shear_are_baked_and_winding_kept_outward(tmp_path):
         assert is_rigid(body.pose)
         expected = np.asarray(box.vertices) @ matrix[:3, :3].T + matrix[:3, 3]
         got = body.world_vertices()
-        assert np.allclose(np.unique(np.round(got, 9), axis=0),
-                           np.unique(np.round(expected, 9), axis=0))
+        assert np.allclose(
+            np.unique(np.round(got, 9), axis=0), np.unique(np.round(expected, 9), axis=0)
+        )
         assert is_closed(body.faces)
         volume = signed_volume(body.vertices, body.faces)
         assert volume == pytest.approx(6.0 * abs(np.linalg.det(matrix[:3, :3])), rel=1e-9)
@@ -269,7 +274,9 @@ def test_gltf_with_external_buffer(tmp_path):
     scene = trimesh.Scene()
     scene.add_geometry(trimesh.creation.box(extents=(1, 1, 1)), geom_name="box", node_name="b1")
     scene.add_geometry(
-        trimesh.creation.icosphere(subdivisions=1), geom_name="ball", node_name="b2",
+        trimesh.creation.icosphere(subdivisions=1),
+        geom_name="ball",
+        node_name="b2",
         transform=trimesh.transformations.translation_matrix([3, 0, 0]),
     )
     for name, blob in trimesh.exchange.gltf.export_gltf(scene).items():
@@ -318,8 +325,13 @@ def test_textured_files_load_without_pillow(corpus, tmp_path):
         "scene": 0,
         "scenes": [{"nodes": [0]}],
         "nodes": [{"mesh": 0, "name": "quad"}],
-        "meshes": [{"primitives": [{
-            "attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
+        "meshes": [
+            {
+                "primitives": [
+                    {"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}
+                ]
+            }
+        ],
         "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
         "textures": [{"source": 0}],
         "images": [{"uri": "data:image/png;base64," + base64.b64encode(b"\x89PNGjunk").decode()}],
@@ -330,16 +342,25 @@ def test_textured_files_load_without_pillow(corpus, tmp_path):
             {"buffer": 0, "byteOffset": 80, "byteLength": 12},
         ],
         "accessors": [
-            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
-             "min": [0, 0, 0], "max": [1, 1, 0]},
+            {
+                "bufferView": 0,
+                "componentType": 5126,
+                "count": 4,
+                "type": "VEC3",
+                "min": [0, 0, 0],
+                "max": [1, 1, 0],
+            },
             {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
             {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"},
         ],
     }
     textured = tmp_path / "textured.gltf"
     textured.write_text(json.dumps(gltf))
-    files = [corpus / "trimesh-models" / "wallhole.obj", corpus / "trimesh-models" / "plane.ply",
-             textured]
+    files = [
+        corpus / "trimesh-models" / "wallhole.obj",
+        corpus / "trimesh-models" / "plane.ply",
+        textured,
+    ]
     script = textwrap.dedent("""
         import sys
         sys.modules["PIL"] = None  # any `import PIL...` now raises ImportError
@@ -349,8 +370,12 @@ def test_textured_files_load_without_pillow(corpus, tmp_path):
             print(body.name, len(body.vertices), len(body.faces))
         assert sys.modules["PIL"] is None
     """)
-    result = subprocess.run([sys.executable, "-c", script, *map(str, files)],
-                            capture_output=True, text=True, timeout=120)
+    result = subprocess.run(
+        [sys.executable, "-c", script, *map(str, files)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert result.returncode == 0, result.stderr
     assert result.stdout.split("\n")[:3] == ["wallhole 35 66", "plane 4 2", "textured 4 2"]
 
@@ -360,8 +385,13 @@ def test_textured_files_load_without_pillow(corpus, tmp_path):
 
 @pytest.mark.parametrize(
     ("name", "faces"),
-    [("nancolor.obj", 12), ("soup.stl", 100), ("notenoughindices.obj", 1), ("shared.STL", 24),
-     ("teapot.stl", 894)],
+    [
+        ("nancolor.obj", 12),
+        ("soup.stl", 100),
+        ("notenoughindices.obj", 1),
+        ("shared.STL", 24),
+        ("teapot.stl", 894),
+    ],
 )
 def test_awkward_meshes_load(corpus, name, faces):
     (body,) = load_mesh(corpus / "trimesh-models" / name)
@@ -388,23 +418,51 @@ TRIANGLE = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
     ("file_name", "content", "error", "message"),
     [
         ("missing.obj", None, InputFileError, "file not found"),
-        ("mesh.xyz", TRIANGLE, InputFileError,
-         "unknown mesh file extension '.xyz' (expected .obj, .stl, .ply, .off, .glb, .gltf)"),
-        ("noext", TRIANGLE, InputFileError,
-         "unknown mesh file extension '(none)' (expected .obj, .stl, .ply, .off, .glb, .gltf)"),
+        (
+            "mesh.xyz",
+            TRIANGLE,
+            InputFileError,
+            "unknown mesh file extension '.xyz' (expected .obj, .stl, .ply, .off, .glb, .gltf)",
+        ),
+        (
+            "noext",
+            TRIANGLE,
+            InputFileError,
+            "unknown mesh file extension '(none)' (expected .obj, .stl, .ply, .off, .glb, .gltf)",
+        ),
         ("empty.obj", "", InvalidMeshError, "mesh has no faces"),
         ("points.obj", "v 0 0 0\nv 1 0 0\n", InvalidMeshError, "mesh has no faces"),
-        ("nan.obj", TRIANGLE.replace("v 1 0 0", "v nan 0 0"), InvalidMeshError,
-         "mesh has non-finite vertex coordinates"),
-        ("inf.obj", TRIANGLE.replace("v 1 0 0", "v 1 inf 0"), InvalidMeshError,
-         "mesh has non-finite vertex coordinates"),
-        ("index.obj", TRIANGLE.replace("f 1 2 3", "f 1 2 9"), InvalidMeshError,
-         "cannot parse OBJ file: index 8 is out of bounds for axis 0 with size 3"),
+        (
+            "nan.obj",
+            TRIANGLE.replace("v 1 0 0", "v nan 0 0"),
+            InvalidMeshError,
+            "mesh has non-finite vertex coordinates",
+        ),
+        (
+            "inf.obj",
+            TRIANGLE.replace("v 1 0 0", "v 1 inf 0"),
+            InvalidMeshError,
+            "mesh has non-finite vertex coordinates",
+        ),
+        (
+            "index.obj",
+            TRIANGLE.replace("f 1 2 3", "f 1 2 9"),
+            InvalidMeshError,
+            "cannot parse OBJ file: index 8 is out of bounds for axis 0 with size 3",
+        ),
         ("text.stl", "hello", InvalidMeshError, "mesh has no faces"),
-        ("bad.gltf", '{"asset": {"version": "2.0"}, "meshes": [', InvalidMeshError,
-         "cannot parse GLTF file: invalid JSON at line 1 column 42: Expecting value"),
-        ("bad.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n", InvalidMeshError,
-         "cannot parse OFF file: cannot reshape array of size 6 into shape (3,3)"),
+        (
+            "bad.gltf",
+            '{"asset": {"version": "2.0"}, "meshes": [',
+            InvalidMeshError,
+            "cannot parse GLTF file: invalid JSON at line 1 column 42: Expecting value",
+        ),
+        (
+            "bad.off",
+            "OFF\n3 1 0\n0 0 0\n1 0 0\n",
+            InvalidMeshError,
+            "cannot parse OFF file: cannot reshape array of size 6 into shape (3,3)",
+        ),
     ],
 )
 def test_bad_input(tmp_path, file_name, content, error, message):
@@ -422,7 +480,10 @@ def test_bad_input(tmp_path, file_name, content, error, message):
 @pytest.mark.parametrize(
     ("content", "message"),
     [
-        (b"garbage\x00\x01\x02", "cannot parse GLB file: buffer size must be a multiple of element size"),
+        (
+            b"garbage\x00\x01\x02",
+            "cannot parse GLB file: buffer size must be a multiple of element size",
+        ),
     ],
 )
 def test_corrupt_binary_glb(tmp_path, content, message):

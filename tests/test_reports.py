@@ -22,8 +22,18 @@ jsonschema = pytest.importorskip("jsonschema")
 SCHEMAS = Path(__file__).resolve().parent.parent / "meshcol" / "schemas"
 GOLDEN = Path(__file__).resolve().parent / "golden"
 GOLDEN_FILES = sorted(GOLDEN.glob("*.json"))
-FAST = ["--threshold", "0.2", "--resolution", "500",
-        "-E", "mcts_iterations=20", "-E", "mcts_nodes=8", "-E", "mcts_max_depth=2"]
+FAST = [
+    "--threshold",
+    "0.2",
+    "--resolution",
+    "500",
+    "-E",
+    "mcts_iterations=20",
+    "-E",
+    "mcts_nodes=8",
+    "-E",
+    "mcts_max_depth=2",
+]
 
 
 def schema_for(report: dict) -> dict:
@@ -80,11 +90,19 @@ def test_inspect_golden(samples: Path, golden, monkeypatch: pytest.MonkeyPatch) 
     golden("inspect_bowl.json", normalised(report))
 
 
-def test_decompose_golden(samples: Path, golden, monkeypatch: pytest.MonkeyPatch,
-                          tmp_path: Path) -> None:
+def test_decompose_golden(
+    samples: Path, golden, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
     monkeypatch.chdir(samples.parent)
-    report = run("decompose", "samples/bullet/wall.obj", "samples/bullet/bullet.obj",
-                 "-o", str(tmp_path / "parts"), "--no-cache", *FAST)
+    report = run(
+        "decompose",
+        "samples/bullet/wall.obj",
+        "samples/bullet/bullet.obj",
+        "-o",
+        str(tmp_path / "parts"),
+        "--no-cache",
+        *FAST,
+    )
     assert report["settings"]["out_dir"] == str(tmp_path / "parts")
     assert report["summary"]["ok"] == 2
     report["settings"]["out_dir"] = "<out_dir>"
@@ -95,8 +113,9 @@ def test_decompose_golden(samples: Path, golden, monkeypatch: pytest.MonkeyPatch
             body["engine_version"] = "<engine_version>"
             # Sampled distances and boolean volumes: round off float noise (1e-10 here,
             # 0 elsewhere) at 1e-6 mesh units, far below what the metrics are read for.
-            body["metrics"] = {k: round(v, 6) if isinstance(v, float) else v
-                               for k, v in body["metrics"].items()}
+            body["metrics"] = {
+                k: round(v, 6) if isinstance(v, float) else v for k, v in body["metrics"].items()
+            }
     golden("decompose_bullet.json", normalised(report))
 
 
@@ -184,7 +203,7 @@ def test_every_schema_field_is_described(name: str) -> None:
 
 def _envelope_shape(report: dict) -> dict:
     return {
-        "first_keys": list(report)[:len(ENVELOPE_KEYS)],
+        "first_keys": list(report)[: len(ENVELOPE_KEYS)],
         "schema_version": report["schema_version"],
         "tool": sorted(report["tool"]),
         "tool_name": report["tool"]["name"],
@@ -200,9 +219,13 @@ def test_envelope_function() -> None:
 
     head = envelope("hull", {"frame": "world"}, "m")
     assert list(head) == list(ENVELOPE_KEYS)
-    assert head == {"schema_version": SCHEMA_VERSION,
-                    "tool": {"name": "meshcol", "version": meshcol.__version__},
-                    "command": "hull", "settings": {"frame": "world"}, "units": "m"}
+    assert head == {
+        "schema_version": SCHEMA_VERSION,
+        "tool": {"name": "meshcol", "version": meshcol.__version__},
+        "command": "hull",
+        "settings": {"frame": "world"},
+        "units": "m",
+    }
 
 
 def test_envelope_is_the_same_in_every_command_report(samples: Path, tmp_path: Path) -> None:
@@ -219,10 +242,14 @@ def test_envelope_is_the_same_in_every_command_report(samples: Path, tmp_path: P
         "sweep": sweep(samples / "bullet" / "scene.json"),
         "hull": hull([wall]),
         "inspect": inspect([wall]),
-        "decompose": decompose_files([wall], tmp_path / "parts", use_cache=False, threshold=0.2,
-                                     resolution=500,
-                                     engine_options={"mcts_iterations": "20", "mcts_nodes": "8",
-                                                     "mcts_max_depth": "2"}),
+        "decompose": decompose_files(
+            [wall],
+            tmp_path / "parts",
+            use_cache=False,
+            threshold=0.2,
+            resolution=500,
+            engine_options={"mcts_iterations": "20", "mcts_nodes": "8", "mcts_max_depth": "2"},
+        ),
     }
     assert set(reports) == set(COMMANDS)
     shapes = {}

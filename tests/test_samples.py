@@ -14,11 +14,13 @@ from meshcol.io.scene import load_scene
 
 
 def test_regenerating_gives_identical_files(samples, tmp_path):
-    subprocess.run([sys.executable, str(samples / "make_samples.py"), str(tmp_path)], check=True,
-                   timeout=120)
+    subprocess.run(
+        [sys.executable, str(samples / "make_samples.py"), str(tmp_path)], check=True, timeout=120
+    )
     generated = sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*") if p.is_file())
     committed = sorted(
-        p.relative_to(samples) for p in samples.rglob("*")
+        p.relative_to(samples)
+        for p in samples.rglob("*")
         if p.is_file() and p.name != "make_samples.py" and "__pycache__" not in p.parts
     )
     assert generated == committed
@@ -94,8 +96,10 @@ def test_level_matches_expected(samples):
     scene = load_scene(samples / "level" / "scene.json")
     expected = json.loads((samples / "level" / "expected.json").read_text())
     assert len(scene.bodies) >= 21
-    boxes = {b.name: (b.world_vertices().min(axis=0), b.world_vertices().max(axis=0))
-             for b in scene.bodies}
+    boxes = {
+        b.name: (b.world_vertices().min(axis=0), b.world_vertices().max(axis=0))
+        for b in scene.bodies
+    }
     planted = {(p["a"], p["b"]): p for p in expected["interpenetrations"]}
     resting = {(p["a"], p["b"]) for p in expected["resting_contacts"]}
     assert 3 <= len(planted) <= 4 and len(resting) >= 2

@@ -22,9 +22,16 @@ from meshcol.io.scene import (
 )
 
 TET = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
-TWO_TETS = "o left\n" + TET + "o right\n" + "\n".join(
-    f"v {2 + float(x)} {y} {z}" for x, y, z in (line.split()[1:] for line in TET.splitlines()[:4])
-) + "\nf 5 7 6\nf 5 6 8\nf 5 8 7\nf 6 7 8\n"
+TWO_TETS = (
+    "o left\n"
+    + TET
+    + "o right\n"
+    + "\n".join(
+        f"v {2 + float(x)} {y} {z}"
+        for x, y, z in (line.split()[1:] for line in TET.splitlines()[:4])
+    )
+    + "\nf 5 7 6\nf 5 6 8\nf 5 8 7\nf 6 7 8\n"
+)
 
 
 @pytest.fixture
@@ -87,6 +94,7 @@ def test_euler_extrinsic_known_rotations():
 
 def test_euler_matches_scipy_extrinsic():
     from scipy.spatial.transform import Rotation as rotation
+
     rng = np.random.default_rng(7)
     for order in ("xyz", "zyx", "yzx", "xzx", "zxz"):
         angles = rng.uniform(-180, 180, 3)
@@ -96,6 +104,7 @@ def test_euler_matches_scipy_extrinsic():
 
 def test_quaternion_matches_scipy():
     from scipy.spatial.transform import Rotation as rotation
+
     rng = np.random.default_rng(3)
     for _ in range(5):
         w, x, y, z = rng.normal(size=4)
@@ -129,10 +138,17 @@ def test_mesh_path_relative_to_manifest_and_source_as_given(folder, monkeypatch)
 
 
 def test_pose_scale_and_rotation(folder):
-    document = {"bodies": [{
-        "name": "t", "mesh": "tet.obj", "position": [1, 0, 0], "scale": [2, 3, 4],
-        "rotation": {"euler_deg": [0, 0, 90], "order": "xyz"},
-    }]}
+    document = {
+        "bodies": [
+            {
+                "name": "t",
+                "mesh": "tet.obj",
+                "position": [1, 0, 0],
+                "scale": [2, 3, 4],
+                "rotation": {"euler_deg": [0, 0, 90], "order": "xyz"},
+            }
+        ]
+    }
     (body,) = load_scene(write(folder, document)).bodies
     assert np.array_equal(body.vertices.max(axis=0), [2, 3, 4])  # scale baked in
     rz90 = np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1]], dtype=float)
@@ -141,8 +157,17 @@ def test_pose_scale_and_rotation(folder):
 
 
 def test_multibody_mesh_gives_named_sub_bodies(folder):
-    document = {"bodies": [{"name": "pair", "mesh": "pair.obj", "scale": 2,
-                            "position": [0, 0, 10], "shape": "hull"}]}
+    document = {
+        "bodies": [
+            {
+                "name": "pair",
+                "mesh": "pair.obj",
+                "scale": 2,
+                "position": [0, 0, 10],
+                "shape": "hull",
+            }
+        ]
+    }
     left, right = load_scene(write(folder, document)).bodies
     assert (left.name, right.name) == ("pair/left", "pair/right")
     assert left.collider == right.collider == "hull"
@@ -151,9 +176,17 @@ def test_multibody_mesh_gives_named_sub_bodies(folder):
 
 def test_glb_sub_bodies_keep_their_node_transforms(corpus, tmp_path):
     nested = corpus / "trimesh-models" / "nested.glb"
-    document = {"bodies": [{"name": "n", "mesh": os.fspath(nested), "scale": 2,
-                            "position": [1, 0, 0],
-                            "rotation": {"quaternion": [0.5, 0.5, 0.5, 0.5]}}]}
+    document = {
+        "bodies": [
+            {
+                "name": "n",
+                "mesh": os.fspath(nested),
+                "scale": 2,
+                "position": [1, 0, 0],
+                "rotation": {"quaternion": [0.5, 0.5, 0.5, 0.5]},
+            }
+        ]
+    }
     bodies = load_scene(write(tmp_path, document)).bodies
     direct = meshcol.load_mesh(nested)
     turn = rotation_from_quaternion([0.5, 0.5, 0.5, 0.5])
@@ -166,9 +199,17 @@ def test_glb_sub_bodies_keep_their_node_transforms(corpus, tmp_path):
 
 
 def test_end_pose_from_end_position_and_rotation(folder):
-    document = {"bodies": [{"name": "t", "mesh": "tet.obj", "position": [0, 0, 0],
-                            "end_position": [5, 0, 0],
-                            "end_rotation": {"quaternion": [0, 0, 0, 1]}}]}
+    document = {
+        "bodies": [
+            {
+                "name": "t",
+                "mesh": "tet.obj",
+                "position": [0, 0, 0],
+                "end_position": [5, 0, 0],
+                "end_rotation": {"quaternion": [0, 0, 0, 1]},
+            }
+        ]
+    }
     (body,) = load_scene(write(folder, document)).bodies
     assert np.array_equal(body.pose, np.eye(4))
     expected = np.diag([-1.0, -1.0, 1.0, 1.0])  # half turn about z
@@ -177,17 +218,28 @@ def test_end_pose_from_end_position_and_rotation(folder):
 
 
 def test_end_pose_from_velocities(folder):
-    document = {"duration": 0.5, "bodies": [{
-        "name": "t", "mesh": "tet.obj", "position": [1, 0, 0],
-        "rotation": {"euler_deg": [90, 0, 0], "order": "xyz"},
-        "velocity": [2, 0, 0], "angular_velocity": [0, 0, math.pi]}]}
+    document = {
+        "duration": 0.5,
+        "bodies": [
+            {
+                "name": "t",
+                "mesh": "tet.obj",
+                "position": [1, 0, 0],
+                "rotation": {"euler_deg": [90, 0, 0], "order": "xyz"},
+                "velocity": [2, 0, 0],
+                "angular_velocity": [0, 0, math.pi],
+            }
+        ],
+    }
     (body,) = load_scene(write(folder, document)).bodies
     assert np.allclose(body.end_pose[:3, 3], [2, 0, 0])
     # a quarter turn about world z after the start rotation (angular velocity in world frame)
     expected = rotation_from_euler([90, 0, 90], "xyz")
     assert np.allclose(body.end_pose[:3, :3], expected, atol=1e-15)
-    only_linear = {"duration": 2.0, "bodies": [{"name": "t", "mesh": "tet.obj",
-                                               "velocity": [0, 1, 0]}]}
+    only_linear = {
+        "duration": 2.0,
+        "bodies": [{"name": "t", "mesh": "tet.obj", "velocity": [0, 1, 0]}],
+    }
     (body,) = load_scene(write(folder, only_linear)).bodies
     expected = np.eye(4)
     expected[1, 3] = 2.0
@@ -197,14 +249,30 @@ def test_end_pose_from_velocities(folder):
 @pytest.mark.parametrize(
     ("primitive", "scale", "expected", "extent"),
     [
-        ({"type": "sphere", "radius": 1.5}, None, meshcol.Primitive("sphere", radius=1.5),
-         [3, 3, 3]),
-        ({"type": "box", "size": [1, 2, 3]}, [2, 1, 1],
-         meshcol.Primitive("box", size=(2.0, 2.0, 3.0)), [2, 2, 3]),
-        ({"type": "capsule", "radius": 0.5, "length": 2}, 2,
-         meshcol.Primitive("capsule", radius=1.0, length=4.0), [2, 2, 6]),
-        ({"type": "cylinder", "radius": 0.5, "length": 2}, None,
-         meshcol.Primitive("cylinder", radius=0.5, length=2.0), [1, 1, 2]),
+        (
+            {"type": "sphere", "radius": 1.5},
+            None,
+            meshcol.Primitive("sphere", radius=1.5),
+            [3, 3, 3],
+        ),
+        (
+            {"type": "box", "size": [1, 2, 3]},
+            [2, 1, 1],
+            meshcol.Primitive("box", size=(2.0, 2.0, 3.0)),
+            [2, 2, 3],
+        ),
+        (
+            {"type": "capsule", "radius": 0.5, "length": 2},
+            2,
+            meshcol.Primitive("capsule", radius=1.0, length=4.0),
+            [2, 2, 6],
+        ),
+        (
+            {"type": "cylinder", "radius": 0.5, "length": 2},
+            None,
+            meshcol.Primitive("cylinder", radius=0.5, length=2.0),
+            [1, 1, 2],
+        ),
     ],
 )
 def test_primitives(folder, primitive, scale, expected, extent):
@@ -240,6 +308,7 @@ velocity = [0, 0, -1]
 
 def test_samples_manifests_validate_against_the_published_schema(samples):
     import jsonschema
+
     schema = json.loads(SCHEMA_PATH.read_text())
     jsonschema.validators.validator_for(schema).check_schema(schema)
     for manifest in samples.glob("*/scene.json"):
@@ -270,12 +339,14 @@ BALL_BODY = 1
 def body(index, **fields):
     def change(document):
         document["bodies"][index].update(fields)
+
     return change
 
 
 def drop(index, field):
     def change(document):
         del document["bodies"][index][field]
+
     return change
 
 
@@ -283,58 +354,104 @@ def drop(index, field):
     ("document", "message"),
     [
         (edit(body(TET_BODY, postion=[1, 2, 3])), "body 'tet': unknown field 'postion'"),
-        (edit(body(TET_BODY, position=[1, 2])), "body 'tet': position must be an array of 3 numbers"),
+        (
+            edit(body(TET_BODY, position=[1, 2])),
+            "body 'tet': position must be an array of 3 numbers",
+        ),
         (edit(body(TET_BODY, position="up")), "body 'tet': position must be an array of 3 numbers"),
-        (edit(body(TET_BODY, position=[1, "2", 3])),
-         "body 'tet': position must be an array of 3 numbers"),
+        (
+            edit(body(TET_BODY, position=[1, "2", 3])),
+            "body 'tet': position must be an array of 3 numbers",
+        ),
         (edit(body(TET_BODY, mesh="missing.obj")), "body 'tet': mesh file 'missing.obj' not found"),
         (edit(drop(TET_BODY, "name")), "bodies[0]: missing field 'name'"),
         (edit(drop(TET_BODY, "mesh")), "body 'tet': needs exactly one of 'mesh' or 'primitive'"),
-        (edit(body(TET_BODY, primitive={"type": "sphere", "radius": 1})),
-         "body 'tet': needs exactly one of 'mesh' or 'primitive'"),
-        (edit(body(BALL_BODY, primitive={"type": "sphere", "radius": 1, "size": [1, 1, 1]})),
-         "body 'ball': unknown field 'primitive.size'"),
-        (edit(body(BALL_BODY, primitive={"type": "cone", "radius": 1})),
-         "body 'ball': primitive.type must be one of sphere, box, capsule, cylinder"),
-        (edit(body(BALL_BODY, primitive={"type": "capsule", "radius": 1})),
-         "body 'ball': missing field 'primitive.length'"),
-        (edit(body(BALL_BODY, primitive={"type": "sphere", "radius": -1})),
-         "body 'ball': primitive.radius must be a positive number"),
-        (edit(body(BALL_BODY, scale=[1, 2, 1])), "body 'ball': a sphere takes a uniform scale only"),
-        (edit(body(TET_BODY, rotation={"quaternion": [0, 0, 0, 0]})),
-         "body 'tet': rotation.quaternion must not be zero"),
-        (edit(body(TET_BODY, rotation={"quaternion": [1, 0, 0]})),
-         "body 'tet': rotation.quaternion must be an array of 4 numbers [w, x, y, z]"),
-        (edit(body(TET_BODY, rotation={"euler_deg": [0, 0, 0]})),
-         "body 'tet': missing field 'rotation.order'"),
-        (edit(body(TET_BODY, rotation={"euler_deg": [0, 0, 0], "order": "XYZ"})),
-         "body 'tet': rotation.order must be a string of three axes such as xyz, zyx or zxz"),
-        (edit(body(TET_BODY, end_rotation={"angles": [0, 0, 0]})),
-         'body \'tet\': end_rotation must be {"quaternion": [w, x, y, z]} or '
-         '{"euler_deg": [a, b, c], "order": "xyz"}'),
-        (edit(body(TET_BODY, scale=0)),
-         "body 'tet': scale must be a positive number or an array of 3 positive numbers"),
-        (edit(body(TET_BODY, shape="convex")), "body 'tet': shape must be one of hull, decomposed, mesh"),
+        (
+            edit(body(TET_BODY, primitive={"type": "sphere", "radius": 1})),
+            "body 'tet': needs exactly one of 'mesh' or 'primitive'",
+        ),
+        (
+            edit(body(BALL_BODY, primitive={"type": "sphere", "radius": 1, "size": [1, 1, 1]})),
+            "body 'ball': unknown field 'primitive.size'",
+        ),
+        (
+            edit(body(BALL_BODY, primitive={"type": "cone", "radius": 1})),
+            "body 'ball': primitive.type must be one of sphere, box, capsule, cylinder",
+        ),
+        (
+            edit(body(BALL_BODY, primitive={"type": "capsule", "radius": 1})),
+            "body 'ball': missing field 'primitive.length'",
+        ),
+        (
+            edit(body(BALL_BODY, primitive={"type": "sphere", "radius": -1})),
+            "body 'ball': primitive.radius must be a positive number",
+        ),
+        (
+            edit(body(BALL_BODY, scale=[1, 2, 1])),
+            "body 'ball': a sphere takes a uniform scale only",
+        ),
+        (
+            edit(body(TET_BODY, rotation={"quaternion": [0, 0, 0, 0]})),
+            "body 'tet': rotation.quaternion must not be zero",
+        ),
+        (
+            edit(body(TET_BODY, rotation={"quaternion": [1, 0, 0]})),
+            "body 'tet': rotation.quaternion must be an array of 4 numbers [w, x, y, z]",
+        ),
+        (
+            edit(body(TET_BODY, rotation={"euler_deg": [0, 0, 0]})),
+            "body 'tet': missing field 'rotation.order'",
+        ),
+        (
+            edit(body(TET_BODY, rotation={"euler_deg": [0, 0, 0], "order": "XYZ"})),
+            "body 'tet': rotation.order must be a string of three axes such as xyz, zyx or zxz",
+        ),
+        (
+            edit(body(TET_BODY, end_rotation={"angles": [0, 0, 0]})),
+            "body 'tet': end_rotation must be {\"quaternion\": [w, x, y, z]} or "
+            '{"euler_deg": [a, b, c], "order": "xyz"}',
+        ),
+        (
+            edit(body(TET_BODY, scale=0)),
+            "body 'tet': scale must be a positive number or an array of 3 positive numbers",
+        ),
+        (
+            edit(body(TET_BODY, shape="convex")),
+            "body 'tet': shape must be one of hull, decomposed, mesh",
+        ),
         (edit(body(BALL_BODY, name="tet")), "body 'tet': name used by an earlier body"),
-        (edit(body(TET_BODY, velocity=[1, 0, 0], end_position=[1, 0, 0])),
-         "body 'tet': give the end pose either as end_position/end_rotation or as "
-         "velocity/angular_velocity, not both"),
-        (edit(lambda d: (d.pop("duration"), d["bodies"][0].update(angular_velocity=[0, 0, 1]))),
-         "body 'tet': angular_velocity needs the manifest's 'duration'"),
+        (
+            edit(body(TET_BODY, velocity=[1, 0, 0], end_position=[1, 0, 0])),
+            "body 'tet': give the end pose either as end_position/end_rotation or as "
+            "velocity/angular_velocity, not both",
+        ),
+        (
+            edit(lambda d: (d.pop("duration"), d["bodies"][0].update(angular_velocity=[0, 0, 1]))),
+            "body 'tet': angular_velocity needs the manifest's 'duration'",
+        ),
         (edit(lambda d: d.update(unit="m")), "unknown field 'unit'"),
         (edit(lambda d: d.update(units=3)), "units must be a non-empty string"),
         (edit(lambda d: d.update(duration=-1)), "duration must be a positive number (seconds)"),
         (edit(lambda d: d.pop("bodies")), "missing field 'bodies'"),
         (edit(lambda d: d.update(bodies=[])), "bodies must be a non-empty array of bodies"),
         (edit(lambda d: d.update(bodies=[3])), "bodies[0] must be an object (a table in TOML)"),
-        (edit(lambda d: d["bodies"].append({"name": 7, "mesh": "tet.obj"})),
-         "bodies[2]: name must be a non-empty string"),
+        (
+            edit(lambda d: d["bodies"].append({"name": 7, "mesh": "tet.obj"})),
+            "bodies[2]: name must be a non-empty string",
+        ),
         ([], "manifest must be an object (a table in TOML)"),
-        ('{"units": "m",\n "bodies": [\n  {"name": "a",\n      "mesh" "x"}]}',
-         "invalid JSON at line 4 column 14: Expecting ':' delimiter"),
-        ('{"bodies": [{"name": "a", "position": [NaN, 0, 0], "mesh": "tet.obj"}]}',
-         "body 'a': position must be finite"),
-        ('{"bodies": [{"name": "a", "mesh": "bad.foo"}]}', "body 'a': mesh file 'bad.foo' not found"),
+        (
+            '{"units": "m",\n "bodies": [\n  {"name": "a",\n      "mesh" "x"}]}',
+            "invalid JSON at line 4 column 14: Expecting ':' delimiter",
+        ),
+        (
+            '{"bodies": [{"name": "a", "position": [NaN, 0, 0], "mesh": "tet.obj"}]}',
+            "body 'a': position must be finite",
+        ),
+        (
+            '{"bodies": [{"name": "a", "mesh": "bad.foo"}]}',
+            "body 'a': mesh file 'bad.foo' not found",
+        ),
     ],
 )
 def test_manifest_errors(folder, document, message):
@@ -362,8 +479,9 @@ def test_broken_mesh_in_manifest(folder):
 
 
 def test_sub_body_name_clash(folder):
-    document = {"bodies": [{"name": "pair/left", "mesh": "tet.obj"},
-                           {"name": "pair", "mesh": "pair.obj"}]}
+    document = {
+        "bodies": [{"name": "pair/left", "mesh": "tet.obj"}, {"name": "pair", "mesh": "pair.obj"}]
+    }
     with pytest.raises(SceneError, match="body 'pair': body name 'pair/left' is already taken"):
         load_scene(write(folder, document))
 
@@ -371,12 +489,18 @@ def test_sub_body_name_clash(folder):
 @pytest.mark.parametrize(
     ("text", "message"),
     [
-        ('units = "m"\n[[bodies]]\nname = "a"\nmesh = tet.obj\n',
-         "invalid TOML: Invalid value (at line 4, column 8)"),
-        ('[[bodies]]\nname = "a"\nmesh = "tet.obj"\nposition = [1.0, 2.0, inf]\n',
-         "body 'a': position must be finite"),
-        ('[[bodies]]\nname = "a"\nmesh = "tet.obj"\nposition = [1.0, 2.0]\n',
-         "body 'a': position must be an array of 3 numbers"),
+        (
+            'units = "m"\n[[bodies]]\nname = "a"\nmesh = tet.obj\n',
+            "invalid TOML: Invalid value (at line 4, column 8)",
+        ),
+        (
+            '[[bodies]]\nname = "a"\nmesh = "tet.obj"\nposition = [1.0, 2.0, inf]\n',
+            "body 'a': position must be finite",
+        ),
+        (
+            '[[bodies]]\nname = "a"\nmesh = "tet.obj"\nposition = [1.0, 2.0]\n',
+            "body 'a': position must be an array of 3 numbers",
+        ),
     ],
 )
 def test_toml_errors(folder, text, message):
@@ -410,7 +534,9 @@ def test_load_inputs_mesh_files(folder, corpus):
     (folder / "other").mkdir()
     (folder / "other" / "tet.obj").write_text(TET)
     pins = corpus / "trimesh-models" / "pins.glb"
-    scene = load_inputs([folder / "tet.obj", folder / "pair.obj", pins, folder / "other" / "tet.obj"])
+    scene = load_inputs(
+        [folder / "tet.obj", folder / "pair.obj", pins, folder / "other" / "tet.obj"]
+    )
     names = [b.name for b in scene.bodies]
     assert names[:3] == ["tet", "pair/left", "pair/right"]
     assert len(names) == 11 and names[-1] == "tet#2"

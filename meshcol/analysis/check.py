@@ -51,7 +51,12 @@ __all__ = [
 PAIR_STATUSES = ("separated", "clearance", "contact", "penetrating", "contained")
 SEVERITY = {name: i for i, name in enumerate(PAIR_STATUSES)}
 # --fail-on value -> least severe status that violates the policy
-FAIL_ON = {"penetration": "penetrating", "contact": "contact", "clearance": "clearance", "none": None}
+FAIL_ON = {
+    "penetration": "penetrating",
+    "contact": "contact",
+    "clearance": "clearance",
+    "none": None,
+}
 
 
 @dataclass(frozen=True)
@@ -94,8 +99,9 @@ class CheckOptions:
 
     def validate(self) -> None:
         if self.collider not in COLLIDER_KINDS:
-            raise ValueError(f"collider must be one of {', '.join(COLLIDER_KINDS)}, "
-                             f"got {self.collider!r}")
+            raise ValueError(
+                f"collider must be one of {', '.join(COLLIDER_KINDS)}, got {self.collider!r}"
+            )
         if not (math.isfinite(self.tolerance) and self.tolerance >= 0):
             raise ValueError(f"tolerance must be a finite number >= 0, got {self.tolerance!r}")
         if not (math.isfinite(self.clearance) and self.clearance >= 0):
@@ -165,8 +171,12 @@ class CheckReport:
         """Up to ``count`` pairs that are not separated, most penetrating (smallest signed
         distance) first."""
         touching = (p for p in self.pairs if p["status"] != "separated")
-        return sorted(touching, key=lambda p: (p["signed_distance"] if p["signed_distance"]
-                                               is not None else float("inf")))[:count]
+        return sorted(
+            touching,
+            key=lambda p: (
+                p["signed_distance"] if p["signed_distance"] is not None else float("inf")
+            ),
+        )[:count]
 
     def to_json(self) -> str:
         from meshcol.io.report import dumps_json
@@ -178,7 +188,21 @@ class CheckReport:
 
         rows = []
         for p in self.pairs:
-            row = {k: p[k] for k in ("a", "b", "status", "distance", "depth", "signed_distance", "part_a", "part_b", "ignored", "violation")}
+            row = {
+                k: p[k]
+                for k in (
+                    "a",
+                    "b",
+                    "status",
+                    "distance",
+                    "depth",
+                    "signed_distance",
+                    "part_a",
+                    "part_b",
+                    "ignored",
+                    "violation",
+                )
+            }
             for key in ("normal", "point_a", "point_b"):
                 vec = p[key] if p[key] is not None else [None] * 3
                 for axis, value in zip("xyz", vec):
@@ -188,11 +212,25 @@ class CheckReport:
 
 
 CSV_COLUMNS = [
-    "a", "b", "status", "distance", "depth", "signed_distance",
-    "normal_x", "normal_y", "normal_z",
-    "point_a_x", "point_a_y", "point_a_z",
-    "point_b_x", "point_b_y", "point_b_z",
-    "part_a", "part_b", "ignored", "violation",
+    "a",
+    "b",
+    "status",
+    "distance",
+    "depth",
+    "signed_distance",
+    "normal_x",
+    "normal_y",
+    "normal_z",
+    "point_a_x",
+    "point_a_y",
+    "point_a_z",
+    "point_b_x",
+    "point_b_y",
+    "point_b_z",
+    "part_a",
+    "part_b",
+    "ignored",
+    "violation",
 ]
 
 
@@ -204,7 +242,9 @@ CSV_COLUMNS = [
 # Pair selection
 
 
-def _ignore_mask(names: Sequence[str], rules: Sequence[str], a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def _ignore_mask(
+    names: Sequence[str], rules: Sequence[str], a: np.ndarray, b: np.ndarray
+) -> np.ndarray:
     """Boolean mask of pairs (a[k], b[k]) matched by any ``A:B`` glob rule, either order."""
     mask = np.zeros(len(a), dtype=bool)
     for rule in rules:
@@ -244,9 +284,13 @@ def _first_per_group(keys: np.ndarray, values: np.ndarray) -> np.ndarray:
 # The check
 
 
-def check_scene(scene: Scene, options: CheckOptions | None = None, *,
-                progress: Callable[[str], None] | None = None,
-                load_seconds: float | None = None) -> CheckReport:
+def check_scene(
+    scene: Scene,
+    options: CheckOptions | None = None,
+    *,
+    progress: Callable[[str], None] | None = None,
+    load_seconds: float | None = None,
+) -> CheckReport:
     """Check every pair of bodies of a loaded scene.
 
     Parameters
@@ -270,8 +314,13 @@ def check_scene(scene: Scene, options: CheckOptions | None = None, *,
     progress = progress or (lambda message: None)
     start = time.perf_counter()
 
-    shapes = build_colliders(scene.bodies, options.collider, mesh_parts="hull",
-                             decompose_options=options.decompose_options, progress=progress)
+    shapes = build_colliders(
+        scene.bodies,
+        options.collider,
+        mesh_parts="hull",
+        decompose_options=options.decompose_options,
+        progress=progress,
+    )
     bodies = shapes.bodies
     n = len(bodies)
     names = [b.name for b in bodies]
@@ -328,8 +377,15 @@ def check_scene(scene: Scene, options: CheckOptions | None = None, *,
         extra = _cartesian_part_pairs(candidates[~covered], shapes.body_part_offsets)
         if len(extra):
             part_pairs = np.concatenate([part_pairs, extra])
-            part_key = np.concatenate([part_key, shapes.part_body[extra[:, 0]] * max(n, 1) + shapes.part_body[extra[:, 1]]])
-        result = signed_distance_batch(shapes.shapes, part_poses, part_pairs, threads=options.threads)
+            part_key = np.concatenate(
+                [
+                    part_key,
+                    shapes.part_body[extra[:, 0]] * max(n, 1) + shapes.part_body[extra[:, 1]],
+                ]
+            )
+        result = signed_distance_batch(
+            shapes.shapes, part_poses, part_pairs, threads=options.threads
+        )
         bad = result.status == int(Status.INVALID_INPUT)
         value = np.where(bad, np.inf, result.signed_distance)
         best = _first_per_group(part_key, value)
@@ -398,31 +454,68 @@ def check_scene(scene: Scene, options: CheckOptions | None = None, *,
         violation = (status_index >= SEVERITY[threshold]) & ~ignored
     if options.baseline is not None:
         idx = np.flatnonzero(violation)
-        violation[idx] = _worse_than_baseline(options.baseline, names, candidates[idx],
-                                              status_index[idx], depth[idx], distance[idx], tol)
+        violation[idx] = _worse_than_baseline(
+            options.baseline,
+            names,
+            candidates[idx],
+            status_index[idx],
+            depth[idx],
+            distance[idx],
+            tol,
+        )
     seconds = time.perf_counter() - start
 
     # Report rows: columns converted once, then zipped (no per-pair numpy calls).
     columns = zip(
-        ca.tolist(), cb.tolist(), status_index.tolist(), _nums(distance), _nums(depth), _nums(sd),
-        _vecs(normal), _vecs(point_a), _vecs(point_b), part_a.tolist(), part_b.tolist(),
-        ignored.tolist(), violation.tolist(), failed.tolist(),
+        ca.tolist(),
+        cb.tolist(),
+        status_index.tolist(),
+        _nums(distance),
+        _nums(depth),
+        _nums(sd),
+        _vecs(normal),
+        _vecs(point_a),
+        _vecs(point_b),
+        part_a.tolist(),
+        part_b.tolist(),
+        ignored.tolist(),
+        violation.tolist(),
+        failed.tolist(),
     )
     pairs = [
-        {"a": names[a], "b": names[b], "status": PAIR_STATUSES[s], "distance": d, "depth": dp,
-         "signed_distance": sdv, "normal": nv, "point_a": pa, "point_b": pb,
-         "part_a": ia if ia >= 0 else None, "part_b": ib if ib >= 0 else None,
-         "ignored": ig, "violation": vi, "query_failed": fa}
+        {
+            "a": names[a],
+            "b": names[b],
+            "status": PAIR_STATUSES[s],
+            "distance": d,
+            "depth": dp,
+            "signed_distance": sdv,
+            "normal": nv,
+            "point_a": pa,
+            "point_b": pb,
+            "part_a": ia if ia >= 0 else None,
+            "part_b": ib if ib >= 0 else None,
+            "ignored": ig,
+            "violation": vi,
+            "query_failed": fa,
+        }
         for a, b, s, d, dp, sdv, nv, pa, pb, ia, ib, ig, vi, fa in columns
     ]
     pairs.sort(key=lambda p: (p["a"], p["b"]))
 
     part_counts = np.diff(shapes.body_part_offsets).tolist()
     body_rows = [
-        {"name": body.name, "file": _relative(body.source), "collider": kind, "parts": parts,
-         "vertices": len(body.vertices), "aabb": [lo, hi]}
-        for body, kind, parts, lo, hi in zip(bodies, shapes.kinds, part_counts,
-                                             _vecs(body_min), _vecs(body_max))
+        {
+            "name": body.name,
+            "file": _relative(body.source),
+            "collider": kind,
+            "parts": parts,
+            "vertices": len(body.vertices),
+            "aabb": [lo, hi],
+        }
+        for body, kind, parts, lo, hi in zip(
+            bodies, shapes.kinds, part_counts, _vecs(body_min), _vecs(body_max)
+        )
     ]
     body_rows.sort(key=lambda r: r["name"])
 
@@ -448,15 +541,29 @@ def check_scene(scene: Scene, options: CheckOptions | None = None, *,
         "fail_on": options.fail_on,
         "ignore": list(options.ignore),
         "baseline": _relative(options.baseline_source),
-        "inputs": [_relative(scene.source)] if scene.source else sorted({_relative(b.source) or "" for b in bodies if b.source}),
+        "inputs": [_relative(scene.source)]
+        if scene.source
+        else sorted({_relative(b.source) or "" for b in bodies if b.source}),
     }
-    return CheckReport(body_rows, pairs, summary, settings, scene.units,
-                       datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"))
+    return CheckReport(
+        body_rows,
+        pairs,
+        summary,
+        settings,
+        scene.units,
+        datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+    )
 
 
-def _worse_than_baseline(baseline: dict, names: Sequence[str], candidates: np.ndarray,
-                         status_index: np.ndarray, depth: np.ndarray, distance: np.ndarray,
-                         tol: float) -> np.ndarray:
+def _worse_than_baseline(
+    baseline: dict,
+    names: Sequence[str],
+    candidates: np.ndarray,
+    status_index: np.ndarray,
+    depth: np.ndarray,
+    distance: np.ndarray,
+    tol: float,
+) -> np.ndarray:
     """True for pairs that are new, or worse than in the baseline report."""
     old = {}
     for p in baseline.get("pairs", []):
@@ -491,17 +598,25 @@ def load_baseline(path: str) -> dict:
     except (OSError, UnicodeDecodeError) as exc:
         raise InputFileError(f"cannot read baseline report: {exc}", path) from None
     except json.JSONDecodeError as exc:
-        raise InputFileError(f"baseline is not valid JSON (line {exc.lineno} column {exc.colno})", path) from None
+        raise InputFileError(
+            f"baseline is not valid JSON (line {exc.lineno} column {exc.colno})", path
+        ) from None
     if not isinstance(data, dict) or not isinstance(data.get("pairs"), list):
         raise InputFileError("baseline is not a meshcol check report (no 'pairs' list)", path)
     for p in data["pairs"]:
         if not isinstance(p, dict) or not {"a", "b", "status"} <= p.keys():
-            raise InputFileError("baseline is not a meshcol check report (pair without a, b, status)", path)
+            raise InputFileError(
+                "baseline is not a meshcol check report (pair without a, b, status)", path
+            )
     return data
 
 
-def check(inputs: Sequence[str | os.PathLike[str]] | str | os.PathLike[str], *,
-          progress: Callable[[str], None] | None = None, **options: Any) -> CheckReport:
+def check(
+    inputs: Sequence[str | os.PathLike[str]] | str | os.PathLike[str],
+    *,
+    progress: Callable[[str], None] | None = None,
+    **options: Any,
+) -> CheckReport:
     """Load inputs and check every pair of bodies.
 
     Parameters

@@ -76,10 +76,14 @@ class Colliders:
         its end pose (the start pose for a body that does not move)."""
         if not self.bodies:
             return np.zeros((0, 4, 4))
-        poses = np.stack([
-            np.asarray(b.end_pose if end and b.end_pose is not None else b.pose, dtype=np.float64)
-            for b in self.bodies
-        ])
+        poses = np.stack(
+            [
+                np.asarray(
+                    b.end_pose if end and b.end_pose is not None else b.pose, dtype=np.float64
+                )
+                for b in self.bodies
+            ]
+        )
         return np.ascontiguousarray(poses[self.part_body])
 
 
@@ -272,7 +276,8 @@ def build_colliders(
     pool = ConvexSet.concatenate(single, *triangle_sets) if triangle_sets else single
     set_start = np.cumsum([len(single)] + [len(s) for s in triangle_sets])
     rows_per_body = [
-        np.asarray(singles, dtype=np.int64) if tri < 0
+        np.asarray(singles, dtype=np.int64)
+        if tri < 0
         else set_start[tri] + np.arange(len(triangle_sets[tri]), dtype=np.int64)
         for tri, singles in blocks
     ]

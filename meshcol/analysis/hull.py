@@ -22,10 +22,25 @@ __all__ = ["CSV_COLUMNS", "HullReport", "OutputDestinationError", "hull", "out_d
 
 #: Columns of :meth:`HullReport.to_csv`, one row per body.
 CSV_COLUMNS = (
-    "name", "source", "input_vertices", "input_faces", "hull_vertices", "hull_faces",
-    "hull_volume", "hull_area", "mesh_volume", "volume_ratio", "flat", "max_vertices",
-    "exact_hull_vertices", "exact_hull_faces", "exact_hull_volume", "added_volume",
-    "added_volume_fraction", "max_distance", "output",
+    "name",
+    "source",
+    "input_vertices",
+    "input_faces",
+    "hull_vertices",
+    "hull_faces",
+    "hull_volume",
+    "hull_area",
+    "mesh_volume",
+    "volume_ratio",
+    "flat",
+    "max_vertices",
+    "exact_hull_vertices",
+    "exact_hull_faces",
+    "exact_hull_volume",
+    "added_volume",
+    "added_volume_fraction",
+    "max_distance",
+    "output",
 )
 
 
@@ -43,8 +58,10 @@ class OutputDestinationError(ValueError):
     def __init__(self, output: str, bodies: int) -> None:
         self.output = output
         self.bodies = bodies
-        super().__init__(f"{output}: {bodies} bodies need a file that holds several meshes "
-                         f"({', '.join(MULTI_MESH_EXTENSIONS)}) or out_dir")
+        super().__init__(
+            f"{output}: {bodies} bodies need a file that holds several meshes "
+            f"({', '.join(MULTI_MESH_EXTENSIONS)}) or out_dir"
+        )
 
 
 @dataclass(frozen=True)
@@ -96,15 +113,22 @@ class HullReport:
 
     @property
     def settings(self) -> dict[str, Any]:
-        return {"max_vertices": self.max_vertices, "frame": "world", "output": self.output,
-                "out_dir": self.out_dir}
+        return {
+            "max_vertices": self.max_vertices,
+            "frame": "world",
+            "output": self.output,
+            "out_dir": self.out_dir,
+        }
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON report: the common envelope, the summary and one entry per body."""
         from meshcol.io.report import envelope
 
-        return {**envelope("hull", self.settings, self.units), "summary": self.summary,
-                "bodies": self.bodies}
+        return {
+            **envelope("hull", self.settings, self.units),
+            "summary": self.summary,
+            "bodies": self.bodies,
+        }
 
     def to_json(self) -> str:
         from meshcol.io.report import dumps_json
@@ -188,12 +212,17 @@ def hull(
     if output is not None:
         extension = os.path.splitext(output)[1].lower()
         if extension not in MESH_OUTPUT_EXTENSIONS:
-            raise ValueError(f"unknown mesh extension {extension or '(none)'!r} in {output!r} "
-                             f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})")
+            raise ValueError(
+                f"unknown mesh extension {extension or '(none)'!r} in {output!r} "
+                f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})"
+            )
     scene = as_scene(inputs)
     bodies = scene.bodies
-    if (output is not None and len(bodies) > 1
-            and os.path.splitext(output)[1].lower() not in MULTI_MESH_EXTENSIONS):
+    if (
+        output is not None
+        and len(bodies) > 1
+        and os.path.splitext(output)[1].lower() not in MULTI_MESH_EXTENSIONS
+    ):
         raise OutputDestinationError(output, len(bodies))
 
     # Compute everything first: a bad body stops the run before any file is written.
@@ -222,10 +251,13 @@ def hull(
             write_meshes(path, [(name, result.vertices, result.faces)])
         destinations = list(paths)
 
-    rows = [_row(body, result, closed_volume(body.vertices, body.faces), destination)
-            for body, result, destination in zip(bodies, hulls, destinations)]
-    return HullReport(rows, tuple(hulls), max_vertices, output, out_dir, scene.units,
-                      tuple(warnings))
+    rows = [
+        _row(body, result, closed_volume(body.vertices, body.faces), destination)
+        for body, result, destination in zip(bodies, hulls, destinations)
+    ]
+    return HullReport(
+        rows, tuple(hulls), max_vertices, output, out_dir, scene.units, tuple(warnings)
+    )
 
 
 def _row(body: Body, result: Any, mesh_volume: float | None, destination: str | None) -> dict:

@@ -163,7 +163,8 @@ def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspectio
         raise InvalidMeshError(f"body '{body.name}': mesh has no faces", body.source)
     if not np.isfinite(vertices).all():
         raise InvalidMeshError(
-            f"body '{body.name}': vertices contain NaN or infinite coordinates", body.source)
+            f"body '{body.name}': vertices contain NaN or infinite coordinates", body.source
+        )
 
     world = body.world_vertices()
     used = world[np.unique(faces)]
@@ -255,15 +256,26 @@ def guess_units(largest_extent: float) -> tuple[str, str]:
     if e > IMPLAUSIBLE_EXTENT:
         return "unknown", f"largest extent {e:.6g} units: over 10 m even in millimetres"
     if e > MILLIMETRE_EXTENT:
-        return "mm", f"largest extent {e:.6g} units: {e / 1000:.3g} m in millimetres, over 100 m in metres"
+        return (
+            "mm",
+            f"largest extent {e:.6g} units: {e / 1000:.3g} m in millimetres, over 100 m in metres",
+        )
     if e < TINY_EXTENT:
         return "unknown", f"largest extent {e:.6g} units: under 1 cm in metres"
     return "m", f"largest extent {e:.6g} units: a plausible size in metres"
 
 
 _UNIT_ALIASES = {
-    "m": "m", "meter": "m", "meters": "m", "metre": "m", "metres": "m",
-    "mm": "mm", "millimeter": "mm", "millimeters": "mm", "millimetre": "mm", "millimetres": "mm",
+    "m": "m",
+    "meter": "m",
+    "meters": "m",
+    "metre": "m",
+    "metres": "m",
+    "mm": "mm",
+    "millimeter": "mm",
+    "millimeters": "mm",
+    "millimetre": "mm",
+    "millimetres": "mm",
 }
 
 
@@ -280,8 +292,10 @@ def _units_suspect(guess: str, declared: str | None) -> bool:
 def _manifold_status(vertices: np.ndarray, faces: np.ndarray) -> str:
     import manifold3d
 
-    mesh = manifold3d.Mesh64(vert_properties=np.ascontiguousarray(vertices),
-                             tri_verts=np.ascontiguousarray(faces, dtype=np.uint64))
+    mesh = manifold3d.Mesh64(
+        vert_properties=np.ascontiguousarray(vertices),
+        tri_verts=np.ascontiguousarray(faces, dtype=np.uint64),
+    )
     status = manifold3d.Manifold(mesh).status()
     return str(getattr(status, "name", status)).split(".")[-1]
 
@@ -290,8 +304,9 @@ def _manifold_status(vertices: np.ndarray, faces: np.ndarray) -> str:
 # self-intersection
 
 
-def self_intersecting_pairs(vertices: np.ndarray, faces: np.ndarray,
-                            skip: np.ndarray | None = None) -> np.ndarray:
+def self_intersecting_pairs(
+    vertices: np.ndarray, faces: np.ndarray, skip: np.ndarray | None = None
+) -> np.ndarray:
     """Pairs of faces of a mesh that cross each other.
 
     Parameters
@@ -349,12 +364,13 @@ def _candidate_pairs(tri: np.ndarray):
 
     pairs = sort_and_sweep(tri.min(axis=1), tri.max(axis=1))
     for start in range(0, len(pairs), PAIR_CHUNK):
-        chunk = pairs[start:start + PAIR_CHUNK]
+        chunk = pairs[start : start + PAIR_CHUNK]
         yield chunk[:, 0], chunk[:, 1]
 
 
-def _triangles_cross(t1: np.ndarray, t2: np.ndarray, shared: np.ndarray,
-                     tolerance: float) -> np.ndarray:
+def _triangles_cross(
+    t1: np.ndarray, t2: np.ndarray, shared: np.ndarray, tolerance: float
+) -> np.ndarray:
     """Crossing test of triangle pairs (k, 3, 3) x (k, 3, 3) sharing ``shared`` vertices.
 
     Non-coplanar pairs: Moller's interval test (Moller 1997). Both triangles meet the line
@@ -372,8 +388,9 @@ def _triangles_cross(t1: np.ndarray, t2: np.ndarray, shared: np.ndarray,
     d2[np.abs(d2) <= tolerance] = 0.0
     d1[np.abs(d1) <= tolerance] = 0.0
     coplanar = (d2 == 0).all(axis=1) & (d1 == 0).all(axis=1)
-    straddle = ~((d2 > 0).all(axis=1) | (d2 < 0).all(axis=1)
-                 | (d1 > 0).all(axis=1) | (d1 < 0).all(axis=1))
+    straddle = ~(
+        (d2 > 0).all(axis=1) | (d2 < 0).all(axis=1) | (d1 > 0).all(axis=1) | (d1 < 0).all(axis=1)
+    )
     hit = np.zeros(len(t1), bool)
     general = np.nonzero(~coplanar & straddle & (shared < 2))[0]
     if len(general):
@@ -445,10 +462,29 @@ def _coplanar_overlap(t1, t2, normal, tolerance):
 
 #: Columns of :meth:`InspectReport.to_csv`, one row per body.
 CSV_COLUMNS = (
-    "name", "source", "vertices", "faces", "components", "watertight", "winding_consistent",
-    "volume", "bounds_min", "bounds_max", "size", "degenerate_faces", "duplicate_faces",
-    "boundary_edges", "non_manifold_edges", "self_intersecting", "self_intersecting_pairs",
-    "manifold_status", "units_guess", "units_reason", "declared_units", "findings", "failed_rules",
+    "name",
+    "source",
+    "vertices",
+    "faces",
+    "components",
+    "watertight",
+    "winding_consistent",
+    "volume",
+    "bounds_min",
+    "bounds_max",
+    "size",
+    "degenerate_faces",
+    "duplicate_faces",
+    "boundary_edges",
+    "non_manifold_edges",
+    "self_intersecting",
+    "self_intersecting_pairs",
+    "manifold_status",
+    "units_guess",
+    "units_reason",
+    "declared_units",
+    "findings",
+    "failed_rules",
 )
 
 
@@ -526,8 +562,10 @@ class InspectReport:
         """One row per body (:data:`CSV_COLUMNS`); bounds split into min and max."""
         from meshcol.io.report import dumps_csv
 
-        flat = [dict(row, bounds_min=row["bounds"][0], bounds_max=row["bounds"][1])
-                for row in self.bodies]
+        flat = [
+            dict(row, bounds_min=row["bounds"][0], bounds_max=row["bounds"][1])
+            for row in self.bodies
+        ]
         return dumps_csv(flat, CSV_COLUMNS)
 
 

@@ -25,8 +25,19 @@ FAIL_ON = ("hit", "none")
 #: The motion model, as the report states it.
 MOTION = "linear translation, constant-rate rotation about the local origin"
 #: Columns of :meth:`SweepReport.to_csv`, one row per pair (poses flattened row-major).
-CSV_COLUMNS = ("a", "b", "status", "time_of_impact", "time", "point", "normal", "tunnelled",
-               "pose_a", "pose_b", "iterations")
+CSV_COLUMNS = (
+    "a",
+    "b",
+    "status",
+    "time_of_impact",
+    "time",
+    "point",
+    "normal",
+    "tunnelled",
+    "pose_a",
+    "pose_b",
+    "iterations",
+)
 
 
 #: Scene-relative default tolerance of :func:`sweep`: this times the scene's bounding diagonal.
@@ -80,11 +91,16 @@ class SweepHit:
         """JSON-ready fields (lists for arrays, the status by name), numbers rounded to 12
         significant digits (far below the tolerance) so reports compare across machines."""
         return {
-            "a": self.a, "b": self.b, "status": self.status.name,
+            "a": self.a,
+            "b": self.b,
+            "status": self.status.name,
             "time_of_impact": _round(self.time_of_impact),
-            "time": _round(self.time), "point": _round(self.point),
-            "normal": _round(self.normal), "pose_a": _round(self.pose_a),
-            "pose_b": _round(self.pose_b), "tunnelled": self.tunnelled,
+            "time": _round(self.time),
+            "point": _round(self.point),
+            "normal": _round(self.normal),
+            "pose_a": _round(self.pose_a),
+            "pose_b": _round(self.pose_b),
+            "tunnelled": self.tunnelled,
             "iterations": self.iterations,
         }
 
@@ -164,8 +180,13 @@ class SweepReport:
     @property
     def settings(self) -> dict[str, Any]:
         """The options of the run, as the report states them."""
-        return {"shape": self.collider, "tolerance": float(f"{self.tolerance:.12g}"),
-                "fail_on": self.fail_on, "motion": MOTION, "frame": "world"}
+        return {
+            "shape": self.collider,
+            "tolerance": float(f"{self.tolerance:.12g}"),
+            "fail_on": self.fail_on,
+            "motion": MOTION,
+            "frame": "world",
+        }
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON report: the common envelope, ``failed`` (the policy verdict), duration,
@@ -176,8 +197,10 @@ class SweepReport:
             **envelope("sweep", self.settings, self.scene.units),
             "failed": self.exit_code == 1,
             "duration": self.scene.duration,
-            "bodies": [{"name": b.name, "source": b.source, "moving": m}
-                       for b, m in zip(self.bodies, self.moving)],
+            "bodies": [
+                {"name": b.name, "source": b.source, "moving": m}
+                for b, m in zip(self.bodies, self.moving)
+            ],
             "summary": self.summary,
             "pairs": [h.to_dict() for h in self.hits],
         }
@@ -192,8 +215,14 @@ class SweepReport:
         from meshcol.io.report import dumps_csv
 
         rows = [h.to_dict() for h in self.hits]
-        flat = [dict(row, pose_a=[x for r in row["pose_a"] for x in r],
-                     pose_b=[x for r in row["pose_b"] for x in r]) for row in rows]
+        flat = [
+            dict(
+                row,
+                pose_a=[x for r in row["pose_a"] for x in r],
+                pose_b=[x for r in row["pose_b"] for x in r],
+            )
+            for row in rows
+        ]
         return dumps_csv(flat, CSV_COLUMNS)
 
 
@@ -266,36 +295,43 @@ def sweep(
     )
 
     if collider not in COLLIDER_KINDS:
-        raise ValueError(f"collider must be one of {', '.join(COLLIDER_KINDS)}, "
-                         f"got {collider!r}")
+        raise ValueError(f"collider must be one of {', '.join(COLLIDER_KINDS)}, got {collider!r}")
     if fail_on not in FAIL_ON:
         raise ValueError(f"fail_on must be one of {', '.join(FAIL_ON)}, got {fail_on!r}")
     scene = as_scene(inputs)
     if not any(b.end_pose is not None for b in scene.bodies):
-        raise SceneError("no body has an end pose or a velocity: nothing moves, nothing to sweep",
-                         scene.source)
-    colliders = build_colliders(scene.bodies, collider, mesh_parts="triangles",
-                                decompose_options=decompose_options)
+        raise SceneError(
+            "no body has an end pose or a velocity: nothing moves, nothing to sweep", scene.source
+        )
+    colliders = build_colliders(
+        scene.bodies, collider, mesh_parts="triangles", decompose_options=decompose_options
+    )
     bodies = colliders.bodies
     moving = np.array([_is_moving(b) for b in bodies], dtype=bool)
     cs, owner = colliders.shapes, colliders.part_body
     start_body = np.stack([np.asarray(b.pose, dtype=np.float64) for b in bodies])
-    end_body = np.stack([np.asarray(b.pose if b.end_pose is None else b.end_pose,
-                                    dtype=np.float64) for b in bodies])
+    end_body = np.stack(
+        [np.asarray(b.pose if b.end_pose is None else b.end_pose, dtype=np.float64) for b in bodies]
+    )
     start, end = colliders.part_poses(), colliders.part_poses(end=True)
     lo, hi = swept_aabbs(cs, start, end, threads)
     if tolerance is None:
         finite = np.all(np.isfinite(lo), axis=1) & np.all(np.isfinite(hi), axis=1)
-        diagonal = (float(np.linalg.norm(hi[finite].max(axis=0) - lo[finite].min(axis=0)))
-                    if np.any(finite) else 0.0)
+        diagonal = (
+            float(np.linalg.norm(hi[finite].max(axis=0) - lo[finite].min(axis=0)))
+            if np.any(finite)
+            else 0.0
+        )
         tol = RELATIVE_TOLERANCE * diagonal if diagonal > 0.0 else contact_tolerance(None)
     else:
         tol = contact_tolerance(tolerance)
     bad = ~(np.all(np.isfinite(lo), axis=1) & np.all(np.isfinite(hi), axis=1))
     if np.any(bad):
         body = bodies[int(owner[np.argmax(bad)])]
-        raise MeshcolError(f"body '{body.name}': invalid shape or pose (NaN/inf, empty or not "
-                           "rigid)", body.source or scene.source)
+        raise MeshcolError(
+            f"body '{body.name}': invalid shape or pose (NaN/inf, empty or not rigid)",
+            body.source or scene.source,
+        )
     pairs = sort_and_sweep(lo - 0.5 * tol, hi + 0.5 * tol)
     if len(pairs):
         oa, ob = owner[pairs[:, 0]], owner[pairs[:, 1]]
@@ -304,8 +340,9 @@ def sweep(
         # Part pairs ordered as their bodies (a first in the scene).
         swap = owner[pairs[:, 0]] > owner[pairs[:, 1]]
         pairs[swap] = pairs[swap][:, ::-1]
-    toi = time_of_impact_batch(cs, start, end, pairs, tolerance=tol,
-                               max_iterations=max_iterations, threads=threads)
+    toi = time_of_impact_batch(
+        cs, start, end, pairs, tolerance=tol, max_iterations=max_iterations, threads=threads
+    )
     at_start = intersects_batch(cs, start, pairs, threads=threads).intersects
     at_end = intersects_batch(cs, end, pairs, threads=threads).intersects
 
@@ -319,8 +356,10 @@ def sweep(
         ks = np.asarray(members)
         status = toi.status[ks]
         if np.any(status == TimeOfImpactStatus.INVALID_INPUT):
-            raise MeshcolError(f"bodies '{bodies[i].name}' and '{bodies[j].name}': invalid "
-                               "shape or pose", scene.source)
+            raise MeshcolError(
+                f"bodies '{bodies[i].name}' and '{bodies[j].name}': invalid shape or pose",
+                scene.source,
+            )
         live = ks[status != TimeOfImpactStatus.SEPARATED]
         if len(live) == 0:
             continue
@@ -334,17 +373,38 @@ def sweep(
             if len(failed) and fraction[failed].min() < fraction[best]:
                 best_status = TimeOfImpactStatus.FAILED
         t = float(fraction[best])
-        poses = interpolate_pose(np.stack([start_body[i], start_body[j]]),
-                                 np.stack([end_body[i], end_body[j]]), [t, t])
-        tunnelled = (best_status == TimeOfImpactStatus.HIT and not np.any(at_start[ks])
-                     and not np.any(at_end[ks]))
-        hits.append(SweepHit(
-            a=bodies[i].name, b=bodies[j].name, status=best_status, time_of_impact=t,
-            time=None if scene.duration is None else t * float(scene.duration),
-            point=toi.point[best].copy(), normal=toi.normal[best].copy(),
-            pose_a=poses[0], pose_b=poses[1], tunnelled=bool(tunnelled),
-            iterations=int(toi.iterations[best])))
+        poses = interpolate_pose(
+            np.stack([start_body[i], start_body[j]]), np.stack([end_body[i], end_body[j]]), [t, t]
+        )
+        tunnelled = (
+            best_status == TimeOfImpactStatus.HIT
+            and not np.any(at_start[ks])
+            and not np.any(at_end[ks])
+        )
+        hits.append(
+            SweepHit(
+                a=bodies[i].name,
+                b=bodies[j].name,
+                status=best_status,
+                time_of_impact=t,
+                time=None if scene.duration is None else t * float(scene.duration),
+                point=toi.point[best].copy(),
+                normal=toi.normal[best].copy(),
+                pose_a=poses[0],
+                pose_b=poses[1],
+                tunnelled=bool(tunnelled),
+                iterations=int(toi.iterations[best]),
+            )
+        )
     hits.sort(key=lambda h: (h.a, h.b))
-    return SweepReport(scene=scene, bodies=bodies, collider=collider, tolerance=tol,
-                       hits=tuple(hits), candidate_pairs=len(groups), part_pairs=len(pairs),
-                       moving=tuple(bool(m) for m in moving), fail_on=fail_on)
+    return SweepReport(
+        scene=scene,
+        bodies=bodies,
+        collider=collider,
+        tolerance=tol,
+        hits=tuple(hits),
+        candidate_pairs=len(groups),
+        part_pairs=len(pairs),
+        moving=tuple(bool(m) for m in moving),
+        fail_on=fail_on,
+    )

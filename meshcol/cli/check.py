@@ -17,31 +17,90 @@ SHAPE_CHOICES = COLLIDER_KINDS
 
 @click.command("check")
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
-@click.option("--shape", type=click.Choice(SHAPE_CHOICES), default="hull", show_default=True,
-              help="Collision shape of each body (a manifest's per-body 'shape' overrides it).")
-@click.option("--tolerance", type=click.FloatRange(min=0.0), default=1e-6, show_default=True,
-              help="Contact band in scene units: |signed distance| <= T counts as touching.")
-@click.option("--clearance", type=click.FloatRange(min=0.0), default=0.0, show_default=True,
-              help="Minimum gap required; closer pairs get status 'clearance'.")
-@click.option("--fail-on", type=click.Choice(FAIL_ON_CHOICES), default="penetration", show_default=True,
-              help="Least severe status that fails the run (exit 1).")
-@click.option("--ignore", "ignore", multiple=True, metavar="A:B",
-              help="Pair designed to touch (globs allowed, either order); repeatable.")
-@click.option("--baseline", type=click.Path(dir_okay=False), default=None, metavar="OLD.json",
-              help="Previous JSON report: fail only on pairs that are new or worse.")
-@click.option("--threads", type=click.IntRange(min=0), default=0, show_default=True,
-              help="Threads for the native queries (0: all cores).")
-@click.option("--engine", type=click.Choice(ENGINES), default="coacd", show_default=True,
-              help="Decomposition engine for 'decomposed' bodies missing from the cache.")
-@click.option("--threshold", type=click.FloatRange(min=0.0, min_open=True), default=None,
-              help="Decomposition concavity threshold (as in 'meshcol decompose').")
-@click.option("--cache-dir", type=click.Path(file_okay=False), default=None,
-              help="Decompose cache folder (default: the user cache, as 'meshcol decompose').")
+@click.option(
+    "--shape",
+    type=click.Choice(SHAPE_CHOICES),
+    default="hull",
+    show_default=True,
+    help="Collision shape of each body (a manifest's per-body 'shape' overrides it).",
+)
+@click.option(
+    "--tolerance",
+    type=click.FloatRange(min=0.0),
+    default=1e-6,
+    show_default=True,
+    help="Contact band in scene units: |signed distance| <= T counts as touching.",
+)
+@click.option(
+    "--clearance",
+    type=click.FloatRange(min=0.0),
+    default=0.0,
+    show_default=True,
+    help="Minimum gap required; closer pairs get status 'clearance'.",
+)
+@click.option(
+    "--fail-on",
+    type=click.Choice(FAIL_ON_CHOICES),
+    default="penetration",
+    show_default=True,
+    help="Least severe status that fails the run (exit 1).",
+)
+@click.option(
+    "--ignore",
+    "ignore",
+    multiple=True,
+    metavar="A:B",
+    help="Pair designed to touch (globs allowed, either order); repeatable.",
+)
+@click.option(
+    "--baseline",
+    type=click.Path(dir_okay=False),
+    default=None,
+    metavar="OLD.json",
+    help="Previous JSON report: fail only on pairs that are new or worse.",
+)
+@click.option(
+    "--threads",
+    type=click.IntRange(min=0),
+    default=0,
+    show_default=True,
+    help="Threads for the native queries (0: all cores).",
+)
+@click.option(
+    "--engine",
+    type=click.Choice(ENGINES),
+    default="coacd",
+    show_default=True,
+    help="Decomposition engine for 'decomposed' bodies missing from the cache.",
+)
+@click.option(
+    "--threshold",
+    type=click.FloatRange(min=0.0, min_open=True),
+    default=None,
+    help="Decomposition concavity threshold (as in 'meshcol decompose').",
+)
+@click.option(
+    "--cache-dir",
+    type=click.Path(file_okay=False),
+    default=None,
+    help="Decompose cache folder (default: the user cache, as 'meshcol decompose').",
+)
 @report_options(default="the report on stdout; the summary on stderr")
-def check(inputs: tuple[str, ...], shape: str, tolerance: float, clearance: float, fail_on: str,
-          ignore: tuple[str, ...], baseline: str | None, threads: int, engine: str,
-          threshold: float | None, cache_dir: str | None, report: str | None,
-          fmt: str | None) -> None:
+def check(
+    inputs: tuple[str, ...],
+    shape: str,
+    tolerance: float,
+    clearance: float,
+    fail_on: str,
+    ignore: tuple[str, ...],
+    baseline: str | None,
+    threads: int,
+    engine: str,
+    threshold: float | None,
+    cache_dir: str | None,
+    report: str | None,
+    fmt: str | None,
+) -> None:
     """Check every pair of bodies for contact, clearance and interpenetration.
 
     INPUT is mesh files (each body at its own coordinates, as parts exported in place), one
@@ -69,10 +128,18 @@ def check(inputs: tuple[str, ...], shape: str, tolerance: float, clearance: floa
             raise click.BadParameter(str(exc), param_hint="'--ignore'") from None
     fmt = pick_format(report, fmt)
     progress = Progress()
-    result = run_check(list(inputs), progress=progress.message, collider=shape,
-                       tolerance=tolerance, clearance=clearance, fail_on=fail_on, ignore=ignore,
-                       baseline=baseline, threads=threads,
-                       decompose_options=_decompose_options(engine, threshold, cache_dir))
+    result = run_check(
+        list(inputs),
+        progress=progress.message,
+        collider=shape,
+        tolerance=tolerance,
+        clearance=clearance,
+        fail_on=fail_on,
+        ignore=ignore,
+        baseline=baseline,
+        threads=threads,
+        decompose_options=_decompose_options(engine, threshold, cache_dir),
+    )
     progress.done()
 
     emit(result.to_csv() if fmt == "csv" else result.to_json(), report)

@@ -10,7 +10,9 @@ from typing import Any
 import click
 
 
-def report_options(default: str = "the report on stdout") -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+def report_options(
+    default: str = "the report on stdout",
+) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     """Add ``--report FILE`` (``-`` for stdout) and ``--format json|csv`` (parameter ``fmt``).
 
     Parameters
@@ -20,11 +22,20 @@ def report_options(default: str = "the report on stdout") -> Callable[[Callable[
     """
 
     def decorate(func: Callable[..., Any]) -> Callable[..., Any]:
-        func = click.option("--format", "fmt", type=click.Choice(["json", "csv"]), default=None,
-                            help="Report format (default: from the --report extension, else json).")(func)
-        func = click.option("--report", type=click.Path(dir_okay=False, allow_dash=True), default=None,
-                            metavar="FILE",
-                            help=f"Write the report to FILE ('-': stdout). Default: {default}.")(func)
+        func = click.option(
+            "--format",
+            "fmt",
+            type=click.Choice(["json", "csv"]),
+            default=None,
+            help="Report format (default: from the --report extension, else json).",
+        )(func)
+        func = click.option(
+            "--report",
+            type=click.Path(dir_okay=False, allow_dash=True),
+            default=None,
+            metavar="FILE",
+            help=f"Write the report to FILE ('-': stdout). Default: {default}.",
+        )(func)
         return func
 
     return decorate

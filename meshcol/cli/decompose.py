@@ -8,7 +8,9 @@ from meshcol.decomposition.engines import ENGINES
 from meshcol.io.mesh_write import LAYOUTS
 
 
-def _engine_option(ctx: click.Context, param: click.Parameter, values: tuple[str, ...]) -> dict[str, str]:
+def _engine_option(
+    ctx: click.Context, param: click.Parameter, values: tuple[str, ...]
+) -> dict[str, str]:
     options: dict[str, str] = {}
     for item in values:
         key, sep, value = item.partition("=")
@@ -20,23 +22,104 @@ def _engine_option(ctx: click.Context, param: click.Parameter, values: tuple[str
 
 @click.command("decompose")
 @click.argument("inputs", nargs=-1, required=True, type=click.Path(dir_okay=False))
-@click.option("--out-dir", "-o", required=True, type=click.Path(file_okay=False), help="Folder for the parts (created if missing).")
-@click.option("--engine", type=click.Choice(ENGINES), default="coacd", show_default=True, help="Decomposition engine (vhacd needs meshcol[vhacd]).")
-@click.option("--threshold", type=click.FloatRange(0, 1, min_open=True), default=None, help="CoACD concavity threshold (default 0.05); lower gives more, tighter parts.")
+@click.option(
+    "--out-dir",
+    "-o",
+    required=True,
+    type=click.Path(file_okay=False),
+    help="Folder for the parts (created if missing).",
+)
+@click.option(
+    "--engine",
+    type=click.Choice(ENGINES),
+    default="coacd",
+    show_default=True,
+    help="Decomposition engine (vhacd needs meshcol[vhacd]).",
+)
+@click.option(
+    "--threshold",
+    type=click.FloatRange(0, 1, min_open=True),
+    default=None,
+    help="CoACD concavity threshold (default 0.05); lower gives more, tighter parts.",
+)
 @click.option("--max-hulls", type=click.IntRange(min=1), default=None, help="Most parts per body.")
-@click.option("--max-vertices", type=click.IntRange(min=4), default=None, help="Most vertices per part (enforced).")
-@click.option("--preprocess", type=click.Choice(["auto", "on", "off"]), default="auto", show_default=True, help="CoACD manifold preprocessing; auto: on for non-manifold input.")
-@click.option("--resolution", type=click.IntRange(min=1), default=None, help="CoACD sampling resolution or V-HACD voxel count.")
+@click.option(
+    "--max-vertices",
+    type=click.IntRange(min=4),
+    default=None,
+    help="Most vertices per part (enforced).",
+)
+@click.option(
+    "--preprocess",
+    type=click.Choice(["auto", "on", "off"]),
+    default="auto",
+    show_default=True,
+    help="CoACD manifold preprocessing; auto: on for non-manifold input.",
+)
+@click.option(
+    "--resolution",
+    type=click.IntRange(min=1),
+    default=None,
+    help="CoACD sampling resolution or V-HACD voxel count.",
+)
 @click.option("--seed", type=int, default=0, show_default=True, help="CoACD random seed.")
-@click.option("--engine-option", "-E", "engine_options", multiple=True, callback=_engine_option, metavar="KEY=VALUE", help="Any other engine parameter, e.g. -E mcts_iterations=50 (repeatable).")
-@click.option("--jobs", "-j", type=click.IntRange(min=1), default=1, show_default=True, help="Files decomposed in parallel processes (1: one at a time, CoACD using every core).")
-@click.option("--timeout", type=click.FloatRange(0, min_open=True), default=None, help="Seconds allowed per file; a file over it is stopped and reported.")
-@click.option("--cache-dir", type=click.Path(file_okay=False), default=None, help="Cache folder (default: the user cache folder, meshcol/decompose).")
+@click.option(
+    "--engine-option",
+    "-E",
+    "engine_options",
+    multiple=True,
+    callback=_engine_option,
+    metavar="KEY=VALUE",
+    help="Any other engine parameter, e.g. -E mcts_iterations=50 (repeatable).",
+)
+@click.option(
+    "--jobs",
+    "-j",
+    type=click.IntRange(min=1),
+    default=1,
+    show_default=True,
+    help="Files decomposed in parallel processes (1: one at a time, CoACD using every core).",
+)
+@click.option(
+    "--timeout",
+    type=click.FloatRange(0, min_open=True),
+    default=None,
+    help="Seconds allowed per file; a file over it is stopped and reported.",
+)
+@click.option(
+    "--cache-dir",
+    type=click.Path(file_okay=False),
+    default=None,
+    help="Cache folder (default: the user cache folder, meshcol/decompose).",
+)
 @click.option("--no-cache", is_flag=True, help="Neither read nor write the cache.")
-@click.option("--layout", type=click.Choice(LAYOUTS), default="parts", show_default=True, help="parts: one file per part; combined: one file per body; ucx: UCX_<body>_NN objects.")
-@click.option("--format", "fmt", type=click.Choice(["obj", "glb"]), default="obj", show_default=True, help="Output format (glb: one node per part; not with ucx).")
-@click.option("--report", type=click.Path(dir_okay=False), default=None, help="Write the JSON or CSV report here instead of stdout.")
-@click.option("--max-hausdorff", type=click.FloatRange(min=0), default=None, help="Fail (exit 1) when a body's Hausdorff distance, either way, exceeds this.")
+@click.option(
+    "--layout",
+    type=click.Choice(LAYOUTS),
+    default="parts",
+    show_default=True,
+    help="parts: one file per part; combined: one file per body; ucx: UCX_<body>_NN objects.",
+)
+@click.option(
+    "--format",
+    "fmt",
+    type=click.Choice(["obj", "glb"]),
+    default="obj",
+    show_default=True,
+    help="Output format (glb: one node per part; not with ucx).",
+)
+@click.option(
+    "--report",
+    type=click.Path(dir_okay=False),
+    default=None,
+    help="Write the JSON or CSV report here instead of stdout.",
+)
+@click.option(
+    "--max-hausdorff",
+    type=click.FloatRange(min=0),
+    default=None,
+    help="Fail (exit 1) when a body's Hausdorff distance, either way, exceeds this.",
+)
 @click.pass_context
 def decompose_command(
     ctx: click.Context,
@@ -95,11 +178,25 @@ def decompose_command(
     progress = Progress()
     try:
         result = decompose_files(
-            inputs, out_dir, engine=engine, threshold=threshold, max_hulls=max_hulls,
-            max_vertices=max_vertices, preprocess=preprocess, resolution=resolution, seed=seed,
-            engine_options=engine_options, jobs=jobs, timeout=timeout, cache_dir=cache_dir,
-            use_cache=not no_cache, layout=layout, fmt=fmt, max_hausdorff=max_hausdorff,
-            progress=progress.message)
+            inputs,
+            out_dir,
+            engine=engine,
+            threshold=threshold,
+            max_hulls=max_hulls,
+            max_vertices=max_vertices,
+            preprocess=preprocess,
+            resolution=resolution,
+            seed=seed,
+            engine_options=engine_options,
+            jobs=jobs,
+            timeout=timeout,
+            cache_dir=cache_dir,
+            use_cache=not no_cache,
+            layout=layout,
+            fmt=fmt,
+            max_hausdorff=max_hausdorff,
+            progress=progress.message,
+        )
     finally:
         progress.done()
     emit(result.to_csv() if report_format(report, None) == "csv" else result.to_json(), report)

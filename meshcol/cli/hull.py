@@ -10,20 +10,39 @@ from meshcol.cli.common import report_options
 from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
 
 
-@click.command("hull", context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
+@click.command(
+    "hull", context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100}
+)
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
-@click.option("-o", "--output", "output", metavar="FILE",
-              help="Write the hull(s) to FILE (format from the extension: .obj .stl .ply .off "
-                   ".glb). Several bodies need .obj or .glb (one named object each).")
-@click.option("--out-dir", metavar="DIR",
-              help="Write one DIR/<body>.obj per body (characters other than letters, digits, "
-                   "'.', '-' and '_' become '_').")
-@click.option("--max-vertices", type=click.IntRange(min=4), metavar="N",
-              help="At most N vertices per hull (PhysX: 255, GPU pipelines: 64), still "
-                   "enclosing the input.")
+@click.option(
+    "-o",
+    "--output",
+    "output",
+    metavar="FILE",
+    help="Write the hull(s) to FILE (format from the extension: .obj .stl .ply .off "
+    ".glb). Several bodies need .obj or .glb (one named object each).",
+)
+@click.option(
+    "--out-dir",
+    metavar="DIR",
+    help="Write one DIR/<body>.obj per body (characters other than letters, digits, "
+    "'.', '-' and '_' become '_').",
+)
+@click.option(
+    "--max-vertices",
+    type=click.IntRange(min=4),
+    metavar="N",
+    help="At most N vertices per hull (PhysX: 255, GPU pipelines: 64), still enclosing the input.",
+)
 @report_options(default="stdout when no mesh is written, else no report")
-def hull(inputs: tuple[str, ...], output: str | None, out_dir: str | None,
-         max_vertices: int | None, report: str | None, fmt: str | None) -> None:
+def hull(
+    inputs: tuple[str, ...],
+    output: str | None,
+    out_dir: str | None,
+    max_vertices: int | None,
+    report: str | None,
+    fmt: str | None,
+) -> None:
     """Convex hull of each body, optionally within a vertex budget.
 
     INPUT is mesh files (OBJ, STL, PLY, OFF, glTF, GLB; every object, solid or mesh node is
@@ -55,19 +74,27 @@ def hull(inputs: tuple[str, ...], output: str | None, out_dir: str | None,
         if extension not in MESH_OUTPUT_EXTENSIONS:
             raise click.BadParameter(
                 f"unknown mesh extension {extension or '(none)'!r} in {output!r} "
-                f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})", param_hint="'-o' / '--output'")
+                f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})",
+                param_hint="'-o' / '--output'",
+            )
 
     from meshcol.analysis.hull import OutputDestinationError
     from meshcol.analysis.hull import hull as run_hull
     from meshcol.io.report import emit, report_format
 
     try:
-        result = run_hull(list(inputs), max_vertices=max_vertices, output=output, out_dir=out_dir,
-                          warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True))
+        result = run_hull(
+            list(inputs),
+            max_vertices=max_vertices,
+            output=output,
+            out_dir=out_dir,
+            warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
+        )
     except OutputDestinationError as exc:
         raise click.UsageError(
             f"-o {exc.output}: {exc.bodies} bodies need a file that holds several meshes "
-            f"({', '.join(MULTI_MESH_EXTENSIONS)}) or --out-dir") from None
+            f"({', '.join(MULTI_MESH_EXTENSIONS)}) or --out-dir"
+        ) from None
     if report is None and (output or out_dir):
         return
     emit(result.to_csv() if report_format(report, fmt) == "csv" else result.to_json(), report)

@@ -19,18 +19,26 @@ def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) 
     unknown = [n for n in names if n not in RULES]
     if unknown:
         raise click.BadParameter(
-            f"unknown rule {unknown[0]!r} (valid rules: all, {', '.join(RULES)})", ctx, param)
+            f"unknown rule {unknown[0]!r} (valid rules: all, {', '.join(RULES)})", ctx, param
+        )
     return tuple(dict.fromkeys(names))
 
 
-@click.command("inspect", context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
+@click.command(
+    "inspect", context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100}
+)
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
 @report_options(default="the report on stdout; a summary table on stderr")
-@click.option("--fail-on", "fail_on", metavar="RULES", callback=_parse_rules,
-              help="Comma-separated findings that make the run exit 1: "
-                   + ", ".join(RULES) + " (or all).")
-def inspect(inputs: tuple[str, ...], report: str | None, fmt: str | None,
-            fail_on: tuple[str, ...]) -> None:
+@click.option(
+    "--fail-on",
+    "fail_on",
+    metavar="RULES",
+    callback=_parse_rules,
+    help="Comma-separated findings that make the run exit 1: " + ", ".join(RULES) + " (or all).",
+)
+def inspect(
+    inputs: tuple[str, ...], report: str | None, fmt: str | None, fail_on: tuple[str, ...]
+) -> None:
     """Health check of each body's mesh: fit to be a collider?
 
     INPUT is mesh files (OBJ, STL, PLY, OFF, glTF, GLB; every object, solid or mesh node is
@@ -59,8 +67,11 @@ def inspect(inputs: tuple[str, ...], report: str | None, fmt: str | None,
     if report is not None and report != "-":
         _print_table(result.bodies)
     for row in result.failed:
-        click.echo(f"meshcol: fail: {row['source']}: body '{row['name']}': "
-                   + ", ".join(row["failed_rules"]), err=True)
+        click.echo(
+            f"meshcol: fail: {row['source']}: body '{row['name']}': "
+            + ", ".join(row["failed_rules"]),
+            err=True,
+        )
     sys.exit(result.exit_code)
 
 
@@ -71,8 +82,17 @@ def _print_table(rows: list[dict]) -> None:
     for row in rows:
         volume = "-" if row["volume"] is None else f"{row['volume']:.4g}"
         size = " x ".join(f"{s:.3g}" for s in row["size"])
-        lines.append((row["name"], str(row["faces"]), "yes" if row["watertight"] else "no",
-                      volume, size, row["units_guess"], ", ".join(row["findings"]) or "ok"))
+        lines.append(
+            (
+                row["name"],
+                str(row["faces"]),
+                "yes" if row["watertight"] else "no",
+                volume,
+                size,
+                row["units_guess"],
+                ", ".join(row["findings"]) or "ok",
+            )
+        )
     widths = [max(len(line[i]) for line in lines) for i in range(len(header) - 1)]
     for line in lines:
         cells = [cell.ljust(width) for cell, width in zip(line, widths)]

@@ -17,28 +17,60 @@ def _positive(ctx: click.Context, param: click.Parameter, value: float | None) -
     return value
 
 
-@click.command("sweep", context_settings={"help_option_names": ["-h", "--help"],
-                                          "max_content_width": 100})
+@click.command(
+    "sweep", context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100}
+)
 @click.argument("manifest", metavar="MANIFEST")
-@click.option("--shape", type=click.Choice(COLLIDER_KINDS), default="hull",
-              show_default=True,
-              help="Collision shape of each body: convex hull, convex decomposition, or the "
-                   "triangles of the mesh (surface contact).")
-@click.option("--tolerance", type=float, callback=_positive, metavar="T",
-              help="Contact distance in scene units (default: 1e-6 x the diagonal of the "
-                   "scene's swept bounds).")
+@click.option(
+    "--shape",
+    type=click.Choice(COLLIDER_KINDS),
+    default="hull",
+    show_default=True,
+    help="Collision shape of each body: convex hull, convex decomposition, or the "
+    "triangles of the mesh (surface contact).",
+)
+@click.option(
+    "--tolerance",
+    type=float,
+    callback=_positive,
+    metavar="T",
+    help="Contact distance in scene units (default: 1e-6 x the diagonal of the "
+    "scene's swept bounds).",
+)
 @report_options(default="the report on stdout; a summary on stderr")
-@click.option("--fail-on", "fail_on", type=click.Choice(FAIL_ON), default="hit",
-              show_default=True,
-              help="'hit': exit 1 when a pair hits, overlaps at the start or cannot be "
-                   "decided; 'none': always exit 0 after a successful run.")
-@click.option("--threads", type=click.IntRange(min=0), default=0, show_default=True,
-              help="Worker threads (0: all cores).")
-@click.option("--cache-dir", type=click.Path(file_okay=False), default=None,
-              help="Decompose cache folder for --shape decomposed (default: the user cache, "
-                   "as 'meshcol decompose'); bodies missing from it are decomposed now.")
-def sweep(manifest: str, shape: str, tolerance: float | None, report: str | None,
-          fmt: str | None, fail_on: str, threads: int, cache_dir: str | None) -> None:
+@click.option(
+    "--fail-on",
+    "fail_on",
+    type=click.Choice(FAIL_ON),
+    default="hit",
+    show_default=True,
+    help="'hit': exit 1 when a pair hits, overlaps at the start or cannot be "
+    "decided; 'none': always exit 0 after a successful run.",
+)
+@click.option(
+    "--threads",
+    type=click.IntRange(min=0),
+    default=0,
+    show_default=True,
+    help="Worker threads (0: all cores).",
+)
+@click.option(
+    "--cache-dir",
+    type=click.Path(file_okay=False),
+    default=None,
+    help="Decompose cache folder for --shape decomposed (default: the user cache, "
+    "as 'meshcol decompose'); bodies missing from it are decomposed now.",
+)
+def sweep(
+    manifest: str,
+    shape: str,
+    tolerance: float | None,
+    report: str | None,
+    fmt: str | None,
+    fail_on: str,
+    threads: int,
+    cache_dir: str | None,
+) -> None:
     """First contact of moving bodies: meshcol sweep MANIFEST [options].
 
     MANIFEST is a scene manifest whose bodies have start poses and end poses
@@ -63,20 +95,32 @@ def sweep(manifest: str, shape: str, tolerance: float | None, report: str | None
     from meshcol.io.report import emit, report_format
 
     decompose_options = {} if cache_dir is None else {"cache_dir": cache_dir}
-    result = run_sweep(manifest, collider=shape, tolerance=tolerance, threads=threads,
-                       decompose_options=decompose_options, fail_on=fail_on)
+    result = run_sweep(
+        manifest,
+        collider=shape,
+        tolerance=tolerance,
+        threads=threads,
+        decompose_options=decompose_options,
+        fail_on=fail_on,
+    )
     emit(result.to_csv() if report_format(report, fmt) == "csv" else result.to_json(), report)
 
     if report is not None and report != "-":
         summary = result.summary
-        click.echo(f"meshcol: sweep: {summary['bodies']} bodies, {summary['candidate_pairs']} "
-                   f"candidate pairs, {summary['hits']} hits ({summary['tunnelled']} tunnelled), "
-                   f"{summary['overlapped_at_start']} overlapped at start, "
-                   f"{summary['failed']} undecided", err=True)
+        click.echo(
+            f"meshcol: sweep: {summary['bodies']} bodies, {summary['candidate_pairs']} "
+            f"candidate pairs, {summary['hits']} hits ({summary['tunnelled']} tunnelled), "
+            f"{summary['overlapped_at_start']} overlapped at start, "
+            f"{summary['failed']} undecided",
+            err=True,
+        )
     if result.exit_code:
         for h in result.hits:
             when = "" if h.time is None else f" (t = {h.time:.6g} s)"
             extra = ", tunnelled" if h.tunnelled else ""
-            click.echo(f"meshcol: fail: {manifest}: '{h.a}' and '{h.b}': {h.status.name} at time of impact "
-                       f"{h.time_of_impact:.6g}{when}{extra}", err=True)
+            click.echo(
+                f"meshcol: fail: {manifest}: '{h.a}' and '{h.b}': {h.status.name} at time of impact "
+                f"{h.time_of_impact:.6g}{when}{extra}",
+                err=True,
+            )
     sys.exit(result.exit_code)

@@ -21,10 +21,24 @@ from meshcol.errors import InvalidMeshError, MeshcolError
 __all__ = ["CSV_COLUMNS", "DecomposeReport", "decompose_files"]
 
 #: Columns of :meth:`DecomposeReport.to_csv`: one row per body, and one per failed file.
-CSV_COLUMNS = ("path", "body", "status", "message", "parts", "vertices_per_part", "mesh_volume",
-               "union_volume", "volume_ratio", "hausdorff_mesh_to_parts",
-               "hausdorff_parts_to_mesh", "uncovered_fraction", "tolerance", "repaired",
-               "from_cache", "hausdorff_ok")
+CSV_COLUMNS = (
+    "path",
+    "body",
+    "status",
+    "message",
+    "parts",
+    "vertices_per_part",
+    "mesh_volume",
+    "union_volume",
+    "volume_ratio",
+    "hausdorff_mesh_to_parts",
+    "hausdorff_parts_to_mesh",
+    "uncovered_fraction",
+    "tolerance",
+    "repaired",
+    "from_cache",
+    "hausdorff_ok",
+)
 
 
 @dataclass(frozen=True)
@@ -67,7 +81,9 @@ class DecomposeReport:
             "timeout": sum(1 for f in self.files if f["status"] == "timeout"),
             "bodies": sum(len(f["bodies"]) for f in self.files),
             "parts": sum(b["metrics"].get("parts", 0) for f in self.files for b in f["bodies"]),
-            "hausdorff_exceeded": sum(not b["hausdorff_ok"] for f in self.files for b in f["bodies"]),
+            "hausdorff_exceeded": sum(
+                not b["hausdorff_ok"] for f in self.files for b in f["bodies"]
+            ),
         }
 
     @property
@@ -82,9 +98,14 @@ class DecomposeReport:
         ``files`` and ``summary``."""
         from meshcol.io.report import envelope
 
-        return {**envelope("decompose", self.settings, self.units), "layout": self.layout,
-                "format": self.fmt, "max_hausdorff": self.max_hausdorff, "files": self.files,
-                "summary": self.summary}
+        return {
+            **envelope("decompose", self.settings, self.units),
+            "layout": self.layout,
+            "format": self.fmt,
+            "max_hausdorff": self.max_hausdorff,
+            "files": self.files,
+            "summary": self.summary,
+        }
 
     def to_json(self) -> str:
         from meshcol.io.report import dumps_json
@@ -174,31 +195,60 @@ def decompose_files(
     inputs = [os.fspath(p) for p in inputs]
     out_dir = os.fspath(out_dir)
     options: dict[str, Any] = {
-        "engine": engine, "threshold": threshold, "max_hulls": max_hulls,
-        "max_vertices": max_vertices, "preprocess": preprocess, "resolution": resolution,
-        "seed": seed, "engine_options": engine_options,
-        "cache_dir": None if cache_dir is None else os.fspath(cache_dir), "use_cache": use_cache,
+        "engine": engine,
+        "threshold": threshold,
+        "max_hulls": max_hulls,
+        "max_vertices": max_vertices,
+        "preprocess": preprocess,
+        "resolution": resolution,
+        "seed": seed,
+        "engine_options": engine_options,
+        "cache_dir": None if cache_dir is None else os.fspath(cache_dir),
+        "use_cache": use_cache,
         # Parallel files share the cores: each worker's distance queries get its share.
         "threads": 0 if jobs == 1 else max(1, (os.cpu_count() or 1) // jobs),
     }
     settings = {
-        "engine": engine, "threshold": threshold, "max_hulls": max_hulls,
-        "max_vertices": max_vertices, "preprocess": preprocess, "resolution": resolution,
-        "seed": seed, "engine_options": engine_options, "jobs": jobs, "timeout": timeout,
-        "use_cache": use_cache, "cache_dir": options["cache_dir"], "out_dir": out_dir,
-        "layout": layout, "format": fmt, "max_hausdorff": max_hausdorff, "frame": "world",
+        "engine": engine,
+        "threshold": threshold,
+        "max_hulls": max_hulls,
+        "max_vertices": max_vertices,
+        "preprocess": preprocess,
+        "resolution": resolution,
+        "seed": seed,
+        "engine_options": engine_options,
+        "jobs": jobs,
+        "timeout": timeout,
+        "use_cache": use_cache,
+        "cache_dir": options["cache_dir"],
+        "out_dir": out_dir,
+        "layout": layout,
+        "format": fmt,
+        "max_hausdorff": max_hausdorff,
+        "frame": "world",
     }
 
     pool = None
     if jobs > 1 or timeout is not None:
         # Workers start now and load the engine while this process reads the files.
-        pool = WorkerPool(decompose_task, jobs, timeout=timeout,
-                          prepare=functools.partial(prepare_engine, engine))
+        pool = WorkerPool(
+            decompose_task, jobs, timeout=timeout, prepare=functools.partial(prepare_engine, engine)
+        )
         pool.start(min(jobs, len(inputs)))
     try:
-        files, rows = _run([os.fspath(p) for p in inputs], out_dir, options, pool, jobs=jobs, timeout=timeout,
-                                  use_cache=use_cache, layout=layout, fmt=fmt,
-                                  max_hausdorff=max_hausdorff, progress=progress)
+        files, rows = _run(
+            [os.fspath(p) for p in inputs],
+            out_dir,
+            options,
+            pool,
+            jobs=jobs,
+            timeout=timeout,
+            use_cache=use_cache,
+            layout=layout,
+            fmt=fmt,
+            max_hausdorff=max_hausdorff,
+            progress=progress,
+        )
     finally:
         if pool is not None:
             pool.close()
@@ -206,8 +256,17 @@ def decompose_files(
 
 
 def _run(
-    inputs: list[str], out_dir: str, options: dict[str, Any], pool: Any, *, jobs: int,
-    timeout: float | None, use_cache: bool, layout: str, fmt: str, max_hausdorff: float | None,
+    inputs: list[str],
+    out_dir: str,
+    options: dict[str, Any],
+    pool: Any,
+    *,
+    jobs: int,
+    timeout: float | None,
+    use_cache: bool,
+    layout: str,
+    fmt: str,
+    max_hausdorff: float | None,
     progress: Callable[[str], None] | None,
 ) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
     """Load, look up the cache, decompose, write: the file entries and the CSV rows."""
@@ -235,7 +294,8 @@ def _run(
                 clean = safe_name(name)
                 if clean in names:
                     raise MeshcolError(
-                        f"two bodies would write {clean!r} (also from {names[clean]}): rename one", path
+                        f"two bodies would write {clean!r} (also from {names[clean]}): rename one",
+                        path,
                     )
                 names[clean] = path
             i = len(files)
@@ -243,7 +303,9 @@ def _run(
             start = time.perf_counter()
             lookup = {}
             if use_cache:
-                lookup = {name: cached_decomposition((v, f), **key_options) for name, v, f, _ in bodies}
+                lookup = {
+                    name: cached_decomposition((v, f), **key_options) for name, v, f, _ in bodies
+                }
             if lookup and all(d is not None and d.metrics is not None for d in lookup.values()):
                 hits = [(name, lookup[name]) for name, _, _, _ in bodies]
                 results[i] = ("ok", hits, None, time.perf_counter() - start)
@@ -263,8 +325,13 @@ def _run(
     file_reports: list[dict[str, Any]] = []
     for i, (path, bodies) in enumerate(files):
         status, value, message, seconds = results[i]
-        entry: dict[str, Any] = {"path": path, "status": status, "message": message, "bodies": [],
-                                 "seconds": round(seconds, 3)}
+        entry: dict[str, Any] = {
+            "path": path,
+            "status": status,
+            "message": message,
+            "bodies": [],
+            "seconds": round(seconds, 3),
+        }
         if status == "ok":
             transforms = {name: t for name, _, _, t in bodies}
             for name, d in value:
@@ -272,23 +339,36 @@ def _run(
                 world = [(v @ t[:3, :3].T + t[:3, 3], f) for v, f in d.parts]
                 written = write_parts(name, world, out_dir, layout, fmt)
                 m = d.metrics.to_dict() if d.metrics is not None else {}
-                worst = max(m.get("hausdorff_mesh_to_parts", 0.0), m.get("hausdorff_parts_to_mesh", 0.0))
+                worst = max(
+                    m.get("hausdorff_mesh_to_parts", 0.0), m.get("hausdorff_parts_to_mesh", 0.0)
+                )
                 ok = max_hausdorff is None or worst <= max_hausdorff
-                entry["bodies"].append({
-                    "name": name,
-                    "outputs": [os.path.relpath(p, out_dir) for p in written],
-                    "cache_key": d.cache_key,
-                    "from_cache": d.from_cache,
-                    "engine": d.engine,
-                    "engine_version": d.engine_version,
-                    "params": dict(d.params),
-                    "repaired": d.repaired,
-                    "notes": list(d.notes),
-                    "metrics": m,
-                    "hausdorff_ok": ok,
-                })
-                rows.append({"path": path, "body": name, "status": status, **m,
-                             "repaired": d.repaired, "from_cache": d.from_cache, "hausdorff_ok": ok})
+                entry["bodies"].append(
+                    {
+                        "name": name,
+                        "outputs": [os.path.relpath(p, out_dir) for p in written],
+                        "cache_key": d.cache_key,
+                        "from_cache": d.from_cache,
+                        "engine": d.engine,
+                        "engine_version": d.engine_version,
+                        "params": dict(d.params),
+                        "repaired": d.repaired,
+                        "notes": list(d.notes),
+                        "metrics": m,
+                        "hausdorff_ok": ok,
+                    }
+                )
+                rows.append(
+                    {
+                        "path": path,
+                        "body": name,
+                        "status": status,
+                        **m,
+                        "repaired": d.repaired,
+                        "from_cache": d.from_cache,
+                        "hausdorff_ok": ok,
+                    }
+                )
         else:
             rows.append({"path": path, "status": status, "message": message})
         file_reports.append(entry)
@@ -314,7 +394,11 @@ def _iter_load(inputs: list[str]) -> Iterator[tuple[str, list[tuple[str, Any, An
             try:
                 v, f = canonical_geometry(body.vertices, body.faces)
             except InvalidMeshError as exc:
-                where = source if body.name == os.path.splitext(os.path.basename(source))[0] else f"{source}: {body.name}"
+                where = (
+                    source
+                    if body.name == os.path.splitext(os.path.basename(source))[0]
+                    else f"{source}: {body.name}"
+                )
                 raise InvalidMeshError(exc.message, where) from None
             canonical.append((body.name, v, f, body.pose))
         yield source, canonical

@@ -23,6 +23,7 @@ from meshcol.io.report import atomic_path
 
 __all__ = ["default_cache_dir", "entry_path", "load", "store"]
 
+
 def default_cache_dir() -> Path:
     """``$XDG_CACHE_HOME/meshcol/decompose``, else the platform's user cache folder.
 
@@ -58,7 +59,8 @@ def load(key: str, cache_dir: str | os.PathLike[str] | None = None) -> Decomposi
     if header.get("key") != key:
         return None
     parts = tuple(
-        (vertices[voff[i]:voff[i + 1]], faces[foff[i]:foff[i + 1]]) for i in range(len(voff) - 1)
+        (vertices[voff[i] : voff[i + 1]], faces[foff[i] : foff[i + 1]])
+        for i in range(len(voff) - 1)
     )
     m = header.get("metrics")
     metrics = None

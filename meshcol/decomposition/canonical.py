@@ -88,7 +88,9 @@ def canonical_geometry(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndar
         unique, f = unique[used], remap[f]
     _, _, widths, diagonal = principal_widths(unique)
     if len(unique) < 4 or dimension_of(widths, diagonal) < 3:
-        raise InvalidMeshError("mesh is flat (all vertices lie in one plane): it encloses no volume")
+        raise InvalidMeshError(
+            "mesh is flat (all vertices lie in one plane): it encloses no volume"
+        )
     return np.ascontiguousarray(unique), np.ascontiguousarray(f)
 
 

@@ -117,8 +117,14 @@ def decompose(
     vertices, faces = canonical_geometry(*as_mesh_arrays(mesh))
     closed = is_closed_manifold(faces)
     params = resolve_params(
-        engine, threshold=threshold, max_hulls=max_hulls, max_vertices=max_vertices,
-        preprocess=preprocess, resolution=resolution, seed=seed, closed=closed,
+        engine,
+        threshold=threshold,
+        max_hulls=max_hulls,
+        max_vertices=max_vertices,
+        preprocess=preprocess,
+        resolution=resolution,
+        seed=seed,
+        closed=closed,
         engine_options=engine_options,
     )
     version = engine_version(engine)
@@ -130,7 +136,9 @@ def decompose(
             if not metrics or _metrics_match(hit.metrics, samples, tol):
                 return hit
             # Same parts, other sampling settings: measure again, keep the parts.
-            remeasured = fidelity(vertices, faces, hit.parts, samples=samples, tolerance=tol, threads=threads)
+            remeasured = fidelity(
+                vertices, faces, hit.parts, samples=samples, tolerance=tol, threads=threads
+            )
             hit = dataclasses.replace(hit, metrics=remeasured)
             cache.store(hit, cache_dir)
             return hit
@@ -164,13 +172,17 @@ def decompose(
     notes = []
     repaired = engine == "coacd" and params["preprocess_mode"] == "on" and not closed
     if repaired:
-        notes.append("input is not a closed manifold: CoACD's preprocessing rebuilt it before decomposing")
+        notes.append(
+            "input is not a closed manifold: CoACD's preprocessing rebuilt it before decomposing"
+        )
     elif not closed:
         notes.append("input is not a closed manifold: the engine decomposed it as given")
     if dropped:
         notes.append(f"dropped {dropped} flat part(s) the engine returned")
     if truncated:
-        notes.append(f"{engine} returned {len(parts)} parts: kept the {max_hulls} largest (max_hulls)")
+        notes.append(
+            f"{engine} returned {len(parts)} parts: kept the {max_hulls} largest (max_hulls)"
+        )
     if reduced:
         notes.append(f"reduced {reduced} part(s) to at most {budget} vertices (enclosing hull)")
     result = Decomposition(
@@ -179,8 +191,11 @@ def decompose(
         engine_version=version,
         params=params,
         cache_key=key,
-        metrics=(fidelity(vertices, faces, parts_sorted, samples=samples, tolerance=tol, threads=threads)
-                 if metrics else None),
+        metrics=(
+            fidelity(vertices, faces, parts_sorted, samples=samples, tolerance=tol, threads=threads)
+            if metrics
+            else None
+        ),
         repaired=repaired,
         notes=tuple(notes),
     )
@@ -189,7 +204,9 @@ def decompose(
     return result
 
 
-def cached_decomposition(mesh: Any, *, cache_dir: str | None = None, **options: Any) -> Decomposition | None:
+def cached_decomposition(
+    mesh: Any, *, cache_dir: str | None = None, **options: Any
+) -> Decomposition | None:
     """The cached decomposition of ``mesh`` for these options, or None; never runs an engine.
 
     Takes the same options as :func:`decompose` (``metrics``, ``samples``, ``tolerance`` and
@@ -210,5 +227,3 @@ def _metrics_match(m: Fidelity | None, samples: int, tolerance: float) -> bool:
 
 # --------------------------------------------------------------------------------------------
 # fidelity
-
-

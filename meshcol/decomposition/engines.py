@@ -58,7 +58,9 @@ def engine_version(engine: str) -> str:
         return importlib.metadata.version(package)
     except importlib.metadata.PackageNotFoundError:
         hint = "pip install coacd" if engine == "coacd" else "pip install 'meshcol[vhacd]'"
-        raise MissingDependencyError(f"engine {engine!r} needs the {package} package: {hint}") from None
+        raise MissingDependencyError(
+            f"engine {engine!r} needs the {package} package: {hint}"
+        ) from None
 
 
 def resolve_params(
@@ -123,7 +125,9 @@ def resolve_params(
         try:
             params[key] = _coerce(value, kind)
         except (TypeError, ValueError):
-            raise ValueError(f"{engine} option {key!r} must be {kind.__name__}, got {value!r}") from None
+            raise ValueError(
+                f"{engine} option {key!r} must be {kind.__name__}, got {value!r}"
+            ) from None
     if engine == "coacd":
         if threshold is not None:
             params["threshold"] = float(threshold)
@@ -167,12 +171,16 @@ def _coerce(value: Any, kind: type) -> Any:
     return kind(value)
 
 
-def run_engine(engine: str, vertices: np.ndarray, faces: np.ndarray, params: Mapping[str, Any]) -> list:
+def run_engine(
+    engine: str, vertices: np.ndarray, faces: np.ndarray, params: Mapping[str, Any]
+) -> list:
     if engine == "coacd":
         try:
             import coacd
         except ImportError:
-            raise MissingDependencyError("engine 'coacd' needs the coacd package: pip install coacd") from None
+            raise MissingDependencyError(
+                "engine 'coacd' needs the coacd package: pip install coacd"
+            ) from None
         coacd.set_log_level("error")
         p = dict(params)
         return coacd.run_coacd(coacd.Mesh(vertices, faces), **p)

@@ -80,7 +80,11 @@ def _worker_main(
 
 class _Worker:
     def __init__(
-        self, ctx: Any, fn: Callable[[Any], Any], env: dict[str, str], prepare: Callable[[], None] | None
+        self,
+        ctx: Any,
+        fn: Callable[[Any], Any],
+        env: dict[str, str],
+        prepare: Callable[[], None] | None,
     ) -> None:
         self.conn, child = ctx.Pipe()
         self.process = ctx.Process(target=_worker_main, args=(child, fn, env, prepare), daemon=True)
@@ -130,8 +134,13 @@ def _context(env: dict[str, str]) -> Any:
     # process's environment when it starts, and its preloaded numpy sizes its thread pool
     # then: start it with the workers' thread settings.
     ctx.set_forkserver_preload(
-        ["meshcol.decomposition.decompose", "meshcol.decomposition.jobs", "scipy.spatial",
-         "manifold3d", "trimesh"]
+        [
+            "meshcol.decomposition.decompose",
+            "meshcol.decomposition.jobs",
+            "scipy.spatial",
+            "manifold3d",
+            "trimesh",
+        ]
     )
     saved = {key: os.environ.get(key) for key in env}
     os.environ.update(env)
@@ -274,14 +283,18 @@ class WorkerPool:
                     code = worker.process.exitcode
                     worker.conn.close()
                     yield TaskOutcome(
-                        worker.task_index, "failed",
-                        message=f"worker process died (exit code {code})", seconds=seconds,
+                        worker.task_index,
+                        "failed",
+                        message=f"worker process died (exit code {code})",
+                        seconds=seconds,
                     )
                 elif timeout is not None and seconds >= timeout:
                     busy.remove(worker)
                     worker.kill()
                     yield TaskOutcome(
-                        worker.task_index, "timeout", message=f"timed out after {timeout:g} s",
+                        worker.task_index,
+                        "timeout",
+                        message=f"timed out after {timeout:g} s",
                         seconds=seconds,
                     )
 
@@ -357,7 +370,9 @@ def run_tasks(
 # writers
 
 
-def decompose_task(task: tuple[str, list[tuple[str, np.ndarray, np.ndarray]], dict[str, Any]]) -> list[tuple[str, Any]]:
+def decompose_task(
+    task: tuple[str, list[tuple[str, np.ndarray, np.ndarray]], dict[str, Any]],
+) -> list[tuple[str, Any]]:
     """Worker entry: decompose every body of one file. ``task`` = (path, bodies, options)."""
     from meshcol.decomposition.decompose import decompose
 

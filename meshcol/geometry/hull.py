@@ -175,18 +175,29 @@ def convex_hull(points: np.ndarray, max_vertices: int | None = None) -> HullResu
     )
     vertices, faces = exact.vertices, exact.faces
     if max_vertices is None or len(vertices) <= max_vertices:
-        return HullResult(vertices=vertices.copy(), faces=faces.copy(), volume=volume,
-                          area=exact.area,
-                          added_volume_fraction=0.0 if max_vertices is not None else None,
-                          **result_kwargs)
+        return HullResult(
+            vertices=vertices.copy(),
+            faces=faces.copy(),
+            volume=volume,
+            area=exact.area,
+            added_volume_fraction=0.0 if max_vertices is not None else None,
+            **result_kwargs,
+        )
 
-    q_vertices, distance = _simplify(vertices, vertices[faces], exact.equations,
-                                     int(max_vertices), exact.diagonal)
+    q_vertices, distance = _simplify(
+        vertices, vertices[faces], exact.equations, int(max_vertices), exact.diagonal
+    )
     q = exact_hull(q_vertices)
     added = max(q.volume - volume, 0.0)
     return HullResult(
-        vertices=q.vertices, faces=q.faces, volume=q.volume, area=q.area, added_volume=added,
-        added_volume_fraction=added / volume, max_distance=distance, **result_kwargs,
+        vertices=q.vertices,
+        faces=q.faces,
+        volume=q.volume,
+        area=q.area,
+        added_volume=added,
+        added_volume_fraction=added / volume,
+        max_distance=distance,
+        **result_kwargs,
     )
 
 
@@ -311,8 +322,17 @@ def exact_hull(points: np.ndarray) -> ExactHull:
             # Reversing a triangle swaps corners 0 and 2, and so the edges opposite them.
             faces[flip] = faces[flip][:, ::-1]
             neighbors[flip] = neighbors[flip][:, ::-1]
-            return ExactHull(3, vertices, faces, equations, neighbors, zero3,
-                             float(hull.volume), float(hull.area), diagonal)
+            return ExactHull(
+                3,
+                vertices,
+                faces,
+                equations,
+                neighbors,
+                zero3,
+                float(hull.volume),
+                float(hull.area),
+                diagonal,
+            )
         dim = 2
     if dim == 2:
         uv = (pts - centre) @ axes[:2].T
@@ -325,14 +345,24 @@ def exact_hull(points: np.ndarray) -> ExactHull:
             area = float(polygon.volume)  # qhull's 2-D "volume" is the area
             normal = np.cross(axes[0], axes[1])
             normal /= np.linalg.norm(normal)
-            return ExactHull(2, np.ascontiguousarray(pts[ring]), _fan(len(ring)), empty4,
-                             _NO_FACES, normal, 0.0, area, diagonal)
+            return ExactHull(
+                2,
+                np.ascontiguousarray(pts[ring]),
+                _fan(len(ring)),
+                empty4,
+                _NO_FACES,
+                normal,
+                0.0,
+                area,
+                diagonal,
+            )
     if dim == 1:
         t = (pts - centre) @ axes[0]
         ends = np.ascontiguousarray(pts[[int(np.argmin(t)), int(np.argmax(t))]])
         return ExactHull(1, ends, _NO_FACES, empty4, _NO_FACES, zero3, 0.0, 0.0, diagonal)
-    return ExactHull(0, np.ascontiguousarray(pts[:1]), _NO_FACES, empty4, _NO_FACES, zero3,
-                     0.0, 0.0, diagonal)
+    return ExactHull(
+        0, np.ascontiguousarray(pts[:1]), _NO_FACES, empty4, _NO_FACES, zero3, 0.0, 0.0, diagonal
+    )
 
 
 def _flat_hull(exact: ExactHull, max_vertices: int | None) -> HullResult:
@@ -341,12 +371,16 @@ def _flat_hull(exact: ExactHull, max_vertices: int | None) -> HullResult:
 
     ring = exact.vertices
     exact_count = len(ring)
-    kwargs: dict[str, Any] = dict(flat=True, exact_vertex_count=exact_count, exact_face_count=exact_count - 2,
-                  exact_volume=0.0, volume=0.0,
-                  max_vertices=None if max_vertices is None else int(max_vertices))
+    kwargs: dict[str, Any] = dict(
+        flat=True,
+        exact_vertex_count=exact_count,
+        exact_face_count=exact_count - 2,
+        exact_volume=0.0,
+        volume=0.0,
+        max_vertices=None if max_vertices is None else int(max_vertices),
+    )
     if max_vertices is None or exact_count <= max_vertices:
-        return HullResult(vertices=ring.copy(), faces=exact.faces.copy(), area=exact.area,
-                          **kwargs)
+        return HullResult(vertices=ring.copy(), faces=exact.faces.copy(), area=exact.area, **kwargs)
     # Plane coordinates with the ring counter-clockwise about the normal.
     u = ring[1] - ring[0]
     u /= np.linalg.norm(u)
@@ -360,12 +394,18 @@ def _flat_hull(exact: ExactHull, max_vertices: int | None) -> HullResult:
     normals /= np.linalg.norm(normals, axis=1)[:, None]
     offsets = -np.einsum("ij,ij->i", normals, segments[:, 0])
     equations = np.hstack([normals, offsets[:, None]])
-    q_coords, distance = _simplify(ring_points, segments, equations, int(max_vertices),
-                                   exact.diagonal)
+    q_coords, distance = _simplify(
+        ring_points, segments, equations, int(max_vertices), exact.diagonal
+    )
     q_hull = ConvexHull(q_coords)
     q_ring = q_coords[q_hull.vertices]
-    return HullResult(vertices=centre + q_ring @ plane_axes, faces=_fan(len(q_ring)),
-                      area=float(q_hull.volume), max_distance=distance, **kwargs)
+    return HullResult(
+        vertices=centre + q_ring @ plane_axes,
+        faces=_fan(len(q_ring)),
+        area=float(q_hull.volume),
+        max_distance=distance,
+        **kwargs,
+    )
 
 
 def _fan(n: int) -> np.ndarray:
@@ -387,7 +427,10 @@ def _simplify(hull_vertices, facets, equations, budget, scale):
     """
     interior = hull_vertices.mean(axis=0)
     dim = hull_vertices.shape[1]
-    equations = (np.ascontiguousarray(equations[:, :dim].T), np.ascontiguousarray(equations[:, dim]))
+    equations = (
+        np.ascontiguousarray(equations[:, :dim].T),
+        np.ascontiguousarray(equations[:, dim]),
+    )
     tolerance = CONVERGED_RELATIVE_DISTANCE * scale
     normals = _start_simplex(hull_vertices)
     offsets = (normals @ hull_vertices.T).max(axis=1)
@@ -408,7 +451,8 @@ def _simplify(hull_vertices, facets, equations, budget, scale):
             trial = _intersect(trial_normals, trial_offsets, interior, scale)
             if trial is not None and len(trial) <= budget:
                 distances, closest = _update_distances(
-                    polytope, distances, closest, trial, facets, equations, scale)
+                    polytope, distances, closest, trial, facets, equations, scale
+                )
                 normals, offsets, polytope = trial_normals, trial_offsets, trial
                 accepted = True
                 break
@@ -455,11 +499,15 @@ def _start_simplex(hull_vertices: np.ndarray) -> np.ndarray:
     for rotation in rotations:
         normals = base @ rotation.T
         offsets = (normals @ hull_vertices.T).max(axis=1)
-        corners = np.array([
-            np.linalg.solve(normals[[i for i in range(dim + 1) if i != skip]],
-                            offsets[[i for i in range(dim + 1) if i != skip]])
-            for skip in range(dim + 1)
-        ])
+        corners = np.array(
+            [
+                np.linalg.solve(
+                    normals[[i for i in range(dim + 1) if i != skip]],
+                    offsets[[i for i in range(dim + 1) if i != skip]],
+                )
+                for skip in range(dim + 1)
+            ]
+        )
         size = abs(np.linalg.det(corners[1:] - corners[0]))
         if size < best_size:
             best, best_size = normals, size
@@ -535,5 +583,3 @@ def _closest_points_on_segments(p: np.ndarray, segments: np.ndarray) -> np.ndarr
     ab = b - a
     t = np.einsum("ij,ij->i", p - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
     return a + np.clip(t, 0.0, 1.0)[:, None] * ab
-
-

@@ -86,8 +86,9 @@ def component_count(faces: np.ndarray, vertex_count: int) -> int:
     from scipy.sparse.csgraph import connected_components
 
     edges = faces[:, [0, 1, 1, 2]].reshape(-1, 2)
-    graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])),
-                       shape=(vertex_count, vertex_count))
+    graph = coo_matrix(
+        (np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(vertex_count, vertex_count)
+    )
     _, labels = connected_components(graph, directed=False)
     return len(np.unique(labels[np.unique(faces)]))
 

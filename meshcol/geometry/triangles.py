@@ -83,7 +83,9 @@ def triangle_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return 0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)
 
 
-def sample_surface(vertices: np.ndarray, faces: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
+def sample_surface(
+    vertices: np.ndarray, faces: np.ndarray, count: int, rng: np.random.Generator
+) -> np.ndarray:
     """``count`` points uniformly distributed on the triangles (area-weighted), (count, 3)."""
     tri = vertices[faces]
     area = triangle_areas(vertices, faces)
@@ -94,7 +96,9 @@ def sample_surface(vertices: np.ndarray, faces: np.ndarray, count: int, rng: np.
     r1, r2 = rng.random(count), rng.random(count)
     s = np.sqrt(r1)
     t = tri[which]
-    return (1 - s)[:, None] * t[:, 0] + (s * (1 - r2))[:, None] * t[:, 1] + (s * r2)[:, None] * t[:, 2]
+    return (
+        (1 - s)[:, None] * t[:, 0] + (s * (1 - r2))[:, None] * t[:, 1] + (s * r2)[:, None] * t[:, 2]
+    )
 
 
 #: A face is degenerate when its height (twice its area over its longest edge) is at most
@@ -111,5 +115,7 @@ def degenerate_faces(vertices: np.ndarray, faces: np.ndarray, diagonal: float) -
     longest = np.linalg.norm(tri - tri[:, [1, 2, 0]], axis=2).max(axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
         height = np.where(longest > 0, twice_area / longest, 0.0)
-    repeated = (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 2] == faces[:, 0])
+    repeated = (
+        (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 2] == faces[:, 0])
+    )
     return repeated | (height <= DEGENERATE_RELATIVE_HEIGHT * diagonal)

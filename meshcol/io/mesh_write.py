@@ -78,16 +78,32 @@ def glb_bytes(objects: Sequence[tuple[str, np.ndarray, np.ndarray]]) -> bytes:
         position = np.ascontiguousarray(vertices, dtype="<f4")
         index = np.ascontiguousarray(faces, dtype="<u4").reshape(-1)
         for data, target in ((position, 34962), (index, 34963)):
-            views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": data.nbytes, "target": target})
+            views.append(
+                {"buffer": 0, "byteOffset": len(blob), "byteLength": data.nbytes, "target": target}
+            )
             blob += data.tobytes()
             blob += b"\0" * (-len(blob) % 4)
-        accessors.append({
-            "bufferView": 2 * i, "componentType": 5126, "count": len(position), "type": "VEC3",
-            "min": position.min(axis=0).astype(float).tolist(),
-            "max": position.max(axis=0).astype(float).tolist(),
-        })
-        accessors.append({"bufferView": 2 * i + 1, "componentType": 5125, "count": len(index), "type": "SCALAR"})
-        meshes.append({"name": name, "primitives": [{"attributes": {"POSITION": 2 * i}, "indices": 2 * i + 1, "mode": 4}]})
+        accessors.append(
+            {
+                "bufferView": 2 * i,
+                "componentType": 5126,
+                "count": len(position),
+                "type": "VEC3",
+                "min": position.min(axis=0).astype(float).tolist(),
+                "max": position.max(axis=0).astype(float).tolist(),
+            }
+        )
+        accessors.append(
+            {"bufferView": 2 * i + 1, "componentType": 5125, "count": len(index), "type": "SCALAR"}
+        )
+        meshes.append(
+            {
+                "name": name,
+                "primitives": [
+                    {"attributes": {"POSITION": 2 * i}, "indices": 2 * i + 1, "mode": 4}
+                ],
+            }
+        )
         nodes.append({"name": name, "mesh": i})
     doc = {
         "asset": {"version": "2.0", "generator": "meshcol"},
@@ -148,11 +164,15 @@ def write_parts(
         emit(os.path.join(out_dir, f"{body}.{fmt}"), [(n, v, f) for n, (v, f) in zip(names, parts)])
     else:
         names = part_names(body, len(parts), prefix="UCX_")
-        emit(os.path.join(out_dir, f"{body}_ucx.obj"), [(n, v, f) for n, (v, f) in zip(names, parts)])
+        emit(
+            os.path.join(out_dir, f"{body}_ucx.obj"), [(n, v, f) for n, (v, f) in zip(names, parts)]
+        )
     return written
 
 
-def write_meshes(path: str | os.PathLike[str], meshes: Sequence[tuple[str, np.ndarray, np.ndarray]]) -> None:
+def write_meshes(
+    path: str | os.PathLike[str], meshes: Sequence[tuple[str, np.ndarray, np.ndarray]]
+) -> None:
     """Write named meshes ``(name, vertices, faces)`` to ``path``, atomically.
 
     The format comes from the extension (:data:`MESH_OUTPUT_EXTENSIONS`). OBJ and GLB are
@@ -167,8 +187,10 @@ def write_meshes(path: str | os.PathLike[str], meshes: Sequence[tuple[str, np.nd
     path = os.fspath(path)
     extension = os.path.splitext(path)[1].lower()
     if extension not in MESH_OUTPUT_EXTENSIONS:
-        raise ValueError(f"unknown mesh extension {extension or '(none)'!r} "
-                         f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})")
+        raise ValueError(
+            f"unknown mesh extension {extension or '(none)'!r} "
+            f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})"
+        )
     if len(meshes) != 1 and extension not in MULTI_MESH_EXTENSIONS:
         raise ValueError(f"{extension} holds one mesh, got {len(meshes)}")
     with atomic_path(path) as tmp:
@@ -183,4 +205,5 @@ def write_meshes(path: str | os.PathLike[str], meshes: Sequence[tuple[str, np.nd
 
             _, vertices, faces = meshes[0]
             trimesh.Trimesh(vertices=vertices, faces=faces, process=False).export(
-                tmp, file_type=extension[1:])
+                tmp, file_type=extension[1:]
+            )

@@ -369,8 +369,9 @@ def _scale(value) -> np.ndarray:
     return np.full(3, float(value))
 
 
-def _mesh_bodies(spec, manifest: Path, source, label, start, end, scale,
-                 files: dict[str, list[Body]]) -> list[Body]:
+def _mesh_bodies(
+    spec, manifest: Path, source, label, start, end, scale, files: dict[str, list[Body]]
+) -> list[Body]:
     mesh = spec["mesh"]
     mesh_source = os.path.join(os.path.dirname(source), mesh)
     key = os.path.normpath(mesh_source)
@@ -491,8 +492,10 @@ def _parse(file: Path, source: str) -> Any:
 def _first_non_finite(value: Any, path: list) -> list | None:
     if isinstance(value, float) and not math.isfinite(value):
         return path
-    items = value.items() if isinstance(value, dict) else (
-        enumerate(value) if isinstance(value, list) else ()
+    items = (
+        value.items()
+        if isinstance(value, dict)
+        else (enumerate(value) if isinstance(value, list) else ())
     )
     for key, item in items:
         found = _first_non_finite(item, [*path, key])
@@ -533,13 +536,13 @@ def _message(document: Any, error) -> str:
     if error.validator == "additionalProperties":
         allowed = set(error.schema.get("properties", {}))
         extra = sorted(set(error.instance) - allowed)
-        names = ", ".join(repr(_join(path[_field_start(path):], name)) for name in extra)
+        names = ", ".join(repr(_join(path[_field_start(path) :], name)) for name in extra)
         noun = "field" if len(extra) == 1 else "fields"
         return _prefixed(document, path, f"unknown {noun} {names}")
     if error.validator == "required":
         missing = [name for name in error.validator_value if name not in error.instance]
         return _prefixed(
-            document, path, f"missing field {_join(path[_field_start(path):], missing[0])!r}"
+            document, path, f"missing field {_join(path[_field_start(path) :], missing[0])!r}"
         )
     if not path:
         return "manifest must be an object (a table in TOML)"
@@ -560,7 +563,9 @@ def _rotation_branch(error):
         form = 1
     else:
         return None
-    inner = [e for e in error.context if e.relative_schema_path and e.relative_schema_path[0] == form]
+    inner = [
+        e for e in error.context if e.relative_schema_path and e.relative_schema_path[0] == form
+    ]
     if not inner:
         return None
     priority = {"additionalProperties": 0, "required": 1}
