@@ -77,6 +77,7 @@ def main(debug: bool) -> None:
 
     \b
     Examples:
+      meshcol check level/scene.json --report level.json
       meshcol inspect props/*.obj --fail-on not-watertight
       meshcol hull chair.obj --max-vertices 64 -o chair_hull.obj
       meshcol COMMAND -h      help and examples for one command
