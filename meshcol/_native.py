@@ -1,7 +1,9 @@
 """The one import of the native core, ``meshcol._core`` (C++17, built by scikit-build-core).
 
 Every other module reaches the core through this one, so there is a single place where the
-extension loads and where its enums are checked against the Python ones.
+extension loads. The core binds its enums (``core.Status``, ``core.TimeOfImpactStatus``,
+``core.ShapeKind``); ``tests/test_native.py`` checks that the Python IntEnums of
+:mod:`meshcol.types` and :mod:`meshcol.collision.shapes` match them exactly.
 """
 
 from __future__ import annotations

@@ -19,7 +19,11 @@ __all__ = ["Body", "Primitive", "Scene", "Status", "TimeOfImpactStatus"]
 
 
 class Status(enum.IntEnum):
-    """Outcome of a distance, penetration or intersection query (mirrors ``status.hpp``)."""
+    """Outcome of a distance, penetration or intersection query.
+
+    Mirrors ``Status`` in ``cpp/include/meshcol/status.hpp`` (bound as ``meshcol._core.Status``;
+    ``tests/test_native.py`` checks names and values match).
+    """
 
     CONVERGED = 0
     MAX_ITERATIONS = 1
@@ -29,7 +33,11 @@ class Status(enum.IntEnum):
 
 
 class TimeOfImpactStatus(enum.IntEnum):
-    """Outcome of a time-of-impact query (mirrors ``status.hpp``)."""
+    """Outcome of a time-of-impact query.
+
+    Mirrors ``TimeOfImpactStatus`` in ``cpp/include/meshcol/status.hpp`` (bound as
+    ``meshcol._core.TimeOfImpactStatus``; ``tests/test_native.py`` checks they match).
+    """
 
     HIT = 0
     SEPARATED = 1

@@ -573,3 +573,63 @@ def test_bad_data_sets_pair_status_only() -> None:
         r = mesh_distance_batch(meshes, q, [[0, 4], [0, 0]])
         assert r.status.tolist() == [Status.INVALID_INPUT, Status.CONVERGED]
         assert r.distance[1] == 0.0 and r.intersecting[1]
+
+
+# --------------------------------------------------------------------------- point queries
+
+
+def brute_point_mesh_distance(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Distance from each point to the nearest of all triangles: the nearest of the three
+    edges (point-segment), or the plane when the projection falls inside a non-degenerate
+    triangle."""
+    p = points[:, None, None, :]
+    a, b = triangles, np.roll(triangles, -1, axis=1)
+    ab = b - a
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.clip(np.einsum("...i,...i", p - a, ab) / np.einsum("...i,...i", ab, ab), 0.0, 1.0)
+    t = np.nan_to_num(t)
+    edge = np.linalg.norm(p - (a + ab * t[..., None]), axis=-1).min(axis=2)
+    n = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+    nn = np.einsum("ij,ij->i", n, n)
+    q = points[:, None, :]
+    inside = nn > 0
+    for k in range(3):
+        e = triangles[:, (k + 1) % 3] - triangles[:, k]
+        inside = inside & (np.einsum("ij,pij->pi", np.cross(e, n), q - triangles[:, k]) <= 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        plane = np.abs(np.einsum("ij,pij->pi", n, q - triangles[:, 0])) / np.sqrt(nn)
+    return np.where(inside, np.minimum(plane, edge), edge).min(axis=1)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_closest_points_equal_brute_force(seed) -> None:
+    rng = np.random.default_rng(seed)
+    vertices = rng.uniform(-1.0, 1.0, (40, 3))
+    faces = rng.integers(0, 40, (60, 3))
+    faces[:5, 1] = faces[:5, 0]  # degenerate: a repeated corner
+    vertices[faces[5:8, 2]] = (vertices[faces[5:8, 0]] + vertices[faces[5:8, 1]]) / 2  # collinear
+    tri = vertices[faces]
+    w = rng.dirichlet(np.ones(3), 50)
+    on_surface = np.einsum("pk,pki->pi", w, tri[rng.integers(0, len(faces), 50)])
+    points = np.vstack([rng.uniform(-2.0, 2.0, (150, 3)), on_surface, vertices[faces[:10, 2]]])
+    meshes = MeshSet.from_arrays([(vertices, faces)])
+    d, closest = meshes.closest_points(0, points)
+    assert np.allclose(d, brute_point_mesh_distance(points, tri), rtol=0, atol=1e-12)
+    assert np.allclose(np.linalg.norm(closest - points, axis=1), d, rtol=0, atol=1e-12)
+    assert np.all(d[150:] <= 1e-12)
+
+
+def test_closest_points_known_answers_and_bad_input() -> None:
+    meshes = MeshSet.from_arrays([box((0, 0, 0), (1, 1, 1)), (np.full((3, 3), np.nan), [[0, 1, 2]])])
+    points = np.array([[0.5, 0.5, 3.0], [2.0, 2.0, 0.5], [0.5, 0.5, 0.4], [np.nan, 0.0, 0.0]])
+    d, closest = meshes.closest_points(0, points)
+    assert d[:3] == pytest.approx([2.0, math.sqrt(2.0), 0.4], abs=1e-12)
+    assert closest[0] == pytest.approx([0.5, 0.5, 1.0], abs=1e-12)
+    assert np.isnan(d[3]) and np.all(np.isnan(closest[3]))
+    d, closest = meshes.closest_points(1, points)  # invalid mesh: NaN, no error
+    assert np.all(np.isnan(d)) and np.all(np.isnan(closest))
+    with pytest.raises(ValueError, match="points must be"):
+        meshes.closest_points(0, np.zeros((2, 2)))
+    with pytest.raises(ValueError, match="out of range"):
+        meshes.closest_points(2, points)
+    assert meshes.closest_points(0, np.zeros((0, 3)))[0].shape == (0,)

@@ -383,11 +383,11 @@ def test_hill_climbing_matches_vertex_scan():
     pairs = np.array([(i, j) for i in range(h) for j in range(h) if i != j], dtype=np.int64)
     got = cs._core.query(1, pose_list, pairs, 1)
     want = scan.query(1, pose_list, pairs, 1)
-    assert np.sum(got["depth"] > 0) > 10 and np.sum(got["distance"] > 0) > 10
-    np.testing.assert_array_equal(got["status"], want["status"])
-    np.testing.assert_allclose(got["distance"], want["distance"], rtol=1e-12, atol=1e-14)
-    np.testing.assert_allclose(got["depth"], want["depth"], rtol=1e-12, atol=1e-14)
-    np.testing.assert_allclose(got["normal"], want["normal"], atol=1e-9)
+    assert np.sum(got.depth > 0) > 10 and np.sum(got.distance > 0) > 10
+    np.testing.assert_array_equal(got.status, want.status)
+    np.testing.assert_allclose(got.distance, want.distance, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(got.depth, want.depth, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(got.normal, want.normal, atol=1e-9)
 
 
 def test_python_fcl_compared_where_it_is_right():

@@ -1,10 +1,11 @@
 // Binds broadphase.hpp: sort_and_sweep, SortAndSweep, AabbTree. Arrays in, arrays out; the
-// Python wrappers in meshcol/broadphase.py check shapes first with friendly messages.
+// Python wrappers in meshcol/collision/broadphase.py check shapes first with friendly messages.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/pair.h>
 
 #include <algorithm>
+#include <cmath>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -13,34 +14,25 @@
 
 #include "meshcol/broadphase.hpp"
 #include "meshcol/defaults.hpp"
-#include <cmath>
+#include "ndarray.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
+using namespace meshcol::bindings;
 
 namespace {
 
-using Boxes = nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
-using Point = nb::ndarray<const double, nb::shape<3>, nb::c_contig, nb::device::cpu>;
-using Ids = nb::ndarray<const std::int64_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+using Boxes = Points;
+using Ids = Index64;
+using PairsOut = Out<std::int64_t, -1, 2>;
 
-/// Hands a vector over to numpy without a copy (the capsule owns it).
-template <class T>
-nb::ndarray<nb::numpy, T> to_numpy(std::vector<T>&& v, size_t rows, size_t cols) {
-    auto* heap = new std::vector<T>(std::move(v));
-    if (heap->empty()) heap->reserve(1);  // a non-null data pointer even for 0 rows
-    nb::capsule owner(heap, [](void* p) noexcept { delete static_cast<std::vector<T>*>(p); });
-    const size_t shape[2] = {rows, cols};
-    return nb::ndarray<nb::numpy, T>(heap->data(), cols == 0 ? 1 : 2, shape, owner);
-}
-
-nb::ndarray<nb::numpy, std::int64_t> pairs_array(std::vector<std::int64_t>&& flat) {
+PairsOut pairs_array(std::vector<std::int64_t>&& flat) {
     const size_t k = flat.size() / 2;
-    return to_numpy(std::move(flat), k, 2);
+    return vector_array<PairsOut>(std::move(flat), k, 2);
 }
 
 /// A read-only (k, 2) view of pairs the sweep keeps sharing; the capsule holds a reference.
-nb::ndarray<nb::numpy, const std::int64_t> shared_pairs_array(
+nb::ndarray<nb::numpy, const std::int64_t, nb::shape<-1, 2>, nb::c_contig> shared_pairs_array(
     std::shared_ptr<const std::vector<std::int64_t>> pairs) {
     static const std::int64_t empty = 0;
     auto* holder = new std::shared_ptr<const std::vector<std::int64_t>>(std::move(pairs));
@@ -49,10 +41,10 @@ nb::ndarray<nb::numpy, const std::int64_t> shared_pairs_array(
     });
     const std::vector<std::int64_t>& flat = **holder;
     const size_t shape[2] = {flat.size() / 2, 2};
-    return nb::ndarray<nb::numpy, const std::int64_t>(flat.empty() ? &empty : flat.data(), 2, shape, owner);
+    return nb::ndarray<nb::numpy, const std::int64_t, nb::shape<-1, 2>, nb::c_contig>(flat.empty() ? &empty : flat.data(), 2, shape, owner);
 }
 
-nb::ndarray<nb::numpy, std::int64_t> keys_array(const std::vector<std::uint64_t>& keys) {
+PairsOut keys_array(const std::vector<std::uint64_t>& keys) {
     std::vector<std::int64_t> flat(2 * keys.size());
     for (size_t k = 0; k < keys.size(); ++k) {
         flat[2 * k] = static_cast<std::int64_t>(keys[k] >> 32);
@@ -144,7 +136,7 @@ void bind_broadphase(nb::module_& m) {
                                                      std::to_string(meshcol::defaults::tree_max_objects) + " boxes");
                      for (std::int64_t i = 0; i < n; ++i) ids[i] = t.insert(box_at(lo, hi, i));
                  }
-                 return to_numpy(std::move(ids), static_cast<size_t>(n), 0);
+                 return vector_array<Out<std::int64_t, -1>>(std::move(ids), static_cast<size_t>(n), 0);
              },
              "aabb_min"_a, "aabb_max"_a)
         .def("remove",
@@ -170,7 +162,7 @@ void bind_broadphase(nb::module_& m) {
                          (*moved)[i] = t.move(static_cast<std::int32_t>(ids.data()[i]), box_at(lo, hi, i));
                  }
                  const size_t shape[1] = {static_cast<size_t>(n)};
-                 return nb::ndarray<nb::numpy, bool>(reinterpret_cast<bool*>(moved->data()), 1, shape, owner);
+                 return Out<bool, -1>(reinterpret_cast<bool*>(moved->data()), 1, shape, owner);
              },
              "ids"_a, "aabb_min"_a, "aabb_max"_a)
         .def("clear", &Tree::clear)
@@ -194,7 +186,7 @@ void bind_broadphase(nb::module_& m) {
                  meshcol::validate_boxes(lo.data(), hi.data(), 1);
                  std::vector<std::int64_t> ids = t.query(box);
                  const size_t k = ids.size();
-                 return to_numpy(std::move(ids), k, 0);
+                 return vector_array<Out<std::int64_t, -1>>(std::move(ids), k, 0);
              },
              "aabb_min"_a, "aabb_max"_a)
         .def("query_pairs",
@@ -228,7 +220,8 @@ void bind_broadphase(nb::module_& m) {
                  std::vector<double> fractions;
                  t.ray_cast(o, d, max_fraction, ids, fractions);
                  const size_t k = ids.size();
-                 return std::make_pair(to_numpy(std::move(ids), k, 0), to_numpy(std::move(fractions), k, 0));
+                 return std::make_pair(vector_array<Out<std::int64_t, -1>>(std::move(ids), k, 0),
+                                       vector_array<Out<double, -1>>(std::move(fractions), k, 0));
              },
              "origin"_a, "direction"_a, "max_fraction"_a = 1.0)
         .def("validate", &Tree::validate)

@@ -9,6 +9,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "meshcol/batch.hpp"
@@ -16,32 +17,15 @@
 #include "meshcol/mesh_bvh.hpp"
 #include "meshcol/mesh_query.hpp"
 #include "meshcol/triangle.hpp"
+#include "ndarray.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
+using namespace meshcol::bindings;
 
 namespace {
 
 using meshcol::Vec3;
-
-template <class T>
-using In1 = nb::ndarray<const T, nb::shape<-1>, nb::c_contig, nb::device::cpu>;
-using Points = nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
-using Faces = nb::ndarray<const std::int64_t, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
-using Poses = nb::ndarray<const double, nb::shape<-1, 4, 4>, nb::c_contig, nb::device::cpu>;
-using Pairs = nb::ndarray<const std::int64_t, nb::shape<-1, 2>, nb::c_contig, nb::device::cpu>;
-using Triangles = nb::ndarray<const double, nb::shape<-1, 3, 3>, nb::c_contig, nb::device::cpu>;
-
-// A new numpy array that owns its buffer.
-template <class T>
-nb::ndarray<nb::numpy, T> new_array(std::initializer_list<size_t> shape, T** data) {
-    size_t n = 1;
-    for (size_t s : shape) n *= s;
-    T* p = new T[n == 0 ? 1 : n];
-    nb::capsule owner(p, [](void* q) noexcept { delete[] static_cast<T*>(q); });
-    *data = p;
-    return nb::ndarray<nb::numpy, T>(p, shape, owner);
-}
 
 /// The hierarchies of M meshes, packed as in meshcol.mesh_query.MeshSet.
 struct MeshBvhSet {
@@ -55,17 +39,8 @@ struct MeshBvhSet {
     }
 };
 
-void check_offsets(const std::int64_t* offsets, size_t count, std::int64_t total, const char* name,
-                   const char* what) {
-    if (offsets[0] != 0 || offsets[count - 1] != total)
-        throw std::invalid_argument(std::string(name) + " must start at 0 and end at the number of " + what);
-    for (size_t i = 1; i < count; ++i)
-        if (offsets[i] < offsets[i - 1])
-            throw std::invalid_argument(std::string(name) + " must be non-decreasing");
-}
-
-void build_set(MeshBvhSet* self, Points vertices, Faces faces, In1<std::int64_t> vertex_offsets,
-               In1<std::int64_t> face_offsets, int threads) {
+void build_set(MeshBvhSet* self, Points vertices, Faces faces, Index64 vertex_offsets,
+               Index64 face_offsets, int threads) {
     const size_t m1 = vertex_offsets.shape(0);
     if (m1 == 0 || face_offsets.shape(0) != m1)
         throw std::invalid_argument("vertex_offsets and face_offsets must both be (M + 1,), got (" +
@@ -73,8 +48,8 @@ void build_set(MeshBvhSet* self, Points vertices, Faces faces, In1<std::int64_t>
                                     std::to_string(face_offsets.shape(0)) + ",)");
     const std::int64_t* vo = vertex_offsets.data();
     const std::int64_t* fo = face_offsets.data();
-    check_offsets(vo, m1, static_cast<std::int64_t>(vertices.shape(0)), "vertex_offsets", "vertices");
-    check_offsets(fo, m1, static_cast<std::int64_t>(faces.shape(0)), "face_offsets", "faces");
+    check_offsets(vo, m1, static_cast<std::int64_t>(vertices.shape(0)), "vertex_offsets");
+    check_offsets(fo, m1, static_cast<std::int64_t>(faces.shape(0)), "face_offsets");
     const auto m = static_cast<long long>(m1 - 1);
     const double* v = vertices.data();
     const std::int64_t* f = faces.data();
@@ -132,7 +107,7 @@ PosedPairs read_pairs(const MeshBvhSet& set, const Poses& poses, const Pairs& pa
     return out;
 }
 
-nb::tuple distance_batch(const MeshBvhSet& set, Poses poses, Pairs pairs, int threads, double max_distance) {
+auto distance_batch(const MeshBvhSet& set, Poses poses, Pairs pairs, int threads, double max_distance) {
     if (!(max_distance >= 0.0))
         throw std::invalid_argument("max_distance must be >= 0, got " + std::to_string(max_distance));
     const PosedPairs in = read_pairs(set, poses, pairs);
@@ -141,15 +116,24 @@ nb::tuple distance_batch(const MeshBvhSet& set, Poses poses, Pairs pairs, int th
     bool *intersecting, *a_inside_b, *b_inside_a;
     std::int64_t *triangle_a, *triangle_b;
     std::int8_t* status;
-    auto distance_arr = new_array<double>({n}, &distance);
-    auto point_a_arr = new_array<double>({n, 3}, &point_a);
-    auto point_b_arr = new_array<double>({n, 3}, &point_b);
-    auto intersecting_arr = new_array<bool>({n}, &intersecting);
-    auto a_inside_b_arr = new_array<bool>({n}, &a_inside_b);
-    auto b_inside_a_arr = new_array<bool>({n}, &b_inside_a);
-    auto triangle_a_arr = new_array<std::int64_t>({n}, &triangle_a);
-    auto triangle_b_arr = new_array<std::int64_t>({n}, &triangle_b);
-    auto status_arr = new_array<std::int8_t>({n}, &status);
+    auto distance_arr = new_array<Out<double, -1>>({n});
+    distance = distance_arr.data();
+    auto point_a_arr = new_array<Out<double, -1, 3>>({n, 3});
+    point_a = point_a_arr.data();
+    auto point_b_arr = new_array<Out<double, -1, 3>>({n, 3});
+    point_b = point_b_arr.data();
+    auto intersecting_arr = new_array<Out<bool, -1>>({n});
+    intersecting = intersecting_arr.data();
+    auto a_inside_b_arr = new_array<Out<bool, -1>>({n});
+    a_inside_b = a_inside_b_arr.data();
+    auto b_inside_a_arr = new_array<Out<bool, -1>>({n});
+    b_inside_a = b_inside_a_arr.data();
+    auto triangle_a_arr = new_array<Out<std::int64_t, -1>>({n});
+    triangle_a = triangle_a_arr.data();
+    auto triangle_b_arr = new_array<Out<std::int64_t, -1>>({n});
+    triangle_b = triangle_b_arr.data();
+    auto status_arr = new_array<Out<std::int8_t, -1>>({n});
+    status = status_arr.data();
     {
         nb::gil_scoped_release release;
         const int t = meshcol::resolve_threads(threads, in.count, meshcol::defaults::mesh_min_pairs_per_thread);
@@ -185,17 +169,19 @@ nb::tuple distance_batch(const MeshBvhSet& set, Poses poses, Pairs pairs, int th
             }
         });
     }
-    return nb::make_tuple(distance_arr, point_a_arr, point_b_arr, intersecting_arr, a_inside_b_arr,
+    return std::make_tuple(distance_arr, point_a_arr, point_b_arr, intersecting_arr, a_inside_b_arr,
                           b_inside_a_arr, triangle_a_arr, triangle_b_arr, status_arr);
 }
 
-nb::tuple intersects_batch(const MeshBvhSet& set, Poses poses, Pairs pairs, int threads) {
+auto intersects_batch(const MeshBvhSet& set, Poses poses, Pairs pairs, int threads) {
     const PosedPairs in = read_pairs(set, poses, pairs);
     const auto n = static_cast<size_t>(in.count);
     bool* intersecting;
     std::int8_t* status;
-    auto intersecting_arr = new_array<bool>({n}, &intersecting);
-    auto status_arr = new_array<std::int8_t>({n}, &status);
+    auto intersecting_arr = new_array<Out<bool, -1>>({n});
+    intersecting = intersecting_arr.data();
+    auto status_arr = new_array<Out<std::int8_t, -1>>({n});
+    status = status_arr.data();
     {
         nb::gil_scoped_release release;
         const int t = meshcol::resolve_threads(threads, in.count, meshcol::defaults::mesh_min_pairs_per_thread);
@@ -215,7 +201,7 @@ nb::tuple intersects_batch(const MeshBvhSet& set, Poses poses, Pairs pairs, int 
             }
         });
     }
-    return nb::make_tuple(intersecting_arr, status_arr);
+    return std::make_tuple(intersecting_arr, status_arr);
 }
 
 }  // namespace
@@ -241,7 +227,8 @@ void bind_mesh_query(nb::module_& m) {
             if (!mesh.valid()) throw std::invalid_argument("mesh " + std::to_string(i) + " is not valid");
             const size_t n = points.shape(0);
             double* out;
-            auto arr = new_array<double>({n}, &out);
+            auto arr = new_array<Out<double, -1>>({n});
+            out = arr.data();
             const double* p = points.data();
             {
                 nb::gil_scoped_release release;
@@ -250,6 +237,35 @@ void bind_mesh_query(nb::module_& m) {
             }
             return arr;
         }, "i"_a, "points"_a, "Generalized winding numbers of points (mesh i's local frame).")
+        .def("closest_points", [](const MeshBvhSet& s, std::int64_t i, Points points, int threads) {
+            const meshcol::MeshBvh& mesh = s.at(i);
+            const size_t n = points.shape(0);
+            auto distance = new_array<Out<double, -1>>({n});
+            auto closest = new_array<Out<double, -1, 3>>({n, 3});
+            auto triangle = new_array<Out<std::int64_t, -1>>({n});
+            const double* p = points.data();
+            double* d = distance.data();
+            double* c = closest.data();
+            std::int64_t* t = triangle.data();
+            {
+                nb::gil_scoped_release release;
+                const auto count = static_cast<long long>(n);
+                const int used = meshcol::resolve_threads(threads, count,
+                                                          meshcol::defaults::min_points_per_thread);
+                meshcol::parallel_for(count, used, [&](long long begin, long long end) {
+                    for (long long k = begin; k < end; ++k) {
+                        const Vec3 q{p[3 * k], p[3 * k + 1], p[3 * k + 2]};
+                        const meshcol::PointDistanceOutput r = meshcol::closest_point(mesh, q);
+                        d[k] = r.distance;
+                        for (int j = 0; j < 3; ++j) c[3 * k + j] = r.point[j];
+                        t[k] = r.triangle;
+                    }
+                });
+            }
+            return std::make_tuple(distance, closest, triangle);
+        }, "i"_a, "points"_a, "threads"_a = 0,
+           "Exact distances (N,), closest surface points (N, 3) and faces (N,) of points (N, 3) "
+           "to mesh i (its local frame); NaN and -1 for a non-finite point or an invalid mesh.")
         .def("distance_batch", &distance_batch, "poses"_a, "pairs"_a, "threads"_a = 0,
              "max_distance"_a = std::numeric_limits<double>::infinity(),
              "Mesh-pair distances: (distance, point_a, point_b, intersecting, a_inside_b, "
@@ -264,10 +280,14 @@ void bind_mesh_query(nb::module_& m) {
         const size_t n = a.shape(0);
         double *distance, *point_a, *point_b;
         bool* intersecting;
-        auto d_arr = new_array<double>({n}, &distance);
-        auto pa_arr = new_array<double>({n, 3}, &point_a);
-        auto pb_arr = new_array<double>({n, 3}, &point_b);
-        auto i_arr = new_array<bool>({n}, &intersecting);
+        auto d_arr = new_array<Out<double, -1>>({n});
+        distance = d_arr.data();
+        auto pa_arr = new_array<Out<double, -1, 3>>({n, 3});
+        point_a = pa_arr.data();
+        auto pb_arr = new_array<Out<double, -1, 3>>({n, 3});
+        point_b = pb_arr.data();
+        auto i_arr = new_array<Out<bool, -1>>({n});
+        intersecting = i_arr.data();
         const double* pa = a.data();
         const double* pb = b.data();
         {
@@ -287,7 +307,7 @@ void bind_mesh_query(nb::module_& m) {
                 }
             }
         }
-        return nb::make_tuple(d_arr, pa_arr, pb_arr, i_arr);
+        return std::make_tuple(d_arr, pa_arr, pb_arr, i_arr);
     }, "a"_a, "b"_a,
        "Exact distances of triangle pairs a[k], b[k] (n, 3, 3): (distance, point_a, point_b, intersecting).");
 }

@@ -1,18 +1,17 @@
-// Exposes toi.hpp: batched time of impact over the arrays of a meshcol.query.ConvexSet, and the
-// pose interpolation the motion model uses. The Python API is meshcol/sweep.py.
+// Exposes toi.hpp: batched time of impact over the arrays of a
+// meshcol.collision.shapes.ConvexSet, its typed result, and the pose interpolation the motion
+// model uses. The Python API is meshcol/collision/time_of_impact.py.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
-#include <nanobind/stl/optional.h>
-#include <nanobind/stl/string.h>
 
 #include <cmath>
 #include <cstdint>
-#include <optional>
 #include <stdexcept>
 #include <string>
 
 #include "meshcol/defaults.hpp"
 #include "meshcol/toi.hpp"
+#include "ndarray.hpp"
 #include "packed_convex_set.hpp"
 
 namespace nb = nanobind;
@@ -21,10 +20,18 @@ using namespace meshcol::bindings;
 
 namespace {
 
-using Times = nb::ndarray<const double, nb::shape<-1>, nb::c_contig, nb::device::cpu>;
+/// The arrays of one time-of-impact batch, P entries each (P x 3 for vectors).
+struct TimeOfImpactArrays {
+    ArrayObject<Out<double, -1>> time_of_impact;
+    ArrayObject<Out<double, -1, 3>> point;
+    ArrayObject<Out<double, -1, 3>> normal;
+    ArrayObject<Out<std::int32_t, -1>> iterations;
+    ArrayObject<Out<std::int8_t, -1>> status;
+};
 
-nb::dict time_of_impact_batch(const PackedConvexSet& set, Poses start_poses, Poses end_poses,
-                              Pairs pairs, double tolerance, int max_iterations, int threads) {
+TimeOfImpactArrays time_of_impact_batch(const PackedConvexSet& set, Poses start_poses,
+                                        Poses end_poses, Pairs pairs, double tolerance,
+                                        int max_iterations, int threads) {
     set.check_poses(start_poses, "start_poses");
     set.check_poses(end_poses, "end_poses");
     set.check_pairs(pairs);
@@ -35,13 +42,12 @@ nb::dict time_of_impact_batch(const PackedConvexSet& set, Poses start_poses, Pos
         throw std::invalid_argument("max_iterations must be >= 1, got " +
                                     std::to_string(max_iterations));
     const long long p = static_cast<long long>(pairs.shape(0));
-    const std::int64_t* idx = pairs.data();
     const size_t n = static_cast<size_t>(p);
-    auto toi = new_array<double>({n});
-    auto point = new_array<double>({n, 3});
-    auto normal = new_array<double>({n, 3});
-    auto iterations = new_array<std::int32_t>({n});
-    auto status = new_array<std::int8_t>({n});
+    auto toi = new_array<Out<double, -1>>({n});
+    auto point = new_array<Out<double, -1, 3>>({n, 3});
+    auto normal = new_array<Out<double, -1, 3>>({n, 3});
+    auto iterations = new_array<Out<std::int32_t, -1>>({n});
+    auto status = new_array<Out<std::int8_t, -1>>({n});
     meshcol::ToiBatchOutput out;
     out.toi = toi.data();
     out.point = point.data();
@@ -53,23 +59,18 @@ nb::dict time_of_impact_batch(const PackedConvexSet& set, Poses start_poses, Pos
     options.max_iterations = max_iterations;
     {
         nb::gil_scoped_release release;
-        meshcol::run_toi_batch(set.view(), start_poses.data(), end_poses.data(), idx, p, options,
-                               threads, out);
+        meshcol::run_toi_batch(set.view(), start_poses.data(), end_poses.data(), pairs.data(), p,
+                               options, threads, out);
     }
-    nb::dict d;
-    d["toi"] = toi;
-    d["point"] = point;
-    d["normal"] = normal;
-    d["iterations"] = iterations;
-    d["status"] = status;
-    return d;
+    return TimeOfImpactArrays{toi.cast(), point.cast(), normal.cast(), iterations.cast(),
+                              status.cast()};
 }
 
-nb::ndarray<nb::numpy, double> interpolate_poses(Poses start_poses, Poses end_poses, Times t) {
+Out<double, -1, 4, 4> interpolate_poses(Poses start_poses, Poses end_poses, Values t) {
     const size_t n = start_poses.shape(0);
     if (end_poses.shape(0) != n || t.shape(0) != n)
         throw std::invalid_argument("start_poses, end_poses and t must have the same length");
-    auto out = new_array<double>({n, 4, 4});
+    auto out = new_array<Out<double, -1, 4, 4>>({n, 4, 4});
     double* o = out.data();
     for (size_t i = 0; i < n; ++i) {
         const double* m0 = start_poses.data() + 16 * i;
@@ -96,12 +97,25 @@ nb::ndarray<nb::numpy, double> interpolate_poses(Poses start_poses, Poses end_po
 }  // namespace
 
 void bind_toi(nb::module_& m) {
+    const auto ro = nb::rv_policy::automatic;
+    nb::class_<TimeOfImpactArrays>(m, "TimeOfImpactArrays",
+                                   "Arrays of a time_of_impact_batch, in pair order.")
+        .def_prop_ro("time_of_impact",
+                     [](const TimeOfImpactArrays& r) { return r.time_of_impact; }, ro,
+                     "(P,) float64 fraction of the motion; NaN when SEPARATED or invalid")
+        .def_prop_ro("point", [](const TimeOfImpactArrays& r) { return r.point; }, ro,
+                     "(P, 3) float64, world")
+        .def_prop_ro("normal", [](const TimeOfImpactArrays& r) { return r.normal; }, ro,
+                     "(P, 3) float64, world, unit, a to b")
+        .def_prop_ro("iterations", [](const TimeOfImpactArrays& r) { return r.iterations; },
+                     ro, "(P,) int32")
+        .def_prop_ro("status", [](const TimeOfImpactArrays& r) { return r.status; }, ro,
+                     "(P,) int8 TimeOfImpactStatus codes");
     m.def("time_of_impact_batch", &time_of_impact_batch, "shapes"_a, "start_poses"_a,
           "end_poses"_a, "pairs"_a, "tolerance"_a = meshcol::defaults::toi_tolerance,
           "max_iterations"_a = meshcol::defaults::toi_max_iterations, "threads"_a = 0,
           "Time of impact of (P, 2) pairs of a PackedConvexSet's shapes moving from start_poses to "
-          "end_poses ((H, 4, 4) each); returns a dict of numpy arrays (toi, point, normal, "
-          "iterations, status).");
+          "end_poses ((H, 4, 4) each).");
     m.def("interpolate_poses", &interpolate_poses, "start_poses"_a, "end_poses"_a, "t"_a,
           "Poses (N, 4, 4) at times t (N,) of the motions start -> end (translation linear, "
           "rotation slerped about the local origin).");

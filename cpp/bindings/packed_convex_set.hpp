@@ -1,51 +1,20 @@
 #pragma once
-// A packed convex set as the bindings see it: the arrays of a Python meshcol.query.ConvexSet,
-// checked once when the set is made, and the view the core reads. Shared by every binding
+// A packed convex set as the bindings see it: the arrays of a Python
+// meshcol.collision.shapes.ConvexSet, checked once when the set is made, and the view the core reads. Shared by every binding
 // that takes convex shapes (narrow phase, time of impact). Bindings only: no nanobind code
 // outside cpp/bindings/.
 #include <nanobind/nanobind.h>
-#include <nanobind/ndarray.h>
 #include <nanobind/stl/optional.h>
 
 #include <cstdint>
-#include <initializer_list>
 #include <optional>
 #include <stdexcept>
 #include <string>
 
 #include "meshcol/narrowphase.hpp"
+#include "ndarray.hpp"
 
 namespace meshcol::bindings {
-
-namespace nb = nanobind;
-
-using Points = nb::ndarray<const double, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
-using Params = nb::ndarray<const double, nb::shape<-1, 4>, nb::c_contig, nb::device::cpu>;
-using Index64 = nb::ndarray<const std::int64_t, nb::shape<-1>, nb::c_contig, nb::device::cpu>;
-using Index32 = nb::ndarray<const std::int32_t, nb::shape<-1>, nb::c_contig, nb::device::cpu>;
-using Kinds = nb::ndarray<const std::int8_t, nb::shape<-1>, nb::c_contig, nb::device::cpu>;
-using Poses = nb::ndarray<const double, nb::shape<-1, 4, 4>, nb::c_contig, nb::device::cpu>;
-using Pairs = nb::ndarray<const std::int64_t, nb::shape<-1, 2>, nb::c_contig, nb::device::cpu>;
-
-/// A new numpy array of `shape` that owns its (uninitialised) data.
-template <class T>
-nb::ndarray<nb::numpy, T> new_array(std::initializer_list<size_t> shape) {
-    size_t n = 1;
-    for (size_t s : shape) n *= s;
-    T* data = new T[n + 1];
-    nb::capsule owner(data, [](void* p) noexcept { delete[] static_cast<T*>(p); });
-    return nb::ndarray<nb::numpy, T>(data, shape, owner);
-}
-
-/// Throws unless `off` (n entries) starts at 0, ends at `total` and never decreases.
-inline void check_offsets(const std::int64_t* off, size_t n, std::int64_t total, const char* name) {
-    if (n == 0 || off[0] != 0 || off[n - 1] != total)
-        throw std::invalid_argument(std::string(name) + " must start at 0 and end at " +
-                                    std::to_string(total));
-    for (size_t i = 1; i < n; ++i)
-        if (off[i] < off[i - 1])
-            throw std::invalid_argument(std::string(name) + " must be non-decreasing");
-}
 
 /// Owns (references to) the arrays of a Python ConvexSet and the view over them.
 class PackedConvexSet {

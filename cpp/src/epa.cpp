@@ -249,7 +249,8 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
             if (norm(c) > 0.0) n = dot(c, md.translation_b) < 0.0 ? -c : c;
         } else if (s.size == 2) {
             const Vec3 d = s.vertices[1].w - s.vertices[0].w;
-            const Vec3 c = n - d * (dot(n, d) / std::fmax(squared_norm(d), 1e-300));
+            const Vec3 c =
+                n - d * (dot(n, d) / std::fmax(squared_norm(d), defaults::epa_min_squared_length));
             if (norm(c) > 0.0) n = c;
         }
         const double nn = norm(n);
@@ -308,7 +309,9 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
         const double upper = dot(closest.normal, w.w);
         const double scale = std::sqrt(squared_norm(closest.normal));
         const std::uint64_t key = Polytope::key_of(w);
-        if (upper - closest.offset <= opt.relative_tolerance * upper + tol * 1e-2 * scale ||
+        if (upper - closest.offset <=
+                opt.relative_tolerance * upper +
+                    tol * defaults::epa_absolute_tolerance_ratio * scale ||
             poly.has_vertex(key)) {
             res.status = Status::CONVERGED;
             break;

@@ -24,10 +24,13 @@ MinkowskiDifference::MinkowskiDifference(const ShapeView& shape_a, const Pose& p
 SimplexVertex MinkowskiDifference::support(const Vec3& d) {
     SimplexVertex v;
     // The previous support points are good starts for the climbs when the direction turned
-    // little (as in EPA and late GJK); after a turn of more than about 60 degrees (early GJK)
-    // a few strided samples start them nearer the top.
+    // little (as in EPA and late GJK); after a larger turn (early GJK) a few strided samples
+    // start them nearer the top. Compares squares: cos^2 > c^2 without a square root.
+    constexpr double c2 = defaults::support_warm_start_min_cosine *
+                          defaults::support_warm_start_min_cosine;
     const double dd = dot(d, last_direction);
-    const bool near = dd > 0.0 && 4.0 * dd * dd > squared_norm(d) * squared_norm(last_direction);
+    const bool near =
+        dd > 0.0 && dd * dd > c2 * (squared_norm(d) * squared_norm(last_direction));
     last_direction = d;
     const int start_a = near ? hint_a : -1, start_b = near ? hint_b : -1;
     const Vec3 db = rotation_b.transpose_times(-d);
@@ -175,7 +178,8 @@ bool closest_tetrahedron(const Vec3* w, Feature& f, Vec3& closest) {
     const Vec3 a = w[0], b = w[1], c = w[2], d = w[3];
     const double volume = dot(d - a, cross(b - a, c - a));
     const double size = std::fmax(std::fmax(max_abs(b - a), max_abs(c - a)), max_abs(d - a));
-    const bool flat = std::fabs(volume) <= 1e-14 * size * size * size;
+    const bool flat =
+        std::fabs(volume) <= defaults::gjk_flat_tetrahedron_volume * size * size * size;
     static constexpr int kFaces[4][4] = {{0, 1, 2, 3}, {0, 2, 3, 1}, {0, 3, 1, 2}, {1, 3, 2, 0}};
     double best = std::numeric_limits<double>::infinity();
     bool outside_any = false;

@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "meshcol/defaults.hpp"
@@ -236,7 +237,66 @@ bool point_inside(const MeshBvh& mesh, const Pose& pose, const Vec3& point) {
     return std::fabs(winding_number(mesh, local)) >= defaults::winding_number_inside;
 }
 
+// Squared distance from p to node n's box.
+inline double point_box_squared_distance(const BvhNode& n, const Vec3& p) {
+    double d2 = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        double gap = static_cast<double>(n.lower[k]) - p[k];
+        if (gap < 0.0) gap = p[k] - static_cast<double>(n.upper[k]);
+        if (gap > 0.0) d2 += gap * gap;
+    }
+    return d2;
+}
+
 }  // namespace
+
+PointDistanceOutput closest_point(const MeshBvh& mesh, const Vec3& point) {
+    PointDistanceOutput out;
+    if (!mesh.valid() || !is_finite(point)) {
+        out.distance = kNaN;
+        out.point = Vec3{kNaN, kNaN, kNaN};
+        return out;
+    }
+    const std::vector<BvhNode>& nodes = mesh.nodes();
+    double best2 = kInf;
+    std::int32_t best_triangle = -1;
+    Vec3 best_point;
+    std::vector<std::pair<std::int32_t, double>> stack;
+    stack.reserve(64);
+    stack.push_back({0, point_box_squared_distance(nodes[0], point)});
+    while (!stack.empty()) {
+        const auto [index, bound] = stack.back();
+        stack.pop_back();
+        // Until a first triangle is measured nothing is pruned (an overflowing inf bound).
+        const bool found = best_triangle >= 0;
+        if (found && bound >= best2) continue;
+        const BvhNode& node = nodes[static_cast<size_t>(index)];
+        if (node.is_leaf()) {
+            for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
+                const Vec3 q = closest_point_on_triangle(point, mesh.triangle(i));
+                const double d2 = squared_norm(q - point);
+                if (best_triangle < 0 || d2 < best2) {
+                    best2 = d2;
+                    best_point = q;
+                    best_triangle = i;
+                }
+            }
+            continue;
+        }
+        // Push the farther child first so the closer one is searched next.
+        const auto child = [&](std::int32_t i) {
+            return std::make_pair(i, point_box_squared_distance(nodes[static_cast<size_t>(i)], point));
+        };
+        std::pair<std::int32_t, double> near = child(index + 1), far = child(node.index);
+        if (near.second > far.second) std::swap(near, far);
+        if (!found || far.second < best2) stack.push_back(far);
+        if (!found || near.second < best2) stack.push_back(near);
+    }
+    out.distance = std::sqrt(best2);
+    out.point = best_point;
+    out.triangle = mesh.face_index(best_triangle);
+    return out;
+}
 
 double winding_number(const MeshBvh& mesh, const Vec3& point) {
     double total = 0.0;

@@ -105,8 +105,11 @@ PairResult query_pair(const ShapeView& a, const Pose& pose_a, const ShapeView& b
     const SatResult sat = sat_penetration(a, pose_a, b, pose_b);
     if (sat.ran) {
         const bool agree = e.status == Status::CONVERGED &&
-                           std::fabs(e.depth - sat.depth) <= 1e-9 * std::fmax(sat.depth, touch) &&
-                           dot(world.normal, sat.normal) >= 1.0 - 1e-9;
+                           std::fabs(e.depth - sat.depth) <=
+                               defaults::sat_agreement_relative_depth *
+                                   std::fmax(sat.depth, touch) &&
+                           dot(world.normal, sat.normal) >=
+                               1.0 - defaults::sat_agreement_normal_cosine;
         world.status = Status::CONVERGED;
         if (agree) {
             world.depth = sat.depth;
@@ -179,7 +182,8 @@ void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t
 
 void world_aabbs(const ConvexSetView& set, const double* poses, double* lo, double* hi,
                  int threads) {
-    const int n_threads = resolve_threads(threads, set.shape_count, 256);
+    const int n_threads =
+        resolve_threads(threads, set.shape_count, defaults::min_shapes_per_thread);
     parallel_for(set.shape_count, n_threads, [&](long long begin, long long end) {
         for (long long h = begin; h < end; ++h) {
             const ShapeView s = set.shape(h);
@@ -193,6 +197,17 @@ void world_aabbs(const ConvexSetView& set, const double* poses, double* lo, doub
             if (good) world_aabb(s, p, a, b);
             store_row(lo, h, a);
             store_row(hi, h, b);
+        }
+    });
+}
+
+void bounding_radii(const ConvexSetView& set, double* radii, int threads) {
+    const int n_threads =
+        resolve_threads(threads, set.shape_count, defaults::min_shapes_per_thread);
+    parallel_for(set.shape_count, n_threads, [&](long long begin, long long end) {
+        for (long long h = begin; h < end; ++h) {
+            const ShapeView s = set.shape(h);
+            radii[h] = is_valid(s) ? bounding_radius(s) : kNaN;
         }
     });
 }

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <limits>
 
+#include "meshcol/defaults.hpp"
+
 namespace meshcol {
 
 namespace {
@@ -67,7 +69,7 @@ SatResult sat_penetration(const ShapeView& a, const Pose& pose_a, const ShapeVie
             const Vec3 c = cross(fa.edges[i], rot * fb.edges[j]);
             const double len = norm(c);
             // Parallel edges span no face of their own: the face normals cover it.
-            if (!(len > 1e-9)) continue;
+            if (!(len > defaults::sat_parallel_edge_sine)) continue;
             const Vec3 n = c / len;
             test(n);
             test(-n);

@@ -178,18 +178,18 @@ Grid make_grid(const double* lo, const double* hi, std::int64_t n, int axis,
     }
     // Candidates per box left by the sweep axis alone: few means the grid cannot pay.
     if (std::isfinite(range[axis]) && range[axis] > 0.0 &&
-        static_cast<double>(n) * 2.0 * median[axis] / range[axis] < d::sweep_min_candidates_for_grid)
+        static_cast<double>(n) * 2.0 * median[axis] / range[axis] < d::sort_and_sweep_min_candidates_for_grid)
         return g;
     auto cells_for = [&](int k) {
         if (!std::isfinite(range[k]) || !(range[k] > 0.0)) return 1;
-        const double width = std::max(d::sweep_cell_extent_ratio * median[k],
-                                      range[k] / d::sweep_max_cells_per_axis);
+        const double width = std::max(d::sort_and_sweep_cell_extent_ratio * median[k],
+                                      range[k] / d::sort_and_sweep_max_cells_per_axis);
         const double c = std::floor(range[k] / width);
-        return static_cast<int>(std::clamp(c, 1.0, static_cast<double>(d::sweep_max_cells_per_axis)));
+        return static_cast<int>(std::clamp(c, 1.0, static_cast<double>(d::sort_and_sweep_max_cells_per_axis)));
     };
     g.cells_u = cells_for(g.u);
     g.cells_v = cells_for(g.v);
-    const std::int64_t max_cells = std::max<std::int64_t>(1, n / d::sweep_min_boxes_per_cell);
+    const std::int64_t max_cells = std::max<std::int64_t>(1, n / d::sort_and_sweep_min_boxes_per_cell);
     while (static_cast<std::int64_t>(g.cells_u) * g.cells_v > max_cells) {
         if (g.cells_u >= g.cells_v) g.cells_u = std::max(1, g.cells_u / 2);
         else g.cells_v = std::max(1, g.cells_v / 2);
@@ -203,7 +203,7 @@ Grid make_grid(const double* lo, const double* hi, std::int64_t n, int axis,
     set_scale();
     // Boxes much larger than the median (a level's floor) enter many cells: coarsen until
     // the duplicates stay bounded.
-    const double max_entries = d::sweep_max_entries_per_box * static_cast<double>(n);
+    const double max_entries = d::sort_and_sweep_max_entries_per_box * static_cast<double>(n);
     while (g.cells() > 1 && static_cast<double>(compute_spans(lo, hi, n, g, span)) > max_entries) {
         g.cells_u = std::max(1, g.cells_u / 2);
         g.cells_v = std::max(1, g.cells_v / 2);
@@ -557,7 +557,7 @@ const std::vector<std::int64_t>& SortAndSweep::update(const double* lo, const do
             s[0] = u0, s[1] = u1, s[2] = v0, s[3] = v1;
         }
     }
-    if (static_cast<double>(changed.size()) > defaults::sweep_max_cell_changes * static_cast<double>(n)) {
+    if (static_cast<double>(changed.size()) > defaults::sort_and_sweep_max_cell_changes * static_cast<double>(n)) {
         pairs_ = std::make_shared<const std::vector<std::int64_t>>(st.build(lo, hi, n, axis_, threads));
         last_shifts_ = -1;
         return *pairs_;
@@ -622,7 +622,7 @@ const std::vector<std::int64_t>& SortAndSweep::update(const double* lo, const do
                 cell.resize(w);
                 const auto count = static_cast<std::int64_t>(w);
                 const std::int64_t moves =
-                    insertion_sort(cell.data(), count, defaults::sweep_max_shifts_per_box * count);
+                    insertion_sort(cell.data(), count, defaults::sort_and_sweep_max_shifts_per_box * count);
                 if (moves < 0) {  // not nearly sorted after all
                     scratch.assign(cell.begin(), cell.end());
                     sort_into(scratch.data(), count, cell.data(), keys);

@@ -76,7 +76,7 @@ bool same_feature(const SimplexVertex& x, const SimplexVertex& y) {
 
 ToiResult invalid_result() {
     ToiResult r;
-    r.status = ToiStatus::INVALID_INPUT;
+    r.status = TimeOfImpactStatus::INVALID_INPUT;
     r.toi = kNaN;
     r.point = kNaN3;
     r.normal = kNaN3;
@@ -85,7 +85,7 @@ ToiResult invalid_result() {
 
 ToiResult separated_result(int iterations) {
     ToiResult r;
-    r.status = ToiStatus::SEPARATED;
+    r.status = TimeOfImpactStatus::SEPARATED;
     r.toi = kNaN;
     r.point = kNaN3;
     r.normal = kNaN3;
@@ -118,7 +118,7 @@ ToiResult sphere_sphere(const Mover& a, const Mover& b, double tol) {
     const Vec3 c0 = b.motion.start.translation - a.motion.start.translation;
     const Vec3 dv = b.motion.velocity - a.motion.velocity;
     const double d0 = norm(c0) - rsum;
-    auto finish = [&](double t, ToiStatus status) {
+    auto finish = [&](double t, TimeOfImpactStatus status) {
         const Vec3 ca = a.motion.start.translation + a.motion.velocity * t;
         const Vec3 c = c0 + dv * t;
         const double len = norm(c);
@@ -130,10 +130,10 @@ ToiResult sphere_sphere(const Mover& a, const Mover& b, double tol) {
         r.toi = t;
         r.point = (pa + pb) * 0.5;
         r.normal = n;
-        if (status == ToiStatus::OVERLAPPED_AT_START && d0 <= 0.0) r.normal = Vec3{};
+        if (status == TimeOfImpactStatus::OVERLAPPED_AT_START && d0 <= 0.0) r.normal = Vec3{};
         return r;
     };
-    if (d0 <= tol) return finish(0.0, ToiStatus::OVERLAPPED_AT_START);
+    if (d0 <= tol) return finish(0.0, TimeOfImpactStatus::OVERLAPPED_AT_START);
     const double qa = dot(dv, dv), qb = 2.0 * dot(c0, dv);
     if (!(qa > 0.0) || qb >= 0.0) return separated_result(1);  // not approaching
     // Smallest root of |c0 + t dv| = radius, in the cancellation-free form 2c / (-b + sqrt(D)).
@@ -145,11 +145,11 @@ ToiResult sphere_sphere(const Mover& a, const Mover& b, double tol) {
         return true;
     };
     double t = 0.0;
-    if (first_root(rsum, t) && t <= 1.0) return finish(t, ToiStatus::HIT);
+    if (first_root(rsum, t) && t <= 1.0) return finish(t, TimeOfImpactStatus::HIT);
     // No touching: still a hit when the closest approach in [0, 1] is within the tolerance.
     const double tm = std::fmin(1.0, -dot(c0, dv) / qa);
     if (norm(c0 + dv * tm) - rsum <= tol && first_root(rsum + tol, t))
-        return finish(std::fmin(t, tm), ToiStatus::HIT);
+        return finish(std::fmin(t, tm), TimeOfImpactStatus::HIT);
     return separated_result(1);
 }
 
@@ -174,11 +174,11 @@ ToiResult conservative_advancement(const Mover& a, const Mover& b, const ToiOpti
         ++iterations;
         const Pose pa = a.motion.at(t), pb = b.motion.at(t);
         const GjkResult g = gjk_distance(*a.shape, pa, *b.shape, pb, gopt);
-        // GJK's distance is exact on polytopes and within 1e-13 relative on curved shapes,
-        // far inside the tol/2 slack of the step.
+        // GJK's distance is exact on polytopes and within defaults::gjk_relative_tolerance on
+        // curved shapes, far inside the tol/2 slack of the step.
         const double d = g.distance;
         if (d <= tol) {
-            r.status = t == 0.0 ? ToiStatus::OVERLAPPED_AT_START : ToiStatus::HIT;
+            r.status = t == 0.0 ? TimeOfImpactStatus::OVERLAPPED_AT_START : TimeOfImpactStatus::HIT;
             r.toi = t;
             r.point = (g.point_a + g.point_b) * 0.5;
             r.normal = d > 0.0 ? g.normal : (t == 0.0 ? Vec3{} : last_normal);
@@ -200,7 +200,7 @@ ToiResult conservative_advancement(const Mover& a, const Mover& b, const ToiOpti
     // Cap reached: t is still a safe lower bound (every step was).
     const Pose pa = a.motion.at(t), pb = b.motion.at(t);
     const GjkResult g = gjk_distance(*a.shape, pa, *b.shape, pb, gopt);
-    r.status = ToiStatus::FAILED;
+    r.status = TimeOfImpactStatus::FAILED;
     r.toi = t;
     r.point = (g.point_a + g.point_b) * 0.5;
     r.normal = g.distance > 0.0 ? g.normal : last_normal;
@@ -239,7 +239,7 @@ ToiResult linear_cast(const Mover& a, const Mover& b, const ToiOptions& opt, boo
         if (vv <= stop * stop) break;
         if (it >= opt.max_iterations) {
             ToiResult r;
-            r.status = ToiStatus::FAILED;
+            r.status = TimeOfImpactStatus::FAILED;
             r.toi = lambda;
             r.iterations = it;
             // Report the closest points of the current simplex, as for a hit.
@@ -303,7 +303,7 @@ ToiResult linear_cast(const Mover& a, const Mover& b, const ToiOptions& opt, boo
         v = c;
     }
     ToiResult r;
-    r.status = lambda == 0.0 ? ToiStatus::OVERLAPPED_AT_START : ToiStatus::HIT;
+    r.status = lambda == 0.0 ? TimeOfImpactStatus::OVERLAPPED_AT_START : TimeOfImpactStatus::HIT;
     r.toi = lambda;
     r.iterations = it;
     Vec3 pa, pb;
@@ -322,13 +322,13 @@ ToiResult linear_cast(const Mover& a, const Mover& b, const ToiOptions& opt, boo
     const double vn = norm(v);
     Vec3 n;
     if (!inside && vn > 0.0) n = v / vn;
-    else if (r.status == ToiStatus::HIT) n = plane_normal;
+    else if (r.status == TimeOfImpactStatus::HIT) n = plane_normal;
     pa += n * margin(*a.shape);
     pb -= n * margin(*b.shape);
     const Pose at = a.motion.at(lambda);
     r.point = at.apply((pa + pb) * 0.5);
     r.normal = at.rotate(n);
-    if (r.status == ToiStatus::OVERLAPPED_AT_START && vn <= delta) r.normal = Vec3{};
+    if (r.status == TimeOfImpactStatus::OVERLAPPED_AT_START && vn <= delta) r.normal = Vec3{};
     return r;
 }
 
@@ -413,7 +413,7 @@ void run_toi_batch(const ConvexSetView& set, const double* start_poses, const do
         radius[h] = bounding_radius(shapes[h]);
     }
     // Advancement can take many GJK calls per pair: smaller chunks balance better.
-    const int n_threads = resolve_threads(threads, pair_count, 8);
+    const int n_threads = resolve_threads(threads, pair_count, defaults::toi_min_pairs_per_thread);
     parallel_for(pair_count, n_threads, [&](long long begin, long long end) {
         for (long long i = begin; i < end; ++i) {
             const std::int64_t ia = pairs[2 * i], ib = pairs[2 * i + 1];

@@ -192,6 +192,44 @@ SegmentClosestPoints segment_closest_points(const Vec3& p1, const Vec3& q1, cons
     return out;
 }
 
+Vec3 closest_point_on_triangle(const Vec3& p, const Vec3 t[3]) {
+    const Vec3 a = t[0], b = t[1], c = t[2];
+    const Vec3 ab = b - a, ac = c - a;
+    const Vec3 n = cross(ab, ac);
+    if (!(dot(n, n) > 0.0)) {
+        // Degenerate (collinear or repeated corners): the triangle is its edges.
+        Vec3 best = a;
+        double best2 = std::numeric_limits<double>::infinity();
+        for (int i = 0; i < 3; ++i) {
+            const SegmentClosestPoints s = segment_closest_points(p, p, t[i], t[(i + 1) % 3]);
+            if (s.squared_distance < best2) {
+                best2 = s.squared_distance;
+                best = s.point_b;
+            }
+        }
+        return best;
+    }
+    const Vec3 ap = p - a;
+    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+    if (d1 <= 0.0 && d2 <= 0.0) return a;
+    const Vec3 bp = p - b;
+    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+    if (d3 >= 0.0 && d4 <= d3) return b;
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return a + ab * (d1 / (d1 - d3));
+    const Vec3 cp = p - c;
+    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+    if (d6 >= 0.0 && d5 <= d6) return c;
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return a + ac * (d2 / (d2 - d6));
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0)
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    // Face region: the plane projection, more accurate than a barycentric sum far from the
+    // triangle (as GJK's closest_triangle).
+    return p - n * (dot(ap, n) / dot(n, n));
+}
+
 double triangle_separated_squared_distance(const Vec3 a[3], const Vec3 b[3], Vec3* point_a,
                                            Vec3* point_b) {
     double best = std::numeric_limits<double>::infinity();

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from meshcol._native import core as _core
+from meshcol._native import core
 
 __all__ = ["sort_and_sweep", "SortAndSweep", "AabbTree", "brute_force_pairs"]
 
@@ -106,7 +106,7 @@ def sort_and_sweep(aabb_min: Any, aabb_max: Any, axis: int | None = None) -> np.
     result. Runs in C++ on all cores with the GIL released.
     """
     lo, hi = _boxes(aabb_min, aabb_max)
-    return _core.sort_and_sweep(lo, hi, _axis(axis))
+    return core.sort_and_sweep(lo, hi, _axis(axis))
 
 
 def brute_force_pairs(aabb_min: Any, aabb_max: Any) -> np.ndarray:
@@ -164,9 +164,9 @@ class SortAndSweep:
     order, re-sorts each cell by insertion sort (O(entries + moves) on nearly sorted cells
     instead of a fresh grid, scatter and O(n log n) sort), moves the few boxes that left
     their cells by merging them into their new cells, and sweeps. When more than
-    ``_core.defaults.sweep_max_cell_changes`` of the boxes changed cells, or a cell's
-    insertion sort would exceed ``_core.defaults.sweep_max_shifts_per_box`` moves per entry,
-    the motion was not small: the step rebuilds the grid or sorts that cell afresh
+    ``defaults.sort_and_sweep_max_cell_changes`` of the boxes changed cells, or a cell's
+    insertion sort would exceed ``defaults.sort_and_sweep_max_shifts_per_box`` moves per
+    entry, the motion was not small: the step rebuilds the grid or sorts that cell afresh
     (``last_shifts`` is then -1). Results equal :func:`sort_and_sweep` exactly, whatever the
     motion. The pair arrays returned are read-only views of what the object keeps for
     :meth:`pairs` (no copy); a later :meth:`update` leaves them unchanged.
@@ -179,7 +179,7 @@ class SortAndSweep:
 
     def __init__(self, aabb_min: Any, aabb_max: Any, axis: int | None = None) -> None:
         lo, hi = _boxes(aabb_min, aabb_max)
-        self._sweep = _core.SortAndSweep(lo, hi, _axis(axis))
+        self._sweep = core.SortAndSweep(lo, hi, _axis(axis))
 
     def pairs(self) -> np.ndarray:
         """Overlapping pairs of the last step: (k, 2) int64 (read-only), i < j, sorted."""
@@ -223,7 +223,7 @@ class AabbTree:
     (Bittner et al. 2013); each ancestor on the way up may swap a child with a grandchild
     when that shrinks the internal area (tree rotations, Kopta et al. 2012) and is rebalanced
     by height when its children's heights differ by more than
-    ``_core.defaults.tree_max_height_imbalance`` (so identical or aligned boxes cannot grow a
+    ``defaults.tree_max_height_imbalance`` (so identical or aligned boxes cannot grow a
     chain). :meth:`rebuild` and :meth:`from_boxes` build top-down by binned SAH (Wald 2007).
     Pairs come from a simultaneous descent of the tree against itself or another tree,
     descending the larger node first (Ericson 2004, 6.5.2), on all cores.
@@ -236,7 +236,7 @@ class AabbTree:
         margin = float(margin)
         if not np.isfinite(margin) or margin < 0.0:
             raise ValueError(f"margin must be finite and >= 0, got {margin}")
-        self._tree = _core.AabbTree(margin)
+        self._tree = core.AabbTree(margin)
 
     @classmethod
     def from_boxes(cls, aabb_min: Any, aabb_max: Any, margin: float = 0.0) -> AabbTree:

@@ -171,6 +171,44 @@ class MeshSet:
         points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
         return self._handle.winding_number(i, points)
 
+    def closest_points(
+        self, i: int, points: Any, *, threads: int = 0
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Exact distance from each point to mesh ``i``'s surface, and the closest points.
+
+        Parameters
+        ----------
+        i : int
+            Mesh index in [0, M).
+        points : (n, 3) float
+            Query points in mesh ``i``'s local frame.
+        threads : int
+            Worker threads; 0 means all cores.
+
+        Returns
+        -------
+        distances : (n,) float64
+            >= 0; NaN for a non-finite point, and for every point when mesh ``i`` is invalid.
+        points : (n, 3) float64
+            Closest surface points, mesh ``i``'s local frame (NaN where ``distances`` is).
+
+        Raises
+        ------
+        ValueError
+            ``points`` not (n, 3), or ``i`` out of range.
+
+        Notes
+        -----
+        Depth-first branch and bound over the mesh's hierarchy, closer child first, pruning
+        boxes no closer than the best distance so far; exact closest point on each triangle at
+        the leaves by Voronoi regions (Ericson 2004, 5.1.5), degenerate triangles as their edges.
+        """
+        points = np.ascontiguousarray(points, dtype=np.float64)
+        if points.ndim != 2 or points.shape[1] != 3:
+            raise ValueError(f"points must be (n, 3), got {points.shape}")
+        distances, closest, _ = self._handle.closest_points(int(i), points, int(threads))
+        return distances, closest
+
 
 @dataclass(frozen=True, eq=False)
 class MeshDistanceBatch:

@@ -200,7 +200,8 @@ class SignedDistanceResult:
 _DISTANCE, _PENETRATION, _INTERSECTS = 0, 1, 2
 
 
-def _run(kind: int, shapes: Any, poses: Any, pairs: Any, threads: int) -> dict[str, np.ndarray]:
+def _run(kind: int, shapes: Any, poses: Any, pairs: Any, threads: int) -> Any:
+    """The native ``QueryArrays`` of one batch (fields the kind does not compute are None)."""
     cs = as_convex_set(shapes)
     h = len(cs)
     return cs._core.query(kind, as_poses(poses, h), as_pairs(pairs, h), int(threads))
@@ -231,8 +232,7 @@ def distance_batch(shapes: ConvexSet, poses: Any, pairs: Any, *, threads: int = 
         Wrong array shapes, non-integer pairs or an index out of range.
     """
     r = _run(_DISTANCE, shapes, poses, pairs, threads)
-    return DistanceBatch(r["distance"], r["point_a"], r["point_b"], r["normal"],
-                         r["iterations"], r["status"])
+    return DistanceBatch(r.distance, r.point_a, r.point_b, r.normal, r.iterations, r.status)
 
 
 def penetration_batch(
@@ -244,8 +244,7 @@ def penetration_batch(
     their closest points.
     """
     r = _run(_PENETRATION, shapes, poses, pairs, threads)
-    return PenetrationBatch(r["depth"], r["normal"], r["point_a"], r["point_b"],
-                            r["iterations"], r["status"])
+    return PenetrationBatch(r.depth, r.normal, r.point_a, r.point_b, r.iterations, r.status)
 
 
 def signed_distance_batch(
@@ -257,9 +256,8 @@ def signed_distance_batch(
     Parameters and errors as :func:`distance_batch`.
     """
     r = _run(_PENETRATION, shapes, poses, pairs, threads)
-    return SignedDistanceBatch(r["distance"] - r["depth"], r["distance"], r["depth"],
-                               r["normal"], r["point_a"], r["point_b"], r["iterations"],
-                               r["status"])
+    return SignedDistanceBatch(r.distance - r.depth, r.distance, r.depth, r.normal, r.point_a,
+                               r.point_b, r.iterations, r.status)
 
 
 def intersects_batch(
@@ -271,7 +269,7 @@ def intersects_batch(
     ``Status.INVALID_INPUT``.
     """
     r = _run(_INTERSECTS, shapes, poses, pairs, threads)
-    return IntersectsBatch(r["intersects"], r["status"])
+    return IntersectsBatch(r.intersects, r.status)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -31,7 +31,11 @@ __all__ = [
 
 
 class ShapeKind(enum.IntEnum):
-    """Kind of a packed shape (mirrors ``ShapeKind`` in ``shapes.hpp``)."""
+    """Kind of a packed shape.
+
+    Mirrors ``ShapeKind`` in ``cpp/include/meshcol/shapes.hpp`` (bound as
+    ``meshcol._core.ShapeKind``; ``tests/test_native.py`` checks they match).
+    """
 
     POLYTOPE = 0  #: convex hull of its vertices (a point, segment or polygon is valid)
     SPHERE = 1  #: params[0] radius

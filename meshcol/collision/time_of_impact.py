@@ -198,7 +198,7 @@ def time_of_impact_batch(
     cap = int(defaults.toi_max_iterations if max_iterations is None else max_iterations)
     r = core.time_of_impact_batch(cs._core, start, end, idx, contact_tolerance(tolerance), cap,
                                    int(threads))
-    return TimeOfImpactBatch(r["toi"], r["point"], r["normal"], r["iterations"], r["status"])
+    return TimeOfImpactBatch(r.time_of_impact, r.point, r.normal, r.iterations, r.status)
 
 
 def time_of_impact(
@@ -241,27 +241,6 @@ def time_of_impact(
                               r.point[0], r.normal[0], int(r.iterations[0]))
 
 
-def _bounding_radii(cs: ConvexSet) -> np.ndarray:
-    """Radius of a ball about each shape's local origin holding the whole shape."""
-    h = len(cs)
-    radii = np.zeros(h)
-    norms = np.linalg.norm(cs.vertices, axis=1) if len(cs.vertices) else np.zeros(0)
-    for i in range(h):
-        k, p = cs.kinds[i], cs.params[i]
-        if k == ShapeKind.POLYTOPE:
-            lo, hi = cs.offsets[i], cs.offsets[i + 1]
-            radii[i] = norms[lo:hi].max() if hi > lo else np.nan
-        elif k == ShapeKind.SPHERE:
-            radii[i] = p[0]
-        elif k == ShapeKind.BOX:
-            radii[i] = np.linalg.norm(p[:3])
-        elif k == ShapeKind.CAPSULE:
-            radii[i] = p[0] + p[1]
-        else:
-            radii[i] = np.hypot(p[0], p[1])
-    return radii
-
-
 def swept_aabbs(cs: ConvexSet, start_poses: np.ndarray, end_poses: np.ndarray,
                 threads: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Conservative world AABBs of shapes over their whole motion.
@@ -289,7 +268,7 @@ def swept_aabbs(cs: ConvexSet, start_poses: np.ndarray, end_poses: np.ndarray,
     turning = np.any(start_poses[:, :3, :3] != end_poses[:, :3, :3], axis=(1, 2))
     turning &= cs.kinds != ShapeKind.SPHERE
     if np.any(turning):
-        r = _bounding_radii(cs)[turning][:, None]
+        r = cs._core.bounding_radii(threads)[turning][:, None]
         t0, t1 = start_poses[turning, :3, 3], end_poses[turning, :3, 3]
         lo[turning] = np.minimum(t0, t1) - r
         hi[turning] = np.maximum(t0, t1) + r

@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from meshcol.decomposition.result import Fidelity
-from meshcol.geometry.triangles import point_triangle_distances, sample_surface, triangle_areas
+from meshcol.geometry.triangles import sample_surface, triangle_areas
 
 __all__ = ["DEFAULT_SAMPLES", "coverage_tolerance", "fidelity", "points_to_parts", "points_to_triangles"]
 
@@ -90,40 +90,19 @@ def points_to_parts(
     return result
 
 
-def points_to_triangles(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+def points_to_triangles(
+    points: np.ndarray, vertices: np.ndarray, faces: np.ndarray, *, threads: int = 0
+) -> np.ndarray:
     """Exact distance from each point to the nearest triangle, (n,) float64.
 
-    An upper bound comes from the exact distances to the triangles with the nearest
-    centroids; then every triangle whose centroid lies within (bound + its bounding radius) is
-    measured. Triangles are binned by radius (powers of two) so a few large triangles do not
-    widen the search for all. Closest point on a triangle follows Ericson, Real-Time Collision
-    Detection (2004), 5.1.5.
+    One native query on the mesh's hierarchy (:meth:`meshcol.collision.mesh_query.MeshSet.
+    closest_points`: branch and bound, exact point-triangle distance, Ericson 2004, 5.1.5).
     """
-    from scipy.spatial import cKDTree
+    from meshcol.collision.mesh_query import MeshSet
 
-    points = np.asarray(points, dtype=np.float64)
-    tri = vertices[faces]
-    centroid = tri.mean(axis=1)
-    radius = np.linalg.norm(tri - centroid[:, None], axis=2).max(axis=1)
-    k = min(8, len(faces))
-    _, near = cKDTree(centroid).query(points, k=k)
-    near = near.reshape(len(points), k)
-    upper = point_triangle_distances(np.repeat(points, k, axis=0), tri[near.reshape(-1)])
-    result = upper.reshape(len(points), k).min(axis=1)
-    level = np.floor(np.log2(np.maximum(radius, 1e-300))).astype(np.int64)
-    for lv in np.unique(level):
-        members = np.nonzero(level == lv)[0]
-        reach = result + float(radius[members].max())
-        candidates = cKDTree(centroid[members]).query_ball_point(points, reach, return_sorted=False)
-        lengths = np.fromiter(map(len, candidates), dtype=np.int64, count=len(points))
-        if lengths.sum() == 0:
-            continue
-        pi = np.repeat(np.arange(len(points)), lengths)
-        ti = members[np.concatenate([np.asarray(c, dtype=np.int64) for c in candidates])]
-        for start in range(0, len(pi), 1_000_000):
-            a, b = pi[start:start + 1_000_000], ti[start:start + 1_000_000]
-            np.minimum.at(result, a, point_triangle_distances(points[a], tri[b]))
-    return result
+    meshes = MeshSet.from_arrays([(vertices, faces)], threads=1)
+    distances, _ = meshes.closest_points(0, points, threads=threads)
+    return distances
 
 
 def _manifold(vertices: np.ndarray, faces: np.ndarray):
@@ -197,7 +176,8 @@ def fidelity(
     if len(parts) > 1:
         shared = points_to_parts(part_points, parts, owner, threads=threads) <= SHARED_FACE_FRACTION * diag
         part_points = part_points[~shared]
-    to_mesh = points_to_triangles(part_points, vertices, faces) if len(part_points) else np.zeros(1)
+    to_mesh = (points_to_triangles(part_points, vertices, faces, threads=threads)
+               if len(part_points) else np.zeros(1))
 
     # The parts are convex hulls already (closed, outward): their meshes are the solids.
     solids = [_manifold(v, f) for v, f in parts]

@@ -10,12 +10,30 @@ constexpr double rigid_tolerance = 1e-6;
 /// Batches smaller than this run on the calling thread: starting threads costs more.
 constexpr long long min_pairs_per_thread = 64;
 
+/// AABBs and bounding radii of fewer shapes than this per thread run on the calling thread:
+/// one shape costs about as little as one pair does, so more of them justify a thread.
+constexpr long long min_shapes_per_thread = 256;
+
+/// Point queries on a mesh (closest points): fewer points than this per thread run on the
+/// calling thread (one point visits a few leaves, a fraction of a mesh pair's work).
+constexpr long long min_points_per_thread = 64;
+
 /// Polytopes with more vertices than this use hill climbing on their hull adjacency (with a
 /// warm start) for support points; smaller ones scan every vertex.
 constexpr int hill_climbing_min_vertices = 32;
 
 /// GJK iteration cap. Polytopes end exactly (a support point repeats) long before it.
 constexpr int gjk_max_iterations = 128;
+
+/// GJK (and EPA) support climbs start from the previous support points when the search
+/// direction turned by less than the angle of this cosine (60 degrees) since the last call,
+/// else from a few strided samples: a small turn keeps the previous vertex near the answer.
+constexpr double support_warm_start_min_cosine = 0.5;
+
+/// GJK treats a tetrahedron as flat when its volume is at most this times the cube of its
+/// longest edge from the first vertex: about 100 ulps of relative rounding, below which the
+/// face-side signs of the origin are noise.
+constexpr double gjk_flat_tetrahedron_volume = 1e-14;
 
 /// GJK stops when v.v - v.w <= tolerance * v.v: the distance is then within this relative
 /// error (van den Bergen 2003). Curved shapes (cylinders) converge to it; polytopes end
@@ -34,6 +52,15 @@ constexpr int epa_max_vertices = 256;
 /// distance of the face: the depth is then within this relative error.
 constexpr double epa_relative_tolerance = 1e-12;
 
+/// EPA also stops when that gap is within this fraction of the contact distance (contact
+/// tolerance times the pair scale): an absolute floor for depths near zero, where the relative
+/// test alone cannot be met.
+constexpr double epa_absolute_tolerance_ratio = 1e-2;
+
+/// Smallest squared edge length EPA divides by when it orients the normal of a flat
+/// Minkowski difference (guards a division by zero; far below any real length squared).
+constexpr double epa_min_squared_length = 1e-300;
+
 /// The same for pairs with a cylinder (spheres and capsules are exact: EPA runs on their
 /// cores): EPA converges only slowly on smooth surfaces.
 constexpr double epa_curved_relative_tolerance = 1e-7;
@@ -42,33 +69,47 @@ constexpr double epa_curved_relative_tolerance = 1e-7;
 /// shapes) is at most this: boxes and small hulls.
 constexpr long long sat_max_work = 40000;
 
+/// SAT skips the cross product of two edge directions whose sine (the norm of the cross
+/// product of unit vectors) is at most this: parallel edges span no face of their own, the
+/// face normals cover them, and a normalised near-zero cross product is noise.
+constexpr double sat_parallel_edge_sine = 1e-9;
+
+/// EPA's depth agrees with exact SAT when they differ by at most this times the SAT depth
+/// (or the contact distance, for shallow pairs); else SAT's depth and axis are taken. Loose
+/// against EPA's 1e-12 tolerance so agreeing answers are never replaced for rounding.
+constexpr double sat_agreement_relative_depth = 1e-9;
+
+/// ... and their normals agree when 1 - cos(angle between them) is at most this (an angle of
+/// about 4.5e-5 radians).
+constexpr double sat_agreement_normal_cosine = 1e-9;
+
 /// Broad phase: fewer boxes than this run on the calling thread.
 constexpr long long broadphase_min_boxes_per_thread = 20000;
 
 /// Sort and sweep: grid cells on the two cross axes are at least this many median box
 /// extents wide (wider cells duplicate fewer boxes, narrower ones prune more).
-constexpr double sweep_cell_extent_ratio = 2.0;
+constexpr double sort_and_sweep_cell_extent_ratio = 2.0;
 
 /// Sort and sweep: at most this many grid cells per cross axis.
-constexpr int sweep_max_cells_per_axis = 1024;
+constexpr int sort_and_sweep_max_cells_per_axis = 1024;
 
 /// Sort and sweep: at least this many boxes per grid cell on average.
-constexpr long long sweep_min_boxes_per_cell = 16;
+constexpr long long sort_and_sweep_min_boxes_per_cell = 16;
 
 /// Sort and sweep: the grid is coarsened until it holds at most this many box entries per
 /// box (a box spanning several cells is entered in each).
-constexpr double sweep_max_entries_per_box = 3.0;
+constexpr double sort_and_sweep_max_entries_per_box = 3.0;
 
 /// Sort and sweep: no grid when the sweep axis alone leaves fewer candidates per box.
-constexpr double sweep_min_candidates_for_grid = 16.0;
+constexpr double sort_and_sweep_min_candidates_for_grid = 16.0;
 
-/// Incremental sweep: a cell's insertion sort gives up and sorts the cell afresh after this many
-/// element moves per entry (large motions are not "nearly sorted").
-constexpr long long sweep_max_shifts_per_box = 32;
+/// Incremental sort and sweep: a cell's insertion sort gives up and sorts the cell afresh after
+/// this many element moves per entry (large motions are not "nearly sorted").
+constexpr long long sort_and_sweep_max_shifts_per_box = 32;
 
-/// Incremental sweep: a step where more than this fraction of the boxes left the grid cells
-/// they spanned rebuilds the grid and sorts afresh (the motion was not small).
-constexpr double sweep_max_cell_changes = 0.25;
+/// Incremental sort and sweep: a step where more than this fraction of the boxes left the grid
+/// cells they spanned rebuilds the grid and sorts afresh (the motion was not small).
+constexpr double sort_and_sweep_max_cell_changes = 0.25;
 
 /// AABB tree: bins of the binned SAH top-down build (Wald 2007; Box2D v3).
 constexpr int tree_bin_count = 32;
@@ -80,6 +121,7 @@ constexpr int tree_max_height_imbalance = 2;
 
 /// AABB tree: most objects one tree holds (ids are 32-bit).
 constexpr long long tree_max_objects = 1000000000;
+
 /// Time of impact: default absolute contact distance (world units). The sweep command scales
 /// it to the scene instead (1e-6 x the scene's bounding diagonal) unless `--tolerance` is given.
 constexpr double toi_tolerance = 1e-6;
@@ -87,6 +129,10 @@ constexpr double toi_tolerance = 1e-6;
 /// Time of impact: cap on ray-cast or conservative-advancement steps per pair. A pair that
 /// reaches it is FAILED with its last safe lower bound.
 constexpr int toi_max_iterations = 1000;
+
+/// Time of impact: fewer pairs than this per thread run on the calling thread. Advancement
+/// can take many GJK calls per pair, so small chunks balance better than for static pairs.
+constexpr long long toi_min_pairs_per_thread = 8;
 
 /// Most triangles in one leaf of a mesh hierarchy (MeshBvh).
 constexpr int mesh_bvh_leaf_size = 4;

@@ -70,14 +70,16 @@ struct GjkOptions {
     bool stop_when_separated = false;  ///< early exit for `intersects`
 };
 
-/// Result of `gjk_distance`.
+/// Result of `gjk_distance` and `gjk_run`. The frame of the points and the normal depends on
+/// which returned it: the world frame from `gjk_distance`, shape a's local frame from
+/// `gjk_run` (its callers map them to the world).
 struct GjkResult {
     Status status = Status::NOT_RUN;
     bool overlap = false;   ///< the (cores or full) shapes touch or overlap
     double distance = 0.0;  ///< >= 0; 0 when `overlap`
-    Vec3 point_a;           ///< world frame, on a (a common point when overlapping)
-    Vec3 point_b;           ///< world frame, on b
-    Vec3 normal;            ///< world frame, unit, from a to b; zero when `overlap`
+    Vec3 point_a;           ///< on a (a common point when overlapping); see above for the frame
+    Vec3 point_b;           ///< on b; see above for the frame
+    Vec3 normal;            ///< unit, from a to b; zero when `overlap`; see above for the frame
     int iterations = 0;
     Simplex simplex;        ///< final simplex (a's local frame), the start of EPA
 };
@@ -89,8 +91,10 @@ struct GjkResult {
 GjkResult gjk_distance(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
                        const Pose& pose_b, const GjkOptions& options = {});
 
-/// Runs GJK on a prepared Minkowski difference (a's frame); `result` points stay in a's
-/// local frame. Used by EPA and by time of impact.
+/// Runs GJK on a prepared Minkowski difference (a's frame): the result's points and normal
+/// stay in a's local frame, and its distance is that of the shapes `difference` describes
+/// (the cores only unless `with_margins`). Used by the narrow phase (`query_pair`), whose
+/// final simplex starts EPA; time of impact calls `gjk_distance`.
 GjkResult gjk_run(MinkowskiDifference& difference, const GjkOptions& options);
 
 /// Closest point of the simplex to the origin (Ericson 2004, sec. 5.1.2-5.1.6): shrinks

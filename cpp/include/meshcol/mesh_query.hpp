@@ -49,6 +49,19 @@ MeshDistanceOutput mesh_distance(const MeshDistanceInput& input);
 /// the first intersecting triangle pair. Both meshes must be valid.
 bool mesh_intersects(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b, const Pose& pose_b);
 
+/// Closest point of a mesh's surface to a point.
+struct PointDistanceOutput {
+    double distance = 0.0;       ///< >= 0; NaN when the point or the mesh is invalid
+    Vec3 point;                  ///< closest surface point, mesh local frame (NaN when invalid)
+    std::int64_t triangle = -1;  ///< input face holding `point`, -1 when invalid
+};
+
+/// Exact distance from `point` (mesh local frame) to the mesh's surface: depth-first branch and
+/// bound over the hierarchy, closer child first, pruning boxes no closer than the best
+/// distance found, exact point-triangle distance at the leaves (Ericson 2004, 5.1.5).
+/// A non-finite point or an invalid mesh gives NaN.
+PointDistanceOutput closest_point(const MeshBvh& mesh, const Vec3& point);
+
 /// Generalized winding number of `point` (mesh's local frame) w.r.t. the mesh: the sum of the
 /// signed solid angles of its triangles over 4 pi (Jacobson et al. 2013; solid angles by van
 /// Oosterom and Strackee 1983). 1 inside a closed outward-wound mesh, 0 outside, -1 inside an

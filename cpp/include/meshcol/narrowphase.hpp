@@ -84,4 +84,8 @@ void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t
 void world_aabbs(const ConvexSetView& set, const double* poses, double* aabb_min,
                  double* aabb_max, int threads);
 
+/// Radius (H,) of a ball about each shape's local origin holding the whole shape
+/// (`bounding_radius`); NaN for a shape that is not `is_valid`.
+void bounding_radii(const ConvexSetView& set, double* radii, int threads);
+
 }  // namespace meshcol

@@ -16,7 +16,7 @@ enum class Status : std::int8_t {
 };
 
 /// Outcome of a time-of-impact query on one pair.
-enum class ToiStatus : std::int8_t {
+enum class TimeOfImpactStatus : std::int8_t {
     HIT = 0,                  ///< first contact at `toi` in [0, 1]
     SEPARATED = 1,            ///< no contact during the whole motion
     OVERLAPPED_AT_START = 2,  ///< already touching or overlapping at t = 0

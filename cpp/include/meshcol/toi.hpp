@@ -68,9 +68,9 @@ struct ToiOptions {
     int max_iterations = defaults::toi_max_iterations;     ///< cap on advancement/cast steps
 };
 
-/// Result of `time_of_impact`. Fields are NaN where they have no meaning (see ToiStatus).
+/// Result of `time_of_impact`. Fields are NaN where they have no meaning (see TimeOfImpactStatus).
 struct ToiResult {
-    ToiStatus status = ToiStatus::FAILED;
+    TimeOfImpactStatus status = TimeOfImpactStatus::FAILED;
     double toi = 0.0;  ///< fraction of the motion in [0, 1]; NaN when SEPARATED
     Vec3 point;        ///< world, midpoint of the closest points at `toi`
     Vec3 normal;       ///< world, unit, from a to b at `toi` (zero when overlapping)
@@ -93,7 +93,8 @@ struct ToiBatchOutput {
 
 /// Time of impact of every pair (P, 2) of `set`, shape h moving from `start_poses[h]` to
 /// `end_poses[h]` ((H, 4, 4) row-major each), on `threads` threads (0: all cores). Pairs with a
-/// bad shape or pose get `ToiStatus::INVALID_INPUT` and NaN fields. Indices must be in range.
+/// bad shape or pose get `TimeOfImpactStatus::INVALID_INPUT` and NaN fields. Indices must be
+/// in range.
 void run_toi_batch(const ConvexSetView& set, const double* start_poses, const double* end_poses,
                    const std::int64_t* pairs, long long pair_count, const ToiOptions& options,
                    int threads, const ToiBatchOutput& out);

@@ -20,6 +20,10 @@ struct SegmentClosestPoints {
 SegmentClosestPoints segment_closest_points(const Vec3& p1, const Vec3& q1, const Vec3& p2,
                                             const Vec3& q2);
 
+/// Closest point of triangle `t` to `p` by Voronoi regions (Ericson 2004, 5.1.5); a
+/// degenerate triangle (zero normal) is its three edges.
+Vec3 closest_point_on_triangle(const Vec3& p, const Vec3 t[3]);
+
 /// Whether two closed triangles share at least one point (touching counts).
 ///
 /// Non-coplanar triangles intersect exactly when an edge of one meets the other; coplanar ones

@@ -1,0 +1,64 @@
+"""The native boundary: the Python enums mirror the C++ ones, results cross as typed objects."""
+
+from __future__ import annotations
+
+import enum
+
+import numpy as np
+import pytest
+
+from meshcol._native import core, defaults
+from meshcol.collision.shapes import ConvexSet, ShapeKind
+from meshcol.types import Status, TimeOfImpactStatus
+
+
+def members(e: type[enum.Enum]) -> dict[str, int]:
+    return {m.name: int(m.value) for m in e}
+
+
+@pytest.mark.parametrize(
+    ("python_enum", "native_enum"),
+    [(Status, core.Status), (TimeOfImpactStatus, core.TimeOfImpactStatus),
+     (ShapeKind, core.ShapeKind)],
+    ids=["Status", "TimeOfImpactStatus", "ShapeKind"],
+)
+def test_python_enums_match_the_bound_cpp_enums(python_enum, native_enum) -> None:
+    assert members(python_enum) == members(native_enum)
+    assert len(python_enum) == len(native_enum)
+
+
+def test_query_results_are_typed_objects() -> None:
+    cs = ConvexSet.from_vertices([np.eye(3), np.eye(3) + 5.0])
+    pairs = np.array([[0, 1]], dtype=np.int64)
+    r = cs._core.query(0, None, pairs)
+    assert type(r).__name__ == "QueryArrays"
+    assert r.distance.shape == (1,) and r.normal.shape == (1, 3)
+    assert r.depth is None and r.intersects is None
+    assert r.distance is r.distance  # one array per field, not a new view per read
+    with pytest.raises(AttributeError):
+        r.distance = np.zeros(1)
+    hit = cs._core.query(2, None, pairs)
+    assert hit.distance is None and hit.intersects.dtype == np.bool_
+
+
+def test_time_of_impact_results_are_typed_objects() -> None:
+    cs = ConvexSet.from_vertices([np.eye(3), np.eye(3) + 5.0])
+    poses = np.tile(np.eye(4), (2, 1, 1))
+    r = core.time_of_impact_batch(cs._core, poses, poses, np.array([[0, 1]], dtype=np.int64))
+    assert type(r).__name__ == "TimeOfImpactArrays"
+    assert r.status[0] == TimeOfImpactStatus.SEPARATED and np.isnan(r.time_of_impact[0])
+
+
+def test_bounding_radii_match_the_shapes() -> None:
+    from meshcol.collision.shapes import Box, Capsule, Cylinder, Sphere
+
+    cs = ConvexSet.from_shapes([np.array([[3.0, 4.0, 0.0], [0, 0, 0], [1, 0, 0], [0, 0, 1]]),
+                                Sphere(2.0), Box((2.0, 4.0, 4.0)), Capsule(1.0, 2.0),
+                                Cylinder(3.0, 8.0)])
+    assert cs._core.bounding_radii() == pytest.approx([5.0, 2.0, 3.0, 2.0, 5.0], abs=1e-12)
+
+
+def test_defaults_are_exposed_under_their_new_names() -> None:
+    assert defaults.sort_and_sweep_max_cell_changes == 0.25
+    assert not hasattr(defaults, "sweep_max_cell_changes")
+    assert 0 < defaults.sat_parallel_edge_sine < 1e-6
