@@ -62,8 +62,16 @@ def level_layout(n, rng):
     lo = np.column_stack([xy, np.zeros(props)])
     hi = lo + np.column_stack([side, side, rng.uniform(0.2, 2.0, props)])
     floor = [[0, 0, -0.5], [0, 0, 0]], [[100, 100, 0], [50, 50, 0.1]]
-    walls_lo = [[0, 0, 0], [0, 99, 0], [0, 0, 0], [99, 0, 0]] + [[12.5 * k, 0, 0] for k in range(1, 8)] + [[0, 25, 0], [0, 50, 0], [0, 75, 0]]
-    walls_hi = [[100, 1, 4], [100, 100, 4], [1, 100, 4], [100, 100, 4]] + [[12.5 * k + 0.3, 100, 3] for k in range(1, 8)] + [[100, 25.3, 3], [100, 50.3, 3], [100, 75.3, 3]]
+    walls_lo = (
+        [[0, 0, 0], [0, 99, 0], [0, 0, 0], [99, 0, 0]]
+        + [[12.5 * k, 0, 0] for k in range(1, 8)]
+        + [[0, 25, 0], [0, 50, 0], [0, 75, 0]]
+    )
+    walls_hi = (
+        [[100, 1, 4], [100, 100, 4], [1, 100, 4], [100, 100, 4]]
+        + [[12.5 * k + 0.3, 100, 3] for k in range(1, 8)]
+        + [[100, 25.3, 3], [100, 50.3, 3], [100, 75.3, 3]]
+    )
     big_lo = np.array(floor[0] + walls_lo[: big - 2], dtype=float)
     big_hi = np.array(floor[1] + walls_hi[: big - 2], dtype=float)
     return np.vstack([lo, big_lo]), np.vstack([hi, big_hi])
@@ -98,7 +106,9 @@ def fcl_pairs(lo, hi):
 def coal_pairs(lo, hi):
     centres, sizes = (lo + hi) / 2, hi - lo
     eye = np.eye(3)
-    objects = [coal.CollisionObject(coal.Box(*s), coal.Transform3s(eye, c)) for c, s in zip(centres, sizes)]
+    objects = [
+        coal.CollisionObject(coal.Box(*s), coal.Transform3s(eye, c)) for c, s in zip(centres, sizes)
+    ]
     manager = coal.DynamicAABBTreeArrayCollisionManager()
     for o in objects:
         manager.registerObject(o)
@@ -109,7 +119,9 @@ def coal_pairs(lo, hi):
 
 
 def row(name, n, seconds, pairs, note=""):
-    print(f"  {name:<34} N={n:>8}  {seconds * 1e3:10.2f} ms  pairs={pairs}{('  ' + note) if note else ''}")
+    print(
+        f"  {name:<34} N={n:>8}  {seconds * 1e3:10.2f} ms  pairs={pairs}{('  ' + note) if note else ''}"
+    )
 
 
 def run_scene(label, lo, hi, repeats, peers):
@@ -135,8 +147,10 @@ def run_scene(label, lo, hi, repeats, peers):
         results["fcl"] = t
     for peer in ("coal", "fcl"):
         if peer in results:
-            print(f"    {peer} / meshcol sort_and_sweep = {results[peer] / t_sas:6.1f}x, "
-                  f"{peer} / meshcol tree = {results[peer] / t_tree:6.1f}x")
+            print(
+                f"    {peer} / meshcol sort_and_sweep = {results[peer] / t_sas:6.1f}x, "
+                f"{peer} / meshcol tree = {results[peer] / t_tree:6.1f}x"
+            )
     return results
 
 
@@ -151,7 +165,9 @@ def incremental(n, rng, repeats):
     """
     lo, hi = random_cubes(n, rng)
     side = hi[0, 0] - lo[0, 0]
-    print(f"Incremental sweep, N={n}: update() per step of a moving scene vs a fresh sort_and_sweep")
+    print(
+        f"Incremental sweep, N={n}: update() per step of a moving scene vs a fresh sort_and_sweep"
+    )
     for fraction in (0.001, 0.01, 0.1):
         step = rng.normal(scale=fraction * side, size=lo.shape)
         moved_lo, moved_hi = lo + step, hi + step
@@ -166,13 +182,17 @@ def incremental(n, rng, repeats):
             moves = sweep.last_shifts
             sweep.update(lo, hi)  # the next step moves back: again a small motion
         ratio = float(np.median(np.array(fresh_times) / np.array(update_times)))
-        print(f"  motion {fraction:>5} x box size: update {min(update_times) * 1e3:8.2f} ms, "
-              f"fresh {min(fresh_times) * 1e3:8.2f} ms, fresh / update = {ratio:4.2f}x (median of "
-              f"{repeats} paired steps), insertion-sort moves = {moves}")
+        print(
+            f"  motion {fraction:>5} x box size: update {min(update_times) * 1e3:8.2f} ms, "
+            f"fresh {min(fresh_times) * 1e3:8.2f} ms, fresh / update = {ratio:4.2f}x (median of "
+            f"{repeats} paired steps), insertion-sort moves = {moves}"
+        )
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--quick", action="store_true", help="stop at N = 1e5")
     args = parser.parse_args()
     rng = np.random.default_rng(12345)
@@ -188,8 +208,10 @@ def main():
         if n == 10**6:
             for peer, t in peer_1e5.items():
                 est = t * 10 * math.log(1e6) / math.log(1e5)
-                print(f"  {peer:<34} N= 1000000  ~{est * 1e3:9.0f} ms  EXTRAPOLATED from N=1e5 as "
-                      f"N log N, not measured ({est / res['sas']:.0f}x sort_and_sweep)")
+                print(
+                    f"  {peer:<34} N= 1000000  ~{est * 1e3:9.0f} ms  EXTRAPOLATED from N=1e5 as "
+                    f"N log N, not measured ({est / res['sas']:.0f}x sort_and_sweep)"
+                )
         print()
     for n in [10**4, 10**5]:
         lo, hi = level_layout(n, rng)

@@ -70,13 +70,20 @@ def load_seconds(scene) -> float:
             key = body.vertices.ctypes.data
             if key not in files:
                 files[key] = f"proto_{len(files)}.obj"
-                trimesh.Trimesh(body.vertices, body.faces, process=False).export(Path(tmp) / files[key])
+                trimesh.Trimesh(body.vertices, body.faces, process=False).export(
+                    Path(tmp) / files[key]
+                )
             r = body.pose[:3, :3]
             w = np.sqrt(max(0.0, 1.0 + np.trace(r))) / 2  # rotations here are about z only
             z = (r[1, 0] - r[0, 1]) / (4 * w)
-            bodies.append({"name": body.name, "mesh": files[key],
-                           "position": body.pose[:3, 3].tolist(),
-                           "rotation": {"quaternion": [w, 0.0, 0.0, z]}})
+            bodies.append(
+                {
+                    "name": body.name,
+                    "mesh": files[key],
+                    "position": body.pose[:3, 3].tolist(),
+                    "rotation": {"quaternion": [w, 0.0, 0.0, z]},
+                }
+            )
         manifest = Path(tmp) / "scene.json"
         manifest.write_text(json.dumps({"units": "m", "bodies": bodies}))
         start = time.perf_counter()
@@ -118,25 +125,40 @@ def run_trimesh(scene, report):
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[100, 1000, 10000])
-    parser.add_argument("--peer-max", type=int, default=10000, help="largest scene given to the peer")
+    parser.add_argument(
+        "--peer-max", type=int, default=10000, help="largest scene given to the peer"
+    )
     parser.add_argument("--repeat", type=int, default=3)
-    parser.add_argument("--clearance", type=float, default=0.25,
-                        help="clearance band: pairs closer than this are candidates too")
+    parser.add_argument(
+        "--clearance",
+        type=float,
+        default=0.25,
+        help="clearance band: pairs closer than this are candidates too",
+    )
     args = parser.parse_args()
 
     from meshcol._native import core as _core
 
-    print(f"meshcol check vs trimesh CollisionManager (+ fcl.distance per candidate pair); "
-          f"{_core.hardware_threads()} hardware threads; clearance {args.clearance}")
-    print(f"{'bodies':>7} {'pairs':>7} {'hits':>5} {'meshcol 1T s':>13} {'meshcol all s':>14} "
-          f"{'trimesh s':>10} {'ratio':>7} {'hits agree':>10} {'load s':>7}")
+    print(
+        f"meshcol check vs trimesh CollisionManager (+ fcl.distance per candidate pair); "
+        f"{_core.hardware_threads()} hardware threads; clearance {args.clearance}"
+    )
+    print(
+        f"{'bodies':>7} {'pairs':>7} {'hits':>5} {'meshcol 1T s':>13} {'meshcol all s':>14} "
+        f"{'trimesh s':>10} {'ratio':>7} {'hits agree':>10} {'load s':>7}"
+    )
     for n in args.sizes:
         scene = level_scene(n)
         run_meshcol(scene, 1, args.clearance)  # warm up: imports, first native call
         t1 = min(run_meshcol(scene, 1, args.clearance)[0] for _ in range(args.repeat))
-        tall, report = min((run_meshcol(scene, 0, args.clearance) for _ in range(args.repeat)),
-                           key=lambda r: r[0])
-        hits = {(p["a"], p["b"]) for p in report.pairs if p["status"] in ("penetrating", "contained", "contact")}
+        tall, report = min(
+            (run_meshcol(scene, 0, args.clearance) for _ in range(args.repeat)), key=lambda r: r[0]
+        )
+        hits = {
+            (p["a"], p["b"])
+            for p in report.pairs
+            if p["status"] in ("penetrating", "contained", "contact")
+        }
         if n <= args.peer_max:
             tp, names, _ = run_trimesh(scene, report)
             peer_hits = {tuple(sorted(pair)) for pair in names}
@@ -145,8 +167,10 @@ def main() -> None:
             tps = f"{tp:10.3f}"
         else:
             ratio, tps, agree = "   n/a", "       n/a", "n/a"
-        print(f"{n:>7} {len(report.pairs):>7} {len(hits):>5} {t1:>13.4f} {tall:>14.4f} {tps} {ratio:>7} "
-              f"{agree:>10} {load_seconds(scene):>7.2f}")
+        print(
+            f"{n:>7} {len(report.pairs):>7} {len(hits):>5} {t1:>13.4f} {tall:>14.4f} {tps} {ratio:>7} "
+            f"{agree:>10} {load_seconds(scene):>7.2f}"
+        )
 
 
 if __name__ == "__main__":

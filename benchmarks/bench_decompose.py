@@ -39,8 +39,20 @@ MESHES = [
     "trimesh-models/round.stl",
 ]
 # CoACD at a moderate setting: threshold 0.1, fewer tree-search iterations than the default.
-COACD = ["--threshold", "0.1", "--preprocess", "off", "--resolution", "1000",
-         "-E", "mcts_iterations=60", "-E", "mcts_nodes=12", "-E", "mcts_max_depth=2"]
+COACD = [
+    "--threshold",
+    "0.1",
+    "--preprocess",
+    "off",
+    "--resolution",
+    "1000",
+    "-E",
+    "mcts_iterations=60",
+    "-E",
+    "mcts_nodes=12",
+    "-E",
+    "mcts_max_depth=2",
+]
 VHACD = ["--engine", "vhacd", "--resolution", "100000", "--max-hulls", "32"]
 
 
@@ -48,8 +60,12 @@ def run(args: list[str], env: dict[str, str] | None = None) -> tuple[float, dict
     with tempfile.NamedTemporaryFile(suffix=".json", delete=False) as f:
         report = f.name
     start = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "meshcol", "decompose", *args, "--report", report],
-                          capture_output=True, text=True, env={**os.environ, **(env or {})})
+    proc = subprocess.run(
+        [sys.executable, "-m", "meshcol", "decompose", *args, "--report", report],
+        capture_output=True,
+        text=True,
+        env={**os.environ, **(env or {})},
+    )
     seconds = time.perf_counter() - start
     if proc.returncode not in (0, 1):
         raise SystemExit(f"meshcol decompose failed ({proc.returncode}): {proc.stderr}")
@@ -66,9 +82,14 @@ def same_tree(a: Path, b: Path) -> bool:
 
 
 def metrics(report: dict) -> dict[str, dict]:
-    return {Path(f["path"]).name: ({**f["bodies"][0]["metrics"], "seconds": f["seconds"]} if f["status"] == "ok"
-                                   else {"status": f["status"]})
-            for f in report["files"]}
+    return {
+        Path(f["path"]).name: (
+            {**f["bodies"][0]["metrics"], "seconds": f["seconds"]}
+            if f["status"] == "ok"
+            else {"status": f["status"]}
+        )
+        for f in report["files"]
+    }
 
 
 def main() -> None:
@@ -81,32 +102,45 @@ def main() -> None:
     if missing:
         raise SystemExit(f"corpus not found: {missing[0]}")
     work = Path(tempfile.mkdtemp(prefix="bench-decompose-"))
-    print(f"{len(meshes)} corpus meshes, {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f}")
+    print(
+        f"{len(meshes)} corpus meshes, {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f}"
+    )
 
     # 1. jobs 1 vs jobs 2 (no cache). The three runs alternate, round after round, so a
     # change in the machine's speed (a shared 2-core VM: +-15% between minutes) hits all three.
     one = {"OMP_NUM_THREADS": "1"}  # CoACD single-threaded: one core for --jobs 1
     times: dict[str, list[float]] = {"single": [], "default": [], "jobs2": []}
     for r in range(args.rounds):
-        s1, _ = run([*meshes, "-o", str(work / f"s1_{r}"), "--no-cache", "--jobs", "1", *COACD], one)
+        s1, _ = run(
+            [*meshes, "-o", str(work / f"s1_{r}"), "--no-cache", "--jobs", "1", *COACD], one
+        )
         t1, r1 = run([*meshes, "-o", str(work / f"j1_{r}"), "--no-cache", "--jobs", "1", *COACD])
         t2, _ = run([*meshes, "-o", str(work / f"j2_{r}"), "--no-cache", "--jobs", "2", *COACD])
         times["single"].append(s1)
         times["default"].append(t1)
         times["jobs2"].append(t2)
-        print(f"round {r + 1}: jobs 1 single-threaded {s1:6.2f} s, jobs 1 default {t1:6.2f} s, "
-              f"jobs 2 {t2:6.2f} s: {s1 / t2:.2f}x / {t1 / t2:.2f}x")
-    identical = all(same_tree(work / "j1_0", work / f"{k}_{r}") for k in ("s1", "j1", "j2")
-                    for r in range(args.rounds))
+        print(
+            f"round {r + 1}: jobs 1 single-threaded {s1:6.2f} s, jobs 1 default {t1:6.2f} s, "
+            f"jobs 2 {t2:6.2f} s: {s1 / t2:.2f}x / {t1 / t2:.2f}x"
+        )
+    identical = all(
+        same_tree(work / "j1_0", work / f"{k}_{r}")
+        for k in ("s1", "j1", "j2")
+        for r in range(args.rounds)
+    )
     best = {k: min(v) for k, v in times.items()}
     median = statistics.median
     print("\n## --jobs 1 vs --jobs 2 (CoACD, no cache)")
-    print(f"best of {args.rounds}: jobs 1 single-threaded {best['single']:.2f} s, jobs 1 default "
-          f"(CoACD's OpenMP on all cores) {best['default']:.2f} s, jobs 2 {best['jobs2']:.2f} s")
-    print(f"speed-up of jobs 2 over jobs 1 on one core: {best['single'] / best['jobs2']:.2f}x (best "
-          f"times), {median([a / b for a, b in zip(times['single'], times['jobs2'])]):.2f}x (median "
-          f"of rounds); over default jobs 1: {best['default'] / best['jobs2']:.2f}x, "
-          f"{median([a / b for a, b in zip(times['default'], times['jobs2'])]):.2f}x")
+    print(
+        f"best of {args.rounds}: jobs 1 single-threaded {best['single']:.2f} s, jobs 1 default "
+        f"(CoACD's OpenMP on all cores) {best['default']:.2f} s, jobs 2 {best['jobs2']:.2f} s"
+    )
+    print(
+        f"speed-up of jobs 2 over jobs 1 on one core: {best['single'] / best['jobs2']:.2f}x (best "
+        f"times), {median([a / b for a, b in zip(times['single'], times['jobs2'])]):.2f}x (median "
+        f"of rounds); over default jobs 1: {best['default'] / best['jobs2']:.2f}x, "
+        f"{median([a / b for a, b in zip(times['default'], times['jobs2'])]):.2f}x"
+    )
     print(f"identical outputs in every run: {identical}")
 
     # 2. cache miss vs hit
@@ -115,13 +149,20 @@ def main() -> None:
     hit, rh = run([*meshes, "-o", str(work / "hit"), "--cache-dir", str(cache), *COACD])
     assert all(b["from_cache"] for f in rh["files"] for b in f["bodies"])
     print("\n## cache miss vs hit")
-    print(f"whole command (includes ~1 s of Python start-up, imports and file parsing): miss {miss:.2f} s, "
-          f"hit {hit:.3f} s, ratio {miss / hit:.0f}x, identical outputs: {same_tree(work / 'miss', work / 'hit')}")
+    print(
+        f"whole command (includes ~1 s of Python start-up, imports and file parsing): miss {miss:.2f} s, "
+        f"hit {hit:.3f} s, ratio {miss / hit:.0f}x, identical outputs: {same_tree(work / 'miss', work / 'hit')}"
+    )
     from meshcol import decompose
     from meshcol.io.mesh_read import load_mesh
 
-    options = {"threshold": 0.1, "preprocess": "off", "resolution": 1000, "cache_dir": str(cache),
-               "engine_options": {"mcts_iterations": 60, "mcts_nodes": 12, "mcts_max_depth": 2}}
+    options = {
+        "threshold": 0.1,
+        "preprocess": "off",
+        "resolution": 1000,
+        "cache_dir": str(cache),
+        "engine_options": {"mcts_iterations": 60, "mcts_nodes": 12, "mcts_max_depth": 2},
+    }
     ratios, hit_total, miss_total = [], 0.0, 0.0
     for f in rm["files"]:
         body = load_mesh(f["path"])[0]
@@ -131,26 +172,34 @@ def main() -> None:
         ratios.append(f["seconds"] / seconds)
         hit_total += seconds
         miss_total += f["seconds"]
-        print(f"  {Path(f['path']).name:24} {len(body.faces):>7} faces: miss {f['seconds']:7.2f} s, "
-              f"hit {seconds * 1000:7.1f} ms, ratio {ratios[-1]:7.0f}x")
-    print(f"decompose() per body (canonical geometry, key, cache read): miss {miss_total:.2f} s, "
-          f"hit {hit_total * 1000:.0f} ms in all, ratio {miss_total / hit_total:.0f}x (smallest {min(ratios):.0f}x)")
+        print(
+            f"  {Path(f['path']).name:24} {len(body.faces):>7} faces: miss {f['seconds']:7.2f} s, "
+            f"hit {seconds * 1000:7.1f} ms, ratio {ratios[-1]:7.0f}x"
+        )
+    print(
+        f"decompose() per body (canonical geometry, key, cache read): miss {miss_total:.2f} s, "
+        f"hit {hit_total * 1000:.0f} ms in all, ratio {miss_total / hit_total:.0f}x (smallest {min(ratios):.0f}x)"
+    )
 
     # 3. CoACD vs V-HACD
     tv, rv = run([*meshes, "-o", str(work / "vhacd"), "--no-cache", "--jobs", "1", *VHACD])
     mc, mv = metrics(r1), metrics(rv)
     print(f"\n## CoACD vs V-HACD (all files, --jobs 1): CoACD {t1:.1f} s, V-HACD {tv:.1f} s")
-    print(f"{'mesh':24} {'seconds':>13} {'parts':>11} {'vol ratio':>13} {'H mesh>parts':>15} {'H parts>mesh':>15} "
-          f"{'uncovered':>13}")
+    print(
+        f"{'mesh':24} {'seconds':>13} {'parts':>11} {'vol ratio':>13} {'H mesh>parts':>15} {'H parts>mesh':>15} "
+        f"{'uncovered':>13}"
+    )
     for name in mc:
         a, b = mc[name], mv[name]
         if "parts" not in a or "parts" not in b:
             print(f"{name:24} coacd {a.get('status', 'ok')}, vhacd {b.get('status', 'ok')}")
             continue
-        print(f"{name:24} {a['seconds']:6.2f}/{b['seconds']:<6.2f} {a['parts']:>5}/{b['parts']:<5} {a['volume_ratio'] or 0:6.3f}/{b['volume_ratio'] or 0:<6.3f} "
-              f"{a['hausdorff_mesh_to_parts']:7.4f}/{b['hausdorff_mesh_to_parts']:<7.4f} "
-              f"{a['hausdorff_parts_to_mesh']:7.4f}/{b['hausdorff_parts_to_mesh']:<7.4f} "
-              f"{a['uncovered_fraction']:6.3f}/{b['uncovered_fraction']:<6.3f}")
+        print(
+            f"{name:24} {a['seconds']:6.2f}/{b['seconds']:<6.2f} {a['parts']:>5}/{b['parts']:<5} {a['volume_ratio'] or 0:6.3f}/{b['volume_ratio'] or 0:<6.3f} "
+            f"{a['hausdorff_mesh_to_parts']:7.4f}/{b['hausdorff_mesh_to_parts']:<7.4f} "
+            f"{a['hausdorff_parts_to_mesh']:7.4f}/{b['hausdorff_parts_to_mesh']:<7.4f} "
+            f"{a['uncovered_fraction']:6.3f}/{b['uncovered_fraction']:<6.3f}"
+        )
     print("(each cell: CoACD/V-HACD; H = one-sided Hausdorff distance in mesh units)")
     shutil.rmtree(work)
 

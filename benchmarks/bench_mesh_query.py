@@ -66,7 +66,9 @@ def case(name: str, a: trimesh.Trimesh, b: trimesh.Trimesh, pb: np.ndarray) -> N
     pairs = np.array([[0, 1]])
 
     def fcl_distance():
-        return fcl.distance(oa, ob, fcl.DistanceRequest(enable_nearest_points=True), fcl.DistanceResult())
+        return fcl.distance(
+            oa, ob, fcl.DistanceRequest(enable_nearest_points=True), fcl.DistanceResult()
+        )
 
     def fcl_collide():
         res = fcl.CollisionResult()
@@ -79,22 +81,34 @@ def case(name: str, a: trimesh.Trimesh, b: trimesh.Trimesh, pb: np.ndarray) -> N
     t_ours_hit = best_of(lambda: mesh_intersects_batch(meshes, None, pairs, threads=1))
     t_fcl = best_of(fcl_distance)
     t_fcl_hit = best_of(fcl_collide)
-    agree = (bool(r.intersecting[0]) == hit_fcl) and (hit_fcl or abs(r.distance[0] - d_fcl) <= 1e-9 * d_fcl)
-    print(f"{name}: {len(a.faces)} + {len(b.faces)} faces, distance {r.distance[0]:.6g} "
-          f"(fcl {d_fcl:.6g}, intersecting {bool(r.intersecting[0])}/{hit_fcl}, agree {agree})")
-    print(f"  build      meshcol {build_meshcol * 1e3:8.2f} ms   fcl {build_fcl * 1e3:8.2f} ms   "
-          f"fcl/meshcol {build_fcl / build_meshcol:6.2f}")
-    print(f"  distance   meshcol {t_ours * 1e3:8.3f} ms   fcl {t_fcl * 1e3:8.3f} ms   "
-          f"fcl/meshcol {t_fcl / t_ours:6.2f}")
-    print(f"  intersects meshcol {t_ours_hit * 1e3:8.3f} ms   fcl {t_fcl_hit * 1e3:8.3f} ms   "
-          f"fcl/meshcol {t_fcl_hit / t_ours_hit:6.2f}")
+    agree = (bool(r.intersecting[0]) == hit_fcl) and (
+        hit_fcl or abs(r.distance[0] - d_fcl) <= 1e-9 * d_fcl
+    )
+    print(
+        f"{name}: {len(a.faces)} + {len(b.faces)} faces, distance {r.distance[0]:.6g} "
+        f"(fcl {d_fcl:.6g}, intersecting {bool(r.intersecting[0])}/{hit_fcl}, agree {agree})"
+    )
+    print(
+        f"  build      meshcol {build_meshcol * 1e3:8.2f} ms   fcl {build_fcl * 1e3:8.2f} ms   "
+        f"fcl/meshcol {build_fcl / build_meshcol:6.2f}"
+    )
+    print(
+        f"  distance   meshcol {t_ours * 1e3:8.3f} ms   fcl {t_fcl * 1e3:8.3f} ms   "
+        f"fcl/meshcol {t_fcl / t_ours:6.2f}"
+    )
+    print(
+        f"  intersects meshcol {t_ours_hit * 1e3:8.3f} ms   fcl {t_fcl_hit * 1e3:8.3f} ms   "
+        f"fcl/meshcol {t_fcl_hit / t_ours_hit:6.2f}"
+    )
 
 
 def batch_case(mesh: trimesh.Trimesh, count: int, rng) -> None:
     """`count` posed copies of one mesh in a loose cluster, all pairs whose world AABBs are
     within one extent (as a broad phase would hand over)."""
     extent = float(mesh.extents.max())
-    poses = np.stack([pose(random_rotation(rng), rng.uniform(0, 4 * extent, 3)) for _ in range(count)])
+    poses = np.stack(
+        [pose(random_rotation(rng), rng.uniform(0, 4 * extent, 3)) for _ in range(count)]
+    )
     meshes = MeshSet.from_arrays([mesh] * count, poses)
     centres = poses[:, :3, 3]
     ii, jj = np.triu_indices(count, 1)
@@ -108,8 +122,13 @@ def batch_case(mesh: trimesh.Trimesh, count: int, rng) -> None:
         for k, (i, j) in enumerate(pairs):
             res = fcl.CollisionResult()
             fcl.collide(objects[i], objects[j], fcl.CollisionRequest(), res)
-            out[k] = 0.0 if res.is_collision else fcl.distance(
-                objects[i], objects[j], fcl.DistanceRequest(), fcl.DistanceResult())
+            out[k] = (
+                0.0
+                if res.is_collision
+                else fcl.distance(
+                    objects[i], objects[j], fcl.DistanceRequest(), fcl.DistanceResult()
+                )
+            )
         return out
 
     d_fcl = fcl_loop()
@@ -118,10 +137,14 @@ def batch_case(mesh: trimesh.Trimesh, count: int, rng) -> None:
     t1 = best_of(lambda: mesh_distance_batch(meshes, None, pairs, threads=1), 3)
     t2 = best_of(lambda: mesh_distance_batch(meshes, None, pairs, threads=0), 3)
     tf = best_of(fcl_loop, 2)
-    print(f"batch: {count} posed copies of {len(mesh.faces)} faces, {len(pairs)} near pairs "
-          f"({int(r.intersecting.sum())} intersecting), distances agree with fcl on {int(ok.sum())}/{len(pairs)}")
-    print(f"  meshcol 1 thread {t1 * 1e3:8.2f} ms   all threads {t2 * 1e3:8.2f} ms   "
-          f"fcl collide+distance loop {tf * 1e3:8.2f} ms   fcl/meshcol(1 thread) {tf / t1:6.2f}")
+    print(
+        f"batch: {count} posed copies of {len(mesh.faces)} faces, {len(pairs)} near pairs "
+        f"({int(r.intersecting.sum())} intersecting), distances agree with fcl on {int(ok.sum())}/{len(pairs)}"
+    )
+    print(
+        f"  meshcol 1 thread {t1 * 1e3:8.2f} ms   all threads {t2 * 1e3:8.2f} ms   "
+        f"fcl collide+distance loop {tf * 1e3:8.2f} ms   fcl/meshcol(1 thread) {tf / t1:6.2f}"
+    )
 
 
 def main() -> None:
@@ -131,12 +154,25 @@ def main() -> None:
     counter = load("counter.unitsmm.STL")
     ball_a, ball_b = load("ballA.off"), load("ballB.off")
     e = float(torus.extents[0])
-    case("torus vs translated torus (gap 5% of extent)", torus, torus, pose(translation=(1.05 * e, 0, 0)))
-    case("torus vs rotated torus (near)", torus, torus,
-         pose(random_rotation(rng), (0.9 * e, 0.3 * e, 0.1 * e)))
+    case(
+        "torus vs translated torus (gap 5% of extent)",
+        torus,
+        torus,
+        pose(translation=(1.05 * e, 0, 0)),
+    )
+    case(
+        "torus vs rotated torus (near)",
+        torus,
+        torus,
+        pose(random_rotation(rng), (0.9 * e, 0.3 * e, 0.1 * e)),
+    )
     e = float(fandisk.extents[0])
-    case("fandisk vs rotated fandisk (near)", fandisk, fandisk,
-         pose(random_rotation(rng), (1.1 * e, 0, 0)))
+    case(
+        "fandisk vs rotated fandisk (near)",
+        fandisk,
+        fandisk,
+        pose(random_rotation(rng), (1.1 * e, 0, 0)),
+    )
     e = float(counter.extents[0])
     case("counter vs copy at a 1 mm gap", counter, counter, pose(translation=(e + 1.0, 0, 0)))
     case("ballA vs ballB (overlapping)", ball_a, ball_b, np.eye(4))

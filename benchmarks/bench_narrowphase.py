@@ -31,11 +31,13 @@ def sphere_hull(n: int, rng: np.random.Generator) -> np.ndarray:
 def random_rotation(rng: np.random.Generator) -> np.ndarray:
     q = rng.normal(size=4)
     w, x, y, z = q / np.linalg.norm(q)
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ])
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def make_case(n_vertices: int, n_pairs: int, penetrating: bool, seed: int):
@@ -112,10 +114,14 @@ def main() -> None:
     from oracles import polytope_distance, sat_depth, transform
 
     threads = _core.hardware_threads()
-    print(f"hardware threads: {threads}; pairs per case: {args.pairs}; "
-          f"peers timed on {args.peer_pairs} pairs (per call from Python)")
-    header = (f"{'hull':>5} {'case':>11} {'query':>11} {'mc 1t us':>9} {'mc all us':>9} "
-              f"{'fcl us':>8} {'coal us':>8} {'fcl/mc1':>8} {'coal/mc1':>8} {'worst rel err':>13}")
+    print(
+        f"hardware threads: {threads}; pairs per case: {args.pairs}; "
+        f"peers timed on {args.peer_pairs} pairs (per call from Python)"
+    )
+    header = (
+        f"{'hull':>5} {'case':>11} {'query':>11} {'mc 1t us':>9} {'mc all us':>9} "
+        f"{'fcl us':>8} {'coal us':>8} {'fcl/mc1':>8} {'coal/mc1':>8} {'worst rel err':>13}"
+    )
     print(header)
     worst_overall = 0.0
     for n in (32, 64, 128, 512):
@@ -148,15 +154,19 @@ def main() -> None:
             if fcl is not None:
                 objs = fcl_objects(shapes, poses)
                 if penetrating:
+
                     def run_fcl():
                         for ia, ib in pairs[:n_peer]:
                             req = fcl.CollisionRequest(enable_contact=True, num_max_contacts=1)
                             fcl.collide(objs[ia], objs[ib], req, fcl.CollisionResult())
                 else:
+
                     def run_fcl():
                         for ia, ib in pairs[:n_peer]:
-                            fcl.distance(objs[ia], objs[ib], fcl.DistanceRequest(),
-                                         fcl.DistanceResult())
+                            fcl.distance(
+                                objs[ia], objs[ib], fcl.DistanceRequest(), fcl.DistanceResult()
+                            )
+
                 t_fcl = time_it(run_fcl, 2) / n_peer * 1e6
             if coal is not None:
                 objs_c = coal_objects(shapes, poses)
@@ -169,9 +179,12 @@ def main() -> None:
                         ga, ta = objs_c[ia]
                         gb, tb = objs_c[ib]
                         coal.distance(ga, ta, gb, tb, req, res_c)
+
                 t_coal = time_it(run_coal, 2) / n_peer * 1e6
-            print(f"{n:>5} {label:>11} {query:>11} {t1:>9.3f} {tn:>9.3f} {t_fcl:>8.2f} "
-                  f"{t_coal:>8.2f} {t_fcl / t1:>8.1f} {t_coal / t1:>8.1f} {worst:>13.2e}")
+            print(
+                f"{n:>5} {label:>11} {query:>11} {t1:>9.3f} {tn:>9.3f} {t_fcl:>8.2f} "
+                f"{t_coal:>8.2f} {t_fcl / t1:>8.1f} {t_coal / t1:>8.1f} {worst:>13.2e}"
+            )
     print(f"worst relative error vs exact oracles: {worst_overall:.2e}")
 
 

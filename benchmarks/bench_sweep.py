@@ -35,11 +35,13 @@ def random_rotation(rng):
     q = rng.normal(size=4)
     q /= np.linalg.norm(q)
     w, x, y, z = q
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ])
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def make_case(rng, n, rotate):
@@ -59,8 +61,9 @@ def ground_truth(cs, start, end, samples):
     pair = np.array([[0, 1]])
 
     def dist(t):
-        return distance_batch(cs, interpolate_pose(start, end, np.full(2, t)), pair,
-                              threads=1).distance[0]
+        return distance_batch(
+            cs, interpolate_pose(start, end, np.full(2, t)), pair, threads=1
+        ).distance[0]
 
     ts = np.linspace(0.0, 1.0, samples)
     prev = 0.0
@@ -97,8 +100,10 @@ def summarise(name, hits, truth, tois, seconds):
     false_hits = sum(1 for g, h in zip(truth, hits) if g is None and h)
     err = max((abs(t - g) for t, g in both), default=float("nan"))
     late = max((t - g for t, g in both), default=float("nan"))
-    return (f"  {name:<28} misses {misses:3d}  false hits {false_hits:3d}  "
-            f"max |toi err| {err:9.2e}  max late {late:9.2e}  {seconds * 1e6:8.2f} us/pair")
+    return (
+        f"  {name:<28} misses {misses:3d}  false hits {false_hits:3d}  "
+        f"max |toi err| {err:9.2e}  max late {late:9.2e}  {seconds * 1e6:8.2f} us/pair"
+    )
 
 
 def run(n, pairs, samples, rotate, rng, fcl):
@@ -106,8 +111,9 @@ def run(n, pairs, samples, rotate, rng, fcl):
     sets = [ConvexSet.from_vertices(v) for v, _, _ in cases]
     truth = [ground_truth(cs, s, e, samples) for cs, (_, s, e) in zip(sets, cases)]
     truth = [None if t == 0.0 else t for t in truth]  # overlapping at start: not scored
-    keep = [i for i, (cs, (_, s, e)) in enumerate(zip(sets, cases))
-            if ground_truth_start_free(cs, s)]
+    keep = [
+        i for i, (cs, (_, s, e)) in enumerate(zip(sets, cases)) if ground_truth_start_free(cs, s)
+    ]
     big = ConvexSet.concatenate(*[sets[i] for i in keep])
     start = np.concatenate([cases[i][1] for i in keep])
     end = np.concatenate([cases[i][2] for i in keep])
@@ -120,26 +126,39 @@ def run(n, pairs, samples, rotate, rng, fcl):
     ours = (time.perf_counter() - t0) / repeat / len(keep)
     hits = [s == TimeOfImpactStatus.HIT for s in r.status]
     failed = int(np.sum(r.status == TimeOfImpactStatus.FAILED))
-    print(f"{n}-vertex hulls, {'rotation + translation' if rotate else 'translation'}: "
-          f"{len(keep)} pairs, {sum(t is not None for t in truth)} touch (ground truth: "
-          f"{samples} samples + bisection)")
-    print(summarise("meshcol", hits, truth, list(r.time_of_impact), ours)
-          + f"  failed {failed}  mean iterations {r.iterations.mean():.1f}")
+    print(
+        f"{n}-vertex hulls, {'rotation + translation' if rotate else 'translation'}: "
+        f"{len(keep)} pairs, {sum(t is not None for t in truth)} touch (ground truth: "
+        f"{samples} samples + bisection)"
+    )
+    print(
+        summarise("meshcol", hits, truth, list(r.time_of_impact), ours)
+        + f"  failed {failed}  mean iterations {r.iterations.mean():.1f}"
+    )
     if fcl is None or rotate:
         return ours, None
     objects = [(fcl_convex(fcl, cases[i][0][0]), fcl_convex(fcl, cases[i][0][1])) for i in keep]
     results = {}
-    for label, solver in (("fcl conservative advancement", fcl.CCDSolverType.CCDC_CONSERVATIVE_ADVANCEMENT),
-                          ("fcl naive", fcl.CCDSolverType.CCDC_NAIVE)):
-        req = fcl.ContinuousCollisionRequest(ccd_solver_type=solver,
-                                             ccd_motion_type=fcl.CCDMotionType.CCDM_TRANS)
+    for label, solver in (
+        ("fcl conservative advancement", fcl.CCDSolverType.CCDC_CONSERVATIVE_ADVANCEMENT),
+        ("fcl naive", fcl.CCDSolverType.CCDC_NAIVE),
+    ):
+        req = fcl.ContinuousCollisionRequest(
+            ccd_solver_type=solver, ccd_motion_type=fcl.CCDMotionType.CCDM_TRANS
+        )
         calls = []
         for (ga, gb), i in zip(objects, keep):
             _, s, e = cases[i]
             oa = fcl.CollisionObject(ga, fcl.Transform(s[0, :3, :3], s[0, :3, 3]))
             ob = fcl.CollisionObject(gb, fcl.Transform(s[1, :3, :3], s[1, :3, 3]))
-            calls.append((oa, fcl.Transform(e[0, :3, :3], e[0, :3, 3]), ob,
-                          fcl.Transform(e[1, :3, :3], e[1, :3, 3])))
+            calls.append(
+                (
+                    oa,
+                    fcl.Transform(e[0, :3, :3], e[0, :3, 3]),
+                    ob,
+                    fcl.Transform(e[1, :3, :3], e[1, :3, 3]),
+                )
+            )
         hit, toi = [], []
         t0 = time.perf_counter()
         for oa, ea, ob, eb in calls:

@@ -144,7 +144,9 @@ def test_bad_boxes_name_the_first_bad_index(call):
         call(lo, inverted)
     with pytest.raises(ValueError, match=r"^aabb_min must be \(n, 3\), got \(4, 2\)$"):
         call(np.zeros((4, 2)), np.zeros((4, 2)))
-    with pytest.raises(ValueError, match=r"^aabb_max must be \(10, 3\) like aabb_min, got \(9, 3\)$"):
+    with pytest.raises(
+        ValueError, match=r"^aabb_max must be \(10, 3\) like aabb_min, got \(9, 3\)$"
+    ):
         call(lo, hi[:9])
 
 
@@ -189,11 +191,15 @@ def box_sets(draw, max_n=40):
     scale = draw(st.sampled_from([1e-12, 1.0, 1e12]))
     offset = draw(st.sampled_from([0.0, -3.0, 5e11])) * (scale if scale < 1 else 1.0)
     coords = st.integers(0, 8)
-    lo = np.array(draw(st.lists(st.tuples(coords, coords, coords), min_size=n, max_size=n)), dtype=float).reshape(n, 3)
-    size = np.array(draw(st.lists(st.tuples(*[st.integers(0, 3)] * 3), min_size=n, max_size=n)), dtype=float).reshape(n, 3)
+    lo = np.array(
+        draw(st.lists(st.tuples(coords, coords, coords), min_size=n, max_size=n)), dtype=float
+    ).reshape(n, 3)
+    size = np.array(
+        draw(st.lists(st.tuples(*[st.integers(0, 3)] * 3), min_size=n, max_size=n)), dtype=float
+    ).reshape(n, 3)
     if n and draw(st.booleans()):
-        lo[n // 2:] = lo[0]  # many identical boxes
-        size[n // 2:] = size[0]
+        lo[n // 2 :] = lo[0]  # many identical boxes
+        size[n // 2 :] = size[0]
     return lo * scale + offset, (lo + size) * scale + offset
 
 
@@ -241,7 +247,9 @@ def test_tree_against_tree_equals_brute_force(a, b):
     expected = _cross_brute(a[0], a[1], b[0], b[1])
     got = tree_a.query_pairs(tree_b)
     # map ids back to rows (ids are rows here: fresh trees hand out 0..n-1)
-    assert np.array_equal(ids_a, np.arange(len(a[0]))) and np.array_equal(ids_b, np.arange(len(b[0])))
+    assert np.array_equal(ids_a, np.arange(len(a[0]))) and np.array_equal(
+        ids_b, np.arange(len(b[0]))
+    )
     assert np.array_equal(got, expected)
     assert np.array_equal(AabbTree.from_boxes(*a).query_pairs(AabbTree.from_boxes(*b)), expected)
 
@@ -275,8 +283,12 @@ def _slab_fractions(lo, hi, origin, direction, max_fraction):
     return np.flatnonzero(ok), t0
 
 
-@given(box_sets(max_n=40), st.tuples(*[st.integers(-2, 10)] * 3), st.tuples(*[st.integers(-3, 3)] * 3),
-       st.sampled_from([0.5, 1.0, 4.0]))
+@given(
+    box_sets(max_n=40),
+    st.tuples(*[st.integers(-2, 10)] * 3),
+    st.tuples(*[st.integers(-3, 3)] * 3),
+    st.sampled_from([0.5, 1.0, 4.0]),
+)
 def test_ray_cast_equals_brute_force(boxes, origin, direction, max_fraction):
     lo, hi = boxes
     scale = np.abs(np.concatenate([lo.ravel(), [1.0]])).max() / 8.0
@@ -315,7 +327,11 @@ class TreeEdits(RuleBasedStateMachine):
         self.tree = AabbTree(margin=margin)
         self.boxes: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
-    @rule(corners=st.lists(st.tuples(*[st.integers(0, 12)] * 3, st.integers(0, 3)), min_size=1, max_size=6))
+    @rule(
+        corners=st.lists(
+            st.tuples(*[st.integers(0, 12)] * 3, st.integers(0, 3)), min_size=1, max_size=6
+        )
+    )
     def insert(self, corners):
         lo = np.array([c[:3] for c in corners], dtype=float)
         hi = lo + np.array([c[3] for c in corners], dtype=float)[:, None]
@@ -327,7 +343,9 @@ class TreeEdits(RuleBasedStateMachine):
     @precondition(lambda self: self.boxes)
     @rule(data=st.data())
     def remove(self, data):
-        ids = data.draw(st.lists(st.sampled_from(sorted(self.boxes)), min_size=1, max_size=4, unique=True))
+        ids = data.draw(
+            st.lists(st.sampled_from(sorted(self.boxes)), min_size=1, max_size=4, unique=True)
+        )
         self.tree.remove(ids)
         for box_id in ids:
             del self.boxes[box_id]
@@ -335,8 +353,20 @@ class TreeEdits(RuleBasedStateMachine):
     @precondition(lambda self: self.boxes)
     @rule(data=st.data(), step=st.sampled_from([0.25, 1.0, 6.0]))
     def move(self, data, step):
-        ids = data.draw(st.lists(st.sampled_from(sorted(self.boxes)), min_size=1, max_size=5, unique=True))
-        deltas = np.array(data.draw(st.lists(st.tuples(*[st.integers(-2, 2)] * 3), min_size=len(ids), max_size=len(ids))), dtype=float) * step
+        ids = data.draw(
+            st.lists(st.sampled_from(sorted(self.boxes)), min_size=1, max_size=5, unique=True)
+        )
+        deltas = (
+            np.array(
+                data.draw(
+                    st.lists(
+                        st.tuples(*[st.integers(-2, 2)] * 3), min_size=len(ids), max_size=len(ids)
+                    )
+                ),
+                dtype=float,
+            )
+            * step
+        )
         lo = np.array([self.boxes[i][0] for i in ids]) + deltas
         hi = np.array([self.boxes[i][1] for i in ids]) + deltas
         moved = self.tree.move(ids, lo, hi)
@@ -408,7 +438,11 @@ def test_height_for_boxes_inserted_in_a_row(n):
 def test_height_for_boxes_inserted_on_a_grid_then_after_every_box_moves():
     k = 64
     n = k * k
-    xy = np.stack(np.meshgrid(np.arange(k), np.arange(k), indexing="ij"), -1).reshape(-1, 2).astype(float)
+    xy = (
+        np.stack(np.meshgrid(np.arange(k), np.arange(k), indexing="ij"), -1)
+        .reshape(-1, 2)
+        .astype(float)
+    )
     lo = np.column_stack([xy, np.zeros(n)])
     tree = AabbTree(margin=0.1)
     ids = tree.insert(lo, lo + 0.8)
@@ -441,7 +475,10 @@ def test_rebuild_keeps_ids_and_lowers_sah_cost():
     tree.rebuild()
     tree.validate()
     assert np.array_equal(tree.query_pairs(), before)
-    assert np.array_equal(tree.query(lo[5], lo[5]), np.sort(ids[np.flatnonzero(((lo <= lo[5]) & (lo[5] <= lo + 1)).all(1))]))
+    assert np.array_equal(
+        tree.query(lo[5], lo[5]),
+        np.sort(ids[np.flatnonzero(((lo <= lo[5]) & (lo[5] <= lo + 1)).all(1))]),
+    )
     fresh = AabbTree.from_boxes(lo, lo + 1)
     assert fresh.area_ratio == pytest.approx(tree.area_ratio)
     assert fresh.height < 3 * math.log2(len(lo))
@@ -455,7 +492,9 @@ def test_incremental_sweep_reuses_the_order():
     assert np.array_equal(sweep.update(small, small + 1), sort_and_sweep(small, small + 1))
     assert 0 <= sweep.last_shifts < len(lo)
     shuffled = rng.random((5000, 3)) * 100
-    assert np.array_equal(sweep.update(shuffled, shuffled + 1), sort_and_sweep(shuffled, shuffled + 1))
+    assert np.array_equal(
+        sweep.update(shuffled, shuffled + 1), sort_and_sweep(shuffled, shuffled + 1)
+    )
     assert sweep.last_shifts == -1  # not nearly sorted: fell back to a full sort
     assert len(sweep) == 5000
 

@@ -24,8 +24,11 @@ from meshcol.geometry.topology import is_closed_manifold
 from meshcol.geometry.triangles import point_triangle_distances
 
 # Coarse CoACD settings: seconds, not minutes (the suite has a time budget).
-FAST = {"threshold": 0.2, "resolution": 500,
-        "engine_options": {"mcts_iterations": 20, "mcts_nodes": 8, "mcts_max_depth": 2}}
+FAST = {
+    "threshold": 0.2,
+    "resolution": 500,
+    "engine_options": {"mcts_iterations": 20, "mcts_nodes": 8, "mcts_max_depth": 2},
+}
 
 
 def _torus() -> trimesh.Trimesh:
@@ -53,6 +56,7 @@ def _inside_union(points: np.ndarray, parts, tol: float) -> np.ndarray:
 
 # ---------------------------------------------------------------------------- canonical input
 
+
 def test_canonical_geometry_merges_duplicates_known_cube() -> None:
     v, f = _box()
     soup_v = v[f].reshape(-1, 3)  # 36 vertices, one per corner of each triangle
@@ -77,18 +81,30 @@ def test_canonical_geometry_ignores_vertex_and_face_order() -> None:
     params = resolve_params("coacd")
     assert cache_key(*a, "coacd", "1", params) == cache_key(*b, "coacd", "1", params)
     assert cache_key(*a, "coacd", "1", params) != cache_key(*a, "coacd", "2", params)
-    assert cache_key(*a, "coacd", "1", params) != cache_key(*a, "coacd", "1", resolve_params("coacd", seed=1))
+    assert cache_key(*a, "coacd", "1", params) != cache_key(
+        *a, "coacd", "1", resolve_params("coacd", seed=1)
+    )
 
 
 @pytest.mark.parametrize(
     ("vertices", "faces", "message"),
     [
         (np.zeros((0, 3)), np.zeros((0, 3), dtype=int), "mesh has no faces"),
-        (np.eye(3), np.array([[0, 1, 2]]), "mesh is flat (all vertices lie in one plane): it encloses no volume"),
-        (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0]], float),
-         np.array([[0, 1, 2], [1, 4, 2]]), "mesh is flat (all vertices lie in one plane): it encloses no volume"),
-        (np.array([[0, 0, 0], [1, 0, 0], [0, np.nan, 0], [0, 0, 1]]), np.array([[0, 1, 2], [0, 1, 3]]),
-         "mesh has non-finite vertex coordinates"),
+        (
+            np.eye(3),
+            np.array([[0, 1, 2]]),
+            "mesh is flat (all vertices lie in one plane): it encloses no volume",
+        ),
+        (
+            np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0]], float),
+            np.array([[0, 1, 2], [1, 4, 2]]),
+            "mesh is flat (all vertices lie in one plane): it encloses no volume",
+        ),
+        (
+            np.array([[0, 0, 0], [1, 0, 0], [0, np.nan, 0], [0, 0, 1]]),
+            np.array([[0, 1, 2], [0, 1, 3]]),
+            "mesh has non-finite vertex coordinates",
+        ),
         (np.eye(3), np.array([[0, 1, 5]]), "face indices out of range"),
         (np.eye(3), np.array([[0, 0, 1]]), "mesh has no faces with three distinct vertices"),
     ],
@@ -115,12 +131,21 @@ def test_is_closed_manifold() -> None:
 
 # ---------------------------------------------------------------------------- parameters
 
+
 def test_resolve_params_auto_preprocess_and_budgets() -> None:
     assert resolve_params("coacd", closed=True)["preprocess_mode"] == "off"
     assert resolve_params("coacd", closed=False)["preprocess_mode"] == "on"
     assert resolve_params("coacd", preprocess="on", closed=True)["preprocess_mode"] == "on"
-    p = resolve_params("coacd", max_hulls=5, max_vertices=12, engine_options={"mcts_nodes": "7", "pca": "true"})
-    assert (p["max_convex_hull"], p["decimate"], p["max_ch_vertex"], p["mcts_nodes"], p["pca"]) == (5, True, 12, 7, True)
+    p = resolve_params(
+        "coacd", max_hulls=5, max_vertices=12, engine_options={"mcts_nodes": "7", "pca": "true"}
+    )
+    assert (p["max_convex_hull"], p["decimate"], p["max_ch_vertex"], p["mcts_nodes"], p["pca"]) == (
+        5,
+        True,
+        12,
+        7,
+        True,
+    )
     q = resolve_params("vhacd", max_hulls=5, max_vertices=12, resolution=10000)
     assert (q["max_convex_hulls"], q["max_num_vertices_per_ch"], q["resolution"]) == (5, 12, 10000)
 
@@ -129,8 +154,16 @@ def test_resolve_params_auto_preprocess_and_budgets() -> None:
     ("engine", "kwargs", "message"),
     [
         ("bullet", {}, "unknown engine 'bullet': choose one of coacd, vhacd"),
-        ("coacd", {"engine_options": {"bogus": 1}}, "unknown coacd option 'bogus': known options are "),
-        ("coacd", {"engine_options": {"mcts_nodes": "many"}}, "coacd option 'mcts_nodes' must be int, got 'many'"),
+        (
+            "coacd",
+            {"engine_options": {"bogus": 1}},
+            "unknown coacd option 'bogus': known options are ",
+        ),
+        (
+            "coacd",
+            {"engine_options": {"mcts_nodes": "many"}},
+            "coacd option 'mcts_nodes' must be int, got 'many'",
+        ),
         ("coacd", {"max_vertices": 3}, "max_vertices must be at least 4, got 3"),
         ("coacd", {"threshold": 0.0}, "threshold must be in (0, 1], got 0.0"),
         ("vhacd", {"threshold": 0.1}, "threshold applies to the coacd engine only"),
@@ -144,6 +177,7 @@ def test_resolve_params_errors(engine, kwargs, message) -> None:
 
 
 # ---------------------------------------------------------------------------- canonical parts
+
 
 def test_canonical_part_is_the_outward_hull_in_lexicographic_order() -> None:
     rng = np.random.default_rng(0)
@@ -177,6 +211,7 @@ def test_canonical_part_of_flat_points_is_none() -> None:
 
 # ---------------------------------------------------------------------------- distances
 
+
 def test_point_triangle_distance_known_regions() -> None:
     tri = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], float)
     cases = {  # point -> distance: face, three vertices, three edges
@@ -197,17 +232,22 @@ def test_points_to_triangles_pruning_equals_brute_force() -> None:
     m = _torus()
     v, f = np.asarray(m.vertices), np.asarray(m.faces)
     points = np.random.default_rng(1).uniform(-1.6, 1.6, (300, 3))
-    brute = np.array([point_triangle_distances(np.repeat(p[None], len(f), 0), v[f]).min() for p in points])
+    brute = np.array(
+        [point_triangle_distances(np.repeat(p[None], len(f), 0), v[f]).min() for p in points]
+    )
     assert np.allclose(points_to_triangles(points, v, f), brute, atol=1e-12)
 
 
 def test_points_to_triangles_agrees_with_mesh_query() -> None:
     from meshcol.collision import mesh_query
+
     m = _torus()
     v, f = np.asarray(m.vertices), np.asarray(m.faces)
     points = np.random.default_rng(4).uniform(-1.6, 1.6, (100, 3))
     # A point is a degenerate one-triangle mesh for the BVH-pair distance.
-    meshes = mesh_query.MeshSet.from_arrays([(v, f)] + [(np.repeat(p[None], 3, 0), [[0, 1, 2]]) for p in points])
+    meshes = mesh_query.MeshSet.from_arrays(
+        [(v, f)] + [(np.repeat(p[None], 3, 0), [[0, 1, 2]]) for p in points]
+    )
     pairs = np.stack([np.arange(1, 101), np.zeros(100, dtype=np.int64)], axis=1)
     expected = mesh_query.mesh_distance_batch(meshes, None, pairs).distance
     assert np.allclose(points_to_triangles(points, v, f), expected, rtol=0, atol=1e-12)
@@ -215,7 +255,9 @@ def test_points_to_triangles_agrees_with_mesh_query() -> None:
 
 def test_points_to_parts_known_distances() -> None:
     parts = (_box((0, 0, 0), (1, 1, 1)), _box((3, 0, 0), (4, 1, 1)))
-    points = np.array([[0.5, 0.5, 0.5], [2.0, 0.5, 0.5], [1.5, 0.5, 0.5], [0.5, 0.5, 3.0], [5.0, 2.0, 1.0]])
+    points = np.array(
+        [[0.5, 0.5, 0.5], [2.0, 0.5, 0.5], [1.5, 0.5, 0.5], [0.5, 0.5, 3.0], [5.0, 2.0, 1.0]]
+    )
     d = points_to_parts(points, parts)
     assert d == pytest.approx([0.0, 1.0, 0.5, 2.0, np.sqrt(2)], abs=1e-6)
     owner = np.array([0, 0, 1, 0, 1])  # exclude the owner part
@@ -224,6 +266,7 @@ def test_points_to_parts_known_distances() -> None:
 
 
 # ---------------------------------------------------------------------------- fidelity
+
 
 def test_fidelity_of_the_mesh_itself_is_perfect() -> None:
     v, f = canonical_geometry(*_box())
@@ -254,6 +297,7 @@ def test_fidelity_two_halves_share_a_cut_and_half_misses() -> None:
 
 
 # ---------------------------------------------------------------------------- decompose
+
 
 @pytest.fixture(scope="module")
 def torus_result(tmp_path_factory) -> tuple[Decomposition, float, Path]:
@@ -310,7 +354,9 @@ def test_cache_hit_is_fast_and_equal(torus_result) -> None:
     assert meshcol.cached_decomposition is cached_decomposition
 
 
-def test_cache_hit_with_other_sampling_measures_again_without_the_engine(torus_result, tmp_path) -> None:
+def test_cache_hit_with_other_sampling_measures_again_without_the_engine(
+    torus_result, tmp_path
+) -> None:
     d, _, cache = torus_result
     shutil.copytree(cache, tmp_path / "cache")
     hit = decompose(_torus(), cache_dir=str(tmp_path / "cache"), samples=300, **FAST)
@@ -320,7 +366,9 @@ def test_cache_hit_with_other_sampling_measures_again_without_the_engine(torus_r
     assert again.metrics == hit.metrics
 
 
-def test_cache_write_interrupted_before_rename_leaves_nothing(torus_result, tmp_path, monkeypatch) -> None:
+def test_cache_write_interrupted_before_rename_leaves_nothing(
+    torus_result, tmp_path, monkeypatch
+) -> None:
     d, _, _ = torus_result
 
     def broken_replace(src, dst):
@@ -357,8 +405,15 @@ def test_vertex_and_hull_budgets_are_respected() -> None:
 
 def test_vhacd_engine_budgets() -> None:
     pytest.importorskip("vhacdx")
-    d = decompose(_torus(), engine="vhacd", max_hulls=12, max_vertices=40, resolution=50000,
-                  use_cache=False, samples=500)
+    d = decompose(
+        _torus(),
+        engine="vhacd",
+        max_hulls=12,
+        max_vertices=40,
+        resolution=50000,
+        use_cache=False,
+        samples=500,
+    )
     assert d.engine == "vhacd" and 1 <= len(d.parts) <= 12
     assert max(len(v) for v, _ in d.parts) <= 40
     assert d.metrics.uncovered_fraction < 0.1
@@ -379,9 +434,22 @@ def test_decompose_accepts_a_body() -> None:
 
 def test_bottle_soup_is_repaired(corpus) -> None:
     bottle = trimesh.load(corpus / "coacd-examples" / "Bottle.obj", force="mesh")
-    d = decompose(bottle, threshold=0.3, resolution=300, use_cache=False, samples=500,
-                  engine_options={"preprocess_resolution": 20, "mcts_iterations": 10, "mcts_nodes": 4,
-                                  "mcts_max_depth": 1})
+    d = decompose(
+        bottle,
+        threshold=0.3,
+        resolution=300,
+        use_cache=False,
+        samples=500,
+        engine_options={
+            "preprocess_resolution": 20,
+            "mcts_iterations": 10,
+            "mcts_nodes": 4,
+            "mcts_max_depth": 1,
+        },
+    )
     assert d.repaired and d.params["preprocess_mode"] == "on"
-    assert d.notes[0] == "input is not a closed manifold: CoACD's preprocessing rebuilt it before decomposing"
+    assert (
+        d.notes[0]
+        == "input is not a closed manifold: CoACD's preprocessing rebuilt it before decomposing"
+    )
     assert d.metrics.mesh_volume is None  # a triangle soup bounds no volume

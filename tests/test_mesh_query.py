@@ -13,7 +13,12 @@ from hypothesis import strategies as st
 
 import meshcol
 from meshcol._native import core as _core
-from meshcol.collision.mesh_query import MeshSet, mesh_distance, mesh_distance_batch, mesh_intersects_batch
+from meshcol.collision.mesh_query import (
+    MeshSet,
+    mesh_distance,
+    mesh_distance_batch,
+    mesh_intersects_batch,
+)
 from meshcol.types import Body, Status
 
 # --------------------------------------------------------------------------- helpers
@@ -42,14 +47,18 @@ def rotation_about(axis: str, angle: float) -> np.ndarray:
 
 def rotation_from_quaternion(q) -> np.ndarray:
     w, x, y, z = np.asarray(q, dtype=float) / np.linalg.norm(q)
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ])
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
-def bowl(outer: float = 1.0, inner: float = 0.9, n: int = 24, sections: int = 48) -> trimesh.Trimesh:
+def bowl(
+    outer: float = 1.0, inner: float = 0.9, n: int = 24, sections: int = 48
+) -> trimesh.Trimesh:
     """A closed hemispherical shell, opening upwards, rim at z = 0 (revolved profile)."""
     th = np.linspace(0.0, np.pi / 2, n)
     outer_arc = np.c_[outer * np.sin(th), -outer * np.cos(th)]
@@ -71,10 +80,14 @@ def _point_segment(p, a, b):
 
 def _segment_segment(p1, q1, p2, q2):
     d1, d2, r = q1 - p1, q2 - p2, p1 - p2
-    best = np.minimum.reduce([
-        _point_segment(p1, p2, q2), _point_segment(q1, p2, q2),
-        _point_segment(p2, p1, q1), _point_segment(q2, p1, q1),
-    ])
+    best = np.minimum.reduce(
+        [
+            _point_segment(p1, p2, q2),
+            _point_segment(q1, p2, q2),
+            _point_segment(p2, p1, q1),
+            _point_segment(q2, p1, q1),
+        ]
+    )
     a, b, c = d1 @ d1, d1 @ d2, d2 @ d2
     e, f = d1 @ r, d2 @ r
     det = a * c - b * b
@@ -112,15 +125,21 @@ def _edge_crossings(a, b, exact: bool):
     out = []
     for i in range(3):
         p, q = a[i], a[(i + 1) % 3]
-        cols = [[q[k] - p[k] for k in range(3)], [b[0][k] - b[1][k] for k in range(3)],
-                [b[0][k] - b[2][k] for k in range(3)]]
+        cols = [
+            [q[k] - p[k] for k in range(3)],
+            [b[0][k] - b[1][k] for k in range(3)],
+            [b[0][k] - b[2][k] for k in range(3)],
+        ]
         rhs = [b[0][k] - p[k] for k in range(3)]
         if exact:
             det = _det3(cols)
             if det == 0:
                 out.append(None)
                 continue
-            sol = [Fraction(_det3([rhs if c == j else cols[c] for c in range(3)]), det) for j in range(3)]
+            sol = [
+                Fraction(_det3([rhs if c == j else cols[c] for c in range(3)]), det)
+                for j in range(3)
+            ]
         else:
             m = np.array(cols, dtype=float).T
             if abs(np.linalg.det(m)) < 1e-9:
@@ -151,8 +170,12 @@ def test_unit_cubes_one_apart_along_x() -> None:
     assert not (r.intersecting or r.a_inside_b or r.b_inside_a)
     a, b = box([0, 0, 0], [1, 1, 1]), box([2, 0, 0], [3, 1, 1])
     # the reported triangles hold the reported points
-    assert _point_triangle(r.point_a, a.vertices[a.faces[r.triangle_a]]) == pytest.approx(0, abs=1e-12)
-    assert _point_triangle(r.point_b, b.vertices[b.faces[r.triangle_b]]) == pytest.approx(0, abs=1e-12)
+    assert _point_triangle(r.point_a, a.vertices[a.faces[r.triangle_a]]) == pytest.approx(
+        0, abs=1e-12
+    )
+    assert _point_triangle(r.point_b, b.vertices[b.faces[r.triangle_b]]) == pytest.approx(
+        0, abs=1e-12
+    )
 
 
 def test_parallel_faces_partially_overlapping_and_posed() -> None:
@@ -168,8 +191,12 @@ def test_edge_edge_crossing() -> None:
     gap = 0.3
     a = b = box([-0.5] * 3, [0.5] * 3)
     h = math.sqrt(2) / 2
-    r = mesh_distance(a, b, pose(rotation_about("y", math.pi / 4)),
-                      pose(rotation_about("x", math.pi / 4), (0, 0, 2 * h + gap)))
+    r = mesh_distance(
+        a,
+        b,
+        pose(rotation_about("y", math.pi / 4)),
+        pose(rotation_about("x", math.pi / 4), (0, 0, 2 * h + gap)),
+    )
     assert r.distance == pytest.approx(gap, abs=1e-12)
     assert r.point_a == pytest.approx([0, 0, h], abs=1e-12)
     assert r.point_b == pytest.approx([0, 0, h + gap], abs=1e-12)
@@ -250,8 +277,10 @@ def test_ball_in_bowl_is_separated_not_inside() -> None:
 
 
 def test_max_distance_cut_off() -> None:
-    meshes = MeshSet.from_arrays([box([0, 0, 0], [1, 1, 1])] * 3,
-                                 [pose(), pose(translation=(2, 0, 0)), pose(translation=(5, 0, 0))])
+    meshes = MeshSet.from_arrays(
+        [box([0, 0, 0], [1, 1, 1])] * 3,
+        [pose(), pose(translation=(2, 0, 0)), pose(translation=(5, 0, 0))],
+    )
     r = mesh_distance_batch(meshes, None, [[0, 1], [0, 2]], max_distance=2.0)
     assert r.distance[0] == pytest.approx(1.0, abs=1e-12)
     assert r.distance[1] == math.inf and np.isnan(r.point_a[1]).all()
@@ -262,16 +291,25 @@ def test_max_distance_cut_off() -> None:
 
 def test_from_bodies_uses_body_transforms() -> None:
     cube = box([0, 0, 0], [1, 1, 1])
-    bodies = [Body("a", None, cube.vertices, cube.faces),
-              Body("b", None, cube.vertices, cube.faces, pose=pose(translation=(0, 0, 3)))]
+    bodies = [
+        Body("a", None, cube.vertices, cube.faces),
+        Body("b", None, cube.vertices, cube.faces, pose=pose(translation=(0, 0, 3))),
+    ]
     meshes = MeshSet.from_bodies(bodies)
     assert mesh_distance_batch(meshes, None, [[0, 1]]).distance[0] == pytest.approx(2.0, abs=1e-12)
     assert mesh_distance(bodies[0], bodies[1]).distance == pytest.approx(2.0, abs=1e-12)
 
 
 def test_public_names_are_exported() -> None:
-    for name in ("MeshSet", "mesh_distance", "mesh_distance_batch", "mesh_intersects_batch",
-                 "MeshDistanceBatch", "MeshDistanceResult", "MeshIntersectsBatch"):
+    for name in (
+        "MeshSet",
+        "mesh_distance",
+        "mesh_distance_batch",
+        "mesh_intersects_batch",
+        "MeshDistanceBatch",
+        "MeshDistanceResult",
+        "MeshIntersectsBatch",
+    ):
         assert getattr(meshcol, name) is not None
     assert _core.defaults.mesh_bvh_leaf_size == 4
     assert _core.defaults.winding_number_inside == 0.5
@@ -316,12 +354,19 @@ def test_triangle_special_cases() -> None:
     assert tri_d(t, [[3, 3, 0], [4, 3, 0], [3, 4, 0]])[0] == pytest.approx(math.sqrt(8), abs=1e-12)
     assert tri_d(t, [[2, 0, 0], [3, 0, 1], [3, 1, 1]]) == (0.0, True)  # shared vertex
     assert tri_d(t, [[0.5, 0.5, -1], [0.5, 0.5, 1], [0.6, 0.6, 1]]) == (0.0, True)  # pierced
-    assert tri_d(t, [[0.5, 0.5, 0.5], [0.5, 0.5, 1], [0.5, 0.5, 2]])[0] == pytest.approx(0.5)  # degenerate
-    assert tri_d(t, [[0.5, 0.5, -1], [0.5, 0.5, 1], [0.5, 0.5, 2]]) == (0.0, True)  # degenerate pierces
+    assert tri_d(t, [[0.5, 0.5, 0.5], [0.5, 0.5, 1], [0.5, 0.5, 2]])[0] == pytest.approx(
+        0.5
+    )  # degenerate
+    assert tri_d(t, [[0.5, 0.5, -1], [0.5, 0.5, 1], [0.5, 0.5, 2]]) == (
+        0.0,
+        True,
+    )  # degenerate pierces
     assert tri_d(t, [[1, 1, 1], [1, 1, 1], [1, 1, 1]])[0] == pytest.approx(1.0)  # a point
 
 
-integer_triangle = st.lists(st.lists(st.integers(-2, 2), min_size=3, max_size=3), min_size=3, max_size=3)
+integer_triangle = st.lists(
+    st.lists(st.integers(-2, 2), min_size=3, max_size=3), min_size=3, max_size=3
+)
 
 
 @given(integer_triangle, integer_triangle, st.permutations(range(3)), st.booleans())
@@ -366,12 +411,14 @@ def brute_force(a: trimesh.Trimesh, pa, b: trimesh.Trimesh, pb) -> tuple[float, 
     tb = trimesh.transform_points(b.vertices, pb)[b.faces]
     ia, ib = np.meshgrid(np.arange(len(ta)), np.arange(len(tb)), indexing="ij")
     d, _, _, hit = _core.triangle_distance_batch(
-        np.ascontiguousarray(ta[ia.ravel()]), np.ascontiguousarray(tb[ib.ravel()]))
+        np.ascontiguousarray(ta[ia.ravel()]), np.ascontiguousarray(tb[ib.ravel()])
+    )
     return float(d.min()), bool(hit.any())
 
 
 quaternion = st.tuples(*[st.floats(-1, 1) for _ in range(4)]).filter(
-    lambda q: sum(x * x for x in q) > 0.01)
+    lambda q: sum(x * x for x in q) > 0.01
+)
 translation = st.tuples(*[st.floats(-1.5, 1.5) for _ in range(3)])
 poses = st.builds(lambda q, t: pose(rotation_from_quaternion(q), t), quaternion, translation)
 mesh_index = st.integers(0, len(LIBRARY) - 1)
@@ -385,7 +432,9 @@ def test_bvh_distance_equals_brute_force_over_triangle_pairs(i, j, pa, pb) -> No
     d, hit = brute_force(LIBRARY[i], pa, LIBRARY[j], pb)
     assert bool(r.intersecting[0]) == (hit or d == 0.0)
     assert r.distance[0] == pytest.approx(0.0 if hit else d, rel=1e-9, abs=1e-12)
-    assert np.linalg.norm(r.point_b[0] - r.point_a[0]) == pytest.approx(r.distance[0], rel=1e-9, abs=1e-12)
+    assert np.linalg.norm(r.point_b[0] - r.point_a[0]) == pytest.approx(
+        r.distance[0], rel=1e-9, abs=1e-12
+    )
 
 
 def _poses_for(i, j, pa, pb) -> np.ndarray:
@@ -417,9 +466,12 @@ def test_symmetry_and_rigid_invariance(i, j, pa, pb, motion) -> None:
     assert mesh_intersects_batch(LIBRARY_SET, p, [[i, j]]).intersecting[0] == r.intersecting[0]
 
 
-@given(st.lists(st.tuples(mesh_index, mesh_index), min_size=1, max_size=12),
-       st.lists(poses, min_size=len(LIBRARY), max_size=len(LIBRARY)), st.integers(0, 3),
-       st.floats(0.0, 2.0))
+@given(
+    st.lists(st.tuples(mesh_index, mesh_index), min_size=1, max_size=12),
+    st.lists(poses, min_size=len(LIBRARY), max_size=len(LIBRARY)),
+    st.integers(0, 3),
+    st.floats(0.0, 2.0),
+)
 def test_batch_equals_loop_of_singles(pairs, pose_list, threads, max_distance) -> None:
     p = np.stack(pose_list)
     r = mesh_distance_batch(LIBRARY_SET, p, pairs, threads=threads, max_distance=max_distance)
@@ -438,8 +490,10 @@ def test_batch_equals_loop_of_singles(pairs, pose_list, threads, max_distance) -
 
 def test_bvh_validates_on_corpus_and_library(corpus) -> None:
     assert LIBRARY_SET.validate()
-    meshes = [trimesh.load(corpus / "trimesh-models" / name, force="mesh")
-              for name in ("torus.STL", "fandisk.obj", "soup.stl", "ballA.off")]
+    meshes = [
+        trimesh.load(corpus / "trimesh-models" / name, force="mesh")
+        for name in ("torus.STL", "fandisk.obj", "soup.stl", "ballA.off")
+    ]
     assert MeshSet.from_arrays(meshes).validate()
 
 
@@ -478,7 +532,9 @@ def test_ball_pair_from_corpus_intersects(corpus) -> None:
     assert _point_triangle(r.point_a, a.vertices[a.faces[r.triangle_a]]) < 1e-9
     assert _point_triangle(r.point_a, b.vertices[b.faces[r.triangle_b]]) < 1e-9
     # moved apart along x by 20 (their extents overlap by about 13.8): separated, as fcl says
-    d, hit = _fcl_distance(fcl, _fcl_model(fcl, a), np.eye(4), _fcl_model(fcl, b), pose(translation=(20, 0, 0)))
+    d, hit = _fcl_distance(
+        fcl, _fcl_model(fcl, a), np.eye(4), _fcl_model(fcl, b), pose(translation=(20, 0, 0))
+    )
     apart = mesh_distance(a, b, None, pose(translation=(20, 0, 0)))
     assert not hit and not apart.intersecting
     assert apart.distance == pytest.approx(d, rel=1e-9)
@@ -527,11 +583,19 @@ def test_face_index_out_of_range_names_the_mesh() -> None:
     cube = box([0, 0, 0], [1, 1, 1])
     bad_faces = cube.faces.copy()
     bad_faces[3, 1] = 8
-    with pytest.raises(ValueError, match=r"^meshes\[1\]: face vertex index 8 out of range \[0, 8\)$"):
+    with pytest.raises(
+        ValueError, match=r"^meshes\[1\]: face vertex index 8 out of range \[0, 8\)$"
+    ):
         MeshSet.from_arrays([cube, (cube.vertices, bad_faces)])
-    with pytest.raises(ValueError, match=r"^mesh 1: face 3 has vertex index 8 out of range \[0, 8\)$"):
-        _core.MeshBvhSet(np.vstack([cube.vertices] * 2), np.vstack([cube.faces, bad_faces]).astype(np.int64),
-                         np.array([0, 8, 16]), np.array([0, 12, 24]))
+    with pytest.raises(
+        ValueError, match=r"^mesh 1: face 3 has vertex index 8 out of range \[0, 8\)$"
+    ):
+        _core.MeshBvhSet(
+            np.vstack([cube.vertices] * 2),
+            np.vstack([cube.faces, bad_faces]).astype(np.int64),
+            np.array([0, 8, 16]),
+            np.array([0, 12, 24]),
+        )
 
 
 def test_malformed_calls_raise_value_error() -> None:
@@ -558,8 +622,15 @@ def test_bad_data_sets_pair_status_only() -> None:
     nan_vertices[2, 1] = np.nan
     inf_vertices = cube.vertices.copy()
     inf_vertices[0, 0] = np.inf
-    meshes = MeshSet.from_arrays([cube, (nan_vertices, cube.faces), (inf_vertices, cube.faces),
-                                  (cube.vertices, np.zeros((0, 3), int)), cube])
+    meshes = MeshSet.from_arrays(
+        [
+            cube,
+            (nan_vertices, cube.faces),
+            (inf_vertices, cube.faces),
+            (cube.vertices, np.zeros((0, 3), int)),
+            cube,
+        ]
+    )
     assert meshes.valid.tolist() == [True, False, False, False, True]
     p = np.tile(np.eye(4), (5, 1, 1))
     p[4, :3, 3] = (3, 0, 0)
@@ -620,7 +691,9 @@ def test_closest_points_equal_brute_force(seed) -> None:
 
 
 def test_closest_points_known_answers_and_bad_input() -> None:
-    meshes = MeshSet.from_arrays([box((0, 0, 0), (1, 1, 1)), (np.full((3, 3), np.nan), [[0, 1, 2]])])
+    meshes = MeshSet.from_arrays(
+        [box((0, 0, 0), (1, 1, 1)), (np.full((3, 3), np.nan), [[0, 1, 2]])]
+    )
     points = np.array([[0.5, 0.5, 3.0], [2.0, 2.0, 0.5], [0.5, 0.5, 0.4], [np.nan, 0.0, 0.0]])
     d, closest = meshes.closest_points(0, points)
     assert d[:3] == pytest.approx([2.0, math.sqrt(2.0), 0.4], abs=1e-12)

@@ -18,8 +18,11 @@ def members(e: type[enum.Enum]) -> dict[str, int]:
 
 @pytest.mark.parametrize(
     ("python_enum", "native_enum"),
-    [(Status, core.Status), (TimeOfImpactStatus, core.TimeOfImpactStatus),
-     (ShapeKind, core.ShapeKind)],
+    [
+        (Status, core.Status),
+        (TimeOfImpactStatus, core.TimeOfImpactStatus),
+        (ShapeKind, core.ShapeKind),
+    ],
     ids=["Status", "TimeOfImpactStatus", "ShapeKind"],
 )
 def test_python_enums_match_the_bound_cpp_enums(python_enum, native_enum) -> None:
@@ -52,9 +55,15 @@ def test_time_of_impact_results_are_typed_objects() -> None:
 def test_bounding_radii_match_the_shapes() -> None:
     from meshcol.collision.shapes import Box, Capsule, Cylinder, Sphere
 
-    cs = ConvexSet.from_shapes([np.array([[3.0, 4.0, 0.0], [0, 0, 0], [1, 0, 0], [0, 0, 1]]),
-                                Sphere(2.0), Box((2.0, 4.0, 4.0)), Capsule(1.0, 2.0),
-                                Cylinder(3.0, 8.0)])
+    cs = ConvexSet.from_shapes(
+        [
+            np.array([[3.0, 4.0, 0.0], [0, 0, 0], [1, 0, 0], [0, 0, 1]]),
+            Sphere(2.0),
+            Box((2.0, 4.0, 4.0)),
+            Capsule(1.0, 2.0),
+            Cylinder(3.0, 8.0),
+        ]
+    )
     assert cs._core.bounding_radii() == pytest.approx([5.0, 2.0, 3.0, 2.0, 5.0], abs=1e-12)
 
 

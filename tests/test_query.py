@@ -8,10 +8,12 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import assume, given, settings
+from conftest import ORACLES
+from hypothesis import assume, given
 from hypothesis import strategies as st
+from oracles import box_corners, polytope_distance, sat_depth, transform
+from strategies import hulls, pose_matrix, poses, rotation_from_quaternion, shapes
 
-import meshcol
 from meshcol import (
     Box,
     Capsule,
@@ -29,10 +31,6 @@ from meshcol import (
     signed_distance_batch,
 )
 from meshcol.types import Body, Primitive, Status
-
-from conftest import ORACLES
-from oracles import box_corners, polytope_distance, sat_depth, transform
-from strategies import hulls, pose_matrix, poses, rotation_from_quaternion, shapes
 
 CUBE = box_corners((1, 1, 1))
 
@@ -71,7 +69,8 @@ def test_rotated_cubes_issue_case_is_exact():
         r = distance(a, a, None, rot_z(45, (4, 4, 0)))
         assert abs(r.distance - expected) <= 1e-12
         assert signed_distance(a, a, None, rot_z(45, (4, 4, 0))).signed_distance == (
-            pytest.approx(expected, abs=1e-12))
+            pytest.approx(expected, abs=1e-12)
+        )
 
 
 @pytest.mark.parametrize("gap", [0.0, 1e-9, 1e-3, 0.5])
@@ -145,14 +144,20 @@ def test_overlap_fields():
     # Separated: depth 0, signed distance = distance.
     assert penetration(CUBE, CUBE, None, translation(3.0)).depth == 0.0
     assert signed_distance(CUBE, CUBE, None, translation(3.0)).signed_distance == (
-        pytest.approx(2.0, abs=1e-12))
+        pytest.approx(2.0, abs=1e-12)
+    )
 
 
 def test_convex_set_layout_and_constructors():
     cs = ConvexSet.from_shapes([CUBE, Sphere(1), Box((2, 4, 6)), Capsule(1, 3), Cylinder(2, 5)])
     assert len(cs) == 5
-    assert list(cs.kinds) == [ShapeKind.POLYTOPE, ShapeKind.SPHERE, ShapeKind.BOX,
-                              ShapeKind.CAPSULE, ShapeKind.CYLINDER]
+    assert list(cs.kinds) == [
+        ShapeKind.POLYTOPE,
+        ShapeKind.SPHERE,
+        ShapeKind.BOX,
+        ShapeKind.CAPSULE,
+        ShapeKind.CYLINDER,
+    ]
     np.testing.assert_allclose(cs.params[2, :3], [1, 2, 3])
     np.testing.assert_allclose(cs.params[3, :2], [1, 1.5])
     np.testing.assert_allclose(cs.params[4, :2], [2, 2.5])
@@ -173,9 +178,15 @@ def test_convex_set_layout_and_constructors():
 
 def test_from_meshes_trimesh_and_body():
     import trimesh
+
     sphere_mesh = trimesh.creation.icosphere(subdivisions=2)
-    body = Body("ball", None, np.zeros((0, 3)), np.zeros((0, 3), np.int64),
-                primitive=Primitive("sphere", radius=1.0))
+    body = Body(
+        "ball",
+        None,
+        np.zeros((0, 3)),
+        np.zeros((0, 3), np.int64),
+        primitive=Primitive("sphere", radius=1.0),
+    )
     box_body = Body("box", None, CUBE, np.zeros((0, 3), np.int64))
     cs = ConvexSet.from_meshes([sphere_mesh, body, box_body])
     assert list(cs.kinds) == [0, 1, 0]
@@ -188,6 +199,7 @@ def test_from_meshes_trimesh_and_body():
 
 # ---------------------------------------------------------------------------------------------
 # Peer cases (../shared/oracles/cases.json)
+
 
 def _load_case_ids() -> list:
     if not ORACLES.is_file():
@@ -282,8 +294,12 @@ def _structured_boxes(n: int, seed: int):
                 r = rot(int(rng.integers(0, 3)), float(rng.choice(angles))) @ r
             rotations.append(r)
         offset = rng.integers(-4, 5, size=3).astype(float)
-        yield sizes[0], sizes[1], pose_matrix(rotations[0], (0, 0, 0)), pose_matrix(
-            rotations[1], offset)
+        yield (
+            sizes[0],
+            sizes[1],
+            pose_matrix(rotations[0], (0, 0, 0)),
+            pose_matrix(rotations[1], offset),
+        )
 
 
 def test_structured_box_family_distance_and_depth_exact():
@@ -347,8 +363,10 @@ def test_hill_climbing_large_hulls_match_oracle():
         clouds.append(p / np.linalg.norm(p, axis=1)[:, None] * rng.uniform(0.5, 1.5))
     cs = ConvexSet.from_vertices(clouds)
     assert np.all(np.diff(cs.offsets) > 32)  # hill climbing is in use
-    pose_list = [pose_matrix(rotation_from_quaternion(rng.normal(size=4)), rng.uniform(-2, 2, 3))
-                 for _ in clouds]
+    pose_list = [
+        pose_matrix(rotation_from_quaternion(rng.normal(size=4)), rng.uniform(-2, 2, 3))
+        for _ in clouds
+    ]
     pairs = np.array([[i, i + 1] for i in range(0, 8, 2)])
     res = signed_distance_batch(cs, np.stack(pose_list), pairs)
     for i, (ia, ib) in enumerate(pairs):
@@ -374,12 +392,25 @@ def test_hill_climbing_matches_vertex_scan():
     cs = ConvexSet.from_vertices(clouds)
     k = np.diff(cs.adjacency_offsets)
     assert np.all(k % 4 == 0) and np.all(k > 0)  # lists padded with the vertex itself
-    scan = _core.PackedConvexSet(cs.vertices, cs.offsets, cs.kinds, cs.params, None, None,
-                                 cs.face_offsets, cs.face_normals, cs.edge_offsets,
-                                 cs.edge_directions)
+    scan = _core.PackedConvexSet(
+        cs.vertices,
+        cs.offsets,
+        cs.kinds,
+        cs.params,
+        None,
+        None,
+        cs.face_offsets,
+        cs.face_normals,
+        cs.edge_offsets,
+        cs.edge_directions,
+    )
     h = len(clouds)
-    pose_list = np.stack([pose_matrix(rotation_from_quaternion(rng.normal(size=4)),
-                                      rng.uniform(-1.2, 1.2, 3)) for _ in range(h)])
+    pose_list = np.stack(
+        [
+            pose_matrix(rotation_from_quaternion(rng.normal(size=4)), rng.uniform(-1.2, 1.2, 3))
+            for _ in range(h)
+        ]
+    )
     pairs = np.array([(i, j) for i in range(h) for j in range(h) if i != j], dtype=np.int64)
     got = cs._core.query(1, pose_list, pairs, 1)
     want = scan.query(1, pose_list, pairs, 1)
@@ -556,8 +587,18 @@ def test_malformed_calls_raise_value_error_naming_the_argument():
     from meshcol._native import core as _core
 
     with pytest.raises(ValueError, match="offsets"):
-        _core.PackedConvexSet(CUBE, np.array([0, 9]), np.zeros(1, np.int8), np.zeros((1, 4)),
-                              None, None, None, None, None, None)
+        _core.PackedConvexSet(
+            CUBE,
+            np.array([0, 9]),
+            np.zeros(1, np.int8),
+            np.zeros((1, 4)),
+            None,
+            None,
+            None,
+            None,
+            None,
+            None,
+        )
 
 
 def test_empty_pairs():
@@ -572,8 +613,7 @@ def test_bad_data_gives_invalid_input_per_pair():
     inf_cloud = CUBE.copy()
     inf_cloud[0, 0] = np.inf
     cs = ConvexSet.from_vertices([CUBE, nan_cloud, inf_cloud, np.zeros((0, 3)), CUBE])
-    poses_ = np.stack([translation(), translation(), translation(), translation(),
-                       translation(3)])
+    poses_ = np.stack([translation(), translation(), translation(), translation(), translation(3)])
     pairs = [[0, 1], [0, 2], [0, 3], [0, 4], [4, 0]]
     for fn in (distance_batch, penetration_batch, signed_distance_batch, intersects_batch):
         r = fn(cs, poses_, pairs)
@@ -599,11 +639,30 @@ def test_public_names_are_exported():
     import meshcol.collision.narrowphase
     import meshcol.collision.shapes
 
-    for name in ("ConvexSet", "Sphere", "Box", "Capsule", "Cylinder", "DistanceResult",
-                 "PenetrationResult", "distance", "penetration", "intersects",
-                 "signed_distance", "distance_batch", "penetration_batch", "intersects_batch",
-                 "signed_distance_batch", "ShapeKind", "SignedDistanceResult"):
-        module = meshcol.collision.shapes if name in ("ConvexSet", "Sphere", "Box", "Capsule", "Cylinder", "ShapeKind") else meshcol.collision.narrowphase
+    for name in (
+        "ConvexSet",
+        "Sphere",
+        "Box",
+        "Capsule",
+        "Cylinder",
+        "DistanceResult",
+        "PenetrationResult",
+        "distance",
+        "penetration",
+        "intersects",
+        "signed_distance",
+        "distance_batch",
+        "penetration_batch",
+        "intersects_batch",
+        "signed_distance_batch",
+        "ShapeKind",
+        "SignedDistanceResult",
+    ):
+        module = (
+            meshcol.collision.shapes
+            if name in ("ConvexSet", "Sphere", "Box", "Capsule", "Cylinder", "ShapeKind")
+            else meshcol.collision.narrowphase
+        )
         assert getattr(meshcol, name) is getattr(module, name)
     from meshcol._native import core as _core
 

@@ -4,11 +4,20 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import given
 from hypothesis import strategies as st
 
-from meshcol import Box, Capsule, ConvexSet, Sphere, distance, distance_batch
-from meshcol import interpolate_pose, time_of_impact, time_of_impact_batch
+from meshcol import (
+    Box,
+    Capsule,
+    ConvexSet,
+    Sphere,
+    distance,
+    distance_batch,
+    interpolate_pose,
+    time_of_impact,
+    time_of_impact_batch,
+)
 from meshcol.types import TimeOfImpactStatus
 
 
@@ -34,11 +43,13 @@ def rot_axis(axis, angle: float) -> np.ndarray:
 
 def quaternion_matrix(wxyz) -> np.ndarray:
     w, x, y, z = np.asarray(wxyz, dtype=float) / np.linalg.norm(wxyz)
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ])
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -47,8 +58,9 @@ def quaternion_matrix(wxyz) -> np.ndarray:
 
 def test_boxes_translation_face_contact():
     # Unit boxes, b from x = 3 to x = 0: faces meet when the centres are 1 apart, t = 2/3.
-    r = time_of_impact(Box((1, 1, 1)), Box((1, 1, 1)), pose(), pose(), pose((3, 0, 0)), pose(),
-                       tolerance=1e-9)
+    r = time_of_impact(
+        Box((1, 1, 1)), Box((1, 1, 1)), pose(), pose(), pose((3, 0, 0)), pose(), tolerance=1e-9
+    )
     assert r.status == TimeOfImpactStatus.HIT
     assert r.time_of_impact == pytest.approx(2.0 / 3.0, abs=1e-9)
     assert r.time_of_impact <= 2.0 / 3.0
@@ -58,8 +70,9 @@ def test_boxes_translation_face_contact():
 
 def test_spheres_head_on_closed_form():
     # a (r 0.5) from x = 0 to x = 2, b (r 0.25) resting at x = 2: contact at a = 1.25, t = 0.625.
-    r = time_of_impact(Sphere(0.5), Sphere(0.25), pose(), pose((2, 0, 0)), pose((2, 0, 0)),
-                       pose((2, 0, 0)))
+    r = time_of_impact(
+        Sphere(0.5), Sphere(0.25), pose(), pose((2, 0, 0)), pose((2, 0, 0)), pose((2, 0, 0))
+    )
     assert r.status == TimeOfImpactStatus.HIT
     assert r.time_of_impact == pytest.approx(0.625, abs=1e-15)
     np.testing.assert_allclose(r.point, [1.75, 0, 0], atol=1e-15)
@@ -67,17 +80,20 @@ def test_spheres_head_on_closed_form():
 
 
 def test_receding_and_parallel_motion_are_separated():
-    r = time_of_impact(Box((1, 1, 1)), Box((1, 1, 1)), pose(), pose((-1, 0, 0)), pose((2, 0, 0)),
-                       pose((2, 0, 0)))
+    r = time_of_impact(
+        Box((1, 1, 1)), Box((1, 1, 1)), pose(), pose((-1, 0, 0)), pose((2, 0, 0)), pose((2, 0, 0))
+    )
     assert r.status == TimeOfImpactStatus.SEPARATED and r.time_of_impact is None
-    r = time_of_impact(Box((1, 1, 1)), Box((1, 1, 1)), pose(), pose((0, 5, 0)), pose((2, 0, 0)),
-                       pose((2, 5, 0)))
+    r = time_of_impact(
+        Box((1, 1, 1)), Box((1, 1, 1)), pose(), pose((0, 5, 0)), pose((2, 0, 0)), pose((2, 5, 0))
+    )
     assert r.status == TimeOfImpactStatus.SEPARATED
 
 
 def test_overlapped_at_start():
-    r = time_of_impact(Box((1, 1, 1)), Sphere(1), pose(), pose((1, 0, 0)), pose((1, 0, 0)),
-                       pose((1, 0, 0)))
+    r = time_of_impact(
+        Box((1, 1, 1)), Sphere(1), pose(), pose((1, 0, 0)), pose((1, 0, 0)), pose((1, 0, 0))
+    )
     assert r.status == TimeOfImpactStatus.OVERLAPPED_AT_START and r.time_of_impact == 0.0
     np.testing.assert_array_equal(r.normal, [0.0, 0.0, 0.0])
 
@@ -91,7 +107,10 @@ def test_invalid_input_and_bad_arguments():
     assert r.status[0] == TimeOfImpactStatus.INVALID_INPUT and np.isnan(r.time_of_impact[0])
     skew = start.copy()
     skew[0, :3, :3] *= 2.0  # not rigid
-    assert time_of_impact_batch(cs, skew, start, [[0, 1]]).status[0] == TimeOfImpactStatus.INVALID_INPUT
+    assert (
+        time_of_impact_batch(cs, skew, start, [[0, 1]]).status[0]
+        == TimeOfImpactStatus.INVALID_INPUT
+    )
     with pytest.raises(ValueError, match=r"tolerance must be finite and > 0, got 0"):
         time_of_impact_batch(cs, start, start, [[0, 1]], tolerance=0)
     with pytest.raises(ValueError, match=r"start_poses must be \(2, 4, 4\), got \(1, 4, 4\)"):
@@ -148,8 +167,13 @@ def test_oracle_time_of_impact(case, oracle_cases):
         end = start.copy()
         end[:3, 3] += np.asarray(case[f"velocity_{side}"], dtype=float)
         poses[side] = (start, end)
-    r = time_of_impact(_oracle_shape(case["a"]), _oracle_shape(case["b"]), *poses["a"],
-                       *poses["b"], tolerance=1e-10)
+    r = time_of_impact(
+        _oracle_shape(case["a"]),
+        _oracle_shape(case["b"]),
+        *poses["a"],
+        *poses["b"],
+        tolerance=1e-10,
+    )
     expected = case["expect"]["toi"]
     if expected is None:
         assert r.status == TimeOfImpactStatus.SEPARATED and r.time_of_impact is None
@@ -177,8 +201,15 @@ def analytic_sphere_toi(c0, dv, radius):
     return t if 0.0 <= t <= 1.0 else None
 
 
-@given(ca=vec3, cb=vec3, va=vec3, vb=vec3, ra=st.floats(0.05, 2), rb=st.floats(0.05, 2),
-       as_capsule=st.booleans())
+@given(
+    ca=vec3,
+    cb=vec3,
+    va=vec3,
+    vb=vec3,
+    ra=st.floats(0.05, 2),
+    rb=st.floats(0.05, 2),
+    as_capsule=st.booleans(),
+)
 def test_sphere_pairs_match_the_quadratic(ca, cb, va, vb, ra, rb, as_capsule):
     ca, cb, va, vb = map(np.asarray, (ca, cb, va, vb))
     c0, dv = cb - ca, (cb + vb) - (ca + va) - (cb - ca)
@@ -187,8 +218,9 @@ def test_sphere_pairs_match_the_quadratic(ca, cb, va, vb, ra, rb, as_capsule):
     tol = 1e-9
     # A zero-length capsule is a sphere that goes through the ray cast (radius as margin).
     b_shape = Capsule(rb, 0.0) if as_capsule else Sphere(rb)
-    r = time_of_impact(Sphere(ra), b_shape, pose(ca), pose(ca + va), pose(cb), pose(cb + vb),
-                       tolerance=tol)
+    r = time_of_impact(
+        Sphere(ra), b_shape, pose(ca), pose(ca + va), pose(cb), pose(cb + vb), tolerance=tol
+    )
     expected = analytic_sphere_toi(c0, dv, ra + rb)
     speed = np.linalg.norm(dv)
     if expected is not None:
@@ -214,9 +246,14 @@ BAR = Box((4.0, 0.2, 0.2))
 
 
 def _bar_case(box_centre):
-    return dict(a=BAR, b=Box((0.5, 0.5, 0.5)), start_pose_a=pose(),
-                end_pose_a=pose(rotation=rot_z(np.pi / 2)), start_pose_b=pose(box_centre),
-                end_pose_b=pose(box_centre))
+    return dict(
+        a=BAR,
+        b=Box((0.5, 0.5, 0.5)),
+        start_pose_a=pose(),
+        end_pose_a=pose(rotation=rot_z(np.pi / 2)),
+        start_pose_b=pose(box_centre),
+        end_pose_b=pose(box_centre),
+    )
 
 
 def _distance_at(case, t):
@@ -302,8 +339,12 @@ def test_random_hulls_never_miss_a_sampled_contact(seed):
         cs = ConvexSet.from_vertices([_random_hull(rng, 32), _random_hull(rng, 32)])
         rotate = rng.uniform() < 0.7
         # Both bodies cross the region around the origin: hits, misses and near misses.
-        starts = np.stack([pose(rng.uniform(-3, 3, 3), _random_rotation(rng)),
-                           pose(rng.uniform(-3, 3, 3), _random_rotation(rng))])
+        starts = np.stack(
+            [
+                pose(rng.uniform(-3, 3, 3), _random_rotation(rng)),
+                pose(rng.uniform(-3, 3, 3), _random_rotation(rng)),
+            ]
+        )
         ends = starts.copy()
         ends[:, :3, 3] = -starts[:, :3, 3] + rng.normal(scale=0.8, size=(2, 3))
         if rotate:
@@ -318,7 +359,9 @@ def test_random_hulls_never_miss_a_sampled_contact(seed):
         checked += 1
         touching = np.flatnonzero(d == 0.0)
         if len(touching):
-            assert status == TimeOfImpactStatus.HIT, f"missed a sampled contact at t={ts[touching[0]]}"
+            assert status == TimeOfImpactStatus.HIT, (
+                f"missed a sampled contact at t={ts[touching[0]]}"
+            )
             hits += 1
             # Bisection between the last free sample and the first touching one.
             i = touching[0]

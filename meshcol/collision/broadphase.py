@@ -66,7 +66,11 @@ def _ids(ids: Any) -> np.ndarray:
 def _axis(axis: int | None) -> int:
     if axis is None:
         return -1
-    if isinstance(axis, (bool, np.bool_)) or not isinstance(axis, (int, np.integer)) or not 0 <= axis <= 2:
+    if (
+        isinstance(axis, (bool, np.bool_))
+        or not isinstance(axis, (int, np.integer))
+        or not 0 <= axis <= 2
+    ):
         raise ValueError(f"axis must be None, 0, 1 or 2, got {axis!r}")
     return int(axis)
 
@@ -135,12 +139,12 @@ def brute_force_pairs(aabb_min: Any, aabb_max: Any) -> np.ndarray:
     found = []
     chunk = max(1, 2_000_000 // max(n, 1))
     for start in range(0, n, chunk):
-        a_lo, a_hi = lo[start:start + chunk, None, :], hi[start:start + chunk, None, :]
+        a_lo, a_hi = lo[start : start + chunk, None, :], hi[start : start + chunk, None, :]
         hit = ((a_lo <= hi[None]) & (lo[None] <= a_hi)).all(axis=2)
-        i, j = np.nonzero(hit)
-        i = i + start
-        keep = i < j
-        found.append(np.stack([i[keep], j[keep]], axis=1))
+        rows, cols = np.nonzero(hit)
+        rows = rows + start
+        keep = rows < cols
+        found.append(np.stack([rows[keep], cols[keep]], axis=1))
     if not found:
         return np.zeros((0, 2), dtype=np.int64)
     return np.concatenate(found).astype(np.int64, copy=False)
@@ -299,7 +303,9 @@ class AabbTree:
             raise ValueError(f"other must be an AabbTree, got {type(other).__name__}")
         return self._tree.query_pairs_with(other._tree)
 
-    def ray_cast(self, origin: Any, direction: Any, max_fraction: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    def ray_cast(
+        self, origin: Any, direction: Any, max_fraction: float = 1.0
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Objects met by the segment ``origin + t * direction``, ``0 <= t <= max_fraction``.
 
         Parameters
@@ -316,7 +322,9 @@ class AabbTree:
         fractions : (k,) float64
             Entry ``t`` of each (0 when the origin is inside the box).
         """
-        return self._tree.ray_cast(_point(origin, "origin"), _point(direction, "direction"), float(max_fraction))
+        return self._tree.ray_cast(
+            _point(origin, "origin"), _point(direction, "direction"), float(max_fraction)
+        )
 
     def rebuild(self) -> None:
         """Rebuilds the whole tree top-down by binned SAH, keeping the ids (for static sets)."""

@@ -41,7 +41,9 @@ def _mesh_arrays(index: int, mesh: Any) -> tuple[np.ndarray, np.ndarray]:
     elif hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
         vertices, faces = mesh.vertices, mesh.faces
     else:
-        raise ValueError(f"meshes[{index}] must be a (vertices, faces) pair or have .vertices and .faces")
+        raise ValueError(
+            f"meshes[{index}] must be a (vertices, faces) pair or have .vertices and .faces"
+        )
     vertices = np.ascontiguousarray(vertices, dtype=np.float64)
     faces = np.asarray(faces)
     if vertices.ndim != 2 or vertices.shape[1] != 3:
@@ -132,9 +134,8 @@ class MeshSet:
         )
         vertices = np.ascontiguousarray(vertices, dtype=np.float64)
         faces = np.ascontiguousarray(faces, dtype=np.int64)
-        if poses is None:
-            poses = np.tile(np.eye(4), (count, 1, 1))
-        poses = as_poses(poses, count)
+        given = np.tile(np.eye(4), (count, 1, 1)) if poses is None else poses
+        poses = np.ascontiguousarray(as_poses(given, count))
         handle = core.MeshBvhSet(vertices, faces, vertex_offsets, face_offsets, threads=threads)
         valid = np.array([handle.valid(i) for i in range(count)], dtype=bool)
         for array in (vertices, faces, vertex_offsets, face_offsets, poses, valid):

@@ -40,12 +40,6 @@ from meshcol.collision.shapes import ConvexSet, as_convex_set
 from meshcol.types import Body, Status
 
 __all__ = [
-    "ShapeKind",
-    "Sphere",
-    "Box",
-    "Capsule",
-    "Cylinder",
-    "ConvexSet",
     "DistanceBatch",
     "PenetrationBatch",
     "SignedDistanceBatch",
@@ -256,8 +250,16 @@ def signed_distance_batch(
     Parameters and errors as :func:`distance_batch`.
     """
     r = _run(_PENETRATION, shapes, poses, pairs, threads)
-    return SignedDistanceBatch(r.distance - r.depth, r.distance, r.depth, r.normal, r.point_a,
-                               r.point_b, r.iterations, r.status)
+    return SignedDistanceBatch(
+        r.distance - r.depth,
+        r.distance,
+        r.depth,
+        r.normal,
+        r.point_a,
+        r.point_b,
+        r.iterations,
+        r.status,
+    )
 
 
 def intersects_batch(
@@ -314,28 +316,45 @@ def distance(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> Distance
     """
     cs, poses = _pair_set(a, b, pose_a, pose_b)
     r = distance_batch(cs, poses, _PAIR, threads=1)
-    return DistanceResult(float(r.distance[0]), r.point_a[0], r.point_b[0], r.normal[0],
-                          int(r.iterations[0]), Status(int(r.status[0])))
+    return DistanceResult(
+        float(r.distance[0]),
+        r.point_a[0],
+        r.point_b[0],
+        r.normal[0],
+        int(r.iterations[0]),
+        Status(int(r.status[0])),
+    )
 
 
 def penetration(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> PenetrationResult:
     """Penetration depth of two convex shapes (0 when apart); arguments as :func:`distance`."""
     cs, poses = _pair_set(a, b, pose_a, pose_b)
     r = penetration_batch(cs, poses, _PAIR, threads=1)
-    return PenetrationResult(float(r.depth[0]), r.normal[0], r.point_a[0], r.point_b[0],
-                             int(r.iterations[0]), Status(int(r.status[0])))
+    return PenetrationResult(
+        float(r.depth[0]),
+        r.normal[0],
+        r.point_a[0],
+        r.point_b[0],
+        int(r.iterations[0]),
+        Status(int(r.status[0])),
+    )
 
 
-def signed_distance(
-    a: Any, b: Any, pose_a: Any = None, pose_b: Any = None
-) -> SignedDistanceResult:
+def signed_distance(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> SignedDistanceResult:
     """Signed distance (distance - depth) of two convex shapes; arguments as
     :func:`distance`."""
     cs, poses = _pair_set(a, b, pose_a, pose_b)
     r = signed_distance_batch(cs, poses, _PAIR, threads=1)
-    return SignedDistanceResult(float(r.signed_distance[0]), float(r.distance[0]),
-                                float(r.depth[0]), r.normal[0], r.point_a[0], r.point_b[0],
-                                int(r.iterations[0]), Status(int(r.status[0])))
+    return SignedDistanceResult(
+        float(r.signed_distance[0]),
+        float(r.distance[0]),
+        float(r.depth[0]),
+        r.normal[0],
+        r.point_a[0],
+        r.point_b[0],
+        int(r.iterations[0]),
+        Status(int(r.status[0])),
+    )
 
 
 def intersects(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> bool:
@@ -350,6 +369,7 @@ def intersects(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> bool:
     cs, poses = _pair_set(a, b, pose_a, pose_b)
     r = intersects_batch(cs, poses, _PAIR, threads=1)
     if r.status[0] == Status.INVALID_INPUT:
-        raise ValueError("a, b, pose_a or pose_b: NaN/inf coordinates, an empty shape or a "
-                         "non-rigid pose")
+        raise ValueError(
+            "a, b, pose_a or pose_b: NaN/inf coordinates, an empty shape or a non-rigid pose"
+        )
     return bool(r.intersects[0])

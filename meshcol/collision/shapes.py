@@ -82,9 +82,7 @@ class Box:
         size = np.asarray(self.size, dtype=np.float64)
         if size.shape != (3,):
             raise ValueError(f"size must be (3,), got {size.shape}")
-        object.__setattr__(
-            self, "size", tuple(_check_length("size", s) for s in size)
-        )
+        object.__setattr__(self, "size", tuple(_check_length("size", s) for s in size))
 
 
 @dataclass(frozen=True)
@@ -299,8 +297,16 @@ class ConvexSet:
     """
 
     _FIELDS = (
-        "vertices", "offsets", "kinds", "params", "adjacency_offsets", "adjacency",
-        "face_offsets", "face_normals", "edge_offsets", "edge_directions",
+        "vertices",
+        "offsets",
+        "kinds",
+        "params",
+        "adjacency_offsets",
+        "adjacency",
+        "face_offsets",
+        "face_normals",
+        "edge_offsets",
+        "edge_directions",
     )
 
     vertices: np.ndarray
@@ -320,9 +326,16 @@ class ConvexSet:
         for name in self._FIELDS:
             setattr(self, name, _readonly(arrays[name]))
         self._core = core.PackedConvexSet(
-            self.vertices, self.offsets, self.kinds, self.params,
-            self.adjacency_offsets, self.adjacency,
-            self.face_offsets, self.face_normals, self.edge_offsets, self.edge_directions,
+            self.vertices,
+            self.offsets,
+            self.kinds,
+            self.params,
+            self.adjacency_offsets,
+            self.adjacency,
+            self.face_offsets,
+            self.face_normals,
+            self.edge_offsets,
+            self.edge_directions,
         )
 
     def __len__(self) -> int:

@@ -140,8 +140,9 @@ def interpolate_pose(start_pose: Any, end_pose: Any, t: Any) -> np.ndarray:
     single = start.ndim == 2
     start = np.ascontiguousarray(start.reshape(-1, 4, 4))
     end = np.ascontiguousarray(np.asarray(end_pose, dtype=np.float64).reshape(-1, 4, 4))
-    times = np.ascontiguousarray(np.broadcast_to(np.asarray(t, dtype=np.float64).reshape(-1),
-                                                 (len(start),)))
+    times = np.ascontiguousarray(
+        np.broadcast_to(np.asarray(t, dtype=np.float64).reshape(-1), (len(start),))
+    )
     out = core.interpolate_poses(start, end, times)
     return out[0] if single else out
 
@@ -196,8 +197,9 @@ def time_of_impact_batch(
         raise ValueError("start_poses and end_poses are required")
     idx = as_pairs(pairs, h)
     cap = int(defaults.toi_max_iterations if max_iterations is None else max_iterations)
-    r = core.time_of_impact_batch(cs._core, start, end, idx, contact_tolerance(tolerance), cap,
-                                   int(threads))
+    r = core.time_of_impact_batch(
+        cs._core, start, end, idx, contact_tolerance(tolerance), cap, int(threads)
+    )
     return TimeOfImpactBatch(r.time_of_impact, r.point, r.normal, r.iterations, r.status)
 
 
@@ -228,21 +230,38 @@ def time_of_impact(
     TimeOfImpactResult
     """
     cs = ConvexSet.from_shapes([a, b], names=("a", "b"))
-    given = (("start_pose_a", start_pose_a, a, False), ("end_pose_a", end_pose_a, a, True),
-             ("start_pose_b", start_pose_b, b, False), ("end_pose_b", end_pose_b, b, True))
-    poses = [as_pose(body_pose(shape, end) if pose is None else pose, name)
-             for name, pose, shape, end in given]
-    r = time_of_impact_batch(cs, np.stack([poses[0], poses[2]]), np.stack([poses[1], poses[3]]),
-                             np.array([[0, 1]]), tolerance=tolerance,
-                             max_iterations=max_iterations, threads=1)
+    given = (
+        ("start_pose_a", start_pose_a, a, False),
+        ("end_pose_a", end_pose_a, a, True),
+        ("start_pose_b", start_pose_b, b, False),
+        ("end_pose_b", end_pose_b, b, True),
+    )
+    poses = [
+        as_pose(body_pose(shape, end) if pose is None else pose, name)
+        for name, pose, shape, end in given
+    ]
+    r = time_of_impact_batch(
+        cs,
+        np.stack([poses[0], poses[2]]),
+        np.stack([poses[1], poses[3]]),
+        np.array([[0, 1]]),
+        tolerance=tolerance,
+        max_iterations=max_iterations,
+        threads=1,
+    )
     fraction = float(r.time_of_impact[0])
-    return TimeOfImpactResult(TimeOfImpactStatus(int(r.status[0])),
-                              None if np.isnan(fraction) else fraction,
-                              r.point[0], r.normal[0], int(r.iterations[0]))
+    return TimeOfImpactResult(
+        TimeOfImpactStatus(int(r.status[0])),
+        None if np.isnan(fraction) else fraction,
+        r.point[0],
+        r.normal[0],
+        int(r.iterations[0]),
+    )
 
 
-def swept_aabbs(cs: ConvexSet, start_poses: np.ndarray, end_poses: np.ndarray,
-                threads: int = 0) -> tuple[np.ndarray, np.ndarray]:
+def swept_aabbs(
+    cs: ConvexSet, start_poses: np.ndarray, end_poses: np.ndarray, threads: int = 0
+) -> tuple[np.ndarray, np.ndarray]:
     """Conservative world AABBs of shapes over their whole motion.
 
     Parameters

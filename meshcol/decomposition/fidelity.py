@@ -9,7 +9,13 @@ import numpy as np
 from meshcol.decomposition.result import Fidelity
 from meshcol.geometry.triangles import sample_surface, triangle_areas
 
-__all__ = ["DEFAULT_SAMPLES", "coverage_tolerance", "fidelity", "points_to_parts", "points_to_triangles"]
+__all__ = [
+    "DEFAULT_SAMPLES",
+    "coverage_tolerance",
+    "fidelity",
+    "points_to_parts",
+    "points_to_triangles",
+]
 
 
 # Fidelity sampling defaults (points on the mesh surface and on the parts' surfaces).
@@ -63,12 +69,12 @@ def points_to_parts(
     pairs_i, pairs_j = [], []
     chunk = max(1, 4_000_000 // max(k, 1))
     for start in range(0, n, chunk):
-        p = points[start:start + chunk]
+        p = points[start : start + chunk]
         gap = np.maximum(np.maximum(lo[None] - p[:, None], p[:, None] - hi[None]), 0.0)
         lower = np.linalg.norm(gap, axis=2)
         upper = np.linalg.norm(p[:, None] - centre[None], axis=2)
         if owner is not None:
-            own = owner[start:start + chunk]
+            own = owner[start : start + chunk]
             lower[np.arange(len(p)), own] = np.inf
             upper[np.arange(len(p)), own] = np.inf
         bound = upper.min(axis=1)
@@ -108,8 +114,12 @@ def points_to_triangles(
 def _manifold(vertices: np.ndarray, faces: np.ndarray):
     import manifold3d
 
-    return manifold3d.Manifold(manifold3d.Mesh64(
-        np.ascontiguousarray(vertices, dtype=np.float64), np.ascontiguousarray(faces, dtype=np.uint64)))
+    return manifold3d.Manifold(
+        manifold3d.Mesh64(
+            np.ascontiguousarray(vertices, dtype=np.float64),
+            np.ascontiguousarray(faces, dtype=np.uint64),
+        )
+    )
 
 
 def _manifold_volume(vertices: np.ndarray, faces: np.ndarray) -> float | None:
@@ -165,19 +175,31 @@ def fidelity(
     tol = coverage_tolerance(vertices, tolerance)
     diag = float(np.linalg.norm(np.ptp(vertices, axis=0)))
     rng = np.random.default_rng(seed)
-    corners = vertices if len(vertices) <= samples else vertices[np.sort(rng.choice(len(vertices), samples, replace=False))]
+    corners = (
+        vertices
+        if len(vertices) <= samples
+        else vertices[np.sort(rng.choice(len(vertices), samples, replace=False))]
+    )
     mesh_points = np.concatenate([sample_surface(vertices, faces, samples, rng), corners])
     to_parts = points_to_parts(mesh_points, parts, threads=threads)
 
     areas = np.array([triangle_areas(v, f).sum() for v, f in parts])
     counts = np.maximum(1, np.round(samples * areas / areas.sum()).astype(np.int64))
-    part_points = np.concatenate([sample_surface(v, f, int(c), rng) for (v, f), c in zip(parts, counts)])
+    part_points = np.concatenate(
+        [sample_surface(v, f, int(c), rng) for (v, f), c in zip(parts, counts)]
+    )
     owner = np.repeat(np.arange(len(parts)), counts)
     if len(parts) > 1:
-        shared = points_to_parts(part_points, parts, owner, threads=threads) <= SHARED_FACE_FRACTION * diag
+        shared = (
+            points_to_parts(part_points, parts, owner, threads=threads)
+            <= SHARED_FACE_FRACTION * diag
+        )
         part_points = part_points[~shared]
-    to_mesh = (points_to_triangles(part_points, vertices, faces, threads=threads)
-               if len(part_points) else np.zeros(1))
+    to_mesh = (
+        points_to_triangles(part_points, vertices, faces, threads=threads)
+        if len(part_points)
+        else np.zeros(1)
+    )
 
     # The parts are convex hulls already (closed, outward): their meshes are the solids.
     solids = [_manifold(v, f) for v, f in parts]

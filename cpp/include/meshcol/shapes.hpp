@@ -13,7 +13,7 @@
 namespace meshcol {
 
 /// Kind of a shape. The numeric values are part of the binary interface (mirrored by the
-/// Python `meshcol.query.ShapeKind`): never renumber.
+/// Python `meshcol.collision.shapes.ShapeKind`; tests/test_native.py checks it): never renumber.
 enum class ShapeKind : std::int8_t {
     POLYTOPE = 0,  ///< convex hull of `vertices` (a point, segment and polygon are valid)
     SPHERE = 1,    ///< params[0] = radius, centred on the origin
