@@ -21,7 +21,17 @@ from meshcol.errors import (
     MissingDependencyError,
     SceneError,
 )
-from meshcol.types import Body, Primitive, Scene, Status, TimeOfImpactStatus
+from meshcol.types import (
+    Body,
+    Box,
+    Capsule,
+    Cylinder,
+    Primitive,
+    Scene,
+    Sphere,
+    Status,
+    TimeOfImpactStatus,
+)
 
 # public name -> module that defines it (imported on first use)
 _LAZY: dict[str, str] = {
@@ -49,10 +59,6 @@ _LAZY: dict[str, str] = {
     # shapes and the narrow phase
     "ConvexSet": "meshcol.collision.shapes",
     "ShapeKind": "meshcol.collision.shapes",
-    "Sphere": "meshcol.collision.shapes",
-    "Box": "meshcol.collision.shapes",
-    "Capsule": "meshcol.collision.shapes",
-    "Cylinder": "meshcol.collision.shapes",
     "DistanceResult": "meshcol.collision.narrowphase",
     "PenetrationResult": "meshcol.collision.narrowphase",
     "SignedDistanceResult": "meshcol.collision.narrowphase",
@@ -108,6 +114,10 @@ __all__ = [
     "MissingDependencyError",
     "Body",
     "Primitive",
+    "Sphere",
+    "Box",
+    "Capsule",
+    "Cylinder",
     "Scene",
     "Status",
     "TimeOfImpactStatus",

@@ -15,7 +15,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Body", "Primitive", "Scene", "Status", "TimeOfImpactStatus"]
+__all__ = [
+    "Body",
+    "Box",
+    "Capsule",
+    "Cylinder",
+    "Primitive",
+    "Scene",
+    "Sphere",
+    "Status",
+    "TimeOfImpactStatus",
+]
 
 
 class Status(enum.IntEnum):
@@ -46,26 +56,87 @@ class TimeOfImpactStatus(enum.IntEnum):
     INVALID_INPUT = 4
 
 
+def _check_length(name: str, value: float) -> float:
+    value = float(value)
+    if not np.isfinite(value) or value < 0.0:
+        raise ValueError(f"{name} must be finite and >= 0, got {value}")
+    return value
+
+
 @dataclass(frozen=True)
-class Primitive:
-    """An analytic shape from a scene manifest, centred on its body's origin.
+class Sphere:
+    """Sphere centred on its local origin.
 
     Attributes
     ----------
-    kind : str
-        ``"sphere"``, ``"box"``, ``"capsule"`` or ``"cylinder"``.
     radius : float
-        Sphere, capsule and cylinder radius (0 for a box).
-    size : (3,) float
-        Box full side lengths (zeros otherwise).
-    length : float
-        Capsule and cylinder length along local z (the capsule's cylindrical part only).
     """
 
-    kind: str
-    radius: float = 0.0
-    size: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    length: float = 0.0
+    radius: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "radius", _check_length("radius", self.radius))
+
+
+@dataclass(frozen=True)
+class Box:
+    """Box centred on its local origin, axes along the local axes.
+
+    Attributes
+    ----------
+    size : (3,) float
+        FULL side lengths along local x, y, z.
+    """
+
+    size: tuple[float, float, float]
+
+    def __post_init__(self) -> None:
+        size = np.asarray(self.size, dtype=np.float64)
+        if size.shape != (3,):
+            raise ValueError(f"size must be (3,), got {size.shape}")
+        object.__setattr__(self, "size", tuple(_check_length("size", s) for s in size))
+
+
+@dataclass(frozen=True)
+class Capsule:
+    """Capsule: a segment along local z, centred, swept by a ball.
+
+    Attributes
+    ----------
+    radius : float
+    length : float
+        Length of the cylindrical part (the segment), along local z.
+    """
+
+    radius: float
+    length: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "radius", _check_length("radius", self.radius))
+        object.__setattr__(self, "length", _check_length("length", self.length))
+
+
+@dataclass(frozen=True)
+class Cylinder:
+    """Solid cylinder along local z, centred.
+
+    Attributes
+    ----------
+    radius : float
+    length : float
+        Full length along local z.
+    """
+
+    radius: float
+    length: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "radius", _check_length("radius", self.radius))
+        object.__setattr__(self, "length", _check_length("length", self.length))
+
+
+#: An analytic shape, used exactly by every query (a manifest's ``primitive`` becomes one).
+Primitive = Sphere | Box | Capsule | Cylinder
 
 
 @dataclass(frozen=True, eq=False)

@@ -167,7 +167,7 @@ def test_axis_aligned_boxes_match_exact_answers(boxes) -> None:
     """Every pair's distance/depth equals the exact axis-aligned answer; no pair is missed."""
     import trimesh
 
-    from meshcol.types import Body, Primitive, Scene
+    from meshcol.types import Body, Box, Scene
 
     bodies = []
     lo, hi = [], []
@@ -184,7 +184,7 @@ def test_axis_aligned_boxes_match_exact_answers(boxes) -> None:
                 np.asarray(mesh.vertices),
                 np.asarray(mesh.faces, np.int64),
                 t,
-                primitive=Primitive("box", size=tuple(s)),
+                primitive=Box(tuple(s)),
             )
         )
         lo.append(c - s / 2)

@@ -14,7 +14,7 @@ from meshcol import ConvexSet
 from meshcol.cli import main
 from meshcol.collision.time_of_impact import interpolate_pose, swept_aabbs
 from meshcol.errors import SceneError
-from meshcol.types import Body, Primitive, Scene, TimeOfImpactStatus
+from meshcol.types import Body, Box, Scene, TimeOfImpactStatus
 
 
 def pose(position=(0.0, 0.0, 0.0), angle_z=0.0) -> np.ndarray:
@@ -102,7 +102,7 @@ def test_bar_rotating_past_box_in_a_scene():
         np.zeros((0, 3), np.int64),
         pose(),
         pose(angle_z=np.pi / 2),
-        primitive=Primitive("box", size=(4.0, 0.2, 0.2)),
+        primitive=Box((4.0, 0.2, 0.2)),
     )
     near = Body(
         "near",
@@ -110,7 +110,7 @@ def test_bar_rotating_past_box_in_a_scene():
         np.zeros((0, 3)),
         np.zeros((0, 3), np.int64),
         pose((1.5, 1.5, 0)),
-        primitive=Primitive("box", size=(0.5, 0.5, 0.5)),
+        primitive=Box((0.5, 0.5, 0.5)),
     )
     far = Body(
         "far",
@@ -118,7 +118,7 @@ def test_bar_rotating_past_box_in_a_scene():
         np.zeros((0, 3)),
         np.zeros((0, 3), np.int64),
         pose((2.05, 2.05, 0)),
-        primitive=Primitive("box", size=(0.5, 0.5, 0.5)),
+        primitive=Box((0.5, 0.5, 0.5)),
     )
     report = meshcol.sweep(Scene((bar, near, far)), tolerance=1e-7)
     assert [(h.a, h.b, h.status, h.tunnelled) for h in report.hits] == [

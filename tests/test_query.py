@@ -30,7 +30,7 @@ from meshcol import (
     signed_distance,
     signed_distance_batch,
 )
-from meshcol.types import Body, Primitive, Status
+from meshcol.types import Body, Status
 
 CUBE = box_corners((1, 1, 1))
 
@@ -185,7 +185,7 @@ def test_from_meshes_trimesh_and_body():
         None,
         np.zeros((0, 3)),
         np.zeros((0, 3), np.int64),
-        primitive=Primitive("sphere", radius=1.0),
+        primitive=Sphere(1.0),
     )
     box_body = Body("box", None, CUBE, np.zeros((0, 3), np.int64))
     cs = ConvexSet.from_meshes([sphere_mesh, body, box_body])

@@ -123,7 +123,7 @@ def test_manifest_basics(folder):
     assert tet.name == "tet" and tet.source == os.path.join(folder, "tet.obj")
     assert np.array_equal(tet.pose[:3, 3], [1, 2, 3])
     assert tet.end_pose is None and tet.primitive is None
-    assert ball.primitive == meshcol.Primitive("sphere", radius=0.5)
+    assert ball.primitive == meshcol.Sphere(0.5)
     assert np.linalg.norm(ball.vertices, axis=1) == pytest.approx(0.5)
 
 
@@ -252,25 +252,25 @@ def test_end_pose_from_velocities(folder):
         (
             {"type": "sphere", "radius": 1.5},
             None,
-            meshcol.Primitive("sphere", radius=1.5),
+            meshcol.Sphere(1.5),
             [3, 3, 3],
         ),
         (
             {"type": "box", "size": [1, 2, 3]},
             [2, 1, 1],
-            meshcol.Primitive("box", size=(2.0, 2.0, 3.0)),
+            meshcol.Box((2.0, 2.0, 3.0)),
             [2, 2, 3],
         ),
         (
             {"type": "capsule", "radius": 0.5, "length": 2},
             2,
-            meshcol.Primitive("capsule", radius=1.0, length=4.0),
+            meshcol.Capsule(1.0, 4.0),
             [2, 2, 6],
         ),
         (
             {"type": "cylinder", "radius": 0.5, "length": 2},
             None,
-            meshcol.Primitive("cylinder", radius=0.5, length=2.0),
+            meshcol.Cylinder(0.5, 2.0),
             [1, 1, 2],
         ),
     ],

@@ -16,7 +16,7 @@ import numpy as np
 
 from meshcol.collision.arrays import as_points, as_poses
 from meshcol.geometry.hull import exact_hull
-from meshcol.types import Body, Primitive
+from meshcol.types import Body, Box, Capsule, Cylinder, Sphere
 
 __all__ = [
     "ShapeKind",
@@ -42,85 +42,6 @@ class ShapeKind(enum.IntEnum):
     BOX = 2  #: params[0:3] half extents
     CAPSULE = 3  #: params[0] radius, params[1] half length of the segment along local z
     CYLINDER = 4  #: params[0] radius, params[1] half length along local z
-
-
-def _check_length(name: str, value: float) -> float:
-    value = float(value)
-    if not np.isfinite(value) or value < 0.0:
-        raise ValueError(f"{name} must be finite and >= 0, got {value}")
-    return value
-
-
-@dataclass(frozen=True)
-class Sphere:
-    """Sphere centred on its local origin.
-
-    Attributes
-    ----------
-    radius : float
-    """
-
-    radius: float
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "radius", _check_length("radius", self.radius))
-
-
-@dataclass(frozen=True)
-class Box:
-    """Box centred on its local origin, axes along the local axes.
-
-    Attributes
-    ----------
-    size : (3,) float
-        FULL side lengths along local x, y, z.
-    """
-
-    size: tuple[float, float, float]
-
-    def __post_init__(self) -> None:
-        size = np.asarray(self.size, dtype=np.float64)
-        if size.shape != (3,):
-            raise ValueError(f"size must be (3,), got {size.shape}")
-        object.__setattr__(self, "size", tuple(_check_length("size", s) for s in size))
-
-
-@dataclass(frozen=True)
-class Capsule:
-    """Capsule: a segment along local z, centred, swept by a ball.
-
-    Attributes
-    ----------
-    radius : float
-    length : float
-        Length of the cylindrical part (the segment), along local z.
-    """
-
-    radius: float
-    length: float
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "radius", _check_length("radius", self.radius))
-        object.__setattr__(self, "length", _check_length("length", self.length))
-
-
-@dataclass(frozen=True)
-class Cylinder:
-    """Solid cylinder along local z, centred.
-
-    Attributes
-    ----------
-    radius : float
-    length : float
-        Full length along local z.
-    """
-
-    radius: float
-    length: float
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "radius", _check_length("radius", self.radius))
-        object.__setattr__(self, "length", _check_length("length", self.length))
 
 
 @dataclass
@@ -218,30 +139,16 @@ def _pack_primitive(shape: Any) -> _Packed:
     return _Packed(int(kind), params, _EMPTY3, [], _EMPTY3, _EMPTY3)
 
 
-def _from_primitive_record(p: Primitive) -> Sphere | Box | Capsule | Cylinder:
-    if p.kind == "sphere":
-        return Sphere(p.radius)
-    if p.kind == "box":
-        return Box(p.size)
-    if p.kind == "capsule":
-        return Capsule(p.radius, p.length)
-    if p.kind == "cylinder":
-        return Cylinder(p.radius, p.length)
-    raise ValueError(f"unknown primitive kind {p.kind!r}")
-
-
 _PRIMITIVES = (Sphere, Box, Capsule, Cylinder)
 
 
 def pack_shape(shape: Any, name: str) -> _Packed:
-    """Packs a primitive, a Primitive record, a Body, a trimesh mesh or an (n, 3) array."""
+    """Packs a primitive, a Body, a trimesh mesh or an (n, 3) array."""
     if isinstance(shape, _PRIMITIVES):
         return _pack_primitive(shape)
-    if isinstance(shape, Primitive):
-        return _pack_primitive(_from_primitive_record(shape))
     if isinstance(shape, Body):
         if shape.primitive is not None:
-            return _pack_primitive(_from_primitive_record(shape.primitive))
+            return _pack_primitive(shape.primitive)
         return _pack_polytope(shape.vertices)
     if hasattr(shape, "vertices") and hasattr(shape, "faces"):  # trimesh.Trimesh and alike
         return _pack_polytope(np.asarray(shape.vertices))

@@ -23,7 +23,7 @@ import numpy as np
 
 from meshcol.errors import InputFileError, MeshcolError, SceneError
 from meshcol.io.mesh_read import load_mesh, split_rigid
-from meshcol.types import Body, Primitive, Scene
+from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere
 
 __all__ = [
     "MANIFEST_EXTENSIONS",
@@ -415,14 +415,20 @@ def _primitive_body(spec, source, label, start, end, scale) -> Body:
     kind = options["type"]
     if kind == "box":
         size = np.asarray(options["size"], dtype=np.float64) * scale
-        primitive = Primitive(kind, size=(float(size[0]), float(size[1]), float(size[2])))
+        primitive: Primitive = Box((float(size[0]), float(size[1]), float(size[2])))
         mesh = trimesh.creation.box(extents=size)
     else:
         if not np.all(scale == scale[0]):
             raise SceneError(f"{label}: a {kind} takes a uniform scale only", source)
         radius = float(options["radius"] * scale[0])
         length = float(options.get("length", 0.0) * scale[0])
-        primitive = Primitive(kind, radius=radius, length=length)
+        primitive = (
+            Sphere(radius)
+            if kind == "sphere"
+            else Capsule(radius, length)
+            if kind == "capsule"
+            else Cylinder(radius, length)
+        )
         if kind == "sphere":
             mesh = trimesh.creation.icosphere(subdivisions=_SPHERE_SUBDIVISIONS, radius=radius)
         elif kind == "capsule":
