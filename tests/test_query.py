@@ -667,3 +667,23 @@ def test_public_names_are_exported():
     from meshcol._native import core as _core
 
     assert _core.defaults.gjk_max_iterations > 0 and _core.defaults.contact_tolerance < 1e-12
+
+
+def test_bodies_are_queried_at_their_own_pose() -> None:
+    """Two unit boxes 5 apart as Bodies: the single-pair queries use Body.pose (issue 11)."""
+    import trimesh
+
+    import meshcol
+
+    cube = trimesh.creation.box(extents=(1.0, 1.0, 1.0))
+    a = Body("a", None, np.asarray(cube.vertices), np.asarray(cube.faces))
+    b = Body(
+        "b", None, np.asarray(cube.vertices), np.asarray(cube.faces), pose=translation(5, 0, 0)
+    )
+    assert distance(a, b).distance == pytest.approx(4.0, abs=1e-12)
+    assert meshcol.mesh_distance(a, b).distance == pytest.approx(4.0, abs=1e-12)
+    # An explicit pose wins over the body's own.
+    assert distance(a, b, None, np.eye(4)).distance == pytest.approx(0.0, abs=1e-12)
+    # Time of impact: b stays at its own pose, a moves 6 towards it: contact after 4 of 6.
+    r = meshcol.time_of_impact(a, b, None, translation(6, 0, 0), None, None)
+    assert r.time_of_impact == pytest.approx(4.0 / 6.0, abs=1e-6)
