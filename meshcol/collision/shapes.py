@@ -16,6 +16,7 @@ import numpy as np
 
 from meshcol.collision.arrays import as_points, as_poses
 from meshcol.geometry.hull import exact_hull
+from meshcol.geometry.topology import unique_rows
 from meshcol.types import Body, Box, Capsule, Cylinder, Sphere
 
 __all__ = [
@@ -70,12 +71,18 @@ def _unique_directions(d: np.ndarray, signed: bool) -> np.ndarray:
         first = np.argmax(key != 0.0, axis=1)
         sign = np.sign(key[np.arange(len(d)), first])
         d = d * np.where(sign == 0.0, 1.0, sign)[:, None]
-    _, index = np.unique(np.round(d, 12), axis=0, return_index=True)
-    return np.ascontiguousarray(d[np.sort(index)])
+    keys = np.round(d, 12)
+    # First occurrence of each distinct key, in input order (np.unique(axis=0,
+    # return_index=True) gives the same, far slower on these small arrays).
+    order = np.lexsort(keys.T[::-1])
+    ordered = keys[order]
+    start = np.ones(len(order), dtype=bool)
+    start[1:] = (ordered[1:] != ordered[:-1]).any(axis=1)
+    return np.ascontiguousarray(d[np.sort(order[start])])
 
 
 def _adjacency_from_edges(n: int, edges: np.ndarray) -> list[np.ndarray]:
-    edges = np.unique(np.sort(edges, axis=1), axis=0)
+    edges, _ = unique_rows(np.sort(edges, axis=1))
     both = np.concatenate([edges, edges[:, ::-1]])
     order = np.lexsort((both[:, 1], both[:, 0]))
     both = both[order]

@@ -9,6 +9,7 @@ sink in.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -251,15 +252,19 @@ def principal_widths(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nda
     the centred points), largest first: the point set's thickness is ``widths[2]``.
     """
     pts = np.asarray(points, dtype=np.float64)
-    diagonal = float(np.linalg.norm(np.ptp(pts, axis=0))) if len(pts) else 0.0
-    centre = pts.mean(axis=0) if len(pts) else np.zeros(3)
+    if len(pts) == 0:
+        return np.zeros(3), np.eye(3), np.zeros(3), 0.0
+    extent = pts.max(axis=0) - pts.min(axis=0)
+    diagonal = math.sqrt(float(extent @ extent))
+    centre = pts.mean(axis=0)
     if diagonal == 0.0 or not np.isfinite(diagonal):
         return centre, np.eye(3), np.zeros(3), diagonal
     centred = pts - centre
     if len(centred) < 3:  # rows at the centre change no width but give a full frame
         centred = np.vstack([centred, np.zeros((3 - len(centred), 3))])
     _, _, axes = np.linalg.svd(centred, full_matrices=False)
-    widths = np.ptp((pts - centre) @ axes.T, axis=0)
+    along = centred @ axes.T
+    widths = along.max(axis=0) - along.min(axis=0)
     return centre, axes, widths, diagonal
 
 
@@ -316,9 +321,17 @@ def exact_hull(points: np.ndarray) -> ExactHull:
             neighbors = np.asarray(hull.neighbors, dtype=np.int64)
             equations = np.asarray(hull.equations, dtype=np.float64)
             vertices = np.ascontiguousarray(pts[keep])
-            tri = vertices[faces]
-            normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-            flip = np.einsum("ij,ij->i", normal, equations[:, :3]) < 0
+            # A face is wound outward when (v1 - v0) x (v2 - v0) points along its plane's
+            # normal: the sign of the triple product, written out (np.cross is slow on
+            # small arrays and this runs once per collision shape).
+            a = vertices[faces[:, 1]] - vertices[faces[:, 0]]
+            b = vertices[faces[:, 2]] - vertices[faces[:, 0]]
+            n = equations
+            flip = (
+                n[:, 0] * (a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1])
+                + n[:, 1] * (a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2])
+                + n[:, 2] * (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
+            ) < 0
             # Reversing a triangle swaps corners 0 and 2, and so the edges opposite them.
             faces[flip] = faces[flip][:, ::-1]
             neighbors[flip] = neighbors[flip][:, ::-1]
