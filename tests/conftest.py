@@ -16,6 +16,20 @@ ORACLES = SHARED / "oracles" / "cases.json"
 SAMPLES = REPO / "samples"
 GOLDEN = Path(__file__).resolve().parent / "golden"
 
+#: `meshcol decompose` flags that make CoACD fast enough for tests (coarse, few MCTS steps).
+FAST_DECOMPOSE = [
+    "--threshold",
+    "0.2",
+    "--resolution",
+    "500",
+    "-E",
+    "mcts_iterations=20",
+    "-E",
+    "mcts_nodes=8",
+    "-E",
+    "mcts_max_depth=2",
+]
+
 # `ci` is derandomized so CI runs are repeatable; `dev` explores more.
 settings.register_profile(
     "ci",

@@ -14,21 +14,11 @@ import numpy as np
 import pytest
 import trimesh
 from click.testing import CliRunner
+from conftest import FAST_DECOMPOSE
 
 from meshcol.cli import main
 
-FAST = [
-    "--threshold",
-    "0.2",
-    "--resolution",
-    "500",
-    "-E",
-    "mcts_iterations=20",
-    "-E",
-    "mcts_nodes=8",
-    "-E",
-    "mcts_max_depth=2",
-]
+FAST = FAST_DECOMPOSE
 
 
 @pytest.fixture(scope="module")

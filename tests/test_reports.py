@@ -11,29 +11,18 @@ import copy
 import json
 from pathlib import Path
 
+import jsonschema
 import pytest
 from click.testing import CliRunner
+from conftest import FAST_DECOMPOSE
 
 from meshcol.cli import COMMANDS, main
 from meshcol.io.report import ENVELOPE_KEYS, SCHEMA_VERSION, envelope
 
-jsonschema = pytest.importorskip("jsonschema")
-
 SCHEMAS = Path(__file__).resolve().parent.parent / "meshcol" / "schemas"
 GOLDEN = Path(__file__).resolve().parent / "golden"
 GOLDEN_FILES = sorted(GOLDEN.glob("*.json"))
-FAST = [
-    "--threshold",
-    "0.2",
-    "--resolution",
-    "500",
-    "-E",
-    "mcts_iterations=20",
-    "-E",
-    "mcts_nodes=8",
-    "-E",
-    "mcts_max_depth=2",
-]
+FAST = FAST_DECOMPOSE
 
 
 def schema_for(report: dict) -> dict:
