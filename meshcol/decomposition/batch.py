@@ -208,25 +208,18 @@ def decompose_files(
         # Parallel files share the cores: each worker's distance queries get its share.
         "threads": 0 if jobs == 1 else max(1, (os.cpu_count() or 1) // jobs),
     }
-    settings = {
-        "engine": engine,
-        "threshold": threshold,
-        "max_hulls": max_hulls,
-        "max_vertices": max_vertices,
-        "preprocess": preprocess,
-        "resolution": resolution,
-        "seed": seed,
-        "engine_options": engine_options,
-        "jobs": jobs,
-        "timeout": timeout,
-        "use_cache": use_cache,
-        "cache_dir": options["cache_dir"],
-        "out_dir": out_dir,
-        "layout": layout,
-        "format": fmt,
-        "max_hausdorff": max_hausdorff,
-        "frame": "world",
-    }
+    # The report's settings: the engine options as given (not the per-worker thread share),
+    # and how the run was made.
+    settings = {key: value for key, value in options.items() if key != "threads"}
+    settings.update(
+        jobs=jobs,
+        timeout=timeout,
+        out_dir=out_dir,
+        layout=layout,
+        format=fmt,
+        max_hausdorff=max_hausdorff,
+        frame="world",
+    )
 
     pool = None
     if jobs > 1 or timeout is not None:
