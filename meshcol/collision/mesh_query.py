@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from meshcol._native import core
-from meshcol.collision.arrays import as_pairs, as_poses
+from meshcol.collision.arrays import as_pairs, as_points, as_poses
 from meshcol.types import Body, Status
 
 __all__ = [
@@ -204,9 +204,7 @@ class MeshSet:
         boxes no closer than the best distance so far; exact closest point on each triangle at
         the leaves by Voronoi regions (Ericson 2004, 5.1.5), degenerate triangles as their edges.
         """
-        points = np.ascontiguousarray(points, dtype=np.float64)
-        if points.ndim != 2 or points.shape[1] != 3:
-            raise ValueError(f"points must be (n, 3), got {points.shape}")
+        points = np.ascontiguousarray(as_points(points, "points"))
         distances, closest, _ = self._handle.closest_points(int(i), points, int(threads))
         return distances, closest
 

@@ -30,8 +30,9 @@ and edge-edge cross products for boxes and small polytopes (Ericson 2004, sec. 5
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -290,6 +291,23 @@ def _pair_set(a: Any, b: Any, pose_a: Any, pose_b: Any) -> tuple[ConvexSet, np.n
     return cs, np.stack([as_pose(pose_a, "pose_a"), as_pose(pose_b, "pose_b")])
 
 
+_Single = TypeVar("_Single", DistanceResult, PenetrationResult, SignedDistanceResult)
+
+
+def _first_row(batch: Any, result_type: type[_Single]) -> _Single:
+    """The single-pair result from row 0 of a batch (the fields have the batch's names)."""
+    values: dict[str, Any] = {}
+    for f in dataclasses.fields(result_type):
+        value = getattr(batch, f.name)[0]
+        if f.name == "status":
+            values[f.name] = Status(int(value))
+        elif f.name == "iterations":
+            values[f.name] = int(value)
+        else:
+            values[f.name] = value if np.ndim(value) else float(value)
+    return result_type(**values)
+
+
 def body_pose(shape: Any, end: bool = False) -> np.ndarray | None:
     """A Body's start (or end) pose, None for any other shape (identity)."""
     if not isinstance(shape, Body):
@@ -315,46 +333,20 @@ def distance(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> Distance
         See :class:`DistanceBatch` for the fields.
     """
     cs, poses = _pair_set(a, b, pose_a, pose_b)
-    r = distance_batch(cs, poses, _PAIR, threads=1)
-    return DistanceResult(
-        float(r.distance[0]),
-        r.point_a[0],
-        r.point_b[0],
-        r.normal[0],
-        int(r.iterations[0]),
-        Status(int(r.status[0])),
-    )
+    return _first_row(distance_batch(cs, poses, _PAIR, threads=1), DistanceResult)
 
 
 def penetration(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> PenetrationResult:
     """Penetration depth of two convex shapes (0 when apart); arguments as :func:`distance`."""
     cs, poses = _pair_set(a, b, pose_a, pose_b)
-    r = penetration_batch(cs, poses, _PAIR, threads=1)
-    return PenetrationResult(
-        float(r.depth[0]),
-        r.normal[0],
-        r.point_a[0],
-        r.point_b[0],
-        int(r.iterations[0]),
-        Status(int(r.status[0])),
-    )
+    return _first_row(penetration_batch(cs, poses, _PAIR, threads=1), PenetrationResult)
 
 
 def signed_distance(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> SignedDistanceResult:
     """Signed distance (distance - depth) of two convex shapes; arguments as
     :func:`distance`."""
     cs, poses = _pair_set(a, b, pose_a, pose_b)
-    r = signed_distance_batch(cs, poses, _PAIR, threads=1)
-    return SignedDistanceResult(
-        float(r.signed_distance[0]),
-        float(r.distance[0]),
-        float(r.depth[0]),
-        r.normal[0],
-        r.point_a[0],
-        r.point_b[0],
-        int(r.iterations[0]),
-        Status(int(r.status[0])),
-    )
+    return _first_row(signed_distance_batch(cs, poses, _PAIR, threads=1), SignedDistanceResult)
 
 
 def intersects(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> bool:
