@@ -16,10 +16,12 @@ import re
 import struct
 import zlib
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from meshcol.errors import InputFileError, InvalidMeshError
+from meshcol.io.off import read_off
 from meshcol.types import Body
 
 __all__ = ["MESH_EXTENSIONS", "load_mesh", "merge_vertices", "split_rigid"]
@@ -98,33 +100,16 @@ def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]
     source = os.fspath(path)
     file = Path(source)
     file_type = _check_file(file, source)
-    scene = _read_scene(file, file_type, source)
-
-    # (name, matrix, trimesh geometry) for every mesh node, in file order
-    nodes = []
-    for node in scene.graph.nodes_geometry:
-        matrix, geometry_name = scene.graph[node]
-        geometry = scene.geometry[geometry_name]
-        faces = getattr(geometry, "faces", None)
-        if faces is None or len(faces) == 0:
-            continue  # point clouds, paths, faceless meshes: not bodies
-        name = geometry_name if file_type in ("obj", "stl", "ply", "off") else str(node)
-        if file_type == "obj" and name == file.name:
-            name = "default"  # faces before any `o`/`g` line: OBJ's default group
-        nodes.append((name, np.asarray(matrix, dtype=np.float64), geometry))
+    nodes = _read_nodes(file, file_type, source)
     if not nodes:
         raise InvalidMeshError("mesh has no faces", source)
-    if file_type == "obj":
-        nodes = _obj_file_order(file, nodes)
-    elif file_type in ("glb", "gltf"):
-        nodes = _gltf_file_order(file, file_type, nodes)
 
     stem = file.stem
     bodies: list[Body] = []
     used: set[str] = set()
-    for name, matrix, geometry in nodes:
-        vertices = np.asarray(geometry.vertices, dtype=np.float64)
-        faces = np.asarray(geometry.faces, dtype=np.int64)
+    for name, matrix, vertices, faces in nodes:
+        vertices = np.asarray(vertices, dtype=np.float64)
+        faces = np.asarray(faces, dtype=np.int64)
         if vertices.ndim != 2 or vertices.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3:
             raise InvalidMeshError("mesh is not made of triangles", source)
         if not np.isfinite(vertices).all():
@@ -253,14 +238,141 @@ def _check_file(file: Path, source: str) -> str:
     return file_type
 
 
-def _read_scene(file: Path, file_type: str, source: str):
+def _read_nodes(file: Path, file_type: str, source: str) -> list:
+    """``(name, matrix, vertices, faces)`` of every mesh node of a file, in file order."""
+    if file_type == "off":
+        off_vertices, off_faces = read_off(_read_bytes(file, source), source)
+        return [(file.stem, np.eye(4), off_vertices, off_faces)] if len(off_faces) else []
+    text = None
+    if file_type == "obj":
+        text = _obj_text(_read_bytes(file, source), source)
+    scene = _read_scene(file, file_type, source, text)
+    nodes = []
+    for node in scene.graph.nodes_geometry:
+        matrix, geometry_name = scene.graph[node]
+        geometry = scene.geometry[geometry_name]
+        faces = getattr(geometry, "faces", None)
+        if faces is None or len(faces) == 0:
+            continue  # point clouds, paths, faceless meshes: not bodies
+        name = geometry_name if file_type in ("obj", "stl", "ply") else str(node)
+        if file_type == "obj" and name == file.name:
+            name = "default"  # faces before any `o`/`g` line: OBJ's default group
+        nodes.append((name, np.asarray(matrix, dtype=np.float64), geometry.vertices, faces))
+    if text is not None:
+        nodes = _obj_file_order(text, nodes)
+    elif file_type in ("glb", "gltf"):
+        nodes = _gltf_file_order(file, file_type, nodes)
+    return nodes
+
+
+def _read_bytes(file: Path, source: str) -> bytes:
+    try:
+        return file.read_bytes()
+    except OSError as error:
+        raise InputFileError(f"cannot read file: {error.strerror or error}", source) from None
+
+
+def _obj_text(data: bytes, source: str) -> str:
+    """The text of an OBJ file, its face indices checked.
+
+    UTF-8 (a byte-order mark is dropped); a file that is not UTF-8 is read as Latin-1, which
+    maps every byte, so a comment or a name in a legacy encoding loads. Bytes that no text
+    file holds (NUL and other C0 controls but tab, newline, carriage return, form feed) make
+    it binary data, not OBJ.
+    """
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        if _BINARY.search(data):
+            raise InvalidMeshError(
+                "cannot parse OBJ file: binary data, not OBJ text", source
+            ) from None
+        text = data.decode("latin-1")
+    return _check_obj_faces(text, source)
+
+
+# C0 control bytes that never appear in a text file (tab, LF, VT, FF and CR excluded)
+_BINARY = re.compile(rb"[\x00-\x08\x0e-\x1f]")
+_OBJ_LINE = re.compile(r"^[ \t]*(v|f|l|p)[ \t]", flags=re.MULTILINE)
+
+
+def _check_obj_faces(text: str, source: str) -> str:
+    """Refuse face (and line, point) indices that name no vertex, with the line number;
+    return the text with relative indices made absolute.
+
+    OBJ indices count from 1; a negative index counts back from the last vertex defined so
+    far (-1 is the latest). trimesh counts negative indices from the end of the whole file
+    instead, so they are rewritten here. 0 is no vertex (trimesh would take it as the last
+    vertex), and an index beyond the vertices is out of range.
+    """
+    defined = 0  # vertices so far
+    total = sum(1 for m in _OBJ_LINE.finditer(text) if m.group(1) == "v")
+    edits: list[tuple[int, int, str]] = []  # (start, end, absolute form) of lines to rewrite
+    for match in _OBJ_LINE.finditer(text):
+        keyword = match.group(1)
+        if keyword == "v":
+            defined += 1
+            continue
+        end = text.find("\n", match.end())
+        end = end if end >= 0 else len(text)
+        body = text[match.end() : end].split("#", 1)[0]
+        relative = False
+        for token in body.split():
+            if token == "\\":
+                continue  # a continuation: the rest is on the next line
+            head = token.split("/", 1)[0]
+            try:
+                index = int(head)
+            except ValueError:
+                problem = f"{keyword} line: {token[:40]!r} is not a vertex index"
+            else:
+                if index == 0:
+                    problem = f"{keyword} line: vertex index 0 (OBJ indices start at 1)"
+                elif index > total:
+                    problem = (
+                        f"{keyword} line: vertex index {index} is out of range (the file has "
+                        f"{total} vertices)"
+                    )
+                elif index < 0 and -index > defined:
+                    problem = (
+                        f"{keyword} line: relative vertex index {index} reaches before the "
+                        f"first vertex ({defined} defined so far)"
+                    )
+                else:
+                    relative |= index < 0
+                    continue
+            line = text.count("\n", 0, match.start()) + 1
+            raise InvalidMeshError(f"cannot parse OBJ file: line {line}: {problem}", source)
+        if relative:
+            tokens = []
+            for token in body.split():
+                head, slash, tail = token.partition("/")
+                if head.lstrip("-").isdigit() and int(head) < 0:
+                    token = f"{defined + int(head) + 1}{slash}{tail}"
+                tokens.append(token)
+            edits.append((match.end(), end, " ".join(tokens)))
+    if not edits:
+        return text
+    pieces, last = [], 0
+    for start, end, replacement in edits:
+        pieces += [text[last:start], replacement]
+        last = end
+    pieces.append(text[last:])
+    return "".join(pieces)
+
+
+def _read_scene(file: Path, file_type: str, source: str, text: str | None):
+    import io
+
     import trimesh
 
     options: dict = {"process": False}
+    stream = None
     if file_type == "obj":
         # Geometry only: no .mtl, no textures (so no Pillow), one body per object, or per
-        # group when the file has no objects.
-        text = file.read_bytes().decode("utf-8", errors="replace")
+        # group when the file has no objects. The text is decoded here (trimesh would guess
+        # the encoding with an optional package) and handed over as UTF-8.
+        assert text is not None
         has_objects = re.search(r"^\s*o\s", text, flags=re.MULTILINE) is not None
         options.update(
             skip_materials=True,
@@ -268,11 +380,23 @@ def _read_scene(file: Path, file_type: str, source: str):
             split_objects=True,
             split_groups=not has_objects,
         )
+        stream = io.BytesIO(text.encode("utf-8"))
     elif file_type == "stl":
-        _check_stl(file, source)
+        text_bytes = _check_stl(file, source)
+        if text_bytes is not None:
+            stream = io.BytesIO(text_bytes)
+    elif file_type == "ply":
+        header = _ply_bytes(file, source)
+        if header is not None:
+            stream = io.BytesIO(header)
     elif file_type == "gltf":
-        _check_json(file, source)
+        _check_gltf(_check_json(file, source), "GLTF", source)
+    elif file_type == "glb":
+        _check_gltf(_glb_json(file, source), "GLB", source)
     try:
+        if stream is not None:
+            stream.name = file.name  # trimesh names an unnamed object after it
+            return trimesh.load_scene(stream, file_type=file_type, **options)
         return trimesh.load_scene(str(file), file_type=file_type, **options)
     except FileNotFoundError as error:
         # a glTF buffer or image the file refers to
@@ -287,28 +411,50 @@ def _read_scene(file: Path, file_type: str, source: str):
         ) from None
 
 
-def _check_stl(file: Path, source: str) -> None:
-    """Reject what is neither a binary STL nor text before trimesh guesses an encoding."""
+def _check_stl(file: Path, source: str) -> bytes | None:
+    """Reject what is neither a binary STL nor text before trimesh guesses an encoding.
+
+    Returns None for a binary STL, else the text as UTF-8 bytes (a Latin-1 solid name is
+    re-encoded, so trimesh reads it without guessing).
+    """
     size = file.stat().st_size
     with open(file, "rb") as stream:
         header = stream.read(84)
     if size >= 84 and 84 + 50 * struct.unpack("<I", header[80:84])[0] == size:
-        return
+        return None
+    data = _read_bytes(file, source)
     try:
-        file.read_bytes().decode("utf-8")
+        data.decode("utf-8")
+        return data
     except UnicodeDecodeError:
-        raise InvalidMeshError(
-            "cannot parse STL file: neither binary STL (size does not match the triangle "
-            "count) nor ASCII text",
-            source,
-        ) from None
+        if _BINARY.search(data):
+            raise InvalidMeshError(
+                "cannot parse STL file: neither binary STL (size does not match the triangle "
+                "count) nor ASCII text",
+                source,
+            ) from None
+        return data.decode("latin-1").encode("utf-8")
 
 
-def _check_json(file: Path, source: str) -> None:
+def _ply_bytes(file: Path, source: str) -> bytes | None:
+    """A PLY file whose header (comments, obj_info) is not UTF-8, with the header re-encoded
+    from Latin-1; None when the file needs nothing (the data after the header is untouched)."""
+    data = _read_bytes(file, source)
+    end = data.find(b"end_header")
+    if end < 0:
+        return None
+    try:
+        data[:end].decode("utf-8")
+        return None
+    except UnicodeDecodeError:
+        return data[:end].decode("latin-1").encode("utf-8") + data[end:]
+
+
+def _check_json(file: Path, source: str) -> Any:
     import json
 
     try:
-        json.loads(file.read_bytes())
+        return json.loads(file.read_bytes().decode("utf-8-sig"))
     except json.JSONDecodeError as error:
         raise InvalidMeshError(
             f"cannot parse GLTF file: invalid JSON at line {error.lineno} column {error.colno}: "
@@ -319,9 +465,109 @@ def _check_json(file: Path, source: str) -> None:
         raise InvalidMeshError("cannot parse GLTF file: not UTF-8 text", source) from None
 
 
-def _obj_file_order(file: Path, nodes: list) -> list:
+def _glb_json(file: Path, source: str) -> Any:
+    """The JSON chunk of a GLB file (its header checked)."""
+    import json
+
+    data = file.read_bytes()
+    if len(data) < 20 or data[:4] != b"glTF":
+        raise InvalidMeshError("cannot parse GLB file: no glTF binary header", source)
+    length, kind = struct.unpack("<I4s", data[12:20])
+    if kind != b"JSON" or 20 + length > len(data):
+        raise InvalidMeshError("cannot parse GLB file: the first chunk is not JSON", source)
+    try:
+        return json.loads(data[20 : 20 + length].decode("utf-8-sig"))
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        raise InvalidMeshError(
+            "cannot parse GLB file: its JSON chunk is not valid", source
+        ) from None
+
+
+_SINGULAR = {
+    "scenes": "scene",
+    "nodes": "node",
+    "meshes": "mesh",
+    "accessors": "accessor",
+    "bufferViews": "bufferView",
+    "buffers": "buffer",
+}
+# glTF 2.0: byte, unsigned byte, short, unsigned short, unsigned int, float
+_COMPONENT_TYPES = (5120, 5121, 5122, 5123, 5125, 5126)
+_ACCESSOR_TYPES = ("SCALAR", "VEC2", "VEC3", "VEC4", "MAT2", "MAT3", "MAT4")
+
+
+def _check_gltf(document: Any, kind: str, source: str) -> None:
+    """Refuse references to objects the glTF file does not have, naming the reference.
+
+    trimesh would index its lists with them: a negative index silently takes an object from
+    the end, a missing one fails with an unnamed IndexError or KeyError.
+    """
+    if not isinstance(document, dict):
+        raise InvalidMeshError(f"cannot parse {kind} file: the JSON is not an object", source)
+
+    def items(name: str) -> list:
+        value = document.get(name, [])
+        if not isinstance(value, list):
+            raise InvalidMeshError(f"cannot parse {kind} file: '{name}' is not an array", source)
+        return value
+
+    def check(where: str, value: Any, name: str) -> None:
+        count = len(items(name))
+        if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < count:
+            raise InvalidMeshError(
+                f"cannot parse {kind} file: {where} refers to {_SINGULAR[name]} {value!r}, but "
+                f"the file has {count} {name}",
+                source,
+            )
+
+    for k, scene in enumerate(items("scenes")):
+        for node in scene.get("nodes", []) if isinstance(scene, dict) else []:
+            check(f"scene {k}", node, "nodes")
+    if "scene" in document:
+        check("'scene'", document["scene"], "scenes")
+    for k, node in enumerate(items("nodes")):
+        if not isinstance(node, dict):
+            continue
+        for child in node.get("children", []):
+            check(f"node {k} children", child, "nodes")
+        if "mesh" in node:
+            check(f"node {k}", node["mesh"], "meshes")
+    for k, mesh in enumerate(items("meshes")):
+        primitives = mesh.get("primitives", []) if isinstance(mesh, dict) else []
+        for j, primitive in enumerate(primitives):
+            if not isinstance(primitive, dict):
+                continue
+            attributes = primitive.get("attributes", {})
+            for attribute in ("POSITION",):
+                if isinstance(attributes, dict) and attribute in attributes:
+                    check(f"mesh {k} primitive {j} {attribute}", attributes[attribute], "accessors")
+            if "indices" in primitive:
+                check(f"mesh {k} primitive {j} indices", primitive["indices"], "accessors")
+    for k, accessor in enumerate(items("accessors")):
+        if not isinstance(accessor, dict):
+            continue
+        if "bufferView" in accessor:
+            check(f"accessor {k}", accessor["bufferView"], "bufferViews")
+        if accessor.get("componentType") not in _COMPONENT_TYPES:
+            raise InvalidMeshError(
+                f"cannot parse {kind} file: accessor {k} has componentType "
+                f"{accessor.get('componentType')!r} (expected one of "
+                f"{', '.join(map(str, _COMPONENT_TYPES))})",
+                source,
+            )
+        if accessor.get("type") not in _ACCESSOR_TYPES:
+            raise InvalidMeshError(
+                f"cannot parse {kind} file: accessor {k} has type {accessor.get('type')!r} "
+                f"(expected one of {', '.join(_ACCESSOR_TYPES)})",
+                source,
+            )
+    for k, view in enumerate(items("bufferViews")):
+        if isinstance(view, dict):
+            check(f"bufferView {k}", view.get("buffer"), "buffers")
+
+
+def _obj_file_order(text: str, nodes: list) -> list:
     """trimesh returns OBJ objects last-first: put them back in the order the file has them."""
-    text = file.read_bytes().decode("utf-8", errors="replace")
 
     def position(item) -> int:
         name = item[0]

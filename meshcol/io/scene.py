@@ -470,7 +470,7 @@ def _parse(file: Path, source: str) -> Any:
     except OSError as error:
         raise InputFileError(f"cannot read file: {error.strerror or error}", source) from None
     try:
-        text = data.decode("utf-8")
+        text = data.decode("utf-8-sig")  # a byte-order mark, as some editors write, is dropped
     except UnicodeDecodeError:
         raise SceneError("manifest is not UTF-8 text", source) from None
     if file.suffix.lower() == ".toml":
