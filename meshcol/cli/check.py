@@ -143,6 +143,8 @@ def check(
     progress.done()
 
     emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+    for warning in result.warnings:
+        click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_table(result), err=True)
     sys.exit(result.exit_code)
 
@@ -171,7 +173,9 @@ def summary_table(result) -> str:
         for p in worst:
             value = "" if p["signed_distance"] is None else f"{p['signed_distance']:.6g}"
             flag = " (ignored)" if p["ignored"] else (" (FAIL)" if p["violation"] else "")
-            lines.append(f"  {p['status']:<12} {value:>12}{units}  {p['a']} <-> {p['b']}{flag}")
+            lines.append(
+                f"  {p['status']:<12} {value:>12}{units}  {p['body_a']} <-> {p['body_b']}{flag}"
+            )
     verdict = "PASS" if s["passed"] else f"FAIL: {s['violations']} pair(s) violate --fail-on"
     lines.append(verdict)
     return "\n".join(lines)

@@ -104,6 +104,8 @@ def sweep(
         fail_on=fail_on,
     )
     emit(result.to_csv() if report_format(report, fmt) == "csv" else result.to_json(), report)
+    for warning in result.warnings:
+        click.echo(f"meshcol: warning: {warning}", err=True)
 
     if report is not None and report != "-":
         summary = result.summary
@@ -119,7 +121,7 @@ def sweep(
             when = "" if h.time is None else f" (t = {h.time:.6g} s)"
             extra = ", tunnelled" if h.tunnelled else ""
             click.echo(
-                f"meshcol: fail: {manifest}: '{h.a}' and '{h.b}': {h.status.name} at time of impact "
+                f"meshcol: fail: {manifest}: '{h.body_a}' and '{h.body_b}': {h.status.name} at time of impact "
                 f"{h.time_of_impact:.6g}{when}{extra}",
                 err=True,
             )
