@@ -211,6 +211,25 @@ class Body:
             out.append((name, self.vertices[used], inverse.reshape(-1, 3).astype(np.int64)))
         return out
 
+    def part_bodies(self) -> list[Body]:
+        """One body per part, named ``<body>/<part>``, with this body's pose (the body itself
+        when it has one part): for what is judged per mesh (inspect's health, decompose's
+        inputs), where a body's parts are separate meshes."""
+        if not self.parts:
+            return [self]
+        return [
+            Body(
+                name=f"{self.name}/{name}",
+                source=self.source,
+                vertices=np.ascontiguousarray(vertices),
+                faces=np.ascontiguousarray(faces),
+                pose=self.pose,
+                end_pose=self.end_pose,
+                collider=self.collider,
+            )
+            for name, vertices, faces in self.part_meshes()
+        ]
+
     def world_vertices(self, end: bool = False) -> np.ndarray:
         """Vertices in the world frame, (n, 3) float64, at the start (or end) pose."""
         m = self.end_pose if end and self.end_pose is not None else self.pose

@@ -270,3 +270,39 @@ def test_cli_prints_warnings_on_stderr(tmp_path):
         "meshcol: warning: 'bowl_ucx/UCX_bowl_00' and 'bowl_ucx/UCX_bowl_01' name no body "
         "'bowl' in the inputs: checked as one body 'bowl_ucx/bowl' of 2 part(s)"
     ) in result.stderr.splitlines()
+
+
+# --- per-mesh commands: inspect and decompose see each part --------------------------------
+
+
+def test_inspect_judges_each_part_of_a_body(tmp_path, chair):
+    from meshcol.analysis.inspect import inspect
+
+    scene = _manifest(tmp_path, [{"name": "chair", "mesh": "chair.obj"}])
+    report = inspect([scene])
+    rows = {r["name"]: r for r in report.to_dict()["bodies"]}
+    # the seat and the leg overlap: two healthy meshes, not one self-intersecting one
+    assert sorted(rows) == ["chair/leg", "chair/seat"]
+
+
+def test_decompose_then_check_reuses_the_cache_part_by_part(tmp_path, chair, monkeypatch):
+    from meshcol.decomposition import decompose as decompose_module
+    from meshcol.decomposition.batch import decompose_files
+
+    scene = _manifest(tmp_path, [{"name": "chair", "mesh": "chair.obj", "scale": 2}])
+    options = dict(
+        threshold=0.2,
+        resolution=500,
+        engine_options={"mcts_iterations": 20, "mcts_nodes": 8, "mcts_max_depth": 2},
+    )
+    cache = tmp_path / "cache"
+    decompose_files([scene], tmp_path / "out", cache_dir=cache, **options)
+
+    def no_engine(*args, **kwargs):
+        raise AssertionError("check decomposed again what decompose had cached")
+
+    monkeypatch.setattr(decompose_module, "decompose", no_engine)
+    report = meshcol.check(
+        [scene], collider="decomposed", decompose_options={"cache_dir": str(cache), **options}
+    )
+    assert report.bodies[0]["collider"] == "decomposed" and report.pairs == []

@@ -320,7 +320,10 @@ def test_corpus_scene_distances_match_fcl(corpus: Path, name: str) -> None:
         if p["status"] in ("penetrating", "contained", "contact"):
             continue
         expected = _fcl_mesh_distance(bodies[p["body_a"]], bodies[p["body_b"]])
-        assert p["distance"] == pytest.approx(expected, rel=1e-6, abs=1e-9), (p["body_a"], p["body_b"])
+        assert p["distance"] == pytest.approx(expected, rel=1e-6, abs=1e-9), (
+            p["body_a"],
+            p["body_b"],
+        )
         compared += 1
     assert compared > 0
 

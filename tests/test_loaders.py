@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 
 import numpy as np
 import pytest
@@ -446,3 +447,42 @@ def test_gltf_bad_reference_is_one_line(tmp_path, edit, message):
         load_mesh(path)
     assert info.value.message == f"cannot parse GLTF file: {message}"
     _one_error_line(_cli("inspect", path), path)
+
+
+# --- dependency ranges ---------------------------------------------------------------------
+
+
+def test_every_runtime_dependency_has_a_lower_bound_that_is_installed_or_newer():
+    """`make test-lowest` pins the lower bounds `.ci/lowest_constraints.py` derives; each must
+    exist for every dependency, and the installed versions must lie in the ranges."""
+    import importlib.metadata
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    spec = importlib.util.spec_from_file_location("lowest", root / ".ci" / "lowest_constraints.py")
+    assert spec is not None and spec.loader is not None
+    lowest = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(lowest)
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:
+        import tomli as tomllib
+    project = tomllib.loads((root / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    pins = lowest.lowest_constraints(project["dependencies"])
+    assert len(pins) == len(project["dependencies"])
+    with pytest.raises(ValueError, match="without a lower bound"):
+        lowest.lowest_constraints(["numpy"])
+
+    def version_tuple(text: str) -> tuple[int, ...]:
+        return tuple(int(part) for part in re.findall(r"\d+", text)[:3])
+
+    for pin in pins:
+        requirement, _, marker = pin.partition(";")
+        if marker and "python_version < '3.11'" in marker and sys.version_info >= (3, 11):
+            continue
+        name, low = requirement.strip().split("==")
+        low = low.removesuffix(".*")
+        installed = importlib.metadata.version(name)
+        assert version_tuple(installed) >= version_tuple(low), (name, installed, low)

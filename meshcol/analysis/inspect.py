@@ -603,5 +603,6 @@ def inspect(inputs: Any, *, fail_on: Sequence[str] = ()) -> InspectReport:
     if isinstance(inputs, (str, os.PathLike)):
         inputs = [inputs]
     scene = load_inputs(list(inputs))
-    results = tuple(inspect_body(body, declared_units=scene.units) for body in scene.bodies)
+    meshes = [part for body in scene.bodies for part in body.part_bodies()]  # health per mesh
+    results = tuple(inspect_body(body, declared_units=scene.units) for body in meshes)
     return InspectReport(results, tuple(dict.fromkeys(fail_on)), scene.units)
