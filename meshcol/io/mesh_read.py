@@ -296,7 +296,39 @@ _BINARY = re.compile(rb"[\x00-\x08\x0e-\x1f]")
 _OBJ_LINE = re.compile(r"^[ \t]*(v|f|l|p)[ \t]", flags=re.MULTILINE)
 
 
+_OBJ_ELEMENTS = re.compile(r"^[ \t]*[flp][ \t]+([^\n#]*)", flags=re.MULTILINE)
+_OBJ_VERTEX = re.compile(r"^[ \t]*v[ \t]", flags=re.MULTILINE)
+
+
 def _check_obj_faces(text: str, source: str) -> str:
+    """:func:`_check_obj_faces_by_line` without a Python loop over lines when every index
+    is a positive one in range (the common case); any other file goes line by line."""
+    import warnings
+
+    elements = "\n".join(_OBJ_ELEMENTS.findall(text))
+    if "-" in elements or "\\" in elements:
+        return _check_obj_faces_by_line(text, source)
+    if "/" in elements:
+        elements = re.sub(r"/\S*", "", elements)  # v/vt/vn: the vertex index only
+    tokens = len(elements.split())
+    try:
+        with warnings.catch_warnings():
+            # a token that is not a number ends the parse (a warning, or an error in numpy 2.4)
+            warnings.simplefilter("ignore")
+            index = np.fromstring(elements, dtype=np.int64, sep=" ") if tokens else np.zeros(0)
+    except ValueError:
+        return _check_obj_faces_by_line(text, source)
+    if len(index) != tokens or (tokens and index.min() < 1):
+        return _check_obj_faces_by_line(text, source)
+    if tokens:
+        # vertex lines at the start of a line: a lower bound of the count, exact in practice
+        quick = text.count("\nv ") + text.count("\nv\t") + text.startswith(("v ", "v\t"))
+        if index.max() > quick and index.max() > len(_OBJ_VERTEX.findall(text)):
+            return _check_obj_faces_by_line(text, source)
+    return text
+
+
+def _check_obj_faces_by_line(text: str, source: str) -> str:
     """Refuse face (and line, point) indices that name no vertex, with the line number;
     return the text with relative indices made absolute.
 
