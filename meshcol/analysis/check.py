@@ -379,11 +379,10 @@ def check_scene(
     # Convex pairs (also gives hull depths for mesh pairs that intersect).
     if k:
         key = ca * max(n, 1) + cb
-        part_pairs = sort_and_sweep(part_min - half, part_max + half)
+        # parts of one body (its hulls, UCX parts, decomposition) never pair: one group each
+        part_pairs = sort_and_sweep(part_min - half, part_max + half, groups=shapes.part_body)
         pb_a = shapes.part_body[part_pairs[:, 0]]
         pb_b = shapes.part_body[part_pairs[:, 1]]
-        keep = pb_a != pb_b
-        part_pairs, pb_a, pb_b = part_pairs[keep], pb_a[keep], pb_b[keep]
         # Orient every part pair as (part of body a, part of body b) with a < b.
         swap = pb_a > pb_b
         part_pairs[swap] = part_pairs[swap][:, ::-1]

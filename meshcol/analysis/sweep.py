@@ -343,10 +343,10 @@ def sweep(
             f"body '{body.name}': invalid shape or pose (NaN/inf, empty or not rigid)",
             body.source or scene.source,
         )
-    pairs = sort_and_sweep(lo - 0.5 * tol, hi + 0.5 * tol)
+    pairs = sort_and_sweep(lo - 0.5 * tol, hi + 0.5 * tol, groups=owner)  # no pair in a body
     if len(pairs):
         oa, ob = owner[pairs[:, 0]], owner[pairs[:, 1]]
-        keep = (oa != ob) & (moving[oa] | moving[ob])
+        keep = moving[oa] | moving[ob]
         pairs = pairs[keep]
         # Part pairs ordered as their bodies (a first in the scene).
         swap = owner[pairs[:, 0]] > owner[pairs[:, 1]]
