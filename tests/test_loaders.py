@@ -432,6 +432,10 @@ def test_good_gltf_loads(tmp_path):
             "accessor 0 refers to bufferView 9, but the file has 2 bufferViews",
         ),
         (
+            lambda d: d["buffers"][0].pop("uri"),
+            "buffer 0 has no uri (only the first buffer of a GLB file may be its binary chunk)",
+        ),
+        (
             lambda d: d["accessors"][1].__setitem__("componentType", 1),
             "accessor 1 has componentType 1 (expected one of 5120, 5121, 5122, 5123, 5125, 5126)",
         ),

@@ -104,10 +104,12 @@ def check(
     """Check every pair of bodies for contact, clearance and interpenetration.
 
     INPUT is mesh files (each body at its own coordinates, as parts exported in place), one
-    scene manifest (JSON/TOML) or glTF/GLB scenes. Statuses per pair: separated, clearance,
-    contact, penetrating, contained. The report (JSON or CSV) goes to --report FILE or to
-    stdout; a short summary goes to stderr. Exit 0 when the policy passes, 1 when it fails,
-    2 on bad input. Points are world coordinates; normals point from a to b.
+    scene manifest (JSON/TOML) or glTF/GLB scenes. Files given directly give one body per
+    object; a manifest body is its whole file, whose objects are its parts (never checked
+    against each other; pairs name them as part_a, part_b). Statuses per pair: separated,
+    clearance, contact, penetrating, contained. The report (JSON or CSV) goes to --report FILE
+    or to stdout; a short summary goes to stderr. Exit 0 when the policy passes, 1 when it
+    fails, 2 on bad input. Points are world coordinates; normals point from body_a to body_b.
 
     \b
     Examples:

@@ -596,6 +596,14 @@ def _check_gltf(document: Any, kind: str, source: str) -> None:
     for k, view in enumerate(items("bufferViews")):
         if isinstance(view, dict):
             check(f"bufferView {k}", view.get("buffer"), "buffers")
+    for k, buffer in enumerate(items("buffers")):
+        # only a GLB's first buffer may leave out its uri (it is the binary chunk)
+        if isinstance(buffer, dict) and "uri" not in buffer and (kind == "GLTF" or k > 0):
+            raise InvalidMeshError(
+                f"cannot parse {kind} file: buffer {k} has no uri (only the first buffer of a "
+                "GLB file may be its binary chunk)",
+                source,
+            )
 
 
 def _obj_file_order(text: str, nodes: list) -> list:
