@@ -22,7 +22,7 @@ def test_report_on_stdout(tmp_path: Path) -> None:
     cube = write(tmp_path, "cube.obj", CUBE_OBJ)
     result = run("inspect", cube)
     assert result.exit_code == 0, result.output
-    assert result.stderr == ""
+    assert result.stderr.splitlines()[-1] == "meshcol: inspect: PASS: 1 body, 0 with findings"
     report = json.loads(result.stdout)
     assert report["schema_version"] == 1 and report["command"] == "inspect"
     assert report["settings"] == {"bounds_frame": "world", "fail_on": []}
@@ -82,10 +82,10 @@ def test_unknown_rule_is_a_usage_error(tmp_path: Path) -> None:
     cube = write(tmp_path, "cube.obj", CUBE_OBJ)
     result = run("inspect", cube, "--fail-on", "not-watertight,leaky")
     assert result.exit_code == 2
-    assert result.stderr.endswith(
-        "Error: Invalid value for '--fail-on': unknown rule 'leaky' (valid rules: all, "
+    assert result.stderr == (
+        "meshcol: error: invalid value for '--fail-on': unknown rule 'leaky' (valid rules: all, "
         + ", ".join(RULES)
-        + ")\n"
+        + ") (see 'meshcol inspect -h')\n"
     )
 
 

@@ -4,14 +4,16 @@ Errors are mapped to exit codes here and nowhere else:
 
 - 0: ran and passed; 1: ran and found what the policy fails on;
 - 2: a usage error or unusable input, reported as one line on stderr
-  (``meshcol: error: FILE: problem``), with a traceback only under ``--debug``.
+  (``meshcol: error: FILE: problem``), with a traceback only under ``--debug``. click's own
+  usage errors (unknown option, bad value, missing argument) get the same prefix and one
+  line, never click's multi-line block.
 """
 
 from __future__ import annotations
 
 import importlib
 import sys
-from typing import Any
+from typing import Any, NoReturn
 
 import click
 
@@ -44,6 +46,21 @@ class MeshcolGroup(click.Group):
         module_name, attr = target.split(":")
         return getattr(importlib.import_module(module_name), attr)
 
+    def main(self, *args: Any, standalone_mode: bool = True, **kwargs: Any) -> Any:
+        """Run the command line; usage errors become one ``meshcol: error:`` line, exit 2."""
+        if not standalone_mode:
+            return super().main(*args, standalone_mode=False, **kwargs)
+        try:
+            code = super().main(*args, standalone_mode=False, **kwargs)
+        except click.ClickException as exc:
+            fail(usage_message(exc))
+        except click.Abort:
+            click.echo("meshcol: interrupted", err=True)
+            sys.exit(130)
+        # Without standalone mode click returns the command's value, or the code of an
+        # explicit exit (--help, --version, ctx.exit(1)).
+        sys.exit(code if isinstance(code, int) else 0)
+
     def invoke(self, ctx: click.Context) -> Any:
         debug = bool(ctx.params.get("debug"))
         try:
@@ -63,7 +80,20 @@ class MeshcolGroup(click.Group):
             sys.exit(130)
 
 
-def fail(message: str) -> None:
+def usage_message(exc: click.ClickException) -> str:
+    """click's error as one line: ``invalid value for '--jobs': 0 is not in the range x>=1
+    (see 'meshcol decompose -h')``."""
+    text = " ".join(exc.format_message().split()).rstrip(".")
+    if text[:2].istitle() and not text[:2].isupper():
+        text = text[0].lower() + text[1:]
+    ctx = getattr(exc, "ctx", None)
+    if ctx is not None:
+        command = " ".join(["meshcol", *ctx.command_path.split()[1:]])
+        text += f" (see '{command} -h')"
+    return text
+
+
+def fail(message: str) -> NoReturn:
     """Print ``meshcol: error: MESSAGE`` on stderr and exit 2."""
     click.echo(f"meshcol: error: {message}", err=True)
     sys.exit(2)
