@@ -209,9 +209,11 @@ def test_cli_fail_on_none_and_csv_report(tmp_path):
     )
     assert result.exit_code == 0, result.output
     lines = out.read_text().splitlines()
-    assert (
-        lines[0] == "a,b,status,time_of_impact,time,point,normal,tunnelled,pose_a,pose_b,iterations"
-    )
+    from meshcol.analysis.sweep import CSV_COLUMNS
+
+    assert lines[0].split(",") == list(CSV_COLUMNS)
+    assert lines[0].startswith("a,b,status,time_of_impact,time,point_x,point_y,point_z,normal_x,")
+    assert ",pose_a_00,pose_a_01," in lines[0] and lines[0].endswith(",pose_b_33,iterations,units")
     assert lines[1].startswith("bar,block,HIT,") and len(lines) == 2
     assert "1 hit (1 tunnelled)" in result.stderr
     assert result.stderr.splitlines()[-1] == (

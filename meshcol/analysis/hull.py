@@ -42,6 +42,7 @@ CSV_COLUMNS = (
     "added_volume_fraction",
     "max_distance",
     "output",
+    "units",
 )
 
 
@@ -140,7 +141,7 @@ class HullReport:
         """One row per body (:data:`CSV_COLUMNS`)."""
         from meshcol.io.report import dumps_csv
 
-        return dumps_csv(self.bodies, CSV_COLUMNS)
+        return dumps_csv([dict(row, units=self.units) for row in self.bodies], CSV_COLUMNS)
 
 
 def out_dir_paths(out_dir: str | os.PathLike[str], names: Sequence[str]) -> list[str]:

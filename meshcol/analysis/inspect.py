@@ -17,6 +17,7 @@ import numpy as np
 from meshcol.errors import InvalidMeshError
 from meshcol.geometry.topology import component_count, duplicate_face_count, edge_table
 from meshcol.geometry.triangles import degenerate_faces
+from meshcol.io.report import vector_columns
 from meshcol.types import Body
 
 __all__ = [
@@ -470,9 +471,9 @@ CSV_COLUMNS = (
     "watertight",
     "winding_consistent",
     "volume",
-    "bounds_min",
-    "bounds_max",
-    "size",
+    *vector_columns("bounds_min"),
+    *vector_columns("bounds_max"),
+    *vector_columns("size"),
     "degenerate_faces",
     "duplicate_faces",
     "boundary_edges",
@@ -485,6 +486,7 @@ CSV_COLUMNS = (
     "declared_units",
     "findings",
     "failed_rules",
+    "units",
 )
 
 
@@ -566,11 +568,18 @@ class InspectReport:
         return dumps_json(self.to_dict())
 
     def to_csv(self) -> str:
-        """One row per body (:data:`CSV_COLUMNS`); bounds split into min and max."""
-        from meshcol.io.report import dumps_csv
+        """One row per body (:data:`CSV_COLUMNS`): bounds and size split into ``_x/_y/_z``
+        columns, as every command's CSV; findings space-separated."""
+        from meshcol.io.report import dumps_csv, split_vectors
 
+        sizes = {"bounds_min": 3, "bounds_max": 3, "size": 3}
         flat = [
-            dict(row, bounds_min=row["bounds"][0], bounds_max=row["bounds"][1])
+            split_vectors(
+                dict(
+                    row, bounds_min=row["bounds"][0], bounds_max=row["bounds"][1], units=self.units
+                ),
+                sizes,
+            )
             for row in self.bodies
         ]
         return dumps_csv(flat, CSV_COLUMNS)

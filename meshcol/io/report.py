@@ -27,6 +27,8 @@ __all__ = [
     "emit",
     "envelope",
     "report_format",
+    "split_vectors",
+    "vector_columns",
 ]
 
 #: Version of the report layout shared by every command's JSON report (see
@@ -143,8 +145,35 @@ def dumps_json(obj: Any) -> str:
     return json.dumps(_finite_or_none(obj), sort_keys=True, indent=2, allow_nan=False) + "\n"
 
 
+#: Column suffixes of a vector or matrix split over several CSV columns, by its length.
+_SUFFIXES = {
+    3: ("x", "y", "z"),
+    16: tuple(f"{row}{column}" for row in range(4) for column in range(4)),
+}
+
+
+def vector_columns(name: str, size: int = 3) -> list[str]:
+    """The CSV columns of a vector (``point_x``, ``point_y``, ``point_z``) or of a 4x4 pose,
+    row-major (``pose_a_00`` ... ``pose_a_33``): the one CSV convention of every command."""
+    return [f"{name}_{suffix}" for suffix in _SUFFIXES[size]]
+
+
+def split_vectors(row: Mapping[str, Any], sizes: Mapping[str, int]) -> dict[str, Any]:
+    """``row`` with each vector or matrix field of ``sizes`` spread over
+    :func:`vector_columns` (a missing or None value gives empty cells)."""
+    flat = dict(row)
+    for name, size in sizes.items():
+        value = flat.pop(name, None)
+        if value is not None and size == 16:
+            value = [x for line in value for x in line]
+        values = [None] * size if value is None else list(value)
+        flat.update(zip(vector_columns(name, size), values))
+    return flat
+
+
 def dumps_csv(rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> str:
-    """CSV text with a header row; lists become space-separated numbers, None an empty cell."""
+    """CSV text with a header row; one number per cell (vectors are split by
+    :func:`split_vectors`), lists of names space-separated, None an empty cell."""
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(columns)
