@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import importlib
 import sys
+from collections.abc import Sequence
 from typing import Any, NoReturn
 
 import click
@@ -46,12 +47,30 @@ class MeshcolGroup(click.Group):
         module_name, attr = target.split(":")
         return getattr(importlib.import_module(module_name), attr)
 
-    def main(self, *args: Any, standalone_mode: bool = True, **kwargs: Any) -> Any:
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        """The command list, each with its whole one-line description (never cut off)."""
+        rows = []
+        for name in self.list_commands(ctx):
+            command = self.get_command(ctx, name)
+            if command is not None and not command.hidden:
+                rows.append((name, command.get_short_help_str(limit=1000)))
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
+
+    def main(
+        self,
+        args: Sequence[str] | None = None,
+        prog_name: str | None = None,
+        complete_var: str | None = None,
+        standalone_mode: bool = True,
+        **extra: Any,
+    ) -> Any:
         """Run the command line; usage errors become one ``meshcol: error:`` line, exit 2."""
+        run = super().main
         if not standalone_mode:
-            return super().main(*args, standalone_mode=False, **kwargs)
+            return run(args, prog_name, complete_var, standalone_mode=False, **extra)
         try:
-            code = super().main(*args, standalone_mode=False, **kwargs)
+            code = run(args, prog_name, complete_var, standalone_mode=False, **extra)
         except click.ClickException as exc:
             fail(usage_message(exc))
         except click.Abort:
@@ -107,7 +126,8 @@ def main(debug: bool) -> None:
 
     \b
     Examples:
-      meshcol check level/scene.json --report level.json
+      meshcol check level/scene.json --report level.json     the main job: every pair
+      meshcol check level.json --baseline last.json          fail only on what got worse
       meshcol inspect props/*.obj --fail-on not-watertight
       meshcol hull chair.obj --max-vertices 64 -o chair_hull.obj
       meshcol COMMAND -h      help and examples for one command

@@ -15,7 +15,9 @@ FAIL_ON_CHOICES = tuple(FAIL_ON)
 SHAPE_CHOICES = COLLIDER_KINDS
 
 
-@click.command("check")
+@click.command(
+    "check", short_help="Every pair of bodies: apart, clearance, contact, penetrating or contained."
+)
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
 @click.option(
     "--shape",

@@ -100,15 +100,17 @@ def report_options(
     return decorate
 
 
-def report_format(report: str | None, fmt: str | None) -> str:
+def report_format(report: str | None, fmt: str | None, format_option: bool = True) -> str:
     """The report's format, or a usage error for an unknown ``--report`` extension or a
-    ``--format`` that contradicts it (``--report out.xml`` never silently writes JSON)."""
+    ``--format`` that contradicts it (``--report out.xml`` never silently writes JSON).
+    ``format_option``: the command has ``--format json|csv`` (the message suggests it)."""
     from meshcol.io.report import report_format as pick
 
     try:
         return pick(report, fmt)
     except ValueError as exc:
-        raise click.BadParameter(str(exc), param_hint="'--report'") from None
+        hint = " (or give --format json|csv)" if format_option and fmt is None else ""
+        raise click.BadParameter(f"{exc}{hint}", param_hint="'--report'") from None
 
 
 def check_outputs(

@@ -19,7 +19,9 @@ from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
 
 
 @click.command(
-    "hull", context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100}
+    "hull",
+    short_help="Convex hull of each body, optionally within a vertex budget.",
+    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
 )
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
 @click.option(

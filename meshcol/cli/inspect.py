@@ -32,7 +32,9 @@ def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) 
 
 
 @click.command(
-    "inspect", context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100}
+    "inspect",
+    short_help="Mesh health of each body: fit to be a collider?",
+    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
 )
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
 @report_options(default="the report on stdout; a summary table on stderr")

@@ -19,7 +19,9 @@ from meshcol.cli.common import (
 
 
 @click.command(
-    "sweep", context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100}
+    "sweep",
+    short_help="First contact of moving bodies (time of impact) and the hits that tunnel.",
+    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
 )
 @click.argument("manifest", metavar="MANIFEST")
 @click.option(

@@ -216,8 +216,7 @@ def report_format(path: str | None, fmt: str | None) -> str:
         return fmt
     if extension and implied is None:
         raise ValueError(
-            f"unknown report extension {extension!r} in {path!r} (expected .json or .csv, or "
-            "give --format)"
+            f"unknown report extension {extension!r} in {path!r}: expected .json or .csv"
         )
     return implied or "json"
 

@@ -641,7 +641,9 @@ def _check_world(body: Body, label: str, source: str) -> None:
         try:
             check_magnitude(world, "world vertex", None)
         except MeshcolError as error:
-            mesh = f" (mesh {os.path.basename(body.source)!r})" if body.source != source else ""
+            mesh = ""
+            if body.source is not None and body.source != source:
+                mesh = f" (mesh {os.path.basename(body.source)!r})"
             raise SceneError(f"{label}{when}: {error.message}{mesh}", source) from None
 
 
