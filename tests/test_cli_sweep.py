@@ -236,7 +236,7 @@ def test_cli_bad_tolerance_is_a_usage_error(tmp_path):
     result = CliRunner().invoke(main, ["sweep", "scene.json", "--tolerance", "-1"])
     assert result.exit_code == 2
     assert result.stderr == (
-        "meshcol: error: invalid value for '--tolerance': '-1' is not in the range 0 < x "
+        "meshcol: error: invalid value for '--tolerance': -1.0 is not in the range x>0 "
         "(see 'meshcol sweep -h')\n"
     )
 

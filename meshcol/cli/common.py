@@ -53,17 +53,18 @@ class FiniteFloat(click.ParamType):
         low = self.min is not None and (number <= self.min if self.min_open else number < self.min)
         high = self.max is not None and (number >= self.max if self.max_open else number > self.max)
         if low or high:
-            self.fail(f"{value!r} is not in the range {self._range()}", param, ctx)
+            self.fail(f"{number} is not in the range {self._range()}", param, ctx)
         return number
 
     def _range(self) -> str:
-        parts = []
-        if self.min is not None:
-            parts.append(f"{self.min:g}{' <' if self.min_open else ' <='}")
-        parts.append("x")
-        if self.max is not None:
-            parts.append(f"{'< ' if self.max_open else '<= '}{self.max:g}")
-        return " ".join(parts)
+        """As click's ranges: ``x>=0``, ``x>0``, ``0<x<=1``."""
+        low = "<" if self.min_open else "<="
+        high = "<" if self.max_open else "<="
+        if self.max is None:
+            return f"x{'>' if self.min_open else '>='}{self.min:g}" if self.min is not None else "x"
+        if self.min is None:
+            return f"x{high}{self.max:g}"
+        return f"{self.min:g}{low}x{high}{self.max:g}"
 
     def __repr__(self) -> str:
         return f"FiniteFloat({self._range()})"
