@@ -292,9 +292,9 @@ def test_hard_link_is_the_same_file(tmp_path: Path, monkeypatch) -> None:
 def test_huge_quaternion_is_a_rotation_not_zero(tmp_path: Path) -> None:
     """A quaternion of 1e308 components is finite and non-zero: it means the same rotation as
     its normalised form (the norm used to overflow and the message said 'must not be zero')."""
-    from meshcol.io.scene import rotation_from_quaternion
-
     import numpy as np
+
+    from meshcol.io.scene import rotation_from_quaternion
 
     big = rotation_from_quaternion([1e308, 1e308, 0, 0])
     np.testing.assert_allclose(big, rotation_from_quaternion([1, 1, 0, 0]), atol=1e-15)
@@ -505,3 +505,20 @@ def test_csv_has_one_number_per_cell_and_units(tmp_path: Path, monkeypatch, comm
         assert rows and rows[0]["units"] == "m"
     if command.startswith("inspect"):
         assert {"bounds_min_x", "bounds_max_z", "size_y"} <= set(header)
+
+
+def test_progress_heartbeat_shows_a_long_silent_step() -> None:
+    """A step that sends no message for longer than the interval (one 26 s file) still
+    prints lines: the heartbeat repeats the last message."""
+    import time
+
+    stream = io.StringIO()
+    progress = Progress(stream, delay=0.2, interval=0.2, command="decompose", heartbeat=True)
+    time.sleep(1.3)
+    progress.done()
+    lines = stream.getvalue().splitlines()
+    assert len(lines) >= 2
+    assert all(line.startswith("meshcol: decompose: working (") for line in lines)
+    after = stream.getvalue()
+    time.sleep(0.3)
+    assert stream.getvalue() == after  # stopped

@@ -131,7 +131,7 @@ def check(
             raise click.BadParameter(str(exc), param_hint="'--ignore'") from None
     check_outputs(inputs, [("--report", report)], baseline=baseline)
     fmt = report_format(report, fmt)
-    progress = Progress()
+    progress = Progress(command="check", heartbeat=True)
     try:
         result = run_check(
             list(inputs),

@@ -6,6 +6,7 @@ import math
 import os
 import re
 import sys
+import threading
 import time
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any
@@ -140,7 +141,9 @@ class Progress:
     On a terminal the latest message is redrawn in place, with elapsed time and, for a
     message that counts ``N/M``, a bar and an estimate of the time left. On anything else
     (CI logs, pipes) a plain line is printed every :data:`PROGRESS_INTERVAL` seconds. Both
-    start only after :data:`PROGRESS_DELAY` seconds, so short runs print nothing extra.
+    start only after :data:`PROGRESS_DELAY` seconds, so short runs print nothing extra. A
+    heartbeat thread repeats the latest message while the library is busy between two
+    messages (a single 26 s file still shows that the run is alive).
 
     Parameters
     ----------
@@ -150,6 +153,11 @@ class Progress:
         Seconds before the first message, and between lines off a terminal.
     clock : callable, optional
         Returns seconds (tests pass a fake clock).
+    command : str, optional
+        The command, prefixed to messages that do not start with it (``meshcol: check: ...``);
+        the heartbeat says ``COMMAND: working`` before the first message.
+    heartbeat : bool
+        Start the heartbeat thread (off for a fake clock).
     """
 
     def __init__(
@@ -158,6 +166,8 @@ class Progress:
         delay: float = PROGRESS_DELAY,
         interval: float = PROGRESS_INTERVAL,
         clock: Callable[[], float] = time.perf_counter,
+        command: str | None = None,
+        heartbeat: bool = False,
     ) -> None:
         self.stream = stream if stream is not None else sys.stderr
         self.live = bool(getattr(self.stream, "isatty", lambda: False)())
@@ -166,27 +176,50 @@ class Progress:
         self.delay = delay
         self.interval = interval
         self.last_line: float | None = None
+        self.command = command
+        self.last_text = None if command is None else "working"
         self.shown = False
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        if heartbeat:
+            self._thread = threading.Thread(target=self._beat, name="meshcol-progress", daemon=True)
+            self._thread.start()
 
     def __call__(self, text: str) -> None:
         self.message(text)
 
+    def _beat(self) -> None:
+        period = min(self.interval, 1.0)
+        while not self._stop.wait(period):
+            if self.last_text is not None:
+                self.message(self.last_text)
+
     def message(self, text: str) -> None:
         """Show ``text`` (redrawn on a terminal, a line every few seconds elsewhere)."""
-        now = self.clock()
-        elapsed = now - self.start
-        if elapsed < self.delay:
-            return
-        if not self.live and self.last_line is not None and now - self.last_line < self.interval:
-            return
-        line = f"meshcol: {text}{self._status(text, elapsed)}"
-        if self.live:
-            self.stream.write(f"\r\033[K{line}")
-        else:
-            self.stream.write(line + "\n")
-            self.last_line = now
-        self.stream.flush()
-        self.shown = True
+        with self._lock:
+            self.last_text = text
+            now = self.clock()
+            elapsed = now - self.start
+            if elapsed < self.delay or self._stop.is_set():
+                return
+            if (
+                not self.live
+                and self.last_line is not None
+                and now - self.last_line < self.interval
+            ):
+                return
+            prefix = "meshcol: "
+            if self.command is not None and not text.startswith(f"{self.command}:"):
+                prefix += f"{self.command}: "
+            line = f"{prefix}{text}{self._status(text, elapsed)}"
+            if self.live:
+                self.stream.write(f"\r\033[K{line}")
+            else:
+                self.stream.write(line + "\n")
+                self.last_line = now
+            self.stream.flush()
+            self.shown = True
 
     def _status(self, text: str, elapsed: float) -> str:
         match = _COUNT.search(text)
@@ -201,10 +234,14 @@ class Progress:
         return status + ")"
 
     def done(self) -> None:
-        """Clear the live line (off a terminal the lines stay in the log)."""
-        if self.shown and self.live:
-            self.stream.write("\r\033[K")
-            self.stream.flush()
+        """Stop the heartbeat and clear the live line (off a terminal the lines stay)."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        with self._lock:
+            if self.shown and self.live:
+                self.stream.write("\r\033[K")
+                self.stream.flush()
 
 
 def _duration(seconds: float) -> str:

@@ -188,7 +188,7 @@ def decompose_command(
     except ValueError as exc:
         raise click.BadParameter(str(exc), param_hint="'--engine-option'") from None
 
-    progress = Progress()
+    progress = Progress(command="decompose", heartbeat=True)
     try:
         result = decompose_files(
             inputs,

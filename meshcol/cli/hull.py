@@ -96,7 +96,7 @@ def hull(
 
     check_outputs(inputs, [("-o", output), ("--report", report)])
     fmt = report_format(report, fmt)
-    progress = Progress()
+    progress = Progress(command="hull", heartbeat=True)
     try:
         result = run_hull(
             list(inputs),

@@ -77,7 +77,7 @@ def inspect(
 
     check_outputs(inputs, [("--report", report)])
     fmt = report_format(report, fmt)
-    progress = Progress()
+    progress = Progress(command="inspect", heartbeat=True)
     try:
         result = run_inspect(list(inputs), fail_on=fail_on, progress=progress)
     finally:

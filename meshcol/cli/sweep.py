@@ -10,6 +10,7 @@ from meshcol.analysis.colliders import COLLIDER_KINDS
 from meshcol.analysis.sweep import FAIL_ON
 from meshcol.cli.common import (
     FiniteFloat,
+    Progress,
     check_outputs,
     plural,
     report_format,
@@ -99,14 +100,18 @@ def sweep(
     check_outputs([manifest], [("--report", report)])
     fmt = report_format(report, fmt)
     decompose_options = {} if cache_dir is None else {"cache_dir": cache_dir}
-    result = run_sweep(
-        manifest,
-        collider=shape,
-        tolerance=tolerance,
-        threads=threads,
-        decompose_options=decompose_options,
-        fail_on=fail_on,
-    )
+    progress = Progress(command="sweep", heartbeat=True)  # the library reports no steps
+    try:
+        result = run_sweep(
+            manifest,
+            collider=shape,
+            tolerance=tolerance,
+            threads=threads,
+            decompose_options=decompose_options,
+            fail_on=fail_on,
+        )
+    finally:
+        progress.done()
     emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
     click.echo(summary_lines(manifest, result), err=True)
     sys.exit(result.exit_code)
