@@ -183,6 +183,7 @@ def test_single_triangle_is_flat(corpus) -> None:
     assert result.exit_code == 0
     assert result.stderr == (
         f"meshcol: warning: {source}: body 'notenoughindices' is flat: the hull is a 2-D polygon\n"
+        "meshcol: hull: PASS: 1 hull, 3 vertices, 1 flat\n"
     )
     assert json.loads(result.stdout)["bodies"][0]["hull_faces"] == 1
 

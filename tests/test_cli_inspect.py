@@ -61,9 +61,11 @@ def test_fail_on_exits_one_after_writing_the_report(corpus, tmp_path: Path) -> N
         tmp_path / "r.json",
     )
     assert result.exit_code == 1
-    assert (
-        result.stderr.splitlines()[-1] == f"meshcol: fail: {teapot}: body 'teapot': not-watertight"
-    )
+    assert result.stderr.splitlines()[-2:] == [
+        f"meshcol: fail: {teapot}: body 'teapot': not-watertight",
+        "meshcol: inspect: FAIL: 2 bodies, 1 with findings, 1 failing --fail-on "
+        "not-watertight,duplicate-faces",
+    ]
     report = json.loads((tmp_path / "r.json").read_text())
     assert report["failed"] is True
     assert [b["failed_rules"] for b in report["bodies"]] == [[], ["not-watertight"]]
