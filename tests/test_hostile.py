@@ -171,7 +171,7 @@ CASES = [
         "sweep huge_spin.json --report r.json",
         2,
         ERR + r"huge_spin\.json: body 'b': angular_velocity x duration is 1e\+300 rad, beyond "
-        r"the limit of 1e\+06 rad \(angular_velocity \[1e\+300, 0, 0\], duration 1 s\)",
+        r"the limit of 1e\+06 rad \(angular_velocity \[1e\+300, 0, 0\], duration 1 s\) \(line 1\)",
         ["r.json"],
     ),
     # item 9: the message names the value at fault, the manifest and the body
@@ -179,20 +179,21 @@ CASES = [
         "sweep huge_velocity.json --report r.json",
         2,
         ERR + r"huge_velocity\.json: body 'b': velocity x duration is 1e\+308, beyond the "
-        r"limit of 1e\+10 \(velocity \[1e\+308, 0, 0\], duration 1 s\)",
+        r"limit of 1e\+10 \(velocity \[1e\+308, 0, 0\], duration 1 s\) \(line 1\)",
         ["r.json"],
     ),
     (
         "hull huge_scale.json --report r.json",
         2,
-        ERR + r"huge_scale\.json: body 'b': scale 1e\+300 is beyond the limit of \+/-1e\+10",
+        ERR + r"huge_scale\.json: body 'b': scale 1e\+300 is beyond the limit of \+/-1e\+10 "
+        r"\(line 1\)",
         ["r.json"],
     ),
     (
         "check huge_position.json --report r.json",
         2,
         ERR + r"huge_position\.json: body 'b': position 1e\+200 is beyond the limit of "
-        r"\+/-1e\+10",
+        r"\+/-1e\+10 \(line 1\)",
         ["r.json"],
     ),
     (
@@ -522,3 +523,31 @@ def test_progress_heartbeat_shows_a_long_silent_step() -> None:
     after = stream.getvalue()
     time.sleep(0.3)
     assert stream.getvalue() == after  # stopped
+
+
+@pytest.mark.parametrize(
+    ("name", "text", "message"),
+    [
+        (
+            "tall.json",
+            '{\n  "duration": 1,\n  "bodies": [\n    {"name": "a", "mesh": "cube.obj"},\n'
+            '    {\n      "name": "b",\n      "mesh": "cube.obj",\n'
+            '      "angular_velocity": [0, 0, 1],\n      "velocity": [1e308, 0, 0]\n    }\n  ]\n}\n',
+            "body 'b': velocity x duration is 1e+308, beyond the limit of 1e+10 "
+            "(velocity [1e+308, 0, 0], duration 1 s) (line 9)",
+        ),
+        (
+            "tall.toml",
+            '[[bodies]]\nname = "a"\nmesh = "cube.obj"\n[[bodies]]\nmesh = "cube.obj"\n'
+            'position = [1e20, 0, 0]\nname = "b"\n',
+            "body 'b': position 1e+20 is beyond the limit of +/-1e+10 (line 6)",
+        ),
+    ],
+)
+def test_magnitude_errors_name_the_line(tmp_path: Path, monkeypatch, name, text, message) -> None:
+    monkeypatch.chdir(tmp_path)
+    _workspace(tmp_path)
+    (tmp_path / name).write_text(text)
+    result = CliRunner().invoke(main, ["check", name])
+    assert result.exit_code == 2
+    assert result.stderr == f"meshcol: error: {name}: {message}\n"

@@ -13,6 +13,7 @@ import dataclasses
 import json
 import math
 import os
+import re
 import sys
 from collections.abc import Callable, Iterator, Sequence
 from functools import lru_cache
@@ -584,7 +585,7 @@ _PRIMITIVE_FIELDS = ("size", "radius", "length")
 
 def _check_magnitudes(document: dict, source: str) -> None:
     """Every length, position and motion of a valid manifest within the limits meshcol
-    computes with: one line naming the body, the field and the value."""
+    computes with: one line naming the body, the field, the value and its line."""
     duration = document.get("duration")
     for index, spec in enumerate(document["bodies"]):
         label = _body_label(document, index)
@@ -593,15 +594,25 @@ def _check_magnitudes(document: dict, source: str) -> None:
             (f"primitive.{name}", spec.get("primitive", {}).get(name)) for name in _PRIMITIVE_FIELDS
         ]
         for name, value in fields:
-            _within(value, MAX_COORDINATE, f"{label}: {name}", source)
+            values = value if isinstance(value, list) else [] if value is None else [value]
+            for v in values:
+                if abs(v) > MAX_COORDINATE:
+                    raise _at_line(
+                        f"{label}: {name} {v:.6g} is beyond the limit of +/-{MAX_COORDINATE:g}",
+                        source,
+                        spec["name"],
+                        name,
+                    )
         if "scale" in spec:
             scales = spec["scale"] if isinstance(spec["scale"], list) else [spec["scale"]]
             for value in scales:
                 if 0 < value < 1.0 / MAX_COORDINATE:
-                    raise SceneError(
+                    raise _at_line(
                         f"{label}: scale {value:.6g} is below the limit of "
                         f"{1.0 / MAX_COORDINATE:g}: the body would collapse to a point",
                         source,
+                        spec["name"],
+                        "scale",
                     )
         if duration is None:
             continue
@@ -614,18 +625,41 @@ def _check_magnitudes(document: dict, source: str) -> None:
                 continue
             motion = max(abs(v) for v in value) * duration  # Python floats: inf, never an error
             if motion > limit:
-                raise SceneError(
+                raise _at_line(
                     f"{label}: {name} x duration is {motion:.6g}{unit}, beyond the limit of "
                     f"{limit:g}{unit} ({name} {_numbers(value)}, duration {duration:g} s)",
                     source,
+                    spec["name"],
+                    name,
                 )
 
 
-def _within(value: Any, limit: float, what: str, source: str) -> None:
-    values = value if isinstance(value, list) else [] if value is None else [value]
-    for v in values:
-        if isinstance(v, (int, float)) and abs(v) > limit:
-            raise SceneError(f"{what} {v:.6g} is beyond the limit of +/-{limit:g}", source)
+def _at_line(message: str, source: str, body: str, field: str) -> SceneError:
+    """``message`` with `` (line N)``, the line of ``field`` in the body named ``body``."""
+    line = _line_of(source, body, field.split(".")[-1])
+    return SceneError(message if line is None else f"{message} (line {line})", source)
+
+
+def _line_of(source: str, body: str, field: str) -> int | None:
+    """1-based line of ``field`` within the body named ``body`` (JSON or TOML text): the
+    first after the body's name line, before the next body's; else the last before it."""
+    try:
+        lines = Path(source).read_text(encoding="utf-8-sig").splitlines()
+    except (OSError, UnicodeDecodeError):
+        return None
+    names = re.compile(r"""["']?\bname["']?\s*[:=]\s*["']([^"']*)["']""")
+    key = re.compile(r"""(?:^|[\s{,"'])""" + re.escape(field) + r"""["']?\s*[:=]""")
+    starts = [(i, m.group(1)) for i, text in enumerate(lines) for m in names.finditer(text)]
+    for k, (start, name) in enumerate(starts):
+        if name != body:
+            continue
+        end = starts[k + 1][0] if k + 1 < len(starts) else len(lines)
+        begin = starts[k - 1][0] + 1 if k > 0 else 0
+        after = [i for i in range(start, max(end, start + 1)) if key.search(lines[i])]
+        before = [i for i in range(begin, start) if key.search(lines[i])]
+        found = after[:1] or before[-1:]
+        return (found[0] if found else start) + 1
+    return None
 
 
 def _numbers(values: list) -> str:
