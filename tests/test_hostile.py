@@ -551,3 +551,36 @@ def test_magnitude_errors_name_the_line(tmp_path: Path, monkeypatch, name, text,
     result = CliRunner().invoke(main, ["check", name])
     assert result.exit_code == 2
     assert result.stderr == f"meshcol: error: {name}: {message}\n"
+
+
+def _typed_options() -> list[tuple[str, str]]:
+    """(command, option) for every option whose type rejects the word 'bogus'."""
+    import click
+
+    from meshcol.cli import COMMANDS
+    from meshcol.cli.common import FiniteFloat
+
+    found = []
+    for name in sorted(COMMANDS):
+        command = main.get_command(None, name)  # type: ignore[arg-type]
+        for option in command.params:
+            if isinstance(option, click.Option) and not option.is_flag:
+                kinds = (click.Choice, click.types._NumberParamTypeBase, FiniteFloat)
+                if isinstance(option.type, kinds):
+                    found.append((name, max(option.opts, key=len)))
+    return found
+
+
+@pytest.mark.parametrize(("command", "option"), _typed_options())
+def test_every_bad_option_value_is_one_line(tmp_path: Path, monkeypatch, command, option) -> None:
+    monkeypatch.chdir(tmp_path)
+    _workspace(tmp_path)
+    extra = ["-o", "parts"] if command == "decompose" and option not in ("-o", "--out-dir") else []
+    result = CliRunner().invoke(main, [command, "cube.obj", *extra, option, "bogus"])
+    assert result.exit_code == 2, result.output
+    assert re.fullmatch(
+        rf"meshcol: error: invalid value for '[^']*{re.escape(option)}'[^\n]*"
+        rf" \(see 'meshcol {command} -h'\)\n",
+        result.stderr,
+    ), result.stderr
+    assert not (tmp_path / "parts").exists()
