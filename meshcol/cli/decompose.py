@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import click
 
 from meshcol.cli.common import FiniteFloat
@@ -173,6 +175,7 @@ def decompose_command(
     from meshcol.decomposition.batch import decompose_files
     from meshcol.decomposition.engines import resolve_params
     from meshcol.io.report import emit
+    from meshcol.io.scene import MANIFEST_EXTENSIONS
 
     report_format(
         report, None, format_option=False
@@ -189,6 +192,8 @@ def decompose_command(
         raise click.BadParameter(str(exc), param_hint="'--engine-option'") from None
 
     progress = Progress(command="decompose", heartbeat=True)
+    if not any(os.path.splitext(p)[1].lower() in MANIFEST_EXTENSIONS for p in inputs):
+        progress(f"decompose: 0/{len(inputs)} files")  # what the heartbeat says until one is done
     try:
         result = decompose_files(
             inputs,
