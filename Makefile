@@ -48,7 +48,7 @@ lint: install-test
 
 # pytest exits 5 when it collected nothing: that fails here like any other error.
 test: lint
-	@test -d ../shared/corpus || echo "WARNING: ../shared/corpus is absent: every corpus test will SKIP (see the skip summary)"
+	@test -d ../shared/corpus || echo "WARNING: ../shared/corpus is absent: every corpus test will SKIP (the count is printed at the end)"
 	$(BIN)/pytest -q -p no:cacheprovider
 
 # The fast lane (under a minute): no slow or corpus tests, fewer hypothesis examples.

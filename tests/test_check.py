@@ -374,7 +374,10 @@ def test_cli_exit_codes_and_reports(tmp_path: Path) -> None:
     result = run(["check", str(m), "--report", str(out)])
     assert result.exit_code == 1, result.output
     assert result.stdout == ""
-    assert result.stderr.splitlines()[-1] == "FAIL: 1 pair(s) violate --fail-on"
+    assert (
+        result.stderr.splitlines()[-1]
+        == "meshcol: check: FAIL: 1 pair violates --fail-on penetration"
+    )
     data = json.loads(out.read_text())
     assert data["summary"]["passed"] is False and data["units"] == "m"
     assert run(["check", str(m), "--fail-on", "none"]).exit_code == 0
@@ -392,7 +395,9 @@ def test_cli_report_to_stdout_keeps_summary_on_stderr(tmp_path: Path) -> None:
         assert result.exit_code == 0
         data = json.loads(result.stdout)
         assert data["summary"]["candidate_pairs"] == 0
-        assert result.stderr.splitlines()[-1] == "PASS"
+        assert result.stderr.splitlines()[-1] == (
+            "meshcol: check: PASS: no pair violates --fail-on penetration"
+        )
 
 
 @pytest.mark.parametrize(
@@ -401,9 +406,9 @@ def test_cli_report_to_stdout_keeps_summary_on_stderr(tmp_path: Path) -> None:
         (["missing.json"], "meshcol: error: missing.json:"),
         (
             ["scene.json", "--ignore", "nocolon"],
-            "Invalid value for '--ignore': ignore rule must look like A:B",
+            "meshcol: error: invalid value for '--ignore': ignore rule must look like A:B",
         ),
-        (["scene.json", "--tolerance", "-1"], "Invalid value for '--tolerance'"),
+        (["scene.json", "--tolerance", "-1"], "meshcol: error: invalid value for '--tolerance'"),
         (
             ["scene.json", "--baseline", "nothere.json"],
             "meshcol: error: nothere.json: baseline report not found",

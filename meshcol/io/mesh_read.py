@@ -24,7 +24,14 @@ from meshcol.errors import InputFileError, InvalidMeshError
 from meshcol.io.off import read_off
 from meshcol.types import Body
 
-__all__ = ["MESH_EXTENSIONS", "load_mesh", "merge_vertices", "split_rigid"]
+__all__ = [
+    "MAX_COORDINATE",
+    "MESH_EXTENSIONS",
+    "check_magnitude",
+    "load_mesh",
+    "merge_vertices",
+    "split_rigid",
+]
 
 #: File extensions (lower case) that :func:`load_mesh` reads, mapped to trimesh's file type.
 MESH_EXTENSIONS: dict[str, str] = {
@@ -39,6 +46,28 @@ MESH_EXTENSIONS: dict[str, str] = {
 # A matrix whose linear part is orthonormal to this tolerance is taken as rigid as it is,
 # so exact rotations (and identity) stay exact instead of going through an SVD.
 _RIGID_TOL = 1e-12
+
+#: Largest coordinate magnitude accepted anywhere (file vertices, and world coordinates after a
+#: manifest's scale, pose and motion). Beyond it the 1e-8 merge grid of vertex positions
+#: overflows 64-bit integers (at 9.2e10) and the float64 spacing of coordinates (2e-6 at 1e10)
+#: is coarser than any contact tolerance; volumes and normals overflow long before 1e308.
+MAX_COORDINATE = 1e10
+
+
+def check_magnitude(values: np.ndarray, what: str, source: str | None) -> None:
+    """Raise :class:`InvalidMeshError` when a value of ``values`` exceeds
+    :data:`MAX_COORDINATE` in magnitude, naming the first such value (``what`` says whose)."""
+    values = np.asarray(values, dtype=np.float64)
+    over = np.abs(values) > MAX_COORDINATE
+    if over.any():
+        first = np.argwhere(over)[0]
+        where = f" {int(first[0]) + 1}" if values.ndim == 2 else ""
+        raise InvalidMeshError(
+            f"{what}{where} has coordinate {values[tuple(first)]:.6g}, beyond the limit of "
+            f"+/-{MAX_COORDINATE:g}",
+            source,
+        )
+
 
 # Vertices closer than this (per coordinate, absolute) are merged: trimesh's own merge
 # tolerance (trimesh.constants.tol.merge), so watertightness agrees with trimesh's processing.
@@ -114,6 +143,7 @@ def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]
             raise InvalidMeshError("mesh is not made of triangles", source)
         if not np.isfinite(vertices).all():
             raise InvalidMeshError("mesh has non-finite vertex coordinates", source)
+        check_magnitude(vertices, "vertex", source)
         if not np.isfinite(matrix).all():
             raise InvalidMeshError("scene graph has a non-finite transform", source)
         if faces.min() < 0 or faces.max() >= len(vertices):
