@@ -2,7 +2,7 @@
 
 Usage::
 
-    python fuzz/run.py TARGET [--seconds S | --runs N] [--artifacts DIR]
+    python fuzz/run.py TARGET [--seconds S | --runs N] [--artifacts DIR] [--seed K]
 
 ``TARGET`` is ``readers``, ``convex`` or ``meshes``. The seeds are built afresh in a temporary
 folder: for ``readers`` every sample mesh and manifest in ``samples/`` and every corpus file
@@ -83,6 +83,7 @@ def main() -> int:
     limit.add_argument("--seconds", type=int, default=60)
     limit.add_argument("--runs", type=int)
     parser.add_argument("--artifacts", type=Path, default=HERE / "crashes")
+    parser.add_argument("--seed", type=int, default=0, help="libFuzzer seed; 0 picks one")
     args = parser.parse_args()
 
     try:
@@ -104,7 +105,7 @@ def main() -> int:
         "-rss_limit_mb=4096",
         f"-max_len={MAX_SEED_BYTES + 1}",
         "-print_final_stats=1",
-        "-seed=1",
+        f"-seed={args.seed}",
     ]
     flags.append(
         f"-runs={args.runs}" if args.runs is not None else f"-max_total_time={args.seconds}"

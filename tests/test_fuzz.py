@@ -55,6 +55,8 @@ def test_short_fuzzing_run_finds_nothing(target: str, tmp_path: Path) -> None:
             target,
             "--runs",
             "1500",
+            "--seed",
+            "1",
             "--artifacts",
             str(tmp_path),
         ],
