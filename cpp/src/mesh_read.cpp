@@ -14,7 +14,6 @@
 #include <limits>
 #include <string>
 #include <string_view>
-#include <unordered_map>
 #include <utility>
 
 #include "meshcol/batch.hpp"
@@ -111,23 +110,31 @@ bool has_object_lines(const char* data, size_t size) {
     return found;
 }
 
-/// Copies the vertices `faces` (global indices) use into a new object, in the order of their
-/// global index, and renumbers the faces locally.
+/// Copies the vertices `faces` (global indices into `vertices`) use into a new object, in the
+/// order of their global index, and renumbers the faces locally. `remap` (one entry per global
+/// vertex, all -1) is scratch space, returned all -1 again.
 MeshObject gather(std::string name, const std::vector<double>& vertices,
-                  const std::vector<std::int64_t>& faces) {
+                  const std::vector<std::int64_t>& faces, std::vector<std::int64_t>& remap) {
     MeshObject object;
     object.name = std::move(name);
-    std::vector<std::int64_t> ids(faces);
-    std::sort(ids.begin(), ids.end());
-    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-    object.vertices.reserve(3 * ids.size());
-    for (const std::int64_t global : ids) {
-        const double* v = &vertices[3 * static_cast<size_t>(global)];
-        object.vertices.insert(object.vertices.end(), v, v + 3);
+    std::vector<std::int64_t> ids;
+    for (const std::int64_t global : faces) {
+        std::int64_t& slot = remap[static_cast<size_t>(global)];
+        if (slot < 0) {
+            slot = 0;
+            ids.push_back(global);
+        }
     }
-    object.faces.reserve(faces.size());
-    for (const std::int64_t global : faces)
-        object.faces.push_back(std::lower_bound(ids.begin(), ids.end(), global) - ids.begin());
+    std::sort(ids.begin(), ids.end());
+    object.vertices.resize(3 * ids.size());
+    for (size_t k = 0; k < ids.size(); ++k) {
+        remap[static_cast<size_t>(ids[k])] = static_cast<std::int64_t>(k);
+        std::memcpy(&object.vertices[3 * k], &vertices[3 * static_cast<size_t>(ids[k])],
+                    3 * sizeof(double));
+    }
+    object.faces.resize(faces.size());
+    for (size_t k = 0; k < faces.size(); ++k) object.faces[k] = remap[static_cast<size_t>(faces[k])];
+    for (const std::int64_t global : ids) remap[static_cast<size_t>(global)] = -1;
     return object;
 }
 
@@ -224,8 +231,9 @@ MeshFile parse_obj(const char* data, size_t size) {
                                                (count == 1 ? " vertex" : " vertices"));
         return file;
     }
+    std::vector<std::int64_t> remap(static_cast<size_t>(count), -1);
     for (auto& [name, faces] : objects)
-        if (!faces.empty()) file.objects.push_back(gather(std::move(name), vertices, faces));
+        if (!faces.empty()) file.objects.push_back(gather(std::move(name), vertices, faces, remap));
     return file;
 }
 
@@ -341,12 +349,15 @@ void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& fa
         }
     };
     struct KeyHash {
-        size_t operator()(const Key& k) const {
-            std::uint64_t h = 1469598103934665603ull;
-            for (std::int64_t v : k.q) {
-                h ^= static_cast<std::uint64_t>(v) + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
+        std::uint64_t operator()(const Key& k) const {
+            std::uint64_t h = 0;
+            for (std::int64_t v : k.q) {  // splitmix64 of each coordinate, chained
+                std::uint64_t z = static_cast<std::uint64_t>(v) + h + 0x9e3779b97f4a7c15ull;
+                z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+                z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+                h = z ^ (z >> 31);
             }
-            return static_cast<size_t>(h);
+            return h;
         }
     };
     const double scale = std::pow(10.0, digits);
@@ -361,18 +372,51 @@ void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& fa
         return bits | 1;
     };
 
-    std::unordered_map<Key, std::int64_t, KeyHash> first;
-    first.reserve(n);
+    // Open addressing with linear probing, kept at most half full and grown as merged vertices
+    // are found (a triangle soup has ~6x fewer than its corners). A slot holds the key's hash
+    // beside the merged index, so a probe reads the key itself only on a hash match.
+    struct Slot {
+        std::uint64_t hash;
+        std::int64_t index;  // -1: empty
+    };
+    size_t capacity = 1024;
+    std::vector<Slot> slots(capacity, Slot{0, -1});
+    std::vector<Key> keys;
+    const KeyHash hasher;
+    auto insert_slot = [&](std::uint64_t h, std::int64_t index) {
+        size_t at = h & (capacity - 1);
+        while (slots[at].index >= 0) at = (at + 1) & (capacity - 1);
+        slots[at] = Slot{h, index};
+    };
     std::vector<std::int64_t> remap(n, -1);
     std::vector<double> merged;
-    merged.reserve(vertices.size());
     for (size_t i = 0; i < n; ++i) {
         if (!used[i]) continue;
         const double* v = &vertices[3 * i];
         const Key key{{quantise(v[0]), quantise(v[1]), quantise(v[2])}};
-        auto [it, added] = first.emplace(key, static_cast<std::int64_t>(merged.size() / 3));
-        if (added) merged.insert(merged.end(), v, v + 3);
-        remap[i] = it->second;
+        const std::uint64_t h = hasher(key);
+        size_t at = h & (capacity - 1);
+        std::int64_t found = -1;
+        while (slots[at].index >= 0) {
+            if (slots[at].hash == h && keys[static_cast<size_t>(slots[at].index)] == key) {
+                found = slots[at].index;
+                break;
+            }
+            at = (at + 1) & (capacity - 1);
+        }
+        if (found < 0) {
+            found = static_cast<std::int64_t>(keys.size());
+            keys.push_back(key);
+            merged.insert(merged.end(), v, v + 3);
+            slots[at] = Slot{h, found};
+            if (2 * keys.size() > capacity) {  // grow: rehash every key
+                capacity <<= 1;
+                slots.assign(capacity, Slot{0, -1});
+                for (size_t k = 0; k < keys.size(); ++k)
+                    insert_slot(hasher(keys[k]), static_cast<std::int64_t>(k));
+            }
+        }
+        remap[i] = found;
     }
     for (std::int64_t& f : faces) f = remap[static_cast<size_t>(f)];
     vertices = std::move(merged);
@@ -396,6 +440,11 @@ std::vector<MeshFile> read_mesh_files(const std::vector<std::string>& paths,
                 continue;
             }
             buffer.clear();
+            if (std::fseek(stream, 0, SEEK_END) == 0) {
+                const long length = std::ftell(stream);
+                if (length > 0) buffer.reserve(static_cast<size_t>(length));
+                std::rewind(stream);
+            }
             char chunk[1 << 16];
             size_t got = 0;
             while ((got = std::fread(chunk, 1, sizeof chunk, stream)) > 0)
