@@ -12,9 +12,12 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <new>
 #include <string>
 #include <string_view>
 #include <utility>
+
+#include <sys/stat.h>
 
 #include "meshcol/batch.hpp"
 
@@ -422,6 +425,48 @@ void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& fa
     vertices = std::move(merged);
 }
 
+namespace {
+
+void read_one(const std::string& path, MeshFormat format, bool merge, std::vector<char>& buffer,
+              MeshFile& out) {
+    std::FILE* stream = std::fopen(path.c_str(), "rb");
+    if (stream == nullptr) {
+        const int code = errno;
+        out.status = code == ENOENT ? ReadStatus::NotFound : ReadStatus::Unreadable;
+        out.error = code == ENOENT ? "file not found"
+                                   : std::string("cannot read file: ") + std::strerror(code);
+        return;
+    }
+    struct stat info {};
+    if (fstat(fileno(stream), &info) == 0 && S_ISDIR(info.st_mode)) {
+        std::fclose(stream);
+        out.status = ReadStatus::Directory;
+        out.error = "is a directory, not a mesh file";
+        return;
+    }
+    buffer.clear();
+    if (info.st_size > 0) buffer.reserve(static_cast<size_t>(info.st_size));
+    char chunk[1 << 16];
+    size_t got = 0;
+    while ((got = std::fread(chunk, 1, sizeof chunk, stream)) > 0)
+        buffer.insert(buffer.end(), chunk, chunk + got);
+    const int code = std::ferror(stream) != 0 ? errno : 0;
+    std::fclose(stream);
+    if (code != 0) {
+        out.status = code == EISDIR ? ReadStatus::Directory : ReadStatus::Unreadable;
+        out.error = code == EISDIR ? "is a directory, not a mesh file"
+                                   : std::string("cannot read file: ") + std::strerror(code);
+        return;
+    }
+    out = format == MeshFormat::Obj ? parse_obj(buffer.data(), buffer.size())
+                                    : parse_stl(buffer.data(), buffer.size());
+    if (!out.error.empty()) out.status = ReadStatus::Corrupt;
+    if (merge && out.error.empty())
+        for (MeshObject& object : out.objects) merge_vertices(object.vertices, object.faces, 8);
+}
+
+}  // namespace
+
 std::vector<MeshFile> read_mesh_files(const std::vector<std::string>& paths,
                                       const std::vector<MeshFormat>& formats, bool merge,
                                       int threads) {
@@ -431,38 +476,14 @@ std::vector<MeshFile> read_mesh_files(const std::vector<std::string>& paths,
         std::vector<char> buffer;
         for (long long i = begin; i < end; ++i) {
             MeshFile& out = files[static_cast<size_t>(i)];
-            std::FILE* stream = std::fopen(paths[static_cast<size_t>(i)].c_str(), "rb");
-            if (stream == nullptr) {
-                const int code = errno;
-                out.status = code == ENOENT ? ReadStatus::NotFound : ReadStatus::Unreadable;
-                out.error = code == ENOENT ? "file not found"
-                                           : std::string("cannot read file: ") + std::strerror(code);
-                continue;
+            try {
+                read_one(paths[static_cast<size_t>(i)], formats[static_cast<size_t>(i)], merge,
+                         buffer, out);
+            } catch (const std::bad_alloc&) {
+                out = MeshFile{};
+                out.status = ReadStatus::Unreadable;
+                out.error = "file too large to read into memory";
             }
-            buffer.clear();
-            if (std::fseek(stream, 0, SEEK_END) == 0) {
-                const long length = std::ftell(stream);
-                if (length > 0) buffer.reserve(static_cast<size_t>(length));
-                std::rewind(stream);
-            }
-            char chunk[1 << 16];
-            size_t got = 0;
-            while ((got = std::fread(chunk, 1, sizeof chunk, stream)) > 0)
-                buffer.insert(buffer.end(), chunk, chunk + got);
-            const int code = std::ferror(stream) != 0 ? errno : 0;
-            std::fclose(stream);
-            if (code != 0) {
-                out.status = code == EISDIR ? ReadStatus::Directory : ReadStatus::Unreadable;
-                out.error = code == EISDIR ? "is a directory, not a mesh file"
-                                           : std::string("cannot read file: ") + std::strerror(code);
-                continue;
-            }
-            out = formats[static_cast<size_t>(i)] == MeshFormat::Obj
-                      ? parse_obj(buffer.data(), buffer.size())
-                      : parse_stl(buffer.data(), buffer.size());
-            if (!out.error.empty()) out.status = ReadStatus::Corrupt;
-            if (merge && out.error.empty())
-                for (MeshObject& object : out.objects) merge_vertices(object.vertices, object.faces, 8);
         }
     });
     return files;
