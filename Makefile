@@ -6,7 +6,7 @@ BIN    := $(VENV)/bin
 PIP    := $(BIN)/python -m pip --disable-pip-version-check
 BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4"
 
-.PHONY: demo test test-fast test-lowest lint install install-test bench clean
+.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -42,8 +42,8 @@ demo: install
 
 # Lint first: ruff (rules and formatting) and mypy, zero findings.
 lint: install-test
-	$(BIN)/ruff check meshcol tests benchmarks
-	$(BIN)/ruff format --check meshcol tests benchmarks
+	$(BIN)/ruff check meshcol tests benchmarks fuzz
+	$(BIN)/ruff format --check meshcol tests benchmarks fuzz
 	$(BIN)/mypy
 
 # pytest exits 5 when it collected nothing: that fails here like any other error.
@@ -64,6 +64,12 @@ test-lowest:
 	.venv-lowest/bin/python -m pip --disable-pip-version-check install -q --no-build-isolation \
 		-c .venv-lowest/constraints.txt -e ".[test]"
 	HYPOTHESIS_PROFILE=fast .venv-lowest/bin/pytest -q -p no:cacheprovider -m "not slow"
+# Fuzz every target (fuzz/targets.py) for FUZZ_SECONDS each; crashes land in fuzz/crashes/.
+FUZZ_SECONDS ?= 60
+fuzz: install-test
+	@for target in readers convex meshes; do \
+		$(BIN)/python fuzz/run.py $$target --seconds $(FUZZ_SECONDS) || exit 1; \
+	done
 
 bench: install-test
 	$(BIN)/python benchmarks/bench_narrowphase.py

@@ -120,6 +120,7 @@ SLOW_TESTS = {
     "test_tree_against_tree_equals_brute_force",
     "test_incremental_sweep_equals_brute_force_over_steps",
     "test_parts_are_convex_and_cover_the_torus",
+    "test_short_fuzzing_run_finds_nothing",
 }
 
 

@@ -253,11 +253,11 @@ def test_no_input_is_a_usage_error() -> None:
 BAD_MESHES = {
     "nan.obj": (
         "v 0 0 0\nv 1 nan 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\n",
-        "mesh has non-finite vertex coordinates",
+        "cannot parse OBJ file: line 2: non-finite vertex coordinate",
     ),
     "inf.obj": (
         "v 0 0 0\nv 1 inf 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\n",
-        "mesh has non-finite vertex coordinates",
+        "cannot parse OBJ file: line 2: non-finite vertex coordinate",
     ),
     "line.obj": (
         "v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n",

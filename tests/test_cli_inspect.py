@@ -142,12 +142,12 @@ def test_broken_manifest(tmp_path: Path, name: str) -> None:
         (
             "nan.obj",
             "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n",
-            "mesh has non-finite vertex coordinates",
+            "cannot parse OBJ file: line 2: non-finite vertex coordinate",
         ),
         (
             "inf.obj",
             "v 0 0 0\nv 1 -inf 0\nv 0 1 0\nf 1 2 3\n",
-            "mesh has non-finite vertex coordinates",
+            "cannot parse OBJ file: line 2: non-finite vertex coordinate",
         ),
         (
             "mesh.dae",

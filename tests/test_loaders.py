@@ -261,25 +261,23 @@ TETRA_VERTICES = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
     [
         (
             "f 1 2 3\nf 0 1 2\n",
-            "cannot parse OBJ file: line 6: f line: vertex index 0 (OBJ indices start at 1)",
+            "cannot parse OBJ file: line 6: face index 0 (OBJ indices start at 1)",
         ),
         (
             "f 1 2 99\n",
-            "cannot parse OBJ file: line 5: f line: vertex index 99 is out of range (the file "
-            "has 4 vertices)",
+            "cannot parse OBJ file: line 5: face index 99 but the file has 4 vertices",
         ),
         (
             "f 1/1/1 2/1/1 0/1/1\n",
-            "cannot parse OBJ file: line 5: f line: vertex index 0 (OBJ indices start at 1)",
+            "cannot parse OBJ file: line 5: face index 0 (OBJ indices start at 1)",
         ),
         (
             "f -1 -2 -5\n",
-            "cannot parse OBJ file: line 5: f line: relative vertex index -5 reaches before the "
-            "first vertex (4 defined so far)",
+            "cannot parse OBJ file: line 5: relative face index -5 but only 4 vertices precede it",
         ),
         (
             "f 1 2 x\n",
-            "cannot parse OBJ file: line 5: f line: 'x' is not a vertex index",
+            "cannot parse OBJ file: line 5: face vertex 'x' is not an index",
         ),
     ],
 )
@@ -490,3 +488,13 @@ def test_every_runtime_dependency_has_a_lower_bound_that_is_installed_or_newer()
         low = low.removesuffix(".*")
         installed = importlib.metadata.version(name)
         assert version_tuple(installed) >= version_tuple(low), (name, installed, low)
+
+
+def test_non_utf8_bad_token_is_one_line(tmp_path):
+    # the native reader's message quotes the token: its bytes are not UTF-8
+    path = tmp_path / "bad.obj"
+    path.write_bytes(TETRA_VERTICES.encode() + b"f 1 2 caf\xe9\n")
+    with pytest.raises(InvalidMeshError) as info:
+        load_mesh(path)
+    assert info.value.message == "cannot parse OBJ file: line 5: face vertex 'café' is not an index"
+    _one_error_line(_cli("inspect", str(path)), path)

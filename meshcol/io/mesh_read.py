@@ -12,7 +12,6 @@ and vertices split along UV or normal seams are merged back by position.
 from __future__ import annotations
 
 import os
-import re
 import struct
 import zlib
 from pathlib import Path
@@ -29,6 +28,7 @@ __all__ = [
     "MESH_EXTENSIONS",
     "check_magnitude",
     "load_mesh",
+    "load_meshes",
     "merge_vertices",
     "split_rigid",
 ]
@@ -129,6 +129,8 @@ def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]
     source = os.fspath(path)
     file = Path(source)
     file_type = _check_file(file, source)
+    if file_type in _NATIVE_FORMATS:
+        return load_meshes([source], merge=merge)[0]
     nodes = _read_nodes(file, file_type, source)
     if not nodes:
         raise InvalidMeshError("mesh has no faces", source)
@@ -170,6 +172,116 @@ def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]
             )
         )
     return bodies
+
+
+#: Formats the native core reads (OBJ, binary and ASCII STL), with their code in the core.
+_NATIVE_FORMATS = {"obj": 0, "stl": 1}
+_CORRUPT = 4  # the core's ReadStatus::Corrupt
+
+
+def load_meshes(
+    paths: list[str | os.PathLike[str]], *, merge: bool = True, threads: int = 0
+) -> list[list[Body]]:
+    """Load many mesh files at once: :func:`load_mesh` for each, with OBJ and STL files read
+    and parsed by the native core in parallel (GIL released).
+
+    Parameters
+    ----------
+    paths : list of str or path-like
+    merge : bool, optional
+        As :func:`load_mesh`.
+    threads : int, optional
+        Reader threads for the OBJ and STL files; 0 means all cores.
+
+    Returns
+    -------
+    list of list of Body
+        One list per path, in order, each as :func:`load_mesh` returns it.
+
+    Raises
+    ------
+    InputFileError, InvalidMeshError
+        As :func:`load_mesh`, for the first path (in order) that fails.
+
+    Notes
+    -----
+    The native readers: OBJ ``v`` and ``f`` lines (any encoding; comments, ``vt``, ``vn``,
+    materials and everything else skipped), polygons fan-triangulated, 1-based or negative
+    (relative) indices, never 0 or out of range; ``o`` lines start bodies, or ``g`` lines when
+    the file has none. STL: binary when the size is 84 + 50 x the triangle count, else ASCII
+    (one body per ``solid``). Other formats go through trimesh, one file at a time.
+    """
+    from meshcol._native import core
+
+    sources = [os.fspath(p) for p in paths]
+    types = []
+    for source in sources:
+        try:
+            types.append(_file_type(source))
+        except InputFileError:
+            _check_file(Path(source), source)  # a missing file or a directory says so first
+            raise
+    native = [i for i, t in enumerate(types) if t in _NATIVE_FORMATS]
+    out: list[list[Body] | None] = [None] * len(sources)
+    if native:
+        vertices, faces, v_off, f_off, owner, raw_names, status, raw_errors = (
+            core.read_mesh_files(
+                [sources[i] for i in native],
+                [_NATIVE_FORMATS[types[i]] for i in native],
+                merge=merge,
+                threads=threads,
+            )
+        )
+        names = [_text(n) for n in raw_names]
+        errors = [_text(e) for e in raw_errors]
+        # one vectorised pass finds the objects with a coordinate beyond the limit
+        big_rows = np.flatnonzero((np.abs(vertices) > MAX_COORDINATE).any(axis=1))
+        big = (
+            set(np.searchsorted(v_off, big_rows, side="right").tolist()) if len(big_rows) else set()
+        )
+        per_file: list[list[int]] = [[] for _ in native]
+        for k, f in enumerate(owner.tolist()):
+            per_file[f].append(k)
+        for j, i in enumerate(native):
+            if status[j] == _CORRUPT:
+                raise InvalidMeshError(
+                    f"cannot parse {types[i].upper()} file: {errors[j]}", sources[i]
+                )
+            if status[j] != 0:
+                raise InputFileError(errors[j], sources[i])
+            objects = per_file[j]
+            if not objects:
+                raise InvalidMeshError("mesh has no faces", sources[i])
+            stem = Path(sources[i]).stem
+            used: set[str] = set()
+            bodies = []
+            for k in objects:
+                if k + 1 in big:
+                    check_magnitude(vertices[v_off[k] : v_off[k + 1]], "vertex", sources[i])
+                name = names[k] or ("default" if types[i] == "obj" else stem)
+                full = _unique(stem if len(objects) == 1 else f"{stem}/{name}", used)
+                bodies.append(
+                    Body(
+                        name=full,
+                        source=sources[i],
+                        vertices=vertices[v_off[k] : v_off[k + 1]],
+                        faces=faces[f_off[k] : f_off[k + 1]],
+                        pose=np.eye(4),
+                    )
+                )
+            out[i] = bodies
+    for i in range(len(sources)):
+        if out[i] is None:
+            out[i] = load_mesh(sources[i], merge=merge)
+    return out  # type: ignore[return-value]
+
+
+def _text(data: bytes) -> str:
+    """Bytes of a file as text: UTF-8, else Latin-1 (which maps every byte)."""
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("latin-1")
 
 
 def split_rigid(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
@@ -237,17 +349,21 @@ def merge_vertices(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray,
     Positions are compared after rounding to 8 decimals, trimesh's merge tolerance, and
     only positions count: normals and UVs are ignored, so UV seams close.
     """
-    from trimesh.grouping import unique_rows
+    from meshcol._native import core
 
-    vertices = np.asarray(vertices, dtype=np.float64)
-    faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    used, corner = np.unique(faces.ravel(), return_inverse=True)
-    if len(used) == 0:
-        return np.zeros((0, 3)), faces
-    # keep_order: the first of each group of equal positions, in file order
-    keep, group = unique_rows(vertices[used], digits=_MERGE_DIGITS, keep_order=True)
-    merged_faces = np.asarray(group, dtype=np.int64)[corner].reshape(-1, 3)
-    return vertices[used][keep], merged_faces
+    vertices = np.ascontiguousarray(vertices, dtype=np.float64).reshape(-1, 3)
+    faces = np.ascontiguousarray(faces, dtype=np.int64).reshape(-1, 3)
+    return core.merge_vertices(vertices, faces, _MERGE_DIGITS)
+
+
+def _file_type(source: str) -> str:
+    """The file type of ``source`` from its extension (InputFileError when unknown)."""
+    file_type = MESH_EXTENSIONS.get(os.path.splitext(source)[1].lower())
+    if file_type is None:
+        known = ", ".join(MESH_EXTENSIONS)
+        suffix = os.path.splitext(source)[1] or "(none)"
+        raise InputFileError(f"unknown mesh file extension {suffix!r} (expected {known})", source)
+    return file_type
 
 
 def _check_file(file: Path, source: str) -> str:
@@ -255,11 +371,7 @@ def _check_file(file: Path, source: str) -> str:
         raise InputFileError("file not found", source)
     if file.is_dir():
         raise InputFileError("is a directory, not a mesh file", source)
-    file_type = MESH_EXTENSIONS.get(file.suffix.lower())
-    if file_type is None:
-        known = ", ".join(MESH_EXTENSIONS)
-        suffix = file.suffix or "(none)"
-        raise InputFileError(f"unknown mesh file extension {suffix!r} (expected {known})", source)
+    file_type = _file_type(source)
     try:
         with open(file, "rb"):
             pass
@@ -269,14 +381,12 @@ def _check_file(file: Path, source: str) -> str:
 
 
 def _read_nodes(file: Path, file_type: str, source: str) -> list:
-    """``(name, matrix, vertices, faces)`` of every mesh node of a file, in file order."""
+    """``(name, matrix, vertices, faces)`` of every mesh node of a PLY, OFF or glTF/GLB file,
+    in file order (OBJ and STL go to the core's readers, :func:`load_meshes`)."""
     if file_type == "off":
         off_vertices, off_faces = read_off(_read_bytes(file, source), source)
         return [(file.stem, np.eye(4), off_vertices, off_faces)] if len(off_faces) else []
-    text = None
-    if file_type == "obj":
-        text = _obj_text(_read_bytes(file, source), source)
-    scene = _read_scene(file, file_type, source, text)
+    scene = _read_scene(file, file_type, source)
     nodes = []
     for node in scene.graph.nodes_geometry:
         matrix, geometry_name = scene.graph[node]
@@ -284,13 +394,9 @@ def _read_nodes(file: Path, file_type: str, source: str) -> list:
         faces = getattr(geometry, "faces", None)
         if faces is None or len(faces) == 0:
             continue  # point clouds, paths, faceless meshes: not bodies
-        name = geometry_name if file_type in ("obj", "stl", "ply") else str(node)
-        if file_type == "obj" and name == file.name:
-            name = "default"  # faces before any `o`/`g` line: OBJ's default group
+        name = geometry_name if file_type == "ply" else str(node)
         nodes.append((name, np.asarray(matrix, dtype=np.float64), geometry.vertices, faces))
-    if text is not None:
-        nodes = _obj_file_order(text, nodes)
-    elif file_type in ("glb", "gltf"):
+    if file_type in ("glb", "gltf"):
         nodes = _gltf_file_order(file, file_type, nodes)
     return nodes
 
@@ -302,152 +408,14 @@ def _read_bytes(file: Path, source: str) -> bytes:
         raise InputFileError(f"cannot read file: {error.strerror or error}", source) from None
 
 
-def _obj_text(data: bytes, source: str) -> str:
-    """The text of an OBJ file, its face indices checked.
-
-    UTF-8 (a byte-order mark is dropped); a file that is not UTF-8 is read as Latin-1, which
-    maps every byte, so a comment or a name in a legacy encoding loads. Bytes that no text
-    file holds (NUL and other C0 controls but tab, newline, carriage return, form feed) make
-    it binary data, not OBJ.
-    """
-    try:
-        text = data.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        if _BINARY.search(data):
-            raise InvalidMeshError(
-                "cannot parse OBJ file: binary data, not OBJ text", source
-            ) from None
-        text = data.decode("latin-1")
-    return _check_obj_faces(text, source)
-
-
-# C0 control bytes that never appear in a text file (tab, LF, VT, FF and CR excluded)
-_BINARY = re.compile(rb"[\x00-\x08\x0e-\x1f]")
-_OBJ_LINE = re.compile(r"^[ \t]*(v|f|l|p)[ \t]", flags=re.MULTILINE)
-
-
-_OBJ_ELEMENTS = re.compile(r"^[ \t]*[flp][ \t]+([^\n#]*)", flags=re.MULTILINE)
-_OBJ_VERTEX = re.compile(r"^[ \t]*v[ \t]", flags=re.MULTILINE)
-
-
-def _check_obj_faces(text: str, source: str) -> str:
-    """:func:`_check_obj_faces_by_line` without a Python loop over lines when every index
-    is a positive one in range (the common case); any other file goes line by line."""
-    import warnings
-
-    elements = "\n".join(_OBJ_ELEMENTS.findall(text))
-    if "-" in elements or "\\" in elements:
-        return _check_obj_faces_by_line(text, source)
-    if "/" in elements:
-        elements = re.sub(r"/\S*", "", elements)  # v/vt/vn: the vertex index only
-    tokens = len(elements.split())
-    try:
-        with warnings.catch_warnings():
-            # a token that is not a number ends the parse (a warning, or an error in numpy 2.4)
-            warnings.simplefilter("ignore")
-            index = np.fromstring(elements, dtype=np.int64, sep=" ") if tokens else np.zeros(0)
-    except ValueError:
-        return _check_obj_faces_by_line(text, source)
-    if len(index) != tokens or (tokens and index.min() < 1):
-        return _check_obj_faces_by_line(text, source)
-    if tokens:
-        # vertex lines at the start of a line: a lower bound of the count, exact in practice
-        quick = text.count("\nv ") + text.count("\nv\t") + text.startswith(("v ", "v\t"))
-        if index.max() > quick and index.max() > len(_OBJ_VERTEX.findall(text)):
-            return _check_obj_faces_by_line(text, source)
-    return text
-
-
-def _check_obj_faces_by_line(text: str, source: str) -> str:
-    """Refuse face (and line, point) indices that name no vertex, with the line number;
-    return the text with relative indices made absolute.
-
-    OBJ indices count from 1; a negative index counts back from the last vertex defined so
-    far (-1 is the latest). trimesh counts negative indices from the end of the whole file
-    instead, so they are rewritten here. 0 is no vertex (trimesh would take it as the last
-    vertex), and an index beyond the vertices is out of range.
-    """
-    defined = 0  # vertices so far
-    total = sum(1 for m in _OBJ_LINE.finditer(text) if m.group(1) == "v")
-    edits: list[tuple[int, int, str]] = []  # (start, end, absolute form) of lines to rewrite
-    for match in _OBJ_LINE.finditer(text):
-        keyword = match.group(1)
-        if keyword == "v":
-            defined += 1
-            continue
-        end = text.find("\n", match.end())
-        end = end if end >= 0 else len(text)
-        body = text[match.end() : end].split("#", 1)[0]
-        relative = False
-        for token in body.split():
-            if token == "\\":
-                continue  # a continuation: the rest is on the next line
-            head = token.split("/", 1)[0]
-            try:
-                index = int(head)
-            except ValueError:
-                problem = f"{keyword} line: {token[:40]!r} is not a vertex index"
-            else:
-                if index == 0:
-                    problem = f"{keyword} line: vertex index 0 (OBJ indices start at 1)"
-                elif index > total:
-                    problem = (
-                        f"{keyword} line: vertex index {index} is out of range (the file has "
-                        f"{total} vertices)"
-                    )
-                elif index < 0 and -index > defined:
-                    problem = (
-                        f"{keyword} line: relative vertex index {index} reaches before the "
-                        f"first vertex ({defined} defined so far)"
-                    )
-                else:
-                    relative |= index < 0
-                    continue
-            line = text.count("\n", 0, match.start()) + 1
-            raise InvalidMeshError(f"cannot parse OBJ file: line {line}: {problem}", source)
-        if relative:
-            tokens = []
-            for token in body.split():
-                head, slash, tail = token.partition("/")
-                if head.lstrip("-").isdigit() and int(head) < 0:
-                    token = f"{defined + int(head) + 1}{slash}{tail}"
-                tokens.append(token)
-            edits.append((match.end(), end, " ".join(tokens)))
-    if not edits:
-        return text
-    pieces, last = [], 0
-    for start, end, replacement in edits:
-        pieces += [text[last:start], replacement]
-        last = end
-    pieces.append(text[last:])
-    return "".join(pieces)
-
-
-def _read_scene(file: Path, file_type: str, source: str, text: str | None):
+def _read_scene(file: Path, file_type: str, source: str):
     import io
 
     import trimesh
 
     options: dict = {"process": False}
     stream = None
-    if file_type == "obj":
-        # Geometry only: no .mtl, no textures (so no Pillow), one body per object, or per
-        # group when the file has no objects. The text is decoded here (trimesh would guess
-        # the encoding with an optional package) and handed over as UTF-8.
-        assert text is not None
-        has_objects = re.search(r"^\s*o\s", text, flags=re.MULTILINE) is not None
-        options.update(
-            skip_materials=True,
-            group_material=False,
-            split_objects=True,
-            split_groups=not has_objects,
-        )
-        stream = io.BytesIO(text.encode("utf-8"))
-    elif file_type == "stl":
-        text_bytes = _check_stl(file, source)
-        if text_bytes is not None:
-            stream = io.BytesIO(text_bytes)
-    elif file_type == "ply":
+    if file_type == "ply":
         header = _ply_bytes(file, source)
         if header is not None:
             stream = io.BytesIO(header)
@@ -471,31 +439,6 @@ def _read_scene(file: Path, file_type: str, source: str, text: str | None):
         raise InvalidMeshError(
             f"cannot parse {file_type.upper()} file: {detail[:200]}", source
         ) from None
-
-
-def _check_stl(file: Path, source: str) -> bytes | None:
-    """Reject what is neither a binary STL nor text before trimesh guesses an encoding.
-
-    Returns None for a binary STL, else the text as UTF-8 bytes (a Latin-1 solid name is
-    re-encoded, so trimesh reads it without guessing).
-    """
-    size = file.stat().st_size
-    with open(file, "rb") as stream:
-        header = stream.read(84)
-    if size >= 84 and 84 + 50 * struct.unpack("<I", header[80:84])[0] == size:
-        return None
-    data = _read_bytes(file, source)
-    try:
-        data.decode("utf-8")
-        return data
-    except UnicodeDecodeError:
-        if _BINARY.search(data):
-            raise InvalidMeshError(
-                "cannot parse STL file: neither binary STL (size does not match the triangle "
-                "count) nor ASCII text",
-                source,
-            ) from None
-        return data.decode("latin-1").encode("utf-8")
 
 
 def _ply_bytes(file: Path, source: str) -> bytes | None:
@@ -634,19 +577,6 @@ def _check_gltf(document: Any, kind: str, source: str) -> None:
                 "GLB file may be its binary chunk)",
                 source,
             )
-
-
-def _obj_file_order(text: str, nodes: list) -> list:
-    """trimesh returns OBJ objects last-first: put them back in the order the file has them."""
-
-    def position(item) -> int:
-        name = item[0]
-        if name == "default":
-            return -1
-        match = re.search(rf"^\s*[og]\s+{re.escape(name)}\s*$", text, flags=re.MULTILINE)
-        return match.start() if match else len(text)
-
-    return sorted(nodes, key=position)
 
 
 def _gltf_file_order(file: Path, file_type: str, nodes: list) -> list:
