@@ -224,13 +224,11 @@ def load_meshes(
     native = [i for i, t in enumerate(types) if t in _NATIVE_FORMATS]
     out: list[list[Body] | None] = [None] * len(sources)
     if native:
-        vertices, faces, v_off, f_off, owner, raw_names, status, raw_errors = (
-            core.read_mesh_files(
-                [sources[i] for i in native],
-                [_NATIVE_FORMATS[types[i]] for i in native],
-                merge=merge,
-                threads=threads,
-            )
+        vertices, faces, v_off, f_off, owner, raw_names, status, raw_errors = core.read_mesh_files(
+            [sources[i] for i in native],
+            [_NATIVE_FORMATS[types[i]] for i in native],
+            merge=merge,
+            threads=threads,
         )
         names = [_text(n) for n in raw_names]
         errors = [_text(e) for e in raw_errors]
