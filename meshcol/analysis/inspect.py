@@ -638,7 +638,9 @@ def inspect(
 
     if _is_manifest(inputs):
         scene = load_scene(inputs[0])  # read whole: a manifest's problem stops the run
-        bodies, units = list(scene.bodies), scene.units
+        # health per mesh: each part of a body is its own mesh
+        bodies = [part for body in scene.bodies for part in body.part_bodies()]
+        units = scene.units
     else:
         bodies = [b for _, file_bodies in iter_inputs(inputs, on_error=skip) for b in file_bodies]
         units = None

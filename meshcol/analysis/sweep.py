@@ -27,8 +27,10 @@ FAIL_ON = ("hit", "none")
 MOTION = "linear translation, constant-rate rotation about the local origin"
 #: Columns of :meth:`SweepReport.to_csv`, one row per pair (poses flattened row-major).
 CSV_COLUMNS = (
-    "a",
-    "b",
+    "body_a",
+    "body_b",
+    "part_a",
+    "part_b",
     "status",
     "time_of_impact",
     "time",
@@ -56,8 +58,11 @@ class SweepHit:
 
     Attributes
     ----------
-    a, b : str
-        Body names (``a`` comes first in the scene).
+    body_a, body_b : str
+        Body names (``body_a`` comes first in the scene).
+    part_a, part_b : str or None
+        The parts of a body of several parts (``Body.parts``) that meet first; None for a
+        body of one part.
     status : TimeOfImpactStatus
         ``HIT``, ``OVERLAPPED_AT_START`` or ``FAILED``.
     time_of_impact : float
@@ -77,8 +82,10 @@ class SweepHit:
         Steps of the pair query that decided the pair.
     """
 
-    a: str
-    b: str
+    body_a: str
+    body_b: str
+    part_a: str | None
+    part_b: str | None
     status: TimeOfImpactStatus
     time_of_impact: float
     time: float | None
@@ -93,8 +100,10 @@ class SweepHit:
         """JSON-ready fields (lists for arrays, the status by name), numbers rounded to 12
         significant digits (far below the tolerance) so reports compare across machines."""
         return {
-            "a": self.a,
-            "b": self.b,
+            "body_a": self.body_a,
+            "body_b": self.body_b,
+            "part_a": self.part_a,
+            "part_b": self.part_b,
             "status": self.status.name,
             "time_of_impact": _round(self.time_of_impact),
             "time": _round(self.time),
@@ -133,7 +142,7 @@ class SweepReport:
     tolerance : float
         Contact distance used (world units).
     hits : tuple of SweepHit
-        Every body pair that is not ``SEPARATED``, sorted by (a, b) names.
+        Every body pair that is not ``SEPARATED``, sorted by (body_a, body_b) names.
     candidate_pairs : int
         Body pairs whose swept bounds overlap (the pairs the narrow phase ran on).
     part_pairs : int
@@ -153,6 +162,7 @@ class SweepReport:
     part_pairs: int
     moving: tuple[bool, ...] = field(default=())
     fail_on: str = "hit"
+    warnings: tuple[str, ...] = ()
 
     @property
     def failed(self) -> bool:
@@ -198,9 +208,10 @@ class SweepReport:
         return {
             **envelope("sweep", self.settings, self.scene.units),
             "failed": self.exit_code == 1,
+            "warnings": list(self.warnings),
             "duration": self.scene.duration,
             "bodies": [
-                {"name": b.name, "source": b.source, "moving": m}
+                {"name": b.name, "source": b.source, "parts": list(b.parts), "moving": m}
                 for b, m in zip(self.bodies, self.moving)
             ],
             "summary": self.summary,
@@ -330,10 +341,10 @@ def sweep(
             f"body '{body.name}': invalid shape or pose (NaN/inf, empty or not rigid)",
             body.source or scene.source,
         )
-    pairs = sort_and_sweep(lo - 0.5 * tol, hi + 0.5 * tol)
+    pairs = sort_and_sweep(lo - 0.5 * tol, hi + 0.5 * tol, groups=owner)  # no pair in a body
     if len(pairs):
         oa, ob = owner[pairs[:, 0]], owner[pairs[:, 1]]
-        keep = (oa != ob) & (moving[oa] | moving[ob])
+        keep = moving[oa] | moving[ob]
         pairs = pairs[keep]
         # Part pairs ordered as their bodies (a first in the scene).
         swap = owner[pairs[:, 0]] > owner[pairs[:, 1]]
@@ -371,6 +382,9 @@ def sweep(
             if len(failed) and fraction[failed].min() < fraction[best]:
                 best_status = TimeOfImpactStatus.FAILED
         t = float(fraction[best])
+        part_a, part_b = colliders.part_names(
+            [i, j], colliders.part_label[[pairs[best, 0], pairs[best, 1]]]
+        )
         poses = interpolate_pose(
             np.stack([start_body[i], start_body[j]]), np.stack([end_body[i], end_body[j]]), [t, t]
         )
@@ -381,8 +395,10 @@ def sweep(
         )
         hits.append(
             SweepHit(
-                a=bodies[i].name,
-                b=bodies[j].name,
+                body_a=bodies[i].name,
+                body_b=bodies[j].name,
+                part_a=part_a,
+                part_b=part_b,
                 status=best_status,
                 time_of_impact=t,
                 time=None if scene.duration is None else t * float(scene.duration),
@@ -394,7 +410,7 @@ def sweep(
                 iterations=int(toi.iterations[best]),
             )
         )
-    hits.sort(key=lambda h: (h.a, h.b))
+    hits.sort(key=lambda h: (h.body_a, h.body_b))
     return SweepReport(
         scene=scene,
         bodies=bodies,
@@ -405,4 +421,5 @@ def sweep(
         part_pairs=len(pairs),
         moving=tuple(bool(m) for m in moving),
         fail_on=fail_on,
+        warnings=colliders.warnings,
     )

@@ -113,6 +113,8 @@ def sweep(
     finally:
         progress.done()
     emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+    for warning in result.warnings:
+        click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_lines(manifest, result), err=True)
     sys.exit(result.exit_code)
 
@@ -132,7 +134,7 @@ def summary_lines(manifest: str, result) -> str:
         extra = ", tunnelled" if h.tunnelled else ""
         kind = "fail" if result.exit_code else "note"
         lines.append(
-            f"meshcol: {kind}: {manifest}: '{h.a}' and '{h.b}': {h.status.name} at time of "
+            f"meshcol: {kind}: {manifest}: '{h.body_a}' and '{h.body_b}': {h.status.name} at time of "
             f"impact {h.time_of_impact:.6g}{when}{extra}"
         )
     if not result.hits:

@@ -93,8 +93,10 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     Returns
     -------
     Scene
-        Bodies in manifest order (a mesh file with several bodies gives ``<name>/<sub>`` for
-        each, in file order), the manifest's ``units`` and ``duration``, ``source = path``.
+        One body per manifest entry, in manifest order: a mesh file with several objects
+        (OBJ objects or groups, glTF mesh nodes, STL solids) gives one body whose ``parts``
+        are those objects, in file order; the manifest's ``units`` and ``duration``,
+        ``source = path``.
 
     Raises
     ------
@@ -107,9 +109,11 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     Notes
     -----
     A body's world pose is ``T = [R | p]`` from ``rotation`` and ``position``; its ``scale``
-    ``S`` and any transform ``L`` a mesh file gives a sub-body are combined as ``T S L`` and
-    split again into a rigid transform and a part baked into the vertices (see
-    :func:`meshcol.io.mesh_read.split_rigid`), so every ``Body.pose`` is rigid.
+    ``S`` and any transform ``L`` the mesh file gives an object are combined as ``T S L``. For
+    a file of one object, ``S L`` is split into a rigid transform and a part baked into the
+    vertices (see :func:`meshcol.io.mesh_read.split_rigid`); for a body of several parts, each
+    part's ``S L`` is baked into its vertices and the body's pose is ``T``. Either way every
+    ``Body.pose`` is rigid.
     """
     source = os.fspath(path)
     file = Path(source)
@@ -122,7 +126,6 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
 
     bodies: list[Body] = []
     names: set[str] = set()
-    taken: set[str] = set()  # names of the bodies made so far (sub-bodies included)
     files: dict[str, list[Body]] = {}  # each mesh file is read once, however many instances
     for spec in document["bodies"]:
         label = f"body {spec['name']!r}"
@@ -140,9 +143,6 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
             new = [_primitive_body(spec, source, label, start, end, scale)]
         for body in new:
             _check_world(body, label, source)
-            if body.name in taken:
-                raise SceneError(f"{label}: body name {body.name!r} is already taken", source)
-            taken.add(body.name)
         bodies.extend(new)
     return Scene(bodies=tuple(bodies), units=units, source=source, duration=duration)
 
@@ -185,8 +185,10 @@ def load_inputs(paths: Sequence[str | os.PathLike[str]]) -> Scene:
     Returns
     -------
     Scene
-        The manifest's scene; or every body of every file in order. A name that clashes with
-        an earlier body's gets ``#2``, ``#3``... appended. ``source`` is the input path when
+        The manifest's scene (one body per manifest entry, its file's objects as its
+        parts); or, for mesh and glTF/GLB files given directly, one body per object of every
+        file, in order (``<stem>/<object>`` when a file holds several). A name that clashes
+        with an earlier body's gets ``#2``, ``#3``... appended. ``source`` is the input path when
         there is exactly one, else None; ``units`` is None without a manifest.
 
     Raises
@@ -411,27 +413,48 @@ def _mesh_bodies(
             raise SceneError(f"{label}: mesh file {mesh!r}: {error.message}", source) from None
         files[key] = loaded
     stretch = np.diag([*scale, 1.0])
-    bodies = []
-    for sub in loaded:
+    if len(loaded) == 1:
+        (sub,) = loaded
         rigid, linear = split_rigid(stretch @ sub.pose)
         vertices, faces = sub.vertices, sub.faces
         if linear is not None:
             vertices = vertices @ linear.T
             if np.linalg.det(linear) < 0:
                 faces = faces[:, ::-1]
-        sub_name = sub.name.split("/", 1)[1] if len(loaded) > 1 else None
-        bodies.append(
-            Body(
-                name=spec["name"] if sub_name is None else f"{spec['name']}/{sub_name}",
-                source=mesh_source,
-                vertices=np.ascontiguousarray(vertices),
-                faces=np.ascontiguousarray(faces),
-                pose=start @ rigid,
-                end_pose=None if end is None else end @ rigid,
-                collider=spec.get("shape"),
+        parts: tuple[str, ...] = ()
+        part_faces = None
+    else:
+        # One body of several parts: each part's node transform and the body's scale are
+        # baked into its vertices, so the parts share the body's frame and pose.
+        rigid = np.eye(4)
+        blocks_v, blocks_f, counts = [], [], []
+        base = 0
+        for sub in loaded:
+            matrix = stretch @ sub.pose
+            part_faces_local = (
+                sub.faces[:, ::-1] if np.linalg.det(matrix[:3, :3]) < 0 else sub.faces
             )
+            blocks_v.append(sub.vertices @ matrix[:3, :3].T + matrix[:3, 3])
+            blocks_f.append(part_faces_local + base)
+            counts.append(len(sub.faces))
+            base += len(sub.vertices)
+        vertices = np.concatenate(blocks_v)
+        faces = np.concatenate(blocks_f)
+        parts = tuple(sub.name.split("/", 1)[1] for sub in loaded)
+        part_faces = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    return [
+        Body(
+            name=spec["name"],
+            source=mesh_source,
+            vertices=np.ascontiguousarray(vertices),
+            faces=np.ascontiguousarray(faces),
+            pose=start @ rigid,
+            end_pose=None if end is None else end @ rigid,
+            collider=spec.get("shape"),
+            parts=parts,
+            part_faces=part_faces,
         )
-    return bodies
+    ]
 
 
 def _primitive_body(spec, source, label, start, end, scale) -> Body:
@@ -496,7 +519,7 @@ def _parse(file: Path, source: str) -> Any:
     except OSError as error:
         raise InputFileError(f"cannot read file: {error.strerror or error}", source) from None
     try:
-        text = data.decode("utf-8")
+        text = data.decode("utf-8-sig")  # a byte-order mark, as some editors write, is dropped
     except UnicodeDecodeError:
         raise SceneError("manifest is not UTF-8 text", source) from None
     document = _decode(file, text, source)
