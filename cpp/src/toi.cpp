@@ -14,7 +14,8 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 const Vec3 kNaN3{kNaN, kNaN, kNaN};
 
-// Rotation by `angle` about the unit `axis` (Rodrigues' formula).
+}  // namespace
+
 Mat3 axis_angle_matrix(const Vec3& k, double angle) {
     const double c = std::cos(angle), s = std::sin(angle), t = 1.0 - c;
     Mat3 r;
@@ -29,6 +30,8 @@ Mat3 axis_angle_matrix(const Vec3& k, double angle) {
     r.m[2][2] = c + t * k.z * k.z;
     return r;
 }
+
+namespace {
 
 // Unit quaternion (w, x, y, z) of a rotation matrix, w >= 0 (Shepperd 1978: the largest of
 // the four diagonal combinations keeps the square root well conditioned, also near pi).
@@ -93,17 +96,17 @@ ToiResult separated_result(int iterations) {
     return r;
 }
 
-// A body's motion as the pair query sees it: spheres do not turn (rotation about their own
-// centre moves no point), so their angle is 0 and their orientation the start one.
+// A body's motion as the pair query sees it: a sphere turning about its own centre moves no
+// point, so its angle is 0 and its orientation the start one.
 struct Mover {
     const ShapeView* shape;
     Motion motion;
-    double radius;  // bounding radius about the reference point (local origin)
+    double radius;  // bounding radius about the pivot (about the local origin + pivot offset)
 };
 
 Mover make_mover(const ShapeView& shape, const Motion& motion, double radius) {
-    Mover m{&shape, motion, radius};
-    if (shape.kind == ShapeKind::SPHERE && m.motion.angle != 0.0) {
+    Mover m{&shape, motion, radius + motion.pivot_offset};
+    if (shape.kind == ShapeKind::SPHERE && m.motion.pivot_offset == 0.0 && m.motion.angle != 0.0) {
         m.motion.end.rotation = m.motion.start.rotation;
         m.motion.angle = 0.0;
     }
@@ -156,11 +159,11 @@ ToiResult sphere_sphere(const Mover& a, const Mover& b, double tol) {
 // Conservative advancement from time `t` (Mirtich 1996; Zhang et al. 2006). At each step GJK
 // gives the distance d and the unit normal n (a to b) of the closest points: A lies behind the
 // plane through its closest point, B beyond the parallel plane through its own. A point of A
-// at r = R(t) p from a's reference point moves along n at speed (v_a + w_a x r).n
-// <= v_a.n + angle_a |n x k_a| |r| (w_a = angle_a k_a, constant), and the same for B along -n,
-// so the gap between the planes closes no faster than
+// at r = x - c_a(t) from a's pivot moves along n at speed (v_a + w_a x r).n
+// <= v_a.n + angle_a |n x k_a| |r| (w_a = angle_a k_a, constant over the motion whatever the
+// angle), and the same for B along -n, so the gap between the planes closes no faster than
 //   mu = (v_a - v_b).n + angle_a |n x k_a| rho_a + angle_b |n x k_b| rho_b
-// (rho: bounding radius about the reference point). Advancing by (d - tol/2) / mu keeps the
+// (rho: bounding radius about the pivot). Advancing by (d - tol/2) / mu keeps the
 // distance above tol/2 on the whole step: rigorous, so contact is never stepped over.
 ToiResult conservative_advancement(const Mover& a, const Mover& b, const ToiOptions& opt,
                                    double t, int iterations) {
@@ -333,7 +336,8 @@ ToiResult linear_cast(const Mover& a, const Mover& b, const ToiOptions& opt, boo
 }
 
 ToiResult pair_toi(const Mover& a, const Mover& b, const ToiOptions& opt) {
-    if (a.shape->kind == ShapeKind::SPHERE && b.shape->kind == ShapeKind::SPHERE)
+    if (a.shape->kind == ShapeKind::SPHERE && b.shape->kind == ShapeKind::SPHERE &&
+        a.motion.angle == 0.0 && b.motion.angle == 0.0)
         return sphere_sphere(a, b, opt.tolerance);
     if (a.motion.angle == 0.0 && b.motion.angle == 0.0 &&
         same_rotation(a.motion.start.rotation, a.motion.end.rotation) &&
@@ -350,35 +354,96 @@ ToiResult pair_toi(const Mover& a, const Mover& b, const ToiOptions& opt) {
 
 }  // namespace
 
+Vec3 shortest_rotation(const Mat3& start, const Mat3& end) {
+    if (same_rotation(start, end)) return Vec3{};
+    double q[4];
+    matrix_quaternion(start.transposed() * end, q);
+    const Vec3 xyz{q[1], q[2], q[3]};
+    const double s = norm(xyz);
+    if (!(s > 0.0)) return Vec3{};
+    // The relative rotation is about the start-frame axis; the world axis is start * axis.
+    return start * (xyz * (2.0 * std::atan2(s, q[0]) / s));
+}
+
 Motion::Motion(const Pose& start_pose, const Pose& end_pose) : start(start_pose), end(end_pose) {
+    pivot = start.translation;
     velocity = end.translation - start.translation;
-    axis_local = Vec3{1.0, 0.0, 0.0};
-    angle = 0.0;
-    if (!same_rotation(start.rotation, end.rotation)) {
-        double q[4];
-        matrix_quaternion(start.rotation.transposed() * end.rotation, q);
-        const Vec3 xyz{q[1], q[2], q[3]};
-        const double s = norm(xyz);
-        if (s > 0.0) {
-            axis_local = xyz / s;
-            angle = 2.0 * std::atan2(s, q[0]);
-        }
+    const Vec3 rotation = shortest_rotation(start.rotation, end.rotation);
+    const double a = norm(rotation);
+    if (a > 0.0) {
+        axis_world = rotation / a;
+        angle = a;
     }
-    axis_world = start.rotate(axis_local);
+}
+
+bool Motion::from_turn(const Pose& start_pose, const Pose& end_pose, const Vec3& rotation,
+                       const Vec3& pivot_point, double tolerance, Motion& out) {
+    if (!is_finite(rotation) || !is_finite(pivot_point)) return false;
+    Motion m;
+    m.start = start_pose;
+    m.end = end_pose;
+    m.pivot = pivot_point;
+    const double a = norm(rotation);
+    if (a > 0.0) {
+        m.axis_world = rotation / a;
+        m.angle = a;
+    }
+    const Mat3 turn = axis_angle_matrix(m.axis_world, m.angle);
+    const Mat3 reached = turn * start_pose.rotation;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            if (!(std::fabs(reached.m[i][j] - end_pose.rotation.m[i][j]) <= tolerance))
+                return false;
+    const Vec3 arm = start_pose.translation - pivot_point;
+    m.pivot_offset = norm(arm);
+    // T1 = c0 + v + Rot(angle) (T0 - c0), so the pivot's displacement follows from the end pose.
+    m.velocity = end_pose.translation - pivot_point - turn * arm;
+    if (!is_finite(m.velocity) || !std::isfinite(m.pivot_offset)) return false;
+    out = m;
+    return true;
 }
 
 Pose Motion::at(double t) const {
     if (t == 0.0) return start;
     if (t == 1.0) return end;
     Pose p;
-    p.translation = start.translation + velocity * t;
-    p.rotation = angle == 0.0 ? start.rotation
-                              : start.rotation * axis_angle_matrix(axis_local, angle * t);
+    if (angle == 0.0) {
+        p.rotation = start.rotation;
+        p.translation = start.translation + velocity * t;
+        return p;
+    }
+    const Mat3 turn = axis_angle_matrix(axis_world, angle * t);
+    p.rotation = turn * start.rotation;
+    p.translation = pivot + velocity * t + turn * (start.translation - pivot);
     return p;
 }
 
-Pose interpolate_pose(const Pose& start, const Pose& end, double t) {
-    return Motion(start, end).at(t);
+void make_motions(long long count, const double* start_poses, const double* end_poses,
+                  const double* rotations, const double* pivots, Motion* motions, char* ok) {
+    for (long long h = 0; h < count; ++h) {
+        const double* m0 = start_poses + 16 * h;
+        const double* m1 = end_poses + 16 * h;
+        ok[h] = 0;
+        if (!is_rigid_matrix4(m0, defaults::rigid_tolerance) ||
+            !is_rigid_matrix4(m1, defaults::rigid_tolerance))
+            continue;
+        const Pose p0 = Pose::from_matrix4(m0), p1 = Pose::from_matrix4(m1);
+        if (rotations == nullptr && pivots == nullptr) {
+            motions[h] = Motion(p0, p1);
+            ok[h] = 1;
+            continue;
+        }
+        const Vec3 rotation =
+            rotations != nullptr
+                ? Vec3{rotations[3 * h], rotations[3 * h + 1], rotations[3 * h + 2]}
+                : shortest_rotation(p0.rotation, p1.rotation);
+        const Vec3 pivot = pivots != nullptr
+                               ? Vec3{pivots[3 * h], pivots[3 * h + 1], pivots[3 * h + 2]}
+                               : p0.translation;
+        ok[h] = Motion::from_turn(p0, p1, rotation, pivot, defaults::rigid_tolerance, motions[h])
+                    ? 1
+                    : 0;
+    }
 }
 
 ToiResult time_of_impact(const ShapeView& a, const Motion& motion_a, const ShapeView& b,
@@ -391,26 +456,21 @@ ToiResult time_of_impact(const ShapeView& a, const Motion& motion_a, const Shape
 }
 
 void run_toi_batch(const ConvexSetView& set, const double* start_poses, const double* end_poses,
-                   const std::int64_t* pairs, long long pair_count, const ToiOptions& options,
-                   int threads, const ToiBatchOutput& out) {
+                   const double* rotations, const double* pivots, const std::int64_t* pairs,
+                   long long pair_count, const ToiOptions& options, int threads,
+                   const ToiBatchOutput& out) {
     const std::int64_t h_count = set.shape_count;
     const bool options_ok = options.tolerance > 0.0 && std::isfinite(options.tolerance);
-    // Shapes, poses, motions and bounding radii once per shape, not once per pair.
+    // Shapes, motions and bounding radii once per shape, not once per pair.
     std::vector<ShapeView> shapes(static_cast<size_t>(h_count));
     std::vector<Motion> motions(static_cast<size_t>(h_count));
     std::vector<double> radius(static_cast<size_t>(h_count), 0.0);
     std::vector<char> ok(static_cast<size_t>(h_count), 0);
+    make_motions(h_count, start_poses, end_poses, rotations, pivots, motions.data(), ok.data());
     for (std::int64_t h = 0; h < h_count; ++h) {
         shapes[h] = set.shape(h);
-        const double* m0 = start_poses + 16 * h;
-        const double* m1 = end_poses + 16 * h;
-        const bool good = options_ok && is_valid(shapes[h]) &&
-                          is_rigid_matrix4(m0, defaults::rigid_tolerance) &&
-                          is_rigid_matrix4(m1, defaults::rigid_tolerance);
-        if (!good) continue;
-        ok[h] = 1;
-        motions[h] = Motion(Pose::from_matrix4(m0), Pose::from_matrix4(m1));
-        radius[h] = bounding_radius(shapes[h]);
+        if (!options_ok || !is_valid(shapes[h])) ok[h] = 0;
+        if (ok[h]) radius[h] = bounding_radius(shapes[h]);
     }
     // Advancement can take many GJK calls per pair: smaller chunks balance better.
     const int n_threads = resolve_threads(threads, pair_count, defaults::toi_min_pairs_per_thread);
