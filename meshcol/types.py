@@ -41,6 +41,9 @@ class Status(enum.IntEnum):
     DEGENERATE = 2
     INVALID_INPUT = 3
     NOT_RUN = 4
+    #: The answer is beyond the range of a double (two shapes near +-1e308): fields are inf or
+    #: NaN, never a number taken for the answer.
+    OUT_OF_RANGE = 5
 
 
 class TimeOfImpactStatus(enum.IntEnum):

@@ -6,6 +6,7 @@
 
 #include "meshcol/batch.hpp"
 #include "meshcol/gjk.hpp"
+#include "rescale.hpp"
 
 namespace meshcol {
 
@@ -335,7 +336,7 @@ ToiResult linear_cast(const Mover& a, const Mover& b, const ToiOptions& opt, boo
     return r;
 }
 
-ToiResult pair_toi(const Mover& a, const Mover& b, const ToiOptions& opt) {
+ToiResult pair_toi_in_range(const Mover& a, const Mover& b, const ToiOptions& opt) {
     if (a.shape->kind == ShapeKind::SPHERE && b.shape->kind == ShapeKind::SPHERE &&
         a.motion.angle == 0.0 && b.motion.angle == 0.0)
         return sphere_sphere(a, b, opt.tolerance);
@@ -350,6 +351,47 @@ ToiResult pair_toi(const Mover& a, const Mover& b, const ToiOptions& opt) {
         return conservative_advancement(a, b, opt, r.toi, r.iterations);
     }
     return conservative_advancement(a, b, opt, 0.0, 0);
+}
+
+// A mover in the frame `f` (rescale.hpp): its shape scaled into `storage`, its motion's points
+// moved and scaled; angles and axes do not change.
+Mover scaled_mover(const Mover& m, const rescale::Frame& f, ShapeView& shape,
+                   std::vector<Vec3>& storage) {
+    shape = rescale::scaled(*m.shape, f, storage);
+    Mover s = m;
+    s.shape = &shape;
+    s.radius = f.length(m.radius);
+    s.motion.start.translation = f.point(m.motion.start.translation);
+    s.motion.end.translation = f.point(m.motion.end.translation);
+    s.motion.pivot = f.point(m.motion.pivot);
+    s.motion.velocity = f.vector(m.motion.velocity);
+    s.motion.pivot_offset = f.length(m.motion.pivot_offset);
+    return s;
+}
+
+// Every pair goes through here: a pair whose lengths (start and end positions, pivots, radii)
+// leave the range where GJK's products are safe runs moved and scaled by a power of two, as
+// the narrow phase does (rescale.hpp); the fraction and the normal do not change.
+ToiResult pair_toi(const Mover& a, const Mover& b, const ToiOptions& opt) {
+    const Vec3 origin = a.motion.start.translation;
+    double half = std::fmax(0.5 * a.radius, 0.5 * b.radius);
+    for (const Mover* m : {&a, &b}) {
+        rescale::reach(half, origin, m->motion.start.translation);
+        rescale::reach(half, origin, m->motion.end.translation);
+        rescale::reach(half, origin, m->motion.pivot);
+    }
+    const rescale::Frame f = rescale::choose(origin, half);
+    if (!f.finite) return invalid_result();
+    if (!f.active) return pair_toi_in_range(a, b, opt);
+    ToiOptions scaled_opt = opt;
+    scaled_opt.tolerance = f.length(opt.tolerance);
+    if (!(scaled_opt.tolerance > 0.0)) return invalid_result();  // below the scene's precision
+    ShapeView shape_a, shape_b;
+    std::vector<Vec3> storage_a, storage_b;
+    ToiResult r = pair_toi_in_range(scaled_mover(a, f, shape_a, storage_a),
+                                    scaled_mover(b, f, shape_b, storage_b), scaled_opt);
+    r.point = f.world_point(r.point);
+    return r;
 }
 
 }  // namespace
@@ -430,7 +472,7 @@ void make_motions(long long count, const double* start_poses, const double* end_
         const Pose p0 = Pose::from_matrix4(m0), p1 = Pose::from_matrix4(m1);
         if (rotations == nullptr && pivots == nullptr) {
             motions[h] = Motion(p0, p1);
-            ok[h] = 1;
+            ok[h] = is_finite(motions[h].velocity) ? 1 : 0;  // a path longer than DBL_MAX
             continue;
         }
         const Vec3 rotation =

@@ -50,6 +50,9 @@ __all__ = [
 
 PAIR_STATUSES = ("separated", "clearance", "contact", "penetrating", "contained")
 SEVERITY = {name: i for i, name in enumerate(PAIR_STATUSES)}
+#: Query statuses whose numbers are not the answer: the pair is reported ``query_failed``.
+_NO_ANSWER = (int(Status.INVALID_INPUT), int(Status.OUT_OF_RANGE))
+
 # --fail-on value -> least severe status that violates the policy
 FAIL_ON = {
     "penetration": "penetrating",
@@ -386,7 +389,7 @@ def check_scene(
         result = signed_distance_batch(
             shapes.shapes, part_poses, part_pairs, threads=options.threads
         )
-        bad = result.status == int(Status.INVALID_INPUT)
+        bad = np.isin(result.status, _NO_ANSWER)
         value = np.where(bad, np.inf, result.signed_distance)
         best = _first_per_group(part_key, value)
         slot = np.searchsorted(key, part_key[best])  # candidates are sorted, so keys are too
@@ -438,7 +441,7 @@ def check_scene(
             normal[im[sep]] = np.where(length > 0, gap / length, normal[im[sep]])
         part_a[im] = -1
         part_b[im] = -1
-        failed[im] = mres.status[m] == int(Status.INVALID_INPUT)
+        failed[im] = np.isin(mres.status[m], _NO_ANSWER)
 
     # Classification.
     tol = options.tolerance

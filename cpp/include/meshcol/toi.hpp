@@ -22,8 +22,13 @@
 /// - OVERLAPPED_AT_START: the distance at t = 0 is <= tolerance; toi = 0.
 /// - FAILED: the iteration cap was reached; `toi` is the last safe lower bound (no contact before
 ///   it), `point` and `normal` the closest points' midpoint and direction there.
-/// - INVALID_INPUT: a bad shape, a non-rigid pose, or a turn that does not take the start
-///   rotation to the end rotation; every field is NaN.
+/// - INVALID_INPUT: a bad shape, a non-rigid pose, a turn that does not take the start
+///   rotation to the end rotation, or lengths beyond a double (a path or a radius over DBL_MAX,
+///   a tolerance under 2^-1074 of the pair's extent); every field is NaN.
+///
+/// Range. A pair whose lengths leave [2^-100, 2^100] is moved and scaled by a power of two
+/// (exact) before the query and back after it, as in the narrow phase (src/rescale.hpp): the
+/// answer is the same at 1e-300 or 1e300 as at 1.
 ///
 /// Algorithms, chosen per pair:
 /// - two spheres that do not turn about an off-centre pivot: closed form (the centre distance
