@@ -200,12 +200,12 @@ def sampled_distances(start, end, rotations, times):
     )
 
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=60, deadline=None)
 @given(
     theta=st.floats(0.05, 4.0 * math.pi),
-    axis=st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(0.2, 1)),
+    axis=st.tuples(st.floats(-0.5, 0.5), st.floats(-0.5, 0.5), st.floats(0.5, 1)),
     post_angle=st.floats(-math.pi, math.pi),
-    post_height=st.floats(-0.3, 0.3),
+    post_height=st.floats(-0.15, 0.15),
     post_distance=st.floats(0.3, 2.3),
     drift=st.tuples(st.floats(-0.5, 0.5), st.floats(-0.5, 0.5), st.floats(-0.2, 0.2)),
 )

@@ -28,8 +28,12 @@ Statuses (:class:`meshcol.types.TimeOfImpactStatus`) and what each guarantees:
   ``tolerance / 2`` and ``tolerance`` may be reported either way).
 - ``OVERLAPPED_AT_START``: within ``tolerance`` at ``t = 0``; ``time_of_impact = 0``.
 - ``FAILED``: the iteration cap was reached; ``time_of_impact`` is the last safe lower bound.
-- ``INVALID_INPUT``: NaN/inf coordinates, an empty shape, a non-rigid pose, or a turn that does
-  not take the start rotation to the end rotation.
+- ``INVALID_INPUT``: NaN/inf coordinates, an empty shape, a non-rigid pose, a turn that does
+  not take the start rotation to the end rotation, or lengths beyond a double (a path or a
+  radius over 1.8e308, a tolerance under 2^-1074 of the pair's size).
+
+Any magnitude: a pair whose lengths leave [2^-100, 2^100] is moved and scaled by a power of two
+(exact) for the query, as in :mod:`meshcol.collision.narrowphase`.
 
 Results give ``point`` (world, the midpoint of the closest points at ``time_of_impact``) and ``normal``
 (world, unit, from a towards b at ``time_of_impact``; zero when overlapping at the start).
@@ -37,7 +41,7 @@ Results give ``point`` (world, the midpoint of the closest points at ``time_of_i
 Notes
 -----
 Two spheres: closed form (the centre distance is the square root of a quadratic in t).
-Translation only (neither body turns, or only spheres do): GJK ray cast on the Minkowski
+Translation only (neither body turns, or only spheres about their centres do): GJK ray cast on the Minkowski
 difference (van den Bergen 2004), sphere and capsule radii as margins. Otherwise: conservative
 advancement (Mirtich 1996; Zhang et al. 2006) with a rigorous bound on the closing speed of the
 separating slab: relative linear speed of the pivots along the normal plus, per body,
