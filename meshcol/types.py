@@ -155,21 +155,25 @@ class Spin:
 
     Attributes
     ----------
-    rotation : (3,) float64
+    rotation : (3,) float64 or None
         World rotation vector of the whole motion: axis x angle in radians
-        (``angular_velocity * duration`` for a manifest body).
+        (``angular_velocity * duration`` for a manifest body). None: the shortest rotation from
+        the pose to the end pose (at most half a turn), about ``pivot``.
     pivot : (3,) float64 or None
-        World point the body turns about, at the start; None: the body's local origin.
+        World point the body turns about, at the start; None: the body's local origin. (The
+        sub-bodies of a multi-node mesh file turn about the manifest body's origin, so that
+        they move as one rigid body.)
     """
 
-    rotation: np.ndarray
+    rotation: np.ndarray | None
     pivot: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        rotation = np.array(self.rotation, dtype=np.float64)
-        if rotation.shape != (3,) or not np.all(np.isfinite(rotation)):
-            raise ValueError(f"rotation must be 3 finite numbers, got {self.rotation!r}")
-        object.__setattr__(self, "rotation", rotation)
+        if self.rotation is not None:
+            rotation = np.array(self.rotation, dtype=np.float64)
+            if rotation.shape != (3,) or not np.all(np.isfinite(rotation)):
+                raise ValueError(f"rotation must be 3 finite numbers, got {self.rotation!r}")
+            object.__setattr__(self, "rotation", rotation)
         if self.pivot is not None:
             pivot = np.array(self.pivot, dtype=np.float64)
             if pivot.shape != (3,) or not np.all(np.isfinite(pivot)):
@@ -177,13 +181,18 @@ class Spin:
             object.__setattr__(self, "pivot", pivot)
 
     @property
-    def angle(self) -> float:
-        """Radians turned over the whole motion (>= 0)."""
-        return float(np.linalg.norm(self.rotation))
+    def angle(self) -> float | None:
+        """Radians turned over the whole motion (>= 0); None for the shortest rotation."""
+        return None if self.rotation is None else float(np.linalg.norm(self.rotation))
 
     def matrix(self) -> np.ndarray:
-        """The (3, 3) rotation of the whole turn (Rodrigues' formula): R_end = matrix @ R_start."""
-        angle = self.angle
+        """The (3, 3) rotation of the whole turn (Rodrigues' formula): R_end = matrix @ R_start.
+
+        Raises ValueError for the shortest rotation (``rotation`` None), which only the end
+        pose knows."""
+        if self.rotation is None:
+            raise ValueError("a spin without a rotation turns the shortest way to the end pose")
+        angle = float(np.linalg.norm(self.rotation))
         if angle == 0.0:
             return np.eye(3)
         k = self.rotation / angle
@@ -238,6 +247,8 @@ class Body:
             return
         if self.end_pose is None:
             raise ValueError(f"body {self.name!r}: a spin needs an end pose")
+        if self.spin.rotation is None:
+            return
         reached = self.spin.matrix() @ np.asarray(self.pose, dtype=np.float64)[:3, :3]
         miss = np.abs(reached - np.asarray(self.end_pose, dtype=np.float64)[:3, :3]).max()
         if not miss <= SPIN_ROTATION_TOLERANCE:

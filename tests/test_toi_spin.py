@@ -413,3 +413,35 @@ def test_corpus_part_spun_past_half_a_turn_matches_dense_sampling(
     else:
         assert np.all(gaps - slack > 1e-6), "too close to call by sampling"
         assert report.hits == ()
+
+
+def test_sub_bodies_reach_an_end_rotation_as_one_body(tmp_path):
+    # The same two-box file given an end_rotation (a quarter turn, reached the shortest way):
+    # the offset box turns about the manifest body's origin too, so halfway it is at 45 deg.
+    scene = trimesh.Scene()
+    scene.add_geometry(trimesh.creation.box((0.2, 0.2, 0.2)), node_name="near", geom_name="near")
+    scene.add_geometry(
+        trimesh.creation.box((0.2, 0.2, 0.2)),
+        node_name="far",
+        geom_name="far",
+        transform=pose((1.0, 0.0, 0.0)),
+    )
+    scene.export(tmp_path / "pair.glb")
+    manifest = {
+        "bodies": [
+            {
+                "name": "pair",
+                "mesh": "pair.glb",
+                "end_rotation": {"euler_deg": [0, 0, 90], "order": "xyz"},
+            }
+        ],
+    }
+    (tmp_path / "s.json").write_text(json.dumps(manifest))
+    bodies = {b.name: b for b in meshcol.load_scene(tmp_path / "s.json").bodies}
+    far = bodies["pair/far"]
+    assert far.spin is not None and far.spin.rotation is None
+    mid = interpolate_pose(far.pose, far.end_pose, 0.5, pivot=far.spin.pivot)
+    h = math.sqrt(0.5)
+    np.testing.assert_allclose(mid[:3, 3], [h, h, 0], atol=1e-12)
+    report = meshcol.sweep(tmp_path / "s.json")
+    assert report.moving == (True, True) and report.hits == ()

@@ -230,7 +230,7 @@ class SweepReport:
 
 
 def _is_moving(body: Body) -> bool:
-    if body.spin is not None and body.spin.angle > 0.0:
+    if body.spin is not None and body.spin.rotation is not None and body.spin.angle:
         return True  # a whole number of turns ends where it started, yet moves
     return body.end_pose is not None and not np.array_equal(body.end_pose, body.pose)
 
@@ -247,7 +247,8 @@ def _turns(bodies: tuple[Body, ...], start: np.ndarray, end: np.ndarray):
     pivots = start[:, :3, 3].copy()
     for k, body in enumerate(bodies):
         if body.spin is not None:
-            rotations[k] = body.spin.rotation
+            if body.spin.rotation is not None:
+                rotations[k] = body.spin.rotation
             if body.spin.pivot is not None:
                 pivots[k] = body.spin.pivot
     return rotations, pivots

@@ -315,7 +315,10 @@ def time_of_impact(
         ends = np.stack([poses[1], poses[3]])
         shortest = shortest_rotation(starts, ends)
         rotations = np.stack(
-            [shortest[k] if spin is None else spin.rotation for k, spin in enumerate(spins)]
+            [
+                shortest[k] if spin is None or spin.rotation is None else spin.rotation
+                for k, spin in enumerate(spins)
+            ]
         )
         pivots = np.stack(
             [

@@ -361,12 +361,13 @@ def _end_pose(spec: dict, start: np.ndarray, duration, label: str, source: str):
     return None, None
 
 
-def _sub_spin(spin: Spin | None, start: np.ndarray, rigid: np.ndarray) -> Spin | None:
-    """A sub-body's spin: the manifest body's, about the manifest body's origin (the sub-body's
-    own origin sits elsewhere when the file places it)."""
-    if spin is None or not np.any(rigid[:3, 3]):
+def _sub_spin(spin: Spin | None, start: np.ndarray, end, rigid: np.ndarray) -> Spin | None:
+    """A sub-body's spin: the manifest body's turn (the shortest one to an end rotation), about
+    the manifest body's origin, where the file places the sub-body's own origin elsewhere; so
+    the sub-bodies move as one rigid body."""
+    if end is None or not np.any(rigid[:3, 3]):
         return spin
-    return Spin(spin.rotation, pivot=start[:3, 3].copy())
+    return Spin(None if spin is None else spin.rotation, pivot=start[:3, 3].copy())
 
 
 def _scale(value) -> np.ndarray:
@@ -411,7 +412,7 @@ def _mesh_bodies(
                 pose=start @ rigid,
                 end_pose=None if end is None else end @ rigid,
                 collider=spec.get("shape"),
-                spin=_sub_spin(spin, start, rigid),
+                spin=_sub_spin(spin, start, end, rigid),
             )
         )
     return bodies
