@@ -445,3 +445,98 @@ def test_sub_bodies_reach_an_end_rotation_as_one_body(tmp_path):
     np.testing.assert_allclose(mid[:3, 3], [h, h, 0], atol=1e-12)
     report = meshcol.sweep(tmp_path / "s.json")
     assert report.moving == (True, True) and report.hits == ()
+
+
+def test_round_shapes_spinning_about_their_own_axis_are_decided():
+    # A capsule turning about its own axis moves no point: its lever arm is 0 and the pair is
+    # decided at once; a cylinder's lever arm is its radius, not its half length (the bound
+    # was the bounding radius, and both ran out of steps: FAILED).
+    from meshcol import Capsule, Cylinder
+
+    for shape, most in ((Capsule(0.1, 2.0), 1), (Cylinder(0.1, 2.0), 400)):
+        post = pose((0.1 + 0.1 + 1e-3, 0.0, 0.3))
+        r = time_of_impact(
+            shape,
+            Sphere(0.1),
+            pose(),
+            pose(rotation=rot_z(0.9 * math.pi)),
+            post,
+            post,
+            tolerance=TOLERANCE,
+        )
+        assert r.status == TimeOfImpactStatus.SEPARATED and r.iterations <= most
+
+
+shape_makers = st.sampled_from(["box", "capsule", "cylinder", "sphere", "points"])
+
+
+def make_shape(kind: str, size: float):
+    from meshcol import Box, Capsule, Cylinder
+
+    if kind == "box":
+        return Box((size, 0.6 * size, 0.3 * size))
+    if kind == "capsule":
+        return Capsule(0.2 * size, size)
+    if kind == "cylinder":
+        return Cylinder(0.2 * size, size)
+    if kind == "sphere":
+        return Sphere(0.3 * size)
+    return (
+        np.array(
+            [
+                [1, 0.2, 0.1],
+                [-0.4, 0.7, 0.2],
+                [0.1, -0.6, 0.4],
+                [0.2, 0.1, -0.8],
+                [-0.3, -0.2, -0.3],
+            ]
+        )
+        * size
+    )
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    kind_a=shape_makers,
+    kind_b=shape_makers,
+    size=st.floats(0.3, 1.5),
+    theta=st.floats(0.0, 4.0 * math.pi),
+    axis=st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(0.3, 1)),
+    pivot=st.tuples(st.floats(-0.6, 0.6), st.floats(-0.6, 0.6), st.floats(-0.6, 0.6)),
+    other=st.tuples(st.floats(-2, 2), st.floats(-2, 2), st.floats(-0.5, 0.5)),
+)
+def test_any_shape_spinning_about_a_pivot_matches_dense_sampling(
+    kind_a, kind_b, size, theta, axis, pivot, other
+):
+    k = np.asarray(axis) / np.linalg.norm(axis)
+    rotation = k * theta
+    cs = ConvexSet.from_shapes([make_shape(kind_a, size), make_shape(kind_b, 0.7)])
+    start = np.stack([pose(), pose(other)])
+    end = start.copy()
+    turn = Spin(rotation).matrix()
+    end[0, :3, :3] = turn
+    end[0, :3, 3] = np.asarray(pivot) + turn @ (-np.asarray(pivot))
+    rotations = np.stack([rotation, np.zeros(3)])
+    pivots = np.stack([np.asarray(pivot), start[1, :3, 3]])
+    r = time_of_impact_batch(
+        cs, start, end, [[0, 1]], rotations=rotations, pivots=pivots, tolerance=TOLERANCE
+    )
+    status = TimeOfImpactStatus(int(r.status[0]))
+    times = np.linspace(0.0, 1.0, 1501)
+    poses = interpolate_pose(
+        np.repeat(start[:1], len(times), 0),
+        np.repeat(end[:1], len(times), 0),
+        times,
+        rotation=np.repeat(rotations[:1], len(times), 0),
+        pivot=np.repeat(pivots[:1], len(times), 0),
+    )
+    d = np.array([distance_batch(cs, np.stack([p, start[1]]), [[0, 1]]).distance[0] for p in poses])
+    touching = np.flatnonzero(d <= 0.0)
+    if status in (TimeOfImpactStatus.HIT, TimeOfImpactStatus.OVERLAPPED_AT_START):
+        t = float(r.time_of_impact[0])
+        if len(touching):
+            assert t <= times[touching[0]] + 1e-12
+        assert np.all(d[times < t - 1e-12] > 0.0)
+    else:
+        assert status == TimeOfImpactStatus.SEPARATED, status
+        assert len(touching) == 0

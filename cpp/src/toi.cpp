@@ -97,19 +97,61 @@ ToiResult separated_result(int iterations) {
     return r;
 }
 
+// The largest distance of the shape's points from its motion's axis line (through the pivot):
+// the lever arm of the turn. A point's speed from turning is angle x its distance from that
+// line, which the turn about the line keeps constant, so this bounds the turning speed of every
+// point at every instant; it is at most the bounding radius about the pivot, and much less for a
+// body long along its axis (a shaft, a drill). |x - pivot| off the axis is convex in x, so its
+// maximum over a polytope or box is at a vertex.
+double turning_radius(const ShapeView& s, const Motion& m) {
+    const Vec3 k = m.start.rotate_inverse(m.axis_world);          // axis, local frame
+    const Vec3 c = m.start.apply_inverse(m.pivot);                 // pivot, local frame
+    auto off_axis = [&](const Vec3& x) {
+        const Vec3 r = x - c;
+        return safe_norm(r - k * dot(r, k));
+    };
+    double arm = 0.0;
+    switch (s.kind) {
+        case ShapeKind::POLYTOPE:
+            for (int i = 0; i < s.vertex_count; ++i) arm = std::fmax(arm, off_axis(s.vertices[i]));
+            return arm;
+        case ShapeKind::BOX:
+            for (int i = 0; i < 8; ++i)
+                arm = std::fmax(arm, off_axis(Vec3{(i & 1 ? 1 : -1) * s.params[0],
+                                                   (i & 2 ? 1 : -1) * s.params[1],
+                                                   (i & 4 ? 1 : -1) * s.params[2]}));
+            return arm;
+        case ShapeKind::SPHERE:
+            // Swept-ball shapes: the support is the core's plus the radius in every direction,
+            // so the gap closes only as fast as the core turns (their radius adds nothing).
+            return off_axis(Vec3{});
+        case ShapeKind::CAPSULE:
+            return std::fmax(off_axis(Vec3{0, 0, s.params[1]}), off_axis(Vec3{0, 0, -s.params[1]}));
+        case ShapeKind::CYLINDER:
+            // Its rims lie within the radius of the end centres, and its farthest point off any
+            // line is on a rim.
+            return std::fmax(off_axis(Vec3{0, 0, s.params[1]}), off_axis(Vec3{0, 0, -s.params[1]})) +
+                   s.params[0];
+    }
+    return bounding_radius(s) + m.pivot_offset;
+}
+
 // A body's motion as the pair query sees it: a sphere turning about its own centre moves no
 // point, so its angle is 0 and its orientation the start one.
 struct Mover {
     const ShapeView* shape;
     Motion motion;
-    double radius;  // bounding radius about the pivot (about the local origin + pivot offset)
+    double radius;  // lever arm of the turn: largest distance of a point from the axis line
+    double reach;   // bounding radius about the local origin (the pair's size, rescale.hpp)
 };
 
-Mover make_mover(const ShapeView& shape, const Motion& motion, double radius) {
-    Mover m{&shape, motion, radius + motion.pivot_offset};
+Mover make_mover(const ShapeView& shape, const Motion& motion) {
+    Mover m{&shape, motion, motion.angle == 0.0 ? 0.0 : turning_radius(shape, motion),
+            bounding_radius(shape)};
     if (shape.kind == ShapeKind::SPHERE && m.motion.pivot_offset == 0.0 && m.motion.angle != 0.0) {
         m.motion.end.rotation = m.motion.start.rotation;
         m.motion.angle = 0.0;
+        m.radius = 0.0;
     }
     return m;
 }
@@ -164,7 +206,8 @@ ToiResult sphere_sphere(const Mover& a, const Mover& b, double tol) {
 // <= v_a.n + angle_a |n x k_a| |r| (w_a = angle_a k_a, constant over the motion whatever the
 // angle), and the same for B along -n, so the gap between the planes closes no faster than
 //   mu = (v_a - v_b).n + angle_a |n x k_a| rho_a + angle_b |n x k_b| rho_b
-// (rho: bounding radius about the pivot). Advancing by (d - tol/2) / mu keeps the
+// (rho: the lever arm, the largest distance of a point from the axis line through the pivot,
+// constant under the turn: `turning_radius`). Advancing by (d - tol/2) / mu keeps the
 // distance above tol/2 on the whole step: rigorous, so contact is never stepped over.
 ToiResult conservative_advancement(const Mover& a, const Mover& b, const ToiOptions& opt,
                                    double t, int iterations) {
@@ -361,6 +404,7 @@ Mover scaled_mover(const Mover& m, const rescale::Frame& f, ShapeView& shape,
     Mover s = m;
     s.shape = &shape;
     s.radius = f.length(m.radius);
+    s.reach = f.length(m.reach);
     s.motion.start.translation = f.point(m.motion.start.translation);
     s.motion.end.translation = f.point(m.motion.end.translation);
     s.motion.pivot = f.point(m.motion.pivot);
@@ -374,7 +418,8 @@ Mover scaled_mover(const Mover& m, const rescale::Frame& f, ShapeView& shape,
 // the narrow phase does (rescale.hpp); the fraction and the normal do not change.
 ToiResult pair_toi(const Mover& a, const Mover& b, const ToiOptions& opt) {
     const Vec3 origin = a.motion.start.translation;
-    double half = std::fmax(0.5 * a.radius, 0.5 * b.radius);
+    double half = std::fmax(std::fmax(0.5 * a.reach, 0.5 * b.reach),
+                            std::fmax(0.5 * a.radius, 0.5 * b.radius));
     for (const Mover* m : {&a, &b}) {
         rescale::reach(half, origin, m->motion.start.translation);
         rescale::reach(half, origin, m->motion.end.translation);
@@ -493,8 +538,7 @@ ToiResult time_of_impact(const ShapeView& a, const Motion& motion_a, const Shape
     if (!is_valid(a) || !is_valid(b) || !(options.tolerance > 0.0) ||
         !std::isfinite(options.tolerance))
         return invalid_result();
-    return pair_toi(make_mover(a, motion_a, bounding_radius(a)),
-                    make_mover(b, motion_b, bounding_radius(b)), options);
+    return pair_toi(make_mover(a, motion_a), make_mover(b, motion_b), options);
 }
 
 void run_toi_batch(const ConvexSetView& set, const double* start_poses, const double* end_poses,
@@ -503,16 +547,16 @@ void run_toi_batch(const ConvexSetView& set, const double* start_poses, const do
                    const ToiBatchOutput& out) {
     const std::int64_t h_count = set.shape_count;
     const bool options_ok = options.tolerance > 0.0 && std::isfinite(options.tolerance);
-    // Shapes, motions and bounding radii once per shape, not once per pair.
+    // Shapes, motions and their lever arms once per shape, not once per pair.
     std::vector<ShapeView> shapes(static_cast<size_t>(h_count));
     std::vector<Motion> motions(static_cast<size_t>(h_count));
-    std::vector<double> radius(static_cast<size_t>(h_count), 0.0);
+    std::vector<Mover> movers(static_cast<size_t>(h_count));
     std::vector<char> ok(static_cast<size_t>(h_count), 0);
     make_motions(h_count, start_poses, end_poses, rotations, pivots, motions.data(), ok.data());
     for (std::int64_t h = 0; h < h_count; ++h) {
         shapes[h] = set.shape(h);
         if (!options_ok || !is_valid(shapes[h])) ok[h] = 0;
-        if (ok[h]) radius[h] = bounding_radius(shapes[h]);
+        if (ok[h]) movers[h] = make_mover(shapes[h], motions[h]);
     }
     // Advancement can take many GJK calls per pair: smaller chunks balance better.
     const int n_threads = resolve_threads(threads, pair_count, defaults::toi_min_pairs_per_thread);
@@ -523,8 +567,7 @@ void run_toi_batch(const ConvexSetView& set, const double* start_poses, const do
             if (!ok[ia] || !ok[ib]) {
                 r = invalid_result();
             } else {
-                r = pair_toi(make_mover(shapes[ia], motions[ia], radius[ia]),
-                             make_mover(shapes[ib], motions[ib], radius[ib]), options);
+                r = pair_toi(movers[ia], movers[ib], options);
             }
             if (out.toi) out.toi[i] = r.toi;
             store_row(out.point, i, r.point);

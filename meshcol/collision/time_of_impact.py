@@ -45,7 +45,8 @@ Translation only (neither body turns, or only spheres about their centres do): G
 difference (van den Bergen 2004), sphere and capsule radii as margins. Otherwise: conservative
 advancement (Mirtich 1996; Zhang et al. 2006) with a rigorous bound on the closing speed of the
 separating slab: relative linear speed of the pivots along the normal plus, per body,
-``angle * |normal x axis| * bounding radius about the pivot`` (the whole angle, any size); each
+``angle * |normal x axis| * lever arm`` (the largest distance of a point from the axis line
+through the pivot, a swept ball's radius excluded; the whole angle, any size); each
 step aims at ``tolerance / 2`` so a contact is never stepped over.
 """
 

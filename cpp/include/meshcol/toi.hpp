@@ -40,8 +40,9 @@
 ///   tolerance;
 /// - otherwise: conservative advancement (Mirtich 1996; Zhang et al. 2006) with a rigorous bound
 ///   on how fast the separating slab can close: relative linear speed of the pivots along the
-///   normal plus, per body, angle x |normal x axis| x bounding radius about the pivot (the
-///   whole angle, so a spin of several turns is bounded as one). The step aims at distance
+///   normal plus, per body, angle x |normal x axis| x lever arm (the largest distance of a point
+///   from the axis line through the pivot; a swept ball's radius adds nothing), for the whole
+///   angle, so a spin of several turns is bounded as one. The step aims at distance
 ///   tolerance / 2, so SEPARATED is never reported for a touching pair.
 
 #include <cstdint>
