@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from meshcol._native import core
+from meshcol._native import core, defaults
 from meshcol.collision.arrays import as_pairs, as_points, as_poses
 from meshcol.types import Body, Status
 
@@ -171,6 +171,14 @@ class MeshSet:
         """
         points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
         return self._handle.winding_number(i, points)
+
+    def contains(self, i: int, points: np.ndarray) -> np.ndarray:
+        """Whether each point (n, 3) is inside mesh ``i`` (local frame), (n,) bool.
+
+        ``|winding number| >= defaults.winding_number_inside`` (either orientation); meaningful
+        for a closed mesh. A non-finite point is not inside.
+        """
+        return np.abs(self.winding_number(i, points)) >= defaults.winding_number_inside
 
     def closest_points(
         self, i: int, points: Any, *, threads: int = 0
