@@ -77,17 +77,27 @@ def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iter
     path = os.fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
     ext = suffix if suffix is not None else os.path.splitext(path)[1]
-    fd, tmp = tempfile.mkstemp(prefix=".meshcol-", suffix=ext, dir=folder)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=".meshcol-", suffix=ext, dir=folder)
+    except OSError as exc:
+        raise _naming(exc, path) from None
     os.close(fd)
     # mkstemp creates the file 0600; give the result the mode a plain open() would.
     os.chmod(tmp, 0o666 & ~_umask())
     try:
         yield tmp
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
+        if isinstance(exc, OSError) and tmp in (exc.filename, exc.filename2):
+            raise _naming(exc, path) from None
         raise
+
+
+def _naming(exc: OSError, path: str) -> OSError:
+    """``exc`` about ``path``, the file the user named, never the temporary file."""
+    return type(exc)(exc.errno, exc.strerror, path)
 
 
 def _umask() -> int:
