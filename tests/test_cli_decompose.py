@@ -776,3 +776,38 @@ def test_signals_stop_the_run_and_leave_nothing(tmp_path, jobs, signum, to_group
     assert _session_processes(proc.pid) == []
     assert not out.exists()
     assert _all_files(cache) == []  # rglob of a missing folder is empty
+
+
+def test_worker_pool_starts_nothing_without_a_task() -> None:
+    # One job starts its worker (and the fork server) at the first task only: a run of cache
+    # hits spawns no process.
+    from meshcol.decomposition.jobs import WorkerPool
+    from meshcol.io.mesh_write import safe_name
+
+    with WorkerPool(safe_name, 1) as pool:
+        assert list(pool.run(iter(()))) == []
+        assert pool._ctx is None and not pool._idle and not pool._busy
+
+
+def test_an_interrupt_swallowed_by_a_task_source_is_raised_again() -> None:
+    # trimesh catches BaseException around its imports: a Ctrl-C that lands there must not
+    # be lost while the pool runs.
+    from meshcol.decomposition.jobs import WorkerPool
+    from meshcol.io.mesh_write import safe_name
+
+    def swallowing_source():
+        try:
+            signal.raise_signal(signal.SIGINT)
+        except BaseException:  # noqa: BLE001 - what trimesh does
+            pass
+        deadline = time.monotonic() + 20  # a long import, in Python
+        while time.monotonic() < deadline:
+            time.sleep(0.01)
+        yield "never reached"
+
+    start = time.monotonic()
+    with WorkerPool(safe_name, 1) as pool, pytest.raises(KeyboardInterrupt):
+        list(pool.run(swallowing_source()))
+    assert time.monotonic() - start < 10  # delivered again within 0.1 s, not after the loop
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    time.sleep(0.3)  # and never again once it has left the pool

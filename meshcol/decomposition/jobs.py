@@ -339,14 +339,14 @@ class WorkerPool:
 
     def start(self, workers: int | None = None) -> WorkerPool:
         """Start ``workers`` (default ``jobs``, at most ``jobs``) processes now."""
-        if self._ctx is None:
-            self._ctx = _context(self.env)
         count = self.jobs if workers is None else min(workers, self.jobs)
         while len(self._idle) + len(self._busy) < count:
             self._idle.append(self._new_worker())
         return self
 
     def _new_worker(self) -> _Worker:
+        if self._ctx is None:  # the fork server starts with the first worker, not before
+            self._ctx = _context(self.env)
         return _Worker(self._ctx, self.fn, self.env, self.prepare)
 
     def run(self, tasks: Iterable[Any]) -> Iterator[TaskOutcome]:
@@ -370,7 +370,6 @@ class WorkerPool:
                 guard.suspended = False
 
     def _run(self, tasks: Iterable[Any]) -> Iterator[TaskOutcome]:
-        self.start(0)
         source = enumerate(tasks)
         more = True
         pending: deque[tuple[int, Any]] = deque()
