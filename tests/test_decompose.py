@@ -414,16 +414,26 @@ def test_fidelity_of_an_open_mesh_measures_to_its_surface() -> None:
 def test_farthest_outside_solid_equals_brute_force(seed) -> None:
     from meshcol.collision.mesh_query import MeshSet
 
-    v, f = canonical_geometry(np.asarray(_torus().vertices), np.asarray(_torus().faces))
+    torus = _torus()
+    v, f = canonical_geometry(np.asarray(torus.vertices), np.asarray(torus.faces))
     rng = np.random.default_rng(seed)
     points = rng.uniform(-1.4, 1.4, size=(3000, 3)) * [1, 1, 0.4]
-    meshes = MeshSet.from_arrays([(v, f)])
-    distances, _ = meshes.closest_points(0, points)
-    inside = np.abs(meshes.winding_number(0, points)) >= 0.5
-    expected = float(np.where(inside, 0.0, distances).max())
-    assert farthest_outside_solid(points, distances, meshes) == expected
-    deep = points[inside]  # every point inside: 0
-    assert farthest_outside_solid(deep, distances[inside], meshes) == 0.0
+    # Points near edges and corners too (their closest feature is not a face's inside).
+    near = v[rng.integers(len(v), size=500)] + rng.normal(scale=0.02, size=(500, 3))
+    points = np.concatenate([points, near])
+    inverted = (v, f[:, ::-1])  # consistently wound the other way round: the same solid
+    for mesh in ((v, f), inverted):
+        meshes = MeshSet.from_arrays([mesh])
+        distances, _ = meshes.closest_points(0, points)
+        inside = np.abs(meshes.winding_number(0, points)) >= 0.5
+        outside = float(np.where(inside, 0.0, distances).max())
+        assert farthest_outside_solid(points, meshes) == outside
+        # Only the points inside, then those plus the nearest outside ones: the search has
+        # to go past every inside point.
+        assert farthest_outside_solid(points[inside], meshes) == 0.0
+        few = inside | (distances <= np.quantile(distances[~inside], 0.05))
+        expected = float(np.where(inside, 0.0, distances)[few].max())
+        assert farthest_outside_solid(points[few], meshes) == expected
 
 
 def test_stale_cached_metrics_are_measured_again_without_the_engine(tmp_path, monkeypatch) -> None:

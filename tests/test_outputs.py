@@ -99,3 +99,23 @@ def test_staged_folder_holds_signals_while_it_moves_files(tmp_path, monkeypatch)
     assert moved == ["a.obj", "b.obj"]  # delivered once both were in place
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["a.obj", "b.obj"]
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_atomic_write_errors_name_the_destination_not_the_temporary_file(
+    tmp_path, monkeypatch
+) -> None:
+    from meshcol.io import report
+
+    target = tmp_path / "missing" / "r.json"
+    with pytest.raises(FileNotFoundError) as caught:
+        report.atomic_write(target, "{}")
+    assert caught.value.filename == str(target)
+
+    def full_disk(src, dst):
+        raise OSError(28, "No space left on device", src, None, dst)
+
+    monkeypatch.setattr(os, "replace", full_disk)
+    with pytest.raises(OSError) as caught:
+        report.atomic_write(tmp_path / "r.json", "{}")
+    assert caught.value.filename == str(tmp_path / "r.json")
+    assert list(tmp_path.glob(".meshcol-*")) == []

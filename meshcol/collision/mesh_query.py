@@ -216,6 +216,22 @@ class MeshSet:
         distances, closest, _ = self._handle.closest_points(int(i), points, int(threads))
         return distances, closest
 
+    def closest_faces(
+        self, i: int, points: Any, *, threads: int = 0
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`closest_points`, and the face of mesh ``i`` holding each closest point.
+
+        Returns
+        -------
+        distances : (n,) float64
+        points : (n, 3) float64
+        faces : (n,) int64
+            Index into mesh ``i``'s faces (input order); -1 where ``distances`` is NaN.
+        """
+        points = np.ascontiguousarray(as_points(points, "points"))
+        distances, closest, faces = self._handle.closest_points(int(i), points, int(threads))
+        return distances, closest, faces
+
 
 @dataclass(frozen=True, eq=False)
 class MeshDistanceBatch:

@@ -63,13 +63,14 @@ def points_to_parts(
 ) -> np.ndarray:
     """Distance from each point to the union of convex parts (0 inside a part), (n,) float64.
 
-    Each point is a one-vertex polytope; candidate (point, part) pairs are pruned with AABBs
+    Each point is a sphere of radius 0; candidate (point, part) pairs are pruned with AABBs
     (a part whose box is farther than the point's nearest part centroid cannot be the closest)
     and measured in one :func:`meshcol.collision.narrowphase.distance_batch` call. ``owner[i]`` (optional)
     excludes part ``owner[i]`` from point ``i``'s candidates.
     """
     from meshcol.collision.narrowphase import distance_batch
     from meshcol.collision.shapes import ConvexSet
+    from meshcol.types import Sphere
 
     points = np.ascontiguousarray(points, dtype=np.float64)
     n, k = len(points), len(parts)
@@ -96,12 +97,15 @@ def points_to_parts(
     j = np.concatenate(pairs_j)
     if len(i) == 0:
         return result
+    # Each point is a sphere of radius 0 placed by its pose: packed without a hull per point.
     shapes = ConvexSet.concatenate(
-        ConvexSet.from_vertices(list(points[:, None, :])),
+        ConvexSet.from_shapes([Sphere(0.0)] * n),
         ConvexSet.from_vertices([v for v, _ in parts]),
     )
+    poses = np.tile(np.eye(4), (n + k, 1, 1))
+    poses[:n, :3, 3] = points
     pairs = np.stack([i, n + j], axis=1).astype(np.int64)
-    batch = distance_batch(shapes, None, pairs, threads=threads)
+    batch = distance_batch(shapes, poses, pairs, threads=threads)
     # fmin skips NaN (a pair the query rejected): a point whose pairs all failed stays inf.
     np.fmin.at(result, i, np.asarray(batch.distance, dtype=np.float64))
     return result
@@ -122,58 +126,94 @@ def points_to_triangles(
     return distances
 
 
-def farthest_outside_solid(points: np.ndarray, distances: np.ndarray, meshes: Any) -> float:
+def farthest_outside_solid(points: np.ndarray, meshes: Any, *, threads: int = 0) -> float:
     """Largest distance from ``points`` to the solid a closed mesh bounds (0 inside it).
 
     Parameters
     ----------
     points : (n, 3) float
         Query points, in the mesh's frame.
-    distances : (n,) float
-        Exact distance of each point to the mesh surface (:func:`points_to_triangles`).
     meshes : meshcol.collision.mesh_query.MeshSet
-        The mesh, as mesh 0; closed and consistently wound.
+        The mesh, as mesh 0; closed and consistently wound (either way round).
+    threads : int
+        Threads for the closest-point queries; 0 uses all cores.
 
     Returns
     -------
     float
-        ``max(distances[i] for points i outside the solid)``, 0 when every point is inside
-        (a NaN distance counts as outside: the result is then NaN).
+        The largest distance to the mesh surface among the points outside it; 0 when every
+        point is inside; NaN when a point is not finite.
 
     Notes
     -----
-    Exact, and cheap where it matters: points are visited farthest first, in batches, and
-    classified by the generalized winding number (:meth:`MeshSet.contains`, Jacobson et al.
-    2013); the first outside point ends the search, since every later one is nearer. A
-    ball of radius ``distances[i]`` around a point holds no surface, so every point in the
-    ball of an inside point is inside too and is never tested (cut faces deep in the solid
-    are settled a ball at a time).
+    Exact, and cheap: each point's closest surface point comes from the mesh's hierarchy
+    (:meth:`MeshSet.closest_faces`). Where it lies inside a face, the point is on the side of
+    that face its normal says (the segment to it crosses no surface, or a surface point
+    would be nearer). The others (closest point on an edge or a corner) are classified by
+    the generalized winding number (:meth:`MeshSet.contains`, Jacobson et al. 2013), farthest
+    first, and only while they could raise the answer: the first outside one ends the
+    search. A ball of radius d around an inside point holds no surface, so every point in it
+    is inside too and is not tested.
     """
     from scipy.spatial import cKDTree
 
     points = np.ascontiguousarray(points, dtype=np.float64)
-    distances = np.asarray(distances, dtype=np.float64)
+    distances, closest, face = meshes.closest_faces(0, points, threads=threads)
+    if len(points) == 0:
+        return 0.0
     if np.isnan(distances).any():
         return float("nan")
+    vertices, faces = meshes.mesh(0)
+    corners = vertices[faces]
+    a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
+    normals = np.cross(b - a, c - a)
+    # Outward (positive volume) or inward: the side a face's normal points to is outside.
+    orientation = 1.0 if np.einsum("ij,ij->i", a, np.cross(b, c)).sum() >= 0 else -1.0
+    interior = _inside_face(closest, a[face], b[face], c[face])
+    side = orientation * np.einsum("ij,ij->i", points - closest, normals[face])
+    outside = interior & (side > 0.0)
+    best = float(distances[outside].max()) if outside.any() else 0.0
+    # Undecided: closest point on an edge or a corner, and farther than the answer so far.
+    settled = interior | (distances <= best)
+    if settled.all():
+        return best
     order = np.argsort(-distances, kind="stable")
-    settled = distances <= 0.0  # on the surface: 0 either way
-    tree = cKDTree(points)
+    tree = None
     batch = 16
     while True:
         pending = order[~settled[order]][:batch]
         if len(pending) == 0:
-            return 0.0
-        outside = ~meshes.contains(0, points[pending])
-        if outside.any():
+            return best
+        out = ~meshes.contains(0, points[pending])
+        if out.any():
             # Farthest first: every point not yet settled is no farther than these.
-            return float(distances[pending[outside]].max())
+            return max(best, float(distances[pending[out]].max()))
         settled[pending] = True
+        if tree is None:
+            tree = cKDTree(points)
         # Shrunk a little so that a point on the ball's sphere (on the surface) is left out.
         balls = tree.query_ball_point(points[pending], distances[pending] * (1.0 - 1e-9))
-        covered = [np.asarray(b, dtype=np.int64) for b in balls if len(b)]
+        covered = [np.asarray(ball, dtype=np.int64) for ball in balls if len(ball)]
         if covered:
             settled[np.concatenate(covered)] = True
         batch = min(2 * batch, 1024)
+
+
+def _inside_face(q: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Whether each point ``q`` (on its triangle's plane) lies strictly inside the triangle
+    (a, b, c), away from its edges by a relative margin: barycentric coordinates > 1e-9."""
+    e0, e1, w = b - a, c - a, q - a
+    d00 = np.einsum("ij,ij->i", e0, e0)
+    d01 = np.einsum("ij,ij->i", e0, e1)
+    d11 = np.einsum("ij,ij->i", e1, e1)
+    d20 = np.einsum("ij,ij->i", w, e0)
+    d21 = np.einsum("ij,ij->i", w, e1)
+    denominator = d00 * d11 - d01 * d01
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = (d11 * d20 - d01 * d21) / denominator
+        u = (d00 * d21 - d01 * d20) / denominator
+    margin = 1e-9
+    return (denominator > 0) & (v > margin) & (u > margin) & (1.0 - u - v > margin)
 
 
 def _manifold(vertices: np.ndarray, faces: np.ndarray):
@@ -276,14 +316,15 @@ def fidelity(
         )
         part_points = part_points[~shared]
     solid = is_closed_manifold(faces)
-    if len(part_points):
-        meshes = MeshSet.from_arrays([(vertices, faces)], threads=1)
-        to_mesh, _ = meshes.closest_points(0, part_points, threads=threads)
-        parts_to_mesh = (
-            farthest_outside_solid(part_points, to_mesh, meshes) if solid else float(to_mesh.max())
-        )
-    else:
+    if not len(part_points):
         parts_to_mesh = 0.0
+    elif solid:
+        meshes = MeshSet.from_arrays([(vertices, faces)], threads=1)
+        parts_to_mesh = farthest_outside_solid(part_points, meshes, threads=threads)
+    else:
+        parts_to_mesh = float(
+            points_to_triangles(part_points, vertices, faces, threads=threads).max()
+        )
 
     # The parts are convex hulls already (closed, outward): their meshes are the solids.
     solids = [_manifold(v, f) for v, f in parts]
