@@ -337,16 +337,18 @@ def _run(
             yield (path, [(name, v, f) for name, v, f, _ in bodies], options)
         total = len(files)
 
-    for outcome in pool.run(tasks()):
-        i = task_file[outcome.index]
-        results[i] = (outcome.status, outcome.value, outcome.message, outcome.seconds)
-        if outcome.status == "ok" and cache_root is not None:
-            # This process stores what the worker made (or measured again), as it arrives.
-            for name, d in outcome.value:
-                before = looked_up[i].get(name)
-                if before is None or before.metrics != d.metrics:
-                    cache.store(d, cache_root)
-        step()
+    # Closed here, not when garbage collected: the pool's signal handlers go with it.
+    with contextlib.closing(pool.run(tasks())) as outcomes:
+        for outcome in outcomes:
+            i = task_file[outcome.index]
+            results[i] = (outcome.status, outcome.value, outcome.message, outcome.seconds)
+            if outcome.status == "ok" and cache_root is not None:
+                # This process stores what the worker made (or measured again), as it arrives.
+                for name, d in outcome.value:
+                    before = looked_up[i].get(name)
+                    if before is None or before.metrics != d.metrics:
+                        cache.store(d, cache_root)
+            step()
 
     rows: list[dict[str, Any]] = []
     file_reports: list[dict[str, Any]] = []
