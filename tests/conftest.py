@@ -123,6 +123,8 @@ SLOW_TESTS = {
     "test_incremental_sweep_equals_brute_force_over_steps",
     "test_parts_are_convex_and_cover_the_torus",
     "test_short_fuzzing_run_finds_nothing",
+    "test_signals_stop_the_run_and_leave_nothing",
+    "test_max_hausdorff_gates_what_sticks_out_not_the_cuts",
 }
 
 
