@@ -641,7 +641,7 @@ def test_outputs_are_checked_before_any_work(meshes, tmp_path, monkeypatch) -> N
             "a_file/cache: cannot create the folder: a_file is not a folder",
         ),
         (["-o", "a_file/out"], "a_file/out: cannot create the folder: a_file is not a folder"),
-        (["-o", "out", "--report", "out"], "out: given as both --report and --out-dir"),
+        (["-o", "out", "--report", "out"], "out: --report and --out-dir are the same file"),
     ]
     for extra, message in cases:
         code, stdout, stderr = run([box, "--cache-dir", "cache", *extra])

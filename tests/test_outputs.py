@@ -30,9 +30,9 @@ def test_check_outputs_accepts_what_can_be_written(tmp_path) -> None:
         ({"--report": "d"}, {}, "d: is a folder, not a file"),
         ({}, {"--out-dir": "f"}, "f: is a file, not a folder"),
         ({}, {"--out-dir": "f/x/y"}, "f/x/y: cannot create the folder: f is not a folder"),
-        ({"--report": "in.obj"}, {}, "in.obj: --report would replace this input"),
-        ({"--report": "d/../in.obj"}, {}, "d/../in.obj: --report would replace this input"),
-        ({"--report": "x"}, {"--out-dir": "./x"}, "x: given as both --report and --out-dir"),
+        ({"--report": "in.obj"}, {}, "in.obj: --report would overwrite the input"),
+        ({"--report": "d/../in.obj"}, {}, "d/../in.obj: --report would overwrite the input"),
+        ({"--report": "x"}, {"--out-dir": "./x"}, "./x: --report and --out-dir are the same file"),
     ],
 )
 def test_check_outputs_refuses_with_the_users_path(

@@ -1,7 +1,9 @@
 """Where a run's outputs go: checked before any work starts, written all or nothing.
 
 A run that fails after an hour of work because its report folder is missing, or that replaces
-one of its own inputs, is worse than one that refuses at once. :func:`check_outputs` checks
+one of its own inputs, is worse than one that refuses at once. Every command calls
+:func:`check_destinations` (an output onto an input, two outputs one file) or
+:func:`check_outputs` (that, and the folders) before it writes anything. :func:`check_outputs` checks
 every output location of a run before it starts: an output file's folder exists and is
 writable, an output folder exists and is writable or can be created, no output is an input,
 and no two outputs are one file. :func:`staged_folder` writes a run's files into a hidden
@@ -17,14 +19,17 @@ import shutil
 import signal
 import tempfile
 import threading
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from pathlib import Path
 
-from meshcol.errors import MeshcolError
+from meshcol.errors import MeshcolError, OutputPathError
 
 __all__ = [
+    "check_destinations",
     "check_output_file",
     "check_output_folder",
     "check_outputs",
+    "manifest_inputs",
     "same_file",
     "staged_folder",
 ]
@@ -32,19 +37,23 @@ __all__ = [
 PathLike = str | os.PathLike[str]
 
 
-def _identity(path: PathLike) -> tuple[int, int] | str:
-    """What makes two paths one file: device and inode when it exists, else the real path."""
-    try:
-        st = os.stat(path)
-    except OSError:
-        return os.path.normcase(os.path.realpath(path))
-    return (st.st_dev, st.st_ino)
+def _key(path: PathLike) -> str:
+    return os.path.normcase(os.path.realpath(os.fspath(path)))
 
 
 def same_file(a: PathLike, b: PathLike) -> bool:
-    """True when ``a`` and ``b`` name one file (links and relative paths resolved), existing
-    or not."""
-    return _identity(a) == _identity(b)
+    """True when ``a`` and ``b`` name one file, existing or not: their resolved paths
+    (symbolic links followed, ``..`` removed, case folded where the platform folds it) are
+    equal, or both exist and :func:`os.path.samefile` says so (hard links, case-insensitive
+    file systems). ``-`` (stdout) is never a file."""
+    if os.fspath(a) == "-" or os.fspath(b) == "-":
+        return False
+    if _key(a) == _key(b):
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # one of them does not exist (yet): then they are not one file
+        return False
 
 
 def _writable_folder(folder: str) -> bool:
@@ -109,21 +118,75 @@ def check_output_folder(path: PathLike) -> None:
         )
 
 
+def check_destinations(
+    inputs: Iterable[tuple[str, PathLike]], outputs: Iterable[tuple[str, PathLike | None]]
+) -> None:
+    """Raise when an output would replace an input, or two outputs are one file.
+
+    Parameters
+    ----------
+    inputs : iterable of (description, path)
+        What the run reads, each with what it is to the user (``"the input"``, ``"the
+        --baseline"``, ``"a mesh file of scene.json"``).
+    outputs : iterable of (label, path or None)
+        What the run writes, each with its option (``"-o"``, ``"--report"``); None and
+        ``"-"`` (stdout) are skipped.
+
+    Raises
+    ------
+    OutputPathError
+        ``cube.obj: -o would overwrite the input`` or ``out.obj: -o and --report are the same
+        file``, naming the path as the user typed it.
+    """
+    read = [(label, os.fspath(path)) for label, path in inputs]
+    written: list[tuple[str, str]] = []
+    for label, path in outputs:
+        if path is None or os.fspath(path) == "-":
+            continue
+        path = os.fspath(path)
+        for description, in_path in read:
+            if same_file(path, in_path):
+                raise OutputPathError(f"{label} would overwrite {description}", path)
+        for out_label, out_path in written:
+            if same_file(path, out_path):
+                raise OutputPathError(f"{out_label} and {label} are the same file", path)
+        written.append((label, path))
+
+
+def manifest_inputs(paths: Iterable[PathLike]) -> list[tuple[str, str]]:
+    """Every file a command's inputs read: the inputs and, for a scene manifest, its meshes.
+
+    A manifest that cannot be parsed contributes only itself: loading it reports the problem.
+    """
+    from meshcol.io.scene import MANIFEST_EXTENSIONS, manifest_mesh_files
+
+    found: list[tuple[str, str]] = []
+    for path in paths:
+        path = os.fspath(path)
+        found.append(("the input", path))
+        if Path(path).suffix.lower() in MANIFEST_EXTENSIONS:
+            found.extend((f"a mesh file of {path}", mesh) for mesh in manifest_mesh_files(path))
+    return found
+
+
 def check_outputs(
     files: Mapping[str, PathLike | None] | None = None,
     folders: Mapping[str, PathLike | None] | None = None,
     inputs: Sequence[PathLike] = (),
 ) -> None:
-    """Check every output location of a run before the run starts.
+    """Check every output location of a run before the run starts: no output replaces an
+    input (a manifest's mesh files included) or another output (:func:`check_destinations`),
+    every output file's folder exists and is writable, every output folder is writable or
+    can be created.
 
     Parameters
     ----------
     files : mapping of label -> path or None
-        Output files (``{"--report": "out/r.json"}``); None entries are skipped.
+        Output files (``{"--report": "out/r.json"}``); None and ``"-"`` entries are skipped.
     folders : mapping of label -> path or None
         Output folders (``{"--out-dir": "parts", "--cache-dir": None}``), created if missing.
     inputs : sequence of paths
-        The run's input files: no output may be one of them.
+        The run's input files.
 
     Raises
     ------
@@ -131,17 +194,13 @@ def check_outputs(
         Naming the path as given: a missing or unwritable folder, a folder given as a file
         (or the reverse), an output that is an input, or one path given as two outputs.
     """
-    outputs = [(label, os.fspath(p), "file") for label, p in (files or {}).items() if p]
+    outputs = [
+        (label, os.fspath(p), "file") for label, p in (files or {}).items() if p and p != "-"
+    ]
     outputs += [(label, os.fspath(p), "folder") for label, p in (folders or {}).items() if p]
-    for label, path, kind in outputs:
-        for source in inputs:
-            if same_file(path, source):
-                raise MeshcolError(f"{label} would replace this input", path)
+    check_destinations(manifest_inputs(inputs), [(label, path) for label, path, _ in outputs])
+    for _, path, kind in outputs:
         (check_output_file if kind == "file" else check_output_folder)(path)
-    for i, (label, path, _) in enumerate(outputs):
-        for other, other_path, _ in outputs[i + 1 :]:
-            if same_file(path, other_path):
-                raise MeshcolError(f"given as both {label} and {other}", path)
 
 
 @contextlib.contextmanager
