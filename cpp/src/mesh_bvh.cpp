@@ -56,6 +56,17 @@ struct Box {
     }
 };
 
+// SAH bin of a centroid coordinate `c` in [lo, lo + extent] (extent > 0), always in
+// [0, mesh_bvh_bins). Divides before scaling: kBins / extent overflows to inf for a denormal
+// extent (vertices near 1e-310), and 0 * inf is NaN, whose conversion to int is undefined; an
+// infinite extent (coordinates near the double range) puts everything in bin 0.
+inline int bin_of(double c, double lo, double extent) {
+    constexpr int kBins = defaults::mesh_bvh_bins;
+    const double x = (c - lo) / extent * kBins;
+    if (!(x > 0.0)) return 0;  // also NaN
+    return x >= kBins - 1 ? kBins - 1 : static_cast<int>(x);
+}
+
 struct BuildTask {
     std::int32_t begin, end;
     std::int32_t patch;  // node whose right-child index is this task's node, or -1
@@ -131,14 +142,13 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
             const double lo = centroid_bounds.lower[axis];
             const double extent = centroid_bounds.upper[axis] - lo;
             if (!(extent > 0.0)) continue;
-            const double scale = kBins / extent;
             for (int b = 0; b < kBins; ++b) {
                 bin_box[b] = Box{};
                 bin_count[b] = 0;
             }
             for (std::int32_t i = task.begin; i < task.end; ++i) {
                 const std::int32_t f = order[static_cast<size_t>(i)];
-                const int b = std::min(kBins - 1, static_cast<int>((centroids[static_cast<size_t>(f)][axis] - lo) * scale));
+                const int b = bin_of(centroids[static_cast<size_t>(f)][axis], lo, extent);
                 bin_box[b].grow(boxes[static_cast<size_t>(f)]);
                 ++bin_count[b];
             }
@@ -167,11 +177,10 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         std::int32_t mid = task.begin + count / 2;
         if (best_axis >= 0) {
             const double lo = centroid_bounds.lower[best_axis];
-            const double scale = kBins / (centroid_bounds.upper[best_axis] - lo);
+            const double extent = centroid_bounds.upper[best_axis] - lo;
             auto first = order.begin() + task.begin, last = order.begin() + task.end;
             auto split = std::partition(first, last, [&](std::int32_t f) {
-                const int b = std::min(kBins - 1, static_cast<int>((centroids[static_cast<size_t>(f)][best_axis] - lo) * scale));
-                return b <= best_bin;
+                return bin_of(centroids[static_cast<size_t>(f)][best_axis], lo, extent) <= best_bin;
             });
             const auto m = static_cast<std::int32_t>(split - order.begin());
             if (m > task.begin && m < task.end) mid = m;

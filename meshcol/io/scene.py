@@ -124,7 +124,7 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
             raise SceneError(f"{label}: needs exactly one of 'mesh' or 'primitive'", source)
         start = _pose(spec.get("position"), spec.get("rotation"), label, "rotation", source)
         end = _end_pose(spec, start, duration, label, source)
-        scale = _scale(spec.get("scale"))
+        scale = _scale(spec.get("scale"), label, source)
         if "mesh" in spec:
             new = _mesh_bodies(spec, file, source, label, start, end, scale, files)
         else:
@@ -361,12 +361,22 @@ def _rotation_vector(vector: np.ndarray) -> np.ndarray:
     return np.eye(3) + math.sin(angle) * cross + (1 - math.cos(angle)) * (cross @ cross)
 
 
-def _scale(value) -> np.ndarray:
+def _scale(value, label: str, source) -> np.ndarray:
     if value is None:
         return np.ones(3)
     if isinstance(value, list):
-        return np.asarray(value, dtype=np.float64)
-    return np.full(3, float(value))
+        scale = np.asarray(value, dtype=np.float64)
+    else:
+        scale = np.full(3, float(value))
+    # The schema asks for > 0; a denormal scale (below the smallest normal double) collapses
+    # the mesh into rounding noise and cannot be baked faithfully.
+    tiny = np.finfo(np.float64).tiny
+    if not np.all(np.isfinite(scale) & (scale >= tiny)):
+        bad = value if not isinstance(value, list) else [float(x) for x in value]
+        raise SceneError(
+            f"{label}: scale {bad!r} is outside the usable range [{tiny:.6g}, inf)", source
+        )
+    return scale
 
 
 def _mesh_bodies(
