@@ -504,9 +504,9 @@ def test_denormal_scale_is_a_one_line_error_not_a_crash(tmp_path: Path, scale: s
     import trimesh
 
     trimesh.creation.box().export(tmp_path / "box.obj")
+    body = '{"name": "a", "mesh": "box.obj", "scale": ' + scale + "}"
     (tmp_path / "scene.json").write_text(
-        '{"bodies": [{"name": "a", "mesh": "box.obj", "scale": %s},'
-        ' {"name": "b", "mesh": "box.obj"}]}' % scale
+        '{"bodies": [' + body + ', {"name": "b", "mesh": "box.obj"}]}'
     )
     for shape in ("hull", "mesh"):
         out = subprocess.run(
