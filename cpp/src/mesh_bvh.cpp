@@ -200,6 +200,10 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         face_index_[static_cast<size_t>(i)] = f;
         for (int k = 0; k < 3; ++k) corners_[3 * static_cast<size_t>(i) + k] = vertex(faces[3 * f + k]);
     }
+    std::vector<char> used(static_cast<size_t>(vertex_count), 0);
+    for (std::int64_t k = 0; k < 3 * face_count; ++k) used[static_cast<size_t>(faces[k])] = 1;
+    for (std::int64_t v = 0; v < vertex_count; ++v)
+        if (used[static_cast<size_t>(v)]) vertices_.push_back(vertex(v));
 }
 
 bool MeshBvh::validate() const {

@@ -9,6 +9,7 @@
 // distance so far are dropped.
 #include "meshcol/mesh_query.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -248,6 +249,158 @@ inline double point_box_squared_distance(const BvhNode& n, const Vec3& p) {
     return d2;
 }
 
+// Marks the triangles (leaf order) of a and of b that belong to an intersecting triangle
+// pair: the descent of mesh_intersects, run to the end.
+struct CrossingPair {
+    std::int32_t a, b;  // leaf order
+    Vec3 witness;       // a shared point, a's frame
+};
+
+void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
+                             std::vector<char>& in_a, std::vector<char>& in_b,
+                             std::vector<CrossingPair>& pairs) {
+    pairs.clear();
+    in_a.assign(static_cast<size_t>(a.triangle_count()), 0);
+    in_b.assign(static_cast<size_t>(b.triangle_count()), 0);
+    const std::vector<BvhNode>& na = a.nodes();
+    const std::vector<BvhNode>& nb = b.nodes();
+    if (box_squared_distance(na[0], nb[0], rel) > 0.0) return;
+    std::vector<std::pair<std::int32_t, std::int32_t>> stack{{0, 0}};
+    MappedLeaf leaf_b;
+    while (!stack.empty()) {
+        const auto [ia, ib] = stack.back();
+        stack.pop_back();
+        const BvhNode& x = na[static_cast<size_t>(ia)];
+        const BvhNode& y = nb[static_cast<size_t>(ib)];
+        if (x.is_leaf() && y.is_leaf()) {
+            leaf_b.load(b, y, rel);
+            for (std::int32_t i = x.index; i < x.index + x.count; ++i) {
+                const Vec3* ta = a.triangle(i);
+                const TriangleBox box_a = triangle_box(ta);
+                for (int j = 0; j < leaf_b.count; ++j)
+                    if (Vec3 w; triangle_box_squared_distance(box_a, leaf_b.boxes[j]) == 0.0 &&
+                                triangles_intersect(ta, leaf_b.corners[j], &w)) {
+                        in_a[static_cast<size_t>(i)] = 1;
+                        in_b[static_cast<size_t>(y.index + j)] = 1;
+                        pairs.push_back({i, y.index + j, w});
+                    }
+            }
+            continue;
+        }
+        const bool descend_a = !x.is_leaf() && (y.is_leaf() || node_size(x) >= node_size(y));
+        const std::pair<std::int32_t, std::int32_t> c1 = descend_a ? std::make_pair(ia + 1, ib) : std::make_pair(ia, ib + 1);
+        const std::pair<std::int32_t, std::int32_t> c2 = descend_a ? std::make_pair(x.index, ib) : std::make_pair(ia, y.index);
+        if (box_squared_distance(na[static_cast<size_t>(c2.first)], nb[static_cast<size_t>(c2.second)], rel) == 0.0)
+            stack.push_back(c2);
+        if (box_squared_distance(na[static_cast<size_t>(c1.first)], nb[static_cast<size_t>(c1.second)], rel) == 0.0)
+            stack.push_back(c1);
+    }
+}
+
+// Parameters along [p, q] (mesh's local frame) where the segment meets the mesh's surface in
+// isolated points, appended to `out`.
+void segment_crossings(const MeshBvh& mesh, const Vec3& p, const Vec3& q, std::vector<double>& out) {
+    const Vec3 lo = component_min(p, q), hi = component_max(p, q);
+    const std::vector<BvhNode>& nodes = mesh.nodes();
+    std::vector<std::int32_t> stack{0};
+    while (!stack.empty()) {
+        const BvhNode& node = nodes[static_cast<size_t>(stack.back())];
+        const std::int32_t id = stack.back();
+        stack.pop_back();
+        bool overlap = true;
+        for (int k = 0; k < 3; ++k)
+            if (hi[k] < node.lower[k] || lo[k] > node.upper[k]) overlap = false;
+        if (!overlap) continue;
+        if (node.is_leaf()) {
+            for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
+                double s = 0.0;
+                if (segment_crosses_triangle(p, q, mesh.triangle(i), &s)) out.push_back(s);
+            }
+            continue;
+        }
+        stack.push_back(node.index);
+        stack.push_back(id + 1);
+    }
+}
+
+// A point of one mesh, in the other mesh's local frame, with its distance to that surface.
+struct DepthCandidate {
+    Vec3 point;
+    Vec3 closest;
+    double distance;
+    int mesh;  // 0: a point of a (frame of b); 1: a point of b (frame of a); 2: a point of
+               // neither surface that may lie inside both (frame of a)
+};
+
+inline double longest_edge(const Vec3 t[3]) {
+    return std::sqrt(std::fmax(squared_norm(t[1] - t[0]),
+                               std::fmax(squared_norm(t[2] - t[1]), squared_norm(t[0] - t[2]))));
+}
+
+// Points off both surfaces near where they cross: from a shared point of each crossing
+// triangle pair, steps into the wedge between the two triangles, against the sum of their
+// unit normals, and from each triangle's centroid, steps against its own normal (each mesh's
+// winding decides its normals: outward for outward-wound meshes, and the winding-number test
+// sorts out the rest). Such a point p inside both solids bounds
+// the minimum translation distance by max(dist(p, surface a), dist(p, surface b)), and it
+// finds overlaps whose surface points all lie on the other surface (flush, coplanar faces).
+void add_wedge_candidates(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
+                          const std::vector<CrossingPair>& pairs, std::vector<DepthCandidate>& out) {
+    constexpr size_t kMaxPairs = 4096;
+    const size_t stride = pairs.size() / kMaxPairs + 1;
+    for (size_t k = 0; k < pairs.size(); k += stride) {
+        const CrossingPair& c = pairs[k];
+        const Vec3* ta = a.triangle(c.a);
+        const Vec3* tb_local = b.triangle(c.b);
+        const Vec3 tb[3] = {rel.apply(tb_local[0]), rel.apply(tb_local[1]), rel.apply(tb_local[2])};
+        const Vec3 na = cross(ta[1] - ta[0], ta[2] - ta[0]);
+        const Vec3 nb = cross(tb[1] - tb[0], tb[2] - tb[0]);
+        const double la = norm(na), lb = norm(nb);
+        if (!(la > 0.0 && lb > 0.0)) continue;
+        const double h = std::fmin(longest_edge(ta), longest_edge(tb));
+        const Vec3 centroid_a = (ta[0] + ta[1] + ta[2]) / 3.0;
+        const Vec3 centroid_b = (tb[0] + tb[1] + tb[2]) / 3.0;
+        for (double step : {0.5 * h, 0.125 * h, 0.03125 * h}) {
+            // Each triangle's centroid, stepped into its own solid: finds coincident and
+            // coplanar overlaps, whose shared points all lie on edges of both.
+            out.push_back({centroid_a - na * (step / la), Vec3{}, 0.0, 2});
+            out.push_back({centroid_b - nb * (step / lb), Vec3{}, 0.0, 2});
+        }
+        const Vec3 sum = na / la + nb / lb;
+        const double ls = norm(sum);
+        if (!(ls > 1e-6)) continue;  // opposite normals: faces resting on each other
+        const Vec3 inward = sum * (-1.0 / ls);
+        for (double step : {0.5 * h, 0.125 * h, 0.03125 * h})
+            out.push_back({c.witness + inward * step, Vec3{}, 0.0, 2});
+    }
+}
+
+// Sample points of `self` (their frame mapped into `other`'s by `to_other`) that may lie
+// inside `other`: vertices within other's root box, and midpoints of the pieces into which the
+// other surface cuts the edges of self's crossing triangles.
+template <class Map>
+void add_candidates(const MeshBvh& self, const MeshBvh& other, const std::vector<char>& crossing,
+                    Map to_other, int mesh, std::vector<DepthCandidate>& out) {
+    const BvhNode& root = other.nodes()[0];
+    auto add = [&](const Vec3& p) {
+        if (inside_box(root, p)) out.push_back({p, Vec3{}, 0.0, mesh});
+    };
+    for (const Vec3& v : self.vertices()) add(to_other(v));
+    std::vector<double> cuts;
+    for (std::int32_t i = 0; i < self.triangle_count(); ++i) {
+        if (!crossing[static_cast<size_t>(i)]) continue;
+        const Vec3* t = self.triangle(i);
+        for (int k = 0; k < 3; ++k) {
+            const Vec3 p = to_other(t[k]), q = to_other(t[(k + 1) % 3]);
+            cuts.assign({0.0, 1.0});
+            segment_crossings(other, p, q, cuts);
+            std::sort(cuts.begin(), cuts.end());
+            for (size_t c = 0; c + 1 < cuts.size(); ++c)
+                if (cuts[c + 1] > cuts[c]) add(p + (q - p) * (0.5 * (cuts[c] + cuts[c + 1])));
+        }
+    }
+}
+
 }  // namespace
 
 PointDistanceOutput closest_point(const MeshBvh& mesh, const Vec3& point) {
@@ -382,6 +535,105 @@ MeshDistanceOutput mesh_distance(const MeshDistanceInput& input) {
         out.b_inside_a = point_inside(a, input.pose_a, input.pose_b.apply(b.triangle(0)[0]));
     }
     out.status = Status::CONVERGED;
+    return out;
+}
+
+MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
+    MeshDepthOutput out;
+    const Vec3 nan3{kNaN, kNaN, kNaN};
+    out.point_a = out.point_b = out.normal = nan3;
+    if (input.a == nullptr || input.b == nullptr || !input.a->valid() || !input.b->valid()) {
+        out.depth = kNaN;
+        out.status = Status::INVALID_INPUT;
+        return out;
+    }
+    const MeshBvh& a = *input.a;
+    const MeshBvh& b = *input.b;
+    const Relative rel(input.pose_a, input.pose_b);  // b's frame -> a's frame
+    std::vector<char> crossing_a, crossing_b;
+    std::vector<CrossingPair> crossing_pairs;
+    mark_crossing_triangles(a, b, rel, crossing_a, crossing_b, crossing_pairs);
+    std::vector<DepthCandidate> candidates;
+    add_candidates(a, b, crossing_a, [&](const Vec3& p) { return rel.apply_inverse(p); }, 0, candidates);
+    add_candidates(b, a, crossing_b, [&](const Vec3& p) { return rel.apply(p); }, 1, candidates);
+    add_wedge_candidates(a, b, rel, crossing_pairs, candidates);
+    // Closest surface points: of the other mesh; for wedge points, of whichever mesh is
+    // farther (its surface point is stored in a's frame).
+    for (DepthCandidate& c : candidates) {
+        if (c.mesh < 2) {
+            const PointDistanceOutput r = closest_point(c.mesh == 0 ? b : a, c.point);
+            c.distance = r.distance;
+            c.closest = r.point;
+            continue;
+        }
+        const PointDistanceOutput ra = closest_point(a, c.point);
+        const PointDistanceOutput rb = closest_point(b, rel.apply_inverse(c.point));
+        if (ra.distance >= rb.distance) {
+            c.distance = ra.distance;
+            c.closest = ra.point;
+        } else {
+            c.distance = rb.distance;
+            c.closest = rel.apply(rb.point);
+        }
+    }
+    // Deepest first: the first inside point is the answer. Points on the other surface
+    // (distance 0) cannot add depth.
+    candidates.erase(std::remove_if(candidates.begin(), candidates.end(),
+                                    [](const DepthCandidate& c) { return !(c.distance > 0.0); }),
+                     candidates.end());
+    std::sort(candidates.begin(), candidates.end(),
+              [](const DepthCandidate& x, const DepthCandidate& y) { return x.distance > y.distance; });
+    // Balls proven free of the other surface around outside points, per frame.
+    std::vector<std::pair<Vec3, double>> outside[3];
+    constexpr size_t kBallsChecked = 256;
+    long long work = 0;
+    out.status = Status::CONVERGED;
+    for (const DepthCandidate& c : candidates) {
+        const auto& balls = outside[c.mesh];
+        bool known_outside = false;
+        for (size_t k = balls.size(); k-- > 0 && balls.size() - k <= kBallsChecked;)
+            if (squared_norm(c.point - balls[k].first) < balls[k].second * balls[k].second) {
+                known_outside = true;
+                break;
+            }
+        if (known_outside) continue;
+        const long long cost = c.mesh == 0 ? b.triangle_count()
+                               : c.mesh == 1 ? a.triangle_count()
+                                             : static_cast<long long>(a.triangle_count()) + b.triangle_count();
+        if (work + cost > defaults::mesh_depth_max_work) {
+            out.status = Status::MAX_ITERATIONS;
+            break;
+        }
+        work += cost;
+        ++out.points_tested;
+        auto inside = [](const MeshBvh& mesh, const Vec3& p) {
+            return std::fabs(winding_number(mesh, p)) >= defaults::winding_number_inside;
+        };
+        const bool found = c.mesh == 0   ? inside(b, c.point)
+                           : c.mesh == 1 ? inside(a, c.point)
+                                         : inside(a, c.point) && inside(b, rel.apply_inverse(c.point));
+        if (found) {
+            out.depth = c.distance;
+            // Report the deepest point and its closest surface point as the pair (point_a,
+            // point_b): a's point inside b, b's point inside a, or a point inside both with
+            // the farther surface's closest point (b moves along point_a - point_b).
+            const Pose& frame = c.mesh == 0 ? input.pose_b : input.pose_a;
+            const Vec3 deep = frame.apply(c.point), surface = frame.apply(c.closest);
+            bool deep_is_a = c.mesh == 0;
+            if (c.mesh == 2) {
+                // The closest point is on a's surface exactly when a is the farther one.
+                deep_is_a = !(closest_point(a, c.point).distance >= c.distance);
+            }
+            out.deepest_mesh = c.mesh == 2 ? (deep_is_a ? 0 : 1) : c.mesh;
+            out.point_a = deep_is_a ? deep : surface;
+            out.point_b = deep_is_a ? surface : deep;
+            const Vec3 gap = out.point_a - out.point_b;
+            const double length = norm(gap);
+            if (length > 0.0) out.normal = gap / length;
+            break;
+        }
+        if (c.mesh < 2) outside[c.mesh].push_back({c.point, c.distance});
+    }
     return out;
 }
 

@@ -334,6 +334,23 @@ bool triangles_intersect(const Vec3 a[3], const Vec3 b[3], Vec3* witness) {
     return triangles_intersect_nondegenerate_b(a, b, drop_a, drop_b, witness);
 }
 
+bool segment_crosses_triangle(const Vec3& p, const Vec3& q, const Vec3 t[3], double* parameter) {
+    const int sp = orient3d_sign(t[0], t[1], t[2], p);
+    const int sq = orient3d_sign(t[0], t[1], t[2], q);
+    if (sp * sq > 0 || (sp == 0 && sq == 0)) return false;  // one side, or in the plane
+    if (projection_axis(t) < 0) return false;              // degenerate triangle
+    const int s0 = orient3d_sign(p, q, t[0], t[1]);
+    const int s1 = orient3d_sign(p, q, t[1], t[2]);
+    const int s2 = orient3d_sign(p, q, t[2], t[0]);
+    if (!same_sign_or_zero(s0, s1, s2)) return false;
+    if (parameter) {
+        const Vec3 n = cross(t[1] - t[0], t[2] - t[0]);
+        const double dp = dot(p - t[0], n), dq = dot(q - t[0], n);
+        *parameter = sp == 0 ? 0.0 : (sq == 0 ? 1.0 : (dp != dq ? clamp01(dp / (dp - dq)) : 0.0));
+    }
+    return true;
+}
+
 TriangleDistanceOutput triangle_distance(const Vec3 a[3], const Vec3 b[3]) {
     TriangleDistanceOutput out;
     Vec3 w;

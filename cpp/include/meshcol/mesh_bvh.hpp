@@ -41,6 +41,8 @@ public:
     std::int32_t triangle_count() const { return static_cast<std::int32_t>(face_index_.size()); }
     /// The three corners of triangle `i` (leaf order), local frame.
     const Vec3* triangle(std::int32_t i) const { return &corners_[3 * static_cast<size_t>(i)]; }
+    /// The vertices used by at least one face, each once, local frame (input order).
+    const std::vector<Vec3>& vertices() const { return vertices_; }
     /// The input face index of triangle `i` (leaf order).
     std::int64_t face_index(std::int32_t i) const { return face_index_[static_cast<size_t>(i)]; }
 
@@ -52,6 +54,7 @@ public:
 private:
     std::vector<BvhNode> nodes_;
     std::vector<Vec3> corners_;            ///< 3 per triangle, leaf order
+    std::vector<Vec3> vertices_;           ///< vertices referenced by a face, input order
     std::vector<std::int64_t> face_index_;  ///< leaf order -> input face
 };
 

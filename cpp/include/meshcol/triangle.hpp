@@ -34,6 +34,12 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3 t[3]);
 /// (up to rounding).
 bool triangles_intersect(const Vec3 a[3], const Vec3 b[3], Vec3* witness);
 
+/// Whether the closed segment [p, q] meets the closed triangle `t` in exactly one point, i.e.
+/// crosses or touches it without lying in its plane (exact signs, as `triangles_intersect`).
+/// A degenerate triangle, or a segment in the triangle's plane, never counts. On success
+/// writes the parameter s in [0, 1] of the meeting point p + s (q - p) (up to rounding).
+bool segment_crosses_triangle(const Vec3& p, const Vec3& q, const Vec3 t[3], double* parameter);
+
 /// Squared distance between two triangles, as the minimum over the 9 edge-edge pairs and the 6
 /// vertex-face pairs (Ericson 2004, 5.1.9 and 5.1.5); writes the closest points. This is the
 /// exact distance when the triangles do not intersect, and an upper bound otherwise (call
