@@ -274,3 +274,66 @@ def test_intersection_volume_needs_two_closed_meshes() -> None:
     volumes = mesh_intersection_volume(meshes, None, [[0, 1], [1, 0], [2, 1]])
     assert volumes[:2] == pytest.approx([0.125, 0.125], rel=1e-12)
     assert math.isnan(volumes[2])
+
+
+def _open_copy(mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray]:
+    """The mesh plus one tiny stray triangle far away: no longer closed, so the core decides
+    inside by the generalized winding number instead of exact ray crossings."""
+    v = np.asarray(mesh.vertices)
+    far = v.max(axis=0) + 10.0
+    stray = np.array([far, far + [1e-3, 0, 0], far + [0, 1e-3, 0]])
+    faces = np.vstack([np.asarray(mesh.faces), len(v) + np.arange(3)[None]])
+    return np.vstack([v, stray]), faces
+
+
+def test_core_closedness_agrees_with_topology() -> None:
+    from meshcol.geometry.topology import is_closed_manifold
+
+    meshes = [host for host, _ in HOSTS.values()] + [cube for _, cube in HOSTS.values()]
+    meshes += [_open_copy(m) for m in meshes[:2]]
+    flipped = box([0, 0, 0], [1, 1, 1])
+    half = np.asarray(flipped.faces).copy()
+    half[:2] = half[:2, ::-1]  # two faces wound the other way
+    meshes += [(flipped.vertices, half), (flipped.vertices, np.asarray(flipped.faces)[:-1])]
+    s = MeshSet.from_arrays(meshes)
+    for i in range(len(s)):
+        assert s._handle.closed(i) == is_closed_manifold(s.mesh(i)[1]), i
+
+
+@given(st.sampled_from(sorted(HOSTS)), quaternion, st.tuples(*[st.floats(-0.5, 0.5)] * 3))
+def test_exact_ray_crossings_agree_with_the_winding_number(name: str, q, t) -> None:
+    """The depth of a closed pair (inside decided by exact signed ray crossings) equals the
+    depth of the same pair made open by a stray far triangle (generalized winding number)."""
+    host, _ = HOSTS[name]
+    cube = box([-0.3, -0.3, -0.3], [0.3, 0.3, 0.3])
+    pose = _pose(_rotation(q), np.array(t) + host.bounds.mean(axis=0))
+    closed = MeshSet.from_arrays([host, cube], np.stack([np.eye(4), pose]))
+    opened = MeshSet.from_arrays([_open_copy(host), cube], np.stack([np.eye(4), pose]))
+    assert closed._handle.closed(0) and not opened._handle.closed(0)
+    a = mesh_penetration_depth_batch(closed, None, [[0, 1], [1, 0]])
+    b = mesh_penetration_depth_batch(opened, None, [[0, 1], [1, 0]])
+    assert a.depth == pytest.approx(b.depth, rel=1e-9, abs=1e-12)
+
+
+SAMPLES = __import__("pathlib").Path(__file__).resolve().parent.parent / "samples"
+
+
+@pytest.mark.parametrize("offset", OFFSETS)
+def test_sample_ball_lowered_onto_the_bowl_is_contact(offset: float) -> None:
+    """samples/bowl with --shape mesh passes (a gap of about 0.05); lowered along the closest
+    points' normal until the triangles touch, then moved by the offsets, it still passes."""
+    from meshcol.io.scene import load_scene
+
+    scene = load_scene(SAMPLES / "bowl" / "scene.json")
+    report = check_scene(scene, CheckOptions(collider="mesh"))
+    (pair,) = report.pairs
+    assert pair["status"] == "separated" and report.passed
+    normal, gap = np.array(pair["normal"]), pair["distance"]
+    bodies = list(scene.bodies)
+    moved = [i for i, b in enumerate(bodies) if b.name == pair["b"]][0]
+    shift = _pose(translation=-(gap - offset) * normal)
+    b = bodies[moved]
+    bodies[moved] = Body(b.name, b.source, b.vertices, b.faces, shift @ b.pose)
+    (touching,) = check_scene(Scene(tuple(bodies)), CheckOptions(collider="mesh")).pairs
+    assert touching["status"] == "contact", touching
+    assert touching["depth"] <= max(0.0, -offset) + 1e-12

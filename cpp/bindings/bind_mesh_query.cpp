@@ -270,6 +270,8 @@ void bind_mesh_query(nb::module_& m) {
         .def("__len__", [](const MeshBvhSet& s) { return s.meshes.size(); })
         .def("valid", [](const MeshBvhSet& s, std::int64_t i) { return s.at(i).valid(); }, "i"_a,
              "Whether mesh i has finite vertices and at least one face.")
+        .def("closed", [](const MeshBvhSet& s, std::int64_t i) { return s.at(i).closed(); }, "i"_a,
+             "Whether mesh i is a closed, consistently wound surface (MeshBvh::closed).")
         .def("node_count", [](const MeshBvhSet& s, std::int64_t i) { return s.at(i).nodes().size(); }, "i"_a)
         .def("validate", [](const MeshBvhSet& s) {
             for (const auto& mesh : s.meshes)

@@ -9,6 +9,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "meshcol/defaults.hpp"
 
@@ -199,6 +200,21 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         const std::int32_t f = order[static_cast<size_t>(i)];
         face_index_[static_cast<size_t>(i)] = f;
         for (int k = 0; k < 3; ++k) corners_[3 * static_cast<size_t>(i) + k] = vertex(faces[3 * f + k]);
+    }
+    // Closed and consistently wound: sorted directed edges pair up as (u, v) and (v, u).
+    std::vector<std::pair<std::int64_t, std::int64_t>> edges;
+    edges.reserve(3 * static_cast<size_t>(face_count));
+    for (std::int64_t f = 0; f < face_count; ++f)
+        for (int k = 0; k < 3; ++k) {
+            const std::int64_t u = faces[3 * f + k], v = faces[3 * f + (k + 1) % 3];
+            if (u != v) edges.push_back({u, v});
+        }
+    std::sort(edges.begin(), edges.end());
+    closed_ = !edges.empty();
+    for (size_t e = 0; e < edges.size() && closed_; ++e) {
+        const auto [u, v] = edges[e];
+        const bool repeated = e + 1 < edges.size() && edges[e + 1] == edges[e];
+        closed_ = !repeated && std::binary_search(edges.begin(), edges.end(), std::make_pair(v, u));
     }
     std::vector<char> used(static_cast<size_t>(vertex_count), 0);
     for (std::int64_t k = 0; k < 3 * face_count; ++k) used[static_cast<size_t>(faces[k])] = 1;

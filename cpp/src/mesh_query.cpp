@@ -17,6 +17,7 @@
 
 #include "meshcol/defaults.hpp"
 #include "meshcol/triangle.hpp"
+#include "predicates.hpp"
 
 namespace meshcol {
 namespace {
@@ -247,6 +248,110 @@ inline double point_box_squared_distance(const BvhNode& n, const Vec3& p) {
         if (gap > 0.0) d2 += gap * gap;
     }
     return d2;
+}
+
+// Whether the segment p + s (q - p), s in [0, 1], may meet node n's box: the slab test on the
+// box grown by a relative margin, so rounding can only keep a box, never drop one.
+inline bool segment_may_meet_box(const BvhNode& n, const Vec3& p, const Vec3& d) {
+    double lo = 0.0, hi = 1.0;
+    for (int k = 0; k < 3; ++k) {
+        const double margin = 1e-9 * (std::fabs(n.lower[k]) + std::fabs(n.upper[k])) + 1e-300;
+        const double a = static_cast<double>(n.lower[k]) - margin;
+        const double b = static_cast<double>(n.upper[k]) + margin;
+        if (d[k] == 0.0) {
+            if (p[k] < a || p[k] > b) return false;
+            continue;
+        }
+        double s0 = (a - p[k]) / d[k], s1 = (b - p[k]) / d[k];
+        if (s0 > s1) std::swap(s0, s1);
+        lo = std::fmax(lo, s0);
+        hi = std::fmin(hi, s1);
+        if (lo > hi) return false;
+    }
+    return true;
+}
+
+// Signed number of crossings of the segment [p, q] with a closed mesh's triangles (the winding
+// number of p when q is outside), with exact orientation signs, or 1 when p lies on the
+// surface; false when the segment passes exactly through an edge or a vertex, so another
+// direction must be tried.
+bool signed_crossings(const MeshBvh& mesh, const Vec3& p, const Vec3& q, int* count) {
+    using predicates::orient3d_sign;
+    const Vec3 d = q - p;
+    const std::vector<BvhNode>& nodes = mesh.nodes();
+    std::vector<std::int32_t> stack{0};
+    int total = 0;
+    while (!stack.empty()) {
+        const std::int32_t id = stack.back();
+        stack.pop_back();
+        const BvhNode& node = nodes[static_cast<size_t>(id)];
+        if (!segment_may_meet_box(node, p, d)) continue;
+        if (!node.is_leaf()) {
+            stack.push_back(node.index);
+            stack.push_back(id + 1);
+            continue;
+        }
+        for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
+            const Vec3* t = mesh.triangle(i);
+            const int sp = orient3d_sign(t[0], t[1], t[2], p);
+            const int sq = orient3d_sign(t[0], t[1], t[2], q);
+            if (sp == 0) {
+                // p on the surface belongs to the closed solid (a point of the other mesh's
+                // surface lying on this one still bounds the depth); elsewhere on the plane
+                // the segment only touches it at p.
+                const Vec3 point[3] = {p, p, p};
+                if (triangles_intersect(t, point, nullptr)) {
+                    *count = 1;
+                    return true;
+                }
+                continue;
+            }
+            // One side, or touching the plane only at q (outside the mesh's box): no crossing.
+            if (sp * sq >= 0) continue;
+            const int s0 = orient3d_sign(p, q, t[0], t[1]);
+            const int s1 = orient3d_sign(p, q, t[1], t[2]);
+            const int s2 = orient3d_sign(p, q, t[2], t[0]);
+            if ((s0 > 0 && s1 > 0 && s2 > 0) || (s0 < 0 && s1 < 0 && s2 < 0)) {
+                total += sp;
+                continue;
+            }
+            if ((s0 > 0 || s1 > 0 || s2 > 0) && (s0 < 0 || s1 < 0 || s2 < 0)) continue;  // misses
+            if (s0 == 0 && s1 == 0 && s2 == 0) continue;  // degenerate triangle
+            return false;  // through an edge or a vertex
+        }
+    }
+    *count = total;
+    return true;
+}
+
+// Whether `p` (mesh's local frame) is in the solid: |winding number| >= 1/2. For a closed
+// mesh the winding number is the signed crossing count of a segment from p to beyond the
+// mesh's box (BVH, exact signs, a few fixed directions in case one passes through an edge or
+// a vertex), and a point exactly on the surface counts as in; otherwise, and if every
+// direction is degenerate, the generalized winding number (which is 1/2 on a smooth part of
+// the surface, so counts it in too).
+bool inside_mesh(const MeshBvh& mesh, const Vec3& p, long long* work) {
+    if (mesh.closed()) {
+        static constexpr Vec3 kDirections[] = {
+            {0.5377304471659, 0.2845902536245, 0.7935981048671},
+            {-0.6117145263523, 0.7219873914523, 0.3232414553322},
+            {0.2174811052316, -0.8642151133311, 0.4536126398734},
+            {-0.3902134117283, -0.4155247717421, -0.8216328740022},
+            {0.8807432016934, -0.1179016743124, -0.4587332154410},
+            {-0.0712387411032, 0.5932171148713, -0.8018427201121},
+        };
+        const BvhNode& root = mesh.nodes()[0];
+        const Vec3 lo{root.lower[0], root.lower[1], root.lower[2]};
+        const Vec3 hi{root.upper[0], root.upper[1], root.upper[2]};
+        const double reach = 2.0 * (norm(hi - lo) + norm(p - (lo + hi) * 0.5)) + 1.0;
+        for (const Vec3& direction : kDirections) {
+            int count = 0;
+            *work += 64;  // about the cost of one segment query, in triangle visits
+            if (signed_crossings(mesh, p, p + direction * reach, &count)) return count != 0;
+        }
+    }
+    *work += mesh.triangle_count();
+    return std::fabs(winding_number(mesh, p)) >= defaults::winding_number_inside;
 }
 
 // Marks the triangles (leaf order) of a and of b that belong to an intersecting triangle
@@ -597,18 +702,12 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
                 break;
             }
         if (known_outside) continue;
-        const long long cost = c.mesh == 0 ? b.triangle_count()
-                               : c.mesh == 1 ? a.triangle_count()
-                                             : static_cast<long long>(a.triangle_count()) + b.triangle_count();
-        if (work + cost > defaults::mesh_depth_max_work) {
+        if (work > defaults::mesh_depth_max_work) {
             out.status = Status::MAX_ITERATIONS;
             break;
         }
-        work += cost;
         ++out.points_tested;
-        auto inside = [](const MeshBvh& mesh, const Vec3& p) {
-            return std::fabs(winding_number(mesh, p)) >= defaults::winding_number_inside;
-        };
+        auto inside = [&work](const MeshBvh& mesh, const Vec3& p) { return inside_mesh(mesh, p, &work); };
         const bool found = c.mesh == 0   ? inside(b, c.point)
                            : c.mesh == 1 ? inside(a, c.point)
                                          : inside(a, c.point) && inside(b, rel.apply_inverse(c.point));
