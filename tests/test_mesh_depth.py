@@ -10,6 +10,7 @@ bound of the minimum translation distance; for boxes that is checked against the
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import manifold3d
 import numpy as np
@@ -315,7 +316,7 @@ def test_exact_ray_crossings_agree_with_the_winding_number(name: str, q, t) -> N
     assert a.depth == pytest.approx(b.depth, rel=1e-9, abs=1e-12)
 
 
-SAMPLES = __import__("pathlib").Path(__file__).resolve().parent.parent / "samples"
+SAMPLES = Path(__file__).resolve().parent.parent / "samples"
 
 
 @pytest.mark.parametrize("offset", OFFSETS)
@@ -330,7 +331,7 @@ def test_sample_ball_lowered_onto_the_bowl_is_contact(offset: float) -> None:
     assert pair["status"] == "separated" and report.passed
     normal, gap = np.array(pair["normal"]), pair["distance"]
     bodies = list(scene.bodies)
-    moved = [i for i, b in enumerate(bodies) if b.name == pair["b"]][0]
+    moved = next(i for i, b in enumerate(bodies) if b.name == pair["b"])
     shift = _pose(translation=-(gap - offset) * normal)
     b = bodies[moved]
     bodies[moved] = Body(b.name, b.source, b.vertices, b.faces, shift @ b.pose)
