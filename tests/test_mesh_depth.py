@@ -16,7 +16,7 @@ import manifold3d
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import given
+from hypothesis import example, given
 from hypothesis import strategies as st
 
 from meshcol.analysis.check import CheckOptions, check_scene
@@ -193,6 +193,8 @@ box_centre = st.tuples(*[st.floats(-1.0, 1.0) for _ in range(3)])
 
 
 @given(box_extent, box_centre, box_extent, box_centre)
+@example((1.0, 1.0, 2.0), (0.5, 0.0, 0.0), (1.0, 1.0, 2.0), (0.0, -0.25, -0.5))
+@example((1.0, 1.0, 2.0), (0.5, 0.25, -0.5), (1.0, 1.0, 2.0), (0.0, 0.0, 0.0))
 def test_depth_of_overlapping_boxes_never_exceeds_the_translation_distance(ea, ca, eb, cb) -> None:
     """For axis-aligned boxes the minimum translation distance is along an axis (their
     Minkowski difference is a box): the smallest over the axes of the shorter push out,

@@ -357,8 +357,9 @@ bool inside_mesh(const MeshBvh& mesh, const Vec3& p, long long* work) {
 // Marks the triangles (leaf order) of a and of b that belong to an intersecting triangle
 // pair: the descent of mesh_intersects, run to the end.
 struct CrossingPair {
-    std::int32_t a, b;  // leaf order
-    Vec3 witness;       // a shared point, a's frame
+    std::int32_t a, b;   // leaf order
+    Vec3 witness[2];     // shared points found from a's side and from b's (a's frame), so
+                         // that the samples do not depend on the order of the pair
 };
 
 void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
@@ -387,7 +388,9 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
                                 triangles_intersect(ta, leaf_b.corners[j], &w)) {
                         in_a[static_cast<size_t>(i)] = 1;
                         in_b[static_cast<size_t>(y.index + j)] = 1;
-                        pairs.push_back({i, y.index + j, w});
+                        Vec3 w_b = w;
+                        triangles_intersect(leaf_b.corners[j], ta, &w_b);
+                        pairs.push_back({i, y.index + j, {w, w_b}});
                     }
             }
             continue;
@@ -405,17 +408,14 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
 // Parameters along [p, q] (mesh's local frame) where the segment meets the mesh's surface in
 // isolated points, appended to `out`.
 void segment_crossings(const MeshBvh& mesh, const Vec3& p, const Vec3& q, std::vector<double>& out) {
-    const Vec3 lo = component_min(p, q), hi = component_max(p, q);
+    const Vec3 d = q - p;
     const std::vector<BvhNode>& nodes = mesh.nodes();
     std::vector<std::int32_t> stack{0};
     while (!stack.empty()) {
-        const BvhNode& node = nodes[static_cast<size_t>(stack.back())];
         const std::int32_t id = stack.back();
+        const BvhNode& node = nodes[static_cast<size_t>(id)];
         stack.pop_back();
-        bool overlap = true;
-        for (int k = 0; k < 3; ++k)
-            if (hi[k] < node.lower[k] || lo[k] > node.upper[k]) overlap = false;
-        if (!overlap) continue;
+        if (!segment_may_meet_box(node, p, d)) continue;
         if (node.is_leaf()) {
             for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
                 double s = 0.0;
@@ -475,8 +475,9 @@ void add_wedge_candidates(const MeshBvh& a, const MeshBvh& b, const Relative& re
         const double ls = norm(sum);
         if (!(ls > 1e-6)) continue;  // opposite normals: faces resting on each other
         const Vec3 inward = sum * (-1.0 / ls);
-        for (double step : {0.5 * h, 0.125 * h, 0.03125 * h})
-            out.push_back({c.witness + inward * step, Vec3{}, 0.0, 2});
+        for (const Vec3& witness : c.witness)
+            for (double step : {0.5 * h, 0.125 * h, 0.03125 * h})
+                out.push_back({witness + inward * step, Vec3{}, 0.0, 2});
     }
 }
 
