@@ -264,8 +264,8 @@ inline bool segment_may_meet_box(const BvhNode& n, const Vec3& p, const Vec3& d)
         }
         double s0 = (a - p[k]) / d[k], s1 = (b - p[k]) / d[k];
         if (s0 > s1) std::swap(s0, s1);
-        lo = std::fmax(lo, s0);
-        hi = std::fmin(hi, s1);
+        if (s0 > lo) lo = s0;
+        if (s1 < hi) hi = s1;
         if (lo > hi) return false;
     }
     return true;
@@ -431,10 +431,10 @@ void segment_crossings(const MeshBvh& mesh, const Vec3& p, const Vec3& q, std::v
 // A point of one mesh, in the other mesh's local frame, with its distance to that surface.
 struct DepthCandidate {
     Vec3 point;
-    Vec3 closest;
     double distance;
     int mesh;  // 0: a point of a (frame of b); 1: a point of b (frame of a); 2: a point of
                // neither surface that may lie inside both (frame of a)
+    bool farther_is_a;  // mesh 2: a's surface is the farther one
 };
 
 inline double longest_edge(const Vec3 t[3]) {
@@ -451,7 +451,7 @@ inline double longest_edge(const Vec3 t[3]) {
 // finds overlaps whose surface points all lie on the other surface (flush, coplanar faces).
 void add_wedge_candidates(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
                           const std::vector<CrossingPair>& pairs, std::vector<DepthCandidate>& out) {
-    constexpr size_t kMaxPairs = 4096;
+    constexpr size_t kMaxPairs = 256;  // evenly strided beyond: the vertices and edge cuts do most
     const size_t stride = pairs.size() / kMaxPairs + 1;
     for (size_t k = 0; k < pairs.size(); k += stride) {
         const CrossingPair& c = pairs[k];
@@ -468,8 +468,8 @@ void add_wedge_candidates(const MeshBvh& a, const MeshBvh& b, const Relative& re
         for (double step : {0.5 * h, 0.125 * h, 0.03125 * h}) {
             // Each triangle's centroid, stepped into its own solid: finds coincident and
             // coplanar overlaps, whose shared points all lie on edges of both.
-            out.push_back({centroid_a - na * (step / la), Vec3{}, 0.0, 2});
-            out.push_back({centroid_b - nb * (step / lb), Vec3{}, 0.0, 2});
+            out.push_back({centroid_a - na * (step / la), 0.0, 2, false});
+            out.push_back({centroid_b - nb * (step / lb), 0.0, 2, false});
         }
         const Vec3 sum = na / la + nb / lb;
         const double ls = norm(sum);
@@ -477,7 +477,7 @@ void add_wedge_candidates(const MeshBvh& a, const MeshBvh& b, const Relative& re
         const Vec3 inward = sum * (-1.0 / ls);
         for (const Vec3& witness : c.witness)
             for (double step : {0.5 * h, 0.125 * h, 0.03125 * h})
-                out.push_back({witness + inward * step, Vec3{}, 0.0, 2});
+                out.push_back({witness + inward * step, 0.0, 2, false});
     }
 }
 
@@ -489,7 +489,7 @@ void add_candidates(const MeshBvh& self, const MeshBvh& other, const std::vector
                     Map to_other, int mesh, std::vector<DepthCandidate>& out) {
     const BvhNode& root = other.nodes()[0];
     auto add = [&](const Vec3& p) {
-        if (inside_box(root, p)) out.push_back({p, Vec3{}, 0.0, mesh});
+        if (inside_box(root, p)) out.push_back({p, 0.0, mesh, false});
     };
     for (const Vec3& v : self.vertices()) add(to_other(v));
     std::vector<double> cuts;
@@ -644,6 +644,48 @@ MeshDistanceOutput mesh_distance(const MeshDistanceInput& input) {
     return out;
 }
 
+namespace {
+
+// Distance from `point` (mesh's local frame) to the surface when it exceeds `floor`; otherwise
+// some value <= floor: the branch and bound of closest_point, stopped at the first triangle
+// within `floor` (such a point cannot raise a maximum that is already `floor`).
+double distance_beyond(const MeshBvh& mesh, const Vec3& point, double floor) {
+    const double floor2 = floor * floor;
+    const std::vector<BvhNode>& nodes = mesh.nodes();
+    double best2 = kInf;
+    bool found = false;
+    std::vector<std::pair<std::int32_t, double>> stack;
+    stack.reserve(64);
+    stack.push_back({0, point_box_squared_distance(nodes[0], point)});
+    while (!stack.empty()) {
+        const auto [index, bound] = stack.back();
+        stack.pop_back();
+        if (found && bound >= best2) continue;
+        const BvhNode& node = nodes[static_cast<size_t>(index)];
+        if (node.is_leaf()) {
+            for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
+                const double d2 = squared_norm(closest_point_on_triangle(point, mesh.triangle(i)) - point);
+                if (!found || d2 < best2) {
+                    best2 = d2;
+                    found = true;
+                }
+            }
+            if (best2 <= floor2) break;
+            continue;
+        }
+        const auto child = [&](std::int32_t i) {
+            return std::make_pair(i, point_box_squared_distance(nodes[static_cast<size_t>(i)], point));
+        };
+        std::pair<std::int32_t, double> near = child(index + 1), far = child(node.index);
+        if (near.second > far.second) std::swap(near, far);
+        if (!found || far.second < best2) stack.push_back(far);
+        if (!found || near.second < best2) stack.push_back(near);
+    }
+    return std::sqrt(best2);
+}
+
+}  // namespace
+
 MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
     MeshDepthOutput out;
     const Vec3 nan3{kNaN, kNaN, kNaN};
@@ -663,77 +705,121 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
     add_candidates(a, b, crossing_a, [&](const Vec3& p) { return rel.apply_inverse(p); }, 0, candidates);
     add_candidates(b, a, crossing_b, [&](const Vec3& p) { return rel.apply(p); }, 1, candidates);
     add_wedge_candidates(a, b, rel, crossing_pairs, candidates);
-    // Closest surface points: of the other mesh; for wedge points, of whichever mesh is
-    // farther (its surface point is stored in a's frame).
-    for (DepthCandidate& c : candidates) {
+
+    long long work = 0;
+    auto inside = [&](const DepthCandidate& c) {
+        if (c.mesh == 0) return inside_mesh(b, c.point, &work);
+        if (c.mesh == 1) return inside_mesh(a, c.point, &work);
+        return inside_mesh(a, c.point, &work) && inside_mesh(b, rel.apply_inverse(c.point), &work);
+    };
+    // The depth a candidate gives (exact when it exceeds `floor`): its distance to the other
+    // surface; for a wedge point, to the farther of the two (`farther_is_a`).
+    auto measure = [&](DepthCandidate& c, double floor) {
         if (c.mesh < 2) {
-            const PointDistanceOutput r = closest_point(c.mesh == 0 ? b : a, c.point);
-            c.distance = r.distance;
-            c.closest = r.point;
+            c.distance = distance_beyond(c.mesh == 0 ? b : a, c.point, floor);
+            return;
+        }
+        const double da = distance_beyond(a, c.point, floor);
+        const double db = distance_beyond(b, rel.apply_inverse(c.point), floor);
+        c.distance = std::fmax(da, db);
+        c.farther_is_a = da >= db;
+    };
+    auto closed = [&](const DepthCandidate& c) {
+        return c.mesh == 0 ? b.closed() : (c.mesh == 1 ? a.closed() : a.closed() && b.closed());
+    };
+
+    out.status = Status::CONVERGED;
+    double best = 0.0;
+    bool have = false;
+    DepthCandidate winner{};
+    // Closed meshes first: inside by exact ray crossings (a BVH query each), then the distance
+    // of the inside points only, each search cut off once it cannot beat the best.
+    std::vector<DepthCandidate> undecided;
+    for (DepthCandidate& c : candidates) {
+        if (!closed(c)) {
+            undecided.push_back(c);
             continue;
         }
-        const PointDistanceOutput ra = closest_point(a, c.point);
-        const PointDistanceOutput rb = closest_point(b, rel.apply_inverse(c.point));
-        if (ra.distance >= rb.distance) {
-            c.distance = ra.distance;
-            c.closest = ra.point;
-        } else {
-            c.distance = rb.distance;
-            c.closest = rel.apply(rb.point);
-        }
-    }
-    // Deepest first: the first inside point is the answer. Points on the other surface
-    // (distance 0) cannot add depth.
-    candidates.erase(std::remove_if(candidates.begin(), candidates.end(),
-                                    [](const DepthCandidate& c) { return !(c.distance > 0.0); }),
-                     candidates.end());
-    std::sort(candidates.begin(), candidates.end(),
-              [](const DepthCandidate& x, const DepthCandidate& y) { return x.distance > y.distance; });
-    // Balls proven free of the other surface around outside points, per frame.
-    std::vector<std::pair<Vec3, double>> outside[3];
-    constexpr size_t kBallsChecked = 256;
-    long long work = 0;
-    out.status = Status::CONVERGED;
-    for (const DepthCandidate& c : candidates) {
-        const auto& balls = outside[c.mesh];
-        bool known_outside = false;
-        for (size_t k = balls.size(); k-- > 0 && balls.size() - k <= kBallsChecked;)
-            if (squared_norm(c.point - balls[k].first) < balls[k].second * balls[k].second) {
-                known_outside = true;
-                break;
-            }
-        if (known_outside) continue;
         if (work > defaults::mesh_depth_max_work) {
             out.status = Status::MAX_ITERATIONS;
             break;
         }
         ++out.points_tested;
-        auto inside = [&work](const MeshBvh& mesh, const Vec3& p) { return inside_mesh(mesh, p, &work); };
-        const bool found = c.mesh == 0   ? inside(b, c.point)
-                           : c.mesh == 1 ? inside(a, c.point)
-                                         : inside(a, c.point) && inside(b, rel.apply_inverse(c.point));
-        if (found) {
-            out.depth = c.distance;
-            // Report the deepest point and its closest surface point as the pair (point_a,
-            // point_b): a's point inside b, b's point inside a, or a point inside both with
-            // the farther surface's closest point (b moves along point_a - point_b).
-            const Pose& frame = c.mesh == 0 ? input.pose_b : input.pose_a;
-            const Vec3 deep = frame.apply(c.point), surface = frame.apply(c.closest);
-            bool deep_is_a = c.mesh == 0;
-            if (c.mesh == 2) {
-                // The closest point is on a's surface exactly when a is the farther one.
-                deep_is_a = !(closest_point(a, c.point).distance >= c.distance);
-            }
-            out.deepest_mesh = c.mesh == 2 ? (deep_is_a ? 0 : 1) : c.mesh;
-            out.point_a = deep_is_a ? deep : surface;
-            out.point_b = deep_is_a ? surface : deep;
-            const Vec3 gap = out.point_a - out.point_b;
-            const double length = norm(gap);
-            if (length > 0.0) out.normal = gap / length;
-            break;
+        if (!inside(c)) continue;
+        measure(c, best);
+        if (c.distance > best) {
+            best = c.distance;
+            winner = c;
+            have = true;
         }
-        if (c.mesh < 2) outside[c.mesh].push_back({c.point, c.distance});
     }
+    // Open meshes: the generalized winding number costs a pass over the triangles, so the
+    // distances come first and the points are decided deepest first, the first inside one
+    // ending the search; a point found outside at distance d proves every point within d of
+    // it outside (that ball holds no surface), which skips most of a cluster.
+    if (out.status == Status::CONVERGED && !undecided.empty()) {
+        for (DepthCandidate& c : undecided) measure(c, best);
+        undecided.erase(std::remove_if(undecided.begin(), undecided.end(),
+                                       [best](const DepthCandidate& c) { return !(c.distance > best); }),
+                        undecided.end());
+        std::sort(undecided.begin(), undecided.end(),
+                  [](const DepthCandidate& x, const DepthCandidate& y) { return x.distance > y.distance; });
+        std::vector<std::pair<Vec3, double>> outside[2];
+        constexpr size_t kBallsChecked = 256;
+        for (const DepthCandidate& c : undecided) {
+            if (c.mesh < 2) {
+                const auto& balls = outside[c.mesh];
+                bool known_outside = false;
+                for (size_t k = balls.size(); k-- > 0 && balls.size() - k <= kBallsChecked;)
+                    if (squared_norm(c.point - balls[k].first) < balls[k].second * balls[k].second) {
+                        known_outside = true;
+                        break;
+                    }
+                if (known_outside) continue;
+            }
+            if (work > defaults::mesh_depth_max_work) {
+                out.status = Status::MAX_ITERATIONS;
+                break;
+            }
+            ++out.points_tested;
+            if (inside(c)) {
+                best = c.distance;
+                winner = c;
+                have = true;
+                break;
+            }
+            if (c.mesh < 2) outside[c.mesh].push_back({c.point, c.distance});
+        }
+    }
+    if (!have) return out;
+
+    // The deepest point and its closest surface point as (point_a, point_b): a's point inside
+    // b, b's point inside a, or a point inside both with the farther surface's closest point
+    // (b moves along point_a - point_b to leave it behind).
+    out.depth = best;
+    Vec3 deep, surface;
+    bool deep_is_a;
+    if (winner.mesh == 0) {
+        deep = input.pose_b.apply(winner.point);
+        surface = input.pose_b.apply(closest_point(b, winner.point).point);
+        deep_is_a = true;
+    } else if (winner.mesh == 1) {
+        deep = input.pose_a.apply(winner.point);
+        surface = input.pose_a.apply(closest_point(a, winner.point).point);
+        deep_is_a = false;
+    } else {
+        deep = input.pose_a.apply(winner.point);
+        const Vec3 local = winner.farther_is_a ? closest_point(a, winner.point).point
+                                               : rel.apply(closest_point(b, rel.apply_inverse(winner.point)).point);
+        surface = input.pose_a.apply(local);
+        deep_is_a = !winner.farther_is_a;  // the surface point is on the farther mesh
+    }
+    out.deepest_mesh = deep_is_a ? 0 : 1;
+    out.point_a = deep_is_a ? deep : surface;
+    out.point_b = deep_is_a ? surface : deep;
+    const Vec3 gap = out.point_a - out.point_b;
+    const double length = norm(gap);
+    if (length > 0.0) out.normal = gap / length;
     return out;
 }
 
