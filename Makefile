@@ -6,7 +6,7 @@ BIN    := $(VENV)/bin
 PIP    := $(BIN)/python -m pip --disable-pip-version-check
 BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4"
 
-.PHONY: demo test test-fast lint install install-test bench clean
+.PHONY: demo test test-fast lint install install-test bench fuzz clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -42,18 +42,25 @@ demo: install
 
 # Lint first: ruff (rules and formatting) and mypy, zero findings.
 lint: install-test
-	$(BIN)/ruff check meshcol tests benchmarks
-	$(BIN)/ruff format --check meshcol tests benchmarks
+	$(BIN)/ruff check meshcol tests benchmarks fuzz
+	$(BIN)/ruff format --check meshcol tests benchmarks fuzz
 	$(BIN)/mypy
 
 # pytest exits 5 when it collected nothing: that fails here like any other error.
 test: lint
-	@test -d ../shared/corpus || echo "WARNING: ../shared/corpus is absent: every corpus test will SKIP (see the skip summary)"
+	@test -d ../shared/corpus || echo "WARNING: ../shared/corpus is absent: every corpus test will SKIP (the count is printed at the end)"
 	$(BIN)/pytest -q -p no:cacheprovider
 
 # The fast lane (under a minute): no slow or corpus tests, fewer hypothesis examples.
 test-fast: install-test
 	HYPOTHESIS_PROFILE=fast $(BIN)/pytest -q -p no:cacheprovider -m "not slow"
+
+# Fuzz every target (fuzz/targets.py) for FUZZ_SECONDS each; crashes land in fuzz/crashes/.
+FUZZ_SECONDS ?= 60
+fuzz: install-test
+	@for target in readers convex meshes; do \
+		$(BIN)/python fuzz/run.py $$target --seconds $(FUZZ_SECONDS) || exit 1; \
+	done
 
 bench: install-test
 	$(BIN)/python benchmarks/bench_narrowphase.py

@@ -371,7 +371,10 @@ def test_cli_exit_codes_and_reports(tmp_path: Path) -> None:
     result = run(["check", str(m), "--report", str(out)])
     assert result.exit_code == 1, result.output
     assert result.stdout == ""
-    assert result.stderr.splitlines()[-1] == "FAIL: 1 pair(s) violate --fail-on"
+    assert (
+        result.stderr.splitlines()[-1]
+        == "meshcol: check: FAIL: 1 pair violates --fail-on penetration"
+    )
     data = json.loads(out.read_text())
     assert data["summary"]["passed"] is False and data["units"] == "m"
     assert run(["check", str(m), "--fail-on", "none"]).exit_code == 0
@@ -389,7 +392,9 @@ def test_cli_report_to_stdout_keeps_summary_on_stderr(tmp_path: Path) -> None:
         assert result.exit_code == 0
         data = json.loads(result.stdout)
         assert data["summary"]["candidate_pairs"] == 0
-        assert result.stderr.splitlines()[-1] == "PASS"
+        assert result.stderr.splitlines()[-1] == (
+            "meshcol: check: PASS: no pair violates --fail-on penetration"
+        )
 
 
 @pytest.mark.parametrize(
@@ -398,9 +403,9 @@ def test_cli_report_to_stdout_keeps_summary_on_stderr(tmp_path: Path) -> None:
         (["missing.json"], "meshcol: error: missing.json:"),
         (
             ["scene.json", "--ignore", "nocolon"],
-            "Invalid value for '--ignore': ignore rule must look like A:B",
+            "meshcol: error: invalid value for '--ignore': ignore rule must look like A:B",
         ),
-        (["scene.json", "--tolerance", "-1"], "Invalid value for '--tolerance'"),
+        (["scene.json", "--tolerance", "-1"], "meshcol: error: invalid value for '--tolerance'"),
         (
             ["scene.json", "--baseline", "nothere.json"],
             "meshcol: error: nothere.json: baseline report not found",
@@ -495,8 +500,9 @@ def test_cli_runs_the_library_check(tmp_path: Path, monkeypatch) -> None:
 @pytest.mark.parametrize("scale", ["1e-320", "[1, 1e-310, 1]", "5e-324"])
 def test_denormal_scale_is_a_one_line_error_not_a_crash(tmp_path: Path, scale: str) -> None:
     """`"scale": 1e-320` made `meshcol check` exit 139 (issue 13): the baked vertices were
-    denormal and the mesh hierarchy's SAH binning crashed on them. Such a scale cannot be
-    baked faithfully; it is refused with exit 2 and one line naming the manifest and body.
+    denormal and the mesh hierarchy's SAH binning crashed on them (fixed in the core, see
+    test_mesh_query's denormal test). The manifest's magnitude check refuses such a scale with
+    exit 2 and one line naming the manifest and body.
     A child process, so that a crash fails the test instead of killing the session."""
     import subprocess
     import sys
@@ -520,4 +526,4 @@ def test_denormal_scale_is_a_one_line_error_not_a_crash(tmp_path: Path, scale: s
         lines = out.stderr.strip().splitlines()
         assert len(lines) == 1
         assert lines[0].startswith("meshcol: error: scene.json: body 'a': scale ")
-        assert "outside the usable range" in lines[0]
+        assert "is below the limit of 1e-10" in lines[0]

@@ -209,11 +209,16 @@ def test_cli_fail_on_none_and_csv_report(tmp_path):
     )
     assert result.exit_code == 0, result.output
     lines = out.read_text().splitlines()
-    assert (
-        lines[0] == "a,b,status,time_of_impact,time,point,normal,tunnelled,pose_a,pose_b,iterations"
-    )
+    from meshcol.analysis.sweep import CSV_COLUMNS
+
+    assert lines[0].split(",") == list(CSV_COLUMNS)
+    assert lines[0].startswith("a,b,status,time_of_impact,time,point_x,point_y,point_z,normal_x,")
+    assert ",pose_a_00,pose_a_01," in lines[0] and lines[0].endswith(",pose_b_33,iterations,units")
     assert lines[1].startswith("bar,block,HIT,") and len(lines) == 2
-    assert "1 hits (1 tunnelled)" in result.stderr
+    assert "1 hit (1 tunnelled)" in result.stderr
+    assert result.stderr.splitlines()[-1] == (
+        "meshcol: sweep: PASS: 1 pair touches during the motion (--fail-on none)"
+    )
     assert not list(tmp_path.glob(".meshcol-*"))  # no temporary left behind
 
 
@@ -230,7 +235,10 @@ def test_cli_manifest_without_motion_exits_2(tmp_path):
 def test_cli_bad_tolerance_is_a_usage_error(tmp_path):
     result = CliRunner().invoke(main, ["sweep", "scene.json", "--tolerance", "-1"])
     assert result.exit_code == 2
-    assert "Invalid value for '--tolerance': must be a finite number > 0, got -1.0" in result.output
+    assert result.stderr == (
+        "meshcol: error: invalid value for '--tolerance': -1.0 is not in the range x>0 "
+        "(see 'meshcol sweep -h')\n"
+    )
 
 
 def test_cli_bullet_sample_golden(samples, golden, monkeypatch):

@@ -392,7 +392,7 @@ def drop(index, field):
         ),
         (
             edit(body(TET_BODY, rotation={"quaternion": [0, 0, 0, 0]})),
-            "body 'tet': rotation.quaternion must not be zero",
+            "body 'tet': rotation.quaternion must be non-zero",
         ),
         (
             edit(body(TET_BODY, rotation={"quaternion": [1, 0, 0]})),

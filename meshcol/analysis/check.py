@@ -41,6 +41,7 @@ import numpy as np
 
 from meshcol.analysis.colliders import COLLIDER_KINDS, build_colliders
 from meshcol.errors import InputFileError
+from meshcol.io.report import vector_columns
 from meshcol.types import Scene, Status
 
 __all__ = [
@@ -189,34 +190,14 @@ class CheckReport:
         return dumps_json(self.to_dict())
 
     def to_csv(self) -> str:
-        from meshcol.io.report import dumps_csv
+        from meshcol.io.report import dumps_csv, split_vectors
 
-        rows = []
-        for p in self.pairs:
-            row = {
-                k: p[k]
-                for k in (
-                    "a",
-                    "b",
-                    "status",
-                    "distance",
-                    "depth",
-                    "signed_distance",
-                    "part_a",
-                    "part_b",
-                    "ignored",
-                    "violation",
-                    "intersection_volume",
-                )
-            }
-            for key in ("normal", "point_a", "point_b"):
-                vec = p[key] if p[key] is not None else [None] * 3
-                for axis, value in zip("xyz", vec):
-                    row[f"{key}_{axis}"] = value
-            rows.append(row)
+        sizes = {"normal": 3, "point_a": 3, "point_b": 3}
+        rows = [split_vectors(dict(p, units=self.units), sizes) for p in self.pairs]
         return dumps_csv(rows, CSV_COLUMNS)
 
 
+#: Columns of :meth:`CheckReport.to_csv`, one row per pair (vectors split, as every command).
 CSV_COLUMNS = [
     "a",
     "b",
@@ -224,20 +205,16 @@ CSV_COLUMNS = [
     "distance",
     "depth",
     "signed_distance",
-    "normal_x",
-    "normal_y",
-    "normal_z",
-    "point_a_x",
-    "point_a_y",
-    "point_a_z",
-    "point_b_x",
-    "point_b_y",
-    "point_b_z",
+    *vector_columns("normal"),
+    *vector_columns("point_a"),
+    *vector_columns("point_b"),
     "part_a",
     "part_b",
     "ignored",
     "violation",
+    "query_failed",
     "intersection_volume",
+    "units",
 ]
 
 
@@ -640,6 +617,10 @@ def load_baseline(path: str) -> dict:
     except json.JSONDecodeError as exc:
         raise InputFileError(
             f"baseline is not valid JSON (line {exc.lineno} column {exc.colno})", path
+        ) from None
+    except RecursionError:
+        raise InputFileError(
+            "baseline nests arrays and objects too deep to be a meshcol check report", path
         ) from None
     if not isinstance(data, dict) or not isinstance(data.get("pairs"), list):
         raise InputFileError("baseline is not a meshcol check report (no 'pairs' list)", path)

@@ -15,6 +15,7 @@ import numpy as np
 
 from meshcol.analysis.colliders import COLLIDER_KINDS, build_colliders
 from meshcol.errors import MeshcolError, SceneError
+from meshcol.io.report import vector_columns
 from meshcol.io.scene import as_scene
 from meshcol.types import Body, Scene, TimeOfImpactStatus
 
@@ -31,12 +32,13 @@ CSV_COLUMNS = (
     "status",
     "time_of_impact",
     "time",
-    "point",
-    "normal",
+    *vector_columns("point"),
+    *vector_columns("normal"),
     "tunnelled",
-    "pose_a",
-    "pose_b",
+    *vector_columns("pose_a", 16),
+    *vector_columns("pose_b", 16),
     "iterations",
+    "units",
 )
 
 
@@ -211,19 +213,15 @@ class SweepReport:
         return dumps_json(self.to_dict())
 
     def to_csv(self) -> str:
-        """One row per pair (:data:`CSV_COLUMNS`); poses as 16 numbers, row-major."""
-        from meshcol.io.report import dumps_csv
+        """One row per pair (:data:`CSV_COLUMNS`): vectors split into ``_x/_y/_z`` columns,
+        poses into 16 columns ``_00`` ... ``_33`` (row-major), as every command's CSV."""
+        from meshcol.io.report import dumps_csv, split_vectors
 
-        rows = [h.to_dict() for h in self.hits]
-        flat = [
-            dict(
-                row,
-                pose_a=[x for r in row["pose_a"] for x in r],
-                pose_b=[x for r in row["pose_b"] for x in r],
-            )
-            for row in rows
-        ]
-        return dumps_csv(flat, CSV_COLUMNS)
+        sizes = {"point": 3, "normal": 3, "pose_a": 16, "pose_b": 16}
+        units = self.scene.units
+        return dumps_csv(
+            [split_vectors(dict(h.to_dict(), units=units), sizes) for h in self.hits], CSV_COLUMNS
+        )
 
 
 def _is_moving(body: Body) -> bool:

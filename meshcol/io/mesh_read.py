@@ -22,7 +22,15 @@ import numpy as np
 from meshcol.errors import InputFileError, InvalidMeshError
 from meshcol.types import Body
 
-__all__ = ["MESH_EXTENSIONS", "load_mesh", "merge_vertices", "split_rigid"]
+__all__ = [
+    "MAX_COORDINATE",
+    "MESH_EXTENSIONS",
+    "check_magnitude",
+    "load_mesh",
+    "load_meshes",
+    "merge_vertices",
+    "split_rigid",
+]
 
 #: File extensions (lower case) that :func:`load_mesh` reads, mapped to trimesh's file type.
 MESH_EXTENSIONS: dict[str, str] = {
@@ -37,6 +45,28 @@ MESH_EXTENSIONS: dict[str, str] = {
 # A matrix whose linear part is orthonormal to this tolerance is taken as rigid as it is,
 # so exact rotations (and identity) stay exact instead of going through an SVD.
 _RIGID_TOL = 1e-12
+
+#: Largest coordinate magnitude accepted anywhere (file vertices, and world coordinates after a
+#: manifest's scale, pose and motion). Beyond it the 1e-8 merge grid of vertex positions
+#: overflows 64-bit integers (at 9.2e10) and the float64 spacing of coordinates (2e-6 at 1e10)
+#: is coarser than any contact tolerance; volumes and normals overflow long before 1e308.
+MAX_COORDINATE = 1e10
+
+
+def check_magnitude(values: np.ndarray, what: str, source: str | None) -> None:
+    """Raise :class:`InvalidMeshError` when a value of ``values`` exceeds
+    :data:`MAX_COORDINATE` in magnitude, naming the first such value (``what`` says whose)."""
+    values = np.asarray(values, dtype=np.float64)
+    over = np.abs(values) > MAX_COORDINATE
+    if over.any():
+        first = np.argwhere(over)[0]
+        where = f" {int(first[0]) + 1}" if values.ndim == 2 else ""
+        raise InvalidMeshError(
+            f"{what}{where} has coordinate {values[tuple(first)]:.6g}, beyond the limit of "
+            f"+/-{MAX_COORDINATE:g}",
+            source,
+        )
+
 
 # Vertices closer than this (per coordinate, absolute) are merged: trimesh's own merge
 # tolerance (trimesh.constants.tol.merge), so watertightness agrees with trimesh's processing.
@@ -98,6 +128,8 @@ def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]
     source = os.fspath(path)
     file = Path(source)
     file_type = _check_file(file, source)
+    if file_type in _NATIVE_FORMATS:
+        return load_meshes([source], merge=merge)[0]
     scene = _read_scene(file, file_type, source)
 
     # (name, matrix, trimesh geometry) for every mesh node, in file order
@@ -129,6 +161,7 @@ def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]
             raise InvalidMeshError("mesh is not made of triangles", source)
         if not np.isfinite(vertices).all():
             raise InvalidMeshError("mesh has non-finite vertex coordinates", source)
+        check_magnitude(vertices, "vertex", source)
         if not np.isfinite(matrix).all():
             raise InvalidMeshError("scene graph has a non-finite transform", source)
         if faces.min() < 0 or faces.max() >= len(vertices):
@@ -155,6 +188,104 @@ def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]
             )
         )
     return bodies
+
+
+#: Formats the native core reads (OBJ, binary and ASCII STL), with their code in the core.
+_NATIVE_FORMATS = {"obj": 0, "stl": 1}
+_CORRUPT = 4  # the core's ReadStatus::Corrupt
+
+
+def load_meshes(
+    paths: list[str | os.PathLike[str]], *, merge: bool = True, threads: int = 0
+) -> list[list[Body]]:
+    """Load many mesh files at once: :func:`load_mesh` for each, with OBJ and STL files read
+    and parsed by the native core in parallel (GIL released).
+
+    Parameters
+    ----------
+    paths : list of str or path-like
+    merge : bool, optional
+        As :func:`load_mesh`.
+    threads : int, optional
+        Reader threads for the OBJ and STL files; 0 means all cores.
+
+    Returns
+    -------
+    list of list of Body
+        One list per path, in order, each as :func:`load_mesh` returns it.
+
+    Raises
+    ------
+    InputFileError, InvalidMeshError
+        As :func:`load_mesh`, for the first path (in order) that fails.
+
+    Notes
+    -----
+    The native readers: OBJ ``v`` and ``f`` lines (any encoding; comments, ``vt``, ``vn``,
+    materials and everything else skipped), polygons fan-triangulated, 1-based or negative
+    (relative) indices, never 0 or out of range; ``o`` lines start bodies, or ``g`` lines when
+    the file has none. STL: binary when the size is 84 + 50 x the triangle count, else ASCII
+    (one body per ``solid``). Other formats go through trimesh, one file at a time.
+    """
+    from meshcol._native import core
+
+    sources = [os.fspath(p) for p in paths]
+    types = []
+    for source in sources:
+        try:
+            types.append(_file_type(source))
+        except InputFileError:
+            _check_file(Path(source), source)  # a missing file or a directory says so first
+            raise
+    native = [i for i, t in enumerate(types) if t in _NATIVE_FORMATS]
+    out: list[list[Body] | None] = [None] * len(sources)
+    if native:
+        vertices, faces, v_off, f_off, owner, names, status, errors = core.read_mesh_files(
+            [sources[i] for i in native],
+            [_NATIVE_FORMATS[types[i]] for i in native],
+            merge=merge,
+            threads=threads,
+        )
+        # one vectorised pass finds the objects with a coordinate beyond the limit
+        big_rows = np.flatnonzero((np.abs(vertices) > MAX_COORDINATE).any(axis=1))
+        big = (
+            set(np.searchsorted(v_off, big_rows, side="right").tolist()) if len(big_rows) else set()
+        )
+        per_file: list[list[int]] = [[] for _ in native]
+        for k, f in enumerate(owner.tolist()):
+            per_file[f].append(k)
+        for j, i in enumerate(native):
+            if status[j] == _CORRUPT:
+                raise InvalidMeshError(
+                    f"cannot parse {types[i].upper()} file: {errors[j]}", sources[i]
+                )
+            if status[j] != 0:
+                raise InputFileError(errors[j], sources[i])
+            objects = per_file[j]
+            if not objects:
+                raise InvalidMeshError("mesh has no faces", sources[i])
+            stem = Path(sources[i]).stem
+            used: set[str] = set()
+            bodies = []
+            for k in objects:
+                if k + 1 in big:
+                    check_magnitude(vertices[v_off[k] : v_off[k + 1]], "vertex", sources[i])
+                name = names[k] or ("default" if types[i] == "obj" else stem)
+                full = _unique(stem if len(objects) == 1 else f"{stem}/{name}", used)
+                bodies.append(
+                    Body(
+                        name=full,
+                        source=sources[i],
+                        vertices=vertices[v_off[k] : v_off[k + 1]],
+                        faces=faces[f_off[k] : f_off[k + 1]],
+                        pose=np.eye(4),
+                    )
+                )
+            out[i] = bodies
+    for i in range(len(sources)):
+        if out[i] is None:
+            out[i] = load_mesh(sources[i], merge=merge)
+    return out  # type: ignore[return-value]
 
 
 def split_rigid(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
@@ -222,17 +353,21 @@ def merge_vertices(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray,
     Positions are compared after rounding to 8 decimals, trimesh's merge tolerance, and
     only positions count: normals and UVs are ignored, so UV seams close.
     """
-    from trimesh.grouping import unique_rows
+    from meshcol._native import core
 
-    vertices = np.asarray(vertices, dtype=np.float64)
-    faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    used, corner = np.unique(faces.ravel(), return_inverse=True)
-    if len(used) == 0:
-        return np.zeros((0, 3)), faces
-    # keep_order: the first of each group of equal positions, in file order
-    keep, group = unique_rows(vertices[used], digits=_MERGE_DIGITS, keep_order=True)
-    merged_faces = np.asarray(group, dtype=np.int64)[corner].reshape(-1, 3)
-    return vertices[used][keep], merged_faces
+    vertices = np.ascontiguousarray(vertices, dtype=np.float64).reshape(-1, 3)
+    faces = np.ascontiguousarray(faces, dtype=np.int64).reshape(-1, 3)
+    return core.merge_vertices(vertices, faces, _MERGE_DIGITS)
+
+
+def _file_type(source: str) -> str:
+    """The file type of ``source`` from its extension (InputFileError when unknown)."""
+    file_type = MESH_EXTENSIONS.get(os.path.splitext(source)[1].lower())
+    if file_type is None:
+        known = ", ".join(MESH_EXTENSIONS)
+        suffix = os.path.splitext(source)[1] or "(none)"
+        raise InputFileError(f"unknown mesh file extension {suffix!r} (expected {known})", source)
+    return file_type
 
 
 def _check_file(file: Path, source: str) -> str:
@@ -240,11 +375,7 @@ def _check_file(file: Path, source: str) -> str:
         raise InputFileError("file not found", source)
     if file.is_dir():
         raise InputFileError("is a directory, not a mesh file", source)
-    file_type = MESH_EXTENSIONS.get(file.suffix.lower())
-    if file_type is None:
-        known = ", ".join(MESH_EXTENSIONS)
-        suffix = file.suffix or "(none)"
-        raise InputFileError(f"unknown mesh file extension {suffix!r} (expected {known})", source)
+    file_type = _file_type(source)
     try:
         with open(file, "rb"):
             pass
