@@ -874,3 +874,14 @@ def test_non_finite_vertices_make_the_mesh_invalid_not_a_crash() -> None:
         assert meshes.valid.tolist() == [False, True]
         r = mesh_distance_batch(meshes, None, [[0, 1]])
         assert r.status[0] == Status.INVALID_INPUT and math.isnan(r.distance[0])
+
+
+def test_overflowing_distance_is_degenerate_not_converged() -> None:
+    """Coordinates near 1e236 overflow the squared distances: the pair used to report
+    CONVERGED with distance inf (found by the fuzz target `meshes`)."""
+    a = box([-1e236, -1e236, -1e236], [-5e235, -5e235, -5e235])
+    b = box([5e235, 5e235, 5e235], [1e236, 1e236, 1e236])
+    r = mesh_distance_batch(MeshSet.from_arrays([a, b]), None, [[0, 1]])
+    assert r.status[0] == Status.DEGENERATE and r.distance[0] == math.inf
+    near = mesh_distance_batch(MeshSet.from_arrays([a, b]), None, [[0, 1]], max_distance=1.0)
+    assert near.status[0] == Status.CONVERGED and near.distance[0] == math.inf  # beyond radius

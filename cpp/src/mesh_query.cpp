@@ -633,6 +633,9 @@ MeshDistanceOutput mesh_distance(const MeshDistanceInput& input) {
         out.distance = kInf;
         out.point_a = out.point_b = nan3;
     }
+    // Nothing found within an infinite radius: the squared distances overflowed (coordinates
+    // beyond about 1e154); the distance is only known to be huge.
+    const bool overflowed = !std::isfinite(out.distance) && std::isinf(input.max_distance);
     if (!out.intersecting) {
         // Disjoint surfaces: each mesh is wholly inside or wholly outside the other, so one
         // vertex decides (Jacobson et al. 2013). Its distance to the other surface is at least
@@ -640,7 +643,7 @@ MeshDistanceOutput mesh_distance(const MeshDistanceInput& input) {
         out.a_inside_b = point_inside(b, input.pose_b, input.pose_a.apply(a.triangle(0)[0]));
         out.b_inside_a = point_inside(a, input.pose_a, input.pose_b.apply(b.triangle(0)[0]));
     }
-    out.status = Status::CONVERGED;
+    out.status = overflowed ? Status::DEGENERATE : Status::CONVERGED;
     return out;
 }
 

@@ -234,8 +234,10 @@ class MeshDistanceBatch:
     triangle_a, triangle_b : (P,) int64
         Faces (indices local to each mesh) holding ``point_a`` and ``point_b``; -1 when none.
     status : (P,) int8
-        :class:`meshcol.types.Status`: ``CONVERGED``, or ``INVALID_INPUT`` for a non-rigid or
-        non-finite pose, a mesh with a non-finite vertex, or a mesh without faces.
+        :class:`meshcol.types.Status`: ``CONVERGED``; ``DEGENERATE`` when squared distances
+        overflow (coordinates beyond about 1e154: ``distance`` is inf, only known to be huge);
+        ``INVALID_INPUT`` for a non-rigid or non-finite pose, a mesh with a non-finite vertex,
+        or a mesh without faces.
     """
 
     distance: np.ndarray

@@ -35,7 +35,9 @@ struct MeshDistanceOutput {
     bool b_inside_a = false;        ///< as a_inside_b, with a and b swapped
     std::int64_t triangle_a = -1;   ///< input face of a holding point_a, -1 when not found
     std::int64_t triangle_b = -1;   ///< input face of b holding point_b, -1 when not found
-    Status status = Status::NOT_RUN;  ///< CONVERGED, or INVALID_INPUT for an invalid mesh
+    /// CONVERGED; DEGENERATE when squared distances overflow (coordinates beyond ~1e154;
+    /// distance inf); INVALID_INPUT for an invalid mesh
+    Status status = Status::NOT_RUN;
 };
 
 /// Minimum distance between the surfaces of two meshes by simultaneous descent of their
