@@ -90,6 +90,9 @@ _LAZY: dict[str, str] = {
     "mesh_distance": "meshcol.collision.mesh_query",
     "mesh_distance_batch": "meshcol.collision.mesh_query",
     "mesh_intersects_batch": "meshcol.collision.mesh_query",
+    "MeshDepthBatch": "meshcol.collision.mesh_query",
+    "mesh_penetration_depth_batch": "meshcol.collision.mesh_query",
+    "mesh_intersection_volume": "meshcol.collision.mesh_query",
     # broad phase
     "sort_and_sweep": "meshcol.collision.broadphase",
     "SortAndSweep": "meshcol.collision.broadphase",

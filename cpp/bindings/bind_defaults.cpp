@@ -50,6 +50,7 @@ void bind_defaults(nb::module_& m) {
     s.attr("mesh_bvh_bins") = d::mesh_bvh_bins;
     s.attr("mesh_min_pairs_per_thread") = d::mesh_min_pairs_per_thread;
     s.attr("winding_number_inside") = d::winding_number_inside;
+    s.attr("mesh_depth_max_work") = d::mesh_depth_max_work;
     m.def("hardware_threads", &meshcol::hardware_threads,
           "Number of hardware threads (at least 1).");
 

@@ -147,4 +147,9 @@ constexpr long long mesh_min_pairs_per_thread = 4;
 /// 2013): 1 inside, 0 outside, fractional near holes in the surface.
 constexpr double winding_number_inside = 0.5;
 
+/// Mesh penetration depth: most triangle visits spent on winding numbers for one pair (about
+/// a second of work). A pair that reaches it is MAX_ITERATIONS with the depth of the points
+/// decided so far (still a lower bound of the minimum translation distance).
+constexpr long long mesh_depth_max_work = 200000000;
+
 }  // namespace meshcol::defaults
