@@ -12,6 +12,8 @@ import io
 import json
 import math
 import os
+import shutil
+import stat
 import sys
 import tempfile
 from collections.abc import Iterator, Mapping, Sequence
@@ -74,10 +76,14 @@ def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iter
     """Yield a temporary path beside ``path``; rename it onto ``path`` if the block succeeds.
 
     The temporary file keeps ``path``'s extension (or ``suffix``) so writers that pick a format
-    from the name still work. On any exception the temporary file is removed.
+    from the name still work. On any exception the temporary file is removed. A destination
+    that exists and is not a regular file (``/dev/null``, a named pipe, a terminal) is never
+    replaced: the finished file is copied into it instead, so ``--report /dev/null`` discards
+    the report and leaves the device alone.
     """
     path = os.fspath(path)
-    folder = os.path.dirname(os.path.abspath(path))
+    special = _is_special(path)
+    folder = tempfile.gettempdir() if special else os.path.dirname(os.path.abspath(path))
     ext = suffix if suffix is not None else os.path.splitext(path)[1]
     try:
         fd, tmp = tempfile.mkstemp(prefix=".meshcol-", suffix=ext, dir=folder)
@@ -88,7 +94,12 @@ def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iter
     os.chmod(tmp, 0o666 & ~_umask())
     try:
         yield tmp
-        os.replace(tmp, path)
+        if special:
+            with open(tmp, "rb") as source, open(path, "wb") as target:
+                shutil.copyfileobj(source, target)
+            os.unlink(tmp)
+        else:
+            os.replace(tmp, path)
     except BaseException as exc:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
@@ -96,6 +107,15 @@ def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iter
             # the temporary name means nothing to the user: name the file they asked for
             raise _as_user_path(exc, path) from None
         raise
+
+
+def _is_special(path: str) -> bool:
+    """An existing destination that is neither a regular file nor a folder (a device, a pipe)."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return False
+    return not stat.S_ISREG(mode) and not stat.S_ISDIR(mode)
 
 
 def _as_user_path(exc: OSError, path: str) -> OSError:
