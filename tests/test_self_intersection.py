@@ -210,6 +210,9 @@ def test_duplicate_faces_and_index_errors() -> None:
     with pytest.raises(ValueError, match=r"pairs must be \(k, 2\), got \(3,\)"):
         face_pairs_cross(v, [[0, 1, 2]], [0, 1, 2])
     assert face_pairs_cross(v, [[0, 1, 2]], np.zeros((0, 2), int)).shape == (0,)
+    v[3, 0] = np.nan
+    with pytest.raises(ValueError, match="vertices contain NaN or infinite coordinates"):
+        face_pairs_cross(v, [[0, 1, 2], [0, 1, 3]], [[0, 1]])
 
 
 def test_fine_uv_sphere_does_not_self_intersect() -> None:

@@ -34,6 +34,8 @@ def _mesh(vertices: Any, faces: Any) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(f"faces must be (m, 3), got {f.shape}")
     if f.size and not np.issubdtype(f.dtype, np.integer):
         raise ValueError(f"faces must be integers, got {f.dtype}")
+    if not np.isfinite(v).all():
+        raise ValueError("vertices contain NaN or infinite coordinates")
     return v, np.ascontiguousarray(f, dtype=np.int64)
 
 
@@ -58,7 +60,8 @@ def face_pairs_cross(vertices: Any, faces: Any, pairs: Any, *, threads: int = 0)
     Raises
     ------
     ValueError
-        Wrong shapes, or an index out of range (naming the face or pair).
+        Wrong shapes, non-finite coordinates, or an index out of range (naming the face or
+        pair).
 
     Notes
     -----
