@@ -75,8 +75,9 @@ def oriented_volume(vertices: np.ndarray, faces: np.ndarray) -> tuple[float, int
         return None
     vertices = np.asarray(vertices, dtype=np.float64)
     a, b, c = vertices[faces[:, 0]], vertices[faces[:, 1]], vertices[faces[:, 2]]
-    used = vertices[np.unique(faces)]
-    centre = (used.min(axis=0) + used.max(axis=0)) / 2
+    lowest = np.minimum(np.minimum(a, b), c).min(axis=0)
+    highest = np.maximum(np.maximum(a, b), c).max(axis=0)
+    centre = (lowest + highest) / 2  # of the bounding box of the used vertices
     ab, ac = b - a, c - a
     normals = np.stack(
         [
@@ -143,10 +144,15 @@ def orient_outward(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray,
 
 def edge_table(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
     """Unique undirected edges, their face counts, and the number of wrongly wound edges."""
+    faces = np.asarray(faces, dtype=np.int64)
     directed = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
     directed = directed[directed[:, 0] != directed[:, 1]]
-    undirected = np.sort(directed, axis=1)
-    edges, inverse, counts = np.unique(undirected, axis=0, return_inverse=True, return_counts=True)
+    # One int64 key per undirected edge, (low, high) in lexicographic order: a 1-D unique is
+    # several times faster than np.unique(axis=0)
+    n = int(faces.max()) + 1 if faces.size else 1
+    low, high = directed.min(axis=1), directed.max(axis=1)
+    keys, inverse, counts = np.unique(low * n + high, return_inverse=True, return_counts=True)
+    edges = np.stack([keys // n, keys % n], axis=1)
     inverse = inverse.reshape(-1)
     # +1 for an edge traversed low->high, -1 high->low: a consistently wound manifold edge
     # sums to 0
@@ -157,7 +163,8 @@ def edge_table(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
 
 
 def duplicate_face_count(faces: np.ndarray) -> int:
-    unique = np.unique(np.sort(faces, axis=1), axis=0)
+    """Faces on the same three vertices as an earlier face (either winding)."""
+    unique, _ = unique_rows(np.sort(np.asarray(faces, dtype=np.int64), axis=1))
     return int(len(faces) - len(unique))
 
 
