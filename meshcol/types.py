@@ -161,6 +161,13 @@ class Body:
         Set when the body is an analytic shape; queries then use it exactly.
     collider : str or None
         Per-body collider kind, the manifest field ``shape`` (``hull``, ``decomposed``, ``mesh``).
+    parts : tuple of str
+        Names of the body's parts when it is made of several (the objects or nodes of a
+        manifest body's mesh file, in file order); empty for a body of one part. Parts of one
+        body are never paired with each other; reports name them (``part_a``, ``part_b``).
+    part_faces : (len(parts) + 1,) int64 or None
+        Part ``i`` is ``faces[part_faces[i]:part_faces[i + 1]]``; None when ``parts`` is
+        empty.
     """
 
     name: str
@@ -171,6 +178,57 @@ class Body:
     end_pose: np.ndarray | None = None
     primitive: Primitive | None = None
     collider: str | None = None
+    parts: tuple[str, ...] = ()
+    part_faces: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.parts:
+            offsets = np.asarray(self.part_faces, dtype=np.int64)
+            if (
+                offsets.shape != (len(self.parts) + 1,)
+                or offsets[0] != 0
+                or offsets[-1] != len(self.faces)
+                or np.any(np.diff(offsets) < 0)
+            ):
+                raise ValueError(
+                    f"body {self.name!r}: part_faces must be {len(self.parts) + 1} "
+                    f"non-decreasing offsets from 0 to {len(self.faces)}"
+                )
+            object.__setattr__(self, "part_faces", offsets)
+        elif self.part_faces is not None:
+            raise ValueError(f"body {self.name!r}: part_faces given without parts")
+
+    def part_meshes(self) -> list[tuple[str | None, np.ndarray, np.ndarray]]:
+        """``(name, vertices, faces)`` of each part, local frame, faces indexing the part's
+        own vertices; one ``(None, vertices, faces)`` for a body of one part."""
+        if not self.parts:
+            return [(None, self.vertices, self.faces)]
+        assert self.part_faces is not None
+        out: list[tuple[str | None, np.ndarray, np.ndarray]] = []
+        for name, start, stop in zip(self.parts, self.part_faces[:-1], self.part_faces[1:]):
+            faces = self.faces[start:stop]
+            used, inverse = np.unique(faces, return_inverse=True)
+            out.append((name, self.vertices[used], inverse.reshape(-1, 3).astype(np.int64)))
+        return out
+
+    def part_bodies(self) -> list[Body]:
+        """One body per part, named ``<body>/<part>``, with this body's pose (the body itself
+        when it has one part): for what is judged per mesh (inspect's health, decompose's
+        inputs), where a body's parts are separate meshes."""
+        if not self.parts:
+            return [self]
+        return [
+            Body(
+                name=f"{self.name}/{name}",
+                source=self.source,
+                vertices=np.ascontiguousarray(vertices),
+                faces=np.ascontiguousarray(faces),
+                pose=self.pose,
+                end_pose=self.end_pose,
+                collider=self.collider,
+            )
+            for name, vertices, faces in self.part_meshes()
+        ]
 
     def world_vertices(self, end: bool = False) -> np.ndarray:
         """Vertices in the world frame, (n, 3) float64, at the start (or end) pose."""

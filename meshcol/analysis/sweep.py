@@ -15,6 +15,7 @@ import numpy as np
 
 from meshcol.analysis.colliders import COLLIDER_KINDS, build_colliders
 from meshcol.errors import MeshcolError, SceneError
+from meshcol.io.report import vector_columns
 from meshcol.io.scene import as_scene
 from meshcol.types import Body, Scene, TimeOfImpactStatus
 
@@ -26,17 +27,20 @@ FAIL_ON = ("hit", "none")
 MOTION = "linear translation, constant-rate rotation about the local origin"
 #: Columns of :meth:`SweepReport.to_csv`, one row per pair (poses flattened row-major).
 CSV_COLUMNS = (
-    "a",
-    "b",
+    "body_a",
+    "body_b",
+    "part_a",
+    "part_b",
     "status",
     "time_of_impact",
     "time",
-    "point",
-    "normal",
+    *vector_columns("point"),
+    *vector_columns("normal"),
     "tunnelled",
-    "pose_a",
-    "pose_b",
+    *vector_columns("pose_a", 16),
+    *vector_columns("pose_b", 16),
     "iterations",
+    "units",
 )
 
 
@@ -54,8 +58,11 @@ class SweepHit:
 
     Attributes
     ----------
-    a, b : str
-        Body names (``a`` comes first in the scene).
+    body_a, body_b : str
+        Body names (``body_a`` comes first in the scene).
+    part_a, part_b : str or None
+        The parts of a body of several parts (``Body.parts``) that meet first; None for a
+        body of one part.
     status : TimeOfImpactStatus
         ``HIT``, ``OVERLAPPED_AT_START`` or ``FAILED``.
     time_of_impact : float
@@ -75,8 +82,10 @@ class SweepHit:
         Steps of the pair query that decided the pair.
     """
 
-    a: str
-    b: str
+    body_a: str
+    body_b: str
+    part_a: str | None
+    part_b: str | None
     status: TimeOfImpactStatus
     time_of_impact: float
     time: float | None
@@ -91,8 +100,10 @@ class SweepHit:
         """JSON-ready fields (lists for arrays, the status by name), numbers rounded to 12
         significant digits (far below the tolerance) so reports compare across machines."""
         return {
-            "a": self.a,
-            "b": self.b,
+            "body_a": self.body_a,
+            "body_b": self.body_b,
+            "part_a": self.part_a,
+            "part_b": self.part_b,
             "status": self.status.name,
             "time_of_impact": _round(self.time_of_impact),
             "time": _round(self.time),
@@ -131,7 +142,7 @@ class SweepReport:
     tolerance : float
         Contact distance used (world units).
     hits : tuple of SweepHit
-        Every body pair that is not ``SEPARATED``, sorted by (a, b) names.
+        Every body pair that is not ``SEPARATED``, sorted by (body_a, body_b) names.
     candidate_pairs : int
         Body pairs whose swept bounds overlap (the pairs the narrow phase ran on).
     part_pairs : int
@@ -151,6 +162,7 @@ class SweepReport:
     part_pairs: int
     moving: tuple[bool, ...] = field(default=())
     fail_on: str = "hit"
+    warnings: tuple[str, ...] = ()
 
     @property
     def failed(self) -> bool:
@@ -196,9 +208,10 @@ class SweepReport:
         return {
             **envelope("sweep", self.settings, self.scene.units),
             "failed": self.exit_code == 1,
+            "warnings": list(self.warnings),
             "duration": self.scene.duration,
             "bodies": [
-                {"name": b.name, "source": b.source, "moving": m}
+                {"name": b.name, "source": b.source, "parts": list(b.parts), "moving": m}
                 for b, m in zip(self.bodies, self.moving)
             ],
             "summary": self.summary,
@@ -211,19 +224,15 @@ class SweepReport:
         return dumps_json(self.to_dict())
 
     def to_csv(self) -> str:
-        """One row per pair (:data:`CSV_COLUMNS`); poses as 16 numbers, row-major."""
-        from meshcol.io.report import dumps_csv
+        """One row per pair (:data:`CSV_COLUMNS`): vectors split into ``_x/_y/_z`` columns,
+        poses into 16 columns ``_00`` ... ``_33`` (row-major), as every command's CSV."""
+        from meshcol.io.report import dumps_csv, split_vectors
 
-        rows = [h.to_dict() for h in self.hits]
-        flat = [
-            dict(
-                row,
-                pose_a=[x for r in row["pose_a"] for x in r],
-                pose_b=[x for r in row["pose_b"] for x in r],
-            )
-            for row in rows
-        ]
-        return dumps_csv(flat, CSV_COLUMNS)
+        sizes = {"point": 3, "normal": 3, "pose_a": 16, "pose_b": 16}
+        units = self.scene.units
+        return dumps_csv(
+            [split_vectors(dict(h.to_dict(), units=units), sizes) for h in self.hits], CSV_COLUMNS
+        )
 
 
 def _is_moving(body: Body) -> bool:
@@ -332,10 +341,10 @@ def sweep(
             f"body '{body.name}': invalid shape or pose (NaN/inf, empty or not rigid)",
             body.source or scene.source,
         )
-    pairs = sort_and_sweep(lo - 0.5 * tol, hi + 0.5 * tol)
+    pairs = sort_and_sweep(lo - 0.5 * tol, hi + 0.5 * tol, groups=owner)  # no pair in a body
     if len(pairs):
         oa, ob = owner[pairs[:, 0]], owner[pairs[:, 1]]
-        keep = (oa != ob) & (moving[oa] | moving[ob])
+        keep = moving[oa] | moving[ob]
         pairs = pairs[keep]
         # Part pairs ordered as their bodies (a first in the scene).
         swap = owner[pairs[:, 0]] > owner[pairs[:, 1]]
@@ -373,6 +382,9 @@ def sweep(
             if len(failed) and fraction[failed].min() < fraction[best]:
                 best_status = TimeOfImpactStatus.FAILED
         t = float(fraction[best])
+        part_a, part_b = colliders.part_names(
+            [i, j], colliders.part_label[[pairs[best, 0], pairs[best, 1]]]
+        )
         poses = interpolate_pose(
             np.stack([start_body[i], start_body[j]]), np.stack([end_body[i], end_body[j]]), [t, t]
         )
@@ -383,8 +395,10 @@ def sweep(
         )
         hits.append(
             SweepHit(
-                a=bodies[i].name,
-                b=bodies[j].name,
+                body_a=bodies[i].name,
+                body_b=bodies[j].name,
+                part_a=part_a,
+                part_b=part_b,
                 status=best_status,
                 time_of_impact=t,
                 time=None if scene.duration is None else t * float(scene.duration),
@@ -396,7 +410,7 @@ def sweep(
                 iterations=int(toi.iterations[best]),
             )
         )
-    hits.sort(key=lambda h: (h.a, h.b))
+    hits.sort(key=lambda h: (h.body_a, h.body_b))
     return SweepReport(
         scene=scene,
         bodies=bodies,
@@ -407,4 +421,5 @@ def sweep(
         part_pairs=len(pairs),
         moving=tuple(bool(m) for m in moving),
         fail_on=fail_on,
+        warnings=colliders.warnings,
     )
