@@ -54,6 +54,9 @@ __all__ = [
 
 PAIR_STATUSES = ("separated", "clearance", "contact", "penetrating", "contained")
 SEVERITY = {name: i for i, name in enumerate(PAIR_STATUSES)}
+#: Query statuses whose numbers are not the answer: the pair is reported ``query_failed``.
+_NO_ANSWER = (int(Status.INVALID_INPUT), int(Status.OUT_OF_RANGE))
+
 # --fail-on value -> least severe status that violates the policy
 FAIL_ON = {
     "penetration": "penetrating",
@@ -378,7 +381,7 @@ def check_scene(
         result = signed_distance_batch(
             shapes.shapes, part_poses, part_pairs, threads=options.threads
         )
-        bad = result.status == int(Status.INVALID_INPUT)
+        bad = np.isin(result.status, _NO_ANSWER)
         value = np.where(bad, np.inf, result.signed_distance)
         best = _first_per_group(part_key, value)
         slot = np.searchsorted(key, part_key[best])  # candidates are sorted, so keys are too
@@ -436,7 +439,7 @@ def check_scene(
         tri_a, tri_b = mres.triangle_a[m], mres.triangle_b[m]
         label_a[im] = np.where(tri_a >= 0, shapes.face_labels(ca[im], tri_a), label_a[im])
         label_b[im] = np.where(tri_b >= 0, shapes.face_labels(cb[im], tri_b), label_b[im])
-        failed[im] = mres.status[m] == int(Status.INVALID_INPUT)
+        failed[im] = np.isin(mres.status[m], _NO_ANSWER)
 
     # Classification.
     tol = options.tolerance

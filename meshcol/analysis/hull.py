@@ -14,8 +14,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from meshcol.errors import InvalidMeshError
-from meshcol.io.destinations import check_destinations
 from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS, safe_name
+from meshcol.io.outputs import check_destinations
 from meshcol.io.scene import as_scene
 from meshcol.types import Body
 

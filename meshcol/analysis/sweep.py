@@ -24,7 +24,10 @@ __all__ = ["FAIL_ON", "SweepHit", "SweepReport", "sweep"]
 #: ``fail_on`` policies: ``hit`` fails the run on any pair that is not separated.
 FAIL_ON = ("hit", "none")
 #: The motion model, as the report states it.
-MOTION = "linear translation, constant-rate rotation about the local origin"
+MOTION = (
+    "pivot (local origin unless given) moves linearly; constant angular velocity about it, "
+    "the whole angle (shortest way to an end_rotation)"
+)
 #: Columns of :meth:`SweepReport.to_csv`, one row per pair (poses flattened row-major).
 CSV_COLUMNS = (
     "body_a",
@@ -236,7 +239,28 @@ class SweepReport:
 
 
 def _is_moving(body: Body) -> bool:
+    if body.spin is not None and body.spin.rotation is not None and body.spin.angle:
+        return True  # a whole number of turns ends where it started, yet moves
     return body.end_pose is not None and not np.array_equal(body.end_pose, body.pose)
+
+
+def _turns(bodies: tuple[Body, ...], start: np.ndarray, end: np.ndarray):
+    """Per body, the world rotation vector of its turn and the world pivot it turns about:
+    its spin, else the shortest rotation about its local origin. ``(None, None)`` when no body
+    spins (the core then takes the shortest rotations itself)."""
+    from meshcol.collision.time_of_impact import shortest_rotation
+
+    if not any(b.spin is not None for b in bodies):
+        return None, None
+    rotations = shortest_rotation(start, end).reshape(-1, 3)
+    pivots = start[:, :3, 3].copy()
+    for k, body in enumerate(bodies):
+        if body.spin is not None:
+            if body.spin.rotation is not None:
+                rotations[k] = body.spin.rotation
+            if body.spin.pivot is not None:
+                pivots[k] = body.spin.pivot
+    return rotations, pivots
 
 
 def sweep(
@@ -323,7 +347,11 @@ def sweep(
         [np.asarray(b.pose if b.end_pose is None else b.end_pose, dtype=np.float64) for b in bodies]
     )
     start, end = colliders.part_poses(), colliders.part_poses(end=True)
-    lo, hi = swept_aabbs(cs, start, end, threads)
+    # Parts share their body's frame, so they share its turn and pivot.
+    body_rotations, body_pivots = _turns(bodies, start_body, end_body)
+    rotations = None if body_rotations is None else body_rotations[owner]
+    pivots = None if body_pivots is None else body_pivots[owner]
+    lo, hi = swept_aabbs(cs, start, end, threads, rotations=rotations, pivots=pivots)
     if tolerance is None:
         finite = np.all(np.isfinite(lo), axis=1) & np.all(np.isfinite(hi), axis=1)
         diagonal = (
@@ -350,7 +378,15 @@ def sweep(
         swap = owner[pairs[:, 0]] > owner[pairs[:, 1]]
         pairs[swap] = pairs[swap][:, ::-1]
     toi = time_of_impact_batch(
-        cs, start, end, pairs, tolerance=tol, max_iterations=max_iterations, threads=threads
+        cs,
+        start,
+        end,
+        pairs,
+        rotations=rotations,
+        pivots=pivots,
+        tolerance=tol,
+        max_iterations=max_iterations,
+        threads=threads,
     )
     at_start = intersects_batch(cs, start, pairs, threads=threads).intersects
     at_end = intersects_batch(cs, end, pairs, threads=threads).intersects
@@ -386,7 +422,11 @@ def sweep(
             [i, j], colliders.part_label[[pairs[best, 0], pairs[best, 1]]]
         )
         poses = interpolate_pose(
-            np.stack([start_body[i], start_body[j]]), np.stack([end_body[i], end_body[j]]), [t, t]
+            np.stack([start_body[i], start_body[j]]),
+            np.stack([end_body[i], end_body[j]]),
+            [t, t],
+            rotation=None if body_rotations is None else body_rotations[[i, j]],
+            pivot=None if body_pivots is None else body_pivots[[i, j]],
         )
         tunnelled = (
             best_status == TimeOfImpactStatus.HIT

@@ -92,7 +92,7 @@ def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iter
     except BaseException as exc:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
-        if isinstance(exc, OSError) and exc.filename == tmp:
+        if isinstance(exc, OSError) and tmp in (exc.filename, exc.filename2):
             # the temporary name means nothing to the user: name the file they asked for
             raise _as_user_path(exc, path) from None
         raise

@@ -24,7 +24,7 @@ import numpy as np
 
 from meshcol.errors import InputFileError, MeshcolError, SceneError
 from meshcol.io.mesh_read import MAX_COORDINATE, check_magnitude, load_mesh, split_rigid
-from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere
+from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere, Spin
 
 __all__ = [
     "MANIFEST_EXTENSIONS",
@@ -135,12 +135,12 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
         if ("mesh" in spec) == ("primitive" in spec):
             raise SceneError(f"{label}: needs exactly one of 'mesh' or 'primitive'", source)
         start = _pose(spec.get("position"), spec.get("rotation"), label, "rotation", source)
-        end = _end_pose(spec, start, duration, label, source)
+        end, spin = _end_pose(spec, start, duration, label, source)
         scale = _scale(spec.get("scale"))
         if "mesh" in spec:
-            new = _mesh_bodies(spec, file, source, label, start, end, scale, files)
+            new = _mesh_bodies(spec, file, source, label, start, end, spin, scale, files)
         else:
-            new = [_primitive_body(spec, source, label, start, end, scale)]
+            new = [_primitive_body(spec, source, label, start, end, spin, scale)]
         for body in new:
             _check_world(body, label, source)
         bodies.extend(new)
@@ -352,6 +352,11 @@ def _pose(position, rotation, label: str, field: str, source: str) -> np.ndarray
 
 
 def _end_pose(spec: dict, start: np.ndarray, duration, label: str, source: str):
+    """The end pose and, for an angular velocity, the spin: ``(end, spin)``, either None.
+
+    An ``end_rotation`` is reached the shortest way (no spin); an ``angular_velocity`` turns
+    the body by ``|w| * duration`` radians, whatever the size (a :class:`Spin`).
+    """
     by_pose = "end_position" in spec or "end_rotation" in spec
     by_velocity = "velocity" in spec or "angular_velocity" in spec
     if by_pose and by_velocity:
@@ -366,27 +371,31 @@ def _end_pose(spec: dict, start: np.ndarray, duration, label: str, source: str):
             end[:3, :3] = _rotation(spec["end_rotation"], label, "end_rotation", source)
         if "end_position" in spec:
             end[:3, 3] = spec["end_position"]
-        return end
+        return end, None
     if by_velocity:
         if duration is None:
             field = "velocity" if "velocity" in spec else "angular_velocity"
             raise SceneError(f"{label}: {field} needs the manifest's 'duration'", source)
         end = start.copy()
         end[:3, 3] += np.asarray(spec.get("velocity", [0.0, 0.0, 0.0]), dtype=float) * duration
-        turn = np.asarray(spec.get("angular_velocity", [0.0, 0.0, 0.0]), dtype=float) * duration
-        end[:3, :3] = _rotation_vector(turn) @ start[:3, :3]
-        return end
-    return None
+        if "angular_velocity" not in spec:
+            return end, None
+        turn = np.asarray(spec["angular_velocity"], dtype=float) * duration
+        if not np.all(np.isfinite(turn)):
+            raise SceneError(f"{label}: angular_velocity * duration is not finite", source)
+        spin = Spin(turn)
+        end[:3, :3] = spin.matrix() @ start[:3, :3]
+        return end, spin
+    return None, None
 
 
-def _rotation_vector(vector: np.ndarray) -> np.ndarray:
-    """Rodrigues' formula: rotation by ``|v|`` radians about ``v / |v|``."""
-    angle = float(np.linalg.norm(vector))
-    if angle == 0.0:
-        return np.eye(3)
-    k = vector / angle
-    cross = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-    return np.eye(3) + math.sin(angle) * cross + (1 - math.cos(angle)) * (cross @ cross)
+def _sub_spin(spin: Spin | None, start: np.ndarray, end, rigid: np.ndarray) -> Spin | None:
+    """A sub-body's spin: the manifest body's turn (the shortest one to an end rotation), about
+    the manifest body's origin, where the file places the sub-body's own origin elsewhere; so
+    the sub-bodies move as one rigid body."""
+    if end is None or not np.any(rigid[:3, 3]):
+        return spin
+    return Spin(None if spin is None else spin.rotation, pivot=start[:3, 3].copy())
 
 
 def _scale(value) -> np.ndarray:
@@ -398,7 +407,7 @@ def _scale(value) -> np.ndarray:
 
 
 def _mesh_bodies(
-    spec, manifest: Path, source, label, start, end, scale, files: dict[str, list[Body]]
+    spec, manifest: Path, source, label, start, end, spin, scale, files: dict[str, list[Body]]
 ) -> list[Body]:
     mesh = spec["mesh"]
     mesh_source = os.path.join(os.path.dirname(source), mesh)
@@ -453,11 +462,12 @@ def _mesh_bodies(
             collider=spec.get("shape"),
             parts=parts,
             part_faces=part_faces,
+            spin=_sub_spin(spin, start, end, rigid),
         )
     ]
 
 
-def _primitive_body(spec, source, label, start, end, scale) -> Body:
+def _primitive_body(spec, source, label, start, end, spin, scale) -> Body:
     import trimesh
 
     options = spec["primitive"]
@@ -495,6 +505,7 @@ def _primitive_body(spec, source, label, start, end, scale) -> Body:
         end_pose=end,
         primitive=primitive,
         collider=spec.get("shape"),
+        spin=spin,
     )
 
 
