@@ -78,6 +78,7 @@ bench: install-test
 	$(BIN)/python benchmarks/bench_sweep.py
 	$(BIN)/python benchmarks/bench_check.py
 	$(BIN)/python benchmarks/bench_decompose.py
+	$(BIN)/python benchmarks/bench_inspect.py --rounds 1
 
 clean:
 	rm -rf build dist $(VENV) .venv-lowest demo-out *.egg-info

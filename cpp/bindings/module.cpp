@@ -9,6 +9,7 @@ void bind_broadphase(nb::module_& m);
 void bind_toi(nb::module_& m);
 void bind_mesh_query(nb::module_& m);
 void bind_io(nb::module_& m);
+void bind_inspect(nb::module_& m);
 
 NB_MODULE(_core, m) {
     m.doc() = "meshcol native core (private: use the meshcol package API)";
@@ -18,4 +19,5 @@ NB_MODULE(_core, m) {
     bind_toi(m);
     bind_mesh_query(m);
     bind_io(m);
+    bind_inspect(m);
 }

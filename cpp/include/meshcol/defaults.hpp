@@ -18,6 +18,10 @@ constexpr long long min_shapes_per_thread = 256;
 /// calling thread (one point visits a few leaves, a fraction of a mesh pair's work).
 constexpr long long min_points_per_thread = 64;
 
+/// Exact triangle-pair crossing tests (self-intersections): fewer pairs than this per thread
+/// run on the calling thread (a pair costs tens of nanoseconds, a thread far more).
+constexpr long long triangle_min_pairs_per_thread = 4096;
+
 /// Polytopes with more vertices than this use hill climbing on their hull adjacency (with a
 /// warm start) for support points; smaller ones scan every vertex.
 constexpr int hill_climbing_min_vertices = 32;
