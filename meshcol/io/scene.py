@@ -13,6 +13,7 @@ import dataclasses
 import json
 import math
 import os
+import re
 import sys
 from collections.abc import Iterator, Sequence
 from functools import lru_cache
@@ -489,10 +490,17 @@ def _parse(file: Path, source: str) -> Any:
             raise SceneError(
                 f"invalid JSON at line {error.lineno} column {error.colno}: {error.msg}", source
             ) from None
-    where = _first_non_finite(document, [])
+    where = _first_non_finite(document, []) if _MAY_BE_NON_FINITE.search(text) else None
     if where is not None:
         raise SceneError(f"{_describe(document, where)} must be finite", source)
     return document
+
+
+# Text that can parse to a non-finite float: NaN/Infinity (JSON), nan/inf (TOML), or a number
+# too large for a double (an exponent of three digits or more, or 309 digits in a row, TOML's
+# underscores counted). Only then is the parsed document walked for the value (a walk costs
+# per-body Python work); a false alarm (a name holding "inf") costs the walk, nothing else.
+_MAY_BE_NON_FINITE = re.compile(r"(?i:nan|inf)|[eE][+]?0*[1-9][0-9]{2,}|[0-9_]{309,}")
 
 
 def _first_non_finite(value: Any, path: list) -> list | None:
@@ -510,6 +518,118 @@ def _first_non_finite(value: Any, path: list) -> list | None:
     return None
 
 
+# The common manifest, checked by hand: JSON Schema validation costs about 0.1 ms of Python per
+# body, which a 100,000-body scene cannot afford. _plainly_valid accepts only documents the
+# schema accepts (tests/test_scene.py checks it against jsonschema on generated documents);
+# anything else, including any field it does not know, goes to jsonschema, which also writes
+# the message. Keep it in step with schemas/scene.schema.json.
+_TOP_FIELDS = frozenset({"units", "duration", "bodies"})
+_BODY_FIELDS = frozenset(
+    {
+        "name",
+        "mesh",
+        "primitive",
+        "position",
+        "rotation",
+        "scale",
+        "end_position",
+        "end_rotation",
+        "velocity",
+        "angular_velocity",
+        "shape",
+    }
+)
+_VECTOR_FIELDS = ("position", "end_position", "velocity", "angular_velocity")
+_ORDERS = frozenset(
+    {"xyz", "xzy", "yxz", "yzx", "zxy", "zyx", "xyx", "xzx", "yxy", "yzy", "zxz", "zyz"}
+)
+_SHAPES = frozenset({"hull", "decomposed", "mesh"})
+_PRIMITIVE_FIELDS = {
+    "sphere": frozenset({"type", "radius"}),
+    "box": frozenset({"type", "size"}),
+    "capsule": frozenset({"type", "radius", "length"}),
+    "cylinder": frozenset({"type", "radius", "length"}),
+}
+
+
+def _is_number(x: Any) -> bool:
+    return (type(x) is float or type(x) is int) and not isinstance(x, bool)
+
+
+def _is_numbers(x: Any, n: int, positive: bool = False) -> bool:
+    if type(x) is not list or len(x) != n:
+        return False
+    return all(_is_number(v) and (not positive or v > 0) for v in x)
+
+
+def _is_rotation(r: Any) -> bool:
+    if type(r) is not dict:
+        return False
+    if len(r) == 1:
+        return _is_numbers(r.get("quaternion"), 4)
+    order = r.get("order")
+    return (
+        len(r) == 2
+        and _is_numbers(r.get("euler_deg"), 3)
+        and type(order) is str
+        and (order in _ORDERS)
+    )
+
+
+def _is_primitive(p: Any) -> bool:
+    if type(p) is not dict:
+        return False
+    kind = p.get("type")
+    fields = _PRIMITIVE_FIELDS.get(kind) if type(kind) is str else None
+    if fields is None or p.keys() != fields:
+        return False
+    if kind == "box":
+        return _is_numbers(p["size"], 3, positive=True)
+    if not (_is_number(p["radius"]) and p["radius"] > 0):
+        return False
+    return kind == "sphere" or (_is_number(p["length"]) and p["length"] > 0)
+
+
+def _plainly_valid(document: Any) -> bool:
+    """True only when ``document`` is valid under the scene schema (False: ask jsonschema)."""
+    if type(document) is not dict or not document.keys() <= _TOP_FIELDS:
+        return False
+    units = document.get("units", "m")
+    duration = document.get("duration", 1.0)
+    bodies = document.get("bodies")
+    if type(units) is not str or not units:
+        return False
+    if not _is_number(duration) or not duration > 0:
+        return False
+    if type(bodies) is not list or not bodies:
+        return False
+    for body in bodies:
+        if type(body) is not dict or not body.keys() <= _BODY_FIELDS:
+            return False
+        name = body.get("name")
+        if type(name) is not str or not name:
+            return False
+        mesh = body.get("mesh")
+        if mesh is None:
+            if "mesh" in body or not _is_primitive(body.get("primitive")):
+                return False
+        elif type(mesh) is not str or not mesh or "primitive" in body:
+            return False
+        for field in _VECTOR_FIELDS:
+            if field in body and not _is_numbers(body[field], 3):
+                return False
+        for field in ("rotation", "end_rotation"):
+            if field in body and not _is_rotation(body[field]):
+                return False
+        if "scale" in body:
+            scale = body["scale"]
+            if not (_is_number(scale) and scale > 0) and not _is_numbers(scale, 3, positive=True):
+                return False
+        if "shape" in body and (type(body["shape"]) is not str or body["shape"] not in _SHAPES):
+            return False
+    return True
+
+
 @lru_cache(maxsize=1)
 def _validator():
     import jsonschema
@@ -520,6 +640,8 @@ def _validator():
 
 
 def _validate(document: Any, source: str) -> None:
+    if _plainly_valid(document):
+        return
     errors = list(_validator().iter_errors(document))
     if not errors:
         return
