@@ -231,6 +231,9 @@ def main() -> None:
         import coal
     except ImportError:
         coal = None
+    for name, module in (("python-fcl", fcl), ("coal", coal)):
+        if module is None:
+            print(f"{name}: skipped (not installed); its columns are nan")
     from oracles import polytope_distance, sat_depth, transform
 
     threads = _core.hardware_threads()
