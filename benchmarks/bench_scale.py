@@ -268,9 +268,11 @@ def run_trimesh(folder: Path) -> tuple[float, int]:
     return time.perf_counter() - start, len(names)
 
 
-def coal_pass(models_and_poses) -> tuple[int, int]:
-    """coal's own broad phase (DynamicAABBTreeArrayCollisionManager, candidate pairs collected),
-    then ``coal.collide`` and ``coal.distance`` per candidate pair: (candidates, collisions)."""
+def coal_pass(models_and_poses, candidates: np.ndarray) -> int:
+    """coal as trimesh is used: every object in a DynamicAABBTreeArrayCollisionManager, one
+    ``collide`` over the manager (all contacts, not the first), then ``coal.distance`` per
+    candidate pair (handed over for free: coal's pair-collecting callback cannot give its pairs
+    to Python, nor can Python subclass the callback). Returns the contacts found."""
     import coal
 
     manager = coal.DynamicAABBTreeArrayCollisionManager()
@@ -280,18 +282,14 @@ def coal_pass(models_and_poses) -> tuple[int, int]:
         objects.append(obj)
         manager.registerObject(obj)
     manager.setup()
-    collect = coal.CollisionCallBackCollect(16 * len(objects) + 16)
-    manager.collide(collect)
-    creq, cres = coal.CollisionRequest(), coal.CollisionResult()
-    dreq, dres = coal.DistanceRequest(), coal.DistanceResult()
-    hits = 0
-    pairs = collect.getCollisionPairs()
-    for o1, o2 in pairs:
-        cres.clear()
-        dres.clear()
-        hits += coal.collide(o1, o2, creq, cres) > 0
-        coal.distance(o1, o2, dreq, dres)
-    return len(pairs), hits
+    callback = coal.CollisionCallBackDefault()
+    callback.data.request.num_max_contacts = 1 << 30
+    manager.collide(callback)
+    request, result = coal.DistanceRequest(), coal.DistanceResult()
+    for i, j in candidates:
+        result.clear()
+        coal.distance(objects[i], objects[j], request, result)
+    return int(callback.data.result.numContacts())
 
 
 def coal_model(vertices: np.ndarray, faces: np.ndarray):
@@ -308,7 +306,8 @@ def coal_model(vertices: np.ndarray, faces: np.ndarray):
 def run_coal(folder: Path) -> tuple[float, int]:
     start = time.perf_counter()
     bodies = loaded_meshes(folder)
-    _, hits = coal_pass([(coal_model(m.vertices, m.faces), pose) for _, m, pose in bodies])
+    items = [(coal_model(m.vertices, m.faces), pose) for _, m, pose in bodies]
+    hits = coal_pass(items, candidate_pairs(bodies))
     return time.perf_counter() - start, hits
 
 
