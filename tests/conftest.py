@@ -107,6 +107,7 @@ def _private_user_cache(tmp_path_factory: pytest.TempPathFactory):
 #: leaves them out with ``-m "not slow"``; ``make test`` runs everything. Tests on the shared
 #: corpus are slow too (marked from their fixtures below).
 SLOW_TESTS = {
+    "test_fast_check_passes_the_valid_common_documents",
     "test_ball_in_bowl_is_separated_when_decomposed",
     "test_incremental_sweep_with_grid_cells_equals_brute_force",
     "test_timeout_stops_one_file_and_the_others_finish",
