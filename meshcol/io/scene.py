@@ -534,7 +534,7 @@ _ORDERS = frozenset(
     {"xyz", "xzy", "yxz", "yzx", "zxy", "zyx", "xyx", "xzx", "yxy", "yzy", "zxz", "zyz"}
 )
 _SHAPES = frozenset({"hull", "decomposed", "mesh"})
-_PRIMITIVE_FIELDS = {
+_PRIMITIVE_KEYS = {
     "sphere": frozenset({"type", "radius"}),
     "box": frozenset({"type", "size"}),
     "capsule": frozenset({"type", "radius", "length"}),
@@ -571,7 +571,7 @@ def _is_primitive(p: Any) -> bool:
     if type(p) is not dict:
         return False
     kind = p.get("type")
-    fields = _PRIMITIVE_FIELDS.get(kind) if type(kind) is str else None
+    fields = _PRIMITIVE_KEYS.get(kind) if type(kind) is str else None
     if fields is None or p.keys() != fields:
         return False
     if kind == "box":
