@@ -372,17 +372,23 @@ def test_bad_inputs_exit_2_with_one_line(meshes, tmp_path) -> None:
         (["--engine", "vhacd", "--threshold", "0.1"], "--threshold applies to --engine coacd only"),
         (
             ["-E", "bogus=1"],
-            "Invalid value for '--engine-option': unknown coacd option 'bogus': known options are",
+            "meshcol: error: invalid value for '--engine-option': unknown coacd option 'bogus': "
+            "known options are",
         ),
         (
             ["-E", "mcts_nodes"],
-            "Invalid value for '--engine-option' / '-E': expected KEY=VALUE, got 'mcts_nodes'",
+            "meshcol: error: invalid value for '--engine-option' / '-E': expected KEY=VALUE, got "
+            "'mcts_nodes'",
         ),
         (
             ["--max-vertices", "3"],
-            "Invalid value for '--max-vertices': 3 is not in the range x>=4.",
+            "meshcol: error: invalid value for '--max-vertices': 3 is not in the range x>=4 "
+            "(see 'meshcol decompose -h')",
         ),
-        (["--threshold", "0"], "Invalid value for '--threshold': 0.0 is not in the range 0<x<=1."),
+        (
+            ["--threshold", "0"],
+            "meshcol: error: invalid value for '--threshold': 0.0 is not in the range 0<x<=1",
+        ),
     ],
 )
 def test_usage_errors(meshes, tmp_path, extra, message) -> None:

@@ -230,8 +230,11 @@ class MeshDistanceBatch:
     triangle_a, triangle_b : (P,) int64
         Faces (indices local to each mesh) holding ``point_a`` and ``point_b``; -1 when none.
     status : (P,) int8
-        :class:`meshcol.types.Status`: ``CONVERGED``, or ``INVALID_INPUT`` for a non-rigid or
-        non-finite pose, a mesh with a non-finite vertex, or a mesh without faces.
+        :class:`meshcol.types.Status`: ``CONVERGED``; ``INVALID_INPUT`` for a non-rigid or
+        non-finite pose, a mesh with a non-finite vertex, or a mesh without faces;
+        ``OUT_OF_RANGE`` (NaN distance) when the pair's lengths (centre distance, reach of the
+        meshes) leave [2^-100, 2^100], where the float boxes and squared distances of the
+        search are not exact enough.
     """
 
     distance: np.ndarray

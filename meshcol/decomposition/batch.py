@@ -383,7 +383,8 @@ def _iter_load(inputs: list[str]) -> Iterator[tuple[str, list[tuple[str, Any, An
 
     for source, bodies in iter_inputs(list(inputs)):
         canonical = []
-        for body in bodies:
+        # each part of a body is decomposed on its own, as check's colliders do (same cache key)
+        for body in (part for whole in bodies for part in whole.part_bodies()):
             try:
                 v, f = canonical_geometry(body.vertices, body.faces)
             except InvalidMeshError as exc:
