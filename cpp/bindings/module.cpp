@@ -8,6 +8,7 @@ void bind_narrowphase(nb::module_& m);
 void bind_broadphase(nb::module_& m);
 void bind_toi(nb::module_& m);
 void bind_mesh_query(nb::module_& m);
+void bind_hull(nb::module_& m);
 
 NB_MODULE(_core, m) {
     m.doc() = "meshcol native core (private: use the meshcol package API)";
@@ -16,4 +17,5 @@ NB_MODULE(_core, m) {
     bind_broadphase(m);
     bind_toi(m);
     bind_mesh_query(m);
+    bind_hull(m);
 }

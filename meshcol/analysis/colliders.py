@@ -24,8 +24,8 @@ from typing import Any
 
 import numpy as np
 
+from meshcol.collision.hull import FLAT_RELATIVE_TOLERANCE
 from meshcol.collision.shapes import ConvexSet
-from meshcol.geometry.hull import FLAT_RELATIVE_TOLERANCE
 from meshcol.types import Body
 
 __all__ = [
@@ -155,7 +155,7 @@ def triangle_parts(body: Body) -> ConvexSet:
     """Every triangle of a body's mesh as a convex part (local frame).
 
     A triangle with an area is a 3-vertex polytope; one that is collinear or a point by the
-    flatness rule (:data:`meshcol.geometry.hull.FLAT_RELATIVE_TOLERANCE`, relative to its own
+    flatness rule (:data:`meshcol.collision.hull.FLAT_RELATIVE_TOLERANCE`, relative to its own
     size) is packed as the segment or point it is, so no triangle is ever dropped.
     """
     tri = np.asarray(body.vertices, dtype=np.float64)[np.asarray(body.faces, dtype=np.int64)]
