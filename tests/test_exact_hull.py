@@ -369,6 +369,51 @@ def test_random_clouds_equal_qhull_and_keep_the_invariants(points: np.ndarray) -
         assert set(map(tuple, hull.vertices)) == qhull_vertex_set(points)
 
 
+@st.composite
+def rotated_grids(draw) -> np.ndarray:
+    """Integer grid points under a rotation: collinear and coplanar up to rounding, where
+    thin triangles (normals lost to cancellation) and ties abound."""
+    points = draw(grids)
+    q = np.array(draw(st.lists(st.floats(-1, 1), min_size=4, max_size=4)))
+    if np.linalg.norm(q) < 1e-3:
+        q = np.array([0.5, 0.5, 0.5, 0.5])
+    w, x, y, z = q / np.linalg.norm(q)
+    rotation = np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+    return points @ rotation.T
+
+
+@settings(max_examples=150, deadline=None)
+@given(rotated_grids())
+def test_rotated_grids_keep_the_invariants(points: np.ndarray) -> None:
+    if exact_hull(points).dimension == 3:
+        assert_valid_hull(points, 1e-12 * float(np.abs(points).max()))
+
+
+def test_random_subsets_of_grids_keep_every_point_inside() -> None:
+    """Seeded cases of the kinds that once lost points: random subsets of a grid in thirds
+    (a corner of a face polygon taken for an edge point through a thin triangle whose plain
+    cross product was zero) and rotated integer grids (badly rounded face planes)."""
+    t = np.linspace(0.0, 1.0, 4)
+    thirds = np.stack(np.meshgrid(t, t, t), axis=-1).reshape(-1, 3)
+    rng = np.random.default_rng(2224)
+    for _ in range(300):
+        n = int(rng.integers(8, 64))
+        points = thirds[rng.permutation(len(thirds))[:n]]
+        if exact_hull(points).dimension == 3:
+            assert_valid_hull(points, 1e-12)
+            assert set(map(tuple, exact_hull(points).vertices)) == qhull_vertex_set(points)
+        rotation = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+        grid = rng.integers(-4, 5, size=(n, 3)).astype(float) @ rotation.T
+        if exact_hull(grid).dimension == 3:
+            assert_valid_hull(grid, 1e-12 * float(np.abs(grid).max()))
+
+
 @settings(max_examples=60, deadline=None)
 @given(st.integers(4, 300), st.integers(0, 2**32 - 1))
 def test_points_on_a_sphere_are_all_vertices(n: int, seed: int) -> None:
