@@ -44,9 +44,25 @@ inline void two_diff(double a, double b, double& x, double& y) {
     y = (a - av) + (bv - b);
 }
 
+// a = hi + lo with each half fitting 26 bits (Dekker 1971), for an exact product without FMA.
+inline void split(double a, double& hi, double& lo) {
+    const double c = 134217729.0 * a;  // 2^27 + 1
+    hi = c - (c - a);
+    lo = a - hi;
+}
+
 inline void two_product(double a, double b, double& x, double& y) {
     x = a * b;
+#if defined(__FMA__)
     y = std::fma(a, b, -x);
+#else
+    // Without hardware FMA (the default x86-64 target) std::fma is a library call: Dekker's
+    // product is exact too and inlines.
+    double ah, al, bh, bl;
+    split(a, ah, al);
+    split(b, bh, bl);
+    y = al * bl - (((x - ah * bh) - al * bh) - ah * bl);
+#endif
 }
 
 // h = e + f (Fast-Expansion-Sum with zero elimination); e and f non-overlapping, increasing
@@ -280,9 +296,29 @@ Vec3 accurate_cross(const Vec3& a, const Vec3& b, const Vec3& c) {
     return {minor(1, 2), minor(2, 0), minor(0, 1)};
 }
 
+// The outward normal (b - a) x (c - a), unnormalised, taken at the corner opposite the
+// longest edge: its rounding error relative to its length is about one ulp over the sine of
+// that corner's angle, small unless the triangle is a cap (three nearly collinear corners),
+// which gets the compensated product.
+Vec3 triangle_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
+    const double ab = squared_norm(b - a), bc = squared_norm(c - b), ca = squared_norm(a - c);
+    const Vec3 *o = &a, *p = &b, *q = &c;  // o: the corner; o p q counter-clockwise
+    if (ab >= bc && ab >= ca)
+        o = &c, p = &a, q = &b;
+    else if (bc >= ca)
+        o = &a, p = &b, q = &c;
+    else
+        o = &b, p = &c, q = &a;
+    const Vec3 u = *p - *o, v = *q - *o;
+    const Vec3 n = cross(u, v);
+    // sin(angle) >= 1/4: the plain product is within a few ulps of the exact one.
+    if (16.0 * squared_norm(n) >= squared_norm(u) * squared_norm(v)) return n;
+    return accurate_cross(*o, *p, *q);
+}
+
 void set_plane(Workspace& w, Face& f) {
     const Vec3& a = w.p[f.v[0]];
-    const Vec3 n = accurate_cross(a, w.p[f.v[1]], w.p[f.v[2]]);
+    const Vec3 n = triangle_normal(a, w.p[f.v[1]], w.p[f.v[2]]);
     const double len = norm(n);
     f.normal = len > 0.0 ? n / len : Vec3{};
     f.offset = dot(f.normal, a);
@@ -415,9 +451,9 @@ Build quickhull(Workspace& w, const std::vector<int>& subset, Triangulation& out
     int start[4] = {new_face(w, a, b, c), new_face(w, a, d, b), new_face(w, b, d, c),
                     new_face(w, c, d, a)};
     link_faces(w, start, 4);
-    const std::vector<int> first(start, start + 4);
+    w.new_faces.assign(start, start + 4);
     for (int i : subset)
-        if (i != a && i != b && i != c && i != d) assign(w, Conflict{p[i], i}, first);
+        if (i != a && i != b && i != c && i != d) assign(w, Conflict{p[i], i}, w.new_faces);
     for (int f : start)
         if (!w.faces[f].conflicts.empty()) w.pending.push_back(f);
 
@@ -581,6 +617,27 @@ struct Planes {
     int groups = 0;
 };
 
+// Everything one hull leaves behind, reused across the shapes of a batch (their capacity
+// saves the allocations that otherwise cost as much as a small hull).
+struct Analysis {
+    Triangulation t, previous;
+    Planes pl;
+    Hull hull;
+
+    void reset() {
+        hull.status = HullStatus::EMPTY;
+        hull.dimension = -1;
+        hull.vertices.clear();
+        hull.faces.clear();
+        hull.face_normals.clear();
+        hull.face_offsets.clear();
+        hull.face_planes.clear();
+        hull.plane_normals.clear();
+        hull.normal = Vec3{};
+        hull.volume = hull.area = hull.diagonal = 0.0;
+    }
+};
+
 int find_root(std::vector<int>& parent, int i) {
     while (parent[i] != i) {
         parent[i] = parent[parent[i]];
@@ -596,7 +653,7 @@ void planes_of(Workspace& w, const Triangulation& t, Planes& out) {
     out.area2.resize(m);
     for (size_t i = 0; i < m; ++i) {
         const Vec3& a = w.p[t.tri[i][0]];
-        const Vec3 n = accurate_cross(a, w.p[t.tri[i][1]], w.p[t.tri[i][2]]);
+        const Vec3 n = triangle_normal(a, w.p[t.tri[i][1]], w.p[t.tri[i][2]]);
         const double len = norm(n);
         out.area2[i] = len;
         out.normal[i] = len > 0.0 ? n / len : Vec3{};
@@ -728,8 +785,8 @@ std::vector<int> polygon(const Workspace& w, const std::vector<int>& idx, const 
 }
 
 // The hull of points already checked finite and in range.
-void compute(const Vec3* points, long long n, Workspace& w, Hull& hull,
-             Triangulation* triangulation, Planes* planes) {
+void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) {
+    Hull& hull = analysis.hull;
     double max_abs = 0.0;
     for (long long i = 0; i < n; ++i) {
         const Vec3& q = points[i];
@@ -786,8 +843,9 @@ void compute(const Vec3* points, long long n, Workspace& w, Hull& hull,
         if (b - a > defaults::flat_relative_tolerance * diagonal) ++dim;
     }
     if (dim == 3) {
-        Triangulation t, previous;
-        Planes pl;
+        Triangulation& t = analysis.t;
+        Triangulation& previous = analysis.previous;
+        Planes& pl = analysis.pl;
         std::vector<int> subset = all;
         bool have = false, planes_current = false;
         std::vector<int> removed, dropped;  // the vertices a rerun leaves out
@@ -896,8 +954,6 @@ void compute(const Vec3* points, long long n, Workspace& w, Hull& hull,
             }
             hull.volume = std::ldexp(volume / 6.0, 3 * exponent);
             hull.area = std::ldexp(area / 2.0, 2 * exponent);
-            if (triangulation != nullptr) *triangulation = std::move(t);
-            if (planes != nullptr) *planes = std::move(pl);
             return;
         }
         dim = 2;
@@ -947,10 +1003,12 @@ HullStatus screen(const Vec3* points, long long n) {
     return huge ? HullStatus::OVERFLOW : HullStatus::OK;
 }
 
-Hull hull_with(const Vec3* points, long long n, Workspace& w, Triangulation* t, Planes* pl) {
-    Hull hull;
+// The hull of `points` into analysis.hull (and its triangulation and planes, 3-D).
+void hull_with(const Vec3* points, long long n, Workspace& w, Analysis& analysis) {
+    analysis.reset();
+    Hull& hull = analysis.hull;
     hull.status = screen(points, n);
-    if (hull.status != HullStatus::OK) return hull;
+    if (hull.status != HullStatus::OK) return;
     // Sorted, without exact duplicates (-0.0 as 0.0), the points give the same hull in any
     // order: equal point sets, equal triangulations (decomposition parts rely on it).
     std::vector<Conflict>& sorted = w.sorted;
@@ -968,10 +1026,8 @@ Hull hull_with(const Vec3* points, long long n, Workspace& w, Triangulation* t, 
         w.unique_points.push_back(sorted[i].p);
         w.unique_index.push_back(sorted[i].index);
     }
-    compute(w.unique_points.data(), static_cast<long long>(w.unique_points.size()), w, hull, t,
-            pl);
+    compute(w.unique_points.data(), static_cast<long long>(w.unique_points.size()), w, analysis);
     for (int& v : hull.vertices) v = w.unique_index[v];
-    return hull;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -1063,10 +1119,12 @@ void adjacency_from_edges(int count, const std::vector<std::pair<int, int>>& edg
     }
 }
 
-void pack_one(const Vec3* points, long long n, Workspace& w, ShapePack& out) {
-    Triangulation t;
-    Planes pl;
-    const Hull hull = hull_with(points, n, w, &t, &pl);
+void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
+              ShapePack& out) {
+    hull_with(points, n, w, analysis);
+    const Hull& hull = analysis.hull;
+    const Triangulation& t = analysis.t;
+    const Planes& pl = analysis.pl;
     out.status = hull.status;
     if (hull.dimension < 0) {
         // Kept as given: the core reports INVALID_INPUT for every pair that uses it.
@@ -1122,7 +1180,9 @@ void pack_one(const Vec3* points, long long n, Workspace& w, ShapePack& out) {
 
 Hull exact_hull(const Vec3* points, long long n) {
     Workspace w;
-    return hull_with(points, n, w, nullptr, nullptr);
+    Analysis analysis;
+    hull_with(points, n, w, analysis);
+    return std::move(analysis.hull);
 }
 
 PackedPolytopes pack_polytopes(const Vec3* points, const std::int64_t* offsets, long long shapes,
@@ -1131,8 +1191,9 @@ PackedPolytopes pack_polytopes(const Vec3* points, const std::int64_t* offsets, 
     const int t = resolve_threads(threads, shapes, defaults::hull_min_shapes_per_thread);
     parallel_for(shapes, t, [&](long long begin, long long end) {
         Workspace w;
+        Analysis analysis;
         for (long long h = begin; h < end; ++h)
-            pack_one(points + offsets[h], offsets[h + 1] - offsets[h], w, packs[h]);
+            pack_one(points + offsets[h], offsets[h + 1] - offsets[h], w, analysis, packs[h]);
     });
     PackedPolytopes out;
     out.status.resize(packs.size());
