@@ -301,6 +301,12 @@ Vec3 accurate_cross(const Vec3& a, const Vec3& b, const Vec3& c) {
 // that corner's angle, small unless the triangle is a cap (three nearly collinear corners),
 // which gets the compensated product.
 Vec3 triangle_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
+    {
+        // Most triangles are well shaped at their first corner already.
+        const Vec3 u = b - a, v = c - a;
+        const Vec3 n = cross(u, v);
+        if (16.0 * squared_norm(n) >= squared_norm(u) * squared_norm(v)) return n;
+    }
     const double ab = squared_norm(b - a), bc = squared_norm(c - b), ca = squared_norm(a - c);
     const Vec3 *o = &a, *p = &b, *q = &c;  // o: the corner; o p q counter-clockwise
     if (ab >= bc && ab >= ca)
