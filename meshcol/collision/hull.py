@@ -318,7 +318,7 @@ def exact_hull(points: Any) -> ExactHull:
     convex and its topology consistent on any input; a point within
     ``defaults.hull_relative_tolerance`` times the largest absolute coordinate of a face's
     plane is on the hull (qhull's coplanar points), and vertices left on an edge or inside a
-    face by such ties are removed. The vertex set matches qhull's (``tests/test_hulls.py``).
+    face by such ties are removed. The vertex set matches qhull's (``tests/test_exact_hull.py``).
     """
     from meshcol._native import core
 
@@ -475,7 +475,7 @@ def _simplify(hull_vertices, facets, equations, budget, scale):
     offsets = (normals @ hull_vertices.T).max(axis=1)
     polytope = _intersect(normals, offsets, interior, scale)
     if polytope is None:  # qhull failed on four planes: not seen, but never crash on it
-        raise InvalidMeshError(f"qhull could not build a hull within {budget} vertices")
+        raise InvalidMeshError(f"could not build a hull within {budget} vertices")
     distances, closest = _distances_to_hull(polytope, facets, equations)
     for _ in range(4 * budget + 16):
         order = np.argsort(-distances, kind="stable")
