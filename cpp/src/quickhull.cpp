@@ -1001,6 +1001,7 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
 // Status of points that have no hull at all, or OK when they can have one.
 HullStatus screen(const Vec3* points, long long n) {
     if (n <= 0) return HullStatus::EMPTY;
+    if (n > INT_MAX) return HullStatus::FAILED;  // point indices are ints
     bool huge = false;
     for (long long i = 0; i < n; ++i) {
         if (!is_finite(points[i])) return HullStatus::NON_FINITE;

@@ -53,7 +53,7 @@ class HullStatus(enum.IntEnum):
     EMPTY = 4  #: no points: no hull
     NON_FINITE = 5  #: a NaN or infinite coordinate: no hull
     OVERFLOW = 6  #: a coordinate beyond :data:`MAX_ABS_COORDINATE`: no hull
-    FAILED = 7  #: the construction's own consistency check failed (never seen)
+    FAILED = 7  #: its own consistency check failed (never seen), or over 2**31 - 1 points
 
 
 #: The smallest vertex budget: a tetrahedron.

@@ -23,7 +23,8 @@ enum class HullStatus : std::int8_t {
     EMPTY = 4,          ///< no points: no hull
     NON_FINITE = 5,     ///< a NaN or infinite coordinate: no hull
     OVERFLOW = 6,       ///< a coordinate beyond `defaults::hull_max_abs_coordinate`: no hull
-    FAILED = 7,         ///< the construction's own consistency check failed (never seen)
+    FAILED = 7,         ///< the construction's own consistency check failed (never seen),
+                        ///< or more than 2^31 - 1 points
 };
 
 /// The exact convex hull of a point set, in the dimension the flatness rule gives it.
