@@ -6,7 +6,7 @@ BIN    := $(VENV)/bin
 PIP    := $(BIN)/python -m pip --disable-pip-version-check
 BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4"
 
-.PHONY: demo test test-fast lint install install-test bench clean
+.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -42,18 +42,34 @@ demo: install
 
 # Lint first: ruff (rules and formatting) and mypy, zero findings.
 lint: install-test
-	$(BIN)/ruff check meshcol tests benchmarks
-	$(BIN)/ruff format --check meshcol tests benchmarks
+	$(BIN)/ruff check meshcol tests benchmarks fuzz
+	$(BIN)/ruff format --check meshcol tests benchmarks fuzz
 	$(BIN)/mypy
 
 # pytest exits 5 when it collected nothing: that fails here like any other error.
 test: lint
-	@test -d ../shared/corpus || echo "WARNING: ../shared/corpus is absent: every corpus test will SKIP (see the skip summary)"
+	@test -d ../shared/corpus || echo "WARNING: ../shared/corpus is absent: every corpus test will SKIP (the count is printed at the end)"
 	$(BIN)/pytest -q -p no:cacheprovider
 
 # The fast lane (under a minute): no slow or corpus tests, fewer hypothesis examples.
 test-fast: install-test
 	HYPOTHESIS_PROFILE=fast $(BIN)/pytest -q -p no:cacheprovider -m "not slow"
+
+# The fast lane with every runtime dependency at the lower end of its range (pyproject.toml),
+# in its own .venv-lowest: run it when a bound changes (it downloads those versions).
+test-lowest:
+	$(PYTHON) -m venv .venv-lowest
+	.venv-lowest/bin/python -m pip --disable-pip-version-check install -q $(BUILD_DEPS)
+	.venv-lowest/bin/python .ci/lowest_constraints.py > .venv-lowest/constraints.txt
+	.venv-lowest/bin/python -m pip --disable-pip-version-check install -q --no-build-isolation \
+		-c .venv-lowest/constraints.txt -e ".[test]"
+	HYPOTHESIS_PROFILE=fast .venv-lowest/bin/pytest -q -p no:cacheprovider -m "not slow"
+# Fuzz every target (fuzz/targets.py) for FUZZ_SECONDS each; crashes land in fuzz/crashes/.
+FUZZ_SECONDS ?= 60
+fuzz: install-test
+	@for target in readers convex meshes; do \
+		$(BIN)/python fuzz/run.py $$target --seconds $(FUZZ_SECONDS) || exit 1; \
+	done
 
 bench: install-test
 	$(BIN)/python benchmarks/bench_narrowphase.py
@@ -64,4 +80,4 @@ bench: install-test
 	$(BIN)/python benchmarks/bench_decompose.py
 
 clean:
-	rm -rf build dist $(VENV) demo-out *.egg-info
+	rm -rf build dist $(VENV) .venv-lowest demo-out *.egg-info

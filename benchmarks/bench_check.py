@@ -117,7 +117,9 @@ def run_trimesh(scene, report):
     request = fcl.DistanceRequest()
     distances = []
     for p in report.pairs:
-        distances.append(fcl.distance(objs[p["a"]], objs[p["b"]], request, fcl.DistanceResult()))
+        distances.append(
+            fcl.distance(objs[p["body_a"]], objs[p["body_b"]], request, fcl.DistanceResult())
+        )
     seconds = time.perf_counter() - start
     return seconds, names, np.asarray(distances)
 
@@ -155,7 +157,7 @@ def main() -> None:
             (run_meshcol(scene, 0, args.clearance) for _ in range(args.repeat)), key=lambda r: r[0]
         )
         hits = {
-            (p["a"], p["b"])
+            (p["body_a"], p["body_b"])
             for p in report.pairs
             if p["status"] in ("penetrating", "contained", "contact")
         }

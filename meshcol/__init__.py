@@ -29,6 +29,7 @@ from meshcol.types import (
     Primitive,
     Scene,
     Sphere,
+    Spin,
     Status,
     TimeOfImpactStatus,
 )
@@ -78,6 +79,7 @@ _LAZY: dict[str, str] = {
     "TimeOfImpactResult": "meshcol.collision.time_of_impact",
     "TimeOfImpactBatch": "meshcol.collision.time_of_impact",
     "interpolate_pose": "meshcol.collision.time_of_impact",
+    "shortest_rotation": "meshcol.collision.time_of_impact",
     "time_of_impact": "meshcol.collision.time_of_impact",
     "time_of_impact_batch": "meshcol.collision.time_of_impact",
     # exact triangle-mesh queries
@@ -115,6 +117,7 @@ __all__ = [
     "Body",
     "Primitive",
     "Sphere",
+    "Spin",
     "Box",
     "Capsule",
     "Cylinder",

@@ -13,6 +13,7 @@ __all__ = [
     "InvalidMeshError",
     "MeshcolError",
     "MissingDependencyError",
+    "OutputPathError",
     "SceneError",
 ]
 
@@ -48,3 +49,7 @@ class SceneError(MeshcolError, ValueError):
 
 class MissingDependencyError(MeshcolError, ImportError):
     """An optional dependency needed for the requested feature is not installed."""
+
+
+class OutputPathError(MeshcolError, ValueError):
+    """An output would replace an input, or two outputs are one file: nothing is written."""

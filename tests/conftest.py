@@ -107,6 +107,8 @@ def _private_user_cache(tmp_path_factory: pytest.TempPathFactory):
 #: leaves them out with ``-m "not slow"``; ``make test`` runs everything. Tests on the shared
 #: corpus are slow too (marked from their fixtures below).
 SLOW_TESTS = {
+    "test_any_shape_spinning_about_a_pivot_matches_dense_sampling",
+    "test_spin_matches_dense_sampling",
     "test_ball_in_bowl_is_separated_when_decomposed",
     "test_incremental_sweep_with_grid_cells_equals_brute_force",
     "test_timeout_stops_one_file_and_the_others_finish",
@@ -120,6 +122,9 @@ SLOW_TESTS = {
     "test_tree_against_tree_equals_brute_force",
     "test_incremental_sweep_equals_brute_force_over_steps",
     "test_parts_are_convex_and_cover_the_torus",
+    "test_short_fuzzing_run_finds_nothing",
+    "test_signals_stop_the_run_and_leave_nothing",
+    "test_max_hausdorff_gates_what_sticks_out_not_the_cuts",
 }
 
 
@@ -129,3 +134,17 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
         fixtures = set(getattr(item, "fixturenames", ()))
         if item.originalname in SLOW_TESTS or fixtures & {"corpus", "corpus_run"}:  # type: ignore[attr-defined]
             item.add_marker(slow)
+
+
+def pytest_terminal_summary(terminalreporter, exitstatus: int, config: pytest.Config) -> None:
+    """Say loudly, at the end of the run, how many tests skipped for want of ../shared."""
+    skipped = terminalreporter.stats.get("skipped", [])
+    missing = [r for r in skipped if "../shared" in str(getattr(r, "longrepr", ""))]
+    if missing:
+        terminalreporter.write_sep(
+            "!",
+            f"WARNING: {SHARED} is absent or incomplete: {len(missing)} tests SKIPPED "
+            "(real-mesh corpus and oracle cases); put the shared folder beside the repository",
+            red=True,
+            bold=True,
+        )

@@ -59,7 +59,7 @@ def test_report_on_stdout_without_mesh_output(tmp_path: Path) -> None:
     cube = write(tmp_path, "cube.obj", CUBE_OBJ)
     result = run("hull", cube)
     assert result.exit_code == 0, result.output
-    assert result.stderr == ""
+    assert result.stderr == "meshcol: hull: PASS: 1 hull, 8 vertices\n"
     report = json.loads(result.stdout)
     assert report["schema_version"] == 1 and report["command"] == "hull"
     assert report["tool"]["name"] == "meshcol"
@@ -169,6 +169,7 @@ def test_flat_mesh_warns_and_reports_flat(tmp_path: Path) -> None:
     assert (
         result.stderr
         == f"meshcol: warning: {flat}: body 'flat' is flat: the hull is a 2-D polygon\n"
+        "meshcol: hull: PASS: 1 hull, 4 vertices, 1 flat\n"
     )
     (body,) = json.loads(result.stdout)["bodies"]
     assert body["flat"] is True and body["hull_volume"] == 0.0
@@ -182,6 +183,7 @@ def test_single_triangle_is_flat(corpus) -> None:
     assert result.exit_code == 0
     assert result.stderr == (
         f"meshcol: warning: {source}: body 'notenoughindices' is flat: the hull is a 2-D polygon\n"
+        "meshcol: hull: PASS: 1 hull, 3 vertices, 1 flat\n"
     )
     assert json.loads(result.stdout)["bodies"][0]["hull_faces"] == 1
 
@@ -202,16 +204,18 @@ def test_output_and_out_dir_together_is_a_usage_error(tmp_path: Path) -> None:
     cube = write(tmp_path, "cube.obj", CUBE_OBJ)
     result = run("hull", cube, "-o", tmp_path / "a.obj", "--out-dir", tmp_path / "d")
     assert result.exit_code == 2
-    assert result.stderr.endswith("Error: give either -o/--output or --out-dir, not both\n")
+    assert result.stderr == (
+        "meshcol: error: give either -o/--output or --out-dir, not both (see 'meshcol hull -h')\n"
+    )
 
 
 def test_unknown_output_extension(tmp_path: Path) -> None:
     cube = write(tmp_path, "cube.obj", CUBE_OBJ)
     result = run("hull", cube, "-o", "hull.xyz")
     assert result.exit_code == 2
-    assert result.stderr.endswith(
-        "Error: Invalid value for '-o' / '--output': unknown mesh extension '.xyz' in 'hull.xyz' "
-        "(expected .obj, .stl, .ply, .off, .glb)\n"
+    assert result.stderr == (
+        "meshcol: error: invalid value for '-o' / '--output': unknown mesh extension '.xyz' in "
+        "'hull.xyz' (expected .obj, .stl, .ply, .off, .glb) (see 'meshcol hull -h')\n"
     )
 
 
@@ -220,9 +224,9 @@ def test_several_bodies_into_stl_is_refused(corpus, tmp_path: Path) -> None:
     out.mkdir()
     result = run("hull", corpus / "trimesh-models" / "multibody.stl", "-o", out / "h.stl")
     assert result.exit_code == 2
-    assert result.stderr.endswith(
-        f"Error: -o {out / 'h.stl'}: 2 bodies need a file that holds several meshes "
-        "(.obj, .glb) or --out-dir\n"
+    assert result.stderr == (
+        f"meshcol: error: -o {out / 'h.stl'}: 2 bodies need a file that holds several meshes "
+        "(.obj, .glb) or --out-dir (see 'meshcol hull -h')\n"
     )
     assert list(out.iterdir()) == []
 
@@ -231,13 +235,16 @@ def test_budget_below_four_is_a_usage_error(tmp_path: Path) -> None:
     cube = write(tmp_path, "cube.obj", CUBE_OBJ)
     result = run("hull", cube, "--max-vertices", "3")
     assert result.exit_code == 2
-    assert "Invalid value for '--max-vertices': 3 is not in the range x>=4." in result.stderr
+    assert result.stderr == (
+        "meshcol: error: invalid value for '--max-vertices': 3 is not in the range x>=4 "
+        "(see 'meshcol hull -h')\n"
+    )
 
 
 def test_no_input_is_a_usage_error() -> None:
     result = run("hull")
     assert result.exit_code == 2
-    assert "Missing argument 'INPUT...'" in result.stderr
+    assert result.stderr == "meshcol: error: missing argument 'INPUT...' (see 'meshcol hull -h')\n"
 
 
 # ---------------------------------------------------------------------------------------
@@ -246,11 +253,11 @@ def test_no_input_is_a_usage_error() -> None:
 BAD_MESHES = {
     "nan.obj": (
         "v 0 0 0\nv 1 nan 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\n",
-        "mesh has non-finite vertex coordinates",
+        "cannot parse OBJ file: line 2: non-finite vertex coordinate",
     ),
     "inf.obj": (
         "v 0 0 0\nv 1 inf 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\n",
-        "mesh has non-finite vertex coordinates",
+        "cannot parse OBJ file: line 2: non-finite vertex coordinate",
     ),
     "line.obj": (
         "v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\n",

@@ -22,7 +22,7 @@ def test_report_on_stdout(tmp_path: Path) -> None:
     cube = write(tmp_path, "cube.obj", CUBE_OBJ)
     result = run("inspect", cube)
     assert result.exit_code == 0, result.output
-    assert result.stderr == ""
+    assert result.stderr.splitlines()[-1] == "meshcol: inspect: PASS: 1 body, 0 with findings"
     report = json.loads(result.stdout)
     assert report["schema_version"] == 1 and report["command"] == "inspect"
     assert report["settings"] == {"bounds_frame": "world", "fail_on": []}
@@ -61,9 +61,11 @@ def test_fail_on_exits_one_after_writing_the_report(corpus, tmp_path: Path) -> N
         tmp_path / "r.json",
     )
     assert result.exit_code == 1
-    assert (
-        result.stderr.splitlines()[-1] == f"meshcol: fail: {teapot}: body 'teapot': not-watertight"
-    )
+    assert result.stderr.splitlines()[-2:] == [
+        f"meshcol: fail: {teapot}: body 'teapot': not-watertight",
+        "meshcol: inspect: FAIL: 2 bodies, 1 with findings, 1 failing --fail-on "
+        "not-watertight,duplicate-faces",
+    ]
     report = json.loads((tmp_path / "r.json").read_text())
     assert report["failed"] is True
     assert [b["failed_rules"] for b in report["bodies"]] == [[], ["not-watertight"]]
@@ -82,10 +84,10 @@ def test_unknown_rule_is_a_usage_error(tmp_path: Path) -> None:
     cube = write(tmp_path, "cube.obj", CUBE_OBJ)
     result = run("inspect", cube, "--fail-on", "not-watertight,leaky")
     assert result.exit_code == 2
-    assert result.stderr.endswith(
-        "Error: Invalid value for '--fail-on': unknown rule 'leaky' (valid rules: all, "
+    assert result.stderr == (
+        "meshcol: error: invalid value for '--fail-on': unknown rule 'leaky' (valid rules: all, "
         + ", ".join(RULES)
-        + ")\n"
+        + ") (see 'meshcol inspect -h')\n"
     )
 
 
@@ -140,12 +142,12 @@ def test_broken_manifest(tmp_path: Path, name: str) -> None:
         (
             "nan.obj",
             "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n",
-            "mesh has non-finite vertex coordinates",
+            "cannot parse OBJ file: line 2: non-finite vertex coordinate",
         ),
         (
             "inf.obj",
             "v 0 0 0\nv 1 -inf 0\nv 0 1 0\nf 1 2 3\n",
-            "mesh has non-finite vertex coordinates",
+            "cannot parse OBJ file: line 2: non-finite vertex coordinate",
         ),
         (
             "mesh.dae",

@@ -293,6 +293,6 @@ def test_inspect_report_applies_the_policy(tmp_path) -> None:
     assert strict.summary["failed"] == 1 and strict.summary["findings"]["not-watertight"] == 1
     data = strict.to_dict()
     assert data["command"] == "inspect" and data["failed"] is True
-    assert strict.to_csv().splitlines()[0].endswith(",findings,failed_rules")
+    assert strict.to_csv().splitlines()[0].endswith(",findings,failed_rules,units")
     with pytest.raises(ValueError, match="unknown rule 'nope'"):
         inspect([path], fail_on=["nope"])

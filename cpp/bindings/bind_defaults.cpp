@@ -60,7 +60,8 @@ void bind_defaults(nb::module_& m) {
         .value("MAX_ITERATIONS", meshcol::Status::MAX_ITERATIONS)
         .value("DEGENERATE", meshcol::Status::DEGENERATE)
         .value("INVALID_INPUT", meshcol::Status::INVALID_INPUT)
-        .value("NOT_RUN", meshcol::Status::NOT_RUN);
+        .value("NOT_RUN", meshcol::Status::NOT_RUN)
+        .value("OUT_OF_RANGE", meshcol::Status::OUT_OF_RANGE);
     using T = meshcol::TimeOfImpactStatus;
     nb::enum_<T>(m, "TimeOfImpactStatus", "Outcome of a time-of-impact query (status.hpp).")
         .value("HIT", T::HIT)

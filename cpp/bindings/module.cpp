@@ -8,6 +8,7 @@ void bind_narrowphase(nb::module_& m);
 void bind_broadphase(nb::module_& m);
 void bind_toi(nb::module_& m);
 void bind_mesh_query(nb::module_& m);
+void bind_io(nb::module_& m);
 void bind_hull(nb::module_& m);
 
 NB_MODULE(_core, m) {
@@ -17,5 +18,6 @@ NB_MODULE(_core, m) {
     bind_broadphase(m);
     bind_toi(m);
     bind_mesh_query(m);
+    bind_io(m);
     bind_hull(m);
 }

@@ -15,6 +15,7 @@ from typing import Any
 
 from meshcol.errors import InvalidMeshError
 from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS, safe_name
+from meshcol.io.outputs import check_destinations
 from meshcol.io.scene import as_scene
 from meshcol.types import Body
 
@@ -41,6 +42,7 @@ CSV_COLUMNS = (
     "added_volume_fraction",
     "max_distance",
     "output",
+    "units",
 )
 
 
@@ -139,7 +141,7 @@ class HullReport:
         """One row per body (:data:`CSV_COLUMNS`)."""
         from meshcol.io.report import dumps_csv
 
-        return dumps_csv(self.bodies, CSV_COLUMNS)
+        return dumps_csv([dict(row, units=self.units) for row in self.bodies], CSV_COLUMNS)
 
 
 def out_dir_paths(out_dir: str | os.PathLike[str], names: Sequence[str]) -> list[str]:
@@ -164,6 +166,8 @@ def hull(
     output: str | os.PathLike[str] | None = None,
     out_dir: str | os.PathLike[str] | None = None,
     warn: Callable[[str], None] | None = None,
+    reserved: Sequence[tuple[str, str | os.PathLike[str] | None]] = (),
+    progress: Callable[[str], None] | None = None,
 ) -> HullReport:
     """Convex hull of each body, in the world frame, optionally within a vertex budget.
 
@@ -181,6 +185,10 @@ def hull(
         Write ``out_dir/<body>.obj`` per body (see :func:`out_dir_paths`); created if missing.
     warn : callable, optional
         Receives one line per flat body as it is found (also kept in ``warnings``).
+    reserved : sequence of (label, path)
+        Other files the caller will write (``("--report", "r.json")``): no hull may go there.
+    progress : callable, optional
+        Receives one line per hull computed (``hull: 3/10 bodies``).
 
     Returns
     -------
@@ -195,6 +203,8 @@ def hull(
     InvalidMeshError
         A body has no hull (collinear or single-point input, non-finite coordinates, or
         coordinates beyond :data:`meshcol.collision.hull.MAX_ABS_COORDINATE`).
+    OutputPathError
+        A hull file would replace an input mesh or a ``reserved`` file (nothing is written).
 
     Notes
     -----
@@ -228,7 +238,9 @@ def hull(
 
     # Compute everything first: a bad body stops the run before any file is written.
     hulls, warnings = [], []
-    for body in bodies:
+    for done, body in enumerate(bodies, start=1):
+        if progress is not None:
+            progress(f"hull: {done}/{len(bodies)} bodies")
         try:
             result = convex_hull(body.world_vertices(), max_vertices=max_vertices)
         except InvalidMeshError as exc:
@@ -242,6 +254,13 @@ def hull(
 
     names = [b.name for b in bodies]
     destinations: list[str | None] = [None] * len(bodies)
+    planned = [("output", output)] if output is not None else []
+    if out_dir is not None:
+        planned = [("--out-dir file", path) for path in out_dir_paths(out_dir, names)]
+    sources = {b.source for b in bodies if b.source is not None}
+    check_destinations(
+        [("an input mesh", source) for source in sorted(sources)], [*planned, *reserved]
+    )
     if output is not None:
         write_meshes(output, [(n, h.vertices, h.faces) for n, h in zip(names, hulls)])
         destinations = [output] * len(bodies)

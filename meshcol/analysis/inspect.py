@@ -8,7 +8,7 @@ piece, and plausibly in metres.
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -17,6 +17,7 @@ import numpy as np
 from meshcol.errors import InvalidMeshError
 from meshcol.geometry.topology import component_count, duplicate_face_count, edge_table
 from meshcol.geometry.triangles import degenerate_faces
+from meshcol.io.report import vector_columns
 from meshcol.types import Body
 
 __all__ = [
@@ -470,9 +471,9 @@ CSV_COLUMNS = (
     "watertight",
     "winding_consistent",
     "volume",
-    "bounds_min",
-    "bounds_max",
-    "size",
+    *vector_columns("bounds_min"),
+    *vector_columns("bounds_max"),
+    *vector_columns("size"),
     "degenerate_faces",
     "duplicate_faces",
     "boundary_edges",
@@ -485,6 +486,7 @@ CSV_COLUMNS = (
     "declared_units",
     "findings",
     "failed_rules",
+    "units",
 )
 
 
@@ -500,11 +502,15 @@ class InspectReport:
         The :data:`RULES` whose findings fail the run.
     units : str or None
         Units the scene manifest declared.
+    errors : tuple of dict
+        Inputs that could not be inspected, each ``{"source", "body", "message"}`` (``body``
+        None for a file that could not be read); the others are still inspected.
     """
 
     inspections: tuple[MeshInspection, ...]
     fail_on: tuple[str, ...] = ()
     units: str | None = None
+    errors: tuple[dict[str, Any], ...] = ()
 
     @property
     def bodies(self) -> list[dict[str, Any]]:
@@ -524,8 +530,9 @@ class InspectReport:
 
     @property
     def exit_code(self) -> int:
-        """1 when a body has a finding listed in ``fail_on``, else 0."""
-        return 1 if self.failed else 0
+        """2 when an input could not be inspected, else 1 when a body has a finding listed in
+        ``fail_on``, else 0."""
+        return 2 if self.errors else 1 if self.failed else 0
 
     @property
     def summary(self) -> dict[str, Any]:
@@ -534,6 +541,7 @@ class InspectReport:
             "bodies": len(self.inspections),
             "with_findings": sum(1 for r in self.inspections if r.findings),
             "failed": len(self.failed),
+            "errors": len(self.errors),
             "findings": {rule: sum(rule in r.findings for r in self.inspections) for rule in RULES},
         }
 
@@ -548,9 +556,10 @@ class InspectReport:
 
         return {
             **envelope("inspect", self.settings, self.units),
-            "failed": self.exit_code == 1,
+            "failed": self.exit_code != 0,
             "summary": self.summary,
             "bodies": self.bodies,
+            "errors": list(self.errors),
         }
 
     def to_json(self) -> str:
@@ -559,17 +568,29 @@ class InspectReport:
         return dumps_json(self.to_dict())
 
     def to_csv(self) -> str:
-        """One row per body (:data:`CSV_COLUMNS`); bounds split into min and max."""
-        from meshcol.io.report import dumps_csv
+        """One row per body (:data:`CSV_COLUMNS`): bounds and size split into ``_x/_y/_z``
+        columns, as every command's CSV; findings space-separated."""
+        from meshcol.io.report import dumps_csv, split_vectors
 
+        sizes = {"bounds_min": 3, "bounds_max": 3, "size": 3}
         flat = [
-            dict(row, bounds_min=row["bounds"][0], bounds_max=row["bounds"][1])
+            split_vectors(
+                dict(
+                    row, bounds_min=row["bounds"][0], bounds_max=row["bounds"][1], units=self.units
+                ),
+                sizes,
+            )
             for row in self.bodies
         ]
         return dumps_csv(flat, CSV_COLUMNS)
 
 
-def inspect(inputs: Any, *, fail_on: Sequence[str] = ()) -> InspectReport:
+def inspect(
+    inputs: Any,
+    *,
+    fail_on: Sequence[str] = (),
+    progress: Callable[[str], None] | None = None,
+) -> InspectReport:
     """Inspect every body of the inputs: is each mesh fit to be a collider?
 
     Parameters
@@ -578,6 +599,8 @@ def inspect(inputs: Any, *, fail_on: Sequence[str] = ()) -> InspectReport:
         Mesh files (every object, solid or mesh node is a body) or one scene manifest.
     fail_on : sequence of str
         Names of :data:`RULES` whose findings fail the run (:attr:`InspectReport.exit_code`).
+    progress : callable, optional
+        Receives one line per body inspected (``inspect: 3/10 bodies``).
 
     Returns
     -------
@@ -587,21 +610,56 @@ def inspect(inputs: Any, *, fail_on: Sequence[str] = ()) -> InspectReport:
     ------
     ValueError
         An unknown rule in ``fail_on``.
-    InvalidMeshError
-        A body has no faces or non-finite coordinates.
+    MeshcolError
+        A manifest that cannot be used, or inputs none of which could be inspected.
 
     Notes
     -----
     Each body goes through :func:`inspect_body`; a manifest's declared units are passed on,
-    so ``suspect-units`` compares the guess with them.
+    so ``suspect-units`` compares the guess with them. A batch keeps going: a mesh file that
+    cannot be read, or a body that cannot be inspected (no faces), becomes an entry of
+    :attr:`InspectReport.errors` and the run's exit code is 2; the other bodies are reported.
     """
-    from meshcol.io.scene import load_inputs
+    from meshcol.errors import MeshcolError
+    from meshcol.io.scene import iter_inputs, load_scene
 
     unknown = [rule for rule in fail_on if rule not in RULES]
     if unknown:
         raise ValueError(f"unknown rule {unknown[0]!r} (valid rules: {', '.join(RULES)})")
     if isinstance(inputs, (str, os.PathLike)):
         inputs = [inputs]
-    scene = load_inputs(list(inputs))
-    results = tuple(inspect_body(body, declared_units=scene.units) for body in scene.bodies)
-    return InspectReport(results, tuple(dict.fromkeys(fail_on)), scene.units)
+    inputs = list(inputs)
+    errors: list[dict[str, Any]] = []
+    first_error: list[MeshcolError] = []
+
+    def skip(path: str, error: MeshcolError, body: str | None = None) -> None:
+        first_error.append(error)
+        errors.append({"source": path, "body": body, "message": error.message})
+
+    if _is_manifest(inputs):
+        scene = load_scene(inputs[0])  # read whole: a manifest's problem stops the run
+        # health per mesh: each part of a body is its own mesh
+        bodies = [part for body in scene.bodies for part in body.part_bodies()]
+        units = scene.units
+    else:
+        bodies = [b for _, file_bodies in iter_inputs(inputs, on_error=skip) for b in file_bodies]
+        units = None
+    results = []
+    for done, body in enumerate(bodies, start=1):
+        try:
+            results.append(inspect_body(body, declared_units=units))
+        except InvalidMeshError as error:
+            skip(error.path or body.source or "", error, body.name)
+        if progress is not None:
+            progress(f"inspect: {done}/{len(bodies)} bodies")
+    if not results and first_error:
+        raise first_error[0]
+    return InspectReport(tuple(results), tuple(dict.fromkeys(fail_on)), units, tuple(errors))
+
+
+def _is_manifest(inputs: Sequence[Any]) -> bool:
+    from meshcol.io.scene import MANIFEST_EXTENSIONS
+
+    return len(inputs) == 1 and os.path.splitext(os.fspath(inputs[0]))[1].lower() in (
+        MANIFEST_EXTENSIONS
+    )

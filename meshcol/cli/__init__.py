@@ -4,14 +4,23 @@ Errors are mapped to exit codes here and nowhere else:
 
 - 0: ran and passed; 1: ran and found what the policy fails on;
 - 2: a usage error or unusable input, reported as one line on stderr
-  (``meshcol: error: FILE: problem``), with a traceback only under ``--debug``.
+  (``meshcol: error: FILE: problem``), with a traceback only under ``--debug``. click's own
+  usage errors (unknown option, bad value, missing argument) get the same prefix and one
+  line, never click's multi-line block.
+- 130: interrupted (SIGINT, Ctrl-C); 143: terminated (SIGTERM). Both unwind the command
+  (temporary files removed, worker processes stopped) before exiting, as a signal's default
+  action would not.
 """
 
 from __future__ import annotations
 
+import contextlib
 import importlib
+import signal
 import sys
-from typing import Any
+import threading
+from collections.abc import Iterator, Sequence
+from typing import Any, NoReturn
 
 import click
 
@@ -44,10 +53,44 @@ class MeshcolGroup(click.Group):
         module_name, attr = target.split(":")
         return getattr(importlib.import_module(module_name), attr)
 
+    def format_commands(self, ctx: click.Context, formatter: click.HelpFormatter) -> None:
+        """The command list, each with its whole one-line description (never cut off)."""
+        rows = []
+        for name in self.list_commands(ctx):
+            command = self.get_command(ctx, name)
+            if command is not None and not command.hidden:
+                rows.append((name, command.get_short_help_str(limit=1000)))
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
+
+    def main(
+        self,
+        args: Sequence[str] | None = None,
+        prog_name: str | None = None,
+        complete_var: str | None = None,
+        standalone_mode: bool = True,
+        **extra: Any,
+    ) -> Any:
+        """Run the command line; usage errors become one ``meshcol: error:`` line, exit 2."""
+        run = super().main
+        if not standalone_mode:
+            return run(args, prog_name, complete_var, standalone_mode=False, **extra)
+        try:
+            code = run(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except click.ClickException as exc:
+            fail(usage_message(exc))
+        except click.Abort:
+            click.echo("meshcol: interrupted", err=True)
+            sys.exit(130)
+        # Without standalone mode click returns the command's value, or the code of an
+        # explicit exit (--help, --version, ctx.exit(1)).
+        sys.exit(code if isinstance(code, int) else 0)
+
     def invoke(self, ctx: click.Context) -> Any:
         debug = bool(ctx.params.get("debug"))
         try:
-            return super().invoke(ctx)
+            with _sigterm_raises():
+                return super().invoke(ctx)
         except MeshcolError as exc:
             if debug:
                 raise
@@ -61,9 +104,47 @@ class MeshcolGroup(click.Group):
         except KeyboardInterrupt:
             click.echo("meshcol: interrupted", err=True)
             sys.exit(130)
+        except Terminated:
+            click.echo("meshcol: terminated", err=True)
+            sys.exit(143)
 
 
-def fail(message: str) -> None:
+class Terminated(BaseException):
+    """SIGTERM, raised in the main thread (like KeyboardInterrupt for SIGINT) so that the
+    command unwinds: ``finally`` blocks and atomic writes clean up, workers are stopped."""
+
+
+def _raise_terminated(signum: int, frame: Any) -> None:
+    raise Terminated
+
+
+@contextlib.contextmanager
+def _sigterm_raises() -> Iterator[None]:
+    """SIGTERM raises :class:`Terminated` during the block (main thread only; then restored)."""
+    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "SIGTERM"):
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous if previous is not None else signal.SIG_DFL)
+
+
+def usage_message(exc: click.ClickException) -> str:
+    """click's error as one line: ``invalid value for '--jobs': 0 is not in the range x>=1
+    (see 'meshcol decompose -h')``."""
+    text = " ".join(exc.format_message().split()).rstrip(".")
+    if text[:2].istitle() and not text[:2].isupper():
+        text = text[0].lower() + text[1:]
+    ctx = getattr(exc, "ctx", None)
+    if ctx is not None:
+        command = " ".join(["meshcol", *ctx.command_path.split()[1:]])
+        text += f" (see '{command} -h')"
+    return text
+
+
+def fail(message: str) -> NoReturn:
     """Print ``meshcol: error: MESSAGE`` on stderr and exit 2."""
     click.echo(f"meshcol: error: {message}", err=True)
     sys.exit(2)
@@ -77,7 +158,8 @@ def main(debug: bool) -> None:
 
     \b
     Examples:
-      meshcol check level/scene.json --report level.json
+      meshcol check level/scene.json --report level.json     the main job: every pair
+      meshcol check level.json --baseline last.json          fail only on what got worse
       meshcol inspect props/*.obj --fail-on not-watertight
       meshcol hull chair.obj --max-vertices 64 -o chair_hull.obj
       meshcol COMMAND -h      help and examples for one command

@@ -8,14 +8,16 @@ import click
 
 from meshcol.analysis.check import FAIL_ON
 from meshcol.analysis.colliders import COLLIDER_KINDS
-from meshcol.cli.common import Progress, report_options
+from meshcol.cli.common import FiniteFloat, Progress, plural, report_format, report_options, verdict
 from meshcol.decomposition.engines import ENGINES
 
 FAIL_ON_CHOICES = tuple(FAIL_ON)
 SHAPE_CHOICES = COLLIDER_KINDS
 
 
-@click.command("check")
+@click.command(
+    "check", short_help="Every pair of bodies: apart, clearance, contact, penetrating or contained."
+)
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
 @click.option(
     "--shape",
@@ -26,14 +28,14 @@ SHAPE_CHOICES = COLLIDER_KINDS
 )
 @click.option(
     "--tolerance",
-    type=click.FloatRange(min=0.0),
+    type=FiniteFloat(min=0.0),
     default=1e-6,
     show_default=True,
     help="Contact band in scene units: |signed distance| <= T counts as touching.",
 )
 @click.option(
     "--clearance",
-    type=click.FloatRange(min=0.0),
+    type=FiniteFloat(min=0.0),
     default=0.0,
     show_default=True,
     help="Minimum gap required; closer pairs get status 'clearance'.",
@@ -50,14 +52,15 @@ SHAPE_CHOICES = COLLIDER_KINDS
     "ignore",
     multiple=True,
     metavar="A:B",
-    help="Pair designed to touch (globs allowed, either order); repeatable.",
+    help="Pair designed to touch (globs allowed, either order); repeatable.  [default: none]",
 )
 @click.option(
     "--baseline",
     type=click.Path(dir_okay=False),
     default=None,
     metavar="OLD.json",
-    help="Previous JSON report: fail only on pairs that are new or worse.",
+    help="Previous JSON report: fail only on pairs that are new or worse.  [default: none, "
+    "every violating pair fails]",
 )
 @click.option(
     "--threads",
@@ -75,15 +78,15 @@ SHAPE_CHOICES = COLLIDER_KINDS
 )
 @click.option(
     "--threshold",
-    type=click.FloatRange(min=0.0, min_open=True),
+    type=FiniteFloat(min=0.0, max=1.0, min_open=True),
     default=None,
-    help="Decomposition concavity threshold (as in 'meshcol decompose').",
+    help="Decomposition concavity threshold (as in 'meshcol decompose').  [default: 0.05]",
 )
 @click.option(
     "--cache-dir",
     type=click.Path(file_okay=False),
     default=None,
-    help="Decompose cache folder (default: the user cache, as 'meshcol decompose').",
+    help="Decompose cache folder.  [default: the user cache, as 'meshcol decompose']",
 )
 @report_options(default="the report on stdout; the summary on stderr")
 def check(
@@ -104,10 +107,12 @@ def check(
     """Check every pair of bodies for contact, clearance and interpenetration.
 
     INPUT is mesh files (each body at its own coordinates, as parts exported in place), one
-    scene manifest (JSON/TOML) or glTF/GLB scenes. Statuses per pair: separated, clearance,
-    contact, penetrating, contained. The report (JSON or CSV) goes to --report FILE or to
-    stdout; a short summary goes to stderr. Exit 0 when the policy passes, 1 when it fails,
-    2 on bad input. Points are world coordinates; normals point from a to b.
+    scene manifest (JSON/TOML) or glTF/GLB scenes. Files given directly give one body per
+    object; a manifest body is its whole file, whose objects are its parts (never checked
+    against each other; pairs name them as part_a, part_b). Statuses per pair: separated,
+    clearance, contact, penetrating, contained. The report (JSON or CSV) goes to --report FILE
+    or to stdout; a short summary goes to stderr. Exit 0 when the policy passes, 1 when it
+    fails, 2 on bad input. Points are world coordinates; normals point from body_a to body_b.
 
     \b
     Examples:
@@ -118,31 +123,36 @@ def check(
     """
     from meshcol.analysis.check import check as run_check
     from meshcol.analysis.check import parse_ignore_rule
+    from meshcol.cli.common import check_outputs
     from meshcol.io.report import emit
-    from meshcol.io.report import report_format as pick_format
 
     for rule in ignore:
         try:
             parse_ignore_rule(rule)
         except ValueError as exc:
             raise click.BadParameter(str(exc), param_hint="'--ignore'") from None
-    fmt = pick_format(report, fmt)
-    progress = Progress()
-    result = run_check(
-        list(inputs),
-        progress=progress.message,
-        collider=shape,
-        tolerance=tolerance,
-        clearance=clearance,
-        fail_on=fail_on,
-        ignore=ignore,
-        baseline=baseline,
-        threads=threads,
-        decompose_options=_decompose_options(engine, threshold, cache_dir),
-    )
-    progress.done()
+    check_outputs(inputs, [("--report", report)], baseline=baseline)
+    fmt = report_format(report, fmt)
+    progress = Progress(command="check", heartbeat=True)
+    try:
+        result = run_check(
+            list(inputs),
+            progress=progress,
+            collider=shape,
+            tolerance=tolerance,
+            clearance=clearance,
+            fail_on=fail_on,
+            ignore=ignore,
+            baseline=baseline,
+            threads=threads,
+            decompose_options=_decompose_options(engine, threshold, cache_dir),
+        )
+    finally:
+        progress.done()
 
     emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+    for warning in result.warnings:
+        click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_table(result), err=True)
     sys.exit(result.exit_code)
 
@@ -156,22 +166,37 @@ def _decompose_options(engine: str, threshold: float | None, cache_dir: str | No
     return options
 
 
+#: Rows of the summary table: the most penetrating pairs that are not separated.
+TABLE_ROWS = 10
+
+
 def summary_table(result) -> str:
-    """A short human summary: counts per status and the worst pairs."""
+    """A short human summary: counts per status, the worst pairs, the verdict line."""
     s = result.summary
     units = f" {result.units}" if result.units else ""
     lines = [
-        f"{s['bodies']} bodies, {s['candidate_pairs']} candidate pairs "
+        f"meshcol: check: {plural(s['bodies'], 'body')}, "
+        f"{plural(s['candidate_pairs'], 'candidate pair')} "
         f"({s['seconds']:.3f} s check, {s['load_seconds'] or 0:.3f} s load)",
         "  " + "  ".join(f"{name}: {count}" for name, count in s["pairs_by_status"].items()),
     ]
-    worst = result.worst_pairs(10)
+    touching = sum(count for name, count in s["pairs_by_status"].items() if name != "separated")
+    worst = result.worst_pairs(TABLE_ROWS)
     if worst:
         lines.append(f"  {'status':<12} {'signed dist':>12}  pair")
         for p in worst:
             value = "" if p["signed_distance"] is None else f"{p['signed_distance']:.6g}"
             flag = " (ignored)" if p["ignored"] else (" (FAIL)" if p["violation"] else "")
-            lines.append(f"  {p['status']:<12} {value:>12}{units}  {p['a']} <-> {p['b']}{flag}")
-    verdict = "PASS" if s["passed"] else f"FAIL: {s['violations']} pair(s) violate --fail-on"
-    lines.append(verdict)
+            lines.append(
+                f"  {p['status']:<12} {value:>12}{units}  {p['body_a']} <-> {p['body_b']}{flag}"
+            )
+        if touching > len(worst):
+            lines.append(f"  ... {touching - len(worst)} more (every pair is in the report)")
+    settings = result.settings
+    if s["passed"]:
+        detail = f"no pair violates --fail-on {settings['fail_on']}"
+    else:
+        violate = "violates" if s["violations"] == 1 else "violate"
+        detail = f"{plural(s['violations'], 'pair')} {violate} --fail-on {settings['fail_on']}"
+    lines.append(verdict("check", s["passed"], detail))
     return "\n".join(lines)

@@ -1,13 +1,74 @@
-"""Pieces shared by the commands: report options and a progress line."""
+"""Pieces shared by the commands: report options, checked numbers, output paths, progress."""
 
 from __future__ import annotations
 
+import math
+import os
+import re
 import sys
+import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
 import click
+
+#: Seconds of work before a progress line appears (on a terminal or not).
+PROGRESS_DELAY = 5.0
+#: Seconds between progress lines when stderr is not a terminal (CI logs).
+PROGRESS_INTERVAL = 5.0
+
+
+class FiniteFloat(click.ParamType):
+    """A finite number (never nan, inf or an overflow such as 1e309), within optional bounds.
+
+    Parameters
+    ----------
+    min : float, optional
+        Smallest value allowed (``min_open``: excluded).
+    max : float, optional
+        Largest value allowed (``max_open``: excluded).
+    """
+
+    name = "float"
+
+    def __init__(
+        self,
+        min: float | None = None,
+        max: float | None = None,
+        min_open: bool = False,
+        max_open: bool = False,
+    ) -> None:
+        self.min, self.max, self.min_open, self.max_open = min, max, min_open, max_open
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        if isinstance(value, float) and math.isfinite(value):
+            number = value
+        else:
+            try:
+                number = float(value)
+            except (TypeError, ValueError):
+                self.fail(f"{value!r} is not a number", param, ctx)
+            if not math.isfinite(number):
+                self.fail(f"{value!r} is not a finite number", param, ctx)
+        low = self.min is not None and (number <= self.min if self.min_open else number < self.min)
+        high = self.max is not None and (number >= self.max if self.max_open else number > self.max)
+        if low or high:
+            self.fail(f"{number} is not in the range {self._range()}", param, ctx)
+        return number
+
+    def _range(self) -> str:
+        """As click's ranges: ``x>=0``, ``x>0``, ``0<x<=1``."""
+        low = "<" if self.min_open else "<="
+        high = "<" if self.max_open else "<="
+        if self.max is None:
+            return f"x{'>' if self.min_open else '>='}{self.min:g}" if self.min is not None else "x"
+        if self.min is None:
+            return f"x{high}{self.max:g}"
+        return f"{self.min:g}{low}x{high}{self.max:g}"
+
+    def __repr__(self) -> str:
+        return f"FiniteFloat({self._range()})"
 
 
 def report_options(
@@ -27,46 +88,195 @@ def report_options(
             "fmt",
             type=click.Choice(["json", "csv"]),
             default=None,
-            help="Report format (default: from the --report extension, else json).",
+            help="Report format.  [default: from the --report extension (.json, .csv), else json]",
         )(func)
         func = click.option(
             "--report",
             type=click.Path(dir_okay=False, allow_dash=True),
             default=None,
             metavar="FILE",
-            help=f"Write the report to FILE ('-': stdout). Default: {default}.",
+            help=f"Write the report to FILE ('-': stdout).  [default: {default}]",
         )(func)
         return func
 
     return decorate
 
 
+def report_format(report: str | None, fmt: str | None, format_option: bool = True) -> str:
+    """The report's format, or a usage error for an unknown ``--report`` extension or a
+    ``--format`` that contradicts it (``--report out.xml`` never silently writes JSON).
+    ``format_option``: the command has ``--format json|csv`` (the message suggests it)."""
+    from meshcol.io.report import report_format as pick
+
+    try:
+        return pick(report, fmt)
+    except ValueError as exc:
+        hint = " (or give --format json|csv)" if format_option and fmt is None else ""
+        raise click.BadParameter(f"{exc}{hint}", param_hint="'--report'") from None
+
+
+def check_outputs(
+    inputs: Iterable[str],
+    outputs: Sequence[tuple[str, str | None]],
+    baseline: str | None = None,
+) -> None:
+    """Exit 2 before anything is written when an output would replace an input (a manifest's
+    mesh files and the baseline count) or two outputs are one file
+    (:func:`meshcol.io.outputs.check_destinations`)."""
+    from meshcol.io.outputs import check_destinations, manifest_inputs
+
+    read = manifest_inputs(inputs)
+    if baseline is not None:
+        read.append(("the --baseline", baseline))
+    check_destinations(read, outputs)
+
+
+_COUNT = re.compile(r"(\d+)/(\d+)")
+
+
 class Progress:
-    """Progress messages on stderr, shown only on a terminal and only after one second.
+    """The one progress display of every command: a callable that takes the library's
+    one-line messages (``decompose: 3/10 files``, ``inspect: 12/40 bodies``).
+
+    On a terminal the latest message is redrawn in place, with elapsed time and, for a
+    message that counts ``N/M``, a bar and an estimate of the time left. On anything else
+    (CI logs, pipes) a plain line is printed every :data:`PROGRESS_INTERVAL` seconds. Both
+    start only after :data:`PROGRESS_DELAY` seconds, so short runs print nothing extra. A
+    heartbeat thread repeats the latest message while the library is busy between two
+    messages (a single 26 s file still shows that the run is alive).
 
     Parameters
     ----------
     stream : file, optional
         Defaults to ``sys.stderr``.
-    delay : float
-        Seconds before the first message is shown.
+    delay, interval : float
+        Seconds before the first message, and between lines off a terminal.
+    clock : callable, optional
+        Returns seconds (tests pass a fake clock).
+    command : str, optional
+        The command, prefixed to messages that do not start with it (``meshcol: check: ...``);
+        the heartbeat says ``COMMAND: working`` before the first message.
+    heartbeat : bool
+        Start the heartbeat thread (off for a fake clock).
     """
 
-    def __init__(self, stream: Any = None, delay: float = 1.0) -> None:
+    def __init__(
+        self,
+        stream: Any = None,
+        delay: float = PROGRESS_DELAY,
+        interval: float = PROGRESS_INTERVAL,
+        clock: Callable[[], float] = time.perf_counter,
+        command: str | None = None,
+        heartbeat: bool = False,
+    ) -> None:
         self.stream = stream if stream is not None else sys.stderr
-        self.enabled = bool(getattr(self.stream, "isatty", lambda: False)())
-        self.start = time.perf_counter()
+        self.live = bool(getattr(self.stream, "isatty", lambda: False)())
+        self.clock = clock
+        self.start = clock()
         self.delay = delay
+        self.interval = interval
+        self.last_line: float | None = None
+        self.command = command
+        self.last_text = None if command is None else "working"
         self.shown = False
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        if heartbeat:
+            self._thread = threading.Thread(target=self._beat, name="meshcol-progress", daemon=True)
+            self._thread.start()
+
+    def __call__(self, text: str) -> None:
+        self.message(text)
+
+    def _beat(self) -> None:
+        period = min(self.interval, 1.0)
+        while not self._stop.wait(period):
+            if self.last_text is not None:
+                self.message(self.last_text)
 
     def message(self, text: str) -> None:
-        if not self.enabled or time.perf_counter() - self.start < self.delay:
-            return
-        self.stream.write(f"\r\033[K{text}")
-        self.stream.flush()
-        self.shown = True
+        """Show ``text`` (redrawn on a terminal, a line every few seconds elsewhere)."""
+        with self._lock:
+            self.last_text = text
+            now = self.clock()
+            elapsed = now - self.start
+            if elapsed < self.delay or self._stop.is_set():
+                return
+            if (
+                not self.live
+                and self.last_line is not None
+                and now - self.last_line < self.interval
+            ):
+                return
+            prefix = "meshcol: "
+            if self.command is not None and not text.startswith(f"{self.command}:"):
+                prefix += f"{self.command}: "
+            line = f"{prefix}{text}{self._status(text, elapsed)}"
+            if self.live:
+                self.stream.write(f"\r\033[K{line}")
+            else:
+                self.stream.write(line + "\n")
+                self.last_line = now
+            self.stream.flush()
+            self.shown = True
+
+    def _status(self, text: str, elapsed: float) -> str:
+        match = _COUNT.search(text)
+        status = f" ({_duration(elapsed)} elapsed"
+        if match is not None:
+            done, total = int(match.group(1)), int(match.group(2))
+            if 0 < done < total:
+                status += f", about {_duration(elapsed * (total - done) / done)} left"
+            if self.live and total > 0:
+                filled = round(20 * min(done, total) / total)
+                status = f" [{'#' * filled}{'.' * (20 - filled)}]" + status
+        return status + ")"
 
     def done(self) -> None:
-        if self.shown:
-            self.stream.write("\r\033[K")
-            self.stream.flush()
+        """Stop the heartbeat and clear the live line (off a terminal the lines stay)."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        with self._lock:
+            if self.shown and self.live:
+                self.stream.write("\r\033[K")
+                self.stream.flush()
+
+
+def _duration(seconds: float) -> str:
+    seconds = max(0, round(seconds))
+    if seconds < 60:
+        return f"{seconds} s"
+    minutes, seconds = divmod(seconds, 60)
+    if minutes < 60:
+        return f"{minutes} min {seconds:02d} s"
+    hours, minutes = divmod(minutes, 60)
+    return f"{hours} h {minutes:02d} min"
+
+
+def plural(count: int, noun: str, plural_form: str | None = None) -> str:
+    """``1 body``, ``2 bodies``, ``0 pairs``."""
+    if count == 1:
+        return f"{count} {noun}"
+    if plural_form is None:
+        plural_form = (
+            noun[:-1] + "ies" if noun.endswith("y") and noun[-2:-1] not in "aeiou" else noun + "s"
+        )
+    return f"{count} {plural_form}"
+
+
+def verdict(command: str, passed: bool, detail: str) -> str:
+    """The last summary line of every command: ``meshcol: check: PASS: ...`` or
+    ``meshcol: check: FAIL: ...``."""
+    return f"meshcol: {command}: {'PASS' if passed else 'FAIL'}: {detail}"
+
+
+def display_path(path: str | os.PathLike[str]) -> str:
+    """A path as the user would type it: relative to the working folder when inside it."""
+    path = os.fspath(path)
+    if os.path.isabs(path):
+        relative = os.path.relpath(path)
+        if not relative.startswith(".."):
+            return relative
+    return path

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import os
+
 import click
 
+from meshcol.cli.common import FiniteFloat
 from meshcol.decomposition.engines import ENGINES
 from meshcol.io.mesh_write import LAYOUTS
 
@@ -20,7 +23,9 @@ def _engine_option(
     return options
 
 
-@click.command("decompose")
+@click.command(
+    "decompose", short_help="Convex decompositions of mesh libraries: cached, parallel, measured."
+)
 @click.argument("inputs", nargs=-1, required=True, type=click.Path(dir_okay=False))
 @click.option(
     "--out-dir",
@@ -38,16 +43,21 @@ def _engine_option(
 )
 @click.option(
     "--threshold",
-    type=click.FloatRange(0, 1, min_open=True),
+    type=FiniteFloat(0, 1, min_open=True),
     default=None,
-    help="CoACD concavity threshold (default 0.05); lower gives more, tighter parts.",
+    help="CoACD concavity threshold; lower gives more, tighter parts.  [default: 0.05]",
 )
-@click.option("--max-hulls", type=click.IntRange(min=1), default=None, help="Most parts per body.")
+@click.option(
+    "--max-hulls",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Most parts per body.  [default: no limit]",
+)
 @click.option(
     "--max-vertices",
     type=click.IntRange(min=4),
     default=None,
-    help="Most vertices per part (enforced).",
+    help="Most vertices per part (enforced).  [default: no limit]",
 )
 @click.option(
     "--preprocess",
@@ -60,7 +70,7 @@ def _engine_option(
     "--resolution",
     type=click.IntRange(min=1),
     default=None,
-    help="CoACD sampling resolution or V-HACD voxel count.",
+    help="CoACD sampling resolution or V-HACD voxel count.  [default: the engine's]",
 )
 @click.option("--seed", type=int, default=0, show_default=True, help="CoACD random seed.")
 @click.option(
@@ -70,7 +80,8 @@ def _engine_option(
     multiple=True,
     callback=_engine_option,
     metavar="KEY=VALUE",
-    help="Any other engine parameter, e.g. -E mcts_iterations=50 (repeatable).",
+    help="Any other engine parameter, e.g. -E mcts_iterations=50 (repeatable).  [default: "
+    "the engine's]",
 )
 @click.option(
     "--jobs",
@@ -82,15 +93,15 @@ def _engine_option(
 )
 @click.option(
     "--timeout",
-    type=click.FloatRange(0, min_open=True),
+    type=FiniteFloat(0, min_open=True),
     default=None,
-    help="Seconds allowed per file; a file over it is stopped and reported.",
+    help="Seconds allowed per file; a file over it is stopped and reported.  [default: no limit]",
 )
 @click.option(
     "--cache-dir",
     type=click.Path(file_okay=False),
     default=None,
-    help="Cache folder (default: the user cache folder, meshcol/decompose).",
+    help="Cache folder.  [default: the user cache folder, meshcol/decompose]",
 )
 @click.option("--no-cache", is_flag=True, help="Neither read nor write the cache.")
 @click.option(
@@ -112,13 +123,14 @@ def _engine_option(
     "--report",
     type=click.Path(dir_okay=False),
     default=None,
-    help="Write the JSON or CSV report here instead of stdout.",
+    help="Write the JSON or CSV report here.  [default: the report on stdout]",
 )
 @click.option(
     "--max-hausdorff",
-    type=click.FloatRange(min=0),
+    type=FiniteFloat(min=0),
     default=None,
-    help="Fail (exit 1) when a body's Hausdorff distance, either way, exceeds this.",
+    help="Fail (exit 1) when a body's Hausdorff distance, either way, exceeds this (mesh "
+    "units).  [default: no limit]",
 )
 @click.pass_context
 def decompose_command(
@@ -146,10 +158,13 @@ def decompose_command(
 
     Each body of each INPUT is decomposed (CoACD by default), its parts are made canonical
     (convex hull, sorted by centroid), written to --out-dir and measured: volume of their
-    union against the mesh's, Hausdorff distances both ways, and the fraction of the mesh
-    surface they leave uncovered. Results are cached by geometry and parameters, so a second
+    union against the mesh's, Hausdorff distances both ways (how far the mesh surface is from
+    the parts, and how far the boundary of their union sticks out of the mesh's solid: cuts
+    inside the mesh count 0), and the fraction of the mesh surface they leave uncovered. Results are cached by geometry and parameters, so a second
     run costs milliseconds. Exit 1 when a file failed or timed out, or --max-hausdorff was
-    exceeded; exit 2 for unusable input.
+    exceeded; exit 2 for unusable input or an output that cannot be written (every output
+    location is checked before the work starts, and nothing is written on failure); 130 on
+    Ctrl-C, 143 on SIGTERM, with no output, no cache entry and no worker left behind.
 
     \b
     Examples:
@@ -159,11 +174,17 @@ def decompose_command(
       meshcol decompose bottle.obj -o out/ --engine vhacd --layout combined --format glb
       meshcol decompose snowflake.obj -o out/ --preprocess off --threshold 0.02 -E mcts_iterations=50
     """
-    from meshcol.cli.common import Progress
+    from meshcol.cli.common import Progress, report_format, verdict
     from meshcol.decomposition.batch import decompose_files
+    from meshcol.decomposition.cache import default_cache_dir
     from meshcol.decomposition.engines import resolve_params
-    from meshcol.io.report import emit, report_format
+    from meshcol.io.outputs import check_outputs
+    from meshcol.io.report import emit
+    from meshcol.io.scene import MANIFEST_EXTENSIONS
 
+    report_format(
+        report, None, format_option=False
+    )  # an unknown --report extension stops the run before it starts
     if layout == "ucx" and fmt == "glb":
         raise click.UsageError("--layout ucx writes OBJ only: drop --format glb")
     if no_cache and cache_dir is not None:
@@ -175,7 +196,21 @@ def decompose_command(
     except ValueError as exc:
         raise click.BadParameter(str(exc), param_hint="'--engine-option'") from None
 
-    progress = Progress()
+    # Every output location, before any work: a run never fails after the work for want of
+    # a folder, and never replaces one of its inputs.
+    report_file = None if report in (None, "-") else report
+    cache_label = "--cache-dir" if cache_dir is not None else "the cache folder"
+    check_outputs(
+        files={"--report": report_file},
+        folders={
+            "--out-dir": out_dir,
+            cache_label: None if no_cache else (cache_dir or str(default_cache_dir())),
+        },
+        inputs=inputs,
+    )
+    progress = Progress(command="decompose", heartbeat=True)
+    if not any(os.path.splitext(p)[1].lower() in MANIFEST_EXTENSIONS for p in inputs):
+        progress(f"decompose: 0/{len(inputs)} files")  # what the heartbeat says until one is done
     try:
         result = decompose_files(
             inputs,
@@ -196,6 +231,7 @@ def decompose_command(
             fmt=fmt,
             max_hausdorff=max_hausdorff,
             progress=progress.message,
+            other_outputs=[report_file] if report_file else [],
         )
     finally:
         progress.done()
@@ -203,5 +239,22 @@ def decompose_command(
     for f in result.files:
         if f["status"] != "ok":
             click.echo(f"meshcol: {f['status']}: {f['path']}: {f['message']}", err=True)
+    click.echo(verdict("decompose", result.exit_code == 0, _summary(result)), err=True)
     if result.exit_code:
         ctx.exit(result.exit_code)
+
+
+def _summary(result) -> str:
+    """``3 files, 5 bodies, 42 parts`` and what failed, for the verdict line."""
+    from meshcol.cli.common import plural
+
+    s = result.summary
+    text = (
+        f"{plural(s['files'], 'file')}, {plural(s['bodies'], 'body')}, {plural(s['parts'], 'part')}"
+    )
+    for key, what in (("failed", "failed"), ("timeout", "timed out")):
+        if s[key]:
+            text += f", {s[key]} {what}"
+    if s["hausdorff_exceeded"]:
+        text += f", {s['hausdorff_exceeded']} over --max-hausdorff"
+    return text

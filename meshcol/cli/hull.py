@@ -6,12 +6,22 @@ import os
 
 import click
 
-from meshcol.cli.common import report_options
+from meshcol.cli.common import (
+    Progress,
+    check_outputs,
+    display_path,
+    plural,
+    report_format,
+    report_options,
+    verdict,
+)
 from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
 
 
 @click.command(
-    "hull", context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100}
+    "hull",
+    short_help="Convex hull of each body, optionally within a vertex budget.",
+    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
 )
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
 @click.option(
@@ -20,19 +30,21 @@ from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
     "output",
     metavar="FILE",
     help="Write the hull(s) to FILE (format from the extension: .obj .stl .ply .off "
-    ".glb). Several bodies need .obj or .glb (one named object each).",
+    ".glb). Several bodies need .obj or .glb (one named object each).  [default: no mesh "
+    "file]",
 )
 @click.option(
     "--out-dir",
     metavar="DIR",
     help="Write one DIR/<body>.obj per body (characters other than letters, digits, "
-    "'.', '-' and '_' become '_').",
+    "'.', '-' and '_' become '_').  [default: no mesh files]",
 )
 @click.option(
     "--max-vertices",
     type=click.IntRange(min=4),
     metavar="N",
-    help="At most N vertices per hull (PhysX: 255, GPU pipelines: 64), still enclosing the input.",
+    help="At most N vertices per hull (PhysX: 255, GPU pipelines: 64), still enclosing the "
+    "input.  [default: no budget, the exact hull]",
 )
 @report_options(default="stdout when no mesh is written, else no report")
 def hull(
@@ -80,8 +92,11 @@ def hull(
 
     from meshcol.analysis.hull import OutputDestinationError
     from meshcol.analysis.hull import hull as run_hull
-    from meshcol.io.report import emit, report_format
+    from meshcol.io.report import emit
 
+    check_outputs(inputs, [("-o", output), ("--report", report)])
+    fmt = report_format(report, fmt)
+    progress = Progress(command="hull", heartbeat=True)
     try:
         result = run_hull(
             list(inputs),
@@ -89,12 +104,24 @@ def hull(
             output=output,
             out_dir=out_dir,
             warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
+            reserved=[("--report", report)],
+            progress=progress,
         )
     except OutputDestinationError as exc:
         raise click.UsageError(
             f"-o {exc.output}: {exc.bodies} bodies need a file that holds several meshes "
             f"({', '.join(MULTI_MESH_EXTENSIONS)}) or --out-dir"
         ) from None
-    if report is None and (output or out_dir):
-        return
-    emit(result.to_csv() if report_format(report, fmt) == "csv" else result.to_json(), report)
+    finally:
+        progress.done()
+    if report is not None or not (output or out_dir):
+        emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+    s = result.summary
+    detail = f"{plural(s['bodies'], 'hull')}, {plural(s['hull_vertices'], 'vertex', 'vertices')}"
+    if s["flat"]:
+        detail += f", {s['flat']} flat"
+    if output:
+        detail += f", written to {display_path(output)}"
+    elif out_dir:
+        detail += f", {plural(s['files_written'], 'file')} written to {display_path(out_dir)}"
+    click.echo(verdict("hull", True, detail), err=True)

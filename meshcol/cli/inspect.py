@@ -7,7 +7,14 @@ import sys
 import click
 
 from meshcol.analysis.inspect import RULES
-from meshcol.cli.common import report_options
+from meshcol.cli.common import (
+    Progress,
+    check_outputs,
+    plural,
+    report_format,
+    report_options,
+    verdict,
+)
 
 
 def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) -> tuple[str, ...]:
@@ -25,7 +32,9 @@ def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) 
 
 
 @click.command(
-    "inspect", context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100}
+    "inspect",
+    short_help="Mesh health of each body: fit to be a collider?",
+    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
 )
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
 @report_options(default="the report on stdout; a summary table on stderr")
@@ -34,7 +43,9 @@ def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) 
     "fail_on",
     metavar="RULES",
     callback=_parse_rules,
-    help="Comma-separated findings that make the run exit 1: " + ", ".join(RULES) + " (or all).",
+    help="Comma-separated findings that make the run exit 1: "
+    + ", ".join(RULES)
+    + " (or all).  [default: none, the run reports only]",
 )
 def inspect(
     inputs: tuple[str, ...], report: str | None, fmt: str | None, fail_on: tuple[str, ...]
@@ -49,7 +60,10 @@ def inspect(
     status, and a units guess with its reason (a chair 400 units tall is millimetres).
 
     Findings are named as the --fail-on rules; a run exits 1 when a body has a finding
-    listed in --fail-on (after writing the report), 0 otherwise, 2 on unusable input.
+    listed in --fail-on (after writing the report), 0 otherwise, 2 on unusable input. A batch
+    keeps going: a file that cannot be read is an entry of the report's "errors" and a
+    'meshcol: error:' line, the other files are inspected and reported, and the run exits 2.
+    A summary table goes to stderr (the first 20 bodies, then "N more").
 
     \b
     Examples:
@@ -59,27 +73,46 @@ def inspect(
       meshcol inspect props/*.obj --report - --format csv --fail-on all
     """
     from meshcol.analysis.inspect import inspect as run_inspect
-    from meshcol.io.report import emit, report_format
+    from meshcol.io.report import emit
 
-    result = run_inspect(list(inputs), fail_on=fail_on)
-    emit(result.to_csv() if report_format(report, fmt) == "csv" else result.to_json(), report)
+    check_outputs(inputs, [("--report", report)])
+    fmt = report_format(report, fmt)
+    progress = Progress(command="inspect", heartbeat=True)
+    try:
+        result = run_inspect(list(inputs), fail_on=fail_on, progress=progress)
+    finally:
+        progress.done()
+    emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
 
-    if report is not None and report != "-":
-        _print_table(result.bodies)
+    _print_table(result.bodies)
     for row in result.failed:
         click.echo(
             f"meshcol: fail: {row['source']}: body '{row['name']}': "
             + ", ".join(row["failed_rules"]),
             err=True,
         )
+    for error in result.errors:
+        body = "" if error["body"] is None else f"body '{error['body']}': "
+        click.echo(f"meshcol: error: {error['source']}: {body}{error['message']}", err=True)
+    s = result.summary
+    detail = f"{plural(s['bodies'], 'body')}, {s['with_findings']} with findings"
+    if fail_on:
+        detail += f", {s['failed']} failing --fail-on {','.join(fail_on)}"
+    if result.errors:
+        detail += f", {plural(len(result.errors), 'input')} not inspected"
+    click.echo(verdict("inspect", result.exit_code == 0, detail), err=True)
     sys.exit(result.exit_code)
+
+
+#: Rows of the summary table; a longer batch ends with "N more".
+TABLE_ROWS = 20
 
 
 def _print_table(rows: list[dict]) -> None:
     """A short human summary on stderr."""
     header = ("body", "faces", "closed", "volume", "size", "units", "findings")
     lines = [header]
-    for row in rows:
+    for row in rows[:TABLE_ROWS]:
         volume = "-" if row["volume"] is None else f"{row['volume']:.4g}"
         size = " x ".join(f"{s:.3g}" for s in row["size"])
         lines.append(
@@ -93,7 +126,11 @@ def _print_table(rows: list[dict]) -> None:
                 ", ".join(row["findings"]) or "ok",
             )
         )
+    if len(lines) == 1:
+        return
     widths = [max(len(line[i]) for line in lines) for i in range(len(header) - 1)]
     for line in lines:
         cells = [cell.ljust(width) for cell, width in zip(line, widths)]
         click.echo("  ".join([*cells, line[-1]]).rstrip(), err=True)
+    if len(rows) > TABLE_ROWS:
+        click.echo(f"... {len(rows) - TABLE_ROWS} more (every body is in the report)", err=True)

@@ -8,17 +8,21 @@ import click
 
 from meshcol.analysis.colliders import COLLIDER_KINDS
 from meshcol.analysis.sweep import FAIL_ON
-from meshcol.cli.common import report_options
-
-
-def _positive(ctx: click.Context, param: click.Parameter, value: float | None) -> float | None:
-    if value is not None and not (value > 0.0 and value != float("inf")):
-        raise click.BadParameter(f"must be a finite number > 0, got {value}", ctx, param)
-    return value
+from meshcol.cli.common import (
+    FiniteFloat,
+    Progress,
+    check_outputs,
+    plural,
+    report_format,
+    report_options,
+    verdict,
+)
 
 
 @click.command(
-    "sweep", context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100}
+    "sweep",
+    short_help="First contact of moving bodies (time of impact) and the hits that tunnel.",
+    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
 )
 @click.argument("manifest", metavar="MANIFEST")
 @click.option(
@@ -31,11 +35,10 @@ def _positive(ctx: click.Context, param: click.Parameter, value: float | None) -
 )
 @click.option(
     "--tolerance",
-    type=float,
-    callback=_positive,
+    type=FiniteFloat(min=0.0, min_open=True),
     metavar="T",
-    help="Contact distance in scene units (default: 1e-6 x the diagonal of the "
-    "scene's swept bounds).",
+    help="Contact distance in scene units.  [default: 1e-6 x the diagonal of the "
+    "scene's swept bounds]",
 )
 @report_options(default="the report on stdout; a summary on stderr")
 @click.option(
@@ -58,8 +61,8 @@ def _positive(ctx: click.Context, param: click.Parameter, value: float | None) -
     "--cache-dir",
     type=click.Path(file_okay=False),
     default=None,
-    help="Decompose cache folder for --shape decomposed (default: the user cache, "
-    "as 'meshcol decompose'); bodies missing from it are decomposed now.",
+    help="Decompose cache folder for --shape decomposed; bodies missing from it are "
+    "decomposed now.  [default: the user cache, as 'meshcol decompose']",
 )
 def sweep(
     manifest: str,
@@ -76,8 +79,9 @@ def sweep(
     MANIFEST is a scene manifest whose bodies have start poses and end poses
     (`end_position` / `end_rotation`, or `velocity` / `angular_velocity` with the manifest's
     `duration`); bodies without an end pose stay still. Each body moves over the motion with
-    its translation interpolated linearly and its rotation turned at a constant rate about
-    its local origin. The report lists every pair of bodies that is not separated during the
+    its origin moving linearly and turning at constant angular velocity about it: by the whole
+    angle of `angular_velocity` x `duration` (several turns included), or the shortest way
+    to an `end_rotation`. The report lists every pair of bodies that is not separated during the
     motion: its status (HIT, OVERLAPPED_AT_START or FAILED), toi (fraction of the motion),
     time in seconds when the manifest has a duration, the world contact point and normal
     (a to b), both poses at impact (4x4), and `tunnelled` when a discrete check at the start
@@ -92,35 +96,54 @@ def sweep(
       meshcol sweep level.json --shape mesh --tolerance 1e-5 --report -
     """
     from meshcol.analysis.sweep import sweep as run_sweep
-    from meshcol.io.report import emit, report_format
+    from meshcol.io.report import emit
 
+    check_outputs([manifest], [("--report", report)])
+    fmt = report_format(report, fmt)
     decompose_options = {} if cache_dir is None else {"cache_dir": cache_dir}
-    result = run_sweep(
-        manifest,
-        collider=shape,
-        tolerance=tolerance,
-        threads=threads,
-        decompose_options=decompose_options,
-        fail_on=fail_on,
-    )
-    emit(result.to_csv() if report_format(report, fmt) == "csv" else result.to_json(), report)
-
-    if report is not None and report != "-":
-        summary = result.summary
-        click.echo(
-            f"meshcol: sweep: {summary['bodies']} bodies, {summary['candidate_pairs']} "
-            f"candidate pairs, {summary['hits']} hits ({summary['tunnelled']} tunnelled), "
-            f"{summary['overlapped_at_start']} overlapped at start, "
-            f"{summary['failed']} undecided",
-            err=True,
+    progress = Progress(command="sweep", heartbeat=True)  # the library reports no steps
+    try:
+        result = run_sweep(
+            manifest,
+            collider=shape,
+            tolerance=tolerance,
+            threads=threads,
+            decompose_options=decompose_options,
+            fail_on=fail_on,
         )
-    if result.exit_code:
-        for h in result.hits:
-            when = "" if h.time is None else f" (t = {h.time:.6g} s)"
-            extra = ", tunnelled" if h.tunnelled else ""
-            click.echo(
-                f"meshcol: fail: {manifest}: '{h.a}' and '{h.b}': {h.status.name} at time of impact "
-                f"{h.time_of_impact:.6g}{when}{extra}",
-                err=True,
-            )
+    finally:
+        progress.done()
+    emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+    for warning in result.warnings:
+        click.echo(f"meshcol: warning: {warning}", err=True)
+    click.echo(summary_lines(manifest, result), err=True)
     sys.exit(result.exit_code)
+
+
+def summary_lines(manifest: str, result) -> str:
+    """The summary on stderr: counts, one ``meshcol: fail:`` line per pair that is not
+    separated, and the verdict line."""
+    s = result.summary
+    lines = [
+        f"meshcol: sweep: {plural(s['bodies'], 'body')} ({s['moving_bodies']} moving), "
+        f"{plural(s['candidate_pairs'], 'candidate pair')}, {plural(s['hits'], 'hit')} "
+        f"({s['tunnelled']} tunnelled), {s['overlapped_at_start']} overlapped at start, "
+        f"{s['failed']} undecided"
+    ]
+    for h in result.hits:
+        when = "" if h.time is None else f" (t = {h.time:.6g} s)"
+        extra = ", tunnelled" if h.tunnelled else ""
+        kind = "fail" if result.exit_code else "note"
+        lines.append(
+            f"meshcol: {kind}: {manifest}: '{h.body_a}' and '{h.body_b}': {h.status.name} at time of "
+            f"impact {h.time_of_impact:.6g}{when}{extra}"
+        )
+    if not result.hits:
+        detail = "no pair touches during the motion"
+    else:
+        touch = "touches" if len(result.hits) == 1 else "touch"
+        detail = f"{plural(len(result.hits), 'pair')} {touch} during the motion"
+        if not result.exit_code:
+            detail += " (--fail-on none)"
+    lines.append(verdict("sweep", result.exit_code == 0, detail))
+    return "\n".join(lines)

@@ -69,6 +69,7 @@ def decompose(
     tolerance: float | None = None,
     cache_dir: str | None = None,
     use_cache: bool = True,
+    write_cache: bool = True,
     threads: int = 0,
 ) -> Decomposition:
     """Convex decomposition of a mesh, from the cache when possible, stored in it otherwise.
@@ -93,6 +94,10 @@ def decompose(
         Cache folder; default :func:`meshcol.cache.default_cache_dir`.
     use_cache : bool
         Read and write the cache.
+    write_cache : bool
+        False: read the cache but leave storing the result to the caller (``meshcol
+        decompose`` stores what its worker processes return, so that a worker killed or
+        interrupted never writes an entry).
     threads : int
         Threads for the metrics' distance queries; 0 uses all cores.
 
@@ -140,7 +145,8 @@ def decompose(
                 vertices, faces, hit.parts, samples=samples, tolerance=tol, threads=threads
             )
             hit = dataclasses.replace(hit, metrics=remeasured)
-            cache.store(hit, cache_dir)
+            if write_cache:
+                cache.store(hit, cache_dir)
             return hit
 
     raw = run_engine(engine, vertices, faces, params)
@@ -199,7 +205,7 @@ def decompose(
         repaired=repaired,
         notes=tuple(notes),
     )
-    if use_cache:
+    if use_cache and write_cache:
         cache.store(result, cache_dir)
     return result
 
@@ -209,10 +215,10 @@ def cached_decomposition(
 ) -> Decomposition | None:
     """The cached decomposition of ``mesh`` for these options, or None; never runs an engine.
 
-    Takes the same options as :func:`decompose` (``metrics``, ``samples``, ``tolerance`` and
-    ``use_cache``, ``threads`` are ignored: metrics come back as stored).
+    Takes the same options as :func:`decompose` (``metrics``, ``samples``, ``tolerance``,
+    ``use_cache``, ``write_cache`` and ``threads`` are ignored: metrics come back as stored).
     """
-    for ignored in ("metrics", "samples", "tolerance", "use_cache", "threads"):
+    for ignored in ("metrics", "samples", "tolerance", "use_cache", "write_cache", "threads"):
         options.pop(ignored, None)
     engine = options.pop("engine", "coacd")
     vertices, faces = canonical_geometry(*as_mesh_arrays(mesh))

@@ -12,17 +12,26 @@ and vertices split along UV or normal seams are merged back by position.
 from __future__ import annotations
 
 import os
-import re
 import struct
 import zlib
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from meshcol.errors import InputFileError, InvalidMeshError
+from meshcol.io.off import read_off
 from meshcol.types import Body
 
-__all__ = ["MESH_EXTENSIONS", "load_mesh", "merge_vertices", "split_rigid"]
+__all__ = [
+    "MAX_COORDINATE",
+    "MESH_EXTENSIONS",
+    "check_magnitude",
+    "load_mesh",
+    "load_meshes",
+    "merge_vertices",
+    "split_rigid",
+]
 
 #: File extensions (lower case) that :func:`load_mesh` reads, mapped to trimesh's file type.
 MESH_EXTENSIONS: dict[str, str] = {
@@ -37,6 +46,28 @@ MESH_EXTENSIONS: dict[str, str] = {
 # A matrix whose linear part is orthonormal to this tolerance is taken as rigid as it is,
 # so exact rotations (and identity) stay exact instead of going through an SVD.
 _RIGID_TOL = 1e-12
+
+#: Largest coordinate magnitude accepted anywhere (file vertices, and world coordinates after a
+#: manifest's scale, pose and motion). Beyond it the 1e-8 merge grid of vertex positions
+#: overflows 64-bit integers (at 9.2e10) and the float64 spacing of coordinates (2e-6 at 1e10)
+#: is coarser than any contact tolerance; volumes and normals overflow long before 1e308.
+MAX_COORDINATE = 1e10
+
+
+def check_magnitude(values: np.ndarray, what: str, source: str | None) -> None:
+    """Raise :class:`InvalidMeshError` when a value of ``values`` exceeds
+    :data:`MAX_COORDINATE` in magnitude, naming the first such value (``what`` says whose)."""
+    values = np.asarray(values, dtype=np.float64)
+    over = np.abs(values) > MAX_COORDINATE
+    if over.any():
+        first = np.argwhere(over)[0]
+        where = f" {int(first[0]) + 1}" if values.ndim == 2 else ""
+        raise InvalidMeshError(
+            f"{what}{where} has coordinate {values[tuple(first)]:.6g}, beyond the limit of "
+            f"+/-{MAX_COORDINATE:g}",
+            source,
+        )
+
 
 # Vertices closer than this (per coordinate, absolute) are merged: trimesh's own merge
 # tolerance (trimesh.constants.tol.merge), so watertightness agrees with trimesh's processing.
@@ -98,37 +129,23 @@ def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]
     source = os.fspath(path)
     file = Path(source)
     file_type = _check_file(file, source)
-    scene = _read_scene(file, file_type, source)
-
-    # (name, matrix, trimesh geometry) for every mesh node, in file order
-    nodes = []
-    for node in scene.graph.nodes_geometry:
-        matrix, geometry_name = scene.graph[node]
-        geometry = scene.geometry[geometry_name]
-        faces = getattr(geometry, "faces", None)
-        if faces is None or len(faces) == 0:
-            continue  # point clouds, paths, faceless meshes: not bodies
-        name = geometry_name if file_type in ("obj", "stl", "ply", "off") else str(node)
-        if file_type == "obj" and name == file.name:
-            name = "default"  # faces before any `o`/`g` line: OBJ's default group
-        nodes.append((name, np.asarray(matrix, dtype=np.float64), geometry))
+    if file_type in _NATIVE_FORMATS:
+        return load_meshes([source], merge=merge)[0]
+    nodes = _read_nodes(file, file_type, source)
     if not nodes:
         raise InvalidMeshError("mesh has no faces", source)
-    if file_type == "obj":
-        nodes = _obj_file_order(file, nodes)
-    elif file_type in ("glb", "gltf"):
-        nodes = _gltf_file_order(file, file_type, nodes)
 
     stem = file.stem
     bodies: list[Body] = []
     used: set[str] = set()
-    for name, matrix, geometry in nodes:
-        vertices = np.asarray(geometry.vertices, dtype=np.float64)
-        faces = np.asarray(geometry.faces, dtype=np.int64)
+    for name, matrix, vertices, faces in nodes:
+        vertices = np.asarray(vertices, dtype=np.float64)
+        faces = np.asarray(faces, dtype=np.int64)
         if vertices.ndim != 2 or vertices.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3:
             raise InvalidMeshError("mesh is not made of triangles", source)
         if not np.isfinite(vertices).all():
             raise InvalidMeshError("mesh has non-finite vertex coordinates", source)
+        check_magnitude(vertices, "vertex", source)
         if not np.isfinite(matrix).all():
             raise InvalidMeshError("scene graph has a non-finite transform", source)
         if faces.min() < 0 or faces.max() >= len(vertices):
@@ -155,6 +172,114 @@ def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]
             )
         )
     return bodies
+
+
+#: Formats the native core reads (OBJ, binary and ASCII STL), with their code in the core.
+_NATIVE_FORMATS = {"obj": 0, "stl": 1}
+_CORRUPT = 4  # the core's ReadStatus::Corrupt
+
+
+def load_meshes(
+    paths: list[str | os.PathLike[str]], *, merge: bool = True, threads: int = 0
+) -> list[list[Body]]:
+    """Load many mesh files at once: :func:`load_mesh` for each, with OBJ and STL files read
+    and parsed by the native core in parallel (GIL released).
+
+    Parameters
+    ----------
+    paths : list of str or path-like
+    merge : bool, optional
+        As :func:`load_mesh`.
+    threads : int, optional
+        Reader threads for the OBJ and STL files; 0 means all cores.
+
+    Returns
+    -------
+    list of list of Body
+        One list per path, in order, each as :func:`load_mesh` returns it.
+
+    Raises
+    ------
+    InputFileError, InvalidMeshError
+        As :func:`load_mesh`, for the first path (in order) that fails.
+
+    Notes
+    -----
+    The native readers: OBJ ``v`` and ``f`` lines (any encoding; comments, ``vt``, ``vn``,
+    materials and everything else skipped), polygons fan-triangulated, 1-based or negative
+    (relative) indices, never 0 or out of range; ``o`` lines start bodies, or ``g`` lines when
+    the file has none. STL: binary when the size is 84 + 50 x the triangle count, else ASCII
+    (one body per ``solid``). Other formats go through trimesh, one file at a time.
+    """
+    from meshcol._native import core
+
+    sources = [os.fspath(p) for p in paths]
+    types = []
+    for source in sources:
+        try:
+            types.append(_file_type(source))
+        except InputFileError:
+            _check_file(Path(source), source)  # a missing file or a directory says so first
+            raise
+    native = [i for i, t in enumerate(types) if t in _NATIVE_FORMATS]
+    out: list[list[Body] | None] = [None] * len(sources)
+    if native:
+        vertices, faces, v_off, f_off, owner, raw_names, status, raw_errors = core.read_mesh_files(
+            [sources[i] for i in native],
+            [_NATIVE_FORMATS[types[i]] for i in native],
+            merge=merge,
+            threads=threads,
+        )
+        names = [_text(n) for n in raw_names]
+        errors = [_text(e) for e in raw_errors]
+        # one vectorised pass finds the objects with a coordinate beyond the limit
+        big_rows = np.flatnonzero((np.abs(vertices) > MAX_COORDINATE).any(axis=1))
+        big = (
+            set(np.searchsorted(v_off, big_rows, side="right").tolist()) if len(big_rows) else set()
+        )
+        per_file: list[list[int]] = [[] for _ in native]
+        for k, f in enumerate(owner.tolist()):
+            per_file[f].append(k)
+        for j, i in enumerate(native):
+            if status[j] == _CORRUPT:
+                raise InvalidMeshError(
+                    f"cannot parse {types[i].upper()} file: {errors[j]}", sources[i]
+                )
+            if status[j] != 0:
+                raise InputFileError(errors[j], sources[i])
+            objects = per_file[j]
+            if not objects:
+                raise InvalidMeshError("mesh has no faces", sources[i])
+            stem = Path(sources[i]).stem
+            used: set[str] = set()
+            bodies = []
+            for k in objects:
+                if k + 1 in big:
+                    check_magnitude(vertices[v_off[k] : v_off[k + 1]], "vertex", sources[i])
+                name = names[k] or ("default" if types[i] == "obj" else stem)
+                full = _unique(stem if len(objects) == 1 else f"{stem}/{name}", used)
+                bodies.append(
+                    Body(
+                        name=full,
+                        source=sources[i],
+                        vertices=vertices[v_off[k] : v_off[k + 1]],
+                        faces=faces[f_off[k] : f_off[k + 1]],
+                        pose=np.eye(4),
+                    )
+                )
+            out[i] = bodies
+    for i in range(len(sources)):
+        if out[i] is None:
+            out[i] = load_mesh(sources[i], merge=merge)
+    return out  # type: ignore[return-value]
+
+
+def _text(data: bytes) -> str:
+    """Bytes of a file as text: UTF-8, else Latin-1 (which maps every byte)."""
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("latin-1")
 
 
 def split_rigid(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
@@ -222,17 +347,21 @@ def merge_vertices(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray,
     Positions are compared after rounding to 8 decimals, trimesh's merge tolerance, and
     only positions count: normals and UVs are ignored, so UV seams close.
     """
-    from trimesh.grouping import unique_rows
+    from meshcol._native import core
 
-    vertices = np.asarray(vertices, dtype=np.float64)
-    faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    used, corner = np.unique(faces.ravel(), return_inverse=True)
-    if len(used) == 0:
-        return np.zeros((0, 3)), faces
-    # keep_order: the first of each group of equal positions, in file order
-    keep, group = unique_rows(vertices[used], digits=_MERGE_DIGITS, keep_order=True)
-    merged_faces = np.asarray(group, dtype=np.int64)[corner].reshape(-1, 3)
-    return vertices[used][keep], merged_faces
+    vertices = np.ascontiguousarray(vertices, dtype=np.float64).reshape(-1, 3)
+    faces = np.ascontiguousarray(faces, dtype=np.int64).reshape(-1, 3)
+    return core.merge_vertices(vertices, faces, _MERGE_DIGITS)
+
+
+def _file_type(source: str) -> str:
+    """The file type of ``source`` from its extension (InputFileError when unknown)."""
+    file_type = MESH_EXTENSIONS.get(os.path.splitext(source)[1].lower())
+    if file_type is None:
+        known = ", ".join(MESH_EXTENSIONS)
+        suffix = os.path.splitext(source)[1] or "(none)"
+        raise InputFileError(f"unknown mesh file extension {suffix!r} (expected {known})", source)
+    return file_type
 
 
 def _check_file(file: Path, source: str) -> str:
@@ -240,11 +369,7 @@ def _check_file(file: Path, source: str) -> str:
         raise InputFileError("file not found", source)
     if file.is_dir():
         raise InputFileError("is a directory, not a mesh file", source)
-    file_type = MESH_EXTENSIONS.get(file.suffix.lower())
-    if file_type is None:
-        known = ", ".join(MESH_EXTENSIONS)
-        suffix = file.suffix or "(none)"
-        raise InputFileError(f"unknown mesh file extension {suffix!r} (expected {known})", source)
+    file_type = _file_type(source)
     try:
         with open(file, "rb"):
             pass
@@ -253,26 +378,53 @@ def _check_file(file: Path, source: str) -> str:
     return file_type
 
 
+def _read_nodes(file: Path, file_type: str, source: str) -> list:
+    """``(name, matrix, vertices, faces)`` of every mesh node of a PLY, OFF or glTF/GLB file,
+    in file order (OBJ and STL go to the core's readers, :func:`load_meshes`)."""
+    if file_type == "off":
+        off_vertices, off_faces = read_off(_read_bytes(file, source), source)
+        return [(file.stem, np.eye(4), off_vertices, off_faces)] if len(off_faces) else []
+    scene = _read_scene(file, file_type, source)
+    nodes = []
+    for node in scene.graph.nodes_geometry:
+        matrix, geometry_name = scene.graph[node]
+        geometry = scene.geometry[geometry_name]
+        faces = getattr(geometry, "faces", None)
+        if faces is None or len(faces) == 0:
+            continue  # point clouds, paths, faceless meshes: not bodies
+        name = geometry_name if file_type == "ply" else str(node)
+        nodes.append((name, np.asarray(matrix, dtype=np.float64), geometry.vertices, faces))
+    if file_type in ("glb", "gltf"):
+        nodes = _gltf_file_order(file, file_type, nodes)
+    return nodes
+
+
+def _read_bytes(file: Path, source: str) -> bytes:
+    try:
+        return file.read_bytes()
+    except OSError as error:
+        raise InputFileError(f"cannot read file: {error.strerror or error}", source) from None
+
+
 def _read_scene(file: Path, file_type: str, source: str):
+    import io
+
     import trimesh
 
     options: dict = {"process": False}
-    if file_type == "obj":
-        # Geometry only: no .mtl, no textures (so no Pillow), one body per object, or per
-        # group when the file has no objects.
-        text = file.read_bytes().decode("utf-8", errors="replace")
-        has_objects = re.search(r"^\s*o\s", text, flags=re.MULTILINE) is not None
-        options.update(
-            skip_materials=True,
-            group_material=False,
-            split_objects=True,
-            split_groups=not has_objects,
-        )
-    elif file_type == "stl":
-        _check_stl(file, source)
+    stream = None
+    if file_type == "ply":
+        header = _ply_bytes(file, source)
+        if header is not None:
+            stream = io.BytesIO(header)
     elif file_type == "gltf":
-        _check_json(file, source)
+        _check_gltf(_check_json(file, source), "GLTF", source)
+    elif file_type == "glb":
+        _check_gltf(_glb_json(file, source), "GLB", source)
     try:
+        if stream is not None:
+            stream.name = file.name  # trimesh names an unnamed object after it
+            return trimesh.load_scene(stream, file_type=file_type, **options)
         return trimesh.load_scene(str(file), file_type=file_type, **options)
     except FileNotFoundError as error:
         # a glTF buffer or image the file refers to
@@ -287,28 +439,25 @@ def _read_scene(file: Path, file_type: str, source: str):
         ) from None
 
 
-def _check_stl(file: Path, source: str) -> None:
-    """Reject what is neither a binary STL nor text before trimesh guesses an encoding."""
-    size = file.stat().st_size
-    with open(file, "rb") as stream:
-        header = stream.read(84)
-    if size >= 84 and 84 + 50 * struct.unpack("<I", header[80:84])[0] == size:
-        return
+def _ply_bytes(file: Path, source: str) -> bytes | None:
+    """A PLY file whose header (comments, obj_info) is not UTF-8, with the header re-encoded
+    from Latin-1; None when the file needs nothing (the data after the header is untouched)."""
+    data = _read_bytes(file, source)
+    end = data.find(b"end_header")
+    if end < 0:
+        return None
     try:
-        file.read_bytes().decode("utf-8")
+        data[:end].decode("utf-8")
+        return None
     except UnicodeDecodeError:
-        raise InvalidMeshError(
-            "cannot parse STL file: neither binary STL (size does not match the triangle "
-            "count) nor ASCII text",
-            source,
-        ) from None
+        return data[:end].decode("latin-1").encode("utf-8") + data[end:]
 
 
-def _check_json(file: Path, source: str) -> None:
+def _check_json(file: Path, source: str) -> Any:
     import json
 
     try:
-        json.loads(file.read_bytes())
+        return json.loads(file.read_bytes().decode("utf-8-sig"))
     except json.JSONDecodeError as error:
         raise InvalidMeshError(
             f"cannot parse GLTF file: invalid JSON at line {error.lineno} column {error.colno}: "
@@ -319,18 +468,113 @@ def _check_json(file: Path, source: str) -> None:
         raise InvalidMeshError("cannot parse GLTF file: not UTF-8 text", source) from None
 
 
-def _obj_file_order(file: Path, nodes: list) -> list:
-    """trimesh returns OBJ objects last-first: put them back in the order the file has them."""
-    text = file.read_bytes().decode("utf-8", errors="replace")
+def _glb_json(file: Path, source: str) -> Any:
+    """The JSON chunk of a GLB file (its header checked)."""
+    import json
 
-    def position(item) -> int:
-        name = item[0]
-        if name == "default":
-            return -1
-        match = re.search(rf"^\s*[og]\s+{re.escape(name)}\s*$", text, flags=re.MULTILINE)
-        return match.start() if match else len(text)
+    data = file.read_bytes()
+    if len(data) < 20 or data[:4] != b"glTF":
+        raise InvalidMeshError("cannot parse GLB file: no glTF binary header", source)
+    length, kind = struct.unpack("<I4s", data[12:20])
+    if kind != b"JSON" or 20 + length > len(data):
+        raise InvalidMeshError("cannot parse GLB file: the first chunk is not JSON", source)
+    try:
+        return json.loads(data[20 : 20 + length].decode("utf-8-sig"))
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        raise InvalidMeshError(
+            "cannot parse GLB file: its JSON chunk is not valid", source
+        ) from None
 
-    return sorted(nodes, key=position)
+
+_SINGULAR = {
+    "scenes": "scene",
+    "nodes": "node",
+    "meshes": "mesh",
+    "accessors": "accessor",
+    "bufferViews": "bufferView",
+    "buffers": "buffer",
+}
+# glTF 2.0: byte, unsigned byte, short, unsigned short, unsigned int, float
+_COMPONENT_TYPES = (5120, 5121, 5122, 5123, 5125, 5126)
+_ACCESSOR_TYPES = ("SCALAR", "VEC2", "VEC3", "VEC4", "MAT2", "MAT3", "MAT4")
+
+
+def _check_gltf(document: Any, kind: str, source: str) -> None:
+    """Refuse references to objects the glTF file does not have, naming the reference.
+
+    trimesh would index its lists with them: a negative index silently takes an object from
+    the end, a missing one fails with an unnamed IndexError or KeyError.
+    """
+    if not isinstance(document, dict):
+        raise InvalidMeshError(f"cannot parse {kind} file: the JSON is not an object", source)
+
+    def items(name: str) -> list:
+        value = document.get(name, [])
+        if not isinstance(value, list):
+            raise InvalidMeshError(f"cannot parse {kind} file: '{name}' is not an array", source)
+        return value
+
+    def check(where: str, value: Any, name: str) -> None:
+        count = len(items(name))
+        if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < count:
+            raise InvalidMeshError(
+                f"cannot parse {kind} file: {where} refers to {_SINGULAR[name]} {value!r}, but "
+                f"the file has {count} {name}",
+                source,
+            )
+
+    for k, scene in enumerate(items("scenes")):
+        for node in scene.get("nodes", []) if isinstance(scene, dict) else []:
+            check(f"scene {k}", node, "nodes")
+    if "scene" in document:
+        check("'scene'", document["scene"], "scenes")
+    for k, node in enumerate(items("nodes")):
+        if not isinstance(node, dict):
+            continue
+        for child in node.get("children", []):
+            check(f"node {k} children", child, "nodes")
+        if "mesh" in node:
+            check(f"node {k}", node["mesh"], "meshes")
+    for k, mesh in enumerate(items("meshes")):
+        primitives = mesh.get("primitives", []) if isinstance(mesh, dict) else []
+        for j, primitive in enumerate(primitives):
+            if not isinstance(primitive, dict):
+                continue
+            attributes = primitive.get("attributes", {})
+            for attribute in ("POSITION",):
+                if isinstance(attributes, dict) and attribute in attributes:
+                    check(f"mesh {k} primitive {j} {attribute}", attributes[attribute], "accessors")
+            if "indices" in primitive:
+                check(f"mesh {k} primitive {j} indices", primitive["indices"], "accessors")
+    for k, accessor in enumerate(items("accessors")):
+        if not isinstance(accessor, dict):
+            continue
+        if "bufferView" in accessor:
+            check(f"accessor {k}", accessor["bufferView"], "bufferViews")
+        if accessor.get("componentType") not in _COMPONENT_TYPES:
+            raise InvalidMeshError(
+                f"cannot parse {kind} file: accessor {k} has componentType "
+                f"{accessor.get('componentType')!r} (expected one of "
+                f"{', '.join(map(str, _COMPONENT_TYPES))})",
+                source,
+            )
+        if accessor.get("type") not in _ACCESSOR_TYPES:
+            raise InvalidMeshError(
+                f"cannot parse {kind} file: accessor {k} has type {accessor.get('type')!r} "
+                f"(expected one of {', '.join(_ACCESSOR_TYPES)})",
+                source,
+            )
+    for k, view in enumerate(items("bufferViews")):
+        if isinstance(view, dict):
+            check(f"bufferView {k}", view.get("buffer"), "buffers")
+    for k, buffer in enumerate(items("buffers")):
+        # only a GLB's first buffer may leave out its uri (it is the binary chunk)
+        if isinstance(buffer, dict) and "uri" not in buffer and (kind == "GLTF" or k > 0):
+            raise InvalidMeshError(
+                f"cannot parse {kind} file: buffer {k} has no uri (only the first buffer of a "
+                "GLB file may be its binary chunk)",
+                source,
+            )
 
 
 def _gltf_file_order(file: Path, file_type: str, nodes: list) -> list:

@@ -27,6 +27,8 @@ __all__ = [
     "emit",
     "envelope",
     "report_format",
+    "split_vectors",
+    "vector_columns",
 ]
 
 #: Version of the report layout shared by every command's JSON report (see
@@ -77,17 +79,33 @@ def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iter
     path = os.fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
     ext = suffix if suffix is not None else os.path.splitext(path)[1]
-    fd, tmp = tempfile.mkstemp(prefix=".meshcol-", suffix=ext, dir=folder)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=".meshcol-", suffix=ext, dir=folder)
+    except OSError as exc:
+        raise _as_user_path(exc, path) from None
     os.close(fd)
     # mkstemp creates the file 0600; give the result the mode a plain open() would.
     os.chmod(tmp, 0o666 & ~_umask())
     try:
         yield tmp
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
+        if isinstance(exc, OSError) and tmp in (exc.filename, exc.filename2):
+            # the temporary name means nothing to the user: name the file they asked for
+            raise _as_user_path(exc, path) from None
         raise
+
+
+def _as_user_path(exc: OSError, path: str) -> OSError:
+    """The same error, naming ``path`` (a destination the user typed) as its file."""
+    strerror = exc.strerror or str(exc)
+    if os.path.isdir(path):
+        strerror = "is a directory"
+    elif not os.path.isdir(os.path.dirname(os.path.abspath(path))):
+        strerror = "cannot write: the folder does not exist"
+    return OSError(exc.errno, strerror, path)
 
 
 def _umask() -> int:
@@ -127,8 +145,35 @@ def dumps_json(obj: Any) -> str:
     return json.dumps(_finite_or_none(obj), sort_keys=True, indent=2, allow_nan=False) + "\n"
 
 
+#: Column suffixes of a vector or matrix split over several CSV columns, by its length.
+_SUFFIXES = {
+    3: ("x", "y", "z"),
+    16: tuple(f"{row}{column}" for row in range(4) for column in range(4)),
+}
+
+
+def vector_columns(name: str, size: int = 3) -> list[str]:
+    """The CSV columns of a vector (``point_x``, ``point_y``, ``point_z``) or of a 4x4 pose,
+    row-major (``pose_a_00`` ... ``pose_a_33``): the one CSV convention of every command."""
+    return [f"{name}_{suffix}" for suffix in _SUFFIXES[size]]
+
+
+def split_vectors(row: Mapping[str, Any], sizes: Mapping[str, int]) -> dict[str, Any]:
+    """``row`` with each vector or matrix field of ``sizes`` spread over
+    :func:`vector_columns` (a missing or None value gives empty cells)."""
+    flat = dict(row)
+    for name, size in sizes.items():
+        value = flat.pop(name, None)
+        if value is not None and size == 16:
+            value = [x for line in value for x in line]
+        values = [None] * size if value is None else list(value)
+        flat.update(zip(vector_columns(name, size), values))
+    return flat
+
+
 def dumps_csv(rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> str:
-    """CSV text with a header row; lists become space-separated numbers, None an empty cell."""
+    """CSV text with a header row; one number per cell (vectors are split by
+    :func:`split_vectors`), lists of names space-separated, None an empty cell."""
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(columns)
@@ -148,13 +193,32 @@ def dumps_csv(rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> str:
     return buf.getvalue()
 
 
+#: Report file extensions and the format each means.
+REPORT_EXTENSIONS = {".json": "json", ".csv": "csv"}
+
+
 def report_format(path: str | None, fmt: str | None) -> str:
-    """The report format: ``fmt`` if given, else from ``path``'s extension, else ``json``."""
+    """The report format: ``fmt`` if given, else from ``path``'s extension, else ``json``.
+
+    Raises
+    ------
+    ValueError
+        ``path`` has an extension other than ``.json`` or ``.csv`` and no ``fmt`` says what
+        to write (``out.xml`` never silently gets JSON), or ``fmt`` contradicts it
+        (``--format csv`` with ``out.json``).
+    """
+    extension = os.path.splitext(path)[1].lower() if path and path != "-" else ""
+    implied = REPORT_EXTENSIONS.get(extension)
     if fmt:
-        return fmt.lower()
-    if path and path.lower().endswith(".csv"):
-        return "csv"
-    return "json"
+        fmt = fmt.lower()
+        if implied is not None and implied != fmt:
+            raise ValueError(f"{path!r} is a .{implied} file: it cannot hold a {fmt} report")
+        return fmt
+    if extension and implied is None:
+        raise ValueError(
+            f"unknown report extension {extension!r} in {path!r}: expected .json or .csv"
+        )
+    return implied or "json"
 
 
 def emit(text: str, output: str | os.PathLike[str] | None) -> None:

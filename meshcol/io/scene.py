@@ -13,8 +13,9 @@ import dataclasses
 import json
 import math
 import os
+import re
 import sys
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -22,8 +23,8 @@ from typing import Any
 import numpy as np
 
 from meshcol.errors import InputFileError, MeshcolError, SceneError
-from meshcol.io.mesh_read import load_mesh, split_rigid
-from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere
+from meshcol.io.mesh_read import MAX_COORDINATE, check_magnitude, load_mesh, split_rigid
+from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere, Spin
 
 __all__ = [
     "MANIFEST_EXTENSIONS",
@@ -32,6 +33,7 @@ __all__ = [
     "load_inputs",
     "as_scene",
     "load_scene",
+    "manifest_mesh_files",
     "rotation_from_euler",
     "rotation_from_quaternion",
 ]
@@ -73,6 +75,12 @@ _EXPECTED = {
 
 _AXES = {"x": 0, "y": 1, "z": 2}
 
+#: Deepest nesting of arrays and objects a manifest may have (a real one has four levels).
+MAX_NESTING = 32
+#: Largest turn, in radians, a body may make over the motion (angular_velocity x duration):
+#: 160,000 revolutions; beyond, sin and cos of the angle carry no precision.
+MAX_TURN = 1e6
+
 
 def load_scene(path: str | os.PathLike[str]) -> Scene:
     """Load a scene manifest (``.json`` or ``.toml``).
@@ -85,8 +93,10 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     Returns
     -------
     Scene
-        Bodies in manifest order (a mesh file with several bodies gives ``<name>/<sub>`` for
-        each, in file order), the manifest's ``units`` and ``duration``, ``source = path``.
+        One body per manifest entry, in manifest order: a mesh file with several objects
+        (OBJ objects or groups, glTF mesh nodes, STL solids) gives one body whose ``parts``
+        are those objects, in file order; the manifest's ``units`` and ``duration``,
+        ``source = path``.
 
     Raises
     ------
@@ -99,21 +109,23 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     Notes
     -----
     A body's world pose is ``T = [R | p]`` from ``rotation`` and ``position``; its ``scale``
-    ``S`` and any transform ``L`` a mesh file gives a sub-body are combined as ``T S L`` and
-    split again into a rigid transform and a part baked into the vertices (see
-    :func:`meshcol.io.mesh_read.split_rigid`), so every ``Body.pose`` is rigid.
+    ``S`` and any transform ``L`` the mesh file gives an object are combined as ``T S L``. For
+    a file of one object, ``S L`` is split into a rigid transform and a part baked into the
+    vertices (see :func:`meshcol.io.mesh_read.split_rigid`); for a body of several parts, each
+    part's ``S L`` is baked into its vertices and the body's pose is ``T``. Either way every
+    ``Body.pose`` is rigid.
     """
     source = os.fspath(path)
     file = Path(source)
     _check_manifest_file(file, source)
     document = _parse(file, source)
     _validate(document, source)
+    _check_magnitudes(document, source)
     units = document.get("units")
     duration = document.get("duration")
 
     bodies: list[Body] = []
     names: set[str] = set()
-    taken: set[str] = set()  # names of the bodies made so far (sub-bodies included)
     files: dict[str, list[Body]] = {}  # each mesh file is read once, however many instances
     for spec in document["bodies"]:
         label = f"body {spec['name']!r}"
@@ -123,16 +135,14 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
         if ("mesh" in spec) == ("primitive" in spec):
             raise SceneError(f"{label}: needs exactly one of 'mesh' or 'primitive'", source)
         start = _pose(spec.get("position"), spec.get("rotation"), label, "rotation", source)
-        end = _end_pose(spec, start, duration, label, source)
+        end, spin = _end_pose(spec, start, duration, label, source)
         scale = _scale(spec.get("scale"))
         if "mesh" in spec:
-            new = _mesh_bodies(spec, file, source, label, start, end, scale, files)
+            new = _mesh_bodies(spec, file, source, label, start, end, spin, scale, files)
         else:
-            new = [_primitive_body(spec, source, label, start, end, scale)]
+            new = [_primitive_body(spec, source, label, start, end, spin, scale)]
         for body in new:
-            if body.name in taken:
-                raise SceneError(f"{label}: body name {body.name!r} is already taken", source)
-            taken.add(body.name)
+            _check_world(body, label, source)
         bodies.extend(new)
     return Scene(bodies=tuple(bodies), units=units, source=source, duration=duration)
 
@@ -175,8 +185,10 @@ def load_inputs(paths: Sequence[str | os.PathLike[str]]) -> Scene:
     Returns
     -------
     Scene
-        The manifest's scene; or every body of every file in order. A name that clashes with
-        an earlier body's gets ``#2``, ``#3``... appended. ``source`` is the input path when
+        The manifest's scene (one body per manifest entry, its file's objects as its
+        parts); or, for mesh and glTF/GLB files given directly, one body per object of every
+        file, in order (``<stem>/<object>`` when a file holds several). A name that clashes
+        with an earlier body's gets ``#2``, ``#3``... appended. ``source`` is the input path when
         there is exactly one, else None; ``units`` is None without a manifest.
 
     Raises
@@ -210,6 +222,7 @@ def _single_manifest(paths: Sequence[str | os.PathLike[str]]) -> str | os.PathLi
 
 def iter_inputs(
     paths: Sequence[str | os.PathLike[str]],
+    on_error: Callable[[str, MeshcolError], None] | None = None,
 ) -> Iterator[tuple[str, list[Body]]]:
     """:func:`load_inputs` one file at a time: ``(file, its bodies)`` as each file is read.
 
@@ -217,6 +230,10 @@ def iter_inputs(
     the first file while the next is read (``meshcol decompose``). A manifest is read whole
     and its bodies come grouped by mesh file (primitives under the manifest's path), in order
     of first appearance.
+
+    ``on_error(path, error)``, when given, receives each mesh file that cannot be read and the
+    others are still yielded (``meshcol inspect`` keeps going); a manifest is read whole, so
+    its errors are raised whatever ``on_error`` is.
     """
     manifest = _single_manifest(paths)
     if manifest is not None:
@@ -229,7 +246,14 @@ def iter_inputs(
     used: set[str] = set()
     for path in paths:
         bodies: list[Body] = []
-        for body in load_mesh(path):
+        try:
+            loaded = load_mesh(path)
+        except MeshcolError as error:
+            if on_error is None:
+                raise
+            on_error(os.fspath(path), error)
+            continue
+        for body in loaded:
             name, k = body.name, 2
             while name in used:
                 name = f"{body.name}#{k}"
@@ -248,10 +272,14 @@ def rotation_from_quaternion(quaternion: Sequence[float]) -> np.ndarray:
         Proper rotation. Raises ValueError for a zero or non-finite quaternion.
     """
     q = np.asarray(quaternion, dtype=np.float64)
-    norm = float(np.linalg.norm(q))
-    if not math.isfinite(norm) or norm < 1e-12:
-        raise ValueError("quaternion must be non-zero and finite")
-    w, x, y, z = q / norm
+    if not np.isfinite(q).all():
+        raise ValueError("quaternion must be finite")
+    # divide by the largest component first: |q| of a huge quaternion would overflow
+    largest = float(np.abs(q).max())
+    if largest == 0.0:
+        raise ValueError("quaternion must be non-zero")
+    q = q / largest
+    w, x, y, z = q / float(np.linalg.norm(q))
     return np.array(
         [
             [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
@@ -310,8 +338,8 @@ def _rotation(spec: dict | None, label: str, field: str, source: str) -> np.ndar
     if "quaternion" in spec:
         try:
             return rotation_from_quaternion(spec["quaternion"])
-        except ValueError:
-            raise SceneError(f"{label}: {field}.quaternion must not be zero", source) from None
+        except ValueError as error:
+            raise SceneError(f"{label}: {field}.{error}", source) from None
     return rotation_from_euler(spec["euler_deg"], spec["order"])
 
 
@@ -324,6 +352,11 @@ def _pose(position, rotation, label: str, field: str, source: str) -> np.ndarray
 
 
 def _end_pose(spec: dict, start: np.ndarray, duration, label: str, source: str):
+    """The end pose and, for an angular velocity, the spin: ``(end, spin)``, either None.
+
+    An ``end_rotation`` is reached the shortest way (no spin); an ``angular_velocity`` turns
+    the body by ``|w| * duration`` radians, whatever the size (a :class:`Spin`).
+    """
     by_pose = "end_position" in spec or "end_rotation" in spec
     by_velocity = "velocity" in spec or "angular_velocity" in spec
     if by_pose and by_velocity:
@@ -338,27 +371,31 @@ def _end_pose(spec: dict, start: np.ndarray, duration, label: str, source: str):
             end[:3, :3] = _rotation(spec["end_rotation"], label, "end_rotation", source)
         if "end_position" in spec:
             end[:3, 3] = spec["end_position"]
-        return end
+        return end, None
     if by_velocity:
         if duration is None:
             field = "velocity" if "velocity" in spec else "angular_velocity"
             raise SceneError(f"{label}: {field} needs the manifest's 'duration'", source)
         end = start.copy()
         end[:3, 3] += np.asarray(spec.get("velocity", [0.0, 0.0, 0.0]), dtype=float) * duration
-        turn = np.asarray(spec.get("angular_velocity", [0.0, 0.0, 0.0]), dtype=float) * duration
-        end[:3, :3] = _rotation_vector(turn) @ start[:3, :3]
-        return end
-    return None
+        if "angular_velocity" not in spec:
+            return end, None
+        turn = np.asarray(spec["angular_velocity"], dtype=float) * duration
+        if not np.all(np.isfinite(turn)):
+            raise SceneError(f"{label}: angular_velocity * duration is not finite", source)
+        spin = Spin(turn)
+        end[:3, :3] = spin.matrix() @ start[:3, :3]
+        return end, spin
+    return None, None
 
 
-def _rotation_vector(vector: np.ndarray) -> np.ndarray:
-    """Rodrigues' formula: rotation by ``|v|`` radians about ``v / |v|``."""
-    angle = float(np.linalg.norm(vector))
-    if angle == 0.0:
-        return np.eye(3)
-    k = vector / angle
-    cross = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-    return np.eye(3) + math.sin(angle) * cross + (1 - math.cos(angle)) * (cross @ cross)
+def _sub_spin(spin: Spin | None, start: np.ndarray, end, rigid: np.ndarray) -> Spin | None:
+    """A sub-body's spin: the manifest body's turn (the shortest one to an end rotation), about
+    the manifest body's origin, where the file places the sub-body's own origin elsewhere; so
+    the sub-bodies move as one rigid body."""
+    if end is None or not np.any(rigid[:3, 3]):
+        return spin
+    return Spin(None if spin is None else spin.rotation, pivot=start[:3, 3].copy())
 
 
 def _scale(value) -> np.ndarray:
@@ -370,7 +407,7 @@ def _scale(value) -> np.ndarray:
 
 
 def _mesh_bodies(
-    spec, manifest: Path, source, label, start, end, scale, files: dict[str, list[Body]]
+    spec, manifest: Path, source, label, start, end, spin, scale, files: dict[str, list[Body]]
 ) -> list[Body]:
     mesh = spec["mesh"]
     mesh_source = os.path.join(os.path.dirname(source), mesh)
@@ -385,30 +422,52 @@ def _mesh_bodies(
             raise SceneError(f"{label}: mesh file {mesh!r}: {error.message}", source) from None
         files[key] = loaded
     stretch = np.diag([*scale, 1.0])
-    bodies = []
-    for sub in loaded:
+    if len(loaded) == 1:
+        (sub,) = loaded
         rigid, linear = split_rigid(stretch @ sub.pose)
         vertices, faces = sub.vertices, sub.faces
         if linear is not None:
             vertices = vertices @ linear.T
             if np.linalg.det(linear) < 0:
                 faces = faces[:, ::-1]
-        sub_name = sub.name.split("/", 1)[1] if len(loaded) > 1 else None
-        bodies.append(
-            Body(
-                name=spec["name"] if sub_name is None else f"{spec['name']}/{sub_name}",
-                source=mesh_source,
-                vertices=np.ascontiguousarray(vertices),
-                faces=np.ascontiguousarray(faces),
-                pose=start @ rigid,
-                end_pose=None if end is None else end @ rigid,
-                collider=spec.get("shape"),
+        parts: tuple[str, ...] = ()
+        part_faces = None
+    else:
+        # One body of several parts: each part's node transform and the body's scale are
+        # baked into its vertices, so the parts share the body's frame and pose.
+        rigid = np.eye(4)
+        blocks_v, blocks_f, counts = [], [], []
+        base = 0
+        for sub in loaded:
+            matrix = stretch @ sub.pose
+            part_faces_local = (
+                sub.faces[:, ::-1] if np.linalg.det(matrix[:3, :3]) < 0 else sub.faces
             )
+            blocks_v.append(sub.vertices @ matrix[:3, :3].T + matrix[:3, 3])
+            blocks_f.append(part_faces_local + base)
+            counts.append(len(sub.faces))
+            base += len(sub.vertices)
+        vertices = np.concatenate(blocks_v)
+        faces = np.concatenate(blocks_f)
+        parts = tuple(sub.name.split("/", 1)[1] for sub in loaded)
+        part_faces = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    return [
+        Body(
+            name=spec["name"],
+            source=mesh_source,
+            vertices=np.ascontiguousarray(vertices),
+            faces=np.ascontiguousarray(faces),
+            pose=start @ rigid,
+            end_pose=None if end is None else end @ rigid,
+            collider=spec.get("shape"),
+            parts=parts,
+            part_faces=part_faces,
+            spin=_sub_spin(spin, start, end, rigid),
         )
-    return bodies
+    ]
 
 
-def _primitive_body(spec, source, label, start, end, scale) -> Body:
+def _primitive_body(spec, source, label, start, end, spin, scale) -> Body:
     import trimesh
 
     options = spec["primitive"]
@@ -446,6 +505,7 @@ def _primitive_body(spec, source, label, start, end, scale) -> Body:
         end_pose=end,
         primitive=primitive,
         collider=spec.get("shape"),
+        spin=spin,
     )
 
 
@@ -470,44 +530,212 @@ def _parse(file: Path, source: str) -> Any:
     except OSError as error:
         raise InputFileError(f"cannot read file: {error.strerror or error}", source) from None
     try:
-        text = data.decode("utf-8")
+        text = data.decode("utf-8-sig")  # a byte-order mark, as some editors write, is dropped
     except UnicodeDecodeError:
         raise SceneError("manifest is not UTF-8 text", source) from None
+    document = _decode(file, text, source)
+    if _nesting(document) > MAX_NESTING:
+        raise SceneError(_too_deep(text, "[{"), source)
+    where = _first_non_finite(document)
+    if where is not None:
+        raise SceneError(f"{_describe(document, where)} must be finite", source)
+    return document
+
+
+def _decode(file: Path, text: str, source: str) -> Any:
+    """The parsed JSON or TOML document; syntax errors and runaway nesting as SceneError."""
     if file.suffix.lower() == ".toml":
         if sys.version_info >= (3, 11):
             import tomllib
         else:
             import tomli as tomllib
         try:
-            document = tomllib.loads(text)
+            return tomllib.loads(text)
         except tomllib.TOMLDecodeError as error:
             raise SceneError(f"invalid TOML: {str(error).splitlines()[0]}", source) from None
-    else:
-        try:
-            document = json.loads(text)
-        except json.JSONDecodeError as error:
-            raise SceneError(
-                f"invalid JSON at line {error.lineno} column {error.colno}: {error.msg}", source
-            ) from None
-    where = _first_non_finite(document, [])
-    if where is not None:
-        raise SceneError(f"{_describe(document, where)} must be finite", source)
-    return document
+        except RecursionError:
+            raise SceneError(_too_deep(text, "[{"), source) from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as error:
+        raise SceneError(
+            f"invalid JSON at line {error.lineno} column {error.colno}: {error.msg}", source
+        ) from None
+    except RecursionError:
+        raise SceneError(_too_deep(text, "[{"), source) from None
 
 
-def _first_non_finite(value: Any, path: list) -> list | None:
-    if isinstance(value, float) and not math.isfinite(value):
-        return path
-    items = (
-        value.items()
-        if isinstance(value, dict)
-        else (enumerate(value) if isinstance(value, list) else ())
-    )
-    for key, item in items:
-        found = _first_non_finite(item, [*path, key])
-        if found is not None:
-            return found
+def _too_deep(text: str, openers: str) -> str:
+    """The message for a document the parser could not descend: where the nesting passes
+    :data:`MAX_NESTING` (brackets inside strings are counted too: a bound, not a parse)."""
+    depth = 0
+    for line_number, line in enumerate(text.splitlines(), start=1):
+        for char in line:
+            depth += char in openers
+            depth -= char in "]}"
+            if depth > MAX_NESTING:
+                return (
+                    f"manifest nests arrays and objects more than {MAX_NESTING} deep "
+                    f"(line {line_number})"
+                )
+    return f"manifest nests arrays and objects more than {MAX_NESTING} deep"
+
+
+def _children(value: Any) -> Iterator[tuple[Any, Any]]:
+    if isinstance(value, dict):
+        return iter(value.items())
+    if isinstance(value, list):
+        return enumerate(value)
+    return iter(())
+
+
+def _nesting(document: Any) -> int:
+    """Depth of arrays and objects (0 for a scalar), without recursion."""
+    deepest, stack = 0, [(document, 0)]
+    while stack:
+        value, depth = stack.pop()
+        if isinstance(value, (dict, list)):
+            deepest = max(deepest, depth + 1)
+            if depth + 1 <= MAX_NESTING:
+                stack.extend((child, depth + 1) for _, child in _children(value))
+    return deepest
+
+
+def _first_non_finite(document: Any) -> list | None:
+    """Path to the first NaN or infinity in document order, or None."""
+    stack: list[tuple[Any, list]] = [(document, [])]
+    while stack:
+        value, path = stack.pop()
+        if isinstance(value, float) and not math.isfinite(value):
+            return path
+        stack.extend(reversed([(item, [*path, key]) for key, item in _children(value)]))
     return None
+
+
+#: Manifest fields that are lengths or positions (checked against MAX_COORDINATE).
+_LENGTH_FIELDS = ("position", "end_position", "scale")
+_PRIMITIVE_FIELDS = ("size", "radius", "length")
+
+
+def _check_magnitudes(document: dict, source: str) -> None:
+    """Every length, position and motion of a valid manifest within the limits meshcol
+    computes with: one line naming the body, the field, the value and its line."""
+    duration = document.get("duration")
+    for index, spec in enumerate(document["bodies"]):
+        label = _body_label(document, index)
+        fields = [(name, spec.get(name)) for name in _LENGTH_FIELDS]
+        fields += [
+            (f"primitive.{name}", spec.get("primitive", {}).get(name)) for name in _PRIMITIVE_FIELDS
+        ]
+        for name, value in fields:
+            values = value if isinstance(value, list) else [] if value is None else [value]
+            for v in values:
+                if abs(v) > MAX_COORDINATE:
+                    raise _at_line(
+                        f"{label}: {name} {v:.6g} is beyond the limit of +/-{MAX_COORDINATE:g}",
+                        source,
+                        spec["name"],
+                        name,
+                    )
+        if "scale" in spec:
+            scales = spec["scale"] if isinstance(spec["scale"], list) else [spec["scale"]]
+            for value in scales:
+                if 0 < value < 1.0 / MAX_COORDINATE:
+                    raise _at_line(
+                        f"{label}: scale {value:.6g} is below the limit of "
+                        f"{1.0 / MAX_COORDINATE:g}: the body would collapse to a point",
+                        source,
+                        spec["name"],
+                        "scale",
+                    )
+        if duration is None:
+            continue
+        for name, limit, unit in (
+            ("velocity", MAX_COORDINATE, ""),
+            ("angular_velocity", MAX_TURN, " rad"),
+        ):
+            value = spec.get(name)
+            if value is None:
+                continue
+            motion = max(abs(v) for v in value) * duration  # Python floats: inf, never an error
+            if motion > limit:
+                raise _at_line(
+                    f"{label}: {name} x duration is {motion:.6g}{unit}, beyond the limit of "
+                    f"{limit:g}{unit} ({name} {_numbers(value)}, duration {duration:g} s)",
+                    source,
+                    spec["name"],
+                    name,
+                )
+
+
+def _at_line(message: str, source: str, body: str, field: str) -> SceneError:
+    """``message`` with `` (line N)``, the line of ``field`` in the body named ``body``."""
+    line = _line_of(source, body, field.split(".")[-1])
+    return SceneError(message if line is None else f"{message} (line {line})", source)
+
+
+def _line_of(source: str, body: str, field: str) -> int | None:
+    """1-based line of ``field`` within the body named ``body`` (JSON or TOML text): the
+    first after the body's name line, before the next body's; else the last before it."""
+    try:
+        lines = Path(source).read_text(encoding="utf-8-sig").splitlines()
+    except (OSError, UnicodeDecodeError):
+        return None
+    names = re.compile(r"""["']?\bname["']?\s*[:=]\s*["']([^"']*)["']""")
+    key = re.compile(r"""(?:^|[\s{,"'])""" + re.escape(field) + r"""["']?\s*[:=]""")
+    starts = [(i, m.group(1)) for i, text in enumerate(lines) for m in names.finditer(text)]
+    for k, (start, name) in enumerate(starts):
+        if name != body:
+            continue
+        end = starts[k + 1][0] if k + 1 < len(starts) else len(lines)
+        begin = starts[k - 1][0] + 1 if k > 0 else 0
+        after = [i for i in range(start, max(end, start + 1)) if key.search(lines[i])]
+        before = [i for i in range(begin, start) if key.search(lines[i])]
+        found = after[:1] or before[-1:]
+        return (found[0] if found else start) + 1
+    return None
+
+
+def _numbers(values: list) -> str:
+    return "[" + ", ".join(f"{v:g}" for v in values) + "]"
+
+
+def _check_world(body: Body, label: str, source: str) -> None:
+    """A body's world coordinates (scale, pose, mesh and motion combined) within the limit."""
+    for pose, when in ((body.pose, ""), (body.end_pose, " at the end of the motion")):
+        if pose is None:
+            continue
+        world = body.vertices @ pose[:3, :3].T + pose[:3, 3]
+        try:
+            check_magnitude(world, "world vertex", None)
+        except MeshcolError as error:
+            mesh = ""
+            if body.source is not None and body.source != source:
+                mesh = f" (mesh {os.path.basename(body.source)!r})"
+            raise SceneError(f"{label}{when}: {error.message}{mesh}", source) from None
+
+
+def manifest_mesh_files(path: str | os.PathLike[str]) -> list[str]:
+    """The mesh files a manifest refers to (relative to its folder), without loading them.
+
+    Returns
+    -------
+    list of str
+        In manifest order, each once; empty when the manifest cannot be read or parsed (then
+        :func:`load_scene` reports why).
+    """
+    source = os.fspath(path)
+    try:
+        document = _parse(Path(source), source)
+    except MeshcolError:
+        return []
+    bodies = document.get("bodies") if isinstance(document, dict) else None
+    found: list[str] = []
+    for spec in bodies if isinstance(bodies, list) else []:
+        mesh = spec.get("mesh") if isinstance(spec, dict) else None
+        if isinstance(mesh, str) and mesh:
+            found.append(os.path.join(os.path.dirname(source), mesh))
+    return list(dict.fromkeys(found))
 
 
 @lru_cache(maxsize=1)

@@ -1,0 +1,61 @@
+#pragma once
+/// Fast readers for the common mesh formats (OBJ, binary and ASCII STL), geometry only, and the
+/// one vertex merge of the package. Files are read and parsed in parallel; a file that cannot
+/// be read or parsed gets a one-line message (with the line number for text formats) instead
+/// of objects. Everything else (materials, normals, texture coordinates, colours) is skipped.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace meshcol {
+
+/// One object of a mesh file: an OBJ object (or group, when the file has no objects), an
+/// ASCII STL solid, or the one mesh of a binary STL.
+struct MeshObject {
+    std::string name;                  ///< as the file spells it; "" when the file gives none
+    std::vector<double> vertices;      ///< 3 per vertex
+    std::vector<std::int64_t> faces;   ///< 3 per triangle, into this object's vertices
+};
+
+/// Why a file gave no objects.
+enum class ReadStatus : std::int8_t {
+    Ok = 0,           ///< read and parsed (possibly with no faces)
+    NotFound = 1,     ///< no such file
+    Directory = 2,    ///< a directory
+    Unreadable = 3,   ///< exists but cannot be read (permissions, I/O error)
+    Corrupt = 4,      ///< read, but not a valid file of its format
+};
+
+/// What one file gave.
+struct MeshFile {
+    std::vector<MeshObject> objects;   ///< in file order; objects without a face are dropped
+    ReadStatus status = ReadStatus::Ok;
+    std::string error;                 ///< empty when Ok; else what is wrong, in one line
+};
+
+enum class MeshFormat : int { Obj = 0, Stl = 1 };
+
+/// Parses OBJ text. Polygons are fan-triangulated; indices may be negative (relative) but never
+/// 0 or out of range; `v` lines need three finite coordinates. `o` lines start objects; when
+/// the file has no `o` line, `g` lines do. Faces before the first of them form an object
+/// named "".
+MeshFile parse_obj(const char* data, size_t size);
+
+/// Parses a binary STL (size = 84 + 50 x count) or an ASCII STL (one object per solid).
+/// Corners are not shared: merge them with `merge_vertices`.
+MeshFile parse_stl(const char* data, size_t size);
+
+/// Reads and parses `paths` (formats given per file) on `threads` threads (0: all cores).
+std::vector<MeshFile> read_mesh_files(const std::vector<std::string>& paths,
+                                      const std::vector<MeshFormat>& formats, bool merge,
+                                      int threads);
+
+/// Merges vertices whose coordinates round to the same multiple of 10^-digits, keeps only the
+/// vertices faces use, in the order of their first index, and renumbers the faces (none is
+/// removed). The rounding is trimesh's (`round(x * 10^digits - 1e-6)`), so watertightness
+/// agrees with trimesh; a coordinate too large for the rounding only merges with itself.
+void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& faces,
+                    int digits);
+
+}  // namespace meshcol

@@ -1,0 +1,492 @@
+// Fast OBJ and STL readers and the vertex merge (see mesh_read.hpp).
+//
+// The parsers work on the raw bytes: no decoding, so a comment in any encoding is harmless and
+// random bytes give "no faces" or a message with a line number, never a crash. Numbers are read
+// with std::from_chars (locale-independent, exact round-trip).
+#include "meshcol/mesh_read.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <new>
+#include <string>
+#include <string_view>
+#include <utility>
+
+#include <sys/stat.h>
+
+#include "meshcol/batch.hpp"
+
+namespace meshcol {
+namespace {
+
+bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+/// Splits a line (no newline in it) into whitespace-separated tokens.
+void tokenize(std::string_view line, std::vector<std::string_view>& tokens) {
+    tokens.clear();
+    size_t i = 0;
+    while (i < line.size()) {
+        while (i < line.size() && is_space(line[i])) ++i;
+        const size_t start = i;
+        while (i < line.size() && !is_space(line[i])) ++i;
+        if (i > start) tokens.push_back(line.substr(start, i - start));
+    }
+}
+
+std::string_view trim(std::string_view s) {
+    while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
+    while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
+    return s;
+}
+
+/// Parses a whole token as a double (an optional leading '+' allowed). False when the token is
+/// not a number or overflows.
+bool parse_double(std::string_view token, double& value) {
+    if (!token.empty() && token.front() == '+') token.remove_prefix(1);
+    const char* end = token.data() + token.size();
+    const auto result = std::from_chars(token.data(), end, value);
+    return result.ec == std::errc() && result.ptr == end;
+}
+
+/// Parses the leading integer of an OBJ face corner ("7", "7/2", "7//3", "-1/4/4").
+bool parse_index(std::string_view token, long long& value) {
+    const size_t slash = token.find('/');
+    if (slash != std::string_view::npos) token = token.substr(0, slash);
+    if (!token.empty() && token.front() == '+') token.remove_prefix(1);
+    const char* end = token.data() + token.size();
+    const auto result = std::from_chars(token.data(), end, value);
+    return !token.empty() && result.ec == std::errc() && result.ptr == end;
+}
+
+std::string at_line(size_t line, const std::string& what) {
+    return "line " + std::to_string(line) + ": " + what;
+}
+
+/// Calls `each(line_number, line)` for every logical line of `text` (a trailing backslash
+/// joins the next line, as the OBJ specification allows); stops when `each` returns false.
+template <class F>
+void for_each_line(const char* data, size_t size, F&& each) {
+    std::string joined;
+    size_t line_number = 0;
+    size_t first_line = 0;
+    size_t i = 0;
+    while (i < size) {
+        const void* found = std::memchr(data + i, '\n', size - i);
+        const size_t end = found ? static_cast<size_t>(static_cast<const char*>(found) - data) : size;
+        std::string_view line(data + i, end - i);
+        ++line_number;
+        i = end + 1;
+        std::string_view body = line;
+        while (!body.empty() && (body.back() == '\r' || body.back() == ' ' || body.back() == '\t'))
+            body.remove_suffix(1);
+        if (!body.empty() && body.back() == '\\') {
+            if (joined.empty()) first_line = line_number;
+            joined.append(body.data(), body.size() - 1);
+            joined.push_back(' ');
+            continue;
+        }
+        if (!joined.empty()) {
+            joined.append(line.data(), line.size());
+            if (!each(first_line, std::string_view(joined))) return;
+            joined.clear();
+            continue;
+        }
+        if (!each(line_number, line)) return;
+    }
+    if (!joined.empty()) each(first_line, std::string_view(joined));
+}
+
+/// Whether an OBJ text has an `o` line (then `g` lines do not split objects).
+bool has_object_lines(const char* data, size_t size) {
+    bool found = false;
+    for_each_line(data, size, [&](size_t, std::string_view line) {
+        line = trim(line);
+        if (line.size() >= 2 && line[0] == 'o' && is_space(line[1])) found = true;
+        if (line == "o") found = true;
+        return !found;
+    });
+    return found;
+}
+
+/// Copies the vertices `faces` (global indices into `vertices`) use into a new object, in the
+/// order of their global index, and renumbers the faces locally. `remap` (one entry per global
+/// vertex, all -1) is scratch space, returned all -1 again.
+MeshObject gather(std::string name, const std::vector<double>& vertices,
+                  const std::vector<std::int64_t>& faces, std::vector<std::int64_t>& remap) {
+    MeshObject object;
+    object.name = std::move(name);
+    std::vector<std::int64_t> ids;
+    for (const std::int64_t global : faces) {
+        std::int64_t& slot = remap[static_cast<size_t>(global)];
+        if (slot < 0) {
+            slot = 0;
+            ids.push_back(global);
+        }
+    }
+    std::sort(ids.begin(), ids.end());
+    object.vertices.resize(3 * ids.size());
+    for (size_t k = 0; k < ids.size(); ++k) {
+        remap[static_cast<size_t>(ids[k])] = static_cast<std::int64_t>(k);
+        std::memcpy(&object.vertices[3 * k], &vertices[3 * static_cast<size_t>(ids[k])],
+                    3 * sizeof(double));
+    }
+    object.faces.resize(faces.size());
+    for (size_t k = 0; k < faces.size(); ++k) object.faces[k] = remap[static_cast<size_t>(faces[k])];
+    for (const std::int64_t global : ids) remap[static_cast<size_t>(global)] = -1;
+    return object;
+}
+
+}  // namespace
+
+MeshFile parse_obj(const char* data, size_t size) {
+    MeshFile file;
+    const bool split_on_groups = !has_object_lines(data, size);
+    std::vector<double> vertices;
+    // per object: name and faces in global (0-based) indices
+    std::vector<std::pair<std::string, std::vector<std::int64_t>>> objects(1);
+    long long largest = -1;      // the largest positive index seen, 0-based
+    size_t largest_line = 0;
+    std::vector<std::string_view> tokens;
+    std::vector<std::int64_t> corners;
+
+    for_each_line(data, size, [&](size_t line_number, std::string_view line) {
+        const size_t hash = line.find('#');
+        if (hash != std::string_view::npos) line = line.substr(0, hash);
+        tokenize(line, tokens);
+        if (tokens.empty()) return true;
+        const std::string_view key = tokens[0];
+        if (key == "v") {
+            double xyz[3];
+            if (tokens.size() < 4) {
+                file.error = at_line(line_number, "a vertex needs three coordinates");
+                return false;
+            }
+            for (int k = 0; k < 3; ++k) {
+                if (!parse_double(tokens[1 + k], xyz[k])) {
+                    file.error = at_line(line_number, "vertex coordinate '" +
+                                                          std::string(tokens[1 + k].substr(0, 40)) +
+                                                          "' is not a number");
+                    return false;
+                }
+                if (!std::isfinite(xyz[k])) {
+                    file.error = at_line(line_number, "non-finite vertex coordinate");
+                    return false;
+                }
+            }
+            vertices.insert(vertices.end(), xyz, xyz + 3);
+        } else if (key == "f") {
+            corners.clear();
+            const long long defined = static_cast<long long>(vertices.size() / 3);
+            for (size_t k = 1; k < tokens.size(); ++k) {
+                long long index = 0;
+                if (!parse_index(tokens[k], index)) {
+                    file.error = at_line(line_number, "face vertex '" +
+                                                          std::string(tokens[k].substr(0, 40)) +
+                                                          "' is not an index");
+                    return false;
+                }
+                if (index == 0) {
+                    file.error = at_line(line_number, "face index 0 (OBJ indices start at 1)");
+                    return false;
+                }
+                if (index < 0) {
+                    if (-index > defined) {
+                        file.error = at_line(line_number,
+                                             "relative face index " + std::to_string(index) +
+                                                 " but only " + std::to_string(defined) +
+                                                 " vertices precede it");
+                        return false;
+                    }
+                    index = defined + index;
+                } else {
+                    index -= 1;
+                    if (index > largest) {
+                        largest = index;
+                        largest_line = line_number;
+                    }
+                }
+                corners.push_back(index);
+            }
+            // A face of fewer than three vertices has no area: skipped, as trimesh does.
+            auto& faces = objects.back().second;
+            for (size_t k = 1; k + 1 < corners.size(); ++k) {
+                faces.push_back(corners[0]);
+                faces.push_back(corners[k]);
+                faces.push_back(corners[k + 1]);
+            }
+        } else if (key == "o" || (split_on_groups && key == "g")) {
+            std::string_view name = trim(line);
+            name.remove_prefix(1);
+            objects.emplace_back(std::string(trim(name)), std::vector<std::int64_t>());
+        }
+        return true;
+    });
+    if (!file.error.empty()) return file;
+    const long long count = static_cast<long long>(vertices.size() / 3);
+    if (largest >= count) {
+        file.error = at_line(largest_line, "face index " + std::to_string(largest + 1) +
+                                               " but the file has " + std::to_string(count) +
+                                               (count == 1 ? " vertex" : " vertices"));
+        return file;
+    }
+    std::vector<std::int64_t> remap(static_cast<size_t>(count), -1);
+    for (auto& [name, faces] : objects)
+        if (!faces.empty()) file.objects.push_back(gather(std::move(name), vertices, faces, remap));
+    return file;
+}
+
+MeshFile parse_stl(const char* data, size_t size) {
+    MeshFile file;
+    if (size >= 84) {
+        std::uint32_t count = 0;
+        std::memcpy(&count, data + 80, 4);  // little-endian, as every supported platform
+        if (84 + 50 * static_cast<std::uint64_t>(count) == size) {
+            MeshObject object;
+            object.vertices.resize(9 * static_cast<size_t>(count));
+            object.faces.resize(3 * static_cast<size_t>(count));
+            for (std::uint32_t t = 0; t < count; ++t) {
+                float corner[9];
+                std::memcpy(corner, data + 84 + 50 * static_cast<size_t>(t) + 12, sizeof corner);
+                for (int k = 0; k < 9; ++k) {
+                    if (!std::isfinite(corner[k])) {
+                        file.error = "triangle " + std::to_string(t) +
+                                     " has a non-finite vertex coordinate";
+                        return file;
+                    }
+                    object.vertices[9 * static_cast<size_t>(t) + k] = corner[k];
+                }
+                for (int k = 0; k < 3; ++k)
+                    object.faces[3 * static_cast<size_t>(t) + k] = 3 * static_cast<std::int64_t>(t) + k;
+            }
+            if (count > 0) file.objects.push_back(std::move(object));
+            return file;
+        }
+    }
+    // ASCII: solid name / facet normal ... / outer loop / vertex x y z (x3) / endloop /
+    // endfacet / endsolid.
+    if (std::memchr(data, '\0', size) != nullptr) {
+        file.error =
+            "neither binary STL (size does not match the triangle count) nor ASCII text";
+        return file;
+    }
+    size_t start = 0;
+    while (start < size && (is_space(data[start]) || data[start] == '\n')) ++start;
+    if (size - start < 5 || std::memcmp(data + start, "solid", 5) != 0) {
+        file.error =
+            "neither binary STL (size does not match the triangle count) nor ASCII STL "
+            "(no 'solid' line)";
+        return file;
+    }
+    std::vector<std::string_view> tokens;
+    MeshObject* object = nullptr;
+    int loop_corners = 0;
+    for_each_line(data, size, [&](size_t line_number, std::string_view line) {
+        tokenize(line, tokens);
+        if (tokens.empty()) return true;
+        const std::string_view key = tokens[0];
+        if (key == "solid") {
+            std::string_view name = trim(line);
+            name.remove_prefix(5);
+            file.objects.push_back(MeshObject{std::string(trim(name)), {}, {}});
+            object = &file.objects.back();
+        } else if (key == "vertex") {
+            if (object == nullptr) {
+                file.error = at_line(line_number, "vertex outside a solid");
+                return false;
+            }
+            if (tokens.size() < 4) {
+                file.error = at_line(line_number, "a vertex needs three coordinates");
+                return false;
+            }
+            for (int k = 0; k < 3; ++k) {
+                double value = 0.0;
+                if (!parse_double(tokens[1 + k], value)) {
+                    file.error = at_line(line_number, "vertex coordinate '" +
+                                                          std::string(tokens[1 + k].substr(0, 40)) +
+                                                          "' is not a number");
+                    return false;
+                }
+                if (!std::isfinite(value)) {
+                    file.error = at_line(line_number, "non-finite vertex coordinate");
+                    return false;
+                }
+                object->vertices.push_back(value);
+            }
+            ++loop_corners;
+        } else if (key == "endloop") {
+            if (loop_corners != 3) {
+                file.error = at_line(line_number, "a facet has " + std::to_string(loop_corners) +
+                                                      " vertices, not 3");
+                return false;
+            }
+            const std::int64_t first = static_cast<std::int64_t>(object->vertices.size() / 3) - 3;
+            for (int k = 0; k < 3; ++k) object->faces.push_back(first + k);
+            loop_corners = 0;
+        } else if (key == "outer") {
+            loop_corners = 0;
+        }
+        return true;
+    });
+    if (!file.error.empty()) return file;
+    std::vector<MeshObject> kept;
+    for (auto& o : file.objects)
+        if (!o.faces.empty()) kept.push_back(std::move(o));
+    file.objects = std::move(kept);
+    return file;
+}
+
+void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& faces, int digits) {
+    const size_t n = vertices.size() / 3;
+    std::vector<char> used(n, 0);
+    for (const std::int64_t f : faces) used[static_cast<size_t>(f)] = 1;
+
+    struct Key {
+        std::int64_t q[3];
+        bool operator==(const Key& o) const {
+            return q[0] == o.q[0] && q[1] == o.q[1] && q[2] == o.q[2];
+        }
+    };
+    struct KeyHash {
+        std::uint64_t operator()(const Key& k) const {
+            std::uint64_t h = 0;
+            for (std::int64_t v : k.q) {  // splitmix64 of each coordinate, chained
+                std::uint64_t z = static_cast<std::uint64_t>(v) + h + 0x9e3779b97f4a7c15ull;
+                z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+                z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+                h = z ^ (z >> 31);
+            }
+            return h;
+        }
+    };
+    const double scale = std::pow(10.0, digits);
+    // |q| below 2^62 converts exactly; a larger coordinate keys on its own bits (tagged so it
+    // never equals a rounded key), so it only merges with an equal coordinate.
+    const double limit = 4.6e18;
+    auto quantise = [&](double x) -> std::int64_t {
+        const double r = std::nearbyint(x * scale - 1e-6);
+        if (std::fabs(r) < limit) return static_cast<std::int64_t>(r) << 1;
+        std::int64_t bits;
+        std::memcpy(&bits, &x, sizeof bits);
+        return bits | 1;
+    };
+
+    // Open addressing with linear probing, kept at most half full and grown as merged vertices
+    // are found (a triangle soup has ~6x fewer than its corners). A slot holds the key's hash
+    // beside the merged index, so a probe reads the key itself only on a hash match.
+    struct Slot {
+        std::uint64_t hash;
+        std::int64_t index;  // -1: empty
+    };
+    size_t capacity = 1024;
+    std::vector<Slot> slots(capacity, Slot{0, -1});
+    std::vector<Key> keys;
+    const KeyHash hasher;
+    auto insert_slot = [&](std::uint64_t h, std::int64_t index) {
+        size_t at = h & (capacity - 1);
+        while (slots[at].index >= 0) at = (at + 1) & (capacity - 1);
+        slots[at] = Slot{h, index};
+    };
+    std::vector<std::int64_t> remap(n, -1);
+    std::vector<double> merged;
+    for (size_t i = 0; i < n; ++i) {
+        if (!used[i]) continue;
+        const double* v = &vertices[3 * i];
+        const Key key{{quantise(v[0]), quantise(v[1]), quantise(v[2])}};
+        const std::uint64_t h = hasher(key);
+        size_t at = h & (capacity - 1);
+        std::int64_t found = -1;
+        while (slots[at].index >= 0) {
+            if (slots[at].hash == h && keys[static_cast<size_t>(slots[at].index)] == key) {
+                found = slots[at].index;
+                break;
+            }
+            at = (at + 1) & (capacity - 1);
+        }
+        if (found < 0) {
+            found = static_cast<std::int64_t>(keys.size());
+            keys.push_back(key);
+            merged.insert(merged.end(), v, v + 3);
+            slots[at] = Slot{h, found};
+            if (2 * keys.size() > capacity) {  // grow: rehash every key
+                capacity <<= 1;
+                slots.assign(capacity, Slot{0, -1});
+                for (size_t k = 0; k < keys.size(); ++k)
+                    insert_slot(hasher(keys[k]), static_cast<std::int64_t>(k));
+            }
+        }
+        remap[i] = found;
+    }
+    for (std::int64_t& f : faces) f = remap[static_cast<size_t>(f)];
+    vertices = std::move(merged);
+}
+
+namespace {
+
+void read_one(const std::string& path, MeshFormat format, bool merge, std::vector<char>& buffer,
+              MeshFile& out) {
+    std::FILE* stream = std::fopen(path.c_str(), "rb");
+    if (stream == nullptr) {
+        const int code = errno;
+        out.status = code == ENOENT ? ReadStatus::NotFound : ReadStatus::Unreadable;
+        out.error = code == ENOENT ? "file not found"
+                                   : std::string("cannot read file: ") + std::strerror(code);
+        return;
+    }
+    struct stat info {};
+    if (fstat(fileno(stream), &info) == 0 && S_ISDIR(info.st_mode)) {
+        std::fclose(stream);
+        out.status = ReadStatus::Directory;
+        out.error = "is a directory, not a mesh file";
+        return;
+    }
+    buffer.clear();
+    if (info.st_size > 0) buffer.reserve(static_cast<size_t>(info.st_size));
+    char chunk[1 << 16];
+    size_t got = 0;
+    while ((got = std::fread(chunk, 1, sizeof chunk, stream)) > 0)
+        buffer.insert(buffer.end(), chunk, chunk + got);
+    const int code = std::ferror(stream) != 0 ? errno : 0;
+    std::fclose(stream);
+    if (code != 0) {
+        out.status = code == EISDIR ? ReadStatus::Directory : ReadStatus::Unreadable;
+        out.error = code == EISDIR ? "is a directory, not a mesh file"
+                                   : std::string("cannot read file: ") + std::strerror(code);
+        return;
+    }
+    out = format == MeshFormat::Obj ? parse_obj(buffer.data(), buffer.size())
+                                    : parse_stl(buffer.data(), buffer.size());
+    if (!out.error.empty()) out.status = ReadStatus::Corrupt;
+    if (merge && out.error.empty())
+        for (MeshObject& object : out.objects) merge_vertices(object.vertices, object.faces, 8);
+}
+
+}  // namespace
+
+std::vector<MeshFile> read_mesh_files(const std::vector<std::string>& paths,
+                                      const std::vector<MeshFormat>& formats, bool merge,
+                                      int threads) {
+    std::vector<MeshFile> files(paths.size());
+    const long long n = static_cast<long long>(paths.size());
+    parallel_for(n, resolve_threads(threads, n, 4), [&](long long begin, long long end) {
+        std::vector<char> buffer;
+        for (long long i = begin; i < end; ++i) {
+            MeshFile& out = files[static_cast<size_t>(i)];
+            try {
+                read_one(paths[static_cast<size_t>(i)], formats[static_cast<size_t>(i)], merge,
+                         buffer, out);
+            } catch (const std::bad_alloc&) {
+                out = MeshFile{};
+                out.status = ReadStatus::Unreadable;
+                out.error = "file too large to read into memory";
+            }
+        }
+    });
+    return files;
+}
+
+}  // namespace meshcol

@@ -1,0 +1,120 @@
+"""Fuzz one target of ``fuzz/targets.py`` with atheris (libFuzzer for Python), seeded.
+
+Usage::
+
+    python fuzz/run.py TARGET [--seconds S | --runs N] [--artifacts DIR] [--seed K]
+
+``TARGET`` is ``readers``, ``convex`` or ``meshes``. The seeds are built afresh in a temporary
+folder: for ``readers`` every sample mesh and manifest in ``samples/`` and every corpus file
+under 64 KB in ``../shared/corpus`` (each prefixed with its format byte); for the numeric
+targets a few hand-made inputs (a cube, a flat square, huge and tiny coordinates).
+
+A crash, a timeout (10 s for one input) or an unexpected exception stops the run: the input is
+written to ``--artifacts`` (default ``fuzz/crashes/``) and the exit code is non-zero. Turn it
+into a regression by moving it to ``fuzz/regressions/TARGET/`` with a name that says what it
+was; ``tests/test_fuzz.py`` replays every file there. The last line printed is
+``fuzz TARGET: N executions, 0 crashes`` (or the crash), for the record.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import struct
+import sys
+import tempfile
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parent
+CORPUS = REPO.parent / "shared" / "corpus"
+MAX_SEED_BYTES = 64 * 1024
+
+sys.path.insert(0, str(HERE))
+
+
+def _reader_seeds(folder: Path) -> int:
+    from targets import FORMATS
+
+    files = sorted((REPO / "samples").rglob("*"))
+    if CORPUS.is_dir():
+        files += sorted(CORPUS.rglob("*"))
+    count = 0
+    for path in files:
+        suffix = path.suffix.lower()
+        if suffix not in FORMATS or not path.is_file():
+            continue
+        if path.stat().st_size > MAX_SEED_BYTES:
+            continue
+        data = bytes([FORMATS.index(suffix)]) + path.read_bytes()
+        (folder / f"seed{count:04d}{suffix}").write_bytes(data)
+        count += 1
+    return count
+
+
+def _encode(points: list[tuple[float, float, float]]) -> bytes:
+    """Points as the numeric targets read them: a count byte, then tagged float64 values."""
+    out = bytearray([len(points)])
+    for point in points:
+        for value in point:
+            out += b"\xff" + struct.pack("<d", value)
+    return bytes(out)
+
+
+def _numeric_seeds(folder: Path) -> int:
+    cube = [(x, y, z) for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)]
+    square = [(x, y, 0.0) for x in (0.0, 1.0) for y in (0.0, 1.0)]
+    seeds = [
+        _encode(cube) + _encode([(x + 1.5, y, z) for x, y, z in cube]),
+        _encode(square) + _encode(cube),
+        _encode([(x * 1e300, y, z) for x, y, z in cube]) + _encode(cube),
+        _encode([(x * 1e-310, y, z) for x, y, z in cube]) + _encode([(0.0, 0.0, 0.0)]),
+        _encode(cube) + _encode(cube) + b"\x01" + b"\xff" + struct.pack("<d", 1e155) * 7,
+    ]
+    for i, data in enumerate(seeds):
+        (folder / f"seed{i}").write_bytes(data)
+    return len(seeds)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("target", choices=("readers", "convex", "meshes"))
+    limit = parser.add_mutually_exclusive_group()
+    limit.add_argument("--seconds", type=int, default=60)
+    limit.add_argument("--runs", type=int)
+    parser.add_argument("--artifacts", type=Path, default=HERE / "crashes")
+    parser.add_argument("--seed", type=int, default=0, help="libFuzzer seed; 0 picks one")
+    args = parser.parse_args()
+
+    try:
+        import atheris
+    except ImportError:
+        print("fuzz: atheris is not installed (pip install atheris)", file=sys.stderr)
+        return 2
+
+    with atheris.instrument_imports(include=["meshcol"]):
+        import targets
+
+    seeds = Path(tempfile.mkdtemp(prefix=f"meshcol-seeds-{args.target}-"))
+    count = _reader_seeds(seeds) if args.target == "readers" else _numeric_seeds(seeds)
+    args.artifacts.mkdir(parents=True, exist_ok=True)
+    flags = [
+        sys.argv[0],
+        f"-artifact_prefix={args.artifacts}{os.sep}{args.target}-",
+        "-timeout=10",
+        "-rss_limit_mb=4096",
+        f"-max_len={MAX_SEED_BYTES + 1}",
+        "-print_final_stats=1",
+        f"-seed={args.seed}",
+    ]
+    flags.append(
+        f"-runs={args.runs}" if args.runs is not None else f"-max_total_time={args.seconds}"
+    )
+    print(f"fuzz {args.target}: {count} seeds in {seeds}", file=sys.stderr)
+    atheris.Setup([*flags, str(seeds)], targets.TARGETS[args.target])
+    atheris.Fuzz()  # exits the process itself: 0 when the run ends without a crash
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
