@@ -264,12 +264,14 @@ def test_packed_degenerate_shapes_and_statuses() -> None:
     assert np.diff(cs.edge_offsets).tolist() == [2, 1, 0, 0, 0, 0, 3]
     assert cs.face_normals[:2].tolist() in ([[0, 0, 1], [0, 0, -1]], [[0, 0, -1], [0, 0, 1]])
     np.testing.assert_allclose(cs.edge_directions[2], np.ones(3) / np.sqrt(3.0))
-    # shapes without a hull answer INVALID_INPUT, whatever the pair (1e200: no garbage)
+    # NaN and empty shapes answer INVALID_INPUT; the 1e200 cube, kept as its points, answers
+    # right: the unit cube at x = 5 is inside it
     poses = np.tile(np.eye(4), (7, 1, 1))
     poses[6, 0, 3] = 5.0
     r = distance_batch(cs, poses, [[6, 3], [6, 4], [6, 5], [6, 0], [6, 1], [6, 2]])
-    assert r.status.tolist()[:3] == [Status.INVALID_INPUT] * 3
-    assert r.status.tolist()[3:] == [Status.CONVERGED] * 3
+    assert r.status.tolist()[:2] == [Status.INVALID_INPUT] * 2
+    assert r.status.tolist()[2:] == [Status.CONVERGED] * 4
+    assert r.distance[2] == 0.0
 
 
 def test_take_and_concatenate_keep_the_statuses() -> None:

@@ -144,12 +144,8 @@ bool is_valid(const ShapeView& s) {
     switch (s.kind) {
         case ShapeKind::POLYTOPE:
             if (s.vertex_count <= 0 || s.vertices == nullptr) return false;
-            // Beyond hull_max_abs_coordinate, products of coordinates overflow: refused
-            // like NaN rather than answered with garbage.
             for (int i = 0; i < s.vertex_count; ++i)
-                if (!is_finite(s.vertices[i]) ||
-                    max_abs(s.vertices[i]) > defaults::hull_max_abs_coordinate)
-                    return false;
+                if (!is_finite(s.vertices[i])) return false;
             return true;
         case ShapeKind::SPHERE:
             return s.params[0] >= 0.0;

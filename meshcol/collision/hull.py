@@ -350,7 +350,8 @@ class PackedHulls:
     """The hulls of many point sets as the arrays of a :class:`ConvexSet`'s polytopes.
 
     ``status`` (H,) int8 holds a :class:`HullStatus` per set; a set without a hull keeps its
-    points as given, with no adjacency and no features (its queries report INVALID_INPUT).
+    points as given, with no adjacency and no features (queries report INVALID_INPUT when
+    it has no points or NaN, and scan the points otherwise).
     The other fields are those of :class:`meshcol.collision.shapes.ConvexSet`.
     """
 

@@ -122,9 +122,10 @@ class ConvexSet:
     Build with :meth:`from_vertices`, :meth:`from_shapes`, :meth:`from_meshes` or
     :meth:`concatenate`. Polytope vertices are reduced to the convex hull's vertices (the
     core's Quickhull, every shape of the set in one call, threaded); flat inputs (a point, a
-    segment, a polygon) are valid shapes. A shape with no vertices, NaN/inf coordinates or
-    coordinates beyond :data:`meshcol.collision.hull.MAX_ABS_COORDINATE` is kept as given:
-    queries report ``Status.INVALID_INPUT`` for its pairs.
+    segment, a polygon) are valid shapes. A shape with no vertices or NaN/inf coordinates is
+    kept as given: queries report ``Status.INVALID_INPUT`` for its pairs. One with coordinates
+    beyond :data:`meshcol.collision.hull.MAX_ABS_COORDINATE` (``hull_status`` OVERFLOW) is
+    kept as given too, without adjacency or SAT features: queries scan its points.
     """
 
     _FIELDS = (

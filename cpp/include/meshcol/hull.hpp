@@ -71,8 +71,9 @@ struct PackedPolytopes {
 
 /// Hulls of H point sets (shape h owns `points[offsets[h] .. offsets[h + 1])`), packed in one
 /// pass on `threads` threads (0: all cores). A shape without a hull (EMPTY, NON_FINITE,
-/// OVERFLOW, FAILED) keeps its points as given with empty adjacency lists and no features,
-/// so that every query on it reports INVALID_INPUT (OVERFLOW: see `is_valid`).
+/// OVERFLOW, FAILED) keeps its points as given with empty adjacency lists and no features:
+/// queries report INVALID_INPUT for no points or NaN, and scan the points of the others
+/// (their support is the hull's; the queries rescale far coordinates themselves).
 ///
 /// Per shape: 3-D, the hull's vertices (lexicographic order), the neighbours of each vertex
 /// in the triangulation (ascending, padded with the vertex itself to a multiple of four),

@@ -76,9 +76,8 @@ void world_aabb(const ShapeView& shape, const Pose& pose, Vec3& aabb_min, Vec3& 
 /// Radius of a ball centred on the local origin that holds the whole shape.
 double bounding_radius(const ShapeView& shape);
 
-/// True when the shape has usable data: finite vertices within
-/// +-`defaults::hull_max_abs_coordinate` and finite parameters, at least one vertex for a
-/// polytope, non-negative radii and extents.
+/// True when the shape has usable data: finite vertices and parameters, at least one vertex
+/// for a polytope, non-negative radii and extents.
 bool is_valid(const ShapeView& shape);
 
 /// A triangle as a three-vertex polytope (for exact mesh queries). `vertices` must outlive it.
