@@ -42,8 +42,8 @@ _LAZY: dict[str, str] = {
     "load_inputs": "meshcol.io.scene",
     "write_meshes": "meshcol.io.mesh_write",
     # hulls and inspection
-    "convex_hull": "meshcol.geometry.hull",
-    "HullResult": "meshcol.geometry.hull",
+    "convex_hull": "meshcol.collision.hull",
+    "HullResult": "meshcol.collision.hull",
     "hull": "meshcol.analysis.hull",
     "HullReport": "meshcol.analysis.hull",
     "inspect": "meshcol.analysis.inspect",

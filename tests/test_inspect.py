@@ -81,7 +81,7 @@ def test_inside_out_cube_is_inverted() -> None:
 def test_inverted_is_the_sign_of_the_volume_wherever_the_mesh_is(seed, scale, far) -> None:
     # the hull of random points, outward, and inside out, moved by a random rigid motion far
     # from the origin: the orientation never changes
-    from meshcol.geometry.hull import exact_hull
+    from meshcol.collision.hull import exact_hull
 
     rng = np.random.default_rng(seed)
     hull = exact_hull(rng.normal(size=(30, 3)) * scale)

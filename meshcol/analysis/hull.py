@@ -1,6 +1,6 @@
 """Convex hulls of a scene's bodies, optionally within a vertex budget: ``meshcol hull``.
 
-Each body's hull comes from :func:`meshcol.geometry.hull.convex_hull` on its world vertices
+Each body's hull comes from :func:`meshcol.collision.hull.convex_hull` on its world vertices
 (the scene transform applied, so exported colliders sit in place over the input); the meshes
 are written through :func:`meshcol.io.mesh_write.write_meshes`, after every hull is computed,
 so a bad body stops the run before any file is written.
@@ -209,20 +209,21 @@ def hull(
     OutputDestinationError
         Several bodies for a single-mesh output format.
     InvalidMeshError
-        A body has no hull (collinear or single-point input, non-finite coordinates).
+        A body has no hull (collinear or single-point input, non-finite coordinates, or
+        coordinates beyond :data:`meshcol.collision.hull.MAX_ABS_COORDINATE`).
     OutputPathError
         A hull file would replace an input mesh or a ``reserved`` file (nothing is written).
 
     Notes
     -----
-    Hulls by :func:`meshcol.geometry.hull.convex_hull` (Quickhull, Barber, Dobkin and
-    Huhdanpaa 1996, through qhull; the budget by outward face growth). Mesh volumes by
+    Hulls by :func:`meshcol.collision.hull.convex_hull` (Quickhull, Barber, Dobkin and
+    Huhdanpaa 1996, in the core; the budget by outward face growth). Mesh volumes by
     :func:`meshcol.geometry.topology.oriented_volume` (closed meshes only). An inside-out
     mesh (negative volume, the ``inverted`` finding of ``meshcol inspect``) gets the same hull
     as the outward one, since a hull depends on the vertices only; its row says so in
     ``note`` and a warning goes out.
     """
-    from meshcol.geometry.hull import convex_hull
+    from meshcol.collision.hull import convex_hull
     from meshcol.geometry.topology import oriented_volume
     from meshcol.io.mesh_write import write_meshes
 

@@ -10,8 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from meshcol.collision.hull import convex_hull, exact_hull
 from meshcol.errors import InvalidMeshError
-from meshcol.geometry.hull import convex_hull, dimension_of, exact_hull, principal_widths
 from meshcol.geometry.topology import unique_rows
 
 __all__ = [
@@ -90,8 +90,7 @@ def canonical_geometry(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndar
         remap = np.full(len(unique), -1, dtype=np.int64)
         remap[used] = np.arange(len(used))
         unique, f = unique[used], remap[f]
-    _, _, widths, diagonal = principal_widths(unique)
-    if len(unique) < 4 or dimension_of(widths, diagonal) < 3:
+    if len(unique) < 4 or exact_hull(unique).dimension < 3:
         raise InvalidMeshError(
             "mesh is flat (all vertices lie in one plane): it encloses no volume"
         )
@@ -130,9 +129,9 @@ def canonical_part(
 ) -> tuple[np.ndarray, np.ndarray, float, bool] | None:
     """(vertices, faces, volume, reduced) of the hull of ``points``, or None when it is flat.
 
-    The hull is :func:`meshcol.geometry.hull.exact_hull` (vertices in lexicographic order);
+    The hull is :func:`meshcol.collision.hull.exact_hull` (vertices in lexicographic order);
     past ``budget`` vertices, the enclosing budgeted hull
-    (:func:`meshcol.geometry.hull.convex_hull`), and ``reduced`` is True. Each triangle starts
+    (:func:`meshcol.collision.hull.convex_hull`), and ``reduced`` is True. Each triangle starts
     at its smallest index (winding kept) and the triangles are sorted, so equal point sets give
     equal parts.
     """

@@ -84,7 +84,7 @@ def decompose(
     threshold, max_hulls, max_vertices, preprocess, resolution, seed, engine_options
         See :func:`resolve_params`. ``max_vertices`` is enforced on every part: a part whose
         hull has more vertices is replaced by the budgeted hull of
-        :func:`meshcol.geometry.hull.convex_hull`, which still encloses the part.
+        :func:`meshcol.collision.hull.convex_hull`, which still encloses the part.
     metrics : bool
         Compute :class:`Fidelity` metrics (stored in the cache with the parts).
     samples : int

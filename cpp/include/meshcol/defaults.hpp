@@ -156,4 +156,29 @@ constexpr double winding_number_inside = 0.5;
 /// decided so far (still a lower bound of the minimum translation distance).
 constexpr long long mesh_depth_max_work = 200000000;
 
+/// The flatness rule: points are flat (coplanar), collinear or one point when their width
+/// across their best-fit plane (line) is at most this fraction of their bounding-box
+/// diagonal (mirrored by `meshcol.collision.hull.FLAT_RELATIVE_TOLERANCE`).
+constexpr double flat_relative_tolerance = 1e-9;
+
+/// Quickhull's plane thickness, times the largest absolute coordinate: a point closer than
+/// that to a face's plane is on it (about 45 ulps, the rounding of a plane distance; qhull's
+/// coplanar tolerance is of the same order).
+constexpr double hull_relative_tolerance = 1e-14;
+
+/// Hulls of coordinates beyond this magnitude are refused (status OVERFLOW): their volumes
+/// (products of three coordinates) and face normals' lengths would overflow doubles.
+constexpr double hull_max_abs_coordinate = 1e100;
+
+/// Quickhull reruns on the extreme vertices when a vertex turned out to lie on an edge or in
+/// a face of its hull (coplanar ties); at most this many times.
+constexpr int hull_max_reruns = 3;
+
+/// A rerun checks that each vertex it leaves out is still inside (a point-plane test against
+/// every face): it runs only while that costs at most this many tests.
+constexpr double hull_max_rerun_work = 5e7;
+
+/// Shapes per thread below which hull packing stays on the calling thread.
+constexpr long long hull_min_shapes_per_thread = 16;
+
 }  // namespace meshcol::defaults
