@@ -140,12 +140,31 @@ def check_destinations(
     """
     read = [(label, os.fspath(path)) for label, path in inputs]
     written: list[tuple[str, str]] = []
+    identities: dict[tuple[int, int], str] | None = None  # input (device, inode) -> description
     for label, path in outputs:
         if path is None or os.fspath(path) == "-":
             continue
         path = os.fspath(path)
+        # An output that does not exist yet is no existing input; one that exists is the same
+        # file as an input exactly when their (device, inode) agree. One stat per input, not
+        # a realpath per (input, output): manifests name thousands of meshes.
+        try:
+            st = os.stat(path)
+        except OSError:
+            st = None
+        if st is not None:
+            if identities is None:
+                identities = {}
+                for description, in_path in reversed(read):
+                    with contextlib.suppress(OSError):
+                        info = os.stat(in_path)
+                        identities[(info.st_dev, info.st_ino)] = description
+            description = identities.get((st.st_dev, st.st_ino))
+            if description is not None:
+                raise OutputPathError(f"{label} would overwrite {description}", path)
         for description, in_path in read:
-            if same_file(path, in_path):
+            if not os.path.lexists(in_path) and _key(path) == _key(in_path):
+                # a missing input spelled as this output (reading it will fail anyway)
                 raise OutputPathError(f"{label} would overwrite {description}", path)
         for out_label, out_path in written:
             if same_file(path, out_path):

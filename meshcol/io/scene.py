@@ -126,7 +126,7 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
 
     bodies: list[Body] = []
     names: set[str] = set()
-    files: dict[str, list[Body]] = {}  # each mesh file is read once, however many instances
+    files = _read_mesh_files(document, source)  # each mesh file read once, all in parallel
     for spec in document["bodies"]:
         label = f"body {spec['name']!r}"
         if spec["name"] in names:
@@ -404,6 +404,26 @@ def _scale(value) -> np.ndarray:
     if isinstance(value, list):
         return np.asarray(value, dtype=np.float64)
     return np.full(3, float(value))
+
+
+def _read_mesh_files(document: Any, source: str) -> dict[str, list[Body]]:
+    """Every mesh file the manifest names, read at once (OBJ and STL by the core, in parallel),
+    keyed by normalised path. Empty when a file fails: the body loop then reads the files one
+    by one and reports the first bad one with its body's name."""
+    from meshcol.io.mesh_read import load_meshes
+
+    folder = os.path.dirname(source)
+    paths = list(
+        dict.fromkeys(
+            os.path.normpath(os.path.join(folder, spec["mesh"]))
+            for spec in document["bodies"]
+            if isinstance(spec.get("mesh"), str)
+        )
+    )
+    try:
+        return dict(zip(paths, load_meshes(paths)))
+    except MeshcolError:
+        return {}
 
 
 def _mesh_bodies(
