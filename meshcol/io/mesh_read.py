@@ -14,6 +14,7 @@ from __future__ import annotations
 import os
 import struct
 import zlib
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -180,7 +181,7 @@ _CORRUPT = 4  # the core's ReadStatus::Corrupt
 
 
 def load_meshes(
-    paths: list[str | os.PathLike[str]], *, merge: bool = True, threads: int = 0
+    paths: Sequence[str | os.PathLike[str]], *, merge: bool = True, threads: int = 0
 ) -> list[list[Body]]:
     """Load many mesh files at once: :func:`load_mesh` for each, with OBJ and STL files read
     and parsed by the native core in parallel (GIL released).

@@ -159,9 +159,9 @@ def check_destinations(
                     with contextlib.suppress(OSError):
                         info = os.stat(in_path)
                         identities[(info.st_dev, info.st_ino)] = description
-            description = identities.get((st.st_dev, st.st_ino))
-            if description is not None:
-                raise OutputPathError(f"{label} would overwrite {description}", path)
+            same = identities.get((st.st_dev, st.st_ino))
+            if same is not None:
+                raise OutputPathError(f"{label} would overwrite {same}", path)
         for description, in_path in read:
             if not os.path.lexists(in_path) and _key(path) == _key(in_path):
                 # a missing input spelled as this output (reading it will fail anyway)
