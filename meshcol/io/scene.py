@@ -442,7 +442,14 @@ def _mesh_bodies(
             raise SceneError(f"{label}: mesh file {mesh!r}: {error.message}", source) from None
         files[key] = loaded
     stretch = np.diag([*scale, 1.0])
-    if len(loaded) == 1:
+    if len(loaded) == 1 and not np.any(scale != 1.0) and _is_identity(loaded[0].pose):
+        # the common case (one object, no scale, no node transform): nothing to split or bake
+        (sub,) = loaded
+        rigid = _IDENTITY
+        vertices, faces = sub.vertices, sub.faces
+        parts: tuple[str, ...] = ()
+        part_faces = None
+    elif len(loaded) == 1:
         (sub,) = loaded
         rigid, linear = split_rigid(stretch @ sub.pose)
         vertices, faces = sub.vertices, sub.faces
@@ -450,7 +457,7 @@ def _mesh_bodies(
             vertices = vertices @ linear.T
             if np.linalg.det(linear) < 0:
                 faces = faces[:, ::-1]
-        parts: tuple[str, ...] = ()
+        parts = ()
         part_faces = None
     else:
         # One body of several parts: each part's node transform and the body's scale are
@@ -477,14 +484,22 @@ def _mesh_bodies(
             source=mesh_source,
             vertices=np.ascontiguousarray(vertices),
             faces=np.ascontiguousarray(faces),
-            pose=start @ rigid,
-            end_pose=None if end is None else end @ rigid,
+            pose=start if rigid is _IDENTITY else start @ rigid,
+            end_pose=None if end is None else end if rigid is _IDENTITY else end @ rigid,
             collider=spec.get("shape"),
             parts=parts,
             part_faces=part_faces,
             spin=_sub_spin(spin, start, end, rigid),
         )
     ]
+
+
+_IDENTITY = np.eye(4)
+_IDENTITY.flags.writeable = False
+
+
+def _is_identity(matrix: np.ndarray) -> bool:
+    return matrix is _IDENTITY or bool(np.array_equal(matrix, _IDENTITY))
 
 
 def _primitive_body(spec, source, label, start, end, spin, scale) -> Body:
@@ -844,8 +859,13 @@ def _numbers(values: list) -> str:
 
 def _check_world(body: Body, label: str, source: str) -> None:
     """A body's world coordinates (scale, pose, mesh and motion combined) within the limit."""
+    reach = float(np.abs(body.vertices).max(initial=0.0)) * math.sqrt(3.0)
     for pose, when in ((body.pose, ""), (body.end_pose, " at the end of the motion")):
         if pose is None:
+            continue
+        # |R v + t| per coordinate is at most sqrt(3) max|v| + max|t| (R a rotation): the
+        # exact check runs only for a body that might reach the limit.
+        if reach + float(np.abs(pose[:3, 3]).max()) <= MAX_COORDINATE:
             continue
         world = body.vertices @ pose[:3, :3].T + pose[:3, 3]
         try:
