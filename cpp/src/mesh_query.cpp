@@ -413,15 +413,15 @@ struct CrossingPair {
                          // that the samples do not depend on the order of the pair
 };
 
-void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
-                             std::vector<char>& in_a, std::vector<char>& in_b,
-                             std::vector<CrossingPair>& pairs) {
-    pairs.clear();
-    in_a.assign(static_cast<size_t>(a.triangle_count()), 0);
-    in_b.assign(static_cast<size_t>(b.triangle_count()), 0);
+// The descent of overlapping oriented boxes shared by the intersection queries: calls
+// `visit(i, j, ta, tb)` for each triangle pair (leaf order i of a, j of b; b's corners mapped
+// into a's frame) whose boxes touch, in depth-first order, until it returns true. Returns
+// whether a visit stopped the descent.
+template <class Visit>
+bool for_each_touching_pair(const MeshBvh& a, const MeshBvh& b, const Relative& rel, Visit visit) {
     const std::vector<BvhNode>& na = a.nodes();
     const std::vector<BvhNode>& nb = b.nodes();
-    if (!boxes_overlap(a, b, {0, 0}, rel)) return;
+    if (!boxes_overlap(a, b, {0, 0}, rel)) return false;
     std::vector<std::pair<std::int32_t, std::int32_t>> stack{{0, 0}};
     MappedLeaf leaf_b;
     while (!stack.empty()) {
@@ -435,14 +435,9 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
                 const Vec3* ta = a.triangle(i);
                 const TriangleBox box_a = triangle_box(ta);
                 for (int j = 0; j < leaf_b.count; ++j)
-                    if (Vec3 w; triangle_box_squared_distance(box_a, leaf_b.boxes[j]) == 0.0 &&
-                                triangles_intersect(ta, leaf_b.corners[j], &w)) {
-                        in_a[static_cast<size_t>(i)] = 1;
-                        in_b[static_cast<size_t>(y.index + j)] = 1;
-                        Vec3 w_b = w;
-                        triangles_intersect(leaf_b.corners[j], ta, &w_b);
-                        pairs.push_back({i, y.index + j, {w, w_b}});
-                    }
+                    if (triangle_box_squared_distance(box_a, leaf_b.boxes[j]) == 0.0 &&
+                        visit(i, y.index + j, ta, leaf_b.corners[j]))
+                        return true;
             }
             continue;
         }
@@ -452,6 +447,25 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
         if (boxes_overlap(a, b, c2, rel)) stack.push_back(c2);
         if (boxes_overlap(a, b, c1, rel)) stack.push_back(c1);
     }
+    return false;
+}
+
+void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
+                             std::vector<char>& in_a, std::vector<char>& in_b,
+                             std::vector<CrossingPair>& pairs) {
+    pairs.clear();
+    in_a.assign(static_cast<size_t>(a.triangle_count()), 0);
+    in_b.assign(static_cast<size_t>(b.triangle_count()), 0);
+    for_each_touching_pair(a, b, rel, [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
+        if (Vec3 w; triangles_intersect(ta, tb, &w)) {
+            in_a[static_cast<size_t>(i)] = 1;
+            in_b[static_cast<size_t>(j)] = 1;
+            Vec3 w_b = w;
+            triangles_intersect(tb, ta, &w_b);
+            pairs.push_back({i, j, {w, w_b}});
+        }
+        return false;
+    });
 }
 
 // Parameters along [p, q] (mesh's local frame) where the segment meets the mesh's surface in
@@ -739,36 +753,9 @@ bool winding_number_inside(const MeshBvh& mesh, const Vec3& point, long long* wo
 }
 
 bool mesh_intersects(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b, const Pose& pose_b) {
-    const Relative rel(pose_a, pose_b);
-    const std::vector<BvhNode>& na = a.nodes();
-    const std::vector<BvhNode>& nb = b.nodes();
-    if (!boxes_overlap(a, b, {0, 0}, rel)) return false;
-    std::vector<std::pair<std::int32_t, std::int32_t>> stack{{0, 0}};
-    MappedLeaf leaf_b;
-    while (!stack.empty()) {
-        const auto [ia, ib] = stack.back();
-        stack.pop_back();
-        const BvhNode& x = na[static_cast<size_t>(ia)];
-        const BvhNode& y = nb[static_cast<size_t>(ib)];
-        if (x.is_leaf() && y.is_leaf()) {
-            leaf_b.load(b, y, rel);
-            for (std::int32_t i = x.index; i < x.index + x.count; ++i) {
-                const Vec3* ta = a.triangle(i);
-                const TriangleBox box_a = triangle_box(ta);
-                for (int j = 0; j < leaf_b.count; ++j)
-                    if (triangle_box_squared_distance(box_a, leaf_b.boxes[j]) == 0.0 &&
-                        triangles_intersect(ta, leaf_b.corners[j], nullptr))
-                        return true;
-            }
-            continue;
-        }
-        const bool descend_a = !x.is_leaf() && (y.is_leaf() || node_size(x) >= node_size(y));
-        const std::pair<std::int32_t, std::int32_t> c1 = descend_a ? std::make_pair(ia + 1, ib) : std::make_pair(ia, ib + 1);
-        const std::pair<std::int32_t, std::int32_t> c2 = descend_a ? std::make_pair(x.index, ib) : std::make_pair(ia, y.index);
-        if (boxes_overlap(a, b, c2, rel)) stack.push_back(c2);
-        if (boxes_overlap(a, b, c1, rel)) stack.push_back(c1);
-    }
-    return false;
+    return for_each_touching_pair(a, b, Relative(pose_a, pose_b), [](std::int32_t, std::int32_t, const Vec3* ta, const Vec3* tb) {
+        return triangles_intersect(ta, tb, nullptr);
+    });
 }
 
 MeshDistanceOutput mesh_distance(const MeshDistanceInput& input) {
@@ -785,7 +772,21 @@ MeshDistanceOutput mesh_distance(const MeshDistanceInput& input) {
     const MeshBvh& b = *input.b;
     const Relative rel(input.pose_a, input.pose_b);
     const double bound2 = input.max_distance * input.max_distance;
-    const SearchResult r = search_distance(a, b, rel, bound2);
+    // Crossing surfaces are found sooner by the intersection descent, which tests triangle
+    // pairs whose boxes touch and measures nothing, than by the distance search, which measures
+    // every near triangle pair on its way to the first crossing one.
+    SearchResult r;
+    const bool crossed = for_each_touching_pair(a, b, rel, [&r](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
+        Vec3 w;
+        if (!triangles_intersect(ta, tb, &w)) return false;
+        r.found = r.intersecting = true;
+        r.squared_distance = 0.0;
+        r.point_a = r.point_b = w;
+        r.triangle_a = i;
+        r.triangle_b = j;
+        return true;
+    });
+    if (!crossed) r = search_distance(a, b, rel, bound2);
     if (r.found) {
         out.distance = std::sqrt(r.squared_distance);
         out.point_a = input.pose_a.apply(r.point_a);
