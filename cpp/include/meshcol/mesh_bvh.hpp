@@ -2,7 +2,9 @@
 /// A static bounding volume hierarchy over the triangles of one mesh, in the mesh's local
 /// frame: axis-aligned boxes, built top-down with a binned surface area heuristic (Wald 2007),
 /// stored flat in depth-first order (32-byte nodes), with the triangles copied in leaf order so
-/// a leaf reads one contiguous block.
+/// a leaf reads one contiguous block. Beside each node, in arrays of their own: an oriented box
+/// (the pair traversals' bound, tight under any relative rotation) and the far-field data of
+/// the fast winding number.
 
 #include <cstdint>
 #include <utility>

@@ -40,11 +40,12 @@ struct MeshDistanceOutput {
     Status status = Status::NOT_RUN;
 };
 
-/// Minimum distance between the surfaces of two meshes by simultaneous descent of their
-/// hierarchies, closer child first, pruning node pairs whose box distance is no less than the
-/// best distance found (branch and bound, as Larsen et al. 1999 and FCL's mesh distance), exact
-/// triangle-pair distance at the leaves; stops at the first intersecting triangle pair. Then,
-/// when the surfaces do not intersect, tests containment with the generalized winding number.
+/// Minimum distance between the surfaces of two meshes. First the intersection descent (as
+/// mesh_intersects) looks for a crossing triangle pair; without one, a simultaneous descent of
+/// the hierarchies, closer child first, prunes node pairs whose oriented-box distance bound is
+/// no less than the best distance found (branch and bound, as Larsen et al. 1999 and FCL's
+/// mesh distance), exact triangle-pair distance at the leaves. Then, when the surfaces do not
+/// intersect, tests containment with the generalized winding number (winding_number_inside).
 /// The caller checks that poses are rigid.
 MeshDistanceOutput mesh_distance(const MeshDistanceInput& input);
 
