@@ -6,7 +6,7 @@ BIN    := $(VENV)/bin
 PIP    := $(BIN)/python -m pip --disable-pip-version-check
 BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4"
 
-.PHONY: demo test test-fast lint install install-test bench fuzz clean
+.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -55,6 +55,15 @@ test: lint
 test-fast: install-test
 	HYPOTHESIS_PROFILE=fast $(BIN)/pytest -q -p no:cacheprovider -m "not slow"
 
+# The fast lane with every runtime dependency at the lower end of its range (pyproject.toml),
+# in its own .venv-lowest: run it when a bound changes (it downloads those versions).
+test-lowest:
+	$(PYTHON) -m venv .venv-lowest
+	.venv-lowest/bin/python -m pip --disable-pip-version-check install -q $(BUILD_DEPS)
+	.venv-lowest/bin/python .ci/lowest_constraints.py > .venv-lowest/constraints.txt
+	.venv-lowest/bin/python -m pip --disable-pip-version-check install -q --no-build-isolation \
+		-c .venv-lowest/constraints.txt -e ".[test]"
+	HYPOTHESIS_PROFILE=fast .venv-lowest/bin/pytest -q -p no:cacheprovider -m "not slow"
 # Fuzz every target (fuzz/targets.py) for FUZZ_SECONDS each; crashes land in fuzz/crashes/.
 FUZZ_SECONDS ?= 60
 fuzz: install-test
@@ -63,12 +72,15 @@ fuzz: install-test
 	done
 
 bench: install-test
+	-$(BIN)/pip install -q --no-build-isolation -e ".[bench]"  # coal; benchmarks skip it if this fails
 	$(BIN)/python benchmarks/bench_narrowphase.py
 	$(BIN)/python benchmarks/bench_broadphase.py
 	$(BIN)/python benchmarks/bench_mesh_query.py
 	$(BIN)/python benchmarks/bench_sweep.py
 	$(BIN)/python benchmarks/bench_check.py
+	$(BIN)/python benchmarks/bench_scale.py --sizes 1000 10000
 	$(BIN)/python benchmarks/bench_decompose.py
+	$(BIN)/python benchmarks/bench_inspect.py --rounds 1
 
 clean:
-	rm -rf build dist $(VENV) demo-out *.egg-info
+	rm -rf build dist $(VENV) .venv-lowest demo-out *.egg-info

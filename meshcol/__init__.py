@@ -29,6 +29,7 @@ from meshcol.types import (
     Primitive,
     Scene,
     Sphere,
+    Spin,
     Status,
     TimeOfImpactStatus,
 )
@@ -41,8 +42,8 @@ _LAZY: dict[str, str] = {
     "load_inputs": "meshcol.io.scene",
     "write_meshes": "meshcol.io.mesh_write",
     # hulls and inspection
-    "convex_hull": "meshcol.geometry.hull",
-    "HullResult": "meshcol.geometry.hull",
+    "convex_hull": "meshcol.collision.hull",
+    "HullResult": "meshcol.collision.hull",
     "hull": "meshcol.analysis.hull",
     "HullReport": "meshcol.analysis.hull",
     "inspect": "meshcol.analysis.inspect",
@@ -78,6 +79,7 @@ _LAZY: dict[str, str] = {
     "TimeOfImpactResult": "meshcol.collision.time_of_impact",
     "TimeOfImpactBatch": "meshcol.collision.time_of_impact",
     "interpolate_pose": "meshcol.collision.time_of_impact",
+    "shortest_rotation": "meshcol.collision.time_of_impact",
     "time_of_impact": "meshcol.collision.time_of_impact",
     "time_of_impact_batch": "meshcol.collision.time_of_impact",
     # exact triangle-mesh queries
@@ -118,6 +120,7 @@ __all__ = [
     "Body",
     "Primitive",
     "Sphere",
+    "Spin",
     "Box",
     "Capsule",
     "Cylinder",

@@ -23,6 +23,7 @@ __all__ = [
     "Primitive",
     "Scene",
     "Sphere",
+    "Spin",
     "Status",
     "TimeOfImpactStatus",
 ]
@@ -40,6 +41,9 @@ class Status(enum.IntEnum):
     DEGENERATE = 2
     INVALID_INPUT = 3
     NOT_RUN = 4
+    #: The answer is beyond the range of a double (two shapes near +-1e308): fields are inf or
+    #: NaN, never a number taken for the answer.
+    OUT_OF_RANGE = 5
 
 
 class TimeOfImpactStatus(enum.IntEnum):
@@ -140,6 +144,67 @@ Primitive = Sphere | Box | Capsule | Cylinder
 
 
 @dataclass(frozen=True, eq=False)
+class Spin:
+    """How a body turns over its motion, when that is not the shortest rotation.
+
+    A body with an end pose and no spin turns the shortest way from its start to its end
+    rotation (at most half a turn) about its local origin. A spin gives the turn itself: the
+    body turns at constant angular velocity by ``|rotation|`` radians (any size: several turns
+    are several turns) about the world axis ``rotation / |rotation|``, about ``pivot``, while
+    the pivot moves linearly (see :mod:`meshcol.collision.time_of_impact`).
+
+    Attributes
+    ----------
+    rotation : (3,) float64 or None
+        World rotation vector of the whole motion: axis x angle in radians
+        (``angular_velocity * duration`` for a manifest body). None: the shortest rotation from
+        the pose to the end pose (at most half a turn), about ``pivot``.
+    pivot : (3,) float64 or None
+        World point the body turns about, at the start; None: the body's local origin. (The
+        sub-bodies of a multi-node mesh file turn about the manifest body's origin, so that
+        they move as one rigid body.)
+    """
+
+    rotation: np.ndarray | None
+    pivot: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.rotation is not None:
+            rotation = np.array(self.rotation, dtype=np.float64)
+            if rotation.shape != (3,) or not np.all(np.isfinite(rotation)):
+                raise ValueError(f"rotation must be 3 finite numbers, got {self.rotation!r}")
+            object.__setattr__(self, "rotation", rotation)
+        if self.pivot is not None:
+            pivot = np.array(self.pivot, dtype=np.float64)
+            if pivot.shape != (3,) or not np.all(np.isfinite(pivot)):
+                raise ValueError(f"pivot must be 3 finite numbers, got {self.pivot!r}")
+            object.__setattr__(self, "pivot", pivot)
+
+    @property
+    def angle(self) -> float | None:
+        """Radians turned over the whole motion (>= 0); None for the shortest rotation."""
+        return None if self.rotation is None else float(np.linalg.norm(self.rotation))
+
+    def matrix(self) -> np.ndarray:
+        """The (3, 3) rotation of the whole turn (Rodrigues' formula): R_end = matrix @ R_start.
+
+        Raises ValueError for the shortest rotation (``rotation`` None), which only the end
+        pose knows."""
+        if self.rotation is None:
+            raise ValueError("a spin without a rotation turns the shortest way to the end pose")
+        angle = float(np.linalg.norm(self.rotation))
+        if angle == 0.0:
+            return np.eye(3)
+        k = self.rotation / angle
+        cross = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+        return np.eye(3) + np.sin(angle) * cross + (1 - np.cos(angle)) * (cross @ cross)
+
+
+#: How far (per matrix entry) a spin's turn may miss the end rotation it claims to reach.
+SPIN_ROTATION_TOLERANCE = 1e-6
+
+
+@dataclass(frozen=True, eq=False)
 class Body:
     """One rigid body: a triangle mesh (or primitive) and its pose.
 
@@ -157,10 +222,21 @@ class Body:
         Rigid world-from-local pose at the start (and only) instant.
     end_pose : (4, 4) float64 or None
         Rigid pose at the end of the motion, for continuous collision.
+    spin : Spin or None
+        How the body turns from ``pose`` to ``end_pose`` (any angle, about a pivot); None: the
+        shortest rotation about its local origin. Needs ``end_pose``, whose rotation the spin
+        must reach (ValueError otherwise).
     primitive : Primitive or None
         Set when the body is an analytic shape; queries then use it exactly.
     collider : str or None
         Per-body collider kind, the manifest field ``shape`` (``hull``, ``decomposed``, ``mesh``).
+    parts : tuple of str
+        Names of the body's parts when it is made of several (the objects or nodes of a
+        manifest body's mesh file, in file order); empty for a body of one part. Parts of one
+        body are never paired with each other; reports name them (``part_a``, ``part_b``).
+    part_faces : (len(parts) + 1,) int64 or None
+        Part ``i`` is ``faces[part_faces[i]:part_faces[i + 1]]``; None when ``parts`` is
+        empty.
     """
 
     name: str
@@ -171,6 +247,77 @@ class Body:
     end_pose: np.ndarray | None = None
     primitive: Primitive | None = None
     collider: str | None = None
+    parts: tuple[str, ...] = ()
+    part_faces: np.ndarray | None = None
+    spin: Spin | None = None
+
+    def __post_init__(self) -> None:
+        self._check_parts()
+        self._check_spin()
+
+    def _check_parts(self) -> None:
+        if self.parts:
+            offsets = np.asarray(self.part_faces, dtype=np.int64)
+            if (
+                offsets.shape != (len(self.parts) + 1,)
+                or offsets[0] != 0
+                or offsets[-1] != len(self.faces)
+                or np.any(np.diff(offsets) < 0)
+            ):
+                raise ValueError(
+                    f"body {self.name!r}: part_faces must be {len(self.parts) + 1} "
+                    f"non-decreasing offsets from 0 to {len(self.faces)}"
+                )
+            object.__setattr__(self, "part_faces", offsets)
+        elif self.part_faces is not None:
+            raise ValueError(f"body {self.name!r}: part_faces given without parts")
+
+    def part_meshes(self) -> list[tuple[str | None, np.ndarray, np.ndarray]]:
+        """``(name, vertices, faces)`` of each part, local frame, faces indexing the part's
+        own vertices; one ``(None, vertices, faces)`` for a body of one part."""
+        if not self.parts:
+            return [(None, self.vertices, self.faces)]
+        assert self.part_faces is not None
+        out: list[tuple[str | None, np.ndarray, np.ndarray]] = []
+        for name, start, stop in zip(self.parts, self.part_faces[:-1], self.part_faces[1:]):
+            faces = self.faces[start:stop]
+            used, inverse = np.unique(faces, return_inverse=True)
+            out.append((name, self.vertices[used], inverse.reshape(-1, 3).astype(np.int64)))
+        return out
+
+    def part_bodies(self) -> list[Body]:
+        """One body per part, named ``<body>/<part>``, with this body's pose (the body itself
+        when it has one part): for what is judged per mesh (inspect's health, decompose's
+        inputs), where a body's parts are separate meshes."""
+        if not self.parts:
+            return [self]
+        return [
+            Body(
+                name=f"{self.name}/{name}",
+                source=self.source,
+                vertices=np.ascontiguousarray(vertices),
+                faces=np.ascontiguousarray(faces),
+                pose=self.pose,
+                end_pose=self.end_pose,
+                collider=self.collider,
+            )
+            for name, vertices, faces in self.part_meshes()
+        ]
+
+    def _check_spin(self) -> None:
+        if self.spin is None:
+            return
+        if self.end_pose is None:
+            raise ValueError(f"body {self.name!r}: a spin needs an end pose")
+        if self.spin.rotation is None:
+            return
+        reached = self.spin.matrix() @ np.asarray(self.pose, dtype=np.float64)[:3, :3]
+        miss = np.abs(reached - np.asarray(self.end_pose, dtype=np.float64)[:3, :3]).max()
+        if not miss <= SPIN_ROTATION_TOLERANCE:
+            raise ValueError(
+                f"body {self.name!r}: the spin does not turn the pose into the end pose "
+                f"(off by {miss:.3g})"
+            )
 
     def world_vertices(self, end: bool = False) -> np.ndarray:
         """Vertices in the world frame, (n, 3) float64, at the start (or end) pose."""

@@ -107,6 +107,10 @@ def _private_user_cache(tmp_path_factory: pytest.TempPathFactory):
 #: leaves them out with ``-m "not slow"``; ``make test`` runs everything. Tests on the shared
 #: corpus are slow too (marked from their fixtures below).
 SLOW_TESTS = {
+    "test_fine_uv_sphere_does_not_self_intersect",
+    "test_fast_check_passes_the_valid_common_documents",
+    "test_any_shape_spinning_about_a_pivot_matches_dense_sampling",
+    "test_spin_matches_dense_sampling",
     "test_ball_in_bowl_is_separated_when_decomposed",
     "test_incremental_sweep_with_grid_cells_equals_brute_force",
     "test_timeout_stops_one_file_and_the_others_finish",
@@ -121,6 +125,8 @@ SLOW_TESTS = {
     "test_incremental_sweep_equals_brute_force_over_steps",
     "test_parts_are_convex_and_cover_the_torus",
     "test_short_fuzzing_run_finds_nothing",
+    "test_signals_stop_the_run_and_leave_nothing",
+    "test_max_hausdorff_gates_what_sticks_out_not_the_cuts",
 }
 
 

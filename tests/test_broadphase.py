@@ -224,6 +224,27 @@ def test_larger_sets_use_the_grid_and_equal_brute_force(boxes, seed):
     assert np.array_equal(AabbTree.from_boxes(lo, hi).query_pairs(), expected)
 
 
+@settings(max_examples=60)
+@given(box_sets(max_n=300), st.integers(0, 2**32 - 1), st.integers(1, 12))
+def test_groups_drop_exactly_the_pairs_within_a_group(boxes, seed, count):
+    lo, hi = boxes
+    rng = np.random.default_rng(seed)
+    shift = rng.integers(0, 20, size=lo.shape) * (hi - lo).max(initial=1.0)
+    lo, hi = lo + shift, hi + shift
+    groups = rng.integers(0, count, size=len(lo))
+    everything = brute_force_pairs(lo, hi)
+    expected = everything[groups[everything[:, 0]] != groups[everything[:, 1]]]
+    assert np.array_equal(sort_and_sweep(lo, hi, groups=groups), expected)
+    # one group per box changes nothing
+    assert np.array_equal(sort_and_sweep(lo, hi, groups=np.arange(len(lo))), everything)
+
+
+def test_groups_must_have_one_id_per_box():
+    lo = np.zeros((3, 3))
+    with pytest.raises(ValueError, match=r"groups must be \(3,\), got \(2,\)"):
+        sort_and_sweep(lo, lo + 1, groups=[0, 1])
+
+
 @given(box_sets(max_n=60), st.integers(0, 2**32 - 1), st.sampled_from([1e-3, 0.3, 5.0]))
 def test_incremental_sweep_equals_brute_force_over_steps(boxes, seed, motion):
     lo, hi = boxes

@@ -38,7 +38,7 @@ def box(name: str, size, position, **extra) -> dict:
 
 def pair(report, a: str, b: str) -> dict:
     for p in report.pairs:
-        if {p["a"], p["b"]} == {a, b}:
+        if {p["body_a"], p["body_b"]} == {a, b}:
             return p
     raise AssertionError(f"pair {a}-{b} not reported")
 
@@ -191,7 +191,7 @@ def test_axis_aligned_boxes_match_exact_answers(boxes) -> None:
         hi.append(c + s / 2)
     clearance = 0.75
     report = check_scene(Scene(tuple(bodies)), CheckOptions(clearance=clearance, tolerance=1e-9))
-    got = {(p["a"], p["b"]): p for p in report.pairs}
+    got = {(p["body_a"], p["body_b"]): p for p in report.pairs}
     for i, j in itertools.combinations(range(len(bodies)), 2):
         gap = np.maximum(np.maximum(lo[i] - hi[j], lo[j] - hi[i]), 0.0)
         overlap = np.minimum(hi[i], hi[j]) - np.maximum(lo[i], lo[j])
@@ -239,14 +239,14 @@ def test_level_finds_exactly_the_planted_interpenetrations(samples: Path) -> Non
     report = check([samples / "level" / "scene.json"])
     planted = {tuple(sorted((e["a"], e["b"]))): e for e in expected["interpenetrations"]}
     found = {
-        tuple(sorted((p["a"], p["b"]))): p
+        tuple(sorted((p["body_a"], p["body_b"]))): p
         for p in report.pairs
         if p["status"] in ("penetrating", "contained")
     }
     assert set(found) == set(planted)
     for key, e in planted.items():
         assert found[key]["depth"] == pytest.approx(e["depth"], rel=1e-9, abs=1e-12), key
-    flagged = {tuple(sorted((p["a"], p["b"]))) for p in report.pairs if p["violation"]}
+    flagged = {tuple(sorted((p["body_a"], p["body_b"]))) for p in report.pairs if p["violation"]}
     assert flagged == set(planted)
 
 
@@ -319,8 +319,11 @@ def test_corpus_scene_distances_match_fcl(corpus: Path, name: str) -> None:
     for p in report.pairs:
         if p["status"] in ("penetrating", "contained", "contact"):
             continue
-        expected = _fcl_mesh_distance(bodies[p["a"]], bodies[p["b"]])
-        assert p["distance"] == pytest.approx(expected, rel=1e-6, abs=1e-9), (p["a"], p["b"])
+        expected = _fcl_mesh_distance(bodies[p["body_a"]], bodies[p["body_b"]])
+        assert p["distance"] == pytest.approx(expected, rel=1e-6, abs=1e-9), (
+            p["body_a"],
+            p["body_b"],
+        )
         compared += 1
     assert compared > 0
 
@@ -350,7 +353,7 @@ def test_baseline_fails_only_new_or_worse_pairs(tmp_path: Path) -> None:
     )
     report = check([new], baseline=str(old))
     assert not report.passed
-    assert {(p["a"], p["b"]) for p in report.pairs if p["violation"]} == {("a", "c")}
+    assert {(p["body_a"], p["body_b"]) for p in report.pairs if p["violation"]} == {("a", "c")}
     better = write_manifest(
         tmp_path, [bodies[0], box("b", (1, 1, 1), (0.9, 0, 0)), bodies[2]], name="better.json"
     )
@@ -382,7 +385,7 @@ def test_cli_exit_codes_and_reports(tmp_path: Path) -> None:
     assert run(["check", str(m), "--report", str(csv_out)]).exit_code == 1
     lines = csv_out.read_text().splitlines()
     assert lines[0].split(",") == CSV_COLUMNS
-    assert lines[1].startswith("a,b,penetrating,")
+    assert lines[1].startswith("a,b,,,penetrating,")
 
 
 def test_cli_report_to_stdout_keeps_summary_on_stderr(tmp_path: Path) -> None:

@@ -539,3 +539,284 @@ def test_decompose_bad_file_after_good_ones_fails_before_writing(meshes, tmp_pat
         assert code == 2
         assert stderr.startswith(f"meshcol: error: {meshes['empty']}: ")
         assert not out.exists()
+
+
+# ------------------------------------------------------------------- --max-hausdorff gate
+
+
+def _cube_parts(extra=()) -> tuple:
+    """The cube [-20, 20]^3 as three slabs with 0.006-wide slits (99.97% of its volume)."""
+    from meshcol.decomposition.canonical import canonical_part
+
+    a, b, g = -20 / 3, 20 / 3, 0.003
+    boxes = [
+        ((-20, -20, -20), (a - g, 20, 20)),
+        ((a + g, -20, -20), (b - g, 20, 20)),
+        ((b + g, -20, -20), (20, 20, 20)),
+        *extra,
+    ]
+    return tuple(
+        canonical_part(np.asarray(trimesh.creation.box(bounds=box).vertices), None)[:2]
+        for box in boxes
+    )
+
+
+def test_max_hausdorff_gates_what_sticks_out_not_the_cuts(tmp_path) -> None:
+    # Regression (#12): three boxes covering 99.97% of a 40-unit cube reported a Hausdorff
+    # distance of 9.95 (the slits' faces inside the cube), so no useful --max-hausdorff passed.
+    import dataclasses
+
+    from meshcol.decomposition import cache as decompose_cache
+
+    cube = tmp_path / "cube.obj"
+    trimesh.creation.box(bounds=[(-20, -20, -20), (20, 20, 20)]).export(cube)
+    cache = tmp_path / "cache"
+    args = [str(cube), "--cache-dir", str(cache), "-o", str(tmp_path / "o"), *FAST]
+    code, stdout, _ = run(args)
+    assert code == 0
+    key = json.loads(stdout)["files"][0]["bodies"][0]["cache_key"]
+    engine_made = decompose_cache.load(key, cache)
+
+    def gate(parts, limit: float) -> tuple[int, dict]:
+        # Hand-made parts under the cube's key, without metrics: the run measures them.
+        decompose_cache.store(dataclasses.replace(engine_made, parts=parts, metrics=None), cache)
+        code, stdout, stderr = run([*args, "--max-hausdorff", repr(limit)])
+        assert stdout, stderr
+        body = json.loads(stdout)["files"][0]["bodies"][0]
+        return code, body
+
+    code, body = gate(_cube_parts(), 0.01)
+    assert code == 0 and body["hausdorff_ok"] is True
+    assert body["metrics"]["hausdorff_parts_to_mesh"] <= 1e-9
+    assert body["metrics"]["hausdorff_mesh_to_parts"] <= 0.003 + 1e-9
+    assert body["metrics"]["volume_ratio"] == pytest.approx(0.9997, abs=1e-9)
+    # A box 5 beyond a corner: 5 * sqrt(3) out; the limit is inclusive.
+    corner = _cube_parts([((15, 15, 15), (25, 25, 25))])
+    height = 5.0 * float(np.sqrt(3.0))
+    code, body = gate(corner, height * (1 - 1e-9))
+    assert code == 1 and body["hausdorff_ok"] is False
+    assert body["metrics"]["hausdorff_parts_to_mesh"] == pytest.approx(height, abs=1e-9)
+    code, body = gate(corner, body["metrics"]["hausdorff_parts_to_mesh"])
+    assert code == 0 and body["hausdorff_ok"] is True
+
+
+def test_within_max_hausdorff_never_passes_what_it_could_not_measure() -> None:
+    from meshcol.decomposition.batch import within_max_hausdorff
+
+    m = {"hausdorff_mesh_to_parts": 0.5, "hausdorff_parts_to_mesh": 1.0}
+    assert within_max_hausdorff(m, None)
+    assert within_max_hausdorff(m, 1.0) and not within_max_hausdorff(m, 0.999)
+    assert not within_max_hausdorff({**m, "hausdorff_mesh_to_parts": float("nan")}, 10.0)
+    assert not within_max_hausdorff({**m, "hausdorff_parts_to_mesh": float("nan")}, 10.0)
+    assert not within_max_hausdorff({"hausdorff_mesh_to_parts": 0.0}, 10.0)
+    assert not within_max_hausdorff({}, 10.0)
+
+
+# ------------------------------------------------------------------- output locations
+
+
+def _all_files(folder: Path) -> list[Path]:
+    return [p for p in folder.rglob("*") if p.is_file()]
+
+
+def test_outputs_are_checked_before_any_work(meshes, tmp_path, monkeypatch) -> None:
+    # Regression (#13): --report in a missing folder exited 2 after writing the parts; an
+    # unusable --cache-dir exited 1, blamed the input and left an empty parts folder.
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "a_file").write_text("x")
+    box = str(meshes["box"])
+    cases = [
+        (
+            ["-o", "out", "--report", "nodir/sub/r.json"],
+            "nodir/sub/r.json: folder nodir/sub does not exist",
+        ),
+        (["-o", "out", "--report", "a_file/r.json"], "a_file/r.json: a_file is not a folder"),
+        (
+            ["-o", "out", "--report", box],  # refused by its extension before anything else
+            f"invalid value for '--report': unknown report extension '.obj' in '{box}': "
+            "expected .json or .csv (see 'meshcol decompose -h')",
+        ),
+        (
+            ["-o", "out", "--cache-dir", "a_file/cache"],
+            "a_file/cache: cannot create the folder: a_file is not a folder",
+        ),
+        (["-o", "a_file/out"], "a_file/out: cannot create the folder: a_file is not a folder"),
+        (["-o", "out", "--report", "out"], "out: --report and --out-dir are the same file"),
+    ]
+    for extra, message in cases:
+        code, stdout, stderr = run([box, "--cache-dir", "cache", *extra])
+        assert (code, stdout, stderr) == (2, "", f"meshcol: error: {message}\n"), extra
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file"]  # no out/, cache/, r.json
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes in read-only folders")
+def test_unwritable_cache_dir_is_exit_2_before_any_work(meshes, tmp_path) -> None:
+    locked = tmp_path / "locked"
+    locked.mkdir()
+    locked.chmod(0o500)
+    try:
+        code, _, stderr = run(
+            [str(meshes["box"]), "-o", str(tmp_path / "out"), "--cache-dir", str(locked / "c")]
+        )
+    finally:
+        locked.chmod(0o700)
+    assert code == 2
+    assert stderr == (
+        f"meshcol: error: {locked / 'c'}: cannot create the folder: cannot write in "
+        f"{locked} (permission denied)\n"
+    )
+    assert not (tmp_path / "out").exists()
+
+
+def test_parts_that_would_replace_an_input_are_refused(meshes, tmp_path, monkeypatch) -> None:
+    # `decompose cube.obj -o . --layout combined` would write cube.obj over its input.
+    monkeypatch.chdir(tmp_path)
+    cube = tmp_path / "cube.obj"
+    cube.write_bytes(meshes["box"].read_bytes())
+    part = tmp_path / "cube_00.obj"  # what the parts layout writes first
+    part.write_bytes(meshes["box"].read_bytes())
+    (tmp_path / "out").mkdir()
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir() if p.is_file()}
+    for args, victim in [
+        (["cube.obj", "-o", ".", "--layout", "combined"], "cube.obj"),
+        (["cube.obj", "-o", tmp_path.as_posix(), "--layout", "combined"], "cube.obj"),
+        (["cube.obj", "cube_00.obj", "-o", "."], "cube_00.obj"),
+    ]:
+        code, stdout, stderr = run([*args, "--no-cache"])
+        assert code == 2 and stdout == "", args
+        assert stderr.startswith(f"meshcol: error: {victim}: the parts of body 'cube")
+        assert stderr.endswith(
+            "would replace this file (output folder "
+            f"{args[args.index('-o') + 1]}): choose another output folder\n"
+        )
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir() if p.is_file()} == before
+    assert list((tmp_path / "out").iterdir()) == []
+
+
+def test_a_failed_write_leaves_no_part_and_names_the_users_file(
+    meshes, tmp_path, monkeypatch
+) -> None:
+    from meshcol.io import mesh_write
+
+    calls = []
+    real = mesh_write.write_meshes
+
+    def disk_full_on_second(path, meshes):
+        calls.append(path)
+        if len(calls) == 2:
+            raise OSError(28, "No space left on device", path)
+        real(path, meshes)
+
+    monkeypatch.setattr(mesh_write, "write_meshes", disk_full_on_second)
+    out = tmp_path / "new" / "out"
+    code, stdout, stderr = run([str(meshes["torus"]), "-o", str(out), "--no-cache", *FAST])
+    assert code == 2 and stdout == ""
+    assert stderr.startswith("meshcol: error: ") and ".meshcol-" not in stderr
+    assert stderr.endswith("torus_01.obj: No space left on device\n")
+    assert not (tmp_path / "new").exists()  # the folders it made are gone too
+
+
+# ------------------------------------------------------------------- signals
+
+
+def _session_processes(session: int) -> list[str]:
+    """Processes still running (not zombies) in a session, from /proc."""
+    alive = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[3]) == session and fields[0] not in ("Z", "X"):
+            alive.append(entry.name)
+    return alive
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
+@pytest.mark.parametrize(
+    ("jobs", "signum", "to_group", "code"),
+    [
+        ("1", signal.SIGINT, True, 130),  # Ctrl-C in a terminal: the whole process group
+        ("1", signal.SIGINT, False, 130),
+        ("1", signal.SIGTERM, False, 143),
+        ("2", signal.SIGTERM, False, 143),  # used to orphan the workers, which wrote the cache
+        ("2", signal.SIGINT, True, 130),
+    ],
+)
+def test_signals_stop_the_run_and_leave_nothing(tmp_path, jobs, signum, to_group, code) -> None:
+    # Regression (#13): Ctrl-C was ignored for a minute while CoACD ran in the one process;
+    # SIGTERM with -j 2 left the workers running, writing to the cache after the parent left.
+    mesh = tmp_path / "torus.obj"  # about 12 s with CoACD's defaults
+    trimesh.creation.torus(1.0, 0.3, major_sections=48, minor_sections=24).export(mesh)
+    cache, out = tmp_path / "cache", tmp_path / "out"
+    command = [sys.executable, "-m", "meshcol", "decompose", str(mesh), "-o", str(out)]
+    proc = subprocess.Popen(
+        [*command, "--cache-dir", str(cache), "--jobs", jobs],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        start_new_session=True,
+    )
+    try:
+        # Until the engine runs: the interpreter, the fork server and a worker are up.
+        deadline = time.monotonic() + 30
+        while len(_session_processes(proc.pid)) < 4 and time.monotonic() < deadline:
+            time.sleep(0.1)
+        time.sleep(1.0)
+        assert proc.poll() is None, "the run finished before the signal"
+        sent = time.monotonic()
+        (os.killpg if to_group else os.kill)(proc.pid, signum)
+        stdout, stderr = proc.communicate(timeout=30)
+        stopped = time.monotonic() - sent
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == code
+    word = "interrupted" if signum == signal.SIGINT else "terminated"
+    assert (stdout, stderr) == (b"", f"meshcol: {word}\n".encode())
+    # Stopped within seconds, not when CoACD is done (about 12 s); the issue asks for one
+    # second, which a loaded CI machine cannot promise: the figures are in the report.
+    assert stopped < 5.0
+    deadline = time.monotonic() + 5
+    while _session_processes(proc.pid) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert _session_processes(proc.pid) == []
+    assert not out.exists()
+    assert _all_files(cache) == []  # rglob of a missing folder is empty
+
+
+def test_worker_pool_starts_nothing_without_a_task() -> None:
+    # One job starts its worker (and the fork server) at the first task only: a run of cache
+    # hits spawns no process.
+    from meshcol.decomposition.jobs import WorkerPool
+    from meshcol.io.mesh_write import safe_name
+
+    with WorkerPool(safe_name, 1) as pool:
+        assert list(pool.run(iter(()))) == []
+        assert pool._ctx is None and not pool._idle and not pool._busy
+
+
+def test_an_interrupt_swallowed_by_a_task_source_is_raised_again() -> None:
+    # trimesh catches BaseException around its imports: a Ctrl-C that lands there must not
+    # be lost while the pool runs.
+    from meshcol.decomposition.jobs import WorkerPool
+    from meshcol.io.mesh_write import safe_name
+
+    def swallowing_source():
+        try:
+            signal.raise_signal(signal.SIGINT)
+        except BaseException:  # noqa: BLE001 - what trimesh does
+            pass
+        deadline = time.monotonic() + 20  # a long import, in Python
+        while time.monotonic() < deadline:
+            time.sleep(0.01)
+        yield "never reached"
+
+    start = time.monotonic()
+    with WorkerPool(safe_name, 1) as pool, pytest.raises(KeyboardInterrupt):
+        list(pool.run(swallowing_source()))
+    assert time.monotonic() - start < 10  # delivered again within 0.1 s, not after the loop
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    time.sleep(0.3)  # and never again once it has left the pool

@@ -46,7 +46,7 @@ def test_bullet_through_wall_is_a_tunnelled_hit():
     report = meshcol.sweep(bullet_and_wall())
     assert report.summary["hits"] == 1 and report.summary["tunnelled"] == 1
     (hit,) = report.hits
-    assert (hit.a, hit.b, hit.status) == ("wall", "bullet", TimeOfImpactStatus.HIT)
+    assert (hit.body_a, hit.body_b, hit.status) == ("wall", "bullet", TimeOfImpactStatus.HIT)
     # Contact when the bullet's centre is at x = -0.02 (its vertices reach 0.01).
     assert hit.time_of_impact == pytest.approx(0.98 / 2.0, abs=1e-5) and hit.time_of_impact <= 0.49
     assert hit.time == pytest.approx(hit.time_of_impact * 0.01)
@@ -121,7 +121,7 @@ def test_bar_rotating_past_box_in_a_scene():
         primitive=Box((0.5, 0.5, 0.5)),
     )
     report = meshcol.sweep(Scene((bar, near, far)), tolerance=1e-7)
-    assert [(h.a, h.b, h.status, h.tunnelled) for h in report.hits] == [
+    assert [(h.body_a, h.body_b, h.status, h.tunnelled) for h in report.hits] == [
         ("bar", "near", TimeOfImpactStatus.HIT, True)
     ]
     hit = report.hits[0]
@@ -190,7 +190,7 @@ def test_cli_rotating_bar_hits_and_exits_1(tmp_path):
     assert report["command"] == "sweep" and report["schema_version"] == 1
     assert report["settings"]["tolerance"] == 1e-7 and report["failed"] is True
     (pair,) = report["pairs"]
-    assert (pair["a"], pair["b"], pair["status"], pair["tunnelled"]) == (
+    assert (pair["body_a"], pair["body_b"], pair["status"], pair["tunnelled"]) == (
         "bar",
         "block",
         "HIT",
@@ -212,9 +212,11 @@ def test_cli_fail_on_none_and_csv_report(tmp_path):
     from meshcol.analysis.sweep import CSV_COLUMNS
 
     assert lines[0].split(",") == list(CSV_COLUMNS)
-    assert lines[0].startswith("a,b,status,time_of_impact,time,point_x,point_y,point_z,normal_x,")
+    assert lines[0].startswith(
+        "body_a,body_b,part_a,part_b,status,time_of_impact,time,point_x,point_y,point_z,normal_x,"
+    )
     assert ",pose_a_00,pose_a_01," in lines[0] and lines[0].endswith(",pose_b_33,iterations,units")
-    assert lines[1].startswith("bar,block,HIT,") and len(lines) == 2
+    assert lines[1].startswith("bar,block,,,HIT,") and len(lines) == 2
     assert "1 hit (1 tunnelled)" in result.stderr
     assert result.stderr.splitlines()[-1] == (
         "meshcol: sweep: PASS: 1 pair touches during the motion (--fail-on none)"

@@ -17,7 +17,12 @@ from meshcol.decomposition import cache as decompose_cache
 from meshcol.decomposition.canonical import cache_key, canonical_geometry, canonical_part
 from meshcol.decomposition.decompose import cached_decomposition, decompose
 from meshcol.decomposition.engines import resolve_params
-from meshcol.decomposition.fidelity import fidelity, points_to_parts, points_to_triangles
+from meshcol.decomposition.fidelity import (
+    farthest_outside_solid,
+    fidelity,
+    points_to_parts,
+    points_to_triangles,
+)
 from meshcol.decomposition.result import Decomposition
 from meshcol.errors import InvalidMeshError
 from meshcol.geometry.topology import is_closed_manifold
@@ -288,12 +293,176 @@ def test_fidelity_two_halves_share_a_cut_and_half_misses() -> None:
     assert m.hausdorff_parts_to_mesh == pytest.approx(0.0, abs=1e-12)
     assert m.hausdorff_mesh_to_parts == pytest.approx(0.0, abs=1e-6)
     assert m.union_volume == pytest.approx(1.0, abs=1e-9)
+    assert m.mesh_is_solid
     half = fidelity(v, f, halves[:1], samples=2000, tolerance=0.01)
     assert half.hausdorff_mesh_to_parts == pytest.approx(0.5, abs=1e-6)  # the corners at x = 1
-    assert 0.4 < half.hausdorff_parts_to_mesh <= 0.5  # the middle of the face x = 0.5
+    # The half lies inside the cube: nothing of it sticks out (its face x = 0.5 is inside the
+    # solid); what it misses is the other direction's business.
+    assert half.hausdorff_parts_to_mesh == pytest.approx(0.0, abs=1e-12)
     assert half.volume_ratio == pytest.approx(0.5, abs=1e-9)
     # Uncovered: the face x = 1 and the x > 0.51 halves of four faces: (1 + 4 * 0.49) / 6.
     assert half.uncovered_fraction == pytest.approx((1 + 4 * 0.49) / 6, abs=0.04)
+
+
+def _parts(*boxes) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+    return tuple(canonical_part(_box(lo, hi)[0], None)[:2] for lo, hi in boxes)
+
+
+def _cube_in_three(gap: float) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+    """The cube [-20, 20]^3 as three slabs along x, slits ``2 * gap`` wide between them."""
+    a, b = -20 / 3, 20 / 3
+    return _parts(
+        ((-20, -20, -20), (a - gap, 20, 20)),
+        ((a + gap, -20, -20), (b - gap, 20, 20)),
+        ((b + gap, -20, -20), (20, 20, 20)),
+    )
+
+
+@pytest.mark.parametrize("gap", [0.003, 0.05])
+def test_fidelity_cut_faces_inside_the_mesh_do_not_count(gap) -> None:
+    # Regression (#12): a 40-unit cube as three boxes covering 99.97% of it reported a
+    # parts -> mesh Hausdorff of 9.95 (13.3 here): the faces of the slits, deep inside the cube.
+    v, f = canonical_geometry(*_box((-20, -20, -20), (20, 20, 20)))
+    m = fidelity(v, f, _cube_in_three(gap))
+    assert m.volume_ratio == pytest.approx(1 - 4 * gap / 40, rel=1e-12)  # 0.9997 for 0.003
+    assert m.mesh_is_solid
+    assert m.hausdorff_parts_to_mesh <= 1e-9  # nothing sticks out
+    assert m.hausdorff_mesh_to_parts <= gap + 1e-9  # the mesh's strips over the slits
+
+
+def test_fidelity_part_sticking_out_reports_its_height() -> None:
+    v, f = canonical_geometry(*_box((-20, -20, -20), (20, 20, 20)))
+    tiles = _cube_in_three(0.0)
+    # A slab 5 beyond the face x = 20: every point of its face x = 25 is 5 from the cube.
+    out_x = fidelity(v, f, tiles + _parts(((15, -5, -5), (25, 5, 5))))
+    assert out_x.hausdorff_parts_to_mesh == pytest.approx(5.0, abs=1e-9)
+    assert out_x.hausdorff_mesh_to_parts == pytest.approx(0.0, abs=1e-9)
+    # Beyond a corner: the farthest point is the corner (25, 25, 25), 5 * sqrt(3) away.
+    corner = fidelity(v, f, tiles + _parts(((15, 15, 15), (25, 25, 25))))
+    assert corner.hausdorff_parts_to_mesh == pytest.approx(5.0 * np.sqrt(3.0), abs=1e-9)
+    # Alone, sticking out of a hole it does not fill: both directions see it.
+    alone = fidelity(v, f, _parts(((-20, -20, -20), (20, 20, 10)), ((-5, -5, 10), (5, 5, 30))))
+    assert alone.hausdorff_parts_to_mesh == pytest.approx(10.0, abs=1e-9)
+    assert alone.hausdorff_mesh_to_parts == pytest.approx(10.0, abs=1e-6)  # the top, 10 above
+
+
+def _torus_solid_distance(points: np.ndarray, major: float, minor: float) -> np.ndarray:
+    """Distance from points to the solid torus (analytic; 0 inside)."""
+    ring = np.hypot(np.hypot(points[:, 0], points[:, 1]) - major, points[:, 2])
+    return np.maximum(ring - minor, 0.0)
+
+
+def test_fidelity_torus_wedges_with_gaps_report_how_far_they_stick_out() -> None:
+    # Regression (#12): a torus whose parts lie within 0.8% of its surface reported 10.7%.
+    # Twelve wedges, each the hull of 9 rings of the mesh, the end rings turned 1e-3 rad
+    # inwards, so that the wedges do not touch (as CoACD's parts do not): their end discs are
+    # cut faces inside the torus, not shared with a neighbour.
+    major, minor, sections = 1.0, 0.3, 96
+    mesh = trimesh.creation.torus(major, minor, major_sections=sections, minor_sections=32)
+    v, f = canonical_geometry(np.asarray(mesh.vertices), np.asarray(mesh.faces))
+    diag = float(np.linalg.norm(np.ptp(v, axis=0)))
+    angle = np.arctan2(v[:, 1], v[:, 0]) % (2 * np.pi)
+    ring = np.round(angle / (2 * np.pi / sections)).astype(int) % sections
+    parts = []
+    for k in range(12):
+        rings = [(8 * k + j) % sections for j in range(9)]
+        chosen = v[np.isin(ring, rings)]
+        a = np.arctan2(chosen[:, 1], chosen[:, 0])
+        r = np.hypot(chosen[:, 0], chosen[:, 1])
+        lo, hi = 2 * np.pi * 8 * k / sections, 2 * np.pi * (8 * k + 8) / sections
+        a = np.unwrap(a - lo) + lo
+        a = np.where(np.isclose(a, lo), lo + 1e-3, np.where(np.isclose(a, hi), hi - 1e-3, a))
+        turned = np.column_stack([r * np.cos(a), r * np.sin(a), chosen[:, 2]])
+        parts.append(canonical_part(turned, None)[:2])
+    parts = tuple(parts)
+    # The oracle: the analytic solid torus, on dense samples of every part surface (a cut
+    # face inside the torus is 0 there, as on the boundary of the union).
+    rng = np.random.default_rng(7)
+    dense = np.concatenate(
+        [
+            trimesh.sample.sample_surface(
+                trimesh.Trimesh(pv, pf), 20000, seed=rng.integers(1 << 30)
+            )[0]
+            for pv, pf in parts
+        ]
+    )
+    oracle = float(_torus_solid_distance(dense, major, minor).max())
+    # The inner faces span 30 degrees of the hole: they sag 0.7 (1 - cos 15) = 0.0239 into it.
+    assert oracle == pytest.approx(0.7 * (1 - np.cos(np.pi / 12)), rel=0.05)
+    assert oracle / diag < 0.008  # the parts lie within 0.8% of the surface
+    m = fidelity(v, f, parts)
+    assert m.mesh_is_solid
+    assert m.hausdorff_parts_to_mesh / diag <= 0.01
+    # The mesh's own polygon sag (inscribed in the analytic torus) bounds the difference.
+    mesh_sag = (major + minor) * (1 - np.cos(np.pi / sections)) + minor * (1 - np.cos(np.pi / 32))
+    assert 0.8 * oracle <= m.hausdorff_parts_to_mesh <= oracle + mesh_sag
+    assert m.hausdorff_mesh_to_parts <= 2e-3  # the 1e-3 rad gaps, at radius at most 1.3
+
+
+def test_fidelity_of_an_open_mesh_measures_to_its_surface() -> None:
+    # A box without its top is no solid: parts -> mesh measures to the surface that is there.
+    v, f = _box()
+    top = np.all(v[f][:, :, 2] == 1.0, axis=1)
+    v, f = canonical_geometry(v, f[~top])
+    m = fidelity(v, f, _parts(((0, 0, 0), (1, 1, 1))), samples=4000)
+    assert not m.mesh_is_solid
+    # The middle of the missing top is 0.5 from the walls; the samples come close to it.
+    assert 0.45 < m.hausdorff_parts_to_mesh <= 0.5 + 1e-12
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_farthest_outside_solid_equals_brute_force(seed) -> None:
+    from meshcol.collision.mesh_query import MeshSet
+
+    torus = _torus()
+    v, f = canonical_geometry(np.asarray(torus.vertices), np.asarray(torus.faces))
+    rng = np.random.default_rng(seed)
+    points = rng.uniform(-1.4, 1.4, size=(3000, 3)) * [1, 1, 0.4]
+    # Points near edges and corners too (their closest feature is not a face's inside).
+    near = v[rng.integers(len(v), size=500)] + rng.normal(scale=0.02, size=(500, 3))
+    points = np.concatenate([points, near])
+    inverted = (v, f[:, ::-1])  # consistently wound the other way round: the same solid
+    for mesh in ((v, f), inverted):
+        meshes = MeshSet.from_arrays([mesh])
+        distances, _ = meshes.closest_points(0, points)
+        inside = np.abs(meshes.winding_number(0, points)) >= 0.5
+        outside = float(np.where(inside, 0.0, distances).max())
+        assert farthest_outside_solid(points, meshes) == outside
+        # Only the points inside, then those plus the nearest outside ones: the search has
+        # to go past every inside point.
+        assert farthest_outside_solid(points[inside], meshes) == 0.0
+        few = inside | (distances <= np.quantile(distances[~inside], 0.05))
+        expected = float(np.where(inside, 0.0, distances)[few].max())
+        assert farthest_outside_solid(points[few], meshes) == expected
+
+
+def test_stale_cached_metrics_are_measured_again_without_the_engine(tmp_path, monkeypatch) -> None:
+    import json
+    import zipfile
+
+    from meshcol.decomposition import decompose as decompose_module
+
+    v, f = _box()
+    d = decompose((v, f), cache_dir=str(tmp_path), **FAST)
+    path = decompose_cache.entry_path(d.cache_key, tmp_path)
+    with np.load(path) as z:
+        arrays = dict(z)
+    header = json.loads(bytes(arrays["header"]).decode())
+    header.pop("metrics_version")  # an entry written before the metrics changed meaning
+    del header["metrics"]["mesh_is_solid"]
+    arrays["header"] = np.frombuffer(json.dumps(header).encode(), dtype=np.uint8)
+    np.savez(path, **arrays)
+    assert zipfile.is_zipfile(path)
+    stale = decompose_cache.load(d.cache_key, tmp_path)
+    assert stale is not None and stale.metrics is None and len(stale.parts) == len(d.parts)
+
+    def no_engine(*args, **kwargs):
+        raise AssertionError("the engine ran for a cached decomposition")
+
+    monkeypatch.setattr(decompose_module, "run_engine", no_engine)
+    again = decompose((v, f), cache_dir=str(tmp_path), **FAST)
+    assert again.from_cache and again.metrics == d.metrics
+    assert decompose_cache.load(d.cache_key, tmp_path).metrics == d.metrics
 
 
 # ---------------------------------------------------------------------------- decompose
@@ -336,6 +505,26 @@ def test_decompose_is_deterministic_and_independent_of_input_order(torus_result)
     assert len(again.parts) == len(d.parts)
     for (v1, f1), (v2, f2) in zip(again.parts, d.parts):
         assert np.array_equal(v1, v2) and np.array_equal(f1, f2)
+
+
+def test_inside_out_input_is_decomposed_outward(torus_result, tmp_path) -> None:
+    # CoACD decomposes an inverted mesh badly (other parts, a negative volume ratio): the
+    # faces are reversed first, so the parts and metrics are the outward torus's, with a note.
+    d, _, _ = torus_result
+    m = _torus()
+    inside_out = (np.asarray(m.vertices), np.asarray(m.faces)[:, ::-1])
+    flipped = decompose(inside_out, cache_dir=str(tmp_path / "cache"), **FAST)
+    assert flipped.notes == (
+        "input is inside out (negative volume): decomposed with its faces reversed",
+    )
+    assert flipped.cache_key != d.cache_key  # the entry's note is true of its own input
+    assert len(flipped.parts) == len(d.parts)
+    for (v1, f1), (v2, f2) in zip(flipped.parts, d.parts):
+        assert np.array_equal(v1, v2) and np.array_equal(f1, f2)
+    assert flipped.metrics.mesh_volume == pytest.approx(d.metrics.mesh_volume, rel=1e-12)
+    assert flipped.metrics.volume_ratio == pytest.approx(d.metrics.volume_ratio, rel=1e-12)
+    looked_up = cached_decomposition(inside_out, cache_dir=str(tmp_path / "cache"), **FAST)
+    assert looked_up is not None and looked_up.notes == flipped.notes
 
 
 def test_cache_hit_is_fast_and_equal(torus_result) -> None:

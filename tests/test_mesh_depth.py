@@ -333,7 +333,7 @@ def test_sample_ball_lowered_onto_the_bowl_is_contact(offset: float) -> None:
     assert pair["status"] == "separated" and report.passed
     normal, gap = np.array(pair["normal"]), pair["distance"]
     bodies = list(scene.bodies)
-    moved = next(i for i, b in enumerate(bodies) if b.name == pair["b"])
+    moved = next(i for i, b in enumerate(bodies) if b.name == pair["body_b"])
     shift = _pose(translation=-(gap - offset) * normal)
     b = bodies[moved]
     bodies[moved] = Body(b.name, b.source, b.vertices, b.faces, shift @ b.pose)

@@ -476,7 +476,7 @@ TRIANGLE = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
             "bad.off",
             "OFF\n3 1 0\n0 0 0\n1 0 0\n",
             InvalidMeshError,
-            "cannot parse OFF file: cannot reshape array of size 6 into shape (3,3)",
+            "cannot parse OFF file: line 2: the header announces 3 vertices and 1 faces but only 2 lines follow",
         ),
     ],
 )
@@ -497,7 +497,7 @@ def test_bad_input(tmp_path, file_name, content, error, message):
     [
         (
             b"garbage\x00\x01\x02",
-            "cannot parse GLB file: buffer size must be a multiple of element size",
+            "cannot parse GLB file: no glTF binary header",
         ),
     ],
 )

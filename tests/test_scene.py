@@ -156,7 +156,7 @@ def test_pose_scale_and_rotation(folder):
     assert np.allclose(body.world_vertices()[1], [1, 2, 0])  # (2, 0, 0) turned to +y, moved
 
 
-def test_multibody_mesh_gives_named_sub_bodies(folder):
+def test_multibody_mesh_gives_one_body_of_named_parts(folder):
     document = {
         "bodies": [
             {
@@ -168,13 +168,19 @@ def test_multibody_mesh_gives_named_sub_bodies(folder):
             }
         ]
     }
-    left, right = load_scene(write(folder, document)).bodies
-    assert (left.name, right.name) == ("pair/left", "pair/right")
-    assert left.collider == right.collider == "hull"
-    assert np.allclose(right.world_vertices().min(axis=0), [4, 0, 10])
+    (body,) = load_scene(write(folder, document)).bodies
+    assert body.name == "pair" and body.parts == ("left", "right")
+    assert body.collider == "hull"
+    (left_name, left_v, left_f), (right_name, right_v, right_f) = body.part_meshes()
+    assert (left_name, right_name) == ("left", "right")
+    assert np.allclose(right_v.min(axis=0) + [0, 0, 10], [4, 0, 10])
+    assert len(left_f) + len(right_f) == len(body.faces)
+    # the parts' world vertices are those of the file, scaled and placed
+    plain = {b.name.split("/")[1]: b for b in meshcol.load_mesh(folder / "pair.obj")}
+    assert np.allclose(np.sort(right_v, axis=0), np.sort(2 * plain["right"].vertices, axis=0))
 
 
-def test_glb_sub_bodies_keep_their_node_transforms(corpus, tmp_path):
+def test_glb_parts_keep_their_node_transforms(corpus, tmp_path):
     nested = corpus / "trimesh-models" / "nested.glb"
     document = {
         "bodies": [
@@ -187,15 +193,17 @@ def test_glb_sub_bodies_keep_their_node_transforms(corpus, tmp_path):
             }
         ]
     }
-    bodies = load_scene(write(tmp_path, document)).bodies
+    (body,) = load_scene(write(tmp_path, document)).bodies
     direct = meshcol.load_mesh(nested)
+    assert body.parts == tuple(plain.name.split("/")[1] for plain in direct)
     turn = rotation_from_quaternion([0.5, 0.5, 0.5, 0.5])
-    for body, plain in zip(bodies, direct):
-        assert body.name == "n/" + plain.name.split("/")[1]
+    r = body.pose[:3, :3]
+    assert np.allclose(r.T @ r, np.eye(3), atol=1e-12) and np.isclose(np.linalg.det(r), 1)
+    world = body.world_vertices()
+    for k, plain in enumerate(direct):
+        faces = body.faces[body.part_faces[k] : body.part_faces[k + 1]]
         expected = 2 * plain.world_vertices() @ turn.T + [1, 0, 0]
-        assert np.allclose(body.world_vertices(), expected, atol=1e-12)
-        r = body.pose[:3, :3]
-        assert np.allclose(r.T @ r, np.eye(3), atol=1e-12) and np.isclose(np.linalg.det(r), 1)
+        assert np.allclose(world[faces], expected[plain.faces], atol=1e-12)
 
 
 def test_end_pose_from_end_position_and_rotation(folder):
@@ -478,12 +486,12 @@ def test_broken_mesh_in_manifest(folder):
     )
 
 
-def test_sub_body_name_clash(folder):
+def test_part_names_do_not_clash_with_body_names(folder):
     document = {
         "bodies": [{"name": "pair/left", "mesh": "tet.obj"}, {"name": "pair", "mesh": "pair.obj"}]
     }
-    with pytest.raises(SceneError, match="body 'pair': body name 'pair/left' is already taken"):
-        load_scene(write(folder, document))
+    bodies = load_scene(write(folder, document)).bodies
+    assert [(b.name, b.parts) for b in bodies] == [("pair/left", ()), ("pair", ("left", "right"))]
 
 
 @pytest.mark.parametrize(

@@ -2,11 +2,13 @@
 // Python wrappers in meshcol/collision/broadphase.py check shapes first with friendly messages.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/optional.h>
 #include <nanobind/stl/pair.h>
 
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -81,17 +83,22 @@ void check_ids(const meshcol::AabbTree& tree, const Ids& ids) {
 void bind_broadphase(nb::module_& m) {
     m.def(
         "sort_and_sweep",
-        [](const Boxes& lo, const Boxes& hi, int axis, int threads) {
+        [](const Boxes& lo, const Boxes& hi, int axis, int threads, std::optional<Ids> groups) {
             const std::int64_t n = box_count(lo, hi);
+            if (groups && static_cast<std::int64_t>(groups->shape(0)) != n)
+                throw std::invalid_argument("groups must be (" + std::to_string(n) + ",), got (" +
+                                            std::to_string(groups->shape(0)) + ",)");
+            const std::int64_t* group_ids = groups ? groups->data() : nullptr;
             std::vector<std::int64_t> flat;
             {
                 nb::gil_scoped_release release;
-                flat = meshcol::sort_and_sweep(lo.data(), hi.data(), n, axis, threads);
+                flat = meshcol::sort_and_sweep(lo.data(), hi.data(), n, axis, threads, group_ids);
             }
             return pairs_array(std::move(flat));
         },
-        "aabb_min"_a, "aabb_max"_a, "axis"_a = -1, "threads"_a = 0,
-        "Overlapping pairs (K, 2) int64, i < j, sorted; axis -1 chooses by variance.");
+        "aabb_min"_a, "aabb_max"_a, "axis"_a = -1, "threads"_a = 0, "groups"_a = nb::none(),
+        "Overlapping pairs (K, 2) int64, i < j, sorted; axis -1 chooses by variance; boxes of "
+        "one group (groups: (N,) int64) never pair.");
     m.def("choose_sweep_axis", [](const Boxes& lo, const Boxes& hi) {
         const std::int64_t n = box_count(lo, hi);
         meshcol::validate_boxes(lo.data(), hi.data(), n);

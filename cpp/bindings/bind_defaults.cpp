@@ -16,6 +16,7 @@ void bind_defaults(nb::module_& m) {
     s.attr("min_pairs_per_thread") = d::min_pairs_per_thread;
     s.attr("min_shapes_per_thread") = d::min_shapes_per_thread;
     s.attr("min_points_per_thread") = d::min_points_per_thread;
+    s.attr("triangle_min_pairs_per_thread") = d::triangle_min_pairs_per_thread;
     s.attr("hill_climbing_min_vertices") = d::hill_climbing_min_vertices;
     s.attr("gjk_max_iterations") = d::gjk_max_iterations;
     s.attr("support_warm_start_min_cosine") = d::support_warm_start_min_cosine;
@@ -61,7 +62,8 @@ void bind_defaults(nb::module_& m) {
         .value("MAX_ITERATIONS", meshcol::Status::MAX_ITERATIONS)
         .value("DEGENERATE", meshcol::Status::DEGENERATE)
         .value("INVALID_INPUT", meshcol::Status::INVALID_INPUT)
-        .value("NOT_RUN", meshcol::Status::NOT_RUN);
+        .value("NOT_RUN", meshcol::Status::NOT_RUN)
+        .value("OUT_OF_RANGE", meshcol::Status::OUT_OF_RANGE);
     using T = meshcol::TimeOfImpactStatus;
     nb::enum_<T>(m, "TimeOfImpactStatus", "Outcome of a time-of-impact query (status.hpp).")
         .value("HIT", T::HIT)

@@ -58,13 +58,18 @@ auto read_files(const std::vector<std::string>& paths, const std::vector<int>& f
         files[i].objects.clear();
     }
     const size_t v = vertices.size() / 3, f = faces.size() / 3, o = object_file.size();
+    // Names and messages carry bytes of the file (an object name, a bad token) in whatever
+    // encoding it has: bytes, decoded in Python (UTF-8, else Latin-1), never a decode error here.
+    nb::list name_bytes, error_bytes;
+    for (const std::string& name : names) name_bytes.append(nb::bytes(name.data(), name.size()));
+    for (const std::string& error : errors) error_bytes.append(nb::bytes(error.data(), error.size()));
     return std::make_tuple(vector_array<VertexArray>(std::move(vertices), v, 3),
                            vector_array<FaceArray>(std::move(faces), f, 3),
                            vector_array<IndexArray>(std::move(vertex_offsets), o + 1, 0),
                            vector_array<IndexArray>(std::move(face_offsets), o + 1, 0),
-                           vector_array<IndexArray>(std::move(object_file), o, 0), std::move(names),
+                           vector_array<IndexArray>(std::move(object_file), o, 0), name_bytes,
                            vector_array<Out<std::int8_t, -1>>(std::move(status), files.size(), 0),
-                           std::move(errors));
+                           error_bytes);
 }
 
 auto merge(Points vertices, Faces faces, int digits) {
@@ -91,7 +96,7 @@ void bind_io(nb::module_& m) {
           "threads"_a = 0,
           "Reads OBJ (format 0) and STL (format 1) files in parallel. Returns (vertices (V, 3), "
           "faces (F, 3) local to each object, vertex_offsets (O + 1,), face_offsets (O + 1,), "
-          "object_file (O,), object names, status (N,) int8 per file (0 read, 1 not found, 2 a "
+          "object_file (O,), object names (bytes), status (N,) int8 per file (0 read, 1 not found, 2 a "
           "directory, 3 unreadable, 4 corrupt), one message per file ('' when read)).");
     m.def("merge_vertices", &merge, "vertices"_a, "faces"_a, "digits"_a = 8,
           "Merges vertices equal after rounding to `digits` decimals (trimesh's rule), drops "

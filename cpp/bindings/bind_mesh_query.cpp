@@ -250,6 +250,11 @@ auto intersects_batch(const MeshBvhSet& set, Poses poses, Pairs pairs, int threa
                     status[k] = static_cast<std::int8_t>(meshcol::Status::INVALID_INPUT);
                     continue;
                 }
+                if (!meshcol::mesh_pair_in_range(a, in.poses[i], b, in.poses[j])) {
+                    intersecting[k] = false;
+                    status[k] = static_cast<std::int8_t>(meshcol::Status::OUT_OF_RANGE);
+                    continue;
+                }
                 intersecting[k] = meshcol::mesh_intersects(a, in.poses[i], b, in.poses[j]);
                 status[k] = static_cast<std::int8_t>(meshcol::Status::CONVERGED);
             }

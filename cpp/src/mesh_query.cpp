@@ -17,6 +17,7 @@
 
 #include "meshcol/defaults.hpp"
 #include "meshcol/triangle.hpp"
+#include "rescale.hpp"
 #include "predicates.hpp"
 
 namespace meshcol {
@@ -758,6 +759,22 @@ bool mesh_intersects(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b, con
     });
 }
 
+bool mesh_pair_in_range(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b,
+                        const Pose& pose_b) {
+    // The reach of a mesh about its origin: the far corner of its root box.
+    auto reach = [](const MeshBvh& m) {
+        const BvhNode& root = m.nodes().front();
+        Vec3 corner;
+        for (int k = 0; k < 3; ++k)
+            corner[k] = std::fmax(std::fabs(double(root.lower[k])), std::fabs(double(root.upper[k])));
+        return safe_norm(corner);
+    };
+    double half = 0.5 * std::fmax(reach(a), reach(b));
+    rescale::reach(half, pose_a.translation, pose_b.translation);
+    return std::isfinite(half) && (half == 0.0 || (2.0 * half >= rescale::kSafeLow &&
+                                                   2.0 * half <= rescale::kSafeHigh));
+}
+
 MeshDistanceOutput mesh_distance(const MeshDistanceInput& input) {
     MeshDistanceOutput out;
     const Vec3 nan3{kNaN, kNaN, kNaN};
@@ -766,6 +783,12 @@ MeshDistanceOutput mesh_distance(const MeshDistanceInput& input) {
         out.distance = kNaN;
         out.point_a = out.point_b = nan3;
         out.status = Status::INVALID_INPUT;
+        return out;
+    }
+    if (!mesh_pair_in_range(*input.a, input.pose_a, *input.b, input.pose_b)) {
+        out.distance = kNaN;
+        out.point_a = out.point_b = nan3;
+        out.status = Status::OUT_OF_RANGE;
         return out;
     }
     const MeshBvh& a = *input.a;

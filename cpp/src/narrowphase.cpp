@@ -9,6 +9,7 @@
 #include "meshcol/epa.hpp"
 #include "meshcol/gjk.hpp"
 #include "meshcol/sat.hpp"
+#include "rescale.hpp"
 
 namespace meshcol {
 
@@ -49,11 +50,14 @@ Status worse(Status x, Status y) {
 
 }  // namespace
 
+namespace {
+
 // The pipeline (as coal and parry): GJK on the cores (sphere and capsule radii are margins,
 // added exactly afterwards); EPA on the full shapes only when the cores overlap; for small
-// polytopes an exact SAT that verifies EPA's depth and replaces it when they disagree.
-PairResult query_pair(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
-                      const Pose& pose_b, QueryKind kind, double radius_a, double radius_b) {
+// polytopes an exact SAT that verifies EPA's depth and replaces it when they disagree. The
+// pair's lengths must be within rescale::kSafeLow..kSafeHigh (`query_pair` sees to it).
+PairResult query_in_range(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
+                          const Pose& pose_b, QueryKind kind, double radius_a, double radius_b) {
     PairResult r;
     MinkowskiDifference core(a, pose_a, b, pose_b, false, radius_a, radius_b);
     GjkOptions opt;
@@ -131,30 +135,67 @@ PairResult query_pair(const ShapeView& a, const Pose& pose_a, const ShapeView& b
     return world;
 }
 
-namespace {
-
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 }  // namespace
 
+PairResult query_pair(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
+                      const Pose& pose_b, QueryKind kind, double radius_a, double radius_b) {
+    if (radius_a < 0.0) radius_a = bounding_radius(a);
+    if (radius_b < 0.0) radius_b = bounding_radius(b);
+    double half = std::fmax(0.5 * radius_a, 0.5 * radius_b);
+    rescale::reach(half, pose_a.translation, pose_b.translation);
+    const rescale::Frame f = rescale::choose(pose_a.translation, half);
+    if (!f.active && f.finite) return query_in_range(a, pose_a, b, pose_b, kind, radius_a, radius_b);
+    PairResult r;
+    if (!f.finite) {
+        r.status = Status::OUT_OF_RANGE;
+        r.distance = r.depth = kNaN;
+        r.normal = r.point_a = r.point_b = Vec3{kNaN, kNaN, kNaN};
+        return r;
+    }
+    // Far out of range (see rescale.hpp): the same query, moved and scaled by a power of two.
+    std::vector<Vec3> storage_a, storage_b;
+    const ShapeView sa = rescale::scaled(a, f, storage_a), sb = rescale::scaled(b, f, storage_b);
+    Pose pa = pose_a, pb = pose_b;
+    pa.translation = Vec3{};
+    pb.translation = f.point(pose_b.translation);
+    r = query_in_range(sa, pa, sb, pb, kind, f.length(radius_a), f.length(radius_b));
+    r.distance = f.world_length(r.distance);
+    r.depth = f.world_length(r.depth);
+    r.point_a = f.world_point(r.point_a);
+    r.point_b = f.world_point(r.point_b);
+    if (!std::isfinite(r.distance) || !std::isfinite(r.depth) || !is_finite(r.point_a) ||
+        !is_finite(r.point_b))
+        r.status = Status::OUT_OF_RANGE;
+    return r;
+}
+
 void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t* pairs,
                long long pair_count, QueryKind kind, int threads, const BatchOutput& out) {
     const std::int64_t h_count = set.shape_count;
-    // Each shape and pose is checked once, not once per pair.
+    // Each shape and pose a pair uses is checked once, not once per pair, on every thread;
+    // a shape no pair uses is not read at all (a big set queried for a few pairs pays for
+    // those few: the checks read every vertex).
     std::vector<char> ok(static_cast<size_t>(h_count), 0);
+    for (long long i = 0; i < 2 * pair_count; ++i) ok[pairs[i]] = 1;
     std::vector<Pose> pose(static_cast<size_t>(h_count));
     std::vector<double> radius(static_cast<size_t>(h_count), 0.0);
-    for (std::int64_t h = 0; h < h_count; ++h) {
-        const ShapeView s = set.shape(h);
-        bool good = is_valid(s);
-        if (good) radius[h] = bounding_radius(s);
-        if (poses != nullptr) {
-            const double* m = poses + 16 * h;
-            if (!is_rigid_matrix4(m, defaults::rigid_tolerance)) good = false;
-            else pose[h] = Pose::from_matrix4(m);
+    const int shape_threads = resolve_threads(threads, h_count, defaults::min_shapes_per_thread);
+    parallel_for(h_count, shape_threads, [&](long long begin, long long end) {
+        for (long long h = begin; h < end; ++h) {
+            if (!ok[h]) continue;
+            const ShapeView s = set.shape(h);
+            bool good = is_valid(s);
+            if (good) radius[h] = bounding_radius(s);
+            if (poses != nullptr) {
+                const double* m = poses + 16 * h;
+                if (!is_rigid_matrix4(m, defaults::rigid_tolerance)) good = false;
+                else pose[h] = Pose::from_matrix4(m);
+            }
+            ok[h] = good ? 1 : 0;
         }
-        ok[h] = good ? 1 : 0;
-    }
+    });
     const int n_threads = resolve_threads(threads, pair_count, defaults::min_pairs_per_thread);
     parallel_for(pair_count, n_threads, [&](long long begin, long long end) {
         for (long long i = begin; i < end; ++i) {

@@ -10,8 +10,12 @@
 // tiny (denormal) are scaled by a power of two before the exact evaluation (scaling is exact),
 // so the error terms do not underflow. Only the sign of a returned value is meaningful.
 //
-// Private to the core (header-only); shared by the triangle tests of triangle_distance.cpp and
-// mesh_query.cpp, and meant for any other exact triangle predicate.
+// Private to the core (header-only); the one copy, shared by the triangle tests of
+// triangle_distance.cpp, mesh_query.cpp and triangle_intersect.cpp (inspect's crossings).
+//
+// Sign conventions: orient2d(a, b, c) > 0 when a, b, c turn counterclockwise; orient3d is
+// Shewchuk's, det[a - d, b - d, c - d], > 0 when d lies on the side that (b - a) x (c - a)
+// points away from (callers wanting the right-hand sign negate it).
 
 #include <algorithm>
 #include <cmath>
@@ -178,6 +182,11 @@ inline double orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& 
     if ((det > bound || -det > bound) && permanent > 0x1p-900) return det;
     if (!std::isfinite(det)) return det;
     return detail::orient3d_exact(a, b, c, d);
+}
+
+/// -1, 0 or +1.
+inline int sign_of(double x) {
+    return (x > 0.0) - (x < 0.0);
 }
 
 /// -1, 0 or +1: the exact sign of `orient3d`.

@@ -120,12 +120,16 @@ double bounding_radius(const ShapeView& s) {
         case ShapeKind::POLYTOPE: {
             double r2 = 0.0;
             for (int i = 0; i < s.vertex_count; ++i) r2 = std::fmax(r2, squared_norm(s.vertices[i]));
-            return std::sqrt(r2);
+            if (r2 >= 0x1p-1000 && r2 <= 0x1p1000) return std::sqrt(r2);
+            // Squares out of range (coordinates beyond about 1e150 or below 1e-150).
+            double r = 0.0;
+            for (int i = 0; i < s.vertex_count; ++i) r = std::fmax(r, safe_norm(s.vertices[i]));
+            return r;
         }
         case ShapeKind::SPHERE:
             return s.params[0];
         case ShapeKind::BOX:
-            return norm(Vec3{s.params[0], s.params[1], s.params[2]});
+            return safe_norm(Vec3{s.params[0], s.params[1], s.params[2]});
         case ShapeKind::CAPSULE:
             return s.params[0] + s.params[1];
         case ShapeKind::CYLINDER:

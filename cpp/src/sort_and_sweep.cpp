@@ -276,13 +276,15 @@ struct KeyBuffer {
 /// tested without a branch: about one in five passes, at random, so a branch on the tests
 /// would mispredict often. Every candidate's key is written and the end advanced by the
 /// test's result.
-void sweep_cell(const Entry* e, std::int64_t count, KeyBuffer& out) {
+void sweep_cell(const Entry* e, std::int64_t count, KeyBuffer& out, const std::int64_t* groups = nullptr) {
     size_t k = out.size;  // a local: the key stores could alias the member
     const Entry* const end = e + count;
     for (const Entry* a = e; a < end; ++a) {
         const double hi_a = a->hi_a, lo_u = a->lo_u, hi_u = a->hi_u, lo_v = a->lo_v, hi_v = a->hi_v;
         const std::uint64_t id = a->id;
         const unsigned home = a->home;
+        // Boxes of one group (the parts of one body) never pair.
+        const std::int64_t group = groups ? groups[id] : 0;
         // Room for every later entry of the cell: one comparison per box, a reallocation
         // seldom. The loop then stores without a capacity check.
         out.size = k;
@@ -290,9 +292,10 @@ void sweep_cell(const Entry* e, std::int64_t count, KeyBuffer& out) {
         std::uint64_t* w = out.data.get();
         for (const Entry* b = a + 1; b < end && b->lo_a <= hi_a; ++b) {
             // Overlap on the cross axes, and this cell reports the pair (see the top).
-            const bool hit = (b->lo_u <= hi_u) & (lo_u <= b->hi_u) & (b->lo_v <= hi_v) &
-                             (lo_v <= b->hi_v) & ((home | b->home) == 3u);
             const std::uint64_t bid = b->id;
+            const bool hit = (b->lo_u <= hi_u) & (lo_u <= b->hi_u) & (b->lo_v <= hi_v) &
+                             (lo_v <= b->hi_v) & ((home | b->home) == 3u) &
+                             (!groups || groups[bid] != group);
             w[k] = id < bid ? (id << 32 | bid) : (bid << 32 | id);
             k += hit;
         }
@@ -399,7 +402,8 @@ inline Entry make_entry(const double* lo, const double* hi, const Grid& g, const
 std::vector<std::int64_t> sort_and_sweep_cells(const double* lo, const double* hi, const Grid& g, Slot* slots,
                                                const std::vector<std::int64_t>& offsets,
                                                std::int64_t n, int threads,
-                                               std::vector<std::vector<Entry>>* keep) {
+                                               std::vector<std::vector<Entry>>* keep,
+                                               const std::int64_t* groups = nullptr) {
     const int cells = g.cells();
     const std::vector<int> task_begin = make_tasks(
         cells, offsets[cells], threads, [&](int c) { return offsets[c + 1] - offsets[c]; });
@@ -425,7 +429,7 @@ std::vector<std::int64_t> sort_and_sweep_cells(const double* lo, const double* h
                     }
                     sorted[q] = make_entry(lo, hi, g, first[q]);
                 }
-                sweep_cell(sorted.data(), count, out);
+                sweep_cell(sorted.data(), count, out, groups);
                 if (keep) {
                     std::vector<Entry>& cell = (*keep)[static_cast<size_t>(c)];
                     cell.reserve(static_cast<size_t>(count + count / 8 + 8));  // room for boxes moving in
@@ -450,7 +454,7 @@ void check_count(std::int64_t n) {
 }  // namespace
 
 std::vector<std::int64_t> sort_and_sweep(const double* lo, const double* hi, std::int64_t n,
-                                         int axis, int threads) {
+                                         int axis, int threads, const std::int64_t* groups) {
     check_axis(axis);
     check_count(n);
     validate_boxes(lo, hi, n);
@@ -461,7 +465,7 @@ std::vector<std::int64_t> sort_and_sweep(const double* lo, const double* hi, std
     std::unique_ptr<Slot[]> slots;
     std::vector<std::int64_t> offsets;
     fill_cells(lo, n, g, span, slots, offsets);
-    return sort_and_sweep_cells(lo, hi, g, slots.get(), offsets, n, threads, nullptr);
+    return sort_and_sweep_cells(lo, hi, g, slots.get(), offsets, n, threads, nullptr, groups);
 }
 
 /// The incremental sweep's memory between steps: the grid of the first step (or of the last

@@ -6,6 +6,7 @@
 
 #include "meshcol/batch.hpp"
 #include "meshcol/gjk.hpp"
+#include "rescale.hpp"
 
 namespace meshcol {
 
@@ -14,7 +15,8 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 const Vec3 kNaN3{kNaN, kNaN, kNaN};
 
-// Rotation by `angle` about the unit `axis` (Rodrigues' formula).
+}  // namespace
+
 Mat3 axis_angle_matrix(const Vec3& k, double angle) {
     const double c = std::cos(angle), s = std::sin(angle), t = 1.0 - c;
     Mat3 r;
@@ -29,6 +31,8 @@ Mat3 axis_angle_matrix(const Vec3& k, double angle) {
     r.m[2][2] = c + t * k.z * k.z;
     return r;
 }
+
+namespace {
 
 // Unit quaternion (w, x, y, z) of a rotation matrix, w >= 0 (Shepperd 1978: the largest of
 // the four diagonal combinations keeps the square root well conditioned, also near pi).
@@ -93,19 +97,61 @@ ToiResult separated_result(int iterations) {
     return r;
 }
 
-// A body's motion as the pair query sees it: spheres do not turn (rotation about their own
-// centre moves no point), so their angle is 0 and their orientation the start one.
+// The largest distance of the shape's points from its motion's axis line (through the pivot):
+// the lever arm of the turn. A point's speed from turning is angle x its distance from that
+// line, which the turn about the line keeps constant, so this bounds the turning speed of every
+// point at every instant; it is at most the bounding radius about the pivot, and much less for a
+// body long along its axis (a shaft, a drill). |x - pivot| off the axis is convex in x, so its
+// maximum over a polytope or box is at a vertex.
+double turning_radius(const ShapeView& s, const Motion& m) {
+    const Vec3 k = m.start.rotate_inverse(m.axis_world);          // axis, local frame
+    const Vec3 c = m.start.apply_inverse(m.pivot);                 // pivot, local frame
+    auto off_axis = [&](const Vec3& x) {
+        const Vec3 r = x - c;
+        return safe_norm(r - k * dot(r, k));
+    };
+    double arm = 0.0;
+    switch (s.kind) {
+        case ShapeKind::POLYTOPE:
+            for (int i = 0; i < s.vertex_count; ++i) arm = std::fmax(arm, off_axis(s.vertices[i]));
+            return arm;
+        case ShapeKind::BOX:
+            for (int i = 0; i < 8; ++i)
+                arm = std::fmax(arm, off_axis(Vec3{(i & 1 ? 1 : -1) * s.params[0],
+                                                   (i & 2 ? 1 : -1) * s.params[1],
+                                                   (i & 4 ? 1 : -1) * s.params[2]}));
+            return arm;
+        case ShapeKind::SPHERE:
+            // Swept-ball shapes: the support is the core's plus the radius in every direction,
+            // so the gap closes only as fast as the core turns (their radius adds nothing).
+            return off_axis(Vec3{});
+        case ShapeKind::CAPSULE:
+            return std::fmax(off_axis(Vec3{0, 0, s.params[1]}), off_axis(Vec3{0, 0, -s.params[1]}));
+        case ShapeKind::CYLINDER:
+            // Its rims lie within the radius of the end centres, and its farthest point off any
+            // line is on a rim.
+            return std::fmax(off_axis(Vec3{0, 0, s.params[1]}), off_axis(Vec3{0, 0, -s.params[1]})) +
+                   s.params[0];
+    }
+    return bounding_radius(s) + m.pivot_offset;
+}
+
+// A body's motion as the pair query sees it: a sphere turning about its own centre moves no
+// point, so its angle is 0 and its orientation the start one.
 struct Mover {
     const ShapeView* shape;
     Motion motion;
-    double radius;  // bounding radius about the reference point (local origin)
+    double radius;  // lever arm of the turn: largest distance of a point from the axis line
+    double reach;   // bounding radius about the local origin (the pair's size, rescale.hpp)
 };
 
-Mover make_mover(const ShapeView& shape, const Motion& motion, double radius) {
-    Mover m{&shape, motion, radius};
-    if (shape.kind == ShapeKind::SPHERE && m.motion.angle != 0.0) {
+Mover make_mover(const ShapeView& shape, const Motion& motion) {
+    Mover m{&shape, motion, motion.angle == 0.0 ? 0.0 : turning_radius(shape, motion),
+            bounding_radius(shape)};
+    if (shape.kind == ShapeKind::SPHERE && m.motion.pivot_offset == 0.0 && m.motion.angle != 0.0) {
         m.motion.end.rotation = m.motion.start.rotation;
         m.motion.angle = 0.0;
+        m.radius = 0.0;
     }
     return m;
 }
@@ -156,11 +202,12 @@ ToiResult sphere_sphere(const Mover& a, const Mover& b, double tol) {
 // Conservative advancement from time `t` (Mirtich 1996; Zhang et al. 2006). At each step GJK
 // gives the distance d and the unit normal n (a to b) of the closest points: A lies behind the
 // plane through its closest point, B beyond the parallel plane through its own. A point of A
-// at r = R(t) p from a's reference point moves along n at speed (v_a + w_a x r).n
-// <= v_a.n + angle_a |n x k_a| |r| (w_a = angle_a k_a, constant), and the same for B along -n,
-// so the gap between the planes closes no faster than
+// at r = x - c_a(t) from a's pivot moves along n at speed (v_a + w_a x r).n
+// <= v_a.n + angle_a |n x k_a| |r| (w_a = angle_a k_a, constant over the motion whatever the
+// angle), and the same for B along -n, so the gap between the planes closes no faster than
 //   mu = (v_a - v_b).n + angle_a |n x k_a| rho_a + angle_b |n x k_b| rho_b
-// (rho: bounding radius about the reference point). Advancing by (d - tol/2) / mu keeps the
+// (rho: the lever arm, the largest distance of a point from the axis line through the pivot,
+// constant under the turn: `turning_radius`). Advancing by (d - tol/2) / mu keeps the
 // distance above tol/2 on the whole step: rigorous, so contact is never stepped over.
 ToiResult conservative_advancement(const Mover& a, const Mover& b, const ToiOptions& opt,
                                    double t, int iterations) {
@@ -332,8 +379,9 @@ ToiResult linear_cast(const Mover& a, const Mover& b, const ToiOptions& opt, boo
     return r;
 }
 
-ToiResult pair_toi(const Mover& a, const Mover& b, const ToiOptions& opt) {
-    if (a.shape->kind == ShapeKind::SPHERE && b.shape->kind == ShapeKind::SPHERE)
+ToiResult pair_toi_in_range(const Mover& a, const Mover& b, const ToiOptions& opt) {
+    if (a.shape->kind == ShapeKind::SPHERE && b.shape->kind == ShapeKind::SPHERE &&
+        a.motion.angle == 0.0 && b.motion.angle == 0.0)
         return sphere_sphere(a, b, opt.tolerance);
     if (a.motion.angle == 0.0 && b.motion.angle == 0.0 &&
         same_rotation(a.motion.start.rotation, a.motion.end.rotation) &&
@@ -348,37 +396,141 @@ ToiResult pair_toi(const Mover& a, const Mover& b, const ToiOptions& opt) {
     return conservative_advancement(a, b, opt, 0.0, 0);
 }
 
+// A mover in the frame `f` (rescale.hpp): its shape scaled into `storage`, its motion's points
+// moved and scaled; angles and axes do not change.
+Mover scaled_mover(const Mover& m, const rescale::Frame& f, ShapeView& shape,
+                   std::vector<Vec3>& storage) {
+    shape = rescale::scaled(*m.shape, f, storage);
+    Mover s = m;
+    s.shape = &shape;
+    s.radius = f.length(m.radius);
+    s.reach = f.length(m.reach);
+    s.motion.start.translation = f.point(m.motion.start.translation);
+    s.motion.end.translation = f.point(m.motion.end.translation);
+    s.motion.pivot = f.point(m.motion.pivot);
+    s.motion.velocity = f.vector(m.motion.velocity);
+    s.motion.pivot_offset = f.length(m.motion.pivot_offset);
+    return s;
+}
+
+// Every pair goes through here: a pair whose lengths (start and end positions, pivots, radii)
+// leave the range where GJK's products are safe runs moved and scaled by a power of two, as
+// the narrow phase does (rescale.hpp); the fraction and the normal do not change.
+ToiResult pair_toi(const Mover& a, const Mover& b, const ToiOptions& opt) {
+    const Vec3 origin = a.motion.start.translation;
+    double half = std::fmax(std::fmax(0.5 * a.reach, 0.5 * b.reach),
+                            std::fmax(0.5 * a.radius, 0.5 * b.radius));
+    for (const Mover* m : {&a, &b}) {
+        rescale::reach(half, origin, m->motion.start.translation);
+        rescale::reach(half, origin, m->motion.end.translation);
+        rescale::reach(half, origin, m->motion.pivot);
+    }
+    const rescale::Frame f = rescale::choose(origin, half);
+    if (!f.finite) return invalid_result();
+    if (!f.active) return pair_toi_in_range(a, b, opt);
+    ToiOptions scaled_opt = opt;
+    scaled_opt.tolerance = f.length(opt.tolerance);
+    if (!(scaled_opt.tolerance > 0.0)) return invalid_result();  // below the scene's precision
+    ShapeView shape_a, shape_b;
+    std::vector<Vec3> storage_a, storage_b;
+    ToiResult r = pair_toi_in_range(scaled_mover(a, f, shape_a, storage_a),
+                                    scaled_mover(b, f, shape_b, storage_b), scaled_opt);
+    r.point = f.world_point(r.point);
+    return r;
+}
+
 }  // namespace
 
+Vec3 shortest_rotation(const Mat3& start, const Mat3& end) {
+    if (same_rotation(start, end)) return Vec3{};
+    double q[4];
+    matrix_quaternion(start.transposed() * end, q);
+    const Vec3 xyz{q[1], q[2], q[3]};
+    const double s = norm(xyz);
+    if (!(s > 0.0)) return Vec3{};
+    // The relative rotation is about the start-frame axis; the world axis is start * axis.
+    return start * (xyz * (2.0 * std::atan2(s, q[0]) / s));
+}
+
 Motion::Motion(const Pose& start_pose, const Pose& end_pose) : start(start_pose), end(end_pose) {
+    pivot = start.translation;
     velocity = end.translation - start.translation;
-    axis_local = Vec3{1.0, 0.0, 0.0};
-    angle = 0.0;
-    if (!same_rotation(start.rotation, end.rotation)) {
-        double q[4];
-        matrix_quaternion(start.rotation.transposed() * end.rotation, q);
-        const Vec3 xyz{q[1], q[2], q[3]};
-        const double s = norm(xyz);
-        if (s > 0.0) {
-            axis_local = xyz / s;
-            angle = 2.0 * std::atan2(s, q[0]);
-        }
+    const Vec3 rotation = shortest_rotation(start.rotation, end.rotation);
+    const double a = norm(rotation);
+    if (a > 0.0) {
+        axis_world = rotation / a;
+        angle = a;
     }
-    axis_world = start.rotate(axis_local);
+}
+
+bool Motion::from_turn(const Pose& start_pose, const Pose& end_pose, const Vec3& rotation,
+                       const Vec3& pivot_point, double tolerance, Motion& out) {
+    if (!is_finite(rotation) || !is_finite(pivot_point)) return false;
+    Motion m;
+    m.start = start_pose;
+    m.end = end_pose;
+    m.pivot = pivot_point;
+    const double a = norm(rotation);
+    if (a > 0.0) {
+        m.axis_world = rotation / a;
+        m.angle = a;
+    }
+    const Mat3 turn = axis_angle_matrix(m.axis_world, m.angle);
+    const Mat3 reached = turn * start_pose.rotation;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            if (!(std::fabs(reached.m[i][j] - end_pose.rotation.m[i][j]) <= tolerance))
+                return false;
+    const Vec3 arm = start_pose.translation - pivot_point;
+    m.pivot_offset = norm(arm);
+    // T1 = c0 + v + Rot(angle) (T0 - c0), so the pivot's displacement follows from the end pose.
+    m.velocity = end_pose.translation - pivot_point - turn * arm;
+    if (!is_finite(m.velocity) || !std::isfinite(m.pivot_offset)) return false;
+    out = m;
+    return true;
 }
 
 Pose Motion::at(double t) const {
     if (t == 0.0) return start;
     if (t == 1.0) return end;
     Pose p;
-    p.translation = start.translation + velocity * t;
-    p.rotation = angle == 0.0 ? start.rotation
-                              : start.rotation * axis_angle_matrix(axis_local, angle * t);
+    if (angle == 0.0) {
+        p.rotation = start.rotation;
+        p.translation = start.translation + velocity * t;
+        return p;
+    }
+    const Mat3 turn = axis_angle_matrix(axis_world, angle * t);
+    p.rotation = turn * start.rotation;
+    p.translation = pivot + velocity * t + turn * (start.translation - pivot);
     return p;
 }
 
-Pose interpolate_pose(const Pose& start, const Pose& end, double t) {
-    return Motion(start, end).at(t);
+void make_motions(long long count, const double* start_poses, const double* end_poses,
+                  const double* rotations, const double* pivots, Motion* motions, char* ok) {
+    for (long long h = 0; h < count; ++h) {
+        const double* m0 = start_poses + 16 * h;
+        const double* m1 = end_poses + 16 * h;
+        ok[h] = 0;
+        if (!is_rigid_matrix4(m0, defaults::rigid_tolerance) ||
+            !is_rigid_matrix4(m1, defaults::rigid_tolerance))
+            continue;
+        const Pose p0 = Pose::from_matrix4(m0), p1 = Pose::from_matrix4(m1);
+        if (rotations == nullptr && pivots == nullptr) {
+            motions[h] = Motion(p0, p1);
+            ok[h] = is_finite(motions[h].velocity) ? 1 : 0;  // a path longer than DBL_MAX
+            continue;
+        }
+        const Vec3 rotation =
+            rotations != nullptr
+                ? Vec3{rotations[3 * h], rotations[3 * h + 1], rotations[3 * h + 2]}
+                : shortest_rotation(p0.rotation, p1.rotation);
+        const Vec3 pivot = pivots != nullptr
+                               ? Vec3{pivots[3 * h], pivots[3 * h + 1], pivots[3 * h + 2]}
+                               : p0.translation;
+        ok[h] = Motion::from_turn(p0, p1, rotation, pivot, defaults::rigid_tolerance, motions[h])
+                    ? 1
+                    : 0;
+    }
 }
 
 ToiResult time_of_impact(const ShapeView& a, const Motion& motion_a, const ShapeView& b,
@@ -386,31 +538,25 @@ ToiResult time_of_impact(const ShapeView& a, const Motion& motion_a, const Shape
     if (!is_valid(a) || !is_valid(b) || !(options.tolerance > 0.0) ||
         !std::isfinite(options.tolerance))
         return invalid_result();
-    return pair_toi(make_mover(a, motion_a, bounding_radius(a)),
-                    make_mover(b, motion_b, bounding_radius(b)), options);
+    return pair_toi(make_mover(a, motion_a), make_mover(b, motion_b), options);
 }
 
 void run_toi_batch(const ConvexSetView& set, const double* start_poses, const double* end_poses,
-                   const std::int64_t* pairs, long long pair_count, const ToiOptions& options,
-                   int threads, const ToiBatchOutput& out) {
+                   const double* rotations, const double* pivots, const std::int64_t* pairs,
+                   long long pair_count, const ToiOptions& options, int threads,
+                   const ToiBatchOutput& out) {
     const std::int64_t h_count = set.shape_count;
     const bool options_ok = options.tolerance > 0.0 && std::isfinite(options.tolerance);
-    // Shapes, poses, motions and bounding radii once per shape, not once per pair.
+    // Shapes, motions and their lever arms once per shape, not once per pair.
     std::vector<ShapeView> shapes(static_cast<size_t>(h_count));
     std::vector<Motion> motions(static_cast<size_t>(h_count));
-    std::vector<double> radius(static_cast<size_t>(h_count), 0.0);
+    std::vector<Mover> movers(static_cast<size_t>(h_count));
     std::vector<char> ok(static_cast<size_t>(h_count), 0);
+    make_motions(h_count, start_poses, end_poses, rotations, pivots, motions.data(), ok.data());
     for (std::int64_t h = 0; h < h_count; ++h) {
         shapes[h] = set.shape(h);
-        const double* m0 = start_poses + 16 * h;
-        const double* m1 = end_poses + 16 * h;
-        const bool good = options_ok && is_valid(shapes[h]) &&
-                          is_rigid_matrix4(m0, defaults::rigid_tolerance) &&
-                          is_rigid_matrix4(m1, defaults::rigid_tolerance);
-        if (!good) continue;
-        ok[h] = 1;
-        motions[h] = Motion(Pose::from_matrix4(m0), Pose::from_matrix4(m1));
-        radius[h] = bounding_radius(shapes[h]);
+        if (!options_ok || !is_valid(shapes[h])) ok[h] = 0;
+        if (ok[h]) movers[h] = make_mover(shapes[h], motions[h]);
     }
     // Advancement can take many GJK calls per pair: smaller chunks balance better.
     const int n_threads = resolve_threads(threads, pair_count, defaults::toi_min_pairs_per_thread);
@@ -421,8 +567,7 @@ void run_toi_batch(const ConvexSetView& set, const double* start_poses, const do
             if (!ok[ia] || !ok[ib]) {
                 r = invalid_result();
             } else {
-                r = pair_toi(make_mover(shapes[ia], motions[ia], radius[ia]),
-                             make_mover(shapes[ib], motions[ib], radius[ib]), options);
+                r = pair_toi(movers[ia], movers[ib], options);
             }
             if (out.toi) out.toi[i] = r.toi;
             store_row(out.point, i, r.point);

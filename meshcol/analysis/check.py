@@ -15,7 +15,10 @@ Pipeline (arrays end to end; Python loops run over bodies, never over pairs):
 3. Parts of candidate body pairs go to a second sort and sweep; the convex part pairs to the
    batched narrow phase (GJK distance, EPA/SAT depth), and pairs where either body is a
    ``mesh`` to the exact triangle-mesh query (distance, intersection, containment).
-4. Results are reduced per body pair (smallest signed distance wins) and classified.
+4. Results are reduced per body pair (smallest signed distance wins) and classified. A body
+   of several parts (``Body.parts``: a manifest body whose file holds several objects) is one
+   body: its parts are never paired with each other, and a pair names the parts that come
+   closest (``part_a``, ``part_b``).
 
 Statuses, in increasing severity: ``separated`` (distance >= clearance), ``clearance``
 (tolerance < distance < clearance), ``contact`` (|signed distance| <= tolerance),
@@ -55,6 +58,9 @@ __all__ = [
 
 PAIR_STATUSES = ("separated", "clearance", "contact", "penetrating", "contained")
 SEVERITY = {name: i for i, name in enumerate(PAIR_STATUSES)}
+#: Query statuses whose numbers are not the answer: the pair is reported ``query_failed``.
+_NO_ANSWER = (int(Status.INVALID_INPUT), int(Status.OUT_OF_RANGE))
+
 # --fail-on value -> least severe status that violates the policy
 FAIL_ON = {
     "penetration": "penetrating",
@@ -132,17 +138,22 @@ class CheckReport:
     Attributes
     ----------
     bodies : list of dict
-        Per body: name, file, collider, parts, vertices, aabb (world ``[[min], [max]]``).
+        Per body: name, file, collider, parts (names; empty for a body of one part),
+        convex_parts, vertices, aabb (world ``[[min], [max]]``).
     pairs : list of dict
-        Per candidate body pair, sorted by (a, b): a, b, status, distance, depth,
-        signed_distance, normal, point_a, point_b, part_a, part_b, ignored, violation,
-        query_failed, intersection_volume.
+        Per candidate body pair, sorted by (body_a, body_b): body_a, body_b, part_a, part_b
+        (the parts that come closest, None for a body of one part), status, distance, depth,
+        signed_distance, normal, point_a, point_b, convex_part_a, convex_part_b, ignored,
+        violation, query_failed, intersection_volume.
     summary : dict
         Counts, extremes, pass/fail and timings.
     settings : dict
         The options used.
     units : str or None
         From the manifest.
+    warnings : list of str
+        What the run could not do as asked (``UCX_`` parts naming nothing, flat bodies that
+        could not be decomposed), one line each.
     """
 
     bodies: list[dict]
@@ -151,6 +162,7 @@ class CheckReport:
     settings: dict
     units: str | None
     generated_at: str
+    warnings: list[str] = field(default_factory=list)
 
     @property
     def passed(self) -> bool:
@@ -168,6 +180,7 @@ class CheckReport:
         return {
             **envelope("check", self.settings, self.units),
             "generated_at": self.generated_at,
+            "warnings": self.warnings,
             "bodies": self.bodies,
             "summary": self.summary,
             "pairs": self.pairs,
@@ -199,8 +212,10 @@ class CheckReport:
 
 #: Columns of :meth:`CheckReport.to_csv`, one row per pair (vectors split, as every command).
 CSV_COLUMNS = [
-    "a",
-    "b",
+    "body_a",
+    "body_b",
+    "part_a",
+    "part_b",
     "status",
     "distance",
     "depth",
@@ -208,8 +223,8 @@ CSV_COLUMNS = [
     *vector_columns("normal"),
     *vector_columns("point_a"),
     *vector_columns("point_b"),
-    "part_a",
-    "part_b",
+    "convex_part_a",
+    "convex_part_b",
     "ignored",
     "violation",
     "query_failed",
@@ -338,6 +353,8 @@ def check_scene(
     point_b = np.full((k, 3), np.nan)
     part_a = np.full(k, -1, dtype=np.int64)
     part_b = np.full(k, -1, dtype=np.int64)
+    label_a = np.full(k, -1, dtype=np.int64)  # Body.parts index of the closest parts
+    label_b = np.full(k, -1, dtype=np.int64)
     contained = np.zeros(k, dtype=bool)
     failed = np.zeros(k, dtype=bool)
     intersection_volume = np.full(k, np.nan)
@@ -347,11 +364,10 @@ def check_scene(
     # Convex pairs (also gives hull depths for mesh pairs that intersect).
     if k:
         key = ca * max(n, 1) + cb
-        part_pairs = sort_and_sweep(part_min - half, part_max + half)
+        # parts of one body (its hulls, UCX parts, decomposition) never pair: one group each
+        part_pairs = sort_and_sweep(part_min - half, part_max + half, groups=shapes.part_body)
         pb_a = shapes.part_body[part_pairs[:, 0]]
         pb_b = shapes.part_body[part_pairs[:, 1]]
-        keep = pb_a != pb_b
-        part_pairs, pb_a, pb_b = part_pairs[keep], pb_a[keep], pb_b[keep]
         # Orient every part pair as (part of body a, part of body b) with a < b.
         swap = pb_a > pb_b
         part_pairs[swap] = part_pairs[swap][:, ::-1]
@@ -371,7 +387,7 @@ def check_scene(
         result = signed_distance_batch(
             shapes.shapes, part_poses, part_pairs, threads=options.threads
         )
-        bad = result.status == int(Status.INVALID_INPUT)
+        bad = np.isin(result.status, _NO_ANSWER)
         value = np.where(bad, np.inf, result.signed_distance)
         best = _first_per_group(part_key, value)
         slot = np.searchsorted(key, part_key[best])  # candidates are sorted, so keys are too
@@ -383,6 +399,8 @@ def check_scene(
         point_b[slot] = result.point_b[best]
         part_a[slot] = shapes.part_index[part_pairs[best, 0]]
         part_b[slot] = shapes.part_index[part_pairs[best, 1]]
+        label_a[slot] = shapes.part_label[part_pairs[best, 0]]
+        label_b[slot] = shapes.part_label[part_pairs[best, 1]]
         failed[slot] = bad[best]
 
     # Exact triangle-mesh queries: pairs involving a `mesh` body, and containment of
@@ -427,7 +445,7 @@ def check_scene(
         length = np.linalg.norm(gap, axis=1, keepdims=True)
         with np.errstate(invalid="ignore", divide="ignore"):
             normal[im[sep]] = np.where(length > 0, gap / length, normal[im[sep]])
-        failed[im] = mres.status[m] == int(Status.INVALID_INPUT)
+        failed[im] = np.isin(mres.status[m], _NO_ANSWER)
         if hit.any():
             ih = im[hit]
             pairs_hit = local[candidates[ih]]
@@ -454,6 +472,10 @@ def check_scene(
         sd[im] = distance[im] - depth[im]
         part_a[im] = -1
         part_b[im] = -1
+        # the parts holding the closest points (hull parts where the surfaces cross)
+        tri_a, tri_b = mres.triangle_a[m], mres.triangle_b[m]
+        label_a[im] = np.where(tri_a >= 0, shapes.face_labels(ca[im], tri_a), label_a[im])
+        label_b[im] = np.where(tri_b >= 0, shapes.face_labels(cb[im], tri_b), label_b[im])
 
     # Classification.
     tol = options.tolerance
@@ -493,6 +515,8 @@ def check_scene(
         _vecs(point_b),
         part_a.tolist(),
         part_b.tolist(),
+        shapes.part_names(ca, label_a),
+        shapes.part_names(cb, label_b),
         ignored.tolist(),
         violation.tolist(),
         failed.tolist(),
@@ -500,8 +524,10 @@ def check_scene(
     )
     pairs = [
         {
-            "a": names[a],
-            "b": names[b],
+            "body_a": names[a],
+            "body_b": names[b],
+            "part_a": na,
+            "part_b": nb,
             "status": PAIR_STATUSES[s],
             "distance": d,
             "depth": dp,
@@ -509,16 +535,16 @@ def check_scene(
             "normal": nv,
             "point_a": pa,
             "point_b": pb,
-            "part_a": ia if ia >= 0 else None,
-            "part_b": ib if ib >= 0 else None,
+            "convex_part_a": ia if ia >= 0 else None,
+            "convex_part_b": ib if ib >= 0 else None,
             "ignored": ig,
             "violation": vi,
             "query_failed": fa,
             "intersection_volume": vol,
         }
-        for a, b, s, d, dp, sdv, nv, pa, pb, ia, ib, ig, vi, fa, vol in columns
+        for a, b, s, d, dp, sdv, nv, pa, pb, ia, ib, na, nb, ig, vi, fa, vol in columns
     ]
-    pairs.sort(key=lambda p: (p["a"], p["b"]))
+    pairs.sort(key=lambda p: (p["body_a"], p["body_b"]))
 
     part_counts = np.diff(shapes.body_part_offsets).tolist()
     body_rows = [
@@ -526,7 +552,8 @@ def check_scene(
             "name": body.name,
             "file": _relative(body.source),
             "collider": kind,
-            "parts": parts,
+            "parts": list(body.parts),
+            "convex_parts": parts,
             "vertices": len(body.vertices),
             "aabb": [lo, hi],
         }
@@ -569,6 +596,7 @@ def check_scene(
         settings,
         scene.units,
         datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+        list(shapes.warnings),
     )
 
 
@@ -584,7 +612,7 @@ def _worse_than_baseline(
     """True for pairs that are new, or worse than in the baseline report."""
     old = {}
     for p in baseline.get("pairs", []):
-        a, b = sorted((p["a"], p["b"]))
+        a, b = sorted((p["body_a"], p["body_b"]))
         old[(a, b)] = p
     worse = np.ones(len(candidates), dtype=bool)
     for i, (a, b) in enumerate(candidates):  # violating pairs only matter; few
@@ -625,9 +653,10 @@ def load_baseline(path: str) -> dict:
     if not isinstance(data, dict) or not isinstance(data.get("pairs"), list):
         raise InputFileError("baseline is not a meshcol check report (no 'pairs' list)", path)
     for p in data["pairs"]:
-        if not isinstance(p, dict) or not {"a", "b", "status"} <= p.keys():
+        if not isinstance(p, dict) or not {"body_a", "body_b", "status"} <= p.keys():
             raise InputFileError(
-                "baseline is not a meshcol check report (pair without a, b, status)", path
+                "baseline is not a meshcol check report (pair without body_a, body_b, status)",
+                path,
             )
     return data
 

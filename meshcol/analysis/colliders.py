@@ -1,14 +1,28 @@
 """From bodies to colliders: the convex parts every analysis queries, built one way.
 
 A body's collider is chosen by its collider kind (:data:`COLLIDER_KINDS`; a manifest body's
-own ``shape`` overrides the run's default, and a primitive is always exact):
+own ``shape`` overrides the run's default, and a primitive is always exact), part by part for
+a body of several parts (``Body.parts``):
 
-- ``hull``: the convex hull of its vertices;
-- ``decomposed``: its ``UCX_<body>_NN`` parts when the input has them (Unreal's convention),
-  else its convex decomposition (from the decompose cache, or computed now and cached);
+- ``hull``: the convex hull of each of its parts;
+- ``decomposed``: each part's ``UCX_<part>_NN`` collision parts when the input has them
+  (Unreal's convention), else the part's convex decomposition (from the decompose cache, or
+  computed now and cached);
 - ``mesh``: its triangles, for the exact mesh queries. What stands for it in the convex
-  queries is chosen by the caller (``mesh_parts``): its hull (check: broad phase and depth
-  bound) or every triangle as a 3-vertex polytope (sweep: surface contact).
+  queries is chosen by the caller (``mesh_parts``): its parts' hulls (check: broad phase and
+  depth bound) or every triangle as a 3-vertex polytope (sweep: surface contact).
+
+``UCX_<name>_NN`` parts (see :func:`split_ucx` for the matching) are collision geometry, not
+render geometry: matched to their owner they leave the body's mesh. A ``UCX_`` part that names
+nothing in the input is kept as geometry and a warning names it; loose ones from one file that
+name the same owner become one body of parts (``<file>/<owner>``), so the convex parts of one
+decomposition are never checked against each other. Under ``decomposed``, every ``UCX_`` part
+is used as given.
+
+Degenerate geometry follows one rule everywhere: a body or part whose points are flat,
+collinear or a single point (:attr:`meshcol.collision.hull.ExactHull.dimension`) is its hull,
+the polygon, segment or point it is, never dropped; under ``decomposed`` (which needs a volume)
+that is said in a warning.
 
 ``check``, ``sweep`` and the exporters all call :func:`build_colliders`, so a body is the same
 collider in each of them.
@@ -16,6 +30,7 @@ collider in each of them.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import re
 from collections.abc import Callable, Sequence
@@ -24,8 +39,9 @@ from typing import Any
 
 import numpy as np
 
+from meshcol.collision.hull import FLAT_RELATIVE_TOLERANCE, exact_hull
 from meshcol.collision.shapes import ConvexSet
-from meshcol.geometry.hull import FLAT_RELATIVE_TOLERANCE
+from meshcol.errors import InvalidMeshError
 from meshcol.types import Body
 
 __all__ = [
@@ -50,7 +66,9 @@ class Colliders:
     Attributes
     ----------
     bodies : tuple of Body
-        The bodies, in input order, without the ``UCX_`` parts that became colliders.
+        The bodies, in input order, without the ``UCX_`` parts that became colliders (a body
+        of several parts loses its matched ``UCX_`` parts; ``UCX_`` parts naming no body
+        become bodies of their own, after the others).
     kinds : tuple of str
         Per body, what its parts are: ``primitive``, ``hull``, ``ucx``, ``decomposed`` or
         ``mesh``.
@@ -62,6 +80,12 @@ class Colliders:
         Index of each part within its body.
     body_part_offsets : (n_bodies + 1,) int64
         Body ``i`` owns parts ``body_part_offsets[i]:body_part_offsets[i + 1]``.
+    part_label : (n_parts,) int64
+        Which of its body's named parts (``Body.parts``) each convex part stands for; -1 for
+        a body of one part.
+    warnings : tuple of str
+        One line per ``UCX_`` part naming nothing, and per flat body that could not be
+        decomposed.
     """
 
     bodies: tuple[Body, ...]
@@ -70,6 +94,8 @@ class Colliders:
     part_body: np.ndarray
     part_index: np.ndarray
     body_part_offsets: np.ndarray
+    part_label: np.ndarray
+    warnings: tuple[str, ...] = ()
 
     def part_poses(self, end: bool = False) -> np.ndarray:
         """World-from-local pose of every part, (n_parts, 4, 4): its body's start pose, or
@@ -86,28 +112,204 @@ class Colliders:
         )
         return np.ascontiguousarray(poses[self.part_body])
 
+    def part_names(self, bodies: Any, labels: Any) -> list[str | None]:
+        """Names of the parts ``labels`` of ``bodies`` (None for -1: a body of one part)."""
+        return [
+            self.bodies[b].parts[label] if label >= 0 else None
+            for b, label in zip(np.asarray(bodies).tolist(), np.asarray(labels).tolist())
+        ]
 
-def split_ucx(bodies: Sequence[Body]) -> tuple[list[Body], dict[str, list[Body]]]:
-    """Separate ``UCX_<body>_NN`` collision parts from the bodies they belong to.
+    def face_labels(self, bodies: Any, faces: Any) -> np.ndarray:
+        """The part label of triangle ``faces[k]`` of body ``bodies[k]`` (-1 for a body of
+        one part or a face index < 0)."""
+        bodies = np.asarray(bodies, dtype=np.int64)
+        faces = np.asarray(faces, dtype=np.int64)
+        labels = np.full(len(bodies), -1, dtype=np.int64)
+        for b in np.unique(bodies).tolist():
+            body = self.bodies[b]
+            if not body.parts:
+                continue
+            assert body.part_faces is not None
+            mine = (bodies == b) & (faces >= 0)
+            labels[mine] = np.searchsorted(body.part_faces, faces[mine], side="right") - 1
+        return labels
 
-    Returns the other bodies, in order, and for each body name its UCX parts sorted by NN.
-    A ``UCX_`` body whose owner is not in the input stays a body of its own.
+
+@dataclass(frozen=True)
+class _Ucx:
+    """UCX collision parts of one body: ``(label, vertices in the owner's frame)`` each."""
+
+    parts: list[tuple[int, np.ndarray]]
+    whole: bool  # they stand for the whole body (its own name, or a loose owner)
+
+
+def _ucx_index(name: str) -> int:
+    match = _UCX.match(name)
+    return int(match["index"]) if match else -1
+
+
+def _restrict(body: Body, keep: list[int]) -> Body:
+    """The body with only the parts ``keep`` (in order); one part left keeps its name."""
+    assert body.part_faces is not None
+    meshes = body.part_meshes()
+    vertices, faces, counts, base = [], [], [], 0
+    for k in keep:
+        _, v, f = meshes[k]
+        vertices.append(v)
+        faces.append(f + base)
+        counts.append(len(f))
+        base += len(v)
+    return dataclasses.replace(
+        body,
+        vertices=np.ascontiguousarray(np.concatenate(vertices)),
+        faces=np.ascontiguousarray(np.concatenate(faces)),
+        parts=tuple(body.parts[k] for k in keep),
+        part_faces=np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
+    )
+
+
+def split_ucx(bodies: Sequence[Body]) -> tuple[list[Body], dict[str, _Ucx], list[str]]:
+    """Separate ``UCX_<owner>_NN`` collision parts from the bodies they belong to.
+
+    Matching, for a part of a body of several parts (a manifest body): the part named
+    ``<owner>`` of the same body, or the body itself when ``<owner>`` is its name. For a loose
+    body ``<file>/UCX_<owner>_NN`` or ``UCX_<owner>_NN``: the body ``<file>/<owner>`` (the
+    same file, Unreal's convention), else a body named ``<owner>`` (``meshcol decompose
+    --layout ucx`` output given beside its source).
+
+    Returns
+    -------
+    bodies : list of Body
+        The bodies without their matched ``UCX_`` parts, in order; loose ``UCX_`` bodies that
+        match nothing become one body of parts per owner name they give (``<file>/<owner>``),
+        after the others; a ``UCX_`` part of a body that matches nothing stays a part of it.
+    ucx : dict
+        Per body name, its ``UCX_`` parts sorted by ``NN``.
+    warnings : list of str
+        One line per owner name that matched nothing.
     """
     names = {b.name for b in bodies}
-    ucx: dict[str, list[Body]] = {}
+    by_name = {b.name: b for b in bodies}
+    ucx: dict[str, _Ucx] = {}
+    orphans: dict[str, list[Body]] = {}
+    warnings: list[str] = []
     kept: list[Body] = []
     for body in bodies:
+        if body.parts:
+            kept.append(_split_body_ucx(body, ucx, warnings))
+            continue
         head, _, last = body.name.rpartition("/")
         match = _UCX.match(last)
-        if match:
-            target = f"{head}/{match['body']}" if head else match["body"]
-            if target in names:
-                ucx.setdefault(target, []).append(body)
-                continue
-        kept.append(body)
-    for parts in ucx.values():
-        parts.sort(key=lambda b: int(_UCX.match(b.name.rpartition("/")[2])["index"]))  # type: ignore[index]
-    return kept, ucx
+        if not match:
+            kept.append(body)
+            continue
+        same_file = f"{head}/{match['body']}" if head else match["body"]
+        target = same_file if same_file in names else match["body"]
+        if target in names and not _UCX.match(target.rpartition("/")[2]):
+            entry = ucx.setdefault(target, _Ucx([], True))
+            (local,) = _in_owner_frame(by_name[target], [body])
+            entry.parts.append((_ucx_index(last), local))
+            continue
+        orphans.setdefault(same_file, []).append(body)
+    for entry in ucx.values():
+        entry.parts.sort(key=lambda item: item[0])
+        if entry.whole:
+            entry.parts[:] = [(-1, v) for _, v in entry.parts]
+    for owner_name, parts in orphans.items():
+        parts.sort(key=lambda b: _ucx_index(b.name.rpartition("/")[2]))
+        name = owner_name
+        k = 2
+        while name in names:
+            name = f"{owner_name}#{k}"
+            k += 1
+        names.add(name)
+        listed = _listing([b.name for b in parts])
+        warnings.append(
+            f"{listed} name no body {owner_name.rpartition('/')[2]!r} in the inputs: checked as "
+            f"one body {name!r} of {len(parts)} part(s)"
+        )
+        kept.append(_group(name, parts))
+    return kept, ucx, warnings
+
+
+def _split_body_ucx(body: Body, ucx: dict[str, _Ucx], warnings: list[str]) -> Body:
+    """Strip the matched ``UCX_`` parts of a body of several parts (see :func:`split_ucx`)."""
+    render = [k for k, name in enumerate(body.parts) if not _UCX.match(name)]
+    index = {body.parts[k]: k for k in render}
+    matched: list[tuple[int, int, int]] = []  # (part, owner part or -1 for the body, NN)
+    unmatched: list[int] = []
+    for k, name in enumerate(body.parts):
+        match = _UCX.match(name)
+        if not match:
+            continue
+        if match["body"] in index:
+            matched.append((k, index[match["body"]], int(match["index"])))
+        elif match["body"] == body.name:
+            matched.append((k, -1, int(match["index"])))
+        else:
+            unmatched.append(k)
+    if unmatched and render:
+        warnings.append(
+            f"body {body.name!r}: {_listing([body.parts[k] for k in unmatched])} name no part "
+            f"of it (its parts: {_listing([body.parts[k] for k in render])}): kept as parts of "
+            "their own"
+        )
+    if not matched:
+        return body
+    keep = sorted(render + unmatched)
+    if not keep:
+        # only collision parts: they are the body's geometry too
+        keep = sorted(k for k, _, _ in matched)
+    kept = _restrict(body, keep) if keep != list(range(len(body.parts))) else body
+    meshes = body.part_meshes()
+    new_index = {k: i for i, k in enumerate(keep)}
+    whole = any(owner < 0 for _, owner, _ in matched)
+    parts = sorted(
+        ((-1 if whole else new_index[owner], nn, meshes[k][1]) for k, owner, nn in matched),
+        key=lambda item: (item[0], item[1]),
+    )
+    ucx[body.name] = _Ucx([(label, v) for label, _, v in parts], whole)
+    return kept
+
+
+def _group(name: str, parts: list[Body]) -> Body:
+    """One body of the given loose bodies as its parts (the first one's frame and pose)."""
+    first = parts[0]
+    local = _in_owner_frame(first, parts)
+    vertices, faces, counts, base = [], [], [], 0
+    for body, v in zip(parts, local):
+        vertices.append(v)
+        faces.append(np.asarray(body.faces, dtype=np.int64) + base)
+        counts.append(len(body.faces))
+        base += len(v)
+    return Body(
+        name=name,
+        source=first.source,
+        vertices=np.ascontiguousarray(np.concatenate(vertices)),
+        faces=np.ascontiguousarray(np.concatenate(faces)),
+        pose=first.pose,
+        end_pose=first.end_pose,
+        collider=first.collider,
+        parts=tuple(b.name.rpartition("/")[2] for b in parts),
+        part_faces=np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
+    )
+
+
+def _listing(names: list[str]) -> str:
+    """``'A', 'B' and 'C'`` or ``'A' ... 'Z' (50 parts)``, for warnings."""
+    if len(names) > 3:
+        return f"{names[0]!r} ... {names[-1]!r} ({len(names)} parts)"
+    quoted = [repr(n) for n in names]
+    return quoted[0] if len(quoted) == 1 else ", ".join(quoted[:-1]) + " and " + quoted[-1]
+
+
+def _flat(vertices: np.ndarray) -> bool:
+    """Whether points are flat, collinear or one point (the flatness rule); points without a
+    hull (none, NaN) count as flat: their shape is packed as given."""
+    try:
+        return exact_hull(vertices).dimension < 3
+    except InvalidMeshError:
+        return True
 
 
 def _in_owner_frame(owner: Body, parts: list[Body]) -> list[np.ndarray]:
@@ -155,9 +357,14 @@ def triangle_parts(body: Body) -> ConvexSet:
     """Every triangle of a body's mesh as a convex part (local frame).
 
     A triangle with an area is a 3-vertex polytope; one that is collinear or a point by the
-    flatness rule (:data:`meshcol.geometry.hull.FLAT_RELATIVE_TOLERANCE`, relative to its own
+    flatness rule (:data:`meshcol.collision.hull.FLAT_RELATIVE_TOLERANCE`, relative to its own
     size) is packed as the segment or point it is, so no triangle is ever dropped.
     """
+    return _triangle_parts(body)[0]
+
+
+def _triangle_parts(body: Body) -> tuple[ConvexSet, np.ndarray]:
+    """:func:`triangle_parts` and the face of each part (solid triangles first, then flat)."""
     tri = np.asarray(body.vertices, dtype=np.float64)[np.asarray(body.faces, dtype=np.int64)]
     n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     area2 = np.linalg.norm(n, axis=1)
@@ -185,7 +392,8 @@ def triangle_parts(body: Body) -> ConvexSet:
         edge_offsets=step3,
         edge_directions=edges.reshape(-1, 3),
     )
-    return solid if flat is None else ConvexSet.concatenate(solid, flat)
+    order = np.concatenate([np.flatnonzero(keep), np.flatnonzero(~keep)])
+    return (solid if flat is None else ConvexSet.concatenate(solid, flat)), order
 
 
 def _constant(value: Any) -> Callable[[], Any]:
@@ -231,14 +439,16 @@ def build_colliders(
         raise ValueError(f"mesh_parts must be hull or triangles, got {mesh_parts!r}")
     options = dict(decompose_options or {})
     report = progress or (lambda message: None)
-    kept, ucx = split_ucx(bodies)
+    kept, ucx, warnings = split_ucx(bodies)
 
     # Unique single shapes (packed together in one call) and per-body triangle sets; each
     # body's parts are a block of rows, single shapes first in the pool, triangles after.
     unique: list[Any] = []
     unique_index: dict[Any, int] = {}
     triangle_sets: list[ConvexSet] = []
-    blocks: list[tuple[int, list[int]]] = []  # (triangle set index or -1, unique indices)
+    triangle_labels: list[np.ndarray] = []
+    # per body: (triangle set index or -1, unique indices, their part labels)
+    blocks: list[tuple[int, list[int], list[int]]] = []
     kinds: list[str] = []
 
     def add(key: Any, make: Callable[[], Any]) -> int:
@@ -249,28 +459,75 @@ def build_colliders(
             unique_index[key] = idx
         return idx
 
+    def hull(vertices: np.ndarray) -> int:
+        return add(("hull", _geometry_key(vertices)), _constant(vertices))
+
     for body in kept:
         body_kind = body.collider or kind
         singles: list[int] = []
+        labels: list[int] = []
         triangles = -1
+        # (label, name for messages, vertices, faces) of each part: one unlabelled for a body
+        # of one part
+        meshes = [
+            (k if body.parts else -1, name, v, f)
+            for k, (name, v, f) in enumerate(body.part_meshes())
+        ]
         if body.primitive is not None:
             body_kind = "primitive"
             singles.append(add(("primitive", body.primitive), _constant(body.primitive)))
-        elif body_kind == "decomposed" and body.name in ucx:
-            body_kind = "ucx"
-            for p in _in_owner_frame(body, ucx[body.name]):
-                singles.append(add(("part", _geometry_key(p)), _constant(p)))
+            labels.append(-1)
         elif body_kind == "decomposed":
-            report(f"convex parts of {body.name}")
-            for p in convex_parts(body, **options):
-                singles.append(add(("part", _geometry_key(p)), _constant(p)))
+            own = ucx.get(body.name)
+            covered = set() if own is None else {label for label, _ in own.parts}
+            if own is not None:
+                for label, v in own.parts:
+                    singles.append(add(("part", _geometry_key(v)), _constant(v)))
+                    labels.append(label)
+            decomposed = False
+            for label, name, v, f in meshes:
+                if own is not None and (own.whole or label in covered):
+                    continue  # its UCX parts stand for it
+                if name is not None and _UCX.match(name):
+                    singles.append(add(("part", _geometry_key(v)), _constant(v)))
+                    labels.append(label)  # a UCX part is convex by convention: as given
+                    continue
+                what = f"body {body.name!r}" + ("" if name is None else f" part {name!r}")
+                if _flat(v):
+                    warnings.append(
+                        f"{what}: flat (no volume to decompose): its hull is used, the "
+                        "polygon, segment or point it is"
+                    )
+                    singles.append(hull(v))
+                    labels.append(label)
+                    continue
+                report(f"convex parts of {body.name}" + ("" if name is None else f"/{name}"))
+                decomposed = True
+                for p in convex_parts((v, f), **options):
+                    singles.append(add(("part", _geometry_key(p)), _constant(p)))
+                    labels.append(label)
+            if not decomposed and (
+                own is not None or all(n is not None and _UCX.match(n) for _, n, _, _ in meshes)
+            ):
+                body_kind = "ucx"
         elif body_kind == "mesh" and mesh_parts == "triangles":
             triangles = len(triangle_sets)
-            triangle_sets.append(triangle_parts(body))
+            tset, order = _triangle_parts(body)
+            triangle_sets.append(tset)
+            if body.parts:
+                assert body.part_faces is not None
+                face_label = np.repeat(
+                    np.arange(len(body.parts), dtype=np.int64), np.diff(body.part_faces)
+                )
+                triangle_labels.append(face_label[order])
+            else:
+                triangle_labels.append(np.full(len(order), -1, dtype=np.int64))
         else:
-            singles.append(add(("hull", _geometry_key(body.vertices)), _constant(body.vertices)))
+            for label, _, v, _ in meshes:
+                singles.append(hull(v))
+                labels.append(label)
         kinds.append(body_kind)
-        blocks.append((triangles, singles))
+        blocks.append((triangles, singles, labels))
 
     single = ConvexSet.from_shapes(unique)
     pool = ConvexSet.concatenate(single, *triangle_sets) if triangle_sets else single
@@ -279,12 +536,26 @@ def build_colliders(
         np.asarray(singles, dtype=np.int64)
         if tri < 0
         else set_start[tri] + np.arange(len(triangle_sets[tri]), dtype=np.int64)
-        for tri, singles in blocks
+        for tri, singles, _ in blocks
+    ]
+    labels_per_body = [
+        np.asarray(labels, dtype=np.int64) if tri < 0 else triangle_labels[tri]
+        for tri, _, labels in blocks
     ]
     rows = np.concatenate(rows_per_body) if rows_per_body else np.zeros(0, np.int64)
+    part_label = np.concatenate(labels_per_body) if labels_per_body else np.zeros(0, np.int64)
     counts = np.asarray([len(r) for r in rows_per_body], dtype=np.int64)
     offsets = np.zeros(len(kept) + 1, dtype=np.int64)
     np.cumsum(counts, out=offsets[1:])
     part_body = np.repeat(np.arange(len(kept), dtype=np.int64), counts)
     part_index = np.arange(len(rows), dtype=np.int64) - offsets[part_body]
-    return Colliders(tuple(kept), tuple(kinds), pool.take(rows), part_body, part_index, offsets)
+    return Colliders(
+        tuple(kept),
+        tuple(kinds),
+        pool.take(rows),
+        part_body,
+        part_index,
+        offsets,
+        part_label,
+        tuple(warnings),
+    )

@@ -24,11 +24,16 @@ __all__ = ["FAIL_ON", "SweepHit", "SweepReport", "sweep"]
 #: ``fail_on`` policies: ``hit`` fails the run on any pair that is not separated.
 FAIL_ON = ("hit", "none")
 #: The motion model, as the report states it.
-MOTION = "linear translation, constant-rate rotation about the local origin"
+MOTION = (
+    "pivot (local origin unless given) moves linearly; constant angular velocity about it, "
+    "the whole angle (shortest way to an end_rotation)"
+)
 #: Columns of :meth:`SweepReport.to_csv`, one row per pair (poses flattened row-major).
 CSV_COLUMNS = (
-    "a",
-    "b",
+    "body_a",
+    "body_b",
+    "part_a",
+    "part_b",
     "status",
     "time_of_impact",
     "time",
@@ -56,8 +61,11 @@ class SweepHit:
 
     Attributes
     ----------
-    a, b : str
-        Body names (``a`` comes first in the scene).
+    body_a, body_b : str
+        Body names (``body_a`` comes first in the scene).
+    part_a, part_b : str or None
+        The parts of a body of several parts (``Body.parts``) that meet first; None for a
+        body of one part.
     status : TimeOfImpactStatus
         ``HIT``, ``OVERLAPPED_AT_START`` or ``FAILED``.
     time_of_impact : float
@@ -77,8 +85,10 @@ class SweepHit:
         Steps of the pair query that decided the pair.
     """
 
-    a: str
-    b: str
+    body_a: str
+    body_b: str
+    part_a: str | None
+    part_b: str | None
     status: TimeOfImpactStatus
     time_of_impact: float
     time: float | None
@@ -93,8 +103,10 @@ class SweepHit:
         """JSON-ready fields (lists for arrays, the status by name), numbers rounded to 12
         significant digits (far below the tolerance) so reports compare across machines."""
         return {
-            "a": self.a,
-            "b": self.b,
+            "body_a": self.body_a,
+            "body_b": self.body_b,
+            "part_a": self.part_a,
+            "part_b": self.part_b,
             "status": self.status.name,
             "time_of_impact": _round(self.time_of_impact),
             "time": _round(self.time),
@@ -133,7 +145,7 @@ class SweepReport:
     tolerance : float
         Contact distance used (world units).
     hits : tuple of SweepHit
-        Every body pair that is not ``SEPARATED``, sorted by (a, b) names.
+        Every body pair that is not ``SEPARATED``, sorted by (body_a, body_b) names.
     candidate_pairs : int
         Body pairs whose swept bounds overlap (the pairs the narrow phase ran on).
     part_pairs : int
@@ -153,6 +165,7 @@ class SweepReport:
     part_pairs: int
     moving: tuple[bool, ...] = field(default=())
     fail_on: str = "hit"
+    warnings: tuple[str, ...] = ()
 
     @property
     def failed(self) -> bool:
@@ -198,9 +211,10 @@ class SweepReport:
         return {
             **envelope("sweep", self.settings, self.scene.units),
             "failed": self.exit_code == 1,
+            "warnings": list(self.warnings),
             "duration": self.scene.duration,
             "bodies": [
-                {"name": b.name, "source": b.source, "moving": m}
+                {"name": b.name, "source": b.source, "parts": list(b.parts), "moving": m}
                 for b, m in zip(self.bodies, self.moving)
             ],
             "summary": self.summary,
@@ -225,7 +239,28 @@ class SweepReport:
 
 
 def _is_moving(body: Body) -> bool:
+    if body.spin is not None and body.spin.rotation is not None and body.spin.angle:
+        return True  # a whole number of turns ends where it started, yet moves
     return body.end_pose is not None and not np.array_equal(body.end_pose, body.pose)
+
+
+def _turns(bodies: tuple[Body, ...], start: np.ndarray, end: np.ndarray):
+    """Per body, the world rotation vector of its turn and the world pivot it turns about:
+    its spin, else the shortest rotation about its local origin. ``(None, None)`` when no body
+    spins (the core then takes the shortest rotations itself)."""
+    from meshcol.collision.time_of_impact import shortest_rotation
+
+    if not any(b.spin is not None for b in bodies):
+        return None, None
+    rotations = shortest_rotation(start, end).reshape(-1, 3)
+    pivots = start[:, :3, 3].copy()
+    for k, body in enumerate(bodies):
+        if body.spin is not None:
+            if body.spin.rotation is not None:
+                rotations[k] = body.spin.rotation
+            if body.spin.pivot is not None:
+                pivots[k] = body.spin.pivot
+    return rotations, pivots
 
 
 def sweep(
@@ -312,7 +347,11 @@ def sweep(
         [np.asarray(b.pose if b.end_pose is None else b.end_pose, dtype=np.float64) for b in bodies]
     )
     start, end = colliders.part_poses(), colliders.part_poses(end=True)
-    lo, hi = swept_aabbs(cs, start, end, threads)
+    # Parts share their body's frame, so they share its turn and pivot.
+    body_rotations, body_pivots = _turns(bodies, start_body, end_body)
+    rotations = None if body_rotations is None else body_rotations[owner]
+    pivots = None if body_pivots is None else body_pivots[owner]
+    lo, hi = swept_aabbs(cs, start, end, threads, rotations=rotations, pivots=pivots)
     if tolerance is None:
         finite = np.all(np.isfinite(lo), axis=1) & np.all(np.isfinite(hi), axis=1)
         diagonal = (
@@ -330,16 +369,24 @@ def sweep(
             f"body '{body.name}': invalid shape or pose (NaN/inf, empty or not rigid)",
             body.source or scene.source,
         )
-    pairs = sort_and_sweep(lo - 0.5 * tol, hi + 0.5 * tol)
+    pairs = sort_and_sweep(lo - 0.5 * tol, hi + 0.5 * tol, groups=owner)  # no pair in a body
     if len(pairs):
         oa, ob = owner[pairs[:, 0]], owner[pairs[:, 1]]
-        keep = (oa != ob) & (moving[oa] | moving[ob])
+        keep = moving[oa] | moving[ob]
         pairs = pairs[keep]
         # Part pairs ordered as their bodies (a first in the scene).
         swap = owner[pairs[:, 0]] > owner[pairs[:, 1]]
         pairs[swap] = pairs[swap][:, ::-1]
     toi = time_of_impact_batch(
-        cs, start, end, pairs, tolerance=tol, max_iterations=max_iterations, threads=threads
+        cs,
+        start,
+        end,
+        pairs,
+        rotations=rotations,
+        pivots=pivots,
+        tolerance=tol,
+        max_iterations=max_iterations,
+        threads=threads,
     )
     at_start = intersects_batch(cs, start, pairs, threads=threads).intersects
     at_end = intersects_batch(cs, end, pairs, threads=threads).intersects
@@ -371,8 +418,15 @@ def sweep(
             if len(failed) and fraction[failed].min() < fraction[best]:
                 best_status = TimeOfImpactStatus.FAILED
         t = float(fraction[best])
+        part_a, part_b = colliders.part_names(
+            [i, j], colliders.part_label[[pairs[best, 0], pairs[best, 1]]]
+        )
         poses = interpolate_pose(
-            np.stack([start_body[i], start_body[j]]), np.stack([end_body[i], end_body[j]]), [t, t]
+            np.stack([start_body[i], start_body[j]]),
+            np.stack([end_body[i], end_body[j]]),
+            [t, t],
+            rotation=None if body_rotations is None else body_rotations[[i, j]],
+            pivot=None if body_pivots is None else body_pivots[[i, j]],
         )
         tunnelled = (
             best_status == TimeOfImpactStatus.HIT
@@ -381,8 +435,10 @@ def sweep(
         )
         hits.append(
             SweepHit(
-                a=bodies[i].name,
-                b=bodies[j].name,
+                body_a=bodies[i].name,
+                body_b=bodies[j].name,
+                part_a=part_a,
+                part_b=part_b,
                 status=best_status,
                 time_of_impact=t,
                 time=None if scene.duration is None else t * float(scene.duration),
@@ -394,7 +450,7 @@ def sweep(
                 iterations=int(toi.iterations[best]),
             )
         )
-    hits.sort(key=lambda h: (h.a, h.b))
+    hits.sort(key=lambda h: (h.body_a, h.body_b))
     return SweepReport(
         scene=scene,
         bodies=bodies,
@@ -405,4 +461,5 @@ def sweep(
         part_pairs=len(pairs),
         moving=tuple(bool(m) for m in moving),
         fail_on=fail_on,
+        warnings=colliders.warnings,
     )

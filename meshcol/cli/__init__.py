@@ -7,13 +7,19 @@ Errors are mapped to exit codes here and nowhere else:
   (``meshcol: error: FILE: problem``), with a traceback only under ``--debug``. click's own
   usage errors (unknown option, bad value, missing argument) get the same prefix and one
   line, never click's multi-line block.
+- 130: interrupted (SIGINT, Ctrl-C); 143: terminated (SIGTERM). Both unwind the command
+  (temporary files removed, worker processes stopped) before exiting, as a signal's default
+  action would not.
 """
 
 from __future__ import annotations
 
+import contextlib
 import importlib
+import signal
 import sys
-from collections.abc import Sequence
+import threading
+from collections.abc import Iterator, Sequence
 from typing import Any, NoReturn
 
 import click
@@ -83,7 +89,8 @@ class MeshcolGroup(click.Group):
     def invoke(self, ctx: click.Context) -> Any:
         debug = bool(ctx.params.get("debug"))
         try:
-            return super().invoke(ctx)
+            with _sigterm_raises():
+                return super().invoke(ctx)
         except MeshcolError as exc:
             if debug:
                 raise
@@ -97,6 +104,31 @@ class MeshcolGroup(click.Group):
         except KeyboardInterrupt:
             click.echo("meshcol: interrupted", err=True)
             sys.exit(130)
+        except Terminated:
+            click.echo("meshcol: terminated", err=True)
+            sys.exit(143)
+
+
+class Terminated(BaseException):
+    """SIGTERM, raised in the main thread (like KeyboardInterrupt for SIGINT) so that the
+    command unwinds: ``finally`` blocks and atomic writes clean up, workers are stopped."""
+
+
+def _raise_terminated(signum: int, frame: Any) -> None:
+    raise Terminated
+
+
+@contextlib.contextmanager
+def _sigterm_raises() -> Iterator[None]:
+    """SIGTERM raises :class:`Terminated` during the block (main thread only; then restored)."""
+    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "SIGTERM"):
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _raise_terminated)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous if previous is not None else signal.SIG_DFL)
 
 
 def usage_message(exc: click.ClickException) -> str:

@@ -107,10 +107,12 @@ def check(
     """Check every pair of bodies for contact, clearance and interpenetration.
 
     INPUT is mesh files (each body at its own coordinates, as parts exported in place), one
-    scene manifest (JSON/TOML) or glTF/GLB scenes. Statuses per pair: separated, clearance,
-    contact, penetrating, contained. The report (JSON or CSV) goes to --report FILE or to
-    stdout; a short summary goes to stderr. Exit 0 when the policy passes, 1 when it fails,
-    2 on bad input. Points are world coordinates; normals point from a to b.
+    scene manifest (JSON/TOML) or glTF/GLB scenes. Files given directly give one body per
+    object; a manifest body is its whole file, whose objects are its parts (never checked
+    against each other; pairs name them as part_a, part_b). Statuses per pair: separated,
+    clearance, contact, penetrating, contained. The report (JSON or CSV) goes to --report FILE
+    or to stdout; a short summary goes to stderr. Exit 0 when the policy passes, 1 when it
+    fails, 2 on bad input. Points are world coordinates; normals point from body_a to body_b.
 
     \b
     Examples:
@@ -149,6 +151,8 @@ def check(
         progress.done()
 
     emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+    for warning in result.warnings:
+        click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_table(result), err=True)
     sys.exit(result.exit_code)
 
@@ -183,7 +187,9 @@ def summary_table(result) -> str:
         for p in worst:
             value = "" if p["signed_distance"] is None else f"{p['signed_distance']:.6g}"
             flag = " (ignored)" if p["ignored"] else (" (FAIL)" if p["violation"] else "")
-            lines.append(f"  {p['status']:<12} {value:>12}{units}  {p['a']} <-> {p['b']}{flag}")
+            lines.append(
+                f"  {p['status']:<12} {value:>12}{units}  {p['body_a']} <-> {p['body_b']}{flag}"
+            )
         if touching > len(worst):
             lines.append(f"  ... {touching - len(worst)} more (every pair is in the report)")
     settings = result.settings

@@ -122,8 +122,8 @@ def check_outputs(
 ) -> None:
     """Exit 2 before anything is written when an output would replace an input (a manifest's
     mesh files and the baseline count) or two outputs are one file
-    (:func:`meshcol.io.destinations.check_destinations`)."""
-    from meshcol.io.destinations import check_destinations, manifest_inputs
+    (:func:`meshcol.io.outputs.check_destinations`)."""
+    from meshcol.io.outputs import check_destinations, manifest_inputs
 
     read = manifest_inputs(inputs)
     if baseline is not None:

@@ -129,8 +129,8 @@ def _engine_option(
     "--max-hausdorff",
     type=FiniteFloat(min=0),
     default=None,
-    help="Fail (exit 1) when a body's Hausdorff distance, either way, exceeds this.  "
-    "[default: no limit]",
+    help="Fail (exit 1) when a body's Hausdorff distance, either way, exceeds this (mesh "
+    "units).  [default: no limit]",
 )
 @click.pass_context
 def decompose_command(
@@ -158,10 +158,13 @@ def decompose_command(
 
     Each body of each INPUT is decomposed (CoACD by default), its parts are made canonical
     (convex hull, sorted by centroid), written to --out-dir and measured: volume of their
-    union against the mesh's, Hausdorff distances both ways, and the fraction of the mesh
-    surface they leave uncovered. Results are cached by geometry and parameters, so a second
+    union against the mesh's, Hausdorff distances both ways (how far the mesh surface is from
+    the parts, and how far the boundary of their union sticks out of the mesh's solid: cuts
+    inside the mesh count 0), and the fraction of the mesh surface they leave uncovered. Results are cached by geometry and parameters, so a second
     run costs milliseconds. Exit 1 when a file failed or timed out, or --max-hausdorff was
-    exceeded; exit 2 for unusable input.
+    exceeded; exit 2 for unusable input or an output that cannot be written (every output
+    location is checked before the work starts, and nothing is written on failure); 130 on
+    Ctrl-C, 143 on SIGTERM, with no output, no cache entry and no worker left behind.
 
     \b
     Examples:
@@ -173,7 +176,9 @@ def decompose_command(
     """
     from meshcol.cli.common import Progress, report_format, verdict
     from meshcol.decomposition.batch import decompose_files
+    from meshcol.decomposition.cache import default_cache_dir
     from meshcol.decomposition.engines import resolve_params
+    from meshcol.io.outputs import check_outputs
     from meshcol.io.report import emit
     from meshcol.io.scene import MANIFEST_EXTENSIONS
 
@@ -191,6 +196,18 @@ def decompose_command(
     except ValueError as exc:
         raise click.BadParameter(str(exc), param_hint="'--engine-option'") from None
 
+    # Every output location, before any work: a run never fails after the work for want of
+    # a folder, and never replaces one of its inputs.
+    report_file = None if report in (None, "-") else report
+    cache_label = "--cache-dir" if cache_dir is not None else "the cache folder"
+    check_outputs(
+        files={"--report": report_file},
+        folders={
+            "--out-dir": out_dir,
+            cache_label: None if no_cache else (cache_dir or str(default_cache_dir())),
+        },
+        inputs=inputs,
+    )
     progress = Progress(command="decompose", heartbeat=True)
     if not any(os.path.splitext(p)[1].lower() in MANIFEST_EXTENSIONS for p in inputs):
         progress(f"decompose: 0/{len(inputs)} files")  # what the heartbeat says until one is done
@@ -214,6 +231,7 @@ def decompose_command(
             fmt=fmt,
             max_hausdorff=max_hausdorff,
             progress=progress.message,
+            other_outputs=[report_file] if report_file else [],
         )
     finally:
         progress.done()

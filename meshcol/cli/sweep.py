@@ -79,8 +79,9 @@ def sweep(
     MANIFEST is a scene manifest whose bodies have start poses and end poses
     (`end_position` / `end_rotation`, or `velocity` / `angular_velocity` with the manifest's
     `duration`); bodies without an end pose stay still. Each body moves over the motion with
-    its translation interpolated linearly and its rotation turned at a constant rate about
-    its local origin. The report lists every pair of bodies that is not separated during the
+    its origin moving linearly and turning at constant angular velocity about it: by the whole
+    angle of `angular_velocity` x `duration` (several turns included), or the shortest way
+    to an `end_rotation`. The report lists every pair of bodies that is not separated during the
     motion: its status (HIT, OVERLAPPED_AT_START or FAILED), toi (fraction of the motion),
     time in seconds when the manifest has a duration, the world contact point and normal
     (a to b), both poses at impact (4x4), and `tunnelled` when a discrete check at the start
@@ -113,6 +114,8 @@ def sweep(
     finally:
         progress.done()
     emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+    for warning in result.warnings:
+        click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_lines(manifest, result), err=True)
     sys.exit(result.exit_code)
 
@@ -132,7 +135,7 @@ def summary_lines(manifest: str, result) -> str:
         extra = ", tunnelled" if h.tunnelled else ""
         kind = "fail" if result.exit_code else "note"
         lines.append(
-            f"meshcol: {kind}: {manifest}: '{h.a}' and '{h.b}': {h.status.name} at time of "
+            f"meshcol: {kind}: {manifest}: '{h.body_a}' and '{h.body_b}': {h.status.name} at time of "
             f"impact {h.time_of_impact:.6g}{when}{extra}"
         )
     if not result.hits:

@@ -42,6 +42,18 @@ def as_poses(poses: Any, h: int, name: str = "poses") -> np.ndarray | None:
     return arr
 
 
+def as_vectors(v: Any, h: int, name: str) -> np.ndarray | None:
+    """``v`` as a C-contiguous (h, 3) float64 array (a (3,) vector when h == 1), or None."""
+    if v is None:
+        return None
+    arr = np.asarray(v, dtype=np.float64)
+    if arr.shape == (3,) and h == 1:
+        arr = arr.reshape(1, 3)
+    if arr.shape != (h, 3):
+        raise ValueError(f"{name} must be ({h}, 3), got {arr.shape}")
+    return np.ascontiguousarray(arr)
+
+
 def as_pairs(pairs: Any, h: int, items: str = "shapes") -> np.ndarray:
     """``pairs`` as a C-contiguous (P, 2) int64 array of indices below ``h`` (the ``items``,
     named in the error), or ValueError."""

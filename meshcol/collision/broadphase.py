@@ -75,7 +75,9 @@ def _axis(axis: int | None) -> int:
     return int(axis)
 
 
-def sort_and_sweep(aabb_min: Any, aabb_max: Any, axis: int | None = None) -> np.ndarray:
+def sort_and_sweep(
+    aabb_min: Any, aabb_max: Any, axis: int | None = None, groups: Any = None
+) -> np.ndarray:
     """All pairs of overlapping boxes, by sort and sweep.
 
     Parameters
@@ -86,12 +88,15 @@ def sort_and_sweep(aabb_min: Any, aabb_max: Any, axis: int | None = None) -> np.
         Maximum corners (world frame), ``aabb_max >= aabb_min``.
     axis : {None, 0, 1, 2}
         Sweep axis; None chooses the axis of largest variance of the box centres.
+    groups : (n,) int, optional
+        A group id per box: boxes of the same group are never paired (the convex parts of
+        one body). None pairs every overlapping box.
 
     Returns
     -------
     pairs : (k, 2) int64
-        Indices ``i < j`` of the boxes that overlap (touching counts), sorted
-        lexicographically.
+        Indices ``i < j`` of the boxes that overlap (touching counts) and lie in different
+        groups, sorted lexicographically.
 
     Raises
     ------
@@ -110,7 +115,12 @@ def sort_and_sweep(aabb_min: Any, aabb_max: Any, axis: int | None = None) -> np.
     result. Runs in C++ on all cores with the GIL released.
     """
     lo, hi = _boxes(aabb_min, aabb_max)
-    return core.sort_and_sweep(lo, hi, _axis(axis))
+    if groups is None:
+        return core.sort_and_sweep(lo, hi, _axis(axis))
+    ids = np.ascontiguousarray(groups, dtype=np.int64)
+    if ids.shape != (len(lo),):
+        raise ValueError(f"groups must be ({len(lo)},), got {ids.shape}")
+    return core.sort_and_sweep(lo, hi, _axis(axis), groups=ids)
 
 
 def brute_force_pairs(aabb_min: Any, aabb_max: Any) -> np.ndarray:

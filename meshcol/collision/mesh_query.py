@@ -198,6 +198,16 @@ class MeshSet:
         """
         points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
         return self._handle.winding_number_inside(i, points)
+    def contains(self, i: int, points: np.ndarray) -> np.ndarray:
+        """Whether each point (n, 3) is inside mesh ``i`` (local frame), (n,) bool.
+
+        ``|winding number| >= defaults.winding_number_inside`` (either orientation); meaningful
+        for a closed mesh. A non-finite point is not inside. Decided by the fast winding
+        number, refined until its error bound settles the comparison (as
+        :meth:`winding_number_inside`), so the verdicts are those of the exact sum.
+        """
+        points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+        return self._handle.winding_number_inside(i, points)[0]
 
     def closest_points(
         self, i: int, points: Any, *, threads: int = 0
@@ -235,6 +245,22 @@ class MeshSet:
         distances, closest, _ = self._handle.closest_points(int(i), points, int(threads))
         return distances, closest
 
+    def closest_faces(
+        self, i: int, points: Any, *, threads: int = 0
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`closest_points`, and the face of mesh ``i`` holding each closest point.
+
+        Returns
+        -------
+        distances : (n,) float64
+        points : (n, 3) float64
+        faces : (n,) int64
+            Index into mesh ``i``'s faces (input order); -1 where ``distances`` is NaN.
+        """
+        points = np.ascontiguousarray(as_points(points, "points"))
+        distances, closest, faces = self._handle.closest_points(int(i), points, int(threads))
+        return distances, closest, faces
+
 
 @dataclass(frozen=True, eq=False)
 class MeshDistanceBatch:
@@ -257,10 +283,11 @@ class MeshDistanceBatch:
     triangle_a, triangle_b : (P,) int64
         Faces (indices local to each mesh) holding ``point_a`` and ``point_b``; -1 when none.
     status : (P,) int8
-        :class:`meshcol.types.Status`: ``CONVERGED``; ``DEGENERATE`` when squared distances
-        overflow (coordinates beyond about 1e154: ``distance`` is inf, only known to be huge);
-        ``INVALID_INPUT`` for a non-rigid or non-finite pose, a mesh with a non-finite vertex,
-        or a mesh without faces.
+        :class:`meshcol.types.Status`: ``CONVERGED``; ``INVALID_INPUT`` for a non-rigid or
+        non-finite pose, a mesh with a non-finite vertex, or a mesh without faces;
+        ``OUT_OF_RANGE`` (NaN distance) when the pair's lengths (centre distance, reach of the
+        meshes) leave [2^-100, 2^100], where the float boxes and squared distances of the
+        search are not exact enough.
     """
 
     distance: np.ndarray

@@ -13,6 +13,10 @@ Frames and signs (fixed once, here, for every function of this module):
   (``point_a`` is the deepest point of ``a`` inside ``b`` and vice versa).
 - Touching counts as intersecting. Two shapes closer than ``defaults.contact_tolerance``
   times the pair's length scale (bounding radii plus centre distance) touch.
+- Any magnitude a double holds: a pair whose lengths leave [2^-100, 2^100] (1e-30..1e30) is
+  moved to a's origin and scaled by a power of two before the query and back after it (exact),
+  so a sphere 1e300 from a box is 1e300 away. An answer beyond the largest double (shapes near
+  +-1e308) gets ``Status.OUT_OF_RANGE``, never a number taken for the answer.
 
 Shapes are packed into a :class:`ConvexSet` (arrays, built once) and the ``*_batch`` functions
 query (P, 2) index pairs in one native call (GIL released, threads over pairs). The

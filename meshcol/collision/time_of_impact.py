@@ -3,11 +3,16 @@
 Motion, fixed once for the whole module (the C++ core, ``cpp/include/meshcol/toi.hpp``,
 implements it):
 
-- Each body moves from its start pose to its end pose over ``t`` in [0, 1]. Its reference point
-  is its LOCAL ORIGIN: the origin's world position moves linearly, and the body turns about it
-  at constant angular velocity from the start to the end rotation (slerp of the relative
-  rotation ``R0.T @ R1``, the shorter way, angle in [0, pi]). :func:`interpolate_pose` gives
-  the pose at any ``t``.
+- Each body moves from its start pose to its end pose over ``t`` in [0, 1] by a screw: a
+  PIVOT (a world point; the body's local origin unless given) moves linearly, and the body
+  turns about it at constant angular velocity ``w = angle * axis`` (a fixed world axis), by
+  ``angle * t`` radians at time ``t``. The ``angle`` may be of any size: a spin of 1.5 or 4
+  turns is that spin, in the time of impact, the motion bound and the poses reported.
+- The turn is given as a world rotation vector ``rotation = angle * axis`` (``rotations`` /
+  :class:`meshcol.types.Spin`; a manifest's ``angular_velocity * duration``), which must take
+  the start rotation to the end rotation. Without one, the body turns the SHORTEST way from
+  its start to its end rotation (angle in [0, pi]) about its local origin: an end pose alone
+  cannot say how many turns lie between. :func:`interpolate_pose` gives the pose at any ``t``.
 - ``time_of_impact`` is the fraction of the motion in [0, 1]; ``time = time_of_impact * duration`` when the scene
   gives a duration in seconds.
 - ``tolerance`` is an absolute distance (world units): the shapes are in contact when their
@@ -23,7 +28,12 @@ Statuses (:class:`meshcol.types.TimeOfImpactStatus`) and what each guarantees:
   ``tolerance / 2`` and ``tolerance`` may be reported either way).
 - ``OVERLAPPED_AT_START``: within ``tolerance`` at ``t = 0``; ``time_of_impact = 0``.
 - ``FAILED``: the iteration cap was reached; ``time_of_impact`` is the last safe lower bound.
-- ``INVALID_INPUT``: NaN/inf coordinates, an empty shape or a non-rigid pose.
+- ``INVALID_INPUT``: NaN/inf coordinates, an empty shape, a non-rigid pose, a turn that does
+  not take the start rotation to the end rotation, or lengths beyond a double (a path or a
+  radius over 1.8e308, a tolerance under 2^-1074 of the pair's size).
+
+Any magnitude: a pair whose lengths leave [2^-100, 2^100] is moved and scaled by a power of two
+(exact) for the query, as in :mod:`meshcol.collision.narrowphase`.
 
 Results give ``point`` (world, the midpoint of the closest points at ``time_of_impact``) and ``normal``
 (world, unit, from a towards b at ``time_of_impact``; zero when overlapping at the start).
@@ -31,12 +41,13 @@ Results give ``point`` (world, the midpoint of the closest points at ``time_of_i
 Notes
 -----
 Two spheres: closed form (the centre distance is the square root of a quadratic in t).
-Translation only (neither body turns, or only spheres do): GJK ray cast on the Minkowski
+Translation only (neither body turns, or only spheres about their centres do): GJK ray cast on the Minkowski
 difference (van den Bergen 2004), sphere and capsule radii as margins. Otherwise: conservative
 advancement (Mirtich 1996; Zhang et al. 2006) with a rigorous bound on the closing speed of the
-separating slab: relative linear speed along the normal plus, per body,
-``angle * |normal x axis| * bounding radius about the local origin``; each step aims at
-``tolerance / 2`` so a contact is never stepped over.
+separating slab: relative linear speed of the pivots along the normal plus, per body,
+``angle * |normal x axis| * lever arm`` (the largest distance of a point from the axis line
+through the pivot, a swept ball's radius excluded; the whole angle, any size); each
+step aims at ``tolerance / 2`` so a contact is never stepped over.
 """
 
 from __future__ import annotations
@@ -47,16 +58,17 @@ from typing import Any
 import numpy as np
 
 from meshcol._native import core, defaults
-from meshcol.collision.arrays import as_pairs, as_pose, as_poses
+from meshcol.collision.arrays import as_pairs, as_pose, as_poses, as_vectors
 from meshcol.collision.narrowphase import body_pose
 from meshcol.collision.shapes import ConvexSet, ShapeKind, as_convex_set
-from meshcol.types import TimeOfImpactStatus
+from meshcol.types import Body, Spin, TimeOfImpactStatus
 
 __all__ = [
     "contact_tolerance",
     "TimeOfImpactResult",
     "TimeOfImpactBatch",
     "interpolate_pose",
+    "shortest_rotation",
     "swept_aabbs",
     "time_of_impact",
     "time_of_impact_batch",
@@ -121,7 +133,9 @@ def contact_tolerance(tolerance: float | None) -> float:
     return value
 
 
-def interpolate_pose(start_pose: Any, end_pose: Any, t: Any) -> np.ndarray:
+def interpolate_pose(
+    start_pose: Any, end_pose: Any, t: Any, *, rotation: Any = None, pivot: Any = None
+) -> np.ndarray:
     """Pose at time ``t`` of the motion from ``start_pose`` to ``end_pose``.
 
     Parameters
@@ -130,11 +144,22 @@ def interpolate_pose(start_pose: Any, end_pose: Any, t: Any) -> np.ndarray:
         Rigid world-from-local poses, row-major.
     t : float or (N,) float
         Fractions of the motion (0: start, 1: end).
+    rotation : (3,) or (N, 3) float, optional
+        World rotation vectors of the turns (axis x angle, any angle), which must take each
+        start rotation to its end rotation; default: the shortest rotation.
+    pivot : (3,) or (N, 3) float, optional
+        World points the bodies turn about, at the start; default: their local origins.
 
     Returns
     -------
     (4, 4) or (N, 4, 4) float64
-        Translation linear in ``t``; rotation slerped about the local origin.
+        The pivot moved linearly in ``t``, the body turned about it by ``t`` times the turn.
+
+    Raises
+    ------
+    ValueError
+        A pose that is not rigid, a turn that does not reach the end rotation, a ``t`` that is
+        not finite, or mismatched lengths.
     """
     start = np.asarray(start_pose, dtype=np.float64)
     single = start.ndim == 2
@@ -143,7 +168,33 @@ def interpolate_pose(start_pose: Any, end_pose: Any, t: Any) -> np.ndarray:
     times = np.ascontiguousarray(
         np.broadcast_to(np.asarray(t, dtype=np.float64).reshape(-1), (len(start),))
     )
-    out = core.interpolate_poses(start, end, times)
+    rotations = as_vectors(rotation, len(start), "rotation")
+    pivots = as_vectors(pivot, len(start), "pivot")
+    out = core.interpolate_poses(start, end, times, rotations, pivots)
+    return out[0] if single else out
+
+
+def shortest_rotation(start_pose: Any, end_pose: Any) -> np.ndarray:
+    """World rotation vector of the shortest turn from a start to an end pose.
+
+    Parameters
+    ----------
+    start_pose, end_pose : (4, 4) or (N, 4, 4) float
+        Rigid world-from-local poses.
+
+    Returns
+    -------
+    (3,) or (N, 3) float64
+        ``angle * axis``, angle in [0, pi], with ``R_end = Rot(axis, angle) @ R_start``: the
+        turn a motion takes when none is given.
+    """
+    start = np.asarray(start_pose, dtype=np.float64)
+    single = start.ndim == 2
+    start = np.ascontiguousarray(start.reshape(-1, 4, 4))
+    end = np.ascontiguousarray(np.asarray(end_pose, dtype=np.float64).reshape(-1, 4, 4))
+    if end.shape != start.shape:
+        raise ValueError(f"end_pose must be {start.shape}, got {end.shape}")
+    out = core.shortest_rotations(start, end)
     return out[0] if single else out
 
 
@@ -153,6 +204,8 @@ def time_of_impact_batch(
     end_poses: Any,
     pairs: Any,
     *,
+    rotations: Any = None,
+    pivots: Any = None,
     tolerance: float | None = None,
     max_iterations: int | None = None,
     threads: int = 0,
@@ -167,6 +220,12 @@ def time_of_impact_batch(
         motion, row-major.
     pairs : (P, 2) int
         Indices into ``shapes``.
+    rotations : (H, 3) float, optional
+        World rotation vector of each shape's turn over the motion (axis x angle in radians, any
+        angle), which must take its start rotation to its end rotation (else its pairs are
+        ``INVALID_INPUT``). Default: the shortest rotation from start to end (at most pi).
+    pivots : (H, 3) float, optional
+        World point each shape turns about, at the start (default: its local origin).
     tolerance : float, optional
         Absolute contact distance (default ``meshcol._native.defaults.toi_tolerance``).
     max_iterations : int, optional
@@ -196,9 +255,11 @@ def time_of_impact_batch(
     if start is None or end is None:
         raise ValueError("start_poses and end_poses are required")
     idx = as_pairs(pairs, h)
+    turns = as_vectors(rotations, h, "rotations")
+    centres = as_vectors(pivots, h, "pivots")
     cap = int(defaults.toi_max_iterations if max_iterations is None else max_iterations)
     r = core.time_of_impact_batch(
-        cs._core, start, end, idx, contact_tolerance(tolerance), cap, int(threads)
+        cs._core, start, end, idx, turns, centres, contact_tolerance(tolerance), cap, int(threads)
     )
     return TimeOfImpactBatch(r.time_of_impact, r.point, r.normal, r.iterations, r.status)
 
@@ -211,6 +272,8 @@ def time_of_impact(
     start_pose_b: Any,
     end_pose_b: Any,
     *,
+    spin_a: Spin | None = None,
+    spin_b: Spin | None = None,
     tolerance: float | None = None,
     max_iterations: int | None = None,
 ) -> TimeOfImpactResult:
@@ -221,7 +284,10 @@ def time_of_impact(
     a, b : Sphere, Box, Capsule, Cylinder, trimesh.Trimesh, Body or (n, 3) float
         Shapes in their local frames (meshes and point sets by their convex hull).
     start_pose_a, end_pose_a, start_pose_b, end_pose_b : (4, 4) float or None
-        Rigid world-from-local poses (None: identity).
+        Rigid world-from-local poses (None: a Body's own pose and end pose, else identity).
+    spin_a, spin_b : Spin, optional
+        How each shape turns (any angle, about a pivot); default: a Body's own ``spin`` when it
+        gives the end pose, else the shortest rotation about the local origin.
     tolerance, max_iterations
         As :func:`time_of_impact_batch`.
 
@@ -240,11 +306,34 @@ def time_of_impact(
         as_pose(body_pose(shape, end) if pose is None else pose, name)
         for name, pose, shape, end in given
     ]
+    spins = [
+        spin if spin is not None or end is not None or not isinstance(shape, Body) else shape.spin
+        for spin, end, shape in ((spin_a, end_pose_a, a), (spin_b, end_pose_b, b))
+    ]
+    rotations = pivots = None
+    if any(spin is not None for spin in spins):
+        starts = np.stack([poses[0], poses[2]])
+        ends = np.stack([poses[1], poses[3]])
+        shortest = shortest_rotation(starts, ends)
+        rotations = np.stack(
+            [
+                shortest[k] if spin is None or spin.rotation is None else spin.rotation
+                for k, spin in enumerate(spins)
+            ]
+        )
+        pivots = np.stack(
+            [
+                starts[k, :3, 3] if spin is None or spin.pivot is None else spin.pivot
+                for k, spin in enumerate(spins)
+            ]
+        )
     r = time_of_impact_batch(
         cs,
         np.stack([poses[0], poses[2]]),
         np.stack([poses[1], poses[3]]),
         np.array([[0, 1]]),
+        rotations=rotations,
+        pivots=pivots,
         tolerance=tolerance,
         max_iterations=max_iterations,
         threads=1,
@@ -260,7 +349,13 @@ def time_of_impact(
 
 
 def swept_aabbs(
-    cs: ConvexSet, start_poses: np.ndarray, end_poses: np.ndarray, threads: int = 0
+    cs: ConvexSet,
+    start_poses: np.ndarray,
+    end_poses: np.ndarray,
+    threads: int = 0,
+    *,
+    rotations: Any = None,
+    pivots: Any = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Conservative world AABBs of shapes over their whole motion.
 
@@ -268,6 +363,9 @@ def swept_aabbs(
     ----------
     cs : ConvexSet
     start_poses, end_poses : (H, 4, 4) float
+    threads : int
+    rotations, pivots : (H, 3) float, optional
+        The turns and pivots, as :func:`time_of_impact_batch`.
 
     Returns
     -------
@@ -275,20 +373,36 @@ def swept_aabbs(
 
     Notes
     -----
-    A shape that does not turn (or a sphere) sweeps the union of its start and end AABBs
-    exactly (an AABB moves rigidly under translation). A turning shape stays inside the ball
-    of its bounding radius about its local origin, whose centre moves linearly: the AABB of
-    that swept ball. (The union of the start and end AABBs alone is NOT conservative under
-    rotation: a bar turning by 90 degrees sweeps corners outside both.)
+    A shape that does not turn (or a sphere turning about its centre) sweeps the union of its
+    start and end AABBs exactly (an AABB moves rigidly under translation). A turning shape stays
+    inside the ball of its bounding radius about its pivot (radius about the local origin plus
+    the origin's distance from the pivot), whose centre moves linearly: the AABB of that swept
+    ball (widened by the pivot offset, as the pivot's end is known only to within it), which
+    encloses a spin of any angle. (The union of the start and end AABBs alone is NOT
+    conservative under rotation: a bar turning by 90 degrees, or by a full turn, sweeps corners
+    outside both.)
     """
-    lo0, hi0 = cs.aabbs(start_poses, threads=threads)
-    lo1, hi1 = cs.aabbs(end_poses, threads=threads)
+    start = np.ascontiguousarray(start_poses, dtype=np.float64)
+    end = np.ascontiguousarray(end_poses, dtype=np.float64)
+    h = len(start)
+    lo0, hi0 = cs.aabbs(start, threads=threads)
+    lo1, hi1 = cs.aabbs(end, threads=threads)
     lo, hi = np.minimum(lo0, lo1), np.maximum(hi0, hi1)
-    turning = np.any(start_poses[:, :3, :3] != end_poses[:, :3, :3], axis=(1, 2))
-    turning &= cs.kinds != ShapeKind.SPHERE
+    turns = as_vectors(rotations, h, "rotations")
+    centres = as_vectors(pivots, h, "pivots")
+    if turns is None:
+        turning = np.any(start[:, :3, :3] != end[:, :3, :3], axis=(1, 2))
+    else:
+        turning = np.any(turns != 0.0, axis=1)
+    pivot = start[:, :3, 3] if centres is None else centres
+    offset = np.linalg.norm(start[:, :3, 3] - pivot, axis=1)
+    turning &= (cs.kinds != ShapeKind.SPHERE) | (offset > 0.0)
     if np.any(turning):
-        r = cs._core.bounding_radii(threads)[turning][:, None]
-        t0, t1 = start_poses[turning, :3, 3], end_poses[turning, :3, 3]
+        # The body stays within r + offset of its pivot c(t) = c0 + t v, and c0, c1 lie within
+        # `offset` of the local origin's start and end T0, T1 (c1 = T1 - Rot(turn) (T0 - c0)):
+        # every point of every instant is within r + 2 offset of the segment T0 T1.
+        r = (cs._core.bounding_radii(threads)[turning] + 2.0 * offset[turning])[:, None]
+        t0, t1 = start[turning, :3, 3], end[turning, :3, 3]
         lo[turning] = np.minimum(t0, t1) - r
         hi[turning] = np.maximum(t0, t1) + r
     return lo, hi

@@ -2,15 +2,21 @@
 
 Files are read one by one and each goes to a worker (:mod:`meshcol.decomposition.jobs`) as
 soon as it is read, so work starts at once and a library is never held in memory whole. Cached
-bodies are looked up before a file is sent. Unusable input still stops the run before anything
-is written: the parts are written at the end, each file atomically, and the workers' cache
-entries for the files before the bad one are valid entries.
+bodies are looked up before a file is sent, and what the workers return is stored in the cache
+by this process, entry by entry as files finish (a worker never writes it). Every output
+location is checked before the work starts (:func:`meshcol.io.outputs.check_outputs`), and each
+file's planned parts against the inputs and the caller's other outputs as it is read. Unusable
+input still stops the run before anything is written: the parts are written at the end, all
+together (:func:`meshcol.io.outputs.staged_folder`), and the cache entries of the files before
+the bad one are valid entries.
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
+import re
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
@@ -18,7 +24,7 @@ from typing import Any
 
 from meshcol.errors import InvalidMeshError, MeshcolError
 
-__all__ = ["CSV_COLUMNS", "DecomposeReport", "decompose_files"]
+__all__ = ["CSV_COLUMNS", "DecomposeReport", "decompose_files", "within_max_hausdorff"]
 
 #: Columns of :meth:`DecomposeReport.to_csv`: one row per body, and one per failed file.
 CSV_COLUMNS = (
@@ -35,6 +41,7 @@ CSV_COLUMNS = (
     "hausdorff_parts_to_mesh",
     "uncovered_fraction",
     "tolerance",
+    "mesh_is_solid",
     "repaired",
     "from_cache",
     "hausdorff_ok",
@@ -138,6 +145,7 @@ def decompose_files(
     fmt: str = "obj",
     max_hausdorff: float | None = None,
     progress: Callable[[str], None] | None = None,
+    other_outputs: Sequence[str | os.PathLike[str]] = (),
 ) -> DecomposeReport:
     """Decompose every body of every input file into convex parts and write them.
 
@@ -164,9 +172,14 @@ def decompose_files(
     fmt : {"obj", "glb"}
         Output format (``ucx`` writes OBJ only).
     max_hausdorff : float, optional
-        A body whose Hausdorff distance, either way, exceeds this fails the run.
+        A body whose Hausdorff distance, either way, exceeds this (in the input's units) fails
+        the run; so does a body whose metrics are missing or not a number.
     progress : callable, optional
         Receives one-line progress messages (``decompose: 3/10 files``).
+    other_outputs : sequence of paths
+        Files the caller will write besides the parts (``meshcol decompose --report``): a
+        body whose parts would replace one is an error before anything is written, as is one
+        whose parts would replace an input.
 
     Returns
     -------
@@ -179,10 +192,14 @@ def decompose_files(
         Contradictory options (``ucx`` with ``glb``, ``cache_dir`` without the cache,
         ``threshold`` with an engine other than CoACD) or bad engine options.
     MeshcolError
-        Unusable input, or two bodies that would write the same files; nothing is written.
+        Unusable input, an output folder that cannot be written (``out_dir``, the cache), two
+        bodies that would write the same files, or parts that would replace an input or an
+        ``other_outputs`` file; nothing is written.
     """
+    from meshcol.decomposition.cache import default_cache_dir
     from meshcol.decomposition.engines import prepare_engine, resolve_params
     from meshcol.decomposition.jobs import WorkerPool, decompose_task
+    from meshcol.io.outputs import check_outputs
 
     if layout == "ucx" and fmt == "glb":
         raise ValueError("layout 'ucx' writes OBJ only, not glb")
@@ -192,8 +209,12 @@ def decompose_files(
         raise ValueError("threshold applies to engine 'coacd' only")
     engine_options = dict(engine_options or {})
     resolve_params(engine, engine_options=engine_options)
-    inputs = [os.fspath(p) for p in inputs]
+    paths = [os.fspath(p) for p in inputs]
     out_dir = os.fspath(out_dir)
+    cache_root = None
+    if use_cache:
+        cache_root = os.fspath(cache_dir) if cache_dir is not None else str(default_cache_dir())
+    check_outputs(folders={"out_dir": out_dir, "cache_dir": cache_root}, inputs=paths)
     options: dict[str, Any] = {
         "engine": engine,
         "threshold": threshold,
@@ -221,30 +242,33 @@ def decompose_files(
         frame="world",
     )
 
-    pool = None
-    if jobs > 1 or timeout is not None:
-        # Workers start now and load the engine while this process reads the files.
-        pool = WorkerPool(
-            decompose_task, jobs, timeout=timeout, prepare=functools.partial(prepare_engine, engine)
-        )
-        pool.start(min(jobs, len(inputs)))
+    # The engines always run in workers, so that this process stays responsive to signals.
+    pool = WorkerPool(
+        decompose_task, jobs, timeout=timeout, prepare=functools.partial(prepare_engine, engine)
+    )
+    if jobs > 1:
+        # Workers start now and load the engine while this process reads the files; one job
+        # starts its worker at the first file the cache does not have (a run of hits needs
+        # none).
+        pool.start(min(jobs, len(paths)))
     try:
         files, rows = _run(
-            [os.fspath(p) for p in inputs],
+            paths,
             out_dir,
             options,
             pool,
-            jobs=jobs,
-            timeout=timeout,
-            use_cache=use_cache,
+            cache_root=cache_root,
             layout=layout,
             fmt=fmt,
             max_hausdorff=max_hausdorff,
             progress=progress,
+            protected=[*paths, *(os.fspath(p) for p in other_outputs)],
         )
-    finally:
-        if pool is not None:
-            pool.close()
+    except BaseException as exc:
+        # A signal (KeyboardInterrupt, SIGTERM's exception) abandons the run: no process stays.
+        pool.close(interrupted=not isinstance(exc, Exception))
+        raise
+    pool.close()
     return DecomposeReport(files, rows, settings, None, layout, fmt, max_hausdorff)
 
 
@@ -254,26 +278,28 @@ def _run(
     options: dict[str, Any],
     pool: Any,
     *,
-    jobs: int,
-    timeout: float | None,
-    use_cache: bool,
+    cache_root: str | None,
     layout: str,
     fmt: str,
     max_hausdorff: float | None,
     progress: Callable[[str], None] | None,
+    protected: list[str],
 ) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
-    """Load, look up the cache, decompose, write: the file entries and the CSV rows."""
+    """Load, look up the cache, decompose, store, write: the file entries and the CSV rows."""
+    from meshcol.decomposition import cache
     from meshcol.decomposition.decompose import cached_decomposition
-    from meshcol.decomposition.jobs import decompose_task, run_tasks
-    from meshcol.io.mesh_write import safe_name, write_parts
+    from meshcol.io.mesh_write import layout_file_pattern, safe_name, write_parts
+    from meshcol.io.outputs import staged_folder
 
     files: list[tuple[str, list[tuple[str, Any, Any, Any]]]] = []
     names: dict[str, str] = {}
     results: dict[int, Any] = {}
+    looked_up: dict[int, dict[str, Any]] = {}
     task_file: list[int] = []
     key_options = {k: v for k, v in options.items() if k != "use_cache"}
     report_progress = progress or (lambda message: None)
     done, total = 0, None if _is_manifest(inputs) else len(inputs)
+    guard = _OutputGuard(out_dir, protected)
 
     def step() -> None:
         nonlocal done
@@ -283,6 +309,7 @@ def _run(
     def tasks() -> Iterator[tuple[str, list, dict]]:
         nonlocal total
         for path, bodies in _iter_load(inputs):
+            guard.protect(path)
             for name, _, _, _ in bodies:
                 clean = safe_name(name)
                 if clean in names:
@@ -291,14 +318,16 @@ def _run(
                         path,
                     )
                 names[clean] = path
+                guard.plan(name, layout_file_pattern(clean, layout, fmt))
             i = len(files)
             files.append((path, bodies))
             start = time.perf_counter()
             lookup = {}
-            if use_cache:
+            if cache_root is not None:
                 lookup = {
                     name: cached_decomposition((v, f), **key_options) for name, v, f, _ in bodies
                 }
+            looked_up[i] = lookup
             if lookup and all(d is not None and d.metrics is not None for d in lookup.values()):
                 hits = [(name, lookup[name]) for name, _, _, _ in bodies]
                 results[i] = ("ok", hits, None, time.perf_counter() - start)
@@ -308,64 +337,122 @@ def _run(
             yield (path, [(name, v, f) for name, v, f, _ in bodies], options)
         total = len(files)
 
-    for outcome in run_tasks(decompose_task, tasks(), jobs=jobs, timeout=timeout, pool=pool):
-        i = task_file[outcome.index]
-        results[i] = (outcome.status, outcome.value, outcome.message, outcome.seconds)
-        step()
-    os.makedirs(out_dir, exist_ok=True)
+    # Closed here, not when garbage collected: the pool's signal handlers go with it.
+    with contextlib.closing(pool.run(tasks())) as outcomes:
+        for outcome in outcomes:
+            i = task_file[outcome.index]
+            results[i] = (outcome.status, outcome.value, outcome.message, outcome.seconds)
+            if outcome.status == "ok" and cache_root is not None:
+                # This process stores what the worker made (or measured again), as it arrives.
+                for name, d in outcome.value:
+                    before = looked_up[i].get(name)
+                    if before is None or before.metrics != d.metrics:
+                        cache.store(d, cache_root)
+            step()
 
     rows: list[dict[str, Any]] = []
     file_reports: list[dict[str, Any]] = []
-    for i, (path, bodies) in enumerate(files):
-        status, value, message, seconds = results[i]
-        entry: dict[str, Any] = {
-            "path": path,
-            "status": status,
-            "message": message,
-            "bodies": [],
-            "seconds": round(seconds, 3),
-        }
-        if status == "ok":
-            transforms = {name: t for name, _, _, t in bodies}
-            for name, d in value:
-                t = transforms[name]
-                world = [(v @ t[:3, :3].T + t[:3, 3], f) for v, f in d.parts]
-                written = write_parts(name, world, out_dir, layout, fmt)
-                m = d.metrics.to_dict() if d.metrics is not None else {}
-                worst = max(
-                    m.get("hausdorff_mesh_to_parts", 0.0), m.get("hausdorff_parts_to_mesh", 0.0)
-                )
-                ok = max_hausdorff is None or worst <= max_hausdorff
-                entry["bodies"].append(
-                    {
-                        "name": name,
-                        "outputs": [os.path.relpath(p, out_dir) for p in written],
-                        "cache_key": d.cache_key,
-                        "from_cache": d.from_cache,
-                        "engine": d.engine,
-                        "engine_version": d.engine_version,
-                        "params": dict(d.params),
-                        "repaired": d.repaired,
-                        "notes": list(d.notes),
-                        "metrics": m,
-                        "hausdorff_ok": ok,
-                    }
-                )
-                rows.append(
-                    {
-                        "path": path,
-                        "body": name,
-                        "status": status,
-                        **m,
-                        "repaired": d.repaired,
-                        "from_cache": d.from_cache,
-                        "hausdorff_ok": ok,
-                    }
-                )
-        else:
-            rows.append({"path": path, "status": status, "message": message})
-        file_reports.append(entry)
+    writes = any(results[i][0] == "ok" and results[i][1] for i in range(len(files)))
+    with staged_folder(out_dir) if writes else contextlib.nullcontext(out_dir) as stage:
+        for i, (path, bodies) in enumerate(files):
+            status, value, message, seconds = results[i]
+            entry: dict[str, Any] = {
+                "path": path,
+                "status": status,
+                "message": message,
+                "bodies": [],
+                "seconds": round(seconds, 3),
+            }
+            if status == "ok":
+                transforms = {name: t for name, _, _, t in bodies}
+                for name, d in value:
+                    t = transforms[name]
+                    world = [(v @ t[:3, :3].T + t[:3, 3], f) for v, f in d.parts]
+                    written = write_parts(name, world, stage, layout, fmt)
+                    m = d.metrics.to_dict() if d.metrics is not None else {}
+                    ok = within_max_hausdorff(m, max_hausdorff)
+                    entry["bodies"].append(
+                        {
+                            "name": name,
+                            "outputs": [os.path.relpath(p, stage) for p in written],
+                            "cache_key": d.cache_key,
+                            "from_cache": d.from_cache,
+                            "engine": d.engine,
+                            "engine_version": d.engine_version,
+                            "params": dict(d.params),
+                            "repaired": d.repaired,
+                            "notes": list(d.notes),
+                            "metrics": m,
+                            "hausdorff_ok": ok,
+                        }
+                    )
+                    rows.append(
+                        {
+                            "path": path,
+                            "body": name,
+                            "status": status,
+                            **m,
+                            "repaired": d.repaired,
+                            "from_cache": d.from_cache,
+                            "hausdorff_ok": ok,
+                        }
+                    )
+            else:
+                rows.append({"path": path, "status": status, "message": message})
+            file_reports.append(entry)
     return file_reports, rows
+
+
+def within_max_hausdorff(metrics: Mapping[str, Any], limit: float | None) -> bool:
+    """Whether a body passes ``--max-hausdorff``: both one-sided Hausdorff distances are
+    numbers no larger than ``limit``. True without a limit; False when a distance is missing
+    or NaN (a gate never passes what it could not measure)."""
+    if limit is None:
+        return True
+    values = [metrics.get(k) for k in ("hausdorff_mesh_to_parts", "hausdorff_parts_to_mesh")]
+    return all(isinstance(v, (int, float)) and v <= limit for v in values)
+
+
+class _OutputGuard:
+    """Refuses, before anything is written, parts that would replace a protected file (an
+    input, a source file a manifest names, the caller's report): each body's file-name
+    pattern in the output folder is checked against each protected file, whichever comes
+    first."""
+
+    def __init__(self, out_dir: str, protected: list[str]) -> None:
+        from meshcol.io.outputs import same_file
+
+        self._same_file = same_file
+        self.out_dir = out_dir
+        self.patterns: list[tuple[str, re.Pattern[str]]] = []
+        self.protected: list[str] = []
+        for path in protected:
+            self.protect(path)
+
+    def _in_out_dir(self, path: str) -> bool:
+        return self._same_file(os.path.dirname(os.path.abspath(path)), self.out_dir)
+
+    def protect(self, path: str) -> None:
+        if path in self.protected:
+            return
+        self.protected.append(path)
+        if self._in_out_dir(path):
+            for body, pattern in self.patterns:
+                self._check(body, pattern, path)
+
+    def plan(self, body: str, pattern: re.Pattern[str]) -> None:
+        self.patterns.append((body, pattern))
+        for path in self.protected:
+            if self._in_out_dir(path):
+                self._check(body, pattern, path)
+
+    def _check(self, body: str, pattern: re.Pattern[str], path: str) -> None:
+        if pattern.fullmatch(os.path.basename(path)):
+            raise MeshcolError(
+                f"the parts of body {body!r} would replace this file (output folder "
+                f"{self.out_dir}): choose another output folder",
+                path,
+            )
 
 
 def _is_manifest(inputs: Sequence[str]) -> bool:
@@ -383,7 +470,8 @@ def _iter_load(inputs: list[str]) -> Iterator[tuple[str, list[tuple[str, Any, An
 
     for source, bodies in iter_inputs(list(inputs)):
         canonical = []
-        for body in bodies:
+        # each part of a body is decomposed on its own, as check's colliders do (same cache key)
+        for body in (part for whole in bodies for part in whole.part_bodies()):
             try:
                 v, f = canonical_geometry(body.vertices, body.faces)
             except InvalidMeshError as exc:

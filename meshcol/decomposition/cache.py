@@ -2,7 +2,7 @@
 
 One entry per key (:func:`meshcol.decomposition.canonical.cache_key`): ``<dir>/<key[:2]>/<key>.npz`` holding
 all part vertices and faces concatenated, their offsets, and a JSON header (engine, version,
-parameters, metrics, notes). An entry is written to a temporary file in the same folder and
+parameters, metrics and the version of their definitions, notes). An entry is written to a temporary file in the same folder and
 renamed into place (``os.replace`` is atomic on POSIX and Windows), so concurrent runs never
 see a partial entry and a killed run leaves none; an unreadable entry counts as a miss.
 """
@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from meshcol.decomposition.fidelity import METRICS_VERSION
 from meshcol.decomposition.result import Decomposition, Fidelity
 from meshcol.io.report import atomic_path
 
@@ -64,9 +65,12 @@ def load(key: str, cache_dir: str | os.PathLike[str] | None = None) -> Decomposi
     )
     m = header.get("metrics")
     metrics = None
-    if m is not None:
-        m["vertices_per_part"] = tuple(m["vertices_per_part"])
-        metrics = Fidelity(**m)
+    # Metrics of another definition are dropped (measured again by the caller); parts stay.
+    if m is not None and header.get("metrics_version") == METRICS_VERSION:
+        try:
+            metrics = Fidelity(**{**m, "vertices_per_part": tuple(m["vertices_per_part"])})
+        except (KeyError, TypeError):
+            metrics = None
     return Decomposition(
         parts=parts,
         engine=header["engine"],
@@ -90,6 +94,7 @@ def store(result: Decomposition, cache_dir: str | os.PathLike[str] | None = None
         "engine_version": result.engine_version,
         "params": dict(result.params),
         "metrics": None if result.metrics is None else result.metrics.to_dict(),
+        "metrics_version": METRICS_VERSION,
         "repaired": result.repaired,
         "notes": list(result.notes),
     }

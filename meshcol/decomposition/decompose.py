@@ -25,6 +25,7 @@ from meshcol.decomposition import cache
 from meshcol.decomposition.canonical import (
     as_mesh_arrays,
     cache_key,
+    canonical_faces,
     canonical_geometry,
     canonical_part,
 )
@@ -32,7 +33,7 @@ from meshcol.decomposition.engines import engine_version, resolve_params, run_en
 from meshcol.decomposition.fidelity import DEFAULT_SAMPLES, coverage_tolerance, fidelity
 from meshcol.decomposition.result import Decomposition, Fidelity
 from meshcol.errors import InvalidMeshError
-from meshcol.geometry.topology import is_closed_manifold
+from meshcol.geometry.topology import is_closed_manifold, orient_outward
 
 __all__ = ["cached_decomposition", "decompose"]
 
@@ -69,6 +70,7 @@ def decompose(
     tolerance: float | None = None,
     cache_dir: str | None = None,
     use_cache: bool = True,
+    write_cache: bool = True,
     threads: int = 0,
 ) -> Decomposition:
     """Convex decomposition of a mesh, from the cache when possible, stored in it otherwise.
@@ -82,7 +84,7 @@ def decompose(
     threshold, max_hulls, max_vertices, preprocess, resolution, seed, engine_options
         See :func:`resolve_params`. ``max_vertices`` is enforced on every part: a part whose
         hull has more vertices is replaced by the budgeted hull of
-        :func:`meshcol.geometry.hull.convex_hull`, which still encloses the part.
+        :func:`meshcol.collision.hull.convex_hull`, which still encloses the part.
     metrics : bool
         Compute :class:`Fidelity` metrics (stored in the cache with the parts).
     samples : int
@@ -93,6 +95,10 @@ def decompose(
         Cache folder; default :func:`meshcol.cache.default_cache_dir`.
     use_cache : bool
         Read and write the cache.
+    write_cache : bool
+        False: read the cache but leave storing the result to the caller (``meshcol
+        decompose`` stores what its worker processes return, so that a worker killed or
+        interrupted never writes an entry).
     threads : int
         Threads for the metrics' distance queries; 0 uses all cores.
 
@@ -110,7 +116,10 @@ def decompose(
     Notes
     -----
     Determinism: the engine runs on the canonical geometry (:func:`canonical_geometry`) with a
-    fixed seed, and parts are canonicalised and sorted, so equal inputs give equal parts.
+    fixed seed, and parts are canonicalised and sorted, so equal inputs give equal parts. A
+    closed input wound inside out (negative volume) is decomposed with its faces reversed
+    (:func:`meshcol.geometry.topology.orient_outward`), so it gets the parts and metrics of the
+    outward mesh, and a note says so.
     CoACD: Wei et al., "Approximate convex decomposition for 3D meshes with collision-aware
     concavity and tree search", SIGGRAPH 2022.
     """
@@ -129,6 +138,12 @@ def decompose(
     )
     version = engine_version(engine)
     key = cache_key(vertices, faces, engine, version, params)
+    # An inside-out input is the same solid: the engine and the metrics get it outward (CoACD
+    # decomposes an inverted mesh badly); the key keeps the input's winding, so the note
+    # stored with the entry is true of every input that finds it.
+    faces, flipped = orient_outward(vertices, faces)
+    if flipped:
+        faces = canonical_faces(faces)  # exactly the outward mesh's canonical faces
     tol = coverage_tolerance(vertices, tolerance)
     if use_cache:
         hit = cache.load(key, cache_dir)
@@ -140,7 +155,8 @@ def decompose(
                 vertices, faces, hit.parts, samples=samples, tolerance=tol, threads=threads
             )
             hit = dataclasses.replace(hit, metrics=remeasured)
-            cache.store(hit, cache_dir)
+            if write_cache:
+                cache.store(hit, cache_dir)
             return hit
 
     raw = run_engine(engine, vertices, faces, params)
@@ -170,6 +186,8 @@ def decompose(
     else:
         truncated = 0
     notes = []
+    if flipped:
+        notes.append("input is inside out (negative volume): decomposed with its faces reversed")
     repaired = engine == "coacd" and params["preprocess_mode"] == "on" and not closed
     if repaired:
         notes.append(
@@ -199,7 +217,7 @@ def decompose(
         repaired=repaired,
         notes=tuple(notes),
     )
-    if use_cache:
+    if use_cache and write_cache:
         cache.store(result, cache_dir)
     return result
 
@@ -209,10 +227,10 @@ def cached_decomposition(
 ) -> Decomposition | None:
     """The cached decomposition of ``mesh`` for these options, or None; never runs an engine.
 
-    Takes the same options as :func:`decompose` (``metrics``, ``samples``, ``tolerance`` and
-    ``use_cache``, ``threads`` are ignored: metrics come back as stored).
+    Takes the same options as :func:`decompose` (``metrics``, ``samples``, ``tolerance``,
+    ``use_cache``, ``write_cache`` and ``threads`` are ignored: metrics come back as stored).
     """
-    for ignored in ("metrics", "samples", "tolerance", "use_cache", "threads"):
+    for ignored in ("metrics", "samples", "tolerance", "use_cache", "write_cache", "threads"):
         options.pop(ignored, None)
     engine = options.pop("engine", "coacd")
     vertices, faces = canonical_geometry(*as_mesh_arrays(mesh))

@@ -3,15 +3,19 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
 from meshcol.decomposition.result import Fidelity
+from meshcol.geometry.topology import is_closed_manifold
 from meshcol.geometry.triangles import sample_surface, triangle_areas
 
 __all__ = [
     "DEFAULT_SAMPLES",
+    "METRICS_VERSION",
     "coverage_tolerance",
+    "farthest_outside_solid",
     "fidelity",
     "points_to_parts",
     "points_to_triangles",
@@ -25,13 +29,20 @@ DEFAULT_SAMPLES = 2000
 DEFAULT_METRIC_SEED = 0
 
 
+#: Version of the metrics' definitions: cached metrics of another version are measured again
+#: (the parts are kept). 2: parts -> mesh measured to the mesh's solid, part vertices sampled.
+METRICS_VERSION = 2
+
+
 # Coverage tolerance as a fraction of the mesh's bounding-box diagonal.
 DEFAULT_TOLERANCE_FRACTION = 0.01
 
 
 # A point of a part's surface this close (fraction of the diagonal) to another part is on a
-# face shared with it (a cut), not on the boundary of the union.
-SHARED_FACE_FRACTION = 1e-6
+# face shared with it (a cut), not on the boundary of the union. CoACD leaves slivers of about
+# 1e-5 of the diagonal between the two sides of a cut (measured on torus.STL); 1e-4 closes them
+# and is still far below any collision tolerance.
+SHARED_FACE_FRACTION = 1e-4
 
 
 def coverage_tolerance(vertices: np.ndarray, tolerance: float | None) -> float:
@@ -52,13 +63,14 @@ def points_to_parts(
 ) -> np.ndarray:
     """Distance from each point to the union of convex parts (0 inside a part), (n,) float64.
 
-    Each point is a one-vertex polytope; candidate (point, part) pairs are pruned with AABBs
+    Each point is a sphere of radius 0; candidate (point, part) pairs are pruned with AABBs
     (a part whose box is farther than the point's nearest part centroid cannot be the closest)
     and measured in one :func:`meshcol.collision.narrowphase.distance_batch` call. ``owner[i]`` (optional)
     excludes part ``owner[i]`` from point ``i``'s candidates.
     """
     from meshcol.collision.narrowphase import distance_batch
     from meshcol.collision.shapes import ConvexSet
+    from meshcol.types import Sphere
 
     points = np.ascontiguousarray(points, dtype=np.float64)
     n, k = len(points), len(parts)
@@ -85,12 +97,15 @@ def points_to_parts(
     j = np.concatenate(pairs_j)
     if len(i) == 0:
         return result
+    # Each point is a sphere of radius 0 placed by its pose: packed without a hull per point.
     shapes = ConvexSet.concatenate(
-        ConvexSet.from_vertices(list(points[:, None, :])),
+        ConvexSet.from_shapes([Sphere(0.0)] * n),
         ConvexSet.from_vertices([v for v, _ in parts]),
     )
+    poses = np.tile(np.eye(4), (n + k, 1, 1))
+    poses[:n, :3, 3] = points
     pairs = np.stack([i, n + j], axis=1).astype(np.int64)
-    batch = distance_batch(shapes, None, pairs, threads=threads)
+    batch = distance_batch(shapes, poses, pairs, threads=threads)
     # fmin skips NaN (a pair the query rejected): a point whose pairs all failed stays inf.
     np.fmin.at(result, i, np.asarray(batch.distance, dtype=np.float64))
     return result
@@ -109,6 +124,96 @@ def points_to_triangles(
     meshes = MeshSet.from_arrays([(vertices, faces)], threads=1)
     distances, _ = meshes.closest_points(0, points, threads=threads)
     return distances
+
+
+def farthest_outside_solid(points: np.ndarray, meshes: Any, *, threads: int = 0) -> float:
+    """Largest distance from ``points`` to the solid a closed mesh bounds (0 inside it).
+
+    Parameters
+    ----------
+    points : (n, 3) float
+        Query points, in the mesh's frame.
+    meshes : meshcol.collision.mesh_query.MeshSet
+        The mesh, as mesh 0; closed and consistently wound (either way round).
+    threads : int
+        Threads for the closest-point queries; 0 uses all cores.
+
+    Returns
+    -------
+    float
+        The largest distance to the mesh surface among the points outside it; 0 when every
+        point is inside; NaN when a point is not finite.
+
+    Notes
+    -----
+    Exact, and cheap: each point's closest surface point comes from the mesh's hierarchy
+    (:meth:`MeshSet.closest_faces`). Where it lies inside a face, the point is on the side of
+    that face its normal says (the segment to it crosses no surface, or a surface point
+    would be nearer). The others (closest point on an edge or a corner) are classified by
+    the generalized winding number (:meth:`MeshSet.contains`, Jacobson et al. 2013), farthest
+    first, and only while they could raise the answer: the first outside one ends the
+    search. A ball of radius d around an inside point holds no surface, so every point in it
+    is inside too and is not tested.
+    """
+    from scipy.spatial import cKDTree
+
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    distances, closest, face = meshes.closest_faces(0, points, threads=threads)
+    if len(points) == 0:
+        return 0.0
+    if np.isnan(distances).any():
+        return float("nan")
+    vertices, faces = meshes.mesh(0)
+    corners = vertices[faces]
+    a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
+    normals = np.cross(b - a, c - a)
+    # Outward (positive volume) or inward: the side a face's normal points to is outside.
+    orientation = 1.0 if np.einsum("ij,ij->i", a, np.cross(b, c)).sum() >= 0 else -1.0
+    interior = _inside_face(closest, a[face], b[face], c[face])
+    side = orientation * np.einsum("ij,ij->i", points - closest, normals[face])
+    outside = interior & (side > 0.0)
+    best = float(distances[outside].max()) if outside.any() else 0.0
+    # Undecided: closest point on an edge or a corner, and farther than the answer so far.
+    settled = interior | (distances <= best)
+    if settled.all():
+        return best
+    order = np.argsort(-distances, kind="stable")
+    tree = None
+    batch = 16
+    while True:
+        pending = order[~settled[order]][:batch]
+        if len(pending) == 0:
+            return best
+        out = ~meshes.contains(0, points[pending])
+        if out.any():
+            # Farthest first: every point not yet settled is no farther than these.
+            return max(best, float(distances[pending[out]].max()))
+        settled[pending] = True
+        if tree is None:
+            tree = cKDTree(points)
+        # Shrunk a little so that a point on the ball's sphere (on the surface) is left out.
+        balls = tree.query_ball_point(points[pending], distances[pending] * (1.0 - 1e-9))
+        covered = [np.asarray(ball, dtype=np.int64) for ball in balls if len(ball)]
+        if covered:
+            settled[np.concatenate(covered)] = True
+        batch = min(2 * batch, 1024)
+
+
+def _inside_face(q: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Whether each point ``q`` (on its triangle's plane) lies strictly inside the triangle
+    (a, b, c), away from its edges by a relative margin: barycentric coordinates > 1e-9."""
+    e0, e1, w = b - a, c - a, q - a
+    d00 = np.einsum("ij,ij->i", e0, e0)
+    d01 = np.einsum("ij,ij->i", e0, e1)
+    d11 = np.einsum("ij,ij->i", e1, e1)
+    d20 = np.einsum("ij,ij->i", w, e0)
+    d21 = np.einsum("ij,ij->i", w, e1)
+    denominator = d00 * d11 - d01 * d01
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = (d11 * d20 - d01 * d21) / denominator
+        u = (d00 * d21 - d01 * d20) / denominator
+    margin = 1e-9
+    return (denominator > 0) & (v > margin) & (u > margin) & (1.0 - u - v > margin)
 
 
 def _manifold(vertices: np.ndarray, faces: np.ndarray):
@@ -160,46 +265,66 @@ def fidelity(
 
     Notes
     -----
+    The two one-sided distances measure how far each shape's surface strays from the other
+    shape (its solid, where it has one), so that what lies inside both (cuts between parts,
+    gaps between them deep in the mesh) never counts:
+
     mesh -> parts: sampled mesh surface points plus the mesh vertices (at most ``samples`` of
-    them, chosen with the same seed), distance to the union of
-    the parts by :func:`points_to_parts` (our GJK distance queries).
-    parts -> mesh: sampled part surface points on the boundary of the union (a point within
-    ``SHARED_FACE_FRACTION`` of the diagonal of another part lies on a cut shared between parts
-    and is skipped), exact distance to the mesh triangles (:func:`points_to_triangles`).
+    them, chosen with the same seed); distance to the union of the parts, 0 inside a part
+    (:func:`points_to_parts`, our GJK distance queries).
+
+    parts -> mesh: sampled points of the parts' surfaces plus the parts' vertices (at most
+    ``samples``), keeping those on the boundary of the union: a point within
+    ``SHARED_FACE_FRACTION`` of the diagonal of another part (inside it, or on a cut shared
+    with it up to the engines' slivers) is not. Their distance to the mesh: to the solid it
+    bounds when the mesh is closed and consistently wound (``mesh_is_solid``; 0 inside,
+    :func:`farthest_outside_solid`), else to its surface (exact point-triangle distances).
+    A part that sticks out of the mesh by h gives h; parts that stay inside give 0, however
+    they are cut.
+
     Volumes: manifold3d (hull of each part, boolean union; the mesh itself when manifold).
     """
     import manifold3d
+
+    from meshcol.collision.mesh_query import MeshSet
 
     vertices = np.asarray(vertices, dtype=np.float64)
     faces = np.asarray(faces, dtype=np.int64)
     tol = coverage_tolerance(vertices, tolerance)
     diag = float(np.linalg.norm(np.ptp(vertices, axis=0)))
     rng = np.random.default_rng(seed)
-    corners = (
-        vertices
-        if len(vertices) <= samples
-        else vertices[np.sort(rng.choice(len(vertices), samples, replace=False))]
-    )
+    corners = _at_most(vertices, samples, rng)
     mesh_points = np.concatenate([sample_surface(vertices, faces, samples, rng), corners])
     to_parts = points_to_parts(mesh_points, parts, threads=threads)
 
     areas = np.array([triangle_areas(v, f).sum() for v, f in parts])
     counts = np.maximum(1, np.round(samples * areas / areas.sum()).astype(np.int64))
+    part_vertices = np.concatenate([v for v, _ in parts])
+    vertex_owner = np.repeat(np.arange(len(parts)), [len(v) for v, _ in parts])
+    kept = _at_most(np.arange(len(part_vertices)), samples, rng)
     part_points = np.concatenate(
-        [sample_surface(v, f, int(c), rng) for (v, f), c in zip(parts, counts)]
+        [
+            *(sample_surface(v, f, int(c), rng) for (v, f), c in zip(parts, counts)),
+            part_vertices[kept],
+        ]
     )
-    owner = np.repeat(np.arange(len(parts)), counts)
+    owner = np.concatenate([np.repeat(np.arange(len(parts)), counts), vertex_owner[kept]])
     if len(parts) > 1:
         shared = (
             points_to_parts(part_points, parts, owner, threads=threads)
             <= SHARED_FACE_FRACTION * diag
         )
         part_points = part_points[~shared]
-    to_mesh = (
-        points_to_triangles(part_points, vertices, faces, threads=threads)
-        if len(part_points)
-        else np.zeros(1)
-    )
+    solid = is_closed_manifold(faces)
+    if not len(part_points):
+        parts_to_mesh = 0.0
+    elif solid:
+        meshes = MeshSet.from_arrays([(vertices, faces)], threads=1)
+        parts_to_mesh = farthest_outside_solid(part_points, meshes, threads=threads)
+    else:
+        parts_to_mesh = float(
+            points_to_triangles(part_points, vertices, faces, threads=threads).max()
+        )
 
     # The parts are convex hulls already (closed, outward): their meshes are the solids.
     solids = [_manifold(v, f) for v, f in parts]
@@ -213,8 +338,16 @@ def fidelity(
         union_volume=union_volume,
         volume_ratio=None if not mesh_volume else union_volume / mesh_volume,
         hausdorff_mesh_to_parts=float(to_parts.max()),
-        hausdorff_parts_to_mesh=float(to_mesh.max()),
+        hausdorff_parts_to_mesh=parts_to_mesh,
         uncovered_fraction=float((to_parts > tol).mean()),
         tolerance=tol,
         samples=samples,
+        mesh_is_solid=solid,
     )
+
+
+def _at_most(rows: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
+    """``rows``, or ``count`` of them chosen with ``rng`` (in their order) when there are more."""
+    if len(rows) <= count:
+        return rows
+    return rows[np.sort(rng.choice(len(rows), count, replace=False))]

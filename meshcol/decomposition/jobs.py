@@ -5,13 +5,25 @@ else ``spawn``: CoACD is C++ that holds the GIL, so threads would not help), kil
 exceeds the per-file timeout and replaces it, and reports every task's outcome, so one failing
 or stuck file never stops the others. A :class:`WorkerPool` can be started before the tasks
 are known, so the workers' start-up overlaps the caller's reading of the input files.
+
+Tasks always run in workers, one job included: native code that holds a process does not see
+its signals, while the parent waiting on its workers does, at once. Interrupted (SIGINT, or
+SIGTERM turned into an exception by the command line), the parent kills its workers as it
+unwinds (:meth:`WorkerPool.close`); workers ignore SIGINT (a terminal's Ctrl-C reaches the
+whole process group: the parent decides), and on Linux die with the process that forked them
+(``PR_SET_PDEATHSIG``), so even a parent killed outright leaves none running.
 """
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import multiprocessing
 import multiprocessing.connection
 import os
+import signal
+import sys
+import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator
@@ -52,12 +64,29 @@ def _call(fn: Callable[[Any], Any], task: Any) -> tuple[str, Any]:
         return "failed", f"{type(exc).__name__}: {exc}"
 
 
+# prctl(2) option: a signal for this process when the thread that forked it exits.
+_PR_SET_PDEATHSIG = 1
+
+
+def _die_with_parent() -> None:
+    """Linux: SIGKILL this worker when its parent (the fork server, which exits with the main
+    process) goes, however it goes. Elsewhere, and should the parent go before this runs, the
+    worker still ends when it next reads its pipe (EOF) instead of a task."""
+    if not sys.platform.startswith("linux"):
+        return
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+
+
 def _worker_main(
     conn: multiprocessing.connection.Connection,
     fn: Callable[[Any], Any],
     env: dict[str, str],
     prepare: Callable[[], None] | None,
 ) -> None:
+    # Ctrl-C reaches the whole process group; the parent stops the workers itself.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _die_with_parent()
     # Before any engine loads: OpenMP reads OMP_NUM_THREADS once, when its library loads.
     os.environ.update(env)
     if prepare is not None:
@@ -76,6 +105,67 @@ def _worker_main(
         index, task = message
         status, value = _call(fn, task)
         conn.send((index, status, value))
+
+
+# Seconds between deliveries of a signal whose exception was swallowed (see _SignalGuard).
+_REDELIVER_INTERVAL = 0.1
+
+
+class _SignalGuard:
+    """While a pool runs (main thread only): a SIGINT or SIGTERM whose handler raised is
+    delivered again, every ``_REDELIVER_INTERVAL`` seconds, until its exception has left the
+    pool's loop, in case code the loop calls swallowed it (trimesh catches ``BaseException``
+    around its imports, which take seconds on a busy machine).
+
+    Only handlers installed from Python are wrapped (the default SIGINT handler raises
+    KeyboardInterrupt); a signal left to its default action ends the process, and the
+    workers with it (``_die_with_parent``). While the loop is suspended at a ``yield`` the
+    caller's own code runs: its exceptions are the caller's, and are never delivered again.
+    """
+
+    def __init__(self) -> None:
+        self.previous: dict[int, Callable[[int, Any], Any]] = {}
+        self.pending: int | None = None
+        self.suspended = False
+        self._lock = threading.Lock()
+        self._done = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def __enter__(self) -> _SignalGuard:
+        if threading.current_thread() is threading.main_thread():
+            for number in (signal.SIGINT, getattr(signal, "SIGTERM", None)):
+                if number is None:
+                    continue
+                handler = signal.getsignal(number)
+                if callable(handler):
+                    self.previous[number] = handler
+                    signal.signal(number, self._handle)
+        return self
+
+    def _handle(self, number: int, frame: Any) -> None:
+        try:
+            self.previous[number](number, frame)
+        except BaseException:
+            if not self.suspended:
+                with self._lock:
+                    self.pending = number
+                    if self._thread is None:
+                        self._thread = threading.Thread(target=self._redeliver, daemon=True)
+                        self._thread.start()
+            raise
+
+    def _redeliver(self) -> None:
+        while not self._done.wait(_REDELIVER_INTERVAL):
+            with self._lock:
+                if self.pending is not None and not self._done.is_set():
+                    os.kill(os.getpid(), self.pending)
+
+    def __exit__(self, *exc: object) -> None:
+        with self._lock:
+            self.pending = None
+            self._done.set()
+        for number, handler in self.previous.items():
+            signal.signal(number, handler)
 
 
 class _Worker:
@@ -124,6 +214,19 @@ class _Worker:
             self.conn.close()
 
 
+@contextlib.contextmanager
+def _sigint_blocked() -> Iterator[None]:
+    """SIGINT blocked in this thread for the block (a signal that comes meanwhile waits)."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
 def _context(env: dict[str, str]) -> Any:
     methods = multiprocessing.get_all_start_methods()
     if "forkserver" not in methods:
@@ -145,9 +248,15 @@ def _context(env: dict[str, str]) -> Any:
     saved = {key: os.environ.get(key) for key in env}
     os.environ.update(env)
     try:
-        from multiprocessing import forkserver
+        from multiprocessing import forkserver, resource_tracker
 
-        forkserver.ensure_running()
+        # The server and the workers it forks inherit a blocked SIGINT: a terminal's Ctrl-C,
+        # sent to the whole process group, reaches only this process, which stops them (the
+        # server would otherwise die mid-import with a traceback). The resource tracker
+        # starts first: starting, it unblocks SIGINT itself.
+        resource_tracker.ensure_running()
+        with _sigint_blocked():
+            forkserver.ensure_running()
     finally:
         for key, value in saved.items():
             if value is None:
@@ -155,6 +264,23 @@ def _context(env: dict[str, str]) -> Any:
             else:
                 os.environ[key] = value
     return ctx
+
+
+def _stop_fork_server() -> None:
+    """Kill the fork server this process started, if any, at once (it exits by itself only
+    after its preloading, when it sees that this process has gone). The server is private
+    to ``multiprocessing``: when its layout differs, it is left to exit by itself."""
+    from multiprocessing import forkserver
+
+    server = getattr(forkserver, "_forkserver", None)
+    pid = getattr(server, "_forkserver_pid", None)
+    stop = getattr(server, "_stop", None)
+    if pid is None or stop is None:
+        return
+    with contextlib.suppress(OSError):
+        os.kill(pid, signal.SIGKILL)
+    with contextlib.suppress(OSError):
+        stop()  # closes our end of its pipe and reaps it (at once: it is dead)
 
 
 def worker_env(jobs: int, threads_per_job: int | None = None) -> dict[str, str]:
@@ -213,14 +339,14 @@ class WorkerPool:
 
     def start(self, workers: int | None = None) -> WorkerPool:
         """Start ``workers`` (default ``jobs``, at most ``jobs``) processes now."""
-        if self._ctx is None:
-            self._ctx = _context(self.env)
         count = self.jobs if workers is None else min(workers, self.jobs)
         while len(self._idle) + len(self._busy) < count:
             self._idle.append(self._new_worker())
         return self
 
     def _new_worker(self) -> _Worker:
+        if self._ctx is None:  # the fork server starts with the first worker, not before
+            self._ctx = _context(self.env)
         return _Worker(self._ctx, self.fn, self.env, self.prepare)
 
     def run(self, tasks: Iterable[Any]) -> Iterator[TaskOutcome]:
@@ -231,8 +357,19 @@ class WorkerPool:
         soon as one is free. So the first files are decomposed while the rest are read, and
         an exception from the generator (unusable input) comes as early as reading allows
         (busy workers are then killed on ``close()``).
+
+        A SIGINT or SIGTERM whose handler raises (KeyboardInterrupt; ``meshcol``'s SIGTERM
+        handler) is delivered again until its exception leaves this loop, should code that
+        ``tasks`` calls swallow it (trimesh catches ``BaseException`` around its imports), so
+        that an interrupt is never lost while workers run.
         """
-        self.start(0)
+        with _SignalGuard() as guard:
+            for outcome in self._run(tasks):
+                guard.suspended = True
+                yield outcome
+                guard.suspended = False
+
+    def _run(self, tasks: Iterable[Any]) -> Iterator[TaskOutcome]:
         source = enumerate(tasks)
         more = True
         pending: deque[tuple[int, Any]] = deque()
@@ -298,24 +435,31 @@ class WorkerPool:
                         seconds=seconds,
                     )
 
-    def close(self) -> None:
+    def close(self, *, interrupted: bool = False) -> None:
         """Stop every worker: a busy one, or one that never had a task (it may still be
-        loading the engine: nothing to wait for), is killed; the others exit cleanly."""
+        loading the engine: nothing to wait for), is killed; the others exit cleanly.
+
+        ``interrupted``: the run is being abandoned (a signal): every worker is killed, and
+        the fork server too, which may still be importing its preloaded modules and would
+        otherwise outlive this process by seconds.
+        """
         for worker in self._busy:
             worker.kill()
         for worker in self._idle:
-            if worker.used:
+            if worker.used and not interrupted:
                 worker.close()
             else:
                 worker.kill()
         self._busy.clear()
         self._idle.clear()
+        if interrupted and self._ctx is not None:
+            _stop_fork_server()
 
     def __enter__(self) -> WorkerPool:
         return self
 
-    def __exit__(self, *exc: object) -> None:
-        self.close()
+    def __exit__(self, kind: type[BaseException] | None, *exc: object) -> None:
+        self.close(interrupted=kind is not None and not issubclass(kind, Exception))
 
 
 def run_tasks(
@@ -336,7 +480,8 @@ def run_tasks(
     tasks : iterable
         Picklable task arguments, read lazily (one whenever a worker is free).
     jobs : int
-        Worker processes. With ``jobs == 1`` and no timeout, tasks run in this process.
+        Worker processes (always at least one: tasks never run in this process, so that it
+        stays responsive to signals while native code runs).
     timeout : float, optional
         Seconds one task may take; its worker is then killed and replaced, and the task's
         status is ``timeout``.
@@ -349,19 +494,6 @@ def run_tasks(
     if pool is not None:
         yield from pool.run(tasks)
         return
-    if jobs < 1:
-        raise ValueError(f"jobs must be at least 1, got {jobs}")
-    if jobs == 1 and timeout is None:
-        # In this process: every task is read (and checked) before the first runs.
-        for index, task in enumerate(list(tasks)):
-            start = time.perf_counter()
-            status, value = _call(fn, task)
-            seconds = time.perf_counter() - start
-            if status == "ok":
-                yield TaskOutcome(index, status, value, seconds=seconds)
-            else:
-                yield TaskOutcome(index, status, message=value, seconds=seconds)
-        return
     with WorkerPool(fn, jobs, timeout=timeout, threads_per_job=threads_per_job) as workers:
         yield from workers.run(tasks)
 
@@ -373,8 +505,15 @@ def run_tasks(
 def decompose_task(
     task: tuple[str, list[tuple[str, np.ndarray, np.ndarray]], dict[str, Any]],
 ) -> list[tuple[str, Any]]:
-    """Worker entry: decompose every body of one file. ``task`` = (path, bodies, options)."""
+    """Worker entry: decompose every body of one file. ``task`` = (path, bodies, options).
+
+    Reads the cache but never writes it (``write_cache=False``): the caller stores results.
+    """
     from meshcol.decomposition.decompose import decompose
 
     _, bodies, options = task
-    return [(name, decompose((vertices, faces), **options)) for name, vertices, faces in bodies]
+    # The parent stores what comes back: a worker killed mid-task never leaves an entry.
+    return [
+        (name, decompose((vertices, faces), write_cache=False, **options))
+        for name, vertices, faces in bodies
+    ]

@@ -28,17 +28,23 @@ class Fidelity:
     volume_ratio : float or None
         ``union_volume / mesh_volume``.
     hausdorff_mesh_to_parts : float
-        Largest distance from a sampled point of the mesh surface to the union of the parts
-        (0 inside a part), computed with :func:`meshcol.collision.narrowphase.distance_batch`.
+        Largest distance from a sampled point of the mesh surface (or a mesh vertex) to the
+        union of the parts, 0 inside a part (:func:`meshcol.collision.narrowphase.
+        distance_batch`): how far the parts fall short of the mesh.
     hausdorff_parts_to_mesh : float
-        Largest distance from a sampled point of the boundary of the union of the parts to the
-        mesh surface (exact point-triangle distances).
+        Largest distance from a sampled point (or vertex) of the boundary of the union of the
+        parts to the mesh: to its solid (0 inside) when ``mesh_is_solid``, else to its surface.
+        How far the parts stick out; cuts and gaps between parts inside the mesh count 0
+        (:func:`meshcol.decomposition.fidelity.fidelity` has the definitions).
     uncovered_fraction : float
         Fraction of the sampled mesh surface points farther than ``tolerance`` from the union.
     tolerance : float
         Coverage tolerance, in mesh units.
     samples : int
         Points sampled on the mesh surface (the parts get as many).
+    mesh_is_solid : bool
+        The mesh is closed and consistently wound
+        (:func:`meshcol.geometry.topology.is_closed_manifold`), so it bounds a solid.
     """
 
     parts: int
@@ -51,6 +57,7 @@ class Fidelity:
     uncovered_fraction: float
     tolerance: float
     samples: int
+    mesh_is_solid: bool
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -64,6 +71,7 @@ class Fidelity:
             "uncovered_fraction": self.uncovered_fraction,
             "tolerance": self.tolerance,
             "samples": self.samples,
+            "mesh_is_solid": self.mesh_is_solid,
         }
 
 

@@ -12,14 +12,16 @@ and vertices split along UV or normal seams are merged back by position.
 from __future__ import annotations
 
 import os
-import re
 import struct
 import zlib
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from meshcol.errors import InputFileError, InvalidMeshError
+from meshcol.io.off import read_off
 from meshcol.types import Body
 
 __all__ = [
@@ -130,33 +132,16 @@ def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]
     file_type = _check_file(file, source)
     if file_type in _NATIVE_FORMATS:
         return load_meshes([source], merge=merge)[0]
-    scene = _read_scene(file, file_type, source)
-
-    # (name, matrix, trimesh geometry) for every mesh node, in file order
-    nodes = []
-    for node in scene.graph.nodes_geometry:
-        matrix, geometry_name = scene.graph[node]
-        geometry = scene.geometry[geometry_name]
-        faces = getattr(geometry, "faces", None)
-        if faces is None or len(faces) == 0:
-            continue  # point clouds, paths, faceless meshes: not bodies
-        name = geometry_name if file_type in ("obj", "stl", "ply", "off") else str(node)
-        if file_type == "obj" and name == file.name:
-            name = "default"  # faces before any `o`/`g` line: OBJ's default group
-        nodes.append((name, np.asarray(matrix, dtype=np.float64), geometry))
+    nodes = _read_nodes(file, file_type, source)
     if not nodes:
         raise InvalidMeshError("mesh has no faces", source)
-    if file_type == "obj":
-        nodes = _obj_file_order(file, nodes)
-    elif file_type in ("glb", "gltf"):
-        nodes = _gltf_file_order(file, file_type, nodes)
 
     stem = file.stem
     bodies: list[Body] = []
     used: set[str] = set()
-    for name, matrix, geometry in nodes:
-        vertices = np.asarray(geometry.vertices, dtype=np.float64)
-        faces = np.asarray(geometry.faces, dtype=np.int64)
+    for name, matrix, vertices, faces in nodes:
+        vertices = np.asarray(vertices, dtype=np.float64)
+        faces = np.asarray(faces, dtype=np.int64)
         if vertices.ndim != 2 or vertices.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3:
             raise InvalidMeshError("mesh is not made of triangles", source)
         if not np.isfinite(vertices).all():
@@ -196,7 +181,7 @@ _CORRUPT = 4  # the core's ReadStatus::Corrupt
 
 
 def load_meshes(
-    paths: list[str | os.PathLike[str]], *, merge: bool = True, threads: int = 0
+    paths: Sequence[str | os.PathLike[str]], *, merge: bool = True, threads: int = 0
 ) -> list[list[Body]]:
     """Load many mesh files at once: :func:`load_mesh` for each, with OBJ and STL files read
     and parsed by the native core in parallel (GIL released).
@@ -240,12 +225,14 @@ def load_meshes(
     native = [i for i, t in enumerate(types) if t in _NATIVE_FORMATS]
     out: list[list[Body] | None] = [None] * len(sources)
     if native:
-        vertices, faces, v_off, f_off, owner, names, status, errors = core.read_mesh_files(
+        vertices, faces, v_off, f_off, owner, raw_names, status, raw_errors = core.read_mesh_files(
             [sources[i] for i in native],
             [_NATIVE_FORMATS[types[i]] for i in native],
             merge=merge,
             threads=threads,
         )
+        names = [_text(n) for n in raw_names]
+        errors = [_text(e) for e in raw_errors]
         # one vectorised pass finds the objects with a coordinate beyond the limit
         big_rows = np.flatnonzero((np.abs(vertices) > MAX_COORDINATE).any(axis=1))
         big = (
@@ -286,6 +273,14 @@ def load_meshes(
         if out[i] is None:
             out[i] = load_mesh(sources[i], merge=merge)
     return out  # type: ignore[return-value]
+
+
+def _text(data: bytes) -> str:
+    """Bytes of a file as text: UTF-8, else Latin-1 (which maps every byte)."""
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("latin-1")
 
 
 def split_rigid(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
@@ -384,26 +379,53 @@ def _check_file(file: Path, source: str) -> str:
     return file_type
 
 
+def _read_nodes(file: Path, file_type: str, source: str) -> list:
+    """``(name, matrix, vertices, faces)`` of every mesh node of a PLY, OFF or glTF/GLB file,
+    in file order (OBJ and STL go to the core's readers, :func:`load_meshes`)."""
+    if file_type == "off":
+        off_vertices, off_faces = read_off(_read_bytes(file, source), source)
+        return [(file.stem, np.eye(4), off_vertices, off_faces)] if len(off_faces) else []
+    scene = _read_scene(file, file_type, source)
+    nodes = []
+    for node in scene.graph.nodes_geometry:
+        matrix, geometry_name = scene.graph[node]
+        geometry = scene.geometry[geometry_name]
+        faces = getattr(geometry, "faces", None)
+        if faces is None or len(faces) == 0:
+            continue  # point clouds, paths, faceless meshes: not bodies
+        name = geometry_name if file_type == "ply" else str(node)
+        nodes.append((name, np.asarray(matrix, dtype=np.float64), geometry.vertices, faces))
+    if file_type in ("glb", "gltf"):
+        nodes = _gltf_file_order(file, file_type, nodes)
+    return nodes
+
+
+def _read_bytes(file: Path, source: str) -> bytes:
+    try:
+        return file.read_bytes()
+    except OSError as error:
+        raise InputFileError(f"cannot read file: {error.strerror or error}", source) from None
+
+
 def _read_scene(file: Path, file_type: str, source: str):
+    import io
+
     import trimesh
 
     options: dict = {"process": False}
-    if file_type == "obj":
-        # Geometry only: no .mtl, no textures (so no Pillow), one body per object, or per
-        # group when the file has no objects.
-        text = file.read_bytes().decode("utf-8", errors="replace")
-        has_objects = re.search(r"^\s*o\s", text, flags=re.MULTILINE) is not None
-        options.update(
-            skip_materials=True,
-            group_material=False,
-            split_objects=True,
-            split_groups=not has_objects,
-        )
-    elif file_type == "stl":
-        _check_stl(file, source)
+    stream = None
+    if file_type == "ply":
+        header = _ply_bytes(file, source)
+        if header is not None:
+            stream = io.BytesIO(header)
     elif file_type == "gltf":
-        _check_json(file, source)
+        _check_gltf(_check_json(file, source), "GLTF", source)
+    elif file_type == "glb":
+        _check_gltf(_glb_json(file, source), "GLB", source)
     try:
+        if stream is not None:
+            stream.name = file.name  # trimesh names an unnamed object after it
+            return trimesh.load_scene(stream, file_type=file_type, **options)
         return trimesh.load_scene(str(file), file_type=file_type, **options)
     except FileNotFoundError as error:
         # a glTF buffer or image the file refers to
@@ -418,28 +440,25 @@ def _read_scene(file: Path, file_type: str, source: str):
         ) from None
 
 
-def _check_stl(file: Path, source: str) -> None:
-    """Reject what is neither a binary STL nor text before trimesh guesses an encoding."""
-    size = file.stat().st_size
-    with open(file, "rb") as stream:
-        header = stream.read(84)
-    if size >= 84 and 84 + 50 * struct.unpack("<I", header[80:84])[0] == size:
-        return
+def _ply_bytes(file: Path, source: str) -> bytes | None:
+    """A PLY file whose header (comments, obj_info) is not UTF-8, with the header re-encoded
+    from Latin-1; None when the file needs nothing (the data after the header is untouched)."""
+    data = _read_bytes(file, source)
+    end = data.find(b"end_header")
+    if end < 0:
+        return None
     try:
-        file.read_bytes().decode("utf-8")
+        data[:end].decode("utf-8")
+        return None
     except UnicodeDecodeError:
-        raise InvalidMeshError(
-            "cannot parse STL file: neither binary STL (size does not match the triangle "
-            "count) nor ASCII text",
-            source,
-        ) from None
+        return data[:end].decode("latin-1").encode("utf-8") + data[end:]
 
 
-def _check_json(file: Path, source: str) -> None:
+def _check_json(file: Path, source: str) -> Any:
     import json
 
     try:
-        json.loads(file.read_bytes())
+        return json.loads(file.read_bytes().decode("utf-8-sig"))
     except json.JSONDecodeError as error:
         raise InvalidMeshError(
             f"cannot parse GLTF file: invalid JSON at line {error.lineno} column {error.colno}: "
@@ -450,18 +469,113 @@ def _check_json(file: Path, source: str) -> None:
         raise InvalidMeshError("cannot parse GLTF file: not UTF-8 text", source) from None
 
 
-def _obj_file_order(file: Path, nodes: list) -> list:
-    """trimesh returns OBJ objects last-first: put them back in the order the file has them."""
-    text = file.read_bytes().decode("utf-8", errors="replace")
+def _glb_json(file: Path, source: str) -> Any:
+    """The JSON chunk of a GLB file (its header checked)."""
+    import json
 
-    def position(item) -> int:
-        name = item[0]
-        if name == "default":
-            return -1
-        match = re.search(rf"^\s*[og]\s+{re.escape(name)}\s*$", text, flags=re.MULTILINE)
-        return match.start() if match else len(text)
+    data = file.read_bytes()
+    if len(data) < 20 or data[:4] != b"glTF":
+        raise InvalidMeshError("cannot parse GLB file: no glTF binary header", source)
+    length, kind = struct.unpack("<I4s", data[12:20])
+    if kind != b"JSON" or 20 + length > len(data):
+        raise InvalidMeshError("cannot parse GLB file: the first chunk is not JSON", source)
+    try:
+        return json.loads(data[20 : 20 + length].decode("utf-8-sig"))
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        raise InvalidMeshError(
+            "cannot parse GLB file: its JSON chunk is not valid", source
+        ) from None
 
-    return sorted(nodes, key=position)
+
+_SINGULAR = {
+    "scenes": "scene",
+    "nodes": "node",
+    "meshes": "mesh",
+    "accessors": "accessor",
+    "bufferViews": "bufferView",
+    "buffers": "buffer",
+}
+# glTF 2.0: byte, unsigned byte, short, unsigned short, unsigned int, float
+_COMPONENT_TYPES = (5120, 5121, 5122, 5123, 5125, 5126)
+_ACCESSOR_TYPES = ("SCALAR", "VEC2", "VEC3", "VEC4", "MAT2", "MAT3", "MAT4")
+
+
+def _check_gltf(document: Any, kind: str, source: str) -> None:
+    """Refuse references to objects the glTF file does not have, naming the reference.
+
+    trimesh would index its lists with them: a negative index silently takes an object from
+    the end, a missing one fails with an unnamed IndexError or KeyError.
+    """
+    if not isinstance(document, dict):
+        raise InvalidMeshError(f"cannot parse {kind} file: the JSON is not an object", source)
+
+    def items(name: str) -> list:
+        value = document.get(name, [])
+        if not isinstance(value, list):
+            raise InvalidMeshError(f"cannot parse {kind} file: '{name}' is not an array", source)
+        return value
+
+    def check(where: str, value: Any, name: str) -> None:
+        count = len(items(name))
+        if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < count:
+            raise InvalidMeshError(
+                f"cannot parse {kind} file: {where} refers to {_SINGULAR[name]} {value!r}, but "
+                f"the file has {count} {name}",
+                source,
+            )
+
+    for k, scene in enumerate(items("scenes")):
+        for node in scene.get("nodes", []) if isinstance(scene, dict) else []:
+            check(f"scene {k}", node, "nodes")
+    if "scene" in document:
+        check("'scene'", document["scene"], "scenes")
+    for k, node in enumerate(items("nodes")):
+        if not isinstance(node, dict):
+            continue
+        for child in node.get("children", []):
+            check(f"node {k} children", child, "nodes")
+        if "mesh" in node:
+            check(f"node {k}", node["mesh"], "meshes")
+    for k, mesh in enumerate(items("meshes")):
+        primitives = mesh.get("primitives", []) if isinstance(mesh, dict) else []
+        for j, primitive in enumerate(primitives):
+            if not isinstance(primitive, dict):
+                continue
+            attributes = primitive.get("attributes", {})
+            for attribute in ("POSITION",):
+                if isinstance(attributes, dict) and attribute in attributes:
+                    check(f"mesh {k} primitive {j} {attribute}", attributes[attribute], "accessors")
+            if "indices" in primitive:
+                check(f"mesh {k} primitive {j} indices", primitive["indices"], "accessors")
+    for k, accessor in enumerate(items("accessors")):
+        if not isinstance(accessor, dict):
+            continue
+        if "bufferView" in accessor:
+            check(f"accessor {k}", accessor["bufferView"], "bufferViews")
+        if accessor.get("componentType") not in _COMPONENT_TYPES:
+            raise InvalidMeshError(
+                f"cannot parse {kind} file: accessor {k} has componentType "
+                f"{accessor.get('componentType')!r} (expected one of "
+                f"{', '.join(map(str, _COMPONENT_TYPES))})",
+                source,
+            )
+        if accessor.get("type") not in _ACCESSOR_TYPES:
+            raise InvalidMeshError(
+                f"cannot parse {kind} file: accessor {k} has type {accessor.get('type')!r} "
+                f"(expected one of {', '.join(_ACCESSOR_TYPES)})",
+                source,
+            )
+    for k, view in enumerate(items("bufferViews")):
+        if isinstance(view, dict):
+            check(f"bufferView {k}", view.get("buffer"), "buffers")
+    for k, buffer in enumerate(items("buffers")):
+        # only a GLB's first buffer may leave out its uri (it is the binary chunk)
+        if isinstance(buffer, dict) and "uri" not in buffer and (kind == "GLTF" or k > 0):
+            raise InvalidMeshError(
+                f"cannot parse {kind} file: buffer {k} has no uri (only the first buffer of a "
+                "GLB file may be its binary chunk)",
+                source,
+            )
 
 
 def _gltf_file_order(file: Path, file_type: str, nodes: list) -> list:

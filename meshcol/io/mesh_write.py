@@ -23,6 +23,7 @@ __all__ = [
     "MESH_OUTPUT_EXTENSIONS",
     "MULTI_MESH_EXTENSIONS",
     "glb_bytes",
+    "layout_file_pattern",
     "obj_text",
     "part_names",
     "safe_name",
@@ -128,6 +129,19 @@ def part_names(body: str, count: int, prefix: str = "") -> list[str]:
     """``[prefix]<body>_NN`` for each part, NN zero-padded to at least two digits."""
     width = max(2, len(str(count - 1)))
     return [f"{prefix}{body}_{i:0{width}d}" for i in range(count)]
+
+
+def layout_file_pattern(body: str, layout: str = "parts", fmt: str = "obj") -> re.Pattern[str]:
+    """The names of the files :func:`write_parts` may write for ``body`` in ``layout``, however
+    many parts it has: a regular expression for a file name (no folder) to ``fullmatch``."""
+    if layout not in LAYOUTS:
+        raise ValueError(f"unknown layout {layout!r}")
+    body = re.escape(safe_name(body))
+    if layout == "parts":
+        return re.compile(rf"{body}_\d{{2,}}\.{fmt}")
+    if layout == "combined":
+        return re.compile(rf"{body}\.{fmt}")
+    return re.compile(rf"{body}_ucx\.obj")
 
 
 def write_parts(

@@ -24,7 +24,7 @@ import numpy as np
 
 from meshcol.errors import InputFileError, MeshcolError, SceneError
 from meshcol.io.mesh_read import MAX_COORDINATE, check_magnitude, load_mesh, split_rigid
-from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere
+from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere, Spin
 
 __all__ = [
     "MANIFEST_EXTENSIONS",
@@ -93,8 +93,10 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     Returns
     -------
     Scene
-        Bodies in manifest order (a mesh file with several bodies gives ``<name>/<sub>`` for
-        each, in file order), the manifest's ``units`` and ``duration``, ``source = path``.
+        One body per manifest entry, in manifest order: a mesh file with several objects
+        (OBJ objects or groups, glTF mesh nodes, STL solids) gives one body whose ``parts``
+        are those objects, in file order; the manifest's ``units`` and ``duration``,
+        ``source = path``.
 
     Raises
     ------
@@ -107,9 +109,11 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     Notes
     -----
     A body's world pose is ``T = [R | p]`` from ``rotation`` and ``position``; its ``scale``
-    ``S`` and any transform ``L`` a mesh file gives a sub-body are combined as ``T S L`` and
-    split again into a rigid transform and a part baked into the vertices (see
-    :func:`meshcol.io.mesh_read.split_rigid`), so every ``Body.pose`` is rigid.
+    ``S`` and any transform ``L`` the mesh file gives an object are combined as ``T S L``. For
+    a file of one object, ``S L`` is split into a rigid transform and a part baked into the
+    vertices (see :func:`meshcol.io.mesh_read.split_rigid`); for a body of several parts, each
+    part's ``S L`` is baked into its vertices and the body's pose is ``T``. Either way every
+    ``Body.pose`` is rigid.
     """
     source = os.fspath(path)
     file = Path(source)
@@ -122,8 +126,7 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
 
     bodies: list[Body] = []
     names: set[str] = set()
-    taken: set[str] = set()  # names of the bodies made so far (sub-bodies included)
-    files: dict[str, list[Body]] = {}  # each mesh file is read once, however many instances
+    files = _read_mesh_files(document, source)  # each mesh file read once, all in parallel
     for spec in document["bodies"]:
         label = f"body {spec['name']!r}"
         if spec["name"] in names:
@@ -132,17 +135,14 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
         if ("mesh" in spec) == ("primitive" in spec):
             raise SceneError(f"{label}: needs exactly one of 'mesh' or 'primitive'", source)
         start = _pose(spec.get("position"), spec.get("rotation"), label, "rotation", source)
-        end = _end_pose(spec, start, duration, label, source)
+        end, spin = _end_pose(spec, start, duration, label, source)
         scale = _scale(spec.get("scale"))
         if "mesh" in spec:
-            new = _mesh_bodies(spec, file, source, label, start, end, scale, files)
+            new = _mesh_bodies(spec, file, source, label, start, end, spin, scale, files)
         else:
-            new = [_primitive_body(spec, source, label, start, end, scale)]
+            new = [_primitive_body(spec, source, label, start, end, spin, scale)]
         for body in new:
             _check_world(body, label, source)
-            if body.name in taken:
-                raise SceneError(f"{label}: body name {body.name!r} is already taken", source)
-            taken.add(body.name)
         bodies.extend(new)
     return Scene(bodies=tuple(bodies), units=units, source=source, duration=duration)
 
@@ -185,8 +185,10 @@ def load_inputs(paths: Sequence[str | os.PathLike[str]]) -> Scene:
     Returns
     -------
     Scene
-        The manifest's scene; or every body of every file in order. A name that clashes with
-        an earlier body's gets ``#2``, ``#3``... appended. ``source`` is the input path when
+        The manifest's scene (one body per manifest entry, its file's objects as its
+        parts); or, for mesh and glTF/GLB files given directly, one body per object of every
+        file, in order (``<stem>/<object>`` when a file holds several). A name that clashes
+        with an earlier body's gets ``#2``, ``#3``... appended. ``source`` is the input path when
         there is exactly one, else None; ``units`` is None without a manifest.
 
     Raises
@@ -350,6 +352,11 @@ def _pose(position, rotation, label: str, field: str, source: str) -> np.ndarray
 
 
 def _end_pose(spec: dict, start: np.ndarray, duration, label: str, source: str):
+    """The end pose and, for an angular velocity, the spin: ``(end, spin)``, either None.
+
+    An ``end_rotation`` is reached the shortest way (no spin); an ``angular_velocity`` turns
+    the body by ``|w| * duration`` radians, whatever the size (a :class:`Spin`).
+    """
     by_pose = "end_position" in spec or "end_rotation" in spec
     by_velocity = "velocity" in spec or "angular_velocity" in spec
     if by_pose and by_velocity:
@@ -364,27 +371,31 @@ def _end_pose(spec: dict, start: np.ndarray, duration, label: str, source: str):
             end[:3, :3] = _rotation(spec["end_rotation"], label, "end_rotation", source)
         if "end_position" in spec:
             end[:3, 3] = spec["end_position"]
-        return end
+        return end, None
     if by_velocity:
         if duration is None:
             field = "velocity" if "velocity" in spec else "angular_velocity"
             raise SceneError(f"{label}: {field} needs the manifest's 'duration'", source)
         end = start.copy()
         end[:3, 3] += np.asarray(spec.get("velocity", [0.0, 0.0, 0.0]), dtype=float) * duration
-        turn = np.asarray(spec.get("angular_velocity", [0.0, 0.0, 0.0]), dtype=float) * duration
-        end[:3, :3] = _rotation_vector(turn) @ start[:3, :3]
-        return end
-    return None
+        if "angular_velocity" not in spec:
+            return end, None
+        turn = np.asarray(spec["angular_velocity"], dtype=float) * duration
+        if not np.all(np.isfinite(turn)):
+            raise SceneError(f"{label}: angular_velocity * duration is not finite", source)
+        spin = Spin(turn)
+        end[:3, :3] = spin.matrix() @ start[:3, :3]
+        return end, spin
+    return None, None
 
 
-def _rotation_vector(vector: np.ndarray) -> np.ndarray:
-    """Rodrigues' formula: rotation by ``|v|`` radians about ``v / |v|``."""
-    angle = float(np.linalg.norm(vector))
-    if angle == 0.0:
-        return np.eye(3)
-    k = vector / angle
-    cross = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-    return np.eye(3) + math.sin(angle) * cross + (1 - math.cos(angle)) * (cross @ cross)
+def _sub_spin(spin: Spin | None, start: np.ndarray, end, rigid: np.ndarray) -> Spin | None:
+    """A sub-body's spin: the manifest body's turn (the shortest one to an end rotation), about
+    the manifest body's origin, where the file places the sub-body's own origin elsewhere; so
+    the sub-bodies move as one rigid body."""
+    if end is None or not np.any(rigid[:3, 3]):
+        return spin
+    return Spin(None if spin is None else spin.rotation, pivot=start[:3, 3].copy())
 
 
 def _scale(value) -> np.ndarray:
@@ -395,8 +406,28 @@ def _scale(value) -> np.ndarray:
     return np.full(3, float(value))
 
 
+def _read_mesh_files(document: Any, source: str) -> dict[str, list[Body]]:
+    """Every mesh file the manifest names, read at once (OBJ and STL by the core, in parallel),
+    keyed by normalised path. Empty when a file fails: the body loop then reads the files one
+    by one and reports the first bad one with its body's name."""
+    from meshcol.io.mesh_read import load_meshes
+
+    folder = os.path.dirname(source)
+    paths = list(
+        dict.fromkeys(
+            os.path.normpath(os.path.join(folder, spec["mesh"]))
+            for spec in document["bodies"]
+            if isinstance(spec.get("mesh"), str)
+        )
+    )
+    try:
+        return dict(zip(paths, load_meshes(paths)))
+    except MeshcolError:
+        return {}
+
+
 def _mesh_bodies(
-    spec, manifest: Path, source, label, start, end, scale, files: dict[str, list[Body]]
+    spec, manifest: Path, source, label, start, end, spin, scale, files: dict[str, list[Body]]
 ) -> list[Body]:
     mesh = spec["mesh"]
     mesh_source = os.path.join(os.path.dirname(source), mesh)
@@ -411,30 +442,52 @@ def _mesh_bodies(
             raise SceneError(f"{label}: mesh file {mesh!r}: {error.message}", source) from None
         files[key] = loaded
     stretch = np.diag([*scale, 1.0])
-    bodies = []
-    for sub in loaded:
+    if len(loaded) == 1:
+        (sub,) = loaded
         rigid, linear = split_rigid(stretch @ sub.pose)
         vertices, faces = sub.vertices, sub.faces
         if linear is not None:
             vertices = vertices @ linear.T
             if np.linalg.det(linear) < 0:
                 faces = faces[:, ::-1]
-        sub_name = sub.name.split("/", 1)[1] if len(loaded) > 1 else None
-        bodies.append(
-            Body(
-                name=spec["name"] if sub_name is None else f"{spec['name']}/{sub_name}",
-                source=mesh_source,
-                vertices=np.ascontiguousarray(vertices),
-                faces=np.ascontiguousarray(faces),
-                pose=start @ rigid,
-                end_pose=None if end is None else end @ rigid,
-                collider=spec.get("shape"),
+        parts: tuple[str, ...] = ()
+        part_faces = None
+    else:
+        # One body of several parts: each part's node transform and the body's scale are
+        # baked into its vertices, so the parts share the body's frame and pose.
+        rigid = np.eye(4)
+        blocks_v, blocks_f, counts = [], [], []
+        base = 0
+        for sub in loaded:
+            matrix = stretch @ sub.pose
+            part_faces_local = (
+                sub.faces[:, ::-1] if np.linalg.det(matrix[:3, :3]) < 0 else sub.faces
             )
+            blocks_v.append(sub.vertices @ matrix[:3, :3].T + matrix[:3, 3])
+            blocks_f.append(part_faces_local + base)
+            counts.append(len(sub.faces))
+            base += len(sub.vertices)
+        vertices = np.concatenate(blocks_v)
+        faces = np.concatenate(blocks_f)
+        parts = tuple(sub.name.split("/", 1)[1] for sub in loaded)
+        part_faces = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    return [
+        Body(
+            name=spec["name"],
+            source=mesh_source,
+            vertices=np.ascontiguousarray(vertices),
+            faces=np.ascontiguousarray(faces),
+            pose=start @ rigid,
+            end_pose=None if end is None else end @ rigid,
+            collider=spec.get("shape"),
+            parts=parts,
+            part_faces=part_faces,
+            spin=_sub_spin(spin, start, end, rigid),
         )
-    return bodies
+    ]
 
 
-def _primitive_body(spec, source, label, start, end, scale) -> Body:
+def _primitive_body(spec, source, label, start, end, spin, scale) -> Body:
     import trimesh
 
     options = spec["primitive"]
@@ -472,6 +525,7 @@ def _primitive_body(spec, source, label, start, end, scale) -> Body:
         end_pose=end,
         primitive=primitive,
         collider=spec.get("shape"),
+        spin=spin,
     )
 
 
@@ -496,15 +550,12 @@ def _parse(file: Path, source: str) -> Any:
     except OSError as error:
         raise InputFileError(f"cannot read file: {error.strerror or error}", source) from None
     try:
-        text = data.decode("utf-8")
+        text = data.decode("utf-8-sig")  # a byte-order mark, as some editors write, is dropped
     except UnicodeDecodeError:
         raise SceneError("manifest is not UTF-8 text", source) from None
     document = _decode(file, text, source)
     if _nesting(document) > MAX_NESTING:
         raise SceneError(_too_deep(text, "[{"), source)
-    where = _first_non_finite(document)
-    if where is not None:
-        raise SceneError(f"{_describe(document, where)} must be finite", source)
     return document
 
 
@@ -576,6 +627,120 @@ def _first_non_finite(document: Any) -> list | None:
             return path
         stack.extend(reversed([(item, [*path, key]) for key, item in _children(value)]))
     return None
+
+
+# The common manifest, checked by hand: JSON Schema validation costs about 0.7 ms of Python per
+# body, which a 100,000-body scene cannot afford. _plainly_valid accepts only documents the
+# schema accepts with every number finite (tests/test_scene_validation.py holds it to
+# jsonschema on generated documents); anything else, including any field it does not know,
+# goes to the walk for non-finite numbers and to jsonschema, which write the message. Keep it
+# in step with schemas/scene.schema.json.
+_TOP_FIELDS = frozenset({"units", "duration", "bodies"})
+_BODY_FIELDS = frozenset(
+    {
+        "name",
+        "mesh",
+        "primitive",
+        "position",
+        "rotation",
+        "scale",
+        "end_position",
+        "end_rotation",
+        "velocity",
+        "angular_velocity",
+        "shape",
+    }
+)
+_VECTOR_FIELDS = ("position", "end_position", "velocity", "angular_velocity")
+_ORDERS = frozenset(
+    {"xyz", "xzy", "yxz", "yzx", "zxy", "zyx", "xyx", "xzx", "yxy", "yzy", "zxz", "zyz"}
+)
+_SHAPES = frozenset({"hull", "decomposed", "mesh"})
+_PRIMITIVE_KEYS = {
+    "sphere": frozenset({"type", "radius"}),
+    "box": frozenset({"type", "size"}),
+    "capsule": frozenset({"type", "radius", "length"}),
+    "cylinder": frozenset({"type", "radius", "length"}),
+}
+
+
+def _is_number(x: Any) -> bool:
+    """A finite JSON number (bool is not one; non-finite ones fail elsewhere, with a message)."""
+    return type(x) is int or (type(x) is float and math.isfinite(x))
+
+
+def _is_numbers(x: Any, n: int, positive: bool = False) -> bool:
+    if type(x) is not list or len(x) != n:
+        return False
+    return all(_is_number(v) and (not positive or v > 0) for v in x)
+
+
+def _is_rotation(r: Any) -> bool:
+    if type(r) is not dict:
+        return False
+    if len(r) == 1:
+        return _is_numbers(r.get("quaternion"), 4)
+    order = r.get("order")
+    return (
+        len(r) == 2
+        and _is_numbers(r.get("euler_deg"), 3)
+        and type(order) is str
+        and (order in _ORDERS)
+    )
+
+
+def _is_primitive(p: Any) -> bool:
+    if type(p) is not dict:
+        return False
+    kind = p.get("type")
+    fields = _PRIMITIVE_KEYS.get(kind) if type(kind) is str else None
+    if fields is None or p.keys() != fields:
+        return False
+    if kind == "box":
+        return _is_numbers(p["size"], 3, positive=True)
+    if not (_is_number(p["radius"]) and p["radius"] > 0):
+        return False
+    return kind == "sphere" or (_is_number(p["length"]) and p["length"] > 0)
+
+
+def _plainly_valid(document: Any) -> bool:
+    """True only when ``document`` is valid under the scene schema (False: ask jsonschema)."""
+    if type(document) is not dict or not document.keys() <= _TOP_FIELDS:
+        return False
+    units = document.get("units", "m")
+    duration = document.get("duration", 1.0)
+    bodies = document.get("bodies")
+    if type(units) is not str or not units:
+        return False
+    if not _is_number(duration) or not duration > 0:
+        return False
+    if type(bodies) is not list or not bodies:
+        return False
+    for body in bodies:
+        if type(body) is not dict or not body.keys() <= _BODY_FIELDS:
+            return False
+        name = body.get("name")
+        if type(name) is not str or not name:
+            return False
+        mesh = body.get("mesh")
+        if mesh is None:
+            if "mesh" in body or not _is_primitive(body.get("primitive")):
+                return False
+        elif type(mesh) is not str or not mesh or "primitive" in body:
+            return False
+        for field in _VECTOR_FIELDS:
+            if field in body and not _is_numbers(body[field], 3):
+                return False
+        for field in ("rotation", "end_rotation"):
+            if field in body and not _is_rotation(body[field]):
+                return False
+        if "scale" in body:
+            scale = body["scale"]
+            if not (_is_number(scale) and scale > 0) and not _is_numbers(scale, 3, positive=True):
+                return False
+        if "shape" in body and (type(body["shape"]) is not str or body["shape"] not in _SHAPES):
+            return False
+    return True
 
 
 #: Manifest fields that are lengths or positions (checked against MAX_COORDINATE).
@@ -714,6 +879,14 @@ def _validator():
 
 
 def _validate(document: Any, source: str) -> None:
+    """Raises SceneError for a non-finite number (first, in document order) or a schema
+    violation; the common manifest passes by the hand-written check alone, which also requires
+    every number it meets to be finite."""
+    if _plainly_valid(document):
+        return
+    where = _first_non_finite(document)
+    if where is not None:
+        raise SceneError(f"{_describe(document, where)} must be finite", source)
     errors = list(_validator().iter_errors(document))
     if not errors:
         return

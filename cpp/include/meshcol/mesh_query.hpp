@@ -35,10 +35,14 @@ struct MeshDistanceOutput {
     bool b_inside_a = false;        ///< as a_inside_b, with a and b swapped
     std::int64_t triangle_a = -1;   ///< input face of a holding point_a, -1 when not found
     std::int64_t triangle_b = -1;   ///< input face of b holding point_b, -1 when not found
-    /// CONVERGED; DEGENERATE when squared distances overflow (coordinates beyond ~1e154;
-    /// distance inf); INVALID_INPUT for an invalid mesh
-    Status status = Status::NOT_RUN;
+    Status status = Status::NOT_RUN;  ///< CONVERGED; INVALID_INPUT for an invalid mesh;
+                                      ///< OUT_OF_RANGE (NaN fields) outside `mesh_pair_in_range`
 };
+
+/// Whether the lengths of a mesh pair (the centre distance and the meshes' reach about their
+/// origins) are within [2^-100, 2^100], where the float boxes and the squared distances of the
+/// search are exact enough. Pairs outside get Status::OUT_OF_RANGE, never a number.
+bool mesh_pair_in_range(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b, const Pose& pose_b);
 
 /// Minimum distance between the surfaces of two meshes. First the intersection descent (as
 /// mesh_intersects) looks for a crossing triangle pair; without one, a simultaneous descent of

@@ -13,6 +13,7 @@ enum class Status : std::int8_t {
     DEGENERATE = 2,      ///< numerical trouble (e.g. a flat simplex); fields are a best effort
     INVALID_INPUT = 3,   ///< NaN/inf coordinates, an empty shape or a non-rigid pose
     NOT_RUN = 4,         ///< the query did not run for this pair
+    OUT_OF_RANGE = 5,    ///< the answer (a distance or point) is beyond the range of a double
 };
 
 /// Outcome of a time-of-impact query on one pair.
@@ -21,7 +22,8 @@ enum class TimeOfImpactStatus : std::int8_t {
     SEPARATED = 1,            ///< no contact during the whole motion
     OVERLAPPED_AT_START = 2,  ///< already touching or overlapping at t = 0
     FAILED = 3,               ///< iteration cap hit; `toi` is a safe lower bound
-    INVALID_INPUT = 4,        ///< NaN/inf coordinates, an empty shape or a non-rigid pose
+    INVALID_INPUT = 4,        ///< NaN/inf coordinates, an empty shape, a non-rigid pose, a
+                              ///< turn that misses the end rotation, or lengths over DBL_MAX
 };
 
 }  // namespace meshcol

@@ -5,6 +5,8 @@
 /// query must be in the same frame. Degenerate triangles (collinear or repeated vertices) are
 /// accepted: they behave as the segment or point they are.
 
+#include <cstdint>
+
 #include "meshcol/vec.hpp"
 
 namespace meshcol {
@@ -57,5 +59,23 @@ struct TriangleDistanceOutput {
 
 /// Exact distance between two triangles: `triangles_intersect`, then the 15 feature pairs.
 TriangleDistanceOutput triangle_distance(const Vec3 a[3], const Vec3 b[3]);
+
+/// Whether two triangles cross: their relative interiors (the open triangles) share a point.
+///
+/// Non-coplanar triangles cross when they meet along a segment through both interiors;
+/// coplanar ones when they overlap with positive area. Meeting only at points or along
+/// boundaries (a shared vertex or edge, a vertex or edge touching the other triangle) is not
+/// a crossing, and a degenerate triangle (collinear or repeated corners) crosses nothing. The
+/// verdict is exact for finite inputs (orientation signs by filtered predicates with an exact
+/// fallback, Shewchuk 1997); no tolerance is involved.
+bool triangles_cross(const Vec3 a[3], const Vec3 b[3]);
+
+/// `triangles_cross` for each pair (pairs[2k], pairs[2k + 1]) of faces of one mesh, written to
+/// crossing[k] (1 or 0); a pair of faces on the same three vertex indices (a duplicate face)
+/// does not cross. `vertices` is (n, 3), `faces` (m, 3) indices into it, `pairs` (k, 2)
+/// indices into `faces`; the caller checks every index. Runs on `threads` threads (0: all).
+void face_pairs_cross(const double* vertices, const std::int64_t* faces,
+                      const std::int64_t* pairs, long long pair_count, std::uint8_t* crossing,
+                      int threads);
 
 }  // namespace meshcol

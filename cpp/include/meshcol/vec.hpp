@@ -48,6 +48,17 @@ inline double max_abs(const Vec3& v) {
     return std::fmax(std::fabs(v.x), std::fmax(std::fabs(v.y), std::fabs(v.z)));
 }
 
+/// |v| without overflow or underflow in the squares: exact scaling by a power of two when the
+/// largest component is outside [2^-500, 2^500] (plain `norm` otherwise, bit for bit).
+inline double safe_norm(const Vec3& v) {
+    const double m = max_abs(v);
+    if (!(m > 0.0) || !std::isfinite(m)) return m;
+    if (m >= 0x1p-500 && m <= 0x1p500) return norm(v);
+    const int e = std::ilogb(m);
+    const Vec3 u{std::ldexp(v.x, -e), std::ldexp(v.y, -e), std::ldexp(v.z, -e)};
+    return std::ldexp(norm(u), e);
+}
+
 /// Writes `v` as row `i` of a row-major (n, 3) array; does nothing when `out` is null (an
 /// output the caller did not ask for).
 inline void store_row(double* out, long long i, const Vec3& v) {

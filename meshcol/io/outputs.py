@@ -1,0 +1,285 @@
+"""Where a run's outputs go: checked before any work starts, written all or nothing.
+
+A run that fails after an hour of work because its report folder is missing, or that replaces
+one of its own inputs, is worse than one that refuses at once. Every command calls
+:func:`check_destinations` (an output onto an input, two outputs one file) or
+:func:`check_outputs` (that, and the folders) before it writes anything. :func:`check_outputs` checks
+every output location of a run before it starts: an output file's folder exists and is
+writable, an output folder exists and is writable or can be created, no output is an input,
+and no two outputs are one file. :func:`staged_folder` writes a run's files into a hidden
+folder inside the destination and moves them into place only when all are written (with
+SIGINT and SIGTERM held for the moves), so a failed or interrupted run leaves nothing behind.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import shutil
+import signal
+import tempfile
+import threading
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from pathlib import Path
+
+from meshcol.errors import MeshcolError, OutputPathError
+
+__all__ = [
+    "check_destinations",
+    "check_output_file",
+    "check_output_folder",
+    "check_outputs",
+    "manifest_inputs",
+    "same_file",
+    "staged_folder",
+]
+
+PathLike = str | os.PathLike[str]
+
+
+def _key(path: PathLike) -> str:
+    return os.path.normcase(os.path.realpath(os.fspath(path)))
+
+
+def same_file(a: PathLike, b: PathLike) -> bool:
+    """True when ``a`` and ``b`` name one file, existing or not: their resolved paths
+    (symbolic links followed, ``..`` removed, case folded where the platform folds it) are
+    equal, or both exist and :func:`os.path.samefile` says so (hard links, case-insensitive
+    file systems). ``-`` (stdout) is never a file."""
+    if os.fspath(a) == "-" or os.fspath(b) == "-":
+        return False
+    if _key(a) == _key(b):
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # one of them does not exist (yet): then they are not one file
+        return False
+
+
+def _writable_folder(folder: str) -> bool:
+    return os.access(folder, os.W_OK | os.X_OK)
+
+
+def _existing_ancestor(path: str) -> str:
+    """The nearest existing ancestor of ``path`` (``path`` itself when it exists)."""
+    current = os.path.abspath(path)
+    while not os.path.lexists(current):
+        parent = os.path.dirname(current)
+        if parent == current:
+            break
+        current = parent
+    return current
+
+
+def _shown(path: str) -> str:
+    """A folder as the user would recognise it: relative to the working folder when inside."""
+    relative = os.path.relpath(path)
+    return path if relative.startswith(os.pardir) else relative
+
+
+def check_output_file(path: PathLike) -> None:
+    """Raise :class:`MeshcolError` (naming ``path``) unless ``path`` can be written as a file.
+
+    Its folder must exist (files are written in place, never with their folders created) and
+    be writable, and ``path`` must not be a folder.
+    """
+    path = os.fspath(path)
+    if os.path.isdir(path):
+        raise MeshcolError("is a folder, not a file", path)
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.exists(folder):
+        ancestor = _existing_ancestor(folder)
+        if not os.path.isdir(ancestor):
+            raise MeshcolError(f"{_shown(ancestor)} is not a folder", path)
+        raise MeshcolError(f"folder {_shown(folder)} does not exist", path)
+    if not os.path.isdir(folder):
+        raise MeshcolError(f"{_shown(folder)} is not a folder", path)
+    if not _writable_folder(folder):
+        raise MeshcolError(f"cannot write in folder {_shown(folder)} (permission denied)", path)
+
+
+def check_output_folder(path: PathLike) -> None:
+    """Raise :class:`MeshcolError` (naming ``path``) unless ``path`` is a writable folder or can
+    be created (its nearest existing ancestor is a writable folder)."""
+    path = os.fspath(path)
+    if os.path.exists(path):
+        if not os.path.isdir(path):
+            raise MeshcolError("is a file, not a folder", path)
+        if not _writable_folder(path):
+            raise MeshcolError("cannot write in this folder (permission denied)", path)
+        return
+    ancestor = _existing_ancestor(path)
+    if not os.path.isdir(ancestor):
+        raise MeshcolError(f"cannot create the folder: {_shown(ancestor)} is not a folder", path)
+    if not _writable_folder(ancestor):
+        raise MeshcolError(
+            f"cannot create the folder: cannot write in {_shown(ancestor)} (permission denied)",
+            path,
+        )
+
+
+def check_destinations(
+    inputs: Iterable[tuple[str, PathLike]], outputs: Iterable[tuple[str, PathLike | None]]
+) -> None:
+    """Raise when an output would replace an input, or two outputs are one file.
+
+    Parameters
+    ----------
+    inputs : iterable of (description, path)
+        What the run reads, each with what it is to the user (``"the input"``, ``"the
+        --baseline"``, ``"a mesh file of scene.json"``).
+    outputs : iterable of (label, path or None)
+        What the run writes, each with its option (``"-o"``, ``"--report"``); None and
+        ``"-"`` (stdout) are skipped.
+
+    Raises
+    ------
+    OutputPathError
+        ``cube.obj: -o would overwrite the input`` or ``out.obj: -o and --report are the same
+        file``, naming the path as the user typed it.
+    """
+    read = [(label, os.fspath(path)) for label, path in inputs]
+    written: list[tuple[str, str]] = []
+    identities: dict[tuple[int, int], str] | None = None  # input (device, inode) -> description
+    for label, path in outputs:
+        if path is None or os.fspath(path) == "-":
+            continue
+        path = os.fspath(path)
+        # An output that does not exist yet is no existing input; one that exists is the same
+        # file as an input exactly when their (device, inode) agree. One stat per input, not
+        # a realpath per (input, output): manifests name thousands of meshes.
+        try:
+            st = os.stat(path)
+        except OSError:
+            st = None
+        if st is not None:
+            if identities is None:
+                identities = {}
+                for description, in_path in reversed(read):
+                    with contextlib.suppress(OSError):
+                        info = os.stat(in_path)
+                        identities[(info.st_dev, info.st_ino)] = description
+            same = identities.get((st.st_dev, st.st_ino))
+            if same is not None:
+                raise OutputPathError(f"{label} would overwrite {same}", path)
+        for description, in_path in read:
+            if not os.path.lexists(in_path) and _key(path) == _key(in_path):
+                # a missing input spelled as this output (reading it will fail anyway)
+                raise OutputPathError(f"{label} would overwrite {description}", path)
+        for out_label, out_path in written:
+            if same_file(path, out_path):
+                raise OutputPathError(f"{out_label} and {label} are the same file", path)
+        written.append((label, path))
+
+
+def manifest_inputs(paths: Iterable[PathLike]) -> list[tuple[str, str]]:
+    """Every file a command's inputs read: the inputs and, for a scene manifest, its meshes.
+
+    A manifest that cannot be parsed contributes only itself: loading it reports the problem.
+    """
+    from meshcol.io.scene import MANIFEST_EXTENSIONS, manifest_mesh_files
+
+    found: list[tuple[str, str]] = []
+    for path in paths:
+        path = os.fspath(path)
+        found.append(("the input", path))
+        if Path(path).suffix.lower() in MANIFEST_EXTENSIONS:
+            found.extend((f"a mesh file of {path}", mesh) for mesh in manifest_mesh_files(path))
+    return found
+
+
+def check_outputs(
+    files: Mapping[str, PathLike | None] | None = None,
+    folders: Mapping[str, PathLike | None] | None = None,
+    inputs: Sequence[PathLike] = (),
+) -> None:
+    """Check every output location of a run before the run starts: no output replaces an
+    input (a manifest's mesh files included) or another output (:func:`check_destinations`),
+    every output file's folder exists and is writable, every output folder is writable or
+    can be created.
+
+    Parameters
+    ----------
+    files : mapping of label -> path or None
+        Output files (``{"--report": "out/r.json"}``); None and ``"-"`` entries are skipped.
+    folders : mapping of label -> path or None
+        Output folders (``{"--out-dir": "parts", "--cache-dir": None}``), created if missing.
+    inputs : sequence of paths
+        The run's input files.
+
+    Raises
+    ------
+    MeshcolError
+        Naming the path as given: a missing or unwritable folder, a folder given as a file
+        (or the reverse), an output that is an input, or one path given as two outputs.
+    """
+    outputs = [
+        (label, os.fspath(p), "file") for label, p in (files or {}).items() if p and p != "-"
+    ]
+    outputs += [(label, os.fspath(p), "folder") for label, p in (folders or {}).items() if p]
+    check_destinations(manifest_inputs(inputs), [(label, path) for label, path, _ in outputs])
+    for _, path, kind in outputs:
+        (check_output_file if kind == "file" else check_output_folder)(path)
+
+
+@contextlib.contextmanager
+def _signals_held() -> Iterator[None]:
+    """Hold SIGINT and SIGTERM for the block (delivered when it ends), in the main thread."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    held: list[int] = []
+    wanted = [signal.SIGINT, *([signal.SIGTERM] if hasattr(signal, "SIGTERM") else [])]
+    # A handler not installed from Python (getsignal None) could not be put back: leave it.
+    wanted = [s for s in wanted if signal.getsignal(s) is not None]
+    previous = {s: signal.signal(s, lambda signum, frame: held.append(signum)) for s in wanted}
+    try:
+        yield
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+        for number in dict.fromkeys(held):
+            signal.raise_signal(number)
+
+
+@contextlib.contextmanager
+def staged_folder(folder: PathLike) -> Iterator[str]:
+    """Yield a hidden folder inside ``folder``; when the block succeeds, move its files into
+    ``folder``; otherwise remove them, and the folders this created.
+
+    ``folder`` (and its missing parents) is created first. Each move is an ``os.replace``
+    on one file system, and SIGINT and SIGTERM wait until the moves are done, so the files
+    of a run appear together or not at all. Files only (the writers put no folder in it).
+    """
+    folder = os.path.abspath(os.fspath(folder))
+    created = []
+    current = folder
+    while not os.path.lexists(current):
+        created.append(current)
+        current = os.path.dirname(current)
+    os.makedirs(folder, exist_ok=True)
+    stage = None
+    try:
+        stage = tempfile.mkdtemp(prefix=".meshcol-", dir=folder)
+        yield stage
+        with _signals_held():
+            for name in sorted(os.listdir(stage)):
+                os.replace(os.path.join(stage, name), os.path.join(folder, name))
+            os.rmdir(stage)
+    except BaseException as exc:
+        if stage is not None:
+            shutil.rmtree(stage, ignore_errors=True)
+        for path in created:  # deepest first
+            with contextlib.suppress(OSError):
+                os.rmdir(path)
+        failed = getattr(exc, "filename", None)
+        if (
+            stage is not None
+            and isinstance(exc, OSError)
+            and isinstance(failed, str)
+            and os.path.dirname(os.path.abspath(failed)) == stage
+        ):
+            # Name the file the user asked for, never the hidden folder.
+            where = os.path.join(folder, os.path.basename(failed))
+            raise type(exc)(exc.errno, exc.strerror, where) from None
+        raise
