@@ -55,9 +55,20 @@ struct Relative {
     // oriented ones for nodes whose orientations differ.
     bool aligned = false;
 
-    Relative(const Pose& pose_a, const Pose& pose_b) {
+    // Rounding allowance of a box bound: the oriented boxes are padded by 1e-12 of their own
+    // coordinates only, while mapping b's boxes rounds at the scale of the translation too.
+    // Every bound is lowered by this (about 500 ulps of the pair's largest length), so rounding
+    // can only keep a node pair, never drop one.
+    double slack = 0.0;
+
+    Relative(const Pose& pose_a, const Pose& pose_b, const MeshBvh& a, const MeshBvh& b) {
         rotation = pose_a.rotation.transposed() * pose_b.rotation;
         translation = pose_a.rotation.transpose_times(pose_b.translation - pose_a.translation);
+        const auto reach = [](const MeshBvh& m) {
+            const NodeObb& root = m.obbs().front();
+            return max_abs(root.center) + max_abs(root.half);
+        };
+        slack = 1e-13 * (max_abs(translation) + reach(a) + reach(b));
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) abs_rotation.m[i][j] = std::fabs(rotation.m[i][j]);
         aligned = true;
@@ -83,7 +94,7 @@ inline double obb_squared_distance(const NodeObb& a, const NodeObb& b, const Rel
         const double length = std::sqrt(length2);
         const double reach = std::fabs(t.x) * a.half.x + std::fabs(t.y) * a.half.y + std::fabs(t.z) * a.half.z +
                              std::fabs(tb.x) * b.half.x + std::fabs(tb.y) * b.half.y + std::fabs(tb.z) * b.half.z;
-        best = max2(0.0, length - reach / length);
+        best = max2(0.0, length - reach / length - rel.slack);
         if (best > 0.0 && best * best >= enough2) return best * best;
     }
     double abs_c[3][3];  // |a_i . b_j|, both axes in a's local frame
@@ -98,12 +109,12 @@ inline double obb_squared_distance(const NodeObb& a, const NodeObb& b, const Rel
     double in_a = 0.0, in_b = 0.0;
     for (int i = 0; i < 3; ++i) {
         const double gap = std::fabs(t[i]) - a.half[i] -
-                           (abs_c[i][0] * b.half.x + abs_c[i][1] * b.half.y + abs_c[i][2] * b.half.z);
+                           (abs_c[i][0] * b.half.x + abs_c[i][1] * b.half.y + abs_c[i][2] * b.half.z) - rel.slack;
         if (gap > 0.0) in_a += gap * gap;
     }
     for (int j = 0; j < 3; ++j) {
         const double gap = std::fabs(tb[j]) - (a.half.x * abs_c[0][j] + a.half.y * abs_c[1][j] + a.half.z * abs_c[2][j]) -
-                           b.half[j];
+                           b.half[j] - rel.slack;
         if (gap > 0.0) in_b += gap * gap;
     }
     return max2(best * best, max2(in_a, in_b));
@@ -121,7 +132,7 @@ inline double aabb_squared_distance(const BvhNode& na, const BvhNode& nb, const 
                                                 0.5 * (static_cast<double>(nb.upper[2]) - nb.lower[2])};
     for (int k = 0; k < 3; ++k) {
         const double gap = max2(static_cast<double>(na.lower[k]) - (b_center[k] + b_half[k]),
-                                (b_center[k] - b_half[k]) - static_cast<double>(na.upper[k]));
+                                (b_center[k] - b_half[k]) - static_cast<double>(na.upper[k])) - rel.slack;
         if (gap > 0.0) d2 += gap * gap;
     }
     return d2;
@@ -754,7 +765,7 @@ bool winding_number_inside(const MeshBvh& mesh, const Vec3& point, long long* wo
 }
 
 bool mesh_intersects(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b, const Pose& pose_b) {
-    return for_each_touching_pair(a, b, Relative(pose_a, pose_b), [](std::int32_t, std::int32_t, const Vec3* ta, const Vec3* tb) {
+    return for_each_touching_pair(a, b, Relative(pose_a, pose_b, a, b), [](std::int32_t, std::int32_t, const Vec3* ta, const Vec3* tb) {
         return triangles_intersect(ta, tb, nullptr);
     });
 }
@@ -793,7 +804,7 @@ MeshDistanceOutput mesh_distance(const MeshDistanceInput& input) {
     }
     const MeshBvh& a = *input.a;
     const MeshBvh& b = *input.b;
-    const Relative rel(input.pose_a, input.pose_b);
+    const Relative rel(input.pose_a, input.pose_b, *input.a, *input.b);
     const double bound2 = input.max_distance * input.max_distance;
     // Crossing surfaces are found sooner by the intersection descent, which tests triangle
     // pairs whose boxes touch and measures nothing, than by the distance search, which measures
@@ -888,7 +899,7 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
     }
     const MeshBvh& a = *input.a;
     const MeshBvh& b = *input.b;
-    const Relative rel(input.pose_a, input.pose_b);  // b's frame -> a's frame
+    const Relative rel(input.pose_a, input.pose_b, *input.a, *input.b);  // b's frame -> a's frame
     std::vector<char> crossing_a, crossing_b;
     std::vector<CrossingPair> crossing_pairs;
     mark_crossing_triangles(a, b, rel, crossing_a, crossing_b, crossing_pairs);

@@ -198,6 +198,7 @@ class MeshSet:
         """
         points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
         return self._handle.winding_number_inside(i, points)
+
     def contains(self, i: int, points: np.ndarray) -> np.ndarray:
         """Whether each point (n, 3) is inside mesh ``i`` (local frame), (n,) bool.
 
