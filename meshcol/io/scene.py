@@ -549,6 +549,10 @@ def _parse(file: Path, source: str) -> Any:
         data = file.read_bytes()
     except OSError as error:
         raise InputFileError(f"cannot read file: {error.strerror or error}", source) from None
+    key = os.path.abspath(source)
+    cached = _PARSED.get(key)
+    if cached is not None and cached[0] == data:
+        return cached[1]  # the same bytes parsed a moment ago (the output check reads it too)
     try:
         text = data.decode("utf-8-sig")  # a byte-order mark, as some editors write, is dropped
     except UnicodeDecodeError:
@@ -556,7 +560,14 @@ def _parse(file: Path, source: str) -> Any:
     document = _decode(file, text, source)
     if _nesting(document) > MAX_NESTING:
         raise SceneError(_too_deep(text, "[{"), source)
+    _PARSED.clear()  # one manifest kept: a run reads its manifest twice, never many
+    _PARSED[key] = (data, document)
     return document
+
+
+# The last manifest parsed, by absolute path: its bytes and its document (never modified by
+# the readers), so the output check and the loading of one run parse it once.
+_PARSED: dict[str, tuple[bytes, Any]] = {}
 
 
 def _decode(file: Path, text: str, source: str) -> Any:
