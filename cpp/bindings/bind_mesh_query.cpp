@@ -298,6 +298,51 @@ void bind_mesh_query(nb::module_& m) {
             }
             return arr;
         }, "i"_a, "points"_a, "Generalized winding numbers of points (mesh i's local frame).")
+        .def("fast_winding_number", [](const MeshBvhSet& s, std::int64_t i, Points points, double max_error) {
+            const meshcol::MeshBvh& mesh = s.at(i);
+            if (!mesh.valid()) throw std::invalid_argument("mesh " + std::to_string(i) + " is not valid");
+            if (!(max_error >= 0.0)) throw std::invalid_argument("max_error must be >= 0");
+            const size_t n = points.shape(0);
+            auto value = new_array<Out<double, -1>>({n});
+            auto error = new_array<Out<double, -1>>({n});
+            auto visits = new_array<Out<std::int64_t, -1>>({n});
+            double *v = value.data(), *e = error.data();
+            std::int64_t* c = visits.data();
+            const double* p = points.data();
+            {
+                nb::gil_scoped_release release;
+                for (size_t k = 0; k < n; ++k) {
+                    const meshcol::WindingEstimate w =
+                        meshcol::fast_winding_number(mesh, Vec3{p[3 * k], p[3 * k + 1], p[3 * k + 2]}, max_error);
+                    v[k] = w.value;
+                    e[k] = w.error;
+                    c[k] = w.visits;
+                }
+            }
+            return std::make_tuple(value, error, visits);
+        }, "i"_a, "points"_a, "max_error"_a,
+           "Fast winding numbers of points (mesh i's local frame) with their error bounds and work.")
+        .def("winding_number_inside", [](const MeshBvhSet& s, std::int64_t i, Points points) {
+            const meshcol::MeshBvh& mesh = s.at(i);
+            if (!mesh.valid()) throw std::invalid_argument("mesh " + std::to_string(i) + " is not valid");
+            const size_t n = points.shape(0);
+            auto inside = new_array<Out<bool, -1>>({n});
+            auto work = new_array<Out<std::int64_t, -1>>({n});
+            bool* out = inside.data();
+            std::int64_t* w = work.data();
+            const double* p = points.data();
+            {
+                nb::gil_scoped_release release;
+                for (size_t k = 0; k < n; ++k) {
+                    long long visits = 0;
+                    out[k] = meshcol::winding_number_inside(mesh, Vec3{p[3 * k], p[3 * k + 1], p[3 * k + 2]}, &visits);
+                    w[k] = visits;
+                }
+            }
+            return std::make_tuple(inside, work);
+        }, "i"_a, "points"_a,
+           "Whether |winding number| >= winding_number_inside for points (mesh i's local frame), "
+           "by the refined fast winding number, with the nodes and triangles visited.")
         .def("closest_points", [](const MeshBvhSet& s, std::int64_t i, Points points, int threads) {
             const meshcol::MeshBvh& mesh = s.at(i);
             const size_t n = points.shape(0);

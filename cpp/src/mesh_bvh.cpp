@@ -36,17 +36,26 @@ float round_up(double x) {
     return f;
 }
 
+// Componentwise minimum and maximum of finite (or infinite) coordinates, inlined: std::fmin
+// and std::fmax are library calls for their NaN rules, which validated vertices do not need.
+inline Vec3 min3(const Vec3& a, const Vec3& b) {
+    return {b.x < a.x ? b.x : a.x, b.y < a.y ? b.y : a.y, b.z < a.z ? b.z : a.z};
+}
+inline Vec3 max3(const Vec3& a, const Vec3& b) {
+    return {b.x > a.x ? b.x : a.x, b.y > a.y ? b.y : a.y, b.z > a.z ? b.z : a.z};
+}
+
 struct Box {
     Vec3 lower{kInf, kInf, kInf};
     Vec3 upper{-kInf, -kInf, -kInf};
 
     void grow(const Vec3& p) {
-        lower = component_min(lower, p);
-        upper = component_max(upper, p);
+        lower = min3(lower, p);
+        upper = max3(upper, p);
     }
     void grow(const Box& b) {
-        lower = component_min(lower, b.lower);
-        upper = component_max(upper, b.upper);
+        lower = min3(lower, b.lower);
+        upper = max3(upper, b.upper);
     }
     bool empty() const { return lower.x > upper.x; }
     // Half the surface area (the SAH only compares areas).
@@ -201,6 +210,8 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         face_index_[static_cast<size_t>(i)] = f;
         for (int k = 0; k < 3; ++k) corners_[3 * static_cast<size_t>(i) + k] = vertex(faces[3 * f + k]);
     }
+    build_winding_nodes();
+    build_obbs();
     // Closed and consistently wound: sorted directed edges pair up as (u, v) and (v, u).
     std::vector<std::pair<std::int64_t, std::int64_t>> edges;
     edges.reserve(3 * static_cast<size_t>(face_count));
@@ -220,6 +231,178 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
     for (std::int64_t k = 0; k < 3 * face_count; ++k) used[static_cast<size_t>(faces[k])] = 1;
     for (std::int64_t v = 0; v < vertex_count; ++v)
         if (used[static_cast<size_t>(v)]) vertices_.push_back(vertex(v));
+}
+
+namespace {
+
+// Adds the first moment of area vector `a` at offset `g` from the centre (a (g)^T, symmetric
+// part) to `m`.
+void add_moment(double m[6], const Vec3& a, const Vec3& g) {
+    m[0] += a.x * g.x;
+    m[1] += a.y * g.y;
+    m[2] += a.z * g.z;
+    m[3] += 0.5 * (a.x * g.y + a.y * g.x);
+    m[4] += 0.5 * (a.y * g.z + a.z * g.y);
+    m[5] += 0.5 * (a.z * g.x + a.x * g.z);
+}
+
+}  // namespace
+
+// Children follow their parent in depth-first order, so a reverse sweep meets every child
+// before its parent. A leaf's radius is exact; an internal node's is the smaller of two valid
+// bounds: the children's spheres seen from the centre, and the farthest corner of the box.
+// A child's moment moves to the parent's centre by the parallel-axis shift
+// M + N (c_child - c)^T.
+void MeshBvh::build_winding_nodes() {
+    winding_nodes_.assign(nodes_.size(), WindingNode{});
+    for (size_t id = nodes_.size(); id-- > 0;) {
+        const BvhNode& node = nodes_[id];
+        WindingNode& w = winding_nodes_[id];
+        const Vec3 lo{node.lower[0], node.lower[1], node.lower[2]};
+        const Vec3 hi{node.upper[0], node.upper[1], node.upper[2]};
+        const Vec3 box_center = (lo + hi) * 0.5;
+        if (node.is_leaf()) {
+            Vec3 weighted{0.0, 0.0, 0.0};
+            for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
+                const Vec3* t = triangle(i);
+                const Vec3 area_vector = cross(t[1] - t[0], t[2] - t[0]) * 0.5;
+                const double area = norm(area_vector);
+                w.dipole += area_vector;
+                w.area += area;
+                weighted += (t[0] + t[1] + t[2]) * (area / 3.0);
+            }
+            w.center = w.area > 0.0 ? weighted / w.area : box_center;
+            if (!is_finite(w.center)) {
+                // Zero or overflowing areas, or float boxes beyond the float range: the mean
+                // of the corners (divided first, so it cannot overflow).
+                w.center = Vec3{0.0, 0.0, 0.0};
+                const double share = 1.0 / (3.0 * node.count);
+                for (std::int32_t i = node.index; i < node.index + node.count; ++i)
+                    for (int k = 0; k < 3; ++k) w.center += triangle(i)[k] * share;
+            }
+            if (!std::isfinite(w.area) || !is_finite(w.dipole)) {
+                // Coordinates beyond about 1e154 overflow the areas: such a node is never
+                // approximated (an infinite area makes its error bound infinite).
+                w.area = kInf;
+                w.dipole = Vec3{0.0, 0.0, 0.0};
+            }
+            for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
+                const Vec3* t = triangle(i);
+                add_moment(w.moment, cross(t[1] - t[0], t[2] - t[0]) * 0.5, (t[0] + t[1] + t[2]) / 3.0 - w.center);
+                for (int k = 0; k < 3; ++k) w.radius = std::fmax(w.radius, norm(t[k] - w.center));
+            }
+            continue;
+        }
+        const WindingNode& l = winding_nodes_[id + 1];
+        const WindingNode& r = winding_nodes_[static_cast<size_t>(node.index)];
+        w.dipole = l.dipole + r.dipole;
+        w.area = l.area + r.area;
+        w.center = w.area > 0.0 ? (l.center * l.area + r.center * r.area) / w.area : box_center;
+        if (!is_finite(w.center)) w.center = l.center * 0.5 + r.center * 0.5;
+        if (!std::isfinite(w.area) || !is_finite(w.dipole)) {
+            w.area = kInf;
+            w.dipole = Vec3{0.0, 0.0, 0.0};
+        }
+        for (const WindingNode* child : {&l, &r}) {
+            for (int k = 0; k < 6; ++k) w.moment[k] += child->moment[k];
+            add_moment(w.moment, child->dipole, child->center - w.center);
+        }
+        const double from_children = std::fmax(norm(l.center - w.center) + l.radius, norm(r.center - w.center) + r.radius);
+        const Vec3 far_corner{std::fmax(hi.x - w.center.x, w.center.x - lo.x), std::fmax(hi.y - w.center.y, w.center.y - lo.y),
+                              std::fmax(hi.z - w.center.z, w.center.z - lo.z)};
+        w.radius = std::fmin(from_children, norm(far_corner));
+    }
+}
+
+std::pair<std::int32_t, std::int32_t> MeshBvh::triangle_range(std::int32_t id) const {
+    // In depth-first order a node's triangles run from its leftmost leaf to its rightmost one.
+    size_t first = static_cast<size_t>(id), last = static_cast<size_t>(id);
+    while (!nodes_[first].is_leaf()) ++first;
+    while (!nodes_[last].is_leaf()) last = static_cast<size_t>(nodes_[last].index);
+    return {nodes_[first].index, nodes_[last].index + nodes_[last].count};
+}
+
+// Per node: axes from the mean normal (the dipole) and, in the tangent plane, the principal
+// directions of the corners (a 2x2 eigenproblem in closed form); extents by projecting every
+// corner (O(n log n) in all). The axis-aligned box is kept when it is no larger (by volume),
+// as for a node whose normals cancel.
+void MeshBvh::build_obbs() {
+    obbs_.assign(nodes_.size(), NodeObb{});
+    // The exact (double) axis-aligned boxes, children before parents.
+    std::vector<Box> exact(nodes_.size());
+    for (size_t id = nodes_.size(); id-- > 0;) {
+        const BvhNode& node = nodes_[id];
+        if (node.is_leaf()) {
+            for (std::int32_t t = node.index; t < node.index + node.count; ++t)
+                for (int k = 0; k < 3; ++k) exact[id].grow(triangle(t)[k]);
+        } else {
+            exact[id].grow(exact[id + 1]);
+            exact[id].grow(exact[static_cast<size_t>(node.index)]);
+        }
+    }
+    for (size_t id = 0; id < nodes_.size(); ++id) {
+        NodeObb& box = obbs_[id];
+        const Vec3 lo = exact[id].lower, hi = exact[id].upper;
+        const double scale = std::fmax(max_abs(lo), max_abs(hi));
+        // Rounding of the projections here and of the bounds that use them: a relative pad.
+        const double pad = 1e-12 * scale + 1e-300;
+        box.axes = Mat3::identity();
+        box.center = lo * 0.5 + hi * 0.5;
+        box.half = (hi * 0.5 - lo * 0.5) + Vec3{pad, pad, pad};
+        const WindingNode& w = winding_nodes_[id];
+        const double dipole = norm(w.dipole);
+        if (!(dipole > 0.5 * w.area)) continue;
+        const Vec3 n = w.dipole / dipole;
+        const Vec3 helper = std::fabs(n.x) <= std::fabs(n.y) && std::fabs(n.x) <= std::fabs(n.z)
+                                ? Vec3{1, 0, 0}
+                                : (std::fabs(n.y) <= std::fabs(n.z) ? Vec3{0, 1, 0} : Vec3{0, 0, 1});
+        Vec3 u = cross(n, helper);
+        u = u / norm(u);
+        Vec3 v = cross(n, u);
+        const auto [begin, end] = triangle_range(static_cast<std::int32_t>(id));
+        double cuu = 0.0, cvv = 0.0, cuv = 0.0, mu = 0.0, mv = 0.0;
+        const double count = 3.0 * (end - begin);
+        for (std::int32_t t = begin; t < end; ++t)
+            for (int k = 0; k < 3; ++k) {
+                const Vec3 p = triangle(t)[k] - w.center;
+                const double pu = dot(p, u), pv = dot(p, v);
+                mu += pu;
+                mv += pv;
+                cuu += pu * pu;
+                cvv += pv * pv;
+                cuv += pu * pv;
+            }
+        mu /= count;
+        mv /= count;
+        cuu = cuu / count - mu * mu;
+        cvv = cvv / count - mv * mv;
+        cuv = cuv / count - mu * mv;
+        double angle = 0.5 * std::atan2(2.0 * cuv, cuu - cvv);
+        if (!std::isfinite(angle)) angle = 0.0;  // squares beyond the double range
+        const double c = std::cos(angle), s = std::sin(angle);
+        const Vec3 u2 = u * c + v * s;
+        v = cross(n, u2);
+        u = u2;
+        Mat3 axes;
+        for (int k = 0; k < 3; ++k) {
+            axes.m[0][k] = n[k];
+            axes.m[1][k] = u[k];
+            axes.m[2][k] = v[k];
+        }
+        Vec3 low{kInf, kInf, kInf}, high{-kInf, -kInf, -kInf};
+        for (std::int32_t t = begin; t < end; ++t)
+            for (int k = 0; k < 3; ++k) {
+                const Vec3 p = axes * triangle(t)[k];
+                low = min3(low, p);
+                high = max3(high, p);
+            }
+        const Vec3 half = (high * 0.5 - low * 0.5) + Vec3{pad, pad, pad};
+        if (half.x * half.y * half.z < box.half.x * box.half.y * box.half.z) {
+            box.axes = axes;
+            box.center = axes.transpose_times(low * 0.5 + high * 0.5);
+            box.half = half;
+        }
+    }
 }
 
 bool MeshBvh::validate() const {
@@ -269,7 +452,25 @@ bool MeshBvh::validate() const {
         stack.push_back(right);
         stack.push_back(left);
     }
-    return next_triangle == n && visited == static_cast<std::int32_t>(nodes_.size());
+    if (next_triangle != n || visited != static_cast<std::int32_t>(nodes_.size())) return false;
+    // Far-field data: every corner under a node within its radius (a relative slack for the
+    // rounding of the distances), areas adding up.
+    if (winding_nodes_.size() != nodes_.size() || obbs_.size() != nodes_.size()) return false;
+    for (size_t id = 0; id < nodes_.size(); ++id) {
+        const WindingNode& w = winding_nodes_[id];
+        if (!(w.radius >= 0.0) || !(w.area >= 0.0) || !(norm(w.dipole) <= w.area * (1.0 + 1e-12) + 1e-300)) return false;
+        const NodeObb& box = obbs_[id];
+        const auto [begin, end] = triangle_range(static_cast<std::int32_t>(id));
+        for (std::int32_t t = begin; t < end; ++t)
+            for (int c = 0; c < 3; ++c) {
+                const Vec3& p = corners_[3 * static_cast<size_t>(t) + c];
+                if (norm(p - w.center) > w.radius * (1.0 + 1e-12)) return false;
+                const Vec3 local = box.axes * (p - box.center);
+                for (int k = 0; k < 3; ++k)
+                    if (!(std::fabs(local[k]) <= box.half[k])) return false;
+            }
+    }
+    return true;
 }
 
 }  // namespace meshcol

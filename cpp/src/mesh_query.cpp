@@ -1,8 +1,8 @@
 // Mesh-mesh distance, intersection and containment on two MeshBvh hierarchies.
 //
-// All the work happens in a's local frame: b's boxes are mapped there as the axis-aligned box
-// enclosing the rotated box (a valid, if looser, lower bound under rotation; exact under pure
-// translation), b's triangles are mapped at the leaves. The distance search is a depth-first
+// All the work happens in a's local frame: b's triangles are mapped there at the leaves, and
+// node pairs are bounded by their oriented boxes (NodeObb: thin along the normal of a nearly
+// flat patch, whatever the poses), whose separating-axis gaps bound the distance from below. The distance search is a depth-first
 // branch and bound over node pairs (Larsen, Gottschalk, Lin and Manocha 1999, "Fast proximity
 // queries with swept sphere volumes"; FCL's MeshDistanceTraversalNode): the closer child pair is
 // visited first so a good bound arrives early, and pairs whose box distance cannot beat the best
@@ -27,66 +27,123 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kPi = 3.14159265358979323846;
 
+// Signed solid angle of triangle t seen from `point` (van Oosterom and Strackee 1983:
+// tan(omega / 2) = det / denominator); positive when the point is behind the triangle's
+// counter-clockwise normal.
+inline double triangle_solid_angle(const Vec3 t[3], const Vec3& point) {
+    const Vec3 a = t[0] - point, b = t[1] - point, c = t[2] - point;
+    const double la = norm(a), lb = norm(b), lc = norm(c);
+    const double det = dot(a, cross(b, c));
+    const double denominator = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb;
+    return 2.0 * std::atan2(det, denominator);
+}
+
+// Minimum and maximum without the NaN rules of std::fmin / std::fmax, which compilers do not
+// inline (a library call each in the hottest loops); the bounds they feed are finite or +inf.
+inline double min2(double x, double y) { return y < x ? y : x; }
+inline double max2(double x, double y) { return y > x ? y : x; }
+inline Vec3 min3(const Vec3& a, const Vec3& b) { return {min2(a.x, b.x), min2(a.y, b.y), min2(a.z, b.z)}; }
+inline Vec3 max3(const Vec3& a, const Vec3& b) { return {max2(a.x, b.x), max2(a.y, b.y), max2(a.z, b.z)}; }
+
 // The rigid map from b's local frame to a's local frame, and back.
 struct Relative {
     Mat3 rotation;
     Mat3 abs_rotation;  // |rotation| element-wise, maps half extents to enclosing half extents
     Vec3 translation;
+    // The frames are nearly aligned (b's boxes grow by under 5% when enclosed in a's frame):
+    // the axis-aligned boxes are then nearly in a shared frame and bound tighter than the
+    // oriented ones for nodes whose orientations differ.
+    bool aligned = false;
 
-    Relative(const Pose& pose_a, const Pose& pose_b) {
+    // Rounding allowance of a box bound: the oriented boxes are padded by 1e-12 of their own
+    // coordinates only, while mapping b's boxes rounds at the scale of the translation too.
+    // Every bound is lowered by this (about 500 ulps of the pair's largest length), so rounding
+    // can only keep a node pair, never drop one.
+    double slack = 0.0;
+
+    Relative(const Pose& pose_a, const Pose& pose_b, const MeshBvh& a, const MeshBvh& b) {
         rotation = pose_a.rotation.transposed() * pose_b.rotation;
         translation = pose_a.rotation.transpose_times(pose_b.translation - pose_a.translation);
+        const auto reach = [](const MeshBvh& m) {
+            const NodeObb& root = m.obbs().front();
+            return max_abs(root.center) + max_abs(root.half);
+        };
+        slack = 1e-13 * (max_abs(translation) + reach(a) + reach(b));
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) abs_rotation.m[i][j] = std::fabs(rotation.m[i][j]);
+        aligned = true;
+        for (int i = 0; i < 3; ++i)
+            aligned = aligned && abs_rotation.m[i][0] + abs_rotation.m[i][1] + abs_rotation.m[i][2] < 1.05;
     }
     Vec3 apply(const Vec3& p) const { return rotation * p + translation; }
     Vec3 apply_inverse(const Vec3& p) const { return rotation.transpose_times(p - translation); }
 };
 
-struct CenteredBox {
-    Vec3 center, half;
-};
-
-inline CenteredBox centered(const BvhNode& n) {
-    const Vec3 lo{n.lower[0], n.lower[1], n.lower[2]};
-    const Vec3 hi{n.upper[0], n.upper[1], n.upper[2]};
-    return {(lo + hi) * 0.5, (hi - lo) * 0.5};
+// A lower bound of the squared distance between the oriented boxes of node a and node b: the
+// largest of the gap of their projections on the line through the centres (a separating-axis
+// candidate, Gottschalk, Lin and Manocha 1996) and the box distances in a's and in b's box
+// frame (the nine edge-pair axes of the overlap test cost more than they prune here). The centre line comes first and needs no relative rotation of the boxes: when
+// it alone reaches `enough2` (a bound that already prunes the pair), the rest is skipped.
+inline double obb_squared_distance(const NodeObb& a, const NodeObb& b, const Relative& rel, double enough2) {
+    const Vec3 d = rel.apply(b.center) - a.center;  // a's local frame
+    const Vec3 t = a.axes * d;                      // a's box frame
+    const Vec3 tb = b.axes * rel.rotation.transpose_times(d);  // b's box frame
+    double best = 0.0;
+    const double length2 = dot(d, d);
+    if (length2 > 0.0) {
+        const double length = std::sqrt(length2);
+        const double reach = std::fabs(t.x) * a.half.x + std::fabs(t.y) * a.half.y + std::fabs(t.z) * a.half.z +
+                             std::fabs(tb.x) * b.half.x + std::fabs(tb.y) * b.half.y + std::fabs(tb.z) * b.half.z;
+        best = max2(0.0, length - reach / length - rel.slack);
+        if (best > 0.0 && best * best >= enough2) return best * best;
+    }
+    double abs_c[3][3];  // |a_i . b_j|, both axes in a's local frame
+    for (int j = 0; j < 3; ++j) {
+        const Vec3 bj = rel.rotation * b.axes.row(j);
+        for (int i = 0; i < 3; ++i) abs_c[i][j] = std::fabs(dot(a.axes.row(i), bj));
+    }
+    // In a's box frame, b's box lies in the axis-aligned box of half extents
+    // sum_j |a_i . b_j| b.half_j about t: the distance between that box and a's box bounds the
+    // distance from below (exactly the box distance when the boxes are aligned); likewise in
+    // b's box frame.
+    double in_a = 0.0, in_b = 0.0;
+    for (int i = 0; i < 3; ++i) {
+        const double gap = std::fabs(t[i]) - a.half[i] -
+                           (abs_c[i][0] * b.half.x + abs_c[i][1] * b.half.y + abs_c[i][2] * b.half.z) - rel.slack;
+        if (gap > 0.0) in_a += gap * gap;
+    }
+    for (int j = 0; j < 3; ++j) {
+        const double gap = std::fabs(tb[j]) - (a.half.x * abs_c[0][j] + a.half.y * abs_c[1][j] + a.half.z * abs_c[2][j]) -
+                           b.half[j] - rel.slack;
+        if (gap > 0.0) in_b += gap * gap;
+    }
+    return max2(best * best, max2(in_a, in_b));
 }
 
-inline double squared_gap(const Vec3& c1, const Vec3& h1, const Vec3& c2, const Vec3& h2) {
+// The distance between node a's axis-aligned box and the axis-aligned box (in a's frame)
+// enclosing node b's: exact under pure translation, looser the more b is rotated.
+inline double aabb_squared_distance(const BvhNode& na, const BvhNode& nb, const Relative& rel) {
     double d2 = 0.0;
+    const Vec3 b_center = rel.apply(Vec3{0.5 * (static_cast<double>(nb.lower[0]) + nb.upper[0]),
+                                         0.5 * (static_cast<double>(nb.lower[1]) + nb.upper[1]),
+                                         0.5 * (static_cast<double>(nb.lower[2]) + nb.upper[2])});
+    const Vec3 b_half = rel.abs_rotation * Vec3{0.5 * (static_cast<double>(nb.upper[0]) - nb.lower[0]),
+                                                0.5 * (static_cast<double>(nb.upper[1]) - nb.lower[1]),
+                                                0.5 * (static_cast<double>(nb.upper[2]) - nb.lower[2])};
     for (int k = 0; k < 3; ++k) {
-        const double gap = std::fabs(c1[k] - c2[k]) - h1[k] - h2[k];
+        const double gap = max2(static_cast<double>(na.lower[k]) - (b_center[k] + b_half[k]),
+                                (b_center[k] - b_half[k]) - static_cast<double>(na.upper[k])) - rel.slack;
         if (gap > 0.0) d2 += gap * gap;
     }
     return d2;
 }
 
-// A lower bound of the squared distance between any triangle under node a and any under node b,
-// the largest of three valid ones: the box distance in a's frame (b's box replaced by the
-// axis-aligned box enclosing it there), the same in b's frame, and the gap of the two boxes'
-// projections on the line through their centres (a separating-axis bound, Gottschalk et al.
-// 1996). Under pure translation the first is the exact box distance; under rotation the first
-// two can be loose by up to a factor sqrt(3), while the third tends to the box distance as the
-// boxes get farther apart relative to their size.
-inline double box_squared_distance(const BvhNode& na, const BvhNode& nb, const Relative& rel) {
-    const CenteredBox a = centered(na);
-    const CenteredBox b = centered(nb);
-    const Vec3 b_center = rel.apply(b.center);
-    const double in_a = squared_gap(a.center, a.half, b_center, rel.abs_rotation * b.half);
-    const double in_b = squared_gap(rel.apply_inverse(a.center), rel.abs_rotation.transpose_times(a.half),
-                                    b.center, b.half);
-    double best = std::fmax(in_a, in_b);
-    const Vec3 axis = b_center - a.center;  // a's frame
-    const double length = norm(axis);
-    if (length > 0.0) {
-        const Vec3 axis_b = rel.rotation.transpose_times(axis);  // b's frame
-        const double reach = (std::fabs(axis.x) * a.half.x + std::fabs(axis.y) * a.half.y + std::fabs(axis.z) * a.half.z +
-                              std::fabs(axis_b.x) * b.half.x + std::fabs(axis_b.y) * b.half.y + std::fabs(axis_b.z) * b.half.z) / length;
-        const double gap = length - reach;
-        if (gap > 0.0) best = std::fmax(best, gap * gap);
-    }
-    return best;
+// Whether the oriented boxes of node pair (a node, b node) may overlap (no separating axis
+// among those of obb_squared_distance).
+inline bool boxes_overlap(const MeshBvh& a, const MeshBvh& b, std::pair<std::int32_t, std::int32_t> pair,
+                          const Relative& rel) {
+    return obb_squared_distance(a.obbs()[static_cast<size_t>(pair.first)], b.obbs()[static_cast<size_t>(pair.second)], rel,
+                                0.0) == 0.0;
 }
 
 inline double node_size(const BvhNode& n) {
@@ -99,7 +156,7 @@ struct TriangleBox {
 };
 
 inline TriangleBox triangle_box(const Vec3 t[3]) {
-    return {component_min(t[0], component_min(t[1], t[2])), component_max(t[0], component_max(t[1], t[2]))};
+    return {min3(t[0], min3(t[1], t[2])), max3(t[0], max3(t[1], t[2]))};
 }
 
 inline double triangle_box_squared_distance(const TriangleBox& a, const TriangleBox& b) {
@@ -117,8 +174,8 @@ inline double triangle_box_squared_distance(const TriangleBox& a, const Triangle
 // relative to their size, where the box bound is loose. Returns a squared distance.
 inline double triangle_axis_squared_distance(const Vec3 a[3], const Vec3 b[3]) {
     const Vec3 axis = (b[0] + b[1] + b[2]) - (a[0] + a[1] + a[2]);
-    const double a_max = std::fmax(dot(axis, a[0]), std::fmax(dot(axis, a[1]), dot(axis, a[2])));
-    const double b_min = std::fmin(dot(axis, b[0]), std::fmin(dot(axis, b[1]), dot(axis, b[2])));
+    const double a_max = max2(dot(axis, a[0]), max2(dot(axis, a[1]), dot(axis, a[2])));
+    const double b_min = min2(dot(axis, b[0]), min2(dot(axis, b[1]), dot(axis, b[2])));
     const double gap = b_min - a_max;
     return gap > 0.0 ? gap * gap / dot(axis, axis) : 0.0;
 }
@@ -160,9 +217,11 @@ SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative&
     auto pruned = [&r](double lb2) { return r.found ? lb2 >= r.squared_distance : lb2 > r.squared_distance; };
     const std::vector<BvhNode>& na = a.nodes();
     const std::vector<BvhNode>& nb = b.nodes();
+    const std::vector<NodeObb>& oa = a.obbs();
+    const std::vector<NodeObb>& ob = b.obbs();
     std::vector<StackItem> stack;
     stack.reserve(128);
-    const double root2 = box_squared_distance(na[0], nb[0], rel);
+    const double root2 = obb_squared_distance(oa[0], ob[0], rel, bound2);
     if (pruned(root2)) return r;
     stack.push_back({0, 0, root2});
     MappedLeaf leaf_b;
@@ -218,8 +277,12 @@ SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative&
             c1 = {item.a, item.b + 1, 0.0};
             c2 = {item.a, y.index, 0.0};
         }
-        c1.bound = box_squared_distance(na[static_cast<size_t>(c1.a)], nb[static_cast<size_t>(c1.b)], rel);
-        c2.bound = box_squared_distance(na[static_cast<size_t>(c2.a)], nb[static_cast<size_t>(c2.b)], rel);
+        c1.bound = obb_squared_distance(oa[static_cast<size_t>(c1.a)], ob[static_cast<size_t>(c1.b)], rel, r.squared_distance);
+        c2.bound = obb_squared_distance(oa[static_cast<size_t>(c2.a)], ob[static_cast<size_t>(c2.b)], rel, r.squared_distance);
+        if (rel.aligned) {
+            c1.bound = max2(c1.bound, aabb_squared_distance(na[static_cast<size_t>(c1.a)], nb[static_cast<size_t>(c1.b)], rel));
+            c2.bound = max2(c2.bound, aabb_squared_distance(na[static_cast<size_t>(c2.a)], nb[static_cast<size_t>(c2.b)], rel));
+        }
         if (c1.bound > c2.bound) std::swap(c1, c2);
         if (!pruned(c2.bound)) stack.push_back(c2);
         if (!pruned(c1.bound)) stack.push_back(c1);
@@ -237,7 +300,7 @@ bool inside_box(const BvhNode& n, const Vec3& p) {
 bool point_inside(const MeshBvh& mesh, const Pose& pose, const Vec3& point) {
     const Vec3 local = pose.apply_inverse(point);
     if (!inside_box(mesh.nodes()[0], local)) return false;
-    return std::fabs(winding_number(mesh, local)) >= defaults::winding_number_inside;
+    return winding_number_inside(mesh, local);
 }
 
 // Squared distance from p to node n's box.
@@ -351,8 +414,7 @@ bool inside_mesh(const MeshBvh& mesh, const Vec3& p, long long* work) {
             if (signed_crossings(mesh, p, p + direction * reach, &count)) return count != 0;
         }
     }
-    *work += mesh.triangle_count();
-    return std::fabs(winding_number(mesh, p)) >= defaults::winding_number_inside;
+    return winding_number_inside(mesh, p, work);
 }
 
 // Marks the triangles (leaf order) of a and of b that belong to an intersecting triangle
@@ -363,15 +425,15 @@ struct CrossingPair {
                          // that the samples do not depend on the order of the pair
 };
 
-void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
-                             std::vector<char>& in_a, std::vector<char>& in_b,
-                             std::vector<CrossingPair>& pairs) {
-    pairs.clear();
-    in_a.assign(static_cast<size_t>(a.triangle_count()), 0);
-    in_b.assign(static_cast<size_t>(b.triangle_count()), 0);
+// The descent of overlapping oriented boxes shared by the intersection queries: calls
+// `visit(i, j, ta, tb)` for each triangle pair (leaf order i of a, j of b; b's corners mapped
+// into a's frame) whose boxes touch, in depth-first order, until it returns true. Returns
+// whether a visit stopped the descent.
+template <class Visit>
+bool for_each_touching_pair(const MeshBvh& a, const MeshBvh& b, const Relative& rel, Visit visit) {
     const std::vector<BvhNode>& na = a.nodes();
     const std::vector<BvhNode>& nb = b.nodes();
-    if (box_squared_distance(na[0], nb[0], rel) > 0.0) return;
+    if (!boxes_overlap(a, b, {0, 0}, rel)) return false;
     std::vector<std::pair<std::int32_t, std::int32_t>> stack{{0, 0}};
     MappedLeaf leaf_b;
     while (!stack.empty()) {
@@ -385,25 +447,37 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
                 const Vec3* ta = a.triangle(i);
                 const TriangleBox box_a = triangle_box(ta);
                 for (int j = 0; j < leaf_b.count; ++j)
-                    if (Vec3 w; triangle_box_squared_distance(box_a, leaf_b.boxes[j]) == 0.0 &&
-                                triangles_intersect(ta, leaf_b.corners[j], &w)) {
-                        in_a[static_cast<size_t>(i)] = 1;
-                        in_b[static_cast<size_t>(y.index + j)] = 1;
-                        Vec3 w_b = w;
-                        triangles_intersect(leaf_b.corners[j], ta, &w_b);
-                        pairs.push_back({i, y.index + j, {w, w_b}});
-                    }
+                    if (triangle_box_squared_distance(box_a, leaf_b.boxes[j]) == 0.0 &&
+                        visit(i, y.index + j, ta, leaf_b.corners[j]))
+                        return true;
             }
             continue;
         }
         const bool descend_a = !x.is_leaf() && (y.is_leaf() || node_size(x) >= node_size(y));
         const std::pair<std::int32_t, std::int32_t> c1 = descend_a ? std::make_pair(ia + 1, ib) : std::make_pair(ia, ib + 1);
         const std::pair<std::int32_t, std::int32_t> c2 = descend_a ? std::make_pair(x.index, ib) : std::make_pair(ia, y.index);
-        if (box_squared_distance(na[static_cast<size_t>(c2.first)], nb[static_cast<size_t>(c2.second)], rel) == 0.0)
-            stack.push_back(c2);
-        if (box_squared_distance(na[static_cast<size_t>(c1.first)], nb[static_cast<size_t>(c1.second)], rel) == 0.0)
-            stack.push_back(c1);
+        if (boxes_overlap(a, b, c2, rel)) stack.push_back(c2);
+        if (boxes_overlap(a, b, c1, rel)) stack.push_back(c1);
     }
+    return false;
+}
+
+void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
+                             std::vector<char>& in_a, std::vector<char>& in_b,
+                             std::vector<CrossingPair>& pairs) {
+    pairs.clear();
+    in_a.assign(static_cast<size_t>(a.triangle_count()), 0);
+    in_b.assign(static_cast<size_t>(b.triangle_count()), 0);
+    for_each_touching_pair(a, b, rel, [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
+        if (Vec3 w; triangles_intersect(ta, tb, &w)) {
+            in_a[static_cast<size_t>(i)] = 1;
+            in_b[static_cast<size_t>(j)] = 1;
+            Vec3 w_b = w;
+            triangles_intersect(tb, ta, &w_b);
+            pairs.push_back({i, j, {w, w_b}});
+        }
+        return false;
+    });
 }
 
 // Parameters along [p, q] (mesh's local frame) where the segment meets the mesh's surface in
@@ -561,51 +635,139 @@ PointDistanceOutput closest_point(const MeshBvh& mesh, const Vec3& point) {
 double winding_number(const MeshBvh& mesh, const Vec3& point) {
     double total = 0.0;
     const std::int32_t n = mesh.triangle_count();
-    for (std::int32_t i = 0; i < n; ++i) {
-        const Vec3* t = mesh.triangle(i);
-        const Vec3 a = t[0] - point, b = t[1] - point, c = t[2] - point;
-        const double la = norm(a), lb = norm(b), lc = norm(c);
-        // van Oosterom and Strackee 1983: tan(omega / 2) = det / denominator.
-        const double det = dot(a, cross(b, c));
-        const double denominator = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb;
-        total += 2.0 * std::atan2(det, denominator);
-    }
+    for (std::int32_t i = 0; i < n; ++i) total += triangle_solid_angle(mesh.triangle(i), point);
     return total / (4.0 * kPi);
 }
 
-bool mesh_intersects(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b, const Pose& pose_b) {
-    const Relative rel(pose_a, pose_b);
-    const std::vector<BvhNode>& na = a.nodes();
-    const std::vector<BvhNode>& nb = b.nodes();
-    if (box_squared_distance(na[0], nb[0], rel) > 0.0) return false;
-    std::vector<std::pair<std::int32_t, std::int32_t>> stack{{0, 0}};
-    MappedLeaf leaf_b;
-    while (!stack.empty()) {
-        const auto [ia, ib] = stack.back();
-        stack.pop_back();
-        const BvhNode& x = na[static_cast<size_t>(ia)];
-        const BvhNode& y = nb[static_cast<size_t>(ib)];
-        if (x.is_leaf() && y.is_leaf()) {
-            leaf_b.load(b, y, rel);
-            for (std::int32_t i = x.index; i < x.index + x.count; ++i) {
-                const Vec3* ta = a.triangle(i);
-                const TriangleBox box_a = triangle_box(ta);
-                for (int j = 0; j < leaf_b.count; ++j)
-                    if (triangle_box_squared_distance(box_a, leaf_b.boxes[j]) == 0.0 &&
-                        triangles_intersect(ta, leaf_b.corners[j], nullptr))
-                        return true;
-            }
-            continue;
-        }
-        const bool descend_a = !x.is_leaf() && (y.is_leaf() || node_size(x) >= node_size(y));
-        const std::pair<std::int32_t, std::int32_t> c1 = descend_a ? std::make_pair(ia + 1, ib) : std::make_pair(ia, ib + 1);
-        const std::pair<std::int32_t, std::int32_t> c2 = descend_a ? std::make_pair(x.index, ib) : std::make_pair(ia, y.index);
-        if (box_squared_distance(na[static_cast<size_t>(c2.first)], nb[static_cast<size_t>(c2.second)], rel) == 0.0)
-            stack.push_back(c2);
-        if (box_squared_distance(na[static_cast<size_t>(c1.first)], nb[static_cast<size_t>(c1.second)], rel) == 0.0)
-            stack.push_back(c1);
+namespace {
+
+// The order-2 far-field expansion of node `w` seen from `point`, and the bound of its
+// remainder, both over 4 pi (winding-number units); false when the point is too near
+// (distance to the centre at most twice the radius) or the figures are not finite.
+// With v = center - point, rho = |v|: the solid angle of the node's triangles is the
+// integral of (x - point) . n / |x - point|^3 over them; its Taylor expansion about the centre
+// gives v . N / rho^3 (dipole) + (tr M - 3 v^T M v / rho^2) / rho^3 (first moment M), and the
+// remainder is at most (1/2) (6 / (rho - radius)^4) radius^2 area.
+inline bool far_field(const WindingNode& w, const Vec3& point, double* value, double* error) {
+    const Vec3 v = w.center - point;
+    const double rho2 = dot(v, v);
+    if (!(rho2 > 4.0 * w.radius * w.radius)) return false;
+    const double rho = std::sqrt(rho2);
+    const double inv3 = 1.0 / (rho2 * rho);
+    const double* m = w.moment;
+    const double trace = m[0] + m[1] + m[2];
+    const double vmv = v.x * v.x * m[0] + v.y * v.y * m[1] + v.z * v.z * m[2] +
+                       2.0 * (v.x * v.y * m[3] + v.y * v.z * m[4] + v.z * v.x * m[5]);
+    const double gap = rho - w.radius;
+    const double gap2 = gap * gap;
+    *value = (dot(v, w.dipole) + trace - 3.0 * vmv / rho2) * inv3 / (4.0 * kPi);
+    *error = 3.0 * w.radius * w.radius * w.area / (gap2 * gap2) / (4.0 * kPi) * (1.0 + 1e-9);
+    return std::isfinite(*value) && std::isfinite(*error);
+}
+
+struct OpenNode {
+    double error;
+    double value;
+    std::int32_t node;
+    bool operator<(const OpenNode& o) const { return error < o.error; }
+};
+
+// The refinement behind fast_winding_number and winding_number_inside: far nodes in a max-heap
+// by their bound, opened until `enough(value, error)`.
+template <class Enough>
+WindingEstimate refine_winding_number(const MeshBvh& mesh, const Vec3& point, Enough enough) {
+    WindingEstimate out;
+    if (!is_finite(point) || !mesh.valid()) {
+        out.value = out.error = kNaN;
+        return out;
     }
-    return false;
+    const std::vector<BvhNode>& nodes = mesh.nodes();
+    const std::vector<WindingNode>& far = mesh.winding_nodes();
+    std::vector<OpenNode> heap;
+    std::vector<std::int32_t> near;
+    double exact = 0.0;  // solid angles summed exactly, steradians
+    double approx = 0.0, error = 0.0;  // far-field sums, winding-number units
+    // Adds node `id`: far, into the heap; near, its children (or its triangles, for a leaf).
+    auto open = [&](std::int32_t id) {
+        near.push_back(id);
+        while (!near.empty()) {
+            const std::int32_t k = near.back();
+            near.pop_back();
+            double value, bound;
+            if (far_field(far[static_cast<size_t>(k)], point, &value, &bound)) {
+                ++out.visits;
+                approx += value;
+                error += bound;
+                heap.push_back({bound, value, k});
+                std::push_heap(heap.begin(), heap.end());
+                continue;
+            }
+            const BvhNode& node = nodes[static_cast<size_t>(k)];
+            if (node.is_leaf()) {
+                for (std::int32_t i = node.index; i < node.index + node.count; ++i)
+                    exact += triangle_solid_angle(mesh.triangle(i), point);
+                out.visits += node.count;
+                continue;
+            }
+            near.push_back(node.index);
+            near.push_back(k + 1);
+        }
+    };
+    open(0);
+    while (!heap.empty() && !enough(exact / (4.0 * kPi) + approx, error)) {
+        std::pop_heap(heap.begin(), heap.end());
+        const OpenNode top = heap.back();
+        heap.pop_back();
+        approx -= top.value;
+        error -= top.error;
+        const BvhNode& node = nodes[static_cast<size_t>(top.node)];
+        if (node.is_leaf()) {
+            for (std::int32_t i = node.index; i < node.index + node.count; ++i)
+                exact += triangle_solid_angle(mesh.triangle(i), point);
+            out.visits += node.count;
+        } else {
+            open(top.node + 1);
+            open(node.index);
+        }
+    }
+    if (heap.empty()) {
+        // Every triangle summed: drop the residue the subtractions left.
+        approx = 0.0;
+        error = 0.0;
+    }
+    out.value = exact / (4.0 * kPi) + approx;
+    // The running total of the bounds lost digits to the subtractions: recount it.
+    if (!heap.empty()) {
+        error = 0.0;
+        for (const OpenNode& o : heap) error += o.error;
+    }
+    out.error = error;
+    return out;
+}
+
+}  // namespace
+
+WindingEstimate fast_winding_number(const MeshBvh& mesh, const Vec3& point, double max_error) {
+    return refine_winding_number(mesh, point, [max_error](double, double error) { return error <= max_error; });
+}
+
+bool winding_number_inside(const MeshBvh& mesh, const Vec3& point, long long* work) {
+    constexpr double threshold = defaults::winding_number_inside;
+    // Decided once the interval [value - error, value + error] of the winding number clears
+    // both thresholds +-0.5 by more than the rounding of the sums (1e-9, far above the
+    // 1e-16 * F of a mesh's exact sum).
+    const WindingEstimate w = refine_winding_number(mesh, point, [](double value, double error) {
+        const double margin = std::fabs(std::fabs(value) - threshold);
+        return margin > error + 1e-9;
+    });
+    if (work != nullptr) *work += w.visits;
+    return std::fabs(w.value) >= threshold;
+}
+
+bool mesh_intersects(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b, const Pose& pose_b) {
+    return for_each_touching_pair(a, b, Relative(pose_a, pose_b, a, b), [](std::int32_t, std::int32_t, const Vec3* ta, const Vec3* tb) {
+        return triangles_intersect(ta, tb, nullptr);
+    });
 }
 
 bool mesh_pair_in_range(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b,
@@ -642,9 +804,23 @@ MeshDistanceOutput mesh_distance(const MeshDistanceInput& input) {
     }
     const MeshBvh& a = *input.a;
     const MeshBvh& b = *input.b;
-    const Relative rel(input.pose_a, input.pose_b);
+    const Relative rel(input.pose_a, input.pose_b, *input.a, *input.b);
     const double bound2 = input.max_distance * input.max_distance;
-    const SearchResult r = search_distance(a, b, rel, bound2);
+    // Crossing surfaces are found sooner by the intersection descent, which tests triangle
+    // pairs whose boxes touch and measures nothing, than by the distance search, which measures
+    // every near triangle pair on its way to the first crossing one.
+    SearchResult r;
+    const bool crossed = for_each_touching_pair(a, b, rel, [&r](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
+        Vec3 w;
+        if (!triangles_intersect(ta, tb, &w)) return false;
+        r.found = r.intersecting = true;
+        r.squared_distance = 0.0;
+        r.point_a = r.point_b = w;
+        r.triangle_a = i;
+        r.triangle_b = j;
+        return true;
+    });
+    if (!crossed) r = search_distance(a, b, rel, bound2);
     if (r.found) {
         out.distance = std::sqrt(r.squared_distance);
         out.point_a = input.pose_a.apply(r.point_a);
@@ -723,7 +899,7 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
     }
     const MeshBvh& a = *input.a;
     const MeshBvh& b = *input.b;
-    const Relative rel(input.pose_a, input.pose_b);  // b's frame -> a's frame
+    const Relative rel(input.pose_a, input.pose_b, *input.a, *input.b);  // b's frame -> a's frame
     std::vector<char> crossing_a, crossing_b;
     std::vector<CrossingPair> crossing_pairs;
     mark_crossing_triangles(a, b, rel, crossing_a, crossing_b, crossing_pairs);

@@ -64,8 +64,17 @@ def as_pairs(pairs: Any, h: int, items: str = "shapes") -> np.ndarray:
         raise ValueError(f"pairs must be (P, 2), got {arr.shape}")
     if arr.size and arr.dtype.kind not in "iu":
         raise ValueError(f"pairs must hold integer indices, got dtype {arr.dtype}")
-    arr = np.ascontiguousarray(arr, dtype=np.int64)
-    if arr.size and (arr.min() < 0 or arr.max() >= h):
-        bad = arr[(arr < 0) | (arr >= h)][0]
-        raise ValueError(f"pairs: index {bad} out of range for {h} {items}")
+    if arr.dtype != np.int64 or not arr.flags.c_contiguous:
+        arr = np.ascontiguousarray(arr, dtype=np.int64)
+    if arr.size:
+        # A few pairs (one query per call) are checked as Python ints: two numpy reductions
+        # cost more than the native query they guard.
+        if arr.size <= 64:
+            flat = arr.ravel().tolist()
+            low, high = min(flat), max(flat)
+        else:
+            low, high = int(arr.min()), int(arr.max())
+        if low < 0 or high >= h:
+            bad = arr[(arr < 0) | (arr >= h)][0]
+            raise ValueError(f"pairs: index {bad} out of range for {h} {items}")
     return arr

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from meshcol._native import core, defaults
+from meshcol._native import core
 from meshcol.collision.arrays import as_pairs, as_points, as_poses
 from meshcol.geometry.topology import is_closed_manifold
 from meshcol.types import Body, Status
@@ -176,13 +176,39 @@ class MeshSet:
         points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
         return self._handle.winding_number(i, points)
 
+    def fast_winding_number(
+        self, i: int, points: np.ndarray, max_error: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Fast winding numbers of ``points`` (n, 3), mesh ``i``'s local frame, within a bound.
+
+        The hierarchical evaluation of Barill et al. 2018 (order-2 far field) with a
+        guaranteed error: returns ``(value (n,), error (n,), visits (n,) int64)`` with
+        ``|value - winding_number| <= error <= max_error`` (up to rounding); ``max_error=0``
+        sums every triangle. ``visits`` counts the nodes and triangles evaluated.
+        """
+        points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+        return self._handle.fast_winding_number(i, points, float(max_error))
+
+    def winding_number_inside(self, i: int, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Containment verdicts ``|winding_number| >= 0.5`` of ``points`` (n, 3) w.r.t. mesh ``i``.
+
+        The fast winding number refined only until its error bound decides the comparison: the
+        same verdicts as thresholding :meth:`winding_number`. Returns ``(inside (n,) bool,
+        visits (n,) int64)``.
+        """
+        points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+        return self._handle.winding_number_inside(i, points)
+
     def contains(self, i: int, points: np.ndarray) -> np.ndarray:
         """Whether each point (n, 3) is inside mesh ``i`` (local frame), (n,) bool.
 
         ``|winding number| >= defaults.winding_number_inside`` (either orientation); meaningful
-        for a closed mesh. A non-finite point is not inside.
+        for a closed mesh. A non-finite point is not inside. Decided by the fast winding
+        number, refined until its error bound settles the comparison (as
+        :meth:`winding_number_inside`), so the verdicts are those of the exact sum.
         """
-        return np.abs(self.winding_number(i, points)) >= defaults.winding_number_inside
+        points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+        return self._handle.winding_number_inside(i, points)[0]
 
     def closest_points(
         self, i: int, points: Any, *, threads: int = 0

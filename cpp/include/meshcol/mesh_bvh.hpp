@@ -2,9 +2,12 @@
 /// A static bounding volume hierarchy over the triangles of one mesh, in the mesh's local
 /// frame: axis-aligned boxes, built top-down with a binned surface area heuristic (Wald 2007),
 /// stored flat in depth-first order (32-byte nodes), with the triangles copied in leaf order so
-/// a leaf reads one contiguous block.
+/// a leaf reads one contiguous block. Beside each node, in arrays of their own: an oriented box
+/// (the pair traversals' bound, tight under any relative rotation) and the far-field data of
+/// the fast winding number.
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "meshcol/vec.hpp"
@@ -22,6 +25,31 @@ struct BvhNode {
     bool is_leaf() const { return count > 0; }
 };
 static_assert(sizeof(BvhNode) == 32, "BvhNode must stay 32 bytes");
+
+/// The far-field data of one node for the fast winding number (Barill, Dickson, Schmidt,
+/// Levin and Jacobson 2018, "Fast winding numbers for soups and clouds"), to order 2: seen
+/// from a point q far from `center`, the triangles under the node subtend the solid angle of
+/// a dipole `dipole` plus a quadrupole `moment` at `center`, within a bound that falls as
+/// radius^2 * area / (|q - center| - radius)^4. Kept apart from BvhNode so the pair traversals
+/// stay on 32-byte nodes.
+struct WindingNode {
+    Vec3 center;       ///< area-weighted centroid of the node's triangles, local frame
+    Vec3 dipole;       ///< sum of the triangles' area vectors a = cross(p1 - p0, p2 - p0) / 2
+    /// Symmetric part of the first moment sum over triangles of a (g - center)^T (g the
+    /// triangle's centroid): xx, yy, zz, xy, yz, zx
+    double moment[6];
+    double radius;     ///< no corner of the node's triangles is farther than this from center
+    double area;       ///< sum of the triangles' areas (|a|), >= |dipole|
+};
+/// An oriented box bounding one node's triangles (Gottschalk, Lin and Manocha 1996, "OBBTree"):
+/// {x : |axes.row(k) . (x - center)| <= half[k]}. Its first axis follows the patch's mean
+/// normal, so a nearly flat patch gets a thin box whatever its orientation in the mesh's frame;
+/// nodes whose normals cancel (a closed piece) keep the axis-aligned box.
+struct NodeObb {
+    Mat3 axes;    ///< rows: orthonormal axes, local frame
+    Vec3 center;  ///< local frame
+    Vec3 half;    ///< half extents along the rows of axes, padded outwards for rounding
+};
 
 /// The hierarchy of one triangle mesh. Immutable once built; safe to share between threads.
 class MeshBvh {
@@ -42,6 +70,12 @@ public:
     /// number is an integer off the surface (as geometry.topology.is_closed_manifold).
     bool closed() const { return closed_; }
     const std::vector<BvhNode>& nodes() const { return nodes_; }
+    /// One per node, same index: the fast winding number's far-field data (validate() checks
+    /// the radii).
+    const std::vector<WindingNode>& winding_nodes() const { return winding_nodes_; }
+    /// One per node, same index: its oriented box (validate() checks that it holds the node's
+    /// triangles).
+    const std::vector<NodeObb>& obbs() const { return obbs_; }
     std::int32_t triangle_count() const { return static_cast<std::int32_t>(face_index_.size()); }
     /// The three corners of triangle `i` (leaf order), local frame.
     const Vec3* triangle(std::int32_t i) const { return &corners_[3 * static_cast<size_t>(i)]; }
@@ -56,7 +90,14 @@ public:
     bool validate() const;
 
 private:
+    void build_winding_nodes();
+    void build_obbs();
+    /// Triangles [first, last) (leaf order) under node `id`.
+    std::pair<std::int32_t, std::int32_t> triangle_range(std::int32_t id) const;
+
     std::vector<BvhNode> nodes_;
+    std::vector<WindingNode> winding_nodes_;
+    std::vector<NodeObb> obbs_;
     std::vector<Vec3> corners_;            ///< 3 per triangle, leaf order
     std::vector<Vec3> vertices_;           ///< vertices referenced by a face, input order
     bool closed_ = false;

@@ -44,11 +44,12 @@ struct MeshDistanceOutput {
 /// search are exact enough. Pairs outside get Status::OUT_OF_RANGE, never a number.
 bool mesh_pair_in_range(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b, const Pose& pose_b);
 
-/// Minimum distance between the surfaces of two meshes by simultaneous descent of their
-/// hierarchies, closer child first, pruning node pairs whose box distance is no less than the
-/// best distance found (branch and bound, as Larsen et al. 1999 and FCL's mesh distance), exact
-/// triangle-pair distance at the leaves; stops at the first intersecting triangle pair. Then,
-/// when the surfaces do not intersect, tests containment with the generalized winding number.
+/// Minimum distance between the surfaces of two meshes. First the intersection descent (as
+/// mesh_intersects) looks for a crossing triangle pair; without one, a simultaneous descent of
+/// the hierarchies, closer child first, prunes node pairs whose oriented-box distance bound is
+/// no less than the best distance found (branch and bound, as Larsen et al. 1999 and FCL's
+/// mesh distance), exact triangle-pair distance at the leaves. Then, when the surfaces do not
+/// intersect, tests containment with the generalized winding number (winding_number_inside).
 /// The caller checks that poses are rigid.
 MeshDistanceOutput mesh_distance(const MeshDistanceInput& input);
 
@@ -105,5 +106,28 @@ PointDistanceOutput closest_point(const MeshBvh& mesh, const Vec3& point);
 /// Oosterom and Strackee 1983). 1 inside a closed outward-wound mesh, 0 outside, -1 inside an
 /// inward-wound one. Undefined on the surface.
 double winding_number(const MeshBvh& mesh, const Vec3& point);
+
+/// A winding number known to within `error`: |value - winding_number| <= error, up to rounding.
+struct WindingEstimate {
+    double value = 0.0;
+    double error = 0.0;         ///< >= 0; 0 when every triangle was summed exactly
+    std::int64_t visits = 0;    ///< nodes approximated plus triangles summed (the work done)
+};
+
+/// Fast winding number (Barill et al. 2018) with a guaranteed error: the hierarchy's nodes far
+/// from `point` (distance from their centre above twice their radius) contribute their order-2
+/// far-field expansion, each with a rigorous bound of its Taylor remainder (the third
+/// directional derivative of 1/|x| is at most 6/|x|^4, as Legendre polynomials are at most 1:
+/// 3 radius^2 area / (4 pi (d - radius)^4)); nodes nearer are opened, leaves summed exactly
+/// (as winding_number). Then the node with the largest bound is opened until the total bound is
+/// at most `max_error` (0: the exact sum). A non-finite point gives NaN.
+WindingEstimate fast_winding_number(const MeshBvh& mesh, const Vec3& point, double max_error);
+
+/// Whether |winding_number(mesh, point)| >= defaults::winding_number_inside, by the fast
+/// winding number refined only until its bound decides that comparison (opening nodes largest
+/// bound first, down to the exact sum when the value sits within rounding of the threshold):
+/// the verdict of the O(F) sum at a fraction of its cost off the surface. Adds the nodes and
+/// triangles visited to `*work` when given.
+bool winding_number_inside(const MeshBvh& mesh, const Vec3& point, long long* work = nullptr);
 
 }  // namespace meshcol
