@@ -8,7 +8,15 @@ import click
 
 from meshcol.analysis.check import FAIL_ON
 from meshcol.analysis.colliders import COLLIDER_KINDS
-from meshcol.cli.common import FiniteFloat, Progress, plural, report_format, report_options, verdict
+from meshcol.cli.common import (
+    FiniteFloat,
+    Progress,
+    plural,
+    report_format,
+    report_options,
+    robot_options,
+    verdict,
+)
 from meshcol.decomposition.engines import ENGINES
 
 FAIL_ON_CHOICES = tuple(FAIL_ON)
@@ -89,6 +97,7 @@ SHAPE_CHOICES = COLLIDER_KINDS
     help="Decompose cache folder.  [default: the user cache, as 'meshcol decompose']",
 )
 @report_options(default="the report on stdout; the summary on stderr")
+@robot_options()
 def check(
     inputs: tuple[str, ...],
     shape: str,
@@ -107,7 +116,9 @@ def check(
     """Check every pair of bodies for contact, clearance and interpenetration.
 
     INPUT is mesh files (each body at its own coordinates, as parts exported in place), one
-    scene manifest (JSON/TOML) or glTF/GLB scenes. Files given directly give one body per
+    scene manifest (JSON/TOML), glTF/GLB scenes, or one robot description (URDF, MJCF): its
+    links are the bodies, posed at --joint/--joints (default zero), their collision elements
+    the parts. Files given directly give one body per
     object; a manifest body is its whole file, whose objects are its parts (never checked
     against each other; pairs name them as part_a, part_b). Statuses per pair: separated,
     clearance, contact, penetrating, contained. The report (JSON or CSV) goes to --report FILE

@@ -1,0 +1,529 @@
+"""Robot descriptions (URDF, MJCF) as scenes, and self-collision checks of them.
+
+Hand-written descriptions cover each edge case; the corpus robots (Franka Panda, Solo) are
+checked against independent computations: yourdfpy's own forward kinematics, MuJoCo's, and
+python-fcl on the same convex hulls.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from meshcol.analysis.check import check_scene
+from meshcol.cli import main
+from meshcol.errors import SceneError
+from meshcol.io.robot import RobotOptions, is_robot_file, load_robot, robot_options
+from meshcol.io.scene import load_inputs
+from meshcol.types import Box, Capsule, Cylinder
+
+pytest.importorskip("yourdfpy", reason="URDF reading needs yourdfpy (pip install meshcol[robots])")
+
+CUBE_OBJ = """v -0.5 -0.5 -0.5
+v 0.5 -0.5 -0.5
+v 0.5 0.5 -0.5
+v -0.5 0.5 -0.5
+v -0.5 -0.5 0.5
+v 0.5 -0.5 0.5
+v 0.5 0.5 0.5
+v -0.5 0.5 0.5
+f 1 3 2
+f 1 4 3
+f 5 6 7
+f 5 7 8
+f 1 2 6
+f 1 6 5
+f 2 3 7
+f 2 7 6
+f 3 4 8
+f 3 8 7
+f 4 1 5
+f 4 5 8
+"""
+
+
+def rot(axis: str, angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    i = "xyz".index(axis)
+    m = np.eye(4)
+    j, k = (i + 1) % 3, (i + 2) % 3
+    m[j, j], m[j, k], m[k, j], m[k, k] = c, -s, s, c
+    return m
+
+
+def trans(x: float, y: float, z: float) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, 3] = (x, y, z)
+    return m
+
+
+def rpy(r: float, p: float, y: float) -> np.ndarray:
+    return rot("z", y) @ rot("y", p) @ rot("x", r)
+
+
+def urdf(body: str, name: str = "bot") -> str:
+    return f'<?xml version="1.0"?>\n<robot name="{name}">\n{body}\n</robot>\n'
+
+
+def write(folder: Path, name: str, text: str) -> Path:
+    path = folder / name
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+    return path
+
+
+def run(*args: str) -> tuple[int, str, str]:
+    result = CliRunner().invoke(main, list(args))
+    return result.exit_code, result.stdout, result.stderr
+
+
+def error_line(*args: str) -> str:
+    code, _, err = run(*args)
+    assert code == 2, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("meshcol: error: "), err
+    assert "Traceback" not in err
+    return lines[0]
+
+
+CHAIN = """
+<link name="base"><collision><geometry><box size="0.2 0.2 0.2"/></geometry></collision></link>
+<link name="arm">
+  <collision><origin xyz="0 0 0.5"/><geometry><cylinder radius="0.05" length="1"/></geometry></collision>
+</link>
+<link name="frame"/>
+<link name="hand">
+  <collision><origin xyz="0.1 0 0" rpy="0 1.5707963267948966 0"/><geometry><capsule radius="0.03" length="0.1"/></geometry></collision>
+  <collision name="palm"><geometry><sphere radius="0.04"/></geometry></collision>
+</link>
+<joint name="shoulder" type="revolute">
+  <parent link="base"/><child link="arm"/>
+  <origin xyz="0 0 0.1" rpy="0.1 0.2 0.3"/><axis xyz="0 1 0"/>
+  <limit lower="-1" upper="1" effort="1" velocity="1"/>
+</joint>
+<joint name="wrist_mount" type="fixed">
+  <parent link="arm"/><child link="frame"/><origin xyz="0 0 1"/>
+</joint>
+<joint name="slide" type="prismatic">
+  <parent link="frame"/><child link="hand"/>
+  <origin xyz="0 0 0.05" rpy="0 0 1.5707963267948966"/><axis xyz="1 0 0"/>
+  <limit lower="0" upper="0.2" effort="1" velocity="1"/>
+</joint>
+"""
+
+
+def test_urdf_links_are_bodies_posed_by_forward_kinematics(tmp_path):
+    path = write(tmp_path, "chain.urdf", urdf(CHAIN))
+    scene = load_robot(path, RobotOptions(joints={"shoulder": 0.4, "slide": 0.15}))
+    names = [b.name for b in scene.bodies]
+    assert names == ["base", "arm", "hand"]  # 'frame' has no collision geometry
+    base, arm, hand = scene.bodies
+    # one primitive element: exact, posed at link pose x origin
+    assert base.primitive == Box((0.2, 0.2, 0.2)) and base.parts == ()
+    assert arm.primitive == Cylinder(0.05, 1.0)
+    arm_link = trans(0, 0, 0.1) @ rpy(0.1, 0.2, 0.3) @ rot("y", 0.4)
+    np.testing.assert_allclose(arm.pose, arm_link @ trans(0, 0, 0.5), atol=1e-12)
+    # nested frames through the geometry-less 'frame' link; prismatic along its own x
+    hand_link = arm_link @ trans(0, 0, 1) @ trans(0, 0, 0.05) @ rot("z", math.pi / 2)
+    hand_link = hand_link @ trans(0.15, 0, 0)
+    np.testing.assert_allclose(hand.pose, hand_link, atol=1e-12)
+    # several elements: tessellated parts, in the link frame, origins baked in
+    assert hand.primitive is None and hand.parts == ("capsule0", "palm")
+    capsule = hand.vertices[: hand.faces[: hand.part_faces[1]].max() + 1]
+    centre = 0.5 * (capsule.min(axis=0) + capsule.max(axis=0))
+    np.testing.assert_allclose(centre, [0.1, 0, 0], atol=1e-9)
+    extent = capsule.max(axis=0) - capsule.min(axis=0)
+    np.testing.assert_allclose(extent, [0.16, 0.06, 0.06], atol=1e-3)  # along link x
+    palm = hand.vertices[hand.faces[hand.part_faces[1] :].ravel()]
+    np.testing.assert_allclose(np.linalg.norm(palm, axis=1), 0.04, atol=1e-9)
+    # adjacency: the frame link without geometry does not hide arm-hand
+    assert set(scene.excluded_pairs) == {("arm", "base", "adjacent"), ("arm", "hand", "adjacent")}
+    assert scene.units == "m" and scene.source == str(path)
+
+
+def test_capsule_exact_when_alone(tmp_path):
+    text = urdf(
+        '<link name="a"><collision><geometry><capsule radius="0.1" length="0.4"/></geometry>'
+        "</collision></link>"
+    )
+    (body,) = load_robot(write(tmp_path, "c.urdf", text)).bodies
+    assert body.primitive == Capsule(0.1, 0.4)
+
+
+def test_mimic_joint_follows_its_master(tmp_path):
+    text = urdf("""
+<link name="base"/><link name="left"><collision><geometry><sphere radius="0.01"/></geometry></collision></link>
+<link name="right"><collision><geometry><sphere radius="0.01"/></geometry></collision></link>
+<joint name="j1" type="prismatic"><parent link="base"/><child link="left"/><axis xyz="0 1 0"/>
+  <limit lower="0" upper="0.04" effort="1" velocity="1"/></joint>
+<joint name="j2" type="prismatic"><parent link="base"/><child link="right"/><axis xyz="0 1 0"/>
+  <limit lower="-0.2" upper="0.2" effort="1" velocity="1"/>
+  <mimic joint="j1" multiplier="-2" offset="0.01"/></joint>""")
+    path = write(tmp_path, "mimic.urdf", text)
+    left, right = load_robot(path, RobotOptions(joints={"j1": 0.03})).bodies
+    np.testing.assert_allclose(left.pose[:3, 3], [0, 0.03, 0], atol=1e-12)
+    np.testing.assert_allclose(right.pose[:3, 3], [0, -2 * 0.03 + 0.01, 0], atol=1e-12)
+    line = error_line("check", str(path), "--joint", "j2=0.01")
+    assert "mimic.urdf" in line and "'j2'" in line and "mimics joint 'j1'" in line
+
+
+def test_mesh_scale_and_relative_path(tmp_path):
+    write(tmp_path, "meshes/cube.obj", CUBE_OBJ)
+    text = urdf(
+        '<link name="a"><collision><origin xyz="1 0 0"/><geometry>'
+        '<mesh filename="../meshes/cube.obj" scale="2 1 -0.5"/></geometry></collision></link>'
+    )
+    (body,) = load_robot(write(tmp_path, "urdf/m.urdf", text)).bodies
+    np.testing.assert_allclose(body.vertices.min(axis=0), [0, -0.5, -0.25])
+    np.testing.assert_allclose(body.vertices.max(axis=0), [2, 0.5, 0.25])
+    # the mirror (negative scale) keeps outward winding: a positive volume
+    v, f = body.vertices, body.faces
+    volume = np.einsum("ij,ij->i", v[f[:, 0]], np.cross(v[f[:, 1]], v[f[:, 2]])).sum() / 6
+    assert volume == pytest.approx(2 * 1 * 0.5)
+
+
+def test_package_uris(tmp_path, monkeypatch):
+    write(tmp_path, "ws/src/my_robot/meshes/cube.obj", CUBE_OBJ)
+    text = urdf(
+        '<link name="a"><collision><geometry><mesh filename="package://my_robot/meshes/cube.obj"/>'
+        "</geometry></collision></link>"
+    )
+    # the folder layout: the description sits inside the package's folder
+    inside = write(tmp_path, "ws/src/my_robot/urdf/r.urdf", text)
+    assert len(load_robot(inside).bodies) == 1
+    # elsewhere: unknown until --package-path or ROS_PACKAGE_PATH names the folder
+    outside = write(tmp_path, "elsewhere/r.urdf", text)
+    monkeypatch.delenv("ROS_PACKAGE_PATH", raising=False)
+    line = error_line("check", str(outside))
+    assert "r.urdf" in line and "link 'a'" in line and "unknown package 'my_robot'" in line
+    pkg = str(tmp_path / "ws/src/my_robot")
+    code, _, err = run("check", str(outside), "--package-path", f"my_robot={pkg}")
+    assert code == 0, err
+    monkeypatch.setenv("ROS_PACKAGE_PATH", str(tmp_path / "ws/src"))
+    assert len(load_robot(outside).bodies) == 1
+
+
+@pytest.mark.parametrize(
+    "body, words",
+    [
+        ("<link name='a'><collision>", ["malformed XML", "line"]),
+        (
+            "<link name='a'/><joint name='j' type='fixed'><parent link='nowhere'/>"
+            "<child link='a'/></joint>",
+            ["joint 'j'", "parent link 'nowhere' does not exist"],
+        ),
+        (
+            "<link name='a'/><link name='b'/><link name='c'/>"
+            "<joint name='ab' type='fixed'><parent link='a'/><child link='b'/></joint>"
+            "<joint name='bc' type='fixed'><parent link='b'/><child link='c'/></joint>"
+            "<joint name='ca' type='fixed'><parent link='c'/><child link='a'/></joint>",
+            ["joint cycle", "'ab'", "'bc'", "'ca'"],
+        ),
+        (
+            "<link name='a'><collision><geometry><mesh filename='missing.stl'/></geometry>"
+            "</collision></link>",
+            ["link 'a'", "mesh file 'missing.stl' not found"],
+        ),
+        (
+            "<link name='a'><collision><geometry><mesh filename='package://nopkg/x.stl'/>"
+            "</geometry></collision></link>",
+            ["link 'a'", "unknown package 'nopkg'"],
+        ),
+        (
+            "<link name='a'><collision><geometry><sphere radius='-1'/></geometry></collision>"
+            "</link>",
+            ["link 'a'", "sphere radius"],
+        ),
+    ],
+)
+def test_bad_urdf_is_one_line_exit_2(tmp_path, monkeypatch, body, words):
+    monkeypatch.delenv("ROS_PACKAGE_PATH", raising=False)
+    path = write(tmp_path, "bad.urdf", urdf(body))
+    line = error_line("check", str(path))
+    assert "bad.urdf" in line
+    for word in words:
+        assert word in line, line
+
+
+def test_unreadable_mesh_names_link(tmp_path):
+    write(tmp_path, "broken.stl", "solid x\nfacet normal 0 0 1\n outer loop\n")
+    text = urdf(
+        '<link name="arm"><collision><geometry><mesh filename="broken.stl"/></geometry>'
+        "</collision></link>"
+    )
+    line = error_line("check", str(write(tmp_path, "r.urdf", text)))
+    assert "r.urdf" in line and "link 'arm'" in line and "broken.stl" in line
+
+
+def test_joint_values_checked(tmp_path):
+    path = write(tmp_path, "chain.urdf", urdf(CHAIN))
+    line = error_line("check", str(path), "--joint", "shoulder=1.5")
+    assert "chain.urdf" in line and "joint 'shoulder'" in line and "outside its limits" in line
+    assert "[-1, 1]" in line
+    assert "joint 'elbow' does not exist" in error_line("check", str(path), "--joint", "elbow=0")
+    assert "is fixed" in error_line("check", str(path), "--joint", "wrist_mount=0")
+    assert "NAME=VALUE" in error_line("check", str(path), "--joint", "shoulder")
+    joints = write(tmp_path, "q.json", json.dumps({"shoulder": 0.5, "slide": 0.1}))
+    code, out, err = run("check", str(path), "--joints", str(joints), "--joint", "slide=0.2")
+    assert code in (0, 1), err
+    with robot_options(RobotOptions(joints={"shoulder": 0.5, "slide": 0.2})):
+        expected = load_inputs([path])
+    with robot_options(RobotOptions(joints={"shoulder": 0.5, "slide": 0.1})):
+        file_only = load_inputs([path])
+
+    def hand_box(report: dict) -> np.ndarray:
+        return np.array(next(b["aabb"] for b in report["bodies"] if b["name"] == "hand"))
+
+    got = hand_box(json.loads(out))
+    np.testing.assert_allclose(got, hand_box(check_scene(expected).to_dict()), atol=1e-12)
+    assert not np.allclose(got, hand_box(check_scene(file_only).to_dict()))
+
+
+def test_zero_outside_limits_is_clamped_with_a_warning(tmp_path):
+    text = urdf(
+        "<link name='a'/><link name='b'><collision><geometry><sphere radius='0.1'/></geometry>"
+        "</collision></link><joint name='j' type='prismatic'><parent link='a'/><child link='b'/>"
+        "<axis xyz='1 0 0'/><limit lower='0.5' upper='1' effort='1' velocity='1'/></joint>"
+    )
+    scene = load_robot(write(tmp_path, "z.urdf", text))
+    np.testing.assert_allclose(scene.bodies[0].pose[:3, 3], [0.5, 0, 0])
+    assert any("zero is outside its limits" in w for w in scene.warnings)
+
+
+TOUCHING = """
+<link name="base"><collision><geometry><box size="1 1 1"/></geometry></collision></link>
+<link name="a"><collision><geometry><box size="1 1 1"/></geometry></collision></link>
+<link name="b"><collision name="left"><origin xyz="0 -5 0"/><geometry><sphere radius="0.1"/></geometry></collision>
+  <collision name="right"><origin xyz="-0.1 0 0"/><geometry><sphere radius="0.3"/></geometry></collision></link>
+<joint name="ja" type="fixed"><parent link="base"/><child link="a"/><origin xyz="0.5 0 0"/></joint>
+<joint name="jb" type="fixed"><parent link="a"/><child link="b"/><origin xyz="0 0 0"/></joint>
+"""
+
+
+def test_robot_file_detection(tmp_path):
+    assert is_robot_file(write(tmp_path, "a.xml", "<?xml version='1.0'?>\n<!-- x -->\n<mujoco/>"))
+    assert is_robot_file(write(tmp_path, "b.xml", "<robot name='x'/>"))
+    assert not is_robot_file(write(tmp_path, "c.xml", "<scene/>"))
+    assert is_robot_file(tmp_path / "d.urdf")
+    path = write(tmp_path, "r.urdf", urdf(CHAIN))
+    line = error_line("check", str(path), str(path))
+    assert "robot description cannot be combined" in line
+
+
+def test_every_scene_command_takes_a_robot(tmp_path):
+    path = write(tmp_path, "chain.urdf", urdf(CHAIN))
+    for command in (["hull"], ["inspect"]):
+        code, out, err = run(*command, str(path), "--joint", "shoulder=0.2", "--report", "-")
+        assert code in (0, 1), err
+        assert "hand" in out
+
+
+# --- MJCF -------------------------------------------------------------------------------------
+
+MJCF = """<mujoco model="m">
+  <compiler angle="radian"/>
+  <default>
+    <default class="link"><geom type="capsule" size="0.05 0.2"/></default>
+  </default>
+  <include file="parts.xml"/>
+  <worldbody>
+    <geom name="floor" type="plane" size="5 5 0.1"/>
+    <body name="base" pos="0 0 0.5">
+      <geom name="base_box" type="box" size="0.1 0.2 0.3"/>
+      <body name="upper" pos="0 0 0.3" euler="0 0 0.5">
+        <joint name="hinge" type="hinge" axis="0 1 0" range="-1 1" limited="true"/>
+        <geom class="link" name="upper_geom" pos="0 0 0.25"/>
+        <geom name="visual" type="sphere" size="0.5" contype="0" conaffinity="0"/>
+        <body name="lower" pos="0 0 0.5">
+          <joint name="slider" type="slide" axis="1 0 0" range="0 0.3"/>
+          <geom name="lower_a" type="sphere" size="0.05"/>
+          <geom name="lower_b" type="mesh" mesh="cube" pos="0.2 0 0"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+  <contact><exclude body1="base" body2="lower"/></contact>
+  <keyframe><key name="bent" qpos="0.7 0.1"/></keyframe>
+</mujoco>
+"""
+
+PARTS = (
+    """<mujoco><asset><mesh name="cube" file="cube.obj" scale="0.1 0.1 0.1"/></asset></mujoco>"""
+)
+
+
+@pytest.fixture
+def mjcf(tmp_path) -> Path:
+    pytest.importorskip("mujoco", reason="MJCF reading needs mujoco (pip install meshcol[robots])")
+    write(tmp_path, "cube.obj", CUBE_OBJ)
+    write(tmp_path, "parts.xml", PARTS)
+    return write(tmp_path, "m.xml", MJCF)
+
+
+def test_mjcf_bodies_posed_by_mujoco(mjcf):
+    scene = load_robot(mjcf, RobotOptions(joints={"hinge": 0.3}))
+    base, upper, lower = scene.bodies
+    assert [b.name for b in scene.bodies] == ["base", "upper", "lower"]  # floor plane skipped
+    assert base.primitive == Box((0.2, 0.4, 0.6))
+    np.testing.assert_allclose(base.pose, trans(0, 0, 0.5), atol=1e-12)
+    # the default class gives the capsule its size; the contype=0 sphere is not collision
+    assert upper.primitive == Capsule(0.05, 0.4)
+    upper_frame = trans(0, 0, 0.8) @ rot("z", 0.5) @ rot("y", 0.3)
+    np.testing.assert_allclose(upper.pose, upper_frame @ trans(0, 0, 0.25), atol=1e-9)
+    # the included mesh asset, scaled by MuJoCo, as the second part of 'lower'
+    assert lower.parts == ("lower_a", "lower_b")
+    np.testing.assert_allclose(lower.pose, upper_frame @ trans(0, 0, 0.5), atol=1e-9)
+    cube = lower.vertices[lower.faces[lower.part_faces[1] :].ravel()]
+    np.testing.assert_allclose(cube.min(axis=0), [0.15, -0.05, -0.05], atol=1e-9)
+    assert set(scene.excluded_pairs) == {
+        ("base", "upper", "adjacent"),
+        ("lower", "upper", "adjacent"),
+        ("base", "lower", "mjcf <exclude>"),
+    }
+
+
+def test_mjcf_keyframe_and_limits(mjcf):
+    scene = load_robot(mjcf, RobotOptions(keyframe=True))
+    upper_frame = trans(0, 0, 0.8) @ rot("z", 0.5) @ rot("y", 0.7)
+    np.testing.assert_allclose(
+        scene.bodies[2].pose, upper_frame @ trans(0, 0, 0.5) @ trans(0.1, 0, 0), atol=1e-9
+    )
+    line = error_line("check", str(mjcf), "--joint", "hinge=2")
+    assert "m.xml" in line and "joint 'hinge'" in line and "outside its limits [-1, 1]" in line
+    assert "joint 'nope' does not exist" in error_line("check", str(mjcf), "--joint", "nope=0")
+
+
+def test_mjcf_mujoco_rejects(tmp_path):
+    pytest.importorskip("mujoco")
+    path = write(
+        tmp_path,
+        "bad.xml",
+        '<mujoco><worldbody><body name="a"><geom type="sphere" size="0.1"/>'
+        '<joint name="j" type="wobble"/></body></worldbody></mujoco>',
+    )
+    line = error_line("check", str(path))
+    assert "bad.xml" in line and "MuJoCo rejects it" in line and "wobble" in line
+
+
+# --- the corpus robots ----------------------------------------------------------------------
+
+
+@pytest.fixture
+def panda(corpus) -> Path:
+    path = corpus / "robots" / "panda_description" / "urdf" / "panda.urdf"
+    if not path.is_file():
+        pytest.skip("corpus robots not present")
+    return path
+
+
+def _yourdfpy_poses(path: Path, cfg: dict[str, float]) -> dict[str, np.ndarray]:
+    import yourdfpy
+
+    model = yourdfpy.URDF.load(
+        str(path), build_scene_graph=True, load_meshes=False, filename_handler=lambda fname: fname
+    )
+    model.update_cfg(cfg)
+    return {link: model.get_transform(link, model.base_link) for link in model.link_map}
+
+
+def test_panda_forward_kinematics_matches_yourdfpy(panda):
+    import yourdfpy
+
+    model = yourdfpy.URDF.load(str(panda), build_scene_graph=False, load_meshes=False)
+    rng = np.random.default_rng(7)
+    for _ in range(5):
+        cfg = {}
+        for name in model.actuated_joint_names:
+            limit = model.joint_map[name].limit
+            cfg[name] = float(rng.uniform(limit.lower, limit.upper))
+        scene = load_robot(panda, RobotOptions(joints=cfg))
+        expected = _yourdfpy_poses(panda, cfg)
+        assert len(scene.bodies) == 11
+        for body in scene.bodies:
+            np.testing.assert_allclose(body.pose, expected[body.name], atol=1e-9)
+        # the mimic finger follows panda_finger_joint1 (yourdfpy's own mimic handling)
+        right = next(b for b in scene.bodies if b.name == "panda_rightfinger")
+        np.testing.assert_allclose(right.pose, expected["panda_rightfinger"], atol=1e-9)
+
+
+def test_solo_loads_obj_meshes(corpus):
+    path = corpus / "robots" / "solo_description" / "robots" / "solo.urdf"
+    if not path.is_file():
+        pytest.skip("corpus robots not present")
+    scene = load_robot(path)
+    assert len(scene.bodies) == 13
+    assert all(len(b.faces) > 100 for b in scene.bodies)
+    expected = _yourdfpy_poses(path, {})
+    for body in scene.bodies:
+        np.testing.assert_allclose(body.pose, expected[body.name], atol=1e-9)
+
+
+def test_panda_as_mjcf_matches_urdf_kinematics(panda, tmp_path):
+    """The same arm written as MJCF (primitives at the URDF's joint origins): MuJoCo's
+    kinematics and ours agree link by link."""
+    mujoco = pytest.importorskip("mujoco")
+    import yourdfpy
+
+    model = yourdfpy.URDF.load(str(panda), build_scene_graph=False, load_meshes=False)
+    chain = [model.joint_map[f"panda_joint{i}"] for i in range(1, 8)]
+    xml, close = [], []
+    for joint in chain:
+        t = joint.origin
+        quat = np.empty(4)
+        mujoco.mju_mat2Quat(quat, np.ascontiguousarray(t[:3, :3]).ravel())
+        lo, hi = joint.limit.lower, joint.limit.upper
+        xml.append(
+            f'<body name="{joint.child}" pos="{" ".join(map(str, t[:3, 3]))}" '
+            f'quat="{" ".join(map(str, quat))}"><joint name="{joint.name}" axis="0 0 1" '
+            f'range="{lo} {hi}"/><geom type="sphere" size="0.05"/>'
+        )
+        close.append("</body>")
+    text = (
+        '<mujoco><compiler angle="radian"/><worldbody>'
+        + "".join(xml)
+        + "".join(close)
+        + "</worldbody></mujoco>"
+    )
+    path = write(tmp_path, "arm.xml", text)
+    cfg = {j.name: 0.5 * (j.limit.lower + j.limit.upper) + 0.1 for j in chain}
+    ours = {b.name: b.pose for b in load_robot(path, RobotOptions(joints=cfg)).bodies}
+    expected = _yourdfpy_poses(panda, cfg)
+    base = expected["panda_link0"]
+    for name, pose in ours.items():
+        np.testing.assert_allclose(pose, np.linalg.inv(base) @ expected[name], atol=1e-6)
+
+
+def test_scene_error_type(tmp_path):
+    with pytest.raises(SceneError, match="joint cycle"):
+        load_robot(
+            write(
+                tmp_path,
+                "cyc.urdf",
+                urdf(
+                    "<link name='a'/><link name='b'/>"
+                    "<joint name='x' type='fixed'><parent link='a'/><child link='b'/></joint>"
+                    "<joint name='y' type='fixed'><parent link='b'/><child link='a'/></joint>"
+                ),
+            )
+        )
+
+
+def test_collada_collision_meshes(panda, tmp_path):
+    """A DAE collision mesh (pycollada) is read in the same frame and units as the STL."""
+    pytest.importorskip("collada", reason="COLLADA meshes need pycollada")
+    meshes = panda.parent.parent / "meshes"
+    links = "".join(
+        f'<link name="{kind}"><collision><geometry><mesh filename="{meshes / kind / name}"/>'
+        "</geometry></collision></link>"
+        for kind, name in (("visual", "link3.dae"), ("collision", "link3.stl"))
+    )
+    joint = '<joint name="j" type="fixed"><parent link="visual"/><child link="collision"/></joint>'
+    dae, stl = load_robot(write(tmp_path, "dae.urdf", urdf(links + joint))).bodies
+    assert len(dae.parts) > 1  # the DAE's objects are the link's parts
+    np.testing.assert_allclose(dae.vertices.min(axis=0), stl.vertices.min(axis=0), atol=2e-3)
+    np.testing.assert_allclose(dae.vertices.max(axis=0), stl.vertices.max(axis=0), atol=2e-3)
