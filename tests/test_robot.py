@@ -7,6 +7,7 @@ python-fcl on the same convex hulls.
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from pathlib import Path
@@ -18,6 +19,7 @@ from click.testing import CliRunner
 from meshcol.analysis.check import check_scene
 from meshcol.cli import main
 from meshcol.errors import SceneError
+from meshcol.geometry.hull import exact_hull
 from meshcol.io.robot import RobotOptions, is_robot_file, load_robot, robot_options
 from meshcol.io.scene import load_inputs
 from meshcol.types import Box, Capsule, Cylinder
@@ -305,6 +307,70 @@ TOUCHING = """
 """
 
 
+def test_check_self_collision_adjacency_and_srdf(tmp_path):
+    path = write(tmp_path, "t.urdf", urdf(TOUCHING))
+    # base-a and a-b are adjacent (left out); base-b is not: b's 'right' sphere reaches base
+    code, out, err = run("check", str(path))
+    report = json.loads(out)
+    assert code == 1, err
+    assert [(p["body_a"], p["body_b"]) for p in report["pairs"]] == [("base", "b")]
+    (pair,) = report["pairs"]
+    assert pair["part_b"] == "right" and pair["part_a"] is None
+    assert pair["status"] == "penetrating" and pair["depth"] == pytest.approx(0.4, abs=0.02)
+    assert "base <-> b/right (FAIL)" in err and "1 candidate pair, 2 excluded" in err
+    assert report["summary"]["excluded_pairs"] == 2
+    assert {
+        (e["body_a"], e["body_b"], e["reason"]) for e in report["settings"]["excluded_pairs"]
+    } == {
+        ("a", "base", "adjacent"),
+        ("a", "b", "adjacent"),
+    }
+    # --include-adjacent: every overlapping pair
+    code, out, _ = run("check", str(path), "--include-adjacent")
+    pairs = {tuple(sorted((p["body_a"], p["body_b"]))) for p in json.loads(out)["pairs"]}
+    assert pairs == {("a", "base"), ("a", "b"), ("b", "base")}
+    # an SRDF disabling base-b: passes
+    srdf = write(
+        tmp_path,
+        "t.srdf",
+        '<robot name="bot"><disable_collisions link1="base" link2="b" reason="Never"/>'
+        '<disable_collisions link1="base" link2="ghost" reason="Never"/></robot>',
+    )
+    code, out, err = run("check", str(path), "--srdf", str(srdf))
+    report = json.loads(out)
+    assert code == 0, err
+    assert report["pairs"] == [] and report["summary"]["excluded_pairs"] == 3
+    assert ("b", "base", "srdf: Never") in {
+        (e["body_a"], e["body_b"], e["reason"]) for e in report["settings"]["excluded_pairs"]
+    }
+    assert "'ghost'" in err and "warning" in err
+    bad = write(tmp_path, "bad.srdf", "<robot><disable_collisions link1='a'></robot>")
+    assert "bad.srdf" in error_line("check", str(path), "--srdf", str(bad))
+
+
+def test_excluded_mask_is_applied_to_any_scene():
+    """check_scene leaves out a scene's excluded pairs whatever made the scene."""
+    from meshcol.types import Body, Scene
+
+    def cube(name, x):
+        v = np.array(list(itertools.product([-0.5, 0.5], repeat=3)), dtype=float)
+        hull = exact_hull(v)
+        pose = trans(x, 0, 0)
+        return Body(name=name, source=None, vertices=hull.vertices, faces=hull.faces, pose=pose)
+
+    bodies = tuple(cube(f"c{i}", 0.9 * i) for i in range(5))  # each overlaps its neighbours
+    full = check_scene(Scene(bodies=bodies))
+    assert full.summary["candidate_pairs"] == 4
+    excluded = (("c1", "c2", "x"), ("c3", "c4", "y"), ("c0", "c4", "far apart anyway"))
+    some = check_scene(Scene(bodies=bodies, excluded_pairs=excluded))
+    assert {(p["body_a"], p["body_b"]) for p in some.pairs} == {("c0", "c1"), ("c2", "c3")}
+    assert some.summary["excluded_pairs"] == 2
+    for a, b in (("c0", "c1"), ("c2", "c3")):
+        want = next(p for p in full.pairs if (p["body_a"], p["body_b"]) == (a, b))
+        got = next(p for p in some.pairs if (p["body_a"], p["body_b"]) == (a, b))
+        assert got["signed_distance"] == pytest.approx(want["signed_distance"])
+
+
 def test_robot_file_detection(tmp_path):
     assert is_robot_file(write(tmp_path, "a.xml", "<?xml version='1.0'?>\n<!-- x -->\n<mujoco/>"))
     assert is_robot_file(write(tmp_path, "b.xml", "<robot name='x'/>"))
@@ -449,6 +515,60 @@ def test_panda_forward_kinematics_matches_yourdfpy(panda):
         # the mimic finger follows panda_finger_joint1 (yourdfpy's own mimic handling)
         right = next(b for b in scene.bodies if b.name == "panda_rightfinger")
         np.testing.assert_allclose(right.pose, expected["panda_rightfinger"], atol=1e-9)
+
+
+def _fcl_colliding(scene, excluded: set[tuple[str, str]]) -> set[tuple[str, str]]:
+    """Link pairs whose convex hulls intersect, by python-fcl (every pair, no broad phase)."""
+    fcl = pytest.importorskip("fcl")
+    objects = {}
+    for body in scene.bodies:
+        hull = exact_hull(body.vertices)
+        faces = np.hstack([np.full((len(hull.faces), 1), 3), hull.faces]).ravel()
+        shape = fcl.Convex(hull.vertices, len(hull.faces), faces)
+        objects[body.name] = fcl.CollisionObject(
+            shape, fcl.Transform(body.pose[:3, :3], body.pose[:3, 3])
+        )
+    found = set()
+    for a, b in itertools.combinations(sorted(objects), 2):
+        if (a, b) in excluded:
+            continue
+        result = fcl.CollisionResult()
+        if fcl.collide(objects[a], objects[b], fcl.CollisionRequest(), result):
+            found.add((a, b))
+    return found
+
+
+def test_panda_self_collision_matches_fcl(panda):
+    srdf = panda.parent.parent / "srdf" / "panda.srdf"
+    for srdf_file in (None, srdf):
+        scene = load_robot(panda, RobotOptions(srdf=None if srdf_file is None else str(srdf_file)))
+        report = check_scene(scene)
+        ours = {
+            tuple(sorted((p["body_a"], p["body_b"])))
+            for p in report.pairs
+            if p["status"] in ("contact", "penetrating", "contained")
+        }
+        excluded = {(a, b) for a, b, _ in scene.excluded_pairs}
+        excluded |= {(b, a) for a, b in excluded}
+        assert ours == {tuple(sorted(p)) for p in _fcl_colliding(scene, excluded)}
+        if srdf_file is None:
+            # hulls: the wrist (link5) reaches the hand and link7; the closed fingers touch
+            assert ours == {
+                ("panda_hand", "panda_link5"),
+                ("panda_link5", "panda_link7"),
+                ("panda_leftfinger", "panda_rightfinger"),
+            }
+        else:
+            assert ours == set() and report.passed  # MoveIt's matrix disables all of those
+
+
+def test_panda_cli_with_srdf_passes(panda):
+    srdf = panda.parent.parent / "srdf" / "panda.srdf"
+    code, out, err = run("check", str(panda), "--srdf", str(srdf))
+    assert code == 0, err
+    report = json.loads(out)
+    assert report["summary"]["bodies"] == 11
+    assert "panda_joint4" in err  # zero is outside its limits: the warning says where it is
 
 
 def test_solo_loads_obj_meshes(corpus):
