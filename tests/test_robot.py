@@ -647,3 +647,71 @@ def test_collada_collision_meshes(panda, tmp_path):
     assert len(dae.parts) > 1  # the DAE's objects are the link's parts
     np.testing.assert_allclose(dae.vertices.min(axis=0), stl.vertices.min(axis=0), atol=2e-3)
     np.testing.assert_allclose(dae.vertices.max(axis=0), stl.vertices.max(axis=0), atol=2e-3)
+
+
+def test_mjcf_equality_joint_is_a_mimic(tmp_path):
+    pytest.importorskip("mujoco")
+    text = """<mujoco><worldbody>
+      <body name="left"><joint name="a" type="slide" axis="0 1 0" range="0 0.04"/>
+        <geom type="sphere" size="0.01"/></body>
+      <body name="right"><joint name="b" type="slide" axis="0 1 0" range="-0.2 0.2"/>
+        <geom type="sphere" size="0.01"/></body>
+    </worldbody>
+    <equality><joint joint1="b" joint2="a" polycoef="0.01 -2 0 0 0"/></equality></mujoco>"""
+    path = write(tmp_path, "eq.xml", text)
+    left, right = load_robot(path, RobotOptions(joints={"a": 0.03})).bodies
+    np.testing.assert_allclose(left.pose[:3, 3], [0, 0.03, 0], atol=1e-12)
+    np.testing.assert_allclose(right.pose[:3, 3], [0, 0.01 - 2 * 0.03, 0], atol=1e-12)
+    line = error_line("check", str(path), "--joint", "b=0")
+    assert "eq.xml" in line and "joint 'b' follows joint 'a'" in line
+
+
+def test_mjcf_qpos0_outside_limits_is_clamped(tmp_path):
+    pytest.importorskip("mujoco")
+    text = """<mujoco><worldbody><body name="a">
+      <joint name="s" type="slide" axis="1 0 0" range="0.5 1"/><geom type="sphere" size="0.1"/>
+    </body></worldbody></mujoco>"""
+    scene = load_robot(write(tmp_path, "q.xml", text))
+    np.testing.assert_allclose(scene.bodies[0].pose[:3, 3], [0.5, 0, 0])
+    assert any("qpos0 0 is outside its limits [0.5, 1]" in w for w in scene.warnings)
+
+
+@pytest.mark.parametrize(
+    "text, words",
+    [
+        ("", ["malformed XML"]),
+        ("<mesh/>", ["not a URDF", "<mesh>"]),
+        (urdf("<link name='a'><collision><geometry/></collision></link>"), ["invalid URDF"]),
+        (urdf("<link name='a'/><link name='a'/>"), ["link 'a'", "earlier link"]),
+        (
+            urdf(
+                "<link name='a'/><link name='b'/><link name='c'/>"
+                "<joint name='x' type='fixed'><parent link='a'/><child link='c'/></joint>"
+                "<joint name='y' type='fixed'><parent link='b'/><child link='c'/></joint>"
+            ),
+            ["link 'c' is the child of two joints", "'x'", "'y'"],
+        ),
+        (urdf("<link name='a'/><link name='b'/>"), ["several root links", "'a'", "'b'"]),
+        (
+            urdf(
+                "<link name='a'/><link name='b'/><joint name='m' type='revolute'>"
+                "<parent link='a'/><child link='b'/><mimic joint='ghost'/>"
+                "<limit lower='-1' upper='1' effort='1' velocity='1'/></joint>"
+            ),
+            ["joint 'm' mimics joint 'ghost', which does not exist"],
+        ),
+        (
+            urdf(
+                "<link name='a'><collision><geometry><mesh filename='x.obj' scale='1 0 1'/>"
+                "</geometry></collision></link>"
+            ),
+            ["link 'a'", "mesh scale"],
+        ),
+    ],
+)
+def test_hostile_urdf(tmp_path, text, words):
+    path = write(tmp_path, "h.urdf", text)
+    line = error_line("check", str(path))
+    assert "h.urdf" in line
+    for word in words:
+        assert word in line, line

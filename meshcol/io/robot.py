@@ -18,7 +18,8 @@ name, as the ``example-robot-data`` layout is).
 
 MJCF is compiled by MuJoCo itself (``mujoco.MjModel.from_xml_path``), so defaults, classes and
 includes mean what MuJoCo says; geom poses come from ``mj_kinematics`` at the configuration
-(``qpos0``, or the first keyframe with ``keyframe=True``, then the joint values given). A
+(``qpos0``, or the first keyframe with ``keyframe=True``, then the joint values given; a
+joint coupled by ``<equality><joint>`` follows its polynomial, as a URDF mimic joint). A
 MuJoCo body is a link; its collision geoms (``contype`` or ``conaffinity`` non-zero) are its
 parts; planes and height fields are skipped (not solids), ellipsoids are tessellated.
 
@@ -721,6 +722,20 @@ def _load_mjcf(source: str, options: RobotOptions) -> tuple[Scene, set[str]]:
         data.qpos[:] = model.qpos0
     obj = mujoco.mjtObj
     scalar_joints = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+
+    def joint_name(jid: int) -> str:
+        return mujoco.mj_id2name(model, obj.mjOBJ_JOINT, jid) or f"#{jid}"
+
+    # <equality><joint joint1 joint2 polycoef>: joint1 follows joint2, as a URDF mimic joint
+    followers: dict[int, tuple[int, np.ndarray]] = {}
+    for e in range(model.neq):
+        if int(model.eq_type[e]) != int(mujoco.mjtEq.mjEQ_JOINT) or not model.eq_active0[e]:
+            continue
+        followers[int(model.eq_obj1id[e])] = (
+            int(model.eq_obj2id[e]),
+            np.array(model.eq_data[e][:5], dtype=np.float64),
+        )
+    given: set[int] = set()
     for name, value in options.joints.items():
         jid = mujoco.mj_name2id(model, obj.mjOBJ_JOINT, name)
         if jid < 0:
@@ -730,16 +745,50 @@ def _load_mjcf(source: str, options: RobotOptions) -> tuple[Scene, set[str]]:
                 f"joint {name!r} is a free or ball joint: only hinge and slide joints take a value",
                 source,
             )
+        if jid in followers:
+            master = followers[jid][0]
+            raise SceneError(
+                f"joint {name!r} follows joint {joint_name(master) if master >= 0 else '(none)'!r}"
+                " by an <equality><joint> constraint: set that one instead",
+                source,
+            )
         data.qpos[model.jnt_qposadr[jid]] = value
+        given.add(jid)
+    warnings: list[str] = []
+    for jid in range(model.njnt):
+        if jid in given or jid in followers or options.keyframe:
+            continue
+        if not model.jnt_limited[jid] or int(model.jnt_type[jid]) not in scalar_joints:
+            continue
+        lower, upper = (float(x) for x in model.jnt_range[jid])
+        adr = model.jnt_qposadr[jid]
+        value = float(data.qpos[adr])
+        nearest = min(max(value, lower), upper)
+        if nearest != value:
+            data.qpos[adr] = nearest
+            warnings.append(
+                f"joint {joint_name(jid)!r}: qpos0 {value:g} is outside its limits "
+                f"[{lower:g}, {upper:g}]; at {nearest:g} (give --joint "
+                f"{joint_name(jid)}=VALUE to choose)"
+            )
+    for follower, (master, coefficients) in followers.items():
+        ref1 = float(model.qpos0[model.jnt_qposadr[follower]])
+        x = 0.0
+        if master >= 0:
+            x = float(data.qpos[model.jnt_qposadr[master]] - model.qpos0[model.jnt_qposadr[master]])
+        data.qpos[model.jnt_qposadr[follower]] = ref1 + float(np.polyval(coefficients[::-1], x))
     for jid in range(model.njnt):
         if not model.jnt_limited[jid] or int(model.jnt_type[jid]) not in scalar_joints:
             continue
         lower, upper = (float(x) for x in model.jnt_range[jid])
         value = float(data.qpos[model.jnt_qposadr[jid]])
         if not lower - _JOINT_TOLERANCE <= value <= upper + _JOINT_TOLERANCE:
-            name = mujoco.mj_id2name(model, obj.mjOBJ_JOINT, jid) or f"#{jid}"
+            how = ""
+            if jid in followers and followers[jid][0] >= 0:
+                how = f" (following {joint_name(followers[jid][0])!r})"
             raise SceneError(
-                f"joint {name!r}: value {value:g} outside its limits [{lower:g}, {upper:g}]",
+                f"joint {joint_name(jid)!r}: value {value:g}{how} outside its limits "
+                f"[{lower:g}, {upper:g}]",
                 source,
             )
     mujoco.mj_kinematics(model, data)
@@ -817,7 +866,13 @@ def _load_mjcf(source: str, options: RobotOptions) -> tuple[Scene, set[str]]:
     for signature in model.exclude_signature:
         a, b = int(signature) >> 16, int(signature) & 0xFFFF
         excluded.append((names[a], names[b], "mjcf <exclude>"))
-    scene = Scene(bodies=tuple(bodies), units="m", source=source, excluded_pairs=tuple(excluded))
+    scene = Scene(
+        bodies=tuple(bodies),
+        units="m",
+        source=source,
+        excluded_pairs=tuple(excluded),
+        warnings=tuple(warnings),
+    )
     return scene, set(names)
 
 
