@@ -715,3 +715,25 @@ def test_hostile_urdf(tmp_path, text, words):
     assert "h.urdf" in line
     for word in words:
         assert word in line, line
+
+
+def test_ros_package_path_finds_nested_packages(tmp_path, monkeypatch):
+    write(tmp_path, "ws/src/some_repo/my_robot/package.xml", "<package/>")
+    write(tmp_path, "ws/src/some_repo/my_robot/meshes/cube.obj", CUBE_OBJ)
+    text = urdf(
+        "".join(
+            f'<link name="l{i}"><collision><origin xyz="{3 * i} 0 0"/><geometry>'
+            '<mesh filename="package://my_robot/meshes/cube.obj"/></geometry></collision></link>'
+            for i in range(3)
+        )
+        + "".join(
+            f'<joint name="j{i}" type="fixed"><parent link="l{i - 1}"/><child link="l{i}"/></joint>'
+            for i in (1, 2)
+        )
+    )
+    path = write(tmp_path, "elsewhere/r.urdf", text)
+    monkeypatch.setenv("ROS_PACKAGE_PATH", str(tmp_path / "nothing") + ":" + str(tmp_path / "ws"))
+    scene = load_robot(path)
+    assert [b.name for b in scene.bodies] == ["l0", "l1", "l2"]
+    for i, body in enumerate(scene.bodies):  # one file for three links, each at its origin
+        np.testing.assert_allclose(body.vertices.min(axis=0), [3 * i - 0.5, -0.5, -0.5])

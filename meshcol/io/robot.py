@@ -40,7 +40,7 @@ import json
 import math
 import os
 import re
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -325,6 +325,12 @@ def _load_urdf(source: str, options: RobotOptions) -> tuple[Scene, set[str]]:
         raise SceneError(f"joint cycle: {_cycle(parent_joint, stray)}", source)
 
     resolver = _PackageResolver(source, options.package_paths)
+    resolver.preload(
+        collision.geometry.mesh.filename
+        for link in robot.links
+        for collision in link.collisions
+        if collision.geometry is not None and collision.geometry.mesh is not None
+    )
     bodies = []
     for link in robot.links:
         body = _urdf_link_body(link, poses[link.name], capsules, resolver, source)
@@ -505,6 +511,28 @@ class _PackageResolver:
         self.folder = Path(source).resolve().parent
         self.package_paths = dict(package_paths)
         self.ros = [p for p in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if p]
+        self.meshes: dict[str, list[Body]] = {}  # each mesh file read once, however many links
+
+    def preload(self, references: Iterable[str]) -> None:
+        """Read the OBJ and STL files of ``references`` at once, in parallel (the core's
+        readers); a file that fails is left for :func:`_read_mesh` to name with its link."""
+        from meshcol.io.mesh_read import load_meshes
+
+        paths = []
+        for reference in references:
+            path, _ = self.resolve(reference)
+            if path is None or Path(path).suffix.lower() not in (".obj", ".stl"):
+                continue
+            key = os.path.normpath(path)
+            if key not in paths and Path(key).is_file():
+                paths.append(key)
+        if not paths:
+            return
+        try:
+            loaded = load_meshes(list[str | os.PathLike[str]](paths))
+        except MeshcolError:
+            return
+        self.meshes.update(zip(paths, loaded))
 
     def resolve(self, reference: str) -> tuple[str | None, str | None]:
         """``(path, None)``, or ``(None, why)`` for a package that cannot be found."""
@@ -517,10 +545,9 @@ class _PackageResolver:
         if name in self.package_paths:
             return os.path.join(self.package_paths[name], rest), None
         for entry in self.ros:
-            base = Path(entry)
-            for candidate in (base / name, base):
-                if candidate.name == name and candidate.is_dir():
-                    return os.fspath(candidate / rest), None
+            found = _find_package(Path(entry), name)
+            if found is not None:
+                return os.fspath(found / rest), None
         ancestors = [self.folder, *self.folder.parents]
         for folder in ancestors:
             if folder.name == name:
@@ -531,6 +558,34 @@ class _PackageResolver:
         return None, (
             f"unknown package {name!r} (give --package-path {name}=DIR or set ROS_PACKAGE_PATH)"
         )
+
+
+#: How deep below a ROS_PACKAGE_PATH entry a package folder is looked for (``src/repo/pkg``).
+_PACKAGE_SEARCH_DEPTH = 3
+
+
+def _find_package(entry: Path, name: str) -> Path | None:
+    """The folder of package ``name`` under a ROS_PACKAGE_PATH entry: the entry itself, or a
+    folder ``name`` holding a ``package.xml`` at most a few levels down (breadth first)."""
+    if entry.name == name and entry.is_dir():
+        return entry
+    if (entry / name).is_dir():
+        return entry / name
+    level = [entry]
+    for _ in range(_PACKAGE_SEARCH_DEPTH):
+        below = []
+        for folder in level:
+            try:
+                children = sorted(p for p in folder.iterdir() if p.is_dir())
+            except OSError:
+                continue
+            for child in children:
+                if child.name == name and (child / "package.xml").is_file():
+                    return child
+                if not child.name.startswith("."):
+                    below.append(child)
+        level = below
+    return None
 
 
 def _urdf_link_body(
@@ -575,7 +630,7 @@ def _urdf_link_body(
         if path is None:
             raise SceneError(f"{label}: mesh {reference!r}: {why}", source)
         scale = _mesh_scale(geometry.mesh.scale, label, source)
-        for sub_name, vertices, faces in _read_mesh(path, reference, label, source):
+        for sub_name, vertices, faces in _read_mesh(path, reference, label, source, resolver):
             stretched = vertices * scale
             if np.prod(scale) < 0:
                 faces = faces[:, ::-1]
@@ -631,17 +686,21 @@ def _mesh_scale(scale: Any, label: str, source: str) -> np.ndarray:
 
 
 def _read_mesh(
-    path: str, reference: str, label: str, source: str
+    path: str, reference: str, label: str, source: str, resolver: _PackageResolver
 ) -> list[tuple[str | None, np.ndarray, np.ndarray]]:
     """A mesh file's objects, each in the file's frame: ``(object name or None, v, f)``."""
     from meshcol.io.mesh_read import load_mesh
 
     if not Path(path).is_file():
         raise SceneError(f"{label}: mesh file {reference!r} not found (looked at {path})", source)
-    try:
-        loaded = load_mesh(path, collada=True)
-    except MeshcolError as error:
-        raise SceneError(f"{label}: mesh {reference!r}: {error.message}", source) from None
+    key = os.path.normpath(path)
+    loaded = resolver.meshes.get(key)
+    if loaded is None:
+        try:
+            loaded = load_mesh(path, collada=True)
+        except MeshcolError as error:
+            raise SceneError(f"{label}: mesh {reference!r}: {error.message}", source) from None
+        resolver.meshes[key] = loaded
     out = []
     for body in loaded:
         vertices = body.vertices @ body.pose[:3, :3].T + body.pose[:3, 3]
