@@ -72,12 +72,15 @@ fuzz: install-test
 	done
 
 bench: install-test
+	-$(BIN)/pip install -q --no-build-isolation -e ".[bench]"  # coal; benchmarks skip it if this fails
 	$(BIN)/python benchmarks/bench_narrowphase.py
 	$(BIN)/python benchmarks/bench_broadphase.py
 	$(BIN)/python benchmarks/bench_mesh_query.py
 	$(BIN)/python benchmarks/bench_sweep.py
 	$(BIN)/python benchmarks/bench_check.py
+	$(BIN)/python benchmarks/bench_scale.py --sizes 1000 10000
 	$(BIN)/python benchmarks/bench_decompose.py
+	$(BIN)/python benchmarks/bench_inspect.py --rounds 1
 
 clean:
 	rm -rf build dist $(VENV) .venv-lowest demo-out *.egg-info

@@ -95,7 +95,7 @@ def run_meshcol(scene, threads: int, clearance: float = 0.0):
     from meshcol.analysis.check import CheckOptions, check_scene
 
     start = time.perf_counter()
-    report = check_scene(scene, CheckOptions(shape="hull", threads=threads, clearance=clearance))
+    report = check_scene(scene, CheckOptions(collider="hull", threads=threads, clearance=clearance))
     return time.perf_counter() - start, report
 
 
@@ -124,6 +124,27 @@ def run_trimesh(scene, report):
     return seconds, names, np.asarray(distances)
 
 
+def run_coal(scene, report):
+    """coal, the same job on the same hulls: a DynamicAABBTreeArrayCollisionManager collide,
+    then ``coal.distance`` per candidate pair, handed over for free (bench_scale.coal_pass)."""
+    import trimesh
+    from bench_scale import coal_model, coal_pass
+
+    start = time.perf_counter()
+    models = {}
+    items = []
+    for body in scene.bodies:
+        key = body.vertices.ctypes.data
+        if key not in models:  # instances share a hull, as in meshcol
+            hull = trimesh.Trimesh(body.vertices, body.faces).convex_hull
+            models[key] = coal_model(hull.vertices, hull.faces)
+        items.append((models[key], body.pose))
+    index = {body.name: i for i, body in enumerate(scene.bodies)}
+    candidates = [(index[p["a"]], index[p["b"]]) for p in report.pairs]
+    hits = coal_pass(items, candidates)
+    return time.perf_counter() - start, hits
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[100, 1000, 10000])
@@ -141,13 +162,22 @@ def main() -> None:
 
     from meshcol._native import core as _core
 
+    try:
+        import coal  # noqa: F401
+
+        has_coal = True
+    except ImportError:
+        has_coal = False
+        print("coal: skipped (not installed; pip install coal)")
+
     print(
         f"meshcol check vs trimesh CollisionManager (+ fcl.distance per candidate pair); "
         f"{_core.hardware_threads()} hardware threads; clearance {args.clearance}"
     )
     print(
         f"{'bodies':>7} {'pairs':>7} {'hits':>5} {'meshcol 1T s':>13} {'meshcol all s':>14} "
-        f"{'trimesh s':>10} {'ratio':>7} {'hits agree':>10} {'load s':>7}"
+        f"{'trimesh s':>10} {'ratio':>7} {'hits agree':>10} {'coal s':>7} {'ratio':>6} "
+        f"{'coal contacts':>13} {'load s':>7}"
     )
     for n in args.sizes:
         scene = level_scene(n)
@@ -169,9 +199,13 @@ def main() -> None:
             tps = f"{tp:10.3f}"
         else:
             ratio, tps, agree = "   n/a", "       n/a", "n/a"
+        tc, coal_ratio, coal_hits = "n/a", "n/a", "n/a"
+        if has_coal and n <= args.peer_max:
+            seconds, count = run_coal(scene, report)
+            tc, coal_ratio, coal_hits = f"{seconds:.3f}", f"{seconds / t1:.1f}x", str(count)
         print(
             f"{n:>7} {len(report.pairs):>7} {len(hits):>5} {t1:>13.4f} {tall:>14.4f} {tps} {ratio:>7} "
-            f"{agree:>10} {load_seconds(scene):>7.2f}"
+            f"{agree:>10} {tc:>7} {coal_ratio:>6} {coal_hits:>13} {load_seconds(scene):>7.2f}"
         )
 
 

@@ -3,7 +3,18 @@ per call, on the same pairs of convex hulls (32, 64, 128 and 512 vertices), sepa
 penetrating, with meshcol on one thread and on all threads. Also reports the worst accuracy
 seen against the exact brute-force oracles (tests/oracles.py) on a subset of the pairs.
 
-Run: .venv/bin/python benchmarks/bench_narrowphase.py [--pairs 4000]
+Then the cache case of issue 14 (``--only-unique`` runs it alone): 40,000 bodies, each with
+its own 64-vertex hull in memory (``ConvexSet.take`` copies of 256 hulls at random rotations
+on a jittered lattice), pairs as the broad phase gives them (sort and sweep of the world
+boxes, about 2.8 overlaps per body). The reference is the same pairs with everything in
+cache: the scene cut into neighbourhoods of 256 bodies, each its own small set and batch
+(pairs across neighbourhoods left out of every row). Rows: the bodies numbered in random
+order (as a manifest may list them) and in spatial (Morton) order; plus the older
+reference, 256 bodies whose few hundred pairs repeat. Ratio to the in-cache row per pair;
+target <= 1.5.
+
+Run: .venv/bin/python benchmarks/bench_narrowphase.py [--pairs 4000] [--unique-shapes 40000]
+     [--only-unique]
 """
 
 from __future__ import annotations
@@ -97,12 +108,121 @@ def coal_objects(shapes, poses):
     return out
 
 
+def lattice_scene(templates: ConvexSet, n_bodies: int, seed: int, spacing: float = 2.15):
+    """``n_bodies`` copies of random templates at random rotations on a jittered cubic
+    lattice (about 2.8 box overlaps per body), numbered in random order; the set, poses and
+    the broad phase's candidate pairs (sort and sweep, index order)."""
+    from meshcol import sort_and_sweep
+
+    rng = np.random.default_rng(seed)
+    side = int(np.ceil(n_bodies ** (1 / 3)))
+    cells = np.stack(np.meshgrid(*[np.arange(side)] * 3, indexing="ij"), -1).reshape(-1, 3)
+    cells = cells[rng.permutation(len(cells))[:n_bodies]]
+    poses = np.tile(np.eye(4), (n_bodies, 1, 1))
+    for p in poses:
+        p[:3, :3] = random_rotation(rng)
+    poses[:, :3, 3] = cells * spacing + rng.uniform(-0.35, 0.35, size=(n_bodies, 3))
+    cs = templates.take(rng.integers(0, len(templates), size=n_bodies))
+    lo, hi = cs.aabbs(poses)
+    return cs, poses, sort_and_sweep(lo, hi)
+
+
+def morton_order(points: np.ndarray) -> np.ndarray:
+    """Indices of ``points`` (n, 3) in Morton (Z-curve) order on a 1024^3 grid."""
+    extent = max(float(np.max(points.max(0) - points.min(0))), 1e-300)
+    q = ((points - points.min(0)) / extent * 1023).astype(np.int64)
+    code = np.zeros(len(points), dtype=np.int64)
+    for bit in range(10):
+        for axis in range(3):
+            code |= ((q[:, axis] >> bit) & 1) << (3 * bit + axis)
+    return np.argsort(code, kind="stable")
+
+
+def unique_case(args) -> None:
+    """Issue 14 item 3: per-pair cost when every body has its own shape in memory."""
+    rng = np.random.default_rng(64)
+    templates = ConvexSet.from_vertices([sphere_hull(64, rng) for _ in range(256)])
+    cs, poses, pairs = lattice_scene(templates, args.unique_shapes, seed=2)
+    # The same scene renumbered in spatial order (what packing in that order would give).
+    perm = morton_order(poses[:, :3, 3])
+    rank = np.empty_like(perm)
+    rank[perm] = np.arange(len(perm))
+    cs_s, poses_s = cs.take(perm), np.ascontiguousarray(poses[perm])
+    pairs_s = np.sort(rank[pairs], axis=1)
+    pairs_s = pairs_s[np.lexsort((pairs_s[:, 1], pairs_s[:, 0]))]
+    # Neighbourhoods of 256 consecutive bodies in spatial order, each its own set: in cache.
+    hood = 256
+    inside = pairs_s[:, 0] // hood == pairs_s[:, 1] // hood
+    kept = np.ascontiguousarray(pairs_s[inside])
+    groups = []
+    for g in np.unique(kept[:, 0] // hood):
+        sel = kept[kept[:, 0] // hood == g]
+        idx = np.arange(g * hood, min((g + 1) * hood, len(cs_s)))
+        groups.append(
+            (
+                cs_s.take(idx),
+                np.ascontiguousarray(poses_s[idx]),
+                np.ascontiguousarray(sel - g * hood),
+            )
+        )
+    kept_random = np.ascontiguousarray(np.sort(perm[kept], axis=1))
+    kept_random = kept_random[np.lexsort((kept_random[:, 1], kept_random[:, 0]))]
+    shared = lattice_scene(templates, 256, seed=1)
+    reps = max(1, len(kept) // max(1, len(shared[2])))
+    shared_pairs = np.ascontiguousarray(np.tile(shared[2], (reps, 1)))
+    mb = sum(getattr(cs, f).nbytes for f in ConvexSet._FIELDS) / 2**20
+    print(
+        f"\nunique shapes: {len(cs)} bodies of 64 vertices ({mb:.0f} MiB packed), "
+        f"{len(pairs)} broad-phase pairs ({2 * len(pairs) / len(cs):.2f} per body), "
+        f"{len(kept)} inside neighbourhoods of {hood} timed; one thread, best of "
+        f"{args.repeat} alternated rounds"
+    )
+    print(f"{'query':>11} {'case':>40} {'us/pair':>8} {'/ cache':>8}")
+
+    def grouped(fn):
+        for g_cs, g_poses, g_pairs in groups:
+            fn(g_cs, g_poses, g_pairs, threads=1)
+
+    for query, fn in (("distance", distance_batch), ("signed", signed_distance_batch)):
+        rows = [
+            ("same pairs in cache (256-body sets)", lambda: grouped(fn), len(kept)),
+            (
+                "unique, bodies in random order",
+                lambda: fn(cs, poses, kept_random, threads=1),
+                len(kept),
+            ),
+            (
+                "unique, bodies in spatial order",
+                lambda: fn(cs_s, poses_s, kept, threads=1),
+                len(kept),
+            ),
+            (
+                "256 bodies, their pairs repeated",
+                lambda: fn(shared[0], shared[1], shared_pairs, threads=1),
+                len(shared_pairs),
+            ),
+        ]
+        # Rounds alternate the rows, so that each sees the same minutes of a shared machine.
+        best = [np.inf] * len(rows)
+        for _ in range(args.repeat):
+            for r, (_, run, count) in enumerate(rows):
+                best[r] = min(best[r], time_it(run, 1) / count * 1e6)
+        for (label, _, _), us in zip(rows, best):
+            print(f"{query:>11} {label:>40} {us:>8.3f} {us / best[0]:>8.2f}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--pairs", type=int, default=4000)
     parser.add_argument("--peer-pairs", type=int, default=1000, help="pairs timed for peers")
     parser.add_argument("--accuracy-pairs", type=int, default=40)
+    parser.add_argument("--unique-shapes", type=int, default=40000)
+    parser.add_argument("--repeat", type=int, default=3, help="best of, unique-shape case")
+    parser.add_argument("--only-unique", action="store_true", help="the cache case alone")
     args = parser.parse_args()
+    if args.only_unique:
+        unique_case(args)
+        return
     try:
         import fcl
     except ImportError:
@@ -111,6 +231,9 @@ def main() -> None:
         import coal
     except ImportError:
         coal = None
+    for name, module in (("python-fcl", fcl), ("coal", coal)):
+        if module is None:
+            print(f"{name}: skipped (not installed); its columns are nan")
     from oracles import polytope_distance, sat_depth, transform
 
     threads = _core.hardware_threads()
@@ -186,6 +309,7 @@ def main() -> None:
                 f"{t_coal:>8.2f} {t_fcl / t1:>8.1f} {t_coal / t1:>8.1f} {worst:>13.2e}"
             )
     print(f"worst relative error vs exact oracles: {worst_overall:.2e}")
+    unique_case(args)
 
 
 if __name__ == "__main__":

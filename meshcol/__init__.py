@@ -44,8 +44,8 @@ _LAZY: dict[str, str] = {
     "RobotOptions": "meshcol.io.robot",
     "write_meshes": "meshcol.io.mesh_write",
     # hulls and inspection
-    "convex_hull": "meshcol.geometry.hull",
-    "HullResult": "meshcol.geometry.hull",
+    "convex_hull": "meshcol.collision.hull",
+    "HullResult": "meshcol.collision.hull",
     "hull": "meshcol.analysis.hull",
     "HullReport": "meshcol.analysis.hull",
     "inspect": "meshcol.analysis.inspect",
@@ -92,6 +92,9 @@ _LAZY: dict[str, str] = {
     "mesh_distance": "meshcol.collision.mesh_query",
     "mesh_distance_batch": "meshcol.collision.mesh_query",
     "mesh_intersects_batch": "meshcol.collision.mesh_query",
+    "MeshDepthBatch": "meshcol.collision.mesh_query",
+    "mesh_penetration_depth_batch": "meshcol.collision.mesh_query",
+    "mesh_intersection_volume": "meshcol.collision.mesh_query",
     # broad phase
     "sort_and_sweep": "meshcol.collision.broadphase",
     "SortAndSweep": "meshcol.collision.broadphase",

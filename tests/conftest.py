@@ -107,6 +107,8 @@ def _private_user_cache(tmp_path_factory: pytest.TempPathFactory):
 #: leaves them out with ``-m "not slow"``; ``make test`` runs everything. Tests on the shared
 #: corpus are slow too (marked from their fixtures below).
 SLOW_TESTS = {
+    "test_fine_uv_sphere_does_not_self_intersect",
+    "test_fast_check_passes_the_valid_common_documents",
     "test_any_shape_spinning_about_a_pivot_matches_dense_sampling",
     "test_spin_matches_dense_sampling",
     "test_ball_in_bowl_is_separated_when_decomposed",

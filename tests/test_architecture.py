@@ -141,3 +141,25 @@ def test_the_walker_sees_lazy_imports_and_skips_type_checking(tmp_path: Path) ->
         "    import meshcol.io.scene\n"
     )
     assert _imports(source) == {"meshcol.collision.shapes", "meshcol.io.scene"}
+
+
+def test_one_hull_mechanism() -> None:
+    """Convex hulls come from the core's Quickhull only (ARCHITECTURE.md, one mechanism per
+    job): no module builds one with scipy's qhull, and only ``collision.hull`` defines the
+    hull functions every other module calls."""
+    qhull_users, definers = [], []
+    for name, path in MODULES.items():
+        if path.suffix != ".py":
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if (
+                isinstance(node, ast.ImportFrom)
+                and (node.module or "").startswith("scipy")
+                and any(a.name in {"ConvexHull", "Delaunay"} for a in node.names)
+            ):
+                qhull_users.append(name)
+            if isinstance(node, ast.FunctionDef) and node.name in {"exact_hull", "convex_hull"}:
+                definers.append(name)
+    assert qhull_users == []
+    assert sorted(set(definers)) == ["meshcol.collision.hull"]

@@ -498,3 +498,35 @@ def test_cli_runs_the_library_check(tmp_path: Path, monkeypatch) -> None:
     assert options["clearance"] == 0.1 and options["ignore"] == ("x:y",)
     assert options["collider"] == "hull" and options["baseline"] is None
     assert json.loads(result.stdout)["command"] == "check"
+
+
+@pytest.mark.parametrize("scale", ["1e-320", "[1, 1e-310, 1]", "5e-324"])
+def test_denormal_scale_is_a_one_line_error_not_a_crash(tmp_path: Path, scale: str) -> None:
+    """`"scale": 1e-320` made `meshcol check` exit 139 (issue 13): the baked vertices were
+    denormal and the mesh hierarchy's SAH binning crashed on them (fixed in the core, see
+    test_mesh_query's denormal test). The manifest's magnitude check refuses such a scale with
+    exit 2 and one line naming the manifest and body.
+    A child process, so that a crash fails the test instead of killing the session."""
+    import subprocess
+    import sys
+
+    import trimesh
+
+    trimesh.creation.box().export(tmp_path / "box.obj")
+    body = '{"name": "a", "mesh": "box.obj", "scale": ' + scale + "}"
+    (tmp_path / "scene.json").write_text(
+        '{"bodies": [' + body + ', {"name": "b", "mesh": "box.obj"}]}'
+    )
+    for shape in ("hull", "mesh"):
+        out = subprocess.run(
+            [sys.executable, "-m", "meshcol", "check", "scene.json", "--shape", shape],
+            capture_output=True,
+            text=True,
+            cwd=tmp_path,
+            timeout=300,
+        )
+        assert out.returncode == 2, (out.returncode, out.stderr[-2000:])
+        lines = out.stderr.strip().splitlines()
+        assert len(lines) == 1
+        assert lines[0].startswith("meshcol: error: scene.json: body 'a': scale ")
+        assert "is below the limit of 1e-10" in lines[0]

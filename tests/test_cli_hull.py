@@ -177,6 +177,27 @@ def test_flat_mesh_warns_and_reports_flat(tmp_path: Path) -> None:
     assert body["note"] == "coplanar input: the hull is a 2-D polygon (volume 0)"
 
 
+def test_inside_out_mesh_gets_the_outward_hull_and_a_warning(tmp_path: Path) -> None:
+    flipped = "".join(
+        "f " + " ".join(reversed(line.split()[1:])) + "\n" if line.startswith("f ") else line + "\n"
+        for line in CUBE_OBJ.splitlines()
+    )
+    cube = write(tmp_path, "inside_out.obj", flipped)
+    result = run("hull", cube)
+    assert result.exit_code == 0, result.output
+    assert result.stderr.splitlines()[0] == (
+        f"meshcol: warning: {cube}: body 'inside_out' is inside out: its faces point inward "
+        "(negative mesh_volume); the hull does not depend on winding and is unaffected"
+    )
+    (body,) = json.loads(result.stdout)["bodies"]
+    assert body["mesh_volume"] == pytest.approx(-1.0)
+    assert body["hull_volume"] == pytest.approx(1.0) and body["volume_ratio"] == pytest.approx(1.0)
+    assert (body["hull_vertices"], body["hull_faces"]) == (8, 12)
+    assert body["note"].startswith("inside-out mesh: its faces point inward")
+    outward = json.loads(run("hull", write(tmp_path, "cube.obj", CUBE_OBJ)).stdout)["bodies"][0]
+    assert outward["note"] is None and outward["hull_volume"] == body["hull_volume"]
+
+
 def test_single_triangle_is_flat(corpus) -> None:
     source = corpus / "trimesh-models" / "notenoughindices.obj"
     result = run("hull", source)

@@ -35,6 +35,23 @@ def test_report_on_stdout(tmp_path: Path) -> None:
     assert body["findings"] == [] and body["failed_rules"] == []
 
 
+def test_inside_out_mesh_is_inverted_and_can_fail_the_run(tmp_path: Path) -> None:
+    lines = CUBE_OBJ.splitlines()
+    flipped = [
+        "f " + " ".join(reversed(line.split()[1:])) if line.startswith("f ") else line
+        for line in lines
+    ]
+    cube = write(tmp_path, "inside_out.obj", "\n".join(flipped) + "\n")
+    result = run("inspect", cube, "--fail-on", "inverted")
+    assert result.exit_code == 1, result.output
+    assert f"meshcol: fail: {cube}: body 'inside_out': inverted" in result.stderr.splitlines()
+    report = json.loads(result.stdout)
+    (body,) = report["bodies"]
+    assert body["volume"] == pytest.approx(-1.0)
+    assert body["findings"] == ["inverted"] and body["failed_rules"] == ["inverted"]
+    assert report["summary"]["findings"]["inverted"] == 1
+
+
 def test_report_file_prints_a_table(corpus, tmp_path: Path) -> None:
     teapot = corpus / "trimesh-models" / "teapot.stl"
     result = run("inspect", teapot, "--report", tmp_path / "r.csv")

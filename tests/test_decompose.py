@@ -507,6 +507,26 @@ def test_decompose_is_deterministic_and_independent_of_input_order(torus_result)
         assert np.array_equal(v1, v2) and np.array_equal(f1, f2)
 
 
+def test_inside_out_input_is_decomposed_outward(torus_result, tmp_path) -> None:
+    # CoACD decomposes an inverted mesh badly (other parts, a negative volume ratio): the
+    # faces are reversed first, so the parts and metrics are the outward torus's, with a note.
+    d, _, _ = torus_result
+    m = _torus()
+    inside_out = (np.asarray(m.vertices), np.asarray(m.faces)[:, ::-1])
+    flipped = decompose(inside_out, cache_dir=str(tmp_path / "cache"), **FAST)
+    assert flipped.notes == (
+        "input is inside out (negative volume): decomposed with its faces reversed",
+    )
+    assert flipped.cache_key != d.cache_key  # the entry's note is true of its own input
+    assert len(flipped.parts) == len(d.parts)
+    for (v1, f1), (v2, f2) in zip(flipped.parts, d.parts):
+        assert np.array_equal(v1, v2) and np.array_equal(f1, f2)
+    assert flipped.metrics.mesh_volume == pytest.approx(d.metrics.mesh_volume, rel=1e-12)
+    assert flipped.metrics.volume_ratio == pytest.approx(d.metrics.volume_ratio, rel=1e-12)
+    looked_up = cached_decomposition(inside_out, cache_dir=str(tmp_path / "cache"), **FAST)
+    assert looked_up is not None and looked_up.notes == flipped.notes
+
+
 def test_cache_hit_is_fast_and_equal(torus_result) -> None:
     d, miss_seconds, cache = torus_result
     start = time.perf_counter()

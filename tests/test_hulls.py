@@ -8,8 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+from meshcol.collision.hull import HullResult, closest_points_on_triangles, convex_hull
 from meshcol.errors import InvalidMeshError
-from meshcol.geometry.hull import HullResult, closest_points_on_triangles, convex_hull
 
 CUBE = np.array([[x, y, z] for x in (0.0, 1.0) for y in (0.0, 1.0) for z in (0.0, 1.0)])
 

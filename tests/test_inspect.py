@@ -7,9 +7,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from meshcol.analysis.inspect import RULES, guess_units, inspect_body, self_intersecting_pairs
+from meshcol.analysis.inspect import RULES, guess_units, inspect_body
+from meshcol.collision.self_intersection import self_intersecting_pairs
 from meshcol.errors import InvalidMeshError
-from meshcol.geometry.topology import closed_volume
+from meshcol.geometry.topology import closed_volume, orient_outward, oriented_volume
 from meshcol.types import Body
 
 CUBE_VERTICES = np.array([[x, y, z] for x in (0.0, 1.0) for y in (0.0, 1.0) for z in (0.0, 1.0)])
@@ -68,9 +69,47 @@ def test_unit_cube_is_clean() -> None:
     assert r.findings == []
 
 
-def test_inside_out_cube_has_negative_volume() -> None:
+def test_inside_out_cube_is_inverted() -> None:
     r = inspect_body(body(CUBE_VERTICES, CUBE_FACES[:, ::-1]))
-    assert r.winding_consistent and r.volume == pytest.approx(-1.0)
+    assert r.watertight and r.winding_consistent and r.volume == pytest.approx(-1.0)
+    assert r.findings == ["inverted"]
+    assert not r.self_intersecting
+
+
+@settings(max_examples=30)
+@given(st.integers(0, 2**32 - 1), st.sampled_from([1e-3, 1.0, 1e3]), st.sampled_from([0, 1e6]))
+def test_inverted_is_the_sign_of_the_volume_wherever_the_mesh_is(seed, scale, far) -> None:
+    # the hull of random points, outward, and inside out, moved by a random rigid motion far
+    # from the origin: the orientation never changes
+    from meshcol.collision.hull import exact_hull
+
+    rng = np.random.default_rng(seed)
+    hull = exact_hull(rng.normal(size=(30, 3)) * scale)
+    rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    moved = hull.vertices @ rotation.T + far * rng.normal(size=3)
+    outward = inspect_body(body(moved, hull.faces))
+    inside_out = inspect_body(body(moved, hull.faces[:, ::-1]))
+    assert "inverted" not in outward.findings and outward.volume > 0
+    assert "inverted" in inside_out.findings and inside_out.volume < 0
+    assert inside_out.volume == pytest.approx(-outward.volume, rel=1e-9)
+
+
+def test_closed_mesh_without_volume_is_not_inverted() -> None:
+    # a triangle and its back face: closed and consistently wound, volume 0, no orientation
+    v = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    assert oriented_volume(v, [[0, 1, 2], [0, 2, 1]]) == (0.0, 0)
+    r = inspect_body(body(v, [[0, 1, 2], [0, 2, 1]]))
+    assert r.volume == 0.0 and "inverted" not in r.findings
+    # an open or inconsistently wound mesh has no volume and no orientation
+    assert oriented_volume(CUBE_VERTICES, CUBE_FACES[:-1]) is None
+    assert orient_outward(CUBE_VERTICES, CUBE_FACES[:-1])[1] is False
+
+
+def test_orient_outward_reverses_an_inside_out_mesh_only() -> None:
+    faces, flipped = orient_outward(CUBE_VERTICES, CUBE_FACES[:, ::-1])
+    assert flipped and faces.tolist() == CUBE_FACES.tolist()
+    faces, flipped = orient_outward(CUBE_VERTICES, CUBE_FACES)
+    assert not flipped and faces.tolist() == CUBE_FACES.tolist()
 
 
 def test_one_flipped_face_is_inconsistent_winding() -> None:
@@ -157,11 +196,10 @@ def test_crossing_pairs_match_brute_force_on_random_soup() -> None:
     vertices = rng.uniform(0, 10, size=(150, 3))
     faces = np.arange(150).reshape(50, 3)
     fast = {tuple(p) for p in self_intersecting_pairs(vertices, faces).tolist()}
-    from meshcol.analysis.inspect import _triangles_cross
+    from meshcol.collision.self_intersection import face_pairs_cross
 
     i, j = np.triu_indices(50, 1)
-    tri = vertices[faces]
-    hit = _triangles_cross(tri[i], tri[j], np.zeros(len(i), int), 1e-10 * 17.3)
+    hit = face_pairs_cross(vertices, faces, np.stack([i, j], axis=1))
     assert fast == set(zip(i[hit].tolist(), j[hit].tolist()))
     assert len(fast) > 0
 

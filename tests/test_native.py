@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from meshcol._native import core, defaults
+from meshcol.collision.hull import FLAT_RELATIVE_TOLERANCE, MAX_ABS_COORDINATE, HullStatus
 from meshcol.collision.shapes import ConvexSet, ShapeKind
 from meshcol.types import Status, TimeOfImpactStatus
 
@@ -22,8 +23,9 @@ def members(e: type[enum.Enum]) -> dict[str, int]:
         (Status, core.Status),
         (TimeOfImpactStatus, core.TimeOfImpactStatus),
         (ShapeKind, core.ShapeKind),
+        (HullStatus, core.HullStatus),
     ],
-    ids=["Status", "TimeOfImpactStatus", "ShapeKind"],
+    ids=["Status", "TimeOfImpactStatus", "ShapeKind", "HullStatus"],
 )
 def test_python_enums_match_the_bound_cpp_enums(python_enum, native_enum) -> None:
     assert members(python_enum) == members(native_enum)
@@ -71,3 +73,8 @@ def test_defaults_are_exposed_under_their_new_names() -> None:
     assert defaults.sort_and_sweep_max_cell_changes == 0.25
     assert not hasattr(defaults, "sweep_max_cell_changes")
     assert 0 < defaults.sat_parallel_edge_sine < 1e-6
+
+
+def test_hull_constants_mirror_the_core_defaults() -> None:
+    assert defaults.flat_relative_tolerance == FLAT_RELATIVE_TOLERANCE
+    assert defaults.hull_max_abs_coordinate == MAX_ABS_COORDINATE

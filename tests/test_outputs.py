@@ -119,3 +119,24 @@ def test_atomic_write_errors_name_the_destination_not_the_temporary_file(
         report.atomic_write(tmp_path / "r.json", "{}")
     assert caught.value.filename == str(tmp_path / "r.json")
     assert list(tmp_path.glob(".meshcol-*")) == []
+
+
+def test_a_report_to_a_device_or_pipe_is_written_into_it_never_replacing_it(tmp_path) -> None:
+    """`--report /dev/null` renamed the temporary file over /dev/null (as root it replaced the
+    device with a regular file, for every program on the machine). A destination that is not
+    a regular file is written into; tested on a named pipe, which a rename would replace too."""
+    import stat
+    import threading
+
+    from meshcol.io.report import atomic_write
+
+    pipe = tmp_path / "pipe.json"
+    os.mkfifo(pipe)
+    got: list[bytes] = []
+    reader = threading.Thread(target=lambda: got.append(pipe.read_bytes()))
+    reader.start()
+    atomic_write(pipe, '{"ok": true}\n')
+    reader.join(timeout=10)
+    assert got == [b'{"ok": true}\n']
+    assert stat.S_ISFIFO(os.stat(pipe).st_mode)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["pipe.json"]

@@ -542,6 +542,32 @@ def test_threads_give_identical_results():
     np.testing.assert_array_equal(one.point_a, many.point_a)
 
 
+def test_large_set_checks_only_the_shapes_pairs_use():
+    # 600 shapes (the per-shape checks run on threads), a NaN shape and a non-rigid pose
+    # among them, pairs on a subset: each pair's answer is the two-shape set's, bad ones
+    # INVALID_INPUT, the same on any number of threads.
+    rng = np.random.default_rng(5)
+    clouds = [rng.normal(size=(24, 3)) for _ in range(600)]
+    clouds[7] = clouds[7].copy()
+    clouds[7][3] = np.nan
+    cs = ConvexSet.from_vertices(clouds)
+    poses_ = np.stack([translation(*rng.uniform(-6, 6, 3)) for _ in clouds])
+    poses_[11, 0, 0] = 2.0  # not rigid
+    pairs = np.concatenate([rng.integers(0, 600, size=(300, 2)), [[7, 8], [9, 11], [12, 13]]])
+    one = signed_distance_batch(cs, poses_, pairs, threads=1)
+    many = signed_distance_batch(cs, poses_, pairs, threads=0)
+    for name in ("signed_distance", "normal", "point_a", "point_b", "status", "iterations"):
+        np.testing.assert_array_equal(getattr(one, name), getattr(many, name))
+    bad = np.isin(pairs, [7, 11]).any(axis=1)
+    assert np.all(one.status[bad] == Status.INVALID_INPUT)
+    assert np.all(one.status[~bad] != Status.INVALID_INPUT)
+    for k in rng.choice(np.flatnonzero(~bad), size=20, replace=False):
+        i, j = pairs[k]
+        pair_set = cs.take([i, j])
+        single = signed_distance_batch(pair_set, poses_[[i, j]], [[0, 1]], threads=1)
+        assert single.signed_distance[0] == one.signed_distance[k]
+
+
 @pytest.mark.parametrize("scale", [1e-6, 1e-3, 1.0, 1e3, 1e6])
 def test_scale_invariance(scale):
     # Relative tolerances: the same layout at any scale gives the same relative answer.

@@ -15,11 +15,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from scipy.spatial import ConvexHull
 
 from meshcol.analysis.check import check_scene
 from meshcol.cli import main
 from meshcol.errors import SceneError
-from meshcol.geometry.hull import exact_hull
 from meshcol.io.robot import RobotOptions, is_robot_file, load_robot, robot_options
 from meshcol.io.scene import load_inputs
 from meshcol.types import Box, Capsule, Cylinder
@@ -354,9 +354,9 @@ def test_excluded_mask_is_applied_to_any_scene():
 
     def cube(name, x):
         v = np.array(list(itertools.product([-0.5, 0.5], repeat=3)), dtype=float)
-        hull = exact_hull(v)
+        hull = ConvexHull(v)
         pose = trans(x, 0, 0)
-        return Body(name=name, source=None, vertices=hull.vertices, faces=hull.faces, pose=pose)
+        return Body(name=name, source=None, vertices=v, faces=hull.simplices, pose=pose)
 
     bodies = tuple(cube(f"c{i}", 0.9 * i) for i in range(5))  # each overlaps its neighbours
     full = check_scene(Scene(bodies=bodies))
@@ -522,9 +522,9 @@ def _fcl_colliding(scene, excluded: set[tuple[str, str]]) -> set[tuple[str, str]
     fcl = pytest.importorskip("fcl")
     objects = {}
     for body in scene.bodies:
-        hull = exact_hull(body.vertices)
-        faces = np.hstack([np.full((len(hull.faces), 1), 3), hull.faces]).ravel()
-        shape = fcl.Convex(hull.vertices, len(hull.faces), faces)
+        hull = ConvexHull(body.vertices)  # scipy's qhull: independent of meshcol's hulls
+        faces = np.hstack([np.full((len(hull.simplices), 1), 3), hull.simplices]).ravel()
+        shape = fcl.Convex(body.vertices, len(hull.simplices), faces)
         objects[body.name] = fcl.CollisionObject(
             shape, fcl.Transform(body.pose[:3, :3], body.pose[:3, 3])
         )

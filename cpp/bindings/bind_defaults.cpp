@@ -16,6 +16,7 @@ void bind_defaults(nb::module_& m) {
     s.attr("min_pairs_per_thread") = d::min_pairs_per_thread;
     s.attr("min_shapes_per_thread") = d::min_shapes_per_thread;
     s.attr("min_points_per_thread") = d::min_points_per_thread;
+    s.attr("triangle_min_pairs_per_thread") = d::triangle_min_pairs_per_thread;
     s.attr("hill_climbing_min_vertices") = d::hill_climbing_min_vertices;
     s.attr("gjk_max_iterations") = d::gjk_max_iterations;
     s.attr("support_warm_start_min_cosine") = d::support_warm_start_min_cosine;
@@ -50,6 +51,7 @@ void bind_defaults(nb::module_& m) {
     s.attr("mesh_bvh_bins") = d::mesh_bvh_bins;
     s.attr("mesh_min_pairs_per_thread") = d::mesh_min_pairs_per_thread;
     s.attr("winding_number_inside") = d::winding_number_inside;
+    s.attr("mesh_depth_max_work") = d::mesh_depth_max_work;
     m.def("hardware_threads", &meshcol::hardware_threads,
           "Number of hardware threads (at least 1).");
 

@@ -173,6 +173,60 @@ auto distance_batch(const MeshBvhSet& set, Poses poses, Pairs pairs, int threads
                           b_inside_a_arr, triangle_a_arr, triangle_b_arr, status_arr);
 }
 
+auto depth_batch(const MeshBvhSet& set, Poses poses, Pairs pairs, int threads) {
+    const PosedPairs in = read_pairs(set, poses, pairs);
+    const auto n = static_cast<size_t>(in.count);
+    auto depth_arr = new_array<Out<double, -1>>({n});
+    auto point_a_arr = new_array<Out<double, -1, 3>>({n, 3});
+    auto point_b_arr = new_array<Out<double, -1, 3>>({n, 3});
+    auto normal_arr = new_array<Out<double, -1, 3>>({n, 3});
+    auto mesh_arr = new_array<Out<std::int8_t, -1>>({n});
+    auto tested_arr = new_array<Out<std::int64_t, -1>>({n});
+    auto status_arr = new_array<Out<std::int8_t, -1>>({n});
+    double* depth = depth_arr.data();
+    double* point_a = point_a_arr.data();
+    double* point_b = point_b_arr.data();
+    double* normal = normal_arr.data();
+    std::int8_t* deepest_mesh = mesh_arr.data();
+    std::int64_t* tested = tested_arr.data();
+    std::int8_t* status = status_arr.data();
+    {
+        nb::gil_scoped_release release;
+        const int t = meshcol::resolve_threads(threads, in.count, meshcol::defaults::mesh_min_pairs_per_thread);
+        meshcol::parallel_for(in.count, t, [&](long long begin, long long end) {
+            for (long long k = begin; k < end; ++k) {
+                const auto i = static_cast<size_t>(in.pairs[2 * k]);
+                const auto j = static_cast<size_t>(in.pairs[2 * k + 1]);
+                meshcol::MeshDistanceInput q;
+                q.a = &set.meshes[i];
+                q.b = &set.meshes[j];
+                q.pose_a = in.poses[i];
+                q.pose_b = in.poses[j];
+                meshcol::MeshDepthOutput r;
+                if (in.rigid[i] && in.rigid[j]) {
+                    r = meshcol::mesh_penetration_depth(q);
+                } else {
+                    const double nan = std::numeric_limits<double>::quiet_NaN();
+                    r.depth = nan;
+                    r.point_a = r.point_b = r.normal = Vec3{nan, nan, nan};
+                    r.status = meshcol::Status::INVALID_INPUT;
+                }
+                depth[k] = r.depth;
+                for (int c = 0; c < 3; ++c) {
+                    point_a[3 * k + c] = r.point_a[c];
+                    point_b[3 * k + c] = r.point_b[c];
+                    normal[3 * k + c] = r.normal[c];
+                }
+                deepest_mesh[k] = static_cast<std::int8_t>(r.deepest_mesh);
+                tested[k] = r.points_tested;
+                status[k] = static_cast<std::int8_t>(r.status);
+            }
+        });
+    }
+    return std::make_tuple(depth_arr, point_a_arr, point_b_arr, normal_arr, mesh_arr, tested_arr,
+                           status_arr);
+}
+
 auto intersects_batch(const MeshBvhSet& set, Poses poses, Pairs pairs, int threads) {
     const PosedPairs in = read_pairs(set, poses, pairs);
     const auto n = static_cast<size_t>(in.count);
@@ -221,6 +275,8 @@ void bind_mesh_query(nb::module_& m) {
         .def("__len__", [](const MeshBvhSet& s) { return s.meshes.size(); })
         .def("valid", [](const MeshBvhSet& s, std::int64_t i) { return s.at(i).valid(); }, "i"_a,
              "Whether mesh i has finite vertices and at least one face.")
+        .def("closed", [](const MeshBvhSet& s, std::int64_t i) { return s.at(i).closed(); }, "i"_a,
+             "Whether mesh i is a closed, consistently wound surface (MeshBvh::closed).")
         .def("node_count", [](const MeshBvhSet& s, std::int64_t i) { return s.at(i).nodes().size(); }, "i"_a)
         .def("validate", [](const MeshBvhSet& s) {
             for (const auto& mesh : s.meshes)
@@ -275,6 +331,9 @@ void bind_mesh_query(nb::module_& m) {
              "max_distance"_a = std::numeric_limits<double>::infinity(),
              "Mesh-pair distances: (distance, point_a, point_b, intersecting, a_inside_b, "
              "b_inside_a, triangle_a, triangle_b, status).")
+        .def("depth_batch", &depth_batch, "poses"_a, "pairs"_a, "threads"_a = 0,
+             "Mesh-pair penetration depths (lower bounds of the minimum translation distance): "
+             "(depth, point_a, point_b, normal, deepest_mesh, points_tested, status).")
         .def("intersects_batch", &intersects_batch, "poses"_a, "pairs"_a, "threads"_a = 0,
              "Mesh-pair surface intersection tests: (intersecting, status).");
 

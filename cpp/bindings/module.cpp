@@ -9,6 +9,8 @@ void bind_broadphase(nb::module_& m);
 void bind_toi(nb::module_& m);
 void bind_mesh_query(nb::module_& m);
 void bind_io(nb::module_& m);
+void bind_inspect(nb::module_& m);
+void bind_hull(nb::module_& m);
 
 NB_MODULE(_core, m) {
     m.doc() = "meshcol native core (private: use the meshcol package API)";
@@ -18,4 +20,6 @@ NB_MODULE(_core, m) {
     bind_toi(m);
     bind_mesh_query(m);
     bind_io(m);
+    bind_inspect(m);
+    bind_hull(m);
 }

@@ -9,6 +9,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "meshcol/defaults.hpp"
 
@@ -55,6 +56,17 @@ struct Box {
         return d.x * d.y + d.y * d.z + d.z * d.x;
     }
 };
+
+// SAH bin of a centroid coordinate `c` in [lo, lo + extent] (extent > 0), always in
+// [0, mesh_bvh_bins). Divides before scaling: kBins / extent overflows to inf for a denormal
+// extent (vertices near 1e-310), and 0 * inf is NaN, whose conversion to int is undefined; an
+// infinite extent (coordinates near the double range) puts everything in bin 0.
+inline int bin_of(double c, double lo, double extent) {
+    constexpr int kBins = defaults::mesh_bvh_bins;
+    const double x = (c - lo) / extent * kBins;
+    if (!(x > 0.0)) return 0;  // also NaN
+    return x >= kBins - 1 ? kBins - 1 : static_cast<int>(x);
+}
 
 struct BuildTask {
     std::int32_t begin, end;
@@ -131,14 +143,13 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
             const double lo = centroid_bounds.lower[axis];
             const double extent = centroid_bounds.upper[axis] - lo;
             if (!(extent > 0.0)) continue;
-            const double scale = kBins / extent;
             for (int b = 0; b < kBins; ++b) {
                 bin_box[b] = Box{};
                 bin_count[b] = 0;
             }
             for (std::int32_t i = task.begin; i < task.end; ++i) {
                 const std::int32_t f = order[static_cast<size_t>(i)];
-                const int b = std::min(kBins - 1, static_cast<int>((centroids[static_cast<size_t>(f)][axis] - lo) * scale));
+                const int b = bin_of(centroids[static_cast<size_t>(f)][axis], lo, extent);
                 bin_box[b].grow(boxes[static_cast<size_t>(f)]);
                 ++bin_count[b];
             }
@@ -167,11 +178,10 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         std::int32_t mid = task.begin + count / 2;
         if (best_axis >= 0) {
             const double lo = centroid_bounds.lower[best_axis];
-            const double scale = kBins / (centroid_bounds.upper[best_axis] - lo);
+            const double extent = centroid_bounds.upper[best_axis] - lo;
             auto first = order.begin() + task.begin, last = order.begin() + task.end;
             auto split = std::partition(first, last, [&](std::int32_t f) {
-                const int b = std::min(kBins - 1, static_cast<int>((centroids[static_cast<size_t>(f)][best_axis] - lo) * scale));
-                return b <= best_bin;
+                return bin_of(centroids[static_cast<size_t>(f)][best_axis], lo, extent) <= best_bin;
             });
             const auto m = static_cast<std::int32_t>(split - order.begin());
             if (m > task.begin && m < task.end) mid = m;
@@ -191,6 +201,25 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         face_index_[static_cast<size_t>(i)] = f;
         for (int k = 0; k < 3; ++k) corners_[3 * static_cast<size_t>(i) + k] = vertex(faces[3 * f + k]);
     }
+    // Closed and consistently wound: sorted directed edges pair up as (u, v) and (v, u).
+    std::vector<std::pair<std::int64_t, std::int64_t>> edges;
+    edges.reserve(3 * static_cast<size_t>(face_count));
+    for (std::int64_t f = 0; f < face_count; ++f)
+        for (int k = 0; k < 3; ++k) {
+            const std::int64_t u = faces[3 * f + k], v = faces[3 * f + (k + 1) % 3];
+            if (u != v) edges.push_back({u, v});
+        }
+    std::sort(edges.begin(), edges.end());
+    closed_ = !edges.empty();
+    for (size_t e = 0; e < edges.size() && closed_; ++e) {
+        const auto [u, v] = edges[e];
+        const bool repeated = e + 1 < edges.size() && edges[e + 1] == edges[e];
+        closed_ = !repeated && std::binary_search(edges.begin(), edges.end(), std::make_pair(v, u));
+    }
+    std::vector<char> used(static_cast<size_t>(vertex_count), 0);
+    for (std::int64_t k = 0; k < 3 * face_count; ++k) used[static_cast<size_t>(faces[k])] = 1;
+    for (std::int64_t v = 0; v < vertex_count; ++v)
+        if (used[static_cast<size_t>(v)]) vertices_.push_back(vertex(v));
 }
 
 bool MeshBvh::validate() const {

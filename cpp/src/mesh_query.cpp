@@ -9,6 +9,7 @@
 // distance so far are dropped.
 #include "meshcol/mesh_query.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -17,6 +18,7 @@
 #include "meshcol/defaults.hpp"
 #include "meshcol/triangle.hpp"
 #include "rescale.hpp"
+#include "predicates.hpp"
 
 namespace meshcol {
 namespace {
@@ -249,6 +251,263 @@ inline double point_box_squared_distance(const BvhNode& n, const Vec3& p) {
     return d2;
 }
 
+// Whether the segment p + s (q - p), s in [0, 1], may meet node n's box: the slab test on the
+// box grown by a relative margin, so rounding can only keep a box, never drop one.
+inline bool segment_may_meet_box(const BvhNode& n, const Vec3& p, const Vec3& d) {
+    double lo = 0.0, hi = 1.0;
+    for (int k = 0; k < 3; ++k) {
+        const double margin = 1e-9 * (std::fabs(n.lower[k]) + std::fabs(n.upper[k])) + 1e-300;
+        const double a = static_cast<double>(n.lower[k]) - margin;
+        const double b = static_cast<double>(n.upper[k]) + margin;
+        if (d[k] == 0.0) {
+            if (p[k] < a || p[k] > b) return false;
+            continue;
+        }
+        double s0 = (a - p[k]) / d[k], s1 = (b - p[k]) / d[k];
+        if (s0 > s1) std::swap(s0, s1);
+        if (s0 > lo) lo = s0;
+        if (s1 < hi) hi = s1;
+        if (lo > hi) return false;
+    }
+    return true;
+}
+
+// Signed number of crossings of the segment [p, q] with a closed mesh's triangles (the winding
+// number of p when q is outside), with exact orientation signs, or 1 when p lies on the
+// surface; false when the segment passes exactly through an edge or a vertex, so another
+// direction must be tried.
+bool signed_crossings(const MeshBvh& mesh, const Vec3& p, const Vec3& q, int* count) {
+    using predicates::orient3d_sign;
+    const Vec3 d = q - p;
+    const std::vector<BvhNode>& nodes = mesh.nodes();
+    std::vector<std::int32_t> stack{0};
+    int total = 0;
+    while (!stack.empty()) {
+        const std::int32_t id = stack.back();
+        stack.pop_back();
+        const BvhNode& node = nodes[static_cast<size_t>(id)];
+        if (!segment_may_meet_box(node, p, d)) continue;
+        if (!node.is_leaf()) {
+            stack.push_back(node.index);
+            stack.push_back(id + 1);
+            continue;
+        }
+        for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
+            const Vec3* t = mesh.triangle(i);
+            const int sp = orient3d_sign(t[0], t[1], t[2], p);
+            const int sq = orient3d_sign(t[0], t[1], t[2], q);
+            if (sp == 0) {
+                // p on the surface belongs to the closed solid (a point of the other mesh's
+                // surface lying on this one still bounds the depth); elsewhere on the plane
+                // the segment only touches it at p.
+                const Vec3 point[3] = {p, p, p};
+                if (triangles_intersect(t, point, nullptr)) {
+                    *count = 1;
+                    return true;
+                }
+                continue;
+            }
+            // One side, or touching the plane only at q (outside the mesh's box): no crossing.
+            if (sp * sq >= 0) continue;
+            const int s0 = orient3d_sign(p, q, t[0], t[1]);
+            const int s1 = orient3d_sign(p, q, t[1], t[2]);
+            const int s2 = orient3d_sign(p, q, t[2], t[0]);
+            if ((s0 > 0 && s1 > 0 && s2 > 0) || (s0 < 0 && s1 < 0 && s2 < 0)) {
+                total += sp;
+                continue;
+            }
+            if ((s0 > 0 || s1 > 0 || s2 > 0) && (s0 < 0 || s1 < 0 || s2 < 0)) continue;  // misses
+            if (s0 == 0 && s1 == 0 && s2 == 0) continue;  // degenerate triangle
+            return false;  // through an edge or a vertex
+        }
+    }
+    *count = total;
+    return true;
+}
+
+// Whether `p` (mesh's local frame) is in the solid: |winding number| >= 1/2. For a closed
+// mesh the winding number is the signed crossing count of a segment from p to beyond the
+// mesh's box (BVH, exact signs, a few fixed directions in case one passes through an edge or
+// a vertex), and a point exactly on the surface counts as in; otherwise, and if every
+// direction is degenerate, the generalized winding number (which is 1/2 on a smooth part of
+// the surface, so counts it in too).
+bool inside_mesh(const MeshBvh& mesh, const Vec3& p, long long* work) {
+    if (mesh.closed()) {
+        static constexpr Vec3 kDirections[] = {
+            {0.5377304471659, 0.2845902536245, 0.7935981048671},
+            {-0.6117145263523, 0.7219873914523, 0.3232414553322},
+            {0.2174811052316, -0.8642151133311, 0.4536126398734},
+            {-0.3902134117283, -0.4155247717421, -0.8216328740022},
+            {0.8807432016934, -0.1179016743124, -0.4587332154410},
+            {-0.0712387411032, 0.5932171148713, -0.8018427201121},
+        };
+        const BvhNode& root = mesh.nodes()[0];
+        const Vec3 lo{root.lower[0], root.lower[1], root.lower[2]};
+        const Vec3 hi{root.upper[0], root.upper[1], root.upper[2]};
+        const double reach = 2.0 * (norm(hi - lo) + norm(p - (lo + hi) * 0.5)) + 1.0;
+        for (const Vec3& direction : kDirections) {
+            int count = 0;
+            *work += 64;  // about the cost of one segment query, in triangle visits
+            if (signed_crossings(mesh, p, p + direction * reach, &count)) return count != 0;
+        }
+    }
+    *work += mesh.triangle_count();
+    return std::fabs(winding_number(mesh, p)) >= defaults::winding_number_inside;
+}
+
+// Marks the triangles (leaf order) of a and of b that belong to an intersecting triangle
+// pair: the descent of mesh_intersects, run to the end.
+struct CrossingPair {
+    std::int32_t a, b;   // leaf order
+    Vec3 witness[2];     // shared points found from a's side and from b's (a's frame), so
+                         // that the samples do not depend on the order of the pair
+};
+
+void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
+                             std::vector<char>& in_a, std::vector<char>& in_b,
+                             std::vector<CrossingPair>& pairs) {
+    pairs.clear();
+    in_a.assign(static_cast<size_t>(a.triangle_count()), 0);
+    in_b.assign(static_cast<size_t>(b.triangle_count()), 0);
+    const std::vector<BvhNode>& na = a.nodes();
+    const std::vector<BvhNode>& nb = b.nodes();
+    if (box_squared_distance(na[0], nb[0], rel) > 0.0) return;
+    std::vector<std::pair<std::int32_t, std::int32_t>> stack{{0, 0}};
+    MappedLeaf leaf_b;
+    while (!stack.empty()) {
+        const auto [ia, ib] = stack.back();
+        stack.pop_back();
+        const BvhNode& x = na[static_cast<size_t>(ia)];
+        const BvhNode& y = nb[static_cast<size_t>(ib)];
+        if (x.is_leaf() && y.is_leaf()) {
+            leaf_b.load(b, y, rel);
+            for (std::int32_t i = x.index; i < x.index + x.count; ++i) {
+                const Vec3* ta = a.triangle(i);
+                const TriangleBox box_a = triangle_box(ta);
+                for (int j = 0; j < leaf_b.count; ++j)
+                    if (Vec3 w; triangle_box_squared_distance(box_a, leaf_b.boxes[j]) == 0.0 &&
+                                triangles_intersect(ta, leaf_b.corners[j], &w)) {
+                        in_a[static_cast<size_t>(i)] = 1;
+                        in_b[static_cast<size_t>(y.index + j)] = 1;
+                        Vec3 w_b = w;
+                        triangles_intersect(leaf_b.corners[j], ta, &w_b);
+                        pairs.push_back({i, y.index + j, {w, w_b}});
+                    }
+            }
+            continue;
+        }
+        const bool descend_a = !x.is_leaf() && (y.is_leaf() || node_size(x) >= node_size(y));
+        const std::pair<std::int32_t, std::int32_t> c1 = descend_a ? std::make_pair(ia + 1, ib) : std::make_pair(ia, ib + 1);
+        const std::pair<std::int32_t, std::int32_t> c2 = descend_a ? std::make_pair(x.index, ib) : std::make_pair(ia, y.index);
+        if (box_squared_distance(na[static_cast<size_t>(c2.first)], nb[static_cast<size_t>(c2.second)], rel) == 0.0)
+            stack.push_back(c2);
+        if (box_squared_distance(na[static_cast<size_t>(c1.first)], nb[static_cast<size_t>(c1.second)], rel) == 0.0)
+            stack.push_back(c1);
+    }
+}
+
+// Parameters along [p, q] (mesh's local frame) where the segment meets the mesh's surface in
+// isolated points, appended to `out`.
+void segment_crossings(const MeshBvh& mesh, const Vec3& p, const Vec3& q, std::vector<double>& out) {
+    const Vec3 d = q - p;
+    const std::vector<BvhNode>& nodes = mesh.nodes();
+    std::vector<std::int32_t> stack{0};
+    while (!stack.empty()) {
+        const std::int32_t id = stack.back();
+        const BvhNode& node = nodes[static_cast<size_t>(id)];
+        stack.pop_back();
+        if (!segment_may_meet_box(node, p, d)) continue;
+        if (node.is_leaf()) {
+            for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
+                double s = 0.0;
+                if (segment_crosses_triangle(p, q, mesh.triangle(i), &s)) out.push_back(s);
+            }
+            continue;
+        }
+        stack.push_back(node.index);
+        stack.push_back(id + 1);
+    }
+}
+
+// A point of one mesh, in the other mesh's local frame, with its distance to that surface.
+struct DepthCandidate {
+    Vec3 point;
+    double distance;
+    int mesh;  // 0: a point of a (frame of b); 1: a point of b (frame of a); 2: a point of
+               // neither surface that may lie inside both (frame of a)
+    bool farther_is_a;  // mesh 2: a's surface is the farther one
+};
+
+inline double longest_edge(const Vec3 t[3]) {
+    return std::sqrt(std::fmax(squared_norm(t[1] - t[0]),
+                               std::fmax(squared_norm(t[2] - t[1]), squared_norm(t[0] - t[2]))));
+}
+
+// Points off both surfaces near where they cross: from a shared point of each crossing
+// triangle pair, steps into the wedge between the two triangles, against the sum of their
+// unit normals, and from each triangle's centroid, steps against its own normal (each mesh's
+// winding decides its normals: outward for outward-wound meshes, and the winding-number test
+// sorts out the rest). Such a point p inside both solids bounds
+// the minimum translation distance by max(dist(p, surface a), dist(p, surface b)), and it
+// finds overlaps whose surface points all lie on the other surface (flush, coplanar faces).
+void add_wedge_candidates(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
+                          const std::vector<CrossingPair>& pairs, std::vector<DepthCandidate>& out) {
+    constexpr size_t kMaxPairs = 256;  // evenly strided beyond: the vertices and edge cuts do most
+    const size_t stride = pairs.size() / kMaxPairs + 1;
+    for (size_t k = 0; k < pairs.size(); k += stride) {
+        const CrossingPair& c = pairs[k];
+        const Vec3* ta = a.triangle(c.a);
+        const Vec3* tb_local = b.triangle(c.b);
+        const Vec3 tb[3] = {rel.apply(tb_local[0]), rel.apply(tb_local[1]), rel.apply(tb_local[2])};
+        const Vec3 na = cross(ta[1] - ta[0], ta[2] - ta[0]);
+        const Vec3 nb = cross(tb[1] - tb[0], tb[2] - tb[0]);
+        const double la = norm(na), lb = norm(nb);
+        if (!(la > 0.0 && lb > 0.0)) continue;
+        const double h = std::fmin(longest_edge(ta), longest_edge(tb));
+        const Vec3 centroid_a = (ta[0] + ta[1] + ta[2]) / 3.0;
+        const Vec3 centroid_b = (tb[0] + tb[1] + tb[2]) / 3.0;
+        for (double step : {0.5 * h, 0.125 * h, 0.03125 * h}) {
+            // Each triangle's centroid, stepped into its own solid: finds coincident and
+            // coplanar overlaps, whose shared points all lie on edges of both.
+            out.push_back({centroid_a - na * (step / la), 0.0, 2, false});
+            out.push_back({centroid_b - nb * (step / lb), 0.0, 2, false});
+        }
+        const Vec3 sum = na / la + nb / lb;
+        const double ls = norm(sum);
+        if (!(ls > 1e-6)) continue;  // opposite normals: faces resting on each other
+        const Vec3 inward = sum * (-1.0 / ls);
+        for (const Vec3& witness : c.witness)
+            for (double step : {0.5 * h, 0.125 * h, 0.03125 * h})
+                out.push_back({witness + inward * step, 0.0, 2, false});
+    }
+}
+
+// Sample points of `self` (their frame mapped into `other`'s by `to_other`) that may lie
+// inside `other`: vertices within other's root box, and midpoints of the pieces into which the
+// other surface cuts the edges of self's crossing triangles.
+template <class Map>
+void add_candidates(const MeshBvh& self, const MeshBvh& other, const std::vector<char>& crossing,
+                    Map to_other, int mesh, std::vector<DepthCandidate>& out) {
+    const BvhNode& root = other.nodes()[0];
+    auto add = [&](const Vec3& p) {
+        if (inside_box(root, p)) out.push_back({p, 0.0, mesh, false});
+    };
+    for (const Vec3& v : self.vertices()) add(to_other(v));
+    std::vector<double> cuts;
+    for (std::int32_t i = 0; i < self.triangle_count(); ++i) {
+        if (!crossing[static_cast<size_t>(i)]) continue;
+        const Vec3* t = self.triangle(i);
+        for (int k = 0; k < 3; ++k) {
+            const Vec3 p = to_other(t[k]), q = to_other(t[(k + 1) % 3]);
+            cuts.assign({0.0, 1.0});
+            segment_crossings(other, p, q, cuts);
+            std::sort(cuts.begin(), cuts.end());
+            for (size_t c = 0; c + 1 < cuts.size(); ++c)
+                if (cuts[c + 1] > cuts[c]) add(p + (q - p) * (0.5 * (cuts[c] + cuts[c + 1])));
+        }
+    }
+}
+
 }  // namespace
 
 PointDistanceOutput closest_point(const MeshBvh& mesh, const Vec3& point) {
@@ -397,6 +656,9 @@ MeshDistanceOutput mesh_distance(const MeshDistanceInput& input) {
         out.distance = kInf;
         out.point_a = out.point_b = nan3;
     }
+    // Nothing found within an infinite radius: the squared distances overflowed (coordinates
+    // beyond about 1e154); the distance is only known to be huge.
+    const bool overflowed = !std::isfinite(out.distance) && std::isinf(input.max_distance);
     if (!out.intersecting) {
         // Disjoint surfaces: each mesh is wholly inside or wholly outside the other, so one
         // vertex decides (Jacobson et al. 2013). Its distance to the other surface is at least
@@ -404,7 +666,186 @@ MeshDistanceOutput mesh_distance(const MeshDistanceInput& input) {
         out.a_inside_b = point_inside(b, input.pose_b, input.pose_a.apply(a.triangle(0)[0]));
         out.b_inside_a = point_inside(a, input.pose_a, input.pose_b.apply(b.triangle(0)[0]));
     }
+    out.status = overflowed ? Status::DEGENERATE : Status::CONVERGED;
+    return out;
+}
+
+namespace {
+
+// Distance from `point` (mesh's local frame) to the surface when it exceeds `floor`; otherwise
+// some value <= floor: the branch and bound of closest_point, stopped at the first triangle
+// within `floor` (such a point cannot raise a maximum that is already `floor`).
+double distance_beyond(const MeshBvh& mesh, const Vec3& point, double floor) {
+    const double floor2 = floor * floor;
+    const std::vector<BvhNode>& nodes = mesh.nodes();
+    double best2 = kInf;
+    bool found = false;
+    std::vector<std::pair<std::int32_t, double>> stack;
+    stack.reserve(64);
+    stack.push_back({0, point_box_squared_distance(nodes[0], point)});
+    while (!stack.empty()) {
+        const auto [index, bound] = stack.back();
+        stack.pop_back();
+        if (found && bound >= best2) continue;
+        const BvhNode& node = nodes[static_cast<size_t>(index)];
+        if (node.is_leaf()) {
+            for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
+                const double d2 = squared_norm(closest_point_on_triangle(point, mesh.triangle(i)) - point);
+                if (!found || d2 < best2) {
+                    best2 = d2;
+                    found = true;
+                }
+            }
+            if (best2 <= floor2) break;
+            continue;
+        }
+        const auto child = [&](std::int32_t i) {
+            return std::make_pair(i, point_box_squared_distance(nodes[static_cast<size_t>(i)], point));
+        };
+        std::pair<std::int32_t, double> near = child(index + 1), far = child(node.index);
+        if (near.second > far.second) std::swap(near, far);
+        if (!found || far.second < best2) stack.push_back(far);
+        if (!found || near.second < best2) stack.push_back(near);
+    }
+    return std::sqrt(best2);
+}
+
+}  // namespace
+
+MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
+    MeshDepthOutput out;
+    const Vec3 nan3{kNaN, kNaN, kNaN};
+    out.point_a = out.point_b = out.normal = nan3;
+    if (input.a == nullptr || input.b == nullptr || !input.a->valid() || !input.b->valid()) {
+        out.depth = kNaN;
+        out.status = Status::INVALID_INPUT;
+        return out;
+    }
+    const MeshBvh& a = *input.a;
+    const MeshBvh& b = *input.b;
+    const Relative rel(input.pose_a, input.pose_b);  // b's frame -> a's frame
+    std::vector<char> crossing_a, crossing_b;
+    std::vector<CrossingPair> crossing_pairs;
+    mark_crossing_triangles(a, b, rel, crossing_a, crossing_b, crossing_pairs);
+    std::vector<DepthCandidate> candidates;
+    add_candidates(a, b, crossing_a, [&](const Vec3& p) { return rel.apply_inverse(p); }, 0, candidates);
+    add_candidates(b, a, crossing_b, [&](const Vec3& p) { return rel.apply(p); }, 1, candidates);
+    add_wedge_candidates(a, b, rel, crossing_pairs, candidates);
+
+    long long work = 0;
+    auto inside = [&](const DepthCandidate& c) {
+        if (c.mesh == 0) return inside_mesh(b, c.point, &work);
+        if (c.mesh == 1) return inside_mesh(a, c.point, &work);
+        return inside_mesh(a, c.point, &work) && inside_mesh(b, rel.apply_inverse(c.point), &work);
+    };
+    // The depth a candidate gives (exact when it exceeds `floor`): its distance to the other
+    // surface; for a wedge point, to the farther of the two (`farther_is_a`).
+    auto measure = [&](DepthCandidate& c, double floor) {
+        if (c.mesh < 2) {
+            c.distance = distance_beyond(c.mesh == 0 ? b : a, c.point, floor);
+            return;
+        }
+        const double da = distance_beyond(a, c.point, floor);
+        const double db = distance_beyond(b, rel.apply_inverse(c.point), floor);
+        c.distance = std::fmax(da, db);
+        c.farther_is_a = da >= db;
+    };
+    auto closed = [&](const DepthCandidate& c) {
+        return c.mesh == 0 ? b.closed() : (c.mesh == 1 ? a.closed() : a.closed() && b.closed());
+    };
+
     out.status = Status::CONVERGED;
+    double best = 0.0;
+    bool have = false;
+    DepthCandidate winner{};
+    // Closed meshes first: inside by exact ray crossings (a BVH query each), then the distance
+    // of the inside points only, each search cut off once it cannot beat the best.
+    std::vector<DepthCandidate> undecided;
+    for (DepthCandidate& c : candidates) {
+        if (!closed(c)) {
+            undecided.push_back(c);
+            continue;
+        }
+        if (work > defaults::mesh_depth_max_work) {
+            out.status = Status::MAX_ITERATIONS;
+            break;
+        }
+        ++out.points_tested;
+        if (!inside(c)) continue;
+        measure(c, best);
+        if (c.distance > best) {
+            best = c.distance;
+            winner = c;
+            have = true;
+        }
+    }
+    // Open meshes: the generalized winding number costs a pass over the triangles, so the
+    // distances come first and the points are decided deepest first, the first inside one
+    // ending the search; a point found outside at distance d proves every point within d of
+    // it outside (that ball holds no surface), which skips most of a cluster.
+    if (out.status == Status::CONVERGED && !undecided.empty()) {
+        for (DepthCandidate& c : undecided) measure(c, best);
+        undecided.erase(std::remove_if(undecided.begin(), undecided.end(),
+                                       [best](const DepthCandidate& c) { return !(c.distance > best); }),
+                        undecided.end());
+        std::sort(undecided.begin(), undecided.end(),
+                  [](const DepthCandidate& x, const DepthCandidate& y) { return x.distance > y.distance; });
+        std::vector<std::pair<Vec3, double>> outside[2];
+        constexpr size_t kBallsChecked = 256;
+        for (const DepthCandidate& c : undecided) {
+            if (c.mesh < 2) {
+                const auto& balls = outside[c.mesh];
+                bool known_outside = false;
+                for (size_t k = balls.size(); k-- > 0 && balls.size() - k <= kBallsChecked;)
+                    if (squared_norm(c.point - balls[k].first) < balls[k].second * balls[k].second) {
+                        known_outside = true;
+                        break;
+                    }
+                if (known_outside) continue;
+            }
+            if (work > defaults::mesh_depth_max_work) {
+                out.status = Status::MAX_ITERATIONS;
+                break;
+            }
+            ++out.points_tested;
+            if (inside(c)) {
+                best = c.distance;
+                winner = c;
+                have = true;
+                break;
+            }
+            if (c.mesh < 2) outside[c.mesh].push_back({c.point, c.distance});
+        }
+    }
+    if (!have) return out;
+
+    // The deepest point and its closest surface point as (point_a, point_b): a's point inside
+    // b, b's point inside a, or a point inside both with the farther surface's closest point
+    // (b moves along point_a - point_b to leave it behind).
+    out.depth = best;
+    Vec3 deep, surface;
+    bool deep_is_a;
+    if (winner.mesh == 0) {
+        deep = input.pose_b.apply(winner.point);
+        surface = input.pose_b.apply(closest_point(b, winner.point).point);
+        deep_is_a = true;
+    } else if (winner.mesh == 1) {
+        deep = input.pose_a.apply(winner.point);
+        surface = input.pose_a.apply(closest_point(a, winner.point).point);
+        deep_is_a = false;
+    } else {
+        deep = input.pose_a.apply(winner.point);
+        const Vec3 local = winner.farther_is_a ? closest_point(a, winner.point).point
+                                               : rel.apply(closest_point(b, rel.apply_inverse(winner.point)).point);
+        surface = input.pose_a.apply(local);
+        deep_is_a = !winner.farther_is_a;  // the surface point is on the farther mesh
+    }
+    out.deepest_mesh = deep_is_a ? 0 : 1;
+    out.point_a = deep_is_a ? deep : surface;
+    out.point_b = deep_is_a ? surface : deep;
+    const Vec3 gap = out.point_a - out.point_b;
+    const double length = norm(gap);
+    if (length > 0.0) out.normal = gap / length;
     return out;
 }
 

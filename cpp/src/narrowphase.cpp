@@ -174,21 +174,28 @@ PairResult query_pair(const ShapeView& a, const Pose& pose_a, const ShapeView& b
 void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t* pairs,
                long long pair_count, QueryKind kind, int threads, const BatchOutput& out) {
     const std::int64_t h_count = set.shape_count;
-    // Each shape and pose is checked once, not once per pair.
+    // Each shape and pose a pair uses is checked once, not once per pair, on every thread;
+    // a shape no pair uses is not read at all (a big set queried for a few pairs pays for
+    // those few: the checks read every vertex).
     std::vector<char> ok(static_cast<size_t>(h_count), 0);
+    for (long long i = 0; i < 2 * pair_count; ++i) ok[pairs[i]] = 1;
     std::vector<Pose> pose(static_cast<size_t>(h_count));
     std::vector<double> radius(static_cast<size_t>(h_count), 0.0);
-    for (std::int64_t h = 0; h < h_count; ++h) {
-        const ShapeView s = set.shape(h);
-        bool good = is_valid(s);
-        if (good) radius[h] = bounding_radius(s);
-        if (poses != nullptr) {
-            const double* m = poses + 16 * h;
-            if (!is_rigid_matrix4(m, defaults::rigid_tolerance)) good = false;
-            else pose[h] = Pose::from_matrix4(m);
+    const int shape_threads = resolve_threads(threads, h_count, defaults::min_shapes_per_thread);
+    parallel_for(h_count, shape_threads, [&](long long begin, long long end) {
+        for (long long h = begin; h < end; ++h) {
+            if (!ok[h]) continue;
+            const ShapeView s = set.shape(h);
+            bool good = is_valid(s);
+            if (good) radius[h] = bounding_radius(s);
+            if (poses != nullptr) {
+                const double* m = poses + 16 * h;
+                if (!is_rigid_matrix4(m, defaults::rigid_tolerance)) good = false;
+                else pose[h] = Pose::from_matrix4(m);
+            }
+            ok[h] = good ? 1 : 0;
         }
-        ok[h] = good ? 1 : 0;
-    }
+    });
     const int n_threads = resolve_threads(threads, pair_count, defaults::min_pairs_per_thread);
     parallel_for(pair_count, n_threads, [&](long long begin, long long end) {
         for (long long i = begin; i < end; ++i) {

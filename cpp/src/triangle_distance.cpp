@@ -2,19 +2,25 @@
 //
 // Distance: for two triangles that do not intersect, the closest pair of points is attained on
 // an edge of each (9 segment pairs) or at a vertex of one and the interior of the other (6
-// vertex-face pairs); Ericson 2004, 5.1.9. Intersection: sign tests on triple products in the
-// manner of Guigue and Devillers 2003 (edge-against-triangle formulation, which also covers the
-// coplanar and degenerate cases).
+// vertex-face pairs); Ericson 2004, 5.1.9. Intersection: sign tests on orientation determinants
+// in the manner of Guigue and Devillers 2003 (edge-against-triangle formulation, which also
+// covers the coplanar and degenerate cases), every sign exact (predicates.hpp: Shewchuk's
+// filtered predicates with an exact expansion fallback), so the yes/no answer is exact for
+// every finite input; only the witness point is rounded.
 #include "meshcol/triangle.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "predicates.hpp"
+
 namespace meshcol {
 namespace {
 
 inline double clamp01(double x) { return x < 0.0 ? 0.0 : (x > 1.0 ? 1.0 : x); }
+
+using predicates::orient3d_sign;
 
 // Largest component of |n|: the axis dropped when projecting a plane with normal n to 2D.
 inline int dominant_axis(const Vec3& n) {
@@ -35,13 +41,22 @@ inline Vec2 project(const Vec3& p, int drop) {
     }
 }
 
-// Twice the signed area of (a, b, c): > 0 counter-clockwise.
-inline double orient2d(const Vec2& a, const Vec2& b, const Vec2& c) {
+// Exact sign of twice the signed area of (a, b, c): > 0 counter-clockwise.
+inline int orient2d(const Vec2& a, const Vec2& b, const Vec2& c) {
+    return predicates::orient2d_sign(a.x, a.y, b.x, b.y, c.x, c.y);
+}
+
+// The same area in floating point, for witness points only (never for a decision).
+inline double area2d(const Vec2& a, const Vec2& b, const Vec2& c) {
     return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
 }
 
-inline bool same_sign_or_zero(double a, double b, double c) {
-    return (a >= 0.0 && b >= 0.0 && c >= 0.0) || (a <= 0.0 && b <= 0.0 && c <= 0.0);
+inline bool same_sign_or_zero(int a, int b, int c) {
+    return (a >= 0 && b >= 0 && c >= 0) || (a <= 0 && b <= 0 && c <= 0);
+}
+
+inline bool all_strictly_same_side(const int s[3]) {
+    return (s[0] > 0 && s[1] > 0 && s[2] > 0) || (s[0] < 0 && s[1] < 0 && s[2] < 0);
 }
 
 // 2D point in closed triangle (t0, t1, t2) of non-zero area.
@@ -49,17 +64,18 @@ inline bool point_in_triangle_2d(const Vec2& p, const Vec2& t0, const Vec2& t1, 
     return same_sign_or_zero(orient2d(t0, t1, p), orient2d(t1, t2, p), orient2d(t2, t0, p));
 }
 
-// Whether closed 2D segments [p, q] and [a, b] meet; on success writes the parameter along
-// [p, q] of a common point.
+// Whether closed 2D segments [p, q] and [a, b] meet (exact); on success writes the parameter
+// along [p, q] of a common point (up to rounding).
 bool segments_meet_2d(const Vec2& p, const Vec2& q, const Vec2& a, const Vec2& b, double* s) {
-    const double o1 = orient2d(p, q, a), o2 = orient2d(p, q, b);
-    if ((o1 > 0.0 && o2 > 0.0) || (o1 < 0.0 && o2 < 0.0)) return false;
-    const double o3 = orient2d(a, b, p), o4 = orient2d(a, b, q);
-    if ((o3 > 0.0 && o4 > 0.0) || (o3 < 0.0 && o4 < 0.0)) return false;
-    if (o1 == 0.0 && o2 == 0.0) {
-        // Collinear: compare intervals along the longer axis of [p, q] (or of [a, b]).
-        const double dx = std::fabs(q.x - p.x) + std::fabs(b.x - a.x);
-        const double dy = std::fabs(q.y - p.y) + std::fabs(b.y - a.y);
+    const int o1 = orient2d(p, q, a), o2 = orient2d(p, q, b);
+    if (o1 * o2 > 0) return false;
+    const int o3 = orient2d(a, b, p), o4 = orient2d(a, b, q);
+    if (o3 * o4 > 0) return false;
+    if (o1 == 0 && o2 == 0) {
+        // Collinear (or points): compare intervals along the axis of larger spread, where the
+        // common line is not perpendicular (coordinate comparisons are exact).
+        const double dx = std::max({p.x, q.x, a.x, b.x}) - std::min({p.x, q.x, a.x, b.x});
+        const double dy = std::max({p.y, q.y, a.y, b.y}) - std::min({p.y, q.y, a.y, b.y});
         const bool use_x = dx >= dy;
         const double p0 = use_x ? p.x : p.y, p1 = use_x ? q.x : q.y;
         const double a0 = use_x ? a.x : a.y, a1 = use_x ? b.x : b.y;
@@ -69,14 +85,26 @@ bool segments_meet_2d(const Vec2& p, const Vec2& q, const Vec2& a, const Vec2& b
         *s = p1 != p0 ? clamp01((lo - p0) / (p1 - p0)) : 0.0;
         return true;
     }
-    *s = o3 != o4 ? clamp01(o3 / (o3 - o4)) : 0.0;
+    const double a3 = area2d(a, b, p), a4 = area2d(a, b, q);
+    *s = a3 != a4 ? clamp01(a3 / (a3 - a4)) : 0.0;
     return true;
 }
 
-// Segment [p, q] against triangle t, all in the plane of t (normal n, non-zero).
-bool segment_triangle_coplanar(const Vec3& p, const Vec3& q, const Vec3 t[3], const Vec3& n,
+// A coordinate plane on which triangle t projects to a non-degenerate triangle (exactly), or
+// -1 when t is collinear. Tries the dominant axis of its normal first.
+int projection_axis(const Vec3 t[3]) {
+    const int first = dominant_axis(cross(t[1] - t[0], t[2] - t[0]));
+    for (int k = 0; k < 3; ++k) {
+        const int drop = (first + k) % 3;
+        if (orient2d(project(t[0], drop), project(t[1], drop), project(t[2], drop)) != 0) return drop;
+    }
+    return -1;
+}
+
+// Segment [p, q] against triangle t, all in one plane; `drop` is an axis on which t projects
+// to a non-degenerate triangle.
+bool segment_triangle_coplanar(const Vec3& p, const Vec3& q, const Vec3 t[3], int drop,
                                Vec3* witness) {
-    const int drop = dominant_axis(n);
     const Vec2 p2 = project(p, drop), q2 = project(q, drop);
     const Vec2 t0 = project(t[0], drop), t1 = project(t[1], drop), t2 = project(t[2], drop);
     if (point_in_triangle_2d(p2, t0, t1, t2)) {
@@ -94,64 +122,81 @@ bool segment_triangle_coplanar(const Vec3& p, const Vec3& q, const Vec3 t[3], co
     return false;
 }
 
-// Segment [p, q] with plane sides sp, sq (w.r.t. triangle t, normal n) against triangle t.
-bool segment_triangle(const Vec3& p, const Vec3& q, double sp, double sq, const Vec3 t[3],
-                      const Vec3& n, Vec3* witness) {
-    if ((sp > 0.0 && sq > 0.0) || (sp < 0.0 && sq < 0.0)) return false;
-    if (sp == 0.0 && sq == 0.0) return segment_triangle_coplanar(p, q, t, n, witness);
-    // The line pq meets the plane; it passes through the closed triangle iff the three triple
-    // products (signed volumes of pq with each edge) agree in sign.
-    const Vec3 d = q - p;
-    const Vec3 a = t[0] - p, b = t[1] - p, c = t[2] - p;
-    const double s0 = dot(d, cross(a, b)), s1 = dot(d, cross(b, c)), s2 = dot(d, cross(c, a));
+// Segment [p, q] with exact plane sides sp, sq w.r.t. triangle t (non-degenerate, projecting
+// well on `drop`) against triangle t.
+bool segment_triangle(const Vec3& p, const Vec3& q, int sp, int sq, const Vec3 t[3], int drop,
+                      Vec3* witness) {
+    if (sp * sq > 0) return false;
+    if (sp == 0 && sq == 0) return segment_triangle_coplanar(p, q, t, drop, witness);
+    // The segment meets the plane in one point; it lies in the closed triangle iff the line
+    // pq passes through it: the three orientations of pq with the edges agree (Pluecker
+    // coordinates, as Guigue and Devillers 2003), exactly.
+    const int s0 = orient3d_sign(p, q, t[0], t[1]);
+    const int s1 = orient3d_sign(p, q, t[1], t[2]);
+    const int s2 = orient3d_sign(p, q, t[2], t[0]);
     if (!same_sign_or_zero(s0, s1, s2)) return false;
-    if (witness) *witness = p + d * clamp01(sp / (sp - sq));
+    if (witness) {
+        const Vec3 n = cross(t[1] - t[0], t[2] - t[0]);
+        const double dp = dot(p - t[0], n), dq = dot(q - t[0], n);
+        const double s = sp == 0 ? 0.0 : (sq == 0 ? 1.0 : (dp != dq ? clamp01(dp / (dp - dq)) : 0.0));
+        *witness = p + (q - p) * s;
+    }
     return true;
 }
 
-// Triangles a (any) and b (non-degenerate, normal nb) that lie in one plane.
-bool coplanar_triangles_intersect(const Vec3 a[3], const Vec3 b[3], const Vec3& nb,
-                                  Vec3* witness) {
+// Triangles a (any) and b (non-degenerate, projecting well on `drop`) in one plane.
+bool coplanar_triangles_intersect(const Vec3 a[3], const Vec3 b[3], int drop, Vec3* witness) {
     for (int i = 0; i < 3; ++i)
-        if (segment_triangle_coplanar(a[i], a[(i + 1) % 3], b, nb, witness)) return true;
+        if (segment_triangle_coplanar(a[i], a[(i + 1) % 3], b, drop, witness)) return true;
     // No edge of a meets b: they intersect only if b lies inside a.
-    const int drop = dominant_axis(nb);
     const Vec2 a0 = project(a[0], drop), a1 = project(a[1], drop), a2 = project(a[2], drop);
-    if (orient2d(a0, a1, a2) != 0.0 && point_in_triangle_2d(project(b[0], drop), a0, a1, a2)) {
+    if (orient2d(a0, a1, a2) != 0 && point_in_triangle_2d(project(b[0], drop), a0, a1, a2)) {
         if (witness) *witness = b[0];
         return true;
     }
     return false;
 }
 
-// Triangle a against triangle b, b non-degenerate (normal nb != 0).
-bool triangles_intersect_nondegenerate_b(const Vec3 a[3], const Vec3 b[3], const Vec3& na,
-                                         const Vec3& nb, bool a_degenerate, Vec3* witness) {
-    double da[3];
-    for (int i = 0; i < 3; ++i) da[i] = dot(a[i] - b[0], nb);
-    if ((da[0] > 0.0 && da[1] > 0.0 && da[2] > 0.0) || (da[0] < 0.0 && da[1] < 0.0 && da[2] < 0.0))
-        return false;
-    if (da[0] == 0.0 && da[1] == 0.0 && da[2] == 0.0)
-        return coplanar_triangles_intersect(a, b, nb, witness);
-    double db[3] = {0.0, 0.0, 0.0};
+// Triangle a against triangle b, b non-degenerate (projecting well on drop_b; drop_a likewise
+// for a unless a is degenerate).
+bool triangles_intersect_nondegenerate_b(const Vec3 a[3], const Vec3 b[3], int drop_a, int drop_b,
+                                         Vec3* witness) {
+    const bool a_degenerate = drop_a < 0;
+    int da[3];
+    for (int i = 0; i < 3; ++i) da[i] = orient3d_sign(b[0], b[1], b[2], a[i]);
+    if (all_strictly_same_side(da)) return false;
+    if (da[0] == 0 && da[1] == 0 && da[2] == 0)
+        return coplanar_triangles_intersect(a, b, drop_b, witness);
+    int db[3] = {0, 0, 0};
     if (!a_degenerate) {
-        for (int i = 0; i < 3; ++i) db[i] = dot(b[i] - a[0], na);
-        if ((db[0] > 0.0 && db[1] > 0.0 && db[2] > 0.0) ||
-            (db[0] < 0.0 && db[1] < 0.0 && db[2] < 0.0))
-            return false;
+        for (int i = 0; i < 3; ++i) db[i] = orient3d_sign(a[0], a[1], a[2], b[i]);
+        if (all_strictly_same_side(db)) return false;
     }
     // Non-coplanar triangles meet along a segment whose ends lie on edges: some edge of one
     // triangle meets the other.
     for (int i = 0; i < 3; ++i) {
         const int j = (i + 1) % 3;
-        if (segment_triangle(a[i], a[j], da[i], da[j], b, nb, witness)) return true;
+        if (segment_triangle(a[i], a[j], da[i], da[j], b, drop_b, witness)) return true;
     }
     if (a_degenerate) return false;  // a is a segment: its edges were the whole of it
     for (int i = 0; i < 3; ++i) {
         const int j = (i + 1) % 3;
-        if (segment_triangle(b[i], b[j], db[i], db[j], a, na, witness)) return true;
+        if (segment_triangle(b[i], b[j], db[i], db[j], a, drop_a, witness)) return true;
     }
     return false;
+}
+
+// Whether two 3D segments (possibly points) meet, exactly: they must be coplanar, and then
+// they meet iff their projections on all three coordinate planes meet (at least one of those
+// projections is one-to-one on their common plane or line).
+bool segments_meet_3d(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b, Vec3* witness) {
+    if (orient3d_sign(p, q, a, b) != 0) return false;
+    double s = 0.0;
+    for (int drop = 0; drop < 3; ++drop)
+        if (!segments_meet_2d(project(p, drop), project(q, drop), project(a, drop), project(b, drop), &s))
+            return false;
+    if (witness) *witness = segment_closest_points(p, q, a, b).point_a;
+    return true;
 }
 
 }  // namespace
@@ -276,25 +321,34 @@ double triangle_separated_squared_distance(const Vec3 a[3], const Vec3 b[3], Vec
 }
 
 bool triangles_intersect(const Vec3 a[3], const Vec3 b[3], Vec3* witness) {
-    const Vec3 na = cross(a[1] - a[0], a[2] - a[0]);
-    const Vec3 nb = cross(b[1] - b[0], b[2] - b[0]);
-    const bool a_degenerate = !(dot(na, na) > 0.0);
-    const bool b_degenerate = !(dot(nb, nb) > 0.0);
-    if (a_degenerate && b_degenerate) {
-        // Two segments (or points): they meet iff some pair of edges is at distance zero.
+    const int drop_a = projection_axis(a);
+    const int drop_b = projection_axis(b);
+    if (drop_a < 0 && drop_b < 0) {
+        // Two segments (or points): they meet iff some pair of edges meets.
         for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j) {
-                const SegmentClosestPoints s =
-                    segment_closest_points(a[i], a[(i + 1) % 3], b[j], b[(j + 1) % 3]);
-                if (s.squared_distance == 0.0) {
-                    if (witness) *witness = s.point_a;
-                    return true;
-                }
-            }
+            for (int j = 0; j < 3; ++j)
+                if (segments_meet_3d(a[i], a[(i + 1) % 3], b[j], b[(j + 1) % 3], witness)) return true;
         return false;
     }
-    if (b_degenerate) return triangles_intersect_nondegenerate_b(b, a, nb, na, true, witness);
-    return triangles_intersect_nondegenerate_b(a, b, na, nb, a_degenerate, witness);
+    if (drop_b < 0) return triangles_intersect_nondegenerate_b(b, a, drop_b, drop_a, witness);
+    return triangles_intersect_nondegenerate_b(a, b, drop_a, drop_b, witness);
+}
+
+bool segment_crosses_triangle(const Vec3& p, const Vec3& q, const Vec3 t[3], double* parameter) {
+    const int sp = orient3d_sign(t[0], t[1], t[2], p);
+    const int sq = orient3d_sign(t[0], t[1], t[2], q);
+    if (sp * sq > 0 || (sp == 0 && sq == 0)) return false;  // one side, or in the plane
+    if (projection_axis(t) < 0) return false;              // degenerate triangle
+    const int s0 = orient3d_sign(p, q, t[0], t[1]);
+    const int s1 = orient3d_sign(p, q, t[1], t[2]);
+    const int s2 = orient3d_sign(p, q, t[2], t[0]);
+    if (!same_sign_or_zero(s0, s1, s2)) return false;
+    if (parameter) {
+        const Vec3 n = cross(t[1] - t[0], t[2] - t[0]);
+        const double dp = dot(p - t[0], n), dq = dot(q - t[0], n);
+        *parameter = sp == 0 ? 0.0 : (sq == 0 ? 1.0 : (dp != dq ? clamp01(dp / (dp - dq)) : 0.0));
+    }
+    return true;
 }
 
 TriangleDistanceOutput triangle_distance(const Vec3 a[3], const Vec3 b[3]) {
@@ -306,9 +360,10 @@ TriangleDistanceOutput triangle_distance(const Vec3 a[3], const Vec3 b[3]) {
         out.intersecting = true;
         return out;
     }
+    // Disjoint (exactly): a distance below rounding may still come out as 0.
     const double d2 = triangle_separated_squared_distance(a, b, &out.point_a, &out.point_b);
     out.distance = std::sqrt(d2);
-    out.intersecting = d2 == 0.0;
+    out.intersecting = false;
     return out;
 }
 

@@ -5,7 +5,11 @@ Pipeline (arrays end to end; Python loops run over bodies, never over pairs):
 1. Each body becomes convex parts in its local frame: its convex hull (``hull``), its convex
    decomposition (``decomposed``; ``UCX_<body>_NN`` parts in the input are used as given, as
    Unreal does), or its exact primitive. Bodies checked as ``mesh`` keep their hull for the
-   broad phase and for a depth estimate, and are measured on their triangles.
+   broad phase only, and are measured on their triangles: distance, and for pairs whose
+   surfaces touch, cross or nest, the mesh depth (the deepest sampled point of one surface
+   inside the other, a lower bound of the minimum translation distance; never the hulls'
+   depth, which calls a concave resting contact penetrating) and, when the pair penetrates
+   and both meshes are closed, the volume of their intersection (manifold3d).
 2. World AABBs of the parts, reduced per body and inflated by half the clearance band on each
    side, go to sort and sweep: candidate body pairs.
 3. Parts of candidate body pairs go to a second sort and sweep; the convex part pairs to the
@@ -140,7 +144,7 @@ class CheckReport:
         Per candidate body pair, sorted by (body_a, body_b): body_a, body_b, part_a, part_b
         (the parts that come closest, None for a body of one part), status, distance, depth,
         signed_distance, normal, point_a, point_b, convex_part_a, convex_part_b, ignored,
-        violation.
+        violation, query_failed, intersection_volume.
     summary : dict
         Counts, extremes, pass/fail and timings.
     settings : dict
@@ -224,6 +228,7 @@ CSV_COLUMNS = [
     "ignored",
     "violation",
     "query_failed",
+    "intersection_volume",
     "units",
 ]
 
@@ -371,6 +376,7 @@ def check_scene(
     label_b = np.full(k, -1, dtype=np.int64)
     contained = np.zeros(k, dtype=bool)
     failed = np.zeros(k, dtype=bool)
+    intersection_volume = np.full(k, np.nan)
 
     use_mesh = mesh_bodies[ca] | mesh_bodies[cb] if k else np.zeros(0, bool)
 
@@ -429,7 +435,12 @@ def check_scene(
         overlap &= a_in_b | b_in_a
     exact = use_mesh | overlap
     if exact.any():
-        from meshcol.collision.mesh_query import MeshSet, mesh_distance_batch
+        from meshcol.collision.mesh_query import (
+            MeshSet,
+            mesh_distance_batch,
+            mesh_intersection_volume,
+            mesh_penetration_depth_batch,
+        )
 
         involved = np.unique(candidates[exact].ravel())
         local = np.full(n, -1, dtype=np.int64)
@@ -442,12 +453,13 @@ def check_scene(
         contained[idx] = inside
         m = use_mesh[idx]
         im = idx[m]
-        # Mesh bodies: distance and points from the triangles; depth from the hulls (an upper
-        # bound for concave bodies, exact for convex ones) when the surfaces cross.
+        # Mesh bodies: everything from the triangles, never from the hulls (a hull's depth
+        # calls a concave resting contact penetrating). Apart: the exact distance. Crossing,
+        # touching or nested: the mesh depth, a lower bound of the minimum translation
+        # distance (mesh_penetration_depth_batch).
         hit = mres.intersecting[m] | inside[m]
         distance[im] = np.where(hit, 0.0, mres.distance[m])
-        depth[im] = np.where(hit, np.maximum(depth[im], 0.0), 0.0)
-        sd[im] = distance[im] - depth[im]
+        depth[im] = 0.0
         sep = ~hit
         point_a[im[sep]] = mres.point_a[m][sep]
         point_b[im[sep]] = mres.point_b[m][sep]
@@ -455,13 +467,37 @@ def check_scene(
         length = np.linalg.norm(gap, axis=1, keepdims=True)
         with np.errstate(invalid="ignore", divide="ignore"):
             normal[im[sep]] = np.where(length > 0, gap / length, normal[im[sep]])
+        failed[im] = np.isin(mres.status[m], _NO_ANSWER)
+        if hit.any():
+            ih = im[hit]
+            pairs_hit = local[candidates[ih]]
+            dres = mesh_penetration_depth_batch(meshes, poses, pairs_hit, threads=options.threads)
+            deep = dres.depth > 0.0
+            depth[ih] = np.where(np.isfinite(dres.depth), dres.depth, 0.0)
+            point_a[ih[deep]] = dres.point_a[deep]
+            point_b[ih[deep]] = dres.point_b[deep]
+            normal[ih[deep]] = dres.normal[deep]
+            # Touching without depth: the shared point, and the normal of a's face there.
+            touch = ~deep & mres.intersecting[m][hit]
+            shared = mres.point_a[m][hit][touch]
+            point_a[ih[touch]] = shared
+            point_b[ih[touch]] = shared
+            normal[ih[touch]] = _face_normals(
+                meshes, pairs_hit[touch, 0], mres.triangle_a[m][hit][touch], poses
+            )
+            failed[ih] |= dres.status != int(Status.CONVERGED)
+            volume_rows = ih[deep & (depth[ih] > options.tolerance)]
+            if len(volume_rows):
+                intersection_volume[volume_rows] = mesh_intersection_volume(
+                    meshes, poses, local[candidates[volume_rows]]
+                )
+        sd[im] = distance[im] - depth[im]
         part_a[im] = -1
         part_b[im] = -1
         # the parts holding the closest points (hull parts where the surfaces cross)
         tri_a, tri_b = mres.triangle_a[m], mres.triangle_b[m]
         label_a[im] = np.where(tri_a >= 0, shapes.face_labels(ca[im], tri_a), label_a[im])
         label_b[im] = np.where(tri_b >= 0, shapes.face_labels(cb[im], tri_b), label_b[im])
-        failed[im] = np.isin(mres.status[m], _NO_ANSWER)
 
     # Classification.
     tol = options.tolerance
@@ -506,6 +542,7 @@ def check_scene(
         ignored.tolist(),
         violation.tolist(),
         failed.tolist(),
+        _nums(intersection_volume),
     )
     pairs = [
         {
@@ -525,8 +562,9 @@ def check_scene(
             "ignored": ig,
             "violation": vi,
             "query_failed": fa,
+            "intersection_volume": vol,
         }
-        for a, b, s, d, dp, sdv, nv, pa, pb, ia, ib, na, nb, ig, vi, fa in columns
+        for a, b, s, d, dp, sdv, nv, pa, pb, ia, ib, na, nb, ig, vi, fa, vol in columns
     ]
     pairs.sort(key=lambda p: (p["body_a"], p["body_b"]))
 
@@ -693,6 +731,31 @@ def check(
     started = time.perf_counter()
     scene = load_inputs(list(inputs))
     return check_scene(scene, opts, progress=progress, load_seconds=time.perf_counter() - started)
+
+
+def _face_normals(meshes: Any, mesh: np.ndarray, face: np.ndarray, poses: np.ndarray) -> np.ndarray:
+    """World unit normals (n, 3) of face ``face[k]`` of mesh ``mesh[k]`` (NaN when degenerate
+    or when the face is -1)."""
+    out = np.full((len(mesh), 3), np.nan)
+    ok = face >= 0
+    if not ok.any():
+        return out
+    rows = meshes.faces[meshes.face_offsets[mesh[ok]] + face[ok]]
+    corners = meshes.vertices[meshes.vertex_offsets[mesh[ok], None] + rows]
+    e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    local = np.stack(
+        [
+            e1[:, 1] * e2[:, 2] - e1[:, 2] * e2[:, 1],
+            e1[:, 2] * e2[:, 0] - e1[:, 0] * e2[:, 2],
+            e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0],
+        ],
+        axis=1,
+    )
+    world = np.einsum("kij,kj->ki", poses[mesh[ok], :3, :3], local)
+    length = np.linalg.norm(world, axis=1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out[ok] = np.where(length > 0, world / length, np.nan)
+    return out
 
 
 def _nums(values: np.ndarray) -> list[float | None]:

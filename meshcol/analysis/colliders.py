@@ -20,8 +20,8 @@ decomposition are never checked against each other. Under ``decomposed``, every 
 is used as given.
 
 Degenerate geometry follows one rule everywhere: a body or part whose points are flat,
-collinear or a single point (:func:`meshcol.geometry.hull.dimension_of`) is its hull, the
-polygon, segment or point it is, never dropped; under ``decomposed`` (which needs a volume)
+collinear or a single point (:attr:`meshcol.collision.hull.ExactHull.dimension`) is its hull,
+the polygon, segment or point it is, never dropped; under ``decomposed`` (which needs a volume)
 that is said in a warning.
 
 ``check``, ``sweep`` and the exporters all call :func:`build_colliders`, so a body is the same
@@ -39,8 +39,9 @@ from typing import Any
 
 import numpy as np
 
+from meshcol.collision.hull import FLAT_RELATIVE_TOLERANCE, exact_hull
 from meshcol.collision.shapes import ConvexSet
-from meshcol.geometry.hull import FLAT_RELATIVE_TOLERANCE, dimension_of, principal_widths
+from meshcol.errors import InvalidMeshError
 from meshcol.types import Body
 
 __all__ = [
@@ -303,9 +304,12 @@ def _listing(names: list[str]) -> str:
 
 
 def _flat(vertices: np.ndarray) -> bool:
-    """Whether points are flat, collinear or one point (the flatness rule)."""
-    _, _, widths, diagonal = principal_widths(vertices)
-    return dimension_of(widths, diagonal) < 3
+    """Whether points are flat, collinear or one point (the flatness rule); points without a
+    hull (none, NaN) count as flat: their shape is packed as given."""
+    try:
+        return exact_hull(vertices).dimension < 3
+    except InvalidMeshError:
+        return True
 
 
 def _in_owner_frame(owner: Body, parts: list[Body]) -> list[np.ndarray]:
@@ -353,7 +357,7 @@ def triangle_parts(body: Body) -> ConvexSet:
     """Every triangle of a body's mesh as a convex part (local frame).
 
     A triangle with an area is a 3-vertex polytope; one that is collinear or a point by the
-    flatness rule (:data:`meshcol.geometry.hull.FLAT_RELATIVE_TOLERANCE`, relative to its own
+    flatness rule (:data:`meshcol.collision.hull.FLAT_RELATIVE_TOLERANCE`, relative to its own
     size) is packed as the segment or point it is, so no triangle is ever dropped.
     """
     return _triangle_parts(body)[0]

@@ -1,6 +1,6 @@
 """Convex hulls of a scene's bodies, optionally within a vertex budget: ``meshcol hull``.
 
-Each body's hull comes from :func:`meshcol.geometry.hull.convex_hull` on its world vertices
+Each body's hull comes from :func:`meshcol.collision.hull.convex_hull` on its world vertices
 (the scene transform applied, so exported colliders sit in place over the input); the meshes
 are written through :func:`meshcol.io.mesh_write.write_meshes`, after every hull is computed,
 so a bad body stops the run before any file is written.
@@ -43,6 +43,13 @@ CSV_COLUMNS = (
     "max_distance",
     "output",
     "units",
+)
+
+
+#: What an inside-out mesh (negative signed volume) means for its hull.
+INVERTED_NOTE = (
+    "its faces point inward (negative mesh_volume); the hull does not depend on winding and is "
+    "unaffected"
 )
 
 
@@ -184,7 +191,8 @@ def hull(
     out_dir : path, optional
         Write ``out_dir/<body>.obj`` per body (see :func:`out_dir_paths`); created if missing.
     warn : callable, optional
-        Receives one line per flat body as it is found (also kept in ``warnings``).
+        Receives one line per flat or inside-out body as it is found (also kept in
+        ``warnings``).
     reserved : sequence of (label, path)
         Other files the caller will write (``("--report", "r.json")``): no hull may go there.
     progress : callable, optional
@@ -201,18 +209,22 @@ def hull(
     OutputDestinationError
         Several bodies for a single-mesh output format.
     InvalidMeshError
-        A body has no hull (collinear or single-point input, non-finite coordinates).
+        A body has no hull (collinear or single-point input, non-finite coordinates, or
+        coordinates beyond :data:`meshcol.collision.hull.MAX_ABS_COORDINATE`).
     OutputPathError
         A hull file would replace an input mesh or a ``reserved`` file (nothing is written).
 
     Notes
     -----
-    Hulls by :func:`meshcol.geometry.hull.convex_hull` (Quickhull, Barber, Dobkin and
-    Huhdanpaa 1996, through qhull; the budget by outward face growth). Mesh volumes by
-    :func:`meshcol.geometry.topology.closed_volume` (closed meshes only).
+    Hulls by :func:`meshcol.collision.hull.convex_hull` (Quickhull, Barber, Dobkin and
+    Huhdanpaa 1996, in the core; the budget by outward face growth). Mesh volumes by
+    :func:`meshcol.geometry.topology.oriented_volume` (closed meshes only). An inside-out
+    mesh (negative volume, the ``inverted`` finding of ``meshcol inspect``) gets the same hull
+    as the outward one, since a hull depends on the vertices only; its row says so in
+    ``note`` and a warning goes out.
     """
-    from meshcol.geometry.hull import convex_hull
-    from meshcol.geometry.topology import closed_volume
+    from meshcol.collision.hull import convex_hull
+    from meshcol.geometry.topology import oriented_volume
     from meshcol.io.mesh_write import write_meshes
 
     if output is not None and out_dir is not None:
@@ -236,7 +248,7 @@ def hull(
         raise OutputDestinationError(output, len(bodies))
 
     # Compute everything first: a bad body stops the run before any file is written.
-    hulls, warnings = [], []
+    hulls, volumes, warnings = [], [], []
     for done, body in enumerate(bodies, start=1):
         if progress is not None:
             progress(f"hull: {done}/{len(bodies)} bodies")
@@ -250,6 +262,12 @@ def hull(
             if warn is not None:
                 warn(message)
         hulls.append(result)
+        volumes.append(oriented_volume(body.vertices, body.faces))
+        if volumes[-1] is not None and volumes[-1][1] < 0:
+            message = f"{body.source}: body '{body.name}' is inside out: {INVERTED_NOTE}"
+            warnings.append(message)
+            if warn is not None:
+                warn(message)
 
     names = [b.name for b in bodies]
     destinations: list[str | None] = [None] * len(bodies)
@@ -271,19 +289,27 @@ def hull(
         destinations = list(paths)
 
     rows = [
-        _row(body, result, closed_volume(body.vertices, body.faces), destination)
-        for body, result, destination in zip(bodies, hulls, destinations)
+        _row(body, result, volume, destination)
+        for body, result, volume, destination in zip(bodies, hulls, volumes, destinations)
     ]
     return HullReport(
         rows, tuple(hulls), max_vertices, output, out_dir, scene.units, tuple(warnings)
     )
 
 
-def _row(body: Body, result: Any, mesh_volume: float | None, destination: str | None) -> dict:
+def _row(
+    body: Body, result: Any, volume: tuple[float, int] | None, destination: str | None
+) -> dict:
     budget = result.max_vertices is not None
+    mesh_volume = None if volume is None else volume[0]
     ratio = None
     if mesh_volume is not None and result.volume > 0:
         ratio = abs(mesh_volume) / result.volume
+    note = None
+    if result.flat:
+        note = "coplanar input: the hull is a 2-D polygon (volume 0)"
+    elif volume is not None and volume[1] < 0:
+        note = f"inside-out mesh: {INVERTED_NOTE}"
     return {
         "name": body.name,
         "source": body.source,
@@ -296,7 +322,7 @@ def _row(body: Body, result: Any, mesh_volume: float | None, destination: str | 
         "mesh_volume": mesh_volume,
         "volume_ratio": ratio,
         "flat": result.flat,
-        "note": "coplanar input: the hull is a 2-D polygon (volume 0)" if result.flat else None,
+        "note": note,
         "max_vertices": result.max_vertices,
         "exact_hull_vertices": result.exact_vertex_count,
         "exact_hull_faces": result.exact_face_count,

@@ -15,7 +15,12 @@ from typing import Any
 import numpy as np
 
 from meshcol.errors import InvalidMeshError
-from meshcol.geometry.topology import component_count, duplicate_face_count, edge_table
+from meshcol.geometry.topology import (
+    component_count,
+    duplicate_face_count,
+    edge_table,
+    oriented_volume,
+)
 from meshcol.geometry.triangles import degenerate_faces
 from meshcol.io.report import vector_columns
 from meshcol.types import Body
@@ -26,7 +31,6 @@ __all__ = [
     "RULES",
     "inspect",
     "inspect_body",
-    "self_intersecting_pairs",
     "guess_units",
 ]
 
@@ -35,23 +39,19 @@ RULES: tuple[str, ...] = (
     "not-watertight",
     "self-intersecting",
     "inconsistent-winding",
+    "inverted",
     "degenerate-faces",
     "non-manifold",
     "duplicate-faces",
     "multiple-components",
     "suspect-units",
 )
-#: Self-intersection tests treat distances up to this fraction of the diagonal as contact,
-#: not crossing: faces that merely touch (shared vertices, T-junctions) are not reported.
-CROSSING_RELATIVE_TOLERANCE = 1e-10
 #: Largest extent, in units, above which a body is probably in millimetres, not metres
 #: (a 400-unit chair), and above which no unit makes it a plausible single asset.
 MILLIMETRE_EXTENT = 100.0
 IMPLAUSIBLE_EXTENT = 10_000.0
 #: Below this largest extent a body in metres would be under a centimetre.
 TINY_EXTENT = 0.01
-#: Candidate pairs are tested in chunks of this many, to bound memory.
-PAIR_CHUNK = 200_000
 
 
 @dataclass(frozen=True)
@@ -72,7 +72,8 @@ class MeshInspection:
         Every edge shared by two faces is traversed in opposite directions by them.
     volume : float or None
         Signed volume (positive when the faces point outward), only when the mesh is
-        watertight and consistently wound; None otherwise (it would mean nothing).
+        watertight and consistently wound; None otherwise (it would mean nothing). A negative
+        volume is the ``inverted`` finding: the mesh is inside out.
     bounds : (2, 3) list of float
         World-frame axis-aligned bounding box, ``[min, max]``.
     size : (3,) list of float
@@ -85,9 +86,11 @@ class MeshInspection:
     boundary_edges, non_manifold_edges : int
         Edges with one face; edges with more than two faces.
     self_intersecting : bool
-        Two non-adjacent parts of the surface cross each other.
+        Two faces cross: their open triangles share a point (see
+        :mod:`meshcol.collision.self_intersection`; decided exactly). Faces that only touch,
+        along shared vertices and edges or elsewhere, do not cross.
     self_intersecting_pairs : int
-        Pairs of faces that cross.
+        Pairs of faces that cross (degenerate faces left out).
     manifold_status : str
         ``manifold3d.Manifold``'s verdict on the mesh (``NoError``, ``NotManifold``, ...).
     units_guess : str
@@ -153,10 +156,13 @@ def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspectio
     -----
     Topology comes from the edge table: each undirected edge with its face count (1:
     boundary, 2: manifold, > 2: non-manifold) and, for two-face edges, whether the faces
-    traverse it in opposite directions (consistent winding). The volume is the divergence
-    theorem sum over the triangles. manifold3d's ``Manifold(Mesh64)`` status is reported as
-    a second opinion on the topology; manifold3d assumes (and does not check) that its input
-    is free of self-intersections, so those come from :func:`self_intersecting_pairs`.
+    traverse it in opposite directions (consistent winding). The volume and orientation come
+    from :func:`meshcol.geometry.topology.oriented_volume` (divergence theorem); a closed mesh
+    whose faces point inward is ``inverted`` (``meshcol hull`` is unaffected and says so;
+    ``meshcol decompose`` reverses its faces before the engine runs). manifold3d's
+    ``Manifold(Mesh64)`` status is reported as a second opinion on the topology; manifold3d
+    assumes (and does not check) that its input is free of self-intersections, so those come
+    from :func:`meshcol.collision.self_intersection.self_intersecting_pairs`, in the core.
     """
     vertices = np.asarray(body.vertices, dtype=np.float64)
     faces = np.asarray(body.faces, dtype=np.int64)
@@ -178,10 +184,11 @@ def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspectio
     non_manifold = int((counts > 2).sum())
     watertight = boundary == 0 and non_manifold == 0
     winding_consistent = inconsistent == 0
-    volume = None
-    if watertight and winding_consistent:
-        tri = vertices[faces]
-        volume = float(np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum() / 6.0)
+    measured = oriented_volume(vertices, faces) if watertight and winding_consistent else None
+    volume = None if measured is None else measured[0]
+    inverted = measured is not None and measured[1] < 0
+
+    from meshcol.collision.self_intersection import self_intersecting_pairs
 
     degenerate = degenerate_faces(vertices, faces, diagonal)
     pairs = self_intersecting_pairs(vertices, faces, skip=degenerate)
@@ -194,6 +201,8 @@ def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspectio
         findings.append("self-intersecting")
     if not winding_consistent:
         findings.append("inconsistent-winding")
+    if inverted:
+        findings.append("inverted")
     if degenerate.any():
         findings.append("degenerate-faces")
     if non_manifold:
@@ -299,163 +308,6 @@ def _manifold_status(vertices: np.ndarray, faces: np.ndarray) -> str:
     )
     status = manifold3d.Manifold(mesh).status()
     return str(getattr(status, "name", status)).split(".")[-1]
-
-
-# ---------------------------------------------------------------------------------------
-# self-intersection
-
-
-def self_intersecting_pairs(
-    vertices: np.ndarray, faces: np.ndarray, skip: np.ndarray | None = None
-) -> np.ndarray:
-    """Pairs of faces of a mesh that cross each other.
-
-    Parameters
-    ----------
-    vertices : (n, 3) float
-    faces : (m, 3) int
-    skip : (m,) bool, optional
-        Faces to leave out (degenerate faces have no plane to cross).
-
-    Returns
-    -------
-    (k, 2) int64
-        Face index pairs ``i < j``, sorted.
-
-    Notes
-    -----
-    Candidate pairs are the faces whose bounding boxes overlap (the native sort and sweep).
-    Two triangles in different planes cross
-    when they share a segment of positive length (Moller's interval test, Moller 1997):
-    meeting at one point (shared vertex, T-junction) or along their shared edge is not a
-    crossing. Coplanar triangles cross when two edges cross properly or a vertex lies
-    strictly inside the other. Distances within ``CROSSING_RELATIVE_TOLERANCE`` of the
-    diagonal count as contact. Faces on the same three vertices are
-    duplicates (reported apart), not crossings.
-    """
-    vertices = np.asarray(vertices, dtype=np.float64)
-    faces = np.asarray(faces, dtype=np.int64)
-    keep = np.ones(len(faces), bool) if skip is None else ~np.asarray(skip, bool)
-    index = np.nonzero(keep)[0]
-    if len(index) < 2:
-        return np.zeros((0, 2), np.int64)
-    tri = vertices[faces[index]]
-    diagonal = float(np.linalg.norm(np.ptp(tri.reshape(-1, 3), axis=0)))
-    tolerance = CROSSING_RELATIVE_TOLERANCE * diagonal
-    found = []
-    for i, j in _candidate_pairs(tri):
-        fi, fj = faces[index[i]], faces[index[j]]
-        shared = (fi[:, :, None] == fj[:, None, :]).any(axis=2).sum(axis=1)
-        distinct = shared < 3
-        i, j, shared = i[distinct], j[distinct], shared[distinct]
-        hit = _triangles_cross(tri[i], tri[j], shared, tolerance)
-        found.append(np.stack([index[i[hit]], index[j[hit]]], axis=1))
-    pairs = np.concatenate(found) if found else np.zeros((0, 2), np.int64)
-    pairs = np.sort(pairs, axis=1)
-    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
-
-
-def _candidate_pairs(tri: np.ndarray):
-    """Yield chunks (i, j), i < j, of faces whose bounding boxes overlap (touching counts).
-
-    The native sort and sweep (:func:`meshcol.collision.broadphase.sort_and_sweep`) finds
-    them; they are handed out ``PAIR_CHUNK`` at a time to bound the memory of the tests.
-    """
-    from meshcol.collision.broadphase import sort_and_sweep
-
-    pairs = sort_and_sweep(tri.min(axis=1), tri.max(axis=1))
-    for start in range(0, len(pairs), PAIR_CHUNK):
-        chunk = pairs[start : start + PAIR_CHUNK]
-        yield chunk[:, 0], chunk[:, 1]
-
-
-def _triangles_cross(
-    t1: np.ndarray, t2: np.ndarray, shared: np.ndarray, tolerance: float
-) -> np.ndarray:
-    """Crossing test of triangle pairs (k, 3, 3) x (k, 3, 3) sharing ``shared`` vertices.
-
-    Non-coplanar pairs: Moller's interval test (Moller 1997). Both triangles meet the line
-    where their planes cross in an interval; they cross when the intervals overlap over
-    more than ``tolerance``. A single common point (a shared vertex, a vertex on the other
-    triangle, a T-junction) is a touch, and two faces sharing an edge meet only along it.
-    """
-    n1 = np.cross(t1[:, 1] - t1[:, 0], t1[:, 2] - t1[:, 0])
-    n2 = np.cross(t2[:, 1] - t2[:, 0], t2[:, 2] - t2[:, 0])
-    n1 /= np.linalg.norm(n1, axis=1)[:, None]
-    n2 /= np.linalg.norm(n2, axis=1)[:, None]
-    # signed distances of each triangle's vertices to the other's plane, snapped to 0
-    d2 = np.einsum("kij,kj->ki", t2 - t1[:, :1], n1)
-    d1 = np.einsum("kij,kj->ki", t1 - t2[:, :1], n2)
-    d2[np.abs(d2) <= tolerance] = 0.0
-    d1[np.abs(d1) <= tolerance] = 0.0
-    coplanar = (d2 == 0).all(axis=1) & (d1 == 0).all(axis=1)
-    straddle = ~(
-        (d2 > 0).all(axis=1) | (d2 < 0).all(axis=1) | (d1 > 0).all(axis=1) | (d1 < 0).all(axis=1)
-    )
-    hit = np.zeros(len(t1), bool)
-    general = np.nonzero(~coplanar & straddle & (shared < 2))[0]
-    if len(general):
-        line = np.cross(n1[general], n2[general])
-        length = np.linalg.norm(line, axis=1)
-        ok = length > 0
-        general, line = general[ok], line[ok] / length[ok][:, None]
-        lo1, hi1 = _interval(t1[general], d1[general], line)
-        lo2, hi2 = _interval(t2[general], d2[general], line)
-        hit[general] = np.minimum(hi1, hi2) - np.maximum(lo1, lo2) > tolerance
-    if coplanar.any():
-        c = np.nonzero(coplanar)[0]
-        hit[c] = _coplanar_overlap(t1[c], t2[c], n1[c], tolerance)
-    return hit
-
-
-def _interval(tri: np.ndarray, distance: np.ndarray, line: np.ndarray):
-    """Extent along ``line`` of where a triangle meets a plane (its vertices' ``distance``)."""
-    along = np.einsum("kij,kj->ki", tri, line)
-    points = np.full((len(tri), 6), np.nan)
-    for i in range(3):
-        j = (i + 1) % 3
-        on_plane = distance[:, i] == 0
-        points[on_plane, i] = along[on_plane, i]
-        crosses = distance[:, i] * distance[:, j] < 0
-        di, dj = distance[crosses, i], distance[crosses, j]
-        ai, aj = along[crosses, i], along[crosses, j]
-        points[crosses, 3 + i] = ai + (aj - ai) * di / (di - dj)
-    # a straddling triangle always meets the plane, so no row is all NaN
-    return np.nanmin(points, axis=1), np.nanmax(points, axis=1)
-
-
-def _coplanar_overlap(t1, t2, normal, tolerance):
-    """Coplanar triangles overlap: edges cross properly or a vertex is strictly inside."""
-    axis = np.abs(normal).argmax(axis=1)
-    keep = np.array([[1, 2], [0, 2], [0, 1]])[axis]
-    rows = np.arange(len(t1))[:, None, None]
-    a2 = t1[rows, np.arange(3)[None, :, None], keep[:, None, :]]
-    b2 = t2[rows, np.arange(3)[None, :, None], keep[:, None, :]]
-    scale = np.abs(normal[np.arange(len(t1)), axis])  # projection shrinks distances by this
-
-    def orient(a, b, c):
-        return (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
-
-    def strict(a, b, c):
-        """Sign of orient(a, b, c), 0 within tolerance of the line ab."""
-        value = orient(a, b, c)
-        limit = tolerance * scale * np.linalg.norm(b - a, axis=1)
-        return np.where(value > limit, 1, np.where(value < -limit, -1, 0))
-
-    hit = np.zeros(len(t1), bool)
-    for e in range(3):
-        p, q = a2[:, e], a2[:, (e + 1) % 3]
-        for f in range(3):
-            r, s = b2[:, f], b2[:, (f + 1) % 3]
-            hit |= (strict(p, q, r) * strict(p, q, s) < 0) & (strict(r, s, p) * strict(r, s, q) < 0)
-    for inner, outer in ((a2, b2), (b2, a2)):
-        winding = np.sign(orient(outer[:, 0], outer[:, 1], outer[:, 2]))
-        for v in range(3):
-            inside = np.ones(len(t1), bool)
-            for e in range(3):
-                inside &= strict(outer[:, e], outer[:, (e + 1) % 3], inner[:, v]) * winding > 0
-            hit |= inside
-    return hit
 
 
 # ---------------------------------------------------------------------------------------------

@@ -61,6 +61,11 @@ def inspect(
     edges (more than two faces), self-intersections (pairs of crossing faces), manifold3d's
     status, and a units guess with its reason (a chair 400 units tall is millimetres).
 
+    Faces cross when their open triangles share a point, decided exactly (no tolerance):
+    faces that only touch (a shared vertex or edge, a T-junction) do not. A closed mesh with
+    a negative volume is inverted (inside out): meshcol hull is unaffected (a hull has no
+    winding) and notes it; meshcol decompose reverses the faces before the engine runs.
+
     Findings are named as the --fail-on rules; a run exits 1 when a body has a finding
     listed in --fail-on (after writing the report), 0 otherwise, 2 on unusable input. A batch
     keeps going: a file that cannot be read is an entry of the report's "errors" and a

@@ -1,22 +1,21 @@
 """Convex shapes and the packed :class:`ConvexSet` the native narrow phase runs on.
 
 A shape is a primitive (:class:`Sphere`, :class:`Box`, :class:`Capsule`, :class:`Cylinder`,
-exact) or a polytope, the convex hull of points (:func:`meshcol.geometry.hull.exact_hull`).
+exact) or a polytope, the convex hull of points (:func:`meshcol.collision.hull.exact_hull`;
+:class:`ConvexSet` packs all its polytopes in one native call, :func:`~meshcol.collision.hull.pack_hulls`).
 Shapes live in their local frames; queries take one rigid world-from-local pose per shape.
 """
 
 from __future__ import annotations
 
 import enum
-from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
 from meshcol.collision.arrays import as_points, as_poses
-from meshcol.geometry.hull import exact_hull
-from meshcol.geometry.topology import unique_rows
+from meshcol.collision.hull import PackedHulls, pack_hulls
 from meshcol.types import Body, Box, Capsule, Cylinder, Sphere
 
 __all__ = [
@@ -27,7 +26,6 @@ __all__ = [
     "Cylinder",
     "ConvexSet",
     "as_convex_set",
-    "pack_shape",
 ]
 
 
@@ -45,93 +43,10 @@ class ShapeKind(enum.IntEnum):
     CYLINDER = 4  #: params[0] radius, params[1] half length along local z
 
 
-@dataclass
-class _Packed:
-    """One shape before packing: hull vertices and the data the core uses."""
-
-    kind: int
-    params: np.ndarray  # (4,)
-    vertices: np.ndarray  # (n, 3)
-    adjacency: list[np.ndarray]  # per vertex: local neighbour indices
-    faces: np.ndarray  # (f, 3) unit outward normals
-    edges: np.ndarray  # (e, 3) unit edge directions (one per parallel class)
+_PRIMITIVES = (Sphere, Box, Capsule, Cylinder)
 
 
-_EMPTY3 = np.zeros((0, 3))
-
-
-def _unique_directions(d: np.ndarray, signed: bool) -> np.ndarray:
-    """Unit directions, one per (anti)parallel class, rounded to 12 digits for grouping."""
-    if len(d) == 0:
-        return _EMPTY3
-    d = d / np.linalg.norm(d, axis=1)[:, None]
-    if not signed:
-        # Canonical sign: the first component that is clearly non-zero is positive.
-        key = np.where(np.abs(d) > 1e-12, d, 0.0)
-        first = np.argmax(key != 0.0, axis=1)
-        sign = np.sign(key[np.arange(len(d)), first])
-        d = d * np.where(sign == 0.0, 1.0, sign)[:, None]
-    keys = np.round(d, 12)
-    # First occurrence of each distinct key, in input order (np.unique(axis=0,
-    # return_index=True) gives the same, far slower on these small arrays).
-    order = np.lexsort(keys.T[::-1])
-    ordered = keys[order]
-    start = np.ones(len(order), dtype=bool)
-    start[1:] = (ordered[1:] != ordered[:-1]).any(axis=1)
-    return np.ascontiguousarray(d[np.sort(order[start])])
-
-
-def _adjacency_from_edges(n: int, edges: np.ndarray) -> list[np.ndarray]:
-    edges, _ = unique_rows(np.sort(edges, axis=1))
-    both = np.concatenate([edges, edges[:, ::-1]])
-    order = np.lexsort((both[:, 1], both[:, 0]))
-    both = both[order]
-    counts = np.bincount(both[:, 0], minlength=n)
-    lists = np.split(both[:, 1].astype(np.int32), np.cumsum(counts)[:-1])
-    # Padded with the vertex itself to a multiple of four: the climb's loop over a vertex's
-    # neighbours then has few distinct trip counts, which the branch predictor learns.
-    return [np.concatenate([a, np.full(-len(a) % 4, i, np.int32)]) for i, a in enumerate(lists)]
-
-
-def _pack_polytope(points: Any) -> _Packed:
-    """Hull vertices, adjacency and SAT features of a point set."""
-    pts = np.asarray(points, dtype=np.float64)
-    if pts.ndim != 2 or pts.shape[1] != 3:
-        raise ValueError(f"vertices must be (n, 3), got {pts.shape}")
-    params = np.zeros(4)
-    if len(pts) == 0 or not np.all(np.isfinite(pts)):
-        # Kept as given: the core reports INVALID_INPUT for every pair that uses it.
-        return _Packed(0, params, np.ascontiguousarray(pts), [], _EMPTY3, _EMPTY3)
-    hull = exact_hull(pts)
-    verts = hull.vertices
-    if hull.dimension == 0:
-        return _Packed(0, params, verts, [np.zeros(0, np.int32)], _EMPTY3, _EMPTY3)
-    if hull.dimension == 1:
-        adj = [np.array([1], np.int32), np.array([0], np.int32)]
-        edges = _unique_directions(verts[1:] - verts[:1], False)
-        return _Packed(0, params, verts, adj, _EMPTY3, edges)
-    if hull.dimension == 2:
-        n = len(verts)
-        loop = np.stack([np.arange(n), (np.arange(n) + 1) % n], axis=1)
-        faces = np.stack([hull.normal, -hull.normal])
-        edges = _unique_directions(verts[loop[:, 1]] - verts[loop[:, 0]], False)
-        return _Packed(0, params, verts, _adjacency_from_edges(n, loop), faces, edges)
-    tri = hull.faces
-    planes = np.round(hull.equations[:, :3], 12)
-    # Edges of the triangulation (all of them drive hill climbing); those between facets of
-    # different planes are the polytope's true edges (SAT).
-    tri_edges, real = [], []
-    for j in range(3):
-        tri_edges.append(tri[:, [(j + 1) % 3, (j + 2) % 3]])
-        real.append(np.any(planes != planes[hull.neighbors[:, j]], axis=1))
-    all_edges = np.concatenate(tri_edges)
-    sat_edges = all_edges[np.concatenate(real)]
-    faces = _unique_directions(hull.equations[:, :3], True)
-    edges = _unique_directions(verts[sat_edges[:, 1]] - verts[sat_edges[:, 0]], False)
-    return _Packed(0, params, verts, _adjacency_from_edges(len(verts), all_edges), faces, edges)
-
-
-def _pack_primitive(shape: Any) -> _Packed:
+def _primitive(shape: Any) -> tuple[int, np.ndarray]:
     params = np.zeros(4)
     if isinstance(shape, Sphere):
         kind, params[0] = ShapeKind.SPHERE, shape.radius
@@ -143,22 +58,19 @@ def _pack_primitive(shape: Any) -> _Packed:
         kind, params[:2] = ShapeKind.CYLINDER, (shape.radius, shape.length / 2.0)
     else:  # pragma: no cover - callers dispatch
         raise TypeError(type(shape).__name__)
-    return _Packed(int(kind), params, _EMPTY3, [], _EMPTY3, _EMPTY3)
+    return int(kind), params
 
 
-_PRIMITIVES = (Sphere, Box, Capsule, Cylinder)
-
-
-def pack_shape(shape: Any, name: str) -> _Packed:
-    """Packs a primitive, a Body, a trimesh mesh or an (n, 3) array."""
+def _item(shape: Any, name: str) -> tuple[int, np.ndarray, np.ndarray | None]:
+    """(kind, params, points or None) of a primitive, a Body, a trimesh mesh or an (n, 3) array."""
     if isinstance(shape, _PRIMITIVES):
-        return _pack_primitive(shape)
+        return (*_primitive(shape), None)
     if isinstance(shape, Body):
         if shape.primitive is not None:
-            return _pack_primitive(shape.primitive)
-        return _pack_polytope(shape.vertices)
+            return (*_primitive(shape.primitive), None)
+        return 0, np.zeros(4), as_points(shape.vertices, name)
     if hasattr(shape, "vertices") and hasattr(shape, "faces"):  # trimesh.Trimesh and alike
-        return _pack_polytope(np.asarray(shape.vertices))
+        return 0, np.zeros(4), as_points(np.asarray(shape.vertices), name)
     try:
         arr = np.asarray(shape, dtype=np.float64)
     except (TypeError, ValueError):
@@ -168,7 +80,7 @@ def pack_shape(shape: Any, name: str) -> _Packed:
         ) from None
     if arr.ndim != 2 or arr.shape[1] != 3:
         raise ValueError(f"{name} must be (n, 3), got {arr.shape}")
-    return _pack_polytope(arr)
+    return 0, np.zeros(4), arr
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:
@@ -200,14 +112,20 @@ class ConvexSet:
         Outward unit face normals (one per plane) of each polytope, for exact SAT.
     edge_offsets : (H + 1,) int64, edge_directions : (E, 3) float64
         Unit edge directions (one per parallel class) of each polytope, for exact SAT.
+    hull_status : (H,) int8
+        :class:`meshcol.collision.hull.HullStatus` of each polytope's hull (OK, FLAT,
+        COLLINEAR, SINGLE_POINT, or why it has none); 0 (OK) for primitives and for sets
+        built from explicit arrays.
 
     Notes
     -----
     Build with :meth:`from_vertices`, :meth:`from_shapes`, :meth:`from_meshes` or
-    :meth:`concatenate`. Polytope vertices are reduced to the convex hull's vertices
-    (qhull); flat inputs (a point, a segment, a polygon) are valid shapes. A shape with
-    NaN/inf coordinates or no vertices is kept: queries report ``Status.INVALID_INPUT`` for
-    its pairs.
+    :meth:`concatenate`. Polytope vertices are reduced to the convex hull's vertices (the
+    core's Quickhull, every shape of the set in one call, threaded); flat inputs (a point, a
+    segment, a polygon) are valid shapes. A shape with no vertices or NaN/inf coordinates is
+    kept as given: queries report ``Status.INVALID_INPUT`` for its pairs. One with coordinates
+    beyond :data:`meshcol.collision.hull.MAX_ABS_COORDINATE` (``hull_status`` OVERFLOW) is
+    kept as given too, without adjacency or SAT features: queries scan its points.
     """
 
     _FIELDS = (
@@ -233,12 +151,15 @@ class ConvexSet:
     face_normals: np.ndarray
     edge_offsets: np.ndarray
     edge_directions: np.ndarray
+    hull_status: np.ndarray
 
-    def __init__(self, **arrays: np.ndarray) -> None:
+    def __init__(self, *, hull_status: np.ndarray | None = None, **arrays: np.ndarray) -> None:
         from meshcol._native import core
 
         for name in self._FIELDS:
             setattr(self, name, _readonly(arrays[name]))
+        status = np.zeros(len(self.kinds), np.int8) if hull_status is None else hull_status
+        self.hull_status = _readonly(np.asarray(status, dtype=np.int8))
         self._core = core.PackedConvexSet(
             self.vertices,
             self.offsets,
@@ -259,29 +180,46 @@ class ConvexSet:
         return f"ConvexSet({len(self)} shapes, {len(self.vertices)} vertices)"
 
     @classmethod
-    def _from_packed(cls, packed: Sequence[_Packed]) -> ConvexSet:
-        def offsets(counts: Iterable[int]) -> np.ndarray:
-            return np.concatenate([[0], np.cumsum(list(counts), dtype=np.int64)]).astype(np.int64)
+    def _from_items(cls, items: Sequence[tuple[int, np.ndarray, np.ndarray | None]]) -> ConvexSet:
+        """Packs (kind, params, points or None) items: every polytope's hull in one native
+        call, primitives as their parameters."""
+        polytopes = [i for i, item in enumerate(items) if item[2] is not None]
+        return cls._assemble(
+            np.array([item[0] for item in items], dtype=np.int8),
+            np.array([item[1] for item in items], dtype=np.float64).reshape(-1, 4),
+            np.asarray(polytopes, dtype=np.int64),
+            pack_hulls([p for _, _, p in items if p is not None]),
+        )
 
-        def stack(items: list[np.ndarray]) -> np.ndarray:
-            return np.concatenate(items).astype(np.float64) if items else _EMPTY3.copy()
+    @classmethod
+    def _assemble(
+        cls, kinds: np.ndarray, params: np.ndarray, polytopes: np.ndarray, packed: PackedHulls
+    ) -> ConvexSet:
+        """A set of ``len(kinds)`` shapes whose polytopes (at rows ``polytopes``) are packed."""
+        h = len(kinds)
 
-        adjacency_lists = [
-            (a if len(a) else [np.zeros(0, np.int32)] * len(p.vertices))
-            for p, a in ((p, p.adjacency) for p in packed)
-        ]
-        flat = [x for lst in adjacency_lists for x in lst]
+        def spread(offsets: np.ndarray) -> np.ndarray:
+            # primitives own no rows: the polytopes' blocks, in order, with empty ones between
+            counts = np.zeros(h, dtype=np.int64)
+            counts[polytopes] = np.diff(offsets)
+            out = np.zeros(h + 1, dtype=np.int64)
+            np.cumsum(counts, out=out[1:])
+            return out
+
+        status = np.zeros(h, dtype=np.int8)
+        status[polytopes] = packed.status
         return cls(
-            vertices=stack([p.vertices.reshape(-1, 3) for p in packed]),
-            offsets=offsets(len(p.vertices) for p in packed),
-            kinds=np.array([p.kind for p in packed], dtype=np.int8),
-            params=np.array([p.params for p in packed], dtype=np.float64).reshape(-1, 4),
-            adjacency_offsets=offsets(len(x) for x in flat),
-            adjacency=(np.concatenate(flat).astype(np.int32) if flat else np.zeros(0, np.int32)),
-            face_offsets=offsets(len(p.faces) for p in packed),
-            face_normals=stack([p.faces for p in packed]),
-            edge_offsets=offsets(len(p.edges) for p in packed),
-            edge_directions=stack([p.edges for p in packed]),
+            vertices=packed.vertices,
+            offsets=spread(packed.offsets),
+            kinds=kinds,
+            params=params,
+            adjacency_offsets=packed.adjacency_offsets,
+            adjacency=packed.adjacency,
+            face_offsets=spread(packed.face_offsets),
+            face_normals=packed.face_normals,
+            edge_offsets=spread(packed.edge_offsets),
+            edge_directions=packed.edge_directions,
+            hull_status=status,
         )
 
     @classmethod
@@ -290,12 +228,19 @@ class ConvexSet:
 
         Parameters
         ----------
-        vertex_lists : sequence of (n_i, 3) float
+        vertex_lists : sequence of (n_i, 3) float, or (H, n, 3) float
             Points of each shape in its local frame (a point, segment and polygon are
             valid).
         """
-        return cls._from_packed(
-            [_pack_polytope(as_points(v, f"vertex_lists[{i}]")) for i, v in enumerate(vertex_lists)]
+        if isinstance(vertex_lists, np.ndarray) and vertex_lists.ndim == 3:
+            if vertex_lists.shape[2] != 3:
+                raise ValueError(f"vertex_lists must be (H, n, 3), got {vertex_lists.shape}")
+            points: Any = vertex_lists
+        else:
+            points = [as_points(v, f"vertex_lists[{i}]") for i, v in enumerate(vertex_lists)]
+        h = len(points)
+        return cls._assemble(
+            np.zeros(h, np.int8), np.zeros((h, 4)), np.arange(h, dtype=np.int64), pack_hulls(points)
         )
 
     @classmethod
@@ -304,19 +249,19 @@ class ConvexSet:
         :class:`meshcol.types.Body` objects, meshes and (n, 3) point arrays (convex hulls), in
         any mix; ``names`` (default ``shapes[i]``) name them in errors."""
         labels = names if names is not None else [f"shapes[{i}]" for i in range(len(shapes))]
-        return cls._from_packed([pack_shape(s, n) for s, n in zip(shapes, labels)])
+        return cls._from_items([_item(s, n) for s, n in zip(shapes, labels)])
 
     @classmethod
     def from_meshes(cls, meshes: Sequence[Any]) -> ConvexSet:
         """Convex hulls of ``trimesh.Trimesh`` meshes or :class:`meshcol.types.Body`
         objects, in their local frames (a Body with a primitive uses the primitive)."""
-        return cls._from_packed([pack_shape(m, f"meshes[{i}]") for i, m in enumerate(meshes)])
+        return cls._from_items([_item(m, f"meshes[{i}]") for i, m in enumerate(meshes)])
 
     @classmethod
     def concatenate(cls, *sets: ConvexSet) -> ConvexSet:
         """One set holding the shapes of ``sets`` in order."""
         if not sets:
-            return cls._from_packed([])
+            return cls._from_items([])
 
         def offsets(name: str, sizes: str) -> np.ndarray:
             parts, base = [np.zeros(1, np.int64)], 0
@@ -337,6 +282,7 @@ class ConvexSet:
             face_normals=np.concatenate([s.face_normals for s in sets]),
             edge_offsets=offsets("edge_offsets", "edge_directions"),
             edge_directions=np.concatenate([s.edge_directions for s in sets]),
+            hull_status=np.concatenate([s.hull_status for s in sets]),
         )
 
     def take(self, indices: Any) -> ConvexSet:
@@ -382,6 +328,7 @@ class ConvexSet:
             face_normals=self.face_normals[face_rows],
             edge_offsets=edge_offsets,
             edge_directions=self.edge_directions[edge_rows],
+            hull_status=self.hull_status[idx],
         )
 
     def aabbs(self, poses: Any = None, *, threads: int = 0) -> tuple[np.ndarray, np.ndarray]:

@@ -10,11 +10,18 @@ from typing import Any
 
 import numpy as np
 
+from meshcol.collision.hull import convex_hull, exact_hull
 from meshcol.errors import InvalidMeshError
-from meshcol.geometry.hull import convex_hull, dimension_of, exact_hull, principal_widths
 from meshcol.geometry.topology import unique_rows
 
-__all__ = ["CACHE_FORMAT", "as_mesh_arrays", "cache_key", "canonical_geometry", "canonical_part"]
+__all__ = [
+    "CACHE_FORMAT",
+    "as_mesh_arrays",
+    "cache_key",
+    "canonical_faces",
+    "canonical_geometry",
+    "canonical_part",
+]
 
 
 # Bump when the cache entry layout or the canonicalisation of inputs or parts changes.
@@ -76,22 +83,28 @@ def canonical_geometry(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndar
     f = f[(f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 0] != f[:, 2])]
     if len(f) == 0:
         raise InvalidMeshError("mesh has no faces with three distinct vertices")
-    shift = np.argmin(f, axis=1)
-    rows = np.arange(len(f))[:, None]
-    f = f[rows, (shift[:, None] + np.arange(3)) % 3]
-    f, _ = unique_rows(f)
+    f = canonical_faces(f)
     # Vertices only referenced by dropped triangles go too.
     used = np.unique(f)
     if len(used) != len(unique):
         remap = np.full(len(unique), -1, dtype=np.int64)
         remap[used] = np.arange(len(used))
         unique, f = unique[used], remap[f]
-    _, _, widths, diagonal = principal_widths(unique)
-    if len(unique) < 4 or dimension_of(widths, diagonal) < 3:
+    if len(unique) < 4 or exact_hull(unique).dimension < 3:
         raise InvalidMeshError(
             "mesh is flat (all vertices lie in one plane): it encloses no volume"
         )
     return np.ascontiguousarray(unique), np.ascontiguousarray(f)
+
+
+def canonical_faces(faces: np.ndarray) -> np.ndarray:
+    """Triangles each rotated to start at its smallest index (winding kept), duplicates
+    removed, sorted lexicographically: (l, 3) int64."""
+    faces = np.asarray(faces, dtype=np.int64)
+    shift = np.argmin(faces, axis=1)
+    rows = np.arange(len(faces))[:, None]
+    rotated, _ = unique_rows(faces[rows, (shift[:, None] + np.arange(3)) % 3])
+    return rotated
 
 
 def cache_key(
@@ -116,9 +129,9 @@ def canonical_part(
 ) -> tuple[np.ndarray, np.ndarray, float, bool] | None:
     """(vertices, faces, volume, reduced) of the hull of ``points``, or None when it is flat.
 
-    The hull is :func:`meshcol.geometry.hull.exact_hull` (vertices in lexicographic order);
+    The hull is :func:`meshcol.collision.hull.exact_hull` (vertices in lexicographic order);
     past ``budget`` vertices, the enclosing budgeted hull
-    (:func:`meshcol.geometry.hull.convex_hull`), and ``reduced`` is True. Each triangle starts
+    (:func:`meshcol.collision.hull.convex_hull`), and ``reduced`` is True. Each triangle starts
     at its smallest index (winding kept) and the triangles are sorted, so equal point sets give
     equal parts.
     """

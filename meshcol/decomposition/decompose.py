@@ -25,6 +25,7 @@ from meshcol.decomposition import cache
 from meshcol.decomposition.canonical import (
     as_mesh_arrays,
     cache_key,
+    canonical_faces,
     canonical_geometry,
     canonical_part,
 )
@@ -32,7 +33,7 @@ from meshcol.decomposition.engines import engine_version, resolve_params, run_en
 from meshcol.decomposition.fidelity import DEFAULT_SAMPLES, coverage_tolerance, fidelity
 from meshcol.decomposition.result import Decomposition, Fidelity
 from meshcol.errors import InvalidMeshError
-from meshcol.geometry.topology import is_closed_manifold
+from meshcol.geometry.topology import is_closed_manifold, orient_outward
 
 __all__ = ["cached_decomposition", "decompose"]
 
@@ -83,7 +84,7 @@ def decompose(
     threshold, max_hulls, max_vertices, preprocess, resolution, seed, engine_options
         See :func:`resolve_params`. ``max_vertices`` is enforced on every part: a part whose
         hull has more vertices is replaced by the budgeted hull of
-        :func:`meshcol.geometry.hull.convex_hull`, which still encloses the part.
+        :func:`meshcol.collision.hull.convex_hull`, which still encloses the part.
     metrics : bool
         Compute :class:`Fidelity` metrics (stored in the cache with the parts).
     samples : int
@@ -115,7 +116,10 @@ def decompose(
     Notes
     -----
     Determinism: the engine runs on the canonical geometry (:func:`canonical_geometry`) with a
-    fixed seed, and parts are canonicalised and sorted, so equal inputs give equal parts.
+    fixed seed, and parts are canonicalised and sorted, so equal inputs give equal parts. A
+    closed input wound inside out (negative volume) is decomposed with its faces reversed
+    (:func:`meshcol.geometry.topology.orient_outward`), so it gets the parts and metrics of the
+    outward mesh, and a note says so.
     CoACD: Wei et al., "Approximate convex decomposition for 3D meshes with collision-aware
     concavity and tree search", SIGGRAPH 2022.
     """
@@ -134,6 +138,12 @@ def decompose(
     )
     version = engine_version(engine)
     key = cache_key(vertices, faces, engine, version, params)
+    # An inside-out input is the same solid: the engine and the metrics get it outward (CoACD
+    # decomposes an inverted mesh badly); the key keeps the input's winding, so the note
+    # stored with the entry is true of every input that finds it.
+    faces, flipped = orient_outward(vertices, faces)
+    if flipped:
+        faces = canonical_faces(faces)  # exactly the outward mesh's canonical faces
     tol = coverage_tolerance(vertices, tolerance)
     if use_cache:
         hit = cache.load(key, cache_dir)
@@ -176,6 +186,8 @@ def decompose(
     else:
         truncated = 0
     notes = []
+    if flipped:
+        notes.append("input is inside out (negative volume): decomposed with its faces reversed")
     repaired = engine == "coacd" and params["preprocess_mode"] == "on" and not closed
     if repaired:
         notes.append(

@@ -1,5 +1,5 @@
-"""Geometry on plain arrays: convex hulls, mesh topology, triangles.
+"""Geometry on plain arrays: mesh topology, triangles.
 
-Pure numpy (and scipy's qhull); nothing here imports the native core, so every layer above
-can use it.
+Pure numpy; nothing here imports the native core, so every layer above can use it. Convex
+hulls run in the core: :mod:`meshcol.collision.hull`.
 """

@@ -18,6 +18,10 @@ constexpr long long min_shapes_per_thread = 256;
 /// calling thread (one point visits a few leaves, a fraction of a mesh pair's work).
 constexpr long long min_points_per_thread = 64;
 
+/// Exact triangle-pair crossing tests (self-intersections): fewer pairs than this per thread
+/// run on the calling thread (a pair costs tens of nanoseconds, a thread far more).
+constexpr long long triangle_min_pairs_per_thread = 4096;
+
 /// Polytopes with more vertices than this use hill climbing on their hull adjacency (with a
 /// warm start) for support points; smaller ones scan every vertex.
 constexpr int hill_climbing_min_vertices = 32;
@@ -146,5 +150,35 @@ constexpr long long mesh_min_pairs_per_thread = 4;
 /// A point is inside a closed mesh when |generalized winding number| >= this (Jacobson et al.
 /// 2013): 1 inside, 0 outside, fractional near holes in the surface.
 constexpr double winding_number_inside = 0.5;
+
+/// Mesh penetration depth: most triangle visits spent on winding numbers for one pair (about
+/// a second of work). A pair that reaches it is MAX_ITERATIONS with the depth of the points
+/// decided so far (still a lower bound of the minimum translation distance).
+constexpr long long mesh_depth_max_work = 200000000;
+
+/// The flatness rule: points are flat (coplanar), collinear or one point when their width
+/// across their best-fit plane (line) is at most this fraction of their bounding-box
+/// diagonal (mirrored by `meshcol.collision.hull.FLAT_RELATIVE_TOLERANCE`).
+constexpr double flat_relative_tolerance = 1e-9;
+
+/// Quickhull's plane thickness, times the largest absolute coordinate: a point closer than
+/// that to a face's plane is on it (about 45 ulps, the rounding of a plane distance; qhull's
+/// coplanar tolerance is of the same order).
+constexpr double hull_relative_tolerance = 1e-14;
+
+/// Hulls of coordinates beyond this magnitude are refused (status OVERFLOW): their volumes
+/// (products of three coordinates) and face normals' lengths would overflow doubles.
+constexpr double hull_max_abs_coordinate = 1e100;
+
+/// Quickhull reruns on the extreme vertices when a vertex turned out to lie on an edge or in
+/// a face of its hull (coplanar ties); at most this many times.
+constexpr int hull_max_reruns = 3;
+
+/// A rerun checks that each vertex it leaves out is still inside (a point-plane test against
+/// every face): it runs only while that costs at most this many tests.
+constexpr double hull_max_rerun_work = 5e7;
+
+/// Shapes per thread below which hull packing stays on the calling thread.
+constexpr long long hull_min_shapes_per_thread = 16;
 
 }  // namespace meshcol::defaults

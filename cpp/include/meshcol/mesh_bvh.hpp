@@ -37,10 +37,16 @@ public:
 
     /// Finite vertices and at least one face.
     bool valid() const { return !nodes_.empty(); }
+    /// Every edge (between distinct vertex indices) is shared by exactly two faces that
+    /// traverse it in opposite directions: a closed, consistently wound surface, whose winding
+    /// number is an integer off the surface (as geometry.topology.is_closed_manifold).
+    bool closed() const { return closed_; }
     const std::vector<BvhNode>& nodes() const { return nodes_; }
     std::int32_t triangle_count() const { return static_cast<std::int32_t>(face_index_.size()); }
     /// The three corners of triangle `i` (leaf order), local frame.
     const Vec3* triangle(std::int32_t i) const { return &corners_[3 * static_cast<size_t>(i)]; }
+    /// The vertices used by at least one face, each once, local frame (input order).
+    const std::vector<Vec3>& vertices() const { return vertices_; }
     /// The input face index of triangle `i` (leaf order).
     std::int64_t face_index(std::int32_t i) const { return face_index_[static_cast<size_t>(i)]; }
 
@@ -52,6 +58,8 @@ public:
 private:
     std::vector<BvhNode> nodes_;
     std::vector<Vec3> corners_;            ///< 3 per triangle, leaf order
+    std::vector<Vec3> vertices_;           ///< vertices referenced by a face, input order
+    bool closed_ = false;
     std::vector<std::int64_t> face_index_;  ///< leaf order -> input face
 };
 

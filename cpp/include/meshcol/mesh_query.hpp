@@ -1,6 +1,7 @@
 #pragma once
 /// Exact queries between two posed triangle meshes: minimum distance with closest points,
-/// intersection, and containment (one mesh inside the other).
+/// intersection, containment (one mesh inside the other), and a penetration depth that never
+/// exceeds the minimum translation distance.
 
 #include <cstdint>
 #include <limits>
@@ -50,6 +51,37 @@ bool mesh_pair_in_range(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b, 
 /// when the surfaces do not intersect, tests containment with the generalized winding number.
 /// The caller checks that poses are rigid.
 MeshDistanceOutput mesh_distance(const MeshDistanceInput& input);
+
+/// Result of `mesh_penetration_depth`.
+struct MeshDepthOutput {
+    /// >= 0: the largest distance, to the other surface, of a sampled point of one mesh that
+    /// lies inside the other (|winding number| >= defaults::winding_number_inside); 0 when no
+    /// sampled point lies strictly inside. For closed meshes a lower bound of the minimum
+    /// translation distance that separates them: a translation shorter than it leaves that
+    /// point inside. NaN when invalid.
+    double depth = 0.0;
+    Vec3 point_a;  ///< world: the deepest point when it is a's, else its closest point on a
+    Vec3 point_b;  ///< world: the deepest point when it is b's, else its closest point on b
+    /// World unit vector from a towards b along which b leaves the deepest point behind
+    /// (point_b - point_a = -depth * normal); NaN when depth is 0. A hint, not a guarantee
+    /// that moving b by depth along it separates a non-convex pair.
+    Vec3 normal;
+    int deepest_mesh = -1;  ///< 0: the deepest point is a's (inside b); 1: b's; -1: none
+    std::int64_t points_tested = 0;  ///< winding numbers evaluated
+    Status status = Status::NOT_RUN;  ///< CONVERGED, MAX_ITERATIONS (work cap), INVALID_INPUT
+};
+
+/// Penetration depth of two posed meshes, as a lower bound of the minimum translation
+/// distance (the depth of `MeshDepthOutput`). The sampled points of each mesh are its vertices
+/// and, on every edge of a triangle that crosses the other surface, the midpoints of the
+/// pieces between consecutive crossings (so an edge through a thin wall counts even when both
+/// its vertices are outside). Each point's distance to the other surface comes from that
+/// mesh's hierarchy (`closest_point`); points are then decided deepest first, by the
+/// generalized winding number, until the first inside one, which is the answer. A point found
+/// outside proves every point closer to it than its distance outside too (that ball holds no
+/// surface), which skips most winding numbers of clustered points. Pairs whose surfaces are
+/// disjoint still get the depth of the deepest vertex inside (containment).
+MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input);
 
 /// Whether the surfaces intersect (touching counts): descends only overlapping boxes, stops at
 /// the first intersecting triangle pair. Both meshes must be valid.

@@ -5,6 +5,8 @@
 /// query must be in the same frame. Degenerate triangles (collinear or repeated vertices) are
 /// accepted: they behave as the segment or point they are.
 
+#include <cstdint>
+
 #include "meshcol/vec.hpp"
 
 namespace meshcol {
@@ -24,15 +26,21 @@ SegmentClosestPoints segment_closest_points(const Vec3& p1, const Vec3& q1, cons
 /// degenerate triangle (zero normal) is its three edges.
 Vec3 closest_point_on_triangle(const Vec3& p, const Vec3 t[3]);
 
-/// Whether two closed triangles share at least one point (touching counts).
+/// Whether two closed triangles share at least one point (touching counts), exactly.
 ///
 /// Non-coplanar triangles intersect exactly when an edge of one meets the other; coplanar ones
 /// when an edge of one meets the other in their plane or one contains the other. The tests are
-/// sign tests on triple products (as Guigue and Devillers 2003), exact whenever those products
-/// are computed exactly (e.g. small-integer coordinates), and otherwise wrong only for pairs
-/// whose distance is at rounding level. When the triangles intersect and `witness` is not null,
-/// writes a point they share (up to rounding).
+/// sign tests on orientation determinants (as Guigue and Devillers 2003), each sign exact for
+/// every finite input (Shewchuk's filtered predicates with an exact fallback), so the answer
+/// is exact. When the triangles intersect and `witness` is not null, writes a point they share
+/// (up to rounding).
 bool triangles_intersect(const Vec3 a[3], const Vec3 b[3], Vec3* witness);
+
+/// Whether the closed segment [p, q] meets the closed triangle `t` in exactly one point, i.e.
+/// crosses or touches it without lying in its plane (exact signs, as `triangles_intersect`).
+/// A degenerate triangle, or a segment in the triangle's plane, never counts. On success
+/// writes the parameter s in [0, 1] of the meeting point p + s (q - p) (up to rounding).
+bool segment_crosses_triangle(const Vec3& p, const Vec3& q, const Vec3 t[3], double* parameter);
 
 /// Squared distance between two triangles, as the minimum over the 9 edge-edge pairs and the 6
 /// vertex-face pairs (Ericson 2004, 5.1.9 and 5.1.5); writes the closest points. This is the
@@ -43,13 +51,31 @@ double triangle_separated_squared_distance(const Vec3 a[3], const Vec3 b[3], Vec
 
 /// Distance between two triangles and their closest points.
 struct TriangleDistanceOutput {
-    double distance = 0.0;      ///< >= 0; 0 when the triangles intersect or touch
+    double distance = 0.0;      ///< >= 0; 0 when they intersect (or, rounded, closer than ~1e-16)
     Vec3 point_a;               ///< on triangle a, caller's frame
     Vec3 point_b;               ///< on triangle b, caller's frame; equals point_a when intersecting
-    bool intersecting = false;  ///< the closed triangles share a point
+    bool intersecting = false;  ///< the closed triangles share a point (exact)
 };
 
 /// Exact distance between two triangles: `triangles_intersect`, then the 15 feature pairs.
 TriangleDistanceOutput triangle_distance(const Vec3 a[3], const Vec3 b[3]);
+
+/// Whether two triangles cross: their relative interiors (the open triangles) share a point.
+///
+/// Non-coplanar triangles cross when they meet along a segment through both interiors;
+/// coplanar ones when they overlap with positive area. Meeting only at points or along
+/// boundaries (a shared vertex or edge, a vertex or edge touching the other triangle) is not
+/// a crossing, and a degenerate triangle (collinear or repeated corners) crosses nothing. The
+/// verdict is exact for finite inputs (orientation signs by filtered predicates with an exact
+/// fallback, Shewchuk 1997); no tolerance is involved.
+bool triangles_cross(const Vec3 a[3], const Vec3 b[3]);
+
+/// `triangles_cross` for each pair (pairs[2k], pairs[2k + 1]) of faces of one mesh, written to
+/// crossing[k] (1 or 0); a pair of faces on the same three vertex indices (a duplicate face)
+/// does not cross. `vertices` is (n, 3), `faces` (m, 3) indices into it, `pairs` (k, 2)
+/// indices into `faces`; the caller checks every index. Runs on `threads` threads (0: all).
+void face_pairs_cross(const double* vertices, const std::int64_t* faces,
+                      const std::int64_t* pairs, long long pair_count, std::uint8_t* crossing,
+                      int threads);
 
 }  // namespace meshcol

@@ -1,4 +1,10 @@
-"""Convex hulls of point sets: exact (qhull), or within a vertex budget and still enclosing.
+"""Convex hulls of point sets: exact (the core's Quickhull), or within a vertex budget and
+still enclosing.
+
+Every hull of meshcol is :func:`exact_hull`: collision shapes (:class:`ConvexSet` packs many
+in one native call, :func:`pack_hulls`), ``meshcol hull``, decomposition parts and the start
+of the budgeted hull. It runs in the C++ core (``cpp/src/quickhull.cpp``), which is why hulls
+live in :mod:`meshcol.collision` and not in the numpy-only :mod:`meshcol.geometry`.
 
 Physics engines cap the vertex count of a convex collider (PhysX 255, GPU pipelines 64).
 :func:`convex_hull` returns the exact hull, or with ``max_vertices`` a hull with at most that
@@ -9,34 +15,60 @@ sink in.
 
 from __future__ import annotations
 
-import math
+import enum
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from meshcol.errors import InvalidMeshError
-from meshcol.geometry.topology import unique_rows
 from meshcol.geometry.triangles import closest_points_on_triangles
 
 __all__ = [
     "FLAT_RELATIVE_TOLERANCE",
+    "MAX_ABS_COORDINATE",
     "MIN_MAX_VERTICES",
     "ExactHull",
     "HullResult",
+    "HullStatus",
+    "PackedHulls",
     "convex_hull",
-    "dimension_of",
     "exact_hull",
-    "principal_widths",
+    "pack_hulls",
 ]
+
+
+class HullStatus(enum.IntEnum):
+    """What a point set's hull is.
+
+    Mirrors ``HullStatus`` in ``cpp/include/meshcol/hull.hpp`` (bound as
+    ``meshcol._core.HullStatus``; ``tests/test_native.py`` checks they match).
+    """
+
+    OK = 0  #: a 3-D polytope
+    FLAT = 1  #: coplanar points (the flatness rule): a convex polygon
+    COLLINEAR = 2  #: collinear points: a segment
+    SINGLE_POINT = 3  #: all points coincide (within the flatness rule)
+    EMPTY = 4  #: no points: no hull
+    NON_FINITE = 5  #: a NaN or infinite coordinate: no hull
+    OVERFLOW = 6  #: a coordinate beyond :data:`MAX_ABS_COORDINATE`: no hull
+    FAILED = 7  #: its own consistency check failed (never seen), or over 2**31 - 1 points
+
 
 #: The smallest vertex budget: a tetrahedron.
 MIN_MAX_VERTICES = 4
 #: The one flatness rule of meshcol. Points are flat (coplanar), collinear or one point when
 #: their width across their best-fit plane (line) is at most this fraction of their
 #: bounding-box diagonal: hulls, collision shapes, decomposition input and swept triangles
-#: all decide with it (:func:`dimension_of`).
+#: all decide with it (:attr:`ExactHull.dimension`). The core decides it: this mirrors its
+#: ``defaults.flat_relative_tolerance`` (``tests/test_native.py`` checks they are equal; the
+#: module stays importable without loading the core).
 FLAT_RELATIVE_TOLERANCE = 1e-9
+#: Hulls of coordinates beyond this magnitude are refused (:attr:`HullStatus.OVERFLOW`): their
+#: volumes, products of three coordinates, would overflow double precision. Mirrors the
+#: core's ``defaults.hull_max_abs_coordinate``.
+MAX_ABS_COORDINATE = 1e100
 #: The budget loop stops early once the simplified hull is within this fraction of the
 #: diagonal of the exact hull.
 CONVERGED_RELATIVE_DISTANCE = 1e-9
@@ -118,17 +150,15 @@ def convex_hull(points: np.ndarray, max_vertices: int | None = None) -> HullResu
     Raises
     ------
     InvalidMeshError
-        No points, non-finite coordinates, or points that span no area (one point or
-        collinear): there is no meaningful hull.
+        No points, non-finite coordinates, coordinates beyond :data:`MAX_ABS_COORDINATE`, or
+        points that span no area (one point or collinear): there is no meaningful hull.
     ValueError
         ``points`` is not (n, 3) or ``max_vertices`` < 4.
 
     Notes
     -----
-    The exact hull is qhull's Quickhull (Barber, Dobkin and Huhdanpaa 1996) through
-    ``scipy.spatial.ConvexHull`` with option ``Qt`` (triangulated output), retried with ``QJ``
-    (joggled input) when qhull reports a precision problem. Coplanar points give a 2-D hull,
-    computed by qhull on the plane coordinates.
+    The exact hull is :func:`exact_hull` (Quickhull in the core). Coplanar points give a 2-D
+    hull, a polygon in their plane.
 
     The budgeted hull is built from supporting planes of the exact hull H (planes touching H
     with H on their inner side), so it always encloses H, and thus every input point:
@@ -147,17 +177,14 @@ def convex_hull(points: np.ndarray, max_vertices: int | None = None) -> HullResu
     This is the plane-based "grow the faces outward" scheme of engine cookers, driven by
     the Hausdorff distance: each step reduces the largest deviation where it is. The
     reported ``max_distance`` is exact: the distance to a convex set is a convex function,
-    so its maximum over the polytope Q is reached at a vertex of Q.
+    so its maximum over the polytope Q is reached at a vertex of Q. The budget loop runs in
+    Python on top of the native exact hull (a few cuts, each a half-space intersection).
     """
     pts = np.asarray(points, dtype=np.float64)
     if pts.ndim != 2 or pts.shape[1] != 3:
         raise ValueError(f"points must be (n, 3), got {pts.shape}")
     if max_vertices is not None and int(max_vertices) < MIN_MAX_VERTICES:
         raise ValueError(f"max_vertices must be >= {MIN_MAX_VERTICES}, got {max_vertices}")
-    if len(pts) == 0:
-        raise InvalidMeshError("mesh has no vertices: there is no hull")
-    if not np.isfinite(pts).all():
-        raise InvalidMeshError("vertices contain NaN or infinite coordinates")
     exact = exact_hull(pts)
     if exact.dimension == 0:
         raise InvalidMeshError("all vertices coincide: there is no meaningful hull")
@@ -212,20 +239,21 @@ class ExactHull:
 
     Attributes
     ----------
+    status : HullStatus
+        OK (3-D), FLAT, COLLINEAR or SINGLE_POINT (the points without a hull raise).
     dimension : int
         0 (one point), 1 (collinear), 2 (coplanar) or 3, by :data:`FLAT_RELATIVE_TOLERANCE`.
     vertices : (k, 3) float64
-        The hull's vertices, a subset of the distinct input points (``-0.0`` as ``0.0``). In
-        3-D they are in lexicographic order; in 2-D they are the polygon's ring,
-        counter-clockwise about ``normal``; in 1-D the segment's two ends; in 0-D the point.
+        The hull's vertices, a subset of the input points (``-0.0`` as ``0.0``). In 3-D they
+        are in lexicographic order; in 2-D they are the polygon's ring, counter-clockwise about
+        ``normal``; in 1-D the segment's two ends; in 0-D the lexicographically smallest point.
+    indices : (k,) int64
+        Rows of the input points that ``vertices`` are.
     faces : (m, 3) int64
         3-D: triangles wound counter-clockwise seen from outside. 2-D: a fan triangulation of
         the ring (one side). Empty otherwise.
     equations : (m, 4) float64
         3-D: each face's outward plane ``n . x + c = 0`` (unit ``n``). Empty otherwise.
-    neighbors : (m, 3) int64
-        3-D: ``neighbors[f, j]`` is the face across the edge opposite corner ``j`` of face
-        ``f``. Empty otherwise.
     normal : (3,) float64
         2-D: the unit normal of the polygon's plane. Zero otherwise.
     volume, area : float
@@ -234,154 +262,153 @@ class ExactHull:
         Bounding-box diagonal of the input points (the scale of the tolerances).
     """
 
+    status: HullStatus
     dimension: int
     vertices: np.ndarray
+    indices: np.ndarray
     faces: np.ndarray
     equations: np.ndarray
-    neighbors: np.ndarray
     normal: np.ndarray
     volume: float
     area: float
     diagonal: float
 
 
-def principal_widths(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    """Centre, principal axes (3, 3), widths along them (3,) and bounding-box diagonal.
-
-    The widths are the extents of the points along the axes of their best-fit plane (SVD of
-    the centred points), largest first: the point set's thickness is ``widths[2]``.
-    """
-    pts = np.asarray(points, dtype=np.float64)
-    if len(pts) == 0:
-        return np.zeros(3), np.eye(3), np.zeros(3), 0.0
-    extent = pts.max(axis=0) - pts.min(axis=0)
-    diagonal = math.sqrt(float(extent @ extent))
-    centre = pts.mean(axis=0)
-    if diagonal == 0.0 or not np.isfinite(diagonal):
-        return centre, np.eye(3), np.zeros(3), diagonal
-    centred = pts - centre
-    if len(centred) < 3:  # rows at the centre change no width but give a full frame
-        centred = np.vstack([centred, np.zeros((3 - len(centred), 3))])
-    _, _, axes = np.linalg.svd(centred, full_matrices=False)
-    along = centred @ axes.T
-    widths = along.max(axis=0) - along.min(axis=0)
-    return centre, axes, widths, diagonal
+def _no_hull(status: HullStatus, points: np.ndarray) -> InvalidMeshError:
+    """The error for points that have no hull (one line, naming the offending value)."""
+    if status == HullStatus.EMPTY:
+        return InvalidMeshError("mesh has no vertices: there is no hull")
+    if status == HullStatus.NON_FINITE:
+        return InvalidMeshError("vertices contain NaN or infinite coordinates")
+    if status == HullStatus.OVERFLOW:
+        value = float(points.flat[int(np.argmax(np.abs(points)))])
+        return InvalidMeshError(
+            f"vertex coordinate {value:g} is beyond +-{MAX_ABS_COORDINATE:g}: "
+            "hull volumes would overflow"
+        )
+    return InvalidMeshError("the hull failed its consistency check (please report this input)")
 
 
-def dimension_of(widths: np.ndarray, diagonal: float) -> int:
-    """How many dimensions points with these principal widths span (the flatness rule)."""
-    if diagonal == 0.0:
-        return 0
-    return int(np.count_nonzero(widths > FLAT_RELATIVE_TOLERANCE * diagonal))
-
-
-_NO_FACES = np.zeros((0, 3), dtype=np.int64)
-
-
-def exact_hull(points: np.ndarray) -> ExactHull:
-    """The exact convex hull of finite points (qhull), flat and degenerate inputs included.
+def exact_hull(points: Any) -> ExactHull:
+    """The exact convex hull of points, flat and degenerate inputs included.
 
     Parameters
     ----------
     points : (n, 3) float
-        At least one point, all finite (callers validate and name the input).
+        Any frame; the hull is in the same frame.
 
     Returns
     -------
     ExactHull
 
+    Raises
+    ------
+    InvalidMeshError
+        No points, a NaN or infinite coordinate, or one beyond :data:`MAX_ABS_COORDINATE`.
+    ValueError
+        ``points`` is not (n, 3).
+
     Notes
     -----
-    Quickhull (Barber, Dobkin and Huhdanpaa 1996) through ``scipy.spatial.ConvexHull``, retried
-    with joggled input (``QJ``) when qhull reports a precision problem. The dimension comes
-    from the one flatness rule (:data:`FLAT_RELATIVE_TOLERANCE`); coplanar points get a 2-D
-    hull computed by qhull on their plane coordinates. Every convex hull in meshcol (collision
-    shapes, ``meshcol hull``, decomposition parts) is this one.
+    Quickhull (Barber, Dobkin and Huhdanpaa 1996) in the core (``cpp/src/quickhull.cpp``),
+    GIL released. The dimension comes from the one flatness rule
+    (:data:`FLAT_RELATIVE_TOLERANCE`, principal widths against the bounding-box diagonal);
+    coplanar points get a polygon (Andrew's monotone chain in their plane). Which faces a new
+    point sees is decided by exact orientation signs (Shewchuk 1997), so the polytope stays
+    convex and its topology consistent on any input; a point within
+    ``defaults.hull_relative_tolerance`` times the largest absolute coordinate of a face's
+    plane is on the hull (qhull's coplanar points), and vertices left on an edge or inside a
+    face by such ties are removed. The vertex set matches qhull's (``tests/test_exact_hull.py``).
     """
-    from scipy.spatial import ConvexHull, QhullError
+    from meshcol._native import core
 
-    pts, _ = unique_rows(np.asarray(points, dtype=np.float64) + 0.0)
-    centre, axes, widths, diagonal = principal_widths(pts)
-    dim = dimension_of(widths, diagonal)
-    empty4 = np.zeros((0, 4))
-    zero3 = np.zeros(3)
-    if dim == 3:
-        hull = None
-        for options in (None, "QJ"):
-            try:
-                hull = ConvexHull(pts, qhull_options=options)
-                break
-            except QhullError:
-                continue
-        if hull is not None and hull.volume > 0.0:
-            keep = hull.vertices  # sorted input order, as the input is sorted
-            remap = np.full(len(pts), -1, dtype=np.int64)
-            remap[keep] = np.arange(len(keep))
-            faces = remap[hull.simplices]
-            neighbors = np.asarray(hull.neighbors, dtype=np.int64)
-            equations = np.asarray(hull.equations, dtype=np.float64)
-            vertices = np.ascontiguousarray(pts[keep])
-            # A face is wound outward when (v1 - v0) x (v2 - v0) points along its plane's
-            # normal: the sign of the triple product, written out (np.cross is slow on
-            # small arrays and this runs once per collision shape).
-            a = vertices[faces[:, 1]] - vertices[faces[:, 0]]
-            b = vertices[faces[:, 2]] - vertices[faces[:, 0]]
-            n = equations
-            flip = (
-                n[:, 0] * (a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1])
-                + n[:, 1] * (a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2])
-                + n[:, 2] * (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
-            ) < 0
-            # Reversing a triangle swaps corners 0 and 2, and so the edges opposite them.
-            faces[flip] = faces[flip][:, ::-1]
-            neighbors[flip] = neighbors[flip][:, ::-1]
-            return ExactHull(
-                3,
-                vertices,
-                faces,
-                equations,
-                neighbors,
-                zero3,
-                float(hull.volume),
-                float(hull.area),
-                diagonal,
-            )
-        dim = 2
-    if dim == 2:
-        uv = (pts - centre) @ axes[:2].T
-        try:
-            polygon = ConvexHull(uv)
-        except QhullError:
-            dim = 1
-        else:
-            ring = polygon.vertices  # counter-clockwise in the plane coordinates
-            area = float(polygon.volume)  # qhull's 2-D "volume" is the area
-            normal = np.cross(axes[0], axes[1])
-            normal /= np.linalg.norm(normal)
-            return ExactHull(
-                2,
-                np.ascontiguousarray(pts[ring]),
-                _fan(len(ring)),
-                empty4,
-                _NO_FACES,
-                normal,
-                0.0,
-                area,
-                diagonal,
-            )
-    if dim == 1:
-        t = (pts - centre) @ axes[0]
-        ends = np.ascontiguousarray(pts[[int(np.argmin(t)), int(np.argmax(t))]])
-        return ExactHull(1, ends, _NO_FACES, empty4, _NO_FACES, zero3, 0.0, 0.0, diagonal)
-    return ExactHull(
-        0, np.ascontiguousarray(pts[:1]), _NO_FACES, empty4, _NO_FACES, zero3, 0.0, 0.0, diagonal
+    pts = np.ascontiguousarray(points, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 3:
+        raise ValueError(f"points must be (n, 3), got {pts.shape}")
+    status, dimension, indices, faces, equations, normal, volume, area, diagonal = core.exact_hull(
+        pts
     )
+    status = HullStatus(status)
+    if dimension < 0:
+        raise _no_hull(status, pts)
+    return ExactHull(
+        status,
+        int(dimension),
+        pts[indices] + 0.0,
+        indices,
+        faces,
+        equations,
+        normal,
+        float(volume),
+        float(area),
+        float(diagonal),
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class PackedHulls:
+    """The hulls of many point sets as the arrays of a :class:`ConvexSet`'s polytopes.
+
+    ``status`` (H,) int8 holds a :class:`HullStatus` per set; a set without a hull keeps its
+    points as given, with no adjacency and no features (queries report INVALID_INPUT when
+    it has no points or NaN, and scan the points otherwise).
+    The other fields are those of :class:`meshcol.collision.shapes.ConvexSet`.
+    """
+
+    status: np.ndarray
+    vertices: np.ndarray
+    offsets: np.ndarray
+    adjacency_offsets: np.ndarray
+    adjacency: np.ndarray
+    face_offsets: np.ndarray
+    face_normals: np.ndarray
+    edge_offsets: np.ndarray
+    edge_directions: np.ndarray
+
+
+def pack_hulls(point_sets: Sequence[np.ndarray] | np.ndarray, threads: int = 0) -> PackedHulls:
+    """Exact hulls of many point sets, packed for the narrow phase in one native call.
+
+    Parameters
+    ----------
+    point_sets : sequence of (n_i, 3) float64, or (H, n, 3) float
+        Already validated point arrays (:func:`meshcol.collision.arrays.as_points`).
+    threads : int
+        Threads over sets (0: all cores).
+
+    Returns
+    -------
+    PackedHulls
+
+    Notes
+    -----
+    Per set, the hull of :func:`exact_hull` and, in the same pass: the neighbours of each
+    vertex in the hull's triangulation (ascending, padded with the vertex itself to a multiple
+    of four for the core's hill climbing), one outward normal per plane, and one direction per
+    class of parallel edges between different planes (unsigned, grouped at 12 digits), the
+    features exact SAT needs. Flat sets give their polygon, its two normals and its edges;
+    collinear sets their segment; single points the point.
+    """
+    from meshcol._native import core
+
+    if isinstance(point_sets, np.ndarray) and point_sets.ndim == 3:
+        h, n = point_sets.shape[:2]
+        points = np.ascontiguousarray(point_sets, dtype=np.float64).reshape(-1, 3)
+        offsets = np.arange(h + 1, dtype=np.int64) * n
+    else:
+        counts = np.fromiter((len(p) for p in point_sets), dtype=np.int64, count=len(point_sets))
+        offsets = np.zeros(len(counts) + 1, dtype=np.int64)
+        np.cumsum(counts, out=offsets[1:])
+        points = (
+            np.ascontiguousarray(np.concatenate(point_sets), dtype=np.float64)
+            if len(point_sets)
+            else np.zeros((0, 3))
+        )
+    return PackedHulls(*core.pack_polytopes(points, offsets, int(threads)))
 
 
 def _flat_hull(exact: ExactHull, max_vertices: int | None) -> HullResult:
     """The 2-D hull of coplanar points as a fan-triangulated polygon, within a budget."""
-    from scipy.spatial import ConvexHull
-
     ring = exact.vertices
     exact_count = len(ring)
     kwargs: dict[str, Any] = dict(
@@ -410,12 +437,12 @@ def _flat_hull(exact: ExactHull, max_vertices: int | None) -> HullResult:
     q_coords, distance = _simplify(
         ring_points, segments, equations, int(max_vertices), exact.diagonal
     )
-    q_hull = ConvexHull(q_coords)
-    q_ring = q_coords[q_hull.vertices]
+    q = exact_hull(centre + q_coords @ plane_axes)
+    q_ring = q.vertices if q.normal @ exact.normal >= 0 else q.vertices[::-1]
     return HullResult(
-        vertices=centre + q_ring @ plane_axes,
+        vertices=q_ring,
         faces=_fan(len(q_ring)),
-        area=float(q_hull.volume),
+        area=q.area,
         max_distance=distance,
         **kwargs,
     )
@@ -449,7 +476,7 @@ def _simplify(hull_vertices, facets, equations, budget, scale):
     offsets = (normals @ hull_vertices.T).max(axis=1)
     polytope = _intersect(normals, offsets, interior, scale)
     if polytope is None:  # qhull failed on four planes: not seen, but never crash on it
-        raise InvalidMeshError(f"qhull could not build a hull within {budget} vertices")
+        raise InvalidMeshError(f"could not build a hull within {budget} vertices")
     distances, closest = _distances_to_hull(polytope, facets, equations)
     for _ in range(4 * budget + 16):
         order = np.argsort(-distances, kind="stable")

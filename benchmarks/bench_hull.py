@@ -1,0 +1,177 @@
+"""Benchmark: packing convex hulls for the narrow phase, the core's Quickhull vs qhull.
+
+``new`` is `ConvexSet.from_vertices` (every hull, its adjacency, face normals and edge
+directions in one threaded native call). ``qhull`` is the packing meshcol had before issue 14,
+kept here only to compare: per shape, qhull through scipy (`ConvexHull`), then
+`np.unique`-style grouping of face normals and edge directions and the adjacency lists in
+numpy (a copy of that code path for 3-D hulls, which is what these inputs are).
+
+Cases: 40,000 clouds of 64 Gaussian points (the old path is timed on ``--old-shapes`` of them
+and reported per shape: 40,000 took 73.6 s); a UV sphere of 2 million triangles (708 x 708:
+one hull of about a million vertices); and `check_scene` end to end on that sphere beside a
+cube. Wall and CPU times are printed: on a shared machine the wall time includes waiting.
+
+Run:  .venv/bin/python benchmarks/bench_hull.py [--shapes 40000] [--old-shapes 2000]
+      [--sphere-count 708] [--skip-old-mesh]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+# ---------------------------------------------------------------------------------------
+# the packing before issue 14 (qhull through scipy, numpy per shape), for comparison only
+
+
+def _legacy_unique_directions(d: np.ndarray, signed: bool) -> np.ndarray:
+    d = d / np.linalg.norm(d, axis=1)[:, None]
+    if not signed:
+        key = np.where(np.abs(d) > 1e-12, d, 0.0)
+        first = np.argmax(key != 0.0, axis=1)
+        sign = np.sign(key[np.arange(len(d)), first])
+        d = d * np.where(sign == 0.0, 1.0, sign)[:, None]
+    keys = np.round(d, 12)
+    order = np.lexsort(keys.T[::-1])
+    ordered = keys[order]
+    start = np.ones(len(order), dtype=bool)
+    start[1:] = (ordered[1:] != ordered[:-1]).any(axis=1)
+    return np.ascontiguousarray(d[np.sort(order[start])])
+
+
+def _legacy_unique_rows(a: np.ndarray) -> np.ndarray:
+    order = np.lexsort(a.T[::-1])
+    s = a[order]
+    keep = np.ones(len(s), bool)
+    keep[1:] = (s[1:] != s[:-1]).any(axis=1)
+    return s[keep]
+
+
+def legacy_pack(points: np.ndarray):
+    """One 3-D shape as main packed it: (vertices, adjacency lists, faces, edges)."""
+    from scipy.spatial import ConvexHull
+
+    pts = _legacy_unique_rows(np.asarray(points, dtype=np.float64) + 0.0)
+    centred = pts - pts.mean(axis=0)
+    np.linalg.svd(centred, full_matrices=False)  # the flatness rule's principal widths
+    hull = ConvexHull(pts)
+    keep = hull.vertices
+    remap = np.full(len(pts), -1, dtype=np.int64)
+    remap[keep] = np.arange(len(keep))
+    tri = remap[hull.simplices]
+    verts = pts[keep]
+    planes = np.round(hull.equations[:, :3], 12)
+    tri_edges, real = [], []
+    for j in range(3):
+        tri_edges.append(tri[:, [(j + 1) % 3, (j + 2) % 3]])
+        real.append(np.any(planes != planes[hull.neighbors[:, j]], axis=1))
+    all_edges = np.concatenate(tri_edges)
+    sat_edges = all_edges[np.concatenate(real)]
+    faces = _legacy_unique_directions(hull.equations[:, :3], True)
+    edges = _legacy_unique_directions(verts[sat_edges[:, 1]] - verts[sat_edges[:, 0]], False)
+    e = _legacy_unique_rows(np.sort(all_edges, axis=1))
+    both = np.concatenate([e, e[:, ::-1]])
+    both = both[np.lexsort((both[:, 1], both[:, 0]))]
+    counts = np.bincount(both[:, 0], minlength=len(verts))
+    lists = np.split(both[:, 1].astype(np.int32), np.cumsum(counts)[:-1])
+    adjacency = [
+        np.concatenate([a, np.full(-len(a) % 4, i, np.int32)]) for i, a in enumerate(lists)
+    ]
+    return verts, adjacency, faces, edges
+
+
+# ---------------------------------------------------------------------------------------
+
+
+def timed(fn, repeats: int = 1) -> tuple[float, float, object]:
+    """Best wall time, the CPU time of that run (all threads: on a shared machine the wall
+    time includes waiting for a core), and the result."""
+    best, cpu, out = np.inf, np.inf, None
+    for _ in range(repeats):
+        t, c = time.perf_counter(), time.process_time()
+        out = fn()
+        wall = time.perf_counter() - t
+        if wall < best:
+            best, cpu = wall, time.process_time() - c
+    return best, cpu, out
+
+
+def clouds_case(shapes: int, old_shapes: int) -> None:
+    from meshcol import ConvexSet
+
+    rng = np.random.default_rng(0)
+    clouds = rng.normal(size=(shapes, 64, 3))
+    as_list = list(clouds)
+    new, new_cpu, cs = timed(lambda: ConvexSet.from_vertices(as_list), 3)
+    new_array, array_cpu, _ = timed(lambda: ConvexSet.from_vertices(clouds), 3)
+    old, old_cpu, _ = timed(lambda: [legacy_pack(c) for c in as_list[:old_shapes]])
+    print(
+        f"{shapes} clouds of 64 points, ConvexSet.from_vertices: {new:.3f} s wall "
+        f"({new_cpu:.3f} s CPU) from a list of arrays, {new_array:.3f} s ({array_cpu:.3f} s CPU) "
+        f"from an (H, 64, 3) array; {cs!r}"
+    )
+    per_old, per_new = old / old_shapes, new / shapes
+    per_old_cpu, per_new_cpu = old_cpu / old_shapes, new_cpu / shapes
+    print(
+        f"  qhull path on {old_shapes} of them: {old:.3f} s wall, {per_old * 1e6:.0f} us a shape "
+        f"(x {shapes}: {per_old * shapes:.1f} s); new {per_new * 1e6:.1f} us a shape: "
+        f"{per_old / per_new:.0f}x wall, {per_old_cpu / per_new_cpu:.0f}x CPU"
+    )
+
+
+def sphere(count: int):
+    import trimesh
+
+    mesh = trimesh.creation.uv_sphere(radius=1.0, count=[count, count])
+    return np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.int64)
+
+
+def mesh_case(count: int, skip_old: bool) -> None:
+    import trimesh
+
+    from meshcol import ConvexSet
+    from meshcol.analysis.check import check_scene
+    from meshcol.types import Body, Scene
+
+    v, f = sphere(count)
+    print(f"UV sphere: {len(f)} triangles, {len(v)} vertices")
+    new, new_cpu, cs = timed(lambda: ConvexSet.from_vertices([v]))
+    print(
+        f"  pack its hull: new {new:.2f} s wall, {new_cpu:.2f} s CPU ({len(cs.vertices)} vertices)"
+    )
+    if not skip_old:
+        old, old_cpu, packed = timed(lambda: legacy_pack(v))
+        print(
+            f"  qhull path {old:.2f} s wall, {old_cpu:.2f} s CPU ({len(packed[0])} vertices): "
+            f"{old / new:.1f}x wall, {old_cpu / new_cpu:.1f}x CPU"
+        )
+    box = trimesh.creation.box(extents=(1.0, 1.0, 1.0))
+    pose = np.eye(4)
+    pose[0, 3] = 1.6
+    bodies = (
+        Body("sphere", None, v, f, np.eye(4)),
+        Body("cube", None, np.asarray(box.vertices, float), np.asarray(box.faces), pose),
+    )
+    scene = Scene(bodies, units="m")
+    total, total_cpu, report = timed(lambda: check_scene(scene))
+    print(
+        f"  check_scene, the sphere beside a cube (hull colliders): {total:.2f} s wall, "
+        f"{total_cpu:.2f} s CPU, exit code {report.exit_code}"
+    )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--shapes", type=int, default=40000)
+    parser.add_argument("--old-shapes", type=int, default=2000)
+    parser.add_argument("--sphere-count", type=int, default=708)
+    parser.add_argument("--skip-old-mesh", action="store_true")
+    args = parser.parse_args()
+    clouds_case(args.shapes, args.old_shapes)
+    mesh_case(args.sphere_count, args.skip_old_mesh)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,380 @@
+"""Whole scenes of unique assets, end to end (issue 14): ``meshcol check`` from the command
+line, loading included, against trimesh's ``CollisionManager`` and coal's
+``DynamicAABBTreeArrayCollisionManager`` doing the same job (load every file, add every body,
+collide, one distance per candidate pair).
+
+Scenes: N bodies, each with its own asset file (no two alike): convex props (hulls of 24 to
+48 random points on an ellipsoid) and concave props (L-shaped brackets, extruded), about one
+in three concave, written as OBJ files plus a JSON manifest, on a jittered grid on the floor
+(turned about z) spaced for about 2-3 box overlaps per body. Written once into
+``benchmarks/.cache/scale/<N>`` (deterministic seed; delete the folder to regenerate).
+
+Also: a 2-million-triangle mesh (a closed torus, binary STL) beside a cube, checked end to
+end; and a 300,000-body manifest (instances of 16 assets) loaded (``load_inputs``, in a
+fresh process).
+
+Every meshcol figure is a fresh ``meshcol check`` process, timed from outside, with its peak
+resident memory (``RUSAGE_CHILDREN`` of a one-child wrapper). Peers run in this process,
+loading included, and are skipped with a printed reason when missing or past ``--peer-max``.
+
+Run: .venv/bin/python benchmarks/bench_scale.py [--sizes 1000 10000 100000] [--peer-max 10000]
+     [--extras] [--threads 0]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent
+CACHE = ROOT / ".cache" / "scale"
+SPACING = 1.2  # grid pitch (m) of props about 0.8-1.6 m wide: about 2.5 box overlaps per body
+
+
+# ---------------------------------------------------------------------------------------------
+# Assets
+
+
+def convex_prop(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """A random hull: 24-48 points on an ellipsoid of semi-axes 0.4-0.8 m, its triangles."""
+    from scipy.spatial import ConvexHull
+
+    p = rng.normal(size=(int(rng.integers(24, 49)), 3))
+    p /= np.linalg.norm(p, axis=1)[:, None]
+    p *= rng.uniform(0.4, 0.8, size=3)
+    hull = ConvexHull(p)
+    faces = hull.simplices.copy()
+    # outward winding: the normal points away from the centroid
+    centre = p.mean(axis=0)
+    a, b, c = p[faces[:, 0]], p[faces[:, 1]], p[faces[:, 2]]
+    inward = np.einsum("ij,ij->i", np.cross(b - a, c - a), a - centre) < 0
+    faces[inward] = faces[inward][:, ::-1]
+    used, faces = np.unique(faces, return_inverse=True)
+    return p[used], faces.reshape(-1, 3)
+
+
+def concave_prop(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """An L-shaped bracket (a closed, non-convex prism) of random size, centred."""
+    w, h = rng.uniform(0.8, 1.5), rng.uniform(0.8, 1.5)
+    t = rng.uniform(0.15, 0.35) * min(w, h)
+    depth = rng.uniform(0.3, 0.8)
+    outline = np.array([[0, 0], [w, 0], [w, t], [t, t], [t, h], [0, h]], dtype=np.float64)
+    outline -= outline.mean(axis=0)
+    n = len(outline)
+    vertices = np.concatenate(
+        [np.c_[outline, np.full(n, -depth / 2)], np.c_[outline, np.full(n, depth / 2)]]
+    )
+    caps = [(0, 1, 2), (0, 2, 3), (0, 3, 4), (0, 4, 5)]  # the L as a fan from its corner 0
+    faces = [(c, b, a) for a, b, c in caps] + [(a + n, b + n, c + n) for a, b, c in caps]
+    for i in range(n):
+        j = (i + 1) % n
+        faces += [(i, j, j + n), (i, j + n, i + n)]
+    return vertices, np.array(faces, dtype=np.int64)
+
+
+def write_obj(path: Path, vertices: np.ndarray, faces: np.ndarray) -> None:
+    lines = [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in vertices]
+    lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def scene_folder(n: int) -> Path:
+    """``benchmarks/.cache/scale/<n>`` with ``scene.json`` and ``assets/``; written once."""
+    folder = CACHE / str(n)
+    manifest = folder / "scene.json"
+    if manifest.exists():
+        return folder
+    rng = np.random.default_rng(n)
+    (folder / "assets").mkdir(parents=True, exist_ok=True)
+    side = math.ceil(math.sqrt(n))
+    bodies = []
+    for i in range(n):
+        vertices, faces = concave_prop(rng) if i % 3 == 2 else convex_prop(rng)
+        name = f"a{i:06d}.obj"
+        write_obj(folder / "assets" / name, vertices, faces)
+        gx, gy = divmod(i, side)
+        x, y = gx * SPACING + rng.normal(0, 0.1), gy * SPACING + rng.normal(0, 0.1)
+        bodies.append(
+            {
+                "name": f"prop{i:06d}",
+                "mesh": f"assets/{name}",
+                "position": [round(x, 6), round(y, 6), 0.8],
+                "rotation": {
+                    "euler_deg": [0.0, 0.0, round(rng.uniform(0, 360), 3)],
+                    "order": "xyz",
+                },
+            }
+        )
+    tmp = manifest.with_suffix(".tmp")
+    tmp.write_text(json.dumps({"units": "m", "bodies": bodies}))
+    tmp.rename(manifest)
+    return folder
+
+
+def big_mesh_folder() -> Path:
+    """A closed torus of 2,000,000 triangles (binary STL) beside a unit cube."""
+    folder = CACHE / "mesh2m"
+    manifest = folder / "scene.json"
+    if manifest.exists():
+        return folder
+    import trimesh
+
+    folder.mkdir(parents=True, exist_ok=True)
+    u_count, v_count = 2000, 500  # 2 * u * v triangles
+    u = np.linspace(0, 2 * np.pi, u_count, endpoint=False)
+    v = np.linspace(0, 2 * np.pi, v_count, endpoint=False)
+    uu, vv = np.meshgrid(u, v, indexing="ij")
+    big, small = 1.0, 0.3
+    vertices = np.stack(
+        [
+            (big + small * np.cos(vv)) * np.cos(uu),
+            (big + small * np.cos(vv)) * np.sin(uu),
+            small * np.sin(vv),
+        ],
+        -1,
+    ).reshape(-1, 3)
+    i, j = np.meshgrid(np.arange(u_count), np.arange(v_count), indexing="ij")
+    a = i * v_count + j
+    b = ((i + 1) % u_count) * v_count + j
+    c = ((i + 1) % u_count) * v_count + (j + 1) % v_count
+    d = i * v_count + (j + 1) % v_count
+    faces = np.concatenate([np.stack([a, b, c], -1), np.stack([a, c, d], -1)]).reshape(-1, 3)
+    trimesh.Trimesh(vertices, faces, process=False).export(folder / "torus.stl")
+    trimesh.creation.box(extents=(0.5, 0.5, 0.5)).export(folder / "cube.stl")
+    bodies = [
+        {"name": "torus", "mesh": "torus.stl"},
+        {"name": "cube", "mesh": "cube.stl", "position": [1.6, 0.0, 0.0]},
+    ]
+    manifest.write_text(json.dumps({"units": "m", "bodies": bodies}))
+    return folder
+
+
+def instances_folder(n: int = 300_000) -> Path:
+    """A manifest of ``n`` bodies instancing 16 asset files (the loader's per-body cost)."""
+    folder = CACHE / f"instances{n}"
+    manifest = folder / "scene.json"
+    if manifest.exists():
+        return folder
+    rng = np.random.default_rng(3)
+    (folder / "assets").mkdir(parents=True, exist_ok=True)
+    for k in range(16):
+        write_obj(folder / "assets" / f"p{k:02d}.obj", *convex_prop(rng))
+    side = math.ceil(math.sqrt(n))
+    bodies = [
+        {
+            "name": f"b{i:06d}",
+            "mesh": f"assets/p{i % 16:02d}.obj",
+            "position": [(i // side) * 2.0, (i % side) * 2.0, 0.8],
+            "rotation": {"quaternion": [1.0, 0.0, 0.0, 0.0]},
+        }
+        for i in range(n)
+    ]
+    manifest.write_text(json.dumps({"units": "m", "bodies": bodies}))
+    return folder
+
+
+# ---------------------------------------------------------------------------------------------
+# Runs
+
+_WRAPPER = (
+    "import resource, subprocess, sys, time\n"
+    "t = time.perf_counter()\n"
+    "rc = subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL).returncode\n"
+    "t = time.perf_counter() - t\n"
+    "print(rc, t, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)\n"
+)
+
+
+def timed(command: list[str]) -> tuple[int, float, float]:
+    """Exit code, wall seconds and peak RSS (MiB) of ``command`` in a fresh process."""
+    out = subprocess.run(
+        [sys.executable, "-c", _WRAPPER, *command], capture_output=True, text=True, check=True
+    ).stdout.split()
+    return int(out[0]), float(out[1]), float(out[2]) / 1024
+
+
+def meshcol_check(folder: Path, threads: int) -> tuple[int, float, float, dict]:
+    meshcol = str(Path(sys.executable).parent / "meshcol")
+    report = folder / "report.json"
+    rc, seconds, rss = timed(
+        [
+            meshcol,
+            "check",
+            str(folder / "scene.json"),
+            "--threads",
+            str(threads),
+            "--report",
+            str(report),
+            "--fail-on",
+            "none",
+        ]
+    )
+    data = json.loads(report.read_text()) if report.exists() else {}
+    return rc, seconds, rss, data
+
+
+def loaded_meshes(folder: Path):
+    """Every body of the manifest as (name, trimesh, 4x4 pose), loaded as a user would."""
+    import trimesh
+    from scipy.spatial.transform import Rotation
+
+    manifest = json.loads((folder / "scene.json").read_text())
+    out = []
+    for body in manifest["bodies"]:
+        mesh = trimesh.load(folder / body["mesh"], force="mesh")
+        pose = np.eye(4)
+        pose[:3, 3] = body.get("position", [0, 0, 0])
+        rot = body.get("rotation")
+        if rot and "euler_deg" in rot:
+            pose[:3, :3] = Rotation.from_euler(
+                rot["order"], rot["euler_deg"], degrees=True
+            ).as_matrix()
+        out.append((body["name"], mesh, pose))
+    return out
+
+
+def candidate_pairs(bodies) -> np.ndarray:
+    """Index pairs whose world boxes overlap (given to the peers for free: numpy, not timed
+    apart; trimesh's manager cannot list them)."""
+    from meshcol import sort_and_sweep
+
+    lo = np.array([(m.vertices @ p[:3, :3].T + p[:3, 3]).min(0) for _, m, p in bodies])
+    hi = np.array([(m.vertices @ p[:3, :3].T + p[:3, 3]).max(0) for _, m, p in bodies])
+    return sort_and_sweep(lo, hi)
+
+
+def run_trimesh(folder: Path) -> tuple[float, int]:
+    import fcl
+    from trimesh.collision import CollisionManager
+
+    start = time.perf_counter()
+    bodies = loaded_meshes(folder)
+    manager = CollisionManager()
+    for name, mesh, pose in bodies:
+        manager.add_object(name, mesh, transform=pose)
+    _, names = manager.in_collision_internal(return_names=True)
+    objs = [manager._objs[name]["obj"] for name, _, _ in bodies]
+    request = fcl.DistanceRequest()
+    for i, j in candidate_pairs(bodies):
+        fcl.distance(objs[i], objs[j], request, fcl.DistanceResult())
+    return time.perf_counter() - start, len(names)
+
+
+def coal_pass(models_and_poses, candidates: np.ndarray) -> int:
+    """coal as trimesh is used: every object in a DynamicAABBTreeArrayCollisionManager, one
+    ``collide`` over the manager (all contacts, not the first), then ``coal.distance`` per
+    candidate pair (handed over for free: coal's pair-collecting callback cannot give its pairs
+    to Python, nor can Python subclass the callback). Returns the contacts found."""
+    import coal
+
+    manager = coal.DynamicAABBTreeArrayCollisionManager()
+    objects = []
+    for model, pose in models_and_poses:
+        obj = coal.CollisionObject(model, coal.Transform3s(pose[:3, :3], pose[:3, 3]))
+        objects.append(obj)
+        manager.registerObject(obj)
+    manager.setup()
+    callback = coal.CollisionCallBackDefault()
+    callback.data.request.num_max_contacts = 1 << 30
+    manager.collide(callback)
+    request, result = coal.DistanceRequest(), coal.DistanceResult()
+    for i, j in candidates:
+        result.clear()
+        coal.distance(objects[i], objects[j], request, result)
+    return int(callback.data.result.numContacts())
+
+
+def coal_model(vertices: np.ndarray, faces: np.ndarray):
+    import coal
+
+    model = coal.BVHModelOBBRSS()
+    model.beginModel(len(faces), len(vertices))
+    model.addVertices(np.asarray(vertices, dtype=np.float64))
+    model.addTriangles(np.asarray(faces, dtype=np.int64))
+    model.endModel()
+    return model
+
+
+def run_coal(folder: Path) -> tuple[float, int]:
+    start = time.perf_counter()
+    bodies = loaded_meshes(folder)
+    items = [(coal_model(m.vertices, m.faces), pose) for _, m, pose in bodies]
+    hits = coal_pass(items, candidate_pairs(bodies))
+    return time.perf_counter() - start, hits
+
+
+def peer(name: str, fn, folder: Path, n: int, peer_max: int) -> str:
+    if n > peer_max:
+        return f"skipped (N > --peer-max {peer_max})"
+    try:
+        seconds, hits = fn(folder)
+    except ImportError as error:
+        return f"skipped ({error.name or error} not installed)"
+    return f"{seconds:.2f} s"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sizes", type=int, nargs="+", default=[1000, 10000, 100000])
+    parser.add_argument("--peer-max", type=int, default=10000, help="largest N given to peers")
+    parser.add_argument("--threads", type=int, default=0, help="meshcol --threads")
+    parser.add_argument("--repeat", type=int, default=1, help="meshcol runs per size (best)")
+    parser.add_argument(
+        "--extras",
+        action="store_true",
+        help="the 2M-triangle mesh and the 300,000-body manifest too",
+    )
+    args = parser.parse_args()
+    print(f"cores: {os.cpu_count()}; meshcol --threads {args.threads}; cache {CACHE}")
+    print(
+        f"{'N':>7} {'pairs':>7} {'meshcol s':>10} {'peak MiB':>9} {'trimesh+fcl':>24} "
+        f"{'ratio':>6} {'coal':>24} {'ratio':>6}"
+    )
+    for n in args.sizes:
+        t0 = time.perf_counter()
+        folder = scene_folder(n)
+        made = time.perf_counter() - t0
+        if made > 1:
+            print(f"  (generated {n} assets in {made:.1f} s)")
+        runs = [meshcol_check(folder, args.threads) for _ in range(args.repeat)]
+        rc, seconds, rss, report = min(runs, key=lambda r: r[1])
+        pairs = len(report.get("pairs", [])) if rc in (0, 1) else f"rc={rc}"
+        t_fcl = peer("trimesh", run_trimesh, folder, n, args.peer_max)
+        t_coal = peer("coal", run_coal, folder, n, args.peer_max)
+
+        def ratio(text: str) -> str:
+            return f"{float(text.split()[0]) / seconds:5.1f}x" if text.endswith(" s") else "-"
+
+        print(
+            f"{n:>7} {pairs!s:>7} {seconds:>10.2f} {rss:>9.0f} {t_fcl:>24} {ratio(t_fcl):>6} "
+            f"{t_coal:>24} {ratio(t_coal):>6}"
+        )
+    if args.extras:
+        folder = big_mesh_folder()
+        rc, seconds, rss, _ = meshcol_check(folder, args.threads)
+        print(
+            f"2,000,000-triangle torus beside a cube: meshcol check {seconds:.2f} s, "
+            f"peak {rss:.0f} MiB (rc {rc})"
+        )
+        folder = instances_folder()
+        code = (
+            f"import meshcol; s = meshcol.load_inputs([{str(folder / 'scene.json')!r}]); "
+            "print(len(s.bodies))"
+        )
+        rc, seconds, rss = timed([sys.executable, "-c", code])
+        print(
+            f"300,000-body manifest: load_inputs {seconds:.2f} s in a fresh process "
+            f"(imports included), peak {rss:.0f} MiB (rc {rc})"
+        )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,129 @@
+// Exposes hull.hpp: the exact hull of one point set, and the hulls of many packed in one call.
+// The Python API is meshcol/collision/hull.py (and ConvexSet in meshcol/collision/shapes.py).
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+
+#include <cstdint>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include "meshcol/defaults.hpp"
+#include "meshcol/hull.hpp"
+#include "ndarray.hpp"
+
+namespace nb = nanobind;
+using namespace nb::literals;
+using namespace meshcol::bindings;
+
+namespace {
+
+static_assert(sizeof(meshcol::Vec3) == 3 * sizeof(double), "Vec3 must be three packed doubles");
+
+const meshcol::Vec3* as_vec3(const Points& points) {
+    return reinterpret_cast<const meshcol::Vec3*>(points.data());
+}
+
+template <class T>
+std::vector<T> flatten(const std::vector<meshcol::Vec3>& v) {
+    std::vector<T> out;
+    out.reserve(3 * v.size());
+    for (const auto& x : v) out.insert(out.end(), {x.x, x.y, x.z});
+    return out;
+}
+
+}  // namespace
+
+void bind_hull(nb::module_& m) {
+    // The hull's defaults join the others in meshcol._core.defaults (bound first).
+    namespace d = meshcol::defaults;
+    nb::object defaults = m.attr("defaults");
+    defaults.attr("flat_relative_tolerance") = d::flat_relative_tolerance;
+    defaults.attr("hull_relative_tolerance") = d::hull_relative_tolerance;
+    defaults.attr("hull_max_abs_coordinate") = d::hull_max_abs_coordinate;
+    defaults.attr("hull_max_reruns") = d::hull_max_reruns;
+    defaults.attr("hull_max_rerun_work") = d::hull_max_rerun_work;
+    defaults.attr("hull_min_shapes_per_thread") = d::hull_min_shapes_per_thread;
+    using S = meshcol::HullStatus;
+    nb::enum_<S>(m, "HullStatus", "What a point set's hull is (hull.hpp).")
+        .value("OK", S::OK)
+        .value("FLAT", S::FLAT)
+        .value("COLLINEAR", S::COLLINEAR)
+        .value("SINGLE_POINT", S::SINGLE_POINT)
+        .value("EMPTY", S::EMPTY)
+        .value("NON_FINITE", S::NON_FINITE)
+        .value("OVERFLOW", S::OVERFLOW)
+        .value("FAILED", S::FAILED);
+
+    m.def(
+        "exact_hull",
+        [](Points points) {
+            const long long n = static_cast<long long>(points.shape(0));
+            meshcol::Hull h;
+            {
+                nb::gil_scoped_release release;
+                h = meshcol::exact_hull(as_vec3(points), n);
+            }
+            const size_t k = h.vertices.size(), f = h.faces.size();
+            const size_t planes = h.dimension == 3 ? f : 0;
+            std::vector<std::int64_t> index(h.vertices.begin(), h.vertices.end());
+            std::vector<std::int64_t> faces;
+            faces.reserve(3 * f);
+            for (const auto& t : h.faces) faces.insert(faces.end(), {t[0], t[1], t[2]});
+            std::vector<double> equations;
+            if (planes > 0) {
+                equations.reserve(4 * f);
+                for (size_t i = 0; i < planes; ++i) {
+                    const auto& nrm = h.face_normals[i];
+                    equations.insert(equations.end(), {nrm.x, nrm.y, nrm.z, h.face_offsets[i]});
+                }
+            }
+            auto normal = new_array<Out<double, 3>>({3});
+            normal.data()[0] = h.normal.x;
+            normal.data()[1] = h.normal.y;
+            normal.data()[2] = h.normal.z;
+            return nb::make_tuple(
+                static_cast<int>(h.status), h.dimension,
+                vector_array<Out<std::int64_t, -1>>(std::move(index), k, 0),
+                vector_array<Out<std::int64_t, -1, 3>>(std::move(faces), f, 3),
+                vector_array<Out<double, -1, 4>>(std::move(equations), planes, 4),
+                normal, h.volume, h.area, h.diagonal);
+        },
+        "points"_a,
+        "Exact convex hull of (n, 3) points: (status, dimension, vertex indices (k,), faces "
+        "(m, 3) into the vertices, equations (m, 4), normal (3,), volume, area, diagonal).");
+
+    m.def(
+        "pack_polytopes",
+        [](Points points, Index64 offsets, int threads) {
+            const long long h = static_cast<long long>(offsets.shape(0)) - 1;
+            if (h < 0) throw std::invalid_argument("offsets must be (H + 1,), got (0,)");
+            check_offsets(offsets.data(), offsets.shape(0),
+                          static_cast<std::int64_t>(points.shape(0)), "offsets");
+            meshcol::PackedPolytopes p;
+            {
+                nb::gil_scoped_release release;
+                p = meshcol::pack_polytopes(as_vec3(points), offsets.data(), h, threads);
+            }
+            std::vector<std::int8_t> status(p.status.size());
+            for (size_t i = 0; i < status.size(); ++i)
+                status[i] = static_cast<std::int8_t>(p.status[i]);
+            const size_t v = p.vertices.size() / 3, k = p.adjacency.size();
+            const size_t f = p.face_normals.size() / 3, e = p.edge_directions.size() / 3;
+            const size_t hs = static_cast<size_t>(h);
+            return nb::make_tuple(
+                vector_array<Out<std::int8_t, -1>>(std::move(status), hs, 0),
+                vector_array<Out<double, -1, 3>>(std::move(p.vertices), v, 3),
+                vector_array<Out<std::int64_t, -1>>(std::move(p.offsets), hs + 1, 0),
+                vector_array<Out<std::int64_t, -1>>(std::move(p.adjacency_offsets), v + 1, 0),
+                vector_array<Out<std::int32_t, -1>>(std::move(p.adjacency), k, 0),
+                vector_array<Out<std::int64_t, -1>>(std::move(p.face_offsets), hs + 1, 0),
+                vector_array<Out<double, -1, 3>>(std::move(p.face_normals), f, 3),
+                vector_array<Out<std::int64_t, -1>>(std::move(p.edge_offsets), hs + 1, 0),
+                vector_array<Out<double, -1, 3>>(std::move(p.edge_directions), e, 3));
+        },
+        "points"_a, "offsets"_a, "threads"_a = 0,
+        "Hulls of H point sets (shape h owns points[offsets[h]:offsets[h + 1]]) packed for a "
+        "ConvexSet: (status (H,), vertices, offsets, adjacency_offsets, adjacency, "
+        "face_offsets, face_normals, edge_offsets, edge_directions).");
+}

@@ -1,0 +1,86 @@
+#pragma once
+/// Exact convex hulls of point sets (Quickhull) and the packed polytope data the narrow phase
+/// runs on (vertices, hull adjacency for hill climbing, face normals and edge directions for
+/// SAT), batched over shapes.
+///
+/// Every hull of meshcol comes from `exact_hull`: collision shapes, `meshcol hull`, the
+/// budgeted hull's exact start and decomposition parts.
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "meshcol/vec.hpp"
+
+namespace meshcol {
+
+/// What a point set's hull is. Mirrored by `meshcol.collision.hull.HullStatus`: never renumber.
+enum class HullStatus : std::int8_t {
+    OK = 0,             ///< a 3-D polytope
+    FLAT = 1,           ///< coplanar points (flatness rule): a convex polygon
+    COLLINEAR = 2,      ///< collinear points: a segment
+    SINGLE_POINT = 3,   ///< all points coincide (within the flatness rule): one point
+    EMPTY = 4,          ///< no points: no hull
+    NON_FINITE = 5,     ///< a NaN or infinite coordinate: no hull
+    OVERFLOW = 6,       ///< a coordinate beyond `defaults::hull_max_abs_coordinate`: no hull
+    FAILED = 7,         ///< the construction's own consistency check failed (never seen),
+                        ///< or more than 2^31 - 1 points
+};
+
+/// The exact convex hull of a point set, in the dimension the flatness rule gives it.
+struct Hull {
+    HullStatus status = HullStatus::EMPTY;
+    int dimension = -1;  ///< 3, 2, 1, 0; -1 when there is no hull (EMPTY, NON_FINITE, ...)
+    /// Indices of the input points that are the hull's vertices. 3-D: in lexicographic order
+    /// of their coordinates; 2-D: the polygon's ring, counter-clockwise about `normal`; 1-D:
+    /// the segment's two ends; 0-D: the lexicographically smallest point.
+    std::vector<int> vertices;
+    /// 3-D: triangles indexing `vertices`, counter-clockwise seen from outside. 2-D: a fan
+    /// of the ring (one side). Empty otherwise.
+    std::vector<std::array<int, 3>> faces;
+    /// 3-D: each triangle's outward unit normal and offset (n . x + offset = 0), input frame.
+    std::vector<Vec3> face_normals;
+    std::vector<double> face_offsets;
+    /// 3-D: the plane of each triangle: coplanar neighbours (within the tolerance) share one.
+    std::vector<int> face_planes;
+    /// 3-D: the outward unit normal of each plane (that of its largest triangle).
+    std::vector<Vec3> plane_normals;
+    Vec3 normal;            ///< 2-D: unit normal of the polygon's plane; zero otherwise
+    double volume = 0.0;    ///< enclosed volume (0 below 3-D), input units cubed
+    double area = 0.0;      ///< surface area; 2-D: the polygon's area (one side)
+    double diagonal = 0.0;  ///< bounding-box diagonal of the input points
+};
+
+/// The exact convex hull of `n` points (Quickhull, Barber, Dobkin and Huhdanpaa 1996).
+/// Never throws for bad points: the status says why there is no hull.
+Hull exact_hull(const Vec3* points, long long n);
+
+/// Packed polytope data of many point sets, concatenated (the arrays of a Python ConvexSet
+/// minus kinds and params).
+struct PackedPolytopes {
+    std::vector<HullStatus> status;            ///< (H,) per shape
+    std::vector<double> vertices;              ///< (V, 3) hull vertices, input frames
+    std::vector<std::int64_t> offsets;         ///< (H + 1,)
+    std::vector<std::int64_t> adjacency_offsets;  ///< (V + 1,)
+    std::vector<std::int32_t> adjacency;       ///< (K,) local neighbour indices, padded
+    std::vector<std::int64_t> face_offsets;    ///< (H + 1,)
+    std::vector<double> face_normals;          ///< (F, 3) outward unit normals, one per plane
+    std::vector<std::int64_t> edge_offsets;    ///< (H + 1,)
+    std::vector<double> edge_directions;       ///< (E, 3) unit, one per parallel class
+};
+
+/// Hulls of H point sets (shape h owns `points[offsets[h] .. offsets[h + 1])`), packed in one
+/// pass on `threads` threads (0: all cores). A shape without a hull (EMPTY, NON_FINITE,
+/// OVERFLOW, FAILED) keeps its points as given with empty adjacency lists and no features:
+/// queries report INVALID_INPUT for no points or NaN, and scan the points of the others
+/// (their support is the hull's; the queries rescale far coordinates themselves).
+///
+/// Per shape: 3-D, the hull's vertices (lexicographic order), the neighbours of each vertex
+/// in the triangulation (ascending, padded with the vertex itself to a multiple of four),
+/// one normal per plane and one direction per class of parallel edges between different
+/// planes; 2-D, the ring, its two neighbours per vertex, the plane's two normals and the
+/// ring's edge directions; 1-D, both ends and the segment's direction; 0-D, the point.
+PackedPolytopes pack_polytopes(const Vec3* points, const std::int64_t* offsets, long long shapes,
+                               int threads);
+
+}  // namespace meshcol
