@@ -10,6 +10,7 @@ from __future__ import annotations
 import itertools
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -552,12 +553,21 @@ def test_panda_self_collision_matches_fcl(panda):
         excluded |= {(b, a) for a, b in excluded}
         assert ours == {tuple(sorted(p)) for p in _fcl_colliding(scene, excluded)}
         if srdf_file is None:
-            # hulls: the wrist (link5) reaches the hand and link7; the closed fingers touch
+            # hulls: the wrist (link5) reaches the hand and link7; the closed fingers touch.
+            # MoveIt's setup assistant marked exactly these "Default" (in collision at the
+            # default configuration) in the SRDF.
             assert ours == {
                 ("panda_hand", "panda_link5"),
                 ("panda_link5", "panda_link7"),
                 ("panda_leftfinger", "panda_rightfinger"),
             }
+            default = {
+                tuple(sorted(m.groups()[:2]))
+                for m in re.finditer(
+                    r'link1="([^"]+)" link2="([^"]+)" reason="(Default)"', srdf.read_text()
+                )
+            }
+            assert ours == default
         else:
             assert ours == set() and report.passed  # MoveIt's matrix disables all of those
 
@@ -737,3 +747,51 @@ def test_ros_package_path_finds_nested_packages(tmp_path, monkeypatch):
     assert [b.name for b in scene.bodies] == ["l0", "l1", "l2"]
     for i, body in enumerate(scene.bodies):  # one file for three links, each at its origin
         np.testing.assert_allclose(body.vertices.min(axis=0), [3 * i - 0.5, -0.5, -0.5])
+
+
+def test_panda_primitive_model_matches_fcl_on_exact_primitives(panda):
+    """panda_collision.urdf (spheres and cylinders only): links of several primitives are
+    tessellated parts, and what check finds agrees with python-fcl on the exact primitives
+    (a margin of 2 mm covers the tessellation, which lies inside the true surface)."""
+    fcl = pytest.importorskip("fcl")
+    import yourdfpy
+
+    path = panda.parent / "panda_collision.urdf"
+    scene = load_robot(path)
+    report = check_scene(scene)
+    poses = {b.name: b.pose for b in scene.bodies}
+    expected = _yourdfpy_poses(path, {"panda_joint4": -0.0698})
+    for name, pose in poses.items():
+        np.testing.assert_allclose(pose, expected[name], atol=1e-9)
+        assert next(b for b in scene.bodies if b.name == name).parts[0] == "cylinder0"
+    model = yourdfpy.URDF.load(str(path), build_scene_graph=False, load_meshes=False)
+    objects: dict[str, list] = {}
+    for link in model.robot.links:
+        for collision in link.collisions:
+            g = collision.geometry
+            shape = (
+                fcl.Sphere(g.sphere.radius)
+                if g.sphere is not None
+                else fcl.Cylinder(g.cylinder.radius, g.cylinder.length)
+            )
+            world = poses[link.name] @ (np.eye(4) if collision.origin is None else collision.origin)
+            objects.setdefault(link.name, []).append(
+                fcl.CollisionObject(shape, fcl.Transform(world[:3, :3], world[:3, 3]))
+            )
+    excluded = {(a, b) for a, b, _ in scene.excluded_pairs}
+    measured = {tuple(sorted((p["body_a"], p["body_b"]))): p for p in report.pairs}
+    for a, b in itertools.combinations(sorted(objects), 2):
+        if (a, b) in excluded:
+            continue
+        hit = any(
+            fcl.collide(x, y, fcl.CollisionRequest(), fcl.CollisionResult())
+            for x in objects[a]
+            for y in objects[b]
+        )
+        pair = measured.get((a, b))
+        if pair is not None and pair["signed_distance"] < -2e-3:
+            assert hit, (a, b)
+        if pair is None or pair["distance"] > 2e-3:
+            assert not hit, (a, b)
+    deep = [p for p in report.pairs if p["signed_distance"] < -2e-3]
+    assert len(deep) == 6  # the coarse spheres of the wrist reach the hand, fingers, link1
