@@ -16,6 +16,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.spatial import ConvexHull
 
 from meshcol.analysis.check import check_scene
@@ -717,6 +719,22 @@ def test_mjcf_qpos0_outside_limits_is_clamped(tmp_path):
             ),
             ["link 'a'", "mesh scale"],
         ),
+        (urdf("<link name='a'/>"), ["no link has collision geometry"]),
+        (
+            urdf(
+                "<link name='a'><collision><origin xyz='nan 0 0'/><geometry>"
+                "<sphere radius='1'/></geometry></collision></link>"
+            ),
+            ["link 'a'", "not finite"],
+        ),
+        (
+            urdf(
+                "<link name='a'/><link name='b'><collision><geometry><sphere radius='1'/>"
+                "</geometry></collision></link><joint name='j' type='fixed'><parent link='a'/>"
+                "<child link='b'/><origin xyz='1e300 0 0'/></joint>"
+            ),
+            ["link 'b'", "beyond the limit"],
+        ),
     ],
 )
 def test_hostile_urdf(tmp_path, text, words):
@@ -795,3 +813,102 @@ def test_panda_primitive_model_matches_fcl_on_exact_primitives(panda):
             assert not hit, (a, b)
     deep = [p for p in report.pairs if p["signed_distance"] < -2e-3]
     assert len(deep) == 6  # the coarse spheres of the wrist reach the hand, fingers, link1
+
+
+_coord = st.floats(-2.0, 2.0, allow_nan=False, width=32)
+_angle = st.floats(-3.0, 3.0, allow_nan=False, width=32)
+_joint = st.fixed_dictionaries(
+    {
+        "type": st.sampled_from(["revolute", "continuous", "prismatic", "fixed"]),
+        "xyz": st.tuples(_coord, _coord, _coord),
+        "rpy": st.tuples(_angle, _angle, _angle),
+        "axis": st.tuples(_coord, _coord, _coord).filter(
+            lambda a: math.sqrt(sum(x * x for x in a)) > 1e-3
+        ),
+        "value": st.floats(-1.0, 1.0, allow_nan=False, width=32),
+    }
+)
+
+
+@settings(max_examples=60)
+@given(joints=st.lists(_joint, min_size=1, max_size=6), branch=st.booleans())
+def test_forward_kinematics_matches_yourdfpy(tmp_path_factory, joints, branch):
+    """Random trees of revolute, continuous, prismatic and fixed joints with arbitrary
+    origins and axes: every link pose equals yourdfpy's own forward kinematics."""
+    folder = tmp_path_factory.mktemp("fk")
+    links = "".join(
+        f'<link name="l{i}"><collision><geometry><sphere radius="0.1"/></geometry></collision>'
+        "</link>"
+        for i in range(len(joints) + 1)
+    )
+    text, cfg = [], {}
+    for i, j in enumerate(joints, start=1):
+        # unit axes: yourdfpy moves a prismatic joint by axis x value unnormalized (see
+        # test_prismatic_axis_is_normalized for ours)
+        norm = math.sqrt(sum(x * x for x in j["axis"]))
+        j = {**j, "axis": tuple(x / norm for x in j["axis"])}
+        parent = 0 if branch and i % 2 == 0 else i - 1  # some links branch off the root
+        limit = '<limit lower="-1" upper="1" effort="1" velocity="1"/>'
+        text.append(
+            f'<joint name="j{i}" type="{j["type"]}"><parent link="l{parent}"/>'
+            f'<child link="l{i}"/><origin xyz="{" ".join(map(repr, j["xyz"]))}" '
+            f'rpy="{" ".join(map(repr, j["rpy"]))}"/>'
+            f'<axis xyz="{" ".join(map(repr, j["axis"]))}"/>{limit}</joint>'
+        )
+        if j["type"] != "fixed":
+            cfg[f"j{i}"] = j["value"]
+    path = write(folder, "fk.urdf", urdf(links + "".join(text)))
+    scene = load_robot(path, RobotOptions(joints=cfg))
+    expected = _yourdfpy_poses(path, cfg)
+    for body in scene.bodies:
+        np.testing.assert_allclose(body.pose, expected[body.name], atol=1e-9)
+
+
+def test_missing_robot_dependencies_are_named(tmp_path, monkeypatch):
+    import importlib.util
+    import sys
+
+    path = write(tmp_path, "chain.urdf", urdf(CHAIN))
+    monkeypatch.setitem(sys.modules, "yourdfpy", None)  # import fails as if not installed
+    line = error_line("check", str(path))
+    assert "chain.urdf" in line and "yourdfpy" in line and "meshcol[robots]" in line
+    monkeypatch.setitem(sys.modules, "mujoco", None)
+    mjcf = write(tmp_path, "m.xml", "<mujoco/>")
+    line = error_line("check", str(mjcf))
+    assert "m.xml" in line and "needs mujoco" in line
+    monkeypatch.undo()
+    find_spec = importlib.util.find_spec
+    monkeypatch.setattr(
+        importlib.util,
+        "find_spec",
+        lambda name, *a: None if name == "collada" else find_spec(name, *a),
+    )
+    write(tmp_path, "x.dae", "<COLLADA/>")
+    text = urdf(
+        '<link name="v"><collision><geometry><mesh filename="x.dae"/></geometry></collision></link>'
+    )
+    line = error_line("check", str(write(tmp_path, "d.urdf", text)))
+    assert "d.urdf" in line and "link 'v'" in line and "pycollada" in line
+
+
+def test_prismatic_axis_is_normalized(tmp_path):
+    """A URDF axis that is not a unit vector gives the direction only, as KDL, Pinocchio and
+    MuJoCo read it: a prismatic joint moves by its value along that direction."""
+    text = urdf(
+        "<link name='a'/><link name='b'><collision><geometry><sphere radius='0.1'/></geometry>"
+        "</collision></link><joint name='j' type='prismatic'><parent link='a'/><child link='b'/>"
+        "<axis xyz='0 0 2'/><limit lower='-1' upper='1' effort='1' velocity='1'/></joint>"
+    )
+    scene = load_robot(write(tmp_path, "p.urdf", text), RobotOptions(joints={"j": 0.5}))
+    np.testing.assert_allclose(scene.bodies[0].pose[:3, 3], [0, 0, 0.5])
+
+
+@pytest.mark.parametrize("axis", ["0 0 0", "nan 0 1"])
+def test_bad_joint_axis(tmp_path, axis):
+    text = urdf(
+        "<link name='a'/><link name='b'/><joint name='j' type='revolute'><parent link='a'/>"
+        f"<child link='b'/><axis xyz='{axis}'/>"
+        "<limit lower='-1' upper='1' effort='1' velocity='1'/></joint>"
+    )
+    line = error_line("check", str(write(tmp_path, "ax.urdf", text)))
+    assert "ax.urdf" in line and "joint 'j': axis must be a finite non-zero vector" in line

@@ -220,6 +220,14 @@ def load_robot(path: str | os.PathLike[str], options: RobotOptions | None = None
         scene, links = _load_mjcf(source, options)
     else:
         scene, links = _load_urdf(source, options)
+    if not scene.bodies:
+        raise SceneError(
+            f"no link has collision geometry ({len(links)} link(s), no <collision> element "
+            "or collision geom)",
+            source,
+        )
+    for body in scene.bodies:
+        _check_body(body, source)
     excluded = list(scene.excluded_pairs)
     warnings = list(scene.warnings)
     if options.srdf is not None:
@@ -239,6 +247,20 @@ def load_robot(path: str | os.PathLike[str], options: RobotOptions | None = None
             seen.add(key)
             kept.append((key[0], key[1], reason))
     return dataclasses.replace(scene, excluded_pairs=tuple(kept), warnings=tuple(warnings))
+
+
+def _check_body(body: Body, source: str) -> None:
+    """A link's pose and world coordinates are finite and within the limit of every input."""
+    from meshcol.io.mesh_read import check_magnitude
+
+    label = f"link {body.name!r}"
+    if not np.all(np.isfinite(body.pose)) or not np.all(np.isfinite(body.vertices)):
+        raise SceneError(f"{label}: pose or geometry is not finite (a NaN or inf origin?)", source)
+    world = body.vertices @ body.pose[:3, :3].T + body.pose[:3, 3]
+    try:
+        check_magnitude(world, "world vertex", None)
+    except MeshcolError as error:
+        raise SceneError(f"{label}: {error.message}", source) from None
 
 
 # --- URDF -----------------------------------------------------------------------------------
@@ -317,7 +339,7 @@ def _load_urdf(source: str, options: RobotOptions) -> tuple[Scene, set[str]]:
             poses[joint.child] = (
                 poses[name]
                 @ _origin(joint.origin)
-                @ _joint_motion(joint, values.get(joint.name, 0.0))
+                @ _joint_motion(joint, values.get(joint.name, 0.0), source)
             )
             stack.append(joint.child)
     if len(poses) != len(links):
@@ -487,14 +509,14 @@ def _origin(matrix: np.ndarray | None) -> np.ndarray:
     return np.eye(4) if matrix is None else np.asarray(matrix, dtype=np.float64)
 
 
-def _joint_motion(joint: Any, value: float) -> np.ndarray:
+def _joint_motion(joint: Any, value: float, source: str) -> np.ndarray:
     motion = np.eye(4)
-    if joint.type in ("fixed", "floating", "planar") or value == 0.0:
+    if joint.type in ("fixed", "floating", "planar"):
         return motion
     axis = np.array([1.0, 0.0, 0.0]) if joint.axis is None else np.asarray(joint.axis, float)
     norm = float(np.linalg.norm(axis))
     if not math.isfinite(norm) or norm == 0.0:
-        raise ValueError(f"joint {joint.name!r}: axis must be a non-zero vector")
+        raise SceneError(f"joint {joint.name!r}: axis must be a finite non-zero vector", source)
     axis = axis / norm
     if joint.type == "prismatic":
         motion[:3, 3] = axis * value
