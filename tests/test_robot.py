@@ -273,6 +273,7 @@ def test_joint_values_checked(tmp_path):
     assert "joint 'elbow' does not exist" in error_line("check", str(path), "--joint", "elbow=0")
     assert "is fixed" in error_line("check", str(path), "--joint", "wrist_mount=0")
     assert "NAME=VALUE" in error_line("check", str(path), "--joint", "shoulder")
+    assert "a URDF has no keyframes" in error_line("check", str(path), "--keyframe")
     joints = write(tmp_path, "q.json", json.dumps({"shoulder": 0.5, "slide": 0.1}))
     code, out, err = run("check", str(path), "--joints", str(joints), "--joint", "slide=0.2")
     assert code in (0, 1), err

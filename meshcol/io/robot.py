@@ -285,6 +285,8 @@ def _load_urdf(source: str, options: RobotOptions) -> tuple[Scene, set[str]]:
     root = tree.getroot()
     if root.tag != "robot":
         raise SceneError(f"not a URDF: the root element is <{root.tag}>, not <robot>", source)
+    if options.keyframe:
+        raise SceneError("--keyframe: a URDF has no keyframes (MJCF only)", source)
     capsules = _take_capsules(root, source)
     try:
         urdf = yourdfpy.URDF.load(
