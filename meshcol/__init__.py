@@ -40,6 +40,8 @@ _LAZY: dict[str, str] = {
     "load_mesh": "meshcol.io.mesh_read",
     "load_scene": "meshcol.io.scene",
     "load_inputs": "meshcol.io.scene",
+    "load_robot": "meshcol.io.robot",
+    "RobotOptions": "meshcol.io.robot",
     "write_meshes": "meshcol.io.mesh_write",
     # hulls and inspection
     "convex_hull": "meshcol.collision.hull",

@@ -339,9 +339,17 @@ class Scene:
         Manifest or scene file, when there was one.
     duration : float or None
         Seconds the start-to-end motion takes, when the manifest gives one.
+    excluded_pairs : tuple of (str, str, str)
+        Body pairs never checked against each other, ``(body_a, body_b, reason)`` with
+        ``body_a < body_b``: a robot's adjacent links and SRDF ``<disable_collisions>``
+        (:mod:`meshcol.io.robot`). Empty for manifests and mesh files.
+    warnings : tuple of str
+        What reading the scene could not do as asked, one line each (reports repeat them).
     """
 
     bodies: tuple[Body, ...]
     units: str | None = None
     source: str | None = None
     duration: float | None = None
+    excluded_pairs: tuple[tuple[str, str, str], ...] = ()
+    warnings: tuple[str, ...] = ()

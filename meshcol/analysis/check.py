@@ -254,6 +254,22 @@ def _ignore_mask(
     return mask
 
 
+def _excluded_mask(
+    names: Sequence[str], excluded: Sequence[tuple[str, str, str]], pairs: np.ndarray
+) -> np.ndarray:
+    """Boolean mask of the body pairs (rows of ``pairs``, a < b) that ``excluded`` names."""
+    if not excluded or len(pairs) == 0:
+        return np.zeros(len(pairs), dtype=bool)
+    index = {name: i for i, name in enumerate(names)}
+    known = [(index[a], index[b]) for a, b, _ in excluded if a in index and b in index]
+    if not known:
+        return np.zeros(len(pairs), dtype=bool)
+    ends = np.array(known, dtype=np.int64)
+    n = len(names)
+    keys = np.minimum(ends[:, 0], ends[:, 1]) * n + np.maximum(ends[:, 0], ends[:, 1])
+    return np.isin(pairs[:, 0] * n + pairs[:, 1], keys)
+
+
 def _cartesian_part_pairs(body_pairs: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     """All (part of a, part of b) pairs of the given body pairs, without a Python loop."""
     if len(body_pairs) == 0:
@@ -340,6 +356,9 @@ def check_scene(
     band = options.clearance + options.tolerance
     half = 0.5 * band
     candidates = sort_and_sweep(body_min - half, body_max + half)
+    # Pairs the scene excludes (a robot's adjacent links, SRDF) are never measured.
+    excluded = _excluded_mask(names, scene.excluded_pairs, candidates)
+    candidates = candidates[~excluded]
     ca, cb = candidates[:, 0], candidates[:, 1]
     ignored = _ignore_mask(names, options.ignore, ca, cb) if len(candidates) else np.zeros(0, bool)
 
@@ -373,6 +392,9 @@ def check_scene(
         part_pairs[swap] = part_pairs[swap][:, ::-1]
         pb_a, pb_b = np.minimum(pb_a, pb_b), np.maximum(pb_a, pb_b)
         part_key = pb_a * max(n, 1) + pb_b
+        if excluded.any():  # part pairs of excluded body pairs
+            keep = np.isin(part_key, key)
+            part_pairs, part_key = part_pairs[keep], part_key[keep]
         # Body pairs whose parts' boxes never meet are still measured: all their part pairs.
         covered = np.isin(key, part_key)
         extra = _cartesian_part_pairs(candidates[~covered], shapes.body_part_offsets)
@@ -570,6 +592,7 @@ def check_scene(
         "candidate_pairs": k,
         "pairs_by_status": by_status,
         "ignored_pairs": int(np.count_nonzero(ignored)),
+        "excluded_pairs": int(np.count_nonzero(excluded)),
         "failed_queries": int(np.count_nonzero(failed)),
         "min_distance": _num(finite_distance.min()) if len(finite_distance) else None,
         "max_depth": _num(depth.max()) if k else None,
@@ -585,6 +608,9 @@ def check_scene(
         "fail_on": options.fail_on,
         "ignore": list(options.ignore),
         "baseline": _relative(options.baseline_source),
+        "excluded_pairs": [
+            {"body_a": a, "body_b": b, "reason": reason} for a, b, reason in scene.excluded_pairs
+        ],
         "inputs": [_relative(scene.source)]
         if scene.source
         else sorted({_relative(b.source) or "" for b in bodies if b.source}),
@@ -596,7 +622,7 @@ def check_scene(
         settings,
         scene.units,
         datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
-        list(shapes.warnings),
+        [*scene.warnings, *shapes.warnings],
     )
 
 

@@ -8,7 +8,15 @@ import click
 
 from meshcol.analysis.check import FAIL_ON
 from meshcol.analysis.colliders import COLLIDER_KINDS
-from meshcol.cli.common import FiniteFloat, Progress, plural, report_format, report_options, verdict
+from meshcol.cli.common import (
+    FiniteFloat,
+    Progress,
+    plural,
+    report_format,
+    report_options,
+    robot_options,
+    verdict,
+)
 from meshcol.decomposition.engines import ENGINES
 
 FAIL_ON_CHOICES = tuple(FAIL_ON)
@@ -89,6 +97,7 @@ SHAPE_CHOICES = COLLIDER_KINDS
     help="Decompose cache folder.  [default: the user cache, as 'meshcol decompose']",
 )
 @report_options(default="the report on stdout; the summary on stderr")
+@robot_options(exclusions=True)
 def check(
     inputs: tuple[str, ...],
     shape: str,
@@ -107,7 +116,10 @@ def check(
     """Check every pair of bodies for contact, clearance and interpenetration.
 
     INPUT is mesh files (each body at its own coordinates, as parts exported in place), one
-    scene manifest (JSON/TOML) or glTF/GLB scenes. Files given directly give one body per
+    scene manifest (JSON/TOML), glTF/GLB scenes, or one robot description (URDF, MJCF): its
+    links are the bodies, posed at --joint/--joints (default zero), their collision elements
+    the parts; links joined by a joint are left out (--include-adjacent keeps them), and so
+    are the --srdf file's <disable_collisions> pairs. Files given directly give one body per
     object; a manifest body is its whole file, whose objects are its parts (never checked
     against each other; pairs name them as part_a, part_b). Statuses per pair: separated,
     clearance, contact, penetrating, contained. The report (JSON or CSV) goes to --report FILE
@@ -120,6 +132,7 @@ def check(
       meshcol check parts/*.stl --clearance 0.5 --fail-on clearance --report out.json
       meshcol check scene.glb --shape decomposed --ignore 'door*:frame*'
       meshcol check scene.json --baseline last_week.json > today.json
+      meshcol check panda.urdf --srdf panda.srdf --joint panda_joint4=-1.5
     """
     from meshcol.analysis.check import check as run_check
     from meshcol.analysis.check import parse_ignore_rule
@@ -176,8 +189,9 @@ def summary_table(result) -> str:
     units = f" {result.units}" if result.units else ""
     lines = [
         f"meshcol: check: {plural(s['bodies'], 'body')}, "
-        f"{plural(s['candidate_pairs'], 'candidate pair')} "
-        f"({s['seconds']:.3f} s check, {s['load_seconds'] or 0:.3f} s load)",
+        f"{plural(s['candidate_pairs'], 'candidate pair')}"
+        + (f", {s['excluded_pairs']} excluded" if s.get("excluded_pairs") else "")
+        + f" ({s['seconds']:.3f} s check, {s['load_seconds'] or 0:.3f} s load)",
         "  " + "  ".join(f"{name}: {count}" for name, count in s["pairs_by_status"].items()),
     ]
     touching = sum(count for name, count in s["pairs_by_status"].items() if name != "separated")
@@ -187,9 +201,9 @@ def summary_table(result) -> str:
         for p in worst:
             value = "" if p["signed_distance"] is None else f"{p['signed_distance']:.6g}"
             flag = " (ignored)" if p["ignored"] else (" (FAIL)" if p["violation"] else "")
-            lines.append(
-                f"  {p['status']:<12} {value:>12}{units}  {p['body_a']} <-> {p['body_b']}{flag}"
-            )
+            a = p["body_a"] if p["part_a"] is None else f"{p['body_a']}/{p['part_a']}"
+            b = p["body_b"] if p["part_b"] is None else f"{p['body_b']}/{p['part_b']}"
+            lines.append(f"  {p['status']:<12} {value:>12}{units}  {a} <-> {b}{flag}")
         if touching > len(worst):
             lines.append(f"  ... {touching - len(worst)} more (every pair is in the report)")
     settings = result.settings

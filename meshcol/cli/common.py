@@ -280,3 +280,93 @@ def display_path(path: str | os.PathLike[str]) -> str:
         if not relative.startswith(".."):
             return relative
     return path
+
+
+def robot_options(exclusions: bool = False) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Add the options of a robot description input (URDF, MJCF) to a command that takes a
+    scene: ``--joint NAME=VALUE`` (repeatable), ``--joints FILE.json``, ``--keyframe``,
+    ``--package-path NAME=DIR`` (repeatable) and, with ``exclusions``, ``--srdf FILE`` and
+    ``--include-adjacent``. The command runs inside :func:`meshcol.io.robot.robot_options`, so
+    every robot file it loads is read with them; they do nothing for other inputs."""
+    import functools
+
+    def decorate(func: Callable[..., Any]) -> Callable[..., Any]:
+        @functools.wraps(func)
+        def run(*args: Any, **kwargs: Any) -> Any:
+            from meshcol.io.robot import RobotOptions, parse_joint_values
+            from meshcol.io.robot import robot_options as use
+
+            joint = kwargs.pop("joint")
+            joints_file = kwargs.pop("joints_file")
+            keyframe = kwargs.pop("keyframe")
+            package_path = kwargs.pop("package_path")
+            srdf = kwargs.pop("srdf", None)
+            include_adjacent = kwargs.pop("include_adjacent", False)
+            try:
+                values = parse_joint_values(joint, joints_file)
+            except ValueError as exc:
+                raise click.BadParameter(str(exc), param_hint="'--joint'") from None
+            packages = {}
+            for item in package_path:
+                name, sep, folder = item.partition("=")
+                if not sep or not name or not folder:
+                    raise click.BadParameter(
+                        f"must look like NAME=DIR, got {item!r}", param_hint="'--package-path'"
+                    )
+                packages[name] = folder
+            options = RobotOptions(
+                joints=values,
+                keyframe=keyframe,
+                package_paths=packages,
+                srdf=srdf,
+                include_adjacent=include_adjacent,
+            )
+            with use(options):
+                return func(*args, **kwargs)
+
+        wrapped: Callable[..., Any] = run
+        if exclusions:
+            wrapped = click.option(
+                "--include-adjacent",
+                is_flag=True,
+                help="Robot: also check pairs of links joined by a joint (left out by default).",
+            )(wrapped)
+            wrapped = click.option(
+                "--srdf",
+                type=click.Path(dir_okay=False),
+                default=None,
+                metavar="FILE",
+                help="Robot: leave out the <disable_collisions> link pairs of this SRDF file.  "
+                "[default: none, only adjacent links are left out]",
+            )(wrapped)
+        wrapped = click.option(
+            "--package-path",
+            multiple=True,
+            metavar="NAME=DIR",
+            help="Robot: folder of package NAME for package:// URIs (before ROS_PACKAGE_PATH "
+            "and the folders around the file); repeatable.  [default: none]",
+        )(wrapped)
+        wrapped = click.option(
+            "--keyframe",
+            is_flag=True,
+            help="Robot (MJCF): start from the model's first keyframe instead of qpos0.",
+        )(wrapped)
+        wrapped = click.option(
+            "--joints",
+            "joints_file",
+            type=click.Path(dir_okay=False),
+            default=None,
+            metavar="FILE.json",
+            help='Robot: joint values {"name": value} (radians, metres).  [default: none, every '
+            "joint at zero]",
+        )(wrapped)
+        wrapped = click.option(
+            "--joint",
+            multiple=True,
+            metavar="NAME=VALUE",
+            help="Robot: one joint value (wins over --joints); repeatable.  [default: zero, or the "
+            "limit nearest zero]",
+        )(wrapped)
+        return wrapped
+
+    return decorate

@@ -6,7 +6,7 @@ import os
 
 import click
 
-from meshcol.cli.common import FiniteFloat
+from meshcol.cli.common import FiniteFloat, robot_options
 from meshcol.decomposition.engines import ENGINES
 from meshcol.io.mesh_write import LAYOUTS
 
@@ -133,6 +133,7 @@ def _engine_option(
     "units).  [default: no limit]",
 )
 @click.pass_context
+@robot_options()
 def decompose_command(
     ctx: click.Context,
     inputs: tuple[str, ...],

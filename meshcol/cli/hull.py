@@ -13,6 +13,7 @@ from meshcol.cli.common import (
     plural,
     report_format,
     report_options,
+    robot_options,
     verdict,
 )
 from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
@@ -47,6 +48,7 @@ from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
     "input.  [default: no budget, the exact hull]",
 )
 @report_options(default="stdout when no mesh is written, else no report")
+@robot_options()
 def hull(
     inputs: tuple[str, ...],
     output: str | None,

@@ -13,6 +13,7 @@ from meshcol.cli.common import (
     plural,
     report_format,
     report_options,
+    robot_options,
     verdict,
 )
 
@@ -47,6 +48,7 @@ def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) 
     + ", ".join(RULES)
     + " (or all).  [default: none, the run reports only]",
 )
+@robot_options()
 def inspect(
     inputs: tuple[str, ...], report: str | None, fmt: str | None, fail_on: tuple[str, ...]
 ) -> None:

@@ -15,6 +15,7 @@ from meshcol.cli.common import (
     plural,
     report_format,
     report_options,
+    robot_options,
     verdict,
 )
 
@@ -64,6 +65,7 @@ from meshcol.cli.common import (
     help="Decompose cache folder for --shape decomposed; bodies missing from it are "
     "decomposed now.  [default: the user cache, as 'meshcol decompose']",
 )
+@robot_options()
 def sweep(
     manifest: str,
     shape: str,

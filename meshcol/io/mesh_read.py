@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.errors import InputFileError, InvalidMeshError
+from meshcol.errors import InputFileError, InvalidMeshError, MissingDependencyError
 from meshcol.io.off import read_off
 from meshcol.types import Body
 
@@ -91,7 +91,9 @@ _PARSE_ERRORS = (
 )
 
 
-def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]:
+def load_mesh(
+    path: str | os.PathLike[str], *, merge: bool = True, collada: bool = False
+) -> list[Body]:
     """Load every body of one mesh file.
 
     Parameters
@@ -103,6 +105,9 @@ def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]
         Merge vertices at the same position (to 1e-8, per coordinate), also across UV and
         normal seams, and drop unreferenced vertices. On by default: topology checks
         (watertight, manifold) are only meaningful after it.
+    collada : bool, optional
+        Also accept ``.dae`` (COLLADA, read by trimesh with pycollada), as robot descriptions
+        reference it (:mod:`meshcol.io.robot`); off for the commands' own mesh inputs.
 
     Returns
     -------
@@ -129,7 +134,18 @@ def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]
     """
     source = os.fspath(path)
     file = Path(source)
-    file_type = _check_file(file, source)
+    if collada and file.suffix.lower() == ".dae":
+        if not file.is_file():
+            _check_file(file, source)  # missing or a directory: says so
+        import importlib.util
+
+        if importlib.util.find_spec("collada") is None:  # trimesh reads COLLADA with it
+            raise MissingDependencyError(
+                "reading COLLADA (.dae) needs pycollada: pip install 'meshcol[robots]'", source
+            )
+        file_type = "dae"
+    else:
+        file_type = _check_file(file, source)
     if file_type in _NATIVE_FORMATS:
         return load_meshes([source], merge=merge)[0]
     nodes = _read_nodes(file, file_type, source)

@@ -24,6 +24,8 @@ import numpy as np
 
 from meshcol.errors import InputFileError, MeshcolError, SceneError
 from meshcol.io.mesh_read import MAX_COORDINATE, check_magnitude, load_mesh, split_rigid
+from meshcol.io.primitives import primitive_mesh
+from meshcol.io.robot import is_robot_file, load_robot
 from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere, Spin
 
 __all__ = [
@@ -43,10 +45,6 @@ MANIFEST_EXTENSIONS = (".json", ".toml")
 
 #: The JSON Schema of a manifest.
 SCHEMA_PATH = Path(__file__).resolve().parent.parent / "schemas" / "scene.schema.json"
-
-# Tessellation of primitive bodies (their exact shape is in Body.primitive).
-_SPHERE_SUBDIVISIONS = 3  # icosphere: 642 vertices
-_ROUND_SECTIONS = 32  # around the axis of capsules and cylinders
 
 # What a wrongly typed field should have been, by field name (the last name in its path).
 _EXPECTED = {
@@ -180,13 +178,16 @@ def load_inputs(paths: Sequence[str | os.PathLike[str]]) -> Scene:
     Parameters
     ----------
     paths : sequence of str or path-like
-        Either one scene manifest, or any number of mesh and glTF/GLB scene files.
+        Either one scene manifest, one robot description (URDF or MJCF,
+        :func:`meshcol.io.robot.load_robot`, read with the options of the enclosing
+        :func:`meshcol.io.robot.robot_options` block), or any number of mesh and glTF/GLB
+        scene files.
 
     Returns
     -------
     Scene
         The manifest's scene (one body per manifest entry, its file's objects as its
-        parts); or, for mesh and glTF/GLB files given directly, one body per object of every
+        parts); the robot's (one body per link with collision geometry); or, for mesh and glTF/GLB files given directly, one body per object of every
         file, in order (``<stem>/<object>`` when a file holds several). A name that clashes
         with an earlier body's gets ``#2``, ``#3``... appended. ``source`` is the input path when
         there is exactly one, else None; ``units`` is None without a manifest.
@@ -202,6 +203,8 @@ def load_inputs(paths: Sequence[str | os.PathLike[str]]) -> Scene:
     """
     manifest = _single_manifest(paths)
     if manifest is not None:
+        if is_robot_file(manifest):
+            return load_robot(manifest)
         return load_scene(manifest)
     bodies = [body for _, file_bodies in iter_inputs(paths) for body in file_bodies]
     source = os.fspath(paths[0]) if len(paths) == 1 else None
@@ -209,13 +212,18 @@ def load_inputs(paths: Sequence[str | os.PathLike[str]]) -> Scene:
 
 
 def _single_manifest(paths: Sequence[str | os.PathLike[str]]) -> str | os.PathLike[str] | None:
-    """The manifest among ``paths`` (it must come alone), or None."""
+    """The manifest or robot description among ``paths`` (it must come alone), or None."""
     if len(paths) == 0:
         raise InputFileError("no input files given")
-    manifests = [p for p in paths if Path(os.fspath(p)).suffix.lower() in MANIFEST_EXTENSIONS]
+    manifests = [
+        p
+        for p in paths
+        if Path(os.fspath(p)).suffix.lower() in MANIFEST_EXTENSIONS or is_robot_file(p)
+    ]
     if manifests and len(paths) > 1:
+        what = "a robot description" if is_robot_file(manifests[0]) else "a scene manifest"
         raise SceneError(
-            "a scene manifest cannot be combined with other inputs: give it alone", manifests[0]
+            f"{what} cannot be combined with other inputs: give it alone", manifests[0]
         )
     return manifests[0] if manifests else None
 
@@ -237,7 +245,7 @@ def iter_inputs(
     """
     manifest = _single_manifest(paths)
     if manifest is not None:
-        scene = load_scene(manifest)
+        scene = load_robot(manifest) if is_robot_file(manifest) else load_scene(manifest)
         groups: dict[str, list[Body]] = {}
         for body in scene.bodies:
             groups.setdefault(body.source or scene.source or body.name, []).append(body)
@@ -503,14 +511,11 @@ def _is_identity(matrix: np.ndarray) -> bool:
 
 
 def _primitive_body(spec, source, label, start, end, spin, scale) -> Body:
-    import trimesh
-
     options = spec["primitive"]
     kind = options["type"]
     if kind == "box":
         size = np.asarray(options["size"], dtype=np.float64) * scale
         primitive: Primitive = Box((float(size[0]), float(size[1]), float(size[2])))
-        mesh = trimesh.creation.box(extents=size)
     else:
         if not np.all(scale == scale[0]):
             raise SceneError(f"{label}: a {kind} takes a uniform scale only", source)
@@ -523,19 +528,12 @@ def _primitive_body(spec, source, label, start, end, spin, scale) -> Body:
             if kind == "capsule"
             else Cylinder(radius, length)
         )
-        if kind == "sphere":
-            mesh = trimesh.creation.icosphere(subdivisions=_SPHERE_SUBDIVISIONS, radius=radius)
-        elif kind == "capsule":
-            mesh = trimesh.creation.capsule(
-                height=length, radius=radius, count=[_ROUND_SECTIONS, _ROUND_SECTIONS]
-            )
-        else:
-            mesh = trimesh.creation.cylinder(radius=radius, height=length, sections=_ROUND_SECTIONS)
+    vertices, faces = primitive_mesh(primitive)
     return Body(
         name=spec["name"],
         source=source,
-        vertices=np.ascontiguousarray(mesh.vertices, dtype=np.float64),
-        faces=np.ascontiguousarray(mesh.faces, dtype=np.int64),
+        vertices=vertices,
+        faces=faces,
         pose=start,
         end_pose=end,
         primitive=primitive,
