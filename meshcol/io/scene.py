@@ -279,15 +279,20 @@ def rotation_from_quaternion(quaternion: Sequence[float]) -> np.ndarray:
     (3, 3) float64
         Proper rotation. Raises ValueError for a zero or non-finite quaternion.
     """
-    q = np.asarray(quaternion, dtype=np.float64)
-    if not np.isfinite(q).all():
+    # plain floats: numpy's per-call cost is most of the time for four numbers, and a scene
+    # can hold 100,000 rotations
+    q = [float(v) for v in quaternion]
+    if len(q) != 4:
+        raise ValueError("quaternion must have 4 components")
+    if not all(math.isfinite(v) for v in q):
         raise ValueError("quaternion must be finite")
     # divide by the largest component first: |q| of a huge quaternion would overflow
-    largest = float(np.abs(q).max())
+    largest = max(abs(v) for v in q)
     if largest == 0.0:
         raise ValueError("quaternion must be non-zero")
-    q = q / largest
-    w, x, y, z = q / float(np.linalg.norm(q))
+    q = [v / largest for v in q]
+    norm = math.sqrt(sum(v * v for v in q))
+    w, x, y, z = (v / norm for v in q)
     return np.array(
         [
             [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
@@ -449,7 +454,6 @@ def _mesh_bodies(
         except MeshcolError as error:
             raise SceneError(f"{label}: mesh file {mesh!r}: {error.message}", source) from None
         files[key] = loaded
-    stretch = np.diag([*scale, 1.0])
     if len(loaded) == 1 and not np.any(scale != 1.0) and _is_identity(loaded[0].pose):
         # the common case (one object, no scale, no node transform): nothing to split or bake
         (sub,) = loaded
@@ -459,7 +463,7 @@ def _mesh_bodies(
         part_faces = None
     elif len(loaded) == 1:
         (sub,) = loaded
-        rigid, linear = split_rigid(stretch @ sub.pose)
+        rigid, linear = split_rigid(np.diag([*scale, 1.0]) @ sub.pose)
         vertices, faces = sub.vertices, sub.faces
         if linear is not None:
             vertices = vertices @ linear.T
@@ -471,6 +475,7 @@ def _mesh_bodies(
         # One body of several parts: each part's node transform and the body's scale are
         # baked into its vertices, so the parts share the body's frame and pose.
         rigid = np.eye(4)
+        stretch = np.diag([*scale, 1.0])
         blocks_v, blocks_f, counts = [], [], []
         base = 0
         for sub in loaded:
@@ -571,16 +576,20 @@ def _parse(file: Path, source: str) -> Any:
     except UnicodeDecodeError:
         raise SceneError("manifest is not UTF-8 text", source) from None
     document = _decode(file, text, source)
-    if _nesting(document) > MAX_NESTING:
+    # A document of the schema's common shape is at most five levels deep: only another one
+    # needs the walk that bounds its depth (before jsonschema, which recurses, sees it).
+    plain = _plainly_valid(document)
+    if not plain and _nesting(document) > MAX_NESTING:
         raise SceneError(_too_deep(text, "[{"), source)
     _PARSED.clear()  # one manifest kept: a run reads its manifest twice, never many
-    _PARSED[key] = (data, document)
+    _PARSED[key] = (data, document, plain)
     return document
 
 
-# The last manifest parsed, by absolute path: its bytes and its document (never modified by
-# the readers), so the output check and the loading of one run parse it once.
-_PARSED: dict[str, tuple[bytes, Any]] = {}
+# The last manifest parsed, by absolute path: its bytes, its document (never modified by the
+# readers) and whether the hand-written check passed it, so the output check and the loading
+# of one run parse and check it once.
+_PARSED: dict[str, tuple[bytes, Any, bool]] = {}
 
 
 def _decode(file: Path, text: str, source: str) -> Any:
@@ -911,6 +920,8 @@ def _validate(document: Any, source: str) -> None:
     """Raises SceneError for a non-finite number (first, in document order) or a schema
     violation; the common manifest passes by the hand-written check alone, which also requires
     every number it meets to be finite."""
+    if any(entry[1] is document and entry[2] for entry in _PARSED.values()):
+        return  # _parse checked this very document
     if _plainly_valid(document):
         return
     where = _first_non_finite(document)
