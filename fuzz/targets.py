@@ -8,9 +8,10 @@ the process: the fuzzer (``fuzz/run.py``, atheris) reports both.
 Targets
 -------
 readers
-    The first byte picks a format (OBJ, STL, PLY, OFF, GLB, glTF, JSON or TOML manifest); the
-    rest is written to a file with that extension and loaded with ``load_mesh`` or
-    ``load_scene``, as the command line does.
+    The first byte picks a format (OBJ, STL, PLY, OFF, GLB, glTF, JSON or TOML manifest, URDF);
+    the rest is written to a file with that extension and loaded with ``load_mesh``,
+    ``load_scene`` or ``load_robot``, as the command line does. (MJCF is left out: it is
+    MuJoCo's compiler, a C library we call but do not own.)
 convex
     Floats from the input (NaN, inf, denormals and huge values included) become two point
     clouds and two poses; the clouds are packed into a ``ConvexSet`` and every narrow-phase
@@ -33,7 +34,7 @@ import numpy as np
 
 from meshcol.errors import MeshcolError
 
-FORMATS = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf", ".json", ".toml")
+FORMATS = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf", ".json", ".toml", ".urdf")
 _MANIFESTS = {".json", ".toml"}
 
 # One directory per process for the readers' files: a fixed name, so a manifest that refers
@@ -43,6 +44,7 @@ _WORKDIR = Path(tempfile.mkdtemp(prefix="meshcol-fuzz-"))
 
 def readers(data: bytes) -> None:
     from meshcol.io.mesh_read import load_mesh
+    from meshcol.io.robot import load_robot
     from meshcol.io.scene import load_scene
 
     if not data:
@@ -53,6 +55,8 @@ def readers(data: bytes) -> None:
     try:
         if suffix in _MANIFESTS:
             load_scene(path)
+        elif suffix == ".urdf":
+            load_robot(path)
         else:
             load_mesh(path)
     except MeshcolError:
