@@ -318,10 +318,8 @@ def test_full_turn_body_is_moving_and_sweeps(tmp_path):
     )
 
 
-def test_sub_bodies_of_a_file_spin_as_one_body(tmp_path):
-    # A file with two boxes, one placed 1 along x by its node: the manifest body spins half a
-    # turn about its origin, and both sub-bodies stay one rigid body at every instant (the
-    # offset one goes round the arc about the body's origin, not along the chord).
+def write_two_box_glb(path) -> None:
+    """Two 0.2 boxes as nodes "near" (at the origin) and "far" (placed 1 along x)."""
     scene = trimesh.Scene()
     scene.add_geometry(trimesh.creation.box((0.2, 0.2, 0.2)), node_name="near", geom_name="near")
     scene.add_geometry(
@@ -330,7 +328,14 @@ def test_sub_bodies_of_a_file_spin_as_one_body(tmp_path):
         geom_name="far",
         transform=pose((1.0, 0.0, 0.0)),
     )
-    scene.export(tmp_path / "pair.glb")
+    scene.export(path)
+
+
+def test_sub_bodies_of_a_file_spin_as_one_body(tmp_path):
+    # A file with two boxes, one placed 1 along x by its node: the manifest body spins half a
+    # turn about its origin, and both sub-bodies stay one rigid body at every instant (the
+    # offset one goes round the arc about the body's origin, not along the chord).
+    write_two_box_glb(tmp_path / "pair.glb")
     manifest = {
         "duration": 1.0,
         "bodies": [
@@ -416,15 +421,7 @@ def test_corpus_part_spun_past_half_a_turn_matches_dense_sampling(
 def test_sub_bodies_reach_an_end_rotation_as_one_body(tmp_path):
     # The same two-box file given an end_rotation (a quarter turn, reached the shortest way):
     # the offset box turns about the manifest body's origin too, so halfway it is at 45 deg.
-    scene = trimesh.Scene()
-    scene.add_geometry(trimesh.creation.box((0.2, 0.2, 0.2)), node_name="near", geom_name="near")
-    scene.add_geometry(
-        trimesh.creation.box((0.2, 0.2, 0.2)),
-        node_name="far",
-        geom_name="far",
-        transform=pose((1.0, 0.0, 0.0)),
-    )
-    scene.export(tmp_path / "pair.glb")
+    write_two_box_glb(tmp_path / "pair.glb")
     manifest = {
         "bodies": [
             {

@@ -31,7 +31,6 @@ body ``a`` to body ``b``, ``signed_distance = distance - depth``.
 from __future__ import annotations
 
 import fnmatch
-import json
 import math
 import os
 import time
@@ -661,21 +660,9 @@ def _worse_than_baseline(
 
 def load_baseline(path: str) -> dict:
     """Read a previous JSON report for ``--baseline``."""
-    try:
-        with open(path, encoding="utf-8") as f:
-            data = json.load(f)
-    except FileNotFoundError:
-        raise InputFileError("baseline report not found", path) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputFileError(f"cannot read baseline report: {exc}", path) from None
-    except json.JSONDecodeError as exc:
-        raise InputFileError(
-            f"baseline is not valid JSON (line {exc.lineno} column {exc.colno})", path
-        ) from None
-    except RecursionError:
-        raise InputFileError(
-            "baseline nests arrays and objects too deep to be a meshcol check report", path
-        ) from None
+    from meshcol.io.report import read_json_file
+
+    data = read_json_file(path, "baseline report", "baseline")
     if not isinstance(data, dict) or not isinstance(data.get("pairs"), list):
         raise InputFileError("baseline is not a meshcol check report (no 'pairs' list)", path)
     for p in data["pairs"]:

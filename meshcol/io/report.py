@@ -20,6 +20,8 @@ import tempfile
 from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
+from meshcol.errors import InputFileError
+
 __all__ = [
     "ENVELOPE_KEYS",
     "SCHEMA_VERSION",
@@ -176,6 +178,39 @@ def _builtin(value: Any) -> Any:
     if hasattr(value, "item"):
         return value.item()
     raise TypeError(f"{type(value).__name__} is not JSON serializable")
+
+
+def read_json_file(path: str | os.PathLike[str], name: str, short: str | None = None) -> Any:
+    """The parsed JSON document of a file the user named, or one line saying what is wrong.
+
+    Parameters
+    ----------
+    path : str or path-like
+    name : str
+        What the file is, for messages: ``"baseline report"``, ``"joints file"``.
+    short : str, optional
+        The shorter name for content errors (``"baseline"``); ``name`` when omitted.
+
+    Raises
+    ------
+    InputFileError
+        Missing, unreadable, not UTF-8, not JSON (with line and column), or nested deeper than
+        the decoder recurses.
+    """
+    short = short or name
+    try:
+        with open(path, encoding="utf-8") as f:
+            return json.load(f)
+    except FileNotFoundError:
+        raise InputFileError(f"{name} not found", path) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputFileError(f"cannot read {name}: {exc}", path) from None
+    except json.JSONDecodeError as exc:
+        raise InputFileError(
+            f"{short} is not valid JSON (line {exc.lineno} column {exc.colno})", path
+        ) from None
+    except RecursionError:
+        raise InputFileError(f"{short} nests arrays and objects too deep", path) from None
 
 
 def dumps_json(obj: Any) -> str:

@@ -36,7 +36,6 @@ import contextlib
 import contextvars
 import dataclasses
 import io
-import json
 import math
 import os
 import re
@@ -48,6 +47,7 @@ from typing import Any
 import numpy as np
 
 from meshcol.errors import InputFileError, MeshcolError, MissingDependencyError, SceneError
+from meshcol.io.report import read_json_file
 from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere
 
 __all__ = [
@@ -120,18 +120,7 @@ def parse_joint_values(
     Raises SceneError (file problems, named) or ValueError (a malformed assignment)."""
     values: dict[str, float] = {}
     if joints_file is not None:
-        try:
-            with open(joints_file, encoding="utf-8") as f:
-                document = json.load(f)
-        except FileNotFoundError:
-            raise InputFileError("joints file not found", joints_file) from None
-        except (OSError, UnicodeDecodeError) as exc:
-            raise InputFileError(f"cannot read joints file: {exc}", joints_file) from None
-        except json.JSONDecodeError as exc:
-            raise SceneError(
-                f"joints file is not valid JSON (line {exc.lineno} column {exc.colno})",
-                joints_file,
-            ) from None
+        document = read_json_file(joints_file, "joints file")
         if not isinstance(document, dict):
             raise SceneError('joints file must be an object {"joint name": value}', joints_file)
         for name, value in document.items():
