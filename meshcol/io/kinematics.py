@@ -78,6 +78,8 @@ class Kinematics:
 
     Attributes
     ----------
+    name : str
+        The robot's name (URDF ``<robot name>``, MJCF ``<mujoco model>``).
     links : tuple of str
         Every link (URDF) or body (MJCF, ``world`` first), in file order.
     edges : (e, 2) int64
@@ -91,6 +93,7 @@ class Kinematics:
         free and ball joints): they keep their default, one line each for the report.
     """
 
+    name: str
     links: tuple[str, ...]
     edges: np.ndarray
     space: JointSpace
@@ -129,6 +132,8 @@ class UrdfKinematics(Kinematics):
         Joint values the description was read at (mimic joints included, ignored here).
     source : str
         The file, for messages.
+    name : str
+        The robot's name.
     """
 
     def __init__(
@@ -140,7 +145,9 @@ class UrdfKinematics(Kinematics):
         given: Any,
         loaded: Any,
         source: str,
+        name: str = "",
     ) -> None:
+        self.name = name
         self.links = tuple(links)
         index = {name: i for i, name in enumerate(self.links)}
         self.root = index[root]
@@ -295,6 +302,7 @@ class MjcfKinematics(Kinematics):
         self.model = model
         self.qpos = np.array(qpos, dtype=np.float64)
         self.followers = mjcf_followers(model)
+        self.name = bytes(model.names).split(b"\0", 1)[0].decode("utf-8", "replace")
         obj = mujoco.mjtObj
         self.links = tuple(
             mujoco.mj_id2name(model, obj.mjOBJ_BODY, b) or f"body{b}" for b in range(model.nbody)

@@ -366,7 +366,14 @@ def _load_urdf(source: str, options: RobotOptions) -> tuple[Scene, set[str], Kin
         stray = next(n for n in links if n not in reached)
         raise SceneError(f"joint cycle: {_cycle(parent_joint, stray)}", source)
     kinematics = UrdfKinematics(
-        robot.joints, links, roots[0], lambda j: _limits(j, source), options.joints, values, source
+        robot.joints,
+        links,
+        roots[0],
+        lambda j: _limits(j, source),
+        options.joints,
+        values,
+        source,
+        name=robot.name or "",
     )
     link_poses = kinematics.link_poses(kinematics.loaded[None])[0]
     poses = {name: link_poses[i] for i, name in enumerate(links)}
