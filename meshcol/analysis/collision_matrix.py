@@ -23,10 +23,11 @@ Pipeline, arrays end to end (Python loops over chunks of configurations and over
 over pairs): link poses of a chunk of configurations at once (:mod:`meshcol.io.kinematics`);
 the links' convex parts (:func:`meshcol.analysis.colliders.build_colliders`, hulls by default)
 replicated once per configuration of a chunk in one :class:`~meshcol.collision.shapes.ConvexSet`
-so that one native call measures every (configuration, part pair) candidate; world AABBs of
-every part of every configuration in one call; the broad phase on link boxes then part boxes,
-vectorised over (configuration, pair); the boolean GJK of the survivors in one batched call
-(:func:`meshcol.collision.narrowphase.intersects_batch`; with a padding, the GJK distance).
+so that one native call measures every (configuration, part pair) candidate; world boxes of
+every part of every configuration (each part's local box, moved: Arvo 1990); the broad phase on
+link boxes then part boxes, vectorised over (configuration, pair); the boolean GJK of the
+survivors in one batched call (:func:`meshcol.collision.narrowphase.intersects_batch`; with a
+padding, the GJK distance).
 """
 
 from __future__ import annotations
@@ -241,6 +242,9 @@ class _Sampler:
         self.pair_start = np.zeros(len(sizes), dtype=np.int64)
         np.cumsum(sizes[:-1], out=self.pair_start[1:])
         self.tiled = colliders.shapes.take(np.tile(np.arange(self.h), batch))
+        local_lo, local_hi = colliders.shapes.aabbs(None)
+        self.local_centre = 0.5 * (local_lo + local_hi)
+        self.local_half = 0.5 * (local_hi - local_lo)
         self.narrow_pairs = 0
         self.failed = np.zeros(len(self.pairs), dtype=np.int64)
         self.kinematics_seconds = 0.0
@@ -267,9 +271,15 @@ class _Sampler:
         middle = time.perf_counter()
         self.kinematics_seconds += middle - began
 
-        lo, hi = self.tiled.aabbs(poses, threads=self.threads)
-        lo = lo[: c * h].reshape(c, h, 3) - 0.5 * self.padding
-        hi = hi[: c * h].reshape(c, h, 3) + 0.5 * self.padding
+        # World boxes of the parts' local boxes (Arvo 1990: centre moved, half extents by |R|):
+        # never smaller than the parts' own world boxes, and numpy over every configuration.
+        rotation = poses[: c * h, :3, :3]
+        centre = np.einsum("kij,kj->ki", rotation, self.local_centre[np.tile(np.arange(h), c)])
+        centre += poses[: c * h, :3, 3]
+        half = np.einsum("kij,kj->ki", np.abs(rotation), self.local_half[np.tile(np.arange(h), c)])
+        half += 0.5 * self.padding
+        lo = (centre - half).reshape(c, h, 3)
+        hi = (centre + half).reshape(c, h, 3)
         starts = colliders.body_part_offsets[:-1]
         body_lo = np.minimum.reduceat(lo, starts, axis=1)
         body_hi = np.maximum.reduceat(hi, starts, axis=1)
