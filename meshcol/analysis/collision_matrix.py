@@ -145,7 +145,8 @@ class CollisionMatrixReport:
         Every pair of links with collision geometry, sorted by (link_a, link_b), link_a <
         link_b: ``class``, ``reason`` (the SRDF reason, None for ``sometimes``),
         ``collisions`` (samples in collision), ``rate`` (collisions / samples), ``adjacent``,
-        ``default_collision``, ``failed_queries``.
+        ``default_collision``, ``failed_queries``; adjacent pairs are never measured (their
+        collisions, rate and default_collision are None), as MoveIt never checks them.
     joints : list of dict
         The sampled joints: name, lower, upper, default.
     summary : dict
@@ -222,6 +223,7 @@ class _Sampler:
         padding: float,
         batch: int,
         threads: int,
+        skip: np.ndarray | None = None,
     ) -> None:
         self.kinematics = kinematics
         self.colliders = colliders
@@ -234,6 +236,8 @@ class _Sampler:
         self.h = len(colliders.part_body)
         i, j = np.triu_indices(n, k=1)
         self.pairs = np.stack([i, j], axis=1).astype(np.int64)
+        # pairs never measured (adjacent links: never checked, as MoveIt's setup assistant)
+        self.skip = np.zeros(len(self.pairs), bool) if skip is None else np.asarray(skip, bool)
         # Every part pair of every link pair, grouped by link pair (computed once).
         self.part_pairs = _cartesian_part_pairs(self.pairs, colliders.body_part_offsets)
         part_of = colliders.body_part_offsets
@@ -287,6 +291,7 @@ class _Sampler:
         # NaN boxes (an invalid pose or shape) compare False: the pair goes to the narrow
         # phase, which gives it its status.
         apart = np.any((body_lo[:, a] > body_hi[:, b]) | (body_lo[:, b] > body_hi[:, a]), axis=2)
+        apart |= self.skip
         config, pair = np.nonzero(~apart)
         # The part pairs of the overlapping (configuration, link pair) candidates.
         sizes = self.pair_sizes[pair]
@@ -382,6 +387,12 @@ def collision_matrix(
     load_seconds = time.perf_counter() - began
 
     space = kinematics.space
+    names = [b.name for b in bodies]
+    adjacent = set(adjacent_links(kinematics.links, kinematics.edges, names))
+    i, j = np.triu_indices(len(bodies), k=1)
+    skip = np.array(
+        [tuple(sorted((names[a], names[b]))) in adjacent for a, b in zip(i, j)], dtype=bool
+    )
     sampler = _Sampler(
         kinematics,
         colliders,
@@ -390,6 +401,7 @@ def collision_matrix(
         opts.padding,
         _batch(opts, len(colliders.shapes.vertices)),
         opts.threads,
+        skip,
     )
     at_default = sampler.collide(space.default[None])[0]
     configurations = space.sample(opts.samples, opts.seed)
@@ -400,8 +412,6 @@ def collision_matrix(
         report(f"collision-matrix: {min(start + step, opts.samples)}/{opts.samples} configurations")
     seconds = time.perf_counter() - began
 
-    names = [b.name for b in bodies]
-    adjacent = set(adjacent_links(kinematics.links, kinematics.edges, names))
     rate = counts / opts.samples
     pairs = []
     for (i, j), hits, r, default, failed in zip(
@@ -429,10 +439,10 @@ def collision_matrix(
                 "link_b": b,
                 "class": kind,
                 "reason": SRDF_REASON.get(kind),
-                "collisions": hits,
-                "rate": r,
+                "collisions": None if is_adjacent else hits,
+                "rate": None if is_adjacent else r,
                 "adjacent": is_adjacent,
-                "default_collision": bool(default),
+                "default_collision": None if is_adjacent else bool(default),
                 "failed_queries": failed,
             }
         )
