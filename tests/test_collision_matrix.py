@@ -410,3 +410,29 @@ def test_solo_matches_its_srdf(corpus: Path) -> None:
     assert adjacent - set(theirs) == {
         (f"{leg}_FOOT", f"{leg}_LOWER_LEG") for leg in ["FL", "FR", "HL", "HR"]
     }
+
+
+def test_default_is_the_middle_of_limits_that_exclude_zero(tmp_path: Path) -> None:
+    # as MoveIt's setToDefaultValues: the ball sits at 1.5, inside the post reaching 1.6; it
+    # touches the post for lift <= 1.65
+    path = tmp_path / "lift.urdf"
+    path.write_text(
+        '<robot name="lift"><link name="base"><collision><origin xyz="0 0 0.8"/><geometry>'
+        '<box size="0.2 0.2 1.6"/></geometry></collision></link>'
+        '<link name="mid"><collision><origin xyz="5 0 0"/><geometry><sphere radius="0.1"/>'
+        "</geometry></collision></link>"
+        '<joint name="m" type="fixed"><parent link="base"/><child link="mid"/></joint>'
+        '<link name="ball"><collision><geometry><sphere radius="0.05"/></geometry></collision>'
+        '</link><joint name="lift" type="prismatic"><axis xyz="0 0 1"/><parent link="mid"/>'
+        '<child link="ball"/>'
+        '<limit lower="1" upper="2" effort="1" velocity="1"/></joint></robot>'
+    )
+    report = collision_matrix(path, samples=400, seed=0)
+    assert report.joints == [{"name": "lift", "lower": 1.0, "upper": 2.0, "default": 1.5}]
+    pairs = by_pair(report)
+    assert pairs[("ball", "base")]["class"] == "default"
+    assert within(pairs[("ball", "base")]["rate"], 0.65, 400)
+    assert report.warnings == [
+        "joint 'lift': zero is outside its limits [1, 2]; the default configuration has it at "
+        "the middle, 1.5 (give --joint lift=VALUE to choose)"
+    ]
