@@ -41,6 +41,7 @@ _LAZY: dict[str, str] = {
     "load_scene": "meshcol.io.scene",
     "load_inputs": "meshcol.io.scene",
     "load_robot": "meshcol.io.robot",
+    "load_robot_model": "meshcol.io.robot",
     "RobotOptions": "meshcol.io.robot",
     "write_meshes": "meshcol.io.mesh_write",
     # hulls and inspection
@@ -104,6 +105,8 @@ _LAZY: dict[str, str] = {
     "Colliders": "meshcol.analysis.colliders",
     "build_colliders": "meshcol.analysis.colliders",
     "check": "meshcol.analysis.check",
+    "collision_matrix": "meshcol.analysis.collision_matrix",
+    "CollisionMatrixReport": "meshcol.analysis.collision_matrix",
     "check_scene": "meshcol.analysis.check",
     "CheckOptions": "meshcol.analysis.check",
     "CheckReport": "meshcol.analysis.check",

@@ -220,12 +220,20 @@ def test_envelope_function() -> None:
 def test_envelope_is_the_same_in_every_command_report(samples: Path, tmp_path: Path) -> None:
     """Each library report object starts from the one envelope, in the same shape."""
     from meshcol.analysis.check import check
+    from meshcol.analysis.collision_matrix import collision_matrix
     from meshcol.analysis.hull import hull
     from meshcol.analysis.inspect import inspect
     from meshcol.analysis.sweep import sweep
     from meshcol.decomposition.batch import decompose_files
 
     wall = samples / "bullet" / "wall.obj"
+    robot = tmp_path / "two.urdf"
+    robot.write_text(
+        '<robot name="two"><link name="a"><collision><geometry><sphere radius="1"/></geometry>'
+        '</collision></link><link name="b"><collision><geometry><box size="1 1 1"/></geometry>'
+        '</collision></link><joint name="j" type="fixed"><parent link="a"/><child link="b"/>'
+        "</joint></robot>"
+    )
     reports = {
         "check": check([samples / "bowl" / "scene.json"]),
         "sweep": sweep(samples / "bullet" / "scene.json"),
@@ -239,6 +247,7 @@ def test_envelope_is_the_same_in_every_command_report(samples: Path, tmp_path: P
             resolution=500,
             engine_options={"mcts_iterations": "20", "mcts_nodes": "8", "mcts_max_depth": "2"},
         ),
+        "collision-matrix": collision_matrix(robot, samples=10),
     }
     assert set(reports) == set(COMMANDS)
     shapes = {}

@@ -35,6 +35,7 @@ COMMANDS: dict[str, str] = {
     "inspect": "meshcol.cli.inspect:inspect",
     "sweep": "meshcol.cli.sweep:sweep",
     "check": "meshcol.cli.check:check",
+    "collision-matrix": "meshcol.cli.collision_matrix:collision_matrix",
 }
 
 CONTEXT_SETTINGS = {"help_option_names": ["-h", "--help"], "max_content_width": 100}

@@ -47,6 +47,13 @@ from typing import Any
 import numpy as np
 
 from meshcol.errors import InputFileError, MeshcolError, MissingDependencyError, SceneError
+from meshcol.io.kinematics import (
+    Kinematics,
+    MjcfKinematics,
+    UrdfKinematics,
+    apply_mjcf_followers,
+    mjcf_followers,
+)
 from meshcol.io.report import read_json_file
 from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere
 
@@ -54,7 +61,9 @@ __all__ = [
     "ROBOT_EXTENSIONS",
     "RobotOptions",
     "is_robot_file",
+    "RobotModel",
     "load_robot",
+    "load_robot_model",
     "parse_joint_values",
     "robot_options",
     "current_robot_options",
@@ -170,6 +179,22 @@ def _root_tag(path: str) -> str | None:
     return match.group(1) if match else None
 
 
+@dataclass(frozen=True, eq=False)
+class RobotModel:
+    """A robot description read once: the scene at one configuration and its kinematics.
+
+    Attributes
+    ----------
+    scene : Scene
+        As :func:`load_robot` returns it.
+    kinematics : meshcol.io.kinematics.Kinematics
+        Link poses of any configuration (``kinematics.loaded``: the scene's).
+    """
+
+    scene: Scene
+    kinematics: Kinematics
+
+
 def load_robot(path: str | os.PathLike[str], options: RobotOptions | None = None) -> Scene:
     """Read a URDF or MJCF file as a scene: one body per link with collision geometry.
 
@@ -197,6 +222,14 @@ def load_robot(path: str | os.PathLike[str], options: RobotOptions | None = None
         Anything wrong in the description, one line naming the link or joint (MuJoCo's own
         message for an MJCF it rejects).
     """
+    return load_robot_model(path, options).scene
+
+
+def load_robot_model(
+    path: str | os.PathLike[str], options: RobotOptions | None = None
+) -> RobotModel:
+    """:func:`load_robot`, with the robot's kinematics (batched link poses of configurations,
+    :mod:`meshcol.io.kinematics`) for commands that move the links."""
     options = options or current_robot_options()
     source = os.fspath(path)
     file = Path(source)
@@ -206,9 +239,9 @@ def load_robot(path: str | os.PathLike[str], options: RobotOptions | None = None
         raise InputFileError("is a directory, not a robot description", source)
     root = _root_tag(source)
     if root == "mujoco" or (file.suffix.lower() == ".mjcf" and root != "robot"):
-        scene, links = _load_mjcf(source, options)
+        scene, links, kinematics = _load_mjcf(source, options)
     else:
-        scene, links = _load_urdf(source, options)
+        scene, links, kinematics = _load_urdf(source, options)
     if not scene.bodies:
         raise SceneError(
             f"no link has collision geometry ({len(links)} link(s), no <collision> element "
@@ -235,7 +268,8 @@ def load_robot(path: str | os.PathLike[str], options: RobotOptions | None = None
         if a in bodies and b in bodies and a != b and key not in seen:
             seen.add(key)
             kept.append((key[0], key[1], reason))
-    return dataclasses.replace(scene, excluded_pairs=tuple(kept), warnings=tuple(warnings))
+    scene = dataclasses.replace(scene, excluded_pairs=tuple(kept), warnings=tuple(warnings))
+    return RobotModel(scene, kinematics)
 
 
 def _check_body(body: Body, source: str) -> None:
@@ -255,7 +289,7 @@ def _check_body(body: Body, source: str) -> None:
 # --- URDF -----------------------------------------------------------------------------------
 
 
-def _load_urdf(source: str, options: RobotOptions) -> tuple[Scene, set[str]]:
+def _load_urdf(source: str, options: RobotOptions) -> tuple[Scene, set[str], Kinematics]:
     try:
         import yourdfpy
         from lxml import etree
@@ -322,20 +356,27 @@ def _load_urdf(source: str, options: RobotOptions) -> tuple[Scene, set[str]]:
     children: dict[str, list[Any]] = {}
     for joint in robot.joints:
         children.setdefault(joint.parent, []).append(joint)
-    poses = {roots[0]: np.eye(4)}
+    reached = {roots[0]}
     stack = [roots[0]]
     while stack:
-        name = stack.pop()
-        for joint in children.get(name, []):
-            poses[joint.child] = (
-                poses[name]
-                @ _origin(joint.origin)
-                @ _joint_motion(joint, values.get(joint.name, 0.0), source)
-            )
+        for joint in children.get(stack.pop(), []):
+            reached.add(joint.child)
             stack.append(joint.child)
-    if len(poses) != len(links):
-        stray = next(n for n in links if n not in poses)
+    if len(reached) != len(links):
+        stray = next(n for n in links if n not in reached)
         raise SceneError(f"joint cycle: {_cycle(parent_joint, stray)}", source)
+    kinematics = UrdfKinematics(
+        robot.joints,
+        links,
+        roots[0],
+        lambda j: _limits(j, source),
+        options.joints,
+        values,
+        source,
+        name=robot.name or "",
+    )
+    link_poses = kinematics.link_poses(kinematics.loaded[None])[0]
+    poses = {name: link_poses[i] for i, name in enumerate(links)}
 
     resolver = _PackageResolver(source, options.package_paths)
     resolver.preload(
@@ -368,7 +409,7 @@ def _load_urdf(source: str, options: RobotOptions) -> tuple[Scene, set[str]]:
         excluded_pairs=tuple(excluded),
         warnings=tuple(warnings),
     )
-    return scene, link_set
+    return scene, link_set, kinematics
 
 
 def _one_line(text: str) -> str:
@@ -498,23 +539,6 @@ def _urdf_joint_values(
 
 def _origin(matrix: np.ndarray | None) -> np.ndarray:
     return np.eye(4) if matrix is None else np.asarray(matrix, dtype=np.float64)
-
-
-def _joint_motion(joint: Any, value: float, source: str) -> np.ndarray:
-    motion = np.eye(4)
-    if joint.type in ("fixed", "floating", "planar"):
-        return motion
-    axis = np.array([1.0, 0.0, 0.0]) if joint.axis is None else np.asarray(joint.axis, float)
-    norm = float(np.linalg.norm(axis))
-    if not math.isfinite(norm) or norm == 0.0:
-        raise SceneError(f"joint {joint.name!r}: axis must be a finite non-zero vector", source)
-    axis = axis / norm
-    if joint.type == "prismatic":
-        motion[:3, 3] = axis * value
-    else:  # revolute, continuous
-        k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-        motion[:3, :3] = np.eye(3) + math.sin(value) * k + (1 - math.cos(value)) * (k @ k)
-    return motion
 
 
 class _PackageResolver:
@@ -774,7 +798,7 @@ def _parts_body(
 # --- MJCF -----------------------------------------------------------------------------------
 
 
-def _load_mjcf(source: str, options: RobotOptions) -> tuple[Scene, set[str]]:
+def _load_mjcf(source: str, options: RobotOptions) -> tuple[Scene, set[str], Kinematics]:
     try:
         import mujoco
     except ImportError:
@@ -799,14 +823,7 @@ def _load_mjcf(source: str, options: RobotOptions) -> tuple[Scene, set[str]]:
         return mujoco.mj_id2name(model, obj.mjOBJ_JOINT, jid) or f"#{jid}"
 
     # <equality><joint joint1 joint2 polycoef>: joint1 follows joint2, as a URDF mimic joint
-    followers: dict[int, tuple[int, np.ndarray]] = {}
-    for e in range(model.neq):
-        if int(model.eq_type[e]) != int(mujoco.mjtEq.mjEQ_JOINT) or not model.eq_active0[e]:
-            continue
-        followers[int(model.eq_obj1id[e])] = (
-            int(model.eq_obj2id[e]),
-            np.array(model.eq_data[e][:5], dtype=np.float64),
-        )
+    followers = mjcf_followers(model)
     given: set[int] = set()
     for name, value in options.joints.items():
         jid = mujoco.mj_name2id(model, obj.mjOBJ_JOINT, name)
@@ -843,12 +860,9 @@ def _load_mjcf(source: str, options: RobotOptions) -> tuple[Scene, set[str]]:
                 f"[{lower:g}, {upper:g}]; at {nearest:g} (give --joint "
                 f"{joint_name(jid)}=VALUE to choose)"
             )
-    for follower, (master, coefficients) in followers.items():
-        ref1 = float(model.qpos0[model.jnt_qposadr[follower]])
-        x = 0.0
-        if master >= 0:
-            x = float(data.qpos[model.jnt_qposadr[master]] - model.qpos0[model.jnt_qposadr[master]])
-        data.qpos[model.jnt_qposadr[follower]] = ref1 + float(np.polyval(coefficients[::-1], x))
+    qpos = np.array(data.qpos, dtype=np.float64)[None]
+    apply_mjcf_followers(model, qpos, followers)
+    data.qpos[:] = qpos[0]
     for jid in range(model.njnt):
         if not model.jnt_limited[jid] or int(model.jnt_type[jid]) not in scalar_joints:
             continue
@@ -945,7 +959,7 @@ def _load_mjcf(source: str, options: RobotOptions) -> tuple[Scene, set[str]]:
         excluded_pairs=tuple(excluded),
         warnings=tuple(warnings),
     )
-    return scene, set(names)
+    return scene, set(names), MjcfKinematics(model, np.array(data.qpos), source)
 
 
 # --- SRDF -----------------------------------------------------------------------------------

@@ -1,0 +1,206 @@
+"""``meshcol collision-matrix``: a robot's self-collision matrix, written as SRDF."""
+
+from __future__ import annotations
+
+import contextlib
+
+import click
+
+from meshcol.analysis.collision_matrix import MATRIX_CLASSES, MATRIX_COLLIDERS
+from meshcol.cli.common import (
+    FiniteFloat,
+    Progress,
+    plural,
+    report_format,
+    robot_options,
+    verdict,
+)
+from meshcol.decomposition.engines import ENGINES
+
+#: Rows of the summary table: the pairs that stay checked, most often colliding first.
+TABLE_ROWS = 10
+
+
+@click.command(
+    "collision-matrix",
+    short_help="Sample a robot's joints: link pairs adjacent, default, always, never, sometimes.",
+)
+@click.argument("robot", metavar="ROBOT")
+@click.option(
+    "--samples",
+    type=click.IntRange(min=1),
+    default=10_000,
+    show_default=True,
+    help="Random joint configurations (uniform within the limits).",
+)
+@click.option(
+    "--seed",
+    type=click.IntRange(min=0),
+    default=0,
+    show_default=True,
+    help="Seed of the configurations: the same seed gives the same matrix.",
+)
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(dir_okay=False, allow_dash=True),
+    default=None,
+    metavar="FILE.srdf",
+    help="Write the SRDF <disable_collisions> entries to FILE ('-': stdout).  [default: stdout, "
+    "unless --report is '-']",
+)
+@click.option(
+    "--report",
+    type=click.Path(dir_okay=False, allow_dash=True),
+    default=None,
+    metavar="FILE",
+    help="Write the report (every pair, its class and rate) to FILE ('-': stdout), JSON or CSV "
+    "by its extension (.json, .csv; JSON otherwise).  [default: none]",
+)
+@click.option(
+    "--shape",
+    type=click.Choice(MATRIX_COLLIDERS),
+    default="hull",
+    show_default=True,
+    help="Collision shape of each collision element (primitives are always exact).",
+)
+@click.option(
+    "--padding",
+    type=FiniteFloat(min=0.0),
+    default=0.0,
+    show_default=True,
+    help="Metres: links closer than this count as colliding.",
+)
+@click.option(
+    "--always-fraction",
+    type=FiniteFloat(min=0.0, max=1.0, min_open=True),
+    default=0.95,
+    show_default=True,
+    help="Pairs colliding in at least this fraction of the samples are 'always' (MoveIt: 0.95).",
+)
+@click.option(
+    "--threads",
+    type=click.IntRange(min=0),
+    default=0,
+    show_default=True,
+    help="Threads for the native queries (0: all cores).",
+)
+@click.option(
+    "--engine",
+    type=click.Choice(ENGINES),
+    default="coacd",
+    show_default=True,
+    help="Decomposition engine for --shape decomposed (parts missing from the cache).",
+)
+@click.option(
+    "--cache-dir",
+    type=click.Path(file_okay=False),
+    default=None,
+    help="Decompose cache folder.  [default: the user cache, as 'meshcol decompose']",
+)
+@robot_options()
+def collision_matrix(
+    robot: str,
+    samples: int,
+    seed: int,
+    output: str | None,
+    report: str | None,
+    shape: str,
+    padding: float,
+    always_fraction: float,
+    threads: int,
+    engine: str,
+    cache_dir: str | None,
+) -> None:
+    """Classify every pair of links of ROBOT (URDF or MJCF) as MoveIt's setup assistant does.
+
+    Joint configurations are sampled uniformly within the limits (continuous joints over
+    [-pi, pi]; mimic joints follow their leader; fixed joints stay fixed). Each pair of links
+    with collision geometry is, in this order: adjacent (joined by a joint, or through links
+    without geometry), default (colliding at the default configuration: zero, or the middle of
+    the limits when zero is outside them; --joint/--joints set it), always (colliding in at
+    least --always-fraction of the samples), never (in none of them), or sometimes (with its
+    rate). The first four are written as SRDF <disable_collisions> entries (reasons Adjacent,
+    Default, Always, Never) to --output; --report writes every pair with its class and
+    collision rate as JSON. Exit 0 when written, 2 on bad input (nothing written).
+
+    \b
+    Examples:
+      meshcol collision-matrix panda.urdf --samples 10000 --seed 1 -o panda.srdf
+      meshcol collision-matrix robot.xml -o robot.srdf --report matrix.json
+      meshcol check panda.urdf --srdf panda.srdf
+    """
+    from meshcol.analysis.collision_matrix import collision_matrix as run
+    from meshcol.cli.common import check_outputs
+    from meshcol.io.report import atomic_path, emit
+
+    if output is not None and output == report:
+        raise click.BadParameter(
+            f"{output!r} is also the --report: give two files", param_hint="'-o' / '--output'"
+        )
+    srdf_to = "-" if output is None and report != "-" else output
+    check_outputs([robot], [("-o/--output", srdf_to), ("--report", report)])
+    fmt = report_format(report, None, format_option=False)
+    decompose: dict = {"engine": engine}
+    if cache_dir is not None:
+        decompose["cache_dir"] = cache_dir
+    progress = Progress(command="collision-matrix", heartbeat=True)
+    try:
+        result = run(
+            robot,
+            progress=progress,
+            samples=samples,
+            seed=seed,
+            collider=shape,
+            padding=padding,
+            always_fraction=always_fraction,
+            threads=threads,
+            decompose_options=decompose,
+        )
+    finally:
+        progress.done()
+
+    # Both files or neither: each is renamed into place only once both are written.
+    files = [
+        (srdf_to, result.to_srdf()),
+        (report, result.to_csv() if fmt == "csv" else result.to_json()),
+    ]
+    with contextlib.ExitStack() as stack:
+        for path, text in files:
+            if path in (None, "-"):
+                continue
+            with open(stack.enter_context(atomic_path(path)), "w", encoding="utf-8") as f:
+                f.write(text)
+    for path, text in files:
+        if path == "-":
+            emit(text, None)
+    for warning in result.warnings:
+        click.echo(f"meshcol: warning: {warning}", err=True)
+    click.echo(summary_table(result), err=True)
+
+
+def summary_table(result) -> str:
+    """A short human summary: counts per class, the most frequent sometimes pairs, the verdict."""
+    s = result.summary
+    lines = [
+        f"meshcol: collision-matrix: {plural(s['links'], 'link')}, "
+        f"{plural(s['link_pairs'], 'pair')}, {plural(s['samples'], 'sample')} (seed {s['seed']}, "
+        f"{s['seconds_per_configuration'] * 1e6:.1f} us per configuration, {s['seconds']:.3f} s "
+        "in all)",
+        "  " + "  ".join(f"{name}: {s['pairs_by_class'][name]}" for name in MATRIX_CLASSES),
+    ]
+    checked = sorted(
+        (p for p in result.pairs if p["class"] == "sometimes"), key=lambda p: -p["rate"]
+    )
+    if checked:
+        lines.append(f"  {'rate':>8}  sometimes colliding (still checked)")
+        for p in checked[:TABLE_ROWS]:
+            lines.append(f"  {p['rate']:8.4f}  {p['link_a']} <-> {p['link_b']}")
+        if len(checked) > TABLE_ROWS:
+            lines.append(f"  ... {len(checked) - TABLE_ROWS} more (every pair is in the report)")
+    detail = (
+        f"{plural(s['disabled_pairs'], 'pair')} disabled, "
+        f"{plural(s['pairs_by_class']['sometimes'], 'pair')} still checked"
+    )
+    lines.append(verdict("collision-matrix", True, detail))
+    return "\n".join(lines)
