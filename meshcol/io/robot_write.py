@@ -232,7 +232,7 @@ def write_robot(
             for name, (vertices, faces) in zip(names, c.parts):
                 write_meshes(os.path.join(stage, name), [(Path(name).stem, vertices, faces)])
         if to == "urdf":
-            atomic_write(target, _urdf_text(robot, files, {}))
+            atomic_write(target, _urdf_text(robot, files, {}, out_dir))
         elif to == "mjcf":
             atomic_write(target, _mjcf_text(robot, files, stage, out_dir))
         elif to == "glb":
@@ -285,13 +285,27 @@ def _parse_xml(source: str) -> Any:
 # --- URDF -----------------------------------------------------------------------------------
 
 
-def _urdf_text(robot: RobotColliders, files: dict[int, list[str]], prefix: dict[str, str]) -> str:
+def _urdf_text(
+    robot: RobotColliders,
+    files: dict[int, list[str]],
+    prefix: dict[str, str],
+    out_dir: str | None = None,
+) -> str:
     """The input URDF with each rebuilt ``<collision>`` pointing at its part files
-    (``prefix``: folder prepended to the part file names, for MuJoCo's importer)."""
+    (``prefix``: folder prepended to the part file names, for MuJoCo's importer). With
+    ``out_dir``, the other relative mesh references (visuals) are made relative to it, so that
+    they still name the input's files; ``package://`` and absolute references stay as written."""
     from lxml import etree
 
     tree = _parse_xml(robot.source)
     root = tree.getroot()
+    if out_dir is not None:
+        folder = os.path.dirname(os.path.abspath(robot.source))
+        for mesh in root.iter("mesh"):
+            reference = mesh.get("filename") or ""
+            if reference and "://" not in reference and not os.path.isabs(reference):
+                moved = os.path.relpath(os.path.join(folder, reference), os.path.abspath(out_dir))
+                mesh.set("filename", Path(moved).as_posix())
     links = {link.get("name"): link for link in root.findall("link")}
     for i, collider in enumerate(robot.colliders):
         if collider.primitive is not None:
