@@ -529,3 +529,19 @@ def test_panda_hulls_urdf_and_mjcf(panda: Path, tmp_path: Path) -> None:
     found, model_mj, _ = mujoco_parts(mj / "panda.xml", qpos)
     match_all(expected, found, 1e-6)
     assert model_mj.nbody == 14  # world and every link, fixed ones included
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["solo.urdf", "solo12.urdf"])
+def test_solo_hulls_to_mjcf(corpus, name: str, tmp_path: Path) -> None:
+    path = corpus / "robots" / "solo_description" / "robots" / name
+    if not path.is_file():
+        pytest.skip("corpus robots not present")
+    out = tmp_path / "out"
+    code, _, stderr = run(
+        "hull", str(path), "--max-vertices", "32", "--out-dir", str(out), "--to", "mjcf"
+    )
+    assert code == 0, stderr
+    _, expected = computed(path, max_vertices=32)
+    found, _, _ = mujoco_parts(out / path.with_suffix(".xml").name, {})
+    match_all(expected, found, 1e-6)

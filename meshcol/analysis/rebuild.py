@@ -143,7 +143,7 @@ def robot_colliders(
         body = _element_body(link, index, source, blocks)
         if method == "hull":
             if progress is not None:
-                progress(f"hull: {link}")
+                progress(f"hull: {g + 1}/{len(groups)} collision elements")
             try:
                 result = convex_hull(body.vertices, max_vertices=max_vertices)
             except InvalidMeshError as exc:
