@@ -74,7 +74,9 @@ MJCF = """\
       <geom class="collision" type="box" size="0.1 0.1 0.1" pos="0.3 0 0"/>
       <body name="arm" pos="0 0 0.3" euler="10 0 0">
         <joint name="j" type="hinge" axis="0 1 0" range="-30 30"/>
-        <geom name="armcol" type="mesh" mesh="arm" pos="0 0.1 0" axisangle="1 0 0 15"/>
+        <frame pos="0 0.05 0" euler="0 0 30"><frame pos="0.02 0 0" euler="10 0 0">
+          <geom name="armcol" type="mesh" mesh="arm" pos="0 0.1 0" axisangle="1 0 0 15"/>
+        </frame></frame>
         <geom type="capsule" size="0.02 0.05" pos="0.1 0 0"/>
       </body>
     </body>

@@ -382,11 +382,11 @@ def _mjcf_text(robot: RobotColliders, files: dict[int, list[str]], stage: str, o
         spec = _spec(mujoco, robot.source, lambda: mujoco.MjSpec.from_file(robot.source))
         _compile(mujoco, spec, robot.source)
         geoms = {geom.id: geom for geom in spec.geoms}
-        replaced: set[int] = set()
+        rebuilt = [geoms[c.index] for c in robot.colliders if c.primitive is None]
+        in_frame = _frame_inverses(mujoco, spec, robot.source, rebuilt)
         mesh_names = {m.name for m in spec.meshes}
         for i, collider in enumerate(robot.colliders):
             geom = geoms[collider.index]
-            replaced.add(collider.index)
             geom.group = 3
             if collider.primitive is not None:
                 continue
@@ -410,8 +410,10 @@ def _mjcf_text(robot: RobotColliders, files: dict[int, list[str]], stage: str, o
                 target.meshname = name
                 # The parts are in the body frame: no offset, no orientation of any kind
                 # (an euler/axisangle/xyaxes/zaxis attribute overrides quat in MuJoCo).
-                target.pos = [0.0, 0.0, 0.0]
-                target.quat = [1.0, 0.0, 0.0, 0.0]
+                # A geom inside <frame> elements gets the inverse of their pose.
+                pos, quat = in_frame.get(id(target), ([0.0] * 3, [1.0, 0.0, 0.0, 0.0]))
+                target.pos = pos
+                target.quat = quat
                 target.alt.type = mujoco.mjtOrientation.mjORIENTATION_QUAT
                 target.fromto = [np.nan] * 6
             if geom.name and len(files[i]) > 1:
@@ -452,6 +454,39 @@ def _relative_files(text: str, stage: str, out_dir: str) -> str:
         else:
             element.set("file", Path(os.path.relpath(file, out_dir)).as_posix())
     return etree.tostring(root, encoding="unicode") + "\n"
+
+
+def _frame_inverses(
+    mujoco: Any, spec: Any, source: str, geoms: list[Any]
+) -> dict[int, tuple[list[float], list[float]]]:
+    """For each geom placed inside ``<frame>`` elements, the (pos, quat) that cancels the
+    frames' pose in the body frame, keyed by ``id(geom)``: a probe sphere at the frame's
+    origin is compiled, and its compiled pose is the frames' pose (what MuJoCo makes of
+    nested frames and their orientation attributes)."""
+    framed = [g for g in geoms if g.frame is not None]
+    if not framed:
+        return {}
+    probes = []
+    for geom in framed:
+        probe = geom.parent.add_geom()
+        probe.type = mujoco.mjtGeom.mjGEOM_SPHERE
+        probe.size = [1.0, 0.0, 0.0]
+        probe.contype = probe.conaffinity = 0
+        probe.set_frame(geom.frame)
+        probes.append(probe)
+    model = _compile(mujoco, spec, source)
+    out: dict[int, tuple[list[float], list[float]]] = {}
+    for geom, probe in zip(framed, probes):
+        pos = np.array(model.geom_pos[probe.id], dtype=np.float64)
+        quat = np.array(model.geom_quat[probe.id], dtype=np.float64)
+        conjugate = quat * np.array([1.0, -1.0, -1.0, -1.0])
+        rotation = np.zeros(9)
+        mujoco.mju_quat2Mat(rotation, quat)
+        inverse_pos = -(rotation.reshape(3, 3).T @ pos)
+        out[id(geom)] = (inverse_pos.tolist(), conjugate.tolist())
+    for probe in probes:
+        spec.delete(probe)
+    return out
 
 
 def _spec(mujoco: Any, source: str, make: Any) -> Any:
