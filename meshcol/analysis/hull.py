@@ -19,7 +19,14 @@ from meshcol.io.outputs import check_destinations
 from meshcol.io.scene import as_scene
 from meshcol.types import Body
 
-__all__ = ["CSV_COLUMNS", "HullReport", "OutputDestinationError", "hull", "out_dir_paths"]
+__all__ = [
+    "CSV_COLUMNS",
+    "HullReport",
+    "OutputDestinationError",
+    "hull",
+    "hull_row",
+    "out_dir_paths",
+]
 
 #: Columns of :meth:`HullReport.to_csv`, one row per body.
 CSV_COLUMNS = (
@@ -94,6 +101,10 @@ class HullReport:
         The scene manifest's units.
     warnings : tuple of str
         One line per flat body (``FILE: body 'NAME' is flat: ...``).
+    frame : {"world", "link"}
+        Frame of the hulls: ``link`` for a robot rebuilt (:func:`meshcol.analysis.rebuild.rebuild_robot`).
+    description, to : str or None
+        The robot description written with the hulls, and its format.
     """
 
     bodies: list[dict[str, Any]]
@@ -103,6 +114,9 @@ class HullReport:
     out_dir: str | None
     units: str | None
     warnings: tuple[str, ...] = ()
+    frame: str = "world"
+    description: str | None = None
+    to: str | None = None
 
     @property
     def exit_code(self) -> int:
@@ -122,12 +136,15 @@ class HullReport:
 
     @property
     def settings(self) -> dict[str, Any]:
-        return {
+        settings = {
             "max_vertices": self.max_vertices,
-            "frame": "world",
+            "frame": self.frame,
             "output": self.output,
             "out_dir": self.out_dir,
         }
+        if self.description is not None:
+            settings.update(description=self.description, to=self.to)
+        return settings
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON report: the common envelope, the summary and one entry per body."""
@@ -289,7 +306,7 @@ def hull(
         destinations = list(paths)
 
     rows = [
-        _row(body, result, volume, destination)
+        hull_row(body, result, volume, destination)
         for body, result, volume, destination in zip(bodies, hulls, volumes, destinations)
     ]
     return HullReport(
@@ -297,9 +314,10 @@ def hull(
     )
 
 
-def _row(
+def hull_row(
     body: Body, result: Any, volume: tuple[float, int] | None, destination: str | None
 ) -> dict:
+    """One report row (:data:`CSV_COLUMNS` and ``note``) for a body and its hull."""
     budget = result.max_vertices is not None
     mesh_volume = None if volume is None else volume[0]
     ratio = None

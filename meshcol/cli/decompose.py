@@ -120,6 +120,14 @@ def _engine_option(
     help="Output format (glb: one node per part; not with ucx).",
 )
 @click.option(
+    "--to",
+    "to",
+    type=click.Choice(["urdf", "mjcf", "glb", "usd"]),
+    default=None,
+    help="Robot input (URDF, MJCF): the format of the description written with the parts, "
+    "OUT/<robot>.urdf|.xml|.glb|.usda (usd needs meshcol[usd]).  [default: the input's]",
+)
+@click.option(
     "--report",
     type=click.Path(dir_okay=False),
     default=None,
@@ -152,6 +160,7 @@ def decompose_command(
     no_cache: bool,
     layout: str,
     fmt: str,
+    to: str | None,
     report: str | None,
     max_hausdorff: float | None,
 ) -> None:
@@ -167,9 +176,18 @@ def decompose_command(
     location is checked before the work starts, and nothing is written on failure); 130 on
     Ctrl-C, 143 on SIGTERM, with no output, no cache entry and no worker left behind.
 
+    A robot description (URDF, or MJCF) is rebuilt: the parts of each collision element's
+    meshes (in parallel with --jobs, one mesh a task) go to OUT/<link>_NN.obj in the link's
+    frame, and a copy of the description, OUT/<robot>.urdf, has one <collision> element per
+    part (visuals, inertials, joints, comments and unknown tags untouched; box, sphere,
+    cylinder and capsule elements kept, being exact). --to mjcf writes OUT/<robot>.xml in
+    MuJoCo Menagerie's convention; --to glb and --to usd the parts at the joint
+    configuration. --layout and --format do not apply.
+
     \b
     Examples:
       meshcol decompose mug.obj --out-dir collision/
+      meshcol decompose panda.urdf --out-dir panda_parts/ --jobs 2 --to mjcf
       meshcol decompose props/*.obj -o collision/ --jobs 4 --timeout 120 --report decompose.json
       meshcol decompose chair.obj -o out/ --layout ucx --max-hulls 16 --max-vertices 32
       meshcol decompose bottle.obj -o out/ --engine vhacd --layout combined --format glb
@@ -209,7 +227,65 @@ def decompose_command(
         },
         inputs=inputs,
     )
+    from click.core import ParameterSource
+
+    from meshcol.io.robot import is_robot_file
+
+    robot = len(inputs) == 1 and is_robot_file(inputs[0])
+    if to is not None and not robot:
+        raise click.UsageError("--to needs one robot description (URDF, MJCF)")
+    if robot:
+        for name, flag in (("layout", "--layout"), ("fmt", "--format")):
+            if ctx.get_parameter_source(name) == ParameterSource.COMMANDLINE:
+                raise click.UsageError(
+                    f"{flag} does not apply to a robot description (parts go to "
+                    "OUT/<link>_NN.obj; --to chooses the description's format)"
+                )
     progress = Progress(command="decompose", heartbeat=True)
+    if robot:
+        from meshcol.analysis.rebuild import rebuild_decomposition
+
+        params = {
+            "engine": engine,
+            "threshold": threshold,
+            "max_hulls": max_hulls,
+            "max_vertices": max_vertices,
+            "preprocess": preprocess,
+            "resolution": resolution,
+            "seed": seed,
+            "engine_options": engine_options,
+        }
+        run = {
+            "jobs": jobs,
+            "timeout": timeout,
+            "cache_dir": cache_dir,
+            "use_cache": not no_cache,
+        }
+        try:
+            result = rebuild_decomposition(
+                inputs[0],
+                out_dir,
+                to=to,
+                decompose_options={**params, **run},
+                settings={
+                    **params,
+                    **run,
+                    "layout": "parts",
+                    "format": "obj",
+                    "max_hausdorff": max_hausdorff,
+                },
+                max_hausdorff=max_hausdorff,
+                reserved=(("the --report file", report_file),) if report_file else (),
+                progress=progress.message,
+            )
+        finally:
+            progress.done()
+        emit(result.to_csv() if report_format(report, None) == "csv" else result.to_json(), report)
+        detail = f"{_summary(result)}, written to {result.settings['description']}"
+        click.echo(verdict("decompose", result.exit_code == 0, detail), err=True)
+        if result.exit_code:
+            ctx.exit(result.exit_code)
+        return
     if not any(os.path.splitext(p)[1].lower() in MANIFEST_EXTENSIONS for p in inputs):
         progress(f"decompose: 0/{len(inputs)} files")  # what the heartbeat says until one is done
     try:

@@ -47,6 +47,15 @@ from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
     help="At most N vertices per hull (PhysX: 255, GPU pipelines: 64), still enclosing the "
     "input.  [default: no budget, the exact hull]",
 )
+@click.option(
+    "--to",
+    "to",
+    type=click.Choice(["urdf", "mjcf", "glb", "usd"]),
+    default=None,
+    help="Robot input (URDF, MJCF) with --out-dir: the format of the description written "
+    "with the hulls, OUT/<robot>.urdf|.xml|.glb|.usda (usd needs meshcol[usd]).  [default: "
+    "the input's]",
+)
 @report_options(default="stdout when no mesh is written, else no report")
 @robot_options()
 def hull(
@@ -54,6 +63,7 @@ def hull(
     output: str | None,
     out_dir: str | None,
     max_vertices: int | None,
+    to: str | None,
     report: str | None,
     fmt: str | None,
 ) -> None:
@@ -74,9 +84,20 @@ def hull(
     warning on stderr, flat: true, volume 0); collinear or single-point input has no hull
     and exits 2.
 
+    A robot description (URDF, or MJCF) with --out-dir is rebuilt: one hull per
+    collision element (its meshes together), written as OUT/<link>_NN.obj in the link's
+    frame, and a copy of the description, OUT/<robot>.urdf, whose <collision> elements use
+    them (no <origin>: the element's origin and scale are in the hull); visuals, inertials,
+    joints, comments and unknown tags are untouched, and box, sphere, cylinder and capsule
+    elements are kept as they are (already exact). --to mjcf writes OUT/<robot>.xml in
+    MuJoCo Menagerie's convention (visual geoms group 2, contype/conaffinity 0; collision
+    geoms group 3); --to glb and --to usd write the colliders at the joint configuration.
+
     \b
     Examples:
       meshcol hull chair.obj                          report on stdout
+      meshcol hull panda.urdf --max-vertices 64 --out-dir panda_hulls/
+      meshcol hull panda.urdf --out-dir out/ --to mjcf --joint panda_joint4=-1.5
       meshcol hull chair.obj --max-vertices 64 -o chair_hull.obj
       meshcol hull props/*.obj --max-vertices 255 --out-dir hulls --report hulls.csv
       meshcol hull level.json -o level_hulls.glb --report -
@@ -95,20 +116,38 @@ def hull(
     from meshcol.analysis.hull import OutputDestinationError
     from meshcol.analysis.hull import hull as run_hull
     from meshcol.io.report import emit
+    from meshcol.io.robot import is_robot_file
 
+    robot = out_dir is not None and len(inputs) == 1 and is_robot_file(inputs[0])
+    if to is not None and not robot:
+        raise click.UsageError("--to needs one robot description (URDF, MJCF) and --out-dir")
     check_outputs(inputs, [("-o", output), ("--report", report)])
     fmt = report_format(report, fmt)
     progress = Progress(command="hull", heartbeat=True)
     try:
-        result = run_hull(
-            list(inputs),
-            max_vertices=max_vertices,
-            output=output,
-            out_dir=out_dir,
-            warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
-            reserved=[("--report", report)],
-            progress=progress,
-        )
+        if robot:
+            from meshcol.analysis.rebuild import rebuild_hulls
+
+            assert out_dir is not None
+            result = rebuild_hulls(
+                inputs[0],
+                out_dir,
+                to=to,
+                max_vertices=max_vertices,
+                reserved=(("the --report file", report),) if report not in (None, "-") else (),
+                warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
+                progress=progress,
+            )
+        else:
+            result = run_hull(
+                list(inputs),
+                max_vertices=max_vertices,
+                output=output,
+                out_dir=out_dir,
+                warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
+                reserved=[("--report", report)],
+                progress=progress,
+            )
     except OutputDestinationError as exc:
         raise click.UsageError(
             f"-o {exc.output}: {exc.bodies} bodies need a file that holds several meshes "
@@ -124,6 +163,8 @@ def hull(
         detail += f", {s['flat']} flat"
     if output:
         detail += f", written to {display_path(output)}"
+    elif robot and result.description is not None:
+        detail += f", written to {display_path(result.description)}"
     elif out_dir:
         detail += f", {plural(s['files_written'], 'file')} written to {display_path(out_dir)}"
     click.echo(verdict("hull", True, detail), err=True)

@@ -24,7 +24,13 @@ from typing import Any
 
 from meshcol.errors import InvalidMeshError, MeshcolError
 
-__all__ = ["CSV_COLUMNS", "DecomposeReport", "decompose_files", "within_max_hausdorff"]
+__all__ = [
+    "CSV_COLUMNS",
+    "DecomposeReport",
+    "decompose_files",
+    "decompose_meshes",
+    "within_max_hausdorff",
+]
 
 #: Columns of :meth:`DecomposeReport.to_csv`: one row per body, and one per failed file.
 CSV_COLUMNS = (
@@ -401,6 +407,119 @@ def _run(
                 rows.append({"path": path, "status": status, "message": message})
             file_reports.append(entry)
     return file_reports, rows
+
+
+def decompose_meshes(
+    meshes: Sequence[tuple[str, Any, Any]],
+    *,
+    engine: str = "coacd",
+    threshold: float | None = None,
+    max_hulls: int | None = None,
+    max_vertices: int | None = None,
+    preprocess: str = "auto",
+    resolution: int | None = None,
+    seed: int = 0,
+    engine_options: Mapping[str, Any] | None = None,
+    jobs: int = 1,
+    timeout: float | None = None,
+    cache_dir: str | os.PathLike[str] | None = None,
+    use_cache: bool = True,
+    progress: Callable[[str], None] | None = None,
+) -> list[Any]:
+    """Decompose named meshes, each a task of its own: the decomposition of every mesh, in order.
+
+    The run of :func:`decompose_files` for meshes already in memory (the parts of a robot's
+    links, ``meshcol decompose ROBOT.urdf``): the cache is looked up first, the misses go to
+    ``jobs`` worker processes (one mesh per task, so a robot's links run in parallel), and
+    this process stores what comes back. Parts are in the frame of the vertices given.
+
+    Parameters
+    ----------
+    meshes : sequence of (label, (n, 3) float, (m, 3) int)
+        The meshes; ``label`` names a mesh in errors (``link 'hand'``).
+    engine, threshold, ..., use_cache
+        As :func:`decompose_files`.
+    progress : callable, optional
+        Receives ``decompose: 3/10 meshes``.
+
+    Returns
+    -------
+    list of Decomposition
+
+    Raises
+    ------
+    MeshcolError
+        A mesh that cannot be decomposed, failed or timed out in its worker, naming its label.
+    """
+    from meshcol.decomposition import cache
+    from meshcol.decomposition.cache import default_cache_dir
+    from meshcol.decomposition.canonical import canonical_geometry
+    from meshcol.decomposition.decompose import cached_decomposition
+    from meshcol.decomposition.engines import prepare_engine, resolve_params
+    from meshcol.decomposition.jobs import WorkerPool, decompose_task
+
+    engine_options = dict(engine_options or {})
+    resolve_params(engine, engine_options=engine_options)
+    cache_root = None
+    if use_cache:
+        cache_root = os.fspath(cache_dir) if cache_dir is not None else str(default_cache_dir())
+    options: dict[str, Any] = {
+        "engine": engine,
+        "threshold": threshold,
+        "max_hulls": max_hulls,
+        "max_vertices": max_vertices,
+        "preprocess": preprocess,
+        "resolution": resolution,
+        "seed": seed,
+        "engine_options": engine_options,
+        "cache_dir": cache_root,
+        "use_cache": use_cache,
+        "threads": 0 if jobs == 1 else max(1, (os.cpu_count() or 1) // jobs),
+    }
+    key_options = {k: v for k, v in options.items() if k not in ("use_cache", "cache_dir")}
+    results: list[Any] = [None] * len(meshes)
+    missing: list[int] = []
+    canonical = []
+    for i, (label, vertices, faces) in enumerate(meshes):
+        try:
+            v, f = canonical_geometry(vertices, faces)
+        except InvalidMeshError as exc:
+            raise InvalidMeshError(f"{label}: {exc.message}", exc.path) from None
+        canonical.append((v, f))
+        hit = None
+        if cache_root is not None:
+            hit = cached_decomposition((v, f), cache_dir=cache_root, **key_options)
+        if hit is not None and hit.metrics is not None:
+            results[i] = hit
+        else:
+            missing.append(i)
+    report = progress or (lambda message: None)
+    done = len(meshes) - len(missing)
+    if missing:
+        report(f"decompose: {done}/{len(meshes)} meshes")
+        pool: Any = WorkerPool(
+            decompose_task, jobs, timeout=timeout, prepare=functools.partial(prepare_engine, engine)
+        )
+        tasks = ((meshes[i][0], [(meshes[i][0], *canonical[i])], options) for i in missing)
+        try:
+            with contextlib.closing(pool.run(tasks)) as outcomes:
+                for outcome in outcomes:
+                    i = missing[outcome.index]
+                    if outcome.status != "ok":
+                        what = "timed out" if outcome.status == "timeout" else "failed"
+                        raise MeshcolError(
+                            f"{meshes[i][0]}: decomposition {what}: {outcome.message}"
+                        )
+                    results[i] = outcome.value[0][1]
+                    if cache_root is not None:
+                        cache.store(results[i], cache_root)
+                    done += 1
+                    report(f"decompose: {done}/{len(meshes)} meshes")
+        except BaseException as exc:
+            pool.close(interrupted=not isinstance(exc, Exception))
+            raise
+        pool.close()
+    return results
 
 
 def within_max_hausdorff(metrics: Mapping[str, Any], limit: float | None) -> bool:

@@ -59,14 +59,17 @@ from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere
 
 __all__ = [
     "ROBOT_EXTENSIONS",
+    "CollisionElement",
     "RobotOptions",
     "is_robot_file",
     "RobotModel",
     "load_robot",
     "load_robot_model",
     "parse_joint_values",
+    "resolve_mesh_reference",
     "robot_options",
     "current_robot_options",
+    "description_kind",
 ]
 
 #: Extensions read as robot descriptions (``.xml`` only when its root element is ``<mujoco>``).
@@ -98,6 +101,36 @@ class RobotOptions:
     package_paths: Mapping[str, str] = field(default_factory=dict)
     srdf: str | None = None
     include_adjacent: bool = False
+
+
+@dataclass(frozen=True, eq=False)
+class CollisionElement:
+    """The collision element (URDF ``<collision>``, MJCF collision geom) behind one part of a
+    link's body, for writers that rebuild a description (:mod:`meshcol.io.robot_write`).
+
+    Attributes
+    ----------
+    link : str
+        The link (URDF) or body (MJCF) name, the :class:`~meshcol.types.Body` name.
+    index : int
+        URDF: position among the link's ``<collision>`` elements (file order); MJCF: the geom
+        id in the compiled model.
+    origin : (4, 4) float64
+        The element's frame in the link frame (URDF ``<origin>``; MJCF the compiled geom pose).
+    primitive : Primitive or None
+        The exact shape, or None for a mesh.
+    vertices : (n, 3) float64 or None
+        A mesh element's vertices in the element's frame, its scale applied (one entry per
+        object of a mesh file of several objects).
+    faces : (m, 3) int64 or None
+    """
+
+    link: str
+    index: int
+    origin: np.ndarray
+    primitive: Primitive | None
+    vertices: np.ndarray | None
+    faces: np.ndarray | None
 
 
 _OPTIONS: contextvars.ContextVar[RobotOptions | None] = contextvars.ContextVar(
@@ -167,6 +200,15 @@ def is_robot_file(path: str | os.PathLike[str]) -> bool:
     return False
 
 
+def description_kind(path: str | os.PathLike[str]) -> str:
+    """``"mjcf"`` or ``"urdf"``: how :func:`load_robot` reads the file."""
+    source = os.fspath(path)
+    root = _root_tag(source)
+    if root == "mujoco" or (Path(source).suffix.lower() == ".mjcf" and root != "robot"):
+        return "mjcf"
+    return "urdf"
+
+
 def _root_tag(path: str) -> str | None:
     """The root element's name, from the file's first few kilobytes (None if unreadable)."""
     try:
@@ -195,7 +237,12 @@ class RobotModel:
     kinematics: Kinematics
 
 
-def load_robot(path: str | os.PathLike[str], options: RobotOptions | None = None) -> Scene:
+def load_robot(
+    path: str | os.PathLike[str],
+    options: RobotOptions | None = None,
+    *,
+    elements: list[CollisionElement] | None = None,
+) -> Scene:
     """Read a URDF or MJCF file as a scene: one body per link with collision geometry.
 
     Parameters
@@ -205,6 +252,9 @@ def load_robot(path: str | os.PathLike[str], options: RobotOptions | None = None
     options : RobotOptions, optional
         Joint values, keyframe, package folders, SRDF, adjacency; defaults to
         :func:`current_robot_options`.
+    elements : list, optional
+        Filled with one :class:`CollisionElement` per body part, in body then part order (a
+        link of one part, a primitive body included, has one).
 
     Returns
     -------
@@ -222,11 +272,14 @@ def load_robot(path: str | os.PathLike[str], options: RobotOptions | None = None
         Anything wrong in the description, one line naming the link or joint (MuJoCo's own
         message for an MJCF it rejects).
     """
-    return load_robot_model(path, options).scene
+    return load_robot_model(path, options, elements=elements).scene
 
 
 def load_robot_model(
-    path: str | os.PathLike[str], options: RobotOptions | None = None
+    path: str | os.PathLike[str],
+    options: RobotOptions | None = None,
+    *,
+    elements: list[CollisionElement] | None = None,
 ) -> RobotModel:
     """:func:`load_robot`, with the robot's kinematics (batched link poses of configurations,
     :mod:`meshcol.io.kinematics`) for commands that move the links."""
@@ -239,9 +292,9 @@ def load_robot_model(
         raise InputFileError("is a directory, not a robot description", source)
     root = _root_tag(source)
     if root == "mujoco" or (file.suffix.lower() == ".mjcf" and root != "robot"):
-        scene, links, kinematics = _load_mjcf(source, options)
+        scene, links, kinematics = _load_mjcf(source, options, elements)
     else:
-        scene, links, kinematics = _load_urdf(source, options)
+        scene, links, kinematics = _load_urdf(source, options, elements)
     if not scene.bodies:
         raise SceneError(
             f"no link has collision geometry ({len(links)} link(s), no <collision> element "
@@ -289,7 +342,9 @@ def _check_body(body: Body, source: str) -> None:
 # --- URDF -----------------------------------------------------------------------------------
 
 
-def _load_urdf(source: str, options: RobotOptions) -> tuple[Scene, set[str], Kinematics]:
+def _load_urdf(
+    source: str, options: RobotOptions, sink: list[CollisionElement] | None = None
+) -> tuple[Scene, set[str], Kinematics]:
     try:
         import yourdfpy
         from lxml import etree
@@ -387,7 +442,7 @@ def _load_urdf(source: str, options: RobotOptions) -> tuple[Scene, set[str], Kin
     )
     bodies = []
     for link in robot.links:
-        body = _urdf_link_body(link, poses[link.name], capsules, resolver, source)
+        body = _urdf_link_body(link, poses[link.name], capsules, resolver, source, sink)
         if body is not None:
             bodies.append(body)
 
@@ -597,6 +652,15 @@ class _PackageResolver:
         )
 
 
+def resolve_mesh_reference(
+    source: str | os.PathLike[str], reference: str, package_paths: Mapping[str, str] = {}
+) -> str | None:
+    """The file a description's mesh reference (``package://``, ``file://``, relative or
+    absolute) names, as :func:`load_robot` resolves it; None for an unknown package."""
+    path, _ = _PackageResolver(os.fspath(source), package_paths).resolve(reference)
+    return None if path is None else os.path.normpath(path)
+
+
 #: How deep below a ROS_PACKAGE_PATH entry a package folder is looked for (``src/repo/pkg``).
 _PACKAGE_SEARCH_DEPTH = 3
 
@@ -631,9 +695,11 @@ def _urdf_link_body(
     capsules: dict[tuple[str, int], Capsule],
     resolver: _PackageResolver,
     source: str,
+    sink: list[CollisionElement] | None = None,
 ) -> Body | None:
     elements: list[tuple[str, np.ndarray, Primitive | None, np.ndarray | None, np.ndarray | None]]
     elements = []
+    indices: list[int] = []  # the <collision> element of each entry of elements
     for index, collision in enumerate(link.collisions):
         label = f"link {link.name!r}"
         origin = _origin(collision.origin)
@@ -659,6 +725,7 @@ def _urdf_link_body(
         if primitive is not None:
             kind = type(primitive).__name__.lower()
             elements.append((name or f"{kind}{index}", origin, primitive, None, None))
+            indices.append(index)
             continue
         if geometry.mesh is None:
             raise SceneError(f"{label}: collision {index} has no shape", source)
@@ -675,8 +742,14 @@ def _urdf_link_body(
             elements.append(
                 (stem if sub_name is None else f"{stem}/{sub_name}", origin, None, stretched, faces)
             )
+            indices.append(index)
     if not elements:
         return None
+    if sink is not None:
+        sink.extend(
+            CollisionElement(link.name, i, o, p, v, f)
+            for i, (_, o, p, v, f) in zip(indices, elements)
+        )
     if len(elements) == 1 and elements[0][2] is not None:
         _, origin, primitive, _, _ = elements[0]
         assert primitive is not None
@@ -798,7 +871,9 @@ def _parts_body(
 # --- MJCF -----------------------------------------------------------------------------------
 
 
-def _load_mjcf(source: str, options: RobotOptions) -> tuple[Scene, set[str], Kinematics]:
+def _load_mjcf(
+    source: str, options: RobotOptions, sink: list[CollisionElement] | None = None
+) -> tuple[Scene, set[str], Kinematics]:
     try:
         import mujoco
     except ImportError:
@@ -915,7 +990,7 @@ def _load_mjcf(source: str, options: RobotOptions) -> tuple[Scene, set[str], Kin
         world = np.eye(4)
         world[:3, :3] = np.asarray(data.geom_xmat[g], dtype=np.float64).reshape(3, 3)
         world[:3, 3] = data.geom_xpos[g]
-        per_body.setdefault(b, []).append((gname, world, primitive, vertices, faces))
+        per_body.setdefault(b, []).append((gname, world, primitive, vertices, faces, g))
 
     bodies = []
     for b in range(model.nbody):
@@ -925,8 +1000,13 @@ def _load_mjcf(source: str, options: RobotOptions) -> tuple[Scene, set[str], Kin
         body_pose = np.eye(4)
         body_pose[:3, :3] = np.asarray(data.xmat[b], dtype=np.float64).reshape(3, 3)
         body_pose[:3, 3] = data.xpos[b]
+        inverse = np.linalg.inv(body_pose)
+        if sink is not None:
+            sink.extend(
+                CollisionElement(names[b], g, inverse @ w, p, v, f) for _, w, p, v, f, g in elements
+            )
         if len(elements) == 1 and elements[0][2] is not None:
-            gname, world, primitive, _, _ = elements[0]
+            gname, world, primitive, _, _, _ = elements[0]
             vertices, faces = _tessellate(primitive)
             bodies.append(
                 Body(
@@ -939,8 +1019,7 @@ def _load_mjcf(source: str, options: RobotOptions) -> tuple[Scene, set[str], Kin
                 )
             )
             continue
-        inverse = np.linalg.inv(body_pose)
-        local = [(n, inverse @ w, p, v, f) for n, w, p, v, f in elements]
+        local = [(n, inverse @ w, p, v, f) for n, w, p, v, f, _ in elements]
         bodies.append(_parts_body(names[b], source, body_pose, local))
 
     excluded: list[tuple[str, str, str]] = []

@@ -1,0 +1,333 @@
+"""Rebuilt collision geometry for robot descriptions: ``meshcol hull|decompose ROBOT --out-dir``.
+
+A robot (URDF or MJCF, read by :func:`meshcol.io.robot.load_robot`) gets new colliders per
+collision element, and the description is written back around them
+(:func:`meshcol.io.robot_write.write_robot`):
+
+- ``hull``: ONE collider per collision element: the convex hull (within ``max_vertices``,
+  still enclosing) of the element's mesh, every object of a multi-object mesh file together;
+- ``decompose``: the convex parts of each element's mesh (each object of a mesh file
+  decomposed on its own, as ``meshcol check --shape decomposed`` does, so the two share
+  cache entries), through the content cache and ``jobs`` worker processes, one mesh a task.
+
+Primitive elements (box, sphere, cylinder, capsule) are kept as they are: they are already
+exact convex colliders. Colliders are computed in the link frame (the element's origin and
+mesh scale baked in), so the description places them with an identity origin.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import numpy as np
+
+from meshcol.errors import InvalidMeshError, MeshcolError
+from meshcol.types import Body
+
+__all__ = ["robot_colliders", "rebuild_hulls", "rebuild_decomposition"]
+
+
+def _load(path: str) -> tuple[Any, list[Any], str]:
+    from meshcol.io.robot import current_robot_options, description_kind, load_robot
+
+    elements: list[Any] = []
+    scene = load_robot(path, current_robot_options(), elements=elements)
+    return scene, elements, description_kind(path)
+
+
+def _groups(elements: list[Any]) -> list[tuple[str, int, list[Any]]]:
+    """Elements grouped by (link, collision element), in order."""
+    groups: dict[tuple[str, int], list[Any]] = {}
+    for e in elements:
+        groups.setdefault((e.link, e.index), []).append(e)
+    return [(link, index, members) for (link, index), members in groups.items()]
+
+
+def _link_poses(scene: Any, elements: list[Any]) -> dict[str, np.ndarray]:
+    first: dict[str, Any] = {}
+    for e in elements:
+        first.setdefault(e.link, e)
+    poses = {}
+    for body in scene.bodies:
+        pose = np.asarray(body.pose, dtype=np.float64)
+        if body.primitive is not None:  # a link of one primitive: the body sits at its origin
+            pose = pose @ np.linalg.inv(np.asarray(first[body.name].origin, dtype=np.float64))
+        poses[body.name] = pose
+    return poses
+
+
+def _link_frame(e: Any) -> np.ndarray:
+    return e.vertices @ e.origin[:3, :3].T + e.origin[:3, 3]
+
+
+def _element_names(path: str, kind: str) -> dict[tuple[str, int], str]:
+    """URDF ``<collision name>`` per (link, element), for the report rows."""
+    if kind != "urdf":
+        return {}
+    from lxml import etree
+
+    root = etree.parse(path, etree.XMLParser(resolve_entities=False)).getroot()
+    return {
+        (link.get("name"), i): c.get("name") or ""
+        for link in root.findall("link")
+        for i, c in enumerate(link.findall("collision"))
+    }
+
+
+def _label(link: str, index: int, kind: str) -> str:
+    return f"link {link!r}: {'collision' if kind == 'urdf' else 'geom'} {index}"
+
+
+def robot_colliders(
+    path: str | os.PathLike[str],
+    method: str,
+    *,
+    max_vertices: int | None = None,
+    decompose_options: Mapping[str, Any] | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> tuple[Any, list[dict[str, Any]]]:
+    """The colliders of a robot description and what each came from.
+
+    Parameters
+    ----------
+    path : path
+        URDF or MJCF (read with :func:`meshcol.io.robot.current_robot_options`).
+    method : {"hull", "decompose"}
+    max_vertices : int, optional
+        ``hull``: the vertex budget of each hull.
+    decompose_options : mapping, optional
+        ``decompose``: the keywords of :func:`meshcol.decomposition.batch.decompose_meshes`.
+    progress : callable, optional
+
+    Returns
+    -------
+    (RobotColliders, list of dict)
+        The colliders, and per rebuilt element ``{"link", "index", "name", "results"}``
+        (``results``: the :class:`~meshcol.collision.hull.HullResult` or the decompositions
+        of its meshes, and ``body``: the element's link-frame mesh as a Body).
+
+    Raises
+    ------
+    SceneError, InputFileError
+        As :func:`meshcol.io.robot.load_robot`.
+    InvalidMeshError
+        An element with no hull (flat beyond repair, collinear), naming its link.
+    """
+    from meshcol.collision.hull import convex_hull
+    from meshcol.decomposition.batch import decompose_meshes
+    from meshcol.io.robot import current_robot_options
+    from meshcol.io.robot_write import Collider, RobotColliders
+
+    if method not in ("hull", "decompose"):
+        raise ValueError(f"unknown method {method!r}")
+    source = os.fspath(path)
+    scene, elements, kind = _load(source)
+    names = _element_names(source, kind)
+    groups = _groups(elements)
+    colliders: list[Any] = []
+    info: list[dict[str, Any]] = []
+    meshes: list[tuple[str, np.ndarray, np.ndarray]] = []
+    owners: list[int] = []  # the group of each entry of meshes
+    for g, (link, index, members) in enumerate(groups):
+        name = names.get((link, index), "")
+        if members[0].primitive is not None:
+            colliders.append(
+                Collider(link, index, (), members[0].primitive, members[0].origin, name)
+            )
+            continue
+        label = _label(link, index, kind)
+        blocks = [(_link_frame(e), np.asarray(e.faces, dtype=np.int64)) for e in members]
+        body = _element_body(link, index, source, blocks)
+        if method == "hull":
+            if progress is not None:
+                progress(f"hull: {g + 1}/{len(groups)} collision elements")
+            try:
+                result = convex_hull(body.vertices, max_vertices=max_vertices)
+            except InvalidMeshError as exc:
+                raise InvalidMeshError(f"{label}: {exc.message}", source) from None
+            colliders.append(Collider(link, index, ((result.vertices, result.faces),), None))
+            info.append(
+                {"link": link, "index": index, "name": name, "results": result, "body": body}
+            )
+        else:
+            for k, (v, f) in enumerate(blocks):
+                meshes.append((label if len(blocks) == 1 else f"{label} object {k}", v, f))
+                owners.append(g)
+            colliders.append(Collider(link, index, (), None, np.eye(4), name))
+            info.append({"link": link, "index": index, "name": name, "results": [], "body": body})
+    if meshes:
+        try:
+            decompositions = decompose_meshes(
+                meshes, progress=progress, **dict(decompose_options or {})
+            )
+        except MeshcolError as exc:
+            if exc.path is not None:
+                raise
+            raise type(exc)(exc.message, source) from None
+        at = {(c.link, c.index): i for i, c in enumerate(colliders)}
+        rows = {(r["link"], r["index"]): r for r in info}
+        for g, d in zip(owners, decompositions):
+            link, index, _ = groups[g]
+            i = at[(link, index)]
+            c = colliders[i]
+            colliders[i] = Collider(link, index, (*c.parts, *d.parts), None, np.eye(4), c.name)
+            rows[(link, index)]["results"].append(d)
+    robot = RobotColliders(
+        source=source,
+        kind=kind,
+        colliders=tuple(colliders),
+        link_poses=_link_poses(scene, elements),
+        package_paths=dict(current_robot_options().package_paths),
+    )
+    return robot, info
+
+
+def _element_body(
+    link: str, index: int, source: str, blocks: list[tuple[np.ndarray, np.ndarray]]
+) -> Body:
+    vertices, faces, base = [], [], 0
+    for v, f in blocks:
+        vertices.append(v)
+        faces.append(f + base)
+        base += len(v)
+    return Body(
+        name=f"{link}/{index}",
+        source=source,
+        vertices=np.ascontiguousarray(np.concatenate(vertices)),
+        faces=np.ascontiguousarray(np.concatenate(faces)),
+    )
+
+
+def rebuild_hulls(
+    path: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str],
+    *,
+    to: str | None = None,
+    max_vertices: int | None = None,
+    reserved: tuple[tuple[str, str], ...] = (),
+    warn: Callable[[str], None] | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> Any:
+    """``meshcol hull ROBOT --out-dir OUT``: one hull per collision element, and the description.
+
+    Returns
+    -------
+    HullReport
+        One row per rebuilt element (``name`` ``<link>/<element>``, ``output`` the file of its
+        hull), ``frame="link"``, ``description`` the file written.
+    """
+    from meshcol.analysis.hull import HullReport, hull_row
+    from meshcol.geometry.topology import oriented_volume
+    from meshcol.io.robot_write import description_path, part_files, write_robot
+
+    robot, info = robot_colliders(path, "hull", max_vertices=max_vertices, progress=progress)
+    to = to or robot.kind
+    written = write_robot(robot, out_dir, to, protected=reserved)
+    files = part_files(robot) if to in ("urdf", "mjcf") else {}
+    at = {(c.link, c.index): i for i, c in enumerate(robot.colliders)}
+    rows, hulls, warnings = [], [], []
+    for entry in info:
+        body, result = entry["body"], entry["results"]
+        names = files.get(at[(entry["link"], entry["index"])])
+        destination = os.path.join(os.fspath(out_dir), names[0]) if names else written[0]
+        rows.append(hull_row(body, result, oriented_volume(body.vertices, body.faces), destination))
+        hulls.append(result)
+        if result.flat:
+            message = f"{robot.source}: {_label(entry['link'], entry['index'], robot.kind)} is flat: the hull is a 2-D polygon"
+            warnings.append(message)
+            if warn is not None:
+                warn(message)
+    return HullReport(
+        rows,
+        tuple(hulls),
+        max_vertices,
+        None,
+        os.fspath(out_dir),
+        "m",
+        tuple(warnings),
+        frame="link",
+        description=description_path(robot.source, out_dir, to),
+        to=to,
+    )
+
+
+def rebuild_decomposition(
+    path: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str],
+    *,
+    to: str | None = None,
+    decompose_options: Mapping[str, Any] | None = None,
+    settings: Mapping[str, Any] | None = None,
+    max_hausdorff: float | None = None,
+    reserved: tuple[tuple[str, str], ...] = (),
+    progress: Callable[[str], None] | None = None,
+) -> Any:
+    """``meshcol decompose ROBOT --out-dir OUT``: the convex parts of every collision element
+    and the description that uses them.
+
+    Returns
+    -------
+    DecomposeReport
+        One file entry (the description), one body per rebuilt element (``<link>/<element>``,
+        its part files, cache keys and metrics); ``frame="link"`` in the settings.
+    """
+    from meshcol.decomposition.batch import DecomposeReport, within_max_hausdorff
+    from meshcol.io.robot_write import description_path, part_files, write_robot
+
+    start = time.perf_counter()
+    robot, info = robot_colliders(
+        path, "decompose", decompose_options=decompose_options, progress=progress
+    )
+    to = to or robot.kind
+    write_robot(robot, out_dir, to, protected=reserved)
+    files = part_files(robot) if to in ("urdf", "mjcf") else {}
+    at = {(c.link, c.index): i for i, c in enumerate(robot.colliders)}
+    bodies, rows = [], []
+    description = description_path(robot.source, out_dir, to)
+    for entry in info:
+        outputs = files.get(at[(entry["link"], entry["index"])], [os.path.basename(description)])
+        for k, d in enumerate(entry["results"]):
+            name = f"{entry['link']}/{entry['index']}"
+            if len(entry["results"]) > 1:
+                name += f"/{k}"
+            m = d.metrics.to_dict() if d.metrics is not None else {}
+            ok = within_max_hausdorff(m, max_hausdorff)
+            bodies.append(
+                {
+                    "name": name,
+                    "outputs": outputs,
+                    "cache_key": d.cache_key,
+                    "from_cache": d.from_cache,
+                    "engine": d.engine,
+                    "engine_version": d.engine_version,
+                    "params": dict(d.params),
+                    "repaired": d.repaired,
+                    "notes": list(d.notes),
+                    "metrics": m,
+                    "hausdorff_ok": ok,
+                }
+            )
+            rows.append(
+                {
+                    "path": robot.source,
+                    "body": name,
+                    "status": "ok",
+                    **m,
+                    "repaired": d.repaired,
+                    "from_cache": d.from_cache,
+                    "hausdorff_ok": ok,
+                }
+            )
+    entry_file = {
+        "path": robot.source,
+        "status": "ok",
+        "message": None,
+        "bodies": bodies,
+        "seconds": round(time.perf_counter() - start, 3),
+    }
+    run_settings = dict(settings or {})
+    run_settings.update(out_dir=os.fspath(out_dir), frame="link", description=description, to=to)
+    return DecomposeReport([entry_file], rows, run_settings, "m", "parts", "obj", max_hausdorff)
