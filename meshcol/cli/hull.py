@@ -10,11 +10,13 @@ from meshcol.cli.common import (
     Progress,
     check_outputs,
     display_path,
+    html_option,
     plural,
     report_format,
     report_options,
     robot_options,
     verdict,
+    write_html,
 )
 from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
 
@@ -49,6 +51,7 @@ from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
 )
 @report_options(default="stdout when no mesh is written, else no report")
 @robot_options()
+@html_option
 def hull(
     inputs: tuple[str, ...],
     output: str | None,
@@ -56,6 +59,7 @@ def hull(
     max_vertices: int | None,
     report: str | None,
     fmt: str | None,
+    html: str | None,
 ) -> None:
     """Convex hull of each body, optionally within a vertex budget.
 
@@ -94,9 +98,10 @@ def hull(
 
     from meshcol.analysis.hull import OutputDestinationError
     from meshcol.analysis.hull import hull as run_hull
+    from meshcol.analysis.review import hull_page
     from meshcol.io.report import emit
 
-    check_outputs(inputs, [("-o", output), ("--report", report)])
+    check_outputs(inputs, [("-o", output), ("--report", report), ("--html", html)])
     fmt = report_format(report, fmt)
     progress = Progress(command="hull", heartbeat=True)
     try:
@@ -118,6 +123,7 @@ def hull(
         progress.done()
     if report is not None or not (output or out_dir):
         emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+    write_html(html, lambda: hull_page(result, inputs))
     s = result.summary
     detail = f"{plural(s['bodies'], 'hull')}, {plural(s['hull_vertices'], 'vertex', 'vertices')}"
     if s["flat"]:
