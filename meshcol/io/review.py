@@ -538,8 +538,11 @@ data.objects.forEach(function (o, k) {
     attributes: {position: {itemSize: 3, type: "Float32Array", array: positions[o.g],
                             normalized: false}},
     index: {type: "Uint32Array", array: indices[o.g]}}};
+  // translucent overlays drawn a hair in front of the surface they cover (no z-fighting)
   var mat = material("MeshPhongMaterial", o.color, o.opacity,
-                     {wireframe: o.wire, shininess: 10, flatShading: true});
+                     {wireframe: o.wire, shininess: 10, flatShading: true,
+                      polygonOffset: o.opacity < 1 || o.group !== "meshes",
+                      polygonOffsetFactor: -1, polygonOffsetUnits: -1});
   var obj = place("/meshcol/" + o.group + "/" + k, objectJson("Mesh", geometry, mat, o.m), o.body);
   obj.userData.baseColor = colorInt(o.color);
   if (o.opacity < 1) obj.renderOrder = 1;
