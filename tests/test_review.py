@@ -306,7 +306,7 @@ def test_browser_sweep_hit(samples, tmp_path):
     pixels, dom = chromium(page, tmp_path, "#pair=0")
     view = assert_drew(pixels, dom)
     assert magenta(view) > 0.01
-    assert "contact t = " in dom
+    assert "contact at toi 0.475, t = 0.00475 s" in dom
 
 
 @browser

@@ -223,8 +223,10 @@ def sweep_page(report: Any) -> ReviewPage:
         ("tolerance", f"{report.tolerance:g}{u}"),
     ]
     del s
-    page.table("Hits (earliest first)", ["body a", "body b", "time", "status"])
-    hits = sorted(report.hits, key=lambda h: np.inf if h.time is None else h.time)
+    page.table(
+        "Hits (earliest first)", ["body a", "body b", "toi (fraction)", "time (s)", "status"]
+    )
+    hits = sorted(report.hits, key=lambda h: h.time_of_impact)
     for k, h in enumerate(hits[:MAX_ROWS]):
         group = f"impact{k}"
         page.group(group, f"time-of-impact poses of hit {k}", HIGHLIGHT, visible=False)
@@ -236,13 +238,13 @@ def sweep_page(report: Any) -> ReviewPage:
                 )
         point = h.point if h.point is not None and np.all(np.isfinite(h.point)) else None
         normal = h.normal if h.normal is not None and np.all(np.isfinite(h.normal)) else None
-        when = "" if h.time is None else f"t = {h.time:.4g}"
+        when = f"toi {h.time_of_impact:.4g}" + ("" if h.time is None else f", t = {h.time:.4g} s")
         page.add_row(
-            [h.body_a, h.body_b, h.time, h.status.name.lower()],
+            [h.body_a, h.body_b, h.time_of_impact, h.time, h.status.name.lower()],
             bodies=tuple(index[n] for n in (h.body_a, h.body_b) if n in index),
             points=None if point is None else [point],
             normal=normal,
-            label=f"contact {when}".strip(),
+            label=f"contact at {when}",
             severity="violation" if report.exit_code else "",
             group=group,
         )

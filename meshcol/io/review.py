@@ -615,8 +615,10 @@ function frame(box) {
 }
 viewer.camera.position.set(1.5, 1.0, 1.5);
 viewer.controls.target.set(0, 0, 0);
+viewer.scene.updateMatrixWorld(true);
 var whole = new THREE.Box3(new THREE.Vector3().fromArray(data.extent).negate(),
-                           new THREE.Vector3().fromArray(data.extent));
+                           new THREE.Vector3().fromArray(data.extent))
+  .applyMatrix4(viewer.scene.matrixWorld);
 frame(whole);
 viewer.controls.minDistance = 0;
 viewer.controls.maxDistance = Infinity;
@@ -684,7 +686,7 @@ function choose(i) {
                              new THREE.MeshBasicMaterial({color: colorInt(data.witness),
                                                           depthTest: false}));
       s.position.set(p[0], p[1], p[2]); s.renderOrder = 10; marks.add(s);
-      box.expandByPoint(s.position);
+      box.expandByPoint(s.position.clone().applyMatrix4(viewer.scene.matrixWorld));
     });
     labelPoint = new THREE.Vector3().fromArray(row.points[0]);
     if (row.points.length > 1)
@@ -717,7 +719,8 @@ fromHash();
 var pane = document.getElementById("meshcat-pane");
 function follow() {
   if (labelPoint) {
-    var p = labelPoint.clone().project(viewer.camera);
+    // meshcat turns its scene (z up); the page's coordinates are the scene's
+    var p = labelPoint.clone().applyMatrix4(viewer.scene.matrixWorld).project(viewer.camera);
     var rect = viewer.renderer.domElement.getBoundingClientRect();
     label.style.left = (rect.left + (p.x + 1) / 2 * rect.width + 12) + "px";
     label.style.top = (rect.top + (1 - p.y) / 2 * rect.height - 12) + "px";
