@@ -269,12 +269,17 @@ def _distance_to_parts(
     return best, nearest
 
 
-def decompose_page(report: Any, out_dir: str) -> ReviewPage:
+def decompose_page(report: Any, out_dir: str, inputs: Sequence[Any] | None = None) -> ReviewPage:
     """The page of ``meshcol decompose``: each body's mesh with its parts in distinct colours,
-    the fidelity numbers per part, and the mesh faces farthest from the parts highlighted."""
+    the fidelity numbers per part, and the mesh faces farthest from the parts highlighted.
+
+    ``inputs`` are the command's inputs (mesh files or a manifest; default: the report's
+    files); their bodies are read as the run read them, each part of a body on its own and
+    at its pose, and the parts from the files the run wrote in ``out_dir`` (world frame)."""
     from meshcol.collision.hull import exact_hull
     from meshcol.geometry.topology import closed_volume
     from meshcol.io.mesh_read import load_mesh
+    from meshcol.io.scene import iter_inputs
 
     page = ReviewPage("decompose", _title([f["path"] for f in report.files]), report.units)
     page.group("meshes", "meshes (input)", MESH_COLOR)
@@ -283,13 +288,17 @@ def decompose_page(report: Any, out_dir: str) -> ReviewPage:
         "far", f"mesh faces far from the parts (over {FAR_SHARE:.0%} of the largest gap)", "#ff0000"
     )
     page.table("Parts", ["body", "part", "vertices", "volume", "covers", "farthest"])
+    bodies_by_source = {
+        source: {part.name: part for whole in bodies for part in whole.part_bodies()}
+        for source, bodies in iter_inputs(list(inputs or [f["path"] for f in report.files]))
+    }
     for entry in report.files:
         if entry["status"] != "ok":
             page.notes.append(
                 f"{os.path.basename(entry['path'])}: {entry['status']}: {entry.get('message') or ''}".strip()
             )
             continue
-        meshes = {b.name: b for b in load_mesh(entry["path"])}
+        meshes = bodies_by_source.get(entry["path"]) or {}
         for row in entry["bodies"]:
             body = meshes.get(row["name"])
             if body is None:

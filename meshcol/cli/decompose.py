@@ -240,7 +240,7 @@ def decompose_command(
     finally:
         progress.done()
     emit(result.to_csv() if report_format(report, None) == "csv" else result.to_json(), report)
-    write_html(html, lambda: decompose_page(result, out_dir))
+    write_html(html, lambda: decompose_page(result, out_dir, inputs))
     for f in result.files:
         if f["status"] != "ok":
             click.echo(f"meshcol: {f['status']}: {f['path']}: {f['message']}", err=True)
