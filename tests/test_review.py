@@ -38,7 +38,7 @@ FLAGS = [
     "--disable-sync",
     "--use-angle=swiftshader",
     "--enable-unsafe-swiftshader",
-    "--virtual-time-budget=4000",
+    "--virtual-time-budget=1500",
     "--window-size=1200,800",
 ]
 #: Left edge of the 3D view (the side panel is 460 px wide).
@@ -49,31 +49,47 @@ def run(args: list[str]):
     return CliRunner().invoke(main, args, catch_exceptions=False)
 
 
-def chromium(page: Path, tmp_path: Path, hash_: str = "") -> tuple[np.ndarray, str]:
-    """Screenshot (H, W, 3) uint8 and DOM after load of ``page`` (``#pair=N`` in hash_)."""
+def chromium(
+    page: Path, tmp_path: Path, hash_: str = "", shot: bool = True, dom: bool = True
+) -> tuple[np.ndarray | None, str]:
+    """Screenshot (H, W, 3) uint8 and DOM after load of ``page`` (``#pair=N`` in hash_); one
+    browser run each (about 3 s), so either can be left out."""
     from PIL import Image
 
     url = page.resolve().as_uri() + hash_
-    shot = tmp_path / f"{page.stem}{hash_.replace('#', '_').replace('=', '')}.png"
+    path = tmp_path / f"{page.stem}{hash_.replace('#', '_').replace('=', '')}.png"
     common = [CHROMIUM, *FLAGS, f"--user-data-dir={tmp_path / 'profile'}"]
-    subprocess.run([*common, f"--screenshot={shot}", url], capture_output=True, timeout=120)
-    dom = subprocess.run(
-        [*common, "--dump-dom", url], capture_output=True, timeout=120, text=True
-    ).stdout
-    return np.asarray(Image.open(shot).convert("RGB")), dom
+    pixels = None
+    if shot:
+        subprocess.run([*common, f"--screenshot={path}", url], capture_output=True, timeout=120)
+        pixels = np.asarray(Image.open(path).convert("RGB"))
+    text = ""
+    if dom:
+        text = subprocess.run(
+            [*common, "--dump-dom", url], capture_output=True, timeout=120, text=True
+        ).stdout
+    return pixels, text
 
 
-def assert_drew(pixels: np.ndarray, dom: str) -> np.ndarray:
-    """The page ran without a JavaScript error and its 3D view is not blank."""
-    root = re.search(r"<html[^>]*>", dom).group(0)  # the page's markers sit on <html>
-    title = re.search(r"<title>(.*?)</title>", dom, re.S).group(1)
-    assert "data-error" not in root and not title.startswith("meshcol-error"), root + title
-    assert 'data-meshcol-ready="' in root, "the page script did not finish"
+def assert_drew(pixels: np.ndarray | None, dom: str | None) -> np.ndarray:
+    """The page ran without a JavaScript error (``dom``; None: not read) and its 3D view is
+    not blank."""
+    assert pixels is not None
+    if dom is not None:
+        assert_no_error(dom)
     view = pixels[:, PANE_LEFT:]
     background = np.median(view.reshape(-1, 3), axis=0)
     drawn = np.abs(view.astype(int) - background).sum(axis=2) > 40
     assert drawn.mean() > 0.01, "the 3D view is blank"
     return view
+
+
+def assert_no_error(dom: str) -> None:
+    root = re.search(r"<html[^>]*>", dom).group(0)  # the page's markers sit on <html>
+    title = re.search(r"<title>(.*?)</title>", dom, re.S).group(1)
+    assert "data-error" not in root and not title.startswith("meshcol-error"), root + title
+    assert "data-console-error" not in root, root
+    assert 'data-meshcol-ready="' in root, "the page script did not finish"
 
 
 def hue_present(view: np.ndarray, color: str, share: float = 1e-4) -> bool:
@@ -266,8 +282,8 @@ def test_browser_check_pair_is_highlighted(samples, tmp_path):
             str(page),
         ]
     )
-    plain, dom = chromium(page, tmp_path)
-    view = assert_drew(plain, dom)
+    plain, _ = chromium(page, tmp_path, dom=False)
+    view = assert_drew(plain, None)
     assert magenta(view) < 1e-4  # nothing chosen: no highlight
     chosen, dom = chromium(page, tmp_path, "#pair=0")
     view = assert_drew(chosen, dom)
@@ -351,7 +367,7 @@ def test_browser_hull_page(samples, tmp_path):
 def test_browser_zero_bodies_and_huge_coordinates(tmp_path):
     empty = tmp_path / "empty.html"
     write_review(empty, ReviewPage("check", "nothing", "m"))
-    _, dom = chromium(empty, tmp_path)
+    _, dom = chromium(empty, tmp_path, shot=False)
     assert re.search(r'<html[^>]*data-meshcol-ready="0"', dom) and "data-error=" not in dom
     box = trimesh.creation.box((1.0, 1.0, 1.0))
     far = ReviewPage("inspect", "far away", "m")
@@ -362,3 +378,16 @@ def test_browser_zero_bodies_and_huge_coordinates(tmp_path):
     write_review(path, far)
     pixels, dom = chromium(path, tmp_path)
     assert_drew(pixels, dom)
+
+
+@browser
+@pytest.mark.slow
+def test_browser_error_marker_catches_a_script_error(tmp_path):
+    """The no-error check can fail: a page whose script throws is caught by it."""
+    page = tmp_path / "broken.html"
+    write_review(page, ReviewPage("check", "broken"))
+    text = page.read_text().replace("</body>", '<script>throw new Error("boom")</script></body>')
+    page.write_text(text)
+    _, dom = chromium(page, tmp_path, shot=False)
+    with pytest.raises(AssertionError, match="boom"):
+        assert_no_error(dom)
