@@ -391,3 +391,26 @@ def test_browser_error_marker_catches_a_script_error(tmp_path):
     _, dom = chromium(page, tmp_path, shot=False)
     with pytest.raises(AssertionError, match="boom"):
         assert_no_error(dom)
+
+
+@pytest.mark.slow
+def test_decompose_command_writes_its_page(tmp_path):
+    trimesh.creation.box((2.0, 1.0, 1.0)).export(tmp_path / "block.obj")
+    page = tmp_path / "block.html"
+    result = run(
+        [
+            "decompose",
+            str(tmp_path / "block.obj"),
+            "--out-dir",
+            str(tmp_path / "parts"),
+            "--no-cache",
+            "--report",
+            str(tmp_path / "d.json"),
+            "--html",
+            str(page),
+        ]
+    )
+    assert result.exit_code == 0, result.output
+    text = page.read_text()
+    assert '"title":"block.obj"' in text and '"columns":["body","part","vertices"' in text
+    assert "block.html" not in os.listdir(tmp_path / "parts")
