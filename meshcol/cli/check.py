@@ -11,6 +11,7 @@ from meshcol.analysis.colliders import COLLIDER_KINDS
 from meshcol.cli.common import (
     FiniteFloat,
     Progress,
+    html_option,
     plural,
     report_format,
     report_options,
@@ -98,6 +99,7 @@ SHAPE_CHOICES = COLLIDER_KINDS
 )
 @report_options(default="the report on stdout; the summary on stderr")
 @robot_options(exclusions=True)
+@html_option
 def check(
     inputs: tuple[str, ...],
     shape: str,
@@ -112,6 +114,7 @@ def check(
     cache_dir: str | None,
     report: str | None,
     fmt: str | None,
+    html: str | None,
 ) -> None:
     """Check every pair of bodies for contact, clearance and interpenetration.
 
@@ -136,7 +139,8 @@ def check(
     """
     from meshcol.analysis.check import check as run_check
     from meshcol.analysis.check import parse_ignore_rule
-    from meshcol.cli.common import check_outputs
+    from meshcol.analysis.review import check_page
+    from meshcol.cli.common import check_outputs, write_html
     from meshcol.io.report import emit
 
     for rule in ignore:
@@ -144,7 +148,7 @@ def check(
             parse_ignore_rule(rule)
         except ValueError as exc:
             raise click.BadParameter(str(exc), param_hint="'--ignore'") from None
-    check_outputs(inputs, [("--report", report)], baseline=baseline)
+    check_outputs(inputs, [("--report", report), ("--html", html)], baseline=baseline)
     fmt = report_format(report, fmt)
     progress = Progress(command="check", heartbeat=True)
     try:
@@ -164,6 +168,10 @@ def check(
         progress.done()
 
     emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+    write_html(
+        html,
+        lambda: check_page(result, inputs, shape, _decompose_options(engine, threshold, cache_dir)),
+    )
     for warning in result.warnings:
         click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_table(result), err=True)

@@ -370,3 +370,37 @@ def robot_options(exclusions: bool = False) -> Callable[[Callable[..., Any]], Ca
         return wrapped
 
     return decorate
+
+
+def html_option(func: Callable[..., Any]) -> Callable[..., Any]:
+    """Add ``--html FILE``: the run's review page (:mod:`meshcol.io.review`). Without the
+    viewer (``meshcol[review]``) the command exits 2 before any work, with the hint."""
+
+    def ready(ctx: click.Context, param: click.Parameter, value: str | None) -> str | None:
+        if value is not None:
+            from meshcol.io.review import viewer_script
+
+            viewer_script()  # MissingDependencyError: exit 2, one line
+        return value
+
+    return click.option(
+        "--html",
+        type=click.Path(dir_okay=False),
+        default=None,
+        metavar="FILE",
+        callback=ready,
+        expose_value=True,
+        help="Also write a self-contained 3D review page (offline HTML) to FILE; needs "
+        "meshcol[review].  [default: none]",
+    )(func)
+
+
+def write_html(path: str | None, build: Callable[[], Any]) -> None:
+    """Build the review page (``build()`` returns a :class:`meshcol.io.review.ReviewPage`)
+    and write it atomically to ``path``; says where on stderr. Nothing when ``path`` is None."""
+    if path is None:
+        return
+    from meshcol.io.review import write_review
+
+    size = write_review(path, build())
+    click.echo(f"meshcol: review page: {display_path(path)} ({size / 1e6:.1f} MB)", err=True)

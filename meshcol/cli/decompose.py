@@ -6,7 +6,7 @@ import os
 
 import click
 
-from meshcol.cli.common import FiniteFloat, robot_options
+from meshcol.cli.common import FiniteFloat, html_option, robot_options, write_html
 from meshcol.decomposition.engines import ENGINES
 from meshcol.io.mesh_write import LAYOUTS
 
@@ -142,6 +142,7 @@ def _engine_option(
 )
 @click.pass_context
 @robot_options()
+@html_option
 def decompose_command(
     ctx: click.Context,
     inputs: tuple[str, ...],
@@ -163,6 +164,7 @@ def decompose_command(
     to: str | None,
     report: str | None,
     max_hausdorff: float | None,
+    html: str | None,
 ) -> None:
     """Split meshes into convex parts for collision (meshcol decompose).
 
@@ -193,6 +195,7 @@ def decompose_command(
       meshcol decompose bottle.obj -o out/ --engine vhacd --layout combined --format glb
       meshcol decompose snowflake.obj -o out/ --preprocess off --threshold 0.02 -E mcts_iterations=50
     """
+    from meshcol.analysis.review import decompose_page
     from meshcol.cli.common import Progress, report_format, verdict
     from meshcol.decomposition.batch import decompose_files
     from meshcol.decomposition.cache import default_cache_dir
@@ -220,7 +223,7 @@ def decompose_command(
     report_file = None if report in (None, "-") else report
     cache_label = "--cache-dir" if cache_dir is not None else "the cache folder"
     check_outputs(
-        files={"--report": report_file},
+        files={"--report": report_file, "--html": html},
         folders={
             "--out-dir": out_dir,
             cache_label: None if no_cache else (cache_dir or str(default_cache_dir())),
@@ -308,11 +311,12 @@ def decompose_command(
             fmt=fmt,
             max_hausdorff=max_hausdorff,
             progress=progress.message,
-            other_outputs=[report_file] if report_file else [],
+            other_outputs=[p for p in (report_file, html) if p],
         )
     finally:
         progress.done()
     emit(result.to_csv() if report_format(report, None) == "csv" else result.to_json(), report)
+    write_html(html, lambda: decompose_page(result, out_dir, inputs))
     for f in result.files:
         if f["status"] != "ok":
             click.echo(f"meshcol: {f['status']}: {f['path']}: {f['message']}", err=True)

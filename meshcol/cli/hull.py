@@ -10,11 +10,13 @@ from meshcol.cli.common import (
     Progress,
     check_outputs,
     display_path,
+    html_option,
     plural,
     report_format,
     report_options,
     robot_options,
     verdict,
+    write_html,
 )
 from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
 
@@ -58,6 +60,7 @@ from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
 )
 @report_options(default="stdout when no mesh is written, else no report")
 @robot_options()
+@html_option
 def hull(
     inputs: tuple[str, ...],
     output: str | None,
@@ -66,6 +69,7 @@ def hull(
     to: str | None,
     report: str | None,
     fmt: str | None,
+    html: str | None,
 ) -> None:
     """Convex hull of each body, optionally within a vertex budget.
 
@@ -115,13 +119,14 @@ def hull(
 
     from meshcol.analysis.hull import OutputDestinationError
     from meshcol.analysis.hull import hull as run_hull
+    from meshcol.analysis.review import hull_page
     from meshcol.io.report import emit
     from meshcol.io.robot import is_robot_file
 
     robot = out_dir is not None and len(inputs) == 1 and is_robot_file(inputs[0])
     if to is not None and not robot:
         raise click.UsageError("--to needs one robot description (URDF, MJCF) and --out-dir")
-    check_outputs(inputs, [("-o", output), ("--report", report)])
+    check_outputs(inputs, [("-o", output), ("--report", report), ("--html", html)])
     fmt = report_format(report, fmt)
     progress = Progress(command="hull", heartbeat=True)
     try:
@@ -157,6 +162,7 @@ def hull(
         progress.done()
     if report is not None or not (output or out_dir):
         emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+    write_html(html, lambda: hull_page(result, inputs))
     s = result.summary
     detail = f"{plural(s['bodies'], 'hull')}, {plural(s['hull_vertices'], 'vertex', 'vertices')}"
     if s["flat"]:

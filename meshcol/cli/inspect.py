@@ -10,11 +10,13 @@ from meshcol.analysis.inspect import RULES
 from meshcol.cli.common import (
     Progress,
     check_outputs,
+    html_option,
     plural,
     report_format,
     report_options,
     robot_options,
     verdict,
+    write_html,
 )
 
 
@@ -49,8 +51,13 @@ def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) 
     + " (or all).  [default: none, the run reports only]",
 )
 @robot_options()
+@html_option
 def inspect(
-    inputs: tuple[str, ...], report: str | None, fmt: str | None, fail_on: tuple[str, ...]
+    inputs: tuple[str, ...],
+    report: str | None,
+    fmt: str | None,
+    fail_on: tuple[str, ...],
+    html: str | None,
 ) -> None:
     """Health check of each body's mesh: fit to be a collider?
 
@@ -80,9 +87,10 @@ def inspect(
       meshcol inspect props/*.obj --report - --format csv --fail-on all
     """
     from meshcol.analysis.inspect import inspect as run_inspect
+    from meshcol.analysis.review import inspect_page
     from meshcol.io.report import emit
 
-    check_outputs(inputs, [("--report", report)])
+    check_outputs(inputs, [("--report", report), ("--html", html)])
     fmt = report_format(report, fmt)
     progress = Progress(command="inspect", heartbeat=True)
     try:
@@ -90,6 +98,7 @@ def inspect(
     finally:
         progress.done()
     emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+    write_html(html, lambda: inspect_page(result, inputs))
 
     _print_table(result.bodies)
     for row in result.failed:

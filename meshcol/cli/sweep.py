@@ -12,11 +12,13 @@ from meshcol.cli.common import (
     FiniteFloat,
     Progress,
     check_outputs,
+    html_option,
     plural,
     report_format,
     report_options,
     robot_options,
     verdict,
+    write_html,
 )
 
 
@@ -66,6 +68,7 @@ from meshcol.cli.common import (
     "decomposed now.  [default: the user cache, as 'meshcol decompose']",
 )
 @robot_options()
+@html_option
 def sweep(
     manifest: str,
     shape: str,
@@ -75,6 +78,7 @@ def sweep(
     fail_on: str,
     threads: int,
     cache_dir: str | None,
+    html: str | None,
 ) -> None:
     """First contact of moving bodies: meshcol sweep MANIFEST [options].
 
@@ -97,10 +101,11 @@ def sweep(
       meshcol sweep level.json --report sweep.csv --fail-on none
       meshcol sweep level.json --shape mesh --tolerance 1e-5 --report -
     """
+    from meshcol.analysis.review import sweep_page
     from meshcol.analysis.sweep import sweep as run_sweep
     from meshcol.io.report import emit
 
-    check_outputs([manifest], [("--report", report)])
+    check_outputs([manifest], [("--report", report), ("--html", html)])
     fmt = report_format(report, fmt)
     decompose_options = {} if cache_dir is None else {"cache_dir": cache_dir}
     progress = Progress(command="sweep", heartbeat=True)  # the library reports no steps
@@ -116,6 +121,7 @@ def sweep(
     finally:
         progress.done()
     emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+    write_html(html, lambda: sweep_page(result))
     for warning in result.warnings:
         click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_lines(manifest, result), err=True)
