@@ -72,6 +72,16 @@ def test_hull_golden(samples: Path, golden, monkeypatch: pytest.MonkeyPatch) -> 
     golden("hull_bowl.json", normalised(report))
 
 
+def test_fit_golden(samples: Path, golden, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(samples.parent)
+    report = run("fit", "samples/level/props/barrel.obj", "samples/level/props/ramp.obj")
+    assert [b["shape"] for b in report["bodies"]] == ["cylinder", "hull"]
+    for body in report["bodies"]:  # sampled gaps: round off float noise
+        if body["max_gap"] is not None:
+            body["max_gap"] = round(body["max_gap"], 6)
+    golden("fit_props.json", normalised(report))
+
+
 def test_inspect_golden(samples: Path, golden, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.chdir(samples.parent)
     report = run("inspect", "samples/bowl/scene.json", "--fail-on", "not-watertight")
@@ -221,6 +231,7 @@ def test_envelope_is_the_same_in_every_command_report(samples: Path, tmp_path: P
     """Each library report object starts from the one envelope, in the same shape."""
     from meshcol.analysis.check import check
     from meshcol.analysis.collision_matrix import collision_matrix
+    from meshcol.analysis.fit import fit
     from meshcol.analysis.hull import hull
     from meshcol.analysis.inspect import inspect
     from meshcol.analysis.sweep import sweep
@@ -238,6 +249,7 @@ def test_envelope_is_the_same_in_every_command_report(samples: Path, tmp_path: P
         "check": check([samples / "bowl" / "scene.json"]),
         "sweep": sweep(samples / "bullet" / "scene.json"),
         "hull": hull([wall]),
+        "fit": fit([wall]),
         "inspect": inspect([wall]),
         "decompose": decompose_files(
             [wall],

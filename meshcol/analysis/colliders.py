@@ -8,6 +8,9 @@ a body of several parts (``Body.parts``):
 - ``decomposed``: each part's ``UCX_<part>_NN`` collision parts when the input has them
   (Unreal's convention), else the part's convex decomposition (from the decompose cache, or
   computed now and cached);
+- ``fit``: each part's enclosing primitive (:mod:`meshcol.analysis.fit`, ``auto``: the
+  simplest primitive within the volume tolerance of its hull, else the hull), queried exactly
+  as a primitive, placed in the body by its own pose (``Colliders.part_offsets``);
 - ``mesh``: its triangles, for the exact mesh queries. What stands for it in the convex
   queries is chosen by the caller (``mesh_parts``): its parts' hulls (check: broad phase and
   depth bound) or every triangle as a 3-vertex polytope (sweep: surface contact).
@@ -54,7 +57,7 @@ __all__ = [
 ]
 
 #: Collider kinds a body can be checked as.
-COLLIDER_KINDS = ("hull", "decomposed", "mesh")
+COLLIDER_KINDS = ("hull", "decomposed", "mesh", "fit")
 
 _UCX = re.compile(r"^UCX_(?P<body>.+)_(?P<index>\d+)$")
 
@@ -86,6 +89,9 @@ class Colliders:
     warnings : tuple of str
         One line per ``UCX_`` part naming nothing, and per flat body that could not be
         decomposed.
+    part_offsets : (n_parts, 4, 4) float64 or None
+        Pose of each part in its body's frame, when some part is not at the body's origin
+        (a ``fit`` primitive); None when every part is.
     """
 
     bodies: tuple[Body, ...]
@@ -96,6 +102,7 @@ class Colliders:
     body_part_offsets: np.ndarray
     part_label: np.ndarray
     warnings: tuple[str, ...] = ()
+    part_offsets: np.ndarray | None = None
 
     def part_poses(self, end: bool = False) -> np.ndarray:
         """World-from-local pose of every part, (n_parts, 4, 4): its body's start pose, or
@@ -110,7 +117,10 @@ class Colliders:
                 for b in self.bodies
             ]
         )
-        return np.ascontiguousarray(poses[self.part_body])
+        poses = poses[self.part_body]
+        if self.part_offsets is not None:
+            poses = poses @ self.part_offsets
+        return np.ascontiguousarray(poses)
 
     def part_names(self, bodies: Any, labels: Any) -> list[str | None]:
         """Names of the parts ``labels`` of ``bodies`` (None for -1: a body of one part)."""
@@ -415,7 +425,7 @@ def build_colliders(
     ----------
     bodies : sequence of Body
         A scene's bodies, ``UCX_`` parts included (they become their owner's parts).
-    kind : {"hull", "decomposed", "mesh"}
+    kind : {"hull", "decomposed", "mesh", "fit"}
         Default collider kind; a body's own ``shape`` overrides it.
     mesh_parts : {"hull", "triangles"}
         What stands for a ``mesh`` body in the convex queries.
@@ -449,6 +459,9 @@ def build_colliders(
     triangle_labels: list[np.ndarray] = []
     # per body: (triangle set index or -1, unique indices, their part labels)
     blocks: list[tuple[int, list[int], list[int]]] = []
+    # the pose in its body of each single part that is not at the body's origin: (body, k)
+    part_poses: dict[tuple[int, int], np.ndarray] = {}
+    fits: dict[bytes, Any] = {}  # geometry key -> its fit: instanced props are fitted once
     kinds: list[str] = []
 
     def add(key: Any, make: Callable[[], Any]) -> int:
@@ -462,7 +475,7 @@ def build_colliders(
     def hull(vertices: np.ndarray) -> int:
         return add(("hull", _geometry_key(vertices)), _constant(vertices))
 
-    for body in kept:
+    for body_number, body in enumerate(kept):
         body_kind = body.collider or kind
         singles: list[int] = []
         labels: list[int] = []
@@ -510,6 +523,26 @@ def build_colliders(
                 own is not None or all(n is not None and _UCX.match(n) for _, n, _, _ in meshes)
             ):
                 body_kind = "ucx"
+        elif body_kind == "fit":
+            from meshcol.analysis.fit import fit_points
+
+            for label, name, v, _ in meshes:
+                if _flat(v):
+                    singles.append(hull(v))  # its polygon: a primitive would add a thickness
+                    labels.append(label)
+                    continue
+                what = f"body {body.name!r}" + ("" if name is None else f" part {name!r}")
+                key = _geometry_key(v)
+                if key not in fits:
+                    report(f"enclosing primitive of {what}")
+                    fits[key] = fit_points(v).primitive_fit
+                chosen = fits[key]
+                if chosen is None:
+                    singles.append(hull(v))
+                else:
+                    part_poses[(body_number, len(singles))] = chosen.pose
+                    singles.append(add(("fit", chosen.primitive), _constant(chosen.primitive)))
+                labels.append(label)
         elif body_kind == "mesh" and mesh_parts == "triangles":
             triangles = len(triangle_sets)
             tset, order = _triangle_parts(body)
@@ -549,6 +582,11 @@ def build_colliders(
     np.cumsum(counts, out=offsets[1:])
     part_body = np.repeat(np.arange(len(kept), dtype=np.int64), counts)
     part_index = np.arange(len(rows), dtype=np.int64) - offsets[part_body]
+    part_offsets = None
+    if part_poses:
+        part_offsets = np.tile(np.eye(4), (len(rows), 1, 1))
+        for (b, k), pose in part_poses.items():
+            part_offsets[offsets[b] + k] = pose
     return Colliders(
         tuple(kept),
         tuple(kinds),
@@ -558,4 +596,5 @@ def build_colliders(
         offsets,
         part_label,
         tuple(warnings),
+        part_offsets,
     )

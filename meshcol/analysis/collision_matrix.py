@@ -73,7 +73,7 @@ CSV_COLUMNS = [
 ]
 #: Collider kinds a link can be sampled as (``mesh`` needs the exact mesh queries, not batched
 #: over configurations here).
-MATRIX_COLLIDERS = ("hull", "decomposed")
+MATRIX_COLLIDERS = ("hull", "decomposed", "fit")
 #: Vertices of the parts replicated for one native call (parts x configurations per call):
 #: large enough that a call measures a few hundred configurations of a typical arm, small enough
 #: that replicating them (memory bound) stays a small share of the run.
@@ -271,7 +271,10 @@ class _Sampler:
         body_poses = link_poses[:, self.body_link] @ self.offsets  # (c, bodies, 4, 4)
         poses = np.empty((self.batch * h, 4, 4))
         poses[:] = np.eye(4)
-        poses[: c * h] = body_poses[:, colliders.part_body].reshape(-1, 4, 4)
+        part_poses = body_poses[:, colliders.part_body]
+        if colliders.part_offsets is not None:  # fit primitives sit off their link's origin
+            part_poses = part_poses @ colliders.part_offsets
+        poses[: c * h] = part_poses.reshape(-1, 4, 4)
         middle = time.perf_counter()
         self.kinematics_seconds += middle - began
 

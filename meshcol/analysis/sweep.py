@@ -244,13 +244,16 @@ def _is_moving(body: Body) -> bool:
     return body.end_pose is not None and not np.array_equal(body.end_pose, body.pose)
 
 
-def _turns(bodies: tuple[Body, ...], start: np.ndarray, end: np.ndarray):
+def _turns(
+    bodies: tuple[Body, ...], start: np.ndarray, end: np.ndarray, offset_parts: bool = False
+):
     """Per body, the world rotation vector of its turn and the world pivot it turns about:
     its spin, else the shortest rotation about its local origin. ``(None, None)`` when no body
-    spins (the core then takes the shortest rotations itself)."""
+    spins and no part sits off its body's origin (``offset_parts``): the core then takes the
+    shortest rotations itself, about each part's origin, which is then its body's."""
     from meshcol.collision.time_of_impact import shortest_rotation
 
-    if not any(b.spin is not None for b in bodies):
+    if not offset_parts and not any(b.spin is not None for b in bodies):
         return None, None
     rotations = shortest_rotation(start, end).reshape(-1, 3)
     pivots = start[:, :3, 3].copy()
@@ -348,7 +351,9 @@ def sweep(
     )
     start, end = colliders.part_poses(), colliders.part_poses(end=True)
     # Parts share their body's frame, so they share its turn and pivot.
-    body_rotations, body_pivots = _turns(bodies, start_body, end_body)
+    body_rotations, body_pivots = _turns(
+        bodies, start_body, end_body, colliders.part_offsets is not None
+    )
     rotations = None if body_rotations is None else body_rotations[owner]
     pivots = None if body_pivots is None else body_pivots[owner]
     lo, hi = swept_aabbs(cs, start, end, threads, rotations=rotations, pivots=pivots)

@@ -32,6 +32,7 @@ from meshcol.errors import MeshcolError
 COMMANDS: dict[str, str] = {
     "decompose": "meshcol.cli.decompose:decompose_command",
     "hull": "meshcol.cli.hull:hull",
+    "fit": "meshcol.cli.fit:fit",
     "inspect": "meshcol.cli.inspect:inspect",
     "sweep": "meshcol.cli.sweep:sweep",
     "check": "meshcol.cli.check:check",

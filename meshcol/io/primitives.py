@@ -43,3 +43,39 @@ def primitive_mesh(primitive: Primitive) -> tuple[np.ndarray, np.ndarray]:
         np.ascontiguousarray(mesh.vertices, dtype=np.float64),
         np.ascontiguousarray(mesh.faces, dtype=np.int64),
     )
+
+
+def _support(primitive: Primitive, directions: np.ndarray) -> np.ndarray:
+    """The primitive's support function h(n) = max over the primitive of n . x, per unit
+    direction (k, 3)."""
+    n = directions
+    if isinstance(primitive, Sphere):
+        return np.full(len(n), primitive.radius)
+    if isinstance(primitive, Box):
+        return np.abs(n) @ (0.5 * np.asarray(primitive.size))
+    half = 0.5 * primitive.length
+    if isinstance(primitive, Capsule):
+        return primitive.radius + half * np.abs(n[:, 2])
+    return primitive.radius * np.hypot(n[:, 0], n[:, 1]) + half * np.abs(n[:, 2])
+
+
+def enclosing_primitive_mesh(primitive: Primitive) -> tuple[np.ndarray, np.ndarray]:
+    """A closed convex mesh that CONTAINS the primitive: :func:`primitive_mesh` scaled about
+    the centre until every face plane clears the primitive (by its support function).
+
+    The inscribed tessellation cuts inside a round primitive; a collider written to a file
+    must not, or the file would no longer enclose what the fit enclosed. The scale is at most
+    a few tenths of a percent for the tessellations used here (1.0 for a box)."""
+    vertices, faces = primitive_mesh(primitive)
+    if isinstance(primitive, Box):
+        return vertices, faces
+    tri = vertices[faces]
+    normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    length = np.linalg.norm(normals, axis=1)
+    keep = length > 0
+    normals = normals[keep] / length[keep, None]
+    offsets = np.einsum("ij,ij->i", normals, tri[keep, 0])
+    outward = offsets > 0
+    need = _support(primitive, normals[outward]) / offsets[outward]
+    scale = max(1.0, float(np.max(need))) * (1.0 + 1e-12) if len(need) else 1.0
+    return vertices * scale, faces

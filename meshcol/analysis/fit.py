@@ -1,0 +1,503 @@
+"""Enclosing primitive fits of a scene's bodies: ``meshcol fit`` and the ``fit`` collider.
+
+Each body (each of its parts, for the collider) gets the sphere, box, capsule or cylinder of
+:mod:`meshcol.collision.fit` around its exact convex hull, which contains every vertex and
+so the whole mesh. The report gives each fit's parameters and pose, its volume against the
+mesh's and the hull's, and the largest gap: how far the primitive's surface strays from the
+mesh (the largest distance from a sampled point of the primitive's surface to the mesh's
+surface, :data:`GAP_SAMPLES` points).
+
+``auto`` fits all four and takes the simplest primitive (in the order of
+:data:`meshcol.collision.fit.FIT_SHAPES`) whose volume is within ``volume_tolerance`` of the
+hull's; when none is, the body keeps its convex hull ("hull"), and the report says which
+primitive came nearest.
+
+Fits are written as Unreal's collision parts (``UBX_``, ``USP_``, ``UCP_``; a cylinder or
+a hull, which Unreal has no primitive for, as a ``UCX_`` convex part), as meshes that contain
+the primitive (:func:`meshcol.io.primitives.enclosing_primitive_mesh`), so the file encloses
+what the fit encloses.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from meshcol.collision.fit import FIT_SHAPES, PrimitiveFit, fit_all, fit_primitive
+from meshcol.errors import InvalidMeshError
+from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
+from meshcol.io.outputs import check_destinations
+from meshcol.io.scene import as_scene
+from meshcol.types import Body, Box, Capsule, Cylinder, Sphere
+
+__all__ = [
+    "CSV_COLUMNS",
+    "DEFAULT_VOLUME_TOLERANCE",
+    "GAP_SAMPLES",
+    "SHAPE_CHOICES",
+    "UNREAL_PREFIX",
+    "BodyFit",
+    "FitReport",
+    "fit",
+    "fit_points",
+]
+
+#: What ``meshcol fit --shape`` takes.
+SHAPE_CHOICES = (*FIT_SHAPES, "auto")
+
+#: ``auto`` takes a primitive whose volume is at most (1 + this) times the hull's.
+DEFAULT_VOLUME_TOLERANCE = 0.15
+
+#: Points sampled on a primitive's surface to measure its largest gap to the mesh.
+GAP_SAMPLES = 4096
+
+#: Unreal's name prefix of each collider a fit can become.
+UNREAL_PREFIX = {"box": "UBX", "sphere": "USP", "capsule": "UCP", "cylinder": "UCX", "hull": "UCX"}
+
+#: Columns of :meth:`FitReport.to_csv`, one row per body.
+CSV_COLUMNS = (
+    "name",
+    "source",
+    "shape",
+    "simpler_primitive",
+    "radius",
+    "length",
+    "size_x",
+    "size_y",
+    "size_z",
+    "center_x",
+    "center_y",
+    "center_z",
+    "qw",
+    "qx",
+    "qy",
+    "qz",
+    "volume",
+    "hull_volume",
+    "mesh_volume",
+    "volume_ratio",
+    "hull_ratio",
+    "max_gap",
+    "output",
+    "units",
+)
+
+
+@dataclass(frozen=True)
+class BodyFit:
+    """The fits of one point set (a body or a part), in the frame of its points.
+
+    Attributes
+    ----------
+    fits : dict of str to PrimitiveFit
+        The primitives fitted (one, or all four for ``auto``).
+    chosen : str
+        The shape taken: a key of ``fits``, or ``"hull"`` when ``auto`` found no primitive
+        within the volume tolerance.
+    hull_vertices, hull_faces : ndarray
+        The exact convex hull the fits enclose.
+    hull_volume : float
+    """
+
+    fits: dict[str, PrimitiveFit]
+    chosen: str
+    hull_vertices: np.ndarray
+    hull_faces: np.ndarray
+    hull_volume: float
+
+    @property
+    def primitive_fit(self) -> PrimitiveFit | None:
+        """The chosen fit, None when the hull was kept."""
+        return self.fits.get(self.chosen)
+
+
+def fit_points(
+    points: np.ndarray,
+    shape: str = "auto",
+    *,
+    volume_tolerance: float = DEFAULT_VOLUME_TOLERANCE,
+) -> BodyFit:
+    """Fit ``shape`` (or every shape, for ``auto``) around points (n, 3), any frame.
+
+    Raises
+    ------
+    InvalidMeshError
+        The points have no hull (none, non-finite, or beyond the hull's coordinate range).
+    ValueError
+        An unknown shape or a negative tolerance.
+    """
+    from meshcol.collision.hull import exact_hull
+
+    if shape not in SHAPE_CHOICES:
+        raise ValueError(f"shape must be one of {', '.join(SHAPE_CHOICES)}, got {shape!r}")
+    if not volume_tolerance >= 0:
+        raise ValueError(f"volume_tolerance must be >= 0, got {volume_tolerance}")
+    hull = exact_hull(points)
+    if hull.dimension == 0:
+        raise InvalidMeshError("all vertices coincide: there is no volume to enclose")
+    if hull.dimension == 1:
+        raise InvalidMeshError("all vertices are collinear: there is no volume to enclose")
+    faces = hull.faces if hull.dimension == 3 else None
+    if shape == "auto":
+        fits = fit_all(hull.vertices, faces)
+        limit = (1.0 + volume_tolerance) * hull.volume
+        chosen = next((n for n in FIT_SHAPES if fits[n].volume <= limit), "hull")
+        if hull.dimension == 2:
+            chosen = "box"  # a flat body: its box (as thin as the margin) is its collider
+    else:
+        fits = {shape: fit_primitive(shape, hull.vertices, faces)}
+        chosen = shape
+    return BodyFit(fits, chosen, hull.vertices, hull.faces, hull.volume)
+
+
+def _fit_vertices(body: Body) -> np.ndarray:
+    """The points a body's fit must enclose, local frame: its vertices, or for a primitive
+    body a tessellation that contains the primitive."""
+    if body.primitive is not None:
+        from meshcol.io.primitives import enclosing_primitive_mesh
+
+        return enclosing_primitive_mesh(body.primitive)[0]
+    return np.asarray(body.vertices, dtype=np.float64)
+
+
+def _quaternion(rotation: np.ndarray) -> list[float]:
+    """Unit quaternion (w, x, y, z), w >= 0, of a rotation matrix (Shepperd's method)."""
+    m = rotation
+    trace = m[0, 0] + m[1, 1] + m[2, 2]
+    if trace > 0:
+        s = 2.0 * np.sqrt(trace + 1.0)
+        q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
+    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
+        q = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
+    elif m[1, 1] > m[2, 2]:
+        s = 2.0 * np.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
+        q = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s]
+    else:
+        s = 2.0 * np.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
+        q = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s]
+    q_arr = np.asarray(q) / np.linalg.norm(q)
+    if q_arr[0] < 0:
+        q_arr = -q_arr
+    return [float(v) for v in q_arr]
+
+
+def _parameters(fit_: PrimitiveFit) -> dict[str, Any]:
+    p = fit_.primitive
+    return {
+        "radius": p.radius if isinstance(p, (Sphere, Capsule, Cylinder)) else None,
+        "length": p.length if isinstance(p, (Capsule, Cylinder)) else None,
+        "size": list(p.size) if isinstance(p, Box) else None,
+        "center": [float(v) for v in fit_.pose[:3, 3]],
+        "quaternion": _quaternion(fit_.pose[:3, :3]),
+    }
+
+
+def _max_gap(fit_: PrimitiveFit, body: Body, hull: BodyFit, pose: np.ndarray) -> float:
+    """Largest distance from a sampled point of the primitive's surface (world frame) to the
+    body's surface (its hull's, for a body without faces)."""
+    from meshcol.collision.mesh_query import MeshSet
+    from meshcol.geometry.triangles import sample_surface
+    from meshcol.io.primitives import primitive_mesh
+
+    vertices, faces = primitive_mesh(fit_.primitive)
+    rng = np.random.default_rng(0)
+    surface = np.concatenate([vertices, sample_surface(vertices, faces, GAP_SAMPLES, rng)])
+    world = surface @ fit_.pose[:3, :3].T + fit_.pose[:3, 3]
+    if body.primitive is None and len(body.faces):
+        mesh = (body.world_vertices(), np.asarray(body.faces))
+    else:
+        world_hull = hull.hull_vertices @ pose[:3, :3].T + pose[:3, 3]
+        mesh = (world_hull, hull.hull_faces)
+    distances, _ = MeshSet.from_arrays([mesh]).closest_points(0, world)
+    finite = distances[np.isfinite(distances)]
+    return float(finite.max()) if len(finite) else 0.0
+
+
+def _world(fit_: PrimitiveFit, pose: np.ndarray) -> PrimitiveFit:
+    return PrimitiveFit(fit_.primitive, pose @ fit_.pose, fit_.volume, fit_.excess)
+
+
+@dataclass(frozen=True)
+class FitReport:
+    """What :func:`fit` computed and wrote.
+
+    Attributes
+    ----------
+    bodies : list of dict
+        Per body: the chosen shape and its parameters (world frame), volumes and ratios, the
+        largest gap, every candidate (for ``auto``), the file it went to.
+    fits : tuple of BodyFit
+        The fits, world frame, in the order of ``bodies``.
+    shape : str
+    volume_tolerance : float
+    output, out_dir : str or None
+    units : str or None
+    warnings : tuple of str
+    """
+
+    bodies: list[dict[str, Any]]
+    fits: tuple[BodyFit, ...]
+    shape: str
+    volume_tolerance: float
+    output: str | None
+    out_dir: str | None
+    units: str | None
+    warnings: tuple[str, ...] = ()
+
+    @property
+    def exit_code(self) -> int:
+        """Always 0: fit has no policy (unusable input raises instead)."""
+        return 0
+
+    @property
+    def summary(self) -> dict[str, Any]:
+        shapes = [row["shape"] for row in self.bodies]
+        return {
+            "bodies": len(self.bodies),
+            "shapes": {name: shapes.count(name) for name in (*FIT_SHAPES, "hull")},
+            "simpler_primitive": sum(1 for row in self.bodies if row["simpler_primitive"]),
+            "files_written": len({r["output"] for r in self.bodies if r["output"] is not None}),
+        }
+
+    @property
+    def settings(self) -> dict[str, Any]:
+        return {
+            "shape": self.shape,
+            "volume_tolerance": self.volume_tolerance,
+            "gap_samples": GAP_SAMPLES,
+            "frame": "world",
+            "output": self.output,
+            "out_dir": self.out_dir,
+        }
+
+    def to_dict(self) -> dict[str, Any]:
+        from meshcol.io.report import envelope
+
+        return {
+            **envelope("fit", self.settings, self.units),
+            "summary": self.summary,
+            "bodies": self.bodies,
+        }
+
+    def to_json(self) -> str:
+        from meshcol.io.report import dumps_json
+
+        return dumps_json(self.to_dict())
+
+    def to_csv(self) -> str:
+        """One row per body (:data:`CSV_COLUMNS`)."""
+        from meshcol.io.report import dumps_csv
+
+        rows = []
+        for row in self.bodies:
+            size = row["size"] or [None, None, None]
+            center = row["center"] or [None, None, None]
+            quaternion = row["quaternion"] or [None, None, None, None]
+            rows.append(
+                {
+                    **row,
+                    "size_x": size[0],
+                    "size_y": size[1],
+                    "size_z": size[2],
+                    "center_x": center[0],
+                    "center_y": center[1],
+                    "center_z": center[2],
+                    "qw": quaternion[0],
+                    "qx": quaternion[1],
+                    "qy": quaternion[2],
+                    "qz": quaternion[3],
+                    "units": self.units,
+                }
+            )
+        return dumps_csv(rows, CSV_COLUMNS)
+
+
+def _ratio(volume: float, reference: float | None) -> float | None:
+    return None if reference is None or reference <= 0 else volume / reference
+
+
+def _row(
+    body: Body,
+    result: BodyFit,
+    mesh_volume: float | None,
+    gap: float | None,
+    destination: str | None,
+    shape: str,
+) -> dict[str, Any]:
+    chosen = result.primitive_fit
+    candidates = None
+    if shape == "auto":
+        candidates = {
+            name: {
+                "volume": f.volume,
+                "hull_ratio": _ratio(f.volume, result.hull_volume),
+            }
+            for name, f in result.fits.items()
+        }
+    if chosen is None:
+        parameters: dict[str, Any] = {
+            "radius": None,
+            "length": None,
+            "size": None,
+            "center": None,
+            "quaternion": None,
+        }
+        volume = result.hull_volume
+    else:
+        parameters = _parameters(chosen)
+        volume = chosen.volume
+    return {
+        "name": body.name,
+        "source": body.source,
+        "shape": result.chosen,
+        "simpler_primitive": shape == "auto" and chosen is not None,
+        **parameters,
+        "volume": volume,
+        "hull_volume": result.hull_volume,
+        "mesh_volume": mesh_volume,
+        "volume_ratio": _ratio(volume, mesh_volume),
+        "hull_ratio": _ratio(volume, result.hull_volume),
+        "max_gap": gap,
+        "candidates": candidates,
+        "output": destination,
+    }
+
+
+def fit(
+    inputs: Any,
+    *,
+    shape: str = "auto",
+    volume_tolerance: float = DEFAULT_VOLUME_TOLERANCE,
+    output: str | os.PathLike[str] | None = None,
+    out_dir: str | os.PathLike[str] | None = None,
+    reserved: Sequence[tuple[str, str | os.PathLike[str] | None]] = (),
+    progress: Callable[[str], None] | None = None,
+) -> FitReport:
+    """An enclosing primitive around each body, in the world frame.
+
+    Parameters
+    ----------
+    inputs : Scene, sequence of Body, or path(s) of meshes / one scene manifest
+    shape : {"sphere", "capsule", "box", "cylinder", "auto"}
+        The primitive; ``auto`` fits all four and takes the simplest within
+        ``volume_tolerance`` of the hull's volume (else the hull).
+    volume_tolerance : float
+        For ``auto``: a primitive is taken when its volume is at most (1 + this) times the
+        hull's.
+    output : path, optional
+        Write every fit to this file (``.obj``, ``.glb``: one named object per body, Unreal's
+        ``UBX_<body>_00`` and alike; one body: any mesh format).
+    out_dir : path, optional
+        Write ``out_dir/<body>.obj`` per body.
+    reserved : sequence of (label, path)
+        Other files the caller will write: no fit may go there.
+    progress : callable, optional
+        One line per body fitted.
+
+    Returns
+    -------
+    FitReport
+
+    Raises
+    ------
+    InvalidMeshError
+        A body has no hull (collinear or single-point input, non-finite coordinates).
+    OutputDestinationError
+        Several bodies for a single-mesh output format.
+    OutputPathError
+        A file would replace an input or a ``reserved`` file (nothing is written).
+    """
+    from meshcol.analysis.hull import OutputDestinationError, out_dir_paths
+    from meshcol.geometry.topology import oriented_volume
+    from meshcol.io.mesh_write import write_meshes
+    from meshcol.io.primitives import enclosing_primitive_mesh
+
+    if shape not in SHAPE_CHOICES:
+        raise ValueError(f"shape must be one of {', '.join(SHAPE_CHOICES)}, got {shape!r}")
+    if output is not None and out_dir is not None:
+        raise ValueError("give either output or out_dir, not both")
+    output = None if output is None else os.fspath(output)
+    out_dir = None if out_dir is None else os.fspath(out_dir)
+    if output is not None:
+        extension = os.path.splitext(output)[1].lower()
+        if extension not in MESH_OUTPUT_EXTENSIONS:
+            raise ValueError(
+                f"unknown mesh extension {extension or '(none)'!r} in {output!r} "
+                f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})"
+            )
+    scene = as_scene(inputs)
+    bodies = scene.bodies
+    multi = output is not None and os.path.splitext(output)[1].lower() in MULTI_MESH_EXTENSIONS
+    if output is not None and len(bodies) > 1 and not multi:
+        raise OutputDestinationError(output, len(bodies))
+
+    # Everything is computed before anything is written: a bad body stops the run first.
+    results, rows_input = [], []
+    for done, body in enumerate(bodies, start=1):
+        if progress is not None:
+            progress(f"fit: {done}/{len(bodies)} bodies")
+        pose = np.asarray(body.pose, dtype=np.float64)
+        try:
+            local = fit_points(_fit_vertices(body), shape, volume_tolerance=volume_tolerance)
+        except InvalidMeshError as exc:
+            raise InvalidMeshError(f"body '{body.name}': {exc.message}", body.source) from exc
+        world = BodyFit(
+            {name: _world(f, pose) for name, f in local.fits.items()},
+            local.chosen,
+            local.hull_vertices @ pose[:3, :3].T + pose[:3, 3],
+            local.hull_faces,
+            local.hull_volume,
+        )
+        chosen = world.primitive_fit
+        gap = None if chosen is None else _max_gap(chosen, body, local, pose)
+        volume = None
+        if body.primitive is None:
+            oriented = oriented_volume(body.vertices, body.faces)
+            volume = None if oriented is None else abs(oriented[0])
+        else:
+            from meshcol.collision.fit import primitive_volume
+
+            volume = primitive_volume(body.primitive)
+        results.append(world)
+        rows_input.append((body, world, volume, gap))
+
+    names = [b.name for b in bodies]
+    parts = []
+    for name, result in zip(names, results):
+        part_name = f"{UNREAL_PREFIX[result.chosen]}_{name}_00"
+        chosen = result.primitive_fit
+        if chosen is None:
+            parts.append((part_name, result.hull_vertices, result.hull_faces))
+        else:
+            v, f = enclosing_primitive_mesh(chosen.primitive)
+            parts.append((part_name, v @ chosen.pose[:3, :3].T + chosen.pose[:3, 3], f))
+    destinations: list[str | None] = [None] * len(bodies)
+    planned = [("output", output)] if output is not None else []
+    if out_dir is not None:
+        planned = [("--out-dir file", p) for p in out_dir_paths(out_dir, names)]
+    sources = {b.source for b in bodies if b.source is not None}
+    check_destinations(
+        [("an input mesh", source) for source in sorted(sources)], [*planned, *reserved]
+    )
+    if output is not None:
+        write_meshes(output, parts)
+        destinations = [output] * len(bodies)
+    elif out_dir is not None:
+        paths = out_dir_paths(out_dir, names)
+        os.makedirs(out_dir, exist_ok=True)
+        for path, part in zip(paths, parts):
+            write_meshes(path, [part])
+        destinations = list(paths)
+
+    rows = [
+        _row(body, result, volume, gap, destination, shape)
+        for (body, result, volume, gap), destination in zip(rows_input, destinations)
+    ]
+    return FitReport(
+        rows, tuple(results), shape, float(volume_tolerance), output, out_dir, scene.units
+    )

@@ -1,0 +1,140 @@
+"""``meshcol fit``: the enclosing sphere, box, capsule or cylinder of each body."""
+
+from __future__ import annotations
+
+import os
+
+import click
+
+from meshcol.analysis.fit import DEFAULT_VOLUME_TOLERANCE, SHAPE_CHOICES
+from meshcol.cli.common import (
+    Progress,
+    check_outputs,
+    display_path,
+    plural,
+    report_format,
+    report_options,
+    robot_options,
+    verdict,
+)
+from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
+
+
+@click.command(
+    "fit",
+    short_help="Enclosing primitive (box, sphere, capsule, cylinder) of each body.",
+    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
+)
+@click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
+@click.option(
+    "--shape",
+    type=click.Choice(SHAPE_CHOICES),
+    default="auto",
+    show_default=True,
+    help="The primitive; auto fits all four and takes the simplest (sphere, capsule, box, "
+    "cylinder) within --volume-tolerance of the hull's volume, else keeps the hull.",
+)
+@click.option(
+    "--volume-tolerance",
+    type=click.FloatRange(min=0.0),
+    default=DEFAULT_VOLUME_TOLERANCE,
+    show_default=True,
+    metavar="T",
+    help="For --shape auto: take a primitive whose volume is at most (1 + T) times the "
+    "convex hull's.",
+)
+@click.option(
+    "-o",
+    "--output",
+    "output",
+    metavar="FILE",
+    help="Write the fits to FILE as Unreal collision parts (UBX_, USP_, UCP_; UCX_ for a "
+    "cylinder or a kept hull), meshes that contain the primitive; several bodies need .obj "
+    "or .glb.  [default: no mesh file]",
+)
+@click.option(
+    "--out-dir",
+    metavar="DIR",
+    help="Write one DIR/<body>.obj per body.  [default: no mesh files]",
+)
+@report_options(default="stdout when no mesh is written, else no report")
+@robot_options()
+def fit(
+    inputs: tuple[str, ...],
+    shape: str,
+    volume_tolerance: float,
+    output: str | None,
+    out_dir: str | None,
+    report: str | None,
+    fmt: str | None,
+) -> None:
+    """Enclosing primitive of each body: it contains every vertex of the mesh.
+
+    INPUT is mesh files (OBJ, STL, PLY, OFF, glTF, GLB), one scene manifest or a robot
+    description; fits are in the WORLD frame, like hulls.
+
+    sphere: the minimum enclosing sphere. box: a near-minimal oriented box (hull face
+    normals and principal axes tried, then polished). cylinder and capsule: along the best
+    axis found, radius by the smallest circle across it. Each is grown by the rounding of its
+    search so that it contains every vertex.
+
+    The report (JSON or CSV, one row per body) gives the primitive's parameters (radius,
+    length, full size), its centre and rotation (quaternion w, x, y, z; capsule and cylinder
+    along local z), its volume, volume_ratio = volume / mesh volume (closed meshes only),
+    hull_ratio = volume / hull volume, and max_gap, the largest distance from the primitive's
+    surface to the mesh (sampled). With --shape auto, simpler_primitive says a primitive is
+    within the tolerance ("could use a simpler primitive") and candidates lists all four.
+
+    \b
+    Examples:
+      meshcol fit crate.obj                            report on stdout
+      meshcol fit props/*.obj --shape box --report boxes.csv
+      meshcol fit level.json -o level_colliders.obj --report fits.json
+    """
+    if output and out_dir:
+        raise click.UsageError("give either -o/--output or --out-dir, not both")
+    if output:
+        extension = os.path.splitext(output)[1].lower()
+        if extension not in MESH_OUTPUT_EXTENSIONS:
+            raise click.BadParameter(
+                f"unknown mesh extension {extension or '(none)'!r} in {output!r} "
+                f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})",
+                param_hint="'-o' / '--output'",
+            )
+
+    from meshcol.analysis.fit import fit as run_fit
+    from meshcol.analysis.hull import OutputDestinationError
+    from meshcol.io.report import emit
+
+    check_outputs(inputs, [("-o", output), ("--report", report)])
+    fmt = report_format(report, fmt)
+    progress = Progress(command="fit", heartbeat=True)
+    try:
+        result = run_fit(
+            list(inputs),
+            shape=shape,
+            volume_tolerance=volume_tolerance,
+            output=output,
+            out_dir=out_dir,
+            reserved=[("--report", report)],
+            progress=progress,
+        )
+    except OutputDestinationError as exc:
+        raise click.UsageError(
+            f"-o {exc.output}: {exc.bodies} bodies need a file that holds several meshes "
+            f"({', '.join(MULTI_MESH_EXTENSIONS)}) or --out-dir"
+        ) from None
+    finally:
+        progress.done()
+    if report is not None or not (output or out_dir):
+        emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+    s = result.summary
+    shapes = ", ".join(f"{count} {name}" for name, count in s["shapes"].items() if count)
+    detail = f"{plural(s['bodies'], 'body', 'bodies')} ({shapes or 'none'})"
+    if shape == "auto":
+        detail += f", {s['simpler_primitive']} could use a simpler primitive"
+    if output:
+        detail += f", written to {display_path(output)}"
+    elif out_dir:
+        detail += f", {plural(s['files_written'], 'file')} written to {display_path(out_dir)}"
+    click.echo(verdict("fit", True, detail), err=True)
