@@ -379,24 +379,6 @@ bool assign(Workspace& w, const Conflict& c, const std::vector<int>& candidates)
     return false;
 }
 
-// As `assign`, trying `candidates` from `*hint` on, round the list, and leaving the face found
-// in `*hint`: the orphans of a step come in conflict-list order, mostly near one another, so
-// the face the previous one went to is the likeliest (a cone of 2,000 new faces otherwise
-// costs a thousand tests an orphan).
-bool assign_near(Workspace& w, const Conflict& c, const std::vector<int>& candidates, size_t* hint) {
-    const size_t h = candidates.size();
-    for (size_t k = 0, at = *hint; k < h; ++k, at = at + 1 == h ? 0 : at + 1) {
-        const int f = candidates[at];
-        const double d = distance(w.faces[f], c.p);
-        if (d > w.eps) {
-            add_conflict(w, f, c, d);
-            *hint = at;
-            return true;
-        }
-    }
-    return false;
-}
-
 // Removes `q` from face f's conflict list (it turned out not to see f) and refreshes the
 // furthest point.
 void drop_conflict(Workspace& w, int face, int q) {
@@ -596,9 +578,8 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
             f.n[1] = w.new_faces[(k + 1) % h];
             f.n[2] = w.new_faces[(k + h - 1) % h];
         }
-        size_t hint = 0;
         for (const Conflict& x : w.orphans) {
-            if (assign_near(w, x, w.new_faces, &hint)) continue;
+            if (assign(w, x, w.new_faces)) continue;
             // Outside no new face: then inside the new hull, unless outside a face of the
             // horizon (it had been listed on the first face it was outside of).
             for (const HorizonEdge& he : w.edges) {
