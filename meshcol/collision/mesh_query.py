@@ -98,7 +98,9 @@ class MeshSet:
     face_offsets : (M + 1,) int64
     poses : (M, 4, 4) float64
         Default world-from-local poses, used when a query passes ``poses=None``: identity from
-        :meth:`from_arrays` unless given, each body's ``pose`` from :meth:`from_bodies`.
+        :meth:`from_arrays` unless given, each body's ``pose`` from :meth:`from_bodies`. Read
+        (and checked for rigidity) by the core once, when the set is built: read-only, like
+        every array of the set.
     valid : (M,) bool
         Whether each mesh is usable: finite vertices and at least one face. Pairs involving an
         invalid mesh report ``Status.INVALID_INPUT``.
