@@ -429,3 +429,49 @@ def test_points_on_a_sphere_are_all_vertices(n: int, seed: int) -> None:
     cs = ConvexSet.from_vertices([p])
     assert len(cs.face_normals) == len(hull.faces)
     assert len(cs.edge_directions) == 3 * len(hull.faces) // 2
+
+
+# --------------------------------------------------------------------------- interior filter
+
+
+def _hull_triangles(points: np.ndarray) -> set[frozenset[tuple[float, ...]]]:
+    hull = exact_hull(points)
+    return {frozenset(map(tuple, hull.vertices[f])) for f in hull.faces}
+
+
+def _torus(u_count: int, v_count: int) -> np.ndarray:
+    u = np.linspace(0, 2 * np.pi, u_count, endpoint=False)
+    v = np.linspace(0, 2 * np.pi, v_count, endpoint=False)
+    uu, vv = np.meshgrid(u, v, indexing="ij")
+    r = 1.0 + 0.3 * np.cos(vv)
+    return np.stack([r * np.cos(uu), r * np.sin(uu), 0.3 * np.sin(vv)], -1).reshape(-1, 3)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_interior_points_of_large_inputs_change_nothing(seed: int) -> None:
+    """Large inputs (4,096 points and more) drop points well inside the hull of their extremes
+    before Quickhull: the triangulation is the one of the surface points alone (few enough to
+    be built unfiltered), face for face, and the vertex set qhull's."""
+    rng = np.random.default_rng(seed)
+    surface = rng.normal(size=(3000, 3))
+    surface /= np.linalg.norm(surface, axis=1, keepdims=True)
+    surface *= rng.uniform(0.5, 2.0, 3)  # an ellipsoid
+    inside = rng.uniform(-0.4, 0.4, size=(2000, 3))  # deep inside: the filter drops these
+    shell = surface * rng.uniform(0.9, 1.0, size=(3000, 1))  # just under the surface
+    points = np.concatenate([shell, surface, inside])[rng.permutation(8000)]
+    assert len(surface) < 4096
+    assert _hull_triangles(points) == _hull_triangles(surface)
+    assert set(map(tuple, exact_hull(points).vertices)) == qhull_vertex_set(points)
+
+
+def test_large_torus_and_cube_grid_equal_qhull() -> None:
+    """A grid torus (half its points inside the hull, flat rings on top and bottom) and a
+    crowded cube surface with points inside, both above the filter's size."""
+    torus = _torus(160, 40)
+    assert set(map(tuple, exact_hull(torus).vertices)) == qhull_vertex_set(torus)
+    grid = cube_surface_grid(30)
+    inner = np.random.default_rng(5).uniform(0.001, 0.999, size=(5000, 3))
+    cube = np.concatenate([grid, inner])
+    hull = exact_hull(cube)
+    assert set(map(tuple, hull.vertices)) == set(map(tuple, CUBE))
+    assert _hull_triangles(cube) == _hull_triangles(CUBE)

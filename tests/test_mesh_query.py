@@ -887,3 +887,83 @@ def test_overflowing_distance_is_out_of_range_not_converged() -> None:
     for radius in (math.inf, 1.0):
         r = mesh_distance_batch(MeshSet.from_arrays([a, b]), None, [[0, 1]], max_distance=radius)
         assert r.status[0] == Status.OUT_OF_RANGE and math.isnan(r.distance[0])
+
+
+# --------------------------------------------------------------------------- single-pair path
+
+
+@given(
+    st.lists(poses, min_size=len(LIBRARY), max_size=len(LIBRARY)),
+    st.lists(st.tuples(mesh_index, mesh_index), min_size=1, max_size=8),
+)
+def test_single_pair_intersects_equals_the_batch(pose_list, pairs) -> None:
+    """MeshSet.intersects (default poses, and poses given per call) gives the batch's
+    verdicts, and the batch with poses=None (the core's cached copy of the set's poses) the
+    batch with the same poses passed."""
+    p = np.stack(pose_list)
+    posed = MeshSet.from_arrays(LIBRARY, p)
+    batch = mesh_intersects_batch(LIBRARY_SET, p, pairs)
+    cached = mesh_intersects_batch(posed, None, np.asarray(pairs, dtype=np.int64))
+    assert np.array_equal(cached.intersecting, batch.intersecting)
+    assert np.array_equal(cached.status, batch.status)
+    distance = mesh_distance_batch(posed, None, pairs)
+    assert np.array_equal(distance.intersecting, batch.intersecting)
+    for k, (i, j) in enumerate(pairs):
+        assert posed.intersects(i, j) == batch.intersecting[k]
+        # a Fortran-ordered copy exercises the binding's copy of a strided pose
+        assert LIBRARY_SET.intersects(i, j, p[i], np.asfortranarray(p[j])) == batch.intersecting[k]
+        assert LIBRARY_SET.intersects(i, j, p[i].tolist(), p[j]) == batch.intersecting[k]
+
+
+def test_single_pair_intersects_known_answers_and_bad_input() -> None:
+    cube = box([0, 0, 0], [1, 1, 1])
+    nan_vertices = cube.vertices.copy()
+    nan_vertices[0, 0] = np.nan
+    p = np.stack([np.eye(4), pose(translation=(0.5, 0.5, 0.5)), pose(translation=(3, 0, 0))])
+    meshes = MeshSet.from_arrays([cube, cube, cube], p)
+    assert meshes.intersects(0, 1) and not meshes.intersects(0, 2)
+    assert meshes.intersects(0, 2, None, pose(translation=(1.0, 0, 0)))  # touching counts
+    assert not meshes.intersects(0, 1, None, pose(translation=(1.5, 0, 0)))
+    with pytest.raises(ValueError, match=r"^mesh index 3 out of range for 3 meshes$"):
+        meshes.intersects(0, 3)
+    with pytest.raises(ValueError, match=r"^mesh index -1 out of range for 3 meshes$"):
+        meshes.intersects(-1, 0)
+    with pytest.raises(ValueError, match=r"^pose_j must be \(4, 4\), got \(3, 3\)$"):
+        meshes.intersects(0, 1, None, np.eye(3))
+    with pytest.raises(ValueError, match=r"^pose_i must be \(4, 4\), got \(16,\)$"):
+        meshes.intersects(0, 1, np.zeros(16))
+    for bad in (np.full((4, 4), np.nan), np.diag([2.0, 1, 1, 1])):
+        with pytest.raises(ValueError, match=r"^pose of mesh 1 is not rigid or not finite$"):
+            meshes.intersects(0, 1, None, bad)
+    # a non-rigid default pose: the batch reports INVALID_INPUT, the single pair raises
+    q = p.copy()
+    q[1, 0, 0] = 2.0
+    skewed = MeshSet.from_arrays([cube, cube, cube], q)
+    assert mesh_intersects_batch(skewed, None, [[0, 1]]).status.tolist() == [Status.INVALID_INPUT]
+    assert mesh_distance_batch(skewed, None, [[0, 1]]).status.tolist() == [Status.INVALID_INPUT]
+    with pytest.raises(ValueError, match=r"^pose of mesh 1 is not rigid or not finite$"):
+        skewed.intersects(0, 1)
+    invalid = MeshSet.from_arrays([cube, (nan_vertices, cube.faces)])
+    with pytest.raises(
+        ValueError, match=r"^mesh 1 is not valid \(a non-finite vertex or no faces\)$"
+    ):
+        invalid.intersects(0, 1)
+    far = MeshSet.from_arrays([cube, cube], np.stack([np.eye(4), pose(translation=(1e200, 0, 0))]))
+    assert mesh_intersects_batch(far, None, [[0, 1]]).status.tolist() == [Status.OUT_OF_RANGE]
+    with pytest.raises(ValueError, match=r"OUT_OF_RANGE"):
+        far.intersects(0, 1)
+
+
+def test_int64_pairs_are_range_checked_by_the_core_with_the_same_message() -> None:
+    cube = box([0, 0, 0], [1, 1, 1])
+    meshes = MeshSet.from_arrays([cube, cube])
+    for call in (mesh_intersects_batch, mesh_distance_batch, meshcol.mesh_penetration_depth_batch):
+        for bad in ([[0, 2]], [[-1, 0]]):
+            with pytest.raises(ValueError, match=r"^pairs: index -?\d out of range for 2 meshes$"):
+                call(meshes, None, np.array(bad, dtype=np.int64))
+            with pytest.raises(ValueError, match=r"^pairs: index -?\d out of range for 2 meshes$"):
+                call(meshes, None, bad)
+        assert len(call(meshes, None, np.zeros((0, 2), np.int64))) == 0
+    # floats are refused, never truncated to indices
+    with pytest.raises(ValueError, match=r"integer"):
+        mesh_intersects_batch(meshes, None, np.array([[0.0, 1.0]]))

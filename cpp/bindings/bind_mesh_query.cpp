@@ -2,11 +2,13 @@
 // mesh-pair queries over it.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/optional.h>
 #include <nanobind/stl/tuple.h>
 
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <tuple>
@@ -27,9 +29,13 @@ namespace {
 
 using meshcol::Vec3;
 
-/// The hierarchies of M meshes, packed as in meshcol.mesh_query.MeshSet.
+/// The hierarchies of M meshes, packed as in meshcol.mesh_query.MeshSet, and the set's default
+/// poses, read and checked for rigidity once (`set_poses`) so that a query without poses reads
+/// no array.
 struct MeshBvhSet {
     std::vector<meshcol::MeshBvh> meshes;
+    std::vector<meshcol::Pose> poses;  // default world-from-local poses (identity until set)
+    std::vector<char> rigid;           // poses[i] is rigid and finite
 
     const meshcol::MeshBvh& at(std::int64_t i) const {
         if (i < 0 || i >= static_cast<std::int64_t>(meshes.size()))
@@ -67,6 +73,10 @@ void build_set(MeshBvhSet* self, Points vertices, Faces faces, Index64 vertex_of
     }
     new (self) MeshBvhSet();
     self->meshes.resize(static_cast<size_t>(m));
+    meshcol::Pose identity;
+    identity.rotation = meshcol::Mat3::identity();
+    self->poses.assign(static_cast<size_t>(m), identity);
+    self->rigid.assign(static_cast<size_t>(m), 1);
     nb::gil_scoped_release release;
     meshcol::parallel_for(m, meshcol::resolve_threads(threads, m, 1), [&](long long begin, long long end) {
         for (long long i = begin; i < end; ++i)
@@ -75,39 +85,63 @@ void build_set(MeshBvhSet* self, Points vertices, Faces faces, Index64 vertex_of
     });
 }
 
+// The poses of a query (the set's defaults, or read and checked from `poses`) and its pairs,
+// range-checked on this thread so that the parallel loop cannot throw.
 struct PosedPairs {
-    std::vector<meshcol::Pose> poses;
-    std::vector<char> rigid;
-    const std::int64_t* pairs;
-    long long count;
+    std::vector<meshcol::Pose> owned_poses;
+    std::vector<char> owned_rigid;
+    const meshcol::Pose* poses = nullptr;
+    const char* rigid = nullptr;
+    const std::int64_t* pairs = nullptr;
+    long long count = 0;
 };
 
-PosedPairs read_pairs(const MeshBvhSet& set, const Poses& poses, const Pairs& pairs) {
+void check_pairs(const std::int64_t* pairs, long long count, size_t m) {
+    for (long long k = 0; k < 2 * count; ++k)
+        if (pairs[k] < 0 || pairs[k] >= static_cast<std::int64_t>(m))
+            throw std::invalid_argument("pairs: index " + std::to_string(pairs[k]) +
+                                        " out of range for " + std::to_string(m) + " meshes");
+}
+
+PosedPairs read_pairs(const MeshBvhSet& set, const std::optional<Poses>& poses, const Pairs& pairs) {
     const size_t m = set.meshes.size();
-    if (poses.shape(0) != m)
-        throw std::invalid_argument("poses must be (" + std::to_string(m) + ", 4, 4), got (" +
-                                    std::to_string(poses.shape(0)) + ", 4, 4)");
     PosedPairs out;
-    out.poses.resize(m);
-    out.rigid.resize(m);
-    for (size_t i = 0; i < m; ++i) {
-        const double* p = poses.data() + 16 * i;
-        out.rigid[i] = meshcol::is_rigid_matrix4(p, meshcol::defaults::rigid_tolerance);
-        out.poses[i] = meshcol::Pose::from_matrix4(p);
+    if (poses) {
+        if (poses->shape(0) != m)
+            throw std::invalid_argument("poses must be (" + std::to_string(m) + ", 4, 4), got (" +
+                                        std::to_string(poses->shape(0)) + ", 4, 4)");
+        out.owned_poses.resize(m);
+        out.owned_rigid.resize(m);
+        for (size_t i = 0; i < m; ++i) {
+            const double* p = poses->data() + 16 * i;
+            out.owned_rigid[i] = meshcol::is_rigid_matrix4(p, meshcol::defaults::rigid_tolerance);
+            out.owned_poses[i] = meshcol::Pose::from_matrix4(p);
+        }
+        out.poses = out.owned_poses.data();
+        out.rigid = out.owned_rigid.data();
+    } else {
+        out.poses = set.poses.data();
+        out.rigid = set.rigid.data();
     }
     out.pairs = pairs.data();
     out.count = static_cast<long long>(pairs.shape(0));
-    for (long long k = 0; k < out.count; ++k)
-        for (int s = 0; s < 2; ++s)
-            if (out.pairs[2 * k + s] < 0 || out.pairs[2 * k + s] >= static_cast<std::int64_t>(m))
-                throw std::invalid_argument("pairs[" + std::to_string(k) + "] = (" +
-                                            std::to_string(out.pairs[2 * k]) + ", " +
-                                            std::to_string(out.pairs[2 * k + 1]) +
-                                            ") is out of range for " + std::to_string(m) + " meshes");
+    check_pairs(out.pairs, out.count, m);
     return out;
 }
 
-auto distance_batch(const MeshBvhSet& set, Poses poses, Pairs pairs, int threads, double max_distance) {
+// The intersection verdict of one posed pair and its status (shared by the batch and the
+// single-pair entry, so the two cannot disagree).
+inline meshcol::Status intersects_one(const meshcol::MeshBvh& a, const meshcol::Pose& pose_a, bool rigid_a,
+                                      const meshcol::MeshBvh& b, const meshcol::Pose& pose_b, bool rigid_b,
+                                      bool* intersecting) {
+    *intersecting = false;
+    if (!a.valid() || !b.valid() || !rigid_a || !rigid_b) return meshcol::Status::INVALID_INPUT;
+    if (!meshcol::mesh_pair_in_range(a, pose_a, b, pose_b)) return meshcol::Status::OUT_OF_RANGE;
+    *intersecting = meshcol::mesh_intersects(a, pose_a, b, pose_b);
+    return meshcol::Status::CONVERGED;
+}
+
+auto distance_batch(const MeshBvhSet& set, std::optional<Poses> poses, Pairs pairs, int threads, double max_distance) {
     if (!(max_distance >= 0.0))
         throw std::invalid_argument("max_distance must be >= 0, got " + std::to_string(max_distance));
     const PosedPairs in = read_pairs(set, poses, pairs);
@@ -173,7 +207,7 @@ auto distance_batch(const MeshBvhSet& set, Poses poses, Pairs pairs, int threads
                           b_inside_a_arr, triangle_a_arr, triangle_b_arr, status_arr);
 }
 
-auto depth_batch(const MeshBvhSet& set, Poses poses, Pairs pairs, int threads) {
+auto depth_batch(const MeshBvhSet& set, std::optional<Poses> poses, Pairs pairs, int threads) {
     const PosedPairs in = read_pairs(set, poses, pairs);
     const auto n = static_cast<size_t>(in.count);
     auto depth_arr = new_array<Out<double, -1>>({n});
@@ -227,40 +261,89 @@ auto depth_batch(const MeshBvhSet& set, Poses poses, Pairs pairs, int threads) {
                            status_arr);
 }
 
-auto intersects_batch(const MeshBvhSet& set, Poses poses, Pairs pairs, int threads) {
+auto intersects_batch(const MeshBvhSet& set, std::optional<Poses> poses, Pairs pairs, int threads) {
     const PosedPairs in = read_pairs(set, poses, pairs);
     const auto n = static_cast<size_t>(in.count);
-    bool* intersecting;
-    std::int8_t* status;
     auto intersecting_arr = new_array<Out<bool, -1>>({n});
-    intersecting = intersecting_arr.data();
     auto status_arr = new_array<Out<std::int8_t, -1>>({n});
-    status = status_arr.data();
-    {
+    bool* intersecting = intersecting_arr.data();
+    std::int8_t* status = status_arr.data();
+    const auto run = [&](long long begin, long long end) {
+        for (long long k = begin; k < end; ++k) {
+            const auto i = static_cast<size_t>(in.pairs[2 * k]);
+            const auto j = static_cast<size_t>(in.pairs[2 * k + 1]);
+            status[k] = static_cast<std::int8_t>(intersects_one(set.meshes[i], in.poses[i], in.rigid[i] != 0,
+                                                                set.meshes[j], in.poses[j], in.rigid[j] != 0,
+                                                                &intersecting[k]));
+        }
+    };
+    const int t = meshcol::resolve_threads(threads, in.count, meshcol::defaults::mesh_min_pairs_per_thread);
+    if (t <= 1 && in.count <= 1) {
+        run(0, in.count);  // one pair: a disjoint one costs less than releasing the GIL
+    } else {
         nb::gil_scoped_release release;
-        const int t = meshcol::resolve_threads(threads, in.count, meshcol::defaults::mesh_min_pairs_per_thread);
-        meshcol::parallel_for(in.count, t, [&](long long begin, long long end) {
-            for (long long k = begin; k < end; ++k) {
-                const auto i = static_cast<size_t>(in.pairs[2 * k]);
-                const auto j = static_cast<size_t>(in.pairs[2 * k + 1]);
-                const meshcol::MeshBvh& a = set.meshes[i];
-                const meshcol::MeshBvh& b = set.meshes[j];
-                if (!a.valid() || !b.valid() || !in.rigid[i] || !in.rigid[j]) {
-                    intersecting[k] = false;
-                    status[k] = static_cast<std::int8_t>(meshcol::Status::INVALID_INPUT);
-                    continue;
-                }
-                if (!meshcol::mesh_pair_in_range(a, in.poses[i], b, in.poses[j])) {
-                    intersecting[k] = false;
-                    status[k] = static_cast<std::int8_t>(meshcol::Status::OUT_OF_RANGE);
-                    continue;
-                }
-                intersecting[k] = meshcol::mesh_intersects(a, in.poses[i], b, in.poses[j]);
-                status[k] = static_cast<std::int8_t>(meshcol::Status::CONVERGED);
-            }
-        });
+        meshcol::parallel_for(in.count, t, run);
     }
     return std::make_tuple(intersecting_arr, status_arr);
+}
+
+// Why a single pair has no verdict, as the message of the ValueError the single-pair entry
+// raises (a bool cannot carry a status).
+[[noreturn]] void no_verdict(meshcol::Status status, std::int64_t i, std::int64_t j, const MeshBvhSet& set,
+                             bool rigid_i, bool rigid_j) {
+    const std::string pair = "meshes " + std::to_string(i) + " and " + std::to_string(j) + ": ";
+    if (status == meshcol::Status::OUT_OF_RANGE)
+        throw std::invalid_argument(pair + "lengths outside [2^-100, 2^100] (Status.OUT_OF_RANGE)");
+    for (const auto& [k, rigid] : {std::make_pair(i, rigid_i), std::make_pair(j, rigid_j)}) {
+        if (!set.meshes[static_cast<size_t>(k)].valid())
+            throw std::invalid_argument("mesh " + std::to_string(k) +
+                                        " is not valid (a non-finite vertex or no faces)");
+        if (!rigid)
+            throw std::invalid_argument("pose of mesh " + std::to_string(k) + " is not rigid or not finite");
+    }
+    throw std::invalid_argument(pair + "no verdict");
+}
+
+size_t mesh_index(const MeshBvhSet& set, std::int64_t i) {
+    if (i < 0 || i >= static_cast<std::int64_t>(set.meshes.size()))
+        throw std::invalid_argument("mesh index " + std::to_string(i) + " out of range for " +
+                                    std::to_string(set.meshes.size()) + " meshes");
+    return static_cast<size_t>(i);
+}
+
+using Pose4 = In<double, 4, 4>;
+
+// One pair at the set's default poses, or at the given ones: the GIL is kept (a disjoint
+// pair's root-box test costs less than releasing it) and nothing is allocated.
+bool intersects_pair(const MeshBvhSet& set, std::int64_t i, std::int64_t j, std::optional<Pose4> pose_i,
+                     std::optional<Pose4> pose_j) {
+    const size_t a = mesh_index(set, i), b = mesh_index(set, j);
+    meshcol::Pose pa = set.poses[a], pb = set.poses[b];
+    bool ra = set.rigid[a] != 0, rb = set.rigid[b] != 0;
+    if (pose_i) {
+        ra = meshcol::is_rigid_matrix4(pose_i->data(), meshcol::defaults::rigid_tolerance);
+        pa = meshcol::Pose::from_matrix4(pose_i->data());
+    }
+    if (pose_j) {
+        rb = meshcol::is_rigid_matrix4(pose_j->data(), meshcol::defaults::rigid_tolerance);
+        pb = meshcol::Pose::from_matrix4(pose_j->data());
+    }
+    bool hit = false;
+    const meshcol::Status status = intersects_one(set.meshes[a], pa, ra, set.meshes[b], pb, rb, &hit);
+    if (status != meshcol::Status::CONVERGED) no_verdict(status, i, j, set, ra, rb);
+    return hit;
+}
+
+void set_poses(MeshBvhSet& set, Poses poses) {
+    const size_t m = set.meshes.size();
+    if (poses.shape(0) != m)
+        throw std::invalid_argument("poses must be (" + std::to_string(m) + ", 4, 4), got (" +
+                                    std::to_string(poses.shape(0)) + ", 4, 4)");
+    for (size_t i = 0; i < m; ++i) {
+        const double* p = poses.data() + 16 * i;
+        set.rigid[i] = meshcol::is_rigid_matrix4(p, meshcol::defaults::rigid_tolerance);
+        set.poses[i] = meshcol::Pose::from_matrix4(p);
+    }
 }
 
 }  // namespace
@@ -372,14 +455,21 @@ void bind_mesh_query(nb::module_& m) {
         }, "i"_a, "points"_a, "threads"_a = 0,
            "Exact distances (N,), closest surface points (N, 3) and faces (N,) of points (N, 3) "
            "to mesh i (its local frame); NaN and -1 for a non-finite point or an invalid mesh.")
-        .def("distance_batch", &distance_batch, "poses"_a, "pairs"_a, "threads"_a = 0,
+        .def("set_poses", &set_poses, "poses"_a,
+             "Sets the default poses (M, 4, 4) that queries with poses=None use (read and "
+             "checked for rigidity once).")
+        .def("intersects_pair", &intersects_pair, "i"_a, "j"_a, "pose_i"_a = nb::none(),
+             "pose_j"_a = nb::none(),
+             "Whether meshes i and j intersect, at the default poses or the given (4, 4) ones; "
+             "ValueError when the pair has no verdict (invalid mesh or pose, out of range).")
+        .def("distance_batch", &distance_batch, "poses"_a.none(), "pairs"_a, "threads"_a = 0,
              "max_distance"_a = std::numeric_limits<double>::infinity(),
              "Mesh-pair distances: (distance, point_a, point_b, intersecting, a_inside_b, "
              "b_inside_a, triangle_a, triangle_b, status).")
-        .def("depth_batch", &depth_batch, "poses"_a, "pairs"_a, "threads"_a = 0,
+        .def("depth_batch", &depth_batch, "poses"_a.none(), "pairs"_a, "threads"_a = 0,
              "Mesh-pair penetration depths (lower bounds of the minimum translation distance): "
              "(depth, point_a, point_b, normal, deepest_mesh, points_tested, status).")
-        .def("intersects_batch", &intersects_batch, "poses"_a, "pairs"_a, "threads"_a = 0,
+        .def("intersects_batch", &intersects_batch, "poses"_a.none(), "pairs"_a, "threads"_a = 0,
              "Mesh-pair surface intersection tests: (intersecting, status).");
 
     m.def("triangle_distance_batch", [](Triangles a, Triangles b) {

@@ -582,6 +582,21 @@ void add_candidates(const MeshBvh& self, const MeshBvh& other, const std::vector
     }
 }
 
+// The child step of the point-to-mesh branch and bound (closest_point, distance_beyond): the
+// children of internal node `index` with their box distances to `point`, pushed farther first
+// so that the closer one is searched next; once a triangle was measured (`found`), only those
+// closer than `best2`.
+inline void push_children(const std::vector<BvhNode>& nodes, std::int32_t index, const Vec3& point, bool found,
+                          double best2, std::vector<std::pair<std::int32_t, double>>& stack) {
+    const auto child = [&](std::int32_t i) {
+        return std::make_pair(i, point_box_squared_distance(nodes[static_cast<size_t>(i)], point));
+    };
+    std::pair<std::int32_t, double> near = child(index + 1), far = child(nodes[static_cast<size_t>(index)].index);
+    if (near.second > far.second) std::swap(near, far);
+    if (!found || far.second < best2) stack.push_back(far);
+    if (!found || near.second < best2) stack.push_back(near);
+}
+
 }  // namespace
 
 PointDistanceOutput closest_point(const MeshBvh& mesh, const Vec3& point) {
@@ -617,14 +632,7 @@ PointDistanceOutput closest_point(const MeshBvh& mesh, const Vec3& point) {
             }
             continue;
         }
-        // Push the farther child first so the closer one is searched next.
-        const auto child = [&](std::int32_t i) {
-            return std::make_pair(i, point_box_squared_distance(nodes[static_cast<size_t>(i)], point));
-        };
-        std::pair<std::int32_t, double> near = child(index + 1), far = child(node.index);
-        if (near.second > far.second) std::swap(near, far);
-        if (!found || far.second < best2) stack.push_back(far);
-        if (!found || near.second < best2) stack.push_back(near);
+        push_children(nodes, index, point, found, best2, stack);
     }
     out.distance = std::sqrt(best2);
     out.point = best_point;
@@ -875,13 +883,7 @@ double distance_beyond(const MeshBvh& mesh, const Vec3& point, double floor) {
             if (best2 <= floor2) break;
             continue;
         }
-        const auto child = [&](std::int32_t i) {
-            return std::make_pair(i, point_box_squared_distance(nodes[static_cast<size_t>(i)], point));
-        };
-        std::pair<std::int32_t, double> near = child(index + 1), far = child(node.index);
-        if (near.second > far.second) std::swap(near, far);
-        if (!found || far.second < best2) stack.push_back(far);
-        if (!found || near.second < best2) stack.push_back(near);
+        push_children(nodes, index, point, found, best2, stack);
     }
     return std::sqrt(best2);
 }

@@ -393,11 +393,20 @@ void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& fa
     };
     std::vector<std::int64_t> remap(n, -1);
     std::vector<double> merged;
+    constexpr size_t kRecent = 4096;  // 64 KiB
+    std::vector<Slot> recent(kRecent, Slot{0, -1});
     for (size_t i = 0; i < n; ++i) {
         if (!used[i]) continue;
         const double* v = &vertices[3 * i];
         const Key key{{quantise(v[0]), quantise(v[1]), quantise(v[2])}};
         const std::uint64_t h = hasher(key);
+        // Neighbouring triangles share corners: a small direct-mapped table of the keys seen
+        // last answers most repeats from cache, where the big table costs a miss a probe.
+        Slot& seen = recent[h & (kRecent - 1)];
+        if (seen.index >= 0 && seen.hash == h && keys[static_cast<size_t>(seen.index)] == key) {
+            remap[i] = seen.index;
+            continue;
+        }
         size_t at = h & (capacity - 1);
         std::int64_t found = -1;
         while (slots[at].index >= 0) {
@@ -420,6 +429,7 @@ void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& fa
             }
         }
         remap[i] = found;
+        seen = Slot{h, found};
     }
     for (std::int64_t& f : faces) f = remap[static_cast<size_t>(f)];
     vertices = std::move(merged);

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from meshcol._native import core
-from meshcol.collision.arrays import as_pairs, as_points, as_poses
+from meshcol.collision.arrays import as_pairs, as_points, as_pose, as_poses
 from meshcol.geometry.topology import is_closed_manifold
 from meshcol.types import Body, Status
 
@@ -67,6 +67,18 @@ def _mesh_arrays(index: int, mesh: Any) -> tuple[np.ndarray, np.ndarray]:
     return vertices, faces
 
 
+_INT64 = np.dtype(np.int64)
+_FLOAT64 = np.dtype(np.float64)
+
+
+def _pose4(pose: Any, name: str) -> np.ndarray:
+    """One pose for the core: a (4, 4) float64 array passes as it is (the binding copies a
+    strided one), anything else goes through :func:`as_pose` (its errors)."""
+    if type(pose) is np.ndarray and pose.dtype is _FLOAT64 and pose.shape == (4, 4):
+        return pose
+    return np.ascontiguousarray(as_pose(pose, name))
+
+
 @dataclass(frozen=True, eq=False)
 class MeshSet:
     """M triangle meshes packed in flat arrays, with their hierarchies built once.
@@ -86,7 +98,9 @@ class MeshSet:
     face_offsets : (M + 1,) int64
     poses : (M, 4, 4) float64
         Default world-from-local poses, used when a query passes ``poses=None``: identity from
-        :meth:`from_arrays` unless given, each body's ``pose`` from :meth:`from_bodies`.
+        :meth:`from_arrays` unless given, each body's ``pose`` from :meth:`from_bodies`. Read
+        (and checked for rigidity) by the core once, when the set is built: read-only, like
+        every array of the set.
     valid : (M,) bool
         Whether each mesh is usable: finite vertices and at least one face. Pairs involving an
         invalid mesh report ``Status.INVALID_INPUT``.
@@ -141,6 +155,9 @@ class MeshSet:
         given = np.tile(np.eye(4), (count, 1, 1)) if poses is None else poses
         poses = np.ascontiguousarray(as_poses(given, count))
         handle = core.MeshBvhSet(vertices, faces, vertex_offsets, face_offsets, threads=threads)
+        # Read and checked for rigidity once: queries with poses=None reuse the native copy
+        # (the arrays are read-only, so it cannot go stale).
+        handle.set_poses(poses)
         valid = np.array([handle.valid(i) for i in range(count)], dtype=bool)
         for array in (vertices, faces, vertex_offsets, face_offsets, poses, valid):
             array.flags.writeable = False
@@ -163,6 +180,26 @@ class MeshSet:
         v0, v1 = self.vertex_offsets[i], self.vertex_offsets[i + 1]
         f0, f1 = self.face_offsets[i], self.face_offsets[i + 1]
         return self.vertices[v0:v1], self.faces[f0:f1]
+
+    def intersects(self, i: int, j: int, pose_i: Any = None, pose_j: Any = None) -> bool:
+        """Whether the surfaces of meshes ``i`` and ``j`` intersect (touching counts).
+
+        The single-pair form of :func:`mesh_intersects_batch` (same verdicts), without its
+        arrays: one native call that reads the set's default poses (or the (4, 4) ``pose_i``,
+        ``pose_j`` given) and allocates nothing, for loops that ask about one pair at a time.
+
+        Raises
+        ------
+        ValueError
+            ``i`` or ``j`` out of range, a pose not (4, 4), or a pair without a verdict (the
+            statuses :func:`mesh_intersects_batch` reports instead): a mesh that is not valid, a
+            pose that is not rigid or not finite, lengths out of range.
+        """
+        if pose_i is not None:
+            pose_i = _pose4(pose_i, "pose_i")
+        if pose_j is not None:
+            pose_j = _pose4(pose_j, "pose_j")
+        return self._handle.intersects_pair(i, j, pose_i, pose_j)
 
     def validate(self) -> bool:
         """Check every hierarchy's invariants (boxes enclose contents, layout); for tests."""
@@ -331,6 +368,21 @@ class MeshIntersectsBatch:
         return len(self.intersecting)
 
 
+def _pairs(pairs: Any, count: int) -> np.ndarray:
+    """``pairs`` checked as :func:`as_pairs` does; a C-contiguous (P, 2) int64 array passes as
+    it is (the core checks its range, with the same message), saving a query on one pair more
+    than the query costs."""
+    if (
+        type(pairs) is np.ndarray
+        and pairs.dtype is _INT64
+        and pairs.ndim == 2
+        and pairs.shape[1] == 2
+        and pairs.flags.c_contiguous
+    ):
+        return pairs
+    return as_pairs(pairs, count, "meshes")
+
+
 def mesh_distance_batch(
     meshes: MeshSet,
     poses: np.ndarray | None,
@@ -381,8 +433,9 @@ def mesh_distance_batch(
     """
     if not isinstance(meshes, MeshSet):
         raise TypeError(f"meshes must be a MeshSet, got {type(meshes).__name__}")
-    poses = meshes.poses if poses is None else as_poses(poses, len(meshes))
-    pairs = as_pairs(pairs, len(meshes), "meshes")
+    if poses is not None:
+        poses = as_poses(poses, len(meshes))
+    pairs = _pairs(pairs, len(meshes))
     max_distance = float(max_distance)
     if not max_distance >= 0.0:
         raise ValueError(f"max_distance must be >= 0, got {max_distance}")
@@ -405,8 +458,9 @@ def mesh_intersects_batch(
     """
     if not isinstance(meshes, MeshSet):
         raise TypeError(f"meshes must be a MeshSet, got {type(meshes).__name__}")
-    poses = meshes.poses if poses is None else as_poses(poses, len(meshes))
-    pairs = as_pairs(pairs, len(meshes), "meshes")
+    if poses is not None:
+        poses = as_poses(poses, len(meshes))
+    pairs = _pairs(pairs, len(meshes))
     intersecting, status = meshes._handle.intersects_batch(poses, pairs, threads=threads)
     return MeshIntersectsBatch(intersecting, status)
 
@@ -482,8 +536,9 @@ def mesh_penetration_depth_batch(
     """
     if not isinstance(meshes, MeshSet):
         raise TypeError(f"meshes must be a MeshSet, got {type(meshes).__name__}")
-    poses = meshes.poses if poses is None else as_poses(poses, len(meshes))
-    pairs = as_pairs(pairs, len(meshes), "meshes")
+    if poses is not None:
+        poses = as_poses(poses, len(meshes))
+    pairs = _pairs(pairs, len(meshes))
     return MeshDepthBatch(*meshes._handle.depth_batch(poses, pairs, threads=threads))
 
 
