@@ -915,6 +915,20 @@ def test_single_pair_intersects_equals_the_batch(pose_list, pairs) -> None:
         assert LIBRARY_SET.intersects(i, j, p[i].tolist(), p[j]) == batch.intersecting[k]
 
 
+def test_a_copy_at_the_same_rotated_pose_intersects_itself() -> None:
+    """A duplicated prop: the same mesh twice at one rotated pose. Their relative pose must be
+    the identity exactly (R^T R rounds otherwise, moving the copy off its own surface, and the
+    exact triangle tests then found the coincident meshes apart). Found by the property test
+    above (mesh 0 paired with itself)."""
+    q = np.array([0.0, 0.90625, 0.67578125, 0.0])
+    p = pose(rotation_from_quaternion(q / np.linalg.norm(q)), (0.25, -3.0, 7.0))
+    for index, mesh in enumerate(LIBRARY):
+        twice = MeshSet.from_arrays([mesh, mesh], np.stack([p, p]))
+        assert twice.intersects(0, 1), index
+        assert mesh_intersects_batch(twice, None, [(0, 1)]).intersecting[0], index
+        assert mesh_distance_batch(twice, None, [(0, 1)]).distance[0] == 0.0, index
+
+
 def test_single_pair_intersects_known_answers_and_bad_input() -> None:
     cube = box([0, 0, 0], [1, 1, 1])
     nan_vertices = cube.vertices.copy()

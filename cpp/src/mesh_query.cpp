@@ -62,7 +62,19 @@ struct Relative {
     double slack = 0.0;
 
     Relative(const Pose& pose_a, const Pose& pose_b, const MeshBvh& a, const MeshBvh& b) {
-        rotation = pose_a.rotation.transposed() * pose_b.rotation;
+        // Equal rotations give the identity exactly: R^T R rounds otherwise, and a copy of a
+        // mesh at the same pose (a duplicated prop) would be moved off itself by that rounding,
+        // so that the exact triangle tests could find its coincident surfaces apart.
+        bool same_rotation = true;
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+                same_rotation = same_rotation && pose_a.rotation.m[i][j] == pose_b.rotation.m[i][j];
+        if (same_rotation) {
+            for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j) rotation.m[i][j] = i == j ? 1.0 : 0.0;
+        } else {
+            rotation = pose_a.rotation.transposed() * pose_b.rotation;
+        }
         translation = pose_a.rotation.transpose_times(pose_b.translation - pose_a.translation);
         const auto reach = [](const MeshBvh& m) {
             const NodeObb& root = m.obbs().front();
