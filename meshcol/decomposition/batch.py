@@ -276,7 +276,6 @@ def decompose_files(
     if run_manifest is not None:
         # What decides the results: resuming with other options would mix two runs.
         decided = {key: value for key, value in options.items() if key in _RESULT_OPTIONS}
-        decided.update(layout=layout, format=fmt, out_dir=os.path.abspath(out_dir))
         manifest = RunManifest(run_manifest, decided, resume=resume)
 
     # The engines always run in workers, so that this process stays responsive to signals.

@@ -3,15 +3,18 @@
 A JSON file (``schemas/run_manifest.schema.json``) listing each input file with its state:
 ``pending``, ``done``, or ``failed`` (with the reason, and ``status`` ``failed`` or
 ``timeout``). It is rewritten atomically (:func:`meshcol.io.report.atomic_path`) when a file
-finishes, at most every :data:`REWRITE_INTERVAL` seconds while files keep finishing, and
-always when the run ends, however it ends (an exception, Ctrl-C). The results themselves are
+finishes, at most every :data:`REWRITE_INTERVAL` seconds (a change that comes sooner is
+written by a timer when the interval is up), and always when the run ends, however it ends
+(an exception, Ctrl-C). The results themselves are
 in the cache, stored before the manifest says ``done``: a driver killed outright loses at most
 the last second of the manifest, never a finished file (the next run finds it in the cache).
 
 ``--resume`` reads the manifest back: files ``done`` are taken from the cache (no engine runs;
 one whose entry has gone is decomposed again), files ``failed`` or ``pending`` run again. The
-manifest keeps a fingerprint of the options that decide the results (engine, parameters,
-layout, format, output folder): resuming with other options is an error, not a mixed run.
+manifest keeps a fingerprint of the options that decide the decompositions (engine and its
+parameters): resuming with other ones is an error, not a mixed run. The parts are written at
+the end of each run, all together (as without a manifest), so the resumed run writes every
+file's parts, to the output folder and in the layout and format it is given.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import threading
 import time
 from collections.abc import Mapping
 from typing import Any
@@ -69,6 +73,8 @@ class RunManifest:
         self.previous: dict[str, dict[str, Any]] = {}
         self._written_at: float | None = None
         self._dirty = False
+        self._lock = threading.RLock()
+        self._timer: threading.Timer | None = None
         if resume:
             self.previous = self._read()
 
@@ -90,8 +96,8 @@ class RunManifest:
             raise MeshcolError("not a meshcol run manifest (format 1)", self.path)
         if data.get("fingerprint") != self.fingerprint:
             raise MeshcolError(
-                "the run manifest was written by a run with other options (engine, parameters, "
-                "layout, format or output folder): run without --resume, or with those options",
+                "the run manifest was written by a run with another engine or other engine "
+                "parameters: run without --resume, or with those options",
                 self.path,
             )
         return {
@@ -106,10 +112,11 @@ class RunManifest:
 
     def pending(self, path: str) -> None:
         """``path`` is part of the run (a resumed run keeps what it knew until it changes)."""
-        if path not in self.files:
-            before = self.previous.get(path)
-            self.files[path] = dict(before) if before else {"path": path, "state": "pending"}
-            self._dirty = True
+        with self._lock:
+            if path not in self.files:
+                before = self.previous.get(path)
+                self.files[path] = dict(before) if before else {"path": path, "state": "pending"}
+                self._dirty = True
 
     def finished(
         self, path: str, status: str, message: str | None = None, seconds: float = 0.0
@@ -120,11 +127,26 @@ class RunManifest:
             entry["state"] = "done"
         else:
             entry.update(state="failed", status=status, reason=message)
-        self.files[path] = entry
-        self._dirty = True
-        now = self.clock()
-        if self._written_at is None or now - self._written_at >= REWRITE_INTERVAL:
-            self.write()
+        with self._lock:
+            self.files[path] = entry
+            self._dirty = True
+            now = self.clock()
+            if self._written_at is None or now - self._written_at >= REWRITE_INTERVAL:
+                self.write()
+            elif self._timer is None:
+                self._timer = threading.Timer(
+                    REWRITE_INTERVAL - (now - self._written_at), self._flush
+                )
+                self._timer.daemon = True
+                self._timer.start()
+
+    def _flush(self) -> None:
+        with self._lock:
+            self._timer = None
+            try:
+                self.write()
+            except OSError:
+                pass  # the next rewrite, or the last one, tries again (and reports)
 
     def counts(self) -> dict[str, int]:
         """Files by state."""
@@ -135,10 +157,17 @@ class RunManifest:
 
     def write(self) -> None:
         """Rewrite the manifest now (atomically), if anything changed."""
+        with self._lock:
+            if self._timer is not None:
+                self._timer.cancel()
+                self._timer = None
+            if not self._dirty and self._written_at is not None:
+                return
+            self._write()
+
+    def _write(self) -> None:
         from meshcol.io.report import atomic_path, dumps_json
 
-        if not self._dirty and self._written_at is not None:
-            return
         data = {
             "format": MANIFEST_FORMAT,
             "command": "decompose",
