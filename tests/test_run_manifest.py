@@ -37,8 +37,17 @@ def meshes(tmp_path_factory) -> dict[str, Path]:
     return paths
 
 
+SCHEMA = Path(__file__).resolve().parent.parent / "meshcol" / "schemas"
+
+
 def read(path: Path) -> dict:
-    return json.loads(path.read_text())
+    """The manifest, checked against its schema."""
+    import jsonschema
+
+    data = json.loads(path.read_text())
+    schema = json.loads((SCHEMA / "run_manifest.schema.json").read_text())
+    jsonschema.Draft202012Validator(schema).validate(data)
+    return data
 
 
 def states(path: Path) -> dict[str, str]:

@@ -15,11 +15,20 @@ worker_env`). Ray is imported only when a Ray executor starts (``pip install 'me
 from __future__ import annotations
 
 import logging
+import os
+import sys
 import time
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any, Protocol
 
-from meshcol.decomposition.jobs import TaskOutcome, WorkerPool, _call, _SignalGuard, worker_env
+from meshcol.decomposition.jobs import (
+    TaskOutcome,
+    WorkerPool,
+    _call,
+    _sigint_blocked,
+    _SignalGuard,
+    worker_env,
+)
 from meshcol.errors import MissingDependencyError
 
 __all__ = ["EXECUTORS", "Executor", "RayExecutor", "make_executor"]
@@ -86,8 +95,14 @@ def make_executor(
     raise ValueError(f"unknown executor {kind!r}: expected one of {', '.join(EXECUTORS)}")
 
 
-def import_ray() -> Any:
-    """The ``ray`` module, or MissingDependencyError with the install hint."""
+def import_ray(local: bool = False) -> Any:
+    """The ``ray`` module, or MissingDependencyError with the install hint.
+
+    ``local``: a local Ray may be started; on Linux, Ray resolves 127.0.0.1 to the machine's
+    network address unless told that this is no multi-machine cluster (the variable below,
+    read when Ray is first imported), so a local Ray binds to the loopback address only."""
+    if local and "ray" not in sys.modules:
+        os.environ.setdefault("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")
     try:
         import ray
     except ImportError:
@@ -148,7 +163,7 @@ class RayExecutor:
             raise ValueError(f"jobs must be at least 1, got {jobs}")
         self.fn, self.jobs, self.timeout, self.prepare = fn, jobs, timeout, prepare
         self.address = address
-        self.ray = import_ray()
+        self.ray = import_ray(local=address is None)
         self._owned = False
         self._remote: Any = None
         self._slots = jobs
@@ -176,12 +191,28 @@ class RayExecutor:
                 "configure_logging": True,
             }
             if self.address is None:
-                ray.init(
-                    address="local",
-                    num_cpus=self.jobs,
-                    _node_ip_address="127.0.0.1",
-                    **common,
-                )
+                # The local Ray's processes inherit this environment: its workers, prestarted
+                # with it, run the tasks as they are (a per-task environment would start
+                # other workers, seconds each on a small machine).
+                # SIGINT blocked meanwhile: Ray's processes inherit the mask, so a terminal's
+                # Ctrl-C (sent to the whole process group) reaches only this process, which
+                # then stops them (ray.shutdown) instead of leaving a half-dead cluster.
+                saved = {key: os.environ.get(key) for key in self.env}
+                os.environ.update(self.env)
+                try:
+                    with _sigint_blocked():
+                        ray.init(
+                            address="local",
+                            num_cpus=self.jobs,
+                            _node_ip_address="127.0.0.1",
+                            **common,
+                        )
+                finally:
+                    for key, value in saved.items():
+                        if value is None:
+                            os.environ.pop(key, None)
+                        else:
+                            os.environ[key] = value
             else:
                 common.pop("include_dashboard")
                 ray.init(address=self.address, **common)
@@ -191,11 +222,10 @@ class RayExecutor:
         else:
             cpus = int(ray.cluster_resources().get("CPU", 0))
             self._slots = max(1, cpus)
-        options = {
-            "num_cpus": 1,
-            "max_retries": 0,
-            "runtime_env": {"env_vars": dict(self.env)},
-        }
+        options: dict[str, Any] = {"num_cpus": 1, "max_retries": 0}
+        if not (self._owned and self.address is None):
+            # A cluster (or a Ray the caller started): the thread settings go with each task.
+            options["runtime_env"] = {"env_vars": dict(self.env)}
         self._remote = ray.remote(_ray_call).options(**options)
         self._prepare_remote = ray.remote(_ray_prepare).options(**options)
 
