@@ -316,8 +316,11 @@ class RayExecutor:
 
     def close(self, *, interrupted: bool = False) -> None:
         """Cancel (by force) what is still in flight; stop the local Ray this started."""
-        for ref in list(self._inflight):
-            self._cancel(ref)
+        if not self._owned:
+            # A cluster outlives the run: its tasks of this run are stopped one by one. A
+            # local Ray this started goes whole with its workers (ray.shutdown).
+            for ref in list(self._inflight):
+                self._cancel(ref)
         self._inflight.clear()
         if self._owned:
             self.ray.shutdown()
