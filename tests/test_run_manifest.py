@@ -125,6 +125,7 @@ def test_resume_and_manifest_usage_errors(meshes, tmp_path) -> None:
     assert no_cache.exit_code == 2 and "--run-manifest needs the cache" in no_cache.stderr
 
 
+@pytest.mark.slow
 def test_manifest_rewrites_are_throttled_but_never_lost(tmp_path) -> None:
     now = [0.0]
     path = tmp_path / "m.json"

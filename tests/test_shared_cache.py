@@ -65,6 +65,7 @@ def test_obj_stl_and_ply_of_one_geometry_get_one_canonical_form(tmp_path) -> Non
     assert _key(tmp_path / "m.obj") == _key(tmp_path / "m.stl") == _key(tmp_path / "m.ply")
 
 
+@pytest.mark.slow
 def test_the_three_exports_hit_one_cache_entry(tmp_path) -> None:
     mesh = _odd_mesh()
     _write_obj_full_precision(mesh, tmp_path / "m.obj")
