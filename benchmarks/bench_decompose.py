@@ -6,9 +6,13 @@ Runs the command line as users do (``python -m meshcol decompose``), on corpus m
    ``--jobs 2`` without the cache, alternating for ``--rounds`` rounds (wall time, outputs
    compared byte for byte);
 2. a cache miss vs a cache hit of the same command (whole command, then ``decompose()`` alone);
-3. CoACD vs V-HACD: parts, seconds and fidelity per mesh, side by side.
+3. CoACD vs V-HACD: parts, seconds and fidelity per mesh, side by side;
+4. the Ray executor vs the local pool (``--jobs 2``, no cache), alternating: the whole command
+   (a local Ray started and stopped by each run) and ``decompose_files`` in one process on a
+   Ray already running (the steady state of a cluster), outputs compared byte for byte; and
+   the per-task overhead of each executor (no-op tasks).
 
-Usage: python benchmarks/bench_decompose.py [--quick] [--rounds 3]
+Usage: python benchmarks/bench_decompose.py [--quick] [--rounds 3] [--only ray]
 """
 
 from __future__ import annotations
@@ -96,6 +100,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="first 4 meshes only")
     parser.add_argument("--rounds", type=int, default=3, help="rounds of the jobs comparison")
+    parser.add_argument("--only", choices=["ray"], help="only the executor comparison (4)")
     args = parser.parse_args()
     meshes = [str(CORPUS / m) for m in (MESHES[:4] if args.quick else MESHES)]
     missing = [m for m in meshes if not Path(m).is_file()]
@@ -105,6 +110,10 @@ def main() -> None:
     print(
         f"{len(meshes)} corpus meshes, {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f}"
     )
+    if args.only == "ray":
+        bench_ray(meshes, work, args.rounds)
+        shutil.rmtree(work)
+        return
 
     # 1. jobs 1 vs jobs 2 (no cache). The three runs alternate, round after round, so a
     # change in the machine's speed (a shared 2-core VM: +-15% between minutes) hits all three.
@@ -201,7 +210,112 @@ def main() -> None:
             f"{a['uncovered_fraction']:6.3f}/{b['uncovered_fraction']:<6.3f}"
         )
     print("(each cell: CoACD/V-HACD; H = one-sided Hausdorff distance in mesh units)")
+    bench_ray(meshes, work, args.rounds)
     shutil.rmtree(work)
+
+
+def _noop(task: object) -> object:
+    return task
+
+
+def spread(values: list[float]) -> str:
+    return f"{min(values):.2f}-{max(values):.2f} s (median {statistics.median(values):.2f})"
+
+
+def bench_ray(meshes: list[str], work: Path, rounds: int) -> None:
+    """4. The Ray executor vs the local pool, alternated round by round."""
+    try:
+        import ray
+    except ImportError:
+        print("\n## Ray executor vs local pool: skipped (pip install 'meshcol[ray]')")
+        return
+    from meshcol.decomposition.batch import decompose_files
+    from meshcol.decomposition.executor import RayExecutor
+    from meshcol.decomposition.jobs import WorkerPool
+
+    print(f"\n## Ray executor vs local pool (--jobs 2, no cache), ray {ray.__version__}")
+    cli: dict[str, list[float]] = {"local": [], "ray": []}
+    for r in range(rounds):
+        for kind in ("local", "ray"):
+            seconds, _ = run(
+                [*meshes, "-o", str(work / f"cli_{kind}_{r}"), "--no-cache", "--jobs", "2"]
+                + ["--executor", kind, *COACD]
+            )
+            cli[kind].append(seconds)
+        print(
+            f"round {r + 1}: whole command, local {cli['local'][-1]:6.2f} s, ray "
+            f"{cli['ray'][-1]:6.2f} s: ray/local {cli['ray'][-1] / cli['local'][-1]:.3f}"
+        )
+    same = all(
+        same_tree(work / "cli_local_0", work / f"cli_{k}_{r}")
+        for k in ("local", "ray")
+        for r in range(rounds)
+    )
+    ratios = [b / a for a, b in zip(cli["local"], cli["ray"], strict=True)]
+    print(
+        f"whole command: local {spread(cli['local'])}, ray {spread(cli['ray'])}; ray/local "
+        f"{min(ratios):.3f}-{max(ratios):.3f}; identical outputs: {same}"
+    )
+
+    # In one process, on a Ray already up (a cluster's steady state: no start-up per run).
+    ray.init(
+        address="local",
+        num_cpus=2,
+        include_dashboard=False,
+        _node_ip_address="127.0.0.1",
+        log_to_driver=False,
+        logging_level="ERROR",
+    )
+    options = {
+        "threshold": 0.1,
+        "preprocess": "off",
+        "resolution": 1000,
+        "use_cache": False,
+        "jobs": 2,
+        "engine_options": {"mcts_iterations": 60, "mcts_nodes": 12, "mcts_max_depth": 2},
+    }
+    warm = decompose_files(meshes[:1], work / "warm", executor="ray", **options)
+    assert warm.exit_code == 0
+    steady: dict[str, list[float]] = {"local": [], "ray": []}
+    for r in range(rounds):
+        for kind in ("local", "ray"):
+            start = time.perf_counter()
+            decompose_files(meshes, work / f"lib_{kind}_{r}", executor=kind, **options)
+            steady[kind].append(time.perf_counter() - start)
+        print(
+            f"round {r + 1}: decompose_files, local {steady['local'][-1]:6.2f} s, ray "
+            f"{steady['ray'][-1]:6.2f} s: ray/local {steady['ray'][-1] / steady['local'][-1]:.3f}"
+        )
+    ratios = [b / a for a, b in zip(steady["local"], steady["ray"], strict=True)]
+    same = all(
+        same_tree(work / "cli_local_0", work / f"lib_{k}_{r}")
+        for k in ("local", "ray")
+        for r in range(rounds)
+    )
+    print(
+        f"decompose_files on a running Ray: local {spread(steady['local'])}, ray "
+        f"{spread(steady['ray'])}; ray/local {min(ratios):.3f}-{max(ratios):.3f}; identical "
+        f"outputs: {same}"
+    )
+
+    # Per-task overhead: no-op tasks through each executor, workers already up.
+    n = 400
+    for kind in ("local", "ray"):
+        samples = []
+        for _ in range(3):
+            executor = RayExecutor(_noop, 2) if kind == "ray" else WorkerPool(_noop, 2)
+            with executor:
+                executor.start()
+                list(executor.run(range(20)))  # workers up and warm
+                start = time.perf_counter()
+                outcomes = list(executor.run(range(n)))
+                samples.append((time.perf_counter() - start) / n)
+            assert all(o.status == "ok" for o in outcomes)
+        print(
+            f"per-task overhead, {kind}: {min(samples) * 1e3:.2f}-{max(samples) * 1e3:.2f} ms "
+            f"per task ({n} no-op tasks, 2 workers, 3 samples)"
+        )
+    ray.shutdown()
 
 
 if __name__ == "__main__":

@@ -404,3 +404,37 @@ def write_html(path: str | None, build: Callable[[], Any]) -> None:
 
     size = write_review(path, build())
     click.echo(f"meshcol: review page: {display_path(path)} ({size / 1e6:.1f} MB)", err=True)
+
+
+def executor_options() -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Add ``--executor local|ray`` and ``--ray-address ADDR`` (parameters ``executor`` and
+    ``ray_address``): where a command's per-file tasks run
+    (:mod:`meshcol.decomposition.executor`). ``--ray-address`` without ``--executor ray`` is
+    a usage error."""
+
+    def check_address(ctx: click.Context, param: click.Parameter, value: str | None) -> Any:
+        if value is not None and ctx.params.get("executor", "local") != "ray":
+            raise click.UsageError("--ray-address needs --executor ray", ctx=ctx)
+        return value
+
+    def decorate(func: Callable[..., Any]) -> Callable[..., Any]:
+        func = click.option(
+            "--ray-address",
+            default=None,
+            metavar="ADDR",
+            callback=check_address,
+            help="Ray cluster to run on (ray://HOST:10001, HOST:6379, auto).  [default: a "
+            "local Ray of --jobs CPUs on 127.0.0.1, stopped at the end]",
+        )(func)
+        func = click.option(
+            "--executor",
+            type=click.Choice(["local", "ray"]),
+            default="local",
+            show_default=True,
+            is_eager=True,
+            help="Where files are processed: local worker processes, or one Ray task per "
+            "file (needs meshcol[ray]).",
+        )(func)
+        return func
+
+    return decorate

@@ -6,7 +6,13 @@ import os
 
 import click
 
-from meshcol.cli.common import FiniteFloat, html_option, robot_options, write_html
+from meshcol.cli.common import (
+    FiniteFloat,
+    executor_options,
+    html_option,
+    robot_options,
+    write_html,
+)
 from meshcol.decomposition.engines import ENGINES
 from meshcol.io.mesh_write import LAYOUTS
 
@@ -101,7 +107,8 @@ def _engine_option(
     "--cache-dir",
     type=click.Path(file_okay=False),
     default=None,
-    help="Cache folder.  [default: the user cache folder, meshcol/decompose]",
+    help="Cache folder (may be shared by several machines) or fsspec URL (file://, s3://, "
+    "gs://, memory://).  [default: the user cache folder, meshcol/decompose]",
 )
 @click.option("--no-cache", is_flag=True, help="Neither read nor write the cache.")
 @click.option(
@@ -140,6 +147,21 @@ def _engine_option(
     help="Fail (exit 1) when a body's Hausdorff distance, either way, exceeds this (mesh "
     "units).  [default: no limit]",
 )
+@click.option(
+    "--run-manifest",
+    type=click.Path(dir_okay=False),
+    default=None,
+    metavar="FILE.json",
+    help="Keep every file's state (done, failed and why, pending) in this file as the run "
+    "goes.  [default: none]",
+)
+@click.option(
+    "--resume",
+    is_flag=True,
+    help="With --run-manifest: skip the files a previous run finished (taken from the "
+    "cache), retry the others.",
+)
+@executor_options()
 @click.pass_context
 @robot_options()
 @html_option
@@ -165,6 +187,10 @@ def decompose_command(
     report: str | None,
     max_hausdorff: float | None,
     html: str | None,
+    run_manifest: str | None,
+    resume: bool,
+    executor: str,
+    ray_address: str | None,
 ) -> None:
     """Split meshes into convex parts for collision (meshcol decompose).
 
@@ -194,11 +220,13 @@ def decompose_command(
       meshcol decompose chair.obj -o out/ --layout ucx --max-hulls 16 --max-vertices 32
       meshcol decompose bottle.obj -o out/ --engine vhacd --layout combined --format glb
       meshcol decompose snowflake.obj -o out/ --preprocess off --threshold 0.02 -E mcts_iterations=50
+      meshcol decompose lib/*.obj -o out/ --executor ray --ray-address auto --cache-dir s3://b/c
+      meshcol decompose lib/*.obj -o out/ --run-manifest run.json --resume
     """
     from meshcol.analysis.review import decompose_page
     from meshcol.cli.common import Progress, report_format, verdict
     from meshcol.decomposition.batch import decompose_files
-    from meshcol.decomposition.cache import default_cache_dir
+    from meshcol.decomposition.cache import default_cache_dir, local_folder
     from meshcol.decomposition.engines import resolve_params
     from meshcol.io.outputs import check_outputs
     from meshcol.io.report import emit
@@ -213,6 +241,13 @@ def decompose_command(
         raise click.UsageError("--cache-dir and --no-cache exclude each other")
     if engine != "coacd" and threshold is not None:
         raise click.UsageError("--threshold applies to --engine coacd only")
+    if resume and run_manifest is None:
+        raise click.UsageError("--resume needs --run-manifest")
+    if run_manifest is not None and no_cache:
+        raise click.UsageError(
+            "--run-manifest needs the cache (it keeps the results of finished files): "
+            "drop --no-cache"
+        )
     try:
         resolve_params(engine, engine_options=engine_options)
     except ValueError as exc:
@@ -223,10 +258,10 @@ def decompose_command(
     report_file = None if report in (None, "-") else report
     cache_label = "--cache-dir" if cache_dir is not None else "the cache folder"
     check_outputs(
-        files={"--report": report_file, "--html": html},
+        files={"--report": report_file, "--html": html, "--run-manifest": run_manifest},
         folders={
             "--out-dir": out_dir,
-            cache_label: None if no_cache else (cache_dir or str(default_cache_dir())),
+            cache_label: None if no_cache else local_folder(cache_dir or str(default_cache_dir())),
         },
         inputs=inputs,
     )
@@ -243,6 +278,16 @@ def decompose_command(
                 raise click.UsageError(
                     f"{flag} does not apply to a robot description (parts go to "
                     "OUT/<link>_NN.obj; --to chooses the description's format)"
+                )
+        for flag, given in (
+            ("--executor ray", executor == "ray"),
+            ("--run-manifest", run_manifest is not None),
+            ("--resume", resume),
+        ):
+            if given:
+                raise click.UsageError(
+                    f"{flag} does not apply to a robot description yet (its links run in the "
+                    "local worker pool, --jobs)"
                 )
     progress = Progress(command="decompose", heartbeat=True)
     if robot:
@@ -311,7 +356,11 @@ def decompose_command(
             fmt=fmt,
             max_hausdorff=max_hausdorff,
             progress=progress.message,
-            other_outputs=[p for p in (report_file, html) if p],
+            other_outputs=[p for p in (report_file, html, run_manifest) if p],
+            executor=executor,
+            ray_address=ray_address,
+            run_manifest=run_manifest,
+            resume=resume,
         )
     finally:
         progress.done()

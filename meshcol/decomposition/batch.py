@@ -152,6 +152,10 @@ def decompose_files(
     max_hausdorff: float | None = None,
     progress: Callable[[str], None] | None = None,
     other_outputs: Sequence[str | os.PathLike[str]] = (),
+    executor: str = "local",
+    ray_address: str | None = None,
+    run_manifest: str | os.PathLike[str] | None = None,
+    resume: bool = False,
 ) -> DecomposeReport:
     """Decompose every body of every input file into convex parts and write them.
 
@@ -169,8 +173,10 @@ def decompose_files(
         using every core).
     timeout : float, optional
         Seconds allowed per file; a file over it is stopped and reported as ``timeout``.
-    cache_dir : path, optional
-        Cache folder (default: the user cache folder).
+    cache_dir : path or URL, optional
+        Cache folder, possibly on a file system several machines share, or an fsspec URL
+        (``file://``, ``memory://``, ``s3://``, ``gs://``; :mod:`meshcol.decomposition.cache`).
+        Default: the user cache folder.
     use_cache : bool
         False: neither read nor write the cache.
     layout : {"parts", "combined", "ucx"}
@@ -186,6 +192,17 @@ def decompose_files(
         Files the caller will write besides the parts (``meshcol decompose --report``): a
         body whose parts would replace one is an error before anything is written, as is one
         whose parts would replace an input.
+    executor : {"local", "ray"}
+        Where the files are decomposed (:mod:`meshcol.decomposition.executor`): the local
+        worker pool, or one Ray task per file.
+    ray_address : str, optional
+        The Ray cluster to use (default: a local Ray of ``jobs`` CPUs, started and stopped
+        by the run).
+    run_manifest : path, optional
+        Keep every file's state in this JSON file as the run goes
+        (:mod:`meshcol.decomposition.manifest`); needs the cache.
+    resume : bool
+        Read ``run_manifest`` first: files done are taken from the cache, the others run.
 
     Returns
     -------
@@ -202,9 +219,11 @@ def decompose_files(
         bodies that would write the same files, or parts that would replace an input or an
         ``other_outputs`` file; nothing is written.
     """
-    from meshcol.decomposition.cache import default_cache_dir
+    from meshcol.decomposition.cache import default_cache_dir, local_folder
     from meshcol.decomposition.engines import prepare_engine, resolve_params
-    from meshcol.decomposition.jobs import WorkerPool, decompose_task
+    from meshcol.decomposition.executor import make_executor
+    from meshcol.decomposition.jobs import decompose_task
+    from meshcol.decomposition.manifest import RunManifest
     from meshcol.io.outputs import check_outputs
 
     if layout == "ucx" and fmt == "glb":
@@ -213,6 +232,12 @@ def decompose_files(
         raise ValueError("cache_dir needs use_cache")
     if engine != "coacd" and threshold is not None:
         raise ValueError("threshold applies to engine 'coacd' only")
+    if resume and run_manifest is None:
+        raise ValueError("resume needs run_manifest")
+    if run_manifest is not None and not use_cache:
+        raise ValueError("run_manifest needs the cache (it keeps the results of finished files)")
+    if executor != "ray" and ray_address is not None:
+        raise ValueError("ray_address needs executor 'ray'")
     engine_options = dict(engine_options or {})
     resolve_params(engine, engine_options=engine_options)
     paths = [os.fspath(p) for p in inputs]
@@ -220,7 +245,11 @@ def decompose_files(
     cache_root = None
     if use_cache:
         cache_root = os.fspath(cache_dir) if cache_dir is not None else str(default_cache_dir())
-    check_outputs(folders={"out_dir": out_dir, "cache_dir": cache_root}, inputs=paths)
+    check_outputs(
+        files={"run_manifest": None if run_manifest is None else os.fspath(run_manifest)},
+        folders={"out_dir": out_dir, "cache_dir": local_folder(cache_root)},
+        inputs=paths,
+    )
     options: dict[str, Any] = {
         "engine": engine,
         "threshold": threshold,
@@ -246,18 +275,30 @@ def decompose_files(
         format=fmt,
         max_hausdorff=max_hausdorff,
         frame="world",
+        executor=executor,
+        ray_address=ray_address,
     )
+    manifest = None
+    if run_manifest is not None:
+        # What decides the results: resuming with other options would mix two runs.
+        decided = {key: value for key, value in options.items() if key in _RESULT_OPTIONS}
+        manifest = RunManifest(run_manifest, decided, resume=resume)
 
     # The engines always run in workers, so that this process stays responsive to signals.
-    pool = WorkerPool(
-        decompose_task, jobs, timeout=timeout, prepare=functools.partial(prepare_engine, engine)
+    pool = make_executor(
+        executor,
+        decompose_task,
+        jobs,
+        timeout=timeout,
+        prepare=functools.partial(prepare_engine, engine),
+        address=ray_address,
     )
-    if jobs > 1:
-        # Workers start now and load the engine while this process reads the files; one job
-        # starts its worker at the first file the cache does not have (a run of hits needs
-        # none).
-        pool.start(min(jobs, len(paths)))
     try:
+        if jobs > 1 or executor != "local":
+            # Workers start now and load the engine while this process reads the files; one
+            # local job starts its worker at the first file the cache does not have (a run of
+            # hits needs none).
+            pool.start(min(jobs, len(paths)))
         files, rows = _run(
             paths,
             out_dir,
@@ -269,6 +310,7 @@ def decompose_files(
             max_hausdorff=max_hausdorff,
             progress=progress,
             protected=[*paths, *(os.fspath(p) for p in other_outputs)],
+            manifest=manifest,
         )
     except BaseException as exc:
         # A signal (KeyboardInterrupt, SIGTERM's exception) abandons the run: no process stays.
@@ -290,6 +332,7 @@ def _run(
     max_hausdorff: float | None,
     progress: Callable[[str], None] | None,
     protected: list[str],
+    manifest: Any = None,
 ) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
     """Load, look up the cache, decompose, store, write: the file entries and the CSV rows."""
     from meshcol.decomposition import cache
@@ -304,16 +347,25 @@ def _run(
     task_file: list[int] = []
     key_options = {k: v for k, v in options.items() if k != "use_cache"}
     report_progress = progress or (lambda message: None)
-    done, total = 0, None if _is_manifest(inputs) else len(inputs)
+    done, failed, sent, total = 0, 0, 0, None if _is_manifest(inputs) else len(inputs)
+    slots = getattr(pool, "slots", 1)
     guard = _OutputGuard(out_dir, protected)
 
-    def step() -> None:
-        nonlocal done
+    def step(status: str = "ok", task: bool = False) -> None:
+        nonlocal done, failed, sent
         done += 1
-        report_progress(f"decompose: {done}{'' if total is None else f'/{total}'} files")
+        failed += status != "ok"
+        sent -= task
+        text = f"decompose: {done}{'' if total is None else f'/{total}'} files"
+        if failed:
+            text += f", {failed} failed"
+        running = min(sent, slots)
+        if running:
+            text += f", {running} running"
+        report_progress(text)
 
     def tasks() -> Iterator[tuple[str, list, dict]]:
-        nonlocal total
+        nonlocal total, sent
         for path, bodies in _iter_load(inputs):
             guard.protect(path)
             for name, _, _, _ in bodies:
@@ -327,6 +379,8 @@ def _run(
                 guard.plan(name, layout_file_pattern(clean, layout, fmt))
             i = len(files)
             files.append((path, bodies))
+            if manifest is not None:
+                manifest.pending(path)
             start = time.perf_counter()
             lookup = {}
             if cache_root is not None:
@@ -337,24 +391,39 @@ def _run(
             if lookup and all(d is not None and d.metrics is not None for d in lookup.values()):
                 hits = [(name, lookup[name]) for name, _, _, _ in bodies]
                 results[i] = ("ok", hits, None, time.perf_counter() - start)
+                if manifest is not None:
+                    manifest.finished(path, "ok", seconds=time.perf_counter() - start)
                 step()
                 continue
+            if manifest is not None and manifest.was_done(path):
+                report_progress(
+                    f"decompose: {path}: done by the resumed run, but not in the cache: "
+                    "decomposing it again"
+                )
             task_file.append(i)
+            sent += 1
             yield (path, [(name, v, f) for name, v, f, _ in bodies], options)
         total = len(files)
 
     # Closed here, not when garbage collected: the pool's signal handlers go with it.
-    with contextlib.closing(pool.run(tasks())) as outcomes:
-        for outcome in outcomes:
-            i = task_file[outcome.index]
-            results[i] = (outcome.status, outcome.value, outcome.message, outcome.seconds)
-            if outcome.status == "ok" and cache_root is not None:
-                # This process stores what the worker made (or measured again), as it arrives.
-                for name, d in outcome.value:
-                    before = looked_up[i].get(name)
-                    if before is None or before.metrics != d.metrics:
-                        cache.store(d, cache_root)
-            step()
+    try:
+        with contextlib.closing(pool.run(tasks())) as outcomes:
+            for outcome in outcomes:
+                i = task_file[outcome.index]
+                results[i] = (outcome.status, outcome.value, outcome.message, outcome.seconds)
+                if outcome.status == "ok" and cache_root is not None:
+                    # This process stores what the worker made (or measured again), as it
+                    # arrives; the manifest says done only once the entry is stored.
+                    for name, d in outcome.value:
+                        before = looked_up[i].get(name)
+                        if before is None or before.metrics != d.metrics:
+                            cache.store(d, cache_root)
+                if manifest is not None:
+                    manifest.finished(files[i][0], outcome.status, outcome.message, outcome.seconds)
+                step(outcome.status, task=True)
+    finally:
+        if manifest is not None:
+            manifest.write()  # however the run ends: what finished is on record
 
     rows: list[dict[str, Any]] = []
     file_reports: list[dict[str, Any]] = []
@@ -520,6 +589,19 @@ def decompose_meshes(
             raise
         pool.close()
     return results
+
+
+# Options of the run that decide its results (the run manifest's fingerprint).
+_RESULT_OPTIONS = (
+    "engine",
+    "threshold",
+    "max_hulls",
+    "max_vertices",
+    "preprocess",
+    "resolution",
+    "seed",
+    "engine_options",
+)
 
 
 def within_max_hausdorff(metrics: Mapping[str, Any], limit: float | None) -> bool:

@@ -2,9 +2,22 @@
 
 One entry per key (:func:`meshcol.decomposition.canonical.cache_key`): ``<dir>/<key[:2]>/<key>.npz`` holding
 all part vertices and faces concatenated, their offsets, and a JSON header (engine, version,
-parameters, metrics and the version of their definitions, notes). An entry is written to a temporary file in the same folder and
-renamed into place (``os.replace`` is atomic on POSIX and Windows), so concurrent runs never
-see a partial entry and a killed run leaves none; an unreadable entry counts as a miss.
+parameters, metrics and the version of their definitions, notes). An unreadable entry, or
+one whose header names another key, counts as a miss.
+
+The cache is a folder (local, or on a file system several machines share: NFS, Lustre, SMB)
+or an fsspec URL (``file://``, ``memory://``, ``s3://``, ``gs://``, ... with the user's
+fsspec backend installed). Writes are atomic, so concurrent writers, on one machine or many,
+never leave a partial entry and a killed run leaves none:
+
+- a folder (or ``file://``): the entry is written to a temporary file in its folder and
+  renamed into place (``os.replace``, atomic on POSIX and Windows, and on NFS within a folder);
+- an object store (``s3``, ``gs``, ``az``, ``memory``, ...): one whole-object put, which
+  readers see entirely or not at all;
+- any other fsspec file system: a temporary object, then a move onto the entry.
+
+Two writers of one key write the same bytes (a key names one geometry, engine version and
+parameter set, and the engines are deterministic), so the last write winning is correct.
 """
 
 from __future__ import annotations
@@ -13,8 +26,10 @@ import io
 import json
 import os
 import sys
+import uuid
 import zipfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -22,7 +37,55 @@ from meshcol.decomposition.fidelity import METRICS_VERSION
 from meshcol.decomposition.result import Decomposition, Fidelity
 from meshcol.io.report import atomic_path
 
-__all__ = ["default_cache_dir", "entry_path", "load", "store"]
+__all__ = ["default_cache_dir", "entry_path", "is_url", "load", "local_folder", "store"]
+
+# fsspec protocols whose single put is atomic (object stores): written in one call.
+_OBJECT_STORES = frozenset(
+    {"s3", "s3a", "gs", "gcs", "az", "abfs", "abfss", "adl", "memory", "oss", "r2"}
+)
+
+
+def is_url(cache_dir: str | os.PathLike[str] | None) -> bool:
+    """Whether ``cache_dir`` is an fsspec URL (``scheme://...``) rather than a folder."""
+    return cache_dir is not None and "://" in os.fspath(cache_dir)
+
+
+def local_folder(cache_dir: str | os.PathLike[str] | None) -> str | None:
+    """The local folder of ``cache_dir`` (a path, or a ``file://`` URL); None for any other
+    URL (checked by its backend when used) and for None."""
+    if cache_dir is None:
+        return None
+    text = os.fspath(cache_dir)
+    if not is_url(text):
+        return text
+    scheme, _, rest = text.partition("://")
+    if scheme in ("file", "local"):
+        return rest or "/"
+    return None
+
+
+def _filesystem(url: str) -> tuple[Any, str]:
+    """(fsspec file system, root path inside it) for a cache URL."""
+    try:
+        import fsspec
+    except ImportError:
+        from meshcol.errors import MissingDependencyError
+
+        raise MissingDependencyError(
+            f"cache URL {url!r} needs fsspec (and its backend, e.g. s3fs or gcsfs): "
+            "pip install fsspec"
+        ) from None
+    try:
+        fs, root = fsspec.core.url_to_fs(url)
+    except (ImportError, ValueError) as exc:
+        from meshcol.errors import MissingDependencyError
+
+        raise MissingDependencyError(f"cache URL {url!r}: {exc}") from None
+    return fs, root.rstrip("/")
+
+
+def _entry_name(key: str) -> str:
+    return f"{key[:2]}/{key}.npz"
 
 
 def default_cache_dir() -> Path:
@@ -47,11 +110,25 @@ def entry_path(key: str, cache_dir: str | os.PathLike[str] | None = None) -> Pat
     return root / key[:2] / f"{key}.npz"
 
 
+def _read(key: str, cache_dir: str | os.PathLike[str] | None) -> Any:
+    """The entry's bytes or path (for np.load); None when it is absent."""
+    local = local_folder(cache_dir) if cache_dir is not None else None
+    if cache_dir is None or local is not None:
+        return entry_path(key, local)
+    fs, root = _filesystem(os.fspath(cache_dir))
+    try:
+        return io.BytesIO(fs.cat_file(f"{root}/{_entry_name(key)}"))
+    except (FileNotFoundError, OSError):
+        return None
+
+
 def load(key: str, cache_dir: str | os.PathLike[str] | None = None) -> Decomposition | None:
     """The cached decomposition for ``key``, or None when absent or unreadable."""
-    path = entry_path(key, cache_dir)
+    source = _read(key, cache_dir)
+    if source is None:
+        return None
     try:
-        with np.load(path, allow_pickle=False) as z:
+        with np.load(source, allow_pickle=False) as z:
             header = json.loads(bytes(z["header"]).decode())
             vertices, faces = z["vertices"], z["faces"]
             voff, foff = z["vertex_offsets"], z["face_offsets"]
@@ -84,10 +161,9 @@ def load(key: str, cache_dir: str | os.PathLike[str] | None = None) -> Decomposi
     )
 
 
-def store(result: Decomposition, cache_dir: str | os.PathLike[str] | None = None) -> Path:
-    """Write ``result`` under its key, atomically; returns the entry's path."""
-    path = entry_path(result.cache_key, cache_dir)
-    path.parent.mkdir(parents=True, exist_ok=True)
+def store(result: Decomposition, cache_dir: str | os.PathLike[str] | None = None) -> Path | str:
+    """Write ``result`` under its key, atomically (see the module's notes); returns where the
+    entry is (a Path, or the entry's URL)."""
     header = {
         "key": result.cache_key,
         "engine": result.engine,
@@ -109,6 +185,30 @@ def store(result: Decomposition, cache_dir: str | os.PathLike[str] | None = None
         vertex_offsets=np.concatenate([[0], np.cumsum(vcount)]).astype(np.int64),
         face_offsets=np.concatenate([[0], np.cumsum(fcount)]).astype(np.int64),
     )
-    with atomic_path(path) as tmp, open(tmp, "wb") as f:
-        f.write(buf.getvalue())
-    return path
+    data = buf.getvalue()
+    local = local_folder(cache_dir) if cache_dir is not None else None
+    if cache_dir is None or local is not None:
+        path = entry_path(result.cache_key, local)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_path(path) as tmp, open(tmp, "wb") as f:
+            f.write(data)
+        return path
+    url = os.fspath(cache_dir)
+    fs, root = _filesystem(url)
+    target = f"{root}/{_entry_name(result.cache_key)}"
+    protocol = fs.protocol if isinstance(fs.protocol, str) else fs.protocol[0]
+    if protocol in _OBJECT_STORES:
+        fs.pipe_file(target, data)  # one put: readers see the whole object or none
+    else:
+        fs.makedirs(f"{root}/{result.cache_key[:2]}", exist_ok=True)
+        tmp = f"{target}.{uuid.uuid4().hex}.tmp"
+        try:
+            fs.pipe_file(tmp, data)
+            fs.mv(tmp, target)
+        except BaseException:
+            try:
+                fs.rm(tmp)
+            except (FileNotFoundError, OSError):
+                pass
+            raise
+    return f"{url.rstrip('/')}/{_entry_name(result.cache_key)}"

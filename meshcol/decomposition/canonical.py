@@ -1,5 +1,11 @@
 """Canonical forms: the input mesh and the parts, independent of vertex and face order, and
-the content key of the cache."""
+the content key of the cache.
+
+The canonical input is quantised (:func:`quantise`), so that one geometry keeps one key
+through re-exports: written as OBJ or PLY (float64, at least 9 significant digits) and as STL
+(float32), it gets the same canonical vertices, hence the same key; and the engine runs on
+the quantised vertices, so a cache entry is exactly what a fresh run on any input with that
+key gives."""
 
 from __future__ import annotations
 
@@ -21,11 +27,46 @@ __all__ = [
     "canonical_faces",
     "canonical_geometry",
     "canonical_part",
+    "quantise",
 ]
 
 
 # Bump when the cache entry layout or the canonicalisation of inputs or parts changes.
-CACHE_FORMAT = 2
+CACHE_FORMAT = 3
+
+#: Canonical coordinates lie on a grid of ``2**-QUANTUM_BITS`` times the power of two at or
+#: above the largest absolute coordinate (between 2**-20 and 2**-19 of it: about 1e-6).
+QUANTUM_BITS = 20
+
+
+def quantise(vertices: np.ndarray) -> np.ndarray:
+    """Coordinates rounded to float32, then to the nearest point of a power-of-two grid.
+
+    The grid step is ``2**(e - QUANTUM_BITS)``, where ``2**e`` is the smallest power of two at
+    or above the largest absolute coordinate (after the float32 rounding): between ``2**-20``
+    and ``2**-19`` of it. Each coordinate moves by at most half a step plus its float32
+    rounding (under 1e-6 of the mesh's magnitude); every operation is exact in float64 beyond
+    these two roundings, so the result depends only on the float32 values.
+
+    Guarantees (for the cache key): inputs whose coordinates have equal float32 values get
+    equal results, so float64 geometry and its float32 STL export always agree. Noise of
+    size ``d`` smaller than the step changes a coordinate's result only if the coordinate
+    lies within ``d`` of a cell boundary (half-way between two grid points), or moves the
+    largest coordinate across a power of two: the chance of a different key is about
+    ``2 * d / step`` per coordinate (never zero: any rounding has boundaries); two results
+    that are equal come from inputs less than one step apart, coordinate by coordinate.
+    """
+    v32 = np.asarray(vertices, dtype=np.float64).astype(np.float32).astype(np.float64)
+    if not np.isfinite(v32).all():
+        raise InvalidMeshError("vertex coordinates overflow float32")
+    scale = float(np.abs(v32).max()) if v32.size else 0.0
+    if scale == 0.0:
+        return v32 + 0.0
+    mantissa, exponent = np.frexp(scale)  # scale = mantissa * 2**exponent, 0.5 <= mantissa < 1
+    if mantissa == 0.5:
+        exponent -= 1  # scale is a power of two: 2**e == scale
+    step = np.ldexp(1.0, int(exponent) - QUANTUM_BITS)
+    return np.rint(v32 / step) * step + 0.0  # + 0.0: -0.0 is 0.0
 
 
 def as_mesh_arrays(mesh: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -50,8 +91,9 @@ def as_mesh_arrays(mesh: Any) -> tuple[np.ndarray, np.ndarray]:
 def canonical_geometry(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The mesh in a canonical form that does not depend on vertex or face order.
 
-    Vertices with bit-identical coordinates are merged (``-0.0`` counts as ``0.0``), unused
-    vertices dropped, and the rest sorted lexicographically; each triangle is rotated so its
+    Coordinates are quantised (:func:`quantise`: float32, then a grid of about 1e-6 of the
+    mesh's magnitude), vertices with equal quantised coordinates merged, unused vertices
+    dropped, and the rest sorted lexicographically; each triangle is rotated so its
     smallest index comes first (winding kept), triangles that collapsed are dropped, duplicates
     removed, and triangles sorted.
 
@@ -76,7 +118,7 @@ def canonical_geometry(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndar
     used = np.unique(faces)
     if not np.isfinite(vertices[used]).all():
         raise InvalidMeshError("mesh has non-finite vertex coordinates")
-    unique, inverse = unique_rows(vertices[used] + 0.0)
+    unique, inverse = unique_rows(quantise(vertices[used]))
     remap = np.empty(len(vertices), dtype=np.int64)
     remap[used] = inverse
     f = remap[faces]

@@ -337,6 +337,11 @@ class WorkerPool:
         self._idle: list[_Worker] = []
         self._busy: list[_Worker] = []
 
+    @property
+    def slots(self) -> int:
+        """Tasks that run at once (``jobs``)."""
+        return self.jobs
+
     def start(self, workers: int | None = None) -> WorkerPool:
         """Start ``workers`` (default ``jobs``, at most ``jobs``) processes now."""
         count = self.jobs if workers is None else min(workers, self.jobs)

@@ -1,0 +1,345 @@
+"""Where the tasks of a run execute: the local worker pool, or a Ray cluster.
+
+:class:`Executor` is the one interface :mod:`meshcol.decomposition.batch` drives: ``start()``
+(workers up, the engine loading, before the tasks are known), ``run(tasks)`` (outcomes as
+they complete, one :class:`~meshcol.decomposition.jobs.TaskOutcome` per task) and
+``close(interrupted=...)``. :class:`~meshcol.decomposition.jobs.WorkerPool` is the local
+implementation; :class:`RayExecutor` runs one Ray task per file on a cluster (a local one
+started on 127.0.0.1 by default, or ``address``), with the same per-task guarantees: a task
+over ``timeout`` is cancelled by force (``ray.cancel(ref, force=True)``: its worker process is
+killed), a worker that crashes or is killed fails only its task, and each task's engine gets
+the thread settings the local pool gives its workers (:func:`~meshcol.decomposition.jobs.
+worker_env`). Ray is imported only when a Ray executor starts (``pip install 'meshcol[ray]'``).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import sys
+import time
+from collections.abc import Callable, Iterable, Iterator
+from typing import Any, Protocol
+
+from meshcol.decomposition.jobs import (
+    TaskOutcome,
+    WorkerPool,
+    _call,
+    _sigint_blocked,
+    _SignalGuard,
+    worker_env,
+)
+from meshcol.errors import MissingDependencyError
+
+__all__ = ["EXECUTORS", "Executor", "RayExecutor", "make_executor"]
+
+#: The values of ``meshcol decompose --executor``.
+EXECUTORS = ("local", "ray")
+
+_RAY_HINT = "--executor ray needs Ray: pip install 'meshcol[ray]'"
+
+
+class Executor(Protocol):
+    """What runs the tasks of a run (the local pool, Ray)."""
+
+    def start(self, workers: int | None = None) -> Executor:
+        """Start up to ``workers`` workers now (they load the engine meanwhile)."""
+        ...
+
+    def run(self, tasks: Iterable[Any]) -> Iterator[TaskOutcome]:
+        """Run every task (read lazily); yield outcomes as they complete."""
+        ...
+
+    def close(self, *, interrupted: bool = False) -> None:
+        """Stop every worker (``interrupted``: at once, nothing waited for)."""
+        ...
+
+
+def make_executor(
+    kind: str,
+    fn: Callable[[Any], Any],
+    jobs: int,
+    *,
+    timeout: float | None = None,
+    threads_per_job: int | None = None,
+    prepare: Callable[[], None] | None = None,
+    address: str | None = None,
+) -> Executor:
+    """The executor ``kind`` (``local`` or ``ray``) for ``fn`` over ``jobs`` parallel tasks.
+
+    ``address``: Ray only, the cluster to join (``ray://host:10001``, ``host:6379``, ``auto``);
+    default a local Ray of ``jobs`` CPUs on 127.0.0.1, stopped on ``close()``.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``kind``, or ``address`` with the local executor.
+    MissingDependencyError
+        ``ray`` without Ray installed.
+    """
+    if kind == "local":
+        if address is not None:
+            raise ValueError("a Ray address needs the ray executor")
+        return WorkerPool(
+            fn, jobs, timeout=timeout, threads_per_job=threads_per_job, prepare=prepare
+        )
+    if kind == "ray":
+        return RayExecutor(
+            fn,
+            jobs,
+            timeout=timeout,
+            threads_per_job=threads_per_job,
+            prepare=prepare,
+            address=address,
+        )
+    raise ValueError(f"unknown executor {kind!r}: expected one of {', '.join(EXECUTORS)}")
+
+
+def import_ray(local: bool = False) -> Any:
+    """The ``ray`` module, or MissingDependencyError with the install hint.
+
+    ``local``: a local Ray may be started; on Linux, Ray resolves 127.0.0.1 to the machine's
+    network address unless told that this is no multi-machine cluster (the variable below,
+    read when Ray is first imported), so a local Ray binds to the loopback address only."""
+    if local and "ray" not in sys.modules:
+        os.environ.setdefault("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")
+    try:
+        import ray
+    except ImportError:
+        raise MissingDependencyError(_RAY_HINT) from None
+    return ray
+
+
+def _ray_call(fn: Callable[[Any], Any], task: Any) -> tuple[str, Any]:
+    # Runs in a Ray worker: an error of the task is its outcome (as in the local pool); only a
+    # dead or cancelled worker reaches the driver as a Ray error.
+    return _call(fn, task)
+
+
+def _ray_prepare(prepare: Callable[[], None]) -> None:
+    try:
+        prepare()
+    except Exception:  # noqa: BLE001 - the first task meets the same error and reports it
+        pass
+
+
+class RayExecutor:
+    """One Ray task per file, on a local Ray (default) or the cluster at ``address``.
+
+    At most ``slots`` tasks are in flight (``jobs`` on the local Ray it starts; the cluster's
+    CPU count otherwise), so that a library is never submitted, nor held in memory, whole, and
+    a task's ``timeout`` counts from its submission, which is when a free CPU starts it (Ray's
+    worker start-up, the first time, included). Tasks are not retried (``max_retries=0``): a
+    file whose worker died is reported failed, like the local pool's.
+
+    Parameters
+    ----------
+    fn : callable
+        What each task runs (pickled to the workers: a module-level function, or a closure).
+    jobs : int
+        CPUs of the local Ray this starts (ignored with ``address``).
+    timeout : float, optional
+        Seconds per task before it is cancelled by force.
+    threads_per_job : int, optional
+        OpenMP threads per task (default as the local pool: :func:`worker_env`).
+    prepare : callable, optional
+        Run once per worker by ``start()`` (loads the engine).
+    address : str, optional
+        A running cluster (else a local Ray is started, and stopped by ``close()``); a Ray
+        already initialised in this process (``ray.init()`` by the caller) is used as is.
+    """
+
+    def __init__(
+        self,
+        fn: Callable[[Any], Any],
+        jobs: int,
+        *,
+        timeout: float | None = None,
+        threads_per_job: int | None = None,
+        prepare: Callable[[], None] | None = None,
+        address: str | None = None,
+    ) -> None:
+        if jobs < 1:
+            raise ValueError(f"jobs must be at least 1, got {jobs}")
+        self.fn, self.jobs, self.timeout, self.prepare = fn, jobs, timeout, prepare
+        self.address = address
+        self.ray = import_ray(local=address is None)
+        self._owned = False
+        self._remote: Any = None
+        self._slots = jobs
+        self._inflight: dict[Any, tuple[int, float]] = {}
+        # Environment of each task's worker: the local pool's thread settings for ``jobs``
+        # processes; on a cluster, each CPU runs a task (the pool's ``jobs == cores``).
+        self.env = worker_env(jobs, threads_per_job)
+        if address is not None and threads_per_job is None:
+            self.env = {**self.env, "OMP_NUM_THREADS": "2", "OPENBLAS_NUM_THREADS": "1"}
+
+    @property
+    def slots(self) -> int:
+        """Tasks in flight at most (after ``start()``)."""
+        return self._slots
+
+    def _connect(self) -> None:
+        if self._remote is not None:
+            return
+        ray = self.ray
+        if not ray.is_initialized():
+            common = {
+                "include_dashboard": False,
+                "logging_level": logging.ERROR,
+                "log_to_driver": False,
+                "configure_logging": True,
+            }
+            if self.address is None:
+                # The local Ray's processes inherit this environment: its workers, prestarted
+                # with it, run the tasks as they are (a per-task environment would start
+                # other workers, seconds each on a small machine).
+                # SIGINT blocked meanwhile: Ray's processes inherit the mask, so a terminal's
+                # Ctrl-C (sent to the whole process group) reaches only this process, which
+                # then stops them (ray.shutdown) instead of leaving a half-dead cluster.
+                saved = {key: os.environ.get(key) for key in self.env}
+                os.environ.update(self.env)
+                try:
+                    with _sigint_blocked():
+                        ray.init(
+                            address="local",
+                            num_cpus=self.jobs,
+                            _node_ip_address="127.0.0.1",
+                            **common,
+                        )
+                finally:
+                    for key, value in saved.items():
+                        if value is None:
+                            os.environ.pop(key, None)
+                        else:
+                            os.environ[key] = value
+            else:
+                common.pop("include_dashboard")
+                ray.init(address=self.address, **common)
+            self._owned = True
+        if self.address is None and self._owned:
+            self._slots = self.jobs
+        else:
+            cpus = int(ray.cluster_resources().get("CPU", 0))
+            self._slots = max(1, cpus)
+        options: dict[str, Any] = {"num_cpus": 1, "max_retries": 0}
+        if not (self._owned and self.address is None):
+            # A cluster (or a Ray the caller started): the thread settings go with each task.
+            options["runtime_env"] = {"env_vars": dict(self.env)}
+        self._remote = ray.remote(_ray_call).options(**options)
+        self._prepare_remote = ray.remote(_ray_prepare).options(**options)
+
+    def start(self, workers: int | None = None) -> RayExecutor:
+        """Join or start the cluster; with ``prepare``, warm up to ``workers`` workers."""
+        self._connect()
+        if self.prepare is not None:
+            count = self._slots if workers is None else min(workers, self._slots)
+            # Fire and forget: each warms a worker (the engine imported) that later tasks reuse.
+            for _ in range(count):
+                self._prepare_remote.remote(self.prepare)
+        return self
+
+    def run(self, tasks: Iterable[Any]) -> Iterator[TaskOutcome]:
+        """Run every task; yield outcomes as they complete (see ``WorkerPool.run``: tasks are
+        read ahead one per poll, and a signal is never lost while tasks run)."""
+        self._connect()
+        with _SignalGuard() as guard:
+            for outcome in self._run(tasks):
+                guard.suspended = True
+                yield outcome
+                guard.suspended = False
+
+    def _run(self, tasks: Iterable[Any]) -> Iterator[TaskOutcome]:
+        ray = self.ray
+        source = enumerate(tasks)
+        more = True
+        pending: list[tuple[int, Any]] = []
+        inflight, timeout = self._inflight, self.timeout
+        while True:
+            while pending and len(inflight) < self._slots:
+                index, task = pending.pop(0)
+                inflight[self._remote.remote(self.fn, task)] = (index, time.perf_counter())
+            if more:
+                item = next(source, None)
+                if item is None:
+                    more = False
+                else:
+                    pending.append(item)
+                if not inflight:
+                    continue
+                wait_for: float | None = 0.0
+            elif not inflight:
+                return
+            else:
+                wait_for = None
+            now = time.perf_counter()
+            if timeout is not None:
+                limit = max(0.0, min(t + timeout for _, t in inflight.values()) - now)
+                wait_for = limit if wait_for is None else min(wait_for, limit)
+            # Bounded waits, so that a signal's exception is raised here within a second.
+            wait_for = 1.0 if wait_for is None else min(wait_for, 1.0)
+            ready, _ = ray.wait(list(inflight), num_returns=1, timeout=wait_for)
+            if ready:
+                # Collect everything that is done now, not one per wait.
+                ready, _ = ray.wait(list(inflight), num_returns=len(inflight), timeout=0)
+            now = time.perf_counter()
+            for ref in ready:
+                index, started = inflight.pop(ref)
+                seconds = now - started
+                try:
+                    status, value = ray.get(ref)
+                except ray.exceptions.RayError as exc:
+                    yield TaskOutcome(index, "failed", message=_ray_failure(exc), seconds=seconds)
+                    continue
+                if status == "ok":
+                    yield TaskOutcome(index, status, value, seconds=seconds)
+                else:
+                    yield TaskOutcome(index, status, message=value, seconds=seconds)
+            if timeout is not None:
+                now = time.perf_counter()
+                for ref, (index, started) in list(inflight.items()):
+                    if now - started >= timeout:
+                        del inflight[ref]
+                        self._cancel(ref)
+                        yield TaskOutcome(
+                            index,
+                            "timeout",
+                            message=f"timed out after {timeout:g} s",
+                            seconds=now - started,
+                        )
+
+    def _cancel(self, ref: Any) -> None:
+        try:
+            self.ray.cancel(ref, force=True)
+        except Exception:  # noqa: BLE001 - a task that ended meanwhile needs no cancel
+            pass
+
+    def close(self, *, interrupted: bool = False) -> None:
+        """Cancel (by force) what is still in flight; stop the local Ray this started."""
+        if not self._owned:
+            # A cluster outlives the run: its tasks of this run are stopped one by one. A
+            # local Ray this started goes whole with its workers (ray.shutdown).
+            for ref in list(self._inflight):
+                self._cancel(ref)
+        self._inflight.clear()
+        if self._owned:
+            self.ray.shutdown()
+            self._owned = False
+        self._remote = None
+
+    def __enter__(self) -> RayExecutor:
+        return self
+
+    def __exit__(self, kind: type[BaseException] | None, *exc: object) -> None:
+        self.close(interrupted=kind is not None and not issubclass(kind, Exception))
+
+
+def _ray_failure(exc: BaseException) -> str:
+    """One line for a task Ray could not finish (a dead worker, a lost node)."""
+    name = type(exc).__name__
+    if "WorkerCrashed" in name or "ActorDied" in name:
+        return f"worker process died ({name})"
+    if "NodeDied" in name or "ObjectLost" in name or "OwnerDied" in name:
+        return f"Ray lost the task's node or result ({name})"
+    first = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+    return f"{name}: {first}" if first else name

@@ -1,0 +1,74 @@
+"""``--executor ray`` without an address: the run starts its own Ray on 127.0.0.1 and, on
+Ctrl-C (SIGINT to the whole process group, as a terminal sends it), exits 130 and leaves no
+Ray process behind."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+
+def _children(pid: int) -> list[tuple[int, str]]:
+    """(pid, command line) of every process whose parent is ``pid`` (Linux /proc)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            stat = (entry / "stat").read_text()
+            cmdline = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode()
+        except OSError:
+            continue
+        if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
+            found.append((int(entry.name), cmdline))
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        return (Path("/proc") / str(pid) / "stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_ctrl_c_stops_the_local_ray_it_started(corpus, tmp_path) -> None:
+    pytest.importorskip("ray", reason="Ray is not installed (pip install 'meshcol[ray]')")
+    slow = corpus / "coacd-examples" / "Octocat-v2.obj"  # minutes with CoACD's defaults
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "meshcol", "decompose", str(slow), "-o", str(tmp_path / "o")]
+        + ["--no-cache", "--executor", "ray", "--jobs", "2", "--preprocess", "off"],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        start_new_session=True,
+    )
+    try:
+        raylet: list[tuple[int, str]] = []
+        deadline = time.monotonic() + 60
+        while not raylet and time.monotonic() < deadline:
+            raylet = [c for c in _children(proc.pid) if "raylet/raylet" in c[1]]
+            time.sleep(0.2)
+        assert raylet, "no raylet started"
+        assert "--node_ip_address=127.0.0.1" in raylet[0][1]
+        ray_processes = [pid for pid, _ in _children(proc.pid)]
+        time.sleep(3.0)  # the task is running
+        os.killpg(proc.pid, signal.SIGINT)
+        _, stderr = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 130, stderr
+    assert b"Traceback" not in stderr
+    deadline = time.monotonic() + 10
+    while any(_alive(p) for p in ray_processes) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert [p for p in ray_processes if _alive(p)] == []
+    assert not (tmp_path / "o").exists()
