@@ -561,19 +561,41 @@ def _bulk_bodies(columns: _Columns, source: str, files: dict[str, list[Body]]) -
     if len(set(names)) != n:
         return None
     folder = os.path.dirname(source)
-    # per mesh name: its path, its one object's arrays (None: the body loop builds its bodies)
+    # Per mesh name: its path and its one object (None: the body loop builds its bodies), and
+    # the reach of _check_world, sqrt(3) max |v|; per file, but in one numpy pass for all.
+    meshes = list(dict.fromkeys(m for m in columns.meshes if m is not None))
+    paths = [os.path.join(folder, mesh) for mesh in meshes]
+    loaded = [files.get(os.path.normpath(path)) for path in paths]
+    single = [f is not None and len(f) == 1 for f in loaded]
+    ones = [f[0] for f, one in zip(loaded, single) if one]  # type: ignore[index]
+    plain = np.zeros(len(meshes), dtype=bool)
+    reaches = np.full(len(meshes), math.inf)
+    if ones:
+        arrays = [np.ascontiguousarray(b.vertices) for b in ones]
+        sizes = np.array([len(v) for v in arrays], dtype=np.int64)
+        largest = np.zeros(len(ones))
+        filled = sizes > 0
+        if filled.any():
+            magnitudes = np.abs(np.concatenate(arrays).reshape(-1, 3)).max(axis=1)
+            starts = np.concatenate([[0], np.cumsum(sizes[filled])[:-1]])
+            largest[filled] = np.maximum.reduceat(magnitudes, starts)
+        rows = np.flatnonzero(single)
+        plain[rows] = (np.stack([b.pose for b in ones]) == _IDENTITY).all(axis=(1, 2))
+        reaches[rows] = largest * math.sqrt(3.0)
     objects: dict[str | None, tuple[str, np.ndarray, np.ndarray] | None] = {None: None}
-    reaches: dict[str | None, float] = {None: math.inf}  # sqrt(3) max |v|, as _check_world
-    for mesh in dict.fromkeys(m for m in columns.meshes if m is not None):
-        mesh_source = os.path.join(folder, mesh)
-        loaded = files.get(os.path.normpath(mesh_source))
-        if loaded is None or len(loaded) != 1 or not _is_identity(loaded[0].pose):
-            objects[mesh], reaches[mesh] = None, math.inf
-            continue
-        vertices = np.ascontiguousarray(loaded[0].vertices)
-        objects[mesh] = (mesh_source, vertices, np.ascontiguousarray(loaded[0].faces))
-        reaches[mesh] = float(np.abs(vertices).max(initial=0.0)) * math.sqrt(3.0)
-    reach = np.array([reaches[m] for m in columns.meshes]).reshape(n)
+    reach_of: dict[str | None, float] = {None: math.inf}
+    for k, (mesh, path, files_of) in enumerate(zip(meshes, paths, loaded)):
+        if plain[k]:
+            (sub,) = files_of  # type: ignore[misc]
+            objects[mesh] = (
+                path,
+                np.ascontiguousarray(sub.vertices),
+                np.ascontiguousarray(sub.faces),
+            )
+            reach_of[mesh] = float(reaches[k])
+        else:
+            objects[mesh], reach_of[mesh] = None, math.inf
+    reach = np.array([reach_of[m] for m in columns.meshes]).reshape(n)
     position = columns.vectors.get("position", np.zeros((n, 3)))
     common = ~columns.moving & ~columns.scaled
     common &= reach + np.abs(position).max(axis=1, initial=0.0) <= MAX_COORDINATE
@@ -628,6 +650,10 @@ def _quaternion_matrices(q: np.ndarray) -> np.ndarray:
     return out
 
 
+_QUARTER_COS = np.array([1.0, 0.0, -1.0, 0.0])
+_QUARTER_SIN = np.array([0.0, 1.0, 0.0, -1.0])
+
+
 def _euler_matrices(angles_deg: np.ndarray, orders: Sequence[str]) -> np.ndarray:
     """:func:`rotation_from_euler` of each row of ``angles_deg`` ((n, 3) float64) in its
     order: (n, 3, 3), the same axis rotations (math's cos and sin, exact at right angles)
@@ -638,8 +664,16 @@ def _euler_matrices(angles_deg: np.ndarray, orders: Sequence[str]) -> np.ndarray
     others = np.array([(1, 2), (2, 0), (0, 1)])
     for step in range(3):
         axis = np.array([_AXES[order[step]] for order in orders], dtype=np.int64).reshape(n)
-        cos_sin = [_exact_cos_sin(math.radians(a)) for a in angles_deg[:, step].tolist()]
-        c, s = np.array(cos_sin).reshape(n, 2).T
+        # _exact_cos_sin of each angle: math.radians is one product by pi / 180, as here
+        angle = angles_deg[:, step] * (math.pi / 180.0)
+        quarter = angle / (math.pi / 2)
+        exact = quarter == np.round(quarter)
+        # round(quarter) % 4 of an integral quarter, exactly at any size (fmod is exact)
+        turns = np.mod(np.where(exact, quarter, 0.0), 4.0).astype(np.int64)
+        c, s = _QUARTER_COS[turns], _QUARTER_SIN[turns]
+        other = angle[~exact].tolist()
+        c[~exact] = list(map(math.cos, other))  # math's, not numpy's: the same bits as one body
+        s[~exact] = list(map(math.sin, other))
         i, j = others[axis].T
         turn = np.zeros((n, 3, 3))
         turn[rows, axis, axis] = 1.0
