@@ -419,7 +419,7 @@ def ab(args: argparse.Namespace) -> None:
         for _ in range(args.repeat):
             for side, meshcol in sides.items():
                 rc, seconds, rss, _ = meshcol_check(folder, args.threads, meshcol)
-                if rc not in (0, 1):
+                if rc != 0:  # --fail-on none: anything else is a crash (a traceback is 1)
                     raise SystemExit(f"{side} meshcol check exited {rc} on {folder}")
                 figures[side].append((seconds, LAST_CPU[0], rss))
         show(f"check, {n} unique", figures)
@@ -431,6 +431,8 @@ def ab(args: argparse.Namespace) -> None:
             for side, meshcol in sides.items():
                 python = str(Path(meshcol).parent / "python")
                 rc, seconds, rss = timed([python, "-c", code])
+                if rc != 0:
+                    raise SystemExit(f"{side} load_inputs exited {rc}")
                 figures[side].append((seconds, LAST_CPU[0], rss))
         show("load 300,000 bodies", figures)
     print(f"load average after: {os.getloadavg()}")
