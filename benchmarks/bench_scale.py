@@ -19,6 +19,8 @@ loading included, and are skipped with a printed reason when missing or past ``-
 
 Run: .venv/bin/python benchmarks/bench_scale.py [--sizes 1000 10000 100000] [--peer-max 10000]
      [--extras] [--threads 0]
+A/B: .venv/bin/python benchmarks/bench_scale.py --baseline ../main/.venv/bin/meshcol --repeat 3
+     [--sizes 10000 100000] [--extras]   (runs alternated; wall, CPU and peak RSS ranges)
 """
 
 from __future__ import annotations
@@ -189,20 +191,30 @@ _WRAPPER = (
     "t = time.perf_counter()\n"
     "rc = subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL).returncode\n"
     "t = time.perf_counter() - t\n"
-    "print(rc, t, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)\n"
+    "u = resource.getrusage(resource.RUSAGE_CHILDREN)\n"
+    "print(rc, t, u.ru_maxrss, u.ru_utime + u.ru_stime)\n"
 )
+
+#: Figures of the last :func:`timed` call: CPU seconds (user + system, every thread).
+LAST_CPU = [0.0]
 
 
 def timed(command: list[str]) -> tuple[int, float, float]:
-    """Exit code, wall seconds and peak RSS (MiB) of ``command`` in a fresh process."""
+    """Exit code, wall seconds and peak RSS (MiB) of ``command`` in a fresh process (its CPU
+    seconds in ``LAST_CPU[0]``: on a shared machine, steadier than the wall time)."""
     out = subprocess.run(
         [sys.executable, "-c", _WRAPPER, *command], capture_output=True, text=True, check=True
     ).stdout.split()
+    LAST_CPU[0] = float(out[3])
     return int(out[0]), float(out[1]), float(out[2]) / 1024
 
 
-def meshcol_check(folder: Path, threads: int) -> tuple[int, float, float, dict]:
-    meshcol = str(Path(sys.executable).parent / "meshcol")
+def meshcol_check(
+    folder: Path, threads: int, meshcol: str | None = None
+) -> tuple[int, float, float, dict]:
+    """``meshcol check`` of the folder's manifest (``meshcol``: the executable, this
+    environment's by default)."""
+    meshcol = meshcol or str(Path(sys.executable).parent / "meshcol")
     report = folder / "report.json"
     rc, seconds, rss = timed(
         [
@@ -332,7 +344,16 @@ def main() -> None:
         action="store_true",
         help="the 2M-triangle mesh and the 300,000-body manifest too",
     )
+    parser.add_argument(
+        "--baseline",
+        metavar="MESHCOL",
+        help="another meshcol executable (e.g. main's .venv/bin/meshcol): its runs alternate "
+        "with this one's, --repeat times each, and only meshcol is timed (A/B)",
+    )
     args = parser.parse_args()
+    if args.baseline:
+        ab(args)
+        return
     print(f"cores: {os.cpu_count()}; meshcol --threads {args.threads}; cache {CACHE}")
     print(
         f"{'N':>7} {'pairs':>7} {'meshcol s':>10} {'peak MiB':>9} {'trimesh+fcl':>24} "
@@ -374,6 +395,47 @@ def main() -> None:
             f"300,000-body manifest: load_inputs {seconds:.2f} s in a fresh process "
             f"(imports included), peak {rss:.0f} MiB (rc {rc})"
         )
+
+
+def ab(args: argparse.Namespace) -> None:
+    """This meshcol against ``--baseline``, runs alternated: wall, CPU and peak RSS ranges;
+    with ``--extras``, ``load_inputs`` of the 300,000-body manifest by each one's Python."""
+    mine = str(Path(sys.executable).parent / "meshcol")
+    sides = {"this": mine, "baseline": args.baseline}
+    print(f"cores: {os.cpu_count()}; A/B, {args.repeat} alternated runs each; {os.getloadavg()}")
+    print(f"{'case':>24} {'side':>9} {'wall s':>13} {'CPU s':>13} {'peak MiB':>11}")
+
+    def show(case: str, figures: dict[str, list[tuple[float, float, float]]]) -> None:
+        for side, runs in figures.items():
+            wall, cpu, rss = zip(*runs)
+            print(
+                f"{case:>24} {side:>9} {min(wall):6.2f}-{max(wall):<6.2f} "
+                f"{min(cpu):6.2f}-{max(cpu):<6.2f} {min(rss):5.0f}-{max(rss):<5.0f}"
+            )
+
+    for n in args.sizes:
+        folder = scene_folder(n)
+        figures: dict[str, list[tuple[float, float, float]]] = {side: [] for side in sides}
+        for _ in range(args.repeat):
+            for side, meshcol in sides.items():
+                rc, seconds, rss, _ = meshcol_check(folder, args.threads, meshcol)
+                if rc != 0:  # --fail-on none: anything else is a crash (a traceback is 1)
+                    raise SystemExit(f"{side} meshcol check exited {rc} on {folder}")
+                figures[side].append((seconds, LAST_CPU[0], rss))
+        show(f"check, {n} unique", figures)
+    if args.extras:
+        manifest = str(instances_folder() / "scene.json")
+        code = f"import meshcol; s = meshcol.load_inputs([{manifest!r}]); print(len(s.bodies))"
+        figures = {side: [] for side in sides}
+        for _ in range(args.repeat):
+            for side, meshcol in sides.items():
+                python = str(Path(meshcol).parent / "python")
+                rc, seconds, rss = timed([python, "-c", code])
+                if rc != 0:
+                    raise SystemExit(f"{side} load_inputs exited {rc}")
+                figures[side].append((seconds, LAST_CPU[0], rss))
+        show("load 300,000 bodies", figures)
+    print(f"load average after: {os.getloadavg()}")
 
 
 if __name__ == "__main__":

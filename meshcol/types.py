@@ -252,8 +252,11 @@ class Body:
     spin: Spin | None = None
 
     def __post_init__(self) -> None:
-        self._check_parts()
-        self._check_spin()
+        # the common body (one part, no spin) skips both calls: a scene can hold 300,000
+        if self.parts or self.part_faces is not None:
+            self._check_parts()
+        if self.spin is not None:
+            self._check_spin()
 
     def _check_parts(self) -> None:
         if self.parts:

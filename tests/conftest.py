@@ -109,6 +109,7 @@ def _private_user_cache(tmp_path_factory: pytest.TempPathFactory):
 SLOW_TESTS = {
     "test_fine_uv_sphere_does_not_self_intersect",
     "test_fast_check_passes_the_valid_common_documents",
+    "test_the_column_path_loads_what_the_body_by_body_path_loads",
     "test_any_shape_spinning_about_a_pivot_matches_dense_sampling",
     "test_spin_matches_dense_sampling",
     "test_ball_in_bowl_is_separated_when_decomposed",
