@@ -713,3 +713,25 @@ def test_bodies_are_queried_at_their_own_pose() -> None:
     # Time of impact: b stays at its own pose, a moves 6 towards it: contact after 4 of 6.
     r = meshcol.time_of_impact(a, b, None, translation(6, 0, 0), None, None)
     assert r.time_of_impact == pytest.approx(4.0 / 6.0, abs=1e-6)
+
+
+def test_witness_points_are_the_distance_apart_on_a_degenerate_simplex():
+    """A cylinder's side against a box edge parallel to it, turned by a motion with 2e-16
+    entries: GJK's simplex is nearly degenerate, its barycentric weights inaccurate, and the
+    witness points stood 4e-6 (relative) farther apart than the distance (found by
+    test_invariance_under_common_rigid_motion). b's point is now a's point minus v."""
+    motion = np.array(
+        [
+            [2.220446049250313e-16, 0, 1, 0],
+            [0, -1, 0, 0],
+            [1, 0, 2.220446049250313e-16, 0],
+            [0, 0, 0, 1],
+        ]
+    )
+    pb = np.eye(4)
+    pb[:3, 3] = 1.0
+    for pose_a, pose_b in ((np.eye(4), pb), (motion, motion @ pb)):
+        r = signed_distance(Cylinder(0.5, 1.625), Box((1.75, 0.5, 1.0)), pose_a, pose_b)
+        assert r.distance == pytest.approx(0.26034531628727703, rel=1e-12)
+        gap = np.linalg.norm(r.point_b - r.point_a)
+        assert gap == pytest.approx(r.distance, rel=1e-12)

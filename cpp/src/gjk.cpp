@@ -359,6 +359,13 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt) {
     res.iterations = it;
     res.overlap = inside || vv <= touch2;
     weighted_points(s, res.point_a, res.point_b);
+    if (!res.overlap) {
+        // v is the accurate answer; the barycentric weights behind the witness points are not
+        // when the simplex is nearly degenerate (parallel edges, a curved side against an
+        // edge), and the points could then stand farther apart than the distance. b's point
+        // is taken at a's point minus v, so that the two are exactly the distance apart.
+        res.point_b = res.point_a - v;
+    }
     if (res.overlap) {
         res.distance = 0.0;
         res.normal = Vec3{};
