@@ -29,8 +29,6 @@ import numpy as np
 
 from meshcol.collision.fit import FIT_SHAPES, PrimitiveFit, fit_all, fit_primitive
 from meshcol.errors import InvalidMeshError
-from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
-from meshcol.io.outputs import check_destinations
 from meshcol.io.scene import as_scene
 from meshcol.types import Body, Box, Capsule, Cylinder, Sphere
 
@@ -412,29 +410,16 @@ def fit(
     OutputPathError
         A file would replace an input or a ``reserved`` file (nothing is written).
     """
-    from meshcol.analysis.hull import OutputDestinationError, out_dir_paths
+    from meshcol.analysis.hull import check_body_count, mesh_destinations, write_body_meshes
     from meshcol.geometry.topology import oriented_volume
-    from meshcol.io.mesh_write import write_meshes
     from meshcol.io.primitives import enclosing_primitive_mesh
 
     if shape not in SHAPE_CHOICES:
         raise ValueError(f"shape must be one of {', '.join(SHAPE_CHOICES)}, got {shape!r}")
-    if output is not None and out_dir is not None:
-        raise ValueError("give either output or out_dir, not both")
-    output = None if output is None else os.fspath(output)
-    out_dir = None if out_dir is None else os.fspath(out_dir)
-    if output is not None:
-        extension = os.path.splitext(output)[1].lower()
-        if extension not in MESH_OUTPUT_EXTENSIONS:
-            raise ValueError(
-                f"unknown mesh extension {extension or '(none)'!r} in {output!r} "
-                f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})"
-            )
+    output, out_dir = mesh_destinations(output, out_dir)
     scene = as_scene(inputs)
     bodies = scene.bodies
-    multi = output is not None and os.path.splitext(output)[1].lower() in MULTI_MESH_EXTENSIONS
-    if output is not None and len(bodies) > 1 and not multi:
-        raise OutputDestinationError(output, len(bodies))
+    check_body_count(output, len(bodies))
 
     # Everything is computed before anything is written: a bad body stops the run first.
     results, rows_input = [], []
@@ -476,23 +461,7 @@ def fit(
         else:
             v, f = enclosing_primitive_mesh(chosen.primitive)
             parts.append((part_name, v @ chosen.pose[:3, :3].T + chosen.pose[:3, 3], f))
-    destinations: list[str | None] = [None] * len(bodies)
-    planned = [("output", output)] if output is not None else []
-    if out_dir is not None:
-        planned = [("--out-dir file", p) for p in out_dir_paths(out_dir, names)]
-    sources = {b.source for b in bodies if b.source is not None}
-    check_destinations(
-        [("an input mesh", source) for source in sorted(sources)], [*planned, *reserved]
-    )
-    if output is not None:
-        write_meshes(output, parts)
-        destinations = [output] * len(bodies)
-    elif out_dir is not None:
-        paths = out_dir_paths(out_dir, names)
-        os.makedirs(out_dir, exist_ok=True)
-        for path, part in zip(paths, parts):
-            write_meshes(path, [part])
-        destinations = list(paths)
+    destinations = write_body_meshes(bodies, parts, output, out_dir, reserved)
 
     rows = [
         _row(body, result, volume, gap, destination, shape)

@@ -183,6 +183,66 @@ def out_dir_paths(out_dir: str | os.PathLike[str], names: Sequence[str]) -> list
     return paths
 
 
+def mesh_destinations(
+    output: str | os.PathLike[str] | None, out_dir: str | os.PathLike[str] | None
+) -> tuple[str | None, str | None]:
+    """``output`` and ``out_dir`` as strings, checked: not both, a known mesh extension."""
+    if output is not None and out_dir is not None:
+        raise ValueError("give either output or out_dir, not both")
+    output = None if output is None else os.fspath(output)
+    out_dir = None if out_dir is None else os.fspath(out_dir)
+    if output is not None:
+        extension = os.path.splitext(output)[1].lower()
+        if extension not in MESH_OUTPUT_EXTENSIONS:
+            raise ValueError(
+                f"unknown mesh extension {extension or '(none)'!r} in {output!r} "
+                f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})"
+            )
+    return output, out_dir
+
+
+def check_body_count(output: str | None, bodies: int) -> None:
+    """:class:`OutputDestinationError` for several bodies in a single-mesh output format."""
+    if (
+        output is not None
+        and bodies > 1
+        and os.path.splitext(output)[1].lower() not in MULTI_MESH_EXTENSIONS
+    ):
+        raise OutputDestinationError(output, bodies)
+
+
+def write_body_meshes(
+    bodies: Sequence[Body],
+    meshes: Sequence[tuple[str, Any, Any]],
+    output: str | None,
+    out_dir: str | None,
+    reserved: Sequence[tuple[str, str | os.PathLike[str] | None]] = (),
+) -> list[str | None]:
+    """Write one named mesh per body (``(name, vertices, faces)``, world frame) to ``output``
+    or to ``out_dir/<body>.obj`` (:func:`out_dir_paths`), after checking that no file would
+    replace an input mesh or a ``reserved`` file. Returns where each body's mesh went."""
+    from meshcol.io.mesh_write import write_meshes
+
+    names = [b.name for b in bodies]
+    planned = [("output", output)] if output is not None else []
+    if out_dir is not None:
+        planned = [("--out-dir file", path) for path in out_dir_paths(out_dir, names)]
+    sources = {b.source for b in bodies if b.source is not None}
+    check_destinations(
+        [("an input mesh", source) for source in sorted(sources)], [*planned, *reserved]
+    )
+    if output is not None:
+        write_meshes(output, list(meshes))
+        return [output] * len(bodies)
+    if out_dir is not None:
+        paths = out_dir_paths(out_dir, names)
+        os.makedirs(out_dir, exist_ok=True)
+        for path, mesh in zip(paths, meshes):
+            write_meshes(path, [mesh])
+        return list(paths)
+    return [None] * len(bodies)
+
+
 def hull(
     inputs: Any,
     *,
@@ -242,27 +302,11 @@ def hull(
     """
     from meshcol.collision.hull import convex_hull
     from meshcol.geometry.topology import oriented_volume
-    from meshcol.io.mesh_write import write_meshes
 
-    if output is not None and out_dir is not None:
-        raise ValueError("give either output or out_dir, not both")
-    output = None if output is None else os.fspath(output)
-    out_dir = None if out_dir is None else os.fspath(out_dir)
-    if output is not None:
-        extension = os.path.splitext(output)[1].lower()
-        if extension not in MESH_OUTPUT_EXTENSIONS:
-            raise ValueError(
-                f"unknown mesh extension {extension or '(none)'!r} in {output!r} "
-                f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})"
-            )
+    output, out_dir = mesh_destinations(output, out_dir)
     scene = as_scene(inputs)
     bodies = scene.bodies
-    if (
-        output is not None
-        and len(bodies) > 1
-        and os.path.splitext(output)[1].lower() not in MULTI_MESH_EXTENSIONS
-    ):
-        raise OutputDestinationError(output, len(bodies))
+    check_body_count(output, len(bodies))
 
     # Compute everything first: a bad body stops the run before any file is written.
     hulls, volumes, warnings = [], [], []
@@ -286,24 +330,13 @@ def hull(
             if warn is not None:
                 warn(message)
 
-    names = [b.name for b in bodies]
-    destinations: list[str | None] = [None] * len(bodies)
-    planned = [("output", output)] if output is not None else []
-    if out_dir is not None:
-        planned = [("--out-dir file", path) for path in out_dir_paths(out_dir, names)]
-    sources = {b.source for b in bodies if b.source is not None}
-    check_destinations(
-        [("an input mesh", source) for source in sorted(sources)], [*planned, *reserved]
+    destinations = write_body_meshes(
+        bodies,
+        [(b.name, h.vertices, h.faces) for b, h in zip(bodies, hulls)],
+        output,
+        out_dir,
+        reserved,
     )
-    if output is not None:
-        write_meshes(output, [(n, h.vertices, h.faces) for n, h in zip(names, hulls)])
-        destinations = [output] * len(bodies)
-    elif out_dir is not None:
-        paths = out_dir_paths(out_dir, names)
-        os.makedirs(out_dir, exist_ok=True)
-        for name, path, result in zip(names, paths, hulls):
-            write_meshes(path, [(name, result.vertices, result.faces)])
-        destinations = list(paths)
 
     rows = [
         hull_row(body, result, volume, destination)
