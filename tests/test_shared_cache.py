@@ -150,6 +150,7 @@ def test_a_url_cache_without_fsspec_names_the_package(monkeypatch) -> None:
         decompose_cache.load("ab" * 32, "s3://bucket/cache")
 
 
+@pytest.mark.slow  # about 8 s: threads racing on one entry, in the full lane only
 @pytest.mark.parametrize("where", ["folder", "memory"])
 def test_concurrent_writers_and_readers_never_see_a_partial_entry(where, tmp_path) -> None:
     if where == "memory":
