@@ -11,14 +11,16 @@ from meshcol.analysis.colliders import COLLIDER_KINDS
 from meshcol.cli.common import (
     FiniteFloat,
     Progress,
+    cache_dir_option,
+    engine_option,
     html_option,
     plural,
     report_format,
     report_options,
     robot_options,
+    threads_option,
     verdict,
 )
-from meshcol.decomposition.engines import ENGINES
 
 FAIL_ON_CHOICES = tuple(FAIL_ON)
 SHAPE_CHOICES = COLLIDER_KINDS
@@ -71,32 +73,15 @@ SHAPE_CHOICES = COLLIDER_KINDS
     help="Previous JSON report: fail only on pairs that are new or worse.  [default: none, "
     "every violating pair fails]",
 )
-@click.option(
-    "--threads",
-    type=click.IntRange(min=0),
-    default=0,
-    show_default=True,
-    help="Threads for the native queries (0: all cores).",
-)
-@click.option(
-    "--engine",
-    type=click.Choice(ENGINES),
-    default="coacd",
-    show_default=True,
-    help="Decomposition engine for 'decomposed' bodies missing from the cache.",
-)
+@threads_option()
+@engine_option("Decomposition engine for 'decomposed' bodies missing from the cache.")
 @click.option(
     "--threshold",
     type=FiniteFloat(min=0.0, max=1.0, min_open=True),
     default=None,
     help="Decomposition concavity threshold (as in 'meshcol decompose').  [default: 0.05]",
 )
-@click.option(
-    "--cache-dir",
-    type=click.Path(file_okay=False),
-    default=None,
-    help="Decompose cache folder.  [default: the user cache, as 'meshcol decompose']",
-)
+@cache_dir_option()
 @report_options(default="the report on stdout; the summary on stderr")
 @robot_options(exclusions=True)
 @html_option

@@ -10,12 +10,14 @@ from meshcol.analysis.collision_matrix import MATRIX_CLASSES, MATRIX_COLLIDERS
 from meshcol.cli.common import (
     FiniteFloat,
     Progress,
+    cache_dir_option,
+    engine_option,
     plural,
     report_format,
     robot_options,
+    threads_option,
     verdict,
 )
-from meshcol.decomposition.engines import ENGINES
 
 #: Rows of the summary table: the pairs that stay checked, most often colliding first.
 TABLE_ROWS = 10
@@ -78,26 +80,9 @@ TABLE_ROWS = 10
     show_default=True,
     help="Pairs colliding in at least this fraction of the samples are 'always' (MoveIt: 0.95).",
 )
-@click.option(
-    "--threads",
-    type=click.IntRange(min=0),
-    default=0,
-    show_default=True,
-    help="Threads for the native queries (0: all cores).",
-)
-@click.option(
-    "--engine",
-    type=click.Choice(ENGINES),
-    default="coacd",
-    show_default=True,
-    help="Decomposition engine for --shape decomposed (parts missing from the cache).",
-)
-@click.option(
-    "--cache-dir",
-    type=click.Path(file_okay=False),
-    default=None,
-    help="Decompose cache folder.  [default: the user cache, as 'meshcol decompose']",
-)
+@threads_option()
+@engine_option("Decomposition engine for --shape decomposed (parts missing from the cache).")
+@cache_dir_option()
 @robot_options()
 def collision_matrix(
     robot: str,

@@ -438,3 +438,30 @@ def executor_options() -> Callable[[Callable[..., Any]], Callable[..., Any]]:
         return func
 
     return decorate
+
+
+def threads_option(
+    help_text: str = "Threads for the native queries (0: all cores).",
+) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Add ``--threads N`` (0: all cores), the one definition of every command's option."""
+    return click.option(
+        "--threads", type=click.IntRange(min=0), default=0, show_default=True, help=help_text
+    )
+
+
+def engine_option(help_text: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Add ``--engine coacd|vhacd`` for the decompositions a command computes itself."""
+    from meshcol.decomposition.engines import ENGINES
+
+    return click.option(
+        "--engine", type=click.Choice(ENGINES), default="coacd", show_default=True, help=help_text
+    )
+
+
+def cache_dir_option(
+    help_text: str = "Decompose cache folder.  [default: the user cache, as 'meshcol decompose']",
+) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Add ``--cache-dir DIR``, the decompose cache a command reads (and fills)."""
+    return click.option(
+        "--cache-dir", type=click.Path(file_okay=False), default=None, help=help_text
+    )

@@ -11,12 +11,14 @@ from meshcol.analysis.sweep import FAIL_ON
 from meshcol.cli.common import (
     FiniteFloat,
     Progress,
+    cache_dir_option,
     check_outputs,
     html_option,
     plural,
     report_format,
     report_options,
     robot_options,
+    threads_option,
     verdict,
     write_html,
 )
@@ -53,19 +55,10 @@ from meshcol.cli.common import (
     help="'hit': exit 1 when a pair hits, overlaps at the start or cannot be "
     "decided; 'none': always exit 0 after a successful run.",
 )
-@click.option(
-    "--threads",
-    type=click.IntRange(min=0),
-    default=0,
-    show_default=True,
-    help="Worker threads (0: all cores).",
-)
-@click.option(
-    "--cache-dir",
-    type=click.Path(file_okay=False),
-    default=None,
-    help="Decompose cache folder for --shape decomposed; bodies missing from it are "
-    "decomposed now.  [default: the user cache, as 'meshcol decompose']",
+@threads_option("Worker threads (0: all cores).")
+@cache_dir_option(
+    "Decompose cache folder for --shape decomposed; bodies missing from it are "
+    "decomposed now.  [default: the user cache, as 'meshcol decompose']"
 )
 @robot_options()
 @html_option
