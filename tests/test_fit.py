@@ -48,9 +48,9 @@ def _hull_faces(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return points[hull.vertices], np.vectorize(index.get)(hull.simplices)
 
 
-def _encloses(fit, points: np.ndarray, tolerance: float) -> float:
+def _encloses(fit, points: np.ndarray) -> float:
     """Largest excess of ``points`` over the planes of the written (enclosing) mesh of the
-    fit, by scipy's hull equations: <= tolerance means every point is inside."""
+    fit, by scipy's hull equations: <= 0 (up to rounding) means every point is inside."""
     v, _ = enclosing_primitive_mesh(fit.primitive)
     world = v @ fit.pose[:3, :3].T + fit.pose[:3, 3]
     equations = ConvexHull(world).equations
@@ -217,7 +217,7 @@ def test_fits_enclose_corpus_meshes(corpus: Path, name: str) -> None:
     for shape, primitive_fit in result.fits.items():
         local = _local(primitive_fit, vertices)
         assert np.max(signed_distances(primitive_fit.primitive, local)) <= 0.0, shape
-        assert _encloses(primitive_fit, vertices, 1e-12 * extent) <= 1e-12 * extent, shape
+        assert _encloses(primitive_fit, vertices) <= 1e-12 * extent, shape
         assert primitive_fit.volume >= result.hull_volume * (1 - 1e-9), shape
 
 

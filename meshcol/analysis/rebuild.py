@@ -274,7 +274,7 @@ def rebuild_decomposition(
         One file entry (the description), one body per rebuilt element (``<link>/<element>``,
         its part files, cache keys and metrics); ``frame="link"`` in the settings.
     """
-    from meshcol.decomposition.batch import DecomposeReport, within_max_hausdorff
+    from meshcol.decomposition.batch import DecomposeReport, body_report
     from meshcol.io.robot_write import description_path, part_files, write_robot
 
     start = time.perf_counter()
@@ -293,34 +293,9 @@ def rebuild_decomposition(
             name = f"{entry['link']}/{entry['index']}"
             if len(entry["results"]) > 1:
                 name += f"/{k}"
-            m = d.metrics.to_dict() if d.metrics is not None else {}
-            ok = within_max_hausdorff(m, max_hausdorff)
-            bodies.append(
-                {
-                    "name": name,
-                    "outputs": outputs,
-                    "cache_key": d.cache_key,
-                    "from_cache": d.from_cache,
-                    "engine": d.engine,
-                    "engine_version": d.engine_version,
-                    "params": dict(d.params),
-                    "repaired": d.repaired,
-                    "notes": list(d.notes),
-                    "metrics": m,
-                    "hausdorff_ok": ok,
-                }
-            )
-            rows.append(
-                {
-                    "path": robot.source,
-                    "body": name,
-                    "status": "ok",
-                    **m,
-                    "repaired": d.repaired,
-                    "from_cache": d.from_cache,
-                    "hausdorff_ok": ok,
-                }
-            )
+            body, row = body_report(robot.source, name, outputs, d, max_hausdorff)
+            bodies.append(body)
+            rows.append(row)
     entry_file = {
         "path": robot.source,
         "status": "ok",

@@ -131,6 +131,55 @@ class DecomposeReport:
         return dumps_csv(self.rows, CSV_COLUMNS)
 
 
+def body_report(
+    path: str, name: str, outputs: list[str], d: Any, max_hausdorff: float | None
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """A decomposed body's entry in its file's ``bodies`` and its CSV row: the one layout of
+    both, for files (:func:`decompose_files`) and robot links (``analysis.rebuild``)."""
+    metrics = d.metrics.to_dict() if d.metrics is not None else {}
+    ok = within_max_hausdorff(metrics, max_hausdorff)
+    body = {
+        "name": name,
+        "outputs": outputs,
+        "cache_key": d.cache_key,
+        "from_cache": d.from_cache,
+        "engine": d.engine,
+        "engine_version": d.engine_version,
+        "params": dict(d.params),
+        "repaired": d.repaired,
+        "notes": list(d.notes),
+        "metrics": metrics,
+        "hausdorff_ok": ok,
+    }
+    row = {
+        "path": path,
+        "body": name,
+        "status": "ok",
+        **metrics,
+        "repaired": d.repaired,
+        "from_cache": d.from_cache,
+        "hausdorff_ok": ok,
+    }
+    return body, row
+
+
+def task_options(
+    jobs: int,
+    cache_dir: str | os.PathLike[str] | None,
+    use_cache: bool,
+    **params: Any,
+) -> dict[str, Any]:
+    """The options every decomposition task gets: the engine parameters, the cache, and the
+    worker's thread share (parallel tasks share the cores: each worker's distance queries get
+    its part of them)."""
+    return {
+        **params,
+        "cache_dir": None if cache_dir is None else os.fspath(cache_dir),
+        "use_cache": use_cache,
+        "threads": 0 if jobs == 1 else max(1, (os.cpu_count() or 1) // jobs),
+    }
+
+
 def decompose_files(
     inputs: Sequence[str | os.PathLike[str]],
     out_dir: str | os.PathLike[str],
@@ -250,20 +299,19 @@ def decompose_files(
         folders={"out_dir": out_dir, "cache_dir": local_folder(cache_root)},
         inputs=paths,
     )
-    options: dict[str, Any] = {
-        "engine": engine,
-        "threshold": threshold,
-        "max_hulls": max_hulls,
-        "max_vertices": max_vertices,
-        "preprocess": preprocess,
-        "resolution": resolution,
-        "seed": seed,
-        "engine_options": engine_options,
-        "cache_dir": None if cache_dir is None else os.fspath(cache_dir),
-        "use_cache": use_cache,
-        # Parallel files share the cores: each worker's distance queries get its share.
-        "threads": 0 if jobs == 1 else max(1, (os.cpu_count() or 1) // jobs),
-    }
+    options = task_options(
+        jobs,
+        cache_dir,
+        use_cache,
+        engine=engine,
+        threshold=threshold,
+        max_hulls=max_hulls,
+        max_vertices=max_vertices,
+        preprocess=preprocess,
+        resolution=resolution,
+        seed=seed,
+        engine_options=engine_options,
+    )
     # The report's settings: the engine options as given (not the per-worker thread share),
     # and how the run was made.
     settings = {key: value for key, value in options.items() if key != "threads"}
@@ -444,34 +492,10 @@ def _run(
                     t = transforms[name]
                     world = [(v @ t[:3, :3].T + t[:3, 3], f) for v, f in d.parts]
                     written = write_parts(name, world, stage, layout, fmt)
-                    m = d.metrics.to_dict() if d.metrics is not None else {}
-                    ok = within_max_hausdorff(m, max_hausdorff)
-                    entry["bodies"].append(
-                        {
-                            "name": name,
-                            "outputs": [os.path.relpath(p, stage) for p in written],
-                            "cache_key": d.cache_key,
-                            "from_cache": d.from_cache,
-                            "engine": d.engine,
-                            "engine_version": d.engine_version,
-                            "params": dict(d.params),
-                            "repaired": d.repaired,
-                            "notes": list(d.notes),
-                            "metrics": m,
-                            "hausdorff_ok": ok,
-                        }
-                    )
-                    rows.append(
-                        {
-                            "path": path,
-                            "body": name,
-                            "status": status,
-                            **m,
-                            "repaired": d.repaired,
-                            "from_cache": d.from_cache,
-                            "hausdorff_ok": ok,
-                        }
-                    )
+                    outputs = [os.path.relpath(p, stage) for p in written]
+                    body, row = body_report(path, name, outputs, d, max_hausdorff)
+                    entry["bodies"].append(body)
+                    rows.append(row)
             else:
                 rows.append({"path": path, "status": status, "message": message})
             file_reports.append(entry)
@@ -532,19 +556,19 @@ def decompose_meshes(
     cache_root = None
     if use_cache:
         cache_root = os.fspath(cache_dir) if cache_dir is not None else str(default_cache_dir())
-    options: dict[str, Any] = {
-        "engine": engine,
-        "threshold": threshold,
-        "max_hulls": max_hulls,
-        "max_vertices": max_vertices,
-        "preprocess": preprocess,
-        "resolution": resolution,
-        "seed": seed,
-        "engine_options": engine_options,
-        "cache_dir": cache_root,
-        "use_cache": use_cache,
-        "threads": 0 if jobs == 1 else max(1, (os.cpu_count() or 1) // jobs),
-    }
+    options = task_options(
+        jobs,
+        cache_root,
+        use_cache,
+        engine=engine,
+        threshold=threshold,
+        max_hulls=max_hulls,
+        max_vertices=max_vertices,
+        preprocess=preprocess,
+        resolution=resolution,
+        seed=seed,
+        engine_options=engine_options,
+    )
     key_options = {k: v for k, v in options.items() if k not in ("use_cache", "cache_dir")}
     results: list[Any] = [None] * len(meshes)
     missing: list[int] = []
