@@ -29,6 +29,7 @@ import numpy as np
 
 from meshcol.collision.fit import FIT_SHAPES, PrimitiveFit, fit_all, fit_primitive
 from meshcol.errors import InvalidMeshError
+from meshcol.geometry.rotations import quaternion_from_matrix
 from meshcol.io.scene import as_scene
 from meshcol.types import Body, Box, Capsule, Cylinder, Sphere
 
@@ -41,6 +42,8 @@ __all__ = [
     "BodyFit",
     "FitReport",
     "fit",
+    "fit_body",
+    "fit_row",
     "fit_points",
 ]
 
@@ -152,6 +155,47 @@ def fit_points(
     return BodyFit(fits, chosen, hull.vertices, hull.faces, hull.volume)
 
 
+def fit_body(
+    body: Body, shape: str = "auto", volume_tolerance: float = DEFAULT_VOLUME_TOLERANCE
+) -> tuple[BodyFit, float | None, float | None]:
+    """Fit one body (:func:`fit_points` on its vertices), in the WORLD frame (its pose applied).
+
+    Returns
+    -------
+    (BodyFit, float or None, float or None)
+        The fits; the body's own volume (closed meshes and primitives; None otherwise); the
+        largest gap from the chosen primitive's surface to the body (None when the hull was
+        kept).
+
+    Raises
+    ------
+    InvalidMeshError
+        As :func:`fit_points` (the message does not name the body).
+    """
+    from meshcol.geometry.topology import oriented_volume
+
+    pose = np.asarray(body.pose, dtype=np.float64)
+    local = fit_points(_fit_vertices(body), shape, volume_tolerance=volume_tolerance)
+    world = BodyFit(
+        {name: _world(f, pose) for name, f in local.fits.items()},
+        local.chosen,
+        local.hull_vertices @ pose[:3, :3].T + pose[:3, 3],
+        local.hull_faces,
+        local.hull_volume,
+    )
+    chosen = world.primitive_fit
+    gap = None if chosen is None else _max_gap(chosen, body, local, pose)
+    volume = None
+    if body.primitive is None:
+        oriented = oriented_volume(body.vertices, body.faces)
+        volume = None if oriented is None else abs(oriented[0])
+    else:
+        from meshcol.collision.fit import primitive_volume
+
+        volume = primitive_volume(body.primitive)
+    return world, volume, gap
+
+
 def _fit_vertices(body: Body) -> np.ndarray:
     """The points a body's fit must enclose, local frame: its vertices, or for a primitive
     body a tessellation that contains the primitive."""
@@ -162,28 +206,6 @@ def _fit_vertices(body: Body) -> np.ndarray:
     return np.asarray(body.vertices, dtype=np.float64)
 
 
-def _quaternion(rotation: np.ndarray) -> list[float]:
-    """Unit quaternion (w, x, y, z), w >= 0, of a rotation matrix (Shepperd's method)."""
-    m = rotation
-    trace = m[0, 0] + m[1, 1] + m[2, 2]
-    if trace > 0:
-        s = 2.0 * np.sqrt(trace + 1.0)
-        q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
-    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-        q = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
-    elif m[1, 1] > m[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
-        q = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s]
-    else:
-        s = 2.0 * np.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
-        q = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s]
-    q_arr = np.asarray(q) / np.linalg.norm(q)
-    if q_arr[0] < 0:
-        q_arr = -q_arr
-    return [float(v) for v in q_arr]
-
-
 def _parameters(fit_: PrimitiveFit) -> dict[str, Any]:
     p = fit_.primitive
     return {
@@ -191,7 +213,7 @@ def _parameters(fit_: PrimitiveFit) -> dict[str, Any]:
         "length": p.length if isinstance(p, (Capsule, Cylinder)) else None,
         "size": list(p.size) if isinstance(p, Box) else None,
         "center": [float(v) for v in fit_.pose[:3, 3]],
-        "quaternion": _quaternion(fit_.pose[:3, :3]),
+        "quaternion": quaternion_from_matrix(fit_.pose[:3, :3]),
     }
 
 
@@ -236,6 +258,11 @@ class FitReport:
     output, out_dir : str or None
     units : str or None
     warnings : tuple of str
+    frame : {"world", "link"}
+        ``link`` for a robot description rebuilt with ``out_dir`` (each fit in its link's
+        frame, one row per collision element).
+    description, to : str or None
+        The robot description written with the fits, and its format.
     """
 
     bodies: list[dict[str, Any]]
@@ -246,6 +273,9 @@ class FitReport:
     out_dir: str | None
     units: str | None
     warnings: tuple[str, ...] = ()
+    frame: str = "world"
+    description: str | None = None
+    to: str | None = None
 
     @property
     def exit_code(self) -> int:
@@ -264,14 +294,17 @@ class FitReport:
 
     @property
     def settings(self) -> dict[str, Any]:
-        return {
+        settings = {
             "shape": self.shape,
             "volume_tolerance": self.volume_tolerance,
             "gap_samples": GAP_SAMPLES,
-            "frame": "world",
+            "frame": self.frame,
             "output": self.output,
             "out_dir": self.out_dir,
         }
+        if self.description is not None:
+            settings.update(description=self.description, to=self.to)
+        return settings
 
     def to_dict(self) -> dict[str, Any]:
         from meshcol.io.report import envelope
@@ -319,7 +352,7 @@ def _ratio(volume: float, reference: float | None) -> float | None:
     return None if reference is None or reference <= 0 else volume / reference
 
 
-def _row(
+def fit_row(
     body: Body,
     result: BodyFit,
     mesh_volume: float | None,
@@ -327,6 +360,7 @@ def _row(
     destination: str | None,
     shape: str,
 ) -> dict[str, Any]:
+    """The report row of one body's fit (``result`` in the frame the row is given in)."""
     chosen = result.primitive_fit
     candidates = None
     if shape == "auto":
@@ -411,7 +445,6 @@ def fit(
         A file would replace an input or a ``reserved`` file (nothing is written).
     """
     from meshcol.analysis.hull import check_body_count, mesh_destinations, write_body_meshes
-    from meshcol.geometry.topology import oriented_volume
     from meshcol.io.primitives import enclosing_primitive_mesh
 
     if shape not in SHAPE_CHOICES:
@@ -426,28 +459,10 @@ def fit(
     for done, body in enumerate(bodies, start=1):
         if progress is not None:
             progress(f"fit: {done}/{len(bodies)} bodies")
-        pose = np.asarray(body.pose, dtype=np.float64)
         try:
-            local = fit_points(_fit_vertices(body), shape, volume_tolerance=volume_tolerance)
+            world, volume, gap = fit_body(body, shape, volume_tolerance)
         except InvalidMeshError as exc:
             raise InvalidMeshError(f"body '{body.name}': {exc.message}", body.source) from exc
-        world = BodyFit(
-            {name: _world(f, pose) for name, f in local.fits.items()},
-            local.chosen,
-            local.hull_vertices @ pose[:3, :3].T + pose[:3, 3],
-            local.hull_faces,
-            local.hull_volume,
-        )
-        chosen = world.primitive_fit
-        gap = None if chosen is None else _max_gap(chosen, body, local, pose)
-        volume = None
-        if body.primitive is None:
-            oriented = oriented_volume(body.vertices, body.faces)
-            volume = None if oriented is None else abs(oriented[0])
-        else:
-            from meshcol.collision.fit import primitive_volume
-
-            volume = primitive_volume(body.primitive)
         results.append(world)
         rows_input.append((body, world, volume, gap))
 
@@ -464,7 +479,7 @@ def fit(
     destinations = write_body_meshes(bodies, parts, output, out_dir, reserved)
 
     rows = [
-        _row(body, result, volume, gap, destination, shape)
+        fit_row(body, result, volume, gap, destination, shape)
         for (body, result, volume, gap), destination in zip(rows_input, destinations)
     ]
     return FitReport(

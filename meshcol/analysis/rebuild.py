@@ -8,7 +8,11 @@ collision element, and the description is written back around them
   still enclosing) of the element's mesh, every object of a multi-object mesh file together;
 - ``decompose``: the convex parts of each element's mesh (each object of a mesh file
   decomposed on its own, as ``meshcol check --shape decomposed`` does, so the two share
-  cache entries), through the content cache and ``jobs`` worker processes, one mesh a task.
+  cache entries), through the content cache and ``jobs`` worker processes, one mesh a task;
+- ``fit``: ONE enclosing primitive per collision element (:func:`meshcol.analysis.fit.fit_body`:
+  box, sphere, capsule or cylinder, or the hull when ``auto`` finds none within its volume
+  tolerance), written as the description's own primitive element (``<box>``, ``<sphere>``,
+  ``<cylinder>``, ``<capsule>``; MJCF geom types) at its pose.
 
 Primitive elements (box, sphere, cylinder, capsule) are kept as they are: they are already
 exact convex colliders. Colliders are computed in the link frame (the element's origin and
@@ -27,7 +31,7 @@ import numpy as np
 from meshcol.errors import InvalidMeshError, MeshcolError
 from meshcol.types import Body
 
-__all__ = ["robot_colliders", "rebuild_hulls", "rebuild_decomposition"]
+__all__ = ["robot_colliders", "rebuild_hulls", "rebuild_decomposition", "rebuild_fits"]
 
 
 def _load(path: str) -> tuple[Any, list[Any], str]:
@@ -87,6 +91,7 @@ def robot_colliders(
     *,
     max_vertices: int | None = None,
     decompose_options: Mapping[str, Any] | None = None,
+    fit_options: Mapping[str, Any] | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> tuple[Any, list[dict[str, Any]]]:
     """The colliders of a robot description and what each came from.
@@ -95,19 +100,22 @@ def robot_colliders(
     ----------
     path : path
         URDF or MJCF (read with :func:`meshcol.io.robot.current_robot_options`).
-    method : {"hull", "decompose"}
+    method : {"hull", "decompose", "fit"}
     max_vertices : int, optional
         ``hull``: the vertex budget of each hull.
     decompose_options : mapping, optional
         ``decompose``: the keywords of :func:`meshcol.decomposition.batch.decompose_meshes`.
+    fit_options : mapping, optional
+        ``fit``: ``shape`` and ``volume_tolerance`` of :func:`meshcol.analysis.fit.fit_body`.
     progress : callable, optional
 
     Returns
     -------
     (RobotColliders, list of dict)
         The colliders, and per rebuilt element ``{"link", "index", "name", "results"}``
-        (``results``: the :class:`~meshcol.collision.hull.HullResult` or the decompositions
-        of its meshes, and ``body``: the element's link-frame mesh as a Body).
+        (``results``: the :class:`~meshcol.collision.hull.HullResult`, the decompositions
+        of its meshes, or ``(BodyFit, mesh volume, max gap)``; and ``body``: the element's
+        link-frame mesh as a Body).
 
     Raises
     ------
@@ -121,7 +129,7 @@ def robot_colliders(
     from meshcol.io.robot import current_robot_options
     from meshcol.io.robot_write import Collider, RobotColliders
 
-    if method not in ("hull", "decompose"):
+    if method not in ("hull", "decompose", "fit"):
         raise ValueError(f"unknown method {method!r}")
     source = os.fspath(path)
     scene, elements, kind = _load(source)
@@ -141,7 +149,27 @@ def robot_colliders(
         label = _label(link, index, kind)
         blocks = [(_link_frame(e), np.asarray(e.faces, dtype=np.int64)) for e in members]
         body = _element_body(link, index, source, blocks)
-        if method == "hull":
+        if method == "fit":
+            from meshcol.analysis.fit import fit_body
+
+            if progress is not None:
+                progress(f"fit: {g + 1}/{len(groups)} collision elements")
+            try:
+                fitted = fit_body(body, **dict(fit_options or {}))
+            except InvalidMeshError as exc:
+                raise InvalidMeshError(f"{label}: {exc.message}", source) from None
+            chosen = fitted[0].primitive_fit
+            if chosen is None:  # auto kept the hull
+                hull = ((fitted[0].hull_vertices, fitted[0].hull_faces),)
+                colliders.append(Collider(link, index, hull, None, np.eye(4), name))
+            else:
+                colliders.append(
+                    Collider(link, index, (), chosen.primitive, chosen.pose, name, fitted=True)
+                )
+            info.append(
+                {"link": link, "index": index, "name": name, "results": fitted, "body": body}
+            )
+        elif method == "hull":
             if progress is not None:
                 progress(f"hull: {g + 1}/{len(groups)} collision elements")
             try:
@@ -306,3 +334,58 @@ def rebuild_decomposition(
     run_settings = dict(settings or {})
     run_settings.update(out_dir=os.fspath(out_dir), frame="link", description=description, to=to)
     return DecomposeReport([entry_file], rows, run_settings, "m", "parts", "obj", max_hausdorff)
+
+
+def rebuild_fits(
+    path: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str],
+    *,
+    to: str | None = None,
+    shape: str = "auto",
+    volume_tolerance: float | None = None,
+    reserved: tuple[tuple[str, str], ...] = (),
+    progress: Callable[[str], None] | None = None,
+) -> Any:
+    """``meshcol fit ROBOT --out-dir OUT``: one enclosing primitive per collision element,
+    written into the description as its own primitive element.
+
+    Returns
+    -------
+    FitReport
+        One row per rebuilt element (``name`` ``<link>/<element>``, parameters in the link
+        frame, ``output`` the description, or the hull's file when ``auto`` kept a hull),
+        ``frame="link"``, ``description`` the file written.
+    """
+    from meshcol.analysis.fit import DEFAULT_VOLUME_TOLERANCE, FitReport, fit_row
+    from meshcol.io.robot_write import description_path, part_files, write_robot
+
+    tolerance = DEFAULT_VOLUME_TOLERANCE if volume_tolerance is None else float(volume_tolerance)
+    robot, info = robot_colliders(
+        path,
+        "fit",
+        fit_options={"shape": shape, "volume_tolerance": tolerance},
+        progress=progress,
+    )
+    to = to or robot.kind
+    written = write_robot(robot, out_dir, to, protected=reserved)
+    files = part_files(robot) if to in ("urdf", "mjcf") else {}
+    at = {(c.link, c.index): i for i, c in enumerate(robot.colliders)}
+    rows, fits = [], []
+    for entry in info:
+        result, volume, gap = entry["results"]
+        names = files.get(at[(entry["link"], entry["index"])])
+        destination = os.path.join(os.fspath(out_dir), names[0]) if names else written[0]
+        rows.append(fit_row(entry["body"], result, volume, gap, destination, shape))
+        fits.append(result)
+    return FitReport(
+        rows,
+        tuple(fits),
+        shape,
+        tolerance,
+        None,
+        os.fspath(out_dir),
+        "m",
+        frame="link",
+        description=description_path(robot.source, out_dir, to),
+        to=to,
+    )
