@@ -23,6 +23,8 @@ mujoco = pytest.importorskip("mujoco")
 etree = pytest.importorskip("lxml.etree")
 
 TOL = 1e-7
+#: The other shapes of a parametrized test: the full lane only (the fast lane keeps one).
+SLOW = pytest.mark.slow
 
 
 @pytest.fixture
@@ -159,7 +161,9 @@ def assert_enclosed(meshes: dict, primitives: dict, new: int) -> None:
     assert used == new
 
 
-@pytest.mark.parametrize("shape", ["box", "sphere", "cylinder", "auto"])
+@pytest.mark.parametrize(
+    "shape", ["auto", *(pytest.param(s, marks=SLOW) for s in ("box", "sphere", "cylinder"))]
+)
 def test_fit_urdf_primitives_enclose_the_input_meshes(urdf: Path, tmp_path: Path, shape) -> None:
     out = tmp_path / "out"
     report = tmp_path / "fits.json"
@@ -226,7 +230,9 @@ def test_fit_urdf_parameters_are_the_reported_ones(urdf: Path, tmp_path: Path) -
         np.testing.assert_allclose(row["center"], c.origin[:3, 3], atol=1e-15)
 
 
-@pytest.mark.parametrize("shape", ["capsule", "box", "auto"])
+@pytest.mark.parametrize(
+    "shape", ["capsule", *(pytest.param(s, marks=SLOW) for s in ("box", "auto"))]
+)
 def test_fit_urdf_to_mjcf_and_capsules_through_mujoco(urdf: Path, tmp_path: Path, shape) -> None:
     out = tmp_path / "urdf"
     assert run("fit", str(urdf), "--out-dir", str(out), "--shape", shape)[0] == 0
@@ -255,7 +261,9 @@ def test_fit_urdf_to_mjcf_and_capsules_through_mujoco(urdf: Path, tmp_path: Path
     assert groups == {"3"}
 
 
-@pytest.mark.parametrize("shape", ["capsule", "box", "sphere", "cylinder"])
+@pytest.mark.parametrize(
+    "shape", ["capsule", *(pytest.param(s, marks=SLOW) for s in ("box", "sphere", "cylinder"))]
+)
 def test_fit_mjcf_to_mjcf_geoms_in_frames(mjcf: Path, tmp_path: Path, shape) -> None:
     out = tmp_path / "out"
     code, _, stderr = run("fit", str(mjcf), "--out-dir", str(out), "--shape", shape)
@@ -274,6 +282,7 @@ def test_fit_mjcf_to_mjcf_geoms_in_frames(mjcf: Path, tmp_path: Path, shape) -> 
     assert (shell.get("type") or "sphere") == shape  # its other attributes stay
 
 
+@pytest.mark.slow
 def test_fit_robot_glb_and_usd(urdf: Path, tmp_path: Path) -> None:
     import trimesh
 
