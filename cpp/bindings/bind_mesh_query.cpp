@@ -264,6 +264,18 @@ auto depth_batch(const MeshBvhSet& set, std::optional<Poses> poses, Pairs pairs,
 // The pairs of a call that takes them as a plain object: a C-contiguous (P, 2) int64 buffer
 // (a numpy array, read in place) or a list or tuple of (i, j) lists or tuples of Python ints
 // (copied); anything else reads as null and the caller converts it (as_pairs) and calls again.
+// The size of an exact list or tuple (false for anything else), and its item k (borrowed).
+bool sequence_size(PyObject* o, Py_ssize_t* size) {
+    if (PyList_CheckExact(o)) *size = PyList_Size(o);
+    else if (PyTuple_CheckExact(o)) *size = PyTuple_Size(o);
+    else return false;
+    return true;
+}
+
+PyObject* sequence_item(PyObject* o, Py_ssize_t k) {
+    return PyList_CheckExact(o) ? PyList_GetItem(o, k) : PyTuple_GetItem(o, k);
+}
+
 struct PairsArg {
     Buffer buffer;
     std::vector<std::int64_t> copied;
@@ -276,22 +288,25 @@ struct PairsArg {
             count = static_cast<long long>(buffer.shape(0));
             return true;
         }
-        if (!PyList_CheckExact(pairs) && !PyTuple_CheckExact(pairs)) return false;
-        const Py_ssize_t n = PySequence_Fast_GET_SIZE(pairs);
-        if (n == 0) return false;  // as_pairs decides what an empty list means
-        PyObject** items = PySequence_Fast_ITEMS(pairs);
+        // list and tuple access by functions, not the PySequence_Fast macros: the module is
+        // built for the stable ABI on Python 3.12 and later
+        Py_ssize_t n = 0;
+        if (!sequence_size(pairs, &n) || n == 0) return false;  // as_pairs decides what [] means
         copied.resize(2 * static_cast<size_t>(n));
         for (Py_ssize_t k = 0; k < n; ++k) {
-            PyObject* pair = items[k];
-            if ((!PyList_CheckExact(pair) && !PyTuple_CheckExact(pair)) || PySequence_Fast_GET_SIZE(pair) != 2)
-                return false;
-            for (int c = 0; c < 2; ++c) {
-                PyObject* index = PySequence_Fast_ITEMS(pair)[c];
+            PyObject* pair = sequence_item(pairs, k);
+            Py_ssize_t two = 0;
+            if (!sequence_size(pair, &two) || two != 2) return false;
+            for (Py_ssize_t c = 0; c < 2; ++c) {
+                PyObject* index = sequence_item(pair, c);
                 if (!PyLong_CheckExact(index)) return false;  // bools, numpy scalars: as_pairs
                 int overflow = 0;
                 const long long value = PyLong_AsLongLongAndOverflow(index, &overflow);
-                if (overflow != 0) return false;
-                copied[2 * static_cast<size_t>(k) + c] = value;
+                if (overflow != 0 || (value == -1 && PyErr_Occurred())) {
+                    PyErr_Clear();
+                    return false;
+                }
+                copied[2 * static_cast<size_t>(k) + static_cast<size_t>(c)] = value;
             }
         }
         data = copied.data();
