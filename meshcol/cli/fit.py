@@ -104,8 +104,9 @@ def fit(
 
     from meshcol.analysis.fit import fit as run_fit
     from meshcol.analysis.hull import OutputDestinationError
-    from meshcol.io.report import emit
+    from meshcol.cli.common import emit_report, no_report_with_meshes
 
+    no_report_with_meshes(fmt, report, bool(output or out_dir))
     check_outputs(inputs, [("-o", output), ("--report", report)])
     fmt = report_format(report, fmt)
     progress = Progress(command="fit", heartbeat=True)
@@ -127,7 +128,7 @@ def fit(
     finally:
         progress.done()
     if report is not None or not (output or out_dir):
-        emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+        emit_report(result, fmt, report)
     s = result.summary
     shapes = ", ".join(f"{count} {name}" for name, count in s["shapes"].items() if count)
     detail = f"{plural(s['bodies'], 'body', 'bodies')} ({shapes or 'none'})"
