@@ -201,6 +201,34 @@ class CheckReport:
 
         return dumps_json(self.to_dict())
 
+    def ci_suite(self) -> Any:
+        """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one case per candidate pair
+        (``body_a <-> body_b``): a failure when it violates ``--fail-on``, skipped when an
+        ``--ignore`` rule spares a pair the policy would fail, else passed; the message has
+        the status and its numbers. More than :data:`meshcol.io.ci.MAX_PASSED_CASES` passed
+        pairs become one case. The file is the scene input, or body_a's file."""
+        from meshcol.io.ci import CiSuite, collapse_passed
+
+        files = {b["name"]: b["file"] for b in self.bodies}
+        inputs = self.settings.get("inputs") or []
+        scene = inputs[0] if len(inputs) == 1 else None
+        threshold = FAIL_ON[self.settings["fail_on"]]
+        least = SEVERITY[threshold] if threshold is not None else len(PAIR_STATUSES)
+        settings = self.settings
+        cases = [_ci_case(p, files, scene, least, settings, self.units) for p in self.pairs]
+        s = self.summary
+        verb = "violates" if s["violations"] == 1 else "violate"
+        return CiSuite(
+            "check",
+            tuple(collapse_passed(cases, "pairs", "meshcol.check")),
+            settings,
+            seconds=(s["seconds"] or 0.0) + (s["load_seconds"] or 0.0),
+            warnings=tuple(self.warnings),
+            verdict=f"{s['violations']} of {s['candidate_pairs']} candidate pairs {verb} "
+            f"--fail-on {settings['fail_on']}",
+            units=self.units,
+        )
+
     def to_csv(self) -> str:
         from meshcol.io.report import dumps_csv, split_vectors
 
@@ -230,6 +258,80 @@ CSV_COLUMNS = [
     "intersection_volume",
     "units",
 ]
+
+
+def _ci_case(
+    pair: dict,
+    files: dict[str, str | None],
+    scene: str | None,
+    least: int,
+    settings: dict,
+    units: str | None,
+) -> Any:
+    """The CI case of one pair of a check report (:meth:`CheckReport.ci_suite`)."""
+    from meshcol.io.ci import CiCase, details, number
+
+    status = pair["status"]
+    a, b = pair["body_a"], pair["body_b"]
+    if status == "separated":
+        message = f"separated: distance {number(pair['distance'], units)}"
+    elif status == "clearance":
+        message = (
+            f"clearance: distance {number(pair['distance'], units)} < --clearance "
+            f"{number(settings['clearance'], units)}"
+        )
+    elif status == "contact":
+        message = (
+            f"contact: signed distance {number(pair['signed_distance'], units)} (tolerance "
+            f"{number(settings['tolerance'], units)})"
+        )
+    else:
+        inside = "one body inside the other, " if status == "contained" else ""
+        message = (
+            f"{status}: {inside}depth {number(pair['depth'], units)}, signed distance "
+            f"{number(pair['signed_distance'], units)}"
+        )
+        if pair["intersection_volume"] is not None:
+            message += f", intersection volume {number(pair['intersection_volume'])}"
+    if pair["query_failed"]:
+        message += " (query failed: the numbers are not the answer)"
+    outcome = "passed"
+    if pair["violation"]:
+        outcome = "failure"
+        message += f" (--fail-on {settings['fail_on']})"
+    elif SEVERITY[status] >= least:
+        if pair["ignored"]:
+            outcome = "skipped"
+            message = f"ignored by --ignore: {message}"
+        else:
+            message += " (not worse than the --baseline)"
+    text = ""
+    if outcome != "passed":
+        text = details(
+            [
+                ("body_a", f"{a} ({files.get(a)})" if files.get(a) else a),
+                ("body_b", f"{b} ({files.get(b)})" if files.get(b) else b),
+                ("part_a", pair["part_a"]),
+                ("part_b", pair["part_b"]),
+                ("distance", pair["distance"]),
+                ("depth", pair["depth"]),
+                ("signed_distance", pair["signed_distance"]),
+                ("intersection_volume", pair["intersection_volume"]),
+                ("point_a", pair["point_a"]),
+                ("point_b", pair["point_b"]),
+                ("normal", pair["normal"]),
+                ("units", units),
+            ]
+        )
+    return CiCase(
+        name=f"{a} <-> {b}",
+        classname="meshcol.check",
+        outcome=outcome,
+        message=message,
+        file=scene or files.get(a),
+        kind=status,
+        details=text,
+    )
 
 
 # ---------------------------------------------------------------------------------------------

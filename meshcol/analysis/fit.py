@@ -320,6 +320,52 @@ class FitReport:
 
         return dumps_json(self.to_dict())
 
+    def ci_suite(self) -> Any:
+        """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one passed case per body
+        (``FILE::BODY``) with the primitive, its size, volume ratios and largest gap (a fit
+        always contains the mesh; unusable input stops the run before any report)."""
+        from meshcol.io.ci import CiCase, CiSuite, number
+
+        units = self.units
+        cases = []
+        for row in self.bodies:
+            shape = row["shape"]
+            parts = [shape]
+            if row["radius"] is not None:
+                parts.append(f"radius {number(row['radius'], units)}")
+            if row["length"] is not None:
+                parts.append(f"length {number(row['length'], units)}")
+            if row["size"] is not None and row["radius"] is None:
+                parts.append("size " + " x ".join(number(v) for v in row["size"]))
+            parts.append(f"volume {number(row['volume'])}")
+            if row["volume_ratio"] is not None:
+                parts.append(f"volume/mesh {number(row['volume_ratio'])}")
+            if row["hull_ratio"] is not None:
+                parts.append(f"volume/hull {number(row['hull_ratio'])}")
+            if row["max_gap"] is not None:
+                parts.append(f"max gap {number(row['max_gap'], units)}")
+            message = ", ".join(parts)
+            if row["simpler_primitive"]:
+                message += " (could use a simpler primitive than the hull)"
+            cases.append(
+                CiCase(
+                    name=f"{row['source']}::{row['name']}" if row["source"] else row["name"],
+                    classname="meshcol.fit",
+                    message=message,
+                    file=row["source"],
+                )
+            )
+        s = self.summary
+        shapes = ", ".join(f"{count} {name}" for name, count in s["shapes"].items() if count)
+        return CiSuite(
+            "fit",
+            tuple(cases),
+            self.settings,
+            warnings=self.warnings,
+            verdict=f"{s['bodies']} bodies ({shapes or 'none'})",
+            units=units,
+        )
+
     def to_csv(self) -> str:
         """One row per body (:data:`CSV_COLUMNS`)."""
         from meshcol.io.report import dumps_csv

@@ -167,6 +167,52 @@ class HullReport:
 
         return dumps_csv([dict(row, units=self.units) for row in self.bodies], CSV_COLUMNS)
 
+    def ci_suite(self) -> Any:
+        """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one case per body
+        (``FILE::BODY``) with the hull's size, volume and, with a budget, what the budget
+        cost; a failure if a hull were over its vertex budget (unusable input stops the run
+        before any report, so there are no error cases)."""
+        from meshcol.io.ci import CiCase, CiSuite, number
+
+        units = self.units
+        cases = []
+        for row in self.bodies:
+            message = (
+                f"{row['hull_vertices']} vertices, {row['hull_faces']} faces, volume "
+                f"{number(row['hull_volume'])}"
+            )
+            if row["volume_ratio"] is not None:
+                message += f", mesh/hull volume {number(row['volume_ratio'])}"
+            if row["flat"]:
+                message += ", flat (a 2-D polygon)"
+            over = row["max_vertices"] is not None and row["hull_vertices"] > row["max_vertices"]
+            if row["max_vertices"] is not None:
+                message += (
+                    f"; budget {row['max_vertices']} (exact hull "
+                    f"{row['exact_hull_vertices']}): added volume "
+                    f"{number(row['added_volume_fraction'])} of the hull's, max distance "
+                    f"{number(row['max_distance'], units)}"
+                )
+            cases.append(
+                CiCase(
+                    name=f"{row['source']}::{row['name']}" if row["source"] else row["name"],
+                    classname="meshcol.hull",
+                    outcome="failure" if over else "passed",
+                    message=f"over the --max-vertices budget: {message}" if over else message,
+                    file=row["source"],
+                    kind="max-vertices" if over else None,
+                )
+            )
+        s = self.summary
+        return CiSuite(
+            "hull",
+            tuple(cases),
+            self.settings,
+            warnings=self.warnings,
+            verdict=f"{s['bodies']} hulls, {s['hull_vertices']} vertices, {s['flat']} flat",
+            units=units,
+        )
+
 
 def out_dir_paths(out_dir: str | os.PathLike[str], names: Sequence[str]) -> list[str]:
     """``DIR/<name>.obj`` per body: names made file-safe (:func:`safe_name`) and unique

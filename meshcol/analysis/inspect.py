@@ -419,6 +419,74 @@ class InspectReport:
 
         return dumps_json(self.to_dict())
 
+    def ci_suite(self) -> Any:
+        """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one case per body
+        (``FILE::BODY``), a failure when it has a finding listed in ``fail_on`` (each
+        finding with its measure: ``not-watertight (12 boundary edges)``), passed otherwise
+        (other findings make it worth a warning); one error case per input that could not
+        be inspected."""
+        from meshcol.io.ci import CiCase, CiSuite, details
+
+        cases = []
+        for row in self.bodies:
+            failed = row["failed_rules"]
+            others = [rule for rule in row["findings"] if rule not in failed]
+            if failed:
+                message = ", ".join(_finding_text(rule, row) for rule in failed)
+                if others:
+                    message += "; also " + ", ".join(_finding_text(r, row) for r in others)
+            elif others:
+                message = "findings: " + ", ".join(_finding_text(r, row) for r in others)
+            else:
+                message = f"ok: {row['vertices']} vertices, {row['faces']} faces, watertight"
+            cases.append(
+                CiCase(
+                    name=_case_name(row["source"], row["name"]),
+                    classname="meshcol.inspect",
+                    outcome="failure" if failed else "passed",
+                    message=message,
+                    file=row["source"],
+                    kind=failed[0] if failed else None,
+                    details=details(
+                        (key, row[key])
+                        for key in (
+                            "vertices",
+                            "faces",
+                            "components",
+                            "watertight",
+                            "winding_consistent",
+                            "volume",
+                            "size",
+                            "boundary_edges",
+                            "non_manifold_edges",
+                            "degenerate_faces",
+                            "duplicate_faces",
+                            "self_intersecting_pairs",
+                            "units_guess",
+                        )
+                    )
+                    if failed
+                    else "",
+                    warn=bool(others) and not failed,
+                )
+            )
+        for error in self.errors:
+            cases.append(
+                CiCase(
+                    name=_case_name(error["source"], error["body"]),
+                    classname="meshcol.inspect",
+                    outcome="error",
+                    message=error["message"],
+                    file=error["source"] or None,
+                    kind="unusable-input",
+                )
+            )
+        s = self.summary
+        verdict = f"{s['bodies']} bodies, {s['with_findings']} with findings"
+        if self.fail_on:
+            verdict += f", {s['failed']} failing --fail-on {','.join(self.fail_on)}"
+        return CiSuite("inspect", tuple(cases), self.settings, verdict=verdict, units=self.units)
+
     def to_csv(self) -> str:
         """One row per body (:data:`CSV_COLUMNS`): bounds and size split into ``_x/_y/_z``
         columns, as every command's CSV; findings space-separated."""
@@ -435,6 +503,30 @@ class InspectReport:
             for row in self.bodies
         ]
         return dumps_csv(flat, CSV_COLUMNS)
+
+
+def _case_name(source: str | None, body: str | None) -> str:
+    """``FILE::BODY`` (body names repeat across files), or whichever of the two is known."""
+    if source and body:
+        return f"{source}::{body}"
+    return source or body or "(unnamed)"
+
+
+def _finding_text(rule: str, row: dict[str, Any]) -> str:
+    """A finding with what was measured: ``not-watertight (12 boundary edges)``."""
+    measure = {
+        "not-watertight": f"{row['boundary_edges']} boundary edges, "
+        f"{row['non_manifold_edges']} non-manifold",
+        "self-intersecting": f"{row['self_intersecting_pairs']} crossing face pairs",
+        "inconsistent-winding": "neighbouring faces disagree on their winding",
+        "inverted": f"volume {row['volume']:.6g}" if row["volume"] is not None else "inside out",
+        "degenerate-faces": f"{row['degenerate_faces']} faces",
+        "non-manifold": f"{row['non_manifold_edges']} edges with more than two faces",
+        "duplicate-faces": f"{row['duplicate_faces']} faces",
+        "multiple-components": f"{row['components']} components",
+        "suspect-units": f"looks like {row['units_guess']}: {row['units_reason']}",
+    }.get(rule)
+    return rule if measure is None else f"{rule} ({measure})"
 
 
 def inspect(

@@ -125,8 +125,7 @@ def check(
     from meshcol.analysis.check import check as run_check
     from meshcol.analysis.check import parse_ignore_rule
     from meshcol.analysis.review import check_page
-    from meshcol.cli.common import check_outputs, write_html
-    from meshcol.io.report import emit
+    from meshcol.cli.common import check_outputs, emit_report, write_html
 
     for rule in ignore:
         try:
@@ -152,7 +151,7 @@ def check(
     finally:
         progress.done()
 
-    emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+    emit_report(result, fmt, report)
     write_html(
         html,
         lambda: check_page(result, inputs, shape, _decompose_options(engine, threshold, cache_dir)),

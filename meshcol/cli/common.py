@@ -74,7 +74,8 @@ class FiniteFloat(click.ParamType):
 def report_options(
     default: str = "the report on stdout",
 ) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
-    """Add ``--report FILE`` (``-`` for stdout) and ``--format json|csv`` (parameter ``fmt``).
+    """Add ``--report FILE`` (``-`` for stdout) and ``--format json|csv|junit|github``
+    (parameter ``fmt``; :data:`meshcol.io.report.REPORT_FORMATS`).
 
     Parameters
     ----------
@@ -83,12 +84,16 @@ def report_options(
     """
 
     def decorate(func: Callable[..., Any]) -> Callable[..., Any]:
+        from meshcol.io.report import REPORT_FORMATS
+
         func = click.option(
             "--format",
             "fmt",
-            type=click.Choice(["json", "csv"]),
+            type=click.Choice(REPORT_FORMATS),
             default=None,
-            help="Report format.  [default: from the --report extension (.json, .csv), else json]",
+            help="Report format: json, csv, junit (JUnit XML for Jenkins and GitHub test "
+            "reporters) or github (workflow-command annotations).  [default: from the --report "
+            "extension (.json, .csv, .xml), else json]",
         )(func)
         func = click.option(
             "--report",
@@ -102,17 +107,59 @@ def report_options(
     return decorate
 
 
-def report_format(report: str | None, fmt: str | None, format_option: bool = True) -> str:
+def report_format(
+    report: str | None,
+    fmt: str | None,
+    format_option: bool = True,
+    option: str = "--format",
+    formats: Sequence[str] | None = None,
+) -> str:
     """The report's format, or a usage error for an unknown ``--report`` extension or a
-    ``--format`` that contradicts it (``--report out.xml`` never silently writes JSON).
-    ``format_option``: the command has ``--format json|csv`` (the message suggests it)."""
+    ``--format`` that contradicts it (``--report out.txt`` never silently writes JSON).
+    ``format_option``: the command has ``option`` (the message suggests it); ``formats``:
+    the formats the command writes (default every one, ``REPORT_FORMATS``)."""
+    from meshcol.io.report import REPORT_FORMATS
     from meshcol.io.report import report_format as pick
 
+    formats = tuple(formats or REPORT_FORMATS)
     try:
-        return pick(report, fmt)
+        chosen = pick(report, fmt)
     except ValueError as exc:
-        hint = " (or give --format json|csv)" if format_option and fmt is None else ""
+        hint = f" (or give {option} {'|'.join(formats)})" if format_option and fmt is None else ""
         raise click.BadParameter(f"{exc}{hint}", param_hint="'--report'") from None
+    if chosen not in formats:
+        raise click.BadParameter(
+            f"{report!r} would be a {chosen} report: this command writes {' or '.join(formats)}",
+            param_hint="'--report'",
+        )
+    return chosen
+
+
+def no_report_with_meshes(fmt: str | None, report: str | None, meshes: bool) -> None:
+    """A usage error for ``--format`` when the command writes meshes (``-o``, ``--out-dir``)
+    and so, without ``--report``, no report at all: the format would silently do nothing."""
+    if fmt is not None and report is None and meshes:
+        raise click.UsageError(
+            f"--format {fmt}: with -o/--out-dir no report is written unless --report FILE "
+            "(or --report - for stdout) says where"
+        )
+
+
+def emit_report(result: Any, fmt: str, report: str | None) -> None:
+    """Write ``result``'s report in ``fmt`` to ``report`` (stdout for None or ``-``)
+    atomically (:func:`meshcol.io.report.report_text`, :func:`meshcol.io.report.emit`); in the
+    ``github`` format also append the Markdown summary to ``$GITHUB_STEP_SUMMARY`` when set."""
+    from meshcol.io.report import emit, report_text
+
+    if fmt not in ("junit", "github"):
+        emit(report_text(result, fmt), report)
+        return
+    from meshcol.io.ci import render, write_step_summary
+
+    suite = result.ci_suite()
+    emit(render(suite, fmt), report)
+    if fmt == "github":
+        write_step_summary(suite)
 
 
 def check_outputs(

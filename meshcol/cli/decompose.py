@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from typing import Any
 
 import click
 
@@ -27,6 +28,22 @@ def _engine_option(
             raise click.BadParameter(f"expected KEY=VALUE, got {item!r}", ctx=ctx, param=param)
         options[key.strip().replace("-", "_")] = value.strip()
     return options
+
+
+class _MeshFormat(click.Choice):
+    """``--format obj|glb``, which names the report formats' option when given one."""
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        from meshcol.io.report import REPORT_FORMATS
+
+        if isinstance(value, str) and value.lower() in REPORT_FORMATS:
+            self.fail(
+                f"{value!r} is a report format: decompose's --format is the parts' mesh "
+                f"format (obj, glb); give --report-format {value.lower()}",
+                param,
+                ctx,
+            )
+        return super().convert(value, param, ctx)
 
 
 @click.command(
@@ -121,7 +138,7 @@ def _engine_option(
 @click.option(
     "--format",
     "fmt",
-    type=click.Choice(["obj", "glb"]),
+    type=_MeshFormat(["obj", "glb"]),
     default="obj",
     show_default=True,
     help="Output format (glb: one node per part; not with ucx).",
@@ -138,7 +155,15 @@ def _engine_option(
     "--report",
     type=click.Path(dir_okay=False),
     default=None,
-    help="Write the JSON or CSV report here.  [default: the report on stdout]",
+    help="Write the report here ('-': stdout).  [default: the report on stdout]",
+)
+@click.option(
+    "--report-format",
+    "report_fmt",
+    type=click.Choice(["json", "csv", "junit", "github"]),
+    default=None,
+    help="Report format: json, csv, junit (JUnit XML) or github (workflow-command "
+    "annotations).  [default: from the --report extension (.json, .csv, .xml), else json]",
 )
 @click.option(
     "--max-hausdorff",
@@ -185,6 +210,7 @@ def decompose_command(
     fmt: str,
     to: str | None,
     report: str | None,
+    report_fmt: str | None,
     max_hausdorff: float | None,
     html: str | None,
     run_manifest: str | None,
@@ -224,17 +250,15 @@ def decompose_command(
       meshcol decompose lib/*.obj -o out/ --run-manifest run.json --resume
     """
     from meshcol.analysis.review import decompose_page
-    from meshcol.cli.common import Progress, report_format, verdict
+    from meshcol.cli.common import Progress, emit_report, report_format, verdict
     from meshcol.decomposition.batch import decompose_files
     from meshcol.decomposition.cache import default_cache_dir, local_folder
     from meshcol.decomposition.engines import resolve_params
     from meshcol.io.outputs import check_outputs
-    from meshcol.io.report import emit
     from meshcol.io.scene import MANIFEST_EXTENSIONS
 
-    report_format(
-        report, None, format_option=False
-    )  # an unknown --report extension stops the run before it starts
+    # an unknown --report extension stops the run before it starts
+    report_fmt = report_format(report, report_fmt, option="--report-format")
     if layout == "ucx" and fmt == "glb":
         raise click.UsageError("--layout ucx writes OBJ only: drop --format glb")
     if no_cache and cache_dir is not None:
@@ -328,7 +352,7 @@ def decompose_command(
             )
         finally:
             progress.done()
-        emit(result.to_csv() if report_format(report, None) == "csv" else result.to_json(), report)
+        emit_report(result, report_fmt, report)
         detail = f"{_summary(result)}, written to {result.settings['description']}"
         click.echo(verdict("decompose", result.exit_code == 0, detail), err=True)
         if result.exit_code:
@@ -364,7 +388,7 @@ def decompose_command(
         )
     finally:
         progress.done()
-    emit(result.to_csv() if report_format(report, None) == "csv" else result.to_json(), report)
+    emit_report(result, report_fmt, report)
     write_html(html, lambda: decompose_page(result, out_dir, inputs))
     for f in result.files:
         if f["status"] != "ok":

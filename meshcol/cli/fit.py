@@ -123,12 +123,13 @@ def fit(
 
     from meshcol.analysis.fit import fit as run_fit
     from meshcol.analysis.hull import OutputDestinationError
-    from meshcol.io.report import emit
+    from meshcol.cli.common import emit_report, no_report_with_meshes
     from meshcol.io.robot import is_robot_file
 
     robot = out_dir is not None and len(inputs) == 1 and is_robot_file(inputs[0])
     if to is not None and not robot:
         raise click.UsageError("--to needs one robot description (URDF, MJCF) and --out-dir")
+    no_report_with_meshes(fmt, report, bool(output or out_dir))
     check_outputs(inputs, [("-o", output), ("--report", report)])
     fmt = report_format(report, fmt)
     progress = Progress(command="fit", heartbeat=True)
@@ -164,7 +165,7 @@ def fit(
     finally:
         progress.done()
     if report is not None or not (output or out_dir):
-        emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+        emit_report(result, fmt, report)
     s = result.summary
     shapes = ", ".join(f"{count} {name}" for name, count in s["shapes"].items() if count)
     detail = f"{plural(s['bodies'], 'body', 'bodies')} ({shapes or 'none'})"

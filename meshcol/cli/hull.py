@@ -120,12 +120,13 @@ def hull(
     from meshcol.analysis.hull import OutputDestinationError
     from meshcol.analysis.hull import hull as run_hull
     from meshcol.analysis.review import hull_page
-    from meshcol.io.report import emit
+    from meshcol.cli.common import emit_report, no_report_with_meshes
     from meshcol.io.robot import is_robot_file
 
     robot = out_dir is not None and len(inputs) == 1 and is_robot_file(inputs[0])
     if to is not None and not robot:
         raise click.UsageError("--to needs one robot description (URDF, MJCF) and --out-dir")
+    no_report_with_meshes(fmt, report, bool(output or out_dir))
     check_outputs(inputs, [("-o", output), ("--report", report), ("--html", html)])
     fmt = report_format(report, fmt)
     progress = Progress(command="hull", heartbeat=True)
@@ -161,7 +162,7 @@ def hull(
     finally:
         progress.done()
     if report is not None or not (output or out_dir):
-        emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+        emit_report(result, fmt, report)
     write_html(html, lambda: hull_page(result, inputs))
     s = result.summary
     detail = f"{plural(s['bodies'], 'hull')}, {plural(s['hull_vertices'], 'vertex', 'vertices')}"

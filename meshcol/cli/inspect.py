@@ -88,7 +88,7 @@ def inspect(
     """
     from meshcol.analysis.inspect import inspect as run_inspect
     from meshcol.analysis.review import inspect_page
-    from meshcol.io.report import emit
+    from meshcol.cli.common import emit_report
 
     check_outputs(inputs, [("--report", report), ("--html", html)])
     fmt = report_format(report, fmt)
@@ -97,7 +97,7 @@ def inspect(
         result = run_inspect(list(inputs), fail_on=fail_on, progress=progress)
     finally:
         progress.done()
-    emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+    emit_report(result, fmt, report)
     write_html(html, lambda: inspect_page(result, inputs))
 
     _print_table(result.bodies)

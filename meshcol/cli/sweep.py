@@ -96,7 +96,7 @@ def sweep(
     """
     from meshcol.analysis.review import sweep_page
     from meshcol.analysis.sweep import sweep as run_sweep
-    from meshcol.io.report import emit
+    from meshcol.cli.common import emit_report
 
     check_outputs([manifest], [("--report", report), ("--html", html)])
     fmt = report_format(report, fmt)
@@ -113,7 +113,7 @@ def sweep(
         )
     finally:
         progress.done()
-    emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+    emit_report(result, fmt, report)
     write_html(html, lambda: sweep_page(result))
     for warning in result.warnings:
         click.echo(f"meshcol: warning: {warning}", err=True)

@@ -130,6 +130,69 @@ class DecomposeReport:
 
         return dumps_csv(self.rows, CSV_COLUMNS)
 
+    def ci_suite(self) -> Any:
+        """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one case per body
+        (``FILE::BODY``) with its parts and fidelity, a failure over ``max_hausdorff``; a file
+        that failed is an error case, one that timed out a failure (both fail the run). A
+        file's seconds are shared among its bodies."""
+        from meshcol.io.ci import CiCase, CiSuite, number
+
+        limit = self.max_hausdorff
+        cases = []
+        for f in self.files:
+            path = f["path"]
+            if f["status"] != "ok":
+                cases.append(
+                    CiCase(
+                        name=path,
+                        classname="meshcol.decompose",
+                        outcome="error" if f["status"] == "failed" else "failure",
+                        message=f"{f['status']}: {f['message']}",
+                        file=path,
+                        kind=f["status"],
+                        time=f.get("seconds"),
+                    )
+                )
+                continue
+            share = (f.get("seconds") or 0.0) / max(len(f["bodies"]), 1)
+            for body in f["bodies"]:
+                m = body["metrics"]
+                message = (
+                    f"{m.get('parts', 0)} parts, volume ratio {number(m.get('volume_ratio'))}, "
+                    f"Hausdorff mesh to parts {number(m.get('hausdorff_mesh_to_parts'))}, "
+                    f"parts to mesh {number(m.get('hausdorff_parts_to_mesh'))}, uncovered "
+                    f"{number(m.get('uncovered_fraction'))}"
+                )
+                ok = body["hausdorff_ok"]
+                if not ok:
+                    message += f" > --max-hausdorff {number(limit)}"
+                cases.append(
+                    CiCase(
+                        name=f"{path}::{body['name']}",
+                        classname="meshcol.decompose",
+                        outcome="passed" if ok else "failure",
+                        message=message,
+                        file=path,
+                        kind=None if ok else "max-hausdorff",
+                        time=share,
+                    )
+                )
+        s = self.summary
+        verdict = f"{s['files']} files, {s['bodies']} bodies, {s['parts']} parts"
+        for key, what in (("failed", "failed"), ("timeout", "timed out")):
+            if s[key]:
+                verdict += f", {s[key]} {what}"
+        if s["hausdorff_exceeded"]:
+            verdict += f", {s['hausdorff_exceeded']} over --max-hausdorff"
+        return CiSuite(
+            "decompose",
+            tuple(cases),
+            self.settings,
+            seconds=sum(f.get("seconds") or 0.0 for f in self.files),
+            verdict=verdict,
+            units=self.units,
+        )
+
 
 def body_report(
     path: str, name: str, outputs: list[str], d: Any, max_hausdorff: float | None
