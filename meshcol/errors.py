@@ -7,6 +7,7 @@ them, in one place (``meshcol/cli/__init__.py``), to a one-line message and exit
 from __future__ import annotations
 
 import os
+from typing import Any
 
 __all__ = [
     "InputFileError",
@@ -33,6 +34,11 @@ class MeshcolError(Exception):
         self.message = message
         self.path = None if path is None else os.fspath(path)
         super().__init__(f"{self.path}: {message}" if self.path is not None else message)
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # Pickled as (message, path), not the joined text: an error raised in a worker
+        # process (``--executor``) reaches the caller as it was raised.
+        return (type(self), (self.message, self.path))
 
 
 class InputFileError(MeshcolError, ValueError):

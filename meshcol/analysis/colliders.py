@@ -418,6 +418,7 @@ def build_colliders(
     mesh_parts: str = "hull",
     decompose_options: dict[str, Any] | None = None,
     progress: Callable[[str], None] | None = None,
+    decompose: Callable[..., list[np.ndarray]] | None = None,
 ) -> Colliders:
     """The colliders of ``bodies`` (see the module docstring for the kinds).
 
@@ -433,6 +434,9 @@ def build_colliders(
         Options of :func:`convex_parts` for ``decomposed`` bodies.
     progress : callable, optional
         Receives one-line progress messages.
+    decompose : callable, optional
+        Stands for :func:`convex_parts` (same arguments and result): parts computed
+        elsewhere (``check``'s per-file tasks), looked up first.
 
     Returns
     -------
@@ -449,6 +453,7 @@ def build_colliders(
         raise ValueError(f"mesh_parts must be hull or triangles, got {mesh_parts!r}")
     options = dict(decompose_options or {})
     report = progress or (lambda message: None)
+    parts_of = convex_parts if decompose is None else decompose
     kept, ucx, warnings = split_ucx(bodies)
 
     # Unique single shapes (packed together in one call) and per-body triangle sets; each
@@ -516,7 +521,7 @@ def build_colliders(
                     continue
                 report(f"convex parts of {body.name}" + ("" if name is None else f"/{name}"))
                 decomposed = True
-                for p in convex_parts((v, f), **options):
+                for p in parts_of((v, f), **options):
                     singles.append(add(("part", _geometry_key(p)), _constant(p)))
                     labels.append(label)
             if not decomposed and (

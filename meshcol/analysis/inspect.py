@@ -534,6 +534,10 @@ def inspect(
     *,
     fail_on: Sequence[str] = (),
     progress: Callable[[str], None] | None = None,
+    jobs: int = 1,
+    timeout: float | None = None,
+    executor: str = "local",
+    ray_address: str | None = None,
 ) -> InspectReport:
     """Inspect every body of the inputs: is each mesh fit to be a collider?
 
@@ -544,11 +548,25 @@ def inspect(
     fail_on : sequence of str
         Names of :data:`RULES` whose findings fail the run (:attr:`InspectReport.exit_code`).
     progress : callable, optional
-        Receives one line per body inspected (``inspect: 3/10 bodies``).
+        Receives one line per body inspected (``inspect: 3/10 bodies``), or per file with
+        an executor (``inspect: 3/10 files``).
+    jobs : int
+        Files inspected at once, each a task of its own (reading the file and inspecting its
+        bodies) in a worker process or a Ray task; each task's native threads are its share
+        of the cores (:func:`meshcol.decomposition.jobs.worker_env`). 1, without
+        ``timeout`` or Ray: every body in this process, one after another.
+    timeout : float, optional
+        Seconds a file's task may take; it is then stopped (its worker killed) and the file
+        is an entry of :attr:`InspectReport.errors`, as is a file whose worker died.
+    executor : {"local", "ray"}
+        Where the tasks run (:func:`meshcol.decomposition.executor.make_executor`).
+    ray_address : str, optional
+        The Ray cluster (default: a local Ray of ``jobs`` CPUs, stopped at the end).
 
     Returns
     -------
     InspectReport
+        The same report whichever executor ran it.
 
     Raises
     ------
@@ -580,7 +598,19 @@ def inspect(
         first_error.append(error)
         errors.append({"source": path, "body": body, "message": error.message})
 
-    if _is_manifest(inputs):
+    if executor != "ray" and ray_address is not None:
+        raise ValueError("ray_address needs executor 'ray'")
+    if jobs > 1 or timeout is not None or executor != "local":
+        results, units = _inspect_tasks(
+            inputs,
+            skip,
+            progress,
+            jobs=jobs,
+            timeout=timeout,
+            executor=executor,
+            address=ray_address,
+        )
+    elif _is_manifest(inputs):
         scene = load_scene(inputs[0])  # read whole: a manifest's problem stops the run
         # health per mesh: each part of a body is its own mesh
         bodies = [part for body in scene.bodies for part in body.part_bodies()]
@@ -588,17 +618,123 @@ def inspect(
     else:
         bodies = [b for _, file_bodies in iter_inputs(inputs, on_error=skip) for b in file_bodies]
         units = None
-    results = []
-    for done, body in enumerate(bodies, start=1):
-        try:
-            results.append(inspect_body(body, declared_units=units))
-        except InvalidMeshError as error:
-            skip(error.path or body.source or "", error, body.name)
-        if progress is not None:
-            progress(f"inspect: {done}/{len(bodies)} bodies")
+    if not (jobs > 1 or timeout is not None or executor != "local"):
+        results = []
+        for done, body in enumerate(bodies, start=1):
+            try:
+                results.append(inspect_body(body, declared_units=units))
+            except InvalidMeshError as error:
+                skip(error.path or body.source or "", error, body.name)
+            if progress is not None:
+                progress(f"inspect: {done}/{len(bodies)} bodies")
     if not results and first_error:
         raise first_error[0]
     return InspectReport(tuple(results), tuple(dict.fromkeys(fail_on)), units, tuple(errors))
+
+
+def _inspect_file(
+    task: tuple[str, list[Body] | None, str | None],
+) -> tuple[list[tuple[str, Any]] | None, Exception | None]:
+    """Worker entry of a parallel inspect: one file's ``(path, bodies, declared units)``
+    (``bodies`` None: read the file here) to ``([(body name, MeshInspection or its
+    InvalidMeshError)], None)``, or ``(None, the MeshcolError that made it unreadable)``."""
+    from meshcol.errors import MeshcolError
+    from meshcol.io.mesh_read import load_mesh
+
+    path, bodies, units = task
+    if bodies is None:
+        try:
+            bodies = load_mesh(path)
+        except MeshcolError as error:
+            return None, error
+    out: list[tuple[str, Any]] = []
+    for body in bodies:
+        try:
+            out.append((body.name, inspect_body(body, declared_units=units)))
+        except InvalidMeshError as error:
+            out.append((body.name, error))
+    return out, None
+
+
+def _inspect_tasks(
+    inputs: list[Any],
+    skip: Callable[..., None],
+    progress: Callable[[str], None] | None,
+    **run: Any,
+) -> tuple[list[MeshInspection], str | None]:
+    """The inspections of :func:`inspect` and the declared units, one executor task per
+    file (a manifest's bodies grouped by mesh file): the same bodies, names (``unique_name``
+    applied here, in input order), errors and order of errors as the sequential run
+    (unreadable files first, then the bodies in order)."""
+    import dataclasses
+
+    from meshcol.decomposition.executor import run_each
+    from meshcol.errors import MeshcolError
+    from meshcol.io.robot import is_robot_file
+    from meshcol.io.scene import iter_inputs, load_scene, unique_name
+
+    units = None
+    robot = len(inputs) == 1 and is_robot_file(inputs[0])
+    if _is_manifest(inputs) or robot:
+        # read whole on this process: a manifest's problem stops the run
+        groups: dict[str, list[int]] = {}
+        if robot:  # its links, as iter_inputs gives them
+            parts = [body for _, bodies in iter_inputs(inputs) for body in bodies]
+            source = os.fspath(inputs[0])
+        else:
+            scene = load_scene(inputs[0])
+            units, source = scene.units, scene.source
+            parts = [part for body in scene.bodies for part in body.part_bodies()]
+        for k, part in enumerate(parts):
+            groups.setdefault(part.source or source or part.name, []).append(k)
+        tasks: list[tuple[str, list[Body] | None, str | None]] = [
+            (path, [parts[k] for k in ks], units) for path, ks in groups.items()
+        ]
+        slots: list[list[int]] | None = list(groups.values())
+        count = len(parts)
+    else:
+        tasks = [(os.fspath(path), None, None) for path in inputs]
+        slots, count = None, 0
+    outcomes: dict[int, Any] = {}
+    for outcome in run_each(_inspect_file, tasks, **run):
+        outcomes[outcome.index] = outcome
+        if progress is not None:
+            progress(f"inspect: {len(outcomes)}/{len(tasks)} files")
+    # (source, name in its file, unique name, inspection or error) per body, in the
+    # sequential run's order
+    named: list[tuple[str, str, str, Any] | None] = [None] * count
+    used: set[str] = set()
+    for index, (path, _, _) in enumerate(tasks):
+        outcome = outcomes[index]
+        if outcome.status != "ok":
+            skip(path, MeshcolError(outcome.message or outcome.status, path))
+            continue
+        found, error = outcome.value
+        if error is not None:
+            skip(path, error)
+            continue
+        if slots is not None:
+            for k, (name, result) in zip(slots[index], found):
+                named[k] = (path, name, name, result)
+        else:
+            named.extend((path, name, unique_name(name, used), result) for name, result in found)
+    results = []
+    for entry in named:
+        if entry is None:  # its file's task failed
+            continue
+        path, original, name, result = entry
+        if isinstance(result, MeshcolError):
+            # raised before the body was renamed (``name#2``): its message names the body
+            prefix = f"body '{original}': "
+            if name != original and result.message.startswith(prefix):
+                message = f"body '{name}': {result.message[len(prefix) :]}"
+                result = type(result)(message, result.path)
+            skip(result.path or path, result, name)
+        else:
+            results.append(
+                result if result.name == name else dataclasses.replace(result, name=name)
+            )
+    return results, units
 
 
 def _is_manifest(inputs: Sequence[Any]) -> bool:

@@ -13,12 +13,15 @@ from meshcol.cli.common import (
     Progress,
     cache_dir_option,
     engine_option,
+    executor_options,
     html_option,
+    jobs_option,
     plural,
     report_format,
     report_options,
     robot_options,
     threads_option,
+    timeout_option,
     verdict,
 )
 
@@ -82,6 +85,15 @@ SHAPE_CHOICES = COLLIDER_KINDS
     help="Decomposition concavity threshold (as in 'meshcol decompose').  [default: 0.05]",
 )
 @cache_dir_option()
+@jobs_option(
+    "Files prepared at once (read, and decomposed for --shape decomposed), each a task in a "
+    "worker process or on Ray; the pairs are measured here, on --threads (1: all in this "
+    "process, unless --timeout or --executor ray)."
+)
+@timeout_option(
+    "Seconds allowed per file's task; a file over it is an error (exit 2).  [default: no limit]"
+)
+@executor_options()
 @report_options(default="the report on stdout; the summary on stderr")
 @robot_options(exclusions=True)
 @html_option
@@ -97,6 +109,10 @@ def check(
     engine: str,
     threshold: float | None,
     cache_dir: str | None,
+    jobs: int,
+    timeout: float | None,
+    executor: str,
+    ray_address: str | None,
     report: str | None,
     fmt: str | None,
     html: str | None,
@@ -121,6 +137,7 @@ def check(
       meshcol check scene.glb --shape decomposed --ignore 'door*:frame*'
       meshcol check scene.json --baseline last_week.json > today.json
       meshcol check panda.urdf --srdf panda.srdf --joint panda_joint4=-1.5
+      meshcol check props/*.obj --shape decomposed -j 2 --executor ray
     """
     from meshcol.analysis.check import check as run_check
     from meshcol.analysis.check import parse_ignore_rule
@@ -147,6 +164,10 @@ def check(
             baseline=baseline,
             threads=threads,
             decompose_options=_decompose_options(engine, threshold, cache_dir),
+            jobs=jobs,
+            timeout=timeout,
+            executor=executor,
+            ray_address=ray_address,
         )
     finally:
         progress.done()

@@ -487,6 +487,28 @@ def executor_options() -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     return decorate
 
 
+def jobs_option(help_text: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Add ``--jobs N`` / ``-j N`` (at least 1): files processed at once, one task each."""
+    return click.option(
+        "--jobs",
+        "-j",
+        type=click.IntRange(min=1),
+        default=1,
+        show_default=True,
+        help=help_text,
+    )
+
+
+def timeout_option(
+    help_text: str = "Seconds allowed per file; a file over it is stopped and reported.  "
+    "[default: no limit]",
+) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Add ``--timeout SECONDS`` (> 0): the limit of one file's task."""
+    return click.option(
+        "--timeout", type=FiniteFloat(0, min_open=True), default=None, help=help_text
+    )
+
+
 def threads_option(
     help_text: str = "Threads for the native queries (0: all cores).",
 ) -> Callable[[Callable[..., Any]], Callable[..., Any]]:

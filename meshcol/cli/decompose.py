@@ -11,7 +11,9 @@ from meshcol.cli.common import (
     FiniteFloat,
     executor_options,
     html_option,
+    jobs_option,
     robot_options,
+    timeout_option,
     write_html,
 )
 from meshcol.decomposition.engines import ENGINES
@@ -106,20 +108,8 @@ class _MeshFormat(click.Choice):
     help="Any other engine parameter, e.g. -E mcts_iterations=50 (repeatable).  [default: "
     "the engine's]",
 )
-@click.option(
-    "--jobs",
-    "-j",
-    type=click.IntRange(min=1),
-    default=1,
-    show_default=True,
-    help="Files decomposed in parallel processes (1: one at a time, CoACD using every core).",
-)
-@click.option(
-    "--timeout",
-    type=FiniteFloat(0, min_open=True),
-    default=None,
-    help="Seconds allowed per file; a file over it is stopped and reported.  [default: no limit]",
-)
+@jobs_option("Files decomposed in parallel processes (1: one at a time, CoACD using every core).")
+@timeout_option()
 @click.option(
     "--cache-dir",
     type=click.Path(file_okay=False),

@@ -10,11 +10,14 @@ from meshcol.analysis.inspect import RULES
 from meshcol.cli.common import (
     Progress,
     check_outputs,
+    executor_options,
     html_option,
+    jobs_option,
     plural,
     report_format,
     report_options,
     robot_options,
+    timeout_option,
     verdict,
     write_html,
 )
@@ -50,6 +53,15 @@ def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) 
     + ", ".join(RULES)
     + " (or all).  [default: none, the run reports only]",
 )
+@jobs_option(
+    "Files inspected at once, each a task in a worker process or on Ray (1: one after "
+    "another in this process, unless --timeout or --executor ray)."
+)
+@timeout_option(
+    "Seconds allowed per file; a file over it is stopped and reported as not inspected "
+    "(exit 2).  [default: no limit]"
+)
+@executor_options()
 @robot_options()
 @html_option
 def inspect(
@@ -57,6 +69,10 @@ def inspect(
     report: str | None,
     fmt: str | None,
     fail_on: tuple[str, ...],
+    jobs: int,
+    timeout: float | None,
+    executor: str,
+    ray_address: str | None,
     html: str | None,
 ) -> None:
     """Health check of each body's mesh: fit to be a collider?
@@ -79,12 +95,19 @@ def inspect(
     'meshcol: error:' line, the other files are inspected and reported, and the run exits 2.
     A summary table goes to stderr (the first 20 bodies, then "N more").
 
+    With --jobs N, --timeout or --executor ray, each file is a task of its own (read and
+    inspected in a worker process, or a Ray task; a manifest is read here and its bodies go
+    out grouped by mesh file): a file whose task dies or runs over --timeout is a "not
+    inspected" entry of the report's "errors" (exit 2) while the others finish. The report
+    is the same whichever executor ran it.
+
     \b
     Examples:
       meshcol inspect chair.obj                       JSON report on stdout
       meshcol inspect props/*.obj --report health.csv
       meshcol inspect level.json --fail-on not-watertight,self-intersecting
       meshcol inspect props/*.obj --report - --format csv --fail-on all
+      meshcol inspect lib/*.glb -j 2 --timeout 60 --executor ray --report health.json
     """
     from meshcol.analysis.inspect import inspect as run_inspect
     from meshcol.analysis.review import inspect_page
@@ -94,7 +117,15 @@ def inspect(
     fmt = report_format(report, fmt)
     progress = Progress(command="inspect", heartbeat=True)
     try:
-        result = run_inspect(list(inputs), fail_on=fail_on, progress=progress)
+        result = run_inspect(
+            list(inputs),
+            fail_on=fail_on,
+            progress=progress,
+            jobs=jobs,
+            timeout=timeout,
+            executor=executor,
+            ray_address=ray_address,
+        )
     finally:
         progress.done()
     emit_report(result, fmt, report)
