@@ -1,4 +1,9 @@
-"""Enclosing primitives of a point set: the sphere, box, cylinder and capsule that contain it.
+"""Test oracle: the pure-Python enclosing fits meshcol had before the core's (cpp/src/fit.cpp).
+
+Kept only to compare the core against (volumes, containment) and for benchmarks/bench_fit.py;
+the package has one engine, the core. What follows is the original module's text.
+
+Enclosing primitives of a point set: the sphere, box, cylinder and capsule that contain it.
 
 Arrays in, primitives out; the 2-D polygons the box and the round fits need come from the one
 exact hull (:mod:`meshcol.collision.hull`). Every fit contains every input point: after the search, each primitive is grown

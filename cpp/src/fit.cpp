@@ -558,8 +558,15 @@ RoundFit round_on(const std::vector<Vec3>& p, const Vec3& axis, bool capsule) {
     return out;
 }
 
-/// The best axis: the candidates' best few, each polished by a pattern search on the axis's
-/// polar angles; the smallest volume wins (the earliest start on ties).
+/// The axis `a` turned in its tangent plane by (u, v) (a chart about a: no pole to stall at).
+Vec3 tilted(const Mat3& chart, const std::array<double, 2>& uv) {
+    const Vec3 d = chart.column(2) + uv[0] * chart.column(0) + uv[1] * chart.column(1);
+    return d / norm(d);
+}
+
+/// The best axis: the candidates' best few, each polished by a pattern search on its polar
+/// angles, then twice more in a chart about where it ended, with smaller first steps (a
+/// restart escapes the stalls of a non-smooth volume); the smallest volume wins (earliest start on ties).
 RoundFit along_best_axis(const std::vector<Vec3>& p, const std::vector<Vec3>& axes, bool capsule) {
     std::vector<std::pair<double, size_t>> starts;
     for (size_t i = 0; i < axes.size(); ++i)
@@ -569,15 +576,27 @@ RoundFit along_best_axis(const std::vector<Vec3>& p, const std::vector<Vec3>& ax
     RoundFit best;
     const size_t count = std::min<size_t>(starts.size(), defaults::fit_axis_polish_starts);
     for (size_t s = 0; s < count; ++s) {
-        auto cost = [&](const std::array<double, 2>& tp) {
+        // First on the axis's polar angles (their uneven steps explore more), then in charts.
+        auto polar = [&](const std::array<double, 2>& tp) {
             return round_on(p, direction(tp), capsule).volume;
         };
         double value = 0.0;
-        const auto tp = polish<2>(cost, angles(axes[starts[s].second]),
-                                  defaults::fit_axis_polish_step,
-                                  defaults::fit_axis_polish_iterations,
-                                  defaults::fit_axis_polish_smallest, value);
-        if (value < best.volume * (1 - 1e-12)) best = round_on(p, direction(tp), capsule);
+        Vec3 axis = direction(polish<2>(polar, angles(axes[starts[s].second]),
+                                        defaults::fit_axis_polish_step,
+                                        defaults::fit_axis_polish_iterations,
+                                        defaults::fit_axis_polish_smallest, value));
+        double step = 0.25 * defaults::fit_axis_polish_step;
+        for (int pass = 0; pass < 2; ++pass, step *= 0.25) {
+            const Mat3 chart = frame_of(axis);
+            auto cost = [&](const std::array<double, 2>& uv) {
+                return round_on(p, tilted(chart, uv), capsule).volume;
+            };
+            const auto uv = polish<2>(cost, {0.0, 0.0}, step,
+                                      defaults::fit_axis_polish_iterations,
+                                      defaults::fit_axis_polish_smallest, value);
+            axis = tilted(chart, uv);
+        }
+        if (value < best.volume * (1 - 1e-12)) best = round_on(p, axis, capsule);
     }
     return best;
 }
