@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.collision.fit import FIT_SHAPES, PrimitiveFit, fit_all, fit_primitive
+from meshcol.collision.fit import FIT_SHAPES, PrimitiveFit, fit_batch
 from meshcol.errors import InvalidMeshError
 from meshcol.geometry.rotations import quaternion_from_matrix
 from meshcol.io.scene import as_scene
@@ -42,9 +42,11 @@ __all__ = [
     "BodyFit",
     "FitReport",
     "fit",
+    "fit_bodies",
     "fit_body",
-    "fit_row",
+    "fit_point_sets",
     "fit_points",
+    "fit_row",
 ]
 
 #: What ``meshcol fit --shape`` takes.
@@ -131,28 +133,65 @@ def fit_points(
     ValueError
         An unknown shape or a negative tolerance.
     """
-    from meshcol.collision.hull import exact_hull
+    result = fit_point_sets([points], shape, volume_tolerance=volume_tolerance)[0]
+    if isinstance(result, InvalidMeshError):
+        raise result
+    return result
 
+
+def fit_point_sets(
+    point_sets: Sequence[np.ndarray],
+    shape: str = "auto",
+    *,
+    volume_tolerance: float = DEFAULT_VOLUME_TOLERANCE,
+    threads: int = 0,
+) -> list[BodyFit | InvalidMeshError]:
+    """:func:`fit_points` of many point sets in ONE native call (:func:`fit_batch`).
+
+    Returns
+    -------
+    list of BodyFit or InvalidMeshError
+        Per set, in order: its fits, or the error that set has no volume to enclose (no
+        points, non-finite, collinear, one point): the caller names the body and raises.
+
+    Raises
+    ------
+    ValueError
+        An unknown shape, a negative tolerance, or a set that is not (n, 3).
+    """
     if shape not in SHAPE_CHOICES:
         raise ValueError(f"shape must be one of {', '.join(SHAPE_CHOICES)}, got {shape!r}")
     if not volume_tolerance >= 0:
         raise ValueError(f"volume_tolerance must be >= 0, got {volume_tolerance}")
-    hull = exact_hull(points)
-    if hull.dimension == 0:
-        raise InvalidMeshError("all vertices coincide: there is no volume to enclose")
-    if hull.dimension == 1:
-        raise InvalidMeshError("all vertices are collinear: there is no volume to enclose")
-    faces = hull.faces if hull.dimension == 3 else None
-    if shape == "auto":
-        fits = fit_all(hull.vertices, faces)
-        limit = (1.0 + volume_tolerance) * hull.volume
-        chosen = next((n for n in FIT_SHAPES if fits[n].volume <= limit), "hull")
-        if hull.dimension == 2:
-            chosen = "box"  # a flat body: its box (as thin as the margin) is its collider
-    else:
-        fits = {shape: fit_primitive(shape, hull.vertices, faces)}
-        chosen = shape
-    return BodyFit(fits, chosen, hull.vertices, hull.faces, hull.volume)
+    sets = [np.ascontiguousarray(p, dtype=np.float64) for p in point_sets]
+    batch = fit_batch(sets, "all" if shape == "auto" else shape, threads=threads)
+    out: list[BodyFit | InvalidMeshError] = []
+    for h, points in enumerate(sets):
+        dimension = int(batch.dimension[h])
+        if dimension == 0:
+            out.append(InvalidMeshError("all vertices coincide: there is no volume to enclose"))
+            continue
+        if dimension == 1:
+            out.append(
+                InvalidMeshError("all vertices are collinear: there is no volume to enclose")
+            )
+            continue
+        if not batch.fitted(h):
+            out.append(batch.error(h))
+            continue
+        vertex_index, faces = batch.hull(h)
+        hull_vertices = points[vertex_index] + 0.0
+        hull_volume = float(batch.hull_volume[h])
+        fits = batch.fits(h)
+        if shape == "auto":
+            limit = (1.0 + volume_tolerance) * hull_volume
+            chosen = next((n for n in FIT_SHAPES if fits[n].volume <= limit), "hull")
+            if dimension == 2:
+                chosen = "box"  # a flat body: its box (as thin as the margin) is its collider
+        else:
+            chosen = shape
+        out.append(BodyFit(fits, chosen, hull_vertices, faces.copy(), hull_volume))
+    return out
 
 
 def fit_body(
@@ -172,28 +211,52 @@ def fit_body(
     InvalidMeshError
         As :func:`fit_points` (the message does not name the body).
     """
+    result = fit_bodies([body], shape, volume_tolerance)[0]
+    if isinstance(result, InvalidMeshError):
+        raise result
+    return result
+
+
+def fit_bodies(
+    bodies: Sequence[Body],
+    shape: str = "auto",
+    volume_tolerance: float = DEFAULT_VOLUME_TOLERANCE,
+    threads: int = 0,
+) -> list[tuple[BodyFit, float | None, float | None] | InvalidMeshError]:
+    """:func:`fit_body` of many bodies, the fits in ONE native call; per body its result
+    or the error that it has no volume to enclose (the message does not name the body)."""
+    from meshcol.collision.fit import primitive_volume
     from meshcol.geometry.topology import oriented_volume
 
-    pose = np.asarray(body.pose, dtype=np.float64)
-    local = fit_points(_fit_vertices(body), shape, volume_tolerance=volume_tolerance)
-    world = BodyFit(
-        {name: _world(f, pose) for name, f in local.fits.items()},
-        local.chosen,
-        local.hull_vertices @ pose[:3, :3].T + pose[:3, 3],
-        local.hull_faces,
-        local.hull_volume,
+    fitted = fit_point_sets(
+        [_fit_vertices(b) for b in bodies],
+        shape,
+        volume_tolerance=volume_tolerance,
+        threads=threads,
     )
-    chosen = world.primitive_fit
-    gap = None if chosen is None else _max_gap(chosen, body, local, pose)
-    volume = None
-    if body.primitive is None:
-        oriented = oriented_volume(body.vertices, body.faces)
-        volume = None if oriented is None else abs(oriented[0])
-    else:
-        from meshcol.collision.fit import primitive_volume
-
-        volume = primitive_volume(body.primitive)
-    return world, volume, gap
+    out: list[tuple[BodyFit, float | None, float | None] | InvalidMeshError] = []
+    for body, local in zip(bodies, fitted):
+        if isinstance(local, InvalidMeshError):
+            out.append(local)
+            continue
+        pose = np.asarray(body.pose, dtype=np.float64)
+        world = BodyFit(
+            {name: _world(f, pose) for name, f in local.fits.items()},
+            local.chosen,
+            local.hull_vertices @ pose[:3, :3].T + pose[:3, 3],
+            local.hull_faces,
+            local.hull_volume,
+        )
+        chosen = world.primitive_fit
+        gap = None if chosen is None else _max_gap(chosen, body, local, pose)
+        volume = None
+        if body.primitive is None:
+            oriented = oriented_volume(body.vertices, body.faces)
+            volume = None if oriented is None else abs(oriented[0])
+        else:
+            volume = primitive_volume(body.primitive)
+        out.append((world, volume, gap))
+    return out
 
 
 def _fit_vertices(body: Body) -> np.ndarray:
@@ -475,7 +538,7 @@ def fit(
     reserved : sequence of (label, path)
         Other files the caller will write: no fit may go there.
     progress : callable, optional
-        One line per body fitted.
+        One line when the fits start (every body's in one native call).
 
     Returns
     -------
@@ -501,14 +564,14 @@ def fit(
     check_body_count(output, len(bodies))
 
     # Everything is computed before anything is written: a bad body stops the run first.
+    # The fits of every body in one native call; then the first body without a fit stops it.
+    if progress is not None:
+        progress(f"fit: {len(bodies)} bodies")
     results, rows_input = [], []
-    for done, body in enumerate(bodies, start=1):
-        if progress is not None:
-            progress(f"fit: {done}/{len(bodies)} bodies")
-        try:
-            world, volume, gap = fit_body(body, shape, volume_tolerance)
-        except InvalidMeshError as exc:
-            raise InvalidMeshError(f"body '{body.name}': {exc.message}", body.source) from exc
+    for body, fitted in zip(bodies, fit_bodies(bodies, shape, volume_tolerance)):
+        if isinstance(fitted, InvalidMeshError):
+            raise InvalidMeshError(f"body '{body.name}': {fitted.message}", body.source)
+        world, volume, gap = fitted
         results.append(world)
         rows_input.append((body, world, volume, gap))
 
