@@ -3,6 +3,7 @@ model engine, then CoACD on small generated meshes and the corpus."""
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -13,6 +14,7 @@ from click.testing import CliRunner
 from conftest import FAST_DECOMPOSE
 
 from meshcol.cli import main
+from meshcol.decomposition import cache as decompose_cache
 from meshcol.decomposition.result import Decomposition, Fidelity
 from meshcol.decomposition.search import (
     SearchTarget,
@@ -198,3 +200,132 @@ def run(args: list[str]) -> tuple[int, str, str]:
 
 def files(folder: Path) -> dict[str, bytes]:
     return {p.name: p.read_bytes() for p in sorted(folder.iterdir()) if p.is_file()}
+
+
+@pytest.fixture(scope="module")
+def l_shape(tmp_path_factory) -> Path:
+    path = tmp_path_factory.mktemp("inputs") / "l_shape.obj"
+    _l_shape().export(path)
+    return path
+
+
+@pytest.mark.slow
+def test_search_meets_the_target_with_fewer_parts_and_caches_every_step(l_shape, tmp_path) -> None:
+    cache = tmp_path / "cache"
+    base = [str(l_shape), "--cache-dir", str(cache), *FAST]
+    # The run's threshold (0.2) gives 2 parts, nothing sticking out.
+    code, stdout, _ = run([*base, "-o", str(tmp_path / "plain")])
+    plain = json.loads(stdout)["files"][0]["bodies"][0]
+    assert code == 0 and plain["metrics"]["parts"] == 2 and plain["search"] is None
+    # Within 0.6 one part does: the hull of the L (0.498 out of it, measured).
+    code, stdout, stderr = run([*base, "-o", str(tmp_path / "a"), "--max-hausdorff", "0.6"])
+    assert code == 0, stderr
+    body = json.loads(stdout)["files"][0]["bodies"][0]
+    search = body["search"]
+    assert search["met"] and search["stopped"] == "one part"
+    assert [s["threshold"] for s in search["steps"]] == [0.2, 0.4, 0.8]
+    assert [s["parts"] for s in search["steps"]] == [2, 2, 1]
+    chosen = search["steps"][search["chosen"]]
+    assert chosen["chosen"] and chosen["threshold"] == 0.8
+    assert body["metrics"]["parts"] == 1 < plain["metrics"]["parts"]
+    assert body["metrics"]["hausdorff_parts_to_mesh"] == pytest.approx(0.5, abs=0.01)
+    assert max(chosen["hausdorff_mesh_to_parts"], chosen["hausdorff_parts_to_mesh"]) <= 0.6
+    assert body["cache_key"] == chosen["cache_key"]
+    # The first step is the plain run's decomposition; every step is in the cache.
+    assert search["steps"][0]["cache_key"] == plain["cache_key"]
+    assert search["steps"][0]["from_cache"] and search["engine_calls"] == 2
+    for s in search["steps"]:
+        entry = decompose_cache.load(s["cache_key"], cache)
+        assert entry is not None and len(entry.parts) == s["parts"]
+    # Second run: every step from the cache, the same parts byte for byte.
+    code, stdout, _ = run([*base, "-o", str(tmp_path / "b"), "--max-hausdorff", "0.6"])
+    again = json.loads(stdout)["files"][0]["bodies"][0]["search"]
+    assert code == 0 and again["engine_calls"] == 0
+    assert all(s["from_cache"] for s in again["steps"])
+    assert files(tmp_path / "a") == files(tmp_path / "b")
+
+
+def test_a_target_no_step_meets_fails_naming_the_best_step(l_shape, tmp_path) -> None:
+    args = [str(l_shape), "--no-cache", "-o", str(tmp_path / "o"), *FAST]
+    code, stdout, stderr = run([*args, "--max-hausdorff", "1e-9", "--search-steps", "2"])
+    assert code == 1
+    report = json.loads(stdout)
+    body = report["files"][0]["bodies"][0]
+    assert body["search"]["met"] is False and body["hausdorff_ok"] is False
+    assert body["search"]["stopped"] == "steps" and len(body["search"]["steps"]) == 2
+    assert report["summary"]["hausdorff_exceeded"] == 1
+    assert "meshcol: target missed: " in stderr
+    assert "no step met the target: best step" in stderr and "> max_hausdorff 1e-09" in stderr
+
+
+def test_search_off_only_checks(l_shape, tmp_path) -> None:
+    args = [str(l_shape), "--no-cache", "-o", str(tmp_path / "o"), *FAST]
+    code, stdout, _ = run([*args, "--max-parts", "1", "--search", "off"])
+    body = json.loads(stdout)["files"][0]["bodies"][0]
+    assert code == 1 and body["search"] is None and body["parts_ok"] is False
+    assert json.loads(stdout)["summary"]["parts_exceeded"] == 1
+
+
+def test_robot_input_refuses_the_search(tmp_path) -> None:
+    urdf = tmp_path / "r.urdf"
+    urdf.write_text('<robot name="r"><link name="a"/></robot>\n')
+    code, _, stderr = run([str(urdf), "-o", str(tmp_path / "o"), "--max-hausdorff", "0.1"])
+    assert code == 2
+    assert "fidelity search" in stderr and "--search off" in stderr
+
+
+@pytest.mark.slow
+def test_max_parts_alone_and_jobs_two_are_deterministic(tmp_path) -> None:
+    folder = tmp_path / "in"
+    folder.mkdir()
+    _l_shape().export(folder / "l.obj")
+    trimesh.creation.box(bounds=[(0, 0, 0), (3, 1, 1)]).union(
+        trimesh.creation.box(bounds=[(1, 0, 0), (2, 1, 2)]), engine="manifold"
+    ).export(folder / "t.obj")
+    inputs = [str(folder / "l.obj"), str(folder / "t.obj")]
+    reports = []
+    for jobs in ("1", "2"):
+        out = tmp_path / f"o{jobs}"
+        code, stdout, stderr = run(
+            [*inputs, "--no-cache", "-o", str(out), *FAST, "--max-parts", "1", "--jobs", jobs]
+        )
+        assert code == 0, stderr
+        report = json.loads(stdout)
+        steps = [
+            [{k: v for k, v in s.items() if k != "seconds"} for s in b["search"]["steps"]]
+            for f in report["files"]
+            for b in f["bodies"]
+        ]
+        reports.append((steps, files(out)))
+        for f in report["files"]:
+            for b in f["bodies"]:
+                assert b["metrics"]["parts"] == 1 and b["search"]["met"]
+                meeting = [s for s in b["search"]["steps"] if s["meets"]]
+                best = b["search"]["steps"][b["search"]["chosen"]]
+                # The smallest Hausdorff among the steps with one part.
+                h = [
+                    max(s["hausdorff_mesh_to_parts"], s["hausdorff_parts_to_mesh"]) for s in meeting
+                ]
+                assert max(best["hausdorff_mesh_to_parts"], best["hausdorff_parts_to_mesh"]) == min(
+                    h
+                )
+    assert reports[0] == reports[1]
+
+
+@pytest.mark.slow
+def test_a_longer_or_resumed_search_reuses_the_cached_steps(l_shape, tmp_path) -> None:
+    cache = tmp_path / "cache"
+    manifest = tmp_path / "run.json"
+    base = [str(l_shape), "--cache-dir", str(cache), *FAST, "--max-hausdorff", "0.6"]
+    code, stdout, _ = run([*base, "-o", str(tmp_path / "a"), "--search-steps", "2"])
+    first = json.loads(stdout)["files"][0]["bodies"][0]["search"]
+    assert code == 0 and first["stopped"] == "steps" and first["engine_calls"] == 2
+    # The same search with a larger budget: its first two steps come from the cache.
+    args = [*base, "-o", str(tmp_path / "b"), "--run-manifest", str(manifest)]
+    code, stdout, _ = run(args)
+    longer = json.loads(stdout)["files"][0]["bodies"][0]["search"]
+    assert code == 0 and [s["from_cache"] for s in longer["steps"]] == [True, True, False]
+    code, stdout, _ = run([*args, "--resume"])
+    resumed = json.loads(stdout)["files"][0]["bodies"][0]["search"]
+    assert code == 0 and resumed["engine_calls"] == 0
+    assert [s["cache_key"] for s in resumed["steps"]] == [s["cache_key"] for s in longer["steps"]]
