@@ -17,6 +17,11 @@ from meshcol.cli.common import (
     write_html,
 )
 from meshcol.decomposition.engines import ENGINES
+from meshcol.decomposition.search import (
+    DEFAULT_SEARCH_STEPS,
+    DEFAULT_SEARCH_TOLERANCE,
+    SEARCH_MODES,
+)
 from meshcol.io.mesh_write import LAYOUTS
 
 
@@ -159,8 +164,38 @@ class _MeshFormat(click.Choice):
     "--max-hausdorff",
     type=FiniteFloat(min=0),
     default=None,
-    help="Fail (exit 1) when a body's Hausdorff distance, either way, exceeds this (mesh "
-    "units).  [default: no limit]",
+    help="Fidelity target: the largest Hausdorff distance, either way (mesh units). Each body's "
+    "threshold (and resolution) is searched for the fewest parts within it; exit 1 when no "
+    "step meets it. With --search off: only checked.  [default: no limit]",
+)
+@click.option(
+    "--max-parts",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Fidelity target: the most parts per body; alone, the search finds the best fidelity "
+    "within it. With --search off: only checked.  [default: no limit]",
+)
+@click.option(
+    "--search",
+    type=click.Choice(SEARCH_MODES),
+    default="auto",
+    show_default=True,
+    help="auto: search the engine's parameters when --max-hausdorff or --max-parts is given; "
+    "off: just check them (the run's parameters, exit 1 when exceeded).",
+)
+@click.option(
+    "--search-steps",
+    type=click.IntRange(min=1),
+    default=DEFAULT_SEARCH_STEPS,
+    show_default=True,
+    help="Most decompositions (cached or not) one body's search makes.",
+)
+@click.option(
+    "--search-tolerance",
+    type=FiniteFloat(0, min_open=True),
+    default=DEFAULT_SEARCH_TOLERANCE,
+    show_default=True,
+    help="The search stops when its threshold bracket is this narrow (hi/lo <= 1 + it).",
 )
 @click.option(
     "--run-manifest",
@@ -202,6 +237,10 @@ def decompose_command(
     report: str | None,
     report_fmt: str | None,
     max_hausdorff: float | None,
+    max_parts: int | None,
+    search: str,
+    search_steps: int,
+    search_tolerance: float,
     html: str | None,
     run_manifest: str | None,
     resume: bool,
@@ -215,8 +254,8 @@ def decompose_command(
     union against the mesh's, Hausdorff distances both ways (how far the mesh surface is from
     the parts, and how far the boundary of their union sticks out of the mesh's solid: cuts
     inside the mesh count 0), and the fraction of the mesh surface they leave uncovered. Results are cached by geometry and parameters, so a second
-    run costs milliseconds. Exit 1 when a file failed or timed out, or --max-hausdorff was
-    exceeded; exit 2 for unusable input or an output that cannot be written (every output
+    run costs milliseconds. Exit 1 when a file failed or timed out, or a body misses
+    --max-hausdorff or --max-parts; exit 2 for unusable input or an output that cannot be written (every output
     location is checked before the work starts, and nothing is written on failure); 130 on
     Ctrl-C, 143 on SIGTERM, with no output, no cache entry and no worker left behind.
 
@@ -228,6 +267,15 @@ def decompose_command(
     MuJoCo Menagerie's convention; --to glb and --to usd the parts at the joint
     configuration. --layout and --format do not apply.
 
+    Fidelity targets: --max-hausdorff D and/or --max-parts N search each body's CoACD
+    threshold (V-HACD: its hull count), bracketing from --threshold then bisecting, and raise
+    the resolution when even the finest threshold misses D, for the fewest parts within D (N
+    alone: the smallest Hausdorff within N parts). Every step is an ordinary cached
+    decomposition (a repeated or resumed run replays the search from the cache) and is in
+    the report's "search" of each body, the chosen one marked; a body no step meets fails
+    (exit 1), naming its best step. --max-hausdorff used to only check the run's result:
+    --search off keeps that.
+
     \b
     Examples:
       meshcol decompose mug.obj --out-dir collision/
@@ -238,6 +286,8 @@ def decompose_command(
       meshcol decompose snowflake.obj -o out/ --preprocess off --threshold 0.02 -E mcts_iterations=50
       meshcol decompose lib/*.obj -o out/ --executor ray --ray-address auto --cache-dir s3://b/c
       meshcol decompose lib/*.obj -o out/ --run-manifest run.json --resume
+      meshcol decompose mug.obj -o out/ --max-hausdorff 0.002 --search-steps 10
+      meshcol decompose mug.obj -o out/ --max-parts 8
     """
     from meshcol.analysis.review import decompose_page
     from meshcol.cli.common import Progress, emit_report, report_format, verdict
@@ -266,6 +316,7 @@ def decompose_command(
         resolve_params(engine, engine_options=engine_options)
     except ValueError as exc:
         raise click.BadParameter(str(exc), param_hint="'--engine-option'") from None
+    searching = search != "off" and (max_hausdorff is not None or max_parts is not None)
 
     # Every output location, before any work: a run never fails after the work for want of
     # a folder, and never replaces one of its inputs.
@@ -303,6 +354,13 @@ def decompose_command(
                     f"{flag} does not apply to a robot description yet (its links run in the "
                     "local worker pool, --jobs)"
                 )
+        if searching:
+            raise click.UsageError(
+                "the fidelity search (--max-hausdorff, --max-parts) does not apply to a robot "
+                "description yet: add --search off to check --max-hausdorff only"
+            )
+        if max_parts is not None:
+            raise click.UsageError("--max-parts does not apply to a robot description yet")
     progress = Progress(command="decompose", heartbeat=True)
     if robot:
         from meshcol.analysis.rebuild import rebuild_decomposition
@@ -335,6 +393,10 @@ def decompose_command(
                     "layout": "parts",
                     "format": "obj",
                     "max_hausdorff": max_hausdorff,
+                    "max_parts": None,
+                    "search": search,
+                    "search_steps": None,
+                    "search_tolerance": None,
                 },
                 max_hausdorff=max_hausdorff,
                 reserved=(("the --report file", report_file),) if report_file else (),
@@ -369,6 +431,10 @@ def decompose_command(
             layout=layout,
             fmt=fmt,
             max_hausdorff=max_hausdorff,
+            max_parts=max_parts,
+            search=search,
+            search_steps=search_steps,
+            search_tolerance=search_tolerance,
             progress=progress.message,
             other_outputs=[p for p in (report_file, html, run_manifest) if p],
             executor=executor,
@@ -383,6 +449,12 @@ def decompose_command(
     for f in result.files:
         if f["status"] != "ok":
             click.echo(f"meshcol: {f['status']}: {f['path']}: {f['message']}", err=True)
+        for body in f["bodies"]:
+            if body["search"] is not None and not body["search"]["met"]:
+                reason = body["search"]["reason"]
+                click.echo(
+                    f"meshcol: target missed: {f['path']}: {body['name']}: {reason}", err=True
+                )
     click.echo(verdict("decompose", result.exit_code == 0, _summary(result)), err=True)
     if result.exit_code:
         ctx.exit(result.exit_code)
@@ -401,4 +473,6 @@ def _summary(result) -> str:
             text += f", {s[key]} {what}"
     if s["hausdorff_exceeded"]:
         text += f", {s['hausdorff_exceeded']} over --max-hausdorff"
+    if s["parts_exceeded"]:
+        text += f", {s['parts_exceeded']} over --max-parts"
     return text

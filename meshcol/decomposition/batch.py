@@ -22,6 +22,7 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from meshcol.decomposition.search import within_max_hausdorff
 from meshcol.errors import InvalidMeshError, MeshcolError
 
 __all__ = [
@@ -51,6 +52,9 @@ CSV_COLUMNS = (
     "repaired",
     "from_cache",
     "hausdorff_ok",
+    "parts_ok",
+    "search_met",
+    "search_steps",
 )
 
 
@@ -74,6 +78,8 @@ class DecomposeReport:
         Files per body and their format (as :func:`decompose_files` took them).
     max_hausdorff : float or None
         Hausdorff limit that fails the run.
+    max_parts : int or None
+        Part limit that fails the run.
     """
 
     files: list[dict[str, Any]]
@@ -83,10 +89,12 @@ class DecomposeReport:
     layout: str = "parts"
     fmt: str = "obj"
     max_hausdorff: float | None = None
+    max_parts: int | None = None
 
     @property
     def summary(self) -> dict[str, int]:
-        """Counts: files by status, bodies, parts, bodies over ``max_hausdorff``."""
+        """Counts: files by status, bodies, parts, bodies over ``max_hausdorff`` or
+        ``max_parts``."""
         return {
             "files": len(self.files),
             "ok": sum(1 for f in self.files if f["status"] == "ok"),
@@ -97,13 +105,18 @@ class DecomposeReport:
             "hausdorff_exceeded": sum(
                 not b["hausdorff_ok"] for f in self.files for b in f["bodies"]
             ),
+            "parts_exceeded": sum(
+                not b.get("parts_ok", True) for f in self.files for b in f["bodies"]
+            ),
         }
 
     @property
     def exit_code(self) -> int:
-        """1 when a file failed or timed out, or a body exceeds ``max_hausdorff``; else 0."""
+        """1 when a file failed or timed out, or a body exceeds ``max_hausdorff`` or
+        ``max_parts`` (a search that met neither); else 0."""
         s = self.summary
-        return 1 if s["failed"] or s["timeout"] or s["hausdorff_exceeded"] else 0
+        exceeded = s["hausdorff_exceeded"] or s["parts_exceeded"]
+        return 1 if s["failed"] or s["timeout"] or exceeded else 0
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON report: the common envelope, then ``layout``, ``format`` and
@@ -195,12 +208,21 @@ class DecomposeReport:
 
 
 def body_report(
-    path: str, name: str, outputs: list[str], d: Any, max_hausdorff: float | None
+    path: str,
+    name: str,
+    outputs: list[str],
+    d: Any,
+    max_hausdorff: float | None,
+    max_parts: int | None = None,
+    search: Any = None,
 ) -> tuple[dict[str, Any], dict[str, Any]]:
     """A decomposed body's entry in its file's ``bodies`` and its CSV row: the one layout of
-    both, for files (:func:`decompose_files`) and robot links (``analysis.rebuild``)."""
+    both, for files (:func:`decompose_files`) and robot links (``analysis.rebuild``).
+    ``search``: the body's :class:`~meshcol.decomposition.search.SearchResult` (``d`` is its
+    chosen step), or None."""
     metrics = d.metrics.to_dict() if d.metrics is not None else {}
     ok = within_max_hausdorff(metrics, max_hausdorff)
+    parts_ok = max_parts is None or len(d.parts) <= max_parts
     body = {
         "name": name,
         "outputs": outputs,
@@ -213,6 +235,8 @@ def body_report(
         "notes": list(d.notes),
         "metrics": metrics,
         "hausdorff_ok": ok,
+        "parts_ok": parts_ok,
+        "search": None if search is None else search.to_dict(),
     }
     row = {
         "path": path,
@@ -222,6 +246,9 @@ def body_report(
         "repaired": d.repaired,
         "from_cache": d.from_cache,
         "hausdorff_ok": ok,
+        "parts_ok": parts_ok,
+        "search_met": None if search is None else search.met,
+        "search_steps": None if search is None else len(search.steps),
     }
     return body, row
 
@@ -262,6 +289,10 @@ def decompose_files(
     layout: str = "parts",
     fmt: str = "obj",
     max_hausdorff: float | None = None,
+    max_parts: int | None = None,
+    search: str = "auto",
+    search_steps: int | None = None,
+    search_tolerance: float | None = None,
     progress: Callable[[str], None] | None = None,
     other_outputs: Sequence[str | os.PathLike[str]] = (),
     executor: str = "local",
@@ -296,8 +327,19 @@ def decompose_files(
     fmt : {"obj", "glb"}
         Output format (``ucx`` writes OBJ only).
     max_hausdorff : float, optional
-        A body whose Hausdorff distance, either way, exceeds this (in the input's units) fails
-        the run; so does a body whose metrics are missing or not a number.
+        The fidelity target: the largest Hausdorff distance, either way, in the input's units.
+        With ``search="auto"``, each body's engine parameters are searched for the fewest parts
+        within it (:mod:`meshcol.decomposition.search`); with ``search="off"`` the run's
+        parameters are used and the limit only checked. Either way a body over it (or whose
+        metrics are missing or not a number) fails the run.
+    max_parts : int, optional
+        The most parts per body: searched for (the best fidelity within it, or with
+        ``max_hausdorff`` a bound on the fewest parts) or, with ``search="off"``, checked.
+    search : {"auto", "off"}
+        ``auto``: search when a limit is given; ``off``: only check the limits.
+    search_steps, search_tolerance : optional
+        The search's step budget per body and threshold tolerance (defaults
+        :data:`~meshcol.decomposition.search.DEFAULT_SEARCH_STEPS`, ``DEFAULT_SEARCH_TOLERANCE``).
     progress : callable, optional
         Receives one-line progress messages (``decompose: 3/10 files``).
     other_outputs : sequence of paths
@@ -325,7 +367,7 @@ def decompose_files(
     ------
     ValueError
         Contradictory options (``ucx`` with ``glb``, ``cache_dir`` without the cache,
-        ``threshold`` with an engine other than CoACD) or bad engine options.
+        ``threshold`` with an engine other than CoACD), bad engine options or search options.
     MeshcolError
         Unusable input, an output folder that cannot be written (``out_dir``, the cache), two
         bodies that would write the same files, or parts that would replace an input or an
@@ -336,8 +378,10 @@ def decompose_files(
     from meshcol.decomposition.executor import make_executor
     from meshcol.decomposition.jobs import decompose_task
     from meshcol.decomposition.manifest import RunManifest
+    from meshcol.decomposition.search import search_task
     from meshcol.io.outputs import check_outputs
 
+    target = _search_target(max_hausdorff, max_parts, search, search_steps, search_tolerance)
     if layout == "ucx" and fmt == "glb":
         raise ValueError("layout 'ucx' writes OBJ only, not glb")
     if not use_cache and cache_dir is not None:
@@ -375,9 +419,11 @@ def decompose_files(
         seed=seed,
         engine_options=engine_options,
     )
+    if target is not None:
+        options["search"] = target.to_dict()
     # The report's settings: the engine options as given (not the per-worker thread share),
     # and how the run was made.
-    settings = {key: value for key, value in options.items() if key != "threads"}
+    settings = {key: value for key, value in options.items() if key not in ("threads", "search")}
     settings.update(
         jobs=jobs,
         timeout=timeout,
@@ -385,6 +431,7 @@ def decompose_files(
         layout=layout,
         format=fmt,
         max_hausdorff=max_hausdorff,
+        **_search_settings(target, max_parts, search),
         frame="world",
         executor=executor,
         ray_address=ray_address,
@@ -398,7 +445,7 @@ def decompose_files(
     # The engines always run in workers, so that this process stays responsive to signals.
     pool = make_executor(
         executor,
-        decompose_task,
+        decompose_task if target is None else search_task,
         jobs,
         timeout=timeout,
         prepare=functools.partial(prepare_engine, engine),
@@ -419,6 +466,7 @@ def decompose_files(
             layout=layout,
             fmt=fmt,
             max_hausdorff=max_hausdorff,
+            max_parts=max_parts,
             progress=progress,
             protected=[*paths, *(os.fspath(p) for p in other_outputs)],
             manifest=manifest,
@@ -428,7 +476,37 @@ def decompose_files(
         pool.close(interrupted=not isinstance(exc, Exception))
         raise
     pool.close()
-    return DecomposeReport(files, rows, settings, None, layout, fmt, max_hausdorff)
+    return DecomposeReport(files, rows, settings, None, layout, fmt, max_hausdorff, max_parts)
+
+
+def _search_target(
+    max_hausdorff: float | None,
+    max_parts: int | None,
+    search: str,
+    steps: int | None,
+    tolerance: float | None,
+) -> Any:
+    """The run's :class:`~meshcol.decomposition.search.SearchTarget`, or None (no search)."""
+    from meshcol.decomposition import search as fidelity_search
+
+    return fidelity_search.search_target(
+        max_hausdorff,
+        max_parts,
+        search,
+        fidelity_search.DEFAULT_SEARCH_STEPS if steps is None else steps,
+        fidelity_search.DEFAULT_SEARCH_TOLERANCE if tolerance is None else tolerance,
+    )
+
+
+def _search_settings(target: Any, max_parts: int | None, search: str) -> dict[str, Any]:
+    """The report's settings of the fidelity search: ``max_parts``, ``search`` (the mode)
+    and ``search_steps``, ``search_tolerance`` (null when the run does not search)."""
+    return {
+        "max_parts": max_parts,
+        "search": search,
+        "search_steps": None if target is None else target.max_steps,
+        "search_tolerance": None if target is None else target.tolerance,
+    }
 
 
 def _run(
@@ -444,9 +522,15 @@ def _run(
     progress: Callable[[str], None] | None,
     protected: list[str],
     manifest: Any = None,
+    max_parts: int | None = None,
 ) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
-    """Load, look up the cache, decompose, store, write: the file entries and the CSV rows."""
+    """Load, look up the cache, decompose, store, write: the file entries and the CSV rows.
+
+    With ``options["search"]`` each body's result is a search
+    (:class:`~meshcol.decomposition.search.SearchResult`): replayed from the cache when every
+    step is there, else run by a worker; every step is stored."""
     from meshcol.decomposition import cache
+    from meshcol.decomposition import search as fidelity_search
     from meshcol.decomposition.decompose import cached_decomposition
     from meshcol.io.mesh_write import layout_file_pattern, safe_name, write_parts
     from meshcol.io.outputs import staged_folder
@@ -456,7 +540,20 @@ def _run(
     results: dict[int, Any] = {}
     looked_up: dict[int, dict[str, Any]] = {}
     task_file: list[int] = []
-    key_options = {k: v for k, v in options.items() if k != "use_cache"}
+    key_options = {k: v for k, v in options.items() if k not in ("use_cache", "search")}
+    target = None
+    if options.get("search") is not None:
+        target = fidelity_search.SearchTarget(**options["search"])
+
+    def lookup_body(v: Any, f: Any) -> Any:
+        if target is not None:
+            return fidelity_search.cached_search((v, f), target, **key_options)
+        return cached_decomposition((v, f), **key_options)
+
+    def complete(found: Any) -> bool:
+        # A search replayed from the cache is complete; a plain entry needs its metrics.
+        return found is not None and (target is not None or found.metrics is not None)
+
     report_progress = progress or (lambda message: None)
     done, failed, sent, total = 0, 0, 0, None if _is_manifest(inputs) else len(inputs)
     slots = getattr(pool, "slots", 1)
@@ -495,11 +592,9 @@ def _run(
             start = time.perf_counter()
             lookup = {}
             if cache_root is not None:
-                lookup = {
-                    name: cached_decomposition((v, f), **key_options) for name, v, f, _ in bodies
-                }
+                lookup = {name: lookup_body(v, f) for name, v, f, _ in bodies}
             looked_up[i] = lookup
-            if lookup and all(d is not None and d.metrics is not None for d in lookup.values()):
+            if lookup and all(complete(d) for d in lookup.values()):
                 hits = [(name, lookup[name]) for name, _, _, _ in bodies]
                 results[i] = ("ok", hits, None, time.perf_counter() - start)
                 if manifest is not None:
@@ -526,6 +621,9 @@ def _run(
                     # This process stores what the worker made (or measured again), as it
                     # arrives; the manifest says done only once the entry is stored.
                     for name, d in outcome.value:
+                        if target is not None:
+                            fidelity_search.store_steps(d, cache_root)
+                            continue
                         before = looked_up[i].get(name)
                         if before is None or before.metrics != d.metrics:
                             cache.store(d, cache_root)
@@ -551,12 +649,16 @@ def _run(
             }
             if status == "ok":
                 transforms = {name: t for name, _, _, t in bodies}
-                for name, d in value:
+                for name, found in value:
+                    searched = found if target is not None else None
+                    d = found.decomposition if searched is not None else found
                     t = transforms[name]
                     world = [(v @ t[:3, :3].T + t[:3, 3], f) for v, f in d.parts]
                     written = write_parts(name, world, stage, layout, fmt)
                     outputs = [os.path.relpath(p, stage) for p in written]
-                    body, row = body_report(path, name, outputs, d, max_hausdorff)
+                    body, row = body_report(
+                        path, name, outputs, d, max_hausdorff, max_parts, searched
+                    )
                     entry["bodies"].append(body)
                     rows.append(row)
             else:
@@ -688,17 +790,8 @@ _RESULT_OPTIONS = (
     "resolution",
     "seed",
     "engine_options",
+    "search",
 )
-
-
-def within_max_hausdorff(metrics: Mapping[str, Any], limit: float | None) -> bool:
-    """Whether a body passes ``--max-hausdorff``: both one-sided Hausdorff distances are
-    numbers no larger than ``limit``. True without a limit; False when a distance is missing
-    or NaN (a gate never passes what it could not measure)."""
-    if limit is None:
-        return True
-    values = [metrics.get(k) for k in ("hausdorff_mesh_to_parts", "hausdorff_parts_to_mesh")]
-    return all(isinstance(v, (int, float)) and v <= limit for v in values)
 
 
 class _OutputGuard:
