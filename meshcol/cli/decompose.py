@@ -66,6 +66,16 @@ def _engine_option(
     help="Most vertices per part (enforced).  [default: no limit]",
 )
 @click.option(
+    "--target",
+    "target_name",
+    metavar="NAME|FILE.toml",
+    default=None,
+    help="Fit every body's parts to an engine's limits (meshcol targets: physx, physx-gpu, "
+    "unity, unreal, godot, mujoco, bullet, isaac) or your own profile, still enclosing; "
+    "tighter --max-hulls/--max-vertices win. Exit 1 when a limit cannot be met.  "
+    "[default: no target]",
+)
+@click.option(
     "--preprocess",
     type=click.Choice(["auto", "on", "off"]),
     default="auto",
@@ -173,6 +183,7 @@ def decompose_command(
     threshold: float | None,
     max_hulls: int | None,
     max_vertices: int | None,
+    target_name: str | None,
     preprocess: str,
     resolution: int | None,
     seed: int,
@@ -199,8 +210,8 @@ def decompose_command(
     union against the mesh's, Hausdorff distances both ways (how far the mesh surface is from
     the parts, and how far the boundary of their union sticks out of the mesh's solid: cuts
     inside the mesh count 0), and the fraction of the mesh surface they leave uncovered. Results are cached by geometry and parameters, so a second
-    run costs milliseconds. Exit 1 when a file failed or timed out, or --max-hausdorff was
-    exceeded; exit 2 for unusable input or an output that cannot be written (every output
+    run costs milliseconds. Exit 1 when a file failed or timed out, --max-hausdorff was
+    exceeded, or a part misses a --target limit (each said on stderr with its rule id); exit 2 for unusable input or an output that cannot be written (every output
     location is checked before the work starts, and nothing is written on failure); 130 on
     Ctrl-C, 143 on SIGTERM, with no output, no cache entry and no worker left behind.
 
@@ -222,6 +233,7 @@ def decompose_command(
       meshcol decompose snowflake.obj -o out/ --preprocess off --threshold 0.02 -E mcts_iterations=50
       meshcol decompose lib/*.obj -o out/ --executor ray --ray-address auto --cache-dir s3://b/c
       meshcol decompose lib/*.obj -o out/ --run-manifest run.json --resume
+      meshcol decompose props/*.obj -o out/ --target isaac
     """
     from meshcol.analysis.review import decompose_page
     from meshcol.cli.common import Progress, report_format, verdict
@@ -272,6 +284,15 @@ def decompose_command(
     robot = len(inputs) == 1 and is_robot_file(inputs[0])
     if to is not None and not robot:
         raise click.UsageError("--to needs one robot description (URDF, MJCF)")
+    target = None
+    if target_name is not None:
+        if robot:
+            raise click.UsageError(
+                "--target does not apply to a robot description yet (give its meshes)"
+            )
+        from meshcol.io.targets import load_target
+
+        target = load_target(target_name)
     if robot:
         for name, flag in (("layout", "--layout"), ("fmt", "--format")):
             if ctx.get_parameter_source(name) == ParameterSource.COMMANDLINE:
@@ -361,6 +382,7 @@ def decompose_command(
             ray_address=ray_address,
             run_manifest=run_manifest,
             resume=resume,
+            target=target,
         )
     finally:
         progress.done()
@@ -369,6 +391,13 @@ def decompose_command(
     for f in result.files:
         if f["status"] != "ok":
             click.echo(f"meshcol: {f['status']}: {f['path']}: {f['message']}", err=True)
+        for b in f["bodies"]:
+            for v in b.get("target", {}).get("violations", []):
+                click.echo(
+                    f"meshcol: {v['rule']} {v['rule_name']}: {f['path']}: body '{b['name']}' "
+                    f"{v['message']}",
+                    err=True,
+                )
     click.echo(verdict("decompose", result.exit_code == 0, _summary(result)), err=True)
     if result.exit_code:
         ctx.exit(result.exit_code)
@@ -387,4 +416,6 @@ def _summary(result) -> str:
             text += f", {s[key]} {what}"
     if s["hausdorff_exceeded"]:
         text += f", {s['hausdorff_exceeded']} over --max-hausdorff"
+    if s.get("target_missed"):
+        text += f", {s['target_missed']} missing a target limit"
     return text
