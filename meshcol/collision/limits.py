@@ -641,12 +641,44 @@ def _budgeted(points: np.ndarray, limits: Mapping[str, float], notes: list[str])
             vertices = max(vertices - 1, 4)
         result = convex_hull(points, max_vertices=vertices, max_planes=plane_budget)
         m = measure_hull(exact_hull(result.vertices))
-    return result
+    if _counts_met(m, limits):
+        return result
+    # the last resort always meets every count limit a profile may set (>= 4 vertices, >= 4
+    # polygons, >= 3 per vertex, >= 4 triangles): the smallest supporting tetrahedron
+    notes.append("reduced to the enclosing tetrahedron (no larger hull met the budgets)")
+    return convex_hull(points, max_vertices=4, max_planes=4)
+
+
+def _counts_met(m: Mapping[str, Any], limits: Mapping[str, float]) -> bool:
+    return all(
+        key not in limits or m[name] <= limits[key]
+        for key, name in _PART_LIMITS.items()
+        if key != "max_oblong_ratio"
+    )
+
+
+def _growth_met(m: Mapping[str, Any], limits: Mapping[str, float]) -> bool:
+    slack = 1 - GROWTH_SLACK
+    return (
+        m["thickness"] >= limits.get("min_thickness", 0.0) * slack
+        and m["volume"] >= limits.get("min_volume", 0.0) * slack
+        and ("max_oblong_ratio" not in limits or m["oblong_ratio"] <= limits["max_oblong_ratio"])
+    )
 
 
 def _fit_one(points: np.ndarray, limits: Mapping[str, float], notes: list[str]):
-    grown = _grow(points, limits, notes)
-    return _budgeted(grown, limits, notes)
+    """Grow, then simplify; simplification can lengthen a part (its far vertices move out),
+    so a part whose growth limits it broke is grown again from the simplified hull."""
+    pts = points
+    result = None
+    for _ in range(3):
+        result = _budgeted(_grow(pts, limits, notes), limits, notes)
+        if result.flat:
+            return result
+        if _growth_met(measure_hull(exact_hull(result.vertices)), limits):
+            return result
+        pts = result.vertices
+    return result
 
 
 def fit_parts(

@@ -284,7 +284,9 @@ def _validate(document: dict[str, Any], where: str, stem: str) -> Target:
                 raise _fail(where, label, f"must be at least 1, got {value}")
             if key == "max_hull_vertices" and value < 4:
                 raise _fail(where, label, f"must be at least 4 (a tetrahedron), got {value}")
-            if key in ("max_hull_polygons", "max_faces_per_vertex") and value < 3:
+            if key == "max_hull_polygons" and value < 4:
+                raise _fail(where, label, f"must be at least 4 (a tetrahedron), got {value}")
+            if key == "max_faces_per_vertex" and value < 3:
                 raise _fail(where, label, f"must be at least 3 (a polytope's least), got {value}")
             limits[key] = value
         else:
