@@ -16,6 +16,7 @@ __all__ = [
     "MissingDependencyError",
     "OutputPathError",
     "SceneError",
+    "TargetError",
 ]
 
 
@@ -59,3 +60,7 @@ class MissingDependencyError(MeshcolError, ImportError):
 
 class OutputPathError(MeshcolError, ValueError):
     """An output would replace an input, or two outputs are one file: nothing is written."""
+
+
+class TargetError(MeshcolError, ValueError):
+    """An engine target profile is unknown, malformed, or has an unknown or ill-typed key."""

@@ -90,6 +90,16 @@ class _MeshFormat(click.Choice):
     help="Most vertices per part (enforced).  [default: no limit]",
 )
 @click.option(
+    "--target",
+    "target_name",
+    metavar="NAME|FILE.toml",
+    default=None,
+    help="Fit every body's parts to an engine's limits (meshcol targets: physx, physx-gpu, "
+    "unity, unreal, godot, mujoco, bullet, isaac) or your own profile, still enclosing; "
+    "tighter --max-hulls/--max-vertices win. Exit 1 when a limit cannot be met.  "
+    "[default: no target]",
+)
+@click.option(
     "--preprocess",
     type=click.Choice(["auto", "on", "off"]),
     default="auto",
@@ -223,6 +233,7 @@ def decompose_command(
     threshold: float | None,
     max_hulls: int | None,
     max_vertices: int | None,
+    target_name: str | None,
     preprocess: str,
     resolution: int | None,
     seed: int,
@@ -254,8 +265,8 @@ def decompose_command(
     union against the mesh's, Hausdorff distances both ways (how far the mesh surface is from
     the parts, and how far the boundary of their union sticks out of the mesh's solid: cuts
     inside the mesh count 0), and the fraction of the mesh surface they leave uncovered. Results are cached by geometry and parameters, so a second
-    run costs milliseconds. Exit 1 when a file failed or timed out, or a body misses
-    --max-hausdorff or --max-parts; exit 2 for unusable input or an output that cannot be written (every output
+    run costs milliseconds. Exit 1 when a file failed or timed out, a body misses
+    --max-hausdorff or --max-parts, or a part misses a --target limit (each said on stderr with its rule id); exit 2 for unusable input or an output that cannot be written (every output
     location is checked before the work starts, and nothing is written on failure); 130 on
     Ctrl-C, 143 on SIGTERM, with no output, no cache entry and no worker left behind.
 
@@ -288,6 +299,7 @@ def decompose_command(
       meshcol decompose lib/*.obj -o out/ --run-manifest run.json --resume
       meshcol decompose mug.obj -o out/ --max-hausdorff 0.002 --search-steps 10
       meshcol decompose mug.obj -o out/ --max-parts 8
+      meshcol decompose props/*.obj -o out/ --target isaac
     """
     from meshcol.analysis.review import decompose_page
     from meshcol.cli.common import Progress, emit_report, report_format, verdict
@@ -337,6 +349,15 @@ def decompose_command(
     robot = len(inputs) == 1 and is_robot_file(inputs[0])
     if to is not None and not robot:
         raise click.UsageError("--to needs one robot description (URDF, MJCF)")
+    target = None
+    if target_name is not None:
+        if robot:
+            raise click.UsageError(
+                "--target does not apply to a robot description yet (give its meshes)"
+            )
+        from meshcol.io.targets import load_target
+
+        target = load_target(target_name)
     if robot:
         for name, flag in (("layout", "--layout"), ("fmt", "--format")):
             if ctx.get_parameter_source(name) == ParameterSource.COMMANDLINE:
@@ -441,6 +462,7 @@ def decompose_command(
             ray_address=ray_address,
             run_manifest=run_manifest,
             resume=resume,
+            target=target,
         )
     finally:
         progress.done()
@@ -454,6 +476,12 @@ def decompose_command(
                 reason = body["search"]["reason"]
                 click.echo(
                     f"meshcol: target missed: {f['path']}: {body['name']}: {reason}", err=True
+                )
+            for v in body.get("target", {}).get("violations", []):
+                click.echo(
+                    f"meshcol: {v['rule']} {v['rule_name']}: {f['path']}: body '{body['name']}' "
+                    f"{v['message']}",
+                    err=True,
                 )
     click.echo(verdict("decompose", result.exit_code == 0, _summary(result)), err=True)
     if result.exit_code:
@@ -475,4 +503,6 @@ def _summary(result) -> str:
         text += f", {s['hausdorff_exceeded']} over --max-hausdorff"
     if s["parts_exceeded"]:
         text += f", {s['parts_exceeded']} over --max-parts"
+    if s.get("target_missed"):
+        text += f", {s['target_missed']} missing a target limit"
     return text

@@ -50,6 +50,15 @@ from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
     "input.  [default: no budget, the exact hull]",
 )
 @click.option(
+    "--target",
+    "target_name",
+    metavar="NAME|FILE.toml",
+    help="Fit every hull to an engine's limits (meshcol targets lists them: physx, "
+    "physx-gpu, unity, unreal, godot, mujoco, bullet, isaac) or to your own profile; "
+    "a tighter --max-vertices still wins. Exit 1 when a limit cannot be met.  [default: "
+    "no target]",
+)
+@click.option(
     "--to",
     "to",
     type=click.Choice(["urdf", "mjcf", "glb", "usd"]),
@@ -66,6 +75,7 @@ def hull(
     output: str | None,
     out_dir: str | None,
     max_vertices: int | None,
+    target_name: str | None,
     to: str | None,
     report: str | None,
     fmt: str | None,
@@ -80,6 +90,13 @@ def hull(
     With --max-vertices the hull keeps at most N vertices and still contains every input
     vertex: its faces are grown outward (never pulled in), and the report gives the volume
     this added and the largest distance from the simplified hull to the exact one.
+
+    With --target every hull meets all the engine's limits (vertices, polygons after
+    merging coplanar triangles, triangles, polygons per vertex, minimum thickness and
+    volume, the GPU oblong ratio), still enclosing the input: thin or flat bodies are
+    thickened, never shrunk. Each row's "target" says what each limit cost (added volume,
+    largest distance) and lists any limit that could not be met, with its rule id (MC101..);
+    those exit 1.
 
     The report (JSON or CSV, one row per body) gives the input and hull sizes, the hull
     volume, the mesh volume (closed meshes only, else null), volume_ratio = mesh volume /
@@ -103,6 +120,7 @@ def hull(
       meshcol hull panda.urdf --max-vertices 64 --out-dir panda_hulls/
       meshcol hull panda.urdf --out-dir out/ --to mjcf --joint panda_joint4=-1.5
       meshcol hull chair.obj --max-vertices 64 -o chair_hull.obj
+      meshcol hull props/*.obj --target physx-gpu --out-dir hulls
       meshcol hull props/*.obj --max-vertices 255 --out-dir hulls --report hulls.csv
       meshcol hull level.json -o level_hulls.glb --report -
     """
@@ -127,6 +145,15 @@ def hull(
     if to is not None and not robot:
         raise click.UsageError("--to needs one robot description (URDF, MJCF) and --out-dir")
     no_report_with_meshes(fmt, report, bool(output or out_dir))
+    target = None
+    if target_name is not None:
+        if robot:
+            raise click.UsageError(
+                "--target does not apply to a robot description yet (give its meshes)"
+            )
+        from meshcol.io.targets import load_target
+
+        target = load_target(target_name)
     check_outputs(inputs, [("-o", output), ("--report", report), ("--html", html)])
     fmt = report_format(report, fmt)
     progress = Progress(command="hull", heartbeat=True)
@@ -153,6 +180,7 @@ def hull(
                 warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
                 reserved=[("--report", report)],
                 progress=progress,
+                target=target,
             )
     except OutputDestinationError as exc:
         raise click.UsageError(
@@ -164,6 +192,11 @@ def hull(
     if report is not None or not (output or out_dir):
         emit_report(result, fmt, report)
     write_html(html, lambda: hull_page(result, inputs))
+    for body, violation in result.violations:
+        click.echo(
+            f"meshcol: {violation.rule} {violation.rule_name}: body '{body}' {violation.message}",
+            err=True,
+        )
     s = result.summary
     detail = f"{plural(s['bodies'], 'hull')}, {plural(s['hull_vertices'], 'vertex', 'vertices')}"
     if s["flat"]:
@@ -174,4 +207,11 @@ def hull(
         detail += f", written to {display_path(result.description)}"
     elif out_dir:
         detail += f", {plural(s['files_written'], 'file')} written to {display_path(out_dir)}"
-    click.echo(verdict("hull", True, detail), err=True)
+    if target is not None:
+        missed = s["target_violations"]
+        detail += f", target {target.name}: " + (
+            "every limit met" if not missed else f"{plural(missed, 'limit')} not met"
+        )
+    click.echo(verdict("hull", result.exit_code == 0, detail), err=True)
+    if result.exit_code:
+        click.get_current_context().exit(result.exit_code)

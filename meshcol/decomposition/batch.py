@@ -94,8 +94,9 @@ class DecomposeReport:
     @property
     def summary(self) -> dict[str, int]:
         """Counts: files by status, bodies, parts, bodies over ``max_hausdorff`` or
-        ``max_parts``."""
-        return {
+        ``max_parts`` and, with a target, bodies that miss one of its limits
+        (``target_missed``)."""
+        counts = {
             "files": len(self.files),
             "ok": sum(1 for f in self.files if f["status"] == "ok"),
             "failed": sum(1 for f in self.files if f["status"] == "failed"),
@@ -109,13 +110,18 @@ class DecomposeReport:
                 not b.get("parts_ok", True) for f in self.files for b in f["bodies"]
             ),
         }
+        if "target" in self.settings:
+            counts["target_missed"] = sum(
+                not b.get("target_ok", True) for f in self.files for b in f["bodies"]
+            )
+        return counts
 
     @property
     def exit_code(self) -> int:
-        """1 when a file failed or timed out, or a body exceeds ``max_hausdorff`` or
-        ``max_parts`` (a search that met neither); else 0."""
+        """1 when a file failed or timed out, a body exceeds ``max_hausdorff`` or
+        ``max_parts`` (a search that met neither) or misses a limit of its target; else 0."""
         s = self.summary
-        exceeded = s["hausdorff_exceeded"] or s["parts_exceeded"]
+        exceeded = s["hausdorff_exceeded"] or s["parts_exceeded"] or s.get("target_missed", 0)
         return 1 if s["failed"] or s["timeout"] or exceeded else 0
 
     def to_dict(self) -> dict[str, Any]:
@@ -141,7 +147,8 @@ class DecomposeReport:
     def to_csv(self) -> str:
         from meshcol.io.report import dumps_csv
 
-        return dumps_csv(self.rows, CSV_COLUMNS)
+        columns = (*CSV_COLUMNS, "target_ok") if "target" in self.settings else CSV_COLUMNS
+        return dumps_csv(self.rows, columns)
 
     def ci_suite(self) -> Any:
         """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one case per body
@@ -299,6 +306,7 @@ def decompose_files(
     ray_address: str | None = None,
     run_manifest: str | os.PathLike[str] | None = None,
     resume: bool = False,
+    target: Any = None,
 ) -> DecomposeReport:
     """Decompose every body of every input file into convex parts and write them.
 
@@ -357,6 +365,11 @@ def decompose_files(
         (:mod:`meshcol.decomposition.manifest`); needs the cache.
     resume : bool
         Read ``run_manifest`` first: files done are taken from the cache, the others run.
+    target : Target, optional
+        An engine profile (:mod:`meshcol.io.targets`): every body's parts meet all its
+        limits and still enclose the body (:func:`apply_target`); its vertex budget and hull
+        count go to the engine, and the tighter of each and ``max_vertices`` /
+        ``max_hulls`` applies. A limit that cannot be met fails the run (exit 1).
 
     Returns
     -------
@@ -381,7 +394,7 @@ def decompose_files(
     from meshcol.decomposition.search import search_task
     from meshcol.io.outputs import check_outputs
 
-    target = _search_target(max_hausdorff, max_parts, search, search_steps, search_tolerance)
+    fidelity = _search_target(max_hausdorff, max_parts, search, search_steps, search_tolerance)
     if layout == "ucx" and fmt == "glb":
         raise ValueError("layout 'ucx' writes OBJ only, not glb")
     if not use_cache and cache_dir is not None:
@@ -396,6 +409,10 @@ def decompose_files(
         raise ValueError("ray_address needs executor 'ray'")
     engine_options = dict(engine_options or {})
     resolve_params(engine, engine_options=engine_options)
+    if target is not None:
+        max_hulls, max_vertices, engine_options = target_options(
+            target, engine, max_hulls, max_vertices, engine_options
+        )
     paths = [os.fspath(p) for p in inputs]
     out_dir = os.fspath(out_dir)
     cache_root = None
@@ -419,8 +436,8 @@ def decompose_files(
         seed=seed,
         engine_options=engine_options,
     )
-    if target is not None:
-        options["search"] = target.to_dict()
+    if fidelity is not None:
+        options["search"] = fidelity.to_dict()
     # The report's settings: the engine options as given (not the per-worker thread share),
     # and how the run was made.
     settings = {key: value for key, value in options.items() if key not in ("threads", "search")}
@@ -431,11 +448,13 @@ def decompose_files(
         layout=layout,
         format=fmt,
         max_hausdorff=max_hausdorff,
-        **_search_settings(target, max_parts, search),
+        **_search_settings(fidelity, max_parts, search),
         frame="world",
         executor=executor,
         ray_address=ray_address,
     )
+    if target is not None:
+        settings.update(target=target.name, target_limits=dict(target.limits))
     manifest = None
     if run_manifest is not None:
         # What decides the results: resuming with other options would mix two runs.
@@ -445,7 +464,7 @@ def decompose_files(
     # The engines always run in workers, so that this process stays responsive to signals.
     pool = make_executor(
         executor,
-        decompose_task if target is None else search_task,
+        decompose_task if fidelity is None else search_task,
         jobs,
         timeout=timeout,
         prepare=functools.partial(prepare_engine, engine),
@@ -470,6 +489,7 @@ def decompose_files(
             progress=progress,
             protected=[*paths, *(os.fspath(p) for p in other_outputs)],
             manifest=manifest,
+            target=target,
         )
     except BaseException as exc:
         # A signal (KeyboardInterrupt, SIGTERM's exception) abandons the run: no process stays.
@@ -509,6 +529,87 @@ def _search_settings(target: Any, max_parts: int | None, search: str) -> dict[st
     }
 
 
+#: The engine parameter of each engine's hull count (a target's ``max_hulls`` goes there, so
+#: that meshcol merges any excess parts, enclosing, rather than drop them).
+_ENGINE_HULL_COUNT = {"coacd": "max_convex_hull", "vhacd": "max_convex_hulls"}
+
+
+def target_options(
+    target: Any,
+    engine: str,
+    max_hulls: int | None,
+    max_vertices: int | None,
+    engine_options: Mapping[str, Any],
+) -> tuple[None, int | None, dict[str, Any]]:
+    """The engine options that aim at a target: ``(max_hulls, max_vertices, engine_options)``.
+
+    The vertex budget (the tighter of ``max_vertices`` and the target's,
+    :func:`meshcol.collision.limits.budget_vertices`) is enforced on every part as before;
+    the hull count (the tighter of ``max_hulls`` and the target's) goes to the engine's own
+    parameter and ``max_hulls`` becomes None, so that an engine overshooting it has its
+    parts merged by :func:`apply_target` (still enclosing), never its smallest parts dropped.
+    """
+    from meshcol.collision.limits import budget_vertices
+
+    options = dict(engine_options)
+    budget = budget_vertices(target.limits)
+    if budget is not None:
+        max_vertices = budget if max_vertices is None else min(max_vertices, budget)
+    count = target.limits.get("max_hulls")
+    if max_hulls is not None:
+        count = max_hulls if count is None else min(int(count), max_hulls)
+    if count is not None:
+        key = _ENGINE_HULL_COUNT[engine]
+        given = options.get(key)
+        options[key] = int(count) if given in (None, -1, "-1") else min(int(count), int(given))
+    return None, max_vertices, options
+
+
+def apply_target(
+    target: Any,
+    d: Any,
+    vertices: Any,
+    faces: Any,
+    units: str | None = None,
+    threads: int = 0,
+) -> tuple[Any, dict[str, Any]]:
+    """A body's decomposition fitted to a target, re-measured, and its report entry.
+
+    The parts (``d.parts``, in the body's frame) go through
+    :func:`meshcol.collision.limits.fit_parts` (merged to ``max_hulls``, each grown and
+    simplified to the per-part limits, every part still enclosing what it replaces); the
+    fidelity metrics are measured again on the fitted parts (same samples and tolerance),
+    so the report describes what is written. The cache keeps the engine's parts.
+
+    Returns
+    -------
+    (Decomposition, dict)
+        The fitted decomposition and the body's ``target`` entry (name, met, costs,
+        violations, per-part measures).
+    """
+    import dataclasses
+
+    from meshcol.collision.limits import fit_parts
+    from meshcol.decomposition.fidelity import fidelity
+    from meshcol.geometry.topology import orient_outward
+
+    fit = fit_parts(d.parts, target.limits, target.length_scale(units))
+    metrics = d.metrics
+    if metrics is not None:
+        outward, _ = orient_outward(vertices, faces)
+        metrics = fidelity(
+            vertices,
+            outward,
+            fit.parts,
+            samples=metrics.samples,
+            tolerance=metrics.tolerance,
+            threads=threads,
+        )
+    notes = tuple(d.notes) + tuple(f"target {target.name}: {note}" for note in fit.notes)
+    fitted = dataclasses.replace(d, parts=fit.parts, metrics=metrics, notes=notes)
+    return fitted, {"name": target.name, **fit.to_dict()}
+
+
 def _run(
     inputs: list[str],
     out_dir: str,
@@ -523,6 +624,7 @@ def _run(
     protected: list[str],
     manifest: Any = None,
     max_parts: int | None = None,
+    target: Any = None,
 ) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
     """Load, look up the cache, decompose, store, write: the file entries and the CSV rows.
 
@@ -541,18 +643,18 @@ def _run(
     looked_up: dict[int, dict[str, Any]] = {}
     task_file: list[int] = []
     key_options = {k: v for k, v in options.items() if k not in ("use_cache", "search")}
-    target = None
+    fidelity = None
     if options.get("search") is not None:
-        target = fidelity_search.SearchTarget(**options["search"])
+        fidelity = fidelity_search.SearchTarget(**options["search"])
 
     def lookup_body(v: Any, f: Any) -> Any:
-        if target is not None:
-            return fidelity_search.cached_search((v, f), target, **key_options)
+        if fidelity is not None:
+            return fidelity_search.cached_search((v, f), fidelity, **key_options)
         return cached_decomposition((v, f), **key_options)
 
     def complete(found: Any) -> bool:
         # A search replayed from the cache is complete; a plain entry needs its metrics.
-        return found is not None and (target is not None or found.metrics is not None)
+        return found is not None and (fidelity is not None or found.metrics is not None)
 
     report_progress = progress or (lambda message: None)
     done, failed, sent, total = 0, 0, 0, None if _is_manifest(inputs) else len(inputs)
@@ -621,7 +723,7 @@ def _run(
                     # This process stores what the worker made (or measured again), as it
                     # arrives; the manifest says done only once the entry is stored.
                     for name, d in outcome.value:
-                        if target is not None:
+                        if fidelity is not None:
                             fidelity_search.store_steps(d, cache_root)
                             continue
                         before = looked_up[i].get(name)
@@ -649,16 +751,26 @@ def _run(
             }
             if status == "ok":
                 transforms = {name: t for name, _, _, t in bodies}
+                meshes = {name: (v, f) for name, v, f, _ in bodies}
                 for name, found in value:
-                    searched = found if target is not None else None
+                    searched = found if fidelity is not None else None
                     d = found.decomposition if searched is not None else found
                     t = transforms[name]
+                    target_entry = None
+                    if target is not None:
+                        d, target_entry = apply_target(
+                            target, d, *meshes[name], threads=options.get("threads", 0)
+                        )
                     world = [(v @ t[:3, :3].T + t[:3, 3], f) for v, f in d.parts]
                     written = write_parts(name, world, stage, layout, fmt)
                     outputs = [os.path.relpath(p, stage) for p in written]
                     body, row = body_report(
                         path, name, outputs, d, max_hausdorff, max_parts, searched
                     )
+                    if target_entry is not None:
+                        body["target"] = target_entry
+                        body["target_ok"] = target_entry["met"]
+                        row["target_ok"] = target_entry["met"]
                     entry["bodies"].append(body)
                     rows.append(row)
             else:
