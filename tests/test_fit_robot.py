@@ -6,6 +6,10 @@ collision mesh of the INPUT, posed by that reader at a joint configuration, must
 the primitive the OUTPUT puts on its link.
 """
 
+# The fixtures urdf, mjcf and panda come from test_robot_write (one copy); as test
+# parameters they shadow the imported names, which is how pytest finds them.
+# ruff: noqa: F811
+
 from __future__ import annotations
 
 import json
@@ -16,7 +20,7 @@ import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
-from test_robot_write import MJCF, ROBOT, _meshes, run
+from test_robot_write import mjcf, panda, run, urdf  # noqa: F401 - the fixtures
 
 pytest.importorskip("yourdfpy")
 mujoco = pytest.importorskip("mujoco")
@@ -25,22 +29,6 @@ etree = pytest.importorskip("lxml.etree")
 TOL = 1e-7
 #: The other shapes of a parametrized test: the full lane only (the fast lane keeps one).
 SLOW = pytest.mark.slow
-
-
-@pytest.fixture
-def urdf(tmp_path: Path) -> Path:
-    _meshes(tmp_path / "robot" / "meshes")
-    path = tmp_path / "robot" / "small.urdf"
-    path.write_text(ROBOT)
-    return path
-
-
-@pytest.fixture
-def mjcf(tmp_path: Path) -> Path:
-    _meshes(tmp_path / "model" / "assets")
-    path = tmp_path / "model" / "small.xml"
-    path.write_text(MJCF)
-    return path
 
 
 def inside(points: np.ndarray, kind: str, size: np.ndarray, tol: float = TOL) -> np.ndarray:
@@ -339,14 +327,6 @@ def test_rpy_round_trip(roll: float, pitch: float, yaw: float) -> None:
         rotation = rz(yaw) @ ry(lock) @ rx(roll)
         r, p, y = rpy_from_matrix(rotation)
         np.testing.assert_allclose(rz(y) @ ry(p) @ rx(r), rotation, atol=1e-7)
-
-
-@pytest.fixture
-def panda(corpus) -> Path:
-    path = corpus / "robots" / "panda_description" / "urdf" / "panda.urdf"
-    if not path.is_file():
-        pytest.skip("corpus robots not present")
-    return path
 
 
 @pytest.mark.slow

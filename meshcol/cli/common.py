@@ -534,3 +534,17 @@ def cache_dir_option(
     return click.option(
         "--cache-dir", type=click.Path(file_okay=False), default=None, help=help_text
     )
+
+
+def to_option(what: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Add ``--to urdf|mjcf|glb|usd`` (parameter ``to``): the format of a rebuilt robot
+    description written with ``what`` (hull, decompose, fit)."""
+    return click.option(
+        "--to",
+        "to",
+        type=click.Choice(["urdf", "mjcf", "glb", "usd"]),
+        default=None,
+        help=f"Robot input (URDF, MJCF) with --out-dir: the format of the description written "
+        f"with {what}, OUT/<robot>.urdf|.xml|.glb|.usda (usd needs meshcol[usd]).  [default: "
+        "the input's]",
+    )

@@ -14,6 +14,7 @@ from meshcol.cli.common import (
     jobs_option,
     robot_options,
     timeout_option,
+    to_option,
     write_html,
 )
 from meshcol.decomposition.engines import ENGINES
@@ -148,14 +149,7 @@ class _MeshFormat(click.Choice):
     show_default=True,
     help="Output format (glb: one node per part; not with ucx).",
 )
-@click.option(
-    "--to",
-    "to",
-    type=click.Choice(["urdf", "mjcf", "glb", "usd"]),
-    default=None,
-    help="Robot input (URDF, MJCF): the format of the description written with the parts, "
-    "OUT/<robot>.urdf|.xml|.glb|.usda (usd needs meshcol[usd]).  [default: the input's]",
-)
+@to_option("the parts")
 @click.option(
     "--report",
     type=click.Path(dir_okay=False),

@@ -15,6 +15,7 @@ from meshcol.cli.common import (
     report_format,
     report_options,
     robot_options,
+    to_option,
     verdict,
 )
 from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
@@ -58,15 +59,7 @@ from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
     help="Write one DIR/<body>.obj per body; for a robot description, the description "
     "rebuilt with primitive colliders.  [default: no mesh files]",
 )
-@click.option(
-    "--to",
-    "to",
-    type=click.Choice(["urdf", "mjcf", "glb", "usd"]),
-    default=None,
-    help="Robot input (URDF, MJCF) with --out-dir: the format of the description written "
-    "with the fits, OUT/<robot>.urdf|.xml|.glb|.usda (usd needs meshcol[usd]).  [default: "
-    "the input's]",
-)
+@to_option("the fits")
 @report_options(default="stdout when no mesh is written, else no report")
 @robot_options()
 def fit(

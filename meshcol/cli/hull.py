@@ -15,6 +15,7 @@ from meshcol.cli.common import (
     report_format,
     report_options,
     robot_options,
+    to_option,
     verdict,
     write_html,
 )
@@ -58,15 +59,7 @@ from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
     "a tighter --max-vertices still wins. Exit 1 when a limit cannot be met.  [default: "
     "no target]",
 )
-@click.option(
-    "--to",
-    "to",
-    type=click.Choice(["urdf", "mjcf", "glb", "usd"]),
-    default=None,
-    help="Robot input (URDF, MJCF) with --out-dir: the format of the description written "
-    "with the hulls, OUT/<robot>.urdf|.xml|.glb|.usda (usd needs meshcol[usd]).  [default: "
-    "the input's]",
-)
+@to_option("the hulls")
 @report_options(default="stdout when no mesh is written, else no report")
 @robot_options()
 @html_option

@@ -340,16 +340,7 @@ def _urdf_text(
             previous = target
             if name and len(names) > 1:
                 target.set("name", f"{name}_{k:02d}")
-            for origin in target.findall("origin"):
-                target.remove(origin)
-            geometry = target.find("geometry")
-            if geometry is None:
-                geometry = etree.SubElement(target, "geometry")
-            tail = None
-            for child in list(geometry):
-                if isinstance(child.tag, str):  # shapes go; comments stay
-                    tail = child.tail if tail is None else tail
-                    geometry.remove(child)
+            geometry, tail = _cleared(target)
             mesh = etree.SubElement(geometry, "mesh")
             mesh.set("filename", prefix.get("collider", "") + file)
             mesh.tail = tail  # the indentation of the shape it replaces
@@ -361,6 +352,24 @@ def _urdf_text(
     ]
     body = "\n".join(etree.tostring(e, encoding="unicode", with_tail=False) for e in siblings)
     return '<?xml version="1.0" encoding="utf-8"?>\n' + body + "\n"
+
+
+def _cleared(element: Any) -> tuple[Any, str | None]:
+    """A ``<collision>`` element without its ``<origin>`` and shapes (comments stay): its
+    ``<geometry>`` (made when missing) and the indentation the first shape had."""
+    from lxml import etree
+
+    for origin in element.findall("origin"):
+        element.remove(origin)
+    geometry = element.find("geometry")
+    if geometry is None:
+        geometry = etree.SubElement(element, "geometry")
+    tail = None
+    for child in list(geometry):
+        if isinstance(child.tag, str):  # shapes go; comments stay
+            tail = child.tail if tail is None else tail
+            geometry.remove(child)
+    return geometry, tail
 
 
 def _format(values: Any) -> str:
@@ -375,16 +384,7 @@ def _urdf_primitive(element: Any, collider: Collider) -> None:
 
     from meshcol.geometry.rotations import rpy_from_matrix
 
-    for origin in element.findall("origin"):
-        element.remove(origin)
-    geometry = element.find("geometry")
-    if geometry is None:
-        geometry = etree.SubElement(element, "geometry")
-    tail = None
-    for child in list(geometry):
-        if isinstance(child.tag, str):  # shapes go; comments stay
-            tail = child.tail if tail is None else tail
-            geometry.remove(child)
+    geometry, tail = _cleared(element)
     origin = etree.Element("origin")
     origin.set("xyz", _format(collider.origin[:3, 3]))
     origin.set("rpy", _format(rpy_from_matrix(collider.origin[:3, :3])))
