@@ -548,3 +548,34 @@ def to_option(what: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
         f"with {what}, OUT/<robot>.urdf|.xml|.glb|.usda (usd needs meshcol[usd]).  [default: "
         "the input's]",
     )
+
+
+def mesh_outputs(
+    inputs: Sequence[str],
+    output: str | None,
+    out_dir: str | None,
+    to: str | None,
+    fmt: str | None,
+    report: str | None,
+) -> bool:
+    """The usage checks of a command that writes meshes (hull, fit): ``-o`` or ``--out-dir``,
+    a known mesh extension, ``--to`` only for a robot, a report format only with a report.
+    Returns whether the run rebuilds one robot description (``--out-dir`` and a URDF/MJCF)."""
+    from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS
+    from meshcol.io.robot import is_robot_file
+
+    if output and out_dir:
+        raise click.UsageError("give either -o/--output or --out-dir, not both")
+    if output:
+        extension = os.path.splitext(output)[1].lower()
+        if extension not in MESH_OUTPUT_EXTENSIONS:
+            raise click.BadParameter(
+                f"unknown mesh extension {extension or '(none)'!r} in {output!r} "
+                f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})",
+                param_hint="'-o' / '--output'",
+            )
+    robot = out_dir is not None and len(inputs) == 1 and is_robot_file(inputs[0])
+    if to is not None and not robot:
+        raise click.UsageError("--to needs one robot description (URDF, MJCF) and --out-dir")
+    no_report_with_meshes(fmt, report, bool(output or out_dir))
+    return robot

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-
 import click
 
 from meshcol.analysis.fit import DEFAULT_VOLUME_TOLERANCE, SHAPE_CHOICES
@@ -11,6 +9,7 @@ from meshcol.cli.common import (
     Progress,
     check_outputs,
     display_path,
+    mesh_outputs,
     plural,
     report_format,
     report_options,
@@ -18,7 +17,7 @@ from meshcol.cli.common import (
     to_option,
     verdict,
 )
-from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
+from meshcol.io.mesh_write import MULTI_MESH_EXTENSIONS
 
 
 @click.command(
@@ -103,26 +102,12 @@ def fit(
       meshcol fit level.json -o level_colliders.obj --report fits.json
       meshcol fit panda.urdf --out-dir panda_fits/ --to mjcf --shape capsule
     """
-    if output and out_dir:
-        raise click.UsageError("give either -o/--output or --out-dir, not both")
-    if output:
-        extension = os.path.splitext(output)[1].lower()
-        if extension not in MESH_OUTPUT_EXTENSIONS:
-            raise click.BadParameter(
-                f"unknown mesh extension {extension or '(none)'!r} in {output!r} "
-                f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})",
-                param_hint="'-o' / '--output'",
-            )
+    robot = mesh_outputs(inputs, output, out_dir, to, fmt, report)
 
     from meshcol.analysis.fit import fit as run_fit
     from meshcol.analysis.hull import OutputDestinationError
-    from meshcol.cli.common import emit_report, no_report_with_meshes
-    from meshcol.io.robot import is_robot_file
+    from meshcol.cli.common import emit_report
 
-    robot = out_dir is not None and len(inputs) == 1 and is_robot_file(inputs[0])
-    if to is not None and not robot:
-        raise click.UsageError("--to needs one robot description (URDF, MJCF) and --out-dir")
-    no_report_with_meshes(fmt, report, bool(output or out_dir))
     check_outputs(inputs, [("-o", output), ("--report", report)])
     fmt = report_format(report, fmt)
     progress = Progress(command="fit", heartbeat=True)

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-
 import click
 
 from meshcol.cli.common import (
@@ -11,6 +9,7 @@ from meshcol.cli.common import (
     check_outputs,
     display_path,
     html_option,
+    mesh_outputs,
     plural,
     report_format,
     report_options,
@@ -19,7 +18,7 @@ from meshcol.cli.common import (
     verdict,
     write_html,
 )
-from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
+from meshcol.io.mesh_write import MULTI_MESH_EXTENSIONS
 
 
 @click.command(
@@ -117,27 +116,13 @@ def hull(
       meshcol hull props/*.obj --max-vertices 255 --out-dir hulls --report hulls.csv
       meshcol hull level.json -o level_hulls.glb --report -
     """
-    if output and out_dir:
-        raise click.UsageError("give either -o/--output or --out-dir, not both")
-    if output:
-        extension = os.path.splitext(output)[1].lower()
-        if extension not in MESH_OUTPUT_EXTENSIONS:
-            raise click.BadParameter(
-                f"unknown mesh extension {extension or '(none)'!r} in {output!r} "
-                f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})",
-                param_hint="'-o' / '--output'",
-            )
+    robot = mesh_outputs(inputs, output, out_dir, to, fmt, report)
 
     from meshcol.analysis.hull import OutputDestinationError
     from meshcol.analysis.hull import hull as run_hull
     from meshcol.analysis.review import hull_page
-    from meshcol.cli.common import emit_report, no_report_with_meshes
-    from meshcol.io.robot import is_robot_file
+    from meshcol.cli.common import emit_report
 
-    robot = out_dir is not None and len(inputs) == 1 and is_robot_file(inputs[0])
-    if to is not None and not robot:
-        raise click.UsageError("--to needs one robot description (URDF, MJCF) and --out-dir")
-    no_report_with_meshes(fmt, report, bool(output or out_dir))
     target = None
     if target_name is not None:
         if robot:
