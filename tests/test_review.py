@@ -234,6 +234,31 @@ def test_check_rows_violations_first(samples):
     assert rows[0]["points"].shape == (2, 3) and rows[0]["normal"] is not None
 
 
+def test_check_page_draws_fitted_primitives(tmp_path):
+    """``--collider fit`` parts are primitives packed without vertices: each is drawn, at its
+    fitted pose, and the drawing holds the body's mesh."""
+    from meshcol.analysis.check import check
+    from meshcol.analysis.review import check_page
+
+    sphere = trimesh.creation.icosphere(subdivisions=2, radius=0.5)
+    sphere.export(tmp_path / "ball.obj")
+    slab = trimesh.creation.box((2.0, 0.4, 0.3))
+    slab.apply_transform(trimesh.transformations.rotation_matrix(0.3, (0, 0, 1)))
+    slab.apply_translation((3.0, 0.0, 0.0))
+    slab.export(tmp_path / "slab.obj")
+    inputs = [str(tmp_path / "ball.obj"), str(tmp_path / "slab.obj")]
+    report = check(inputs, collider="fit")
+    page = check_page(report, inputs, "fit", {})
+    drawn = [o for o in page._objects if o["group"] == "colliders"]
+    assert len(drawn) == 2
+    for o, mesh in zip(drawn, (sphere, slab)):
+        v = page._geometries[o["g"]].vertices @ o["pose"][:3, :3].T + o["pose"][:3, 3]
+        hull = trimesh.Trimesh(v, page._geometries[o["g"]].faces).convex_hull
+        # the drawn polytope is inscribed in the primitive: it holds the mesh up to its facets
+        assert np.all(hull.bounds[0] <= mesh.bounds[0] + 0.03)
+        assert np.all(hull.bounds[1] >= mesh.bounds[1] - 0.03)
+
+
 def _two_part_decomposition(tmp_path: Path) -> SimpleNamespace:
     """A 2x1x1 block 'decomposed' into two cubes (written as the run writes parts)."""
     block = trimesh.creation.box((2.0, 1.0, 1.0))
