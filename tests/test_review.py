@@ -163,11 +163,16 @@ def test_html_never_replaces_an_input(samples, tmp_path):
     assert mesh.read_bytes() == before
 
 
-def test_too_many_bodies_is_refused_in_one_line(samples, tmp_path, monkeypatch):
+@pytest.mark.parametrize("command", ["inspect", "check"])
+def test_too_many_bodies_is_refused_in_one_line(samples, tmp_path, monkeypatch, command):
+    """A page over its limits is refused before anything is written: no page, no report."""
     monkeypatch.setattr(review, "MAX_REVIEW_BODIES", 10)
     page = tmp_path / "x.html"
-    result = run(["inspect", str(samples / "level" / "scene.json"), "--html", str(page)])
+    report = tmp_path / "report.json"
+    scene = str(samples / "level" / "scene.json")
+    result = run([command, scene, "--html", str(page), "--report", str(report)])
     assert result.exit_code == 2
+    assert not report.exists()
     last = result.stderr.strip().splitlines()[-1]
     assert last == (
         "meshcol: error: review page: 25 bodies is over the limit of 10 a browser can show; "

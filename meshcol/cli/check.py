@@ -142,7 +142,7 @@ def check(
     from meshcol.analysis.check import check as run_check
     from meshcol.analysis.check import parse_ignore_rule
     from meshcol.analysis.review import check_page
-    from meshcol.cli.common import check_outputs, emit_report, write_html
+    from meshcol.cli.common import check_outputs, emit_report, render_html, write_html
 
     for rule in ignore:
         try:
@@ -172,11 +172,12 @@ def check(
     finally:
         progress.done()
 
-    emit_report(result, fmt, report)
-    write_html(
+    page = render_html(
         html,
         lambda: check_page(result, inputs, shape, _decompose_options(engine, threshold, cache_dir)),
     )
+    emit_report(result, fmt, report)
+    write_html(html, page)
     for warning in result.warnings:
         click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_table(result), err=True)

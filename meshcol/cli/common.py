@@ -442,14 +442,23 @@ def html_option(func: Callable[..., Any]) -> Callable[..., Any]:
     )(func)
 
 
-def write_html(path: str | None, build: Callable[[], Any]) -> None:
-    """Build the review page (``build()`` returns a :class:`meshcol.io.review.ReviewPage`)
-    and write it atomically to ``path``; says where on stderr. Nothing when ``path`` is None."""
+def render_html(path: str | None, build: Callable[[], Any]) -> str | None:
+    """The review page's HTML (``build()`` returns a :class:`meshcol.io.review.ReviewPage`),
+    or None when ``path`` is None. Called before any output is written, so that a page over
+    its limits (:class:`meshcol.io.review.ReviewTooLargeError`, exit 2) leaves no report."""
     if path is None:
-        return
-    from meshcol.io.review import write_review
+        return None
+    return str(build().to_html())
 
-    size = write_review(path, build())
+
+def write_html(path: str | None, text: str | None) -> None:
+    """Write the page :func:`render_html` made to ``path`` atomically; says where on stderr."""
+    if path is None or text is None:
+        return
+    from meshcol.io.report import atomic_write
+
+    atomic_write(path, text)
+    size = len(text.encode("utf-8"))
     click.echo(f"meshcol: review page: {display_path(path)} ({size / 1e6:.1f} MB)", err=True)
 
 

@@ -12,6 +12,7 @@ from meshcol.cli.common import (
     executor_options,
     html_option,
     jobs_option,
+    render_html,
     robot_options,
     timeout_option,
     to_option,
@@ -460,8 +461,9 @@ def decompose_command(
         )
     finally:
         progress.done()
+    page = render_html(html, lambda: decompose_page(result, out_dir, inputs))
     emit_report(result, report_fmt, report)
-    write_html(html, lambda: decompose_page(result, out_dir, inputs))
+    write_html(html, page)
     for f in result.files:
         if f["status"] != "ok":
             click.echo(f"meshcol: {f['status']}: {f['path']}: {f['message']}", err=True)

@@ -11,6 +11,7 @@ from meshcol.cli.common import (
     html_option,
     mesh_outputs,
     plural,
+    render_html,
     report_format,
     report_options,
     robot_options,
@@ -167,9 +168,10 @@ def hull(
         ) from None
     finally:
         progress.done()
+    page = render_html(html, lambda: hull_page(result, inputs))
     if report is not None or not (output or out_dir):
         emit_report(result, fmt, report)
-    write_html(html, lambda: hull_page(result, inputs))
+    write_html(html, page)
     for body, violation in result.violations:
         click.echo(
             f"meshcol: {violation.rule} {violation.rule_name}: body '{body}' {violation.message}",

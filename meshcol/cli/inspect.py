@@ -14,6 +14,7 @@ from meshcol.cli.common import (
     html_option,
     jobs_option,
     plural,
+    render_html,
     report_format,
     report_options,
     robot_options,
@@ -128,8 +129,9 @@ def inspect(
         )
     finally:
         progress.done()
+    page = render_html(html, lambda: inspect_page(result, inputs))
     emit_report(result, fmt, report)
-    write_html(html, lambda: inspect_page(result, inputs))
+    write_html(html, page)
 
     _print_table(result.bodies)
     for row in result.failed:

@@ -15,6 +15,7 @@ from meshcol.cli.common import (
     check_outputs,
     html_option,
     plural,
+    render_html,
     report_format,
     report_options,
     robot_options,
@@ -113,8 +114,9 @@ def sweep(
         )
     finally:
         progress.done()
+    page = render_html(html, lambda: sweep_page(result))
     emit_report(result, fmt, report)
-    write_html(html, lambda: sweep_page(result))
+    write_html(html, page)
     for warning in result.warnings:
         click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_lines(manifest, result), err=True)
