@@ -126,10 +126,6 @@ def hull(
 
     target = None
     if target_name is not None:
-        if robot:
-            raise click.UsageError(
-                "--target does not apply to a robot description yet (give its meshes)"
-            )
         from meshcol.io.targets import load_target
 
         target = load_target(target_name)
@@ -149,6 +145,7 @@ def hull(
                 reserved=(("the --report file", report),) if report not in (None, "-") else (),
                 warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
                 progress=progress,
+                target=target,
             )
         else:
             result = run_hull(
