@@ -36,7 +36,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
-from target_oracle import encloses, missed  # noqa: E402
+from target_oracle import encloses, missed
 
 MESHES = [
     "trimesh-models/featuretype.STL",
