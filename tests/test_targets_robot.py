@@ -4,7 +4,7 @@ every collider it names meets the profile's limits by an independent count
 (tests/target_oracle.py, scipy's hull), hulls enclose their element's input mesh, and the
 report carries each link part's target entry and validates against its schema."""
 
-# The fixtures urdf and mjcf come from test_robot_write (one copy); as test parameters they
+# The fixtures urdf, mjcf and panda come from test_robot_write (one copy); as test parameters they
 # shadow the imported names, which is how pytest finds them.
 # ruff: noqa: F811
 
@@ -19,7 +19,7 @@ import pytest
 from conftest import FAST_DECOMPOSE
 from target_oracle import encloses, missed
 from test_fit_robot import urdf_input_meshes
-from test_robot_write import mjcf, run, urdf  # noqa: F401 - the fixtures
+from test_robot_write import mjcf, panda, run, urdf  # noqa: F401 - the fixtures
 
 from meshcol.io.targets import load_target
 
@@ -181,3 +181,55 @@ def test_decompose_robot_target_that_cannot_be_met_names_the_rule(urdf: Path, tm
     data = json.loads(report.read_text())
     validate(data, "decompose")
     assert not any(b["target_ok"] for b in data["files"][0]["bodies"])
+
+
+@pytest.mark.slow
+def test_decompose_robot_shares_max_hulls_among_an_elements_objects(urdf: Path, tmp_path: Path):
+    # the arm's collision mesh file holds two objects: with max_hulls 2 each gets one part,
+    # with max_hulls 1 the element cannot meet it (each object keeps a part): MC106
+    for count, code_expected in ((2, 0), (1, 1)):
+        profile = tmp_path / f"hulls{count}.toml"
+        profile.write_text(f'title = "Hulls"\n[limits]\nmax_hulls = {count}\n')
+        out, report = tmp_path / f"out{count}", tmp_path / f"d{count}.json"
+        code, _, stderr = run(
+            "decompose",
+            str(urdf),
+            "--out-dir",
+            str(out),
+            "--target",
+            str(profile),
+            "--report",
+            str(report),
+            *FAST_DECOMPOSE,
+        )
+        assert code == code_expected, stderr
+        data = json.loads(report.read_text())
+        validate(data, "decompose")
+        arm = [b for b in data["files"][0]["bodies"] if b["name"].startswith("arm/")]
+        assert len(arm) == 2 and all(b["target"]["max_hulls_share"] == 1 for b in arm)
+        written = urdf_colliders(out / urdf.name, JOINTS)
+        assert len(written["arm"]) == 2
+        if count == 1:
+            assert "MC106 hull-count-over-limit" in stderr and "arm" in stderr
+            assert arm[-1]["target_ok"] is False
+        else:
+            assert all(len(parts) <= count for parts in written.values())
+
+
+@pytest.mark.slow
+def test_panda_hulls_meet_physx_gpu_and_enclose_its_meshes(panda: Path, tmp_path: Path):
+    out, report = tmp_path / "out", tmp_path / "hull.json"
+    code, _, stderr = run(
+        "hull", str(panda), "--out-dir", str(out), "--target", "physx-gpu", "--report", str(report)
+    )
+    assert code == 0, stderr
+    validate(json.loads(report.read_text()), "hull")
+    joints = {"panda_joint2": -0.5, "panda_joint4": -2.0, "panda_finger_joint1": 0.02}
+    written = urdf_colliders(out / panda.name, joints)
+    inputs = urdf_input_meshes(panda, joints)
+    limits = load_target("physx-gpu").limits
+    assert set(written) == set(inputs) and len(written) == 9
+    for link, clouds in inputs.items():
+        assert missed(written[link], limits) == set(), link
+        for cloud in clouds:
+            assert any(encloses(p, cloud, tol=1e-6) for p in written[link]), link

@@ -230,6 +230,9 @@ def robot_colliders(
             c = colliders[i]
             colliders[i] = Collider(link, index, (*c.parts, *d.parts), None, np.eye(4), c.name)
             rows[(link, index)]["results"].append(d)
+        if target is not None and "max_hulls" in target.limits:
+            for row in info:
+                _element_hull_count(row, int(target.limits["max_hulls"]))
     robot = RobotColliders(
         source=source,
         kind=kind,
@@ -275,6 +278,24 @@ def _element_target(
     if share is not target:
         entry["max_hulls_share"] = share.limits["max_hulls"]
     return fitted, entry
+
+
+def _element_hull_count(row: dict[str, Any], limit: int) -> None:
+    """An element of more objects than ``max_hulls`` allows (each object has at least one
+    part) misses the limit as a whole: its last object's entry gets the MC106 violation."""
+    from meshcol.collision.limits import Violation
+
+    entries = row.get("targets") or []
+    total = sum(len(d.parts) for d in row["results"])
+    if not entries or total <= limit:
+        return
+    v = Violation("max_hulls", None, float(total), float(limit)).to_dict()
+    v["message"] = (
+        f"the collision element: {total} parts > max_hulls {limit} "
+        f"(its {len(entries)} mesh objects are decomposed one by one)"
+    )
+    entries[-1]["violations"].append(v)
+    entries[-1]["met"] = False
 
 
 def _element_body(

@@ -271,7 +271,9 @@ def decompose_command(
     part (visuals, inertials, joints, comments and unknown tags untouched; box, sphere,
     cylinder and capsule elements kept, being exact). --to mjcf writes OUT/<robot>.xml in
     MuJoCo Menagerie's convention; --to glb and --to usd the parts at the joint
-    configuration. --layout and --format do not apply.
+    configuration. --layout and --format do not apply. --target fits each mesh object's
+    parts (an element of k objects gives each max_hulls // k; more objects than max_hulls
+    is an MC106 finding on the element).
 
     Fidelity targets: --max-hausdorff D and/or --max-parts N search each body's CoACD
     threshold (V-HACD: its hull count), bracketing from --threshold then bisecting, and raise

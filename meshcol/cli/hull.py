@@ -106,6 +106,7 @@ def hull(
     elements are kept as they are (already exact). --to mjcf writes OUT/<robot>.xml in
     MuJoCo Menagerie's convention (visual geoms group 2, contype/conaffinity 0; collision
     geoms group 3); --to glb and --to usd write the colliders at the joint configuration.
+    --target fits each element's hull as it fits a mesh's (the description is in metres).
 
     \b
     Examples:
