@@ -81,7 +81,7 @@ def test_every_profile_meets_its_limits_or_says_which(name, kind, seed, n, scale
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", PROFILES)
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     kind=st.sampled_from(["random", "flat", "needle", "duplicates"]),
     seed=st.integers(0, 2**31),

@@ -87,9 +87,10 @@ def hull(
     With --target every hull meets all the engine's limits (vertices, polygons after
     merging coplanar triangles, triangles, polygons per vertex, minimum thickness and
     volume, the GPU oblong ratio), still enclosing the input: thin or flat bodies are
-    thickened, never shrunk. Each row's "target" says what each limit cost (added volume,
-    largest distance) and lists any limit that could not be met, with its rule id (MC101..);
-    those exit 1.
+    thickened, never shrunk. Each row's "target" says what each limit cost, in the order
+    limits are applied: marginal added volume (these sum to the row's added_volume),
+    cumulative largest distance, and the limit's standalone cost; and lists any limit that
+    could not be met, with its rule id (MC101..); those exit 1.
 
     The report (JSON or CSV, one row per body) gives the input and hull sizes, the hull
     volume, the mesh volume (closed meshes only, else null), volume_ratio = mesh volume /
