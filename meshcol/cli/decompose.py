@@ -271,7 +271,9 @@ def decompose_command(
     part (visuals, inertials, joints, comments and unknown tags untouched; box, sphere,
     cylinder and capsule elements kept, being exact). --to mjcf writes OUT/<robot>.xml in
     MuJoCo Menagerie's convention; --to glb and --to usd the parts at the joint
-    configuration. --layout and --format do not apply.
+    configuration. --layout and --format do not apply. --target fits each mesh object's
+    parts (an element of k objects gives each max_hulls // k; more objects than max_hulls
+    is an MC106 finding on the element).
 
     Fidelity targets: --max-hausdorff D and/or --max-parts N search each body's CoACD
     threshold (V-HACD: its hull count), bracketing from --threshold then bisecting, and raise
@@ -346,10 +348,6 @@ def decompose_command(
         raise click.UsageError("--to needs one robot description (URDF, MJCF)")
     target = None
     if target_name is not None:
-        if robot:
-            raise click.UsageError(
-                "--target does not apply to a robot description yet (give its meshes)"
-            )
         from meshcol.io.targets import load_target
 
         target = load_target(target_name)
@@ -417,10 +415,12 @@ def decompose_command(
                 max_hausdorff=max_hausdorff,
                 reserved=(("the --report file", report_file),) if report_file else (),
                 progress=progress.message,
+                target=target,
             )
         finally:
             progress.done()
         emit_report(result, report_fmt, report)
+        _echo_target_violations(result)
         detail = f"{_summary(result)}, written to {result.settings['description']}"
         click.echo(verdict("decompose", result.exit_code == 0, detail), err=True)
         if result.exit_code:
@@ -473,15 +473,22 @@ def decompose_command(
                 click.echo(
                     f"meshcol: target missed: {f['path']}: {body['name']}: {reason}", err=True
                 )
+    _echo_target_violations(result)
+    click.echo(verdict("decompose", result.exit_code == 0, _summary(result)), err=True)
+    if result.exit_code:
+        ctx.exit(result.exit_code)
+
+
+def _echo_target_violations(result) -> None:
+    """One stderr line per target limit a body missed, with its rule id."""
+    for f in result.files:
+        for body in f["bodies"]:
             for v in body.get("target", {}).get("violations", []):
                 click.echo(
                     f"meshcol: {v['rule']} {v['rule_name']}: {f['path']}: body '{body['name']}' "
                     f"{v['message']}",
                     err=True,
                 )
-    click.echo(verdict("decompose", result.exit_code == 0, _summary(result)), err=True)
-    if result.exit_code:
-        ctx.exit(result.exit_code)
 
 
 def _summary(result) -> str:

@@ -87,9 +87,10 @@ def hull(
     With --target every hull meets all the engine's limits (vertices, polygons after
     merging coplanar triangles, triangles, polygons per vertex, minimum thickness and
     volume, the GPU oblong ratio), still enclosing the input: thin or flat bodies are
-    thickened, never shrunk. Each row's "target" says what each limit cost (added volume,
-    largest distance) and lists any limit that could not be met, with its rule id (MC101..);
-    those exit 1.
+    thickened, never shrunk. Each row's "target" says what each limit cost, in the order
+    limits are applied: marginal added volume (these sum to the row's added_volume),
+    cumulative largest distance, and the limit's standalone cost; and lists any limit that
+    could not be met, with its rule id (MC101..); those exit 1.
 
     The report (JSON or CSV, one row per body) gives the input and hull sizes, the hull
     volume, the mesh volume (closed meshes only, else null), volume_ratio = mesh volume /
@@ -106,6 +107,7 @@ def hull(
     elements are kept as they are (already exact). --to mjcf writes OUT/<robot>.xml in
     MuJoCo Menagerie's convention (visual geoms group 2, contype/conaffinity 0; collision
     geoms group 3); --to glb and --to usd write the colliders at the joint configuration.
+    --target fits each element's hull as it fits a mesh's (the description is in metres).
 
     \b
     Examples:
@@ -126,10 +128,6 @@ def hull(
 
     target = None
     if target_name is not None:
-        if robot:
-            raise click.UsageError(
-                "--target does not apply to a robot description yet (give its meshes)"
-            )
         from meshcol.io.targets import load_target
 
         target = load_target(target_name)
@@ -149,6 +147,7 @@ def hull(
                 reserved=(("the --report file", report),) if report not in (None, "-") else (),
                 warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
                 progress=progress,
+                target=target,
             )
         else:
             result = run_hull(

@@ -30,6 +30,7 @@ from meshcol.collision.hull import (
 from meshcol.errors import InvalidMeshError
 
 __all__ = [
+    "APPLY_ORDER",
     "COPLANAR_RELATIVE_TOLERANCE",
     "RULES",
     "LimitCost",
@@ -57,6 +58,18 @@ RULES: dict[str, tuple[str, str]] = {
     "min_thickness": ("MC107", "part-too-thin"),
     "min_volume": ("MC201", "volume-too-small"),
 }
+#: The order :func:`fit_parts` meets limits in (merging, growth, then the count budgets),
+#: which is the order the marginal costs are measured in (:class:`LimitCost`).
+APPLY_ORDER = (
+    "max_hulls",
+    "min_thickness",
+    "min_volume",
+    "max_oblong_ratio",
+    "max_hull_vertices",
+    "max_hull_triangles",
+    "max_hull_polygons",
+    "max_faces_per_vertex",
+)
 #: Two adjacent hull triangles are one polygon when each one's far vertex is within this
 #: fraction of the part's bounding-box diagonal of the other's plane (and their normals agree).
 COPLANAR_RELATIVE_TOLERANCE = 1e-9
@@ -463,6 +476,17 @@ def budget_vertices(limits: Mapping[str, float]) -> int | None:
 class LimitCost:
     """What meeting one limit cost a body (measured against the exact hull of its input).
 
+    Two figures, which answer different questions:
+
+    - **marginal** (``marginal_added_volume``): the limits are applied one more at a time in
+      :data:`APPLY_ORDER`; a limit's marginal cost is the volume the fit with it and every
+      limit before it adds over the fit without it. The marginal costs of a body's limits
+      sum to its total ``added_volume`` (exactly: the last cumulative fit is the fit). A
+      marginal cost can be negative when a later limit reshapes what an earlier one grew.
+    - **standalone** (``standalone_added_volume``): the limit's own fit against the exact
+      hull, as if the profile had no other limit. Standalone costs do not add up (two
+      limits often pay for the same growth).
+
     Attributes
     ----------
     limit : str
@@ -474,10 +498,18 @@ class LimitCost:
     after : float or None
         Worst measure of the result.
     met : bool
-    added_volume : float
-        Volume added to meet this limit alone (the limit's own fit against the exact hull).
-    max_distance : float
-        Largest distance from that fit to the exact hull (input units).
+    order : int
+        Position of the limit in :data:`APPLY_ORDER` among the profile's limits (0 first).
+    marginal_added_volume : float
+        Volume added by applying this limit after the ones before it (sums to the total).
+    cumulative_added_volume : float
+        Volume added by this limit and every one before it.
+    cumulative_max_distance : float
+        Largest distance from that cumulative fit to the exact hull (input units).
+    standalone_added_volume : float
+        Volume added to meet this limit alone (its own fit against the exact hull).
+    standalone_max_distance : float
+        Largest distance from that standalone fit to the exact hull (input units).
     """
 
     limit: str
@@ -485,8 +517,12 @@ class LimitCost:
     before: float | None
     after: float | None
     met: bool
-    added_volume: float
-    max_distance: float
+    order: int
+    marginal_added_volume: float
+    cumulative_added_volume: float
+    cumulative_max_distance: float
+    standalone_added_volume: float
+    standalone_max_distance: float
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -496,8 +532,12 @@ class LimitCost:
             "before": self.before,
             "after": self.after,
             "met": self.met,
-            "added_volume": self.added_volume,
-            "max_distance": self.max_distance,
+            "order": self.order,
+            "marginal_added_volume": self.marginal_added_volume,
+            "cumulative_added_volume": self.cumulative_added_volume,
+            "cumulative_max_distance": self.cumulative_max_distance,
+            "standalone_added_volume": self.standalone_added_volume,
+            "standalone_max_distance": self.standalone_max_distance,
         }
 
 
@@ -515,7 +555,8 @@ class TargetFit:
     violations : tuple of Violation
         Limits still unmet (empty when the target is met).
     costs : tuple of LimitCost
-        One per limit of the target, in :data:`RULES` order.
+        One per limit of the target, in :data:`APPLY_ORDER`; their
+        ``marginal_added_volume`` sum to ``added_volume``.
     added_volume : float
         Volume of the parts minus that of the exact hulls they replace (>= 0).
     max_distance : float
@@ -719,9 +760,11 @@ def fit_parts(
        (:func:`meshcol.collision.hull.convex_hull`) within the vertex budget
        (:func:`budget_vertices`) and, when the polygons or the polygons per vertex are over,
        a plane budget, tightened until :func:`measure_hull` agrees.
-    4. The result is re-measured and compared (:func:`limit_violations`). Each limit the
-       exact hulls were past is also met alone, to report what it cost by itself
-       (``costs``); the totals are for all limits together.
+    4. The result is re-measured and compared (:func:`limit_violations`). What each limit
+       cost (``costs``, :class:`LimitCost`) is measured twice: marginally, by fitting the
+       limits of :data:`APPLY_ORDER` one more at a time (a limit the previous cumulative
+       fit already meets adds nothing and is not refitted), so the marginal costs sum to
+       the total; and standalone, each limit the exact hulls were past fitted alone.
     """
     limits = scaled_limits(target, length_scale)
     inputs = [np.asarray(v, dtype=np.float64) for v, _ in parts]
@@ -744,30 +787,7 @@ def fit_parts(
     after = measure_parts(out_parts)
     violations = limit_violations(limits, after, len(out_parts))
 
-    costs = []
-    binding = {v.limit for v in limit_violations(limits, before, len(inputs))}
-    for key in RULES:
-        if key not in limits:
-            continue
-        alone = {key: limits[key]}
-        if key not in binding:
-            cost_added, cost_distance = 0.0, 0.0
-        elif len(binding) == 1:
-            cost_added, cost_distance = added, distance
-        else:
-            alone_groups = groups if key == "max_hulls" else [[i] for i in range(len(inputs))]
-            _, cost_added, cost_distance = _fit_groups(inputs, exacts, alone_groups, alone, [])
-        costs.append(
-            LimitCost(
-                limit=key,
-                threshold=float(limits[key]),
-                before=_worst(key, before, len(inputs)),
-                after=_worst(key, after, len(out_parts)),
-                met=not any(v.limit == key for v in violations),
-                added_volume=cost_added,
-                max_distance=cost_distance,
-            )
-        )
+    costs = _costs(inputs, exacts, groups, limits, before, after, violations, added, distance)
     return TargetFit(
         parts=tuple(out_parts),
         measures=after,
@@ -777,6 +797,63 @@ def fit_parts(
         max_distance=distance,
         notes=tuple(dict.fromkeys(notes)),
     )
+
+
+def _costs(inputs, exacts, groups, limits, before, after, violations, added, distance):
+    """The :class:`LimitCost` of every limit: marginal (cumulative fits in
+    :data:`APPLY_ORDER`, the last one being the fit itself) and standalone."""
+    count = len(inputs)
+    singles = [[i] for i in range(count)]
+    binding = {v.limit for v in limit_violations(limits, before, count)}
+    keys = [key for key in APPLY_ORDER if key in limits]
+    cumulative: list[tuple[float, float]] = []
+    applied: dict[str, float] = {}
+    previous = (0.0, 0.0)
+    previous_parts: list[tuple[np.ndarray, np.ndarray]] | None = None
+    for n, key in enumerate(keys):
+        applied[key] = limits[key]
+        if n == len(keys) - 1:
+            previous = (added, distance)  # every limit: the fit itself
+        elif previous_parts is None or _violated(key, applied, previous_parts):
+            prefix_groups = groups if "max_hulls" in applied else singles
+            previous_parts, cost_added, cost_distance = _fit_groups(
+                inputs, exacts, prefix_groups, applied, []
+            )
+            previous = (cost_added, cost_distance)
+        cumulative.append(previous)
+    costs = []
+    for n, key in enumerate(keys):
+        if key not in binding:
+            alone_added, alone_distance = 0.0, 0.0
+        elif len(binding) == 1 and len(keys) == 1:
+            alone_added, alone_distance = added, distance
+        else:
+            alone_groups = groups if key == "max_hulls" else singles
+            _, alone_added, alone_distance = _fit_groups(
+                inputs, exacts, alone_groups, {key: limits[key]}, []
+            )
+        costs.append(
+            LimitCost(
+                limit=key,
+                threshold=float(limits[key]),
+                before=_worst(key, before, count),
+                after=_worst(key, after, len(groups)),
+                met=not any(v.limit == key for v in violations),
+                order=n,
+                marginal_added_volume=cumulative[n][0] - (cumulative[n - 1][0] if n else 0.0),
+                cumulative_added_volume=cumulative[n][0],
+                cumulative_max_distance=cumulative[n][1],
+                standalone_added_volume=alone_added,
+                standalone_max_distance=alone_distance,
+            )
+        )
+    return costs
+
+
+def _violated(key: str, limits: Mapping[str, float], parts) -> bool:
+    """Whether ``parts`` miss the limit ``key`` (so that applying it changes the fit)."""
+    measures = measure_parts(parts)
+    return any(v.limit == key for v in limit_violations(limits, measures, len(parts)))
 
 
 def fit_hull(points: Any, target: Any, length_scale: float = 1.0) -> TargetFit:
@@ -800,8 +877,25 @@ def _fit_groups(inputs, exacts, groups, limits, notes):
         union = exacts[group[0]] if len(group) == 1 else exact_hull(points)
         added += max(float(result.volume) - sum(float(exacts[i].volume) for i in group), 0.0)
         if len(result.vertices):
-            distance = max(distance, float(distance_to_hull(result.vertices, union).max()))
+            distance = max(distance, _outside_distance(result.vertices, union))
     return parts, added, distance
+
+
+def _outside_distance(points: np.ndarray, hull: ExactHull) -> float:
+    """Largest distance from ``points`` to the solid ``hull``, 0 for points on or inside it
+    (within rounding: ``1e-12`` of its diagonal in front of every face plane).
+
+    :func:`~meshcol.collision.hull.distance_to_hull` searches only the facets whose plane a
+    point lies in front of; a vertex of the hull lying a rounding error in front of the
+    plane of a coplanar facet that does not hold it (the other triangle of a box face) gets
+    that facet's distance, not 0. Points within rounding of every plane are inside."""
+    if hull.dimension == 3:
+        signed = points @ hull.equations[:, :3].T + hull.equations[:, 3]
+        outside = signed.max(axis=1) > 1e-12 * max(hull.diagonal, 1e-300)
+        if not outside.any():
+            return 0.0
+        points = points[outside]
+    return float(distance_to_hull(points, hull).max())
 
 
 def _merge_groups(inputs: list[np.ndarray], count: int) -> list[list[int]]:
