@@ -658,15 +658,28 @@ def _merge_close(points: np.ndarray, radius: float) -> np.ndarray:
     return points[order[first]]
 
 
+#: Relative rounding allowed in a facet plane's signed distance (:func:`_distances_to_hull`).
+_ROUNDING = 1e-12
+
+
 def _distances_to_hull(points, facets, equations):
     """Exact distance (and closest point) from each point to a convex polytope.
 
     A point outside the polytope has its closest point on a facet whose plane it lies in
     front of, so only those facets are searched; points inside get distance 0.
     ``equations`` is ``(normals.T, offsets)``, the transpose contiguous for a fast product.
+
+    "In front" allows a rounding error: a point on the surface can lie a rounding error in
+    front of a coplanar facet that does not hold it and behind the one that does (a vertex of
+    a box and the two triangles of a face); searching only the first would give that facet's
+    distance instead of 0. A facet searched in excess is harmless: its closest point is on the
+    surface, never nearer than the true one.
     """
     dim = points.shape[1]
-    in_front = points @ equations[0] + equations[1] > 0.0
+    signed = points @ equations[0] + equations[1]
+    outside = signed.max(axis=1, initial=-np.inf) > 0.0
+    scale = max(float(np.abs(facets).max(initial=0.0)), float(np.abs(points).max(initial=0.0)))
+    in_front = (signed > -_ROUNDING * max(scale, 1e-300)) & outside[:, None]
     distances = np.zeros(len(points))
     closest = points.copy()
     p_index, f_index = np.nonzero(in_front)

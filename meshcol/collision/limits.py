@@ -883,12 +883,8 @@ def _fit_groups(inputs, exacts, groups, limits, notes):
 
 def _outside_distance(points: np.ndarray, hull: ExactHull) -> float:
     """Largest distance from ``points`` to the solid ``hull``, 0 for points on or inside it
-    (within rounding: ``1e-12`` of its diagonal in front of every face plane).
-
-    :func:`~meshcol.collision.hull.distance_to_hull` searches only the facets whose plane a
-    point lies in front of; a vertex of the hull lying a rounding error in front of the
-    plane of a coplanar facet that does not hold it (the other triangle of a box face) gets
-    that facet's distance, not 0. Points within rounding of every plane are inside."""
+    (within rounding: ``1e-12`` of its diagonal in front of every face plane), so that a
+    part's own vertices report 0 rather than a rounding error."""
     if hull.dimension == 3:
         signed = points @ hull.equations[:, :3].T + hull.equations[:, 3]
         outside = signed.max(axis=1) > 1e-12 * max(hull.diagonal, 1e-300)
