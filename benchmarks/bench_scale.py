@@ -354,10 +354,13 @@ def main() -> None:
     if args.baseline:
         ab(args)
         return
-    print(f"cores: {os.cpu_count()}; meshcol --threads {args.threads}; cache {CACHE}")
+    print(
+        f"cores: {os.cpu_count()}; meshcol --threads {args.threads}; cache {CACHE}; "
+        f"load average {os.getloadavg()[0]:.2f} (each row: after it)"
+    )
     print(
         f"{'N':>7} {'pairs':>7} {'meshcol s':>10} {'peak MiB':>9} {'trimesh+fcl':>24} "
-        f"{'ratio':>6} {'coal':>24} {'ratio':>6}"
+        f"{'ratio':>6} {'coal':>24} {'ratio':>6} {'load avg':>9}"
     )
     for n in args.sizes:
         t0 = time.perf_counter()
@@ -376,7 +379,7 @@ def main() -> None:
 
         print(
             f"{n:>7} {pairs!s:>7} {seconds:>10.2f} {rss:>9.0f} {t_fcl:>24} {ratio(t_fcl):>6} "
-            f"{t_coal:>24} {ratio(t_coal):>6}"
+            f"{t_coal:>24} {ratio(t_coal):>6} {os.getloadavg()[0]:>9.2f}"
         )
     if args.extras:
         folder = big_mesh_folder()

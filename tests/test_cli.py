@@ -97,3 +97,19 @@ def test_same_named_functions_stay_callable() -> None:
     first, heavy = out.stdout.strip().splitlines()
     assert first == "True True meshcol.analysis.check meshcol.analysis.sweep"
     assert heavy == "HEAVY="
+
+
+def test_a_run_collects_garbage_less_often_then_restores_the_rate() -> None:
+    import gc
+
+    import meshcol.cli as cli
+
+    before = gc.get_threshold()
+    with cli._collect_less_often():
+        assert gc.get_threshold() == (cli.GC_THRESHOLD, *before[1:])
+    assert gc.get_threshold() == before
+    with pytest.raises(RuntimeError), cli._collect_less_often():
+        raise RuntimeError  # a failing command restores it too
+    assert gc.get_threshold() == before
+    assert CliRunner().invoke(main, ["--version"]).exit_code == 0
+    assert gc.get_threshold() == before

@@ -736,6 +736,45 @@ def test_load_meshes_equals_load_mesh_per_file_and_reports_the_first_failure(cor
         meshcol.io.mesh_read.load_meshes([tmp_path / "folder.obj"])
 
 
+def test_load_meshes_plain_scene_pass_builds_what_the_general_loop_builds(tmp_path):
+    # Files of one object each take a flat pass; one file of two objects among them sends
+    # the whole batch through the general loop: both must build the same bodies.
+    rng = np.random.default_rng(7)
+    singles = []
+    for k, name in enumerate(["a.obj", "b.c.obj", ".hidden.obj", "e.stl"]):
+        path = tmp_path / name
+        points = rng.normal(size=(6, 3)) + k
+        if name.endswith(".stl"):
+            trimesh.Trimesh(points, [[0, 1, 2], [2, 3, 4], [4, 5, 0]], process=False).export(path)
+        else:
+            lines = [f"v {x} {y} {z}" for x, y, z in points] + ["f 1 2 3", "f 3 4 5", "f 5 6 1"]
+            path.write_text("\n".join(lines) + "\n")
+        singles.append(path)
+    two = tmp_path / "two.obj"
+    two.write_text(
+        "o x\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\no y\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf 4 5 6\n"
+    )
+    plain = meshcol.io.mesh_read.load_meshes(singles)
+    general = meshcol.io.mesh_read.load_meshes([*singles, two])
+    assert [b.name for b in general[-1]] == ["two/x", "two/y"]
+    for fast, slow in zip(plain, general[:-1]):
+        assert len(fast) == len(slow) == 1
+        (a,), (b,) = fast, slow
+        assert (a.name, a.source) == (b.name, b.source)
+        np.testing.assert_array_equal(a.vertices, b.vertices)
+        np.testing.assert_array_equal(a.faces, b.faces)
+        np.testing.assert_array_equal(a.pose, np.eye(4))
+    assert [b[0].name for b in plain] == ["a", "b.c", ".hidden", "e"]
+    assert len({id(b[0].pose) for b in plain}) == len(plain)  # each body its own pose
+
+
+@pytest.mark.parametrize(
+    "source", ["a/b.obj", ".obj", "a/b.tar.obj", "b", "a/.x.obj", "a/b.", "x/..obj", "/x/y.stl"]
+)
+def test_stem_is_paths_stem(source):
+    assert meshcol.io.mesh_read._stem(source) == Path(source).stem
+
+
 @settings(max_examples=40)
 @given(
     vertices=arrays(

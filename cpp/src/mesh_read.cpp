@@ -382,7 +382,10 @@ void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& fa
         std::uint64_t hash;
         std::int64_t index;  // -1: empty
     };
-    size_t capacity = 1024;
+    // Sized to the object: a scene's props are small, and tables of a fixed 80 KiB each
+    // cost more to clear than to fill (results never depend on the sizes).
+    size_t capacity = 16;
+    while (capacity < 2 * n && capacity < 1024) capacity <<= 1;
     std::vector<Slot> slots(capacity, Slot{0, -1});
     std::vector<Key> keys;
     const KeyHash hasher;
@@ -393,7 +396,9 @@ void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& fa
     };
     std::vector<std::int64_t> remap(n, -1);
     std::vector<double> merged;
-    constexpr size_t kRecent = 4096;  // 64 KiB
+    size_t recent_size = 16;  // at most 4096 slots (64 KiB), a power of two
+    while (recent_size < n && recent_size < 4096) recent_size <<= 1;
+    const size_t kRecent = recent_size;
     std::vector<Slot> recent(kRecent, Slot{0, -1});
     for (size_t i = 0; i < n; ++i) {
         if (!used[i]) continue;
@@ -455,10 +460,13 @@ void read_one(const std::string& path, MeshFormat format, bool merge, std::vecto
         return;
     }
     buffer.clear();
-    if (info.st_size > 0) buffer.reserve(static_cast<size_t>(info.st_size));
+    if (info.st_size > 0) {  // the whole file in one read, straight into the buffer
+        buffer.resize(static_cast<size_t>(info.st_size));
+        buffer.resize(std::fread(buffer.data(), 1, buffer.size(), stream));
+    }
     char chunk[1 << 16];
     size_t got = 0;
-    while ((got = std::fread(chunk, 1, sizeof chunk, stream)) > 0)
+    while ((got = std::fread(chunk, 1, sizeof chunk, stream)) > 0)  // what a growing file adds
         buffer.insert(buffer.end(), chunk, chunk + got);
     const int code = std::ferror(stream) != 0 ? errno : 0;
     std::fclose(stream);

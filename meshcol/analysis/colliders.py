@@ -38,6 +38,7 @@ import hashlib
 import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from itertools import chain
 from typing import Any
 
 import numpy as np
@@ -415,8 +416,6 @@ def _fits_of(bodies: Sequence[Body], kind: str, report: Callable[[str], None]) -
     """The ``auto`` fit (:func:`meshcol.analysis.fit.fit_point_sets`) of every unique,
     non-flat part of the ``fit`` bodies, all in one native call: geometry key -> the chosen
     PrimitiveFit, or None when the hull was kept."""
-    from meshcol.analysis.fit import fit_point_sets
-
     keys: list[bytes] = []
     seen: set[bytes] = set()
     sets: list[np.ndarray] = []
@@ -434,6 +433,8 @@ def _fits_of(bodies: Sequence[Body], kind: str, report: Callable[[str], None]) -
             names.append(f"body {body.name!r}" + ("" if name is None else f" part {name!r}"))
     if not sets:
         return {}
+    from meshcol.analysis.fit import fit_point_sets  # only when a body is fitted
+
     report(f"enclosing primitives of {len(sets)} unique parts")
     out: dict[bytes, Any] = {}
     for key, what, result in zip(keys, names, fit_point_sets(sets)):
@@ -597,19 +598,24 @@ def build_colliders(
     single = ConvexSet.from_shapes(unique)
     pool = ConvexSet.concatenate(single, *triangle_sets) if triangle_sets else single
     set_start = np.cumsum([len(single)] + [len(s) for s in triangle_sets])
-    rows_per_body = [
-        np.asarray(singles, dtype=np.int64)
-        if tri < 0
-        else set_start[tri] + np.arange(len(triangle_sets[tri]), dtype=np.int64)
-        for tri, singles, _ in blocks
-    ]
-    labels_per_body = [
-        np.asarray(labels, dtype=np.int64) if tri < 0 else triangle_labels[tri]
-        for tri, _, labels in blocks
-    ]
-    rows = np.concatenate(rows_per_body) if rows_per_body else np.zeros(0, np.int64)
-    part_label = np.concatenate(labels_per_body) if labels_per_body else np.zeros(0, np.int64)
-    counts = np.asarray([len(r) for r in rows_per_body], dtype=np.int64)
+    if triangle_sets:
+        rows_per_body = [
+            np.asarray(singles, dtype=np.int64)
+            if tri < 0
+            else set_start[tri] + np.arange(len(triangle_sets[tri]), dtype=np.int64)
+            for tri, singles, _ in blocks
+        ]
+        labels_per_body = [
+            np.asarray(labels, dtype=np.int64) if tri < 0 else triangle_labels[tri]
+            for tri, _, labels in blocks
+        ]
+        rows = np.concatenate(rows_per_body)
+        part_label = np.concatenate(labels_per_body)
+        counts = np.asarray([len(r) for r in rows_per_body], dtype=np.int64)
+    else:  # single shapes only: three flat passes, no small array per body
+        rows = np.fromiter(chain.from_iterable(b[1] for b in blocks), dtype=np.int64)
+        part_label = np.fromiter(chain.from_iterable(b[2] for b in blocks), dtype=np.int64)
+        counts = np.fromiter((len(b[1]) for b in blocks), dtype=np.int64, count=len(blocks))
     offsets = np.zeros(len(kept) + 1, dtype=np.int64)
     np.cumsum(counts, out=offsets[1:])
     part_body = np.repeat(np.arange(len(kept), dtype=np.int64), counts)
@@ -622,7 +628,8 @@ def build_colliders(
     return Colliders(
         tuple(kept),
         tuple(kinds),
-        pool.take(rows),
+        # every part its own unique shape, in pool order (a scene of unique assets): as is
+        pool if np.array_equal(rows, np.arange(len(pool))) else pool.take(rows),
         part_body,
         part_index,
         offsets,

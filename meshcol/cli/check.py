@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from typing import Any
 
 import click
 
@@ -141,7 +142,6 @@ def check(
     """
     from meshcol.analysis.check import check as run_check
     from meshcol.analysis.check import parse_ignore_rule
-    from meshcol.analysis.review import check_page
     from meshcol.cli.common import check_outputs, emit_report, render_html, write_html
 
     for rule in ignore:
@@ -172,10 +172,12 @@ def check(
     finally:
         progress.done()
 
-    page = render_html(
-        html,
-        lambda: check_page(result, inputs, shape, _decompose_options(engine, threshold, cache_dir)),
-    )
+    def review_page() -> Any:
+        from meshcol.analysis.review import check_page  # only with --html
+
+        return check_page(result, inputs, shape, _decompose_options(engine, threshold, cache_dir))
+
+    page = render_html(html, review_page)
     emit_report(result, fmt, report)
     write_html(html, page)
     for warning in result.warnings:

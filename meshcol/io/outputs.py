@@ -184,7 +184,8 @@ def manifest_inputs(paths: Iterable[PathLike]) -> list[tuple[str, str]]:
         path = os.fspath(path)
         found.append(("the input", path))
         if Path(path).suffix.lower() in MANIFEST_EXTENSIONS:
-            found.extend((f"a mesh file of {path}", mesh) for mesh in manifest_mesh_files(path))
+            description = f"a mesh file of {path}"  # once, not once a mesh
+            found.extend((description, mesh) for mesh in manifest_mesh_files(path))
     return found
 
 
