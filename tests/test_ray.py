@@ -16,11 +16,24 @@ import time
 from pathlib import Path
 
 import pytest
-import trimesh
+import test_executor
 from click.testing import CliRunner
 from conftest import FAST_DECOMPOSE
+from test_executor import (
+    CHECK,
+    alive,
+    cache_entries,
+    files,
+    linux_only,
+    run_killing_reader,
+    strip_progress,
+    untimed,
+)
 
 from meshcol.cli import main
+
+# The inputs of tests/test_executor.py (fixtures), for the same scenarios on Ray.
+meshes, batch = test_executor.meshes, test_executor.batch
 
 # Engine options of FAST_DECOMPOSE, for decompose_files.
 FAST = {
@@ -48,27 +61,6 @@ def ray_cluster():
         yield ray
     finally:
         ray.shutdown()
-
-
-@pytest.fixture(scope="module")
-def meshes(tmp_path_factory) -> list[Path]:
-    folder = tmp_path_factory.mktemp("ray-inputs")
-    shapes = {
-        "torus": trimesh.creation.torus(1.0, 0.3, major_sections=24, minor_sections=12),
-        "box": trimesh.creation.box(extents=(2, 1, 1)),
-        "l_shape": trimesh.creation.box(bounds=[(0, 0, 0), (2, 1, 1)]).union(
-            trimesh.creation.box(bounds=[(0, 0, 0.5), (1, 1, 2)]), engine="manifold"
-        ),
-    }
-    paths = []
-    for name, mesh in shapes.items():
-        paths.append(folder / f"{name}.obj")
-        mesh.export(paths[-1])
-    return paths
-
-
-def files(folder: Path) -> dict[str, bytes]:
-    return {p.name: p.read_bytes() for p in sorted(folder.iterdir()) if p.is_file()}
 
 
 def _sleep_or_record(task):
@@ -147,9 +139,9 @@ def test_a_timeout_cancels_a_task_that_sleeps_forever(ray_cluster, tmp_path) -> 
     # The cancel was forced: the worker process that slept is gone.
     pid = int(pid_file.read_text())
     deadline = time.monotonic() + 10
-    while time.monotonic() < deadline and _alive(pid):
+    while time.monotonic() < deadline and alive(pid):
         time.sleep(0.1)
-    assert not _alive(pid)
+    assert not alive(pid)
 
 
 @pytest.mark.slow
@@ -166,18 +158,6 @@ def test_engine_threads_are_set_per_task(ray_cluster) -> None:
 
 def _environment(_):
     return dict(os.environ)
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    try:  # a zombie is dead too
-        with open(f"/proc/{pid}/stat") as f:
-            return f.read().split()[2] != "Z"
-    except OSError:
-        return True
 
 
 def test_executor_ray_without_ray_exits_2_with_a_hint(meshes, tmp_path, monkeypatch) -> None:
@@ -217,35 +197,6 @@ def test_importing_meshcol_and_help_load_no_ray() -> None:
 # inspect and check over many inputs: one task per file
 
 
-@pytest.fixture(scope="module")
-def batch(meshes, tmp_path_factory) -> list[str]:
-    """Files whose report exercises the driver's side: two files of one stem (``l_shape``,
-    ``l_shape#2``), an unreadable file between them, and a file of two bodies."""
-    folder = tmp_path_factory.mktemp("ray-batch")
-    (folder / "empty.obj").write_text("# no faces\nv 0 0 0\n")
-    twin = folder / "l_shape.obj"
-    twin.write_bytes(meshes[2].read_bytes())
-    scene = trimesh.Scene()
-    scene.add_geometry(trimesh.creation.box(extents=(1, 1, 1)), geom_name="a")
-    scene.add_geometry(
-        trimesh.creation.icosphere(subdivisions=2), geom_name="b", transform=_moved(3.0)
-    )
-    scene.export(folder / "pair.glb")
-    return [*map(str, meshes), str(folder / "empty.obj"), str(twin), str(folder / "pair.glb")]
-
-
-def _moved(x: float):
-    import numpy as np
-
-    matrix = np.eye(4)
-    matrix[0, 3] = x
-    return matrix
-
-
-def _strip_progress(text: str) -> list[str]:
-    return [line for line in text.splitlines() if " elapsed" not in line]
-
-
 def _inspect(args: list[str]):
     return CliRunner().invoke(main, ["inspect", *args])
 
@@ -256,7 +207,7 @@ def test_inspect_on_ray_is_byte_identical_to_the_local_run(ray_cluster, batch) -
     remote = _inspect([*batch, "--executor", "ray", "--jobs", "2"])
     assert local.exit_code == remote.exit_code == 2  # empty.obj is not inspected
     assert remote.stdout == local.stdout
-    assert _strip_progress(remote.stderr) == _strip_progress(local.stderr)
+    assert strip_progress(remote.stderr) == strip_progress(local.stderr)
     report = json.loads(remote.stdout)
     names = [b["name"] for b in report["bodies"]]
     assert names[:3] == ["torus", "box", "l_shape"] and "l_shape#2" in names
@@ -269,6 +220,11 @@ def test_an_inspect_timeout_fails_only_its_file(ray_cluster, batch, tmp_path) ->
     timeout; the other files are reported."""
     hang = tmp_path / "hang.obj"
     os.mkfifo(hang)
+    # The timeout counts from a task's submission, a new worker's start-up included (these
+    # tasks' thread settings are a runtime_env of their own on this Ray: new workers, seconds
+    # each on a loaded machine): warm two up first, so that only the FIFO's task times out.
+    warm = _inspect([batch[0], batch[1], "--executor", "ray"])
+    assert warm.exit_code == 0, warm.stderr
     start = time.perf_counter()
     result = _inspect([batch[0], str(hang), batch[1], "--executor", "ray", "--timeout", "4"])
     assert time.perf_counter() - start < 60
@@ -294,20 +250,12 @@ def test_check_decomposed_on_ray_matches_the_local_run(ray_cluster, batch, tmp_p
     )
     assert local.exit_code == remote.exit_code == 0, remote.stderr
     a, b = json.loads(local.stdout), json.loads(remote.stdout)
-    assert _untimed(a) == _untimed(b)
+    assert untimed(a) == untimed(b)
     assert len(a["pairs"]) >= 3
     # The tasks filled the cache as the local run did: the same entries.
     assert sorted(p.name for p in (tmp_path / "c1").rglob("*") if p.is_file()) == sorted(
         p.name for p in (tmp_path / "c2").rglob("*") if p.is_file()
     )
-
-
-def _untimed(report: dict) -> dict:
-    out = {k: v for k, v in report.items() if k != "generated_at"}
-    out["summary"] = {
-        k: v for k, v in report["summary"].items() if k not in ("seconds", "load_seconds")
-    }
-    return out
 
 
 def test_check_ray_address_needs_the_ray_executor(meshes) -> None:
@@ -325,3 +273,51 @@ def test_inspect_and_check_on_ray_without_ray_exit_2_with_a_hint(meshes, monkeyp
         assert result.stderr.strip().splitlines() == [
             "meshcol: error: --executor ray needs Ray: pip install 'meshcol[ray]'"
         ]
+
+
+@pytest.mark.slow
+@linux_only
+def test_a_killed_ray_worker_fails_only_its_inspect_file(ray_cluster, batch, tmp_path) -> None:
+    """Six files on Ray: the worker that reads the third is killed by its pid mid-task; that
+    file is an error of the report, the others are the in-process run's bodies."""
+    fifo = tmp_path / "killed.obj"
+    os.mkfifo(fifo)
+    inputs = [*batch[:2], str(fifo), *batch[2:3], *batch[5:]]
+    result, pid = run_killing_reader(
+        fifo, ["inspect", *inputs, "--executor", "ray", "-j", "2", "--timeout", "60"]
+    )
+    assert not alive(pid)
+    assert result.exit_code == 2, result.stderr
+    report = json.loads(result.stdout)
+    assert report["bodies"] == json.loads(_inspect([*batch[:3], *batch[5:]]).stdout)["bodies"]
+    ((error),) = report["errors"]
+    assert error["source"] == str(fifo) and error["body"] is None
+    assert error["message"].startswith("worker process died ("), error
+    assert f"meshcol: error: {fifo}: worker process died (" in result.stderr
+
+
+@pytest.mark.slow
+@linux_only
+def test_a_killed_ray_worker_fails_only_its_check_file(ray_cluster, batch, tmp_path) -> None:
+    """The other files' tasks finish (the cache holds what a clean run of them leaves); the
+    run names the file whose worker died and writes no report."""
+    fifo = tmp_path / "killed.obj"
+    os.mkfifo(fifo)
+    others = [batch[1], batch[2], batch[4], batch[5]]
+    out = tmp_path / "report.json"
+    result, pid = run_killing_reader(
+        fifo,
+        ["check", *others[:2], str(fifo), *others[2:], *CHECK, "--executor", "ray", "-j", "2"]
+        + ["--timeout", "60", "--cache-dir", str(tmp_path / "c1"), "--report", str(out)],
+    )
+    assert not alive(pid)
+    assert result.exit_code == 2
+    # (Ray's own message about the dead worker may come on stderr too, before or after)
+    expected = f"meshcol: error: {fifo}: its task failed: worker process died ("
+    assert any(line.startswith(expected) for line in result.stderr.splitlines()), result.stderr
+    assert not out.exists()
+    clean = CliRunner().invoke(
+        main, ["check", *others, *CHECK, "--cache-dir", str(tmp_path / "c2")]
+    )
+    assert clean.exit_code == 0, clean.stderr
+    assert cache_entries(tmp_path / "c1") == cache_entries(tmp_path / "c2") != []

@@ -14,9 +14,12 @@ worker_env`). Ray is imported only when a Ray executor starts (``pip install 'me
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
+import signal
 import sys
+import threading
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import Any, Protocol
@@ -135,7 +138,8 @@ def import_ray(local: bool = False) -> Any:
 
     ``local``: a local Ray may be started; on Linux, Ray resolves 127.0.0.1 to the machine's
     network address unless told that this is no multi-machine cluster (the variable below,
-    read when Ray is first imported), so a local Ray binds to the loopback address only."""
+    read when Ray is first imported), so a local Ray binds to the loopback address only.
+    The same for a cluster at a loopback address (see :func:`_loopback_only`)."""
     if local and "ray" not in sys.modules:
         os.environ.setdefault("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")
     try:
@@ -143,6 +147,95 @@ def import_ray(local: bool = False) -> Any:
     except ImportError:
         raise MissingDependencyError(_RAY_HINT) from None
     return ray
+
+
+def _is_loopback(address: str) -> bool:
+    """``127.0.0.1:6379``, ``localhost:6379``, ``[::1]:6379`` (``ray://`` too): a cluster on
+    this machine's loopback interface only."""
+    host = address.split("://", 1)[-1].rsplit(":", 1)[0].strip("[]").lower()
+    return host in ("localhost", "::1") or host.startswith("127.")
+
+
+@contextlib.contextmanager
+def _loopback_only(address: str) -> Iterator[None]:
+    """While joining a cluster at a loopback address: Ray rewrites 127.0.0.1 in the address
+    to this machine's network address (its multi-machine default), where a cluster started
+    with ``--node-ip-address=127.0.0.1`` does not listen, and ``ray.init`` then retries for
+    minutes. The environment variable of :func:`import_ray` is read only when Ray is first
+    imported; when Ray was imported before, its (private) constant is set for the call."""
+    if not _is_loopback(address):
+        yield
+        return
+    try:
+        from ray._private import ray_constants
+    except ImportError:  # another layout: the variable of import_ray is all there is
+        yield
+        return
+    previous = getattr(ray_constants, "ENABLE_RAY_CLUSTER", None)
+    ray_constants.ENABLE_RAY_CLUSTER = False
+    try:
+        yield
+    finally:
+        if previous is not None:
+            ray_constants.ENABLE_RAY_CLUSTER = previous
+
+
+@contextlib.contextmanager
+def _signals_deferred() -> Iterator[None]:
+    """SIGINT and SIGTERM held back during the block, then honoured (their handler called,
+    so KeyboardInterrupt or meshcol's ``Terminated`` is raised at the block's end).
+
+    Around ``ray.init`` and ``ray.shutdown``: an exception raised by a signal inside either,
+    or between ``ray.init``'s return and the executor recording that it owns that Ray, left
+    Ray's core worker running, never shut down, to the interpreter's exit, where its threads
+    crashed the process (SIGSEGV in ``TaskManager::RecordMetrics`` instead of exit 130: one
+    Ctrl-C test run in 3 to 12 here). Blocking SIGINT in this thread is not enough: Python
+    runs handlers in the main thread whichever thread the signal reached (the progress
+    timer's, Ray's), so the handlers are replaced for the block. SIGINT is also blocked in
+    this thread, for the processes started meanwhile to inherit (see ``_connect``).
+    """
+    if threading.current_thread() is not threading.main_thread():
+        with _sigint_blocked():
+            yield
+        return
+    caught: list[int] = []
+    previous: dict[int, Callable[[int, Any], Any]] = {}
+    for number in (signal.SIGINT, getattr(signal, "SIGTERM", None)):
+        if number is None:
+            continue
+        handler = signal.getsignal(number)
+        if callable(handler):
+            previous[number] = handler
+            signal.signal(number, lambda n, _frame: caught.append(n))
+    try:
+        with _sigint_blocked():  # a SIGINT pending on this thread arrives as the mask goes
+            yield
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, handler)
+        for number in dict.fromkeys(caught):
+            previous[number](number, None)
+
+
+def _errors_to_stderr() -> None:
+    """Ray's driver prints the cluster's error messages (``(raylet) A worker died or was
+    killed ...``) on stdout, whatever ``log_to_driver``: on a killed worker it corrupted the
+    report that ``meshcol inspect --executor ray > report.json`` writes there. Once this
+    process has connected an executor, they go to stderr, with meshcol's own messages (the
+    failure is also the file's error in the report); for good, as a message may come after
+    the run, while the report is written. Ray's printer is private: if its layout differs,
+    nothing is changed."""
+    from ray._private import worker
+
+    original = getattr(worker, "print_to_stdstream", None)
+    if original is None or getattr(original, "_meshcol_stderr", False):
+        return
+
+    def to_stderr(data: dict[str, Any], *args: Any, **kwargs: Any) -> Any:
+        return original({**data, "is_err": True}, *args, **kwargs)
+
+    to_stderr._meshcol_stderr = True  # type: ignore[attr-defined]
+    worker.print_to_stdstream = to_stderr
 
 
 def _ray_call(fn: Callable[[Any], Any], task: Any) -> tuple[str, Any]:
@@ -198,7 +291,7 @@ class RayExecutor:
             raise ValueError(f"jobs must be at least 1, got {jobs}")
         self.fn, self.jobs, self.timeout, self.prepare = fn, jobs, timeout, prepare
         self.address = address
-        self.ray = import_ray(local=address is None)
+        self.ray = import_ray(local=address is None or _is_loopback(address))
         self._owned = False
         self._remote: Any = None
         self._slots = jobs
@@ -225,33 +318,20 @@ class RayExecutor:
                 "log_to_driver": False,
                 "configure_logging": True,
             }
-            if self.address is None:
-                # The local Ray's processes inherit this environment: its workers, prestarted
-                # with it, run the tasks as they are (a per-task environment would start
-                # other workers, seconds each on a small machine).
-                # SIGINT blocked meanwhile: Ray's processes inherit the mask, so a terminal's
-                # Ctrl-C (sent to the whole process group) reaches only this process, which
-                # then stops them (ray.shutdown) instead of leaving a half-dead cluster.
-                saved = {key: os.environ.get(key) for key in self.env}
-                os.environ.update(self.env)
-                try:
-                    with _sigint_blocked():
-                        ray.init(
-                            address="local",
-                            num_cpus=self.jobs,
-                            _node_ip_address="127.0.0.1",
-                            **common,
-                        )
-                finally:
-                    for key, value in saved.items():
-                        if value is None:
-                            os.environ.pop(key, None)
-                        else:
-                            os.environ[key] = value
-            else:
-                common.pop("include_dashboard")
-                ray.init(address=self.address, **common)
-            self._owned = True
+            # Signals deferred from before ray.init until this executor owns the Ray it started
+            # or joined (see _signals_deferred). A local Ray's processes also inherit the
+            # blocked SIGINT, so a terminal's Ctrl-C (sent to the whole process group) reaches
+            # only this process, which stops them (ray.shutdown) instead of leaving a
+            # half-dead cluster.
+            with _signals_deferred():
+                if self.address is None:
+                    self._init_local(ray, common)
+                else:
+                    common.pop("include_dashboard")
+                    with _loopback_only(self.address):
+                        ray.init(address=self.address, **common)
+                self._owned = True
+        _errors_to_stderr()
         if self.address is None and self._owned:
             self._slots = self.jobs
         else:
@@ -263,6 +343,21 @@ class RayExecutor:
             options["runtime_env"] = {"env_vars": dict(self.env)}
         self._remote = ray.remote(_ray_call).options(**options)
         self._prepare_remote = ray.remote(_ray_prepare).options(**options)
+
+    def _init_local(self, ray: Any, common: dict[str, Any]) -> None:
+        # The local Ray's processes inherit this environment: its workers, prestarted with
+        # it, run the tasks as they are (a per-task environment would start other workers,
+        # seconds each on a small machine).
+        saved = {key: os.environ.get(key) for key in self.env}
+        os.environ.update(self.env)
+        try:
+            ray.init(address="local", num_cpus=self.jobs, _node_ip_address="127.0.0.1", **common)
+        finally:
+            for key, value in saved.items():
+                if value is None:
+                    os.environ.pop(key, None)
+                else:
+                    os.environ[key] = value
 
     def start(self, workers: int | None = None) -> RayExecutor:
         """Join or start the cluster; with ``prepare``, warm up to ``workers`` workers."""
@@ -358,8 +453,10 @@ class RayExecutor:
                 self._cancel(ref)
         self._inflight.clear()
         if self._owned:
-            self.ray.shutdown()
-            self._owned = False
+            # Never interrupted half-way (see _signals_deferred).
+            with _signals_deferred():
+                self.ray.shutdown()
+                self._owned = False
         self._remote = None
 
     def __enter__(self) -> RayExecutor:

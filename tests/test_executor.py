@@ -1,0 +1,317 @@
+"""inspect and check over many files on the local worker pool (``--jobs 2``, ``--timeout``):
+reports byte-identical to the in-process run, a stuck file cancelled at its timeout, and a
+worker killed by its pid mid-task failing only its file while the others finish.
+
+The inputs and helpers here are shared with tests/test_ray.py, which runs the same scenarios
+on a real local Ray.
+
+A stuck file is a FIFO nobody writes: its task blocks opening it. The killed-worker tests
+find the worker through the FIFO itself (:class:`FifoReaderKiller`): opening the write end
+without blocking succeeds only once a reader has it open, and that reader's pid is the
+process holding it in ``/proc``; it is killed, then the write end closed. Every wait is
+bounded (a deadline in the killer, ``--timeout`` as a backstop in the run), so that a kill
+that never happens fails the test instead of hanging it.
+"""
+
+from __future__ import annotations
+
+import errno
+import json
+import os
+import signal
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+import trimesh
+from click.testing import CliRunner
+
+from meshcol.cli import main
+
+linux_only = pytest.mark.skipif(
+    not sys.platform.startswith("linux"), reason="finds the worker through /proc"
+)
+
+
+@pytest.fixture(scope="module")
+def meshes(tmp_path_factory) -> list[Path]:
+    folder = tmp_path_factory.mktemp("executor-inputs")
+    shapes = {
+        "torus": trimesh.creation.torus(1.0, 0.3, major_sections=24, minor_sections=12),
+        "box": trimesh.creation.box(extents=(2, 1, 1)),
+        "l_shape": trimesh.creation.box(bounds=[(0, 0, 0), (2, 1, 1)]).union(
+            trimesh.creation.box(bounds=[(0, 0, 0.5), (1, 1, 2)]), engine="manifold"
+        ),
+    }
+    paths = []
+    for name, mesh in shapes.items():
+        paths.append(folder / f"{name}.obj")
+        mesh.export(paths[-1])
+    return paths
+
+
+@pytest.fixture(scope="module")
+def batch(meshes, tmp_path_factory) -> list[str]:
+    """Files whose report exercises the driver's side: two files of one stem (``l_shape``,
+    ``l_shape#2``), an unreadable file between them, and a file of two bodies."""
+    folder = tmp_path_factory.mktemp("executor-batch")
+    (folder / "empty.obj").write_text("# no faces\nv 0 0 0\n")
+    twin = folder / "l_shape.obj"
+    twin.write_bytes(meshes[2].read_bytes())
+    scene = trimesh.Scene()
+    scene.add_geometry(trimesh.creation.box(extents=(1, 1, 1)), geom_name="a")
+    scene.add_geometry(
+        trimesh.creation.icosphere(subdivisions=2), geom_name="b", transform=_moved(3.0)
+    )
+    scene.export(folder / "pair.glb")
+    return [*map(str, meshes), str(folder / "empty.obj"), str(twin), str(folder / "pair.glb")]
+
+
+def _moved(x: float):
+    import numpy as np
+
+    matrix = np.eye(4)
+    matrix[0, 3] = x
+    return matrix
+
+
+def files(folder: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir()) if p.is_file()}
+
+
+def strip_progress(text: str) -> list[str]:
+    return [line for line in text.splitlines() if " elapsed" not in line]
+
+
+def untimed(report: dict) -> dict:
+    out = {k: v for k, v in report.items() if k != "generated_at"}
+    out["summary"] = {
+        k: v for k, v in report["summary"].items() if k not in ("seconds", "load_seconds")
+    }
+    return out
+
+
+def alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    try:  # a zombie is dead too
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().split()[2] != "Z"
+    except OSError:
+        return True
+
+
+def cache_entries(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.rglob("*") if p.is_file())
+
+
+class FifoReaderKiller(threading.Thread):
+    """Kills (SIGKILL) the process that opens ``fifo`` for reading, within ``deadline`` s.
+
+    Never blocks: the write end is opened with ``O_NONBLOCK`` (ENXIO until a reader has
+    the FIFO open), the reader is the other process holding the FIFO in ``/proc/*/fd``.
+    Once the reader is dead (or at the deadline) the write end is closed, so a reader that
+    was not killed reads end-of-file instead of waiting for ever. ``pid``: the process
+    killed (None: none found)."""
+
+    def __init__(self, fifo: Path, deadline: float = 60.0) -> None:
+        super().__init__(daemon=True)
+        self.fifo, self.deadline = fifo, time.monotonic() + deadline
+        self.pid: int | None = None
+
+    def run(self) -> None:
+        fd = None
+        try:
+            while fd is None and time.monotonic() < self.deadline:
+                try:
+                    fd = os.open(self.fifo, os.O_WRONLY | os.O_NONBLOCK)
+                except OSError as error:
+                    if error.errno != errno.ENXIO:
+                        raise
+                    time.sleep(0.02)
+            while fd is not None and self.pid is None and time.monotonic() < self.deadline:
+                self.pid = self._reader()
+                if self.pid is None:
+                    time.sleep(0.02)
+            if self.pid is not None:
+                os.kill(self.pid, signal.SIGKILL)
+                while alive(self.pid) and time.monotonic() < self.deadline:
+                    time.sleep(0.02)
+        finally:
+            if fd is not None:
+                os.close(fd)
+
+    def _reader(self) -> int | None:
+        target = os.stat(self.fifo)
+        for entry in Path("/proc").iterdir():
+            if not entry.name.isdigit() or int(entry.name) == os.getpid():
+                continue
+            try:
+                fds = list((entry / "fd").iterdir())
+            except OSError:
+                continue
+            for link in fds:
+                try:
+                    st = os.stat(link)
+                except OSError:
+                    continue
+                if (st.st_dev, st.st_ino) == (target.st_dev, target.st_ino):
+                    return int(entry.name)
+        return None
+
+
+def run_killing_reader(fifo: Path, args: list[str]):
+    """``meshcol args`` (in this process) while the worker that opens ``fifo`` is killed; the
+    result and the killed pid. ``args`` should carry a ``--timeout`` as a backstop."""
+    killer = FifoReaderKiller(fifo)
+    killer.start()
+    try:
+        result = CliRunner().invoke(main, args)
+    finally:
+        killer.join(timeout=70)
+    assert not killer.is_alive()
+    assert killer.pid is not None, "no worker opened the FIFO"
+    assert killer.pid != os.getpid()
+    return result, killer.pid
+
+
+def _inspect(args: list[str]):
+    return CliRunner().invoke(main, ["inspect", *args])
+
+
+# --------------------------------------------------------------------------------------------
+# inspect on the local pool
+
+
+@pytest.mark.slow
+def test_inspect_on_the_local_pool_is_byte_identical_to_the_in_process_run(batch) -> None:
+    local = _inspect(batch)
+    pool = _inspect([*batch, "--executor", "local", "--jobs", "2"])
+    assert local.exit_code == pool.exit_code == 2  # empty.obj is not inspected
+    assert pool.stdout == local.stdout
+    assert strip_progress(pool.stderr) == strip_progress(local.stderr)
+    report = json.loads(pool.stdout)
+    assert [b["name"] for b in report["bodies"]] == [
+        "torus",
+        "box",
+        "l_shape",
+        "l_shape#2",
+        "pair/a",
+        "pair/b",
+    ]
+    # another format, the same bytes
+    csv = [_inspect([*batch, "--format", "csv", *j]) for j in ([], ["-j", "2"])]
+    assert csv[0].stdout == csv[1].stdout and "l_shape#2" in csv[0].stdout
+
+
+@pytest.mark.slow
+@linux_only
+def test_an_inspect_timeout_on_the_local_pool_fails_only_its_file(batch, tmp_path) -> None:
+    hang = tmp_path / "hang.obj"
+    os.mkfifo(hang)
+    start = time.perf_counter()
+    result = _inspect([batch[0], str(hang), batch[1], "--jobs", "2", "--timeout", "3"])
+    assert time.perf_counter() - start < 60
+    assert result.exit_code == 2, result.stderr
+    report = json.loads(result.stdout)
+    assert [b["name"] for b in report["bodies"]] == ["torus", "box"]
+    assert report["errors"] == [
+        {"source": str(hang), "body": None, "message": "timed out after 3 s"}
+    ]
+    assert f"meshcol: error: {hang}: timed out after 3 s" in result.stderr
+
+
+@pytest.mark.slow
+@linux_only
+def test_a_killed_inspect_worker_fails_only_its_file(batch, tmp_path) -> None:
+    """Six files, two workers: the worker reading the third is killed by its pid; the
+    report is the in-process run's plus that file's error."""
+    fifo = tmp_path / "killed.obj"
+    os.mkfifo(fifo)
+    inputs = [*batch[:2], str(fifo), *batch[2:3], *batch[5:]]
+    result, pid = run_killing_reader(fifo, ["inspect", *inputs, "--jobs", "2", "--timeout", "60"])
+    assert not alive(pid)
+    assert result.exit_code == 2, result.stderr
+    report = json.loads(result.stdout)
+    expected = json.loads(_inspect([*batch[:3], *batch[5:]]).stdout)
+    assert report["bodies"] == expected["bodies"]
+    assert report["errors"] == [
+        {"source": str(fifo), "body": None, "message": "worker process died (exit code -9)"}
+    ]
+    assert f"meshcol: error: {fifo}: worker process died (exit code -9)" in result.stderr
+
+
+# --------------------------------------------------------------------------------------------
+# check on the local pool
+
+CHECK = ["--shape", "decomposed", "--threshold", "0.2", "--fail-on", "none"]
+
+
+@pytest.mark.slow
+def test_check_on_the_local_pool_is_byte_identical_to_the_in_process_run(batch, tmp_path) -> None:
+    inputs = [batch[1], batch[2], batch[4], batch[5]]  # box, l_shape, l_shape#2, pair.glb
+    runner = CliRunner()
+    common = ["check", *inputs, *CHECK]
+    local = runner.invoke(main, [*common, "--cache-dir", str(tmp_path / "c1")])
+    pool = runner.invoke(main, [*common, "--cache-dir", str(tmp_path / "c2"), "-j", "2"])
+    assert local.exit_code == pool.exit_code == 0, pool.stderr
+    a, b = json.loads(local.stdout), json.loads(pool.stdout)
+    assert untimed(a) == untimed(b)
+    assert len(a["pairs"]) >= 3
+    assert cache_entries(tmp_path / "c1") == cache_entries(tmp_path / "c2") != []
+    # byte for byte in a format without timings
+    csv = [
+        runner.invoke(main, [*common, "--cache-dir", str(tmp_path / "c1"), "--format", "csv", *j])
+        for j in ([], ["-j", "2"])
+    ]
+    assert csv[0].exit_code == csv[1].exit_code == 0, csv[1].stderr
+    assert csv[0].stdout == csv[1].stdout and csv[0].stdout.count("\n") >= 4
+
+
+@pytest.mark.slow
+@linux_only
+def test_a_check_timeout_on_the_local_pool_names_the_stuck_file(batch, tmp_path) -> None:
+    hang = tmp_path / "hang.obj"
+    os.mkfifo(hang)
+    start = time.perf_counter()
+    result = CliRunner().invoke(
+        main, ["check", batch[1], str(hang), batch[2], *CHECK, "-j", "2", "--timeout", "3"]
+    )
+    assert time.perf_counter() - start < 60
+    assert result.exit_code == 2
+    assert result.stdout == ""
+    assert result.stderr.strip().splitlines()[-1] == (
+        f"meshcol: error: {hang}: its task timed out after 3 s"
+    )
+
+
+@pytest.mark.slow
+@linux_only
+def test_a_killed_check_worker_fails_only_its_file(batch, tmp_path) -> None:
+    """The other files' tasks finish (their decompositions are in the cache, as a clean run
+    of them leaves it); the run names the file whose worker died, and writes no report."""
+    fifo = tmp_path / "killed.obj"
+    os.mkfifo(fifo)
+    others = [batch[1], batch[2], batch[4], batch[5]]
+    inputs = [*others[:2], str(fifo), *others[2:]]
+    out = tmp_path / "report.json"
+    result, pid = run_killing_reader(
+        fifo,
+        ["check", *inputs, *CHECK, "-j", "2", "--timeout", "60"]
+        + ["--cache-dir", str(tmp_path / "c1"), "--report", str(out)],
+    )
+    assert not alive(pid)
+    assert result.exit_code == 2
+    assert result.stderr.strip().splitlines()[-1] == (
+        f"meshcol: error: {fifo}: its task failed: worker process died (exit code -9)"
+    )
+    assert not out.exists()
+    clean = CliRunner().invoke(
+        main, ["check", *others, *CHECK, "--cache-dir", str(tmp_path / "c2")]
+    )
+    assert clean.exit_code == 0, clean.stderr
+    assert cache_entries(tmp_path / "c1") == cache_entries(tmp_path / "c2") != []
