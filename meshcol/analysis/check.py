@@ -67,6 +67,36 @@ FAIL_ON = {
     "clearance": "clearance",
     "none": None,
 }
+#: The rule (meshcol.analysis.rules) of each pair status but ``separated``.
+PAIR_RULES = {
+    "clearance": "MC504",
+    "contact": "MC503",
+    "penetrating": "MC501",
+    "contained": "MC502",
+}
+
+
+def failing_rules(fail_on: str) -> tuple[str, ...]:
+    """The rule ids a ``--fail-on`` value fails on: a status level (``penetration``,
+    ``contact``, ``clearance``, ``none``: that status and the more severe ones) or
+    comma-separated rule ids or names (``MC501,missing-collider``, ``all``).
+
+    Raises
+    ------
+    UnknownRuleError
+        Neither a level nor rules of check (a ValueError; the message lists the valid ones).
+    """
+    from meshcol.analysis.rules import UnknownRuleError, select_rules
+
+    if fail_on in FAIL_ON:
+        least = FAIL_ON[fail_on]
+        if least is None:
+            return ()
+        return tuple(PAIR_RULES[s] for s in PAIR_STATUSES[SEVERITY[least] :])
+    try:
+        return select_rules(fail_on, "check")
+    except UnknownRuleError as exc:
+        raise UnknownRuleError(f"{exc} (or a level: {', '.join(FAIL_ON)})") from None
 
 
 @dataclass(frozen=True)
@@ -85,7 +115,8 @@ class CheckOptions:
         Minimum gap required; pairs closer than it (but not touching) have status
         ``clearance``. 0 disables the band.
     fail_on : str
-        ``penetration`` (default), ``contact``, ``clearance`` or ``none``.
+        ``penetration`` (default), ``contact``, ``clearance`` or ``none`` (that status and the
+        more severe ones fail), or comma-separated rule ids or names (:func:`failing_rules`).
     ignore : tuple of str
         ``A:B`` rules with shell-style globs on body names; matching pairs (either order) are
         reported as ignored and never fail the run.
@@ -116,8 +147,7 @@ class CheckOptions:
             raise ValueError(f"tolerance must be a finite number >= 0, got {self.tolerance!r}")
         if not (math.isfinite(self.clearance) and self.clearance >= 0):
             raise ValueError(f"clearance must be a finite number >= 0, got {self.clearance!r}")
-        if self.fail_on not in FAIL_ON:
-            raise ValueError(f"fail_on must be one of {', '.join(FAIL_ON)}, got {self.fail_on!r}")
+        failing_rules(self.fail_on)
         for rule in self.ignore:
             parse_ignore_rule(rule)
 
@@ -153,6 +183,9 @@ class CheckReport:
     warnings : list of str
         What the run could not do as asked (``UCX_`` parts naming nothing, flat bodies that
         could not be decomposed), one line each.
+    findings : list of dict
+        Finding records (:class:`meshcol.analysis.rules.Finding` fields and ``failed``):
+        MC301 per body without a usable collider, one per pair not separated nor ignored.
     """
 
     bodies: list[dict]
@@ -162,6 +195,7 @@ class CheckReport:
     units: str | None
     generated_at: str
     warnings: list[str] = field(default_factory=list)
+    findings: list[dict] = field(default_factory=list)
 
     @property
     def passed(self) -> bool:
@@ -183,6 +217,7 @@ class CheckReport:
             "bodies": self.bodies,
             "summary": self.summary,
             "pairs": self.pairs,
+            "findings": self.findings,
         }
 
     def worst_pairs(self, count: int = 10) -> list[dict]:
@@ -506,10 +541,9 @@ def check_scene(
     status_index[sd < -tol] = SEVERITY["penetrating"]
     status_index[contained] = SEVERITY["contained"]
 
-    threshold = FAIL_ON[options.fail_on]
-    violation = np.zeros(k, dtype=bool)
-    if threshold is not None:
-        violation = (status_index >= SEVERITY[threshold]) & ~ignored
+    fail_rules = failing_rules(options.fail_on)
+    failing_status = [SEVERITY[s] for s, rule in PAIR_RULES.items() if rule in fail_rules]
+    violation = np.isin(status_index, failing_status) & ~ignored
     if options.baseline is not None:
         idx = np.flatnonzero(violation)
         violation[idx] = _worse_than_baseline(
@@ -566,6 +600,7 @@ def check_scene(
         for a, b, s, d, dp, sdv, nv, pa, pb, ia, ib, na, nb, ig, vi, fa, vol in columns
     ]
     pairs.sort(key=lambda p: (p["body_a"], p["body_b"]))
+    findings = _findings(pairs, shapes, options, fail_rules)
 
     part_counts = np.diff(shapes.body_part_offsets).tolist()
     files = _relative_paths([body.source for body in bodies])
@@ -597,7 +632,9 @@ def check_scene(
         "min_distance": _num(finite_distance.min()) if len(finite_distance) else None,
         "max_depth": _num(depth.max()) if k else None,
         "violations": int(np.count_nonzero(violation)),
-        "passed": not bool(violation.any()),
+        "failed_findings": sum(f["failed"] for f in findings),
+        "passed": not any(f["failed"] for f in findings if f["other_body"] is None)
+        and not bool(violation.any()),
         "seconds": round(seconds, 6),
         "load_seconds": None if load_seconds is None else round(load_seconds, 6),
     }
@@ -606,6 +643,7 @@ def check_scene(
         "tolerance": options.tolerance,
         "clearance": options.clearance,
         "fail_on": options.fail_on,
+        "fail_on_rules": list(fail_rules),
         "ignore": list(options.ignore),
         "baseline": _relative(options.baseline_source),
         "excluded_pairs": [
@@ -623,7 +661,62 @@ def check_scene(
         scene.units,
         datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
         [*scene.warnings, *shapes.warnings],
+        findings,
     )
+
+
+def _findings(
+    pairs: list[dict], shapes: Any, options: CheckOptions, fail_rules: Sequence[str]
+) -> list[dict]:
+    """Finding records: MC301 per body without a usable collider (every convex part a
+    segment or a point: no area), then one per pair that is not separated and not ignored
+    (MC501..MC504), each with ``failed`` (its rule fails the run; a pair's also needs it to
+    be a violation, which the baseline may clear)."""
+    from meshcol.analysis.rules import finding
+    from meshcol.collision.hull import HullStatus
+
+    out = []
+    no_area = np.isin(shapes.shapes.hull_status, (HullStatus.COLLINEAR, HullStatus.SINGLE_POINT))
+    no_area &= shapes.shapes.kinds == 0  # polytopes
+    counts = np.diff(shapes.body_part_offsets)
+    starts = shapes.body_part_offsets[:-1]
+    if len(no_area):
+        flat_parts = np.add.reduceat(no_area.astype(np.int64), starts) if len(starts) else []
+        for b in np.flatnonzero((np.asarray(flat_parts) == counts) & (counts > 0)).tolist():
+            record = finding(
+                "MC301",
+                shapes.bodies[b].name,
+                None,
+                0.0,
+                0.0,
+                "no area: the collider is a segment or a point (every face degenerate)",
+            ).to_dict()
+            out.append(dict(record, failed="MC301" in fail_rules))
+    for p in pairs:
+        rule = PAIR_RULES.get(p["status"])
+        if rule is None or p["ignored"]:
+            continue
+        if p["status"] == "clearance":
+            measured, limit, text = p["distance"], options.clearance, "closer than the clearance"
+        elif p["status"] == "contact":
+            sd = p["signed_distance"]
+            measured, limit, text = None if sd is None else abs(sd), options.tolerance, "touch"
+        else:
+            measured, limit = p["depth"], options.tolerance
+            text = "one lies inside the other" if p["status"] == "contained" else "interpenetrate"
+        value = "" if measured is None else f": {measured:.6g}"
+        record = finding(
+            rule,
+            p["body_a"],
+            p["part_a"],
+            measured,
+            limit,
+            f"{p['body_a']} and {p['body_b']} {text}{value}",
+            other_body=p["body_b"],
+            other_part=p["part_b"],
+        ).to_dict()
+        out.append(dict(record, failed=bool(p["violation"])))
+    return out
 
 
 def _worse_than_baseline(

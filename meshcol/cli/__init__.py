@@ -37,6 +37,7 @@ COMMANDS: dict[str, str] = {
     "sweep": "meshcol.cli.sweep:sweep",
     "check": "meshcol.cli.check:check",
     "collision-matrix": "meshcol.cli.collision_matrix:collision_matrix",
+    "rules": "meshcol.cli.rules:rules",
 }
 
 CONTEXT_SETTINGS = {"help_option_names": ["-h", "--help"], "max_content_width": 100}

@@ -26,6 +26,17 @@ FAIL_ON_CHOICES = tuple(FAIL_ON)
 SHAPE_CHOICES = COLLIDER_KINDS
 
 
+def _parse_fail_on(ctx: click.Context, param: click.Parameter, value: str) -> str:
+    from meshcol.analysis.check import failing_rules
+    from meshcol.analysis.rules import UnknownRuleError
+
+    try:
+        failing_rules(value)
+    except UnknownRuleError as exc:
+        raise click.BadParameter(str(exc), ctx, param) from None
+    return value
+
+
 @click.command(
     "check", short_help="Every pair of bodies: apart, clearance, contact, penetrating or contained."
 )
@@ -53,10 +64,14 @@ SHAPE_CHOICES = COLLIDER_KINDS
 )
 @click.option(
     "--fail-on",
-    type=click.Choice(FAIL_ON_CHOICES),
     default="penetration",
     show_default=True,
-    help="Least severe status that fails the run (exit 1).",
+    metavar="LEVEL|RULES",
+    callback=_parse_fail_on,
+    help="Least severe status that fails the run (exit 1): "
+    + ", ".join(FAIL_ON_CHOICES)
+    + "; or comma-separated rule ids or names (MC501,MC301, penetrating, missing-collider, "
+    "all; 'meshcol rules').",
 )
 @click.option(
     "--ignore",
