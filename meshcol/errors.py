@@ -7,6 +7,7 @@ them, in one place (``meshcol/cli/__init__.py``), to a one-line message and exit
 from __future__ import annotations
 
 import os
+from typing import Any
 
 __all__ = [
     "InputFileError",
@@ -15,6 +16,7 @@ __all__ = [
     "MissingDependencyError",
     "OutputPathError",
     "SceneError",
+    "TargetError",
 ]
 
 
@@ -33,6 +35,11 @@ class MeshcolError(Exception):
         self.message = message
         self.path = None if path is None else os.fspath(path)
         super().__init__(f"{self.path}: {message}" if self.path is not None else message)
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # Pickled as (message, path), not the joined text: an error raised in a worker
+        # process (``--executor``) reaches the caller as it was raised.
+        return (type(self), (self.message, self.path))
 
 
 class InputFileError(MeshcolError, ValueError):
@@ -53,3 +60,7 @@ class MissingDependencyError(MeshcolError, ImportError):
 
 class OutputPathError(MeshcolError, ValueError):
     """An output would replace an input, or two outputs are one file: nothing is written."""
+
+
+class TargetError(MeshcolError, ValueError):
+    """An engine target profile is unknown, malformed, or has an unknown or ill-typed key."""

@@ -133,6 +133,16 @@ SLOW_TESTS = {
     "test_short_fuzzing_run_finds_nothing",
     "test_signals_stop_the_run_and_leave_nothing",
     "test_max_hausdorff_gates_what_sticks_out_not_the_cuts",
+    # session 6: the fast lane reached 59 s with the new tests; the slowest go here
+    "test_decompose_then_check_reuses_the_cache_part_by_part",
+    "test_lattice_of_touching_unit_cubes_uses_threads_and_grid",
+    "test_random_clouds_equal_qhull_and_keep_the_invariants",
+    "test_worker_pool_reads_tasks_ahead_and_fails_fast",
+    "test_bvh_distance_equals_brute_force_over_triangle_pairs",
+    "test_denormal_scale_is_a_one_line_error_not_a_crash",
+    "test_structured_box_family_distance_and_depth_exact",
+    "test_each_profile_brings_a_fine_sphere_within_its_counts",
+    "test_containment_of_disjoint_pairs_equals_the_exact_winding_number",
 }
 
 

@@ -81,6 +81,7 @@ def test_parts_layout_and_report(meshes, tmp_path) -> None:
         "hausdorff_exceeded": 0,
         "ok": 1,
         "parts": n,
+        "parts_exceeded": 0,
         "timeout": 0,
     }
 
@@ -223,12 +224,13 @@ def test_max_hausdorff_fails_the_run(meshes, tmp_path) -> None:
         str(tmp_path / "o"),
         *FAST,
     ]
-    code, stdout, _ = run([*args, "--max-hausdorff", "1e-9"])
+    # --search off: the limit is only checked (without it the run would search for it).
+    code, stdout, _ = run([*args, "--max-hausdorff", "1e-9", "--search", "off"])
     assert code == 1
     report = json.loads(stdout)
     assert report["files"][0]["bodies"][0]["hausdorff_ok"] is False
     assert report["summary"]["hausdorff_exceeded"] == 1
-    code, stdout, _ = run([*args, "--max-hausdorff", "10"])
+    code, stdout, _ = run([*args, "--max-hausdorff", "10", "--search", "off"])
     assert code == 0 and json.loads(stdout)["summary"]["hausdorff_exceeded"] == 0
 
 
@@ -580,7 +582,7 @@ def test_max_hausdorff_gates_what_sticks_out_not_the_cuts(tmp_path) -> None:
     def gate(parts, limit: float) -> tuple[int, dict]:
         # Hand-made parts under the cube's key, without metrics: the run measures them.
         decompose_cache.store(dataclasses.replace(engine_made, parts=parts, metrics=None), cache)
-        code, stdout, stderr = run([*args, "--max-hausdorff", repr(limit)])
+        code, stdout, stderr = run([*args, "--max-hausdorff", repr(limit), "--search", "off"])
         assert stdout, stderr
         body = json.loads(stdout)["files"][0]["bodies"][0]
         return code, body
@@ -634,7 +636,8 @@ def test_outputs_are_checked_before_any_work(meshes, tmp_path, monkeypatch) -> N
         (
             ["-o", "out", "--report", box],  # refused by its extension before anything else
             f"invalid value for '--report': unknown report extension '.obj' in '{box}': "
-            "expected .json or .csv (see 'meshcol decompose -h')",
+            "expected .json, .csv or .xml (or give --report-format json|csv|junit|github) "
+            "(see 'meshcol decompose -h')",
         ),
         (
             ["-o", "out", "--cache-dir", "a_file/cache"],

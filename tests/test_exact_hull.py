@@ -475,3 +475,30 @@ def test_large_torus_and_cube_grid_equal_qhull() -> None:
     hull = exact_hull(cube)
     assert set(map(tuple, hull.vertices)) == set(map(tuple, CUBE))
     assert _hull_triangles(cube) == _hull_triangles(CUBE)
+
+
+@settings(max_examples=60)
+@given(
+    st.tuples(*[st.floats(0.01, 100.0) for _ in range(3)]),
+    st.tuples(*[st.floats(-1e3, 1e3) for _ in range(3)]),
+    st.integers(0, 2**32 - 1),
+)
+def test_distance_to_a_box_hull_is_the_analytic_one(half, centre, seed) -> None:
+    """Points on the surface (vertices, where the two triangles of a face meet) are at 0, not
+    at the distance of a coplanar triangle they lie a rounding error in front of; points
+    around the box are at the analytic box distance."""
+    from meshcol.collision.hull import distance_to_hull
+
+    h, c = np.array(half), np.array(centre)
+    signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+    rotation, _ = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))
+    corners = c + (signs * h) @ rotation.T
+    hull = exact_hull(corners)
+    rng = np.random.default_rng(seed)
+    local = np.vstack(
+        [signs * h, rng.uniform(-3, 3, (200, 3)) * h, signs * h * rng.uniform(0, 1, (8, 1))]
+    )
+    expected = np.linalg.norm(np.maximum(np.abs(local) - h, 0.0), axis=1)
+    got = distance_to_hull(c + local @ rotation.T, hull)
+    scale = np.abs(c).max() + h.max()
+    np.testing.assert_allclose(got, expected, rtol=1e-9, atol=1e-9 * scale)

@@ -218,15 +218,16 @@ CASES = [
     (
         "inspect cube.obj --format xml",
         2,
-        ERR + r"invalid value for '--format': 'xml' is not one of 'json', 'csv'" + USAGE,
+        ERR + r"invalid value for '--format': 'xml' is not one of 'json', 'csv', 'junit', "
+        r"'github'" + USAGE,
         [],
     ),
     (
-        "inspect cube.obj --report out.xml",
+        "inspect cube.obj --report out.txt",
         2,
-        ERR + r"invalid value for '--report': unknown report extension '\.xml' in 'out\.xml': "
-        r"expected \.json or \.csv \(or give --format json\|csv\)" + USAGE,
-        ["out.xml"],
+        ERR + r"invalid value for '--report': unknown report extension '\.txt' in 'out\.txt': "
+        r"expected \.json, \.csv or \.xml \(or give --format json\|csv\|junit\|github\)" + USAGE,
+        ["out.txt"],
     ),
     (
         "check scene.json --format csv --report out.json",
@@ -236,11 +237,12 @@ CASES = [
         ["out.json"],
     ),
     (
-        "decompose cube.obj -o parts --report out.xml",
+        "decompose cube.obj -o parts --report out.txt",
         2,
-        ERR + r"invalid value for '--report': unknown report extension '\.xml' in 'out\.xml': "
-        r"expected \.json or \.csv" + USAGE,
-        ["parts", "out.xml"],
+        ERR + r"invalid value for '--report': unknown report extension '\.txt' in 'out\.txt': "
+        r"expected \.json, \.csv or \.xml \(or give --report-format json\|csv\|junit\|github\)"
+        + USAGE,
+        ["parts", "out.txt"],
     ),
     ("check", 2, ERR + r"missing argument 'INPUT\.\.\.'" + USAGE, []),
     ("sweep motion.json --bogus", 2, ERR + r"no such option '--bogus'" + USAGE, []),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from fractions import Fraction
 
@@ -14,6 +15,7 @@ from hypothesis import strategies as st
 import meshcol
 from meshcol._native import core as _core
 from meshcol.collision.mesh_query import (
+    MeshIntersectsBatch,
     MeshSet,
     mesh_distance,
     mesh_distance_batch,
@@ -981,3 +983,51 @@ def test_int64_pairs_are_range_checked_by_the_core_with_the_same_message() -> No
     # floats are refused, never truncated to indices
     with pytest.raises(ValueError, match=r"integer"):
         mesh_intersects_batch(meshes, None, np.array([[0.0, 1.0]]))
+
+
+def test_intersects_batch_reads_every_input_form_alike() -> None:
+    """The batch's one-call path (arrays already in the core's form, and lists of int pairs,
+    read in place) and its converting path give the same results, in a result built with
+    the dataclass's fields, as fresh writable arrays."""
+    cube = box([0, 0, 0], [1, 1, 1])
+    p = np.stack([np.eye(4), pose(translation=(0.5, 0.5, 0.5)), pose(translation=(3, 0, 0))])
+    meshes = MeshSet.from_arrays([cube, cube, cube], p)
+    pairs = np.array([[0, 1], [0, 2], [1, 2], [2, 2]], dtype=np.int64)
+    expected = [True, False, False, True]
+    read_only = pairs.copy()
+    read_only.flags.writeable = False
+    forms = [
+        pairs,
+        read_only,
+        pairs.tolist(),
+        tuple(map(tuple, pairs.tolist())),
+        [list(map(np.int64, row)) for row in pairs],  # numpy scalars: converted
+        pairs.astype(np.int32),
+        np.asfortranarray(pairs),
+        np.ascontiguousarray(pairs.T).T,  # a strided view
+    ]
+    for poses in (None, p, p.tolist(), p.astype(np.float32).astype(np.float64)):
+        for form in forms:
+            r = mesh_intersects_batch(meshes, poses, form, threads=1)
+            assert isinstance(r, MeshIntersectsBatch)
+            assert [f.name for f in dataclasses.fields(r)] == ["intersecting", "status"]
+            assert r.intersecting.dtype == np.bool_ and r.status.dtype == np.int8
+            assert r.intersecting.flags.writeable and r.status.flags.c_contiguous
+            assert r.intersecting.tolist() == expected, (type(form), type(poses))
+            assert r.status.tolist() == [Status.CONVERGED] * 4
+    # every call makes its own arrays
+    a = mesh_intersects_batch(meshes, None, pairs[:1])
+    b = mesh_intersects_batch(meshes, None, pairs[:1])
+    assert a.intersecting is not b.intersecting and not np.shares_memory(a.status, b.status)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        a.intersecting = b.intersecting  # type: ignore[misc]
+    assert len(mesh_intersects_batch(meshes, None, [])) == 0
+    for bad in ([[True, False]], [[0, 1, 2]], [(0.0, 1.0)]):
+        with pytest.raises(ValueError, match=r"^pairs must"):
+            mesh_intersects_batch(meshes, None, bad)
+    with pytest.raises(ValueError, match=r"^pairs: index 3 out of range for 3 meshes$"):
+        mesh_intersects_batch(meshes, None, [(0, 3)])
+    with pytest.raises(ValueError, match=r"^poses must be \(3, 4, 4\), got \(2, 4, 4\)$"):
+        mesh_intersects_batch(meshes, p[:2], pairs)
+    with pytest.raises(TypeError, match=r"MeshSet"):
+        mesh_intersects_batch(cube, None, pairs)  # type: ignore[arg-type]

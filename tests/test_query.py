@@ -162,6 +162,13 @@ def test_convex_set_layout_and_constructors():
     np.testing.assert_allclose(cs.params[3, :2], [1, 1.5])
     np.testing.assert_allclose(cs.params[4, :2], [2, 2.5])
     assert list(cs.offsets) == [0, 8, 8, 8, 8, 8]
+    assert [cs.primitive(h) for h in range(5)] == [
+        None,
+        Sphere(1),
+        Box((2, 4, 6)),
+        Capsule(1, 3),
+        Cylinder(2, 5),
+    ]
     assert cs.vertices.dtype == np.float64 and cs.offsets.dtype == np.int64
     assert cs.kinds.dtype == np.int8
     with pytest.raises(ValueError):

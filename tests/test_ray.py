@@ -211,3 +211,117 @@ def test_importing_meshcol_and_help_load_no_ray() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+# --------------------------------------------------------------------------------------------
+# inspect and check over many inputs: one task per file
+
+
+@pytest.fixture(scope="module")
+def batch(meshes, tmp_path_factory) -> list[str]:
+    """Files whose report exercises the driver's side: two files of one stem (``l_shape``,
+    ``l_shape#2``), an unreadable file between them, and a file of two bodies."""
+    folder = tmp_path_factory.mktemp("ray-batch")
+    (folder / "empty.obj").write_text("# no faces\nv 0 0 0\n")
+    twin = folder / "l_shape.obj"
+    twin.write_bytes(meshes[2].read_bytes())
+    scene = trimesh.Scene()
+    scene.add_geometry(trimesh.creation.box(extents=(1, 1, 1)), geom_name="a")
+    scene.add_geometry(
+        trimesh.creation.icosphere(subdivisions=2), geom_name="b", transform=_moved(3.0)
+    )
+    scene.export(folder / "pair.glb")
+    return [*map(str, meshes), str(folder / "empty.obj"), str(twin), str(folder / "pair.glb")]
+
+
+def _moved(x: float):
+    import numpy as np
+
+    matrix = np.eye(4)
+    matrix[0, 3] = x
+    return matrix
+
+
+def _strip_progress(text: str) -> list[str]:
+    return [line for line in text.splitlines() if " elapsed" not in line]
+
+
+def _inspect(args: list[str]):
+    return CliRunner().invoke(main, ["inspect", *args])
+
+
+@pytest.mark.slow
+def test_inspect_on_ray_is_byte_identical_to_the_local_run(ray_cluster, batch) -> None:
+    local = _inspect(batch)
+    remote = _inspect([*batch, "--executor", "ray", "--jobs", "2"])
+    assert local.exit_code == remote.exit_code == 2  # empty.obj is not inspected
+    assert remote.stdout == local.stdout
+    assert _strip_progress(remote.stderr) == _strip_progress(local.stderr)
+    report = json.loads(remote.stdout)
+    names = [b["name"] for b in report["bodies"]]
+    assert names[:3] == ["torus", "box", "l_shape"] and "l_shape#2" in names
+    assert [e["source"] for e in report["errors"]] == [batch[3]]
+
+
+@pytest.mark.slow
+def test_an_inspect_timeout_fails_only_its_file(ray_cluster, batch, tmp_path) -> None:
+    """A file whose read never ends (a FIFO nobody writes) is cancelled by force at the
+    timeout; the other files are reported."""
+    hang = tmp_path / "hang.obj"
+    os.mkfifo(hang)
+    start = time.perf_counter()
+    result = _inspect([batch[0], str(hang), batch[1], "--executor", "ray", "--timeout", "4"])
+    assert time.perf_counter() - start < 60
+    assert result.exit_code == 2, result.stderr
+    report = json.loads(result.stdout)
+    assert [b["name"] for b in report["bodies"]] == ["torus", "box"]
+    assert report["errors"] == [
+        {"source": str(hang), "body": None, "message": "timed out after 4 s"}
+    ]
+    assert f"meshcol: error: {hang}: timed out after 4 s" in result.stderr
+
+
+@pytest.mark.slow
+def test_check_decomposed_on_ray_matches_the_local_run(ray_cluster, batch, tmp_path) -> None:
+    """The per-file work (reading, the decompositions through the cache) on Ray, the pairs
+    on the driver: the report of the sequential run, timings and time stamp aside."""
+    inputs = [batch[1], batch[2], batch[4], batch[5]]  # box, l_shape, l_shape#2, pair.glb
+    common = ["check", *inputs, "--shape", "decomposed", "--threshold", "0.2", "--fail-on", "none"]
+    runner = CliRunner()
+    local = runner.invoke(main, [*common, "--cache-dir", str(tmp_path / "c1")])
+    remote = runner.invoke(
+        main, [*common, "--cache-dir", str(tmp_path / "c2"), "--executor", "ray", "-j", "2"]
+    )
+    assert local.exit_code == remote.exit_code == 0, remote.stderr
+    a, b = json.loads(local.stdout), json.loads(remote.stdout)
+    assert _untimed(a) == _untimed(b)
+    assert len(a["pairs"]) >= 3
+    # The tasks filled the cache as the local run did: the same entries.
+    assert sorted(p.name for p in (tmp_path / "c1").rglob("*") if p.is_file()) == sorted(
+        p.name for p in (tmp_path / "c2").rglob("*") if p.is_file()
+    )
+
+
+def _untimed(report: dict) -> dict:
+    out = {k: v for k, v in report.items() if k != "generated_at"}
+    out["summary"] = {
+        k: v for k, v in report["summary"].items() if k not in ("seconds", "load_seconds")
+    }
+    return out
+
+
+def test_check_ray_address_needs_the_ray_executor(meshes) -> None:
+    for command in ("check", "inspect"):
+        result = CliRunner().invoke(main, [command, str(meshes[1]), "--ray-address", "auto"])
+        assert result.exit_code == 2
+        assert "--ray-address needs --executor ray" in result.stderr
+
+
+def test_inspect_and_check_on_ray_without_ray_exit_2_with_a_hint(meshes, monkeypatch) -> None:
+    monkeypatch.setitem(sys.modules, "ray", None)
+    for command in ("check", "inspect"):
+        result = CliRunner().invoke(main, [command, str(meshes[1]), "--executor", "ray"])
+        assert result.exit_code == 2
+        assert result.stderr.strip().splitlines() == [
+            "meshcol: error: --executor ray needs Ray: pip install 'meshcol[ray]'"
+        ]

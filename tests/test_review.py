@@ -163,11 +163,16 @@ def test_html_never_replaces_an_input(samples, tmp_path):
     assert mesh.read_bytes() == before
 
 
-def test_too_many_bodies_is_refused_in_one_line(samples, tmp_path, monkeypatch):
+@pytest.mark.parametrize("command", ["inspect", "check"])
+def test_too_many_bodies_is_refused_in_one_line(samples, tmp_path, monkeypatch, command):
+    """A page over its limits is refused before anything is written: no page, no report."""
     monkeypatch.setattr(review, "MAX_REVIEW_BODIES", 10)
     page = tmp_path / "x.html"
-    result = run(["inspect", str(samples / "level" / "scene.json"), "--html", str(page)])
+    report = tmp_path / "report.json"
+    scene = str(samples / "level" / "scene.json")
+    result = run([command, scene, "--html", str(page), "--report", str(report)])
     assert result.exit_code == 2
+    assert not report.exists()
     last = result.stderr.strip().splitlines()[-1]
     assert last == (
         "meshcol: error: review page: 25 bodies is over the limit of 10 a browser can show; "
@@ -232,6 +237,31 @@ def test_check_rows_violations_first(samples):
     assert severities == sorted(severities, key=lambda s: s != "violation")
     assert rows[0]["label"].startswith("depth ") and rows[0]["label"].endswith(" m")
     assert rows[0]["points"].shape == (2, 3) and rows[0]["normal"] is not None
+
+
+def test_check_page_draws_fitted_primitives(tmp_path):
+    """``--collider fit`` parts are primitives packed without vertices: each is drawn, at its
+    fitted pose, and the drawing holds the body's mesh."""
+    from meshcol.analysis.check import check
+    from meshcol.analysis.review import check_page
+
+    sphere = trimesh.creation.icosphere(subdivisions=2, radius=0.5)
+    sphere.export(tmp_path / "ball.obj")
+    slab = trimesh.creation.box((2.0, 0.4, 0.3))
+    slab.apply_transform(trimesh.transformations.rotation_matrix(0.3, (0, 0, 1)))
+    slab.apply_translation((3.0, 0.0, 0.0))
+    slab.export(tmp_path / "slab.obj")
+    inputs = [str(tmp_path / "ball.obj"), str(tmp_path / "slab.obj")]
+    report = check(inputs, collider="fit")
+    page = check_page(report, inputs, "fit", {})
+    drawn = [o for o in page._objects if o["group"] == "colliders"]
+    assert len(drawn) == 2
+    for o, mesh in zip(drawn, (sphere, slab)):
+        v = page._geometries[o["g"]].vertices @ o["pose"][:3, :3].T + o["pose"][:3, 3]
+        hull = trimesh.Trimesh(v, page._geometries[o["g"]].faces).convex_hull
+        # the drawn polytope is inscribed in the primitive: it holds the mesh up to its facets
+        assert np.all(hull.bounds[0] <= mesh.bounds[0] + 0.03)
+        assert np.all(hull.bounds[1] >= mesh.bounds[1] - 0.03)
 
 
 def _two_part_decomposition(tmp_path: Path) -> SimpleNamespace:

@@ -913,3 +913,34 @@ def test_bad_joint_axis(tmp_path, axis):
     )
     line = error_line("check", str(write(tmp_path, "ax.urdf", text)))
     assert "ax.urdf" in line and "joint 'j': axis must be a finite non-zero vector" in line
+
+
+def test_check_and_collision_matrix_share_one_adjacency_rule(tmp_path):
+    """MoveIt's rule in both: links with only geometry-less links between them are adjacent,
+    the two wheels under a bare root included (not joined to each other by any joint)."""
+    from meshcol.analysis.collision_matrix import collision_matrix
+
+    box = '<collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision>'
+    joint = (
+        '<joint name="{n}" type="{t}"><parent link="{p}"/><child link="{c}"/>'
+        '<origin xyz="{x} 0 0"/><axis xyz="0 1 0"/>'
+        '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+    )
+    text = urdf(
+        '<link name="root"/>'
+        f'<link name="wheel_l">{box}</link><link name="wheel_r">{box}</link>'
+        f'<link name="mount"/><link name="arm">{box}</link>'
+        + joint.format(n="jl", t="continuous", p="root", c="wheel_l", x=-1)
+        + joint.format(n="jr", t="continuous", p="root", c="wheel_r", x=1)
+        + joint.format(n="jm", t="fixed", p="wheel_l", c="mount", x=0)
+        + joint.format(n="ja", t="revolute", p="mount", c="arm", x=0.5)
+    )
+    path = write(tmp_path, "cart.urdf", text)
+    scene = load_robot(path)
+    adjacent = {tuple(sorted(p[:2])) for p in scene.excluded_pairs if p[2] == "adjacent"}
+    assert adjacent == {("wheel_l", "wheel_r"), ("arm", "wheel_l")}
+    matrix = collision_matrix(path, samples=50, seed=1)
+    from_matrix = {
+        tuple(sorted((e["link_a"], e["link_b"]))) for e in matrix.pairs if e["class"] == "adjacent"
+    }
+    assert from_matrix == adjacent

@@ -261,19 +261,123 @@ auto depth_batch(const MeshBvhSet& set, std::optional<Poses> poses, Pairs pairs,
                            status_arr);
 }
 
-auto intersects_batch(const MeshBvhSet& set, std::optional<Poses> poses, Pairs pairs, int threads) {
-    const PosedPairs in = read_pairs(set, poses, pairs);
+// The pairs of a call that takes them as a plain object: a C-contiguous (P, 2) int64 buffer
+// (a numpy array, read in place) or a list or tuple of (i, j) lists or tuples of Python ints
+// (copied); anything else reads as null and the caller converts it (as_pairs) and calls again.
+// The size of an exact list or tuple (false for anything else), and its item k (borrowed).
+bool sequence_size(PyObject* o, Py_ssize_t* size) {
+    if (PyList_CheckExact(o)) *size = PyList_Size(o);
+    else if (PyTuple_CheckExact(o)) *size = PyTuple_Size(o);
+    else return false;
+    return true;
+}
+
+PyObject* sequence_item(PyObject* o, Py_ssize_t k) {
+    return PyList_CheckExact(o) ? PyList_GetItem(o, k) : PyTuple_GetItem(o, k);
+}
+
+struct PairsArg {
+    Buffer buffer;
+    std::vector<std::int64_t> copied;
+    const std::int64_t* data = nullptr;
+    long long count = 0;
+
+    bool read(PyObject* pairs) {
+        if (const std::int64_t* p = buffer.get<std::int64_t>(pairs, {-1, 2})) {
+            data = p;
+            count = static_cast<long long>(buffer.shape(0));
+            return true;
+        }
+        // list and tuple access by functions, not the PySequence_Fast macros: the module is
+        // built for the stable ABI on Python 3.12 and later
+        Py_ssize_t n = 0;
+        if (!sequence_size(pairs, &n) || n == 0) return false;  // as_pairs decides what [] means
+        copied.resize(2 * static_cast<size_t>(n));
+        for (Py_ssize_t k = 0; k < n; ++k) {
+            PyObject* pair = sequence_item(pairs, k);
+            Py_ssize_t two = 0;
+            if (!sequence_size(pair, &two) || two != 2) return false;
+            for (Py_ssize_t c = 0; c < 2; ++c) {
+                PyObject* index = sequence_item(pair, c);
+                if (!PyLong_CheckExact(index)) return false;  // bools, numpy scalars: as_pairs
+                int overflow = 0;
+                const long long value = PyLong_AsLongLongAndOverflow(index, &overflow);
+                if (overflow != 0 || (value == -1 && PyErr_Occurred())) {
+                    PyErr_Clear();
+                    return false;
+                }
+                copied[2 * static_cast<size_t>(k) + static_cast<size_t>(c)] = value;
+            }
+        }
+        data = copied.data();
+        count = static_cast<long long>(n);
+        return true;
+    }
+};
+
+// A result dataclass instance made as its generated __init__ makes it (object.__setattr__ of
+// each field, frozen or not), without the Python frame: `names` (interned once by the caller)
+// and `values` in field order.
+nb::object dataclass_instance(nb::handle type, std::initializer_list<PyObject*> names,
+                              std::initializer_list<nb::handle> values) {
+    if (!PyType_Check(type.ptr())) throw nb::type_error("result_type must be a class");
+    auto* tp = reinterpret_cast<PyTypeObject*>(type.ptr());
+    auto alloc = reinterpret_cast<allocfunc>(PyType_GetSlot(tp, Py_tp_alloc));
+    nb::object self = nb::steal(alloc(tp, 0));
+    if (!self.is_valid()) throw nb::python_error();
+    auto value = values.begin();
+    for (PyObject* name : names)
+        if (PyObject_GenericSetAttr(self.ptr(), name, (value++)->ptr()) != 0) throw nb::python_error();
+    return self;
+}
+
+PyObject* interned(const char* name) {
+    PyObject* s = PyUnicode_InternFromString(name);
+    if (s == nullptr) throw nb::python_error();
+    return s;  // kept for the module's life
+}
+
+// Whether the surfaces of posed mesh pairs intersect, as a `result_type(intersecting, status)`
+// (meshcol.collision.mesh_query.MeshIntersectsBatch). `poses` (None: the set's defaults) and
+// `pairs` are taken as plain objects and read in place when they are already in the core's
+// form; otherwise the call returns None and the caller converts them (as_poses, as_pairs) and
+// calls again. A batch of one pair thus costs one native call, two numpy.empty calls and the
+// query: no DLPack import or export, no Python-level checks.
+nb::object intersects_batch(const MeshBvhSet& set, nb::handle poses, nb::handle pairs, int threads,
+                            nb::handle result_type) {
+    const size_t m = set.meshes.size();
+    std::vector<meshcol::Pose> owned_poses;
+    std::vector<char> owned_rigid;
+    const meshcol::Pose* pose = set.poses.data();
+    const char* rigid = set.rigid.data();
+    Buffer pose_buffer;
+    if (!poses.is_none()) {
+        const double* p = pose_buffer.get<double>(poses.ptr(), {static_cast<Py_ssize_t>(m), 4, 4});
+        if (p == nullptr) return nb::none();
+        owned_poses.resize(m);
+        owned_rigid.resize(m);
+        for (size_t i = 0; i < m; ++i) {
+            owned_rigid[i] = meshcol::is_rigid_matrix4(p + 16 * i, meshcol::defaults::rigid_tolerance);
+            owned_poses[i] = meshcol::Pose::from_matrix4(p + 16 * i);
+        }
+        pose = owned_poses.data();
+        rigid = owned_rigid.data();
+    }
+    PairsArg in;
+    if (!in.read(pairs.ptr())) return nb::none();
+    check_pairs(in.data, in.count, m);
     const auto n = static_cast<size_t>(in.count);
-    auto intersecting_arr = new_array<Out<bool, -1>>({n});
-    auto status_arr = new_array<Out<std::int8_t, -1>>({n});
-    bool* intersecting = intersecting_arr.data();
-    std::int8_t* status = status_arr.data();
+    bool* intersecting = nullptr;
+    std::int8_t* status = nullptr;
+    nb::object intersecting_arr = numpy_empty(n, &intersecting);
+    nb::object status_arr = numpy_empty(n, &status);
+    const std::int64_t* ij = in.data;
     const auto run = [&](long long begin, long long end) {
         for (long long k = begin; k < end; ++k) {
-            const auto i = static_cast<size_t>(in.pairs[2 * k]);
-            const auto j = static_cast<size_t>(in.pairs[2 * k + 1]);
-            status[k] = static_cast<std::int8_t>(intersects_one(set.meshes[i], in.poses[i], in.rigid[i] != 0,
-                                                                set.meshes[j], in.poses[j], in.rigid[j] != 0,
+            const auto i = static_cast<size_t>(ij[2 * k]);
+            const auto j = static_cast<size_t>(ij[2 * k + 1]);
+            status[k] = static_cast<std::int8_t>(intersects_one(set.meshes[i], pose[i], rigid[i] != 0,
+                                                                set.meshes[j], pose[j], rigid[j] != 0,
                                                                 &intersecting[k]));
         }
     };
@@ -284,7 +388,9 @@ auto intersects_batch(const MeshBvhSet& set, std::optional<Poses> poses, Pairs p
         nb::gil_scoped_release release;
         meshcol::parallel_for(in.count, t, run);
     }
-    return std::make_tuple(intersecting_arr, status_arr);
+    static PyObject* const intersecting_name = interned("intersecting");
+    static PyObject* const status_name = interned("status");
+    return dataclass_instance(result_type, {intersecting_name, status_name}, {intersecting_arr, status_arr});
 }
 
 // Why a single pair has no verdict, as the message of the ValueError the single-pair entry
@@ -311,27 +417,32 @@ size_t mesh_index(const MeshBvhSet& set, std::int64_t i) {
     return static_cast<size_t>(i);
 }
 
-using Pose4 = In<double, 4, 4>;
-
 // One pair at the set's default poses, or at the given ones: the GIL is kept (a disjoint
-// pair's root-box test costs less than releasing it) and nothing is allocated.
-bool intersects_pair(const MeshBvhSet& set, std::int64_t i, std::int64_t j, std::optional<Pose4> pose_i,
-                     std::optional<Pose4> pose_j) {
+// pair's root-box test costs less than releasing it) and nothing is allocated. A pose is read in
+// place when it is a C-contiguous (4, 4) float64 buffer; any other pose object makes the call
+// return None, and the caller converts it (as_pose) and calls again.
+nb::object intersects_pair(const MeshBvhSet& set, std::int64_t i, std::int64_t j, nb::handle pose_i,
+                           nb::handle pose_j) {
     const size_t a = mesh_index(set, i), b = mesh_index(set, j);
     meshcol::Pose pa = set.poses[a], pb = set.poses[b];
     bool ra = set.rigid[a] != 0, rb = set.rigid[b] != 0;
-    if (pose_i) {
-        ra = meshcol::is_rigid_matrix4(pose_i->data(), meshcol::defaults::rigid_tolerance);
-        pa = meshcol::Pose::from_matrix4(pose_i->data());
+    Buffer buffer_i, buffer_j;
+    if (!pose_i.is_none()) {
+        const double* p = buffer_i.get<double>(pose_i.ptr(), {4, 4});
+        if (p == nullptr) return nb::none();
+        ra = meshcol::is_rigid_matrix4(p, meshcol::defaults::rigid_tolerance);
+        pa = meshcol::Pose::from_matrix4(p);
     }
-    if (pose_j) {
-        rb = meshcol::is_rigid_matrix4(pose_j->data(), meshcol::defaults::rigid_tolerance);
-        pb = meshcol::Pose::from_matrix4(pose_j->data());
+    if (!pose_j.is_none()) {
+        const double* p = buffer_j.get<double>(pose_j.ptr(), {4, 4});
+        if (p == nullptr) return nb::none();
+        rb = meshcol::is_rigid_matrix4(p, meshcol::defaults::rigid_tolerance);
+        pb = meshcol::Pose::from_matrix4(p);
     }
     bool hit = false;
     const meshcol::Status status = intersects_one(set.meshes[a], pa, ra, set.meshes[b], pb, rb, &hit);
     if (status != meshcol::Status::CONVERGED) no_verdict(status, i, j, set, ra, rb);
-    return hit;
+    return nb::bool_(hit);
 }
 
 void set_poses(MeshBvhSet& set, Poses poses) {
@@ -460,8 +571,10 @@ void bind_mesh_query(nb::module_& m) {
              "checked for rigidity once).")
         .def("intersects_pair", &intersects_pair, "i"_a, "j"_a, "pose_i"_a = nb::none(),
              "pose_j"_a = nb::none(),
-             "Whether meshes i and j intersect, at the default poses or the given (4, 4) ones; "
-             "ValueError when the pair has no verdict (invalid mesh or pose, out of range).")
+             "Whether meshes i and j intersect, at the default poses or the given C-contiguous "
+             "(4, 4) float64 ones (None when a pose is another object: convert it and call "
+             "again); ValueError when the pair has no verdict (invalid mesh or pose, out of "
+             "range).")
         .def("distance_batch", &distance_batch, "poses"_a.none(), "pairs"_a, "threads"_a = 0,
              "max_distance"_a = std::numeric_limits<double>::infinity(),
              "Mesh-pair distances: (distance, point_a, point_b, intersecting, a_inside_b, "
@@ -469,8 +582,12 @@ void bind_mesh_query(nb::module_& m) {
         .def("depth_batch", &depth_batch, "poses"_a.none(), "pairs"_a, "threads"_a = 0,
              "Mesh-pair penetration depths (lower bounds of the minimum translation distance): "
              "(depth, point_a, point_b, normal, deepest_mesh, points_tested, status).")
-        .def("intersects_batch", &intersects_batch, "poses"_a.none(), "pairs"_a, "threads"_a = 0,
-             "Mesh-pair surface intersection tests: (intersecting, status).");
+        .def("intersects_batch", &intersects_batch, "poses"_a.none(), "pairs"_a, "threads"_a,
+             "result_type"_a,
+             "Mesh-pair surface intersection tests as result_type(intersecting, status); None "
+             "when poses is not None or a C-contiguous (M, 4, 4) float64 array, or pairs not a "
+             "C-contiguous (P, 2) int64 array or a non-empty list of (i, j) Python ints "
+             "(convert them and call again).");
 
     m.def("triangle_distance_batch", [](Triangles a, Triangles b) {
         if (a.shape(0) != b.shape(0))

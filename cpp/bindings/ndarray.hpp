@@ -10,6 +10,7 @@
 #include <initializer_list>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -62,6 +63,164 @@ A vector_array(std::vector<typename A::Scalar>&& values, size_t rows, size_t col
     nb::capsule owner(heap, [](void* p) noexcept { delete static_cast<std::vector<T>*>(p); });
     const size_t shape[2] = {rows, cols};
     return A(heap->data(), cols == 0 ? 1 : 2, shape, owner);
+}
+
+/// The buffer (Python's buffer protocol, as numpy arrays export it) of an argument taken as a
+/// plain object, for the calls whose whole cost is a few hundred nanoseconds: reading a numpy
+/// array this way costs a fraction of the ndarray caster's DLPack import. `get` accepts only a
+/// C-contiguous buffer of T in native byte order whose shape matches (-1: any size); anything
+/// else (another dtype, strides, a list) reads as null, and the caller takes its general path.
+class Buffer {
+public:
+    Buffer() = default;
+    Buffer(const Buffer&) = delete;
+    Buffer& operator=(const Buffer&) = delete;
+    ~Buffer() {
+        if (held_) PyBuffer_Release(&view_);
+    }
+
+    template <class T>
+    T* get(PyObject* object, std::initializer_list<Py_ssize_t> shape, bool writable = false) {
+        if (held_ || !PyObject_CheckBuffer(object)) return nullptr;
+        const int flags = PyBUF_RECORDS_RO | (writable ? PyBUF_WRITABLE : 0);
+        if (PyObject_GetBuffer(object, &view_, flags) != 0) {
+            PyErr_Clear();
+            return nullptr;
+        }
+        held_ = true;
+        if (view_.itemsize != static_cast<Py_ssize_t>(sizeof(T)) || !format_is<T>(view_.format) ||
+            view_.ndim != static_cast<int>(shape.size()) || !PyBuffer_IsContiguous(&view_, 'C'))
+            return nullptr;
+        int d = 0;
+        for (Py_ssize_t s : shape) {
+            if (s >= 0 && view_.shape[d] != s) return nullptr;
+            ++d;
+        }
+        return static_cast<T*>(view_.buf);
+    }
+
+    /// Size of dimension `d` of the buffer `get` accepted.
+    Py_ssize_t shape(int d) const { return view_.shape[d]; }
+
+private:
+    // struct-module codes: '@', '=' or (on a little-endian machine) '<' may lead.
+    template <class T>
+    static bool format_is(const char* f) {
+        if (f == nullptr) return false;
+        if (*f == '@' || *f == '=' || (*f == '<' && is_little_endian())) ++f;
+        if (f[0] == '\0' || f[1] != '\0') return false;
+        if constexpr (std::is_same_v<T, double>) return f[0] == 'd';
+        else if constexpr (std::is_same_v<T, bool>) return f[0] == '?';
+        else if constexpr (std::is_same_v<T, std::int8_t>) return f[0] == 'b';
+        else if constexpr (std::is_same_v<T, std::int64_t>) return f[0] == 'l' || f[0] == 'q';
+        else static_assert(sizeof(T) == 0, "no buffer format for this type");
+    }
+    static bool is_little_endian() {
+        const std::uint16_t one = 1;
+        return *reinterpret_cast<const unsigned char*>(&one) == 1;
+    }
+
+    Py_buffer view_{};
+    bool held_ = false;
+};
+
+/// numpy's array constructor from its C API table (the `_ARRAY_API` capsule every extension
+/// compiled against numpy reads at import_array), found without numpy's headers, which do not
+/// build under the stable ABI. Only entries fixed by numpy's ABI are used: 0
+/// (PyArray_GetNDArrayCVersion, checked to be ABI 1.x or 2.x), 2 (PyArray_Type) and 93
+/// (PyArray_New). Null members: numpy.empty is called instead.
+struct NumpyApi {
+    using NewArray = PyObject* (*)(PyTypeObject*, int, const Py_ssize_t*, int, const Py_ssize_t*,
+                                   void*, int, int, PyObject*);
+    PyTypeObject* array_type = nullptr;
+    NewArray new_array = nullptr;
+
+    static const NumpyApi& get() {
+        static const NumpyApi api = find();
+        return api;
+    }
+
+private:
+    static NumpyApi find() {
+        NumpyApi api;
+        for (const char* name : {"numpy._core._multiarray_umath", "numpy.core._multiarray_umath"}) {
+            PyObject* module = PyImport_ImportModule(name);
+            if (module == nullptr) {
+                PyErr_Clear();
+                continue;
+            }
+            PyObject* capsule = PyObject_GetAttrString(module, "_ARRAY_API");
+            Py_DECREF(module);
+            if (capsule == nullptr || !PyCapsule_CheckExact(capsule)) {
+                Py_XDECREF(capsule);
+                PyErr_Clear();
+                continue;
+            }
+            auto** table = static_cast<void**>(PyCapsule_GetPointer(capsule, PyCapsule_GetName(capsule)));
+            Py_DECREF(capsule);  // the module keeps the table alive
+            if (table == nullptr) {
+                PyErr_Clear();
+                continue;
+            }
+            const unsigned int abi = reinterpret_cast<unsigned int (*)()>(table[0])();
+            if (abi < 0x01000009u || abi >= 0x03000000u) break;
+            api.array_type = static_cast<PyTypeObject*>(table[2]);
+            api.new_array = reinterpret_cast<NewArray>(table[93]);
+            break;
+        }
+        return api;
+    }
+};
+
+/// A new, uninitialised, C-contiguous 1-D numpy array of `n` entries of T (bool or std::int8_t),
+/// and its data in `*data`, for results of a few entries: numpy's own constructor
+/// (NumpyApi) costs a small fraction of exporting an `Out` (numpy.asarray of a DLPack view),
+/// numpy.empty about a third. The data pointer is read where every extension compiled against
+/// numpy reads it (the first field after the object header of numpy's array struct, what
+/// PyArray_DATA expands to), not through a buffer export (which costs as much as the array);
+/// checked once against the buffer protocol, which is used from then on should the two ever
+/// disagree. Holds the GIL.
+template <class T>
+nb::object numpy_empty(size_t n, T** data) {
+    static_assert(std::is_same_v<T, bool> || std::is_same_v<T, std::int8_t>, "add the dtype");
+    constexpr int type_number = std::is_same_v<T, bool> ? 0 : 1;  // NPY_BOOL, NPY_BYTE
+    static int layout_checked = 0;  // 0: not yet, 1: the struct read agrees, -1: use the buffer
+    const NumpyApi& api = NumpyApi::get();
+    nb::object array;
+    if (api.new_array != nullptr) {
+        const Py_ssize_t shape[1] = {static_cast<Py_ssize_t>(n)};
+        array = nb::steal(api.new_array(api.array_type, 1, shape, type_number, nullptr, nullptr, 0, 0, nullptr));
+    } else {
+        // never released: they live as long as the interpreter's numpy
+        static PyObject* const empty = nb::object(nb::module_::import_("numpy").attr("empty")).release().ptr();
+        static PyObject* const dtype =
+            nb::object(nb::module_::import_("numpy").attr("dtype")(type_number == 0 ? "bool" : "int8"))
+                .release()
+                .ptr();
+        nb::object size = nb::steal(PyLong_FromSize_t(n));
+        if (!size.is_valid()) throw nb::python_error();
+        PyObject* args[] = {size.ptr(), dtype};
+        array = nb::steal(PyObject_Vectorcall(empty, args, 2, nullptr));
+    }
+    if (!array.is_valid()) throw nb::python_error();
+    struct ArrayHead {
+        PyObject head;
+        char* data;
+    };
+    if (layout_checked <= 0) {
+        Py_buffer view;
+        if (PyObject_GetBuffer(array.ptr(), &view, PyBUF_SIMPLE | PyBUF_WRITABLE) != 0) throw nb::python_error();
+        void* buffer_data = view.buf;
+        PyBuffer_Release(&view);
+        if (layout_checked == 0)
+            layout_checked = reinterpret_cast<ArrayHead*>(array.ptr())->data == buffer_data ? 1 : -1;
+        if (layout_checked < 0) {
+            *data = static_cast<T*>(buffer_data);
+            return array;
+        }
+    }
+    *data = reinterpret_cast<T*>(reinterpret_cast<ArrayHead*>(array.ptr())->data);
+    return array;
 }
 
 /// Throws unless `offsets` (n entries) starts at 0, ends at `total` and never decreases.

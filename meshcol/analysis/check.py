@@ -30,6 +30,7 @@ body ``a`` to body ``b``, ``signed_distance = distance - depth``.
 
 from __future__ import annotations
 
+import contextlib
 import fnmatch
 import math
 import os
@@ -236,6 +237,34 @@ class CheckReport:
 
         return dumps_json(self.to_dict())
 
+    def ci_suite(self) -> Any:
+        """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one case per candidate pair
+        (``body_a <-> body_b``): a failure when it violates ``--fail-on``, skipped when an
+        ``--ignore`` rule spares a pair the policy would fail, else passed; the message has
+        the status and its numbers. More than :data:`meshcol.io.ci.MAX_PASSED_CASES` passed
+        pairs become one case. The file is the scene input, or body_a's file."""
+        from meshcol.io.ci import CiSuite, collapse_passed
+
+        files = {b["name"]: b["file"] for b in self.bodies}
+        inputs = self.settings.get("inputs") or []
+        scene = inputs[0] if len(inputs) == 1 else None
+        threshold = FAIL_ON[self.settings["fail_on"]]
+        least = SEVERITY[threshold] if threshold is not None else len(PAIR_STATUSES)
+        settings = self.settings
+        cases = [_ci_case(p, files, scene, least, settings, self.units) for p in self.pairs]
+        s = self.summary
+        verb = "violates" if s["violations"] == 1 else "violate"
+        return CiSuite(
+            "check",
+            tuple(collapse_passed(cases, "pairs", "meshcol.check")),
+            settings,
+            seconds=(s["seconds"] or 0.0) + (s["load_seconds"] or 0.0),
+            warnings=tuple(self.warnings),
+            verdict=f"{s['violations']} of {s['candidate_pairs']} candidate pairs {verb} "
+            f"--fail-on {settings['fail_on']}",
+            units=self.units,
+        )
+
     def to_csv(self) -> str:
         from meshcol.io.report import dumps_csv, split_vectors
 
@@ -265,6 +294,80 @@ CSV_COLUMNS = [
     "intersection_volume",
     "units",
 ]
+
+
+def _ci_case(
+    pair: dict,
+    files: dict[str, str | None],
+    scene: str | None,
+    least: int,
+    settings: dict,
+    units: str | None,
+) -> Any:
+    """The CI case of one pair of a check report (:meth:`CheckReport.ci_suite`)."""
+    from meshcol.io.ci import CiCase, details, number
+
+    status = pair["status"]
+    a, b = pair["body_a"], pair["body_b"]
+    if status == "separated":
+        message = f"separated: distance {number(pair['distance'], units)}"
+    elif status == "clearance":
+        message = (
+            f"clearance: distance {number(pair['distance'], units)} < --clearance "
+            f"{number(settings['clearance'], units)}"
+        )
+    elif status == "contact":
+        message = (
+            f"contact: signed distance {number(pair['signed_distance'], units)} (tolerance "
+            f"{number(settings['tolerance'], units)})"
+        )
+    else:
+        inside = "one body inside the other, " if status == "contained" else ""
+        message = (
+            f"{status}: {inside}depth {number(pair['depth'], units)}, signed distance "
+            f"{number(pair['signed_distance'], units)}"
+        )
+        if pair["intersection_volume"] is not None:
+            message += f", intersection volume {number(pair['intersection_volume'])}"
+    if pair["query_failed"]:
+        message += " (query failed: the numbers are not the answer)"
+    outcome = "passed"
+    if pair["violation"]:
+        outcome = "failure"
+        message += f" (--fail-on {settings['fail_on']})"
+    elif SEVERITY[status] >= least:
+        if pair["ignored"]:
+            outcome = "skipped"
+            message = f"ignored by --ignore: {message}"
+        else:
+            message += " (not worse than the --baseline)"
+    text = ""
+    if outcome != "passed":
+        text = details(
+            [
+                ("body_a", f"{a} ({files.get(a)})" if files.get(a) else a),
+                ("body_b", f"{b} ({files.get(b)})" if files.get(b) else b),
+                ("part_a", pair["part_a"]),
+                ("part_b", pair["part_b"]),
+                ("distance", pair["distance"]),
+                ("depth", pair["depth"]),
+                ("signed_distance", pair["signed_distance"]),
+                ("intersection_volume", pair["intersection_volume"]),
+                ("point_a", pair["point_a"]),
+                ("point_b", pair["point_b"]),
+                ("normal", pair["normal"]),
+                ("units", units),
+            ]
+        )
+    return CiCase(
+        name=f"{a} <-> {b}",
+        classname="meshcol.check",
+        outcome=outcome,
+        message=message,
+        file=scene or files.get(a),
+        kind=status,
+        details=text,
+    )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -339,6 +442,7 @@ def check_scene(
     *,
     progress: Callable[[str], None] | None = None,
     load_seconds: float | None = None,
+    decompose: Callable[..., list[np.ndarray]] | None = None,
 ) -> CheckReport:
     """Check every pair of bodies of a loaded scene.
 
@@ -350,6 +454,10 @@ def check_scene(
         Shapes, tolerance, clearance, policy; defaults when omitted.
     progress : callable, optional
         Receives one-line progress messages.
+    load_seconds : float, optional
+        Reported as the time the scene took to load.
+    decompose : callable, optional
+        Convex parts computed elsewhere (``build_colliders(decompose=)``).
 
     Returns
     -------
@@ -369,6 +477,7 @@ def check_scene(
         mesh_parts="hull",
         decompose_options=options.decompose_options,
         progress=progress,
+        decompose=decompose,
     )
     bodies = shapes.bodies
     n = len(bodies)
@@ -681,7 +790,7 @@ def _findings(
     counts = np.diff(shapes.body_part_offsets)
     starts = shapes.body_part_offsets[:-1]
     if len(no_area):
-        flat_parts = np.add.reduceat(no_area.astype(np.int64), starts) if len(starts) else []
+        flat_parts: Any = np.add.reduceat(no_area.astype(np.int64), starts) if len(starts) else []
         for b in np.flatnonzero((np.asarray(flat_parts) == counts) & (counts > 0)).tolist():
             record = finding(
                 "MC301",
@@ -772,6 +881,10 @@ def check(
     inputs: Sequence[str | os.PathLike[str]] | str | os.PathLike[str],
     *,
     progress: Callable[[str], None] | None = None,
+    jobs: int = 1,
+    timeout: float | None = None,
+    executor: str = "local",
+    ray_address: str | None = None,
     **options: Any,
 ) -> CheckReport:
     """Load inputs and check every pair of bodies.
@@ -781,6 +894,20 @@ def check(
     inputs : path or sequence of paths
         Mesh files (each body at its own coordinates), one scene manifest (JSON/TOML) or
         glTF/GLB scenes.
+    jobs : int
+        Files prepared at once, each a task of its own in a worker process or a Ray task:
+        reading the file and, for ``decomposed`` bodies, their convex parts (through the
+        cache; each task's engine gets its share of the cores,
+        :func:`meshcol.decomposition.jobs.worker_env`). A manifest or robot is read here
+        and only its decompositions go out, grouped by mesh file. The pair phase always runs
+        here, on ``threads``. 1, without ``timeout`` or Ray: everything in this process.
+    timeout : float, optional
+        Seconds one file's task may take; a file over it, or whose worker dies, is an error
+        (the pair phase needs every body).
+    executor : {"local", "ray"}
+        Where the tasks run (:func:`meshcol.decomposition.executor.make_executor`).
+    ray_address : str, optional
+        The Ray cluster (default: a local Ray of ``jobs`` CPUs, stopped at the end).
     **options
         Fields of :class:`CheckOptions` (``collider``, ``tolerance``, ``clearance``, ``fail_on``,
         ``ignore``, ``baseline`` (a path or a report dict), ``threads``, ``decompose_options``).
@@ -790,7 +917,8 @@ def check(
     Returns
     -------
     CheckReport
-        ``report.passed`` / ``report.exit_code`` apply the policy.
+        ``report.passed`` / ``report.exit_code`` apply the policy; the same report whichever
+        executor prepared the files.
 
     Notes
     -----
@@ -809,9 +937,141 @@ def check(
     if "ignore" in options:
         options["ignore"] = tuple(options["ignore"])
     opts = CheckOptions(baseline=baseline, **options)
+    if executor != "ray" and ray_address is not None:
+        raise ValueError("ray_address needs executor 'ray'")
+    opts.validate()
     started = time.perf_counter()
-    scene = load_inputs(list(inputs))
-    return check_scene(scene, opts, progress=progress, load_seconds=time.perf_counter() - started)
+    decompose = None
+    if jobs > 1 or timeout is not None or executor != "local":
+        scene, decompose = _prepare_files(
+            list(inputs),
+            opts,
+            progress,
+            jobs=jobs,
+            timeout=timeout,
+            executor=executor,
+            address=ray_address,
+        )
+    else:
+        scene = load_inputs(list(inputs))
+    return check_scene(
+        scene,
+        opts,
+        progress=progress,
+        load_seconds=time.perf_counter() - started,
+        decompose=decompose,
+    )
+
+
+def _mesh_key(mesh: tuple[np.ndarray, np.ndarray]) -> bytes:
+    import hashlib
+
+    h = hashlib.blake2b(digest_size=16)
+    for array in mesh:
+        a = np.ascontiguousarray(array)
+        h.update(str((a.dtype.str, a.shape)).encode())
+        h.update(a.tobytes())
+    return h.digest()
+
+
+def _check_file(task: tuple[str, list[Any] | None, str, dict]) -> tuple[Any, Any, Any]:
+    """Worker entry of a parallel check: one file's ``(path, bodies, collider kind,
+    decompose options)`` (``bodies`` None: read the file here) to ``(bodies read or None,
+    {mesh key: convex parts}, MeshcolError or None)``. The convex parts are those
+    :func:`build_colliders` asks for on this file's bodies, through the cache; should it
+    fail on them, the parts made so far are returned, and the caller's own
+    :func:`build_colliders` meets (and reports) the error as a sequential run does."""
+    from meshcol.analysis.colliders import convex_parts
+    from meshcol.errors import MeshcolError
+    from meshcol.io.mesh_read import load_mesh
+
+    path, given, kind, decompose_options = task
+    try:
+        bodies = load_mesh(path) if given is None else given
+    except MeshcolError as error:
+        return None, {}, error
+    parts: dict[bytes, list[np.ndarray]] = {}
+
+    def record(mesh: Any, **options: Any) -> list[np.ndarray]:
+        parts[_mesh_key(mesh)] = found = convex_parts(mesh, **options)
+        return found
+
+    if any(b.primitive is None and (b.collider or kind) == "decomposed" for b in bodies):
+        # Only the convex parts are kept: the caller builds the scene's colliders whole.
+        with contextlib.suppress(MeshcolError):
+            build_colliders(bodies, kind, decompose_options=decompose_options, decompose=record)
+    return (bodies if given is None else None), parts, None
+
+
+def _prepare_files(
+    inputs: list[str | os.PathLike[str]],
+    options: CheckOptions,
+    progress: Callable[[str], None] | None,
+    **run: Any,
+) -> tuple[Scene, Callable[..., list[np.ndarray]]]:
+    """:func:`load_inputs` and the decompositions with one executor task per file: the scene
+    (names given here, in input order, by :func:`meshcol.io.scene.unique_name`) and the
+    convex parts the tasks made, for ``check_scene(decompose=)``. Errors are the sequential
+    run's: the first unreadable file in input order (decomposition errors are met again by
+    ``check_scene``, as in a sequential run); a file whose task failed or ran over the
+    timeout is an error naming it."""
+    import dataclasses
+
+    from meshcol.analysis.colliders import convex_parts
+    from meshcol.decomposition.executor import run_each
+    from meshcol.errors import MeshcolError
+    from meshcol.io.robot import is_robot_file
+    from meshcol.io.scene import MANIFEST_EXTENSIONS, iter_inputs, load_inputs, unique_name
+
+    kind, decompose_options = options.collider, options.decompose_options
+    whole = len(inputs) == 1 and (
+        is_robot_file(inputs[0])
+        or os.path.splitext(os.fspath(inputs[0]))[1].lower() in MANIFEST_EXTENSIONS
+    )
+    scene: Scene | None = None
+    if whole:  # a manifest or robot is read here; its decompositions go out per mesh file
+        scene = load_inputs(inputs)
+        tasks: list[tuple[str, list[Any] | None, str, dict]] = [
+            (path, bodies, kind, decompose_options) for path, bodies in iter_inputs(inputs)
+        ]
+    else:
+        tasks = [(os.fspath(p), None, kind, decompose_options) for p in inputs]
+    outcomes: dict[int, Any] = {}
+    report = progress or (lambda message: None)
+    for outcome in run_each(_check_file, tasks, **run):
+        outcomes[outcome.index] = outcome
+        report(f"check: {len(outcomes)}/{len(tasks)} files")
+    parts: dict[bytes, list[np.ndarray]] = {}
+    for index, (path, _, _, _) in enumerate(tasks):
+        outcome = outcomes[index]
+        if outcome.status != "ok":
+            raise MeshcolError(f"its task {_outcome_text(outcome)}", path)
+        _, found, error = outcome.value
+        if error is not None:
+            raise error
+        parts.update(found)
+    if scene is None:
+        bodies: list[Any] = []
+        used: set[str] = set()
+        for index in range(len(tasks)):
+            for body in outcomes[index].value[0]:
+                name = unique_name(body.name, used)
+                bodies.append(body if name == body.name else dataclasses.replace(body, name=name))
+        source = os.fspath(inputs[0]) if len(inputs) == 1 else None
+        scene = Scene(bodies=tuple(bodies), units=None, source=source)
+
+    def decompose(mesh: Any, **options: Any) -> list[np.ndarray]:
+        found = parts.get(_mesh_key(mesh))
+        return convex_parts(mesh, **options) if found is None else found
+
+    return scene, decompose
+
+
+def _outcome_text(outcome: Any) -> str:
+    """``timed out after 3 s``, ``failed: worker process died (exit code -9)``."""
+    if outcome.status == "timeout":
+        return outcome.message or "timed out"
+    return f"failed: {outcome.message}"
 
 
 def _face_normals(meshes: Any, mesh: np.ndarray, face: np.ndarray, poses: np.ndarray) -> np.ndarray:

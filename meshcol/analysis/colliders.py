@@ -411,6 +411,38 @@ def _constant(value: Any) -> Callable[[], Any]:
     return lambda: value
 
 
+def _fits_of(bodies: Sequence[Body], kind: str, report: Callable[[str], None]) -> dict[bytes, Any]:
+    """The ``auto`` fit (:func:`meshcol.analysis.fit.fit_point_sets`) of every unique,
+    non-flat part of the ``fit`` bodies, all in one native call: geometry key -> the chosen
+    PrimitiveFit, or None when the hull was kept."""
+    from meshcol.analysis.fit import fit_point_sets
+
+    keys: list[bytes] = []
+    seen: set[bytes] = set()
+    sets: list[np.ndarray] = []
+    names: list[str] = []
+    for body in bodies:
+        if body.primitive is not None or (body.collider or kind) != "fit":
+            continue
+        for name, v, _ in body.part_meshes():
+            key = _geometry_key(v)
+            if key in seen or _flat(v):
+                continue
+            seen.add(key)
+            keys.append(key)
+            sets.append(v)
+            names.append(f"body {body.name!r}" + ("" if name is None else f" part {name!r}"))
+    if not sets:
+        return {}
+    report(f"enclosing primitives of {len(sets)} unique parts")
+    out: dict[bytes, Any] = {}
+    for key, what, result in zip(keys, names, fit_point_sets(sets)):
+        if isinstance(result, InvalidMeshError):
+            raise InvalidMeshError(f"{what}: {result.message}")
+        out[key] = result.primitive_fit
+    return out
+
+
 def build_colliders(
     bodies: Sequence[Body],
     kind: str = "hull",
@@ -418,6 +450,7 @@ def build_colliders(
     mesh_parts: str = "hull",
     decompose_options: dict[str, Any] | None = None,
     progress: Callable[[str], None] | None = None,
+    decompose: Callable[..., list[np.ndarray]] | None = None,
 ) -> Colliders:
     """The colliders of ``bodies`` (see the module docstring for the kinds).
 
@@ -433,6 +466,9 @@ def build_colliders(
         Options of :func:`convex_parts` for ``decomposed`` bodies.
     progress : callable, optional
         Receives one-line progress messages.
+    decompose : callable, optional
+        Stands for :func:`convex_parts` (same arguments and result): parts computed
+        elsewhere (``check``'s per-file tasks), looked up first.
 
     Returns
     -------
@@ -449,6 +485,7 @@ def build_colliders(
         raise ValueError(f"mesh_parts must be hull or triangles, got {mesh_parts!r}")
     options = dict(decompose_options or {})
     report = progress or (lambda message: None)
+    parts_of = convex_parts if decompose is None else decompose
     kept, ucx, warnings = split_ucx(bodies)
 
     # Unique single shapes (packed together in one call) and per-body triangle sets; each
@@ -474,6 +511,8 @@ def build_colliders(
 
     def hull(vertices: np.ndarray) -> int:
         return add(("hull", _geometry_key(vertices)), _constant(vertices))
+
+    fits.update(_fits_of(kept, kind, report))
 
     for body_number, body in enumerate(kept):
         body_kind = body.collider or kind
@@ -516,7 +555,7 @@ def build_colliders(
                     continue
                 report(f"convex parts of {body.name}" + ("" if name is None else f"/{name}"))
                 decomposed = True
-                for p in convex_parts((v, f), **options):
+                for p in parts_of((v, f), **options):
                     singles.append(add(("part", _geometry_key(p)), _constant(p)))
                     labels.append(label)
             if not decomposed and (
@@ -524,19 +563,12 @@ def build_colliders(
             ):
                 body_kind = "ucx"
         elif body_kind == "fit":
-            from meshcol.analysis.fit import fit_points
-
-            for label, name, v, _ in meshes:
+            for label, _, v, _ in meshes:
                 if _flat(v):
                     singles.append(hull(v))  # its polygon: a primitive would add a thickness
                     labels.append(label)
                     continue
-                what = f"body {body.name!r}" + ("" if name is None else f" part {name!r}")
-                key = _geometry_key(v)
-                if key not in fits:
-                    report(f"enclosing primitive of {what}")
-                    fits[key] = fit_points(v).primitive_fit
-                chosen = fits[key]
+                chosen = fits[_geometry_key(v)]
                 if chosen is None:
                     singles.append(hull(v))
                 else:

@@ -27,8 +27,9 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.collision.fit import FIT_SHAPES, PrimitiveFit, fit_all, fit_primitive
+from meshcol.collision.fit import FIT_SHAPES, PrimitiveFit, fit_batch
 from meshcol.errors import InvalidMeshError
+from meshcol.geometry.rotations import quaternion_from_matrix
 from meshcol.io.scene import as_scene
 from meshcol.types import Body, Box, Capsule, Cylinder, Sphere
 
@@ -41,7 +42,11 @@ __all__ = [
     "BodyFit",
     "FitReport",
     "fit",
+    "fit_bodies",
+    "fit_body",
+    "fit_point_sets",
     "fit_points",
+    "fit_row",
 ]
 
 #: What ``meshcol fit --shape`` takes.
@@ -128,28 +133,130 @@ def fit_points(
     ValueError
         An unknown shape or a negative tolerance.
     """
-    from meshcol.collision.hull import exact_hull
+    result = fit_point_sets([points], shape, volume_tolerance=volume_tolerance)[0]
+    if isinstance(result, InvalidMeshError):
+        raise result
+    return result
 
+
+def fit_point_sets(
+    point_sets: Sequence[np.ndarray],
+    shape: str = "auto",
+    *,
+    volume_tolerance: float = DEFAULT_VOLUME_TOLERANCE,
+    threads: int = 0,
+) -> list[BodyFit | InvalidMeshError]:
+    """:func:`fit_points` of many point sets in ONE native call (:func:`fit_batch`).
+
+    Returns
+    -------
+    list of BodyFit or InvalidMeshError
+        Per set, in order: its fits, or the error that set has no volume to enclose (no
+        points, non-finite, collinear, one point): the caller names the body and raises.
+
+    Raises
+    ------
+    ValueError
+        An unknown shape, a negative tolerance, or a set that is not (n, 3).
+    """
     if shape not in SHAPE_CHOICES:
         raise ValueError(f"shape must be one of {', '.join(SHAPE_CHOICES)}, got {shape!r}")
     if not volume_tolerance >= 0:
         raise ValueError(f"volume_tolerance must be >= 0, got {volume_tolerance}")
-    hull = exact_hull(points)
-    if hull.dimension == 0:
-        raise InvalidMeshError("all vertices coincide: there is no volume to enclose")
-    if hull.dimension == 1:
-        raise InvalidMeshError("all vertices are collinear: there is no volume to enclose")
-    faces = hull.faces if hull.dimension == 3 else None
-    if shape == "auto":
-        fits = fit_all(hull.vertices, faces)
-        limit = (1.0 + volume_tolerance) * hull.volume
-        chosen = next((n for n in FIT_SHAPES if fits[n].volume <= limit), "hull")
-        if hull.dimension == 2:
-            chosen = "box"  # a flat body: its box (as thin as the margin) is its collider
-    else:
-        fits = {shape: fit_primitive(shape, hull.vertices, faces)}
-        chosen = shape
-    return BodyFit(fits, chosen, hull.vertices, hull.faces, hull.volume)
+    sets = [np.ascontiguousarray(p, dtype=np.float64) for p in point_sets]
+    batch = fit_batch(sets, "all" if shape == "auto" else shape, threads=threads)
+    out: list[BodyFit | InvalidMeshError] = []
+    for h, points in enumerate(sets):
+        dimension = int(batch.dimension[h])
+        if dimension == 0:
+            out.append(InvalidMeshError("all vertices coincide: there is no volume to enclose"))
+            continue
+        if dimension == 1:
+            out.append(
+                InvalidMeshError("all vertices are collinear: there is no volume to enclose")
+            )
+            continue
+        if not batch.fitted(h):
+            out.append(batch.error(h))
+            continue
+        vertex_index, faces = batch.hull(h)
+        hull_vertices = points[vertex_index] + 0.0
+        hull_volume = float(batch.hull_volume[h])
+        fits = batch.fits(h)
+        if shape == "auto":
+            limit = (1.0 + volume_tolerance) * hull_volume
+            chosen = next((n for n in FIT_SHAPES if fits[n].volume <= limit), "hull")
+            if dimension == 2:
+                chosen = "box"  # a flat body: its box (as thin as the margin) is its collider
+        else:
+            chosen = shape
+        out.append(BodyFit(fits, chosen, hull_vertices, faces.copy(), hull_volume))
+    return out
+
+
+def fit_body(
+    body: Body, shape: str = "auto", volume_tolerance: float = DEFAULT_VOLUME_TOLERANCE
+) -> tuple[BodyFit, float | None, float | None]:
+    """Fit one body (:func:`fit_points` on its vertices), in the WORLD frame (its pose applied).
+
+    Returns
+    -------
+    (BodyFit, float or None, float or None)
+        The fits; the body's own volume (closed meshes and primitives; None otherwise); the
+        largest gap from the chosen primitive's surface to the body (None when the hull was
+        kept).
+
+    Raises
+    ------
+    InvalidMeshError
+        As :func:`fit_points` (the message does not name the body).
+    """
+    result = fit_bodies([body], shape, volume_tolerance)[0]
+    if isinstance(result, InvalidMeshError):
+        raise result
+    return result
+
+
+def fit_bodies(
+    bodies: Sequence[Body],
+    shape: str = "auto",
+    volume_tolerance: float = DEFAULT_VOLUME_TOLERANCE,
+    threads: int = 0,
+) -> list[tuple[BodyFit, float | None, float | None] | InvalidMeshError]:
+    """:func:`fit_body` of many bodies, the fits in ONE native call; per body its result
+    or the error that it has no volume to enclose (the message does not name the body)."""
+    from meshcol.collision.fit import primitive_volume
+    from meshcol.geometry.topology import oriented_volume
+
+    fitted = fit_point_sets(
+        [_fit_vertices(b) for b in bodies],
+        shape,
+        volume_tolerance=volume_tolerance,
+        threads=threads,
+    )
+    out: list[tuple[BodyFit, float | None, float | None] | InvalidMeshError] = []
+    for body, local in zip(bodies, fitted):
+        if isinstance(local, InvalidMeshError):
+            out.append(local)
+            continue
+        pose = np.asarray(body.pose, dtype=np.float64)
+        world = BodyFit(
+            {name: _world(f, pose) for name, f in local.fits.items()},
+            local.chosen,
+            local.hull_vertices @ pose[:3, :3].T + pose[:3, 3],
+            local.hull_faces,
+            local.hull_volume,
+        )
+        chosen = world.primitive_fit
+        gap = None if chosen is None else _max_gap(chosen, body, local, pose)
+        volume = None
+        if body.primitive is None:
+            oriented = oriented_volume(body.vertices, body.faces)
+            volume = None if oriented is None else abs(oriented[0])
+        else:
+            volume = primitive_volume(body.primitive)
+        out.append((world, volume, gap))
+    return out
 
 
 def _fit_vertices(body: Body) -> np.ndarray:
@@ -162,28 +269,6 @@ def _fit_vertices(body: Body) -> np.ndarray:
     return np.asarray(body.vertices, dtype=np.float64)
 
 
-def _quaternion(rotation: np.ndarray) -> list[float]:
-    """Unit quaternion (w, x, y, z), w >= 0, of a rotation matrix (Shepperd's method)."""
-    m = rotation
-    trace = m[0, 0] + m[1, 1] + m[2, 2]
-    if trace > 0:
-        s = 2.0 * np.sqrt(trace + 1.0)
-        q = [0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s]
-    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-        q = [(m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s]
-    elif m[1, 1] > m[2, 2]:
-        s = 2.0 * np.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
-        q = [(m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s]
-    else:
-        s = 2.0 * np.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
-        q = [(m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s]
-    q_arr = np.asarray(q) / np.linalg.norm(q)
-    if q_arr[0] < 0:
-        q_arr = -q_arr
-    return [float(v) for v in q_arr]
-
-
 def _parameters(fit_: PrimitiveFit) -> dict[str, Any]:
     p = fit_.primitive
     return {
@@ -191,7 +276,7 @@ def _parameters(fit_: PrimitiveFit) -> dict[str, Any]:
         "length": p.length if isinstance(p, (Capsule, Cylinder)) else None,
         "size": list(p.size) if isinstance(p, Box) else None,
         "center": [float(v) for v in fit_.pose[:3, 3]],
-        "quaternion": _quaternion(fit_.pose[:3, :3]),
+        "quaternion": quaternion_from_matrix(fit_.pose[:3, :3]),
     }
 
 
@@ -236,6 +321,11 @@ class FitReport:
     output, out_dir : str or None
     units : str or None
     warnings : tuple of str
+    frame : {"world", "link"}
+        ``link`` for a robot description rebuilt with ``out_dir`` (each fit in its link's
+        frame, one row per collision element).
+    description, to : str or None
+        The robot description written with the fits, and its format.
     """
 
     bodies: list[dict[str, Any]]
@@ -246,6 +336,9 @@ class FitReport:
     out_dir: str | None
     units: str | None
     warnings: tuple[str, ...] = ()
+    frame: str = "world"
+    description: str | None = None
+    to: str | None = None
 
     @property
     def exit_code(self) -> int:
@@ -264,14 +357,17 @@ class FitReport:
 
     @property
     def settings(self) -> dict[str, Any]:
-        return {
+        settings = {
             "shape": self.shape,
             "volume_tolerance": self.volume_tolerance,
             "gap_samples": GAP_SAMPLES,
-            "frame": "world",
+            "frame": self.frame,
             "output": self.output,
             "out_dir": self.out_dir,
         }
+        if self.description is not None:
+            settings.update(description=self.description, to=self.to)
+        return settings
 
     def to_dict(self) -> dict[str, Any]:
         from meshcol.io.report import envelope
@@ -286,6 +382,52 @@ class FitReport:
         from meshcol.io.report import dumps_json
 
         return dumps_json(self.to_dict())
+
+    def ci_suite(self) -> Any:
+        """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one passed case per body
+        (``FILE::BODY``) with the primitive, its size, volume ratios and largest gap (a fit
+        always contains the mesh; unusable input stops the run before any report)."""
+        from meshcol.io.ci import CiCase, CiSuite, number
+
+        units = self.units
+        cases = []
+        for row in self.bodies:
+            shape = row["shape"]
+            parts = [shape]
+            if row["radius"] is not None:
+                parts.append(f"radius {number(row['radius'], units)}")
+            if row["length"] is not None:
+                parts.append(f"length {number(row['length'], units)}")
+            if row["size"] is not None and row["radius"] is None:
+                parts.append("size " + " x ".join(number(v) for v in row["size"]))
+            parts.append(f"volume {number(row['volume'])}")
+            if row["volume_ratio"] is not None:
+                parts.append(f"volume/mesh {number(row['volume_ratio'])}")
+            if row["hull_ratio"] is not None:
+                parts.append(f"volume/hull {number(row['hull_ratio'])}")
+            if row["max_gap"] is not None:
+                parts.append(f"max gap {number(row['max_gap'], units)}")
+            message = ", ".join(parts)
+            if row["simpler_primitive"]:
+                message += " (could use a simpler primitive than the hull)"
+            cases.append(
+                CiCase(
+                    name=f"{row['source']}::{row['name']}" if row["source"] else row["name"],
+                    classname="meshcol.fit",
+                    message=message,
+                    file=row["source"],
+                )
+            )
+        s = self.summary
+        shapes = ", ".join(f"{count} {name}" for name, count in s["shapes"].items() if count)
+        return CiSuite(
+            "fit",
+            tuple(cases),
+            self.settings,
+            warnings=self.warnings,
+            verdict=f"{s['bodies']} bodies ({shapes or 'none'})",
+            units=units,
+        )
 
     def to_csv(self) -> str:
         """One row per body (:data:`CSV_COLUMNS`)."""
@@ -319,7 +461,7 @@ def _ratio(volume: float, reference: float | None) -> float | None:
     return None if reference is None or reference <= 0 else volume / reference
 
 
-def _row(
+def fit_row(
     body: Body,
     result: BodyFit,
     mesh_volume: float | None,
@@ -327,6 +469,7 @@ def _row(
     destination: str | None,
     shape: str,
 ) -> dict[str, Any]:
+    """The report row of one body's fit (``result`` in the frame the row is given in)."""
     chosen = result.primitive_fit
     candidates = None
     if shape == "auto":
@@ -395,7 +538,7 @@ def fit(
     reserved : sequence of (label, path)
         Other files the caller will write: no fit may go there.
     progress : callable, optional
-        One line per body fitted.
+        One line when the fits start (every body's in one native call).
 
     Returns
     -------
@@ -411,7 +554,6 @@ def fit(
         A file would replace an input or a ``reserved`` file (nothing is written).
     """
     from meshcol.analysis.hull import check_body_count, mesh_destinations, write_body_meshes
-    from meshcol.geometry.topology import oriented_volume
     from meshcol.io.primitives import enclosing_primitive_mesh
 
     if shape not in SHAPE_CHOICES:
@@ -422,32 +564,14 @@ def fit(
     check_body_count(output, len(bodies))
 
     # Everything is computed before anything is written: a bad body stops the run first.
+    # The fits of every body in one native call; then the first body without a fit stops it.
+    if progress is not None:
+        progress(f"fit: {len(bodies)} bodies")
     results, rows_input = [], []
-    for done, body in enumerate(bodies, start=1):
-        if progress is not None:
-            progress(f"fit: {done}/{len(bodies)} bodies")
-        pose = np.asarray(body.pose, dtype=np.float64)
-        try:
-            local = fit_points(_fit_vertices(body), shape, volume_tolerance=volume_tolerance)
-        except InvalidMeshError as exc:
-            raise InvalidMeshError(f"body '{body.name}': {exc.message}", body.source) from exc
-        world = BodyFit(
-            {name: _world(f, pose) for name, f in local.fits.items()},
-            local.chosen,
-            local.hull_vertices @ pose[:3, :3].T + pose[:3, 3],
-            local.hull_faces,
-            local.hull_volume,
-        )
-        chosen = world.primitive_fit
-        gap = None if chosen is None else _max_gap(chosen, body, local, pose)
-        volume = None
-        if body.primitive is None:
-            oriented = oriented_volume(body.vertices, body.faces)
-            volume = None if oriented is None else abs(oriented[0])
-        else:
-            from meshcol.collision.fit import primitive_volume
-
-            volume = primitive_volume(body.primitive)
+    for body, fitted in zip(bodies, fit_bodies(bodies, shape, volume_tolerance)):
+        if isinstance(fitted, InvalidMeshError):
+            raise InvalidMeshError(f"body '{body.name}': {fitted.message}", body.source)
+        world, volume, gap = fitted
         results.append(world)
         rows_input.append((body, world, volume, gap))
 
@@ -464,7 +588,7 @@ def fit(
     destinations = write_body_meshes(bodies, parts, output, out_dir, reserved)
 
     rows = [
-        _row(body, result, volume, gap, destination, shape)
+        fit_row(body, result, volume, gap, destination, shape)
         for (body, result, volume, gap), destination in zip(rows_input, destinations)
     ]
     return FitReport(

@@ -105,6 +105,9 @@ class HullReport:
         Frame of the hulls: ``link`` for a robot rebuilt (:func:`meshcol.analysis.rebuild.rebuild_robot`).
     description, to : str or None
         The robot description written with the hulls, and its format.
+    target : Target or None
+        The engine profile every hull was fitted to (:mod:`meshcol.io.targets`); each row
+        then has a ``target`` entry (limits met, what each cost, violations).
     """
 
     bodies: list[dict[str, Any]]
@@ -117,26 +120,46 @@ class HullReport:
     frame: str = "world"
     description: str | None = None
     to: str | None = None
+    target: Any = None
+
+    @property
+    def violations(self) -> list[tuple[str, Any]]:
+        """``(body name, Violation)`` for every target limit a hull could not meet."""
+        return [
+            (row["name"], violation)
+            for row, fit in zip(self.bodies, self.fits)
+            if fit is not None
+            for violation in fit.violations
+        ]
+
+    @property
+    def fits(self) -> list[Any]:
+        """The :class:`~meshcol.collision.limits.TargetFit` of each body (None without a
+        target)."""
+        return [h.target_fit for h in self.hulls]
 
     @property
     def exit_code(self) -> int:
-        """Always 0: hull has no policy (unusable input raises instead)."""
-        return 0
+        """1 when a hull misses a limit of ``target``; else 0 (unusable input raises)."""
+        return 1 if self.violations else 0
 
     @property
     def summary(self) -> dict[str, Any]:
         """Counts: bodies, flat bodies, total hull vertices, files written."""
         files = {row["output"] for row in self.bodies if row["output"] is not None}
-        return {
+        summary = {
             "bodies": len(self.bodies),
             "flat": sum(1 for row in self.bodies if row["flat"]),
             "hull_vertices": sum(row["hull_vertices"] for row in self.bodies),
             "files_written": len(files),
         }
+        if self.target is not None:
+            summary["target_violations"] = len(self.violations)
+        return summary
 
     @property
     def settings(self) -> dict[str, Any]:
-        settings = {
+        settings: dict[str, Any] = {
             "max_vertices": self.max_vertices,
             "frame": self.frame,
             "output": self.output,
@@ -144,6 +167,9 @@ class HullReport:
         }
         if self.description is not None:
             settings.update(description=self.description, to=self.to)
+        if self.target is not None:
+            settings["target"] = self.target.name
+            settings["target_limits"] = dict(self.target.limits)
         return settings
 
     def to_dict(self) -> dict[str, Any]:
@@ -166,6 +192,52 @@ class HullReport:
         from meshcol.io.report import dumps_csv
 
         return dumps_csv([dict(row, units=self.units) for row in self.bodies], CSV_COLUMNS)
+
+    def ci_suite(self) -> Any:
+        """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one case per body
+        (``FILE::BODY``) with the hull's size, volume and, with a budget, what the budget
+        cost; a failure if a hull were over its vertex budget (unusable input stops the run
+        before any report, so there are no error cases)."""
+        from meshcol.io.ci import CiCase, CiSuite, number
+
+        units = self.units
+        cases = []
+        for row in self.bodies:
+            message = (
+                f"{row['hull_vertices']} vertices, {row['hull_faces']} faces, volume "
+                f"{number(row['hull_volume'])}"
+            )
+            if row["volume_ratio"] is not None:
+                message += f", mesh/hull volume {number(row['volume_ratio'])}"
+            if row["flat"]:
+                message += ", flat (a 2-D polygon)"
+            over = row["max_vertices"] is not None and row["hull_vertices"] > row["max_vertices"]
+            if row["max_vertices"] is not None:
+                message += (
+                    f"; budget {row['max_vertices']} (exact hull "
+                    f"{row['exact_hull_vertices']}): added volume "
+                    f"{number(row['added_volume_fraction'])} of the hull's, max distance "
+                    f"{number(row['max_distance'], units)}"
+                )
+            cases.append(
+                CiCase(
+                    name=f"{row['source']}::{row['name']}" if row["source"] else row["name"],
+                    classname="meshcol.hull",
+                    outcome="failure" if over else "passed",
+                    message=f"over the --max-vertices budget: {message}" if over else message,
+                    file=row["source"],
+                    kind="max-vertices" if over else None,
+                )
+            )
+        s = self.summary
+        return CiSuite(
+            "hull",
+            tuple(cases),
+            self.settings,
+            warnings=self.warnings,
+            verdict=f"{s['bodies']} hulls, {s['hull_vertices']} vertices, {s['flat']} flat",
+            units=units,
+        )
 
 
 def out_dir_paths(out_dir: str | os.PathLike[str], names: Sequence[str]) -> list[str]:
@@ -252,6 +324,7 @@ def hull(
     warn: Callable[[str], None] | None = None,
     reserved: Sequence[tuple[str, str | os.PathLike[str] | None]] = (),
     progress: Callable[[str], None] | None = None,
+    target: Any = None,
 ) -> HullReport:
     """Convex hull of each body, in the world frame, optionally within a vertex budget.
 
@@ -274,6 +347,14 @@ def hull(
         Other files the caller will write (``("--report", "r.json")``): no hull may go there.
     progress : callable, optional
         Receives one line per hull computed (``hull: 3/10 bodies``).
+    target : Target, optional
+        An engine profile (:func:`meshcol.io.targets.load_target`): every hull meets all
+        its limits (:func:`meshcol.collision.limits.fit_hull`) and still encloses the body;
+        a ``max_vertices`` tighter than the profile's vertex budget wins, a looser one is
+        ignored (the tighter of the two always applies). ``min_thickness`` and
+        ``min_volume`` are converted from metres to the scene's ``units`` (else the
+        profile's). A limit that cannot be met is reported, never hidden: the row's
+        ``target.violations`` (rule ids MC1xx/MC201) and ``exit_code`` 1.
 
     Returns
     -------
@@ -307,6 +388,14 @@ def hull(
     scene = as_scene(inputs)
     bodies = scene.bodies
     check_body_count(output, len(bodies))
+    limits = None
+    if target is not None:
+        limits = dict(target.limits)
+        if max_vertices is not None:
+            limits["max_hull_vertices"] = min(
+                int(max_vertices), int(limits.get("max_hull_vertices", max_vertices))
+            )
+        length_scale = target.length_scale(scene.units)
 
     # Compute everything first: a bad body stops the run before any file is written.
     hulls, volumes, warnings = [], [], []
@@ -314,7 +403,10 @@ def hull(
         if progress is not None:
             progress(f"hull: {done}/{len(bodies)} bodies")
         try:
-            result = convex_hull(body.world_vertices(), max_vertices=max_vertices)
+            if limits is None:
+                result = convex_hull(body.world_vertices(), max_vertices=max_vertices)
+            else:
+                result = _target_hull(body.world_vertices(), limits, length_scale)
         except InvalidMeshError as exc:
             raise InvalidMeshError(f"body '{body.name}': {exc.message}", body.source) from exc
         if result.flat:
@@ -342,16 +434,56 @@ def hull(
         hull_row(body, result, volume, destination)
         for body, result, volume, destination in zip(bodies, hulls, volumes, destinations)
     ]
+    if target is not None:
+        for row, result in zip(rows, hulls):
+            row["target"] = {"name": target.name, **result.target_fit.to_dict()}
     return HullReport(
-        rows, tuple(hulls), max_vertices, output, out_dir, scene.units, tuple(warnings)
+        rows,
+        tuple(hulls),
+        max_vertices,
+        output,
+        out_dir,
+        scene.units,
+        tuple(warnings),
+        target=target,
     )
+
+
+def _target_hull(points: Any, limits: dict, length_scale: float) -> Any:
+    """The hull of ``points`` fitted to ``limits``, as a :class:`HullResult` (its exact-hull
+    fields from the input) that also carries the fit (``target_fit``)."""
+    from meshcol.collision.hull import HullResult, exact_hull
+    from meshcol.collision.limits import budget_vertices, fit_hull
+
+    fit = fit_hull(points, limits, length_scale)
+    vertices, faces = fit.parts[0]
+    exact = exact_hull(points)
+    out = exact_hull(vertices)
+    flat = out.dimension < 3
+    exact_volume = exact.volume if exact.dimension == 3 else 0.0
+    result = HullResult(
+        vertices=vertices,
+        faces=faces,
+        volume=out.volume if not flat else 0.0,
+        area=out.area,
+        flat=flat,
+        exact_vertex_count=len(exact.vertices),
+        exact_face_count=len(exact.faces),
+        exact_volume=exact_volume,
+        max_vertices=budget_vertices(limits),
+        added_volume=fit.added_volume,
+        added_volume_fraction=fit.added_volume / exact_volume if exact_volume > 0 else None,
+        max_distance=fit.max_distance,
+        target_fit=fit,
+    )
+    return result
 
 
 def hull_row(
     body: Body, result: Any, volume: tuple[float, int] | None, destination: str | None
 ) -> dict:
     """One report row (:data:`CSV_COLUMNS` and ``note``) for a body and its hull."""
-    budget = result.max_vertices is not None
+    budget = result.max_vertices is not None or result.target_fit is not None
     mesh_volume = None if volume is None else volume[0]
     ratio = None
     if mesh_volume is not None and result.volume > 0:

@@ -461,19 +461,6 @@ def _mass_dict(p: MassProperties | None) -> dict[str, Any] | None:
     }
 
 
-def _part_primitive(kind: int, params: np.ndarray) -> Any:
-    from meshcol.collision.shapes import ShapeKind
-    from meshcol.types import Box, Capsule, Cylinder, Sphere
-
-    if kind == ShapeKind.SPHERE:
-        return Sphere(float(params[0]))
-    if kind == ShapeKind.BOX:
-        return Box(tuple(float(2.0 * x) for x in params[:3]))
-    if kind == ShapeKind.CAPSULE:
-        return Capsule(float(params[0]), float(2.0 * params[1]))
-    return Cylinder(float(params[0]), float(2.0 * params[1]))
-
-
 def _moment_ratio(a: MassProperties, b: MassProperties) -> float | None:
     """Largest ratio (>= 1) of the sorted principal moments per unit mass of two solids."""
     if a.volume == 0 or b.volume == 0:
@@ -628,8 +615,8 @@ def physics_readiness(
 
         # MC301: a UCX scene's body (or part) without UCX_ parts
         if ucx and not grouped and body.primitive is None:
-            own = ucx.get(body.name)
-            if own is None:
+            owned = ucx.get(body.name)
+            if owned is None:
                 findings.append(
                     finding(
                         "MC301",
@@ -641,8 +628,8 @@ def physics_readiness(
                         "its own collider, or none",
                     )
                 )
-            elif not own.whole:
-                covered = {label for label, _ in own.parts}
+            elif not owned.whole:
+                covered = {label for label, _ in owned.parts}
                 for label, name in enumerate(body.parts):
                     if label not in covered and not _UCX.match(name):
                         findings.append(
@@ -702,9 +689,9 @@ def physics_readiness(
                         )
                     )
             else:
-                mass = primitive_mass_properties(
-                    _part_primitive(int(shapes.kinds[k]), shapes.params[k])
-                )
+                primitive = shapes.primitive(k)
+                assert primitive is not None  # a part without vertices is a primitive
+                mass = primitive_mass_properties(primitive)
             if colliders.part_offsets is not None:
                 mass = mass.transformed(colliders.part_offsets[k])
             masses.append(mass)
@@ -994,6 +981,74 @@ class InspectReport:
 
         return dumps_json(self.to_dict())
 
+    def ci_suite(self) -> Any:
+        """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one case per body
+        (``FILE::BODY``), a failure when it has a finding listed in ``fail_on`` (each
+        finding with its measure: ``not-watertight (12 boundary edges)``), passed otherwise
+        (other findings make it worth a warning); one error case per input that could not
+        be inspected."""
+        from meshcol.io.ci import CiCase, CiSuite, details
+
+        cases = []
+        for row in self.bodies:
+            failed = row["failed_rules"]
+            others = [rule for rule in row["findings"] if rule not in failed]
+            if failed:
+                message = ", ".join(_finding_text(rule, row) for rule in failed)
+                if others:
+                    message += "; also " + ", ".join(_finding_text(r, row) for r in others)
+            elif others:
+                message = "findings: " + ", ".join(_finding_text(r, row) for r in others)
+            else:
+                message = f"ok: {row['vertices']} vertices, {row['faces']} faces, watertight"
+            cases.append(
+                CiCase(
+                    name=_case_name(row["source"], row["name"]),
+                    classname="meshcol.inspect",
+                    outcome="failure" if failed else "passed",
+                    message=message,
+                    file=row["source"],
+                    kind=failed[0] if failed else None,
+                    details=details(
+                        (key, row[key])
+                        for key in (
+                            "vertices",
+                            "faces",
+                            "components",
+                            "watertight",
+                            "winding_consistent",
+                            "volume",
+                            "size",
+                            "boundary_edges",
+                            "non_manifold_edges",
+                            "degenerate_faces",
+                            "duplicate_faces",
+                            "self_intersecting_pairs",
+                            "units_guess",
+                        )
+                    )
+                    if failed
+                    else "",
+                    warn=bool(others) and not failed,
+                )
+            )
+        for error in self.errors:
+            cases.append(
+                CiCase(
+                    name=_case_name(error["source"], error["body"]),
+                    classname="meshcol.inspect",
+                    outcome="error",
+                    message=error["message"],
+                    file=error["source"] or None,
+                    kind="unusable-input",
+                )
+            )
+        s = self.summary
+        verdict = f"{s['bodies']} bodies, {s['with_findings']} with findings"
+        if self.fail_on:
+            verdict += f", {s['failed']} failing --fail-on {','.join(self.fail_on)}"
+        return CiSuite("inspect", tuple(cases), self.settings, verdict=verdict, units=self.units)
+
     def to_csv(self) -> str:
         """One row per body (:data:`CSV_COLUMNS`): bounds and size split into ``_x/_y/_z``
         columns, as every command's CSV; findings space-separated."""
@@ -1012,12 +1067,40 @@ class InspectReport:
         return dumps_csv(flat, CSV_COLUMNS)
 
 
+def _case_name(source: str | None, body: str | None) -> str:
+    """``FILE::BODY`` (body names repeat across files), or whichever of the two is known."""
+    if source and body:
+        return f"{source}::{body}"
+    return source or body or "(unnamed)"
+
+
+def _finding_text(rule: str, row: dict[str, Any]) -> str:
+    """A finding with what was measured: ``not-watertight (12 boundary edges)``."""
+    measure = {
+        "not-watertight": f"{row['boundary_edges']} boundary edges, "
+        f"{row['non_manifold_edges']} non-manifold",
+        "self-intersecting": f"{row['self_intersecting_pairs']} crossing face pairs",
+        "inconsistent-winding": "neighbouring faces disagree on their winding",
+        "inverted": f"volume {row['volume']:.6g}" if row["volume"] is not None else "inside out",
+        "degenerate-faces": f"{row['degenerate_faces']} faces",
+        "non-manifold": f"{row['non_manifold_edges']} edges with more than two faces",
+        "duplicate-faces": f"{row['duplicate_faces']} faces",
+        "multiple-components": f"{row['components']} components",
+        "suspect-units": f"looks like {row['units_guess']}: {row['units_reason']}",
+    }.get(rule)
+    return rule if measure is None else f"{rule} ({measure})"
+
+
 def inspect(
     inputs: Any,
     *,
     fail_on: Sequence[str] | str = (),
     physics: PhysicsOptions | None = None,
     progress: Callable[[str], None] | None = None,
+    jobs: int = 1,
+    timeout: float | None = None,
+    executor: str = "local",
+    ray_address: str | None = None,
 ) -> InspectReport:
     """Inspect every body of the inputs: is each mesh fit to be a collider, and is its
     collider fit for physics?
@@ -1034,11 +1117,25 @@ def inspect(
     physics : PhysicsOptions, optional
         The collider and the tolerances of the physics rules.
     progress : callable, optional
-        Receives one line per body inspected (``inspect: 3/10 bodies``).
+        Receives one line per body inspected (``inspect: 3/10 bodies``), or per file with
+        an executor (``inspect: 3/10 files``).
+    jobs : int
+        Files inspected at once, each a task of its own (reading the file and inspecting its
+        bodies) in a worker process or a Ray task; each task's native threads are its share
+        of the cores (:func:`meshcol.decomposition.jobs.worker_env`). 1, without
+        ``timeout`` or Ray: every body in this process, one after another.
+    timeout : float, optional
+        Seconds a file's task may take; it is then stopped (its worker killed) and the file
+        is an entry of :attr:`InspectReport.errors`, as is a file whose worker died.
+    executor : {"local", "ray"}
+        Where the tasks run (:func:`meshcol.decomposition.executor.make_executor`).
+    ray_address : str, optional
+        The Ray cluster (default: a local Ray of ``jobs`` CPUs, stopped at the end).
 
     Returns
     -------
     InspectReport
+        The same report whichever executor ran it.
 
     Raises
     ------
@@ -1074,8 +1171,12 @@ def inspect(
         first_error.append(error)
         errors.append({"source": path, "body": body, "message": error.message})
 
+    if executor != "ray" and ray_address is not None:
+        raise ValueError("ray_address needs executor 'ray'")
+    in_tasks = jobs > 1 or timeout is not None or executor != "local"
     visuals: dict[str, Body] | None = None
     units = None
+    scene_bodies: list[Body] | None = None
     if _is_manifest(inputs):
         scene = load_scene(inputs[0])  # read whole: a manifest's problem stops the run
         scene_bodies = list(scene.bodies)
@@ -1091,31 +1192,47 @@ def inspect(
             warnings.append(
                 f"visual geometry not read, links compared with their collision meshes: {error}"
             )
-    else:
+    elif not in_tasks:
         scene_bodies = [
             b for _, file_bodies in iter_inputs(inputs, on_error=skip) for b in file_bodies
         ]
-    # health per mesh: each part of a body is its own mesh
-    meshes = [
-        (body.name, name, part)
-        for body in scene_bodies
-        for name, part in zip(body.parts or (None,), body.part_bodies())
-    ]
+    if in_tasks:
+        scene_bodies, inspected = _inspect_tasks(
+            inputs,
+            scene_bodies,
+            units,
+            skip,
+            progress,
+            jobs=jobs,
+            timeout=timeout,
+            executor=executor,
+            address=ray_address,
+        )
+    else:
+        assert scene_bodies is not None
+        meshes = _meshes(scene_bodies)
+        inspected = []
+        for done, (body_name, part_name, part) in enumerate(meshes, start=1):
+            try:
+                outcome: MeshInspection | InvalidMeshError = inspect_body(
+                    part, declared_units=units
+                )
+            except InvalidMeshError as error:
+                outcome = error
+            inspected.append((body_name, part_name, part, outcome))
+            if progress is not None:
+                progress(f"inspect: {done}/{len(meshes)} bodies")
+    # health per mesh, in input order
     results = []
     findings: list[Finding] = []
-    usable = []
     bad = set()
-    for done, (body_name, part_name, part) in enumerate(meshes, start=1):
-        try:
-            result = inspect_body(part, declared_units=units)
-        except InvalidMeshError as error:
-            skip(error.path or part.source or "", error, part.name)
+    for body_name, part_name, part, outcome in inspected:
+        if isinstance(outcome, InvalidMeshError):
+            skip(outcome.path or part.source or "", outcome, part.name)
             bad.add(body_name)
         else:
-            results.append(result)
-            findings.extend(health_findings(result, body_name, part_name))
-        if progress is not None:
-            progress(f"inspect: {done}/{len(meshes)} bodies")
+            results.append(outcome)
+            findings.extend(health_findings(outcome, body_name, part_name))
     if not results and first_error:
         raise first_error[0]
     usable = [b for b in scene_bodies if b.name not in bad]
@@ -1131,6 +1248,142 @@ def inspect(
         options,
         tuple(warnings),
     )
+
+
+def _meshes(bodies: Sequence[Body]) -> list[tuple[str, str | None, Body]]:
+    """``(body name, part name or None, mesh)`` per mesh of the bodies: each part of a body
+    is its own mesh for the health rules."""
+    return [
+        (body.name, name, part)
+        for body in bodies
+        for name, part in zip(body.parts or (None,), body.part_bodies())
+    ]
+
+
+#: One inspected mesh: ``(body name, part name or None, the mesh, its inspection or the
+#: InvalidMeshError that stopped it)``.
+Inspected = tuple[str, str | None, Body, Any]
+
+
+def _inspect_file(
+    task: tuple[str, list[Body] | None, str | None],
+) -> tuple[tuple[list[Body] | None, list[Any]] | None, Exception | None]:
+    """Worker entry of a parallel inspect: one file's ``(path, meshes, declared units)``
+    (``meshes`` None: read the file here) to ``((bodies read here or None, [inspection or
+    its InvalidMeshError per mesh]), None)``, or ``(None, the MeshcolError that made the
+    file unreadable)``."""
+    from meshcol.errors import MeshcolError
+    from meshcol.io.mesh_read import load_mesh
+
+    path, meshes, units = task
+    bodies = None
+    if meshes is None:
+        try:
+            bodies = load_mesh(path)
+        except MeshcolError as error:
+            return None, error
+        meshes = [part for _, _, part in _meshes(bodies)]
+    out: list[Any] = []
+    for mesh in meshes:
+        try:
+            out.append(inspect_body(mesh, declared_units=units))
+        except InvalidMeshError as error:
+            out.append(error)
+    return (bodies, out), None
+
+
+def _renamed(body: Body, name: str) -> Body:
+    import dataclasses
+
+    return body if body.name == name else dataclasses.replace(body, name=name)
+
+
+def _inspect_tasks(
+    inputs: list[Any],
+    scene_bodies: list[Body] | None,
+    units: str | None,
+    skip: Callable[..., None],
+    progress: Callable[[str], None] | None,
+    **run: Any,
+) -> tuple[list[Body], list[Inspected]]:
+    """The inspections of :func:`inspect`, one executor task per file: a manifest's or a
+    robot's meshes (``scene_bodies``, read here) grouped by mesh file, or each input file
+    read in its task. Returns the bodies and their inspected meshes as the sequential run
+    has them: the same names (``unique_name`` applied here, in input order), order and
+    errors (an unreadable file's error first, in file order)."""
+    import dataclasses
+
+    from meshcol.decomposition.executor import run_each
+    from meshcol.errors import MeshcolError
+    from meshcol.io.scene import unique_name
+
+    tasks: list[tuple[str, list[Body] | None, str | None]]
+    if scene_bodies is not None:
+        meshes = _meshes(scene_bodies)
+        source = os.fspath(inputs[0])
+        groups: dict[str, list[int]] = {}
+        for k, (_, _, part) in enumerate(meshes):
+            groups.setdefault(part.source or source or part.name, []).append(k)
+        tasks = [(path, [meshes[k][2] for k in ks], units) for path, ks in groups.items()]
+        slots = list(groups.values())
+    else:
+        tasks = [(os.fspath(path), None, None) for path in inputs]
+    outcomes: dict[int, Any] = {}
+    for outcome in run_each(_inspect_file, tasks, **run):
+        outcomes[outcome.index] = outcome
+        if progress is not None:
+            progress(f"inspect: {len(outcomes)}/{len(tasks)} files")
+    per_task: list[tuple[list[Body] | None, list[Any]] | None] = []
+    for index, (path, _, _) in enumerate(tasks):
+        outcome = outcomes[index]
+        if outcome.status != "ok":
+            skip(path, MeshcolError(outcome.message or outcome.status, path))
+            per_task.append(None)
+            continue
+        value, error = outcome.value
+        if error is not None:
+            skip(path, error)
+            per_task.append(None)
+            continue
+        per_task.append(value)
+    if scene_bodies is not None:
+        inspected: list[Inspected] = []
+        found: dict[int, Any] = {}
+        for ks, value in zip(slots, per_task):
+            if value is not None:  # else its file's task failed, an error already
+                found.update(zip(ks, value[1]))
+        for k, (body_name, part_name, part) in enumerate(meshes):
+            if k in found:
+                inspected.append((body_name, part_name, part, found[k]))
+        return scene_bodies, inspected
+    bodies: list[Body] = []
+    inspected = []
+    used: set[str] = set()
+    for value in per_task:
+        if value is None:
+            continue
+        read, results = value
+        assert read is not None
+        originals: dict[str, str] = {}
+        mine: list[Body] = []
+        for body in read:
+            body = _renamed(body, unique_name(body.name, used))
+            originals[body.name] = read[len(mine)].name
+            mine.append(body)
+        bodies.extend(mine)
+        for (body_name, part_name, part), result in zip(_meshes(mine), results):
+            original = originals[body_name]
+            if isinstance(result, MeshcolError):
+                # raised before the body was renamed (``name#2``): its message names the mesh
+                before = original + part.name[len(body_name) :]
+                prefix = f"body '{before}': "
+                if body_name != original and result.message.startswith(prefix):
+                    message = f"body '{part.name}': {result.message[len(prefix) :]}"
+                    result = type(result)(message, result.path)
+            elif result.name != part.name:
+                result = dataclasses.replace(result, name=part.name)
+            inspected.append((body_name, part_name, part, result))
+    return bodies, inspected
 
 
 def _is_manifest(inputs: Sequence[Any]) -> bool:

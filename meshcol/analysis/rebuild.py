@@ -8,7 +8,11 @@ collision element, and the description is written back around them
   still enclosing) of the element's mesh, every object of a multi-object mesh file together;
 - ``decompose``: the convex parts of each element's mesh (each object of a mesh file
   decomposed on its own, as ``meshcol check --shape decomposed`` does, so the two share
-  cache entries), through the content cache and ``jobs`` worker processes, one mesh a task.
+  cache entries), through the content cache and ``jobs`` worker processes, one mesh a task;
+- ``fit``: ONE enclosing primitive per collision element (:func:`meshcol.analysis.fit.fit_body`:
+  box, sphere, capsule or cylinder, or the hull when ``auto`` finds none within its volume
+  tolerance), written as the description's own primitive element (``<box>``, ``<sphere>``,
+  ``<cylinder>``, ``<capsule>``; MJCF geom types) at its pose.
 
 Primitive elements (box, sphere, cylinder, capsule) are kept as they are: they are already
 exact convex colliders. Colliders are computed in the link frame (the element's origin and
@@ -27,7 +31,7 @@ import numpy as np
 from meshcol.errors import InvalidMeshError, MeshcolError
 from meshcol.types import Body
 
-__all__ = ["robot_colliders", "rebuild_hulls", "rebuild_decomposition"]
+__all__ = ["robot_colliders", "rebuild_hulls", "rebuild_decomposition", "rebuild_fits"]
 
 
 def _load(path: str) -> tuple[Any, list[Any], str]:
@@ -87,6 +91,8 @@ def robot_colliders(
     *,
     max_vertices: int | None = None,
     decompose_options: Mapping[str, Any] | None = None,
+    fit_options: Mapping[str, Any] | None = None,
+    target: Any = None,
     progress: Callable[[str], None] | None = None,
 ) -> tuple[Any, list[dict[str, Any]]]:
     """The colliders of a robot description and what each came from.
@@ -95,19 +101,30 @@ def robot_colliders(
     ----------
     path : path
         URDF or MJCF (read with :func:`meshcol.io.robot.current_robot_options`).
-    method : {"hull", "decompose"}
+    method : {"hull", "decompose", "fit"}
     max_vertices : int, optional
         ``hull``: the vertex budget of each hull.
     decompose_options : mapping, optional
         ``decompose``: the keywords of :func:`meshcol.decomposition.batch.decompose_meshes`.
+    fit_options : mapping, optional
+        ``fit``: ``shape`` and ``volume_tolerance`` of :func:`meshcol.analysis.fit.fit_body`.
+    target : Target, optional
+        ``hull`` and ``decompose``: an engine profile (:mod:`meshcol.io.targets`) every
+        element's colliders are fitted to (:func:`meshcol.collision.limits.fit_parts`; the
+        description is in metres). ``hull``: the tighter of ``max_vertices`` and the
+        profile's budget. ``decompose``: each object of an element's mesh file is fitted
+        on its own, an element of k objects giving each ``max_hulls // k`` parts so that
+        the element meets ``max_hulls``; each entry then has ``targets``, one report
+        entry per decomposition.
     progress : callable, optional
 
     Returns
     -------
     (RobotColliders, list of dict)
         The colliders, and per rebuilt element ``{"link", "index", "name", "results"}``
-        (``results``: the :class:`~meshcol.collision.hull.HullResult` or the decompositions
-        of its meshes, and ``body``: the element's link-frame mesh as a Body).
+        (``results``: the :class:`~meshcol.collision.hull.HullResult`, the decompositions
+        of its meshes, or ``(BodyFit, mesh volume, max gap)``; and ``body``: the element's
+        link-frame mesh as a Body).
 
     Raises
     ------
@@ -121,8 +138,17 @@ def robot_colliders(
     from meshcol.io.robot import current_robot_options
     from meshcol.io.robot_write import Collider, RobotColliders
 
-    if method not in ("hull", "decompose"):
+    if method not in ("hull", "decompose", "fit"):
         raise ValueError(f"unknown method {method!r}")
+    if target is not None and method == "fit":
+        raise ValueError("a target applies to hull and decompose, not fit")
+    limits: dict[str, Any] | None = None
+    if target is not None and method == "hull":
+        limits = dict(target.limits)
+        if max_vertices is not None:
+            limits["max_hull_vertices"] = min(
+                int(max_vertices), int(limits.get("max_hull_vertices", max_vertices))
+            )
     source = os.fspath(path)
     scene, elements, kind = _load(source)
     names = _element_names(source, kind)
@@ -141,11 +167,34 @@ def robot_colliders(
         label = _label(link, index, kind)
         blocks = [(_link_frame(e), np.asarray(e.faces, dtype=np.int64)) for e in members]
         body = _element_body(link, index, source, blocks)
-        if method == "hull":
+        if method == "fit":
+            from meshcol.analysis.fit import fit_body
+
+            if progress is not None:
+                progress(f"fit: {g + 1}/{len(groups)} collision elements")
+            try:
+                fitted = fit_body(body, **dict(fit_options or {}))
+            except InvalidMeshError as exc:
+                raise InvalidMeshError(f"{label}: {exc.message}", source) from None
+            chosen = fitted[0].primitive_fit
+            if chosen is None:  # auto kept the hull
+                hull = ((fitted[0].hull_vertices, fitted[0].hull_faces),)
+                colliders.append(Collider(link, index, hull, None, np.eye(4), name))
+            else:
+                colliders.append(
+                    Collider(link, index, (), chosen.primitive, chosen.pose, name, fitted=True)
+                )
+            info.append(
+                {"link": link, "index": index, "name": name, "results": fitted, "body": body}
+            )
+        elif method == "hull":
             if progress is not None:
                 progress(f"hull: {g + 1}/{len(groups)} collision elements")
             try:
-                result = convex_hull(body.vertices, max_vertices=max_vertices)
+                if limits is None:
+                    result = convex_hull(body.vertices, max_vertices=max_vertices)
+                else:
+                    result = _target_hull(body.vertices, limits, target.length_scale("m"))
             except InvalidMeshError as exc:
                 raise InvalidMeshError(f"{label}: {exc.message}", source) from None
             colliders.append(Collider(link, index, ((result.vertices, result.faces),), None))
@@ -158,6 +207,8 @@ def robot_colliders(
                 owners.append(g)
             colliders.append(Collider(link, index, (), None, np.eye(4), name))
             info.append({"link": link, "index": index, "name": name, "results": [], "body": body})
+            if target is not None:
+                info[-1]["targets"] = []
     if meshes:
         try:
             decompositions = decompose_meshes(
@@ -169,12 +220,19 @@ def robot_colliders(
             raise type(exc)(exc.message, source) from None
         at = {(c.link, c.index): i for i, c in enumerate(colliders)}
         rows = {(r["link"], r["index"]): r for r in info}
-        for g, d in zip(owners, decompositions):
+        objects = {g: owners.count(g) for g in set(owners)}
+        for g, d, (label, v, f) in zip(owners, decompositions, meshes):
             link, index, _ = groups[g]
+            if target is not None:
+                d, entry = _element_target(target, d, v, f, objects[g], label, source)
+                rows[(link, index)]["targets"].append(entry)
             i = at[(link, index)]
             c = colliders[i]
             colliders[i] = Collider(link, index, (*c.parts, *d.parts), None, np.eye(4), c.name)
             rows[(link, index)]["results"].append(d)
+        if target is not None and "max_hulls" in target.limits:
+            for row in info:
+                _element_hull_count(row, int(target.limits["max_hulls"]))
     robot = RobotColliders(
         source=source,
         kind=kind,
@@ -183,6 +241,61 @@ def robot_colliders(
         package_paths=dict(current_robot_options().package_paths),
     )
     return robot, info
+
+
+def _target_hull(points: np.ndarray, limits: Mapping[str, Any], length_scale: float) -> Any:
+    from meshcol.analysis.hull import _target_hull as target_hull
+
+    return target_hull(points, dict(limits), length_scale)
+
+
+def _element_target(
+    target: Any,
+    d: Any,
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    objects: int,
+    label: str,
+    source: str,
+) -> tuple[Any, dict[str, Any]]:
+    """One object's decomposition fitted to ``target`` (metres): an element of ``objects``
+    objects gives each ``max_hulls // objects`` parts (at least 1), so the element's
+    colliders together stay within ``max_hulls`` whenever ``objects <= max_hulls``."""
+    import dataclasses
+
+    from meshcol.decomposition.batch import apply_target
+
+    share = target
+    count = target.limits.get("max_hulls")
+    if count is not None and objects > 1:
+        limits = dict(target.limits)
+        limits["max_hulls"] = max(int(count) // objects, 1)
+        share = dataclasses.replace(target, limits=limits)
+    try:
+        fitted, entry = apply_target(share, d, vertices, faces, "m")
+    except InvalidMeshError as exc:
+        raise InvalidMeshError(f"{label}: {exc.message}", source) from None
+    if share is not target:
+        entry["max_hulls_share"] = share.limits["max_hulls"]
+    return fitted, entry
+
+
+def _element_hull_count(row: dict[str, Any], limit: int) -> None:
+    """An element of more objects than ``max_hulls`` allows (each object has at least one
+    part) misses the limit as a whole: its last object's entry gets the MC106 violation."""
+    from meshcol.collision.limits import Violation
+
+    entries = row.get("targets") or []
+    total = sum(len(d.parts) for d in row["results"])
+    if not entries or total <= limit:
+        return
+    v = Violation("max_hulls", None, float(total), float(limit)).to_dict()
+    v["message"] = (
+        f"the collision element: {total} parts > max_hulls {limit} "
+        f"(its {len(entries)} mesh objects are decomposed one by one)"
+    )
+    entries[-1]["violations"].append(v)
+    entries[-1]["met"] = False
 
 
 def _element_body(
@@ -210,8 +323,13 @@ def rebuild_hulls(
     reserved: tuple[tuple[str, str], ...] = (),
     warn: Callable[[str], None] | None = None,
     progress: Callable[[str], None] | None = None,
+    target: Any = None,
 ) -> Any:
     """``meshcol hull ROBOT --out-dir OUT``: one hull per collision element, and the description.
+
+    With ``target`` every element's hull meets the profile's limits and still encloses the
+    element's mesh; each row then has ``target`` (met, costs, violations), as
+    :func:`meshcol.analysis.hull.hull` rows do.
 
     Returns
     -------
@@ -223,7 +341,9 @@ def rebuild_hulls(
     from meshcol.geometry.topology import oriented_volume
     from meshcol.io.robot_write import description_path, part_files, write_robot
 
-    robot, info = robot_colliders(path, "hull", max_vertices=max_vertices, progress=progress)
+    robot, info = robot_colliders(
+        path, "hull", max_vertices=max_vertices, target=target, progress=progress
+    )
     to = to or robot.kind
     written = write_robot(robot, out_dir, to, protected=reserved)
     files = part_files(robot) if to in ("urdf", "mjcf") else {}
@@ -234,6 +354,8 @@ def rebuild_hulls(
         names = files.get(at[(entry["link"], entry["index"])])
         destination = os.path.join(os.fspath(out_dir), names[0]) if names else written[0]
         rows.append(hull_row(body, result, oriented_volume(body.vertices, body.faces), destination))
+        if target is not None:
+            rows[-1]["target"] = {"name": target.name, **result.target_fit.to_dict()}
         hulls.append(result)
         if result.flat:
             message = f"{robot.source}: {_label(entry['link'], entry['index'], robot.kind)} is flat: the hull is a 2-D polygon"
@@ -251,6 +373,7 @@ def rebuild_hulls(
         frame="link",
         description=description_path(robot.source, out_dir, to),
         to=to,
+        target=target,
     )
 
 
@@ -264,9 +387,15 @@ def rebuild_decomposition(
     max_hausdorff: float | None = None,
     reserved: tuple[tuple[str, str], ...] = (),
     progress: Callable[[str], None] | None = None,
+    target: Any = None,
 ) -> Any:
     """``meshcol decompose ROBOT --out-dir OUT``: the convex parts of every collision element
     and the description that uses them.
+
+    With ``target`` the engine aims at the profile (its vertex budget and hull count,
+    :func:`meshcol.decomposition.batch.target_options`) and every element's parts are then
+    fitted to all its limits (:func:`robot_colliders`); each body has ``target`` and
+    ``target_ok`` as :func:`~meshcol.decomposition.batch.decompose_files` bodies do.
 
     Returns
     -------
@@ -278,8 +407,22 @@ def rebuild_decomposition(
     from meshcol.io.robot_write import description_path, part_files, write_robot
 
     start = time.perf_counter()
+    options = dict(decompose_options or {})
+    run_settings = dict(settings or {})
+    if target is not None:
+        from meshcol.decomposition.batch import target_options
+
+        engine_options = dict(options.get("engine_options") or {})
+        options["max_hulls"], options["max_vertices"], options["engine_options"] = target_options(
+            target,
+            options.get("engine", "coacd"),
+            options.get("max_hulls"),
+            options.get("max_vertices"),
+            engine_options,
+        )
+        run_settings.update(target=target.name, target_limits=dict(target.limits))
     robot, info = robot_colliders(
-        path, "decompose", decompose_options=decompose_options, progress=progress
+        path, "decompose", decompose_options=options, target=target, progress=progress
     )
     to = to or robot.kind
     write_robot(robot, out_dir, to, protected=reserved)
@@ -294,6 +437,10 @@ def rebuild_decomposition(
             if len(entry["results"]) > 1:
                 name += f"/{k}"
             body, row = body_report(robot.source, name, outputs, d, max_hausdorff)
+            if target is not None:
+                body["target"] = entry["targets"][k]
+                body["target_ok"] = body["target"]["met"]
+                row["target_ok"] = body["target"]["met"]
             bodies.append(body)
             rows.append(row)
     entry_file = {
@@ -303,6 +450,60 @@ def rebuild_decomposition(
         "bodies": bodies,
         "seconds": round(time.perf_counter() - start, 3),
     }
-    run_settings = dict(settings or {})
     run_settings.update(out_dir=os.fspath(out_dir), frame="link", description=description, to=to)
     return DecomposeReport([entry_file], rows, run_settings, "m", "parts", "obj", max_hausdorff)
+
+
+def rebuild_fits(
+    path: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str],
+    *,
+    to: str | None = None,
+    shape: str = "auto",
+    volume_tolerance: float | None = None,
+    reserved: tuple[tuple[str, str], ...] = (),
+    progress: Callable[[str], None] | None = None,
+) -> Any:
+    """``meshcol fit ROBOT --out-dir OUT``: one enclosing primitive per collision element,
+    written into the description as its own primitive element.
+
+    Returns
+    -------
+    FitReport
+        One row per rebuilt element (``name`` ``<link>/<element>``, parameters in the link
+        frame, ``output`` the description, or the hull's file when ``auto`` kept a hull),
+        ``frame="link"``, ``description`` the file written.
+    """
+    from meshcol.analysis.fit import DEFAULT_VOLUME_TOLERANCE, FitReport, fit_row
+    from meshcol.io.robot_write import description_path, part_files, write_robot
+
+    tolerance = DEFAULT_VOLUME_TOLERANCE if volume_tolerance is None else float(volume_tolerance)
+    robot, info = robot_colliders(
+        path,
+        "fit",
+        fit_options={"shape": shape, "volume_tolerance": tolerance},
+        progress=progress,
+    )
+    to = to or robot.kind
+    written = write_robot(robot, out_dir, to, protected=reserved)
+    files = part_files(robot) if to in ("urdf", "mjcf") else {}
+    at = {(c.link, c.index): i for i, c in enumerate(robot.colliders)}
+    rows, fits = [], []
+    for entry in info:
+        result, volume, gap = entry["results"]
+        names = files.get(at[(entry["link"], entry["index"])])
+        destination = os.path.join(os.fspath(out_dir), names[0]) if names else written[0]
+        rows.append(fit_row(entry["body"], result, volume, gap, destination, shape))
+        fits.append(result)
+    return FitReport(
+        rows,
+        tuple(fits),
+        shape,
+        tolerance,
+        None,
+        os.fspath(out_dir),
+        "m",
+        frame="link",
+        description=description_path(robot.source, out_dir, to),
+        to=to,
+    )

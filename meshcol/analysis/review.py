@@ -96,8 +96,8 @@ def _add_colliders(page: ReviewPage, colliders: Any, ids: list[int]) -> None:
             if key not in cache:
                 cache[key] = _hull_mesh(shapes.vertices[start:end])
             mesh = cache[key]
-        else:
-            primitive = colliders.bodies[body].primitive
+        else:  # a primitive part: the body's own, or a ``fit`` part
+            primitive = shapes.primitive(k)
             mesh = primitive_mesh(primitive) if primitive is not None else None
         if mesh is None:
             continue

@@ -154,6 +154,9 @@ class SweepReport:
         Per body of ``bodies``: whether it moves.
     fail_on : str
         ``hit`` (any pair that is not separated fails the run) or ``none``.
+    separated : tuple of (str, str)
+        The candidate body pairs (moving, swept bounds overlapping) that stay separated, as
+        ``(body_a, body_b)`` names.
     """
 
     scene: Scene
@@ -166,6 +169,7 @@ class SweepReport:
     moving: tuple[bool, ...] = field(default=())
     fail_on: str = "hit"
     warnings: tuple[str, ...] = ()
+    separated: tuple[tuple[str, str], ...] = ()
 
     @property
     def failed(self) -> bool:
@@ -225,6 +229,75 @@ class SweepReport:
         from meshcol.io.report import dumps_json
 
         return dumps_json(self.to_dict())
+
+    def ci_suite(self) -> Any:
+        """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one case per candidate
+        pair (``body_a <-> body_b``); a pair that hits, overlaps at the start or cannot be
+        decided is a failure under ``--fail-on hit`` (a warning under ``none``), with its
+        time of impact, point and normal; the pairs that stay separated pass."""
+        from meshcol.io.ci import CiCase, CiSuite, collapse_passed, details, number
+
+        units = self.scene.units
+        source = self.scene.source
+        fail = self.fail_on == "hit"
+        cases = []
+        for hit in self.hits:
+            if hit.status == TimeOfImpactStatus.HIT:
+                message = f"HIT at time of impact {number(hit.time_of_impact)}"
+            elif hit.status == TimeOfImpactStatus.OVERLAPPED_AT_START:
+                message = "OVERLAPPED_AT_START: the bodies overlap before they move"
+            else:
+                message = (
+                    f"FAILED: undecided, no contact before time of impact "
+                    f"{number(hit.time_of_impact)}"
+                )
+            if hit.time is not None and hit.status != TimeOfImpactStatus.OVERLAPPED_AT_START:
+                message += f" (t = {number(hit.time, 's')})"
+            if hit.tunnelled:
+                message += ", tunnelled (missed at the start and end poses)"
+            cases.append(
+                CiCase(
+                    name=f"{hit.body_a} <-> {hit.body_b}",
+                    classname="meshcol.sweep",
+                    outcome="failure" if fail else "passed",
+                    message=message,
+                    file=source,
+                    kind=hit.status.name,
+                    details=details(
+                        [
+                            ("part_a", hit.part_a),
+                            ("part_b", hit.part_b),
+                            ("point", _round(hit.point)),
+                            ("normal", _round(hit.normal)),
+                            ("iterations", hit.iterations),
+                            ("units", units),
+                        ]
+                    )
+                    if fail
+                    else "",
+                    warn=not fail,
+                )
+            )
+        for a, b in self.separated:
+            cases.append(
+                CiCase(
+                    name=f"{a} <-> {b}",
+                    classname="meshcol.sweep",
+                    message="separated during the whole motion",
+                    file=source,
+                )
+            )
+        cases.sort(key=lambda case: case.name)
+        s = self.summary
+        return CiSuite(
+            "sweep",
+            tuple(collapse_passed(cases, "pairs", "meshcol.sweep")),
+            self.settings,
+            warnings=tuple(self.warnings),
+            verdict=f"{s['hits']} hits, {s['overlapped_at_start']} overlapped at start, "
+            f"{s['failed']} undecided of {s['candidate_pairs']} candidate pairs",
+            units=units,
+        )
 
     def to_csv(self) -> str:
         """One row per pair (:data:`CSV_COLUMNS`): vectors split into ``_x/_y/_z`` columns,
@@ -401,6 +474,7 @@ def sweep(
     for k, (i, j) in enumerate(body_pairs.tolist()):
         groups.setdefault((i, j), []).append(k)
     hits = []
+    separated: list[tuple[str, str]] = []
     fraction = toi.time_of_impact
     for (i, j), members in groups.items():
         ks = np.asarray(members)
@@ -412,6 +486,7 @@ def sweep(
             )
         live = ks[status != TimeOfImpactStatus.SEPARATED]
         if len(live) == 0:
+            separated.append((bodies[i].name, bodies[j].name))
             continue
         best = live[np.argmin(fraction[live])]
         best_status = TimeOfImpactStatus(int(toi.status[best]))
@@ -467,4 +542,5 @@ def sweep(
         moving=tuple(bool(m) for m in moving),
         fail_on=fail_on,
         warnings=colliders.warnings,
+        separated=tuple(sorted(separated)),
     )

@@ -37,6 +37,7 @@ COMMANDS: dict[str, str] = {
     "sweep": "meshcol.cli.sweep:sweep",
     "check": "meshcol.cli.check:check",
     "collision-matrix": "meshcol.cli.collision_matrix:collision_matrix",
+    "targets": "meshcol.cli.targets:targets",
     "rules": "meshcol.cli.rules:rules",
 }
 

@@ -13,12 +13,15 @@ from meshcol.cli.common import (
     Progress,
     cache_dir_option,
     engine_option,
+    executor_options,
     html_option,
+    jobs_option,
     plural,
     report_format,
     report_options,
     robot_options,
     threads_option,
+    timeout_option,
     verdict,
 )
 
@@ -97,6 +100,15 @@ def _parse_fail_on(ctx: click.Context, param: click.Parameter, value: str) -> st
     help="Decomposition concavity threshold (as in 'meshcol decompose').  [default: 0.05]",
 )
 @cache_dir_option()
+@jobs_option(
+    "Files prepared at once (read, and decomposed for --shape decomposed), each a task in a "
+    "worker process or on Ray; the pairs are measured here, on --threads (1: all in this "
+    "process, unless --timeout or --executor ray)."
+)
+@timeout_option(
+    "Seconds allowed per file's task; a file over it is an error (exit 2).  [default: no limit]"
+)
+@executor_options()
 @report_options(default="the report on stdout; the summary on stderr")
 @robot_options(exclusions=True)
 @html_option
@@ -112,6 +124,10 @@ def check(
     engine: str,
     threshold: float | None,
     cache_dir: str | None,
+    jobs: int,
+    timeout: float | None,
+    executor: str,
+    ray_address: str | None,
     report: str | None,
     fmt: str | None,
     html: str | None,
@@ -136,12 +152,12 @@ def check(
       meshcol check scene.glb --shape decomposed --ignore 'door*:frame*'
       meshcol check scene.json --baseline last_week.json > today.json
       meshcol check panda.urdf --srdf panda.srdf --joint panda_joint4=-1.5
+      meshcol check props/*.obj --shape decomposed -j 2 --executor ray
     """
     from meshcol.analysis.check import check as run_check
     from meshcol.analysis.check import parse_ignore_rule
     from meshcol.analysis.review import check_page
-    from meshcol.cli.common import check_outputs, write_html
-    from meshcol.io.report import emit
+    from meshcol.cli.common import check_outputs, emit_report, render_html, write_html
 
     for rule in ignore:
         try:
@@ -163,15 +179,20 @@ def check(
             baseline=baseline,
             threads=threads,
             decompose_options=_decompose_options(engine, threshold, cache_dir),
+            jobs=jobs,
+            timeout=timeout,
+            executor=executor,
+            ray_address=ray_address,
         )
     finally:
         progress.done()
 
-    emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
-    write_html(
+    page = render_html(
         html,
         lambda: check_page(result, inputs, shape, _decompose_options(engine, threshold, cache_dir)),
     )
+    emit_report(result, fmt, report)
+    write_html(html, page)
     for warning in result.warnings:
         click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_table(result), err=True)

@@ -125,7 +125,7 @@ def collision_matrix(
         )
     srdf_to = "-" if output is None and report != "-" else output
     check_outputs([robot], [("-o/--output", srdf_to), ("--report", report)])
-    fmt = report_format(report, None, format_option=False)
+    fmt = report_format(report, None, format_option=False, formats=("json", "csv"))
     decompose: dict = {"engine": engine}
     if cache_dir is not None:
         decompose["cache_dir"] = cache_dir

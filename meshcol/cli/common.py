@@ -74,7 +74,8 @@ class FiniteFloat(click.ParamType):
 def report_options(
     default: str = "the report on stdout",
 ) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
-    """Add ``--report FILE`` (``-`` for stdout) and ``--format json|csv`` (parameter ``fmt``).
+    """Add ``--report FILE`` (``-`` for stdout) and ``--format json|csv|junit|github``
+    (parameter ``fmt``; :data:`meshcol.io.report.REPORT_FORMATS`).
 
     Parameters
     ----------
@@ -83,12 +84,16 @@ def report_options(
     """
 
     def decorate(func: Callable[..., Any]) -> Callable[..., Any]:
+        from meshcol.io.report import REPORT_FORMATS
+
         func = click.option(
             "--format",
             "fmt",
-            type=click.Choice(["json", "csv"]),
+            type=click.Choice(REPORT_FORMATS),
             default=None,
-            help="Report format.  [default: from the --report extension (.json, .csv), else json]",
+            help="Report format: json, csv, junit (JUnit XML for Jenkins and GitHub test "
+            "reporters) or github (workflow-command annotations).  [default: from the --report "
+            "extension (.json, .csv, .xml), else json]",
         )(func)
         func = click.option(
             "--report",
@@ -102,17 +107,59 @@ def report_options(
     return decorate
 
 
-def report_format(report: str | None, fmt: str | None, format_option: bool = True) -> str:
+def report_format(
+    report: str | None,
+    fmt: str | None,
+    format_option: bool = True,
+    option: str = "--format",
+    formats: Sequence[str] | None = None,
+) -> str:
     """The report's format, or a usage error for an unknown ``--report`` extension or a
-    ``--format`` that contradicts it (``--report out.xml`` never silently writes JSON).
-    ``format_option``: the command has ``--format json|csv`` (the message suggests it)."""
+    ``--format`` that contradicts it (``--report out.txt`` never silently writes JSON).
+    ``format_option``: the command has ``option`` (the message suggests it); ``formats``:
+    the formats the command writes (default every one, ``REPORT_FORMATS``)."""
+    from meshcol.io.report import REPORT_FORMATS
     from meshcol.io.report import report_format as pick
 
+    formats = tuple(formats or REPORT_FORMATS)
     try:
-        return pick(report, fmt)
+        chosen = pick(report, fmt)
     except ValueError as exc:
-        hint = " (or give --format json|csv)" if format_option and fmt is None else ""
+        hint = f" (or give {option} {'|'.join(formats)})" if format_option and fmt is None else ""
         raise click.BadParameter(f"{exc}{hint}", param_hint="'--report'") from None
+    if chosen not in formats:
+        raise click.BadParameter(
+            f"{report!r} would be a {chosen} report: this command writes {' or '.join(formats)}",
+            param_hint="'--report'",
+        )
+    return chosen
+
+
+def no_report_with_meshes(fmt: str | None, report: str | None, meshes: bool) -> None:
+    """A usage error for ``--format`` when the command writes meshes (``-o``, ``--out-dir``)
+    and so, without ``--report``, no report at all: the format would silently do nothing."""
+    if fmt is not None and report is None and meshes:
+        raise click.UsageError(
+            f"--format {fmt}: with -o/--out-dir no report is written unless --report FILE "
+            "(or --report - for stdout) says where"
+        )
+
+
+def emit_report(result: Any, fmt: str, report: str | None) -> None:
+    """Write ``result``'s report in ``fmt`` to ``report`` (stdout for None or ``-``)
+    atomically (:func:`meshcol.io.report.report_text`, :func:`meshcol.io.report.emit`); in the
+    ``github`` format also append the Markdown summary to ``$GITHUB_STEP_SUMMARY`` when set."""
+    from meshcol.io.report import emit, report_text
+
+    if fmt not in ("junit", "github"):
+        emit(report_text(result, fmt), report)
+        return
+    from meshcol.io.ci import render, write_step_summary
+
+    suite = result.ci_suite()
+    emit(render(suite, fmt), report)
+    if fmt == "github":
+        write_step_summary(suite)
 
 
 def check_outputs(
@@ -395,14 +442,23 @@ def html_option(func: Callable[..., Any]) -> Callable[..., Any]:
     )(func)
 
 
-def write_html(path: str | None, build: Callable[[], Any]) -> None:
-    """Build the review page (``build()`` returns a :class:`meshcol.io.review.ReviewPage`)
-    and write it atomically to ``path``; says where on stderr. Nothing when ``path`` is None."""
+def render_html(path: str | None, build: Callable[[], Any]) -> str | None:
+    """The review page's HTML (``build()`` returns a :class:`meshcol.io.review.ReviewPage`),
+    or None when ``path`` is None. Called before any output is written, so that a page over
+    its limits (:class:`meshcol.io.review.ReviewTooLargeError`, exit 2) leaves no report."""
     if path is None:
-        return
-    from meshcol.io.review import write_review
+        return None
+    return str(build().to_html())
 
-    size = write_review(path, build())
+
+def write_html(path: str | None, text: str | None) -> None:
+    """Write the page :func:`render_html` made to ``path`` atomically; says where on stderr."""
+    if path is None or text is None:
+        return
+    from meshcol.io.report import atomic_write
+
+    atomic_write(path, text)
+    size = len(text.encode("utf-8"))
     click.echo(f"meshcol: review page: {display_path(path)} ({size / 1e6:.1f} MB)", err=True)
 
 
@@ -440,6 +496,28 @@ def executor_options() -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     return decorate
 
 
+def jobs_option(help_text: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Add ``--jobs N`` / ``-j N`` (at least 1): files processed at once, one task each."""
+    return click.option(
+        "--jobs",
+        "-j",
+        type=click.IntRange(min=1),
+        default=1,
+        show_default=True,
+        help=help_text,
+    )
+
+
+def timeout_option(
+    help_text: str = "Seconds allowed per file; a file over it is stopped and reported.  "
+    "[default: no limit]",
+) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Add ``--timeout SECONDS`` (> 0): the limit of one file's task."""
+    return click.option(
+        "--timeout", type=FiniteFloat(0, min_open=True), default=None, help=help_text
+    )
+
+
 def threads_option(
     help_text: str = "Threads for the native queries (0: all cores).",
 ) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
@@ -465,3 +543,48 @@ def cache_dir_option(
     return click.option(
         "--cache-dir", type=click.Path(file_okay=False), default=None, help=help_text
     )
+
+
+def to_option(what: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Add ``--to urdf|mjcf|glb|usd`` (parameter ``to``): the format of a rebuilt robot
+    description written with ``what`` (hull, decompose, fit)."""
+    return click.option(
+        "--to",
+        "to",
+        type=click.Choice(["urdf", "mjcf", "glb", "usd"]),
+        default=None,
+        help=f"Robot input (URDF, MJCF) with --out-dir: the format of the description written "
+        f"with {what}, OUT/<robot>.urdf|.xml|.glb|.usda (usd needs meshcol[usd]).  [default: "
+        "the input's]",
+    )
+
+
+def mesh_outputs(
+    inputs: Sequence[str],
+    output: str | None,
+    out_dir: str | None,
+    to: str | None,
+    fmt: str | None,
+    report: str | None,
+) -> bool:
+    """The usage checks of a command that writes meshes (hull, fit): ``-o`` or ``--out-dir``,
+    a known mesh extension, ``--to`` only for a robot, a report format only with a report.
+    Returns whether the run rebuilds one robot description (``--out-dir`` and a URDF/MJCF)."""
+    from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS
+    from meshcol.io.robot import is_robot_file
+
+    if output and out_dir:
+        raise click.UsageError("give either -o/--output or --out-dir, not both")
+    if output:
+        extension = os.path.splitext(output)[1].lower()
+        if extension not in MESH_OUTPUT_EXTENSIONS:
+            raise click.BadParameter(
+                f"unknown mesh extension {extension or '(none)'!r} in {output!r} "
+                f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})",
+                param_hint="'-o' / '--output'",
+            )
+    robot = out_dir is not None and len(inputs) == 1 and is_robot_file(inputs[0])
+    if to is not None and not robot:
+        raise click.UsageError("--to needs one robot description (URDF, MJCF) and --out-dir")
+    no_report_with_meshes(fmt, report, bool(output or out_dir))
+    return robot

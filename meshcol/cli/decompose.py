@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from typing import Any
 
 import click
 
@@ -10,10 +11,19 @@ from meshcol.cli.common import (
     FiniteFloat,
     executor_options,
     html_option,
+    jobs_option,
+    render_html,
     robot_options,
+    timeout_option,
+    to_option,
     write_html,
 )
 from meshcol.decomposition.engines import ENGINES
+from meshcol.decomposition.search import (
+    DEFAULT_SEARCH_STEPS,
+    DEFAULT_SEARCH_TOLERANCE,
+    SEARCH_MODES,
+)
 from meshcol.io.mesh_write import LAYOUTS
 
 
@@ -27,6 +37,22 @@ def _engine_option(
             raise click.BadParameter(f"expected KEY=VALUE, got {item!r}", ctx=ctx, param=param)
         options[key.strip().replace("-", "_")] = value.strip()
     return options
+
+
+class _MeshFormat(click.Choice):
+    """``--format obj|glb``, which names the report formats' option when given one."""
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        from meshcol.io.report import REPORT_FORMATS
+
+        if isinstance(value, str) and value.lower() in REPORT_FORMATS:
+            self.fail(
+                f"{value!r} is a report format: decompose's --format is the parts' mesh "
+                f"format (obj, glb); give --report-format {value.lower()}",
+                param,
+                ctx,
+            )
+        return super().convert(value, param, ctx)
 
 
 @click.command(
@@ -66,6 +92,16 @@ def _engine_option(
     help="Most vertices per part (enforced).  [default: no limit]",
 )
 @click.option(
+    "--target",
+    "target_name",
+    metavar="NAME|FILE.toml",
+    default=None,
+    help="Fit every body's parts to an engine's limits (meshcol targets: physx, physx-gpu, "
+    "unity, unreal, godot, mujoco, bullet, isaac) or your own profile, still enclosing; "
+    "tighter --max-hulls/--max-vertices win. Exit 1 when a limit cannot be met.  "
+    "[default: no target]",
+)
+@click.option(
     "--preprocess",
     type=click.Choice(["auto", "on", "off"]),
     default="auto",
@@ -89,20 +125,8 @@ def _engine_option(
     help="Any other engine parameter, e.g. -E mcts_iterations=50 (repeatable).  [default: "
     "the engine's]",
 )
-@click.option(
-    "--jobs",
-    "-j",
-    type=click.IntRange(min=1),
-    default=1,
-    show_default=True,
-    help="Files decomposed in parallel processes (1: one at a time, CoACD using every core).",
-)
-@click.option(
-    "--timeout",
-    type=FiniteFloat(0, min_open=True),
-    default=None,
-    help="Seconds allowed per file; a file over it is stopped and reported.  [default: no limit]",
-)
+@jobs_option("Files decomposed in parallel processes (1: one at a time, CoACD using every core).")
+@timeout_option()
 @click.option(
     "--cache-dir",
     type=click.Path(file_okay=False),
@@ -121,31 +145,62 @@ def _engine_option(
 @click.option(
     "--format",
     "fmt",
-    type=click.Choice(["obj", "glb"]),
+    type=_MeshFormat(["obj", "glb"]),
     default="obj",
     show_default=True,
     help="Output format (glb: one node per part; not with ucx).",
 )
-@click.option(
-    "--to",
-    "to",
-    type=click.Choice(["urdf", "mjcf", "glb", "usd"]),
-    default=None,
-    help="Robot input (URDF, MJCF): the format of the description written with the parts, "
-    "OUT/<robot>.urdf|.xml|.glb|.usda (usd needs meshcol[usd]).  [default: the input's]",
-)
+@to_option("the parts")
 @click.option(
     "--report",
     type=click.Path(dir_okay=False),
     default=None,
-    help="Write the JSON or CSV report here.  [default: the report on stdout]",
+    help="Write the report here ('-': stdout).  [default: the report on stdout]",
+)
+@click.option(
+    "--report-format",
+    "report_fmt",
+    type=click.Choice(["json", "csv", "junit", "github"]),
+    default=None,
+    help="Report format: json, csv, junit (JUnit XML) or github (workflow-command "
+    "annotations).  [default: from the --report extension (.json, .csv, .xml), else json]",
 )
 @click.option(
     "--max-hausdorff",
     type=FiniteFloat(min=0),
     default=None,
-    help="Fail (exit 1) when a body's Hausdorff distance, either way, exceeds this (mesh "
-    "units).  [default: no limit]",
+    help="Fidelity target: the largest Hausdorff distance, either way (mesh units). Each body's "
+    "threshold (and resolution) is searched for the fewest parts within it; exit 1 when no "
+    "step meets it. With --search off: only checked.  [default: no limit]",
+)
+@click.option(
+    "--max-parts",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Fidelity target: the most parts per body; alone, the search finds the best fidelity "
+    "within it. With --search off: only checked.  [default: no limit]",
+)
+@click.option(
+    "--search",
+    type=click.Choice(SEARCH_MODES),
+    default="auto",
+    show_default=True,
+    help="auto: search the engine's parameters when --max-hausdorff or --max-parts is given; "
+    "off: just check them (the run's parameters, exit 1 when exceeded).",
+)
+@click.option(
+    "--search-steps",
+    type=click.IntRange(min=1),
+    default=DEFAULT_SEARCH_STEPS,
+    show_default=True,
+    help="Most decompositions (cached or not) one body's search makes.",
+)
+@click.option(
+    "--search-tolerance",
+    type=FiniteFloat(0, min_open=True),
+    default=DEFAULT_SEARCH_TOLERANCE,
+    show_default=True,
+    help="The search stops when its threshold bracket is this narrow (hi/lo <= 1 + it).",
 )
 @click.option(
     "--run-manifest",
@@ -173,6 +228,7 @@ def decompose_command(
     threshold: float | None,
     max_hulls: int | None,
     max_vertices: int | None,
+    target_name: str | None,
     preprocess: str,
     resolution: int | None,
     seed: int,
@@ -185,7 +241,12 @@ def decompose_command(
     fmt: str,
     to: str | None,
     report: str | None,
+    report_fmt: str | None,
     max_hausdorff: float | None,
+    max_parts: int | None,
+    search: str,
+    search_steps: int,
+    search_tolerance: float,
     html: str | None,
     run_manifest: str | None,
     resume: bool,
@@ -199,8 +260,8 @@ def decompose_command(
     union against the mesh's, Hausdorff distances both ways (how far the mesh surface is from
     the parts, and how far the boundary of their union sticks out of the mesh's solid: cuts
     inside the mesh count 0), and the fraction of the mesh surface they leave uncovered. Results are cached by geometry and parameters, so a second
-    run costs milliseconds. Exit 1 when a file failed or timed out, or --max-hausdorff was
-    exceeded; exit 2 for unusable input or an output that cannot be written (every output
+    run costs milliseconds. Exit 1 when a file failed or timed out, a body misses
+    --max-hausdorff or --max-parts, or a part misses a --target limit (each said on stderr with its rule id); exit 2 for unusable input or an output that cannot be written (every output
     location is checked before the work starts, and nothing is written on failure); 130 on
     Ctrl-C, 143 on SIGTERM, with no output, no cache entry and no worker left behind.
 
@@ -210,7 +271,18 @@ def decompose_command(
     part (visuals, inertials, joints, comments and unknown tags untouched; box, sphere,
     cylinder and capsule elements kept, being exact). --to mjcf writes OUT/<robot>.xml in
     MuJoCo Menagerie's convention; --to glb and --to usd the parts at the joint
-    configuration. --layout and --format do not apply.
+    configuration. --layout and --format do not apply. --target fits each mesh object's
+    parts (an element of k objects gives each max_hulls // k; more objects than max_hulls
+    is an MC106 finding on the element).
+
+    Fidelity targets: --max-hausdorff D and/or --max-parts N search each body's CoACD
+    threshold (V-HACD: its hull count), bracketing from --threshold then bisecting, and raise
+    the resolution when even the finest threshold misses D, for the fewest parts within D (N
+    alone: the smallest Hausdorff within N parts). Every step is an ordinary cached
+    decomposition (a repeated or resumed run replays the search from the cache) and is in
+    the report's "search" of each body, the chosen one marked; a body no step meets fails
+    (exit 1), naming its best step. --max-hausdorff used to only check the run's result:
+    --search off keeps that.
 
     \b
     Examples:
@@ -222,19 +294,20 @@ def decompose_command(
       meshcol decompose snowflake.obj -o out/ --preprocess off --threshold 0.02 -E mcts_iterations=50
       meshcol decompose lib/*.obj -o out/ --executor ray --ray-address auto --cache-dir s3://b/c
       meshcol decompose lib/*.obj -o out/ --run-manifest run.json --resume
+      meshcol decompose mug.obj -o out/ --max-hausdorff 0.002 --search-steps 10
+      meshcol decompose mug.obj -o out/ --max-parts 8
+      meshcol decompose props/*.obj -o out/ --target isaac
     """
     from meshcol.analysis.review import decompose_page
-    from meshcol.cli.common import Progress, report_format, verdict
+    from meshcol.cli.common import Progress, emit_report, report_format, verdict
     from meshcol.decomposition.batch import decompose_files
     from meshcol.decomposition.cache import default_cache_dir, local_folder
     from meshcol.decomposition.engines import resolve_params
     from meshcol.io.outputs import check_outputs
-    from meshcol.io.report import emit
     from meshcol.io.scene import MANIFEST_EXTENSIONS
 
-    report_format(
-        report, None, format_option=False
-    )  # an unknown --report extension stops the run before it starts
+    # an unknown --report extension stops the run before it starts
+    report_fmt = report_format(report, report_fmt, option="--report-format")
     if layout == "ucx" and fmt == "glb":
         raise click.UsageError("--layout ucx writes OBJ only: drop --format glb")
     if no_cache and cache_dir is not None:
@@ -252,6 +325,7 @@ def decompose_command(
         resolve_params(engine, engine_options=engine_options)
     except ValueError as exc:
         raise click.BadParameter(str(exc), param_hint="'--engine-option'") from None
+    searching = search != "off" and (max_hausdorff is not None or max_parts is not None)
 
     # Every output location, before any work: a run never fails after the work for want of
     # a folder, and never replaces one of its inputs.
@@ -272,6 +346,11 @@ def decompose_command(
     robot = len(inputs) == 1 and is_robot_file(inputs[0])
     if to is not None and not robot:
         raise click.UsageError("--to needs one robot description (URDF, MJCF)")
+    target = None
+    if target_name is not None:
+        from meshcol.io.targets import load_target
+
+        target = load_target(target_name)
     if robot:
         for name, flag in (("layout", "--layout"), ("fmt", "--format")):
             if ctx.get_parameter_source(name) == ParameterSource.COMMANDLINE:
@@ -289,6 +368,13 @@ def decompose_command(
                     f"{flag} does not apply to a robot description yet (its links run in the "
                     "local worker pool, --jobs)"
                 )
+        if searching:
+            raise click.UsageError(
+                "the fidelity search (--max-hausdorff, --max-parts) does not apply to a robot "
+                "description yet: add --search off to check --max-hausdorff only"
+            )
+        if max_parts is not None:
+            raise click.UsageError("--max-parts does not apply to a robot description yet")
     progress = Progress(command="decompose", heartbeat=True)
     if robot:
         from meshcol.analysis.rebuild import rebuild_decomposition
@@ -321,14 +407,20 @@ def decompose_command(
                     "layout": "parts",
                     "format": "obj",
                     "max_hausdorff": max_hausdorff,
+                    "max_parts": None,
+                    "search": search,
+                    "search_steps": None,
+                    "search_tolerance": None,
                 },
                 max_hausdorff=max_hausdorff,
                 reserved=(("the --report file", report_file),) if report_file else (),
                 progress=progress.message,
+                target=target,
             )
         finally:
             progress.done()
-        emit(result.to_csv() if report_format(report, None) == "csv" else result.to_json(), report)
+        emit_report(result, report_fmt, report)
+        _echo_target_violations(result)
         detail = f"{_summary(result)}, written to {result.settings['description']}"
         click.echo(verdict("decompose", result.exit_code == 0, detail), err=True)
         if result.exit_code:
@@ -355,23 +447,48 @@ def decompose_command(
             layout=layout,
             fmt=fmt,
             max_hausdorff=max_hausdorff,
+            max_parts=max_parts,
+            search=search,
+            search_steps=search_steps,
+            search_tolerance=search_tolerance,
             progress=progress.message,
             other_outputs=[p for p in (report_file, html, run_manifest) if p],
             executor=executor,
             ray_address=ray_address,
             run_manifest=run_manifest,
             resume=resume,
+            target=target,
         )
     finally:
         progress.done()
-    emit(result.to_csv() if report_format(report, None) == "csv" else result.to_json(), report)
-    write_html(html, lambda: decompose_page(result, out_dir, inputs))
+    page = render_html(html, lambda: decompose_page(result, out_dir, inputs))
+    emit_report(result, report_fmt, report)
+    write_html(html, page)
     for f in result.files:
         if f["status"] != "ok":
             click.echo(f"meshcol: {f['status']}: {f['path']}: {f['message']}", err=True)
+        for body in f["bodies"]:
+            if body["search"] is not None and not body["search"]["met"]:
+                reason = body["search"]["reason"]
+                click.echo(
+                    f"meshcol: target missed: {f['path']}: {body['name']}: {reason}", err=True
+                )
+    _echo_target_violations(result)
     click.echo(verdict("decompose", result.exit_code == 0, _summary(result)), err=True)
     if result.exit_code:
         ctx.exit(result.exit_code)
+
+
+def _echo_target_violations(result) -> None:
+    """One stderr line per target limit a body missed, with its rule id."""
+    for f in result.files:
+        for body in f["bodies"]:
+            for v in body.get("target", {}).get("violations", []):
+                click.echo(
+                    f"meshcol: {v['rule']} {v['rule_name']}: {f['path']}: body '{body['name']}' "
+                    f"{v['message']}",
+                    err=True,
+                )
 
 
 def _summary(result) -> str:
@@ -387,4 +504,8 @@ def _summary(result) -> str:
             text += f", {s[key]} {what}"
     if s["hausdorff_exceeded"]:
         text += f", {s['hausdorff_exceeded']} over --max-hausdorff"
+    if s["parts_exceeded"]:
+        text += f", {s['parts_exceeded']} over --max-parts"
+    if s.get("target_missed"):
+        text += f", {s['target_missed']} missing a target limit"
     return text

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-
 import click
 
 from meshcol.analysis.fit import DEFAULT_VOLUME_TOLERANCE, SHAPE_CHOICES
@@ -11,13 +9,15 @@ from meshcol.cli.common import (
     Progress,
     check_outputs,
     display_path,
+    mesh_outputs,
     plural,
     report_format,
     report_options,
     robot_options,
+    to_option,
     verdict,
 )
-from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
+from meshcol.io.mesh_write import MULTI_MESH_EXTENSIONS
 
 
 @click.command(
@@ -55,8 +55,10 @@ from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
 @click.option(
     "--out-dir",
     metavar="DIR",
-    help="Write one DIR/<body>.obj per body.  [default: no mesh files]",
+    help="Write one DIR/<body>.obj per body; for a robot description, the description "
+    "rebuilt with primitive colliders.  [default: no mesh files]",
 )
+@to_option("the fits")
 @report_options(default="stdout when no mesh is written, else no report")
 @robot_options()
 def fit(
@@ -65,6 +67,7 @@ def fit(
     volume_tolerance: float,
     output: str | None,
     out_dir: str | None,
+    to: str | None,
     report: str | None,
     fmt: str | None,
 ) -> None:
@@ -85,40 +88,53 @@ def fit(
     surface to the mesh (sampled). With --shape auto, simpler_primitive says a primitive is
     within the tolerance ("could use a simpler primitive") and candidates lists all four.
 
+    A robot description (URDF, or MJCF) with --out-dir is rebuilt: each collision mesh
+    element becomes its fit, written as the description's own primitive (URDF <box>,
+    <sphere>, <cylinder>, and <capsule>, which MuJoCo's importer and meshcol read but ROS's
+    urdfdom does not; MJCF geom types) with an <origin> in the link frame; a hull kept by
+    --shape auto goes to OUT/<link>_NN.obj. Visuals, inertials, joints and existing primitive
+    elements are untouched. --to mjcf, glb and usd as for meshcol hull.
+
     \b
     Examples:
       meshcol fit crate.obj                            report on stdout
       meshcol fit props/*.obj --shape box --report boxes.csv
       meshcol fit level.json -o level_colliders.obj --report fits.json
+      meshcol fit panda.urdf --out-dir panda_fits/ --to mjcf --shape capsule
     """
-    if output and out_dir:
-        raise click.UsageError("give either -o/--output or --out-dir, not both")
-    if output:
-        extension = os.path.splitext(output)[1].lower()
-        if extension not in MESH_OUTPUT_EXTENSIONS:
-            raise click.BadParameter(
-                f"unknown mesh extension {extension or '(none)'!r} in {output!r} "
-                f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})",
-                param_hint="'-o' / '--output'",
-            )
+    robot = mesh_outputs(inputs, output, out_dir, to, fmt, report)
 
     from meshcol.analysis.fit import fit as run_fit
     from meshcol.analysis.hull import OutputDestinationError
-    from meshcol.io.report import emit
+    from meshcol.cli.common import emit_report
 
     check_outputs(inputs, [("-o", output), ("--report", report)])
     fmt = report_format(report, fmt)
     progress = Progress(command="fit", heartbeat=True)
     try:
-        result = run_fit(
-            list(inputs),
-            shape=shape,
-            volume_tolerance=volume_tolerance,
-            output=output,
-            out_dir=out_dir,
-            reserved=[("--report", report)],
-            progress=progress,
-        )
+        if robot:
+            from meshcol.analysis.rebuild import rebuild_fits
+
+            assert out_dir is not None
+            result = rebuild_fits(
+                inputs[0],
+                out_dir,
+                to=to,
+                shape=shape,
+                volume_tolerance=volume_tolerance,
+                reserved=(("the --report file", report),) if report not in (None, "-") else (),
+                progress=progress,
+            )
+        else:
+            result = run_fit(
+                list(inputs),
+                shape=shape,
+                volume_tolerance=volume_tolerance,
+                output=output,
+                out_dir=out_dir,
+                reserved=[("--report", report)],
+                progress=progress,
+            )
     except OutputDestinationError as exc:
         raise click.UsageError(
             f"-o {exc.output}: {exc.bodies} bodies need a file that holds several meshes "
@@ -127,7 +143,7 @@ def fit(
     finally:
         progress.done()
     if report is not None or not (output or out_dir):
-        emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
+        emit_report(result, fmt, report)
     s = result.summary
     shapes = ", ".join(f"{count} {name}" for name, count in s["shapes"].items() if count)
     detail = f"{plural(s['bodies'], 'body', 'bodies')} ({shapes or 'none'})"
@@ -135,6 +151,8 @@ def fit(
         detail += f", {s['simpler_primitive']} could use a simpler primitive"
     if output:
         detail += f", written to {display_path(output)}"
+    elif robot and result.description is not None:
+        detail += f", written to {display_path(result.description)}"
     elif out_dir:
         detail += f", {plural(s['files_written'], 'file')} written to {display_path(out_dir)}"
     click.echo(verdict("fit", True, detail), err=True)

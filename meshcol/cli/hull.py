@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-
 import click
 
 from meshcol.cli.common import (
@@ -11,14 +9,17 @@ from meshcol.cli.common import (
     check_outputs,
     display_path,
     html_option,
+    mesh_outputs,
     plural,
+    render_html,
     report_format,
     report_options,
     robot_options,
+    to_option,
     verdict,
     write_html,
 )
-from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
+from meshcol.io.mesh_write import MULTI_MESH_EXTENSIONS
 
 
 @click.command(
@@ -50,14 +51,15 @@ from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS
     "input.  [default: no budget, the exact hull]",
 )
 @click.option(
-    "--to",
-    "to",
-    type=click.Choice(["urdf", "mjcf", "glb", "usd"]),
-    default=None,
-    help="Robot input (URDF, MJCF) with --out-dir: the format of the description written "
-    "with the hulls, OUT/<robot>.urdf|.xml|.glb|.usda (usd needs meshcol[usd]).  [default: "
-    "the input's]",
+    "--target",
+    "target_name",
+    metavar="NAME|FILE.toml",
+    help="Fit every hull to an engine's limits (meshcol targets lists them: physx, "
+    "physx-gpu, unity, unreal, godot, mujoco, bullet, isaac) or to your own profile; "
+    "a tighter --max-vertices still wins. Exit 1 when a limit cannot be met.  [default: "
+    "no target]",
 )
+@to_option("the hulls")
 @report_options(default="stdout when no mesh is written, else no report")
 @robot_options()
 @html_option
@@ -66,6 +68,7 @@ def hull(
     output: str | None,
     out_dir: str | None,
     max_vertices: int | None,
+    target_name: str | None,
     to: str | None,
     report: str | None,
     fmt: str | None,
@@ -80,6 +83,14 @@ def hull(
     With --max-vertices the hull keeps at most N vertices and still contains every input
     vertex: its faces are grown outward (never pulled in), and the report gives the volume
     this added and the largest distance from the simplified hull to the exact one.
+
+    With --target every hull meets all the engine's limits (vertices, polygons after
+    merging coplanar triangles, triangles, polygons per vertex, minimum thickness and
+    volume, the GPU oblong ratio), still enclosing the input: thin or flat bodies are
+    thickened, never shrunk. Each row's "target" says what each limit cost, in the order
+    limits are applied: marginal added volume (these sum to the row's added_volume),
+    cumulative largest distance, and the limit's standalone cost; and lists any limit that
+    could not be met, with its rule id (MC101..); those exit 1.
 
     The report (JSON or CSV, one row per body) gives the input and hull sizes, the hull
     volume, the mesh volume (closed meshes only, else null), volume_ratio = mesh volume /
@@ -96,6 +107,7 @@ def hull(
     elements are kept as they are (already exact). --to mjcf writes OUT/<robot>.xml in
     MuJoCo Menagerie's convention (visual geoms group 2, contype/conaffinity 0; collision
     geoms group 3); --to glb and --to usd write the colliders at the joint configuration.
+    --target fits each element's hull as it fits a mesh's (the description is in metres).
 
     \b
     Examples:
@@ -103,29 +115,22 @@ def hull(
       meshcol hull panda.urdf --max-vertices 64 --out-dir panda_hulls/
       meshcol hull panda.urdf --out-dir out/ --to mjcf --joint panda_joint4=-1.5
       meshcol hull chair.obj --max-vertices 64 -o chair_hull.obj
+      meshcol hull props/*.obj --target physx-gpu --out-dir hulls
       meshcol hull props/*.obj --max-vertices 255 --out-dir hulls --report hulls.csv
       meshcol hull level.json -o level_hulls.glb --report -
     """
-    if output and out_dir:
-        raise click.UsageError("give either -o/--output or --out-dir, not both")
-    if output:
-        extension = os.path.splitext(output)[1].lower()
-        if extension not in MESH_OUTPUT_EXTENSIONS:
-            raise click.BadParameter(
-                f"unknown mesh extension {extension or '(none)'!r} in {output!r} "
-                f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})",
-                param_hint="'-o' / '--output'",
-            )
+    robot = mesh_outputs(inputs, output, out_dir, to, fmt, report)
 
     from meshcol.analysis.hull import OutputDestinationError
     from meshcol.analysis.hull import hull as run_hull
     from meshcol.analysis.review import hull_page
-    from meshcol.io.report import emit
-    from meshcol.io.robot import is_robot_file
+    from meshcol.cli.common import emit_report
 
-    robot = out_dir is not None and len(inputs) == 1 and is_robot_file(inputs[0])
-    if to is not None and not robot:
-        raise click.UsageError("--to needs one robot description (URDF, MJCF) and --out-dir")
+    target = None
+    if target_name is not None:
+        from meshcol.io.targets import load_target
+
+        target = load_target(target_name)
     check_outputs(inputs, [("-o", output), ("--report", report), ("--html", html)])
     fmt = report_format(report, fmt)
     progress = Progress(command="hull", heartbeat=True)
@@ -142,6 +147,7 @@ def hull(
                 reserved=(("the --report file", report),) if report not in (None, "-") else (),
                 warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
                 progress=progress,
+                target=target,
             )
         else:
             result = run_hull(
@@ -152,6 +158,7 @@ def hull(
                 warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
                 reserved=[("--report", report)],
                 progress=progress,
+                target=target,
             )
     except OutputDestinationError as exc:
         raise click.UsageError(
@@ -160,9 +167,15 @@ def hull(
         ) from None
     finally:
         progress.done()
+    page = render_html(html, lambda: hull_page(result, inputs))
     if report is not None or not (output or out_dir):
-        emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
-    write_html(html, lambda: hull_page(result, inputs))
+        emit_report(result, fmt, report)
+    write_html(html, page)
+    for body, violation in result.violations:
+        click.echo(
+            f"meshcol: {violation.rule} {violation.rule_name}: body '{body}' {violation.message}",
+            err=True,
+        )
     s = result.summary
     detail = f"{plural(s['bodies'], 'hull')}, {plural(s['hull_vertices'], 'vertex', 'vertices')}"
     if s["flat"]:
@@ -173,4 +186,11 @@ def hull(
         detail += f", written to {display_path(result.description)}"
     elif out_dir:
         detail += f", {plural(s['files_written'], 'file')} written to {display_path(out_dir)}"
-    click.echo(verdict("hull", True, detail), err=True)
+    if target is not None:
+        missed = s["target_violations"]
+        detail += f", target {target.name}: " + (
+            "every limit met" if not missed else f"{plural(missed, 'limit')} not met"
+        )
+    click.echo(verdict("hull", result.exit_code == 0, detail), err=True)
+    if result.exit_code:
+        click.get_current_context().exit(result.exit_code)

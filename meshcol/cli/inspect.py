@@ -13,11 +13,15 @@ from meshcol.cli.common import (
     cache_dir_option,
     check_outputs,
     engine_option,
+    executor_options,
     html_option,
+    jobs_option,
     plural,
+    render_html,
     report_format,
     report_options,
     robot_options,
+    timeout_option,
     verdict,
     write_html,
 )
@@ -95,6 +99,15 @@ def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) 
 )
 @engine_option("Decomposition engine for --shape decomposed bodies missing from the cache.")
 @cache_dir_option()
+@jobs_option(
+    "Files inspected at once, each a task in a worker process or on Ray (1: one after "
+    "another in this process, unless --timeout or --executor ray)."
+)
+@timeout_option(
+    "Seconds allowed per file; a file over it is stopped and reported as not inspected "
+    "(exit 2).  [default: no limit]"
+)
+@executor_options()
 @robot_options()
 @html_option
 def inspect(
@@ -110,6 +123,10 @@ def inspect(
     min_volume: float,
     engine: str,
     cache_dir: str | None,
+    jobs: int,
+    timeout: float | None,
+    executor: str,
+    ray_address: str | None,
     html: str | None,
 ) -> None:
     """Health check of each body's mesh: fit to be a collider?
@@ -139,6 +156,12 @@ def inspect(
     'meshcol: error:' line, the other files are inspected and reported, and the run exits 2.
     A summary table goes to stderr (the first 20 bodies, then "N more").
 
+    With --jobs N, --timeout or --executor ray, each file is a task of its own (read and
+    inspected in a worker process, or a Ray task; a manifest is read here and its bodies go
+    out grouped by mesh file): a file whose task dies or runs over --timeout is a "not
+    inspected" entry of the report's "errors" (exit 2) while the others finish. The report
+    is the same whichever executor ran it.
+
     \b
     Examples:
       meshcol inspect chair.obj                       JSON report on stdout
@@ -146,11 +169,12 @@ def inspect(
       meshcol inspect level.json --fail-on not-watertight,self-intersecting
       meshcol inspect props/*.obj --report - --format csv --fail-on all
       meshcol inspect robot.urdf --fail-on MC301,MC204,collider-volume-mismatch
+      meshcol inspect lib/*.glb -j 2 --timeout 60 --executor ray --report health.json
     """
     from meshcol.analysis.inspect import PhysicsOptions
     from meshcol.analysis.inspect import inspect as run_inspect
     from meshcol.analysis.review import inspect_page
-    from meshcol.io.report import emit
+    from meshcol.cli.common import emit_report
 
     check_outputs(inputs, [("--report", report), ("--html", html)])
     fmt = report_format(report, fmt)
@@ -166,11 +190,21 @@ def inspect(
             decompose_options={"engine": engine}
             | ({} if cache_dir is None else {"cache_dir": cache_dir}),
         )
-        result = run_inspect(list(inputs), fail_on=fail_on, physics=physics, progress=progress)
+        result = run_inspect(
+            list(inputs),
+            fail_on=fail_on,
+            physics=physics,
+            progress=progress,
+            jobs=jobs,
+            timeout=timeout,
+            executor=executor,
+            ray_address=ray_address,
+        )
     finally:
         progress.done()
-    emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
-    write_html(html, lambda: inspect_page(result, inputs))
+    page = render_html(html, lambda: inspect_page(result, inputs))
+    emit_report(result, fmt, report)
+    write_html(html, page)
 
     _print_table(result.bodies)
     for warning in result.warnings:

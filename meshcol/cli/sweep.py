@@ -15,6 +15,7 @@ from meshcol.cli.common import (
     check_outputs,
     html_option,
     plural,
+    render_html,
     report_format,
     report_options,
     robot_options,
@@ -96,7 +97,7 @@ def sweep(
     """
     from meshcol.analysis.review import sweep_page
     from meshcol.analysis.sweep import sweep as run_sweep
-    from meshcol.io.report import emit
+    from meshcol.cli.common import emit_report
 
     check_outputs([manifest], [("--report", report), ("--html", html)])
     fmt = report_format(report, fmt)
@@ -113,8 +114,9 @@ def sweep(
         )
     finally:
         progress.done()
-    emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
-    write_html(html, lambda: sweep_page(result))
+    page = render_html(html, lambda: sweep_page(result))
+    emit_report(result, fmt, report)
+    write_html(html, page)
     for warning in result.warnings:
         click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_lines(manifest, result), err=True)

@@ -34,6 +34,7 @@ __all__ = [
     "HullStatus",
     "PackedHulls",
     "convex_hull",
+    "distance_to_hull",
     "exact_hull",
     "pack_hulls",
 ]
@@ -110,7 +111,9 @@ class HullResult:
         ``added_volume / exact_volume``; None when the exact volume is 0 (flat).
     max_distance : float
         Largest distance from a point of this hull to the exact hull (one-sided Hausdorff
-        distance; 0 when exact). Input units.
+        distance; 0 when exact). Input units.    target_fit : TargetFit or None
+        With an engine target (:func:`meshcol.collision.limits.fit_hull`): the fit this hull
+        is, its measures, costs and violations.
     """
 
     vertices: np.ndarray
@@ -125,6 +128,7 @@ class HullResult:
     added_volume: float = 0.0
     added_volume_fraction: float | None = None
     max_distance: float = 0.0
+    target_fit: Any = None
 
     @property
     def simplified(self) -> bool:
@@ -132,7 +136,9 @@ class HullResult:
         return self.max_distance > 0.0 or len(self.vertices) != self.exact_vertex_count
 
 
-def convex_hull(points: np.ndarray, max_vertices: int | None = None) -> HullResult:
+def convex_hull(
+    points: np.ndarray, max_vertices: int | None = None, *, max_planes: int | None = None
+) -> HullResult:
     """Convex hull of a point set, optionally with at most ``max_vertices`` vertices.
 
     Parameters
@@ -142,6 +148,12 @@ def convex_hull(points: np.ndarray, max_vertices: int | None = None) -> HullResu
     max_vertices : int, optional
         Vertex budget (>= 4). The result then has at most this many vertices and still
         contains every input point.
+    max_planes : int, optional
+        At most this many face planes (polygons, once coplanar triangles are merged) in the
+        simplified hull (>= 4); the exact hull is kept only when it has at most
+        ``max_vertices`` vertices and at most ``max_planes`` triangles (each plane holds one
+        at least), else the hull is simplified within both budgets (``max_vertices``
+        defaulting to the exact hull's count). Ignored for flat input.
 
     Returns
     -------
@@ -185,6 +197,8 @@ def convex_hull(points: np.ndarray, max_vertices: int | None = None) -> HullResu
         raise ValueError(f"points must be (n, 3), got {pts.shape}")
     if max_vertices is not None and int(max_vertices) < MIN_MAX_VERTICES:
         raise ValueError(f"max_vertices must be >= {MIN_MAX_VERTICES}, got {max_vertices}")
+    if max_planes is not None and int(max_planes) < MIN_MAX_VERTICES:
+        raise ValueError(f"max_planes must be >= {MIN_MAX_VERTICES}, got {max_planes}")
     exact = exact_hull(pts)
     if exact.dimension == 0:
         raise InvalidMeshError("all vertices coincide: there is no meaningful hull")
@@ -202,7 +216,11 @@ def convex_hull(points: np.ndarray, max_vertices: int | None = None) -> HullResu
         max_vertices=None if max_vertices is None else int(max_vertices),
     )
     vertices, faces = exact.vertices, exact.faces
-    if max_vertices is None or len(vertices) <= max_vertices:
+    if max_planes is not None and max_vertices is None:
+        max_vertices = max(len(vertices), MIN_MAX_VERTICES)
+        result_kwargs["max_vertices"] = max_vertices
+    planes_fit = max_planes is None or len(faces) <= max_planes
+    if max_vertices is None or (len(vertices) <= max_vertices and planes_fit):
         return HullResult(
             vertices=vertices.copy(),
             faces=faces.copy(),
@@ -213,7 +231,12 @@ def convex_hull(points: np.ndarray, max_vertices: int | None = None) -> HullResu
         )
 
     q_vertices, distance = _simplify(
-        vertices, vertices[faces], exact.equations, int(max_vertices), exact.diagonal
+        vertices,
+        vertices[faces],
+        exact.equations,
+        int(max_vertices),
+        exact.diagonal,
+        max_planes=None if max_planes is None else int(max_planes),
     )
     q = exact_hull(q_vertices)
     added = max(q.volume - volume, 0.0)
@@ -458,8 +481,9 @@ def _fan(n: int) -> np.ndarray:
 # budgeted hulls (dimension-generic: 3-D, or 2-D for flat input)
 
 
-def _simplify(hull_vertices, facets, equations, budget, scale):
-    """Supporting-plane polytope with <= ``budget`` vertices around the exact hull.
+def _simplify(hull_vertices, facets, equations, budget, scale, max_planes=None):
+    """Supporting-plane polytope with <= ``budget`` vertices (and, with ``max_planes``, at
+    most that many planes) around the exact hull.
 
     ``hull_vertices`` (k, d) are the exact hull's vertices, ``facets`` (m, d, d) its facet
     simplices and ``equations`` (m, d + 1) their outward planes ``n . x + c = 0``.
@@ -479,6 +503,8 @@ def _simplify(hull_vertices, facets, equations, budget, scale):
         raise InvalidMeshError(f"could not build a hull within {budget} vertices")
     distances, closest = _distances_to_hull(polytope, facets, equations)
     for _ in range(4 * budget + 16):
+        if max_planes is not None and len(normals) >= max_planes:
+            break
         order = np.argsort(-distances, kind="stable")
         accepted = False
         for index in order[:CUT_CANDIDATES]:
@@ -501,6 +527,48 @@ def _simplify(hull_vertices, facets, equations, budget, scale):
     # the loop reused distances of vertices that survived a cut; report a fresh, exact one
     distances, _ = _distances_to_hull(polytope, facets, equations)
     return polytope, float(distances.max())
+
+
+def distance_to_hull(points: np.ndarray, hull: ExactHull) -> np.ndarray:
+    """Distance from each point to the solid of an exact hull (0 inside).
+
+    Parameters
+    ----------
+    points : (n, 3) float
+        Same frame as the hull.
+    hull : ExactHull
+        Any dimension: a polytope, a polygon, a segment or a point.
+
+    Returns
+    -------
+    (n,) float64
+        Exact Euclidean distances.
+
+    Notes
+    -----
+    3-D: only the facets whose plane a point lies in front of are searched (the closest point
+    of a convex polytope to an outside point is on such a facet), as the budget loop of
+    :func:`convex_hull` does. A polygon: its fan triangles; a segment or a point: directly.
+    """
+    pts = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+    v = hull.vertices
+    if hull.dimension == 3:
+        equations = (
+            np.ascontiguousarray(hull.equations[:, :3].T),
+            np.ascontiguousarray(hull.equations[:, 3]),
+        )
+        return _distances_to_hull(pts, v[hull.faces], equations)[0]
+    if hull.dimension == 2:
+        triangles = v[hull.faces]
+        best = np.full(len(pts), np.inf)
+        for triangle in triangles:
+            closest = closest_points_on_triangles(pts, np.broadcast_to(triangle, (len(pts), 3, 3)))
+            best = np.minimum(best, np.linalg.norm(closest - pts, axis=1))
+        return best
+    if hull.dimension == 1:
+        segment = np.broadcast_to(v[:2], (len(pts), 2, 3))
+        return np.linalg.norm(_closest_points_on_segments(pts, segment) - pts, axis=1)
+    return np.linalg.norm(pts - v[0], axis=1)
 
 
 def _update_distances(old, old_distances, old_closest, new, facets, equations, scale):
@@ -590,15 +658,28 @@ def _merge_close(points: np.ndarray, radius: float) -> np.ndarray:
     return points[order[first]]
 
 
+#: Relative rounding allowed in a facet plane's signed distance (:func:`_distances_to_hull`).
+_ROUNDING = 1e-12
+
+
 def _distances_to_hull(points, facets, equations):
     """Exact distance (and closest point) from each point to a convex polytope.
 
     A point outside the polytope has its closest point on a facet whose plane it lies in
     front of, so only those facets are searched; points inside get distance 0.
     ``equations`` is ``(normals.T, offsets)``, the transpose contiguous for a fast product.
+
+    "In front" allows a rounding error: a point on the surface can lie a rounding error in
+    front of a coplanar facet that does not hold it and behind the one that does (a vertex of
+    a box and the two triangles of a face); searching only the first would give that facet's
+    distance instead of 0. A facet searched in excess is harmless: its closest point is on the
+    surface, never nearer than the true one.
     """
     dim = points.shape[1]
-    in_front = points @ equations[0] + equations[1] > 0.0
+    signed = points @ equations[0] + equations[1]
+    outside = signed.max(axis=1, initial=-np.inf) > 0.0
+    scale = max(float(np.abs(facets).max(initial=0.0)), float(np.abs(points).max(initial=0.0)))
+    in_front = (signed > -_ROUNDING * max(scale, 1e-300)) & outside[:, None]
     distances = np.zeros(len(points))
     closest = points.copy()
     p_index, f_index = np.nonzero(in_front)

@@ -68,15 +68,6 @@ def _mesh_arrays(index: int, mesh: Any) -> tuple[np.ndarray, np.ndarray]:
 
 
 _INT64 = np.dtype(np.int64)
-_FLOAT64 = np.dtype(np.float64)
-
-
-def _pose4(pose: Any, name: str) -> np.ndarray:
-    """One pose for the core: a (4, 4) float64 array passes as it is (the binding copies a
-    strided one), anything else goes through :func:`as_pose` (its errors)."""
-    if type(pose) is np.ndarray and pose.dtype is _FLOAT64 and pose.shape == (4, 4):
-        return pose
-    return np.ascontiguousarray(as_pose(pose, name))
 
 
 @dataclass(frozen=True, eq=False)
@@ -195,11 +186,14 @@ class MeshSet:
             statuses :func:`mesh_intersects_batch` reports instead): a mesh that is not valid, a
             pose that is not rigid or not finite, lengths out of range.
         """
-        if pose_i is not None:
-            pose_i = _pose4(pose_i, "pose_i")
-        if pose_j is not None:
-            pose_j = _pose4(pose_j, "pose_j")
-        return self._handle.intersects_pair(i, j, pose_i, pose_j)
+        hit = self._handle.intersects_pair(i, j, pose_i, pose_j)
+        if hit is None:  # a pose the core does not read in place: converted, then asked again
+            if pose_i is not None:
+                pose_i = np.ascontiguousarray(as_pose(pose_i, "pose_i"))
+            if pose_j is not None:
+                pose_j = np.ascontiguousarray(as_pose(pose_j, "pose_j"))
+            hit = self._handle.intersects_pair(i, j, pose_i, pose_j)
+        return bool(hit)
 
     def validate(self) -> bool:
         """Check every hierarchy's invariants (boxes enclose contents, layout); for tests."""
@@ -357,7 +351,7 @@ class MeshDistanceResult:
     status: Status
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, slots=True)
 class MeshIntersectsBatch:
     """Results of :func:`mesh_intersects_batch`: ``intersecting (P,) bool``, ``status (P,) int8``."""
 
@@ -458,11 +452,17 @@ def mesh_intersects_batch(
     """
     if not isinstance(meshes, MeshSet):
         raise TypeError(f"meshes must be a MeshSet, got {type(meshes).__name__}")
-    if poses is not None:
-        poses = as_poses(poses, len(meshes))
-    pairs = _pairs(pairs, len(meshes))
-    intersecting, status = meshes._handle.intersects_batch(poses, pairs, threads=threads)
-    return MeshIntersectsBatch(intersecting, status)
+    # Arrays already in the core's form (C-contiguous float64 poses, int64 pairs, or a list of
+    # int pairs) are read in place by one native call that also builds the result: a one-pair
+    # batch costs about as much as the single-pair call. Anything else is None, then converted
+    # and checked here (the same messages) and asked again.
+    result = meshes._handle.intersects_batch(poses, pairs, threads, MeshIntersectsBatch)
+    if result is None:
+        if poses is not None:
+            poses = as_poses(poses, len(meshes))
+        pairs = as_pairs(pairs, len(meshes), "meshes")
+        result = meshes._handle.intersects_batch(poses, pairs, threads, MeshIntersectsBatch)
+    return result
 
 
 @dataclass(frozen=True, eq=False)

@@ -176,6 +176,20 @@ class ConvexSet:
     def __len__(self) -> int:
         return len(self.kinds)
 
+    def primitive(self, h: int) -> Sphere | Box | Capsule | Cylinder | None:
+        """Shape ``h`` as the primitive it packs (the inverse of packing one), or None for a
+        polytope."""
+        kind, p = int(self.kinds[h]), self.params[h]
+        if kind == ShapeKind.SPHERE:
+            return Sphere(float(p[0]))
+        if kind == ShapeKind.BOX:
+            return Box((float(p[0]) * 2.0, float(p[1]) * 2.0, float(p[2]) * 2.0))
+        if kind == ShapeKind.CAPSULE:
+            return Capsule(float(p[0]), float(p[1]) * 2.0)
+        if kind == ShapeKind.CYLINDER:
+            return Cylinder(float(p[0]), float(p[1]) * 2.0)
+        return None
+
     def __repr__(self) -> str:
         return f"ConvexSet({len(self)} shapes, {len(self.vertices)} vertices)"
 

@@ -22,6 +22,7 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from meshcol.decomposition.search import within_max_hausdorff
 from meshcol.errors import InvalidMeshError, MeshcolError
 
 __all__ = [
@@ -51,6 +52,9 @@ CSV_COLUMNS = (
     "repaired",
     "from_cache",
     "hausdorff_ok",
+    "parts_ok",
+    "search_met",
+    "search_steps",
 )
 
 
@@ -74,6 +78,8 @@ class DecomposeReport:
         Files per body and their format (as :func:`decompose_files` took them).
     max_hausdorff : float or None
         Hausdorff limit that fails the run.
+    max_parts : int or None
+        Part limit that fails the run.
     """
 
     files: list[dict[str, Any]]
@@ -83,11 +89,14 @@ class DecomposeReport:
     layout: str = "parts"
     fmt: str = "obj"
     max_hausdorff: float | None = None
+    max_parts: int | None = None
 
     @property
     def summary(self) -> dict[str, int]:
-        """Counts: files by status, bodies, parts, bodies over ``max_hausdorff``."""
-        return {
+        """Counts: files by status, bodies, parts, bodies over ``max_hausdorff`` or
+        ``max_parts`` and, with a target, bodies that miss one of its limits
+        (``target_missed``)."""
+        counts = {
             "files": len(self.files),
             "ok": sum(1 for f in self.files if f["status"] == "ok"),
             "failed": sum(1 for f in self.files if f["status"] == "failed"),
@@ -97,13 +106,23 @@ class DecomposeReport:
             "hausdorff_exceeded": sum(
                 not b["hausdorff_ok"] for f in self.files for b in f["bodies"]
             ),
+            "parts_exceeded": sum(
+                not b.get("parts_ok", True) for f in self.files for b in f["bodies"]
+            ),
         }
+        if "target" in self.settings:
+            counts["target_missed"] = sum(
+                not b.get("target_ok", True) for f in self.files for b in f["bodies"]
+            )
+        return counts
 
     @property
     def exit_code(self) -> int:
-        """1 when a file failed or timed out, or a body exceeds ``max_hausdorff``; else 0."""
+        """1 when a file failed or timed out, a body exceeds ``max_hausdorff`` or
+        ``max_parts`` (a search that met neither) or misses a limit of its target; else 0."""
         s = self.summary
-        return 1 if s["failed"] or s["timeout"] or s["hausdorff_exceeded"] else 0
+        exceeded = s["hausdorff_exceeded"] or s["parts_exceeded"] or s.get("target_missed", 0)
+        return 1 if s["failed"] or s["timeout"] or exceeded else 0
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON report: the common envelope, then ``layout``, ``format`` and
@@ -128,16 +147,89 @@ class DecomposeReport:
     def to_csv(self) -> str:
         from meshcol.io.report import dumps_csv
 
-        return dumps_csv(self.rows, CSV_COLUMNS)
+        columns = (*CSV_COLUMNS, "target_ok") if "target" in self.settings else CSV_COLUMNS
+        return dumps_csv(self.rows, columns)
+
+    def ci_suite(self) -> Any:
+        """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one case per body
+        (``FILE::BODY``) with its parts and fidelity, a failure over ``max_hausdorff``; a file
+        that failed is an error case, one that timed out a failure (both fail the run). A
+        file's seconds are shared among its bodies."""
+        from meshcol.io.ci import CiCase, CiSuite, number
+
+        limit = self.max_hausdorff
+        cases = []
+        for f in self.files:
+            path = f["path"]
+            if f["status"] != "ok":
+                cases.append(
+                    CiCase(
+                        name=path,
+                        classname="meshcol.decompose",
+                        outcome="error" if f["status"] == "failed" else "failure",
+                        message=f"{f['status']}: {f['message']}",
+                        file=path,
+                        kind=f["status"],
+                        time=f.get("seconds"),
+                    )
+                )
+                continue
+            share = (f.get("seconds") or 0.0) / max(len(f["bodies"]), 1)
+            for body in f["bodies"]:
+                m = body["metrics"]
+                message = (
+                    f"{m.get('parts', 0)} parts, volume ratio {number(m.get('volume_ratio'))}, "
+                    f"Hausdorff mesh to parts {number(m.get('hausdorff_mesh_to_parts'))}, "
+                    f"parts to mesh {number(m.get('hausdorff_parts_to_mesh'))}, uncovered "
+                    f"{number(m.get('uncovered_fraction'))}"
+                )
+                ok = body["hausdorff_ok"]
+                if not ok:
+                    message += f" > --max-hausdorff {number(limit)}"
+                cases.append(
+                    CiCase(
+                        name=f"{path}::{body['name']}",
+                        classname="meshcol.decompose",
+                        outcome="passed" if ok else "failure",
+                        message=message,
+                        file=path,
+                        kind=None if ok else "max-hausdorff",
+                        time=share,
+                    )
+                )
+        s = self.summary
+        verdict = f"{s['files']} files, {s['bodies']} bodies, {s['parts']} parts"
+        for key, what in (("failed", "failed"), ("timeout", "timed out")):
+            if s[key]:
+                verdict += f", {s[key]} {what}"
+        if s["hausdorff_exceeded"]:
+            verdict += f", {s['hausdorff_exceeded']} over --max-hausdorff"
+        return CiSuite(
+            "decompose",
+            tuple(cases),
+            self.settings,
+            seconds=sum(f.get("seconds") or 0.0 for f in self.files),
+            verdict=verdict,
+            units=self.units,
+        )
 
 
 def body_report(
-    path: str, name: str, outputs: list[str], d: Any, max_hausdorff: float | None
+    path: str,
+    name: str,
+    outputs: list[str],
+    d: Any,
+    max_hausdorff: float | None,
+    max_parts: int | None = None,
+    search: Any = None,
 ) -> tuple[dict[str, Any], dict[str, Any]]:
     """A decomposed body's entry in its file's ``bodies`` and its CSV row: the one layout of
-    both, for files (:func:`decompose_files`) and robot links (``analysis.rebuild``)."""
+    both, for files (:func:`decompose_files`) and robot links (``analysis.rebuild``).
+    ``search``: the body's :class:`~meshcol.decomposition.search.SearchResult` (``d`` is its
+    chosen step), or None."""
     metrics = d.metrics.to_dict() if d.metrics is not None else {}
     ok = within_max_hausdorff(metrics, max_hausdorff)
+    parts_ok = max_parts is None or len(d.parts) <= max_parts
     body = {
         "name": name,
         "outputs": outputs,
@@ -150,6 +242,8 @@ def body_report(
         "notes": list(d.notes),
         "metrics": metrics,
         "hausdorff_ok": ok,
+        "parts_ok": parts_ok,
+        "search": None if search is None else search.to_dict(),
     }
     row = {
         "path": path,
@@ -159,6 +253,9 @@ def body_report(
         "repaired": d.repaired,
         "from_cache": d.from_cache,
         "hausdorff_ok": ok,
+        "parts_ok": parts_ok,
+        "search_met": None if search is None else search.met,
+        "search_steps": None if search is None else len(search.steps),
     }
     return body, row
 
@@ -199,12 +296,17 @@ def decompose_files(
     layout: str = "parts",
     fmt: str = "obj",
     max_hausdorff: float | None = None,
+    max_parts: int | None = None,
+    search: str = "auto",
+    search_steps: int | None = None,
+    search_tolerance: float | None = None,
     progress: Callable[[str], None] | None = None,
     other_outputs: Sequence[str | os.PathLike[str]] = (),
     executor: str = "local",
     ray_address: str | None = None,
     run_manifest: str | os.PathLike[str] | None = None,
     resume: bool = False,
+    target: Any = None,
 ) -> DecomposeReport:
     """Decompose every body of every input file into convex parts and write them.
 
@@ -233,8 +335,19 @@ def decompose_files(
     fmt : {"obj", "glb"}
         Output format (``ucx`` writes OBJ only).
     max_hausdorff : float, optional
-        A body whose Hausdorff distance, either way, exceeds this (in the input's units) fails
-        the run; so does a body whose metrics are missing or not a number.
+        The fidelity target: the largest Hausdorff distance, either way, in the input's units.
+        With ``search="auto"``, each body's engine parameters are searched for the fewest parts
+        within it (:mod:`meshcol.decomposition.search`); with ``search="off"`` the run's
+        parameters are used and the limit only checked. Either way a body over it (or whose
+        metrics are missing or not a number) fails the run.
+    max_parts : int, optional
+        The most parts per body: searched for (the best fidelity within it, or with
+        ``max_hausdorff`` a bound on the fewest parts) or, with ``search="off"``, checked.
+    search : {"auto", "off"}
+        ``auto``: search when a limit is given; ``off``: only check the limits.
+    search_steps, search_tolerance : optional
+        The search's step budget per body and threshold tolerance (defaults
+        :data:`~meshcol.decomposition.search.DEFAULT_SEARCH_STEPS`, ``DEFAULT_SEARCH_TOLERANCE``).
     progress : callable, optional
         Receives one-line progress messages (``decompose: 3/10 files``).
     other_outputs : sequence of paths
@@ -252,6 +365,11 @@ def decompose_files(
         (:mod:`meshcol.decomposition.manifest`); needs the cache.
     resume : bool
         Read ``run_manifest`` first: files done are taken from the cache, the others run.
+    target : Target, optional
+        An engine profile (:mod:`meshcol.io.targets`): every body's parts meet all its
+        limits and still enclose the body (:func:`apply_target`); its vertex budget and hull
+        count go to the engine, and the tighter of each and ``max_vertices`` /
+        ``max_hulls`` applies. A limit that cannot be met fails the run (exit 1).
 
     Returns
     -------
@@ -262,7 +380,7 @@ def decompose_files(
     ------
     ValueError
         Contradictory options (``ucx`` with ``glb``, ``cache_dir`` without the cache,
-        ``threshold`` with an engine other than CoACD) or bad engine options.
+        ``threshold`` with an engine other than CoACD), bad engine options or search options.
     MeshcolError
         Unusable input, an output folder that cannot be written (``out_dir``, the cache), two
         bodies that would write the same files, or parts that would replace an input or an
@@ -273,8 +391,10 @@ def decompose_files(
     from meshcol.decomposition.executor import make_executor
     from meshcol.decomposition.jobs import decompose_task
     from meshcol.decomposition.manifest import RunManifest
+    from meshcol.decomposition.search import search_task
     from meshcol.io.outputs import check_outputs
 
+    fidelity = _search_target(max_hausdorff, max_parts, search, search_steps, search_tolerance)
     if layout == "ucx" and fmt == "glb":
         raise ValueError("layout 'ucx' writes OBJ only, not glb")
     if not use_cache and cache_dir is not None:
@@ -289,6 +409,10 @@ def decompose_files(
         raise ValueError("ray_address needs executor 'ray'")
     engine_options = dict(engine_options or {})
     resolve_params(engine, engine_options=engine_options)
+    if target is not None:
+        max_hulls, max_vertices, engine_options = target_options(
+            target, engine, max_hulls, max_vertices, engine_options
+        )
     paths = [os.fspath(p) for p in inputs]
     out_dir = os.fspath(out_dir)
     cache_root = None
@@ -312,9 +436,11 @@ def decompose_files(
         seed=seed,
         engine_options=engine_options,
     )
+    if fidelity is not None:
+        options["search"] = fidelity.to_dict()
     # The report's settings: the engine options as given (not the per-worker thread share),
     # and how the run was made.
-    settings = {key: value for key, value in options.items() if key != "threads"}
+    settings = {key: value for key, value in options.items() if key not in ("threads", "search")}
     settings.update(
         jobs=jobs,
         timeout=timeout,
@@ -322,10 +448,13 @@ def decompose_files(
         layout=layout,
         format=fmt,
         max_hausdorff=max_hausdorff,
+        **_search_settings(fidelity, max_parts, search),
         frame="world",
         executor=executor,
         ray_address=ray_address,
     )
+    if target is not None:
+        settings.update(target=target.name, target_limits=dict(target.limits))
     manifest = None
     if run_manifest is not None:
         # What decides the results: resuming with other options would mix two runs.
@@ -335,7 +464,7 @@ def decompose_files(
     # The engines always run in workers, so that this process stays responsive to signals.
     pool = make_executor(
         executor,
-        decompose_task,
+        decompose_task if fidelity is None else search_task,
         jobs,
         timeout=timeout,
         prepare=functools.partial(prepare_engine, engine),
@@ -356,16 +485,129 @@ def decompose_files(
             layout=layout,
             fmt=fmt,
             max_hausdorff=max_hausdorff,
+            max_parts=max_parts,
             progress=progress,
             protected=[*paths, *(os.fspath(p) for p in other_outputs)],
             manifest=manifest,
+            target=target,
         )
     except BaseException as exc:
         # A signal (KeyboardInterrupt, SIGTERM's exception) abandons the run: no process stays.
         pool.close(interrupted=not isinstance(exc, Exception))
         raise
     pool.close()
-    return DecomposeReport(files, rows, settings, None, layout, fmt, max_hausdorff)
+    return DecomposeReport(files, rows, settings, None, layout, fmt, max_hausdorff, max_parts)
+
+
+def _search_target(
+    max_hausdorff: float | None,
+    max_parts: int | None,
+    search: str,
+    steps: int | None,
+    tolerance: float | None,
+) -> Any:
+    """The run's :class:`~meshcol.decomposition.search.SearchTarget`, or None (no search)."""
+    from meshcol.decomposition import search as fidelity_search
+
+    return fidelity_search.search_target(
+        max_hausdorff,
+        max_parts,
+        search,
+        fidelity_search.DEFAULT_SEARCH_STEPS if steps is None else steps,
+        fidelity_search.DEFAULT_SEARCH_TOLERANCE if tolerance is None else tolerance,
+    )
+
+
+def _search_settings(target: Any, max_parts: int | None, search: str) -> dict[str, Any]:
+    """The report's settings of the fidelity search: ``max_parts``, ``search`` (the mode)
+    and ``search_steps``, ``search_tolerance`` (null when the run does not search)."""
+    return {
+        "max_parts": max_parts,
+        "search": search,
+        "search_steps": None if target is None else target.max_steps,
+        "search_tolerance": None if target is None else target.tolerance,
+    }
+
+
+#: The engine parameter of each engine's hull count (a target's ``max_hulls`` goes there, so
+#: that meshcol merges any excess parts, enclosing, rather than drop them).
+_ENGINE_HULL_COUNT = {"coacd": "max_convex_hull", "vhacd": "max_convex_hulls"}
+
+
+def target_options(
+    target: Any,
+    engine: str,
+    max_hulls: int | None,
+    max_vertices: int | None,
+    engine_options: Mapping[str, Any],
+) -> tuple[None, int | None, dict[str, Any]]:
+    """The engine options that aim at a target: ``(max_hulls, max_vertices, engine_options)``.
+
+    The vertex budget (the tighter of ``max_vertices`` and the target's,
+    :func:`meshcol.collision.limits.budget_vertices`) is enforced on every part as before;
+    the hull count (the tighter of ``max_hulls`` and the target's) goes to the engine's own
+    parameter and ``max_hulls`` becomes None, so that an engine overshooting it has its
+    parts merged by :func:`apply_target` (still enclosing), never its smallest parts dropped.
+    """
+    from meshcol.collision.limits import budget_vertices
+
+    options = dict(engine_options)
+    budget = budget_vertices(target.limits)
+    if budget is not None:
+        max_vertices = budget if max_vertices is None else min(max_vertices, budget)
+    count = target.limits.get("max_hulls")
+    if max_hulls is not None:
+        count = max_hulls if count is None else min(int(count), max_hulls)
+    if count is not None:
+        key = _ENGINE_HULL_COUNT[engine]
+        given = options.get(key)
+        options[key] = int(count) if given in (None, -1, "-1") else min(int(count), int(given))
+    return None, max_vertices, options
+
+
+def apply_target(
+    target: Any,
+    d: Any,
+    vertices: Any,
+    faces: Any,
+    units: str | None = None,
+    threads: int = 0,
+) -> tuple[Any, dict[str, Any]]:
+    """A body's decomposition fitted to a target, re-measured, and its report entry.
+
+    The parts (``d.parts``, in the body's frame) go through
+    :func:`meshcol.collision.limits.fit_parts` (merged to ``max_hulls``, each grown and
+    simplified to the per-part limits, every part still enclosing what it replaces); the
+    fidelity metrics are measured again on the fitted parts (same samples and tolerance),
+    so the report describes what is written. The cache keeps the engine's parts.
+
+    Returns
+    -------
+    (Decomposition, dict)
+        The fitted decomposition and the body's ``target`` entry (name, met, costs,
+        violations, per-part measures).
+    """
+    import dataclasses
+
+    from meshcol.collision.limits import fit_parts
+    from meshcol.decomposition.fidelity import fidelity
+    from meshcol.geometry.topology import orient_outward
+
+    fit = fit_parts(d.parts, target.limits, target.length_scale(units))
+    metrics = d.metrics
+    if metrics is not None:
+        outward, _ = orient_outward(vertices, faces)
+        metrics = fidelity(
+            vertices,
+            outward,
+            fit.parts,
+            samples=metrics.samples,
+            tolerance=metrics.tolerance,
+            threads=threads,
+        )
+    notes = tuple(d.notes) + tuple(f"target {target.name}: {note}" for note in fit.notes)
+    fitted = dataclasses.replace(d, parts=fit.parts, metrics=metrics, notes=notes)
+    return fitted, {"name": target.name, **fit.to_dict()}
 
 
 def _run(
@@ -381,9 +623,16 @@ def _run(
     progress: Callable[[str], None] | None,
     protected: list[str],
     manifest: Any = None,
+    max_parts: int | None = None,
+    target: Any = None,
 ) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
-    """Load, look up the cache, decompose, store, write: the file entries and the CSV rows."""
+    """Load, look up the cache, decompose, store, write: the file entries and the CSV rows.
+
+    With ``options["search"]`` each body's result is a search
+    (:class:`~meshcol.decomposition.search.SearchResult`): replayed from the cache when every
+    step is there, else run by a worker; every step is stored."""
     from meshcol.decomposition import cache
+    from meshcol.decomposition import search as fidelity_search
     from meshcol.decomposition.decompose import cached_decomposition
     from meshcol.io.mesh_write import layout_file_pattern, safe_name, write_parts
     from meshcol.io.outputs import staged_folder
@@ -393,7 +642,20 @@ def _run(
     results: dict[int, Any] = {}
     looked_up: dict[int, dict[str, Any]] = {}
     task_file: list[int] = []
-    key_options = {k: v for k, v in options.items() if k != "use_cache"}
+    key_options = {k: v for k, v in options.items() if k not in ("use_cache", "search")}
+    fidelity = None
+    if options.get("search") is not None:
+        fidelity = fidelity_search.SearchTarget(**options["search"])
+
+    def lookup_body(v: Any, f: Any) -> Any:
+        if fidelity is not None:
+            return fidelity_search.cached_search((v, f), fidelity, **key_options)
+        return cached_decomposition((v, f), **key_options)
+
+    def complete(found: Any) -> bool:
+        # A search replayed from the cache is complete; a plain entry needs its metrics.
+        return found is not None and (fidelity is not None or found.metrics is not None)
+
     report_progress = progress or (lambda message: None)
     done, failed, sent, total = 0, 0, 0, None if _is_manifest(inputs) else len(inputs)
     slots = getattr(pool, "slots", 1)
@@ -432,11 +694,9 @@ def _run(
             start = time.perf_counter()
             lookup = {}
             if cache_root is not None:
-                lookup = {
-                    name: cached_decomposition((v, f), **key_options) for name, v, f, _ in bodies
-                }
+                lookup = {name: lookup_body(v, f) for name, v, f, _ in bodies}
             looked_up[i] = lookup
-            if lookup and all(d is not None and d.metrics is not None for d in lookup.values()):
+            if lookup and all(complete(d) for d in lookup.values()):
                 hits = [(name, lookup[name]) for name, _, _, _ in bodies]
                 results[i] = ("ok", hits, None, time.perf_counter() - start)
                 if manifest is not None:
@@ -463,6 +723,9 @@ def _run(
                     # This process stores what the worker made (or measured again), as it
                     # arrives; the manifest says done only once the entry is stored.
                     for name, d in outcome.value:
+                        if fidelity is not None:
+                            fidelity_search.store_steps(d, cache_root)
+                            continue
                         before = looked_up[i].get(name)
                         if before is None or before.metrics != d.metrics:
                             cache.store(d, cache_root)
@@ -488,12 +751,26 @@ def _run(
             }
             if status == "ok":
                 transforms = {name: t for name, _, _, t in bodies}
-                for name, d in value:
+                meshes = {name: (v, f) for name, v, f, _ in bodies}
+                for name, found in value:
+                    searched = found if fidelity is not None else None
+                    d = found.decomposition if searched is not None else found
                     t = transforms[name]
+                    target_entry = None
+                    if target is not None:
+                        d, target_entry = apply_target(
+                            target, d, *meshes[name], threads=options.get("threads", 0)
+                        )
                     world = [(v @ t[:3, :3].T + t[:3, 3], f) for v, f in d.parts]
                     written = write_parts(name, world, stage, layout, fmt)
                     outputs = [os.path.relpath(p, stage) for p in written]
-                    body, row = body_report(path, name, outputs, d, max_hausdorff)
+                    body, row = body_report(
+                        path, name, outputs, d, max_hausdorff, max_parts, searched
+                    )
+                    if target_entry is not None:
+                        body["target"] = target_entry
+                        body["target_ok"] = target_entry["met"]
+                        row["target_ok"] = target_entry["met"]
                     entry["bodies"].append(body)
                     rows.append(row)
             else:
@@ -625,17 +902,8 @@ _RESULT_OPTIONS = (
     "resolution",
     "seed",
     "engine_options",
+    "search",
 )
-
-
-def within_max_hausdorff(metrics: Mapping[str, Any], limit: float | None) -> bool:
-    """Whether a body passes ``--max-hausdorff``: both one-sided Hausdorff distances are
-    numbers no larger than ``limit``. True without a limit; False when a distance is missing
-    or NaN (a gate never passes what it could not measure)."""
-    if limit is None:
-        return True
-    values = [metrics.get(k) for k in ("hausdorff_mesh_to_parts", "hausdorff_parts_to_mesh")]
-    return all(isinstance(v, (int, float)) and v <= limit for v in values)
 
 
 class _OutputGuard:

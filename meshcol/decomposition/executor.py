@@ -18,7 +18,7 @@ import logging
 import os
 import sys
 import time
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import Any, Protocol
 
 from meshcol.decomposition.jobs import (
@@ -31,7 +31,7 @@ from meshcol.decomposition.jobs import (
 )
 from meshcol.errors import MissingDependencyError
 
-__all__ = ["EXECUTORS", "Executor", "RayExecutor", "make_executor"]
+__all__ = ["EXECUTORS", "Executor", "RayExecutor", "make_executor", "run_each"]
 
 #: The values of ``meshcol decompose --executor``.
 EXECUTORS = ("local", "ray")
@@ -93,6 +93,41 @@ def make_executor(
             address=address,
         )
     raise ValueError(f"unknown executor {kind!r}: expected one of {', '.join(EXECUTORS)}")
+
+
+def run_each(
+    fn: Callable[[Any], Any],
+    tasks: Sequence[Any],
+    *,
+    executor: str = "local",
+    jobs: int = 1,
+    timeout: float | None = None,
+    address: str | None = None,
+) -> Iterator[TaskOutcome]:
+    """Run ``fn(task)`` for every task on the executor ``executor``; yield outcomes as they
+    complete: the per-file tasks of ``inspect`` and ``check`` (``decompose`` drives its
+    executor itself, to overlap reading with the work).
+
+    The executor starts with ``min(jobs, len(tasks))`` workers and is closed however the
+    caller leaves: abandoning the generator (an exception, ``close()``) or a signal kills
+    every worker at once (a local Ray started for the run is stopped). Each task's threads
+    are the local pool's share (:func:`~meshcol.decomposition.jobs.worker_env`).
+    """
+    if not tasks:
+        return
+    pool = make_executor(executor, fn, jobs, timeout=timeout, address=address)
+    try:
+        pool.start(min(jobs, len(tasks)))
+        outcomes = pool.run(tasks)
+        try:
+            yield from outcomes
+        finally:
+            # closed here, not when garbage collected: the pool's signal handlers go with it
+            getattr(outcomes, "close", lambda: None)()
+    except BaseException as exc:
+        pool.close(interrupted=not isinstance(exc, Exception))
+        raise
+    pool.close()
 
 
 def import_ray(local: bool = False) -> Any:

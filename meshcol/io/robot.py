@@ -23,10 +23,10 @@ joint coupled by ``<equality><joint>`` follows its polynomial, as a URDF mimic j
 MuJoCo body is a link; its collision geoms (``contype`` or ``conaffinity`` non-zero) are its
 parts; planes and height fields are skipped (not solids), ellipsoids are tessellated.
 
-Self-collision exclusions travel with the scene (:attr:`Scene.excluded_pairs`): links joined by
-a joint (URDF: the nearest ancestor link with collision geometry, so a frame link without
-geometry between two links does not hide their adjacency; MJCF: parent and child bodies, as
-MuJoCo filters them, and the model's ``<contact><exclude>`` pairs), unless
+Self-collision exclusions travel with the scene (:attr:`Scene.excluded_pairs`): adjacent links
+(URDF: MoveIt's rule, :func:`meshcol.io.kinematics.adjacent_links`, joined by a joint or with
+only links without geometry between them; MJCF: parent and child bodies, as MuJoCo filters
+them, and the model's ``<contact><exclude>`` pairs), unless
 ``include_adjacent``; and the ``<disable_collisions>`` pairs of an SRDF file.
 """
 
@@ -458,17 +458,20 @@ def _load_urdf(
         if body is not None:
             bodies.append(body)
 
-    # Adjacency: each link with geometry and its nearest ancestor link with geometry.
+    # Adjacency: MoveIt's rule, the one meshcol collision-matrix uses (links joined by a
+    # joint, or with only links without geometry between them).
     excluded: list[tuple[str, str, str]] = []
     if not options.include_adjacent:
-        has_geometry = {b.name for b in bodies}
-        for name in has_geometry:
-            up = name
-            while up in parent_joint:
-                up = parent_joint[up].parent
-                if up in has_geometry:
-                    excluded.append((up, name, "adjacent"))
-                    break
+        from meshcol.io.kinematics import adjacent_links
+
+        index = {name: i for i, name in enumerate(links)}
+        edges = np.array(
+            [(index[j.parent], index[child]) for child, j in parent_joint.items()],
+            dtype=np.int64,
+        ).reshape(-1, 2)
+        excluded = [
+            (a, b, "adjacent") for a, b in adjacent_links(links, edges, [b.name for b in bodies])
+        ]
     scene = Scene(
         bodies=tuple(bodies),
         units="m",

@@ -95,11 +95,14 @@ class Collider:
     parts : tuple of ((n, 3) float64, (m, 3) int64)
         Convex parts in the LINK frame (one for a hull); empty for a kept primitive.
     primitive : Primitive or None
-        A primitive kept as it is.
+        A primitive: the element's own, kept as it is, or (``fitted``) one that replaces it.
     origin : (4, 4) float64
-        The element's frame in the link frame (where a kept primitive sits).
+        The element's frame in the link frame (where the primitive sits).
     name : str
         The element's name (URDF ``name``, MJCF geom name), or ``""``.
+    fitted : bool
+        ``primitive`` is new (``meshcol fit``): the element's geometry becomes it, at
+        ``origin``.
     """
 
     link: str
@@ -108,6 +111,12 @@ class Collider:
     primitive: Primitive | None = None
     origin: np.ndarray = field(default_factory=lambda: np.eye(4))
     name: str = ""
+    fitted: bool = False
+
+    @property
+    def kept(self) -> bool:
+        """The element is written back as it was read (a primitive of the input)."""
+        return self.primitive is not None and not self.fitted
 
 
 @dataclass(frozen=True, eq=False)
@@ -308,7 +317,7 @@ def _urdf_text(
                 mesh.set("filename", Path(moved).as_posix())
     links = {link.get("name"): link for link in root.findall("link")}
     for i, collider in enumerate(robot.colliders):
-        if collider.primitive is not None:
+        if collider.kept:
             continue
         link = links.get(collider.link)
         elements = link.findall("collision") if link is not None else []
@@ -318,6 +327,9 @@ def _urdf_text(
                 robot.source,
             )
         element = elements[collider.index]
+        if collider.fitted:
+            _urdf_primitive(element, collider)
+            continue
         name = element.get("name")
         names = files[i]
         previous = element
@@ -328,16 +340,7 @@ def _urdf_text(
             previous = target
             if name and len(names) > 1:
                 target.set("name", f"{name}_{k:02d}")
-            for origin in target.findall("origin"):
-                target.remove(origin)
-            geometry = target.find("geometry")
-            if geometry is None:
-                geometry = etree.SubElement(target, "geometry")
-            tail = None
-            for child in list(geometry):
-                if isinstance(child.tag, str):  # shapes go; comments stay
-                    tail = child.tail if tail is None else tail
-                    geometry.remove(child)
+            geometry, tail = _cleared(target)
             mesh = etree.SubElement(geometry, "mesh")
             mesh.set("filename", prefix.get("collider", "") + file)
             mesh.tail = tail  # the indentation of the shape it replaces
@@ -349,6 +352,60 @@ def _urdf_text(
     ]
     body = "\n".join(etree.tostring(e, encoding="unicode", with_tail=False) for e in siblings)
     return '<?xml version="1.0" encoding="utf-8"?>\n' + body + "\n"
+
+
+def _cleared(element: Any) -> tuple[Any, str | None]:
+    """A ``<collision>`` element without its ``<origin>`` and shapes (comments stay): its
+    ``<geometry>`` (made when missing) and the indentation the first shape had."""
+    from lxml import etree
+
+    for origin in element.findall("origin"):
+        element.remove(origin)
+    geometry = element.find("geometry")
+    if geometry is None:
+        geometry = etree.SubElement(element, "geometry")
+    tail = None
+    for child in list(geometry):
+        if isinstance(child.tag, str):  # shapes go; comments stay
+            tail = child.tail if tail is None else tail
+            geometry.remove(child)
+    return geometry, tail
+
+
+def _format(values: Any) -> str:
+    """Numbers as written in a URDF attribute: shortest round-trip text, rounding noise
+    below 1e-15 (and -0) written as 0."""
+    return " ".join(repr(float(v)) if abs(float(v)) >= 1e-15 else "0" for v in values)
+
+
+def _urdf_primitive(element: Any, collider: Collider) -> None:
+    """Make a ``<collision>`` element the fitted primitive at the collider's origin."""
+    from lxml import etree
+
+    from meshcol.geometry.rotations import rpy_from_matrix
+
+    geometry, tail = _cleared(element)
+    origin = etree.Element("origin")
+    origin.set("xyz", _format(collider.origin[:3, 3]))
+    origin.set("rpy", _format(rpy_from_matrix(collider.origin[:3, :3])))
+    before = geometry.getprevious()
+    origin.tail = before.tail if before is not None else element.text
+    geometry.addprevious(origin)
+    p = collider.primitive
+    if isinstance(p, Box):
+        shape = etree.SubElement(geometry, "box", size=_format(p.size))
+    elif isinstance(p, Sphere):
+        shape = etree.SubElement(geometry, "sphere", radius=_format([p.radius]))
+    elif isinstance(p, Cylinder):
+        shape = etree.SubElement(
+            geometry, "cylinder", radius=_format([p.radius]), length=_format([p.length])
+        )
+    else:  # URDF has no capsule; this is the element MuJoCo's importer and meshcol read
+        assert isinstance(p, Capsule)
+        shape = etree.SubElement(
+            geometry, "capsule", radius=_format([p.radius]), length=_format([p.length])
+        )
+    shape.tail = tail
 
 
 # --- MJCF -----------------------------------------------------------------------------------
@@ -370,8 +427,10 @@ def _mjcf_text(robot: RobotColliders, files: dict[int, list[str]], stage: str, o
     out_abs = os.path.abspath(out_dir)
     stage_abs = os.path.abspath(stage)
     new_assets: set[str] = set()
+    exact: list[Any] = []  # fitted primitive geoms, written at full precision below
     if robot.kind == "urdf":
         spec = _spec_from_urdf(mujoco, robot, files, stage_abs)
+        exact = _imported_primitives(mujoco, spec, robot)
         for geom in spec.geoms:
             if geom.contype == 0 and geom.conaffinity == 0:
                 geom.group = 2  # MuJoCo's importer puts URDF visuals in group 1
@@ -382,13 +441,17 @@ def _mjcf_text(robot: RobotColliders, files: dict[int, list[str]], stage: str, o
         spec = _spec(mujoco, robot.source, lambda: mujoco.MjSpec.from_file(robot.source))
         _compile(mujoco, spec, robot.source)
         geoms = {geom.id: geom for geom in spec.geoms}
-        rebuilt = [geoms[c.index] for c in robot.colliders if c.primitive is None]
+        rebuilt = [geoms[c.index] for c in robot.colliders if not c.kept]
         in_frame = _frame_inverses(mujoco, spec, robot.source, rebuilt)
         mesh_names = {m.name for m in spec.meshes}
         for i, collider in enumerate(robot.colliders):
             geom = geoms[collider.index]
             geom.group = 3
-            if collider.primitive is not None:
+            if collider.kept:
+                continue
+            if collider.fitted:
+                _mjcf_primitive(mujoco, geom, collider, in_frame.get(id(geom)))
+                exact.append(geom)
                 continue
             extra_mass = geom.mass / len(files[i]) if not np.isnan(geom.mass) else None
             for k, file in enumerate(files[i]):
@@ -430,13 +493,121 @@ def _mjcf_text(robot: RobotColliders, files: dict[int, list[str]], stage: str, o
     spec.meshdir = ""
     spec.texturedir = ""
     _compile(mujoco, spec, robot.source)
+    markers = _mark(mujoco, spec, exact)
     try:
         text = spec.to_xml()
     except Exception as exc:  # noqa: BLE001 - as _spec
         raise SceneError(
             f"MuJoCo cannot write the rebuilt model: {' '.join(str(exc).split())}", robot.source
         ) from None
-    return _relative_files(text, stage_abs, out_abs)
+    return _relative_files(_exact_geoms(text, markers), stage_abs, out_abs)
+
+
+def _imported_primitives(mujoco: Any, spec: Any, robot: RobotColliders) -> list[Any]:
+    """The geoms MuJoCo's URDF importer made of the fitted primitives: on the link's body, of
+    the primitive's type, size and position (the URDF carries them at full precision)."""
+    types = {
+        Box: mujoco.mjtGeom.mjGEOM_BOX,
+        Sphere: mujoco.mjtGeom.mjGEOM_SPHERE,
+        Cylinder: mujoco.mjtGeom.mjGEOM_CYLINDER,
+        Capsule: mujoco.mjtGeom.mjGEOM_CAPSULE,
+    }
+    found, taken = [], set()
+    for collider in robot.colliders:
+        if not collider.fitted:
+            continue
+        want = types[type(collider.primitive)]
+        for geom in spec.geoms:
+            if (
+                id(geom) not in taken
+                and geom.type == want
+                and geom.parent.name == collider.link
+                and np.allclose(geom.pos, collider.origin[:3, 3], rtol=0, atol=1e-12)
+            ):
+                taken.add(id(geom))
+                found.append(geom)
+                break
+    return found
+
+
+def _mark(mujoco: Any, spec: Any, geoms: list[Any]) -> dict[str, tuple[bool, dict[str, str]]]:
+    """Name each geom uniquely (its own name, or a marker that :func:`_exact_geoms` removes)
+    and keep its size, pos and quat at full precision: MuJoCo writes numbers with 6
+    significant digits, which can shrink a fitted primitive below what it must enclose."""
+    taken = {g.name for g in spec.geoms if g.name}
+    used = {mujoco.mjtGeom.mjGEOM_SPHERE: 1, mujoco.mjtGeom.mjGEOM_BOX: 3}
+    markers: dict[str, tuple[bool, dict[str, str]]] = {}
+    for k, geom in enumerate(geoms):
+        own = bool(geom.name)
+        if not own:
+            name = f"meshcol_fit_{k}"
+            while name in taken:
+                name += "_"
+            geom.name = name
+            taken.add(name)
+        size = np.asarray(geom.size, dtype=np.float64)[: used.get(geom.type, 2)]
+        values = {"size": size, "pos": geom.pos, "quat": geom.quat}
+        markers[geom.name] = (own, {key: _format(v) for key, v in values.items()})
+    return markers
+
+
+def _exact_geoms(text: str, markers: dict[str, tuple[bool, dict[str, str]]]) -> str:
+    """MuJoCo's XML with the marked geoms' numbers as :func:`_mark` kept them."""
+    if not markers:
+        return text
+    from lxml import etree
+
+    root = etree.fromstring(text.encode("utf-8"))
+    for geom in root.iter("geom"):
+        entry = markers.get(geom.get("name") or "")
+        if entry is None:
+            continue
+        own, attributes = entry
+        for key, value in attributes.items():
+            geom.set(key, value)
+        for key in ("euler", "axisangle", "xyaxes", "zaxis", "fromto"):
+            geom.attrib.pop(key, None)
+        if not own:
+            del geom.attrib["name"]
+    return etree.tostring(root, encoding="unicode") + "\n"
+
+
+def _mjcf_primitive(
+    mujoco: Any, geom: Any, collider: Collider, frame: tuple[list[float], list[float]] | None
+) -> None:
+    """Make a geom the fitted primitive at the collider's origin (body frame; ``frame``: the
+    (pos, quat) that cancels the ``<frame>`` elements around the geom)."""
+    from meshcol.geometry.rotations import quaternion_from_matrix
+
+    p = collider.primitive
+    if isinstance(p, Box):
+        geom.type = mujoco.mjtGeom.mjGEOM_BOX
+        geom.size = [s / 2.0 for s in p.size]
+    elif isinstance(p, Sphere):
+        geom.type = mujoco.mjtGeom.mjGEOM_SPHERE
+        geom.size = [p.radius, 0.0, 0.0]
+    elif isinstance(p, Cylinder):
+        geom.type = mujoco.mjtGeom.mjGEOM_CYLINDER
+        geom.size = [p.radius, p.length / 2.0, 0.0]
+    else:
+        assert isinstance(p, Capsule)
+        geom.type = mujoco.mjtGeom.mjGEOM_CAPSULE
+        geom.size = [p.radius, p.length / 2.0, 0.0]
+    geom.meshname = ""
+    pos = np.asarray(collider.origin[:3, 3], dtype=np.float64)
+    quat = np.asarray(quaternion_from_matrix(collider.origin[:3, :3]), dtype=np.float64)
+    if frame is not None:  # the frames' inverse, then the fit: inverse * origin
+        frame_pos, frame_quat = (np.asarray(v, dtype=np.float64) for v in frame)
+        rotation = np.zeros(9)
+        mujoco.mju_quat2Mat(rotation, frame_quat)
+        pos = rotation.reshape(3, 3) @ pos + frame_pos
+        composed = np.zeros(4)
+        mujoco.mju_mulQuat(composed, frame_quat, quat)
+        quat = composed
+    geom.pos = pos.tolist()
+    geom.quat = quat.tolist()
+    geom.alt.type = mujoco.mjtOrientation.mjORIENTATION_QUAT
+    geom.fromto = [np.nan] * 6
 
 
 def _relative_files(text: str, stage: str, out_dir: str) -> str:

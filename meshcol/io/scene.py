@@ -38,6 +38,7 @@ __all__ = [
     "as_scene",
     "load_scene",
     "manifest_mesh_files",
+    "unique_name",
     "rotation_from_euler",
     "rotation_from_quaternion",
 ]
@@ -296,13 +297,21 @@ def iter_inputs(
             on_error(os.fspath(path), error)
             continue
         for body in loaded:
-            name, k = body.name, 2
-            while name in used:
-                name = f"{body.name}#{k}"
-                k += 1
-            used.add(name)
+            name = unique_name(body.name, used)
             bodies.append(body if name == body.name else dataclasses.replace(body, name=name))
         yield os.fspath(path), bodies
+
+
+def unique_name(name: str, used: set[str]) -> str:
+    """``name``, or ``name#2``, ``name#3``... when taken: the one rule of :func:`load_inputs`
+    for bodies of several files, for callers that read files elsewhere (worker processes) and
+    name their bodies here, in input order. The name returned is added to ``used``."""
+    unique, k = name, 2
+    while unique in used:
+        unique = f"{name}#{k}"
+        k += 1
+    used.add(unique)
+    return unique
 
 
 def rotation_from_quaternion(quaternion: Sequence[float]) -> np.ndarray:

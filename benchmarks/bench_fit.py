@@ -1,0 +1,93 @@
+"""Enclosing fits per body: the core (1 and 2 threads) against the Python fits it replaced
+(tests/fit_oracle.py) and trimesh's peers (oriented_bounds for the box, minimum_nsphere for
+the sphere), A/B alternated in one run, ranges over the repeats, volume ratios to the peers.
+
+    .venv/bin/python benchmarks/bench_fit.py --bodies 20 --points 300 --repeats 3
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _oracle():
+    spec = importlib.util.spec_from_file_location("fit_oracle", ROOT / "tests" / "fit_oracle.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["fit_oracle"] = module  # dataclasses look their module up
+    spec.loader.exec_module(module)
+    return module
+
+
+def _clouds(count: int, n: int) -> list[np.ndarray]:
+    rng = np.random.default_rng(0)
+    return [rng.normal(size=(n, 3)) * rng.uniform(0.1, 2.0, 3) for _ in range(count)]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--bodies", type=int, default=20)
+    parser.add_argument("--points", type=int, default=300)
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+    import trimesh
+
+    from meshcol.collision.fit import fit_batch
+    from meshcol.collision.hull import exact_hull
+
+    oracle = _oracle()
+    sets = _clouds(args.bodies, args.points)
+    hulls = [exact_hull(p) for p in sets]
+    shapes = ("sphere", "box", "cylinder", "capsule", "all")
+    times: dict[tuple[str, str], list[float]] = {}
+
+    def timed(key: tuple[str, str], run) -> None:
+        start = time.perf_counter()
+        run()
+        times.setdefault(key, []).append((time.perf_counter() - start) / len(sets) * 1e3)
+
+    for _ in range(args.repeats):
+        for shape in shapes:
+            timed((shape, "core 1 thread"), lambda: fit_batch(sets, shape, threads=1))
+            timed((shape, "core 2 threads"), lambda: fit_batch(sets, shape, threads=2))
+            if shape == "all":
+                timed(
+                    (shape, "python"), lambda: [oracle.fit_all(h.vertices, h.faces) for h in hulls]
+                )
+            else:
+                timed(
+                    (shape, "python"),
+                    lambda: [oracle.fit_primitive(shape, h.vertices, h.faces) for h in hulls],
+                )
+        timed(
+            ("box", "trimesh oriented_bounds"),
+            lambda: [trimesh.bounds.oriented_bounds(p) for p in sets],
+        )
+        timed(
+            ("sphere", "trimesh minimum_nsphere"),
+            lambda: [trimesh.nsphere.minimum_nsphere(p) for p in sets],
+        )
+
+    print(f"ms per body ({args.bodies} bodies of {args.points} points, {args.repeats} repeats)")
+    for (shape, engine), values in times.items():
+        print(f"  {shape:9s} {engine:26s} {min(values):9.3f} .. {max(values):9.3f}")
+    core = fit_batch(sets, "all", threads=1)
+    box = np.array([np.prod(trimesh.bounds.oriented_bounds(p)[1]) for p in sets])
+    sphere = np.array(
+        [4.0 / 3.0 * np.pi * trimesh.nsphere.minimum_nsphere(p)[1] ** 3 for p in sets]
+    )
+    for name, peer in (("box", box), ("sphere", sphere)):
+        ratio = core.volume[:, core.shapes.index(name)] / peer
+        print(f"  volume {name} core / trimesh: {ratio.min():.6f} .. {ratio.max():.6f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,810 @@
+#include "meshcol/fit.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <initializer_list>
+#include <limits>
+#include <numeric>
+#include <utility>
+#include <vector>
+
+#include "meshcol/batch.hpp"
+
+namespace meshcol {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// ---------------------------------------------------------------------------------------------
+// Small symmetric eigenproblems (cyclic Jacobi, Golub and Van Loan 8.5): principal axes and the
+// least-squares centre of a degenerate Welzl support.
+
+/// Eigen-decomposition of a symmetric m x m matrix (m <= 3): a = V diag(w) V^T, columns of
+/// `v` the eigenvectors. Capped at 64 sweeps (it converges quadratically in a handful).
+void jacobi(int m, double a[3][3], double w[3], double v[3][3]) {
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) v[i][j] = i == j ? 1.0 : 0.0;
+    for (int sweep = 0; sweep < 64; ++sweep) {
+        double off = 0.0, total = 0.0;
+        for (int i = 0; i < m; ++i)
+            for (int j = 0; j < m; ++j) {
+                total += a[i][j] * a[i][j];
+                if (i != j) off += a[i][j] * a[i][j];
+            }
+        if (!(off > 1e-32 * total)) break;
+        for (int p = 0; p < m; ++p)
+            for (int q = p + 1; q < m; ++q) {
+                if (a[p][q] == 0.0) continue;
+                const double theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+                const double t = (theta >= 0 ? 1.0 : -1.0) /
+                                 (std::fabs(theta) + std::sqrt(theta * theta + 1.0));
+                const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
+                for (int k = 0; k < m; ++k) {
+                    const double akp = a[k][p], akq = a[k][q];
+                    a[k][p] = c * akp - s * akq;
+                    a[k][q] = s * akp + c * akq;
+                }
+                for (int k = 0; k < m; ++k) {
+                    const double apk = a[p][k], aqk = a[q][k];
+                    a[p][k] = c * apk - s * aqk;
+                    a[q][k] = s * apk + c * aqk;
+                }
+                for (int k = 0; k < 3; ++k) {
+                    const double vkp = v[k][p], vkq = v[k][q];
+                    v[k][p] = c * vkp - s * vkq;
+                    v[k][q] = s * vkp + c * vkq;
+                }
+            }
+    }
+    for (int i = 0; i < m; ++i) w[i] = a[i][i];
+}
+
+// ---------------------------------------------------------------------------------------------
+// Minimum enclosing ball (Welzl 1991), any dimension up to 3
+
+struct BallSearch {
+    const double* p;  // n rows of d doubles, shuffled
+    long long n;
+    int d;
+    double tolerance;  // squared-distance slack of "outside" (rounding of one distance)
+    long long work = 0, max_work = 0;
+    bool capped = false;
+
+    double squared_distance(long long i, const double c[3]) const {
+        double s = 0.0;
+        for (int k = 0; k < d; ++k) {
+            const double e = p[i * d + k] - c[k];
+            s += e * e;
+        }
+        return s;
+    }
+
+    /// The smallest ball with the support points on its boundary: centre in their affine
+    /// hull (the least-squares, minimum-norm solution when they are degenerate).
+    void through(const long long* support, int k, double c[3], double& r2) const {
+        const double* p0 = p + support[0] * d;
+        for (int j = 0; j < 3; ++j) c[j] = j < d ? p0[j] : 0.0;
+        r2 = 0.0;
+        if (k == 1) return;
+        const int m = k - 1;
+        double a[3][3] = {}, gram[3][3] = {}, rhs[3] = {};
+        for (int i = 0; i < m; ++i) {
+            for (int j = 0; j < d; ++j) a[i][j] = p[support[i + 1] * d + j] - p0[j];
+            for (int j = 0; j < d; ++j) rhs[i] += 0.5 * a[i][j] * a[i][j];
+        }
+        for (int i = 0; i < m; ++i)
+            for (int j = 0; j < m; ++j)
+                for (int t = 0; t < d; ++t) gram[i][j] += a[i][t] * a[j][t];
+        double w[3], v[3][3];
+        jacobi(m, gram, w, v);
+        double largest = 0.0;
+        for (int i = 0; i < m; ++i) largest = std::max(largest, std::fabs(w[i]));
+        double coefficient[3] = {0.0, 0.0, 0.0};
+        for (int e = 0; e < m; ++e) {
+            if (!(std::fabs(w[e]) > 1e-12 * largest)) continue;  // pseudo-inverse
+            double proj = 0.0;
+            for (int i = 0; i < m; ++i) proj += v[i][e] * rhs[i];
+            for (int i = 0; i < m; ++i) coefficient[i] += v[i][e] * proj / w[e];
+        }
+        for (int i = 0; i < m; ++i)
+            for (int j = 0; j < d; ++j) c[j] += coefficient[i] * a[i][j];
+        for (int i = 0; i < k; ++i) r2 = std::max(r2, squared_distance(support[i], c));
+    }
+
+    long long first_outside(const double c[3], double r2, long long start, long long end) {
+        const double limit = r2 + tolerance + 1e-12 * r2;
+        for (long long i = start; i < end; ++i) {
+            if (++work > max_work) {
+                capped = true;
+                return -1;
+            }
+            if (squared_distance(i, c) > limit) return i;
+        }
+        return -1;
+    }
+
+    void ball(long long end, long long* support, int k, double c[3], double& r2) {
+        long long start = 0;
+        if (k > 0) {
+            through(support, k, c, r2);
+        } else {
+            for (int j = 0; j < 3; ++j) c[j] = j < d ? p[j] : 0.0;
+            r2 = 0.0;
+            start = 1;
+        }
+        if (k == d + 1) return;
+        long long i = first_outside(c, r2, start, end);
+        while (i >= 0) {
+            support[k] = i;
+            ball(i, support, k + 1, c, r2);
+            i = first_outside(c, r2, i + 1, end);
+        }
+    }
+};
+
+std::uint64_t splitmix64(std::uint64_t& state) {
+    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+/// Welzl on rows of `d` doubles (copied and shuffled with the fixed seed).
+bool ball_of(std::vector<double> rows, long long n, int d, double center[3], double& radius) {
+    std::uint64_t state = defaults::fit_ball_seed;
+    for (long long i = n - 1; i > 0; --i) {
+        const long long j = static_cast<long long>(splitmix64(state) % static_cast<std::uint64_t>(i + 1));
+        for (int k = 0; k < d; ++k) std::swap(rows[i * d + k], rows[j * d + k]);
+    }
+    double scale = 0.0;
+    for (long long i = 0; i < n; ++i)
+        for (int k = 0; k < d; ++k) scale = std::max(scale, std::fabs(rows[i * d + k] - rows[k]));
+    if (!(scale > 0.0)) scale = 1.0;
+    BallSearch s{rows.data(), n, d, (1e-12 * scale) * (1e-12 * scale)};
+    s.max_work = std::max<long long>(1, n) * defaults::fit_ball_max_work_per_point;
+    long long support[4];
+    double r2 = 0.0;
+    s.ball(n, support, 0, center, r2);
+    double largest = 0.0;
+    for (long long i = 0; i < n; ++i) largest = std::max(largest, s.squared_distance(i, center));
+    radius = std::sqrt(largest);
+    return !s.capped;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Frames
+
+/// A right-handed rotation whose third column is the unit `axis` (world x where it can be).
+Mat3 frame_of(const Vec3& axis) {
+    const Vec3 z = axis / norm(axis);
+    const Vec3 helper = std::fabs(z.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+    Vec3 x = helper - dot(helper, z) * z;
+    x = x / norm(x);
+    const Vec3 y = cross(z, x);
+    Mat3 r;
+    for (int i = 0; i < 3; ++i) {
+        r.m[i][0] = x[i];
+        r.m[i][1] = y[i];
+        r.m[i][2] = z[i];
+    }
+    return r;
+}
+
+Mat3 from_columns(const Vec3& a, const Vec3& b, const Vec3& c) {
+    Mat3 r;
+    for (int i = 0; i < 3; ++i) {
+        r.m[i][0] = a[i];
+        r.m[i][1] = b[i];
+        r.m[i][2] = c[i];
+    }
+    return r;
+}
+
+/// exp([w]x) R (Rodrigues).
+Mat3 turned(const Mat3& rotation, const double w[3]) {
+    const double angle = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    if (angle == 0.0) return rotation;
+    const double k[3] = {w[0] / angle, w[1] / angle, w[2] / angle};
+    const double kx[3][3] = {{0, -k[2], k[1]}, {k[2], 0, -k[0]}, {-k[1], k[0], 0}};
+    const double s = std::sin(angle), c1 = 1.0 - std::cos(angle);
+    Mat3 turn;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            double kk = 0.0;
+            for (int t = 0; t < 3; ++t) kk += kx[i][t] * kx[t][j];
+            turn.m[i][j] = (i == j ? 1.0 : 0.0) + s * kx[i][j] + c1 * kk;
+        }
+    return turn * rotation;
+}
+
+/// Principal axes of the points (descending variance), right-handed.
+Mat3 principal_axes(const std::vector<Vec3>& p) {
+    Vec3 mean;
+    for (const auto& x : p) mean += x;
+    mean = mean / static_cast<double>(p.size());
+    double a[3][3] = {};
+    for (const auto& x : p) {
+        const Vec3 e = x - mean;
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) a[i][j] += e[i] * e[j];
+    }
+    double w[3], v[3][3];
+    jacobi(3, a, w, v);
+    int order[3] = {0, 1, 2};
+    std::sort(order, order + 3, [&](int i, int j) { return w[i] > w[j]; });
+    Vec3 c[3];
+    for (int k = 0; k < 3; ++k) c[k] = {v[0][order[k]], v[1][order[k]], v[2][order[k]]};
+    if (dot(cross(c[0], c[1]), c[2]) < 0) c[2] = -c[2];
+    return from_columns(c[0], c[1], c[2]);
+}
+
+/// A derivative-free, monotone pattern search (coordinate steps, halved on failure) from x.
+template <int K, class Cost>
+std::array<double, K> polish(const Cost& cost, std::array<double, K> x, double step,
+                             int iterations, double smallest, double& best) {
+    best = cost(x);
+    for (int it = 0; it < iterations; ++it) {
+        bool improved = false;
+        for (int k = 0; k < K; ++k)
+            for (double sign : {1.0, -1.0}) {
+                auto trial = x;
+                trial[k] += sign * step;
+                const double value = cost(trial);
+                if (value < best) {
+                    x = trial;
+                    best = value;
+                    improved = true;
+                    break;
+                }
+            }
+        if (!improved) {
+            step *= 0.5;
+            if (step < smallest) break;
+        }
+    }
+    return x;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Boxes
+
+double box_volume(const std::vector<Vec3>& p, const Mat3& r) {
+    const Vec3 a = r.column(0), b = r.column(1), c = r.column(2);
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (const auto& x : p) {
+        const double u[3] = {dot(x, a), dot(x, b), dot(x, c)};
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = std::min(lo[k], u[k]);
+            hi[k] = std::max(hi[k], u[k]);
+        }
+    }
+    return (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+}
+
+double cross2(const std::array<double, 2>& o, const std::array<double, 2>& a,
+              const std::array<double, 2>& b) {
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+}
+
+/// The convex polygon of 2-D points, counter-clockwise, collinear points dropped (Andrew's
+/// monotone chain). Only candidate angles come from it: containment is the final growth's.
+std::vector<std::array<double, 2>> polygon_2d(std::vector<std::array<double, 2>> q) {
+    std::sort(q.begin(), q.end());
+    q.erase(std::unique(q.begin(), q.end()), q.end());
+    if (q.size() < 3) return q;
+    std::vector<std::array<double, 2>> h(2 * q.size());
+    size_t k = 0;
+    for (size_t i = 0; i < q.size(); ++i) {
+        while (k >= 2 && cross2(h[k - 2], h[k - 1], q[i]) <= 0) --k;
+        h[k++] = q[i];
+    }
+    for (size_t i = q.size() - 1, t = k + 1; i-- > 0;) {
+        while (k >= t && cross2(h[k - 2], h[k - 1], q[i]) <= 0) --k;
+        h[k++] = q[i];
+    }
+    h.resize(k - 1);
+    return h;
+}
+
+/// Angle of the smallest-area rectangle around a convex polygon: one side lies along an
+/// edge (Freeman and Shapira 1975), found by rotating calipers (Toussaint 1983) in O(m).
+double min_area_rectangle_angle(const std::vector<std::array<double, 2>>& poly) {
+    const size_t m = poly.size();
+    if (m < 2) return 0.0;
+    if (m == 2) return std::atan2(poly[1][1] - poly[0][1], poly[1][0] - poly[0][0]);
+    auto along = [&](size_t i, double ux, double uy) {
+        return poly[i % m][0] * ux + poly[i % m][1] * uy;
+    };
+    size_t right = 0, top = 0, left = 0;
+    double best_area = INFINITY, best_angle = 0.0;
+    for (size_t i = 0; i < m; ++i) {
+        const auto& a = poly[i];
+        const auto& b = poly[(i + 1) % m];
+        double ux = b[0] - a[0], uy = b[1] - a[1];
+        const double len = std::hypot(ux, uy);
+        if (!(len > 0.0)) continue;
+        ux /= len;
+        uy /= len;
+        const double nx = -uy, ny = ux;  // inward normal of a counter-clockwise polygon
+        if (i == 0) right = top = left = 1;
+        // Each caliper only moves forward; each is capped at one turn per edge.
+        for (size_t s = 0; s < m && along(right + 1, ux, uy) >= along(right, ux, uy); ++s) ++right;
+        if (top < right) top = right;
+        for (size_t s = 0; s < m && along(top + 1, nx, ny) >= along(top, nx, ny); ++s) ++top;
+        if (left < top) left = top;
+        for (size_t s = 0; s < m && along(left + 1, ux, uy) <= along(left, ux, uy); ++s) ++left;
+        const double width = along(right, ux, uy) - along(left, ux, uy);
+        const double height = along(top, nx, ny) - (a[0] * nx + a[1] * ny);
+        const double area = width * height;
+        if (area < best_area) {
+            best_area = area;
+            best_angle = std::atan2(uy, ux);
+        }
+    }
+    return best_angle;
+}
+
+/// The frame with `normal` as z and the smallest rectangle of the projected points.
+Mat3 normal_frame(const std::vector<Vec3>& p, const Vec3& normal) {
+    const Mat3 f = frame_of(normal);
+    const Vec3 fx = f.column(0), fy = f.column(1), z = f.column(2);
+    std::vector<std::array<double, 2>> q(p.size());
+    for (size_t i = 0; i < p.size(); ++i) q[i] = {dot(p[i], fx), dot(p[i], fy)};
+    const double angle = min_area_rectangle_angle(polygon_2d(std::move(q)));
+    const Vec3 x = std::cos(angle) * fx + std::sin(angle) * fy;
+    return from_columns(x, cross(z, x), z);
+}
+
+/// Candidate axes of the box: the hull's plane normals (antiparallel ones merged, rounded to
+/// 6 digits as one direction), by total area, the largest `fit_box_normals`.
+std::vector<Vec3> box_normals(const std::vector<Vec3>& p, const Hull& hull) {
+    std::vector<Vec3> out;
+    if (hull.dimension == 2) {
+        out.push_back(hull.normal);
+        return out;
+    }
+    if (hull.dimension != 3) return out;
+    std::vector<double> area(hull.plane_normals.size(), 0.0);
+    for (size_t t = 0; t < hull.faces.size(); ++t) {
+        const auto& f = hull.faces[t];
+        const Vec3 c = cross(p[f[1]] - p[f[0]], p[f[2]] - p[f[0]]);
+        area[hull.face_planes[t]] += norm(c);
+    }
+    struct Entry {
+        std::array<double, 3> key;
+        Vec3 normal;
+        double area, own;
+    };
+    std::vector<Entry> e;
+    for (size_t i = 0; i < area.size(); ++i) {
+        Vec3 nrm = hull.plane_normals[i];
+        if (nrm.z < 0 || (nrm.z == 0 && (nrm.y < 0 || (nrm.y == 0 && nrm.x < 0)))) nrm = -nrm;
+        if (!is_finite(nrm) || !(area[i] > 0)) continue;
+        e.push_back({{std::round(nrm.x * 1e6), std::round(nrm.y * 1e6), std::round(nrm.z * 1e6)},
+                     nrm,
+                     area[i],
+                     area[i]});
+    }
+    std::sort(e.begin(), e.end(), [](const Entry& a, const Entry& b) { return a.key < b.key; });
+    std::vector<Entry> merged;
+    for (const auto& x : e) {
+        if (!merged.empty() && merged.back().key == x.key) {
+            merged.back().area += x.area;
+            if (x.own > merged.back().own) {
+                merged.back().own = x.own;
+                merged.back().normal = x.normal;
+            }
+        } else {
+            merged.push_back(x);
+        }
+    }
+    std::stable_sort(merged.begin(), merged.end(),
+                     [](const Entry& a, const Entry& b) { return a.area > b.area; });
+    const size_t keep = std::min<size_t>(merged.size(), defaults::fit_box_normals);
+    for (size_t i = 0; i < keep; ++i) out.push_back(merged[i].normal);
+    return out;
+}
+
+/// The best box frame: candidates (identity, principal axes, each normal's rectangle), the
+/// best few polished; the first of the equal best (an axis-aligned box stays aligned).
+Mat3 box_frame(const std::vector<Vec3>& p, const Hull& hull) {
+    std::vector<Mat3> candidates = {Mat3::identity(), principal_axes(p)};
+    for (const Vec3& nrm : box_normals(p, hull)) candidates.push_back(normal_frame(p, nrm));
+    std::vector<double> volume(candidates.size());
+    for (size_t i = 0; i < candidates.size(); ++i) volume[i] = box_volume(p, candidates[i]);
+    std::vector<size_t> order(candidates.size());
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return volume[a] < volume[b]; });
+    Mat3 best = candidates[order[0]];
+    double best_volume = volume[order[0]];
+    size_t best_rank = order[0];
+    const size_t starts = std::min<size_t>(order.size(), defaults::fit_box_polish_starts);
+    for (size_t s = 0; s < starts; ++s) {
+        const Mat3 start = candidates[order[s]];
+        auto cost = [&](const std::array<double, 3>& w) {
+            return box_volume(p, turned(start, w.data()));
+        };
+        double value = 0.0;
+        const auto w = polish<3>(cost, {0.0, 0.0, 0.0}, defaults::fit_box_polish_step,
+                                 defaults::fit_box_polish_iterations,
+                                 defaults::fit_box_polish_smallest, value);
+        // Strictly better beyond rounding, or as good and earlier among the candidates.
+        const bool better = value < best_volume * (1 - 1e-9);
+        const bool tie = value <= best_volume * (1 + 1e-9) && order[s] < best_rank;
+        if (better || tie) {
+            best = turned(start, w.data());
+            best_volume = value;
+            best_rank = order[s];
+        }
+    }
+    return best;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cylinders and capsules along an axis
+
+Vec3 direction(const std::array<double, 2>& tp) {
+    return {std::sin(tp[0]) * std::cos(tp[1]), std::sin(tp[0]) * std::sin(tp[1]),
+            std::cos(tp[0])};
+}
+
+std::array<double, 2> angles(const Vec3& axis) {
+    const Vec3 a = axis / norm(axis);
+    return {std::acos(std::max(-1.0, std::min(1.0, a.z))), std::atan2(a.y, a.x)};
+}
+
+struct RoundFit {
+    double radius = 0.0, length = 0.0, volume = INFINITY;
+    Mat3 rotation;
+    Vec3 center;
+    bool capped = false;
+};
+
+/// The cylinder (capsule = false) or capsule around the points along `axis`: the axis
+/// through the minimum circle of the projected points; cylinder length by their extent
+/// along it; capsule radius searched, its shortest segment exact for each radius.
+RoundFit round_on(const std::vector<Vec3>& p, const Vec3& axis, bool capsule) {
+    RoundFit out;
+    out.rotation = frame_of(axis);
+    const Vec3 fx = out.rotation.column(0), fy = out.rotation.column(1),
+               z = out.rotation.column(2);
+    const size_t n = p.size();
+    std::vector<double> plane(2 * n), along(n);
+    double lo = INFINITY, hi = -INFINITY;
+    for (size_t i = 0; i < n; ++i) {
+        plane[2 * i] = dot(p[i], fx);
+        plane[2 * i + 1] = dot(p[i], fy);
+        along[i] = dot(p[i], z);
+        lo = std::min(lo, along[i]);
+        hi = std::max(hi, along[i]);
+    }
+    double c2[3], r_min = 0.0;
+    out.capped = !ball_of(plane, static_cast<long long>(n), 2, c2, r_min);
+    if (!capsule) {
+        out.radius = r_min;
+        out.length = hi - lo;
+        out.volume = kPi * r_min * r_min * out.length;
+        out.center = c2[0] * fx + c2[1] * fy + 0.5 * (lo + hi) * z;
+        return out;
+    }
+    std::vector<double> radial2(n);
+    const double middle = 0.5 * (lo + hi);
+    double r_max2 = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+        const double dx = plane[2 * i] - c2[0], dy = plane[2 * i + 1] - c2[1];
+        radial2[i] = dx * dx + dy * dy;
+        r_max2 = std::max(r_max2, radial2[i] + (along[i] - middle) * (along[i] - middle));
+    }
+    const double r_max = std::max(std::sqrt(r_max2), r_min);
+    auto segment = [&](double r, double& top, double& bottom) {
+        top = -INFINITY;
+        bottom = INFINITY;
+        for (size_t i = 0; i < n; ++i) {
+            const double reach = std::sqrt(std::max(r * r - radial2[i], 0.0));
+            top = std::max(top, along[i] - reach);
+            bottom = std::min(bottom, along[i] + reach);
+        }
+    };
+    auto volume_at = [&](double r) {
+        double top, bottom;
+        segment(r, top, bottom);
+        return kPi * r * r * std::max(top - bottom, 0.0) + 4.0 / 3.0 * kPi * r * r * r;
+    };
+    // A grid over [r_min, r_max], then golden-section search between the best's neighbours.
+    const int g = defaults::fit_capsule_radius_grid;
+    int best = 0;
+    double best_volume = INFINITY;
+    for (int k = 0; k < g; ++k) {
+        const double r = r_min + (r_max - r_min) * k / (g - 1);
+        const double v = volume_at(r);
+        if (v < best_volume) {
+            best_volume = v;
+            best = k;
+        }
+    }
+    double a = r_min + (r_max - r_min) * std::max(best - 1, 0) / (g - 1);
+    double b = r_min + (r_max - r_min) * std::min(best + 1, g - 1) / (g - 1);
+    double radius = r_min + (r_max - r_min) * best / (g - 1);
+    const double ratio = 0.5 * (std::sqrt(5.0) - 1.0);
+    double x1 = b - ratio * (b - a), x2 = a + ratio * (b - a);
+    double f1 = volume_at(x1), f2 = volume_at(x2);
+    for (int k = 0; k < defaults::fit_capsule_golden_steps; ++k) {
+        if (f1 < f2) {
+            b = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = b - ratio * (b - a);
+            f1 = volume_at(x1);
+        } else {
+            a = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = a + ratio * (b - a);
+            f2 = volume_at(x2);
+        }
+    }
+    if (std::min(f1, f2) < best_volume) radius = f1 < f2 ? x1 : x2;
+    double top, bottom;
+    segment(radius, top, bottom);
+    out.radius = radius;
+    out.length = std::max(top - bottom, 0.0);
+    out.volume = kPi * radius * radius * out.length + 4.0 / 3.0 * kPi * radius * radius * radius;
+    out.center = c2[0] * fx + c2[1] * fy + 0.5 * (top + bottom) * z;
+    return out;
+}
+
+/// The axis `a` turned in its tangent plane by (u, v) (a chart about a: no pole to stall at).
+Vec3 tilted(const Mat3& chart, const std::array<double, 2>& uv) {
+    const Vec3 d = chart.column(2) + uv[0] * chart.column(0) + uv[1] * chart.column(1);
+    return d / norm(d);
+}
+
+/// The best axis: the candidates' best few, each polished by a pattern search on its polar
+/// angles, then twice more in a chart about where it ended, with smaller first steps (a
+/// restart escapes the stalls of a non-smooth volume); the smallest volume wins (earliest start on ties).
+RoundFit along_best_axis(const std::vector<Vec3>& p, const std::vector<Vec3>& axes, bool capsule) {
+    std::vector<std::pair<double, size_t>> starts;
+    for (size_t i = 0; i < axes.size(); ++i)
+        starts.push_back({round_on(p, axes[i], capsule).volume, i});
+    std::stable_sort(starts.begin(), starts.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    RoundFit best;
+    const size_t count = std::min<size_t>(starts.size(), defaults::fit_axis_polish_starts);
+    for (size_t s = 0; s < count; ++s) {
+        // First on the axis's polar angles (their uneven steps explore more), then in charts.
+        auto polar = [&](const std::array<double, 2>& tp) {
+            return round_on(p, direction(tp), capsule).volume;
+        };
+        double value = 0.0;
+        Vec3 axis = direction(polish<2>(polar, angles(axes[starts[s].second]),
+                                        defaults::fit_axis_polish_step,
+                                        defaults::fit_axis_polish_iterations,
+                                        defaults::fit_axis_polish_smallest, value));
+        double step = 0.25 * defaults::fit_axis_polish_step;
+        for (int pass = 0; pass < 2; ++pass, step *= 0.25) {
+            const Mat3 chart = frame_of(axis);
+            auto cost = [&](const std::array<double, 2>& uv) {
+                return round_on(p, tilted(chart, uv), capsule).volume;
+            };
+            const auto uv = polish<2>(cost, {0.0, 0.0}, step,
+                                      defaults::fit_axis_polish_iterations,
+                                      defaults::fit_axis_polish_smallest, value);
+            axis = tilted(chart, uv);
+        }
+        if (value < best.volume * (1 - 1e-12)) best = round_on(p, axis, capsule);
+    }
+    return best;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Growth to contain every input point
+
+/// How far the point (local frame) lies outside the primitive (as Python's
+/// `signed_distances`).
+double outside(FitShape shape, const double* q, const Vec3& l) {
+    switch (shape) {
+        case FitShape::SPHERE:
+            return norm(l) - q[0];
+        case FitShape::BOX:
+            return std::max({std::fabs(l.x) - 0.5 * q[0], std::fabs(l.y) - 0.5 * q[1],
+                             std::fabs(l.z) - 0.5 * q[2]});
+        case FitShape::CAPSULE: {
+            const double beyond = std::max(std::fabs(l.z) - 0.5 * q[1], 0.0);
+            return std::hypot(std::hypot(l.x, l.y), beyond) - q[0];
+        }
+        case FitShape::CYLINDER:
+            return std::max(std::hypot(l.x, l.y) - q[0], std::fabs(l.z) - 0.5 * q[1]);
+    }
+    return 0.0;
+}
+
+void grow(FitShape shape, double* q, double amount) {
+    switch (shape) {
+        case FitShape::SPHERE:
+        case FitShape::CAPSULE:
+            q[0] += amount;
+            break;
+        case FitShape::BOX:
+            for (int k = 0; k < 3; ++k) q[k] += 2.0 * amount;
+            break;
+        case FitShape::CYLINDER:
+            q[0] += amount;
+            q[1] += 2.0 * amount;
+            break;
+    }
+}
+
+double volume_of(FitShape shape, const double* q) {
+    switch (shape) {
+        case FitShape::SPHERE:
+            return 4.0 / 3.0 * kPi * q[0] * q[0] * q[0];
+        case FitShape::BOX:
+            return q[0] * q[1] * q[2];
+        case FitShape::CAPSULE:
+            return kPi * q[0] * q[0] * q[1] + 4.0 / 3.0 * kPi * q[0] * q[0] * q[0];
+        case FitShape::CYLINDER:
+            return kPi * q[0] * q[0] * q[1];
+    }
+    return 0.0;
+}
+
+/// Grows a searched fit (input units) by the largest excess of every input point, evaluated
+/// in its frame, plus the margin; checks again (rounding of the growth itself), at most 4 times.
+void finish(PrimitiveFit& f, FitShape shape, const Vec3* points, long long n, double scale) {
+    auto excess_of = [&]() {
+        double e = -INFINITY;
+        for (long long i = 0; i < n; ++i)
+            e = std::max(e, outside(shape, f.params, f.rotation.transpose_times(points[i] - f.center)));
+        return e;
+    };
+    const double margin = defaults::fit_containment_margin * scale;
+    double e = excess_of();
+    f.excess = std::max(e, 0.0);
+    grow(shape, f.params, f.excess + margin);
+    for (int round = 0; round < 4 && (e = excess_of()) > 0.0; ++round) grow(shape, f.params, e + margin);
+    f.volume = volume_of(shape, f.params);
+    bool finite = std::isfinite(f.volume) && std::isfinite(f.excess) && is_finite(f.center);
+    for (int k = 0; k < 3; ++k) finite = finite && std::isfinite(f.params[k]);
+    if (!finite || excess_of() > 0.0) {
+        f.status = FitStatus::FAILED;
+        for (double& x : f.params) x = kNaN;
+        f.volume = kNaN;
+    }
+}
+
+PrimitiveFit no_fit() {
+    PrimitiveFit f;
+    f.status = FitStatus::INVALID_INPUT;
+    for (double& x : f.params) x = kNaN;
+    f.volume = kNaN;
+    f.excess = kNaN;
+    return f;
+}
+
+}  // namespace
+
+bool minimum_ball(const double* points, long long n, int dimension, double center[3],
+                  double& radius) {
+    center[0] = center[1] = center[2] = 0.0;
+    radius = 0.0;
+    if (n <= 0 || dimension < 1 || dimension > 3) return false;
+    std::vector<double> rows(points, points + n * dimension);
+    return ball_of(std::move(rows), n, dimension, center, radius);
+}
+
+FitSet fit_point_set(const Vec3* points, long long n, const FitShape* shapes, int shape_count) {
+    FitSet out;
+    out.hull = exact_hull(points, n);
+    const Hull& hull = out.hull;
+    out.fits.assign(static_cast<size_t>(shape_count), no_fit());
+    if (hull.dimension < 0 || shape_count == 0) return out;
+
+    // Search in normalised coordinates: the hull's vertices about their box's centre, scaled
+    // by a power of two (exact) to unit size, so no square under- or overflows.
+    Vec3 low{INFINITY, INFINITY, INFINITY}, high{-INFINITY, -INFINITY, -INFINITY};
+    for (int v : hull.vertices) {
+        low = component_min(low, points[v]);
+        high = component_max(high, points[v]);
+    }
+    const Vec3 origin = 0.5 * low + 0.5 * high;
+    const double half = max_abs(0.5 * high - 0.5 * low);
+    const double unit = half > 0.0 ? std::ldexp(1.0, std::ilogb(half)) : 1.0;
+    std::vector<Vec3> p(hull.vertices.size());
+    for (size_t i = 0; i < p.size(); ++i) p[i] = (points[hull.vertices[i]] - origin) / unit;
+
+    // The growth margin's scale: the points' extent, at least 1e-6 of their magnitude.
+    Vec3 all_low{INFINITY, INFINITY, INFINITY}, all_high{-INFINITY, -INFINITY, -INFINITY};
+    double magnitude = 0.0;
+    for (long long i = 0; i < n; ++i) {
+        all_low = component_min(all_low, points[i]);
+        all_high = component_max(all_high, points[i]);
+        magnitude = std::max(magnitude, max_abs(points[i]));
+    }
+    const double scale =
+        std::max({max_abs(all_high - all_low), magnitude * 1e-6, 1e-300});
+
+    bool want_box = false, want_round = false;
+    for (int k = 0; k < shape_count; ++k) {
+        want_box = want_box || shapes[k] == FitShape::BOX;
+        want_round = want_round || shapes[k] == FitShape::CAPSULE || shapes[k] == FitShape::CYLINDER;
+    }
+    Mat3 box;
+    std::vector<Vec3> axes;
+    if (want_box || want_round) {
+        box = box_frame(p, hull);
+        if (want_round) {
+            const Mat3 principal = principal_axes(p);
+            for (int k = 0; k < 3; ++k) axes.push_back(box.column(k));
+            for (int k = 0; k < 3; ++k) axes.push_back(principal.column(k));
+        }
+    }
+    for (int k = 0; k < shape_count; ++k) {
+        PrimitiveFit f;
+        f.status = FitStatus::OK;
+        Vec3 center;  // normalised
+        switch (shapes[k]) {
+            case FitShape::SPHERE: {
+                double c[3], r;
+                std::vector<double> rows(3 * p.size());
+                for (size_t i = 0; i < p.size(); ++i)
+                    for (int j = 0; j < 3; ++j) rows[3 * i + j] = p[i][j];
+                if (!ball_of(std::move(rows), static_cast<long long>(p.size()), 3, c, r))
+                    f.status = FitStatus::MAX_ITERATIONS;
+                center = {c[0], c[1], c[2]};
+                f.params[0] = r;
+                break;
+            }
+            case FitShape::BOX: {
+                f.rotation = box;
+                double lo[3] = {INFINITY, INFINITY, INFINITY};
+                double hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+                for (const auto& x : p) {
+                    const Vec3 l = box.transpose_times(x);
+                    for (int j = 0; j < 3; ++j) {
+                        lo[j] = std::min(lo[j], l[j]);
+                        hi[j] = std::max(hi[j], l[j]);
+                    }
+                }
+                for (int j = 0; j < 3; ++j) f.params[j] = hi[j] - lo[j];
+                center = box * Vec3{0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]),
+                                    0.5 * (lo[2] + hi[2])};
+                break;
+            }
+            case FitShape::CAPSULE:
+            case FitShape::CYLINDER: {
+                const RoundFit r = along_best_axis(p, axes, shapes[k] == FitShape::CAPSULE);
+                if (r.capped) f.status = FitStatus::MAX_ITERATIONS;
+                f.rotation = r.rotation;
+                f.params[0] = r.radius;
+                f.params[1] = r.length;
+                center = r.center;
+                break;
+            }
+        }
+        for (double& x : f.params) x *= unit;
+        f.center = origin + center * unit;
+        finish(f, shapes[k], points, n, scale);
+        out.fits[static_cast<size_t>(k)] = f;
+    }
+    return out;
+}
+
+std::vector<FitSet> fit_point_sets(const Vec3* points, const std::int64_t* offsets,
+                                   long long sets, const FitShape* shapes, int shape_count,
+                                   int threads) {
+    std::vector<FitSet> out(static_cast<size_t>(std::max<long long>(sets, 0)));
+    const int t = resolve_threads(threads, sets, defaults::fit_min_sets_per_thread);
+    parallel_for(sets, t, [&](long long begin, long long end) {
+        for (long long h = begin; h < end; ++h)
+            out[static_cast<size_t>(h)] =
+                fit_point_set(points + offsets[h], offsets[h + 1] - offsets[h], shapes, shape_count);
+    });
+    return out;
+}
+
+}  // namespace meshcol
