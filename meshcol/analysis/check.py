@@ -77,23 +77,25 @@ PAIR_RULES = {
 }
 
 
-def failing_rules(fail_on: str) -> tuple[str, ...]:
+def failing_rules(fail_on: str, target: bool = False) -> tuple[str, ...]:
     """The rule ids a ``--fail-on`` value fails on: a status level (``penetration``,
-    ``contact``, ``clearance``, ``none``: that status and the more severe ones) or
-    comma-separated rule ids or names (``MC501,missing-collider``, ``all``).
+    ``contact``, ``clearance``, ``none``: that status and the more severe ones, and with a
+    ``target`` its limits' rules, :data:`meshcol.analysis.rules.TARGET_RULES`) or comma-separated rule ids or names
+    (``MC501,missing-collider``, ``all``).
 
     Raises
     ------
     UnknownRuleError
         Neither a level nor rules of check (a ValueError; the message lists the valid ones).
     """
-    from meshcol.analysis.rules import UnknownRuleError, select_rules
+    from meshcol.analysis.rules import TARGET_RULES, UnknownRuleError, select_rules
 
     if fail_on in FAIL_ON:
         least = FAIL_ON[fail_on]
         if least is None:
             return ()
-        return tuple(PAIR_RULES[s] for s in PAIR_STATUSES[SEVERITY[least] :])
+        levels = tuple(PAIR_RULES[s] for s in PAIR_STATUSES[SEVERITY[least] :])
+        return levels + (TARGET_RULES if target else ())
     try:
         return select_rules(fail_on, "check")
     except UnknownRuleError as exc:
@@ -127,6 +129,10 @@ class CheckOptions:
         Threads for the native queries; 0 means all cores.
     decompose_options : dict
         Options for on-the-fly convex decomposition (``decomposed`` bodies not in the cache).
+    target : meshcol.io.targets.Target, optional
+        An engine profile: each body's convex parts are measured against its limits
+        (:func:`meshcol.analysis.rules.target_findings`); with a status level in ``fail_on``
+        (not ``none``) its findings fail the run too.
     """
 
     collider: str = "hull"
@@ -138,6 +144,7 @@ class CheckOptions:
     baseline_source: str | None = None
     threads: int = 0
     decompose_options: dict = field(default_factory=dict)
+    target: Any = None
 
     def validate(self) -> None:
         if self.collider not in COLLIDER_KINDS:
@@ -650,7 +657,7 @@ def check_scene(
     status_index[sd < -tol] = SEVERITY["penetrating"]
     status_index[contained] = SEVERITY["contained"]
 
-    fail_rules = failing_rules(options.fail_on)
+    fail_rules = failing_rules(options.fail_on, options.target is not None)
     failing_status = [SEVERITY[s] for s, rule in PAIR_RULES.items() if rule in fail_rules]
     violation = np.isin(status_index, failing_status) & ~ignored
     if options.baseline is not None:
@@ -709,7 +716,7 @@ def check_scene(
         for a, b, s, d, dp, sdv, nv, pa, pb, ia, ib, na, nb, ig, vi, fa, vol in columns
     ]
     pairs.sort(key=lambda p: (p["body_a"], p["body_b"]))
-    findings = _findings(pairs, shapes, options, fail_rules)
+    findings = _findings(shapes, options, scene.units, fail_rules)
 
     part_counts = np.diff(shapes.body_part_offsets).tolist()
     files = _relative_paths([body.source for body in bodies])
@@ -742,8 +749,7 @@ def check_scene(
         "max_depth": _num(depth.max()) if k else None,
         "violations": int(np.count_nonzero(violation)),
         "failed_findings": sum(f["failed"] for f in findings),
-        "passed": not any(f["failed"] for f in findings if f["other_body"] is None)
-        and not bool(violation.any()),
+        "passed": not any(f["failed"] for f in findings) and not bool(violation.any()),
         "seconds": round(seconds, 6),
         "load_seconds": None if load_seconds is None else round(load_seconds, 6),
     }
@@ -762,6 +768,9 @@ def check_scene(
         if scene.source
         else sorted({file or "" for file, b in zip(files, bodies) if b.source}),
     }
+    if options.target is not None:
+        settings["target"] = options.target.name
+        settings["target_limits"] = dict(options.target.limits)
     return CheckReport(
         body_rows,
         pairs,
@@ -775,57 +784,36 @@ def check_scene(
 
 
 def _findings(
-    pairs: list[dict], shapes: Any, options: CheckOptions, fail_rules: Sequence[str]
+    shapes: Any, options: CheckOptions, units: str | None, fail_rules: Sequence[str]
 ) -> list[dict]:
-    """Finding records: MC301 per body without a usable collider (every convex part a
-    segment or a point: no area), then one per pair that is not separated and not ignored
-    (MC501..MC504), each with ``failed`` (its rule fails the run; a pair's also needs it to
-    be a violation, which the baseline may clear)."""
-    from meshcol.analysis.rules import finding
+    """Body finding records, each with ``failed`` (its rule fails the run): MC301 per body
+    without a usable collider (every convex part a segment or a point: no area), then a
+    target's limits (:func:`meshcol.analysis.rules.target_findings`). Pairs are not
+    repeated here: a pair's status is its rule (:data:`PAIR_RULES`, ``meshcol rules``)."""
+    from meshcol.analysis.rules import finding, target_findings
     from meshcol.collision.hull import HullStatus
 
-    out = []
+    records = []
     no_area = np.isin(shapes.shapes.hull_status, (HullStatus.COLLINEAR, HullStatus.SINGLE_POINT))
     no_area &= shapes.shapes.kinds == 0  # polytopes
     counts = np.diff(shapes.body_part_offsets)
     starts = shapes.body_part_offsets[:-1]
-    if len(no_area):
-        flat_parts: Any = np.add.reduceat(no_area.astype(np.int64), starts) if len(starts) else []
-        for b in np.flatnonzero((np.asarray(flat_parts) == counts) & (counts > 0)).tolist():
-            record = finding(
-                "MC301",
-                shapes.bodies[b].name,
-                None,
-                0.0,
-                0.0,
-                "no area: the collider is a segment or a point (every face degenerate)",
-            ).to_dict()
-            out.append(dict(record, failed="MC301" in fail_rules))
-    for p in pairs:
-        rule = PAIR_RULES.get(p["status"])
-        if rule is None or p["ignored"]:
-            continue
-        if p["status"] == "clearance":
-            measured, limit, text = p["distance"], options.clearance, "closer than the clearance"
-        elif p["status"] == "contact":
-            sd = p["signed_distance"]
-            measured, limit, text = None if sd is None else abs(sd), options.tolerance, "touch"
-        else:
-            measured, limit = p["depth"], options.tolerance
-            text = "one lies inside the other" if p["status"] == "contained" else "interpenetrate"
-        value = "" if measured is None else f": {measured:.6g}"
-        record = finding(
-            rule,
-            p["body_a"],
-            p["part_a"],
-            measured,
-            limit,
-            f"{p['body_a']} and {p['body_b']} {text}{value}",
-            other_body=p["body_b"],
-            other_part=p["part_b"],
-        ).to_dict()
-        out.append(dict(record, failed=bool(p["violation"])))
-    return out
+    if len(no_area) and len(starts):
+        flat_parts = np.add.reduceat(no_area.astype(np.int64), starts)
+        for b in np.flatnonzero((flat_parts == counts) & (counts > 0)).tolist():
+            records.append(
+                finding(
+                    "MC301",
+                    shapes.bodies[b].name,
+                    None,
+                    0.0,
+                    0.0,
+                    "no area: the collider is a segment or a point (every face degenerate)",
+                )
+            )
+    if options.target is not None:
+        records.extend(target_findings(shapes, options.target, units))
+    return [dict(f.to_dict(), failed=f.rule in fail_rules) for f in records]
 
 
 def _worse_than_baseline(

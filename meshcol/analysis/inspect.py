@@ -397,6 +397,9 @@ class PhysicsOptions:
         MC203 fires for a collider of a positive volume below this (cubic units).
     decompose_options : dict
         For ``decomposed`` colliders (engine, cache_dir, ...).
+    target : meshcol.io.targets.Target, optional
+        An engine profile: the collider's convex parts are measured against its limits
+        (:func:`meshcol.analysis.rules.target_findings`, MC101..MC107, MC201).
     """
 
     shape: str = "hull"
@@ -406,6 +409,7 @@ class PhysicsOptions:
     min_relative_volume: float = 1e-6
     min_volume: float = 1e-15
     decompose_options: dict = field(default_factory=dict)
+    target: Any = None
 
     def validate(self) -> None:
         from meshcol.analysis.colliders import COLLIDER_KINDS
@@ -431,6 +435,11 @@ class PhysicsOptions:
             "inertia_ratio": self.inertia_ratio,
             "min_relative_volume": self.min_relative_volume,
             "min_volume": self.min_volume,
+            **(
+                {}
+                if self.target is None
+                else {"target": self.target.name, "target_limits": dict(self.target.limits)}
+            ),
         }
 
 
@@ -481,6 +490,7 @@ def physics_readiness(
     *,
     visuals: dict[str, Body] | None = None,
     progress: Callable[[str], None] | None = None,
+    units: str | None = None,
 ) -> tuple[list[dict[str, Any]], list[Finding]]:
     """Each body's collider against its visual mesh: mass properties and their findings.
 
@@ -494,6 +504,8 @@ def physics_readiness(
         A robot's visual geometry per link (:func:`meshcol.io.robot.load_robot` with
         ``visual=True``); the bodies are then its links' collision geometry. Without it,
         a body's visual mesh is its own render geometry (its mesh, less its ``UCX_`` parts).
+    units : str, optional
+        The scene's units, for a ``target``'s lengths and volumes.
 
     Returns
     -------
@@ -506,7 +518,8 @@ def physics_readiness(
         centre of mass, density 1), ``volume_ratio``, ``center_of_mass_offset`` (over the
         visual bounding-box diagonal), ``inertia_ratio``.
     findings : list of Finding
-        MC202..MC207 and MC301..MC303.
+        MC202..MC207 and MC301..MC303; with ``options.target``, MC101..MC107 and MC201
+        first.
 
     Notes
     -----
@@ -582,6 +595,10 @@ def physics_readiness(
         decompose_options=options.decompose_options,
         progress=progress,
     )
+    if options.target is not None:
+        from meshcol.analysis.rules import target_findings
+
+        findings.extend(target_findings(colliders, options.target, units))
     _, ucx, _ = split_ucx(bodies)
     shapes = colliders.shapes
     offsets = colliders.body_part_offsets
@@ -989,26 +1006,46 @@ class InspectReport:
         be inspected."""
         from meshcol.io.ci import CiCase, CiSuite, details
 
+        rows = self.bodies
+        by_name = {row["name"]: row for row in rows}
+        grouped: dict[str, list[Finding]] = {}
+        for f in self.findings:  # each finding to its mesh's case, or a case of its own
+            key = f.body if f.part is None else f"{f.body}/{f.part}"
+            grouped.setdefault(key if key in by_name else f.body, []).append(f)
+        sources = {row["name"].split("/")[0]: row["source"] for row in rows}
+
+        def text(f: Finding, row: dict[str, Any] | None) -> str:
+            if row is not None and f.rule in HEALTH_IDS.values():
+                return _finding_text(f.name, row)
+            where = "" if f.part is None or row is not None else f"part {f.part}: "
+            return f"{f.rule} {f.name} ({where}{f.message})"
+
         cases = []
-        for row in self.bodies:
-            failed = row["failed_rules"]
-            others = [rule for rule in row["findings"] if rule not in failed]
+        keys = [row["name"] for row in rows] + [k for k in grouped if k not in by_name]
+        for key in keys:
+            row = by_name.get(key)
+            found = grouped.get(key, [])
+            failed = [f for f in found if f.rule in self.fail_on]
+            others = [f for f in found if f.rule not in self.fail_on]
             if failed:
-                message = ", ".join(_finding_text(rule, row) for rule in failed)
+                message = ", ".join(text(f, row) for f in failed)
                 if others:
-                    message += "; also " + ", ".join(_finding_text(r, row) for r in others)
+                    message += "; also " + ", ".join(text(f, row) for f in others)
             elif others:
-                message = "findings: " + ", ".join(_finding_text(r, row) for r in others)
-            else:
+                message = "findings: " + ", ".join(text(f, row) for f in others)
+            elif row is not None:
                 message = f"ok: {row['vertices']} vertices, {row['faces']} faces, watertight"
+            else:
+                continue
+            source = row["source"] if row is not None else sources.get(key)
             cases.append(
                 CiCase(
-                    name=_case_name(row["source"], row["name"]),
+                    name=_case_name(source, key),
                     classname="meshcol.inspect",
                     outcome="failure" if failed else "passed",
                     message=message,
-                    file=row["source"],
-                    kind=failed[0] if failed else None,
+                    file=source,
+                    kind=failed[0].name if failed else None,
                     details=details(
                         (key, row[key])
                         for key in (
@@ -1027,7 +1064,7 @@ class InspectReport:
                             "units_guess",
                         )
                     )
-                    if failed
+                    if failed and row is not None
                     else "",
                     warn=bool(others) and not failed,
                 )
@@ -1159,6 +1196,10 @@ def inspect(
 
     rules = select_rules(fail_on, "inspect")
     options = physics or PhysicsOptions()
+    if not rules and options.target is not None:
+        from meshcol.analysis.rules import TARGET_RULES
+
+        rules = TARGET_RULES  # a target's limits fail the run unless --fail-on says otherwise
     options.validate()
     if isinstance(inputs, (str, os.PathLike)):
         inputs = [inputs]
@@ -1236,7 +1277,7 @@ def inspect(
     if not results and first_error:
         raise first_error[0]
     usable = [b for b in scene_bodies if b.name not in bad]
-    rows, physics_findings = physics_readiness(usable, options, visuals=visuals)
+    rows, physics_findings = physics_readiness(usable, options, visuals=visuals, units=units)
     findings.extend(physics_findings)
     return InspectReport(
         tuple(results),

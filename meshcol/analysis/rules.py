@@ -19,6 +19,7 @@ from typing import Any
 
 __all__ = [
     "RULES",
+    "TARGET_RULES",
     "Finding",
     "Rule",
     "RulesReport",
@@ -27,6 +28,7 @@ __all__ = [
     "get_rule",
     "rules_report",
     "select_rules",
+    "target_findings",
 ]
 
 #: Severities, most severe first.
@@ -622,3 +624,68 @@ def rules_report(keys: Sequence[str] = ()) -> RulesReport:
         return RulesReport(RULES)
     chosen = tuple(dict.fromkeys(get_rule(key) for key in keys))
     return RulesReport(chosen, tuple(rule.id for rule in chosen))
+
+
+#: The rules of a target profile's limits (``limit_key`` set): a target's findings fail
+#: a run unless ``--fail-on`` names other rules.
+TARGET_RULES: tuple[str, ...] = tuple(rule.id for rule in RULES if rule.limit_key is not None)
+
+
+def target_findings(colliders: Any, target: Any, units: str | None = None) -> list[Finding]:
+    """The engine-limit findings (MC101..MC107, MC201) of built colliders against a target
+    profile, body by body.
+
+    Parameters
+    ----------
+    colliders : meshcol.analysis.colliders.Colliders
+        What the command checks (each body's convex parts).
+    target : meshcol.io.targets.Target
+    units : str, optional
+        The scene's units (the profile's lengths and volumes are converted to them).
+
+    Returns
+    -------
+    list of Finding
+        Per body in order, its part-count finding then each convex part's. A part is named
+        by its body part (``Body.parts``), or by its index among the body's convex parts
+        when the body has several and no names. Primitive parts and ``mesh`` bodies (an
+        engine's triangle mesh, not a convex mesh) are counted for ``max_hulls`` only.
+
+    Notes
+    -----
+    Every part is measured once, by :func:`meshcol.collision.limits.measure_parts` (the
+    measurement hull and decompose use to meet the same limits).
+    """
+    from meshcol.collision.limits import limit_violations, measure_parts
+
+    shapes = colliders.shapes
+    offsets = colliders.body_part_offsets
+    scale = target.length_scale(units)
+    out: list[Finding] = []
+    for b, body in enumerate(colliders.bodies):
+        if colliders.kinds[b] == "mesh":
+            continue
+        parts = range(int(offsets[b]), int(offsets[b + 1]))
+        convex = [k for k in parts if shapes.offsets[k + 1] > shapes.offsets[k]]
+        measures = measure_parts(
+            [(shapes.vertices[shapes.offsets[k] : shapes.offsets[k + 1]], None) for k in convex]
+        )
+        labels = colliders.part_names([b] * len(convex), colliders.part_label[convex])
+        for v in limit_violations(target, measures, len(parts), scale):
+            if v.part is None:
+                part = None
+            else:
+                part = labels[v.part]
+                if part is None and len(parts) > 1:
+                    part = str(int(colliders.part_index[convex[v.part]]))
+            out.append(
+                finding(
+                    v.rule,
+                    body.name,
+                    part,
+                    v.measured,
+                    v.threshold,
+                    f"{target.name}: {v.message}",
+                )
+            )
+    return out

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from typing import Any
 
 import click
 
@@ -20,6 +21,7 @@ from meshcol.cli.common import (
     report_format,
     report_options,
     robot_options,
+    target_option,
     threads_option,
     timeout_option,
     verdict,
@@ -109,6 +111,11 @@ def _parse_fail_on(ctx: click.Context, param: click.Parameter, value: str) -> st
     "Seconds allowed per file's task; a file over it is an error (exit 2).  [default: no limit]"
 )
 @executor_options()
+@target_option(
+    "Measure each body's convex parts against an engine's limits (meshcol targets); "
+    "each limit a part is past is a finding (MC101..MC107, MC201) that fails the run "
+    "with a --fail-on level."
+)
 @report_options(default="the report on stdout; the summary on stderr")
 @robot_options(exclusions=True)
 @html_option
@@ -118,6 +125,7 @@ def check(
     tolerance: float,
     clearance: float,
     fail_on: str,
+    target: Any,
     ignore: tuple[str, ...],
     baseline: str | None,
     threads: int,
@@ -175,6 +183,7 @@ def check(
             tolerance=tolerance,
             clearance=clearance,
             fail_on=fail_on,
+            target=target,
             ignore=ignore,
             baseline=baseline,
             threads=threads,
@@ -236,10 +245,20 @@ def summary_table(result) -> str:
         if touching > len(worst):
             lines.append(f"  ... {touching - len(worst)} more (every pair is in the report)")
     settings = result.settings
+    failed = [f for f in result.findings if f["failed"]]
+    for f in failed[:TABLE_ROWS]:
+        where = f"body '{f['body']}'" + ("" if f["part"] is None else f" part '{f['part']}'")
+        lines.append(f"meshcol: fail: {where}: {f['rule']} {f['name']}: {f['message']}")
+    if len(failed) > TABLE_ROWS:
+        lines.append(f"  ... {len(failed) - TABLE_ROWS} more failing findings (in the report)")
     if s["passed"]:
         detail = f"no pair violates --fail-on {settings['fail_on']}"
     else:
         violate = "violates" if s["violations"] == 1 else "violate"
         detail = f"{plural(s['violations'], 'pair')} {violate} --fail-on {settings['fail_on']}"
+        if failed:
+            detail += (
+                f", {plural(len(failed), 'finding')} {'fails' if len(failed) == 1 else 'fail'}"
+            )
     lines.append(verdict("check", s["passed"], detail))
     return "\n".join(lines)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from typing import Any
 
 import click
 
@@ -21,6 +22,7 @@ from meshcol.cli.common import (
     report_format,
     report_options,
     robot_options,
+    target_option,
     timeout_option,
     verdict,
     write_html,
@@ -108,6 +110,11 @@ def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) 
     "(exit 2).  [default: no limit]"
 )
 @executor_options()
+@target_option(
+    "Measure each body's collider (--shape) against an engine's limits (meshcol "
+    "targets): each limit a part is past is a finding (MC101..MC107, MC201) that fails "
+    "the run unless --fail-on lists other rules."
+)
 @robot_options()
 @html_option
 def inspect(
@@ -115,6 +122,7 @@ def inspect(
     report: str | None,
     fmt: str | None,
     fail_on: tuple[str, ...],
+    target: Any,
     shape: str,
     volume_ratio: float,
     com_offset: float,
@@ -189,6 +197,7 @@ def inspect(
             min_volume=min_volume,
             decompose_options={"engine": engine}
             | ({} if cache_dir is None else {"cache_dir": cache_dir}),
+            target=target,
         )
         result = run_inspect(
             list(inputs),
@@ -209,16 +218,22 @@ def inspect(
     _print_table(result.bodies)
     for warning in result.warnings:
         click.echo(f"meshcol: warning: {warning}", err=True)
+    sources = {r.name: r.source for r in result.inspections}
     for found in result.failed_findings:
         where = f"body '{found.body}'" + ("" if found.part is None else f" part '{found.part}'")
-        click.echo(f"meshcol: fail: {where}: {found.rule} {found.name}: {found.message}", err=True)
+        source = sources.get(f"{found.body}/{found.part}") or sources.get(found.body)
+        click.echo(
+            f"meshcol: fail: {source + ': ' if source else ''}{where}: {found.rule} "
+            f"{found.name}: {found.message}",
+            err=True,
+        )
     for error in result.errors:
         body = "" if error["body"] is None else f"body '{error['body']}': "
         click.echo(f"meshcol: error: {error['source']}: {body}{error['message']}", err=True)
     s = result.summary
     detail = f"{plural(s['bodies'], 'body')}, {s['with_findings']} with findings"
-    if fail_on:
-        detail += f", {s['failed']} failing --fail-on {','.join(fail_on)}"
+    if result.fail_on:
+        detail += f", {s['failed']} failing --fail-on {','.join(result.fail_on)}"
     if result.errors:
         detail += f", {plural(len(result.errors), 'input')} not inspected"
     click.echo(verdict("inspect", result.exit_code == 0, detail), err=True)
