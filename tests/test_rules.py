@@ -468,3 +468,14 @@ def test_physics_rows_on_the_corpus_match_independent_oracles(corpus: Path, name
     )
     assert row["comparison"] == "solid" and row["volume_ratio"] >= 1.0
     assert row["volume_ratio"] == pytest.approx(hull.volume / mesh.volume, rel=1e-9)
+
+
+def test_docs_rules_page_is_current() -> None:
+    """docs/rules.md is generated from the registry: regenerate it when a rule changes."""
+    from meshcol.analysis.rules import rules_report
+
+    page = PACKAGE.parent / "docs" / "rules.md"
+    assert page.read_text() == rules_report().to_markdown(), (
+        "docs/rules.md is stale: python -c \"from meshcol.analysis.rules import rules_report; "
+        "open('docs/rules.md', 'w').write(rules_report().to_markdown())\""
+    )

@@ -365,7 +365,7 @@ RULES: tuple[Rule, ...] = (
         "MC501",
         "penetrating",
         "error",
-        ("check", "sweep"),
+        ("check",),
         "Two bodies interpenetrate deeper than the contact tolerance.",
         "measured: the penetration depth; limit: --tolerance.",
         "Move the bodies apart, or --ignore the pair if it is designed to overlap.",
@@ -383,7 +383,7 @@ RULES: tuple[Rule, ...] = (
         "MC503",
         "contact",
         "info",
-        ("check", "sweep"),
+        ("check",),
         "Two bodies touch: |signed distance| within the contact tolerance.",
         "measured: |signed distance|; limit: --tolerance.",
         "None needed for resting contact; --ignore the pair if designed.",
@@ -604,6 +604,37 @@ class RulesReport:
         from meshcol.io.report import dumps_json
 
         return dumps_json(self.to_dict())
+
+    def to_markdown(self) -> str:
+        """The rules as the Markdown page ``docs/rules.md`` (a test keeps that page current)."""
+        lines = [
+            "# meshcol rules",
+            "",
+            "Every finding of `meshcol inspect` and `meshcol check` names one of these rules by",
+            "its id; ids are stable (a retired rule keeps its id, never reused). `--fail-on` takes",
+            "ids or names, comma separated, or `all`. Generated from `meshcol/analysis/rules.py`",
+            "(`meshcol rules`).",
+            "",
+            "| id | name | severity | commands | what it means |",
+            "| --- | --- | --- | --- | --- |",
+        ]
+        lines += [
+            f"| {r.id} | `{r.name}` | {r.severity} | {', '.join(r.commands)} | {r.summary} |"
+            for r in self.rules
+        ]
+        for r in self.rules:
+            lines += [
+                "",
+                f"## {r.id} {r.name}",
+                "",
+                r.summary,
+                "",
+                f"- {r.measured[0].upper()}{r.measured[1:]}",
+            ]
+            if r.limit_key is not None:
+                lines.append(f"- Target profile limit: `{r.limit_key}`")
+            lines.append(f"- Fix: {r.fix}")
+        return "\n".join(lines) + "\n"
 
     def to_csv(self) -> str:
         from meshcol.io.report import dumps_csv
