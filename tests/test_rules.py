@@ -476,6 +476,6 @@ def test_docs_rules_page_is_current() -> None:
 
     page = PACKAGE.parent / "docs" / "rules.md"
     assert page.read_text() == rules_report().to_markdown(), (
-        "docs/rules.md is stale: python -c \"from meshcol.analysis.rules import rules_report; "
+        'docs/rules.md is stale: python -c "from meshcol.analysis.rules import rules_report; '
         "open('docs/rules.md', 'w').write(rules_report().to_markdown())\""
     )
