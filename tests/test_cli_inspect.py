@@ -10,7 +10,7 @@ import pytest
 from click.testing import CliRunner
 from test_cli_hull import CUBE_OBJ, MANIFESTS, assert_clean_failure, outside_distance, write
 
-from meshcol.analysis.inspect import RULES
+from meshcol.analysis.rules import command_rules
 from meshcol.cli import main
 
 
@@ -25,7 +25,9 @@ def test_report_on_stdout(tmp_path: Path) -> None:
     assert result.stderr.splitlines()[-1] == "meshcol: inspect: PASS: 1 body, 0 with findings"
     report = json.loads(result.stdout)
     assert report["schema_version"] == 1 and report["command"] == "inspect"
-    assert report["settings"] == {"bounds_frame": "world", "fail_on": []}
+    settings = report["settings"]
+    assert settings["bounds_frame"] == "world" and settings["shape"] == "hull"
+    assert settings["fail_on"] == [] and settings["fail_on_rules"] == []
     assert report["failed"] is False
     (body,) = report["bodies"]
     assert body["name"] == "cube" and body["source"] == str(cube)
@@ -44,7 +46,10 @@ def test_inside_out_mesh_is_inverted_and_can_fail_the_run(tmp_path: Path) -> Non
     cube = write(tmp_path, "inside_out.obj", "\n".join(flipped) + "\n")
     result = run("inspect", cube, "--fail-on", "inverted")
     assert result.exit_code == 1, result.output
-    assert f"meshcol: fail: {cube}: body 'inside_out': inverted" in result.stderr.splitlines()
+    assert (
+        f"meshcol: fail: {cube}: body 'inside_out': MC404 inverted: inside out: volume -1"
+        in result.stderr.splitlines()
+    )
     report = json.loads(result.stdout)
     (body,) = report["bodies"]
     assert body["volume"] == pytest.approx(-1.0)
@@ -79,9 +84,9 @@ def test_fail_on_exits_one_after_writing_the_report(corpus, tmp_path: Path) -> N
     )
     assert result.exit_code == 1
     assert result.stderr.splitlines()[-2:] == [
-        f"meshcol: fail: {teapot}: body 'teapot': not-watertight",
-        "meshcol: inspect: FAIL: 2 bodies, 1 with findings, 1 failing --fail-on "
-        "not-watertight,duplicate-faces",
+        f"meshcol: fail: {teapot}: body 'teapot': MC401 not-watertight: open: 64 boundary "
+        "and 0 non-manifold edges",
+        "meshcol: inspect: FAIL: 2 bodies, 1 with findings, 1 failing --fail-on MC401,MC407",
     ]
     report = json.loads((tmp_path / "r.json").read_text())
     assert report["failed"] is True
@@ -94,17 +99,18 @@ def test_fail_on_exits_one_after_writing_the_report(corpus, tmp_path: Path) -> N
 def test_fail_on_all_lists_every_rule(tmp_path: Path) -> None:
     cube = write(tmp_path, "cube.obj", CUBE_OBJ)
     report = json.loads(run("inspect", cube, "--fail-on", "all").stdout)
-    assert report["settings"]["fail_on"] == list(RULES)
+    assert report["settings"]["fail_on"] == [rule.name for rule in command_rules("inspect")]
+    assert report["settings"]["fail_on_rules"] == [rule.id for rule in command_rules("inspect")]
 
 
 def test_unknown_rule_is_a_usage_error(tmp_path: Path) -> None:
     cube = write(tmp_path, "cube.obj", CUBE_OBJ)
     result = run("inspect", cube, "--fail-on", "not-watertight,leaky")
     assert result.exit_code == 2
+    valid = ", ".join(f"{rule.id} {rule.name}" for rule in command_rules("inspect"))
     assert result.stderr == (
-        "meshcol: error: invalid value for '--fail-on': unknown rule 'leaky' (valid rules: all, "
-        + ", ".join(RULES)
-        + ") (see 'meshcol inspect -h')\n"
+        "meshcol: error: invalid value for '--fail-on': unknown rule 'leaky' for inspect "
+        f"(valid: all, {valid}) (see 'meshcol inspect -h')\n"
     )
 
 

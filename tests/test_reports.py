@@ -21,7 +21,7 @@ from meshcol.io.report import ENVELOPE_KEYS, SCHEMA_VERSION, envelope
 
 #: The commands that write a run's report (``meshcol targets`` lists the packaged engine
 #: profiles: data, not a run, so no envelope).
-REPORT_COMMANDS = sorted(set(COMMANDS) - {"targets"})
+REPORT_COMMANDS = sorted(set(COMMANDS) - {"targets", "rules"})  # listings, not runs
 
 SCHEMAS = Path(__file__).resolve().parent.parent / "meshcol" / "schemas"
 GOLDEN = Path(__file__).resolve().parent / "golden"

@@ -68,6 +68,38 @@ FAIL_ON = {
     "clearance": "clearance",
     "none": None,
 }
+#: The rule (meshcol.analysis.rules) of each pair status but ``separated``.
+PAIR_RULES = {
+    "clearance": "MC504",
+    "contact": "MC503",
+    "penetrating": "MC501",
+    "contained": "MC502",
+}
+
+
+def failing_rules(fail_on: str, target: bool = False) -> tuple[str, ...]:
+    """The rule ids a ``--fail-on`` value fails on: a status level (``penetration``,
+    ``contact``, ``clearance``, ``none``: that status and the more severe ones, and with a
+    ``target`` its limits' rules, :data:`meshcol.analysis.rules.TARGET_RULES`) or comma-separated rule ids or names
+    (``MC501,missing-collider``, ``all``).
+
+    Raises
+    ------
+    UnknownRuleError
+        Neither a level nor rules of check (a ValueError; the message lists the valid ones).
+    """
+    from meshcol.analysis.rules import TARGET_RULES, UnknownRuleError, select_rules
+
+    if fail_on in FAIL_ON:
+        least = FAIL_ON[fail_on]
+        if least is None:
+            return ()
+        levels = tuple(PAIR_RULES[s] for s in PAIR_STATUSES[SEVERITY[least] :])
+        return levels + (TARGET_RULES if target else ())
+    try:
+        return select_rules(fail_on, "check")
+    except UnknownRuleError as exc:
+        raise UnknownRuleError(f"{exc} (or a level: {', '.join(FAIL_ON)})") from None
 
 
 @dataclass(frozen=True)
@@ -86,7 +118,8 @@ class CheckOptions:
         Minimum gap required; pairs closer than it (but not touching) have status
         ``clearance``. 0 disables the band.
     fail_on : str
-        ``penetration`` (default), ``contact``, ``clearance`` or ``none``.
+        ``penetration`` (default), ``contact``, ``clearance`` or ``none`` (that status and the
+        more severe ones fail), or comma-separated rule ids or names (:func:`failing_rules`).
     ignore : tuple of str
         ``A:B`` rules with shell-style globs on body names; matching pairs (either order) are
         reported as ignored and never fail the run.
@@ -96,6 +129,10 @@ class CheckOptions:
         Threads for the native queries; 0 means all cores.
     decompose_options : dict
         Options for on-the-fly convex decomposition (``decomposed`` bodies not in the cache).
+    target : meshcol.io.targets.Target, optional
+        An engine profile: each body's convex parts are measured against its limits
+        (:func:`meshcol.analysis.rules.target_findings`); with a status level in ``fail_on``
+        (not ``none``) its findings fail the run too.
     """
 
     collider: str = "hull"
@@ -107,6 +144,7 @@ class CheckOptions:
     baseline_source: str | None = None
     threads: int = 0
     decompose_options: dict = field(default_factory=dict)
+    target: Any = None
 
     def validate(self) -> None:
         if self.collider not in COLLIDER_KINDS:
@@ -117,8 +155,7 @@ class CheckOptions:
             raise ValueError(f"tolerance must be a finite number >= 0, got {self.tolerance!r}")
         if not (math.isfinite(self.clearance) and self.clearance >= 0):
             raise ValueError(f"clearance must be a finite number >= 0, got {self.clearance!r}")
-        if self.fail_on not in FAIL_ON:
-            raise ValueError(f"fail_on must be one of {', '.join(FAIL_ON)}, got {self.fail_on!r}")
+        failing_rules(self.fail_on)
         for rule in self.ignore:
             parse_ignore_rule(rule)
 
@@ -154,6 +191,9 @@ class CheckReport:
     warnings : list of str
         What the run could not do as asked (``UCX_`` parts naming nothing, flat bodies that
         could not be decomposed), one line each.
+    findings : list of dict
+        Finding records (:class:`meshcol.analysis.rules.Finding` fields and ``failed``):
+        MC301 per body without a usable collider, one per pair not separated nor ignored.
     """
 
     bodies: list[dict]
@@ -163,6 +203,7 @@ class CheckReport:
     units: str | None
     generated_at: str
     warnings: list[str] = field(default_factory=list)
+    findings: list[dict] = field(default_factory=list)
 
     @property
     def passed(self) -> bool:
@@ -184,6 +225,7 @@ class CheckReport:
             "bodies": self.bodies,
             "summary": self.summary,
             "pairs": self.pairs,
+            "findings": self.findings,
         }
 
     def worst_pairs(self, count: int = 10) -> list[dict]:
@@ -615,10 +657,9 @@ def check_scene(
     status_index[sd < -tol] = SEVERITY["penetrating"]
     status_index[contained] = SEVERITY["contained"]
 
-    threshold = FAIL_ON[options.fail_on]
-    violation = np.zeros(k, dtype=bool)
-    if threshold is not None:
-        violation = (status_index >= SEVERITY[threshold]) & ~ignored
+    fail_rules = failing_rules(options.fail_on, options.target is not None)
+    failing_status = [SEVERITY[s] for s, rule in PAIR_RULES.items() if rule in fail_rules]
+    violation = np.isin(status_index, failing_status) & ~ignored
     if options.baseline is not None:
         idx = np.flatnonzero(violation)
         violation[idx] = _worse_than_baseline(
@@ -675,6 +716,7 @@ def check_scene(
         for a, b, s, d, dp, sdv, nv, pa, pb, ia, ib, na, nb, ig, vi, fa, vol in columns
     ]
     pairs.sort(key=lambda p: (p["body_a"], p["body_b"]))
+    findings = _findings(shapes, options, scene.units, fail_rules)
 
     part_counts = np.diff(shapes.body_part_offsets).tolist()
     files = _relative_paths([body.source for body in bodies])
@@ -706,7 +748,8 @@ def check_scene(
         "min_distance": _num(finite_distance.min()) if len(finite_distance) else None,
         "max_depth": _num(depth.max()) if k else None,
         "violations": int(np.count_nonzero(violation)),
-        "passed": not bool(violation.any()),
+        "failed_findings": sum(f["failed"] for f in findings),
+        "passed": not any(f["failed"] for f in findings) and not bool(violation.any()),
         "seconds": round(seconds, 6),
         "load_seconds": None if load_seconds is None else round(load_seconds, 6),
     }
@@ -715,6 +758,7 @@ def check_scene(
         "tolerance": options.tolerance,
         "clearance": options.clearance,
         "fail_on": options.fail_on,
+        "fail_on_rules": list(fail_rules),
         "ignore": list(options.ignore),
         "baseline": _relative(options.baseline_source),
         "excluded_pairs": [
@@ -724,6 +768,9 @@ def check_scene(
         if scene.source
         else sorted({file or "" for file, b in zip(files, bodies) if b.source}),
     }
+    if options.target is not None:
+        settings["target"] = options.target.name
+        settings["target_limits"] = dict(options.target.limits)
     return CheckReport(
         body_rows,
         pairs,
@@ -732,7 +779,41 @@ def check_scene(
         scene.units,
         datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
         [*scene.warnings, *shapes.warnings],
+        findings,
     )
+
+
+def _findings(
+    shapes: Any, options: CheckOptions, units: str | None, fail_rules: Sequence[str]
+) -> list[dict]:
+    """Body finding records, each with ``failed`` (its rule fails the run): MC301 per body
+    without a usable collider (every convex part a segment or a point: no area), then a
+    target's limits (:func:`meshcol.analysis.rules.target_findings`). Pairs are not
+    repeated here: a pair's status is its rule (:data:`PAIR_RULES`, ``meshcol rules``)."""
+    from meshcol.analysis.rules import finding, target_findings
+    from meshcol.collision.hull import HullStatus
+
+    records = []
+    no_area = np.isin(shapes.shapes.hull_status, (HullStatus.COLLINEAR, HullStatus.SINGLE_POINT))
+    no_area &= shapes.shapes.kinds == 0  # polytopes
+    counts = np.diff(shapes.body_part_offsets)
+    starts = shapes.body_part_offsets[:-1]
+    if len(no_area) and len(starts):
+        flat_parts = np.add.reduceat(no_area.astype(np.int64), starts)
+        for b in np.flatnonzero((flat_parts == counts) & (counts > 0)).tolist():
+            records.append(
+                finding(
+                    "MC301",
+                    shapes.bodies[b].name,
+                    None,
+                    0.0,
+                    0.0,
+                    "no area: the collider is a segment or a point (every face degenerate)",
+                )
+            )
+    if options.target is not None:
+        records.extend(target_findings(shapes, options.target, units))
+    return [dict(f.to_dict(), failed=f.rule in fail_rules) for f in records]
 
 
 def _worse_than_baseline(

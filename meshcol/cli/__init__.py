@@ -38,6 +38,7 @@ COMMANDS: dict[str, str] = {
     "check": "meshcol.cli.check:check",
     "collision-matrix": "meshcol.cli.collision_matrix:collision_matrix",
     "targets": "meshcol.cli.targets:targets",
+    "rules": "meshcol.cli.rules:rules",
 }
 
 CONTEXT_SETTINGS = {"help_option_names": ["-h", "--help"], "max_content_width": 100}

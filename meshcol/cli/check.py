@@ -21,6 +21,7 @@ from meshcol.cli.common import (
     report_format,
     report_options,
     robot_options,
+    target_option,
     threads_option,
     timeout_option,
     verdict,
@@ -28,6 +29,17 @@ from meshcol.cli.common import (
 
 FAIL_ON_CHOICES = tuple(FAIL_ON)
 SHAPE_CHOICES = COLLIDER_KINDS
+
+
+def _parse_fail_on(ctx: click.Context, param: click.Parameter, value: str) -> str:
+    from meshcol.analysis.check import failing_rules
+    from meshcol.analysis.rules import UnknownRuleError
+
+    try:
+        failing_rules(value)
+    except UnknownRuleError as exc:
+        raise click.BadParameter(str(exc), ctx, param) from None
+    return value
 
 
 @click.command(
@@ -57,10 +69,14 @@ SHAPE_CHOICES = COLLIDER_KINDS
 )
 @click.option(
     "--fail-on",
-    type=click.Choice(FAIL_ON_CHOICES),
     default="penetration",
     show_default=True,
-    help="Least severe status that fails the run (exit 1).",
+    metavar="LEVEL|RULES",
+    callback=_parse_fail_on,
+    help="Least severe status that fails the run (exit 1): "
+    + ", ".join(FAIL_ON_CHOICES)
+    + "; or comma-separated rule ids or names (MC501,MC301, penetrating, missing-collider, "
+    "all; 'meshcol rules').",
 )
 @click.option(
     "--ignore",
@@ -95,6 +111,11 @@ SHAPE_CHOICES = COLLIDER_KINDS
     "Seconds allowed per file's task; a file over it is an error (exit 2).  [default: no limit]"
 )
 @executor_options()
+@target_option(
+    "Measure each body's convex parts against an engine's limits (meshcol targets); "
+    "each limit a part is past is a finding (MC101..MC107, MC201) that fails the run "
+    "with a --fail-on level."
+)
 @report_options(default="the report on stdout; the summary on stderr")
 @robot_options(exclusions=True)
 @html_option
@@ -104,6 +125,7 @@ def check(
     tolerance: float,
     clearance: float,
     fail_on: str,
+    target: Any,
     ignore: tuple[str, ...],
     baseline: str | None,
     threads: int,
@@ -160,6 +182,7 @@ def check(
             tolerance=tolerance,
             clearance=clearance,
             fail_on=fail_on,
+            target=target,
             ignore=ignore,
             baseline=baseline,
             threads=threads,
@@ -223,10 +246,20 @@ def summary_table(result) -> str:
         if touching > len(worst):
             lines.append(f"  ... {touching - len(worst)} more (every pair is in the report)")
     settings = result.settings
+    failed = [f for f in result.findings if f["failed"]]
+    for f in failed[:TABLE_ROWS]:
+        where = f"body '{f['body']}'" + ("" if f["part"] is None else f" part '{f['part']}'")
+        lines.append(f"meshcol: fail: {where}: {f['rule']} {f['name']}: {f['message']}")
+    if len(failed) > TABLE_ROWS:
+        lines.append(f"  ... {len(failed) - TABLE_ROWS} more failing findings (in the report)")
     if s["passed"]:
         detail = f"no pair violates --fail-on {settings['fail_on']}"
     else:
         violate = "violates" if s["violations"] == 1 else "violate"
         detail = f"{plural(s['violations'], 'pair')} {violate} --fail-on {settings['fail_on']}"
+        if failed:
+            detail += (
+                f", {plural(len(failed), 'finding')} {'fails' if len(failed) == 1 else 'fail'}"
+            )
     lines.append(verdict("check", s["passed"], detail))
     return "\n".join(lines)

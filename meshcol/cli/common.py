@@ -419,6 +419,28 @@ def robot_options(exclusions: bool = False) -> Callable[[Callable[..., Any]], Ca
     return decorate
 
 
+def target_option(help: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Add ``--target NAME|FILE.toml`` (parameter ``target``): an engine profile
+    (:func:`meshcol.io.targets.load_target`), loaded before any work; an unknown name or a
+    malformed file exits 2 with one line naming it."""
+
+    def load(ctx: click.Context, param: click.Parameter, value: str | None) -> Any:
+        if value is None:
+            return None
+        from meshcol.io.targets import load_target
+
+        return load_target(value)
+
+    return click.option(
+        "--target",
+        "target",
+        metavar="NAME|FILE.toml",
+        default=None,
+        callback=load,
+        help=help + "  [default: no target]",
+    )
+
+
 def html_option(func: Callable[..., Any]) -> Callable[..., Any]:
     """Add ``--html FILE``: the run's review page (:mod:`meshcol.io.review`). Without the
     viewer (``meshcol[review]``) the command exits 2 before any work, with the hint."""

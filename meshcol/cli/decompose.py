@@ -14,6 +14,7 @@ from meshcol.cli.common import (
     jobs_option,
     render_html,
     robot_options,
+    target_option,
     timeout_option,
     to_option,
     write_html,
@@ -91,15 +92,10 @@ class _MeshFormat(click.Choice):
     default=None,
     help="Most vertices per part (enforced).  [default: no limit]",
 )
-@click.option(
-    "--target",
-    "target_name",
-    metavar="NAME|FILE.toml",
-    default=None,
-    help="Fit every body's parts to an engine's limits (meshcol targets: physx, physx-gpu, "
+@target_option(
+    "Fit every body's parts to an engine's limits (meshcol targets: physx, physx-gpu, "
     "unity, unreal, godot, mujoco, bullet, isaac) or your own profile, still enclosing; "
-    "tighter --max-hulls/--max-vertices win. Exit 1 when a limit cannot be met.  "
-    "[default: no target]",
+    "tighter --max-hulls/--max-vertices win. Exit 1 when a limit cannot be met."
 )
 @click.option(
     "--preprocess",
@@ -228,7 +224,7 @@ def decompose_command(
     threshold: float | None,
     max_hulls: int | None,
     max_vertices: int | None,
-    target_name: str | None,
+    target: Any,
     preprocess: str,
     resolution: int | None,
     seed: int,
@@ -346,11 +342,6 @@ def decompose_command(
     robot = len(inputs) == 1 and is_robot_file(inputs[0])
     if to is not None and not robot:
         raise click.UsageError("--to needs one robot description (URDF, MJCF)")
-    target = None
-    if target_name is not None:
-        from meshcol.io.targets import load_target
-
-        target = load_target(target_name)
     if robot:
         for name, flag in (("layout", "--layout"), ("fmt", "--format")):
             if ctx.get_parameter_source(name) == ParameterSource.COMMANDLINE:

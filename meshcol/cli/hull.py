@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import click
 
 from meshcol.cli.common import (
@@ -15,6 +17,7 @@ from meshcol.cli.common import (
     report_format,
     report_options,
     robot_options,
+    target_option,
     to_option,
     verdict,
     write_html,
@@ -50,14 +53,10 @@ from meshcol.io.mesh_write import MULTI_MESH_EXTENSIONS
     help="At most N vertices per hull (PhysX: 255, GPU pipelines: 64), still enclosing the "
     "input.  [default: no budget, the exact hull]",
 )
-@click.option(
-    "--target",
-    "target_name",
-    metavar="NAME|FILE.toml",
-    help="Fit every hull to an engine's limits (meshcol targets lists them: physx, "
+@target_option(
+    "Fit every hull to an engine's limits (meshcol targets lists them: physx, "
     "physx-gpu, unity, unreal, godot, mujoco, bullet, isaac) or to your own profile; "
-    "a tighter --max-vertices still wins. Exit 1 when a limit cannot be met.  [default: "
-    "no target]",
+    "a tighter --max-vertices still wins. Exit 1 when a limit cannot be met."
 )
 @to_option("the hulls")
 @report_options(default="stdout when no mesh is written, else no report")
@@ -68,7 +67,7 @@ def hull(
     output: str | None,
     out_dir: str | None,
     max_vertices: int | None,
-    target_name: str | None,
+    target: Any,
     to: str | None,
     report: str | None,
     fmt: str | None,
@@ -126,11 +125,6 @@ def hull(
     from meshcol.analysis.review import hull_page
     from meshcol.cli.common import emit_report
 
-    target = None
-    if target_name is not None:
-        from meshcol.io.targets import load_target
-
-        target = load_target(target_name)
     check_outputs(inputs, [("-o", output), ("--report", report), ("--html", html)])
     fmt = report_format(report, fmt)
     progress = Progress(command="hull", heartbeat=True)

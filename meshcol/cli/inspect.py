@@ -3,13 +3,17 @@
 from __future__ import annotations
 
 import sys
+from typing import Any
 
 import click
 
-from meshcol.analysis.inspect import RULES
+from meshcol.analysis.colliders import COLLIDER_KINDS
 from meshcol.cli.common import (
+    FiniteFloat,
     Progress,
+    cache_dir_option,
     check_outputs,
+    engine_option,
     executor_options,
     html_option,
     jobs_option,
@@ -18,6 +22,7 @@ from meshcol.cli.common import (
     report_format,
     report_options,
     robot_options,
+    target_option,
     timeout_option,
     verdict,
     write_html,
@@ -25,17 +30,14 @@ from meshcol.cli.common import (
 
 
 def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) -> tuple[str, ...]:
+    from meshcol.analysis.rules import UnknownRuleError, select_rules
+
     if value is None:
         return ()
-    names = [v.strip() for v in value.split(",") if v.strip()]
-    if "all" in names:
-        return RULES
-    unknown = [n for n in names if n not in RULES]
-    if unknown:
-        raise click.BadParameter(
-            f"unknown rule {unknown[0]!r} (valid rules: all, {', '.join(RULES)})", ctx, param
-        )
-    return tuple(dict.fromkeys(names))
+    try:
+        return select_rules(value, "inspect")
+    except UnknownRuleError as exc:
+        raise click.BadParameter(str(exc), ctx, param) from None
 
 
 @click.command(
@@ -50,10 +52,55 @@ def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) 
     "fail_on",
     metavar="RULES",
     callback=_parse_rules,
-    help="Comma-separated findings that make the run exit 1: "
-    + ", ".join(RULES)
-    + " (or all).  [default: none, the run reports only]",
+    help="Comma-separated rules whose findings make the run exit 1: ids or names "
+    "(MC401 or not-watertight; 'meshcol rules' lists them), or all.  "
+    "[default: none, the run reports only]",
 )
+@click.option(
+    "--shape",
+    type=click.Choice(COLLIDER_KINDS),
+    default="hull",
+    show_default=True,
+    help="Collider of each body for the physics rules, as in check (a manifest body's "
+    "'shape' overrides it).",
+)
+@click.option(
+    "--volume-ratio",
+    type=FiniteFloat(min=1.0),
+    default=2.0,
+    show_default=True,
+    help="MC205: collider volume over visual volume allowed, either way.",
+)
+@click.option(
+    "--com-offset",
+    type=FiniteFloat(min=0.0),
+    default=0.05,
+    show_default=True,
+    help="MC206: centre-of-mass offset allowed, as a fraction of the visual bounding-box diagonal.",
+)
+@click.option(
+    "--inertia-ratio",
+    type=FiniteFloat(min=1.0),
+    default=1.5,
+    show_default=True,
+    help="MC207: ratio allowed between principal moments of inertia per unit mass.",
+)
+@click.option(
+    "--min-relative-volume",
+    type=FiniteFloat(min=0.0),
+    default=1e-6,
+    show_default=True,
+    help="MC202: a convex part under this volume over its diagonal cubed is flat.",
+)
+@click.option(
+    "--min-volume",
+    type=FiniteFloat(min=0.0),
+    default=1e-15,
+    show_default=True,
+    help="MC203: a collider under this volume (cubic units) is too small to simulate.",
+)
+@engine_option("Decomposition engine for --shape decomposed bodies missing from the cache.")
+@cache_dir_option()
 @jobs_option(
     "Files inspected at once, each a task in a worker process or on Ray (1: one after "
     "another in this process, unless --timeout or --executor ray)."
@@ -63,6 +110,11 @@ def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) 
     "(exit 2).  [default: no limit]"
 )
 @executor_options()
+@target_option(
+    "Measure each body's collider (--shape) against an engine's limits (meshcol "
+    "targets): each limit a part is past is a finding (MC101..MC107, MC201) that fails "
+    "the run unless --fail-on lists other rules."
+)
 @robot_options()
 @html_option
 def inspect(
@@ -70,6 +122,15 @@ def inspect(
     report: str | None,
     fmt: str | None,
     fail_on: tuple[str, ...],
+    target: Any,
+    shape: str,
+    volume_ratio: float,
+    com_offset: float,
+    inertia_ratio: float,
+    min_relative_volume: float,
+    min_volume: float,
+    engine: str,
+    cache_dir: str | None,
     jobs: int,
     timeout: float | None,
     executor: str,
@@ -85,13 +146,20 @@ def inspect(
     edges (more than two faces), self-intersections (pairs of crossing faces), manifold3d's
     status, and a units guess with its reason (a chair 400 units tall is millimetres).
 
+    Physics readiness, per body: its collider (--shape, the convex hull by default; a robot
+    link's collision elements, compared with its visual elements) and its visual mesh get
+    mass properties (volume, centre of mass, inertia about it, solid and shell; world frame,
+    density 1); the rules MC202..MC207 and MC301..MC303 compare them and flag flat, tiny,
+    inverted or missing colliders and UCX_ parts naming nothing. Every finding is a record
+    (body, part, rule id and name, measured value, limit, message) in the report's
+    "findings"; 'meshcol rules' documents each rule.
+
     Faces cross when their open triangles share a point, decided exactly (no tolerance):
     faces that only touch (a shared vertex or edge, a T-junction) do not. A closed mesh with
     a negative volume is inverted (inside out): meshcol hull is unaffected (a hull has no
     winding) and notes it; meshcol decompose reverses the faces before the engine runs.
 
-    Findings are named as the --fail-on rules; a run exits 1 when a body has a finding
-    listed in --fail-on (after writing the report), 0 otherwise, 2 on unusable input. A batch
+    A run exits 1 when a finding's rule is listed in --fail-on (after writing the report), 0 otherwise, 2 on unusable input. A batch
     keeps going: a file that cannot be read is an entry of the report's "errors" and a
     'meshcol: error:' line, the other files are inspected and reported, and the run exits 2.
     A summary table goes to stderr (the first 20 bodies, then "N more").
@@ -108,8 +176,10 @@ def inspect(
       meshcol inspect props/*.obj --report health.csv
       meshcol inspect level.json --fail-on not-watertight,self-intersecting
       meshcol inspect props/*.obj --report - --format csv --fail-on all
+      meshcol inspect robot.urdf --fail-on MC301,MC204,collider-volume-mismatch
       meshcol inspect lib/*.glb -j 2 --timeout 60 --executor ray --report health.json
     """
+    from meshcol.analysis.inspect import PhysicsOptions
     from meshcol.analysis.inspect import inspect as run_inspect
     from meshcol.analysis.review import inspect_page
     from meshcol.cli.common import emit_report
@@ -118,9 +188,21 @@ def inspect(
     fmt = report_format(report, fmt)
     progress = Progress(command="inspect", heartbeat=True)
     try:
+        physics = PhysicsOptions(
+            shape=shape,
+            volume_ratio=volume_ratio,
+            com_offset=com_offset,
+            inertia_ratio=inertia_ratio,
+            min_relative_volume=min_relative_volume,
+            min_volume=min_volume,
+            decompose_options={"engine": engine}
+            | ({} if cache_dir is None else {"cache_dir": cache_dir}),
+            target=target,
+        )
         result = run_inspect(
             list(inputs),
             fail_on=fail_on,
+            physics=physics,
             progress=progress,
             jobs=jobs,
             timeout=timeout,
@@ -134,10 +216,15 @@ def inspect(
     write_html(html, page)
 
     _print_table(result.bodies)
-    for row in result.failed:
+    for warning in result.warnings:
+        click.echo(f"meshcol: warning: {warning}", err=True)
+    sources = {r.name: r.source for r in result.inspections}
+    for found in result.failed_findings:
+        where = f"body '{found.body}'" + ("" if found.part is None else f" part '{found.part}'")
+        source = sources.get(f"{found.body}/{found.part}") or sources.get(found.body)
         click.echo(
-            f"meshcol: fail: {row['source']}: body '{row['name']}': "
-            + ", ".join(row["failed_rules"]),
+            f"meshcol: fail: {source + ': ' if source else ''}{where}: {found.rule} "
+            f"{found.name}: {found.message}",
             err=True,
         )
     for error in result.errors:
@@ -145,8 +232,8 @@ def inspect(
         click.echo(f"meshcol: error: {error['source']}: {body}{error['message']}", err=True)
     s = result.summary
     detail = f"{plural(s['bodies'], 'body')}, {s['with_findings']} with findings"
-    if fail_on:
-        detail += f", {s['failed']} failing --fail-on {','.join(fail_on)}"
+    if result.fail_on:
+        detail += f", {s['failed']} failing --fail-on {','.join(result.fail_on)}"
     if result.errors:
         detail += f", {plural(len(result.errors), 'input')} not inspected"
     click.echo(verdict("inspect", result.exit_code == 0, detail), err=True)

@@ -242,6 +242,7 @@ def load_robot(
     options: RobotOptions | None = None,
     *,
     elements: list[CollisionElement] | None = None,
+    visual: bool = False,
 ) -> Scene:
     """Read a URDF or MJCF file as a scene: one body per link with collision geometry.
 
@@ -255,6 +256,11 @@ def load_robot(
     elements : list, optional
         Filled with one :class:`CollisionElement` per body part, in body then part order (a
         link of one part, a primitive body included, has one).
+    visual : bool
+        Read the links' visual geometry instead (URDF ``<visual>``; MJCF geoms that collide
+        with nothing, ``contype`` and ``conaffinity`` 0), posed the same way: what a link
+        looks like, for comparing with its collider (``meshcol inspect``). A link without
+        visual geometry is no body; a robot without any gives a scene of no bodies.
 
     Returns
     -------
@@ -272,7 +278,7 @@ def load_robot(
         Anything wrong in the description, one line naming the link or joint (MuJoCo's own
         message for an MJCF it rejects).
     """
-    return load_robot_model(path, options, elements=elements).scene
+    return load_robot_model(path, options, elements=elements, visual=visual).scene
 
 
 def load_robot_model(
@@ -280,6 +286,7 @@ def load_robot_model(
     options: RobotOptions | None = None,
     *,
     elements: list[CollisionElement] | None = None,
+    visual: bool = False,
 ) -> RobotModel:
     """:func:`load_robot`, with the robot's kinematics (batched link poses of configurations,
     :mod:`meshcol.io.kinematics`) for commands that move the links."""
@@ -292,10 +299,10 @@ def load_robot_model(
         raise InputFileError("is a directory, not a robot description", source)
     root = _root_tag(source)
     if root == "mujoco" or (file.suffix.lower() == ".mjcf" and root != "robot"):
-        scene, links, kinematics = _load_mjcf(source, options, elements)
+        scene, links, kinematics = _load_mjcf(source, options, elements, visual)
     else:
-        scene, links, kinematics = _load_urdf(source, options, elements)
-    if not scene.bodies:
+        scene, links, kinematics = _load_urdf(source, options, elements, visual)
+    if not scene.bodies and not visual:
         raise SceneError(
             f"no link has collision geometry ({len(links)} link(s), no <collision> element "
             "or collision geom)",
@@ -343,7 +350,10 @@ def _check_body(body: Body, source: str) -> None:
 
 
 def _load_urdf(
-    source: str, options: RobotOptions, sink: list[CollisionElement] | None = None
+    source: str,
+    options: RobotOptions,
+    sink: list[CollisionElement] | None = None,
+    visual: bool = False,
 ) -> tuple[Scene, set[str], Kinematics]:
     try:
         import yourdfpy
@@ -365,7 +375,7 @@ def _load_urdf(
         raise SceneError(f"not a URDF: the root element is <{root.tag}>, not <robot>", source)
     if options.keyframe:
         raise SceneError("--keyframe: a URDF has no keyframes (MJCF only)", source)
-    capsules = _take_capsules(root, source)
+    capsules = {} if visual else _take_capsules(root, source)
     try:
         urdf = yourdfpy.URDF.load(
             io.BytesIO(etree.tostring(root)), build_scene_graph=False, load_meshes=False
@@ -437,12 +447,14 @@ def _load_urdf(
     resolver.preload(
         collision.geometry.mesh.filename
         for link in robot.links
-        for collision in link.collisions
+        for collision in (link.visuals if visual else link.collisions)
         if collision.geometry is not None and collision.geometry.mesh is not None
     )
     bodies = []
     for link in robot.links:
-        body = _urdf_link_body(link, poses[link.name], capsules, resolver, source, sink)
+        body = _urdf_link_body(
+            link, poses[link.name], capsules, resolver, source, sink, visual=visual
+        )
         if body is not None:
             bodies.append(body)
 
@@ -699,11 +711,13 @@ def _urdf_link_body(
     resolver: _PackageResolver,
     source: str,
     sink: list[CollisionElement] | None = None,
+    visual: bool = False,
 ) -> Body | None:
     elements: list[tuple[str, np.ndarray, Primitive | None, np.ndarray | None, np.ndarray | None]]
     elements = []
     indices: list[int] = []  # the <collision> element of each entry of elements
-    for index, collision in enumerate(link.collisions):
+    role = "visual" if visual else "collision"
+    for index, collision in enumerate(link.visuals if visual else link.collisions):
         label = f"link {link.name!r}"
         origin = _origin(collision.origin)
         geometry = collision.geometry
@@ -712,7 +726,7 @@ def _urdf_link_body(
         if (link.name, index) in capsules:
             primitive = capsules[(link.name, index)]
         elif geometry is None:
-            raise SceneError(f"{label}: collision {index} has no geometry", source)
+            raise SceneError(f"{label}: {role} {index} has no geometry", source)
         elif geometry.box is not None:
             size = np.asarray(geometry.box.size, dtype=np.float64).reshape(-1)
             primitive = _primitive(Box, (tuple(size),), label, "box size", source)
@@ -731,7 +745,7 @@ def _urdf_link_body(
             indices.append(index)
             continue
         if geometry.mesh is None:
-            raise SceneError(f"{label}: collision {index} has no shape", source)
+            raise SceneError(f"{label}: {role} {index} has no shape", source)
         reference = geometry.mesh.filename
         path, why = resolver.resolve(reference)
         if path is None:
@@ -875,7 +889,10 @@ def _parts_body(
 
 
 def _load_mjcf(
-    source: str, options: RobotOptions, sink: list[CollisionElement] | None = None
+    source: str,
+    options: RobotOptions,
+    sink: list[CollisionElement] | None = None,
+    visual: bool = False,
 ) -> tuple[Scene, set[str], Kinematics]:
     try:
         import mujoco
@@ -961,8 +978,8 @@ def _load_mjcf(
     geom_type = {int(t): t.name for t in mujoco.mjtGeom.__members__.values()}
     per_body: dict[int, list] = {}
     for g in range(model.ngeom):
-        if model.geom_contype[g] == 0 and model.geom_conaffinity[g] == 0:
-            continue
+        if (model.geom_contype[g] == 0 and model.geom_conaffinity[g] == 0) != visual:
+            continue  # collision geoms (or, for visual, the geoms that collide with nothing)
         kind = geom_type.get(int(model.geom_type[g]), "")
         if kind in ("mjGEOM_PLANE", "mjGEOM_HFIELD"):
             continue
