@@ -228,9 +228,17 @@ struct StackItem {
 
 // b's leaf triangles mapped into a's frame, with their boxes.
 struct MappedLeaf {
-    Vec3 corners[defaults::mesh_bvh_leaf_size][3];
-    TriangleBox boxes[defaults::mesh_bvh_leaf_size];
+    // Left uninitialised (a union member without an initialiser): `load` writes the first
+    // `count` entries before any is read (zeroing them all shows on a query that reaches a leaf).
+    union {
+        Vec3 corners[defaults::mesh_bvh_leaf_size][3];
+    };
+    union {
+        TriangleBox boxes[defaults::mesh_bvh_leaf_size];
+    };
     int count = 0;
+
+    MappedLeaf() {}
 
     void load(const MeshBvh& mesh, const BvhNode& leaf, const Relative& rel) {
         count = leaf.count;
