@@ -985,6 +985,15 @@ def test_int64_pairs_are_range_checked_by_the_core_with_the_same_message() -> No
         mesh_intersects_batch(meshes, None, np.array([[0.0, 1.0]]))
 
 
+def unaligned_copy(a: np.ndarray) -> np.ndarray:
+    """A C-contiguous copy of ``a`` whose data sits one byte off its dtype's alignment."""
+    raw = np.empty(a.nbytes + 1, dtype=np.uint8)
+    out = raw[1:].view(a.dtype).reshape(a.shape)
+    out[...] = a
+    assert not out.flags.aligned and out.flags.c_contiguous
+    return out
+
+
 def test_intersects_batch_reads_every_input_form_alike() -> None:
     """The batch's one-call path (arrays already in the core's form, and lists of int pairs,
     read in place) and its converting path give the same results, in a result built with
@@ -1005,6 +1014,10 @@ def test_intersects_batch_reads_every_input_form_alike() -> None:
         pairs.astype(np.int32),
         np.asfortranarray(pairs),
         np.ascontiguousarray(pairs.T).T,  # a strided view
+        pairs.astype(pairs.dtype.newbyteorder()),  # non-native byte order: converted
+        pairs.view(np.ma.MaskedArray),  # a subclass: not read from numpy's struct
+        unaligned_copy(pairs),
+        pairs.reshape(1, 4, 2)[0],  # a C-contiguous view of another array
     ]
     for poses in (None, p, p.tolist(), p.astype(np.float32).astype(np.float64)):
         for form in forms:
@@ -1015,6 +1028,12 @@ def test_intersects_batch_reads_every_input_form_alike() -> None:
             assert r.intersecting.flags.writeable and r.status.flags.c_contiguous
             assert r.intersecting.tolist() == expected, (type(form), type(poses))
             assert r.status.tolist() == [Status.CONVERGED] * 4
+    # many pairs on several threads (the pairs are copied before the GIL is released)
+    many = np.tile(pairs, (300, 1))
+    for threads in (1, 2):
+        r = mesh_intersects_batch(meshes, None, many, threads=threads)
+        assert r.intersecting.tolist() == expected * 300
+    assert len(mesh_intersects_batch(meshes, None, pairs[:0])) == 0
     # every call makes its own arrays
     a = mesh_intersects_batch(meshes, None, pairs[:1])
     b = mesh_intersects_batch(meshes, None, pairs[:1])

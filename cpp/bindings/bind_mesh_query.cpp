@@ -283,6 +283,12 @@ struct PairsArg {
     long long count = 0;
 
     bool read(PyObject* pairs) {
+        Py_ssize_t shape[2];
+        if (const std::int64_t* p = numpy_int64_data(pairs, 2, shape); p != nullptr && shape[1] == 2) {
+            data = p;
+            count = static_cast<long long>(shape[0]);
+            return true;
+        }
         if (const std::int64_t* p = buffer.get<std::int64_t>(pairs, {-1, 2})) {
             data = p;
             count = static_cast<long long>(buffer.shape(0));
@@ -312,6 +318,15 @@ struct PairsArg {
         data = copied.data();
         count = static_cast<long long>(n);
         return true;
+    }
+
+    // Before the GIL is released: pairs read from numpy's struct (no buffer held) are copied,
+    // so that nothing another thread does to that array can reach the loop.
+    void pin() {
+        if (data == copied.data() || data == nullptr) return;
+        if (buffer.held()) return;
+        copied.assign(data, data + 2 * count);
+        data = copied.data();
     }
 };
 
@@ -385,6 +400,7 @@ nb::object intersects_batch(const MeshBvhSet& set, nb::handle poses, nb::handle 
     if (t <= 1 && in.count <= 1) {
         run(0, in.count);  // one pair: a disjoint one costs less than releasing the GIL
     } else {
+        in.pin();
         nb::gil_scoped_release release;
         meshcol::parallel_for(in.count, t, run);
     }

@@ -99,6 +99,9 @@ public:
         return static_cast<T*>(view_.buf);
     }
 
+    /// Whether a buffer is exported (and released at destruction).
+    bool held() const { return held_; }
+
     /// Size of dimension `d` of the buffer `get` accepted.
     Py_ssize_t shape(int d) const { return view_.shape[d]; }
 
@@ -221,6 +224,62 @@ nb::object numpy_empty(size_t n, T** data) {
     }
     *data = reinterpret_cast<T*>(reinterpret_cast<ArrayHead*>(array.ptr())->data);
     return array;
+}
+
+/// The data of `object` when it is exactly a numpy array (not a subclass), C-contiguous and
+/// aligned, of int64 in native byte order, with `ndim` dimensions whose sizes go to `shape`;
+/// null otherwise (the caller then asks the buffer protocol, which says the same for such an
+/// array, only slower: a buffer export costs about as much as a one-pair query). Read from
+/// numpy's array and dtype structs where every extension compiled against numpy reads them
+/// (PyArray_DATA, _NDIM, _DIMS, _FLAGS, _DESCR and the dtype's kind, type and byteorder
+/// characters, whose offsets numpy 1.x and 2.x share), checked once against the buffer
+/// protocol (data, shape) and not used again should the two ever disagree. No reference to the
+/// data is held: read it under the GIL, or export a buffer before releasing it. Holds the GIL.
+inline const std::int64_t* numpy_int64_data(PyObject* object, int ndim, Py_ssize_t* shape) {
+    struct ArrayHead {
+        PyObject head;
+        char* data;
+        int nd;
+        Py_ssize_t* dimensions;
+        Py_ssize_t* strides;
+        PyObject* base;
+        PyObject* descr;
+        int flags;
+    };
+    struct DescrHead {
+        PyObject head;
+        PyTypeObject* typeobj;
+        char kind;
+        char type;
+        char byteorder;
+    };
+    constexpr int c_contiguous = 0x0001, aligned = 0x0100;  // NPY_ARRAY_C_CONTIGUOUS, _ALIGNED
+    static int layout_checked = 0;  // 0: not yet, 1: the struct read agrees, -1: never use it
+    const NumpyApi& api = NumpyApi::get();
+    if (layout_checked < 0 || api.array_type == nullptr || Py_TYPE(object) != api.array_type) return nullptr;
+    const auto* a = reinterpret_cast<const ArrayHead*>(object);
+    const auto* d = reinterpret_cast<const DescrHead*>(a->descr);
+    const std::uint16_t one = 1;
+    const bool little = *reinterpret_cast<const unsigned char*>(&one) == 1;
+    const bool native = d->byteorder == '=' || d->byteorder == '|' || (d->byteorder == '<' && little) ||
+                        (d->byteorder == '>' && !little);
+    const bool int64 = d->kind == 'i' && (d->type == 'q' || (d->type == 'l' && sizeof(long) == 8));
+    if (a->nd != ndim || !native || !int64 || (a->flags & (c_contiguous | aligned)) != (c_contiguous | aligned))
+        return nullptr;
+    if (layout_checked == 0) {
+        Py_buffer view;
+        if (PyObject_GetBuffer(object, &view, PyBUF_RECORDS_RO) != 0) {
+            PyErr_Clear();
+            return nullptr;
+        }
+        bool agree = view.buf == a->data && view.ndim == ndim && view.itemsize == 8;
+        for (int k = 0; agree && k < ndim; ++k) agree = view.shape[k] == a->dimensions[k];
+        PyBuffer_Release(&view);
+        layout_checked = agree ? 1 : -1;
+        if (!agree) return nullptr;
+    }
+    for (int k = 0; k < ndim; ++k) shape[k] = a->dimensions[k];
+    return reinterpret_cast<const std::int64_t*>(a->data);
 }
 
 /// Throws unless `offsets` (n entries) starts at 0, ends at `total` and never decreases.

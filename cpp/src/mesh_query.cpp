@@ -150,12 +150,41 @@ inline double aabb_squared_distance(const BvhNode& na, const BvhNode& nb, const 
     return d2;
 }
 
-// Whether the oriented boxes of node pair (a node, b node) may overlap (no separating axis
-// among those of obb_squared_distance).
+// Whether the oriented boxes a and b may overlap: no separating axis among those of
+// obb_squared_distance (the same tests, each lowered by the same slack), stopping at the first
+// that separates, and the centre line's tested without its square root and division
+// (length - reach / length > slack as length^2 - reach > slack * length, squared).
+inline bool obb_overlap(const NodeObb& a, const NodeObb& b, const Relative& rel) {
+    const Vec3 d = rel.apply(b.center) - a.center;  // a's local frame
+    const Vec3 t = a.axes * d;                      // a's box frame
+    const double length2 = dot(d, d);
+    const Vec3 tb = b.axes * rel.rotation.transpose_times(d);  // b's box frame
+    if (length2 > 0.0) {
+        const double reach = std::fabs(t.x) * a.half.x + std::fabs(t.y) * a.half.y + std::fabs(t.z) * a.half.z +
+                             std::fabs(tb.x) * b.half.x + std::fabs(tb.y) * b.half.y + std::fabs(tb.z) * b.half.z;
+        const double excess = length2 - reach;
+        if (excess > 0.0 && excess * excess > rel.slack * rel.slack * length2) return false;
+    }
+    double abs_c[3][3];  // |a_i . b_j|, both axes in a's local frame
+    for (int j = 0; j < 3; ++j) {
+        const Vec3 bj = rel.rotation * b.axes.row(j);
+        for (int i = 0; i < 3; ++i) abs_c[i][j] = std::fabs(dot(a.axes.row(i), bj));
+    }
+    for (int i = 0; i < 3; ++i)
+        if (std::fabs(t[i]) - a.half[i] - (abs_c[i][0] * b.half.x + abs_c[i][1] * b.half.y + abs_c[i][2] * b.half.z) -
+                rel.slack > 0.0)
+            return false;
+    for (int j = 0; j < 3; ++j)
+        if (std::fabs(tb[j]) - (a.half.x * abs_c[0][j] + a.half.y * abs_c[1][j] + a.half.z * abs_c[2][j]) - b.half[j] -
+                rel.slack > 0.0)
+            return false;
+    return true;
+}
+
+// Whether the oriented boxes of node pair (a node, b node) may overlap (obb_overlap).
 inline bool boxes_overlap(const MeshBvh& a, const MeshBvh& b, std::pair<std::int32_t, std::int32_t> pair,
                           const Relative& rel) {
-    return obb_squared_distance(a.obbs()[static_cast<size_t>(pair.first)], b.obbs()[static_cast<size_t>(pair.second)], rel,
-                                0.0) == 0.0;
+    return obb_overlap(a.obbs()[static_cast<size_t>(pair.first)], b.obbs()[static_cast<size_t>(pair.second)], rel);
 }
 
 inline double node_size(const BvhNode& n) {
@@ -199,9 +228,17 @@ struct StackItem {
 
 // b's leaf triangles mapped into a's frame, with their boxes.
 struct MappedLeaf {
-    Vec3 corners[defaults::mesh_bvh_leaf_size][3];
-    TriangleBox boxes[defaults::mesh_bvh_leaf_size];
+    // Left uninitialised (a union member without an initialiser): `load` writes the first
+    // `count` entries before any is read (zeroing them all shows on a query that reaches a leaf).
+    union {
+        Vec3 corners[defaults::mesh_bvh_leaf_size][3];
+    };
+    union {
+        TriangleBox boxes[defaults::mesh_bvh_leaf_size];
+    };
     int count = 0;
+
+    MappedLeaf() {}
 
     void load(const MeshBvh& mesh, const BvhNode& leaf, const Relative& rel) {
         count = leaf.count;
@@ -437,6 +474,39 @@ struct CrossingPair {
                          // that the samples do not depend on the order of the pair
 };
 
+// A last-in first-out stack of node pairs held in the caller's frame up to 64 entries (a
+// depth-first descent of two balanced hierarchies needs about their summed depths, 40 for a
+// million triangles each) and in a vector beyond: a query that descends a few levels
+// allocates nothing (a heap allocation costs as much as a root-box test).
+class NodePairStack {
+public:
+    struct Item {
+        std::int32_t a, b;
+    };
+    bool empty() const { return size_ == 0; }
+    void push(std::int32_t a, std::int32_t b) {
+        if (size_ < kInline) {
+            inline_[size_] = Item{a, b};
+        } else {
+            spill_.push_back(Item{a, b});
+        }
+        ++size_;
+    }
+    Item pop() {
+        --size_;
+        if (size_ < kInline) return inline_[size_];
+        const Item top = spill_.back();
+        spill_.pop_back();
+        return top;
+    }
+
+private:
+    static constexpr int kInline = 64;
+    Item inline_[kInline];
+    std::vector<Item> spill_;
+    int size_ = 0;
+};
+
 // The descent of overlapping oriented boxes shared by the intersection queries: calls
 // `visit(i, j, ta, tb)` for each triangle pair (leaf order i of a, j of b; b's corners mapped
 // into a's frame) whose boxes touch, in depth-first order, until it returns true. Returns
@@ -446,11 +516,11 @@ bool for_each_touching_pair(const MeshBvh& a, const MeshBvh& b, const Relative& 
     const std::vector<BvhNode>& na = a.nodes();
     const std::vector<BvhNode>& nb = b.nodes();
     if (!boxes_overlap(a, b, {0, 0}, rel)) return false;
-    std::vector<std::pair<std::int32_t, std::int32_t>> stack{{0, 0}};
+    NodePairStack stack;
+    stack.push(0, 0);
     MappedLeaf leaf_b;
     while (!stack.empty()) {
-        const auto [ia, ib] = stack.back();
-        stack.pop_back();
+        const auto [ia, ib] = stack.pop();
         const BvhNode& x = na[static_cast<size_t>(ia)];
         const BvhNode& y = nb[static_cast<size_t>(ib)];
         if (x.is_leaf() && y.is_leaf()) {
@@ -468,8 +538,8 @@ bool for_each_touching_pair(const MeshBvh& a, const MeshBvh& b, const Relative& 
         const bool descend_a = !x.is_leaf() && (y.is_leaf() || node_size(x) >= node_size(y));
         const std::pair<std::int32_t, std::int32_t> c1 = descend_a ? std::make_pair(ia + 1, ib) : std::make_pair(ia, ib + 1);
         const std::pair<std::int32_t, std::int32_t> c2 = descend_a ? std::make_pair(x.index, ib) : std::make_pair(ia, y.index);
-        if (boxes_overlap(a, b, c2, rel)) stack.push_back(c2);
-        if (boxes_overlap(a, b, c1, rel)) stack.push_back(c1);
+        if (boxes_overlap(a, b, c2, rel)) stack.push(c2.first, c2.second);
+        if (boxes_overlap(a, b, c1, rel)) stack.push(c1.first, c1.second);
     }
     return false;
 }
