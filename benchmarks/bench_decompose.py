@@ -230,8 +230,6 @@ def bench_ray(meshes: list[str], work: Path, rounds: int) -> None:
         print("\n## Ray executor vs local pool: skipped (pip install 'meshcol[ray]')")
         return
     from meshcol.decomposition.batch import decompose_files
-    from meshcol.decomposition.executor import RayExecutor
-    from meshcol.decomposition.jobs import WorkerPool
 
     print(f"\n## Ray executor vs local pool (--jobs 2, no cache), ray {ray.__version__}")
     cli: dict[str, list[float]] = {"local": [], "ray": []}
@@ -298,12 +296,20 @@ def bench_ray(meshes: list[str], work: Path, rounds: int) -> None:
         f"outputs: {same}"
     )
 
-    # Per-task overhead: no-op tasks through each executor, workers already up.
-    n = 400
+    task_overhead(_noop)
+    ray.shutdown()
+
+
+def task_overhead(noop, n: int = 400) -> None:
+    """Print the per-task overhead of each executor: ``n`` no-op tasks (``noop``, defined in
+    the running script so that Ray sends it by value), workers already up, 3 samples."""
+    from meshcol.decomposition.executor import RayExecutor
+    from meshcol.decomposition.jobs import WorkerPool
+
     for kind in ("local", "ray"):
         samples = []
         for _ in range(3):
-            executor = RayExecutor(_noop, 2) if kind == "ray" else WorkerPool(_noop, 2)
+            executor = RayExecutor(noop, 2) if kind == "ray" else WorkerPool(noop, 2)
             with executor:
                 executor.start()
                 list(executor.run(range(20)))  # workers up and warm
@@ -315,7 +321,6 @@ def bench_ray(meshes: list[str], work: Path, rounds: int) -> None:
             f"per-task overhead, {kind}: {min(samples) * 1e3:.2f}-{max(samples) * 1e3:.2f} ms "
             f"per task ({n} no-op tasks, 2 workers, 3 samples)"
         )
-    ray.shutdown()
 
 
 if __name__ == "__main__":

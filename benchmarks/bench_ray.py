@@ -25,15 +25,11 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_decompose import CORPUS, MESHES
+from bench_decompose import CORPUS, MESHES, spread, task_overhead
 
 
 def _noop(x: int) -> int:
     return x
-
-
-def spread(values: list[float]) -> str:
-    return f"{min(values):.2f}-{max(values):.2f} s (median {statistics.median(values):.2f})"
 
 
 def main() -> None:
@@ -48,8 +44,6 @@ def main() -> None:
         return
     from meshcol.analysis.check import check
     from meshcol.analysis.inspect import inspect
-    from meshcol.decomposition.executor import RayExecutor
-    from meshcol.decomposition.jobs import WorkerPool
 
     work = Path(tempfile.mkdtemp(prefix="bench_ray_"))
     try:
@@ -140,22 +134,7 @@ def main() -> None:
                 f"identical reports: {same}"
             )
 
-        n = 400
-        for kind in ("local", "ray"):
-            samples = []
-            for _ in range(3):
-                executor = RayExecutor(_noop, 2) if kind == "ray" else WorkerPool(_noop, 2)
-                with executor:
-                    executor.start()
-                    list(executor.run(range(20)))  # workers up and warm
-                    start = time.perf_counter()
-                    outcomes = list(executor.run(range(n)))
-                    samples.append((time.perf_counter() - start) / n)
-                assert all(o.status == "ok" for o in outcomes)
-            print(
-                f"per-task overhead, {kind}: {min(samples) * 1e3:.2f}-"
-                f"{max(samples) * 1e3:.2f} ms per task ({n} no-op tasks, 2 workers, 3 samples)"
-            )
+        task_overhead(_noop)
         ray.shutdown()
     finally:
         shutil.rmtree(work, ignore_errors=True)
