@@ -88,3 +88,45 @@ def test_ctrl_c_stops_the_local_ray_it_started(corpus, tmp_path, when) -> None:
         time.sleep(0.2)
     assert [p for p in ray_processes if _alive(p)] == []
     assert not (tmp_path / "o").exists()
+
+
+_CLOSE_SCRIPT = """
+import json, os, sys, time
+sys.path.insert(0, {tests!r})
+from test_ray_local import _descendants
+from meshcol.decomposition.executor import RayExecutor
+
+def noop(task):
+    return task
+
+executor = RayExecutor(noop, 2).start()
+done = sorted(o.value for o in executor.run(range(4)))
+before = [pid for pid, _ in _descendants(os.getpid())]
+start = time.perf_counter()
+executor.close()
+seconds = time.perf_counter() - start
+left = [pid for pid in before if os.path.exists(f"/proc/{{pid}}")]
+print(json.dumps({{"done": done, "before": before, "left": left, "seconds": seconds}}))
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_closing_the_local_ray_stops_every_process_it_started() -> None:
+    """``close()`` stops the raylet as Ray does and the others together (see
+    ``executor._prompt_stop``): when it returns, no process of that Ray is left, not even a
+    zombie (each was reaped)."""
+    pytest.importorskip("ray", reason="Ray is not installed (pip install 'meshcol[ray]')")
+    import json
+
+    script = _CLOSE_SCRIPT.format(tests=str(Path(__file__).parent))
+    proc = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=120
+    )
+    assert proc.returncode == 0, proc.stderr
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert result["done"] == [0, 1, 2, 3]
+    # The raylet, the GCS server, the monitors and the workers were all running.
+    assert len(result["before"]) >= 5
+    # Checked as close() returns, before this process's exit could clean anything up.
+    assert result["left"] == []

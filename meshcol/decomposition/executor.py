@@ -238,6 +238,58 @@ def _errors_to_stderr() -> None:
     worker.print_to_stdstream = to_stderr
 
 
+@contextlib.contextmanager
+def _prompt_stop() -> Iterator[None]:
+    """While ``ray.shutdown`` stops the local Ray this process started: the processes after
+    the raylet are stopped together, not one by one.
+
+    Ray stops its processes one at a time, each with a SIGTERM and up to a second's wait
+    before a SIGKILL. The raylet exits within that second (it stops its workers and agents
+    first), but the GCS server and the autoscaler monitor did not, here: each took its whole
+    second, about 1 s of a 1.1-1.35 s shutdown, on every run. During the block, once the
+    raylet is stopped as Ray stops it, the others get their SIGTERM together and 0.25 s to
+    exit; Ray's own loop then kills (SIGKILL) and reaps whatever is left. Nothing of a run is
+    in those processes (the driver has every result), and they are the ones Ray would kill a
+    second later. Ray's node object is private: if its layout differs, Ray stops them as
+    usual.
+    """
+    try:
+        from ray._private import ray_constants
+        from ray._private import worker as ray_worker
+
+        node: Any = ray_worker._global_node
+        raylet = ray_constants.PROCESS_TYPE_RAYLET
+        original = node.kill_all_processes
+        node.all_processes  # noqa: B018 - the layout this relies on
+        node._kill_process_type  # noqa: B018
+    except (ImportError, AttributeError):
+        yield
+        return
+
+    def kill_all(check_alive: bool = True, allow_graceful: bool = False, wait: bool = False) -> Any:
+        if allow_graceful:
+            if raylet in node.all_processes:
+                node._kill_process_type(raylet, check_alive=False, allow_graceful=True, wait=wait)
+            live = [
+                info.process
+                for infos in node.all_processes.values()
+                for info in infos
+                if info.process.poll() is None
+            ]
+            for process in live:
+                process.terminate()
+            deadline = time.monotonic() + 0.25
+            while time.monotonic() < deadline and any(p.poll() is None for p in live):
+                time.sleep(0.005)
+        return original(check_alive=check_alive, allow_graceful=False, wait=wait)
+
+    node.kill_all_processes = kill_all
+    try:
+        yield
+    finally:
+        node.kill_all_processes = original
+
+
 def _ray_call(fn: Callable[[Any], Any], task: Any) -> tuple[str, Any]:
     # Runs in a Ray worker: an error of the task is its outcome (as in the local pool); only a
     # dead or cancelled worker reaches the driver as a Ray error.
@@ -454,7 +506,7 @@ class RayExecutor:
         self._inflight.clear()
         if self._owned:
             # Never interrupted half-way (see _signals_deferred).
-            with _signals_deferred():
+            with _signals_deferred(), _prompt_stop():
                 self.ray.shutdown()
                 self._owned = False
         self._remote = None
