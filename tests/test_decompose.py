@@ -642,3 +642,59 @@ def test_bottle_soup_is_repaired(corpus) -> None:
         == "input is not a closed manifold: CoACD's preprocessing rebuilt it before decomposing"
     )
     assert d.metrics.mesh_volume is None  # a triangle soup bounds no volume
+
+
+def _engine_of_boxes(count: int):
+    """A stand-in engine that returns ``count`` unit boxes in a row (overshooting any hull
+    count below it), as (vertices, faces) pairs like CoACD's."""
+
+    def run(engine, vertices, faces, params):
+        return [_box((i * 1.5, 0, 0), (i * 1.5 + 1.0 + 0.1 * i, 1, 1)) for i in range(count)]
+
+    return run
+
+
+def test_parts_over_max_hulls_are_merged_never_dropped(monkeypatch) -> None:
+    """An engine that returns more parts than ``max_hulls`` gets them merged (each merged
+    part the hull of those it replaces), so every point the engine's parts covered is still
+    covered: a dropped part would leave a hole in the collision geometry."""
+    from meshcol.decomposition import decompose as decompose_module
+
+    engine_parts = _engine_of_boxes(5)(None, None, None, None)
+    monkeypatch.setattr(decompose_module, "run_engine", _engine_of_boxes(5))
+    v, f = _box((0, 0, 0), (7.5, 1, 1))
+    d = decompose((v, f), max_hulls=2, use_cache=False, metrics=False)
+    assert len(d.parts) == 2
+    corners = np.vstack([pv for pv, _ in engine_parts])
+    assert _inside_union(corners, d.parts, 1e-9).all()
+    assert any("returned 5 parts: merged into 2 (max_hulls" in note for note in d.notes)
+    # The cheapest merges join neighbours: no box is merged with a far one over a near one.
+    spans = sorted((pv[:, 0].min(), pv[:, 0].max()) for pv, _ in d.parts)
+    assert spans[0][1] < spans[1][0]
+    # Within the vertex budget as every part (an 8-corner hull of two boxes has 8 vertices;
+    # max_vertices=6 makes the budgeted, still enclosing, hull).
+    budgeted = decompose((v, f), max_hulls=2, max_vertices=6, use_cache=False, metrics=False)
+    assert max(len(pv) for pv, _ in budgeted.parts) <= 6
+    assert _inside_union(corners, budgeted.parts, 1e-9).all()
+
+
+def test_a_cache_entry_that_dropped_parts_is_decomposed_again(monkeypatch, tmp_path) -> None:
+    """An entry stored by an earlier meshcol that kept only the largest parts over max_hulls
+    (its note says so) is a miss: the body is decomposed again, with its parts merged."""
+    import dataclasses
+
+    from meshcol.decomposition import decompose as decompose_module
+
+    monkeypatch.setattr(decompose_module, "run_engine", _engine_of_boxes(4))
+    v, f = _box((0, 0, 0), (6.0, 1, 1))
+    fresh = decompose((v, f), max_hulls=2, cache_dir=str(tmp_path), metrics=False)
+    old = dataclasses.replace(
+        fresh,
+        parts=fresh.parts[:1],
+        notes=("coacd returned 4 parts: kept the 2 largest (max_hulls)",),
+    )
+    decompose_cache.store(old, tmp_path)
+    assert len(decompose_cache.load(fresh.cache_key, tmp_path).parts) == 1
+    again = decompose((v, f), max_hulls=2, cache_dir=str(tmp_path), metrics=False)
+    assert not again.from_cache and len(again.parts) == 2
+    assert again.notes == fresh.notes

@@ -43,6 +43,7 @@ __all__ = [
     "limit_violations",
     "measure_hull",
     "measure_parts",
+    "merge_groups",
     "polygon_labels",
     "scaled_limits",
 ]
@@ -781,7 +782,7 @@ def fit_parts(
     groups = [[i] for i in range(len(inputs))]
     max_hulls = limits.get("max_hulls")
     if max_hulls is not None and len(groups) > max_hulls:
-        groups = _merge_groups(inputs, int(max_hulls))
+        groups = merge_groups(inputs, int(max_hulls))
         notes.append(f"merged {len(inputs)} parts into {len(groups)} (max_hulls)")
     out_parts, added, distance = _fit_groups(inputs, exacts, groups, limits, notes)
     after = measure_parts(out_parts)
@@ -894,9 +895,13 @@ def _outside_distance(points: np.ndarray, hull: ExactHull) -> float:
     return float(distance_to_hull(points, hull).max())
 
 
-def _merge_groups(inputs: list[np.ndarray], count: int) -> list[list[int]]:
-    """Greedy merging to ``count`` groups: each step merges the two groups whose hull adds
-    the least volume over their own hulls (pair costs recomputed only for the new group)."""
+def merge_groups(inputs: list[np.ndarray], count: int) -> list[list[int]]:
+    """Which parts to merge so that at most ``count`` remain: groups of indices of
+    ``inputs`` (each a part's points), each sorted, whose hulls enclose every part.
+
+    Greedy: each step merges the two groups whose hull adds the least volume over their own
+    hulls (pair costs recomputed only for the new group). The one mechanism behind a target's
+    ``max_hulls`` and :func:`meshcol.decomposition.decompose.decompose`'s ``max_hulls``."""
     groups: list[list[int]] = [[i] for i in range(len(inputs))]
     points = [inputs[i] for i in range(len(inputs))]
     volumes = [_volume(p) for p in points]

@@ -54,6 +54,37 @@ __all__ = ["cached_decomposition", "decompose"]
 # public entry points
 
 
+#: The end of the note of a cache entry stored before parts over ``max_hulls`` were merged
+#: (an earlier meshcol kept the largest and dropped the rest): such an entry is decomposed again.
+_DROPPED_NOTE = " largest (max_hulls)"
+
+
+def _merge_parts(
+    parts: list[tuple[np.ndarray, np.ndarray, float]],
+    reduced: list[bool],
+    count: int,
+    budget: int | None,
+) -> tuple[list[tuple[np.ndarray, np.ndarray, float]], list[bool]]:
+    """At most ``count`` parts, groups merged by :func:`meshcol.collision.limits.merge_groups`,
+    each group's part the canonical hull of its parts' vertices (budgeted as every part), with
+    whether each was reduced to the vertex budget."""
+    from meshcol.collision.limits import merge_groups
+
+    merged: list[tuple[np.ndarray, np.ndarray, float]] = []
+    flags: list[bool] = []
+    for group in merge_groups([v for v, _, _ in parts], count):
+        if len(group) == 1:
+            merged.append(parts[group[0]])
+            flags.append(reduced[group[0]])
+            continue
+        canon = canonical_part(np.vstack([parts[i][0] for i in group]), budget)
+        if canon is None:  # cannot happen: the parts had volume, so does their hull
+            raise InvalidMeshError("merging parts over max_hulls left a flat hull")
+        merged.append(canon[:3])
+        flags.append(canon[3])
+    return merged, flags
+
+
 def decompose(
     mesh: Any,
     *,
@@ -147,6 +178,8 @@ def decompose(
     tol = coverage_tolerance(vertices, tolerance)
     if use_cache:
         hit = cache.load(key, cache_dir)
+        if hit is not None and any(note.endswith(_DROPPED_NOTE) for note in hit.notes):
+            hit = None  # made before parts over max_hulls were merged: they were dropped
         if hit is not None:
             if not metrics or _metrics_match(hit.metrics, samples, tol):
                 return hit
@@ -162,29 +195,29 @@ def decompose(
     raw = run_engine(engine, vertices, faces, params)
     budget = max_vertices
     parts: list[tuple[np.ndarray, np.ndarray, float]] = []
-    dropped = reduced = 0
+    reduced_flags: list[bool] = []
+    dropped = 0
     for part_vertices, _ in raw:
         canon = canonical_part(part_vertices, budget)
         if canon is None:
             dropped += 1
             continue
         parts.append(canon[:3])
-        reduced += canon[3]
+        reduced_flags.append(canon[3])
     if not parts:
         raise InvalidMeshError(f"{engine} returned no part with a volume")
+    merged_from = 0
+    if max_hulls is not None and len(parts) > max_hulls:
+        # The engines treat the hull count as a target; never exceed it, and never lose what a
+        # part covers: the parts whose merged hull adds the least volume are merged (the hull
+        # of a group encloses each of its parts), within the vertex budget as every part.
+        merged_from = len(parts)
+        parts, reduced_flags = _merge_parts(parts, reduced_flags, max_hulls, budget)
     order = sorted(
         range(len(parts)),
         key=lambda i: (*parts[i][0].mean(axis=0).tolist(), parts[i][2], len(parts[i][0])),
     )
     parts_sorted = tuple((parts[i][0], parts[i][1]) for i in order)
-    if max_hulls is not None and len(parts_sorted) > max_hulls:
-        # The engines treat the hull count as a target; never exceed it: keep the largest.
-        by_volume = sorted(order, key=lambda i: -parts[i][2])[:max_hulls]
-        keep = set(by_volume)
-        parts_sorted = tuple((parts[i][0], parts[i][1]) for i in order if i in keep)
-        truncated = len(parts) - max_hulls
-    else:
-        truncated = 0
     notes = []
     if flipped:
         notes.append("input is inside out (negative volume): decomposed with its faces reversed")
@@ -197,10 +230,12 @@ def decompose(
         notes.append("input is not a closed manifold: the engine decomposed it as given")
     if dropped:
         notes.append(f"dropped {dropped} flat part(s) the engine returned")
-    if truncated:
+    if merged_from:
         notes.append(
-            f"{engine} returned {len(parts)} parts: kept the {max_hulls} largest (max_hulls)"
+            f"{engine} returned {merged_from} parts: merged into {len(parts_sorted)} "
+            "(max_hulls; each merged part is the hull of the parts it replaces)"
         )
+    reduced = sum(reduced_flags)
     if reduced:
         notes.append(f"reduced {reduced} part(s) to at most {budget} vertices (enclosing hull)")
     result = Decomposition(
