@@ -914,7 +914,7 @@ def check(
     2003) and EPA with exact SAT on small polytopes; exact triangle-mesh distance and a winding
     number containment test (Jacobson et al. 2013) for ``mesh`` shapes.
     """
-    from meshcol.io.scene import load_inputs
+    from meshcol.io.scene import collector_paused, load_inputs
 
     if isinstance(inputs, (str, os.PathLike)):
         inputs = [inputs]
@@ -942,13 +942,14 @@ def check(
         )
     else:
         scene = load_inputs(list(inputs))
-    return check_scene(
-        scene,
-        opts,
-        progress=progress,
-        load_seconds=time.perf_counter() - started,
-        decompose=decompose,
-    )
+    with collector_paused():
+        return check_scene(
+            scene,
+            opts,
+            progress=progress,
+            load_seconds=time.perf_counter() - started,
+            decompose=decompose,
+        )
 
 
 def _mesh_key(mesh: tuple[np.ndarray, np.ndarray]) -> bytes:
@@ -1126,8 +1127,12 @@ def _relative_paths(paths: Sequence[str | None]) -> list[str | None]:
         if folder not in folders:
             folders[folder] = os.path.relpath(folder)
         inside = folders[folder]
-        if name in ("", ".", "..") or inside.startswith(".."):
-            out.append(_relative(path))  # outside the working folder: kept absolute, as there
+        if name in ("", ".", ".."):
+            out.append(_relative(path))
+        elif inside.startswith(".."):
+            # outside the working folder: kept absolute, as _relative keeps it (relpath(path)
+            # is relpath(folder) and the name, so it starts with ".." too)
+            out.append(path.replace(os.sep, "/"))
         else:
             # the working folder contains the file's folder, so relpath(path) is relpath(folder)
             # followed by the name
