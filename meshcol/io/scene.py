@@ -587,8 +587,10 @@ def _bulk_bodies(columns: _Columns, source: str, files: dict[str, list[Body]]) -
         largest = np.zeros(len(ones))
         filled = sizes > 0
         if filled.any():
-            magnitudes = np.abs(np.concatenate(arrays).reshape(-1, 3)).max(axis=1)
-            starts = np.concatenate([[0], np.cumsum(sizes[filled])[:-1]])
+            # the largest |coordinate| of each object: one reduction over the flat coordinates
+            # (a max over rows of 3 first costs more than the rest of this function)
+            magnitudes = np.abs(np.concatenate(arrays).reshape(-1))
+            starts = np.concatenate([[0], np.cumsum(sizes[filled])[:-1]]) * 3
             largest[filled] = np.maximum.reduceat(magnitudes, starts)
         rows = np.flatnonzero(single)
         plain[rows] = (np.stack([b.pose for b in ones]) == _IDENTITY).all(axis=(1, 2))
