@@ -181,9 +181,14 @@ private:
         // UTF-8 byte order is code point order: Python's sorted() of str keys.
         std::sort(items.begin(), items.end(),
                   [](const auto& a, const auto& b) { return a.first < b.first; });
+        // keys and values held: a _builtin call cannot free what the walk still reads
         std::vector<PyObject*> held;
-        held.reserve(items.size());
-        for (auto& item : items) Py_INCREF(item.second), held.push_back(item.second);
+        held.reserve(2 * items.size());
+        pos = 0;
+        while (PyDict_Next(o, &pos, &key, &val)) {
+            Py_INCREF(key), held.push_back(key);
+            Py_INCREF(val), held.push_back(val);
+        }
         try {
             text.push_back('{');
             bool first = true;
