@@ -20,7 +20,8 @@ loading included, and are skipped with a printed reason when missing or past ``-
 Run: .venv/bin/python benchmarks/bench_scale.py [--sizes 1000 10000 100000] [--peer-max 10000]
      [--extras] [--threads 0]
 A/B: .venv/bin/python benchmarks/bench_scale.py --baseline ../main/.venv/bin/meshcol --repeat 3
-     [--sizes 10000 100000] [--extras]   (runs alternated; wall, CPU and peak RSS ranges)
+     [--sizes 10000 100000] [--extras]   (runs alternated; wall, CPU and peak RSS ranges;
+     the two sides' last reports compared byte for byte, clock fields masked)
 """
 
 from __future__ import annotations
@@ -210,12 +211,12 @@ def timed(command: list[str]) -> tuple[int, float, float]:
 
 
 def meshcol_check(
-    folder: Path, threads: int, meshcol: str | None = None
+    folder: Path, threads: int, meshcol: str | None = None, report_name: str = "report.json"
 ) -> tuple[int, float, float, dict]:
     """``meshcol check`` of the folder's manifest (``meshcol``: the executable, this
-    environment's by default)."""
+    environment's by default), its report written to ``folder / report_name``."""
     meshcol = meshcol or str(Path(sys.executable).parent / "meshcol")
-    report = folder / "report.json"
+    report = folder / report_name
     rc, seconds, rss = timed(
         [
             meshcol,
@@ -400,6 +401,26 @@ def main() -> None:
         )
 
 
+#: Report fields that differ between any two runs (clocks), masked before comparing.
+_CLOCK_FIELDS = (b'"generated_at": ', b'"seconds": ', b'"load_seconds": ')
+
+
+def same_reports(folder: Path, sides: list[str]) -> str:
+    """Whether the last report of each side is the same bytes, clock fields masked."""
+
+    def masked(side: str) -> list[bytes]:
+        lines = (folder / f"report-{side}.json").read_bytes().split(b"\n")
+        return [
+            line.split(b": ")[0] if line.lstrip().startswith(_CLOCK_FIELDS) else line
+            for line in lines
+        ]
+
+    first, *others = (masked(side) for side in sides)
+    if all(other == first for other in others):
+        return f"identical bytes ({len(first):,} lines; clock fields masked)"
+    return "DIFFER"
+
+
 def ab(args: argparse.Namespace) -> None:
     """This meshcol against ``--baseline``, runs alternated: wall, CPU and peak RSS ranges;
     with ``--extras``, ``load_inputs`` of the 300,000-body manifest by each one's Python."""
@@ -421,11 +442,14 @@ def ab(args: argparse.Namespace) -> None:
         figures: dict[str, list[tuple[float, float, float]]] = {side: [] for side in sides}
         for _ in range(args.repeat):
             for side, meshcol in sides.items():
-                rc, seconds, rss, _ = meshcol_check(folder, args.threads, meshcol)
+                rc, seconds, rss, _ = meshcol_check(
+                    folder, args.threads, meshcol, f"report-{side}.json"
+                )
                 if rc != 0:  # --fail-on none: anything else is a crash (a traceback is 1)
                     raise SystemExit(f"{side} meshcol check exited {rc} on {folder}")
                 figures[side].append((seconds, LAST_CPU[0], rss))
         show(f"check, {n} unique", figures)
+        print(f"{'':>24} reports: {same_reports(folder, list(sides))}")
     if args.extras:
         manifest = str(instances_folder() / "scene.json")
         code = f"import meshcol; s = meshcol.load_inputs([{manifest!r}]); print(len(s.bodies))"

@@ -95,11 +95,10 @@ def test_only_the_native_module_imports_the_core() -> None:
     assert importers == ["meshcol._native"]
 
 
-def test_only_collision_and_the_mesh_readers_use_the_native_module() -> None:
+def test_only_collision_the_mesh_readers_and_the_report_writer_use_the_native_module() -> None:
     users = sorted(m for m, deps in GRAPH.items() if "meshcol._native" in deps)
-    assert users and all(_layer(m) == "collision" or m == "meshcol.io.mesh_read" for m in users), (
-        users
-    )
+    io_users = {"meshcol.io.mesh_read", "meshcol.io.report"}
+    assert users and all(_layer(m) == "collision" or m in io_users for m in users), users
 
 
 def test_no_import_cycles() -> None:

@@ -551,3 +551,26 @@ def test_relative_paths_are_those_of_relative_one_by_one(tmp_path, monkeypatch):
     ]
     assert _relative_paths(paths) == [_relative(p) for p in paths]
     assert _relative_paths(paths)[2:5] == ["level/a.obj", "level/b.obj", "c.obj"]
+
+
+@given(
+    st.lists(
+        st.tuples(
+            st.sampled_from(["separated", "contact", "penetrating", "contained"]),
+            st.one_of(st.none(), st.sampled_from([-1.0, -0.5, 0.0]), st.floats(-2, 2)),
+        ),
+        max_size=40,
+    ),
+    st.integers(0, 12),
+)
+def test_worst_pairs_are_the_sorted_touching_pairs_ties_in_report_order(rows, count):
+    from meshcol.analysis.check import CheckReport
+
+    pairs = [{"id": i, "status": s, "signed_distance": d} for i, (s, d) in enumerate(rows)]
+    report = CheckReport([], pairs, {}, {}, None, "")
+    touching = [p for p in pairs if p["status"] != "separated"]
+    expected = sorted(
+        touching,
+        key=lambda p: p["signed_distance"] if p["signed_distance"] is not None else float("inf"),
+    )[:count]
+    assert report.worst_pairs(count) == expected

@@ -1,15 +1,20 @@
 """dumps_json writes exactly what copying the report through _finite_or_none and encoding it
-wrote (the one-pass encoder must not change a byte of any report)."""
+wrote (the one-pass encoder must not change a byte of any report): the core's encoder, and the
+Python column encoder it falls back to; and the core's float text is repr(float)'s."""
 
 from __future__ import annotations
 
 import json
+import math
+import struct
 
 import numpy as np
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from meshcol.io.report import _finite_or_none, dumps_json
+from meshcol._native import core
+from meshcol.io.report import _builtin, _dumps_json_python, _finite_or_none, dumps_json
 
 floats = st.floats(allow_nan=True, allow_infinity=True)
 tricky_text = st.one_of(
@@ -57,6 +62,81 @@ def reference(obj):
 @given(documents)
 def test_dumps_json_matches_the_two_pass_encoding(obj):
     assert dumps_json(obj) == reference(obj)
+
+
+@given(documents)
+def test_the_python_fallback_matches_the_two_pass_encoding(obj):
+    assert _dumps_json_python(obj) == reference(obj)
+
+
+#: Floats whose text is easy to get wrong: the fixed/exponent switch at 1e-4 and 1e16, the
+#: shortest digits (0.1 + 0.2), subnormals, the extremes, signed zero, integral values,
+#: 17-digit values, three-digit exponents.
+AWKWARD = [
+    0.0, -0.0, 1.0, -1.0, 3.0, 1e-5, 1e-4, 0.0001234, 9.999999999999999e-05, 1e15, 1e16,
+    9999999999999998.0, 1.2345678901234567e16, 123456789012345678.0, 1e22, 1e23, 0.1, 0.2,
+    0.1 + 0.2, 1 / 3, 2 / 3, 5e-324, -5e-324, 2.2250738585072014e-308, 2.225073858507201e-308,
+    1.7976931348623157e308, -1.7976931348623157e308, 1e300, 1e-300, 1.5e-7, 4.35, 0.5,
+    2.0**53, 2.0**53 + 2, 2.0**-1074 * 3, 100.0, 1e-10, 123.456, math.pi, -math.e,
+    float("nan"), float("inf"), float("-inf"),
+]  # fmt: skip
+
+
+def test_the_core_float_text_is_repr_on_awkward_values():
+    assert core.float_reprs(np.array(AWKWARD)) == [repr(x) for x in AWKWARD]
+
+
+@given(st.integers(0, 2**64 - 1))
+def test_the_core_float_text_is_repr_on_every_bit_pattern(bits):
+    (x,) = struct.unpack("<d", struct.pack("<Q", bits))
+    assert core.float_reprs(np.array([x])) == [repr(x)]
+
+
+@given(st.lists(st.floats(allow_nan=True, allow_infinity=True, allow_subnormal=True)))
+def test_the_core_float_text_is_repr(values):
+    assert core.float_reprs(np.array(values, dtype=np.float64)) == list(map(repr, values))
+
+
+def test_awkward_floats_in_a_report_match_json():
+    doc = {"values": AWKWARD, "rows": [{"x": x, "v": [x, -x]} for x in AWKWARD]}
+    assert dumps_json(doc) == reference(doc)
+
+
+class _Items(dict):
+    def items(self):  # json's Python path sorts these; the core declines dict subclasses
+        return sorted(super().items(), reverse=True)
+
+
+class _Cycle:
+    def tolist(self):
+        return self  # never becomes plain: Python's encoder recurses until it gives up
+
+
+@pytest.mark.parametrize(
+    "doc",
+    [
+        {1: "a"},
+        [{"k": 2**70}, {"k": -(2**64)}],
+        _Items(b=1, a=2),
+        {"s": "lone \ud800 surrogate"},
+        {"deep": json.loads("[" * 450 + "]" * 450)},
+    ],
+    ids=["int key", "big int", "dict subclass", "lone surrogate", "deep"],
+)
+def test_documents_the_core_declines_go_to_python_and_match(doc):
+    assert core.dumps_indented(doc, _builtin) is None
+    assert dumps_json(doc) == _dumps_json_python(doc)
+
+
+def test_what_neither_encoder_can_write_raises_as_before():
+    with pytest.raises(TypeError, match="set is not JSON serializable"):
+        dumps_json({"a": {1, 2}})
+    with pytest.raises(RecursionError):
+        dumps_json([_Cycle()])
+    cyclic: list = []
+    cyclic.append(cyclic)
+    with pytest.raises((RecursionError, ValueError)):
+        dumps_json(cyclic)
 
 
 def test_dumps_json_writes_null_for_non_finite_fields_and_items():

@@ -230,14 +230,17 @@ class CheckReport:
 
     def worst_pairs(self, count: int = 10) -> list[dict]:
         """Up to ``count`` pairs that are not separated, most penetrating (smallest signed
-        distance) first."""
+        distance) first, ties in report order (``heapq.nsmallest`` is ``sorted()[:count]``
+        without sorting 100,000 pairs to print ten)."""
+        import heapq
+
+        inf = float("inf")
         touching = (p for p in self.pairs if p["status"] != "separated")
-        return sorted(
+        return heapq.nsmallest(
+            count,
             touching,
-            key=lambda p: (
-                p["signed_distance"] if p["signed_distance"] is not None else float("inf")
-            ),
-        )[:count]
+            key=lambda p: inf if p["signed_distance"] is None else p["signed_distance"],
+        )
 
     def to_json(self) -> str:
         from meshcol.io.report import dumps_json
@@ -914,7 +917,7 @@ def check(
     2003) and EPA with exact SAT on small polytopes; exact triangle-mesh distance and a winding
     number containment test (Jacobson et al. 2013) for ``mesh`` shapes.
     """
-    from meshcol.io.scene import load_inputs
+    from meshcol.io.scene import collector_paused, load_inputs
 
     if isinstance(inputs, (str, os.PathLike)):
         inputs = [inputs]
@@ -942,13 +945,14 @@ def check(
         )
     else:
         scene = load_inputs(list(inputs))
-    return check_scene(
-        scene,
-        opts,
-        progress=progress,
-        load_seconds=time.perf_counter() - started,
-        decompose=decompose,
-    )
+    with collector_paused():
+        return check_scene(
+            scene,
+            opts,
+            progress=progress,
+            load_seconds=time.perf_counter() - started,
+            decompose=decompose,
+        )
 
 
 def _mesh_key(mesh: tuple[np.ndarray, np.ndarray]) -> bytes:
@@ -1126,8 +1130,12 @@ def _relative_paths(paths: Sequence[str | None]) -> list[str | None]:
         if folder not in folders:
             folders[folder] = os.path.relpath(folder)
         inside = folders[folder]
-        if name in ("", ".", "..") or inside.startswith(".."):
-            out.append(_relative(path))  # outside the working folder: kept absolute, as there
+        if name in ("", ".", ".."):
+            out.append(_relative(path))
+        elif inside.startswith(".."):
+            # outside the working folder: kept absolute, as _relative keeps it (relpath(path)
+            # is relpath(folder) and the name, so it starts with ".." too)
+            out.append(path.replace(os.sep, "/"))
         else:
             # the working folder contains the file's folder, so relpath(path) is relpath(folder)
             # followed by the name

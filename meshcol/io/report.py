@@ -225,7 +225,23 @@ def dumps_json(obj: Any) -> str:
     bodies of a report) are encoded column by column: every number of a column by the C
     encoder in one call, every string by the C string escape, then one format string per row.
     Keys must be strings (anything else is encoded by ``json`` itself, as before).
+
+    The core's encoder (``dumps_indented``: the same walk in C++, numbers by
+    ``std::to_chars`` laid out as ``repr(float)``) writes the text when it can; it declines
+    the rare documents it does not write exactly as ``json`` does (a key that is not a
+    string, an int past 64 bits, a dict subclass, a string that is not UTF-8, deep nesting,
+    an object ``json`` cannot encode), which take the Python path below.
     """
+    from meshcol._native import core
+
+    native = core.dumps_indented(obj, _builtin)
+    if native is not None:
+        return str(native)
+    return _dumps_json_python(obj)
+
+
+def _dumps_json_python(obj: Any) -> str:
+    """:func:`dumps_json` without the core: the column encoder, else ``json`` itself."""
     try:
         text = _value(obj, 0)
     except _Unusual:
