@@ -550,7 +550,23 @@ struct TriangleMarks {
     // triangle not near is farther than rel.slack from every triangle of the other mesh.
     std::vector<char> near;
     std::vector<std::int32_t> partner;  // a triangle of the other mesh it crosses, else -1
+    // The triangles of the other mesh near triangle i: others[first[i] .. first[i + 1]).
+    std::vector<std::int32_t> first, others;
 };
+
+// The near pairs (index into a, index into b) grouped by `side`'s triangle.
+void group_near_pairs(const std::vector<std::pair<std::int32_t, std::int32_t>>& pairs, int side,
+                      std::int32_t count, TriangleMarks& marks) {
+    marks.first.assign(static_cast<size_t>(count) + 1, 0);
+    for (const auto& pair : pairs) ++marks.first[static_cast<size_t>(side == 0 ? pair.first : pair.second) + 1];
+    for (size_t i = 0; i < static_cast<size_t>(count); ++i) marks.first[i + 1] += marks.first[i];
+    marks.others.resize(pairs.size());
+    std::vector<std::int32_t> next(marks.first.begin(), marks.first.end() - 1);
+    for (const auto& pair : pairs) {
+        const auto [mine, theirs] = side == 0 ? pair : std::make_pair(pair.second, pair.first);
+        marks.others[static_cast<size_t>(next[static_cast<size_t>(mine)]++)] = theirs;
+    }
+}
 
 // The descent of mesh_intersects run to the end: the intersecting triangle pairs in descent
 // order, and the marks of both meshes' triangles. Triangle pairs whose boxes are within
@@ -564,11 +580,13 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
         marks->near.assign(static_cast<size_t>(mesh->triangle_count()), 0);
         marks->partner.assign(static_cast<size_t>(mesh->triangle_count()), -1);
     }
+    std::vector<std::pair<std::int32_t, std::int32_t>> near_pairs;
     for_each_touching_pair(
         a, b, rel,
         [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
             const auto si = static_cast<size_t>(i), sj = static_cast<size_t>(j);
             in_a.near[si] = in_b.near[sj] = 1;
+            near_pairs.push_back({i, j});
             if (triangle_box_squared_distance(triangle_box(ta), triangle_box(tb)) == 0.0 &&
                 triangles_intersect(ta, tb, nullptr)) {
                 in_a.crossing[si] = in_b.crossing[sj] = 1;
@@ -579,6 +597,8 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
             return false;
         },
         rel.slack * rel.slack);
+    group_near_pairs(near_pairs, 0, a.triangle_count(), in_a);
+    group_near_pairs(near_pairs, 1, b.triangle_count(), in_b);
 }
 
 // Parameters along [p, q] (mesh's local frame) where the segment meets the mesh's surface in
@@ -665,15 +685,22 @@ void add_wedge_candidates(const MeshBvh& a, const MeshBvh& b, const Relative& re
     }
 }
 
+// The midpoints of the pieces of [p, q] between the sorted parameters `cuts` (0 and 1 among
+// them), passed to `add`.
+template <class Add>
+void add_pieces(const Vec3& p, const Vec3& q, std::vector<double>& cuts, Add add) {
+    std::sort(cuts.begin(), cuts.end());
+    for (size_t c = 0; c + 1 < cuts.size(); ++c)
+        if (cuts[c + 1] > cuts[c]) add(p + (q - p) * (0.5 * (cuts[c] + cuts[c + 1])));
+}
+
 // The midpoints of the pieces into which other's surface cuts the segment [p, q] (other's
 // frame), passed to `add`; `cuts` is scratch space.
 template <class Add>
 void add_edge_pieces(const MeshBvh& other, const Vec3& p, const Vec3& q, std::vector<double>& cuts, Add add) {
     cuts.assign({0.0, 1.0});
     segment_crossings(other, p, q, cuts);
-    std::sort(cuts.begin(), cuts.end());
-    for (size_t c = 0; c + 1 < cuts.size(); ++c)
-        if (cuts[c + 1] > cuts[c]) add(p + (q - p) * (0.5 * (cuts[c] + cuts[c + 1])));
+    add_pieces(p, q, cuts, add);
 }
 
 // Sample points of `self` (their frame mapped into `other`'s by `to_other`) that may lie
@@ -1064,6 +1091,7 @@ public:
     // decided, its root node and the edges of its crossing triangles queued. False when the
     // work cap stopped it.
     bool add_mesh(int m, const TriangleMarks& marks) {
+        marks_[m] = &marks;
         const MeshBvh& self = m == 0 ? a_ : b_;
         const MeshBvh& other = m == 0 ? b_ : a_;
         const BvhNode& root = other.nodes()[0];
@@ -1085,9 +1113,14 @@ public:
             }
             return v;
         };
+        // Triangles wholly outside the box are left out: a region of the others reaches
+        // outside through a triangle with a corner in the box, so the regions found are parts
+        // of the true ones, each still on one side.
         for (std::int32_t i = 0; i < self.triangle_count(); ++i) {
             if (marks.near[static_cast<size_t>(i)]) continue;
             const std::int32_t* t = self.triangle_vertices(i);
+            if (!in_box[static_cast<size_t>(t[0])] && !in_box[static_cast<size_t>(t[1])] && !in_box[static_cast<size_t>(t[2])])
+                continue;
             for (int k = 0; k < 3; ++k) {
                 regular[static_cast<size_t>(t[k])] = 1;
                 const std::int32_t x = find(t[k]), y = find(t[(k + 1) % 3]);
@@ -1139,15 +1172,20 @@ public:
         return true;
     }
 
-    // Queues the wedge points (both meshes closed), each bounded by its pair's triangles.
+    // Queues the wedge points (both meshes closed) in groups of one pair's: the distances of
+    // the first point to the pair's triangles bound its depth, plus the group's spread.
     void add_wedges(std::vector<DepthCandidate>&& wedges, const std::vector<CrossingPair>& pairs) {
         wedges_ = std::move(wedges);
-        for (size_t k = 0; k < wedges_.size(); ++k) {
-            const DepthCandidate& c = wedges_[k];
+        for (size_t first = 0, last = 0; first < wedges_.size(); first = last) {
+            const DepthCandidate& c = wedges_[first];
+            double spread = 0.0;
+            for (last = first; last < wedges_.size() && wedges_[last].pair == c.pair; ++last)
+                spread = max2(spread, norm(wedges_[last].point - c.point));
             const CrossingPair& pair = pairs[static_cast<size_t>(c.pair)];
             const double da = triangle_distance_of(c.point, a_.triangle(pair.a));
             const double db = triangle_distance_of(rel_.apply_inverse(c.point), b_.triangle(pair.b));
-            push({max2(da, db) + slack_, kWedge, 2, static_cast<std::int32_t>(k), 0});
+            push({max2(da, db) + spread + slack_, kWedge, 2, static_cast<std::int32_t>(first),
+                  static_cast<int>(last - first)});
         }
     }
 
@@ -1173,13 +1211,25 @@ public:
                 const BvhNode& root = other.nodes()[0];
                 const Vec3* t = self.triangle(e.index);
                 std::int64_t piece = 0;
-                add_edge_pieces(other, to_other(e.mesh, t[e.k]), to_other(e.mesh, t[(e.k + 1) % 3]), cuts,
+                // The triangles the edge meets are near its triangle (the marks' margin is far
+                // above the rounding of the frames): the cuts of segment_crossings, found
+                // among those alone.
+                const Vec3 p = to_other(e.mesh, t[e.k]), q = to_other(e.mesh, t[(e.k + 1) % 3]);
+                const TriangleMarks& marks = *marks_[e.mesh];
+                cuts.assign({0.0, 1.0});
+                for (std::int32_t n = marks.first[static_cast<size_t>(e.index)]; n < marks.first[static_cast<size_t>(e.index) + 1]; ++n) {
+                    double cut = 0.0;
+                    if (segment_crosses_triangle(p, q, other.triangle(marks.others[static_cast<size_t>(n)]), &cut))
+                        cuts.push_back(cut);
+                }
+                add_pieces(p, q, cuts,
                                 [&](const Vec3& p) {
                                     const Order order{e.mesh, 1, 3 * std::int64_t{e.index} + e.k, piece++};
                                     if (ok && inside_box(root, p)) ok = try_point(e.mesh, p, Side::UNKNOWN, nullptr, order);
                                 });
             } else {
-                ok = try_wedge(wedges_[static_cast<size_t>(e.index)], Order{2, 0, e.index, 0});
+                for (std::int32_t k = e.index; k < e.index + e.k && ok; ++k)
+                    ok = try_wedge(wedges_[static_cast<size_t>(k)], Order{2, 0, k, 0});
             }
             if (!ok) return false;
         }
@@ -1207,7 +1257,7 @@ private:
         double bound;  // no point of the group is farther than this from the other surface
         int kind, mesh;
         std::int32_t index;  // node, triangle (leaf order) or wedge point
-        int k;               // edge k of the triangle
+        int k;               // edge k of the triangle; wedge points in the group
         // A node: a triangle of the other mesh (leaf order) near it, and whether `bound` comes
         // from its centre's distance (else from its distance to `near`, a looser bound).
         std::int32_t near = -1;
@@ -1246,7 +1296,7 @@ private:
         const WindingNode& w = self.winding_nodes()[static_cast<size_t>(e.index)];
         const double floor = best - w.radius - slack_;
         std::int32_t near = 0;
-        const double d = distance_within(other, to_other(e.mesh, w.center), max2(0.0, floor), 0.5 * w.radius, &near);
+        const double d = distance_within(other, to_other(e.mesh, w.center), max2(0.0, floor), w.radius, &near);
         if (d <= floor) return;
         push({d + w.radius + slack_, kNode, e.mesh, e.index, 0, near, true});
     }
@@ -1309,6 +1359,9 @@ private:
     }
 
     bool try_wedge(DepthCandidate& c, const Order& order) {
+        // Outside a closed mesh's box is outside it (the test's verdict, without its work).
+        const Vec3 in_b = rel_.apply_inverse(c.point);
+        if (!inside_box(a_.nodes()[0], c.point) || !inside_box(b_.nodes()[0], in_b)) return true;
         auto measure = [&](double floor) {
             const double da = distance_beyond(a_, c.point, floor);
             const double db = distance_beyond(b_, rel_.apply_inverse(c.point), floor);
@@ -1318,10 +1371,7 @@ private:
         c.distance = measure(best);
         if (!beats(c.distance, order, [&] { return measure(0.0); })) return true;
         if (!may_test()) return false;
-        // Outside a closed mesh's box is outside it (the test's verdict, without its work).
-        const Vec3 in_b = rel_.apply_inverse(c.point);
-        if (inside_box(a_.nodes()[0], c.point) && inside_box(b_.nodes()[0], in_b) && inside_mesh(a_, c.point, &work_) &&
-            inside_mesh(b_, in_b, &work_)) {
+        if (inside_mesh(a_, c.point, &work_) && inside_mesh(b_, in_b, &work_)) {
             best = c.distance;
             winner = c;
             winner_order_ = order;
@@ -1349,6 +1399,7 @@ private:
     std::vector<Side> side_[2];
     std::vector<char> done_[2];
     std::vector<char> live_[2];
+    const TriangleMarks* marks_[2] = {nullptr, nullptr};
     std::vector<DepthCandidate> wedges_;
     std::vector<Entry> heap_;
     Order winner_order_{};
