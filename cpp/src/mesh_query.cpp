@@ -1200,7 +1200,10 @@ public:
             if (!(e.bound > best)) break;
             bool ok = true;
             if (e.kind == kNode) {
-                if (e.refined) {
+                // A leaf whose bound is already within twice its radius of the best depth has
+                // its few corners measured directly (each search cut off at the best depth,
+                // mostly at its first leaf): cheaper than refining a deep centre's bound.
+                if (e.refined || direct_leaf(e)) {
                     ok = open_node(e);
                 } else {
                     refine_node(e);
@@ -1299,6 +1302,12 @@ private:
         const double d = distance_within(other, to_other(e.mesh, w.center), max2(0.0, floor), w.radius, &near);
         if (d <= floor) return;
         push({d + w.radius + slack_, kNode, e.mesh, e.index, 0, near, true});
+    }
+
+    bool direct_leaf(const Entry& e) const {
+        const MeshBvh& self = e.mesh == 0 ? a_ : b_;
+        const auto id = static_cast<size_t>(e.index);
+        return self.nodes()[id].is_leaf() && have && e.bound <= best + 2.0 * self.winding_nodes()[id].radius;
     }
 
     bool open_node(const Entry& e) {
