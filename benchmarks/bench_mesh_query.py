@@ -229,7 +229,7 @@ def depth_case(name: str, a: trimesh.Trimesh, b: trimesh.Trimesh, pb: np.ndarray
     t_fcl = best_of(fcl_depth, 3)
     print(
         f"depth {name}: {len(a.faces)} + {len(b.faces)} faces, meshcol depth {r.depth[0]:.6g} "
-        f"({int(r.points_tested[0])} points decided), fcl deepest contact {fcl_depth():.6g}"
+        f"({int(r.points_tested[0])} exact inside tests), fcl deepest contact {fcl_depth():.6g}"
     )
     row(f"depth {name}: depth", t_ours, t_fcl, "fcl collide+contacts")
 
