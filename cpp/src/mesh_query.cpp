@@ -1121,9 +1121,9 @@ public:
             const std::int32_t* t = self.triangle_vertices(i);
             if (!in_box[static_cast<size_t>(t[0])] && !in_box[static_cast<size_t>(t[1])] && !in_box[static_cast<size_t>(t[2])])
                 continue;
-            for (int k = 0; k < 3; ++k) {
-                regular[static_cast<size_t>(t[k])] = 1;
-                const std::int32_t x = find(t[k]), y = find(t[(k + 1) % 3]);
+            regular[static_cast<size_t>(t[0])] = regular[static_cast<size_t>(t[1])] = regular[static_cast<size_t>(t[2])] = 1;
+            for (int k = 0; k < 2; ++k) {  // two edges join the three corners
+                const std::int32_t x = find(t[k]), y = find(t[k + 1]);
                 if (x != y) parent[static_cast<size_t>(std::max(x, y))] = std::min(x, y);
             }
         }
@@ -1160,6 +1160,16 @@ public:
                     if (side[static_cast<size_t>(self.triangle_vertices(i)[k])] != Side::OUTSIDE) live[id] = 1;
         }
         if (live[0]) refine_node({kInf, kNode, m, 0, 0});
+        return true;
+    }
+
+    // Queues the edges of mesh m's crossing triangles, each bounded by its ends' distances to
+    // a triangle that its triangle crosses (after the vertices: most are then within the best
+    // depth already and never queued).
+    void add_edges(int m) {
+        const MeshBvh& self = m == 0 ? a_ : b_;
+        const MeshBvh& other = m == 0 ? b_ : a_;
+        const TriangleMarks& marks = *marks_[m];
         for (std::int32_t i = 0; i < self.triangle_count(); ++i) {
             const std::int32_t partner = marks.partner[static_cast<size_t>(i)];
             if (!marks.crossing[static_cast<size_t>(i)] || partner < 0) continue;
@@ -1169,7 +1179,6 @@ public:
             for (int k = 0; k < 3; ++k) ends[k] = triangle_distance_of(to_other(m, t[k]), tp);
             for (int k = 0; k < 3; ++k) push({max2(ends[k], ends[(k + 1) % 3]) + slack_, kEdge, m, i, k});
         }
-        return true;
     }
 
     // Queues the wedge points (both meshes closed) in groups of one pair's: the distances of
@@ -1441,6 +1450,9 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
     bool running = true;
     for (int m = 0; m < 2 && running; ++m)
         if (closed_other[m]) running = search.add_mesh(m, m == 0 ? marks_a : marks_b);
+    if (running) running = search.run();  // the vertices first: a best depth to prune with
+    for (int m = 0; m < 2 && running; ++m)
+        if (closed_other[m]) search.add_edges(m);
     const bool wedges_closed = a.closed() && b.closed();
     if (running && wedges_closed) search.add_wedges(std::move(wedges), crossing_pairs);
     if (running) running = search.run();
