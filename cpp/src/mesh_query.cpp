@@ -1339,7 +1339,13 @@ private:
                 Side& side = side_[m][static_cast<size_t>(v)];
                 if (side == Side::OUTSIDE) continue;
                 const Vec3 p = to_other(m, self.vertices()[static_cast<size_t>(v)]);
-                if (!(triangle_distance_of(p, near) + slack_ > best)) continue;
+                // Bounded by the node's triangle and by the triangles near its own; a point at
+                // distance 0 from one (on the surface: the search would find 0) gives nothing.
+                double bound = triangle_distance_of(p, near);
+                const TriangleMarks& marks = *marks_[m];
+                for (std::int32_t n = marks.first[static_cast<size_t>(i)]; n < marks.first[static_cast<size_t>(i) + 1] && bound > 0.0; ++n)
+                    bound = min2(bound, triangle_distance_of(p, other.triangle(marks.others[static_cast<size_t>(n)])));
+                if (bound == 0.0 || !(bound + slack_ > best)) continue;
                 if (!try_point(m, p, side, &side, Order{m, 0, v, 0})) return false;
             }
         return true;
