@@ -11,7 +11,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <limits>
 #include <tuple>
 #include <utility>
@@ -1251,6 +1250,9 @@ public:
     double best = 0.0;
     bool have = false;
     DepthCandidate winner{};
+    // The other mesh's triangle (leaf order) nearest a vertex or edge winner, found by the
+    // search that measured it (closest_point's, uncut), else -1.
+    std::int32_t winner_triangle = -1;
     long long work() const { return work_; }
 
 private:
@@ -1355,7 +1357,8 @@ private:
     // best there: deeper, or as deep and sampled before it (so that the deepest point, and
     // thus the witnesses, are the same whatever the order of work). A distance equal to the
     // best that came from a search cut off at it (at most the best) is measured in full.
-    bool beats(double& d, const Order& order, const std::function<double()>& full) const {
+    template <class Full>
+    bool beats(double& d, const Order& order, Full full) const {
         if (d > best) return true;
         if (!(have && d == best && order < winner_order_)) return false;
         d = full();
@@ -1366,8 +1369,9 @@ private:
     // verdict stored in `*store` when given): the new best when inside and deeper.
     bool try_point(int m, const Vec3& p, Side known, Side* store, const Order& order) {
         const MeshBvh& other = m == 0 ? b_ : a_;
-        double d = distance_beyond(other, p, best);
-        if (!beats(d, order, [&] { return distance_beyond(other, p, 0.0); })) return true;
+        std::int32_t triangle = -1;
+        double d = distance_beyond(other, p, best, &triangle);
+        if (!beats(d, order, [&] { return distance_beyond(other, p, 0.0, &triangle); })) return true;
         if (known == Side::UNKNOWN) {
             if (!may_test()) return false;
             known = inside_mesh(other, p, &work_) ? Side::INSIDE : Side::OUTSIDE;
@@ -1376,6 +1380,7 @@ private:
         if (known == Side::INSIDE) {
             best = d;
             winner = {p, d, m, false};
+            winner_triangle = triangle;
             winner_order_ = order;
             have = true;
         }
@@ -1398,6 +1403,7 @@ private:
         if (inside_mesh(a_, c.point, &work_) && inside_mesh(b_, in_b, &work_)) {
             best = c.distance;
             winner = c;
+            winner_triangle = -1;
             winner_order_ = order;
             have = true;
         }
@@ -1465,6 +1471,7 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
     double best = search.best;
     bool have = search.have;
     DepthCandidate winner = search.winner;
+    std::int32_t winner_triangle = search.winner_triangle;
     long long work = search.work();
 
     // Open meshes: the generalized winding number costs a pass over the triangles, so the
@@ -1524,6 +1531,7 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
             if (inside(c)) {
                 best = c.distance;
                 winner = c;
+                winner_triangle = -1;
                 have = true;
                 break;
             }
@@ -1538,13 +1546,19 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
     out.depth = best;
     Vec3 deep, surface;
     bool deep_is_a;
+    // The nearest point of the winner's triangle when the search kept it: closest_point's
+    // answer (the same search to the end), without searching again.
+    auto nearest = [&](const MeshBvh& mesh) {
+        return winner_triangle >= 0 ? closest_point_on_triangle(winner.point, mesh.triangle(winner_triangle))
+                                    : closest_point(mesh, winner.point).point;
+    };
     if (winner.mesh == 0) {
         deep = input.pose_b.apply(winner.point);
-        surface = input.pose_b.apply(closest_point(b, winner.point).point);
+        surface = input.pose_b.apply(nearest(b));
         deep_is_a = true;
     } else if (winner.mesh == 1) {
         deep = input.pose_a.apply(winner.point);
-        surface = input.pose_a.apply(closest_point(a, winner.point).point);
+        surface = input.pose_a.apply(nearest(a));
         deep_is_a = false;
     } else {
         deep = input.pose_a.apply(winner.point);
