@@ -645,11 +645,17 @@ inline double longest_edge(const Vec3 t[3]) {
 // sorts out the rest). Such a point p inside both solids bounds
 // the minimum translation distance by max(dist(p, surface a), dist(p, surface b)), and it
 // finds overlaps whose surface points all lie on the other surface (flush, coplanar faces).
-void add_wedge_candidates(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
-                          const std::vector<CrossingPair>& pairs, std::vector<DepthCandidate>& out) {
-    constexpr size_t kMaxPairs = 256;  // evenly strided beyond: the vertices and edge cuts do most
-    const size_t stride = pairs.size() / kMaxPairs + 1;
-    for (size_t k = 0; k < pairs.size(); k += stride) {
+// The crossing pairs that get wedge points: at most 256, evenly strided beyond (the vertices
+// and edge cuts do most).
+inline size_t wedge_stride(const std::vector<CrossingPair>& pairs) {
+    constexpr size_t kMaxPairs = 256;
+    return pairs.size() / kMaxPairs + 1;
+}
+
+// The wedge points of crossing pair k (add_wedge_candidates), appended to `out`.
+void add_pair_wedge_points(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
+                           const std::vector<CrossingPair>& pairs, size_t k, std::vector<DepthCandidate>& out) {
+    {
         const CrossingPair& c = pairs[k];
         const auto pair = static_cast<std::int32_t>(k);
         const Vec3* ta = a.triangle(c.a);
@@ -664,7 +670,7 @@ void add_wedge_candidates(const MeshBvh& a, const MeshBvh& b, const Relative& re
         const Vec3 na = cross(ta[1] - ta[0], ta[2] - ta[0]);
         const Vec3 nb = cross(tb[1] - tb[0], tb[2] - tb[0]);
         const double la = norm(na), lb = norm(nb);
-        if (!(la > 0.0 && lb > 0.0)) continue;
+        if (!(la > 0.0 && lb > 0.0)) return;
         const double h = std::fmin(longest_edge(ta), longest_edge(tb));
         const Vec3 centroid_a = (ta[0] + ta[1] + ta[2]) / 3.0;
         const Vec3 centroid_b = (tb[0] + tb[1] + tb[2]) / 3.0;
@@ -676,12 +682,18 @@ void add_wedge_candidates(const MeshBvh& a, const MeshBvh& b, const Relative& re
         }
         const Vec3 sum = na / la + nb / lb;
         const double ls = norm(sum);
-        if (!(ls > 1e-6)) continue;  // opposite normals: faces resting on each other
+        if (!(ls > 1e-6)) return;  // opposite normals: faces resting on each other
         const Vec3 inward = sum * (-1.0 / ls);
         for (const Vec3& witness : witnesses)
             for (double step : {0.5 * h, 0.125 * h, 0.03125 * h})
                 out.push_back({witness + inward * step, 0.0, 2, false, pair});
     }
+}
+
+void add_wedge_candidates(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
+                          const std::vector<CrossingPair>& pairs, std::vector<DepthCandidate>& out) {
+    const size_t stride = wedge_stride(pairs);
+    for (size_t k = 0; k < pairs.size(); k += stride) add_pair_wedge_points(a, b, rel, pairs, k, out);
 }
 
 // The midpoints of the pieces of [p, q] between the sorted parameters `cuts` (0 and 1 among
@@ -1180,20 +1192,25 @@ public:
         }
     }
 
-    // Queues the wedge points (both meshes closed) in groups of one pair's: the distances of
-    // the first point to the pair's triangles bound its depth, plus the group's spread.
-    void add_wedges(std::vector<DepthCandidate>&& wedges, const std::vector<CrossingPair>& pairs) {
-        wedges_ = std::move(wedges);
-        for (size_t first = 0, last = 0; first < wedges_.size(); first = last) {
-            const DepthCandidate& c = wedges_[first];
-            double spread = 0.0;
-            for (last = first; last < wedges_.size() && wedges_[last].pair == c.pair; ++last)
-                spread = max2(spread, norm(wedges_[last].point - c.point));
-            const CrossingPair& pair = pairs[static_cast<size_t>(c.pair)];
-            const double da = triangle_distance_of(c.point, a_.triangle(pair.a));
-            const double db = triangle_distance_of(rel_.apply_inverse(c.point), b_.triangle(pair.b));
-            push({max2(da, db) + spread + slack_, kWedge, 2, static_cast<std::int32_t>(first),
-                  static_cast<int>(last - first)});
+    // Queues the wedge points (both meshes closed) of each crossing pair that gets them, made
+    // when the pair comes up. Every one lies within the pair's reach of a's centroid q: a
+    // step of at most h / 2 from q, b's centroid or a shared point, which lies on an edge of
+    // one of the triangles (triangles_intersect's witnesses), so no farther from q than their
+    // farthest corner. Its depth is then at most q's distances to the two triangles plus that.
+    void add_wedges(const std::vector<CrossingPair>& pairs) {
+        pairs_ = &pairs;
+        const size_t stride = wedge_stride(pairs);
+        for (size_t k = 0; k < pairs.size(); k += stride) {
+            const Vec3* ta = a_.triangle(pairs[k].a);
+            const Vec3* tb_local = b_.triangle(pairs[k].b);
+            const Vec3 tb[3] = {rel_.apply(tb_local[0]), rel_.apply(tb_local[1]), rel_.apply(tb_local[2])};
+            const Vec3 q = (ta[0] + ta[1] + ta[2]) / 3.0;
+            double reach = norm((tb[0] + tb[1] + tb[2]) / 3.0 - q);
+            for (int i = 0; i < 3; ++i) reach = max2(reach, max2(norm(ta[i] - q), norm(tb[i] - q)));
+            reach += 0.5 * std::fmin(longest_edge(ta), longest_edge(tb));
+            const double da = triangle_distance_of(q, ta);
+            const double db = triangle_distance_of(rel_.apply_inverse(q), tb_local);
+            push({max2(da, db) + reach * (1.0 + 1e-9) + slack_, kWedge, 2, static_cast<std::int32_t>(k), 0});
         }
     }
 
@@ -1239,8 +1256,10 @@ public:
                                     if (ok && inside_box(root, p)) ok = try_point(e.mesh, p, Side::UNKNOWN, nullptr, order);
                                 });
             } else {
-                for (std::int32_t k = e.index; k < e.index + e.k && ok; ++k)
-                    ok = try_wedge(wedges_[static_cast<size_t>(k)], Order{2, 0, k, 0});
+                wedges_.clear();
+                add_pair_wedge_points(a_, b_, rel_, *pairs_, static_cast<size_t>(e.index), wedges_);
+                for (size_t k = 0; k < wedges_.size() && ok; ++k)
+                    ok = try_wedge(wedges_[k], Order{2, e.index, static_cast<std::int64_t>(k), 0});
             }
             if (!ok) return false;
         }
@@ -1270,8 +1289,8 @@ private:
     struct Entry {
         double bound;  // no point of the group is farther than this from the other surface
         int kind, mesh;
-        std::int32_t index;  // node, triangle (leaf order) or wedge point
-        int k;               // edge k of the triangle; wedge points in the group
+        std::int32_t index;  // node, triangle (leaf order) or crossing pair (wedge points)
+        int k;               // edge k of the triangle
         // A node: a triangle of the other mesh (leaf order) near it, and whether `bound` comes
         // from its centre's distance (else from its distance to `near`, a looser bound).
         std::int32_t near = -1;
@@ -1430,7 +1449,8 @@ private:
     std::vector<char> done_[2];
     std::vector<char> live_[2];
     const TriangleMarks* marks_[2] = {nullptr, nullptr};
-    std::vector<DepthCandidate> wedges_;
+    const std::vector<CrossingPair>* pairs_ = nullptr;
+    std::vector<DepthCandidate> wedges_;  // scratch: one pair's wedge points
     std::vector<Entry> heap_;
     Order winner_order_{};
 };
@@ -1452,8 +1472,6 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
     TriangleMarks marks_a, marks_b;
     std::vector<CrossingPair> crossing_pairs;
     mark_crossing_triangles(a, b, rel, marks_a, marks_b, crossing_pairs);
-    std::vector<DepthCandidate> wedges;
-    add_wedge_candidates(a, b, rel, crossing_pairs, wedges);
 
     // The points of a mesh whose other mesh is closed: regions and branch and bound.
     out.status = Status::CONVERGED;
@@ -1466,7 +1484,7 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
     for (int m = 0; m < 2 && running; ++m)
         if (closed_other[m]) search.add_edges(m);
     const bool wedges_closed = a.closed() && b.closed();
-    if (running && wedges_closed) search.add_wedges(std::move(wedges), crossing_pairs);
+    if (running && wedges_closed) search.add_wedges(crossing_pairs);
     if (running) running = search.run();
     double best = search.best;
     bool have = search.have;
@@ -1484,7 +1502,7 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
             add_candidates(a, b, marks_a.crossing, [&](const Vec3& p) { return rel.apply_inverse(p); }, 0, undecided);
         if (!closed_other[1])
             add_candidates(b, a, marks_b.crossing, [&](const Vec3& p) { return rel.apply(p); }, 1, undecided);
-        if (!wedges_closed) undecided.insert(undecided.end(), wedges.begin(), wedges.end());
+        if (!wedges_closed) add_wedge_candidates(a, b, rel, crossing_pairs, undecided);
     }
     auto inside = [&](const DepthCandidate& c) {
         if (c.mesh == 0) return inside_mesh(b, c.point, &work);
