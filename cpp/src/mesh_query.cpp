@@ -1329,7 +1329,15 @@ private:
         const WindingNode& w = self.winding_nodes()[static_cast<size_t>(e.index)];
         const double floor = best - w.radius - slack_;
         std::int32_t near = 0;
-        const double d = distance_within(other, to_other(e.mesh, w.center), max2(0.0, floor), w.radius, &near);
+        const Vec3 center = to_other(e.mesh, w.center);
+        double d = distance_within(other, center, max2(0.0, floor), w.radius, &near);
+        if (e.near >= 0) {  // the parent's triangle may be nearer than the one found
+            const double parent = triangle_distance_of(center, other.triangle(e.near));
+            if (parent < d) {
+                d = parent;
+                near = e.near;
+            }
+        }
         if (d <= floor) return;
         push({d + w.radius + slack_, kNode, e.mesh, e.index, 0, near, true});
     }
