@@ -226,22 +226,30 @@ quaternion = st.tuples(*[st.floats(-1, 1) for _ in range(4)]).filter(
 offset = st.tuples(*[st.floats(-0.7, 0.7) for _ in range(3)])
 
 
+# Poses nudged off exact alignments: the oracle's floating-point crossing tests (unlike the
+# core's exact predicates) cannot decide flush or touching faces, which simple rotations such
+# as a quarter turn produce.
+NUDGE_Q = np.array([2.0**0.5, 3.0**0.5, 5.0**0.5, 7.0**0.5]) * 1e-3
+NUDGE_T = np.array([11.0**0.5, 13.0**0.5, 17.0**0.5]) * 1e-4
+
+
 @pytest.mark.slow
 @settings(max_examples=60, deadline=None)
 @given(st.sampled_from(sorted(SHAPES)), st.sampled_from(sorted(SHAPES)), quaternion, offset)
 def test_depth_matches_a_brute_force_oracle(name_a: str, name_b: str, q, t) -> None:
-    """Small posed pairs of closed meshes: the core's depth is the oracle's (all samples decided
-    by the O(F) winding number, distances over every triangle) to 1e-12, unless its deepest
-    point is one the oracle leaves out (stepped in from a pair's witness point); that point is
-    then checked by brute force: inside both meshes, at exactly the depth."""
+    """Small posed pairs of closed meshes in general position, in both orders: the core's depth
+    is the oracle's (all samples decided by the O(F) winding number, distances over every
+    triangle) to 1e-12, unless its deepest point is one the oracle leaves out (stepped in from
+    a pair's witness point); that point is then checked by brute force: inside both meshes, at
+    exactly the depth."""
     a, b = SHAPES[name_a], SHAPES[name_b]
-    pose_b = _pose(_rotation(q), t)
+    pose_b = _pose(_rotation(np.asarray(q) + NUDGE_Q), np.asarray(t) + NUDGE_T)
     r = _depth([a, b], [np.eye(4), pose_b])
     assert (r.status == Status.CONVERGED).all()
-    assert r.depth[1] == pytest.approx(r.depth[0], rel=1e-12, abs=1e-15)
-    for k in range(2):
+    ta, tb = _posed(a, np.eye(4)), _posed(b, pose_b)
+    for k, (first, second) in enumerate(((ta, tb), (tb, ta))):
         _witness_consistent(r, k)
-    _check_against_oracle(r, 0, _posed(a, np.eye(4)), _posed(b, pose_b))
+        _check_against_oracle(r, k, first, second)
 
 
 @settings(max_examples=25, deadline=None)
