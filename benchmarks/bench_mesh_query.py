@@ -8,7 +8,11 @@ intersects) time meshcol and fcl in alternating windows of at least a millisecon
 each, so that both sides see the same load on a shared machine.
 
 Then the mesh penetration depth (mesh_penetration_depth_batch) against fcl.collide with
-contacts (the deepest contact's penetration_depth), on overlapping and resting pairs.
+contacts (the deepest contact's penetration_depth), on overlapping and resting pairs. With
+--depth-only just those rows (about 2 s): run this script with another checkout's interpreter
+(its meshcol) in alternation with this one's for an A/B of the core, e.g.
+``for i in 1 2 3; do for py in ../main/.venv/bin/python .venv/bin/python; do $py
+benchmarks/bench_mesh_query.py --depth-only; done; done``.
 
 For each corpus mesh pair: hierarchy build time, one distance query, one collision query (meshcol
 answers both with mesh_distance_batch, which also tests containment; fcl needs fcl.distance and
@@ -23,6 +27,7 @@ distances are compared (fcl is exact for separated meshes).
 from __future__ import annotations
 
 import argparse
+import os
 import time
 from collections import defaultdict
 from pathlib import Path
@@ -31,6 +36,7 @@ import fcl
 import numpy as np
 import trimesh
 
+import meshcol
 from meshcol.collision.mesh_query import (
     MeshSet,
     mesh_distance_batch,
@@ -225,11 +231,12 @@ def depth_case(name: str, a: trimesh.Trimesh, b: trimesh.Trimesh, pb: np.ndarray
         return max((c.penetration_depth for c in res.contacts), default=0.0)
 
     r = mesh_penetration_depth_batch(meshes, None, pairs, threads=1)
-    t_ours = best_of(lambda: mesh_penetration_depth_batch(meshes, None, pairs, threads=1), 3)
-    t_fcl = best_of(fcl_depth, 3)
+    t_ours, t_fcl = best_of_alternated(
+        lambda: mesh_penetration_depth_batch(meshes, None, pairs, threads=1), fcl_depth, 5
+    )
     print(
         f"depth {name}: {len(a.faces)} + {len(b.faces)} faces, meshcol depth {r.depth[0]:.6g} "
-        f"({int(r.points_tested[0])} points decided), fcl deepest contact {fcl_depth():.6g}"
+        f"({int(r.points_tested[0])} exact inside tests), fcl deepest contact {fcl_depth():.6g}"
     )
     row(f"depth {name}: depth", t_ours, t_fcl, "fcl collide+contacts")
 
@@ -237,11 +244,17 @@ def depth_case(name: str, a: trimesh.Trimesh, b: trimesh.Trimesh, pb: np.ndarray
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=1, help="repeat the whole set (ranges)")
+    parser.add_argument("--depth-only", action="store_true", help="only the depth rows")
     args = parser.parse_args()
+    print(f"meshcol from {Path(meshcol.__file__).resolve().parent}, load average {os.getloadavg()}")
     for run in range(args.runs):
         if args.runs > 1:
             print(f"== run {run + 1} of {args.runs}")
-        one_run()
+        if args.depth_only:
+            depth_rows()
+        else:
+            one_run()
+            depth_rows()
     if args.runs > 1:
         print(f"\nfcl/meshcol over {args.runs} runs (min-max):")
         for name, ratios in RATIOS.items():
@@ -278,6 +291,12 @@ def one_run() -> None:
     case("counter vs copy at a 1 mm gap", counter, counter, pose(translation=(e + 1.0, 0, 0)))
     case("ballA vs ballB (overlapping)", ball_a, ball_b, np.eye(4))
     batch_case(load("torus.STL"), 60, rng)
+
+
+def depth_rows() -> None:
+    load = lambda name: trimesh.load(CORPUS / name, force="mesh")
+    torus = load("torus.STL")
+    ball_a, ball_b = load("ballA.off"), load("ballB.off")
     depth_case("ballA vs ballB (overlapping)", ball_a, ball_b, np.eye(4))
     e = float(torus.extents[0])
     depth_case("torus vs copy moved 30%", torus, torus, pose(translation=(0.3 * e, 0.01 * e, 0)))

@@ -227,10 +227,20 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         const bool repeated = e + 1 < edges.size() && edges[e + 1] == edges[e];
         closed_ = !repeated && std::binary_search(edges.begin(), edges.end(), std::make_pair(v, u));
     }
-    std::vector<char> used(static_cast<size_t>(vertex_count), 0);
-    for (std::int64_t k = 0; k < 3 * face_count; ++k) used[static_cast<size_t>(faces[k])] = 1;
+    // Used vertices renumbered in input order (-1: unused), for the triangles' corner indices.
+    std::vector<std::int32_t> compact(static_cast<size_t>(vertex_count), -1);
+    for (std::int64_t k = 0; k < 3 * face_count; ++k) compact[static_cast<size_t>(faces[k])] = 0;
     for (std::int64_t v = 0; v < vertex_count; ++v)
-        if (used[static_cast<size_t>(v)]) vertices_.push_back(vertex(v));
+        if (compact[static_cast<size_t>(v)] == 0) {
+            compact[static_cast<size_t>(v)] = static_cast<std::int32_t>(vertices_.size());
+            vertices_.push_back(vertex(v));
+        }
+    corner_vertices_.resize(3 * static_cast<size_t>(n));
+    for (std::int32_t i = 0; i < n; ++i) {
+        const std::int64_t f = face_index_[static_cast<size_t>(i)];
+        for (int k = 0; k < 3; ++k)
+            corner_vertices_[3 * static_cast<size_t>(i) + k] = compact[static_cast<size_t>(faces[3 * f + k])];
+    }
 }
 
 namespace {
@@ -405,10 +415,19 @@ void MeshBvh::build_obbs() {
     }
 }
 
+namespace {
+bool same_point(const Vec3& p, const Vec3& q) { return p.x == q.x && p.y == q.y && p.z == q.z; }
+}  // namespace
+
 bool MeshBvh::validate() const {
     if (nodes_.empty()) return corners_.empty() && face_index_.empty();
     const std::int32_t n = triangle_count();
-    if (corners_.size() != 3 * static_cast<size_t>(n)) return false;
+    if (corners_.size() != 3 * static_cast<size_t>(n) || corner_vertices_.size() != corners_.size()) return false;
+    for (size_t k = 0; k < corners_.size(); ++k) {
+        const std::int32_t v = corner_vertices_[k];
+        if (v < 0 || static_cast<size_t>(v) >= vertices_.size() || !same_point(vertices_[static_cast<size_t>(v)], corners_[k]))
+            return false;
+    }
     std::vector<char> seen(static_cast<size_t>(n), 0);
     for (std::int32_t i = 0; i < n; ++i) {
         const std::int64_t f = face_index_[static_cast<size_t>(i)];

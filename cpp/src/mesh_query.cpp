@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -466,14 +467,10 @@ bool inside_mesh(const MeshBvh& mesh, const Vec3& p, long long* work) {
     return winding_number_inside(mesh, p, work);
 }
 
-// Marks the triangles (leaf order) of a and of b that belong to an intersecting triangle
-// pair: the descent of mesh_intersects, run to the end.
+// A triangle pair of a and b that intersect (touching counts), in leaf order.
 struct CrossingPair {
-    std::int32_t a, b;   // leaf order
-    Vec3 witness[2];     // shared points found from a's side and from b's (a's frame), so
-                         // that the samples do not depend on the order of the pair
+    std::int32_t a, b;
 };
-
 // A last-in first-out stack of node pairs held in the caller's frame up to 64 entries (a
 // depth-first descent of two balanced hierarchies needs about their summed depths, 40 for a
 // million triangles each) and in a vector beyond: a query that descends a few levels
@@ -509,10 +506,11 @@ private:
 
 // The descent of overlapping oriented boxes shared by the intersection queries: calls
 // `visit(i, j, ta, tb)` for each triangle pair (leaf order i of a, j of b; b's corners mapped
-// into a's frame) whose boxes touch, in depth-first order, until it returns true. Returns
-// whether a visit stopped the descent.
+// into a's frame) whose boxes touch (are at most sqrt(margin2) apart), in depth-first order,
+// until it returns true. Returns whether a visit stopped the descent.
 template <class Visit>
-bool for_each_touching_pair(const MeshBvh& a, const MeshBvh& b, const Relative& rel, Visit visit) {
+bool for_each_touching_pair(const MeshBvh& a, const MeshBvh& b, const Relative& rel, Visit visit,
+                            double margin2 = 0.0) {
     const std::vector<BvhNode>& na = a.nodes();
     const std::vector<BvhNode>& nb = b.nodes();
     if (!boxes_overlap(a, b, {0, 0}, rel)) return false;
@@ -529,7 +527,7 @@ bool for_each_touching_pair(const MeshBvh& a, const MeshBvh& b, const Relative& 
                 const Vec3* ta = a.triangle(i);
                 const TriangleBox box_a = triangle_box(ta);
                 for (int j = 0; j < leaf_b.count; ++j)
-                    if (triangle_box_squared_distance(box_a, leaf_b.boxes[j]) == 0.0 &&
+                    if (triangle_box_squared_distance(box_a, leaf_b.boxes[j]) <= margin2 &&
                         visit(i, y.index + j, ta, leaf_b.corners[j]))
                         return true;
             }
@@ -544,22 +542,62 @@ bool for_each_touching_pair(const MeshBvh& a, const MeshBvh& b, const Relative& 
     return false;
 }
 
-void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
-                             std::vector<char>& in_a, std::vector<char>& in_b,
-                             std::vector<CrossingPair>& pairs) {
+// What the descent of the depth query learns about each mesh's triangles (leaf order).
+struct TriangleMarks {
+    std::vector<char> crossing;  // intersects (touches) the other surface
+    // Within the other mesh's rounding allowance of its surface (every crossing one too): a
+    // triangle not near is farther than rel.slack from every triangle of the other mesh.
+    std::vector<char> near;
+    std::vector<std::int32_t> partner;  // a triangle of the other mesh it crosses, else -1
+    // The triangles of the other mesh near triangle i: others[first[i] .. first[i + 1]).
+    std::vector<std::int32_t> first, others;
+};
+
+// The near pairs (index into a, index into b) grouped by `side`'s triangle.
+void group_near_pairs(const std::vector<std::pair<std::int32_t, std::int32_t>>& pairs, int side,
+                      std::int32_t count, TriangleMarks& marks) {
+    marks.first.assign(static_cast<size_t>(count) + 1, 0);
+    for (const auto& pair : pairs) ++marks.first[static_cast<size_t>(side == 0 ? pair.first : pair.second) + 1];
+    for (size_t i = 0; i < static_cast<size_t>(count); ++i) marks.first[i + 1] += marks.first[i];
+    marks.others.resize(pairs.size());
+    std::vector<std::int32_t> next(marks.first.begin(), marks.first.end() - 1);
+    for (const auto& pair : pairs) {
+        const auto [mine, theirs] = side == 0 ? pair : std::make_pair(pair.second, pair.first);
+        marks.others[static_cast<size_t>(next[static_cast<size_t>(mine)]++)] = theirs;
+    }
+}
+
+// The descent of mesh_intersects run to the end: the intersecting triangle pairs in descent
+// order, and the marks of both meshes' triangles. Triangle pairs whose boxes are within
+// rel.slack are visited too, to mark the near ones: the node bounds are lowered by rel.slack,
+// so a triangle pair closer than that is never pruned.
+void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative& rel, TriangleMarks& in_a,
+                             TriangleMarks& in_b, std::vector<CrossingPair>& pairs) {
     pairs.clear();
-    in_a.assign(static_cast<size_t>(a.triangle_count()), 0);
-    in_b.assign(static_cast<size_t>(b.triangle_count()), 0);
-    for_each_touching_pair(a, b, rel, [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
-        if (Vec3 w; triangles_intersect(ta, tb, &w)) {
-            in_a[static_cast<size_t>(i)] = 1;
-            in_b[static_cast<size_t>(j)] = 1;
-            Vec3 w_b = w;
-            triangles_intersect(tb, ta, &w_b);
-            pairs.push_back({i, j, {w, w_b}});
-        }
-        return false;
-    });
+    for (auto [marks, mesh] : {std::make_pair(&in_a, &a), std::make_pair(&in_b, &b)}) {
+        marks->crossing.assign(static_cast<size_t>(mesh->triangle_count()), 0);
+        marks->near.assign(static_cast<size_t>(mesh->triangle_count()), 0);
+        marks->partner.assign(static_cast<size_t>(mesh->triangle_count()), -1);
+    }
+    std::vector<std::pair<std::int32_t, std::int32_t>> near_pairs;
+    for_each_touching_pair(
+        a, b, rel,
+        [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
+            const auto si = static_cast<size_t>(i), sj = static_cast<size_t>(j);
+            in_a.near[si] = in_b.near[sj] = 1;
+            near_pairs.push_back({i, j});
+            if (triangle_box_squared_distance(triangle_box(ta), triangle_box(tb)) == 0.0 &&
+                triangles_intersect(ta, tb, nullptr)) {
+                in_a.crossing[si] = in_b.crossing[sj] = 1;
+                if (in_a.partner[si] < 0) in_a.partner[si] = j;
+                if (in_b.partner[sj] < 0) in_b.partner[sj] = i;
+                pairs.push_back({i, j});
+            }
+            return false;
+        },
+        rel.slack * rel.slack);
+    group_near_pairs(near_pairs, 0, a.triangle_count(), in_a);
+    group_near_pairs(near_pairs, 1, b.triangle_count(), in_b);
 }
 
 // Parameters along [p, q] (mesh's local frame) where the segment meets the mesh's surface in
@@ -592,6 +630,7 @@ struct DepthCandidate {
     int mesh;  // 0: a point of a (frame of b); 1: a point of b (frame of a); 2: a point of
                // neither surface that may lie inside both (frame of a)
     bool farther_is_a;  // mesh 2: a's surface is the farther one
+    std::int32_t pair = -1;  // mesh 2: the crossing pair it steps in from
 };
 
 inline double longest_edge(const Vec3 t[3]) {
@@ -606,36 +645,73 @@ inline double longest_edge(const Vec3 t[3]) {
 // sorts out the rest). Such a point p inside both solids bounds
 // the minimum translation distance by max(dist(p, surface a), dist(p, surface b)), and it
 // finds overlaps whose surface points all lie on the other surface (flush, coplanar faces).
-void add_wedge_candidates(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
-                          const std::vector<CrossingPair>& pairs, std::vector<DepthCandidate>& out) {
-    constexpr size_t kMaxPairs = 256;  // evenly strided beyond: the vertices and edge cuts do most
-    const size_t stride = pairs.size() / kMaxPairs + 1;
-    for (size_t k = 0; k < pairs.size(); k += stride) {
+// The crossing pairs that get wedge points: at most 256, evenly strided beyond (the vertices
+// and edge cuts do most).
+inline size_t wedge_stride(const std::vector<CrossingPair>& pairs) {
+    constexpr size_t kMaxPairs = 256;
+    return pairs.size() / kMaxPairs + 1;
+}
+
+// The wedge points of crossing pair k (add_wedge_candidates), appended to `out`.
+void add_pair_wedge_points(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
+                           const std::vector<CrossingPair>& pairs, size_t k, std::vector<DepthCandidate>& out) {
+    {
         const CrossingPair& c = pairs[k];
+        const auto pair = static_cast<std::int32_t>(k);
         const Vec3* ta = a.triangle(c.a);
         const Vec3* tb_local = b.triangle(c.b);
         const Vec3 tb[3] = {rel.apply(tb_local[0]), rel.apply(tb_local[1]), rel.apply(tb_local[2])};
+        // Shared points found from a's side and from b's, so that the samples do not depend on
+        // the order of the pair.
+        Vec3 witnesses[2];
+        triangles_intersect(ta, tb, &witnesses[0]);
+        witnesses[1] = witnesses[0];
+        triangles_intersect(tb, ta, &witnesses[1]);
         const Vec3 na = cross(ta[1] - ta[0], ta[2] - ta[0]);
         const Vec3 nb = cross(tb[1] - tb[0], tb[2] - tb[0]);
         const double la = norm(na), lb = norm(nb);
-        if (!(la > 0.0 && lb > 0.0)) continue;
+        if (!(la > 0.0 && lb > 0.0)) return;
         const double h = std::fmin(longest_edge(ta), longest_edge(tb));
         const Vec3 centroid_a = (ta[0] + ta[1] + ta[2]) / 3.0;
         const Vec3 centroid_b = (tb[0] + tb[1] + tb[2]) / 3.0;
         for (double step : {0.5 * h, 0.125 * h, 0.03125 * h}) {
             // Each triangle's centroid, stepped into its own solid: finds coincident and
             // coplanar overlaps, whose shared points all lie on edges of both.
-            out.push_back({centroid_a - na * (step / la), 0.0, 2, false});
-            out.push_back({centroid_b - nb * (step / lb), 0.0, 2, false});
+            out.push_back({centroid_a - na * (step / la), 0.0, 2, false, pair});
+            out.push_back({centroid_b - nb * (step / lb), 0.0, 2, false, pair});
         }
         const Vec3 sum = na / la + nb / lb;
         const double ls = norm(sum);
-        if (!(ls > 1e-6)) continue;  // opposite normals: faces resting on each other
+        if (!(ls > 1e-6)) return;  // opposite normals: faces resting on each other
         const Vec3 inward = sum * (-1.0 / ls);
-        for (const Vec3& witness : c.witness)
+        for (const Vec3& witness : witnesses)
             for (double step : {0.5 * h, 0.125 * h, 0.03125 * h})
-                out.push_back({witness + inward * step, 0.0, 2, false});
+                out.push_back({witness + inward * step, 0.0, 2, false, pair});
     }
+}
+
+void add_wedge_candidates(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
+                          const std::vector<CrossingPair>& pairs, std::vector<DepthCandidate>& out) {
+    const size_t stride = wedge_stride(pairs);
+    for (size_t k = 0; k < pairs.size(); k += stride) add_pair_wedge_points(a, b, rel, pairs, k, out);
+}
+
+// The midpoints of the pieces of [p, q] between the sorted parameters `cuts` (0 and 1 among
+// them), passed to `add`.
+template <class Add>
+void add_pieces(const Vec3& p, const Vec3& q, std::vector<double>& cuts, Add add) {
+    std::sort(cuts.begin(), cuts.end());
+    for (size_t c = 0; c + 1 < cuts.size(); ++c)
+        if (cuts[c + 1] > cuts[c]) add(p + (q - p) * (0.5 * (cuts[c] + cuts[c + 1])));
+}
+
+// The midpoints of the pieces into which other's surface cuts the segment [p, q] (other's
+// frame), passed to `add`; `cuts` is scratch space.
+template <class Add>
+void add_edge_pieces(const MeshBvh& other, const Vec3& p, const Vec3& q, std::vector<double>& cuts, Add add) {
+    cuts.assign({0.0, 1.0});
+    segment_crossings(other, p, q, cuts);
+    add_pieces(p, q, cuts, add);
 }
 
 // Sample points of `self` (their frame mapped into `other`'s by `to_other`) that may lie
@@ -654,12 +730,7 @@ void add_candidates(const MeshBvh& self, const MeshBvh& other, const std::vector
         if (!crossing[static_cast<size_t>(i)]) continue;
         const Vec3* t = self.triangle(i);
         for (int k = 0; k < 3; ++k) {
-            const Vec3 p = to_other(t[k]), q = to_other(t[(k + 1) % 3]);
-            cuts.assign({0.0, 1.0});
-            segment_crossings(other, p, q, cuts);
-            std::sort(cuts.begin(), cuts.end());
-            for (size_t c = 0; c + 1 < cuts.size(); ++c)
-                if (cuts[c + 1] > cuts[c]) add(p + (q - p) * (0.5 * (cuts[c] + cuts[c + 1])));
+            add_edge_pieces(other, to_other(t[k]), to_other(t[(k + 1) % 3]), cuts, add);
         }
     }
 }
@@ -940,8 +1011,9 @@ namespace {
 
 // Distance from `point` (mesh's local frame) to the surface when it exceeds `floor`; otherwise
 // some value <= floor: the branch and bound of closest_point, stopped at the first triangle
-// within `floor` (such a point cannot raise a maximum that is already `floor`).
-double distance_beyond(const MeshBvh& mesh, const Vec3& point, double floor) {
+// within `floor` (such a point cannot raise a maximum that is already `floor`). Writes the
+// triangle (leaf order) at the returned distance to `*triangle` when given.
+double distance_beyond(const MeshBvh& mesh, const Vec3& point, double floor, std::int32_t* triangle = nullptr) {
     const double floor2 = floor * floor;
     const std::vector<BvhNode>& nodes = mesh.nodes();
     double best2 = kInf;
@@ -960,6 +1032,7 @@ double distance_beyond(const MeshBvh& mesh, const Vec3& point, double floor) {
                 if (!found || d2 < best2) {
                     best2 = d2;
                     found = true;
+                    if (triangle != nullptr) *triangle = i;
                 }
             }
             if (best2 <= floor2) break;
@@ -969,6 +1042,426 @@ double distance_beyond(const MeshBvh& mesh, const Vec3& point, double floor) {
     }
     return std::sqrt(best2);
 }
+
+// An upper bound of the distance from `point` (mesh's local frame) to the surface, within
+// `slack` of it: the branch and bound of distance_beyond with boxes pruned once they cannot
+// beat the best distance found by more than `slack`, stopped as it at a triangle within
+// `floor`. Writes the triangle (leaf order) at the returned distance to `*triangle`.
+double distance_within(const MeshBvh& mesh, const Vec3& point, double floor, double slack, std::int32_t* triangle) {
+    const double floor2 = floor * floor;
+    const std::vector<BvhNode>& nodes = mesh.nodes();
+    double best = kInf, prune2 = kInf;
+    bool found = false;
+    std::vector<std::pair<std::int32_t, double>> stack;
+    stack.reserve(64);
+    stack.push_back({0, point_box_squared_distance(nodes[0], point)});
+    while (!stack.empty()) {
+        const auto [index, bound] = stack.back();
+        stack.pop_back();
+        if (found && bound >= prune2) continue;
+        const BvhNode& node = nodes[static_cast<size_t>(index)];
+        if (node.is_leaf()) {
+            for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
+                const double d2 = squared_norm(closest_point_on_triangle(point, mesh.triangle(i)) - point);
+                if (!found || d2 < best * best) {
+                    best = std::sqrt(d2);
+                    const double reach = max2(0.0, best - slack);
+                    prune2 = reach * reach;
+                    found = true;
+                    *triangle = i;
+                }
+            }
+            if (best * best <= floor2) break;
+            continue;
+        }
+        push_children(nodes, index, point, found, prune2, stack);
+    }
+    return best;
+}
+
+// The depth search over the points of a mesh whose other mesh is closed. The winding number
+// of a closed surface is constant along a path that does not meet it (Jacobson et al. 2013),
+// so the vertices joined by edges of triangles that are not near the other surface (farther
+// than the rounding allowance) form regions lying wholly inside or wholly outside: one exact
+// test decides each region (none when a vertex lies outside the other's box), and only the
+// vertices of near triangles are decided one by one. The largest distance among the inside
+// points is then found by branch and bound, as a one-sided Hausdorff distance over a
+// hierarchy: a node of a mesh's own hierarchy bounds the distances of its triangles' corners
+// by the distance of its centre plus its radius (the distance to a surface is 1-Lipschitz),
+// a piece of an edge of a crossing triangle by the distance of its ends to a triangle it
+// crosses (the distance to a triangle is convex along a segment), a wedge point by its
+// distances to the pair it steps in from; groups are opened highest bound first until no
+// bound exceeds the best depth found. The answer is the maximum, over the same points as the
+// per-point search, of the same distances: only its order of work differs.
+class ClosedDepthSearch {
+public:
+    ClosedDepthSearch(const MeshBvh& a, const MeshBvh& b, const Relative& rel, MeshDepthOutput& out)
+        : a_(a), b_(b), rel_(rel), out_(out), slack_(8.0 * rel.slack) {}
+
+    // Adds the points of mesh m (0: a's, in b's frame; 1: b's, in a's frame): its regions
+    // decided, its root node and the edges of its crossing triangles queued. False when the
+    // work cap stopped it.
+    bool add_mesh(int m, const TriangleMarks& marks) {
+        marks_[m] = &marks;
+        const MeshBvh& self = m == 0 ? a_ : b_;
+        const MeshBvh& other = m == 0 ? b_ : a_;
+        const BvhNode& root = other.nodes()[0];
+        const std::vector<Vec3>& vertices = self.vertices();
+        const size_t vertex_count = vertices.size();
+        std::vector<Side>& side = side_[m];
+        side.assign(vertex_count, Side::UNKNOWN);
+        done_[m].assign(vertex_count, 0);
+        std::vector<char> in_box(vertex_count), regular(vertex_count, 0);
+        std::vector<std::int32_t> parent(vertex_count);
+        for (size_t v = 0; v < vertex_count; ++v) {
+            in_box[v] = inside_box(root, to_other(m, vertices[v]));
+            parent[v] = static_cast<std::int32_t>(v);
+        }
+        auto find = [&parent](std::int32_t v) {
+            while (parent[static_cast<size_t>(v)] != v) {
+                parent[static_cast<size_t>(v)] = parent[static_cast<size_t>(parent[static_cast<size_t>(v)])];
+                v = parent[static_cast<size_t>(v)];
+            }
+            return v;
+        };
+        // Triangles wholly outside the box are left out: a region of the others reaches
+        // outside through a triangle with a corner in the box, so the regions found are parts
+        // of the true ones, each still on one side.
+        for (std::int32_t i = 0; i < self.triangle_count(); ++i) {
+            if (marks.near[static_cast<size_t>(i)]) continue;
+            const std::int32_t* t = self.triangle_vertices(i);
+            if (!in_box[static_cast<size_t>(t[0])] && !in_box[static_cast<size_t>(t[1])] && !in_box[static_cast<size_t>(t[2])])
+                continue;
+            regular[static_cast<size_t>(t[0])] = regular[static_cast<size_t>(t[1])] = regular[static_cast<size_t>(t[2])] = 1;
+            for (int k = 0; k < 2; ++k) {  // two edges join the three corners
+                const std::int32_t x = find(t[k]), y = find(t[k + 1]);
+                if (x != y) parent[static_cast<size_t>(std::max(x, y))] = std::min(x, y);
+            }
+        }
+        // A region with a vertex outside the other's box is outside; otherwise one vertex
+        // (off the surface by more than the rounding allowance) decides it.
+        std::vector<Side> region(vertex_count, Side::UNKNOWN);
+        for (size_t v = 0; v < vertex_count; ++v)
+            if (regular[v] && !in_box[v]) region[static_cast<size_t>(find(static_cast<std::int32_t>(v)))] = Side::OUTSIDE;
+        for (size_t v = 0; v < vertex_count; ++v) {
+            if (!in_box[v]) {
+                side[v] = Side::OUTSIDE;
+                continue;
+            }
+            if (!regular[v]) continue;  // decided alone, when it matters
+            Side& r = region[static_cast<size_t>(find(static_cast<std::int32_t>(v)))];
+            if (r == Side::UNKNOWN) {
+                if (!may_test()) return false;
+                r = inside_mesh(other, to_other(m, vertices[v]), &work_) ? Side::INSIDE : Side::OUTSIDE;
+            }
+            side[v] = r;
+        }
+        // Nodes holding a corner that may be inside.
+        const std::vector<BvhNode>& nodes = self.nodes();
+        std::vector<char>& live = live_[m];
+        live.assign(nodes.size(), 0);
+        for (size_t id = nodes.size(); id-- > 0;) {
+            const BvhNode& node = nodes[id];
+            if (!node.is_leaf()) {
+                live[id] = live[id + 1] || live[static_cast<size_t>(node.index)];
+                continue;
+            }
+            for (std::int32_t i = node.index; i < node.index + node.count && !live[id]; ++i)
+                for (int k = 0; k < 3; ++k)
+                    if (side[static_cast<size_t>(self.triangle_vertices(i)[k])] != Side::OUTSIDE) live[id] = 1;
+        }
+        if (live[0]) refine_node({kInf, kNode, m, 0, 0});
+        return true;
+    }
+
+    // Queues the edges of mesh m's crossing triangles, each bounded by its ends' distances to
+    // a triangle that its triangle crosses (after the vertices: most are then within the best
+    // depth already and never queued).
+    void add_edges(int m) {
+        const MeshBvh& self = m == 0 ? a_ : b_;
+        const MeshBvh& other = m == 0 ? b_ : a_;
+        const TriangleMarks& marks = *marks_[m];
+        for (std::int32_t i = 0; i < self.triangle_count(); ++i) {
+            const std::int32_t partner = marks.partner[static_cast<size_t>(i)];
+            if (!marks.crossing[static_cast<size_t>(i)] || partner < 0) continue;
+            const Vec3* t = self.triangle(i);
+            const Vec3* tp = other.triangle(partner);
+            double ends[3];
+            for (int k = 0; k < 3; ++k) ends[k] = triangle_distance_of(to_other(m, t[k]), tp);
+            for (int k = 0; k < 3; ++k) push({max2(ends[k], ends[(k + 1) % 3]) + slack_, kEdge, m, i, k});
+        }
+    }
+
+    // Queues the wedge points (both meshes closed) of each crossing pair that gets them, made
+    // when the pair comes up. Every one lies within the pair's reach of a's centroid q: a
+    // step of at most h / 2 from q, b's centroid or a shared point, which lies on an edge of
+    // one of the triangles (triangles_intersect's witnesses), so no farther from q than their
+    // farthest corner. Its depth is then at most q's distances to the two triangles plus that.
+    void add_wedges(const std::vector<CrossingPair>& pairs) {
+        pairs_ = &pairs;
+        const size_t stride = wedge_stride(pairs);
+        for (size_t k = 0; k < pairs.size(); k += stride) {
+            const Vec3* ta = a_.triangle(pairs[k].a);
+            const Vec3* tb_local = b_.triangle(pairs[k].b);
+            const Vec3 tb[3] = {rel_.apply(tb_local[0]), rel_.apply(tb_local[1]), rel_.apply(tb_local[2])};
+            const Vec3 q = (ta[0] + ta[1] + ta[2]) / 3.0;
+            double reach = norm((tb[0] + tb[1] + tb[2]) / 3.0 - q);
+            for (int i = 0; i < 3; ++i) reach = max2(reach, max2(norm(ta[i] - q), norm(tb[i] - q)));
+            reach += 0.5 * std::fmin(longest_edge(ta), longest_edge(tb));
+            const double da = triangle_distance_of(q, ta);
+            const double db = triangle_distance_of(rel_.apply_inverse(q), tb_local);
+            push({max2(da, db) + reach * (1.0 + 1e-9) + slack_, kWedge, 2, static_cast<std::int32_t>(k), 0});
+        }
+    }
+
+    // Opens the queue highest bound first until no bound exceeds the best depth. False when
+    // the work cap stopped it.
+    bool run() {
+        std::vector<double> cuts;
+        while (!heap_.empty()) {
+            std::pop_heap(heap_.begin(), heap_.end());
+            const Entry e = heap_.back();
+            heap_.pop_back();
+            if (!(e.bound > best)) break;
+            bool ok = true;
+            if (e.kind == kNode) {
+                // A leaf whose bound is already within twice its radius of the best depth has
+                // its few corners measured directly (each search cut off at the best depth,
+                // mostly at its first leaf): cheaper than refining a deep centre's bound.
+                if (e.refined || direct_leaf(e)) {
+                    ok = open_node(e);
+                } else {
+                    refine_node(e);
+                }
+            } else if (e.kind == kEdge) {
+                const MeshBvh& self = e.mesh == 0 ? a_ : b_;
+                const MeshBvh& other = e.mesh == 0 ? b_ : a_;
+                const BvhNode& root = other.nodes()[0];
+                const Vec3* t = self.triangle(e.index);
+                std::int64_t piece = 0;
+                // The triangles the edge meets are near its triangle (the marks' margin is far
+                // above the rounding of the frames): the cuts of segment_crossings, found
+                // among those alone.
+                const Vec3 p = to_other(e.mesh, t[e.k]), q = to_other(e.mesh, t[(e.k + 1) % 3]);
+                const TriangleMarks& marks = *marks_[e.mesh];
+                cuts.assign({0.0, 1.0});
+                for (std::int32_t n = marks.first[static_cast<size_t>(e.index)]; n < marks.first[static_cast<size_t>(e.index) + 1]; ++n) {
+                    double cut = 0.0;
+                    if (segment_crosses_triangle(p, q, other.triangle(marks.others[static_cast<size_t>(n)]), &cut))
+                        cuts.push_back(cut);
+                }
+                add_pieces(p, q, cuts,
+                                [&](const Vec3& p) {
+                                    const Order order{e.mesh, 1, 3 * std::int64_t{e.index} + e.k, piece++};
+                                    if (ok && inside_box(root, p)) ok = try_point(e.mesh, p, Side::UNKNOWN, nullptr, order);
+                                });
+            } else {
+                wedges_.clear();
+                add_pair_wedge_points(a_, b_, rel_, *pairs_, static_cast<size_t>(e.index), wedges_);
+                for (size_t k = 0; k < wedges_.size() && ok; ++k)
+                    ok = try_wedge(wedges_[k], Order{2, e.index, static_cast<std::int64_t>(k), 0});
+            }
+            if (!ok) return false;
+        }
+        return true;
+    }
+
+    double best = 0.0;
+    bool have = false;
+    DepthCandidate winner{};
+    // The other mesh's triangle (leaf order) nearest a vertex or edge winner, found by the
+    // search that measured it (closest_point's, uncut), else -1.
+    std::int32_t winner_triangle = -1;
+    long long work() const { return work_; }
+
+private:
+    enum class Side : signed char { OUTSIDE, INSIDE, UNKNOWN };
+    // A point's place in the per-point search's order: mesh (0, 1, 2: wedges), then its
+    // vertices before its edge pieces (0, 1), then vertex, 3 * triangle + edge, or wedge
+    // point, then the piece along the edge.
+    struct Order {
+        std::int64_t mesh, group, index, piece;
+        bool operator<(const Order& o) const {
+            return std::tie(mesh, group, index, piece) < std::tie(o.mesh, o.group, o.index, o.piece);
+        }
+    };
+    static constexpr int kNode = 0, kEdge = 1, kWedge = 2;
+    struct Entry {
+        double bound;  // no point of the group is farther than this from the other surface
+        int kind, mesh;
+        std::int32_t index;  // node, triangle (leaf order) or crossing pair (wedge points)
+        int k;               // edge k of the triangle
+        // A node: a triangle of the other mesh (leaf order) near it, and whether `bound` comes
+        // from its centre's distance (else from its distance to `near`, a looser bound).
+        std::int32_t near = -1;
+        bool refined = false;
+        bool operator<(const Entry& o) const { return bound < o.bound; }
+    };
+
+    Vec3 to_other(int m, const Vec3& p) const { return m == 0 ? rel_.apply_inverse(p) : rel_.apply(p); }
+
+    static double triangle_distance_of(const Vec3& p, const Vec3* t) {
+        return std::sqrt(squared_norm(closest_point_on_triangle(p, t) - p));
+    }
+
+    void push(const Entry& e) {
+        if (!(e.bound > best)) return;
+        heap_.push_back(e);
+        std::push_heap(heap_.begin(), heap_.end());
+    }
+
+    // Child `id` of mesh m's node whose other-mesh triangle is `near`: first bounded by its
+    // centre's distance to that triangle, plus its radius (refined when it comes up).
+    void push_node(int m, std::int32_t id, std::int32_t near) {
+        if (!live_[m][static_cast<size_t>(id)]) return;
+        const MeshBvh& self = m == 0 ? a_ : b_;
+        const MeshBvh& other = m == 0 ? b_ : a_;
+        const WindingNode& w = self.winding_nodes()[static_cast<size_t>(id)];
+        const double d = triangle_distance_of(to_other(m, w.center), other.triangle(near));
+        push({d + w.radius + slack_, kNode, m, id, 0, near, false});
+    }
+
+    // The node bounded by its centre's distance to the other surface (a search cut off once
+    // the bound cannot beat the best) plus its radius, queued again.
+    void refine_node(const Entry& e) {
+        const MeshBvh& self = e.mesh == 0 ? a_ : b_;
+        const MeshBvh& other = e.mesh == 0 ? b_ : a_;
+        const WindingNode& w = self.winding_nodes()[static_cast<size_t>(e.index)];
+        const double floor = best - w.radius - slack_;
+        std::int32_t near = 0;
+        const Vec3 center = to_other(e.mesh, w.center);
+        double d = distance_within(other, center, max2(0.0, floor), w.radius, &near);
+        if (e.near >= 0) {  // the parent's triangle may be nearer than the one found
+            const double parent = triangle_distance_of(center, other.triangle(e.near));
+            if (parent < d) {
+                d = parent;
+                near = e.near;
+            }
+        }
+        if (d <= floor) return;
+        push({d + w.radius + slack_, kNode, e.mesh, e.index, 0, near, true});
+    }
+
+    bool direct_leaf(const Entry& e) const {
+        const MeshBvh& self = e.mesh == 0 ? a_ : b_;
+        const auto id = static_cast<size_t>(e.index);
+        return self.nodes()[id].is_leaf() && have && e.bound <= best + 2.0 * self.winding_nodes()[id].radius;
+    }
+
+    bool open_node(const Entry& e) {
+        const int m = e.mesh;
+        const MeshBvh& self = m == 0 ? a_ : b_;
+        const MeshBvh& other = m == 0 ? b_ : a_;
+        const BvhNode& node = self.nodes()[static_cast<size_t>(e.index)];
+        if (!node.is_leaf()) {
+            push_node(m, e.index + 1, e.near);
+            push_node(m, node.index, e.near);
+            return true;
+        }
+        const Vec3* near = other.triangle(e.near);
+        for (std::int32_t i = node.index; i < node.index + node.count; ++i)
+            for (int k = 0; k < 3; ++k) {
+                const std::int32_t v = self.triangle_vertices(i)[k];
+                char& done = done_[m][static_cast<size_t>(v)];
+                if (done) continue;
+                done = 1;
+                Side& side = side_[m][static_cast<size_t>(v)];
+                if (side == Side::OUTSIDE) continue;
+                const Vec3 p = to_other(m, self.vertices()[static_cast<size_t>(v)]);
+                // Bounded by the node's triangle and by the triangles near its own; a point at
+                // distance 0 from one (on the surface: the search would find 0) gives nothing.
+                double bound = triangle_distance_of(p, near);
+                const TriangleMarks& marks = *marks_[m];
+                for (std::int32_t n = marks.first[static_cast<size_t>(i)]; n < marks.first[static_cast<size_t>(i) + 1] && bound > 0.0; ++n)
+                    bound = min2(bound, triangle_distance_of(p, other.triangle(marks.others[static_cast<size_t>(n)])));
+                if (bound == 0.0 || !(bound + slack_ > best)) continue;
+                if (!try_point(m, p, side, &side, Order{m, 0, v, 0})) return false;
+            }
+        return true;
+    }
+
+    // Whether a point at distance d, `order` in the per-point search, would have replaced the
+    // best there: deeper, or as deep and sampled before it (so that the deepest point, and
+    // thus the witnesses, are the same whatever the order of work). A distance equal to the
+    // best that came from a search cut off at it (at most the best) is measured in full.
+    template <class Full>
+    bool beats(double& d, const Order& order, Full full) const {
+        if (d > best) return true;
+        if (!(have && d == best && order < winner_order_)) return false;
+        d = full();
+        return d == best;
+    }
+
+    // A point of mesh m (other's frame) whose side is `known` (UNKNOWN: an exact test, its
+    // verdict stored in `*store` when given): the new best when inside and deeper.
+    bool try_point(int m, const Vec3& p, Side known, Side* store, const Order& order) {
+        const MeshBvh& other = m == 0 ? b_ : a_;
+        std::int32_t triangle = -1;
+        double d = distance_beyond(other, p, best, &triangle);
+        if (!beats(d, order, [&] { return distance_beyond(other, p, 0.0, &triangle); })) return true;
+        if (known == Side::UNKNOWN) {
+            if (!may_test()) return false;
+            known = inside_mesh(other, p, &work_) ? Side::INSIDE : Side::OUTSIDE;
+            if (store != nullptr) *store = known;
+        }
+        if (known == Side::INSIDE) {
+            best = d;
+            winner = {p, d, m, false};
+            winner_triangle = triangle;
+            winner_order_ = order;
+            have = true;
+        }
+        return true;
+    }
+
+    bool try_wedge(DepthCandidate& c, const Order& order) {
+        // Outside a closed mesh's box is outside it (the test's verdict, without its work).
+        const Vec3 in_b = rel_.apply_inverse(c.point);
+        if (!inside_box(a_.nodes()[0], c.point) || !inside_box(b_.nodes()[0], in_b)) return true;
+        auto measure = [&](double floor) {
+            const double da = distance_beyond(a_, c.point, floor);
+            const double db = distance_beyond(b_, rel_.apply_inverse(c.point), floor);
+            c.farther_is_a = da >= db;
+            return std::fmax(da, db);
+        };
+        c.distance = measure(best);
+        if (!beats(c.distance, order, [&] { return measure(0.0); })) return true;
+        if (!may_test()) return false;
+        if (inside_mesh(a_, c.point, &work_) && inside_mesh(b_, in_b, &work_)) {
+            best = c.distance;
+            winner = c;
+            winner_triangle = -1;
+            winner_order_ = order;
+            have = true;
+        }
+        return true;
+    }
+
+    // Counts one exact inside test, or stops at the work cap.
+    bool may_test() {
+        if (work_ > defaults::mesh_depth_max_work) {
+            out_.status = Status::MAX_ITERATIONS;
+            return false;
+        }
+        ++out_.points_tested;
+        return true;
+    }
+
+    const MeshBvh& a_;
+    const MeshBvh& b_;
+    const Relative& rel_;
+    MeshDepthOutput& out_;
+    double slack_;  // allowance for rounding in the distance bounds (absolute)
+    long long work_ = 0;
+    std::vector<Side> side_[2];
+    std::vector<char> done_[2];
+    std::vector<char> live_[2];
+    const TriangleMarks* marks_[2] = {nullptr, nullptr};
+    const std::vector<CrossingPair>* pairs_ = nullptr;
+    std::vector<DepthCandidate> wedges_;  // scratch: one pair's wedge points
+    std::vector<Entry> heap_;
+    Order winner_order_{};
+};
 
 }  // namespace
 
@@ -984,15 +1477,41 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
     const MeshBvh& a = *input.a;
     const MeshBvh& b = *input.b;
     const Relative rel(input.pose_a, input.pose_b, *input.a, *input.b);  // b's frame -> a's frame
-    std::vector<char> crossing_a, crossing_b;
+    TriangleMarks marks_a, marks_b;
     std::vector<CrossingPair> crossing_pairs;
-    mark_crossing_triangles(a, b, rel, crossing_a, crossing_b, crossing_pairs);
-    std::vector<DepthCandidate> candidates;
-    add_candidates(a, b, crossing_a, [&](const Vec3& p) { return rel.apply_inverse(p); }, 0, candidates);
-    add_candidates(b, a, crossing_b, [&](const Vec3& p) { return rel.apply(p); }, 1, candidates);
-    add_wedge_candidates(a, b, rel, crossing_pairs, candidates);
+    mark_crossing_triangles(a, b, rel, marks_a, marks_b, crossing_pairs);
 
-    long long work = 0;
+    // The points of a mesh whose other mesh is closed: regions and branch and bound.
+    out.status = Status::CONVERGED;
+    ClosedDepthSearch search(a, b, rel, out);
+    const bool closed_other[2] = {b.closed(), a.closed()};
+    bool running = true;
+    for (int m = 0; m < 2 && running; ++m)
+        if (closed_other[m]) running = search.add_mesh(m, m == 0 ? marks_a : marks_b);
+    if (running) running = search.run();  // the vertices first: a best depth to prune with
+    for (int m = 0; m < 2 && running; ++m)
+        if (closed_other[m]) search.add_edges(m);
+    const bool wedges_closed = a.closed() && b.closed();
+    if (running && wedges_closed) search.add_wedges(crossing_pairs);
+    if (running) running = search.run();
+    double best = search.best;
+    bool have = search.have;
+    DepthCandidate winner = search.winner;
+    std::int32_t winner_triangle = search.winner_triangle;
+    long long work = search.work();
+
+    // Open meshes: the generalized winding number costs a pass over the triangles, so the
+    // distances come first and the points are decided deepest first, the first inside one
+    // ending the search; a point found outside at distance d proves every point within d of
+    // it outside (that ball holds no surface), which skips most of a cluster.
+    std::vector<DepthCandidate> undecided;
+    if (running) {
+        if (!closed_other[0])
+            add_candidates(a, b, marks_a.crossing, [&](const Vec3& p) { return rel.apply_inverse(p); }, 0, undecided);
+        if (!closed_other[1])
+            add_candidates(b, a, marks_b.crossing, [&](const Vec3& p) { return rel.apply(p); }, 1, undecided);
+        if (!wedges_closed) add_wedge_candidates(a, b, rel, crossing_pairs, undecided);
+    }
     auto inside = [&](const DepthCandidate& c) {
         if (c.mesh == 0) return inside_mesh(b, c.point, &work);
         if (c.mesh == 1) return inside_mesh(a, c.point, &work);
@@ -1010,39 +1529,6 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
         c.distance = std::fmax(da, db);
         c.farther_is_a = da >= db;
     };
-    auto closed = [&](const DepthCandidate& c) {
-        return c.mesh == 0 ? b.closed() : (c.mesh == 1 ? a.closed() : a.closed() && b.closed());
-    };
-
-    out.status = Status::CONVERGED;
-    double best = 0.0;
-    bool have = false;
-    DepthCandidate winner{};
-    // Closed meshes first: inside by exact ray crossings (a BVH query each), then the distance
-    // of the inside points only, each search cut off once it cannot beat the best.
-    std::vector<DepthCandidate> undecided;
-    for (DepthCandidate& c : candidates) {
-        if (!closed(c)) {
-            undecided.push_back(c);
-            continue;
-        }
-        if (work > defaults::mesh_depth_max_work) {
-            out.status = Status::MAX_ITERATIONS;
-            break;
-        }
-        ++out.points_tested;
-        if (!inside(c)) continue;
-        measure(c, best);
-        if (c.distance > best) {
-            best = c.distance;
-            winner = c;
-            have = true;
-        }
-    }
-    // Open meshes: the generalized winding number costs a pass over the triangles, so the
-    // distances come first and the points are decided deepest first, the first inside one
-    // ending the search; a point found outside at distance d proves every point within d of
-    // it outside (that ball holds no surface), which skips most of a cluster.
     if (out.status == Status::CONVERGED && !undecided.empty()) {
         for (DepthCandidate& c : undecided) measure(c, best);
         undecided.erase(std::remove_if(undecided.begin(), undecided.end(),
@@ -1071,6 +1557,7 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
             if (inside(c)) {
                 best = c.distance;
                 winner = c;
+                winner_triangle = -1;
                 have = true;
                 break;
             }
@@ -1085,13 +1572,19 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
     out.depth = best;
     Vec3 deep, surface;
     bool deep_is_a;
+    // The nearest point of the winner's triangle when the search kept it: closest_point's
+    // answer (the same search to the end), without searching again.
+    auto nearest = [&](const MeshBvh& mesh) {
+        return winner_triangle >= 0 ? closest_point_on_triangle(winner.point, mesh.triangle(winner_triangle))
+                                    : closest_point(mesh, winner.point).point;
+    };
     if (winner.mesh == 0) {
         deep = input.pose_b.apply(winner.point);
-        surface = input.pose_b.apply(closest_point(b, winner.point).point);
+        surface = input.pose_b.apply(nearest(b));
         deep_is_a = true;
     } else if (winner.mesh == 1) {
         deep = input.pose_a.apply(winner.point);
-        surface = input.pose_a.apply(closest_point(a, winner.point).point);
+        surface = input.pose_a.apply(nearest(a));
         deep_is_a = false;
     } else {
         deep = input.pose_a.apply(winner.point);

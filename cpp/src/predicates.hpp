@@ -160,6 +160,10 @@ inline double orient2d(double ax, double ay, double bx, double by, double cx, do
     // The bound assumes no underflow: a permanent in the denormal range goes exact.
     if ((det > bound || -det > bound) && permanent > 0x1p-900) return det;
     if (!std::isfinite(det)) return det;  // non-finite input: no meaningful sign
+    // Three points on one axis-parallel line are collinear: a column of the determinant is
+    // exactly zero (the difference of two doubles is zero only when they are equal). Common in
+    // axis-aligned contacts, where the filter cannot decide; it saves the exact evaluation.
+    if ((ax == cx && bx == cx) || (ay == cy && by == cy)) return 0.0;
     return detail::orient2d_exact(ax, ay, bx, by, cx, cy);
 }
 
@@ -181,6 +185,11 @@ inline double orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& 
     // The bound assumes no underflow: a permanent in the denormal range goes exact.
     if ((det > bound || -det > bound) && permanent > 0x1p-900) return det;
     if (!std::isfinite(det)) return det;
+    // Four points on one axis-parallel plane are coplanar (a column is exactly zero), as in
+    // orient2d: the flush faces of axis-aligned contacts, decided without the exact evaluation.
+    if ((adx == 0.0 && bdx == 0.0 && cdx == 0.0) || (ady == 0.0 && bdy == 0.0 && cdy == 0.0) ||
+        (adz == 0.0 && bdz == 0.0 && cdz == 0.0))
+        return 0.0;
     return detail::orient3d_exact(a, b, c, d);
 }
 

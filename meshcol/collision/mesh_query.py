@@ -485,7 +485,8 @@ class MeshDepthBatch:
     deepest_mesh : (P,) int8
         0 when the deepest point is a's (inside b), 1 when it is b's, -1 when none is inside.
     points_tested : (P,) int64
-        Winding numbers evaluated.
+        Exact inside tests run: one per region of points when the other mesh is closed (see
+        the Notes of :func:`mesh_penetration_depth_batch`), one per point otherwise.
     status : (P,) int8
         :class:`meshcol.types.Status`: ``CONVERGED``; ``MAX_ITERATIONS`` when the pair used
         ``defaults.mesh_depth_max_work`` triangle visits (depth is then that of the points
@@ -531,8 +532,12 @@ def mesh_penetration_depth_batch(
     translation distance: a resting contact has depth 0 however concave its bodies, and a
     reported depth is always at most the true one (exactly the true one for a box sunk into a
     box's face). Distances come from the other mesh's hierarchy (exact point-triangle
-    distance); points are decided deepest first, the first inside one ends the search, and a
-    point found outside at distance d proves every point within d of it outside.
+    distance). When the other mesh is closed, points are decided by regions (vertices joined
+    by edges of triangles clear of the other surface lie on one side, so one exact test decides
+    each region) and the largest distance is found by branch and bound over the hierarchies;
+    otherwise points are decided deepest first, the first inside one ends the search, and a
+    point found outside at distance d proves every point within d of it outside. Either way the
+    depth is the same maximum over the same points.
     """
     if not isinstance(meshes, MeshSet):
         raise TypeError(f"meshes must be a MeshSet, got {type(meshes).__name__}")

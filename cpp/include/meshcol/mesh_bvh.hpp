@@ -81,6 +81,8 @@ public:
     const Vec3* triangle(std::int32_t i) const { return &corners_[3 * static_cast<size_t>(i)]; }
     /// The vertices used by at least one face, each once, local frame (input order).
     const std::vector<Vec3>& vertices() const { return vertices_; }
+    /// The three corners of triangle `i` (leaf order) as indices into `vertices()`.
+    const std::int32_t* triangle_vertices(std::int32_t i) const { return &corner_vertices_[3 * static_cast<size_t>(i)]; }
     /// The input face index of triangle `i` (leaf order).
     std::int64_t face_index(std::int32_t i) const { return face_index_[static_cast<size_t>(i)]; }
 
@@ -100,6 +102,7 @@ private:
     std::vector<NodeObb> obbs_;
     std::vector<Vec3> corners_;            ///< 3 per triangle, leaf order
     std::vector<Vec3> vertices_;           ///< vertices referenced by a face, input order
+    std::vector<std::int32_t> corner_vertices_;  ///< 3 per triangle, leaf order, into vertices_
     bool closed_ = false;
     std::vector<std::int64_t> face_index_;  ///< leaf order -> input face
 };

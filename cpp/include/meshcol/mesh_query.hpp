@@ -68,7 +68,9 @@ struct MeshDepthOutput {
     /// that moving b by depth along it separates a non-convex pair.
     Vec3 normal;
     int deepest_mesh = -1;  ///< 0: the deepest point is a's (inside b); 1: b's; -1: none
-    std::int64_t points_tested = 0;  ///< winding numbers evaluated
+    /// exact inside tests run: one per region of points (closed other mesh), one per point
+    /// otherwise
+    std::int64_t points_tested = 0;
     Status status = Status::NOT_RUN;  ///< CONVERGED, MAX_ITERATIONS (work cap), INVALID_INPUT
 };
 
@@ -76,12 +78,18 @@ struct MeshDepthOutput {
 /// distance (the depth of `MeshDepthOutput`). The sampled points of each mesh are its vertices
 /// and, on every edge of a triangle that crosses the other surface, the midpoints of the
 /// pieces between consecutive crossings (so an edge through a thin wall counts even when both
-/// its vertices are outside). Each point's distance to the other surface comes from that
-/// mesh's hierarchy (`closest_point`); points are then decided deepest first, by the
-/// generalized winding number, until the first inside one, which is the answer. A point found
-/// outside proves every point closer to it than its distance outside too (that ball holds no
-/// surface), which skips most winding numbers of clustered points. Pairs whose surfaces are
-/// disjoint still get the depth of the deepest vertex inside (containment).
+/// its vertices are outside), and points stepped into the wedges of crossing triangle pairs.
+/// Each point's distance to the other surface comes from that mesh's hierarchy
+/// (`closest_point`). When the other mesh is closed, its points are decided by regions (the
+/// vertices joined by edges of triangles clear of the other surface share a side, so one exact
+/// ray-crossing test decides each region) and the largest distance is found by branch and
+/// bound over the hierarchies (a node's corners are no farther than its centre's distance plus
+/// its radius), so that most points are neither tested nor measured. Otherwise (an open or
+/// non-manifold other mesh) points are decided deepest first by the generalized winding
+/// number, until the first inside one; a point found outside proves every point closer to it
+/// than its distance outside too. Either way the depth is the same maximum over the same
+/// points. Pairs whose surfaces are disjoint still get the depth of the deepest vertex inside
+/// (containment).
 MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input);
 
 /// Whether the surfaces intersect (touching counts): descends only overlapping boxes, stops at
