@@ -142,3 +142,15 @@ def transform(points: np.ndarray, pose: np.ndarray | None) -> np.ndarray:
 def box_corners(size) -> np.ndarray:
     h = np.asarray(size, dtype=np.float64) / 2.0
     return np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * h
+
+
+def quaternion_rotation(q) -> np.ndarray:
+    """The rotation matrix of quaternion ``q`` = (w, x, y, z), normalised first."""
+    w, x, y, z = np.asarray(q, dtype=float) / np.linalg.norm(q)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )

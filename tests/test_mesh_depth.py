@@ -18,6 +18,7 @@ import pytest
 import trimesh
 from hypothesis import example, given
 from hypothesis import strategies as st
+from oracles import quaternion_rotation
 
 from meshcol.analysis.check import CheckOptions, check_scene
 from meshcol.collision.mesh_query import (
@@ -105,17 +106,6 @@ def _pose(rotation: np.ndarray | None = None, translation=(0.0, 0.0, 0.0)) -> np
     return m
 
 
-def _rotation(q) -> np.ndarray:
-    w, x, y, z = np.asarray(q, dtype=float) / np.linalg.norm(q)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
-
-
 def _scene(host: trimesh.Trimesh, cube: trimesh.Trimesh, offset: float, motion: np.ndarray):
     """Host and cube under a common rigid motion, the cube moved by offset along the approach
     (the host's z axis: positive lifts it)."""
@@ -165,7 +155,7 @@ def test_resting_contact_under_any_rigid_motion_is_never_penetrating(
     """The class of the defect: rounding of a rotated, translated scene makes the touching
     triangles cross by ~1e-16 to 1e-7; the status must stay contact and the depth tiny."""
     host, cube = HOSTS[name]
-    scene = _scene(host, cube, offset, _pose(_rotation(q), t))
+    scene = _scene(host, cube, offset, _pose(quaternion_rotation(q), t))
     (pair,) = check_scene(scene, CheckOptions(collider="mesh")).pairs
     assert pair["status"] == "contact", pair
     assert pair["depth"] <= 1e-7 + 1e-9
@@ -246,7 +236,7 @@ def test_edge_through_a_thin_wall_counts() -> None:
     vertices all outside the bar; the pieces of the bar's edges inside the wall give depth."""
     wall = box([-1, -1, -0.05], [1, 1, 0.05])
     bar = trimesh.creation.box(extents=[0.1, 0.1, 1.0])
-    tilt = _pose(_rotation([math.cos(0.2), math.sin(0.2), 0, 0]))
+    tilt = _pose(quaternion_rotation([math.cos(0.2), math.sin(0.2), 0, 0]))
     meshes = MeshSet.from_arrays([wall, bar], np.stack([np.eye(4), tilt]))
     r = mesh_penetration_depth_batch(meshes, None, [[0, 1]])
     assert 0.0 < r.depth[0] <= 0.05 + 1e-12
@@ -309,7 +299,7 @@ def test_exact_ray_crossings_agree_with_the_winding_number(name: str, q, t) -> N
     depth of the same pair made open by a stray far triangle (generalized winding number)."""
     host, _ = HOSTS[name]
     cube = box([-0.3, -0.3, -0.3], [0.3, 0.3, 0.3])
-    pose = _pose(_rotation(q), np.array(t) + host.bounds.mean(axis=0))
+    pose = _pose(quaternion_rotation(q), np.array(t) + host.bounds.mean(axis=0))
     closed = MeshSet.from_arrays([host, cube], np.stack([np.eye(4), pose]))
     opened = MeshSet.from_arrays([_open_copy(host), cube], np.stack([np.eye(4), pose]))
     assert closed._handle.closed(0) and not opened._handle.closed(0)

@@ -18,6 +18,7 @@ import pytest
 import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from oracles import quaternion_rotation
 
 from meshcol.collision.mesh_query import MeshSet, mesh_penetration_depth_batch
 from meshcol.types import Status
@@ -156,17 +157,6 @@ def oracle_depth(ta: np.ndarray, tb: np.ndarray) -> tuple[float, np.ndarray]:
 # -- helpers ---------------------------------------------------------------------------------
 
 
-def _rotation(q) -> np.ndarray:
-    w, x, y, z = np.asarray(q, dtype=float) / np.linalg.norm(q)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
-
-
 def _pose(rotation=None, translation=(0.0, 0.0, 0.0)) -> np.ndarray:
     m = np.eye(4)
     if rotation is not None:
@@ -243,7 +233,7 @@ def test_depth_matches_a_brute_force_oracle(name_a: str, name_b: str, q, t) -> N
     a pair's witness point); that point is then checked by brute force: inside both meshes, at
     exactly the depth."""
     a, b = SHAPES[name_a], SHAPES[name_b]
-    pose_b = _pose(_rotation(np.asarray(q) + NUDGE_Q), np.asarray(t) + NUDGE_T)
+    pose_b = _pose(quaternion_rotation(np.asarray(q) + NUDGE_Q), np.asarray(t) + NUDGE_T)
     r = _depth([a, b], [np.eye(4), pose_b])
     assert (r.status == Status.CONVERGED).all()
     ta, tb = _posed(a, np.eye(4)), _posed(b, pose_b)
@@ -259,7 +249,7 @@ def test_regions_agree_with_the_per_point_winding_number(name_a: str, name_b: st
     way: every sample decided by the generalized winding number, deepest first. The samples and
     distances are the same, so the depths are too."""
     a, b = SHAPES[name_a], SHAPES[name_b]
-    poses = [np.eye(4), _pose(_rotation(q), t)]
+    poses = [np.eye(4), _pose(quaternion_rotation(q), t)]
     closed = _depth([a, b], poses)
     opened = _depth([_open_copy(a), _open_copy(b)], poses)
     assert closed.depth == pytest.approx(opened.depth, rel=1e-12, abs=1e-15)
@@ -321,7 +311,7 @@ def test_thin_wall_crossed_by_edges_with_both_ends_outside() -> None:
     most its half thickness, and equal to the per-point search's."""
     wall = trimesh.creation.box(extents=[2.0, 2.0, 0.1])
     bar = trimesh.creation.box(extents=[0.1, 0.1, 1.0])
-    tilt = _pose(_rotation([np.cos(0.2), np.sin(0.2), 0, 0]))
+    tilt = _pose(quaternion_rotation([np.cos(0.2), np.sin(0.2), 0, 0]))
     r = _depth([wall, bar], [np.eye(4), tilt])
     assert (r.depth > 0.0).all() and (r.depth <= 0.05 + 1e-12).all()
     opened = _depth([_open_copy(wall), _open_copy(bar)], [np.eye(4), tilt])

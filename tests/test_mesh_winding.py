@@ -12,6 +12,7 @@ import pytest
 import trimesh
 from hypothesis import given
 from hypothesis import strategies as st
+from oracles import quaternion_rotation
 
 from meshcol._native import core as _core
 from meshcol.collision.mesh_query import MeshSet, mesh_distance_batch
@@ -175,17 +176,6 @@ def _brute_force_distance(a, pa, b, pb) -> float:
     return float(d.min())
 
 
-def _rotation(q) -> np.ndarray:
-    w, x, y, z = np.asarray(q, dtype=float) / np.linalg.norm(q)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
-
-
 quaternions = st.tuples(*[st.floats(-1, 1) for _ in range(4)]).filter(
     lambda q: sum(x * x for x in q) > 0.01
 )
@@ -204,7 +194,7 @@ def test_rotated_near_pairs_equal_brute_force(i, j, qa, qb, gap) -> None:
     if i == j:
         return
     pa, pb = np.eye(4), np.eye(4)
-    pa[:3, :3], pb[:3, :3] = _rotation(qa), _rotation(qb)
+    pa[:3, :3], pb[:3, :3] = quaternion_rotation(qa), quaternion_rotation(qb)
     pb[:3, 3] = [2.2 + gap, 0.3, -0.2]
     poses = np.tile(np.eye(4), (len(SMALL), 1, 1))
     poses[i], poses[j] = pa, pb
