@@ -140,3 +140,18 @@ def test_a_report_to_a_device_or_pipe_is_written_into_it_never_replacing_it(tmp_
     assert got == [b'{"ok": true}\n']
     assert stat.S_ISFIFO(os.stat(pipe).st_mode)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["pipe.json"]
+
+
+@pytest.mark.parametrize("spelling", ["gone.obj", "./gone.obj", "sub/../gone.obj", "link.json"])
+def test_an_output_spelled_as_a_missing_input_is_refused(tmp_path, monkeypatch, spelling) -> None:
+    """An input that does not exist, named by the output in another spelling (or reached by
+    the output's dangling link), would be created by the run: refused as overwriting it."""
+    from meshcol.io.outputs import check_destinations
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "link.json").symlink_to(tmp_path / "gone.obj")  # dangling
+    inputs = [("the input", "a.obj"), ("a mesh file of scene.json", "gone.obj")]
+    with pytest.raises(MeshcolError, match=r"would overwrite a mesh file of scene\.json"):
+        check_destinations(inputs, [("--report", spelling)])
+    check_destinations(inputs, [("--report", "other.json")])  # another name: accepted

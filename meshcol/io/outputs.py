@@ -162,9 +162,16 @@ def check_destinations(
             same = identities.get((st.st_dev, st.st_ino))
             if same is not None:
                 raise OutputPathError(f"{label} would overwrite {same}", path)
+        # A missing input spelled as this output (reading it will fail anyway). Its resolved
+        # path ends in its own last name (nothing of it exists to resolve), so only inputs
+        # named as the output's resolved path ends are looked at: no lstat per input.
+        name = os.path.normcase(os.path.basename(os.path.realpath(path)))
         for description, in_path in read:
-            if not os.path.lexists(in_path) and _key(path) == _key(in_path):
-                # a missing input spelled as this output (reading it will fail anyway)
+            if (
+                os.path.normcase(os.path.basename(os.path.normpath(in_path))) == name
+                and not os.path.lexists(in_path)
+                and _key(path) == _key(in_path)
+            ):
                 raise OutputPathError(f"{label} would overwrite {description}", path)
         for out_label, out_path in written:
             if same_file(path, out_path):
