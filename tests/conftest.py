@@ -156,6 +156,11 @@ SLOW_TESTS = {
     "test_ray_cast_equals_brute_force",
     "test_resting_contact_under_any_rigid_motion_is_never_penetrating",
     "test_decompose_robot_target_that_cannot_be_met_names_the_rule",
+    # session 8: the fast lane reached 50 s (60 s with its install); the slowest go here
+    "test_hull_target_that_cannot_be_met_exits_1_with_the_rule_id",
+    "test_combined_ucx_and_glb_layouts",
+    "test_every_profile_meets_its_limits_or_says_which",
+    "test_nested_meshes_without_crossing",
 }
 
 
