@@ -445,6 +445,12 @@ def test_rules_command_lists_and_shows_one() -> None:
     assert [r["id"] for r in data["rules"]] == [rule.id for rule in RULES]
     unknown = run("rules", "MC999")
     assert unknown.exit_code == 2 and "MC999" in unknown.stderr
+    rows = run("rules", "--format", "csv").output.splitlines()
+    assert rows[0].startswith("id,") and len(rows) == len(RULES) + 1
+    # The registry has no findings for CI annotations: refused, never JSON in their place.
+    for fmt in ("junit", "github"):
+        refused = run("rules", "--format", fmt)
+        assert refused.exit_code == 2 and "writes json or csv" in refused.stderr
 
 
 @pytest.mark.parametrize("name", ["7_8ths_cube.stl", "angle_block.STL", "featuretype.STL"])

@@ -37,6 +37,22 @@ def validate(data: dict, command: str) -> None:
     jsonschema.Draft202012Validator(schema).validate(data)
 
 
+def decompose_to(urdf: Path, out: Path, report: Path, target: str, *extra: str):
+    """``meshcol decompose URDF --out-dir OUT --target T --report R`` at the fast settings."""
+    return run(
+        "decompose",
+        str(urdf),
+        "--out-dir",
+        str(out),
+        "--target",
+        target,
+        *extra,
+        "--report",
+        str(report),
+        *FAST_DECOMPOSE,
+    )
+
+
 def urdf_colliders(path: Path, cfg: dict) -> dict[str, list[np.ndarray]]:
     """World vertices of every collision mesh of a URDF, by link, as yourdfpy loads it."""
     import trimesh
@@ -131,18 +147,7 @@ def test_hull_mjcf_robot_target(mjcf: Path, tmp_path: Path):
 @pytest.mark.slow
 def test_decompose_robot_target_every_part_meets_the_limits(urdf: Path, tmp_path: Path):
     out, report = tmp_path / "out", tmp_path / "d.json"
-    code, _, stderr = run(
-        "decompose",
-        str(urdf),
-        "--out-dir",
-        str(out),
-        "--target",
-        "physx-gpu",
-        "--no-cache",
-        "--report",
-        str(report),
-        *FAST_DECOMPOSE,
-    )
+    code, _, stderr = decompose_to(urdf, out, report, "physx-gpu", "--no-cache")
     assert code == 0, stderr
     data = json.loads(report.read_text())
     validate(data, "decompose")
@@ -165,17 +170,7 @@ def test_decompose_robot_target_that_cannot_be_met_names_the_rule(urdf: Path, tm
     profile = tmp_path / "round.toml"
     profile.write_text('title = "Round"\n[limits]\nmax_oblong_ratio = 1.0\n')
     out, report = tmp_path / "out", tmp_path / "d.json"
-    code, _, stderr = run(
-        "decompose",
-        str(urdf),
-        "--out-dir",
-        str(out),
-        "--target",
-        str(profile),
-        "--report",
-        str(report),
-        *FAST_DECOMPOSE,
-    )
+    code, _, stderr = decompose_to(urdf, out, report, str(profile))
     assert code == 1, stderr
     assert "MC102 not-gpu-compatible-oblong" in stderr
     data = json.loads(report.read_text())
@@ -191,17 +186,7 @@ def test_decompose_robot_shares_max_hulls_among_an_elements_objects(urdf: Path, 
         profile = tmp_path / f"hulls{count}.toml"
         profile.write_text(f'title = "Hulls"\n[limits]\nmax_hulls = {count}\n')
         out, report = tmp_path / f"out{count}", tmp_path / f"d{count}.json"
-        code, _, stderr = run(
-            "decompose",
-            str(urdf),
-            "--out-dir",
-            str(out),
-            "--target",
-            str(profile),
-            "--report",
-            str(report),
-            *FAST_DECOMPOSE,
-        )
+        code, _, stderr = decompose_to(urdf, out, report, str(profile))
         assert code == code_expected, stderr
         data = json.loads(report.read_text())
         validate(data, "decompose")

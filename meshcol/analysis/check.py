@@ -193,7 +193,8 @@ class CheckReport:
         could not be decomposed), one line each.
     findings : list of dict
         Finding records (:class:`meshcol.analysis.rules.Finding` fields and ``failed``):
-        MC301 per body without a usable collider, one per pair not separated nor ignored.
+        MC301 per body without a usable collider, and a target's limits per body and part. A
+        pair's rule is its status (:data:`PAIR_RULES`), in ``pairs``, not repeated here.
     """
 
     bodies: list[dict]

@@ -26,6 +26,8 @@ __all__ = [
     "hull",
     "hull_row",
     "out_dir_paths",
+    "target_hull",
+    "target_limits",
 ]
 
 #: Columns of :meth:`HullReport.to_csv`, one row per body.
@@ -390,11 +392,7 @@ def hull(
     check_body_count(output, len(bodies))
     limits = None
     if target is not None:
-        limits = dict(target.limits)
-        if max_vertices is not None:
-            limits["max_hull_vertices"] = min(
-                int(max_vertices), int(limits.get("max_hull_vertices", max_vertices))
-            )
+        limits = target_limits(target, max_vertices)
         length_scale = target.length_scale(scene.units)
 
     # Compute everything first: a bad body stops the run before any file is written.
@@ -406,7 +404,7 @@ def hull(
             if limits is None:
                 result = convex_hull(body.world_vertices(), max_vertices=max_vertices)
             else:
-                result = _target_hull(body.world_vertices(), limits, length_scale)
+                result = target_hull(body.world_vertices(), limits, length_scale)
         except InvalidMeshError as exc:
             raise InvalidMeshError(f"body '{body.name}': {exc.message}", body.source) from exc
         if result.flat:
@@ -449,7 +447,17 @@ def hull(
     )
 
 
-def _target_hull(points: Any, limits: dict, length_scale: float) -> Any:
+def target_limits(target: Any, max_vertices: int | None) -> dict[str, Any]:
+    """A target's limits with ``--max-vertices`` applied: the tighter vertex count wins."""
+    limits = dict(target.limits)
+    if max_vertices is not None:
+        limits["max_hull_vertices"] = min(
+            int(max_vertices), int(limits.get("max_hull_vertices", max_vertices))
+        )
+    return limits
+
+
+def target_hull(points: Any, limits: dict, length_scale: float) -> Any:
     """The hull of ``points`` fitted to ``limits``, as a :class:`HullResult` (its exact-hull
     fields from the input) that also carries the fit (``target_fit``)."""
     from meshcol.collision.hull import HullResult, exact_hull

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.analysis.rules import Finding
+from meshcol.analysis.rules import Finding, get_rule
 from meshcol.errors import InvalidMeshError
 from meshcol.geometry.mass import MassProperties
 from meshcol.geometry.topology import (
@@ -51,7 +51,7 @@ RULES: tuple[str, ...] = (
     "suspect-units",
 )
 #: The rule id of each mesh-health finding.
-HEALTH_IDS = {name: f"MC{401 + k}" for k, name in enumerate(RULES)}
+HEALTH_IDS = {name: get_rule(name).id for name in RULES}
 #: Largest extent, in units, above which a body is probably in millimetres, not metres
 #: (a 400-unit chair), and above which no unit makes it a plausible single asset.
 MILLIMETRE_EXTENT = 100.0
@@ -362,11 +362,7 @@ def health_findings(result: MeshInspection, body: str, part: str | None) -> list
         "multiple-components": (r.components, 1, f"{r.components} disconnected pieces"),
         "suspect-units": (extent, units_limit, r.units_reason),
     }
-    return [
-        finding(HEALTH_IDS[name], body, part, *measures[name])
-        for name in r.findings
-        if name in measures
-    ]
+    return [finding(HEALTH_IDS[name], body, part, *measures[name]) for name in r.findings]
 
 
 # ---------------------------------------------------------------------------------------------

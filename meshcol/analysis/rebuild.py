@@ -133,6 +133,7 @@ def robot_colliders(
     InvalidMeshError
         An element with no hull (flat beyond repair, collinear), naming its link.
     """
+    from meshcol.analysis.hull import target_hull, target_limits
     from meshcol.collision.hull import convex_hull
     from meshcol.decomposition.batch import decompose_meshes
     from meshcol.io.robot import current_robot_options
@@ -144,11 +145,7 @@ def robot_colliders(
         raise ValueError("a target applies to hull and decompose, not fit")
     limits: dict[str, Any] | None = None
     if target is not None and method == "hull":
-        limits = dict(target.limits)
-        if max_vertices is not None:
-            limits["max_hull_vertices"] = min(
-                int(max_vertices), int(limits.get("max_hull_vertices", max_vertices))
-            )
+        limits = target_limits(target, max_vertices)
     source = os.fspath(path)
     scene, elements, kind = _load(source)
     names = _element_names(source, kind)
@@ -194,7 +191,7 @@ def robot_colliders(
                 if limits is None:
                     result = convex_hull(body.vertices, max_vertices=max_vertices)
                 else:
-                    result = _target_hull(body.vertices, limits, target.length_scale("m"))
+                    result = target_hull(body.vertices, limits, target.length_scale("m"))
             except InvalidMeshError as exc:
                 raise InvalidMeshError(f"{label}: {exc.message}", source) from None
             colliders.append(Collider(link, index, ((result.vertices, result.faces),), None))
@@ -241,12 +238,6 @@ def robot_colliders(
         package_paths=dict(current_robot_options().package_paths),
     )
     return robot, info
-
-
-def _target_hull(points: np.ndarray, limits: Mapping[str, Any], length_scale: float) -> Any:
-    from meshcol.analysis.hull import _target_hull as target_hull
-
-    return target_hull(points, dict(limits), length_scale)
 
 
 def _element_target(

@@ -578,10 +578,6 @@ class RulesReport:
     selected: tuple[str, ...] = ()
 
     @property
-    def exit_code(self) -> int:
-        return 0
-
-    @property
     def summary(self) -> dict[str, Any]:
         return {
             "rules": len(self.rules),

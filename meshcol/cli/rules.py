@@ -35,7 +35,7 @@ def rules(rule_keys: tuple[str, ...], report: str | None, fmt: str | None) -> No
       meshcol rules --format json        the registry as JSON
     """
     from meshcol.analysis.rules import UnknownRuleError, rules_report
-    from meshcol.io.report import emit
+    from meshcol.io.report import emit, report_text
 
     try:
         result = rules_report(rule_keys)
@@ -44,9 +44,10 @@ def rules(rule_keys: tuple[str, ...], report: str | None, fmt: str | None) -> No
     if report is None and fmt is None:
         click.echo(_full(result.rules) if rule_keys else _table(result.rules))
         sys.exit(0)
-    fmt = report_format(report, fmt)
-    emit(result.to_csv() if fmt == "csv" else result.to_json(), report)
-    sys.exit(result.exit_code)
+    # The registry has no findings to annotate: JSON or CSV only (junit, github: exit 2).
+    fmt = report_format(report, fmt, formats=("json", "csv"))
+    emit(report_text(result, fmt), report)
+    sys.exit(0)
 
 
 def _table(rules) -> str:
