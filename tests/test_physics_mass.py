@@ -61,10 +61,13 @@ def test_fine_tessellations_converge_to_the_closed_forms(mesh, primitive, rel) -
 
 
 def test_sphere_closed_forms() -> None:
+    """Textbook values for r = 2 (density 1), none taken from the result: V = 32 pi / 3,
+    A = 16 pi, solid I = 2/5 V r^2 = 256 pi / 15, shell I = 2/3 A r^2 = 128 pi / 3."""
     exact = primitive_mass_properties(Sphere(2.0))
-    assert exact.volume == pytest.approx(4 / 3 * np.pi * 8)
-    assert exact.inertia[0, 0] == pytest.approx(0.4 * exact.volume * 4)
-    assert exact.shell_inertia[0, 0] == pytest.approx(2 / 3 * exact.area * 4)
+    assert exact.volume == pytest.approx(32 * np.pi / 3)
+    assert exact.area == pytest.approx(16 * np.pi)
+    np.testing.assert_allclose(exact.inertia, np.eye(3) * 256 * np.pi / 15, atol=1e-12)
+    np.testing.assert_allclose(exact.shell_inertia, np.eye(3) * 128 * np.pi / 3, atol=1e-12)
 
 
 @pytest.mark.parametrize("seed", range(5))
@@ -129,3 +132,16 @@ def test_flat_mesh_has_no_solid_values_but_a_shell() -> None:
     assert p.volume == 0.0 and np.isnan(p.center_of_mass).all()
     assert p.area == pytest.approx(1.0)
     assert p.shell_center_of_mass == pytest.approx([1 / 3, 1 / 3, 0])
+
+
+@pytest.mark.parametrize(
+    "primitive", [Sphere(0.7), Box((0.5, 1.0, 2.0)), Capsule(0.3, 1.5), Cylinder(0.4, 2.0)]
+)
+def test_primitive_volumes_agree_with_the_fit_module(primitive) -> None:
+    """geometry.mass sits below collision.fit, so each has its own primitive volume: they
+    must stay equal (inspect's physics rows and fit's volume ratios use one each)."""
+    from meshcol.collision.fit import primitive_volume
+
+    assert primitive_mass_properties(primitive).volume == pytest.approx(
+        primitive_volume(primitive), rel=1e-12
+    )
