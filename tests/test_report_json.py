@@ -160,3 +160,28 @@ def test_rows_of_one_shape_match_json_with_percent_keys_and_ragged_vectors():
 def test_non_string_keys_are_left_to_json():
     obj = [{1: "a"}, {1: "b"}]
     assert dumps_json(obj) == json.dumps(obj, sort_keys=True, indent=2) + "\n"
+
+
+def test_an_error_other_than_not_serialisable_is_raised_once_never_swallowed() -> None:
+    """A conversion that fails with anything but TypeError (an interrupt, a memory error)
+    propagates from the core's encoder as it is: it is not taken for "not serialisable" and
+    retried by the Python encoder (which, on a second call that happened to succeed, wrote a
+    report after an interrupt)."""
+    calls = []
+
+    class Flaky:
+        def tolist(self):
+            calls.append(1)
+            if len(calls) == 1:
+                raise KeyboardInterrupt
+            return [1.0]
+
+    with pytest.raises(KeyboardInterrupt):
+        dumps_json({"a": Flaky()})
+    assert calls == [1]
+
+    class Opaque:
+        pass
+
+    with pytest.raises(TypeError, match="Opaque is not JSON serializable"):
+        dumps_json({"a": Opaque()})

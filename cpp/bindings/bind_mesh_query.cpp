@@ -386,7 +386,7 @@ nb::object intersects_batch(const MeshBvhSet& set, nb::handle poses, nb::handle 
     std::int8_t* status = nullptr;
     nb::object intersecting_arr = numpy_empty(n, &intersecting);
     nb::object status_arr = numpy_empty(n, &status);
-    const std::int64_t* ij = in.data;
+    const std::int64_t* ij = in.data;  // replaced by the pinned copy before the GIL goes
     const auto run = [&](long long begin, long long end) {
         for (long long k = begin; k < end; ++k) {
             const auto i = static_cast<size_t>(ij[2 * k]);
@@ -401,6 +401,7 @@ nb::object intersects_batch(const MeshBvhSet& set, nb::handle poses, nb::handle 
         run(0, in.count);  // one pair: a disjoint one costs less than releasing the GIL
     } else {
         in.pin();
+        ij = in.data;  // the loop reads the copy (`run` holds ij by reference), never numpy's
         nb::gil_scoped_release release;
         meshcol::parallel_for(in.count, t, run);
     }

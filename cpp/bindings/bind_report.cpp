@@ -52,7 +52,12 @@ public:
         // numpy arrays and scalars, other mappings: the Python side's _builtin
         // (each conversion counts as a level: one that never ends in plain values declines)
         PyObject* plain = PyObject_CallFunctionObjArgs(builtin_, o, nullptr);
-        if (plain == nullptr) throw Decline{};  // not serialisable: Python raises the error
+        if (plain == nullptr) {
+            // not serialisable (builtin's TypeError): declined, Python raises that error; any
+            // other exception (KeyboardInterrupt, MemoryError) propagates as it is
+            if (!PyErr_ExceptionMatches(PyExc_TypeError)) throw nb::python_error();
+            throw Decline{};
+        }
         ++conversions_;
         try {
             value(plain, level);

@@ -630,7 +630,6 @@ struct DepthCandidate {
     int mesh;  // 0: a point of a (frame of b); 1: a point of b (frame of a); 2: a point of
                // neither surface that may lie inside both (frame of a)
     bool farther_is_a;  // mesh 2: a's surface is the farther one
-    std::int32_t pair = -1;  // mesh 2: the crossing pair it steps in from
 };
 
 inline double longest_edge(const Vec3 t[3]) {
@@ -657,7 +656,6 @@ void add_pair_wedge_points(const MeshBvh& a, const MeshBvh& b, const Relative& r
                            const std::vector<CrossingPair>& pairs, size_t k, std::vector<DepthCandidate>& out) {
     {
         const CrossingPair& c = pairs[k];
-        const auto pair = static_cast<std::int32_t>(k);
         const Vec3* ta = a.triangle(c.a);
         const Vec3* tb_local = b.triangle(c.b);
         const Vec3 tb[3] = {rel.apply(tb_local[0]), rel.apply(tb_local[1]), rel.apply(tb_local[2])};
@@ -677,8 +675,8 @@ void add_pair_wedge_points(const MeshBvh& a, const MeshBvh& b, const Relative& r
         for (double step : {0.5 * h, 0.125 * h, 0.03125 * h}) {
             // Each triangle's centroid, stepped into its own solid: finds coincident and
             // coplanar overlaps, whose shared points all lie on edges of both.
-            out.push_back({centroid_a - na * (step / la), 0.0, 2, false, pair});
-            out.push_back({centroid_b - nb * (step / lb), 0.0, 2, false, pair});
+            out.push_back({centroid_a - na * (step / la), 0.0, 2, false});
+            out.push_back({centroid_b - nb * (step / lb), 0.0, 2, false});
         }
         const Vec3 sum = na / la + nb / lb;
         const double ls = norm(sum);
@@ -686,7 +684,7 @@ void add_pair_wedge_points(const MeshBvh& a, const MeshBvh& b, const Relative& r
         const Vec3 inward = sum * (-1.0 / ls);
         for (const Vec3& witness : witnesses)
             for (double step : {0.5 * h, 0.125 * h, 0.03125 * h})
-                out.push_back({witness + inward * step, 0.0, 2, false, pair});
+                out.push_back({witness + inward * step, 0.0, 2, false});
     }
 }
 
