@@ -353,17 +353,6 @@ bool point_inside(const MeshBvh& mesh, const Pose& pose, const Vec3& point) {
     return winding_number_inside(mesh, local);
 }
 
-// Squared distance from p to node n's box.
-inline double point_box_squared_distance(const BvhNode& n, const Vec3& p) {
-    double d2 = 0.0;
-    for (int k = 0; k < 3; ++k) {
-        double gap = static_cast<double>(n.lower[k]) - p[k];
-        if (gap < 0.0) gap = p[k] - static_cast<double>(n.upper[k]);
-        if (gap > 0.0) d2 += gap * gap;
-    }
-    return d2;
-}
-
 // Whether the segment p + s (q - p), s in [0, 1], may meet node n's box: the slab test on the
 // box grown by a relative margin, so rounding can only keep a box, never drop one.
 inline bool segment_may_meet_box(const BvhNode& n, const Vec3& p, const Vec3& d) {
@@ -733,16 +722,33 @@ void add_candidates(const MeshBvh& self, const MeshBvh& other, const std::vector
     }
 }
 
+// Lower bound of the squared distance from `point` to the triangles of node `id`: the distance
+// to its oriented box. A patch's box is a thin slab along its mean normal, so from a point
+// deep inside a closed mesh (the depth query's points) the bound is nearly the distance itself,
+// where the axis-aligned box of a slanted patch reaches far towards the point and prunes
+// little. The box is padded by 1e-12 of its coordinates (MeshBvh::build_obbs), above the
+// rounding of the projections here for any point within reach of it; a far point's rounding,
+// relative to its distance, is covered by lowering the bound by a relative 1e-9. A projection
+// that overflows gives NaN, which adds nothing: the bound only falls.
+inline double point_node_squared_distance(const MeshBvh& mesh, std::int32_t id, const Vec3& point) {
+    const NodeObb& box = mesh.obbs()[static_cast<size_t>(id)];
+    const Vec3 local = box.axes * (point - box.center);
+    double d2 = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        const double gap = std::fabs(local[k]) - box.half[k];
+        if (gap > 0.0) d2 += gap * gap;
+    }
+    return d2 * (1.0 - 1e-9);
+}
+
 // The child step of the point-to-mesh branch and bound (closest_point, distance_beyond): the
 // children of internal node `index` with their box distances to `point`, pushed farther first
 // so that the closer one is searched next; once a triangle was measured (`found`), only those
 // closer than `best2`.
-inline void push_children(const std::vector<BvhNode>& nodes, std::int32_t index, const Vec3& point, bool found,
-                          double best2, std::vector<std::pair<std::int32_t, double>>& stack) {
-    const auto child = [&](std::int32_t i) {
-        return std::make_pair(i, point_box_squared_distance(nodes[static_cast<size_t>(i)], point));
-    };
-    std::pair<std::int32_t, double> near = child(index + 1), far = child(nodes[static_cast<size_t>(index)].index);
+inline void push_children(const MeshBvh& mesh, std::int32_t index, const Vec3& point, bool found, double best2,
+                          std::vector<std::pair<std::int32_t, double>>& stack) {
+    const auto child = [&](std::int32_t i) { return std::make_pair(i, point_node_squared_distance(mesh, i, point)); };
+    std::pair<std::int32_t, double> near = child(index + 1), far = child(mesh.nodes()[static_cast<size_t>(index)].index);
     if (near.second > far.second) std::swap(near, far);
     if (!found || far.second < best2) stack.push_back(far);
     if (!found || near.second < best2) stack.push_back(near);
@@ -763,7 +769,7 @@ PointDistanceOutput closest_point(const MeshBvh& mesh, const Vec3& point) {
     Vec3 best_point;
     std::vector<std::pair<std::int32_t, double>> stack;
     stack.reserve(64);
-    stack.push_back({0, point_box_squared_distance(nodes[0], point)});
+    stack.push_back({0, point_node_squared_distance(mesh, 0, point)});
     while (!stack.empty()) {
         const auto [index, bound] = stack.back();
         stack.pop_back();
@@ -783,7 +789,7 @@ PointDistanceOutput closest_point(const MeshBvh& mesh, const Vec3& point) {
             }
             continue;
         }
-        push_children(nodes, index, point, found, best2, stack);
+        push_children(mesh, index, point, found, best2, stack);
     }
     out.distance = std::sqrt(best2);
     out.point = best_point;
@@ -1018,7 +1024,7 @@ double distance_beyond(const MeshBvh& mesh, const Vec3& point, double floor, std
     bool found = false;
     std::vector<std::pair<std::int32_t, double>> stack;
     stack.reserve(64);
-    stack.push_back({0, point_box_squared_distance(nodes[0], point)});
+    stack.push_back({0, point_node_squared_distance(mesh, 0, point)});
     while (!stack.empty()) {
         const auto [index, bound] = stack.back();
         stack.pop_back();
@@ -1036,7 +1042,7 @@ double distance_beyond(const MeshBvh& mesh, const Vec3& point, double floor, std
             if (best2 <= floor2) break;
             continue;
         }
-        push_children(nodes, index, point, found, best2, stack);
+        push_children(mesh, index, point, found, best2, stack);
     }
     return std::sqrt(best2);
 }
@@ -1052,7 +1058,7 @@ double distance_within(const MeshBvh& mesh, const Vec3& point, double floor, dou
     bool found = false;
     std::vector<std::pair<std::int32_t, double>> stack;
     stack.reserve(64);
-    stack.push_back({0, point_box_squared_distance(nodes[0], point)});
+    stack.push_back({0, point_node_squared_distance(mesh, 0, point)});
     while (!stack.empty()) {
         const auto [index, bound] = stack.back();
         stack.pop_back();
@@ -1072,7 +1078,7 @@ double distance_within(const MeshBvh& mesh, const Vec3& point, double floor, dou
             if (best * best <= floor2) break;
             continue;
         }
-        push_children(nodes, index, point, found, prune2, stack);
+        push_children(mesh, index, point, found, prune2, stack);
     }
     return best;
 }
