@@ -792,6 +792,31 @@ def test_closest_points_equal_brute_force(seed) -> None:
     assert np.all(d[150:] <= 1e-12)
 
 
+@pytest.mark.parametrize(
+    ("offset", "scale"), [(0.0, 1.0), (1e6, 1e-3), (-3e4, 50.0)], ids=["unit", "far-small", "big"]
+)
+def test_closest_points_on_curved_closed_meshes_equal_brute_force(offset, scale) -> None:
+    """The point search prunes by the nodes' oriented boxes (thin slabs on a curved surface):
+    from points deep inside, on and near the surface, and far away, of a rotated sphere and
+    torus far from the origin (where the boxes' rounding pad is smallest relative to the
+    subtractions), the distance is the brute-force minimum over the triangles."""
+    rng = np.random.default_rng(3)
+    rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    for mesh in (trimesh.creation.icosphere(3), trimesh.creation.torus(1.0, 0.3)):
+        vertices = (mesh.vertices @ rotation.T) * scale + offset
+        tri = vertices[mesh.faces]
+        w = rng.dirichlet(np.ones(3), 60)
+        on_surface = np.einsum("pk,pki->pi", w, tri[rng.integers(0, len(mesh.faces), 60)])
+        unit = rng.normal(size=(240, 3))
+        unit /= np.linalg.norm(unit, axis=1, keepdims=True)
+        radii = np.repeat([0.05, 0.5, 0.95, 1.02, 3.0, 1e3], 40)[:, None]
+        points = np.vstack([(unit * radii) @ rotation.T * scale + offset, on_surface])
+        d, closest = MeshSet.from_arrays([(vertices, mesh.faces)]).closest_points(0, points)
+        tolerance = 1e-12 * (abs(offset) + scale * 1e3)
+        assert np.allclose(d, brute_point_mesh_distance(points, tri), rtol=1e-12, atol=tolerance)
+        assert np.allclose(np.linalg.norm(closest - points, axis=1), d, rtol=1e-12, atol=tolerance)
+
+
 def test_closest_points_known_answers_and_bad_input() -> None:
     meshes = MeshSet.from_arrays(
         [box((0, 0, 0), (1, 1, 1)), (np.full((3, 3), np.nan), [[0, 1, 2]])]

@@ -270,8 +270,10 @@ class MeshSet:
         Notes
         -----
         Depth-first branch and bound over the mesh's hierarchy, closer child first, pruning
-        boxes no closer than the best distance so far; exact closest point on each triangle at
-        the leaves by Voronoi regions (Ericson 2004, 5.1.5), degenerate triangles as their edges.
+        nodes whose oriented boxes are no closer than the best distance so far (a curved
+        patch's box is a thin slab, tight even from deep inside); exact closest point on each
+        triangle at the leaves by Voronoi regions (Ericson 2004, 5.1.5), degenerate triangles as
+        their edges.
         """
         points = np.ascontiguousarray(as_points(points, "points"))
         distances, closest, _ = self._handle.closest_points(int(i), points, int(threads))
