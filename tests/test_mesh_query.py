@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import types
 from fractions import Fraction
 
 import numpy as np
@@ -1075,3 +1076,34 @@ def test_intersects_batch_reads_every_input_form_alike() -> None:
         mesh_intersects_batch(meshes, p[:2], pairs)
     with pytest.raises(TypeError, match=r"MeshSet"):
         mesh_intersects_batch(cube, None, pairs)  # type: ignore[arg-type]
+    # the type is checked when the call fails: a handle that is not a set's is refused alike
+    for impostor in (types.SimpleNamespace(_handle=object()), types.SimpleNamespace(_handle=1)):
+        with pytest.raises(TypeError, match=r"^meshes must be a MeshSet, got SimpleNamespace$"):
+            mesh_intersects_batch(impostor, None, pairs)  # type: ignore[arg-type]
+
+
+def test_intersects_batch_result_of_any_dataclass() -> None:
+    """The core builds its result as the class's generated __init__ would: the field setters
+    of a slotted class are looked up once per class, and another class (slotted or not) asked
+    for in between gets its own, so the two never mix."""
+
+    @dataclasses.dataclass(frozen=True)
+    class Plain:
+        intersecting: np.ndarray
+        status: np.ndarray
+
+    @dataclasses.dataclass(frozen=True, slots=True)
+    class Slotted:
+        intersecting: np.ndarray
+        status: np.ndarray
+
+    cube = box([0, 0, 0], [1, 1, 1])
+    meshes = MeshSet.from_arrays([cube, cube], np.stack([np.eye(4), pose(translation=(3, 0, 0))]))
+    pairs = np.array([[0, 0], [0, 1]], dtype=np.int64)
+    for kind in (MeshIntersectsBatch, Plain, Slotted, Plain, MeshIntersectsBatch, Slotted):
+        r = meshes._handle.intersects_batch(None, pairs, 1, kind)
+        assert type(r) is kind
+        assert r.intersecting.tolist() == [True, False]
+        assert r.status.tolist() == [Status.CONVERGED] * 2
+    with pytest.raises(TypeError, match=r"result_type must be a class"):
+        meshes._handle.intersects_batch(None, pairs, 1, "not a class")

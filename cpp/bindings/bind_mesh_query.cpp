@@ -5,6 +5,7 @@
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/tuple.h>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -332,19 +333,61 @@ struct PairsArg {
 
 // A result dataclass instance made as its generated __init__ makes it (object.__setattr__ of
 // each field, frozen or not), without the Python frame: `names` (interned once by the caller)
-// and `values` in field order.
-nb::object dataclass_instance(nb::handle type, std::initializer_list<PyObject*> names,
-                              std::initializer_list<nb::handle> values) {
-    if (!PyType_Check(type.ptr())) throw nb::type_error("result_type must be a class");
-    auto* tp = reinterpret_cast<PyTypeObject*>(type.ptr());
-    auto alloc = reinterpret_cast<allocfunc>(PyType_GetSlot(tp, Py_tp_alloc));
-    nb::object self = nb::steal(alloc(tp, 0));
-    if (!self.is_valid()) throw nb::python_error();
-    auto value = values.begin();
-    for (PyObject* name : names)
-        if (PyObject_GenericSetAttr(self.ptr(), name, (value++)->ptr()) != 0) throw nb::python_error();
-    return self;
-}
+// and `values` in field order. The setters of a slotted class (its fields' member descriptors)
+// are looked up once per type and called directly, which is what object.__setattr__ ends in;
+// any other class takes object.__setattr__ itself.
+template <size_t N>
+class DataclassMaker {
+public:
+    nb::object make(nb::handle type, const std::array<PyObject*, N>& names,
+                    const std::array<nb::handle, N>& values) {
+        if (!PyType_Check(type.ptr())) throw nb::type_error("result_type must be a class");
+        auto* tp = reinterpret_cast<PyTypeObject*>(type.ptr());
+        if (type.ptr() != type_) learn(type, names);
+        auto alloc = reinterpret_cast<allocfunc>(PyType_GetSlot(tp, Py_tp_alloc));
+        nb::object self = nb::steal(alloc(tp, 0));
+        if (!self.is_valid()) throw nb::python_error();
+        for (size_t k = 0; k < N; ++k) {
+            const int failed = setter_[k] != nullptr
+                                   ? setter_[k](descriptor_[k], self.ptr(), values[k].ptr())
+                                   : PyObject_GenericSetAttr(self.ptr(), names[k], values[k].ptr());
+            if (failed != 0) throw nb::python_error();
+        }
+        return self;
+    }
+
+private:
+    // The type and its descriptors are held while they are the ones kept (so that a new type
+    // at the same address cannot inherit them), and let go when another type takes their place.
+    void learn(nb::handle type, const std::array<PyObject*, N>& names) {
+        // the attribute of a slotted class is its member descriptor (a built-in type)
+        static PyObject* const member_type =
+            nb::object(nb::module_::import_("types").attr("MemberDescriptorType")).release().ptr();
+        std::array<PyObject*, N> descriptor{};
+        std::array<descrsetfunc, N> setter{};
+        for (size_t k = 0; k < N; ++k) {
+            PyObject* d = PyObject_GetAttr(type.ptr(), names[k]);
+            if (d == nullptr) {
+                PyErr_Clear();
+            } else if (reinterpret_cast<PyObject*>(Py_TYPE(d)) == member_type) {
+                descriptor[k] = d;
+                setter[k] = reinterpret_cast<descrsetfunc>(PyType_GetSlot(Py_TYPE(d), Py_tp_descr_set));
+                continue;
+            } else {
+                Py_DECREF(d);
+            }
+        }
+        Py_XDECREF(type_);
+        for (PyObject* d : descriptor_) Py_XDECREF(d);
+        type_ = nb::handle(type).inc_ref().ptr();
+        descriptor_ = descriptor;
+        setter_ = setter;
+    }
+
+    PyObject* type_ = nullptr;
+    std::array<PyObject*, N> descriptor_{};
+    std::array<descrsetfunc, N> setter_{};
+};
 
 PyObject* interned(const char* name) {
     PyObject* s = PyUnicode_InternFromString(name);
@@ -405,9 +448,9 @@ nb::object intersects_batch(const MeshBvhSet& set, nb::handle poses, nb::handle 
         nb::gil_scoped_release release;
         meshcol::parallel_for(in.count, t, run);
     }
-    static PyObject* const intersecting_name = interned("intersecting");
-    static PyObject* const status_name = interned("status");
-    return dataclass_instance(result_type, {intersecting_name, status_name}, {intersecting_arr, status_arr});
+    static const std::array<PyObject*, 2> names = {interned("intersecting"), interned("status")};
+    static DataclassMaker<2> maker;
+    return maker.make(result_type, names, {intersecting_arr, status_arr});
 }
 
 // Why a single pair has no verdict, as the message of the ValueError the single-pair entry

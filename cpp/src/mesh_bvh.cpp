@@ -212,6 +212,15 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
     }
     build_winding_nodes();
     build_obbs();
+    {
+        const BvhNode& root = nodes_.front();
+        Vec3 corner;
+        for (int k = 0; k < 3; ++k)
+            corner[k] = std::fmax(std::fabs(double(root.lower[k])), std::fabs(double(root.upper[k])));
+        box_reach_ = safe_norm(corner);
+        const NodeObb& obb = obbs_.front();
+        obb_reach_ = max_abs(obb.center) + max_abs(obb.half);
+    }
     // Closed and consistently wound: sorted directed edges pair up as (u, v) and (v, u).
     std::vector<std::pair<std::int64_t, std::int64_t>> edges;
     edges.reserve(3 * static_cast<size_t>(face_count));

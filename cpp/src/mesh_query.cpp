@@ -77,11 +77,7 @@ struct Relative {
             rotation = pose_a.rotation.transposed() * pose_b.rotation;
         }
         translation = pose_a.rotation.transpose_times(pose_b.translation - pose_a.translation);
-        const auto reach = [](const MeshBvh& m) {
-            const NodeObb& root = m.obbs().front();
-            return max_abs(root.center) + max_abs(root.half);
-        };
-        slack = 1e-13 * (max_abs(translation) + reach(a) + reach(b));
+        slack = 1e-13 * (max_abs(translation) + a.obb_reach() + b.obb_reach());
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) abs_rotation.m[i][j] = std::fabs(rotation.m[i][j]);
         aligned = true;
@@ -937,15 +933,8 @@ bool mesh_intersects(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b, con
 
 bool mesh_pair_in_range(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b,
                         const Pose& pose_b) {
-    // The reach of a mesh about its origin: the far corner of its root box.
-    auto reach = [](const MeshBvh& m) {
-        const BvhNode& root = m.nodes().front();
-        Vec3 corner;
-        for (int k = 0; k < 3; ++k)
-            corner[k] = std::fmax(std::fabs(double(root.lower[k])), std::fabs(double(root.upper[k])));
-        return safe_norm(corner);
-    };
-    double half = 0.5 * std::fmax(reach(a), reach(b));
+    // The reach of each mesh about its origin (the far corner of its root box), kept at build.
+    double half = 0.5 * max2(a.box_reach(), b.box_reach());
     rescale::reach(half, pose_a.translation, pose_b.translation);
     return std::isfinite(half) && (half == 0.0 || (2.0 * half >= rescale::kSafeLow &&
                                                    2.0 * half <= rescale::kSafeHigh));

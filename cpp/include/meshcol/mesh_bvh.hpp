@@ -85,6 +85,12 @@ public:
     const std::int32_t* triangle_vertices(std::int32_t i) const { return &corner_vertices_[3 * static_cast<size_t>(i)]; }
     /// The input face index of triangle `i` (leaf order).
     std::int64_t face_index(std::int32_t i) const { return face_index_[static_cast<size_t>(i)]; }
+    /// The distance from the local origin to the far corner of the root box (0 when not
+    /// valid()): the mesh's reach, for the range check of a pair.
+    double box_reach() const { return box_reach_; }
+    /// max|centre| + max|half extent| of the root's oriented box (0 when not valid()): the
+    /// scale of the rounding allowance of a pair's box bounds.
+    double obb_reach() const { return obb_reach_; }
 
     /// Checks the invariants (for tests): every box contains its triangles and children, every
     /// triangle sits in exactly one leaf, leaves are no larger than the leaf size, the layout is
@@ -104,6 +110,8 @@ private:
     std::vector<Vec3> vertices_;           ///< vertices referenced by a face, input order
     std::vector<std::int32_t> corner_vertices_;  ///< 3 per triangle, leaf order, into vertices_
     bool closed_ = false;
+    double box_reach_ = 0.0;  ///< computed once at build: every pair query reads it
+    double obb_reach_ = 0.0;
     std::vector<std::int64_t> face_index_;  ///< leaf order -> input face
 };
 
