@@ -365,6 +365,33 @@ def test_touching_pairs_have_no_depth(gap: float) -> None:
         assert (r.deepest_mesh == -1).all()
 
 
+def test_a_depth_below_the_pose_rounding_still_has_a_unit_normal() -> None:
+    """Resting pairs moved together by a rigid motion far from the origin: a depth of a few
+    ulps (the rounding of the shared motion) maps the deepest point and its surface point to
+    one world point, yet the normal is a unit vector whenever the depth is not 0 (its
+    direction known in the local frame); it was NaN. Depths stay at rounding level."""
+    rng = np.random.default_rng(0)
+    shapes = [
+        trimesh.creation.box(),
+        trimesh.creation.icosphere(2),
+        trimesh.creation.cylinder(0.5, 1.0, sections=24),
+    ]
+    coincident = 0
+    for trial in range(240):
+        a, b = shapes[trial % 3], shapes[(trial // 3) % 3]
+        motion = _pose(quaternion_rotation(rng.normal(size=4)), rng.normal(size=3) * 100.0)
+        on_top = _pose(translation=(rng.uniform(-0.3, 0.3), 0.0, a.bounds[1, 2] - b.bounds[0, 2]))
+        r = _depth([a, b], [motion, motion @ on_top])
+        assert (r.status == Status.CONVERGED).all()
+        assert (r.depth < 1e-9).all(), r.depth
+        deep = r.depth > 0.0
+        coincident += int((deep & (r.point_a == r.point_b).all(axis=1)).sum())
+        assert np.isfinite(r.normal[deep]).all(), (trial, r.depth, r.normal)
+        assert np.linalg.norm(r.normal[deep], axis=1) == pytest.approx(1.0, abs=1e-12)
+        assert np.isnan(r.normal[~deep]).all()
+    assert coincident > 0  # the case this test is about did occur
+
+
 def test_open_and_non_manifold_meshes_take_the_winding_number_path() -> None:
     """An open box (one face removed) and a non-manifold one (two boxes sharing an edge) are
     not closed: the samples inside them are decided by the generalized winding number, point

@@ -1564,6 +1564,8 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
     // (b moves along point_a - point_b to leave it behind).
     out.depth = best;
     Vec3 deep, surface;
+    Vec3 deep_local, surface_local;  // the same two points in the frame of `frame`
+    const Pose* frame;
     bool deep_is_a;
     // The nearest point of the winner's triangle when the search kept it: closest_point's
     // answer (the same search to the end), without searching again.
@@ -1571,27 +1573,38 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
         return winner_triangle >= 0 ? closest_point_on_triangle(winner.point, mesh.triangle(winner_triangle))
                                     : closest_point(mesh, winner.point).point;
     };
+    deep_local = winner.point;
     if (winner.mesh == 0) {
-        deep = input.pose_b.apply(winner.point);
-        surface = input.pose_b.apply(nearest(b));
+        frame = &input.pose_b;
+        surface_local = nearest(b);
         deep_is_a = true;
     } else if (winner.mesh == 1) {
-        deep = input.pose_a.apply(winner.point);
-        surface = input.pose_a.apply(nearest(a));
+        frame = &input.pose_a;
+        surface_local = nearest(a);
         deep_is_a = false;
     } else {
-        deep = input.pose_a.apply(winner.point);
-        const Vec3 local = winner.farther_is_a ? closest_point(a, winner.point).point
-                                               : rel.apply(closest_point(b, rel.apply_inverse(winner.point)).point);
-        surface = input.pose_a.apply(local);
+        frame = &input.pose_a;
+        surface_local = winner.farther_is_a ? closest_point(a, winner.point).point
+                                            : rel.apply(closest_point(b, rel.apply_inverse(winner.point)).point);
         deep_is_a = !winner.farther_is_a;  // the surface point is on the farther mesh
     }
+    deep = frame->apply(deep_local);
+    surface = frame->apply(surface_local);
     out.deepest_mesh = deep_is_a ? 0 : 1;
     out.point_a = deep_is_a ? deep : surface;
     out.point_b = deep_is_a ? surface : deep;
     const Vec3 gap = out.point_a - out.point_b;
     const double length = norm(gap);
-    if (length > 0.0) out.normal = gap / length;
+    if (length > 0.0 && std::isfinite(length)) {
+        out.normal = gap / length;
+    } else {
+        // A depth below the rounding of the pose (a resting contact: 1e-15 deep at coordinates
+        // of 1e3) maps both points to the same world point. The direction is still known in the
+        // local frame, where the two points differ by the depth: turned into the world frame.
+        const Vec3 local_gap = deep_is_a ? deep_local - surface_local : surface_local - deep_local;
+        const double local_length = norm(local_gap);
+        if (local_length > 0.0) out.normal = frame->rotate(local_gap / local_length);
+    }
     return out;
 }
 

@@ -488,7 +488,9 @@ class MeshDepthBatch:
         a is ``point_a``); ``point_b - point_a == -depth * normal``. NaN when depth is 0.
     normal : (P, 3) float64
         Unit vector from a towards b along which b leaves the deepest point behind; NaN when
-        depth is 0. For a non-convex pair a hint, not a separating direction.
+        depth is 0, a unit vector whenever it is not (also for a depth below the rounding of
+        the poses, whose two points are then one world point). For a non-convex pair a hint,
+        not a separating direction.
     deepest_mesh : (P,) int8
         0 when the deepest point is a's (inside b), 1 when it is b's, -1 when none is inside.
     points_tested : (P,) int64

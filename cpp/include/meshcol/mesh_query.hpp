@@ -64,8 +64,9 @@ struct MeshDepthOutput {
     Vec3 point_a;  ///< world: the deepest point when it is a's, else its closest point on a
     Vec3 point_b;  ///< world: the deepest point when it is b's, else its closest point on b
     /// World unit vector from a towards b along which b leaves the deepest point behind
-    /// (point_b - point_a = -depth * normal); NaN when depth is 0. A hint, not a guarantee
-    /// that moving b by depth along it separates a non-convex pair.
+    /// (point_b - point_a = -depth * normal); NaN when depth is 0, a unit vector whenever it
+    /// is not (also when a depth below the pose's rounding maps both points to one). A hint,
+    /// not a guarantee that moving b by depth along it separates a non-convex pair.
     Vec3 normal;
     int deepest_mesh = -1;  ///< 0: the deepest point is a's (inside b); 1: b's; -1: none
     /// exact inside tests run: one per region of points (closed other mesh), one per point
