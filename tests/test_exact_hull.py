@@ -464,6 +464,21 @@ def test_interior_points_of_large_inputs_change_nothing(seed: int) -> None:
     assert set(map(tuple, exact_hull(points).vertices)) == qhull_vertex_set(points)
 
 
+def test_interior_filter_split_over_threads_changes_nothing() -> None:
+    """Above 2 x 131,072 points the filter's scans run in chunks on threads (where the
+    machine has them), combined in chunk order: the triangulation is still the one of the
+    surface points alone, whichever chunk holds each extreme, its duplicates and the points
+    just under the surface."""
+    rng = np.random.default_rng(11)
+    surface = rng.normal(size=(3000, 3))
+    surface /= np.linalg.norm(surface, axis=1, keepdims=True)
+    surface *= (0.7, 1.3, 2.0)
+    inside = rng.uniform(-0.3, 0.3, size=(300_000, 3))
+    shell = surface[rng.integers(0, 3000, 20_000)] * rng.uniform(0.95, 1.0, size=(20_000, 1))
+    points = np.concatenate([inside, shell, surface, surface[:50]])[rng.permutation(323_050)]
+    assert _hull_triangles(points) == _hull_triangles(surface)
+
+
 def test_large_torus_and_cube_grid_equal_qhull() -> None:
     """A grid torus (half its points inside the hull, flat rings on top and bottom) and a
     crowded cube surface with points inside, both above the filter's size."""

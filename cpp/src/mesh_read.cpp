@@ -384,8 +384,11 @@ void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& fa
     };
     // Sized to the object: a scene's props are small, and tables of a fixed 80 KiB each
     // cost more to clear than to fill (results never depend on the sizes).
+    // A large soup (a 2-million-triangle STL) starts near its final size, half full at the
+    // expected one merged vertex per six corners, instead of growing through a dozen rehashes.
     size_t capacity = 16;
-    while (capacity < 2 * n && capacity < 1024) capacity <<= 1;
+    const size_t expected = n >= 65536 ? n / 3 : 0;
+    while (capacity < 2 * n && (capacity < 1024 || capacity < expected)) capacity <<= 1;
     std::vector<Slot> slots(capacity, Slot{0, -1});
     std::vector<Key> keys;
     const KeyHash hasher;

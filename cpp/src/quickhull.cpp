@@ -631,30 +631,60 @@ void interior_filter(Workspace& w, const std::vector<int>& subset, std::vector<i
     const std::vector<Vec3>& p = w.p;
     std::vector<int>& extremes = w.filter_extremes;
     extremes.clear();
+    // Both scans below are split into chunks of consecutive points on threads (one large
+    // input, such as a 2-million-triangle mesh, leaves the other cores idle otherwise), each
+    // chunk's answer kept apart and combined in chunk order: the result is the sequential one.
+    const auto n = static_cast<long long>(subset.size());
+    const int threads = resolve_threads(0, n, defaults::hull_min_filter_points_per_thread);
+    const long long chunks = threads <= 1 ? 1 : 4LL * threads;
+    const long long per_chunk = (n + chunks - 1) / chunks;
+    auto chunk_range = [&](long long c) {
+        return std::make_pair(std::min(n, c * per_chunk), std::min(n, (c + 1) * per_chunk));
+    };
     // Directions on a Fibonacci sphere; the extreme point along each (first of ties). Structure
     // of arrays, so the scan over directions vectorises.
     const double golden = 3.14159265358979323846 * (3.0 - std::sqrt(5.0));
-    double dx[directions], dy[directions], dz[directions], best[directions];
-    int arg[directions];
+    double dx[directions], dy[directions], dz[directions];
     for (int k = 0; k < directions; ++k) {
         const double z = 1.0 - (2.0 * k + 1.0) / directions;
         const double r = std::sqrt(1.0 - z * z);
         dx[k] = r * std::cos(golden * k);
         dy[k] = r * std::sin(golden * k);
         dz[k] = z;
-        best[k] = -INFINITY;
-        arg[k] = subset[0];
     }
-    for (int i : subset) {
-        const double x = p[i].x, y = p[i].y, z = p[i].z;
-        for (int k = 0; k < directions; ++k) {
-            const double d = dx[k] * x + dy[k] * y + dz[k] * z;
-            const bool better = d > best[k];
-            best[k] = better ? d : best[k];
-            arg[k] = better ? i : arg[k];
+    struct Extremes {
+        double best[directions];
+        int arg[directions];
+    };
+    std::vector<Extremes> found(static_cast<size_t>(chunks));
+    parallel_for(chunks, threads, [&](long long first, long long last) {
+        for (long long c = first; c < last; ++c) {
+            Extremes& e = found[static_cast<size_t>(c)];
+            for (int k = 0; k < directions; ++k) {
+                e.best[k] = -INFINITY;
+                e.arg[k] = subset[0];
+            }
+            const auto [begin, end] = chunk_range(c);
+            for (long long j = begin; j < end; ++j) {
+                const int i = subset[static_cast<size_t>(j)];
+                const double x = p[i].x, y = p[i].y, z = p[i].z;
+                for (int k = 0; k < directions; ++k) {
+                    const double d = dx[k] * x + dy[k] * y + dz[k] * z;
+                    const bool better = d > e.best[k];
+                    e.best[k] = better ? d : e.best[k];
+                    e.arg[k] = better ? i : e.arg[k];
+                }
+            }
         }
-    }
-    extremes.assign(arg, arg + directions);
+    });
+    Extremes all = found[0];
+    for (size_t c = 1; c < found.size(); ++c)
+        for (int k = 0; k < directions; ++k)
+            if (found[c].best[k] > all.best[k]) {
+                all.best[k] = found[c].best[k];
+                all.arg[k] = found[c].arg[k];
+            }
+    extremes.assign(all.arg, all.arg + directions);
     std::sort(extremes.begin(), extremes.end());
     extremes.erase(std::unique(extremes.begin(), extremes.end()), extremes.end());
     kept.clear();
@@ -675,25 +705,35 @@ void interior_filter(Workspace& w, const std::vector<int>& subset, std::vector<i
     // Inside by this much (the points are scaled to at most 1): far above the rounding of a
     // plane distance (about 1e-16) and above eps, so a point dropped is truly interior.
     const double margin = 1e-9 + 4.0 * w.eps;
-    size_t hint = 0;  // consecutive points are often near one another: the last plane first
-    for (int i : subset) {
-        const Vec3& q = p[i];
-        const double* h = &plane[4 * hint];
-        if (h[0] * q.x + h[1] * q.y + h[2] * q.z - h[3] > -margin) {
-            kept.push_back(i);
-            continue;
-        }
-        bool inside = true;
-        for (size_t f = 0; f < planes; ++f) {
-            const double* e = &plane[4 * f];
-            if (e[0] * q.x + e[1] * q.y + e[2] * q.z - e[3] > -margin) {
-                inside = false;
-                hint = f;
-                break;
+    std::vector<std::vector<int>> outside(static_cast<size_t>(chunks));
+    parallel_for(chunks, threads, [&](long long first, long long last) {
+        for (long long c = first; c < last; ++c) {
+            std::vector<int>& out = chunks == 1 ? kept : outside[static_cast<size_t>(c)];
+            size_t hint = 0;  // consecutive points are often near one another: the last plane first
+            const auto [begin, end] = chunk_range(c);
+            for (long long j = begin; j < end; ++j) {
+                const int i = subset[static_cast<size_t>(j)];
+                const Vec3& q = p[i];
+                const double* h = &plane[4 * hint];
+                if (h[0] * q.x + h[1] * q.y + h[2] * q.z - h[3] > -margin) {
+                    out.push_back(i);
+                    continue;
+                }
+                bool inside = true;
+                for (size_t f = 0; f < planes; ++f) {
+                    const double* e = &plane[4 * f];
+                    if (e[0] * q.x + e[1] * q.y + e[2] * q.z - e[3] > -margin) {
+                        inside = false;
+                        hint = f;
+                        break;
+                    }
+                }
+                if (!inside) out.push_back(i);
             }
         }
-        if (!inside) kept.push_back(i);
-    }
+    });
+    if (chunks > 1)
+        for (const std::vector<int>& out : outside) kept.insert(kept.end(), out.begin(), out.end());
 }
 
 Build quickhull(Workspace& w, const std::vector<int>& subset, Triangulation& out) {
