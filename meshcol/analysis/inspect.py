@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -23,7 +24,7 @@ from meshcol.geometry.topology import (
     edge_table,
     oriented_volume,
 )
-from meshcol.geometry.triangles import degenerate_faces
+from meshcol.geometry.triangles import degenerate_faces, face_heights
 from meshcol.io.report import vector_columns
 from meshcol.types import Body
 
@@ -173,6 +174,91 @@ def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspectio
     assumes (and does not check) that its input is free of self-intersections, so those come
     from :func:`meshcol.collision.self_intersection.self_intersecting_pairs`, in the core.
     """
+    return _inspect_instance(body, declared_units, {})
+
+
+class _Geometry:
+    """One mesh's vertices and faces (its local frame) and what they alone decide, each
+    measured on first use.
+
+    The bodies that instance one mesh share one (:func:`_shared_geometry`), so a level of
+    instanced props is measured once per prop. Nothing here depends on a body's name, source,
+    pose or units; what does (bounds, size, which faces are degenerate and so which cross, the
+    units guess, every finding's names) each body computes itself.
+    """
+
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray) -> None:
+        self.vertices = vertices
+        self.faces = faces
+        # crossing face pairs per degenerate-face mask (a mask follows the body's diagonal)
+        self._crossings: dict[bytes, int] = {}
+
+    @cached_property
+    def used(self) -> np.ndarray:
+        """(k,) int64: the vertices the faces use, ascending."""
+        return np.unique(self.faces)
+
+    @cached_property
+    def heights(self) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`meshcol.geometry.triangles.face_heights`."""
+        return face_heights(self.vertices, self.faces)
+
+    @cached_property
+    def edges(self) -> tuple[int, int, int]:
+        """Boundary edges (one face), non-manifold edges (more than two), inconsistently
+        wound edges."""
+        _, counts, inconsistent = edge_table(self.faces)
+        return int((counts == 1).sum()), int((counts > 2).sum()), int(inconsistent)
+
+    @cached_property
+    def oriented_volume(self) -> tuple[float, int] | None:
+        """:func:`meshcol.geometry.topology.oriented_volume`."""
+        return oriented_volume(self.vertices, self.faces)
+
+    @cached_property
+    def duplicates(self) -> int:
+        return duplicate_face_count(self.faces)
+
+    @cached_property
+    def components(self) -> int:
+        return component_count(self.faces, len(self.vertices))
+
+    @cached_property
+    def manifold_status(self) -> str:
+        return _manifold_status(self.vertices, self.faces)
+
+    def crossings(self, skip: np.ndarray) -> int:
+        """Pairs of faces that cross, the faces of ``skip`` ((m,) bool) left out."""
+        key = skip.tobytes()
+        count = self._crossings.get(key)
+        if count is None:
+            from meshcol.collision.self_intersection import self_intersecting_pairs
+
+            pairs = self_intersecting_pairs(self.vertices, self.faces, skip=skip)
+            count = self._crossings[key] = len(pairs)
+        return count
+
+
+def _shared_geometry(
+    geometries: dict[bytes, _Geometry], vertices: np.ndarray, faces: np.ndarray
+) -> _Geometry:
+    """The :class:`_Geometry` of a mesh from ``geometries`` when an earlier body had the same
+    vertices and faces (:func:`meshcol.analysis.colliders._geometry_key`: the same bits), else
+    a new one, stored there."""
+    from meshcol.analysis.colliders import _geometry_key
+
+    key = _geometry_key(vertices, faces)
+    geometry = geometries.get(key)
+    if geometry is None:
+        geometry = geometries[key] = _Geometry(vertices, faces)
+    return geometry
+
+
+def _inspect_instance(
+    body: Body, declared_units: str | None, geometries: dict[bytes, _Geometry]
+) -> MeshInspection:
+    """:func:`inspect_body`, with what the mesh alone decides shared through ``geometries``
+    (:func:`_shared_geometry`) by the bodies that instance it."""
     vertices = np.asarray(body.vertices, dtype=np.float64)
     faces = np.asarray(body.faces, dtype=np.int64)
     if len(faces) == 0:
@@ -181,32 +267,29 @@ def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspectio
         raise InvalidMeshError(
             f"body '{body.name}': vertices contain NaN or infinite coordinates", body.source
         )
+    mesh = _shared_geometry(geometries, vertices, faces)
 
-    world = body.world_vertices()
-    used = world[np.unique(faces)]
+    used = body.world_vertices()[mesh.used]
     lo, hi = used.min(axis=0), used.max(axis=0)
     size = hi - lo
     diagonal = float(np.linalg.norm(size))
 
-    edges, counts, inconsistent = edge_table(faces)
-    boundary = int((counts == 1).sum())
-    non_manifold = int((counts > 2).sum())
+    boundary, non_manifold, inconsistent = mesh.edges
     watertight = boundary == 0 and non_manifold == 0
     winding_consistent = inconsistent == 0
-    measured = oriented_volume(vertices, faces) if watertight and winding_consistent else None
+    measured = mesh.oriented_volume if watertight and winding_consistent else None
     volume = None if measured is None else measured[0]
     inverted = measured is not None and measured[1] < 0
 
-    from meshcol.collision.self_intersection import self_intersecting_pairs
-
-    degenerate = degenerate_faces(vertices, faces, diagonal)
-    pairs = self_intersecting_pairs(vertices, faces, skip=degenerate)
+    # relative to the world diagonal, so a body's own: its rotation changes its bounding box
+    degenerate = degenerate_faces(vertices, faces, diagonal, heights=mesh.heights)
+    crossings = mesh.crossings(degenerate)
     units, reason = guess_units(float(size.max()))
 
     findings = []
     if not watertight:
         findings.append("not-watertight")
-    if len(pairs):
+    if crossings:
         findings.append("self-intersecting")
     if not winding_consistent:
         findings.append("inconsistent-winding")
@@ -216,11 +299,9 @@ def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspectio
         findings.append("degenerate-faces")
     if non_manifold:
         findings.append("non-manifold")
-    duplicates = duplicate_face_count(faces)
-    if duplicates:
+    if mesh.duplicates:
         findings.append("duplicate-faces")
-    components = component_count(faces, len(vertices))
-    if components > 1:
+    if mesh.components > 1:
         findings.append("multiple-components")
     if _units_suspect(units, declared_units):
         findings.append("suspect-units")
@@ -230,20 +311,20 @@ def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspectio
         source=body.source,
         vertices=len(vertices),
         faces=len(faces),
-        components=components,
+        components=mesh.components,
         watertight=watertight,
         winding_consistent=winding_consistent,
         volume=volume,
         bounds=[lo.tolist(), hi.tolist()],
         size=size.tolist(),
         degenerate_faces=int(degenerate.sum()),
-        duplicate_faces=duplicates,
+        duplicate_faces=mesh.duplicates,
         boundary_edges=boundary,
         non_manifold_edges=non_manifold,
-        inconsistent_edges=int(inconsistent),
-        self_intersecting=bool(len(pairs)),
-        self_intersecting_pairs=len(pairs),
-        manifold_status=_manifold_status(vertices, faces),
+        inconsistent_edges=inconsistent,
+        self_intersecting=bool(crossings),
+        self_intersecting_pairs=crossings,
+        manifold_status=mesh.manifold_status,
         units_guess=units,
         units_reason=reason,
         declared_units=declared_units,
@@ -1184,6 +1265,9 @@ def inspect(
     each body through :func:`physics_readiness`. A batch keeps going: a mesh file that cannot
     be read, or a body that cannot be inspected (no faces), becomes an entry of
     :attr:`InspectReport.errors` and the run's exit code is 2; the other bodies are reported.
+    What a mesh alone decides (its topology, crossings, manifold status) is measured once
+    however many bodies instance it; what a body's pose decides (its bounds, its degenerate
+    faces, its units guess) for each body, so the report is the one of each body alone.
     """
     from meshcol.analysis.rules import select_rules
     from meshcol.errors import MeshcolError
@@ -1248,17 +1332,11 @@ def inspect(
     else:
         assert scene_bodies is not None
         meshes = _meshes(scene_bodies)
-        inspected = []
-        for done, (body_name, part_name, part) in enumerate(meshes, start=1):
-            try:
-                outcome: MeshInspection | InvalidMeshError = inspect_body(
-                    part, declared_units=units
-                )
-            except InvalidMeshError as error:
-                outcome = error
-            inspected.append((body_name, part_name, part, outcome))
-            if progress is not None:
-                progress(f"inspect: {done}/{len(meshes)} bodies")
+        outcomes = _inspect_meshes([part for _, _, part in meshes], units, progress)
+        inspected = [
+            (body_name, part_name, part, outcome)
+            for (body_name, part_name, part), outcome in zip(meshes, outcomes)
+        ]
     # health per mesh, in input order
     results = []
     findings: list[Finding] = []
@@ -1302,6 +1380,26 @@ def _meshes(bodies: Sequence[Body]) -> list[tuple[str, str | None, Body]]:
 Inspected = tuple[str, str | None, Body, Any]
 
 
+def _inspect_meshes(
+    meshes: Sequence[Body],
+    units: str | None,
+    progress: Callable[[str], None] | None = None,
+) -> list[MeshInspection | InvalidMeshError]:
+    """:func:`inspect_body` of each mesh, or the InvalidMeshError that stopped it; what a
+    mesh alone decides is measured once for all the meshes that instance it (a level's
+    props), so the work follows the unique meshes, not the bodies."""
+    geometries: dict[bytes, _Geometry] = {}
+    out: list[MeshInspection | InvalidMeshError] = []
+    for done, mesh in enumerate(meshes, start=1):
+        try:
+            out.append(_inspect_instance(mesh, units, geometries))
+        except InvalidMeshError as error:
+            out.append(error)
+        if progress is not None:
+            progress(f"inspect: {done}/{len(meshes)} bodies")
+    return out
+
+
 def _inspect_file(
     task: tuple[str, list[Body] | None, str | None],
 ) -> tuple[tuple[list[Body] | None, list[Any]] | None, Exception | None]:
@@ -1320,13 +1418,7 @@ def _inspect_file(
         except MeshcolError as error:
             return None, error
         meshes = [part for _, _, part in _meshes(bodies)]
-    out: list[Any] = []
-    for mesh in meshes:
-        try:
-            out.append(inspect_body(mesh, declared_units=units))
-        except InvalidMeshError as error:
-            out.append(error)
-    return (bodies, out), None
+    return (bodies, _inspect_meshes(meshes, units)), None
 
 
 def _renamed(body: Body, name: str) -> Body:
