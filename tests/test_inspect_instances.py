@@ -5,8 +5,10 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 
 from meshcol.analysis.inspect import (
+    HEALTH_IDS,
     PhysicsOptions,
     health_findings,
     inspect,
@@ -135,7 +137,9 @@ def test_instances_are_reported_as_each_body_alone(tmp_path) -> None:
 
 def test_inspect_measures_each_unique_mesh_once(tmp_path, monkeypatch) -> None:
     import meshcol.analysis.inspect as inspect_module
+    import meshcol.collision.hull as hull_module
     import meshcol.collision.self_intersection as crossing_module
+    import meshcol.geometry.mass as mass_module
 
     calls: dict[str, int] = {}
 
@@ -151,6 +155,8 @@ def test_inspect_measures_each_unique_mesh_once(tmp_path, monkeypatch) -> None:
     counted(crossing_module, "self_intersecting_pairs")
     counted(inspect_module, "_manifold_status")
     counted(inspect_module, "component_count")
+    counted(mass_module, "mass_properties")
+    counted(hull_module, "exact_hull")
 
     write_meshes(tmp_path)
     meshes = ["cube.obj", "open.obj", "inverted.obj"]  # no sliver: one mask per mesh
@@ -160,6 +166,9 @@ def test_inspect_measures_each_unique_mesh_once(tmp_path, monkeypatch) -> None:
     assert calls["self_intersecting_pairs"] == unique
     assert calls["_manifold_status"] == unique
     assert calls["component_count"] == unique
+    # the visual meshes' and the hulls' (the open box's hull is the cube's)
+    assert calls["mass_properties"] <= 2 * unique
+    assert calls["exact_hull"] <= unique
 
 
 def test_each_degenerate_mask_is_crossed_once(tmp_path, monkeypatch) -> None:
@@ -177,3 +186,22 @@ def test_each_degenerate_mask_is_crossed_once(tmp_path, monkeypatch) -> None:
     report = inspect(write_level(tmp_path, 30, ["sliver.obj"], scales=False))
     assert {r.degenerate_faces for r in report.inspections} == {0, 1}
     assert len(seen) == len(set(seen)) == 2
+
+
+@pytest.mark.parametrize("shape", ["mesh", "fit"])
+def test_instances_with_other_colliders_match_each_body_alone(tmp_path, shape) -> None:
+    write_meshes(tmp_path)
+    path = write_level(tmp_path, 24, ["cube.obj", "open.obj", "inverted.obj"])
+    options = PhysicsOptions(shape=shape)
+    report = inspect(path, physics=options)
+    rows, findings = [], []
+    for body in load_scene(path).bodies:
+        body_rows, body_findings = physics_readiness([body], options, units="m")
+        rows += body_rows
+        findings += body_findings
+    assert dumps_json(list(report.physics)) == dumps_json(rows)
+    physics = [f for f in report.findings if f.rule not in HEALTH_IDS.values()]
+    assert by_body(physics) == by_body(findings)
+    if shape == "mesh":  # authored triangles: each inside-out instance named (MC204)
+        inside_out = {f.body for f in report.findings if f.rule == "MC204"}
+        assert inside_out == {r.name for r in report.inspections if r.name.startswith("inv")}

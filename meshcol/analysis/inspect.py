@@ -227,6 +227,23 @@ class _Geometry:
     def manifold_status(self) -> str:
         return _manifold_status(self.vertices, self.faces)
 
+    @cached_property
+    def hull_volume(self) -> float | None:
+        """The volume of the vertices' exact hull; None when they have none."""
+        from meshcol.collision.hull import exact_hull
+
+        try:
+            return exact_hull(self.vertices).volume
+        except InvalidMeshError:
+            return None
+
+    @cached_property
+    def mass(self) -> MassProperties:
+        """:func:`meshcol.geometry.mass.mass_properties`, in the local frame."""
+        from meshcol.geometry.mass import mass_properties
+
+        return mass_properties(self.vertices, self.faces)
+
     def crossings(self, skip: np.ndarray) -> int:
         """Pairs of faces that cross, the faces of ``skip`` ((m,) bool) left out."""
         key = skip.tobytes()
@@ -561,6 +578,22 @@ def _moment_ratio(a: MassProperties, b: MassProperties) -> float | None:
     return float(np.max(np.maximum(pa / pb, pb / pa)))
 
 
+def _hull_mass(points: np.ndarray) -> tuple[int, tuple[MassProperties, float] | None]:
+    """A convex part's hull dimension (0 when the points have no hull) and, in 3-D, its mass
+    properties (the points' frame) and its volume over its diagonal cubed (MC202)."""
+    from meshcol.collision.hull import exact_hull
+    from meshcol.geometry.mass import mass_properties
+
+    try:
+        hull = exact_hull(points)
+    except InvalidMeshError:
+        return 0, None
+    if hull.dimension < 3:
+        return hull.dimension, None
+    mass = mass_properties(hull.vertices, hull.faces)
+    return hull.dimension, (mass, mass.volume / hull.diagonal**3)
+
+
 def physics_readiness(
     bodies: Sequence[Body],
     options: PhysicsOptions | None = None,
@@ -605,23 +638,24 @@ def physics_readiness(
     mass properties from :func:`meshcol.geometry.mass.mass_properties` (signed tetrahedra)
     or :func:`~meshcol.geometry.mass.primitive_mass_properties`, summed over the parts as
     engines sum a body's shapes (overlaps count twice). A ``mesh`` collider is its triangles.
+    A mesh's and a convex part's properties in their own frame are computed once per unique
+    geometry and moved by each body's pose, as for a body alone: bodies that instance one
+    prop cost one measurement.
     """
-    from meshcol.analysis.colliders import _UCX, build_colliders, split_ucx
+    from meshcol.analysis.colliders import _UCX, _geometry_key, build_colliders, split_ucx
     from meshcol.analysis.rules import finding
-    from meshcol.collision.hull import exact_hull
     from meshcol.collision.shapes import ShapeKind
-    from meshcol.geometry.mass import (
-        combine_mass_properties,
-        mass_properties,
-        primitive_mass_properties,
-    )
-    from meshcol.geometry.topology import oriented_volume
+    from meshcol.geometry.mass import combine_mass_properties, primitive_mass_properties
 
     options = options or PhysicsOptions()
     options.validate()
     findings: list[Finding] = []
     robot = visuals is not None
     original = {b.name for b in bodies}
+    # What a mesh or a convex part decides in its own frame, once per geometry: instances
+    # share it and apply their own poses, in the order of operations of one body alone.
+    geometries: dict[bytes, _Geometry] = {}
+    hulls: dict[bytes, tuple[int, tuple[MassProperties, float] | None]] = {}
 
     # Authored collision triangles: inside out (MC204), UCX parts not convex (MC303).
     for body in bodies:
@@ -631,7 +665,8 @@ def physics_readiness(
             authored = is_ucx or (robot and body.primitive is None) or options.shape == "mesh"
             if not authored or body.primitive is not None:
                 continue
-            measured = oriented_volume(v, f)
+            geometry = _shared_geometry(geometries, v, f)
+            measured = geometry.oriented_volume
             if measured is None:
                 continue
             volume, orientation = measured
@@ -648,9 +683,8 @@ def physics_readiness(
                     )
                 )
             elif orientation > 0 and is_ucx:
-                try:
-                    hull_volume = exact_hull(v).volume
-                except InvalidMeshError:
+                hull_volume = geometry.hull_volume
+                if hull_volume is None:
                     continue
                 if hull_volume > 0 and volume / hull_volume < UCX_CONVEX_FRACTION:
                     fraction = volume / hull_volume
@@ -741,7 +775,7 @@ def physics_readiness(
         # the collider's mass properties, part by part, in the body frame
         masses = []
         if kind == "mesh":
-            masses.append(mass_properties(body.vertices, body.faces))
+            masses.append(_shared_geometry(geometries, body.vertices, body.faces).mass)
         for k in parts if kind != "mesh" else ():
             label = int(colliders.part_label[k])
             part_name = body.parts[label] if label >= 0 else None
@@ -750,12 +784,13 @@ def physics_readiness(
                 "" if part_name is None else f" of part {part_name!r}"
             )
             if int(shapes.kinds[k]) == ShapeKind.POLYTOPE:
-                try:
-                    hull = exact_hull(shapes.vertices[start:end])
-                except InvalidMeshError:
-                    hull = None
-                if hull is None or hull.dimension < 3:
-                    dimension = 0 if hull is None else hull.dimension
+                points = shapes.vertices[start:end]
+                key = _geometry_key(points)
+                measured_hull = hulls.get(key)
+                if measured_hull is None:
+                    measured_hull = hulls[key] = _hull_mass(points)
+                dimension, solid = measured_hull
+                if solid is None:
                     shape_name = ("a point", "a segment", "flat")[dimension]
                     findings.append(
                         finding(
@@ -768,8 +803,7 @@ def physics_readiness(
                         )
                     )
                     continue
-                mass = mass_properties(hull.vertices, hull.faces)
-                relative = mass.volume / hull.diagonal**3
+                mass, relative = solid
                 if relative < options.min_relative_volume:
                     findings.append(
                         finding(
@@ -826,15 +860,14 @@ def physics_readiness(
         rows.append(row)
         if visual_body is None or collider is None:
             continue
+        geometry = _shared_geometry(geometries, visual_body.vertices, visual_body.faces)
         if visual_body.primitive is not None:
             visual = primitive_mass_properties(visual_body.primitive).transformed(visual_body.pose)
             closed = True
         else:
-            measured = oriented_volume(visual_body.vertices, visual_body.faces)
+            measured = geometry.oriented_volume
             closed = measured is not None and measured[1] != 0
-            visual = mass_properties(visual_body.vertices, visual_body.faces).transformed(
-                visual_body.pose
-            )
+            visual = geometry.mass.transformed(visual_body.pose)
         row["visual_mass"] = _mass_dict(visual)
         if visual.area == 0.0:
             findings.append(
@@ -848,7 +881,7 @@ def physics_readiness(
                 )
             )
             continue
-        world = visual_body.world_vertices()[np.unique(visual_body.faces)]
+        world = visual_body.world_vertices()[geometry.used]
         diagonal = float(np.linalg.norm(world.max(axis=0) - world.min(axis=0)))
         row["comparison"] = "solid" if closed else "shell"
         if closed and collider.volume > 0:
