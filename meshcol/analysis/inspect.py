@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -23,7 +24,7 @@ from meshcol.geometry.topology import (
     edge_table,
     oriented_volume,
 )
-from meshcol.geometry.triangles import degenerate_faces
+from meshcol.geometry.triangles import degenerate_faces, face_heights
 from meshcol.io.report import vector_columns
 from meshcol.types import Body
 
@@ -173,6 +174,108 @@ def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspectio
     assumes (and does not check) that its input is free of self-intersections, so those come
     from :func:`meshcol.collision.self_intersection.self_intersecting_pairs`, in the core.
     """
+    return _inspect_instance(body, declared_units, {})
+
+
+class _Geometry:
+    """One mesh's vertices and faces (its local frame) and what they alone decide, each
+    measured on first use.
+
+    The bodies that instance one mesh share one (:func:`_shared_geometry`), so a level of
+    instanced props is measured once per prop. Nothing here depends on a body's name, source,
+    pose or units; what does (bounds, size, which faces are degenerate and so which cross, the
+    units guess, every finding's names) each body computes itself.
+    """
+
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray) -> None:
+        self.vertices = vertices
+        self.faces = faces
+        # crossing face pairs per degenerate-face mask (a mask follows the body's diagonal)
+        self._crossings: dict[bytes, int] = {}
+
+    @cached_property
+    def used(self) -> np.ndarray:
+        """(k,) int64: the vertices the faces use, ascending."""
+        return np.unique(self.faces)
+
+    @cached_property
+    def heights(self) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`meshcol.geometry.triangles.face_heights`."""
+        return face_heights(self.vertices, self.faces)
+
+    @cached_property
+    def edges(self) -> tuple[int, int, int]:
+        """Boundary edges (one face), non-manifold edges (more than two), inconsistently
+        wound edges."""
+        _, counts, inconsistent = edge_table(self.faces)
+        return int((counts == 1).sum()), int((counts > 2).sum()), int(inconsistent)
+
+    @cached_property
+    def oriented_volume(self) -> tuple[float, int] | None:
+        """:func:`meshcol.geometry.topology.oriented_volume`."""
+        return oriented_volume(self.vertices, self.faces)
+
+    @cached_property
+    def duplicates(self) -> int:
+        return duplicate_face_count(self.faces)
+
+    @cached_property
+    def components(self) -> int:
+        return component_count(self.faces, len(self.vertices))
+
+    @cached_property
+    def manifold_status(self) -> str:
+        return _manifold_status(self.vertices, self.faces)
+
+    @cached_property
+    def hull_volume(self) -> float | None:
+        """The volume of the vertices' exact hull; None when they have none."""
+        from meshcol.collision.hull import exact_hull
+
+        try:
+            return exact_hull(self.vertices).volume
+        except InvalidMeshError:
+            return None
+
+    @cached_property
+    def mass(self) -> MassProperties:
+        """:func:`meshcol.geometry.mass.mass_properties`, in the local frame."""
+        from meshcol.geometry.mass import mass_properties
+
+        return mass_properties(self.vertices, self.faces)
+
+    def crossings(self, skip: np.ndarray) -> int:
+        """Pairs of faces that cross, the faces of ``skip`` ((m,) bool) left out."""
+        key = skip.tobytes()
+        count = self._crossings.get(key)
+        if count is None:
+            from meshcol.collision.self_intersection import self_intersecting_pairs
+
+            pairs = self_intersecting_pairs(self.vertices, self.faces, skip=skip)
+            count = self._crossings[key] = len(pairs)
+        return count
+
+
+def _shared_geometry(
+    geometries: dict[bytes, _Geometry], vertices: np.ndarray, faces: np.ndarray
+) -> _Geometry:
+    """The :class:`_Geometry` of a mesh from ``geometries`` when an earlier body had the same
+    vertices and faces (:func:`meshcol.analysis.colliders._geometry_key`: the same bits), else
+    a new one, stored there."""
+    from meshcol.analysis.colliders import _geometry_key
+
+    key = _geometry_key(vertices, faces)
+    geometry = geometries.get(key)
+    if geometry is None:
+        geometry = geometries[key] = _Geometry(vertices, faces)
+    return geometry
+
+
+def _inspect_instance(
+    body: Body, declared_units: str | None, geometries: dict[bytes, _Geometry]
+) -> MeshInspection:
+    """:func:`inspect_body`, with what the mesh alone decides shared through ``geometries``
+    (:func:`_shared_geometry`) by the bodies that instance it."""
     vertices = np.asarray(body.vertices, dtype=np.float64)
     faces = np.asarray(body.faces, dtype=np.int64)
     if len(faces) == 0:
@@ -181,32 +284,29 @@ def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspectio
         raise InvalidMeshError(
             f"body '{body.name}': vertices contain NaN or infinite coordinates", body.source
         )
+    mesh = _shared_geometry(geometries, vertices, faces)
 
-    world = body.world_vertices()
-    used = world[np.unique(faces)]
+    used = body.world_vertices()[mesh.used]
     lo, hi = used.min(axis=0), used.max(axis=0)
     size = hi - lo
     diagonal = float(np.linalg.norm(size))
 
-    edges, counts, inconsistent = edge_table(faces)
-    boundary = int((counts == 1).sum())
-    non_manifold = int((counts > 2).sum())
+    boundary, non_manifold, inconsistent = mesh.edges
     watertight = boundary == 0 and non_manifold == 0
     winding_consistent = inconsistent == 0
-    measured = oriented_volume(vertices, faces) if watertight and winding_consistent else None
+    measured = mesh.oriented_volume if watertight and winding_consistent else None
     volume = None if measured is None else measured[0]
     inverted = measured is not None and measured[1] < 0
 
-    from meshcol.collision.self_intersection import self_intersecting_pairs
-
-    degenerate = degenerate_faces(vertices, faces, diagonal)
-    pairs = self_intersecting_pairs(vertices, faces, skip=degenerate)
+    # relative to the world diagonal, so a body's own: its rotation changes its bounding box
+    degenerate = degenerate_faces(vertices, faces, diagonal, heights=mesh.heights)
+    crossings = mesh.crossings(degenerate)
     units, reason = guess_units(float(size.max()))
 
     findings = []
     if not watertight:
         findings.append("not-watertight")
-    if len(pairs):
+    if crossings:
         findings.append("self-intersecting")
     if not winding_consistent:
         findings.append("inconsistent-winding")
@@ -216,11 +316,9 @@ def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspectio
         findings.append("degenerate-faces")
     if non_manifold:
         findings.append("non-manifold")
-    duplicates = duplicate_face_count(faces)
-    if duplicates:
+    if mesh.duplicates:
         findings.append("duplicate-faces")
-    components = component_count(faces, len(vertices))
-    if components > 1:
+    if mesh.components > 1:
         findings.append("multiple-components")
     if _units_suspect(units, declared_units):
         findings.append("suspect-units")
@@ -230,20 +328,20 @@ def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspectio
         source=body.source,
         vertices=len(vertices),
         faces=len(faces),
-        components=components,
+        components=mesh.components,
         watertight=watertight,
         winding_consistent=winding_consistent,
         volume=volume,
         bounds=[lo.tolist(), hi.tolist()],
         size=size.tolist(),
         degenerate_faces=int(degenerate.sum()),
-        duplicate_faces=duplicates,
+        duplicate_faces=mesh.duplicates,
         boundary_edges=boundary,
         non_manifold_edges=non_manifold,
-        inconsistent_edges=int(inconsistent),
-        self_intersecting=bool(len(pairs)),
-        self_intersecting_pairs=len(pairs),
-        manifold_status=_manifold_status(vertices, faces),
+        inconsistent_edges=inconsistent,
+        self_intersecting=bool(crossings),
+        self_intersecting_pairs=crossings,
+        manifold_status=mesh.manifold_status,
         units_guess=units,
         units_reason=reason,
         declared_units=declared_units,
@@ -480,6 +578,22 @@ def _moment_ratio(a: MassProperties, b: MassProperties) -> float | None:
     return float(np.max(np.maximum(pa / pb, pb / pa)))
 
 
+def _hull_mass(points: np.ndarray) -> tuple[int, tuple[MassProperties, float] | None]:
+    """A convex part's hull dimension (0 when the points have no hull) and, in 3-D, its mass
+    properties (the points' frame) and its volume over its diagonal cubed (MC202)."""
+    from meshcol.collision.hull import exact_hull
+    from meshcol.geometry.mass import mass_properties
+
+    try:
+        hull = exact_hull(points)
+    except InvalidMeshError:
+        return 0, None
+    if hull.dimension < 3:
+        return hull.dimension, None
+    mass = mass_properties(hull.vertices, hull.faces)
+    return hull.dimension, (mass, mass.volume / hull.diagonal**3)
+
+
 def physics_readiness(
     bodies: Sequence[Body],
     options: PhysicsOptions | None = None,
@@ -524,23 +638,24 @@ def physics_readiness(
     mass properties from :func:`meshcol.geometry.mass.mass_properties` (signed tetrahedra)
     or :func:`~meshcol.geometry.mass.primitive_mass_properties`, summed over the parts as
     engines sum a body's shapes (overlaps count twice). A ``mesh`` collider is its triangles.
+    A mesh's and a convex part's properties in their own frame are computed once per unique
+    geometry and moved by each body's pose, as for a body alone: bodies that instance one
+    prop cost one measurement.
     """
-    from meshcol.analysis.colliders import _UCX, build_colliders, split_ucx
+    from meshcol.analysis.colliders import _UCX, _geometry_key, build_colliders, split_ucx
     from meshcol.analysis.rules import finding
-    from meshcol.collision.hull import exact_hull
     from meshcol.collision.shapes import ShapeKind
-    from meshcol.geometry.mass import (
-        combine_mass_properties,
-        mass_properties,
-        primitive_mass_properties,
-    )
-    from meshcol.geometry.topology import oriented_volume
+    from meshcol.geometry.mass import combine_mass_properties, primitive_mass_properties
 
     options = options or PhysicsOptions()
     options.validate()
     findings: list[Finding] = []
     robot = visuals is not None
     original = {b.name for b in bodies}
+    # What a mesh or a convex part decides in its own frame, once per geometry: instances
+    # share it and apply their own poses, in the order of operations of one body alone.
+    geometries: dict[bytes, _Geometry] = {}
+    hulls: dict[bytes, tuple[int, tuple[MassProperties, float] | None]] = {}
 
     # Authored collision triangles: inside out (MC204), UCX parts not convex (MC303).
     for body in bodies:
@@ -550,7 +665,8 @@ def physics_readiness(
             authored = is_ucx or (robot and body.primitive is None) or options.shape == "mesh"
             if not authored or body.primitive is not None:
                 continue
-            measured = oriented_volume(v, f)
+            geometry = _shared_geometry(geometries, v, f)
+            measured = geometry.oriented_volume
             if measured is None:
                 continue
             volume, orientation = measured
@@ -567,9 +683,8 @@ def physics_readiness(
                     )
                 )
             elif orientation > 0 and is_ucx:
-                try:
-                    hull_volume = exact_hull(v).volume
-                except InvalidMeshError:
+                hull_volume = geometry.hull_volume
+                if hull_volume is None:
                     continue
                 if hull_volume > 0 and volume / hull_volume < UCX_CONVEX_FRACTION:
                     fraction = volume / hull_volume
@@ -660,7 +775,7 @@ def physics_readiness(
         # the collider's mass properties, part by part, in the body frame
         masses = []
         if kind == "mesh":
-            masses.append(mass_properties(body.vertices, body.faces))
+            masses.append(_shared_geometry(geometries, body.vertices, body.faces).mass)
         for k in parts if kind != "mesh" else ():
             label = int(colliders.part_label[k])
             part_name = body.parts[label] if label >= 0 else None
@@ -669,12 +784,13 @@ def physics_readiness(
                 "" if part_name is None else f" of part {part_name!r}"
             )
             if int(shapes.kinds[k]) == ShapeKind.POLYTOPE:
-                try:
-                    hull = exact_hull(shapes.vertices[start:end])
-                except InvalidMeshError:
-                    hull = None
-                if hull is None or hull.dimension < 3:
-                    dimension = 0 if hull is None else hull.dimension
+                points = shapes.vertices[start:end]
+                key = _geometry_key(points)
+                measured_hull = hulls.get(key)
+                if measured_hull is None:
+                    measured_hull = hulls[key] = _hull_mass(points)
+                dimension, solid = measured_hull
+                if solid is None:
                     shape_name = ("a point", "a segment", "flat")[dimension]
                     findings.append(
                         finding(
@@ -687,8 +803,7 @@ def physics_readiness(
                         )
                     )
                     continue
-                mass = mass_properties(hull.vertices, hull.faces)
-                relative = mass.volume / hull.diagonal**3
+                mass, relative = solid
                 if relative < options.min_relative_volume:
                     findings.append(
                         finding(
@@ -745,15 +860,14 @@ def physics_readiness(
         rows.append(row)
         if visual_body is None or collider is None:
             continue
+        geometry = _shared_geometry(geometries, visual_body.vertices, visual_body.faces)
         if visual_body.primitive is not None:
             visual = primitive_mass_properties(visual_body.primitive).transformed(visual_body.pose)
             closed = True
         else:
-            measured = oriented_volume(visual_body.vertices, visual_body.faces)
+            measured = geometry.oriented_volume
             closed = measured is not None and measured[1] != 0
-            visual = mass_properties(visual_body.vertices, visual_body.faces).transformed(
-                visual_body.pose
-            )
+            visual = geometry.mass.transformed(visual_body.pose)
         row["visual_mass"] = _mass_dict(visual)
         if visual.area == 0.0:
             findings.append(
@@ -767,7 +881,7 @@ def physics_readiness(
                 )
             )
             continue
-        world = visual_body.world_vertices()[np.unique(visual_body.faces)]
+        world = visual_body.world_vertices()[geometry.used]
         diagonal = float(np.linalg.norm(world.max(axis=0) - world.min(axis=0)))
         row["comparison"] = "solid" if closed else "shell"
         if closed and collider.volume > 0:
@@ -1184,6 +1298,9 @@ def inspect(
     each body through :func:`physics_readiness`. A batch keeps going: a mesh file that cannot
     be read, or a body that cannot be inspected (no faces), becomes an entry of
     :attr:`InspectReport.errors` and the run's exit code is 2; the other bodies are reported.
+    What a mesh alone decides (its topology, crossings, manifold status) is measured once
+    however many bodies instance it; what a body's pose decides (its bounds, its degenerate
+    faces, its units guess) for each body, so the report is the one of each body alone.
     """
     from meshcol.analysis.rules import select_rules
     from meshcol.errors import MeshcolError
@@ -1248,17 +1365,11 @@ def inspect(
     else:
         assert scene_bodies is not None
         meshes = _meshes(scene_bodies)
-        inspected = []
-        for done, (body_name, part_name, part) in enumerate(meshes, start=1):
-            try:
-                outcome: MeshInspection | InvalidMeshError = inspect_body(
-                    part, declared_units=units
-                )
-            except InvalidMeshError as error:
-                outcome = error
-            inspected.append((body_name, part_name, part, outcome))
-            if progress is not None:
-                progress(f"inspect: {done}/{len(meshes)} bodies")
+        outcomes = _inspect_meshes([part for _, _, part in meshes], units, progress)
+        inspected = [
+            (body_name, part_name, part, outcome)
+            for (body_name, part_name, part), outcome in zip(meshes, outcomes)
+        ]
     # health per mesh, in input order
     results = []
     findings: list[Finding] = []
@@ -1302,6 +1413,26 @@ def _meshes(bodies: Sequence[Body]) -> list[tuple[str, str | None, Body]]:
 Inspected = tuple[str, str | None, Body, Any]
 
 
+def _inspect_meshes(
+    meshes: Sequence[Body],
+    units: str | None,
+    progress: Callable[[str], None] | None = None,
+) -> list[MeshInspection | InvalidMeshError]:
+    """:func:`inspect_body` of each mesh, or the InvalidMeshError that stopped it; what a
+    mesh alone decides is measured once for all the meshes that instance it (a level's
+    props), so the work follows the unique meshes, not the bodies."""
+    geometries: dict[bytes, _Geometry] = {}
+    out: list[MeshInspection | InvalidMeshError] = []
+    for done, mesh in enumerate(meshes, start=1):
+        try:
+            out.append(_inspect_instance(mesh, units, geometries))
+        except InvalidMeshError as error:
+            out.append(error)
+        if progress is not None:
+            progress(f"inspect: {done}/{len(meshes)} bodies")
+    return out
+
+
 def _inspect_file(
     task: tuple[str, list[Body] | None, str | None],
 ) -> tuple[tuple[list[Body] | None, list[Any]] | None, Exception | None]:
@@ -1320,13 +1451,7 @@ def _inspect_file(
         except MeshcolError as error:
             return None, error
         meshes = [part for _, _, part in _meshes(bodies)]
-    out: list[Any] = []
-    for mesh in meshes:
-        try:
-            out.append(inspect_body(mesh, declared_units=units))
-        except InvalidMeshError as error:
-            out.append(error)
-    return (bodies, out), None
+    return (bodies, _inspect_meshes(meshes, units)), None
 
 
 def _renamed(body: Body, name: str) -> Body:

@@ -8,6 +8,7 @@ __all__ = [
     "DEGENERATE_RELATIVE_HEIGHT",
     "closest_points_on_triangles",
     "degenerate_faces",
+    "face_heights",
     "point_triangle_distances",
     "sample_surface",
     "triangle_areas",
@@ -107,9 +108,23 @@ def sample_surface(
 DEGENERATE_RELATIVE_HEIGHT = 1e-7
 
 
-def degenerate_faces(vertices: np.ndarray, faces: np.ndarray, diagonal: float) -> np.ndarray:
-    """(m,) bool: faces with a repeated vertex or a height at most
-    ``DEGENERATE_RELATIVE_HEIGHT * diagonal`` (they have no usable normal)."""
+def face_heights(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """What :func:`degenerate_faces` compares with a length, measured once for a mesh judged
+    at several sizes (one mesh instanced at many poses, each with its own diagonal).
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+    faces : (m, 3) int
+
+    Returns
+    -------
+    heights : (m,) float64
+        Each face's height on its longest edge (twice its area over that edge's length; 0
+        when every edge has length 0).
+    repeated : (m,) bool
+        The face names one vertex twice.
+    """
     tri = vertices[faces]
     twice_area = np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
     longest = np.linalg.norm(tri - tri[:, [1, 2, 0]], axis=2).max(axis=1)
@@ -118,4 +133,20 @@ def degenerate_faces(vertices: np.ndarray, faces: np.ndarray, diagonal: float) -
     repeated = (
         (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 2] == faces[:, 0])
     )
+    return height, repeated
+
+
+def degenerate_faces(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    diagonal: float,
+    *,
+    heights: tuple[np.ndarray, np.ndarray] | None = None,
+) -> np.ndarray:
+    """(m,) bool: faces with a repeated vertex or a height at most
+    ``DEGENERATE_RELATIVE_HEIGHT * diagonal`` (they have no usable normal).
+
+    ``heights``, :func:`face_heights` of the same vertices and faces when already measured,
+    spares measuring them again."""
+    height, repeated = face_heights(vertices, faces) if heights is None else heights
     return repeated | (height <= DEGENERATE_RELATIVE_HEIGHT * diagonal)
