@@ -322,6 +322,31 @@ def test_merge_vertices_keeps_degenerate_faces():
     assert new_faces.tolist() == [[0, 1, 2], [0, 1, 1]]
 
 
+def test_merge_vertices_of_a_large_soup_numbers_in_first_occurrence_order():
+    """A soup of 240,000 corners over 9,000 positions, with unused vertices between them: the
+    core's table (presized, probed in prefetched blocks) numbers the merged positions in the
+    order of their first use, as a sort-based reference does."""
+    rng = np.random.default_rng(4)
+    positions = rng.integers(-5000, 5000, size=(9000, 3)) / 1e3 + 0.25e-9  # no rounding ties
+    corners = rng.integers(0, 9000, size=240_000)
+    vertices = np.vstack([positions[corners], rng.normal(size=(1000, 3)) + 50.0])
+    order = rng.permutation(len(vertices))  # the unused 1,000 rows land among the corners
+    vertices = vertices[order]
+    faces = np.argsort(order)[:240_000].reshape(-1, 3)
+    merged, new_faces = merge_vertices(vertices, faces)
+    # reference: the used rows in row order, keyed as the core keys them (8 decimals)
+    used = np.unique(faces)
+    keys = np.rint(vertices[used] * 1e8 - 1e-6)
+    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    rank = np.empty(len(first), dtype=np.int64)
+    rank[np.argsort(first)] = np.arange(len(first))
+    remap = np.full(len(vertices), -1)
+    remap[used] = rank[inverse.ravel()]
+    assert len(merged) == len(np.unique(corners))
+    assert np.array_equal(merged, vertices[used][np.sort(first)])
+    assert np.array_equal(new_faces, remap[faces])
+
+
 def test_textured_files_load_without_pillow(corpus, tmp_path):
     # a glTF with a texture (garbage image bytes: never decoded without Pillow)
     positions = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=np.float32)

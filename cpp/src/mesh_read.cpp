@@ -403,41 +403,61 @@ void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& fa
     while (recent_size < n && recent_size < 4096) recent_size <<= 1;
     const size_t kRecent = recent_size;
     std::vector<Slot> recent(kRecent, Slot{0, -1});
-    for (size_t i = 0; i < n; ++i) {
-        if (!used[i]) continue;
-        const double* v = &vertices[3 * i];
-        const Key key{{quantise(v[0]), quantise(v[1]), quantise(v[2])}};
-        const std::uint64_t h = hasher(key);
-        // Neighbouring triangles share corners: a small direct-mapped table of the keys seen
-        // last answers most repeats from cache, where the big table costs a miss a probe.
-        Slot& seen = recent[h & (kRecent - 1)];
-        if (seen.index >= 0 && seen.hash == h && keys[static_cast<size_t>(seen.index)] == key) {
-            remap[i] = seen.index;
-            continue;
+    // Corners go in blocks: each block's keys and hashes first, with their table slots
+    // prefetched, then looked up one by one in order (the same lookups as one at a time, so
+    // the same numbering). A big soup's lookups are cache misses in a table of tens of MiB;
+    // prefetched, a block's misses overlap instead of queueing.
+    constexpr size_t kBlock = 16;
+    size_t block_corner[kBlock];
+    Key block_key[kBlock];
+    std::uint64_t block_hash[kBlock];
+    for (size_t next = 0; next < n;) {
+        size_t count = 0;
+        for (; next < n && count < kBlock; ++next) {
+            if (!used[next]) continue;
+            const double* v = &vertices[3 * next];
+            block_corner[count] = next;
+            block_key[count] = Key{{quantise(v[0]), quantise(v[1]), quantise(v[2])}};
+            block_hash[count] = hasher(block_key[count]);
+            __builtin_prefetch(&slots[block_hash[count] & (capacity - 1)]);
+            ++count;
         }
-        size_t at = h & (capacity - 1);
-        std::int64_t found = -1;
-        while (slots[at].index >= 0) {
-            if (slots[at].hash == h && keys[static_cast<size_t>(slots[at].index)] == key) {
-                found = slots[at].index;
-                break;
+        for (size_t b = 0; b < count; ++b) {
+            const size_t i = block_corner[b];
+            const Key& key = block_key[b];
+            const std::uint64_t h = block_hash[b];
+            // Neighbouring triangles share corners: a small direct-mapped table of the keys
+            // seen last answers most repeats from cache.
+            Slot& seen = recent[h & (kRecent - 1)];
+            if (seen.index >= 0 && seen.hash == h && keys[static_cast<size_t>(seen.index)] == key) {
+                remap[i] = seen.index;
+                continue;
             }
-            at = (at + 1) & (capacity - 1);
-        }
-        if (found < 0) {
-            found = static_cast<std::int64_t>(keys.size());
-            keys.push_back(key);
-            merged.insert(merged.end(), v, v + 3);
-            slots[at] = Slot{h, found};
-            if (2 * keys.size() > capacity) {  // grow: rehash every key
-                capacity <<= 1;
-                slots.assign(capacity, Slot{0, -1});
-                for (size_t k = 0; k < keys.size(); ++k)
-                    insert_slot(hasher(keys[k]), static_cast<std::int64_t>(k));
+            size_t at = h & (capacity - 1);
+            std::int64_t found = -1;
+            while (slots[at].index >= 0) {
+                if (slots[at].hash == h && keys[static_cast<size_t>(slots[at].index)] == key) {
+                    found = slots[at].index;
+                    break;
+                }
+                at = (at + 1) & (capacity - 1);
             }
+            if (found < 0) {
+                found = static_cast<std::int64_t>(keys.size());
+                keys.push_back(key);
+                const double* v = &vertices[3 * i];
+                merged.insert(merged.end(), v, v + 3);
+                slots[at] = Slot{h, found};
+                if (2 * keys.size() > capacity) {  // grow: rehash every key
+                    capacity <<= 1;
+                    slots.assign(capacity, Slot{0, -1});
+                    for (size_t k = 0; k < keys.size(); ++k)
+                        insert_slot(hasher(keys[k]), static_cast<std::int64_t>(k));
+                }
+            }
+            remap[i] = found;
+            seen = Slot{h, found};
         }
-        remap[i] = found;
-        seen = Slot{h, found};
     }
     for (std::int64_t& f : faces) f = remap[static_cast<size_t>(f)];
     vertices = std::move(merged);
