@@ -42,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.analysis.colliders import COLLIDER_KINDS, build_colliders
+from meshcol.analysis.colliders import COLLIDER_KINDS, _geometry_key, build_colliders
 from meshcol.errors import InputFileError
 from meshcol.io.report import vector_columns
 from meshcol.types import Scene, Status
@@ -956,17 +956,6 @@ def check(
         )
 
 
-def _mesh_key(mesh: tuple[np.ndarray, np.ndarray]) -> bytes:
-    import hashlib
-
-    h = hashlib.blake2b(digest_size=16)
-    for array in mesh:
-        a = np.ascontiguousarray(array)
-        h.update(str((a.dtype.str, a.shape)).encode())
-        h.update(a.tobytes())
-    return h.digest()
-
-
 def _check_file(task: tuple[str, list[Any] | None, str, dict]) -> tuple[Any, Any, Any]:
     """Worker entry of a parallel check: one file's ``(path, bodies, collider kind,
     decompose options)`` (``bodies`` None: read the file here) to ``(bodies read or None,
@@ -986,7 +975,7 @@ def _check_file(task: tuple[str, list[Any] | None, str, dict]) -> tuple[Any, Any
     parts: dict[bytes, list[np.ndarray]] = {}
 
     def record(mesh: Any, **options: Any) -> list[np.ndarray]:
-        parts[_mesh_key(mesh)] = found = convex_parts(mesh, **options)
+        parts[_geometry_key(*mesh)] = found = convex_parts(mesh, **options)
         return found
 
     if any(b.primitive is None and (b.collider or kind) == "decomposed" for b in bodies):
@@ -1054,7 +1043,7 @@ def _prepare_files(
         scene = Scene(bodies=tuple(bodies), units=None, source=source)
 
     def decompose(mesh: Any, **options: Any) -> list[np.ndarray]:
-        found = parts.get(_mesh_key(mesh))
+        found = parts.get(_geometry_key(*mesh))
         return convex_parts(mesh, **options) if found is None else found
 
     return scene, decompose
