@@ -641,8 +641,9 @@ void interior_filter(Workspace& w, const std::vector<int>& subset, std::vector<i
     auto chunk_range = [&](long long c) {
         return std::make_pair(std::min(n, c * per_chunk), std::min(n, (c + 1) * per_chunk));
     };
-    // Directions on a Fibonacci sphere; the extreme point along each (first of ties). Structure
-    // of arrays, so the scan over directions vectorises.
+    // Directions on a Fibonacci sphere; the extreme point along each (first of ties), the
+    // directions as a structure of arrays. GCC 12 does not vectorise this scan (it keeps the
+    // two selects as branches, "control flow in loop"), with int or 64-bit indices alike.
     const double golden = 3.14159265358979323846 * (3.0 - std::sqrt(5.0));
     double dx[directions], dy[directions], dz[directions];
     for (int k = 0; k < directions; ++k) {
