@@ -142,6 +142,7 @@ def test_the_walker_sees_lazy_imports_and_skips_type_checking(tmp_path: Path) ->
     assert _imports(source) == {"meshcol.collision.shapes", "meshcol.io.scene"}
 
 
+@pytest.mark.slow
 def test_one_hull_mechanism() -> None:
     """Convex hulls come from the core's Quickhull only (ARCHITECTURE.md, one mechanism per
     job): no module builds one with scipy's qhull, and only ``collision.hull`` defines the

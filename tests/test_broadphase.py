@@ -414,6 +414,7 @@ class TreeEdits(RuleBasedStateMachine):
 
 TreeEdits.TestCase.settings = settings(max_examples=60, stateful_step_count=25, deadline=None)
 test_tree_edits = TreeEdits.TestCase
+test_tree_edits.pytestmark = [pytest.mark.slow]
 
 
 def test_move_within_the_fat_margin_changes_nothing():

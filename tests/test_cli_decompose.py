@@ -215,6 +215,7 @@ def test_killed_run_leaves_no_cache_entry_or_output(corpus, tmp_path) -> None:
     assert [p for p in out.rglob("*") if p.is_file()] == []
 
 
+@pytest.mark.slow
 def test_max_hausdorff_fails_the_run(meshes, tmp_path) -> None:
     args = [
         str(meshes["torus"]),
@@ -234,6 +235,7 @@ def test_max_hausdorff_fails_the_run(meshes, tmp_path) -> None:
     assert code == 0 and json.loads(stdout)["summary"]["hausdorff_exceeded"] == 0
 
 
+@pytest.mark.slow
 def test_csv_report(meshes, tmp_path) -> None:
     report = tmp_path / "r.csv"
     code, stdout, _ = run(
@@ -696,6 +698,7 @@ def test_parts_that_would_replace_an_input_are_refused(meshes, tmp_path, monkeyp
     assert list((tmp_path / "out").iterdir()) == []
 
 
+@pytest.mark.slow
 def test_a_failed_write_leaves_no_part_and_names_the_users_file(
     meshes, tmp_path, monkeypatch
 ) -> None:

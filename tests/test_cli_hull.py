@@ -369,6 +369,7 @@ def test_broken_manifest_maps_the_scene_error(tmp_path: Path, name: str) -> None
     assert_clean_failure(result, manifest, info.value.message, out)
 
 
+@pytest.mark.slow
 def test_debug_shows_a_traceback(tmp_path: Path) -> None:
     missing = tmp_path / "nope.obj"
     quiet = subprocess.run(

@@ -586,6 +586,7 @@ def test_default_cache_dir_follows_xdg(monkeypatch, tmp_path) -> None:
     assert decompose_cache.default_cache_dir() == tmp_path / "meshcol" / "decompose"
 
 
+@pytest.mark.slow
 def test_vertex_and_hull_budgets_are_respected() -> None:
     d = decompose(_torus(), max_vertices=8, max_hulls=3, use_cache=False, metrics=False, **FAST)
     assert 1 <= len(d.parts) <= 3

@@ -398,6 +398,7 @@ def test_rotated_grids_keep_the_invariants(points: np.ndarray) -> None:
         assert_valid_hull(points, 1e-12 * float(np.abs(points).max()))
 
 
+@pytest.mark.slow
 def test_random_subsets_of_grids_keep_every_point_inside() -> None:
     """Seeded cases of the kinds that once lost points: random subsets of a grid in thirds
     (a corner of a face polygon taken for an edge point through a thin triangle whose plain
@@ -417,6 +418,7 @@ def test_random_subsets_of_grids_keep_every_point_inside() -> None:
             assert_valid_hull(grid, 1e-12 * float(np.abs(grid).max()))
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None)
 @given(st.integers(4, 300), st.integers(0, 2**32 - 1))
 def test_points_on_a_sphere_are_all_vertices(n: int, seed: int) -> None:

@@ -132,6 +132,7 @@ def _solver_ball(points: np.ndarray) -> float:
 coordinates = st.floats(-100.0, 100.0, allow_nan=False, allow_infinity=False)
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None)
 @given(st.lists(st.tuples(coordinates, coordinates, coordinates), min_size=1, max_size=40))
 def test_minimum_ball_contains_every_point_and_is_minimal(raw: list) -> None:
@@ -402,6 +403,7 @@ def _compare_with_oracle(point_sets: list[np.ndarray]) -> None:
             assert np.max(signed_distances(fit.primitive, _local(fit, points))) <= 0.0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(3))
 def test_core_volumes_are_no_worse_than_the_python_fits(seed: int) -> None:
     _compare_with_oracle([_cloud(10 * seed + k, 40) for k in range(2)])

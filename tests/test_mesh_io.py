@@ -322,6 +322,7 @@ def test_merge_vertices_keeps_degenerate_faces():
     assert new_faces.tolist() == [[0, 1, 2], [0, 1, 1]]
 
 
+@pytest.mark.slow
 def test_merge_vertices_of_a_large_soup_numbers_in_first_occurrence_order():
     """A soup of 240,000 corners over 9,000 positions, with unused vertices between them: the
     core's table (presized, probed in prefetched blocks) numbers the merged positions in the
@@ -800,6 +801,7 @@ def test_stem_is_paths_stem(source):
     assert meshcol.io.mesh_read._stem(source) == Path(source).stem
 
 
+@pytest.mark.slow
 @settings(max_examples=40)
 @given(
     vertices=arrays(

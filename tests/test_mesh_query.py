@@ -793,6 +793,7 @@ def test_closest_points_equal_brute_force(seed) -> None:
     assert np.all(d[150:] <= 1e-12)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("offset", "scale"), [(0.0, 1.0), (1e6, 1e-3), (-3e4, 50.0)], ids=["unit", "far-small", "big"]
 )

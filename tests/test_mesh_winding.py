@@ -86,6 +86,7 @@ def test_containment_verdicts_equal_the_exact_sum(i, seed, log_offset) -> None:
     assert np.all(visits > 0)
 
 
+@pytest.mark.slow
 def test_open_surface_verdicts_on_a_dense_grid() -> None:
     """Many points around the open cap, where |w| crosses 1/2 on a curved sheet."""
     g = np.linspace(-1.3, 1.3, 23)

@@ -428,6 +428,7 @@ def test_hill_climbing_matches_vertex_scan():
     np.testing.assert_allclose(got.normal, want.normal, atol=1e-9)
 
 
+@pytest.mark.slow
 def test_python_fcl_compared_where_it_is_right():
     fcl = pytest.importorskip("fcl")
 

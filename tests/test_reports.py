@@ -177,6 +177,7 @@ def _mutations(report: dict):
             yield f"{key}[0] without a field", row
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", GOLDEN_FILES, ids=[p.name for p in GOLDEN_FILES])
 def test_schema_rejects_broken_reports(path: Path) -> None:
     report = json.loads(path.read_text())

@@ -831,6 +831,7 @@ _joint = st.fixed_dictionaries(
 )
 
 
+@pytest.mark.slow
 @settings(max_examples=60)
 @given(joints=st.lists(_joint, min_size=1, max_size=6), branch=st.booleans())
 def test_forward_kinematics_matches_yourdfpy(tmp_path_factory, joints, branch):

@@ -44,6 +44,7 @@ def test_columns_pass_no_body_with_one_bad_field(data):
         assert _plainly_valid_by_body(document), document
 
 
+@pytest.mark.slow
 @given(st.lists(valid_bodies(), min_size=1, max_size=4))
 def test_columns_pass_every_valid_body_of_ordinary_numbers(bodies):
     document = {"bodies": bodies}

@@ -155,6 +155,7 @@ def test_fast_check_passes_only_what_the_schema_passes(document):
         assert schema_valid(document), document
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("field", sorted(near_valid) + ["colour"])
 @given(data=st.data())
 def test_fast_check_passes_no_body_with_one_bad_field(field, data):

@@ -300,6 +300,7 @@ def test_native_verdict_equals_the_exact_oracle(pair) -> None:
     assert native_cross(a[1:] + a[:1], b[::-1]) is expected
 
 
+@pytest.mark.slow
 def test_batch_equals_the_oracle_on_a_random_soup() -> None:
     rng = np.random.default_rng(7)
     # 70 faces on 40 grid points: many shared vertices, edges, coplanar and touching pairs

@@ -106,6 +106,7 @@ def test_a_flat_square_gets_a_mujoco_volume() -> None:
     assert fit.met and fit.measures.volume[0] >= 1e-12 * (1 - 1e-9)
 
 
+@pytest.mark.slow
 def test_a_needle_meets_the_gpu_oblong_ratio() -> None:
     rod = np.c_[np.linspace(0, 10, 30), np.zeros(30), np.zeros(30)]
     rod[:, 1] += 1e-4 * np.sin(np.arange(30))

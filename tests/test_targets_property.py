@@ -120,6 +120,7 @@ def test_corpus_meshes_meet_every_profile(corpus: Path, rel: str, name: str) -> 
     assert encloses(vertices, points, tol=1e-8)
 
 
+@pytest.mark.slow
 def test_a_user_profile_file_works_as_the_packaged_one(tmp_path: Path) -> None:
     ball = tmp_path / "ball.obj"
     trimesh.creation.icosphere(2, 0.5).export(ball)
@@ -158,6 +159,7 @@ def test_an_impossible_profile_is_exit_2_in_one_line(tmp_path: Path) -> None:
     assert "Traceback" not in stderr
 
 
+@pytest.mark.slow
 def test_a_limit_the_input_cannot_meet_is_a_finding_with_its_rule_id(tmp_path: Path) -> None:
     # no polytope reaches the in-sphere ratio 1 (only a ball does): MC102 on any input
     ball = tmp_path / "ball.obj"

@@ -92,6 +92,7 @@ def mjcf_colliders(path: Path) -> dict[str, list[np.ndarray]]:
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["physx-gpu", "unity"])
 def test_hull_robot_target_meets_every_limit_and_encloses(urdf: Path, tmp_path: Path, name):
     out, report = tmp_path / "out", tmp_path / "hull.json"
@@ -120,6 +121,7 @@ def test_hull_robot_target_meets_every_limit_and_encloses(urdf: Path, tmp_path: 
             assert any(encloses(p, cloud, tol=1e-6) for p in parts), link
 
 
+@pytest.mark.slow
 def test_hull_robot_target_to_mjcf_compiles_and_meets_limits(urdf: Path, tmp_path: Path):
     out = tmp_path / "out"
     code, _, stderr = run(

@@ -330,6 +330,7 @@ def _dense_distances(cs, starts, ends, ts):
     return distance_batch(big, poses, pairs, threads=0).distance
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(3))
 def test_random_hulls_never_miss_a_sampled_contact(seed):
     rng = np.random.default_rng(seed)
