@@ -174,14 +174,14 @@ def inspect_body(body: Body, declared_units: str | None = None) -> MeshInspectio
     assumes (and does not check) that its input is free of self-intersections, so those come
     from :func:`meshcol.collision.self_intersection.self_intersecting_pairs`, in the core.
     """
-    return _inspect_instance(body, declared_units, {})
+    return _inspect_instance(body, declared_units, _Geometries())
 
 
 class _Geometry:
     """One mesh's vertices and faces (its local frame) and what they alone decide, each
     measured on first use.
 
-    The bodies that instance one mesh share one (:func:`_shared_geometry`), so a level of
+    The bodies that instance one mesh share one (:class:`_Geometries`), so a level of
     instanced props is measured once per prop. Nothing here depends on a body's name, source,
     pose or units; what does (bounds, size, which faces are degenerate and so which cross, the
     units guess, every finding's names) each body computes itself.
@@ -256,26 +256,37 @@ class _Geometry:
         return count
 
 
-def _shared_geometry(
-    geometries: dict[bytes, _Geometry], vertices: np.ndarray, faces: np.ndarray
-) -> _Geometry:
-    """The :class:`_Geometry` of a mesh from ``geometries`` when an earlier body had the same
-    vertices and faces (:func:`meshcol.analysis.colliders._geometry_key`: the same bits), else
-    a new one, stored there."""
-    from meshcol.analysis.colliders import _geometry_key
+class _Geometries:
+    """The :class:`_Geometry` of each mesh of one inspect run, shared by the bodies (and the
+    health and physics phases) that use it: found by the arrays themselves first (a file's
+    instances share their arrays), else by content
+    (:func:`meshcol.analysis.colliders._geometry_key`: the same bits), so each pair of
+    arrays is hashed once."""
 
-    key = _geometry_key(vertices, faces)
-    geometry = geometries.get(key)
-    if geometry is None:
-        geometry = geometries[key] = _Geometry(vertices, faces)
-    return geometry
+    def __init__(self) -> None:
+        self._by_key: dict[bytes, _Geometry] = {}
+        # id pair -> (geometry, vertices, faces): the arrays are held, so the ids stay theirs
+        self._by_arrays: dict[tuple[int, int], tuple[_Geometry, np.ndarray, np.ndarray]] = {}
+
+    def get(self, vertices: np.ndarray, faces: np.ndarray) -> _Geometry:
+        seen = self._by_arrays.get((id(vertices), id(faces)))
+        if seen is not None:
+            return seen[0]
+        from meshcol.analysis.colliders import _geometry_key
+
+        key = _geometry_key(vertices, faces)
+        geometry = self._by_key.get(key)
+        if geometry is None:
+            geometry = self._by_key[key] = _Geometry(vertices, faces)
+        self._by_arrays[id(vertices), id(faces)] = (geometry, vertices, faces)
+        return geometry
 
 
 def _inspect_instance(
-    body: Body, declared_units: str | None, geometries: dict[bytes, _Geometry]
+    body: Body, declared_units: str | None, geometries: _Geometries
 ) -> MeshInspection:
     """:func:`inspect_body`, with what the mesh alone decides shared through ``geometries``
-    (:func:`_shared_geometry`) by the bodies that instance it."""
+    by the bodies that instance it."""
     vertices = np.asarray(body.vertices, dtype=np.float64)
     faces = np.asarray(body.faces, dtype=np.int64)
     if len(faces) == 0:
@@ -284,7 +295,7 @@ def _inspect_instance(
         raise InvalidMeshError(
             f"body '{body.name}': vertices contain NaN or infinite coordinates", body.source
         )
-    mesh = _shared_geometry(geometries, vertices, faces)
+    mesh = geometries.get(vertices, faces)
 
     used = body.world_vertices()[mesh.used]
     lo, hi = used.min(axis=0), used.max(axis=0)
@@ -601,6 +612,7 @@ def physics_readiness(
     visuals: dict[str, Body] | None = None,
     progress: Callable[[str], None] | None = None,
     units: str | None = None,
+    _geometries: _Geometries | None = None,
 ) -> tuple[list[dict[str, Any]], list[Finding]]:
     """Each body's collider against its visual mesh: mass properties and their findings.
 
@@ -654,7 +666,8 @@ def physics_readiness(
     original = {b.name for b in bodies}
     # What a mesh or a convex part decides in its own frame, once per geometry: instances
     # share it and apply their own poses, in the order of operations of one body alone.
-    geometries: dict[bytes, _Geometry] = {}
+    # (inspect passes the ones its health phase measured: _geometries)
+    geometries = _geometries if _geometries is not None else _Geometries()
     hulls: dict[bytes, tuple[int, tuple[MassProperties, float] | None]] = {}
 
     # Authored collision triangles: inside out (MC204), UCX parts not convex (MC303).
@@ -665,7 +678,7 @@ def physics_readiness(
             authored = is_ucx or (robot and body.primitive is None) or options.shape == "mesh"
             if not authored or body.primitive is not None:
                 continue
-            geometry = _shared_geometry(geometries, v, f)
+            geometry = geometries.get(v, f)
             measured = geometry.oriented_volume
             if measured is None:
                 continue
@@ -775,7 +788,7 @@ def physics_readiness(
         # the collider's mass properties, part by part, in the body frame
         masses = []
         if kind == "mesh":
-            masses.append(_shared_geometry(geometries, body.vertices, body.faces).mass)
+            masses.append(geometries.get(body.vertices, body.faces).mass)
         for k in parts if kind != "mesh" else ():
             label = int(colliders.part_label[k])
             part_name = body.parts[label] if label >= 0 else None
@@ -860,7 +873,7 @@ def physics_readiness(
         rows.append(row)
         if visual_body is None or collider is None:
             continue
-        geometry = _shared_geometry(geometries, visual_body.vertices, visual_body.faces)
+        geometry = geometries.get(visual_body.vertices, visual_body.faces)
         if visual_body.primitive is not None:
             visual = primitive_mass_properties(visual_body.primitive).transformed(visual_body.pose)
             closed = True
@@ -1328,6 +1341,7 @@ def inspect(
     if executor != "ray" and ray_address is not None:
         raise ValueError("ray_address needs executor 'ray'")
     in_tasks = jobs > 1 or timeout is not None or executor != "local"
+    geometries = _Geometries()  # health and physics measure each mesh once between them
     visuals: dict[str, Body] | None = None
     units = None
     scene_bodies: list[Body] | None = None
@@ -1365,7 +1379,7 @@ def inspect(
     else:
         assert scene_bodies is not None
         meshes = _meshes(scene_bodies)
-        outcomes = _inspect_meshes([part for _, _, part in meshes], units, progress)
+        outcomes = _inspect_meshes([part for _, _, part in meshes], units, progress, geometries)
         inspected = [
             (body_name, part_name, part, outcome)
             for (body_name, part_name, part), outcome in zip(meshes, outcomes)
@@ -1384,7 +1398,9 @@ def inspect(
     if not results and first_error:
         raise first_error[0]
     usable = [b for b in scene_bodies if b.name not in bad]
-    rows, physics_findings = physics_readiness(usable, options, visuals=visuals, units=units)
+    rows, physics_findings = physics_readiness(
+        usable, options, visuals=visuals, units=units, _geometries=geometries
+    )
     findings.extend(physics_findings)
     return InspectReport(
         tuple(results),
@@ -1417,11 +1433,12 @@ def _inspect_meshes(
     meshes: Sequence[Body],
     units: str | None,
     progress: Callable[[str], None] | None = None,
+    geometries: _Geometries | None = None,
 ) -> list[MeshInspection | InvalidMeshError]:
     """:func:`inspect_body` of each mesh, or the InvalidMeshError that stopped it; what a
     mesh alone decides is measured once for all the meshes that instance it (a level's
     props), so the work follows the unique meshes, not the bodies."""
-    geometries: dict[bytes, _Geometry] = {}
+    geometries = geometries if geometries is not None else _Geometries()
     out: list[MeshInspection | InvalidMeshError] = []
     for done, mesh in enumerate(meshes, start=1):
         try:
