@@ -24,6 +24,17 @@ FORBIDDEN: dict[str, set[str]] = {
     "cli": {"_native", "geometry", "collision"},
     "types": {"io", "collision", "decomposition", "analysis", "cli", "geometry", "_native"},
     "errors": {"io", "collision", "decomposition", "analysis", "cli", "geometry", "_native"},
+    "vocabulary": {
+        "io",
+        "collision",
+        "decomposition",
+        "analysis",
+        "cli",
+        "geometry",
+        "_native",
+        "types",
+        "errors",
+    },
 }
 
 

@@ -46,6 +46,7 @@ from meshcol.analysis.colliders import COLLIDER_KINDS, _geometry_key, build_coll
 from meshcol.errors import InputFileError
 from meshcol.io.report import vector_columns
 from meshcol.types import Scene, Status
+from meshcol.vocabulary import PAIR_STATUSES
 
 __all__ = [
     "PAIR_STATUSES",
@@ -56,7 +57,6 @@ __all__ = [
     "check_scene",
 ]
 
-PAIR_STATUSES = ("separated", "clearance", "contact", "penetrating", "contained")
 SEVERITY = {name: i for i, name in enumerate(PAIR_STATUSES)}
 #: Query statuses whose numbers are not the answer: the pair is reported ``query_failed``.
 _NO_ANSWER = (int(Status.INVALID_INPUT), int(Status.OUT_OF_RANGE))

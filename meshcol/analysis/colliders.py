@@ -47,6 +47,7 @@ from meshcol.collision.hull import FLAT_RELATIVE_TOLERANCE, exact_hull
 from meshcol.collision.shapes import ConvexSet
 from meshcol.errors import InvalidMeshError
 from meshcol.types import Body
+from meshcol.vocabulary import COLLIDER_KINDS
 
 __all__ = [
     "COLLIDER_KINDS",
@@ -57,8 +58,6 @@ __all__ = [
     "triangle_parts",
 ]
 
-#: Collider kinds a body can be checked as.
-COLLIDER_KINDS = ("hull", "decomposed", "mesh", "fit")
 
 _UCX = re.compile(r"^UCX_(?P<body>.+)_(?P<index>\d+)$")
 

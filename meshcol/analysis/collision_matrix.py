@@ -46,6 +46,7 @@ from meshcol.analysis.check import _cartesian_part_pairs, _relative
 from meshcol.analysis.colliders import build_colliders
 from meshcol.errors import SceneError
 from meshcol.types import Status
+from meshcol.vocabulary import MATRIX_COLLIDERS
 
 __all__ = [
     "MATRIX_CLASSES",
@@ -71,9 +72,6 @@ CSV_COLUMNS = [
     "default_collision",
     "failed_queries",
 ]
-#: Collider kinds a link can be sampled as (``mesh`` needs the exact mesh queries, not batched
-#: over configurations here).
-MATRIX_COLLIDERS = ("hull", "decomposed", "fit")
 #: Vertices of the parts replicated for one native call (parts x configurations per call):
 #: large enough that a call measures a few hundred configurations of a typical arm, small enough
 #: that replicating them (memory bound) stays a small share of the run.

@@ -18,6 +18,7 @@ import numpy as np
 
 from meshcol.io.review import HIGHLIGHT, MESH_COLOR, PALETTE, ReviewPage
 from meshcol.types import Body
+from meshcol.vocabulary import SEVERITY_ORDER
 
 __all__ = [
     "check_page",
@@ -28,8 +29,6 @@ __all__ = [
     "SEVERITY_ORDER",
 ]
 
-#: Table order of check pairs after the violations: worst first.
-SEVERITY_ORDER = ("contained", "penetrating", "contact", "clearance", "separated")
 #: Rows of a page's table at most (the report has every row).
 MAX_ROWS = 2000
 #: Samples along a moving body's path.

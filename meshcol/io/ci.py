@@ -28,6 +28,8 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from meshcol.vocabulary import CI_FORMATS
+
 __all__ = [
     "OUTCOMES",
     "CI_FORMATS",
@@ -46,8 +48,6 @@ __all__ = [
 
 #: Outcomes of a case, as JUnit has them.
 OUTCOMES = ("passed", "failure", "error", "skipped")
-#: Report formats rendered here.
-CI_FORMATS = ("junit", "github")
 #: Most passed cases of one kind written one by one; past this the passed cases of that kind
 #: become one summary case (failures, errors and skipped cases are always written one by one),
 #: so a 10,000-body scene's JUnit file stays a few megabytes that Jenkins loads in a second.

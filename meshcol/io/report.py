@@ -21,6 +21,7 @@ from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
 from meshcol.errors import InputFileError
+from meshcol.vocabulary import REPORT_FORMATS
 
 __all__ = [
     "ENVELOPE_KEYS",
@@ -413,8 +414,6 @@ def dumps_csv(rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> str:
 #: Report file extensions and the format each means (``github`` has none: workflow commands
 #: are read from the log, so they usually go to stdout).
 REPORT_EXTENSIONS = {".json": "json", ".csv": "csv", ".xml": "junit"}
-#: Every report format: the data (JSON, CSV) and the CI-native ones (:mod:`meshcol.io.ci`).
-REPORT_FORMATS = ("json", "csv", "junit", "github")
 
 
 def report_format(path: str | None, fmt: str | None) -> str:

@@ -56,6 +56,7 @@ from meshcol.io.kinematics import (
 )
 from meshcol.io.report import read_json_file
 from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere
+from meshcol.vocabulary import ROBOT_EXTENSIONS
 
 __all__ = [
     "ROBOT_EXTENSIONS",
@@ -72,8 +73,6 @@ __all__ = [
     "description_kind",
 ]
 
-#: Extensions read as robot descriptions (``.xml`` only when its root element is ``<mujoco>``).
-ROBOT_EXTENSIONS = (".urdf", ".mjcf", ".xml")
 
 _JOINT_TOLERANCE = 1e-9  # joint values this far outside a limit are taken as on it
 

@@ -29,6 +29,7 @@ from meshcol.io.mesh_read import MAX_COORDINATE, check_magnitude, load_mesh, spl
 from meshcol.io.primitives import primitive_mesh
 from meshcol.io.robot import is_robot_file, load_robot
 from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere, Spin
+from meshcol.vocabulary import MANIFEST_EXTENSIONS, SCENE_SHAPES
 
 __all__ = [
     "MANIFEST_EXTENSIONS",
@@ -44,8 +45,6 @@ __all__ = [
     "rotation_from_quaternion",
 ]
 
-#: Extensions read as scene manifests; anything else is a mesh or glTF scene file.
-MANIFEST_EXTENSIONS = (".json", ".toml")
 
 #: The JSON Schema of a manifest.
 SCHEMA_PATH = Path(__file__).resolve().parent.parent / "schemas" / "scene.schema.json"
@@ -882,7 +881,7 @@ _VECTOR_FIELDS = ("position", "end_position", "velocity", "angular_velocity")
 _ORDERS = frozenset(
     {"xyz", "xzy", "yxz", "yzx", "zxy", "zyx", "xyx", "xzx", "yxy", "yzy", "zxz", "zyz"}
 )
-_SHAPES = frozenset({"hull", "decomposed", "mesh"})
+_SHAPES = frozenset(SCENE_SHAPES)
 _PRIMITIVE_KEYS = {
     "sphere": frozenset({"type", "radius"}),
     "box": frozenset({"type", "size"}),

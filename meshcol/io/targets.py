@@ -42,6 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from meshcol.errors import TargetError
+from meshcol.vocabulary import COUNT_LIMITS, LIMIT_KEYS
 
 __all__ = [
     "COUNT_LIMITS",
@@ -59,25 +60,6 @@ __all__ = [
 #: The folder of the package's profiles.
 TARGETS_DIR = Path(__file__).resolve().parent.parent / "targets"
 
-#: Limits that count something (integers >= 1).
-COUNT_LIMITS = (
-    "max_hull_vertices",
-    "max_hull_polygons",
-    "max_hull_triangles",
-    "max_faces_per_vertex",
-    "max_hulls",
-)
-#: Every limit key of ``[limits]``, in the order reports list them.
-LIMIT_KEYS = (
-    "max_hull_vertices",
-    "max_hull_polygons",
-    "max_hull_triangles",
-    "max_faces_per_vertex",
-    "max_hulls",
-    "max_oblong_ratio",
-    "min_thickness",
-    "min_volume",
-)
 #: Length units a profile or a scene manifest may declare, in metres.
 LENGTH_UNITS: dict[str, float] = {
     "m": 1.0,

@@ -1,0 +1,79 @@
+"""The words every floor of meshcol shares, defined once.
+
+Data only: this module imports nothing of meshcol's and may be imported from anywhere (like
+``types`` and ``errors``). A list that two modules need lives here; the modules import it.
+Adding a word (a collider kind, a limit key, a report format) starts here, and the recipes in
+ARCHITECTURE.md say which one registry then maps it to its code.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "COLLIDER_KINDS",
+    "COUNT_LIMITS",
+    "INPUT_KINDS",
+    "LIMIT_KEYS",
+    "MANIFEST_EXTENSIONS",
+    "MATRIX_COLLIDERS",
+    "PAIR_STATUSES",
+    "REPORT_FORMATS",
+    "CI_FORMATS",
+    "ROBOT_EXTENSIONS",
+    "SCENE_SHAPES",
+    "SEVERITY_ORDER",
+]
+
+# -- colliders --------------------------------------------------------------------------------
+
+#: Collider kinds a body can be checked as (``--shape``).
+COLLIDER_KINDS = ("hull", "decomposed", "mesh", "fit")
+#: The collider kinds a scene manifest may name per body (``"shape"``).
+SCENE_SHAPES = ("hull", "decomposed", "mesh")
+#: The collider kinds of a robot's self-collision matrix (``mesh`` needs the exact mesh
+#: queries, which are not batched over configurations).
+MATRIX_COLLIDERS = ("hull", "decomposed", "fit")
+
+# -- engine targets ---------------------------------------------------------------------------
+
+#: Limits that count something (integers >= 1).
+COUNT_LIMITS = (
+    "max_hull_vertices",
+    "max_hull_polygons",
+    "max_hull_triangles",
+    "max_faces_per_vertex",
+    "max_hulls",
+)
+#: Every limit key of a target's ``[limits]``, in the order reports list them.
+LIMIT_KEYS = (
+    "max_hull_vertices",
+    "max_hull_polygons",
+    "max_hull_triangles",
+    "max_faces_per_vertex",
+    "max_hulls",
+    "max_oblong_ratio",
+    "min_thickness",
+    "min_volume",
+)
+
+# -- inputs -----------------------------------------------------------------------------------
+
+#: What a command's input path can be.
+INPUT_KINDS = ("mesh", "manifest", "robot")
+#: File extensions (lower case) of scene manifests.
+MANIFEST_EXTENSIONS = (".json", ".toml")
+#: File extensions (lower case) of robot descriptions (URDF, MJCF).
+ROBOT_EXTENSIONS = (".urdf", ".mjcf", ".xml")
+
+# -- results ----------------------------------------------------------------------------------
+
+#: A checked pair's status, from the mildest to the worst.
+PAIR_STATUSES = ("separated", "clearance", "contact", "penetrating", "contained")
+#: The same, worst first (the order review pages and summaries list pairs in).
+SEVERITY_ORDER = tuple(reversed(PAIR_STATUSES))
+
+# -- reports ----------------------------------------------------------------------------------
+
+#: Formats a report can be written in (``--format``).
+REPORT_FORMATS = ("json", "csv", "junit", "github")
+#: The CI-native ones among them.
+CI_FORMATS = ("junit", "github")
