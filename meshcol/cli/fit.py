@@ -8,7 +8,6 @@ from meshcol.analysis.fit import DEFAULT_VOLUME_TOLERANCE, SHAPE_CHOICES
 from meshcol.cli.common import (
     Progress,
     check_outputs,
-    display_path,
     mesh_outputs,
     plural,
     report_format,
@@ -18,6 +17,7 @@ from meshcol.cli.common import (
     verdict,
 )
 from meshcol.io.mesh_write import MULTI_MESH_EXTENSIONS
+from meshcol.io.paths import display_path
 
 
 @click.command(

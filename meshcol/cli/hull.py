@@ -9,7 +9,6 @@ import click
 from meshcol.cli.common import (
     Progress,
     check_outputs,
-    display_path,
     html_option,
     mesh_outputs,
     plural,
@@ -23,6 +22,7 @@ from meshcol.cli.common import (
     write_html,
 )
 from meshcol.io.mesh_write import MULTI_MESH_EXTENSIONS
+from meshcol.io.paths import display_path
 
 
 @click.command(
