@@ -199,7 +199,7 @@ CASES = [
     (
         "inspect cube.obj --report missing/r.json",
         2,
-        ERR + r"missing/r\.json: cannot write: the folder does not exist",
+        ERR + r"missing/r\.json: folder missing does not exist",
         ["missing"],
     ),
     # item 10: click's usage errors as one line with the prefix

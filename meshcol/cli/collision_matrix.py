@@ -116,7 +116,7 @@ def collision_matrix(
       meshcol check panda.urdf --srdf panda.srdf
     """
     from meshcol.analysis.collision_matrix import collision_matrix as run
-    from meshcol.cli.common import check_outputs
+    from meshcol.io.outputs import check_outputs
     from meshcol.io.report import atomic_path, emit
 
     if output is not None and output == report:
@@ -124,7 +124,7 @@ def collision_matrix(
             f"{output!r} is also the --report: give two files", param_hint="'-o' / '--output'"
         )
     srdf_to = "-" if output is None and report != "-" else output
-    check_outputs([robot], [("-o/--output", srdf_to), ("--report", report)])
+    check_outputs(files={"-o/--output": srdf_to, "--report": report}, inputs=[robot])
     fmt = report_format(report, None, format_option=False, formats=("json", "csv"))
     decompose: dict = {"engine": engine}
     if cache_dir is not None:

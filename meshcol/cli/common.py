@@ -8,7 +8,7 @@ import re
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import click
@@ -160,22 +160,6 @@ def emit_report(result: Any, fmt: str, report: str | None) -> None:
     emit(render(suite, fmt), report)
     if fmt == "github":
         write_step_summary(suite)
-
-
-def check_outputs(
-    inputs: Iterable[str],
-    outputs: Sequence[tuple[str, str | None]],
-    baseline: str | None = None,
-) -> None:
-    """Exit 2 before anything is written when an output would replace an input (a manifest's
-    mesh files and the baseline count) or two outputs are one file
-    (:func:`meshcol.io.outputs.check_destinations`)."""
-    from meshcol.io.outputs import check_destinations, manifest_inputs
-
-    read = manifest_inputs(inputs)
-    if baseline is not None:
-        read.append(("the --baseline", baseline))
-    check_destinations(read, outputs)
 
 
 _COUNT = re.compile(r"(\d+)/(\d+)")

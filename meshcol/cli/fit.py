@@ -7,7 +7,6 @@ import click
 from meshcol.analysis.fit import DEFAULT_VOLUME_TOLERANCE, SHAPE_CHOICES
 from meshcol.cli.common import (
     Progress,
-    check_outputs,
     mesh_outputs,
     plural,
     report_format,
@@ -17,6 +16,7 @@ from meshcol.cli.common import (
     verdict,
 )
 from meshcol.io.mesh_write import MULTI_MESH_EXTENSIONS
+from meshcol.io.outputs import check_outputs
 from meshcol.io.paths import display_path
 
 
@@ -108,7 +108,9 @@ def fit(
     from meshcol.analysis.hull import OutputDestinationError
     from meshcol.cli.common import emit_report
 
-    check_outputs(inputs, [("-o", output), ("--report", report)])
+    check_outputs(
+        files={"-o": output, "--report": report}, folders={"--out-dir": out_dir}, inputs=inputs
+    )
     fmt = report_format(report, fmt)
     progress = Progress(command="fit", heartbeat=True)
     try:

@@ -8,7 +8,6 @@ import click
 
 from meshcol.cli.common import (
     Progress,
-    check_outputs,
     html_option,
     mesh_outputs,
     plural,
@@ -22,6 +21,7 @@ from meshcol.cli.common import (
     write_html,
 )
 from meshcol.io.mesh_write import MULTI_MESH_EXTENSIONS
+from meshcol.io.outputs import check_outputs
 from meshcol.io.paths import display_path
 
 
@@ -125,7 +125,11 @@ def hull(
     from meshcol.analysis.review import hull_page
     from meshcol.cli.common import emit_report
 
-    check_outputs(inputs, [("-o", output), ("--report", report), ("--html", html)])
+    check_outputs(
+        files={"-o": output, "--report": report, "--html": html},
+        folders={"--out-dir": out_dir},
+        inputs=inputs,
+    )
     fmt = report_format(report, fmt)
     progress = Progress(command="hull", heartbeat=True)
     try:

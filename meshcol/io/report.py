@@ -28,6 +28,7 @@ __all__ = [
     "SCHEMA_VERSION",
     "atomic_path",
     "atomic_write",
+    "is_special_file",
     "dumps_csv",
     "dumps_json",
     "emit",
@@ -87,7 +88,7 @@ def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iter
     the report and leaves the device alone.
     """
     path = os.fspath(path)
-    special = _is_special(path)
+    special = is_special_file(path)
     folder = tempfile.gettempdir() if special else os.path.dirname(os.path.abspath(path))
     ext = suffix if suffix is not None else os.path.splitext(path)[1]
     try:
@@ -114,8 +115,9 @@ def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iter
         raise
 
 
-def _is_special(path: str) -> bool:
-    """An existing destination that is neither a regular file nor a folder (a device, a pipe)."""
+def is_special_file(path: str) -> bool:
+    """An existing destination that is neither a regular file nor a folder (a device such as
+    ``/dev/null``, a named pipe): written into, never replaced."""
     try:
         mode = os.stat(path).st_mode
     except OSError:
