@@ -267,8 +267,8 @@ def test_decompose_format_junit_names_the_report_option(samples, tmp_path):
 
 def test_unknown_and_contradicting_formats_are_usage_errors(samples, tmp_path):
     bowl = str(samples / "bowl" / "bowl.obj")
-    code, _, err = run("inspect", bowl, "--format", "tap")
-    assert code == 2 and "'tap' is not one of 'json', 'csv', 'junit', 'github'" in err
+    code, _, err = run("inspect", bowl, "--format", "yaml")
+    assert code == 2 and "'yaml' is not one of 'json', 'csv', 'junit', 'github'" in err
     code, _, err = run("inspect", bowl, "--format", "github", "--report", str(tmp_path / "r.xml"))
     assert code == 2 and "is a .junit file: it cannot hold a github report" in err
     code, _, err = run("inspect", bowl, "--format", "junit", "--report", str(tmp_path / "r.json"))
@@ -458,3 +458,41 @@ def test_step_summary_cells_are_one_line_and_inert() -> None:
     text = step_summary(CiSuite("check", (case,)))
     row = text.splitlines()[-2]
     assert row == "| failure | a\\|b | f\\|g.obj | x &lt;script&gt; next |"
+
+
+# ---------------------------------------------------------------------------------------------
+# The registry of report formats (meshcol.io.formats): the one list the commands read
+
+
+def test_every_format_is_one_registry_entry_that_writes_a_report(samples, monkeypatch):
+    from meshcol.analysis.collision_matrix import CollisionMatrixReport
+    from meshcol.analysis.inspect import inspect
+    from meshcol.analysis.rules import RulesReport
+    from meshcol.io.formats import FORMATS, REPORT_EXTENSIONS, formats_for, report_text
+
+    assert all(
+        f.extension is None or re.fullmatch(r"\.[a-z0-9]+", f.extension) for f in FORMATS.values()
+    )
+    assert len(REPORT_EXTENSIONS) == sum(f.extension is not None for f in FORMATS.values())
+    assert formats_for(RulesReport) == formats_for(CollisionMatrixReport) == ("json", "csv")
+    monkeypatch.chdir(samples.parent)
+    report = inspect(["samples/bowl/bowl.obj"])
+    assert formats_for(type(report)) == tuple(FORMATS)
+    for name in FORMATS:
+        assert report_text(report, name)  # every writer runs on a real report
+    with pytest.raises(ValueError, match="report format must be one of json, csv"):
+        report_text(report, "yaml")
+
+
+def test_the_help_and_messages_list_the_registry():
+    from meshcol.io.formats import describe_formats, report_format
+
+    assert describe_formats() == (
+        "json, csv, junit (JUnit XML for Jenkins and GitHub test reporters) or github "
+        "(workflow-command annotations).  [default: from the --report extension "
+        "(.json, .csv, .xml), else json]"
+    )
+    assert report_format("out.XML", None) == "junit"
+    assert report_format("-", None) == report_format(None, None) == "json"
+    with pytest.raises(ValueError, match=r"unknown report extension '\.txt' in 'out\.txt'"):
+        report_format("out.txt", None)

@@ -115,7 +115,9 @@ def collision_matrix(
       meshcol collision-matrix robot.xml -o robot.srdf --report matrix.json
       meshcol check panda.urdf --srdf panda.srdf
     """
+    from meshcol.analysis.collision_matrix import CollisionMatrixReport
     from meshcol.analysis.collision_matrix import collision_matrix as run
+    from meshcol.io.formats import formats_for, report_text
     from meshcol.io.outputs import check_outputs
     from meshcol.io.report import atomic_path, emit
 
@@ -125,7 +127,8 @@ def collision_matrix(
         )
     srdf_to = "-" if output is None and report != "-" else output
     check_outputs(files={"-o/--output": srdf_to, "--report": report}, inputs=[robot])
-    fmt = report_format(report, None, format_option=False, formats=("json", "csv"))
+    formats = formats_for(CollisionMatrixReport)
+    fmt = report_format(report, None, format_option=False, formats=formats)
     decompose: dict = {"engine": engine}
     if cache_dir is not None:
         decompose["cache_dir"] = cache_dir
@@ -148,7 +151,7 @@ def collision_matrix(
     # Both files or neither: each is renamed into place only once both are written.
     files = [
         (srdf_to, result.to_srdf()),
-        (report, result.to_csv() if fmt == "csv" else result.to_json()),
+        (report, report_text(result, fmt)),
     ]
     with contextlib.ExitStack() as stack:
         for path, text in files:

@@ -28,11 +28,8 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from meshcol.vocabulary import CI_FORMATS
-
 __all__ = [
     "OUTCOMES",
-    "CI_FORMATS",
     "MAX_PASSED_CASES",
     "CiCase",
     "CiSuite",
@@ -398,15 +395,6 @@ def write_step_summary(suite: CiSuite) -> bool:
     with open(path, "a", encoding="utf-8") as f:
         f.write(step_summary(suite))
     return True
-
-
-def render(suite: CiSuite, fmt: str) -> str:
-    """The text of ``suite`` in ``fmt`` (:data:`CI_FORMATS`)."""
-    if fmt == "junit":
-        return dumps_junit(suite)
-    if fmt == "github":
-        return dumps_github(suite)
-    raise ValueError(f"format must be one of {', '.join(CI_FORMATS)}, got {fmt!r}")
 
 
 def details(pairs: Iterable[tuple[str, Any]]) -> str:

@@ -21,7 +21,6 @@ from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
 from meshcol.errors import InputFileError
-from meshcol.vocabulary import REPORT_FORMATS
 
 __all__ = [
     "ENVELOPE_KEYS",
@@ -33,8 +32,6 @@ __all__ = [
     "dumps_json",
     "emit",
     "envelope",
-    "report_format",
-    "report_text",
     "split_vectors",
     "vector_columns",
 ]
@@ -411,51 +408,6 @@ def dumps_csv(rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> str:
                 cells.append(str(v))
         writer.writerow(cells)
     return buf.getvalue()
-
-
-#: Report file extensions and the format each means (``github`` has none: workflow commands
-#: are read from the log, so they usually go to stdout).
-REPORT_EXTENSIONS = {".json": "json", ".csv": "csv", ".xml": "junit"}
-
-
-def report_format(path: str | None, fmt: str | None) -> str:
-    """The report format: ``fmt`` if given, else from ``path``'s extension, else ``json``.
-
-    Raises
-    ------
-    ValueError
-        ``path`` has an extension other than ``.json``, ``.csv`` or ``.xml`` (JUnit) and no
-        ``fmt`` says what to write (``out.txt`` never silently gets JSON), or ``fmt``
-        contradicts it (``--format csv`` with ``out.json``, ``--format github`` with
-        ``out.xml``).
-    """
-    extension = os.path.splitext(path)[1].lower() if path and path != "-" else ""
-    implied = REPORT_EXTENSIONS.get(extension)
-    if fmt:
-        fmt = fmt.lower()
-        if implied is not None and implied != fmt:
-            raise ValueError(f"{path!r} is a .{implied} file: it cannot hold a {fmt} report")
-        return fmt
-    if extension and implied is None:
-        raise ValueError(
-            f"unknown report extension {extension!r} in {path!r}: expected .json, .csv or .xml"
-        )
-    return implied or "json"
-
-
-def report_text(report: Any, fmt: str) -> str:
-    """The text of a command's report in ``fmt`` (:data:`REPORT_FORMATS`): its JSON
-    (``to_json``), CSV (``to_csv``), or its CI suite (``ci_suite``) as JUnit XML or GitHub
-    workflow commands (:mod:`meshcol.io.ci`)."""
-    if fmt == "json":
-        return str(report.to_json())
-    if fmt == "csv":
-        return str(report.to_csv())
-    if fmt in ("junit", "github"):
-        from meshcol.io.ci import render
-
-        return render(report.ci_suite(), fmt)
-    raise ValueError(f"report format must be one of {', '.join(REPORT_FORMATS)}, got {fmt!r}")
 
 
 def emit(text: str, output: str | os.PathLike[str] | None) -> None:
