@@ -19,7 +19,6 @@ the file it is about. This module renders that suite, and nothing else does:
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import re
@@ -27,6 +26,8 @@ import xml.etree.ElementTree as ET
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
+
+from meshcol.io.report import dumps_json
 
 __all__ = [
     "OUTCOMES",
@@ -200,7 +201,7 @@ def _property_value(value: Any) -> str:
     if isinstance(value, str):
         return value
     # control characters come out as \u escapes, which XML holds
-    return json.dumps(value, sort_keys=True, separators=(",", ":"), ensure_ascii=False, default=str)
+    return dumps_json(value, compact=True, ascii_only=False)
 
 
 def _properties(suite: CiSuite) -> list[tuple[str, str]]:

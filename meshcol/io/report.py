@@ -149,21 +149,6 @@ def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> None:
                 text.write(data)
 
 
-def _finite_or_none(value: Any) -> Any:
-    """JSON has no NaN or infinity: write them as null."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, Mapping):
-        return {str(k): _finite_or_none(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_finite_or_none(v) for v in value]
-    if hasattr(value, "tolist") and not isinstance(value, (str, bytes)):
-        return _finite_or_none(value.tolist())
-    if hasattr(value, "item") and not isinstance(value, (str, bytes)):
-        return _finite_or_none(value.item())
-    return value
-
-
 # A bare NaN/Infinity token in two-space-indented JSON: alone on its line (an array item) or
 # after '": ' at the end of its line (a field). A string cannot hold a raw newline, so neither
 # form can occur inside one.
@@ -214,30 +199,92 @@ def read_json_file(path: str | os.PathLike[str], name: str, short: str | None = 
         raise InputFileError(f"{short} nests arrays and objects too deep", path) from None
 
 
-def dumps_json(obj: Any) -> str:
-    """Deterministic JSON: sorted keys, two-space indent, NaN/inf as null, trailing newline.
+def dumps_json(
+    obj: Any,
+    *,
+    compact: bool = False,
+    sort_keys: bool = True,
+    ascii_only: bool = True,
+    non_finite: str = "null",
+) -> str:
+    """The JSON text of ``obj``: the one JSON encoder of meshcol's outputs.
 
-    The text is exactly ``json.dumps(obj, sort_keys=True, indent=2)`` of the report with every
-    non-finite number made null and numpy values made Python ones (``tests/test_report_json.py``
-    holds it to that), written faster: Python's C encoder cannot indent, and its indenting
-    encoder costs about a microsecond per value, most of the time of writing a report of
-    10,000 pairs. So rows of one shape (a list of dicts with the same keys, the pairs and
-    bodies of a report) are encoded column by column: every number of a column by the C
-    encoder in one call, every string by the C string escape, then one format string per row.
-    Keys must be strings (anything else is encoded by ``json`` itself, as before).
+    Parameters
+    ----------
+    obj : JSON-ready value
+        Dicts, lists, tuples, strings, numbers, None; numpy arrays and scalars and other
+        mappings are converted (``tolist``, ``item``, ``dict``).
+    compact : bool
+        False (a report): two-space indent and a trailing newline. True (a value inside
+        another format: a JUnit property, a review page's data): one line, ``,`` and ``:``
+        without spaces, no newline.
+    sort_keys : bool
+        Keys sorted (every report: deterministic text); False keeps each mapping's order.
+    ascii_only : bool
+        Characters past ASCII as ``\\uXXXX`` escapes (True) or as they are.
+    non_finite : {"null", "error"}
+        NaN and infinities (which JSON has not) written as null, or refused (ValueError).
+
+    Returns
+    -------
+    str
+
+    Notes
+    -----
+    A report (the defaults) is exactly ``json.dumps(obj, sort_keys=True, indent=2)`` of the
+    report with every non-finite number made null and numpy values made Python ones
+    (``tests/test_report_json.py`` holds it to that), written faster: Python's C encoder
+    cannot indent, and its indenting encoder costs about a microsecond per value, most of the
+    time of writing a report of 10,000 pairs. So rows of one shape (a list of dicts with the
+    same keys, the pairs and bodies of a report) are encoded column by column: every number
+    of a column by the C encoder in one call, every string by the C string escape, then one
+    format string per row. Keys must be strings (anything else is encoded by ``json``
+    itself, as before).
 
     The core's encoder (``dumps_indented``: the same walk in C++, numbers by
-    ``std::to_chars`` laid out as ``repr(float)``) writes the text when it can; it declines
+    ``std::to_chars`` laid out as ``repr(float)``) writes a report when it can; it declines
     the rare documents it does not write exactly as ``json`` does (a key that is not a
     string, an int past 64 bits, a dict subclass, a string that is not UTF-8, deep nesting,
-    an object ``json`` cannot encode), which take the Python path below.
-    """
-    from meshcol._native import core
+    an object ``json`` cannot encode), which take the Python path.
 
-    native = core.dumps_indented(obj, _builtin)
-    if native is not None:
-        return str(native)
-    return _dumps_json_python(obj)
+    Any other choice of options is ``json.dumps`` with them (non-finite numbers made null
+    first, when so asked).
+    """
+    if non_finite not in ("null", "error"):
+        raise ValueError(f"non_finite must be 'null' or 'error', got {non_finite!r}")
+    if not compact and sort_keys and ascii_only and non_finite == "null":
+        from meshcol._native import core
+
+        native = core.dumps_indented(obj, _builtin)
+        if native is not None:
+            return str(native)
+        return _dumps_json_python(obj)
+    text = json.dumps(
+        _nulled(obj) if non_finite == "null" else obj,
+        indent=None if compact else 2,
+        separators=(",", ":") if compact else None,
+        sort_keys=sort_keys,
+        ensure_ascii=ascii_only,
+        allow_nan=False,
+        default=_builtin,
+    )
+    return text if compact else text + "\n"
+
+
+def _nulled(value: Any) -> Any:
+    """``value`` with every non-finite float (numpy's too) made None and numpy values made
+    Python ones; keys and everything else as they are (``json`` encodes them)."""
+    if isinstance(value, (str, int, type(None))):
+        return value
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _nulled(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_nulled(v) for v in value]
+    if isinstance(value, Mapping) or hasattr(value, "tolist") or hasattr(value, "item"):
+        return _nulled(_builtin(value))
+    return value
 
 
 def _dumps_json_python(obj: Any) -> str:
@@ -397,7 +444,7 @@ def dumps_csv(rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> str:
     for row in rows:
         cells = []
         for c in columns:
-            v = _finite_or_none(row.get(c))
+            v = _nulled(row.get(c))
             if v is None:
                 cells.append("")
             elif isinstance(v, list):

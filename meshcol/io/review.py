@@ -17,7 +17,6 @@ import base64
 import hashlib
 import html
 import importlib.util
-import json
 import os
 from dataclasses import dataclass, field
 from typing import Any
@@ -25,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from meshcol.errors import MeshcolError, MissingDependencyError
+from meshcol.io.report import atomic_write, dumps_json
 
 __all__ = [
     "MAX_REVIEW_BODIES",
@@ -387,7 +387,7 @@ class ReviewPage:
             "witness": WITNESS,
             "normal": NORMAL,
         }
-        payload = json.dumps(data, separators=(",", ":"), allow_nan=False)
+        payload = dumps_json(data, compact=True, sort_keys=False, non_finite="error")
         # inside <script>: "</" would end the element early
         payload = payload.replace("</", "<\\/")
         page = (
@@ -419,8 +419,6 @@ def _cell(value: Any) -> Any:
 
 def write_review(path: str | os.PathLike[str], page: ReviewPage) -> int:
     """Write ``page`` to ``path`` atomically; returns its size in bytes."""
-    from meshcol.io.report import atomic_write
-
     text = page.to_html()
     atomic_write(path, text)
     return len(text.encode("utf-8"))
