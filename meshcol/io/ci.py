@@ -42,6 +42,7 @@ __all__ = [
     "annotation_path",
     "number",
     "collapse_passed",
+    "verdict_line",
 ]
 
 #: Outcomes of a case, as JUnit has them.
@@ -323,7 +324,9 @@ def _command(kind: str, message: str, *, file: str | None, title: str) -> str:
     return f"::{kind} {','.join(props)}::{escape_data(message)}"
 
 
-def _verdict(suite: CiSuite) -> str:
+def verdict_line(suite: CiSuite) -> str:
+    """``PASS: 6 cases, 0 failures, 0 errors, 0 skipped`` and the report's verdict after it
+    in parentheses: the last line of every CI format."""
     counts = {outcome: suite.count(outcome) for outcome in OUTCOMES}
     state = "PASS" if suite.passed else "FAIL"
     text = (
@@ -353,7 +356,9 @@ def dumps_github(suite: CiSuite, workspace: str | None = None) -> str:
         )
     for warning in suite.warnings:
         lines.append(_command("warning", warning, file=None, title=f"meshcol {suite.command}"))
-    lines.append(_command("notice", _verdict(suite), file=None, title=f"meshcol {suite.command}"))
+    lines.append(
+        _command("notice", verdict_line(suite), file=None, title=f"meshcol {suite.command}")
+    )
     return "\n".join(lines) + "\n"
 
 

@@ -16,7 +16,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from meshcol.io import ci
+from meshcol.io import ci, tap
 from meshcol.io.report import emit
 
 __all__ = [
@@ -85,6 +85,13 @@ FORMATS: dict[str, ReportFormat] = {
             ci.dumps_github,
             note="workflow-command annotations",
             after=ci.write_step_summary,
+        ),
+        ReportFormat(
+            "tap",
+            ".tap",
+            "ci_suite",
+            tap.dumps_tap,
+            note="Test Anything Protocol 14",
         ),
     )
 }
