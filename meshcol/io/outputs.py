@@ -72,12 +72,14 @@ def _existing_ancestor(path: str) -> str:
     return current
 
 
-def check_output_file(path: PathLike) -> None:
+def check_output_file(path: PathLike, made: Iterable[PathLike] = ()) -> None:
     """Raise :class:`MeshcolError` (naming ``path``) unless ``path`` can be written as a file.
 
     Its folder must exist (files are written in place, never with their folders created) and
-    be writable, and ``path`` must not be a folder. A device or a pipe (``/dev/null``) needs
-    only to be writable itself: reports are written into it.
+    be writable, unless it is one of ``made``, the output folders the run makes before it
+    writes the file (``--out-dir parts --report parts/r.json``; each is checked as a folder).
+    ``path`` must not be a folder. A device or a pipe (``/dev/null``) needs only to be
+    writable itself: reports are written into it.
     """
     path = os.fspath(path)
     if os.path.isdir(path):
@@ -88,6 +90,8 @@ def check_output_file(path: PathLike) -> None:
             raise MeshcolError("cannot write to it (permission denied)", path)
         return
     folder = os.path.dirname(os.path.abspath(path))
+    if _key(folder) in {_key(made_folder) for made_folder in made}:
+        return
     if not os.path.exists(folder):
         ancestor = _existing_ancestor(folder)
         if not os.path.isdir(ancestor):
@@ -236,24 +240,15 @@ def check_outputs(
     A file directly inside one of ``folders`` needs no existing folder: the run makes it
     before writing the file.
     """
-    outputs = [
-        (label, os.fspath(p), "file") for label, p in (files or {}).items() if p and p != "-"
-    ]
-    outputs += [(label, os.fspath(p), "folder") for label, p in (folders or {}).items() if p]
+    out_files = {label: os.fspath(p) for label, p in (files or {}).items() if p and p != "-"}
+    out_folders = {label: os.fspath(p) for label, p in (folders or {}).items() if p}
     read = manifest_inputs(inputs)
     read += [(what, os.fspath(p)) for what, p in (named_inputs or {}).items() if p is not None]
-    check_destinations(read, [(label, path) for label, path, _ in outputs])
-    made = {_key(path) for _, path, kind in outputs if kind == "folder"}
-    for _, path, kind in outputs:
-        if kind == "folder":
-            check_output_folder(path)
-        elif _key(os.path.dirname(os.path.abspath(path))) in made:
-            # a file written into an output folder of the run (--out-dir parts --report
-            # parts/r.json): the folder is checked as such, and made before the file is written
-            if os.path.isdir(path):
-                raise MeshcolError("is a folder, not a file", path)
-        else:
-            check_output_file(path)
+    check_destinations(read, [*out_files.items(), *out_folders.items()])
+    for path in out_files.values():
+        check_output_file(path, made=out_folders.values())
+    for path in out_folders.values():
+        check_output_folder(path)
 
 
 @contextlib.contextmanager
