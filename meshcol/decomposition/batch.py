@@ -949,9 +949,9 @@ class _OutputGuard:
 
 
 def _is_manifest(inputs: Sequence[str]) -> bool:
-    from meshcol.io.scene import MANIFEST_EXTENSIONS
+    from meshcol.io.inputs import is_manifest
 
-    return any(os.path.splitext(p)[1].lower() in MANIFEST_EXTENSIONS for p in inputs)
+    return any(is_manifest(p) for p in inputs)
 
 
 def _iter_load(inputs: list[str]) -> Iterator[tuple[str, list[tuple[str, Any, Any, Any]]]]:

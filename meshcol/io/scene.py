@@ -25,14 +25,14 @@ from typing import Any
 import numpy as np
 
 from meshcol.errors import InputFileError, MeshcolError, SceneError
+from meshcol.io.inputs import input_kind, is_manifest, is_robot_file
 from meshcol.io.mesh_read import MAX_COORDINATE, check_magnitude, load_mesh, split_rigid
 from meshcol.io.primitives import primitive_mesh
-from meshcol.io.robot import is_robot_file, load_robot
+from meshcol.io.robot import load_robot
 from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere, Spin
-from meshcol.vocabulary import MANIFEST_EXTENSIONS, SCENE_SHAPES
+from meshcol.vocabulary import SCENE_SHAPES
 
 __all__ = [
-    "MANIFEST_EXTENSIONS",
     "SCHEMA_PATH",
     "iter_inputs",
     "load_inputs",
@@ -251,11 +251,7 @@ def _single_manifest(paths: Sequence[str | os.PathLike[str]]) -> str | os.PathLi
     """The manifest or robot description among ``paths`` (it must come alone), or None."""
     if len(paths) == 0:
         raise InputFileError("no input files given")
-    manifests = [
-        p
-        for p in paths
-        if Path(os.fspath(p)).suffix.lower() in MANIFEST_EXTENSIONS or is_robot_file(p)
-    ]
+    manifests = [p for p in paths if input_kind(p) != "mesh"]
     if manifests and len(paths) > 1:
         what = "a robot description" if is_robot_file(manifests[0]) else "a scene manifest"
         raise SceneError(
@@ -737,7 +733,7 @@ def _check_manifest_file(file: Path, source: str) -> None:
         raise InputFileError("file not found", source)
     if file.is_dir():
         raise InputFileError("is a directory, not a scene manifest", source)
-    if file.suffix.lower() not in MANIFEST_EXTENSIONS:
+    if not is_manifest(file):
         raise InputFileError(
             f"unknown scene manifest extension {file.suffix or '(none)'!r} (expected .json, .toml)",
             source,
