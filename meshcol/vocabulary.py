@@ -25,8 +25,11 @@ __all__ = [
 
 # -- colliders --------------------------------------------------------------------------------
 
-#: Collider kinds a body can be checked as (``--shape``).
-COLLIDER_KINDS = ("hull", "decomposed", "mesh", "fit")
+#: Collider kinds a body can be checked as (``--shape``): builders in
+#: :mod:`meshcol.analysis.colliders` (``box`` and ``sphere``: each part's enclosing oriented
+#: box or minimum sphere, the simple colliders engines offer and USD's ``boundingCube`` and
+#: ``boundingSphere`` approximations).
+COLLIDER_KINDS = ("hull", "decomposed", "mesh", "fit", "box", "sphere")
 #: The collider kinds a scene manifest may name per body (``"shape"``).
 SCENE_SHAPES = ("hull", "decomposed", "mesh")
 #: The collider kinds of a robot's self-collision matrix (``mesh`` needs the exact mesh

@@ -11,6 +11,8 @@ a body of several parts (``Body.parts``):
 - ``fit``: each part's enclosing primitive (:mod:`meshcol.analysis.fit`, ``auto``: the
   simplest primitive within the volume tolerance of its hull, else the hull), queried exactly
   as a primitive, placed in the body by its own pose (``Colliders.part_offsets``);
+- ``box``, ``sphere``: each part's enclosing oriented box or minimum sphere, always that
+  primitive (an engine's simple colliders; USD's ``boundingCube``, ``boundingSphere``);
 - ``mesh``: its triangles, for the exact mesh queries. What stands for it in the convex
   queries is chosen by the caller (``mesh_parts``): its parts' hulls (check: broad phase and
   depth bound) or every triangle as a 3-vertex polytope (sweep: surface contact).
@@ -34,6 +36,7 @@ collider in each of them.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import re
 from collections.abc import Callable, Sequence
@@ -417,35 +420,40 @@ def _triangle_parts(body: Body) -> tuple[ConvexSet, np.ndarray]:
     return (solid if flat is None else ConvexSet.concatenate(solid, flat)), order
 
 
-def _fits_of(bodies: Sequence[Body], kind: str, report: Callable[[str], None]) -> dict[bytes, Any]:
-    """The ``auto`` fit (:func:`meshcol.analysis.fit.fit_point_sets`) of every unique,
-    non-flat part of the ``fit`` bodies, all in one native call: geometry key -> the chosen
+#: Collider kinds whose parts are enclosing primitives, and the fit each asks for
+#: (:func:`meshcol.analysis.fit.fit_point_sets`): ``fit`` the simplest within the volume
+#: tolerance (else the hull), ``box`` and ``sphere`` always that primitive.
+FIT_KIND_SHAPES = {"fit": "auto", "box": "box", "sphere": "sphere"}
+
+
+def _fits_of(
+    bodies: Sequence[Body], kind: str, report: Callable[[str], None]
+) -> dict[tuple[str, bytes], Any]:
+    """The fit of every unique, non-flat part of the bodies whose kind is one of
+    :data:`FIT_KIND_SHAPES`, one native call per fit shape: (shape, geometry key) -> the chosen
     PrimitiveFit, or None when the hull was kept."""
-    keys: list[bytes] = []
-    seen: set[bytes] = set()
-    sets: list[np.ndarray] = []
-    names: list[str] = []
+    wanted: dict[str, dict[bytes, tuple[np.ndarray, str]]] = {}
     for body in bodies:
-        if body.primitive is not None or (body.collider or kind) != "fit":
+        shape = FIT_KIND_SHAPES.get(body.collider or kind)
+        if body.primitive is not None or shape is None:
             continue
+        sets = wanted.setdefault(shape, {})
         for name, v, _ in body.part_meshes():
             key = _geometry_key(v)
-            if key in seen or _flat(v):
-                continue
-            seen.add(key)
-            keys.append(key)
-            sets.append(v)
-            names.append(f"body {body.name!r}" + ("" if name is None else f" part {name!r}"))
-    if not sets:
+            if key not in sets and not _flat(v):
+                sets[key] = (v, f"body {body.name!r}" + ("" if name is None else f" part {name!r}"))
+    if not wanted:
         return {}
     from meshcol.analysis.fit import fit_point_sets  # only when a body is fitted
 
-    report(f"enclosing primitives of {len(sets)} unique parts")
-    out: dict[bytes, Any] = {}
-    for key, what, result in zip(keys, names, fit_point_sets(sets)):
-        if isinstance(result, InvalidMeshError):
-            raise InvalidMeshError(f"{what}: {result.message}")
-        out[key] = result.primitive_fit
+    out: dict[tuple[str, bytes], Any] = {}
+    for shape, sets in wanted.items():
+        report(f"enclosing primitives of {len(sets)} unique parts")
+        results = fit_point_sets([v for v, _ in sets.values()], shape)
+        for (key, (_, what)), result in zip(sets.items(), results):
+            if isinstance(result, InvalidMeshError):
+                raise InvalidMeshError(f"{what}: {result.message}")
+            out[(shape, key)] = result.primitive_fit
     return out
 
 
@@ -464,8 +472,9 @@ def build_colliders(
     ----------
     bodies : sequence of Body
         A scene's bodies, ``UCX_`` parts included (they become their owner's parts).
-    kind : {"hull", "decomposed", "mesh", "fit"}
-        Default collider kind; a body's own ``shape`` overrides it.
+    kind : str
+        Default collider kind (:data:`meshcol.vocabulary.COLLIDER_KINDS`); a body's own
+        ``shape`` overrides it.
     mesh_parts : {"hull", "triangles"}
         What stands for a ``mesh`` body in the convex queries.
     decompose_options : dict, optional
@@ -638,7 +647,7 @@ class _Build:
     report: Callable[[str], None]
     parts_of: Callable[..., list[np.ndarray]]
     decompose_options: dict[str, Any]
-    fits: dict[bytes, Any]  # geometry key -> its fit: instanced props are fitted once
+    fits: dict[tuple[str, bytes], Any]  # (shape, geometry key) -> its fit: fitted once
     pool: _Pool = dataclasses.field(default_factory=_Pool)
 
 
@@ -666,17 +675,19 @@ def _mesh_parts(build: _Build, body: Body, block: _Block) -> str:
     return "mesh"
 
 
-def _fitted_parts(build: _Build, body: Body, block: _Block) -> str:
-    """``fit``: each part's enclosing primitive, placed by its pose; a flat part, or one whose
-    fit kept the hull, is its hull."""
+def _fitted_parts(build: _Build, body: Body, block: _Block, kind: str = "fit") -> str:
+    """``fit``, ``box``, ``sphere``: each part's enclosing primitive (the fit of
+    :data:`FIT_KIND_SHAPES`), placed by its pose; a flat part, or one whose fit kept the hull,
+    is its hull."""
+    shape = FIT_KIND_SHAPES[kind]
     for label, _, vertices, _ in _part_meshes(body):
-        chosen = None if _flat(vertices) else build.fits[_geometry_key(vertices)]
+        chosen = None if _flat(vertices) else build.fits[(shape, _geometry_key(vertices))]
         if chosen is None:  # flat: its polygon (a primitive would add a thickness)
             block.put(build.pool.hull(vertices), label)
             continue
         build.pool.part_poses[(block.body_number, len(block.singles))] = chosen.pose
         block.put(build.pool.add(("fit", chosen.primitive), chosen.primitive), label)
-    return "fit"
+    return kind
 
 
 def _decomposed_parts(build: _Build, body: Body, block: _Block) -> str:
@@ -719,6 +730,8 @@ _BUILDERS: dict[str, Callable[[_Build, Body, _Block], str]] = {
     "decomposed": _decomposed_parts,
     "mesh": _mesh_parts,
     "fit": _fitted_parts,
+    "box": functools.partial(_fitted_parts, kind="box"),
+    "sphere": functools.partial(_fitted_parts, kind="sphere"),
 }
 if set(_BUILDERS) != set(COLLIDER_KINDS):  # pragma: no cover - caught by importing the module
     raise ImportError(f"collider builders {sorted(_BUILDERS)} != kinds {COLLIDER_KINDS}")
