@@ -19,10 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.collision.hull import (
-    ExactHull,
-    exact_hull,
-)
+from meshcol.collision.hull import ExactHull, exact_hull
+from meshcol.vocabulary import LIMITS
 
 __all__ = [
     "COPLANAR_RELATIVE_TOLERANCE",
@@ -37,16 +35,9 @@ __all__ = [
     "scaled_limits",
 ]
 
-#: Limit key -> (rule id, rule name): the ids are stable forever (registered by ``meshcol rules``).
+#: Limit key -> (rule id, rule name), in rule id order (the order violations are listed in).
 RULES: dict[str, tuple[str, str]] = {
-    "max_hull_vertices": ("MC101", "hull-vertices-over-limit"),
-    "max_oblong_ratio": ("MC102", "not-gpu-compatible-oblong"),
-    "max_hull_polygons": ("MC103", "hull-polygons-over-limit"),
-    "max_hull_triangles": ("MC104", "hull-triangles-over-limit"),
-    "max_faces_per_vertex": ("MC105", "faces-per-vertex-over-limit"),
-    "max_hulls": ("MC106", "hull-count-over-limit"),
-    "min_thickness": ("MC107", "part-too-thin"),
-    "min_volume": ("MC201", "volume-too-small"),
+    key: (rule, name) for key, (rule, name, _) in sorted(LIMITS.items(), key=lambda kv: kv[1][0])
 }
 #: Two adjacent hull triangles are one polygon when each one's far vertex is within this
 #: fraction of the part's bounding-box diagonal of the other's plane (and their normals agree).
