@@ -10,7 +10,8 @@ from typing import Any
 
 import click
 
-from meshcol.cli.common import Progress, display_path, plural
+from meshcol.cli.common import Progress, plural
+from meshcol.io.paths import display_path
 
 
 @contextmanager
