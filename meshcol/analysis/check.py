@@ -1003,14 +1003,11 @@ def _prepare_files(
     from meshcol.analysis.colliders import convex_parts
     from meshcol.decomposition.executor import run_each
     from meshcol.errors import MeshcolError
-    from meshcol.io.robot import is_robot_file
-    from meshcol.io.scene import MANIFEST_EXTENSIONS, iter_inputs, load_inputs, unique_name
+    from meshcol.io.inputs import is_whole_scene
+    from meshcol.io.scene import iter_inputs, load_inputs, unique_name
 
     kind, decompose_options = options.collider, options.decompose_options
-    whole = len(inputs) == 1 and (
-        is_robot_file(inputs[0])
-        or os.path.splitext(os.fspath(inputs[0]))[1].lower() in MANIFEST_EXTENSIONS
-    )
+    whole = is_whole_scene(inputs)
     scene: Scene | None = None
     if whole:  # a manifest or robot is read here; its decompositions go out per mesh file
         scene = load_inputs(inputs)

@@ -355,8 +355,9 @@ def collision_matrix(
     pair's rate measured on all the samples. Narrow phase: boolean GJK (Gilbert et al. 1988;
     van den Bergen 2003) on the links' convex parts, batched over every candidate.
     """
+    from meshcol.io.inputs import is_robot_file
     from meshcol.io.kinematics import adjacent_links
-    from meshcol.io.robot import current_robot_options, is_robot_file, load_robot_model
+    from meshcol.io.robot import current_robot_options, load_robot_model
 
     opts = MatrixOptions(**options)
     opts.validate()

@@ -557,8 +557,8 @@ def mesh_outputs(
     """The usage checks of a command that writes meshes (hull, fit): ``-o`` or ``--out-dir``,
     a known mesh extension, ``--to`` only for a robot, a report format only with a report.
     Returns whether the run rebuilds one robot description (``--out-dir`` and a URDF/MJCF)."""
+    from meshcol.io.inputs import is_robot_file
     from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS
-    from meshcol.io.robot import is_robot_file
 
     if output and out_dir:
         raise click.UsageError("give either -o/--output or --out-dir, not both")

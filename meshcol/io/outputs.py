@@ -19,7 +19,6 @@ import signal
 import tempfile
 import threading
 from collections.abc import Iterable, Iterator, Mapping, Sequence
-from pathlib import Path
 
 from meshcol.errors import MeshcolError, OutputPathError
 from meshcol.io.paths import display_path
@@ -193,13 +192,14 @@ def manifest_inputs(paths: Iterable[PathLike]) -> list[tuple[str, str]]:
 
     A manifest that cannot be parsed contributes only itself: loading it reports the problem.
     """
-    from meshcol.io.scene import MANIFEST_EXTENSIONS, manifest_mesh_files
+    from meshcol.io.inputs import is_manifest
+    from meshcol.io.scene import manifest_mesh_files
 
     found: list[tuple[str, str]] = []
     for path in paths:
         path = os.fspath(path)
         found.append(("the input", path))
-        if Path(path).suffix.lower() in MANIFEST_EXTENSIONS:
+        if is_manifest(path):
             description = f"a mesh file of {path}"  # once, not once a mesh
             found.extend((description, mesh) for mesh in manifest_mesh_files(path))
     return found
