@@ -267,8 +267,8 @@ def test_decompose_format_junit_names_the_report_option(samples, tmp_path):
 
 def test_unknown_and_contradicting_formats_are_usage_errors(samples, tmp_path):
     bowl = str(samples / "bowl" / "bowl.obj")
-    code, _, err = run("inspect", bowl, "--format", "tap")
-    assert code == 2 and "'tap' is not one of 'json', 'csv', 'junit', 'github'" in err
+    code, _, err = run("inspect", bowl, "--format", "yaml")
+    assert code == 2 and "'yaml' is not one of 'json', 'csv', 'junit', 'github', 'tap'" in err
     code, _, err = run("inspect", bowl, "--format", "github", "--report", str(tmp_path / "r.xml"))
     assert code == 2 and "is a .junit file: it cannot hold a github report" in err
     code, _, err = run("inspect", bowl, "--format", "junit", "--report", str(tmp_path / "r.json"))
@@ -458,3 +458,135 @@ def test_step_summary_cells_are_one_line_and_inert() -> None:
     text = step_summary(CiSuite("check", (case,)))
     row = text.splitlines()[-2]
     assert row == "| failure | a\\|b | f\\|g.obj | x &lt;script&gt; next |"
+
+
+# ---------------------------------------------------------------------------------------------
+# The registry of report formats (meshcol.io.formats): the one list the commands read
+
+
+def test_every_format_is_one_registry_entry_that_writes_a_report(samples, monkeypatch):
+    from meshcol.analysis.collision_matrix import CollisionMatrixReport
+    from meshcol.analysis.inspect import inspect
+    from meshcol.analysis.rules import RulesReport
+    from meshcol.io.formats import FORMATS, REPORT_EXTENSIONS, formats_for, report_text
+
+    assert all(
+        f.extension is None or re.fullmatch(r"\.[a-z0-9]+", f.extension) for f in FORMATS.values()
+    )
+    assert len(REPORT_EXTENSIONS) == sum(f.extension is not None for f in FORMATS.values())
+    assert formats_for(RulesReport) == formats_for(CollisionMatrixReport) == ("json", "csv")
+    monkeypatch.chdir(samples.parent)
+    report = inspect(["samples/bowl/bowl.obj"])
+    assert formats_for(type(report)) == tuple(FORMATS)
+    for name in FORMATS:
+        assert report_text(report, name)  # every writer runs on a real report
+    with pytest.raises(ValueError, match="report format must be one of json, csv"):
+        report_text(report, "yaml")
+
+
+def test_the_help_and_messages_list_the_registry():
+    from meshcol.io.formats import describe_formats, report_format
+
+    assert describe_formats() == (
+        "json, csv, junit (JUnit XML for Jenkins and GitHub test reporters), github "
+        "(workflow-command annotations) or tap (Test Anything Protocol 14).  [default: from "
+        "the --report extension (.json, .csv, .xml, .tap), else json]"
+    )
+    assert report_format("out.XML", None) == "junit"
+    assert report_format("-", None) == report_format(None, None) == "json"
+    with pytest.raises(ValueError, match=r"unknown report extension '\.txt' in 'out\.txt'"):
+        report_format("out.txt", None)
+
+
+# ---------------------------------------------------------------------------------------------
+# TAP (meshcol.io.tap): the format added by following the recipe in ARCHITECTURE.md
+
+TAP_SUITE = CiSuite(
+    command="check",
+    cases=(
+        CiCase("a <-> b", "meshcol.check", message="separated: distance 1 m"),
+        CiCase(
+            "crate #1 <-> c:\\table",
+            "meshcol.check",
+            outcome="failure",
+            message="penetrating: depth 0.5 m",
+            file="scene.json",
+            kind="penetrating",
+            details="depth: 0.5\nunits: m",
+        ),
+        CiCase("broken\nname \udcff", "meshcol.inspect", outcome="error", message="no faces"),
+        CiCase("d <-> e", "meshcol.check", outcome="skipped", message="ignored by d* # e*"),
+        CiCase("f.obj::f", "meshcol.inspect", message="open edges: 4", warn=True, file="f.obj"),
+    ),
+    warnings=("scene has no units",),
+    verdict="1 pair violates --fail-on penetration",
+)
+
+
+def test_tap_is_exact_for_every_outcome():
+    from meshcol.io.tap import dumps_tap
+
+    assert dumps_tap(TAP_SUITE) == (
+        "TAP version 14\n"
+        "1..5\n"
+        "ok 1 - a <-> b\n"
+        "not ok 2 - crate \\#1 <-> c:\\\\table\n"
+        "  ---\n"
+        '  message: "penetrating: depth 0.5 m"\n'
+        "  severity: fail\n"
+        '  type: "penetrating"\n'
+        '  file: "scene.json"\n'
+        '  details: "depth: 0.5\\nunits: m"\n'
+        "  ...\n"
+        "not ok 3 - broken name  \n"
+        "  ---\n"
+        '  message: "no faces"\n'
+        "  severity: error\n"
+        "  ...\n"
+        "ok 4 - d <-> e # SKIP ignored by d* \\# e*\n"
+        "ok 5 - f.obj::f\n"
+        "  ---\n"
+        '  message: "open edges: 4"\n'
+        "  severity: warning\n"
+        '  file: "f.obj"\n'
+        "  ...\n"
+        "# warning: scene has no units\n"
+        "# meshcol check: FAIL: 5 cases, 1 failures, 1 errors, 1 skipped (1 pair violates "
+        "--fail-on penetration)\n"
+    )
+    assert dumps_tap(CiSuite("hull", ())) == (
+        "TAP version 14\n1..0 # SKIP no cases to judge\n"
+        "# meshcol hull: PASS: 0 cases, 0 failures, 0 errors, 0 skipped\n"
+    )
+
+
+def test_tap_diagnostics_are_yaml_with_the_case_fields():
+    yaml = pytest.importorskip("yaml")
+    from meshcol.io.tap import dumps_tap
+
+    blocks = re.findall(r"^  ---\n(.*?)^  \.\.\.$", dumps_tap(TAP_SUITE), re.M | re.S)
+    failure = yaml.safe_load(blocks[0])
+    assert failure == {
+        "message": "penetrating: depth 0.5 m",
+        "severity": "fail",
+        "type": "penetrating",
+        "file": "scene.json",
+        "details": "depth: 0.5\nunits: m",
+    }
+    assert [yaml.safe_load(b)["severity"] for b in blocks] == ["fail", "error", "warning"]
+
+
+def test_tap_report_of_check_from_its_extension(samples, tmp_path, monkeypatch):
+    monkeypatch.chdir(samples.parent)
+    out = tmp_path / "check.tap"
+    code, stdout, _ = run("check", "samples/bowl/scene.json", "--report", str(out))
+    assert (code, stdout) == (1, "")
+    lines = out.read_text().splitlines()
+    assert lines[:3] == ["TAP version 14", "1..1", "not ok 1 - bowl <-> ball"]
+    assert lines[-1].startswith("# meshcol check: FAIL: 1 cases, 1 failures")
+    code, stdout, _ = run("inspect", "samples/bowl/bowl.obj", "--format", "tap")
+    assert code == 0 and stdout.splitlines()[:3] == [
+        "TAP version 14",
+        "1..1",
+        "ok 1 - samples/bowl/bowl.obj::bowl",
+    ]

@@ -638,7 +638,8 @@ def test_outputs_are_checked_before_any_work(meshes, tmp_path, monkeypatch) -> N
         (
             ["-o", "out", "--report", box],  # refused by its extension before anything else
             f"invalid value for '--report': unknown report extension '.obj' in '{box}': "
-            "expected .json, .csv or .xml (or give --report-format json|csv|junit|github) "
+            "expected .json, .csv, .xml or .tap (or give --report-format "
+            "json|csv|junit|github|tap) "
             "(see 'meshcol decompose -h')",
         ),
         (

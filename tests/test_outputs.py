@@ -47,6 +47,37 @@ def test_check_outputs_refuses_with_the_users_path(
     assert str(caught.value) == message
 
 
+def test_check_outputs_names_the_other_inputs_a_run_reads(tmp_path, monkeypatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    Path("old.json").write_text("{}")
+    with pytest.raises(MeshcolError) as caught:
+        check_outputs(
+            files={"--report": "old.json"},
+            inputs=["scene.json"],
+            named_inputs={"the --baseline": "old.json", "the --srdf": None},
+        )
+    assert str(caught.value) == "old.json: --report would overwrite the --baseline"
+
+
+def test_a_file_inside_an_output_folder_of_the_run_needs_no_folder_yet(tmp_path, monkeypatch):
+    """`hull x.obj --out-dir hulls --report hulls/r.json`: the run makes hulls/ first."""
+    monkeypatch.chdir(tmp_path)
+    check_outputs(files={"--report": "hulls/r.json"}, folders={"--out-dir": "hulls"})
+    with pytest.raises(MeshcolError, match="folder hulls/deeper does not exist"):
+        check_outputs(files={"--report": "hulls/deeper/r.json"}, folders={"--out-dir": "hulls"})
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_device_is_checked_as_itself_not_its_folder(monkeypatch) -> None:
+    """`--report /dev/null` is written into, never replaced: /dev need not be writable."""
+    real = os.access
+    monkeypatch.setattr(os, "access", lambda p, mode: p != "/dev" and real(p, mode))
+    check_outputs(files={"--report": os.devnull, "--html": "-"})
+    monkeypatch.setattr(os, "access", lambda p, mode: False)
+    with pytest.raises(MeshcolError, match="cannot write to it"):
+        check_outputs(files={"--report": os.devnull})
+
+
 def test_same_file_follows_links(tmp_path) -> None:
     (tmp_path / "a").write_text("x")
     os.link(tmp_path / "a", tmp_path / "hard")

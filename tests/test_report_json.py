@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import math
 import struct
+from collections.abc import Mapping
 
 import numpy as np
 import pytest
@@ -14,7 +15,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from meshcol._native import core
-from meshcol.io.report import _builtin, _dumps_json_python, _finite_or_none, dumps_json
+from meshcol.io.report import _builtin, _dumps_json_python, dumps_json
 
 floats = st.floats(allow_nan=True, allow_infinity=True)
 tricky_text = st.one_of(
@@ -53,6 +54,22 @@ tables = row_keys.flatmap(
     lambda keys: st.lists(st.fixed_dictionaries(dict.fromkeys(keys, cells)), min_size=1, max_size=6)
 )
 documents = st.one_of(values, tables, st.dictionaries(tricky_text, tables, max_size=3))
+
+
+def _finite_or_none(value):
+    """The report as the two-pass encoding copied it: non-finite numbers None, numpy values
+    Python ones, keys strings (JSON has no NaN)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, Mapping):
+        return {str(k): _finite_or_none(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite_or_none(v) for v in value]
+    if hasattr(value, "tolist") and not isinstance(value, (str, bytes)):
+        return _finite_or_none(value.tolist())
+    if hasattr(value, "item") and not isinstance(value, (str, bytes)):
+        return _finite_or_none(value.item())
+    return value
 
 
 def reference(obj):
@@ -185,3 +202,31 @@ def test_an_error_other_than_not_serialisable_is_raised_once_never_swallowed() -
 
     with pytest.raises(TypeError, match="Opaque is not JSON serializable"):
         dumps_json({"a": Opaque()})
+
+
+# The same encoder for JSON inside other outputs (a JUnit property, the review page's data):
+# one line, and the options that differ between them.
+
+
+@given(documents)
+def test_compact_text_is_the_two_pass_encoding_on_one_line(obj):
+    expected = json.dumps(_finite_or_none(obj), sort_keys=True, separators=(",", ":"))
+    assert dumps_json(obj, compact=True) == expected
+    assert json.loads(dumps_json(obj, compact=True)) == json.loads(dumps_json(obj))
+
+
+def test_the_options_that_differ_between_outputs():
+    doc = {"b": "\u00e9", "a": [1.5, float("nan"), np.float32(np.inf)], "c": np.arange(2)}
+    assert dumps_json(doc, compact=True) == '{"a":[1.5,null,null],"b":"\\u00e9","c":[0,1]}'
+    assert dumps_json(doc, compact=True, ascii_only=False, sort_keys=False) == (
+        '{"b":"\u00e9","a":[1.5,null,null],"c":[0,1]}'
+    )
+    with pytest.raises(ValueError, match="Out of range float values are not JSON compliant"):
+        dumps_json(doc, compact=True, non_finite="error")
+    plain = {"z": [1, 2.5, "x"], "a": None}
+    assert dumps_json(plain, compact=True, sort_keys=False, non_finite="error") == json.dumps(
+        plain, separators=(",", ":"), allow_nan=False
+    )
+    assert dumps_json(plain, sort_keys=False) == json.dumps(plain, indent=2) + "\n"
+    with pytest.raises(ValueError, match="non_finite must be 'null' or 'error'"):
+        dumps_json(plain, non_finite="nan")

@@ -3,6 +3,7 @@ by a real browser (headless Chromium; those tests skip when /usr/bin/chromium is
 
 from __future__ import annotations
 
+import html.parser
 import os
 import re
 import shutil
@@ -293,6 +294,150 @@ def test_decompose_page_rows_per_part(tmp_path):
     assert [r["cells"][1] for r in page._rows] == [0, 1]
     assert [r["cells"][3] for r in page._rows] == [1.0, 1.0]  # each part's volume
     assert [r["cells"][4] for r in page._rows] == ["50.0%", "50.0%"]  # surface each covers
+
+
+# -- the page's own files: package data, parsed ------------------------------------------
+
+#: Slots of the page's skeleton, each filled once.
+SLOTS = ["TITLE", "STYLE", "ERRORS", "VIEWER", "DATA", "APP"]
+#: sha256 of _small_page() as ee068ea wrote it, when the page was strings in review.py: the
+#: page read from its files must not change by a byte (change it only with the page).
+SMALL_PAGE_SHA256 = "6b6da322999444e2898d2a7d0e410ea14af92e5fdc6fce4b8b6005aca5c3230d"
+
+
+def _small_page(monkeypatch) -> str:
+    """A page with every kind of content (notes, groups, meshes, lines, points, rows, markup
+    in names), the viewer stubbed."""
+    monkeypatch.setattr(review, "viewer_script", lambda: "/* viewer </script> */")
+    p = ReviewPage("check", "a <b> & c", "m")
+    p.notes.append("a note")
+    p.info.append(("bodies", "2"))
+    p.group("meshes", "meshes", "#b8b8b8")
+    p.group("hits", "hits", "#ff00ff", visible=False)
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    f = np.array([[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]])
+    a, b = p.add_body("a</script>"), p.add_body("b")
+    pose = np.eye(4)
+    pose[:3, 3] = [2.0, 0.5, -1.0]
+    p.add_mesh(v, f, body=a, name="a")
+    p.add_mesh(v, f, pose, body=b, name="b", opacity=0.5, wireframe=True)
+    p.add_lines([[[0, 0, 0], [1, 1, 1]]], group="paths", color="#000000")
+    p.add_points([[0.5, 0.5, 0.5], [np.nan, 0, 0]], group="hits", color="#00c000", labels=["x"])
+    p.table("Pairs", ["status", "distance", "a", "b", "flag"])
+    p.add_row(
+        ["penetrating", -0.25, "a", "b", True],
+        bodies=(a, b),
+        points=[[0, 0, 0], [1, 0, 0]],
+        normal=[1, 0, 0],
+        label="depth 0.25 m",
+        severity="violation",
+        group="hits",
+    )
+    p.add_row(["separated", float("nan"), "a", None, np.int64(3)], bodies=(a,))
+    return p.to_html()
+
+
+def test_the_page_from_its_files_is_byte_identical_to_the_page_in_strings(monkeypatch):
+    import hashlib
+
+    text = _small_page(monkeypatch)
+    assert hashlib.sha256(text.encode("utf-8")).hexdigest() == SMALL_PAGE_SHA256
+
+
+def test_the_page_files_are_package_data_read_once():
+    """Found the way an installed package finds them (importlib.resources, not a path from
+    the source tree), and read once."""
+    import importlib.resources
+
+    folder = importlib.resources.files("meshcol.io") / "review_assets"
+    assert sorted(p.name for p in folder.iterdir() if p.is_file()) == sorted(review.ASSETS.values())
+    assert review.review_assets() is review.review_assets()
+    page = review.review_assets()["page"]
+    assert re.findall(r"@([A-Z]+)@", page) == SLOTS
+    assert "</script" not in review.review_assets()["app"] + review.review_assets()["errors"]
+    assert "</style" not in review.review_assets()["style"]
+
+
+def test_the_page_files_ship_in_the_wheel():
+    """scikit-build-core puts every file of ``wheel.packages`` in the wheel (a wheel built from
+    this tree holds meshcol/io/review_assets/*, and a page from it installed is this page);
+    nothing in pyproject.toml leaves them out."""
+    import fnmatch
+
+    try:
+        import tomllib
+    except ImportError:  # Python 3.10
+        import tomli as tomllib
+
+    root = Path(review.__file__).resolve().parents[2]
+    config = tomllib.loads((root / "pyproject.toml").read_text())["tool"]["scikit-build"]
+    assert "meshcol" in config["wheel"]["packages"]
+    excluded = config["wheel"].get("exclude", []) + config.get("sdist", {}).get("exclude", [])
+    for name in review.ASSETS.values():
+        path = f"meshcol/io/review_assets/{name}"
+        assert (root / path).is_file()
+        assert not any(fnmatch.fnmatch(path, pattern) for pattern in excluded)
+
+
+def test_a_name_holding_a_slot_stays_as_it_is(monkeypatch):
+    monkeypatch.setattr(review, "viewer_script", lambda: "")
+    text = ReviewPage("check", "@DATA@ @APP@").to_html()
+    assert "<title>meshcol check: @DATA@ @APP@</title>" in text
+
+
+class _Tags(html.parser.HTMLParser):
+    """Open elements, closed in order; void elements never open."""
+
+    VOID = frozenset(
+        {"meta", "link", "br", "hr", "img", "input", "col", "area", "base", "source", "wbr"}
+    )
+
+    def __init__(self) -> None:
+        super().__init__(convert_charrefs=True)
+        self.stack: list[str] = []
+        self.errors: list[str] = []
+
+    def handle_starttag(self, tag, attrs) -> None:
+        if tag not in self.VOID:
+            self.stack.append(tag)
+
+    def handle_endtag(self, tag) -> None:
+        if not self.stack or self.stack[-1] != tag:
+            self.errors.append(f"</{tag}> at {self.getpos()} closes {self.stack[-1:]}")
+        else:
+            self.stack.pop()
+
+
+def test_the_page_skeleton_is_well_formed_html():
+    parser = _Tags()
+    parser.feed(review.review_assets()["page"])
+    parser.close()
+    assert parser.errors == []
+    assert parser.stack == [], f"unclosed: {parser.stack}"
+    assert review.review_assets()["page"].startswith("<!DOCTYPE html>\n")
+
+
+def test_the_style_sheet_balances_its_braces():
+    css = re.sub(r"/\*.*?\*/", "", review.review_assets()["style"], flags=re.S)
+    depth = 0
+    for ch in css:
+        depth += {"{": 1, "}": -1}.get(ch, 0)
+        assert depth in (0, 1)
+    assert depth == 0
+
+
+NODE = shutil.which("node")
+
+
+@pytest.mark.skipif(NODE is None, reason="no node to parse the page's scripts (node --check)")
+@pytest.mark.parametrize("name", ["errors.js", "app.js"])
+def test_the_page_scripts_parse(name, tmp_path):
+    """``node --check``: a real JavaScript parser (V8's), offline; the scripts run in the page
+    as classic scripts, as node checks a .js file outside a package."""
+    script = tmp_path / name
+    script.write_text(review.review_assets()[name.replace(".js", "")], encoding="utf-8")
+    done = subprocess.run([NODE, "--check", str(script)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
 
 
 # -- pages in a real browser ---------------------------------------------------------------

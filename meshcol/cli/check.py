@@ -164,14 +164,19 @@ def check(
     """
     from meshcol.analysis.check import check as run_check
     from meshcol.analysis.check import parse_ignore_rule
-    from meshcol.cli.common import check_outputs, emit_report, render_html, write_html
+    from meshcol.cli.common import emit_report, render_html, write_html
+    from meshcol.io.outputs import check_outputs
 
     for rule in ignore:
         try:
             parse_ignore_rule(rule)
         except ValueError as exc:
             raise click.BadParameter(str(exc), param_hint="'--ignore'") from None
-    check_outputs(inputs, [("--report", report), ("--html", html)], baseline=baseline)
+    check_outputs(
+        files={"--report": report, "--html": html},
+        inputs=inputs,
+        named_inputs={"the --baseline": baseline},
+    )
     fmt = report_format(report, fmt)
     progress = Progress(command="check", heartbeat=True)
     try:

@@ -115,8 +115,10 @@ def collision_matrix(
       meshcol collision-matrix robot.xml -o robot.srdf --report matrix.json
       meshcol check panda.urdf --srdf panda.srdf
     """
+    from meshcol.analysis.collision_matrix import CollisionMatrixReport
     from meshcol.analysis.collision_matrix import collision_matrix as run
-    from meshcol.cli.common import check_outputs
+    from meshcol.io.formats import formats_for, report_text
+    from meshcol.io.outputs import check_outputs
     from meshcol.io.report import atomic_path, emit
 
     if output is not None and output == report:
@@ -124,8 +126,9 @@ def collision_matrix(
             f"{output!r} is also the --report: give two files", param_hint="'-o' / '--output'"
         )
     srdf_to = "-" if output is None and report != "-" else output
-    check_outputs([robot], [("-o/--output", srdf_to), ("--report", report)])
-    fmt = report_format(report, None, format_option=False, formats=("json", "csv"))
+    check_outputs(files={"-o/--output": srdf_to, "--report": report}, inputs=[robot])
+    formats = formats_for(CollisionMatrixReport)
+    fmt = report_format(report, None, format_option=False, formats=formats)
     decompose: dict = {"engine": engine}
     if cache_dir is not None:
         decompose["cache_dir"] = cache_dir
@@ -148,7 +151,7 @@ def collision_matrix(
     # Both files or neither: each is renamed into place only once both are written.
     files = [
         (srdf_to, result.to_srdf()),
-        (report, result.to_csv() if fmt == "csv" else result.to_json()),
+        (report, report_text(result, fmt)),
     ]
     with contextlib.ExitStack() as stack:
         for path, text in files:

@@ -24,6 +24,7 @@ from meshcol.decomposition.search import (
     DEFAULT_SEARCH_TOLERANCE,
     SEARCH_MODES,
 )
+from meshcol.io.formats import REPORT_FORMATS, describe_formats
 from meshcol.io.mesh_write import LAYOUTS
 
 
@@ -43,8 +44,6 @@ class _MeshFormat(click.Choice):
     """``--format obj|glb``, which names the report formats' option when given one."""
 
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
-        from meshcol.io.report import REPORT_FORMATS
-
         if isinstance(value, str) and value.lower() in REPORT_FORMATS:
             self.fail(
                 f"{value!r} is a report format: decompose's --format is the parts' mesh "
@@ -155,10 +154,9 @@ class _MeshFormat(click.Choice):
 @click.option(
     "--report-format",
     "report_fmt",
-    type=click.Choice(["json", "csv", "junit", "github"]),
+    type=click.Choice(REPORT_FORMATS),
     default=None,
-    help="Report format: json, csv, junit (JUnit XML) or github (workflow-command "
-    "annotations).  [default: from the --report extension (.json, .csv, .xml), else json]",
+    help=f"Report format: {describe_formats()}",
 )
 @click.option(
     "--max-hausdorff",

@@ -7,7 +7,6 @@ from typing import Any
 import click
 
 from meshcol.cli.common import (
-    check_outputs,
     html_option,
     mesh_outputs,
     plural,
@@ -21,6 +20,7 @@ from meshcol.cli.common import (
     write_html,
 )
 from meshcol.cli.mesh_outputs import run_mesh_command, written_to
+from meshcol.io.outputs import check_outputs
 
 
 @click.command(
@@ -122,7 +122,11 @@ def hull(
     from meshcol.analysis.review import hull_page
     from meshcol.cli.common import emit_report
 
-    check_outputs(inputs, [("-o", output), ("--report", report), ("--html", html)])
+    check_outputs(
+        files={"-o": output, "--report": report, "--html": html},
+        folders={"--out-dir": out_dir},
+        inputs=inputs,
+    )
     fmt = report_format(report, fmt)
     from meshcol.analysis.rebuild import rebuild_hulls
 

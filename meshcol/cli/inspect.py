@@ -12,7 +12,6 @@ from meshcol.cli.common import (
     FiniteFloat,
     Progress,
     cache_dir_option,
-    check_outputs,
     engine_option,
     executor_options,
     html_option,
@@ -27,6 +26,7 @@ from meshcol.cli.common import (
     verdict,
     write_html,
 )
+from meshcol.io.outputs import check_outputs
 
 
 def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) -> tuple[str, ...]:
@@ -184,7 +184,7 @@ def inspect(
     from meshcol.analysis.review import inspect_page
     from meshcol.cli.common import emit_report
 
-    check_outputs(inputs, [("--report", report), ("--html", html)])
+    check_outputs(files={"--report": report, "--html": html}, inputs=inputs)
     fmt = report_format(report, fmt)
     progress = Progress(command="inspect", heartbeat=True)
     try:
