@@ -23,6 +23,7 @@ from meshcol.cli.common import (
     write_html,
 )
 from meshcol.io.mesh_write import MULTI_MESH_EXTENSIONS
+from meshcol.io.targets import target_names
 
 
 @click.command(
@@ -54,8 +55,8 @@ from meshcol.io.mesh_write import MULTI_MESH_EXTENSIONS
     "input.  [default: no budget, the exact hull]",
 )
 @target_option(
-    "Fit every hull to an engine's limits (meshcol targets lists them: physx, "
-    "physx-gpu, unity, unreal, godot, mujoco, bullet, isaac) or to your own profile; "
+    "Fit every hull to an engine's limits (meshcol targets lists them: "
+    f"{', '.join(target_names())}) or to your own profile; "
     "a tighter --max-vertices still wins. Exit 1 when a limit cannot be met."
 )
 @to_option("the hulls")
