@@ -25,7 +25,15 @@ import numpy as np
 from meshcol.errors import InputFileError, MissingDependencyError
 from meshcol.io import gltf, mesh_trimesh, off
 
-__all__ = ["FORMATS", "MESH_EXTENSIONS", "MeshFormat", "MeshNode", "check_file", "mesh_format"]
+__all__ = [
+    "FORMATS",
+    "MESH_EXTENSIONS",
+    "MeshFormat",
+    "MeshNode",
+    "check_file",
+    "mesh_format",
+    "read_natively",
+]
 
 #: One mesh node of a file: ``(name, matrix, vertices, faces)``; ``matrix`` (4, 4) is the
 #: node's world transform (scale, shear and mirror allowed: the loader splits them off),
@@ -106,6 +114,13 @@ def mesh_format(source: str, opted_in: frozenset[str] = frozenset()) -> MeshForm
         suffix = os.path.splitext(source)[1] or "(none)"
         raise InputFileError(f"unknown mesh file extension {suffix!r} (expected {known})", source)
     return fmt
+
+
+def read_natively(source: str) -> bool:
+    """True when the core reads ``source`` (by its extension): it can go in the one parallel
+    call of :func:`meshcol.io.mesh_read.load_meshes`."""
+    fmt = _BY_EXTENSION.get(os.path.splitext(source)[1].lower())
+    return fmt is not None and fmt.native is not None
 
 
 def check_file(source: str, opted_in: frozenset[str] = frozenset()) -> MeshFormat:
