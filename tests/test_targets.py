@@ -10,9 +10,20 @@ from click.testing import CliRunner
 
 from meshcol.cli import main
 from meshcol.errors import TargetError
-from meshcol.io.targets import LIMIT_KEYS, list_targets, load_target
+from meshcol.io.targets import (
+    LIMIT_KEYS,
+    TARGETS_DIR,
+    list_targets,
+    load_target,
+    target_names,
+    targets_markdown,
+)
 
-PROFILES = ("physx", "physx-gpu", "unity", "unreal", "godot", "mujoco", "bullet", "isaac")
+#: Every profile of the package: the files of meshcol/targets/ (adding one is adding a file).
+PROFILES = tuple(target_names())
+#: The engines issue 8 asked for (each must keep its profile).
+ISSUE_ENGINES = ("physx", "physx-gpu", "unity", "unreal", "godot", "mujoco", "bullet", "isaac")
+DOCS = Path(__file__).resolve().parent.parent / "docs" / "targets.md"
 
 
 def run(*args: str):
@@ -20,7 +31,30 @@ def run(*args: str):
 
 
 def test_every_engine_of_the_issue_has_a_profile() -> None:
-    assert sorted(t.name for t in list_targets()) == sorted(PROFILES)
+    assert set(ISSUE_ENGINES) <= set(PROFILES)
+
+
+def test_the_profiles_are_the_files_of_the_folder_named_as_their_files() -> None:
+    files = sorted(path.stem for path in TARGETS_DIR.glob("*.toml"))
+    assert tuple(files) == PROFILES
+    assert sorted(t.name for t in list_targets()) == files
+    assert all(load_target(name).name == name for name in files)
+
+
+def test_the_docs_page_is_generated_from_the_profiles() -> None:
+    assert DOCS.read_text(encoding="utf-8") == targets_markdown(), (
+        'docs/targets.md is stale: python -c "from meshcol.io.targets import '
+        "targets_markdown; print(targets_markdown(), end='')\" > docs/targets.md"
+    )
+    for name in PROFILES:
+        assert f"| `{name}` |" in targets_markdown()
+
+
+def test_the_jolt_profile_is_jolts_documented_hull_limit() -> None:
+    jolt = load_target("jolt")
+    assert jolt.limits == {"max_hull_vertices": 256}  # ConvexHullShape::cMaxPointsInHull
+    assert jolt.units == "m"
+    assert {s.kind for s in jolt.sources} == {"documented"}
 
 
 @pytest.mark.parametrize("name", PROFILES)

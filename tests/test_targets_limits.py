@@ -8,7 +8,7 @@ from scipy.spatial import ConvexHull
 
 from meshcol.collision.limits import limit_violations, measure_parts
 from meshcol.collision.target_fit import fit_hull
-from meshcol.io.targets import load_target
+from meshcol.io.targets import load_target, target_names
 
 
 def sphere(n: int, seed: int = 0) -> np.ndarray:
@@ -75,9 +75,7 @@ def test_cone_apex_is_past_32_faces_per_vertex_and_is_brought_within() -> None:
     check_independently(points, fit.parts[0][0], dict(load_target("physx-gpu").limits))
 
 
-@pytest.mark.parametrize(
-    "name", ["physx", "physx-gpu", "unity", "unreal", "godot", "bullet", "isaac", "mujoco"]
-)
+@pytest.mark.parametrize("name", target_names())
 def test_each_profile_brings_a_fine_sphere_within_its_counts(name: str) -> None:
     points = sphere(400)
     target = load_target(name)

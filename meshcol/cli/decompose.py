@@ -26,6 +26,7 @@ from meshcol.decomposition.search import (
 )
 from meshcol.io.formats import REPORT_FORMATS, describe_formats
 from meshcol.io.mesh_write import LAYOUTS
+from meshcol.io.targets import target_names
 
 
 def _engine_option(
@@ -91,8 +92,8 @@ class _MeshFormat(click.Choice):
     help="Most vertices per part (enforced).  [default: no limit]",
 )
 @target_option(
-    "Fit every body's parts to an engine's limits (meshcol targets: physx, physx-gpu, "
-    "unity, unreal, godot, mujoco, bullet, isaac) or your own profile, still enclosing; "
+    "Fit every body's parts to an engine's limits (meshcol targets: "
+    f"{', '.join(target_names())}) or your own profile, still enclosing; "
     "tighter --max-hulls/--max-vertices win. Exit 1 when a limit cannot be met."
 )
 @click.option(

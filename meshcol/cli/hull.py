@@ -21,6 +21,7 @@ from meshcol.cli.common import (
 )
 from meshcol.cli.mesh_outputs import run_mesh_command, written_to
 from meshcol.io.outputs import check_outputs
+from meshcol.io.targets import target_names
 
 
 @click.command(
@@ -52,8 +53,8 @@ from meshcol.io.outputs import check_outputs
     "input.  [default: no budget, the exact hull]",
 )
 @target_option(
-    "Fit every hull to an engine's limits (meshcol targets lists them: physx, "
-    "physx-gpu, unity, unreal, godot, mujoco, bullet, isaac) or to your own profile; "
+    "Fit every hull to an engine's limits (meshcol targets lists them: "
+    f"{', '.join(target_names())}) or to your own profile; "
     "a tighter --max-vertices still wins. Exit 1 when a limit cannot be met."
 )
 @to_option("the hulls")
