@@ -30,12 +30,9 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
 __all__ = [
     "TaskOutcome",
     "WorkerPool",
-    "decompose_task",
     "run_tasks",
     "worker_env",
 ]
@@ -529,24 +526,3 @@ def run_tasks(
         return
     with WorkerPool(fn, jobs, timeout=timeout, threads_per_job=threads_per_job) as workers:
         yield from workers.run(tasks)
-
-
-# --------------------------------------------------------------------------------------------
-# writers
-
-
-def decompose_task(
-    task: tuple[str, list[tuple[str, np.ndarray, np.ndarray]], dict[str, Any]],
-) -> list[tuple[str, Any]]:
-    """Worker entry: decompose every body of one file. ``task`` = (path, bodies, options).
-
-    Reads the cache but never writes it (``write_cache=False``): the caller stores results.
-    """
-    from meshcol.decomposition.decompose import decompose
-
-    _, bodies, options = task
-    # The parent stores what comes back: a worker killed mid-task never leaves an entry.
-    return [
-        (name, decompose((vertices, faces), write_cache=False, **options))
-        for name, vertices, faces in bodies
-    ]
