@@ -34,6 +34,7 @@ from meshcol.decomposition.options import (
     RunOptions,
 )
 from meshcol.io.mesh_write import LAYOUTS
+from meshcol.vocabulary import REPORT_FORMATS
 
 #: The command's help (``meshcol decompose -h``).
 _HELP = """Split meshes into convex parts for collision (meshcol decompose).
@@ -99,8 +100,6 @@ class _MeshFormat(click.Choice):
     """``--format obj|glb``, which names the report formats' option when given one."""
 
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
-        from meshcol.io.report import REPORT_FORMATS
-
         if isinstance(value, str) and value.lower() in REPORT_FORMATS:
             self.fail(
                 f"{value!r} is a report format: decompose's --format is the parts' mesh "
@@ -213,7 +212,7 @@ class _MeshFormat(click.Choice):
 @click.option(
     "--report-format",
     "report_fmt",
-    type=click.Choice(["json", "csv", "junit", "github"]),
+    type=click.Choice(REPORT_FORMATS),
     default=None,
     help="Report format: json, csv, junit (JUnit XML) or github (workflow-command "
     "annotations).  [default: from the --report extension (.json, .csv, .xml), else json]",
@@ -414,7 +413,7 @@ def _robot_input(
     apply to one (and for --to without one)."""
     from click.core import ParameterSource
 
-    from meshcol.io.robot import is_robot_file
+    from meshcol.io.inputs import is_robot_file
 
     robot = len(inputs) == 1 and is_robot_file(inputs[0])
     if outputs.to is not None and not robot:

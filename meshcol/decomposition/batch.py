@@ -180,9 +180,9 @@ def _manifest(options: DecomposeOptions, run_manifest: Any, resume: bool) -> Any
 
 
 def _is_manifest(inputs: Sequence[str]) -> bool:
-    from meshcol.io.scene import MANIFEST_EXTENSIONS
+    from meshcol.io.inputs import is_manifest
 
-    return any(os.path.splitext(p)[1].lower() in MANIFEST_EXTENSIONS for p in inputs)
+    return any(is_manifest(p) for p in inputs)
 
 
 def _run_files(

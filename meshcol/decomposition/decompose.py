@@ -81,10 +81,10 @@ def _prepare(mesh: Any, options: DecomposeOptions) -> _Input:
 def _merge_parts(
     parts: list[_Part], reduced: list[bool], count: int, budget: int | None
 ) -> tuple[list[_Part], list[bool]]:
-    """At most ``count`` parts, groups merged by :func:`meshcol.collision.limits.merge_groups`,
+    """At most ``count`` parts, groups merged by :func:`meshcol.collision.target_fit.merge_groups`,
     each group's part the canonical hull of its parts' vertices (budgeted as every part), with
     whether each was reduced to the vertex budget."""
-    from meshcol.collision.limits import merge_groups
+    from meshcol.collision.target_fit import merge_groups
 
     merged: list[_Part] = []
     flags: list[bool] = []

@@ -27,7 +27,7 @@ def apply_target(
     """A body's decomposition fitted to a target, re-measured, and its report entry.
 
     The parts (``d.parts``, in the body's frame) go through
-    :func:`meshcol.collision.limits.fit_parts` (merged to ``max_hulls``, each grown and
+    :func:`meshcol.collision.target_fit.fit_parts` (merged to ``max_hulls``, each grown and
     simplified to the per-part limits, every part still enclosing what it replaces); the
     fidelity metrics are measured again on the fitted parts (same samples and tolerance),
     so the report describes what is written.
@@ -38,7 +38,7 @@ def apply_target(
         The fitted decomposition and the body's ``target`` entry (name, met, costs,
         violations, per-part measures).
     """
-    from meshcol.collision.limits import fit_parts
+    from meshcol.collision.target_fit import fit_parts
     from meshcol.decomposition.fidelity import fidelity
     from meshcol.geometry.topology import orient_outward
 
