@@ -502,46 +502,47 @@ def _print_files(result: Any, outputs: _Outputs, inputs: tuple[str, ...]) -> Non
     page = render_html(outputs.html, lambda: decompose_page(result, outputs.out_dir, inputs))
     emit_report(result, outputs.report_fmt, outputs.report)
     write_html(outputs.html, page)
-    for f in result.files:
-        if f["status"] != "ok":
-            click.echo(f"meshcol: {f['status']}: {f['path']}: {f['message']}", err=True)
-        for body in f["bodies"]:
+    for entry in result.files:
+        if entry["status"] != "ok":
+            click.echo(f"meshcol: {entry['status']}: {entry['path']}: {entry['message']}", err=True)
+        for body in entry["bodies"]:
             if body["search"] is not None and not body["search"]["met"]:
                 reason = body["search"]["reason"]
                 click.echo(
-                    f"meshcol: target missed: {f['path']}: {body['name']}: {reason}", err=True
+                    f"meshcol: target missed: {entry['path']}: {body['name']}: {reason}", err=True
                 )
     _echo_target_violations(result)
     click.echo(verdict("decompose", result.exit_code == 0, _summary(result)), err=True)
 
 
-def _echo_target_violations(result) -> None:
+def _echo_target_violations(result: Any) -> None:
     """One stderr line per target limit a body missed, with its rule id."""
-    for f in result.files:
-        for body in f["bodies"]:
-            for v in body.get("target", {}).get("violations", []):
+    for entry in result.files:
+        for body in entry["bodies"]:
+            for violation in body.get("target", {}).get("violations", []):
                 click.echo(
-                    f"meshcol: {v['rule']} {v['rule_name']}: {f['path']}: body '{body['name']}' "
-                    f"{v['message']}",
+                    f"meshcol: {violation['rule']} {violation['rule_name']}: {entry['path']}: "
+                    f"body '{body['name']}' {violation['message']}",
                     err=True,
                 )
 
 
-def _summary(result) -> str:
+def _summary(result: Any) -> str:
     """``3 files, 5 bodies, 42 parts`` and what failed, for the verdict line."""
     from meshcol.cli.common import plural
 
-    s = result.summary
+    counts = result.summary
     text = (
-        f"{plural(s['files'], 'file')}, {plural(s['bodies'], 'body')}, {plural(s['parts'], 'part')}"
+        f"{plural(counts['files'], 'file')}, {plural(counts['bodies'], 'body')}, "
+        f"{plural(counts['parts'], 'part')}"
     )
     for key, what in (("failed", "failed"), ("timeout", "timed out")):
-        if s[key]:
-            text += f", {s[key]} {what}"
-    if s["hausdorff_exceeded"]:
-        text += f", {s['hausdorff_exceeded']} over --max-hausdorff"
-    if s["parts_exceeded"]:
-        text += f", {s['parts_exceeded']} over --max-parts"
-    if s.get("target_missed"):
-        text += f", {s['target_missed']} missing a target limit"
+        if counts[key]:
+            text += f", {counts[key]} {what}"
+    if counts["hausdorff_exceeded"]:
+        text += f", {counts['hausdorff_exceeded']} over --max-hausdorff"
+    if counts["parts_exceeded"]:
+        text += f", {counts['parts_exceeded']} over --max-parts"
+    if counts.get("target_missed"):
+        text += f", {counts['target_missed']} missing a target limit"
     return text
