@@ -605,7 +605,7 @@ def test_max_hausdorff_gates_what_sticks_out_not_the_cuts(tmp_path) -> None:
 
 
 def test_within_max_hausdorff_never_passes_what_it_could_not_measure() -> None:
-    from meshcol.decomposition.batch import within_max_hausdorff
+    from meshcol.decomposition.search import within_max_hausdorff
 
     m = {"hausdorff_mesh_to_parts": 0.5, "hausdorff_parts_to_mesh": 1.0}
     assert within_max_hausdorff(m, None)

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import dataclasses
 import os
+import pickle
+import re
 import shutil
 import time
 from pathlib import Path
@@ -23,6 +26,7 @@ from meshcol.decomposition.fidelity import (
     points_to_parts,
     points_to_triangles,
 )
+from meshcol.decomposition.options import DecomposeOptions, RunOptions
 from meshcol.decomposition.result import Decomposition
 from meshcol.errors import InvalidMeshError
 from meshcol.geometry.topology import is_closed_manifold
@@ -83,11 +87,11 @@ def test_canonical_geometry_ignores_vertex_and_face_order() -> None:
     f2 = np.roll(f2, 1, axis=1)  # same winding, another starting corner
     a, b = canonical_geometry(v, f), canonical_geometry(v[perm], f2)
     assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
-    params = resolve_params("coacd")
+    params = resolve_params(DecomposeOptions("coacd"))
     assert cache_key(*a, "coacd", "1", params) == cache_key(*b, "coacd", "1", params)
     assert cache_key(*a, "coacd", "1", params) != cache_key(*a, "coacd", "2", params)
     assert cache_key(*a, "coacd", "1", params) != cache_key(
-        *a, "coacd", "1", resolve_params("coacd", seed=1)
+        *a, "coacd", "1", resolve_params(DecomposeOptions("coacd", seed=1))
     )
 
 
@@ -138,11 +142,14 @@ def test_is_closed_manifold() -> None:
 
 
 def test_resolve_params_auto_preprocess_and_budgets() -> None:
-    assert resolve_params("coacd", closed=True)["preprocess_mode"] == "off"
-    assert resolve_params("coacd", closed=False)["preprocess_mode"] == "on"
-    assert resolve_params("coacd", preprocess="on", closed=True)["preprocess_mode"] == "on"
+    assert resolve_params(DecomposeOptions("coacd"), closed=True)["preprocess_mode"] == "off"
+    assert resolve_params(DecomposeOptions("coacd"), closed=False)["preprocess_mode"] == "on"
+    on = DecomposeOptions("coacd", preprocess="on")
+    assert resolve_params(on, closed=True)["preprocess_mode"] == "on"
     p = resolve_params(
-        "coacd", max_hulls=5, max_vertices=12, engine_options={"mcts_nodes": "7", "pca": "true"}
+        DecomposeOptions(
+            "coacd", max_hulls=5, max_vertices=12, engine_options={"mcts_nodes": "7", "pca": "true"}
+        )
     )
     assert (p["max_convex_hull"], p["decimate"], p["max_ch_vertex"], p["mcts_nodes"], p["pca"]) == (
         5,
@@ -151,7 +158,7 @@ def test_resolve_params_auto_preprocess_and_budgets() -> None:
         7,
         True,
     )
-    q = resolve_params("vhacd", max_hulls=5, max_vertices=12, resolution=10000)
+    q = resolve_params(DecomposeOptions("vhacd", max_hulls=5, max_vertices=12, resolution=10000))
     assert (q["max_convex_hulls"], q["max_num_vertices_per_ch"], q["resolution"]) == (5, 12, 10000)
 
 
@@ -175,10 +182,126 @@ def test_resolve_params_auto_preprocess_and_budgets() -> None:
         ("coacd", {"preprocess": "maybe"}, "preprocess must be auto, on or off, got 'maybe'"),
     ],
 )
-def test_resolve_params_errors(engine, kwargs, message) -> None:
+def test_decompose_options_are_validated_when_made(engine, kwargs, message) -> None:
     with pytest.raises(ValueError) as info:
-        resolve_params(engine, **kwargs)
+        DecomposeOptions(engine, **kwargs)
     assert str(info.value).startswith(message)
+    # the public entries build them from their keywords, with the same message
+    with pytest.raises(ValueError) as info:
+        decompose(_torus(), engine=engine, use_cache=False, **kwargs)
+    assert str(info.value).startswith(message)
+
+
+# ------------------------------------------------------------------------------------ options
+
+#: Cache keys of a 1 x 2 x 3 box that meshcol ee068ea computed (engine version "1.0.14"): a
+#: cache made before the options were typed must still hit.
+KNOWN_KEYS = [
+    (
+        "coacd",
+        {
+            "threshold": 0.2,
+            "resolution": 500,
+            "engine_options": {"mcts_iterations": "20", "pca": "true"},
+        },
+        "0393821af0d64e96938eebbd4ee3fa58c217e66d4b283a9f49d7f51902a309a8",
+    ),
+    (
+        "coacd",
+        {"max_hulls": 4, "max_vertices": 16, "preprocess": "on", "seed": 3},
+        "afd792079538368d824c5178515376d4244342c948a859d10481a3a37e9d589a",
+    ),
+    (
+        "vhacd",
+        {"max_hulls": 8, "resolution": 10000, "engine_options": {"fill_mode": "raycast"}},
+        "b1fb19967e21f24892df85264fdc1d94f5dac6c5525b86b5e429b528ae6f43f5",
+    ),
+]
+
+
+@pytest.mark.parametrize(("engine", "fields", "key"), KNOWN_KEYS)
+def test_cache_keys_are_those_of_earlier_runs(engine, fields, key) -> None:
+    m = trimesh.creation.box(extents=(1, 2, 3))
+    v, f = canonical_geometry(np.asarray(m.vertices), np.asarray(m.faces))
+    params = resolve_params(DecomposeOptions(engine, **fields), closed=True)
+    assert cache_key(v, f, engine, "1.0.14", params) == key
+
+
+def test_run_manifest_fingerprint_is_that_of_earlier_runs() -> None:
+    from meshcol.decomposition.manifest import fingerprint
+
+    options = DecomposeOptions(
+        threshold=0.2, resolution=500, engine_options={"mcts_iterations": "20"}
+    )
+    assert fingerprint(options.result_settings()) == (
+        "6fdcba180d35e412cbe9842971add4b33278d901956875bcde1118b9a042380a"
+    )
+    searching = dataclasses.replace(options, max_hausdorff=0.05, search_steps=4)
+    assert fingerprint(searching.result_settings()) == (
+        "3db7bb6e62c4ec7271de8aa927d5e88afb078960ab360e61e3d86a42ee3ef765"
+    )
+    assert DecomposeOptions(max_hausdorff=0.05, search="off").search_target() is None
+
+
+def test_options_are_frozen_and_travel_to_workers() -> None:
+    options = DecomposeOptions(threshold=0.1, engine_options={"mcts_nodes": "7"})
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        options.threshold = 0.2  # type: ignore[misc]
+    with pytest.raises(TypeError):
+        options.engine_options["mcts_nodes"] = "8"  # type: ignore[index]
+    again = pickle.loads(pickle.dumps(options))
+    assert again == options and hash(again) == hash(options)
+    assert dict(again.engine_options) == {"mcts_nodes": "7"}
+    assert DecomposeOptions.given(options) is options
+    assert DecomposeOptions.given(options, seed=2).seed == 2
+    assert DecomposeOptions.given(None, seed=2) == DecomposeOptions(seed=2)
+
+
+def test_options_aimed_at_a_target() -> None:
+    from meshcol.io.targets import Target
+
+    target = Target("t", "", "m", {"max_hulls": 4, "max_hull_vertices": 32})
+    aimed = DecomposeOptions(max_hulls=6, max_vertices=64).aimed_at(target)
+    # the hull count goes to the engine's own parameter (excess parts merged, never dropped)
+    assert (aimed.max_hulls, aimed.max_vertices) == (None, 32)
+    assert dict(aimed.engine_options) == {"max_convex_hull": 4}
+    given = DecomposeOptions("vhacd", engine_options={"max_convex_hulls": "3"}).aimed_at(target)
+    assert dict(given.engine_options) == {"max_convex_hulls": 3}
+
+
+@pytest.mark.parametrize(
+    ("fields", "message"),
+    [
+        ({"jobs": 0}, "jobs must be at least 1, got 0"),
+        ({"use_cache": False, "cache_dir": "c"}, "cache_dir needs use_cache"),
+        ({"ray_address": "auto"}, "ray_address needs executor 'ray'"),
+    ],
+)
+def test_run_options_are_validated_when_made(fields, message) -> None:
+    with pytest.raises(ValueError, match=message):
+        RunOptions(**fields)
+
+
+@pytest.mark.parametrize(
+    ("fields", "message"),
+    [
+        ({"max_vertices": 3, "use_cache": False}, "max_vertices must be at least 4, got 3"),
+        ({"engine": "vhacd", "threshold": 0.1}, "threshold applies to the coacd engine only"),
+        ({"layout": "ucx", "fmt": "glb"}, "layout 'ucx' writes OBJ only, not glb"),
+        ({"resume": True}, "resume needs run_manifest"),
+        ({"run_manifest": "m.json", "use_cache": False}, "run_manifest needs the cache"),
+        ({"cache_dir": "c", "use_cache": False}, "cache_dir needs use_cache"),
+        ({"max_parts": 0}, "max_parts must be at least 1, got 0"),
+    ],
+)
+def test_decompose_files_refuses_bad_options_before_any_work(tmp_path, fields, message) -> None:
+    from meshcol.decomposition.batch import decompose_files
+
+    mesh = tmp_path / "torus.obj"
+    _torus().export(mesh)
+    with pytest.raises(ValueError, match=re.escape(message)):
+        decompose_files([mesh], tmp_path / "out", **fields)
+    assert not (tmp_path / "out").exists()
 
 
 # ---------------------------------------------------------------------------- canonical parts

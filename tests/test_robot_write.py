@@ -15,6 +15,7 @@ import pytest
 from click.testing import CliRunner
 
 from meshcol.cli import main
+from meshcol.decomposition.options import RunOptions
 
 pytest.importorskip("yourdfpy")
 mujoco = pytest.importorskip("mujoco")
@@ -283,7 +284,7 @@ def test_decompose_urdf_parts_cache_and_jobs(urdf: Path, tmp_path: Path) -> None
     names = [b["name"] for b in first["files"][0]["bodies"]]
     # each object of the arm's mesh is decomposed on its own (as check's colliders are)
     assert names == ["base/0", "arm/0/0", "arm/0/1", "finger/0"]
-    robot, expected = computed(urdf, "decompose", decompose_options={"cache_dir": str(cache)})
+    robot, expected = computed(urdf, "decompose", run=RunOptions(cache_dir=str(cache)))
     root = etree.fromstring((out / "small.urdf").read_bytes())
     arm = root.findall("link[@name='arm']/collision")
     assert len(arm) == sum(len(c.parts) for c in robot.colliders if c.link == "arm")
