@@ -496,6 +496,8 @@ class _Comparison:
     body: str
     collider: MassProperties
     visual: MassProperties
+    collider_row: dict[str, Any]  # their _mass_dict
+    visual_row: dict[str, Any]
     solid: bool  # the visual mesh is closed and the collider has a volume: compare solids
     diagonal: float  # of the visual mesh's world bounding box
 
@@ -528,6 +530,8 @@ def _visual_comparison(item: _ColliderBody) -> list[Finding]:
         body=body.name,
         collider=collider,
         visual=visual,
+        collider_row=item.row["collider_mass"],
+        visual_row=item.row["visual_mass"],
         solid=closed and collider.volume > 0,
         diagonal=float(np.linalg.norm(world.max(axis=0) - world.min(axis=0))),
     )
@@ -572,7 +576,7 @@ def _inertia_ratio(c: _Comparison, options: PhysicsOptions) -> tuple[Any, list[F
     ``inertia_ratio``."""
     if not c.solid:
         return None, []
-    ratio = _moment_ratio(c.collider, c.visual)
+    ratio = _moment_ratio(c.collider_row, c.visual_row)
     if ratio is None or not ratio > options.inertia_ratio:
         return ratio, []
     message = f"principal moments of inertia per unit mass differ by up to {ratio:.3g} x"
@@ -596,12 +600,15 @@ def _center_of_mass_offset(c: _Comparison, options: PhysicsOptions) -> tuple[Any
     return offset, [finding("MC206", c.body, None, offset, options.com_offset, message)]
 
 
-def _moment_ratio(a: MassProperties, b: MassProperties) -> float | None:
-    """Largest ratio (>= 1) of the sorted principal moments per unit mass of two solids."""
-    if a.volume == 0 or b.volume == 0:
+def _moment_ratio(a: dict[str, Any], b: dict[str, Any]) -> float | None:
+    """Largest ratio (>= 1) of the sorted principal moments per unit mass of two solids,
+    from their :func:`_mass_dict` (whose principal moments are already computed)."""
+    if a["volume"] == 0 or b["volume"] == 0:
         return None
-    per_mass_a = a.principal_inertia() / a.volume
-    per_mass_b = b.principal_inertia() / b.volume
+    if a["principal_inertia"] is None or b["principal_inertia"] is None:
+        return None  # not finite
+    per_mass_a = np.asarray(a["principal_inertia"], dtype=np.float64) / a["volume"]
+    per_mass_b = np.asarray(b["principal_inertia"], dtype=np.float64) / b["volume"]
     if not (np.all(np.isfinite(per_mass_a)) and np.all(np.isfinite(per_mass_b))):
         return None
     per_mass_a, per_mass_b = np.sort(np.abs(per_mass_a)), np.sort(np.abs(per_mass_b))
