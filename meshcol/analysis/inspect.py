@@ -40,7 +40,6 @@ from meshcol.analysis.physics import PhysicsOptions, physics_readiness
 from meshcol.analysis.rules import Finding
 from meshcol.errors import InvalidMeshError, MeshcolError
 from meshcol.types import Body
-from meshcol.vocabulary import MANIFEST_EXTENSIONS
 
 __all__ = [
     "InspectReport",
@@ -187,13 +186,14 @@ def _read_inputs(paths: list[Any], errors: _InputErrors, read_files: bool) -> _I
     """One manifest (read whole: its problem stops the run), one robot description, or mesh
     files (an unreadable one is an error of the report; not read here when ``read_files`` is
     false)."""
-    from meshcol.io.robot import is_robot_file
+    from meshcol.io.inputs import input_kind
     from meshcol.io.scene import iter_inputs, load_scene
 
-    if _is_manifest(paths):
+    kind = input_kind(paths[0]) if len(paths) == 1 else "mesh"
+    if kind == "manifest":
         scene = load_scene(paths[0])
         return _Inputs(list(scene.bodies), scene.units)
-    if len(paths) == 1 and is_robot_file(paths[0]):
+    if kind == "robot":
         return _read_robot(paths[0])
     if not read_files:
         return _Inputs(None)
@@ -212,12 +212,6 @@ def _read_robot(path: Any) -> _Inputs:
         warning = f"visual geometry not read, links compared with their collision meshes: {error}"
         return _Inputs(list(scene.bodies), scene.units, {}, [warning])
     return _Inputs(list(scene.bodies), scene.units, visuals)
-
-
-def _is_manifest(paths: Sequence[Any]) -> bool:
-    return len(paths) == 1 and os.path.splitext(os.fspath(paths[0]))[1].lower() in (
-        MANIFEST_EXTENSIONS
-    )
 
 
 def _inspect_bodies(
