@@ -334,3 +334,54 @@ def test_inspect_report_applies_the_policy(tmp_path) -> None:
     assert strict.to_csv().splitlines()[0].endswith(",findings,failed_rules,units")
     with pytest.raises(ValueError, match="unknown rule 'nope'"):
         inspect([path], fail_on=["nope"])
+
+
+def dented_cube() -> tuple[np.ndarray, np.ndarray]:
+    """The unit cube with its top face's centre pushed down to the middle: closed, outward,
+    volume 5/6, its hull the unit cube."""
+    top = [i for i, face in enumerate(CUBE_FACES) if set(face) <= {1, 3, 5, 7}]
+    vertices = np.vstack([CUBE_VERTICES, [[0.5, 0.5, 0.5]]])
+    fan = [[1, 5, 8], [5, 7, 8], [7, 3, 8], [3, 1, 8]]
+    return vertices, np.vstack([np.delete(CUBE_FACES, top, axis=0), fan])
+
+
+def test_physics_comparisons_are_the_known_ratios() -> None:
+    import trimesh
+
+    from meshcol.analysis.physics import PhysicsOptions, physics_readiness
+
+    vertices, faces = dented_cube()
+    rows, findings = physics_readiness(
+        [body(vertices, faces)], PhysicsOptions(volume_ratio=1.1, inertia_ratio=1.0001)
+    )
+    (row,) = rows
+    assert row["comparison"] == "solid" and row["convex_parts"] == 1
+    assert row["volume_ratio"] == pytest.approx(1.2, rel=1e-12)  # the hull's 1 over 5/6
+    # the inertia ratio against an independent oracle: trimesh's moments, per unit mass
+    hull, dented = trimesh.Trimesh(CUBE_VERTICES, CUBE_FACES), trimesh.Trimesh(vertices, faces)
+    moments = [
+        np.sort(np.linalg.eigvalsh(mesh.moment_inertia)) / mesh.volume for mesh in (hull, dented)
+    ]
+    expected = float(np.max(np.maximum(moments[0] / moments[1], moments[1] / moments[0])))
+    assert row["inertia_ratio"] == pytest.approx(expected, rel=1e-9)
+    assert row["inertia_ratio"] > 1.0001
+    # the dent moves the centre of mass down; the offset is over the visual diagonal, sqrt 3
+    assert row["center_of_mass_offset"] == pytest.approx(
+        np.linalg.norm(hull.center_mass - dented.center_mass) / np.sqrt(3), rel=1e-9
+    )
+    assert [(f.rule, f.limit) for f in findings] == [("MC205", 1.1), ("MC207", 1.0001)]
+    # the principal moments the row reports are the ones the ratio used
+    assert np.sort(row["collider_mass"]["principal_inertia"]) == pytest.approx(
+        np.full(3, 1 / 6), rel=1e-12
+    )
+
+
+def test_physics_comparisons_of_a_box_with_its_own_hull_are_one() -> None:
+    from meshcol.analysis.physics import physics_readiness
+
+    stretched = CUBE_VERTICES * [1.0, 2.0, 4.0]
+    rows, findings = physics_readiness([body(stretched, CUBE_FACES)])
+    assert rows[0]["volume_ratio"] == pytest.approx(1.0, rel=1e-12)
+    assert rows[0]["inertia_ratio"] == pytest.approx(1.0, rel=1e-12)
+    assert rows[0]["center_of_mass_offset"] == pytest.approx(0.0, abs=1e-12)
+    assert findings == []

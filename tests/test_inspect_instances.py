@@ -7,14 +7,9 @@ import json
 import numpy as np
 import pytest
 
-from meshcol.analysis.inspect import (
-    HEALTH_IDS,
-    PhysicsOptions,
-    health_findings,
-    inspect,
-    inspect_body,
-    physics_readiness,
-)
+from meshcol.analysis.health import HEALTH_IDS, health_findings, inspect_body
+from meshcol.analysis.inspect import inspect
+from meshcol.analysis.physics import PhysicsOptions, physics_readiness
 from meshcol.io.report import dumps_json
 from meshcol.io.scene import load_scene
 
@@ -136,7 +131,7 @@ def test_instances_are_reported_as_each_body_alone(tmp_path) -> None:
 
 
 def test_inspect_measures_each_unique_mesh_once(tmp_path, monkeypatch) -> None:
-    import meshcol.analysis.inspect as inspect_module
+    import meshcol.analysis.geometry_cache as geometry_module
     import meshcol.collision.hull as hull_module
     import meshcol.collision.self_intersection as crossing_module
     import meshcol.geometry.mass as mass_module
@@ -153,8 +148,8 @@ def test_inspect_measures_each_unique_mesh_once(tmp_path, monkeypatch) -> None:
         monkeypatch.setattr(module, name, count)
 
     counted(crossing_module, "self_intersecting_pairs")
-    counted(inspect_module, "_manifold_status")
-    counted(inspect_module, "component_count")
+    counted(geometry_module, "_manifold_status")
+    counted(geometry_module, "component_count")
     counted(mass_module, "mass_properties")
     counted(hull_module, "exact_hull")
 

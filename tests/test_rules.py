@@ -15,7 +15,8 @@ import trimesh
 from click.testing import CliRunner
 
 from meshcol.analysis.check import PAIR_RULES, check
-from meshcol.analysis.inspect import HEALTH_IDS, PhysicsOptions, inspect
+from meshcol.analysis.health import HEALTH_IDS
+from meshcol.analysis.inspect import PhysicsOptions, inspect
 from meshcol.analysis.rules import (
     RULES,
     TARGET_RULES,
