@@ -12,7 +12,8 @@ from click.testing import CliRunner
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from meshcol.analysis.check import CSV_COLUMNS, CheckOptions, check, check_scene
+from meshcol.analysis.check import CheckOptions, check, check_scene
+from meshcol.analysis.check_report import CSV_COLUMNS
 from meshcol.cli import main
 from meshcol.io.scene import load_inputs
 
@@ -533,7 +534,7 @@ def test_denormal_scale_is_a_one_line_error_not_a_crash(tmp_path: Path, scale: s
 
 
 def test_relative_paths_are_those_of_relative_one_by_one(tmp_path, monkeypatch):
-    from meshcol.analysis.check import _relative, _relative_paths
+    from meshcol.analysis.paths import display_path, display_paths
 
     inner = tmp_path / "work" / "level"
     inner.mkdir(parents=True)
@@ -549,8 +550,8 @@ def test_relative_paths_are_those_of_relative_one_by_one(tmp_path, monkeypatch):
         str(tmp_path / "work" / "level" / ".."),
         "/",
     ]
-    assert _relative_paths(paths) == [_relative(p) for p in paths]
-    assert _relative_paths(paths)[2:5] == ["level/a.obj", "level/b.obj", "c.obj"]
+    assert display_paths(paths) == [display_path(p) for p in paths]
+    assert display_paths(paths)[2:5] == ["level/a.obj", "level/b.obj", "c.obj"]
 
 
 @given(
