@@ -40,6 +40,8 @@ from meshcol.types import Status
 from meshcol.vocabulary import PAIR_STATUSES
 
 __all__ = [
+    "MEASURES",
+    "NO_ANSWER",
     "SEVERITY",
     "PairTable",
     "PartPairIndex",
