@@ -50,7 +50,7 @@ from meshcol.analysis.colliders import _geometry_key, build_colliders
 from meshcol.analysis.mesh_phase import mesh_phase
 from meshcol.analysis.pairs import broad_phase, classify, convex_phase, place
 from meshcol.types import Scene
-from meshcol.vocabulary import MANIFEST_EXTENSIONS, PAIR_STATUSES
+from meshcol.vocabulary import PAIR_STATUSES
 
 __all__ = [
     "PAIR_STATUSES",
@@ -243,14 +243,11 @@ def _prepare_files(
     from meshcol.analysis.colliders import convex_parts
     from meshcol.decomposition.executor import run_each
     from meshcol.errors import MeshcolError
-    from meshcol.io.robot import is_robot_file
+    from meshcol.io.inputs import is_whole_scene
     from meshcol.io.scene import iter_inputs, load_inputs, unique_name
 
     kind, decompose_options = options.collider, options.decompose_options
-    whole = len(inputs) == 1 and (
-        is_robot_file(inputs[0])
-        or os.path.splitext(os.fspath(inputs[0]))[1].lower() in MANIFEST_EXTENSIONS
-    )
+    whole = is_whole_scene(inputs)
     scene: Scene | None = None
     if whole:  # a manifest or robot is read here; its decompositions go out per mesh file
         scene = load_inputs(inputs)

@@ -15,7 +15,7 @@ import numpy as np
 
 from meshcol.analysis.check_policy import FAIL_ON, CheckOptions
 from meshcol.analysis.pairs import SEVERITY, PairTable, PlacedColliders
-from meshcol.analysis.paths import display_path, display_paths
+from meshcol.io.paths import display_path, display_paths
 from meshcol.io.report import vector_columns
 from meshcol.types import Scene
 from meshcol.vocabulary import PAIR_STATUSES
@@ -259,7 +259,7 @@ def check_report(
     colliders = placed.colliders
     names = [body.name for body in colliders.bodies]
     table = table.take(_report_order(table, names))
-    files = display_paths([body.source for body in colliders.bodies])
+    files = display_paths([body.source for body in colliders.bodies], posix=True)
     findings = _findings(colliders, options, scene.units, fail_rules)
     return CheckReport(
         _body_rows(placed, files),
@@ -417,11 +417,11 @@ def _settings(
         "fail_on": options.fail_on,
         "fail_on_rules": list(fail_rules),
         "ignore": list(options.ignore),
-        "baseline": display_path(options.baseline_source),
+        "baseline": display_path(options.baseline_source, posix=True),
         "excluded_pairs": [
             {"body_a": a, "body_b": b, "reason": reason} for a, b, reason in scene.excluded_pairs
         ],
-        "inputs": [display_path(scene.source)]
+        "inputs": [display_path(scene.source, posix=True)]
         if scene.source
         else sorted({file or "" for file, body in zip(files, bodies) if body.source}),
     }

@@ -49,8 +49,8 @@ import numpy as np
 
 from meshcol.analysis.colliders import build_colliders
 from meshcol.analysis.pairs import NO_ANSWER, PartPairIndex, broad_phase_batch
-from meshcol.analysis.paths import display_path
 from meshcol.errors import SceneError
+from meshcol.io.paths import display_path
 from meshcol.vocabulary import MATRIX_COLLIDERS
 
 __all__ = [
@@ -252,8 +252,9 @@ class _RobotLinks:
 
 def _robot_links(source: str, options: MatrixOptions, report: Callable[[str], None]) -> _RobotLinks:
     """Load the robot and build its links' colliders (hulls, or the decomposition)."""
+    from meshcol.io.inputs import is_robot_file
     from meshcol.io.kinematics import adjacent_links
-    from meshcol.io.robot import current_robot_options, is_robot_file, load_robot_model
+    from meshcol.io.robot import current_robot_options, load_robot_model
 
     if os.path.isfile(source) and not is_robot_file(source):
         raise SceneError(
@@ -574,7 +575,7 @@ def _matrix_report(
         "padding": options.padding,
         "always_fraction": options.always_fraction,
         "threads": options.threads,
-        "inputs": [display_path(links.source)],
+        "inputs": [display_path(links.source, posix=True)],
     }
     robot = links.kinematics.name or Path(links.source).stem
     return CollisionMatrixReport(robot, pairs, joints, summary, settings, _warnings(links))
