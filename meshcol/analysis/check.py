@@ -169,6 +169,7 @@ def check(
     opts = CheckOptions.from_keywords(**options)
     if executor != "ray" and ray_address is not None:
         raise ValueError("ray_address needs executor 'ray'")
+    opts.validate()
     started = time.perf_counter()
     run = {"jobs": jobs, "timeout": timeout, "executor": executor, "address": ray_address}
     scene, decompose = _load(paths, opts, progress, **run)

@@ -125,16 +125,15 @@ class CheckOptions:
     @classmethod
     def from_keywords(cls, **options: Any) -> CheckOptions:
         """Options as :func:`meshcol.analysis.check.check` takes them: ``baseline`` a path
-        (read here) or a report dict, ``ignore`` any sequence; validated."""
+        (read here) or a report dict, ``ignore`` any sequence. Not validated here
+        (:meth:`validate`): ``check`` validates them after its executor arguments."""
         baseline = options.pop("baseline", None)
         if isinstance(baseline, (str, os.PathLike)):
             options["baseline_source"] = os.fspath(baseline)
             baseline = load_baseline(os.fspath(baseline))
         if "ignore" in options:
             options["ignore"] = tuple(options["ignore"])
-        made = cls(baseline=baseline, **options)
-        made.validate()
-        return made
+        return cls(baseline=baseline, **options)
 
     def validate(self) -> None:
         if self.collider not in COLLIDER_KINDS:
