@@ -12,7 +12,8 @@ from click.testing import CliRunner
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from meshcol.analysis.check import CSV_COLUMNS, CheckOptions, check, check_scene
+from meshcol.analysis.check import CheckOptions, check, check_scene
+from meshcol.analysis.check_report import CSV_COLUMNS
 from meshcol.cli import main
 from meshcol.io.scene import load_inputs
 

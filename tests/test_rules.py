@@ -14,7 +14,8 @@ import pytest
 import trimesh
 from click.testing import CliRunner
 
-from meshcol.analysis.check import PAIR_RULES, check
+from meshcol.analysis.check import check
+from meshcol.analysis.check_policy import PAIR_RULES
 from meshcol.analysis.health import HEALTH_IDS
 from meshcol.analysis.inspect import PhysicsOptions, inspect
 from meshcol.analysis.rules import (

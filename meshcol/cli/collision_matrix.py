@@ -6,7 +6,7 @@ import contextlib
 
 import click
 
-from meshcol.analysis.collision_matrix import MATRIX_CLASSES, MATRIX_COLLIDERS
+from meshcol.analysis.collision_matrix import MATRIX_CLASSES
 from meshcol.cli.common import (
     FiniteFloat,
     Progress,
@@ -18,6 +18,7 @@ from meshcol.cli.common import (
     threads_option,
     verdict,
 )
+from meshcol.vocabulary import MATRIX_COLLIDERS
 
 #: Rows of the summary table: the pairs that stay checked, most often colliding first.
 TABLE_ROWS = 10
@@ -119,7 +120,6 @@ def collision_matrix(
     from meshcol.analysis.collision_matrix import collision_matrix as run
     from meshcol.io.formats import formats_for, report_text
     from meshcol.io.outputs import check_outputs
-    from meshcol.io.report import atomic_path, emit
 
     if output is not None and output == report:
         raise click.BadParameter(
@@ -148,11 +148,22 @@ def collision_matrix(
     finally:
         progress.done()
 
-    # Both files or neither: each is renamed into place only once both are written.
-    files = [
-        (srdf_to, result.to_srdf()),
-        (report, report_text(result, fmt)),
-    ]
+    _write_all(
+        [
+            (srdf_to, result.to_srdf()),
+            (report, report_text(result, fmt)),
+        ]
+    )
+    for warning in result.warnings:
+        click.echo(f"meshcol: warning: {warning}", err=True)
+    click.echo(summary_table(result), err=True)
+
+
+def _write_all(files: list[tuple[str | None, str]]) -> None:
+    """Write each ``(path, text)``: both files or neither (each is renamed into place only once
+    both are written), then the ``-`` ones to stdout; None paths are skipped."""
+    from meshcol.io.report import atomic_path, emit
+
     with contextlib.ExitStack() as stack:
         for path, text in files:
             if path in (None, "-"):
@@ -162,9 +173,6 @@ def collision_matrix(
     for path, text in files:
         if path == "-":
             emit(text, None)
-    for warning in result.warnings:
-        click.echo(f"meshcol: warning: {warning}", err=True)
-    click.echo(summary_table(result), err=True)
 
 
 def summary_table(result) -> str:

@@ -6,7 +6,6 @@ import sys
 
 import click
 
-from meshcol.analysis.colliders import COLLIDER_KINDS
 from meshcol.analysis.sweep import FAIL_ON
 from meshcol.cli.common import (
     FiniteFloat,
@@ -23,6 +22,7 @@ from meshcol.cli.common import (
     write_html,
 )
 from meshcol.io.outputs import check_outputs
+from meshcol.vocabulary import COLLIDER_KINDS
 
 
 @click.command(
