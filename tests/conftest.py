@@ -30,24 +30,20 @@ FAST_DECOMPOSE = [
     "mcts_max_depth=2",
 ]
 
-# `ci` is derandomized so CI runs are repeatable; `dev` explores more.
-settings.register_profile(
-    "ci",
-    derandomize=True,
-    max_examples=150,
-    deadline=None,
-    suppress_health_check=[HealthCheck.too_slow],
-)
-settings.register_profile("dev", max_examples=400, deadline=None)
-# `fast` is the `make test-fast` lane: the same properties, fewer examples.
-settings.register_profile(
-    "fast",
-    derandomize=True,
-    max_examples=25,
-    deadline=None,
-    suppress_health_check=[HealthCheck.too_slow],
-)
-settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+# Hypothesis profiles (HYPOTHESIS_PROFILE): `nightly` runs the long example counts (150 a
+# property, or the count its @settings names), `ci` (the default, `make test`) a third of each,
+# `fast` (`make test-fast`) a sixth. All but `nightly` are derandomized (repeatable runs);
+# `nightly` and `dev` draw new examples each run. The counts are scaled at collection
+# (`_scale_examples`), so a test's own @settings(max_examples=N) is its nightly count.
+EXAMPLES = 150
+EXAMPLE_SCALE = {"nightly": 1.0, "dev": 1.0, "ci": 1 / 3, "fast": 1 / 6}
+_quiet = {"deadline": None, "suppress_health_check": [HealthCheck.too_slow]}
+settings.register_profile("nightly", max_examples=EXAMPLES, **_quiet)
+settings.register_profile("ci", derandomize=True, max_examples=EXAMPLES, **_quiet)
+settings.register_profile("dev", max_examples=EXAMPLES, deadline=None)
+settings.register_profile("fast", derandomize=True, max_examples=EXAMPLES, **_quiet)
+PROFILE = os.environ.get("HYPOTHESIS_PROFILE", "ci")
+settings.load_profile(PROFILE)
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
@@ -164,12 +160,45 @@ SLOW_TESTS = {
 }
 
 
+#: Test files that share one resource and run on one xdist worker, in order (``make test``
+#: runs ``-n 2 --dist loadgroup``): the Ray tests start Ray clusters on 127.0.0.1 (one at a
+#: time: tests/test_ray_cluster.py joins only its own).
+XDIST_GROUPS = {"test_ray.py": "ray", "test_ray_cluster.py": "ray", "test_ray_local.py": "ray"}
+
+
+@pytest.hookimpl(tryfirst=True)  # before xdist reads the groups
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     slow = pytest.mark.slow
+    scaled: set[int] = set()
     for item in items:
         fixtures = set(getattr(item, "fixturenames", ()))
         if item.originalname in SLOW_TESTS or fixtures & {"corpus", "corpus_run"}:  # type: ignore[attr-defined]
             item.add_marker(slow)
+        group = XDIST_GROUPS.get(item.path.name)
+        if group is not None:
+            item.add_marker(pytest.mark.xdist_group(group))
+        _scale_examples(item, EXAMPLE_SCALE.get(PROFILE, 1.0), scaled)
+
+
+def _scale_examples(item: pytest.Item, scale: float, scaled: set[int]) -> None:
+    """The profile's share of a property's example count (its @settings or the profile's)."""
+    if scale == 1.0:
+        return
+    test = getattr(getattr(item, "obj", None), "__func__", getattr(item, "obj", None))
+    owner = getattr(item, "cls", None)
+    if hasattr(test, "hypothesis"):  # @given: the settings Hypothesis reads when it runs
+        holder, name = test, "_hypothesis_internal_use_settings"
+    elif isinstance(getattr(owner, "settings", None), settings):  # a state machine's TestCase
+        holder, name = owner, "settings"
+    else:
+        return
+    current = getattr(holder, name, None)
+    if current is None or id(holder) in scaled:
+        return
+    scaled.add(id(holder))
+    setattr(
+        holder, name, settings(current, max_examples=max(2, round(current.max_examples * scale)))
+    )
 
 
 def pytest_terminal_summary(terminalreporter, exitstatus: int, config: pytest.Config) -> None:
