@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
+from typing import Any
 
 import pytest
 from hypothesis import HealthCheck, settings
@@ -160,13 +161,44 @@ SLOW_TESTS = {
 }
 
 
-#: Test files that share one resource and run on one xdist worker, in order (``make test``
-#: runs ``-n 2 --dist loadgroup``): the Ray tests start Ray clusters on 127.0.0.1 (one at a
-#: time: tests/test_ray_cluster.py joins only its own).
-XDIST_GROUPS = {"test_ray.py": "ray", "test_ray_cluster.py": "ray", "test_ray_local.py": "ray"}
+#: Work units of ``make test``'s two workers (``-n 2 --dist loadgroup``): each test alone,
+#: except the files named here, whose tests run on one worker, in order, as one unit. The
+#: Ray tests start Ray clusters on 127.0.0.1 (one at a time: tests/test_ray_cluster.py
+#: joins only its own); the others have a module fixture worth computing once (the whole
+#: corpus inspected and hulled; a CoACD torus).
+XDIST_GROUPS = {
+    "test_ray.py": "ray",
+    "test_ray_cluster.py": "ray",
+    "test_ray_local.py": "ray",
+    "test_cli_inspect.py": "test_cli_inspect.py",
+    "test_decompose.py": "test_decompose.py",
+}
 
 
-@pytest.hookimpl(tryfirst=True)  # before xdist reads the groups
+def pytest_configure(config: pytest.Config) -> None:
+    if config.pluginmanager.hasplugin("xdist"):
+        config.pluginmanager.register(_XdistGroups(), "meshcol-xdist-groups")
+
+
+class _XdistGroups:
+    """``--dist loadgroup`` by :data:`XDIST_GROUPS`. (xdist's own reads ``xdist_group``
+    marks through ``item._nodeid``, which pytest 9 no longer reads: its groups split.)"""
+
+    @staticmethod
+    def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
+        if config.getvalue("dist") != "loadgroup":
+            return None
+        from xdist.scheduler import LoadScopeScheduling
+
+        class Scheduling(LoadScopeScheduling):
+            def _split_scope(self, nodeid: str) -> str:
+                name = nodeid.split("::", 1)[0].rsplit("/", 1)[-1]
+                return XDIST_GROUPS.get(name, nodeid)
+
+        return Scheduling(config, log)
+
+
+@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     slow = pytest.mark.slow
     scaled: set[int] = set()
@@ -174,9 +206,6 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
         fixtures = set(getattr(item, "fixturenames", ()))
         if item.originalname in SLOW_TESTS or fixtures & {"corpus", "corpus_run"}:  # type: ignore[attr-defined]
             item.add_marker(slow)
-        group = XDIST_GROUPS.get(item.path.name)
-        if group is not None:
-            item.add_marker(pytest.mark.xdist_group(group))
         _scale_examples(item, EXAMPLE_SCALE.get(PROFILE, 1.0), scaled)
 
 

@@ -782,7 +782,9 @@ def test_signals_stop_the_run_and_leave_nothing(tmp_path, jobs, signum, to_group
             proc.wait()
     assert proc.returncode == code
     word = "interrupted" if signum == signal.SIGINT else "terminated"
-    assert (stdout, stderr) == (b"", f"meshcol: {word}\n".encode())
+    # (a loaded machine reaches the progress line's 5 s before the signal: it may precede)
+    lines = [line for line in stderr.decode().splitlines() if " elapsed)" not in line]
+    assert (stdout, lines) == (b"", [f"meshcol: {word}"])
     # Stopped within seconds, not when CoACD is done (about 12 s); the issue asks for one
     # second, which a loaded CI machine cannot promise: the figures are in the report.
     assert stopped < 8.0
