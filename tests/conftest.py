@@ -33,7 +33,7 @@ FAST_DECOMPOSE = [
 
 # Hypothesis profiles (HYPOTHESIS_PROFILE): `nightly` runs the long example counts (150 a
 # property, or the count its @settings names), `ci` (the default, `make test`) a third of each,
-# `fast` (`make test-fast`) a sixth. All but `nightly` are derandomized (repeatable runs);
+# `fast` (`make test-fast`) a sixth; those two are derandomized (repeatable runs), while
 # `nightly` and `dev` draw new examples each run. The counts are scaled at collection
 # (`_scale_examples`), so a test's own @settings(max_examples=N) is its nightly count.
 EXAMPLES = 150
@@ -41,7 +41,7 @@ EXAMPLE_SCALE = {"nightly": 1.0, "dev": 1.0, "ci": 1 / 3, "fast": 1 / 6}
 _quiet = {"deadline": None, "suppress_health_check": [HealthCheck.too_slow]}
 settings.register_profile("nightly", max_examples=EXAMPLES, **_quiet)
 settings.register_profile("ci", derandomize=True, max_examples=EXAMPLES, **_quiet)
-settings.register_profile("dev", max_examples=EXAMPLES, deadline=None)
+settings.register_profile("dev", max_examples=400, deadline=None)
 settings.register_profile("fast", derandomize=True, max_examples=EXAMPLES, **_quiet)
 PROFILE = os.environ.get("HYPOTHESIS_PROFILE", "ci")
 settings.load_profile(PROFILE)
