@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -16,6 +17,15 @@ CORPUS = SHARED / "corpus"
 ORACLES = SHARED / "oracles" / "cases.json"
 SAMPLES = REPO / "samples"
 GOLDEN = Path(__file__).resolve().parent / "golden"
+
+#: The tests mirror the package, a folder a room; the shared helpers (oracles.py,
+#: strategies.py, ...) are here. A test imports a helper or another test module (its fixtures
+#: and inputs: test_executor, test_cli_hull) by name: every folder is on sys.path, whichever
+#: one pytest collects first.
+TEST_FOLDERS = ("geometry", "io", "collision", "decomposition", "analysis", "targets", "cli")
+for _folder in (Path(__file__).resolve().parent / name for name in TEST_FOLDERS):
+    if str(_folder) not in sys.path:
+        sys.path.append(str(_folder))
 
 #: `meshcol decompose` flags that make CoACD fast enough for tests (coarse, few MCTS steps).
 FAST_DECOMPOSE = [
@@ -163,7 +173,7 @@ SLOW_TESTS = {
 
 #: Work units of ``make test``'s two workers (``-n 2 --dist loadgroup``): each test alone,
 #: except the files named here, whose tests run on one worker, in order, as one unit. The
-#: Ray tests start Ray clusters on 127.0.0.1 (one at a time: tests/test_ray_cluster.py
+#: Ray tests start Ray clusters on 127.0.0.1 (one at a time: test_ray_cluster.py
 #: joins only its own); the others have a module fixture worth computing once (the whole
 #: corpus inspected and hulled; a CoACD torus).
 XDIST_GROUPS = {

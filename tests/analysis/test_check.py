@@ -16,7 +16,7 @@ from meshcol.analysis.check import CSV_COLUMNS, CheckOptions, check, check_scene
 from meshcol.cli import main
 from meshcol.io.scene import load_inputs
 
-SCHEMA = Path(__file__).resolve().parent.parent / "meshcol" / "schemas" / "check_report.schema.json"
+SCHEMA = Path(__file__).resolve().parents[2] / "meshcol" / "schemas" / "check_report.schema.json"
 
 
 def write_manifest(

@@ -37,7 +37,7 @@ def meshes(tmp_path_factory) -> dict[str, Path]:
     return paths
 
 
-SCHEMA = Path(__file__).resolve().parent.parent / "meshcol" / "schemas"
+SCHEMA = Path(__file__).resolve().parents[2] / "meshcol" / "schemas"
 
 
 def read(path: Path) -> dict:

@@ -30,7 +30,7 @@ from meshcol.io.ci import (
 junitparser = pytest.importorskip("junitparser")
 etree = pytest.importorskip("lxml.etree")
 
-SCHEMA = Path(__file__).resolve().parent / "data" / "junit.xsd"
+SCHEMA = Path(__file__).resolve().parents[1] / "data" / "junit.xsd"
 
 
 @pytest.fixture(scope="module")
