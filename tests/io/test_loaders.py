@@ -462,7 +462,7 @@ def test_every_runtime_dependency_has_a_lower_bound_that_is_installed_or_newer()
     import sys
     from pathlib import Path
 
-    root = Path(__file__).resolve().parent.parent
+    root = Path(__file__).resolve().parents[2]
     spec = importlib.util.spec_from_file_location("lowest", root / ".ci" / "lowest_constraints.py")
     assert spec is not None and spec.loader is not None
     lowest = importlib.util.module_from_spec(spec)

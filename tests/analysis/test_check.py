@@ -17,7 +17,7 @@ from meshcol.analysis.check_report import CSV_COLUMNS
 from meshcol.cli import main
 from meshcol.io.scene import load_inputs
 
-SCHEMA = Path(__file__).resolve().parent.parent / "meshcol" / "schemas" / "check_report.schema.json"
+SCHEMA = Path(__file__).resolve().parents[2] / "meshcol" / "schemas" / "check_report.schema.json"
 
 
 def write_manifest(

@@ -308,7 +308,7 @@ def test_exact_ray_crossings_agree_with_the_winding_number(name: str, q, t) -> N
     assert a.depth == pytest.approx(b.depth, rel=1e-9, abs=1e-12)
 
 
-SAMPLES = Path(__file__).resolve().parent.parent / "samples"
+SAMPLES = Path(__file__).resolve().parents[2] / "samples"
 
 
 @pytest.mark.parametrize("offset", OFFSETS)

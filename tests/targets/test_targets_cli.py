@@ -17,7 +17,7 @@ from scipy.spatial import ConvexHull
 
 from meshcol.cli import main
 
-SCHEMAS = Path(__file__).resolve().parent.parent / "meshcol" / "schemas"
+SCHEMAS = Path(__file__).resolve().parents[2] / "meshcol" / "schemas"
 
 
 def run(*args: str):

@@ -480,12 +480,13 @@ def test_worker_pool_starts_before_its_tasks() -> None:
         ]
         assert set(pool._idle) == set(workers)  # the early workers ran the tasks
     assert not any(w.process.is_alive() for w in workers)
-    # A pool that never gets a task stops at once, even while its workers still load.
+    # A pool that never gets a task stops at once, even while its workers still load (a
+    # load of 60 s here, so that the bound tells the two apart on a loaded machine too).
     start = time.perf_counter()
-    with WorkerPool(safe_name, 2, prepare=functools.partial(prepare_engine, "coacd")) as pool:
+    with WorkerPool(safe_name, 2, prepare=functools.partial(time.sleep, 60)) as pool:
         pool.start()
         workers = list(pool._idle)
-    assert time.perf_counter() - start < 1.5
+    assert time.perf_counter() - start < 30
     assert not any(w.process.is_alive() for w in workers)
 
 
@@ -509,10 +510,10 @@ def test_worker_pool_reads_tasks_ahead_and_fails_fast() -> None:
         assert len(list(outcomes)) == 2
 
     def broken():
-        yield 5.0
+        yield 60.0
         raise MeshcolError("mesh has no faces", "bad.obj")
 
-    # One worker, busy for 5 s with the first task: the bad second "file" is read at once,
+    # One worker, busy for 60 s with the first task: the bad second "file" is read at once,
     # not when the worker is free, and close() kills the busy worker.
     start = time.perf_counter()
     with WorkerPool(time.sleep, 1) as pool:
@@ -520,7 +521,7 @@ def test_worker_pool_reads_tasks_ahead_and_fails_fast() -> None:
             list(pool.run(broken()))
         workers = list(pool._busy)
         assert len(workers) == 1
-    assert time.perf_counter() - start < 2.5
+    assert time.perf_counter() - start < 30
     assert not any(w.process.is_alive() for w in workers)
 
 
@@ -782,11 +783,13 @@ def test_signals_stop_the_run_and_leave_nothing(tmp_path, jobs, signum, to_group
             proc.wait()
     assert proc.returncode == code
     word = "interrupted" if signum == signal.SIGINT else "terminated"
-    assert (stdout, stderr) == (b"", f"meshcol: {word}\n".encode())
+    # (a loaded machine reaches the progress line's 5 s before the signal: it may precede)
+    lines = [line for line in stderr.decode().splitlines() if " elapsed)" not in line]
+    assert (stdout, lines) == (b"", [f"meshcol: {word}"])
     # Stopped within seconds, not when CoACD is done (about 12 s); the issue asks for one
     # second, which a loaded CI machine cannot promise: the figures are in the report.
-    assert stopped < 5.0
-    deadline = time.monotonic() + 5
+    assert stopped < 8.0
+    deadline = time.monotonic() + 30  # a bound: on a loaded machine the workers take seconds
     while _session_processes(proc.pid) and time.monotonic() < deadline:
         time.sleep(0.05)
     assert _session_processes(proc.pid) == []

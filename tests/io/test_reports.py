@@ -23,8 +23,8 @@ from meshcol.io.report import ENVELOPE_KEYS, SCHEMA_VERSION, envelope
 #: profiles: data, not a run, so no envelope).
 REPORT_COMMANDS = sorted(set(COMMANDS) - {"targets", "rules"})  # listings, not runs
 
-SCHEMAS = Path(__file__).resolve().parent.parent / "meshcol" / "schemas"
-GOLDEN = Path(__file__).resolve().parent / "golden"
+SCHEMAS = Path(__file__).resolve().parents[2] / "meshcol" / "schemas"
+GOLDEN = Path(__file__).resolve().parents[1] / "golden"
 GOLDEN_FILES = sorted(GOLDEN.glob("*.json"))
 FAST = FAST_DECOMPOSE
 

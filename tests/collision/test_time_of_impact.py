@@ -150,7 +150,7 @@ def _toi_cases():
     import json
     from pathlib import Path
 
-    path = Path(__file__).resolve().parents[1].parent / "shared" / "oracles" / "cases.json"
+    path = Path(__file__).resolve().parents[2].parent / "shared" / "oracles" / "cases.json"
     if not path.is_file():
         return [pytest.param(None, marks=pytest.mark.skip(reason="oracle cases absent"))]
     cases = [c for c in json.loads(path.read_text())["cases"] if c["query"] == "time_of_impact"]

@@ -656,7 +656,7 @@ def _native_files(root: Path) -> list[Path]:
 
 def test_native_readers_give_trimeshs_geometry_on_the_corpus_and_samples(corpus):
     compared = 0
-    for path in _native_files(corpus) + _native_files(Path(__file__).parent.parent / "samples"):
+    for path in _native_files(corpus) + _native_files(Path(__file__).parents[2] / "samples"):
         try:
             expected = _trimesh_geometry(path)
         except Exception:  # noqa: BLE001 - trimesh cannot read it; meshcol's error tests cover it

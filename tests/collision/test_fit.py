@@ -248,7 +248,7 @@ def test_fit_command_report_and_unreal_parts(samples: Path, tmp_path: Path) -> N
     )
     assert result.exit_code == 0, result.output
     data = json.loads(report.read_text())
-    schema_path = Path(__file__).resolve().parent.parent / "meshcol/schemas/fit_report.schema.json"
+    schema_path = Path(__file__).resolve().parents[2] / "meshcol/schemas/fit_report.schema.json"
     jsonschema.Draft202012Validator(json.loads(schema_path.read_text())).validate(data)
     shapes = {b["name"]: b["shape"] for b in data["bodies"]}
     assert shapes == {"ball": "sphere", "crate": "box", "ramp": "hull"}

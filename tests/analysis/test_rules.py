@@ -31,7 +31,7 @@ from meshcol.collision import limits
 from meshcol.collision.limits import measure_parts
 from meshcol.io.targets import load_target
 
-PACKAGE = Path(__file__).resolve().parent.parent / "meshcol"
+PACKAGE = Path(__file__).resolve().parents[2] / "meshcol"
 
 
 def run(*args: object):

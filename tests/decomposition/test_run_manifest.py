@@ -37,7 +37,7 @@ def meshes(tmp_path_factory) -> dict[str, Path]:
     return paths
 
 
-SCHEMA = Path(__file__).resolve().parent.parent / "meshcol" / "schemas"
+SCHEMA = Path(__file__).resolve().parents[2] / "meshcol" / "schemas"
 
 
 def read(path: Path) -> dict:
@@ -136,7 +136,7 @@ def test_manifest_rewrites_are_throttled_but_never_lost(tmp_path) -> None:
     assert states(path) == {"a": "done", "b": "pending", "c": "pending"}
     m.finished("b", "failed", "ValueError: bad")
     assert states(path)["b"] == "pending"  # within the interval: the timer writes it
-    deadline = time.monotonic() + 5
+    deadline = time.monotonic() + 30  # a bound, not a speed
     while states(path)["b"] != "failed" and time.monotonic() < deadline:
         time.sleep(0.05)
     assert states(path)["b"] == "failed"
@@ -164,7 +164,7 @@ def test_resume_after_sigint_skips_the_files_that_finished(meshes, corpus, tmp_p
         start_new_session=True,
     )
     try:
-        deadline = time.monotonic() + 60
+        deadline = time.monotonic() + 240  # three CoACD runs, on a loaded machine too
         while time.monotonic() < deadline:
             if manifest.exists() and read(manifest)["counts"]["done"] == 3:
                 break

@@ -175,7 +175,7 @@ def test_fit_urdf_primitives_enclose_the_input_meshes(urdf: Path, tmp_path: Path
         primitives = urdf_output_primitives(out / "small.urdf", cfg)
         assert_enclosed(meshes, primitives, new=3)  # base shell, the arm's two objects, finger
     data = json.loads(report.read_text())
-    schema = Path(__file__).resolve().parent.parent / "meshcol/schemas/fit_report.schema.json"
+    schema = Path(__file__).resolve().parents[2] / "meshcol/schemas/fit_report.schema.json"
     jsonschema.Draft202012Validator(json.loads(schema.read_text())).validate(data)
     assert data["settings"]["frame"] == "link"
     assert data["settings"]["description"] == str(out / "small.urdf")

@@ -26,7 +26,7 @@ from meshcol.io.targets import load_target
 yourdfpy = pytest.importorskip("yourdfpy")
 mujoco = pytest.importorskip("mujoco")
 
-SCHEMAS = Path(__file__).resolve().parent.parent / "meshcol" / "schemas"
+SCHEMAS = Path(__file__).resolve().parents[2] / "meshcol" / "schemas"
 #: Coplanar within float32 rounding (MuJoCo compiles vertices to float32).
 FLOAT32_PLANES = 1e-5
 JOINTS = {"j1": 0.4, "j3": 0.01}

@@ -83,7 +83,7 @@ def test_ctrl_c_stops_the_local_ray_it_started(corpus, tmp_path, when) -> None:
     assert proc.returncode == 130, stderr
     assert stderr.decode().strip().splitlines()[-1] == "meshcol: interrupted"
     assert b"Traceback" not in stderr
-    deadline = time.monotonic() + 10
+    deadline = time.monotonic() + 30  # a bound, not a speed
     while any(_alive(p) for p in ray_processes) and time.monotonic() < deadline:
         time.sleep(0.2)
     assert [p for p in ray_processes if _alive(p)] == []
