@@ -10,7 +10,7 @@ import pytest
 from meshcol.io.inputs import input_kind, is_manifest, is_robot_file, is_whole_scene, root_tag
 from meshcol.vocabulary import INPUT_KINDS
 
-PACKAGE = Path(__file__).resolve().parent.parent / "meshcol"
+PACKAGE = Path(__file__).resolve().parents[2] / "meshcol"
 
 
 def write(folder: Path, name: str, text: str) -> Path:

@@ -24,7 +24,7 @@ from meshcol.io.mesh_write import obj_text
 from meshcol.io.scene import load_inputs
 from meshcol.vocabulary import COLLIDER_KINDS
 
-SAMPLES = os.path.join(os.path.dirname(__file__), "..", "samples")
+SAMPLES = os.path.join(os.path.dirname(__file__), "..", "..", "samples")
 
 
 def _scene(tmp_path, objects: dict[str, trimesh.Trimesh]):
