@@ -66,7 +66,6 @@ def test_no_python_file_is_over_800_lines() -> None:
     assert not over, f"files over {MAX_FILE_LINES} lines: {over}"
 
 
-@IN_PROGRESS
 def test_at_most_ten_functions_are_over_80_lines() -> None:
     rows = long_functions()
     assert len(rows) <= MAX_LONG_FUNCTIONS, "\n".join(rows)

@@ -23,7 +23,7 @@ from meshcol.io.targets import (
 PROFILES = tuple(target_names())
 #: The engines issue 8 asked for (each must keep its profile).
 ISSUE_ENGINES = ("physx", "physx-gpu", "unity", "unreal", "godot", "mujoco", "bullet", "isaac")
-DOCS = Path(__file__).resolve().parent.parent / "docs" / "targets.md"
+DOCS = Path(__file__).resolve().parents[2] / "docs" / "targets.md"
 
 
 def run(*args: str):
