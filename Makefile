@@ -4,9 +4,12 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 PIP    := $(BIN)/python -m pip --disable-pip-version-check
-BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4"
+# cmake and ninja: the system's when it has them, else the PyPI packages (into the venv), for
+# the extension's build and the C++ tests alike.
+BUILD_TOOLS := $(if $(shell command -v cmake),,"cmake>=3.18") $(if $(shell command -v ninja),,ninja)
+BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4" $(BUILD_TOOLS)
 
-.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs
+.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs test-cpp
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -46,8 +49,17 @@ lint: install-test
 	$(BIN)/ruff format --check meshcol tests benchmarks fuzz
 	$(BIN)/mypy
 
+# The C++ unit tests of the core (cpp/tests, their own runner check.hpp): a CMake build of its
+# own in build/cpp-tests, no Python in it, with the venv's cmake/ninja when the system has none.
+CPP_TESTS := build/cpp-tests
+test-cpp: install-test
+	PATH="$(CURDIR)/$(BIN):$$PATH" cmake -S . -B $(CPP_TESTS) -G Ninja -DCMAKE_BUILD_TYPE=Release \
+		-DMESHCOL_BUILD_EXTENSION=OFF -DMESHCOL_BUILD_TESTS=ON > /dev/null
+	PATH="$(CURDIR)/$(BIN):$$PATH" cmake --build $(CPP_TESTS)
+	$(CPP_TESTS)/meshcol_cpp_tests
+
 # pytest exits 5 when it collected nothing: that fails here like any other error.
-test: lint
+test: lint test-cpp
 	@test -d ../shared/corpus || echo "WARNING: ../shared/corpus is absent: every corpus test will SKIP (the count is printed at the end)"
 	$(BIN)/pytest -q -p no:cacheprovider
 

@@ -78,3 +78,32 @@ def test_defaults_are_exposed_under_their_new_names() -> None:
 def test_hull_constants_mirror_the_core_defaults() -> None:
     assert defaults.flat_relative_tolerance == FLAT_RELATIVE_TOLERANCE
     assert defaults.hull_max_abs_coordinate == MAX_ABS_COORDINATE
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-300, 1e-310, 5e-322])
+def test_exact_crossings_hold_at_denormal_coordinates(scale: float) -> None:
+    # Two triangles crossing through each other, and a pair side by side, scaled together:
+    # the verdict is scale-free. Below 2^-1022 the exact predicates' rescaling overflowed (a
+    # factor 2^k past 2^1023) and returned one sign whatever the side.
+    from meshcol.collision.self_intersection import face_pairs_cross
+
+    vertices = (
+        np.array(
+            [
+                [0, 0, 0],
+                [4, 0, 0],
+                [0, 4, 0],
+                [1, 1, -1],
+                [1, 1, 1],
+                [3, 3, 1],
+                [8, 0, 0],
+                [9, 0, 0],
+                [8, 1, 0],
+            ],
+            dtype=np.float64,
+        )
+        * scale
+    )
+    faces = np.array([[0, 1, 2], [3, 4, 5], [6, 7, 8]], dtype=np.int64)
+    crossing = face_pairs_cross(vertices, faces, np.array([[0, 1], [0, 2], [1, 2]]))
+    assert crossing.tolist() == [True, False, False]

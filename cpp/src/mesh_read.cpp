@@ -294,6 +294,10 @@ MeshFile parse_stl(const char* data, size_t size) {
             name.remove_prefix(5);
             file.objects.push_back(MeshObject{std::string(trim(name)), {}, {}});
             object = &file.objects.back();
+            // A loop left open by the previous solid ends here: its corners stay behind with
+            // that solid (unused), so an `endloop` in this one never counts them as its own
+            // (its face would index before this solid's first vertex).
+            loop_corners = 0;
         } else if (key == "vertex") {
             if (object == nullptr) {
                 file.error = at_line(line_number, "vertex outside a solid");
