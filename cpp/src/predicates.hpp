@@ -11,7 +11,8 @@
 // so the error terms do not underflow. Only the sign of a returned value is meaningful.
 //
 // Private to the core (header-only); the one copy, shared by the triangle tests of
-// triangle_distance.cpp, mesh_query.cpp and triangle_intersect.cpp (inspect's crossings).
+// triangle_distance.cpp, the mesh queries (mesh_*.cpp) and triangle_intersect.cpp (inspect's
+// crossings).
 //
 // Sign conventions: orient2d(a, b, c) > 0 when a, b, c turn counterclockwise; orient3d is
 // Shewchuk's, det[a - d, b - d, c - d], > 0 when d lies on the side that (b - a) x (c - a)
