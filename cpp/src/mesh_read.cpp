@@ -373,7 +373,8 @@ void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& fa
     const double limit = 4.6e18;
     auto quantise = [&](double x) -> std::int64_t {
         const double r = std::nearbyint(x * scale - 1e-6);
-        if (std::fabs(r) < limit) return static_cast<std::int64_t>(r) << 1;
+        // Times 2, not a shift: shifting a negative value left is undefined before C++20.
+        if (std::fabs(r) < limit) return static_cast<std::int64_t>(r) * 2;
         std::int64_t bits;
         std::memcpy(&bits, &x, sizeof bits);
         return bits | 1;

@@ -145,4 +145,11 @@ TEST_CASE("mesh read: merge_vertices rounds to the digits and renumbers") {
     merge_vertices(vertices, faces, 8);
     CHECK_EQ(vertices.size(), size_t{9});
     CHECK((faces == std::vector<std::int64_t>{0, 1, 2, 0, 2, 1}));
+    // negative coordinates (their keys were a left shift of a negative value: undefined),
+    // and one too large to round, which merges only with itself
+    std::vector<double> signed_vertices = {-0.85, -1, -2, 1e300, 0, 0, -0.850000001, -1, -2, 1e300, 0, 0};
+    std::vector<std::int64_t> signed_faces = {0, 1, 2, 2, 3, 1};
+    merge_vertices(signed_vertices, signed_faces, 8);
+    CHECK_EQ(signed_vertices.size(), size_t{6});
+    CHECK((signed_faces == std::vector<std::int64_t>{0, 1, 0, 0, 1, 1}));
 }
