@@ -9,7 +9,7 @@ from numpy.typing import NDArray
 
 
 class defaults:
-    """Defaults and caps of the core (cpp/include/meshcol/defaults.hpp)."""
+    """Defaults and caps of the core (cpp/include/meshcol/defaults.inc)."""
 
     rigid_tolerance: float = 1e-06
 
@@ -102,6 +102,8 @@ class defaults:
     hull_max_rerun_work: float = 50000000.0
 
     hull_min_shapes_per_thread: int = 16
+
+    hull_min_filter_points_per_thread: int = 131072
 
     fit_containment_margin: float = 1e-09
 
