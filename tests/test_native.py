@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import enum
+import re
 
 import numpy as np
 import pytest
@@ -107,3 +108,21 @@ def test_exact_crossings_hold_at_denormal_coordinates(scale: float) -> None:
     faces = np.array([[0, 1, 2], [3, 4, 5], [6, 7, 8]], dtype=np.int64)
     crossing = face_pairs_cross(vertices, faces, np.array([[0, 1], [0, 2], [1, 2]]))
     assert crossing.tolist() == [True, False, False]
+
+
+def test_every_default_of_the_one_list_reaches_python() -> None:
+    # cpp/include/meshcol/defaults.inc is the one list: each entry is a C++ constexpr and an
+    # attribute of meshcol._core.defaults with the same value.
+    from pathlib import Path
+
+    import meshcol
+
+    listing = Path(meshcol.__file__).resolve().parent.parent / "cpp/include/meshcol/defaults.inc"
+    if not listing.is_file():
+        pytest.skip("the C++ sources are not beside the package (an installed wheel)")
+    entries = re.findall(r"^MESHCOL_DEFAULT\(([^,]+), (\w+), (.+)\)$", listing.read_text(), re.M)
+    assert len(entries) > 50
+    for type_name, name, value in entries:
+        exposed = getattr(defaults, name)
+        expected = int(value, 0) if "int" in type_name or "long" in type_name else float(value)
+        assert exposed == expected and type(exposed) is type(expected), name
