@@ -86,7 +86,8 @@ test-lowest:
 # AddressSanitizer and UndefinedBehaviorSanitizer (MESHCOL_SANITIZE) in build/sanitize and its
 # own .venv-sanitize, then the C++ tests, the fuzz seeds and regressions (and 500 seeded
 # mutations per target) and the fast lane, with the sanitized extension loaded into Python
-# (the runtimes preloaded; leak checks off for Python itself). Any report stops the run.
+# (the runtimes preloaded; leak checks off for Python itself). Any report stops the run;
+# pytest captures sys.stdout/err only, so a report (written to fd 2) reaches the terminal.
 SANITIZE_VENV := .venv-sanitize
 SANITIZE_BIN := $(SANITIZE_VENV)/bin
 SANITIZE_BUILD := build/sanitize
@@ -108,7 +109,7 @@ test-sanitize:
 			$(SANITIZE_BIN)/python fuzz/run.py $$target --replay --mutations 500 || exit 1; \
 	done
 	LD_PRELOAD="$(SANITIZE_RUNTIMES)" $(SANITIZE_OPTIONS) HYPOTHESIS_PROFILE=fast \
-		$(SANITIZE_BIN)/pytest -q -p no:cacheprovider -m "not slow"
+		$(SANITIZE_BIN)/pytest -q -p no:cacheprovider -m "not slow" --capture=sys
 
 # Fuzz every target (fuzz/targets.py) for FUZZ_SECONDS each; crashes land in fuzz/crashes/.
 FUZZ_SECONDS ?= 60
