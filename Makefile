@@ -82,6 +82,7 @@ test-lowest:
 	.venv-lowest/bin/python -m pip --disable-pip-version-check install -q --no-build-isolation \
 		-c .venv-lowest/constraints.txt -e ".[test]"
 	HYPOTHESIS_PROFILE=fast .venv-lowest/bin/pytest -q -p no:cacheprovider -m "not slow"
+
 # The sanitizer lane, to run before landing a change to the core: everything built with
 # AddressSanitizer and UndefinedBehaviorSanitizer (MESHCOL_SANITIZE) in build/sanitize and its
 # own .venv-sanitize, then the C++ tests, the fuzz seeds and regressions (and 500 seeded
