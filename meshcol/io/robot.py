@@ -38,7 +38,6 @@ import dataclasses
 import io
 import math
 import os
-import re
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -47,6 +46,7 @@ from typing import Any
 import numpy as np
 
 from meshcol.errors import InputFileError, MeshcolError, MissingDependencyError, SceneError
+from meshcol.io.inputs import input_kind, root_tag
 from meshcol.io.kinematics import (
     Kinematics,
     MjcfKinematics,
@@ -191,12 +191,7 @@ def _finite(value: float, name: str, source: str) -> float:
 def is_robot_file(path: str | os.PathLike[str]) -> bool:
     """True for a ``.urdf`` or ``.mjcf`` file, or an ``.xml`` file whose root is ``<mujoco>``
     (or ``<robot>``)."""
-    suffix = Path(os.fspath(path)).suffix.lower()
-    if suffix in (".urdf", ".mjcf"):
-        return True
-    if suffix == ".xml":
-        return _root_tag(os.fspath(path)) in ("mujoco", "robot")
-    return False
+    return input_kind(path) == "robot"
 
 
 def description_kind(path: str | os.PathLike[str]) -> str:
@@ -210,14 +205,7 @@ def description_kind(path: str | os.PathLike[str]) -> str:
 
 def _root_tag(path: str) -> str | None:
     """The root element's name, from the file's first few kilobytes (None if unreadable)."""
-    try:
-        with open(path, "rb") as f:
-            head = f.read(65536).decode("utf-8", errors="replace")
-    except OSError:
-        return None
-    head = re.sub(r"<\?.*?\?>|<!--.*?-->|<!DOCTYPE[^>]*>", "", head, flags=re.S)
-    match = re.search(r"<\s*([A-Za-z_][\w.-]*)", head)
-    return match.group(1) if match else None
+    return root_tag(path)
 
 
 @dataclass(frozen=True, eq=False)
