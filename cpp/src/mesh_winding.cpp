@@ -182,6 +182,29 @@ WindingEstimate refine_winding_number(const MeshBvh& mesh, const Vec3& point, En
     return out;
 }
 
+// Whether `p` (mesh's local frame) lies exactly on the surface: the exact test of
+// triangles_intersect against the triangles of the boxes holding p (rounded outwards, so the
+// box of a triangle holding p holds p).
+bool on_surface(const MeshBvh& mesh, const Vec3& p) {
+    const std::vector<BvhNode>& nodes = mesh.nodes();
+    const Vec3 point[3] = {p, p, p};
+    std::vector<std::int32_t> stack{0};
+    while (!stack.empty()) {
+        const std::int32_t id = stack.back();
+        stack.pop_back();
+        const BvhNode& node = nodes[static_cast<size_t>(id)];
+        if (!inside_box(node, p)) continue;
+        if (!node.is_leaf()) {
+            stack.push_back(node.index);
+            stack.push_back(id + 1);
+            continue;
+        }
+        for (std::int32_t i = node.index; i < node.index + node.count; ++i)
+            if (triangles_intersect(mesh.triangle(i), point, nullptr)) return true;
+    }
+    return false;
+}
+
 }  // namespace
 
 namespace mesh_detail {
@@ -190,8 +213,11 @@ namespace mesh_detail {
 // mesh the winding number is the signed crossing count of a segment from p to beyond the
 // mesh's box (BVH, exact signs, a few fixed directions in case one passes through an edge or
 // a vertex), and a point exactly on the surface counts as in; otherwise, and if every
-// direction is degenerate, the generalized winding number (which is 1/2 on a smooth part of
-// the surface, so counts it in too).
+// direction is degenerate, the generalized winding number, with a point exactly on the
+// surface counted in first as for a closed mesh (the sum is 1/2 on a smooth part of the
+// surface, but the solid angles of two coplanar triangles seen from a point of their shared
+// edge cancel to 0, so the two tests disagreed there and the depth of one pair depended on
+// whether the other mesh was closed).
 bool inside_mesh(const MeshBvh& mesh, const Vec3& p, long long* work) {
     if (mesh.closed()) {
         static constexpr Vec3 kDirections[] = {
@@ -212,6 +238,7 @@ bool inside_mesh(const MeshBvh& mesh, const Vec3& p, long long* work) {
             if (signed_crossings(mesh, p, p + direction * reach, &count)) return count != 0;
         }
     }
+    if (on_surface(mesh, p)) return true;
     return winding_number_inside(mesh, p, work);
 }
 
