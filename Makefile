@@ -4,9 +4,12 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 PIP    := $(BIN)/python -m pip --disable-pip-version-check
-BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4"
+# cmake and ninja: the system's when it has them, else the PyPI packages (into the venv), for
+# the extension's build and the C++ tests alike.
+BUILD_TOOLS := $(if $(shell command -v cmake),,"cmake>=3.18") $(if $(shell command -v ninja),,ninja)
+BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4" $(BUILD_TOOLS)
 
-.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs
+.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs test-cpp test-sanitize
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -46,10 +49,19 @@ lint: install-test
 	$(BIN)/ruff format --check meshcol tests benchmarks fuzz
 	$(BIN)/mypy
 
+# The C++ unit tests of the core (cpp/tests, their own runner check.hpp): a CMake build of its
+# own in build/cpp-tests, no Python in it, with the venv's cmake/ninja when the system has none.
+CPP_TESTS := build/cpp-tests
+test-cpp: install-test
+	PATH="$(CURDIR)/$(BIN):$$PATH" cmake -S . -B $(CPP_TESTS) -G Ninja -DCMAKE_BUILD_TYPE=Release \
+		-DMESHCOL_BUILD_EXTENSION=OFF -DMESHCOL_BUILD_TESTS=ON > /dev/null
+	PATH="$(CURDIR)/$(BIN):$$PATH" cmake --build $(CPP_TESTS)
+	$(CPP_TESTS)/meshcol_cpp_tests
+
 # pytest exits 5 when it collected nothing: that fails here like any other error. Both lanes
 # run on two workers (pytest-xdist; tests/conftest.py groups what cannot share a machine).
 XDIST := -n 2 --dist loadgroup
-test: lint
+test: lint test-cpp
 	@test -d ../shared/corpus || echo "WARNING: ../shared/corpus is absent: every corpus test will SKIP (the count is printed at the end)"
 	$(BIN)/pytest -q -p no:cacheprovider $(XDIST)
 
@@ -72,6 +84,36 @@ test-lowest:
 	.venv-lowest/bin/python -m pip --disable-pip-version-check install -q --no-build-isolation \
 		-c .venv-lowest/constraints.txt -e ".[test]"
 	HYPOTHESIS_PROFILE=fast .venv-lowest/bin/pytest -q -p no:cacheprovider -m "not slow"
+
+# The sanitizer lane, to run before landing a change to the core: everything built with
+# AddressSanitizer and UndefinedBehaviorSanitizer (MESHCOL_SANITIZE) in build/sanitize and its
+# own .venv-sanitize, then the C++ tests, the fuzz seeds and regressions (and 500 seeded
+# mutations per target) and the fast lane, with the sanitized extension loaded into Python
+# (the runtimes preloaded; leak checks off for Python itself). Any report stops the run;
+# pytest captures sys.stdout/err only, so a report (written to fd 2) reaches the terminal.
+SANITIZE_VENV := .venv-sanitize
+SANITIZE_BIN := $(SANITIZE_VENV)/bin
+SANITIZE_BUILD := build/sanitize
+SANITIZE_RUNTIMES = $(shell $(CXX) -print-file-name=libasan.so) $(shell $(CXX) -print-file-name=libubsan.so)
+SANITIZE_OPTIONS := ASAN_OPTIONS=detect_leaks=0 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
+test-sanitize:
+	test -x $(SANITIZE_BIN)/python || $(PYTHON) -m venv $(SANITIZE_VENV)
+	$(SANITIZE_BIN)/python -m pip --disable-pip-version-check install -q $(BUILD_DEPS)
+	$(SANITIZE_BIN)/python -m pip --disable-pip-version-check install -q --no-build-isolation \
+		-C build-dir=$(SANITIZE_BUILD)/{wheel_tag} -C cmake.build-type=RelWithDebInfo \
+		-C cmake.define.MESHCOL_SANITIZE=ON -e ".[test]"
+	PATH="$(CURDIR)/$(SANITIZE_BIN):$$PATH" cmake -S . -B $(SANITIZE_BUILD)/cpp-tests -G Ninja \
+		-DCMAKE_BUILD_TYPE=RelWithDebInfo -DMESHCOL_SANITIZE=ON -DMESHCOL_BUILD_EXTENSION=OFF \
+		-DMESHCOL_BUILD_TESTS=ON > /dev/null
+	PATH="$(CURDIR)/$(SANITIZE_BIN):$$PATH" cmake --build $(SANITIZE_BUILD)/cpp-tests
+	UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 $(SANITIZE_BUILD)/cpp-tests/meshcol_cpp_tests
+	@for target in readers convex meshes; do \
+		LD_PRELOAD="$(SANITIZE_RUNTIMES)" $(SANITIZE_OPTIONS) \
+			$(SANITIZE_BIN)/python fuzz/run.py $$target --replay --mutations 500 || exit 1; \
+	done
+	LD_PRELOAD="$(SANITIZE_RUNTIMES)" $(SANITIZE_OPTIONS) HYPOTHESIS_PROFILE=fast \
+		$(SANITIZE_BIN)/pytest -q -p no:cacheprovider -m "not slow" --capture=sys
+
 # Fuzz every target (fuzz/targets.py) for FUZZ_SECONDS each; crashes land in fuzz/crashes/.
 FUZZ_SECONDS ?= 60
 fuzz: install-test
@@ -91,4 +133,4 @@ bench: install-test
 	$(BIN)/python benchmarks/bench_inspect.py --rounds 1
 
 clean:
-	rm -rf build dist $(VENV) .venv-lowest demo-out *.egg-info
+	rm -rf build dist $(VENV) .venv-lowest $(SANITIZE_VENV) demo-out *.egg-info

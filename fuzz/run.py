@@ -3,6 +3,13 @@
 Usage::
 
     python fuzz/run.py TARGET [--seconds S | --runs N] [--artifacts DIR] [--seed K]
+    python fuzz/run.py TARGET --replay
+
+``--replay`` runs the target once on every seed and every regression input of
+``fuzz/regressions/TARGET/``, then on ``--mutations M`` (default 0) seeded mutations of them
+(bytes flipped, dropped, repeated, special float64 values written in), without atheris:
+``make test-sanitize`` runs the sanitized core on them this way. It prints
+``fuzz TARGET: replayed N inputs``.
 
 ``TARGET`` is ``readers``, ``convex`` or ``meshes``. The seeds are built afresh in a temporary
 folder: for ``readers`` every sample mesh and manifest in ``samples/`` and every corpus file
@@ -24,6 +31,7 @@ import struct
 import sys
 import tempfile
 from pathlib import Path
+from random import Random
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
@@ -76,15 +84,61 @@ def _numeric_seeds(folder: Path) -> int:
     return len(seeds)
 
 
+_SPECIAL = [float("nan"), float("inf"), -float("inf"), 0.0, -0.0, 5e-324, 1e-310, 1e308, 1e155]
+
+
+def _mutate(data: bytes, random: Random) -> bytes:
+    """A few random edits of `data` (the first byte, a reader's format, is kept)."""
+    out = bytearray(data)
+    for _ in range(random.randint(1, 4)):
+        at = random.randrange(1, len(out)) if len(out) > 1 else 1
+        edit = random.randrange(5)
+        if edit == 0 and len(out) > 1:
+            out[at] = random.randrange(256)
+        elif edit == 1 and len(out) > 1:
+            del out[at : at + random.randint(1, 64)]
+        elif edit == 2:
+            chunk = out[at : at + random.randint(1, 64)]
+            out[at:at] = chunk * random.randint(1, 4)
+        elif edit == 3:
+            out[at:at] = b"\xff" + struct.pack("<d", random.choice(_SPECIAL))
+        else:
+            out[at:at] = bytes(random.randrange(256) for _ in range(random.randint(1, 8)))
+    return bytes(out)
+
+
+def _replay(target: str, mutations: int) -> int:
+    """Runs `target` on each seed and regression input, then on seeded mutations of them."""
+    import targets
+
+    seeds = Path(tempfile.mkdtemp(prefix=f"meshcol-seeds-{target}-"))
+    if target == "readers":
+        _reader_seeds(seeds)
+    else:
+        _numeric_seeds(seeds)
+    paths = sorted(seeds.iterdir()) + sorted((HERE / "regressions" / target).glob("*"))
+    inputs = [path.read_bytes() for path in paths]
+    random = Random(f"meshcol-fuzz-{target}")
+    inputs += [_mutate(random.choice(inputs), random) for _ in range(mutations)]
+    for data in inputs:
+        targets.TARGETS[target](data)
+    print(f"fuzz {target}: replayed {len(inputs)} inputs", file=sys.stderr)
+    return 0
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("target", choices=("readers", "convex", "meshes"))
     limit = parser.add_mutually_exclusive_group()
     limit.add_argument("--seconds", type=int, default=60)
     limit.add_argument("--runs", type=int)
+    limit.add_argument("--replay", action="store_true", help="run each seed and regression once")
+    parser.add_argument("--mutations", type=int, default=0, help="with --replay: mutated inputs")
     parser.add_argument("--artifacts", type=Path, default=HERE / "crashes")
     parser.add_argument("--seed", type=int, default=0, help="libFuzzer seed; 0 picks one")
     args = parser.parse_args()
+    if args.replay:
+        return _replay(args.target, args.mutations)
 
     try:
         import atheris

@@ -9,7 +9,7 @@ from numpy.typing import NDArray
 
 
 class defaults:
-    """Defaults and caps of the core (cpp/include/meshcol/defaults.hpp)."""
+    """Defaults and caps of the core (cpp/include/meshcol/defaults.inc)."""
 
     rigid_tolerance: float = 1e-06
 
@@ -102,6 +102,8 @@ class defaults:
     hull_max_rerun_work: float = 50000000.0
 
     hull_min_shapes_per_thread: int = 16
+
+    hull_min_filter_points_per_thread: int = 131072
 
     fit_containment_margin: float = 1e-09
 
@@ -392,14 +394,19 @@ class MeshBvhSet:
         Whether meshes i and j intersect, at the default poses or the given C-contiguous (4, 4) float64 ones (None when a pose is another object: convert it and call again); ValueError when the pair has no verdict (invalid mesh or pose, out of range).
         """
 
-    def distance_batch(self, poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)] | None, pairs: Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', device='cpu', writable=False)], threads: int = 0, max_distance: float = float('inf')) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')]]:
+    def distance_batch(self, poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)] | None, pairs: Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', device='cpu', writable=False)], threads: int = 0, max_distance: float = float('inf')) -> dict:
         """
-        Mesh-pair distances: (distance, point_a, point_b, intersecting, a_inside_b, b_inside_a, triangle_a, triangle_b, status).
+        Mesh-pair distances: {distance, point_a, point_b, intersecting, a_inside_b, b_inside_a, triangle_a, triangle_b, status}.
         """
 
-    def depth_batch(self, poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)] | None, pairs: Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', device='cpu', writable=False)], threads: int = 0) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')]]:
+    def depth_batch(self, poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)] | None, pairs: Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', device='cpu', writable=False)], threads: int = 0) -> dict:
         """
-        Mesh-pair penetration depths (lower bounds of the minimum translation distance): (depth, point_a, point_b, normal, deepest_mesh, points_tested, status).
+        Mesh-pair penetration depths (lower bounds of the minimum translation distance): {depth, point_a, point_b, normal, deepest_mesh, points_tested, status}.
+        """
+
+    def ray_cast_batch(self, meshes: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], origins: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], directions: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)] | None, max_distance: float = float('inf'), threads: int = 0) -> dict:
+        """
+        First hits of rays (world frame) on meshes[k]: {hit, distance, point, normal, triangle, status}.
         """
 
     def intersects_batch(self, poses: object | None, pairs: object, threads: int, result_type: type[ResultT]) -> ResultT | None:

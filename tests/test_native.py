@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import enum
+import re
 
 import numpy as np
 import pytest
@@ -78,3 +79,50 @@ def test_defaults_are_exposed_under_their_new_names() -> None:
 def test_hull_constants_mirror_the_core_defaults() -> None:
     assert defaults.flat_relative_tolerance == FLAT_RELATIVE_TOLERANCE
     assert defaults.hull_max_abs_coordinate == MAX_ABS_COORDINATE
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-300, 1e-310, 5e-322])
+def test_exact_crossings_hold_at_denormal_coordinates(scale: float) -> None:
+    # Two triangles crossing through each other, and a pair side by side, scaled together:
+    # the verdict is scale-free. Below 2^-1022 the exact predicates' rescaling overflowed (a
+    # factor 2^k past 2^1023) and returned one sign whatever the side.
+    from meshcol.collision.self_intersection import face_pairs_cross
+
+    vertices = (
+        np.array(
+            [
+                [0, 0, 0],
+                [4, 0, 0],
+                [0, 4, 0],
+                [1, 1, -1],
+                [1, 1, 1],
+                [3, 3, 1],
+                [8, 0, 0],
+                [9, 0, 0],
+                [8, 1, 0],
+            ],
+            dtype=np.float64,
+        )
+        * scale
+    )
+    faces = np.array([[0, 1, 2], [3, 4, 5], [6, 7, 8]], dtype=np.int64)
+    crossing = face_pairs_cross(vertices, faces, np.array([[0, 1], [0, 2], [1, 2]]))
+    assert crossing.tolist() == [True, False, False]
+
+
+def test_every_default_of_the_one_list_reaches_python() -> None:
+    # cpp/include/meshcol/defaults.inc is the one list: each entry is a C++ constexpr and an
+    # attribute of meshcol._core.defaults with the same value.
+    from pathlib import Path
+
+    import meshcol
+
+    listing = Path(meshcol.__file__).resolve().parent.parent / "cpp/include/meshcol/defaults.inc"
+    if not listing.is_file():
+        pytest.skip("the C++ sources are not beside the package (an installed wheel)")
+    entries = re.findall(r"^MESHCOL_DEFAULT\(([^,]+), (\w+), (.+)\)$", listing.read_text(), re.M)
+    assert len(entries) > 50
+    for type_name, name, value in entries:
+        exposed = getattr(defaults, name)
+        expected = int(value, 0) if "int" in type_name or "long" in type_name else float(value)
+        assert exposed == expected and type(exposed) is type(expected), name

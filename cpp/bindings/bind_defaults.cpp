@@ -18,47 +18,11 @@ struct Defaults {};
 void bind_defaults(nb::module_& m) {
     namespace d = meshcol::defaults;
     nb::class_<Defaults> s(m, "defaults",
-                           "Defaults and caps of the core (cpp/include/meshcol/defaults.hpp).");
-    s.attr("rigid_tolerance") = d::rigid_tolerance;
-    s.attr("min_pairs_per_thread") = d::min_pairs_per_thread;
-    s.attr("min_shapes_per_thread") = d::min_shapes_per_thread;
-    s.attr("min_points_per_thread") = d::min_points_per_thread;
-    s.attr("triangle_min_pairs_per_thread") = d::triangle_min_pairs_per_thread;
-    s.attr("hill_climbing_min_vertices") = d::hill_climbing_min_vertices;
-    s.attr("gjk_max_iterations") = d::gjk_max_iterations;
-    s.attr("support_warm_start_min_cosine") = d::support_warm_start_min_cosine;
-    s.attr("gjk_flat_tetrahedron_volume") = d::gjk_flat_tetrahedron_volume;
-    s.attr("gjk_relative_tolerance") = d::gjk_relative_tolerance;
-    s.attr("contact_tolerance") = d::contact_tolerance;
-    s.attr("epa_max_iterations") = d::epa_max_iterations;
-    s.attr("epa_max_vertices") = d::epa_max_vertices;
-    s.attr("epa_relative_tolerance") = d::epa_relative_tolerance;
-    s.attr("epa_absolute_tolerance_ratio") = d::epa_absolute_tolerance_ratio;
-    s.attr("epa_min_squared_length") = d::epa_min_squared_length;
-    s.attr("epa_curved_relative_tolerance") = d::epa_curved_relative_tolerance;
-    s.attr("sat_max_work") = d::sat_max_work;
-    s.attr("sat_parallel_edge_sine") = d::sat_parallel_edge_sine;
-    s.attr("sat_agreement_relative_depth") = d::sat_agreement_relative_depth;
-    s.attr("sat_agreement_normal_cosine") = d::sat_agreement_normal_cosine;
-    s.attr("broadphase_min_boxes_per_thread") = d::broadphase_min_boxes_per_thread;
-    s.attr("sort_and_sweep_cell_extent_ratio") = d::sort_and_sweep_cell_extent_ratio;
-    s.attr("sort_and_sweep_max_cells_per_axis") = d::sort_and_sweep_max_cells_per_axis;
-    s.attr("sort_and_sweep_min_boxes_per_cell") = d::sort_and_sweep_min_boxes_per_cell;
-    s.attr("sort_and_sweep_max_entries_per_box") = d::sort_and_sweep_max_entries_per_box;
-    s.attr("sort_and_sweep_min_candidates_for_grid") = d::sort_and_sweep_min_candidates_for_grid;
-    s.attr("sort_and_sweep_max_shifts_per_box") = d::sort_and_sweep_max_shifts_per_box;
-    s.attr("sort_and_sweep_max_cell_changes") = d::sort_and_sweep_max_cell_changes;
-    s.attr("tree_bin_count") = d::tree_bin_count;
-    s.attr("tree_max_height_imbalance") = d::tree_max_height_imbalance;
-    s.attr("tree_max_objects") = d::tree_max_objects;
-    s.attr("toi_tolerance") = d::toi_tolerance;
-    s.attr("toi_max_iterations") = d::toi_max_iterations;
-    s.attr("toi_min_pairs_per_thread") = d::toi_min_pairs_per_thread;
-    s.attr("mesh_bvh_leaf_size") = d::mesh_bvh_leaf_size;
-    s.attr("mesh_bvh_bins") = d::mesh_bvh_bins;
-    s.attr("mesh_min_pairs_per_thread") = d::mesh_min_pairs_per_thread;
-    s.attr("winding_number_inside") = d::winding_number_inside;
-    s.attr("mesh_depth_max_work") = d::mesh_depth_max_work;
+                           "Defaults and caps of the core (cpp/include/meshcol/defaults.inc).");
+    // Every entry of the one list (defaults.inc), by name.
+#define MESHCOL_DEFAULT(type, name, value) s.attr(#name) = d::name;
+#include "meshcol/defaults.inc"
+#undef MESHCOL_DEFAULT
     m.def("hardware_threads", &meshcol::hardware_threads,
           "Number of hardware threads (at least 1).");
 

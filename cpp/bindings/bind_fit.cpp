@@ -18,22 +18,6 @@ using namespace meshcol::bindings;
 
 void bind_fit(nb::module_& m) {
     namespace d = meshcol::defaults;
-    nb::object defaults = m.attr("defaults");
-    defaults.attr("fit_containment_margin") = d::fit_containment_margin;
-    defaults.attr("fit_box_normals") = d::fit_box_normals;
-    defaults.attr("fit_ball_seed") = d::fit_ball_seed;
-    defaults.attr("fit_ball_max_work_per_point") = d::fit_ball_max_work_per_point;
-    defaults.attr("fit_box_polish_step") = d::fit_box_polish_step;
-    defaults.attr("fit_box_polish_iterations") = d::fit_box_polish_iterations;
-    defaults.attr("fit_box_polish_smallest") = d::fit_box_polish_smallest;
-    defaults.attr("fit_box_polish_starts") = d::fit_box_polish_starts;
-    defaults.attr("fit_axis_polish_step") = d::fit_axis_polish_step;
-    defaults.attr("fit_axis_polish_iterations") = d::fit_axis_polish_iterations;
-    defaults.attr("fit_axis_polish_smallest") = d::fit_axis_polish_smallest;
-    defaults.attr("fit_axis_polish_starts") = d::fit_axis_polish_starts;
-    defaults.attr("fit_capsule_radius_grid") = d::fit_capsule_radius_grid;
-    defaults.attr("fit_capsule_golden_steps") = d::fit_capsule_golden_steps;
-    defaults.attr("fit_min_sets_per_thread") = d::fit_min_sets_per_thread;
     using S = meshcol::FitStatus;
     nb::enum_<S>(m, "FitStatus", "Outcome of one enclosing fit (fit.hpp).")
         .value("OK", S::OK)

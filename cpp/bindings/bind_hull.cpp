@@ -36,15 +36,6 @@ std::vector<T> flatten(const std::vector<meshcol::Vec3>& v) {
 }  // namespace
 
 void bind_hull(nb::module_& m) {
-    // The hull's defaults join the others in meshcol._core.defaults (bound first).
-    namespace d = meshcol::defaults;
-    nb::object defaults = m.attr("defaults");
-    defaults.attr("flat_relative_tolerance") = d::flat_relative_tolerance;
-    defaults.attr("hull_relative_tolerance") = d::hull_relative_tolerance;
-    defaults.attr("hull_max_abs_coordinate") = d::hull_max_abs_coordinate;
-    defaults.attr("hull_max_reruns") = d::hull_max_reruns;
-    defaults.attr("hull_max_rerun_work") = d::hull_max_rerun_work;
-    defaults.attr("hull_min_shapes_per_thread") = d::hull_min_shapes_per_thread;
     using S = meshcol::HullStatus;
     nb::enum_<S>(m, "HullStatus", "What a point set's hull is (hull.hpp).")
         .value("OK", S::OK)

@@ -1,5 +1,6 @@
 // Exposes mesh_bvh.hpp and mesh_query.hpp: a set of mesh hierarchies built once, and batched
-// mesh-pair queries over it.
+// mesh-pair and ray queries over it. A batched query kind is its output struct's columns (one
+// list, columns.hpp) and one function that makes each item's output.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/optional.h>
@@ -21,6 +22,7 @@
 #include "meshcol/mesh_bvh.hpp"
 #include "meshcol/mesh_query.hpp"
 #include "meshcol/triangle.hpp"
+#include "columns.hpp"
 #include "ndarray.hpp"
 
 namespace nb = nanobind;
@@ -87,15 +89,33 @@ void build_set(MeshBvhSet* self, Points vertices, Faces faces, Index64 vertex_of
     });
 }
 
-// The poses of a query (the set's defaults, or read and checked from `poses`) and its pairs,
-// range-checked on this thread so that the parallel loop cannot throw.
-struct PosedPairs {
+// The poses of a query: the set's defaults, or read and checked for rigidity from `poses`.
+struct PosedMeshes {
     std::vector<meshcol::Pose> owned_poses;
     std::vector<char> owned_rigid;
     const meshcol::Pose* poses = nullptr;
     const char* rigid = nullptr;
+};
+
+// The poses of a query and its pairs, range-checked on this thread so that the parallel loop
+// cannot throw.
+struct PosedPairs : PosedMeshes {
     const std::int64_t* pairs = nullptr;
     long long count = 0;
+
+    // The meshes and poses of pair k, and whether both poses are rigid.
+    meshcol::MeshDistanceInput input(const MeshBvhSet& set, long long k) const {
+        const auto i = static_cast<size_t>(pairs[2 * k]), j = static_cast<size_t>(pairs[2 * k + 1]);
+        meshcol::MeshDistanceInput q;
+        q.a = &set.meshes[i];
+        q.b = &set.meshes[j];
+        q.pose_a = poses[i];
+        q.pose_b = poses[j];
+        return q;
+    }
+    bool rigid_pair(long long k) const {
+        return rigid[static_cast<size_t>(pairs[2 * k])] && rigid[static_cast<size_t>(pairs[2 * k + 1])];
+    }
 };
 
 void check_pairs(const std::int64_t* pairs, long long count, size_t m) {
@@ -105,9 +125,8 @@ void check_pairs(const std::int64_t* pairs, long long count, size_t m) {
                                         " out of range for " + std::to_string(m) + " meshes");
 }
 
-PosedPairs read_pairs(const MeshBvhSet& set, const std::optional<Poses>& poses, const Pairs& pairs) {
+void read_poses(const MeshBvhSet& set, const std::optional<Poses>& poses, PosedMeshes& out) {
     const size_t m = set.meshes.size();
-    PosedPairs out;
     if (poses) {
         if (poses->shape(0) != m)
             throw std::invalid_argument("poses must be (" + std::to_string(m) + ", 4, 4), got (" +
@@ -125,6 +144,12 @@ PosedPairs read_pairs(const MeshBvhSet& set, const std::optional<Poses>& poses, 
         out.poses = set.poses.data();
         out.rigid = set.rigid.data();
     }
+}
+
+PosedPairs read_pairs(const MeshBvhSet& set, const std::optional<Poses>& poses, const Pairs& pairs) {
+    const size_t m = set.meshes.size();
+    PosedPairs out;
+    read_poses(set, poses, out);
     out.pairs = pairs.data();
     out.count = static_cast<long long>(pairs.shape(0));
     check_pairs(out.pairs, out.count, m);
@@ -143,124 +168,99 @@ inline meshcol::Status intersects_one(const meshcol::MeshBvh& a, const meshcol::
     return meshcol::Status::CONVERGED;
 }
 
-auto distance_batch(const MeshBvhSet& set, std::optional<Poses> poses, Pairs pairs, int threads, double max_distance) {
+// The columns of each batched query kind: the fields of its output struct, named as the
+// Python result class names them (meshcol/collision/mesh_query.py, ray_cast.py).
+using meshcol::MeshDepthOutput;
+using meshcol::MeshDistanceOutput;
+using meshcol::MeshRayOutput;
+const auto kDistanceColumns = std::make_tuple(
+    field("distance", &MeshDistanceOutput::distance), field("point_a", &MeshDistanceOutput::point_a),
+    field("point_b", &MeshDistanceOutput::point_b), field("intersecting", &MeshDistanceOutput::intersecting),
+    field("a_inside_b", &MeshDistanceOutput::a_inside_b), field("b_inside_a", &MeshDistanceOutput::b_inside_a),
+    field("triangle_a", &MeshDistanceOutput::triangle_a), field("triangle_b", &MeshDistanceOutput::triangle_b),
+    field_as<std::int8_t>("status", &MeshDistanceOutput::status));
+const auto kDepthColumns = std::make_tuple(
+    field("depth", &MeshDepthOutput::depth), field("point_a", &MeshDepthOutput::point_a),
+    field("point_b", &MeshDepthOutput::point_b), field("normal", &MeshDepthOutput::normal),
+    field_as<std::int8_t>("deepest_mesh", &MeshDepthOutput::deepest_mesh),
+    field("points_tested", &MeshDepthOutput::points_tested), field_as<std::int8_t>("status", &MeshDepthOutput::status));
+const auto kRayColumns = std::make_tuple(
+    field("hit", &MeshRayOutput::hit), field("distance", &MeshRayOutput::distance), field("point", &MeshRayOutput::point),
+    field("normal", &MeshRayOutput::normal), field("triangle", &MeshRayOutput::triangle),
+    field_as<std::int8_t>("status", &MeshRayOutput::status));
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+const Vec3 kNaN3{kNaN, kNaN, kNaN};
+
+nb::dict distance_batch(const MeshBvhSet& set, std::optional<Poses> poses, Pairs pairs, int threads,
+                        double max_distance) {
     if (!(max_distance >= 0.0))
         throw std::invalid_argument("max_distance must be >= 0, got " + std::to_string(max_distance));
     const PosedPairs in = read_pairs(set, poses, pairs);
-    const auto n = static_cast<size_t>(in.count);
-    double *distance, *point_a, *point_b;
-    bool *intersecting, *a_inside_b, *b_inside_a;
-    std::int64_t *triangle_a, *triangle_b;
-    std::int8_t* status;
-    auto distance_arr = new_array<Out<double, -1>>({n});
-    distance = distance_arr.data();
-    auto point_a_arr = new_array<Out<double, -1, 3>>({n, 3});
-    point_a = point_a_arr.data();
-    auto point_b_arr = new_array<Out<double, -1, 3>>({n, 3});
-    point_b = point_b_arr.data();
-    auto intersecting_arr = new_array<Out<bool, -1>>({n});
-    intersecting = intersecting_arr.data();
-    auto a_inside_b_arr = new_array<Out<bool, -1>>({n});
-    a_inside_b = a_inside_b_arr.data();
-    auto b_inside_a_arr = new_array<Out<bool, -1>>({n});
-    b_inside_a = b_inside_a_arr.data();
-    auto triangle_a_arr = new_array<Out<std::int64_t, -1>>({n});
-    triangle_a = triangle_a_arr.data();
-    auto triangle_b_arr = new_array<Out<std::int64_t, -1>>({n});
-    triangle_b = triangle_b_arr.data();
-    auto status_arr = new_array<Out<std::int8_t, -1>>({n});
-    status = status_arr.data();
-    {
-        nb::gil_scoped_release release;
-        const int t = meshcol::resolve_threads(threads, in.count, meshcol::defaults::mesh_min_pairs_per_thread);
-        meshcol::parallel_for(in.count, t, [&](long long begin, long long end) {
-            for (long long k = begin; k < end; ++k) {
-                const std::int64_t i = in.pairs[2 * k], j = in.pairs[2 * k + 1];
-                meshcol::MeshDistanceInput q;
-                q.a = &set.meshes[static_cast<size_t>(i)];
-                q.b = &set.meshes[static_cast<size_t>(j)];
-                q.pose_a = in.poses[static_cast<size_t>(i)];
-                q.pose_b = in.poses[static_cast<size_t>(j)];
-                q.max_distance = max_distance;
-                meshcol::MeshDistanceOutput r;
-                if (in.rigid[static_cast<size_t>(i)] && in.rigid[static_cast<size_t>(j)]) {
-                    r = meshcol::mesh_distance(q);
-                } else {
-                    const double nan = std::numeric_limits<double>::quiet_NaN();
-                    r.distance = nan;
-                    r.point_a = r.point_b = Vec3{nan, nan, nan};
-                    r.status = meshcol::Status::INVALID_INPUT;
-                }
-                distance[k] = r.distance;
-                for (int c = 0; c < 3; ++c) {
-                    point_a[3 * k + c] = r.point_a[c];
-                    point_b[3 * k + c] = r.point_b[c];
-                }
-                intersecting[k] = r.intersecting;
-                a_inside_b[k] = r.a_inside_b;
-                b_inside_a[k] = r.b_inside_a;
-                triangle_a[k] = r.triangle_a;
-                triangle_b[k] = r.triangle_b;
-                status[k] = static_cast<std::int8_t>(r.status);
-            }
-        });
-    }
-    return std::make_tuple(distance_arr, point_a_arr, point_b_arr, intersecting_arr, a_inside_b_arr,
-                          b_inside_a_arr, triangle_a_arr, triangle_b_arr, status_arr);
+    auto columns = columns_of<MeshDistanceOutput>(static_cast<size_t>(in.count), kDistanceColumns);
+    run_items(in.count, threads, meshcol::defaults::mesh_min_pairs_per_thread, columns, [&](long long k) {
+        meshcol::MeshDistanceInput q = in.input(set, k);
+        q.max_distance = max_distance;
+        if (in.rigid_pair(k)) return meshcol::mesh_distance(q);
+        MeshDistanceOutput r;
+        r.distance = kNaN;
+        r.point_a = r.point_b = kNaN3;
+        r.status = meshcol::Status::INVALID_INPUT;
+        return r;
+    });
+    return columns.dict();
 }
 
-auto depth_batch(const MeshBvhSet& set, std::optional<Poses> poses, Pairs pairs, int threads) {
+nb::dict depth_batch(const MeshBvhSet& set, std::optional<Poses> poses, Pairs pairs, int threads) {
     const PosedPairs in = read_pairs(set, poses, pairs);
-    const auto n = static_cast<size_t>(in.count);
-    auto depth_arr = new_array<Out<double, -1>>({n});
-    auto point_a_arr = new_array<Out<double, -1, 3>>({n, 3});
-    auto point_b_arr = new_array<Out<double, -1, 3>>({n, 3});
-    auto normal_arr = new_array<Out<double, -1, 3>>({n, 3});
-    auto mesh_arr = new_array<Out<std::int8_t, -1>>({n});
-    auto tested_arr = new_array<Out<std::int64_t, -1>>({n});
-    auto status_arr = new_array<Out<std::int8_t, -1>>({n});
-    double* depth = depth_arr.data();
-    double* point_a = point_a_arr.data();
-    double* point_b = point_b_arr.data();
-    double* normal = normal_arr.data();
-    std::int8_t* deepest_mesh = mesh_arr.data();
-    std::int64_t* tested = tested_arr.data();
-    std::int8_t* status = status_arr.data();
-    {
-        nb::gil_scoped_release release;
-        const int t = meshcol::resolve_threads(threads, in.count, meshcol::defaults::mesh_min_pairs_per_thread);
-        meshcol::parallel_for(in.count, t, [&](long long begin, long long end) {
-            for (long long k = begin; k < end; ++k) {
-                const auto i = static_cast<size_t>(in.pairs[2 * k]);
-                const auto j = static_cast<size_t>(in.pairs[2 * k + 1]);
-                meshcol::MeshDistanceInput q;
-                q.a = &set.meshes[i];
-                q.b = &set.meshes[j];
-                q.pose_a = in.poses[i];
-                q.pose_b = in.poses[j];
-                meshcol::MeshDepthOutput r;
-                if (in.rigid[i] && in.rigid[j]) {
-                    r = meshcol::mesh_penetration_depth(q);
-                } else {
-                    const double nan = std::numeric_limits<double>::quiet_NaN();
-                    r.depth = nan;
-                    r.point_a = r.point_b = r.normal = Vec3{nan, nan, nan};
-                    r.status = meshcol::Status::INVALID_INPUT;
-                }
-                depth[k] = r.depth;
-                for (int c = 0; c < 3; ++c) {
-                    point_a[3 * k + c] = r.point_a[c];
-                    point_b[3 * k + c] = r.point_b[c];
-                    normal[3 * k + c] = r.normal[c];
-                }
-                deepest_mesh[k] = static_cast<std::int8_t>(r.deepest_mesh);
-                tested[k] = r.points_tested;
-                status[k] = static_cast<std::int8_t>(r.status);
-            }
-        });
-    }
-    return std::make_tuple(depth_arr, point_a_arr, point_b_arr, normal_arr, mesh_arr, tested_arr,
-                           status_arr);
+    auto columns = columns_of<MeshDepthOutput>(static_cast<size_t>(in.count), kDepthColumns);
+    run_items(in.count, threads, meshcol::defaults::mesh_min_pairs_per_thread, columns, [&](long long k) {
+        if (in.rigid_pair(k)) return meshcol::mesh_penetration_depth(in.input(set, k));
+        MeshDepthOutput r;
+        r.depth = kNaN;
+        r.point_a = r.point_b = r.normal = kNaN3;
+        r.status = meshcol::Status::INVALID_INPUT;
+        return r;
+    });
+    return columns.dict();
+}
+
+// The first hit of each ray (origins[k], directions[k], world frame) on mesh meshes[k].
+nb::dict ray_cast_batch(const MeshBvhSet& set, Index64 meshes, Points origins, Points directions,
+                        std::optional<Poses> poses, double max_distance, int threads) {
+    const size_t n = origins.shape(0), m = set.meshes.size();
+    if (directions.shape(0) != n || meshes.shape(0) != n)
+        throw std::invalid_argument("mesh_indices, origins and directions must have one row per ray, got " +
+                                    std::to_string(meshes.shape(0)) + ", " + std::to_string(n) + " and " +
+                                    std::to_string(directions.shape(0)));
+    if (!(max_distance >= 0.0))
+        throw std::invalid_argument("max_distance must be >= 0, got " + std::to_string(max_distance));
+    const std::int64_t* index = meshes.data();
+    for (size_t k = 0; k < n; ++k)
+        if (index[k] < 0 || index[k] >= static_cast<std::int64_t>(m))
+            throw std::invalid_argument("mesh_indices: index " + std::to_string(index[k]) + " out of range for " +
+                                        std::to_string(m) + " meshes");
+    PosedMeshes posed;
+    read_poses(set, poses, posed);
+    const double* o = origins.data();
+    const double* d = directions.data();
+    auto columns = columns_of<MeshRayOutput>(n, kRayColumns);
+    run_items(static_cast<long long>(n), threads, meshcol::defaults::min_points_per_thread, columns, [&](long long k) {
+        const auto i = static_cast<size_t>(index[k]);
+        meshcol::MeshRayInput q;
+        q.mesh = &set.meshes[i];
+        q.pose = posed.poses[i];
+        q.origin = Vec3{o[3 * k], o[3 * k + 1], o[3 * k + 2]};
+        q.direction = Vec3{d[3 * k], d[3 * k + 1], d[3 * k + 2]};
+        q.max_distance = max_distance;
+        if (posed.rigid[i]) return meshcol::mesh_ray_cast(q);
+        MeshRayOutput r;
+        r.distance = kNaN;
+        r.point = r.normal = kNaN3;
+        r.status = meshcol::Status::INVALID_INPUT;
+        return r;
+    });
+    return columns.dict();
 }
 
 // The pairs of a call that takes them as a plain object: a C-contiguous (P, 2) int64 buffer
@@ -640,11 +640,15 @@ void bind_mesh_query(nb::module_& m) {
              "range).")
         .def("distance_batch", &distance_batch, "poses"_a.none(), "pairs"_a, "threads"_a = 0,
              "max_distance"_a = std::numeric_limits<double>::infinity(),
-             "Mesh-pair distances: (distance, point_a, point_b, intersecting, a_inside_b, "
-             "b_inside_a, triangle_a, triangle_b, status).")
+             "Mesh-pair distances: {distance, point_a, point_b, intersecting, a_inside_b, "
+             "b_inside_a, triangle_a, triangle_b, status}.")
         .def("depth_batch", &depth_batch, "poses"_a.none(), "pairs"_a, "threads"_a = 0,
              "Mesh-pair penetration depths (lower bounds of the minimum translation distance): "
-             "(depth, point_a, point_b, normal, deepest_mesh, points_tested, status).")
+             "{depth, point_a, point_b, normal, deepest_mesh, points_tested, status}.")
+        .def("ray_cast_batch", &ray_cast_batch, "meshes"_a, "origins"_a, "directions"_a, "poses"_a.none(),
+             "max_distance"_a = std::numeric_limits<double>::infinity(), "threads"_a = 0,
+             "First hits of rays (world frame) on meshes[k]: {hit, distance, point, normal, "
+             "triangle, status}.")
         .def("intersects_batch", &intersects_batch, "poses"_a.none(), "pairs"_a, "threads"_a,
              "result_type"_a,
              nb::sig("def intersects_batch(self, poses: object | None, pairs: object, threads: int, "

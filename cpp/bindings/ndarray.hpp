@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <initializer_list>
 #include <stdexcept>
 #include <string>
@@ -96,6 +97,7 @@ public:
             if (s >= 0 && view_.shape[d] != s) return nullptr;
             ++d;
         }
+        if (reinterpret_cast<std::uintptr_t>(view_.buf) % alignof(T) != 0) return aligned_copy<T>(writable);
         return static_cast<T*>(view_.buf);
     }
 
@@ -106,6 +108,27 @@ public:
     Py_ssize_t shape(int d) const { return view_.shape[d]; }
 
 private:
+    // A buffer at an address T may not be read from (a view at an odd byte offset: loads
+    // through a misaligned T* are undefined) is read through an aligned copy; one the caller
+    // would write to reads as null (the caller converts it).
+    template <class T>
+    T* aligned_copy(bool writable) {
+        if (writable) return nullptr;
+        const size_t n = static_cast<size_t>(view_.len) / sizeof(T);
+        if constexpr (std::is_same_v<T, double>) {
+            doubles_.resize(n);
+            std::memcpy(doubles_.data(), view_.buf, n * sizeof(T));
+            return doubles_.data();
+        } else if constexpr (std::is_same_v<T, std::int64_t>) {
+            integers_.resize(n);
+            std::memcpy(integers_.data(), view_.buf, n * sizeof(T));
+            return integers_.data();
+        } else {
+            static_assert(alignof(T) == 1, "add an aligned copy for this type");
+            return static_cast<T*>(view_.buf);
+        }
+    }
+
     // struct-module codes: '@', '=' or (on a little-endian machine) '<' may lead.
     template <class T>
     static bool format_is(const char* f) {
@@ -127,6 +150,8 @@ private:
     // call of a few hundred nanoseconds makes one or two of these).
     Py_buffer view_;
     bool held_ = false;
+    std::vector<double> doubles_;          // aligned_copy's
+    std::vector<std::int64_t> integers_;   // aligned_copy's
 };
 
 /// numpy's array constructor from its C API table (the `_ARRAY_API` capsule every extension

@@ -294,6 +294,10 @@ MeshFile parse_stl(const char* data, size_t size) {
             name.remove_prefix(5);
             file.objects.push_back(MeshObject{std::string(trim(name)), {}, {}});
             object = &file.objects.back();
+            // A loop left open by the previous solid ends here: its corners stay behind with
+            // that solid (unused), so an `endloop` in this one never counts them as its own
+            // (its face would index before this solid's first vertex).
+            loop_corners = 0;
         } else if (key == "vertex") {
             if (object == nullptr) {
                 file.error = at_line(line_number, "vertex outside a solid");
@@ -369,7 +373,8 @@ void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& fa
     const double limit = 4.6e18;
     auto quantise = [&](double x) -> std::int64_t {
         const double r = std::nearbyint(x * scale - 1e-6);
-        if (std::fabs(r) < limit) return static_cast<std::int64_t>(r) << 1;
+        // Times 2, not a shift: shifting a negative value left is undefined before C++20.
+        if (std::fabs(r) < limit) return static_cast<std::int64_t>(r) * 2;
         std::int64_t bits;
         std::memcpy(&bits, &x, sizeof bits);
         return bits | 1;

@@ -11,7 +11,8 @@
 // so the error terms do not underflow. Only the sign of a returned value is meaningful.
 //
 // Private to the core (header-only); the one copy, shared by the triangle tests of
-// triangle_distance.cpp, mesh_query.cpp and triangle_intersect.cpp (inspect's crossings).
+// triangle_distance.cpp, the mesh queries (mesh_*.cpp) and triangle_intersect.cpp (inspect's
+// crossings).
 //
 // Sign conventions: orient2d(a, b, c) > 0 when a, b, c turn counterclockwise; orient3d is
 // Shewchuk's, det[a - d, b - d, c - d], > 0 when d lies on the side that (b - a) x (c - a)
@@ -113,20 +114,22 @@ inline double sign_of(const Expansion& e) {
     return 0.0;
 }
 
-// Power-of-two factor that brings the largest magnitude `m` near 1 when it is tiny, so that
-// products of differences stay clear of the denormal range (exact: powers of two).
-inline double rescale_factor(double m) {
-    if (!(m > 0.0) || m >= 0x1p-400) return 1.0;
+// The power of two (its exponent) that brings the largest magnitude `m` near 1 when it is tiny,
+// so that products of differences stay clear of the denormal range; 0 otherwise. Applied by
+// std::ldexp to each coordinate, which is exact: a factor 2^k itself overflows for the
+// denormal m (k > 1023), where multiplying by it would turn every coordinate into inf or NaN.
+inline int rescale_exponent(double m) {
+    if (!(m > 0.0) || m >= 0x1p-400) return 0;
     int exponent = 0;
     std::frexp(m, &exponent);
-    return std::ldexp(1.0, -exponent);
+    return -exponent;
 }
 
 inline double orient2d_exact(double ax, double ay, double bx, double by, double cx, double cy) {
     const double m = std::max({std::fabs(ax), std::fabs(ay), std::fabs(bx), std::fabs(by),
                                std::fabs(cx), std::fabs(cy)});
-    const double s = rescale_factor(m);
-    ax *= s, ay *= s, bx *= s, by *= s, cx *= s, cy *= s;
+    if (const int k = rescale_exponent(m); k != 0)
+        for (double* x : {&ax, &ay, &bx, &by, &cx, &cy}) *x = std::ldexp(*x, k);
     const Expansion acx = difference(ax, cx), acy = difference(ay, cy);
     const Expansion bcx = difference(bx, cx), bcy = difference(by, cy);
     return sign_of(add(multiply(acx, bcy), negate(multiply(acy, bcx))));
@@ -136,8 +139,8 @@ inline double orient3d_exact(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
     double m = 0.0;
     for (const Vec3* p : {&a, &b, &c, &d})
         m = std::max({m, std::fabs(p->x), std::fabs(p->y), std::fabs(p->z)});
-    const double s = rescale_factor(m);
-    if (s != 1.0) a = a * s, b = b * s, c = c * s, d = d * s;
+    if (const int k = rescale_exponent(m); k != 0)
+        for (Vec3* p : {&a, &b, &c, &d}) *p = {std::ldexp(p->x, k), std::ldexp(p->y, k), std::ldexp(p->z, k)};
     const Expansion adx = difference(a.x, d.x), ady = difference(a.y, d.y), adz = difference(a.z, d.z);
     const Expansion bdx = difference(b.x, d.x), bdy = difference(b.y, d.y), bdz = difference(b.z, d.z);
     const Expansion cdx = difference(c.x, d.x), cdy = difference(c.y, d.y), cdz = difference(c.z, d.z);

@@ -111,7 +111,8 @@ class HullResult:
         ``added_volume / exact_volume``; None when the exact volume is 0 (flat).
     max_distance : float
         Largest distance from a point of this hull to the exact hull (one-sided Hausdorff
-        distance; 0 when exact). Input units.    target_fit : TargetFit or None
+        distance; 0 when exact). Input units.
+    target_fit : TargetFit or None
         With an engine target (:func:`meshcol.collision.target_fit.fit_hull`): the fit this hull
         is, its measures, costs and violations.
     """
@@ -172,33 +173,15 @@ def convex_hull(
     The exact hull is :func:`exact_hull` (Quickhull in the core). Coplanar points give a 2-D
     hull, a polygon in their plane.
 
-    The budgeted hull is built from supporting planes of the exact hull H (planes touching H
-    with H on their inner side), so it always encloses H, and thus every input point:
-
-    1. Start from the smallest of ``START_ORIENTATIONS`` simplices (tetrahedron, or triangle
-       when flat) whose faces are supporting planes of H.
-    2. Find the vertex v of the current polytope Q farthest from H, with its closest point p
-       on H (exact point-to-facet distances over the facets of H that v sees).
-    3. Add the supporting plane at p with normal ``(v - p) / |v - p|``: it is the cut that
-       removes v most deeply. Recompute Q as the intersection of the half-spaces
-       (``scipy.spatial.HalfspaceIntersection``, interior point: the centroid of H's vertices).
-    4. Keep the cut if Q still has at most ``max_vertices`` vertices (else try the next
-       farthest vertices, up to ``CUT_CANDIDATES``), and repeat from 2 until no cut fits or Q
-       is within ``CONVERGED_RELATIVE_DISTANCE`` of H.
-
-    This is the plane-based "grow the faces outward" scheme of engine cookers, driven by
-    the Hausdorff distance: each step reduces the largest deviation where it is. The
-    reported ``max_distance`` is exact: the distance to a convex set is a convex function,
-    so its maximum over the polytope Q is reached at a vertex of Q. The budget loop runs in
-    Python on top of the native exact hull (a few cuts, each a half-space intersection).
+    The budgeted hull (:func:`_simplify`, whose docstring gives the steps) is built from
+    supporting planes of the exact hull H (planes touching H with H on their inner side), so
+    it always encloses H, and thus every input point. Each step cuts the vertex of the
+    current polytope farthest from H by the supporting plane nearest it, the plane-based
+    "grow the faces outward" scheme of engine cookers driven by the Hausdorff distance. The
+    reported ``max_distance`` is exact: the distance to a convex set is a convex function, so
+    its maximum over the polytope is reached at one of its vertices.
     """
-    pts = np.asarray(points, dtype=np.float64)
-    if pts.ndim != 2 or pts.shape[1] != 3:
-        raise ValueError(f"points must be (n, 3), got {pts.shape}")
-    if max_vertices is not None and int(max_vertices) < MIN_MAX_VERTICES:
-        raise ValueError(f"max_vertices must be >= {MIN_MAX_VERTICES}, got {max_vertices}")
-    if max_planes is not None and int(max_planes) < MIN_MAX_VERTICES:
-        raise ValueError(f"max_planes must be >= {MIN_MAX_VERTICES}, got {max_planes}")
+    pts = _checked_points(points, max_vertices, max_planes)
     exact = exact_hull(pts)
     if exact.dimension == 0:
         raise InvalidMeshError("all vertices coincide: there is no meaningful hull")
@@ -206,49 +189,91 @@ def convex_hull(
         raise InvalidMeshError("all vertices are collinear: there is no meaningful hull")
     if exact.dimension == 2:
         return _flat_hull(exact, max_vertices)
+    vertex_budget, plane_budget = _budgets(exact, max_vertices, max_planes)
+    if vertex_budget is None or _fits(exact, vertex_budget, plane_budget):
+        return _exact_result(exact, vertex_budget)
+    return _simplified_result(exact, vertex_budget, plane_budget)
 
-    volume = exact.volume
-    result_kwargs: dict[str, Any] = dict(
+
+def _checked_points(
+    points: np.ndarray, max_vertices: int | None, max_planes: int | None
+) -> np.ndarray:
+    """The points as (n, 3) float64, the budgets checked (ValueError names the argument)."""
+    pts = np.asarray(points, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 3:
+        raise ValueError(f"points must be (n, 3), got {pts.shape}")
+    if max_vertices is not None and int(max_vertices) < MIN_MAX_VERTICES:
+        raise ValueError(f"max_vertices must be >= {MIN_MAX_VERTICES}, got {max_vertices}")
+    if max_planes is not None and int(max_planes) < MIN_MAX_VERTICES:
+        raise ValueError(f"max_planes must be >= {MIN_MAX_VERTICES}, got {max_planes}")
+    return pts
+
+
+def _budgets(
+    exact: ExactHull, max_vertices: int | None, max_planes: int | None
+) -> tuple[int | None, int | None]:
+    """The vertex and plane budgets of a 3-D hull; a plane budget alone keeps the exact
+    hull's vertex count (at least :data:`MIN_MAX_VERTICES`) as the vertex budget."""
+    plane_budget = None if max_planes is None else int(max_planes)
+    if max_vertices is not None:
+        return int(max_vertices), plane_budget
+    if plane_budget is not None:
+        return max(len(exact.vertices), MIN_MAX_VERTICES), plane_budget
+    return None, None
+
+
+def _fits(exact: ExactHull, vertex_budget: int, plane_budget: int | None) -> bool:
+    """Whether the exact hull is within the budgets (each plane holds a triangle at least)."""
+    planes_fit = plane_budget is None or len(exact.faces) <= plane_budget
+    return len(exact.vertices) <= vertex_budget and planes_fit
+
+
+def _exact_summary(exact: ExactHull, vertex_budget: int | None) -> dict[str, Any]:
+    """The fields of a 3-D :class:`HullResult` that describe the exact hull and the budget."""
+    return dict(
         flat=False,
         exact_vertex_count=len(exact.vertices),
         exact_face_count=len(exact.faces),
-        exact_volume=volume,
-        max_vertices=None if max_vertices is None else int(max_vertices),
+        exact_volume=exact.volume,
+        max_vertices=vertex_budget,
     )
-    vertices, faces = exact.vertices, exact.faces
-    if max_planes is not None and max_vertices is None:
-        max_vertices = max(len(vertices), MIN_MAX_VERTICES)
-        result_kwargs["max_vertices"] = max_vertices
-    planes_fit = max_planes is None or len(faces) <= max_planes
-    if max_vertices is None or (len(vertices) <= max_vertices and planes_fit):
-        return HullResult(
-            vertices=vertices.copy(),
-            faces=faces.copy(),
-            volume=volume,
-            area=exact.area,
-            added_volume_fraction=0.0 if max_vertices is not None else None,
-            **result_kwargs,
-        )
 
+
+def _exact_result(exact: ExactHull, vertex_budget: int | None) -> HullResult:
+    """The exact 3-D hull as the result (its own copy of the arrays)."""
+    return HullResult(
+        vertices=exact.vertices.copy(),
+        faces=exact.faces.copy(),
+        volume=exact.volume,
+        area=exact.area,
+        added_volume_fraction=0.0 if vertex_budget is not None else None,
+        **_exact_summary(exact, vertex_budget),
+    )
+
+
+def _simplified_result(
+    exact: ExactHull, vertex_budget: int, plane_budget: int | None
+) -> HullResult:
+    """The supporting-plane hull within the budgets (:func:`_simplify`), with what it added."""
     q_vertices, distance = _simplify(
-        vertices,
-        vertices[faces],
+        exact.vertices,
+        exact.vertices[exact.faces],
         exact.equations,
-        int(max_vertices),
+        vertex_budget,
         exact.diagonal,
-        max_planes=None if max_planes is None else int(max_planes),
+        max_planes=plane_budget,
     )
     q = exact_hull(q_vertices)
-    added = max(q.volume - volume, 0.0)
+    added = max(q.volume - exact.volume, 0.0)
     return HullResult(
         vertices=q.vertices,
         faces=q.faces,
         volume=q.volume,
         area=q.area,
         added_volume=added,
-        added_volume_fraction=added / volume,
+        added_volume_fraction=added / exact.volume,
         max_distance=distance,
-        **result_kwargs,
+        **_exact_summary(exact, vertex_budget),
     )
 
 
@@ -488,6 +513,22 @@ def _simplify(hull_vertices, facets, equations, budget, scale, max_planes=None):
     ``hull_vertices`` (k, d) are the exact hull's vertices, ``facets`` (m, d, d) its facet
     simplices and ``equations`` (m, d + 1) their outward planes ``n . x + c = 0``.
     Returns the polytope's vertices (q, d) and its exact distance to the hull.
+
+    The steps, with H the exact hull and Q the polytope:
+
+    1. Start from the smallest of ``START_ORIENTATIONS`` simplices (tetrahedron, or triangle
+       when flat) whose faces are supporting planes of H.
+    2. Find the vertex v of Q farthest from H, with its closest point p on H (exact
+       point-to-facet distances over the facets of H that v sees).
+    3. Add the supporting plane at p with normal ``(v - p) / |v - p|``: it is the cut that
+       removes v most deeply. Recompute Q as the intersection of the half-spaces
+       (``scipy.spatial.HalfspaceIntersection``, interior point: the centroid of H's vertices).
+    4. Keep the cut if Q still has at most ``budget`` vertices (else try the next farthest
+       vertices, up to ``CUT_CANDIDATES``), and repeat from 2 until no cut fits or Q is within
+       ``CONVERGED_RELATIVE_DISTANCE`` of H.
+
+    Each step reduces the largest deviation where it is. The loop runs in Python on top of
+    the native exact hull (a few cuts, each a half-space intersection).
     """
     interior = hull_vertices.mean(axis=0)
     dim = hull_vertices.shape[1]

@@ -435,8 +435,10 @@ def mesh_distance_batch(
     max_distance = float(max_distance)
     if not max_distance >= 0.0:
         raise ValueError(f"max_distance must be >= 0, got {max_distance}")
-    fields = meshes._handle.distance_batch(poses, pairs, threads=threads, max_distance=max_distance)
-    return MeshDistanceBatch(*fields)
+    columns = meshes._handle.distance_batch(
+        poses, pairs, threads=threads, max_distance=max_distance
+    )
+    return MeshDistanceBatch(**columns)
 
 
 def mesh_intersects_batch(
@@ -555,7 +557,7 @@ def mesh_penetration_depth_batch(
     if poses is not None:
         poses = as_poses(poses, len(meshes))
     pairs = _pairs(pairs, len(meshes))
-    return MeshDepthBatch(*meshes._handle.depth_batch(poses, pairs, threads=threads))
+    return MeshDepthBatch(**meshes._handle.depth_batch(poses, pairs, threads=threads))
 
 
 def mesh_intersection_volume(

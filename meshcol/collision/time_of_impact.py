@@ -295,42 +295,16 @@ def time_of_impact(
     -------
     TimeOfImpactResult
     """
-    cs = ConvexSet.from_shapes([a, b], names=("a", "b"))
-    given = (
-        ("start_pose_a", start_pose_a, a, False),
-        ("end_pose_a", end_pose_a, a, True),
-        ("start_pose_b", start_pose_b, b, False),
-        ("end_pose_b", end_pose_b, b, True),
+    shapes = ConvexSet.from_shapes([a, b], names=("a", "b"))
+    starts, ends = _pair_poses(
+        (a, start_pose_a, end_pose_a, "a"), (b, start_pose_b, end_pose_b, "b")
     )
-    poses = [
-        as_pose(body_pose(shape, end) if pose is None else pose, name)
-        for name, pose, shape, end in given
-    ]
-    spins = [
-        spin if spin is not None or end is not None or not isinstance(shape, Body) else shape.spin
-        for spin, end, shape in ((spin_a, end_pose_a, a), (spin_b, end_pose_b, b))
-    ]
-    rotations = pivots = None
-    if any(spin is not None for spin in spins):
-        starts = np.stack([poses[0], poses[2]])
-        ends = np.stack([poses[1], poses[3]])
-        shortest = shortest_rotation(starts, ends)
-        rotations = np.stack(
-            [
-                shortest[k] if spin is None or spin.rotation is None else spin.rotation
-                for k, spin in enumerate(spins)
-            ]
-        )
-        pivots = np.stack(
-            [
-                starts[k, :3, 3] if spin is None or spin.pivot is None else spin.pivot
-                for k, spin in enumerate(spins)
-            ]
-        )
-    r = time_of_impact_batch(
-        cs,
-        np.stack([poses[0], poses[2]]),
-        np.stack([poses[1], poses[3]]),
+    spins = (_spin_of(a, spin_a, end_pose_a), _spin_of(b, spin_b, end_pose_b))
+    rotations, pivots = _turns(starts, ends, spins)
+    batch = time_of_impact_batch(
+        shapes,
+        starts,
+        ends,
         np.array([[0, 1]]),
         rotations=rotations,
         pivots=pivots,
@@ -338,13 +312,66 @@ def time_of_impact(
         max_iterations=max_iterations,
         threads=1,
     )
-    fraction = float(r.time_of_impact[0])
+    return _first_result(batch)
+
+
+def _pair_poses(*moves: tuple[Any, Any, Any, str]) -> tuple[np.ndarray, np.ndarray]:
+    """The (2, 4, 4) start and end poses of two moving shapes, checked in argument order.
+
+    Each move is (shape, start pose, end pose, name); a pose that is None is the shape's own
+    (a Body's ``pose`` or ``end_pose``), else the identity.
+    """
+    starts, ends = [], []
+    for shape, start, end, name in moves:
+        starts.append(
+            as_pose(body_pose(shape, False) if start is None else start, f"start_pose_{name}")
+        )
+        ends.append(as_pose(body_pose(shape, True) if end is None else end, f"end_pose_{name}"))
+    return np.stack(starts), np.stack(ends)
+
+
+def _spin_of(shape: Any, spin: Spin | None, end_pose: Any) -> Spin | None:
+    """The spin a shape turns by: the one given, else a Body's own when it gives the end pose."""
+    if spin is not None or end_pose is not None or not isinstance(shape, Body):
+        return spin
+    return shape.spin
+
+
+def _turns(
+    starts: np.ndarray, ends: np.ndarray, spins: tuple[Spin | None, Spin | None]
+) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The (2, 3) rotation vectors and pivots of the turns, or (None, None) without a spin.
+
+    A shape without a spin (or a spin without a rotation or a pivot) takes the shortest
+    rotation from its start to its end pose, about its local origin.
+    """
+    if all(spin is None for spin in spins):
+        return None, None
+    shortest = shortest_rotation(starts, ends)
+    rotations = np.stack(
+        [
+            shortest[k] if spin is None or spin.rotation is None else spin.rotation
+            for k, spin in enumerate(spins)
+        ]
+    )
+    pivots = np.stack(
+        [
+            starts[k, :3, 3] if spin is None or spin.pivot is None else spin.pivot
+            for k, spin in enumerate(spins)
+        ]
+    )
+    return rotations, pivots
+
+
+def _first_result(batch: TimeOfImpactBatch) -> TimeOfImpactResult:
+    """The result of the batch's one pair."""
+    fraction = float(batch.time_of_impact[0])
     return TimeOfImpactResult(
-        TimeOfImpactStatus(int(r.status[0])),
+        TimeOfImpactStatus(int(batch.status[0])),
         None if np.isnan(fraction) else fraction,
-        r.point[0],
-        r.normal[0],
-        int(r.iterations[0]),
+        batch.point[0],
+        batch.normal[0],
+        int(batch.iterations[0]),
     )
 
 

@@ -294,6 +294,9 @@ def test_core_closedness_agrees_with_topology() -> None:
 
 
 @given(st.sampled_from(sorted(HOSTS)), quaternion, st.tuples(*[st.floats(-0.5, 0.5)] * 3))
+# a wedge point on the cavity's wall plane, on an edge between two coplanar triangles: the
+# generalized winding number of the open copy cancelled to 0 there (0.2167 against 0.2330)
+@example("box_with_cavity", (0.0, 0.0, 0.5, 1.0), (0.25, 0.0, 0.125))
 def test_exact_ray_crossings_agree_with_the_winding_number(name: str, q, t) -> None:
     """The depth of a closed pair (inside decided by exact signed ray crossings) equals the
     depth of the same pair made open by a stray far triangle (generalized winding number)."""

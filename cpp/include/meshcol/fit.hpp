@@ -9,54 +9,11 @@
 #include <cstdint>
 #include <vector>
 
+#include "meshcol/defaults.hpp"
 #include "meshcol/hull.hpp"
 #include "meshcol/vec.hpp"
 
 namespace meshcol {
-
-namespace defaults {
-
-/// Relative margin (times the points' extent, at least 1e-6 of their largest coordinate)
-/// every fit keeps beyond its farthest point. Mirrored by `CONTAINMENT_MARGIN` in Python.
-constexpr double fit_containment_margin = 1e-9;
-
-/// How many hull plane normals (the largest by area, antiparallel planes merged) the box
-/// search tries as an axis.
-constexpr int fit_box_normals = 200;
-
-/// The fixed seed of Welzl's shuffle: the same ball every run, for any thread count.
-constexpr std::uint64_t fit_ball_seed = 0x6D657368;
-
-/// Welzl's algorithm stops (status MAX_ITERATIONS, the ball still grown to hold every
-/// point) after this many point tests per point: its expected work is linear, its worst
-/// case is not.
-constexpr long long fit_ball_max_work_per_point = 4096;
-
-/// The box's local search over rotations (a pattern search on a rotation vector): first
-/// step (radians), most sweeps, smallest step. The best this many candidate frames are
-/// polished.
-constexpr double fit_box_polish_step = 0.05;
-constexpr int fit_box_polish_iterations = 200;
-constexpr double fit_box_polish_smallest = 1e-7;
-constexpr int fit_box_polish_starts = 3;
-
-/// The cylinder's and capsule's local search over axes (pattern search on the axis's polar
-/// angles): first step, most sweeps, smallest step, and how many candidate axes it starts
-/// from (the best by volume).
-constexpr double fit_axis_polish_step = 0.05;
-constexpr int fit_axis_polish_iterations = 100;
-constexpr double fit_axis_polish_smallest = 1e-5;
-constexpr int fit_axis_polish_starts = 3;
-
-/// The capsule's radius search for one axis: a grid of this many radii, then golden-section
-/// steps around its best.
-constexpr int fit_capsule_radius_grid = 33;
-constexpr int fit_capsule_golden_steps = 40;
-
-/// Sets per thread below which fits stay on the calling thread (one set is milliseconds).
-constexpr long long fit_min_sets_per_thread = 1;
-
-}  // namespace defaults
 
 /// The primitives a fit makes, in the order of Python's `FIT_SHAPES` (never renumber).
 enum class FitShape : std::int8_t { SPHERE = 0, CAPSULE = 1, BOX = 2, CYLINDER = 3 };

@@ -1,7 +1,10 @@
 #pragma once
 /// Exact queries between two posed triangle meshes: minimum distance with closest points,
 /// intersection, containment (one mesh inside the other), and a penetration depth that never
-/// exceeds the minimum translation distance.
+/// exceeds the minimum translation distance; and queries of one mesh: a point's closest
+/// surface point, winding numbers, a ray's first hit. By concept in src/: mesh_distance.cpp,
+/// mesh_intersection.cpp, mesh_winding.cpp, mesh_depth.cpp (+ mesh_depth_closed.cpp),
+/// mesh_ray_cast.cpp.
 
 #include <cstdint>
 #include <limits>
@@ -109,6 +112,40 @@ struct PointDistanceOutput {
 /// distance found, exact point-triangle distance at the leaves (Ericson 2004, 5.1.5).
 /// A non-finite point or an invalid mesh gives NaN.
 PointDistanceOutput closest_point(const MeshBvh& mesh, const Vec3& point);
+
+/// A ray against a posed mesh.
+struct MeshRayInput {
+    const MeshBvh* mesh = nullptr;  ///< the mesh (local frame)
+    Pose pose;                      ///< world from the mesh's local frame, rigid
+    Vec3 origin;                    ///< world frame: where the ray starts
+    Vec3 direction;                 ///< world frame: along what it runs (finite, non-zero)
+    /// Only hits at most this far from the origin count (world units). Must be >= 0.
+    double max_distance = std::numeric_limits<double>::infinity();
+};
+
+/// Result of `mesh_ray_cast`.
+struct MeshRayOutput {
+    bool hit = false;  ///< the ray meets the surface within max_distance
+    /// >= 0: from the origin to the first hit along the ray (world units); inf without a hit;
+    /// NaN when invalid
+    double distance = 0.0;
+    Vec3 point;  ///< world: the first hit, origin + distance * unit direction; NaN without one
+    /// World unit normal of the face hit on its counter-clockwise side (outward for an
+    /// outward-wound mesh); NaN without a hit
+    Vec3 normal;
+    std::int64_t triangle = -1;       ///< input face hit, -1 without a hit
+    Status status = Status::NOT_RUN;  ///< CONVERGED; INVALID_INPUT (mesh, origin, direction,
+                                      ///< max_distance). The caller checks that the pose is rigid.
+};
+
+/// The first hit of a ray on a mesh's surface. The ray is clipped to the root box and the
+/// hierarchy descended nearer box first, pruning boxes it enters beyond the nearest hit; at the
+/// leaves the exact segment-triangle test (`segment_crosses_triangle`: orientation signs) decides
+/// each hit, so a ray through an edge or a vertex shared by two faces never passes between them;
+/// only the distance is rounded. An origin on the surface hits at distance 0; a ray lying in a
+/// face's plane does not hit that face (its neighbours' edges catch it). Of hits at the same
+/// distance, the lowest input face wins.
+MeshRayOutput mesh_ray_cast(const MeshRayInput& input);
 
 /// Generalized winding number of `point` (mesh's local frame) w.r.t. the mesh: the sum of the
 /// signed solid angles of its triangles over 4 pi (Jacobson et al. 2013; solid angles by van

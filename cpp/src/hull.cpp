@@ -1,0 +1,429 @@
+// The exact hull of a point set (hull.hpp): screened, sorted and deduplicated, then by its
+// dimension: Quickhull's triangulation (quickhull.cpp) with its coplanar planes merged, a
+// 2-D hull by the monotone chain, a segment or a point.
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <cstdint>
+#include <numeric>
+#include <utility>
+#include <vector>
+
+#include "meshcol/batch.hpp"
+#include "meshcol/defaults.hpp"
+#include "meshcol/hull.hpp"
+#include "hull_detail.hpp"
+
+namespace meshcol {
+namespace hull_detail {
+namespace {
+
+int find_root(std::vector<int>& parent, int i) {
+    while (parent[i] != i) {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    return i;
+}
+
+void planes_of(Workspace& w, const Triangulation& t, Planes& out) {
+    const size_t m = t.tri.size();
+    out.normal.resize(m);
+    out.offset.resize(m);
+    out.area2.resize(m);
+    for (size_t i = 0; i < m; ++i) {
+        const Vec3& a = w.p[t.tri[i][0]];
+        const Vec3 n = triangle_normal(a, w.p[t.tri[i][1]], w.p[t.tri[i][2]]);
+        const double len = norm(n);
+        out.area2[i] = len;
+        out.normal[i] = len > 0.0 ? n / len : Vec3{};
+        out.offset[i] = dot(out.normal[i], a);
+    }
+    // Neighbours are coplanar when each one's far corner lies within eps of the other's
+    // plane; coplanar groups are the connected components (one plane, one SAT normal).
+    std::vector<int>& parent = w.parent;
+    parent.resize(m);
+    std::iota(parent.begin(), parent.end(), 0);
+    for (size_t i = 0; i < m; ++i)
+        for (int e = 0; e < 3; ++e) {
+            const int j = t.neighbor[i][e];
+            if (j < static_cast<int>(i)) continue;
+            const int far_i = t.tri[i][(e + 2) % 3];
+            int far_j = -1;
+            for (int k = 0; k < 3; ++k)
+                if (t.neighbor[j][k] == static_cast<int>(i)) far_j = t.tri[j][(k + 2) % 3];
+            if (far_j < 0) continue;
+            const bool coplanar =
+                std::fabs(dot(out.normal[i], w.p[far_j]) - out.offset[i]) <= w.eps &&
+                std::fabs(dot(out.normal[j], w.p[far_i]) - out.offset[j]) <= w.eps;
+            if (coplanar) parent[find_root(parent, j)] = find_root(parent, static_cast<int>(i));
+        }
+    out.group.assign(m, -1);
+    std::vector<int>& id = w.id;
+    id.assign(m, -1);
+    out.groups = 0;
+    for (size_t i = 0; i < m; ++i) {
+        const int r = find_root(parent, static_cast<int>(i));
+        if (id[r] < 0) id[r] = out.groups++;
+        out.group[i] = id[r];
+    }
+}
+
+// Principal axes of points (Jacobi eigenvectors of their covariance), largest spread first.
+void principal_axes(const Vec3* p, const std::vector<int>& idx, const Vec3& centre, Vec3 axes[3]) {
+    double a[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+    for (int i : idx) {
+        const Vec3 d = p[i] - centre;
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) a[r][c] += d[r] * d[c];
+    }
+    double v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    for (int sweep = 0; sweep < 50; ++sweep) {
+        const double off = std::fabs(a[0][1]) + std::fabs(a[0][2]) + std::fabs(a[1][2]);
+        const double diag = std::fabs(a[0][0]) + std::fabs(a[1][1]) + std::fabs(a[2][2]);
+        if (off <= 1e-30 * diag || off == 0.0) break;
+        for (int r = 0; r < 2; ++r)
+            for (int c = r + 1; c < 3; ++c) {
+                if (a[r][c] == 0.0) continue;
+                // Classic Jacobi rotation zeroing a[r][c] (Golub and Van Loan, sec. 8.5).
+                const double theta = (a[c][c] - a[r][r]) / (2.0 * a[r][c]);
+                const double t = (theta >= 0 ? 1.0 : -1.0) /
+                                 (std::fabs(theta) + std::sqrt(theta * theta + 1.0));
+                const double cs = 1.0 / std::sqrt(t * t + 1.0), sn = t * cs;
+                for (int k = 0; k < 3; ++k) {
+                    const double akr = a[k][r], akc = a[k][c];
+                    a[k][r] = cs * akr - sn * akc;
+                    a[k][c] = sn * akr + cs * akc;
+                }
+                for (int k = 0; k < 3; ++k) {
+                    const double ark = a[r][k], ack = a[c][k];
+                    a[r][k] = cs * ark - sn * ack;
+                    a[c][k] = sn * ark + cs * ack;
+                }
+                for (int k = 0; k < 3; ++k) {
+                    const double vkr = v[k][r], vkc = v[k][c];
+                    v[k][r] = cs * vkr - sn * vkc;
+                    v[k][c] = sn * vkr + cs * vkc;
+                }
+            }
+    }
+    int order[3] = {0, 1, 2};
+    std::sort(order, order + 3, [&](int x, int y) { return a[x][x] > a[y][y]; });
+    for (int k = 0; k < 3; ++k) {
+        const int j = order[k];
+        axes[k] = Vec3{v[0][j], v[1][j], v[2][j]};
+        axes[k] = axes[k] / norm(axes[k]);
+    }
+}
+
+bool lexicographic_less(const Vec3& a, const Vec3& b) {
+    if (a.x != b.x) return a.x < b.x;
+    if (a.y != b.y) return a.y < b.y;
+    return a.z < b.z;
+}
+
+// The 2-D hull in the plane of axes[0], axes[1]: Andrew's monotone chain, points within
+// eps of a chord dropped. Returns the ring counter-clockwise (about axes[0] x axes[1]).
+std::vector<int> polygon(const Workspace& w, const std::vector<int>& idx, const Vec3& centre,
+                         const Vec3 axes[3], double& area) {
+    const size_t n = idx.size();
+    std::vector<std::pair<double, double>> uv(w.p.size());
+    for (int i : idx) {
+        const Vec3 d = w.p[i] - centre;
+        uv[i] = {dot(d, axes[0]), dot(d, axes[1])};
+    }
+    std::vector<int> order(idx);
+    std::sort(order.begin(), order.end(), [&](int a, int b) { return uv[a] < uv[b]; });
+    auto turns_left = [&](int o, int a, int b) {
+        const double ax = uv[a].first - uv[o].first, ay = uv[a].second - uv[o].second;
+        const double bx = uv[b].first - uv[o].first, by = uv[b].second - uv[o].second;
+        const double c = ax * by - ay * bx;  // |ob| times the height of a over the chord ob
+        return c > w.eps * std::sqrt(bx * bx + by * by);
+    };
+    std::vector<int> ring;
+    ring.reserve(2 * n);
+    for (size_t k = 0; k < n; ++k) {
+        while (ring.size() >= 2 && !turns_left(ring[ring.size() - 2], ring.back(), order[k]))
+            ring.pop_back();
+        ring.push_back(order[k]);
+    }
+    const size_t lower = ring.size() + 1;
+    for (size_t k = n - 1; k-- > 0;) {
+        while (ring.size() >= lower && !turns_left(ring[ring.size() - 2], ring.back(), order[k]))
+            ring.pop_back();
+        ring.push_back(order[k]);
+    }
+    ring.pop_back();  // the first point again
+    area = 0.0;
+    for (size_t k = 0; k < ring.size(); ++k) {
+        const auto& s = uv[ring[k]];
+        const auto& t = uv[ring[(k + 1) % ring.size()]];
+        area += s.first * t.second - s.second * t.first;
+    }
+    area *= 0.5;
+    return ring;
+}
+
+// The hull of points already checked finite and in range.
+void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) {
+    Hull& hull = analysis.hull;
+    double max_abs = 0.0;
+    for (long long i = 0; i < n; ++i) {
+        const Vec3& q = points[i];
+        const double m = std::max(std::fabs(q.x), std::max(std::fabs(q.y), std::fabs(q.z)));
+        max_abs = m > max_abs ? m : max_abs;
+    }
+    // A power of two scales exactly: the hull of the scaled points is the hull of the points.
+    int exponent = 0;
+    if (max_abs > 0.0) std::frexp(max_abs, &exponent);
+    const double to_unit = std::ldexp(1.0, -exponent);
+    w.p.resize(static_cast<size_t>(n));
+    Vec3 lo = points[0] * to_unit, hi = lo, sum{};
+    for (long long i = 0; i < n; ++i) {
+        const Vec3 q = points[i] * to_unit;
+        w.p[i] = q;
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = q[k] < lo[k] ? q[k] : lo[k];
+            hi[k] = q[k] > hi[k] ? q[k] : hi[k];
+        }
+        sum += q;
+    }
+    w.eps = defaults::hull_relative_tolerance * std::ldexp(max_abs, -exponent);
+    w.mark.assign(static_cast<size_t>(n), 0);
+    w.stamp = 0;
+    const double diagonal = norm(hi - lo);
+    hull.diagonal = std::ldexp(diagonal, exponent);
+    std::vector<int>& all = w.all;
+    all.resize(static_cast<size_t>(n));
+    std::iota(all.begin(), all.end(), 0);
+    auto smallest = [&]() {
+        int best = 0;
+        for (long long i = 1; i < n; ++i)
+            if (lexicographic_less(points[i], points[best])) best = static_cast<int>(i);
+        return best;
+    };
+    if (!(diagonal > 0.0)) {
+        hull.status = HullStatus::SINGLE_POINT;
+        hull.dimension = 0;
+        hull.vertices = {smallest()};
+        return;
+    }
+    // The flatness rule: widths along the principal axes against the diagonal.
+    const Vec3 centre = sum / static_cast<double>(n);
+    Vec3 axes[3];
+    principal_axes(w.p.data(), all, centre, axes);
+    int dim = 0;
+    for (int k = 0; k < 3; ++k) {
+        double a = INFINITY, b = -INFINITY;
+        for (long long i = 0; i < n; ++i) {
+            const double t = dot(w.p[i] - centre, axes[k]);
+            a = t < a ? t : a;
+            b = t > b ? t : b;
+        }
+        if (b - a > defaults::flat_relative_tolerance * diagonal) ++dim;
+    }
+    if (dim == 3) {
+        Triangulation& t = analysis.t;
+        Triangulation& previous = analysis.previous;
+        Planes& pl = analysis.pl;
+        std::vector<int> subset = all;
+        bool have = false, planes_current = false;
+        std::vector<int> removed, dropped;  // the vertices a rerun leaves out
+        for (int run = 0; run <= defaults::hull_max_reruns; ++run) {
+            const Build b = quickhull(w, subset, t);
+            if (b == Build::FAILED && !have) {
+                hull.status = HullStatus::FAILED;
+                hull.dimension = -1;
+                return;
+            }
+            if (b != Build::OK) {  // a rerun that failed: the previous hull stands
+                t = previous;
+                planes_current = false;
+                break;
+            }
+            planes_of(w, t, pl);
+            planes_current = true;
+            if (have) {
+                // The rerun must still hold every vertex it left out (within a few eps): else
+                // one was a true corner flagged through a chain of nearly coplanar faces, and
+                // the previous hull stands.
+                bool holds = true;
+                for (size_t k = 0; holds && k < removed.size(); ++k)
+                    for (size_t i = 0; holds && i < t.tri.size(); ++i)
+                        holds = dot(pl.normal[i], w.p[removed[k]]) - pl.offset[i] <= 4.0 * w.eps;
+                if (!holds) {
+                    t = previous;
+                    planes_current = false;
+                    break;
+                }
+            }
+            have = true;
+            // A vertex with at most two edges between different planes lies on an edge or
+            // in a face of its hull (a coplanar tie Quickhull took first): hull again
+            // without those.
+            std::vector<int>& real = w.real;
+            std::vector<char>& used = w.used;
+            real.assign(static_cast<size_t>(n), 0);
+            used.assign(static_cast<size_t>(n), 0);
+            for (size_t i = 0; i < t.tri.size(); ++i)
+                for (int e = 0; e < 3; ++e) {
+                    used[t.tri[i][e]] = 1;
+                    const int j = t.neighbor[i][e];
+                    if (j > static_cast<int>(i) && pl.group[i] != pl.group[j]) {
+                        ++real[t.tri[i][e]];
+                        ++real[t.tri[i][(e + 1) % 3]];
+                    }
+                }
+            std::vector<int>& keep = w.keep;
+            keep.clear();
+            dropped.clear();
+            for (long long i = 0; i < n; ++i) {
+                if (!used[i]) continue;
+                if (real[i] <= 2)
+                    dropped.push_back(static_cast<int>(i));
+                else
+                    keep.push_back(static_cast<int>(i));
+            }
+            // The check above costs (left out) x (faces): past a cap the hull stays as is
+            // (valid, with a few extra vertices on its edges or faces).
+            const double work = static_cast<double>(dropped.size()) * 2.0 *
+                                static_cast<double>(keep.size());
+            if (dropped.empty() || run == defaults::hull_max_reruns ||
+                work > defaults::hull_max_rerun_work)
+                break;
+            previous = t;
+            subset.swap(keep);
+            removed.swap(dropped);
+        }
+        if (have) {
+            if (!planes_current) planes_of(w, t, pl);
+            // Vertices in lexicographic order.
+            std::vector<int> verts;
+            std::vector<int>& local = w.local;
+            local.assign(static_cast<size_t>(n), -1);
+            for (const auto& tri : t.tri)
+                for (int v : tri)
+                    if (local[v] < 0) local[v] = 0, verts.push_back(v);
+            std::sort(verts.begin(), verts.end());  // the points are in lexicographic order
+            for (size_t k = 0; k < verts.size(); ++k) local[verts[k]] = static_cast<int>(k);
+            hull.status = HullStatus::OK;
+            hull.dimension = 3;
+            hull.vertices = verts;
+            const size_t m = t.tri.size();
+            hull.faces.resize(m);
+            hull.face_normals.resize(m);
+            hull.face_offsets.resize(m);
+            hull.face_planes = pl.group;
+            hull.plane_normals.assign(static_cast<size_t>(pl.groups), Vec3{});
+            std::vector<double> largest(static_cast<size_t>(pl.groups), -1.0);
+            double volume = 0.0, area = 0.0;
+            const Vec3 origin = w.p[verts[0]];
+            for (size_t i = 0; i < m; ++i) {
+                const auto& tri = t.tri[i];
+                hull.faces[i] = {local[tri[0]], local[tri[1]], local[tri[2]]};
+                hull.face_normals[i] = pl.normal[i];
+                hull.face_offsets[i] = -dot(pl.normal[i], points[tri[0]]);
+                const int g = pl.group[i];
+                if (pl.area2[i] > largest[g]) {
+                    largest[g] = pl.area2[i];
+                    hull.plane_normals[g] = pl.normal[i];
+                }
+                area += pl.area2[i];
+                volume += dot(w.p[tri[0]] - origin,
+                              cross(w.p[tri[1]] - origin, w.p[tri[2]] - origin));
+            }
+            hull.volume = std::ldexp(volume / 6.0, 3 * exponent);
+            hull.area = std::ldexp(area / 2.0, 2 * exponent);
+            return;
+        }
+        dim = 2;
+    }
+    if (dim == 2) {
+        double area = 0.0;
+        std::vector<int> ring = polygon(w, all, centre, axes, area);
+        if (ring.size() >= 3) {
+            hull.status = HullStatus::FLAT;
+            hull.dimension = 2;
+            hull.vertices = ring;
+            for (int k = 1; k + 1 < static_cast<int>(ring.size()); ++k)
+                hull.faces.push_back({0, k, k + 1});
+            const Vec3 normal = cross(axes[0], axes[1]);
+            hull.normal = normal / norm(normal);
+            hull.area = std::ldexp(area, 2 * exponent);
+            return;
+        }
+        dim = 1;
+    }
+    if (dim == 1) {
+        int a = 0, b = 0;
+        double ta = INFINITY, tb = -INFINITY;
+        for (long long i = 0; i < n; ++i) {
+            const double t = dot(w.p[i] - centre, axes[0]);
+            if (t < ta) ta = t, a = static_cast<int>(i);
+            if (t > tb) tb = t, b = static_cast<int>(i);
+        }
+        hull.status = HullStatus::COLLINEAR;
+        hull.dimension = 1;
+        hull.vertices = {a, b};
+        return;
+    }
+    hull.status = HullStatus::SINGLE_POINT;
+    hull.dimension = 0;
+    hull.vertices = {smallest()};
+}
+
+// Status of points that have no hull at all, or OK when they can have one.
+HullStatus screen(const Vec3* points, long long n) {
+    if (n <= 0) return HullStatus::EMPTY;
+    if (n > INT_MAX) return HullStatus::FAILED;  // point indices are ints
+    bool huge = false;
+    for (long long i = 0; i < n; ++i) {
+        if (!is_finite(points[i])) return HullStatus::NON_FINITE;
+        huge = huge || meshcol::max_abs(points[i]) > defaults::hull_max_abs_coordinate;
+    }
+    return huge ? HullStatus::OVERFLOW : HullStatus::OK;
+}
+
+
+}  // namespace
+
+// The hull of `points` into analysis.hull (and its triangulation and planes, 3-D).
+void hull_with(const Vec3* points, long long n, Workspace& w, Analysis& analysis) {
+    analysis.reset();
+    Hull& hull = analysis.hull;
+    hull.status = screen(points, n);
+    if (hull.status != HullStatus::OK) return;
+    // Sorted, without exact duplicates (-0.0 as 0.0), the points give the same hull in any
+    // order: equal point sets, equal triangulations (decomposition parts rely on it).
+    std::vector<Conflict>& sorted = w.sorted;
+    sorted.resize(static_cast<size_t>(n));
+    const Vec3 zero{0.0, 0.0, 0.0};
+    for (long long i = 0; i < n; ++i) sorted[i] = {points[i] + zero, static_cast<int>(i)};
+    std::sort(sorted.begin(), sorted.end(), [](const Conflict& a, const Conflict& b) {
+        return lexicographic_less(a.p, b.p) ||
+               (!lexicographic_less(b.p, a.p) && a.index < b.index);
+    });
+    w.unique_points.clear();
+    w.unique_index.clear();
+    for (long long i = 0; i < n; ++i) {
+        if (i > 0 && !lexicographic_less(sorted[i - 1].p, sorted[i].p)) continue;
+        w.unique_points.push_back(sorted[i].p);
+        w.unique_index.push_back(sorted[i].index);
+    }
+    compute(w.unique_points.data(), static_cast<long long>(w.unique_points.size()), w, analysis);
+    for (int& v : hull.vertices) v = w.unique_index[v];
+}
+
+}  // namespace hull_detail
+
+using hull_detail::Analysis;
+using hull_detail::Workspace;
+
+Hull exact_hull(const Vec3* points, long long n) {
+    Workspace w;
+    Analysis analysis;
+    hull_with(points, n, w, analysis);
+    return std::move(analysis.hull);
+}
+
+}  // namespace meshcol

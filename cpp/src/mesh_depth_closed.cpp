@@ -1,0 +1,432 @@
+// The mesh depth over the points of a mesh whose other mesh is closed (mesh_depth.cpp holds
+// the rest of the query): regions decided by one exact test each, then the deepest point by
+// branch and bound.
+#include <algorithm>
+#include <cmath>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "meshcol/defaults.hpp"
+#include "meshcol/mesh_query.hpp"
+#include "meshcol/triangle.hpp"
+#include "mesh_depth.hpp"
+#include "mesh_query_detail.hpp"
+
+namespace meshcol {
+using namespace mesh_detail;
+namespace {
+
+// The depth search over the points of a mesh whose other mesh is closed. The winding number
+// of a closed surface is constant along a path that does not meet it (Jacobson et al. 2013),
+// so the vertices joined by edges of triangles that are not near the other surface (farther
+// than the rounding allowance) form regions lying wholly inside or wholly outside: one exact
+// test decides each region (none when a vertex lies outside the other's box), and only the
+// vertices of near triangles are decided one by one. The largest distance among the inside
+// points is then found by branch and bound, as a one-sided Hausdorff distance over a
+// hierarchy: a node of a mesh's own hierarchy bounds the distances of its triangles' corners
+// by the distance of its centre plus its radius (the distance to a surface is 1-Lipschitz),
+// a piece of an edge of a crossing triangle by the distance of its ends to a triangle it
+// crosses (the distance to a triangle is convex along a segment), a wedge point by its
+// distances to the pair it steps in from; groups are opened highest bound first until no
+// bound exceeds the best depth found. The answer is the maximum, over the same points as the
+// per-point search, of the same distances: only its order of work differs.
+class ClosedDepthSearch {
+public:
+    ClosedDepthSearch(const MeshBvh& a, const MeshBvh& b, const Relative& rel, MeshDepthOutput& out)
+        : a_(a), b_(b), rel_(rel), out_(out), slack_(8.0 * rel.slack) {}
+
+    // Adds the points of mesh m (0: a's, in b's frame; 1: b's, in a's frame): its regions
+    // decided, its root node and the edges of its crossing triangles queued. False when the
+    // work cap stopped it.
+    bool add_mesh(int m, const TriangleMarks& marks) {
+        marks_[m] = &marks;
+        const MeshBvh& self = m == 0 ? a_ : b_;
+        const MeshBvh& other = m == 0 ? b_ : a_;
+        const BvhNode& root = other.nodes()[0];
+        const std::vector<Vec3>& vertices = self.vertices();
+        const size_t vertex_count = vertices.size();
+        std::vector<Side>& side = side_[m];
+        side.assign(vertex_count, Side::UNKNOWN);
+        done_[m].assign(vertex_count, 0);
+        std::vector<char> in_box(vertex_count), regular(vertex_count, 0);
+        std::vector<std::int32_t> parent(vertex_count);
+        for (size_t v = 0; v < vertex_count; ++v) {
+            in_box[v] = inside_box(root, to_other(m, vertices[v]));
+            parent[v] = static_cast<std::int32_t>(v);
+        }
+        auto find = [&parent](std::int32_t v) {
+            while (parent[static_cast<size_t>(v)] != v) {
+                parent[static_cast<size_t>(v)] = parent[static_cast<size_t>(parent[static_cast<size_t>(v)])];
+                v = parent[static_cast<size_t>(v)];
+            }
+            return v;
+        };
+        // Triangles wholly outside the box are left out: a region of the others reaches
+        // outside through a triangle with a corner in the box, so the regions found are parts
+        // of the true ones, each still on one side.
+        for (std::int32_t i = 0; i < self.triangle_count(); ++i) {
+            if (marks.near[static_cast<size_t>(i)]) continue;
+            const std::int32_t* t = self.triangle_vertices(i);
+            if (!in_box[static_cast<size_t>(t[0])] && !in_box[static_cast<size_t>(t[1])] && !in_box[static_cast<size_t>(t[2])])
+                continue;
+            regular[static_cast<size_t>(t[0])] = regular[static_cast<size_t>(t[1])] = regular[static_cast<size_t>(t[2])] = 1;
+            for (int k = 0; k < 2; ++k) {  // two edges join the three corners
+                const std::int32_t x = find(t[k]), y = find(t[k + 1]);
+                if (x != y) parent[static_cast<size_t>(std::max(x, y))] = std::min(x, y);
+            }
+        }
+        // A region with a vertex outside the other's box is outside; otherwise one vertex
+        // (off the surface by more than the rounding allowance) decides it.
+        std::vector<Side> region(vertex_count, Side::UNKNOWN);
+        for (size_t v = 0; v < vertex_count; ++v)
+            if (regular[v] && !in_box[v]) region[static_cast<size_t>(find(static_cast<std::int32_t>(v)))] = Side::OUTSIDE;
+        for (size_t v = 0; v < vertex_count; ++v) {
+            if (!in_box[v]) {
+                side[v] = Side::OUTSIDE;
+                continue;
+            }
+            if (!regular[v]) continue;  // decided alone, when it matters
+            Side& r = region[static_cast<size_t>(find(static_cast<std::int32_t>(v)))];
+            if (r == Side::UNKNOWN) {
+                if (!may_test()) return false;
+                r = inside_mesh(other, to_other(m, vertices[v]), &work_) ? Side::INSIDE : Side::OUTSIDE;
+            }
+            side[v] = r;
+        }
+        // Nodes holding a corner that may be inside.
+        const std::vector<BvhNode>& nodes = self.nodes();
+        std::vector<char>& live = live_[m];
+        live.assign(nodes.size(), 0);
+        for (size_t id = nodes.size(); id-- > 0;) {
+            const BvhNode& node = nodes[id];
+            if (!node.is_leaf()) {
+                live[id] = live[id + 1] || live[static_cast<size_t>(node.index)];
+                continue;
+            }
+            for (std::int32_t i = node.index; i < node.index + node.count && !live[id]; ++i)
+                for (int k = 0; k < 3; ++k)
+                    if (side[static_cast<size_t>(self.triangle_vertices(i)[k])] != Side::OUTSIDE) live[id] = 1;
+        }
+        if (live[0]) refine_node({kInf, kNode, m, 0, 0});
+        return true;
+    }
+
+    // Queues the edges of mesh m's crossing triangles, each bounded by its ends' distances to
+    // a triangle that its triangle crosses (after the vertices: most are then within the best
+    // depth already and never queued).
+    void add_edges(int m) {
+        const MeshBvh& self = m == 0 ? a_ : b_;
+        const MeshBvh& other = m == 0 ? b_ : a_;
+        const TriangleMarks& marks = *marks_[m];
+        for (std::int32_t i = 0; i < self.triangle_count(); ++i) {
+            const std::int32_t partner = marks.partner[static_cast<size_t>(i)];
+            if (!marks.crossing[static_cast<size_t>(i)] || partner < 0) continue;
+            const Vec3* t = self.triangle(i);
+            const Vec3* tp = other.triangle(partner);
+            double ends[3];
+            for (int k = 0; k < 3; ++k) ends[k] = triangle_distance_of(to_other(m, t[k]), tp);
+            for (int k = 0; k < 3; ++k) push({max2(ends[k], ends[(k + 1) % 3]) + slack_, kEdge, m, i, k});
+        }
+    }
+
+    // Queues the wedge points (both meshes closed) of each crossing pair that gets them, made
+    // when the pair comes up. Every one lies within the pair's reach of a's centroid q: a
+    // step of at most h / 2 from q, b's centroid or a shared point, which lies on an edge of
+    // one of the triangles (triangles_intersect's witnesses), so no farther from q than their
+    // farthest corner. Its depth is then at most q's distances to the two triangles plus that.
+    void add_wedges(const std::vector<CrossingPair>& pairs) {
+        pairs_ = &pairs;
+        const size_t stride = wedge_stride(pairs);
+        for (size_t k = 0; k < pairs.size(); k += stride) {
+            const Vec3* ta = a_.triangle(pairs[k].a);
+            const Vec3* tb_local = b_.triangle(pairs[k].b);
+            const Vec3 tb[3] = {rel_.apply(tb_local[0]), rel_.apply(tb_local[1]), rel_.apply(tb_local[2])};
+            const Vec3 q = (ta[0] + ta[1] + ta[2]) / 3.0;
+            double reach = norm((tb[0] + tb[1] + tb[2]) / 3.0 - q);
+            for (int i = 0; i < 3; ++i) reach = max2(reach, max2(norm(ta[i] - q), norm(tb[i] - q)));
+            reach += 0.5 * std::fmin(longest_edge(ta), longest_edge(tb));
+            const double da = triangle_distance_of(q, ta);
+            const double db = triangle_distance_of(rel_.apply_inverse(q), tb_local);
+            push({max2(da, db) + reach * (1.0 + 1e-9) + slack_, kWedge, 2, static_cast<std::int32_t>(k), 0});
+        }
+    }
+
+    // Opens the queue highest bound first until no bound exceeds the best depth. False when
+    // the work cap stopped it.
+    bool run() {
+        std::vector<double> cuts;
+        while (!heap_.empty()) {
+            std::pop_heap(heap_.begin(), heap_.end());
+            const Entry e = heap_.back();
+            heap_.pop_back();
+            if (!(e.bound > best)) break;
+            bool ok = true;
+            if (e.kind == kNode) {
+                // A leaf whose bound is already within twice its radius of the best depth has
+                // its few corners measured directly (each search cut off at the best depth,
+                // mostly at its first leaf): cheaper than refining a deep centre's bound.
+                if (e.refined || direct_leaf(e)) {
+                    ok = open_node(e);
+                } else {
+                    refine_node(e);
+                }
+            } else if (e.kind == kEdge) {
+                const MeshBvh& self = e.mesh == 0 ? a_ : b_;
+                const MeshBvh& other = e.mesh == 0 ? b_ : a_;
+                const BvhNode& root = other.nodes()[0];
+                const Vec3* t = self.triangle(e.index);
+                std::int64_t piece = 0;
+                // The triangles the edge meets are near its triangle (the marks' margin is far
+                // above the rounding of the frames): the cuts of segment_crossings, found
+                // among those alone.
+                const Vec3 p = to_other(e.mesh, t[e.k]), q = to_other(e.mesh, t[(e.k + 1) % 3]);
+                const TriangleMarks& marks = *marks_[e.mesh];
+                cuts.assign({0.0, 1.0});
+                for (std::int32_t n = marks.first[static_cast<size_t>(e.index)]; n < marks.first[static_cast<size_t>(e.index) + 1]; ++n) {
+                    double cut = 0.0;
+                    if (segment_crosses_triangle(p, q, other.triangle(marks.others[static_cast<size_t>(n)]), &cut))
+                        cuts.push_back(cut);
+                }
+                add_pieces(p, q, cuts,
+                                [&](const Vec3& p) {
+                                    const Order order{e.mesh, 1, 3 * std::int64_t{e.index} + e.k, piece++};
+                                    if (ok && inside_box(root, p)) ok = try_point(e.mesh, p, Side::UNKNOWN, nullptr, order);
+                                });
+            } else {
+                wedges_.clear();
+                add_pair_wedge_points(a_, b_, rel_, *pairs_, static_cast<size_t>(e.index), wedges_);
+                for (size_t k = 0; k < wedges_.size() && ok; ++k)
+                    ok = try_wedge(wedges_[k], Order{2, e.index, static_cast<std::int64_t>(k), 0});
+            }
+            if (!ok) return false;
+        }
+        return true;
+    }
+
+    double best = 0.0;
+    bool have = false;
+    DepthCandidate winner{};
+    // The other mesh's triangle (leaf order) nearest a vertex or edge winner, found by the
+    // search that measured it (closest_point's, uncut), else -1.
+    std::int32_t winner_triangle = -1;
+    long long work() const { return work_; }
+
+private:
+    enum class Side : signed char { OUTSIDE, INSIDE, UNKNOWN };
+    // A point's place in the per-point search's order: mesh (0, 1, 2: wedges), then its
+    // vertices before its edge pieces (0, 1), then vertex, 3 * triangle + edge, or wedge
+    // point, then the piece along the edge.
+    struct Order {
+        std::int64_t mesh, group, index, piece;
+        bool operator<(const Order& o) const {
+            return std::tie(mesh, group, index, piece) < std::tie(o.mesh, o.group, o.index, o.piece);
+        }
+    };
+    static constexpr int kNode = 0, kEdge = 1, kWedge = 2;
+    struct Entry {
+        double bound;  // no point of the group is farther than this from the other surface
+        int kind, mesh;
+        std::int32_t index;  // node, triangle (leaf order) or crossing pair (wedge points)
+        int k;               // edge k of the triangle
+        // A node: a triangle of the other mesh (leaf order) near it, and whether `bound` comes
+        // from its centre's distance (else from its distance to `near`, a looser bound).
+        std::int32_t near = -1;
+        bool refined = false;
+        bool operator<(const Entry& o) const { return bound < o.bound; }
+    };
+
+    Vec3 to_other(int m, const Vec3& p) const { return m == 0 ? rel_.apply_inverse(p) : rel_.apply(p); }
+
+    static double triangle_distance_of(const Vec3& p, const Vec3* t) {
+        return std::sqrt(squared_norm(closest_point_on_triangle(p, t) - p));
+    }
+
+    void push(const Entry& e) {
+        if (!(e.bound > best)) return;
+        heap_.push_back(e);
+        std::push_heap(heap_.begin(), heap_.end());
+    }
+
+    // Child `id` of mesh m's node whose other-mesh triangle is `near`: first bounded by its
+    // centre's distance to that triangle, plus its radius (refined when it comes up).
+    void push_node(int m, std::int32_t id, std::int32_t near) {
+        if (!live_[m][static_cast<size_t>(id)]) return;
+        const MeshBvh& self = m == 0 ? a_ : b_;
+        const MeshBvh& other = m == 0 ? b_ : a_;
+        const WindingNode& w = self.winding_nodes()[static_cast<size_t>(id)];
+        const double d = triangle_distance_of(to_other(m, w.center), other.triangle(near));
+        push({d + w.radius + slack_, kNode, m, id, 0, near, false});
+    }
+
+    // The node bounded by its centre's distance to the other surface (a search cut off once
+    // the bound cannot beat the best) plus its radius, queued again.
+    void refine_node(const Entry& e) {
+        const MeshBvh& self = e.mesh == 0 ? a_ : b_;
+        const MeshBvh& other = e.mesh == 0 ? b_ : a_;
+        const WindingNode& w = self.winding_nodes()[static_cast<size_t>(e.index)];
+        const double floor = best - w.radius - slack_;
+        std::int32_t near = 0;
+        const Vec3 center = to_other(e.mesh, w.center);
+        double d = distance_within(other, center, max2(0.0, floor), w.radius, &near);
+        if (e.near >= 0) {  // the parent's triangle may be nearer than the one found
+            const double parent = triangle_distance_of(center, other.triangle(e.near));
+            if (parent < d) {
+                d = parent;
+                near = e.near;
+            }
+        }
+        if (d <= floor) return;
+        push({d + w.radius + slack_, kNode, e.mesh, e.index, 0, near, true});
+    }
+
+    bool direct_leaf(const Entry& e) const {
+        const MeshBvh& self = e.mesh == 0 ? a_ : b_;
+        const auto id = static_cast<size_t>(e.index);
+        return self.nodes()[id].is_leaf() && have && e.bound <= best + 2.0 * self.winding_nodes()[id].radius;
+    }
+
+    bool open_node(const Entry& e) {
+        const int m = e.mesh;
+        const MeshBvh& self = m == 0 ? a_ : b_;
+        const MeshBvh& other = m == 0 ? b_ : a_;
+        const BvhNode& node = self.nodes()[static_cast<size_t>(e.index)];
+        if (!node.is_leaf()) {
+            push_node(m, e.index + 1, e.near);
+            push_node(m, node.index, e.near);
+            return true;
+        }
+        const Vec3* near = other.triangle(e.near);
+        for (std::int32_t i = node.index; i < node.index + node.count; ++i)
+            for (int k = 0; k < 3; ++k) {
+                const std::int32_t v = self.triangle_vertices(i)[k];
+                char& done = done_[m][static_cast<size_t>(v)];
+                if (done) continue;
+                done = 1;
+                Side& side = side_[m][static_cast<size_t>(v)];
+                if (side == Side::OUTSIDE) continue;
+                const Vec3 p = to_other(m, self.vertices()[static_cast<size_t>(v)]);
+                // Bounded by the node's triangle and by the triangles near its own; a point at
+                // distance 0 from one (on the surface: the search would find 0) gives nothing.
+                double bound = triangle_distance_of(p, near);
+                const TriangleMarks& marks = *marks_[m];
+                for (std::int32_t n = marks.first[static_cast<size_t>(i)]; n < marks.first[static_cast<size_t>(i) + 1] && bound > 0.0; ++n)
+                    bound = min2(bound, triangle_distance_of(p, other.triangle(marks.others[static_cast<size_t>(n)])));
+                if (bound == 0.0 || !(bound + slack_ > best)) continue;
+                if (!try_point(m, p, side, &side, Order{m, 0, v, 0})) return false;
+            }
+        return true;
+    }
+
+    // Whether a point at distance d, `order` in the per-point search, would have replaced the
+    // best there: deeper, or as deep and sampled before it (so that the deepest point, and
+    // thus the witnesses, are the same whatever the order of work). A distance equal to the
+    // best that came from a search cut off at it (at most the best) is measured in full.
+    template <class Full>
+    bool beats(double& d, const Order& order, Full full) const {
+        if (d > best) return true;
+        if (!(have && d == best && order < winner_order_)) return false;
+        d = full();
+        return d == best;
+    }
+
+    // A point of mesh m (other's frame) whose side is `known` (UNKNOWN: an exact test, its
+    // verdict stored in `*store` when given): the new best when inside and deeper.
+    bool try_point(int m, const Vec3& p, Side known, Side* store, const Order& order) {
+        const MeshBvh& other = m == 0 ? b_ : a_;
+        std::int32_t triangle = -1;
+        double d = distance_beyond(other, p, best, &triangle);
+        if (!beats(d, order, [&] { return distance_beyond(other, p, 0.0, &triangle); })) return true;
+        if (known == Side::UNKNOWN) {
+            if (!may_test()) return false;
+            known = inside_mesh(other, p, &work_) ? Side::INSIDE : Side::OUTSIDE;
+            if (store != nullptr) *store = known;
+        }
+        if (known == Side::INSIDE) {
+            best = d;
+            winner = {p, d, m, false};
+            winner_triangle = triangle;
+            winner_order_ = order;
+            have = true;
+        }
+        return true;
+    }
+
+    bool try_wedge(DepthCandidate& c, const Order& order) {
+        // Outside a closed mesh's box is outside it (the test's verdict, without its work).
+        const Vec3 in_b = rel_.apply_inverse(c.point);
+        if (!inside_box(a_.nodes()[0], c.point) || !inside_box(b_.nodes()[0], in_b)) return true;
+        auto measure = [&](double floor) {
+            const double da = distance_beyond(a_, c.point, floor);
+            const double db = distance_beyond(b_, rel_.apply_inverse(c.point), floor);
+            c.farther_is_a = da >= db;
+            return std::fmax(da, db);
+        };
+        c.distance = measure(best);
+        if (!beats(c.distance, order, [&] { return measure(0.0); })) return true;
+        if (!may_test()) return false;
+        if (inside_mesh(a_, c.point, &work_) && inside_mesh(b_, in_b, &work_)) {
+            best = c.distance;
+            winner = c;
+            winner_triangle = -1;
+            winner_order_ = order;
+            have = true;
+        }
+        return true;
+    }
+
+    // Counts one exact inside test, or stops at the work cap.
+    bool may_test() {
+        if (work_ > defaults::mesh_depth_max_work) {
+            out_.status = Status::MAX_ITERATIONS;
+            return false;
+        }
+        ++out_.points_tested;
+        return true;
+    }
+
+    const MeshBvh& a_;
+    const MeshBvh& b_;
+    const Relative& rel_;
+    MeshDepthOutput& out_;
+    double slack_;  // allowance for rounding in the distance bounds (absolute)
+    long long work_ = 0;
+    std::vector<Side> side_[2];
+    std::vector<char> done_[2];
+    std::vector<char> live_[2];
+    const TriangleMarks* marks_[2] = {nullptr, nullptr};
+    const std::vector<CrossingPair>* pairs_ = nullptr;
+    std::vector<DepthCandidate> wedges_;  // scratch: one pair's wedge points
+    std::vector<Entry> heap_;
+    Order winner_order_{};
+};
+
+}  // namespace
+
+namespace mesh_detail {
+
+ClosedDepth search_closed_depth(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
+                                const TriangleMarks& marks_a, const TriangleMarks& marks_b,
+                                const std::vector<CrossingPair>& crossing_pairs, MeshDepthOutput& out) {
+    ClosedDepthSearch search(a, b, rel, out);
+    const bool closed_other[2] = {b.closed(), a.closed()};
+    bool running = true;
+    for (int m = 0; m < 2 && running; ++m)
+        if (closed_other[m]) running = search.add_mesh(m, m == 0 ? marks_a : marks_b);
+    if (running) running = search.run();  // the vertices first: a best depth to prune with
+    for (int m = 0; m < 2 && running; ++m)
+        if (closed_other[m]) search.add_edges(m);
+    if (running && a.closed() && b.closed()) search.add_wedges(crossing_pairs);
+    if (running) running = search.run();
+    ClosedDepth found;
+    found.best = search.best;
+    found.have = search.have;
+    found.winner = search.winner;
+    found.winner_triangle = search.winner_triangle;
+    found.work = search.work();
+    found.running = running;
+    return found;
+}
+
+}  // namespace mesh_detail
+}  // namespace meshcol

@@ -1,0 +1,292 @@
+// Mesh-mesh distance and the closest point of a mesh to a point.
+//
+// The distance search is a depth-first branch and bound over node pairs (Larsen, Gottschalk,
+// Lin and Manocha 1999, "Fast proximity queries with swept sphere volumes"; FCL's
+// MeshDistanceTraversalNode): the closer child pair is visited first so a good bound arrives
+// early, and pairs whose box distance cannot beat the best distance so far are dropped. The
+// pair is first tried for a crossing (mesh_intersection.cpp) and, when its surfaces are
+// disjoint, for containment (mesh_winding.cpp).
+#include <algorithm>
+#include <cmath>
+#include <utility>
+#include <vector>
+
+#include "meshcol/mesh_query.hpp"
+#include "meshcol/triangle.hpp"
+#include "mesh_query_detail.hpp"
+
+namespace meshcol {
+using namespace mesh_detail;
+namespace {
+
+// A lower bound of the squared distance between the oriented boxes of node a and node b: the
+// largest of the gap of their projections on the line through the centres (a separating-axis
+// candidate, Gottschalk, Lin and Manocha 1996) and the box distances in a's and in b's box
+// frame (the nine edge-pair axes of the overlap test cost more than they prune here). The centre line comes first and needs no relative rotation of the boxes: when
+// it alone reaches `enough2` (a bound that already prunes the pair), the rest is skipped.
+inline double obb_squared_distance(const NodeObb& a, const NodeObb& b, const Relative& rel, double enough2) {
+    const Vec3 d = rel.apply(b.center) - a.center;  // a's local frame
+    const Vec3 t = a.axes * d;                      // a's box frame
+    const Vec3 tb = b.axes * rel.rotation.transpose_times(d);  // b's box frame
+    double best = 0.0;
+    const double length2 = dot(d, d);
+    if (length2 > 0.0) {
+        const double length = std::sqrt(length2);
+        const double reach = std::fabs(t.x) * a.half.x + std::fabs(t.y) * a.half.y + std::fabs(t.z) * a.half.z +
+                             std::fabs(tb.x) * b.half.x + std::fabs(tb.y) * b.half.y + std::fabs(tb.z) * b.half.z;
+        best = max2(0.0, length - reach / length - rel.slack);
+        if (best > 0.0 && best * best >= enough2) return best * best;
+    }
+    double abs_c[3][3];  // |a_i . b_j|, both axes in a's local frame
+    for (int j = 0; j < 3; ++j) {
+        const Vec3 bj = rel.rotation * b.axes.row(j);
+        for (int i = 0; i < 3; ++i) abs_c[i][j] = std::fabs(dot(a.axes.row(i), bj));
+    }
+    // In a's box frame, b's box lies in the axis-aligned box of half extents
+    // sum_j |a_i . b_j| b.half_j about t: the distance between that box and a's box bounds the
+    // distance from below (exactly the box distance when the boxes are aligned); likewise in
+    // b's box frame.
+    double in_a = 0.0, in_b = 0.0;
+    for (int i = 0; i < 3; ++i) {
+        const double gap = std::fabs(t[i]) - a.half[i] -
+                           (abs_c[i][0] * b.half.x + abs_c[i][1] * b.half.y + abs_c[i][2] * b.half.z) - rel.slack;
+        if (gap > 0.0) in_a += gap * gap;
+    }
+    for (int j = 0; j < 3; ++j) {
+        const double gap = std::fabs(tb[j]) - (a.half.x * abs_c[0][j] + a.half.y * abs_c[1][j] + a.half.z * abs_c[2][j]) -
+                           b.half[j] - rel.slack;
+        if (gap > 0.0) in_b += gap * gap;
+    }
+    return max2(best * best, max2(in_a, in_b));
+}
+
+// The distance between node a's axis-aligned box and the axis-aligned box (in a's frame)
+// enclosing node b's: exact under pure translation, looser the more b is rotated.
+inline double aabb_squared_distance(const BvhNode& na, const BvhNode& nb, const Relative& rel) {
+    double d2 = 0.0;
+    const Vec3 b_center = rel.apply(Vec3{0.5 * (static_cast<double>(nb.lower[0]) + nb.upper[0]),
+                                         0.5 * (static_cast<double>(nb.lower[1]) + nb.upper[1]),
+                                         0.5 * (static_cast<double>(nb.lower[2]) + nb.upper[2])});
+    const Vec3 b_half = rel.abs_rotation * Vec3{0.5 * (static_cast<double>(nb.upper[0]) - nb.lower[0]),
+                                                0.5 * (static_cast<double>(nb.upper[1]) - nb.lower[1]),
+                                                0.5 * (static_cast<double>(nb.upper[2]) - nb.lower[2])};
+    for (int k = 0; k < 3; ++k) {
+        const double gap = max2(static_cast<double>(na.lower[k]) - (b_center[k] + b_half[k]),
+                                (b_center[k] - b_half[k]) - static_cast<double>(na.upper[k])) - rel.slack;
+        if (gap > 0.0) d2 += gap * gap;
+    }
+    return d2;
+}
+
+// Lower bound of the distance between triangles a and b from their projections on the line
+// through their centroids (separating-axis bound): tight when the triangles are far apart
+// relative to their size, where the box bound is loose. Returns a squared distance.
+inline double triangle_axis_squared_distance(const Vec3 a[3], const Vec3 b[3]) {
+    const Vec3 axis = (b[0] + b[1] + b[2]) - (a[0] + a[1] + a[2]);
+    const double a_max = max2(dot(axis, a[0]), max2(dot(axis, a[1]), dot(axis, a[2])));
+    const double b_min = min2(dot(axis, b[0]), min2(dot(axis, b[1]), dot(axis, b[2])));
+    const double gap = b_min - a_max;
+    return gap > 0.0 ? gap * gap / dot(axis, axis) : 0.0;
+}
+
+struct StackItem {
+    std::int32_t a, b;
+    double bound;  // squared box distance when pushed
+};
+
+struct SearchResult {
+    bool found = false;         // a pair within the bound was found
+    bool intersecting = false;  // a triangle pair intersects
+    double squared_distance = kInf;
+    Vec3 point_a, point_b;      // a's frame
+    std::int32_t triangle_a = -1, triangle_b = -1;  // leaf order
+};
+
+// Branch and bound over node pairs. `bound2` is the squared max_distance.
+SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative& rel, double bound2) {
+    SearchResult r;
+    r.squared_distance = bound2;
+    // A pair at exactly max_distance still counts, so before the first find the test is strict.
+    auto pruned = [&r](double lb2) { return r.found ? lb2 >= r.squared_distance : lb2 > r.squared_distance; };
+    const std::vector<BvhNode>& na = a.nodes();
+    const std::vector<BvhNode>& nb = b.nodes();
+    const std::vector<NodeObb>& oa = a.obbs();
+    const std::vector<NodeObb>& ob = b.obbs();
+    std::vector<StackItem> stack;
+    stack.reserve(128);
+    const double root2 = obb_squared_distance(oa[0], ob[0], rel, bound2);
+    if (pruned(root2)) return r;
+    stack.push_back({0, 0, root2});
+    MappedLeaf leaf_b;
+    while (!stack.empty()) {
+        const StackItem item = stack.back();
+        stack.pop_back();
+        if (pruned(item.bound)) continue;
+        const BvhNode& x = na[static_cast<size_t>(item.a)];
+        const BvhNode& y = nb[static_cast<size_t>(item.b)];
+        if (x.is_leaf() && y.is_leaf()) {
+            leaf_b.load(b, y, rel);
+            for (std::int32_t i = x.index; i < x.index + x.count; ++i) {
+                const Vec3* ta = a.triangle(i);
+                const TriangleBox box_a = triangle_box(ta);
+                for (int j = 0; j < leaf_b.count; ++j) {
+                    const double lb2 = triangle_box_squared_distance(box_a, leaf_b.boxes[j]);
+                    if (lb2 == 0.0) {
+                        Vec3 w;
+                        if (triangles_intersect(ta, leaf_b.corners[j], &w)) {
+                            r.found = r.intersecting = true;
+                            r.squared_distance = 0.0;
+                            r.point_a = r.point_b = w;
+                            r.triangle_a = i;
+                            r.triangle_b = y.index + j;
+                            return r;
+                        }
+                    }
+                    if (pruned(lb2) || pruned(triangle_axis_squared_distance(ta, leaf_b.corners[j]))) continue;
+                    Vec3 pa, pb;
+                    const double d2 = triangle_separated_squared_distance(ta, leaf_b.corners[j], &pa, &pb);
+                    if (!pruned(d2)) {
+                        r.found = true;
+                        r.squared_distance = d2;
+                        r.point_a = pa;
+                        r.point_b = pb;
+                        r.triangle_a = i;
+                        r.triangle_b = y.index + j;
+                    }
+                }
+            }
+            // Touching without a detected intersection (rounding): nothing can beat zero.
+            if (r.found && r.squared_distance == 0.0) return r;
+            continue;
+        }
+        // Descend the larger box (or the only internal one); push the farther child first so
+        // the closer one is popped next.
+        const bool descend_a = !x.is_leaf() && (y.is_leaf() || node_size(x) >= node_size(y));
+        StackItem c1, c2;
+        if (descend_a) {
+            c1 = {item.a + 1, item.b, 0.0};
+            c2 = {x.index, item.b, 0.0};
+        } else {
+            c1 = {item.a, item.b + 1, 0.0};
+            c2 = {item.a, y.index, 0.0};
+        }
+        c1.bound = obb_squared_distance(oa[static_cast<size_t>(c1.a)], ob[static_cast<size_t>(c1.b)], rel, r.squared_distance);
+        c2.bound = obb_squared_distance(oa[static_cast<size_t>(c2.a)], ob[static_cast<size_t>(c2.b)], rel, r.squared_distance);
+        if (rel.aligned) {
+            c1.bound = max2(c1.bound, aabb_squared_distance(na[static_cast<size_t>(c1.a)], nb[static_cast<size_t>(c1.b)], rel));
+            c2.bound = max2(c2.bound, aabb_squared_distance(na[static_cast<size_t>(c2.a)], nb[static_cast<size_t>(c2.b)], rel));
+        }
+        if (c1.bound > c2.bound) std::swap(c1, c2);
+        if (!pruned(c2.bound)) stack.push_back(c2);
+        if (!pruned(c1.bound)) stack.push_back(c1);
+    }
+    return r;
+}
+
+// Whether `point` (world frame) is inside `mesh` posed at `pose`.
+bool point_inside(const MeshBvh& mesh, const Pose& pose, const Vec3& point) {
+    const Vec3 local = pose.apply_inverse(point);
+    if (!inside_box(mesh.nodes()[0], local)) return false;
+    return winding_number_inside(mesh, local);
+}
+
+}  // namespace
+
+PointDistanceOutput closest_point(const MeshBvh& mesh, const Vec3& point) {
+    PointDistanceOutput out;
+    if (!mesh.valid() || !is_finite(point)) {
+        out.distance = kNaN;
+        out.point = Vec3{kNaN, kNaN, kNaN};
+        return out;
+    }
+    const std::vector<BvhNode>& nodes = mesh.nodes();
+    double best2 = kInf;
+    std::int32_t best_triangle = -1;
+    Vec3 best_point;
+    std::vector<std::pair<std::int32_t, double>> stack;
+    stack.reserve(64);
+    stack.push_back({0, point_node_squared_distance(mesh, 0, point)});
+    while (!stack.empty()) {
+        const auto [index, bound] = stack.back();
+        stack.pop_back();
+        // Until a first triangle is measured nothing is pruned (an overflowing inf bound).
+        const bool found = best_triangle >= 0;
+        if (found && bound >= best2) continue;
+        const BvhNode& node = nodes[static_cast<size_t>(index)];
+        if (node.is_leaf()) {
+            for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
+                const Vec3 q = closest_point_on_triangle(point, mesh.triangle(i));
+                const double d2 = squared_norm(q - point);
+                if (best_triangle < 0 || d2 < best2) {
+                    best2 = d2;
+                    best_point = q;
+                    best_triangle = i;
+                }
+            }
+            continue;
+        }
+        push_children(mesh, index, point, found, best2, stack);
+    }
+    out.distance = std::sqrt(best2);
+    out.point = best_point;
+    out.triangle = mesh.face_index(best_triangle);
+    return out;
+}
+
+MeshDistanceOutput mesh_distance(const MeshDistanceInput& input) {
+    MeshDistanceOutput out;
+    const Vec3 nan3{kNaN, kNaN, kNaN};
+    if (input.a == nullptr || input.b == nullptr || !input.a->valid() || !input.b->valid() ||
+        !(input.max_distance >= 0.0)) {
+        out.distance = kNaN;
+        out.point_a = out.point_b = nan3;
+        out.status = Status::INVALID_INPUT;
+        return out;
+    }
+    if (!mesh_pair_in_range(*input.a, input.pose_a, *input.b, input.pose_b)) {
+        out.distance = kNaN;
+        out.point_a = out.point_b = nan3;
+        out.status = Status::OUT_OF_RANGE;
+        return out;
+    }
+    const MeshBvh& a = *input.a;
+    const MeshBvh& b = *input.b;
+    const Relative rel(input.pose_a, input.pose_b, *input.a, *input.b);
+    const double bound2 = input.max_distance * input.max_distance;
+    // Crossing surfaces are found sooner by the intersection descent, which tests triangle
+    // pairs whose boxes touch and measures nothing, than by the distance search, which measures
+    // every near triangle pair on its way to the first crossing one.
+    SearchResult r;
+    if (first_crossing(a, b, rel, &r.triangle_a, &r.triangle_b, &r.point_a)) {
+        r.found = r.intersecting = true;
+        r.squared_distance = 0.0;
+        r.point_b = r.point_a;
+    } else {
+        r = search_distance(a, b, rel, bound2);
+    }
+    if (r.found) {
+        out.distance = std::sqrt(r.squared_distance);
+        out.point_a = input.pose_a.apply(r.point_a);
+        out.point_b = r.intersecting ? out.point_a : input.pose_a.apply(r.point_b);
+        out.intersecting = r.intersecting || r.squared_distance == 0.0;
+        out.triangle_a = a.face_index(r.triangle_a);
+        out.triangle_b = b.face_index(r.triangle_b);
+    } else {
+        out.distance = kInf;
+        out.point_a = out.point_b = nan3;
+    }
+    // Nothing found within an infinite radius: the squared distances overflowed (coordinates
+    // beyond about 1e154); the distance is only known to be huge.
+    const bool overflowed = !std::isfinite(out.distance) && std::isinf(input.max_distance);
+    if (!out.intersecting) {
+        // Disjoint surfaces: each mesh is wholly inside or wholly outside the other, so one
+        // vertex decides (Jacobson et al. 2013). Its distance to the other surface is at least
+        // `distance` > 0, which keeps the winding number away from its jump.
+        out.a_inside_b = point_inside(b, input.pose_b, input.pose_a.apply(a.triangle(0)[0]));
+        out.b_inside_a = point_inside(a, input.pose_a, input.pose_b.apply(b.triangle(0)[0]));
+    }
+    out.status = overflowed ? Status::DEGENERATE : Status::CONVERGED;
+    return out;
+}
+
+}  // namespace meshcol

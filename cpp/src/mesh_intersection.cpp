@@ -1,0 +1,230 @@
+// Whether two meshes' surfaces meet: a descent of the pair's overlapping oriented boxes to
+// the exact triangle-pair tests (triangle.hpp), stopped at the first crossing pair, or run to
+// the end to mark every crossing and near triangle (the depth query's start); and where a
+// segment crosses a surface.
+#include <algorithm>
+#include <cmath>
+#include <utility>
+#include <vector>
+
+#include "meshcol/mesh_query.hpp"
+#include "meshcol/triangle.hpp"
+#include "mesh_query_detail.hpp"
+#include "rescale.hpp"
+
+namespace meshcol {
+using namespace mesh_detail;
+namespace {
+
+// Whether the oriented boxes a and b may overlap: no separating axis among those of
+// obb_squared_distance (the same tests, each lowered by the same slack), stopping at the first
+// that separates, and the centre line's tested without its square root and division
+// (length - reach / length > slack as length^2 - reach > slack * length, squared).
+inline bool obb_overlap(const NodeObb& a, const NodeObb& b, const Relative& rel) {
+    const Vec3 d = rel.apply(b.center) - a.center;  // a's local frame
+    const Vec3 t = a.axes * d;                      // a's box frame
+    const double length2 = dot(d, d);
+    const Vec3 tb = b.axes * rel.rotation.transpose_times(d);  // b's box frame
+    if (length2 > 0.0) {
+        const double reach = std::fabs(t.x) * a.half.x + std::fabs(t.y) * a.half.y + std::fabs(t.z) * a.half.z +
+                             std::fabs(tb.x) * b.half.x + std::fabs(tb.y) * b.half.y + std::fabs(tb.z) * b.half.z;
+        const double excess = length2 - reach;
+        if (excess > 0.0 && excess * excess > rel.slack * rel.slack * length2) return false;
+    }
+    double abs_c[3][3];  // |a_i . b_j|, both axes in a's local frame
+    for (int j = 0; j < 3; ++j) {
+        const Vec3 bj = rel.rotation * b.axes.row(j);
+        for (int i = 0; i < 3; ++i) abs_c[i][j] = std::fabs(dot(a.axes.row(i), bj));
+    }
+    for (int i = 0; i < 3; ++i)
+        if (std::fabs(t[i]) - a.half[i] - (abs_c[i][0] * b.half.x + abs_c[i][1] * b.half.y + abs_c[i][2] * b.half.z) -
+                rel.slack > 0.0)
+            return false;
+    for (int j = 0; j < 3; ++j)
+        if (std::fabs(tb[j]) - (a.half.x * abs_c[0][j] + a.half.y * abs_c[1][j] + a.half.z * abs_c[2][j]) - b.half[j] -
+                rel.slack > 0.0)
+            return false;
+    return true;
+}
+
+// Whether the oriented boxes of node pair (a node, b node) may overlap (obb_overlap).
+inline bool boxes_overlap(const MeshBvh& a, const MeshBvh& b, std::pair<std::int32_t, std::int32_t> pair,
+                          const Relative& rel) {
+    return obb_overlap(a.obbs()[static_cast<size_t>(pair.first)], b.obbs()[static_cast<size_t>(pair.second)], rel);
+}
+
+// A last-in first-out stack of node pairs held in the caller's frame up to 64 entries (a
+// depth-first descent of two balanced hierarchies needs about their summed depths, 40 for a
+// million triangles each) and in a vector beyond: a query that descends a few levels
+// allocates nothing (a heap allocation costs as much as a root-box test).
+class NodePairStack {
+public:
+    struct Item {
+        std::int32_t a, b;
+    };
+    bool empty() const { return size_ == 0; }
+    void push(std::int32_t a, std::int32_t b) {
+        if (size_ < kInline) {
+            inline_[size_] = Item{a, b};
+        } else {
+            spill_.push_back(Item{a, b});
+        }
+        ++size_;
+    }
+    Item pop() {
+        --size_;
+        if (size_ < kInline) return inline_[size_];
+        const Item top = spill_.back();
+        spill_.pop_back();
+        return top;
+    }
+
+private:
+    static constexpr int kInline = 64;
+    Item inline_[kInline];
+    std::vector<Item> spill_;
+    int size_ = 0;
+};
+
+// The descent of overlapping oriented boxes shared by the intersection queries: calls
+// `visit(i, j, ta, tb)` for each triangle pair (leaf order i of a, j of b; b's corners mapped
+// into a's frame) whose boxes touch (are at most sqrt(margin2) apart), in depth-first order,
+// until it returns true. Returns whether a visit stopped the descent.
+template <class Visit>
+bool for_each_touching_pair(const MeshBvh& a, const MeshBvh& b, const Relative& rel, Visit visit,
+                            double margin2 = 0.0) {
+    const std::vector<BvhNode>& na = a.nodes();
+    const std::vector<BvhNode>& nb = b.nodes();
+    if (!boxes_overlap(a, b, {0, 0}, rel)) return false;
+    NodePairStack stack;
+    stack.push(0, 0);
+    MappedLeaf leaf_b;
+    while (!stack.empty()) {
+        const auto [ia, ib] = stack.pop();
+        const BvhNode& x = na[static_cast<size_t>(ia)];
+        const BvhNode& y = nb[static_cast<size_t>(ib)];
+        if (x.is_leaf() && y.is_leaf()) {
+            leaf_b.load(b, y, rel);
+            for (std::int32_t i = x.index; i < x.index + x.count; ++i) {
+                const Vec3* ta = a.triangle(i);
+                const TriangleBox box_a = triangle_box(ta);
+                for (int j = 0; j < leaf_b.count; ++j)
+                    if (triangle_box_squared_distance(box_a, leaf_b.boxes[j]) <= margin2 &&
+                        visit(i, y.index + j, ta, leaf_b.corners[j]))
+                        return true;
+            }
+            continue;
+        }
+        const bool descend_a = !x.is_leaf() && (y.is_leaf() || node_size(x) >= node_size(y));
+        const std::pair<std::int32_t, std::int32_t> c1 = descend_a ? std::make_pair(ia + 1, ib) : std::make_pair(ia, ib + 1);
+        const std::pair<std::int32_t, std::int32_t> c2 = descend_a ? std::make_pair(x.index, ib) : std::make_pair(ia, y.index);
+        if (boxes_overlap(a, b, c2, rel)) stack.push(c2.first, c2.second);
+        if (boxes_overlap(a, b, c1, rel)) stack.push(c1.first, c1.second);
+    }
+    return false;
+}
+
+// The near pairs (index into a, index into b) grouped by `side`'s triangle.
+void group_near_pairs(const std::vector<std::pair<std::int32_t, std::int32_t>>& pairs, int side,
+                      std::int32_t count, TriangleMarks& marks) {
+    marks.first.assign(static_cast<size_t>(count) + 1, 0);
+    for (const auto& pair : pairs) ++marks.first[static_cast<size_t>(side == 0 ? pair.first : pair.second) + 1];
+    for (size_t i = 0; i < static_cast<size_t>(count); ++i) marks.first[i + 1] += marks.first[i];
+    marks.others.resize(pairs.size());
+    std::vector<std::int32_t> next(marks.first.begin(), marks.first.end() - 1);
+    for (const auto& pair : pairs) {
+        const auto [mine, theirs] = side == 0 ? pair : std::make_pair(pair.second, pair.first);
+        marks.others[static_cast<size_t>(next[static_cast<size_t>(mine)]++)] = theirs;
+    }
+}
+
+}  // namespace
+
+namespace mesh_detail {
+
+bool first_crossing(const MeshBvh& a, const MeshBvh& b, const Relative& rel, std::int32_t* triangle_a,
+                    std::int32_t* triangle_b, Vec3* witness) {
+    return for_each_touching_pair(a, b, rel, [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
+        Vec3 w;
+        if (!triangles_intersect(ta, tb, &w)) return false;
+        *witness = w;
+        *triangle_a = i;
+        *triangle_b = j;
+        return true;
+    });
+}
+
+// The descent of mesh_intersects run to the end: the intersecting triangle pairs in descent
+// order, and the marks of both meshes' triangles. Triangle pairs whose boxes are within
+// rel.slack are visited too, to mark the near ones: the node bounds are lowered by rel.slack,
+// so a triangle pair closer than that is never pruned.
+void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative& rel, TriangleMarks& in_a,
+                             TriangleMarks& in_b, std::vector<CrossingPair>& pairs) {
+    pairs.clear();
+    for (auto [marks, mesh] : {std::make_pair(&in_a, &a), std::make_pair(&in_b, &b)}) {
+        marks->crossing.assign(static_cast<size_t>(mesh->triangle_count()), 0);
+        marks->near.assign(static_cast<size_t>(mesh->triangle_count()), 0);
+        marks->partner.assign(static_cast<size_t>(mesh->triangle_count()), -1);
+    }
+    std::vector<std::pair<std::int32_t, std::int32_t>> near_pairs;
+    for_each_touching_pair(
+        a, b, rel,
+        [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
+            const auto si = static_cast<size_t>(i), sj = static_cast<size_t>(j);
+            in_a.near[si] = in_b.near[sj] = 1;
+            near_pairs.push_back({i, j});
+            if (triangle_box_squared_distance(triangle_box(ta), triangle_box(tb)) == 0.0 &&
+                triangles_intersect(ta, tb, nullptr)) {
+                in_a.crossing[si] = in_b.crossing[sj] = 1;
+                if (in_a.partner[si] < 0) in_a.partner[si] = j;
+                if (in_b.partner[sj] < 0) in_b.partner[sj] = i;
+                pairs.push_back({i, j});
+            }
+            return false;
+        },
+        rel.slack * rel.slack);
+    group_near_pairs(near_pairs, 0, a.triangle_count(), in_a);
+    group_near_pairs(near_pairs, 1, b.triangle_count(), in_b);
+}
+
+// Parameters along [p, q] (mesh's local frame) where the segment meets the mesh's surface in
+// isolated points, appended to `out`.
+void segment_crossings(const MeshBvh& mesh, const Vec3& p, const Vec3& q, std::vector<double>& out) {
+    const Vec3 d = q - p;
+    const std::vector<BvhNode>& nodes = mesh.nodes();
+    std::vector<std::int32_t> stack{0};
+    while (!stack.empty()) {
+        const std::int32_t id = stack.back();
+        const BvhNode& node = nodes[static_cast<size_t>(id)];
+        stack.pop_back();
+        if (!segment_may_meet_box(node, p, d)) continue;
+        if (node.is_leaf()) {
+            for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
+                double s = 0.0;
+                if (segment_crosses_triangle(p, q, mesh.triangle(i), &s)) out.push_back(s);
+            }
+            continue;
+        }
+        stack.push_back(node.index);
+        stack.push_back(id + 1);
+    }
+}
+
+}  // namespace mesh_detail
+
+bool mesh_intersects(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b, const Pose& pose_b) {
+    return for_each_touching_pair(a, b, Relative(pose_a, pose_b, a, b), [](std::int32_t, std::int32_t, const Vec3* ta, const Vec3* tb) {
+        return triangles_intersect(ta, tb, nullptr);
+    });
+}
+
+bool mesh_pair_in_range(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b,
+                        const Pose& pose_b) {
+    // The reach of each mesh about its origin (the far corner of its root box), kept at build.
+    double half = 0.5 * max2(a.box_reach(), b.box_reach());
+    rescale::reach(half, pose_a.translation, pose_b.translation);
+    return std::isfinite(half) && (half == 0.0 || (2.0 * half >= rescale::kSafeLow &&
+                                                   2.0 * half <= rescale::kSafeHigh));
+}
+
+}  // namespace meshcol

@@ -1,0 +1,219 @@
+#pragma once
+// The pieces the mesh-pair queries share (mesh_distance.cpp, mesh_intersection.cpp,
+// mesh_depth.cpp, mesh_depth_closed.cpp, mesh_winding.cpp): the relative frame of a pair, the
+// bounds of node and triangle boxes, the point-to-node bound of the point searches, and the
+// entry points one query file offers another. Private to the core.
+//
+// All the pair work happens in a's local frame: b's triangles are mapped there at the leaves,
+// and node pairs are bounded by their oriented boxes (NodeObb: thin along the normal of a
+// nearly flat patch, whatever the poses), whose separating-axis gaps bound the distance from
+// below.
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <utility>
+#include <vector>
+
+#include "meshcol/defaults.hpp"
+#include "meshcol/mesh_bvh.hpp"
+#include "meshcol/vec.hpp"
+
+namespace meshcol::mesh_detail {
+
+inline constexpr double kInf = std::numeric_limits<double>::infinity();
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+inline constexpr double kPi = 3.14159265358979323846;
+
+// Minimum and maximum without the NaN rules of std::fmin / std::fmax, which compilers do not
+// inline (a library call each in the hottest loops); the bounds they feed are finite or +inf.
+inline double min2(double x, double y) { return y < x ? y : x; }
+inline double max2(double x, double y) { return y > x ? y : x; }
+inline Vec3 min3(const Vec3& a, const Vec3& b) { return {min2(a.x, b.x), min2(a.y, b.y), min2(a.z, b.z)}; }
+inline Vec3 max3(const Vec3& a, const Vec3& b) { return {max2(a.x, b.x), max2(a.y, b.y), max2(a.z, b.z)}; }
+
+// The rigid map from b's local frame to a's local frame, and back.
+struct Relative {
+    Mat3 rotation;
+    Mat3 abs_rotation;  // |rotation| element-wise, maps half extents to enclosing half extents
+    Vec3 translation;
+    // The frames are nearly aligned (b's boxes grow by under 5% when enclosed in a's frame):
+    // the axis-aligned boxes are then nearly in a shared frame and bound tighter than the
+    // oriented ones for nodes whose orientations differ.
+    bool aligned = false;
+
+    // Rounding allowance of a box bound: the oriented boxes are padded by 1e-12 of their own
+    // coordinates only, while mapping b's boxes rounds at the scale of the translation too.
+    // Every bound is lowered by this (about 500 ulps of the pair's largest length), so rounding
+    // can only keep a node pair, never drop one.
+    double slack = 0.0;
+
+    Relative(const Pose& pose_a, const Pose& pose_b, const MeshBvh& a, const MeshBvh& b) {
+        // Equal rotations give the identity exactly: R^T R rounds otherwise, and a copy of a
+        // mesh at the same pose (a duplicated prop) would be moved off itself by that rounding,
+        // so that the exact triangle tests could find its coincident surfaces apart.
+        bool same_rotation = true;
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j)
+                same_rotation = same_rotation && pose_a.rotation.m[i][j] == pose_b.rotation.m[i][j];
+        if (same_rotation) {
+            for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j) rotation.m[i][j] = i == j ? 1.0 : 0.0;
+        } else {
+            rotation = pose_a.rotation.transposed() * pose_b.rotation;
+        }
+        translation = pose_a.rotation.transpose_times(pose_b.translation - pose_a.translation);
+        slack = 1e-13 * (max_abs(translation) + a.obb_reach() + b.obb_reach());
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) abs_rotation.m[i][j] = std::fabs(rotation.m[i][j]);
+        aligned = true;
+        for (int i = 0; i < 3; ++i)
+            aligned = aligned && abs_rotation.m[i][0] + abs_rotation.m[i][1] + abs_rotation.m[i][2] < 1.05;
+    }
+    Vec3 apply(const Vec3& p) const { return rotation * p + translation; }
+    Vec3 apply_inverse(const Vec3& p) const { return rotation.transpose_times(p - translation); }
+};
+
+inline double node_size(const BvhNode& n) {
+    return (static_cast<double>(n.upper[0]) - n.lower[0]) + (static_cast<double>(n.upper[1]) - n.lower[1]) +
+           (static_cast<double>(n.upper[2]) - n.lower[2]);
+}
+
+struct TriangleBox {
+    Vec3 lower, upper;
+};
+
+inline TriangleBox triangle_box(const Vec3 t[3]) {
+    return {min3(t[0], min3(t[1], t[2])), max3(t[0], max3(t[1], t[2]))};
+}
+
+inline double triangle_box_squared_distance(const TriangleBox& a, const TriangleBox& b) {
+    double d2 = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        double gap = a.lower[k] - b.upper[k];
+        if (gap < 0.0) gap = b.lower[k] - a.upper[k];
+        if (gap > 0.0) d2 += gap * gap;
+    }
+    return d2;
+}
+
+// b's leaf triangles mapped into a's frame, with their boxes.
+struct MappedLeaf {
+    // Left uninitialised (a union member without an initialiser): `load` writes the first
+    // `count` entries before any is read (zeroing them all shows on a query that reaches a leaf).
+    union {
+        Vec3 corners[defaults::mesh_bvh_leaf_size][3];
+    };
+    union {
+        TriangleBox boxes[defaults::mesh_bvh_leaf_size];
+    };
+    int count = 0;
+
+    MappedLeaf() {}
+
+    void load(const MeshBvh& mesh, const BvhNode& leaf, const Relative& rel) {
+        count = leaf.count;
+        for (int i = 0; i < count; ++i) {
+            const Vec3* t = mesh.triangle(leaf.index + i);
+            for (int k = 0; k < 3; ++k) corners[i][k] = rel.apply(t[k]);
+            boxes[i] = triangle_box(corners[i]);
+        }
+    }
+};
+
+inline bool inside_box(const BvhNode& n, const Vec3& p) {
+    for (int k = 0; k < 3; ++k)
+        if (!(p[k] >= n.lower[k] && p[k] <= n.upper[k])) return false;
+    return true;
+}
+
+// Whether the segment p + s (q - p), s in [0, 1], may meet node n's box: the slab test on the
+// box grown by a relative margin, so rounding can only keep a box, never drop one.
+inline bool segment_may_meet_box(const BvhNode& n, const Vec3& p, const Vec3& d) {
+    double lo = 0.0, hi = 1.0;
+    for (int k = 0; k < 3; ++k) {
+        const double margin = 1e-9 * (std::fabs(n.lower[k]) + std::fabs(n.upper[k])) + 1e-300;
+        const double a = static_cast<double>(n.lower[k]) - margin;
+        const double b = static_cast<double>(n.upper[k]) + margin;
+        if (d[k] == 0.0) {
+            if (p[k] < a || p[k] > b) return false;
+            continue;
+        }
+        double s0 = (a - p[k]) / d[k], s1 = (b - p[k]) / d[k];
+        if (s0 > s1) std::swap(s0, s1);
+        if (s0 > lo) lo = s0;
+        if (s1 < hi) hi = s1;
+        if (lo > hi) return false;
+    }
+    return true;
+}
+
+// A triangle pair of a and b that intersect (touching counts), in leaf order.
+struct CrossingPair {
+    std::int32_t a, b;
+};
+
+// What the descent of the depth query learns about each mesh's triangles (leaf order).
+struct TriangleMarks {
+    std::vector<char> crossing;  // intersects (touches) the other surface
+    // Within the other mesh's rounding allowance of its surface (every crossing one too): a
+    // triangle not near is farther than rel.slack from every triangle of the other mesh.
+    std::vector<char> near;
+    std::vector<std::int32_t> partner;  // a triangle of the other mesh it crosses, else -1
+    // The triangles of the other mesh near triangle i: others[first[i] .. first[i + 1]).
+    std::vector<std::int32_t> first, others;
+};
+
+// Lower bound of the squared distance from `point` to the triangles of node `id`: the distance
+// to its oriented box. A patch's box is a thin slab along its mean normal, so from a point
+// deep inside a closed mesh (the depth query's points) the bound is nearly the distance itself,
+// where the axis-aligned box of a slanted patch reaches far towards the point and prunes
+// little. The box is padded by 1e-12 of its coordinates (MeshBvh::build_obbs), above the
+// rounding of the projections here for any point within reach of it; a far point's rounding,
+// relative to its distance, is covered by lowering the bound by a relative 1e-9. A projection
+// that overflows gives NaN, which adds nothing: the bound only falls.
+inline double point_node_squared_distance(const MeshBvh& mesh, std::int32_t id, const Vec3& point) {
+    const NodeObb& box = mesh.obbs()[static_cast<size_t>(id)];
+    const Vec3 local = box.axes * (point - box.center);
+    double d2 = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        const double gap = std::fabs(local[k]) - box.half[k];
+        if (gap > 0.0) d2 += gap * gap;
+    }
+    return d2 * (1.0 - 1e-9);
+}
+
+// The child step of the point-to-mesh branch and bound (closest_point, distance_beyond): the
+// children of internal node `index` with their box distances to `point`, pushed farther first
+// so that the closer one is searched next; once a triangle was measured (`found`), only those
+// closer than `best2`.
+inline void push_children(const MeshBvh& mesh, std::int32_t index, const Vec3& point, bool found, double best2,
+                          std::vector<std::pair<std::int32_t, double>>& stack) {
+    const auto child = [&](std::int32_t i) { return std::make_pair(i, point_node_squared_distance(mesh, i, point)); };
+    std::pair<std::int32_t, double> near = child(index + 1), far = child(mesh.nodes()[static_cast<size_t>(index)].index);
+    if (near.second > far.second) std::swap(near, far);
+    if (!found || far.second < best2) stack.push_back(far);
+    if (!found || near.second < best2) stack.push_back(near);
+}
+
+// Entry points of one query file for the others.
+
+/// Whether `p` (mesh's local frame) is in the solid: |winding number| >= 1/2, exactly for a
+/// closed mesh (mesh_winding.cpp). Adds the work done to `*work`.
+bool inside_mesh(const MeshBvh& mesh, const Vec3& p, long long* work);
+
+/// The first intersecting triangle pair (leaf order) of the descent of mesh_intersects and a
+/// point they share (a's frame); false when the surfaces do not meet (mesh_intersection.cpp).
+bool first_crossing(const MeshBvh& a, const MeshBvh& b, const Relative& rel, std::int32_t* triangle_a,
+                    std::int32_t* triangle_b, Vec3* witness);
+
+/// The descent of mesh_intersects run to the end: the intersecting triangle pairs in descent
+/// order, and the marks of both meshes' triangles (mesh_intersection.cpp).
+void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative& rel, TriangleMarks& in_a,
+                             TriangleMarks& in_b, std::vector<CrossingPair>& pairs);
+
+/// Parameters along [p, q] (mesh's local frame) where the segment meets the mesh's surface in
+/// isolated points, appended to `out` (mesh_intersection.cpp).
+void segment_crossings(const MeshBvh& mesh, const Vec3& p, const Vec3& q, std::vector<double>& out);
+
+}  // namespace meshcol::mesh_detail

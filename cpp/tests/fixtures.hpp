@@ -1,0 +1,104 @@
+#pragma once
+/// Shapes, poses and meshes with known answers, shared by the test files.
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "meshcol/mesh_bvh.hpp"
+#include "meshcol/shapes.hpp"
+#include "meshcol/vec.hpp"
+
+namespace meshcol::fixtures {
+
+inline Pose at(double x, double y, double z) {
+    Pose p;
+    p.translation = {x, y, z};
+    return p;
+}
+
+/// Rotation by `angle` radians about z, placed at (x, y, z).
+inline Pose turned_about_z(double angle, double x, double y, double z) {
+    Pose p = at(x, y, z);
+    const double c = std::cos(angle), s = std::sin(angle);
+    p.rotation.m[0][0] = c;
+    p.rotation.m[0][1] = -s;
+    p.rotation.m[1][0] = s;
+    p.rotation.m[1][1] = c;
+    return p;
+}
+
+inline ShapeView box(double hx, double hy, double hz) {
+    ShapeView v;
+    v.kind = ShapeKind::BOX;
+    v.params[0] = hx;
+    v.params[1] = hy;
+    v.params[2] = hz;
+    return v;
+}
+
+inline ShapeView sphere(double radius) {
+    ShapeView v;
+    v.kind = ShapeKind::SPHERE;
+    v.params[0] = radius;
+    return v;
+}
+
+inline ShapeView capsule(double radius, double half_length) {
+    ShapeView v;
+    v.kind = ShapeKind::CAPSULE;
+    v.params[0] = radius;
+    v.params[1] = half_length;
+    return v;
+}
+
+/// The eight corners of the box [-h, h]^3 (x fastest).
+inline std::vector<Vec3> cube_corners(double h) {
+    std::vector<Vec3> corners;
+    for (int k = 0; k < 8; ++k)
+        corners.push_back({(k & 1) ? h : -h, (k & 2) ? h : -h, (k & 4) ? h : -h});
+    return corners;
+}
+
+/// A polytope view of `points` (no adjacency, no SAT features); `points` must outlive it.
+inline ShapeView polytope(const std::vector<Vec3>& points) {
+    ShapeView v;
+    v.kind = ShapeKind::POLYTOPE;
+    v.vertices = points.data();
+    v.vertex_count = static_cast<int>(points.size());
+    return v;
+}
+
+/// A closed, outward-wound triangle mesh: vertices (3 per vertex) and faces (3 per triangle).
+struct TriangleMesh {
+    std::vector<double> vertices;
+    std::vector<std::int64_t> faces;
+
+    MeshBvh bvh() const {
+        return MeshBvh(vertices.data(), static_cast<std::int64_t>(vertices.size() / 3), faces.data(),
+                       static_cast<std::int64_t>(faces.size() / 3));
+    }
+};
+
+/// The box [lo, hi] as 12 outward-wound triangles.
+inline TriangleMesh box_mesh(const Vec3& lo, const Vec3& hi) {
+    TriangleMesh m;
+    for (int k = 0; k < 8; ++k) {
+        m.vertices.push_back((k & 1) ? hi.x : lo.x);
+        m.vertices.push_back((k & 2) ? hi.y : lo.y);
+        m.vertices.push_back((k & 4) ? hi.z : lo.z);
+    }
+    // corner k has bit 0 = x, bit 1 = y, bit 2 = z; each face counter-clockwise from outside
+    const std::int64_t quads[6][4] = {
+        {0, 2, 3, 1},  // z = lo
+        {4, 5, 7, 6},  // z = hi
+        {0, 1, 5, 4},  // y = lo
+        {2, 6, 7, 3},  // y = hi
+        {0, 4, 6, 2},  // x = lo
+        {1, 3, 7, 5},  // x = hi
+    };
+    for (const auto& q : quads) m.faces.insert(m.faces.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
+    return m;
+}
+
+}  // namespace meshcol::fixtures

@@ -1,0 +1,126 @@
+// Mesh hierarchies and mesh-pair queries (mesh_bvh.hpp, mesh_query.hpp) on boxes whose
+// distances, crossings, containment and depths are known.
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "check.hpp"
+#include "fixtures.hpp"
+#include "meshcol/mesh_query.hpp"
+
+using namespace meshcol;
+using fixtures::at;
+
+namespace {
+
+MeshDistanceInput pair_of(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b, const Pose& pose_b) {
+    MeshDistanceInput in;
+    in.a = &a;
+    in.b = &b;
+    in.pose_a = pose_a;
+    in.pose_b = pose_b;
+    return in;
+}
+
+// The unit cube about the origin.
+fixtures::TriangleMesh unit_cube() { return fixtures::box_mesh({-0.5, -0.5, -0.5}, {0.5, 0.5, 0.5}); }
+
+}  // namespace
+
+TEST_CASE("mesh bvh: a box mesh builds a valid, closed hierarchy") {
+    const MeshBvh cube = unit_cube().bvh();
+    REQUIRE(cube.valid());
+    CHECK(cube.closed());
+    CHECK(cube.validate());
+    CHECK_EQ(cube.triangle_count(), 12);
+    CHECK_EQ(cube.vertices().size(), size_t{8});
+
+    fixtures::TriangleMesh open = unit_cube();
+    open.faces.resize(open.faces.size() - 6);  // drop the x = hi face: a hole
+    CHECK(!open.bvh().closed());
+
+    fixtures::TriangleMesh broken = unit_cube();
+    broken.vertices[4] = std::numeric_limits<double>::quiet_NaN();
+    CHECK(!broken.bvh().valid());
+}
+
+TEST_CASE("mesh query: boxes one apart, rotated or not") {
+    const MeshBvh cube = unit_cube().bvh();
+    const MeshDistanceOutput r = mesh_distance(pair_of(cube, at(0, 0, 0), cube, at(2, 0.3, -0.1)));
+    REQUIRE(r.status == Status::CONVERGED);
+    CHECK_NEAR(r.distance, 1.0, 1e-12);
+    CHECK(!r.intersecting);
+    CHECK(!r.a_inside_b && !r.b_inside_a);
+    CHECK_NEAR(r.point_a.x, 0.5, 1e-12);
+    CHECK_NEAR(r.point_b.x, 1.5, 1e-12);
+    CHECK(r.triangle_a >= 0 && r.triangle_b >= 0);
+
+    // b turned 45 degrees about z: its vertical edge is sqrt(1/2) from its centre
+    const double reach = std::sqrt(0.5);
+    const MeshDistanceOutput turned = mesh_distance(
+        pair_of(cube, at(0, 0, 0), cube, fixtures::turned_about_z(std::acos(-1.0) / 4, 0.5 + reach + 0.75, 0, 0)));
+    CHECK_NEAR(turned.distance, 0.75, 1e-12);
+    CHECK(!mesh_intersects(cube, at(0, 0, 0), cube, at(2, 0, 0)));
+}
+
+TEST_CASE("mesh query: crossing boxes intersect; a box sunk into a face has that depth") {
+    const MeshBvh cube = unit_cube().bvh();
+    const Pose b = at(0.8, 0.1, 0.05);  // overlap 0.2 along x
+    CHECK(mesh_intersects(cube, at(0, 0, 0), cube, b));
+    const MeshDistanceOutput d = mesh_distance(pair_of(cube, at(0, 0, 0), cube, b));
+    CHECK(d.intersecting);
+    CHECK_EQ(d.distance, 0.0);
+    const MeshDepthOutput crossing = mesh_penetration_depth(pair_of(cube, at(0, 0, 0), cube, b));
+    REQUIRE(crossing.status == Status::CONVERGED);
+    CHECK(crossing.depth > 0.0 && crossing.depth <= 0.2 + 1e-12);  // a lower bound of 0.2
+
+    // the unit cube sunk 0.2 into the x = 2 face of a box of side 4: depth exactly 0.2, b
+    // (the cube) leaves along +x
+    const MeshBvh floor = fixtures::box_mesh({-2, -2, -2}, {2, 2, 2}).bvh();
+    const MeshDepthOutput sunk = mesh_penetration_depth(pair_of(floor, at(0, 0, 0), cube, at(2.3, 0, 0)));
+    REQUIRE(sunk.status == Status::CONVERGED);
+    CHECK_NEAR(sunk.depth, 0.2, 1e-12);
+    CHECK_NEAR(sunk.normal.x, 1.0, 1e-12);
+
+    // touching faces: intersecting, depth 0 (a resting contact)
+    const MeshDepthOutput resting = mesh_penetration_depth(pair_of(cube, at(0, 0, 0), cube, at(1, 0, 0)));
+    CHECK(mesh_intersects(cube, at(0, 0, 0), cube, at(1, 0, 0)));
+    CHECK_EQ(resting.depth, 0.0);
+}
+
+TEST_CASE("mesh query: a box inside a box is contained, with the depth of its deepest vertex") {
+    const MeshBvh big = fixtures::box_mesh({-2, -2, -2}, {2, 2, 2}).bvh();
+    const MeshBvh small = unit_cube().bvh();
+    const MeshDistanceOutput r = mesh_distance(pair_of(small, at(0.5, 0, 0), big, at(0, 0, 0)));
+    REQUIRE(r.status == Status::CONVERGED);
+    CHECK(!r.intersecting);
+    CHECK(r.a_inside_b);
+    CHECK(!r.b_inside_a);
+    CHECK_NEAR(r.distance, 1.0, 1e-12);  // small's x = 1 face to big's x = 2 face
+    // depth: the small box's vertex farthest from big's surface, (0, +-0.5, +-0.5): 1.5 away
+    const MeshDepthOutput depth = mesh_penetration_depth(pair_of(small, at(0.5, 0, 0), big, at(0, 0, 0)));
+    CHECK_NEAR(depth.depth, 1.5, 1e-12);
+    CHECK_EQ(depth.deepest_mesh, 0);
+}
+
+TEST_CASE("mesh query: winding numbers and closest points of a box") {
+    const MeshBvh cube = unit_cube().bvh();
+    CHECK_NEAR(winding_number(cube, {0.1, 0.2, -0.3}), 1.0, 1e-12);
+    CHECK_NEAR(winding_number(cube, {3.0, 0.0, 0.0}), 0.0, 1e-12);
+    CHECK(winding_number_inside(cube, {0.4, 0.4, 0.4}));
+    CHECK(!winding_number_inside(cube, {0.6, 0.0, 0.0}));
+    const WindingEstimate far = fast_winding_number(cube, {30.0, 1.0, 2.0}, 1e-6);
+    CHECK(std::fabs(far.value) <= 1e-6 + far.error);
+    const PointDistanceOutput c = closest_point(cube, {2.0, 0.1, 0.2});
+    CHECK_NEAR(c.distance, 1.5, 1e-12);
+    CHECK_NEAR(c.point.x, 0.5, 1e-12);
+    CHECK(c.triangle >= 10);  // the x = hi face is triangles 10 and 11
+}
+
+TEST_CASE("mesh query: lengths out of range are refused, not guessed") {
+    const MeshBvh cube = unit_cube().bvh();
+    CHECK(mesh_pair_in_range(cube, at(0, 0, 0), cube, at(2, 0, 0)));
+    CHECK(!mesh_pair_in_range(cube, at(0, 0, 0), cube, at(1e40, 0, 0)));
+    const MeshDistanceOutput r = mesh_distance(pair_of(cube, at(0, 0, 0), cube, at(1e40, 0, 0)));
+    CHECK(r.status == Status::OUT_OF_RANGE);
+}

@@ -1,0 +1,155 @@
+// OBJ and STL readers and the vertex merge (mesh_read.hpp): what they read, and the status and
+// one-line message of every kind of bad input.
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "check.hpp"
+#include "meshcol/mesh_read.hpp"
+
+using namespace meshcol;
+
+namespace {
+
+MeshFile obj(const std::string& text) { return parse_obj(text.data(), text.size()); }
+MeshFile stl(const std::string& bytes) { return parse_stl(bytes.data(), bytes.size()); }
+
+bool starts_with(const std::string& text, const std::string& prefix) {
+    return text.compare(0, prefix.size(), prefix) == 0;
+}
+
+// A binary STL of `count` triangles, each the triangle (0,0,0), (1,0,0), (0,1,0) moved by t.
+std::string binary_stl(std::uint32_t count) {
+    std::string bytes(84 + 50 * static_cast<size_t>(count), '\0');
+    std::memcpy(&bytes[80], &count, 4);
+    for (std::uint32_t t = 0; t < count; ++t) {
+        const float corners[9] = {0, 0, float(t), 1, 0, float(t), 0, 1, float(t)};
+        std::memcpy(&bytes[84 + 50 * static_cast<size_t>(t) + 12], corners, sizeof corners);
+    }
+    return bytes;
+}
+
+// A file in a fresh temporary folder, removed with it.
+struct TemporaryFolder {
+    std::filesystem::path path;
+    TemporaryFolder() {
+        path = std::filesystem::temp_directory_path() /
+               ("meshcol_cpp_tests_" + std::to_string(reinterpret_cast<std::uintptr_t>(this)));
+        std::filesystem::create_directories(path);
+    }
+    ~TemporaryFolder() { std::filesystem::remove_all(path); }
+    std::string write(const std::string& name, const std::string& bytes) const {
+        const std::string file = (path / name).string();
+        std::FILE* stream = std::fopen(file.c_str(), "wb");
+        if (stream != nullptr) {
+            std::fwrite(bytes.data(), 1, bytes.size(), stream);
+            std::fclose(stream);
+        }
+        return file;
+    }
+};
+
+}  // namespace
+
+TEST_CASE("mesh read: an OBJ quad, objects, negative indices") {
+    const MeshFile quad = obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");
+    REQUIRE(quad.error.empty());
+    REQUIRE(quad.objects.size() == 1);
+    CHECK_EQ(quad.objects[0].faces.size(), size_t{6});  // a fan of two triangles
+    CHECK_EQ(quad.objects[0].vertices.size(), size_t{12});
+
+    const MeshFile two = obj("o first\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n"
+                             "o second\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf 4/1/1 5//2 6\no empty\n");
+    REQUIRE(two.error.empty());
+    REQUIRE(two.objects.size() == 2);  // an object without a face is dropped
+    CHECK_EQ(two.objects[0].name, std::string("first"));
+    CHECK_EQ(two.objects[1].name, std::string("second"));
+    CHECK((two.objects[1].faces == std::vector<std::int64_t>{0, 1, 2}));  // local indices
+}
+
+TEST_CASE("mesh read: corrupt OBJ files name the line and the fault") {
+    const MeshFile zero = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n");
+    CHECK_EQ(zero.error, std::string("line 4: face index 0 (OBJ indices start at 1)"));
+    const MeshFile beyond = obj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+    CHECK_EQ(beyond.error, std::string("line 4: face index 9 but the file has 3 vertices"));
+    const MeshFile short_vertex = obj("v 0 0\n");
+    CHECK_EQ(short_vertex.error, std::string("line 1: a vertex needs three coordinates"));
+    const MeshFile infinite = obj("v 0 0 inf\n");
+    CHECK_EQ(infinite.error, std::string("line 1: non-finite vertex coordinate"));
+    CHECK(starts_with(obj("v 0 0 zero\n").error, "line 1: vertex coordinate 'zero'"));
+    CHECK(obj("").error.empty());  // an empty file is read: no objects
+    CHECK(obj("").objects.empty());
+}
+
+TEST_CASE("mesh read: binary and ASCII STL") {
+    const MeshFile binary = stl(binary_stl(3));
+    REQUIRE(binary.error.empty());
+    REQUIRE(binary.objects.size() == 1);
+    CHECK_EQ(binary.objects[0].faces.size(), size_t{9});
+    CHECK_EQ(binary.objects[0].vertices[9 * 2 + 2], 2.0);
+
+    const MeshFile ascii = stl("solid part\n facet normal 0 0 1\n  outer loop\n"
+                               "   vertex 0 0 0\n   vertex 1 0 0\n   vertex 0 1 0\n"
+                               "  endloop\n endfacet\nendsolid part\n");
+    REQUIRE(ascii.error.empty());
+    REQUIRE(ascii.objects.size() == 1);
+    CHECK_EQ(ascii.objects[0].name, std::string("part"));
+    CHECK_EQ(ascii.objects[0].faces.size(), size_t{3});
+}
+
+TEST_CASE("mesh read: corrupt STL files say why") {
+    std::string truncated = binary_stl(4);
+    truncated.resize(truncated.size() - 7);
+    truncated[0] = '\0';  // binary header, but the size does not match the count
+    CHECK(starts_with(stl(truncated).error, "neither binary STL"));
+    CHECK(starts_with(stl("hello world, no solid here").error, "neither binary STL"));
+    std::string nan_corner = binary_stl(2);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    std::memcpy(&nan_corner[84 + 50 + 12 + 4], &nan, 4);
+    CHECK_EQ(stl(nan_corner).error, std::string("triangle 1 has a non-finite vertex coordinate"));
+    // a loop left open by one solid and closed in the next: an error, never a face that
+    // indexes before the second solid's vertices (it crashed the vertex merge)
+    const MeshFile split = stl("solid a\n vertex 0 0 0\n vertex 1 0 0\n vertex 0 1 0\n"
+                               "solid b\n endloop\nendsolid\n");
+    CHECK_EQ(split.error, std::string("line 6: a facet has 0 vertices, not 3"));
+}
+
+TEST_CASE("mesh read: files read in parallel, each with its status") {
+    const TemporaryFolder folder;
+    const std::string good = folder.write("good.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 0\nf 1 2 3\nf 4 2 3\n");
+    const std::string bad = folder.write("bad.stl", "solid x\n outer loop\n vertex 0 0 0\n endloop\nendsolid\n");
+    const std::string empty = folder.write("empty.stl", "");
+    const std::string missing = (folder.path / "missing.obj").string();
+    const std::string directory = folder.path.string();
+    const std::vector<MeshFile> files = read_mesh_files(
+        {good, bad, empty, missing, directory},
+        {MeshFormat::Obj, MeshFormat::Stl, MeshFormat::Stl, MeshFormat::Obj, MeshFormat::Obj}, true, 2);
+    REQUIRE(files.size() == 5);
+    CHECK(files[0].status == ReadStatus::Ok);
+    REQUIRE(files[0].objects.size() == 1);
+    CHECK_EQ(files[0].objects[0].vertices.size(), size_t{9});  // vertex 4 merged into vertex 1
+    CHECK(files[1].status == ReadStatus::Corrupt);
+    CHECK(files[2].status == ReadStatus::Corrupt);  // an empty STL is neither kind
+    CHECK(files[3].status == ReadStatus::NotFound);
+    CHECK_EQ(files[3].error, std::string("file not found"));
+    CHECK(files[4].status == ReadStatus::Directory);
+}
+
+TEST_CASE("mesh read: merge_vertices rounds to the digits and renumbers") {
+    std::vector<double> vertices = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1e-10, 0, 0, 5, 5, 5};
+    std::vector<std::int64_t> faces = {0, 1, 2, 3, 2, 1};  // vertex 4 unused
+    merge_vertices(vertices, faces, 8);
+    CHECK_EQ(vertices.size(), size_t{9});
+    CHECK((faces == std::vector<std::int64_t>{0, 1, 2, 0, 2, 1}));
+    // negative coordinates (their keys were a left shift of a negative value: undefined),
+    // and one too large to round, which merges only with itself
+    std::vector<double> signed_vertices = {-0.85, -1, -2, 1e300, 0, 0, -0.850000001, -1, -2, 1e300, 0, 0};
+    std::vector<std::int64_t> signed_faces = {0, 1, 2, 2, 3, 1};
+    merge_vertices(signed_vertices, signed_faces, 8);
+    CHECK_EQ(signed_vertices.size(), size_t{6});
+    CHECK((signed_faces == std::vector<std::int64_t>{0, 1, 0, 0, 1, 1}));
+}

@@ -1,0 +1,150 @@
+// GJK distance, EPA and SAT penetration, and the pair query that combines them (gjk.hpp,
+// epa.hpp, sat.hpp, narrowphase.hpp), on pairs whose answers are known in closed form.
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "check.hpp"
+#include "fixtures.hpp"
+#include "meshcol/gjk.hpp"
+#include "meshcol/narrowphase.hpp"
+#include "meshcol/sat.hpp"
+
+using namespace meshcol;
+using fixtures::at;
+
+TEST_CASE("gjk: unit boxes one apart along x") {
+    const ShapeView a = fixtures::box(0.5, 0.5, 0.5), b = fixtures::box(0.5, 0.5, 0.5);
+    const GjkResult r = gjk_distance(a, at(0, 0, 0), b, at(2, 0, 0));
+    REQUIRE(r.status == Status::CONVERGED);
+    CHECK(!r.overlap);
+    CHECK_NEAR(r.distance, 1.0, 1e-12);
+    CHECK_NEAR(r.point_a.x, 0.5, 1e-12);
+    CHECK_NEAR(r.point_b.x, 1.5, 1e-12);
+    CHECK_NEAR(r.normal.x, 1.0, 1e-12);
+}
+
+TEST_CASE("gjk: spheres and a sphere against a box, distances in closed form") {
+    const ShapeView s = fixtures::sphere(1.0), t = fixtures::sphere(0.5);
+    const GjkResult spheres = gjk_distance(s, at(0, 0, 0), t, at(3, 4, 0));
+    REQUIRE(spheres.status == Status::CONVERGED);
+    CHECK_NEAR(spheres.distance, 5.0 - 1.5, 1e-12);
+    CHECK_NEAR(spheres.normal.x, 0.6, 1e-12);
+    CHECK_NEAR(spheres.normal.y, 0.8, 1e-12);
+
+    // a box's corner (1, 1, 1) towards a sphere centred on the diagonal
+    const ShapeView b = fixtures::box(1, 1, 1);
+    const GjkResult corner = gjk_distance(b, at(0, 0, 0), t, at(3, 3, 3));
+    CHECK_NEAR(corner.distance, 2.0 * std::sqrt(3.0) - 0.5, 1e-12);
+}
+
+TEST_CASE("gjk: a rotated box, touching counts as overlap") {
+    // a box turned 45 degrees about z reaches sqrt(2)/2 along x
+    const ShapeView a = fixtures::box(0.5, 0.5, 0.5), b = fixtures::box(0.5, 0.5, 0.5);
+    const double reach = std::sqrt(0.5);
+    const GjkResult r = gjk_distance(a, fixtures::turned_about_z(std::acos(-1.0) / 4, 0, 0, 0), b,
+                                     at(reach + 0.5 + 0.25, 0, 0));
+    CHECK_NEAR(r.distance, 0.25, 1e-12);
+    const GjkResult touching = gjk_distance(a, at(0, 0, 0), b, at(1, 0, 0));
+    CHECK(touching.overlap);
+    CHECK_EQ(touching.distance, 0.0);
+}
+
+TEST_CASE("epa: boxes overlapping by a quarter along x") {
+    const ShapeView a = fixtures::box(0.5, 0.5, 0.5), b = fixtures::box(0.5, 0.5, 0.5);
+    const PairResult r = query_pair(a, at(0, 0, 0), b, at(0.75, 0.1, 0.05), QueryKind::PENETRATION);
+    REQUIRE(r.status == Status::CONVERGED);
+    CHECK(r.intersects);
+    CHECK_EQ(r.distance, 0.0);
+    CHECK_NEAR(r.depth, 0.25, 1e-12);
+    CHECK_NEAR(r.normal.x, 1.0, 1e-12);
+    // moving b by depth * normal brings the pair to contact
+    const Vec3 moved = Vec3{0.75, 0.1, 0.05} + r.depth * r.normal;
+    const GjkResult after = gjk_distance(a, at(0, 0, 0), b, at(moved.x, moved.y, moved.z));
+    CHECK_NEAR(after.distance, 0.0, 1e-12);
+}
+
+TEST_CASE("epa: spheres and capsules overlap by their radii") {
+    const ShapeView s = fixtures::sphere(1.0);
+    const PairResult spheres = query_pair(s, at(0, 0, 0), s, at(0, 1.5, 0), QueryKind::PENETRATION);
+    REQUIRE(spheres.status == Status::CONVERGED);
+    CHECK_NEAR(spheres.depth, 0.5, 1e-12);
+    CHECK_NEAR(spheres.normal.y, 1.0, 1e-12);
+
+    // capsules along z side by side: their segments are 1.0 apart, radii 0.75 each
+    const ShapeView c = fixtures::capsule(0.75, 2.0);
+    const PairResult capsules = query_pair(c, at(0, 0, 0), c, at(1.0, 0, 0.5), QueryKind::PENETRATION);
+    CHECK_NEAR(capsules.depth, 0.5, 1e-12);
+    const PairResult apart = query_pair(c, at(0, 0, 0), c, at(2.0, 0, 0), QueryKind::DISTANCE);
+    CHECK_NEAR(apart.distance, 0.5, 1e-12);
+}
+
+TEST_CASE("narrow phase: intersects agrees with the distance") {
+    const ShapeView a = fixtures::box(1, 1, 1), b = fixtures::sphere(0.5);
+    CHECK(query_pair(a, at(0, 0, 0), b, at(1.4, 0, 0), QueryKind::INTERSECTS).intersects);
+    CHECK(!query_pair(a, at(0, 0, 0), b, at(1.6, 0, 0), QueryKind::INTERSECTS).intersects);
+}
+
+TEST_CASE("sat: the exact depth of overlapping boxes and the separated verdict") {
+    const ShapeView a = fixtures::box(1, 1, 1), b = fixtures::box(0.5, 0.5, 0.5);
+    REQUIRE(has_sat_features(a));
+    const SatResult deep = sat_penetration(a, at(0, 0, 0), b, at(0.2, 1.3, 0.1));
+    REQUIRE(deep.ran);
+    CHECK(!deep.separated);
+    CHECK_NEAR(deep.depth, 0.2, 1e-12);  // 1.5 - 1.3 along y
+    CHECK_NEAR(std::fabs(deep.normal.y), 1.0, 1e-12);
+    const SatResult apart = sat_penetration(a, at(0, 0, 0), b, at(0, 0, 1.6));
+    REQUIRE(apart.ran);
+    CHECK(apart.separated);
+    CHECK_EQ(apart.depth, 0.0);
+}
+
+TEST_CASE("sat: a turned box's edge sunk into a face") {
+    // b turned 45 degrees about z and a sunk into a's +x face by 0.1 along x: b's vertical
+    // edge reaches sqrt(2)/2 from its centre
+    const ShapeView a = fixtures::box(1, 1, 1), b = fixtures::box(0.5, 0.5, 0.5);
+    const double reach = std::sqrt(0.5);
+    const SatResult r = sat_penetration(a, at(0, 0, 0), b,
+                                        fixtures::turned_about_z(std::acos(-1.0) / 4, 1.0 + reach - 0.1, 0, 0));
+    REQUIRE(r.ran);
+    CHECK_NEAR(r.depth, 0.1, 1e-12);
+    CHECK_NEAR(r.normal.x, 1.0, 1e-12);
+}
+
+TEST_CASE("narrow phase: a polytope from points equals the box it spans") {
+    const std::vector<Vec3> corners = fixtures::cube_corners(0.5);
+    const ShapeView poly = fixtures::polytope(corners), box = fixtures::box(0.5, 0.5, 0.5);
+    const PairResult r = query_pair(poly, at(0, 0, 0), box, at(0, 0, 3), QueryKind::DISTANCE);
+    CHECK_NEAR(r.distance, 2.0, 1e-12);
+    CHECK_NEAR(r.normal.z, 1.0, 1e-12);
+}
+
+TEST_CASE("narrow phase: a batch sets each pair's status, a bad pose is INVALID_INPUT") {
+    // two unit boxes and a sphere; no polytope vertices
+    const std::int64_t offsets[4] = {0, 0, 0, 0};
+    const std::int8_t kinds[3] = {static_cast<std::int8_t>(ShapeKind::BOX),
+                                  static_cast<std::int8_t>(ShapeKind::BOX),
+                                  static_cast<std::int8_t>(ShapeKind::SPHERE)};
+    const double params[12] = {0.5, 0.5, 0.5, 0, 0.5, 0.5, 0.5, 0, 1.0, 0, 0, 0};
+    ConvexSetView set;
+    set.offsets = offsets;
+    set.shape_count = 3;
+    set.kinds = kinds;
+    set.params = params;
+    double poses[48] = {};
+    for (int h = 0; h < 3; ++h)
+        for (int k = 0; k < 4; ++k) poses[16 * h + 5 * k] = 1.0;
+    poses[16 * 1 + 3] = 3.0;                                   // box 1 at x = 3
+    poses[16 * 2 + 0] = 2.0;                                   // sphere 2: not rigid
+    const std::int64_t pairs[4] = {0, 1, 0, 2};
+    double distance[2];
+    std::int8_t status[2];
+    BatchOutput out;
+    out.distance = distance;
+    out.status = status;
+    run_batch(set, poses, pairs, 2, QueryKind::DISTANCE, 1, out);
+    CHECK(status[0] == static_cast<std::int8_t>(Status::CONVERGED));
+    CHECK_NEAR(distance[0], 2.0, 1e-12);
+    CHECK(status[1] == static_cast<std::int8_t>(Status::INVALID_INPUT));
+    CHECK(std::isnan(distance[1]));
+}
