@@ -45,6 +45,7 @@ import numpy as np
 from meshcol.analysis.colliders import COLLIDER_KINDS, _geometry_key, build_colliders
 from meshcol.errors import InputFileError
 from meshcol.io.report import vector_columns
+from meshcol.io.robot import RobotOptions
 from meshcol.types import Scene, Status
 from meshcol.vocabulary import PAIR_STATUSES
 
@@ -877,6 +878,7 @@ def check(
     timeout: float | None = None,
     executor: str = "local",
     ray_address: str | None = None,
+    robot_options: RobotOptions | None = None,
     **options: Any,
 ) -> CheckReport:
     """Load inputs and check every pair of bodies.
@@ -900,6 +902,8 @@ def check(
         Where the tasks run (:func:`meshcol.decomposition.executor.make_executor`).
     ray_address : str, optional
         The Ray cluster (default: a local Ray of ``jobs`` CPUs, stopped at the end).
+    robot_options : RobotOptions, optional
+        How a robot description is read (:func:`meshcol.io.scene.load_inputs`).
     **options
         Fields of :class:`CheckOptions` (``collider``, ``tolerance``, ``clearance``, ``fail_on``,
         ``ignore``, ``baseline`` (a path or a report dict), ``threads``, ``decompose_options``).
@@ -943,9 +947,10 @@ def check(
             timeout=timeout,
             executor=executor,
             address=ray_address,
+            robot_options=robot_options,
         )
     else:
-        scene = load_inputs(list(inputs))
+        scene = load_inputs(list(inputs), robot_options=robot_options)
     with collector_paused():
         return check_scene(
             scene,
@@ -989,6 +994,7 @@ def _prepare_files(
     inputs: list[str | os.PathLike[str]],
     options: CheckOptions,
     progress: Callable[[str], None] | None,
+    robot_options: RobotOptions | None = None,
     **run: Any,
 ) -> tuple[Scene, Callable[..., list[np.ndarray]]]:
     """:func:`load_inputs` and the decompositions with one executor task per file: the scene
@@ -1012,9 +1018,10 @@ def _prepare_files(
     )
     scene: Scene | None = None
     if whole:  # a manifest or robot is read here; its decompositions go out per mesh file
-        scene = load_inputs(inputs)
+        scene = load_inputs(inputs, robot_options=robot_options)
         tasks: list[tuple[str, list[Any] | None, str, dict]] = [
-            (path, bodies, kind, decompose_options) for path, bodies in iter_inputs(inputs)
+            (path, bodies, kind, decompose_options)
+            for path, bodies in iter_inputs(inputs, robot_options=robot_options)
         ]
     else:
         tasks = [(os.fspath(p), None, kind, decompose_options) for p in inputs]

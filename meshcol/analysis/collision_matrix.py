@@ -45,6 +45,7 @@ import numpy as np
 from meshcol.analysis.check import _cartesian_part_pairs, _relative
 from meshcol.analysis.colliders import build_colliders
 from meshcol.errors import SceneError
+from meshcol.io.robot import RobotOptions
 from meshcol.types import Status
 from meshcol.vocabulary import MATRIX_COLLIDERS
 
@@ -325,6 +326,7 @@ def collision_matrix(
     robot: str | os.PathLike[str],
     *,
     progress: Callable[[str], None] | None = None,
+    robot_options: RobotOptions | None = None,
     **options: Any,
 ) -> CollisionMatrixReport:
     """Sample a robot's configurations and classify every pair of links.
@@ -332,10 +334,12 @@ def collision_matrix(
     Parameters
     ----------
     robot : path
-        A URDF or MJCF file; joint values, packages and keyframe come from the enclosing
-        :func:`meshcol.io.robot.robot_options` block (the CLI's robot options).
+        A URDF or MJCF file.
     progress : callable, optional
         Receives one-line progress messages (``collision-matrix: 3000/10000 configurations``).
+    robot_options : RobotOptions, optional
+        How the robot is read: its joint values (the default configuration), packages and
+        keyframe (:func:`meshcol.io.robot.load_robot_model`).
     **options
         Fields of :class:`MatrixOptions`.
 
@@ -355,7 +359,7 @@ def collision_matrix(
     van den Bergen 2003) on the links' convex parts, batched over every candidate.
     """
     from meshcol.io.kinematics import adjacent_links
-    from meshcol.io.robot import current_robot_options, is_robot_file, load_robot_model
+    from meshcol.io.robot import is_robot_file, load_robot_model
 
     opts = MatrixOptions(**options)
     opts.validate()
@@ -367,8 +371,9 @@ def collision_matrix(
             "not a robot description (expected .urdf, .mjcf, or .xml with <robot> or <mujoco>)",
             source,
         )
-    model = load_robot_model(source)
-    given = current_robot_options().joints
+    robot_options = RobotOptions() if robot_options is None else robot_options
+    model = load_robot_model(source, robot_options)
+    given = robot_options.joints
     scene, kinematics = model.scene, model.kinematics
     colliders = build_colliders(
         scene.bodies,

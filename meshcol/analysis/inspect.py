@@ -26,6 +26,7 @@ from meshcol.geometry.topology import (
 )
 from meshcol.geometry.triangles import degenerate_faces, face_heights
 from meshcol.io.report import vector_columns
+from meshcol.io.robot import RobotOptions
 from meshcol.types import Body
 
 __all__ = [
@@ -1261,6 +1262,7 @@ def inspect(
     timeout: float | None = None,
     executor: str = "local",
     ray_address: str | None = None,
+    robot_options: RobotOptions | None = None,
 ) -> InspectReport:
     """Inspect every body of the inputs: is each mesh fit to be a collider, and is its
     collider fit for physics?
@@ -1291,6 +1293,8 @@ def inspect(
         Where the tasks run (:func:`meshcol.decomposition.executor.make_executor`).
     ray_address : str, optional
         The Ray cluster (default: a local Ray of ``jobs`` CPUs, stopped at the end).
+    robot_options : RobotOptions, optional
+        How a robot description is read (:func:`meshcol.io.robot.load_robot`).
 
     Returns
     -------
@@ -1350,11 +1354,12 @@ def inspect(
         scene_bodies = list(scene.bodies)
         units = scene.units
     elif len(inputs) == 1 and is_robot_file(inputs[0]):
-        scene = load_robot(inputs[0])
+        scene = load_robot(inputs[0], robot_options)
         scene_bodies = list(scene.bodies)
         units = scene.units
         try:
-            visuals = {b.name: b for b in load_robot(inputs[0], visual=True).bodies}
+            visual_scene = load_robot(inputs[0], robot_options, visual=True)
+            visuals = {b.name: b for b in visual_scene.bodies}
         except MeshcolError as error:
             visuals = {}
             warnings.append(

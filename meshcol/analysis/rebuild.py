@@ -29,16 +29,17 @@ from typing import Any
 import numpy as np
 
 from meshcol.errors import InvalidMeshError, MeshcolError
+from meshcol.io.robot import RobotOptions
 from meshcol.types import Body
 
 __all__ = ["robot_colliders", "rebuild_hulls", "rebuild_decomposition", "rebuild_fits"]
 
 
-def _load(path: str) -> tuple[Any, list[Any], str]:
-    from meshcol.io.robot import current_robot_options, description_kind, load_robot
+def _load(path: str, robot_options: RobotOptions) -> tuple[Any, list[Any], str]:
+    from meshcol.io.robot import description_kind, load_robot
 
     elements: list[Any] = []
-    scene = load_robot(path, current_robot_options(), elements=elements)
+    scene = load_robot(path, robot_options, elements=elements)
     return scene, elements, description_kind(path)
 
 
@@ -94,13 +95,14 @@ def robot_colliders(
     fit_options: Mapping[str, Any] | None = None,
     target: Any = None,
     progress: Callable[[str], None] | None = None,
+    robot_options: RobotOptions | None = None,
 ) -> tuple[Any, list[dict[str, Any]]]:
     """The colliders of a robot description and what each came from.
 
     Parameters
     ----------
     path : path
-        URDF or MJCF (read with :func:`meshcol.io.robot.current_robot_options`).
+        URDF or MJCF, read with ``robot_options``.
     method : {"hull", "decompose", "fit"}
     max_vertices : int, optional
         ``hull``: the vertex budget of each hull.
@@ -117,6 +119,9 @@ def robot_colliders(
         the element meets ``max_hulls``; each entry then has ``targets``, one report
         entry per decomposition.
     progress : callable, optional
+    robot_options : RobotOptions, optional
+        How the description is read (:func:`meshcol.io.robot.load_robot`); its package
+        folders also find the visual meshes a URDF written as MJCF keeps.
 
     Returns
     -------
@@ -136,7 +141,6 @@ def robot_colliders(
     from meshcol.analysis.hull import target_hull, target_limits
     from meshcol.collision.hull import convex_hull
     from meshcol.decomposition.batch import decompose_meshes
-    from meshcol.io.robot import current_robot_options
     from meshcol.io.robot_write import Collider, RobotColliders
 
     if method not in ("hull", "decompose", "fit"):
@@ -147,7 +151,8 @@ def robot_colliders(
     if target is not None and method == "hull":
         limits = target_limits(target, max_vertices)
     source = os.fspath(path)
-    scene, elements, kind = _load(source)
+    robot_options = RobotOptions() if robot_options is None else robot_options
+    scene, elements, kind = _load(source, robot_options)
     names = _element_names(source, kind)
     groups = _groups(elements)
     colliders: list[Any] = []
@@ -235,7 +240,7 @@ def robot_colliders(
         kind=kind,
         colliders=tuple(colliders),
         link_poses=_link_poses(scene, elements),
-        package_paths=dict(current_robot_options().package_paths),
+        package_paths=dict(robot_options.package_paths),
     )
     return robot, info
 
@@ -315,6 +320,7 @@ def rebuild_hulls(
     warn: Callable[[str], None] | None = None,
     progress: Callable[[str], None] | None = None,
     target: Any = None,
+    robot_options: RobotOptions | None = None,
 ) -> Any:
     """``meshcol hull ROBOT --out-dir OUT``: one hull per collision element, and the description.
 
@@ -333,7 +339,12 @@ def rebuild_hulls(
     from meshcol.io.robot_write import description_path, part_files, write_robot
 
     robot, info = robot_colliders(
-        path, "hull", max_vertices=max_vertices, target=target, progress=progress
+        path,
+        "hull",
+        max_vertices=max_vertices,
+        target=target,
+        progress=progress,
+        robot_options=robot_options,
     )
     to = to or robot.kind
     written = write_robot(robot, out_dir, to, protected=reserved)
@@ -379,6 +390,7 @@ def rebuild_decomposition(
     reserved: tuple[tuple[str, str], ...] = (),
     progress: Callable[[str], None] | None = None,
     target: Any = None,
+    robot_options: RobotOptions | None = None,
 ) -> Any:
     """``meshcol decompose ROBOT --out-dir OUT``: the convex parts of every collision element
     and the description that uses them.
@@ -413,7 +425,12 @@ def rebuild_decomposition(
         )
         run_settings.update(target=target.name, target_limits=dict(target.limits))
     robot, info = robot_colliders(
-        path, "decompose", decompose_options=options, target=target, progress=progress
+        path,
+        "decompose",
+        decompose_options=options,
+        target=target,
+        progress=progress,
+        robot_options=robot_options,
     )
     to = to or robot.kind
     write_robot(robot, out_dir, to, protected=reserved)
@@ -454,6 +471,7 @@ def rebuild_fits(
     volume_tolerance: float | None = None,
     reserved: tuple[tuple[str, str], ...] = (),
     progress: Callable[[str], None] | None = None,
+    robot_options: RobotOptions | None = None,
 ) -> Any:
     """``meshcol fit ROBOT --out-dir OUT``: one enclosing primitive per collision element,
     written into the description as its own primitive element.
@@ -474,6 +492,7 @@ def rebuild_fits(
         "fit",
         fit_options={"shape": shape, "volume_tolerance": tolerance},
         progress=progress,
+        robot_options=robot_options,
     )
     to = to or robot.kind
     written = write_robot(robot, out_dir, to, protected=reserved)

@@ -16,6 +16,7 @@ import numpy as np
 from meshcol.analysis.colliders import COLLIDER_KINDS, build_colliders
 from meshcol.errors import MeshcolError, SceneError
 from meshcol.io.report import vector_columns
+from meshcol.io.robot import RobotOptions
 from meshcol.io.scene import as_scene
 from meshcol.types import Body, Scene, TimeOfImpactStatus
 
@@ -348,6 +349,7 @@ def sweep(
     threads: int = 0,
     decompose_options: dict | None = None,
     fail_on: str = "hit",
+    robot_options: RobotOptions | None = None,
 ) -> SweepReport:
     """Continuous collision over a scene: the first contact of every pair of bodies.
 
@@ -374,6 +376,8 @@ def sweep(
     fail_on : {"hit", "none"}
         Policy of :attr:`SweepReport.exit_code`: ``hit`` fails on any pair that is not
         separated.
+    robot_options : RobotOptions, optional
+        How a robot description is read (:func:`meshcol.io.scene.load_inputs`).
 
     Returns
     -------
@@ -407,7 +411,7 @@ def sweep(
         raise ValueError(f"collider must be one of {', '.join(COLLIDER_KINDS)}, got {collider!r}")
     if fail_on not in FAIL_ON:
         raise ValueError(f"fail_on must be one of {', '.join(FAIL_ON)}, got {fail_on!r}")
-    scene = as_scene(inputs)
+    scene = as_scene(inputs, robot_options)
     if not any(b.end_pose is not None for b in scene.bodies):
         raise SceneError(
             "no body has an end pose or a velocity: nothing moves, nothing to sweep", scene.source

@@ -26,6 +26,7 @@ from meshcol.cli.common import (
     timeout_option,
     verdict,
 )
+from meshcol.io.robot import RobotOptions
 
 FAIL_ON_CHOICES = tuple(FAIL_ON)
 SHAPE_CHOICES = COLLIDER_KINDS
@@ -139,6 +140,7 @@ def check(
     report: str | None,
     fmt: str | None,
     html: str | None,
+    robot_options: RobotOptions,
 ) -> None:
     """Check every pair of bodies for contact, clearance and interpenetration.
 
@@ -191,6 +193,7 @@ def check(
             timeout=timeout,
             executor=executor,
             ray_address=ray_address,
+            robot_options=robot_options,
         )
     finally:
         progress.done()
@@ -198,7 +201,8 @@ def check(
     def review_page() -> Any:
         from meshcol.analysis.review import check_page  # only with --html
 
-        return check_page(result, inputs, shape, _decompose_options(engine, threshold, cache_dir))
+        decompose_options = _decompose_options(engine, threshold, cache_dir)
+        return check_page(result, inputs, shape, decompose_options, robot_options)
 
     page = render_html(html, review_page)
     emit_report(result, fmt, report)

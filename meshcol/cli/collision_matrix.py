@@ -18,6 +18,7 @@ from meshcol.cli.common import (
     threads_option,
     verdict,
 )
+from meshcol.io.robot import RobotOptions
 
 #: Rows of the summary table: the pairs that stay checked, most often colliding first.
 TABLE_ROWS = 10
@@ -96,6 +97,7 @@ def collision_matrix(
     threads: int,
     engine: str,
     cache_dir: str | None,
+    robot_options: RobotOptions,
 ) -> None:
     """Classify every pair of links of ROBOT (URDF or MJCF) as MoveIt's setup assistant does.
 
@@ -141,6 +143,7 @@ def collision_matrix(
             always_fraction=always_fraction,
             threads=threads,
             decompose_options=decompose,
+            robot_options=robot_options,
         )
     finally:
         progress.done()

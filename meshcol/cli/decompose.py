@@ -26,6 +26,7 @@ from meshcol.decomposition.search import (
     SEARCH_MODES,
 )
 from meshcol.io.mesh_write import LAYOUTS
+from meshcol.io.robot import RobotOptions
 
 
 def _engine_option(
@@ -248,6 +249,7 @@ def decompose_command(
     resume: bool,
     executor: str,
     ray_address: str | None,
+    robot_options: RobotOptions,
 ) -> None:
     """Split meshes into convex parts for collision (meshcol decompose).
 
@@ -407,6 +409,7 @@ def decompose_command(
                 reserved=(("the --report file", report_file),) if report_file else (),
                 progress=progress.message,
                 target=target,
+                robot_options=robot_options,
             )
         finally:
             progress.done()
@@ -449,10 +452,11 @@ def decompose_command(
             run_manifest=run_manifest,
             resume=resume,
             target=target,
+            robot_options=robot_options,
         )
     finally:
         progress.done()
-    page = render_html(html, lambda: decompose_page(result, out_dir, inputs))
+    page = render_html(html, lambda: decompose_page(result, out_dir, inputs, robot_options))
     emit_report(result, report_fmt, report)
     write_html(html, page)
     for f in result.files:

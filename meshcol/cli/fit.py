@@ -18,6 +18,7 @@ from meshcol.cli.common import (
     verdict,
 )
 from meshcol.io.mesh_write import MULTI_MESH_EXTENSIONS
+from meshcol.io.robot import RobotOptions
 
 
 @click.command(
@@ -70,6 +71,7 @@ def fit(
     to: str | None,
     report: str | None,
     fmt: str | None,
+    robot_options: RobotOptions,
 ) -> None:
     """Enclosing primitive of each body: it contains every vertex of the mesh.
 
@@ -124,6 +126,7 @@ def fit(
                 volume_tolerance=volume_tolerance,
                 reserved=(("the --report file", report),) if report not in (None, "-") else (),
                 progress=progress,
+                robot_options=robot_options,
             )
         else:
             result = run_fit(
@@ -134,6 +137,7 @@ def fit(
                 out_dir=out_dir,
                 reserved=[("--report", report)],
                 progress=progress,
+                robot_options=robot_options,
             )
     except OutputDestinationError as exc:
         raise click.UsageError(

@@ -23,6 +23,7 @@ from meshcol.cli.common import (
     write_html,
 )
 from meshcol.io.mesh_write import MULTI_MESH_EXTENSIONS
+from meshcol.io.robot import RobotOptions
 
 
 @click.command(
@@ -72,6 +73,7 @@ def hull(
     report: str | None,
     fmt: str | None,
     html: str | None,
+    robot_options: RobotOptions,
 ) -> None:
     """Convex hull of each body, optionally within a vertex budget.
 
@@ -142,6 +144,7 @@ def hull(
                 warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
                 progress=progress,
                 target=target,
+                robot_options=robot_options,
             )
         else:
             result = run_hull(
@@ -153,6 +156,7 @@ def hull(
                 reserved=[("--report", report)],
                 progress=progress,
                 target=target,
+                robot_options=robot_options,
             )
     except OutputDestinationError as exc:
         raise click.UsageError(
@@ -161,7 +165,7 @@ def hull(
         ) from None
     finally:
         progress.done()
-    page = render_html(html, lambda: hull_page(result, inputs))
+    page = render_html(html, lambda: hull_page(result, inputs, robot_options))
     if report is not None or not (output or out_dir):
         emit_report(result, fmt, report)
     write_html(html, page)

@@ -27,6 +27,7 @@ from meshcol.cli.common import (
     verdict,
     write_html,
 )
+from meshcol.io.robot import RobotOptions
 
 
 def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) -> tuple[str, ...]:
@@ -136,6 +137,7 @@ def inspect(
     executor: str,
     ray_address: str | None,
     html: str | None,
+    robot_options: RobotOptions,
 ) -> None:
     """Health check of each body's mesh: fit to be a collider?
 
@@ -208,10 +210,11 @@ def inspect(
             timeout=timeout,
             executor=executor,
             ray_address=ray_address,
+            robot_options=robot_options,
         )
     finally:
         progress.done()
-    page = render_html(html, lambda: inspect_page(result, inputs))
+    page = render_html(html, lambda: inspect_page(result, inputs, robot_options))
     emit_report(result, fmt, report)
     write_html(html, page)
 

@@ -24,6 +24,7 @@ from typing import Any
 
 from meshcol.decomposition.search import within_max_hausdorff
 from meshcol.errors import InvalidMeshError, MeshcolError
+from meshcol.io.robot import RobotOptions
 
 __all__ = [
     "CSV_COLUMNS",
@@ -307,6 +308,7 @@ def decompose_files(
     run_manifest: str | os.PathLike[str] | None = None,
     resume: bool = False,
     target: Any = None,
+    robot_options: RobotOptions | None = None,
 ) -> DecomposeReport:
     """Decompose every body of every input file into convex parts and write them.
 
@@ -370,6 +372,8 @@ def decompose_files(
         limits and still enclose the body (:func:`apply_target`); its vertex budget and hull
         count go to the engine, and the tighter of each and ``max_vertices`` /
         ``max_hulls`` applies. A limit that cannot be met fails the run (exit 1).
+    robot_options : RobotOptions, optional
+        How a robot description is read (:func:`meshcol.io.scene.iter_inputs`).
 
     Returns
     -------
@@ -490,6 +494,7 @@ def decompose_files(
             protected=[*paths, *(os.fspath(p) for p in other_outputs)],
             manifest=manifest,
             target=target,
+            robot_options=robot_options,
         )
     except BaseException as exc:
         # A signal (KeyboardInterrupt, SIGTERM's exception) abandons the run: no process stays.
@@ -625,6 +630,7 @@ def _run(
     manifest: Any = None,
     max_parts: int | None = None,
     target: Any = None,
+    robot_options: RobotOptions | None = None,
 ) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
     """Load, look up the cache, decompose, store, write: the file entries and the CSV rows.
 
@@ -676,7 +682,7 @@ def _run(
 
     def tasks() -> Iterator[tuple[str, list, dict]]:
         nonlocal total, sent
-        for path, bodies in _iter_load(inputs):
+        for path, bodies in _iter_load(inputs, robot_options):
             guard.protect(path)
             for name, _, _, _ in bodies:
                 clean = safe_name(name)
@@ -954,14 +960,16 @@ def _is_manifest(inputs: Sequence[str]) -> bool:
     return any(os.path.splitext(p)[1].lower() in MANIFEST_EXTENSIONS for p in inputs)
 
 
-def _iter_load(inputs: list[str]) -> Iterator[tuple[str, list[tuple[str, Any, Any, Any]]]]:
+def _iter_load(
+    inputs: list[str], robot_options: RobotOptions | None = None
+) -> Iterator[tuple[str, list[tuple[str, Any, Any, Any]]]]:
     """(file, [(body name, canonical vertices, canonical faces, transform)]) per input file,
     as each is read (:func:`meshcol.io.scene.iter_inputs`): one task per file; a manifest's
     bodies without a file of their own (primitives) belong to the manifest."""
     from meshcol.decomposition.canonical import canonical_geometry
     from meshcol.io.scene import iter_inputs
 
-    for source, bodies in iter_inputs(list(inputs)):
+    for source, bodies in iter_inputs(list(inputs), robot_options=robot_options):
         canonical = []
         # each part of a body is decomposed on its own, as check's colliders do (same cache key)
         for body in (part for whole in bodies for part in whole.part_bodies()):

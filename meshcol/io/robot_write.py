@@ -266,7 +266,7 @@ def _referenced_files(robot: RobotColliders) -> list[tuple[str, str]]:
     """Every mesh file the description names (URDF visual and collision meshes), resolved."""
     if robot.kind != "urdf":
         return []
-    from meshcol.io.robot import resolve_mesh_reference
+    from meshcol.io.packages import resolve_mesh_reference
 
     out = []
     for element in _parse_xml(robot.source).getroot().iter("mesh"):
@@ -699,7 +699,7 @@ def _spec_from_urdf(
     other visual meshes MuJoCo does not read converted to OBJ in the stage."""
     from lxml import etree
 
-    from meshcol.io.robot import resolve_mesh_reference
+    from meshcol.io.packages import resolve_mesh_reference
 
     text = _urdf_text(robot, files, {"collider": stage + os.sep})
     root = etree.fromstring(text.encode("utf-8"))
