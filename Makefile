@@ -6,7 +6,7 @@ BIN    := $(VENV)/bin
 PIP    := $(BIN)/python -m pip --disable-pip-version-check
 BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4"
 
-.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean
+.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -50,6 +50,12 @@ lint: install-test
 test: lint
 	@test -d ../shared/corpus || echo "WARNING: ../shared/corpus is absent: every corpus test will SKIP (the count is printed at the end)"
 	$(BIN)/pytest -q -p no:cacheprovider
+
+# The stub of the native module, meshcol/_core.pyi (nanobind's stubgen), regenerated from the
+# built extension: run it after changing a binding and commit the stub (mypy reads it;
+# tests/test_native_stub.py fails while it is stale).
+stubs: install-test
+	$(BIN)/python -m nanobind.stubgen -q -m meshcol._core -o meshcol/_core.pyi
 
 # The fast lane (under a minute): no slow or corpus tests, fewer hypothesis examples.
 test-fast: install-test

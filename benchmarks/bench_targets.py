@@ -2,7 +2,7 @@
 
 Hulls, per packaged profile and corpus mesh:
 
-- ``meshcol``: :func:`meshcol.collision.limits.fit_hull` (every limit of the profile, the
+- ``meshcol``: :func:`meshcol.collision.target_fit.fit_hull` (every limit of the profile, the
   hull still enclosing the mesh);
 - ``qhull-TA``: scipy's Qhull told to stop after the profile's vertex budget (``TA<n>``),
   which is what MuJoCo's ``maxhullvert`` does: it only budgets vertices and keeps a subset
@@ -12,7 +12,7 @@ Hulls, per packaged profile and corpus mesh:
 Decompositions, for the profiles with a hull count (godot, isaac, unreal) on one mesh:
 
 - ``coacd-own``: CoACD with its own ``max_convex_hull`` and ``max_ch_vertex`` (decimate on);
-- ``coacd+fit``: CoACD without them, then :func:`meshcol.collision.limits.fit_parts`
+- ``coacd+fit``: CoACD without them, then :func:`meshcol.collision.target_fit.fit_parts`
   (timed on its own: the CoACD run is the same for both and reported once).
 
 For every result: wall time (A/B alternated, ``--repeats`` runs, min-max range), volume
@@ -58,7 +58,7 @@ def _exact_volume(points: np.ndarray) -> float:
 
 
 def _meshcol(points, target, scale):
-    from meshcol.collision.limits import fit_hull
+    from meshcol.collision.target_fit import fit_hull
 
     fit = fit_hull(points, target, scale)
     return fit.parts[0][0]
@@ -126,7 +126,8 @@ def bench_decompose(corpus: Path, repeats: int) -> None:
     import coacd
     import trimesh
 
-    from meshcol.collision.limits import budget_vertices, fit_parts
+    from meshcol.collision.limits import budget_vertices
+    from meshcol.collision.target_fit import fit_parts
     from meshcol.io.targets import list_targets
 
     path = corpus / DECOMPOSE_MESH

@@ -12,6 +12,7 @@ __all__ = [
     "COLLIDER_KINDS",
     "COUNT_LIMITS",
     "INPUT_KINDS",
+    "LIMITS",
     "LIMIT_KEYS",
     "MANIFEST_EXTENSIONS",
     "MATRIX_COLLIDERS",
@@ -25,8 +26,11 @@ __all__ = [
 
 # -- colliders --------------------------------------------------------------------------------
 
-#: Collider kinds a body can be checked as (``--shape``).
-COLLIDER_KINDS = ("hull", "decomposed", "mesh", "fit")
+#: Collider kinds a body can be checked as (``--shape``): builders in
+#: :mod:`meshcol.analysis.colliders` (``box`` and ``sphere``: each part's enclosing oriented
+#: box or minimum sphere, the simple colliders engines offer and USD's ``boundingCube`` and
+#: ``boundingSphere`` approximations).
+COLLIDER_KINDS = ("hull", "decomposed", "mesh", "fit", "box", "sphere")
 #: The collider kinds a scene manifest may name per body (``"shape"``).
 SCENE_SHAPES = ("hull", "decomposed", "mesh")
 #: The collider kinds of a robot's self-collision matrix (``mesh`` needs the exact mesh
@@ -35,6 +39,21 @@ MATRIX_COLLIDERS = ("hull", "decomposed", "fit")
 
 # -- engine targets ---------------------------------------------------------------------------
 
+#: Every limit key of a target's ``[limits]``, in the order reports list them: its rule id and
+#: rule name (stable forever; the rule's text is in ``meshcol.analysis.rules``) and its
+#: column header in ``meshcol targets``.
+LIMITS: dict[str, tuple[str, str, str]] = {
+    "max_hull_vertices": ("MC101", "hull-vertices-over-limit", "vertices"),
+    "max_hull_polygons": ("MC103", "hull-polygons-over-limit", "polygons"),
+    "max_hull_triangles": ("MC104", "hull-triangles-over-limit", "triangles"),
+    "max_faces_per_vertex": ("MC105", "faces-per-vertex-over-limit", "per vertex"),
+    "max_hulls": ("MC106", "hull-count-over-limit", "hulls"),
+    "max_oblong_ratio": ("MC102", "not-gpu-compatible-oblong", "oblong"),
+    "min_thickness": ("MC107", "part-too-thin", "thickness m"),
+    "min_volume": ("MC201", "volume-too-small", "volume m3"),
+}
+#: The limit keys alone, in that order.
+LIMIT_KEYS = tuple(LIMITS)
 #: Limits that count something (integers >= 1).
 COUNT_LIMITS = (
     "max_hull_vertices",
@@ -42,17 +61,6 @@ COUNT_LIMITS = (
     "max_hull_triangles",
     "max_faces_per_vertex",
     "max_hulls",
-)
-#: Every limit key of a target's ``[limits]``, in the order reports list them.
-LIMIT_KEYS = (
-    "max_hull_vertices",
-    "max_hull_polygons",
-    "max_hull_triangles",
-    "max_faces_per_vertex",
-    "max_hulls",
-    "max_oblong_ratio",
-    "min_thickness",
-    "min_volume",
 )
 
 # -- inputs -----------------------------------------------------------------------------------

@@ -532,27 +532,6 @@ def test_denormal_scale_is_a_one_line_error_not_a_crash(tmp_path: Path, scale: s
         assert "is below the limit of 1e-10" in lines[0]
 
 
-def test_relative_paths_are_those_of_relative_one_by_one(tmp_path, monkeypatch):
-    from meshcol.analysis.check import _relative, _relative_paths
-
-    inner = tmp_path / "work" / "level"
-    inner.mkdir(parents=True)
-    monkeypatch.chdir(tmp_path / "work")
-    paths = [
-        None,
-        "rel/a.obj",
-        str(inner / "a.obj"),
-        str(inner / "b.obj"),
-        str(tmp_path / "work" / "c.obj"),
-        str(tmp_path / "outside.obj"),
-        str(tmp_path / "work" / "level" / ".." / "d.obj"),
-        str(tmp_path / "work" / "level" / ".."),
-        "/",
-    ]
-    assert _relative_paths(paths) == [_relative(p) for p in paths]
-    assert _relative_paths(paths)[2:5] == ["level/a.obj", "level/b.obj", "c.obj"]
-
-
 @given(
     st.lists(
         st.tuples(

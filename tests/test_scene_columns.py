@@ -1,4 +1,4 @@
-"""The manifest's column path (meshcol.io.scene._columns: validation, the magnitude check and
+"""The manifest's column path (meshcol.io.scene_columns: validation, the magnitude check and
 the bodies built in bulk) against the body-by-body path it stands in for: the same bodies to
 the bit, the same first error, never a document the body-by-body check refuses."""
 
@@ -15,16 +15,17 @@ from test_scene_validation import bodies as valid_bodies
 from test_scene_validation import documents, mutate, near_valid
 
 from meshcol.errors import MeshcolError
-from meshcol.io import scene as scene_module
-from meshcol.io.scene import (
-    _columns,
-    _euler_matrices,
-    _plainly_valid_by_body,
-    _quaternion_matrices,
-    load_scene,
-    rotation_from_euler,
-    rotation_from_quaternion,
-)
+from meshcol.io import scene_parse, scene_validate
+from meshcol.io.scene import load_scene, rotation_from_euler, rotation_from_quaternion
+from meshcol.io.scene_columns import columns as _columns
+from meshcol.io.scene_columns import euler_matrices as _euler_matrices
+from meshcol.io.scene_columns import quaternion_matrices as _quaternion_matrices
+from meshcol.io.scene_validate import first_problem
+
+
+def _plainly_valid_by_body(document) -> bool:
+    return first_problem(document) is None
+
 
 # --- validation -------------------------------------------------------------------------------
 
@@ -110,18 +111,23 @@ def load_both(folder: Path, document) -> tuple:
     path = folder / "scene.json"
     path.write_text(json.dumps(document))
     out = []
-    for columns in (scene_module._columns, lambda document: None):
-        scene_module._PARSED.clear()
-        original = scene_module._columns
-        scene_module._columns = columns
+    for columns in (_columns, lambda document: None):
+        forget()
+        scene_validate.columns = columns
         try:
             out.append(describe(load_scene(path)))
         except MeshcolError as error:
             out.append(str(error))
         finally:
-            scene_module._columns = original
-    scene_module._PARSED.clear()
+            scene_validate.columns = _columns
+    forget()
     return tuple(out)
+
+
+def forget() -> None:
+    """Drop the manifest read and assessed last (so the next load reads and checks anew)."""
+    scene_parse._READ.clear()
+    scene_validate._LAST[:] = [object(), None, None]
 
 
 def describe(scene) -> list:

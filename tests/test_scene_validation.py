@@ -1,5 +1,6 @@
-"""The hand-written fast check of scene manifests (meshcol.io.scene._plainly_valid) against
-JSON Schema: it may send a valid document to jsonschema, never pass an invalid one."""
+"""The one validator of scene manifests (meshcol.io.scene_validate) against JSON Schema: it
+passes exactly what jsonschema passes (every number finite), and words every problem as
+meshcol did when jsonschema decided (tests/scene_oracle.py, main ee068ea's code)."""
 
 from __future__ import annotations
 
@@ -9,20 +10,26 @@ import math
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scene_oracle import schema_message, schema_valid
 
-from meshcol.io.scene import (
-    _BODY_FIELDS,
-    _TOP_FIELDS,
-    SCHEMA_PATH,
-    _first_non_finite,
-    _plainly_valid,
-    _validator,
-)
+from meshcol.errors import SceneError
+from meshcol.io.scene_columns import columns
+from meshcol.io.scene_schema import BODY_FIELDS, SCHEMA_PATH, SHAPES, TOP_FIELDS
+from meshcol.io.scene_validate import first_problem, validate
+from meshcol.vocabulary import SCENE_SHAPES
 
 
-def schema_valid(document) -> bool:
-    """What the slow path accepts: every number finite and no jsonschema error."""
-    return _first_non_finite(document) is None and not list(_validator().iter_errors(document))
+def _plainly_valid(document) -> bool:
+    return first_problem(document) is None
+
+
+def message(document) -> str | None:
+    """What loading ``document`` says about it (None: valid)."""
+    try:
+        validate(document, "", "scene.json")
+    except SceneError as error:
+        return error.message
+    return None
 
 
 numbers = st.one_of(
@@ -150,15 +157,33 @@ def documents(draw):
 
 
 @given(documents())
-def test_fast_check_passes_only_what_the_schema_passes(document):
+def test_validation_passes_only_what_the_schema_passes(document):
     if _plainly_valid(document):
         assert schema_valid(document), document
+
+
+@settings(max_examples=400)
+@given(documents())
+def test_every_message_is_the_one_jsonschema_gave(document):
+    assert message(document) == schema_message(document), document
+
+
+@pytest.mark.slow
+@settings(max_examples=60)
+@pytest.mark.parametrize("field", sorted(near_valid) + ["colour"])
+@given(data=st.data())
+def test_every_message_about_one_bad_field_is_the_one_jsonschema_gave(field, data):
+    document = {"bodies": data.draw(st.lists(bodies(), min_size=1, max_size=2))}
+    mutate(data.draw, document["bodies"][-1], field)
+    if data.draw(st.booleans()):
+        mutate(data.draw, document["bodies"][0])
+    assert message(document) == schema_message(document), document
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("field", sorted(near_valid) + ["colour"])
 @given(data=st.data())
-def test_fast_check_passes_no_body_with_one_bad_field(field, data):
+def test_validation_passes_no_body_with_one_bad_field(field, data):
     document = {"bodies": data.draw(st.lists(bodies(), min_size=1, max_size=2))}
     mutate(data.draw, document["bodies"][0], field)
     if _plainly_valid(document):
@@ -167,20 +192,20 @@ def test_fast_check_passes_no_body_with_one_bad_field(field, data):
 
 @settings(max_examples=300)
 @given(documents())
-def test_fast_check_passes_the_valid_common_documents(document):
-    # Where jsonschema accepts a document, so does the fast path: a valid manifest never pays
-    # for jsonschema.
+def test_validation_passes_the_valid_documents(document):
+    # Where jsonschema accepts a document, so does the validator.
     if schema_valid(document):
         assert _plainly_valid(document), document
 
 
-def test_fast_check_knows_only_fields_of_the_schema():
+def test_the_validator_knows_the_fields_of_the_schema():
     schema = json.loads(SCHEMA_PATH.read_text())
-    assert set(schema["properties"]) >= _TOP_FIELDS
-    assert set(schema["properties"]["bodies"]["items"]["properties"]) >= _BODY_FIELDS
+    assert set(schema["properties"]) == TOP_FIELDS
+    assert set(schema["properties"]["bodies"]["items"]["properties"]) == BODY_FIELDS
+    assert set(SCENE_SHAPES) == SHAPES
 
 
-def test_a_typical_ten_thousand_body_manifest_takes_the_fast_path():
+def test_a_typical_ten_thousand_body_manifest_is_valid():
     bodies = [
         {
             "name": f"prop{i}",
@@ -195,6 +220,7 @@ def test_a_typical_ten_thousand_body_manifest_takes_the_fast_path():
     bodies.append({"name": "ball", "primitive": {"type": "sphere", "radius": 0.5}})
     document = {"units": "m", "bodies": bodies}
     assert _plainly_valid(document)
+    assert columns(document) is not None  # the fast path: column by column
     bodies[5000]["position"] = [0.0, 0.0]
     assert not _plainly_valid(document)
 
@@ -229,3 +255,40 @@ def test_every_spelling_of_a_non_finite_number_is_found(tmp_path, suffix, text):
     path.write_text(text)
     with pytest.raises(SceneError, match="body 'a': position must be finite"):
         load_scene(path)
+
+
+@pytest.mark.parametrize(
+    "document",
+    [
+        None,
+        [],
+        {},
+        {"bodies": [], "colour": 1},
+        {"bodies": [3]},
+        {"bodies": [{"name": "a", "mesh": "m"}, "b"], "units": ""},
+        {"bodies": [{"mesh": "m", "primitive": {"type": "sphere", "radius": 1}}]},
+        {"bodies": [{"name": "a", "mesh": "m", "colour": 1, "position": [0]}]},
+        {"bodies": [{"name": "a", "primitive": {"type": "cone", "radius": -1}}]},
+        {"bodies": [{"name": "a", "primitive": {"type": "sphere", "radius": 1, "size": [1]}}]},
+        {"bodies": [{"name": "a", "primitive": {"type": "sphere", "foo": 1, "size": [1]}}]},
+        {"bodies": [{"name": "a", "primitive": {"type": "capsule"}}]},
+        {"bodies": [{"name": "a", "primitive": {"radius": 1}}]},
+        {"bodies": [{"name": "a", "primitive": [1]}]},
+        {"bodies": [{"name": "a", "mesh": "m", "rotation": {"euler_deg": [1, "a", 3]}}]},
+        {
+            "bodies": [
+                {"name": "a", "mesh": "m", "rotation": {"euler_deg": [1, "a", 3], "order": "q"}}
+            ]
+        },
+        {"bodies": [{"name": "a", "mesh": "m", "rotation": {"euler_deg": [1, 2], "order": 5}}]},
+        {"bodies": [{"name": "a", "mesh": "m", "rotation": {"quaternion": [1], "order": "x"}}]},
+        {"bodies": [{"name": "a", "mesh": "m", "end_rotation": {"axis": [1, 0, 0]}}]},
+        {"bodies": [{"name": "a", "mesh": "m", "scale": {"quaternion": [1, 0, 0, 0]}}]},
+        {"bodies": [{"name": "a", "mesh": "m", "scale": [1, 0, 1], "shape": "convex"}]},
+        {"bodies": [{"name": "", "mesh": ""}], "duration": 0},
+        {"bodies": [{"name": True, "mesh": "m", "velocity": [1, 2, True]}]},
+        {"bodies": [{"name": "a", "mesh": "m"}], "duration": float("nan"), "units": 3},
+    ],
+)
+def test_messages_of_chosen_documents_are_the_ones_jsonschema_gave(document):
+    assert message(document) == schema_message(document)

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from scipy.spatial import ConvexHull
 
-from meshcol.collision.limits import fit_hull, limit_violations, measure_parts
+from meshcol.collision.limits import limit_violations, measure_parts
+from meshcol.collision.target_fit import fit_hull
 from meshcol.io.targets import load_target
 
 

@@ -19,7 +19,8 @@ from hypothesis import strategies as st
 from target_oracle import encloses, missed
 
 from meshcol.cli import main
-from meshcol.collision.limits import RULES, fit_hull
+from meshcol.collision.limits import RULES
+from meshcol.collision.target_fit import fit_hull
 from meshcol.io.targets import TARGETS_DIR, load_target, target_names
 
 PROFILES = target_names()

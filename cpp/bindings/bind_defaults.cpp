@@ -8,10 +8,17 @@
 
 namespace nb = nanobind;
 
+namespace {
+// The namespace meshcol._core.defaults: a class holding the constants as class attributes,
+// not a submodule, so that the stub of meshcol._core (nanobind's stubgen, one file) types
+// each of them.
+struct Defaults {};
+}  // namespace
+
 void bind_defaults(nb::module_& m) {
     namespace d = meshcol::defaults;
-    nb::module_ s = m.def_submodule(
-        "defaults", "Defaults and caps of the core (cpp/include/meshcol/defaults.hpp).");
+    nb::class_<Defaults> s(m, "defaults",
+                           "Defaults and caps of the core (cpp/include/meshcol/defaults.hpp).");
     s.attr("rigid_tolerance") = d::rigid_tolerance;
     s.attr("min_pairs_per_thread") = d::min_pairs_per_thread;
     s.attr("min_shapes_per_thread") = d::min_shapes_per_thread;

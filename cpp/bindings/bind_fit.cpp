@@ -2,6 +2,7 @@
 // The Python API is meshcol/collision/fit.py.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/tuple.h>
 
 #include <cstdint>
 #include <stdexcept>
@@ -56,7 +57,7 @@ void bind_fit(nb::module_& m) {
             }
             auto c = new_array<Out<double, -1>>({static_cast<size_t>(dim)});
             for (int k = 0; k < dim; ++k) c.data()[k] = center[k];
-            return nb::make_tuple(c, radius, converged);
+            return std::make_tuple(c, radius, converged);
         },
         "points"_a,
         "Smallest ball of (n, d) points, d <= 3 (Welzl): (centre (d,), radius, converged).");
@@ -123,7 +124,7 @@ void bind_fit(nb::module_& m) {
             if (pv->empty()) pv->reserve(1);
             if (qv->empty()) qv->reserve(1);
             const size_t pshape[3] = {hs, ks, 3}, qshape[4] = {hs, ks, 4, 4};
-            return nb::make_tuple(
+            return std::make_tuple(
                 vector_array<Out<std::int8_t, -1>>(std::move(hull_status), hs, 0),
                 vector_array<Out<std::int8_t, -1>>(std::move(dimension), hs, 0),
                 vector_array<Out<double, -1>>(std::move(hull_volume), hs, 0),

@@ -2,6 +2,7 @@
 // The Python API is meshcol/collision/hull.py (and ConvexSet in meshcol/collision/shapes.py).
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/tuple.h>
 
 #include <cstdint>
 #include <stdexcept>
@@ -82,7 +83,7 @@ void bind_hull(nb::module_& m) {
             normal.data()[0] = h.normal.x;
             normal.data()[1] = h.normal.y;
             normal.data()[2] = h.normal.z;
-            return nb::make_tuple(
+            return std::make_tuple(
                 static_cast<int>(h.status), h.dimension,
                 vector_array<Out<std::int64_t, -1>>(std::move(index), k, 0),
                 vector_array<Out<std::int64_t, -1, 3>>(std::move(faces), f, 3),
@@ -111,7 +112,7 @@ void bind_hull(nb::module_& m) {
             const size_t v = p.vertices.size() / 3, k = p.adjacency.size();
             const size_t f = p.face_normals.size() / 3, e = p.edge_directions.size() / 3;
             const size_t hs = static_cast<size_t>(h);
-            return nb::make_tuple(
+            return std::make_tuple(
                 vector_array<Out<std::int8_t, -1>>(std::move(status), hs, 0),
                 vector_array<Out<double, -1, 3>>(std::move(p.vertices), v, 3),
                 vector_array<Out<std::int64_t, -1>>(std::move(p.offsets), hs + 1, 0),

@@ -4,6 +4,7 @@
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/tuple.h>
+#include <nanobind/typing.h>
 
 #include <array>
 #include <cmath>
@@ -481,28 +482,28 @@ size_t mesh_index(const MeshBvhSet& set, std::int64_t i) {
 // pair's root-box test costs less than releasing it) and nothing is allocated. A pose is read in
 // place when it is a C-contiguous (4, 4) float64 buffer; any other pose object makes the call
 // return None, and the caller converts it (as_pose) and calls again.
-nb::object intersects_pair(const MeshBvhSet& set, std::int64_t i, std::int64_t j, nb::handle pose_i,
-                           nb::handle pose_j) {
+std::optional<bool> intersects_pair(const MeshBvhSet& set, std::int64_t i, std::int64_t j,
+                                   nb::handle pose_i, nb::handle pose_j) {
     const size_t a = mesh_index(set, i), b = mesh_index(set, j);
     meshcol::Pose pa = set.poses[a], pb = set.poses[b];
     bool ra = set.rigid[a] != 0, rb = set.rigid[b] != 0;
     Buffer buffer_i, buffer_j;
     if (!pose_i.is_none()) {
         const double* p = buffer_i.get<double>(pose_i.ptr(), {4, 4});
-        if (p == nullptr) return nb::none();
+        if (p == nullptr) return std::nullopt;
         ra = meshcol::is_rigid_matrix4(p, meshcol::defaults::rigid_tolerance);
         pa = meshcol::Pose::from_matrix4(p);
     }
     if (!pose_j.is_none()) {
         const double* p = buffer_j.get<double>(pose_j.ptr(), {4, 4});
-        if (p == nullptr) return nb::none();
+        if (p == nullptr) return std::nullopt;
         rb = meshcol::is_rigid_matrix4(p, meshcol::defaults::rigid_tolerance);
         pb = meshcol::Pose::from_matrix4(p);
     }
     bool hit = false;
     const meshcol::Status status = intersects_one(set.meshes[a], pa, ra, set.meshes[b], pb, rb, &hit);
     if (status != meshcol::Status::CONVERGED) no_verdict(status, i, j, set, ra, rb);
-    return nb::bool_(hit);
+    return hit;
 }
 
 void set_poses(MeshBvhSet& set, Poses poses) {
@@ -520,6 +521,8 @@ void set_poses(MeshBvhSet& set, Poses poses) {
 }  // namespace
 
 void bind_mesh_query(nb::module_& m) {
+    // The type of the result intersects_batch builds (its caller's dataclass), for the stub.
+    m.attr("ResultT") = nb::type_var("ResultT");
     nb::class_<MeshBvhSet>(m, "MeshBvhSet",
                            "Bounding volume hierarchies of M triangle meshes, built once (mesh_bvh.hpp).")
         .def("__init__", &build_set, "vertices"_a, "faces"_a, "vertex_offsets"_a, "face_offsets"_a,
@@ -644,6 +647,8 @@ void bind_mesh_query(nb::module_& m) {
              "(depth, point_a, point_b, normal, deepest_mesh, points_tested, status).")
         .def("intersects_batch", &intersects_batch, "poses"_a.none(), "pairs"_a, "threads"_a,
              "result_type"_a,
+             nb::sig("def intersects_batch(self, poses: object | None, pairs: object, threads: int, "
+                     "result_type: type[ResultT]) -> ResultT | None"),
              "Mesh-pair surface intersection tests as result_type(intersecting, status); None "
              "when poses is not None or a C-contiguous (M, 4, 4) float64 array, or pairs not a "
              "C-contiguous (P, 2) int64 array or a non-empty list of (i, j) Python ints "

@@ -4,6 +4,7 @@
 // encoder whenever this one declines a document). Only the limited C API is used.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
+#include <nanobind/stl/optional.h>
 
 #include <Python.h>
 
@@ -215,19 +216,19 @@ private:
     }
 };
 
-nb::object dumps_indented(nb::handle document, nb::handle builtin) {
+std::optional<nb::str> dumps_indented(nb::handle document, nb::handle builtin) {
     Encoder encoder(builtin.ptr());
     try {
         encoder.value(document.ptr(), 0);
     } catch (const Decline&) {
         PyErr_Clear();
-        return nb::none();
+        return std::nullopt;
     }
     encoder.text.push_back('\n');
     PyObject* text = PyUnicode_DecodeASCII(
         encoder.text.data(), static_cast<Py_ssize_t>(encoder.text.size()), nullptr);
     if (text == nullptr) throw nb::python_error();
-    return nb::steal(text);
+    return nb::steal<nb::str>(text);
 }
 
 }  // namespace
@@ -242,7 +243,7 @@ void bind_report(nb::module_& m) {
     m.def(
         "float_reprs",
         [](const Values& values) {
-            nb::list out;
+            nb::typed<nb::list, nb::str> out;
             char buf[meshcol::kDoubleReprSize];
             const double* v = values.data();
             for (size_t i = 0; i < values.shape(0); ++i) {

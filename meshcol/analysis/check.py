@@ -44,6 +44,7 @@ import numpy as np
 
 from meshcol.analysis.colliders import COLLIDER_KINDS, _geometry_key, build_colliders
 from meshcol.errors import InputFileError
+from meshcol.io.paths import display_path, display_paths
 from meshcol.io.report import vector_columns
 from meshcol.io.robot import RobotOptions
 from meshcol.types import Scene, Status
@@ -724,7 +725,7 @@ def check_scene(
     findings = _findings(shapes, options, scene.units, fail_rules)
 
     part_counts = np.diff(shapes.body_part_offsets).tolist()
-    files = _relative_paths([body.source for body in bodies])
+    files = display_paths([body.source for body in bodies], posix=True)
     body_rows = [
         {
             "name": body.name,
@@ -765,11 +766,11 @@ def check_scene(
         "fail_on": options.fail_on,
         "fail_on_rules": list(fail_rules),
         "ignore": list(options.ignore),
-        "baseline": _relative(options.baseline_source),
+        "baseline": display_path(options.baseline_source, posix=True),
         "excluded_pairs": [
             {"body_a": a, "body_b": b, "reason": reason} for a, b, reason in scene.excluded_pairs
         ],
-        "inputs": [_relative(scene.source)]
+        "inputs": [display_path(scene.source, posix=True)]
         if scene.source
         else sorted({file or "" for file, b in zip(files, bodies) if b.source}),
     }
@@ -1008,14 +1009,11 @@ def _prepare_files(
     from meshcol.analysis.colliders import convex_parts
     from meshcol.decomposition.executor import run_each
     from meshcol.errors import MeshcolError
-    from meshcol.io.robot import is_robot_file
-    from meshcol.io.scene import MANIFEST_EXTENSIONS, iter_inputs, load_inputs, unique_name
+    from meshcol.io.inputs import is_whole_scene
+    from meshcol.io.scene import iter_inputs, load_inputs, unique_name
 
     kind, decompose_options = options.collider, options.decompose_options
-    whole = len(inputs) == 1 and (
-        is_robot_file(inputs[0])
-        or os.path.splitext(os.fspath(inputs[0]))[1].lower() in MANIFEST_EXTENSIONS
-    )
+    whole = is_whole_scene(inputs)
     scene: Scene | None = None
     if whole:  # a manifest or robot is read here; its decompositions go out per mesh file
         scene = load_inputs(inputs, robot_options=robot_options)
@@ -1102,39 +1100,3 @@ def _vecs(values: np.ndarray) -> list[list[float] | None]:
 def _num(x: float) -> float | None:
     x = float(x)
     return x if math.isfinite(x) else None
-
-
-def _relative(path: str | None) -> str | None:
-    if path is None:
-        return None
-    if os.path.isabs(path):
-        rel = os.path.relpath(path)
-        if not rel.startswith(".."):
-            return rel.replace(os.sep, "/")
-    return str(path).replace(os.sep, "/")
-
-
-def _relative_paths(paths: Sequence[str | None]) -> list[str | None]:
-    """:func:`_relative` of each path, the folder of an absolute one made relative once (not
-    once a body: ``os.path.relpath`` costs 20 us, and a scene can hold 100,000 bodies)."""
-    folders: dict[str, str] = {}
-    out: list[str | None] = []
-    for path in paths:
-        if path is None or not os.path.isabs(path):
-            out.append(_relative(path))
-            continue
-        folder, name = os.path.split(path)
-        if folder not in folders:
-            folders[folder] = os.path.relpath(folder)
-        inside = folders[folder]
-        if name in ("", ".", ".."):
-            out.append(_relative(path))
-        elif inside.startswith(".."):
-            # outside the working folder: kept absolute, as _relative keeps it (relpath(path)
-            # is relpath(folder) and the name, so it starts with ".." too)
-            out.append(path.replace(os.sep, "/"))
-        else:
-            # the working folder contains the file's folder, so relpath(path) is relpath(folder)
-            # followed by the name
-            out.append((name if inside == "." else os.path.join(inside, name)).replace(os.sep, "/"))
-    return out

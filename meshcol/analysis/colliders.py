@@ -11,6 +11,8 @@ a body of several parts (``Body.parts``):
 - ``fit``: each part's enclosing primitive (:mod:`meshcol.analysis.fit`, ``auto``: the
   simplest primitive within the volume tolerance of its hull, else the hull), queried exactly
   as a primitive, placed in the body by its own pose (``Colliders.part_offsets``);
+- ``box``, ``sphere``: each part's enclosing oriented box or minimum sphere, always that
+  primitive (an engine's simple colliders; USD's ``boundingCube``, ``boundingSphere``);
 - ``mesh``: its triangles, for the exact mesh queries. What stands for it in the convex
   queries is chosen by the caller (``mesh_parts``): its parts' hulls (check: broad phase and
   depth bound) or every triangle as a 3-vertex polytope (sweep: surface contact).
@@ -34,6 +36,7 @@ collider in each of them.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import re
 from collections.abc import Callable, Sequence
@@ -417,40 +420,40 @@ def _triangle_parts(body: Body) -> tuple[ConvexSet, np.ndarray]:
     return (solid if flat is None else ConvexSet.concatenate(solid, flat)), order
 
 
-def _constant(value: Any) -> Callable[[], Any]:
-    """A function returning ``value``: packs a unique shape only when it is first seen."""
-    return lambda: value
+#: Collider kinds whose parts are enclosing primitives, and the fit each asks for
+#: (:func:`meshcol.analysis.fit.fit_point_sets`): ``fit`` the simplest within the volume
+#: tolerance (else the hull), ``box`` and ``sphere`` always that primitive.
+FIT_KIND_SHAPES = {"fit": "auto", "box": "box", "sphere": "sphere"}
 
 
-def _fits_of(bodies: Sequence[Body], kind: str, report: Callable[[str], None]) -> dict[bytes, Any]:
-    """The ``auto`` fit (:func:`meshcol.analysis.fit.fit_point_sets`) of every unique,
-    non-flat part of the ``fit`` bodies, all in one native call: geometry key -> the chosen
+def _fits_of(
+    bodies: Sequence[Body], kind: str, report: Callable[[str], None]
+) -> dict[tuple[str, bytes], Any]:
+    """The fit of every unique, non-flat part of the bodies whose kind is one of
+    :data:`FIT_KIND_SHAPES`, one native call per fit shape: (shape, geometry key) -> the chosen
     PrimitiveFit, or None when the hull was kept."""
-    keys: list[bytes] = []
-    seen: set[bytes] = set()
-    sets: list[np.ndarray] = []
-    names: list[str] = []
+    wanted: dict[str, dict[bytes, tuple[np.ndarray, str]]] = {}
     for body in bodies:
-        if body.primitive is not None or (body.collider or kind) != "fit":
+        shape = FIT_KIND_SHAPES.get(body.collider or kind)
+        if body.primitive is not None or shape is None:
             continue
+        sets = wanted.setdefault(shape, {})
         for name, v, _ in body.part_meshes():
             key = _geometry_key(v)
-            if key in seen or _flat(v):
-                continue
-            seen.add(key)
-            keys.append(key)
-            sets.append(v)
-            names.append(f"body {body.name!r}" + ("" if name is None else f" part {name!r}"))
-    if not sets:
+            if key not in sets and not _flat(v):
+                sets[key] = (v, f"body {body.name!r}" + ("" if name is None else f" part {name!r}"))
+    if not wanted:
         return {}
     from meshcol.analysis.fit import fit_point_sets  # only when a body is fitted
 
-    report(f"enclosing primitives of {len(sets)} unique parts")
-    out: dict[bytes, Any] = {}
-    for key, what, result in zip(keys, names, fit_point_sets(sets)):
-        if isinstance(result, InvalidMeshError):
-            raise InvalidMeshError(f"{what}: {result.message}")
-        out[key] = result.primitive_fit
+    out: dict[tuple[str, bytes], Any] = {}
+    for shape, sets in wanted.items():
+        report(f"enclosing primitives of {len(sets)} unique parts")
+        results = fit_point_sets([v for v, _ in sets.values()], shape)
+        for (key, (_, what)), result in zip(sets.items(), results):
+            if isinstance(result, InvalidMeshError):
+                raise InvalidMeshError(f"{what}: {result.message}")
+            out[(shape, key)] = result.primitive_fit
     return out
 
 
@@ -469,8 +472,9 @@ def build_colliders(
     ----------
     bodies : sequence of Body
         A scene's bodies, ``UCX_`` parts included (they become their owner's parts).
-    kind : {"hull", "decomposed", "mesh", "fit"}
-        Default collider kind; a body's own ``shape`` overrides it.
+    kind : str
+        Default collider kind (:data:`meshcol.vocabulary.COLLIDER_KINDS`); a body's own
+        ``shape`` overrides it.
     mesh_parts : {"hull", "triangles"}
         What stands for a ``mesh`` body in the convex queries.
     decompose_options : dict, optional
@@ -488,162 +492,246 @@ def build_colliders(
     Notes
     -----
     Identical geometry is packed once and replicated (:meth:`ConvexSet.take`), so a level of
-    instanced props costs one hull per unique prop.
+    instanced props costs one hull per unique prop. Each kind's parts come from its builder in
+    :data:`_BUILDERS` (one entry per collider kind).
     """
     if kind not in COLLIDER_KINDS:
         raise ValueError(f"collider must be one of {', '.join(COLLIDER_KINDS)}, got {kind!r}")
     if mesh_parts not in ("hull", "triangles"):
         raise ValueError(f"mesh_parts must be hull or triangles, got {mesh_parts!r}")
-    options = dict(decompose_options or {})
-    report = progress or (lambda message: None)
-    parts_of = convex_parts if decompose is None else decompose
     kept, ucx, warnings = split_ucx(bodies)
-
-    # Unique single shapes (packed together in one call) and per-body triangle sets; each
-    # body's parts are a block of rows, single shapes first in the pool, triangles after.
-    unique: list[Any] = []
-    unique_index: dict[Any, int] = {}
-    triangle_sets: list[ConvexSet] = []
-    triangle_labels: list[np.ndarray] = []
-    # per body: (triangle set index or -1, unique indices, their part labels)
-    blocks: list[tuple[int, list[int], list[int]]] = []
-    # the pose in its body of each single part that is not at the body's origin: (body, k)
-    part_poses: dict[tuple[int, int], np.ndarray] = {}
-    fits: dict[bytes, Any] = {}  # geometry key -> its fit: instanced props are fitted once
-    kinds: list[str] = []
-
-    def add(key: Any, make: Callable[[], Any]) -> int:
-        idx = unique_index.get(key)
-        if idx is None:
-            idx = len(unique)
-            unique.append(make())
-            unique_index[key] = idx
-        return idx
-
-    def hull(vertices: np.ndarray) -> int:
-        return add(("hull", _geometry_key(vertices)), _constant(vertices))
-
-    fits.update(_fits_of(kept, kind, report))
-
+    report = progress or (lambda message: None)
+    build = _Build(
+        kind=kind,
+        mesh_parts=mesh_parts,
+        ucx=ucx,
+        warnings=warnings,
+        report=report,
+        parts_of=convex_parts if decompose is None else decompose,
+        decompose_options=dict(decompose_options or {}),
+        fits=_fits_of(kept, kind, report),
+    )
     for body_number, body in enumerate(kept):
-        body_kind = body.collider or kind
-        singles: list[int] = []
-        labels: list[int] = []
-        triangles = -1
-        # (label, name for messages, vertices, faces) of each part: one unlabelled for a body
-        # of one part
-        meshes = [
-            (k if body.parts else -1, name, v, f)
-            for k, (name, v, f) in enumerate(body.part_meshes())
-        ]
+        block = _Block(body_number)
         if body.primitive is not None:
+            block.put(build.pool.add(("primitive", body.primitive), body.primitive), -1)
             body_kind = "primitive"
-            singles.append(add(("primitive", body.primitive), _constant(body.primitive)))
-            labels.append(-1)
-        elif body_kind == "decomposed":
-            own = ucx.get(body.name)
-            covered = set() if own is None else {label for label, _ in own.parts}
-            if own is not None:
-                for label, v in own.parts:
-                    singles.append(add(("part", _geometry_key(v)), _constant(v)))
-                    labels.append(label)
-            decomposed = False
-            for label, name, v, f in meshes:
-                if own is not None and (own.whole or label in covered):
-                    continue  # its UCX parts stand for it
-                if name is not None and _UCX.match(name):
-                    singles.append(add(("part", _geometry_key(v)), _constant(v)))
-                    labels.append(label)  # a UCX part is convex by convention: as given
-                    continue
-                what = f"body {body.name!r}" + ("" if name is None else f" part {name!r}")
-                if _flat(v):
-                    warnings.append(
-                        f"{what}: flat (no volume to decompose): its hull is used, the "
-                        "polygon, segment or point it is"
-                    )
-                    singles.append(hull(v))
-                    labels.append(label)
-                    continue
-                report(f"convex parts of {body.name}" + ("" if name is None else f"/{name}"))
-                decomposed = True
-                for p in parts_of((v, f), **options):
-                    singles.append(add(("part", _geometry_key(p)), _constant(p)))
-                    labels.append(label)
-            if not decomposed and (
-                own is not None or all(n is not None and _UCX.match(n) for _, n, _, _ in meshes)
-            ):
-                body_kind = "ucx"
-        elif body_kind == "fit":
-            for label, _, v, _ in meshes:
-                if _flat(v):
-                    singles.append(hull(v))  # its polygon: a primitive would add a thickness
-                    labels.append(label)
-                    continue
-                chosen = fits[_geometry_key(v)]
-                if chosen is None:
-                    singles.append(hull(v))
-                else:
-                    part_poses[(body_number, len(singles))] = chosen.pose
-                    singles.append(add(("fit", chosen.primitive), _constant(chosen.primitive)))
-                labels.append(label)
-        elif body_kind == "mesh" and mesh_parts == "triangles":
-            triangles = len(triangle_sets)
-            tset, order = _triangle_parts(body)
-            triangle_sets.append(tset)
-            if body.parts:
-                assert body.part_faces is not None
-                face_label = np.repeat(
-                    np.arange(len(body.parts), dtype=np.int64), np.diff(body.part_faces)
-                )
-                triangle_labels.append(face_label[order])
-            else:
-                triangle_labels.append(np.full(len(order), -1, dtype=np.int64))
         else:
-            for label, _, v, _ in meshes:
-                singles.append(hull(v))
-                labels.append(label)
-        kinds.append(body_kind)
-        blocks.append((triangles, singles, labels))
+            body_kind = _BUILDERS[body.collider or kind](build, body, block)
+        build.pool.close(block, body_kind)
+    return build.pool.colliders(kept, warnings)
 
-    single = ConvexSet.from_shapes(unique)
-    pool = ConvexSet.concatenate(single, *triangle_sets) if triangle_sets else single
-    set_start = np.cumsum([len(single)] + [len(s) for s in triangle_sets])
-    if triangle_sets:
+
+@dataclass
+class _Block:
+    """The parts of one body being built: rows of single shapes in the pool and their part
+    labels, or a triangle set (``triangles`` >= 0, its index)."""
+
+    body_number: int
+    singles: list[int] = dataclasses.field(default_factory=list)
+    labels: list[int] = dataclasses.field(default_factory=list)
+    triangles: int = -1
+
+    def put(self, row: int, label: int) -> None:
+        self.singles.append(row)
+        self.labels.append(label)
+
+
+class _Pool:
+    """Unique single shapes (packed together in one call) and per-body triangle sets; each
+    body's parts are a block of rows, single shapes first in the pool, triangles after."""
+
+    def __init__(self) -> None:
+        self.unique: list[Any] = []
+        self.unique_index: dict[Any, int] = {}
+        self.triangle_sets: list[ConvexSet] = []
+        self.triangle_labels: list[np.ndarray] = []
+        self.blocks: list[_Block] = []
+        self.kinds: list[str] = []
+        # the pose in its body of each single part that is not at the body's origin: (body, k)
+        self.part_poses: dict[tuple[int, int], np.ndarray] = {}
+
+    def add(self, key: Any, shape: Any) -> int:
+        """The row of the unique shape ``key``, packed the first time it is seen."""
+        row = self.unique_index.get(key)
+        if row is None:
+            row = len(self.unique)
+            self.unique.append(shape)
+            self.unique_index[key] = row
+        return row
+
+    def hull(self, vertices: np.ndarray) -> int:
+        return self.add(("hull", _geometry_key(vertices)), vertices)
+
+    def part(self, vertices: np.ndarray) -> int:
+        return self.add(("part", _geometry_key(vertices)), vertices)
+
+    def add_triangles(self, body: Body, block: _Block) -> None:
+        """Every triangle of ``body`` as a part (one triangle set)."""
+        block.triangles = len(self.triangle_sets)
+        triangles, order = _triangle_parts(body)
+        self.triangle_sets.append(triangles)
+        if body.parts:
+            assert body.part_faces is not None
+            face_label = np.repeat(
+                np.arange(len(body.parts), dtype=np.int64), np.diff(body.part_faces)
+            )
+            self.triangle_labels.append(face_label[order])
+        else:
+            self.triangle_labels.append(np.full(len(order), -1, dtype=np.int64))
+
+    def close(self, block: _Block, kind: str) -> None:
+        self.kinds.append(kind)
+        self.blocks.append(block)
+
+    def _rows(self, single: ConvexSet) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Pool row and part label of every part, and the part count of every body."""
+        blocks = self.blocks
+        if not self.triangle_sets:  # single shapes only: three flat passes
+            rows = np.fromiter(chain.from_iterable(b.singles for b in blocks), dtype=np.int64)
+            labels = np.fromiter(chain.from_iterable(b.labels for b in blocks), dtype=np.int64)
+            counts = np.fromiter((len(b.singles) for b in blocks), np.int64, count=len(blocks))
+            return rows, labels, counts
+        set_start = np.cumsum([len(single)] + [len(s) for s in self.triangle_sets])
         rows_per_body = [
-            np.asarray(singles, dtype=np.int64)
-            if tri < 0
-            else set_start[tri] + np.arange(len(triangle_sets[tri]), dtype=np.int64)
-            for tri, singles, _ in blocks
+            np.asarray(b.singles, dtype=np.int64)
+            if b.triangles < 0
+            else set_start[b.triangles]
+            + np.arange(len(self.triangle_sets[b.triangles]), dtype=np.int64)
+            for b in blocks
         ]
         labels_per_body = [
-            np.asarray(labels, dtype=np.int64) if tri < 0 else triangle_labels[tri]
-            for tri, _, labels in blocks
+            np.asarray(b.labels, dtype=np.int64)
+            if b.triangles < 0
+            else self.triangle_labels[b.triangles]
+            for b in blocks
         ]
-        rows = np.concatenate(rows_per_body)
-        part_label = np.concatenate(labels_per_body)
         counts = np.asarray([len(r) for r in rows_per_body], dtype=np.int64)
-    else:  # single shapes only: three flat passes, no small array per body
-        rows = np.fromiter(chain.from_iterable(b[1] for b in blocks), dtype=np.int64)
-        part_label = np.fromiter(chain.from_iterable(b[2] for b in blocks), dtype=np.int64)
-        counts = np.fromiter((len(b[1]) for b in blocks), dtype=np.int64, count=len(blocks))
-    offsets = np.zeros(len(kept) + 1, dtype=np.int64)
-    np.cumsum(counts, out=offsets[1:])
-    part_body = np.repeat(np.arange(len(kept), dtype=np.int64), counts)
-    part_index = np.arange(len(rows), dtype=np.int64) - offsets[part_body]
-    part_offsets = None
-    if part_poses:
-        part_offsets = np.tile(np.eye(4), (len(rows), 1, 1))
-        for (b, k), pose in part_poses.items():
-            part_offsets[offsets[b] + k] = pose
-    return Colliders(
-        tuple(kept),
-        tuple(kinds),
-        # every part its own unique shape, in pool order (a scene of unique assets): as is
-        pool if np.array_equal(rows, np.arange(len(pool))) else pool.take(rows),
-        part_body,
-        part_index,
-        offsets,
-        part_label,
-        tuple(warnings),
-        part_offsets,
-    )
+        return np.concatenate(rows_per_body), np.concatenate(labels_per_body), counts
+
+    def colliders(self, bodies: list[Body], warnings: list[str]) -> Colliders:
+        """The packed :class:`Colliders` of every closed block."""
+        single = ConvexSet.from_shapes(self.unique)
+        pool = ConvexSet.concatenate(single, *self.triangle_sets) if self.triangle_sets else single
+        rows, part_label, counts = self._rows(single)
+        offsets = np.zeros(len(bodies) + 1, dtype=np.int64)
+        np.cumsum(counts, out=offsets[1:])
+        part_body = np.repeat(np.arange(len(bodies), dtype=np.int64), counts)
+        part_offsets = None
+        if self.part_poses:
+            part_offsets = np.tile(np.eye(4), (len(rows), 1, 1))
+            for (body_number, k), pose in self.part_poses.items():
+                part_offsets[offsets[body_number] + k] = pose
+        return Colliders(
+            tuple(bodies),
+            tuple(self.kinds),
+            # every part its own unique shape, in pool order (a scene of unique assets): as is
+            pool if np.array_equal(rows, np.arange(len(pool))) else pool.take(rows),
+            part_body,
+            np.arange(len(rows), dtype=np.int64) - offsets[part_body],
+            offsets,
+            part_label,
+            tuple(warnings),
+            part_offsets,
+        )
+
+
+@dataclass
+class _Build:
+    """What every collider builder shares during one :func:`build_colliders` call."""
+
+    kind: str
+    mesh_parts: str
+    ucx: dict[str, _Ucx]
+    warnings: list[str]
+    report: Callable[[str], None]
+    parts_of: Callable[..., list[np.ndarray]]
+    decompose_options: dict[str, Any]
+    fits: dict[tuple[str, bytes], Any]  # (shape, geometry key) -> its fit: fitted once
+    pool: _Pool = dataclasses.field(default_factory=_Pool)
+
+
+def _part_meshes(body: Body) -> list[tuple[int, str | None, np.ndarray, np.ndarray]]:
+    """(label, name for messages, vertices, faces) of each part: one unlabelled part (-1) for
+    a body of one part."""
+    return [
+        (k if body.parts else -1, name, v, f) for k, (name, v, f) in enumerate(body.part_meshes())
+    ]
+
+
+def _hull_parts(build: _Build, body: Body, block: _Block) -> str:
+    """``hull``: the convex hull of each part."""
+    for label, _, vertices, _ in _part_meshes(body):
+        block.put(build.pool.hull(vertices), label)
+    return "hull"
+
+
+def _mesh_parts(build: _Build, body: Body, block: _Block) -> str:
+    """``mesh``: its triangles, or its parts' hulls, as the caller's ``mesh_parts`` says."""
+    if build.mesh_parts == "triangles":
+        build.pool.add_triangles(body, block)
+    else:
+        _hull_parts(build, body, block)
+    return "mesh"
+
+
+def _fitted_parts(build: _Build, body: Body, block: _Block, kind: str = "fit") -> str:
+    """``fit``, ``box``, ``sphere``: each part's enclosing primitive (the fit of
+    :data:`FIT_KIND_SHAPES`), placed by its pose; a flat part, or one whose fit kept the hull,
+    is its hull."""
+    shape = FIT_KIND_SHAPES[kind]
+    for label, _, vertices, _ in _part_meshes(body):
+        chosen = None if _flat(vertices) else build.fits[(shape, _geometry_key(vertices))]
+        if chosen is None:  # flat: its polygon (a primitive would add a thickness)
+            block.put(build.pool.hull(vertices), label)
+            continue
+        build.pool.part_poses[(block.body_number, len(block.singles))] = chosen.pose
+        block.put(build.pool.add(("fit", chosen.primitive), chosen.primitive), label)
+    return kind
+
+
+def _decomposed_parts(build: _Build, body: Body, block: _Block) -> str:
+    """``decomposed``: the body's matched ``UCX_`` parts, any part named ``UCX_`` as given,
+    a flat part's hull (with a warning), and the convex decomposition of every other part.
+    A body whose parts all came from ``UCX_`` geometry is of kind ``ucx``."""
+    own = build.ucx.get(body.name)
+    covered = set() if own is None else {label for label, _ in own.parts}
+    for label, vertices in own.parts if own is not None else ():
+        block.put(build.pool.part(vertices), label)
+    meshes = _part_meshes(body)
+    decomposed = False
+    for label, name, vertices, faces in meshes:
+        if own is not None and (own.whole or label in covered):
+            continue  # its UCX parts stand for it
+        if name is not None and _UCX.match(name):
+            block.put(build.pool.part(vertices), label)  # convex by convention: as given
+            continue
+        if _flat(vertices):
+            what = f"body {body.name!r}" + ("" if name is None else f" part {name!r}")
+            build.warnings.append(
+                f"{what}: flat (no volume to decompose): its hull is used, the "
+                "polygon, segment or point it is"
+            )
+            block.put(build.pool.hull(vertices), label)
+            continue
+        build.report(f"convex parts of {body.name}" + ("" if name is None else f"/{name}"))
+        decomposed = True
+        for part in build.parts_of((vertices, faces), **build.decompose_options):
+            block.put(build.pool.part(part), label)
+    all_ucx = all(n is not None and _UCX.match(n) for _, n, _, _ in meshes)
+    return "ucx" if not decomposed and (own is not None or all_ucx) else "decomposed"
+
+
+#: The builder of each collider kind: (build, body, block) -> the kind the body is reported
+#: as. A new collider kind is a word in :data:`meshcol.vocabulary.COLLIDER_KINDS` and an entry
+#: here (ARCHITECTURE.md, "Add a collider kind").
+_BUILDERS: dict[str, Callable[[_Build, Body, _Block], str]] = {
+    "hull": _hull_parts,
+    "decomposed": _decomposed_parts,
+    "mesh": _mesh_parts,
+    "fit": _fitted_parts,
+    "box": functools.partial(_fitted_parts, kind="box"),
+    "sphere": functools.partial(_fitted_parts, kind="sphere"),
+}
+if set(_BUILDERS) != set(COLLIDER_KINDS):  # pragma: no cover - caught by importing the module
+    raise ImportError(f"collider builders {sorted(_BUILDERS)} != kinds {COLLIDER_KINDS}")

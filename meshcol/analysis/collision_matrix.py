@@ -42,9 +42,10 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.analysis.check import _cartesian_part_pairs, _relative
+from meshcol.analysis.check import _cartesian_part_pairs
 from meshcol.analysis.colliders import build_colliders
 from meshcol.errors import SceneError
+from meshcol.io.paths import display_path
 from meshcol.io.robot import RobotOptions
 from meshcol.types import Status
 from meshcol.vocabulary import MATRIX_COLLIDERS
@@ -358,8 +359,9 @@ def collision_matrix(
     pair's rate measured on all the samples. Narrow phase: boolean GJK (Gilbert et al. 1988;
     van den Bergen 2003) on the links' convex parts, batched over every candidate.
     """
+    from meshcol.io.inputs import is_robot_file
     from meshcol.io.kinematics import adjacent_links
-    from meshcol.io.robot import is_robot_file, load_robot_model
+    from meshcol.io.robot import load_robot_model
 
     opts = MatrixOptions(**options)
     opts.validate()
@@ -485,7 +487,7 @@ def collision_matrix(
         "padding": opts.padding,
         "always_fraction": opts.always_fraction,
         "threads": opts.threads,
-        "inputs": [_relative(source)],
+        "inputs": [display_path(source, posix=True)],
     }
     # The scene's pose is not the default configuration here: its joint-limit notes go.
     warnings = [w for w in scene.warnings if "outside its limits" not in w]

@@ -510,6 +510,19 @@ def fit_row(
     }
 
 
+def _fit_mesh(name: str, result: Any) -> tuple[str, np.ndarray, np.ndarray]:
+    """The mesh written for one body's fit, named by Unreal's convention (``UBX_<body>_00``
+    and alike): the chosen primitive tessellated and placed, or the hull it kept."""
+    from meshcol.io.primitives import enclosing_primitive_mesh
+
+    part_name = f"{UNREAL_PREFIX[result.chosen]}_{name}_00"
+    chosen = result.primitive_fit
+    if chosen is None:
+        return part_name, result.hull_vertices, result.hull_faces
+    vertices, faces = enclosing_primitive_mesh(chosen.primitive)
+    return part_name, vertices @ chosen.pose[:3, :3].T + chosen.pose[:3, 3], faces
+
+
 def fit(
     inputs: Any,
     *,
@@ -558,7 +571,6 @@ def fit(
         A file would replace an input or a ``reserved`` file (nothing is written).
     """
     from meshcol.analysis.hull import check_body_count, mesh_destinations, write_body_meshes
-    from meshcol.io.primitives import enclosing_primitive_mesh
 
     if shape not in SHAPE_CHOICES:
         raise ValueError(f"shape must be one of {', '.join(SHAPE_CHOICES)}, got {shape!r}")
@@ -579,16 +591,7 @@ def fit(
         results.append(world)
         rows_input.append((body, world, volume, gap))
 
-    names = [b.name for b in bodies]
-    parts = []
-    for name, result in zip(names, results):
-        part_name = f"{UNREAL_PREFIX[result.chosen]}_{name}_00"
-        chosen = result.primitive_fit
-        if chosen is None:
-            parts.append((part_name, result.hull_vertices, result.hull_faces))
-        else:
-            v, f = enclosing_primitive_mesh(chosen.primitive)
-            parts.append((part_name, v @ chosen.pose[:3, :3].T + chosen.pose[:3, 3], f))
+    parts = [_fit_mesh(body.name, result) for body, result in zip(bodies, results)]
     destinations = write_body_meshes(bodies, parts, output, out_dir, reserved)
 
     rows = [

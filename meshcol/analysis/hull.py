@@ -137,7 +137,7 @@ class HullReport:
 
     @property
     def fits(self) -> list[Any]:
-        """The :class:`~meshcol.collision.limits.TargetFit` of each body (None without a
+        """The :class:`~meshcol.collision.target_fit.TargetFit` of each body (None without a
         target)."""
         return [h.target_fit for h in self.hulls]
 
@@ -353,7 +353,7 @@ def hull(
         Receives one line per hull computed (``hull: 3/10 bodies``).
     target : Target, optional
         An engine profile (:func:`meshcol.io.targets.load_target`): every hull meets all
-        its limits (:func:`meshcol.collision.limits.fit_hull`) and still encloses the body;
+        its limits (:func:`meshcol.collision.target_fit.fit_hull`) and still encloses the body;
         a ``max_vertices`` tighter than the profile's vertex budget wins, a looser one is
         ignored (the tighter of the two always applies). ``min_thickness`` and
         ``min_volume`` are converted from metres to the scene's ``units`` (else the
@@ -387,43 +387,12 @@ def hull(
     as the outward one, since a hull depends on the vertices only; its row says so in
     ``note`` and a warning goes out.
     """
-    from meshcol.collision.hull import convex_hull
-    from meshcol.geometry.topology import oriented_volume
-
     output, out_dir = mesh_destinations(output, out_dir)
     scene = as_scene(inputs, robot_options)
     bodies = scene.bodies
     check_body_count(output, len(bodies))
-    limits = None
-    if target is not None:
-        limits = target_limits(target, max_vertices)
-        length_scale = target.length_scale(scene.units)
-
     # Compute everything first: a bad body stops the run before any file is written.
-    hulls, volumes, warnings = [], [], []
-    for done, body in enumerate(bodies, start=1):
-        if progress is not None:
-            progress(f"hull: {done}/{len(bodies)} bodies")
-        try:
-            if limits is None:
-                result = convex_hull(body.world_vertices(), max_vertices=max_vertices)
-            else:
-                result = target_hull(body.world_vertices(), limits, length_scale)
-        except InvalidMeshError as exc:
-            raise InvalidMeshError(f"body '{body.name}': {exc.message}", body.source) from exc
-        if result.flat:
-            message = f"{body.source}: body '{body.name}' is flat: the hull is a 2-D polygon"
-            warnings.append(message)
-            if warn is not None:
-                warn(message)
-        hulls.append(result)
-        volumes.append(oriented_volume(body.vertices, body.faces))
-        if volumes[-1] is not None and volumes[-1][1] < 0:
-            message = f"{body.source}: body '{body.name}' is inside out: {INVERTED_NOTE}"
-            warnings.append(message)
-            if warn is not None:
-                warn(message)
-
+    hulls, volumes, warnings = _body_hulls(scene, max_vertices, target, warn, progress)
     destinations = write_body_meshes(
         bodies,
         [(b.name, h.vertices, h.faces) for b, h in zip(bodies, hulls)],
@@ -431,7 +400,6 @@ def hull(
         out_dir,
         reserved,
     )
-
     rows = [
         hull_row(body, result, volume, destination)
         for body, result, volume, destination in zip(bodies, hulls, volumes, destinations)
@@ -451,6 +419,47 @@ def hull(
     )
 
 
+def _body_hulls(
+    scene: Any,
+    max_vertices: int | None,
+    target: Any,
+    warn: Callable[[str], None] | None,
+    progress: Callable[[str], None] | None,
+) -> tuple[list[Any], list[tuple[float, int] | None], list[str]]:
+    """The hull of every body of ``scene`` (within the budget or the target's limits), the
+    mesh volume of each (None when not closed), and the warnings (flat, inside-out bodies),
+    each also given to ``warn`` as it is found."""
+    from meshcol.collision.hull import convex_hull
+    from meshcol.geometry.topology import oriented_volume
+
+    limits = None if target is None else target_limits(target, max_vertices)
+    length_scale = 1.0 if target is None else float(target.length_scale(scene.units))
+    hulls, volumes, warnings = [], [], []
+
+    def say(message: str) -> None:
+        warnings.append(message)
+        if warn is not None:
+            warn(message)
+
+    for done, body in enumerate(scene.bodies, start=1):
+        if progress is not None:
+            progress(f"hull: {done}/{len(scene.bodies)} bodies")
+        try:
+            if limits is None:
+                result = convex_hull(body.world_vertices(), max_vertices=max_vertices)
+            else:
+                result = target_hull(body.world_vertices(), limits, length_scale)
+        except InvalidMeshError as exc:
+            raise InvalidMeshError(f"body '{body.name}': {exc.message}", body.source) from exc
+        if result.flat:
+            say(f"{body.source}: body '{body.name}' is flat: the hull is a 2-D polygon")
+        hulls.append(result)
+        volumes.append(oriented_volume(body.vertices, body.faces))
+        if volumes[-1] is not None and volumes[-1][1] < 0:
+            say(f"{body.source}: body '{body.name}' is inside out: {INVERTED_NOTE}")
+    return hulls, volumes, warnings
+
+
 def target_limits(target: Any, max_vertices: int | None) -> dict[str, Any]:
     """A target's limits with ``--max-vertices`` applied: the tighter vertex count wins."""
     limits = dict(target.limits)
@@ -465,7 +474,8 @@ def target_hull(points: Any, limits: dict, length_scale: float) -> Any:
     """The hull of ``points`` fitted to ``limits``, as a :class:`HullResult` (its exact-hull
     fields from the input) that also carries the fit (``target_fit``)."""
     from meshcol.collision.hull import HullResult, exact_hull
-    from meshcol.collision.limits import budget_vertices, fit_hull
+    from meshcol.collision.limits import budget_vertices
+    from meshcol.collision.target_fit import fit_hull
 
     fit = fit_hull(points, limits, length_scale)
     vertices, faces = fit.parts[0]

@@ -1321,7 +1321,8 @@ def inspect(
     """
     from meshcol.analysis.rules import select_rules
     from meshcol.errors import MeshcolError
-    from meshcol.io.robot import is_robot_file, load_robot
+    from meshcol.io.inputs import is_robot_file
+    from meshcol.io.robot import load_robot
     from meshcol.io.scene import iter_inputs, load_scene
 
     rules = select_rules(fail_on, "inspect")
@@ -1571,8 +1572,6 @@ def _inspect_tasks(
 
 
 def _is_manifest(inputs: Sequence[Any]) -> bool:
-    from meshcol.io.scene import MANIFEST_EXTENSIONS
+    from meshcol.io.inputs import is_manifest
 
-    return len(inputs) == 1 and os.path.splitext(os.fspath(inputs[0]))[1].lower() in (
-        MANIFEST_EXTENSIONS
-    )
+    return len(inputs) == 1 and is_manifest(inputs[0])

@@ -112,7 +112,7 @@ def robot_colliders(
         ``fit``: ``shape`` and ``volume_tolerance`` of :func:`meshcol.analysis.fit.fit_body`.
     target : Target, optional
         ``hull`` and ``decompose``: an engine profile (:mod:`meshcol.io.targets`) every
-        element's colliders are fitted to (:func:`meshcol.collision.limits.fit_parts`; the
+        element's colliders are fitted to (:func:`meshcol.collision.target_fit.fit_parts`; the
         description is in metres). ``hull``: the tighter of ``max_vertices`` and the
         profile's budget. ``decompose``: each object of an element's mesh file is fitted
         on its own, an element of k objects giving each ``max_hulls // k`` parts so that

@@ -17,6 +17,8 @@ from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
 
+from meshcol.vocabulary import LIMITS
+
 __all__ = [
     "RULES",
     "TARGET_RULES",
@@ -90,8 +92,7 @@ _TARGET_NOTE = " Reported when a --target profile sets the limit."
 #: Every rule, in id order.
 RULES: tuple[Rule, ...] = (
     Rule(
-        "MC101",
-        "hull-vertices-over-limit",
+        *LIMITS["max_hull_vertices"][:2],
         "error",
         _TARGET,
         "A convex part has more vertices than the engine accepts (PhysX 255, GPU 64).",
@@ -101,8 +102,7 @@ RULES: tuple[Rule, ...] = (
         "max_hull_vertices",
     ),
     Rule(
-        "MC102",
-        "not-gpu-compatible-oblong",
+        *LIMITS["max_oblong_ratio"][:2],
         "warning",
         _TARGET,
         "A convex part is too oblong for the GPU pipeline: its largest extent over its "
@@ -114,8 +114,7 @@ RULES: tuple[Rule, ...] = (
         "max_oblong_ratio",
     ),
     Rule(
-        "MC103",
-        "hull-polygons-over-limit",
+        *LIMITS["max_hull_polygons"][:2],
         "error",
         _TARGET,
         "A convex part has more polygons (coplanar triangles merged) than the engine accepts.",
@@ -124,8 +123,7 @@ RULES: tuple[Rule, ...] = (
         "max_hull_polygons",
     ),
     Rule(
-        "MC104",
-        "hull-triangles-over-limit",
+        *LIMITS["max_hull_triangles"][:2],
         "error",
         _TARGET,
         "A convex part has more triangles than the engine accepts (Unity: 255).",
@@ -134,8 +132,7 @@ RULES: tuple[Rule, ...] = (
         "max_hull_triangles",
     ),
     Rule(
-        "MC105",
-        "faces-per-vertex-over-limit",
+        *LIMITS["max_faces_per_vertex"][:2],
         "warning",
         _TARGET,
         "Too many polygons meet at one vertex of a convex part (PhysX GPU: 32).",
@@ -145,8 +142,7 @@ RULES: tuple[Rule, ...] = (
         "max_faces_per_vertex",
     ),
     Rule(
-        "MC106",
-        "hull-count-over-limit",
+        *LIMITS["max_hulls"][:2],
         "error",
         _TARGET,
         "A body has more convex parts than the engine accepts per body or mesh.",
@@ -155,8 +151,7 @@ RULES: tuple[Rule, ...] = (
         "max_hulls",
     ),
     Rule(
-        "MC107",
-        "part-too-thin",
+        *LIMITS["min_thickness"][:2],
         "warning",
         _TARGET,
         "A convex part is thinner than the engine handles reliably (tunnelling, jitter).",
@@ -166,8 +161,7 @@ RULES: tuple[Rule, ...] = (
         "min_thickness",
     ),
     Rule(
-        "MC201",
-        "volume-too-small",
+        *LIMITS["min_volume"][:2],
         "error",
         _TARGET,
         "A convex part's volume is below the engine's minimum (MuJoCo: 'mesh volume is too "

@@ -322,16 +322,6 @@ def verdict(command: str, passed: bool, detail: str) -> str:
     return f"meshcol: {command}: {'PASS' if passed else 'FAIL'}: {detail}"
 
 
-def display_path(path: str | os.PathLike[str]) -> str:
-    """A path as the user would type it: relative to the working folder when inside it."""
-    path = os.fspath(path)
-    if os.path.isabs(path):
-        relative = os.path.relpath(path)
-        if not relative.startswith(".."):
-            return relative
-    return path
-
-
 #: The robot flags of every command that takes a scene, in --help order.
 _ROBOT_FLAGS = (
     click.option(
@@ -494,6 +484,7 @@ def write_html(path: str | None, text: str | None) -> None:
     """Write the page :func:`render_html` made to ``path`` atomically; says where on stderr."""
     if path is None or text is None:
         return
+    from meshcol.io.paths import display_path
     from meshcol.io.report import atomic_write
 
     atomic_write(path, text)
@@ -609,8 +600,8 @@ def mesh_outputs(
     """The usage checks of a command that writes meshes (hull, fit): ``-o`` or ``--out-dir``,
     a known mesh extension, ``--to`` only for a robot, a report format only with a report.
     Returns whether the run rebuilds one robot description (``--out-dir`` and a URDF/MJCF)."""
+    from meshcol.io.inputs import is_robot_file
     from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS
-    from meshcol.io.robot import is_robot_file
 
     if output and out_dir:
         raise click.UsageError("give either -o/--output or --out-dir, not both")

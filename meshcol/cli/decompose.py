@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 from typing import Any
 
 import click
@@ -301,8 +300,8 @@ def decompose_command(
     from meshcol.decomposition.batch import decompose_files
     from meshcol.decomposition.cache import default_cache_dir, local_folder
     from meshcol.decomposition.engines import resolve_params
+    from meshcol.io.inputs import is_manifest
     from meshcol.io.outputs import check_outputs
-    from meshcol.io.scene import MANIFEST_EXTENSIONS
 
     # an unknown --report extension stops the run before it starts
     report_fmt = report_format(report, report_fmt, option="--report-format")
@@ -339,7 +338,7 @@ def decompose_command(
     )
     from click.core import ParameterSource
 
-    from meshcol.io.robot import is_robot_file
+    from meshcol.io.inputs import is_robot_file
 
     robot = len(inputs) == 1 and is_robot_file(inputs[0])
     if to is not None and not robot:
@@ -420,7 +419,7 @@ def decompose_command(
         if result.exit_code:
             ctx.exit(result.exit_code)
         return
-    if not any(os.path.splitext(p)[1].lower() in MANIFEST_EXTENSIONS for p in inputs):
+    if not any(is_manifest(p) for p in inputs):
         progress(f"decompose: 0/{len(inputs)} files")  # what the heartbeat says until one is done
     try:
         result = decompose_files(

@@ -6,9 +6,7 @@ import click
 
 from meshcol.analysis.fit import DEFAULT_VOLUME_TOLERANCE, SHAPE_CHOICES
 from meshcol.cli.common import (
-    Progress,
     check_outputs,
-    display_path,
     mesh_outputs,
     plural,
     report_format,
@@ -17,7 +15,7 @@ from meshcol.cli.common import (
     to_option,
     verdict,
 )
-from meshcol.io.mesh_write import MULTI_MESH_EXTENSIONS
+from meshcol.cli.mesh_outputs import run_mesh_command, written_to
 from meshcol.io.robot import RobotOptions
 
 
@@ -107,45 +105,23 @@ def fit(
     robot = mesh_outputs(inputs, output, out_dir, to, fmt, report)
 
     from meshcol.analysis.fit import fit as run_fit
-    from meshcol.analysis.hull import OutputDestinationError
     from meshcol.cli.common import emit_report
 
     check_outputs(inputs, [("-o", output), ("--report", report)])
     fmt = report_format(report, fmt)
-    progress = Progress(command="fit", heartbeat=True)
-    try:
-        if robot:
-            from meshcol.analysis.rebuild import rebuild_fits
+    from meshcol.analysis.rebuild import rebuild_fits
 
-            assert out_dir is not None
-            result = rebuild_fits(
-                inputs[0],
-                out_dir,
-                to=to,
-                shape=shape,
-                volume_tolerance=volume_tolerance,
-                reserved=(("the --report file", report),) if report not in (None, "-") else (),
-                progress=progress,
-                robot_options=robot_options,
-            )
-        else:
-            result = run_fit(
-                list(inputs),
-                shape=shape,
-                volume_tolerance=volume_tolerance,
-                output=output,
-                out_dir=out_dir,
-                reserved=[("--report", report)],
-                progress=progress,
-                robot_options=robot_options,
-            )
-    except OutputDestinationError as exc:
-        raise click.UsageError(
-            f"-o {exc.output}: {exc.bodies} bodies need a file that holds several meshes "
-            f"({', '.join(MULTI_MESH_EXTENSIONS)}) or --out-dir"
-        ) from None
-    finally:
-        progress.done()
+    result = run_mesh_command(
+        "fit",
+        inputs,
+        robot,
+        (output, out_dir, to, report),
+        run_fit,
+        rebuild_fits,
+        shape=shape,
+        volume_tolerance=volume_tolerance,
+        robot_options=robot_options,
+    )
     if report is not None or not (output or out_dir):
         emit_report(result, fmt, report)
     s = result.summary
@@ -153,10 +129,5 @@ def fit(
     detail = f"{plural(s['bodies'], 'body', 'bodies')} ({shapes or 'none'})"
     if shape == "auto":
         detail += f", {s['simpler_primitive']} could use a simpler primitive"
-    if output:
-        detail += f", written to {display_path(output)}"
-    elif robot and result.description is not None:
-        detail += f", written to {display_path(result.description)}"
-    elif out_dir:
-        detail += f", {plural(s['files_written'], 'file')} written to {display_path(out_dir)}"
+    detail += written_to(result, output, out_dir, robot)
     click.echo(verdict("fit", True, detail), err=True)

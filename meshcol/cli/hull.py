@@ -7,9 +7,7 @@ from typing import Any
 import click
 
 from meshcol.cli.common import (
-    Progress,
     check_outputs,
-    display_path,
     html_option,
     mesh_outputs,
     plural,
@@ -22,7 +20,7 @@ from meshcol.cli.common import (
     verdict,
     write_html,
 )
-from meshcol.io.mesh_write import MULTI_MESH_EXTENSIONS
+from meshcol.cli.mesh_outputs import run_mesh_command, written_to
 from meshcol.io.robot import RobotOptions
 
 
@@ -122,73 +120,56 @@ def hull(
     """
     robot = mesh_outputs(inputs, output, out_dir, to, fmt, report)
 
-    from meshcol.analysis.hull import OutputDestinationError
     from meshcol.analysis.hull import hull as run_hull
     from meshcol.analysis.review import hull_page
     from meshcol.cli.common import emit_report
 
     check_outputs(inputs, [("-o", output), ("--report", report), ("--html", html)])
     fmt = report_format(report, fmt)
-    progress = Progress(command="hull", heartbeat=True)
-    try:
-        if robot:
-            from meshcol.analysis.rebuild import rebuild_hulls
+    from meshcol.analysis.rebuild import rebuild_hulls
 
-            assert out_dir is not None
-            result = rebuild_hulls(
-                inputs[0],
-                out_dir,
-                to=to,
-                max_vertices=max_vertices,
-                reserved=(("the --report file", report),) if report not in (None, "-") else (),
-                warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
-                progress=progress,
-                target=target,
-                robot_options=robot_options,
-            )
-        else:
-            result = run_hull(
-                list(inputs),
-                max_vertices=max_vertices,
-                output=output,
-                out_dir=out_dir,
-                warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
-                reserved=[("--report", report)],
-                progress=progress,
-                target=target,
-                robot_options=robot_options,
-            )
-    except OutputDestinationError as exc:
-        raise click.UsageError(
-            f"-o {exc.output}: {exc.bodies} bodies need a file that holds several meshes "
-            f"({', '.join(MULTI_MESH_EXTENSIONS)}) or --out-dir"
-        ) from None
-    finally:
-        progress.done()
+    result = run_mesh_command(
+        "hull",
+        inputs,
+        robot,
+        (output, out_dir, to, report),
+        run_hull,
+        rebuild_hulls,
+        max_vertices=max_vertices,
+        target=target,
+        warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
+        robot_options=robot_options,
+    )
     page = render_html(html, lambda: hull_page(result, inputs, robot_options))
     if report is not None or not (output or out_dir):
         emit_report(result, fmt, report)
     write_html(html, page)
+    _say_violations(result)
+    detail = _summary(result, target, output, out_dir, robot)
+    click.echo(verdict("hull", result.exit_code == 0, detail), err=True)
+    if result.exit_code:
+        click.get_current_context().exit(result.exit_code)
+
+
+def _say_violations(result: Any) -> None:
+    """One stderr line per limit a hull could not meet."""
     for body, violation in result.violations:
         click.echo(
             f"meshcol: {violation.rule} {violation.rule_name}: body '{body}' {violation.message}",
             err=True,
         )
+
+
+def _summary(result: Any, target: Any, output: str | None, out_dir: str | None, robot: bool) -> str:
+    """The verdict line's detail: hulls, vertices, flat ones, where written, the target."""
     s = result.summary
     detail = f"{plural(s['bodies'], 'hull')}, {plural(s['hull_vertices'], 'vertex', 'vertices')}"
     if s["flat"]:
         detail += f", {s['flat']} flat"
-    if output:
-        detail += f", written to {display_path(output)}"
-    elif robot and result.description is not None:
-        detail += f", written to {display_path(result.description)}"
-    elif out_dir:
-        detail += f", {plural(s['files_written'], 'file')} written to {display_path(out_dir)}"
+    detail += written_to(result, output, out_dir, robot)
     if target is not None:
         missed = s["target_violations"]
         detail += f", target {target.name}: " + (
             "every limit met" if not missed else f"{plural(missed, 'limit')} not met"
         )
-    click.echo(verdict("hull", result.exit_code == 0, detail), err=True)
-    if result.exit_code:
-        click.get_current_context().exit(result.exit_code)
+    return detail

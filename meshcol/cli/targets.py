@@ -4,17 +4,10 @@ from __future__ import annotations
 
 import click
 
+from meshcol.vocabulary import LIMITS
+
 #: Table columns: (header, limit key).
-_COLUMNS = (
-    ("vertices", "max_hull_vertices"),
-    ("polygons", "max_hull_polygons"),
-    ("triangles", "max_hull_triangles"),
-    ("per vertex", "max_faces_per_vertex"),
-    ("hulls", "max_hulls"),
-    ("oblong", "max_oblong_ratio"),
-    ("thickness m", "min_thickness"),
-    ("volume m3", "min_volume"),
-)
+_COLUMNS = tuple((header, key) for key, (_, _, header) in LIMITS.items())
 
 
 @click.command(

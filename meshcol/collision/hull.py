@@ -112,7 +112,7 @@ class HullResult:
     max_distance : float
         Largest distance from a point of this hull to the exact hull (one-sided Hausdorff
         distance; 0 when exact). Input units.    target_fit : TargetFit or None
-        With an engine target (:func:`meshcol.collision.limits.fit_hull`): the fit this hull
+        With an engine target (:func:`meshcol.collision.target_fit.fit_hull`): the fit this hull
         is, its measures, costs and violations.
     """
 

@@ -103,7 +103,7 @@ class MeshSet:
     face_offsets: np.ndarray
     poses: np.ndarray
     valid: np.ndarray
-    _handle: Any = field(repr=False)
+    _handle: core.MeshBvhSet = field(repr=False)
 
     @classmethod
     def from_arrays(
@@ -469,6 +469,8 @@ def mesh_intersects_batch(
             poses = as_poses(poses, len(meshes))
         pairs = as_pairs(pairs, len(meshes), "meshes")
         result = meshes._handle.intersects_batch(poses, pairs, threads, MeshIntersectsBatch)
+        if result is None:  # as_poses and as_pairs give the core's form: never declined twice
+            raise AssertionError("the core declined converted poses and pairs")
     return result
 
 

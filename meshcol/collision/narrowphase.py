@@ -40,6 +40,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
+from meshcol._native import core
 from meshcol.collision.arrays import as_pairs, as_pose, as_poses
 from meshcol.collision.shapes import ConvexSet, as_convex_set
 from meshcol.types import Body, Status
@@ -199,11 +200,18 @@ class SignedDistanceResult:
 _DISTANCE, _PENETRATION, _INTERSECTS = 0, 1, 2
 
 
-def _run(kind: int, shapes: Any, poses: Any, pairs: Any, threads: int) -> Any:
+def _run(kind: int, shapes: Any, poses: Any, pairs: Any, threads: int) -> core.QueryArrays:
     """The native ``QueryArrays`` of one batch (fields the kind does not compute are None)."""
     cs = as_convex_set(shapes)
     h = len(cs)
     return cs._core.query(kind, as_poses(poses, h), as_pairs(pairs, h), int(threads))
+
+
+def _computed(field: np.ndarray | None) -> np.ndarray:
+    """A field of ``QueryArrays`` that the batch's kind computes (only the others are None)."""
+    if field is None:
+        raise AssertionError("the core left out a field its query kind computes")
+    return field
 
 
 def distance_batch(shapes: ConvexSet, poses: Any, pairs: Any, *, threads: int = 0) -> DistanceBatch:
@@ -231,7 +239,14 @@ def distance_batch(shapes: ConvexSet, poses: Any, pairs: Any, *, threads: int = 
         Wrong array shapes, non-integer pairs or an index out of range.
     """
     r = _run(_DISTANCE, shapes, poses, pairs, threads)
-    return DistanceBatch(r.distance, r.point_a, r.point_b, r.normal, r.iterations, r.status)
+    return DistanceBatch(
+        _computed(r.distance),
+        _computed(r.point_a),
+        _computed(r.point_b),
+        _computed(r.normal),
+        _computed(r.iterations),
+        r.status,
+    )
 
 
 def penetration_batch(
@@ -243,7 +258,14 @@ def penetration_batch(
     their closest points.
     """
     r = _run(_PENETRATION, shapes, poses, pairs, threads)
-    return PenetrationBatch(r.depth, r.normal, r.point_a, r.point_b, r.iterations, r.status)
+    return PenetrationBatch(
+        _computed(r.depth),
+        _computed(r.normal),
+        _computed(r.point_a),
+        _computed(r.point_b),
+        _computed(r.iterations),
+        r.status,
+    )
 
 
 def signed_distance_batch(
@@ -255,14 +277,15 @@ def signed_distance_batch(
     Parameters and errors as :func:`distance_batch`.
     """
     r = _run(_PENETRATION, shapes, poses, pairs, threads)
+    distance, depth = _computed(r.distance), _computed(r.depth)
     return SignedDistanceBatch(
-        r.distance - r.depth,
-        r.distance,
-        r.depth,
-        r.normal,
-        r.point_a,
-        r.point_b,
-        r.iterations,
+        distance - depth,
+        distance,
+        depth,
+        _computed(r.normal),
+        _computed(r.point_a),
+        _computed(r.point_b),
+        _computed(r.iterations),
         r.status,
     )
 
@@ -276,7 +299,7 @@ def intersects_batch(
     ``Status.INVALID_INPUT``.
     """
     r = _run(_INTERSECTS, shapes, poses, pairs, threads)
-    return IntersectsBatch(r.intersects, r.status)
+    return IntersectsBatch(_computed(r.intersects), r.status)
 
 
 # ---------------------------------------------------------------------------------------------

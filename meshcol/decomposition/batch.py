@@ -581,7 +581,7 @@ def apply_target(
     """A body's decomposition fitted to a target, re-measured, and its report entry.
 
     The parts (``d.parts``, in the body's frame) go through
-    :func:`meshcol.collision.limits.fit_parts` (merged to ``max_hulls``, each grown and
+    :func:`meshcol.collision.target_fit.fit_parts` (merged to ``max_hulls``, each grown and
     simplified to the per-part limits, every part still enclosing what it replaces); the
     fidelity metrics are measured again on the fitted parts (same samples and tolerance),
     so the report describes what is written. The cache keeps the engine's parts.
@@ -594,7 +594,7 @@ def apply_target(
     """
     import dataclasses
 
-    from meshcol.collision.limits import fit_parts
+    from meshcol.collision.target_fit import fit_parts
     from meshcol.decomposition.fidelity import fidelity
     from meshcol.geometry.topology import orient_outward
 
@@ -955,9 +955,9 @@ class _OutputGuard:
 
 
 def _is_manifest(inputs: Sequence[str]) -> bool:
-    from meshcol.io.scene import MANIFEST_EXTENSIONS
+    from meshcol.io.inputs import is_manifest
 
-    return any(os.path.splitext(p)[1].lower() in MANIFEST_EXTENSIONS for p in inputs)
+    return any(is_manifest(p) for p in inputs)
 
 
 def _iter_load(

@@ -65,10 +65,10 @@ def _merge_parts(
     count: int,
     budget: int | None,
 ) -> tuple[list[tuple[np.ndarray, np.ndarray, float]], list[bool]]:
-    """At most ``count`` parts, groups merged by :func:`meshcol.collision.limits.merge_groups`,
+    """At most ``count`` parts, groups merged by :func:`meshcol.collision.target_fit.merge_groups`,
     each group's part the canonical hull of its parts' vertices (budgeted as every part), with
     whether each was reduced to the vertex budget."""
-    from meshcol.collision.limits import merge_groups
+    from meshcol.collision.target_fit import merge_groups
 
     merged: list[tuple[np.ndarray, np.ndarray, float]] = []
     flags: list[bool] = []

@@ -20,9 +20,9 @@ import signal
 import tempfile
 import threading
 from collections.abc import Iterable, Iterator, Mapping, Sequence
-from pathlib import Path
 
 from meshcol.errors import MeshcolError, OutputPathError
+from meshcol.io.paths import display_path
 
 __all__ = [
     "check_destinations",
@@ -71,12 +71,6 @@ def _existing_ancestor(path: str) -> str:
     return current
 
 
-def _shown(path: str) -> str:
-    """A folder as the user would recognise it: relative to the working folder when inside."""
-    relative = os.path.relpath(path)
-    return path if relative.startswith(os.pardir) else relative
-
-
 def check_output_file(path: PathLike) -> None:
     """Raise :class:`MeshcolError` (naming ``path``) unless ``path`` can be written as a file.
 
@@ -90,12 +84,14 @@ def check_output_file(path: PathLike) -> None:
     if not os.path.exists(folder):
         ancestor = _existing_ancestor(folder)
         if not os.path.isdir(ancestor):
-            raise MeshcolError(f"{_shown(ancestor)} is not a folder", path)
-        raise MeshcolError(f"folder {_shown(folder)} does not exist", path)
+            raise MeshcolError(f"{display_path(ancestor)} is not a folder", path)
+        raise MeshcolError(f"folder {display_path(folder)} does not exist", path)
     if not os.path.isdir(folder):
-        raise MeshcolError(f"{_shown(folder)} is not a folder", path)
+        raise MeshcolError(f"{display_path(folder)} is not a folder", path)
     if not _writable_folder(folder):
-        raise MeshcolError(f"cannot write in folder {_shown(folder)} (permission denied)", path)
+        raise MeshcolError(
+            f"cannot write in folder {display_path(folder)} (permission denied)", path
+        )
 
 
 def check_output_folder(path: PathLike) -> None:
@@ -110,10 +106,12 @@ def check_output_folder(path: PathLike) -> None:
         return
     ancestor = _existing_ancestor(path)
     if not os.path.isdir(ancestor):
-        raise MeshcolError(f"cannot create the folder: {_shown(ancestor)} is not a folder", path)
+        raise MeshcolError(
+            f"cannot create the folder: {display_path(ancestor)} is not a folder", path
+        )
     if not _writable_folder(ancestor):
         raise MeshcolError(
-            f"cannot create the folder: cannot write in {_shown(ancestor)} (permission denied)",
+            f"cannot create the folder: cannot write in {display_path(ancestor)} (permission denied)",
             path,
         )
 
@@ -184,13 +182,14 @@ def manifest_inputs(paths: Iterable[PathLike]) -> list[tuple[str, str]]:
 
     A manifest that cannot be parsed contributes only itself: loading it reports the problem.
     """
-    from meshcol.io.scene import MANIFEST_EXTENSIONS, manifest_mesh_files
+    from meshcol.io.inputs import is_manifest
+    from meshcol.io.scene import manifest_mesh_files
 
     found: list[tuple[str, str]] = []
     for path in paths:
         path = os.fspath(path)
         found.append(("the input", path))
-        if Path(path).suffix.lower() in MANIFEST_EXTENSIONS:
+        if is_manifest(path):
             description = f"a mesh file of {path}"  # once, not once a mesh
             found.extend((description, mesh) for mesh in manifest_mesh_files(path))
     return found

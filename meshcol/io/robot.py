@@ -26,7 +26,6 @@ import dataclasses
 import math
 import numbers
 import os
-import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -36,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from meshcol.errors import InputFileError, MeshcolError, SceneError
+from meshcol.io.inputs import input_kind, root_tag
 from meshcol.io.kinematics import Kinematics
 from meshcol.io.links import CollisionElement
 from meshcol.io.mjcf import read_mjcf
@@ -187,34 +187,17 @@ def parse_package_paths(assignments: Sequence[str] = ()) -> dict[str, str]:
 
 def is_robot_file(path: str | os.PathLike[str]) -> bool:
     """True for a ``.urdf`` or ``.mjcf`` file, or an ``.xml`` file whose root is ``<mujoco>``
-    (or ``<robot>``)."""
-    suffix = Path(os.fspath(path)).suffix.lower()
-    if suffix in (".urdf", ".mjcf"):
-        return True
-    if suffix == ".xml":
-        return _root_tag(os.fspath(path)) in ("mujoco", "robot")
-    return False
+    (or ``<robot>``): :func:`meshcol.io.inputs.input_kind` says ``"robot"``."""
+    return input_kind(path) == "robot"
 
 
 def description_kind(path: str | os.PathLike[str]) -> str:
     """``"mjcf"`` or ``"urdf"``: how :func:`load_robot` reads the file."""
     source = os.fspath(path)
-    root = _root_tag(source)
+    root = root_tag(source)
     if root == "mujoco" or (Path(source).suffix.lower() == ".mjcf" and root != "robot"):
         return "mjcf"
     return "urdf"
-
-
-def _root_tag(path: str) -> str | None:
-    """The root element's name, from the file's first few kilobytes (None if unreadable)."""
-    try:
-        with open(path, "rb") as f:
-            head = f.read(65536).decode("utf-8", errors="replace")
-    except OSError:
-        return None
-    head = re.sub(r"<\?.*?\?>|<!--.*?-->|<!DOCTYPE[^>]*>", "", head, flags=re.S)
-    match = re.search(r"<\s*([A-Za-z_][\w.-]*)", head)
-    return match.group(1) if match else None
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,0 +1,484 @@
+"""meshcol native core (private: use the meshcol package API)"""
+
+from collections.abc import Sequence
+import enum
+from typing import Annotated, TypeVar
+
+import numpy
+from numpy.typing import NDArray
+
+
+class defaults:
+    """Defaults and caps of the core (cpp/include/meshcol/defaults.hpp)."""
+
+    rigid_tolerance: float = 1e-06
+
+    min_pairs_per_thread: int = 64
+
+    min_shapes_per_thread: int = 256
+
+    min_points_per_thread: int = 64
+
+    triangle_min_pairs_per_thread: int = 4096
+
+    hill_climbing_min_vertices: int = 32
+
+    gjk_max_iterations: int = 128
+
+    support_warm_start_min_cosine: float = 0.5
+
+    gjk_flat_tetrahedron_volume: float = 1e-14
+
+    gjk_relative_tolerance: float = 1e-13
+
+    contact_tolerance: float = 1e-14
+
+    epa_max_iterations: int = 250
+
+    epa_max_vertices: int = 256
+
+    epa_relative_tolerance: float = 1e-12
+
+    epa_absolute_tolerance_ratio: float = 0.01
+
+    epa_min_squared_length: float = 1e-300
+
+    epa_curved_relative_tolerance: float = 1e-07
+
+    sat_max_work: int = 40000
+
+    sat_parallel_edge_sine: float = 1e-09
+
+    sat_agreement_relative_depth: float = 1e-09
+
+    sat_agreement_normal_cosine: float = 1e-09
+
+    broadphase_min_boxes_per_thread: int = 20000
+
+    sort_and_sweep_cell_extent_ratio: float = 2.0
+
+    sort_and_sweep_max_cells_per_axis: int = 1024
+
+    sort_and_sweep_min_boxes_per_cell: int = 16
+
+    sort_and_sweep_max_entries_per_box: float = 3.0
+
+    sort_and_sweep_min_candidates_for_grid: float = 16.0
+
+    sort_and_sweep_max_shifts_per_box: int = 32
+
+    sort_and_sweep_max_cell_changes: float = 0.25
+
+    tree_bin_count: int = 32
+
+    tree_max_height_imbalance: int = 2
+
+    tree_max_objects: int = 1000000000
+
+    toi_tolerance: float = 1e-06
+
+    toi_max_iterations: int = 1000
+
+    toi_min_pairs_per_thread: int = 8
+
+    mesh_bvh_leaf_size: int = 4
+
+    mesh_bvh_bins: int = 16
+
+    mesh_min_pairs_per_thread: int = 4
+
+    winding_number_inside: float = 0.5
+
+    mesh_depth_max_work: int = 200000000
+
+    flat_relative_tolerance: float = 1e-09
+
+    hull_relative_tolerance: float = 1e-14
+
+    hull_max_abs_coordinate: float = 1e+100
+
+    hull_max_reruns: int = 3
+
+    hull_max_rerun_work: float = 50000000.0
+
+    hull_min_shapes_per_thread: int = 16
+
+    fit_containment_margin: float = 1e-09
+
+    fit_box_normals: int = 200
+
+    fit_ball_seed: int = 1835365224
+
+    fit_ball_max_work_per_point: int = 4096
+
+    fit_box_polish_step: float = 0.05
+
+    fit_box_polish_iterations: int = 200
+
+    fit_box_polish_smallest: float = 1e-07
+
+    fit_box_polish_starts: int = 3
+
+    fit_axis_polish_step: float = 0.05
+
+    fit_axis_polish_iterations: int = 100
+
+    fit_axis_polish_smallest: float = 1e-05
+
+    fit_axis_polish_starts: int = 3
+
+    fit_capsule_radius_grid: int = 33
+
+    fit_capsule_golden_steps: int = 40
+
+    fit_min_sets_per_thread: int = 1
+
+def hardware_threads() -> int:
+    """Number of hardware threads (at least 1)."""
+
+class Status(enum.Enum):
+    """Outcome of a pair query (status.hpp)."""
+
+    CONVERGED = 0
+
+    MAX_ITERATIONS = 1
+
+    DEGENERATE = 2
+
+    INVALID_INPUT = 3
+
+    NOT_RUN = 4
+
+    OUT_OF_RANGE = 5
+
+class TimeOfImpactStatus(enum.Enum):
+    """Outcome of a time-of-impact query (status.hpp)."""
+
+    HIT = 0
+
+    SEPARATED = 1
+
+    OVERLAPPED_AT_START = 2
+
+    FAILED = 3
+
+    INVALID_INPUT = 4
+
+class ShapeKind(enum.Enum):
+    """Kind of a packed convex shape (shapes.hpp)."""
+
+    POLYTOPE = 0
+
+    SPHERE = 1
+
+    BOX = 2
+
+    CAPSULE = 3
+
+    CYLINDER = 4
+
+class QueryArrays:
+    """
+    Arrays of a PackedConvexSet.query batch, in pair order; None for a field the query kind does not compute.
+    """
+
+    @property
+    def distance(self) -> Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')] | None:
+        """(P,) float64, >= 0"""
+
+    @property
+    def depth(self) -> Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')] | None:
+        """(P,) float64, >= 0 (penetration only)"""
+
+    @property
+    def normal(self) -> Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')] | None:
+        """(P, 3) float64, world, unit, a to b"""
+
+    @property
+    def point_a(self) -> Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')] | None:
+        """(P, 3) float64, world"""
+
+    @property
+    def point_b(self) -> Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')] | None:
+        """(P, 3) float64, world"""
+
+    @property
+    def iterations(self) -> Annotated[NDArray[numpy.int32], dict(shape=(None,), order='C')] | None:
+        """(P,) int32"""
+
+    @property
+    def status(self) -> Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')]:
+        """(P,) int8 Status codes"""
+
+    @property
+    def intersects(self) -> Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')] | None:
+        """(P,) bool (intersects only)"""
+
+class PackedConvexSet:
+    """
+    Packed convex shapes (the arrays of meshcol.collision.shapes.ConvexSet).
+    """
+
+    def __init__(self, vertices: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], kinds: Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C', device='cpu', writable=False)], params: Annotated[NDArray[numpy.float64], dict(shape=(None, 4), order='C', device='cpu', writable=False)], adjacency_offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)] | None, adjacency: Annotated[NDArray[numpy.int32], dict(shape=(None,), order='C', device='cpu', writable=False)] | None, face_offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)] | None, face_normals: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)] | None, edge_offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)] | None, edge_directions: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)] | None) -> None: ...
+
+    def __len__(self) -> int: ...
+
+    def query(self, kind: int, poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)] | None, pairs: Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', device='cpu', writable=False)], threads: int = 0) -> QueryArrays:
+        """
+        Runs query kind (0 distance, 1 penetration, 2 intersects) on (P, 2) pairs.
+        """
+
+    def aabbs(self, poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)] | None, threads: int = 0) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')]]:
+        """World AABBs (H, 3), (H, 3) under poses (None: identity)."""
+
+    def bounding_radii(self, threads: int = 0) -> Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')]:
+        """
+        Radius (H,) of a ball about each shape's local origin holding the whole shape; NaN for an invalid shape.
+        """
+
+def sort_and_sweep(aabb_min: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], aabb_max: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], axis: int = -1, threads: int = 0, groups: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)] | None = None) -> Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C')]:
+    """
+    Overlapping pairs (K, 2) int64, i < j, sorted; axis -1 chooses by variance; boxes of one group (groups: (N,) int64) never pair.
+    """
+
+def choose_sweep_axis(aabb_min: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], aabb_max: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)]) -> int:
+    """The axis of largest variance of the box centres."""
+
+class SortAndSweep:
+    """Incremental sort and sweep."""
+
+    def __init__(self, aabb_min: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], aabb_max: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], axis: int = -1, threads: int = 0) -> None: ...
+
+    def pairs(self) -> Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', writable=False)]: ...
+
+    def update(self, aabb_min: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], aabb_max: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)]) -> Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', writable=False)]: ...
+
+    @property
+    def axis(self) -> int: ...
+
+    @property
+    def last_shifts(self) -> int: ...
+
+    def __len__(self) -> int: ...
+
+class AabbTree:
+    """Dynamic AABB tree (Box2D v3 style)."""
+
+    def __init__(self, margin: float = 0.0) -> None: ...
+
+    def insert(self, aabb_min: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], aabb_max: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)]) -> Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')]: ...
+
+    def remove(self, ids: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)]) -> None: ...
+
+    def move(self, ids: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], aabb_min: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], aabb_max: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)]) -> Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')]: ...
+
+    def clear(self) -> None: ...
+
+    def build(self, aabb_min: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], aabb_max: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], threads: int = 0) -> None: ...
+
+    def rebuild(self, threads: int = 0) -> None: ...
+
+    def query(self, aabb_min: Annotated[NDArray[numpy.float64], dict(shape=(3), order='C', device='cpu', writable=False)], aabb_max: Annotated[NDArray[numpy.float64], dict(shape=(3), order='C', device='cpu', writable=False)]) -> Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')]: ...
+
+    def query_pairs(self, threads: int = 0) -> Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C')]: ...
+
+    def query_pairs_with(self, other: AabbTree, threads: int = 0) -> Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C')]: ...
+
+    def ray_cast(self, origin: Annotated[NDArray[numpy.float64], dict(shape=(3), order='C', device='cpu', writable=False)], direction: Annotated[NDArray[numpy.float64], dict(shape=(3), order='C', device='cpu', writable=False)], max_fraction: float = 1.0) -> tuple[Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')]]: ...
+
+    def validate(self) -> None: ...
+
+    @property
+    def height(self) -> int: ...
+
+    @property
+    def margin(self) -> float: ...
+
+    @property
+    def area_ratio(self) -> float: ...
+
+    def __len__(self) -> int: ...
+
+class TimeOfImpactArrays:
+    """Arrays of a time_of_impact_batch, in pair order."""
+
+    @property
+    def time_of_impact(self) -> Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')]:
+        """(P,) float64 fraction of the motion; NaN when SEPARATED or invalid"""
+
+    @property
+    def point(self) -> Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')]:
+        """(P, 3) float64, world"""
+
+    @property
+    def normal(self) -> Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')]:
+        """(P, 3) float64, world, unit, a to b"""
+
+    @property
+    def iterations(self) -> Annotated[NDArray[numpy.int32], dict(shape=(None,), order='C')]:
+        """(P,) int32"""
+
+    @property
+    def status(self) -> Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')]:
+        """(P,) int8 TimeOfImpactStatus codes"""
+
+def time_of_impact_batch(shapes: PackedConvexSet, start_poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)], end_poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)], pairs: Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', device='cpu', writable=False)], rotations: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)] | None = None, pivots: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)] | None = None, tolerance: float = 1e-06, max_iterations: int = 1000, threads: int = 0) -> TimeOfImpactArrays:
+    """
+    Time of impact of (P, 2) pairs of a PackedConvexSet's shapes moving from start_poses to end_poses ((H, 4, 4) each), turning by the world rotation vectors rotations (H, 3; None: the shortest rotation) about the world points pivots (H, 3; None: the local origins).
+    """
+
+def interpolate_poses(start_poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)], end_poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)], t: Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C', device='cpu', writable=False)], rotations: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)] | None = None, pivots: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)] | None = None) -> Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C')]:
+    """
+    Poses (N, 4, 4) at times t (N,) of the motions start -> end (the pivot moves linearly, the body turns about it by the rotation vector, any angle).
+    """
+
+def shortest_rotations(start_poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)], end_poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)]) -> Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')]:
+    """
+    World rotation vectors (N, 3), angle in [0, pi], of the shortest rotations taking each start pose's rotation to its end pose's.
+    """
+
+ResultT = TypeVar("ResultT")
+
+class MeshBvhSet:
+    """
+    Bounding volume hierarchies of M triangle meshes, built once (mesh_bvh.hpp).
+    """
+
+    def __init__(self, vertices: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], faces: Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], vertex_offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], face_offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], threads: int = 0) -> None:
+        """
+        Builds every mesh's hierarchy. vertices (V, 3) local frames; faces (F, 3) indices local to each mesh's vertex block; offsets (M + 1,).
+        """
+
+    def __len__(self) -> int: ...
+
+    def valid(self, i: int) -> bool:
+        """Whether mesh i has finite vertices and at least one face."""
+
+    def closed(self, i: int) -> bool:
+        """
+        Whether mesh i is a closed, consistently wound surface (MeshBvh::closed).
+        """
+
+    def node_count(self, i: int) -> int: ...
+
+    def validate(self) -> bool:
+        """Checks every hierarchy's invariants (for tests)."""
+
+    def winding_number(self, i: int, points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)]) -> Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')]:
+        """Generalized winding numbers of points (mesh i's local frame)."""
+
+    def fast_winding_number(self, i: int, points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], max_error: float) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')]]:
+        """
+        Fast winding numbers of points (mesh i's local frame) with their error bounds and work.
+        """
+
+    def winding_number_inside(self, i: int, points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)]) -> tuple[Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')]]:
+        """
+        Whether |winding number| >= winding_number_inside for points (mesh i's local frame), by the refined fast winding number, with the nodes and triangles visited.
+        """
+
+    def closest_points(self, i: int, points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], threads: int = 0) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')]]:
+        """
+        Exact distances (N,), closest surface points (N, 3) and faces (N,) of points (N, 3) to mesh i (its local frame); NaN and -1 for a non-finite point or an invalid mesh.
+        """
+
+    def set_poses(self, poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)]) -> None:
+        """
+        Sets the default poses (M, 4, 4) that queries with poses=None use (read and checked for rigidity once).
+        """
+
+    def intersects_pair(self, i: int, j: int, pose_i: object | None = None, pose_j: object | None = None) -> bool | None:
+        """
+        Whether meshes i and j intersect, at the default poses or the given C-contiguous (4, 4) float64 ones (None when a pose is another object: convert it and call again); ValueError when the pair has no verdict (invalid mesh or pose, out of range).
+        """
+
+    def distance_batch(self, poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)] | None, pairs: Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', device='cpu', writable=False)], threads: int = 0, max_distance: float = float('inf')) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')]]:
+        """
+        Mesh-pair distances: (distance, point_a, point_b, intersecting, a_inside_b, b_inside_a, triangle_a, triangle_b, status).
+        """
+
+    def depth_batch(self, poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)] | None, pairs: Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', device='cpu', writable=False)], threads: int = 0) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')]]:
+        """
+        Mesh-pair penetration depths (lower bounds of the minimum translation distance): (depth, point_a, point_b, normal, deepest_mesh, points_tested, status).
+        """
+
+    def intersects_batch(self, poses: object | None, pairs: object, threads: int, result_type: type[ResultT]) -> ResultT | None:
+        """
+        Mesh-pair surface intersection tests as result_type(intersecting, status); None when poses is not None or a C-contiguous (M, 4, 4) float64 array, or pairs not a C-contiguous (P, 2) int64 array or a non-empty list of (i, j) Python ints (convert them and call again).
+        """
+
+def triangle_distance_batch(a: Annotated[NDArray[numpy.float64], dict(shape=(None, 3, 3), order='C', device='cpu', writable=False)], b: Annotated[NDArray[numpy.float64], dict(shape=(None, 3, 3), order='C', device='cpu', writable=False)]) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')]]:
+    """
+    Exact distances of triangle pairs a[k], b[k] (n, 3, 3): (distance, point_a, point_b, intersecting).
+    """
+
+def read_mesh_files(paths: Sequence[str], formats: Sequence[int], merge: bool = True, threads: int = 0) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], list, Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')], list]:
+    """
+    Reads OBJ (format 0) and STL (format 1) files in parallel. Returns (vertices (V, 3), faces (F, 3) local to each object, vertex_offsets (O + 1,), face_offsets (O + 1,), object_file (O,), object names (bytes), status (N,) int8 per file (0 read, 1 not found, 2 a directory, 3 unreadable, 4 corrupt), one message per file ('' when read)).
+    """
+
+def merge_vertices(vertices: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], faces: Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], digits: int = 8) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C')]]:
+    """
+    Merges vertices equal after rounding to `digits` decimals (trimesh's rule), drops unused ones, renumbers faces. Returns (vertices, faces).
+    """
+
+def face_pairs_cross(vertices: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], faces: Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], pairs: Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', device='cpu', writable=False)], threads: int = 0) -> Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')]:
+    """Per face pair (K,) bool: the open triangles share a point (exact)."""
+
+class HullStatus(enum.Enum):
+    """What a point set's hull is (hull.hpp)."""
+
+    OK = 0
+
+    FLAT = 1
+
+    COLLINEAR = 2
+
+    SINGLE_POINT = 3
+
+    EMPTY = 4
+
+    NON_FINITE = 5
+
+    OVERFLOW = 6
+
+    FAILED = 7
+
+def exact_hull(points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)]) -> tuple[int, int, Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 4), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(3), order='C')], float, float, float]:
+    """
+    Exact convex hull of (n, 3) points: (status, dimension, vertex indices (k,), faces (m, 3) into the vertices, equations (m, 4), normal (3,), volume, area, diagonal).
+    """
+
+def pack_polytopes(points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], threads: int = 0) -> tuple[Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int32], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')]]:
+    """
+    Hulls of H point sets (shape h owns points[offsets[h]:offsets[h + 1]]) packed for a ConvexSet: (status (H,), vertices, offsets, adjacency_offsets, adjacency, face_offsets, face_normals, edge_offsets, edge_directions).
+    """
+
+class FitStatus(enum.Enum):
+    """Outcome of one enclosing fit (fit.hpp)."""
+
+    OK = 0
+
+    MAX_ITERATIONS = 1
+
+    INVALID_INPUT = 2
+
+    FAILED = 3
+
+def minimum_ball(points: Annotated[NDArray[numpy.float64], dict(shape=(None, None), order='C', device='cpu', writable=False)]) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')], float, bool]:
+    """
+    Smallest ball of (n, d) points, d <= 3 (Welzl): (centre (d,), radius, converged).
+    """
+
+def fit_primitives(points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], shapes: Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C', device='cpu', writable=False)], threads: int = 0) -> tuple[Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int8], dict(shape=(None, None), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, None, 3), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, None, 4, 4), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, None), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, None), order='C')]]:
+    """
+    Enclosing primitives of H point sets (set h owns points[offsets[h]:offsets[h + 1]]), shapes (K,) codes (0 sphere, 1 capsule, 2 box, 3 cylinder): (hull_status (H,), dimension (H,), hull_volume (H,), hull_vertex_offsets (H + 1,), hull_vertices (V,) indices into each set, hull_face_offsets (H + 1,), hull_faces (F, 3) into each set's hull vertices, status (H, K), params (H, K, 3), poses (H, K, 4, 4), volume (H, K), excess (H, K)).
+    """
+
+def dumps_indented(document: object | None, builtin: object) -> str | None:
+    """
+    json.dumps(document, sort_keys=True, indent=2) + newline, NaN and infinities as null; builtin(o) turns any other object into one of those; None when the document is one to leave to Python's json (a key that is not a string, an int beyond 64 bits, a dict subclass, a string that is not UTF-8, nesting past 400, or builtin raising).
+    """
+
+def float_reprs(values: Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C', device='cpu', writable=False)]) -> list[str]:
+    """repr(float(x)) of each value, by the core's formatter (for tests)."""

@@ -1,0 +1,77 @@
+"""What the commands that write meshes (``hull``, ``fit``) share after their usage checks
+(:func:`meshcol.cli.common.mesh_outputs`): the error of a single-mesh file given several
+bodies, and the summary's "written to" clause."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from typing import Any
+
+import click
+
+from meshcol.cli.common import Progress, plural
+from meshcol.io.paths import display_path
+
+
+@contextmanager
+def several_bodies_need_a_scene_file() -> Iterator[None]:
+    """Turn ``OutputDestinationError`` (several bodies, ``-o`` of a single-mesh format) into
+    the usage error that names the formats that hold several meshes."""
+    from meshcol.analysis.hull import OutputDestinationError
+    from meshcol.io.mesh_write import MULTI_MESH_EXTENSIONS
+
+    try:
+        yield
+    except OutputDestinationError as exc:
+        raise click.UsageError(
+            f"-o {exc.output}: {exc.bodies} bodies need a file that holds several meshes "
+            f"({', '.join(MULTI_MESH_EXTENSIONS)}) or --out-dir"
+        ) from None
+
+
+def written_to(result: Any, output: str | None, out_dir: str | None, robot: bool) -> str:
+    """The summary clause saying where the meshes went ("" when nowhere): the ``-o`` file, a
+    rebuilt robot's description, or the count of files in ``--out-dir``."""
+    if output:
+        return f", written to {display_path(output)}"
+    if robot and result.description is not None:
+        return f", written to {display_path(result.description)}"
+    if out_dir:
+        files = plural(result.summary["files_written"], "file")
+        return f", {files} written to {display_path(out_dir)}"
+    return ""
+
+
+def run_mesh_command(
+    command: str,
+    inputs: Sequence[str],
+    robot: bool,
+    destinations: tuple[str | None, str | None, str | None, str | None],
+    run: Callable[..., Any],
+    rebuild: Callable[..., Any],
+    **options: Any,
+) -> Any:
+    """Run ``hull`` or ``fit``: ``rebuild`` for one robot description with ``--out-dir``,
+    else ``run`` on the inputs, with the command's progress display and ``options``.
+    ``destinations`` are ``(-o, --out-dir, --to, --report)``."""
+    output, out_dir, to, report = destinations
+    progress = Progress(command=command, heartbeat=True)
+    with several_bodies_need_a_scene_file():
+        try:
+            if robot:
+                assert out_dir is not None
+                reserved = (("the --report file", report),) if report not in (None, "-") else ()
+                return rebuild(
+                    inputs[0], out_dir, to=to, reserved=reserved, progress=progress, **options
+                )
+            return run(
+                list(inputs),
+                output=output,
+                out_dir=out_dir,
+                reserved=[("--report", report)],
+                progress=progress,
+                **options,
+            )
+        finally:
+            progress.done()

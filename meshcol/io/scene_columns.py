@@ -1,0 +1,447 @@
+"""The common scene manifest as columns: recognised column by column and built in bulk.
+
+A manifest of 300,000 bodies is mostly bodies of one shape: a name, a mesh file, a position,
+perhaps a rotation, a scale and a collider shape. :func:`columns` recognises such a document
+in C loops over its columns (never Python per body) and returns its fields as arrays
+(:class:`Columns`); anything it cannot pass that way (an unknown field, a number beyond a
+double, any problem) it leaves to the body-by-body check of :mod:`meshcol.io.scene_validate`.
+It passes only documents that check passes (``tests/test_scene_columns.py``).
+
+:func:`bulk_bodies` then builds the static, unscaled bodies of one-object files together, to
+the bit what the body loop of :mod:`meshcol.io.scene_bodies` builds.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from meshcol.io.mesh_read import MAX_COORDINATE
+from meshcol.io.scene_bodies import AXES, IDENTITY
+from meshcol.io.scene_schema import (
+    BODY_FIELDS,
+    MAX_TURN,
+    ORDERS,
+    SHAPES,
+    VECTOR_FIELDS,
+    is_primitive,
+    plain_top,
+)
+from meshcol.types import Body
+
+__all__ = [
+    "Columns",
+    "bulk_bodies",
+    "columns",
+    "euler_matrices",
+    "near_limits",
+    "quaternion_matrices",
+]
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class Columns:
+    """The bodies of a plainly valid manifest as columns, index-aligned with its bodies (n):
+    what the loader's bulk path and the magnitude check read instead of the bodies.
+
+    Attributes
+    ----------
+    names, meshes, shapes : list
+        Per body (``meshes[i]`` and ``shapes[i]`` None where absent).
+    primitive, moving, scaled : (n,) bool
+        A primitive body; one with an end pose or a velocity; one with a scale other than 1.
+    vectors : dict of str to (n, 3) float64
+        ``position``, ``end_position``, ``velocity``, ``angular_velocity``, zeros where
+        absent; a field no body has is not in it.
+    scale : (n, 3) float64 or None
+        Ones where absent; None when no body has one.
+    rotation : (n,) int8
+        0 none, 1 quaternion, 2 Euler angles.
+    quaternion : (nq, 4) float64
+        The quaternions of the bodies with ``rotation == 1``, in order.
+    euler, orders : (ne, 3) float64, list of str
+        The angles and orders of the bodies with ``rotation == 2``, in order.
+    """
+
+    names: list[str]
+    meshes: list[str | None]
+    shapes: list[str | None]
+    primitive: np.ndarray
+    moving: np.ndarray
+    scaled: np.ndarray
+    vectors: dict[str, np.ndarray]
+    scale: np.ndarray | None
+    rotation: np.ndarray
+    quaternion: np.ndarray
+    euler: np.ndarray
+    orders: list[str]
+
+
+_NUMBER_TYPES = frozenset({int, float})
+_QUATERNION_KEYS = frozenset({"quaternion"})
+_EULER_KEYS = frozenset({"euler_deg", "order"})
+_MOTION_FIELDS = ("end_position", "end_rotation", "velocity", "angular_velocity")
+
+
+class _Unplain(Exception):
+    """The document is not of the common shape: the body-by-body check decides."""
+
+
+class _Table:
+    """The bodies (dicts) of a manifest, read a field at a time."""
+
+    def __init__(self, bodies: list) -> None:
+        if set(map(type, bodies)) != {dict}:
+            raise _Unplain
+        layouts: dict[frozenset, int] = {}
+        for keys in map(frozenset, bodies):
+            layouts[keys] = layouts.get(keys, 0) + 1
+        for keys in layouts:
+            if not keys <= BODY_FIELDS or "name" not in keys:
+                raise _Unplain
+            if ("mesh" in keys) == ("primitive" in keys):
+                raise _Unplain
+        self.bodies = bodies
+        self.n = len(bodies)
+        self.count = {f: sum(c for keys, c in layouts.items() if f in keys) for f in BODY_FIELDS}
+
+    def column(self, field: str) -> tuple[list, np.ndarray | None]:
+        """The values of the bodies that have ``field``, and which those are (None: all)."""
+        if self.count[field] == self.n:
+            return [b[field] for b in self.bodies], None
+        mask = np.fromiter((field in b for b in self.bodies), dtype=bool, count=self.n)
+        return [b[field] for b in self.bodies if field in b], mask
+
+    def spread_list(self, values: list, mask: np.ndarray | None) -> list:
+        """``values`` of the bodies ``mask`` selects at their places, None elsewhere."""
+        if mask is None:
+            return values
+        found = iter(values)
+        return [next(found) if there else None for there in mask.tolist()]
+
+    def present(self, field: str) -> np.ndarray:
+        """(n,) bool: the bodies that have ``field``."""
+        if self.count[field] in (0, self.n):
+            return np.full(self.n, self.count[field] == self.n)
+        return self.column(field)[1]  # type: ignore[return-value]
+
+    def strings(self, field: str, allowed: frozenset | None = None) -> list:
+        """The non-empty strings of ``field`` (of ``allowed``), None where absent."""
+        if not self.count[field]:
+            return [None] * self.n
+        values, mask = self.column(field)
+        if set(map(type, values)) != {str} or "" in values:
+            raise _Unplain
+        if allowed is not None and not set(values) <= allowed:
+            raise _Unplain
+        return self.spread_list(values, mask)
+
+
+def columns(document: Any) -> Columns | None:
+    """The columns of ``document`` when it is plainly valid, checked column by column; None
+    when it is not, or when this check cannot tell (then the body-by-body check of
+    :mod:`meshcol.io.scene_validate` decides)."""
+    if not plain_top(document):
+        return None
+    try:
+        table = _Table(document["bodies"])
+        names = table.strings("name")
+        meshes = table.strings("mesh")
+        if table.count["primitive"] and not all(map(is_primitive, table.column("primitive")[0])):
+            raise _Unplain
+        vectors = _vectors(table)
+        rotation, quaternion, euler, orders = _rotations(table)
+        scale, scaled = _scales(table)
+        shapes = table.strings("shape", SHAPES)
+    except _Unplain:
+        return None
+    moving = np.zeros(table.n, dtype=bool)
+    for field in _MOTION_FIELDS:
+        moving |= table.present(field)
+    return Columns(
+        names=names,
+        meshes=meshes,
+        shapes=shapes,
+        primitive=table.present("primitive"),
+        moving=moving,
+        scaled=scaled,
+        vectors=vectors,
+        scale=scale,
+        rotation=rotation,
+        quaternion=quaternion,
+        euler=euler,
+        orders=orders,
+    )
+
+
+def _rows(values: list, width: int) -> np.ndarray:
+    """``values``, lists of ``width`` finite JSON numbers each, as (len, width) float64
+    (bool is not a number; an integer beyond a double is left to the body-by-body check)."""
+    if not values:
+        return np.zeros((0, width))
+    if set(map(type, values)) != {list} or set(map(len, values)) != {width}:
+        raise _Unplain
+    flat = [v for row in values for v in row]
+    if not set(map(type, flat)) <= _NUMBER_TYPES:
+        raise _Unplain
+    try:
+        rows = np.array(flat, dtype=np.float64).reshape(-1, width)
+    except OverflowError:
+        raise _Unplain from None
+    if not np.isfinite(rows).all():
+        raise _Unplain
+    return rows
+
+
+def _spread(rows: np.ndarray, mask: np.ndarray | None, n: int, fill: float) -> np.ndarray:
+    """Rows of the bodies ``mask`` selects (all when None) in an (n, width) array."""
+    if mask is None:
+        return rows
+    out = np.full((n, rows.shape[1]), fill)
+    out[mask] = rows
+    return out
+
+
+def _vectors(table: _Table) -> dict[str, np.ndarray]:
+    vectors = {}
+    for field in VECTOR_FIELDS:
+        if table.count[field]:
+            values, mask = table.column(field)
+            vectors[field] = _spread(_rows(values, 3), mask, table.n, 0.0)
+    return vectors
+
+
+def _rotations(table: _Table) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
+    """``rotation``'s kinds, quaternions, angles and orders (``end_rotation`` checked)."""
+    n = table.n
+    rotation = np.zeros(n, dtype=np.int8)
+    quaternion, euler, orders = np.zeros((0, 4)), np.zeros((0, 3)), []
+    for field in ("rotation", "end_rotation"):
+        if not table.count[field]:
+            continue
+        values, mask = table.column(field)
+        if set(map(type, values)) != {dict}:
+            raise _Unplain
+        is_quaternion = [r.keys() == _QUATERNION_KEYS for r in values]
+        if not all(q or r.keys() == _EULER_KEYS for q, r in zip(is_quaternion, values)):
+            raise _Unplain
+        q_rows = _rows([r["quaternion"] for r in values if len(r) == 1], 4)
+        e_values = [r for r in values if len(r) == 2]
+        e_rows = _rows([r["euler_deg"] for r in e_values], 3)
+        e_orders = [r["order"] for r in e_values]
+        if not set(map(type, e_orders)) <= {str} or not set(e_orders) <= ORDERS:
+            raise _Unplain
+        if field == "rotation":
+            kinds = np.where(np.array(is_quaternion, dtype=bool), 1, 2).astype(np.int8)
+            rotation = _spread(kinds.reshape(-1, 1), mask, n, 0).astype(np.int8).reshape(n)
+            quaternion, euler, orders = q_rows, e_rows, e_orders
+    return rotation, quaternion, euler, orders
+
+
+def _scales(table: _Table) -> tuple[np.ndarray | None, np.ndarray]:
+    """The (n, 3) scales (None when no body has one) and which bodies are scaled."""
+    if not table.count["scale"]:
+        return None, np.zeros(table.n, dtype=bool)
+    values, mask = table.column("scale")
+    if not set(map(type, values)) <= {int, float, list}:
+        raise _Unplain
+    is_list = [type(v) is list for v in values]
+    uniform = [v for v, listed in zip(values, is_list) if not listed]
+    try:
+        factors = np.array(uniform, dtype=np.float64)
+    except OverflowError:
+        raise _Unplain from None
+    rows = _rows([v for v in values if type(v) is list], 3)
+    if not (np.isfinite(factors).all() and (factors > 0).all() and (rows > 0).all()):
+        raise _Unplain
+    given = np.empty((len(values), 3))
+    listed = np.array(is_list, dtype=bool).reshape(len(values))
+    given[listed] = rows
+    given[~listed] = factors[:, None]
+    scale = _spread(given, mask, table.n, 1.0)
+    return scale, (scale != 1.0).any(axis=1)
+
+
+def near_limits(found: Columns, duration: float | None) -> np.ndarray:
+    """(n,) bool: the bodies the magnitude check must look at one by one: primitives, and
+    every body with a value within a factor of two of a limit (a margin, so rounding an
+    integer to a double never hides one beyond it)."""
+    near = found.primitive.copy()
+    lengths = [found.vectors.get("position"), found.vectors.get("end_position"), found.scale]
+    for values in lengths:
+        if values is not None:
+            near |= (np.abs(values) >= 0.5 * MAX_COORDINATE).any(axis=1)
+    if found.scale is not None:
+        near |= (found.scale <= 2.0 / MAX_COORDINATE).any(axis=1)
+    if duration is not None:
+        with np.errstate(over="ignore"):
+            for name, limit in (("velocity", MAX_COORDINATE), ("angular_velocity", MAX_TURN)):
+                values = found.vectors.get(name)
+                if values is not None:
+                    near |= np.abs(values).max(axis=1) * float(duration) >= 0.5 * limit
+    return near
+
+
+# --- bodies in bulk ------------------------------------------------------------------------------
+
+
+def bulk_bodies(found: Columns, source: str, files: dict[str, list[Body]]) -> list | None:
+    """The manifest's common bodies, built together: index-aligned with its bodies, a Body
+    for each static, unscaled mesh body whose file holds one object without a transform and
+    whose world coordinates are plainly within the limit; None for the others (built one by
+    one). None in all when names repeat (the body loop says which).
+
+    Each body is what the body loop would build, to the bit: the same rotation arithmetic
+    (:func:`quaternion_matrices`, :func:`euler_matrices`), the same vertex and face arrays
+    of its file, the same bound of its world coordinates as its world check.
+    """
+    names = found.names
+    n = len(names)
+    if len(set(names)) != n:
+        return None
+    objects, reach_of = _plain_objects(found, source, files)
+    reach = np.array([reach_of[m] for m in found.meshes]).reshape(n)
+    position = found.vectors.get("position", np.zeros((n, 3)))
+    common = ~found.moving & ~found.scaled
+    common &= reach + np.abs(position).max(axis=1, initial=0.0) <= MAX_COORDINATE
+    poses = _poses(found, position, common)
+    out: list[Body | None] = [None] * n
+    shapes = found.shapes
+    for i in np.flatnonzero(common).tolist():
+        mesh_source, vertices, faces = objects[found.meshes[i]]
+        out[i] = Body(
+            name=names[i],
+            source=mesh_source,
+            vertices=vertices,
+            faces=faces,
+            pose=poses[i],
+            collider=shapes[i],
+        )
+    return out
+
+
+def _plain_objects(
+    found: Columns, source: str, files: dict[str, list[Body]]
+) -> tuple[dict[str | None, Any], dict[str | None, float]]:
+    """Per mesh name: ``(path, vertices, faces)`` of its file's one object without a transform
+    (None: the body loop builds its bodies), and the reach of the world check, sqrt(3)
+    max |v| (inf for the others); per file, but in one numpy pass for all."""
+    folder = os.path.dirname(source)
+    meshes = list(dict.fromkeys(m for m in found.meshes if m is not None))
+    paths = [os.path.join(folder, mesh) for mesh in meshes]
+    loaded = [files.get(os.path.normpath(path)) for path in paths]
+    single = [f is not None and len(f) == 1 for f in loaded]
+    ones = [f[0] for f, one in zip(loaded, single) if one]  # type: ignore[index]
+    plain = np.zeros(len(meshes), dtype=bool)
+    reaches = np.full(len(meshes), math.inf)
+    if ones:
+        rows = np.flatnonzero(single)
+        plain[rows] = (np.stack([b.pose for b in ones]) == IDENTITY).all(axis=(1, 2))
+        reaches[rows] = _largest_coordinates(ones) * math.sqrt(3.0)
+    objects: dict[str | None, Any] = {None: None}
+    reach_of: dict[str | None, float] = {None: math.inf}
+    for k, (mesh, path, files_of) in enumerate(zip(meshes, paths, loaded)):
+        if plain[k]:
+            (sub,) = files_of  # type: ignore[misc]
+            vertices, faces = np.ascontiguousarray(sub.vertices), np.ascontiguousarray(sub.faces)
+            objects[mesh], reach_of[mesh] = (path, vertices, faces), float(reaches[k])
+        else:
+            objects[mesh], reach_of[mesh] = None, math.inf
+    return objects, reach_of
+
+
+def _largest_coordinates(bodies: Sequence[Body]) -> np.ndarray:
+    """The largest |coordinate| of each body's vertices (0 for none): one reduction over the
+    flat coordinates (a max over rows of 3 first costs more than the rest of the bulk path)."""
+    arrays = [np.ascontiguousarray(b.vertices) for b in bodies]
+    sizes = np.array([len(v) for v in arrays], dtype=np.int64)
+    largest = np.zeros(len(bodies))
+    filled = sizes > 0
+    if filled.any():
+        magnitudes = np.abs(np.concatenate(arrays).reshape(-1))
+        starts = np.concatenate([[0], np.cumsum(sizes[filled])[:-1]]) * 3
+        largest[filled] = np.maximum.reduceat(magnitudes, starts)
+    return largest
+
+
+def _poses(found: Columns, position: np.ndarray, common: np.ndarray) -> np.ndarray:
+    """(n, 4, 4) start poses of the columns' bodies; a body with a zero quaternion leaves
+    ``common`` (the body loop says what is wrong with it)."""
+    n = len(found.names)
+    rotations = np.tile(np.eye(3), (n, 1, 1))
+    quaternion = found.rotation == 1
+    if quaternion.any():
+        q = found.quaternion
+        nonzero = np.abs(q).max(axis=1) > 0
+        rows = np.flatnonzero(quaternion)
+        common[rows[~nonzero]] = False
+        rotations[rows[nonzero]] = quaternion_matrices(q[nonzero])
+    euler = found.rotation == 2
+    if euler.any():
+        rotations[euler] = euler_matrices(found.euler, found.orders)
+    poses = np.zeros((n, 4, 4))
+    poses[:, :3, :3] = rotations
+    poses[:, :3, 3] = position
+    poses[:, 3, 3] = 1.0
+    return poses
+
+
+def quaternion_matrices(q: np.ndarray) -> np.ndarray:
+    """:func:`meshcol.io.scene_bodies.rotation_from_quaternion` of each row of ``q`` ((n, 4)
+    float64, finite, none zero): (n, 3, 3), by the same operations in the same order, so to
+    the same bits."""
+    q = q / np.abs(q).max(axis=1, keepdims=True)
+    norm = np.sqrt(q[:, 0] * q[:, 0] + q[:, 1] * q[:, 1] + q[:, 2] * q[:, 2] + q[:, 3] * q[:, 3])
+    w, x, y, z = (q[:, k] / norm for k in range(4))
+    out = np.empty((len(q), 3, 3))
+    out[:, 0, 0] = 1 - 2 * (y * y + z * z)
+    out[:, 0, 1] = 2 * (x * y - w * z)
+    out[:, 0, 2] = 2 * (x * z + w * y)
+    out[:, 1, 0] = 2 * (x * y + w * z)
+    out[:, 1, 1] = 1 - 2 * (x * x + z * z)
+    out[:, 1, 2] = 2 * (y * z - w * x)
+    out[:, 2, 0] = 2 * (x * z - w * y)
+    out[:, 2, 1] = 2 * (y * z + w * x)
+    out[:, 2, 2] = 1 - 2 * (x * x + y * y)
+    return out
+
+
+_QUARTER_COS = np.array([1.0, 0.0, -1.0, 0.0])
+_QUARTER_SIN = np.array([0.0, 1.0, 0.0, -1.0])
+
+
+def euler_matrices(angles_deg: np.ndarray, orders: Sequence[str]) -> np.ndarray:
+    """:func:`meshcol.io.scene_bodies.rotation_from_euler` of each row of ``angles_deg``
+    ((n, 3) float64) in its order: (n, 3, 3), the same axis rotations (math's cos and sin,
+    exact at right angles) multiplied in the same order by one stacked matmul per axis, so to
+    the same bits."""
+    n = len(orders)
+    rows = np.arange(n)
+    matrix = np.tile(np.eye(3), (n, 1, 1))
+    others = np.array([(1, 2), (2, 0), (0, 1)])
+    for step in range(3):
+        axis = np.array([AXES[order[step]] for order in orders], dtype=np.int64).reshape(n)
+        # the exact cosine and sine of each angle: math.radians is one product by pi / 180
+        angle = angles_deg[:, step] * (math.pi / 180.0)
+        quarter = angle / (math.pi / 2)
+        exact = quarter == np.round(quarter)
+        # round(quarter) % 4 of an integral quarter, exactly at any size (fmod is exact)
+        turns = np.mod(np.where(exact, quarter, 0.0), 4.0).astype(np.int64)
+        c, s = _QUARTER_COS[turns], _QUARTER_SIN[turns]
+        other = angle[~exact].tolist()
+        c[~exact] = list(map(math.cos, other))  # math's, not numpy's: the same bits as one body
+        s[~exact] = list(map(math.sin, other))
+        i, j = others[axis].T
+        turn = np.zeros((n, 3, 3))
+        turn[rows, axis, axis] = 1.0
+        turn[rows, i, i] = c
+        turn[rows, j, j] = c
+        turn[rows, i, j] = -s
+        turn[rows, j, i] = s
+        matrix = np.matmul(turn, matrix)
+    return matrix
