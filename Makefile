@@ -46,10 +46,12 @@ lint: install-test
 	$(BIN)/ruff format --check meshcol tests benchmarks fuzz
 	$(BIN)/mypy
 
-# pytest exits 5 when it collected nothing: that fails here like any other error.
+# pytest exits 5 when it collected nothing: that fails here like any other error. Both lanes
+# run on two workers (pytest-xdist; tests/conftest.py groups what cannot share a machine).
+XDIST := -n 2 --dist loadgroup
 test: lint
 	@test -d ../shared/corpus || echo "WARNING: ../shared/corpus is absent: every corpus test will SKIP (the count is printed at the end)"
-	$(BIN)/pytest -q -p no:cacheprovider
+	$(BIN)/pytest -q -p no:cacheprovider $(XDIST)
 
 # The stub of the native module, meshcol/_core.pyi (nanobind's stubgen), regenerated from the
 # built extension: run it after changing a binding and commit the stub (mypy reads it;
@@ -57,9 +59,9 @@ test: lint
 stubs: install-test
 	$(BIN)/python -m nanobind.stubgen -q -m meshcol._core -o meshcol/_core.pyi
 
-# The fast lane (under a minute): no slow or corpus tests, fewer hypothesis examples.
+# The fast lane (at most 40 s): no slow or corpus tests, a sixth of the hypothesis examples.
 test-fast: install-test
-	HYPOTHESIS_PROFILE=fast $(BIN)/pytest -q -p no:cacheprovider -m "not slow"
+	HYPOTHESIS_PROFILE=fast $(BIN)/pytest -q -p no:cacheprovider -m "not slow" $(XDIST)
 
 # The fast lane with every runtime dependency at the lower end of its range (pyproject.toml),
 # in its own .venv-lowest: run it when a bound changes (it downloads those versions).

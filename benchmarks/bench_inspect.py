@@ -1,10 +1,10 @@
 """``meshcol inspect`` speed: the whole body inspection and its self-intersection step.
 
-Measures :func:`meshcol.analysis.inspect.inspect_body` and
+Measures :func:`meshcol.analysis.health.inspect_body` and
 :func:`meshcol.collision.self_intersection.self_intersecting_pairs` on trimesh's UV sphere (a
 clean closed mesh, fine pole fans) and on corpus meshes, and prints the crossing pairs found.
-With ``--baseline FILE`` (a copy of an older ``meshcol/analysis/inspect.py``, e.g. ``git show
-main:meshcol/analysis/inspect.py > /tmp/old_inspect.py``) the old inspection runs in the same
+With ``--baseline FILE`` (a copy of an older ``meshcol/analysis/health.py``, e.g. ``git show
+main:meshcol/analysis/health.py > /tmp/old_inspect.py``) the old inspection runs in the same
 process, alternated with the new one, and the ratios are printed.
 
     .venv/bin/python benchmarks/bench_inspect.py --sphere 650 --rounds 2 \\
@@ -42,12 +42,12 @@ def main() -> None:
     parser.add_argument("--sphere", type=int, default=650, help="UV sphere segments (0: none)")
     parser.add_argument("--mesh", action="append", default=[], help="a mesh file (repeatable)")
     parser.add_argument("--rounds", type=int, default=3)
-    parser.add_argument("--baseline", help="an older meshcol/analysis/inspect.py to compare")
+    parser.add_argument("--baseline", help="an older meshcol/analysis/health.py to compare")
     args = parser.parse_args()
 
     import trimesh
 
-    from meshcol.analysis.inspect import inspect_body
+    from meshcol.analysis.health import inspect_body
     from meshcol.collision.self_intersection import self_intersecting_pairs
     from meshcol.io.mesh_read import load_mesh
     from meshcol.types import Body

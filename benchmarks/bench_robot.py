@@ -95,7 +95,6 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=1)
     args = parser.parse_args()
 
-    from meshcol.analysis.check import _cartesian_part_pairs
     from meshcol.analysis.colliders import build_colliders
     from meshcol.analysis.collision_matrix import _Sampler, collision_matrix
     from meshcol.io.kinematics import adjacent_links
@@ -126,8 +125,8 @@ def main() -> None:
     sampler = _Sampler(
         kin, colliders, body_link, offsets, 0.0, min(len(q), 256), args.threads, skip
     )
-    part_pairs = _cartesian_part_pairs(sampler.pairs, colliders.body_part_offsets)
-    pair_of = np.repeat(np.arange(len(sampler.pairs)), sampler.pair_sizes)
+    part_pairs = sampler.index.part_pairs
+    pair_of = np.repeat(np.arange(len(sampler.pairs)), sampler.index.sizes)
     part_pairs, pair_of = part_pairs[~skip[pair_of]], pair_of[~skip[pair_of]]
     objects = fcl_objects(colliders) if fcl_ok else []
 

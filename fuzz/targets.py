@@ -33,8 +33,10 @@ from pathlib import Path
 import numpy as np
 
 from meshcol.errors import MeshcolError
+from meshcol.io.mesh_formats import MESH_EXTENSIONS
 
-FORMATS = (".obj", ".stl", ".ply", ".off", ".glb", ".gltf", ".json", ".toml", ".urdf")
+# Every mesh format of the registry, then the manifests and URDF (the first byte picks one).
+FORMATS = (*MESH_EXTENSIONS, ".json", ".toml", ".urdf")
 _MANIFESTS = {".json", ".toml"}
 
 # One directory per process for the readers' files: a fixed name, so a manifest that refers

@@ -57,7 +57,9 @@ _LAZY: dict[str, str] = {
     "decompose": "meshcol.decomposition.decompose",
     "cached_decomposition": "meshcol.decomposition.decompose",
     "decompose_files": "meshcol.decomposition.batch",
-    "DecomposeReport": "meshcol.decomposition.batch",
+    "DecomposeOptions": "meshcol.decomposition.options",
+    "RunOptions": "meshcol.decomposition.options",
+    "DecomposeReport": "meshcol.decomposition.report",
     "Decomposition": "meshcol.decomposition.result",
     "Fidelity": "meshcol.decomposition.result",
     # shapes and the narrow phase

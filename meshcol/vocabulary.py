@@ -2,8 +2,9 @@
 
 Data only: this module imports nothing of meshcol's and may be imported from anywhere (like
 ``types`` and ``errors``). A list that two modules need lives here; the modules import it.
-Adding a word (a collider kind, a limit key, a report format) starts here, and the recipes in
-ARCHITECTURE.md say which one registry then maps it to its code.
+Adding a word (a collider kind, a limit key) starts here, and the recipes in ARCHITECTURE.md
+say which one registry then maps it to its code. (Report formats are not here: their one list
+is the registry that maps each to its writer, ``meshcol.io.formats.FORMATS``.)
 """
 
 from __future__ import annotations
@@ -17,8 +18,6 @@ __all__ = [
     "MANIFEST_EXTENSIONS",
     "MATRIX_COLLIDERS",
     "PAIR_STATUSES",
-    "REPORT_FORMATS",
-    "CI_FORMATS",
     "ROBOT_EXTENSIONS",
     "SCENE_SHAPES",
     "SEVERITY_ORDER",
@@ -78,10 +77,3 @@ ROBOT_EXTENSIONS = (".urdf", ".mjcf", ".xml")
 PAIR_STATUSES = ("separated", "clearance", "contact", "penetrating", "contained")
 #: The same, worst first (the order review pages and summaries list pairs in).
 SEVERITY_ORDER = tuple(reversed(PAIR_STATUSES))
-
-# -- reports ----------------------------------------------------------------------------------
-
-#: Formats a report can be written in (``--format``).
-REPORT_FORMATS = ("json", "csv", "junit", "github")
-#: The CI-native ones among them.
-CI_FORMATS = ("junit", "github")

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 from hypothesis import HealthCheck, settings
@@ -15,6 +17,15 @@ CORPUS = SHARED / "corpus"
 ORACLES = SHARED / "oracles" / "cases.json"
 SAMPLES = REPO / "samples"
 GOLDEN = Path(__file__).resolve().parent / "golden"
+
+#: The tests mirror the package, a folder a room; the shared helpers (oracles.py,
+#: strategies.py, ...) are here. A test imports a helper or another test module (its fixtures
+#: and inputs: test_executor, test_cli_hull) by name: every folder is on sys.path, whichever
+#: one pytest collects first.
+TEST_FOLDERS = ("geometry", "io", "collision", "decomposition", "analysis", "targets", "cli")
+for _folder in (Path(__file__).resolve().parent / name for name in TEST_FOLDERS):
+    if str(_folder) not in sys.path:
+        sys.path.append(str(_folder))
 
 #: `meshcol decompose` flags that make CoACD fast enough for tests (coarse, few MCTS steps).
 FAST_DECOMPOSE = [
@@ -30,24 +41,20 @@ FAST_DECOMPOSE = [
     "mcts_max_depth=2",
 ]
 
-# `ci` is derandomized so CI runs are repeatable; `dev` explores more.
-settings.register_profile(
-    "ci",
-    derandomize=True,
-    max_examples=150,
-    deadline=None,
-    suppress_health_check=[HealthCheck.too_slow],
-)
+# Hypothesis profiles (HYPOTHESIS_PROFILE): `nightly` runs the long example counts (150 a
+# property, or the count its @settings names), `ci` (the default, `make test`) a third of each,
+# `fast` (`make test-fast`) a sixth; those two are derandomized (repeatable runs), while
+# `nightly` and `dev` draw new examples each run. The counts are scaled at collection
+# (`_scale_examples`), so a test's own @settings(max_examples=N) is its nightly count.
+EXAMPLES = 150
+EXAMPLE_SCALE = {"nightly": 1.0, "dev": 1.0, "ci": 1 / 3, "fast": 1 / 6}
+_quiet = {"deadline": None, "suppress_health_check": [HealthCheck.too_slow]}
+settings.register_profile("nightly", max_examples=EXAMPLES, **_quiet)
+settings.register_profile("ci", derandomize=True, max_examples=EXAMPLES, **_quiet)
 settings.register_profile("dev", max_examples=400, deadline=None)
-# `fast` is the `make test-fast` lane: the same properties, fewer examples.
-settings.register_profile(
-    "fast",
-    derandomize=True,
-    max_examples=25,
-    deadline=None,
-    suppress_health_check=[HealthCheck.too_slow],
-)
-settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+settings.register_profile("fast", derandomize=True, max_examples=EXAMPLES, **_quiet)
+PROFILE = os.environ.get("HYPOTHESIS_PROFILE", "ci")
+settings.load_profile(PROFILE)
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
@@ -164,12 +171,73 @@ SLOW_TESTS = {
 }
 
 
+#: Work units of ``make test``'s two workers (``-n 2 --dist loadgroup``): each test alone,
+#: except the files named here, whose tests run on one worker, in order, as one unit. The
+#: Ray tests start Ray clusters on 127.0.0.1 (one at a time: test_ray_cluster.py
+#: joins only its own); the others have a module fixture worth computing once (the whole
+#: corpus inspected and hulled; a CoACD torus).
+XDIST_GROUPS = {
+    "test_ray.py": "ray",
+    "test_ray_cluster.py": "ray",
+    "test_ray_local.py": "ray",
+    "test_cli_inspect.py": "test_cli_inspect.py",
+    "test_decompose.py": "test_decompose.py",
+}
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    if config.pluginmanager.hasplugin("xdist"):
+        config.pluginmanager.register(_XdistGroups(), "meshcol-xdist-groups")
+
+
+class _XdistGroups:
+    """``--dist loadgroup`` by :data:`XDIST_GROUPS`. (xdist's own reads ``xdist_group``
+    marks through ``item._nodeid``, which pytest 9 no longer reads: its groups split.)"""
+
+    @staticmethod
+    def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
+        if config.getvalue("dist") != "loadgroup":
+            return None
+        from xdist.scheduler import LoadScopeScheduling
+
+        class Scheduling(LoadScopeScheduling):
+            def _split_scope(self, nodeid: str) -> str:
+                name = nodeid.split("::", 1)[0].rsplit("/", 1)[-1]
+                return XDIST_GROUPS.get(name, nodeid)
+
+        return Scheduling(config, log)
+
+
+@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     slow = pytest.mark.slow
+    scaled: set[int] = set()
     for item in items:
         fixtures = set(getattr(item, "fixturenames", ()))
         if item.originalname in SLOW_TESTS or fixtures & {"corpus", "corpus_run"}:  # type: ignore[attr-defined]
             item.add_marker(slow)
+        _scale_examples(item, EXAMPLE_SCALE.get(PROFILE, 1.0), scaled)
+
+
+def _scale_examples(item: pytest.Item, scale: float, scaled: set[int]) -> None:
+    """The profile's share of a property's example count (its @settings or the profile's)."""
+    if scale == 1.0:
+        return
+    test = getattr(getattr(item, "obj", None), "__func__", getattr(item, "obj", None))
+    owner = getattr(item, "cls", None)
+    if hasattr(test, "hypothesis"):  # @given: the settings Hypothesis reads when it runs
+        holder, name = test, "_hypothesis_internal_use_settings"
+    elif isinstance(getattr(owner, "settings", None), settings):  # a state machine's TestCase
+        holder, name = owner, "settings"
+    else:
+        return
+    current = getattr(holder, name, None)
+    if current is None or id(holder) in scaled:
+        return
+    scaled.add(id(holder))
+    setattr(
+        holder, name, settings(current, max_examples=max(2, round(current.max_examples * scale)))
+    )
 
 
 def pytest_terminal_summary(terminalreporter, exitstatus: int, config: pytest.Config) -> None:

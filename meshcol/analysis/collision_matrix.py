@@ -25,9 +25,14 @@ the links' convex parts (:func:`meshcol.analysis.colliders.build_colliders`, hul
 replicated once per configuration of a chunk in one :class:`~meshcol.collision.shapes.ConvexSet`
 so that one native call measures every (configuration, part pair) candidate; world boxes of
 every part of every configuration (each part's local box, moved: Arvo 1990); the broad phase on
-link boxes then part boxes, vectorised over (configuration, pair); the boolean GJK of the
-survivors in one batched call (:func:`meshcol.collision.narrowphase.intersects_batch`; with a
-padding, the GJK distance).
+link boxes then part boxes, vectorised over (configuration, pair) (the batched form of the
+broad phase ``check`` uses, :func:`meshcol.analysis.pairs.broad_phase_batch`); the boolean GJK
+of the survivors in one batched call (:func:`meshcol.collision.narrowphase.intersects_batch`;
+with a padding, the GJK distance).
+
+Stages: ``_robot_links`` (the robot and its links' colliders) -> ``_sample`` (the default
+configuration and the samples, chunk by chunk: poses, boxes, broad phase, narrow phase) ->
+``_classify`` (MoveIt's class of each link pair) -> ``_matrix_report``.
 """
 
 from __future__ import annotations
@@ -42,12 +47,11 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.analysis.check import _cartesian_part_pairs
 from meshcol.analysis.colliders import build_colliders
+from meshcol.analysis.pairs import NO_ANSWER, PartPairIndex, broad_phase_batch
 from meshcol.errors import SceneError
 from meshcol.io.paths import display_path
 from meshcol.io.robot import RobotOptions
-from meshcol.types import Status
 from meshcol.vocabulary import MATRIX_COLLIDERS
 
 __all__ = [
@@ -211,8 +215,86 @@ class CollisionMatrixReport:
         return srdf_text(self.robot, self.disabled_pairs(), comment)
 
 
+@dataclass(frozen=True, eq=False)
+class _RobotLinks:
+    """A robot's links with collision geometry, ready to sample.
+
+    Attributes
+    ----------
+    source : str
+    scene : Scene
+        At the loaded configuration.
+    kinematics : UrdfKinematics or MjcfKinematics
+    colliders : Colliders
+        One body per link with geometry.
+    body_link : (n_bodies,) int64
+        Each body's link (index into ``kinematics.links``).
+    offsets : (n_bodies, 4, 4) float64
+        Each body's pose in its link's frame.
+    adjacent : set of (str, str)
+        Adjacent link pairs (sorted names), never measured.
+    given_joints : mapping
+        Joint values given by the robot options (``--joint``).
+    """
+
+    source: str
+    scene: Any
+    kinematics: Any
+    colliders: Any
+    body_link: np.ndarray
+    offsets: np.ndarray
+    adjacent: set[tuple[str, str]]
+    given_joints: Any
+
+    @property
+    def names(self) -> list[str]:
+        return [b.name for b in self.colliders.bodies]
+
+
+def _robot_links(
+    source: str,
+    options: MatrixOptions,
+    report: Callable[[str], None],
+    robot_options: RobotOptions | None = None,
+) -> _RobotLinks:
+    """Load the robot (read with ``robot_options``) and build its links' colliders (hulls, or
+    the decomposition)."""
+    from meshcol.io.inputs import is_robot_file
+    from meshcol.io.kinematics import adjacent_links
+    from meshcol.io.robot import load_robot_model
+
+    if os.path.isfile(source) and not is_robot_file(source):
+        raise SceneError(
+            "not a robot description (expected .urdf, .mjcf, or .xml with <robot> or <mujoco>)",
+            source,
+        )
+    robot_options = RobotOptions() if robot_options is None else robot_options
+    model = load_robot_model(source, robot_options)
+    given = robot_options.joints
+    scene, kinematics = model.scene, model.kinematics
+    colliders = build_colliders(
+        scene.bodies,
+        "decomposed" if options.collider == "decomposed" else "hull",
+        mesh_parts="hull",
+        decompose_options=options.decompose_options,
+        progress=report,
+    )
+    bodies = colliders.bodies
+    link_index = {name: i for i, name in enumerate(kinematics.links)}
+    stray = [b.name for b in bodies if b.name not in link_index]
+    if stray:
+        raise SceneError(f"body {stray[0]!r} is no link of the robot (a UCX_ link name?)", source)
+    body_link = np.array([link_index[b.name] for b in bodies], dtype=np.int64)
+    loaded = kinematics.link_poses(kinematics.loaded[None])[0]
+    offsets = np.linalg.inv(loaded[body_link]) @ np.stack([b.pose for b in bodies])
+    names = [b.name for b in bodies]
+    adjacent = set(adjacent_links(kinematics.links, kinematics.edges, names))
+    return _RobotLinks(source, scene, kinematics, colliders, body_link, offsets, adjacent, given)
+
+
 class _Sampler:
-    """Which (configuration, link pair) collide: the batched broad and narrow phase."""
+    """Which (configuration, link pair) collide: link poses, part boxes, the shared batched
+    broad phase (:func:`meshcol.analysis.pairs.broad_phase_batch`), the narrow phase."""
 
     def __init__(
         self,
@@ -239,12 +321,7 @@ class _Sampler:
         # pairs never measured (adjacent links: never checked, as MoveIt's setup assistant)
         self.skip = np.zeros(len(self.pairs), bool) if skip is None else np.asarray(skip, bool)
         # Every part pair of every link pair, grouped by link pair (computed once).
-        self.part_pairs = _cartesian_part_pairs(self.pairs, colliders.body_part_offsets)
-        part_of = colliders.body_part_offsets
-        sizes = (part_of[i + 1] - part_of[i]) * (part_of[j + 1] - part_of[j])
-        self.pair_sizes = sizes.astype(np.int64)
-        self.pair_start = np.zeros(len(sizes), dtype=np.int64)
-        np.cumsum(sizes[:-1], out=self.pair_start[1:])
+        self.index = PartPairIndex.of(self.pairs, colliders.body_part_offsets)
         self.tiled = colliders.shapes.take(np.tile(np.arange(self.h), batch))
         local_lo, local_hi = colliders.shapes.aabbs(None)
         self.local_centre = 0.5 * (local_lo + local_hi)
@@ -263,63 +340,71 @@ class _Sampler:
         return out
 
     def _chunk(self, q: np.ndarray) -> np.ndarray:
-        from meshcol.collision.narrowphase import distance_batch, intersects_batch
-
         began = time.perf_counter()
-        c, h, colliders = len(q), self.h, self.colliders
+        poses = self._part_poses(q)
+        middle = time.perf_counter()
+        self.kinematics_seconds += middle - began
+        lo, hi = self._part_boxes(poses, len(q))
+        configuration, pair, part_pairs = broad_phase_batch(
+            lo, hi, self.colliders.body_part_offsets, self.index, self.skip
+        )
+        collides = self._narrow_phase(poses, configuration, pair, part_pairs, len(q))
+        self.collision_seconds += time.perf_counter() - middle
+        return collides
+
+    def _part_poses(self, q: np.ndarray) -> np.ndarray:
+        """(batch * parts, 4, 4): every part's world pose at each configuration of ``q``, then
+        identities up to the batch (the tiled shapes' size)."""
+        colliders = self.colliders
         link_poses = self.kinematics.link_poses(q)  # (c, links, 4, 4)
         body_poses = link_poses[:, self.body_link] @ self.offsets  # (c, bodies, 4, 4)
-        poses = np.empty((self.batch * h, 4, 4))
+        poses = np.empty((self.batch * self.h, 4, 4))
         poses[:] = np.eye(4)
         part_poses = body_poses[:, colliders.part_body]
         if colliders.part_offsets is not None:  # fit primitives sit off their link's origin
             part_poses = part_poses @ colliders.part_offsets
-        poses[: c * h] = part_poses.reshape(-1, 4, 4)
-        middle = time.perf_counter()
-        self.kinematics_seconds += middle - began
+        poses[: len(q) * self.h] = part_poses.reshape(-1, 4, 4)
+        return poses
 
-        # World boxes of the parts' local boxes (Arvo 1990: centre moved, half extents by |R|):
-        # never smaller than the parts' own world boxes, and numpy over every configuration.
+    def _part_boxes(self, poses: np.ndarray, c: int) -> tuple[np.ndarray, np.ndarray]:
+        """(c, parts, 3) world boxes of the parts' local boxes, grown by half the padding
+        (Arvo 1990: centre moved, half extents by |R|): never smaller than the parts' own
+        world boxes, and numpy over every configuration."""
+        h = self.h
         rotation = poses[: c * h, :3, :3]
         centre = np.einsum("kij,kj->ki", rotation, self.local_centre[np.tile(np.arange(h), c)])
         centre += poses[: c * h, :3, 3]
         half = np.einsum("kij,kj->ki", np.abs(rotation), self.local_half[np.tile(np.arange(h), c)])
         half += 0.5 * self.padding
-        lo = (centre - half).reshape(c, h, 3)
-        hi = (centre + half).reshape(c, h, 3)
-        starts = colliders.body_part_offsets[:-1]
-        body_lo = np.minimum.reduceat(lo, starts, axis=1)
-        body_hi = np.maximum.reduceat(hi, starts, axis=1)
-        a, b = self.pairs[:, 0], self.pairs[:, 1]
-        # NaN boxes (an invalid pose or shape) compare False: the pair goes to the narrow
-        # phase, which gives it its status.
-        apart = np.any((body_lo[:, a] > body_hi[:, b]) | (body_lo[:, b] > body_hi[:, a]), axis=2)
-        apart |= self.skip
-        config, pair = np.nonzero(~apart)
-        # The part pairs of the overlapping (configuration, link pair) candidates.
-        sizes = self.pair_sizes[pair]
-        owner = np.repeat(np.arange(len(pair)), sizes)
-        first = np.zeros(len(sizes), dtype=np.int64)
-        np.cumsum(sizes[:-1], out=first[1:])
-        rows = self.pair_start[pair][owner] + np.arange(int(sizes.sum())) - first[owner]
-        pa, pb = self.part_pairs[rows, 0], self.part_pairs[rows, 1]
-        cfg = config[owner]
-        keep = ~np.any((lo[cfg, pa] > hi[cfg, pb]) | (lo[cfg, pb] > hi[cfg, pa]), axis=1)
-        cfg, pa, pb, owner = cfg[keep], pa[keep], pb[keep], owner[keep]
-        narrow = np.stack([cfg * h + pa, cfg * h + pb], axis=1)
+        return (centre - half).reshape(c, h, 3), (centre + half).reshape(c, h, 3)
+
+    def _narrow_phase(
+        self,
+        poses: np.ndarray,
+        configuration: np.ndarray,
+        pair: np.ndarray,
+        part_pairs: np.ndarray,
+        c: int,
+    ) -> np.ndarray:
+        """(c, pairs) bool from the part pairs the broad phase kept: boolean GJK (with a
+        padding, the GJK distance); a failed query counts in ``failed``, never as a hit."""
+        from meshcol.collision.narrowphase import distance_batch, intersects_batch
+
+        h = self.h
+        narrow = np.stack(
+            [configuration * h + part_pairs[:, 0], configuration * h + part_pairs[:, 1]], axis=1
+        )
         self.narrow_pairs += len(narrow)
         if self.padding > 0:
-            result = distance_batch(self.tiled, poses, narrow, threads=self.threads)
-            hit = result.distance <= self.padding
+            measured = distance_batch(self.tiled, poses, narrow, threads=self.threads)
+            hit, status = measured.distance <= self.padding, measured.status
         else:
             checked = intersects_batch(self.tiled, poses, narrow, threads=self.threads)
-            hit = checked.intersects
-        status = np.asarray(checked.status if self.padding == 0 else result.status)
-        bad = np.isin(status, (int(Status.INVALID_INPUT), int(Status.OUT_OF_RANGE)))
-        np.add.at(self.failed, pair[owner[bad]], 1)
+            hit, status = checked.intersects, checked.status
+        bad = np.isin(np.asarray(status), NO_ANSWER)
+        np.add.at(self.failed, pair[bad], 1)
         collides = np.zeros((c, len(self.pairs)), dtype=bool)
-        collides[config[owner[hit & ~bad]], pair[owner[hit & ~bad]]] = True
-        self.collision_seconds += time.perf_counter() - middle
+        collides[configuration[hit & ~bad], pair[hit & ~bad]] = True
         return collides
 
 
@@ -359,68 +444,78 @@ def collision_matrix(
     pair's rate measured on all the samples. Narrow phase: boolean GJK (Gilbert et al. 1988;
     van den Bergen 2003) on the links' convex parts, batched over every candidate.
     """
-    from meshcol.io.inputs import is_robot_file
-    from meshcol.io.kinematics import adjacent_links
-    from meshcol.io.robot import load_robot_model
-
     opts = MatrixOptions(**options)
     opts.validate()
     report = progress or (lambda message: None)
-    source = os.fspath(robot)
     began = time.perf_counter()
-    if os.path.isfile(source) and not is_robot_file(source):
-        raise SceneError(
-            "not a robot description (expected .urdf, .mjcf, or .xml with <robot> or <mujoco>)",
-            source,
-        )
-    robot_options = RobotOptions() if robot_options is None else robot_options
-    model = load_robot_model(source, robot_options)
-    given = robot_options.joints
-    scene, kinematics = model.scene, model.kinematics
-    colliders = build_colliders(
-        scene.bodies,
-        "decomposed" if opts.collider == "decomposed" else "hull",
-        mesh_parts="hull",
-        decompose_options=opts.decompose_options,
-        progress=report,
-    )
-    bodies = colliders.bodies
-    link_index = {name: i for i, name in enumerate(kinematics.links)}
-    stray = [b.name for b in bodies if b.name not in link_index]
-    if stray:
-        raise SceneError(f"body {stray[0]!r} is no link of the robot (a UCX_ link name?)", source)
-    body_link = np.array([link_index[b.name] for b in bodies], dtype=np.int64)
-    loaded = kinematics.link_poses(kinematics.loaded[None])[0]
-    offsets = np.linalg.inv(loaded[body_link]) @ np.stack([b.pose for b in bodies])
+    links = _robot_links(os.fspath(robot), opts, report, robot_options)
     load_seconds = time.perf_counter() - began
+    sampler = _sampler(links, opts)
+    at_default, counts = _sample(sampler, links.kinematics.space, opts, report)
+    seconds = time.perf_counter() - began
+    pairs = _classify(links, sampler, counts, at_default, opts)
+    return _matrix_report(links, sampler, pairs, opts, seconds, load_seconds)
 
-    space = kinematics.space
-    names = [b.name for b in bodies]
-    adjacent = set(adjacent_links(kinematics.links, kinematics.edges, names))
-    i, j = np.triu_indices(len(bodies), k=1)
+
+def _sampler(links: _RobotLinks, options: MatrixOptions) -> _Sampler:
+    """The sampler of every link pair but the adjacent ones."""
+    names = links.names
+    i, j = np.triu_indices(len(names), k=1)
     skip = np.array(
-        [tuple(sorted((names[a], names[b]))) in adjacent for a, b in zip(i, j)], dtype=bool
+        [tuple(sorted((names[a], names[b]))) in links.adjacent for a, b in zip(i, j)], dtype=bool
     )
-    sampler = _Sampler(
-        kinematics,
+    colliders = links.colliders
+    return _Sampler(
+        links.kinematics,
         colliders,
-        body_link,
-        offsets,
-        opts.padding,
-        _batch(opts, len(colliders.shapes.vertices)),
-        opts.threads,
+        links.body_link,
+        links.offsets,
+        options.padding,
+        _batch(options, len(colliders.shapes.vertices)),
+        options.threads,
         skip,
     )
+
+
+def _sample(
+    sampler: _Sampler, space: Any, options: MatrixOptions, report: Callable[[str], None]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Collisions at the default configuration, and per link pair the number of sampled
+    configurations in collision."""
     at_default = sampler.collide(space.default[None])[0]
-    configurations = space.sample(opts.samples, opts.seed)
+    configurations = space.sample(options.samples, options.seed)
     counts = np.zeros(len(sampler.pairs), dtype=np.int64)
     step = max(sampler.batch, 1)
-    for start in range(0, opts.samples, step):
+    for start in range(0, options.samples, step):
         counts += sampler.collide(configurations[start : start + step]).sum(axis=0)
-        report(f"collision-matrix: {min(start + step, opts.samples)}/{opts.samples} configurations")
-    seconds = time.perf_counter() - began
+        done = min(start + step, options.samples)
+        report(f"collision-matrix: {done}/{options.samples} configurations")
+    return at_default, counts
 
-    rate = counts / opts.samples
+
+def _pair_class(adjacent: bool, default: bool, rate: float, hits: int, always: float) -> str:
+    """MoveIt's class of a link pair: the first that applies."""
+    if adjacent:
+        return "adjacent"
+    if default:
+        return "default"
+    if rate >= always:
+        return "always"
+    if hits == 0:
+        return "never"
+    return "sometimes"
+
+
+def _classify(
+    links: _RobotLinks,
+    sampler: _Sampler,
+    counts: np.ndarray,
+    at_default: np.ndarray,
+    options: MatrixOptions,
+) -> list[dict]:
+    """One row per link pair, sorted by (link_a, link_b): its class, SRDF reason, rate."""
+    names = links.names
+    rate = counts / options.samples
     pairs = []
     for (i, j), hits, r, default, failed in zip(
         sampler.pairs.tolist(),
@@ -430,17 +525,8 @@ def collision_matrix(
         sampler.failed.tolist(),
     ):
         a, b = sorted((names[i], names[j]))
-        is_adjacent = (a, b) in adjacent
-        if is_adjacent:
-            kind = "adjacent"
-        elif default:
-            kind = "default"
-        elif r >= opts.always_fraction:
-            kind = "always"
-        elif hits == 0:
-            kind = "never"
-        else:
-            kind = "sometimes"
+        is_adjacent = (a, b) in links.adjacent
+        kind = _pair_class(is_adjacent, default, r, hits, options.always_fraction)
         pairs.append(
             {
                 "link_a": a,
@@ -455,6 +541,19 @@ def collision_matrix(
             }
         )
     pairs.sort(key=lambda p: (p["link_a"], p["link_b"]))
+    return pairs
+
+
+def _matrix_report(
+    links: _RobotLinks,
+    sampler: _Sampler,
+    pairs: list[dict],
+    options: MatrixOptions,
+    seconds: float,
+    load_seconds: float,
+) -> CollisionMatrixReport:
+    """The report: joints, summary, settings and warnings around the classified pairs."""
+    space = links.kinematics.space
     joints = [
         {"name": n, "lower": lo, "upper": hi, "default": d}
         for n, lo, hi, d in zip(
@@ -464,43 +563,49 @@ def collision_matrix(
     by_class = {k: sum(p["class"] == k for p in pairs) for k in MATRIX_CLASSES}
     sampling = sampler.kinematics_seconds + sampler.collision_seconds
     summary = {
-        "links": len(bodies),
+        "links": len(links.colliders.bodies),
         "link_pairs": len(pairs),
         "pairs_by_class": by_class,
         "disabled_pairs": len(pairs) - by_class["sometimes"],
-        "samples": opts.samples,
-        "seed": opts.seed,
+        "samples": options.samples,
+        "seed": options.seed,
         "sampled_joints": len(space),
-        "convex_parts": len(colliders.part_body),
+        "convex_parts": len(links.colliders.part_body),
         "narrow_phase_pairs": sampler.narrow_pairs,
         "failed_queries": int(sampler.failed.sum()),
         "seconds": round(seconds, 6),
         "load_seconds": round(load_seconds, 6),
         "kinematics_seconds": round(sampler.kinematics_seconds, 6),
         "collision_seconds": round(sampler.collision_seconds, 6),
-        "seconds_per_configuration": sampling / (opts.samples + 1),
+        "seconds_per_configuration": sampling / (options.samples + 1),
     }
     settings = {
-        "samples": opts.samples,
-        "seed": opts.seed,
-        "collider": opts.collider,
-        "padding": opts.padding,
-        "always_fraction": opts.always_fraction,
-        "threads": opts.threads,
-        "inputs": [display_path(source, posix=True)],
+        "samples": options.samples,
+        "seed": options.seed,
+        "collider": options.collider,
+        "padding": options.padding,
+        "always_fraction": options.always_fraction,
+        "threads": options.threads,
+        "inputs": [display_path(links.source, posix=True)],
     }
-    # The scene's pose is not the default configuration here: its joint-limit notes go.
-    warnings = [w for w in scene.warnings if "outside its limits" not in w]
+    robot = links.kinematics.name or Path(links.source).stem
+    return CollisionMatrixReport(robot, pairs, joints, summary, settings, _warnings(links))
+
+
+def _warnings(links: _RobotLinks) -> list[str]:
+    """The scene's warnings but its joint-limit notes (the scene's pose is not the default
+    configuration here), joints whose default is not zero, colliders not built as asked,
+    joints held."""
+    space = links.kinematics.space
+    warnings = [w for w in links.scene.warnings if "outside its limits" not in w]
     warnings += [
         f"joint {n!r}: zero is outside its limits [{lo:g}, {hi:g}]; the default configuration "
         f"has it at the middle, {d:g} (give --joint {n}=VALUE to choose)"
         for n, lo, hi, d in zip(space.names, space.lower, space.upper, space.default)
-        if not lo <= 0.0 <= hi and n not in given
+        if not lo <= 0.0 <= hi and n not in links.given_joints
     ]
-    warnings += [*colliders.warnings, *kinematics.held]
-    return CollisionMatrixReport(
-        kinematics.name or Path(source).stem, pairs, joints, summary, settings, warnings
-    )
+    warnings += [*links.colliders.warnings, *links.kinematics.held]
+    return warnings
 
 
 def _batch(options: MatrixOptions, vertices: int) -> int:

@@ -24,10 +24,12 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from meshcol.decomposition.options import DecomposeOptions, RunOptions
 from meshcol.errors import InvalidMeshError, MeshcolError
 from meshcol.io.robot import RobotOptions
 from meshcol.types import Body
@@ -86,12 +88,41 @@ def _label(link: str, index: int, kind: str) -> str:
     return f"link {link!r}: {'collision' if kind == 'urdf' else 'geom'} {index}"
 
 
+#: The ways of :func:`robot_colliders` to rebuild an element.
+METHODS = ("hull", "decompose", "fit")
+
+
+@dataclass(frozen=True)
+class _Element:
+    """A collision element to rebuild: its meshes in the link frame, one block per object of
+    its mesh file, and the same as one Body."""
+
+    link: str
+    index: int
+    name: str  #: URDF ``<collision name>``, or ""
+    label: str  #: names the element in messages (``link 'hand': collision 0``)
+    number: int  #: its place among every element of the robot (kept primitives included)
+    blocks: list[tuple[np.ndarray, np.ndarray]]
+    body: Body
+
+    def entry(self, results: Any) -> dict[str, Any]:
+        """Its entry in :func:`robot_colliders`' list."""
+        return {
+            "link": self.link,
+            "index": self.index,
+            "name": self.name,
+            "results": results,
+            "body": self.body,
+        }
+
+
 def robot_colliders(
     path: str | os.PathLike[str],
     method: str,
     *,
     max_vertices: int | None = None,
-    decompose_options: Mapping[str, Any] | None = None,
+    options: DecomposeOptions | None = None,
+    run: RunOptions | None = None,
     fit_options: Mapping[str, Any] | None = None,
     target: Any = None,
     progress: Callable[[str], None] | None = None,
@@ -106,8 +137,9 @@ def robot_colliders(
     method : {"hull", "decompose", "fit"}
     max_vertices : int, optional
         ``hull``: the vertex budget of each hull.
-    decompose_options : mapping, optional
-        ``decompose``: the keywords of :func:`meshcol.decomposition.batch.decompose_meshes`.
+    options, run : DecomposeOptions, RunOptions, optional
+        ``decompose``: the engine's options and where it runs
+        (:func:`meshcol.decomposition.batch.decompose_meshes`).
     fit_options : mapping, optional
         ``fit``: ``shape`` and ``volume_tolerance`` of :func:`meshcol.analysis.fit.fit_body`.
     target : Target, optional
@@ -138,111 +170,190 @@ def robot_colliders(
     InvalidMeshError
         An element with no hull (flat beyond repair, collinear), naming its link.
     """
-    from meshcol.analysis.hull import target_hull, target_limits
-    from meshcol.collision.hull import convex_hull
-    from meshcol.decomposition.batch import decompose_meshes
-    from meshcol.io.robot_write import Collider, RobotColliders
+    from meshcol.io.robot_write import RobotColliders
 
-    if method not in ("hull", "decompose", "fit"):
+    if method not in METHODS:
         raise ValueError(f"unknown method {method!r}")
     if target is not None and method == "fit":
         raise ValueError("a target applies to hull and decompose, not fit")
-    limits: dict[str, Any] | None = None
-    if target is not None and method == "hull":
-        limits = target_limits(target, max_vertices)
+    hull_limits = _hull_limits(method, target, max_vertices)
     source = os.fspath(path)
     robot_options = RobotOptions() if robot_options is None else robot_options
     scene, elements, kind = _load(source, robot_options)
-    names = _element_names(source, kind)
     groups = _groups(elements)
-    colliders: list[Any] = []
-    info: list[dict[str, Any]] = []
-    meshes: list[tuple[str, np.ndarray, np.ndarray]] = []
-    owners: list[int] = []  # the group of each entry of meshes
-    for g, (link, index, members) in enumerate(groups):
-        name = names.get((link, index), "")
-        if members[0].primitive is not None:
-            colliders.append(
-                Collider(link, index, (), members[0].primitive, members[0].origin, name)
-            )
-            continue
-        label = _label(link, index, kind)
-        blocks = [(_link_frame(e), np.asarray(e.faces, dtype=np.int64)) for e in members]
-        body = _element_body(link, index, source, blocks)
-        if method == "fit":
-            from meshcol.analysis.fit import fit_body
-
-            if progress is not None:
-                progress(f"fit: {g + 1}/{len(groups)} collision elements")
-            try:
-                fitted = fit_body(body, **dict(fit_options or {}))
-            except InvalidMeshError as exc:
-                raise InvalidMeshError(f"{label}: {exc.message}", source) from None
-            chosen = fitted[0].primitive_fit
-            if chosen is None:  # auto kept the hull
-                hull = ((fitted[0].hull_vertices, fitted[0].hull_faces),)
-                colliders.append(Collider(link, index, hull, None, np.eye(4), name))
-            else:
-                colliders.append(
-                    Collider(link, index, (), chosen.primitive, chosen.pose, name, fitted=True)
-                )
-            info.append(
-                {"link": link, "index": index, "name": name, "results": fitted, "body": body}
-            )
-        elif method == "hull":
-            if progress is not None:
-                progress(f"hull: {g + 1}/{len(groups)} collision elements")
-            try:
-                if limits is None:
-                    result = convex_hull(body.vertices, max_vertices=max_vertices)
-                else:
-                    result = target_hull(body.vertices, limits, target.length_scale("m"))
-            except InvalidMeshError as exc:
-                raise InvalidMeshError(f"{label}: {exc.message}", source) from None
-            colliders.append(Collider(link, index, ((result.vertices, result.faces),), None))
-            info.append(
-                {"link": link, "index": index, "name": name, "results": result, "body": body}
-            )
-        else:
-            for k, (v, f) in enumerate(blocks):
-                meshes.append((label if len(blocks) == 1 else f"{label} object {k}", v, f))
-                owners.append(g)
-            colliders.append(Collider(link, index, (), None, np.eye(4), name))
-            info.append({"link": link, "index": index, "name": name, "results": [], "body": body})
-            if target is not None:
-                info[-1]["targets"] = []
-    if meshes:
-        try:
-            decompositions = decompose_meshes(
-                meshes, progress=progress, **dict(decompose_options or {})
-            )
-        except MeshcolError as exc:
-            if exc.path is not None:
-                raise
-            raise type(exc)(exc.message, source) from None
-        at = {(c.link, c.index): i for i, c in enumerate(colliders)}
-        rows = {(r["link"], r["index"]): r for r in info}
-        objects = {g: owners.count(g) for g in set(owners)}
-        for g, d, (label, v, f) in zip(owners, decompositions, meshes):
-            link, index, _ = groups[g]
-            if target is not None:
-                d, entry = _element_target(target, d, v, f, objects[g], label, source)
-                rows[(link, index)]["targets"].append(entry)
-            i = at[(link, index)]
-            c = colliders[i]
-            colliders[i] = Collider(link, index, (*c.parts, *d.parts), None, np.eye(4), c.name)
-            rows[(link, index)]["results"].append(d)
-        if target is not None and "max_hulls" in target.limits:
-            for row in info:
-                _element_hull_count(row, int(target.limits["max_hulls"]))
+    kept, rebuilt = _elements(source, kind, groups)
+    report = _Progress(progress, method, len(groups))
+    if method == "fit":
+        made = [_fit(element, fit_options, source, report) for element in rebuilt]
+    elif method == "hull":
+        made = [_hull(element, max_vertices, hull_limits, target, report) for element in rebuilt]
+    else:
+        made = _decompositions(rebuilt, options, run, target, source, progress)
+    by_element = {(c.link, c.index): c for c in kept}
+    by_element.update({(c.link, c.index): c for c, _ in made})
     robot = RobotColliders(
         source=source,
         kind=kind,
-        colliders=tuple(colliders),
+        colliders=tuple(by_element[(link, index)] for link, index, _ in groups),
         link_poses=_link_poses(scene, elements),
         package_paths=dict(robot_options.package_paths),
     )
-    return robot, info
+    return robot, [entry for _, entry in made]
+
+
+def _hull_limits(method: str, target: Any, max_vertices: int | None) -> dict[str, Any] | None:
+    """``hull`` with a target: its limits with ``max_vertices`` applied."""
+    from meshcol.analysis.hull import target_limits
+
+    if target is None or method != "hull":
+        return None
+    return target_limits(target, max_vertices)
+
+
+def _elements(
+    source: str, kind: str, groups: list[tuple[str, int, list[Any]]]
+) -> tuple[list[Any], list[_Element]]:
+    """The colliders of the primitive elements (kept as they are, being exact), and the
+    elements to rebuild."""
+    from meshcol.io.robot_write import Collider
+
+    names = _element_names(source, kind)
+    kept: list[Any] = []
+    rebuilt: list[_Element] = []
+    for number, (link, index, members) in enumerate(groups):
+        name = names.get((link, index), "")
+        first = members[0]
+        if first.primitive is not None:
+            kept.append(Collider(link, index, (), first.primitive, first.origin, name))
+            continue
+        blocks = [(_link_frame(e), np.asarray(e.faces, dtype=np.int64)) for e in members]
+        body = _element_body(link, index, source, blocks)
+        label = _label(link, index, kind)
+        rebuilt.append(_Element(link, index, name, label, number, blocks, body))
+    return kept, rebuilt
+
+
+class _Progress:
+    """``hull: 3/9 collision elements`` as each element starts."""
+
+    def __init__(self, progress: Callable[[str], None] | None, method: str, total: int) -> None:
+        self.progress, self.method, self.total = progress, method, total
+
+    def __call__(self, element: _Element) -> None:
+        if self.progress is not None:
+            self.progress(f"{self.method}: {element.number + 1}/{self.total} collision elements")
+
+
+def _fit(
+    element: _Element, fit_options: Mapping[str, Any] | None, source: str, report: _Progress
+) -> tuple[Any, dict[str, Any]]:
+    """One enclosing primitive for the element (or its hull, when ``auto`` kept it)."""
+    from meshcol.analysis.fit import fit_body
+    from meshcol.io.robot_write import Collider
+
+    report(element)
+    try:
+        fitted = fit_body(element.body, **dict(fit_options or {}))
+    except InvalidMeshError as exc:
+        raise InvalidMeshError(f"{element.label}: {exc.message}", source) from None
+    chosen = fitted[0].primitive_fit
+    link, index, name = element.link, element.index, element.name
+    if chosen is None:  # auto kept the hull
+        hull = ((fitted[0].hull_vertices, fitted[0].hull_faces),)
+        collider = Collider(link, index, hull, None, np.eye(4), name)
+    else:
+        collider = Collider(link, index, (), chosen.primitive, chosen.pose, name, fitted=True)
+    return collider, element.entry(fitted)
+
+
+def _hull(
+    element: _Element,
+    max_vertices: int | None,
+    limits: dict[str, Any] | None,
+    target: Any,
+    report: _Progress,
+) -> tuple[Any, dict[str, Any]]:
+    """The element's hull: within ``max_vertices``, or fitted to the target's limits."""
+    from meshcol.analysis.hull import target_hull
+    from meshcol.collision.hull import convex_hull
+    from meshcol.io.robot_write import Collider
+
+    report(element)
+    vertices = element.body.vertices
+    try:
+        if limits is None:
+            result = convex_hull(vertices, max_vertices=max_vertices)
+        else:
+            result = target_hull(vertices, limits, target.length_scale("m"))
+    except InvalidMeshError as exc:
+        raise InvalidMeshError(f"{element.label}: {exc.message}", element.body.source) from None
+    collider = Collider(element.link, element.index, ((result.vertices, result.faces),), None)
+    return collider, element.entry(result)
+
+
+def _decompositions(
+    rebuilt: list[_Element],
+    options: DecomposeOptions | None,
+    run: RunOptions | None,
+    target: Any,
+    source: str,
+    progress: Callable[[str], None] | None,
+) -> list[tuple[Any, dict[str, Any]]]:
+    """The convex parts of every element: each object of its mesh file decomposed on its
+    own, all of them in one run (:func:`meshcol.decomposition.batch.decompose_meshes`), then
+    fitted to the target."""
+    from meshcol.io.robot_write import Collider
+
+    meshes: list[tuple[str, np.ndarray, np.ndarray]] = []
+    owners: list[int] = []  # the element of each entry of meshes
+    for number, element in enumerate(rebuilt):
+        single = len(element.blocks) == 1
+        for k, (v, f) in enumerate(element.blocks):
+            meshes.append((element.label if single else f"{element.label} object {k}", v, f))
+            owners.append(number)
+    entries = [element.entry([]) for element in rebuilt]
+    parts: list[list[tuple[np.ndarray, np.ndarray]]] = [[] for _ in rebuilt]
+    if target is not None:
+        for entry in entries:
+            entry["targets"] = []
+    decompositions = _decompose_meshes(meshes, options, run, source, progress) if meshes else []
+    objects = {owner: owners.count(owner) for owner in set(owners)}
+    for owner, decomposition, (label, v, f) in zip(owners, decompositions, meshes):
+        if target is not None:
+            decomposition, fitted = _element_target(
+                target, decomposition, v, f, objects[owner], label, source
+            )
+            entries[owner]["targets"].append(fitted)
+        parts[owner].extend(decomposition.parts)
+        entries[owner]["results"].append(decomposition)
+    if meshes and target is not None and "max_hulls" in target.limits:
+        for entry in entries:
+            _element_hull_count(entry, int(target.limits["max_hulls"]))
+    return [
+        (
+            Collider(element.link, element.index, tuple(parts[k]), None, np.eye(4), element.name),
+            entries[k],
+        )
+        for k, element in enumerate(rebuilt)
+    ]
+
+
+def _decompose_meshes(
+    meshes: list[tuple[str, np.ndarray, np.ndarray]],
+    options: DecomposeOptions | None,
+    run: RunOptions | None,
+    source: str,
+    progress: Callable[[str], None] | None,
+) -> list[Any]:
+    """:func:`meshcol.decomposition.batch.decompose_meshes`, its errors naming the robot."""
+    from meshcol.decomposition.batch import decompose_meshes
+
+    try:
+        return decompose_meshes(meshes, options, run, progress=progress)
+    except MeshcolError as exc:
+        if exc.path is not None:
+            raise
+        raise type(exc)(exc.message, source) from None
 
 
 def _element_target(
@@ -259,7 +370,7 @@ def _element_target(
     colliders together stay within ``max_hulls`` whenever ``objects <= max_hulls``."""
     import dataclasses
 
-    from meshcol.decomposition.batch import apply_target
+    from meshcol.decomposition.target import apply_target
 
     share = target
     count = target.limits.get("max_hulls")
@@ -382,11 +493,10 @@ def rebuild_hulls(
 def rebuild_decomposition(
     path: str | os.PathLike[str],
     out_dir: str | os.PathLike[str],
+    options: DecomposeOptions | None = None,
+    run: RunOptions | None = None,
     *,
     to: str | None = None,
-    decompose_options: Mapping[str, Any] | None = None,
-    settings: Mapping[str, Any] | None = None,
-    max_hausdorff: float | None = None,
     reserved: tuple[tuple[str, str], ...] = (),
     progress: Callable[[str], None] | None = None,
     target: Any = None,
@@ -395,10 +505,12 @@ def rebuild_decomposition(
     """``meshcol decompose ROBOT --out-dir OUT``: the convex parts of every collision element
     and the description that uses them.
 
-    With ``target`` the engine aims at the profile (its vertex budget and hull count,
-    :func:`meshcol.decomposition.batch.target_options`) and every element's parts are then
-    fitted to all its limits (:func:`robot_colliders`); each body has ``target`` and
-    ``target_ok`` as :func:`~meshcol.decomposition.batch.decompose_files` bodies do.
+    ``options.max_hausdorff`` is checked on every body (the search does not apply to a
+    robot). With ``target`` the engine aims at the profile (its vertex budget and hull count,
+    :meth:`~meshcol.decomposition.options.DecomposeOptions.aimed_at`) and every element's
+    parts are then fitted to all its limits (:func:`robot_colliders`); each body has
+    ``target`` and ``target_ok`` as :func:`~meshcol.decomposition.batch.decompose_files`
+    bodies do.
 
     Returns
     -------
@@ -406,51 +518,27 @@ def rebuild_decomposition(
         One file entry (the description), one body per rebuilt element (``<link>/<element>``,
         its part files, cache keys and metrics); ``frame="link"`` in the settings.
     """
-    from meshcol.decomposition.batch import DecomposeReport, body_report
-    from meshcol.io.robot_write import description_path, part_files, write_robot
+    from meshcol.decomposition.report import DecomposeReport
+    from meshcol.io.robot_write import description_path, write_robot
 
     start = time.perf_counter()
-    options = dict(decompose_options or {})
-    run_settings = dict(settings or {})
-    if target is not None:
-        from meshcol.decomposition.batch import target_options
-
-        engine_options = dict(options.get("engine_options") or {})
-        options["max_hulls"], options["max_vertices"], options["engine_options"] = target_options(
-            target,
-            options.get("engine", "coacd"),
-            options.get("max_hulls"),
-            options.get("max_vertices"),
-            engine_options,
-        )
-        run_settings.update(target=target.name, target_limits=dict(target.limits))
+    options = options or DecomposeOptions()
+    run = run or RunOptions()
+    settings = _decomposition_settings(options, run, target)
+    aimed = options if target is None else options.aimed_at(target)
     robot, info = robot_colliders(
         path,
         "decompose",
-        decompose_options=options,
+        options=aimed,
+        run=run,
         target=target,
         progress=progress,
         robot_options=robot_options,
     )
     to = to or robot.kind
     write_robot(robot, out_dir, to, protected=reserved)
-    files = part_files(robot) if to in ("urdf", "mjcf") else {}
-    at = {(c.link, c.index): i for i, c in enumerate(robot.colliders)}
-    bodies, rows = [], []
     description = description_path(robot.source, out_dir, to)
-    for entry in info:
-        outputs = files.get(at[(entry["link"], entry["index"])], [os.path.basename(description)])
-        for k, d in enumerate(entry["results"]):
-            name = f"{entry['link']}/{entry['index']}"
-            if len(entry["results"]) > 1:
-                name += f"/{k}"
-            body, row = body_report(robot.source, name, outputs, d, max_hausdorff)
-            if target is not None:
-                body["target"] = entry["targets"][k]
-                body["target_ok"] = body["target"]["met"]
-                row["target_ok"] = body["target"]["met"]
-            bodies.append(body)
-            rows.append(row)
+    bodies, rows = _decomposed_bodies(robot, info, to, description, options, target)
     entry_file = {
         "path": robot.source,
         "status": "ok",
@@ -458,8 +546,61 @@ def rebuild_decomposition(
         "bodies": bodies,
         "seconds": round(time.perf_counter() - start, 3),
     }
-    run_settings.update(out_dir=os.fspath(out_dir), frame="link", description=description, to=to)
-    return DecomposeReport([entry_file], rows, run_settings, "m", "parts", "obj", max_hausdorff)
+    settings.update(out_dir=os.fspath(out_dir), frame="link", description=description, to=to)
+    return DecomposeReport([entry_file], rows, settings, "m", "parts", "obj", options.max_hausdorff)
+
+
+def _decomposition_settings(
+    options: DecomposeOptions, run: RunOptions, target: Any
+) -> dict[str, Any]:
+    """The report's settings of a robot's decomposition: the engine's options as given, the
+    run's, and no search (parts in one layout, as OBJ)."""
+    settings = {
+        **options.engine_settings(),
+        **run.settings(),
+        "layout": "parts",
+        "format": "obj",
+        "max_hausdorff": options.max_hausdorff,
+        "max_parts": None,
+        "search": options.search,
+        "search_steps": None,
+        "search_tolerance": None,
+    }
+    if target is not None:
+        settings.update(target=target.name, target_limits=dict(target.limits))
+    return settings
+
+
+def _decomposed_bodies(
+    robot: Any,
+    info: list[dict[str, Any]],
+    to: str,
+    description: str,
+    options: DecomposeOptions,
+    target: Any,
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """One report body and CSV row per decomposed mesh of every element
+    (``<link>/<element>``, and ``/<object>`` for an element of several objects)."""
+    from meshcol.decomposition.report import body_report
+    from meshcol.io.robot_write import part_files
+
+    files = part_files(robot) if to in ("urdf", "mjcf") else {}
+    at = {(c.link, c.index): i for i, c in enumerate(robot.colliders)}
+    bodies, rows = [], []
+    for entry in info:
+        outputs = files.get(at[(entry["link"], entry["index"])], [os.path.basename(description)])
+        for k, d in enumerate(entry["results"]):
+            name = f"{entry['link']}/{entry['index']}"
+            if len(entry["results"]) > 1:
+                name += f"/{k}"
+            body, row = body_report(robot.source, name, outputs, d, options.max_hausdorff)
+            if target is not None:
+                body["target"] = entry["targets"][k]
+                body["target_ok"] = body["target"]["met"]
+                row["target_ok"] = body["target"]["met"]
+            bodies.append(body)
+            rows.append(row)
+    return bodies, rows
 
 
 def rebuild_fits(

@@ -178,19 +178,37 @@ def check_page(
 def sweep_page(report: Any) -> ReviewPage:
     """The page of ``meshcol sweep``: each moving body's path, its start and end poses, and
     per hit the two bodies at the time of impact and the contact point."""
+    bodies = report.bodies
+    source = report.scene.source
+    page = ReviewPage(
+        "sweep", _title((source and [source]) or [b.name for b in bodies[:3]]), report.scene.units
+    )
+    _add_bodies(page, bodies)
+    _add_motions(page, report)
+    u = _units(report.scene.units)
+    page.info += [
+        ("bodies", str(len(bodies))),
+        ("moving", str(sum(_moving(report)))),
+        ("hits", str(len(report.hits))),
+        ("collider", report.collider),
+        ("tolerance", f"{report.tolerance:g}{u}"),
+    ]
+    _add_hits(page, report)
+    return page
+
+
+def _moving(report: Any) -> Sequence[bool]:
+    return report.moving or tuple(False for _ in report.bodies)
+
+
+def _add_motions(page: ReviewPage, report: Any) -> None:
+    """Each moving body at its end pose, translucent, and the path of its centre."""
     from meshcol.analysis.sweep import _turns
     from meshcol.collision.time_of_impact import interpolate_pose
 
     bodies = report.bodies
-    page = ReviewPage(
-        "sweep",
-        _title((report.scene.source and [report.scene.source]) or [b.name for b in bodies[:3]]),
-        report.scene.units,
-    )
-    _add_bodies(page, bodies)
     page.group("end", "end poses", "#4363d8")
     page.group("paths", "paths (body origins)", "#000000")
-    moving = report.moving or tuple(False for _ in bodies)
     start = np.stack([b.pose for b in bodies]) if bodies else np.zeros((0, 4, 4))
     end = (
         np.stack([b.end_pose if b.end_pose is not None else b.pose for b in bodies])
@@ -199,63 +217,61 @@ def sweep_page(report: Any) -> ReviewPage:
     )
     rotations, pivots = _turns(tuple(bodies), start, end) if bodies else (None, None)
     t = np.linspace(0.0, 1.0, PATH_SAMPLES)
-    for k, body in enumerate(bodies):
-        if not moving[k]:
+    for k, (body, moving) in enumerate(zip(bodies, _moving(report))):
+        if not moving:
             continue
         page.add_mesh(body.vertices, body.faces, end[k], group="end", color="#4363d8", opacity=0.3)
-        kwargs: dict[str, Any] = {}
+        turn: dict[str, Any] = {}
         if rotations is not None and pivots is not None:
-            kwargs = {
+            turn = {
                 "rotation": np.repeat(rotations[k][None], len(t), 0),
                 "pivot": np.repeat(pivots[k][None], len(t), 0),
             }
         poses = interpolate_pose(
-            np.repeat(start[k][None], len(t), 0), np.repeat(end[k][None], len(t), 0), t, **kwargs
+            np.repeat(start[k][None], len(t), 0), np.repeat(end[k][None], len(t), 0), t, **turn
         )
         centre = 0.5 * (body.vertices.min(axis=0) + body.vertices.max(axis=0))
         path = poses[:, :3, :3] @ centre + poses[:, :3, 3]
         page.add_lines(np.stack([path[:-1], path[1:]], axis=1), group="paths", color="#000000")
+
+
+def _if_finite(value: Any) -> Any:
+    """``value`` when it is there and every entry of it is finite, else None."""
+    return value if value is not None and np.all(np.isfinite(value)) else None
+
+
+def _add_hits(page: ReviewPage, report: Any) -> None:
+    """The table of hits, earliest first: choosing one shows both bodies at the time of
+    impact (a group of its own, hidden otherwise) and the contact point and normal."""
     index = {name: i for i, name in enumerate(page.bodies)}
-    by_name = {b.name: b for b in bodies}
-    u = _units(report.scene.units)
-    s = report.summary
-    page.info += [
-        ("bodies", str(len(bodies))),
-        ("moving", str(sum(moving))),
-        ("hits", str(len(report.hits))),
-        ("collider", report.collider),
-        ("tolerance", f"{report.tolerance:g}{u}"),
-    ]
-    del s
+    by_name = {b.name: b for b in report.bodies}
     page.table(
         "Hits (earliest first)", ["body a", "body b", "toi (fraction)", "time (s)", "status"]
     )
-    hits = sorted(report.hits, key=lambda h: h.time_of_impact)
-    for k, h in enumerate(hits[:MAX_ROWS]):
+    hits = sorted(report.hits, key=lambda h: h.time_of_impact)[:MAX_ROWS]
+    for k, h in enumerate(hits):
         group = f"impact{k}"
         page.group(group, f"time-of-impact poses of hit {k}", HIGHLIGHT, visible=False)
         for name, pose in ((h.body_a, h.pose_a), (h.body_b, h.pose_b)):
             body = by_name.get(name)
-            if body is not None and pose is not None and np.all(np.isfinite(pose)):
+            if body is not None and _if_finite(pose) is not None:
                 page.add_mesh(
                     body.vertices, body.faces, pose, group=group, color=HIGHLIGHT, opacity=0.6
                 )
-        point = h.point if h.point is not None and np.all(np.isfinite(h.point)) else None
-        normal = h.normal if h.normal is not None and np.all(np.isfinite(h.normal)) else None
+        point = _if_finite(h.point)
         when = f"toi {h.time_of_impact:.4g}" + ("" if h.time is None else f", t = {h.time:.4g} s")
         page.add_row(
             [h.body_a, h.body_b, h.time_of_impact, h.time, h.status.name.lower()],
             bodies=tuple(index[n] for n in (h.body_a, h.body_b) if n in index),
             points=None if point is None else [point],
-            normal=normal,
+            normal=_if_finite(h.normal),
             label=f"contact at {when}",
             severity="violation" if report.exit_code else "",
             group=group,
         )
     # the impact groups are declared for the rows; the legend keeps only the scene's toggles
-    for k in range(len(hits[:MAX_ROWS])):
+    for k in range(len(hits)):
         page.groups.pop(f"impact{k}", None)
-    return page
 
 
 def _distance_to_parts(
@@ -286,9 +302,6 @@ def decompose_page(
     files); their bodies are read as the run read them, each part of a body on its own and
     at its pose (``robot_options``: as the run read a robot), and the parts from the files
     the run wrote in ``out_dir`` (world frame)."""
-    from meshcol.collision.hull import exact_hull
-    from meshcol.geometry.topology import closed_volume
-    from meshcol.io.mesh_read import load_mesh
     from meshcol.io.scene import iter_inputs
 
     page = ReviewPage("decompose", _title([f["path"] for f in report.files]), report.units)
@@ -305,73 +318,106 @@ def decompose_page(
     }
     for entry in report.files:
         if entry["status"] != "ok":
-            page.notes.append(
-                f"{os.path.basename(entry['path'])}: {entry['status']}: {entry.get('message') or ''}".strip()
-            )
+            message = f"{os.path.basename(entry['path'])}: {entry['status']}: "
+            page.notes.append((message + (entry.get("message") or "")).strip())
             continue
         meshes = bodies_by_source.get(entry["path"]) or {}
         for row in entry["bodies"]:
             body = meshes.get(row["name"])
-            if body is None:
-                continue
-            index = page.add_body(body.name)
-            page.add_mesh(body.vertices, body.faces, body.pose, body=index, name=body.name)
-            parts: list[np.ndarray] = []
-            for output in row["outputs"]:
-                for part_body in load_mesh(os.path.join(out_dir, output), merge=False):
-                    for _name, v, _f in part_body.part_meshes():
-                        parts.append(v @ part_body.pose[:3, :3].T + part_body.pose[:3, 3])
-            hulls = [exact_hull(p) for p in parts]
-            world = body.vertices @ body.pose[:3, :3].T + body.pose[:3, 3]
-            centroids = world[body.faces].mean(axis=1)
-            planes = [h.equations for h in hulls if h.dimension == 3]
-            solid = [k for k, h in enumerate(hulls) if h.dimension == 3]
-            far = np.zeros(len(centroids))
-            nearest = np.full(len(centroids), -1)
-            if planes:
-                far, near_solid = _distance_to_parts(centroids, planes)
-                nearest = np.asarray(solid)[near_solid]
-            largest = float(far.max()) if len(far) else 0.0
-            metrics = row.get("metrics") or {}
-            tolerance = float(metrics.get("tolerance") or 0.0)
-            flagged = (
-                (far > FAR_SHARE * largest) & (far > tolerance)
-                if largest > 0
-                else np.zeros(len(far), bool)
-            )
-            if flagged.any():
-                page.add_mesh(world, body.faces[flagged], group="far", color="#ff0000", body=index)
-            u = _units(report.units)
-            page.info.append(
-                (
-                    body.name,
-                    f"{len(parts)} parts, Hausdorff mesh->parts "
-                    f"{metrics.get('hausdorff_mesh_to_parts', float('nan')):.4g}{u}, parts->mesh "
-                    f"{metrics.get('hausdorff_parts_to_mesh', float('nan')):.4g}{u}, volume ratio "
-                    f"{metrics.get('volume_ratio') or float('nan'):.4g}",
-                )
-            )
-            for k, h in enumerate(hulls):
-                color = PALETTE[k % len(PALETTE)]
-                if h.dimension == 3:
-                    page.add_mesh(
-                        h.vertices, h.faces, group="parts", color=color, opacity=0.45, body=index
-                    )
-                mine = nearest == k
-                share = float(mine.mean()) if len(mine) else 0.0
-                page.add_row(
-                    [
-                        body.name,
-                        k,
-                        len(h.vertices),
-                        closed_volume(h.vertices, h.faces) if h.dimension == 3 else 0.0,
-                        f"{share:.1%}",
-                        float(far[mine].max()) if mine.any() else 0.0,
-                    ],
-                    bodies=(index,),
-                    label=f"{body.name} part {k}",
-                )
+            if body is not None:
+                _add_decomposed_body(page, body, row, out_dir, _units(report.units))
     return page
+
+
+def _add_decomposed_body(page: ReviewPage, body: Body, row: dict, out_dir: str, u: str) -> None:
+    """One body of a decomposition: its mesh, its faces far from the parts, its numbers, and
+    each part (drawn and a row of the table)."""
+    from meshcol.collision.hull import exact_hull
+
+    index = page.add_body(body.name)
+    page.add_mesh(body.vertices, body.faces, body.pose, body=index, name=body.name)
+    hulls = [exact_hull(points) for points in _part_points(row["outputs"], out_dir)]
+    world = body.vertices @ body.pose[:3, :3].T + body.pose[:3, 3]
+    metrics = row.get("metrics") or {}
+    far, nearest, flagged = _far_faces(world[body.faces].mean(axis=1), hulls, metrics)
+    if flagged.any():
+        page.add_mesh(world, body.faces[flagged], group="far", color="#ff0000", body=index)
+    page.info.append(
+        (
+            body.name,
+            f"{len(hulls)} parts, Hausdorff mesh->parts "
+            f"{metrics.get('hausdorff_mesh_to_parts', float('nan')):.4g}{u}, parts->mesh "
+            f"{metrics.get('hausdorff_parts_to_mesh', float('nan')):.4g}{u}, volume ratio "
+            f"{metrics.get('volume_ratio') or float('nan'):.4g}",
+        )
+    )
+    _add_parts(page, body.name, index, hulls, far, nearest)
+
+
+def _part_points(outputs: Sequence[str], out_dir: str) -> list[np.ndarray]:
+    """The vertices (world frame) of every part of the files a body's decomposition wrote."""
+    from meshcol.io.mesh_read import load_mesh
+
+    parts: list[np.ndarray] = []
+    for output in outputs:
+        for part_body in load_mesh(os.path.join(out_dir, output), merge=False):
+            for _name, v, _f in part_body.part_meshes():
+                parts.append(v @ part_body.pose[:3, :3].T + part_body.pose[:3, 3])
+    return parts
+
+
+def _far_faces(
+    centroids: np.ndarray, hulls: Sequence[Any], metrics: dict
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per mesh face (its centroid): its distance outside the parts, its nearest part (-1:
+    none), and whether it is far (over :data:`FAR_SHARE` of the largest distance and over
+    the run's tolerance)."""
+    planes = [h.equations for h in hulls if h.dimension == 3]
+    solid = [k for k, h in enumerate(hulls) if h.dimension == 3]
+    far = np.zeros(len(centroids))
+    nearest = np.full(len(centroids), -1)
+    if planes:
+        far, near_solid = _distance_to_parts(centroids, planes)
+        nearest = np.asarray(solid)[near_solid]
+    largest = float(far.max()) if len(far) else 0.0
+    tolerance = float(metrics.get("tolerance") or 0.0)
+    if largest > 0:
+        flagged = (far > FAR_SHARE * largest) & (far > tolerance)
+    else:
+        flagged = np.zeros(len(far), bool)
+    return far, nearest, flagged
+
+
+def _add_parts(
+    page: ReviewPage,
+    name: str,
+    index: int,
+    hulls: Sequence[Any],
+    far: np.ndarray,
+    nearest: np.ndarray,
+) -> None:
+    """Each part, a colour each, and its row: vertices, volume, the share of the mesh's faces
+    it is nearest to, and their largest distance outside it."""
+    from meshcol.geometry.topology import closed_volume
+
+    for k, h in enumerate(hulls):
+        color = PALETTE[k % len(PALETTE)]
+        if h.dimension == 3:
+            page.add_mesh(h.vertices, h.faces, group="parts", color=color, opacity=0.45, body=index)
+        mine = nearest == k
+        share = float(mine.mean()) if len(mine) else 0.0
+        page.add_row(
+            [
+                name,
+                k,
+                len(h.vertices),
+                closed_volume(h.vertices, h.faces) if h.dimension == 3 else 0.0,
+                f"{share:.1%}",
+                float(far[mine].max()) if mine.any() else 0.0,
+            ],
+            bodies=(index,),
+            label=f"{name} part {k}",
+        )
 
 
 def _findings(page: ReviewPage, body: Body, index: int) -> dict[str, int]:

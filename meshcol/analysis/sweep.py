@@ -8,17 +8,20 @@ statuses and their guarantees are those of :mod:`meshcol.collision.time_of_impac
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from meshcol.analysis.colliders import COLLIDER_KINDS, build_colliders
+from meshcol.analysis.colliders import build_colliders
+from meshcol.analysis.pairs import overlapping_pairs
 from meshcol.errors import MeshcolError, SceneError
 from meshcol.io.report import vector_columns
 from meshcol.io.robot import RobotOptions
 from meshcol.io.scene import as_scene
 from meshcol.types import Body, Scene, TimeOfImpactStatus
+from meshcol.vocabulary import COLLIDER_KINDS
 
 __all__ = ["FAIL_ON", "SweepHit", "SweepReport", "sweep"]
 
@@ -398,15 +401,35 @@ def sweep(
     (:func:`meshcol.collision.narrowphase.intersects_batch`) finds no overlap at the start
     poses nor at the end poses.
     """
-    from meshcol.collision.broadphase import sort_and_sweep
-    from meshcol.collision.narrowphase import intersects_batch
-    from meshcol.collision.time_of_impact import (
-        contact_tolerance,
-        interpolate_pose,
-        swept_aabbs,
-        time_of_impact_batch,
+    scene = _moving_scene(inputs, collider, fail_on, robot_options)
+    colliders = build_colliders(
+        scene.bodies, collider, mesh_parts="triangles", decompose_options=decompose_options
+    )
+    motion = _Motion.of(colliders)
+    lo, hi, tol = _swept_boxes(colliders, motion, scene, tolerance, threads)
+    pairs = _candidates(lo, hi, tol, colliders.part_body, motion.moving)
+    contacts = _Contacts.of(colliders, motion, pairs, tol, max_iterations, threads)
+    hits, separated, candidate_pairs = _first_contacts(colliders, motion, pairs, contacts, scene)
+    return SweepReport(
+        scene=scene,
+        bodies=colliders.bodies,
+        collider=collider,
+        tolerance=tol,
+        hits=tuple(hits),
+        candidate_pairs=candidate_pairs,
+        part_pairs=len(pairs),
+        moving=tuple(bool(m) for m in motion.moving),
+        fail_on=fail_on,
+        warnings=colliders.warnings,
+        separated=tuple(sorted(separated)),
     )
 
+
+def _moving_scene(
+    inputs: Any, collider: str, fail_on: str, robot_options: RobotOptions | None = None
+) -> Scene:
+    """The scene of ``inputs`` (a robot read with ``robot_options``), the options checked
+    first; SceneError when no body moves."""
     if collider not in COLLIDER_KINDS:
         raise ValueError(f"collider must be one of {', '.join(COLLIDER_KINDS)}, got {collider!r}")
     if fail_on not in FAIL_ON:
@@ -416,26 +439,82 @@ def sweep(
         raise SceneError(
             "no body has an end pose or a velocity: nothing moves, nothing to sweep", scene.source
         )
-    colliders = build_colliders(
-        scene.bodies, collider, mesh_parts="triangles", decompose_options=decompose_options
+    return scene
+
+
+@dataclass(frozen=True, eq=False)
+class _Motion:
+    """Every body's and part's motion.
+
+    Attributes
+    ----------
+    moving : (n_bodies,) bool
+    start_body, end_body : (n_bodies, 4, 4) float64
+        World poses of the bodies at the start and the end (the start for a static body).
+    start, end : (n_parts, 4, 4) float64
+        The same of every part.
+    body_rotations, body_pivots : (n_bodies, 3) float64 or None
+        Each body's turn and pivot (:func:`_turns`); None: the core's shortest rotations.
+    rotations, pivots : (n_parts, 3) float64 or None
+        The same per part (parts share their body's frame, so its turn and pivot).
+    """
+
+    moving: np.ndarray
+    start_body: np.ndarray
+    end_body: np.ndarray
+    start: np.ndarray
+    end: np.ndarray
+    body_rotations: np.ndarray | None
+    body_pivots: np.ndarray | None
+    rotations: np.ndarray | None
+    pivots: np.ndarray | None
+
+    @classmethod
+    def of(cls, colliders: Any) -> _Motion:
+        bodies, owner = colliders.bodies, colliders.part_body
+        moving = np.array([_is_moving(b) for b in bodies], dtype=bool)
+        start_body = np.stack([np.asarray(b.pose, dtype=np.float64) for b in bodies])
+        end_body = np.stack(
+            [
+                np.asarray(b.pose if b.end_pose is None else b.end_pose, dtype=np.float64)
+                for b in bodies
+            ]
+        )
+        start, end = colliders.part_poses(), colliders.part_poses(end=True)
+        body_rotations, body_pivots = _turns(
+            bodies, start_body, end_body, colliders.part_offsets is not None
+        )
+        return cls(
+            moving,
+            start_body,
+            end_body,
+            start,
+            end,
+            body_rotations,
+            body_pivots,
+            None if body_rotations is None else body_rotations[owner],
+            None if body_pivots is None else body_pivots[owner],
+        )
+
+
+def _swept_boxes(
+    colliders: Any, motion: _Motion, scene: Scene, tolerance: float | None, threads: int
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """World boxes of every part over its whole motion, and the contact tolerance (given, else
+    :data:`RELATIVE_TOLERANCE` of the boxes' diagonal); MeshcolError naming the first body
+    whose box is not finite."""
+    from meshcol.collision.time_of_impact import contact_tolerance, swept_aabbs
+
+    lo, hi = swept_aabbs(
+        colliders.shapes,
+        motion.start,
+        motion.end,
+        threads,
+        rotations=motion.rotations,
+        pivots=motion.pivots,
     )
-    bodies = colliders.bodies
-    moving = np.array([_is_moving(b) for b in bodies], dtype=bool)
-    cs, owner = colliders.shapes, colliders.part_body
-    start_body = np.stack([np.asarray(b.pose, dtype=np.float64) for b in bodies])
-    end_body = np.stack(
-        [np.asarray(b.pose if b.end_pose is None else b.end_pose, dtype=np.float64) for b in bodies]
-    )
-    start, end = colliders.part_poses(), colliders.part_poses(end=True)
-    # Parts share their body's frame, so they share its turn and pivot.
-    body_rotations, body_pivots = _turns(
-        bodies, start_body, end_body, colliders.part_offsets is not None
-    )
-    rotations = None if body_rotations is None else body_rotations[owner]
-    pivots = None if body_pivots is None else body_pivots[owner]
-    lo, hi = swept_aabbs(cs, start, end, threads, rotations=rotations, pivots=pivots)
+    finite = np.all(np.isfinite(lo), axis=1) & np.all(np.isfinite(hi), axis=1)
     if tolerance is None:
-        finite = np.all(np.isfinite(lo), axis=1) & np.all(np.isfinite(hi), axis=1)
         diagonal = (
             float(np.linalg.norm(hi[finite].max(axis=0) - lo[finite].min(axis=0)))
             if np.any(finite)
@@ -444,107 +523,153 @@ def sweep(
         tol = RELATIVE_TOLERANCE * diagonal if diagonal > 0.0 else contact_tolerance(None)
     else:
         tol = contact_tolerance(tolerance)
-    bad = ~(np.all(np.isfinite(lo), axis=1) & np.all(np.isfinite(hi), axis=1))
-    if np.any(bad):
-        body = bodies[int(owner[np.argmax(bad)])]
+    if not np.all(finite):
+        body = colliders.bodies[int(colliders.part_body[np.argmax(~finite)])]
         raise MeshcolError(
             f"body '{body.name}': invalid shape or pose (NaN/inf, empty or not rigid)",
             body.source or scene.source,
         )
-    pairs = sort_and_sweep(lo - 0.5 * tol, hi + 0.5 * tol, groups=owner)  # no pair in a body
-    if len(pairs):
-        oa, ob = owner[pairs[:, 0]], owner[pairs[:, 1]]
-        keep = moving[oa] | moving[ob]
-        pairs = pairs[keep]
-        # Part pairs ordered as their bodies (a first in the scene).
-        swap = owner[pairs[:, 0]] > owner[pairs[:, 1]]
-        pairs[swap] = pairs[swap][:, ::-1]
-    toi = time_of_impact_batch(
-        cs,
-        start,
-        end,
-        pairs,
-        rotations=rotations,
-        pivots=pivots,
-        tolerance=tol,
-        max_iterations=max_iterations,
-        threads=threads,
-    )
-    at_start = intersects_batch(cs, start, pairs, threads=threads).intersects
-    at_end = intersects_batch(cs, end, pairs, threads=threads).intersects
+    return lo, hi, tol
 
+
+def _candidates(
+    lo: np.ndarray, hi: np.ndarray, tol: float, owner: np.ndarray, moving: np.ndarray
+) -> np.ndarray:
+    """Part pairs of different bodies whose swept boxes come within ``tol``, at least one of
+    them moving (static pairs cannot start touching), each ordered as its bodies (a first in
+    the scene): the broad phase of :func:`meshcol.analysis.pairs.overlapping_pairs`."""
+    pairs = overlapping_pairs(lo, hi, tol, groups=owner)  # no pair within a body
+    if len(pairs):
+        pairs = pairs[moving[owner[pairs[:, 0]]] | moving[owner[pairs[:, 1]]]]
+    return pairs
+
+
+@dataclass(frozen=True, eq=False)
+class _Contacts:
+    """The narrow phase of every candidate part pair: its time of impact, and whether it
+    overlaps at the start and at the end poses."""
+
+    toi: Any  # meshcol.collision.time_of_impact.TimeOfImpactBatch
+    at_start: np.ndarray
+    at_end: np.ndarray
+
+    @classmethod
+    def of(
+        cls,
+        colliders: Any,
+        motion: _Motion,
+        pairs: np.ndarray,
+        tol: float,
+        max_iterations: int | None,
+        threads: int,
+    ) -> _Contacts:
+        from meshcol.collision.narrowphase import intersects_batch
+        from meshcol.collision.time_of_impact import time_of_impact_batch
+
+        shapes = colliders.shapes
+        toi = time_of_impact_batch(
+            shapes,
+            motion.start,
+            motion.end,
+            pairs,
+            rotations=motion.rotations,
+            pivots=motion.pivots,
+            tolerance=tol,
+            max_iterations=max_iterations,
+            threads=threads,
+        )
+        at_start = intersects_batch(shapes, motion.start, pairs, threads=threads).intersects
+        at_end = intersects_batch(shapes, motion.end, pairs, threads=threads).intersects
+        return cls(toi, at_start, at_end)
+
+
+def _first_contacts(
+    colliders: Any, motion: _Motion, pairs: np.ndarray, contacts: _Contacts, scene: Scene
+) -> tuple[list[SweepHit], list[tuple[str, str]], int]:
+    """Per candidate body pair, its first contact: ``(hits sorted by names, the pairs that
+    stay separated, the number of candidate body pairs)``."""
+    owner = colliders.part_body
     body_pairs = owner[pairs] if len(pairs) else np.zeros((0, 2), np.int64)
     groups: dict[tuple[int, int], list[int]] = {}
     for k, (i, j) in enumerate(body_pairs.tolist()):
         groups.setdefault((i, j), []).append(k)
     hits = []
     separated: list[tuple[str, str]] = []
-    fraction = toi.time_of_impact
     for (i, j), members in groups.items():
-        ks = np.asarray(members)
-        status = toi.status[ks]
-        if np.any(status == TimeOfImpactStatus.INVALID_INPUT):
-            raise MeshcolError(
-                f"bodies '{bodies[i].name}' and '{bodies[j].name}': invalid shape or pose",
-                scene.source,
-            )
-        live = ks[status != TimeOfImpactStatus.SEPARATED]
-        if len(live) == 0:
-            separated.append((bodies[i].name, bodies[j].name))
-            continue
-        best = live[np.argmin(fraction[live])]
-        best_status = TimeOfImpactStatus(int(toi.status[best]))
-        if np.any(status == TimeOfImpactStatus.OVERLAPPED_AT_START):
-            best = ks[np.argmax(status == TimeOfImpactStatus.OVERLAPPED_AT_START)]
-            best_status = TimeOfImpactStatus.OVERLAPPED_AT_START
-        elif best_status == TimeOfImpactStatus.HIT:
-            failed = live[toi.status[live] == TimeOfImpactStatus.FAILED]
-            if len(failed) and fraction[failed].min() < fraction[best]:
-                best_status = TimeOfImpactStatus.FAILED
-        t = float(fraction[best])
-        part_a, part_b = colliders.part_names(
-            [i, j], colliders.part_label[[pairs[best, 0], pairs[best, 1]]]
-        )
-        poses = interpolate_pose(
-            np.stack([start_body[i], start_body[j]]),
-            np.stack([end_body[i], end_body[j]]),
-            [t, t],
-            rotation=None if body_rotations is None else body_rotations[[i, j]],
-            pivot=None if body_pivots is None else body_pivots[[i, j]],
-        )
-        tunnelled = (
-            best_status == TimeOfImpactStatus.HIT
-            and not np.any(at_start[ks])
-            and not np.any(at_end[ks])
-        )
-        hits.append(
-            SweepHit(
-                body_a=bodies[i].name,
-                body_b=bodies[j].name,
-                part_a=part_a,
-                part_b=part_b,
-                status=best_status,
-                time_of_impact=t,
-                time=None if scene.duration is None else t * float(scene.duration),
-                point=toi.point[best].copy(),
-                normal=toi.normal[best].copy(),
-                pose_a=poses[0],
-                pose_b=poses[1],
-                tunnelled=bool(tunnelled),
-                iterations=int(toi.iterations[best]),
-            )
-        )
+        hit = _first_contact(colliders, motion, pairs, contacts, scene, (i, j), members)
+        if hit is None:
+            separated.append((colliders.bodies[i].name, colliders.bodies[j].name))
+        else:
+            hits.append(hit)
     hits.sort(key=lambda h: (h.body_a, h.body_b))
-    return SweepReport(
-        scene=scene,
-        bodies=bodies,
-        collider=collider,
-        tolerance=tol,
-        hits=tuple(hits),
-        candidate_pairs=len(groups),
-        part_pairs=len(pairs),
-        moving=tuple(bool(m) for m in moving),
-        fail_on=fail_on,
-        warnings=colliders.warnings,
-        separated=tuple(sorted(separated)),
+    return hits, separated, len(groups)
+
+
+def _first_contact(
+    colliders: Any,
+    motion: _Motion,
+    pairs: np.ndarray,
+    contacts: _Contacts,
+    scene: Scene,
+    body_pair: tuple[int, int],
+    members: Sequence[int],
+) -> SweepHit | None:
+    """The first contact of body pair ``(i, j)`` from its part pairs ``members`` (None when
+    it stays separated): overlapping at the start wins, else the earliest hit, ``FAILED`` when
+    an undecided part pair could come earlier."""
+    from meshcol.collision.time_of_impact import interpolate_pose
+
+    i, j = body_pair
+    bodies, toi = colliders.bodies, contacts.toi
+    ks = np.asarray(members)
+    status = toi.status[ks]
+    if np.any(status == TimeOfImpactStatus.INVALID_INPUT):
+        raise MeshcolError(
+            f"bodies '{bodies[i].name}' and '{bodies[j].name}': invalid shape or pose",
+            scene.source,
+        )
+    live = ks[status != TimeOfImpactStatus.SEPARATED]
+    if len(live) == 0:
+        return None
+    fraction = toi.time_of_impact
+    best = live[np.argmin(fraction[live])]
+    best_status = TimeOfImpactStatus(int(toi.status[best]))
+    if np.any(status == TimeOfImpactStatus.OVERLAPPED_AT_START):
+        best = ks[np.argmax(status == TimeOfImpactStatus.OVERLAPPED_AT_START)]
+        best_status = TimeOfImpactStatus.OVERLAPPED_AT_START
+    elif best_status == TimeOfImpactStatus.HIT:
+        failed = live[toi.status[live] == TimeOfImpactStatus.FAILED]
+        if len(failed) and fraction[failed].min() < fraction[best]:
+            best_status = TimeOfImpactStatus.FAILED
+    t = float(fraction[best])
+    part_a, part_b = colliders.part_names(
+        [i, j], colliders.part_label[[pairs[best, 0], pairs[best, 1]]]
+    )
+    rotations, pivots = motion.body_rotations, motion.body_pivots
+    poses = interpolate_pose(
+        np.stack([motion.start_body[i], motion.start_body[j]]),
+        np.stack([motion.end_body[i], motion.end_body[j]]),
+        [t, t],
+        rotation=None if rotations is None else rotations[[i, j]],
+        pivot=None if pivots is None else pivots[[i, j]],
+    )
+    tunnelled = (
+        best_status == TimeOfImpactStatus.HIT
+        and not np.any(contacts.at_start[ks])
+        and not np.any(contacts.at_end[ks])
+    )
+    return SweepHit(
+        body_a=bodies[i].name,
+        body_b=bodies[j].name,
+        part_a=part_a,
+        part_b=part_b,
+        status=best_status,
+        time_of_impact=t,
+        time=None if scene.duration is None else t * float(scene.duration),
+        point=toi.point[best].copy(),
+        normal=toi.normal[best].copy(),
+        pose_a=poses[0],
+        pose_b=poses[1],
+        tunnelled=bool(tunnelled),
+        iterations=int(toi.iterations[best]),
     )

@@ -7,8 +7,7 @@ from typing import Any
 
 import click
 
-from meshcol.analysis.check import FAIL_ON
-from meshcol.analysis.colliders import COLLIDER_KINDS
+from meshcol.analysis.check_policy import FAIL_ON
 from meshcol.cli.common import (
     FiniteFloat,
     Progress,
@@ -27,19 +26,33 @@ from meshcol.cli.common import (
     verdict,
 )
 from meshcol.io.robot import RobotOptions
+from meshcol.vocabulary import COLLIDER_KINDS
 
 FAIL_ON_CHOICES = tuple(FAIL_ON)
 SHAPE_CHOICES = COLLIDER_KINDS
 
 
 def _parse_fail_on(ctx: click.Context, param: click.Parameter, value: str) -> str:
-    from meshcol.analysis.check import failing_rules
+    from meshcol.analysis.check_policy import failing_rules
     from meshcol.analysis.rules import UnknownRuleError
 
     try:
         failing_rules(value)
     except UnknownRuleError as exc:
         raise click.BadParameter(str(exc), ctx, param) from None
+    return value
+
+
+def _parse_ignore(
+    ctx: click.Context, param: click.Parameter, value: tuple[str, ...]
+) -> tuple[str, ...]:
+    from meshcol.analysis.check_policy import parse_ignore_rule
+
+    for rule in value:
+        try:
+            parse_ignore_rule(rule)
+        except ValueError as exc:
+            raise click.BadParameter(str(exc), ctx, param) from None
     return value
 
 
@@ -84,6 +97,7 @@ def _parse_fail_on(ctx: click.Context, param: click.Parameter, value: str) -> st
     "ignore",
     multiple=True,
     metavar="A:B",
+    callback=_parse_ignore,
     help="Pair designed to touch (globs allowed, either order); repeatable.  [default: none]",
 )
 @click.option(
@@ -123,24 +137,14 @@ def _parse_fail_on(ctx: click.Context, param: click.Parameter, value: str) -> st
 def check(
     inputs: tuple[str, ...],
     shape: str,
-    tolerance: float,
-    clearance: float,
-    fail_on: str,
-    target: Any,
-    ignore: tuple[str, ...],
-    baseline: str | None,
-    threads: int,
     engine: str,
     threshold: float | None,
     cache_dir: str | None,
-    jobs: int,
-    timeout: float | None,
-    executor: str,
-    ray_address: str | None,
     report: str | None,
     fmt: str | None,
     html: str | None,
     robot_options: RobotOptions,
+    **options: Any,
 ) -> None:
     """Check every pair of bodies for contact, clearance and interpenetration.
 
@@ -165,52 +169,49 @@ def check(
       meshcol check props/*.obj --shape decomposed -j 2 --executor ray
     """
     from meshcol.analysis.check import check as run_check
-    from meshcol.analysis.check import parse_ignore_rule
-    from meshcol.cli.common import check_outputs, emit_report, render_html, write_html
+    from meshcol.cli.common import emit_report, render_html, write_html
+    from meshcol.io.outputs import check_outputs
 
-    for rule in ignore:
-        try:
-            parse_ignore_rule(rule)
-        except ValueError as exc:
-            raise click.BadParameter(str(exc), param_hint="'--ignore'") from None
-    check_outputs(inputs, [("--report", report), ("--html", html)], baseline=baseline)
+    check_outputs(
+        files={"--report": report, "--html": html},
+        inputs=inputs,
+        named_inputs={"the --baseline": options["baseline"]},
+    )
     fmt = report_format(report, fmt)
+    decompose_options = _decompose_options(engine, threshold, cache_dir)
     progress = Progress(command="check", heartbeat=True)
     try:
         result = run_check(
             list(inputs),
             progress=progress,
             collider=shape,
-            tolerance=tolerance,
-            clearance=clearance,
-            fail_on=fail_on,
-            target=target,
-            ignore=ignore,
-            baseline=baseline,
-            threads=threads,
-            decompose_options=_decompose_options(engine, threshold, cache_dir),
-            jobs=jobs,
-            timeout=timeout,
-            executor=executor,
-            ray_address=ray_address,
+            decompose_options=decompose_options,
             robot_options=robot_options,
+            **options,
         )
     finally:
         progress.done()
-
-    def review_page() -> Any:
-        from meshcol.analysis.review import check_page  # only with --html
-
-        decompose_options = _decompose_options(engine, threshold, cache_dir)
-        return check_page(result, inputs, shape, decompose_options, robot_options)
-
-    page = render_html(html, review_page)
+    page = render_html(
+        html, lambda: _review_page(result, inputs, shape, decompose_options, robot_options)
+    )
     emit_report(result, fmt, report)
     write_html(html, page)
     for warning in result.warnings:
         click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_table(result), err=True)
     sys.exit(result.exit_code)
+
+
+def _review_page(
+    result: Any,
+    inputs: tuple[str, ...],
+    shape: str,
+    decompose: dict,
+    robot_options: RobotOptions,
+) -> Any:
+    from meshcol.analysis.review import check_page  # only with --html
+
+    return check_page(result, inputs, shape, decompose, robot_options)
 
 
 def _decompose_options(engine: str, threshold: float | None, cache_dir: str | None) -> dict:
@@ -226,44 +227,64 @@ def _decompose_options(engine: str, threshold: float | None, cache_dir: str | No
 TABLE_ROWS = 10
 
 
-def summary_table(result) -> str:
-    """A short human summary: counts per status, the worst pairs, the verdict line."""
+def summary_table(result: Any) -> str:
+    """A short human summary: counts per status, the worst pairs, the failing findings, the
+    verdict line."""
+    failed = [f for f in result.findings if f["failed"]]
+    lines = [*_count_lines(result), *_worst_lines(result), *_finding_lines(failed)]
+    lines.append(verdict("check", result.summary["passed"], _verdict_detail(result, failed)))
+    return "\n".join(lines)
+
+
+def _count_lines(result: Any) -> list[str]:
+    """Bodies, candidate pairs and times; then the count of each status."""
     s = result.summary
-    units = f" {result.units}" if result.units else ""
-    lines = [
+    excluded = f", {s['excluded_pairs']} excluded" if s.get("excluded_pairs") else ""
+    return [
         f"meshcol: check: {plural(s['bodies'], 'body')}, "
-        f"{plural(s['candidate_pairs'], 'candidate pair')}"
-        + (f", {s['excluded_pairs']} excluded" if s.get("excluded_pairs") else "")
-        + f" ({s['seconds']:.3f} s check, {s['load_seconds'] or 0:.3f} s load)",
+        f"{plural(s['candidate_pairs'], 'candidate pair')}{excluded} "
+        f"({s['seconds']:.3f} s check, {s['load_seconds'] or 0:.3f} s load)",
         "  " + "  ".join(f"{name}: {count}" for name, count in s["pairs_by_status"].items()),
     ]
-    touching = sum(count for name, count in s["pairs_by_status"].items() if name != "separated")
+
+
+def _worst_lines(result: Any) -> list[str]:
+    """The most penetrating pairs that are not separated, one line each."""
     worst = result.worst_pairs(TABLE_ROWS)
-    if worst:
-        lines.append(f"  {'status':<12} {'signed dist':>12}  pair")
-        for p in worst:
-            value = "" if p["signed_distance"] is None else f"{p['signed_distance']:.6g}"
-            flag = " (ignored)" if p["ignored"] else (" (FAIL)" if p["violation"] else "")
-            a = p["body_a"] if p["part_a"] is None else f"{p['body_a']}/{p['part_a']}"
-            b = p["body_b"] if p["part_b"] is None else f"{p['body_b']}/{p['part_b']}"
-            lines.append(f"  {p['status']:<12} {value:>12}{units}  {a} <-> {b}{flag}")
-        if touching > len(worst):
-            lines.append(f"  ... {touching - len(worst)} more (every pair is in the report)")
-    settings = result.settings
-    failed = [f for f in result.findings if f["failed"]]
+    if not worst:
+        return []
+    units = f" {result.units}" if result.units else ""
+    lines = [f"  {'status':<12} {'signed dist':>12}  pair"]
+    for p in worst:
+        value = "" if p["signed_distance"] is None else f"{p['signed_distance']:.6g}"
+        flag = " (ignored)" if p["ignored"] else (" (FAIL)" if p["violation"] else "")
+        a = p["body_a"] if p["part_a"] is None else f"{p['body_a']}/{p['part_a']}"
+        b = p["body_b"] if p["part_b"] is None else f"{p['body_b']}/{p['part_b']}"
+        lines.append(f"  {p['status']:<12} {value:>12}{units}  {a} <-> {b}{flag}")
+    by_status = result.summary["pairs_by_status"]
+    touching = sum(count for name, count in by_status.items() if name != "separated")
+    if touching > len(worst):
+        lines.append(f"  ... {touching - len(worst)} more (every pair is in the report)")
+    return lines
+
+
+def _finding_lines(failed: list[dict]) -> list[str]:
+    """One ``meshcol: fail:`` line per failing finding, up to :data:`TABLE_ROWS`."""
+    lines = []
     for f in failed[:TABLE_ROWS]:
         where = f"body '{f['body']}'" + ("" if f["part"] is None else f" part '{f['part']}'")
         lines.append(f"meshcol: fail: {where}: {f['rule']} {f['name']}: {f['message']}")
     if len(failed) > TABLE_ROWS:
         lines.append(f"  ... {len(failed) - TABLE_ROWS} more failing findings (in the report)")
+    return lines
+
+
+def _verdict_detail(result: Any, failed: list[dict]) -> str:
+    s, fail_on = result.summary, result.settings["fail_on"]
     if s["passed"]:
-        detail = f"no pair violates --fail-on {settings['fail_on']}"
-    else:
-        violate = "violates" if s["violations"] == 1 else "violate"
-        detail = f"{plural(s['violations'], 'pair')} {violate} --fail-on {settings['fail_on']}"
-        if failed:
-            detail += (
-                f", {plural(len(failed), 'finding')} {'fails' if len(failed) == 1 else 'fail'}"
-            )
-    lines.append(verdict("check", s["passed"], detail))
-    return "\n".join(lines)
+        return f"no pair violates --fail-on {fail_on}"
+    violate = "violates" if s["violations"] == 1 else "violate"
+    detail = f"{plural(s['violations'], 'pair')} {violate} --fail-on {fail_on}"
+    if failed:
+        detail += f", {plural(len(failed), 'finding')} {'fails' if len(failed) == 1 else 'fail'}"
+    return detail

@@ -6,7 +6,7 @@ import contextlib
 
 import click
 
-from meshcol.analysis.collision_matrix import MATRIX_CLASSES, MATRIX_COLLIDERS
+from meshcol.analysis.collision_matrix import MATRIX_CLASSES
 from meshcol.cli.common import (
     FiniteFloat,
     Progress,
@@ -19,6 +19,7 @@ from meshcol.cli.common import (
     verdict,
 )
 from meshcol.io.robot import RobotOptions
+from meshcol.vocabulary import MATRIX_COLLIDERS
 
 #: Rows of the summary table: the pairs that stay checked, most often colliding first.
 TABLE_ROWS = 10
@@ -117,17 +118,19 @@ def collision_matrix(
       meshcol collision-matrix robot.xml -o robot.srdf --report matrix.json
       meshcol check panda.urdf --srdf panda.srdf
     """
+    from meshcol.analysis.collision_matrix import CollisionMatrixReport
     from meshcol.analysis.collision_matrix import collision_matrix as run
-    from meshcol.cli.common import check_outputs
-    from meshcol.io.report import atomic_path, emit
+    from meshcol.io.formats import formats_for, report_text
+    from meshcol.io.outputs import check_outputs
 
     if output is not None and output == report:
         raise click.BadParameter(
             f"{output!r} is also the --report: give two files", param_hint="'-o' / '--output'"
         )
     srdf_to = "-" if output is None and report != "-" else output
-    check_outputs([robot], [("-o/--output", srdf_to), ("--report", report)])
-    fmt = report_format(report, None, format_option=False, formats=("json", "csv"))
+    check_outputs(files={"-o/--output": srdf_to, "--report": report}, inputs=[robot])
+    formats = formats_for(CollisionMatrixReport)
+    fmt = report_format(report, None, format_option=False, formats=formats)
     decompose: dict = {"engine": engine}
     if cache_dir is not None:
         decompose["cache_dir"] = cache_dir
@@ -148,11 +151,22 @@ def collision_matrix(
     finally:
         progress.done()
 
-    # Both files or neither: each is renamed into place only once both are written.
-    files = [
-        (srdf_to, result.to_srdf()),
-        (report, result.to_csv() if fmt == "csv" else result.to_json()),
-    ]
+    _write_all(
+        [
+            (srdf_to, result.to_srdf()),
+            (report, report_text(result, fmt)),
+        ]
+    )
+    for warning in result.warnings:
+        click.echo(f"meshcol: warning: {warning}", err=True)
+    click.echo(summary_table(result), err=True)
+
+
+def _write_all(files: list[tuple[str | None, str]]) -> None:
+    """Write each ``(path, text)``: both files or neither (each is renamed into place only once
+    both are written), then the ``-`` ones to stdout; None paths are skipped."""
+    from meshcol.io.report import atomic_path, emit
+
     with contextlib.ExitStack() as stack:
         for path, text in files:
             if path in (None, "-"):
@@ -162,9 +176,6 @@ def collision_matrix(
     for path, text in files:
         if path == "-":
             emit(text, None)
-    for warning in result.warnings:
-        click.echo(f"meshcol: warning: {warning}", err=True)
-    click.echo(summary_table(result), err=True)
 
 
 def summary_table(result) -> str:

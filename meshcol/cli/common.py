@@ -8,7 +8,7 @@ import re
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import click
@@ -77,8 +77,8 @@ class FiniteFloat(click.ParamType):
 def report_options(
     default: str = "the report on stdout",
 ) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
-    """Add ``--report FILE`` (``-`` for stdout) and ``--format json|csv|junit|github``
-    (parameter ``fmt``; :data:`meshcol.io.report.REPORT_FORMATS`).
+    """Add ``--report FILE`` (``-`` for stdout) and ``--format FORMAT`` (parameter ``fmt``;
+    the choices and their help from :data:`meshcol.io.formats.FORMATS`).
 
     Parameters
     ----------
@@ -87,16 +87,14 @@ def report_options(
     """
 
     def decorate(func: Callable[..., Any]) -> Callable[..., Any]:
-        from meshcol.io.report import REPORT_FORMATS
+        from meshcol.io.formats import REPORT_FORMATS, describe_formats
 
         func = click.option(
             "--format",
             "fmt",
             type=click.Choice(REPORT_FORMATS),
             default=None,
-            help="Report format: json, csv, junit (JUnit XML for Jenkins and GitHub test "
-            "reporters) or github (workflow-command annotations).  [default: from the --report "
-            "extension (.json, .csv, .xml), else json]",
+            help=f"Report format: {describe_formats()}",
         )(func)
         func = click.option(
             "--report",
@@ -120,9 +118,10 @@ def report_format(
     """The report's format, or a usage error for an unknown ``--report`` extension or a
     ``--format`` that contradicts it (``--report out.txt`` never silently writes JSON).
     ``format_option``: the command has ``option`` (the message suggests it); ``formats``:
-    the formats the command writes (default every one, ``REPORT_FORMATS``)."""
-    from meshcol.io.report import REPORT_FORMATS
-    from meshcol.io.report import report_format as pick
+    the formats the command writes (default every one,
+    :data:`meshcol.io.formats.REPORT_FORMATS`; :func:`meshcol.io.formats.formats_for`)."""
+    from meshcol.io.formats import REPORT_FORMATS
+    from meshcol.io.formats import report_format as pick
 
     formats = tuple(formats or REPORT_FORMATS)
     try:
@@ -150,35 +149,10 @@ def no_report_with_meshes(fmt: str | None, report: str | None, meshes: bool) -> 
 
 def emit_report(result: Any, fmt: str, report: str | None) -> None:
     """Write ``result``'s report in ``fmt`` to ``report`` (stdout for None or ``-``)
-    atomically (:func:`meshcol.io.report.report_text`, :func:`meshcol.io.report.emit`); in the
-    ``github`` format also append the Markdown summary to ``$GITHUB_STEP_SUMMARY`` when set."""
-    from meshcol.io.report import emit, report_text
+    atomically, and what the format does after (:func:`meshcol.io.formats.write_report`)."""
+    from meshcol.io.formats import write_report
 
-    if fmt not in ("junit", "github"):
-        emit(report_text(result, fmt), report)
-        return
-    from meshcol.io.ci import render, write_step_summary
-
-    suite = result.ci_suite()
-    emit(render(suite, fmt), report)
-    if fmt == "github":
-        write_step_summary(suite)
-
-
-def check_outputs(
-    inputs: Iterable[str],
-    outputs: Sequence[tuple[str, str | None]],
-    baseline: str | None = None,
-) -> None:
-    """Exit 2 before anything is written when an output would replace an input (a manifest's
-    mesh files and the baseline count) or two outputs are one file
-    (:func:`meshcol.io.outputs.check_destinations`)."""
-    from meshcol.io.outputs import check_destinations, manifest_inputs
-
-    read = manifest_inputs(inputs)
-    if baseline is not None:
-        read.append(("the --baseline", baseline))
-    check_destinations(read, outputs)
+    write_report(result, fmt, report)
 
 
 _COUNT = re.compile(r"(\d+)/(\d+)")

@@ -2,30 +2,88 @@
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import click
 
 from meshcol.cli.common import (
     FiniteFloat,
+    Progress,
+    emit_report,
     executor_options,
     html_option,
     jobs_option,
     render_html,
+    report_format,
     robot_options,
     target_option,
     timeout_option,
     to_option,
+    verdict,
     write_html,
 )
 from meshcol.decomposition.engines import ENGINES
-from meshcol.decomposition.search import (
+from meshcol.decomposition.options import (
     DEFAULT_SEARCH_STEPS,
     DEFAULT_SEARCH_TOLERANCE,
     SEARCH_MODES,
+    DecomposeOptions,
+    RunOptions,
 )
+from meshcol.io.formats import REPORT_FORMATS, describe_formats
 from meshcol.io.mesh_write import LAYOUTS
 from meshcol.io.robot import RobotOptions
+from meshcol.io.targets import target_names
+
+#: The command's help (``meshcol decompose -h``).
+_HELP = """Split meshes into convex parts for collision (meshcol decompose).
+
+Each body of each INPUT is decomposed (CoACD by default), its parts are made canonical
+(convex hull, sorted by centroid), written to --out-dir and measured: volume of their
+union against the mesh's, Hausdorff distances both ways (how far the mesh surface is from
+the parts, and how far the boundary of their union sticks out of the mesh's solid: cuts
+inside the mesh count 0), and the fraction of the mesh surface they leave uncovered. Results are cached by geometry and parameters, so a second
+run costs milliseconds. Exit 1 when a file failed or timed out, a body misses
+--max-hausdorff or --max-parts, or a part misses a --target limit (each said on stderr with its rule id); exit 2 for unusable input or an output that cannot be written (every output
+location is checked before the work starts, and nothing is written on failure); 130 on
+Ctrl-C, 143 on SIGTERM, with no output, no cache entry and no worker left behind.
+
+A robot description (URDF, or MJCF) is rebuilt: the parts of each collision element's
+meshes (in parallel with --jobs, one mesh a task) go to OUT/<link>_NN.obj in the link's
+frame, and a copy of the description, OUT/<robot>.urdf, has one <collision> element per
+part (visuals, inertials, joints, comments and unknown tags untouched; box, sphere,
+cylinder and capsule elements kept, being exact). --to mjcf writes OUT/<robot>.xml in
+MuJoCo Menagerie's convention; --to glb and --to usd the parts at the joint
+configuration. --layout and --format do not apply. --target fits each mesh object's
+parts (an element of k objects gives each max_hulls // k; more objects than max_hulls
+is an MC106 finding on the element).
+
+Fidelity targets: --max-hausdorff D and/or --max-parts N search each body's CoACD
+threshold (V-HACD: its hull count), bracketing from --threshold then bisecting, and raise
+the resolution when even the finest threshold misses D, for the fewest parts within D (N
+alone: the smallest Hausdorff within N parts). Every step is an ordinary cached
+decomposition (a repeated or resumed run replays the search from the cache) and is in
+the report's "search" of each body, the chosen one marked; a body no step meets fails
+(exit 1), naming its best step. --max-hausdorff used to only check the run's result:
+--search off keeps that.
+
+\b
+Examples:
+  meshcol decompose mug.obj --out-dir collision/
+  meshcol decompose panda.urdf --out-dir panda_parts/ --jobs 2 --to mjcf
+  meshcol decompose props/*.obj -o collision/ --jobs 4 --timeout 120 --report decompose.json
+  meshcol decompose chair.obj -o out/ --layout ucx --max-hulls 16 --max-vertices 32
+  meshcol decompose bottle.obj -o out/ --engine vhacd --layout combined --format glb
+  meshcol decompose snowflake.obj -o out/ --preprocess off --threshold 0.02 -E mcts_iterations=50
+  meshcol decompose lib/*.obj -o out/ --executor ray --ray-address auto --cache-dir s3://b/c
+  meshcol decompose lib/*.obj -o out/ --run-manifest run.json --resume
+  meshcol decompose mug.obj -o out/ --max-hausdorff 0.002 --search-steps 10
+  meshcol decompose mug.obj -o out/ --max-parts 8
+  meshcol decompose props/*.obj -o out/ --target isaac
+"""
 
 
 def _engine_option(
@@ -44,8 +102,6 @@ class _MeshFormat(click.Choice):
     """``--format obj|glb``, which names the report formats' option when given one."""
 
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
-        from meshcol.io.report import REPORT_FORMATS
-
         if isinstance(value, str) and value.lower() in REPORT_FORMATS:
             self.fail(
                 f"{value!r} is a report format: decompose's --format is the parts' mesh "
@@ -57,7 +113,9 @@ class _MeshFormat(click.Choice):
 
 
 @click.command(
-    "decompose", short_help="Convex decompositions of mesh libraries: cached, parallel, measured."
+    "decompose",
+    short_help="Convex decompositions of mesh libraries: cached, parallel, measured.",
+    help=_HELP,
 )
 @click.argument("inputs", nargs=-1, required=True, type=click.Path(dir_okay=False))
 @click.option(
@@ -93,8 +151,8 @@ class _MeshFormat(click.Choice):
     help="Most vertices per part (enforced).  [default: no limit]",
 )
 @target_option(
-    "Fit every body's parts to an engine's limits (meshcol targets: physx, physx-gpu, "
-    "unity, unreal, godot, mujoco, bullet, isaac) or your own profile, still enclosing; "
+    "Fit every body's parts to an engine's limits (meshcol targets: "
+    f"{', '.join(target_names())}) or your own profile, still enclosing; "
     "tighter --max-hulls/--max-vertices win. Exit 1 when a limit cannot be met."
 )
 @click.option(
@@ -156,10 +214,9 @@ class _MeshFormat(click.Choice):
 @click.option(
     "--report-format",
     "report_fmt",
-    type=click.Choice(["json", "csv", "junit", "github"]),
+    type=click.Choice(REPORT_FORMATS),
     default=None,
-    help="Report format: json, csv, junit (JUnit XML) or github (workflow-command "
-    "annotations).  [default: from the --report extension (.json, .csv, .xml), else json]",
+    help=f"Report format: {describe_formats()}",
 )
 @click.option(
     "--max-hausdorff",
@@ -250,61 +307,62 @@ def decompose_command(
     ray_address: str | None,
     robot_options: RobotOptions,
 ) -> None:
-    """Split meshes into convex parts for collision (meshcol decompose).
-
-    Each body of each INPUT is decomposed (CoACD by default), its parts are made canonical
-    (convex hull, sorted by centroid), written to --out-dir and measured: volume of their
-    union against the mesh's, Hausdorff distances both ways (how far the mesh surface is from
-    the parts, and how far the boundary of their union sticks out of the mesh's solid: cuts
-    inside the mesh count 0), and the fraction of the mesh surface they leave uncovered. Results are cached by geometry and parameters, so a second
-    run costs milliseconds. Exit 1 when a file failed or timed out, a body misses
-    --max-hausdorff or --max-parts, or a part misses a --target limit (each said on stderr with its rule id); exit 2 for unusable input or an output that cannot be written (every output
-    location is checked before the work starts, and nothing is written on failure); 130 on
-    Ctrl-C, 143 on SIGTERM, with no output, no cache entry and no worker left behind.
-
-    A robot description (URDF, or MJCF) is rebuilt: the parts of each collision element's
-    meshes (in parallel with --jobs, one mesh a task) go to OUT/<link>_NN.obj in the link's
-    frame, and a copy of the description, OUT/<robot>.urdf, has one <collision> element per
-    part (visuals, inertials, joints, comments and unknown tags untouched; box, sphere,
-    cylinder and capsule elements kept, being exact). --to mjcf writes OUT/<robot>.xml in
-    MuJoCo Menagerie's convention; --to glb and --to usd the parts at the joint
-    configuration. --layout and --format do not apply. --target fits each mesh object's
-    parts (an element of k objects gives each max_hulls // k; more objects than max_hulls
-    is an MC106 finding on the element).
-
-    Fidelity targets: --max-hausdorff D and/or --max-parts N search each body's CoACD
-    threshold (V-HACD: its hull count), bracketing from --threshold then bisecting, and raise
-    the resolution when even the finest threshold misses D, for the fewest parts within D (N
-    alone: the smallest Hausdorff within N parts). Every step is an ordinary cached
-    decomposition (a repeated or resumed run replays the search from the cache) and is in
-    the report's "search" of each body, the chosen one marked; a body no step meets fails
-    (exit 1), naming its best step. --max-hausdorff used to only check the run's result:
-    --search off keeps that.
-
-    \b
-    Examples:
-      meshcol decompose mug.obj --out-dir collision/
-      meshcol decompose panda.urdf --out-dir panda_parts/ --jobs 2 --to mjcf
-      meshcol decompose props/*.obj -o collision/ --jobs 4 --timeout 120 --report decompose.json
-      meshcol decompose chair.obj -o out/ --layout ucx --max-hulls 16 --max-vertices 32
-      meshcol decompose bottle.obj -o out/ --engine vhacd --layout combined --format glb
-      meshcol decompose snowflake.obj -o out/ --preprocess off --threshold 0.02 -E mcts_iterations=50
-      meshcol decompose lib/*.obj -o out/ --executor ray --ray-address auto --cache-dir s3://b/c
-      meshcol decompose lib/*.obj -o out/ --run-manifest run.json --resume
-      meshcol decompose mug.obj -o out/ --max-hausdorff 0.002 --search-steps 10
-      meshcol decompose mug.obj -o out/ --max-parts 8
-      meshcol decompose props/*.obj -o out/ --target isaac
-    """
-    from meshcol.analysis.review import decompose_page
-    from meshcol.cli.common import Progress, emit_report, report_format, verdict
-    from meshcol.decomposition.batch import decompose_files
-    from meshcol.decomposition.cache import default_cache_dir, local_folder
-    from meshcol.decomposition.engines import resolve_params
-    from meshcol.io.inputs import is_manifest
-    from meshcol.io.outputs import check_outputs
-
     # an unknown --report extension stops the run before it starts
     report_fmt = report_format(report, report_fmt, option="--report-format")
+    _check_flags(engine, threshold, layout, fmt, no_cache, cache_dir, resume, run_manifest)
+    options = _options(ctx)
+    run = RunOptions(jobs, timeout, cache_dir, not no_cache, executor, ray_address)
+    outputs = _Outputs(out_dir, layout, fmt, to, report, report_fmt, html, run_manifest, resume)
+    # Every output location, before any work: a run never fails after the work for want of
+    # a folder, and never replaces one of its inputs.
+    _check_destinations(inputs, outputs, run)
+    robot = _robot_input(ctx, inputs, options, run, outputs)
+    progress = Progress(command="decompose", heartbeat=True)
+    try:
+        result = _decompose(
+            inputs, options, run, outputs, target, robot, progress.message, robot_options
+        )
+    finally:
+        progress.done()
+    if robot:
+        _print_robot(result, outputs)
+    else:
+        _print_files(result, outputs, inputs, robot_options)
+    if result.exit_code:
+        ctx.exit(result.exit_code)
+
+
+@dataclass(frozen=True)
+class _Outputs:
+    """What the command writes, and where (its flags as given)."""
+
+    out_dir: str
+    layout: str
+    fmt: str
+    to: str | None
+    report: str | None
+    report_fmt: str
+    html: str | None
+    run_manifest: str | None
+    resume: bool
+
+    @property
+    def report_file(self) -> str | None:
+        """The --report file (None for stdout)."""
+        return None if self.report in (None, "-") else self.report
+
+
+def _check_flags(
+    engine: str,
+    threshold: float | None,
+    layout: str,
+    fmt: str,
+    no_cache: bool,
+    cache_dir: str | None,
+    resume: bool,
+    run_manifest: str | None,
+) -> None:
+    """Usage errors of flags that exclude each other."""
     if layout == "ucx" and fmt == "glb":
         raise click.UsageError("--layout ucx writes OBJ only: drop --format glb")
     if no_cache and cache_dir is not None:
@@ -318,188 +376,184 @@ def decompose_command(
             "--run-manifest needs the cache (it keeps the results of finished files): "
             "drop --no-cache"
         )
+
+
+def _options(ctx: click.Context) -> DecomposeOptions:
+    """The options of the flags named as their fields (``--max-hulls``: ``max_hulls``);
+    what only the engine can refuse is an --engine-option error (the flags' types have
+    checked the rest)."""
+    names = {f.name for f in dataclasses.fields(DecomposeOptions)}
     try:
-        resolve_params(engine, engine_options=engine_options)
+        return DecomposeOptions(**{k: v for k, v in ctx.params.items() if k in names})
     except ValueError as exc:
         raise click.BadParameter(str(exc), param_hint="'--engine-option'") from None
-    searching = search != "off" and (max_hausdorff is not None or max_parts is not None)
 
-    # Every output location, before any work: a run never fails after the work for want of
-    # a folder, and never replaces one of its inputs.
-    report_file = None if report in (None, "-") else report
-    cache_label = "--cache-dir" if cache_dir is not None else "the cache folder"
+
+def _check_destinations(inputs: tuple[str, ...], outputs: _Outputs, run: RunOptions) -> None:
+    """Exit 2 before any work when an output cannot be written or would replace an input
+    (:func:`meshcol.io.outputs.check_outputs`)."""
+    from meshcol.io.outputs import check_outputs
+
+    cache_label = "--cache-dir" if run.cache_dir is not None else "the cache folder"
     check_outputs(
-        files={"--report": report_file, "--html": html, "--run-manifest": run_manifest},
-        folders={
-            "--out-dir": out_dir,
-            cache_label: None if no_cache else local_folder(cache_dir or str(default_cache_dir())),
+        files={
+            "--report": outputs.report_file,
+            "--html": outputs.html,
+            "--run-manifest": outputs.run_manifest,
         },
+        folders={"--out-dir": outputs.out_dir, cache_label: run.local_cache_folder()},
         inputs=inputs,
     )
+
+
+def _robot_input(
+    ctx: click.Context,
+    inputs: tuple[str, ...],
+    options: DecomposeOptions,
+    run: RunOptions,
+    outputs: _Outputs,
+) -> bool:
+    """Whether the input is one robot description; usage errors for the flags that do not
+    apply to one (and for --to without one)."""
     from click.core import ParameterSource
 
     from meshcol.io.inputs import is_robot_file
 
     robot = len(inputs) == 1 and is_robot_file(inputs[0])
-    if to is not None and not robot:
+    if outputs.to is not None and not robot:
         raise click.UsageError("--to needs one robot description (URDF, MJCF)")
-    if robot:
-        for name, flag in (("layout", "--layout"), ("fmt", "--format")):
-            if ctx.get_parameter_source(name) == ParameterSource.COMMANDLINE:
-                raise click.UsageError(
-                    f"{flag} does not apply to a robot description (parts go to "
-                    "OUT/<link>_NN.obj; --to chooses the description's format)"
-                )
-        for flag, given in (
-            ("--executor ray", executor == "ray"),
-            ("--run-manifest", run_manifest is not None),
-            ("--resume", resume),
-        ):
-            if given:
-                raise click.UsageError(
-                    f"{flag} does not apply to a robot description yet (its links run in the "
-                    "local worker pool, --jobs)"
-                )
-        if searching:
+    if not robot:
+        return False
+    for name, flag in (("layout", "--layout"), ("fmt", "--format")):
+        if ctx.get_parameter_source(name) == ParameterSource.COMMANDLINE:
             raise click.UsageError(
-                "the fidelity search (--max-hausdorff, --max-parts) does not apply to a robot "
-                "description yet: add --search off to check --max-hausdorff only"
+                f"{flag} does not apply to a robot description (parts go to "
+                "OUT/<link>_NN.obj; --to chooses the description's format)"
             )
-        if max_parts is not None:
-            raise click.UsageError("--max-parts does not apply to a robot description yet")
-    progress = Progress(command="decompose", heartbeat=True)
-    if robot:
-        from meshcol.analysis.rebuild import rebuild_decomposition
+    for flag, given in (
+        ("--executor ray", run.executor == "ray"),
+        ("--run-manifest", outputs.run_manifest is not None),
+        ("--resume", outputs.resume),
+    ):
+        if given:
+            raise click.UsageError(
+                f"{flag} does not apply to a robot description yet (its links run in the "
+                "local worker pool, --jobs)"
+            )
+    if options.search_target() is not None:
+        raise click.UsageError(
+            "the fidelity search (--max-hausdorff, --max-parts) does not apply to a robot "
+            "description yet: add --search off to check --max-hausdorff only"
+        )
+    if options.max_parts is not None:
+        raise click.UsageError("--max-parts does not apply to a robot description yet")
+    return True
 
-        params = {
-            "engine": engine,
-            "threshold": threshold,
-            "max_hulls": max_hulls,
-            "max_vertices": max_vertices,
-            "preprocess": preprocess,
-            "resolution": resolution,
-            "seed": seed,
-            "engine_options": engine_options,
-        }
-        run = {
-            "jobs": jobs,
-            "timeout": timeout,
-            "cache_dir": cache_dir,
-            "use_cache": not no_cache,
-        }
-        try:
-            result = rebuild_decomposition(
-                inputs[0],
-                out_dir,
-                to=to,
-                decompose_options={**params, **run},
-                settings={
-                    **params,
-                    **run,
-                    "layout": "parts",
-                    "format": "obj",
-                    "max_hausdorff": max_hausdorff,
-                    "max_parts": None,
-                    "search": search,
-                    "search_steps": None,
-                    "search_tolerance": None,
-                },
-                max_hausdorff=max_hausdorff,
-                reserved=(("the --report file", report_file),) if report_file else (),
-                progress=progress.message,
-                target=target,
-                robot_options=robot_options,
-            )
-        finally:
-            progress.done()
-        emit_report(result, report_fmt, report)
-        _echo_target_violations(result)
-        detail = f"{_summary(result)}, written to {result.settings['description']}"
-        click.echo(verdict("decompose", result.exit_code == 0, detail), err=True)
-        if result.exit_code:
-            ctx.exit(result.exit_code)
-        return
-    if not any(is_manifest(p) for p in inputs):
-        progress(f"decompose: 0/{len(inputs)} files")  # what the heartbeat says until one is done
-    try:
-        result = decompose_files(
-            inputs,
-            out_dir,
-            engine=engine,
-            threshold=threshold,
-            max_hulls=max_hulls,
-            max_vertices=max_vertices,
-            preprocess=preprocess,
-            resolution=resolution,
-            seed=seed,
-            engine_options=engine_options,
-            jobs=jobs,
-            timeout=timeout,
-            cache_dir=cache_dir,
-            use_cache=not no_cache,
-            layout=layout,
-            fmt=fmt,
-            max_hausdorff=max_hausdorff,
-            max_parts=max_parts,
-            search=search,
-            search_steps=search_steps,
-            search_tolerance=search_tolerance,
-            progress=progress.message,
-            other_outputs=[p for p in (report_file, html, run_manifest) if p],
-            executor=executor,
-            ray_address=ray_address,
-            run_manifest=run_manifest,
-            resume=resume,
+
+def _decompose(
+    inputs: tuple[str, ...],
+    options: DecomposeOptions,
+    run: RunOptions,
+    outputs: _Outputs,
+    target: Any,
+    robot: bool,
+    progress: Callable[[str], None],
+    robot_options: RobotOptions,
+) -> Any:
+    """The one library call: a robot's rebuild, or the run over files."""
+    from meshcol.analysis.rebuild import rebuild_decomposition
+    from meshcol.decomposition.batch import decompose_files
+
+    report_file = outputs.report_file
+    if robot:
+        return rebuild_decomposition(
+            inputs[0],
+            outputs.out_dir,
+            options,
+            run,
+            to=outputs.to,
+            reserved=(("the --report file", report_file),) if report_file else (),
+            progress=progress,
             target=target,
             robot_options=robot_options,
         )
-    finally:
-        progress.done()
-    page = render_html(html, lambda: decompose_page(result, out_dir, inputs, robot_options))
-    emit_report(result, report_fmt, report)
-    write_html(html, page)
-    for f in result.files:
-        if f["status"] != "ok":
-            click.echo(f"meshcol: {f['status']}: {f['path']}: {f['message']}", err=True)
-        for body in f["bodies"]:
+    return decompose_files(
+        inputs,
+        outputs.out_dir,
+        options,
+        run,
+        layout=outputs.layout,
+        fmt=outputs.fmt,
+        target=target,
+        progress=progress,
+        other_outputs=[p for p in (report_file, outputs.html, outputs.run_manifest) if p],
+        run_manifest=outputs.run_manifest,
+        resume=outputs.resume,
+        robot_options=robot_options,
+    )
+
+
+def _print_robot(result: Any, outputs: _Outputs) -> None:
+    """A robot's report, its target findings and the verdict."""
+    emit_report(result, outputs.report_fmt, outputs.report)
+    _echo_target_violations(result)
+    detail = f"{_summary(result)}, written to {result.settings['description']}"
+    click.echo(verdict("decompose", result.exit_code == 0, detail), err=True)
+
+
+def _print_files(
+    result: Any, outputs: _Outputs, inputs: tuple[str, ...], robot_options: RobotOptions
+) -> None:
+    """The report, the review page, each file that failed and each target missed, and the
+    verdict."""
+    from meshcol.analysis.review import decompose_page
+
+    page = render_html(
+        outputs.html, lambda: decompose_page(result, outputs.out_dir, inputs, robot_options)
+    )
+    emit_report(result, outputs.report_fmt, outputs.report)
+    write_html(outputs.html, page)
+    for entry in result.files:
+        if entry["status"] != "ok":
+            click.echo(f"meshcol: {entry['status']}: {entry['path']}: {entry['message']}", err=True)
+        for body in entry["bodies"]:
             if body["search"] is not None and not body["search"]["met"]:
                 reason = body["search"]["reason"]
                 click.echo(
-                    f"meshcol: target missed: {f['path']}: {body['name']}: {reason}", err=True
+                    f"meshcol: target missed: {entry['path']}: {body['name']}: {reason}", err=True
                 )
     _echo_target_violations(result)
     click.echo(verdict("decompose", result.exit_code == 0, _summary(result)), err=True)
-    if result.exit_code:
-        ctx.exit(result.exit_code)
 
 
-def _echo_target_violations(result) -> None:
+def _echo_target_violations(result: Any) -> None:
     """One stderr line per target limit a body missed, with its rule id."""
-    for f in result.files:
-        for body in f["bodies"]:
-            for v in body.get("target", {}).get("violations", []):
+    for entry in result.files:
+        for body in entry["bodies"]:
+            for violation in body.get("target", {}).get("violations", []):
                 click.echo(
-                    f"meshcol: {v['rule']} {v['rule_name']}: {f['path']}: body '{body['name']}' "
-                    f"{v['message']}",
+                    f"meshcol: {violation['rule']} {violation['rule_name']}: {entry['path']}: "
+                    f"body '{body['name']}' {violation['message']}",
                     err=True,
                 )
 
 
-def _summary(result) -> str:
+def _summary(result: Any) -> str:
     """``3 files, 5 bodies, 42 parts`` and what failed, for the verdict line."""
     from meshcol.cli.common import plural
 
-    s = result.summary
+    counts = result.summary
     text = (
-        f"{plural(s['files'], 'file')}, {plural(s['bodies'], 'body')}, {plural(s['parts'], 'part')}"
+        f"{plural(counts['files'], 'file')}, {plural(counts['bodies'], 'body')}, "
+        f"{plural(counts['parts'], 'part')}"
     )
     for key, what in (("failed", "failed"), ("timeout", "timed out")):
-        if s[key]:
-            text += f", {s[key]} {what}"
-    if s["hausdorff_exceeded"]:
-        text += f", {s['hausdorff_exceeded']} over --max-hausdorff"
-    if s["parts_exceeded"]:
-        text += f", {s['parts_exceeded']} over --max-parts"
-    if s.get("target_missed"):
-        text += f", {s['target_missed']} missing a target limit"
+        if counts[key]:
+            text += f", {counts[key]} {what}"
+    if counts["hausdorff_exceeded"]:
+        text += f", {counts['hausdorff_exceeded']} over --max-hausdorff"
+    if counts["parts_exceeded"]:
+        text += f", {counts['parts_exceeded']} over --max-parts"
+    if counts.get("target_missed"):
+        text += f", {counts['target_missed']} missing a target limit"
     return text

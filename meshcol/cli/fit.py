@@ -6,7 +6,6 @@ import click
 
 from meshcol.analysis.fit import DEFAULT_VOLUME_TOLERANCE, SHAPE_CHOICES
 from meshcol.cli.common import (
-    check_outputs,
     mesh_outputs,
     plural,
     report_format,
@@ -16,6 +15,7 @@ from meshcol.cli.common import (
     verdict,
 )
 from meshcol.cli.mesh_outputs import run_mesh_command, written_to
+from meshcol.io.outputs import check_outputs
 from meshcol.io.robot import RobotOptions
 
 
@@ -107,7 +107,9 @@ def fit(
     from meshcol.analysis.fit import fit as run_fit
     from meshcol.cli.common import emit_report
 
-    check_outputs(inputs, [("-o", output), ("--report", report)])
+    check_outputs(
+        files={"-o": output, "--report": report}, folders={"--out-dir": out_dir}, inputs=inputs
+    )
     fmt = report_format(report, fmt)
     from meshcol.analysis.rebuild import rebuild_fits
 

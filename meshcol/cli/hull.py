@@ -7,7 +7,6 @@ from typing import Any
 import click
 
 from meshcol.cli.common import (
-    check_outputs,
     html_option,
     mesh_outputs,
     plural,
@@ -21,7 +20,9 @@ from meshcol.cli.common import (
     write_html,
 )
 from meshcol.cli.mesh_outputs import run_mesh_command, written_to
+from meshcol.io.outputs import check_outputs
 from meshcol.io.robot import RobotOptions
+from meshcol.io.targets import target_names
 
 
 @click.command(
@@ -53,8 +54,8 @@ from meshcol.io.robot import RobotOptions
     "input.  [default: no budget, the exact hull]",
 )
 @target_option(
-    "Fit every hull to an engine's limits (meshcol targets lists them: physx, "
-    "physx-gpu, unity, unreal, godot, mujoco, bullet, isaac) or to your own profile; "
+    "Fit every hull to an engine's limits (meshcol targets lists them: "
+    f"{', '.join(target_names())}) or to your own profile; "
     "a tighter --max-vertices still wins. Exit 1 when a limit cannot be met."
 )
 @to_option("the hulls")
@@ -124,7 +125,11 @@ def hull(
     from meshcol.analysis.review import hull_page
     from meshcol.cli.common import emit_report
 
-    check_outputs(inputs, [("-o", output), ("--report", report), ("--html", html)])
+    check_outputs(
+        files={"-o": output, "--report": report, "--html": html},
+        folders={"--out-dir": out_dir},
+        inputs=inputs,
+    )
     fmt = report_format(report, fmt)
     from meshcol.analysis.rebuild import rebuild_hulls
 

@@ -2,17 +2,17 @@
 
 from __future__ import annotations
 
+import functools
 import sys
+from collections.abc import Callable
 from typing import Any
 
 import click
 
-from meshcol.analysis.colliders import COLLIDER_KINDS
 from meshcol.cli.common import (
     FiniteFloat,
     Progress,
     cache_dir_option,
-    check_outputs,
     engine_option,
     executor_options,
     html_option,
@@ -27,7 +27,9 @@ from meshcol.cli.common import (
     verdict,
     write_html,
 )
+from meshcol.io.outputs import check_outputs
 from meshcol.io.robot import RobotOptions
+from meshcol.vocabulary import COLLIDER_KINDS
 
 
 def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) -> tuple[str, ...]:
@@ -39,6 +41,43 @@ def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) 
         return select_rules(value, "inspect")
     except UnknownRuleError as exc:
         raise click.BadParameter(str(exc), ctx, param) from None
+
+
+def _physics_options(command: Callable[..., None]) -> Callable[..., None]:
+    """Hand the physics rules' options (--shape, the tolerances, --engine, --cache-dir,
+    --target) to ``command`` as one :class:`~meshcol.analysis.physics.PhysicsOptions`,
+    ``physics`` (validated by the library)."""
+
+    @functools.wraps(command)
+    def with_physics(
+        *,
+        shape: str,
+        volume_ratio: float,
+        com_offset: float,
+        inertia_ratio: float,
+        min_relative_volume: float,
+        min_volume: float,
+        engine: str,
+        cache_dir: str | None,
+        target: Any,
+        **others: Any,
+    ) -> None:
+        from meshcol.analysis.physics import PhysicsOptions
+
+        physics = PhysicsOptions(
+            shape=shape,
+            volume_ratio=volume_ratio,
+            com_offset=com_offset,
+            inertia_ratio=inertia_ratio,
+            min_relative_volume=min_relative_volume,
+            min_volume=min_volume,
+            decompose_options={"engine": engine}
+            | ({} if cache_dir is None else {"cache_dir": cache_dir}),
+            target=target,
+        )
+        command(physics=physics, **others)
+
+    return with_physics
 
 
 @click.command(
@@ -118,20 +157,13 @@ def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) 
 )
 @robot_options()
 @html_option
+@_physics_options
 def inspect(
     inputs: tuple[str, ...],
     report: str | None,
     fmt: str | None,
     fail_on: tuple[str, ...],
-    target: Any,
-    shape: str,
-    volume_ratio: float,
-    com_offset: float,
-    inertia_ratio: float,
-    min_relative_volume: float,
-    min_volume: float,
-    engine: str,
-    cache_dir: str | None,
+    physics: Any,
     jobs: int,
     timeout: float | None,
     executor: str,
@@ -181,26 +213,14 @@ def inspect(
       meshcol inspect robot.urdf --fail-on MC301,MC204,collider-volume-mismatch
       meshcol inspect lib/*.glb -j 2 --timeout 60 --executor ray --report health.json
     """
-    from meshcol.analysis.inspect import PhysicsOptions
     from meshcol.analysis.inspect import inspect as run_inspect
     from meshcol.analysis.review import inspect_page
     from meshcol.cli.common import emit_report
 
-    check_outputs(inputs, [("--report", report), ("--html", html)])
+    check_outputs(files={"--report": report, "--html": html}, inputs=inputs)
     fmt = report_format(report, fmt)
     progress = Progress(command="inspect", heartbeat=True)
     try:
-        physics = PhysicsOptions(
-            shape=shape,
-            volume_ratio=volume_ratio,
-            com_offset=com_offset,
-            inertia_ratio=inertia_ratio,
-            min_relative_volume=min_relative_volume,
-            min_volume=min_volume,
-            decompose_options={"engine": engine}
-            | ({} if cache_dir is None else {"cache_dir": cache_dir}),
-            target=target,
-        )
         result = run_inspect(
             list(inputs),
             fail_on=fail_on,
@@ -217,29 +237,7 @@ def inspect(
     page = render_html(html, lambda: inspect_page(result, inputs, robot_options))
     emit_report(result, fmt, report)
     write_html(html, page)
-
-    _print_table(result.bodies)
-    for warning in result.warnings:
-        click.echo(f"meshcol: warning: {warning}", err=True)
-    sources = {r.name: r.source for r in result.inspections}
-    for found in result.failed_findings:
-        where = f"body '{found.body}'" + ("" if found.part is None else f" part '{found.part}'")
-        source = sources.get(f"{found.body}/{found.part}") or sources.get(found.body)
-        click.echo(
-            f"meshcol: fail: {source + ': ' if source else ''}{where}: {found.rule} "
-            f"{found.name}: {found.message}",
-            err=True,
-        )
-    for error in result.errors:
-        body = "" if error["body"] is None else f"body '{error['body']}': "
-        click.echo(f"meshcol: error: {error['source']}: {body}{error['message']}", err=True)
-    s = result.summary
-    detail = f"{plural(s['bodies'], 'body')}, {s['with_findings']} with findings"
-    if result.fail_on:
-        detail += f", {s['failed']} failing --fail-on {','.join(result.fail_on)}"
-    if result.errors:
-        detail += f", {plural(len(result.errors), 'input')} not inspected"
-    click.echo(verdict("inspect", result.exit_code == 0, detail), err=True)
+    click.echo("\n".join(summary_lines(result)), err=True)
     sys.exit(result.exit_code)
 
 
@@ -247,14 +245,39 @@ def inspect(
 TABLE_ROWS = 20
 
 
-def _print_table(rows: list[dict]) -> None:
-    """A short human summary on stderr."""
+def summary_lines(result: Any) -> list[str]:
+    """What a run says on stderr: a short table of the bodies, the warnings, each failing
+    finding and each input not inspected, then the verdict."""
+    lines = _table(result.bodies)
+    lines += [f"meshcol: warning: {warning}" for warning in result.warnings]
+    for found in result.failed_findings:
+        where = f"body '{found.body}'" + ("" if found.part is None else f" part '{found.part}'")
+        source = result.source_of(found)
+        lines.append(
+            f"meshcol: fail: {source + ': ' if source else ''}{where}: {found.rule} "
+            f"{found.name}: {found.message}"
+        )
+    for error in result.errors:
+        body = "" if error["body"] is None else f"body '{error['body']}': "
+        lines.append(f"meshcol: error: {error['source']}: {body}{error['message']}")
+    counts = result.summary
+    detail = f"{plural(counts['bodies'], 'body')}, {counts['with_findings']} with findings"
+    if result.fail_on:
+        detail += f", {counts['failed']} failing --fail-on {','.join(result.fail_on)}"
+    if result.errors:
+        detail += f", {plural(len(result.errors), 'input')} not inspected"
+    lines.append(verdict("inspect", result.exit_code == 0, detail))
+    return lines
+
+
+def _table(rows: list[dict]) -> list[str]:
+    """A short human summary of the bodies (none when there are none)."""
     header = ("body", "faces", "closed", "volume", "size", "units", "findings")
-    lines = [header]
+    cells = [header]
     for row in rows[:TABLE_ROWS]:
         volume = "-" if row["volume"] is None else f"{row['volume']:.4g}"
         size = " x ".join(f"{s:.3g}" for s in row["size"])
-        lines.append(
+        cells.append(
             (
                 row["name"],
                 str(row["faces"]),
@@ -265,11 +288,13 @@ def _print_table(rows: list[dict]) -> None:
                 ", ".join(row["findings"]) or "ok",
             )
         )
-    if len(lines) == 1:
-        return
-    widths = [max(len(line[i]) for line in lines) for i in range(len(header) - 1)]
-    for line in lines:
-        cells = [cell.ljust(width) for cell, width in zip(line, widths)]
-        click.echo("  ".join([*cells, line[-1]]).rstrip(), err=True)
+    if len(cells) == 1:
+        return []
+    widths = [max(len(line[i]) for line in cells) for i in range(len(header) - 1)]
+    lines = [
+        "  ".join([*(cell.ljust(width) for cell, width in zip(line, widths)), line[-1]]).rstrip()
+        for line in cells
+    ]
     if len(rows) > TABLE_ROWS:
-        click.echo(f"... {len(rows) - TABLE_ROWS} more (every body is in the report)", err=True)
+        lines.append(f"... {len(rows) - TABLE_ROWS} more (every body is in the report)")
+    return lines

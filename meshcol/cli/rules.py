@@ -35,7 +35,7 @@ def rules(rule_keys: tuple[str, ...], report: str | None, fmt: str | None) -> No
       meshcol rules --format json        the registry as JSON
     """
     from meshcol.analysis.rules import UnknownRuleError, rules_report
-    from meshcol.io.report import emit, report_text
+    from meshcol.io.formats import formats_for, write_report
 
     try:
         result = rules_report(rule_keys)
@@ -44,9 +44,9 @@ def rules(rule_keys: tuple[str, ...], report: str | None, fmt: str | None) -> No
     if report is None and fmt is None:
         click.echo(_full(result.rules) if rule_keys else _table(result.rules))
         sys.exit(0)
-    # The registry has no findings to annotate: JSON or CSV only (junit, github: exit 2).
-    fmt = report_format(report, fmt, formats=("json", "csv"))
-    emit(report_text(result, fmt), report)
+    # The registry has no findings to annotate (no CI suite): JSON or CSV only.
+    fmt = report_format(report, fmt, formats=formats_for(type(result)))
+    write_report(result, fmt, report)
     sys.exit(0)
 
 

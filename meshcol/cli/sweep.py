@@ -6,13 +6,11 @@ import sys
 
 import click
 
-from meshcol.analysis.colliders import COLLIDER_KINDS
 from meshcol.analysis.sweep import FAIL_ON
 from meshcol.cli.common import (
     FiniteFloat,
     Progress,
     cache_dir_option,
-    check_outputs,
     html_option,
     plural,
     render_html,
@@ -23,7 +21,9 @@ from meshcol.cli.common import (
     verdict,
     write_html,
 )
+from meshcol.io.outputs import check_outputs
 from meshcol.io.robot import RobotOptions
+from meshcol.vocabulary import COLLIDER_KINDS
 
 
 @click.command(
@@ -101,7 +101,7 @@ def sweep(
     from meshcol.analysis.sweep import sweep as run_sweep
     from meshcol.cli.common import emit_report
 
-    check_outputs([manifest], [("--report", report), ("--html", html)])
+    check_outputs(files={"--report": report, "--html": html}, inputs=[manifest])
     fmt = report_format(report, fmt)
     decompose_options = {} if cache_dir is None else {"cache_dir": cache_dir}
     progress = Progress(command="sweep", heartbeat=True)  # the library reports no steps

@@ -3,16 +3,31 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from meshcol.errors import MissingDependencyError
 
-__all__ = ["ENGINES", "engine_version", "prepare_engine", "resolve_params", "run_engine"]
+if TYPE_CHECKING:
+    from meshcol.decomposition.options import DecomposeOptions
+
+__all__ = [
+    "ENGINES",
+    "HULL_COUNT_PARAMETER",
+    "check_options",
+    "engine_version",
+    "prepare_engine",
+    "resolve_params",
+    "run_engine",
+]
 
 
 ENGINES = ("coacd", "vhacd")
+
+#: The engine parameter of each engine's hull count (a target's ``max_hulls`` goes there, so
+#: that meshcol merges any excess parts, enclosing, rather than drop them).
+HULL_COUNT_PARAMETER = {"coacd": "max_convex_hull", "vhacd": "max_convex_hulls"}
 
 
 # Engine parameters meshcol exposes, with their defaults (None = the engine's default or
@@ -64,97 +79,101 @@ def engine_version(engine: str) -> str:
         ) from None
 
 
-def resolve_params(
-    engine: str = "coacd",
-    *,
-    threshold: float | None = None,
-    max_hulls: int | None = None,
-    max_vertices: int | None = None,
-    preprocess: str = "auto",
-    resolution: int | None = None,
-    seed: int = 0,
-    closed: bool = True,
-    engine_options: Mapping[str, Any] | None = None,
-) -> dict[str, Any]:
-    """The engine's full parameter set for the common options.
+def check_options(options: DecomposeOptions) -> None:
+    """Raise ValueError for what the engine cannot take: an unknown engine, a budget out of
+    range, an unknown preprocessing mode, an unknown or ill-typed engine option, a threshold
+    out of (0, 1] or given to V-HACD. :class:`DecomposeOptions` calls it once, when made."""
+    if options.engine not in ENGINES:
+        raise ValueError(f"unknown engine {options.engine!r}: choose one of {', '.join(ENGINES)}")
+    if options.max_vertices is not None and options.max_vertices < 4:
+        raise ValueError(f"max_vertices must be at least 4, got {options.max_vertices}")
+    if options.max_hulls is not None and options.max_hulls < 1:
+        raise ValueError(f"max_hulls must be at least 1, got {options.max_hulls}")
+    if options.preprocess not in ("auto", "on", "off"):
+        raise ValueError(f"preprocess must be auto, on or off, got {options.preprocess!r}")
+    given = _engine_options(options.engine, options.engine_options)
+    if options.engine == "coacd":
+        threshold = options.threshold
+        if threshold is None:
+            threshold = given.get("threshold", _COACD_DEFAULTS["threshold"])
+        if not 0.0 < float(threshold) <= 1.0:
+            raise ValueError(f"threshold must be in (0, 1], got {float(threshold)}")
+    elif options.threshold is not None:
+        raise ValueError("threshold applies to the coacd engine only")
+
+
+def resolve_params(options: DecomposeOptions, *, closed: bool = True) -> dict[str, Any]:
+    """The engine's full parameter set (the cache key's) for ``options``.
 
     Parameters
     ----------
-    engine : {"coacd", "vhacd"}
-    threshold : float, optional
-        CoACD concavity threshold (CoACD only).
-    max_hulls : int, optional
-        Most parts per body.
-    max_vertices : int, optional
-        Most vertices per part (at least 4). Passed to the engine and enforced afterwards.
-    preprocess : {"auto", "on", "off"}
-        CoACD manifold preprocessing; ``auto`` turns it on exactly when the mesh is not a
-        closed, consistently oriented manifold (``closed``).
-    resolution : int, optional
-        CoACD sampling resolution or V-HACD voxel count.
-    seed : int
-        CoACD random seed (V-HACD is deterministic when run synchronously).
+    options : DecomposeOptions
+        Valid by construction (:func:`check_options`).
     closed : bool
         Whether the canonical input is a closed manifold (for ``preprocess="auto"``).
-    engine_options : mapping, optional
-        Any other parameter of the engine, by its snake_case name (see ``_COACD_DEFAULTS``,
-        ``_VHACD_DEFAULTS``).
 
-    Raises
-    ------
-    ValueError
-        Unknown engine, unknown or ill-typed option.
+    Returns
+    -------
+    dict
+        Every parameter of ``_COACD_DEFAULTS`` or ``_VHACD_DEFAULTS``, by the engine's
+        snake_case name: the defaults, then the engine options, then the common options.
     """
-    engine_options = dict(engine_options or {})
-    if engine not in ENGINES:
-        raise ValueError(f"unknown engine {engine!r}: choose one of {', '.join(ENGINES)}")
-    if max_vertices is not None and max_vertices < 4:
-        raise ValueError(f"max_vertices must be at least 4, got {max_vertices}")
-    if max_hulls is not None and max_hulls < 1:
-        raise ValueError(f"max_hulls must be at least 1, got {max_hulls}")
-    if preprocess not in ("auto", "on", "off"):
-        raise ValueError(f"preprocess must be auto, on or off, got {preprocess!r}")
+    defaults = _COACD_DEFAULTS if options.engine == "coacd" else _VHACD_DEFAULTS
+    params = {**defaults, **_engine_options(options.engine, options.engine_options)}
+    if options.engine == "coacd":
+        return _coacd_params(params, options, closed)
+    return _vhacd_params(params, options)
+
+
+def _engine_options(engine: str, engine_options: Mapping[str, Any]) -> dict[str, Any]:
+    """The engine options coerced to their parameters' types; ValueError for an unknown or
+    ill-typed one."""
     defaults = _COACD_DEFAULTS if engine == "coacd" else _VHACD_DEFAULTS
     unknown = sorted(set(engine_options) - set(defaults))
     if unknown:
         raise ValueError(
             f"unknown {engine} option {unknown[0]!r}: known options are {', '.join(sorted(defaults))}"
         )
-    params = dict(defaults)
+    coerced = {}
     for key, value in engine_options.items():
         kind = type(defaults[key])
         try:
-            params[key] = _coerce(value, kind)
+            coerced[key] = _coerce(value, kind)
         except (TypeError, ValueError):
             raise ValueError(
                 f"{engine} option {key!r} must be {kind.__name__}, got {value!r}"
             ) from None
-    if engine == "coacd":
-        if threshold is not None:
-            params["threshold"] = float(threshold)
-        if not 0.0 < params["threshold"] <= 1.0:
-            raise ValueError(f"threshold must be in (0, 1], got {params['threshold']}")
-        if max_hulls is not None:
-            params["max_convex_hull"] = int(max_hulls)
-        if max_vertices is not None:
-            params["decimate"] = True
-            params["max_ch_vertex"] = int(max_vertices)
-        if resolution is not None:
-            params["resolution"] = int(resolution)
-        params["seed"] = int(seed)
-        mode = preprocess if "preprocess_mode" not in engine_options else params["preprocess_mode"]
-        if mode == "auto":
-            mode = "off" if closed else "on"
-        params["preprocess_mode"] = mode
-    else:
-        if threshold is not None:
-            raise ValueError("threshold applies to the coacd engine only")
-        if max_hulls is not None:
-            params["max_convex_hulls"] = int(max_hulls)
-        if max_vertices is not None:
-            params["max_num_vertices_per_ch"] = int(max_vertices)
-        if resolution is not None:
-            params["resolution"] = int(resolution)
+    return coerced
+
+
+def _coacd_params(
+    params: dict[str, Any], options: DecomposeOptions, closed: bool
+) -> dict[str, Any]:
+    if options.threshold is not None:
+        params["threshold"] = float(options.threshold)
+    if options.max_hulls is not None:
+        params["max_convex_hull"] = int(options.max_hulls)
+    if options.max_vertices is not None:
+        params["decimate"] = True
+        params["max_ch_vertex"] = int(options.max_vertices)
+    if options.resolution is not None:
+        params["resolution"] = int(options.resolution)
+    params["seed"] = int(options.seed)
+    given = "preprocess_mode" in options.engine_options
+    mode = params["preprocess_mode"] if given else options.preprocess
+    if mode == "auto":
+        mode = "off" if closed else "on"
+    params["preprocess_mode"] = mode
+    return params
+
+
+def _vhacd_params(params: dict[str, Any], options: DecomposeOptions) -> dict[str, Any]:
+    if options.max_hulls is not None:
+        params["max_convex_hulls"] = int(options.max_hulls)
+    if options.max_vertices is not None:
+        params["max_num_vertices_per_ch"] = int(options.max_vertices)
+    if options.resolution is not None:
+        params["resolution"] = int(options.resolution)
     return params
 
 

@@ -284,52 +284,16 @@ def fidelity(
 
     Volumes: manifold3d (hull of each part, boolean union; the mesh itself when manifold).
     """
-    import manifold3d
-
-    from meshcol.collision.mesh_query import MeshSet
-
     vertices = np.asarray(vertices, dtype=np.float64)
     faces = np.asarray(faces, dtype=np.int64)
     tol = coverage_tolerance(vertices, tolerance)
-    diag = float(np.linalg.norm(np.ptp(vertices, axis=0)))
     rng = np.random.default_rng(seed)
-    corners = _at_most(vertices, samples, rng)
-    mesh_points = np.concatenate([sample_surface(vertices, faces, samples, rng), corners])
-    to_parts = points_to_parts(mesh_points, parts, threads=threads)
-
-    areas = np.array([triangle_areas(v, f).sum() for v, f in parts])
-    counts = np.maximum(1, np.round(samples * areas / areas.sum()).astype(np.int64))
-    part_vertices = np.concatenate([v for v, _ in parts])
-    vertex_owner = np.repeat(np.arange(len(parts)), [len(v) for v, _ in parts])
-    kept = _at_most(np.arange(len(part_vertices)), samples, rng)
-    part_points = np.concatenate(
-        [
-            *(sample_surface(v, f, int(c), rng) for (v, f), c in zip(parts, counts)),
-            part_vertices[kept],
-        ]
-    )
-    owner = np.concatenate([np.repeat(np.arange(len(parts)), counts), vertex_owner[kept]])
-    if len(parts) > 1:
-        shared = (
-            points_to_parts(part_points, parts, owner, threads=threads)
-            <= SHARED_FACE_FRACTION * diag
-        )
-        part_points = part_points[~shared]
+    # Mesh points first, then the parts': one generator, in this order, for every result.
+    to_parts = points_to_parts(_mesh_points(vertices, faces, samples, rng), parts, threads=threads)
+    diagonal = float(np.linalg.norm(np.ptp(vertices, axis=0)))
+    boundary = _boundary_points(parts, samples, rng, diagonal, threads)
     solid = is_closed_manifold(faces)
-    if not len(part_points):
-        parts_to_mesh = 0.0
-    elif solid:
-        meshes = MeshSet.from_arrays([(vertices, faces)], threads=1)
-        parts_to_mesh = farthest_outside_solid(part_points, meshes, threads=threads)
-    else:
-        parts_to_mesh = float(
-            points_to_triangles(part_points, vertices, faces, threads=threads).max()
-        )
-
-    # The parts are convex hulls already (closed, outward): their meshes are the solids.
-    solids = [_manifold(v, f) for v, f in parts]
-    union = manifold3d.Manifold.batch_boolean(solids, manifold3d.OpType.Add)
-    union_volume = float(union.volume())
+    union_volume = _union_volume(parts)
     mesh_volume = _manifold_volume(vertices, faces)
     return Fidelity(
         parts=len(parts),
@@ -338,12 +302,75 @@ def fidelity(
         union_volume=union_volume,
         volume_ratio=None if not mesh_volume else union_volume / mesh_volume,
         hausdorff_mesh_to_parts=float(to_parts.max()),
-        hausdorff_parts_to_mesh=parts_to_mesh,
+        hausdorff_parts_to_mesh=_farthest_from_mesh(boundary, vertices, faces, solid, threads),
         uncovered_fraction=float((to_parts > tol).mean()),
         tolerance=tol,
         samples=samples,
         mesh_is_solid=solid,
     )
+
+
+def _mesh_points(
+    vertices: np.ndarray, faces: np.ndarray, samples: int, rng: np.random.Generator
+) -> np.ndarray:
+    """``samples`` points of the mesh surface and at most ``samples`` of its vertices."""
+    corners = _at_most(vertices, samples, rng)
+    return np.concatenate([sample_surface(vertices, faces, samples, rng), corners])
+
+
+def _boundary_points(
+    parts: tuple[tuple[np.ndarray, np.ndarray], ...],
+    samples: int,
+    rng: np.random.Generator,
+    diagonal: float,
+    threads: int,
+) -> np.ndarray:
+    """Points of the parts' surfaces (``samples`` by area, and at most ``samples`` of their
+    vertices) on the boundary of their union: those within ``SHARED_FACE_FRACTION`` of the
+    diagonal of another part are not."""
+    areas = np.array([triangle_areas(v, f).sum() for v, f in parts])
+    counts = np.maximum(1, np.round(samples * areas / areas.sum()).astype(np.int64))
+    part_vertices = np.concatenate([v for v, _ in parts])
+    vertex_owner = np.repeat(np.arange(len(parts)), [len(v) for v, _ in parts])
+    kept = _at_most(np.arange(len(part_vertices)), samples, rng)
+    points = np.concatenate(
+        [
+            *(sample_surface(v, f, int(c), rng) for (v, f), c in zip(parts, counts)),
+            part_vertices[kept],
+        ]
+    )
+    if len(parts) == 1:
+        return points
+    owner = np.concatenate([np.repeat(np.arange(len(parts)), counts), vertex_owner[kept]])
+    shared = (
+        points_to_parts(points, parts, owner, threads=threads) <= SHARED_FACE_FRACTION * diagonal
+    )
+    return points[~shared]
+
+
+def _farthest_from_mesh(
+    points: np.ndarray, vertices: np.ndarray, faces: np.ndarray, solid: bool, threads: int
+) -> float:
+    """The largest distance of ``points`` to the mesh's solid (0 inside) when it is one,
+    else to its surface; 0 without points."""
+    from meshcol.collision.mesh_query import MeshSet
+
+    if not len(points):
+        return 0.0
+    if solid:
+        meshes = MeshSet.from_arrays([(vertices, faces)], threads=1)
+        return farthest_outside_solid(points, meshes, threads=threads)
+    return float(points_to_triangles(points, vertices, faces, threads=threads).max())
+
+
+def _union_volume(parts: tuple[tuple[np.ndarray, np.ndarray], ...]) -> float:
+    """Volume of the union of the parts (manifold3d's boolean union)."""
+    import manifold3d
+
+    # The parts are convex hulls already (closed, outward): their meshes are the solids.
+    solids = [_manifold(v, f) for v, f in parts]
+    union = manifold3d.Manifold.batch_boolean(solids, manifold3d.OpType.Add)
+    return float(union.volume())
 
 
 def _at_most(rows: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:

@@ -30,12 +30,9 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
 __all__ = [
     "TaskOutcome",
     "WorkerPool",
-    "decompose_task",
     "run_tasks",
     "worker_env",
 ]
@@ -378,67 +375,95 @@ class WorkerPool:
         source = enumerate(tasks)
         more = True
         pending: deque[tuple[int, Any]] = deque()
-        idle, busy, timeout = self._idle, self._busy, self.timeout
         while True:
-            while pending and len(busy) < self.jobs:
-                worker = idle.pop() if idle else self._new_worker()
-                worker.assign(*pending.popleft())
-                busy.append(worker)
+            self._assign(pending)
             if more:
-                item = next(source, None)
-                if item is None:
-                    more = False
-                else:
-                    pending.append(item)
-                if not busy:
+                more = self._read_ahead(source, pending)
+                if not self._busy:
                     continue
                 wait_for: float | None = 0.0  # poll, then read on
-            elif not busy:
+            elif not self._busy:
                 return
             else:
                 wait_for = None
+            yield from self._collect(self._wait(wait_for))
+
+    def _assign(self, pending: deque[tuple[int, Any]]) -> None:
+        """Give pending tasks to idle workers (new ones up to ``jobs``)."""
+        while pending and len(self._busy) < self.jobs:
+            worker = self._idle.pop() if self._idle else self._new_worker()
+            worker.assign(*pending.popleft())
+            self._busy.append(worker)
+
+    @staticmethod
+    def _read_ahead(source: Iterator[tuple[int, Any]], pending: deque[tuple[int, Any]]) -> bool:
+        """Read one more task; False when there are no more."""
+        item = next(source, None)
+        if item is None:
+            return False
+        pending.append(item)
+        return True
+
+    def _wait(self, wait_for: float | None) -> set[Any]:
+        """The busy workers' pipes and sentinels that are ready within ``wait_for`` seconds
+        (None: until one is), at most until the first task's timeout."""
+        if self.timeout is not None:
             now = time.perf_counter()
-            if timeout is not None:
-                limit = max(0.0, min(w.started + timeout for w in busy) - now)
-                wait_for = limit if wait_for is None else min(wait_for, limit)
-            handles: list[Any] = [w.conn for w in busy] + [w.process.sentinel for w in busy]
-            ready = set(multiprocessing.connection.wait(handles, wait_for))
-            now = time.perf_counter()
-            for worker in list(busy):
-                seconds = now - worker.started
-                if worker.conn in ready:
-                    try:
-                        index, status, value = worker.conn.recv()
-                    except (EOFError, OSError):
-                        ready.add(worker.process.sentinel)
-                    else:
-                        busy.remove(worker)
-                        idle.append(worker)
-                        if status == "ok":
-                            yield TaskOutcome(index, status, value, seconds=seconds)
-                        else:
-                            yield TaskOutcome(index, status, message=value, seconds=seconds)
-                        continue
-                if worker.process.sentinel in ready:
-                    busy.remove(worker)
-                    worker.process.join()
-                    code = worker.process.exitcode
-                    worker.conn.close()
-                    yield TaskOutcome(
-                        worker.task_index,
-                        "failed",
-                        message=f"worker process died (exit code {code})",
-                        seconds=seconds,
-                    )
-                elif timeout is not None and seconds >= timeout:
-                    busy.remove(worker)
-                    worker.kill()
-                    yield TaskOutcome(
-                        worker.task_index,
-                        "timeout",
-                        message=f"timed out after {timeout:g} s",
-                        seconds=seconds,
-                    )
+            limit = max(0.0, min(w.started + self.timeout for w in self._busy) - now)
+            wait_for = limit if wait_for is None else min(wait_for, limit)
+        handles: list[Any] = [w.conn for w in self._busy]
+        handles += [w.process.sentinel for w in self._busy]
+        return set(multiprocessing.connection.wait(handles, wait_for))
+
+    def _collect(self, ready: set[Any]) -> Iterator[TaskOutcome]:
+        """The outcome of every busy worker that answered, died or ran out of time."""
+        now = time.perf_counter()
+        for worker in list(self._busy):
+            seconds = now - worker.started
+            if worker.conn in ready:
+                outcome = self._receive(worker, seconds)
+                if outcome is not None:
+                    yield outcome
+                    continue
+                ready.add(worker.process.sentinel)
+            if worker.process.sentinel in ready:
+                yield self._died(worker, seconds)
+            elif self.timeout is not None and seconds >= self.timeout:
+                yield self._timed_out(worker, seconds)
+
+    def _receive(self, worker: _Worker, seconds: float) -> TaskOutcome | None:
+        """A worker's answer (the worker is idle again), or None when its pipe broke."""
+        try:
+            index, status, value = worker.conn.recv()
+        except (EOFError, OSError):
+            return None
+        self._busy.remove(worker)
+        self._idle.append(worker)
+        if status == "ok":
+            return TaskOutcome(index, status, value, seconds=seconds)
+        return TaskOutcome(index, status, message=value, seconds=seconds)
+
+    def _died(self, worker: _Worker, seconds: float) -> TaskOutcome:
+        self._busy.remove(worker)
+        worker.process.join()
+        code = worker.process.exitcode
+        worker.conn.close()
+        return TaskOutcome(
+            worker.task_index,
+            "failed",
+            message=f"worker process died (exit code {code})",
+            seconds=seconds,
+        )
+
+    def _timed_out(self, worker: _Worker, seconds: float) -> TaskOutcome:
+        self._busy.remove(worker)
+        worker.kill()
+        return TaskOutcome(
+            worker.task_index,
+            "timeout",
+            message=f"timed out after {self.timeout:g} s",
+            seconds=seconds,
+        )
 
     def close(self, *, interrupted: bool = False) -> None:
         """Stop every worker: a busy one, or one that never had a task (it may still be
@@ -501,24 +526,3 @@ def run_tasks(
         return
     with WorkerPool(fn, jobs, timeout=timeout, threads_per_job=threads_per_job) as workers:
         yield from workers.run(tasks)
-
-
-# --------------------------------------------------------------------------------------------
-# writers
-
-
-def decompose_task(
-    task: tuple[str, list[tuple[str, np.ndarray, np.ndarray]], dict[str, Any]],
-) -> list[tuple[str, Any]]:
-    """Worker entry: decompose every body of one file. ``task`` = (path, bodies, options).
-
-    Reads the cache but never writes it (``write_cache=False``): the caller stores results.
-    """
-    from meshcol.decomposition.decompose import decompose
-
-    _, bodies, options = task
-    # The parent stores what comes back: a worker killed mid-task never leaves an entry.
-    return [
-        (name, decompose((vertices, faces), write_cache=False, **options))
-        for name, vertices, faces in bodies
-    ]

@@ -45,8 +45,14 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
+from meshcol.decomposition.options import (
+    DEFAULT_SEARCH_STEPS,
+    DEFAULT_SEARCH_TOLERANCE,
+    SEARCH_MODES,
+    DecomposeOptions,
+    SearchTarget,
+    search_target,
+)
 from meshcol.decomposition.result import Decomposition
 
 __all__ = [
@@ -62,16 +68,10 @@ __all__ = [
     "run_search",
     "search_decomposition",
     "search_target",
-    "search_task",
+    "store_steps",
     "within_max_hausdorff",
 ]
 
-#: ``--search``: ``auto`` searches when a target is given; ``off`` only checks the target.
-SEARCH_MODES = ("auto", "off")
-#: Engine calls (cached or not) a body's search may make (``--search-steps``).
-DEFAULT_SEARCH_STEPS = 8
-#: The search stops when its threshold bracket is this narrow: ``hi / lo <= 1 + tolerance``.
-DEFAULT_SEARCH_TOLERANCE = 0.1
 #: CoACD's concavity thresholds searched (its documented range is 0.01 to 1).
 COACD_THRESHOLD_RANGE = (0.01, 1.0)
 #: Thresholds of the search are rounded to this many significant digits.
@@ -80,74 +80,6 @@ SIGNIFICANT_DIGITS = 3
 RESOLUTION_FACTOR = 2
 #: Most resolution raises per search.
 RESOLUTION_RAISES = 2
-
-
-@dataclass(frozen=True)
-class SearchTarget:
-    """What a search must meet, and how long it may look.
-
-    Attributes
-    ----------
-    max_hausdorff : float or None
-        Largest Hausdorff distance, either way, in the input's units.
-    max_parts : int or None
-        Most parts.
-    max_steps : int
-        Most steps (decompositions, cached or not) per body.
-    tolerance : float
-        Relative width of the threshold bracket at which bisection stops.
-    """
-
-    max_hausdorff: float | None = None
-    max_parts: int | None = None
-    max_steps: int = DEFAULT_SEARCH_STEPS
-    tolerance: float = DEFAULT_SEARCH_TOLERANCE
-
-    def __post_init__(self) -> None:
-        if self.max_hausdorff is None and self.max_parts is None:
-            raise ValueError("a search needs max_hausdorff or max_parts")
-        if self.max_hausdorff is not None and not (
-            math.isfinite(self.max_hausdorff) and self.max_hausdorff >= 0
-        ):
-            raise ValueError(f"max_hausdorff must be finite and >= 0, got {self.max_hausdorff}")
-        if self.max_parts is not None and self.max_parts < 1:
-            raise ValueError(f"max_parts must be at least 1, got {self.max_parts}")
-        if self.max_steps < 1:
-            raise ValueError(f"search steps must be at least 1, got {self.max_steps}")
-        if not (math.isfinite(self.tolerance) and self.tolerance > 0):
-            raise ValueError(f"search tolerance must be finite and > 0, got {self.tolerance}")
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "max_hausdorff": self.max_hausdorff,
-            "max_parts": self.max_parts,
-            "max_steps": self.max_steps,
-            "tolerance": self.tolerance,
-        }
-
-
-def search_target(
-    max_hausdorff: float | None,
-    max_parts: int | None,
-    search: str = "auto",
-    steps: int = DEFAULT_SEARCH_STEPS,
-    tolerance: float = DEFAULT_SEARCH_TOLERANCE,
-) -> SearchTarget | None:
-    """The target of a run's search, or None when it does not search (``search="off"``, or
-    neither limit given: the limits are then only checked).
-
-    Raises
-    ------
-    ValueError
-        An unknown ``search`` mode, or a limit, step count or tolerance out of range.
-    """
-    if search not in SEARCH_MODES:
-        raise ValueError(f"search must be one of {', '.join(SEARCH_MODES)}, got {search!r}")
-    if max_parts is not None and max_parts < 1:
-        raise ValueError(f"max_parts must be at least 1, got {max_parts}")
-    if search == "off" or (max_hausdorff is None and max_parts is None):
-        return None
-    return SearchTarget(max_hausdorff, max_parts, int(steps), float(tolerance))
 
 
 def meets_target(
@@ -387,110 +319,133 @@ def run_search(
     SearchResult
     """
     axis = _axis(engine, params, target.max_parts)
-    resolution = int(params["resolution"])
-    steps: list[SearchStep] = []
-    # With a Hausdorff limit, the predicate that brackets is "within D" (true at the fine end,
-    # the fewest parts at its coarse edge); with a part limit alone, "at most N parts" (true at
-    # the coarse end, the best fidelity at its fine edge).
-    by_hausdorff = target.max_hausdorff is not None
+    search = _Search(target, axis, int(params["resolution"]), evaluate, max_hulls, clock)
+    stopped = search.run()
+    return _result(target, axis, search.steps, stopped)
 
-    def step(x: float, res: int) -> SearchStep:
-        threshold = x if axis.name == "threshold" else None
-        hulls = max_hulls if axis.name == "threshold" else int(-x)
-        started = clock()
-        d = evaluate(threshold, hulls, res)
-        metrics = {} if d.metrics is None else d.metrics.to_dict()
-        s = SearchStep(
-            len(steps),
-            threshold,
-            hulls,
-            res,
-            d,
-            clock() - started,
-            meets_target(metrics, target.max_hausdorff, target.max_parts),
-        )
-        steps.append(s)
-        return s
 
-    def good(s: SearchStep) -> bool:
-        m = s.decomposition.metrics
-        if by_hausdorff:
-            return m is not None and meets_target(m.to_dict(), target.max_hausdorff, None)
-        return s.parts <= (target.max_parts or 0)
+class _Search:
+    """One body's search in progress: its steps, and the stages that make them (bracket the
+    edge of the target on the axis, bisect the bracket, raise the resolution)."""
 
-    def budget() -> bool:
-        return len(steps) < target.max_steps
+    def __init__(
+        self,
+        target: SearchTarget,
+        axis: _Axis,
+        resolution: int,
+        evaluate: Callable[[float | None, int | None, int], Decomposition],
+        max_hulls: int | None,
+        clock: Callable[[], float],
+    ) -> None:
+        self.target, self.axis, self.resolution = target, axis, resolution
+        self.evaluate, self.max_hulls, self.clock = evaluate, max_hulls, clock
+        self.steps: list[SearchStep] = []
+        # With a Hausdorff limit, the predicate that brackets is "within D" (true at the fine
+        # end, the fewest parts at its coarse edge); with a part limit alone, "at most N
+        # parts" (true at the coarse end, the best fidelity at its fine edge).
+        self.by_hausdorff = target.max_hausdorff is not None
 
-    def done_early(s: SearchStep) -> bool:
-        # One part within D: nothing coarser can have fewer.
-        return by_hausdorff and good(s) and s.parts == 1
+    def run(self) -> str:
+        """Every stage, from the start of the axis: why the search stopped."""
+        x, raises = self.axis.start, 0
+        while True:
+            stopped, good_x, bad_x = self._bracket(x)
+            if stopped == "one part":
+                return stopped
+            if good_x is not None and bad_x is not None:
+                return self._bisect(good_x, bad_x)
+            if not self._can_raise(stopped, good_x, raises):
+                return stopped or "range"
+            # Even the finest value of the axis misses D: sample finer, search again.
+            raises += 1
+            self.resolution *= RESOLUTION_FACTOR
+            x = self.axis.finest
 
-    stopped = "range"
-    x = axis.start
-    raises = 0
-    while True:
-        # Bracket at this resolution: the last good and the last bad position on the axis.
-        s = step(x, resolution)
-        if done_early(s):
-            stopped = "one part"
-            break
-        good_x: float | None = x if good(s) else None
-        bad_x: float | None = None if good(s) else x
+    def _bracket(self, x: float) -> tuple[str | None, float | None, float | None]:
+        """Steps from ``x`` towards the unknown edge until the last good and the last bad
+        position are known: (why it stopped first, or None; good position; bad position)."""
+        s = self._step(x)
+        if self._done_early(s):
+            return "one part", None, None
+        good_x: float | None = x if self._good(s) else None
+        bad_x: float | None = None if self._good(s) else x
         while good_x is None or bad_x is None:
-            if not budget():
-                stopped = "steps"
-                break
+            if not self._has_budget():
+                return "steps", good_x, bad_x
             # Towards the unknown edge: from good, coarser with D (finer with N alone); from
             # bad, the other way.
-            toward_coarse = (good_x is not None) == by_hausdorff
-            nxt = axis.coarser(x) if toward_coarse else axis.finer(x)
-            if nxt is None:
-                stopped = "range"
-                break
-            x = nxt
-            s = step(x, resolution)
-            if done_early(s):
-                stopped = "one part"
-                break
-            if good(s):
+            toward_coarse = (good_x is not None) == self.by_hausdorff
+            following = self.axis.coarser(x) if toward_coarse else self.axis.finer(x)
+            if following is None:
+                return "range", good_x, bad_x
+            x = following
+            s = self._step(x)
+            if self._done_early(s):
+                return "one part", good_x, bad_x
+            if self._good(s):
                 good_x = x
             else:
                 bad_x = x
-        if stopped == "one part":
-            break
-        if good_x is not None and bad_x is not None:
-            while True:
-                lo, hi = sorted((good_x, bad_x))
-                mid = axis.between(lo, hi, target.tolerance)
-                if mid is None:
-                    stopped = "tolerance"
-                    break
-                if not budget():
-                    stopped = "steps"
-                    break
-                s = step(mid, resolution)
-                if done_early(s):
-                    stopped = "one part"
-                    break
-                if good(s):
-                    good_x = mid
-                else:
-                    bad_x = mid
-            break
-        if (
+        return None, good_x, bad_x
+
+    def _bisect(self, good_x: float, bad_x: float) -> str:
+        """Bisect the bracket until it is within the tolerance: why it stopped."""
+        while True:
+            lo, hi = sorted((good_x, bad_x))
+            mid = self.axis.between(lo, hi, self.target.tolerance)
+            if mid is None:
+                return "tolerance"
+            if not self._has_budget():
+                return "steps"
+            s = self._step(mid)
+            if self._done_early(s):
+                return "one part"
+            if self._good(s):
+                good_x = mid
+            else:
+                bad_x = mid
+
+    def _can_raise(self, stopped: str | None, good_x: float | None, raises: int) -> bool:
+        """Whether to raise the resolution: nothing on the axis met D, the axis ran out, and
+        raises and steps are left."""
+        return (
             good_x is None
-            and by_hausdorff
+            and self.by_hausdorff
             and stopped == "range"
             and raises < RESOLUTION_RAISES
-            and budget()
-        ):
-            # Even the finest value of the axis misses D: sample finer, search again.
-            raises += 1
-            resolution *= RESOLUTION_FACTOR
-            x = axis.finest
-            continue
-        break
-    return _result(target, axis, steps, stopped)
+            and self._has_budget()
+        )
+
+    def _step(self, x: float) -> SearchStep:
+        threshold = x if self.axis.name == "threshold" else None
+        hulls = self.max_hulls if self.axis.name == "threshold" else int(-x)
+        started = self.clock()
+        d = self.evaluate(threshold, hulls, self.resolution)
+        metrics = {} if d.metrics is None else d.metrics.to_dict()
+        s = SearchStep(
+            len(self.steps),
+            threshold,
+            hulls,
+            self.resolution,
+            d,
+            self.clock() - started,
+            meets_target(metrics, self.target.max_hausdorff, self.target.max_parts),
+        )
+        self.steps.append(s)
+        return s
+
+    def _good(self, s: SearchStep) -> bool:
+        m = s.decomposition.metrics
+        if self.by_hausdorff:
+            return m is not None and meets_target(m.to_dict(), self.target.max_hausdorff, None)
+        return s.parts <= (self.target.max_parts or 0)
+
+    def _has_budget(self) -> bool:
+        return len(self.steps) < self.target.max_steps
+
+    def _done_early(self, s: SearchStep) -> bool:
+        # One part within D: nothing coarser can have fewer.
+        return self.by_hausdorff and self._good(s) and s.parts == 1
 
 
 def _result(
@@ -558,67 +513,52 @@ def _stopped(stopped: str, target: SearchTarget) -> str:
 # entry points
 
 
-def _split(options: Mapping[str, Any]) -> tuple[str, dict[str, Any], dict[str, Any]]:
-    """(engine, the run's engine options, everything else) of a task's options."""
-    engine_keys = (
-        "threshold",
-        "max_hulls",
-        "max_vertices",
-        "preprocess",
-        "resolution",
-        "seed",
-        "engine_options",
-    )
-    rest = dict(options)
-    engine = rest.pop("engine", "coacd")
-    engine_params = {k: rest.pop(k) for k in engine_keys if k in rest}
-    return engine, engine_params, rest
-
-
-def _start_params(
-    engine: str, vertices: np.ndarray, faces: np.ndarray, engine_params: Mapping[str, Any]
-) -> dict[str, Any]:
-    from meshcol.decomposition.engines import resolve_params
-    from meshcol.geometry.topology import is_closed_manifold
-
-    return resolve_params(engine, closed=is_closed_manifold(faces), **engine_params)
-
-
 def _search(
     mesh: Any,
     target: SearchTarget,
-    options: Mapping[str, Any],
-    decomposition: Callable[..., Decomposition | None],
+    options: DecomposeOptions,
+    decomposition: Callable[[Any, DecomposeOptions], Decomposition | None],
 ) -> SearchResult:
+    """The search of ``mesh`` with ``decomposition(mesh, step options)`` making each step."""
     from meshcol.decomposition.canonical import as_mesh_arrays, canonical_geometry
+    from meshcol.decomposition.engines import resolve_params
+    from meshcol.geometry.topology import is_closed_manifold
 
     vertices, faces = canonical_geometry(*as_mesh_arrays(mesh))
-    engine, engine_params, rest = _split(options)
-    params = _start_params(engine, vertices, faces, engine_params)
+    params = resolve_params(options, closed=is_closed_manifold(faces))
 
     def evaluate(threshold: float | None, hulls: int | None, resolution: int) -> Decomposition:
-        step_params = {**engine_params, "resolution": resolution, "max_hulls": hulls}
-        if engine == "coacd":
-            step_params["threshold"] = threshold
-        d = decomposition((vertices, faces), engine=engine, **step_params, **rest)
+        d = decomposition((vertices, faces), options.step(threshold, hulls, resolution))
         if d is None or d.metrics is None:
             raise _Miss
         return d
 
-    return run_search(target, engine, params, evaluate, max_hulls=engine_params.get("max_hulls"))
+    return run_search(target, options.engine, params, evaluate, max_hulls=options.max_hulls)
 
 
-def search_decomposition(mesh: Any, target: SearchTarget, **options: Any) -> SearchResult:
+def search_decomposition(
+    mesh: Any,
+    target: SearchTarget,
+    options: DecomposeOptions | None = None,
+    *,
+    cache_dir: str | None = None,
+    use_cache: bool = True,
+    write_cache: bool = True,
+    threads: int = 0,
+    **fields: Any,
+) -> SearchResult:
     """Search the engine's parameters for the fewest parts of ``mesh`` that meet ``target``.
 
     Parameters
     ----------
     mesh : Body, trimesh.Trimesh or ((n, 3) float, (m, 3) int)
     target : SearchTarget
-    **options
-        As :func:`meshcol.decomposition.decompose.decompose` (``engine``, ``threshold`` and
-        ``resolution``: the start of the search, ``max_hulls``, ``seed``, ``cache_dir``,
-        ``use_cache``, ``write_cache``, ``threads``...); ``metrics`` is always on.
+    options : DecomposeOptions, optional
+        The run's options: ``threshold`` and ``resolution`` are the start of the search.
+    cache_dir, use_cache, write_cache, threads
+        As :func:`meshcol.decomposition.decompose.decompose` (metrics are always measured).
+    **fields
+        Fields of :class:`DecomposeOptions`, which replace those of ``options``.
 
     Returns
     -------
@@ -627,37 +567,38 @@ def search_decomposition(mesh: Any, target: SearchTarget, **options: Any) -> Sea
     """
     from meshcol.decomposition.decompose import decompose
 
-    options = {k: v for k, v in options.items() if k != "metrics"}
-    return _search(mesh, target, options, decompose)
+    def decomposition(mesh: Any, step: DecomposeOptions) -> Decomposition:
+        return decompose(
+            mesh,
+            step,
+            cache_dir=cache_dir,
+            use_cache=use_cache,
+            write_cache=write_cache,
+            threads=threads,
+        )
+
+    return _search(mesh, target, DecomposeOptions.given(options, **fields), decomposition)
 
 
-def cached_search(mesh: Any, target: SearchTarget, **options: Any) -> SearchResult | None:
+def cached_search(
+    mesh: Any,
+    target: SearchTarget,
+    options: DecomposeOptions | None = None,
+    *,
+    cache_dir: str | None = None,
+    **fields: Any,
+) -> SearchResult | None:
     """The search of :func:`search_decomposition` replayed from the cache alone, or None as
     soon as a step is missing (or has no metrics); never runs an engine."""
     from meshcol.decomposition.decompose import cached_decomposition
 
+    def decomposition(mesh: Any, step: DecomposeOptions) -> Decomposition | None:
+        return cached_decomposition(mesh, step, cache_dir=cache_dir)
+
     try:
-        return _search(mesh, target, options, cached_decomposition)
+        return _search(mesh, target, DecomposeOptions.given(options, **fields), decomposition)
     except _Miss:
         return None
-
-
-def search_task(
-    task: tuple[str, list[tuple[str, np.ndarray, np.ndarray]], dict[str, Any]],
-) -> list[tuple[str, SearchResult]]:
-    """Worker entry (:mod:`meshcol.decomposition.jobs`): the search of every body of one file.
-
-    ``task`` = (path, bodies, options), ``options["search"]`` the target
-    (:meth:`SearchTarget.to_dict`). Reads the cache but never writes it: the caller stores
-    every step (:func:`store_steps`).
-    """
-    _, bodies, options = task
-    options = dict(options)
-    target = SearchTarget(**options.pop("search"))
-    return [
-        (name, search_decomposition((vertices, faces), target, write_cache=False, **options))
-        for name, vertices, faces in bodies
-    ]
 
 
 def store_steps(result: SearchResult, cache_dir: str) -> None:

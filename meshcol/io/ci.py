@@ -19,7 +19,6 @@ the file it is about. This module renders that suite, and nothing else does:
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import re
@@ -28,11 +27,10 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from meshcol.vocabulary import CI_FORMATS
+from meshcol.io.report import dumps_json
 
 __all__ = [
     "OUTCOMES",
-    "CI_FORMATS",
     "MAX_PASSED_CASES",
     "CiCase",
     "CiSuite",
@@ -44,6 +42,7 @@ __all__ = [
     "annotation_path",
     "number",
     "collapse_passed",
+    "verdict_line",
 ]
 
 #: Outcomes of a case, as JUnit has them.
@@ -203,7 +202,7 @@ def _property_value(value: Any) -> str:
     if isinstance(value, str):
         return value
     # control characters come out as \u escapes, which XML holds
-    return json.dumps(value, sort_keys=True, separators=(",", ":"), ensure_ascii=False, default=str)
+    return dumps_json(value, compact=True, ascii_only=False)
 
 
 def _properties(suite: CiSuite) -> list[tuple[str, str]]:
@@ -325,7 +324,9 @@ def _command(kind: str, message: str, *, file: str | None, title: str) -> str:
     return f"::{kind} {','.join(props)}::{escape_data(message)}"
 
 
-def _verdict(suite: CiSuite) -> str:
+def verdict_line(suite: CiSuite) -> str:
+    """``PASS: 6 cases, 0 failures, 0 errors, 0 skipped`` and the report's verdict after it
+    in parentheses: the last line of every CI format."""
     counts = {outcome: suite.count(outcome) for outcome in OUTCOMES}
     state = "PASS" if suite.passed else "FAIL"
     text = (
@@ -355,7 +356,9 @@ def dumps_github(suite: CiSuite, workspace: str | None = None) -> str:
         )
     for warning in suite.warnings:
         lines.append(_command("warning", warning, file=None, title=f"meshcol {suite.command}"))
-    lines.append(_command("notice", _verdict(suite), file=None, title=f"meshcol {suite.command}"))
+    lines.append(
+        _command("notice", verdict_line(suite), file=None, title=f"meshcol {suite.command}")
+    )
     return "\n".join(lines) + "\n"
 
 
@@ -398,15 +401,6 @@ def write_step_summary(suite: CiSuite) -> bool:
     with open(path, "a", encoding="utf-8") as f:
         f.write(step_summary(suite))
     return True
-
-
-def render(suite: CiSuite, fmt: str) -> str:
-    """The text of ``suite`` in ``fmt`` (:data:`CI_FORMATS`)."""
-    if fmt == "junit":
-        return dumps_junit(suite)
-    if fmt == "github":
-        return dumps_github(suite)
-    raise ValueError(f"format must be one of {', '.join(CI_FORMATS)}, got {fmt!r}")
 
 
 def details(pairs: Iterable[tuple[str, Any]]) -> str:

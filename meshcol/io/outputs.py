@@ -2,10 +2,9 @@
 
 A run that fails after an hour of work because its report folder is missing, or that replaces
 one of its own inputs, is worse than one that refuses at once. Every command calls
-:func:`check_destinations` (an output onto an input, two outputs one file) or
-:func:`check_outputs` (that, and the folders) before it writes anything. :func:`check_outputs` checks
-every output location of a run before it starts: an output file's folder exists and is
-writable, an output folder exists and is writable or can be created, no output is an input,
+:func:`check_outputs` before it computes anything: it checks every output location of the
+run (an output file's folder exists and is writable, an output folder exists and is
+writable or can be created) and, by :func:`check_destinations`, that no output is an input
 and no two outputs are one file. :func:`staged_folder` writes a run's files into a hidden
 folder inside the destination and moves them into place only when all are written (with
 SIGINT and SIGTERM held for the moves), so a failed or interrupted run leaves nothing behind.
@@ -23,6 +22,7 @@ from collections.abc import Iterable, Iterator, Mapping, Sequence
 
 from meshcol.errors import MeshcolError, OutputPathError
 from meshcol.io.paths import display_path
+from meshcol.io.report import is_special_file
 
 __all__ = [
     "check_destinations",
@@ -71,16 +71,26 @@ def _existing_ancestor(path: str) -> str:
     return current
 
 
-def check_output_file(path: PathLike) -> None:
+def check_output_file(path: PathLike, made: Iterable[PathLike] = ()) -> None:
     """Raise :class:`MeshcolError` (naming ``path``) unless ``path`` can be written as a file.
 
     Its folder must exist (files are written in place, never with their folders created) and
-    be writable, and ``path`` must not be a folder.
+    be writable, unless it is one of ``made``, the output folders the run makes before it
+    writes the file (``--out-dir parts --report parts/r.json``; each is checked as a folder).
+    ``path`` must not be a folder. A device or a pipe (``/dev/null``) needs only to be
+    writable itself: reports are written into it.
     """
     path = os.fspath(path)
     if os.path.isdir(path):
         raise MeshcolError("is a folder, not a file", path)
+    if is_special_file(path):
+        # written into, never replaced (io.report.atomic_path): its folder is not written
+        if not os.access(path, os.W_OK):
+            raise MeshcolError("cannot write to it (permission denied)", path)
+        return
     folder = os.path.dirname(os.path.abspath(path))
+    if _key(folder) in {_key(made_folder) for made_folder in made}:
+        return
     if not os.path.exists(folder):
         ancestor = _existing_ancestor(folder)
         if not os.path.isdir(ancestor):
@@ -199,11 +209,13 @@ def check_outputs(
     files: Mapping[str, PathLike | None] | None = None,
     folders: Mapping[str, PathLike | None] | None = None,
     inputs: Sequence[PathLike] = (),
+    named_inputs: Mapping[str, PathLike | None] | None = None,
 ) -> None:
     """Check every output location of a run before the run starts: no output replaces an
     input (a manifest's mesh files included) or another output (:func:`check_destinations`),
     every output file's folder exists and is writable, every output folder is writable or
-    can be created.
+    can be created. Every command calls it first, so nothing of a run is computed for an
+    output it cannot write.
 
     Parameters
     ----------
@@ -212,21 +224,31 @@ def check_outputs(
     folders : mapping of label -> path or None
         Output folders (``{"--out-dir": "parts", "--cache-dir": None}``), created if missing.
     inputs : sequence of paths
-        The run's input files.
+        The run's input files (``the input``; a manifest's meshes too).
+    named_inputs : mapping of description -> path or None
+        Other files the run reads, each with what it is to the user
+        (``{"the --baseline": "old.json"}``); None entries are skipped.
 
     Raises
     ------
     MeshcolError
         Naming the path as given: a missing or unwritable folder, a folder given as a file
         (or the reverse), an output that is an input, or one path given as two outputs.
+
+    Notes
+    -----
+    A file directly inside one of ``folders`` needs no existing folder: the run makes it
+    before writing the file.
     """
-    outputs = [
-        (label, os.fspath(p), "file") for label, p in (files or {}).items() if p and p != "-"
-    ]
-    outputs += [(label, os.fspath(p), "folder") for label, p in (folders or {}).items() if p]
-    check_destinations(manifest_inputs(inputs), [(label, path) for label, path, _ in outputs])
-    for _, path, kind in outputs:
-        (check_output_file if kind == "file" else check_output_folder)(path)
+    out_files = {label: os.fspath(p) for label, p in (files or {}).items() if p and p != "-"}
+    out_folders = {label: os.fspath(p) for label, p in (folders or {}).items() if p}
+    read = manifest_inputs(inputs)
+    read += [(what, os.fspath(p)) for what, p in (named_inputs or {}).items() if p is not None]
+    check_destinations(read, [*out_files.items(), *out_folders.items()])
+    for path in out_files.values():
+        check_output_file(path, made=out_folders.values())
+    for path in out_folders.values():
+        check_output_folder(path)
 
 
 @contextlib.contextmanager

@@ -21,19 +21,17 @@ from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
 from meshcol.errors import InputFileError
-from meshcol.vocabulary import REPORT_FORMATS
 
 __all__ = [
     "ENVELOPE_KEYS",
     "SCHEMA_VERSION",
     "atomic_path",
     "atomic_write",
+    "is_special_file",
     "dumps_csv",
     "dumps_json",
     "emit",
     "envelope",
-    "report_format",
-    "report_text",
     "split_vectors",
     "vector_columns",
 ]
@@ -87,7 +85,7 @@ def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iter
     the report and leaves the device alone.
     """
     path = os.fspath(path)
-    special = _is_special(path)
+    special = is_special_file(path)
     folder = tempfile.gettempdir() if special else os.path.dirname(os.path.abspath(path))
     ext = suffix if suffix is not None else os.path.splitext(path)[1]
     try:
@@ -114,8 +112,9 @@ def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iter
         raise
 
 
-def _is_special(path: str) -> bool:
-    """An existing destination that is neither a regular file nor a folder (a device, a pipe)."""
+def is_special_file(path: str) -> bool:
+    """An existing destination that is neither a regular file nor a folder (a device such as
+    ``/dev/null``, a named pipe): written into, never replaced."""
     try:
         mode = os.stat(path).st_mode
     except OSError:
@@ -148,21 +147,6 @@ def atomic_write(path: str | os.PathLike[str], data: str | bytes) -> None:
         else:
             with open(tmp, "w", encoding="utf-8", newline="") as text:
                 text.write(data)
-
-
-def _finite_or_none(value: Any) -> Any:
-    """JSON has no NaN or infinity: write them as null."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, Mapping):
-        return {str(k): _finite_or_none(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_finite_or_none(v) for v in value]
-    if hasattr(value, "tolist") and not isinstance(value, (str, bytes)):
-        return _finite_or_none(value.tolist())
-    if hasattr(value, "item") and not isinstance(value, (str, bytes)):
-        return _finite_or_none(value.item())
-    return value
 
 
 # A bare NaN/Infinity token in two-space-indented JSON: alone on its line (an array item) or
@@ -215,30 +199,92 @@ def read_json_file(path: str | os.PathLike[str], name: str, short: str | None = 
         raise InputFileError(f"{short} nests arrays and objects too deep", path) from None
 
 
-def dumps_json(obj: Any) -> str:
-    """Deterministic JSON: sorted keys, two-space indent, NaN/inf as null, trailing newline.
+def dumps_json(
+    obj: Any,
+    *,
+    compact: bool = False,
+    sort_keys: bool = True,
+    ascii_only: bool = True,
+    non_finite: str = "null",
+) -> str:
+    """The JSON text of ``obj``: the one JSON encoder of meshcol's outputs.
 
-    The text is exactly ``json.dumps(obj, sort_keys=True, indent=2)`` of the report with every
-    non-finite number made null and numpy values made Python ones (``tests/test_report_json.py``
-    holds it to that), written faster: Python's C encoder cannot indent, and its indenting
-    encoder costs about a microsecond per value, most of the time of writing a report of
-    10,000 pairs. So rows of one shape (a list of dicts with the same keys, the pairs and
-    bodies of a report) are encoded column by column: every number of a column by the C
-    encoder in one call, every string by the C string escape, then one format string per row.
-    Keys must be strings (anything else is encoded by ``json`` itself, as before).
+    Parameters
+    ----------
+    obj : JSON-ready value
+        Dicts, lists, tuples, strings, numbers, None; numpy arrays and scalars and other
+        mappings are converted (``tolist``, ``item``, ``dict``).
+    compact : bool
+        False (a report): two-space indent and a trailing newline. True (a value inside
+        another format: a JUnit property, a review page's data): one line, ``,`` and ``:``
+        without spaces, no newline.
+    sort_keys : bool
+        Keys sorted (every report: deterministic text); False keeps each mapping's order.
+    ascii_only : bool
+        Characters past ASCII as ``\\uXXXX`` escapes (True) or as they are.
+    non_finite : {"null", "error"}
+        NaN and infinities (which JSON has not) written as null, or refused (ValueError).
+
+    Returns
+    -------
+    str
+
+    Notes
+    -----
+    A report (the defaults) is exactly ``json.dumps(obj, sort_keys=True, indent=2)`` of the
+    report with every non-finite number made null and numpy values made Python ones
+    (``tests/test_report_json.py`` holds it to that), written faster: Python's C encoder
+    cannot indent, and its indenting encoder costs about a microsecond per value, most of the
+    time of writing a report of 10,000 pairs. So rows of one shape (a list of dicts with the
+    same keys, the pairs and bodies of a report) are encoded column by column: every number
+    of a column by the C encoder in one call, every string by the C string escape, then one
+    format string per row. Keys must be strings (anything else is encoded by ``json``
+    itself, as before).
 
     The core's encoder (``dumps_indented``: the same walk in C++, numbers by
-    ``std::to_chars`` laid out as ``repr(float)``) writes the text when it can; it declines
+    ``std::to_chars`` laid out as ``repr(float)``) writes a report when it can; it declines
     the rare documents it does not write exactly as ``json`` does (a key that is not a
     string, an int past 64 bits, a dict subclass, a string that is not UTF-8, deep nesting,
-    an object ``json`` cannot encode), which take the Python path below.
-    """
-    from meshcol._native import core
+    an object ``json`` cannot encode), which take the Python path.
 
-    native = core.dumps_indented(obj, _builtin)
-    if native is not None:
-        return str(native)
-    return _dumps_json_python(obj)
+    Any other choice of options is ``json.dumps`` with them (non-finite numbers made null
+    first, when so asked).
+    """
+    if non_finite not in ("null", "error"):
+        raise ValueError(f"non_finite must be 'null' or 'error', got {non_finite!r}")
+    if not compact and sort_keys and ascii_only and non_finite == "null":
+        from meshcol._native import core
+
+        native = core.dumps_indented(obj, _builtin)
+        if native is not None:
+            return str(native)
+        return _dumps_json_python(obj)
+    text = json.dumps(
+        _nulled(obj) if non_finite == "null" else obj,
+        indent=None if compact else 2,
+        separators=(",", ":") if compact else None,
+        sort_keys=sort_keys,
+        ensure_ascii=ascii_only,
+        allow_nan=False,
+        default=_builtin,
+    )
+    return text if compact else text + "\n"
+
+
+def _nulled(value: Any) -> Any:
+    """``value`` with every non-finite float (numpy's too) made None and numpy values made
+    Python ones; keys and everything else as they are (``json`` encodes them)."""
+    if isinstance(value, (str, int, type(None))):
+        return value
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _nulled(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_nulled(v) for v in value]
+    if isinstance(value, Mapping) or hasattr(value, "tolist") or hasattr(value, "item"):
+        return _nulled(_builtin(value))
+    return value
 
 
 def _dumps_json_python(obj: Any) -> str:
@@ -398,7 +444,7 @@ def dumps_csv(rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> str:
     for row in rows:
         cells = []
         for c in columns:
-            v = _finite_or_none(row.get(c))
+            v = _nulled(row.get(c))
             if v is None:
                 cells.append("")
             elif isinstance(v, list):
@@ -409,51 +455,6 @@ def dumps_csv(rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> str:
                 cells.append(str(v))
         writer.writerow(cells)
     return buf.getvalue()
-
-
-#: Report file extensions and the format each means (``github`` has none: workflow commands
-#: are read from the log, so they usually go to stdout).
-REPORT_EXTENSIONS = {".json": "json", ".csv": "csv", ".xml": "junit"}
-
-
-def report_format(path: str | None, fmt: str | None) -> str:
-    """The report format: ``fmt`` if given, else from ``path``'s extension, else ``json``.
-
-    Raises
-    ------
-    ValueError
-        ``path`` has an extension other than ``.json``, ``.csv`` or ``.xml`` (JUnit) and no
-        ``fmt`` says what to write (``out.txt`` never silently gets JSON), or ``fmt``
-        contradicts it (``--format csv`` with ``out.json``, ``--format github`` with
-        ``out.xml``).
-    """
-    extension = os.path.splitext(path)[1].lower() if path and path != "-" else ""
-    implied = REPORT_EXTENSIONS.get(extension)
-    if fmt:
-        fmt = fmt.lower()
-        if implied is not None and implied != fmt:
-            raise ValueError(f"{path!r} is a .{implied} file: it cannot hold a {fmt} report")
-        return fmt
-    if extension and implied is None:
-        raise ValueError(
-            f"unknown report extension {extension!r} in {path!r}: expected .json, .csv or .xml"
-        )
-    return implied or "json"
-
-
-def report_text(report: Any, fmt: str) -> str:
-    """The text of a command's report in ``fmt`` (:data:`REPORT_FORMATS`): its JSON
-    (``to_json``), CSV (``to_csv``), or its CI suite (``ci_suite``) as JUnit XML or GitHub
-    workflow commands (:mod:`meshcol.io.ci`)."""
-    if fmt == "json":
-        return str(report.to_json())
-    if fmt == "csv":
-        return str(report.to_csv())
-    if fmt in ("junit", "github"):
-        from meshcol.io.ci import render
-
-        return render(report.ci_suite(), fmt)
-    raise ValueError(f"report format must be one of {', '.join(REPORT_FORMATS)}, got {fmt!r}")
 
 
 def emit(text: str, output: str | os.PathLike[str] | None) -> None:

@@ -1,10 +1,11 @@
 """Engine target profiles: the limits a physics engine puts on convex colliders.
 
-A profile is a TOML file: the package's own in ``meshcol/targets/<name>.toml`` (``physx``,
-``physx-gpu``, ``unity``, ``unreal``, ``godot``, ``mujoco``, ``bullet``, ``isaac``), or a
-user's file given by path. :func:`load_target` reads and validates one, :func:`list_targets`
-the package's. The limits are measured by :mod:`meshcol.collision.limits`; this module only
-reads files.
+A profile is a TOML file: the package's own in ``meshcol/targets/<name>.toml`` (every file
+of that folder is one, by its name: ``meshcol targets`` lists them; there is no list to edit),
+or a user's file given by path. :func:`load_target` reads and validates one,
+:func:`list_targets` the package's, :func:`targets_markdown` writes them as the page
+``docs/targets.md`` (a test keeps it current). The limits are measured by
+:mod:`meshcol.collision.limits`; this module only reads files.
 
 A profile::
 
@@ -55,6 +56,7 @@ __all__ = [
     "load_target",
     "metres_per_unit",
     "target_names",
+    "targets_markdown",
 ]
 
 #: The folder of the package's profiles.
@@ -187,6 +189,38 @@ def target_names() -> list[str]:
     return sorted(path.stem for path in TARGETS_DIR.glob("*.toml"))
 
 
+def targets_markdown(targets: list[Target] | None = None) -> str:
+    """The package's profiles (or ``targets``) as the Markdown page ``docs/targets.md``: one
+    table of every limit, then each profile's sources (document, sentence, kind, note)."""
+    targets = list_targets() if targets is None else targets
+    lines = [
+        "# meshcol engine targets",
+        "",
+        "The profiles of `--target NAME` (`meshcol hull`, `decompose`, `inspect`, `check`), one",
+        "file each in `meshcol/targets/`, every number cited below; `-` is no limit, lengths",
+        "are metres. Generated from those files (a test keeps this page current):",
+        "",
+        "```",
+        'python -c "from meshcol.io.targets import targets_markdown; '
+        "print(targets_markdown(), end='')\" > docs/targets.md",
+        "```",
+        "",
+        "| name | engine | units | " + " | ".join(LIMIT_KEYS) + " |",
+        "| --- | --- | --- | " + " | ".join("---" for _ in LIMIT_KEYS) + " |",
+    ]
+    for t in targets:
+        cells = ["-" if t.limits.get(k) is None else f"{t.limits[k]:g}" for k in LIMIT_KEYS]
+        lines.append(f"| `{t.name}` | {t.title} | {t.units} | " + " | ".join(cells) + " |")
+    for t in targets:
+        lines += ["", f"## {t.name}", ""]
+        if t.description:
+            lines += [t.description, ""]
+        for s in t.sources:
+            note = f" {s.note}" if s.note else ""
+            lines.append(f'- `{s.limit}` ({s.kind}): <{s.url}>: "{s.quote}"{note}')
+    return "\n".join(lines) + "\n"
+
+
 def load_target(name_or_path: str | os.PathLike[str]) -> Target:
     """A target profile by name (``physx-gpu``) or by the path of a TOML file.
 
@@ -250,87 +284,106 @@ def _validate(document: dict[str, Any], where: str, stem: str) -> Target:
     units = _string(document, "units", where) or "m"
     if units not in LENGTH_UNITS:
         raise _fail(where, "units", f"unknown unit {units!r} (known: {', '.join(LENGTH_UNITS)})")
-
-    raw_limits = document.get("limits", {})
-    if not isinstance(raw_limits, dict):
-        raise _fail(where, "limits", "must be a table")
-    limits: dict[str, float] = {}
-    for key, value in raw_limits.items():
-        label = f"limits.{key}"
-        if key not in LIMIT_KEYS:
-            raise _fail(where, label, f"unknown limit (known: {', '.join(LIMIT_KEYS)})")
-        if key in COUNT_LIMITS:
-            if type(value) is not int:
-                raise _fail(where, label, f"must be an integer, got {value!r}")
-            if value < 1:
-                raise _fail(where, label, f"must be at least 1, got {value}")
-            if key == "max_hull_vertices" and value < 4:
-                raise _fail(where, label, f"must be at least 4 (a tetrahedron), got {value}")
-            if key == "max_hull_polygons" and value < 4:
-                raise _fail(where, label, f"must be at least 4 (a tetrahedron), got {value}")
-            if key == "max_faces_per_vertex" and value < 3:
-                raise _fail(where, label, f"must be at least 3 (a polytope's least), got {value}")
-            limits[key] = value
-        else:
-            if type(value) not in (int, float):
-                raise _fail(where, label, f"must be a number, got {value!r}")
-            number = float(value)
-            if not math.isfinite(number) or number < 0:
-                raise _fail(where, label, f"must be a finite number >= 0, got {value!r}")
-            if key == "max_oblong_ratio" and number < 1:
-                raise _fail(where, label, f"must be at least 1, got {value!r}")
-            limits[key] = number
-    if "max_hull_triangles" in limits and limits["max_hull_triangles"] < 4:
-        raise _fail(where, "limits.max_hull_triangles", "must be at least 4 (a tetrahedron)")
-
-    raw_naming = document.get("naming", {})
-    if not isinstance(raw_naming, dict):
-        raise _fail(where, "naming", "must be a table")
-    naming: dict[str, str] = {}
-    for key in raw_naming:
-        if key not in _NAMING_KEYS:
-            raise _fail(
-                where, f"naming.{key}", f"unknown key (known: {', '.join(sorted(_NAMING_KEYS))})"
-            )
-        naming[key] = _string(raw_naming, key, where, "naming.") or ""
-
-    raw_sources = document.get("sources", [])
-    if not isinstance(raw_sources, list):
-        raise _fail(where, "sources", "must be an array of tables ([[sources]])")
-    sources = []
-    for i, entry in enumerate(raw_sources):
-        label = f"sources[{i}]"
-        if not isinstance(entry, dict):
-            raise _fail(where, label, "must be a table")
-        extra = sorted(set(entry) - _SOURCE_KEYS)
-        if extra:
-            raise _fail(
-                where,
-                f"{label}.{extra[0]}",
-                f"unknown key (known: {', '.join(sorted(_SOURCE_KEYS))})",
-            )
-        values = {}
-        for key in ("limit", "url", "quote", "kind"):
-            value = _string(entry, key, where, f"{label}.")
-            if value is None:
-                raise _fail(where, f"{label}.{key}", "is required")
-            values[key] = value
-        if values["kind"] not in _SOURCE_KINDS:
-            raise _fail(
-                where,
-                f"{label}.kind",
-                f"must be one of {', '.join(_SOURCE_KINDS)}, got {values['kind']!r}",
-            )
-        if values["limit"] not in (*LIMIT_KEYS, "naming", "units"):
-            raise _fail(where, f"{label}.limit", f"unknown limit {values['limit']!r}")
-        sources.append(Source(note=_string(entry, "note", where, f"{label}."), **values))
     return Target(
         name=name,
         title=title,
         units=units,
-        limits=limits,
-        naming=naming,
-        sources=tuple(sources),
+        limits=_limits(document.get("limits", {}), where),
+        naming=_naming(document.get("naming", {}), where),
+        sources=_sources(document.get("sources", []), where),
         description=description,
         path=where,
     )
+
+
+#: The least value of each count limit, and why (a polytope's least).
+_LEAST_COUNTS = {
+    "max_hull_vertices": (4, " (a tetrahedron)"),
+    "max_hull_polygons": (4, " (a tetrahedron)"),
+    "max_faces_per_vertex": (3, " (a polytope's least)"),
+}
+
+
+def _limits(raw: Any, where: str) -> dict[str, float]:
+    """The ``[limits]`` table: known keys, counts as integers at least their least, lengths
+    and ratios as finite numbers >= 0."""
+    if not isinstance(raw, dict):
+        raise _fail(where, "limits", "must be a table")
+    limits: dict[str, float] = {}
+    for key, value in raw.items():
+        label = f"limits.{key}"
+        if key not in LIMIT_KEYS:
+            raise _fail(where, label, f"unknown limit (known: {', '.join(LIMIT_KEYS)})")
+        if key in COUNT_LIMITS:
+            limits[key] = _count(value, key, label, where)
+        else:
+            limits[key] = _measure(value, key, label, where)
+    if "max_hull_triangles" in limits and limits["max_hull_triangles"] < 4:
+        raise _fail(where, "limits.max_hull_triangles", "must be at least 4 (a tetrahedron)")
+    return limits
+
+
+def _count(value: Any, key: str, label: str, where: str) -> int:
+    if type(value) is not int:
+        raise _fail(where, label, f"must be an integer, got {value!r}")
+    if value < 1:
+        raise _fail(where, label, f"must be at least 1, got {value}")
+    least, why = _LEAST_COUNTS.get(key, (1, ""))
+    if value < least:
+        raise _fail(where, label, f"must be at least {least}{why}, got {value}")
+    return value
+
+
+def _measure(value: Any, key: str, label: str, where: str) -> float:
+    if type(value) not in (int, float):
+        raise _fail(where, label, f"must be a number, got {value!r}")
+    number = float(value)
+    if not math.isfinite(number) or number < 0:
+        raise _fail(where, label, f"must be a finite number >= 0, got {value!r}")
+    if key == "max_oblong_ratio" and number < 1:
+        raise _fail(where, label, f"must be at least 1, got {value!r}")
+    return number
+
+
+def _naming(raw: Any, where: str) -> dict[str, str]:
+    if not isinstance(raw, dict):
+        raise _fail(where, "naming", "must be a table")
+    naming: dict[str, str] = {}
+    for key in raw:
+        if key not in _NAMING_KEYS:
+            raise _fail(
+                where, f"naming.{key}", f"unknown key (known: {', '.join(sorted(_NAMING_KEYS))})"
+            )
+        naming[key] = _string(raw, key, where, "naming.") or ""
+    return naming
+
+
+def _sources(raw: Any, where: str) -> tuple[Source, ...]:
+    if not isinstance(raw, list):
+        raise _fail(where, "sources", "must be an array of tables ([[sources]])")
+    return tuple(_source(entry, f"sources[{i}]", where) for i, entry in enumerate(raw))
+
+
+def _source(entry: Any, label: str, where: str) -> Source:
+    if not isinstance(entry, dict):
+        raise _fail(where, label, "must be a table")
+    extra = sorted(set(entry) - _SOURCE_KEYS)
+    if extra:
+        raise _fail(
+            where, f"{label}.{extra[0]}", f"unknown key (known: {', '.join(sorted(_SOURCE_KEYS))})"
+        )
+    values = {}
+    for key in ("limit", "url", "quote", "kind"):
+        value = _string(entry, key, where, f"{label}.")
+        if value is None:
+            raise _fail(where, f"{label}.{key}", "is required")
+        values[key] = value
+    if values["kind"] not in _SOURCE_KINDS:
+        raise _fail(
+            where,
+            f"{label}.kind",
+            f"must be one of {', '.join(_SOURCE_KINDS)}, got {values['kind']!r}",
+        )
+    if values["limit"] not in (*LIMIT_KEYS, "naming", "units"):
+        raise _fail(where, f"{label}.limit", f"unknown limit {values['limit']!r}")
+    return Source(note=_string(entry, "note", where, f"{label}."), **values)

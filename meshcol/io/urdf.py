@@ -506,12 +506,13 @@ class _LinkMeshes:
     def preload(self, references: Iterable[str]) -> None:
         """Read the OBJ and STL files of ``references`` at once, in parallel (the core's
         readers); a file that fails is left for :meth:`read` to name with its link."""
+        from meshcol.io.mesh_formats import read_natively
         from meshcol.io.mesh_read import load_meshes
 
         paths = []
         for reference in references:
             path, _ = self.resolver.resolve(reference)
-            if path is None or Path(path).suffix.lower() not in (".obj", ".stl"):
+            if path is None or not read_natively(path):
                 continue
             key = os.path.normpath(path)
             if key not in paths and Path(key).is_file():

@@ -1,0 +1,480 @@
+"""The report of ``meshcol check``: :class:`CheckReport` (JSON, CSV, JUnit and GitHub through
+its CI suite, the review page), and the last stage of a check, :func:`check_report`, which
+turns the classified :class:`~meshcol.analysis.pairs.PairTable` into its rows.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from datetime import datetime, timezone
+from typing import Any
+
+import numpy as np
+
+from meshcol.analysis.check_policy import FAIL_ON, CheckOptions
+from meshcol.analysis.pairs import SEVERITY, PairTable, PlacedColliders
+from meshcol.io.paths import display_path, display_paths
+from meshcol.io.report import vector_columns
+from meshcol.types import Scene
+from meshcol.vocabulary import PAIR_STATUSES
+
+__all__ = ["CSV_COLUMNS", "CheckReport", "check_report"]
+
+
+@dataclass(frozen=True)
+class CheckReport:
+    """The outcome of a check: everything the JSON report holds.
+
+    Attributes
+    ----------
+    bodies : list of dict
+        Per body: name, file, collider, parts (names; empty for a body of one part),
+        convex_parts, vertices, aabb (world ``[[min], [max]]``).
+    pairs : list of dict
+        Per candidate body pair, sorted by (body_a, body_b): body_a, body_b, part_a, part_b
+        (the parts that come closest, None for a body of one part), status, distance, depth,
+        signed_distance, normal, point_a, point_b, convex_part_a, convex_part_b, ignored,
+        violation, query_failed, intersection_volume.
+    summary : dict
+        Counts, extremes, pass/fail and timings.
+    settings : dict
+        The options used.
+    units : str or None
+        From the manifest.
+    warnings : list of str
+        What the run could not do as asked (``UCX_`` parts naming nothing, flat bodies that
+        could not be decomposed), one line each.
+    findings : list of dict
+        Finding records (:class:`meshcol.analysis.rules.Finding` fields and ``failed``):
+        MC301 per body without a usable collider, and a target's limits per body and part. A
+        pair's rule is its status (:data:`~meshcol.analysis.check_policy.PAIR_RULES`), in
+        ``pairs``, not repeated here.
+    table : PairTable or None
+        The pairs as arrays, row ``i`` the pair ``pairs[i]`` (None for a report read back or
+        made by hand).
+    """
+
+    bodies: list[dict]
+    pairs: list[dict]
+    summary: dict
+    settings: dict
+    units: str | None
+    generated_at: str
+    warnings: list[str] = field(default_factory=list)
+    findings: list[dict] = field(default_factory=list)
+    table: PairTable | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def passed(self) -> bool:
+        return bool(self.summary["passed"])
+
+    @property
+    def exit_code(self) -> int:
+        """0 when the policy passes, 1 when it is violated."""
+        return 0 if self.passed else 1
+
+    def to_dict(self) -> dict:
+        """The JSON report: the common envelope, ``generated_at``, bodies, summary, pairs."""
+        from meshcol.io.report import envelope
+
+        return {
+            **envelope("check", self.settings, self.units),
+            "generated_at": self.generated_at,
+            "warnings": self.warnings,
+            "bodies": self.bodies,
+            "summary": self.summary,
+            "pairs": self.pairs,
+            "findings": self.findings,
+        }
+
+    def worst_pairs(self, count: int = 10) -> list[dict]:
+        """Up to ``count`` pairs that are not separated, most penetrating (smallest signed
+        distance) first, ties in report order (``heapq.nsmallest`` is ``sorted()[:count]``
+        without sorting 100,000 pairs to print ten)."""
+        import heapq
+
+        inf = float("inf")
+        touching = (p for p in self.pairs if p["status"] != "separated")
+        return heapq.nsmallest(
+            count,
+            touching,
+            key=lambda p: inf if p["signed_distance"] is None else p["signed_distance"],
+        )
+
+    def to_json(self) -> str:
+        from meshcol.io.report import dumps_json
+
+        return dumps_json(self.to_dict())
+
+    def ci_suite(self) -> Any:
+        """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one case per candidate pair
+        (``body_a <-> body_b``): a failure when it violates ``--fail-on``, skipped when an
+        ``--ignore`` rule spares a pair the policy would fail, else passed; the message has
+        the status and its numbers. More than :data:`meshcol.io.ci.MAX_PASSED_CASES` passed
+        pairs become one case. The file is the scene input, or body_a's file."""
+        from meshcol.io.ci import CiSuite, collapse_passed
+
+        files = {b["name"]: b["file"] for b in self.bodies}
+        inputs = self.settings.get("inputs") or []
+        scene = inputs[0] if len(inputs) == 1 else None
+        threshold = FAIL_ON[self.settings["fail_on"]]
+        least = SEVERITY[threshold] if threshold is not None else len(PAIR_STATUSES)
+        settings = self.settings
+        cases = [_ci_case(p, files, scene, least, settings, self.units) for p in self.pairs]
+        s = self.summary
+        verb = "violates" if s["violations"] == 1 else "violate"
+        return CiSuite(
+            "check",
+            tuple(collapse_passed(cases, "pairs", "meshcol.check")),
+            settings,
+            seconds=(s["seconds"] or 0.0) + (s["load_seconds"] or 0.0),
+            warnings=tuple(self.warnings),
+            verdict=f"{s['violations']} of {s['candidate_pairs']} candidate pairs {verb} "
+            f"--fail-on {settings['fail_on']}",
+            units=self.units,
+        )
+
+    def to_csv(self) -> str:
+        from meshcol.io.report import dumps_csv, split_vectors
+
+        sizes = {"normal": 3, "point_a": 3, "point_b": 3}
+        rows = [split_vectors(dict(p, units=self.units), sizes) for p in self.pairs]
+        return dumps_csv(rows, CSV_COLUMNS)
+
+
+#: Columns of :meth:`CheckReport.to_csv`, one row per pair (vectors split, as every command).
+CSV_COLUMNS = [
+    "body_a",
+    "body_b",
+    "part_a",
+    "part_b",
+    "status",
+    "distance",
+    "depth",
+    "signed_distance",
+    *vector_columns("normal"),
+    *vector_columns("point_a"),
+    *vector_columns("point_b"),
+    "convex_part_a",
+    "convex_part_b",
+    "ignored",
+    "violation",
+    "query_failed",
+    "intersection_volume",
+    "units",
+]
+
+
+def _ci_case(
+    pair: dict,
+    files: dict[str, str | None],
+    scene: str | None,
+    least: int,
+    settings: dict,
+    units: str | None,
+) -> Any:
+    """The CI case of one pair of a check report (:meth:`CheckReport.ci_suite`)."""
+    from meshcol.io.ci import CiCase, details, number
+
+    status = pair["status"]
+    a, b = pair["body_a"], pair["body_b"]
+    if status == "separated":
+        message = f"separated: distance {number(pair['distance'], units)}"
+    elif status == "clearance":
+        message = (
+            f"clearance: distance {number(pair['distance'], units)} < --clearance "
+            f"{number(settings['clearance'], units)}"
+        )
+    elif status == "contact":
+        message = (
+            f"contact: signed distance {number(pair['signed_distance'], units)} (tolerance "
+            f"{number(settings['tolerance'], units)})"
+        )
+    else:
+        inside = "one body inside the other, " if status == "contained" else ""
+        message = (
+            f"{status}: {inside}depth {number(pair['depth'], units)}, signed distance "
+            f"{number(pair['signed_distance'], units)}"
+        )
+        if pair["intersection_volume"] is not None:
+            message += f", intersection volume {number(pair['intersection_volume'])}"
+    if pair["query_failed"]:
+        message += " (query failed: the numbers are not the answer)"
+    outcome = "passed"
+    if pair["violation"]:
+        outcome = "failure"
+        message += f" (--fail-on {settings['fail_on']})"
+    elif SEVERITY[status] >= least:
+        if pair["ignored"]:
+            outcome = "skipped"
+            message = f"ignored by --ignore: {message}"
+        else:
+            message += " (not worse than the --baseline)"
+    text = ""
+    if outcome != "passed":
+        text = details(
+            [
+                ("body_a", f"{a} ({files.get(a)})" if files.get(a) else a),
+                ("body_b", f"{b} ({files.get(b)})" if files.get(b) else b),
+                ("part_a", pair["part_a"]),
+                ("part_b", pair["part_b"]),
+                ("distance", pair["distance"]),
+                ("depth", pair["depth"]),
+                ("signed_distance", pair["signed_distance"]),
+                ("intersection_volume", pair["intersection_volume"]),
+                ("point_a", pair["point_a"]),
+                ("point_b", pair["point_b"]),
+                ("normal", pair["normal"]),
+                ("units", units),
+            ]
+        )
+    return CiCase(
+        name=f"{a} <-> {b}",
+        classname="meshcol.check",
+        outcome=outcome,
+        message=message,
+        file=scene or files.get(a),
+        kind=status,
+        details=text,
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# The last stage: the table as the report's rows
+
+
+def check_report(
+    table: PairTable,
+    placed: PlacedColliders,
+    scene: Scene,
+    options: CheckOptions,
+    fail_rules: Sequence[str],
+    seconds: float,
+    load_seconds: float | None,
+) -> CheckReport:
+    """The report of a classified table with its policy applied: the pairs as rows sorted by
+    (body_a, body_b) names, the bodies, the findings, the summary and the settings."""
+    colliders = placed.colliders
+    names = [body.name for body in colliders.bodies]
+    table = table.take(_report_order(table, names))
+    files = display_paths([body.source for body in colliders.bodies], posix=True)
+    findings = _findings(colliders, options, scene.units, fail_rules)
+    return CheckReport(
+        _body_rows(placed, files),
+        pair_rows(table, colliders),
+        _summary(table, len(names), findings, seconds, load_seconds),
+        _settings(scene, options, fail_rules, colliders.bodies, files),
+        scene.units,
+        datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+        [*scene.warnings, *colliders.warnings],
+        findings,
+        table,
+    )
+
+
+def _report_order(table: PairTable, names: Sequence[str]) -> np.ndarray:
+    """The rows sorted by (body_a, body_b) names, ties in table order."""
+    a, b = table.body_a.tolist(), table.body_b.tolist()
+    order = sorted(range(len(a)), key=lambda row: (names[a[row]], names[b[row]]))
+    return np.asarray(order, dtype=np.int64)
+
+
+def pair_rows(table: PairTable, colliders: Any) -> list[dict]:
+    """One dict per row (the report's ``pairs``), in table order; non-finite numbers as None,
+    parts by name. Columns are converted once, then zipped (no per-pair numpy calls)."""
+    names = [body.name for body in colliders.bodies]
+    a, b = table.body_a, table.body_b
+    columns = zip(
+        a.tolist(),
+        b.tolist(),
+        table.status.tolist(),
+        _nums(table.distance),
+        _nums(table.depth),
+        _nums(table.signed_distance),
+        _vecs(table.normal),
+        _vecs(table.point_a),
+        _vecs(table.point_b),
+        table.part_a.tolist(),
+        table.part_b.tolist(),
+        colliders.part_names(a, table.label_a),
+        colliders.part_names(b, table.label_b),
+        table.ignored.tolist(),
+        table.violation.tolist(),
+        table.query_failed.tolist(),
+        _nums(table.intersection_volume),
+    )
+    return [
+        {
+            "body_a": names[ia],
+            "body_b": names[ib],
+            "part_a": name_a,
+            "part_b": name_b,
+            "status": PAIR_STATUSES[status],
+            "distance": distance,
+            "depth": depth,
+            "signed_distance": signed,
+            "normal": normal,
+            "point_a": point_a,
+            "point_b": point_b,
+            "convex_part_a": part_a if part_a >= 0 else None,
+            "convex_part_b": part_b if part_b >= 0 else None,
+            "ignored": ignored,
+            "violation": violation,
+            "query_failed": failed,
+            "intersection_volume": volume,
+        }
+        for (
+            ia,
+            ib,
+            status,
+            distance,
+            depth,
+            signed,
+            normal,
+            point_a,
+            point_b,
+            part_a,
+            part_b,
+            name_a,
+            name_b,
+            ignored,
+            violation,
+            failed,
+            volume,
+        ) in columns
+    ]
+
+
+def _body_rows(placed: PlacedColliders, files: Sequence[str | None]) -> list[dict]:
+    """One dict per body, sorted by name: file, collider kind, parts, box."""
+    colliders = placed.colliders
+    part_counts = np.diff(colliders.body_part_offsets).tolist()
+    rows = [
+        {
+            "name": body.name,
+            "file": file,
+            "collider": kind,
+            "parts": list(body.parts),
+            "convex_parts": parts,
+            "vertices": len(body.vertices),
+            "aabb": [lo, hi],
+        }
+        for body, file, kind, parts, lo, hi in zip(
+            colliders.bodies,
+            files,
+            colliders.kinds,
+            part_counts,
+            _vecs(placed.body_min),
+            _vecs(placed.body_max),
+        )
+    ]
+    rows.sort(key=lambda r: r["name"])
+    return rows
+
+
+def _summary(
+    table: PairTable,
+    bodies: int,
+    findings: Sequence[dict],
+    seconds: float,
+    load_seconds: float | None,
+) -> dict:
+    """Counts per status, extremes, the verdict and timings."""
+    status = table.status
+    by_status = {s: int(np.count_nonzero(status == SEVERITY[s])) for s in PAIR_STATUSES}
+    finite_distance = table.distance[np.isfinite(table.distance)]
+    return {
+        "bodies": bodies,
+        "candidate_pairs": len(table),
+        "pairs_by_status": by_status,
+        "ignored_pairs": int(np.count_nonzero(table.ignored)),
+        "excluded_pairs": table.excluded_pairs,
+        "failed_queries": int(np.count_nonzero(table.query_failed)),
+        "min_distance": _num(finite_distance.min()) if len(finite_distance) else None,
+        "max_depth": _num(table.depth.max()) if len(table) else None,
+        "violations": int(np.count_nonzero(table.violation)),
+        "failed_findings": sum(f["failed"] for f in findings),
+        "passed": not any(f["failed"] for f in findings) and not bool(table.violation.any()),
+        "seconds": round(seconds, 6),
+        "load_seconds": None if load_seconds is None else round(load_seconds, 6),
+    }
+
+
+def _settings(
+    scene: Scene,
+    options: CheckOptions,
+    fail_rules: Sequence[str],
+    bodies: Sequence[Any],
+    files: Sequence[str | None],
+) -> dict:
+    """The options used, as the report states them."""
+    settings = {
+        "collider": options.collider,
+        "tolerance": options.tolerance,
+        "clearance": options.clearance,
+        "fail_on": options.fail_on,
+        "fail_on_rules": list(fail_rules),
+        "ignore": list(options.ignore),
+        "baseline": display_path(options.baseline_source, posix=True),
+        "excluded_pairs": [
+            {"body_a": a, "body_b": b, "reason": reason} for a, b, reason in scene.excluded_pairs
+        ],
+        "inputs": [display_path(scene.source, posix=True)]
+        if scene.source
+        else sorted({file or "" for file, body in zip(files, bodies) if body.source}),
+    }
+    if options.target is not None:
+        settings["target"] = options.target.name
+        settings["target_limits"] = dict(options.target.limits)
+    return settings
+
+
+def _findings(
+    colliders: Any, options: CheckOptions, units: str | None, fail_rules: Sequence[str]
+) -> list[dict]:
+    """Body finding records, each with ``failed`` (its rule fails the run): MC301 per body
+    without a usable collider (every convex part a segment or a point: no area), then a
+    target's limits (:func:`meshcol.analysis.rules.target_findings`). Pairs are not
+    repeated here: a pair's status is its rule (:data:`PAIR_RULES`, ``meshcol rules``)."""
+    from meshcol.analysis.rules import finding, target_findings
+    from meshcol.collision.hull import HullStatus
+
+    records = []
+    no_area = np.isin(colliders.shapes.hull_status, (HullStatus.COLLINEAR, HullStatus.SINGLE_POINT))
+    no_area &= colliders.shapes.kinds == 0  # polytopes
+    counts = np.diff(colliders.body_part_offsets)
+    starts = colliders.body_part_offsets[:-1]
+    if len(no_area) and len(starts):
+        flat_parts = np.add.reduceat(no_area.astype(np.int64), starts)
+        for b in np.flatnonzero((flat_parts == counts) & (counts > 0)).tolist():
+            records.append(
+                finding(
+                    "MC301",
+                    colliders.bodies[b].name,
+                    None,
+                    0.0,
+                    0.0,
+                    "no area: the collider is a segment or a point (every face degenerate)",
+                )
+            )
+    if options.target is not None:
+        records.extend(target_findings(colliders, options.target, units))
+    return [dict(f.to_dict(), failed=f.rule in fail_rules) for f in records]
+
+
+def _nums(values: np.ndarray) -> list[float | None]:
+    """Floats as a list, non-finite ones as None."""
+    return [v if math.isfinite(v) else None for v in values.tolist()]
+
+
+def _vecs(values: np.ndarray) -> list[list[float] | None]:
+    """Rows of 3-vectors as lists, rows with a non-finite entry as None."""
+    finite = np.all(np.isfinite(values), axis=1).tolist()
+    return [row if ok else None for row, ok in zip(values.tolist(), finite)]
+
+
+def _num(x: float) -> float | None:
+    x = float(x)
+    return x if math.isfinite(x) else None

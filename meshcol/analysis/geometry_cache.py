@@ -1,0 +1,141 @@
+"""What a mesh decides in its own frame, measured once per unique geometry.
+
+``meshcol inspect`` measures each body's mesh (:mod:`meshcol.analysis.health`) and its
+collider against it (:mod:`meshcol.analysis.physics`). Bodies that instance one mesh (a level
+of props) share one :class:`LocalGeometry` through a :class:`GeometryCache`, so a level of
+instanced props is measured once per prop. Nothing here depends on a body's name, source, pose
+or units; what does (bounds, size, which faces are degenerate and so which cross, the units
+guess, every finding's names) each body computes itself.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import numpy as np
+
+from meshcol.errors import InvalidMeshError
+from meshcol.geometry.mass import MassProperties
+from meshcol.geometry.topology import (
+    component_count,
+    duplicate_face_count,
+    edge_table,
+    oriented_volume,
+)
+from meshcol.geometry.triangles import face_heights
+
+__all__ = ["GeometryCache", "LocalGeometry"]
+
+
+class LocalGeometry:
+    """One mesh's vertices and faces (its local frame) and what they alone decide, each
+    measured on first use."""
+
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray) -> None:
+        self.vertices = vertices
+        self.faces = faces
+        # crossing face pairs per degenerate-face mask (a mask follows the body's diagonal)
+        self._crossings: dict[bytes, int] = {}
+
+    @cached_property
+    def used(self) -> np.ndarray:
+        """(k,) int64: the vertices the faces use, ascending."""
+        return np.unique(self.faces)
+
+    @cached_property
+    def heights(self) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`meshcol.geometry.triangles.face_heights`."""
+        return face_heights(self.vertices, self.faces)
+
+    @cached_property
+    def edges(self) -> tuple[int, int, int]:
+        """Boundary edges (one face), non-manifold edges (more than two), inconsistently
+        wound edges."""
+        _, counts, inconsistent = edge_table(self.faces)
+        return int((counts == 1).sum()), int((counts > 2).sum()), int(inconsistent)
+
+    @cached_property
+    def oriented_volume(self) -> tuple[float, int] | None:
+        """:func:`meshcol.geometry.topology.oriented_volume`."""
+        return oriented_volume(self.vertices, self.faces)
+
+    @cached_property
+    def duplicates(self) -> int:
+        """Faces on the same three vertices as an earlier face."""
+        return duplicate_face_count(self.faces)
+
+    @cached_property
+    def components(self) -> int:
+        """Connected pieces (faces linked through shared vertices)."""
+        return component_count(self.faces, len(self.vertices))
+
+    @cached_property
+    def manifold_status(self) -> str:
+        """manifold3d's verdict on the mesh (``NoError``, ``NotManifold``, ...)."""
+        return _manifold_status(self.vertices, self.faces)
+
+    @cached_property
+    def hull_volume(self) -> float | None:
+        """The volume of the vertices' exact hull; None when they have none."""
+        from meshcol.collision.hull import exact_hull
+
+        try:
+            return exact_hull(self.vertices).volume
+        except InvalidMeshError:
+            return None
+
+    @cached_property
+    def mass(self) -> MassProperties:
+        """:func:`meshcol.geometry.mass.mass_properties`, in the local frame."""
+        from meshcol.geometry.mass import mass_properties
+
+        return mass_properties(self.vertices, self.faces)
+
+    def crossings(self, skip: np.ndarray) -> int:
+        """Pairs of faces that cross, the faces of ``skip`` ((m,) bool) left out."""
+        key = skip.tobytes()
+        count = self._crossings.get(key)
+        if count is None:
+            from meshcol.collision.self_intersection import self_intersecting_pairs
+
+            pairs = self_intersecting_pairs(self.vertices, self.faces, skip=skip)
+            count = self._crossings[key] = len(pairs)
+        return count
+
+
+class GeometryCache:
+    """The :class:`LocalGeometry` of each mesh of one inspect run, shared by the bodies (and
+    the health and physics phases) that use it: found by the arrays themselves first (a file's
+    instances share their arrays), else by content
+    (:func:`meshcol.analysis.colliders._geometry_key`: the same bits), so each pair of
+    arrays is hashed once."""
+
+    def __init__(self) -> None:
+        self._by_key: dict[bytes, LocalGeometry] = {}
+        # id pair -> (geometry, vertices, faces): the arrays are held, so the ids stay theirs
+        self._by_arrays: dict[tuple[int, int], tuple[LocalGeometry, np.ndarray, np.ndarray]] = {}
+
+    def get(self, vertices: np.ndarray, faces: np.ndarray) -> LocalGeometry:
+        """The geometry of these arrays, measured by whoever asked first."""
+        seen = self._by_arrays.get((id(vertices), id(faces)))
+        if seen is not None:
+            return seen[0]
+        from meshcol.analysis.colliders import _geometry_key
+
+        key = _geometry_key(vertices, faces)
+        geometry = self._by_key.get(key)
+        if geometry is None:
+            geometry = self._by_key[key] = LocalGeometry(vertices, faces)
+        self._by_arrays[id(vertices), id(faces)] = (geometry, vertices, faces)
+        return geometry
+
+
+def _manifold_status(vertices: np.ndarray, faces: np.ndarray) -> str:
+    import manifold3d
+
+    mesh = manifold3d.Mesh64(
+        vert_properties=np.ascontiguousarray(vertices),
+        tri_verts=np.ascontiguousarray(faces, dtype=np.uint64),
+    )
+    status = manifold3d.Manifold(mesh).status()
+    return str(getattr(status, "name", status)).split(".")[-1]

@@ -1,0 +1,188 @@
+"""The mesh stage of ``check``: pairs decided on the triangles, never on the hulls.
+
+Rows of a :class:`~meshcol.analysis.pairs.PairTable` with a ``mesh`` body, and convex rows
+that may nest, go to the exact triangle-mesh queries of :mod:`meshcol.collision.mesh_query`:
+distance and containment (winding numbers), and for surfaces that touch, cross or nest the
+mesh depth (a lower bound of the minimum translation distance) and, when penetrating, the
+intersection volume (manifold3d). Runs after :func:`~meshcol.analysis.pairs.convex_phase`,
+whose numbers it replaces on mesh rows.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from meshcol.analysis.pairs import MEASURES, NO_ANSWER, PairTable, PlacedColliders
+from meshcol.types import Status
+
+__all__ = ["mesh_phase"]
+
+
+def _exact_rows(
+    table: PairTable, placed: PlacedColliders, tolerance: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(mesh, exact)`` row masks: rows with a ``mesh`` body, and those plus the convex rows
+    that may nest (touching or overlapping, one body's box inside the other's)."""
+    a, b = table.body_a, table.body_b
+    mesh_bodies = np.array([kind == "mesh" for kind in placed.colliders.kinds], dtype=bool)
+    mesh = mesh_bodies[a] | mesh_bodies[b]
+    lo, hi = placed.body_min, placed.body_max
+    a_in_b = np.all((lo[a] >= lo[b]) & (hi[a] <= hi[b]), axis=1)
+    b_in_a = np.all((lo[b] >= lo[a]) & (hi[b] <= hi[a]), axis=1)
+    nested = (table.signed_distance <= tolerance) & ~mesh & (a_in_b | b_in_a)
+    return mesh, mesh | nested
+
+
+@dataclass(frozen=True, eq=False)
+class _Surfaces:
+    """The triangle meshes of the bodies some rows involve, at their poses."""
+
+    meshes: Any  # meshcol.collision.mesh_query.MeshSet
+    poses: np.ndarray
+    local: np.ndarray  # body index -> mesh index (-1: not involved)
+
+    @classmethod
+    def of(cls, bodies: Sequence[Any], body_pairs: np.ndarray) -> _Surfaces:
+        from meshcol.collision.mesh_query import MeshSet
+
+        involved = np.unique(body_pairs.ravel())
+        local = np.full(len(bodies), -1, dtype=np.int64)
+        local[involved] = np.arange(len(involved))
+        meshes = MeshSet.from_bodies([bodies[i] for i in involved])
+        return cls(meshes, np.stack([bodies[i].pose for i in involved]), local)
+
+    def pairs(self, table: PairTable, rows: np.ndarray) -> np.ndarray:
+        """(len(rows), 2) mesh index pairs of ``rows``."""
+        return self.local[table.body_pairs[rows]]
+
+
+def _subset(batch: Any, mask: np.ndarray) -> Any:
+    """The entries ``mask`` of a batch result (a dataclass of arrays)."""
+    fields = dataclasses.fields(batch)
+    return type(batch)(*(getattr(batch, f.name)[mask] for f in fields))
+
+
+def mesh_phase(
+    table: PairTable, placed: PlacedColliders, tolerance: float, threads: int = 0
+) -> PairTable:
+    """Exact triangle-mesh queries: rows with a ``mesh`` body, and containment of convex rows
+    that may nest (judged on the real surfaces).
+
+    A mesh row takes everything from the triangles, never from the hulls (a hull's depth
+    calls a concave resting contact penetrating): apart, the exact distance and closest
+    points; crossing, touching or nested, the mesh depth (a lower bound of the minimum
+    translation distance) and, when penetrating deeper than ``tolerance``, the intersection
+    volume. Only a body's box inside the other's can hold it, so only such convex rows are
+    tested for containment.
+    """
+    if len(table) == 0:
+        return table
+    mesh, exact = _exact_rows(table, placed, tolerance)
+    if not exact.any():
+        return table
+    from meshcol.collision.mesh_query import mesh_distance_batch
+
+    rows = np.flatnonzero(exact)
+    colliders = placed.colliders
+    surfaces = _Surfaces.of(colliders.bodies, table.body_pairs[rows])
+    found = mesh_distance_batch(
+        surfaces.meshes, surfaces.poses, surfaces.pairs(table, rows), threads=threads
+    )
+    inside = (found.a_inside_b | found.b_inside_a) & ~found.intersecting
+    out = table.writable(*MEASURES)
+    out.contained[rows] = inside
+    mesh_rows = rows[mesh[rows]]
+    on_mesh = _subset(found, mesh[rows])
+    hit = on_mesh.intersecting | inside[mesh[rows]]
+    _mesh_distances(out, mesh_rows, on_mesh, hit)
+    if hit.any():
+        _mesh_depths(out, mesh_rows[hit], _subset(on_mesh, hit), surfaces, tolerance, threads)
+    out.signed_distance[mesh_rows] = out.distance[mesh_rows] - out.depth[mesh_rows]
+    out.part_a[mesh_rows] = -1
+    out.part_b[mesh_rows] = -1
+    # the parts holding the closest points (hull parts where the surfaces cross)
+    tri_a, tri_b = on_mesh.triangle_a, on_mesh.triangle_b
+    labels_a = colliders.face_labels(out.body_a[mesh_rows], tri_a)
+    labels_b = colliders.face_labels(out.body_b[mesh_rows], tri_b)
+    out.label_a[mesh_rows] = np.where(tri_a >= 0, labels_a, out.label_a[mesh_rows])
+    out.label_b[mesh_rows] = np.where(tri_b >= 0, labels_b, out.label_b[mesh_rows])
+    return out
+
+
+def _mesh_distances(out: PairTable, rows: np.ndarray, found: Any, hit: np.ndarray) -> None:
+    """Mesh rows from the exact distance: apart, the distance, closest points and the unit
+    gap as normal; crossing, touching or nested (``hit``), distance 0."""
+    out.distance[rows] = np.where(hit, 0.0, found.distance)
+    out.depth[rows] = 0.0
+    apart = rows[~hit]
+    out.point_a[apart] = found.point_a[~hit]
+    out.point_b[apart] = found.point_b[~hit]
+    gap = found.point_b[~hit] - found.point_a[~hit]
+    length = np.linalg.norm(gap, axis=1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out.normal[apart] = np.where(length > 0, gap / length, out.normal[apart])
+    out.query_failed[rows] = np.isin(found.status, NO_ANSWER)
+
+
+def _mesh_depths(
+    out: PairTable,
+    rows: np.ndarray,
+    found: Any,
+    surfaces: _Surfaces,
+    tolerance: float,
+    threads: int,
+) -> None:
+    """Mesh rows whose surfaces cross, touch or nest: the mesh depth and its points; touching
+    without depth, the shared point and the normal of a's face there; penetrating, the
+    intersection volume."""
+    from meshcol.collision.mesh_query import mesh_intersection_volume, mesh_penetration_depth_batch
+
+    pairs = surfaces.pairs(out, rows)
+    depths = mesh_penetration_depth_batch(surfaces.meshes, surfaces.poses, pairs, threads=threads)
+    deep = depths.depth > 0.0
+    out.depth[rows] = np.where(np.isfinite(depths.depth), depths.depth, 0.0)
+    out.point_a[rows[deep]] = depths.point_a[deep]
+    out.point_b[rows[deep]] = depths.point_b[deep]
+    out.normal[rows[deep]] = depths.normal[deep]
+    touch = ~deep & found.intersecting
+    out.point_a[rows[touch]] = found.point_a[touch]
+    out.point_b[rows[touch]] = found.point_a[touch]
+    out.normal[rows[touch]] = _face_normals(
+        surfaces.meshes, pairs[touch, 0], found.triangle_a[touch], surfaces.poses
+    )
+    out.query_failed[rows] |= depths.status != int(Status.CONVERGED)
+    penetrating = rows[deep & (out.depth[rows] > tolerance)]
+    if len(penetrating):
+        out.intersection_volume[penetrating] = mesh_intersection_volume(
+            surfaces.meshes, surfaces.poses, surfaces.pairs(out, penetrating)
+        )
+
+
+def _face_normals(meshes: Any, mesh: np.ndarray, face: np.ndarray, poses: np.ndarray) -> np.ndarray:
+    """World unit normals (n, 3) of face ``face[k]`` of mesh ``mesh[k]`` (NaN when degenerate
+    or when the face is -1)."""
+    out = np.full((len(mesh), 3), np.nan)
+    ok = face >= 0
+    if not ok.any():
+        return out
+    rows = meshes.faces[meshes.face_offsets[mesh[ok]] + face[ok]]
+    corners = meshes.vertices[meshes.vertex_offsets[mesh[ok], None] + rows]
+    e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    local = np.stack(
+        [
+            e1[:, 1] * e2[:, 2] - e1[:, 2] * e2[:, 1],
+            e1[:, 2] * e2[:, 0] - e1[:, 0] * e2[:, 2],
+            e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0],
+        ],
+        axis=1,
+    )
+    world = np.einsum("kij,kj->ki", poses[mesh[ok], :3, :3], local)
+    length = np.linalg.norm(world, axis=1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out[ok] = np.where(length > 0, world / length, np.nan)
+    return out

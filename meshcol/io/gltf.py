@@ -1,0 +1,196 @@
+"""glTF 2.0 files (``.gltf`` JSON, ``.glb`` binary): their references checked, their mesh nodes
+read by trimesh and put back in the file's node order.
+
+trimesh indexes the file's lists with its references: a negative index silently takes an
+object from the end, a missing one fails with an unnamed IndexError or KeyError. Every
+reference is checked first and a bad one named (``node 3 refers to mesh 7, but the file has
+2 meshes``).
+"""
+
+from __future__ import annotations
+
+import json
+import struct
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from meshcol.errors import InvalidMeshError
+from meshcol.io.mesh_trimesh import load_scene, scene_nodes
+
+if TYPE_CHECKING:
+    from meshcol.io.mesh_formats import MeshNode
+
+__all__ = ["check_references", "read_glb", "read_gltf"]
+
+
+def read_gltf(file: Path, source: str) -> list[MeshNode]:
+    """The mesh nodes of a ``.gltf`` file, in the file's node order."""
+    check_references(_gltf_json(file, source), "GLTF", source)
+    return _file_order(file, "gltf", scene_nodes(load_scene(file, "gltf", source)))
+
+
+def read_glb(file: Path, source: str) -> list[MeshNode]:
+    """The mesh nodes of a ``.glb`` file, in the file's node order."""
+    check_references(_glb_json(file, source), "GLB", source)
+    return _file_order(file, "glb", scene_nodes(load_scene(file, "glb", source)))
+
+
+def _gltf_json(file: Path, source: str) -> Any:
+    try:
+        return json.loads(file.read_bytes().decode("utf-8-sig"))
+    except json.JSONDecodeError as error:
+        raise InvalidMeshError(
+            f"cannot parse GLTF file: invalid JSON at line {error.lineno} column {error.colno}: "
+            f"{error.msg}",
+            source,
+        ) from None
+    except UnicodeDecodeError:
+        raise InvalidMeshError("cannot parse GLTF file: not UTF-8 text", source) from None
+
+
+def _glb_json(file: Path, source: str) -> Any:
+    """The JSON chunk of a GLB file (its header checked)."""
+    data = file.read_bytes()
+    if len(data) < 20 or data[:4] != b"glTF":
+        raise InvalidMeshError("cannot parse GLB file: no glTF binary header", source)
+    length, kind = struct.unpack("<I4s", data[12:20])
+    if kind != b"JSON" or 20 + length > len(data):
+        raise InvalidMeshError("cannot parse GLB file: the first chunk is not JSON", source)
+    try:
+        return json.loads(data[20 : 20 + length].decode("utf-8-sig"))
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        raise InvalidMeshError(
+            "cannot parse GLB file: its JSON chunk is not valid", source
+        ) from None
+
+
+_SINGULAR = {
+    "scenes": "scene",
+    "nodes": "node",
+    "meshes": "mesh",
+    "accessors": "accessor",
+    "bufferViews": "bufferView",
+    "buffers": "buffer",
+}
+# glTF 2.0: byte, unsigned byte, short, unsigned short, unsigned int, float
+_COMPONENT_TYPES = (5120, 5121, 5122, 5123, 5125, 5126)
+_ACCESSOR_TYPES = ("SCALAR", "VEC2", "VEC3", "VEC4", "MAT2", "MAT3", "MAT4")
+
+
+class _Document:
+    """A glTF document's lists, and a check that a reference names one of their items."""
+
+    def __init__(self, document: Any, kind: str, source: str) -> None:
+        if not isinstance(document, dict):
+            raise InvalidMeshError(f"cannot parse {kind} file: the JSON is not an object", source)
+        self.document, self.kind, self.source = document, kind, source
+
+    def items(self, name: str) -> list:
+        value = self.document.get(name, [])
+        if not isinstance(value, list):
+            raise self.error(f"'{name}' is not an array")
+        return value
+
+    def check(self, where: str, value: Any, name: str) -> None:
+        count = len(self.items(name))
+        if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < count:
+            raise self.error(
+                f"{where} refers to {_SINGULAR[name]} {value!r}, but the file has {count} {name}"
+            )
+
+    def error(self, problem: str) -> InvalidMeshError:
+        return InvalidMeshError(f"cannot parse {self.kind} file: {problem}", self.source)
+
+
+def check_references(document: Any, kind: str, source: str) -> None:
+    """Refuse references to objects the glTF document does not have, naming the reference
+    (``kind``: ``GLTF`` or ``GLB``, for the message)."""
+    gltf = _Document(document, kind, source)
+    for check in _CHECKS:
+        check(gltf)
+
+
+def _check_scenes(gltf: _Document) -> None:
+    for k, scene in enumerate(gltf.items("scenes")):
+        for node in scene.get("nodes", []) if isinstance(scene, dict) else []:
+            gltf.check(f"scene {k}", node, "nodes")
+    if "scene" in gltf.document:
+        gltf.check("'scene'", gltf.document["scene"], "scenes")
+
+
+def _check_nodes(gltf: _Document) -> None:
+    for k, node in enumerate(gltf.items("nodes")):
+        if not isinstance(node, dict):
+            continue
+        for child in node.get("children", []):
+            gltf.check(f"node {k} children", child, "nodes")
+        if "mesh" in node:
+            gltf.check(f"node {k}", node["mesh"], "meshes")
+
+
+def _check_meshes(gltf: _Document) -> None:
+    for k, mesh in enumerate(gltf.items("meshes")):
+        primitives = mesh.get("primitives", []) if isinstance(mesh, dict) else []
+        for j, primitive in enumerate(primitives):
+            if not isinstance(primitive, dict):
+                continue
+            attributes = primitive.get("attributes", {})
+            if isinstance(attributes, dict) and "POSITION" in attributes:
+                where = f"mesh {k} primitive {j} POSITION"
+                gltf.check(where, attributes["POSITION"], "accessors")
+            if "indices" in primitive:
+                gltf.check(f"mesh {k} primitive {j} indices", primitive["indices"], "accessors")
+
+
+def _check_accessors(gltf: _Document) -> None:
+    for k, accessor in enumerate(gltf.items("accessors")):
+        if not isinstance(accessor, dict):
+            continue
+        if "bufferView" in accessor:
+            gltf.check(f"accessor {k}", accessor["bufferView"], "bufferViews")
+        if accessor.get("componentType") not in _COMPONENT_TYPES:
+            raise gltf.error(
+                f"accessor {k} has componentType {accessor.get('componentType')!r} (expected "
+                f"one of {', '.join(map(str, _COMPONENT_TYPES))})"
+            )
+        if accessor.get("type") not in _ACCESSOR_TYPES:
+            raise gltf.error(
+                f"accessor {k} has type {accessor.get('type')!r} (expected one of "
+                f"{', '.join(_ACCESSOR_TYPES)})"
+            )
+
+
+def _check_buffers(gltf: _Document) -> None:
+    for k, view in enumerate(gltf.items("bufferViews")):
+        if isinstance(view, dict):
+            gltf.check(f"bufferView {k}", view.get("buffer"), "buffers")
+    for k, buffer in enumerate(gltf.items("buffers")):
+        # only a GLB's first buffer may leave out its uri (it is the binary chunk)
+        if isinstance(buffer, dict) and "uri" not in buffer and (gltf.kind == "GLTF" or k > 0):
+            raise gltf.error(
+                f"buffer {k} has no uri (only the first buffer of a GLB file may be its binary "
+                "chunk)"
+            )
+
+
+_CHECKS: tuple[Callable[[_Document], None], ...] = (
+    _check_scenes,
+    _check_nodes,
+    _check_meshes,
+    _check_accessors,
+    _check_buffers,
+)
+
+
+def _file_order(file: Path, file_type: str, nodes: list) -> list:
+    """Order glTF mesh nodes as the file's node list does (trimesh's graph order differs)."""
+    data = file.read_bytes()
+    if file_type == "glb":
+        length = struct.unpack("<I", data[12:16])[0]
+        data = data[20 : 20 + length]
+    index: dict[str, int] = {}
+    for k, node in enumerate(json.loads(data).get("nodes", [])):
+        index.setdefault(str(node.get("name", "")), k)
+    # unnamed nodes keep trimesh's relative order, after the named ones
+    return sorted(nodes, key=lambda item: index.get(item[0], len(index)))

@@ -1,0 +1,145 @@
+"""The mesh file formats meshcol reads: one registry from a file extension to its reader.
+
+Each :class:`MeshFormat` says how a format is read and the conventions it carries: the core's
+parallel reader (OBJ, STL) or a Python reader that returns the file's mesh nodes, what an
+unnamed object is called, whether a caller must ask for it (COLLADA, for robot descriptions)
+and what it needs installed. :func:`meshcol.io.mesh_read.load_mesh` and ``load_meshes`` look a
+file up here and nowhere else; so do the manifests, the robot loaders and the fuzz target.
+
+Adding a format is one module with a reader (``read(file, source) -> list[MeshNode]``, see
+:data:`MeshNode`; corrupt content raises :class:`meshcol.errors.InvalidMeshError` worded
+``cannot parse <NAME> file: ...``) and one entry in :data:`FORMATS` (ARCHITECTURE.md, "Add a
+mesh format").
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from meshcol.errors import InputFileError, MissingDependencyError
+from meshcol.io import gltf, mesh_trimesh, off
+
+__all__ = [
+    "FORMATS",
+    "MESH_EXTENSIONS",
+    "MeshFormat",
+    "MeshNode",
+    "check_file",
+    "mesh_format",
+    "read_natively",
+]
+
+#: One mesh node of a file: ``(name, matrix, vertices, faces)``; ``matrix`` (4, 4) is the
+#: node's world transform (scale, shear and mirror allowed: the loader splits them off),
+#: ``vertices`` (n, 3) and ``faces`` (m, 3) array-likes in the node's frame.
+MeshNode = tuple[str, np.ndarray, object, object]
+
+
+@dataclass(frozen=True)
+class MeshFormat:
+    """How one mesh file format is read.
+
+    Attributes
+    ----------
+    name : str
+        The format's name (``"off"``); messages say ``cannot parse OFF file``.
+    extensions : tuple of str
+        Its file extensions, lower case with the dot.
+    read : callable or None
+        ``read(file: Path, source: str) -> list[MeshNode]``: every mesh node of the file, in
+        file order (none: no faces). None for a format the core reads.
+    native : int or None
+        The core's reader (``read_mesh_files``' format code): read in parallel, merged by
+        the core.
+    unnamed : str or None
+        The name of an object the file leaves unnamed, in a file of several (OBJ:
+        ``default``); None: the file's stem.
+    opt_in : str or None
+        A keyword of :func:`meshcol.io.mesh_read.load_mesh` that must be true to read the
+        format (``collada``); such a format is not one of the commands' own inputs.
+    requires : tuple of str or None
+        ``(module, install hint)``: a module the reader needs, checked before reading.
+    """
+
+    name: str
+    extensions: tuple[str, ...]
+    read: Callable[[Path, str], list] | None = None
+    native: int | None = None
+    unnamed: str | None = None
+    opt_in: str | None = None
+    requires: tuple[str, str] | None = None
+
+
+#: Every format, in the order messages list their extensions.
+FORMATS: tuple[MeshFormat, ...] = (
+    MeshFormat("obj", (".obj",), native=0, unnamed="default"),
+    MeshFormat("stl", (".stl",), native=1),
+    MeshFormat("ply", (".ply",), read=mesh_trimesh.read_ply),
+    MeshFormat("off", (".off",), read=off.read_off_file),
+    MeshFormat("glb", (".glb",), read=gltf.read_glb),
+    MeshFormat("gltf", (".gltf",), read=gltf.read_gltf),
+    MeshFormat(
+        "dae",
+        (".dae",),
+        read=mesh_trimesh.read_dae,
+        opt_in="collada",
+        requires=(
+            "collada",  # trimesh reads COLLADA with pycollada
+            "reading COLLADA (.dae) needs pycollada: pip install 'meshcol[robots]'",
+        ),
+    ),
+)
+
+_BY_EXTENSION = {extension: fmt for fmt in FORMATS for extension in fmt.extensions}
+
+#: File extensions (lower case) that :func:`meshcol.io.mesh_read.load_mesh` reads, mapped to
+#: the format's name (the commands' inputs: formats a caller opts in to are not listed).
+MESH_EXTENSIONS: dict[str, str] = {
+    extension: fmt.name for fmt in FORMATS if fmt.opt_in is None for extension in fmt.extensions
+}
+
+
+def mesh_format(source: str, opted_in: frozenset[str] = frozenset()) -> MeshFormat:
+    """The format of ``source`` by its extension (InputFileError when unknown, or when the
+    format needs an ``opt_in`` keyword that is not among ``opted_in``)."""
+    fmt = _BY_EXTENSION.get(os.path.splitext(source)[1].lower())
+    if fmt is None or (fmt.opt_in is not None and fmt.opt_in not in opted_in):
+        known = ", ".join(MESH_EXTENSIONS)
+        suffix = os.path.splitext(source)[1] or "(none)"
+        raise InputFileError(f"unknown mesh file extension {suffix!r} (expected {known})", source)
+    return fmt
+
+
+def read_natively(source: str) -> bool:
+    """True when the core reads ``source`` (by its extension): it can go in the one parallel
+    call of :func:`meshcol.io.mesh_read.load_meshes`."""
+    fmt = _BY_EXTENSION.get(os.path.splitext(source)[1].lower())
+    return fmt is not None and fmt.native is not None
+
+
+def check_file(source: str, opted_in: frozenset[str] = frozenset()) -> MeshFormat:
+    """The format of ``source``, once it is known to be a readable file: missing, a directory,
+    an unknown extension, a missing dependency or an unreadable file raise, in that order."""
+    file = Path(source)
+    if not file.exists():
+        raise InputFileError("file not found", source)
+    if file.is_dir():
+        raise InputFileError("is a directory, not a mesh file", source)
+    fmt = mesh_format(source, opted_in)
+    if fmt.requires is not None:
+        module, hint = fmt.requires
+        if importlib.util.find_spec(module) is None:
+            raise MissingDependencyError(hint, source)
+        return fmt  # its reader opens the file (and says what is wrong with it)
+    try:
+        with open(file, "rb"):
+            pass
+    except OSError as error:
+        raise InputFileError(f"cannot read file: {error.strerror or error}", source) from None
+    return fmt

@@ -1,0 +1,113 @@
+"""Mesh formats read by trimesh's loaders (PLY, glTF/GLB, COLLADA): a file's scene graph as
+mesh nodes, with trimesh's exceptions turned into one line that names the file.
+
+Only geometry is loaded (``process=False``, no materials kept): a textured file loads
+without Pillow.
+"""
+
+from __future__ import annotations
+
+import io
+import struct
+import zlib
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from meshcol.errors import InputFileError, InvalidMeshError
+
+if TYPE_CHECKING:
+    from meshcol.io.mesh_formats import MeshNode
+
+__all__ = ["read_bytes", "read_dae", "read_ply", "scene_nodes"]
+
+# What trimesh's parsers raise on corrupt content. Listed explicitly rather than catching
+# Exception, so programming errors still surface with a traceback.
+_PARSE_ERRORS = (
+    ValueError,  # includes json.JSONDecodeError and UnicodeDecodeError
+    IndexError,
+    KeyError,
+    TypeError,
+    AttributeError,
+    AssertionError,
+    EOFError,
+    OverflowError,
+    NotImplementedError,
+    struct.error,
+    zlib.error,
+)
+
+
+def read_ply(file: Path, source: str) -> list[MeshNode]:
+    """The meshes of a PLY file, named after their geometry (a header that is not UTF-8 is
+    re-encoded from Latin-1 first)."""
+    header = _ply_bytes(file, source)
+    stream = None if header is None else io.BytesIO(header)
+    return scene_nodes(load_scene(file, "ply", source, stream), by_geometry=True)
+
+
+def read_dae(file: Path, source: str) -> list[MeshNode]:
+    """The mesh nodes of a COLLADA file (robot descriptions reference them)."""
+    return scene_nodes(load_scene(file, "dae", source))
+
+
+def scene_nodes(scene: Any, by_geometry: bool = False) -> list[MeshNode]:
+    """``(name, matrix, vertices, faces)`` of every mesh node of a trimesh scene, in graph
+    order, named by node (or by geometry); point clouds, paths and faceless meshes are not
+    bodies."""
+    nodes = []
+    for node in scene.graph.nodes_geometry:
+        matrix, geometry_name = scene.graph[node]
+        geometry = scene.geometry[geometry_name]
+        faces = getattr(geometry, "faces", None)
+        if faces is None or len(faces) == 0:
+            continue
+        name = geometry_name if by_geometry else str(node)
+        nodes.append((name, np.asarray(matrix, dtype=np.float64), geometry.vertices, faces))
+    return nodes
+
+
+def load_scene(file: Path, file_type: str, source: str, stream: io.BytesIO | None = None):
+    """trimesh's scene of ``file`` (or of ``stream``, its bytes mended), every parse error
+    as :class:`InvalidMeshError` ``cannot parse <TYPE> file: ...``."""
+    import trimesh
+
+    try:
+        if stream is not None:
+            stream.name = file.name  # trimesh names an unnamed object after it
+            return trimesh.load_scene(stream, file_type=file_type, process=False)
+        return trimesh.load_scene(str(file), file_type=file_type, process=False)
+    except FileNotFoundError as error:
+        # a glTF buffer or image the file refers to
+        raise InvalidMeshError(
+            f"cannot parse {file_type.upper()} file: referenced file {error.args[-1]!r} not found",
+            source,
+        ) from None
+    except _PARSE_ERRORS as error:
+        detail = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+        raise InvalidMeshError(
+            f"cannot parse {file_type.upper()} file: {detail[:200]}", source
+        ) from None
+
+
+def read_bytes(file: Path, source: str) -> bytes:
+    """The file's bytes (InputFileError naming it when it cannot be read)."""
+    try:
+        return file.read_bytes()
+    except OSError as error:
+        raise InputFileError(f"cannot read file: {error.strerror or error}", source) from None
+
+
+def _ply_bytes(file: Path, source: str) -> bytes | None:
+    """A PLY file whose header (comments, obj_info) is not UTF-8, with the header re-encoded
+    from Latin-1; None when the file needs nothing (the data after the header is untouched)."""
+    data = read_bytes(file, source)
+    end = data.find(b"end_header")
+    if end < 0:
+        return None
+    try:
+        data[:end].decode("utf-8")
+        return None
+    except UnicodeDecodeError:
+        return data[:end].decode("latin-1").encode("utf-8") + data[end:]

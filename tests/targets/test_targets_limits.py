@@ -1,0 +1,116 @@
+"""Limits measured and met: each profile's limits brought within, checked independently."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial import ConvexHull
+
+from meshcol.collision.limits import limit_violations, measure_parts
+from meshcol.collision.target_fit import fit_hull
+from meshcol.io.targets import load_target, target_names
+
+
+def sphere(n: int, seed: int = 0) -> np.ndarray:
+    p = np.random.default_rng(seed).normal(size=(n, 3))
+    return p / np.linalg.norm(p, axis=1)[:, None]
+
+
+def cone(segments: int) -> np.ndarray:
+    t = np.linspace(0, 2 * np.pi, segments, endpoint=False)
+    return np.vstack([np.c_[np.cos(t), np.sin(t), np.zeros_like(t)], [[0, 0, 1]]])
+
+
+def distinct_planes(points: np.ndarray) -> np.ndarray:
+    """Brute force: scipy's facet equations, equal ones (to 1e-7) counted once."""
+    eq = ConvexHull(points).equations
+    keep: list[np.ndarray] = []
+    for e in eq:
+        if not any(np.abs(e - k).max() < 1e-7 for k in keep):
+            keep.append(e)
+    return np.array(keep)
+
+
+def check_independently(points: np.ndarray, out: np.ndarray, limits: dict) -> None:
+    hull = ConvexHull(out)
+    scale = np.ptp(points, axis=0).max()
+    assert (points @ hull.equations[:, :3].T + hull.equations[:, 3]).max() <= 1e-9 * scale
+    planes = distinct_planes(out)
+    if "max_hull_vertices" in limits:
+        assert len(hull.vertices) <= limits["max_hull_vertices"]
+    if "max_hull_polygons" in limits:
+        assert len(planes) <= limits["max_hull_polygons"]
+    if "max_hull_triangles" in limits:
+        assert 2 * len(hull.vertices) - 4 <= limits["max_hull_triangles"]
+    if "max_faces_per_vertex" in limits:
+        v = out[hull.vertices]
+        on = np.abs(v @ planes[:, :3].T + planes[:, 3]) < 1e-7 * scale
+        assert on.sum(axis=1).max() <= limits["max_faces_per_vertex"]
+
+
+def test_known_measures_of_a_box() -> None:
+    box = np.array([[x, y, z] for x in (0, 200) for y in (0, 1) for z in (0, 1)], float)
+    m = measure_parts([(box, None)])
+    assert m.vertices[0] == 8 and m.triangles[0] == 12 and m.polygons[0] == 6
+    assert m.max_faces_per_vertex[0] == 3
+    assert m.thickness[0] == pytest.approx(1.0)
+    assert m.volume[0] == pytest.approx(200.0)
+    assert m.inradius[0] == pytest.approx(0.5)
+    # the in-sphere centre of a long box is not unique (any point of its axis segment): the
+    # ratio lies between the centred one and the one from an end, both past 100
+    assert (
+        np.sqrt(100**2 + 0.5) / 0.5 - 1e-6
+        <= m.oblong_ratio[0]
+        <= np.sqrt(199.5**2 + 0.5) / 0.5 + 1e-6
+    )
+    found = limit_violations(load_target("physx-gpu"), m, 1)
+    assert [(v.rule, v.limit) for v in found] == [("MC102", "max_oblong_ratio")]
+
+
+def test_cone_apex_is_past_32_faces_per_vertex_and_is_brought_within() -> None:
+    points = cone(40)
+    assert measure_parts([(points, None)]).max_faces_per_vertex[0] == 40
+    fit = fit_hull(points, load_target("physx-gpu"))
+    assert fit.met, [v.message for v in fit.violations]
+    check_independently(points, fit.parts[0][0], dict(load_target("physx-gpu").limits))
+
+
+@pytest.mark.parametrize("name", target_names())
+def test_each_profile_brings_a_fine_sphere_within_its_counts(name: str) -> None:
+    points = sphere(400)
+    target = load_target(name)
+    fit = fit_hull(points, target, target.length_scale("m"))
+    assert fit.met, [v.message for v in fit.violations]
+    check_independently(points, fit.parts[0][0], dict(target.limits))
+    assert fit.added_volume >= 0 and fit.max_distance >= 0
+
+
+@pytest.mark.parametrize("name", ["bullet", "isaac"])
+def test_a_thin_plate_is_thickened_not_shrunk(name: str) -> None:
+    plate = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1e-5)], float)
+    target = load_target(name)
+    fit = fit_hull(plate, target)
+    assert fit.met, [v.message for v in fit.violations]
+    out = fit.parts[0][0]
+    check_independently(plate, out, dict(target.limits))
+    widths = np.ptp(out, axis=0)
+    assert widths[2] >= target.limits["min_thickness"] * (1 - 1e-9)
+    cost = next(c for c in fit.costs if c.limit == "min_thickness")
+    assert cost.before == pytest.approx(1e-5) and cost.standalone_added_volume > 0
+
+
+def test_a_flat_square_gets_a_mujoco_volume() -> None:
+    square = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float) * 1e-3
+    fit = fit_hull(square, load_target("mujoco"))
+    assert fit.met and fit.measures.volume[0] >= 1e-12 * (1 - 1e-9)
+
+
+@pytest.mark.slow
+def test_a_needle_meets_the_gpu_oblong_ratio() -> None:
+    rod = np.c_[np.linspace(0, 10, 30), np.zeros(30), np.zeros(30)]
+    rod[:, 1] += 1e-4 * np.sin(np.arange(30))
+    rod[:, 2] += 1e-4 * np.cos(np.arange(30))
+    fit = fit_hull(rod, load_target("physx-gpu"))
+    assert fit.met, [v.message for v in fit.violations]
+    assert fit.measures.oblong_ratio[0] <= 100
+    check_independently(rod, fit.parts[0][0], dict(load_target("physx-gpu").limits))
