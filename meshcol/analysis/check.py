@@ -49,6 +49,7 @@ from meshcol.analysis.check_report import CheckReport, check_report
 from meshcol.analysis.colliders import _geometry_key, build_colliders
 from meshcol.analysis.mesh_phase import mesh_phase
 from meshcol.analysis.pairs import broad_phase, classify, convex_phase, place
+from meshcol.io.robot import RobotOptions
 from meshcol.types import Scene
 from meshcol.vocabulary import PAIR_STATUSES
 
@@ -122,6 +123,7 @@ def check(
     timeout: float | None = None,
     executor: str = "local",
     ray_address: str | None = None,
+    robot_options: RobotOptions | None = None,
     **options: Any,
 ) -> CheckReport:
     """Load inputs and check every pair of bodies.
@@ -145,6 +147,8 @@ def check(
         Where the tasks run (:func:`meshcol.decomposition.executor.make_executor`).
     ray_address : str, optional
         The Ray cluster (default: a local Ray of ``jobs`` CPUs, stopped at the end).
+    robot_options : RobotOptions, optional
+        How a robot description is read (:func:`meshcol.io.scene.load_inputs`).
     **options
         Fields of :class:`CheckOptions` (``collider``, ``tolerance``, ``clearance``, ``fail_on``,
         ``ignore``, ``baseline`` (a path or a report dict), ``threads``, ``decompose_options``).
@@ -172,7 +176,7 @@ def check(
     opts.validate()
     started = time.perf_counter()
     run = {"jobs": jobs, "timeout": timeout, "executor": executor, "address": ray_address}
-    scene, decompose = _load(paths, opts, progress, **run)
+    scene, decompose = _load(paths, opts, progress, robot_options, **run)
     with collector_paused():
         return check_scene(
             scene,
@@ -187,15 +191,16 @@ def _load(
     inputs: list[str | os.PathLike[str]],
     options: CheckOptions,
     progress: Callable[[str], None] | None,
+    robot_options: RobotOptions | None = None,
     **run: Any,
 ) -> tuple[Scene, Callable[..., list[np.ndarray]] | None]:
     """The scene, and the convex parts made by per-file tasks when ``run`` asks for them
     (``jobs`` > 1, a ``timeout`` or an executor other than ``local``); else everything here."""
     if run["jobs"] > 1 or run["timeout"] is not None or run["executor"] != "local":
-        return _prepare_files(inputs, options, progress, **run)
+        return _prepare_files(inputs, options, progress, robot_options, **run)
     from meshcol.io.scene import load_inputs
 
-    return load_inputs(inputs), None
+    return load_inputs(inputs, robot_options=robot_options), None
 
 
 def _check_file(task: tuple[str, list[Any] | None, str, dict]) -> tuple[Any, Any, Any]:
@@ -231,6 +236,7 @@ def _prepare_files(
     inputs: list[str | os.PathLike[str]],
     options: CheckOptions,
     progress: Callable[[str], None] | None,
+    robot_options: RobotOptions | None = None,
     **run: Any,
 ) -> tuple[Scene, Callable[..., list[np.ndarray]]]:
     """:func:`load_inputs` and the decompositions with one executor task per file: the scene
@@ -251,9 +257,10 @@ def _prepare_files(
     whole = is_whole_scene(inputs)
     scene: Scene | None = None
     if whole:  # a manifest or robot is read here; its decompositions go out per mesh file
-        scene = load_inputs(inputs)
+        scene = load_inputs(inputs, robot_options=robot_options)
         tasks: list[tuple[str, list[Any] | None, str, dict]] = [
-            (path, bodies, kind, decompose_options) for path, bodies in iter_inputs(inputs)
+            (path, bodies, kind, decompose_options)
+            for path, bodies in iter_inputs(inputs, robot_options=robot_options)
         ]
     else:
         tasks = [(os.fspath(p), None, kind, decompose_options) for p in inputs]

@@ -51,6 +51,7 @@ from meshcol.analysis.colliders import build_colliders
 from meshcol.analysis.pairs import NO_ANSWER, PartPairIndex, broad_phase_batch
 from meshcol.errors import SceneError
 from meshcol.io.paths import display_path
+from meshcol.io.robot import RobotOptions
 from meshcol.vocabulary import MATRIX_COLLIDERS
 
 __all__ = [
@@ -250,19 +251,26 @@ class _RobotLinks:
         return [b.name for b in self.colliders.bodies]
 
 
-def _robot_links(source: str, options: MatrixOptions, report: Callable[[str], None]) -> _RobotLinks:
-    """Load the robot and build its links' colliders (hulls, or the decomposition)."""
+def _robot_links(
+    source: str,
+    options: MatrixOptions,
+    report: Callable[[str], None],
+    robot_options: RobotOptions | None = None,
+) -> _RobotLinks:
+    """Load the robot (read with ``robot_options``) and build its links' colliders (hulls, or
+    the decomposition)."""
     from meshcol.io.inputs import is_robot_file
     from meshcol.io.kinematics import adjacent_links
-    from meshcol.io.robot import current_robot_options, load_robot_model
+    from meshcol.io.robot import load_robot_model
 
     if os.path.isfile(source) and not is_robot_file(source):
         raise SceneError(
             "not a robot description (expected .urdf, .mjcf, or .xml with <robot> or <mujoco>)",
             source,
         )
-    model = load_robot_model(source)
-    given = current_robot_options().joints
+    robot_options = RobotOptions() if robot_options is None else robot_options
+    model = load_robot_model(source, robot_options)
+    given = robot_options.joints
     scene, kinematics = model.scene, model.kinematics
     colliders = build_colliders(
         scene.bodies,
@@ -404,6 +412,7 @@ def collision_matrix(
     robot: str | os.PathLike[str],
     *,
     progress: Callable[[str], None] | None = None,
+    robot_options: RobotOptions | None = None,
     **options: Any,
 ) -> CollisionMatrixReport:
     """Sample a robot's configurations and classify every pair of links.
@@ -411,10 +420,12 @@ def collision_matrix(
     Parameters
     ----------
     robot : path
-        A URDF or MJCF file; joint values, packages and keyframe come from the enclosing
-        :func:`meshcol.io.robot.robot_options` block (the CLI's robot options).
+        A URDF or MJCF file.
     progress : callable, optional
         Receives one-line progress messages (``collision-matrix: 3000/10000 configurations``).
+    robot_options : RobotOptions, optional
+        How the robot is read: its joint values (the default configuration), packages and
+        keyframe (:func:`meshcol.io.robot.load_robot_model`).
     **options
         Fields of :class:`MatrixOptions`.
 
@@ -437,7 +448,7 @@ def collision_matrix(
     opts.validate()
     report = progress or (lambda message: None)
     began = time.perf_counter()
-    links = _robot_links(os.fspath(robot), opts, report)
+    links = _robot_links(os.fspath(robot), opts, report, robot_options)
     load_seconds = time.perf_counter() - began
     sampler = _sampler(links, opts)
     at_default, counts = _sample(sampler, links.kinematics.space, opts, report)

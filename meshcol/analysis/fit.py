@@ -30,6 +30,7 @@ import numpy as np
 from meshcol.collision.fit import FIT_SHAPES, PrimitiveFit, fit_batch
 from meshcol.errors import InvalidMeshError
 from meshcol.geometry.rotations import quaternion_from_matrix
+from meshcol.io.robot import RobotOptions
 from meshcol.io.scene import as_scene
 from meshcol.types import Body, Box, Capsule, Cylinder, Sphere
 
@@ -531,6 +532,7 @@ def fit(
     out_dir: str | os.PathLike[str] | None = None,
     reserved: Sequence[tuple[str, str | os.PathLike[str] | None]] = (),
     progress: Callable[[str], None] | None = None,
+    robot_options: RobotOptions | None = None,
 ) -> FitReport:
     """An enclosing primitive around each body, in the world frame.
 
@@ -552,6 +554,8 @@ def fit(
         Other files the caller will write: no fit may go there.
     progress : callable, optional
         One line when the fits start (every body's in one native call).
+    robot_options : RobotOptions, optional
+        How a robot description is read (:func:`meshcol.io.scene.load_inputs`).
 
     Returns
     -------
@@ -571,7 +575,7 @@ def fit(
     if shape not in SHAPE_CHOICES:
         raise ValueError(f"shape must be one of {', '.join(SHAPE_CHOICES)}, got {shape!r}")
     output, out_dir = mesh_destinations(output, out_dir)
-    scene = as_scene(inputs)
+    scene = as_scene(inputs, robot_options)
     bodies = scene.bodies
     check_body_count(output, len(bodies))
 

@@ -16,6 +16,7 @@ from typing import Any
 from meshcol.errors import InvalidMeshError
 from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS, safe_name
 from meshcol.io.outputs import check_destinations
+from meshcol.io.robot import RobotOptions
 from meshcol.io.scene import as_scene
 from meshcol.types import Body
 
@@ -327,6 +328,7 @@ def hull(
     reserved: Sequence[tuple[str, str | os.PathLike[str] | None]] = (),
     progress: Callable[[str], None] | None = None,
     target: Any = None,
+    robot_options: RobotOptions | None = None,
 ) -> HullReport:
     """Convex hull of each body, in the world frame, optionally within a vertex budget.
 
@@ -357,6 +359,8 @@ def hull(
         ``min_volume`` are converted from metres to the scene's ``units`` (else the
         profile's). A limit that cannot be met is reported, never hidden: the row's
         ``target.violations`` (rule ids MC1xx/MC201) and ``exit_code`` 1.
+    robot_options : RobotOptions, optional
+        How a robot description is read (:func:`meshcol.io.scene.load_inputs`).
 
     Returns
     -------
@@ -384,7 +388,7 @@ def hull(
     ``note`` and a warning goes out.
     """
     output, out_dir = mesh_destinations(output, out_dir)
-    scene = as_scene(inputs)
+    scene = as_scene(inputs, robot_options)
     bodies = scene.bodies
     check_body_count(output, len(bodies))
     # Compute everything first: a bad body stops the run before any file is written.

@@ -39,6 +39,7 @@ from meshcol.analysis.inspect_tasks import inspect_in_tasks
 from meshcol.analysis.physics import PhysicsOptions, physics_readiness
 from meshcol.analysis.rules import Finding
 from meshcol.errors import InvalidMeshError, MeshcolError
+from meshcol.io.robot import RobotOptions
 from meshcol.types import Body
 
 __all__ = [
@@ -62,6 +63,7 @@ def inspect(
     timeout: float | None = None,
     executor: str = "local",
     ray_address: str | None = None,
+    robot_options: RobotOptions | None = None,
 ) -> InspectReport:
     """Inspect every body of the inputs: is each mesh fit to be a collider, and is its
     collider fit for physics?
@@ -91,6 +93,8 @@ def inspect(
         Where the tasks run (:func:`meshcol.decomposition.executor.make_executor`).
     ray_address : str, optional
         The Ray cluster (default: a local Ray of ``jobs`` CPUs, stopped at the end).
+    robot_options : RobotOptions, optional
+        How a robot description is read (:func:`meshcol.io.robot.load_robot`).
 
     Returns
     -------
@@ -108,7 +112,7 @@ def inspect(
     paths = [inputs] if isinstance(inputs, (str, os.PathLike)) else list(inputs)
     run = _task_run(jobs, timeout, executor, ray_address)
     errors = _InputErrors()
-    scene = _read_inputs(paths, errors, read_files=run is None)
+    scene = _read_inputs(paths, errors, read_files=run is None, robot_options=robot_options)
     geometries = GeometryCache()  # health and physics measure each mesh once between them
     bodies, inspected = _inspect_bodies(paths, scene, errors, progress, geometries, run)
     inspections, findings, unusable = _health(inspected, errors)
@@ -182,10 +186,15 @@ class _Inputs:
     warnings: list[str] = field(default_factory=list)
 
 
-def _read_inputs(paths: list[Any], errors: _InputErrors, read_files: bool) -> _Inputs:
-    """One manifest (read whole: its problem stops the run), one robot description, or mesh
-    files (an unreadable one is an error of the report; not read here when ``read_files`` is
-    false)."""
+def _read_inputs(
+    paths: list[Any],
+    errors: _InputErrors,
+    read_files: bool,
+    robot_options: RobotOptions | None = None,
+) -> _Inputs:
+    """One manifest (read whole: its problem stops the run), one robot description (read with
+    ``robot_options``), or mesh files (an unreadable one is an error of the report; not read
+    here when ``read_files`` is false)."""
     from meshcol.io.inputs import input_kind
     from meshcol.io.scene import iter_inputs, load_scene
 
@@ -194,20 +203,22 @@ def _read_inputs(paths: list[Any], errors: _InputErrors, read_files: bool) -> _I
         scene = load_scene(paths[0])
         return _Inputs(list(scene.bodies), scene.units)
     if kind == "robot":
-        return _read_robot(paths[0])
+        return _read_robot(paths[0], robot_options)
     if not read_files:
         return _Inputs(None)
     files = iter_inputs(paths, on_error=errors.add)
     return _Inputs([body for _, file_bodies in files for body in file_bodies])
 
 
-def _read_robot(path: Any) -> _Inputs:
-    """A robot's links (their collision geometry) and its visual geometry per link."""
+def _read_robot(path: Any, robot_options: RobotOptions | None = None) -> _Inputs:
+    """A robot's links (their collision geometry) and its visual geometry per link, read with
+    ``robot_options``."""
     from meshcol.io.robot import load_robot
 
-    scene = load_robot(path)
+    scene = load_robot(path, robot_options)
     try:
-        visuals = {body.name: body for body in load_robot(path, visual=True).bodies}
+        visual = load_robot(path, robot_options, visual=True)
+        visuals = {body.name: body for body in visual.bodies}
     except MeshcolError as error:
         warning = f"visual geometry not read, links compared with their collision meshes: {error}"
         return _Inputs(list(scene.bodies), scene.units, {}, [warning])

@@ -31,16 +31,17 @@ import numpy as np
 
 from meshcol.decomposition.options import DecomposeOptions, RunOptions
 from meshcol.errors import InvalidMeshError, MeshcolError
+from meshcol.io.robot import RobotOptions
 from meshcol.types import Body
 
 __all__ = ["robot_colliders", "rebuild_hulls", "rebuild_decomposition", "rebuild_fits"]
 
 
-def _load(path: str) -> tuple[Any, list[Any], str]:
-    from meshcol.io.robot import current_robot_options, description_kind, load_robot
+def _load(path: str, robot_options: RobotOptions) -> tuple[Any, list[Any], str]:
+    from meshcol.io.robot import description_kind, load_robot
 
     elements: list[Any] = []
-    scene = load_robot(path, current_robot_options(), elements=elements)
+    scene = load_robot(path, robot_options, elements=elements)
     return scene, elements, description_kind(path)
 
 
@@ -125,13 +126,14 @@ def robot_colliders(
     fit_options: Mapping[str, Any] | None = None,
     target: Any = None,
     progress: Callable[[str], None] | None = None,
+    robot_options: RobotOptions | None = None,
 ) -> tuple[Any, list[dict[str, Any]]]:
     """The colliders of a robot description and what each came from.
 
     Parameters
     ----------
     path : path
-        URDF or MJCF (read with :func:`meshcol.io.robot.current_robot_options`).
+        URDF or MJCF, read with ``robot_options``.
     method : {"hull", "decompose", "fit"}
     max_vertices : int, optional
         ``hull``: the vertex budget of each hull.
@@ -149,6 +151,9 @@ def robot_colliders(
         the element meets ``max_hulls``; each entry then has ``targets``, one report
         entry per decomposition.
     progress : callable, optional
+    robot_options : RobotOptions, optional
+        How the description is read (:func:`meshcol.io.robot.load_robot`); its package
+        folders also find the visual meshes a URDF written as MJCF keeps.
 
     Returns
     -------
@@ -165,7 +170,6 @@ def robot_colliders(
     InvalidMeshError
         An element with no hull (flat beyond repair, collinear), naming its link.
     """
-    from meshcol.io.robot import current_robot_options
     from meshcol.io.robot_write import RobotColliders
 
     if method not in METHODS:
@@ -174,7 +178,8 @@ def robot_colliders(
         raise ValueError("a target applies to hull and decompose, not fit")
     hull_limits = _hull_limits(method, target, max_vertices)
     source = os.fspath(path)
-    scene, elements, kind = _load(source)
+    robot_options = RobotOptions() if robot_options is None else robot_options
+    scene, elements, kind = _load(source, robot_options)
     groups = _groups(elements)
     kept, rebuilt = _elements(source, kind, groups)
     report = _Progress(progress, method, len(groups))
@@ -191,7 +196,7 @@ def robot_colliders(
         kind=kind,
         colliders=tuple(by_element[(link, index)] for link, index, _ in groups),
         link_poses=_link_poses(scene, elements),
-        package_paths=dict(current_robot_options().package_paths),
+        package_paths=dict(robot_options.package_paths),
     )
     return robot, [entry for _, entry in made]
 
@@ -426,6 +431,7 @@ def rebuild_hulls(
     warn: Callable[[str], None] | None = None,
     progress: Callable[[str], None] | None = None,
     target: Any = None,
+    robot_options: RobotOptions | None = None,
 ) -> Any:
     """``meshcol hull ROBOT --out-dir OUT``: one hull per collision element, and the description.
 
@@ -444,7 +450,12 @@ def rebuild_hulls(
     from meshcol.io.robot_write import description_path, part_files, write_robot
 
     robot, info = robot_colliders(
-        path, "hull", max_vertices=max_vertices, target=target, progress=progress
+        path,
+        "hull",
+        max_vertices=max_vertices,
+        target=target,
+        progress=progress,
+        robot_options=robot_options,
     )
     to = to or robot.kind
     written = write_robot(robot, out_dir, to, protected=reserved)
@@ -489,6 +500,7 @@ def rebuild_decomposition(
     reserved: tuple[tuple[str, str], ...] = (),
     progress: Callable[[str], None] | None = None,
     target: Any = None,
+    robot_options: RobotOptions | None = None,
 ) -> Any:
     """``meshcol decompose ROBOT --out-dir OUT``: the convex parts of every collision element
     and the description that uses them.
@@ -515,7 +527,13 @@ def rebuild_decomposition(
     settings = _decomposition_settings(options, run, target)
     aimed = options if target is None else options.aimed_at(target)
     robot, info = robot_colliders(
-        path, "decompose", options=aimed, run=run, target=target, progress=progress
+        path,
+        "decompose",
+        options=aimed,
+        run=run,
+        target=target,
+        progress=progress,
+        robot_options=robot_options,
     )
     to = to or robot.kind
     write_robot(robot, out_dir, to, protected=reserved)
@@ -594,6 +612,7 @@ def rebuild_fits(
     volume_tolerance: float | None = None,
     reserved: tuple[tuple[str, str], ...] = (),
     progress: Callable[[str], None] | None = None,
+    robot_options: RobotOptions | None = None,
 ) -> Any:
     """``meshcol fit ROBOT --out-dir OUT``: one enclosing primitive per collision element,
     written into the description as its own primitive element.
@@ -614,6 +633,7 @@ def rebuild_fits(
         "fit",
         fit_options={"shape": shape, "volume_tolerance": tolerance},
         progress=progress,
+        robot_options=robot_options,
     )
     to = to or robot.kind
     written = write_robot(robot, out_dir, to, protected=reserved)

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from meshcol.io.review import HIGHLIGHT, MESH_COLOR, PALETTE, ReviewPage
+from meshcol.io.robot import RobotOptions
 from meshcol.types import Body
 from meshcol.vocabulary import SEVERITY_ORDER
 
@@ -108,7 +109,11 @@ def _add_colliders(page: ReviewPage, colliders: Any, ids: list[int]) -> None:
 
 
 def check_page(
-    report: Any, inputs: Sequence[Any], collider: str, decompose_options: dict
+    report: Any,
+    inputs: Sequence[Any],
+    collider: str,
+    decompose_options: dict,
+    robot_options: RobotOptions | None = None,
 ) -> ReviewPage:
     """The page of ``meshcol check``: bodies, colliders, and the pairs sorted by severity
     (violations first); choosing a pair frames both bodies, marks the witness points, draws
@@ -116,7 +121,7 @@ def check_page(
     from meshcol.analysis.colliders import build_colliders
     from meshcol.io.scene import load_inputs
 
-    scene = load_inputs(list(inputs))
+    scene = load_inputs(list(inputs), robot_options=robot_options)
     colliders = build_colliders(
         scene.bodies, collider, mesh_parts="hull", decompose_options=decompose_options
     )
@@ -284,13 +289,19 @@ def _distance_to_parts(
     return best, nearest
 
 
-def decompose_page(report: Any, out_dir: str, inputs: Sequence[Any] | None = None) -> ReviewPage:
+def decompose_page(
+    report: Any,
+    out_dir: str,
+    inputs: Sequence[Any] | None = None,
+    robot_options: RobotOptions | None = None,
+) -> ReviewPage:
     """The page of ``meshcol decompose``: each body's mesh with its parts in distinct colours,
     the fidelity numbers per part, and the mesh faces farthest from the parts highlighted.
 
     ``inputs`` are the command's inputs (mesh files or a manifest; default: the report's
     files); their bodies are read as the run read them, each part of a body on its own and
-    at its pose, and the parts from the files the run wrote in ``out_dir`` (world frame)."""
+    at its pose (``robot_options``: as the run read a robot), and the parts from the files
+    the run wrote in ``out_dir`` (world frame)."""
     from meshcol.io.scene import iter_inputs
 
     page = ReviewPage("decompose", _title([f["path"] for f in report.files]), report.units)
@@ -300,9 +311,10 @@ def decompose_page(report: Any, out_dir: str, inputs: Sequence[Any] | None = Non
         "far", f"mesh faces far from the parts (over {FAR_SHARE:.0%} of the largest gap)", "#ff0000"
     )
     page.table("Parts", ["body", "part", "vertices", "volume", "covers", "farthest"])
+    paths = list(inputs or [f["path"] for f in report.files])
     bodies_by_source = {
         source: {part.name: part for whole in bodies for part in whole.part_bodies()}
-        for source, bodies in iter_inputs(list(inputs or [f["path"] for f in report.files]))
+        for source, bodies in iter_inputs(paths, robot_options=robot_options)
     }
     for entry in report.files:
         if entry["status"] != "ok":
@@ -452,11 +464,15 @@ def _findings(page: ReviewPage, body: Body, index: int) -> dict[str, int]:
 
 
 def _shape_page(
-    command: str, inputs: Sequence[Any], units: str | None, hulls: dict[str, tuple]
+    command: str,
+    inputs: Sequence[Any],
+    units: str | None,
+    hulls: dict[str, tuple],
+    robot_options: RobotOptions | None = None,
 ) -> ReviewPage:
     from meshcol.io.scene import load_inputs
 
-    scene = load_inputs(list(inputs))
+    scene = load_inputs(list(inputs), robot_options=robot_options)
     page = ReviewPage(command, _title(inputs), units if units is not None else scene.units)
     ids = _add_bodies(page, scene.bodies)
     page.group("hulls", "convex hulls", PALETTE[0])
@@ -502,21 +518,25 @@ def _hull_numbers(hull: tuple) -> tuple[float | None, float | None]:
     return closed_volume(hull[0], hull[1]), None
 
 
-def hull_page(report: Any, inputs: Sequence[Any]) -> ReviewPage:
+def hull_page(
+    report: Any, inputs: Sequence[Any], robot_options: RobotOptions | None = None
+) -> ReviewPage:
     """The page of ``meshcol hull``: each hull over its mesh, the volume it adds, and the
     mesh's findings."""
     hulls = {
         row["name"]: (h.vertices, h.faces, h.volume, h.added_volume if h.max_vertices else None)
         for row, h in zip(report.bodies, report.hulls)
     }
-    page = _shape_page("hull", inputs, report.units, hulls)
+    page = _shape_page("hull", inputs, report.units, hulls, robot_options)
     page.info.append(("max vertices", str(report.max_vertices or "exact hull")))
     return page
 
 
-def inspect_page(report: Any, inputs: Sequence[Any]) -> ReviewPage:
+def inspect_page(
+    report: Any, inputs: Sequence[Any], robot_options: RobotOptions | None = None
+) -> ReviewPage:
     """The page of ``meshcol inspect``: each mesh with its findings drawn on it (open edges,
     non-manifold edges, self-intersecting faces, inverted regions) and its hull over it."""
-    page = _shape_page("inspect", inputs, report.units, {})
+    page = _shape_page("inspect", inputs, report.units, {}, robot_options)
     page.info.append(("bodies", str(len(report.inspections))))
     return page

@@ -18,6 +18,7 @@ from meshcol.analysis.colliders import build_colliders
 from meshcol.analysis.pairs import overlapping_pairs
 from meshcol.errors import MeshcolError, SceneError
 from meshcol.io.report import vector_columns
+from meshcol.io.robot import RobotOptions
 from meshcol.io.scene import as_scene
 from meshcol.types import Body, Scene, TimeOfImpactStatus
 from meshcol.vocabulary import COLLIDER_KINDS
@@ -351,6 +352,7 @@ def sweep(
     threads: int = 0,
     decompose_options: dict | None = None,
     fail_on: str = "hit",
+    robot_options: RobotOptions | None = None,
 ) -> SweepReport:
     """Continuous collision over a scene: the first contact of every pair of bodies.
 
@@ -377,6 +379,8 @@ def sweep(
     fail_on : {"hit", "none"}
         Policy of :attr:`SweepReport.exit_code`: ``hit`` fails on any pair that is not
         separated.
+    robot_options : RobotOptions, optional
+        How a robot description is read (:func:`meshcol.io.scene.load_inputs`).
 
     Returns
     -------
@@ -397,7 +401,7 @@ def sweep(
     (:func:`meshcol.collision.narrowphase.intersects_batch`) finds no overlap at the start
     poses nor at the end poses.
     """
-    scene = _moving_scene(inputs, collider, fail_on)
+    scene = _moving_scene(inputs, collider, fail_on, robot_options)
     colliders = build_colliders(
         scene.bodies, collider, mesh_parts="triangles", decompose_options=decompose_options
     )
@@ -421,13 +425,16 @@ def sweep(
     )
 
 
-def _moving_scene(inputs: Any, collider: str, fail_on: str) -> Scene:
-    """The scene of ``inputs``, the options checked first; SceneError when no body moves."""
+def _moving_scene(
+    inputs: Any, collider: str, fail_on: str, robot_options: RobotOptions | None = None
+) -> Scene:
+    """The scene of ``inputs`` (a robot read with ``robot_options``), the options checked
+    first; SceneError when no body moves."""
     if collider not in COLLIDER_KINDS:
         raise ValueError(f"collider must be one of {', '.join(COLLIDER_KINDS)}, got {collider!r}")
     if fail_on not in FAIL_ON:
         raise ValueError(f"fail_on must be one of {', '.join(FAIL_ON)}, got {fail_on!r}")
-    scene = as_scene(inputs)
+    scene = as_scene(inputs, robot_options)
     if not any(b.end_pose is not None for b in scene.bodies):
         raise SceneError(
             "no body has an end pose or a velocity: nothing moves, nothing to sweep", scene.source

@@ -25,6 +25,7 @@ from meshcol.cli.common import (
     timeout_option,
     verdict,
 )
+from meshcol.io.robot import RobotOptions
 from meshcol.vocabulary import COLLIDER_KINDS
 
 FAIL_ON_CHOICES = tuple(FAIL_ON)
@@ -142,6 +143,7 @@ def check(
     report: str | None,
     fmt: str | None,
     html: str | None,
+    robot_options: RobotOptions,
     **options: Any,
 ) -> None:
     """Check every pair of bodies for contact, clearance and interpenetration.
@@ -184,11 +186,14 @@ def check(
             progress=progress,
             collider=shape,
             decompose_options=decompose_options,
+            robot_options=robot_options,
             **options,
         )
     finally:
         progress.done()
-    page = render_html(html, lambda: _review_page(result, inputs, shape, decompose_options))
+    page = render_html(
+        html, lambda: _review_page(result, inputs, shape, decompose_options, robot_options)
+    )
     emit_report(result, fmt, report)
     write_html(html, page)
     for warning in result.warnings:
@@ -197,10 +202,16 @@ def check(
     sys.exit(result.exit_code)
 
 
-def _review_page(result: Any, inputs: tuple[str, ...], shape: str, decompose: dict) -> Any:
+def _review_page(
+    result: Any,
+    inputs: tuple[str, ...],
+    shape: str,
+    decompose: dict,
+    robot_options: RobotOptions,
+) -> Any:
     from meshcol.analysis.review import check_page  # only with --html
 
-    return check_page(result, inputs, shape, decompose)
+    return check_page(result, inputs, shape, decompose, robot_options)
 
 
 def _decompose_options(engine: str, threshold: float | None, cache_dir: str | None) -> dict:

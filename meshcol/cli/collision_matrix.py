@@ -18,6 +18,7 @@ from meshcol.cli.common import (
     threads_option,
     verdict,
 )
+from meshcol.io.robot import RobotOptions
 from meshcol.vocabulary import MATRIX_COLLIDERS
 
 #: Rows of the summary table: the pairs that stay checked, most often colliding first.
@@ -97,6 +98,7 @@ def collision_matrix(
     threads: int,
     engine: str,
     cache_dir: str | None,
+    robot_options: RobotOptions,
 ) -> None:
     """Classify every pair of links of ROBOT (URDF or MJCF) as MoveIt's setup assistant does.
 
@@ -144,6 +146,7 @@ def collision_matrix(
             always_fraction=always_fraction,
             threads=threads,
             decompose_options=decompose,
+            robot_options=robot_options,
         )
     finally:
         progress.done()

@@ -9,9 +9,12 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
+
+if TYPE_CHECKING:
+    from meshcol.io.robot import RobotOptions
 
 #: Seconds of work before a progress line appears (on a terminal or not).
 PROGRESS_DELAY = 5.0
@@ -293,94 +296,108 @@ def verdict(command: str, passed: bool, detail: str) -> str:
     return f"meshcol: {command}: {'PASS' if passed else 'FAIL'}: {detail}"
 
 
+#: The robot flags of every command that takes a scene, in --help order.
+_ROBOT_FLAGS = (
+    click.option(
+        "--joint",
+        multiple=True,
+        metavar="NAME=VALUE",
+        help="Robot: one joint value (wins over --joints); repeatable.  [default: zero, or the "
+        "limit nearest zero]",
+    ),
+    click.option(
+        "--joints",
+        "joints_file",
+        type=click.Path(dir_okay=False),
+        default=None,
+        metavar="FILE.json",
+        help='Robot: joint values {"name": value} (radians, metres).  [default: none, every '
+        "joint at zero]",
+    ),
+    click.option(
+        "--keyframe",
+        is_flag=True,
+        help="Robot (MJCF): start from the model's first keyframe instead of qpos0.",
+    ),
+    click.option(
+        "--package-path",
+        multiple=True,
+        metavar="NAME=DIR",
+        help="Robot: folder of package NAME for package:// URIs (before ROS_PACKAGE_PATH "
+        "and the folders around the file); repeatable.  [default: none]",
+    ),
+)
+#: The self-collision flags of the commands that check a robot's pairs.
+_EXCLUSION_FLAGS = (
+    click.option(
+        "--srdf",
+        type=click.Path(dir_okay=False),
+        default=None,
+        metavar="FILE",
+        help="Robot: leave out the <disable_collisions> link pairs of this SRDF file.  "
+        "[default: none, only adjacent links are left out]",
+    ),
+    click.option(
+        "--include-adjacent",
+        is_flag=True,
+        help="Robot: also check pairs of links joined by a joint (left out by default).",
+    ),
+)
+
+
 def robot_options(exclusions: bool = False) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     """Add the options of a robot description input (URDF, MJCF) to a command that takes a
     scene: ``--joint NAME=VALUE`` (repeatable), ``--joints FILE.json``, ``--keyframe``,
     ``--package-path NAME=DIR`` (repeatable) and, with ``exclusions``, ``--srdf FILE`` and
-    ``--include-adjacent``. The command runs inside :func:`meshcol.io.robot.robot_options`, so
-    every robot file it loads is read with them; they do nothing for other inputs."""
+    ``--include-adjacent``. The command gets them as one parameter, ``robot_options`` (a
+    :class:`meshcol.io.robot.RobotOptions`), to pass to the library; they do nothing for
+    other inputs."""
     import functools
+
+    flags = _ROBOT_FLAGS + (_EXCLUSION_FLAGS if exclusions else ())
 
     def decorate(func: Callable[..., Any]) -> Callable[..., Any]:
         @functools.wraps(func)
         def run(*args: Any, **kwargs: Any) -> Any:
-            from meshcol.io.robot import RobotOptions, parse_joint_values
-            from meshcol.io.robot import robot_options as use
-
-            joint = kwargs.pop("joint")
-            joints_file = kwargs.pop("joints_file")
-            keyframe = kwargs.pop("keyframe")
-            package_path = kwargs.pop("package_path")
-            srdf = kwargs.pop("srdf", None)
-            include_adjacent = kwargs.pop("include_adjacent", False)
-            try:
-                values = parse_joint_values(joint, joints_file)
-            except ValueError as exc:
-                raise click.BadParameter(str(exc), param_hint="'--joint'") from None
-            packages = {}
-            for item in package_path:
-                name, sep, folder = item.partition("=")
-                if not sep or not name or not folder:
-                    raise click.BadParameter(
-                        f"must look like NAME=DIR, got {item!r}", param_hint="'--package-path'"
-                    )
-                packages[name] = folder
-            options = RobotOptions(
-                joints=values,
-                keyframe=keyframe,
-                package_paths=packages,
-                srdf=srdf,
-                include_adjacent=include_adjacent,
+            made = _make_robot_options(
+                kwargs.pop("joint"),
+                kwargs.pop("joints_file"),
+                kwargs.pop("keyframe"),
+                kwargs.pop("package_path"),
+                kwargs.pop("srdf", None),
+                kwargs.pop("include_adjacent", False),
             )
-            with use(options):
-                return func(*args, **kwargs)
+            return func(*args, robot_options=made, **kwargs)
 
         wrapped: Callable[..., Any] = run
-        if exclusions:
-            wrapped = click.option(
-                "--include-adjacent",
-                is_flag=True,
-                help="Robot: also check pairs of links joined by a joint (left out by default).",
-            )(wrapped)
-            wrapped = click.option(
-                "--srdf",
-                type=click.Path(dir_okay=False),
-                default=None,
-                metavar="FILE",
-                help="Robot: leave out the <disable_collisions> link pairs of this SRDF file.  "
-                "[default: none, only adjacent links are left out]",
-            )(wrapped)
-        wrapped = click.option(
-            "--package-path",
-            multiple=True,
-            metavar="NAME=DIR",
-            help="Robot: folder of package NAME for package:// URIs (before ROS_PACKAGE_PATH "
-            "and the folders around the file); repeatable.  [default: none]",
-        )(wrapped)
-        wrapped = click.option(
-            "--keyframe",
-            is_flag=True,
-            help="Robot (MJCF): start from the model's first keyframe instead of qpos0.",
-        )(wrapped)
-        wrapped = click.option(
-            "--joints",
-            "joints_file",
-            type=click.Path(dir_okay=False),
-            default=None,
-            metavar="FILE.json",
-            help='Robot: joint values {"name": value} (radians, metres).  [default: none, every '
-            "joint at zero]",
-        )(wrapped)
-        wrapped = click.option(
-            "--joint",
-            multiple=True,
-            metavar="NAME=VALUE",
-            help="Robot: one joint value (wins over --joints); repeatable.  [default: zero, or the "
-            "limit nearest zero]",
-        )(wrapped)
+        for flag in reversed(flags):
+            wrapped = flag(wrapped)
         return wrapped
 
     return decorate
+
+
+def _make_robot_options(
+    joint: tuple[str, ...],
+    joints_file: str | None,
+    keyframe: bool,
+    package_path: tuple[str, ...],
+    srdf: str | None,
+    include_adjacent: bool,
+) -> RobotOptions:
+    """The RobotOptions of the flags; a malformed ``--joint`` or ``--package-path`` is a
+    usage error naming the flag."""
+    from meshcol.io.robot import RobotOptions, parse_joint_values, parse_package_paths
+
+    try:
+        joints = parse_joint_values(joint, joints_file)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="'--joint'") from None
+    try:
+        packages = parse_package_paths(package_path)
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="'--package-path'") from None
+    return RobotOptions(joints, keyframe, packages, srdf, include_adjacent)
 
 
 def target_option(help: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:

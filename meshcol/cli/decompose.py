@@ -35,6 +35,7 @@ from meshcol.decomposition.options import (
 )
 from meshcol.io.formats import REPORT_FORMATS, describe_formats
 from meshcol.io.mesh_write import LAYOUTS
+from meshcol.io.robot import RobotOptions
 from meshcol.io.targets import target_names
 
 #: The command's help (``meshcol decompose -h``).
@@ -304,6 +305,7 @@ def decompose_command(
     resume: bool,
     executor: str,
     ray_address: str | None,
+    robot_options: RobotOptions,
 ) -> None:
     # an unknown --report extension stops the run before it starts
     report_fmt = report_format(report, report_fmt, option="--report-format")
@@ -317,13 +319,15 @@ def decompose_command(
     robot = _robot_input(ctx, inputs, options, run, outputs)
     progress = Progress(command="decompose", heartbeat=True)
     try:
-        result = _decompose(inputs, options, run, outputs, target, robot, progress.message)
+        result = _decompose(
+            inputs, options, run, outputs, target, robot, progress.message, robot_options
+        )
     finally:
         progress.done()
     if robot:
         _print_robot(result, outputs)
     else:
-        _print_files(result, outputs, inputs)
+        _print_files(result, outputs, inputs, robot_options)
     if result.exit_code:
         ctx.exit(result.exit_code)
 
@@ -454,6 +458,7 @@ def _decompose(
     target: Any,
     robot: bool,
     progress: Callable[[str], None],
+    robot_options: RobotOptions,
 ) -> Any:
     """The one library call: a robot's rebuild, or the run over files."""
     from meshcol.analysis.rebuild import rebuild_decomposition
@@ -470,6 +475,7 @@ def _decompose(
             reserved=(("the --report file", report_file),) if report_file else (),
             progress=progress,
             target=target,
+            robot_options=robot_options,
         )
     return decompose_files(
         inputs,
@@ -483,6 +489,7 @@ def _decompose(
         other_outputs=[p for p in (report_file, outputs.html, outputs.run_manifest) if p],
         run_manifest=outputs.run_manifest,
         resume=outputs.resume,
+        robot_options=robot_options,
     )
 
 
@@ -494,12 +501,16 @@ def _print_robot(result: Any, outputs: _Outputs) -> None:
     click.echo(verdict("decompose", result.exit_code == 0, detail), err=True)
 
 
-def _print_files(result: Any, outputs: _Outputs, inputs: tuple[str, ...]) -> None:
+def _print_files(
+    result: Any, outputs: _Outputs, inputs: tuple[str, ...], robot_options: RobotOptions
+) -> None:
     """The report, the review page, each file that failed and each target missed, and the
     verdict."""
     from meshcol.analysis.review import decompose_page
 
-    page = render_html(outputs.html, lambda: decompose_page(result, outputs.out_dir, inputs))
+    page = render_html(
+        outputs.html, lambda: decompose_page(result, outputs.out_dir, inputs, robot_options)
+    )
     emit_report(result, outputs.report_fmt, outputs.report)
     write_html(outputs.html, page)
     for entry in result.files:

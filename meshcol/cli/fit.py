@@ -16,6 +16,7 @@ from meshcol.cli.common import (
 )
 from meshcol.cli.mesh_outputs import run_mesh_command, written_to
 from meshcol.io.outputs import check_outputs
+from meshcol.io.robot import RobotOptions
 
 
 @click.command(
@@ -68,6 +69,7 @@ def fit(
     to: str | None,
     report: str | None,
     fmt: str | None,
+    robot_options: RobotOptions,
 ) -> None:
     """Enclosing primitive of each body: it contains every vertex of the mesh.
 
@@ -120,6 +122,7 @@ def fit(
         rebuild_fits,
         shape=shape,
         volume_tolerance=volume_tolerance,
+        robot_options=robot_options,
     )
     if report is not None or not (output or out_dir):
         emit_report(result, fmt, report)

@@ -21,6 +21,7 @@ from meshcol.cli.common import (
 )
 from meshcol.cli.mesh_outputs import run_mesh_command, written_to
 from meshcol.io.outputs import check_outputs
+from meshcol.io.robot import RobotOptions
 from meshcol.io.targets import target_names
 
 
@@ -71,6 +72,7 @@ def hull(
     report: str | None,
     fmt: str | None,
     html: str | None,
+    robot_options: RobotOptions,
 ) -> None:
     """Convex hull of each body, optionally within a vertex budget.
 
@@ -141,8 +143,9 @@ def hull(
         max_vertices=max_vertices,
         target=target,
         warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
+        robot_options=robot_options,
     )
-    page = render_html(html, lambda: hull_page(result, inputs))
+    page = render_html(html, lambda: hull_page(result, inputs, robot_options))
     if report is not None or not (output or out_dir):
         emit_report(result, fmt, report)
     write_html(html, page)

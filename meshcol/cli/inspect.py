@@ -28,6 +28,7 @@ from meshcol.cli.common import (
     write_html,
 )
 from meshcol.io.outputs import check_outputs
+from meshcol.io.robot import RobotOptions
 from meshcol.vocabulary import COLLIDER_KINDS
 
 
@@ -168,6 +169,7 @@ def inspect(
     executor: str,
     ray_address: str | None,
     html: str | None,
+    robot_options: RobotOptions,
 ) -> None:
     """Health check of each body's mesh: fit to be a collider?
 
@@ -228,10 +230,11 @@ def inspect(
             timeout=timeout,
             executor=executor,
             ray_address=ray_address,
+            robot_options=robot_options,
         )
     finally:
         progress.done()
-    page = render_html(html, lambda: inspect_page(result, inputs))
+    page = render_html(html, lambda: inspect_page(result, inputs, robot_options))
     emit_report(result, fmt, report)
     write_html(html, page)
     click.echo("\n".join(summary_lines(result)), err=True)

@@ -22,6 +22,7 @@ from meshcol.cli.common import (
     write_html,
 )
 from meshcol.io.outputs import check_outputs
+from meshcol.io.robot import RobotOptions
 from meshcol.vocabulary import COLLIDER_KINDS
 
 
@@ -73,6 +74,7 @@ def sweep(
     threads: int,
     cache_dir: str | None,
     html: str | None,
+    robot_options: RobotOptions,
 ) -> None:
     """First contact of moving bodies: meshcol sweep MANIFEST [options].
 
@@ -111,6 +113,7 @@ def sweep(
             threads=threads,
             decompose_options=decompose_options,
             fail_on=fail_on,
+            robot_options=robot_options,
         )
     finally:
         progress.done()

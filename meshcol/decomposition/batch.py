@@ -35,6 +35,7 @@ from meshcol.decomposition.tasks import (
 )
 from meshcol.decomposition.writing import FileResult, OutputGuard, PartsLayout, write_files
 from meshcol.errors import InvalidMeshError, MeshcolError
+from meshcol.io.robot import RobotOptions
 
 __all__ = ["decompose_files", "decompose_meshes"]
 
@@ -52,6 +53,7 @@ def decompose_files(
     other_outputs: Sequence[str | os.PathLike[str]] = (),
     run_manifest: str | os.PathLike[str] | None = None,
     resume: bool = False,
+    robot_options: RobotOptions | None = None,
     **fields: Any,
 ) -> DecomposeReport:
     """Decompose every body of every input file into convex parts and write them.
@@ -83,6 +85,8 @@ def decompose_files(
         (:mod:`meshcol.decomposition.manifest`); needs the cache.
     resume : bool
         Read ``run_manifest`` first: files done are taken from the cache, the others run.
+    robot_options : RobotOptions, optional
+        How a robot description is read (:func:`meshcol.io.scene.iter_inputs`).
     **fields
         Fields of either (``engine="vhacd"``, ``jobs=4``), which replace those given.
 
@@ -112,7 +116,7 @@ def decompose_files(
     settings = _settings(options, run, parts, target)
     manifest = _manifest(options, run_manifest, resume)
     guard = OutputGuard(parts, [*paths, *(os.fspath(p) for p in other_outputs)])
-    results = _run_files(paths, options, run, guard, manifest, progress)
+    results = _run_files(paths, options, run, guard, manifest, progress, robot_options)
     files, rows = write_files(results, parts, options, target, run.threads())
     return DecomposeReport(
         files, rows, settings, None, layout, fmt, options.max_hausdorff, options.max_parts
@@ -192,6 +196,7 @@ def _run_files(
     guard: OutputGuard,
     manifest: Any,
     progress: Callable[[str], None] | None,
+    robot_options: RobotOptions | None = None,
 ) -> list[FileResult]:
     """Every file read, looked up and, unless the cache has it, decomposed by a worker: what
     became of each, in input order. The engines always run in workers, so that this process
@@ -218,7 +223,8 @@ def _run_files(
             # hits needs none).
             pool.start(min(run.jobs, len(paths)))
         counter.slots = getattr(pool, "slots", 1)
-        results = _FileRun(paths, options, run, guard, manifest, counter).results(pool)
+        file_run = _FileRun(paths, options, run, guard, manifest, counter, robot_options)
+        results = file_run.results(pool)
     except BaseException as exc:
         # A signal (KeyboardInterrupt, SIGTERM's exception) abandons the run: no process stays.
         pool.close(interrupted=not isinstance(exc, Exception))
@@ -262,8 +268,10 @@ class _FileRun:
         guard: OutputGuard,
         manifest: Any,
         counter: _FileCounter,
+        robot_options: RobotOptions | None = None,
     ) -> None:
         self.paths, self.options, self.guard = paths, options, guard
+        self.robot_options = robot_options
         self.manifest, self.counter = manifest, counter
         self.task_options = TaskOptions.of(options, run)
         self.cache_root = run.cache_root()
@@ -289,7 +297,7 @@ class _FileRun:
 
     def _tasks(self) -> Iterator[tuple[str, list, TaskOptions]]:
         """The task of each file the cache does not have whole, as each file is read."""
-        for path, bodies in iter_files(self.paths):
+        for path, bodies in iter_files(self.paths, self.robot_options):
             self.guard.plan_file(path, bodies)
             index = len(self.files)
             self.files.append((path, bodies))

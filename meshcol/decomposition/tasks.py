@@ -13,12 +13,15 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from meshcol.decomposition.options import DecomposeOptions, RunOptions
 from meshcol.errors import InvalidMeshError
+
+if TYPE_CHECKING:
+    from meshcol.io.robot import RobotOptions
 
 __all__ = [
     "BodyMesh",
@@ -121,15 +124,18 @@ def search_task(
     ]
 
 
-def iter_files(inputs: Sequence[str]) -> Iterator[tuple[str, list[BodyMesh]]]:
+def iter_files(
+    inputs: Sequence[str], robot_options: RobotOptions | None = None
+) -> Iterator[tuple[str, list[BodyMesh]]]:
     """(file, its bodies) per input file, as each is read
-    (:func:`meshcol.io.scene.iter_inputs`): one task per file; a manifest's bodies without a
-    file of their own (primitives) belong to the manifest. Each part of a body is a body of
-    its own, as check's colliders decompose it (same cache key)."""
+    (:func:`meshcol.io.scene.iter_inputs`, a robot read with ``robot_options``): one task per
+    file; a manifest's bodies without a file of their own (primitives) belong to the
+    manifest. Each part of a body is a body of its own, as check's colliders decompose it
+    (same cache key)."""
     from meshcol.decomposition.canonical import canonical_geometry
     from meshcol.io.scene import iter_inputs
 
-    for source, bodies in iter_inputs(list(inputs)):
+    for source, bodies in iter_inputs(list(inputs), robot_options=robot_options):
         canonical = []
         for body in (part for whole in bodies for part in whole.part_bodies()):
             try:

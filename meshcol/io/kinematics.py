@@ -12,7 +12,7 @@ MJCF free and ball joints keep their default (see :attr:`Kinematics.held`).
   every joint type and every frame means what MuJoCo says.
 
 :func:`meshcol.io.robot.load_robot_model` builds them from the parsed file (the one parse and
-validation of robot descriptions); :func:`adjacent_links` is the adjacency rule of MoveIt's
+validation of robot descriptions, :mod:`meshcol.io.urdf` and :mod:`meshcol.io.mjcf`); :func:`adjacent_links` is the adjacency rule of MoveIt's
 setup assistant on their link tree.
 """
 
@@ -125,7 +125,7 @@ class UrdfKinematics(Kinematics):
         The root link (world frame).
     limits : callable
         ``limits(joint)``: ``(lower, upper)`` of a revolute or prismatic joint, None without
-        limits (:func:`meshcol.io.robot._limits`).
+        limits (:func:`meshcol.io.urdf._limits`).
     given : mapping of str to float
         Joint values the user gave: the default configuration there.
     loaded : mapping of str to float
@@ -149,76 +149,20 @@ class UrdfKinematics(Kinematics):
     ) -> None:
         self.name = name
         self.links = tuple(links)
-        index = {name: i for i, name in enumerate(self.links)}
+        index = {link: i for i, link in enumerate(self.links)}
         self.root = index[root]
         free = [
             j for j in joints if j.type in ("revolute", "continuous", "prismatic") and not j.mimic
         ]
-        column = {j.name: k for k, j in enumerate(free)}
-        lower, upper, default = [], [], []
-        for j in free:
-            bounds = limits(j) if j.type != "continuous" else None
-            if bounds is None or not all(math.isfinite(b) for b in bounds):
-                if j.type == "prismatic":
-                    raise SceneError(
-                        f"joint {j.name!r}: prismatic joint without limits: its range cannot be "
-                        "sampled",
-                        source,
-                    )
-                bounds = (-math.pi, math.pi)
-            lower.append(bounds[0])
-            upper.append(bounds[1])
-            zero_inside = bounds[0] <= 0.0 <= bounds[1]
-            default.append(
-                float(given[j.name])
-                if j.name in given
-                else (0.0 if zero_inside else 0.5 * (bounds[0] + bounds[1]))
-            )
-        self.space = JointSpace(
-            tuple(j.name for j in free),
-            np.asarray(lower, dtype=np.float64),
-            np.asarray(upper, dtype=np.float64),
-            np.asarray(default, dtype=np.float64),
-        )
+        self.space = _urdf_joint_space(free, limits, given, source)
         self.loaded = np.asarray([float(loaded.get(j.name, 0.0)) for j in free], np.float64)
         self.held = tuple(
             f"joint {j.name!r} is {j.type}: kept at identity"
             for j in joints
             if j.type in ("floating", "planar")
         )
-        # Joints parents first (a breadth-first walk from the root).
-        children: dict[str, list[Any]] = {}
-        for j in joints:
-            children.setdefault(j.parent, []).append(j)
-        ordered: list[Any] = []
-        frontier = [root]
-        while frontier:
-            below = []
-            for name in frontier:
-                for j in children.get(name, []):
-                    ordered.append(j)
-                    below.append(j.child)
-            frontier = below
-        self._steps: list[tuple[int, int, np.ndarray, str, np.ndarray, int, float, float]] = []
-        for j in ordered:
-            origin = np.eye(4) if j.origin is None else np.asarray(j.origin, dtype=np.float64)
-            axis = np.array([1.0, 0.0, 0.0]) if j.axis is None else np.asarray(j.axis, float)
-            kind = "fixed" if j.type in ("fixed", "floating", "planar") else j.type
-            if kind != "fixed":
-                norm = float(np.linalg.norm(axis))
-                if not math.isfinite(norm) or norm == 0.0:
-                    raise SceneError(
-                        f"joint {j.name!r}: axis must be a finite non-zero vector", source
-                    )
-                axis = axis / norm
-            col, multiplier, offset = column.get(j.name, -1), 1.0, 0.0
-            if j.mimic is not None and kind != "fixed":
-                col = column.get(j.mimic.joint, -1)
-                multiplier = 1.0 if j.mimic.multiplier is None else float(j.mimic.multiplier)
-                offset = 0.0 if j.mimic.offset is None else float(j.mimic.offset)
-            self._steps.append(
-                (index[j.parent], index[j.child], origin, kind, axis, col, multiplier, offset)
-            )
+        column = {j.name: k for k, j in enumerate(free)}
+        self._steps = [_urdf_step(j, index, column, source) for j in _parents_first(joints, root)]
         self.edges = np.array(
             [(index[j.parent], index[j.child]) for j in joints], dtype=np.int64
         ).reshape(-1, 2)
@@ -252,6 +196,84 @@ class UrdfKinematics(Kinematics):
                 )
             poses[:, child] = frame @ motion
         return poses
+
+
+#: One joint of :class:`UrdfKinematics`, parents first: parent and child link index, the
+#: joint origin (4, 4), its kind ("fixed", "revolute", "continuous", "prismatic"), its unit
+#: axis, the configuration column it reads (-1: none) and the mimic multiplier and offset.
+_Step = tuple[int, int, np.ndarray, str, np.ndarray, int, float, float]
+
+
+def _urdf_joint_space(
+    free: list[Any],
+    limits: Callable[[Any], tuple[float, float] | None],
+    given: Any,
+    source: str,
+) -> JointSpace:
+    """The sampling ranges (continuous and unlimited revolute joints: ``[-pi, pi]``) and the
+    default configuration (MoveIt's) of the free joints."""
+    lower, upper, default = [], [], []
+    for j in free:
+        bounds = limits(j) if j.type != "continuous" else None
+        if bounds is None or not all(math.isfinite(b) for b in bounds):
+            if j.type == "prismatic":
+                raise SceneError(
+                    f"joint {j.name!r}: prismatic joint without limits: its range cannot be "
+                    "sampled",
+                    source,
+                )
+            bounds = (-math.pi, math.pi)
+        lower.append(bounds[0])
+        upper.append(bounds[1])
+        zero_inside = bounds[0] <= 0.0 <= bounds[1]
+        default.append(
+            float(given[j.name])
+            if j.name in given
+            else (0.0 if zero_inside else 0.5 * (bounds[0] + bounds[1]))
+        )
+    return JointSpace(
+        tuple(j.name for j in free),
+        np.asarray(lower, dtype=np.float64),
+        np.asarray(upper, dtype=np.float64),
+        np.asarray(default, dtype=np.float64),
+    )
+
+
+def _parents_first(joints: Sequence[Any], root: str) -> list[Any]:
+    """The joints in a breadth-first walk from the root link."""
+    children: dict[str, list[Any]] = {}
+    for j in joints:
+        children.setdefault(j.parent, []).append(j)
+    ordered: list[Any] = []
+    frontier = [root]
+    while frontier:
+        below = []
+        for link in frontier:
+            for j in children.get(link, []):
+                ordered.append(j)
+                below.append(j.child)
+        frontier = below
+    return ordered
+
+
+def _urdf_step(j: Any, index: dict[str, int], column: dict[str, int], source: str) -> _Step:
+    """What :meth:`UrdfKinematics.link_poses` does for joint ``j`` (floating and planar
+    joints held fixed; the axis made a unit vector; a mimic joint reads its leader's
+    column)."""
+    origin = np.eye(4) if j.origin is None else np.asarray(j.origin, dtype=np.float64)
+    axis = np.array([1.0, 0.0, 0.0]) if j.axis is None else np.asarray(j.axis, float)
+    kind = "fixed" if j.type in ("fixed", "floating", "planar") else j.type
+    if kind != "fixed":
+        norm = float(np.linalg.norm(axis))
+        if not math.isfinite(norm) or norm == 0.0:
+            raise SceneError(f"joint {j.name!r}: axis must be a finite non-zero vector", source)
+        axis = axis / norm
+    col, multiplier, offset = column.get(j.name, -1), 1.0, 0.0
+    if j.mimic is not None and kind != "fixed":
+        col = column.get(j.mimic.joint, -1)
+        multiplier = 1.0 if j.mimic.multiplier is None else float(j.mimic.multiplier)
+        offset = 0.0 if j.mimic.offset is None else float(j.mimic.offset)
+    return (index[j.parent], index[j.child], origin, kind, axis, col, multiplier, offset)
 
 
 def mjcf_followers(model: Any) -> dict[int, tuple[int, np.ndarray]]:

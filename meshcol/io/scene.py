@@ -22,7 +22,7 @@ from typing import Any
 from meshcol.errors import InputFileError, MeshcolError, SceneError
 from meshcol.io.inputs import input_kind, is_robot_file
 from meshcol.io.mesh_read import load_mesh
-from meshcol.io.robot import load_robot
+from meshcol.io.robot import RobotOptions, load_robot
 from meshcol.io.scene_bodies import (
     build_bodies,
     read_mesh_files,
@@ -99,13 +99,15 @@ def _load_scene(source: str) -> Scene:
     return Scene(bodies=tuple(bodies), units=units, source=source, duration=duration)
 
 
-def as_scene(inputs: Any) -> Scene:
+def as_scene(inputs: Any, robot_options: RobotOptions | None = None) -> Scene:
     """A scene from what the library's analyses accept: a Scene, a Body, a sequence of
     Bodies, or input paths (:func:`load_inputs`; a single mesh file becomes the source).
 
     Parameters
     ----------
     inputs : Scene, Body, sequence of Body, path or sequence of paths
+    robot_options : RobotOptions, optional
+        How a robot description among the paths is read.
 
     Returns
     -------
@@ -120,22 +122,26 @@ def as_scene(inputs: Any) -> Scene:
     inputs = list(inputs)
     if inputs and all(isinstance(b, Body) for b in inputs):
         return Scene(bodies=tuple(inputs))
-    scene = load_inputs(inputs)
+    scene = load_inputs(inputs, robot_options=robot_options)
     if scene.source is None and len(inputs) == 1:
         scene = dataclasses.replace(scene, source=os.fspath(inputs[0]))
     return scene
 
 
-def load_inputs(paths: Sequence[str | os.PathLike[str]]) -> Scene:
+def load_inputs(
+    paths: Sequence[str | os.PathLike[str]], robot_options: RobotOptions | None = None
+) -> Scene:
     """Turn a command's input paths into one scene.
 
     Parameters
     ----------
     paths : sequence of str or path-like
         Either one scene manifest, one robot description (URDF or MJCF,
-        :func:`meshcol.io.robot.load_robot`, read with the options of the enclosing
-        :func:`meshcol.io.robot.robot_options` block), or any number of mesh and glTF/GLB
-        scene files.
+        :func:`meshcol.io.robot.load_robot`), or any number of mesh and glTF/GLB scene
+        files.
+    robot_options : RobotOptions, optional
+        How a robot description is read (joint values, packages, SRDF, adjacency); nothing
+        for other inputs.
 
     Returns
     -------
@@ -158,7 +164,7 @@ def load_inputs(paths: Sequence[str | os.PathLike[str]]) -> Scene:
     manifest = _single_manifest(paths)
     if manifest is not None:
         if is_robot_file(manifest):
-            return load_robot(manifest)
+            return load_robot(manifest, robot_options)
         return load_scene(manifest)
     bodies = [body for _, file_bodies in iter_inputs(paths) for body in file_bodies]
     source = os.fspath(paths[0]) if len(paths) == 1 else None
@@ -181,6 +187,7 @@ def _single_manifest(paths: Sequence[str | os.PathLike[str]]) -> str | os.PathLi
 def iter_inputs(
     paths: Sequence[str | os.PathLike[str]],
     on_error: Callable[[str, MeshcolError], None] | None = None,
+    robot_options: RobotOptions | None = None,
 ) -> Iterator[tuple[str, list[Body]]]:
     """:func:`load_inputs` one file at a time: ``(file, its bodies)`` as each file is read.
 
@@ -191,11 +198,13 @@ def iter_inputs(
 
     ``on_error(path, error)``, when given, receives each mesh file that cannot be read and the
     others are still yielded (``meshcol inspect`` keeps going); a manifest is read whole, so
-    its errors are raised whatever ``on_error`` is.
+    its errors are raised whatever ``on_error`` is. ``robot_options``: as
+    :func:`load_inputs`.
     """
     manifest = _single_manifest(paths)
     if manifest is not None:
-        scene = load_robot(manifest) if is_robot_file(manifest) else load_scene(manifest)
+        robot = is_robot_file(manifest)
+        scene = load_robot(manifest, robot_options) if robot else load_scene(manifest)
         groups: dict[str, list[Body]] = {}
         for body in scene.bodies:
             groups.setdefault(body.source or scene.source or body.name, []).append(body)

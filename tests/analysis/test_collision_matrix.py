@@ -16,7 +16,7 @@ from lxml import etree
 from meshcol.analysis.collision_matrix import collision_matrix
 from meshcol.cli import main
 from meshcol.io.kinematics import adjacent_links
-from meshcol.io.robot import RobotOptions, load_robot_model, robot_options
+from meshcol.io.robot import RobotOptions, load_robot_model
 
 # An arm of half thickness W from R0 to R1 about the z axis at height 1, a wall filling y >= 0
 # around it: a convex box meets the half-space y >= 0 iff one of its corners does, which is
@@ -156,8 +156,8 @@ def test_classes_and_rates_at_the_zero_default(arm: Path) -> None:
 def test_default_configuration_from_the_joint_values(arm: Path) -> None:
     # The arm pointing at -y clears the wall (its mimic twin points at +y); the ball lifted
     # clear of the post collides in 97 % of the samples: always.
-    with robot_options(RobotOptions(joints={"spin": -math.pi / 2, "lift": 1.0})):
-        report = collision_matrix(arm, samples=4000, seed=3)
+    given = RobotOptions(joints={"spin": -math.pi / 2, "lift": 1.0})
+    report = collision_matrix(arm, samples=4000, seed=3, robot_options=given)
     pairs = by_pair(report)
     assert pairs[("arm", "wall")]["class"] == "sometimes"
     assert within(pairs[("arm", "wall")]["rate"], ARM_WALL_RATE, 4000)

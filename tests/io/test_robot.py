@@ -7,9 +7,13 @@ python-fcl on the same convex hulls.
 
 from __future__ import annotations
 
+import dataclasses
+import importlib
+import inspect
 import itertools
 import json
 import math
+import pickle
 import re
 from pathlib import Path
 
@@ -23,7 +27,7 @@ from scipy.spatial import ConvexHull
 from meshcol.analysis.check import check_scene
 from meshcol.cli import main
 from meshcol.errors import SceneError
-from meshcol.io.robot import RobotOptions, is_robot_file, load_robot, robot_options
+from meshcol.io.robot import RobotOptions, is_robot_file, load_robot
 from meshcol.io.scene import load_inputs
 from meshcol.types import Box, Capsule, Cylinder
 
@@ -277,10 +281,12 @@ def test_joint_values_checked(tmp_path):
     joints = write(tmp_path, "q.json", json.dumps({"shoulder": 0.5, "slide": 0.1}))
     code, out, err = run("check", str(path), "--joints", str(joints), "--joint", "slide=0.2")
     assert code in (0, 1), err
-    with robot_options(RobotOptions(joints={"shoulder": 0.5, "slide": 0.2})):
-        expected = load_inputs([path])
-    with robot_options(RobotOptions(joints={"shoulder": 0.5, "slide": 0.1})):
-        file_only = load_inputs([path])
+    expected = load_inputs(
+        [path], robot_options=RobotOptions(joints={"shoulder": 0.5, "slide": 0.2})
+    )
+    file_only = load_inputs(
+        [path], robot_options=RobotOptions(joints={"shoulder": 0.5, "slide": 0.1})
+    )
 
     def hand_box(report: dict) -> np.ndarray:
         return np.array(next(b["aabb"] for b in report["bodies"] if b["name"] == "hand"))
@@ -288,6 +294,77 @@ def test_joint_values_checked(tmp_path):
     got = hand_box(json.loads(out))
     np.testing.assert_allclose(got, hand_box(check_scene(expected).to_dict()), atol=1e-12)
     assert not np.allclose(got, hand_box(check_scene(file_only).to_dict()))
+
+
+def test_robot_options_are_checked_when_made_and_never_change():
+    joints = {"a": 1, "b": np.float32(0.5)}
+    options = RobotOptions(joints=joints, package_paths={"p": Path("/x")}, srdf=Path("s.srdf"))
+    joints["a"] = 2.0  # the options hold a copy
+    assert dict(options.joints) == {"a": 1.0, "b": 0.5}
+    assert all(type(v) is float for v in options.joints.values())
+    assert dict(options.package_paths) == {"p": "/x"} and options.srdf == "s.srdf"
+    with pytest.raises(TypeError):
+        options.joints["a"] = 3.0
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        options.keyframe = True
+    assert pickle.loads(pickle.dumps(options)) == options  # they travel to worker processes
+    assert dataclasses.replace(options, keyframe=True).joints == options.joints
+    for bad, message in [
+        ({"a": math.nan}, "joint 'a': value must be finite, got nan"),
+        ({"a": math.inf}, "joint 'a': value must be finite, got inf"),
+        ({"a": "1"}, "joint 'a': value must be a number, got '1'"),
+        ({"a": True}, "joint 'a': value must be a number, got True"),
+        ({1: 0.0}, "joint name must be a string, got 1"),
+    ]:
+        with pytest.raises(ValueError, match=f"^{re.escape(message)}$"):
+            RobotOptions(joints=bad)
+    with pytest.raises(ValueError, match="package name must be a non-empty string"):
+        RobotOptions(package_paths={"": "/x"})
+    with pytest.raises(ValueError, match="package 'p': folder must be a non-empty path"):
+        RobotOptions(package_paths={"p": ""})
+    with pytest.raises(TypeError, match="keyframe must be True or False, got 1"):
+        RobotOptions(keyframe=1)
+
+
+@pytest.mark.parametrize(
+    "function",
+    [
+        "meshcol.io.scene:load_inputs",
+        "meshcol.io.scene:iter_inputs",
+        "meshcol.io.scene:as_scene",
+        "meshcol.analysis.check:check",
+        "meshcol.analysis.sweep:sweep",
+        "meshcol.analysis.inspect:inspect",
+        "meshcol.analysis.hull:hull",
+        "meshcol.analysis.fit:fit",
+        "meshcol.analysis.collision_matrix:collision_matrix",
+        "meshcol.analysis.rebuild:robot_colliders",
+        "meshcol.analysis.rebuild:rebuild_hulls",
+        "meshcol.analysis.rebuild:rebuild_decomposition",
+        "meshcol.analysis.rebuild:rebuild_fits",
+        "meshcol.decomposition.batch:decompose_files",
+    ],
+)
+def test_every_entry_point_that_reads_a_robot_takes_its_options(function):
+    module, name = function.split(":")
+    parameter = inspect.signature(getattr(importlib.import_module(module), name)).parameters
+    assert parameter["robot_options"].default is None
+
+
+def test_robot_options_reach_the_library_as_an_argument(tmp_path):
+    from meshcol.analysis.check import check
+
+    path = write(tmp_path, "chain.urdf", urdf(CHAIN))
+    options = RobotOptions(joints={"shoulder": 0.5}, include_adjacent=True)
+    report = check([path], robot_options=options)
+    default = check([path])
+    assert report.summary["excluded_pairs"] == 0 < default.summary["excluded_pairs"]
+
+    def arm_pose(scene) -> np.ndarray:
+        return next(b.pose for b in scene.bodies if b.name == "arm")
+
+    moved = arm_pose(load_inputs([path], robot_options=options))
+    assert not np.allclose(moved, arm_pose(load_inputs([path])))
 
 
 def test_zero_outside_limits_is_clamped_with_a_warning(tmp_path):

@@ -128,10 +128,9 @@ def run(*args: str) -> tuple[int, str, str]:
 def computed(path: Path, method: str = "hull", joints: dict | None = None, **kw):
     """What meshcol computes: the colliders and each part's world vertices by link."""
     from meshcol.analysis.rebuild import robot_colliders
-    from meshcol.io.robot import RobotOptions, robot_options
+    from meshcol.io.robot import RobotOptions
 
-    with robot_options(RobotOptions(joints=joints or {})):
-        robot, _ = robot_colliders(path, method, **kw)
+    robot, _ = robot_colliders(path, method, robot_options=RobotOptions(joints=joints or {}), **kw)
     world: dict[str, list[np.ndarray]] = {}
     for c in robot.colliders:
         pose = robot.link_poses[c.link]

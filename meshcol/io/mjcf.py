@@ -1,0 +1,323 @@
+"""MJCF read as a scene by MuJoCo itself: one body per MuJoCo body with collision geoms.
+
+The file is compiled by ``mujoco.MjModel.from_xml_path``, so defaults, classes and includes
+mean what MuJoCo says; geom poses come from ``mj_kinematics`` at the configuration (``qpos0``,
+or the first keyframe with ``keyframe``, then the joint values given; a joint coupled by
+``<equality><joint>`` follows its polynomial, as a URDF mimic joint). A body's collision
+geoms (``contype`` or ``conaffinity`` non-zero) are its parts; planes and height fields are
+skipped (not solids), ellipsoids are tessellated.
+
+:func:`read_mjcf` is the reader :func:`meshcol.io.robot.load_robot_model` dispatches to.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any, NamedTuple
+
+import numpy as np
+
+from meshcol.errors import MissingDependencyError, SceneError
+from meshcol.io.kinematics import (
+    Kinematics,
+    MjcfKinematics,
+    apply_mjcf_followers,
+    mjcf_followers,
+)
+from meshcol.io.links import (
+    JOINT_TOLERANCE,
+    CollisionElement,
+    LinkElement,
+    one_line,
+    parts_body,
+    primitive_body,
+    tessellate,
+)
+from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere
+
+if TYPE_CHECKING:
+    from meshcol.io.robot import RobotOptions
+
+__all__ = ["read_mjcf"]
+
+#: Followers of ``<equality><joint>``: joint id -> (leader id or -1, polynomial).
+Followers = dict[int, tuple[int, np.ndarray]]
+
+
+class _Geom(NamedTuple):
+    """A collision geom of the compiled model at the configuration."""
+
+    name: str
+    world: np.ndarray  # (4, 4) world from geom
+    primitive: Primitive | None
+    vertices: np.ndarray | None  # a mesh or ellipsoid in the geom frame
+    faces: np.ndarray | None
+    geom_id: int
+
+
+def read_mjcf(
+    source: str,
+    options: RobotOptions,
+    sink: list[CollisionElement] | None = None,
+    visual: bool = False,
+) -> tuple[Scene, set[str], Kinematics]:
+    """An MJCF file as a scene at the options' configuration.
+
+    Parameters
+    ----------
+    source : str
+        The ``.xml`` (``<mujoco>`` root) or ``.mjcf`` file.
+    options : RobotOptions
+        Joint values, keyframe and adjacency (package folders do not apply: MuJoCo finds
+        its assets).
+    sink : list, optional
+        Filled with one :class:`~meshcol.io.links.CollisionElement` per body part.
+    visual : bool
+        Read the geoms that collide with nothing (``contype`` and ``conaffinity`` 0) instead.
+
+    Returns
+    -------
+    (Scene, set of str, MjcfKinematics)
+        The scene (body order; parent and child bodies excluded unless
+        ``include_adjacent``, and the model's ``<contact><exclude>`` pairs), every body
+        name, and the model's kinematics.
+    """
+    mujoco = _import_mujoco(source)
+    try:
+        model = mujoco.MjModel.from_xml_path(source)
+    except Exception as exc:  # noqa: BLE001 - MuJoCo raises ValueError and others; its words
+        raise SceneError(f"MuJoCo rejects it: {one_line(str(exc))}", source) from None
+    data = mujoco.MjData(model)
+    warnings = _configure(mujoco, model, data, options, source)
+    mujoco.mj_kinematics(model, data)
+    names = [
+        mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) or f"body{b}"
+        for b in range(model.nbody)
+    ]
+    geoms = _geoms_by_body(mujoco, model, data, visual)
+    bodies = _bodies(model, data, names, geoms, source, sink)
+    scene = Scene(
+        bodies=tuple(bodies),
+        units="m",
+        source=source,
+        excluded_pairs=tuple(_exclusions(model, names, options.include_adjacent)),
+        warnings=tuple(warnings),
+    )
+    return scene, set(names), MjcfKinematics(model, np.array(data.qpos), source)
+
+
+def _import_mujoco(source: str) -> Any:
+    try:
+        import mujoco
+    except ImportError:
+        raise MissingDependencyError(
+            "reading MJCF needs mujoco (pip install 'meshcol[robots]')", source
+        ) from None
+    return mujoco
+
+
+# --- the configuration ------------------------------------------------------------------------
+
+
+def _configure(mujoco: Any, model: Any, data: Any, options: RobotOptions, source: str) -> list[str]:
+    """Set ``data.qpos`` to the configuration the scene is read at; the warnings it gave.
+
+    ``qpos0`` (or the first keyframe), then the values given; a joint whose ``qpos0`` is
+    outside its limits is clamped to them (not with a keyframe); followers of
+    ``<equality><joint>`` are set from their leaders; then every value must be within its
+    joint's limits."""
+    if options.keyframe:
+        if model.nkey == 0:
+            raise SceneError("--keyframe: the model has no <keyframe>", source)
+        data.qpos[:] = model.key_qpos[0]
+    else:
+        data.qpos[:] = model.qpos0
+    followers = mjcf_followers(model)
+    given = _set_given(mujoco, model, data, options.joints, followers, source)
+    warnings = [] if options.keyframe else _clamp_defaults(mujoco, model, data, given, followers)
+    configuration = np.array(data.qpos, dtype=np.float64)[None]
+    apply_mjcf_followers(model, configuration, followers)
+    data.qpos[:] = configuration[0]
+    _check_limits(mujoco, model, data, followers, source)
+    return warnings
+
+
+def _scalar_joint(mujoco: Any, model: Any, jid: int) -> bool:
+    """Hinge and slide joints: the ones that take one value."""
+    scalar = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+    return int(model.jnt_type[jid]) in scalar
+
+
+def _joint_name(mujoco: Any, model: Any, jid: int) -> str:
+    return mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, jid) or f"#{jid}"
+
+
+def _set_given(
+    mujoco: Any,
+    model: Any,
+    data: Any,
+    joints: Mapping[str, float],
+    followers: Followers,
+    source: str,
+) -> set[int]:
+    """Set the values given (each a hinge or slide joint that follows no other); their ids."""
+    given: set[int] = set()
+    for name, value in joints.items():
+        jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)
+        if jid < 0:
+            raise SceneError(f"joint {name!r} does not exist", source)
+        if not _scalar_joint(mujoco, model, jid):
+            raise SceneError(
+                f"joint {name!r} is a free or ball joint: only hinge and slide joints take a value",
+                source,
+            )
+        if jid in followers:
+            leader = followers[jid][0]
+            leader_name = _joint_name(mujoco, model, leader) if leader >= 0 else "(none)"
+            raise SceneError(
+                f"joint {name!r} follows joint {leader_name!r}"
+                " by an <equality><joint> constraint: set that one instead",
+                source,
+            )
+        data.qpos[model.jnt_qposadr[jid]] = value
+        given.add(jid)
+    return given
+
+
+def _clamp_defaults(
+    mujoco: Any, model: Any, data: Any, given: set[int], followers: Followers
+) -> list[str]:
+    """Clamp each limited joint not given whose ``qpos0`` is outside its limits; a warning
+    for each."""
+    warnings: list[str] = []
+    for jid in range(model.njnt):
+        if jid in given or jid in followers:
+            continue
+        if not model.jnt_limited[jid] or not _scalar_joint(mujoco, model, jid):
+            continue
+        lower, upper = (float(x) for x in model.jnt_range[jid])
+        address = model.jnt_qposadr[jid]
+        value = float(data.qpos[address])
+        nearest = min(max(value, lower), upper)
+        if nearest != value:
+            data.qpos[address] = nearest
+            name = _joint_name(mujoco, model, jid)
+            warnings.append(
+                f"joint {name!r}: qpos0 {value:g} is outside its limits "
+                f"[{lower:g}, {upper:g}]; at {nearest:g} (give --joint {name}=VALUE to choose)"
+            )
+    return warnings
+
+
+def _check_limits(mujoco: Any, model: Any, data: Any, followers: Followers, source: str) -> None:
+    """Every limited hinge and slide joint's value is within its limits (a follower's too)."""
+    for jid in range(model.njnt):
+        if not model.jnt_limited[jid] or not _scalar_joint(mujoco, model, jid):
+            continue
+        lower, upper = (float(x) for x in model.jnt_range[jid])
+        value = float(data.qpos[model.jnt_qposadr[jid]])
+        if not lower - JOINT_TOLERANCE <= value <= upper + JOINT_TOLERANCE:
+            how = ""
+            if jid in followers and followers[jid][0] >= 0:
+                how = f" (following {_joint_name(mujoco, model, followers[jid][0])!r})"
+            raise SceneError(
+                f"joint {_joint_name(mujoco, model, jid)!r}: value {value:g}{how} outside its "
+                f"limits [{lower:g}, {upper:g}]",
+                source,
+            )
+
+
+# --- geoms and bodies -------------------------------------------------------------------------
+
+
+def _geoms_by_body(mujoco: Any, model: Any, data: Any, visual: bool) -> dict[int, list[_Geom]]:
+    """The collision geoms (``visual``: the geoms that collide with nothing) of each body, at
+    their world poses; planes, height fields and unknown types left out."""
+    geom_type = {int(t): t.name for t in mujoco.mjtGeom.__members__.values()}
+    by_body: dict[int, list[_Geom]] = {}
+    for g in range(model.ngeom):
+        if (model.geom_contype[g] == 0 and model.geom_conaffinity[g] == 0) != visual:
+            continue
+        shape = _geom_shape(model, g, geom_type.get(int(model.geom_type[g]), ""))
+        if shape is None:
+            continue
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g) or f"geom{g}"
+        world = np.eye(4)
+        world[:3, :3] = np.asarray(data.geom_xmat[g], dtype=np.float64).reshape(3, 3)
+        world[:3, 3] = data.geom_xpos[g]
+        by_body.setdefault(int(model.geom_bodyid[g]), []).append(_Geom(name, world, *shape, g))
+    return by_body
+
+
+def _geom_shape(
+    model: Any, g: int, kind: str
+) -> tuple[Primitive | None, np.ndarray | None, np.ndarray | None] | None:
+    """A geom's ``(primitive, vertices, faces)`` in its own frame; None for a geom that is
+    not a solid meshcol reads (plane, height field, and types it does not know)."""
+    size = model.geom_size[g]
+    if kind == "mjGEOM_SPHERE":
+        return Sphere(float(size[0])), None, None
+    if kind == "mjGEOM_CAPSULE":
+        return Capsule(float(size[0]), 2.0 * float(size[1])), None, None
+    if kind == "mjGEOM_CYLINDER":
+        return Cylinder(float(size[0]), 2.0 * float(size[1])), None, None
+    if kind == "mjGEOM_BOX":
+        return Box((2.0 * float(size[0]), 2.0 * float(size[1]), 2.0 * float(size[2]))), None, None
+    if kind == "mjGEOM_ELLIPSOID":
+        vertices, faces = tessellate(Sphere(1.0))
+        return None, vertices * np.asarray(size[:3], dtype=np.float64), faces
+    if kind == "mjGEOM_MESH":
+        mesh = int(model.geom_dataid[g])
+        v0, nv = int(model.mesh_vertadr[mesh]), int(model.mesh_vertnum[mesh])
+        f0, nf = int(model.mesh_faceadr[mesh]), int(model.mesh_facenum[mesh])
+        vertices = np.array(model.mesh_vert[v0 : v0 + nv], dtype=np.float64)
+        return None, vertices, np.array(model.mesh_face[f0 : f0 + nf], dtype=np.int64)
+    return None
+
+
+def _bodies(
+    model: Any,
+    data: Any,
+    names: list[str],
+    geoms: dict[int, list[_Geom]],
+    source: str,
+    sink: list[CollisionElement] | None,
+) -> list[Body]:
+    """One body per MuJoCo body with geoms: a primitive at the geom's world pose when it has
+    one primitive geom, else a body of parts in the body frame."""
+    bodies = []
+    for b in range(model.nbody):
+        body_geoms = geoms.get(b)
+        if not body_geoms:
+            continue
+        body_pose = np.eye(4)
+        body_pose[:3, :3] = np.asarray(data.xmat[b], dtype=np.float64).reshape(3, 3)
+        body_pose[:3, 3] = data.xpos[b]
+        inverse = np.linalg.inv(body_pose)
+        local = [LinkElement(geom.name, inverse @ geom.world, *geom[2:5]) for geom in body_geoms]
+        if sink is not None:
+            sink.extend(
+                CollisionElement(names[b], geom.geom_id, *element[1:])
+                for geom, element in zip(body_geoms, local)
+            )
+        only = body_geoms[0]
+        if len(body_geoms) == 1 and only.primitive is not None:
+            bodies.append(primitive_body(names[b], source, only.primitive, only.world))
+        else:
+            bodies.append(parts_body(names[b], source, body_pose, local))
+    return bodies
+
+
+def _exclusions(model: Any, names: list[str], include_adjacent: bool) -> list[tuple[str, str, str]]:
+    """Parent and child bodies (as MuJoCo filters them; never the world body's children),
+    unless ``include_adjacent``, and the model's ``<contact><exclude>`` pairs."""
+    excluded: list[tuple[str, str, str]] = []
+    if not include_adjacent:
+        for b in range(1, model.nbody):
+            parent = int(model.body_parentid[b])
+            if parent != 0:  # MuJoCo never filters contacts with the world body
+                excluded.append((names[parent], names[b], "adjacent"))
+    for signature in model.exclude_signature:
+        a, b = int(signature) >> 16, int(signature) & 0xFFFF
+        excluded.append((names[a], names[b], "mjcf <exclude>"))
+    return excluded

@@ -1,0 +1,432 @@
+"""MJCF written around rebuilt colliders by MuJoCo's own model editor (``mujoco.MjSpec``).
+
+``OUT/ROBOT.xml`` follows the convention of MuJoCo Menagerie: visual geoms in group 2 with
+``contype="0" conaffinity="0"``, collision geoms in group 3, one mesh asset per part. An MJCF
+input is edited as MuJoCo read it (defaults, classes and includes resolved by MuJoCo; comments
+do not survive MuJoCo's writer). A URDF input is first rewritten
+(:func:`meshcol.io.urdf_write.urdf_text`) and then compiled by MuJoCo's URDF importer (bodies,
+joints, limits, inertials and mimic joints as MuJoCo reads them, ``fusestatic`` off so that
+every link stays a body); visual meshes MuJoCo cannot read (COLLADA) are converted to
+``OUT/visual_<name>.obj``. The model is compiled by MuJoCo before the text is returned. The
+format module of :func:`meshcol.io.robot_write.write_robot`.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from meshcol.errors import MeshcolError, MissingDependencyError, SceneError
+from meshcol.io.packages import resolve_mesh_reference
+from meshcol.io.urdf_write import format_numbers, urdf_text
+from meshcol.types import Box, Capsule, Cylinder, Sphere
+
+if TYPE_CHECKING:
+    from meshcol.io.robot_write import Collider, RobotColliders
+
+__all__ = ["mjcf_text"]
+
+#: Mesh formats MuJoCo reads itself; other visual meshes are converted to OBJ.
+_MUJOCO_MESH_FORMATS = (".stl", ".obj", ".msh")
+
+#: Geom attributes a part's extra geoms take from the geom they replace (MJCF).
+_GEOM_ATTRIBUTES = (
+    "classname",
+    "contype",
+    "conaffinity",
+    "condim",
+    "friction",
+    "solref",
+    "solimp",
+    "solmix",
+    "margin",
+    "gap",
+    "priority",
+    "rgba",
+    "material",
+    "density",
+    "group",
+)
+
+
+def _mujoco(source: str) -> Any:
+    try:
+        import mujoco
+    except ImportError:
+        raise MissingDependencyError(
+            "writing MJCF needs mujoco (pip install 'meshcol[robots]')", source
+        ) from None
+    return mujoco
+
+
+def mjcf_text(robot: RobotColliders, files: dict[int, list[str]], stage: str, out_dir: str) -> str:
+    """``OUT/ROBOT.xml`` in the Menagerie convention, compiled by MuJoCo before it is returned.
+
+    ``files``: the part files of each rebuilt collider (by its position in
+    ``robot.colliders``), written in ``stage`` and moved to ``out_dir`` afterwards."""
+    mujoco = _mujoco(robot.source)
+    stage_abs = os.path.abspath(stage)
+    if robot.kind == "urdf":
+        spec, exact = _spec_of_urdf(mujoco, robot, files, stage_abs)
+    else:
+        spec, exact = _spec_of_mjcf(mujoco, robot, files, stage_abs)
+    # Files by absolute path for MuJoCo's check and writer, then relative to OUT in the text.
+    _absolute_asset_files(spec, robot.source if robot.kind == "mjcf" else None)
+    spec.meshdir = ""
+    spec.texturedir = ""
+    _compile(mujoco, spec, robot.source)
+    markers = _mark(mujoco, spec, exact)
+    try:
+        text = spec.to_xml()
+    except Exception as exc:  # noqa: BLE001 - as _spec
+        raise SceneError(
+            f"MuJoCo cannot write the rebuilt model: {' '.join(str(exc).split())}", robot.source
+        ) from None
+    return _relative_files(_exact_geoms(text, markers), stage_abs, os.path.abspath(out_dir))
+
+
+def _spec_of_urdf(
+    mujoco: Any, robot: RobotColliders, files: dict[int, list[str]], stage: str
+) -> tuple[Any, list[Any]]:
+    """The rebuilt URDF as MuJoCo imports it, visual geoms in group 2 and collision geoms in
+    group 3; and the geoms of its fitted primitives (written at full precision)."""
+    spec = _spec_from_urdf(mujoco, robot, files, stage)
+    exact = _imported_primitives(mujoco, spec, robot)
+    for geom in spec.geoms:
+        if geom.contype == 0 and geom.conaffinity == 0:
+            geom.group = 2  # MuJoCo's importer puts URDF visuals in group 1
+        else:
+            geom.group = 3
+    return spec, exact
+
+
+def _spec_of_mjcf(
+    mujoco: Any, robot: RobotColliders, files: dict[int, list[str]], stage: str
+) -> tuple[Any, list[Any]]:
+    """The input MJCF as MuJoCo read it, each rebuilt geom made its parts (or its fitted
+    primitive), visual geoms in group 2 and collision geoms in group 3, collision meshes no
+    geom uses any more deleted; and the geoms of the fitted primitives."""
+    spec = _spec(mujoco, robot.source, lambda: mujoco.MjSpec.from_file(robot.source))
+    _compile(mujoco, spec, robot.source)
+    geoms = {geom.id: geom for geom in spec.geoms}
+    rebuilt = [geoms[c.index] for c in robot.colliders if not c.kept]
+    in_frame = _frame_inverses(mujoco, spec, robot.source, rebuilt)
+    mesh_names = {m.name for m in spec.meshes}
+    new_assets: set[str] = set()
+    exact: list[Any] = []
+    for i, collider in enumerate(robot.colliders):
+        geom = geoms[collider.index]
+        geom.group = 3
+        if collider.kept:
+            continue
+        if collider.fitted:
+            _mjcf_primitive(mujoco, geom, collider, in_frame.get(id(geom)))
+            exact.append(geom)
+            continue
+        added = _part_geoms(mujoco, spec, geom, files[i], stage, mesh_names, in_frame)
+        new_assets.update(added)
+    for geom in spec.geoms:
+        if geom.contype == 0 and geom.conaffinity == 0:
+            geom.group = 2
+    used = {geom.meshname for geom in spec.geoms if geom.meshname}
+    for mesh in list(spec.meshes):
+        if mesh.name not in used and mesh.name not in new_assets:
+            spec.delete(mesh)  # a collision mesh no geom uses any more
+    return spec, exact
+
+
+def _part_geoms(
+    mujoco: Any,
+    spec: Any,
+    geom: Any,
+    part_files: list[str],
+    stage: str,
+    mesh_names: set[str],
+    in_frame: dict[int, tuple[list[float], list[float]]],
+) -> list[str]:
+    """Make ``geom`` the first part's mesh geom and add one geom per further part (its
+    attributes copied, ``NAME_NN``; the geom's mass shared out); the mesh assets added."""
+    extra_mass = geom.mass / len(part_files) if not np.isnan(geom.mass) else None
+    added = []
+    for k, file in enumerate(part_files):
+        name = Path(file).stem
+        while name in mesh_names:
+            name += "_"
+        mesh_names.add(name)
+        added.append(name)
+        spec.add_mesh(name=name, file=os.path.join(stage, file))
+        target = geom if k == 0 else geom.parent.add_geom()
+        if k > 0:
+            for attribute in _GEOM_ATTRIBUTES:
+                setattr(target, attribute, getattr(geom, attribute))
+            if geom.name:
+                target.name = f"{geom.name}_{k:02d}"
+        if extra_mass is not None:
+            target.mass = extra_mass
+        target.type = mujoco.mjtGeom.mjGEOM_MESH
+        target.meshname = name
+        # The parts are in the body frame: no offset, no orientation of any kind (an
+        # euler/axisangle/xyaxes/zaxis attribute overrides quat in MuJoCo). A geom inside
+        # <frame> elements gets the inverse of their pose.
+        pos, quat = in_frame.get(id(target), ([0.0] * 3, [1.0, 0.0, 0.0, 0.0]))
+        target.pos = pos
+        target.quat = quat
+        target.alt.type = mujoco.mjtOrientation.mjORIENTATION_QUAT
+        target.fromto = [np.nan] * 6
+    if geom.name and len(part_files) > 1:
+        geom.name = f"{geom.name}_00"
+    return added
+
+
+def _imported_primitives(mujoco: Any, spec: Any, robot: RobotColliders) -> list[Any]:
+    """The geoms MuJoCo's URDF importer made of the fitted primitives: on the link's body, of
+    the primitive's type, size and position (the URDF carries them at full precision)."""
+    types = {
+        Box: mujoco.mjtGeom.mjGEOM_BOX,
+        Sphere: mujoco.mjtGeom.mjGEOM_SPHERE,
+        Cylinder: mujoco.mjtGeom.mjGEOM_CYLINDER,
+        Capsule: mujoco.mjtGeom.mjGEOM_CAPSULE,
+    }
+    found, taken = [], set()
+    for collider in robot.colliders:
+        if not collider.fitted:
+            continue
+        want = types[type(collider.primitive)]
+        for geom in spec.geoms:
+            if (
+                id(geom) not in taken
+                and geom.type == want
+                and geom.parent.name == collider.link
+                and np.allclose(geom.pos, collider.origin[:3, 3], rtol=0, atol=1e-12)
+            ):
+                taken.add(id(geom))
+                found.append(geom)
+                break
+    return found
+
+
+def _mark(mujoco: Any, spec: Any, geoms: list[Any]) -> dict[str, tuple[bool, dict[str, str]]]:
+    """Name each geom uniquely (its own name, or a marker that :func:`_exact_geoms` removes)
+    and keep its size, pos and quat at full precision: MuJoCo writes numbers with 6
+    significant digits, which can shrink a fitted primitive below what it must enclose."""
+    taken = {g.name for g in spec.geoms if g.name}
+    used = {mujoco.mjtGeom.mjGEOM_SPHERE: 1, mujoco.mjtGeom.mjGEOM_BOX: 3}
+    markers: dict[str, tuple[bool, dict[str, str]]] = {}
+    for k, geom in enumerate(geoms):
+        own = bool(geom.name)
+        if not own:
+            name = f"meshcol_fit_{k}"
+            while name in taken:
+                name += "_"
+            geom.name = name
+            taken.add(name)
+        size = np.asarray(geom.size, dtype=np.float64)[: used.get(geom.type, 2)]
+        values = {"size": size, "pos": geom.pos, "quat": geom.quat}
+        markers[geom.name] = (own, {key: format_numbers(v) for key, v in values.items()})
+    return markers
+
+
+def _exact_geoms(text: str, markers: dict[str, tuple[bool, dict[str, str]]]) -> str:
+    """MuJoCo's XML with the marked geoms' numbers as :func:`_mark` kept them."""
+    if not markers:
+        return text
+    from lxml import etree
+
+    root = etree.fromstring(text.encode("utf-8"))
+    for geom in root.iter("geom"):
+        entry = markers.get(geom.get("name") or "")
+        if entry is None:
+            continue
+        own, attributes = entry
+        for key, value in attributes.items():
+            geom.set(key, value)
+        for key in ("euler", "axisangle", "xyaxes", "zaxis", "fromto"):
+            geom.attrib.pop(key, None)
+        if not own:
+            del geom.attrib["name"]
+    return etree.tostring(root, encoding="unicode") + "\n"
+
+
+def _mjcf_primitive(
+    mujoco: Any, geom: Any, collider: Collider, frame: tuple[list[float], list[float]] | None
+) -> None:
+    """Make a geom the fitted primitive at the collider's origin (body frame; ``frame``: the
+    (pos, quat) that cancels the ``<frame>`` elements around the geom)."""
+    from meshcol.geometry.rotations import quaternion_from_matrix
+
+    p = collider.primitive
+    if isinstance(p, Box):
+        geom.type = mujoco.mjtGeom.mjGEOM_BOX
+        geom.size = [s / 2.0 for s in p.size]
+    elif isinstance(p, Sphere):
+        geom.type = mujoco.mjtGeom.mjGEOM_SPHERE
+        geom.size = [p.radius, 0.0, 0.0]
+    elif isinstance(p, Cylinder):
+        geom.type = mujoco.mjtGeom.mjGEOM_CYLINDER
+        geom.size = [p.radius, p.length / 2.0, 0.0]
+    else:
+        assert isinstance(p, Capsule)
+        geom.type = mujoco.mjtGeom.mjGEOM_CAPSULE
+        geom.size = [p.radius, p.length / 2.0, 0.0]
+    geom.meshname = ""
+    pos = np.asarray(collider.origin[:3, 3], dtype=np.float64)
+    quat = np.asarray(quaternion_from_matrix(collider.origin[:3, :3]), dtype=np.float64)
+    if frame is not None:  # the frames' inverse, then the fit: inverse * origin
+        frame_pos, frame_quat = (np.asarray(v, dtype=np.float64) for v in frame)
+        rotation = np.zeros(9)
+        mujoco.mju_quat2Mat(rotation, frame_quat)
+        pos = rotation.reshape(3, 3) @ pos + frame_pos
+        composed = np.zeros(4)
+        mujoco.mju_mulQuat(composed, frame_quat, quat)
+        quat = composed
+    geom.pos = pos.tolist()
+    geom.quat = quat.tolist()
+    geom.alt.type = mujoco.mjtOrientation.mjORIENTATION_QUAT
+    geom.fromto = [np.nan] * 6
+
+
+def _relative_files(text: str, stage: str, out_dir: str) -> str:
+    """MuJoCo's XML with every asset file relative to the output folder (the stage's files
+    by name: they move into it)."""
+    from lxml import etree
+
+    root = etree.fromstring(text.encode("utf-8"))
+    for element in root.iter("mesh", "hfield", "texture", "skin"):
+        file = element.get("file")
+        if not file or not os.path.isabs(file):
+            continue
+        if os.path.dirname(file) == stage:
+            element.set("file", os.path.basename(file))
+        else:
+            element.set("file", Path(os.path.relpath(file, out_dir)).as_posix())
+    return etree.tostring(root, encoding="unicode") + "\n"
+
+
+def _frame_inverses(
+    mujoco: Any, spec: Any, source: str, geoms: list[Any]
+) -> dict[int, tuple[list[float], list[float]]]:
+    """For each geom placed inside ``<frame>`` elements, the (pos, quat) that cancels the
+    frames' pose in the body frame, keyed by ``id(geom)``: a probe sphere at the frame's
+    origin is compiled, and its compiled pose is the frames' pose (what MuJoCo makes of
+    nested frames and their orientation attributes)."""
+    framed = [g for g in geoms if g.frame is not None]
+    if not framed:
+        return {}
+    probes = []
+    for geom in framed:
+        probe = geom.parent.add_geom()
+        probe.type = mujoco.mjtGeom.mjGEOM_SPHERE
+        probe.size = [1.0, 0.0, 0.0]
+        probe.contype = probe.conaffinity = 0
+        probe.set_frame(geom.frame)
+        probes.append(probe)
+    model = _compile(mujoco, spec, source)
+    out: dict[int, tuple[list[float], list[float]]] = {}
+    for geom, probe in zip(framed, probes):
+        pos = np.array(model.geom_pos[probe.id], dtype=np.float64)
+        quat = np.array(model.geom_quat[probe.id], dtype=np.float64)
+        conjugate = quat * np.array([1.0, -1.0, -1.0, -1.0])
+        rotation = np.zeros(9)
+        mujoco.mju_quat2Mat(rotation, quat)
+        inverse_pos = -(rotation.reshape(3, 3).T @ pos)
+        out[id(geom)] = (inverse_pos.tolist(), conjugate.tolist())
+    for probe in probes:
+        spec.delete(probe)
+    return out
+
+
+def _spec(mujoco: Any, source: str, make: Any) -> Any:
+    try:
+        return make()
+    except Exception as exc:  # noqa: BLE001 - MuJoCo raises ValueError and others; its words
+        raise SceneError(f"MuJoCo rejects it: {' '.join(str(exc).split())}", source) from None
+
+
+def _compile(mujoco: Any, spec: Any, source: str) -> Any:
+    try:
+        return spec.compile()
+    except Exception as exc:  # noqa: BLE001 - as _spec
+        raise SceneError(
+            f"MuJoCo rejects the rebuilt model: {' '.join(str(exc).split())}", source
+        ) from None
+
+
+def _absolute_asset_files(spec: Any, mjcf: str | None) -> None:
+    """Each mesh, height field and texture file by its absolute path."""
+    base = spec.modelfiledir or (os.path.dirname(os.path.abspath(mjcf)) if mjcf else "")
+    for assets, folder in (
+        (spec.meshes, spec.meshdir),
+        (spec.hfields, spec.meshdir),
+        (spec.textures, spec.texturedir),
+    ):
+        for asset in assets:
+            file = getattr(asset, "file", "")
+            if not file:
+                continue
+            path = file if os.path.isabs(file) else os.path.join(base, folder or "", file)
+            asset.file = os.path.abspath(path)
+
+
+def _spec_from_urdf(
+    mujoco: Any, robot: RobotColliders, files: dict[int, list[str]], stage: str
+) -> Any:
+    """MuJoCo's URDF importer on the rebuilt URDF: every mesh by absolute path, COLLADA and
+    other visual meshes MuJoCo does not read converted to OBJ in the stage."""
+    from lxml import etree
+
+    text = urdf_text(robot, files, {"collider": stage + os.sep})
+    root = etree.fromstring(text.encode("utf-8"))
+    converted: dict[str, str] = {}
+    for link in root.findall("link"):
+        for visual in link.findall("visual"):
+            for mesh in visual.iter("mesh"):
+                reference = mesh.get("filename") or ""
+                path = resolve_mesh_reference(robot.source, reference, robot.package_paths)
+                if path is None or not os.path.isfile(path):
+                    raise SceneError(
+                        f"link {link.get('name')!r}: visual mesh {reference!r} not found",
+                        robot.source,
+                    )
+                if Path(path).suffix.lower() not in _MUJOCO_MESH_FORMATS:
+                    path = converted.get(path) or _convert_visual(path, stage, converted, robot)
+                mesh.set("filename", path)
+    extension = root.find("mujoco")
+    if extension is None:
+        extension = etree.SubElement(root, "mujoco")
+    compiler = extension.find("compiler")
+    if compiler is None:
+        compiler = etree.SubElement(extension, "compiler")
+    # Keep visuals, every link a body, file paths as written.
+    compiler.set("discardvisual", "false")
+    compiler.set("fusestatic", "false")
+    compiler.set("strippath", "false")
+    xml = etree.tostring(root, encoding="unicode")
+    return _spec(mujoco, robot.source, lambda: mujoco.MjSpec.from_string(xml))
+
+
+def _convert_visual(path: str, stage: str, converted: dict[str, str], robot: RobotColliders) -> str:
+    """A visual mesh MuJoCo cannot read, as one OBJ in the stage (``visual_<stem>.obj``)."""
+    from meshcol.io.mesh_read import load_mesh
+    from meshcol.io.mesh_write import safe_name, write_meshes
+
+    try:
+        bodies = load_mesh(path, collada=True)
+    except MeshcolError as error:
+        raise SceneError(f"visual mesh {path}: {error.message}", robot.source) from None
+    vertices, faces, base = [], [], 0
+    for body in bodies:
+        vertices.append(body.vertices @ body.pose[:3, :3].T + body.pose[:3, 3])
+        faces.append(body.faces + base)
+        base += len(body.vertices)
+    stem = f"visual_{safe_name(Path(path).stem)}"
+    name, k = stem, 2
+    taken = {os.path.basename(p) for p in converted.values()}
+    while f"{name}.obj" in taken:
+        name, k = f"{stem}-{k}", k + 1
+    target = os.path.join(stage, f"{name}.obj")
+    write_meshes(target, [(name, np.concatenate(vertices), np.concatenate(faces))])
+    converted[path] = target
+    return target

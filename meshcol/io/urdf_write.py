@@ -1,0 +1,159 @@
+"""URDF written back around rebuilt colliders: the input's XML tree edited in place (lxml).
+
+Visual elements, inertials, joints, comments and unknown tags survive: each rebuilt
+``<collision>`` keeps its name and attributes, loses its ``<origin>``, and its geometry becomes
+``<mesh filename="<link>_NN.obj"/>`` (a decomposition of several parts repeats the element,
+``NAME_NN``, once per part); a fitted primitive becomes the element's own ``<box>``,
+``<sphere>``, ``<cylinder>`` or ``<capsule>`` at its ``<origin>``. The format module of
+:func:`meshcol.io.robot_write.write_robot`; MuJoCo's URDF importer reads this text too
+(:mod:`meshcol.io.mjcf_write`).
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from meshcol.errors import MissingDependencyError, SceneError
+from meshcol.types import Box, Capsule, Cylinder, Sphere
+
+if TYPE_CHECKING:
+    from meshcol.io.robot_write import Collider, RobotColliders
+
+__all__ = ["format_numbers", "parse_xml", "urdf_text"]
+
+
+def parse_xml(source: str) -> Any:
+    """The description's XML tree (lxml), or one line saying why it cannot be read."""
+    try:
+        from lxml import etree
+    except ImportError:
+        raise MissingDependencyError(
+            "writing URDF needs lxml (pip install 'meshcol[robots]')", source
+        ) from None
+    try:
+        return etree.parse(source, etree.XMLParser(resolve_entities=False))
+    except (etree.XMLSyntaxError, OSError) as exc:
+        raise SceneError(f"cannot read the XML: {' '.join(str(exc).split())}", source) from None
+
+
+def urdf_text(
+    robot: RobotColliders,
+    files: dict[int, list[str]],
+    prefix: dict[str, str],
+    out_dir: str | None = None,
+) -> str:
+    """The input URDF with each rebuilt ``<collision>`` pointing at its part files
+    (``prefix``: folder prepended to the part file names, for MuJoCo's importer). With
+    ``out_dir``, the other relative mesh references (visuals) are made relative to it, so that
+    they still name the input's files; ``package://`` and absolute references stay as written."""
+    from lxml import etree
+
+    tree = parse_xml(robot.source)
+    root = tree.getroot()
+    if out_dir is not None:
+        folder = os.path.dirname(os.path.abspath(robot.source))
+        for mesh in root.iter("mesh"):
+            reference = mesh.get("filename") or ""
+            if reference and "://" not in reference and not os.path.isabs(reference):
+                moved = os.path.relpath(os.path.join(folder, reference), os.path.abspath(out_dir))
+                mesh.set("filename", Path(moved).as_posix())
+    links = {link.get("name"): link for link in root.findall("link")}
+    for i, collider in enumerate(robot.colliders):
+        if collider.kept:
+            continue
+        link = links.get(collider.link)
+        elements = link.findall("collision") if link is not None else []
+        if collider.index >= len(elements):
+            raise SceneError(
+                f"link {collider.link!r}: collision {collider.index} is not in the file",
+                robot.source,
+            )
+        element = elements[collider.index]
+        if collider.fitted:
+            _urdf_primitive(element, collider)
+            continue
+        name = element.get("name")
+        names = files[i]
+        previous = element
+        for k, file in enumerate(names):
+            target = element if k == 0 else copy.deepcopy(element)
+            if k > 0:
+                previous.addnext(target)
+            previous = target
+            if name and len(names) > 1:
+                target.set("name", f"{name}_{k:02d}")
+            geometry, tail = _cleared(target)
+            mesh = etree.SubElement(geometry, "mesh")
+            mesh.set("filename", prefix.get("collider", "") + file)
+            mesh.tail = tail  # the indentation of the shape it replaces
+    # The root's siblings (comments, processing instructions) on lines of their own, as read.
+    siblings = [
+        *reversed(list(root.itersiblings(preceding=True))),
+        root,
+        *root.itersiblings(),
+    ]
+    body = "\n".join(etree.tostring(e, encoding="unicode", with_tail=False) for e in siblings)
+    return '<?xml version="1.0" encoding="utf-8"?>\n' + body + "\n"
+
+
+def _cleared(element: Any) -> tuple[Any, str | None]:
+    """A ``<collision>`` element without its ``<origin>`` and shapes (comments stay): its
+    ``<geometry>`` (made when missing) and the indentation the first shape had."""
+    from lxml import etree
+
+    for origin in element.findall("origin"):
+        element.remove(origin)
+    geometry = element.find("geometry")
+    if geometry is None:
+        geometry = etree.SubElement(element, "geometry")
+    tail = None
+    for child in list(geometry):
+        if isinstance(child.tag, str):  # shapes go; comments stay
+            tail = child.tail if tail is None else tail
+            geometry.remove(child)
+    return geometry, tail
+
+
+def format_numbers(values: Any) -> str:
+    """Numbers as written in a URDF attribute: shortest round-trip text, rounding noise
+    below 1e-15 (and -0) written as 0."""
+    return " ".join(repr(float(v)) if abs(float(v)) >= 1e-15 else "0" for v in values)
+
+
+def _urdf_primitive(element: Any, collider: Collider) -> None:
+    """Make a ``<collision>`` element the fitted primitive at the collider's origin."""
+    from lxml import etree
+
+    from meshcol.geometry.rotations import rpy_from_matrix
+
+    geometry, tail = _cleared(element)
+    origin = etree.Element("origin")
+    origin.set("xyz", format_numbers(collider.origin[:3, 3]))
+    origin.set("rpy", format_numbers(rpy_from_matrix(collider.origin[:3, :3])))
+    before = geometry.getprevious()
+    origin.tail = before.tail if before is not None else element.text
+    geometry.addprevious(origin)
+    p = collider.primitive
+    if isinstance(p, Box):
+        shape = etree.SubElement(geometry, "box", size=format_numbers(p.size))
+    elif isinstance(p, Sphere):
+        shape = etree.SubElement(geometry, "sphere", radius=format_numbers([p.radius]))
+    elif isinstance(p, Cylinder):
+        shape = etree.SubElement(
+            geometry,
+            "cylinder",
+            radius=format_numbers([p.radius]),
+            length=format_numbers([p.length]),
+        )
+    else:  # URDF has no capsule; this is the element MuJoCo's importer and meshcol read
+        assert isinstance(p, Capsule)
+        shape = etree.SubElement(
+            geometry,
+            "capsule",
+            radius=format_numbers([p.radius]),
+            length=format_numbers([p.length]),
+        )
+    shape.tail = tail
