@@ -247,7 +247,8 @@ def _read_native(
     """The bodies of files the core reads, read in parallel: one list per file."""
     from meshcol._native import core
 
-    codes = [fmt.native for fmt in formats]
+    codes = [fmt.native for fmt in formats if fmt.native is not None]
+    assert len(codes) == len(formats), "every format read here has a native reader"
     read = _NativeRead(*core.read_mesh_files(sources, codes, merge=merge, threads=threads))
     # one vectorised pass finds the objects with a coordinate beyond the limit
     big_rows = np.flatnonzero((np.abs(read.vertices) > MAX_COORDINATE).any(axis=1))
