@@ -127,10 +127,11 @@ inline bool inside_box(const BvhNode& n, const Vec3& p) {
     return true;
 }
 
-// Whether the segment p + s (q - p), s in [0, 1], may meet node n's box: the slab test on the
-// box grown by a relative margin, so rounding can only keep a box, never drop one.
-inline bool segment_may_meet_box(const BvhNode& n, const Vec3& p, const Vec3& d) {
-    double lo = 0.0, hi = 1.0;
+// The parameters [enter, leave] of the line p + s d within node n's box grown by a relative
+// margin (so rounding can only keep a box, never drop one), intersected with [lo, hi]; false
+// when empty (the slab test, Kay and Kajiya 1986).
+inline bool slab_interval(const BvhNode& n, const Vec3& p, const Vec3& d, double lo, double hi,
+                          double* enter, double* leave) {
     for (int k = 0; k < 3; ++k) {
         const double margin = 1e-9 * (std::fabs(n.lower[k]) + std::fabs(n.upper[k])) + 1e-300;
         const double a = static_cast<double>(n.lower[k]) - margin;
@@ -145,7 +146,15 @@ inline bool segment_may_meet_box(const BvhNode& n, const Vec3& p, const Vec3& d)
         if (s1 < hi) hi = s1;
         if (lo > hi) return false;
     }
+    *enter = lo;
+    *leave = hi;
     return true;
+}
+
+// Whether the segment p + s d, s in [0, 1], may meet node n's (grown) box.
+inline bool segment_may_meet_box(const BvhNode& n, const Vec3& p, const Vec3& d) {
+    double enter = 0.0, leave = 1.0;
+    return slab_interval(n, p, d, 0.0, 1.0, &enter, &leave);
 }
 
 // A triangle pair of a and b that intersect (touching counts), in leaf order.

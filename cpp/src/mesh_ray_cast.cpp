@@ -17,29 +17,6 @@ namespace meshcol {
 using namespace mesh_detail;
 namespace {
 
-// The parameters [enter, leave] of the line p + s d within node n's box grown by the margin
-// of segment_may_meet_box, intersected with [lo, hi]; false when empty.
-bool slab_interval(const BvhNode& n, const Vec3& p, const Vec3& d, double lo, double hi, double* enter,
-                   double* leave) {
-    for (int k = 0; k < 3; ++k) {
-        const double margin = 1e-9 * (std::fabs(n.lower[k]) + std::fabs(n.upper[k])) + 1e-300;
-        const double a = static_cast<double>(n.lower[k]) - margin;
-        const double b = static_cast<double>(n.upper[k]) + margin;
-        if (d[k] == 0.0) {
-            if (p[k] < a || p[k] > b) return false;
-            continue;
-        }
-        double s0 = (a - p[k]) / d[k], s1 = (b - p[k]) / d[k];
-        if (s0 > s1) std::swap(s0, s1);
-        if (s0 > lo) lo = s0;
-        if (s1 < hi) hi = s1;
-        if (lo > hi) return false;
-    }
-    *enter = lo;
-    *leave = hi;
-    return true;
-}
-
 // The nearest hit on the segment [p, q] (mesh's local frame) as its parameter s in [0, 1]
 // and the triangle (leaf order): the lowest s, then the lowest input face; false for none.
 bool nearest_crossing(const MeshBvh& mesh, const Vec3& p, const Vec3& q, double* parameter, std::int32_t* triangle) {
