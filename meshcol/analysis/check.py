@@ -44,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.analysis.check_policy import FAIL_ON, CheckOptions, apply_policy, failing_rules
+from meshcol.analysis.check_policy import FAIL_ON, CheckOptions, apply_policy
 from meshcol.analysis.check_report import CheckReport, check_report
 from meshcol.analysis.colliders import _geometry_key, build_colliders
 from meshcol.analysis.mesh_phase import mesh_phase
@@ -91,7 +91,6 @@ def check_scene(
     CheckReport
     """
     options = options or CheckOptions()
-    options.validate()
     report = progress or (lambda message: None)
     started = time.perf_counter()
     colliders = build_colliders(
@@ -109,10 +108,9 @@ def check_scene(
     table = convex_phase(table, placed, options.threads)
     table = mesh_phase(table, placed, options.tolerance, options.threads)
     table = classify(table, options.tolerance, options.clearance)
-    fail_rules = failing_rules(options.fail_on, options.target is not None)
-    table = apply_policy(table, [body.name for body in colliders.bodies], options, fail_rules)
+    table = apply_policy(table, [body.name for body in colliders.bodies], options)
     seconds = time.perf_counter() - started
-    return check_report(table, placed, scene, options, fail_rules, seconds, load_seconds)
+    return check_report(table, placed, scene, options, seconds, load_seconds)
 
 
 def check(
@@ -170,10 +168,9 @@ def check(
     from meshcol.io.scene import collector_paused
 
     paths = [inputs] if isinstance(inputs, (str, os.PathLike)) else list(inputs)
-    opts = CheckOptions.from_keywords(**options)
     if executor != "ray" and ray_address is not None:
         raise ValueError("ray_address needs executor 'ray'")
-    opts.validate()
+    opts = CheckOptions.from_keywords(**options)
     started = time.perf_counter()
     run = {"jobs": jobs, "timeout": timeout, "executor": executor, "address": ray_address}
     scene, decompose = _load(paths, opts, progress, robot_options, **run)

@@ -95,7 +95,8 @@ class CheckOptions:
         ``clearance``. 0 disables the band.
     fail_on : str
         ``penetration`` (default), ``contact``, ``clearance`` or ``none`` (that status and the
-        more severe ones fail), or comma-separated rule ids or names (:func:`failing_rules`).
+        more severe ones fail), or comma-separated rule ids or names (:func:`failing_rules`;
+        the resolved ids are ``fail_rules``).
     ignore : tuple of str
         ``A:B`` rules with shell-style globs on body names; matching pairs (either order) are
         reported as ignored and never fail the run.
@@ -121,12 +122,20 @@ class CheckOptions:
     threads: int = 0
     decompose_options: dict = field(default_factory=dict)
     target: Any = None
+    #: The rule ids the run fails on (:func:`failing_rules` of ``fail_on`` and ``target``),
+    #: made with the options.
+    fail_rules: tuple[str, ...] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        """Validated once, where they are made (also by ``dataclasses.replace``)."""
+        self.validate()
+        rules = failing_rules(self.fail_on, self.target is not None)
+        object.__setattr__(self, "fail_rules", rules)
 
     @classmethod
     def from_keywords(cls, **options: Any) -> CheckOptions:
         """Options as :func:`meshcol.analysis.check.check` takes them: ``baseline`` a path
-        (read here) or a report dict, ``ignore`` any sequence. Not validated here
-        (:meth:`validate`): ``check`` validates them after its executor arguments."""
+        (read here) or a report dict, ``ignore`` any sequence."""
         baseline = options.pop("baseline", None)
         if isinstance(baseline, (str, os.PathLike)):
             options["baseline_source"] = os.fspath(baseline)
@@ -136,6 +145,7 @@ class CheckOptions:
         return cls(baseline=baseline, **options)
 
     def validate(self) -> None:
+        """Raise ValueError for a value out of range (:class:`CheckOptions` calls it)."""
         if self.collider not in COLLIDER_KINDS:
             raise ValueError(
                 f"collider must be one of {', '.join(COLLIDER_KINDS)}, got {self.collider!r}"
@@ -169,12 +179,11 @@ def load_baseline(path: str) -> dict:
 # The policy stage
 
 
-def apply_policy(
-    table: PairTable, names: Sequence[str], options: CheckOptions, fail_rules: Sequence[str]
-) -> PairTable:
+def apply_policy(table: PairTable, names: Sequence[str], options: CheckOptions) -> PairTable:
     """Mark each classified pair ``ignored`` (an ``--ignore`` rule matches it) and
-    ``violation`` (its status's rule is in ``fail_rules``, it is not ignored and, with a
-    baseline, it is new or worse than there)."""
+    ``violation`` (its status's rule is in ``options.fail_rules``, it is not ignored and, with
+    a baseline, it is new or worse than there)."""
+    fail_rules = options.fail_rules
     a, b = table.body_a, table.body_b
     ignored = _ignore_mask(names, options.ignore, a, b) if len(table) else np.zeros(0, bool)
     failing_status = [SEVERITY[s] for s, rule in PAIR_RULES.items() if rule in fail_rules]

@@ -250,7 +250,6 @@ def check_report(
     placed: PlacedColliders,
     scene: Scene,
     options: CheckOptions,
-    fail_rules: Sequence[str],
     seconds: float,
     load_seconds: float | None,
 ) -> CheckReport:
@@ -260,12 +259,12 @@ def check_report(
     names = [body.name for body in colliders.bodies]
     table = table.take(_report_order(table, names))
     files = display_paths([body.source for body in colliders.bodies], posix=True)
-    findings = _findings(colliders, options, scene.units, fail_rules)
+    findings = _findings(colliders, options, scene.units)
     return CheckReport(
         _body_rows(placed, files),
         pair_rows(table, colliders),
         _summary(table, len(names), findings, seconds, load_seconds),
-        _settings(scene, options, fail_rules, colliders.bodies, files),
+        _settings(scene, options, colliders.bodies, files),
         scene.units,
         datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
         [*scene.warnings, *colliders.warnings],
@@ -405,7 +404,6 @@ def _summary(
 def _settings(
     scene: Scene,
     options: CheckOptions,
-    fail_rules: Sequence[str],
     bodies: Sequence[Any],
     files: Sequence[str | None],
 ) -> dict:
@@ -415,7 +413,7 @@ def _settings(
         "tolerance": options.tolerance,
         "clearance": options.clearance,
         "fail_on": options.fail_on,
-        "fail_on_rules": list(fail_rules),
+        "fail_on_rules": list(options.fail_rules),
         "ignore": list(options.ignore),
         "baseline": display_path(options.baseline_source, posix=True),
         "excluded_pairs": [
@@ -431,9 +429,7 @@ def _settings(
     return settings
 
 
-def _findings(
-    colliders: Any, options: CheckOptions, units: str | None, fail_rules: Sequence[str]
-) -> list[dict]:
+def _findings(colliders: Any, options: CheckOptions, units: str | None) -> list[dict]:
     """Body finding records, each with ``failed`` (its rule fails the run): MC301 per body
     without a usable collider (every convex part a segment or a point: no area), then a
     target's limits (:func:`meshcol.analysis.rules.target_findings`). Pairs are not
@@ -461,7 +457,7 @@ def _findings(
             )
     if options.target is not None:
         records.extend(target_findings(colliders, options.target, units))
-    return [dict(f.to_dict(), failed=f.rule in fail_rules) for f in records]
+    return [dict(f.to_dict(), failed=f.rule in options.fail_rules) for f in records]
 
 
 def _nums(values: np.ndarray) -> list[float | None]:
