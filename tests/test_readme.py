@@ -52,3 +52,11 @@ def test_readme_has_a_ci_recipe() -> None:
     text = (REPO / "README.md").read_text()
     assert "## Your assets in CI" in text
     assert "--baseline" in text.split("## Your assets in CI")[1]
+
+
+def test_readme_command_table_names_every_command() -> None:
+    from meshcol.cli import COMMANDS
+
+    text = (REPO / "README.md").read_text().split("## What it does")[1].split("\n\n##")[0]
+    listed = set(re.findall(r"^\| `meshcol ([a-z-]+)`", text, flags=re.M))
+    assert listed == set(COMMANDS), sorted(set(COMMANDS) ^ listed)

@@ -76,6 +76,7 @@ class FiniteFloat(click.ParamType):
 
 def report_options(
     default: str = "the report on stdout",
+    formats: Sequence[str] | None = None,
 ) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     """Add ``--report FILE`` (``-`` for stdout) and ``--format FORMAT`` (parameter ``fmt``;
     the choices and their help from :data:`meshcol.io.formats.FORMATS`).
@@ -84,17 +85,21 @@ def report_options(
     ----------
     default : str
         Where the report goes without ``--report``, for the help text.
+    formats : sequence of str, optional
+        The formats the command writes (:func:`meshcol.io.formats.formats_for` of its
+        report), when not every one: ``--help`` lists only those.
     """
 
     def decorate(func: Callable[..., Any]) -> Callable[..., Any]:
         from meshcol.io.formats import REPORT_FORMATS, describe_formats
 
+        choices = list(formats or REPORT_FORMATS)
         func = click.option(
             "--format",
             "fmt",
-            type=click.Choice(REPORT_FORMATS),
+            type=click.Choice(choices),
             default=None,
-            help=f"Report format: {describe_formats()}",
+            help=f"Report format: {describe_formats(choices)}",
         )(func)
         func = click.option(
             "--report",

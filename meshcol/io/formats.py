@@ -106,11 +106,15 @@ def _either(items: Sequence[str]) -> str:
     return items[0] if len(items) == 1 else f"{', '.join(items[:-1])} or {items[-1]}"
 
 
-def describe_formats() -> str:
+def describe_formats(formats: Sequence[str] | None = None) -> str:
     """The formats for a help text: ``json, csv, junit (JUnit XML for ...) or github (...)``,
-    then the default: ``[default: from the --report extension (.json, ...), else json]``."""
-    names = [f"{f.name} ({f.note})" if f.note else f.name for f in FORMATS.values()]
-    extensions = ", ".join(REPORT_EXTENSIONS)
+    then the default: ``[default: from the --report extension (.json, ...), else json]``.
+    ``formats``: only those (default every one)."""
+    chosen = [f for f in FORMATS.values() if formats is None or f.name in formats]
+    names = [f"{f.name} ({f.note})" if f.note else f.name for f in chosen]
+    extensions = ", ".join(
+        e for e, name in REPORT_EXTENSIONS.items() if name in (formats or FORMATS)
+    )
     return f"{_either(names)}.  [default: from the --report extension ({extensions}), else json]"
 
 
