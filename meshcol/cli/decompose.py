@@ -209,7 +209,8 @@ class _MeshFormat(click.Choice):
     "--report",
     type=click.Path(dir_okay=False),
     default=None,
-    help="Write the report here ('-': stdout).  [default: the report on stdout]",
+    help="Write the report here ('-': stdout).  [default: no report: the parts are the "
+    "output, as with hull -o and fit -o]",
 )
 @click.option(
     "--report-format",
@@ -494,8 +495,9 @@ def _decompose(
 
 
 def _print_robot(result: Any, outputs: _Outputs) -> None:
-    """A robot's report, its target findings and the verdict."""
-    emit_report(result, outputs.report_fmt, outputs.report)
+    """A robot's report (with --report), its target findings and the verdict."""
+    if outputs.report is not None:
+        emit_report(result, outputs.report_fmt, outputs.report)
     _echo_target_violations(result)
     detail = f"{_summary(result)}, written to {result.settings['description']}"
     click.echo(verdict("decompose", result.exit_code == 0, detail), err=True)
@@ -511,7 +513,8 @@ def _print_files(
     page = render_html(
         outputs.html, lambda: decompose_page(result, outputs.out_dir, inputs, robot_options)
     )
-    emit_report(result, outputs.report_fmt, outputs.report)
+    if outputs.report is not None:  # the parts are the output, as for hull -o
+        emit_report(result, outputs.report_fmt, outputs.report)
     write_html(outputs.html, page)
     for entry in result.files:
         if entry["status"] != "ok":

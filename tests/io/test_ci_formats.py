@@ -238,6 +238,7 @@ def test_decompose_junit_fails_bodies_over_max_hausdorff(samples, schema, tmp_pa
     base = ["decompose", bullet, wall, "-o", str(tmp_path / "parts"), *FAST_DECOMPOSE]
     base += ["--cache-dir", str(tmp_path / "cache"), "--max-hausdorff", "1e-9"]
     base += ["--search-steps", "1"]  # one step misses 1e-9 as eight do (eight: 8x the time)
+    base += ["--report", "-"]
     code_json, out_json, _ = run(*base)
     code, out, _ = run(*base, "--report-format", "junit")
     assert code == code_json == 1

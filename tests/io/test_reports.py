@@ -113,6 +113,8 @@ def test_decompose_golden(
         "-o",
         str(tmp_path / "parts"),
         "--no-cache",
+        "--report",
+        "-",
         *FAST,
     )
     assert report["settings"]["out_dir"] == str(tmp_path / "parts")
