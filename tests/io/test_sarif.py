@@ -219,6 +219,7 @@ def test_every_command_with_a_ci_suite_writes_valid_sarif(samples, validator, tm
         valid(json.loads(out.read_text(encoding="utf-8")), validator)
 
 
+@pytest.mark.slow
 def test_sarif_tools_reads_the_log(samples, tmp_path, monkeypatch):
     """sarif-tools (a SARIF consumer) lists the results with their rule ids and files."""
     pytest.importorskip("sarif", reason="sarif-tools is not installed")

@@ -32,11 +32,12 @@ def pixels(path: Path) -> np.ndarray:
 
 def hue_mask(image: np.ndarray, color: str) -> np.ndarray:
     """Pixels of ``color`` under any flat shade: proportional to it channel by channel."""
-    target = np.asarray(hex_rgb(color), dtype=np.float64)
-    rgb = image.astype(np.float64)
-    scale = rgb.sum(axis=2) / target.sum()
+    target = np.asarray(hex_rgb(color), dtype=np.float32)
+    rgb = image.astype(np.float32)
+    total = rgb.sum(axis=2)
+    scale = total / target.sum()
     close = np.abs(rgb - scale[..., None] * target).max(axis=2) <= 6
-    return close & (scale > 0.3) & (rgb.sum(axis=2) > 60)
+    return close & (scale > 0.3) & (total > 60)
 
 
 def exact_mask(image: np.ndarray, color: str) -> np.ndarray:
@@ -90,15 +91,15 @@ def test_pictures_show_the_pair_framed_with_witnesses_and_normal(level_run):
     out, report, _, _ = level_run
     for picture in sorted((out / "pictures").iterdir()):
         image = pixels(picture)
-        for color in PAIR_COLORS:  # each body of the pair, in its colour
-            assert hue_mask(image, color).sum() > 400, (picture.name, color)
+        masks = [hue_mask(image, color) for color in PAIR_COLORS]
+        for color, mask in zip(PAIR_COLORS, masks):  # each body of the pair, in its colour
+            assert mask.sum() > 400, (picture.name, color)
         assert exact_mask(image, WITNESS_COLOR).sum() > 20, picture.name  # a witness disc
-        subject = hue_mask(image, PAIR_COLORS[0]) | hue_mask(image, PAIR_COLORS[1])
-        ys, xs = np.nonzero(subject)
+        ys, xs = np.nonzero(masks[0] | masks[1])
         width, height = xs.max() - xs.min(), ys.max() - ys.min()
         assert width > 0.25 * 800 or height > 0.25 * 600  # framed: the pair fills the view
         # the smaller body (a barrel on a floor) is wholly in the picture
-        small = min((hue_mask(image, c) for c in PAIR_COLORS), key=lambda m: m.sum())
+        small = min(masks, key=lambda m: m.sum())
         ys, xs = np.nonzero(small)
         assert xs.min() > 0 and ys.min() > 0 and xs.max() < 799 and ys.max() < 599
     penetrating = next(p for p in report["pairs"] if p["status"] == "penetrating")
