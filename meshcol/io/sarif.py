@@ -15,8 +15,10 @@ findings is two results), with:
   registered rule is ``error`` when the policy fails on it, else ``warning``.
 - a physical location on the asset file: ``artifactLocation.uri`` relative to the repository
   root (``$GITHUB_WORKSPACE``, else the working folder) with ``uriBaseId`` ``%SRCROOT%``
-  (``run.originalUriBaseIds`` says where that is); no region, since a finding is about a
-  mesh or a body pair, not a line of the file; the body or pair as a logical location.
+  (``run.originalUriBaseIds`` says where that is); in a text input (a manifest, a robot
+  description) the line that names the case's (first) body as its ``region``, so that a
+  pull request shows the alert on that line; a mesh file has no region (a finding is about
+  the whole mesh). The body or pair is the logical location.
 - ``partialFingerprints`` that hash the command, the rule, the file and the body or pair, and
   none of the numbers, so that a code-scanning service keeps tracking one alert across runs
   whose depths differ.
@@ -31,6 +33,7 @@ category.
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import urllib.parse
 from collections.abc import Mapping
@@ -128,12 +131,54 @@ def _uri(path: str, root: str) -> tuple[str, str | None]:
     return urllib.parse.urljoin("file:", urllib.parse.quote(absolute.replace(os.sep, "/"))), None
 
 
-def _location(case: CiCase, root: str) -> dict[str, Any]:
+#: Text files whose lines name bodies (manifests, robot descriptions): a result on one gets
+#: the line that names its (first) body as its region.
+TEXT_INPUTS = (".json", ".toml", ".urdf", ".xml", ".mjcf", ".srdf")
+#: Largest text file searched for a body's line.
+MAX_REGION_BYTES = 8 * 1024 * 1024
+
+
+def _body(case: CiCase) -> str:
+    """The (first) body a case is about: ``a`` of ``a <-> b``, ``body`` of ``file::body``."""
+    name = case.name.split("::")[-1] if "::" in case.name else case.name
+    return name.split(" <-> ")[0].split("/")[0]
+
+
+def body_line(path: str, body: str, lines: dict[str, list[str] | None]) -> int | None:
+    """The first line (1-based) of the text file ``path`` that names ``body`` as a name
+    (``"name": "crate"``, ``name = "crate"``, ``name="crate"``); None when none does or the
+    file is not a text input. ``lines`` caches each file's lines."""
+    if not path.lower().endswith(TEXT_INPUTS) or not body:
+        return None
+    if path not in lines:
+        try:
+            if os.path.getsize(path) > MAX_REGION_BYTES:
+                raise OSError
+            with open(path, encoding="utf-8", errors="replace") as handle:
+                lines[path] = handle.read().splitlines()
+        except OSError:
+            lines[path] = None
+    text = lines[path]
+    if text is None:
+        return None
+    quoted = (json.dumps(body), f"'{body}'")
+    for number, line in enumerate(text, 1):
+        if "name" in line and any(q in line for q in quoted):
+            return number
+    return None
+
+
+def _location(
+    case: CiCase, root: str, lines: dict[str, list[str] | None] | None = None
+) -> dict[str, Any]:
     location: dict[str, Any] = {}
     if case.file:
         uri, base = _uri(case.file, root)
         artifact = {"uri": uri, **({"uriBaseId": base} if base else {})}
         location["physicalLocation"] = {"artifactLocation": artifact}
+        line = body_line(case.file, _body(case), lines if lines is not None else {})
+        if line is not None:
+            location["physicalLocation"]["region"] = {"startLine": line}
     location["logicalLocations"] = [{"fullyQualifiedName": case.name, "kind": "object"}]
     return location
 
@@ -154,7 +199,13 @@ def _case_rules(case: CiCase) -> tuple[str, ...]:
 
 
 def _result(
-    case: CiCase, rule_id: str, index: int, level: str, suite: CiSuite, root: str
+    case: CiCase,
+    rule_id: str,
+    index: int,
+    level: str,
+    suite: CiSuite,
+    root: str,
+    lines: dict[str, list[str] | None],
 ) -> dict[str, Any]:
     several = len(_case_rules(case)) > 1
     rule = suite.rules.get(rule_id)
@@ -165,7 +216,7 @@ def _result(
         "level": level,
         "kind": "fail",
         "message": {"text": prefix + (case.message or case.name)},
-        "locations": [_location(case, root)],
+        "locations": [_location(case, root, lines)],
         "partialFingerprints": {FINGERPRINT: _fingerprint(suite.command, rule_id, case)},
         "properties": {"case": case.name, "outcome": case.outcome},
     }
@@ -201,6 +252,7 @@ def sarif_log(suite: CiSuite, root: str | None = None) -> dict[str, Any]:
     index = {d["id"]: k for k, d in enumerate(descriptors)}
     results: list[dict[str, Any]] = []
     notes: list[dict[str, Any]] = []
+    lines: dict[str, list[str] | None] = {}  # each text input read once
     for case in suite.cases:
         if case.outcome == "error":
             notes.append(_notification(case, root))
@@ -214,7 +266,7 @@ def sarif_log(suite: CiSuite, root: str | None = None) -> dict[str, Any]:
                 level = LEVELS.get(str(rule.get("severity")), "warning")
             else:
                 level = "error" if case.outcome == "failure" else "warning"
-            results.append(_result(case, rule_id, index[rule_id], level, suite, root))
+            results.append(_result(case, rule_id, index[rule_id], level, suite, root, lines))
     base_uri = urllib.parse.urljoin("file:", urllib.parse.quote(root.replace(os.sep, "/")))
     run: dict[str, Any] = {
         "tool": {

@@ -79,6 +79,7 @@ def test_check_sarif_cites_the_pair_rules_with_registry_help(samples, validator,
     code, out, _ = run(*args, "--format", "sarif")
     assert code == code_json == 1
     report = json.loads(out_json)
+    manifest = Path("samples/level/scene.json").read_text().splitlines()
     sarif_run = only_run(valid(json.loads(out), validator))
     driver = sarif_run["tool"]["driver"]
     assert driver["name"] == "meshcol"
@@ -105,6 +106,8 @@ def test_check_sarif_cites_the_pair_rules_with_registry_help(samples, validator,
         (location,) = result["locations"]
         artifact = location["physicalLocation"]["artifactLocation"]
         assert artifact == {"uri": "samples/level/scene.json", "uriBaseId": ROOT_ID}
+        line = location["physicalLocation"]["region"]["startLine"]  # the line naming body_a
+        assert f'"name": "{pair["body_a"]}"' in manifest[line - 1]
         name = location["logicalLocations"][0]["fullyQualifiedName"]
         assert name == f"{pair['body_a']} <-> {pair['body_b']}"
         assert result["message"]["text"].startswith(pair["status"])
@@ -164,12 +167,17 @@ def test_inspect_sarif_one_result_per_finding(samples, validator, monkeypatch):
         for r in results
     )
     assert [rule for rule, _ in got] == [rule for rule, _ in expected]
+    assert len(results) == len(report["findings"]) > 0
     severities = {r.id: r.severity for r in RULES}
     for result in results:
         level = {"error": "error", "warning": "warning", "info": "note"}
         assert result["level"] == level[severities[result["ruleId"]]]
-        uri = result["locations"][0]["physicalLocation"]["artifactLocation"]["uri"]
-        assert uri in ("samples/bowl/bowl.obj", "samples/bullet/wall.obj")
+        physical = result["locations"][0]["physicalLocation"]
+        assert physical["artifactLocation"]["uri"] in (
+            "samples/bowl/bowl.obj",
+            "samples/bullet/wall.obj",
+        )
+        assert "region" not in physical  # a mesh file: the whole file
 
 
 def test_unreadable_inputs_are_notifications_and_ignored_pairs_suppressed(
