@@ -51,7 +51,8 @@ SARIF_SCHEMA = (
 )
 #: Where the rules are documented, relative to the project's home (docs/rules.md).
 RULES_PAGE = "docs/rules.md"
-#: The project's public home; rule ``helpUri`` is this plus :data:`RULES_PAGE`.
+#: The project's public home; rule ``helpUri`` is this plus :data:`RULES_PAGE` (the
+#: environment variable ``MESHCOL_DOCS_URL`` replaces it, for a mirror or a fork).
 HOME_ENV = "MESHCOL_DOCS_URL"
 DEFAULT_HOME = "https://github.com/meshcol/meshcol/blob/main/"
 #: ``uriBaseId`` of every location: the repository root.
