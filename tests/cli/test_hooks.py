@@ -180,10 +180,16 @@ def test_gitlab_example_ci_job_runs_meshcol_ci(assets, tmp_path):
     probe = subprocess.run([str(BIN / "meshcol"), "ci", "--help"], capture_output=True)
     if probe.returncode != 0:
         pytest.skip("meshcol ci is not available in this build")
-    (assets / "meshcol.toml").write_text("")
+    (assets / "meshcol.toml").write_text(
+        '[[assets]]\nglob = "props/*.obj"\ninspect = { fail-on = ["not-watertight"] }\n\n'
+        '[[scenes]]\npath = "level_01.json"\ncheck = { fail-on = "penetration" }\n'
+    )
+    git(assets, "add", "-A")
     result = run_bash(gitlab_script("meshcol-ci"), assets, tmp_path)
-    assert result.returncode in (0, 1), result.stdout + result.stderr
-    assert (assets / "reports" / "meshcol.sarif").is_file()
+    assert result.returncode == 0, result.stdout + result.stderr  # good assets pass
+    sarif = json.loads((assets / "reports" / "meshcol.sarif").read_text())
+    assert sarif["version"] == "2.1.0"
+    assert "meshcol" in (assets / "reports" / "meshcol.md").read_text()
 
 
 def test_github_action_is_composite_and_uploads_sarif_and_the_summary(tmp_path):
