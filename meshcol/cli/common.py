@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import re
 import sys
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import TYPE_CHECKING, Any
 
 import click
@@ -469,6 +470,54 @@ def write_html(path: str | None, text: str | None) -> None:
     atomic_write(path, text)
     size = len(text.encode("utf-8"))
     click.echo(f"meshcol: review page: {display_path(path)} ({size / 1e6:.1f} MB)", err=True)
+
+
+def snapshots_option(func: Callable[..., Any]) -> Callable[..., Any]:
+    """Add ``--snapshots DIR``: one PNG per violation (:mod:`meshcol.io.snapshots`), linked
+    from the Markdown report. Without Pillow (``meshcol[snapshots]``) the command exits 2
+    before any work, with the hint."""
+
+    def ready(ctx: click.Context, param: click.Parameter, value: str | None) -> str | None:
+        if value is not None:
+            from meshcol.io.snapshots import pillow
+
+            pillow()  # MissingDependencyError: exit 2, one line
+        return value
+
+    return click.option(
+        "--snapshots",
+        type=click.Path(file_okay=False),
+        default=None,
+        metavar="DIR",
+        callback=ready,
+        help="Also draw one PNG per violation into DIR (offscreen: the bodies framed, "
+        "witness points, normal, depth), written with the report or not at all, and linked "
+        "from --format markdown; needs meshcol[snapshots].  [default: none]",
+    )(func)
+
+
+@contextlib.contextmanager
+def snapshots_written(
+    result: Any, folder: str | None, report: str | None, build_page: Callable[[], Any]
+) -> Iterator[Any]:
+    """Yield the report to write: ``result`` itself, or with ``--snapshots`` the report
+    whose CI cases link to their pictures, drawn into a staged folder that becomes
+    ``folder`` only when the block (writing the report) succeeds
+    (:func:`meshcol.io.outputs.staged_folder`): the pictures and the report appear together
+    or not at all."""
+    if folder is None:
+        yield result
+        return
+    from meshcol.analysis.snapshots import with_snapshots
+    from meshcol.io.outputs import staged_folder
+    from meshcol.io.paths import display_path
+
+    link_from = os.path.dirname(os.path.abspath(report)) if report and report != "-" else None
+    with staged_folder(folder) as stage:
+        written = with_snapshots(result, build_page(), stage, folder, link_from)
+        yield written
+    count = len(written.snapshots)
+    click.echo(f"meshcol: snapshots: {count} in {display_path(folder)}", err=True)
 
 
 def executor_options() -> Callable[[Callable[..., Any]], Callable[..., Any]]:

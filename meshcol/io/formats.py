@@ -16,7 +16,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from meshcol.io import ci, tap
+from meshcol.io import ci, markdown, sarif, tap
 from meshcol.io.report import emit
 
 __all__ = [
@@ -92,6 +92,20 @@ FORMATS: dict[str, ReportFormat] = {
             "ci_suite",
             tap.dumps_tap,
             note="Test Anything Protocol 14",
+        ),
+        ReportFormat(
+            "sarif",
+            ".sarif",
+            "ci_suite",
+            sarif.dumps_sarif,
+            note="SARIF 2.1.0 for GitHub code scanning",
+        ),
+        ReportFormat(
+            "markdown",
+            ".md",
+            "ci_suite",
+            markdown.dumps_markdown,
+            note="a pull-request comment: what is new or worse, per rule and per case",
         ),
     )
 }

@@ -641,8 +641,8 @@ def test_outputs_are_checked_before_any_work(meshes, tmp_path, monkeypatch) -> N
         (
             ["-o", "out", "--report", box],  # refused by its extension before anything else
             f"invalid value for '--report': unknown report extension '.obj' in '{box}': "
-            "expected .json, .csv, .xml or .tap (or give --report-format "
-            "json|csv|junit|github|tap) "
+            "expected .json, .csv, .xml, .tap, .sarif or .md (or give --report-format "
+            "json|csv|junit|github|tap|sarif|markdown) "
             "(see 'meshcol decompose -h')",
         ),
         (
