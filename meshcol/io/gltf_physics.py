@@ -6,7 +6,9 @@ A glTF file that uses neither is read as before (:mod:`meshcol.io.gltf`: every m
 body); one that uses them is a scene of its own (``MeshFormat.scene``):
 
 - a body is a node with ``motion`` (either extension), its descendants' colliders its parts;
-  a collider under no such node is a static body of its own;
+  else a render node (a mesh, no collider) with its child colliders (what ``--to
+  gltf-physics`` writes), named as the node reads without physics; else a collider node is
+  a static body of its own;
 - a collider's shape decides its geometry: an implicit shape (box, sphere, capsule,
   cylinder, along the node's Y axis) is that exact primitive (a tapered capsule or cylinder,
   radii unequal, is its convex hull); KHR ``geometry.node`` is that node's mesh at that
@@ -36,7 +38,14 @@ from meshcol.io.gltf import check_references, read_document
 from meshcol.io.physics_bodies import BodyGroup, FileScene, ShapeElement
 from meshcol.types import Box, Capsule, Cylinder, Primitive, Sphere
 
-__all__ = ["PHYSICS_EXTENSIONS", "has_physics", "read_glb_scene", "read_gltf_scene"]
+__all__ = [
+    "PHYSICS_EXTENSIONS",
+    "GltfFile",
+    "has_physics",
+    "node_worlds",
+    "read_glb_scene",
+    "read_gltf_scene",
+]
 
 KHR_BODIES = "KHR_physics_rigid_bodies"
 KHR_SHAPES = "KHR_implicit_shapes"
@@ -71,7 +80,7 @@ def has_physics(document: Any) -> bool:
     return isinstance(used, list) and any(name in used for name in PHYSICS_EXTENSIONS)
 
 
-class _File:
+class GltfFile:
     """A glTF document's parts the physics reader needs, every access checked."""
 
     def __init__(self, document: Any, binary: bytes | None, file: Path, source: str, kind: str):
@@ -197,7 +206,7 @@ def _node_matrix(node: dict) -> np.ndarray:
     return matrix
 
 
-def _worlds(gltf: _File) -> tuple[dict[int, np.ndarray], dict[int, int]]:
+def node_worlds(gltf: GltfFile) -> tuple[dict[int, np.ndarray], dict[int, int]]:
     """Every node's world transform (nodes outside the scene: from their own root) and its
     parent; a node with two parents or a cycle is refused."""
     nodes = gltf.items("nodes")
@@ -245,8 +254,8 @@ def _scene(
     if not has_physics(document):
         return None
     check_references(document, kind, source)
-    gltf = _File(document, binary, file, source, kind)
-    worlds, parent = _worlds(gltf)
+    gltf = GltfFile(document, binary, file, source, kind)
+    worlds, parent = node_worlds(gltf)
     nodes = gltf.items("nodes")
     groups: dict[int, BodyGroup] = {}
     filters: dict[int, list[Any]] = {}
@@ -277,18 +286,40 @@ def _scene(
         geometry = ext.get("collider", {}).get("geometry", {}) if ext else {}
         if isinstance(geometry, dict) and isinstance(geometry.get("node"), int):
             colliders_of.add(geometry["node"])
+    drawn = _in_scenes(gltf)
     render = sum(
         1
-        for k, node in enumerate(nodes)
-        if isinstance(node, dict) and "mesh" in node and k not in colliders_of
+        for k in drawn
+        if isinstance(nodes[k], dict) and "mesh" in nodes[k] and k not in colliders_of | set(groups)
     )
     if triggers:
         warnings.append(f"{triggers} trigger(s) not checked (triggers are not solid)")
     if planes:
         warnings.append(f"{planes} plane collider(s) not checked (a plane is not a solid)")
     if render and groups:
-        warnings.append(f"{render} mesh node(s) without a collider not read (render geometry)")
+        warnings.append(
+            f"{render} mesh node(s) with no collider of their own not read (render geometry)"
+        )
     return FileScene(list(groups.values()), _filtered_pairs(gltf, filters), "m", warnings)
+
+
+def _in_scenes(gltf: GltfFile) -> set[int]:
+    """The nodes of the file's scenes (drawn), the roots' descendants included."""
+    nodes = gltf.items("nodes")
+    todo = [
+        n
+        for scene in gltf.items("scenes")
+        if isinstance(scene, dict)
+        for n in scene.get("nodes", [])
+    ]
+    seen: set[int] = set()
+    while todo:
+        k = todo.pop()
+        if isinstance(k, int) and 0 <= k < len(nodes) and k not in seen:
+            seen.add(k)
+            node = nodes[k]
+            todo.extend(node.get("children", []) if isinstance(node, dict) else [])
+    return seen
 
 
 def _node_name(nodes: list, k: int) -> str:
@@ -297,17 +328,21 @@ def _node_name(nodes: list, k: int) -> str:
 
 
 def _body_node(k: int, parent: dict[int, int], nodes: list) -> int:
-    """The node with ``motion`` at or above node ``k``; ``k`` when there is none."""
+    """The node with ``motion`` at or above node ``k``; else the render node (a node with a
+    mesh and no collider) node ``k`` hangs from, whose collider it is; else ``k``."""
     current: int | None = k
     while current is not None:
         if "motion" in _ext(nodes[current])[0]:
             return current
         current = parent.get(current)
+    up = parent.get(k)
+    if up is not None and "mesh" in nodes[up] and "collider" not in _ext(nodes[up])[0]:
+        return up
     return k
 
 
 def _collider_element(
-    gltf: _File, k: int, node: dict, collider: dict, extension: str, worlds: dict
+    gltf: GltfFile, k: int, node: dict, collider: dict, extension: str, worlds: dict
 ) -> ShapeElement | None:
     """The element of node ``k``'s collider (None for a plane)."""
     name = _node_name(gltf.items("nodes"), k)
@@ -338,7 +373,7 @@ _DEFAULTS = {True: (1.0, 0.5, 0.5, 0.25, 0.5, 0.25), False: (1.0, 0.5, 1.0, 0.5,
 
 
 def _shape_element(
-    gltf: _File, name: str, world: np.ndarray, shape: dict, where: str, khr: bool
+    gltf: GltfFile, name: str, world: np.ndarray, shape: dict, where: str, khr: bool
 ) -> ShapeElement | None:
     kind = shape.get("type")
     params = shape.get(kind, {}) if isinstance(kind, str) else {}
@@ -373,7 +408,8 @@ def _shape_element(
         if isinstance(error, InvalidMeshError):
             raise
         raise gltf.error(f"{where} shape {kind!r} has a bad parameter: {error}") from None
-    return ShapeElement(name, world, primitive, None, None, None, axis="Y")
+    axis = "Y" if isinstance(primitive, (Capsule, Cylinder)) else "Z"  # box sizes: node axes
+    return ShapeElement(name, world, primitive, None, None, None, axis=axis)
 
 
 def _tapered(kind: str, height: float, top: float, bottom: float):
@@ -423,7 +459,7 @@ def _does_collide(a: dict | None, b: dict | None) -> bool:
     return True
 
 
-def _filtered_pairs(gltf: _File, filters: dict[int, list[Any]]) -> list[tuple[str, str, str]]:
+def _filtered_pairs(gltf: GltfFile, filters: dict[int, list[Any]]) -> list[tuple[str, str, str]]:
     """The body pairs (group keys) none of whose colliders' filters let them collide."""
     table = gltf.items("collisionFilters", gltf.extension(KHR_BODIES))
     if not table:
