@@ -3,7 +3,9 @@ written back into a copy of the asset (:mod:`meshcol.io.gltf_physics_write`), so
 and its colliders stay one file.
 
 ``hull``: one convex part per body (its hull, within the command's budget or target);
-``fit``: the chosen primitive per body (exact), or its hull when ``auto`` kept the hull.
+``fit``: the chosen primitive per body (exact), or its hull when ``auto`` kept the hull;
+``decompose``: each body's convex parts as the run wrote them (``OUT/<body>_NN.obj``, world
+frame; its cache, jobs and target apply as to any run), read back and written into the asset.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from typing import Any
 
 from meshcol.errors import MeshcolError
 
-__all__ = ["GLTF_EXTENSIONS", "is_gltf", "node_colliders", "rebuild_gltf"]
+__all__ = ["GLTF_EXTENSIONS", "decompose_gltf", "is_gltf", "node_colliders", "rebuild_gltf"]
 
 #: What ``--to gltf-physics`` takes.
 GLTF_EXTENSIONS = (".glb", ".gltf")
@@ -83,3 +85,40 @@ def rebuild_gltf(
     result = run([path], output=None, out_dir=None, reserved=reserved, progress=progress, **options)
     write_gltf_physics(path, node_colliders(result), target)
     return dataclasses.replace(result, description=target, to="gltf-physics")
+
+
+def decompose_gltf(path: str, out_dir: str, options: Any, run: Any, **kwargs: Any) -> Any:
+    """``meshcol decompose ASSET.glb --out-dir OUT --to gltf-physics``: the run over the asset
+    (:func:`meshcol.decomposition.batch.decompose_files`, its parts in ``OUT``), then
+    ``OUT/<stem>.glb`` with each body's parts.
+
+    Returns
+    -------
+    DecomposeReport
+        The run's report, ``settings`` naming the GLB (``description``) and ``to``.
+    """
+    from meshcol.decomposition.batch import decompose_files
+    from meshcol.io.gltf_physics_write import (
+        NodeColliders,
+        gltf_physics_path,
+        write_gltf_physics,
+    )
+    from meshcol.io.mesh_read import load_mesh
+
+    if not is_gltf(path):
+        raise MeshcolError("--to gltf-physics needs a glTF or GLB asset", path)
+    target = gltf_physics_path(path, out_dir)
+    report = decompose_files([path], out_dir, options, run, layout="parts", fmt="obj", **kwargs)
+    colliders = []
+    for entry in report.files:
+        if entry["status"] != "ok":
+            raise MeshcolError(f"decomposition {entry['status']}: {entry['message']}", path)
+        for body in entry["bodies"]:
+            parts = []
+            for output in body["outputs"]:
+                (part,) = load_mesh(os.path.join(out_dir, os.path.basename(output)), merge=False)
+                parts.append(("mesh", part.world_vertices(), part.faces))
+            colliders.append(NodeColliders(body["name"], tuple(parts)))
+    write_gltf_physics(path, colliders, target)
+    report.settings.update(description=target, to="gltf-physics")
+    return report

@@ -405,3 +405,34 @@ def test_broken_physics_exits_2_with_one_line(tmp_path: Path, change, words: str
     assert code == 2 and stderr.count("\n") == 1, stderr
     assert stderr.startswith(f"meshcol: error: {path}: cannot parse GLTF file: ")
     assert words in stderr
+
+
+@pytest.mark.slow  # CoACD on two meshes: about 5 s on a loaded machine
+def test_decompose_to_gltf_physics_reads_back_its_parts(asset: Path, tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    code, stdout, stderr = run(
+        "decompose",
+        str(asset),
+        "--out-dir",
+        str(out),
+        "--to",
+        "gltf-physics",
+        "--cache-dir",
+        str(tmp_path / "cache"),
+    )
+    assert code == 0, stderr
+    report = json.loads(stdout)
+    assert report["settings"]["to"] == "gltf-physics"
+    assert report["settings"]["description"] == str(out / "props.glb")
+    scene = load_inputs([out / "props.glb"])
+    by_name = {b.name: b for b in scene.bodies}
+    for body in report["files"][0]["bodies"]:
+        read = by_name[body["name"]]
+        assert read.collider == "hull"
+        parts = [load_inputs([out / name]).bodies[0].world_vertices() for name in body["outputs"]]
+        got = [m[1] @ read.pose[:3, :3].T + read.pose[:3, 3] for m in read.part_meshes()]
+        assert len(got) == len(parts)
+        for want, mine in zip(parts, got):
+            assert point_gap(mine, want) <= 1e-6 * float(np.ptp(want, axis=0).max())
+    usage = run("decompose", str(asset), str(asset), "--out-dir", str(out), "--to", "gltf-physics")
+    assert usage[0] == 2 and "--to gltf-physics needs one glTF/GLB asset and --out-dir" in usage[2]

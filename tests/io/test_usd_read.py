@@ -443,3 +443,36 @@ def test_bad_usd_exits_2_with_one_line(tmp_path: Path, case: str) -> None:
         assert code == 2, (command, stderr)
         assert stderr.startswith(f"meshcol: error: {path}: ") and stderr.count("\n") == 1
         assert words in stderr
+
+
+@pytest.mark.slow
+def test_decompose_to_usd_reads_back_to_the_same_parts(tmp_path: Path) -> None:
+    pytest.importorskip("yourdfpy")
+    import test_robot_write as rw
+
+    urdf = rw.urdf.__wrapped__(tmp_path)  # type: ignore[attr-defined]
+    out = tmp_path / "out"
+    code, _, err = run(
+        "decompose",
+        str(urdf),
+        "--out-dir",
+        str(out),
+        "--to",
+        "usd",
+        "--cache-dir",
+        str(tmp_path / "cache"),
+    )
+    assert code == 0, err
+    from meshcol.decomposition.options import RunOptions
+
+    cache = RunOptions(cache_dir=str(tmp_path / "cache"))
+    robot, expected = rw.computed(urdf, "decompose", run=cache)
+    scene = load(out / "small.usda")
+    bodies = {b.name.split("/")[1]: b for b in scene.bodies}
+    for link, parts in expected.items():
+        body = bodies[link]
+        assert body.collider == "hull"
+        got = [m[1] @ body.pose[:3, :3].T + body.pose[:3, 3] for m in body.part_meshes()]
+        meshes = [m for m in got if len(m)]
+        for want in parts:
+            assert any(rw.same_points(want, mine, 1e-6) for mine in meshes)
