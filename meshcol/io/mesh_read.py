@@ -111,7 +111,7 @@ def load_mesh(
     fmt = check_file(source, frozenset({"collada"}) if collada else frozenset())
     file = Path(source)
     if fmt.scene is not None:
-        scene = load_file_scene(source)
+        scene = load_file_scene(source, merge=merge)
         if scene is not None:
             return list(scene.bodies)
     if fmt.read is None:
@@ -127,10 +127,10 @@ def load_mesh(
     return bodies
 
 
-def load_file_scene(path: str | os.PathLike[str]) -> Scene | None:
+def load_file_scene(path: str | os.PathLike[str], *, merge: bool = True) -> Scene | None:
     """The scene a file declares of itself (its format's ``scene`` reader: USD, glTF with
     physics extensions), or None for a file that is only meshes (then :func:`load_mesh`
-    has everything).
+    has everything). ``merge``: as :func:`load_mesh`.
 
     Returns
     -------
@@ -154,7 +154,7 @@ def load_file_scene(path: str | os.PathLike[str]) -> Scene | None:
     for group in found.groups:
         full = stem if len(found.groups) == 1 else f"{stem}/{group.name}"
         names[group.key] = name = _unique(full, used)
-        bodies.append(_group_body(name, source, group, warnings))
+        bodies.append(_group_body(name, source, group, warnings, merge))
     excluded = sorted(
         {(*sorted((names[a], names[b])), reason) for a, b, reason in found.excluded if a != b}
     )
@@ -167,7 +167,9 @@ def load_file_scene(path: str | os.PathLike[str]) -> Scene | None:
     )
 
 
-def _group_body(name: str, source: str, group: BodyGroup, warnings: list[str]) -> Body:
+def _group_body(
+    name: str, source: str, group: BodyGroup, warnings: list[str], merge: bool = True
+) -> Body:
     """One body from a group of collision shapes (:mod:`meshcol.io.physics_bodies`): a lone
     primitive stays exact when its transform allows; anything else is a body of parts,
     every part merged; ``warnings`` gets a line when its parts ask for different colliders."""
@@ -193,7 +195,8 @@ def _group_body(name: str, source: str, group: BodyGroup, warnings: list[str]) -
         vertices = vertices @ origin[:3, :3].T + origin[:3, 3]
         if np.linalg.det(origin[:3, :3]) < 0:
             faces = faces[:, ::-1]
-        vertices, faces = merge_vertices(vertices, faces)
+        if merge:
+            vertices, faces = merge_vertices(vertices, faces)
         elements.append(LinkElement(element.name, np.eye(4), None, vertices, faces))
     body = parts_body(name, source, pose, elements)
     collider = choose_collider([e.collider for e in group.elements], warnings, name)
