@@ -4,7 +4,8 @@ Two sources, both UsdPhysics:
 
 - ``FilteredPairsAPI``: a prim's ``physics:filteredPairs`` targets never collide with it;
 - ``CollisionGroup``: the bodies of a group (its ``colliders`` collection) never collide with
-  the bodies of the groups in its ``physics:filteredGroups`` (a group may name itself).
+  the bodies of the groups in its ``physics:filteredGroups`` (a group may name itself; with
+  ``physics:invertFilteredGroups``, with those of every group not listed).
 
 A prim stands for every body at or under it, and for the body it is part of. Each pair is
 ``(key_a, key_b, reason)``, keys the bodies' prim paths (``FileScene.excluded``).
@@ -71,6 +72,12 @@ def excluded_pairs(stage: Any, names: list[str]) -> list[tuple[str, str, str]]:
                 {body for member in members for body in _bodies_of(str(member), names)}
             )
             filtered = [str(t) for t in group.GetFilteredGroupsRel().GetTargets()]
+            if group.GetInvertFilteredGroupsAttr().Get():
+                # it collides only with the groups listed: every other group is filtered
+                others = [
+                    str(p.GetPath()) for p in stage.Traverse() if p.IsA(UsdPhysics.CollisionGroup)
+                ]
+                filtered = [g for g in others if g not in filtered]
             filters.append((path, filtered))
     for path, filtered in filters:
         for other in filtered:

@@ -314,6 +314,16 @@ def test_rigid_bodies_are_bodies_of_parts_and_filters_exclude_pairs(tmp_path: Pa
     assert {(p["body_a"], p["body_b"]) for p in listed} == set(pairs)
 
 
+@pytest.mark.slow  # worker processes start
+def test_check_in_workers_keeps_the_stages_filters(tmp_path: Path) -> None:
+    test_rigid_bodies_are_bodies_of_parts_and_filters_exclude_pairs(tmp_path)
+    path = tmp_path / "rig.usda"
+    one = json.loads(run("check", str(path), "--format", "json")[1])
+    code, out, _ = run("check", str(path), "--format", "json", "--jobs", "2")
+    assert code in (0, 1)
+    assert json.loads(out)["settings"]["excluded_pairs"] == one["settings"]["excluded_pairs"] != []
+
+
 # -- composition: references, instancing, point instancers, usdz, usdc ----------------------
 
 
