@@ -56,6 +56,8 @@ PHYSICS_EXTENSIONS = (KHR_BODIES, KHR_SHAPES, OMI_BODY, OMI_SHAPE)
 
 _COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}
 _DTYPES = {5120: "<i1", 5121: "<u1", 5122: "<i2", 5123: "<u2", 5125: "<u4", 5126: "<f4"}
+# Mesh compressions whose accessors hold no data of their own (never read as zeros)
+_COMPRESSIONS = {"KHR_draco_mesh_compression", "EXT_meshopt_compression"}
 #: Most nodes one file may hold (a bound on the work of a hostile file).
 MAX_NODES = 1_000_000
 
@@ -172,6 +174,13 @@ class GltfFile:
         for k, primitive in enumerate(self.items("primitives", spec)):
             if not isinstance(primitive, dict) or primitive.get("mode", 4) != 4:
                 continue
+            compressed = primitive.get("extensions", {})
+            if isinstance(compressed, dict) and set(compressed) & _COMPRESSIONS:
+                raise self.error(
+                    f"mesh {index} primitive {k} is compressed "
+                    f"({', '.join(sorted(set(compressed) & _COMPRESSIONS))}), which meshcol "
+                    "does not decode"
+                )
             attributes = primitive.get("attributes", {})
             if not isinstance(attributes, dict) or "POSITION" not in attributes:
                 continue

@@ -391,6 +391,12 @@ def test_a_gltf_without_physics_reads_as_before(asset: Path) -> None:
         ),
         (lambda d: d["nodes"][1].update(children=[0]), "node 0's parents form a cycle"),
         (
+            lambda d: d["meshes"][0]["primitives"][0].update(
+                extensions={"KHR_draco_mesh_compression": {"bufferView": 0, "attributes": {}}}
+            ),
+            "mesh 0 primitive 0 is compressed (KHR_draco_mesh_compression), which meshcol does",
+        ),
+        (
             lambda d: d["extensions"]["KHR_implicit_shapes"]["shapes"][1].update(type="torus"),
             "has shape type 'torus', which meshcol does not read",
         ),
