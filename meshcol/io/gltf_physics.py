@@ -252,9 +252,25 @@ def _ext(node: dict) -> tuple[dict, str]:
         return {}, ""
     for name in (KHR_BODIES, OMI_BODY):
         value = extensions.get(name)
-        if isinstance(value, dict):
+        if isinstance(value, dict) and (name == KHR_BODIES or set(value) & _NODE_KEYS):
             return value, name
-    return {}, ""
+    return _legacy_omi(extensions)
+
+
+_NODE_KEYS = {"motion", "collider", "trigger"}
+
+
+def _legacy_omi(extensions: dict) -> tuple[dict, str]:
+    """OMI's earlier draft (what Godot 4.1 and 4.2 write): a body ``{"type": ...}`` (``trigger``
+    makes its shapes triggers, any other type is a body) and a node-level
+    ``OMI_physics_shape {"shape": i}`` for a collider, read as the current form."""
+    body, shape = extensions.get(OMI_BODY), extensions.get(OMI_SHAPE)
+    out: dict[str, Any] = {}
+    if isinstance(body, dict) and "type" in body:
+        out["legacy_trigger" if body["type"] == "trigger" else "motion"] = {"type": body["type"]}
+    if isinstance(shape, dict) and "shape" in shape:
+        out["collider"] = {"shape": shape["shape"]}
+    return (out, OMI_BODY) if out else ({}, "")
 
 
 def _scene(
@@ -277,6 +293,10 @@ def _scene(
             triggers += 1
         collider = ext.get("collider")
         if not isinstance(collider, dict):
+            continue
+        up = parent.get(k)
+        if up is not None and "legacy_trigger" in _ext(nodes[up])[0]:
+            triggers += 1  # a shape of an earlier-draft OMI trigger body
             continue
         element = _collider_element(gltf, k, node, collider, name, worlds)
         if element is None:
@@ -385,7 +405,8 @@ def _shape_element(
     gltf: GltfFile, name: str, world: np.ndarray, shape: dict, where: str, khr: bool
 ) -> ShapeElement | None:
     kind = shape.get("type")
-    params = shape.get(kind, {}) if isinstance(kind, str) else {}
+    # the parameters sit under the type's name; OMI's earlier draft put them beside "type"
+    params = shape.get(kind, shape if not khr else {}) if isinstance(kind, str) else {}
     if not isinstance(params, dict):
         raise gltf.error(f"{where} shape {kind!r} parameters are not an object")
     box, sphere, cap_h, cap_r, cyl_h, cyl_r = _DEFAULTS[khr]

@@ -367,6 +367,44 @@ def test_omi_bodies_as_godot_writes_them(tmp_path: Path) -> None:
     assert scene.warnings == ("1 trigger(s) not checked (triggers are not solid)",)
 
 
+def test_omis_earlier_draft_as_godot_4_1_writes_it(tmp_path: Path) -> None:
+    # omigroup/gltf-extensions, OMI_physics_body/examples/complex/static_with_trigger.gltf
+    document = {
+        "asset": {"version": "2.0"},
+        "extensions": {
+            "OMI_physics_shape": {
+                "shapes": [
+                    {"size": [1, 1, 1], "type": "box"},
+                    {"radius": 2, "type": "sphere"},
+                ]
+            }
+        },
+        "extensionsUsed": ["OMI_physics_body", "OMI_physics_shape"],
+        "nodes": [
+            {
+                "children": [1, 2],
+                "extensions": {"OMI_physics_body": {"type": "static"}},
+                "name": "StaticBox",
+            },
+            {"extensions": {"OMI_physics_shape": {"shape": 0}}, "name": "StaticShape"},
+            {
+                "children": [3],
+                "extensions": {"OMI_physics_body": {"type": "trigger"}},
+                "name": "TriggerBody",
+            },
+            {"extensions": {"OMI_physics_shape": {"shape": 1}}, "name": "TriggerShape"},
+        ],
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+    }
+    path = tmp_path / "static_with_trigger.gltf"
+    path.write_text(json.dumps(document))
+    scene = load_inputs([path])
+    assert [b.name for b in scene.bodies] == ["static_with_trigger"]
+    assert scene.bodies[0].primitive == Box((1.0, 1.0, 1.0))
+    assert scene.warnings == ("1 trigger(s) not checked (triggers are not solid)",)
+
+
 def test_a_gltf_without_physics_reads_as_before(asset: Path) -> None:
     from meshcol.io.gltf import read_glb
 
