@@ -480,3 +480,47 @@ def test_decompose_to_gltf_physics_reads_back_its_parts(asset: Path, tmp_path: P
             assert point_gap(mine, want) <= 1e-6 * float(np.ptp(want, axis=0).max())
     usage = run("decompose", str(asset), str(asset), "--out-dir", str(out), "--to", "gltf-physics")
     assert usage[0] == 2 and "--to gltf-physics needs one glTF/GLB asset and --out-dir" in usage[2]
+
+
+def test_collision_filters_as_the_khronos_filter_sample_sets_them(tmp_path: Path) -> None:
+    # the scenario of glTF_Physics' RigidBodies_CollisionFilter_01: two dynamic balls of one
+    # system that never collide with each other, one of them not with the static floor either
+    khr = "KHR_physics_rigid_bodies"
+
+    def body(x: float, y: float, shape: int, filter_index: int, dynamic: bool) -> dict:
+        ext: dict = {"collider": {"geometry": {"shape": shape}, "collisionFilter": filter_index}}
+        if dynamic:
+            ext["motion"] = {}
+        return {"translation": [x, y, 0.0], "extensions": {khr: ext}}
+
+    document = {
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_implicit_shapes", khr],
+        "nodes": [body(-5, 5, 0, 0, True), body(5, 5, 0, 1, True), body(0, -0.5, 1, 2, False)],
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1, 2]}],
+        "extensions": {
+            "KHR_implicit_shapes": {
+                "shapes": [
+                    {"type": "sphere", "sphere": {"radius": 1.0}},
+                    {"type": "box", "box": {"size": [15.0, 1.0, 15.0]}},
+                ]
+            },
+            khr: {
+                "collisionFilters": [
+                    {"collisionSystems": ["Dynamic"], "notCollideWithSystems": ["Dynamic"]},
+                    {"collisionSystems": ["Dynamic"], "notCollideWithSystems": ["Static"]},
+                    {"collisionSystems": ["Static"]},
+                ]
+            },
+        },
+    }
+    assert physics_schema_problems(document) == []
+    path = tmp_path / "filters.gltf"
+    path.write_text(json.dumps(document))
+    scene = load_inputs([path])
+    assert [b.primitive for b in scene.bodies] == [Sphere(1.0), Sphere(1.0), Box((15.0, 1.0, 15.0))]
+    assert [(a, b) for a, b, _ in scene.excluded_pairs] == [
+        ("filters/node_0", "filters/node_1"),
+        ("filters/node_1", "filters/node_2"),
+    ]
