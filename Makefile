@@ -135,7 +135,7 @@ bench: install-test
 # The Khronos glTF validator (npm package gltf-validator, needs node and npm) in
 # .venv/node/node_modules, where tests/io/test_gltf_physics.py finds it (it skips without).
 gltf-validator: $(BIN)/python
-	npm install --silent --prefix $(VENV)/node gltf-validator
+	npm install --no-fund --no-audit --prefix $(VENV)/node gltf-validator
 
 clean:
 	rm -rf build dist $(VENV) .venv-lowest $(SANITIZE_VENV) demo-out *.egg-info
