@@ -12,7 +12,8 @@ its own, as the objects of an OBJ file are (``purpose = "guide"`` prims skipped)
 some, geometry without ``CollisionAPI`` is render geometry and not read (a warning counts it).
 Collision prims with ``physics:collisionEnabled = false`` are skipped (a warning counts them).
 
-Geometry: ``UsdGeom.Mesh`` (polygons triangulated by :func:`meshcol.io.off.triangulate_polygons`,
+Values are read at the earliest time sample where an attribute has some (an animated
+transform often has no default), else at its default. Geometry: ``UsdGeom.Mesh`` (polygons triangulated by :func:`meshcol.io.off.triangulate_polygons`,
 ``holeIndices`` dropped, ``orientation = "leftHanded"`` winding reversed) and ``Cube``,
 ``Sphere``, ``Capsule``, ``Cylinder`` at their world transforms (``UsdGeom.XformCache``,
 instance proxies of instanceable prims and references included, ``PointInstancer``
@@ -177,7 +178,10 @@ class _Reader:
         from pxr import Usd, UsdGeom
 
         self.stage, self.frame, self.source, self.warnings = stage, frame, source, warnings
-        self.cache = UsdGeom.XformCache(Usd.TimeCode.Default())
+        # the earliest time sample where there are some, else the default value: an exporter
+        # that animates a transform often authors no default, which reads as the identity
+        self.time = Usd.TimeCode.EarliestTime()
+        self.cache = UsdGeom.XformCache(self.time)
         self.groups: dict[str, BodyGroup] = {}
         self.triangles = 0
 
@@ -265,8 +269,8 @@ class _Reader:
         if kind != "Mesh":
             axis = "Z"
             if kind in ("Capsule", "Cylinder"):
-                axis = str(UsdGeom.Gprim(prim).GetPrim().GetAttribute("axis").Get() or "Z")
-            primitive = _primitive(prim, kind, UsdGeom)
+                axis = str(prim.GetAttribute("axis").Get(self.time) or "Z")
+            primitive = _primitive(prim, kind, UsdGeom, self.time)
             return ShapeElement(name, world, primitive, None, None, None, axis)
         vertices, faces = self._mesh(UsdGeom.Mesh(prim), str(prim.GetPath()))
         collider = None
@@ -293,9 +297,11 @@ class _Reader:
 
         from meshcol.io.off import triangulate_polygons
 
-        points = np.asarray(mesh.GetPointsAttr().Get() or [], dtype=np.float64).reshape(-1, 3)
-        counts = np.asarray(mesh.GetFaceVertexCountsAttr().Get() or [], dtype=np.int64)
-        indices = np.asarray(mesh.GetFaceVertexIndicesAttr().Get() or [], dtype=np.int64)
+        points = np.asarray(mesh.GetPointsAttr().Get(self.time) or [], dtype=np.float64).reshape(
+            -1, 3
+        )
+        counts = np.asarray(mesh.GetFaceVertexCountsAttr().Get(self.time) or [], dtype=np.int64)
+        indices = np.asarray(mesh.GetFaceVertexIndicesAttr().Get(self.time) or [], dtype=np.int64)
         if counts.size and (counts.min() < 0 or int(counts.sum()) != len(indices)):
             raise self.error(
                 f"cannot parse USD file: {where}: faceVertexCounts add up to "
@@ -306,7 +312,7 @@ class _Reader:
                 f"cannot parse USD file: {where}: faceVertexIndices refers to a point the mesh "
                 f"does not have ({len(points)} points)"
             )
-        holes = np.asarray(mesh.GetHoleIndicesAttr().Get() or [], dtype=np.int64)
+        holes = np.asarray(mesh.GetHoleIndicesAttr().Get(self.time) or [], dtype=np.int64)
         keep = counts >= 3
         if holes.size:
             keep[holes[(holes >= 0) & (holes < len(counts))]] = False
@@ -320,7 +326,7 @@ class _Reader:
         faces = triangulate_polygons(points, indices[corners], sizes) if sizes.size else None
         if faces is None:
             faces = np.zeros((0, 3), dtype=np.int64)
-        if mesh.GetOrientationAttr().Get() == UsdGeom.Tokens.leftHanded:
+        if mesh.GetOrientationAttr().Get(self.time) == UsdGeom.Tokens.leftHanded:
             faces = faces[:, ::-1]
         return points, np.ascontiguousarray(faces, dtype=np.int64)
 
@@ -330,11 +336,9 @@ class _Reader:
         from pxr import Usd
 
         point = UsdGeom.PointInstancer(instancer)
-        xforms = point.ComputeInstanceTransformsAtTime(
-            Usd.TimeCode.Default(), Usd.TimeCode.Default()
-        )
+        xforms = point.ComputeInstanceTransformsAtTime(self.time, self.time)
         targets = point.GetPrototypesRel().GetTargets()
-        indices = np.asarray(point.GetProtoIndicesAttr().Get() or [], dtype=np.int64)
+        indices = np.asarray(point.GetProtoIndicesAttr().Get(self.time) or [], dtype=np.int64)
         if len(indices) > MAX_PRIMS:
             raise self.error(f"stage has more than {MAX_PRIMS} prims")
         base = self.world(instancer)
@@ -361,15 +365,15 @@ class _Reader:
                 self.groups[key].elements.append(self._element(prim, name.lstrip("/"), world))
 
 
-def _primitive(prim: Any, kind: str, UsdGeom: Any) -> Primitive:
+def _primitive(prim: Any, kind: str, UsdGeom: Any, time: Any) -> Primitive:
     """The primitive of a ``Cube``, ``Sphere``, ``Capsule`` or ``Cylinder`` prim in its own
     frame, axis along z (an X or Y axis is turned onto z by :func:`_axis_turn`)."""
     if kind == "Cube":
-        size = float(UsdGeom.Cube(prim).GetSizeAttr().Get())
+        size = float(UsdGeom.Cube(prim).GetSizeAttr().Get(time))
         return Box((abs(size),) * 3)
     if kind == "Sphere":
-        return Sphere(abs(float(UsdGeom.Sphere(prim).GetRadiusAttr().Get())))
+        return Sphere(abs(float(UsdGeom.Sphere(prim).GetRadiusAttr().Get(time))))
     schema = UsdGeom.Capsule(prim) if kind == "Capsule" else UsdGeom.Cylinder(prim)
-    radius = abs(float(schema.GetRadiusAttr().Get()))
-    height = abs(float(schema.GetHeightAttr().Get()))
+    radius = abs(float(schema.GetRadiusAttr().Get(time)))
+    height = abs(float(schema.GetHeightAttr().Get(time)))
     return Capsule(radius, height) if kind == "Capsule" else Cylinder(radius, height)

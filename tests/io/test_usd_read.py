@@ -126,6 +126,18 @@ def test_y_up_centimetres_land_in_metres_z_up(tmp_path: Path) -> None:
     assert not any("metersPerUnit" in w for w in scene.warnings)
 
 
+def test_animated_transforms_read_at_their_first_sample(tmp_path: Path) -> None:
+    path = tmp_path / "anim.usda"
+    stage = new_stage(path)
+    mesh = add_cube_mesh(stage, "/cube")
+    op = mesh.AddTranslateOp()
+    op.Set(Gf.Vec3d(1.0, 2.0, 3.0), 10.0)  # time samples only, no default
+    op.Set(Gf.Vec3d(9.0, 9.0, 9.0), 20.0)
+    stage.GetRootLayer().Save()
+    low = load(path).bodies[0].world_vertices().min(axis=0)
+    assert low == pytest.approx([1.0, 2.0, 3.0], abs=1e-15)
+
+
 def test_unauthored_units_take_usds_fallbacks_and_say_so(tmp_path: Path) -> None:
     path = tmp_path / "bare.usda"
     stage = Usd.Stage.CreateNew(str(path))
