@@ -603,17 +603,25 @@ def cache_dir_option(
     )
 
 
-def to_option(what: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+def to_option(what: str, gltf: bool = False) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     """Add ``--to urdf|mjcf|glb|usd`` (parameter ``to``): the format of a rebuilt robot
-    description written with ``what`` (hull, decompose, fit)."""
+    description written with ``what`` (hull, decompose, fit); with ``gltf``, also
+    ``gltf-physics`` (a glTF/GLB asset written back with its colliders)."""
+    choices = ["urdf", "mjcf", "glb", "usd"] + (["gltf-physics"] if gltf else [])
+    extra = (
+        "; a glTF/GLB asset with --to gltf-physics: OUT/<asset>.glb, the asset with its "
+        "colliders (KHR_physics_rigid_bodies and OMI_physics_body)"
+        if gltf
+        else ""
+    )
     return click.option(
         "--to",
         "to",
-        type=click.Choice(["urdf", "mjcf", "glb", "usd"]),
+        type=click.Choice(choices),
         default=None,
         help=f"Robot input (URDF, MJCF) with --out-dir: the format of the description written "
-        f"with {what}, OUT/<robot>.urdf|.xml|.glb|.usda (usd needs meshcol[usd]).  [default: "
-        "the input's]",
+        f"with {what}, OUT/<robot>.urdf|.xml|.glb|.usda (usd needs meshcol[usd]){extra}.  "
+        "[default: the input's]",
     )
 
 
@@ -641,6 +649,13 @@ def mesh_outputs(
                 f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})",
                 param_hint="'-o' / '--output'",
             )
+    if to == "gltf-physics":
+        from meshcol.analysis.gltf_rebuild import is_gltf
+
+        if out_dir is None or len(inputs) != 1 or not is_gltf(inputs[0]):
+            raise click.UsageError("--to gltf-physics needs one glTF/GLB asset and --out-dir")
+        no_report_with_meshes(fmt, report, True)
+        return True
     robot = out_dir is not None and len(inputs) == 1 and is_robot_file(inputs[0])
     if to is not None and not robot:
         raise click.UsageError("--to needs one robot description (URDF, MJCF) and --out-dir")

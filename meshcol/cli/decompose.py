@@ -204,7 +204,7 @@ class _MeshFormat(click.Choice):
     show_default=True,
     help="Output format (glb: one node per part; not with ucx).",
 )
-@to_option("the parts")
+@to_option("the parts", gltf=True)
 @click.option(
     "--report",
     type=click.Path(dir_okay=False),
@@ -420,6 +420,12 @@ def _robot_input(
 
     from meshcol.io.inputs import is_robot_file
 
+    if outputs.to == "gltf-physics":
+        from meshcol.analysis.gltf_rebuild import is_gltf
+
+        if len(inputs) != 1 or not is_gltf(inputs[0]) or outputs.out_dir is None:
+            raise click.UsageError("--to gltf-physics needs one glTF/GLB asset and --out-dir")
+        return True
     robot = len(inputs) == 1 and is_robot_file(inputs[0])
     if outputs.to is not None and not robot:
         raise click.UsageError("--to needs one robot description (URDF, MJCF)")
@@ -466,6 +472,19 @@ def _decompose(
     from meshcol.decomposition.batch import decompose_files
 
     report_file = outputs.report_file
+    if outputs.to == "gltf-physics":
+        from meshcol.analysis.gltf_rebuild import decompose_gltf
+
+        return decompose_gltf(
+            inputs[0],
+            outputs.out_dir,
+            options,
+            run,
+            target=target,
+            progress=progress,
+            other_outputs=[p for p in (report_file, outputs.html) if p],
+            robot_options=robot_options,
+        )
     if robot:
         return rebuild_decomposition(
             inputs[0],
