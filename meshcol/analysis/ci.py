@@ -13,6 +13,9 @@ since``) limits the run to the jobs whose file, or a file it read, changed.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
+import functools
+import hashlib
 import os
 import subprocess
 from collections.abc import Callable, Collection, Iterable, Iterator, Mapping, Sequence
@@ -109,6 +112,21 @@ def _settings(resolved: Resolved, config: Config, command: str) -> dict[str, Any
     return out
 
 
+def _checked(
+    resolved: Resolved, config: Config, command: str
+) -> tuple[dict[str, Any], tuple[str, ...]]:
+    """A command's settings checked (:func:`_settings`) and the files besides the input
+    they name (a baseline, a target's .toml), whose content is part of the job's key."""
+    settings = _settings(resolved, config, command)
+    named = [("baseline", settings.get("baseline")), ("target", settings["target"])]
+    extra = tuple(
+        _in_folder(config, value)
+        for key, value in named
+        if isinstance(value, str) and (key == "baseline" or value.endswith(".toml"))
+    )
+    return settings, extra
+
+
 def _in_folder(config: Config, path: str) -> str:
     return _in_folder_path(os.fspath(config.folder), path)
 
@@ -128,21 +146,17 @@ def plan(
         that does not load), naming the key and its line.
     """
     jobs = []
+    # one check per resolution the files share
+    checked: dict[tuple[int, str], tuple[dict[str, Any], tuple[str, ...]]] = {}
     for path in files if files is not None else config.files():
-        for resolved in resolve(config, path, overrides):
+        for resolved in resolve(config, path, overrides, shared=True):
             for command in resolved.commands:
-                settings = _settings(resolved, config, command)
-                extra = [
-                    _in_folder(config, v)
-                    for k, v in (
-                        ("baseline", settings.get("baseline")),
-                        ("target", settings["target"]),
-                    )
-                    if isinstance(v, str) and (k == "baseline" or v.endswith(".toml"))
-                ]
-                jobs.append(
-                    Job(command, path, resolved.kind, settings, resolved.sections, tuple(extra))
-                )
+                memo = (id(resolved.values), command)
+                if memo not in checked:
+                    named = dataclasses.replace(resolved, path=path)  # for its messages
+                    checked[memo] = _checked(named, config, command)
+                settings, extra = checked[memo]
+                jobs.append(Job(command, path, resolved.kind, settings, resolved.sections, extra))
     return jobs
 
 
@@ -330,7 +344,6 @@ def run_ci(
         Look results up and store them (``--no-cache``: neither).
     """
     from meshcol.decomposition.executor import run_each
-    from meshcol.decomposition.result_cache import Digests, load_result, result_key, store_result
 
     folder = os.fspath(config.folder)
     if root is None:
@@ -338,19 +351,18 @@ def run_ci(
     root = os.path.realpath(root)
     if cache_dir is None and config.get("cache-dir") is not None:
         cache_dir = _store(folder, config.get("cache-dir"))
-    digests = Digests(folder)
+    store = _Results(config, cache_dir if use_cache else None, use_cache)
     runs: dict[int, CiRun] = {}
     pending: list[tuple[int, Job, str]] = []
-    all_jobs = plan(config, overrides)
     skipped = 0
-    for index, job in enumerate(all_jobs):
-        key = _key(job, folder, digests, result_key)
-        cached = load_result(key, digests, cache_dir) if use_cache else None
+    for index, job in enumerate(plan(config, overrides)):
+        key = store.key(job)
+        cached = store.look_up(key)
         if changed is not None and not _touched(job, changed, cached, folder):
             skipped += 1
             continue
         if cached is not None:
-            runs[index] = CiRun(job, cached, cached=True)
+            runs[index] = CiRun(job, cached, cached=True, fetch=store.fetcher(key))
         else:
             pending.append((index, job, key))
     if progress is not None and pending:
@@ -364,21 +376,101 @@ def run_ci(
     for done, (position, result) in enumerate(_numbered(outcomes, jobs == 1), start=1):
         index, job, key = pending[position]
         runs[index] = CiRun(job, result, cached=False)
-        if use_cache and "error" not in result:
-            depends = {path: digests(path) for path in result["reads"]}
-            for extra in job.extra_files:
-                depends[_rel(folder, extra)] = digests(extra)
-            store_result(key, result, depends, cache_dir)
+        store.keep(key, job, result)
         if progress is not None:
             progress(f"ci: {done}/{len(pending)} jobs")
-    ordered = [runs[i] for i in sorted(runs)]
+    store.write_index(runs.values())
     return CiReport(
-        runs=tuple(ordered),
+        runs=tuple(runs[i] for i in sorted(runs)),
         config=config.path,
         root=root,
         changed_since=changed_since,
         skipped=skipped,
     )
+
+
+class _Results:
+    """The result cache as a run uses it: the run's index read once (a warm run's lookups),
+    entries read when the index lacks a job or a report is written, each result stored as
+    it comes and the index written at the end."""
+
+    def __init__(self, config: Config, cache_dir: Any, enabled: bool) -> None:
+        from meshcol.decomposition.result_cache import (
+            Digests,
+            load_index,
+            read_index,
+            result_key,
+        )
+
+        self.folder = os.fspath(config.folder)
+        self.cache_dir, self.enabled = cache_dir, enabled
+        self.name = f"{Digests()(config.path)}:{config.path.name}"
+        index = read_index(self.name, cache_dir) if enabled else {}
+        self.digests = Digests(self.folder, index.get("stats"), index.get("written_ns", 0))
+        self.result_key = result_key
+        self.index = load_index(index, self.digests)
+        self.changed = False
+        self._keys: dict[int, str] = {}
+        self._settings: dict[int, str] = {}
+
+    def key(self, job: Job) -> str:
+        """The job's cache key (the settings' part once per settings shared by jobs)."""
+        known = self._keys.get(id(job))
+        if known is not None:
+            return known
+        shared = self._settings.get(id(job.settings))
+        if shared is None:
+            shared = self.result_key(job.command, dict(job.settings), "")
+            self._settings[id(job.settings)] = shared
+        parts = [shared, job.path, self.digests(job.path)]
+        for extra in job.extra_files:
+            parts += [_rel(self.folder, extra), self.digests(extra)]
+        key = hashlib.sha256("\0".join(parts).encode()).hexdigest()
+        self._keys[id(job)] = key
+        return key
+
+    def look_up(self, key: str) -> dict[str, Any] | None:
+        """What the run keeps of a cached result (the index's summary, else the entry)."""
+        from meshcol.decomposition.result_cache import load_result
+
+        if not self.enabled:
+            return None
+        if key in self.index:
+            return dict(self.index[key])
+        self.changed = True
+        return load_result(key, self.digests, self.cache_dir)
+
+    def fetcher(self, key: str) -> Callable[[], dict[str, Any] | None]:
+        return functools.partial(self._fetch, key)
+
+    def _fetch(self, key: str) -> dict[str, Any] | None:
+        from meshcol.decomposition.result_cache import load_result
+
+        return load_result(key, self.digests, self.cache_dir)
+
+    def _depends(self, job: Job, result: Mapping[str, Any]) -> dict[str, str]:
+        depends = {path: self.digests(path) for path in result.get("reads", [])}
+        for extra in job.extra_files:
+            depends[_rel(self.folder, extra)] = self.digests(extra)
+        return depends
+
+    def keep(self, key: str, job: Job, result: dict[str, Any]) -> None:
+        from meshcol.decomposition.result_cache import store_result
+
+        if self.enabled and "error" not in result:
+            store_result(key, result, self._depends(job, result), self.cache_dir)
+
+    def write_index(self, runs: Iterable[CiRun]) -> None:
+        from meshcol.decomposition.result_cache import store_index
+
+        if not self.enabled or not self.changed:
+            return  # every job came from the index, whose files were unchanged
+        entries = {}
+        for run in runs:
+            if "error" not in run.result:
+                summary = {k: v for k, v in run.result.items() if k != "report"}
+                entries[self.key(run.job)] = (summary, self._depends(run.job, run.result))
+        store_index(self.name, entries, self.digests.stats(), self.cache_dir)
 
 
 def _store(folder: str, cache_dir: str) -> str:
@@ -391,14 +483,6 @@ def _rel(folder: str, path: str) -> str:
     """A dependency as the cache keeps it: relative to the config's folder when inside."""
     relative = os.path.relpath(path, folder)
     return path if relative.startswith("..") else relative.replace(os.sep, "/")
-
-
-def _key(job: Job, folder: str, digests: Any, result_key: Callable[..., str]) -> str:
-    content = digests(job.path)
-    settings = {"path": job.path, "settings": dict(job.settings)}
-    for extra in job.extra_files:
-        settings[_rel(folder, extra)] = digests(extra)
-    return result_key(job.command, settings, content)
 
 
 def _touched(job: Job, changed: Collection[str], cached: Any, folder: str) -> bool:

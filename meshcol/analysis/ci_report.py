@@ -15,10 +15,12 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from meshcol._version import __version__
+from meshcol.errors import MeshcolError
 
 if TYPE_CHECKING:
     from meshcol.analysis.ci import Job
@@ -35,11 +37,29 @@ def _plain(value: Any) -> Any:
 
 @dataclass(frozen=True)
 class CiRun:
-    """One job and its result: ``{"report", "suite", "exit_code"}`` or ``{"error"}``."""
+    """One job and its result: ``{"report", "suite", "exit_code", "reads"}`` or
+    ``{"error"}``; from the cache's index the report is left out, and ``fetch`` reads it
+    when a format needs it (the JSON report): a run that writes only CI formats never
+    reads the reports of its unchanged jobs."""
 
     job: Job
     result: dict[str, Any]
     cached: bool = False
+    fetch: Callable[[], dict[str, Any] | None] | None = None
+
+    def report(self) -> Any:
+        """The job's own JSON report (None for an error)."""
+        if "error" in self.result:
+            return None
+        if "report" not in self.result and self.fetch is not None:
+            entry = self.fetch()
+            if entry is None:
+                raise MeshcolError(
+                    f"{self.job.path}: the cached {self.job.command} report is gone from the "
+                    "result cache (run again, or with --no-cache)"
+                )
+            return entry["report"]
+        return self.result["report"]
 
     @staticmethod
     def result_of(report: Any) -> dict[str, Any]:
@@ -67,7 +87,7 @@ class CiRun:
             "settings": dict(sorted(self.job.settings.items())),
             "exit_code": self.exit_code,
             "error": self.result.get("error"),
-            "report": self.result.get("report"),
+            "report": self.report(),
         }
 
     def cases(self) -> list[Any]:

@@ -17,33 +17,77 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import time
 from collections.abc import Mapping
 from typing import Any
 
 from meshcol._version import __version__
 from meshcol.decomposition.cache import read_bytes, write_bytes
 
-__all__ = ["FORMAT_VERSION", "Digests", "load_result", "result_key", "store_result"]
+__all__ = [
+    "FORMAT_VERSION",
+    "Digests",
+    "load_index",
+    "load_result",
+    "read_index",
+    "result_key",
+    "store_index",
+    "store_result",
+]
 
 #: The version of the entries' layout (and of what ci keeps of a report); a new one misses.
 FORMAT_VERSION = 1
+#: Seconds before an index was written within which a file's stat is not trusted.
+RACY_SECONDS = 2.0
 _CHUNK = 1 << 20
 
 
 class Digests:
     """Content digests (SHA-256) of files, each file read once per run; a missing or
-    unreadable file's digest is ``missing``. Relative paths are from ``folder``."""
+    unreadable file's digest is ``missing``. Relative paths are from ``folder``.
 
-    def __init__(self, folder: str | os.PathLike[str] = ".") -> None:
+    ``stats`` (from the last run's index, :meth:`stats`) lets a file whose size, times,
+    inode and device are those it had then keep its digest unread, as git's index does; a
+    file changed less than :data:`RACY_SECONDS` before that index was written is read
+    again (its time may not show a second change within the clock's step)."""
+
+    def __init__(
+        self,
+        folder: str | os.PathLike[str] = ".",
+        stats: Mapping[str, list[Any]] | None = None,
+        written_ns: int = 0,
+    ) -> None:
         self.folder = os.fspath(folder)
         self._known: dict[str, str] = {}
+        self._stats: dict[str, list[Any]] = {}
+        self._previous = dict(stats or {})
+        self._racy_ns = written_ns - int(RACY_SECONDS * 1e9)
 
     def __call__(self, path: str | os.PathLike[str]) -> str:
-        key = os.path.realpath(os.path.join(self.folder, path))
+        key = os.path.normpath(os.path.join(self.folder, path))
         digest = self._known.get(key)
         if digest is None:
-            digest = self._known[key] = _digest(key)
+            digest = self._known[key] = self._digest(key)
         return digest
+
+    def _digest(self, path: str) -> str:
+        try:
+            st = os.stat(path)
+        except OSError:
+            return "missing"
+        signature = [st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino, st.st_dev]
+        before = self._previous.get(path)
+        if before is not None and before[:5] == signature and st.st_mtime_ns < self._racy_ns:
+            digest: str = before[5]
+        else:
+            digest = _digest(path)
+        self._stats[path] = [*signature, digest]
+        return digest
+
+    def stats(self) -> dict[str, list[Any]]:
+        """``path -> [size, mtime_ns, ctime_ns, inode, device, digest]`` of every file
+        digested so far (for the next run's index)."""
+        return dict(self._stats)
 
 
 def _digest(path: str) -> str:
@@ -110,3 +154,56 @@ def store_result(
     entry = {"key": key, "depends": dict(sorted(depends.items())), "result": result}
     data = json.dumps(entry, sort_keys=True, separators=(",", ":"), allow_nan=True).encode()
     write_bytes(_name(key), data, cache_dir)
+
+
+# --- the run index: what a run needs of each entry, in one object -------------------------------
+
+
+def _index_name(name: str) -> str:
+    return f"results/index/{hashlib.sha256(name.encode()).hexdigest()[:32]}.json"
+
+
+def read_index(name: str, cache_dir: str | os.PathLike[str] | None = None) -> dict[str, Any]:
+    """The index of the last run called ``name`` (a config file), as written by
+    :func:`store_index`; empty when there is none or it is unreadable. One object instead
+    of one per job: a warm run of 10,000 jobs reads it once."""
+    data = read_bytes(_index_name(name), cache_dir)
+    try:
+        index = json.loads(data) if data is not None else {}
+    except ValueError:
+        return {}
+    if not isinstance(index, dict) or index.get("format") != FORMAT_VERSION:
+        return {}
+    return index
+
+
+def load_index(index: Mapping[str, Any], digests: Digests) -> dict[str, Any]:
+    """``key -> summary`` of each entry of ``index`` whose files still have their digests
+    (the summary: what a run keeps of a result but its report)."""
+    return {
+        key: entry["summary"]
+        for key, entry in index.get("entries", {}).items()
+        if all(digests(path) == digest for path, digest in entry["depends"].items())
+    }
+
+
+def store_index(
+    name: str,
+    entries: Mapping[str, tuple[Any, Mapping[str, str]]],
+    stats: Mapping[str, list[Any]],
+    cache_dir: str | os.PathLike[str] | None = None,
+) -> None:
+    """Write the index of a run: ``key -> (summary, depends)`` of every job it has a result
+    for (it replaces the last one; two runs at once: the last write wins, and a job missing
+    from it is only looked up entry by entry)."""
+    index = {
+        "format": FORMAT_VERSION,
+        "written_ns": time.time_ns(),
+        "stats": dict(stats),
+        "entries": {
+            key: {"summary": summary, "depends": dict(depends)}
+            for key, (summary, depends) in entries.items()
+        },
+    }
+    data = json.dumps(index, sort_keys=True, separators=(",", ":"), allow_nan=True).encode()
+    write_bytes(_index_name(name), data, cache_dir)

@@ -15,6 +15,7 @@ scene section names) and where each came from: ``meshcol.toml:7``, a flag (``--s
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import re
@@ -134,6 +135,8 @@ class Config:
     text: str
     table: tuple[str, ...]
     sections: tuple[Section, ...] = ()
+    #: resolutions shared by the files the same sections match (:func:`resolve`)
+    memo: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
 
     @property
     def folder(self) -> Path:
@@ -507,39 +510,66 @@ def resolve(
     config: Config,
     path: str | os.PathLike[str],
     overrides: Mapping[str, tuple[Any, str]] = {},
+    shared: bool = False,
 ) -> list[Resolved]:
     """The settings of ``path`` (relative to the config's folder, or absolute): one
     :class:`Resolved` per kind of section that matches it (an asset, a scene, or both), the
     sections applied in file order (a later one's key wins), then ``overrides``
-    (``key -> (value, origin)``, the flags), then the schema's defaults."""
+    (``key -> (value, origin)``, the flags), then the schema's defaults. ``shared``: the
+    one object of every file the same sections match, its ``path`` empty (a plan of
+    10,000 files makes no copy per file)."""
     relative = _relative(config, path)
     out = []
-    keys = setting_keys()
+    shared_only = shared
     for kind in ("assets", "scenes"):
-        matched = [s for s in config.sections if s.kind == kind and s.matches(relative)]
+        matched = tuple(s for s in config.sections if s.kind == kind and s.matches(relative))
         if not matched:
             continue
-        values: dict[str, Any] = {}
-        origins: dict[str, str] = {}
-        commands: dict[str, None] = {}
-        for section in matched:
-            for key, value, origin in _section_values(config, section):
-                if key in COMMANDS:
-                    commands[key] = None
-                elif key != "robot":
-                    values[key], origins[key] = value, origin
-        for key, (value, origin) in overrides.items():
-            values[key], origins[key] = value, origin
-        for key, node in keys.items():
-            if key not in values:
-                values[key], origins[key] = node.get("default"), "default"
-        ordered = tuple(c for c in COMMANDS if c in commands) or (DEFAULT_COMMAND[kind],)
-        labels = tuple(f"{s.label} ({config.origin(s.kind, s.index)})" for s in matched)
-        out.append(Resolved(relative, kind, ordered, values, origins, labels))
+        # files the same sections match share one resolution (10,000 props, a few sections)
+        memo_key = (
+            kind,
+            tuple(s.index for s in matched),
+            tuple(sorted(overrides.items(), key=str)),
+        )
+        one = config.memo.get(repr(memo_key))
+        if one is None:
+            one = config.memo[repr(memo_key)] = _resolve(config, kind, matched, overrides)
+        out.append(one if shared_only else dataclasses.replace(one, path=relative))
     return out
 
 
+def _resolve(
+    config: Config,
+    kind: str,
+    matched: Sequence[Section],
+    overrides: Mapping[str, tuple[Any, str]],
+) -> Resolved:
+    keys = setting_keys()
+    values: dict[str, Any] = {}
+    origins: dict[str, str] = {}
+    commands: dict[str, None] = {}
+    for section in matched:
+        for key, value, origin in _section_values(config, section):
+            if key in COMMANDS:
+                commands[key] = None
+            elif key != "robot":
+                values[key], origins[key] = value, origin
+    for key, (value, origin) in overrides.items():
+        values[key], origins[key] = value, origin
+    for key, node in keys.items():
+        if key not in values:
+            values[key], origins[key] = node.get("default"), "default"
+    ordered = tuple(c for c in COMMANDS if c in commands) or (DEFAULT_COMMAND[kind],)
+    labels = tuple(f"{s.label} ({config.origin(s.kind, s.index)})" for s in matched)
+    return Resolved("", kind, ordered, values, origins, labels)
+
+
 def _relative(config: Config, path: str | os.PathLike[str]) -> str:
+    odd = ("\\", "/./", "/../", "//")
+    if isinstance(path, str) and not path.startswith(("/", "./", "../")) and not any(
+        part in path for part in odd
+    ):
+        return path  # already as Config.files gives it (the common case, no pathlib)
     file = Path(path)
     if file.is_absolute():
         try:
