@@ -566,8 +566,10 @@ def _resolve(
 
 def _relative(config: Config, path: str | os.PathLike[str]) -> str:
     odd = ("\\", "/./", "/../", "//")
-    if isinstance(path, str) and not path.startswith(("/", "./", "../")) and not any(
-        part in path for part in odd
+    if (
+        isinstance(path, str)
+        and not path.startswith(("/", "./", "../"))
+        and not any(part in path for part in odd)
     ):
         return path  # already as Config.files gives it (the common case, no pathlib)
     file = Path(path)
