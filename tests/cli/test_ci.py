@@ -246,3 +246,11 @@ def test_pyproject_table(tmp_path, monkeypatch):
     assert code == 1, err
     assert json.loads(out)["config"] == "pyproject.toml"
     assert json.loads(out)["root"] == "."
+
+
+def test_the_pool_gives_the_report_of_one_process(repo, tmp_path):
+    code, one, err = run("ci", "--report", "-", "--no-cache")
+    assert code == 1, err
+    code, pool, err = run("ci", "--report", "-", "--no-cache", "-j", "2")
+    assert code == 1, err
+    assert without_times(json.loads(pool)) == without_times(json.loads(one))
