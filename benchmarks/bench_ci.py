@@ -20,6 +20,7 @@ must be the same bytes. Rounds alternate the warm and one-change runs.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import shutil
 import subprocess
@@ -35,6 +36,23 @@ CONFIG = """[[assets]]
 glob = "props/**/*.obj"
 inspect = { fail-on = ["not-watertight"] }
 """
+
+
+def untimed(text: str) -> object:
+    """A JSON report without its measured times and timestamps."""
+
+    def strip(value: object) -> object:
+        if isinstance(value, dict):
+            return {
+                k: strip(v)
+                for k, v in value.items()
+                if "seconds" not in k and k not in ("time", "generated_at")
+            }
+        if isinstance(value, list):
+            return [strip(v) for v in value]
+        return value
+
+    return strip(json.loads(text))
 
 
 def make(root: Path, count: int) -> list[Path]:
@@ -86,17 +104,31 @@ def main() -> None:
         cold, cold_report, line = meshcol(root, *jobs, "--report", "-")
         print(f"cold:      {cold:7.2f} s   {line}")
         _, fresh_report, _ = meshcol(root, "-j", str(args.jobs), "--no-cache", "--report", "-")
-        warm_times, change_times = [], []
+        assert untimed(fresh_report) == untimed(cold_report), "--no-cache report differs"
+        warm_times, change_times, junit_times, json_times = [], [], [], []
+        junit, report = str(root.parent / "r.xml"), str(root.parent / "r.json")
         for k in range(args.rounds):
             seconds, warm_report, line = meshcol(root, *jobs, "--report", "-")
+            print(f"warm, JSON report: {seconds:7.2f} s   {line}")
+            assert warm_report == cold_report, "the cached report differs from the cold one"
+            seconds, _, line = meshcol(root, *jobs)
             warm_times.append(seconds)
-            print(f"warm:      {seconds:7.2f} s   {line}")
-            assert warm_report == cold_report == fresh_report, "cached report differs from cold"
-            files[k].write_text(box_obj(5.0 + k, name=files[k].stem))
-            seconds, _, line = meshcol(root, *jobs, "--report", str(root.parent / "r.json"))
-            change_times.append(seconds)
-            print(f"1 changed: {seconds:7.2f} s   {line}")
-        print("cached report == cold report == --no-cache report: True")
+            print(f"warm, verdict:     {seconds:7.2f} s   {line}")
+            for n, (times, outputs) in enumerate(
+                (
+                    (change_times, ()),
+                    (junit_times, ("--junit", junit)),
+                    (json_times, ("--report", report)),
+                )
+            ):
+                path = files[3 * k + n]
+                path.write_text(box_obj(5.0 + k, name=path.stem))
+                seconds, _, line = meshcol(root, *jobs, *outputs)
+                times.append(seconds)
+                print(
+                    f"1 changed {' '.join(outputs) or '(verdict)':<20}: {seconds:7.2f} s   {line}"
+                )
+        print("cached report == cold report (bytes); == --no-cache report but its times: True")
 
         touched = files[-max(1, args.assets // 100) :]
         for path in touched:
@@ -108,20 +140,23 @@ def main() -> None:
             root, "-j", str(args.jobs), "--no-cache", "--changed-since", "HEAD~1"
         )
         print(f"--changed-since HEAD~1, --no-cache: {nocache:7.2f} s   {line}")
+
+        def span(times: list[float]) -> str:
+            return f"{min(times):.2f}-{max(times):.2f} s ({cold / max(times):.0f}x-{cold / min(times):.0f}x)"
+
         print(
-            f"summary: cold {cold:.2f} s; warm {min(warm_times):.2f}-{max(warm_times):.2f} s; "
-            f"one changed {min(change_times):.2f}-{max(change_times):.2f} s "
-            f"(cold / one changed = {cold / max(change_times):.0f}x to "
-            f"{cold / min(change_times):.0f}x); changed-since 1%: {since:.2f} s "
-            f"({cold / since:.0f}x), without the cache {nocache:.2f} s"
+            f"summary: cold {cold:.2f} s; warm verdict {span(warm_times)}; one changed: "
+            f"verdict {span(change_times)}, --junit {span(junit_times)}, --report JSON "
+            f"{span(json_times)}; changed-since 1%: {since:.2f} s ({cold / since:.0f}x), "
+            f"without the cache {nocache:.2f} s"
         )
     finally:
         if not args.keep:
             shutil.rmtree(root, ignore_errors=True)
         shutil.rmtree(cache, ignore_errors=True)
-        with_r = root.parent / "r.json"
-        if with_r.exists():
-            os.unlink(with_r)
+        for name in ("r.json", "r.xml"):
+            if (root.parent / name).exists():
+                os.unlink(root.parent / name)
 
 
 if __name__ == "__main__":

@@ -368,12 +368,14 @@ def run_ci(
     if progress is not None and pending:
         progress(f"ci: {len(runs)} jobs from the cache, {len(pending)} to run")
     tasks = [(job, folder, root) for _, job, _ in pending]
+    # one job (the asset that changed) runs here: starting a pool costs seconds
+    here = jobs == 1 or len(tasks) == 1
     outcomes = (
         (run_job(task) for task in tasks)
-        if jobs == 1
+        if here
         else (_outcome(o, tasks) for o in run_each(run_job, tasks, jobs=jobs))
     )
-    for done, (position, result) in enumerate(_numbered(outcomes, jobs == 1), start=1):
+    for done, (position, result) in enumerate(_numbered(outcomes, here), start=1):
         index, job, key = pending[position]
         runs[index] = CiRun(job, result, cached=False)
         store.keep(key, job, result)
