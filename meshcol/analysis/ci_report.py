@@ -19,7 +19,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from meshcol._version import __version__
 from meshcol.errors import MeshcolError
 
 if TYPE_CHECKING:
@@ -162,16 +161,39 @@ class CiReport:
     def to_dict(self) -> dict[str, Any]:
         """The JSON report; paths relative to the config's folder, as every job's input is
         (the same bytes wherever the repository is checked out)."""
-        folder = os.path.dirname(os.fspath(self.config))
+        from meshcol.io.report import envelope
+
         return {
-            "meshcol_version": __version__,
-            "command": "ci",
-            "config": os.path.basename(os.fspath(self.config)),
-            "root": os.path.relpath(self.root, folder).replace(os.sep, "/"),
-            "changed_since": self.changed_since,
+            **envelope("ci", self.settings, None),
             "summary": self.summary,
             "runs": [run.to_dict() for run in self.runs],
         }
+
+    @property
+    def settings(self) -> dict[str, Any]:
+        folder = os.path.dirname(os.fspath(self.config))
+        return {
+            "config": os.path.basename(os.fspath(self.config)),
+            "root": os.path.relpath(self.root, folder).replace(os.sep, "/"),
+            "changed_since": self.changed_since,
+        }
+
+    def to_csv(self) -> str:
+        """One row per job: command, input, kind, exit code, error, its report's verdict."""
+        from meshcol.io.report import dumps_csv
+
+        rows = [
+            {
+                "command": run.job.command,
+                "input": run.job.path,
+                "kind": run.job.kind.rstrip("s"),
+                "exit_code": run.exit_code,
+                "error": run.result.get("error"),
+                "verdict": run.result.get("suite", {}).get("verdict"),
+            }
+            for run in self.runs
+        ]
+        return dumps_csv(rows, ("command", "input", "kind", "exit_code", "error", "verdict"))
 
     def to_json(self) -> str:
         from meshcol.io.report import dumps_json
@@ -198,9 +220,4 @@ class CiReport:
             if "suite" in run.result
             for warning in run.result["suite"]["warnings"]
         )
-        settings = {
-            "config": self.to_dict()["config"],
-            "root": self.to_dict()["root"],
-            "changed_since": self.changed_since,
-        }
-        return CiSuite("ci", tuple(cases), settings, warnings=warnings, verdict=self.verdict())
+        return CiSuite("ci", tuple(cases), self.settings, warnings=warnings, verdict=self.verdict())

@@ -114,7 +114,7 @@ def output_files(
     multiple=True,
     metavar="FORMAT=FILE",
     callback=_parse_outputs,
-    help="One more output in any report format (meshcol's registry); repeatable.",
+    help="One more output in any report format (meshcol's registry); repeatable.  [default: none]",
 )
 @click.option(
     "--outputs",

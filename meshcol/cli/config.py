@@ -62,10 +62,17 @@ def settings_options(command: Callable[..., Any]) -> Callable[..., Any]:
             multiple=True,
             metavar="KEY=VALUE",
             help="Override KEY in every section (a TOML value: shape=decomposed, "
-            "inspect.fail-on='[\"all\"]', check.clearance=0.01); repeatable.",
+            "inspect.fail-on='[\"all\"]', check.clearance=0.01); repeatable.  [default: "
+            "none, the file's settings]",
         ),
-        click.option("--shape", default=None, help="Same as --set shape=SHAPE."),
-        click.option("--target", default=None, help="Same as --set target=NAME|FILE.toml."),
+        click.option(
+            "--shape", default=None, help="Same as --set shape=SHAPE.  [default: the file's]"
+        ),
+        click.option(
+            "--target",
+            default=None,
+            help="Same as --set target=NAME|FILE.toml.  [default: the file's]",
+        ),
     )
     wrapped: Callable[..., Any] = run
     for option in reversed(options):

@@ -5,12 +5,15 @@ from __future__ import annotations
 
 import json
 import shutil
+from pathlib import Path
 
 import pytest
 from ci_repo import box_obj, commit, make_repo
 from click.testing import CliRunner
 
 from meshcol.cli import main
+
+SCHEMAS = Path(__file__).resolve().parents[2] / "meshcol" / "schemas"
 
 pytest.importorskip("yourdfpy", reason="the test repository's robot needs yourdfpy")
 
@@ -182,7 +185,10 @@ def test_changed_since_runs_what_a_commit_touched(tmp_path, monkeypatch):
         ("hull", "props/hard/closed.obj"),
         ("inspect", "props/hard/closed.obj"),
     ]
-    assert report["summary"]["skipped_unchanged"] == 7 and report["changed_since"] == "HEAD~1"
+    assert (
+        report["summary"]["skipped_unchanged"] == 7
+        and report["settings"]["changed_since"] == "HEAD~1"
+    )
     assert code == 1  # the level still penetrates
     code, _, err = run("ci", "--changed-since", "no-such-ref")
     assert code == 2 and "--changed-since no-such-ref" in err
@@ -244,8 +250,8 @@ def test_pyproject_table(tmp_path, monkeypatch):
     monkeypatch.chdir(root / "sub")
     code, out, err = run("ci", "--report", "-", "--no-cache")
     assert code == 1, err
-    assert json.loads(out)["config"] == "pyproject.toml"
-    assert json.loads(out)["root"] == "."
+    assert json.loads(out)["settings"]["config"] == "pyproject.toml"
+    assert json.loads(out)["settings"]["root"] == "."
 
 
 def test_the_pool_gives_the_report_of_one_process(repo, tmp_path):
@@ -254,3 +260,48 @@ def test_the_pool_gives_the_report_of_one_process(repo, tmp_path):
     code, pool, err = run("ci", "--report", "-", "--no-cache", "-j", "2")
     assert code == 1, err
     assert without_times(json.loads(pool)) == without_times(json.loads(one))
+
+
+def golden_text(report: dict) -> str:
+    """The report with versions, times and timestamps out, floats to 9 digits (below 1e-12:
+    summation noise, 0), sorted keys."""
+
+    def clean(value, key=""):
+        if isinstance(value, dict):
+            return {k: clean(v, k) for k, v in value.items()}
+        if isinstance(value, list):
+            return [clean(v) for v in value]
+        if key == "version" or key == "generated_at":
+            return f"<{key}>"
+        if isinstance(value, float):
+            if "seconds" in key:
+                return 0.0
+            return 0.0 if abs(value) < 1e-12 else float(f"{value:.9g}") + 0.0
+        return value
+
+    return json.dumps(clean(report), sort_keys=True, indent=2) + "\n"
+
+
+def test_ci_golden_and_schema(samples, golden, tmp_path, monkeypatch):
+    jsonschema = pytest.importorskip("jsonschema", reason="the schema oracle needs jsonschema")
+    repo = tmp_path / "bowl"
+    shutil.copytree(samples / "bowl", repo)
+    (repo / "meshcol.toml").write_text(
+        '[[assets]]\nglob = "*.obj"\nhull = { max-vertices = 16 }\n\n'
+        '[[scenes]]\npath = "scene.json"\n'
+    )
+    monkeypatch.chdir(repo)
+    code, out, err = run("ci", "--report", "-", "--no-cache")
+    assert code == 1, err  # the ball rests in the bowl: penetrating by the hull
+    report = json.loads(out)
+    assert [(r["command"], r["input"], r["exit_code"]) for r in report["runs"]] == [
+        ("hull", "ball.obj", 0),  # a section naming a command runs only it
+        ("hull", "bowl.obj", 0),
+        ("check", "scene.json", 1),
+    ]
+    schema = json.loads((SCHEMAS / "ci_report.schema.json").read_text())
+    jsonschema.Draft202012Validator(schema).validate(report)
+    golden("ci_bowl.json", golden_text(report))
+    code, out, _ = run("ci", "--no-cache", "--outputs", "out")
+    rows = (repo / "out" / "meshcol-ci.csv").read_text().splitlines()
+    assert rows[0] == "command,input,kind,exit_code,error,verdict" and len(rows) == 4
