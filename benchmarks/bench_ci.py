@@ -112,10 +112,11 @@ def main() -> None:
             print("a second cold run (--no-cache) gives the same report but its times")
         warm_times, change_times, junit_times, json_times = [], [], [], []
         junit, report = str(root.parent / "r.xml"), str(root.parent / "r.json")
+        reference = cold_report  # the report of the tree as it is, as first computed
         for k in range(args.rounds):
             seconds, warm_report, line = meshcol(root, *jobs, "--report", "-")
             print(f"warm, JSON report: {seconds:7.2f} s   {line}")
-            assert warm_report == cold_report, "the cached report differs from the cold one"
+            assert warm_report == reference, "the cached report differs from the computed one"
             seconds, _, line = meshcol(root, *jobs)
             warm_times.append(seconds)
             print(f"warm, verdict:     {seconds:7.2f} s   {line}")
@@ -130,10 +131,12 @@ def main() -> None:
                 path.write_text(box_obj(5.0 + k, name=path.stem))
                 seconds, _, line = meshcol(root, *jobs, *outputs)
                 times.append(seconds)
+                if outputs and outputs[0] == "--report":
+                    reference = Path(report).read_text()
                 print(
                     f"1 changed {' '.join(outputs) or '(verdict)':<20}: {seconds:7.2f} s   {line}"
                 )
-        print("every cached report == the cold report, byte for byte: True")
+        print("every cached report == the report first computed for that tree, byte for byte")
 
         touched = files[-max(1, args.assets // 100) :]
         for path in touched:

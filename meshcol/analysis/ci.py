@@ -230,6 +230,7 @@ def _execute(job: Job, folder: str) -> Any:
     from meshcol.io.targets import load_target
 
     s = job.settings
+    _confine_named(s, folder)
     target = None if s["target"] is None else load_target(_in_folder_path(folder, s["target"]))
     robot = _robot(s, folder)
     if job.command == "inspect":
@@ -275,6 +276,20 @@ def _execute(job: Job, folder: str) -> Any:
         target=target,
         robot_options=robot,
     )
+
+
+def _confine_named(settings: Mapping[str, Any], folder: str) -> None:
+    """The files the configuration names for a job (baseline, target profile, SRDF, package
+    folders) inside the root too: a pull request can change the configuration as well."""
+    from meshcol.io.paths import confine
+
+    named = [settings.get("baseline"), settings.get("srdf"), *settings["package-paths"].values()]
+    target = settings["target"]
+    if target is not None and _in_folder_path(folder, target) != target:
+        named.append(target)
+    for path in named:
+        if path is not None:
+            confine(os.path.join(folder, path), "the configuration", path)
 
 
 def _in_folder_path(folder: str, path: str) -> str:

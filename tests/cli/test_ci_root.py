@@ -134,3 +134,14 @@ def test_confine_records_reads_and_resolves_symlinks(repo):
             confine("meshes/link.obj", "scene.json")
     assert os.path.realpath("meshes/ok.obj") in reads
     assert confine(None, "scene.json") is None
+
+
+def test_files_the_configuration_names_stay_inside_the_root(repo):
+    (repo / "scene.json").write_text(manifest("meshes/ok.obj").replace('"bad"', '"twin"'))
+    (repo.parent / "secret" / "base.json").write_text("{}")
+    (repo / "meshcol.toml").write_text(
+        '[[scenes]]\npath = "scene.json"\ncheck = { baseline = "../secret/base.json" }\n'
+    )
+    code, _, err = run("ci", "--no-cache", "--root", str(repo))
+    assert code == 2, err
+    assert "the configuration: path '../secret/base.json' resolves outside the root" in err
