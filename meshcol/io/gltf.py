@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 from meshcol.errors import InvalidMeshError
 from meshcol.io.mesh_trimesh import load_scene, scene_nodes
+from meshcol.io.paths import confine_uris
 
 if TYPE_CHECKING:
     from meshcol.io.mesh_formats import MeshNode
@@ -107,6 +108,7 @@ def check_references(document: Any, kind: str, source: str) -> None:
     """Refuse references to objects the glTF document does not have, naming the reference
     (``kind``: ``GLTF`` or ``GLB``, for the message)."""
     gltf = _Document(document, kind, source)
+    confine_uris(document, source)  # every buffer and image file inside --root (io.paths)
     for check in _CHECKS:
         check(gltf)
 

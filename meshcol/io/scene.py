@@ -22,6 +22,7 @@ from typing import Any
 from meshcol.errors import InputFileError, MeshcolError, SceneError
 from meshcol.io.inputs import input_kind, is_robot_file
 from meshcol.io.mesh_read import load_mesh
+from meshcol.io.paths import confine
 from meshcol.io.robot import RobotOptions, load_robot
 from meshcol.io.scene_bodies import (
     build_bodies,
@@ -308,4 +309,4 @@ def manifest_mesh_files(path: str | os.PathLike[str]) -> list[str]:
         if isinstance(mesh, str) and mesh:
             meshes[mesh] = None
     folder = os.path.dirname(source)
-    return list(dict.fromkeys(os.path.join(folder, mesh) for mesh in meshes))
+    return list(dict.fromkeys(confine(os.path.join(folder, m), source, m) for m in meshes))
