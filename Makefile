@@ -9,7 +9,7 @@ PIP    := $(BIN)/python -m pip --disable-pip-version-check
 BUILD_TOOLS := $(if $(shell command -v cmake),,"cmake>=3.18") $(if $(shell command -v ninja),,ninja)
 BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4" $(BUILD_TOOLS)
 
-.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs test-cpp test-sanitize
+.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs test-cpp test-sanitize gltf-validator
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -131,6 +131,11 @@ bench: install-test
 	$(BIN)/python benchmarks/bench_scale.py --sizes 1000 10000
 	$(BIN)/python benchmarks/bench_decompose.py
 	$(BIN)/python benchmarks/bench_inspect.py --rounds 1
+
+# The Khronos glTF validator (npm package gltf-validator, needs node and npm) in
+# .venv/node/node_modules, where tests/io/test_gltf_physics.py finds it (it skips without).
+gltf-validator: $(BIN)/python
+	npm install --no-fund --no-audit --prefix $(VENV)/node gltf-validator
 
 clean:
 	rm -rf build dist $(VENV) .venv-lowest $(SANITIZE_VENV) demo-out *.egg-info
