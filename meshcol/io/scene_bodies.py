@@ -91,8 +91,9 @@ def read_mesh_files(document: Any, source: str) -> dict[str, list[Body]]:
     meshes = dict.fromkeys(
         spec["mesh"] for spec in document["bodies"] if isinstance(spec.get("mesh"), str)
     )  # each name once before the path arithmetic: 300,000 bodies may share 16 files
-    paths = list(dict.fromkeys(os.path.normpath(os.path.join(folder, m)) for m in meshes))
-    paths = [confine(path, source, mesh) for path, mesh in zip(paths, meshes)]  # --root
+    paths = list(
+        dict.fromkeys(confine(os.path.normpath(os.path.join(folder, m)), source, m) for m in meshes)
+    )  # each inside --root (meshcol.io.paths)
     try:
         return dict(zip(paths, load_meshes(paths)))
     except MeshcolError:
