@@ -96,7 +96,10 @@ def main() -> None:
                         bad |= abs(pair["distance"] - gap) > 1e-9
                     over = true is not None and pair["depth"] > true * (1 + 1e-6) + 1e-12
                     upper = pair.get("depth_upper")
-                    out = upper is not None and pair["depth"] > upper
+                    # the true value outside [depth, depth_upper] (or depth above depth_upper)
+                    out = upper is not None and (
+                        pair["depth"] > upper or (true is not None and upper < true * (1 - 1e-6))
+                    )
                     wrong += bad
                     too_deep += over
                     outside += out
@@ -106,7 +109,7 @@ def main() -> None:
                             f" depth {pair['depth']:.3g} upper {upper}"
                         )
     print(
-        f"pairs {total}: wrong statuses {wrong}, depth above the true {too_deep}, depth > depth_upper {outside}"
+        f"pairs {total}: wrong statuses {wrong}, depth above the true {too_deep}, true outside [depth, depth_upper] {outside}"
     )
     _hausdorff()
 
