@@ -169,7 +169,12 @@ class MeshSet:
             On malformed arrays or a face index out of range, naming the mesh (``meshes[3]: ...``).
         """
         arrays = [_mesh_arrays(i, m) for i, m in enumerate(meshes)]
-        oriented = [_oriented(v, f, orient) for v, f in arrays]
+        # once per distinct mesh: instances of one asset share their arrays
+        distinct: dict[tuple[int, int], _Oriented] = {}
+        for v, f in arrays:
+            if (id(v), id(f)) not in distinct:
+                distinct[(id(v), id(f))] = _oriented(v, f, orient)
+        oriented = [distinct[(id(v), id(f))] for v, f in arrays]
         arrays = [(v, o.faces) for (v, _), o in zip(arrays, oriented)]
         reoriented, orientable, closed = (
             np.array([bool(getattr(o, name)) for o in oriented], dtype=bool).reshape(-1)

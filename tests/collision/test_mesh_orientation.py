@@ -139,3 +139,34 @@ def test_open_host_depth_stays_in_its_interval() -> None:
         for faces in (f, shuffled(f, 5)):
             (pair,) = check_pair((v, faces), box, at([0.2, 0.2, z])).pairs
             assert pair["depth"] <= pair["depth_upper"]
+
+
+def test_mesh_set_flags_and_opt_out() -> None:
+    v, f = blob()
+    dirty = shuffled(f)
+    oriented = MeshSet.from_arrays([(v, dirty), (v, f), (v, f[:-3])])
+    assert oriented.reoriented.tolist() == [True, False, False]
+    assert oriented.orientable.all()
+    assert oriented.closed.tolist() == [True, True, False]
+    assert oriented.inside_decided.tolist() == [True, True, False]
+    np.testing.assert_array_equal(oriented.mesh(0)[1], f)
+    kept = MeshSet.from_arrays([(v, dirty)], orient=False)
+    np.testing.assert_array_equal(kept.mesh(0)[1], dirty)
+    assert not kept.reoriented[0] and kept.orientable[0]
+    # the consistently wound copy's verdicts, not the shuffled surface's
+    probe = np.array([[0.0, 0.0, 0.0], [0.1, 0.05, -0.1], [2.0, 0.0, 0.0]])
+    assert oriented.contains(0, probe).tolist() == [True, True, False]
+
+
+def test_ray_parity_votes_and_abstains() -> None:
+    from meshcol.geometry.ray_parity import ray_parity
+
+    outer = trimesh.creation.box(extents=(1, 1, 1))
+    inner_box = trimesh.creation.box(extents=(0.8, 0.8, 0.8))
+    v = np.concatenate([outer.vertices, inner_box.vertices])
+    f = np.concatenate([outer.faces, inner_box.faces + len(outer.vertices)])  # winding unused
+    points = np.array([[0.45, 0.0, 0.0], [0.0, 0.0, 0.0], [0.7, 0.0, 0.0], [0.5, 0.5, 0.5]])
+    inside, decided = ray_parity(points, v, shuffled(f))
+    assert decided[:3].all()
+    assert inside[:3].tolist() == [True, False, False]  # the wall, the cavity, outside
+    assert not decided[3]  # on a corner: every ray grazes, no vote
