@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from meshcol.decomposition.result import Fidelity
-from meshcol.geometry.topology import is_closed_manifold
+from meshcol.geometry.topology import is_closed_manifold, orient_consistently
 from meshcol.geometry.triangles import point_triangle_distances, sample_surface
 
 __all__ = [
@@ -291,9 +291,11 @@ def fidelity(
     about 0, however they are cut.
 
     Volumes: manifold3d (hull of each part, boolean union; the mesh itself when manifold).
+    An inconsistently wound mesh is wound consistently first
+    (:func:`meshcol.geometry.topology.orient_consistently`), so a closed one is a solid.
     """
     vertices = np.asarray(vertices, dtype=np.float64)
-    faces = np.asarray(faces, dtype=np.int64)
+    faces = orient_consistently(vertices, np.asarray(faces, dtype=np.int64)).faces
     tol = coverage_tolerance(vertices, tolerance)
     rng = np.random.default_rng(seed)
     # Mesh points first, then the parts': one generator, in this order, for every result.

@@ -136,3 +136,18 @@ def test_bounded_maximum_past_its_budget_is_still_an_upper_bound() -> None:
         square, lambda p: value(p) / 2.0, lambda best: 0.0, max_evaluations=50
     )
     assert upper >= true / 2.0
+
+
+def test_a_shuffled_mesh_is_measured_as_its_solid() -> None:
+    """Half the faces reversed at random (MC403): the same figures as the wound mesh."""
+    from dirty_meshes import shuffled
+
+    mesh = trimesh.creation.icosphere(subdivisions=2)
+    v, f = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+    hull = trimesh.convex.convex_hull(v[v[:, 0] >= 0] * 1.1)  # half of it, sticking out
+    parts = ((np.asarray(hull.vertices), np.asarray(hull.faces)),)
+    wound = fidelity(v, f, parts, samples=200)
+    dirty = fidelity(v, shuffled(f), parts, samples=200)
+    assert dirty.mesh_is_solid and wound.mesh_is_solid
+    assert dirty.hausdorff_parts_to_mesh == wound.hausdorff_parts_to_mesh
+    assert dirty.mesh_volume == pytest.approx(wound.mesh_volume, rel=1e-12)
