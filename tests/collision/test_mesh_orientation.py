@@ -170,3 +170,42 @@ def test_ray_parity_votes_and_abstains() -> None:
     assert decided[:3].all()
     assert inside[:3].tolist() == [True, False, False]  # the wall, the cavity, outside
     assert not decided[3]  # on a corner: every ray grazes, no vote
+
+
+def _moebius() -> tuple[np.ndarray, np.ndarray]:
+    n = 24
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    ring = np.stack([np.cos(t), np.sin(t), np.zeros(n)], axis=1)
+    half = 0.3 * np.stack([np.cos(t / 2) * np.cos(t), np.cos(t / 2) * np.sin(t), np.sin(t / 2)], 1)
+    faces = []
+    for i in range(n):
+        j = (i + 1) % n
+        a, b, c, d = i, j, n + i, n + j
+        if j == 0:
+            b, d = d, b
+        faces += [[a, b, c], [b, d, c]]
+    return np.concatenate([ring + half, ring - half]), np.array(faces)
+
+
+def test_undecided_pairs_reach_every_writer() -> None:
+    """A box across a Moebius strip: no inside test decides, so the pair is undecided, with
+    depth 0 (the only sure lower bound) and its depth_upper, in JSON, CSV and CI cases."""
+    from meshcol.analysis.check import CheckOptions, check_scene
+    from meshcol.types import Body, Scene
+
+    v, f = _moebius()
+    box = cube(0.2)
+    scene = Scene((Body("strip", None, v, f), Body("box", None, box[0], box[1], at([1, 0, 0]))))
+    report = check_scene(scene, CheckOptions(collider="mesh", fail_on="contact"))
+    (pair,) = report.pairs
+    assert pair["status"] == "undecided"
+    assert pair["depth"] == 0.0 and pair["depth_upper"] > 1e-6
+    assert report.summary["pairs_by_status"]["undecided"] == 1
+    assert report.exit_code == 1  # --fail-on contact fails on it
+    header, row = report.to_csv().splitlines()[:2]
+    assert "depth_upper" in header.split(",") and "undecided" in row.split(",")
+    (case,) = report.ci_suite().cases
+    assert case.kind == "undecided" and case.outcome == "failure"
+    assert case.message.startswith("undecided: no inside test decides")
+    lenient = check_scene(scene, CheckOptions(collider="mesh"))
+    assert lenient.exit_code == 0  # --fail-on penetration does not
