@@ -38,6 +38,23 @@ def blob() -> tuple[np.ndarray, np.ndarray]:
     return v, np.asarray(mesh.faces, dtype=np.int64)
 
 
+def moebius(width: float = 0.3, sections: int = 24) -> tuple[np.ndarray, np.ndarray]:
+    """A Moebius strip of radius 1 about the origin: non-orientable, no winding decides it."""
+    t = np.linspace(0, 2 * np.pi, sections, endpoint=False)
+    ring = np.stack([np.cos(t), np.sin(t), np.zeros(sections)], axis=1)
+    half = width * np.stack(
+        [np.cos(t / 2) * np.cos(t), np.cos(t / 2) * np.sin(t), np.sin(t / 2)], 1
+    )
+    faces = []
+    for i in range(sections):
+        j = (i + 1) % sections
+        a, b, c, d = i, j, sections + i, sections + j
+        if j == 0:  # the half twist joins the strip's two sides crossed
+            b, d = d, b
+        faces += [[a, b, c], [b, d, c]]
+    return np.concatenate([ring + half, ring - half]), np.array(faces)
+
+
 HOSTS = {"airplane": airplane, "torus": torus, "blob": blob}
 
 

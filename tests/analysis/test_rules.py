@@ -341,27 +341,13 @@ def _pair(rule_id: str, tmp_path: Path, other_at: tuple, other_size: tuple, **op
     return report.exit_code == 1
 
 
-def _moebius() -> tuple[np.ndarray, np.ndarray]:
-    """A Moebius strip of radius 1 about the origin (non-orientable: no winding decides it)."""
-    n = 24
-    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    ring = np.stack([np.cos(t), np.sin(t), np.zeros(n)], axis=1)
-    half = 0.3 * np.stack([np.cos(t / 2) * np.cos(t), np.cos(t / 2) * np.sin(t), np.sin(t / 2)], 1)
-    faces = []
-    for i in range(n):
-        j = (i + 1) % n
-        a, b, c, d = i, j, n + i, n + j
-        if j == 0:  # the half twist joins the strip's two sides crossed
-            b, d = d, b
-        faces += [[a, b, c], [b, d, c]]
-    return np.concatenate([ring + half, ring - half]), np.array(faces)
-
-
 @case("MC505")
 def _undecided(tmp_path: Path, rule_id: str) -> tuple[bool, bool]:
     """A box across a Moebius strip under ``--shape mesh`` is undecided (neither contact nor
     penetration is claimed); the same box clear of the strip's hull is not."""
-    strip = write_obj(tmp_path / "strip.obj", {"strip": _moebius()})
+    from dirty_meshes import moebius
+
+    strip = write_obj(tmp_path / "strip.obj", {"strip": moebius()})
 
     def fails(at: tuple) -> bool:
         b = write_obj(tmp_path / "b.obj", {"b": box((0.2, 0.2, 0.2), at)})

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
-from dirty_meshes import HOSTS, at, blob, check_pair, cube, inner, on_top, shuffled
+from dirty_meshes import HOSTS, at, blob, check_pair, cube, inner, moebius, on_top, shuffled
 
 from meshcol.collision.mesh_query import MeshSet
 from meshcol.geometry.topology import edge_table, is_balanced, orient_consistently
@@ -53,19 +53,8 @@ def test_a_shell_keeps_its_cavity() -> None:
 
 
 def test_a_moebius_strip_is_not_orientable() -> None:
-    n = 24
-    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    ring = np.stack([np.cos(t), np.sin(t), np.zeros(n)], axis=1)
-    half = 0.2 * np.stack([np.cos(t / 2) * np.cos(t), np.cos(t / 2) * np.sin(t), np.sin(t / 2)], 1)
-    v = np.concatenate([ring + half, ring - half])
-    faces = []
-    for i in range(n):
-        j = (i + 1) % n
-        a, b, c, d = i, j, n + i, n + j
-        if j == 0:  # the half twist joins the strip's two sides crossed
-            b, d = d, b
-        faces += [[a, b, c], [b, d, c]]
-    found = orient_consistently(v, shuffled(np.array(faces)))
+    v, f = moebius(0.2)
+    found = orient_consistently(v, shuffled(f))
     assert not found.orientable and not found.closed
 
 
@@ -172,28 +161,13 @@ def test_ray_parity_votes_and_abstains() -> None:
     assert not decided[3]  # on a corner: every ray grazes, no vote
 
 
-def _moebius() -> tuple[np.ndarray, np.ndarray]:
-    n = 24
-    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    ring = np.stack([np.cos(t), np.sin(t), np.zeros(n)], axis=1)
-    half = 0.3 * np.stack([np.cos(t / 2) * np.cos(t), np.cos(t / 2) * np.sin(t), np.sin(t / 2)], 1)
-    faces = []
-    for i in range(n):
-        j = (i + 1) % n
-        a, b, c, d = i, j, n + i, n + j
-        if j == 0:
-            b, d = d, b
-        faces += [[a, b, c], [b, d, c]]
-    return np.concatenate([ring + half, ring - half]), np.array(faces)
-
-
 def test_undecided_pairs_reach_every_writer() -> None:
     """A box across a Moebius strip: no inside test decides, so the pair is undecided, with
     depth 0 (the only sure lower bound) and its depth_upper, in JSON, CSV and CI cases."""
     from meshcol.analysis.check import CheckOptions, check_scene
     from meshcol.types import Body, Scene
 
-    v, f = _moebius()
+    v, f = moebius()
     box = cube(0.2)
     scene = Scene((Body("strip", None, v, f), Body("box", None, box[0], box[1], at([1, 0, 0]))))
     report = check_scene(scene, CheckOptions(collider="mesh", fail_on="contact"))
