@@ -161,6 +161,7 @@ CSV_COLUMNS = [
     "status",
     "distance",
     "depth",
+    "depth_upper",
     "signed_distance",
     *vector_columns("normal"),
     *vector_columns("point_a"),
@@ -202,10 +203,17 @@ def _ci_case(
             f"contact: signed distance {number(pair['signed_distance'], units)} (tolerance "
             f"{number(settings['tolerance'], units)})"
         )
+    elif status == "undecided":
+        message = (
+            "undecided: no inside test decides (a non-orientable mesh whose ray parity "
+            f"splits); depth between {number(pair['depth'], units)} and "
+            f"{number(pair['depth_upper'], units)}"
+        )
     else:
         inside = "one body inside the other, " if status == "contained" else ""
         message = (
-            f"{status}: {inside}depth {number(pair['depth'], units)}, signed distance "
+            f"{status}: {inside}depth {number(pair['depth'], units)} (at most "
+            f"{number(pair['depth_upper'], units)}), signed distance "
             f"{number(pair['signed_distance'], units)}"
         )
         if pair["intersection_volume"] is not None:
@@ -232,6 +240,7 @@ def _ci_case(
                 ("part_b", pair["part_b"]),
                 ("distance", pair["distance"]),
                 ("depth", pair["depth"]),
+                ("depth_upper", pair["depth_upper"]),
                 ("signed_distance", pair["signed_distance"]),
                 ("intersection_volume", pair["intersection_volume"]),
                 ("point_a", pair["point_a"]),
@@ -312,6 +321,7 @@ def pair_rows(table: PairTable, colliders: Any) -> list[dict]:
         table.status.tolist(),
         _nums(table.distance),
         _nums(table.depth),
+        _nums(table.depth_upper),
         _nums(table.signed_distance),
         _vecs(table.normal),
         _vecs(table.point_a),
@@ -334,6 +344,7 @@ def pair_rows(table: PairTable, colliders: Any) -> list[dict]:
             "status": PAIR_STATUSES[status],
             "distance": distance,
             "depth": depth,
+            "depth_upper": depth_upper,
             "signed_distance": signed,
             "normal": normal,
             "point_a": point_a,
@@ -351,6 +362,7 @@ def pair_rows(table: PairTable, colliders: Any) -> list[dict]:
             status,
             distance,
             depth,
+            depth_upper,
             signed,
             normal,
             point_a,
