@@ -206,8 +206,12 @@ def _read_inputs(
         return _read_robot(paths[0], robot_options)
     if not read_files:
         return _Inputs(None)
+    from meshcol.io.mesh_formats import declared_units
+
     files = iter_inputs(paths, on_error=errors.add)
-    return _Inputs([body for _, file_bodies in files for body in file_bodies])
+    return _Inputs(
+        [body for _, file_bodies in files for body in file_bodies], declared_units(paths)
+    )
 
 
 def _read_robot(path: Any, robot_options: RobotOptions | None = None) -> _Inputs:

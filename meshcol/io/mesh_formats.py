@@ -16,14 +16,14 @@ from __future__ import annotations
 
 import importlib.util
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from meshcol.errors import InputFileError, MissingDependencyError
-from meshcol.io import gltf, mesh_trimesh, off
+from meshcol.io import fbx, gltf, mesh_trimesh, off
 
 __all__ = [
     "FORMATS",
@@ -31,6 +31,7 @@ __all__ = [
     "MeshFormat",
     "MeshNode",
     "check_file",
+    "declared_units",
     "mesh_format",
     "read_natively",
 ]
@@ -65,6 +66,10 @@ class MeshFormat:
         format (``collada``); such a format is not one of the commands' own inputs.
     requires : tuple of str or None
         ``(module, install hint)``: a module the reader needs, checked before reading.
+    units : str or None
+        The length unit the reader returns vertices in, whatever the file's own (FBX: ``m``,
+        converted from its ``UnitScaleFactor``): reported in the envelope's ``units`` when
+        every input says the same. None: the format does not say.
     """
 
     name: str
@@ -74,6 +79,7 @@ class MeshFormat:
     unnamed: str | None = None
     opt_in: str | None = None
     requires: tuple[str, str] | None = None
+    units: str | None = None
 
 
 #: Every format, in the order messages list their extensions.
@@ -84,6 +90,13 @@ FORMATS: tuple[MeshFormat, ...] = (
     MeshFormat("off", (".off",), read=off.read_off_file),
     MeshFormat("glb", (".glb",), read=gltf.read_glb),
     MeshFormat("gltf", (".gltf",), read=gltf.read_gltf),
+    MeshFormat(
+        "fbx",
+        (".fbx",),
+        read=fbx.read_fbx,
+        requires=("ufbx", "reading FBX (.fbx) needs ufbx: pip install 'meshcol[fbx]'"),
+        units=fbx.UNITS,
+    ),
     MeshFormat(
         "dae",
         (".dae",),
@@ -114,6 +127,16 @@ def mesh_format(source: str, opted_in: frozenset[str] = frozenset()) -> MeshForm
         suffix = os.path.splitext(source)[1] or "(none)"
         raise InputFileError(f"unknown mesh file extension {suffix!r} (expected {known})", source)
     return fmt
+
+
+def declared_units(sources: Sequence[str | os.PathLike[str]]) -> str | None:
+    """The units every one of ``sources`` is read in (:attr:`MeshFormat.units`), or None
+    when one format does not say, two differ, or there are none."""
+    units = {
+        fmt.units if fmt is not None else None
+        for fmt in (_BY_EXTENSION.get(os.path.splitext(os.fspath(s))[1].lower()) for s in sources)
+    }
+    return units.pop() if len(units) == 1 else None
 
 
 def read_natively(source: str) -> bool:

@@ -21,6 +21,7 @@ from typing import Any
 
 from meshcol.errors import InputFileError, MeshcolError, SceneError
 from meshcol.io.inputs import input_kind, is_robot_file
+from meshcol.io.mesh_formats import declared_units
 from meshcol.io.mesh_read import load_mesh
 from meshcol.io.robot import RobotOptions, load_robot
 from meshcol.io.scene_bodies import (
@@ -150,7 +151,8 @@ def load_inputs(
         parts); the robot's (one body per link with collision geometry); or, for mesh and glTF/GLB files given directly, one body per object of every
         file, in order (``<stem>/<object>`` when a file holds several). A name that clashes
         with an earlier body's gets ``#2``, ``#3``... appended. ``source`` is the input path when
-        there is exactly one, else None; ``units`` is None without a manifest.
+        there is exactly one, else None; ``units`` without a manifest: what every mesh file's
+        format converts to (FBX: ``m``), else None.
 
     Raises
     ------
@@ -168,7 +170,7 @@ def load_inputs(
         return load_scene(manifest)
     bodies = [body for _, file_bodies in iter_inputs(paths) for body in file_bodies]
     source = os.fspath(paths[0]) if len(paths) == 1 else None
-    return Scene(bodies=tuple(bodies), units=None, source=source)
+    return Scene(bodies=tuple(bodies), units=declared_units(paths), source=source)
 
 
 def _single_manifest(paths: Sequence[str | os.PathLike[str]]) -> str | os.PathLike[str] | None:

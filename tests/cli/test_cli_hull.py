@@ -290,7 +290,7 @@ BAD_MESHES = {
     ),
     "unknown.xyz": (
         "x\n",
-        "unknown mesh file extension '.xyz' (expected .obj, .stl, .ply, .off, .glb, .gltf)",
+        "unknown mesh file extension '.xyz' (expected .obj, .stl, .ply, .off, .glb, .gltf, .fbx)",
     ),
 }
 
