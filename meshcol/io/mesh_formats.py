@@ -70,6 +70,11 @@ class MeshFormat:
         The length unit the reader returns vertices in, whatever the file's own (FBX: ``m``,
         converted from its ``UnitScaleFactor``): reported in the envelope's ``units`` when
         every input says the same. None: the format does not say.
+    godot_hints : bool
+        Node names may end in Godot's import hints (``-col``, ``-convcol``, ``-colonly``,
+        ``-convcolonly``, ``-rigid``: :mod:`meshcol.io.collision_names`), as in the glTF and
+        FBX scenes Godot imports: the loader cuts the hint from the body's name and makes it
+        the body's collider kind.
     """
 
     name: str
@@ -80,6 +85,7 @@ class MeshFormat:
     opt_in: str | None = None
     requires: tuple[str, str] | None = None
     units: str | None = None
+    godot_hints: bool = False
 
 
 #: Every format, in the order messages list their extensions.
@@ -88,14 +94,15 @@ FORMATS: tuple[MeshFormat, ...] = (
     MeshFormat("stl", (".stl",), native=1),
     MeshFormat("ply", (".ply",), read=mesh_trimesh.read_ply),
     MeshFormat("off", (".off",), read=off.read_off_file),
-    MeshFormat("glb", (".glb",), read=gltf.read_glb),
-    MeshFormat("gltf", (".gltf",), read=gltf.read_gltf),
+    MeshFormat("glb", (".glb",), read=gltf.read_glb, godot_hints=True),
+    MeshFormat("gltf", (".gltf",), read=gltf.read_gltf, godot_hints=True),
     MeshFormat(
         "fbx",
         (".fbx",),
         read=fbx.read_fbx,
         requires=("ufbx", "reading FBX (.fbx) needs ufbx: pip install 'meshcol[fbx]'"),
         units=fbx.UNITS,
+        godot_hints=True,
     ),
     MeshFormat(
         "dae",
