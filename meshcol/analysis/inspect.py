@@ -206,12 +206,11 @@ def _read_inputs(
         return _read_robot(paths[0], robot_options)
     if not read_files:
         return _Inputs(None)
-    from meshcol.io.mesh_formats import declared_units
+    from meshcol.io.mesh_formats import declared_units, format_notes
 
     files = iter_inputs(paths, on_error=errors.add)
-    return _Inputs(
-        [body for _, file_bodies in files for body in file_bodies], declared_units(paths)
-    )
+    bodies = [body for _, file_bodies in files for body in file_bodies]
+    return _Inputs(bodies, declared_units(paths), warnings=format_notes(paths))
 
 
 def _read_robot(path: Any, robot_options: RobotOptions | None = None) -> _Inputs:

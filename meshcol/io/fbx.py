@@ -230,15 +230,20 @@ def polygon_triangles(
     (:func:`meshcol.io.off.triangulate_polygons`: a fan when convex, else ear clipping),
     (m, 3) int64."""
     keep = count >= 3
-    begin, count = begin[keep], count[keep]
+    if not keep.all():
+        begin, count = begin[keep], count[keep]
     if len(count) == 0:
         return np.zeros((0, 3), dtype=np.int64)
-    within = np.arange(int(count.sum()), dtype=np.int64) - np.repeat(
-        np.cumsum(count) - count, count
-    )
-    corners = indices[np.repeat(begin, count) + within]
+    if len(indices) == 3 * len(count) and (count == 3).all():  # triangles, one after another
+        corners = indices
+    else:
+        starts = np.cumsum(count) - count
+        within = np.arange(int(count.sum()), dtype=np.int64) - np.repeat(starts, count)
+        corners = indices[np.repeat(begin, count) + within]
     if corners.min() < 0 or corners.max() >= len(vertices):
         raise ValueError("polygon corner out of range")  # ufbx checks this: never met
+    if len(corners) == 3 * len(count):  # triangles only: nothing to split
+        return corners.reshape(-1, 3)
     return triangulate_polygons(vertices, corners, count)
 
 

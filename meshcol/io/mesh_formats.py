@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from meshcol.errors import InputFileError, MissingDependencyError
+from meshcol.errors import InputFileError, MeshcolError, MissingDependencyError
 from meshcol.io import fbx, gltf, mesh_trimesh, off
 
 __all__ = [
@@ -32,6 +32,7 @@ __all__ = [
     "MeshNode",
     "check_file",
     "declared_units",
+    "format_notes",
     "mesh_format",
     "read_natively",
 ]
@@ -75,6 +76,10 @@ class MeshFormat:
         ``-convcolonly``, ``-rigid``: :mod:`meshcol.io.collision_names`), as in the glTF and
         FBX scenes Godot imports: the loader cuts the hint from the body's name and makes it
         the body's collider kind.
+    notes : callable or None
+        ``notes(file, source) -> list[str]``: what the file holds that the reader leaves out
+        (FBX: materials, skins, cameras, lights, animation), one short phrase each, for
+        reports' warnings (:func:`format_notes`).
     """
 
     name: str
@@ -86,6 +91,7 @@ class MeshFormat:
     requires: tuple[str, str] | None = None
     units: str | None = None
     godot_hints: bool = False
+    notes: Callable[[Path, str], list[str]] | None = None
 
 
 #: Every format, in the order messages list their extensions.
@@ -103,6 +109,7 @@ FORMATS: tuple[MeshFormat, ...] = (
         requires=("ufbx", "reading FBX (.fbx) needs ufbx: pip install 'meshcol[fbx]'"),
         units=fbx.UNITS,
         godot_hints=True,
+        notes=fbx.ignored,
     ),
     MeshFormat(
         "dae",
@@ -144,6 +151,25 @@ def declared_units(sources: Sequence[str | os.PathLike[str]]) -> str | None:
         for fmt in (_BY_EXTENSION.get(os.path.splitext(os.fspath(s))[1].lower()) for s in sources)
     }
     return units.pop() if len(units) == 1 else None
+
+
+def format_notes(sources: Sequence[str | os.PathLike[str]]) -> list[str]:
+    """One warning per file of ``sources`` whose reader left content out
+    (:attr:`MeshFormat.notes`): ``level.fbx: not read (geometry only): 1 material, 1
+    camera``. A file that cannot be read gets none (its error is said elsewhere)."""
+    out = []
+    for path in sources:
+        source = os.fspath(path)
+        fmt = _BY_EXTENSION.get(os.path.splitext(source)[1].lower())
+        if fmt is None or fmt.notes is None:
+            continue
+        try:
+            left_out = fmt.notes(Path(source), source)
+        except MeshcolError:
+            continue
+        if left_out:
+            out.append(f"{source}: not read (geometry only): {', '.join(left_out)}")
+    return out
 
 
 def read_natively(source: str) -> bool:

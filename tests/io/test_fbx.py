@@ -286,6 +286,16 @@ def test_materials_cameras_lights_and_animation_are_ignored_with_a_note():
     ]
     names = [b.name for b in meshcol.load_mesh(DATA / "level.fbx")]
     assert "level/Camera" not in names and "level/Sun" not in names
+    result = _run("inspect", DATA / "level.fbx", "--format", "json")
+    assert result.exit_code == 0
+    (note,) = json.loads(result.stdout)["warnings"]
+    assert note.endswith(
+        ": not read (geometry only): 1 material, 1 camera, 1 light, 1 animation stack"
+    )
+    assert (
+        json.loads(_run("inspect", DATA / "rig_yup.fbx", "--format", "json").stdout)["warnings"]
+        == []
+    )
 
 
 def test_several_mesh_objects_are_the_parts_of_a_manifest_body(tmp_path):
