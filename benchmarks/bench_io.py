@@ -9,7 +9,7 @@ Cases, each measured as a user pays it (Python call to geometry in numpy arrays)
   process=False)`` per file, no merge) against ``meshcol.io.mesh_read.load_meshes`` (parsing
   in the core on all cores, merged) and ``load_mesh`` per file (merged).
 - One large OBJ and binary STL (a 1000 x 1000 grid sphere, 2 million triangles).
-- ``--fbx``: one large binary FBX (a grid sphere of 2.1 million vertices and 4.2 million
+- ``--fbx``: one large binary FBX (trimesh's UV sphere of 2.0 million vertices and 4.0 million
   triangles, uncompressed arrays, about 100 MB, written here): ufbx alone (``ufbx.load_file``
   with meshcol's options, vertices and indices copied into numpy arrays, the floor meshcol's
   reader can reach) against ``meshcol.io.fbx.read_fbx`` (that plus triangulation) and
