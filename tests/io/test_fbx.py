@@ -393,3 +393,36 @@ def test_bad_fbx_files_exit_2_with_one_line(tmp_path):
 def test_read_fbx_returns_parents_before_children():
     names = [node[0] for node in read_fbx(DATA / "rig_yup.fbx", "rig_yup.fbx")]
     assert names.index("Shelf") < names.index("Bin") and len(names) == 3
+
+
+def test_without_ufbx_the_message_says_what_to_install(monkeypatch):
+    from meshcol.io import mesh_formats
+
+    monkeypatch.setattr(mesh_formats.importlib.util, "find_spec", lambda name: None)
+    result = _run("inspect", DATA / "level.fbx")
+    assert result.exit_code == 2
+    assert "reading FBX (.fbx) needs ufbx: pip install 'meshcol[fbx]'" in result.stderr
+
+
+def test_a_huge_declared_count_allocates_nothing(tmp_path):
+    """ASCII arrays are read by their content, never by their declared count."""
+    path = tmp_path / "count.fbx"
+    path.write_text(_ascii_fbx().replace("Vertices: *24", "Vertices: *99999999999"))
+    (body,) = meshcol.load_mesh(path)
+    assert len(body.vertices) == 8
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ("hull", "-o", "{out}/hull.obj"),
+        ("fit", "-o", "{out}/fit.obj"),
+        ("decompose", "-o", "{out}/parts", "--max-hulls", "2"),
+        ("check", "--html", "{out}/review.html"),
+    ],
+)
+def test_every_command_takes_fbx(tmp_path, command):
+    name, *options = command
+    result = _run(name, DATA / "rig_yup.fbx", *[o.format(out=tmp_path) for o in options])
+    assert result.exit_code in (0, 1), result.output
+    assert any(tmp_path.iterdir())
