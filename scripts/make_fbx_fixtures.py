@@ -8,7 +8,8 @@ One scene, ``level``, is built and exported as binary FBX at several unit scales
 settings; for each file, ``<file>.expected.json`` holds Blender's own evaluated world vertices
 of every mesh object, in metres, in Blender's frame (right-handed, Z up: meshcol's FBX frame),
 and ``level.obj`` the same scene in OBJ, written here at full precision (Blender's OBJ exporter
-rounds to 6 decimals), for the same-report test.
+rounds to 6 decimals), and ``level.glb`` as Blender's glTF exporter writes it (Z up kept),
+for the same-report tests.
 
 Two scenes. ``level``: render meshes with Unreal collision parts (``UCX_Crate_01``/``_02``,
 ``UBX_Block_01``, ``USP_Ball_01``, ``UCP_Pill_01``), Godot hints (``Floor-col``,
@@ -27,8 +28,7 @@ import math
 import sys
 from pathlib import Path
 
-import bpy  # first: bpy makes bmesh importable
-import bmesh  # noqa: I001
+import bpy
 import numpy as np
 
 R90 = math.pi / 2
@@ -38,15 +38,29 @@ ZUP = {"axis_forward": "Y", "axis_up": "Z"}  # Blender's own frame: no axis conv
 EXPORTS = (
     ("level", "level", ZUP, 1.0),
     ("level_quarter", "level", ZUP, 0.25),  # scene unit: 0.25 m per Blender unit
-    ("level_global4", "level", ZUP | {"global_scale": 4.0, "apply_scale_options": "FBX_SCALE_ALL"}, 1.0),
+    (
+        "level_global4",
+        "level",
+        ZUP | {"global_scale": 4.0, "apply_scale_options": "FBX_SCALE_ALL"},
+        1.0,
+    ),
     ("level_yup", "level", {}, 1.0),  # Blender's defaults: -Z forward, Y up, cm in FBX
     ("rig_yup", "rig", {}, 1.0),
     ("rig_xfwd", "rig", {"axis_forward": "X", "axis_up": "-Y"}, 1.0),
 )
 
 
-def _mesh_object(name: str, build, location=(0, 0, 0), rotation=(0, 0, 0), scale=(1, 1, 1),
-                 order="XYZ", parent=None):
+def _mesh_object(
+    name: str,
+    build,
+    location=(0, 0, 0),
+    rotation=(0, 0, 0),
+    scale=(1, 1, 1),
+    order="XYZ",
+    parent=None,
+):
+    import bmesh  # importable once bpy is
+
     mesh = bpy.data.meshes.new(name)
     bm = bmesh.new()
     build(bm)
@@ -63,26 +77,44 @@ def _mesh_object(name: str, build, location=(0, 0, 0), rotation=(0, 0, 0), scale
 
 def _box(lo=(-1, -1, -1), hi=(1, 1, 1)):
     def build(bm):
-        corners = [bm.verts.new((x, y, z)) for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                   for z in (lo[2], hi[2])]
-        for f in ((0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4),
-                  (1, 5, 7, 3)):
+        corners = [
+            bm.verts.new((x, y, z))
+            for x in (lo[0], hi[0])
+            for y in (lo[1], hi[1])
+            for z in (lo[2], hi[2])
+        ]
+        for f in (
+            (0, 1, 3, 2),
+            (4, 6, 7, 5),
+            (0, 4, 5, 1),
+            (2, 3, 7, 6),
+            (0, 2, 6, 4),
+            (1, 5, 7, 3),
+        ):
             bm.faces.new([corners[i] for i in f])
+
     return build
 
 
 def _sphere(radius=1.0, subdivisions=2):
     def build(bm):
+        import bmesh
+
         bmesh.ops.create_icosphere(bm, subdivisions=subdivisions, radius=radius)
+
     return build
 
 
 def _capsule(radius=0.5, half=0.5):
     """A UV sphere cut at the equator, each half moved along z by +/- ``half``."""
+
     def build(bm):
+        import bmesh
+
         bmesh.ops.create_uvsphere(bm, u_segments=8, v_segments=8, radius=radius)
         for v in bm.verts:
             v.co.z += half if v.co.z > 1e-6 else (-half if v.co.z < -1e-6 else 0.0)
+
     return build
 
 
@@ -97,13 +129,30 @@ def build_scene(kind: str) -> None:
         scene.collection.objects.link(rack)
         rack.rotation_mode = "YXZ"
         rack.location, rack.rotation_euler, rack.scale = (0, 4, 0), (0, R90, R90), (2, 2, 2)
-        shelf = _mesh_object("Shelf", _box((-1, -0.5, -0.125), (1, 0.5, 0.125)),
-                             location=(1, 0, 0.5), rotation=(0, 0, 2 * R90), order="ZYX",
-                             parent=rack)
-        _mesh_object("Bin", _box((-0.25, -0.25, 0), (0.25, 0.25, 0.5)),
-                     location=(0.5, 0, 0.125), rotation=(R90, 0, 0), order="XZY", parent=shelf)
-        _mesh_object("Crate", _box(), location=(4, 0, 1), rotation=(R90, 0, R90),
-                     scale=(1, 0.5, 0.25), order="ZXY")
+        shelf = _mesh_object(
+            "Shelf",
+            _box((-1, -0.5, -0.125), (1, 0.5, 0.125)),
+            location=(1, 0, 0.5),
+            rotation=(0, 0, 2 * R90),
+            order="ZYX",
+            parent=rack,
+        )
+        _mesh_object(
+            "Bin",
+            _box((-0.25, -0.25, 0), (0.25, 0.25, 0.5)),
+            location=(0.5, 0, 0.125),
+            rotation=(R90, 0, 0),
+            order="XZY",
+            parent=shelf,
+        )
+        _mesh_object(
+            "Crate",
+            _box(),
+            location=(4, 0, 1),
+            rotation=(R90, 0, R90),
+            scale=(1, 0.5, 0.25),
+            order="ZXY",
+        )
         bpy.context.view_layer.update()
         return
     crate = dict(location=(4, 0, 1), scale=(1, 0.5, 0.25))
@@ -115,8 +164,12 @@ def build_scene(kind: str) -> None:
     ball = _mesh_object("Ball", _sphere(1.0, 2), location=(-4, 0, 1))
     _mesh_object("USP_Ball_01", _sphere(1.0, 1), location=(-4, 0, 1))
     _mesh_object("Block", _box((-0.5, -0.5, -0.5), (0.5, 0.5, 0.5)), location=(0, -4, 0.5))
-    _mesh_object("UBX_Block_01", _box((-0.5, -0.5, -0.5), (0.5, 0.5, 0.5)),
-                 location=(0, -4, 0.5), scale=(1.125, 1.125, 1.125))
+    _mesh_object(
+        "UBX_Block_01",
+        _box((-0.5, -0.5, -0.5), (0.5, 0.5, 0.5)),
+        location=(0, -4, 0.5),
+        scale=(1.125, 1.125, 1.125),
+    )
     _mesh_object("Pill", _capsule(), location=(-4, -4, 1))
     _mesh_object("UCP_Pill_01", _capsule(0.5, 0.5), location=(-4, -4, 1))
     _mesh_object("Floor-col", _box((-8, -8, -0.25), (8, 8, 0)))
@@ -182,11 +235,27 @@ def main(out: Path) -> None:
         converted = (options.get("axis_forward"), options.get("axis_up")) != ("Y", "Z")
         expected = world_vertices(unit * options.get("global_scale", 1.0), converted)
         (out / f"{stem}.expected.json").write_text(
-            json.dumps({"blender": bpy.app.version_string, "options": options,
-                        "unit_scale": unit, "objects": expected}) + "\n"
+            json.dumps(
+                {
+                    "blender": bpy.app.version_string,
+                    "options": options,
+                    "unit_scale": unit,
+                    "objects": expected,
+                }
+            )
+            + "\n"
         )
         if stem == "level":
             write_obj(out / "level.obj", expected)
+            bpy.ops.export_scene.gltf(
+                filepath=str(out / "level.glb"),
+                export_format="GLB",
+                export_yup=False,
+                export_materials="NONE",
+                export_animations=False,
+                export_cameras=False,
+                export_lights=False,
+            )
         print(f"wrote {path}")
 
 

@@ -316,12 +316,14 @@ def _report(path):
     return json.loads(_run("check", path, "--format", "json").stdout)
 
 
-def test_check_of_the_fbx_is_the_check_of_the_same_scene_in_obj():
-    """Blender's level as FBX and as OBJ (its evaluated world vertices, full precision): the
-    same pairs (OBJ has no Godot hints: ``Floor-col`` is its name there), statuses and
+@pytest.mark.parametrize("other", ["level.obj", "level.glb"])
+def test_check_of_the_fbx_is_the_check_of_the_same_scene_in_obj_and_glb(other):
+    """Blender's level as FBX, as OBJ (its evaluated world vertices, full precision) and as
+    Blender's own GLB: the same pairs (OBJ has no Godot hints: ``Floor-col`` is its name
+    there), statuses and
     numbers to 1e-9 of the scene's size (witness points of faces in
     contact are not unique, so the distances stand for them), and the same inspection."""
-    fbx, obj = _report(DATA / "level.fbx"), _report(DATA / "level.obj")
+    fbx, obj = _report(DATA / "level.fbx"), _report(DATA / other)
     size = _size(_expected("level")["objects"])
     for summary in (fbx["summary"], obj["summary"]):
         summary.pop("seconds"), summary.pop("load_seconds")
@@ -333,7 +335,7 @@ def test_check_of_the_fbx_is_the_check_of_the_same_scene_in_obj():
         for key in ("signed_distance", "distance", "depth"):
             assert abs(a[key] - b[key]) <= 1e-9 * size, key
     fbx_bodies = json.loads(_run("inspect", DATA / "level.fbx", "--format", "json").stdout)
-    obj_bodies = json.loads(_run("inspect", DATA / "level.obj", "--format", "json").stdout)
+    obj_bodies = json.loads(_run("inspect", DATA / other, "--format", "json").stdout)
     assert len(fbx_bodies["bodies"]) == len(obj_bodies["bodies"]) == 11
     for a, b in zip(fbx_bodies["bodies"], obj_bodies["bodies"]):
         assert (a["name"], a["faces"]) == (_body_name(b["name"]), b["faces"])

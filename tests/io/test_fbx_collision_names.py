@@ -65,12 +65,13 @@ def _primitives(colliders):
 pytest.importorskip("ufbx", reason="reading FBX needs ufbx (pip install 'meshcol[fbx]')")
 
 
-@pytest.mark.parametrize("file", ["level.fbx", "level.obj"])
+@pytest.mark.parametrize("file", ["level.fbx", "level.obj", "level.glb"])
 def test_decomposed_uses_unreal_parts_primitives_exact(file):
     colliders = _colliders(DATA / file, "decomposed")
     names = [b.name.split("/")[1] for b in colliders.bodies]
-    floor = "Floor" if file.endswith(".fbx") else "Floor-col"
-    rock = "Rock" if file.endswith(".fbx") else "Rock-convcolonly"
+    hints = not file.endswith(".obj")  # Godot's hints: glTF and FBX
+    floor = "Floor" if hints else "Floor-col"
+    rock = "Rock" if hints else "Rock-convcolonly"
     assert names == ["Crate", "Ball", "Block", "Pill", floor, rock]  # parts are no bodies
     kinds = dict(zip(names, colliders.kinds))
     assert kinds["Crate"] == kinds["Ball"] == kinds["Block"] == kinds["Pill"] == "ucx"
