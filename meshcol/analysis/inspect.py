@@ -204,10 +204,10 @@ def _read_inputs(
         return _Inputs(list(scene.bodies), scene.units)
     if kind == "robot":
         return _read_robot(paths[0], robot_options)
-    if not read_files:
-        return _Inputs(None)
     from meshcol.io.mesh_formats import declared_units, format_notes
 
+    if not read_files:
+        return _Inputs(None, declared_units(paths), warnings=format_notes(paths))
     files = iter_inputs(paths, on_error=errors.add)
     bodies = [body for _, file_bodies in files for body in file_bodies]
     return _Inputs(bodies, declared_units(paths), warnings=format_notes(paths))

@@ -79,8 +79,12 @@ def test_units_are_metres_in_the_envelope():
     assert load_inputs([DATA / "level.obj"]).units is None
     assert load_inputs([DATA / "level.fbx", DATA / "level.obj"]).units is None
     for command in ("check", "inspect"):
-        result = _run(command, DATA / "level.fbx", "--format", "json")
-        assert json.loads(result.stdout)["units"] == "m", command
+        for jobs in ("1", "2"):  # in this process, and in worker processes
+            result = _run(command, DATA / "level.fbx", "--jobs", jobs, "--format", "json")
+            report = json.loads(result.stdout)
+            assert report["units"] == "m", (command, jobs)
+            if command == "inspect":  # what FBX leaves out, noted
+                assert len(report["warnings"]) == 1
 
 
 def _fbx_matrix(translation, rotation, order="XYZ"):
