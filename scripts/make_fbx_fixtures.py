@@ -11,7 +11,8 @@ and ``level.obj`` the same scene in OBJ, written here at full precision (Blender
 rounds to 6 decimals), and ``level.glb`` as Blender's glTF exporter writes it (Z up kept),
 for the same-report tests.
 
-Two scenes. ``level``: render meshes with Unreal collision parts (``UCX_Crate_01``/``_02``,
+``level`` and ``rig_yup`` are also written as ASCII FBX (``scripts/fbx_ascii.py``: Blender
+writes binary only), with the same expectations. Two scenes. ``level``: render meshes with Unreal collision parts (``UCX_Crate_01``/``_02``,
 ``UBX_Block_01``, ``USP_Ball_01``, ``UCP_Pill_01``), Godot hints (``Floor-col``,
 ``Rock-convcolonly``), a material, a camera, a light and an animation (which meshcol
 ignores), translated and non-uniformly scaled by dyadic numbers, so that Blender's float32
@@ -30,9 +31,12 @@ from pathlib import Path
 
 import bpy
 import numpy as np
+from fbx_ascii import to_ascii
 
 R90 = math.pi / 2
 
+#: Fixtures also written as ASCII FBX (scripts/fbx_ascii.py).
+ASCII = ("level", "rig_yup")
 ZUP = {"axis_forward": "Y", "axis_up": "Z"}  # Blender's own frame: no axis conversion
 #: (file stem, scene, export options, scene unit scale): the settings the fixtures cover.
 EXPORTS = (
@@ -245,6 +249,11 @@ def main(out: Path) -> None:
             )
             + "\n"
         )
+        if stem in ASCII:  # Blender writes binary only: the same content as ASCII FBX
+            (out / f"{stem}_ascii.fbx").write_text(to_ascii(path.read_bytes()))
+            (out / f"{stem}_ascii.expected.json").write_text(
+                (out / f"{stem}.expected.json").read_text()
+            )
         if stem == "level":
             write_obj(out / "level.obj", expected)
             bpy.ops.export_scene.gltf(

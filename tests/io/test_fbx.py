@@ -44,6 +44,9 @@ def test_the_fixtures_cover_unit_scales_axes_and_hierarchies():
     assert {s["options"].get("axis_up", "Y") for s in settings.values()} >= {"Y", "Z", "-Y"}
     assert any(s["options"].get("global_scale") == 4.0 for s in settings.values())
     assert all(s["blender"].startswith("4.") for s in settings.values())
+    # binary (Blender's) and ASCII (the same content, scripts/fbx_ascii.py) FBX
+    kinds = {(DATA / f"{stem}.fbx").read_bytes()[:18] for stem in FIXTURES}
+    assert kinds == {b"Kaydara FBX Binary", b"; FBX 7.4.0 projec"}
 
 
 @pytest.mark.parametrize("stem", FIXTURES)
