@@ -12,14 +12,15 @@ report ``units = "m"``.
 
 Only geometry is read: materials, textures, skins and blend shapes (the mesh at its bind
 pose), cameras, lights and animation (the rest pose) are left out, never an error
-(:func:`ignored` says what a file had). Polygons are fan-triangulated, as the OBJ reader
-does, when convex polygon, ear-clipped when concave (OFF's triangulation); point and line
-faces carry no area and are skipped. A mesh instanced by several nodes
-is one body per node.
+(:func:`ignored` says what a file had). Polygons are split as OFF's are (a fan from the first
+corner when convex, as the OBJ reader does; ear clipping when not); point and line faces
+carry no area and are skipped. A mesh instanced by several nodes is one body per node.
 
-Untrusted input: ufbx bounds every array by the file's own size, and a parent chain
-deeper than :data:`MAX_NODE_DEPTH` is refused, as is a file whose counts exceed
-:data:`MAX_INDICES`; each failure is one ``cannot parse FBX file: ...`` line.
+Untrusted input: a declared count is never trusted beyond the file's content (ufbx ignores
+an ASCII array's count and refuses a binary array that does not fit), a parent chain deeper
+than :data:`MAX_NODE_DEPTH` or a cyclic one is refused, and so is a file of more than
+:data:`MAX_INDICES` polygon corners before they are copied; each failure is one ``cannot
+parse FBX file: ...`` line, a truncated binary file's naming the record it cuts.
 """
 
 from __future__ import annotations

@@ -435,3 +435,29 @@ def test_every_command_takes_fbx(tmp_path, command):
     result = _run(name, DATA / "rig_yup.fbx", *[o.format(out=tmp_path) for o in options])
     assert result.exit_code in (0, 1), result.output
     assert any(tmp_path.iterdir())
+
+
+def _deep_fbx(depth: int) -> str:
+    """The transform test's file with a chain of ``depth`` empty nodes above the parent."""
+    text = _ascii_fbx()
+    models = "".join(f'\tModel: {1000 + k}, "Model::N{k}", "Null" {{\n\t}}\n' for k in range(depth))
+    links = "".join(f'\tC: "OO",{1000 + k},{1000 + k - 1 if k else 0}\n' for k in range(depth))
+    text = text.replace("Objects:  {\n", "Objects:  {\n" + models)
+    return text.replace('\tC: "OO",200,0\n', links + f'\tC: "OO",200,{1000 + depth - 1}\n')
+
+
+def test_limits_on_depth_and_corners(tmp_path, monkeypatch):
+    from meshcol.io import fbx
+
+    deep = tmp_path / "deep.fbx"
+    deep.write_text(_deep_fbx(fbx.MAX_NODE_DEPTH + 10))
+    result = _run("inspect", deep)
+    assert result.exit_code == 2
+    assert "cannot parse FBX file: node depth limit exceeded" in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1, result.stderr
+    shallow = tmp_path / "shallow.fbx"
+    shallow.write_text(_deep_fbx(20))
+    assert len(meshcol.load_mesh(shallow)) == 1
+    monkeypatch.setattr(fbx, "MAX_INDICES", 100)
+    with pytest.raises(meshcol.errors.InvalidMeshError, match="over 100 polygon-vertex"):
+        meshcol.load_mesh(DATA / "level.fbx")
