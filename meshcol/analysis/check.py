@@ -249,10 +249,11 @@ def _prepare_files(
     from meshcol.errors import MeshcolError
     from meshcol.io.inputs import is_whole_scene
     from meshcol.io.mesh_formats import declared_units
-    from meshcol.io.scene import iter_inputs, load_inputs, unique_name
+    from meshcol.io.scene import is_scene_file, iter_inputs, load_inputs, unique_name
 
     kind, decompose_options = options.collider, options.decompose_options
-    whole = is_whole_scene(inputs)
+    # a USD stage or glTF physics file carries excluded pairs and units: read it here, whole
+    whole = is_whole_scene(inputs) or any(is_scene_file(p) for p in inputs)
     scene: Scene | None = None
     if whole:  # a manifest or robot is read here; its decompositions go out per mesh file
         scene = load_inputs(inputs, robot_options=robot_options)

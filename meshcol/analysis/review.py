@@ -528,7 +528,11 @@ def hull_page(
         for row, h in zip(report.bodies, report.hulls)
     }
     page = _shape_page("hull", inputs, report.units, hulls, robot_options)
-    page.info.append(("max vertices", str(report.max_vertices or "exact hull")))
+    if report.target is not None:  # the target's limits shaped every hull
+        limits = ", ".join(f"{k} {v:g}" for k, v in sorted(report.target.limits.items()))
+        page.info.append(("target", f"{report.target.name} ({limits})"))
+    if report.max_vertices or report.target is None:
+        page.info.append(("max vertices", str(report.max_vertices or "exact hull")))
     return page
 
 

@@ -23,7 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from meshcol.errors import InputFileError, MeshcolError, MissingDependencyError
-from meshcol.io import fbx, gltf, mesh_trimesh, off
+from meshcol.io import fbx, gltf, gltf_physics, mesh_trimesh, off, usd_read
+from meshcol.io.physics_bodies import FileScene
 
 __all__ = [
     "FORMATS",
@@ -80,6 +81,11 @@ class MeshFormat:
         ``notes(file, source) -> list[str]``: what the file holds that the reader leaves out
         (FBX: materials, skins, cameras, lights, animation), one short phrase each, for
         reports' warnings (:func:`format_notes`).
+    scene : callable or None
+        ``scene(file: Path, source: str) -> FileScene | None``: for a file that is a scene
+        of its own (USD, glTF with physics extensions: bodies with their colliders and exact
+        primitives, excluded pairs, units, warnings; :mod:`meshcol.io.physics_bodies`),
+        read instead of ``read``; None from it: nothing beyond ``read``'s nodes.
     """
 
     name: str
@@ -92,6 +98,7 @@ class MeshFormat:
     units: str | None = None
     godot_hints: bool = False
     notes: Callable[[Path, str], list[str]] | None = None
+    scene: Callable[[Path, str], FileScene | None] | None = None
 
 
 #: Every format, in the order messages list their extensions.
@@ -100,8 +107,16 @@ FORMATS: tuple[MeshFormat, ...] = (
     MeshFormat("stl", (".stl",), native=1),
     MeshFormat("ply", (".ply",), read=mesh_trimesh.read_ply),
     MeshFormat("off", (".off",), read=off.read_off_file),
-    MeshFormat("glb", (".glb",), read=gltf.read_glb, godot_hints=True),
-    MeshFormat("gltf", (".gltf",), read=gltf.read_gltf, godot_hints=True),
+    MeshFormat(
+        "glb", (".glb",), read=gltf.read_glb, scene=gltf_physics.read_glb_scene, godot_hints=True
+    ),
+    MeshFormat(
+        "gltf",
+        (".gltf",),
+        read=gltf.read_gltf,
+        scene=gltf_physics.read_gltf_scene,
+        godot_hints=True,
+    ),
     MeshFormat(
         "fbx",
         (".fbx",),
@@ -120,6 +135,12 @@ FORMATS: tuple[MeshFormat, ...] = (
             "collada",  # trimesh reads COLLADA with pycollada
             "reading COLLADA (.dae) needs pycollada: pip install 'meshcol[robots]'",
         ),
+    ),
+    MeshFormat(
+        "usd",
+        usd_read.USD_EXTENSIONS,
+        scene=usd_read.read_usd_scene,
+        requires=("pxr", "reading USD needs usd-core: pip install 'meshcol[usd]'"),
     ),
 )
 

@@ -38,6 +38,7 @@ from meshcol.types import Body, Scene
 
 __all__ = [
     "SCHEMA_PATH",
+    "is_scene_file",
     "iter_inputs",
     "load_inputs",
     "as_scene",
@@ -168,9 +169,56 @@ def load_inputs(
         if is_robot_file(manifest):
             return load_robot(manifest, robot_options)
         return load_scene(manifest)
-    bodies = [body for _, file_bodies in iter_inputs(paths) for body in file_bodies]
     source = os.fspath(paths[0]) if len(paths) == 1 else None
+    if any(is_scene_file(path) for path in paths):
+        return _file_scenes(paths, source)
+    bodies = [body for _, file_bodies in iter_inputs(paths) for body in file_bodies]
     return Scene(bodies=tuple(bodies), units=declared_units(paths), source=source)
+
+
+def is_scene_file(path: str | os.PathLike[str]) -> bool:
+    """True for a mesh file whose format reads it as a scene of its own (USD: excluded pairs,
+    units, warnings beside the bodies; ``MeshFormat.scene``)."""
+    from meshcol.io.mesh_formats import mesh_format
+
+    try:
+        return mesh_format(os.fspath(path)).scene is not None
+    except InputFileError:
+        return False
+
+
+def _file_scenes(paths: Sequence[str | os.PathLike[str]], source: str | None) -> Scene:
+    """Mesh files of which some are scenes of their own: every file's bodies named as
+    :func:`load_inputs` names them, the files' excluded pairs (renamed with their bodies),
+    their warnings, and their units when every file declares the same."""
+    from meshcol.io.mesh_read import load_file_scene
+
+    used: set[str] = set()
+    bodies: list[Body] = []
+    pairs: list[tuple[str, str, str]] = []
+    warnings: list[str] = []
+    units: set[str | None] = set()
+    for path in paths:
+        scene = load_file_scene(path)
+        if scene is None:
+            scene = Scene(bodies=tuple(load_mesh(path)), units=declared_units([path]))
+        renamed: dict[str, str] = {}
+        for body in scene.bodies:
+            renamed[body.name] = name = unique_name(body.name, used)
+            bodies.append(body if name == body.name else dataclasses.replace(body, name=name))
+        for a, b, reason in scene.excluded_pairs:
+            a, b = sorted((renamed[a], renamed[b]))
+            pairs.append((a, b, reason))
+        prefix = "" if len(paths) == 1 else f"{os.fspath(path)}: "
+        warnings.extend(prefix + warning for warning in scene.warnings)
+        units.add(scene.units)
+    return Scene(
+        bodies=tuple(bodies),
+        units=units.pop() if len(units) == 1 else None,
+        source=source,
+        excluded_pairs=tuple(pairs),
+        warnings=tuple(warnings),
+    )
 
 
 def _single_manifest(paths: Sequence[str | os.PathLike[str]]) -> str | os.PathLike[str] | None:

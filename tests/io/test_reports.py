@@ -113,10 +113,19 @@ def test_decompose_golden(
         "-o",
         str(tmp_path / "parts"),
         "--no-cache",
+        "--report",
+        "-",
         *FAST,
     )
     assert report["settings"]["out_dir"] == str(tmp_path / "parts")
     assert report["summary"]["ok"] == 2
+    # The settings state the values used (issue 29 item 18), which every body's params repeat
+    # but for the preprocessing CoACD's auto mode decides per mesh.
+    used = report["settings"]["engine_parameters"]
+    assert used["threshold"] == 0.2 and used["mcts_nodes"] == 8 and used["max_ch_vertex"] == 256
+    for entry in report["files"]:
+        for body in entry["bodies"]:
+            assert {**used, "preprocess_mode": body["params"]["preprocess_mode"]} == body["params"]
     report["settings"]["out_dir"] = "<out_dir>"
     for entry in report["files"]:
         entry["seconds"] = 0.0
