@@ -9,7 +9,7 @@ PIP    := $(BIN)/python -m pip --disable-pip-version-check
 BUILD_TOOLS := $(if $(shell command -v cmake),,"cmake>=3.18") $(if $(shell command -v ninja),,ninja)
 BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4" $(BUILD_TOOLS)
 
-.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs test-cpp test-sanitize gltf-validator
+.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs test-cpp test-sanitize gltf-validator fbx-fixtures
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -132,10 +132,21 @@ bench: install-test
 	$(BIN)/python benchmarks/bench_decompose.py
 	$(BIN)/python benchmarks/bench_inspect.py --rounds 1
 
+# The FBX fixtures re-made by Blender (bpy 4.2 LTS, about 1 GB, in a venv of its own, never in
+# the test extra) and re-checked: tests/io/test_fbx.py compares what meshcol reads with the
+# world vertices Blender wrote beside each file. The FBX files carry their export time.
+BPY_VENV := .venv-bpy
+fbx-fixtures: install-test
+	test -x $(BPY_VENV)/bin/python || $(PYTHON) -m venv $(BPY_VENV)
+	$(BPY_VENV)/bin/python -m pip --disable-pip-version-check install -q "bpy==4.2.0" numpy
+	$(BPY_VENV)/bin/python scripts/make_fbx_fixtures.py tests/data/fbx
+	$(BIN)/python -m pytest -q -p no:cacheprovider tests/io/test_fbx.py
+	git status --short tests/data/fbx
+
 # The Khronos glTF validator (npm package gltf-validator, needs node and npm) in
 # .venv/node/node_modules, where tests/io/test_gltf_physics.py finds it (it skips without).
 gltf-validator: $(BIN)/python
 	npm install --no-fund --no-audit --prefix $(VENV)/node gltf-validator
 
 clean:
-	rm -rf build dist $(VENV) .venv-lowest $(SANITIZE_VENV) demo-out *.egg-info
+	rm -rf build dist $(VENV) .venv-lowest $(SANITIZE_VENV) $(BPY_VENV) demo-out *.egg-info

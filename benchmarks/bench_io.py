@@ -9,6 +9,12 @@ Cases, each measured as a user pays it (Python call to geometry in numpy arrays)
   process=False)`` per file, no merge) against ``meshcol.io.mesh_read.load_meshes`` (parsing
   in the core on all cores, merged) and ``load_mesh`` per file (merged).
 - One large OBJ and binary STL (a 1000 x 1000 grid sphere, 2 million triangles).
+- ``--fbx``: one large binary FBX (trimesh's UV sphere of 2.0 million vertices and 4.0 million
+  triangles, uncompressed arrays, about 100 MB, written here): ufbx alone (``ufbx.load_file``
+  with meshcol's options, vertices and indices copied into numpy arrays, the floor meshcol's
+  reader can reach) against ``meshcol.io.fbx.read_fbx`` (that plus triangulation) and
+  ``load_mesh`` (plus the vertex merge); and assimp-py, when installed, as the other
+  candidate reader (``assimp_py.import_file`` with triangulation, float32 arrays).
 - With ``--usd-quads Q``: one USD crate file (``.usdc``) of 8 grid-sphere meshes of quads,
   Q quads in all, under transformed Xforms, centimetres, Y up (4.5 million quads make
   about 100 MB): usd-core alone (open the stage, traverse it, every mesh's points, counts and
@@ -21,6 +27,7 @@ Rounds alternate the readers; the range (min-max) over rounds is printed with th
 from __future__ import annotations
 
 import argparse
+import struct
 import time
 from pathlib import Path
 
@@ -73,6 +80,145 @@ def large_sphere() -> dict[str, Path]:
         for p in paths.values():
             mesh.export(p)
     return paths
+
+
+def _record(node: tuple, at: int) -> bytes:
+    """One FBX 7.4 binary node record ``(name, properties, count, children)`` starting at
+    byte ``at`` (its end offset is absolute)."""
+    name, properties, count, children = node
+    label = name.encode()
+    start = at + 13 + len(label) + len(properties)
+    nested = b""
+    for child in children:
+        nested += _record(child, start + len(nested))
+    if children:
+        nested += bytes(13)  # the null record that closes a list
+    end = start + len(nested)
+    return (
+        struct.pack("<IIIB", end, count, len(properties), len(label)) + label + properties + nested
+    )
+
+
+def _array(code: bytes, values: np.ndarray) -> bytes:
+    data = values.tobytes()
+    return code + struct.pack("<III", len(values), 0, len(data)) + data
+
+
+def _string(text: str) -> bytes:
+    return b"S" + struct.pack("<I", len(text)) + text.encode()
+
+
+def _long(value: int) -> bytes:
+    return b"L" + struct.pack("<q", value)
+
+
+def write_fbx(path: Path, vertices: np.ndarray, faces: np.ndarray) -> None:
+    """A binary FBX 7.4 file of one mesh node (uncompressed arrays, default settings)."""
+    polygon = faces.astype(np.int32).copy()
+    polygon[:, 2] = -polygon[:, 2] - 1  # a polygon's last corner is stored as ~index
+    geometry = (
+        ("Vertices", _array(b"d", vertices.astype(np.float64).reshape(-1)), 1, ()),
+        ("PolygonVertexIndex", _array(b"i", polygon.reshape(-1)), 1, ()),
+    )
+    nodes = (
+        ("FBXHeaderExtension", b"", 0, (("FBXVersion", b"I" + struct.pack("<i", 7400), 1, ()),)),
+        (
+            "Objects",
+            b"",
+            0,
+            (
+                (
+                    "Geometry",
+                    _long(100) + _string("Sphere\x00\x01Geometry") + _string("Mesh"),
+                    3,
+                    geometry,
+                ),
+                ("Model", _long(200) + _string("Sphere\x00\x01Model") + _string("Mesh"), 3, ()),
+            ),
+        ),
+        (
+            "Connections",
+            b"",
+            0,
+            (
+                ("C", _string("OO") + _long(200) + _long(0), 3, ()),
+                ("C", _string("OO") + _long(100) + _long(200), 3, ()),
+            ),
+        ),
+    )
+    out = bytearray(b"Kaydara FBX Binary  \x00\x1a\x00" + struct.pack("<I", 7400))
+    for node in nodes:
+        out += _record(node, len(out))
+    out += bytes(13)
+    path.write_bytes(bytes(out))
+
+
+def large_fbx() -> Path:
+    path = CACHE / "sphere2m.fbx"
+    if not path.exists():
+        CACHE.mkdir(parents=True, exist_ok=True)
+        mesh = trimesh.creation.uv_sphere(radius=1.0, count=[1000, 1000])
+        write_fbx(path, np.asarray(mesh.vertices), np.asarray(mesh.faces))
+    return path
+
+
+def ufbx_alone(path: Path) -> None:
+    """ufbx's load and the copy of every mesh into arrays: what meshcol cannot go below."""
+    import ufbx
+
+    scene = ufbx.load_file(
+        str(path),
+        file_format=ufbx.FileFormat.FBX,
+        target_axes=ufbx.axes_right_handed_z_up,
+        target_unit_meters=1.0,
+        ignore_animation=True,
+        ignore_embedded=True,
+    )
+    for node in scene.nodes:
+        mesh = node.mesh
+        if mesh is not None:
+            np.array(memoryview(mesh.vertices))
+            np.array(memoryview(mesh.faces))
+            np.fromiter(mesh.vertex_indices, dtype=np.int64, count=mesh.num_indices)
+            tuple(node.geometry_to_world)
+        del mesh
+    del node
+    scene.free()
+
+
+def assimp_alone(path: Path) -> None:
+    import assimp_py
+
+    scene = assimp_py.import_file(str(path), assimp_py.Process_Triangulate)
+    for mesh in scene.meshes:
+        np.frombuffer(mesh.vertices, dtype=np.float32).copy()
+        np.frombuffer(mesh.indices, dtype=np.uint32).copy()
+
+
+def compare_fbx(rounds: int) -> None:
+    import gc
+    import importlib.util
+
+    from meshcol.io.fbx import read_fbx
+
+    path = large_fbx()
+    print(f"{path.name}: {path.stat().st_size / 1e6:.0f} MB")
+    readers = {
+        "ufbx alone + copy": lambda: ufbx_alone(path),
+        "meshcol read_fbx": lambda: read_fbx(path, str(path)),
+        "meshcol load_mesh": lambda: load_mesh(path),
+    }
+    if importlib.util.find_spec("assimp_py") is not None:
+        try:
+            assimp_alone(path)
+            readers["assimp-py (float32)"] = lambda: assimp_alone(path)
+        except RuntimeError as error:  # assimp-py 1.1 refuses this minimal file
+            print(f"assimp-py: {' '.join(str(error).split())}")
+    gc.disable()  # ufbx 0.0.5's objects crash the collector (meshcol.io.fbx says why)
+    try:
+        compare("100 MB binary FBX", readers, rounds, 1)
+    finally:
+        gc.enable()
 
 
 def usd_level(quads: int) -> Path:
@@ -155,9 +301,13 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--files", type=int, default=2000)
     parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--fbx", action="store_true", help="only the large FBX case")
     parser.add_argument("--usd-quads", type=int, default=0, help="the USD case's size (0: none)")
     parser.add_argument("--usd-only", action="store_true", help="only the USD case")
     args = parser.parse_args()
+    if args.fbx:
+        compare_fbx(args.rounds)
+        return
     if args.usd_quads:
         path = usd_level(args.usd_quads)
         compare(

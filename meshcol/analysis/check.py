@@ -253,6 +253,7 @@ def _prepare_files(
     from meshcol.decomposition.executor import run_each
     from meshcol.errors import MeshcolError
     from meshcol.io.inputs import is_whole_scene
+    from meshcol.io.mesh_formats import declared_units
     from meshcol.io.scene import is_scene_file, iter_inputs, load_inputs, unique_name
 
     kind, decompose_options = options.collider, options.decompose_options
@@ -289,7 +290,7 @@ def _prepare_files(
                 name = unique_name(body.name, used)
                 bodies.append(body if name == body.name else dataclasses.replace(body, name=name))
         source = os.fspath(inputs[0]) if len(inputs) == 1 else None
-        scene = Scene(bodies=tuple(bodies), units=None, source=source)
+        scene = Scene(bodies=tuple(bodies), units=declared_units(inputs), source=source)
 
     def decompose(mesh: Any, **options: Any) -> list[np.ndarray]:
         found = parts.get(_geometry_key(*mesh))

@@ -22,7 +22,9 @@ render geometry: matched to their owner they leave the body's mesh. A ``UCX_`` p
 nothing in the input is kept as geometry and a warning names it; loose ones from one file that
 name the same owner become one body of parts (``<file>/<owner>``), so the convex parts of one
 decomposition are never checked against each other. Under ``decomposed``, every ``UCX_`` part
-is used as given.
+is used as given. ``UBX_``, ``USP_`` and ``UCP_`` parts (a box, a sphere, a capsule:
+:mod:`meshcol.io.collision_names`, the conventions shared by every format) are matched the
+same way and, under ``decomposed``, become the enclosing primitive of their vertices, exact.
 
 Degenerate geometry follows one rule everywhere: a body or part whose points are flat,
 collinear or a single point (:attr:`meshcol.collision.hull.ExactHull.dimension`) is its hull,
@@ -49,6 +51,7 @@ import numpy as np
 from meshcol.collision.hull import FLAT_RELATIVE_TOLERANCE, exact_hull
 from meshcol.collision.shapes import ConvexSet
 from meshcol.errors import InvalidMeshError
+from meshcol.io.collision_names import collision_part
 from meshcol.types import Body
 from meshcol.vocabulary import COLLIDER_KINDS
 
@@ -62,7 +65,7 @@ __all__ = [
 ]
 
 
-_UCX = re.compile(r"^UCX_(?P<body>.+)_(?P<index>\d+)$")
+_UCX = re.compile(r"^UCX_(?P<body>.+)_(?P<index>\d+)$")  # convex parts only (MC303)
 
 
 @dataclass(frozen=True, eq=False)
@@ -150,15 +153,28 @@ class Colliders:
 
 @dataclass(frozen=True)
 class _Ucx:
-    """UCX collision parts of one body: ``(label, vertices in the owner's frame)`` each."""
+    """Unreal collision parts of one body (``UCX_``, ``UBX_``, ``USP_``, ``UCP_``):
+    ``(label, vertices in the owner's frame)`` each, and each one's kind
+    (:data:`meshcol.io.collision_names.UNREAL_PREFIXES`), in the same order."""
 
     parts: list[tuple[int, np.ndarray]]
     whole: bool  # they stand for the whole body (its own name, or a loose owner)
+    kinds: list[str] = dataclasses.field(default_factory=list)
+
+    def add(self, label: int, vertices: np.ndarray, kind: str) -> None:
+        self.parts.append((label, vertices))
+        self.kinds.append(kind)
+
+    def sort(self) -> None:
+        """In ``NN`` order (the labels hold it until then)."""
+        order = sorted(range(len(self.parts)), key=lambda k: self.parts[k][0])
+        self.parts[:] = [self.parts[k] for k in order]
+        self.kinds[:] = [self.kinds[k] for k in order]
 
 
 def _ucx_index(name: str) -> int:
-    match = _UCX.match(name)
-    return int(match["index"]) if match else -1
+    part = collision_part(name)
+    return part.index if part is not None else -1
 
 
 def _restrict(body: Body, keep: list[int]) -> Body:
@@ -212,20 +228,20 @@ def split_ucx(bodies: Sequence[Body]) -> tuple[list[Body], dict[str, _Ucx], list
             kept.append(_split_body_ucx(body, ucx, warnings))
             continue
         head, _, last = body.name.rpartition("/")
-        match = _UCX.match(last)
-        if not match:
+        match = collision_part(last)
+        if match is None:
             kept.append(body)
             continue
-        same_file = f"{head}/{match['body']}" if head else match["body"]
-        target = same_file if same_file in names else match["body"]
-        if target in names and not _UCX.match(target.rpartition("/")[2]):
+        same_file = f"{head}/{match.owner}" if head else match.owner
+        target = same_file if same_file in names else match.owner
+        if target in names and collision_part(target.rpartition("/")[2]) is None:
             entry = ucx.setdefault(target, _Ucx([], True))
             (local,) = _in_owner_frame(by_name[target], [body])
-            entry.parts.append((_ucx_index(last), local))
+            entry.add(match.index, local, match.kind)
             continue
         orphans.setdefault(same_file, []).append(body)
     for entry in ucx.values():
-        entry.parts.sort(key=lambda item: item[0])
+        entry.sort()
         if entry.whole:
             entry.parts[:] = [(-1, v) for _, v in entry.parts]
     for owner_name, parts in orphans.items():
@@ -247,18 +263,18 @@ def split_ucx(bodies: Sequence[Body]) -> tuple[list[Body], dict[str, _Ucx], list
 
 def _split_body_ucx(body: Body, ucx: dict[str, _Ucx], warnings: list[str]) -> Body:
     """Strip the matched ``UCX_`` parts of a body of several parts (see :func:`split_ucx`)."""
-    render = [k for k, name in enumerate(body.parts) if not _UCX.match(name)]
+    render = [k for k, name in enumerate(body.parts) if collision_part(name) is None]
     index = {body.parts[k]: k for k in render}
     matched: list[tuple[int, int, int]] = []  # (part, owner part or -1 for the body, NN)
     unmatched: list[int] = []
     for k, name in enumerate(body.parts):
-        match = _UCX.match(name)
-        if not match:
+        match = collision_part(name)
+        if match is None:
             continue
-        if match["body"] in index:
-            matched.append((k, index[match["body"]], int(match["index"])))
-        elif match["body"] == body.name:
-            matched.append((k, -1, int(match["index"])))
+        if match.owner in index:
+            matched.append((k, index[match.owner], match.index))
+        elif match.owner == body.name:
+            matched.append((k, -1, match.index))
         else:
             unmatched.append(k)
     if unmatched and render:
@@ -278,10 +294,13 @@ def _split_body_ucx(body: Body, ucx: dict[str, _Ucx], warnings: list[str]) -> Bo
     new_index = {k: i for i, k in enumerate(keep)}
     whole = any(owner < 0 for _, owner, _ in matched)
     parts = sorted(
-        ((-1 if whole else new_index[owner], nn, meshes[k][1]) for k, owner, nn in matched),
+        ((-1 if whole else new_index[owner], nn, k) for k, owner, nn in matched),
         key=lambda item: (item[0], item[1]),
     )
-    ucx[body.name] = _Ucx([(label, v) for label, _, v in parts], whole)
+    entry = ucx[body.name] = _Ucx([], whole)
+    for label, _, k in parts:
+        kind = collision_part(body.parts[k])
+        entry.add(label, meshes[k][1], kind.kind if kind is not None else "convex")
     return kept
 
 
@@ -696,15 +715,16 @@ def _decomposed_parts(build: _Build, body: Body, block: _Block) -> str:
     A body whose parts all came from ``UCX_`` geometry is of kind ``ucx``."""
     own = build.ucx.get(body.name)
     covered = set() if own is None else {label for label, _ in own.parts}
-    for label, vertices in own.parts if own is not None else ():
-        block.put(build.pool.part(vertices), label)
+    for (label, vertices), kind in zip(own.parts, own.kinds) if own is not None else ():
+        _collision_part(build, block, label, vertices, kind)
     meshes = _part_meshes(body)
     decomposed = False
     for label, name, vertices, faces in meshes:
         if own is not None and (own.whole or label in covered):
             continue  # its UCX parts stand for it
-        if name is not None and _UCX.match(name):
-            block.put(build.pool.part(vertices), label)  # convex by convention: as given
+        named = collision_part(name) if name is not None else None
+        if named is not None:  # convex (or a primitive) by convention: as given
+            _collision_part(build, block, label, vertices, named.kind)
             continue
         if _flat(vertices):
             what = f"body {body.name!r}" + ("" if name is None else f" part {name!r}")
@@ -718,8 +738,28 @@ def _decomposed_parts(build: _Build, body: Body, block: _Block) -> str:
         decomposed = True
         for part in build.parts_of((vertices, faces), **build.decompose_options):
             block.put(build.pool.part(part), label)
-    all_ucx = all(n is not None and _UCX.match(n) for _, n, _, _ in meshes)
+    all_ucx = all(n is not None and collision_part(n) is not None for _, n, _, _ in meshes)
     return "ucx" if not decomposed and (own is not None or all_ucx) else "decomposed"
+
+
+def _collision_part(
+    build: _Build, block: _Block, label: int, vertices: np.ndarray, kind: str
+) -> None:
+    """An Unreal collision part as the engine takes it: a ``UCX_`` part as given (convex by
+    convention), a ``UBX_``, ``USP_`` or ``UCP_`` part as the box, sphere or capsule that
+    encloses it (queried exactly, placed by its pose); a flat one as the polygon it is."""
+    if kind == "convex" or _flat(vertices):
+        block.put(build.pool.part(vertices), label)
+        return
+    from meshcol.analysis.fit import fit_point_sets  # only when a file has such parts
+
+    (result,) = fit_point_sets([vertices], kind)
+    chosen = None if isinstance(result, InvalidMeshError) else result.primitive_fit
+    if chosen is None:
+        block.put(build.pool.part(vertices), label)
+        return
+    build.pool.part_poses[(block.body_number, len(block.singles))] = chosen.pose
+    block.put(build.pool.add(("fit", chosen.primitive), chosen.primitive), label)
 
 
 #: The builder of each collider kind: (build, body, block) -> the kind the body is reported

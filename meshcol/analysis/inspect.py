@@ -205,6 +205,8 @@ def _read_inputs(
         return _Inputs(list(scene.bodies), scene.units)
     if kind == "robot":
         return _read_robot(paths[0], robot_options)
+    from meshcol.io.mesh_formats import declared_units, format_notes
+
     if len(paths) == 1 and is_scene_file(paths[0]):  # USD, glTF physics: units, warnings
         try:
             whole = load_file_scene(paths[0])
@@ -214,9 +216,10 @@ def _read_inputs(
         if whole is not None:
             return _Inputs(list(whole.bodies), whole.units, None, list(whole.warnings))
     if not read_files:
-        return _Inputs(None)
+        return _Inputs(None, declared_units(paths), warnings=format_notes(paths))
     files = iter_inputs(paths, on_error=errors.add)
-    return _Inputs([body for _, file_bodies in files for body in file_bodies])
+    bodies = [body for _, file_bodies in files for body in file_bodies]
+    return _Inputs(bodies, declared_units(paths), warnings=format_notes(paths))
 
 
 def _read_robot(path: Any, robot_options: RobotOptions | None = None) -> _Inputs:

@@ -16,14 +16,14 @@ from __future__ import annotations
 
 import importlib.util
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from meshcol.errors import InputFileError, MissingDependencyError
-from meshcol.io import gltf, gltf_physics, mesh_trimesh, off, usd_read
+from meshcol.errors import InputFileError, MeshcolError, MissingDependencyError
+from meshcol.io import fbx, gltf, gltf_physics, mesh_trimesh, off, usd_read
 from meshcol.io.physics_bodies import FileScene
 
 __all__ = [
@@ -32,6 +32,8 @@ __all__ = [
     "MeshFormat",
     "MeshNode",
     "check_file",
+    "declared_units",
+    "format_notes",
     "mesh_format",
     "read_natively",
 ]
@@ -66,6 +68,19 @@ class MeshFormat:
         format (``collada``); such a format is not one of the commands' own inputs.
     requires : tuple of str or None
         ``(module, install hint)``: a module the reader needs, checked before reading.
+    units : str or None
+        The length unit the reader returns vertices in, whatever the file's own (FBX: ``m``,
+        converted from its ``UnitScaleFactor``): reported in the envelope's ``units`` when
+        every input says the same. None: the format does not say.
+    godot_hints : bool
+        Node names may end in Godot's import hints (``-col``, ``-convcol``, ``-colonly``,
+        ``-convcolonly``, ``-rigid``: :mod:`meshcol.io.collision_names`), as in the glTF and
+        FBX scenes Godot imports: the loader cuts the hint from the body's name and makes it
+        the body's collider kind.
+    notes : callable or None
+        ``notes(file, source) -> list[str]``: what the file holds that the reader leaves out
+        (FBX: materials, skins, cameras, lights, animation), one short phrase each, for
+        reports' warnings (:func:`format_notes`).
     scene : callable or None
         ``scene(file: Path, source: str) -> FileScene | None``: for a file that is a scene
         of its own (USD, glTF with physics extensions: bodies with their colliders and exact
@@ -80,6 +95,9 @@ class MeshFormat:
     unnamed: str | None = None
     opt_in: str | None = None
     requires: tuple[str, str] | None = None
+    units: str | None = None
+    godot_hints: bool = False
+    notes: Callable[[Path, str], list[str]] | None = None
     scene: Callable[[Path, str], FileScene | None] | None = None
 
 
@@ -89,8 +107,25 @@ FORMATS: tuple[MeshFormat, ...] = (
     MeshFormat("stl", (".stl",), native=1),
     MeshFormat("ply", (".ply",), read=mesh_trimesh.read_ply),
     MeshFormat("off", (".off",), read=off.read_off_file),
-    MeshFormat("glb", (".glb",), read=gltf.read_glb, scene=gltf_physics.read_glb_scene),
-    MeshFormat("gltf", (".gltf",), read=gltf.read_gltf, scene=gltf_physics.read_gltf_scene),
+    MeshFormat(
+        "glb", (".glb",), read=gltf.read_glb, scene=gltf_physics.read_glb_scene, godot_hints=True
+    ),
+    MeshFormat(
+        "gltf",
+        (".gltf",),
+        read=gltf.read_gltf,
+        scene=gltf_physics.read_gltf_scene,
+        godot_hints=True,
+    ),
+    MeshFormat(
+        "fbx",
+        (".fbx",),
+        read=fbx.read_fbx,
+        requires=("ufbx", "reading FBX (.fbx) needs ufbx: pip install 'meshcol[fbx]'"),
+        units=fbx.UNITS,
+        godot_hints=True,
+        notes=fbx.ignored,
+    ),
     MeshFormat(
         "dae",
         (".dae",),
@@ -127,6 +162,35 @@ def mesh_format(source: str, opted_in: frozenset[str] = frozenset()) -> MeshForm
         suffix = os.path.splitext(source)[1] or "(none)"
         raise InputFileError(f"unknown mesh file extension {suffix!r} (expected {known})", source)
     return fmt
+
+
+def declared_units(sources: Sequence[str | os.PathLike[str]]) -> str | None:
+    """The units every one of ``sources`` is read in (:attr:`MeshFormat.units`), or None
+    when one format does not say, two differ, or there are none."""
+    units = {
+        fmt.units if fmt is not None else None
+        for fmt in (_BY_EXTENSION.get(os.path.splitext(os.fspath(s))[1].lower()) for s in sources)
+    }
+    return units.pop() if len(units) == 1 else None
+
+
+def format_notes(sources: Sequence[str | os.PathLike[str]]) -> list[str]:
+    """One warning per file of ``sources`` whose reader left content out
+    (:attr:`MeshFormat.notes`): ``level.fbx: not read (geometry only): 1 material, 1
+    camera``. A file that cannot be read gets none (its error is said elsewhere)."""
+    out = []
+    for path in sources:
+        source = os.fspath(path)
+        fmt = _BY_EXTENSION.get(os.path.splitext(source)[1].lower())
+        if fmt is None or fmt.notes is None:
+            continue
+        try:
+            left_out = fmt.notes(Path(source), source)
+        except MeshcolError:
+            continue
+        if left_out:
+            out.append(f"{source}: not read (geometry only): {', '.join(left_out)}")
+    return out
 
 
 def read_natively(source: str) -> bool:

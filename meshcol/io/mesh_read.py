@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from meshcol.errors import InputFileError, InvalidMeshError
+from meshcol.io.collision_names import godot_hint
 from meshcol.io.mesh_formats import MESH_EXTENSIONS, MeshFormat, check_file, mesh_format
 from meshcol.io.physics_bodies import BodyGroup, axis_turn, choose_collider, scaled_primitive
 from meshcol.types import Body, Scene
@@ -88,7 +89,9 @@ def load_mesh(
     -------
     list of Body
         In file order (glTF: scene-graph order). Named after the file stem when the file holds
-        one body, else ``<stem>/<object, solid or node name>``; names are unique.
+        one body, else ``<stem>/<object, solid or node name>``; names are unique. In glTF
+        and FBX, a Godot hint ending a node name (``Floor-col``) is cut from it and sets the
+        body's ``collider`` (:mod:`meshcol.io.collision_names`).
         ``vertices`` (n, 3) float64 are in the body's local frame with scale baked in;
         ``faces`` (m, 3) int64; ``pose`` (4, 4) is rigid, world from local.
 
@@ -122,8 +125,14 @@ def load_mesh(
     used: set[str] = set()
     bodies = []
     for name, matrix, vertices, faces in nodes:
+        hint = godot_hint(name) if fmt.godot_hints else None
+        if hint is not None:
+            name = hint.name
         full = _unique(file.stem if len(nodes) == 1 else f"{file.stem}/{name}", used)
-        bodies.append(_node_body(full, matrix, vertices, faces, source, merge))
+        body = _node_body(full, matrix, vertices, faces, source, merge)
+        if hint is not None and hint.collider is not None:
+            body = dataclasses.replace(body, collider=hint.collider)
+        bodies.append(body)
     return bodies
 
 

@@ -21,6 +21,7 @@ from typing import Any
 
 from meshcol.errors import InputFileError, MeshcolError, SceneError
 from meshcol.io.inputs import input_kind, is_robot_file
+from meshcol.io.mesh_formats import declared_units
 from meshcol.io.mesh_read import load_mesh
 from meshcol.io.paths import confine
 from meshcol.io.robot import RobotOptions, load_robot
@@ -152,7 +153,8 @@ def load_inputs(
         parts); the robot's (one body per link with collision geometry); or, for mesh and glTF/GLB files given directly, one body per object of every
         file, in order (``<stem>/<object>`` when a file holds several). A name that clashes
         with an earlier body's gets ``#2``, ``#3``... appended. ``source`` is the input path when
-        there is exactly one, else None; ``units`` is None without a manifest.
+        there is exactly one, else None; ``units`` without a manifest: what every mesh file's
+        format converts to (FBX: ``m``), else None.
 
     Raises
     ------
@@ -172,7 +174,7 @@ def load_inputs(
     if any(is_scene_file(path) for path in paths):
         return _file_scenes(paths, source)
     bodies = [body for _, file_bodies in iter_inputs(paths) for body in file_bodies]
-    return Scene(bodies=tuple(bodies), units=None, source=source)
+    return Scene(bodies=tuple(bodies), units=declared_units(paths), source=source)
 
 
 def is_scene_file(path: str | os.PathLike[str]) -> bool:
@@ -200,7 +202,7 @@ def _file_scenes(paths: Sequence[str | os.PathLike[str]], source: str | None) ->
     for path in paths:
         scene = load_file_scene(path)
         if scene is None:
-            scene = Scene(bodies=tuple(load_mesh(path)))
+            scene = Scene(bodies=tuple(load_mesh(path)), units=declared_units([path]))
         renamed: dict[str, str] = {}
         for body in scene.bodies:
             renamed[body.name] = name = unique_name(body.name, used)

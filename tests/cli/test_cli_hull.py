@@ -291,7 +291,7 @@ BAD_MESHES = {
     "unknown.xyz": (
         "x\n",
         "unknown mesh file extension '.xyz' "
-        "(expected .obj, .stl, .ply, .off, .glb, .gltf, .usd, .usda, .usdc, .usdz)",
+        "(expected .obj, .stl, .ply, .off, .glb, .gltf, .fbx, .usd, .usda, .usdc, .usdz)",
     ),
 }
 

@@ -176,7 +176,7 @@ def test_broken_manifest(tmp_path: Path, name: str) -> None:
             "mesh.dae",
             "<xml/>\n",
             "unknown mesh file extension '.dae' "
-            "(expected .obj, .stl, .ply, .off, .glb, .gltf, .usd, .usda, .usdc, .usdz)",
+            "(expected .obj, .stl, .ply, .off, .glb, .gltf, .fbx, .usd, .usda, .usdc, .usdz)",
         ),
     ],
 )

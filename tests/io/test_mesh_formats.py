@@ -32,7 +32,7 @@ def test_every_extension_is_lower_case_and_belongs_to_one_format():
 def test_the_commands_read_what_they_always_read():
     # the unknown-extension message lists these, in this order
     assert list(MESH_EXTENSIONS) == [
-        *(".obj", ".stl", ".ply", ".off", ".glb", ".gltf"),
+        *(".obj", ".stl", ".ply", ".off", ".glb", ".gltf", ".fbx"),
         *(".usd", ".usda", ".usdc", ".usdz"),
     ]
     assert read_natively("a.OBJ") and read_natively("b.stl") and not read_natively("c.ply")
