@@ -19,6 +19,9 @@ turn, a third of them turned), on a jittered 3-D grid of pitch 0.8 m with sizes 
 a few bodies in a hundred touch or overlap a neighbour; ``meshcol check`` from the command
 line, report written, with its wall and CPU time and peak memory.
 
+Each meshcol row also gives its stages from the report (load, check, and the rest of the wall
+time: start-up, imports, writing the report).
+
 Every meshcol figure is a fresh ``meshcol check`` process, timed from outside, with its peak
 resident memory (``RUSAGE_CHILDREN`` of a one-child wrapper). Peers run in this process,
 loading included, and are skipped with a printed reason when missing or past ``--peer-max``.
@@ -251,6 +254,17 @@ def timed(command: list[str]) -> tuple[int, float, float]:
     return int(out[0]), float(out[1]), float(out[2]) / 1024
 
 
+def stages(report: dict, wall: float) -> str:
+    """The run's stages from its report: load (read, validate, build the bodies), check
+    (colliders, broad, narrow and mesh phases, the report's rows) and the rest of the wall
+    time (start-up, imports, writing the report)."""
+    summary = report.get("summary", {})
+    load, check = summary.get("load_seconds"), summary.get("seconds")
+    if load is None or check is None:
+        return "stages: -"
+    return f"stages: load {load:.2f} s, check {check:.2f} s, rest {wall - load - check:.2f} s"
+
+
 def meshcol_check(
     folder: Path, threads: int, meshcol: str | None = None, report_name: str = "report.json"
 ) -> tuple[int, float, float, dict]:
@@ -433,6 +447,7 @@ def main() -> None:
             f"{n:>7} {pairs!s:>7} {seconds:>10.2f} {rss:>9.0f} {t_fcl:>24} {ratio(t_fcl):>6} "
             f"{t_coal:>24} {ratio(t_coal):>6} {os.getloadavg()[0]:>9.2f}"
         )
+        print(f"{'':>7} {stages(report, seconds)}")
     for n in args.primitives:
         for kind in args.primitive_kinds:
             folder = primitives_folder(n, kind)
@@ -445,7 +460,8 @@ def main() -> None:
             print(
                 f"{n:,} {kind} primitives: meshcol check {min(wall):.2f}-{max(wall):.2f} s wall, "
                 f"{min(cpu):.2f}-{max(cpu):.2f} s CPU, peak {max(rss_runs):.0f} MiB, "
-                f"{pairs} pairs reported (load avg {os.getloadavg()[0]:.2f})"
+                f"{pairs} pairs reported (load avg {os.getloadavg()[0]:.2f}); last run's "
+                f"{stages(report, wall[-1])}"
             )
     if args.extras:
         folder = big_mesh_folder()
