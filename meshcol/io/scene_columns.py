@@ -354,9 +354,10 @@ def bulk_bodies(found: Columns, source: str, files: dict[str, list[Body]]) -> li
     poses = _poses(found, position, common)
     out: list[Body | None] = [None] * n
     shapes = found.shapes
+    kinds, lengths = found.primitive_type.tolist(), found.primitive_lengths.tolist()
     for i in np.flatnonzero(common & primitive).tolist():
         out[i] = Body.of_primitive(
-            names[i], source, _primitive(found, i), pose=poses[i], collider=shapes[i]
+            names[i], source, _primitive(kinds[i], lengths[i]), pose=poses[i], collider=shapes[i]
         )
     for i in np.flatnonzero(common & ~primitive).tolist():
         mesh_source, vertices, faces = objects[found.meshes[i]]
@@ -389,10 +390,10 @@ _SPHERE, _BOX, _CAPSULE, _CYLINDER = (
 )
 
 
-def _primitive(found: Columns, i: int) -> Primitive:
-    """The primitive of body ``i``, as the body loop builds it from the same numbers."""
-    kind = int(found.primitive_type[i])
-    a, b, c = found.primitive_lengths[i].tolist()
+def _primitive(kind: int, lengths: list[float]) -> Primitive:
+    """A body's primitive from its columns' type and lengths, as the body loop builds it
+    from the same numbers."""
+    a, b, c = lengths
     if kind == _BOX:
         return Box((a, b, c))
     if kind == _SPHERE:
