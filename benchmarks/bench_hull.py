@@ -6,13 +6,17 @@ kept here only to compare: per shape, qhull through scipy (`ConvexHull`), then
 `np.unique`-style grouping of face normals and edge directions and the adjacency lists in
 numpy (a copy of that code path for 3-D hulls, which is what these inputs are).
 
-Cases: 40,000 clouds of 64 Gaussian points (the old path is timed on ``--old-shapes`` of them
+Cases: smooth hulls (issue 32): points on random ellipsoids (semi-axes 0.5-1.5, randomly
+turned), every point a hull vertex, as decomposition parts, UCX parts and fitted capsules
+are: 64 points a shape (``--shapes`` of them), 256 and 1,024 (the same number of points in
+all: a quarter and a sixteenth as many shapes), from one (H, n, 3) array and from a list;
+40,000 clouds of 64 Gaussian points (about 25 on the hull) (the old path is timed on ``--old-shapes`` of them
 and reported per shape: 40,000 took 73.6 s); a UV sphere of 2 million triangles (708 x 708:
 one hull of about a million vertices); and `check_scene` end to end on that sphere beside a
 cube. Wall and CPU times are printed: on a shared machine the wall time includes waiting.
 
 Run:  .venv/bin/python benchmarks/bench_hull.py [--shapes 40000] [--old-shapes 2000]
-      [--sphere-count 708] [--skip-old-mesh]
+      [--sphere-count 708] [--skip-old-mesh] [--on-hull-sizes 64 256 1024] [--only-on-hull]
 """
 
 from __future__ import annotations
@@ -121,6 +125,36 @@ def clouds_case(shapes: int, old_shapes: int) -> None:
     )
 
 
+def on_hull_points(rng: np.random.Generator, shapes: int, n: int) -> np.ndarray:
+    """(shapes, n, 3) points on random ellipsoids, randomly turned: every point on the hull."""
+    from scipy.spatial.transform import Rotation
+
+    p = rng.normal(size=(shapes, n, 3))
+    p /= np.linalg.norm(p, axis=2, keepdims=True)
+    p *= rng.uniform(0.5, 1.5, size=(shapes, 1, 3))
+    turn = Rotation.random(shapes, random_state=rng).as_matrix()
+    return np.ascontiguousarray(np.einsum("hij,hnj->hni", turn, p))
+
+
+def on_hull_case(shapes: int, sizes: list[int]) -> None:
+    from meshcol import ConvexSet
+
+    rng = np.random.default_rng(1)
+    for n in sizes:
+        count = max(1, shapes * 64 // n)
+        points = on_hull_points(rng, count, n)
+        as_list = list(points)
+        array, array_cpu, cs = timed(lambda: ConvexSet.from_vertices(points), 3)
+        listed, list_cpu, _ = timed(lambda: ConvexSet.from_vertices(as_list), 3)
+        kept = len(cs.vertices) / (count * n)
+        print(
+            f"{count} smooth hulls of {n} points ({kept:.0%} on the hull), from one array: "
+            f"{array:.3f} s wall ({array_cpu:.3f} s CPU), {array / count * 1e6:.1f} us a shape "
+            f"({array_cpu / count * 1e6:.1f} us CPU); from a list {listed:.3f} s "
+            f"({list_cpu:.3f} s CPU)"
+        )
+
+
 def sphere(count: int):
     import trimesh
 
@@ -168,7 +202,12 @@ def main() -> None:
     parser.add_argument("--old-shapes", type=int, default=2000)
     parser.add_argument("--sphere-count", type=int, default=708)
     parser.add_argument("--skip-old-mesh", action="store_true")
+    parser.add_argument("--on-hull-sizes", type=int, nargs="*", default=[64, 256, 1024])
+    parser.add_argument("--only-on-hull", action="store_true", help="the smooth hulls alone")
     args = parser.parse_args()
+    on_hull_case(args.shapes, args.on_hull_sizes)
+    if args.only_on_hull:
+        return
     clouds_case(args.shapes, args.old_shapes)
     mesh_case(args.sphere_count, args.skip_old_mesh)
 

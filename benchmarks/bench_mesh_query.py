@@ -1,6 +1,6 @@
 """Exact mesh-mesh queries: meshcol (MeshSet + mesh_distance_batch) vs python-fcl BVHModel.
 
-Run: .venv/bin/python benchmarks/bench_mesh_query.py [--runs 3]
+Run: .venv/bin/python benchmarks/bench_mesh_query.py [--runs 3] [--coal] [--coal-only]
 
 With --runs N the whole set runs N times (meshcol and fcl side by side in each) and a summary
 gives each row's fcl/meshcol ratio as a range over the runs. The single-pair rows (distance,
@@ -13,6 +13,14 @@ contacts (the deepest contact's penetration_depth), on overlapping and resting p
 (its meshcol) in alternation with this one's for an A/B of the core, e.g.
 ``for i in 1 2 3; do for py in ../main/.venv/bin/python .venv/bin/python; do $py
 benchmarks/bench_mesh_query.py --depth-only; done; done``.
+
+Coal (issue 32, item 3): ``--coal`` adds a peer column, coal's ``BVHModelOBBRSS`` (``pip
+install coal``, in the ``bench`` extra), on a real-mesh family from the corpus (torus,
+fandisk, teapot, ballA), each against a randomly turned copy posed apart (a gap of half its
+extent), near (5%), touching (1e-4) and overlapping; distance and intersection, single pair,
+each side timed in alternating windows with meshcol; then a batch (60 posed copies of the
+torus, every near pair: coal and fcl collide-then-distance loops). ``--coal-only`` runs just
+that family. Rows print coal/meshcol and fcl/meshcol.
 
 For each corpus mesh pair: hierarchy build time, one distance query, one collision query (meshcol
 answers both with mesh_distance_batch, which also tests containment; fcl needs fcl.distance and
@@ -52,10 +60,11 @@ RATIOS: dict[str, list[float]] = defaultdict(list)  # row -> fcl/meshcol of each
 
 def row(name: str, ours: float, theirs: float, label: str = "fcl") -> None:
     """Prints one timed row (seconds) and records its ratio for the summary."""
-    RATIOS[name].append(theirs / ours)
+    RATIOS[name if label == "fcl" else f"{name} [{label}]"].append(theirs / ours)
+    peer = label.split()[0]
     print(
         f"  {name.split(': ', 1)[-1]:<22} meshcol {ours * 1e3:8.4f} ms   {label} {theirs * 1e3:8.4f} ms   "
-        f"fcl/meshcol {theirs / ours:6.2f}"
+        f"{peer}/meshcol {theirs / ours:6.2f}"
     )
 
 
@@ -241,22 +250,154 @@ def depth_case(name: str, a: trimesh.Trimesh, b: trimesh.Trimesh, pb: np.ndarray
     row(f"depth {name}: depth", t_ours, t_fcl, "fcl collide+contacts")
 
 
+def coal_model(mesh: trimesh.Trimesh):
+    import coal
+
+    m = coal.BVHModelOBBRSS()
+    m.beginModel(len(mesh.faces), len(mesh.vertices))
+    m.addVertices(np.asarray(mesh.vertices, dtype=np.float64))
+    m.addTriangles(np.asarray(mesh.faces, dtype=np.int64))
+    m.endModel()
+    return m
+
+
+def coal_pair(name: str, mesh: trimesh.Trimesh, pb: np.ndarray) -> None:
+    """One pair of the coal family: meshcol against coal and fcl, distance and intersects."""
+    import coal
+
+    meshes = MeshSet.from_arrays([mesh, mesh], np.stack([np.eye(4), pb]), threads=1)
+    pairs = np.array([[0, 1]])
+    model = coal_model(mesh)
+    ta, tb = coal.Transform3s(), coal.Transform3s(pb[:3, :3].copy(), pb[:3, 3].copy())
+    oa = fcl.CollisionObject(fcl_model(mesh), fcl.Transform())
+    ob = fcl.CollisionObject(fcl_model(mesh), fcl.Transform(pb[:3, :3], pb[:3, 3]))
+
+    def coal_distance():
+        res = coal.DistanceResult()
+        coal.distance(model, ta, model, tb, coal.DistanceRequest(), res)
+        return res.min_distance
+
+    def coal_collide():
+        res = coal.CollisionResult()
+        coal.collide(model, ta, model, tb, coal.CollisionRequest(), res)
+        return res.isCollision()
+
+    def fcl_distance():
+        return fcl.distance(oa, ob, fcl.DistanceRequest(), fcl.DistanceResult())
+
+    def fcl_collide():
+        res = fcl.CollisionResult()
+        fcl.collide(oa, ob, fcl.CollisionRequest(), res)
+        return res.is_collision
+
+    def ours_distance():
+        return mesh_distance_batch(meshes, None, pairs, threads=1)
+
+    def ours_collide():
+        return mesh_intersects_batch(meshes, None, pairs, threads=1).intersecting[0]
+
+    r = ours_distance()
+    print(
+        f"{name}: {len(mesh.faces)} faces; meshcol distance {r.distance[0]:.6g} "
+        f"(intersecting {bool(r.intersecting[0])}), coal {coal_distance():.6g} "
+        f"(collide {coal_collide()}), fcl {fcl_distance():.6g} (collide {fcl_collide()})"
+    )
+    for query, ours, peers in (
+        ("distance", ours_distance, (("coal", coal_distance), ("fcl", fcl_distance))),
+        ("intersects", ours_collide, (("coal", coal_collide), ("fcl", fcl_collide))),
+    ):
+        for label, theirs in peers:
+            t_ours, t_theirs = best_of_alternated(ours, theirs)
+            row(f"{name}: {query}", t_ours, t_theirs, label)
+
+
+def coal_batch(mesh: trimesh.Trimesh, count: int, rng) -> None:
+    """``count`` posed copies in a loose cluster, every near pair: meshcol's batch (one
+    thread) against coal's and fcl's collide-then-distance loops."""
+    import coal
+
+    extent = float(mesh.extents.max())
+    poses = np.stack(
+        [pose(random_rotation(rng), rng.uniform(0, 4 * extent, 3)) for _ in range(count)]
+    )
+    meshes = MeshSet.from_arrays([mesh] * count, poses)
+    ii, jj = np.triu_indices(count, 1)
+    near = np.linalg.norm(poses[ii, :3, 3] - poses[jj, :3, 3], axis=1) < 2 * extent
+    pairs = np.c_[ii[near], jj[near]]
+    model = coal_model(mesh)
+    transforms = [coal.Transform3s(p[:3, :3].copy(), p[:3, 3].copy()) for p in poses]
+
+    def coal_loop():
+        out = np.empty(len(pairs))
+        for k, (i, j) in enumerate(pairs.tolist()):
+            res = coal.CollisionResult()
+            coal.collide(model, transforms[i], model, transforms[j], coal.CollisionRequest(), res)
+            if res.isCollision():
+                out[k] = 0.0
+                continue
+            dres = coal.DistanceResult()
+            coal.distance(model, transforms[i], model, transforms[j], coal.DistanceRequest(), dres)
+            out[k] = dres.min_distance
+        return out
+
+    d_coal = coal_loop()
+    r = mesh_distance_batch(meshes, None, pairs, threads=1)
+    ok = np.isclose(r.distance, d_coal, rtol=1e-9, atol=1e-12)
+    t1 = best_of(lambda: mesh_distance_batch(meshes, None, pairs, threads=1), 3)
+    tc = best_of(coal_loop, 2)
+    print(
+        f"coal batch: {count} posed copies of {len(mesh.faces)} faces, {len(pairs)} near pairs, "
+        f"distances agree with coal on {int(ok.sum())}/{len(pairs)}"
+    )
+    row("coal batch: 1 thread", t1, tc, "coal collide+distance loop")
+
+
+def coal_rows() -> None:
+    rng = np.random.default_rng(32)
+    load = lambda name: trimesh.load(CORPUS / name, force="mesh")
+    for file in ("torus.STL", "fandisk.obj", "teapot.stl", "ballA.off"):
+        mesh = load(file)
+        mesh.apply_translation(-mesh.bounds.mean(axis=0))
+        e = float(mesh.extents.max())
+        turn = random_rotation(rng)
+        near = pose(turn, (1.05 * e, 0.0, 0.0))
+        # touching: the near copy moved by its closest points' gap, so that they meet
+        meshes = MeshSet.from_arrays([mesh, mesh], np.stack([np.eye(4), near]), threads=1)
+        closest = mesh_distance_batch(meshes, None, np.array([[0, 1]]), threads=1)
+        touching = near.copy()
+        touching[:3, 3] += closest.point_a[0] - closest.point_b[0]
+        for label, posed in (
+            ("apart", pose(turn, (1.5 * e, 0.0, 0.0))),
+            ("near", near),
+            ("touching", touching),
+            ("overlapping", pose(turn, (0.6 * e, 0.0, 0.0))),
+        ):
+            coal_pair(f"{file} {label}", mesh, posed)
+    coal_batch(load("torus.STL"), 60, rng)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=1, help="repeat the whole set (ranges)")
     parser.add_argument("--depth-only", action="store_true", help="only the depth rows")
+    parser.add_argument("--coal", action="store_true", help="the coal family too")
+    parser.add_argument("--coal-only", action="store_true", help="only the coal family")
     args = parser.parse_args()
     print(f"meshcol from {Path(meshcol.__file__).resolve().parent}, load average {os.getloadavg()}")
     for run in range(args.runs):
         if args.runs > 1:
             print(f"== run {run + 1} of {args.runs}")
-        if args.depth_only:
+        if args.coal_only:
+            coal_rows()
+        elif args.depth_only:
             depth_rows()
         else:
             one_run()
             depth_rows()
+            if args.coal:
+                coal_rows()
     if args.runs > 1:
-        print(f"\nfcl/meshcol over {args.runs} runs (min-max):")
+        print(f"\npeer/meshcol over {args.runs} runs (min-max):")
         for name, ratios in RATIOS.items():
             print(f"  {name:<60} {min(ratios):6.2f} - {max(ratios):6.2f}")
 

@@ -13,14 +13,23 @@ Also: a 2-million-triangle mesh (a closed torus, binary STL) beside a cube, chec
 end; and a 300,000-body manifest (instances of 16 assets) loaded (``load_inputs``, in a
 fresh process).
 
+Primitive rows (issue 32): manifests of N primitive bodies and no mesh file (``--primitives``):
+``spheres`` (every body a sphere) and ``mixed`` (spheres, boxes, capsules and cylinders in
+turn, a third of them turned), on a jittered 3-D grid of pitch 0.8 m with sizes 0.2-0.45 m, so
+a few bodies in a hundred touch or overlap a neighbour; ``meshcol check`` from the command
+line, report written, with its wall and CPU time and peak memory.
+
+Each meshcol row also gives its stages from the report (load, check, and the rest of the wall
+time: start-up, imports, writing the report).
+
 Every meshcol figure is a fresh ``meshcol check`` process, timed from outside, with its peak
 resident memory (``RUSAGE_CHILDREN`` of a one-child wrapper). Peers run in this process,
 loading included, and are skipped with a printed reason when missing or past ``--peer-max``.
 
 Run: .venv/bin/python benchmarks/bench_scale.py [--sizes 1000 10000 100000] [--peer-max 10000]
-     [--extras] [--threads 0]
+     [--extras] [--threads 0] [--primitives 100000 1000000] [--primitive-kinds spheres mixed]
 A/B: .venv/bin/python benchmarks/bench_scale.py --baseline ../main/.venv/bin/meshcol --repeat 3
-     [--sizes 10000 100000] [--extras]   (runs alternated; wall, CPU and peak RSS ranges;
+     [--sizes 10000 100000] [--extras] [--primitives 10000]   (runs alternated; wall, CPU and peak RSS ranges;
      the two sides' last reports compared byte for byte, clock fields masked)
 """
 
@@ -184,6 +193,41 @@ def instances_folder(n: int = 300_000) -> Path:
     return folder
 
 
+def primitives_folder(n: int, kind: str) -> Path:
+    """A manifest of ``n`` primitive bodies (``kind``: spheres or mixed), no mesh file."""
+    folder = CACHE / f"primitives-{kind}{n}"
+    manifest = folder / "scene.json"
+    if manifest.exists():
+        return folder
+    folder.mkdir(parents=True, exist_ok=True)
+    rng = np.random.default_rng(5)
+    side = math.ceil(n ** (1 / 3))
+    index = np.arange(n)
+    grid = np.stack([index % side, index // side % side, index // side // side], axis=1)
+    position = (0.8 * grid + rng.uniform(-0.05, 0.05, (n, 3))).round(6).tolist()
+    size = rng.uniform(0.2, 0.45, n).round(6).tolist()
+    quaternion = rng.normal(size=(n, 4)).round(6).tolist()
+    bodies = []
+    for i in range(n):
+        r = size[i]
+        k = 0 if kind == "spheres" else i % 4
+        body: dict = {
+            "name": f"p{i:07d}",
+            "primitive": [
+                {"type": "sphere", "radius": r},
+                {"type": "box", "size": [2 * r, 0.4, 0.5]},
+                {"type": "capsule", "radius": r / 2, "length": 0.4},
+                {"type": "cylinder", "radius": r / 2, "length": 0.5},
+            ][k],
+            "position": position[i],
+        }
+        if kind == "mixed" and i % 3 == 0:
+            body["rotation"] = {"quaternion": quaternion[i]}
+        bodies.append(body)
+    manifest.write_text(json.dumps({"units": "m", "bodies": bodies}))
+    return folder
+
+
 # ---------------------------------------------------------------------------------------------
 # Runs
 
@@ -208,6 +252,17 @@ def timed(command: list[str]) -> tuple[int, float, float]:
     ).stdout.split()
     LAST_CPU[0] = float(out[3])
     return int(out[0]), float(out[1]), float(out[2]) / 1024
+
+
+def stages(report: dict, wall: float) -> str:
+    """The run's stages from its report: load (read, validate, build the bodies), check
+    (colliders, broad, narrow and mesh phases, the report's rows) and the rest of the wall
+    time (start-up, imports, writing the report)."""
+    summary = report.get("summary", {})
+    load, check = summary.get("load_seconds"), summary.get("seconds")
+    if load is None or check is None:
+        return "stages: -"
+    return f"stages: load {load:.2f} s, check {check:.2f} s, rest {wall - load - check:.2f} s"
 
 
 def meshcol_check(
@@ -336,7 +391,7 @@ def peer(name: str, fn, folder: Path, n: int, peer_max: int) -> str:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sizes", type=int, nargs="+", default=[1000, 10000, 100000])
+    parser.add_argument("--sizes", type=int, nargs="*", default=[1000, 10000, 100000])
     parser.add_argument("--peer-max", type=int, default=10000, help="largest N given to peers")
     parser.add_argument("--threads", type=int, default=0, help="meshcol --threads")
     parser.add_argument("--repeat", type=int, default=1, help="meshcol runs per size (best)")
@@ -344,6 +399,16 @@ def main() -> None:
         "--extras",
         action="store_true",
         help="the 2M-triangle mesh and the 300,000-body manifest too",
+    )
+    parser.add_argument(
+        "--primitives",
+        type=int,
+        nargs="*",
+        default=[],
+        help="sizes of the primitive-body manifests to check (e.g. 100000 1000000)",
+    )
+    parser.add_argument(
+        "--primitive-kinds", nargs="+", default=["spheres", "mixed"], choices=["spheres", "mixed"]
     )
     parser.add_argument(
         "--baseline",
@@ -382,6 +447,22 @@ def main() -> None:
             f"{n:>7} {pairs!s:>7} {seconds:>10.2f} {rss:>9.0f} {t_fcl:>24} {ratio(t_fcl):>6} "
             f"{t_coal:>24} {ratio(t_coal):>6} {os.getloadavg()[0]:>9.2f}"
         )
+        print(f"{'':>7} {stages(report, seconds)}")
+    for n in args.primitives:
+        for kind in args.primitive_kinds:
+            folder = primitives_folder(n, kind)
+            runs = []
+            for _ in range(args.repeat):
+                rc, seconds, rss, report = meshcol_check(folder, args.threads)
+                runs.append((seconds, LAST_CPU[0], rss))
+            wall, cpu, rss_runs = zip(*runs)
+            pairs = len(report.get("pairs", [])) if rc == 0 else f"rc={rc}"
+            print(
+                f"{n:,} {kind} primitives: meshcol check {min(wall):.2f}-{max(wall):.2f} s wall, "
+                f"{min(cpu):.2f}-{max(cpu):.2f} s CPU, peak {max(rss_runs):.0f} MiB, "
+                f"{pairs} pairs reported (load avg {os.getloadavg()[0]:.2f}); last run's "
+                f"{stages(report, wall[-1])}"
+            )
     if args.extras:
         folder = big_mesh_folder()
         rc, seconds, rss, _ = meshcol_check(folder, args.threads)
@@ -437,8 +518,12 @@ def ab(args: argparse.Namespace) -> None:
                 f"{min(cpu):6.2f}-{max(cpu):<6.2f} {min(rss):5.0f}-{max(rss):<5.0f}"
             )
 
-    for n in args.sizes:
-        folder = scene_folder(n)
+    cases = [(f"check, {n} unique", scene_folder(n)) for n in args.sizes] + [
+        (f"{n} {kind} primitives", primitives_folder(n, kind))
+        for n in args.primitives
+        for kind in args.primitive_kinds
+    ]
+    for case, folder in cases:
         figures: dict[str, list[tuple[float, float, float]]] = {side: [] for side in sides}
         for _ in range(args.repeat):
             for side, meshcol in sides.items():
@@ -448,7 +533,7 @@ def ab(args: argparse.Namespace) -> None:
                 if rc != 0:  # --fail-on none: anything else is a crash (a traceback is 1)
                     raise SystemExit(f"{side} meshcol check exited {rc} on {folder}")
                 figures[side].append((seconds, LAST_CPU[0], rss))
-        show(f"check, {n} unique", figures)
+        show(case, figures)
         print(f"{'':>24} reports: {same_reports(folder, list(sides))}")
     if args.extras:
         manifest = str(instances_folder() / "scene.json")

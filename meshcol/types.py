@@ -11,7 +11,10 @@ Frames and signs, fixed once for the whole package:
 from __future__ import annotations
 
 import enum
+import functools
+import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -26,6 +29,9 @@ __all__ = [
     "Spin",
     "Status",
     "TimeOfImpactStatus",
+    "primitive_mesh",
+    "primitive_reach",
+    "primitive_vertex_count",
 ]
 
 
@@ -143,6 +149,87 @@ class Cylinder:
 Primitive = Sphere | Box | Capsule | Cylinder
 
 
+_SPHERE_SUBDIVISIONS = 3  # icosphere: 642 vertices
+_ROUND_SECTIONS = 32  # around the axis of capsules and cylinders
+
+
+def primitive_mesh(primitive: Primitive) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (n, 3) float64 and faces (m, 3) int64 of a primitive, centred, axis along z:
+    made once per distinct primitive (the last 1,024 kept), the caller's own copies.
+
+    Sphere: an icosphere of 642 vertices; capsule and cylinder: 32 sections around the axis;
+    box: 8 vertices. The vertices lie on the surface (the polytope is inscribed). Queries never
+    need it (they use the primitive exactly): it is for what draws or exports triangles."""
+    vertices, faces = _tessellation(primitive)
+    return vertices.copy(), faces.copy()
+
+
+@functools.lru_cache(maxsize=1024)
+def _tessellation(primitive: Primitive) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`primitive_mesh`, cached, read-only."""
+    import trimesh
+
+    if isinstance(primitive, Box):
+        mesh = trimesh.creation.box(extents=np.asarray(primitive.size, dtype=np.float64))
+    elif isinstance(primitive, Sphere):
+        mesh = trimesh.creation.icosphere(
+            subdivisions=_SPHERE_SUBDIVISIONS, radius=primitive.radius
+        )
+    elif isinstance(primitive, Capsule):
+        mesh = trimesh.creation.capsule(
+            height=primitive.length,
+            radius=primitive.radius,
+            count=[_ROUND_SECTIONS, _ROUND_SECTIONS],
+        )
+    else:
+        mesh = trimesh.creation.cylinder(
+            radius=primitive.radius, height=primitive.length, sections=_ROUND_SECTIONS
+        )
+    vertices = np.array(mesh.vertices, dtype=np.float64, order="C")
+    faces = np.array(mesh.faces, dtype=np.int64, order="C")
+    vertices.flags.writeable = False
+    faces.flags.writeable = False
+    return vertices, faces
+
+
+def primitive_reach(primitive: Primitive) -> float:
+    """A bound, a little over, of the distance from a primitive's centre to any of its points
+    (and so to any vertex of its inscribed tessellation): a world-coordinate check's reach
+    without the tessellation."""
+    if isinstance(primitive, Sphere):
+        reach = primitive.radius
+    elif isinstance(primitive, Box):
+        reach = 0.5 * math.hypot(*primitive.size)
+    elif isinstance(primitive, Capsule):
+        reach = primitive.radius + 0.5 * primitive.length
+    else:
+        reach = math.hypot(primitive.radius, 0.5 * primitive.length)
+    return reach * (1.0 + 1e-12)
+
+
+#: The lengths within which a primitive's tessellation has the vertex count of every other of
+#: its type (trimesh merges the vertices of tinier or more elongated ones), and those counts;
+#: ``tests/test_primitive_bodies.py`` checks both against the tessellation.
+REGULAR_LENGTHS = (1e-2, 1e5)
+REGULAR_VERTEX_COUNTS: dict[type, int] = {Sphere: 642, Box: 8, Capsule: 1026, Cylinder: 66}
+
+
+def primitive_vertex_count(primitive: Primitive) -> int:
+    """``len(primitive_mesh(primitive)[0])``, without tessellating a primitive whose lengths
+    are all within :data:`REGULAR_LENGTHS`."""
+    low, high = REGULAR_LENGTHS
+    lengths = (
+        primitive.size
+        if isinstance(primitive, Box)
+        else (primitive.radius,)
+        if isinstance(primitive, Sphere)
+        else (primitive.radius, primitive.length)
+    )
+    if all(low <= x <= high for x in lengths):
+        return REGULAR_VERTEX_COUNTS[type(primitive)]
+    return len(primitive_mesh(primitive)[0])
+
+
 @dataclass(frozen=True, eq=False)
 class Spin:
     """How a body turns over its motion, when that is not the shortest rotation.
@@ -217,7 +304,10 @@ class Body:
     vertices : (n, 3) float64
         Local frame, scale applied.
     faces : (m, 3) int64
-        Triangles, indices into ``vertices``. For a primitive, a tessellation.
+        Triangles, indices into ``vertices``. For a primitive, a tessellation
+        (:func:`primitive_mesh`): given None, it is made on first use, once per distinct
+        primitive (shared, read-only), so a body that nothing draws or exports is never
+        tessellated; :attr:`vertex_count` knows its size without making it.
     pose : (4, 4) float64
         Rigid world-from-local pose at the start (and only) instant.
     end_pose : (4, 4) float64 or None
@@ -322,10 +412,57 @@ class Body:
                 f"(off by {miss:.3g})"
             )
 
+    @classmethod
+    def of_primitive(
+        cls, name: str, source: str | None, primitive: Primitive, **fields: Any
+    ) -> Body:
+        """A primitive body whose tessellation is made on first use of ``vertices`` or
+        ``faces`` (never, when nothing draws or exports it); ``fields`` as the constructor's."""
+        return cls(name, source, _UNMADE, _UNMADE, primitive=primitive, **fields)
+
+    @property
+    def vertex_count(self) -> int:
+        """``len(self.vertices)``, without tessellating a primitive body for it."""
+        made = self.__dict__["vertices"]
+        if made is None and self.primitive is not None:
+            return primitive_vertex_count(self.primitive)
+        return len(self.vertices)
+
     def world_vertices(self, end: bool = False) -> np.ndarray:
         """Vertices in the world frame, (n, 3) float64, at the start (or end) pose."""
         m = self.end_pose if end and self.end_pose is not None else self.pose
         return self.vertices @ m[:3, :3].T + m[:3, 3]
+
+
+#: What :meth:`Body.of_primitive` gives for the tessellation it leaves unmade.
+_UNMADE: Any = None
+
+
+class _Tessellation:
+    """``Body.vertices`` and ``Body.faces``: as given; for a primitive body given None (see
+    :meth:`Body.of_primitive`), its shared tessellation (:func:`primitive_mesh`), made on the
+    first read. A data descriptor, so the frozen dataclass's ``__init__`` stores through it
+    and a plain assignment still raises."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+    def __get__(self, body: Body | None, owner: type | None = None) -> Any:
+        if body is None:
+            return self
+        value = body.__dict__[self.name]
+        if value is None and body.primitive is not None:
+            body.__dict__["vertices"], body.__dict__["faces"] = primitive_mesh(body.primitive)
+            value = body.__dict__[self.name]
+        return value
+
+    def __set__(self, body: Body, value: Any) -> None:
+        body.__dict__[self.name] = value
+
+
+# installed after the dataclass is made, so that it sees two plain fields without defaults
+for _name in ("vertices", "faces"):
+    setattr(Body, _name, _Tessellation(_name))
 
 
 @dataclass(frozen=True, eq=False)

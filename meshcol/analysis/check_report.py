@@ -390,7 +390,7 @@ def _body_rows(placed: PlacedColliders, files: Sequence[str | None]) -> list[dic
             "collider": kind,
             "parts": list(body.parts),
             "convex_parts": parts,
-            "vertices": len(body.vertices),
+            "vertices": body.vertex_count,
             "aabb": [lo, hi],
         }
         for body, file, kind, parts, lo, hi in zip(

@@ -46,22 +46,21 @@ class ShapeKind(enum.IntEnum):
 _PRIMITIVES = (Sphere, Box, Capsule, Cylinder)
 
 
-def _primitive(shape: Any) -> tuple[int, np.ndarray]:
-    params = np.zeros(4)
+def _primitive(shape: Any) -> tuple[int, tuple[float, float, float, float]]:
+    """(kind, params) of a primitive; plain floats: a scene may pack 1,000,000 of them."""
     if isinstance(shape, Sphere):
-        kind, params[0] = ShapeKind.SPHERE, shape.radius
-    elif isinstance(shape, Box):
-        kind, params[:3] = ShapeKind.BOX, np.asarray(shape.size) / 2.0
-    elif isinstance(shape, Capsule):
-        kind, params[:2] = ShapeKind.CAPSULE, (shape.radius, shape.length / 2.0)
-    elif isinstance(shape, Cylinder):
-        kind, params[:2] = ShapeKind.CYLINDER, (shape.radius, shape.length / 2.0)
-    else:  # pragma: no cover - callers dispatch
-        raise TypeError(type(shape).__name__)
-    return int(kind), params
+        return ShapeKind.SPHERE, (shape.radius, 0.0, 0.0, 0.0)
+    if isinstance(shape, Box):
+        x, y, z = shape.size
+        return ShapeKind.BOX, (x / 2.0, y / 2.0, z / 2.0, 0.0)
+    if isinstance(shape, Capsule):
+        return ShapeKind.CAPSULE, (shape.radius, shape.length / 2.0, 0.0, 0.0)
+    if isinstance(shape, Cylinder):
+        return ShapeKind.CYLINDER, (shape.radius, shape.length / 2.0, 0.0, 0.0)
+    raise TypeError(type(shape).__name__)  # pragma: no cover - callers dispatch
 
 
-def _item(shape: Any, name: str) -> tuple[int, np.ndarray, np.ndarray | None]:
+def _item(shape: Any, name: str) -> tuple[int, Any, np.ndarray | None]:
     """(kind, params, points or None) of a primitive, a Body, a trimesh mesh or an (n, 3) array."""
     if isinstance(shape, _PRIMITIVES):
         return (*_primitive(shape), None)
@@ -194,7 +193,7 @@ class ConvexSet:
         return f"ConvexSet({len(self)} shapes, {len(self.vertices)} vertices)"
 
     @classmethod
-    def _from_items(cls, items: Sequence[tuple[int, np.ndarray, np.ndarray | None]]) -> ConvexSet:
+    def _from_items(cls, items: Sequence[tuple[int, Any, np.ndarray | None]]) -> ConvexSet:
         """Packs (kind, params, points or None) items: every polytope's hull in one native
         call, primitives as their parameters."""
         polytopes = [i for i, item in enumerate(items) if item[2] is not None]

@@ -98,10 +98,7 @@ def tessellate(primitive: Primitive) -> tuple[np.ndarray, np.ndarray]:
 
 def primitive_body(name: str, source: str, primitive: Primitive, pose: np.ndarray) -> Body:
     """A link of one primitive element: the exact primitive at the element's world pose."""
-    vertices, faces = tessellate(primitive)
-    return Body(
-        name=name, source=source, vertices=vertices, faces=faces, pose=pose, primitive=primitive
-    )
+    return Body.of_primitive(name, source, primitive, pose=pose)
 
 
 def parts_body(name: str, source: str, pose: np.ndarray, elements: Sequence[LinkElement]) -> Body:

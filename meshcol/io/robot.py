@@ -42,7 +42,7 @@ from meshcol.io.mjcf import read_mjcf
 from meshcol.io.report import read_json_file
 from meshcol.io.srdf import read_srdf
 from meshcol.io.urdf import read_urdf
-from meshcol.types import Body, Scene
+from meshcol.types import Body, Scene, primitive_reach
 
 __all__ = [
     "CollisionElement",
@@ -295,11 +295,18 @@ def load_robot_model(
 
 def _check_body(body: Body, source: str) -> None:
     """A link's pose and world coordinates are finite and within the limit of every input."""
-    from meshcol.io.mesh_read import check_magnitude
+    from meshcol.io.mesh_read import MAX_COORDINATE, check_magnitude
 
     label = f"link {body.name!r}"
-    if not np.all(np.isfinite(body.pose)) or not np.all(np.isfinite(body.vertices)):
+    primitive = body.primitive  # finite by construction: bounded without its tessellation
+    if not np.all(np.isfinite(body.pose)) or (
+        primitive is None and not np.all(np.isfinite(body.vertices))
+    ):
         raise SceneError(f"{label}: pose or geometry is not finite (a NaN or inf origin?)", source)
+    if primitive is not None and (
+        primitive_reach(primitive) + float(np.abs(body.pose[:3, 3]).max()) <= MAX_COORDINATE
+    ):
+        return
     world = body.vertices @ body.pose[:3, :3].T + body.pose[:3, 3]
     try:
         check_magnitude(world, "world vertex", None)

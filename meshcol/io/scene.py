@@ -96,7 +96,7 @@ def _load_scene(source: str) -> Scene:
     files = read_mesh_files(document, source)  # each mesh file read once, all in parallel
     # The common bodies (static, unscaled, one object each) built together; every other body,
     # and every body whose checks might fail, one by one in order, so errors come as before.
-    bulk = bulk_bodies(columns, source, files) if columns is not None and files else None
+    bulk = bulk_bodies(columns, source, files) if columns is not None else None
     bodies = build_bodies(document, source, files, bulk)
     units, duration = document.get("units"), document.get("duration")
     return Scene(bodies=tuple(bodies), units=units, source=source, duration=duration)

@@ -19,8 +19,7 @@ import numpy as np
 from meshcol.errors import MeshcolError, SceneError
 from meshcol.io.mesh_read import MAX_COORDINATE, check_magnitude, load_mesh, split_rigid
 from meshcol.io.paths import confine
-from meshcol.io.primitives import primitive_mesh
-from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Sphere, Spin
+from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Sphere, Spin, primitive_reach
 
 __all__ = [
     "AXES",
@@ -380,15 +379,12 @@ def _primitive_body(
             if kind == "capsule"
             else Cylinder(radius, length)
         )
-    vertices, faces = primitive_mesh(primitive)
-    return Body(
-        name=spec["name"],
-        source=source,
-        vertices=vertices,
-        faces=faces,
+    return Body.of_primitive(
+        spec["name"],
+        source,
+        primitive,
         pose=motion.start,
         end_pose=motion.end,
-        primitive=primitive,
         collider=spec.get("shape"),
         spin=motion.spin,
     )
@@ -396,7 +392,11 @@ def _primitive_body(
 
 def _check_world(body: Body, label: str, source: str) -> None:
     """A body's world coordinates (scale, pose, mesh and motion combined) within the limit."""
-    reach = float(np.abs(body.vertices).max(initial=0.0)) * math.sqrt(3.0)
+    reach = (
+        float(np.abs(body.vertices).max(initial=0.0)) * math.sqrt(3.0)
+        if body.primitive is None
+        else primitive_reach(body.primitive)  # bounds its tessellation's vertices
+    )
     for pose, when in ((body.pose, ""), (body.end_pose, " at the end of the motion")):
         if pose is None:
             continue

@@ -27,12 +27,13 @@ from meshcol.io.scene_schema import (
     BODY_FIELDS,
     MAX_TURN,
     ORDERS,
+    PRIMITIVE_TYPES,
     SHAPES,
     VECTOR_FIELDS,
     is_primitive,
     plain_top,
 )
-from meshcol.types import Body
+from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Sphere
 
 __all__ = [
     "Columns",
@@ -55,6 +56,12 @@ class Columns:
         Per body (``meshes[i]`` and ``shapes[i]`` None where absent).
     primitive, moving, scaled : (n,) bool
         A primitive body; one with an end pose or a velocity; one with a scale other than 1.
+    primitive_type : (n,) int8
+        The index of a primitive body's type in :data:`PRIMITIVE_TYPES`, -1 elsewhere.
+    primitive_lengths : (n, 3) float64
+        A primitive body's lengths as the manifest gives them: a box's size, a sphere's
+        ``(radius, 0, 0)``, a capsule's or cylinder's ``(radius, length, 0)``; zeros
+        elsewhere.
     vectors : dict of str to (n, 3) float64
         ``position``, ``end_position``, ``velocity``, ``angular_velocity``, zeros where
         absent; a field no body has is not in it.
@@ -80,6 +87,8 @@ class Columns:
     quaternion: np.ndarray
     euler: np.ndarray
     orders: list[str]
+    primitive_type: np.ndarray
+    primitive_lengths: np.ndarray
 
 
 _NUMBER_TYPES = frozenset({int, float})
@@ -152,8 +161,7 @@ def columns(document: Any) -> Columns | None:
         table = _Table(document["bodies"])
         names = table.strings("name")
         meshes = table.strings("mesh")
-        if table.count["primitive"] and not all(map(is_primitive, table.column("primitive")[0])):
-            raise _Unplain
+        primitive_type, primitive_lengths = _primitives(table)
         vectors = _vectors(table)
         rotation, quaternion, euler, orders = _rotations(table)
         scale, scaled = _scales(table)
@@ -176,7 +184,32 @@ def columns(document: Any) -> Columns | None:
         quaternion=quaternion,
         euler=euler,
         orders=orders,
+        primitive_type=primitive_type,
+        primitive_lengths=primitive_lengths,
     )
+
+
+def _primitives(table: _Table) -> tuple[np.ndarray, np.ndarray]:
+    """The primitive bodies' types and lengths (see :class:`Columns`), each checked."""
+    kinds = np.full(table.n, -1, dtype=np.int8)
+    lengths = np.zeros((table.n, 3))
+    if not table.count["primitive"]:
+        return kinds, lengths
+    values, mask = table.column("primitive")
+    if not all(map(is_primitive, values)):
+        raise _Unplain
+    rows = [
+        p["size"]
+        if p["type"] == "box"
+        else [p["radius"], 0.0, 0.0]
+        if p["type"] == "sphere"
+        else [p["radius"], p["length"], 0.0]
+        for p in values
+    ]
+    index = {kind: k for k, kind in enumerate(PRIMITIVE_TYPES)}
+    given = np.array([index[p["type"]] for p in values], dtype=np.int8).reshape(-1, 1)
+    kinds = _spread(given, mask, table.n, -1).astype(np.int8).reshape(table.n)
+    return kinds, _spread(_rows(rows, 3), mask, table.n, 0.0)
 
 
 def _rows(values: list, width: int) -> np.ndarray:
@@ -268,11 +301,16 @@ def _scales(table: _Table) -> tuple[np.ndarray | None, np.ndarray]:
 
 
 def near_limits(found: Columns, duration: float | None) -> np.ndarray:
-    """(n,) bool: the bodies the magnitude check must look at one by one: primitives, and
-    every body with a value within a factor of two of a limit (a margin, so rounding an
-    integer to a double never hides one beyond it)."""
-    near = found.primitive.copy()
-    lengths = [found.vectors.get("position"), found.vectors.get("end_position"), found.scale]
+    """(n,) bool: the bodies the magnitude check must look at one by one: every body with a
+    value (a primitive's lengths included) within a factor of two of a limit (a margin, so
+    rounding an integer to a double never hides one beyond it)."""
+    near = np.zeros(len(found.names), dtype=bool)
+    lengths = [
+        found.vectors.get("position"),
+        found.vectors.get("end_position"),
+        found.scale,
+        found.primitive_lengths,
+    ]
     for values in lengths:
         if values is not None:
             near |= (np.abs(values) >= 0.5 * MAX_COORDINATE).any(axis=1)
@@ -292,13 +330,15 @@ def near_limits(found: Columns, duration: float | None) -> np.ndarray:
 
 def bulk_bodies(found: Columns, source: str, files: dict[str, list[Body]]) -> list | None:
     """The manifest's common bodies, built together: index-aligned with its bodies, a Body
-    for each static, unscaled mesh body whose file holds one object without a transform and
-    whose world coordinates are plainly within the limit; None for the others (built one by
-    one). None in all when names repeat (the body loop says which).
+    for each static, unscaled mesh body whose file holds one object without a transform, and
+    each static, unscaled primitive body, whose world coordinates are plainly within the
+    limit; None for the others (built one by one). None in all when names repeat (the body
+    loop says which).
 
     Each body is what the body loop would build, to the bit: the same rotation arithmetic
     (:func:`quaternion_matrices`, :func:`euler_matrices`), the same vertex and face arrays
-    of its file, the same bound of its world coordinates as its world check.
+    of its file (a primitive: the same primitive, its tessellation left to its first use),
+    the same bound of its world coordinates as its world check.
     """
     names = found.names
     n = len(names)
@@ -306,13 +346,20 @@ def bulk_bodies(found: Columns, source: str, files: dict[str, list[Body]]) -> li
         return None
     objects, reach_of = _plain_objects(found, source, files)
     reach = np.array([reach_of[m] for m in found.meshes]).reshape(n)
+    primitive = found.primitive
+    reach[primitive] = _primitive_reach(found.primitive_type, found.primitive_lengths)[primitive]
     position = found.vectors.get("position", np.zeros((n, 3)))
     common = ~found.moving & ~found.scaled
     common &= reach + np.abs(position).max(axis=1, initial=0.0) <= MAX_COORDINATE
     poses = _poses(found, position, common)
     out: list[Body | None] = [None] * n
     shapes = found.shapes
-    for i in np.flatnonzero(common).tolist():
+    kinds, lengths = found.primitive_type.tolist(), found.primitive_lengths.tolist()
+    for i in np.flatnonzero(common & primitive).tolist():
+        out[i] = Body.of_primitive(
+            names[i], source, _primitive(kinds[i], lengths[i]), pose=poses[i], collider=shapes[i]
+        )
+    for i in np.flatnonzero(common & ~primitive).tolist():
         mesh_source, vertices, faces = objects[found.meshes[i]]
         out[i] = Body(
             name=names[i],
@@ -323,6 +370,35 @@ def bulk_bodies(found: Columns, source: str, files: dict[str, list[Body]]) -> li
             collider=shapes[i],
         )
     return out
+
+
+def _primitive_reach(kinds: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """A bound of |v| over each primitive (the radius of a ball about its origin that holds
+    it, and so its inscribed tessellation), a little over: the world check's reach."""
+    radius, length = lengths[:, 0], lengths[:, 1]
+    box = 0.5 * np.sqrt((lengths * lengths).sum(axis=1))
+    reach = np.select(
+        [kinds == _SPHERE, kinds == _BOX, kinds == _CAPSULE],
+        [radius, box, radius + 0.5 * length],
+        np.hypot(radius, 0.5 * length),
+    )
+    return reach * (1.0 + 1e-12)
+
+
+_SPHERE, _BOX, _CAPSULE, _CYLINDER = (
+    PRIMITIVE_TYPES.index(k) for k in ("sphere", "box", "capsule", "cylinder")
+)
+
+
+def _primitive(kind: int, lengths: list[float]) -> Primitive:
+    """A body's primitive from its columns' type and lengths, as the body loop builds it
+    from the same numbers."""
+    a, b, c = lengths
+    if kind == _BOX:
+        return Box((a, b, c))
+    if kind == _SPHERE:
+        return Sphere(a)
+    return Capsule(a, b) if kind == _CAPSULE else Cylinder(a, b)
 
 
 def _plain_objects(

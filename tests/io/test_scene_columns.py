@@ -185,6 +185,17 @@ optional = {
 }
 
 
+primitives = st.one_of(
+    st.fixed_dictionaries({"type": st.just("sphere"), "radius": positive}),
+    st.fixed_dictionaries(
+        {"type": st.just("box"), "size": st.lists(positive, min_size=3, max_size=3)}
+    ),
+    st.fixed_dictionaries(
+        {"type": st.sampled_from(["capsule", "cylinder"]), "radius": positive, "length": positive}
+    ),
+)
+
+
 @st.composite
 def manifests(draw):
     names = st.sampled_from(["a", "b", "c", "d", "e", "f", "g", "h"])
@@ -194,7 +205,7 @@ def manifests(draw):
         if draw(st.integers(0, 5)):
             body["mesh"] = draw(st.sampled_from(MESHES[:1] * 4 + MESHES))
         else:
-            body["primitive"] = {"type": "sphere", "radius": draw(positive)}
+            body["primitive"] = draw(primitives)
         for field in draw(st.sets(st.sampled_from(sorted(optional)), max_size=3)):
             body[field] = draw(optional[field])
         bodies.append(body)
