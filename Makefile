@@ -9,7 +9,7 @@ PIP    := $(BIN)/python -m pip --disable-pip-version-check
 BUILD_TOOLS := $(if $(shell command -v cmake),,"cmake>=3.18") $(if $(shell command -v ninja),,ninja)
 BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4" $(BUILD_TOOLS)
 
-.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs test-cpp test-sanitize
+.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs test-cpp test-sanitize robots-wild
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -131,6 +131,13 @@ bench: install-test
 	$(BIN)/python benchmarks/bench_scale.py --sizes 1000 10000
 	$(BIN)/python benchmarks/bench_decompose.py
 	$(BIN)/python benchmarks/bench_inspect.py --rounds 1
+
+# Robots from the wild: every robot of example-robot-data, gymnasium and dm_control checked,
+# rebuilt (--to urdf, mjcf, usd) and loaded by pybullet, yourdfpy, MuJoCo and usd-core.
+robots-wild: install-test
+	$(PIP) install -q --no-build-isolation -e ".[robots-wild]"
+	@mkdir -p benchmarks/.cache
+	$(BIN)/python benchmarks/bench_robots_wild.py --json benchmarks/.cache/robots-wild.json
 
 clean:
 	rm -rf build dist $(VENV) .venv-lowest $(SANITIZE_VENV) demo-out *.egg-info

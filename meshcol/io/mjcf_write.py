@@ -77,7 +77,10 @@ def mjcf_text(robot: RobotColliders, files: dict[int, list[str]], stage: str, ou
     _absolute_asset_files(spec, robot.source if robot.kind == "mjcf" else None)
     spec.meshdir = ""
     spec.texturedir = ""
-    _compile(mujoco, spec, robot.source)
+    excludes = _add_excludes(spec, robot)
+    notes = _bound_inertia(mujoco, spec, robot.source)
+    if excludes:
+        notes.insert(0, f"{excludes} <contact><exclude> pair(s) written: {_EXCLUDE_NOTE}")
     markers = _mark(mujoco, spec, exact)
     try:
         text = spec.to_xml()
@@ -85,7 +88,75 @@ def mjcf_text(robot: RobotColliders, files: dict[int, list[str]], stage: str, ou
         raise SceneError(
             f"MuJoCo cannot write the rebuilt model: {' '.join(str(exc).split())}", robot.source
         ) from None
-    return _relative_files(_exact_geoms(text, markers), stage_abs, os.path.abspath(out_dir))
+    text = _relative_files(_exact_geoms(text, markers), stage_abs, os.path.abspath(out_dir))
+    return _with_notes(text, notes)
+
+
+#: What the written ``<contact><exclude>`` elements are, for the note at the top of the file.
+_EXCLUDE_NOTE = (
+    "the link pairs meshcol leaves out of self-collision (adjacent links, SRDF pairs) that "
+    "MuJoCo's own parent-child filter misses (a child of a body welded to the world)"
+)
+
+#: Lower bounds MuJoCo's compiler puts on a moving body's mass (kg) and inertia (kg m^2)
+#: when the model does not compile without them (``<compiler boundmass boundinertia>``).
+BOUND_MASS = 1e-3
+BOUND_INERTIA = 1e-6
+
+
+def _add_excludes(spec: Any, robot: RobotColliders) -> int:
+    """A ``<contact><exclude>`` for each pair meshcol excludes but MuJoCo's own filters (MJCF
+    excludes, welds, contype/conaffinity) do not already cover; how many were added."""
+    bodies = {body.name for body in spec.bodies}
+    present = {tuple(sorted((e.bodyname1, e.bodyname2))) for e in spec.excludes}
+    added = 0
+    for a, b, reason in robot.excluded_pairs:
+        key = tuple(sorted((a, b)))
+        if reason.startswith("mjcf") or key in present or a not in bodies or b not in bodies:
+            continue
+        spec.add_exclude(bodyname1=key[0], bodyname2=key[1])
+        present.add(key)
+        added += 1
+    return added
+
+
+def _bound_inertia(mujoco: Any, spec: Any, source: str) -> list[str]:
+    """Compile; a model MuJoCo rejects for a moving body's mass or inertia below ``mjMINVAL``
+    (URDF links of near-zero inertia, a quadruped's motor links) or for an inertia that breaks
+    the triangle inequality is compiled again with MuJoCo's own remedies, as converters do:
+    ``<compiler boundmass boundinertia>`` (:data:`BOUND_MASS`, :data:`BOUND_INERTIA`: lower
+    bounds on every body's mass and inertia but the world's) and ``balanceinertia``; the note
+    saying so (MuJoCo writes the bounded inertials, so the file reloads as compiled)."""
+    try:
+        spec.compile()
+        return []
+    except Exception as exc:  # noqa: BLE001 - as _spec
+        why = " ".join(str(exc).split())
+        if "mjMINVAL" not in why and "A + B >= C" not in why:
+            raise SceneError(f"MuJoCo rejects the rebuilt model: {why}", source) from None
+    spec.compiler.balanceinertia = True
+    spec.compiler.boundmass = max(float(spec.compiler.boundmass), BOUND_MASS)
+    spec.compiler.boundinertia = max(float(spec.compiler.boundinertia), BOUND_INERTIA)
+    _compile(mujoco, spec, source)
+    return [
+        f"MuJoCo rejected the model as written ({why}); compiled with <compiler "
+        f'boundmass="{BOUND_MASS:g}" boundinertia="{BOUND_INERTIA:g}" balanceinertia="true"> '
+        "(MuJoCo's lower bounds on the mass and inertia of moving bodies), as converters do"
+    ]
+
+
+def _with_notes(text: str, notes: list[str]) -> str:
+    """The XML with one comment per note after its root's opening tag ("meshcol: ...")."""
+    if not notes:
+        return text
+    from lxml import etree
+
+    root = etree.fromstring(text.encode("utf-8"))
+    for k, note in enumerate(notes):
+        comment = etree.Comment(f" meshcol: {note.replace('--', '- -')} ")
+        comment.tail = "\n  "
+        root.insert(k, comment)
+    return etree.tostring(root, encoding="unicode") + "\n"
 
 
 def _spec_of_urdf(
