@@ -69,8 +69,9 @@ def mjcf_text(robot: RobotColliders, files: dict[int, list[str]], stage: str, ou
     ``robot.colliders``), written in ``stage`` and moved to ``out_dir`` afterwards."""
     mujoco = _mujoco(robot.source)
     stage_abs = os.path.abspath(stage)
+    notes: list[str] = []
     if robot.kind == "urdf":
-        spec, exact = _spec_of_urdf(mujoco, robot, files, stage_abs)
+        spec, exact = _spec_of_urdf(mujoco, robot, files, stage_abs, notes)
     else:
         spec, exact = _spec_of_mjcf(mujoco, robot, files, stage_abs)
     # Files by absolute path for MuJoCo's check and writer, then relative to OUT in the text.
@@ -78,9 +79,11 @@ def mjcf_text(robot: RobotColliders, files: dict[int, list[str]], stage: str, ou
     spec.meshdir = ""
     spec.texturedir = ""
     excludes = _add_excludes(spec, robot)
-    notes = _bound_inertia(mujoco, spec, robot.source)
+    bounds = _bound_inertia(mujoco, spec, robot.source)
     if excludes:
-        notes.insert(0, f"{excludes} <contact><exclude> pair(s) written: {_EXCLUDE_NOTE}")
+        notes.append(f"{excludes} <contact><exclude> pair(s) written: {_EXCLUDE_NOTE}")
+    if bounds:
+        notes.append(bounds)
     markers = _mark(mujoco, spec, exact)
     try:
         text = spec.to_xml()
@@ -89,13 +92,14 @@ def mjcf_text(robot: RobotColliders, files: dict[int, list[str]], stage: str, ou
             f"MuJoCo cannot write the rebuilt model: {' '.join(str(exc).split())}", robot.source
         ) from None
     text = _relative_files(_exact_geoms(text, markers), stage_abs, os.path.abspath(out_dir))
-    return _with_notes(text, notes)
+    return _with_notes(text, notes, spec.compiler if bounds else None)
 
 
 #: What the written ``<contact><exclude>`` elements are, for the note at the top of the file.
 _EXCLUDE_NOTE = (
-    "the link pairs meshcol leaves out of self-collision (adjacent links, SRDF pairs) that "
-    "MuJoCo's own parent-child filter misses (a child of a body welded to the world)"
+    "the link pairs meshcol leaves out of self-collision (adjacent links, SRDF pairs), so that "
+    "MuJoCo leaves them out too (its own parent-child filter misses the child of a body "
+    "welded to the world)"
 )
 
 #: Lower bounds MuJoCo's compiler puts on a moving body's mass (kg) and inertia (kg m^2)
@@ -120,38 +124,93 @@ def _add_excludes(spec: Any, robot: RobotColliders) -> int:
     return added
 
 
-def _bound_inertia(mujoco: Any, spec: Any, source: str) -> list[str]:
-    """Compile; a model MuJoCo rejects for a moving body's mass or inertia below ``mjMINVAL``
-    (URDF links of near-zero inertia, a quadruped's motor links) or for an inertia that breaks
-    the triangle inequality is compiled again with MuJoCo's own remedies, as converters do:
-    ``<compiler boundmass boundinertia>`` (:data:`BOUND_MASS`, :data:`BOUND_INERTIA`: lower
-    bounds on every body's mass and inertia but the world's) and ``balanceinertia``; the note
-    saying so (MuJoCo writes the bounded inertials, so the file reloads as compiled)."""
-    try:
-        spec.compile()
-        return []
-    except Exception as exc:  # noqa: BLE001 - as _spec
-        why = " ".join(str(exc).split())
-        if "mjMINVAL" not in why and "A + B >= C" not in why:
-            raise SceneError(f"MuJoCo rejects the rebuilt model: {why}", source) from None
+def _bound_inertia(mujoco: Any, spec: Any, source: str) -> str | None:
+    """Compile; a model MuJoCo rejects for a body's mass or inertia (below ``mjMINVAL`` on a
+    moving body, as a quadruped's motor links; breaking the triangle inequality; a full
+    inertia that is not positive definite) is compiled again with MuJoCo's own remedies, as
+    converters do: ``<compiler boundmass boundinertia balanceinertia>`` (:data:`BOUND_MASS`,
+    :data:`BOUND_INERTIA`: lower bounds on every body's mass and inertia but the world's),
+    and if that is not enough ``inertiafromgeom="true"`` (every inertia from the body's
+    geoms); the note saying so."""
+    why = _inertia_rejection(spec, source)
+    if why is None:
+        return None
+    from_geoms = _inertia_from_geoms(spec)
     spec.compiler.balanceinertia = True
     spec.compiler.boundmass = max(float(spec.compiler.boundmass), BOUND_MASS)
     spec.compiler.boundinertia = max(float(spec.compiler.boundinertia), BOUND_INERTIA)
+    remedy = f'boundmass="{BOUND_MASS:g}" boundinertia="{BOUND_INERTIA:g}" balanceinertia="true"'
+    if _inertia_rejection(spec, source) is not None:
+        spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_TRUE
+        remedy += ' inertiafromgeom="true"'
     _compile(mujoco, spec, source)
-    return [
-        f"MuJoCo rejected the model as written ({why}); compiled with <compiler "
-        f'boundmass="{BOUND_MASS:g}" boundinertia="{BOUND_INERTIA:g}" balanceinertia="true"> '
-        "(MuJoCo's lower bounds on the mass and inertia of moving bodies), as converters do"
-    ]
+    geoms = (
+        f"; the inertia of {', '.join(repr(name) for name in from_geoms)} (not positive "
+        "definite) from its geoms"
+        if from_geoms
+        else ""
+    )
+    return (
+        f"MuJoCo rejected the model as written ({why}); compiled with <compiler {remedy}> "
+        f"(MuJoCo's remedies for the masses and inertias of bodies){geoms}, as converters do"
+    )
 
 
-def _with_notes(text: str, notes: list[str]) -> str:
-    """The XML with one comment per note after its root's opening tag ("meshcol: ...")."""
+def _inertia_from_geoms(spec: Any) -> list[str]:
+    """Bodies whose full inertia is not positive definite (MuJoCo refuses it before any
+    bound applies) get their inertial from their geoms instead; their names."""
+    names = []
+    for body in spec.bodies:
+        full = np.asarray(body.fullinertia, dtype=np.float64)
+        if not body.explicitinertial or not np.all(np.isfinite(full)):
+            continue
+        matrix = np.array(
+            [[full[0], full[3], full[4]], [full[3], full[1], full[5]], [full[4], full[5], full[2]]]
+        )
+        if np.linalg.eigvalsh(matrix).min() <= 0.0:
+            body.explicitinertial = False
+            body.fullinertia = [np.nan] * 6
+            names.append(body.name)
+    return names
+
+
+#: Words of MuJoCo's compiler errors about a body's mass or inertia.
+_INERTIA_ERRORS = ("mjMINVAL", "A + B >= C", "positive eigenvalues")
+
+
+def _inertia_rejection(spec: Any, source: str) -> str | None:
+    """None when the spec compiles; MuJoCo's words when it rejects a mass or inertia; any
+    other rejection is a SceneError."""
+    try:
+        spec.compile()
+        return None
+    except Exception as exc:  # noqa: BLE001 - as _spec
+        why = " ".join(str(exc).split())
+    if not any(words in why for words in _INERTIA_ERRORS):
+        raise SceneError(f"MuJoCo rejects the rebuilt model: {why}", source) from None
+    return why
+
+
+def _with_notes(text: str, notes: list[str], compiler: Any = None) -> str:
+    """The XML with one comment per note after its root's opening tag ("meshcol: ..."), and
+    with ``compiler``: the bounds :func:`_bound_inertia` set on ``<compiler>`` (MuJoCo's
+    writer leaves ``balanceinertia`` out, and the file must compile as it did here)."""
     if not notes:
         return text
     from lxml import etree
 
     root = etree.fromstring(text.encode("utf-8"))
+    if compiler is not None:
+        element = root.find("compiler")
+        if element is None:
+            element = etree.Element("compiler")
+            element.tail = "\n  "
+            root.insert(0, element)
+        element.set("boundmass", format_numbers([compiler.boundmass]))
+        element.set("boundinertia", format_numbers([compiler.boundinertia]))
+        element.set("balanceinertia", "true")
+        if int(compiler.inertiafromgeom) == 1:  # mjINERTIAFROMGEOM_TRUE
+            element.set("inertiafromgeom", "true")
     for k, note in enumerate(notes):
         comment = etree.Comment(f" meshcol: {note.replace('--', '- -')} ")
         comment.tail = "\n  "
@@ -160,11 +219,11 @@ def _with_notes(text: str, notes: list[str]) -> str:
 
 
 def _spec_of_urdf(
-    mujoco: Any, robot: RobotColliders, files: dict[int, list[str]], stage: str
+    mujoco: Any, robot: RobotColliders, files: dict[int, list[str]], stage: str, notes: list[str]
 ) -> tuple[Any, list[Any]]:
     """The rebuilt URDF as MuJoCo imports it, visual geoms in group 2 and collision geoms in
     group 3; and the geoms of its fitted primitives (written at full precision)."""
-    spec = _spec_from_urdf(mujoco, robot, files, stage)
+    spec = _spec_from_urdf(mujoco, robot, files, stage, notes)
     exact = _imported_primitives(mujoco, spec, robot)
     for geom in spec.geoms:
         if geom.contype == 0 and geom.conaffinity == 0:
@@ -442,10 +501,11 @@ def _absolute_asset_files(spec: Any, mjcf: str | None) -> None:
 
 
 def _spec_from_urdf(
-    mujoco: Any, robot: RobotColliders, files: dict[int, list[str]], stage: str
+    mujoco: Any, robot: RobotColliders, files: dict[int, list[str]], stage: str, notes: list[str]
 ) -> Any:
     """MuJoCo's URDF importer on the rebuilt URDF: every mesh by absolute path, COLLADA and
-    other visual meshes MuJoCo does not read converted to OBJ in the stage."""
+    other visual meshes MuJoCo does not read converted to OBJ in the stage; a visual mesh
+    that has no triangles to convert (a COLLADA of lines only) is left out, with a note."""
     from lxml import etree
 
     text = urdf_text(robot, files, {"collider": stage + os.sep})
@@ -462,7 +522,15 @@ def _spec_from_urdf(
                         robot.source,
                     )
                 if Path(path).suffix.lower() not in _MUJOCO_MESH_FORMATS:
-                    path = converted.get(path) or _convert_visual(path, stage, converted, robot)
+                    try:
+                        path = converted.get(path) or _convert_visual(path, stage, converted)
+                    except MeshcolError as error:
+                        link.remove(visual)
+                        notes.append(
+                            f"link {link.get('name')!r}: visual mesh {reference!r} left out "
+                            f"({error.message})"
+                        )
+                        break
                 mesh.set("filename", path)
     extension = root.find("mujoco")
     if extension is None:
@@ -478,15 +546,13 @@ def _spec_from_urdf(
     return _spec(mujoco, robot.source, lambda: mujoco.MjSpec.from_string(xml))
 
 
-def _convert_visual(path: str, stage: str, converted: dict[str, str], robot: RobotColliders) -> str:
-    """A visual mesh MuJoCo cannot read, as one OBJ in the stage (``visual_<stem>.obj``)."""
+def _convert_visual(path: str, stage: str, converted: dict[str, str]) -> str:
+    """A visual mesh MuJoCo cannot read, as one OBJ in the stage (``visual_<stem>.obj``);
+    the reader's error (MeshcolError) for a file it cannot read."""
     from meshcol.io.mesh_read import load_mesh
     from meshcol.io.mesh_write import safe_name, write_meshes
 
-    try:
-        bodies = load_mesh(path, collada=True)
-    except MeshcolError as error:
-        raise SceneError(f"visual mesh {path}: {error.message}", robot.source) from None
+    bodies = load_mesh(path, collada=True)
     vertices, faces, base = [], [], 0
     for body in bodies:
         vertices.append(body.vertices @ body.pose[:3, :3].T + body.pose[:3, 3])

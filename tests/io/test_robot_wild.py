@@ -342,10 +342,18 @@ def test_mjcf_written_excludes_what_meshcol_excludes(samples, tmp_path, name):
     assert rest_contacts(written, excluded) == []
 
 
-def test_near_zero_inertia_links_are_bounded_as_converters_do(tmp_path):
+@pytest.mark.parametrize(
+    "base_inertia, words",
+    [
+        ('ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"', "mjMINVAL"),
+        # a full inertia that is not positive definite (anymal's base in example-robot-data)
+        ('ixx="0.01" ixy="0.05" ixz="0" iyy="0.01" iyz="0" izz="0.01"', "positive eigenvalues"),
+    ],
+)
+def test_near_zero_inertia_links_are_bounded_as_converters_do(tmp_path, base_inertia, words):
     mujoco = pytest.importorskip("mujoco")
-    body = """
-<link name="base"><inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial>
+    body = f"""
+<link name="base"><inertial><mass value="1"/><inertia {base_inertia}/></inertial>
   <collision><geometry><box size="0.2 0.2 0.2"/></geometry></collision></link>
 <link name="motor"><inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial>
   <collision><origin xyz="0 0 0.3"/><geometry><sphere radius="0.05"/></geometry></collision></link>
@@ -357,7 +365,7 @@ def test_near_zero_inertia_links_are_bounded_as_converters_do(tmp_path):
     assert code == 0, err
     text = (tmp_path / "out" / "quad.xml").read_text()
     assert 'boundmass="0.001"' in text and 'boundinertia="1e-06"' in text
-    assert "meshcol: MuJoCo rejected the model as written" in text and "mjMINVAL" in text
+    assert "meshcol: MuJoCo rejected the model as written" in text and words in text
     model = mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "quad.xml"))
     motor = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "motor")
     assert model.body_mass[motor] == pytest.approx(1e-3)
@@ -464,3 +472,70 @@ def test_sample_arm_checks_with_its_fingers_touching(samples, tmp_path):
     pairs = json.loads((tmp_path / "c.json").read_text())["pairs"]
     touching = [(p["body_a"], p["body_b"]) for p in pairs if p["status"] == "contact"]
     assert touching == [("finger_left", "finger_right")]
+
+
+# --- what the sweep of the collections found ---------------------------------------------------
+
+
+def test_link_names_that_are_no_usd_identifiers_are_written(tmp_path):
+    pytest.importorskip("pxr", reason="pip install 'meshcol[usd]'")
+    from pxr import Usd, UsdPhysics
+
+    body = (
+        "<link name='link_8.0'><collision><geometry><box size='0.1 0.1 0.1'/></geometry>"
+        "</collision></link>"
+    )
+    robot = write(tmp_path, "hand.urdf", urdf(body))
+    code, _, err = run("hull", str(robot), "--out-dir", str(tmp_path / "out"), "--to", "usd")
+    assert code == 0, err
+    stage = Usd.Stage.Open(str(tmp_path / "out" / "hand.usda"))
+    colliders = [p for p in stage.Traverse() if p.HasAPI(UsdPhysics.CollisionAPI)]
+    assert [p.GetName() for p in colliders] == ["link_8_0_box0"]
+
+
+def test_mjcf_of_a_urdf_leaves_out_a_visual_without_triangles(tmp_path):
+    mujoco = pytest.importorskip("mujoco")
+    lines_only = """<?xml version="1.0"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <library_geometries><geometry id="g"><mesh>
+    <source id="p"><float_array id="pa" count="6">0 0 0 1 0 0</float_array>
+      <technique_common><accessor source="#pa" count="2" stride="3">
+        <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
+      </accessor></technique_common></source>
+    <vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
+    <lines count="1"><input semantic="VERTEX" source="#v" offset="0"/><p>0 1</p></lines>
+  </mesh></geometry></library_geometries>
+  <library_visual_scenes><visual_scene id="s"><node id="n">
+    <instance_geometry url="#g"/></node></visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#s"/></scene>
+</COLLADA>
+"""
+    write(tmp_path, "foot.dae", lines_only)
+    body = (
+        "<link name='foot'><visual><geometry><mesh filename='foot.dae'/></geometry></visual>"
+        "<collision><geometry><sphere radius='0.05'/></geometry></collision></link>"
+    )
+    robot = write(tmp_path, "leg.urdf", urdf(body))
+    code, _, err = run("hull", str(robot), "--out-dir", str(tmp_path / "out"), "--to", "mjcf")
+    assert code == 0, err
+    text = (tmp_path / "out" / "leg.xml").read_text()
+    assert "link 'foot': visual mesh 'foot.dae' left out" in text
+    mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "leg.xml"))
+
+
+def test_an_unranged_slide_joint_is_held_not_refused(tmp_path):
+    pytest.importorskip("mujoco")
+    text = """<mujoco><worldbody><body name="torso">
+      <joint name="rootx" type="slide" axis="1 0 0"/><geom type="sphere" size="0.1"/>
+      <body name="leg" pos="0 0 -0.3"><joint name="knee" axis="0 1 0" range="-1 1"/>
+        <geom type="capsule" size="0.05" fromto="0 0 0 0 0 -0.3"/></body>
+    </body></worldbody></mujoco>"""
+    path = write(tmp_path, "walker.xml", text)
+    code, _, err = run("check", str(path), "--report", str(tmp_path / "c.json"))
+    assert code == 0, err
+    code, _, err = run("collision-matrix", str(path), "--samples", "10", "--report",
+                       str(tmp_path / "m.json"))  # fmt: skip
+    assert code == 0, err
+    report = json.loads((tmp_path / "m.json").read_text())
+    assert [j["name"] for j in report["joints"]] == ["knee"]
+    assert any("joint 'rootx' is a slide joint without a range" in w for w in report["warnings"])
