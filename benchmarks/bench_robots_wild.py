@@ -43,6 +43,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+#: The folder the script was started from (it then works in a scratch folder).
+ORIGIN = Path.cwd()
 #: Seconds one meshcol command may take before the row says "timeout".
 TIMEOUT = 600
 #: Steps simulated in MuJoCo.
@@ -302,7 +304,10 @@ def main() -> int:
         "--table", type=Path, nargs="+", default=None, help="print the table of --json files"
     )
     args = parser.parse_args()
+    if args.json is not None:
+        args.json = ORIGIN / args.json
     if args.table:
+        args.table = [ORIGIN / file for file in args.table]
         merged: dict[str, dict] = {}
         for file in args.table:  # a later file's row for the same robot wins
             merged.update((row["path"], row) for row in json.loads(file.read_text()))
@@ -330,4 +335,6 @@ def main() -> int:
 
 if __name__ == "__main__":
     os.environ.setdefault("PYTHONHASHSEED", "0")
-    sys.exit(main())
+    with tempfile.TemporaryDirectory() as scratch:
+        os.chdir(scratch)  # MuJoCo writes MUJOCO_LOG.TXT into the working folder
+        sys.exit(main())
