@@ -539,3 +539,53 @@ def test_an_unranged_slide_joint_is_held_not_refused(tmp_path):
     report = json.loads((tmp_path / "m.json").read_text())
     assert [j["name"] for j in report["joints"]] == ["knee"]
     assert any("joint 'rootx' is a slide joint without a range" in w for w in report["warnings"])
+
+
+# --- a few robots of the real collections (benchmarks/bench_robots_wild.py runs them all) -----
+
+
+def collection_file(package: str, *parts: str) -> Path:
+    """A file of an installed collection; the test skips when the package is missing."""
+    import importlib.util
+    import site
+
+    if package == "example-robot-data":
+        for base in site.getsitepackages():
+            path = Path(base, "cmeel.prefix", "share", "example-robot-data", "robots", *parts)
+            if path.is_file():
+                return path
+        pytest.skip("example-robot-data is not installed (pip install 'meshcol[robots-wild]')")
+    spec = importlib.util.find_spec(package)
+    if spec is None or not spec.submodule_search_locations:
+        pytest.skip(f"{package} is not installed (pip install 'meshcol[robots-wild]')")
+    path = Path(next(iter(spec.submodule_search_locations)), *parts)
+    if not path.is_file():
+        pytest.skip(f"{package} has no {'/'.join(parts)}")
+    return path
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "package, parts",
+    [
+        ("example-robot-data", ("ur_description", "urdf", "ur5_robot.urdf")),
+        ("example-robot-data", ("solo_description", "robots", "solo.urdf")),
+        ("gymnasium", ("envs", "mujoco", "assets", "ant.xml")),
+        ("dm_control", ("suite", "cartpole.xml")),
+    ],
+)
+def test_collection_robots_check_and_their_mjcf_rests_without_excluded_contacts(
+    tmp_path, package, parts
+):
+    pytest.importorskip("mujoco")
+    robot = collection_file(package, *parts)
+    code, _, err = run("check", str(robot), "--report", str(tmp_path / "c.json"))
+    assert code in (0, 1), err
+    excluded = {(min(a, b), max(a, b)) for a, b, _ in load_robot(robot).excluded_pairs}
+    code, _, err = run("hull", str(robot), "--out-dir", str(tmp_path / "out"), "--to", "mjcf")
+    assert code == 0, err
+    assert rest_contacts(tmp_path / "out" / f"{robot.stem}.xml", excluded) == []
+    if robot.suffix == ".urdf":
+        code, _, err = run("hull", str(robot), "--out-dir", str(tmp_path / "urdf"))
+        assert code == 0, err
+        assert pybullet_collision_extent(tmp_path / "urdf" / robot.name)
