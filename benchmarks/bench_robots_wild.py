@@ -110,7 +110,9 @@ def meshcol(*args: str) -> tuple[int, str]:
     except subprocess.TimeoutExpired:
         return 124, f"timeout after {TIMEOUT} s"
     lines = [line for line in done.stderr.splitlines() if line.strip()]
-    return done.returncode, (lines[-1] if lines else "")
+    last = lines[-1] if lines else ""
+    # "meshcol: error: /long/path/robot.urdf: what" -> "what"
+    return done.returncode, last.split(".urdf: ", 1)[-1].split(".xml: ", 1)[-1]
 
 
 def excluded_pairs(robot: Path) -> set[tuple[str, str]]:

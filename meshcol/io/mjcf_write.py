@@ -135,6 +135,17 @@ def _bound_inertia(mujoco: Any, spec: Any, source: str) -> str | None:
     why = _inertia_rejection(spec, source)
     if why is None:
         return None
+    first, shells = why, _shell_inertias(mujoco, spec, source, why)
+    if shells:
+        why = _inertia_rejection(spec, source)
+        shell = f'; mesh(es) {", ".join(repr(n) for n in shells)} with inertia="shell"'
+        if why is None:
+            return (
+                f"MuJoCo rejected the model as written ({first}); compiled{shell[1:]} (a "
+                "mesh too thin for a volume inertia, MuJoCo's advice), as converters do"
+            )
+    else:
+        shell = ""
     from_geoms = _inertia_from_geoms(spec)
     spec.compiler.balanceinertia = True
     spec.compiler.boundmass = max(float(spec.compiler.boundmass), BOUND_MASS)
@@ -151,9 +162,28 @@ def _bound_inertia(mujoco: Any, spec: Any, source: str) -> str | None:
         else ""
     )
     return (
-        f"MuJoCo rejected the model as written ({why}); compiled with <compiler {remedy}> "
-        f"(MuJoCo's remedies for the masses and inertias of bodies){geoms}, as converters do"
+        f"MuJoCo rejected the model as written ({first}); compiled with <compiler {remedy}> "
+        f"(MuJoCo's remedies for the masses and inertias of bodies){geoms}{shell}, as "
+        "converters do"
     )
+
+
+def _shell_inertias(mujoco: Any, spec: Any, source: str, why: str | None) -> list[str]:
+    """While MuJoCo rejects a mesh whose volume is too small for its inertia (a visual mesh
+    of open or paper-thin surfaces), that mesh gets ``inertia="shell"``, as MuJoCo advises;
+    the names of those meshes."""
+    import re
+
+    shells: list[str] = []
+    while why is not None and "mesh volume is too small" in why:
+        found = re.search(r"too small: (.+?) \. Try", why)
+        mesh = spec.mesh(found.group(1)) if found else None
+        if mesh is None or mesh.name in shells:
+            break
+        mesh.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL
+        shells.append(mesh.name)
+        why = _inertia_rejection(spec, source)
+    return shells
 
 
 def _inertia_from_geoms(spec: Any) -> list[str]:
@@ -175,7 +205,7 @@ def _inertia_from_geoms(spec: Any) -> list[str]:
 
 
 #: Words of MuJoCo's compiler errors about a body's mass or inertia.
-_INERTIA_ERRORS = ("mjMINVAL", "A + B >= C", "positive eigenvalues")
+_INERTIA_ERRORS = ("mjMINVAL", "A + B >= C", "positive eigenvalues", "mesh volume is too small")
 
 
 def _inertia_rejection(spec: Any, source: str) -> str | None:

@@ -589,3 +589,20 @@ def test_collection_robots_check_and_their_mjcf_rests_without_excluded_contacts(
         code, _, err = run("hull", str(robot), "--out-dir", str(tmp_path / "urdf"))
         assert code == 0, err
         assert pybullet_collision_extent(tmp_path / "urdf" / robot.name)
+
+
+def test_a_visual_mesh_too_thin_for_a_volume_inertia_gets_a_shell_inertia(tmp_path):
+    mujoco = pytest.importorskip("mujoco")
+    write(tmp_path, "nub.obj", "v 0 0 0\nv 0.01 0 0\nv 0 0.01 0\nv 0.01 0.01 0\nf 1 2 3\nf 2 4 3\n")
+    body = (
+        "<link name='hand'><inertial><mass value='1'/><inertia ixx='0.01' ixy='0' ixz='0' "
+        "iyy='0.01' iyz='0' izz='0.01'/></inertial>"
+        "<visual><geometry><mesh filename='nub.obj'/></geometry></visual>"
+        "<collision><geometry><sphere radius='0.05'/></geometry></collision></link>"
+    )
+    robot = write(tmp_path, "hand.urdf", urdf(body))
+    code, _, err = run("hull", str(robot), "--out-dir", str(tmp_path / "out"), "--to", "mjcf")
+    assert code == 0, err
+    text = (tmp_path / "out" / "hand.xml").read_text()
+    assert "mesh volume is too small" in text and 'with inertia="shell"' in text
+    mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "hand.xml"))
