@@ -515,18 +515,21 @@ def _compile(mujoco: Any, spec: Any, source: str) -> Any:
 
 
 def _absolute_asset_files(spec: Any, mjcf: str | None) -> None:
-    """Each mesh, height field and texture file by its absolute path."""
+    """Each mesh, height field, texture and skin file by its absolute path."""
     base = spec.modelfiledir or (os.path.dirname(os.path.abspath(mjcf)) if mjcf else "")
     for assets, folder in (
         (spec.meshes, spec.meshdir),
         (spec.hfields, spec.meshdir),
         (spec.textures, spec.texturedir),
+        (spec.skins, spec.meshdir),
     ):
         for asset in assets:
             file = getattr(asset, "file", "")
             if not file:
                 continue
             path = file if os.path.isabs(file) else os.path.join(base, folder or "", file)
+            if not os.path.isfile(path) and os.path.isfile(os.path.join(base, file)):
+                path = os.path.join(base, file)  # a skin MuJoCo found beside the model
             asset.file = os.path.abspath(path)
 
 
