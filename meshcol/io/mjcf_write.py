@@ -538,7 +538,8 @@ def _spec_from_urdf(
 ) -> Any:
     """MuJoCo's URDF importer on the rebuilt URDF: every mesh by absolute path, COLLADA and
     other visual meshes MuJoCo does not read converted to OBJ in the stage; a visual mesh
-    that has no triangles to convert (a COLLADA of lines only) is left out, with a note."""
+    that is not found or has no triangles to convert (a COLLADA of lines only) is left out,
+    with a note."""
     from lxml import etree
 
     text = urdf_text(robot, files, {"collider": stage + os.sep})
@@ -549,21 +550,18 @@ def _spec_from_urdf(
             for mesh in visual.iter("mesh"):
                 reference = mesh.get("filename") or ""
                 path = resolve_mesh_reference(robot.source, reference, robot.package_paths)
-                if path is None or not os.path.isfile(path):
-                    raise SceneError(
-                        f"link {link.get('name')!r}: visual mesh {reference!r} not found",
-                        robot.source,
-                    )
-                if Path(path).suffix.lower() not in _MUJOCO_MESH_FORMATS:
-                    try:
+                try:
+                    if path is None or not os.path.isfile(path):
+                        raise SceneError("not found", robot.source)
+                    if Path(path).suffix.lower() not in _MUJOCO_MESH_FORMATS:
                         path = converted.get(path) or _convert_visual(path, stage, converted)
-                    except MeshcolError as error:
-                        link.remove(visual)
-                        notes.append(
-                            f"link {link.get('name')!r}: visual mesh {reference!r} left out "
-                            f"({error.message})"
-                        )
-                        break
+                except MeshcolError as error:
+                    link.remove(visual)  # what a link looks like: no collider depends on it
+                    notes.append(
+                        f"link {link.get('name')!r}: visual mesh {reference!r} left out "
+                        f"({error.message})"
+                    )
+                    break
                 mesh.set("filename", path)
     extension = root.find("mujoco")
     if extension is None:

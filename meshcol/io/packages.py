@@ -66,7 +66,7 @@ class PackageResolver:
                 return os.fspath(found / rest), None
         ancestors = [self.folder, *self.folder.parents]
         for folder in ancestors:
-            if folder.name == name:
+            if name and folder.name == name:
                 return os.fspath(folder / rest), None
         for folder in ancestors:
             if rest and (folder / name / rest).is_file():

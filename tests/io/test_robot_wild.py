@@ -79,6 +79,9 @@ def mesh_link(name: str, reference: str) -> str:
         ("package://my_robot/meshes/cube.obj", "meshes/cube.obj", "a/b/r.urdf", "yourdfpy"),
         # NAME beside an ancestor: pybullet's rule, one folder up at a time
         ("package://my_robot/meshes/cube.obj", "my_robot/meshes/cube.obj", "a/b/r.urdf", None),
+        # package:/// with no package name (talos_full_v2 of example-robot-data): the rest
+        # from an ancestor, never the file system's root
+        ("package:///pkg/meshes/cube.obj", "pkg/meshes/cube.obj", "a/r.urdf", None),
         # package://meshes/...: relative to the URDF's folder (pybullet)
         ("package://meshes/cube.obj", "meshes/cube.obj", "r.urdf", "pybullet"),
     ],
@@ -514,12 +517,17 @@ def test_mjcf_of_a_urdf_leaves_out_a_visual_without_triangles(tmp_path):
     body = (
         "<link name='foot'><visual><geometry><mesh filename='foot.dae'/></geometry></visual>"
         "<collision><geometry><sphere radius='0.05'/></geometry></collision></link>"
+        "<link name='toe'><visual><geometry><mesh filename='file:///nowhere/Toe.mesh'/>"
+        "</geometry></visual><collision><geometry><sphere radius='0.02'/></geometry>"
+        "</collision></link><joint name='j' type='fixed'><parent link='foot'/>"
+        "<child link='toe'/><origin xyz='0.1 0 0'/></joint>"
     )
     robot = write(tmp_path, "leg.urdf", urdf(body))
     code, _, err = run("hull", str(robot), "--out-dir", str(tmp_path / "out"), "--to", "mjcf")
     assert code == 0, err
     text = (tmp_path / "out" / "leg.xml").read_text()
     assert "link 'foot': visual mesh 'foot.dae' left out" in text
+    assert "link 'toe': visual mesh 'file:///nowhere/Toe.mesh' left out (not found)" in text
     mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "leg.xml"))
 
 
