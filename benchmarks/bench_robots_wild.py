@@ -117,9 +117,13 @@ def meshcol(*args: str) -> tuple[int, str]:
 
 def excluded_pairs(robot: Path) -> set[tuple[str, str]]:
     """The body pairs meshcol leaves out of self-collision for this robot."""
+    from meshcol.errors import MeshcolError
     from meshcol.io.robot import load_robot
 
-    scene = load_robot(robot)
+    try:
+        scene = load_robot(robot)
+    except MeshcolError:  # check said the same, in its row
+        return set()
     return {(min(a, b), max(a, b)) for a, b, _ in scene.excluded_pairs}
 
 
