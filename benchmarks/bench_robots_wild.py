@@ -283,7 +283,8 @@ def table(rows: list[dict]) -> str:
         "| --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for row in rows:
-        check = f"exit {row['check']}" + (f": {row['note'][:80]}" if row.get("note") else "")
+        note = row.get("note", "").split(".urdf: ", 1)[-1].split(".xml: ", 1)[-1]
+        check = f"exit {row['check']}" + (f": {note[:90]}" if note else "")
         lines.append(
             f"| {row['collection']} | {row['robot']} | {check} | {cell(row, 'urdf')} | "
             f"{cell(row, 'mjcf')} | {cell(row, 'usd')} | {'yes' if verdict(row) else 'NO'} "
