@@ -9,7 +9,7 @@ PIP    := $(BIN)/python -m pip --disable-pip-version-check
 BUILD_TOOLS := $(if $(shell command -v cmake),,"cmake>=3.18") $(if $(shell command -v ninja),,ninja)
 BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4" $(BUILD_TOOLS)
 
-.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs test-cpp test-sanitize robots-wild
+.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs test-cpp test-sanitize gltf-validator robots-wild
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -138,6 +138,11 @@ robots-wild: install-test
 	$(PIP) install -q --no-build-isolation -e ".[robots-wild]"
 	@mkdir -p benchmarks/.cache
 	$(BIN)/python benchmarks/bench_robots_wild.py --json benchmarks/.cache/robots-wild.json
+
+# The Khronos glTF validator (npm package gltf-validator, needs node and npm) in
+# .venv/node/node_modules, where tests/io/test_gltf_physics.py finds it (it skips without).
+gltf-validator: $(BIN)/python
+	npm install --no-fund --no-audit --prefix $(VENV)/node gltf-validator
 
 clean:
 	rm -rf build dist $(VENV) .venv-lowest $(SANITIZE_VENV) demo-out *.egg-info

@@ -9,6 +9,11 @@ Cases, each measured as a user pays it (Python call to geometry in numpy arrays)
   process=False)`` per file, no merge) against ``meshcol.io.mesh_read.load_meshes`` (parsing
   in the core on all cores, merged) and ``load_mesh`` per file (merged).
 - One large OBJ and binary STL (a 1000 x 1000 grid sphere, 2 million triangles).
+- With ``--usd-quads Q``: one USD crate file (``.usdc``) of 8 grid-sphere meshes of quads,
+  Q quads in all, under transformed Xforms, centimetres, Y up (4.5 million quads make
+  about 100 MB): usd-core alone (open the stage, traverse it, every mesh's points, counts and
+  indices copied into numpy arrays) against ``load_mesh`` (that, plus world transforms,
+  triangulation, units and axes; with and without the vertex merge).
 
 Rounds alternate the readers; the range (min-max) over rounds is printed with the ratios.
 """
@@ -70,6 +75,59 @@ def large_sphere() -> dict[str, Path]:
     return paths
 
 
+def usd_level(quads: int) -> Path:
+    """The USD case's file (made once per size)."""
+    from pxr import Gf, Usd, UsdGeom
+
+    path = CACHE / f"level{quads}.usdc"
+    if path.exists():
+        return path
+    CACHE.mkdir(parents=True, exist_ok=True)
+    stage = Usd.Stage.CreateNew(str(path))
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
+    UsdGeom.SetStageMetersPerUnit(stage, 0.01)
+    n = max(4, int(np.sqrt(quads / 8)))
+    theta, phi = np.meshgrid(np.linspace(0.1, np.pi - 0.1, n), np.linspace(0, 2 * np.pi, n))
+    points = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], -1)
+    points = (100.0 * points.reshape(-1, 3)).astype(np.float32)
+    r, c = np.meshgrid(np.arange(n - 1), np.arange(n - 1), indexing="ij")
+    corners = np.stack([r * n + c, r * n + c + 1, (r + 1) * n + c + 1, (r + 1) * n + c], -1)
+    indices = corners.reshape(-1).astype(np.int32)
+    from pxr import Vt
+
+    for k in range(8):
+        xform = UsdGeom.Xform.Define(stage, f"/World/part{k}")
+        xform.AddTranslateOp().Set(Gf.Vec3d(300.0 * k, 0, 0))
+        xform.AddRotateYOp().Set(10.0 * k)
+        mesh = UsdGeom.Mesh.Define(stage, f"/World/part{k}/mesh")
+        mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points))
+        mesh.CreateFaceVertexCountsAttr(
+            Vt.IntArray.FromNumpy(np.full(len(corners.reshape(-1, 4)), 4, np.int32))
+        )
+        mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(indices))
+    stage.GetRootLayer().Save()
+    return path
+
+
+def usd_core_alone(path: Path) -> list:
+    """usd-core's own read of every mesh into numpy arrays: the floor meshcol is held to."""
+    from pxr import Usd, UsdGeom
+
+    stage = Usd.Stage.Open(str(path))
+    out = []
+    for prim in stage.Traverse():
+        if prim.IsA(UsdGeom.Mesh):
+            mesh = UsdGeom.Mesh(prim)
+            out.append(
+                (
+                    np.asarray(mesh.GetPointsAttr().Get(), dtype=np.float64),
+                    np.asarray(mesh.GetFaceVertexCountsAttr().Get(), dtype=np.int64),
+                    np.asarray(mesh.GetFaceVertexIndicesAttr().Get(), dtype=np.int64),
+                )
+            )
+    return out
+
+
 def timed(fn) -> float:
     start = time.perf_counter()
     fn()
@@ -97,7 +155,23 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--files", type=int, default=2000)
     parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--usd-quads", type=int, default=0, help="the USD case's size (0: none)")
+    parser.add_argument("--usd-only", action="store_true", help="only the USD case")
     args = parser.parse_args()
+    if args.usd_quads:
+        path = usd_level(args.usd_quads)
+        compare(
+            f"USD {path.stat().st_size / 1e6:.0f} MB",
+            {
+                "usd-core alone": lambda: usd_core_alone(path),
+                "meshcol load_mesh": lambda: load_mesh(path),
+                "meshcol load_mesh merge=False": lambda: load_mesh(path, merge=False),
+            },
+            max(2, args.rounds // 2),
+            1,
+        )
+    if args.usd_only:
+        return
     files = small_assets(args.files)
     for kind, paths in files.items():
         compare(

@@ -73,7 +73,9 @@ ROBOT_EXTENSIONS = (".urdf", ".mjcf", ".xml")
 
 # -- results ----------------------------------------------------------------------------------
 
-#: A checked pair's status, from the mildest to the worst.
-PAIR_STATUSES = ("separated", "clearance", "contact", "penetrating", "contained")
+#: A checked pair's status, from the mildest to the worst. ``undecided``: the surfaces meet or
+#: may nest, and neither the winding number nor ray parity decides inside from outside (a
+#: non-orientable mesh), so the pair is at least in contact and at most ``depth_upper`` deep.
+PAIR_STATUSES = ("separated", "clearance", "contact", "undecided", "penetrating", "contained")
 #: The same, worst first (the order review pages and summaries list pairs in).
 SEVERITY_ORDER = tuple(reversed(PAIR_STATUSES))

@@ -219,15 +219,15 @@ CASES = [
         "inspect cube.obj --format xml",
         2,
         ERR + r"invalid value for '--format': 'xml' is not one of 'json', 'csv', 'junit', "
-        r"'github', 'tap'" + USAGE,
+        r"'github', 'tap', 'sarif', 'markdown'" + USAGE,
         [],
     ),
     (
         "inspect cube.obj --report out.txt",
         2,
         ERR + r"invalid value for '--report': unknown report extension '\.txt' in 'out\.txt': "
-        r"expected \.json, \.csv, \.xml or \.tap \(or give --format "
-        r"json\|csv\|junit\|github\|tap\)" + USAGE,
+        r"expected \.json, \.csv, \.xml, \.tap, \.sarif or \.md \(or give --format "
+        r"json\|csv\|junit\|github\|tap\|sarif\|markdown\)" + USAGE,
         ["out.txt"],
     ),
     (
@@ -241,8 +241,8 @@ CASES = [
         "decompose cube.obj -o parts --report out.txt",
         2,
         ERR + r"invalid value for '--report': unknown report extension '\.txt' in 'out\.txt': "
-        r"expected \.json, \.csv, \.xml or \.tap \(or give --report-format "
-        r"json\|csv\|junit\|github\|tap\)" + USAGE,
+        r"expected \.json, \.csv, \.xml, \.tap, \.sarif or \.md \(or give --report-format "
+        r"json\|csv\|junit\|github\|tap\|sarif\|markdown\)" + USAGE,
         ["parts", "out.txt"],
     ),
     ("check", 2, ERR + r"missing argument 'INPUT\.\.\.'" + USAGE, []),

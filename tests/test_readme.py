@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import pytest
 from conftest import REPO
@@ -52,3 +53,61 @@ def test_readme_has_a_ci_recipe() -> None:
     text = (REPO / "README.md").read_text()
     assert "## Your assets in CI" in text
     assert "--baseline" in text.split("## Your assets in CI")[1]
+
+
+def test_readme_command_table_names_every_command() -> None:
+    from meshcol.cli import COMMANDS
+
+    text = (REPO / "README.md").read_text().split("## What it does")[1].split("\n\n##")[0]
+    listed = set(re.findall(r"^\| `meshcol ([a-z-]+)`", text, flags=re.M))
+    assert listed == set(COMMANDS), sorted(set(COMMANDS) ^ listed)
+
+
+#: Lines of a live progress display (a slow run on a loaded machine prints them): not part of
+#: what the tour shows.
+_PROGRESS = re.compile(r"^meshcol: [a-z-]+: .*\(\d[^)]* elapsed[^)]*\)$")
+
+
+def _tour() -> list[tuple[str, list[str]]]:
+    """``(command, the lines the README shows it printing)`` for every ``$`` line of the
+    README's tour (from "A short tour" to "Scene manifests")."""
+    text = (REPO / "README.md").read_text().split("## A short tour")[1].split("## Scene")[0]
+    steps: list[tuple[str, list[str]]] = []
+    for block in re.findall(r"```\n(.*?)```", text, flags=re.S):
+        for line in block.splitlines():
+            if line.startswith("$ "):
+                steps.append((line[2:], []))
+            elif steps:
+                steps[-1][1].append(line)
+    return steps
+
+
+def _untimed(line: str) -> str:
+    """Timings and CoACD's part count (its version's) aside."""
+    line = re.sub(r"\(\d+\.\d+ s check, \d+\.\d+ s load\)", "(T)", line)
+    return re.sub(r"\d+ parts$", "N parts", line)
+
+
+@pytest.mark.slow
+def test_every_tour_line_runs_as_printed(tmp_path: Path) -> None:
+    """Issue 29 item 18: the tour's commands run from the repository root as printed (here a
+    copy of its samples, so the outputs land in a temporary folder) and print what the
+    README shows."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+
+    steps = _tour()
+    assert len(steps) >= 6 and all(command.startswith("meshcol ") for command, _ in steps)
+    shutil.copytree(REPO / "samples", tmp_path / "samples")
+    env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}")
+    env["XDG_CACHE_HOME"] = str(tmp_path / "cache")  # a cold decompose cache, the user's kept
+    for command, shown in steps:
+        done = subprocess.run(
+            ["bash", "-c", command], cwd=tmp_path, env=env, capture_output=True, text=True
+        )
+        assert done.returncode in (0, 1), (command, done.stderr)
+        printed = [line for line in done.stderr.splitlines() if not _PROGRESS.match(line)]
+        if shown:  # a line shown without its output is only run
+            assert [_untimed(x) for x in printed] == [_untimed(x) for x in shown], command

@@ -18,7 +18,10 @@ end to end (Python loops run over bodies, never over pairs):
    bound of the minimum translation distance; never the hulls' depth, which calls a concave
    resting contact penetrating) and, when the pair penetrates and both meshes are closed,
    the volume of their intersection (manifold3d).
-6. ``classify``, then the policy (:func:`~meshcol.analysis.check_policy.apply_policy`:
+6. ``depth_bounds``: ``depth_upper``, the penetration depth of convex sets enclosing the two
+   bodies (an upper bound of the minimum translation distance), so that ``depth <= minimum
+   translation distance <= depth_upper``; a depth above it is lowered to it.
+7. ``classify``, then the policy (:func:`~meshcol.analysis.check_policy.apply_policy`:
    ``--fail-on``, ``--ignore``, ``--baseline``), then the report's rows
    (:func:`~meshcol.analysis.check_report.check_report`).
 
@@ -47,6 +50,7 @@ import numpy as np
 from meshcol.analysis.check_policy import FAIL_ON, CheckOptions, apply_policy
 from meshcol.analysis.check_report import CheckReport, check_report
 from meshcol.analysis.colliders import _geometry_key, build_colliders
+from meshcol.analysis.depth_bounds import depth_bounds
 from meshcol.analysis.mesh_phase import mesh_phase
 from meshcol.analysis.pairs import broad_phase, classify, convex_phase, place
 from meshcol.io.robot import RobotOptions
@@ -107,6 +111,7 @@ def check_scene(
     table = broad_phase(placed, options.clearance + options.tolerance, scene.excluded_pairs)
     table = convex_phase(table, placed, options.threads)
     table = mesh_phase(table, placed, options.tolerance, options.threads)
+    table = depth_bounds(table, placed, options.threads)
     table = classify(table, options.tolerance, options.clearance)
     table = apply_policy(table, [body.name for body in colliders.bodies], options)
     seconds = time.perf_counter() - started
@@ -248,10 +253,11 @@ def _prepare_files(
     from meshcol.decomposition.executor import run_each
     from meshcol.errors import MeshcolError
     from meshcol.io.inputs import is_whole_scene
-    from meshcol.io.scene import iter_inputs, load_inputs, unique_name
+    from meshcol.io.scene import is_scene_file, iter_inputs, load_inputs, unique_name
 
     kind, decompose_options = options.collider, options.decompose_options
-    whole = is_whole_scene(inputs)
+    # a USD stage or glTF physics file carries excluded pairs and units: read it here, whole
+    whole = is_whole_scene(inputs) or any(is_scene_file(p) for p in inputs)
     scene: Scene | None = None
     if whole:  # a manifest or robot is read here; its decompositions go out per mesh file
         scene = load_inputs(inputs, robot_options=robot_options)

@@ -40,6 +40,7 @@ FAIL_ON = {
 PAIR_RULES = {
     "clearance": "MC504",
     "contact": "MC503",
+    "undecided": "MC505",
     "penetrating": "MC501",
     "contained": "MC502",
 }

@@ -54,6 +54,9 @@ class CheckReport:
     table : PairTable or None
         The pairs as arrays, row ``i`` the pair ``pairs[i]`` (None for a report read back or
         made by hand).
+    baseline : dict or None
+        The ``--baseline`` report's pairs by sorted body names (``(a, b) -> pair``), for the
+        summaries that show what got worse (None without a baseline).
     """
 
     bodies: list[dict]
@@ -65,6 +68,7 @@ class CheckReport:
     warnings: list[str] = field(default_factory=list)
     findings: list[dict] = field(default_factory=list)
     table: PairTable | None = field(default=None, repr=False, compare=False)
+    baseline: dict | None = field(default=None, repr=False, compare=False)
 
     @property
     def passed(self) -> bool:
@@ -114,6 +118,7 @@ class CheckReport:
         ``--ignore`` rule spares a pair the policy would fail, else passed; the message has
         the status and its numbers. More than :data:`meshcol.io.ci.MAX_PASSED_CASES` passed
         pairs become one case. The file is the scene input, or body_a's file."""
+        from meshcol.analysis.rules import command_rules
         from meshcol.io.ci import CiSuite, collapse_passed
 
         files = {b["name"]: b["file"] for b in self.bodies}
@@ -122,7 +127,8 @@ class CheckReport:
         threshold = FAIL_ON[self.settings["fail_on"]]
         least = SEVERITY[threshold] if threshold is not None else len(PAIR_STATUSES)
         settings = self.settings
-        cases = [_ci_case(p, files, scene, least, settings, self.units) for p in self.pairs]
+        old = self.baseline or {}
+        cases = [_ci_case(p, files, scene, least, settings, self.units, old) for p in self.pairs]
         s = self.summary
         verb = "violates" if s["violations"] == 1 else "violate"
         return CiSuite(
@@ -134,6 +140,8 @@ class CheckReport:
             verdict=f"{s['violations']} of {s['candidate_pairs']} candidate pairs {verb} "
             f"--fail-on {settings['fail_on']}",
             units=self.units,
+            rules={rule.id: rule.to_dict() for rule in command_rules("check")},
+            baseline=settings.get("baseline"),
         )
 
     def to_csv(self) -> str:
@@ -153,6 +161,7 @@ CSV_COLUMNS = [
     "status",
     "distance",
     "depth",
+    "depth_upper",
     "signed_distance",
     *vector_columns("normal"),
     *vector_columns("point_a"),
@@ -174,8 +183,10 @@ def _ci_case(
     least: int,
     settings: dict,
     units: str | None,
+    baseline: dict | None = None,
 ) -> Any:
     """The CI case of one pair of a check report (:meth:`CheckReport.ci_suite`)."""
+    from meshcol.analysis.check_policy import PAIR_RULES
     from meshcol.io.ci import CiCase, details, number
 
     status = pair["status"]
@@ -192,10 +203,17 @@ def _ci_case(
             f"contact: signed distance {number(pair['signed_distance'], units)} (tolerance "
             f"{number(settings['tolerance'], units)})"
         )
+    elif status == "undecided":
+        message = (
+            "undecided: no inside test decides (a non-orientable mesh whose ray parity "
+            f"splits); depth between {number(pair['depth'], units)} and "
+            f"{number(pair['depth_upper'], units)}"
+        )
     else:
         inside = "one body inside the other, " if status == "contained" else ""
         message = (
-            f"{status}: {inside}depth {number(pair['depth'], units)}, signed distance "
+            f"{status}: {inside}depth {number(pair['depth'], units)} (at most "
+            f"{number(pair['depth_upper'], units)}), signed distance "
             f"{number(pair['signed_distance'], units)}"
         )
         if pair["intersection_volume"] is not None:
@@ -222,6 +240,7 @@ def _ci_case(
                 ("part_b", pair["part_b"]),
                 ("distance", pair["distance"]),
                 ("depth", pair["depth"]),
+                ("depth_upper", pair["depth_upper"]),
                 ("signed_distance", pair["signed_distance"]),
                 ("intersection_volume", pair["intersection_volume"]),
                 ("point_a", pair["point_a"]),
@@ -238,6 +257,9 @@ def _ci_case(
         file=scene or files.get(a),
         kind=status,
         details=text,
+        rules=(PAIR_RULES[status],) if status in PAIR_RULES else (),
+        before=(baseline or {}).get(tuple(sorted((a, b)))),
+        numbers={k: pair[k] for k in ("depth", "distance", "signed_distance")},
     )
 
 
@@ -270,7 +292,15 @@ def check_report(
         [*scene.warnings, *colliders.warnings],
         findings,
         table,
+        _baseline_pairs(options.baseline),
     )
+
+
+def _baseline_pairs(baseline: dict | None) -> dict | None:
+    """The ``--baseline`` report's pairs by sorted body names (as the policy reads them)."""
+    if baseline is None:
+        return None
+    return {tuple(sorted((p["body_a"], p["body_b"]))): p for p in baseline.get("pairs", [])}
 
 
 def _report_order(table: PairTable, names: Sequence[str]) -> np.ndarray:
@@ -291,6 +321,7 @@ def pair_rows(table: PairTable, colliders: Any) -> list[dict]:
         table.status.tolist(),
         _nums(table.distance),
         _nums(table.depth),
+        _nums(table.depth_upper),
         _nums(table.signed_distance),
         _vecs(table.normal),
         _vecs(table.point_a),
@@ -313,6 +344,7 @@ def pair_rows(table: PairTable, colliders: Any) -> list[dict]:
             "status": PAIR_STATUSES[status],
             "distance": distance,
             "depth": depth,
+            "depth_upper": depth_upper,
             "signed_distance": signed,
             "normal": normal,
             "point_a": point_a,
@@ -330,6 +362,7 @@ def pair_rows(table: PairTable, colliders: Any) -> list[dict]:
             status,
             distance,
             depth,
+            depth_upper,
             signed,
             normal,
             point_a,

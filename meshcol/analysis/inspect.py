@@ -196,7 +196,8 @@ def _read_inputs(
     ``robot_options``), or mesh files (an unreadable one is an error of the report; not read
     here when ``read_files`` is false)."""
     from meshcol.io.inputs import input_kind
-    from meshcol.io.scene import iter_inputs, load_scene
+    from meshcol.io.mesh_read import load_file_scene
+    from meshcol.io.scene import is_scene_file, iter_inputs, load_scene
 
     kind = input_kind(paths[0]) if len(paths) == 1 else "mesh"
     if kind == "manifest":
@@ -204,6 +205,14 @@ def _read_inputs(
         return _Inputs(list(scene.bodies), scene.units)
     if kind == "robot":
         return _read_robot(paths[0], robot_options)
+    if len(paths) == 1 and is_scene_file(paths[0]):  # USD, glTF physics: units, warnings
+        try:
+            whole = load_file_scene(paths[0])
+        except MeshcolError as error:
+            errors.add(os.fspath(paths[0]), error)
+            return _Inputs([])
+        if whole is not None:
+            return _Inputs(list(whole.bodies), whole.units, None, list(whole.warnings))
     if not read_files:
         return _Inputs(None)
     files = iter_inputs(paths, on_error=errors.add)

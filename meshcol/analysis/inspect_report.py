@@ -192,6 +192,7 @@ class InspectReport:
         finding with its measure: ``not-watertight (12 boundary edges)``), passed otherwise
         (other findings make it worth a warning); one error case per input that could not
         be inspected."""
+        from meshcol.analysis.rules import command_rules
         from meshcol.io.ci import CiSuite
 
         rows = self.bodies
@@ -206,7 +207,12 @@ class InspectReport:
                 cases.append(case)
         cases += [_error_case(error) for error in self.errors]
         return CiSuite(
-            "inspect", tuple(cases), self.settings, verdict=self._ci_verdict(), units=self.units
+            "inspect",
+            tuple(cases),
+            self.settings,
+            verdict=self._ci_verdict(),
+            units=self.units,
+            rules={rule.id: rule.to_dict() for rule in command_rules("inspect")},
         )
 
     def _body_case(
@@ -237,6 +243,7 @@ class InspectReport:
             if failed and row is not None
             else "",
             warn=bool(others) and not failed,
+            rules=tuple(dict.fromkeys(f.rule for f in [*failed, *others])),
         )
 
     def _ci_verdict(self) -> str:

@@ -61,6 +61,51 @@ class _Surfaces:
         return self.local[table.body_pairs[rows]]
 
 
+def _decided(surfaces: _Surfaces, pairs: np.ndarray) -> np.ndarray:
+    """(len(pairs),) bool: both meshes of each pair are orientable, so the winding number
+    (after :meth:`MeshSet.from_arrays` wound them consistently) decides inside tests."""
+    orientable = surfaces.meshes.orientable
+    return orientable[pairs[:, 0]] & orientable[pairs[:, 1]]
+
+
+def _containment(
+    found: Any, surfaces: _Surfaces, pairs: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(contained, undecided)`` per pair: one mesh inside the other by the winding number,
+    or, against a non-orientable mesh, by ray parity voted over several directions
+    (:func:`meshcol.geometry.ray_parity.ray_parity`) of one vertex of the other mesh;
+    undecided where the vote splits. Surfaces that cross are never contained."""
+    inside = (found.a_inside_b | found.b_inside_a) & ~found.intersecting
+    unsure = np.zeros(len(pairs), dtype=bool)
+    meshes = surfaces.meshes
+    for k in np.flatnonzero(~_decided(surfaces, pairs) & ~found.intersecting).tolist():
+        verdict, open_question = False, False
+        for inner, outer in (pairs[k], pairs[k][::-1]):
+            if meshes.orientable[outer]:
+                verdict |= bool(
+                    found.a_inside_b[k] if inner == pairs[k][0] else found.b_inside_a[k]
+                )
+                continue
+            is_inside, decided = _parity_of_vertex(surfaces, int(inner), int(outer))
+            verdict |= is_inside and decided
+            open_question |= not decided
+        inside[k] = verdict
+        unsure[k] = open_question and not verdict
+    return inside, unsure
+
+
+def _parity_of_vertex(surfaces: _Surfaces, inner: int, outer: int) -> tuple[bool, bool]:
+    """Ray parity of the first vertex of mesh ``inner`` against mesh ``outer``."""
+    from meshcol.geometry.ray_parity import ray_parity
+
+    vertices, _ = surfaces.meshes.mesh(inner)
+    world = surfaces.poses[inner] @ np.append(vertices[0], 1.0)
+    local = np.linalg.solve(surfaces.poses[outer], world)[:3]
+    outer_vertices, outer_faces = surfaces.meshes.mesh(outer)
+    is_inside, decided = ray_parity(local[None], outer_vertices, outer_faces)
+    return bool(is_inside[0]), bool(decided[0])
+
+
 def _subset(batch: Any, mask: np.ndarray) -> Any:
     """The entries ``mask`` of a batch result (a dataclass of arrays)."""
     fields = dataclasses.fields(batch)
@@ -90,18 +135,23 @@ def mesh_phase(
     rows = np.flatnonzero(exact)
     colliders = placed.colliders
     surfaces = _Surfaces.of(colliders.bodies, table.body_pairs[rows])
-    found = mesh_distance_batch(
-        surfaces.meshes, surfaces.poses, surfaces.pairs(table, rows), threads=threads
-    )
-    inside = (found.a_inside_b | found.b_inside_a) & ~found.intersecting
+    pairs = surfaces.pairs(table, rows)
+    found = mesh_distance_batch(surfaces.meshes, surfaces.poses, pairs, threads=threads)
+    inside, unsure = _containment(found, surfaces, pairs)
     out = table.writable(*MEASURES)
     out.contained[rows] = inside
+    out.undecided[rows] = unsure
     mesh_rows = rows[mesh[rows]]
     on_mesh = _subset(found, mesh[rows])
     hit = on_mesh.intersecting | inside[mesh[rows]]
     _mesh_distances(out, mesh_rows, on_mesh, hit)
     if hit.any():
         _mesh_depths(out, mesh_rows[hit], _subset(on_mesh, hit), surfaces, tolerance, threads)
+    # crossing a mesh no inside test decides: 0 is the only depth that is surely not too deep
+    crossing = mesh_rows[on_mesh.intersecting & ~_decided(surfaces, pairs[mesh[rows]])]
+    out.depth[crossing] = 0.0
+    out.undecided[crossing] = True
+    out.intersection_volume[crossing] = np.nan
     out.signed_distance[mesh_rows] = out.distance[mesh_rows] - out.depth[mesh_rows]
     out.part_a[mesh_rows] = -1
     out.part_b[mesh_rows] = -1

@@ -84,7 +84,11 @@ class PairTable:
     excluded_pairs : int
         Body pairs whose boxes overlap but that the scene excludes (never rows).
     signed_distance, distance, depth : (k,) float64
-        ``inf``, ``inf``, 0 until measured.
+        ``inf``, ``inf``, 0 until measured. ``depth`` is a lower bound of the minimum
+        translation distance that separates the pair.
+    depth_upper : (k,) float64
+        An upper bound of the same (:func:`meshcol.analysis.depth_bounds.depth_bounds`): 0
+        until measured and for pairs apart; NaN when its query gave no answer.
     normal, point_a, point_b : (k, 3) float64
         World frame; NaN until measured.
     part_a, part_b : (k,) int64
@@ -94,6 +98,10 @@ class PairTable:
         Which named part (``Body.parts``) holds the closest points; -1 for a body of one part.
     contained : (k,) bool
         One body lies wholly inside the other's closed surface.
+    undecided : (k,) bool
+        No inside test decides whether the pair overlaps or nests (a non-orientable mesh whose
+        ray parity splits): ``depth`` is then 0, a lower bound, and :func:`classify` calls the
+        pair ``undecided`` unless ``depth_upper`` is within the tolerance.
     query_failed : (k,) bool
         A query's status says its numbers are not the answer.
     intersection_volume : (k,) float64
@@ -112,6 +120,7 @@ class PairTable:
     signed_distance: np.ndarray
     distance: np.ndarray
     depth: np.ndarray
+    depth_upper: np.ndarray
     normal: np.ndarray
     point_a: np.ndarray
     point_b: np.ndarray
@@ -120,6 +129,7 @@ class PairTable:
     label_a: np.ndarray
     label_b: np.ndarray
     contained: np.ndarray
+    undecided: np.ndarray
     query_failed: np.ndarray
     intersection_volume: np.ndarray
     status: np.ndarray
@@ -145,6 +155,7 @@ class PairTable:
             signed_distance=np.full(k, np.inf),
             distance=np.full(k, np.inf),
             depth=np.zeros(k),
+            depth_upper=np.zeros(k),
             normal=np.full((k, 3), np.nan),
             point_a=np.full((k, 3), np.nan),
             point_b=np.full((k, 3), np.nan),
@@ -153,6 +164,7 @@ class PairTable:
             label_a=np.full(k, -1, dtype=np.int64),
             label_b=np.full(k, -1, dtype=np.int64),
             contained=np.zeros(k, dtype=bool),
+            undecided=np.zeros(k, dtype=bool),
             query_failed=np.zeros(k, dtype=bool),
             intersection_volume=np.full(k, np.nan),
             status=np.zeros(k, dtype=np.int64),
@@ -197,6 +209,7 @@ MEASURES = (
     "label_a",
     "label_b",
     "contained",
+    "undecided",
     "query_failed",
     "intersection_volume",
 )
@@ -513,12 +526,17 @@ def convex_phase(table: PairTable, placed: PlacedColliders, threads: int = 0) ->
 
 def classify(table: PairTable, tolerance: float, clearance: float) -> PairTable:
     """Each row's status: ``clearance`` (distance < clearance), ``contact`` (|signed
-    distance| <= tolerance), ``penetrating`` (signed distance < -tolerance), ``contained``
-    (one body inside the other), else ``separated``; the most severe that applies."""
+    distance| <= tolerance), ``undecided`` (no inside test decides, and ``depth_upper`` is
+    above the tolerance or unknown), ``penetrating`` (signed distance < -tolerance),
+    ``contained`` (one body inside the other), else ``separated``; the most severe that
+    applies."""
     status = np.zeros(len(table), dtype=np.int64)
     signed = table.signed_distance
     status[table.distance < clearance] = SEVERITY["clearance"]
     status[(signed <= tolerance) & (signed >= -tolerance)] = SEVERITY["contact"]
+    # undecided: no inside test settles it, and the hulls leave room for a penetration
+    open_question = table.undecided & ~(table.depth_upper <= tolerance)
+    status[open_question] = SEVERITY["undecided"]
     status[signed < -tolerance] = SEVERITY["penetrating"]
     status[table.contained] = SEVERITY["contained"]
     return dataclasses.replace(table, status=status)

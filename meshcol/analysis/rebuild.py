@@ -557,7 +557,7 @@ def _decomposition_settings(
     """The report's settings of a robot's decomposition: the engine's options as given, the
     run's, and no search (parts in one layout, as OBJ)."""
     settings = {
-        **options.engine_settings(),
+        **options.report_settings(),
         **run.settings(),
         "layout": "parts",
         "format": "obj",

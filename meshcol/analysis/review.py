@@ -150,14 +150,14 @@ def check_page(
         page.notes.append(f"the table shows the {MAX_ROWS} worst of {len(pairs)} pairs")
     page.table(
         "Pairs (violations first, then by severity)",
-        ["status", "signed distance" + u, "body a", "body b"],
+        ["status", "signed distance" + u, "depth at most" + u, "body a", "body b"],
     )
     for p in pairs[:MAX_ROWS]:
         a = p["body_a"] if p["part_a"] is None else f"{p['body_a']}/{p['part_a']}"
         b = p["body_b"] if p["part_b"] is None else f"{p['body_b']}/{p['part_b']}"
         points = [q for q in (p["point_a"], p["point_b"]) if q is not None]
-        if p["status"] == "contained":
-            label = "contained"
+        if p["status"] in ("contained", "undecided"):
+            label = p["status"]
         elif (p["depth"] or 0) > 0:
             label = f"depth {p['depth']:.4g}{u}"
         elif p["distance"] is not None:
@@ -165,7 +165,7 @@ def check_page(
         else:
             label = p["status"]
         page.add_row(
-            [p["status"], p["signed_distance"], a, b],
+            [p["status"], p["signed_distance"], p["depth_upper"], a, b],
             bodies=tuple(index[n] for n in (p["body_a"], p["body_b"]) if n in index),
             points=points or None,
             normal=p["normal"],
@@ -528,7 +528,11 @@ def hull_page(
         for row, h in zip(report.bodies, report.hulls)
     }
     page = _shape_page("hull", inputs, report.units, hulls, robot_options)
-    page.info.append(("max vertices", str(report.max_vertices or "exact hull")))
+    if report.target is not None:  # the target's limits shaped every hull
+        limits = ", ".join(f"{k} {v:g}" for k, v in sorted(report.target.limits.items()))
+        page.info.append(("target", f"{report.target.name} ({limits})"))
+    if report.max_vertices or report.target is None:
+        page.info.append(("max vertices", str(report.max_vertices or "exact hull")))
     return page
 
 

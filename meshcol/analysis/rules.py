@@ -391,6 +391,17 @@ RULES: tuple[Rule, ...] = (
         "measured: the distance; limit: --clearance.",
         "Move them apart by the shortfall.",
     ),
+    Rule(
+        "MC505",
+        "undecided",
+        "warning",
+        ("check",),
+        "The pair's surfaces meet or may nest, and no inside test decides it: a mesh that "
+        "cannot be wound consistently (non-orientable), whose ray parity splits over the "
+        "directions tried. Neither a contact nor a penetration is claimed.",
+        "measured: depth_upper, the most the pair can penetrate; limit: --tolerance.",
+        "Repair the mesh's winding (inspect reports MC403), or check the pair as hull.",
+    ),
 )
 
 _BY_ID = {rule.id: rule for rule in RULES}

@@ -39,6 +39,8 @@ COMMANDS: dict[str, str] = {
     "collision-matrix": "meshcol.cli.collision_matrix:collision_matrix",
     "targets": "meshcol.cli.targets:targets",
     "rules": "meshcol.cli.rules:rules",
+    "ci": "meshcol.cli.ci:ci",
+    "config": "meshcol.cli.config:config_command",
 }
 
 CONTEXT_SETTINGS = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
@@ -178,7 +180,16 @@ def fail(message: str) -> NoReturn:
 @click.group(cls=MeshcolGroup, context_settings=CONTEXT_SETTINGS)
 @click.version_option(__version__, "--version", prog_name="meshcol")
 @click.option("--debug", is_flag=True, help="Show full tracebacks on errors.")
-def main(debug: bool) -> None:
+@click.option(
+    "--root",
+    type=click.Path(file_okay=False, exists=True),
+    default=None,
+    metavar="DIR",
+    help="Every path an input names (manifest meshes, URDF package:// and relative paths, "
+    "glTF buffers, MJCF includes) must resolve inside DIR, symlinks followed; else exit 2 "
+    "(also $MESHCOL_ROOT; 'meshcol ci' sets it to the repository).  [default: no limit]",
+)
+def main(debug: bool, root: str | None) -> None:
     """Mesh collision analysis for asset pipelines.
 
     \b
@@ -189,3 +200,23 @@ def main(debug: bool) -> None:
       meshcol hull chair.obj --max-vertices 64 -o chair_hull.obj
       meshcol COMMAND -h      help and examples for one command
     """
+    if root is not None:
+        _set_root(root)
+
+
+def _set_root(root: str) -> None:
+    """``$MESHCOL_ROOT`` for the command and its worker processes, as it was afterwards."""
+    import os
+
+    from meshcol.io.paths import ROOT_ENV
+
+    previous = os.environ.get(ROOT_ENV)
+    os.environ[ROOT_ENV] = os.path.realpath(root)
+
+    def restore() -> None:
+        if previous is None:
+            os.environ.pop(ROOT_ENV, None)
+        else:
+            os.environ[ROOT_ENV] = previous
+
+    click.get_current_context().call_on_close(restore)

@@ -20,6 +20,7 @@ from meshcol.cli.common import (
     report_format,
     report_options,
     robot_options,
+    snapshots_option,
     target_option,
     threads_option,
     timeout_option,
@@ -134,6 +135,7 @@ def _parse_ignore(
 @report_options(default="the report on stdout; the summary on stderr")
 @robot_options(exclusions=True)
 @html_option
+@snapshots_option
 def check(
     inputs: tuple[str, ...],
     shape: str,
@@ -143,6 +145,7 @@ def check(
     report: str | None,
     fmt: str | None,
     html: str | None,
+    snapshots: str | None,
     robot_options: RobotOptions,
     **options: Any,
 ) -> None:
@@ -170,11 +173,12 @@ def check(
       meshcol check props/*.obj --shape decomposed -j 2 --executor ray
     """
     from meshcol.analysis.check import check as run_check
-    from meshcol.cli.common import emit_report, render_html, write_html
+    from meshcol.cli.common import emit_report, render_html, snapshots_written, write_html
     from meshcol.io.outputs import check_outputs
 
     check_outputs(
         files={"--report": report, "--html": html},
+        folders={"--snapshots": snapshots},
         inputs=inputs,
         named_inputs={"the --baseline": options["baseline"]},
     )
@@ -192,10 +196,13 @@ def check(
         )
     finally:
         progress.done()
-    page = render_html(
-        html, lambda: _review_page(result, inputs, shape, decompose_options, robot_options)
-    )
-    emit_report(result, fmt, report)
+
+    def review() -> Any:
+        return _review_page(result, inputs, shape, decompose_options, robot_options)
+
+    page = render_html(html, review)
+    with snapshots_written(result, snapshots, report, review) as written:
+        emit_report(written, fmt, report)
     write_html(html, page)
     for warning in result.warnings:
         click.echo(f"meshcol: warning: {warning}", err=True)

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import re
 import sys
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import TYPE_CHECKING, Any
 
 import click
@@ -76,6 +77,7 @@ class FiniteFloat(click.ParamType):
 
 def report_options(
     default: str = "the report on stdout",
+    formats: Sequence[str] | None = None,
 ) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     """Add ``--report FILE`` (``-`` for stdout) and ``--format FORMAT`` (parameter ``fmt``;
     the choices and their help from :data:`meshcol.io.formats.FORMATS`).
@@ -84,17 +86,21 @@ def report_options(
     ----------
     default : str
         Where the report goes without ``--report``, for the help text.
+    formats : sequence of str, optional
+        The formats the command writes (:func:`meshcol.io.formats.formats_for` of its
+        report), when not every one: ``--help`` lists only those.
     """
 
     def decorate(func: Callable[..., Any]) -> Callable[..., Any]:
         from meshcol.io.formats import REPORT_FORMATS, describe_formats
 
+        choices = list(formats or REPORT_FORMATS)
         func = click.option(
             "--format",
             "fmt",
-            type=click.Choice(REPORT_FORMATS),
+            type=click.Choice(choices),
             default=None,
-            help=f"Report format: {describe_formats()}",
+            help=f"Report format: {describe_formats(choices)}",
         )(func)
         func = click.option(
             "--report",
@@ -467,6 +473,54 @@ def write_html(path: str | None, text: str | None) -> None:
     click.echo(f"meshcol: review page: {display_path(path)} ({size / 1e6:.1f} MB)", err=True)
 
 
+def snapshots_option(func: Callable[..., Any]) -> Callable[..., Any]:
+    """Add ``--snapshots DIR``: one PNG per violation (:mod:`meshcol.io.snapshots`), linked
+    from the Markdown report. Without Pillow (``meshcol[snapshots]``) the command exits 2
+    before any work, with the hint."""
+
+    def ready(ctx: click.Context, param: click.Parameter, value: str | None) -> str | None:
+        if value is not None:
+            from meshcol.io.snapshots import pillow
+
+            pillow()  # MissingDependencyError: exit 2, one line
+        return value
+
+    return click.option(
+        "--snapshots",
+        type=click.Path(file_okay=False),
+        default=None,
+        metavar="DIR",
+        callback=ready,
+        help="Also draw one PNG per violation into DIR (offscreen: the bodies framed, "
+        "witness points, normal, depth), written with the report or not at all, and linked "
+        "from --format markdown; needs meshcol[snapshots].  [default: none]",
+    )(func)
+
+
+@contextlib.contextmanager
+def snapshots_written(
+    result: Any, folder: str | None, report: str | None, build_page: Callable[[], Any]
+) -> Iterator[Any]:
+    """Yield the report to write: ``result`` itself, or with ``--snapshots`` the report
+    whose CI cases link to their pictures, drawn into a staged folder that becomes
+    ``folder`` only when the block (writing the report) succeeds
+    (:func:`meshcol.io.outputs.staged_folder`): the pictures and the report appear together
+    or not at all."""
+    if folder is None:
+        yield result
+        return
+    from meshcol.analysis.snapshots import with_snapshots
+    from meshcol.io.outputs import staged_folder
+    from meshcol.io.paths import display_path
+
+    link_from = os.path.dirname(os.path.abspath(report)) if report and report != "-" else None
+    with staged_folder(folder) as stage:
+        written = with_snapshots(result, build_page(), stage, folder, link_from)
+        yield written
+    count = len(written.snapshots)
+    click.echo(f"meshcol: snapshots: {count} in {display_path(folder)}", err=True)
+
+
 def executor_options() -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     """Add ``--executor local|ray`` and ``--ray-address ADDR`` (parameters ``executor`` and
     ``ray_address``): where a command's per-file tasks run
@@ -550,17 +604,25 @@ def cache_dir_option(
     )
 
 
-def to_option(what: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+def to_option(what: str, gltf: bool = False) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     """Add ``--to urdf|mjcf|glb|usd`` (parameter ``to``): the format of a rebuilt robot
-    description written with ``what`` (hull, decompose, fit)."""
+    description written with ``what`` (hull, decompose, fit); with ``gltf``, also
+    ``gltf-physics`` (a glTF/GLB asset written back with its colliders)."""
+    choices = ["urdf", "mjcf", "glb", "usd"] + (["gltf-physics"] if gltf else [])
+    extra = (
+        "; a glTF/GLB asset with --to gltf-physics: OUT/<asset>.glb, the asset with its "
+        "colliders (KHR_physics_rigid_bodies and OMI_physics_body)"
+        if gltf
+        else ""
+    )
     return click.option(
         "--to",
         "to",
-        type=click.Choice(["urdf", "mjcf", "glb", "usd"]),
+        type=click.Choice(choices),
         default=None,
         help=f"Robot input (URDF, MJCF) with --out-dir: the format of the description written "
-        f"with {what}, OUT/<robot>.urdf|.xml|.glb|.usda (usd needs meshcol[usd]).  [default: "
-        "the input's]",
+        f"with {what}, OUT/<robot>.urdf|.xml|.glb|.usda (usd needs meshcol[usd]){extra}.  "
+        "[default: the input's]",
     )
 
 
@@ -588,6 +650,13 @@ def mesh_outputs(
                 f"(expected {', '.join(MESH_OUTPUT_EXTENSIONS)})",
                 param_hint="'-o' / '--output'",
             )
+    if to == "gltf-physics":
+        from meshcol.analysis.gltf_rebuild import is_gltf
+
+        if out_dir is None or len(inputs) != 1 or not is_gltf(inputs[0]):
+            raise click.UsageError("--to gltf-physics needs one glTF/GLB asset and --out-dir")
+        no_report_with_meshes(fmt, report, True)
+        return True
     robot = out_dir is not None and len(inputs) == 1 and is_robot_file(inputs[0])
     if to is not None and not robot:
         raise click.UsageError("--to needs one robot description (URDF, MJCF) and --out-dir")

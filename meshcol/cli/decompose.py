@@ -204,12 +204,13 @@ class _MeshFormat(click.Choice):
     show_default=True,
     help="Output format (glb: one node per part; not with ucx).",
 )
-@to_option("the parts")
+@to_option("the parts", gltf=True)
 @click.option(
     "--report",
     type=click.Path(dir_okay=False),
     default=None,
-    help="Write the report here ('-': stdout).  [default: the report on stdout]",
+    help="Write the report here ('-': stdout).  [default: no report: the parts are the "
+    "output, as with hull -o and fit -o]",
 )
 @click.option(
     "--report-format",
@@ -419,6 +420,12 @@ def _robot_input(
 
     from meshcol.io.inputs import is_robot_file
 
+    if outputs.to == "gltf-physics":
+        from meshcol.analysis.gltf_rebuild import is_gltf
+
+        if len(inputs) != 1 or not is_gltf(inputs[0]) or outputs.out_dir is None:
+            raise click.UsageError("--to gltf-physics needs one glTF/GLB asset and --out-dir")
+        return True
     robot = len(inputs) == 1 and is_robot_file(inputs[0])
     if outputs.to is not None and not robot:
         raise click.UsageError("--to needs one robot description (URDF, MJCF)")
@@ -465,6 +472,19 @@ def _decompose(
     from meshcol.decomposition.batch import decompose_files
 
     report_file = outputs.report_file
+    if outputs.to == "gltf-physics":
+        from meshcol.analysis.gltf_rebuild import decompose_gltf
+
+        return decompose_gltf(
+            inputs[0],
+            outputs.out_dir,
+            options,
+            run,
+            target=target,
+            progress=progress,
+            other_outputs=[p for p in (report_file, outputs.html) if p],
+            robot_options=robot_options,
+        )
     if robot:
         return rebuild_decomposition(
             inputs[0],
@@ -494,8 +514,9 @@ def _decompose(
 
 
 def _print_robot(result: Any, outputs: _Outputs) -> None:
-    """A robot's report, its target findings and the verdict."""
-    emit_report(result, outputs.report_fmt, outputs.report)
+    """A robot's report (with --report), its target findings and the verdict."""
+    if outputs.report is not None:
+        emit_report(result, outputs.report_fmt, outputs.report)
     _echo_target_violations(result)
     detail = f"{_summary(result)}, written to {result.settings['description']}"
     click.echo(verdict("decompose", result.exit_code == 0, detail), err=True)
@@ -511,7 +532,8 @@ def _print_files(
     page = render_html(
         outputs.html, lambda: decompose_page(result, outputs.out_dir, inputs, robot_options)
     )
-    emit_report(result, outputs.report_fmt, outputs.report)
+    if outputs.report is not None:  # the parts are the output, as for hull -o
+        emit_report(result, outputs.report_fmt, outputs.report)
     write_html(outputs.html, page)
     for entry in result.files:
         if entry["status"] != "ok":

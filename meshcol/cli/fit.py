@@ -57,7 +57,7 @@ from meshcol.io.robot import RobotOptions
     help="Write one DIR/<body>.obj per body; for a robot description, the description "
     "rebuilt with primitive colliders.  [default: no mesh files]",
 )
-@to_option("the fits")
+@to_option("the fits", gltf=True)
 @report_options(default="stdout when no mesh is written, else no report")
 @robot_options()
 def fit(

@@ -58,7 +58,7 @@ from meshcol.io.targets import target_names
     f"{', '.join(target_names())}) or to your own profile; "
     "a tighter --max-vertices still wins. Exit 1 when a limit cannot be met."
 )
-@to_option("the hulls")
+@to_option("the hulls", gltf=True)
 @report_options(default="stdout when no mesh is written, else no report")
 @robot_options()
 @html_option

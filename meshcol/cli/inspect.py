@@ -22,6 +22,8 @@ from meshcol.cli.common import (
     report_format,
     report_options,
     robot_options,
+    snapshots_option,
+    snapshots_written,
     target_option,
     timeout_option,
     verdict,
@@ -157,6 +159,7 @@ def _physics_options(command: Callable[..., None]) -> Callable[..., None]:
 )
 @robot_options()
 @html_option
+@snapshots_option
 @_physics_options
 def inspect(
     inputs: tuple[str, ...],
@@ -169,6 +172,7 @@ def inspect(
     executor: str,
     ray_address: str | None,
     html: str | None,
+    snapshots: str | None,
     robot_options: RobotOptions,
 ) -> None:
     """Health check of each body's mesh: fit to be a collider?
@@ -217,7 +221,11 @@ def inspect(
     from meshcol.analysis.review import inspect_page
     from meshcol.cli.common import emit_report
 
-    check_outputs(files={"--report": report, "--html": html}, inputs=inputs)
+    check_outputs(
+        files={"--report": report, "--html": html},
+        folders={"--snapshots": snapshots},
+        inputs=inputs,
+    )
     fmt = report_format(report, fmt)
     progress = Progress(command="inspect", heartbeat=True)
     try:
@@ -234,8 +242,13 @@ def inspect(
         )
     finally:
         progress.done()
-    page = render_html(html, lambda: inspect_page(result, inputs, robot_options))
-    emit_report(result, fmt, report)
+
+    def review() -> Any:
+        return inspect_page(result, inputs, robot_options)
+
+    page = render_html(html, review)
+    with snapshots_written(result, snapshots, report, review) as written:
+        emit_report(written, fmt, report)
     write_html(html, page)
     click.echo("\n".join(summary_lines(result)), err=True)
     sys.exit(result.exit_code)

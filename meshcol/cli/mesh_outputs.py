@@ -62,6 +62,12 @@ def run_mesh_command(
             if robot:
                 assert out_dir is not None
                 reserved = (("the --report file", report),) if report not in (None, "-") else ()
+                if to == "gltf-physics":
+                    from meshcol.analysis.gltf_rebuild import rebuild_gltf
+
+                    return rebuild_gltf(
+                        inputs[0], out_dir, run, reserved=reserved, progress=progress, **options
+                    )
                 return rebuild(
                     inputs[0], out_dir, to=to, reserved=reserved, progress=progress, **options
                 )

@@ -9,6 +9,10 @@ import click
 
 from meshcol.cli.common import report_format, report_options
 
+#: What ``meshcol rules`` writes: the registry has no findings to annotate (no CI suite), so
+#: JSON or CSV only (``formats_for(RulesReport)``, held equal by a test).
+RULES_FORMATS = ("json", "csv")
+
 
 @click.command(
     "rules",
@@ -16,7 +20,7 @@ from meshcol.cli.common import report_format, report_options
     context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
 )
 @click.argument("rule_keys", nargs=-1, metavar="[RULE]...")
-@report_options(default="a table on stdout (JSON with --format json)")
+@report_options(default="a table on stdout (JSON with --format json)", formats=RULES_FORMATS)
 def rules(rule_keys: tuple[str, ...], report: str | None, fmt: str | None) -> None:
     """List the rules that inspect and check findings cite, or describe some in full.
 
@@ -44,7 +48,6 @@ def rules(rule_keys: tuple[str, ...], report: str | None, fmt: str | None) -> No
     if report is None and fmt is None:
         click.echo(_full(result.rules) if rule_keys else _table(result.rules))
         sys.exit(0)
-    # The registry has no findings to annotate (no CI suite): JSON or CSV only.
     fmt = report_format(report, fmt, formats=formats_for(type(result)))
     write_report(result, fmt, report)
     sys.exit(0)

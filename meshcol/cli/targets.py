@@ -21,8 +21,8 @@ _COLUMNS = tuple((header, key) for key, (_, _, header) in LIMITS.items())
     "fmt",
     type=click.Choice(["table", "json"]),
     default=None,
-    help="table (on a terminal) or json (one object per profile, with every source).  "
-    "[default: table on a terminal, else json]",
+    help="table (one line per profile, as `meshcol rules` prints) or json (one object per "
+    "profile, with every source).  [default: table]",
 )
 def targets(profiles: tuple[str, ...], fmt: str | None) -> None:
     """List the engine target profiles of --target (hull, decompose) and their limits.
@@ -40,14 +40,10 @@ def targets(profiles: tuple[str, ...], fmt: str | None) -> None:
       meshcol targets physx-gpu --format json
       meshcol targets my_engine.toml
     """
-    import sys
-
     from meshcol.io.report import dumps_json
     from meshcol.io.targets import list_targets, load_target
 
     found = [load_target(p) for p in profiles] if profiles else list_targets()
-    if fmt is None:
-        fmt = "table" if sys.stdout.isatty() else "json"
     if fmt == "json":
         click.echo(dumps_json({"targets": [t.to_dict() for t in found]}), nl=False)
         return

@@ -21,7 +21,7 @@ import numpy as np
 
 from meshcol._native import core
 from meshcol.collision.arrays import as_pairs, as_points, as_pose, as_poses
-from meshcol.geometry.topology import is_closed_manifold
+from meshcol.geometry.topology import is_closed_manifold, orient_consistently
 from meshcol.types import Body, Status
 
 __all__ = [
@@ -70,6 +70,24 @@ def _mesh_arrays(index: int, mesh: Any) -> tuple[np.ndarray, np.ndarray]:
 _INT64 = np.dtype(np.int64)
 
 
+@dataclass(frozen=True)
+class _Oriented:
+    faces: np.ndarray
+    reoriented: bool
+    orientable: bool
+    closed: bool
+
+
+def _oriented(vertices: np.ndarray, faces: np.ndarray, orient: bool) -> _Oriented:
+    """One mesh's faces wound consistently (when ``orient``) and its topology flags."""
+    if len(faces) == 0:
+        return _Oriented(faces, False, True, False)
+    found = orient_consistently(vertices, faces)
+    if not orient:
+        return _Oriented(faces, False, found.orientable, found.closed)
+    return _Oriented(found.faces, bool(found.flipped.any()), found.orientable, found.closed)
+
+
 @dataclass(frozen=True, eq=False)
 class MeshSet:
     """M triangle meshes packed in flat arrays, with their hierarchies built once.
@@ -95,6 +113,17 @@ class MeshSet:
     valid : (M,) bool
         Whether each mesh is usable: finite vertices and at least one face. Pairs involving an
         invalid mesh report ``Status.INVALID_INPUT``.
+    reoriented : (M,) bool
+        Some faces of the mesh were reversed when the set was built
+        (:func:`meshcol.geometry.topology.orient_consistently`: its winding was inconsistent,
+        MC403); ``faces`` holds them as reversed, in input order.
+    orientable : (M,) bool
+        Every component of the mesh can be wound consistently. When False the winding number
+        does not decide inside from outside (see :meth:`inside_decided`).
+    closed : (M,) bool
+        The mesh's faces (as reoriented) are balanced, every edge traversed as often each way
+        (:func:`meshcol.geometry.topology.is_balanced`): closed and consistently wound, so
+        the winding number decides inside from outside exactly.
     """
 
     vertices: np.ndarray
@@ -103,6 +132,9 @@ class MeshSet:
     face_offsets: np.ndarray
     poses: np.ndarray
     valid: np.ndarray
+    reoriented: np.ndarray
+    orientable: np.ndarray
+    closed: np.ndarray
     _handle: core.MeshBvhSet = field(repr=False)
 
     @classmethod
@@ -112,8 +144,9 @@ class MeshSet:
         poses: np.ndarray | None = None,
         *,
         threads: int = 0,
+        orient: bool = True,
     ) -> MeshSet:
-        """Pack meshes and build their hierarchies.
+        """Pack meshes, wind each consistently, and build their hierarchies.
 
         Parameters
         ----------
@@ -123,6 +156,12 @@ class MeshSet:
             Default poses (identity when omitted).
         threads : int
             Build threads; 0 means all cores.
+        orient : bool
+            Reverse the faces of an inconsistently wound mesh so that each of its components
+            is wound consistently, closed ones outward
+            (:func:`meshcol.geometry.topology.orient_consistently`), before any inside test:
+            the winding number of a mesh wound both ways at random means nothing. A mesh
+            without inconsistent edges is kept as given. False keeps every mesh as given.
 
         Raises
         ------
@@ -130,6 +169,17 @@ class MeshSet:
             On malformed arrays or a face index out of range, naming the mesh (``meshes[3]: ...``).
         """
         arrays = [_mesh_arrays(i, m) for i, m in enumerate(meshes)]
+        # once per distinct mesh: instances of one asset share their arrays
+        distinct: dict[tuple[int, int], _Oriented] = {}
+        for v, f in arrays:
+            if (id(v), id(f)) not in distinct:
+                distinct[(id(v), id(f))] = _oriented(v, f, orient)
+        oriented = [distinct[(id(v), id(f))] for v, f in arrays]
+        arrays = [(v, o.faces) for (v, _), o in zip(arrays, oriented)]
+        reoriented, orientable, closed = (
+            np.array([bool(getattr(o, name)) for o in oriented], dtype=bool).reshape(-1)
+            for name in ("reoriented", "orientable", "closed")
+        )
         count = len(arrays)
         vertex_offsets = np.zeros(count + 1, dtype=np.int64)
         face_offsets = np.zeros(count + 1, dtype=np.int64)
@@ -150,9 +200,12 @@ class MeshSet:
         # (the arrays are read-only, so it cannot go stale).
         handle.set_poses(poses)
         valid = np.array([handle.valid(i) for i in range(count)], dtype=bool)
-        for array in (vertices, faces, vertex_offsets, face_offsets, poses, valid):
+        flags = (reoriented, orientable, closed)
+        for array in (vertices, faces, vertex_offsets, face_offsets, poses, valid, *flags):
             array.flags.writeable = False
-        return cls(vertices, faces, vertex_offsets, face_offsets, poses, valid, handle)
+        return cls(
+            vertices, faces, vertex_offsets, face_offsets, poses, valid, *flags, _handle=handle
+        )
 
     @classmethod
     def from_bodies(cls, bodies: Sequence[Body], *, threads: int = 0) -> MeshSet:
@@ -165,6 +218,14 @@ class MeshSet:
 
     def __len__(self) -> int:
         return len(self.vertex_offsets) - 1
+
+    @property
+    def inside_decided(self) -> np.ndarray:
+        """(M,) bool: the winding number decides inside from outside for each mesh: it is
+        closed and consistently wound, as given or reoriented (``closed``). Containment and
+        the depth's lower bound hold exactly against these; against any other mesh they rest
+        on the winding number's tolerance of holes, or are undecided."""
+        return self.closed.copy()
 
     def mesh(self, i: int) -> tuple[np.ndarray, np.ndarray]:
         """(vertices (n, 3), faces (m, 3)) of mesh ``i``, local frame, indices local."""

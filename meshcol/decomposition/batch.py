@@ -154,11 +154,8 @@ def _settings(
     """The report's settings: the engine options as the run used them (aimed at the target),
     and how the run was made."""
     settings = {
-        **options.engine_settings(),
-        "cache_dir": run.cache_dir,
-        "use_cache": run.use_cache,
-        "jobs": run.jobs,
-        "timeout": run.timeout,
+        **options.report_settings(),
+        **run.settings(),
         "out_dir": parts.out_dir,
         "layout": parts.layout,
         "format": parts.fmt,

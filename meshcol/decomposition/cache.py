@@ -37,7 +37,16 @@ from meshcol.decomposition.fidelity import METRICS_VERSION
 from meshcol.decomposition.result import Decomposition, Fidelity
 from meshcol.io.report import atomic_path
 
-__all__ = ["default_cache_dir", "entry_path", "is_url", "load", "local_folder", "store"]
+__all__ = [
+    "default_cache_dir",
+    "entry_path",
+    "is_url",
+    "load",
+    "local_folder",
+    "read_bytes",
+    "store",
+    "write_bytes",
+]
 
 # fsspec protocols whose single put is atomic (object stores): written in one call.
 _OBJECT_STORES = frozenset(
@@ -115,11 +124,26 @@ def _read(key: str, cache_dir: str | os.PathLike[str] | None) -> Any:
     local = local_folder(cache_dir) if cache_dir is not None else None
     if cache_dir is None or local is not None:
         return entry_path(key, local)
-    fs, root = _filesystem(os.fspath(cache_dir))
+    data = read_bytes(_entry_name(key), cache_dir)
+    return None if data is None else io.BytesIO(data)
+
+
+def read_bytes(name: str, cache_dir: str | os.PathLike[str] | None = None) -> bytes | None:
+    """The bytes of the entry ``name`` (a path inside the store, ``ab/abcd.npz``); None
+    when it is absent or unreadable."""
+    local = local_folder(cache_dir) if cache_dir is not None else None
+    if cache_dir is None or local is not None:
+        root = Path(local) if local is not None else default_cache_dir()
+        try:
+            return (root / name).read_bytes()
+        except OSError:
+            return None
+    fs, root_path = _filesystem(os.fspath(cache_dir))
     try:
-        return io.BytesIO(fs.cat_file(f"{root}/{_entry_name(key)}"))
+        data: bytes = fs.cat_file(f"{root_path}/{name}")
     except (FileNotFoundError, OSError):
         return None
+    return data
 
 
 def load(key: str, cache_dir: str | os.PathLike[str] | None = None) -> Decomposition | None:
@@ -185,22 +209,29 @@ def store(result: Decomposition, cache_dir: str | os.PathLike[str] | None = None
         vertex_offsets=np.concatenate([[0], np.cumsum(vcount)]).astype(np.int64),
         face_offsets=np.concatenate([[0], np.cumsum(fcount)]).astype(np.int64),
     )
-    data = buf.getvalue()
+    return write_bytes(_entry_name(result.cache_key), buf.getvalue(), cache_dir)
+
+
+def write_bytes(
+    name: str, data: bytes, cache_dir: str | os.PathLike[str] | None = None
+) -> Path | str:
+    """Write ``data`` as the entry ``name`` (a path inside the store), atomically (see the
+    module's notes); returns where it is (a Path, or its URL)."""
     local = local_folder(cache_dir) if cache_dir is not None else None
     if cache_dir is None or local is not None:
-        path = entry_path(result.cache_key, local)
+        path = (Path(local) if local is not None else default_cache_dir()) / name
         path.parent.mkdir(parents=True, exist_ok=True)
         with atomic_path(path) as tmp, open(tmp, "wb") as f:
             f.write(data)
         return path
     url = os.fspath(cache_dir)
     fs, root = _filesystem(url)
-    target = f"{root}/{_entry_name(result.cache_key)}"
+    target = f"{root}/{name}"
     protocol = fs.protocol if isinstance(fs.protocol, str) else fs.protocol[0]
     if protocol in _OBJECT_STORES:
         fs.pipe_file(target, data)  # one put: readers see the whole object or none
     else:
-        fs.makedirs(f"{root}/{result.cache_key[:2]}", exist_ok=True)
+        fs.makedirs(target.rsplit("/", 1)[0], exist_ok=True)
         tmp = f"{target}.{uuid.uuid4().hex}.tmp"
         try:
             fs.pipe_file(tmp, data)
@@ -211,4 +242,4 @@ def store(result: Decomposition, cache_dir: str | os.PathLike[str] | None = None
             except (FileNotFoundError, OSError):
                 pass
             raise
-    return f"{url.rstrip('/')}/{_entry_name(result.cache_key)}"
+    return f"{url.rstrip('/')}/{name}"

@@ -125,6 +125,11 @@ def resolve_params(options: DecomposeOptions, *, closed: bool = True) -> dict[st
     return _vhacd_params(params, options)
 
 
+def engine_options_used(engine: str, engine_options: Mapping[str, Any]) -> dict[str, Any]:
+    """The engine options as the engine takes them: coerced to their parameters' types."""
+    return _engine_options(engine, engine_options)
+
+
 def _engine_options(engine: str, engine_options: Mapping[str, Any]) -> dict[str, Any]:
     """The engine options coerced to their parameters' types; ValueError for an unknown or
     ill-typed one."""

@@ -425,7 +425,10 @@ class RayExecutor:
                 else:
                     common.pop("include_dashboard")
                     with _loopback_only(self.address):
-                        ray.init(address=self.address, **common)
+                        try:
+                            ray.init(address=self.address, **common)
+                        except ConnectionError as exc:
+                            raise ConnectionError(_join_failure(self.address, exc)) from None
                 self._owned = True
         _errors_to_stderr()
         if self.address is None and self._owned:
@@ -563,6 +566,20 @@ class RayExecutor:
 
     def __exit__(self, kind: type[BaseException] | None, *exc: object) -> None:
         self.close(interrupted=kind is not None and not issubclass(kind, Exception))
+
+
+def _join_failure(address: str, exc: BaseException, environ: Any = None) -> str:
+    """One line for a Ray cluster that could not be joined, with the hint a cluster started
+    with token authentication needs (Ray says only "Failed to connect" when the token is
+    missing: its GCS refuses the client, ``InvalidAuthToken``, in log lines of its own)."""
+    environ = os.environ if environ is None else environ
+    first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+    if environ.get("RAY_AUTH_MODE", "").lower() == "token":
+        return f"{first} (RAY_AUTH_MODE=token: is the token the cluster's?)"
+    return (
+        f"{first}; a cluster started with token authentication needs RAY_AUTH_MODE=token "
+        "here too, with its token in RAY_AUTH_TOKEN, RAY_AUTH_TOKEN_PATH or ~/.ray/auth_token"
+    )
 
 
 def _ray_failure(exc: BaseException) -> str:

@@ -26,7 +26,12 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from meshcol.decomposition.engines import HULL_COUNT_PARAMETER, check_options
+from meshcol.decomposition.engines import (
+    HULL_COUNT_PARAMETER,
+    check_options,
+    engine_options_used,
+    resolve_params,
+)
 from meshcol.decomposition.fidelity import DEFAULT_SAMPLES
 
 if TYPE_CHECKING:
@@ -297,6 +302,20 @@ class DecomposeOptions:
         settings["engine_options"] = dict(self.engine_options)
         return settings
 
+    def report_settings(self) -> dict[str, Any]:
+        """The engine's parameters for a report: the fields as given (null: the default),
+        the engine options as the engine took them (typed: ``20``, not the flag's ``"20"``),
+        and ``engine_parameters``, every parameter of the engine with the value the run used
+        (``preprocess_mode`` ``auto`` means per mesh: ``off`` for a closed one, else ``on``;
+        each body's ``params`` says which)."""
+        settings = self.engine_settings()
+        settings["engine_options"] = engine_options_used(self.engine, self.engine_options)
+        used = resolve_params(self)
+        if self.engine == "coacd" and "preprocess_mode" not in self.engine_options:
+            used["preprocess_mode"] = self.preprocess
+        settings["engine_parameters"] = used
+        return settings
+
     def result_settings(self) -> dict[str, Any]:
         """What decides a run's results: the engine's parameters and, when it searches, the
         search's target (the run manifest's fingerprint)."""
@@ -396,11 +415,12 @@ class RunOptions:
         return 0 if self.jobs == 1 else max(1, (os.cpu_count() or 1) // self.jobs)
 
     def settings(self) -> dict[str, Any]:
-        """``jobs``, ``timeout``, ``cache_dir`` (as given) and ``use_cache``, for reports."""
+        """``jobs``, ``timeout``, ``cache_dir`` (the folder or URL used: the default one
+        when none was given; null without the cache) and ``use_cache``, for reports."""
         return {
             "jobs": self.jobs,
             "timeout": self.timeout,
-            "cache_dir": self.cache_dir,
+            "cache_dir": self.cache_root(),
             "use_cache": self.use_cache,
         }
 

@@ -84,6 +84,18 @@ class CiCase:
     warn : bool
         A passed case worth an annotation (a finding the policy does not fail on):
         ``::warning`` in the GitHub format.
+    rules : tuple of str
+        The ids of the registered rules the case breaks (:data:`CiSuite.rules`), the
+        failing ones first (``("MC501",)``, ``("MC401", "MC405")``); empty when its kind is
+        no registered rule (``max-hausdorff``) or nothing is broken.
+    before : mapping or None
+        The case as the ``--baseline`` report had it (``status``, ``depth``,
+        ``distance``...), when there was a baseline and the case was in it.
+    numbers : mapping
+        The case's headline numbers by name (``depth``, ``distance``, ``signed_distance``),
+        for summaries that compare them with ``before``.
+    snapshot : str or None
+        A picture of the case (``--snapshots``), as a link from the report.
     """
 
     name: str
@@ -95,6 +107,10 @@ class CiCase:
     details: str = ""
     time: float | None = None
     warn: bool = False
+    rules: tuple[str, ...] = ()
+    before: Mapping[str, Any] | None = None
+    numbers: Mapping[str, Any] = field(default_factory=dict)
+    snapshot: str | None = None
 
     def __post_init__(self) -> None:
         if self.outcome not in OUTCOMES:
@@ -120,6 +136,12 @@ class CiSuite:
         The run's one-line verdict (``2 pairs violate --fail-on penetration``).
     units : str or None
         Length unit of the numbers.
+    rules : mapping of str -> mapping
+        The registered rules the command can report (``MC501`` -> the rule's fields as
+        :meth:`meshcol.analysis.rules.Rule.to_dict` gives them), for formats that describe
+        the rules they cite (SARIF).
+    baseline : str or None
+        The ``--baseline`` report the run compared with, as the user gave it.
     """
 
     command: str
@@ -129,6 +151,8 @@ class CiSuite:
     warnings: tuple[str, ...] = ()
     verdict: str = ""
     units: str | None = None
+    rules: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    baseline: str | None = None
 
     def count(self, outcome: str) -> int:
         return sum(1 for case in self.cases if case.outcome == outcome)

@@ -16,7 +16,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from meshcol.io import ci, tap
+from meshcol.io import ci, markdown, sarif, tap
 from meshcol.io.report import emit
 
 __all__ = [
@@ -93,6 +93,20 @@ FORMATS: dict[str, ReportFormat] = {
             tap.dumps_tap,
             note="Test Anything Protocol 14",
         ),
+        ReportFormat(
+            "sarif",
+            ".sarif",
+            "ci_suite",
+            sarif.dumps_sarif,
+            note="SARIF 2.1.0 for GitHub code scanning",
+        ),
+        ReportFormat(
+            "markdown",
+            ".md",
+            "ci_suite",
+            markdown.dumps_markdown,
+            note="a pull-request comment: what is new or worse, per rule and per case",
+        ),
     )
 }
 #: The format names (``--format`` choices).
@@ -106,11 +120,15 @@ def _either(items: Sequence[str]) -> str:
     return items[0] if len(items) == 1 else f"{', '.join(items[:-1])} or {items[-1]}"
 
 
-def describe_formats() -> str:
+def describe_formats(formats: Sequence[str] | None = None) -> str:
     """The formats for a help text: ``json, csv, junit (JUnit XML for ...) or github (...)``,
-    then the default: ``[default: from the --report extension (.json, ...), else json]``."""
-    names = [f"{f.name} ({f.note})" if f.note else f.name for f in FORMATS.values()]
-    extensions = ", ".join(REPORT_EXTENSIONS)
+    then the default: ``[default: from the --report extension (.json, ...), else json]``.
+    ``formats``: only those (default every one)."""
+    chosen = [f for f in FORMATS.values() if formats is None or f.name in formats]
+    names = [f"{f.name} ({f.note})" if f.note else f.name for f in chosen]
+    extensions = ", ".join(
+        e for e, name in REPORT_EXTENSIONS.items() if name in (formats or FORMATS)
+    )
     return f"{_either(names)}.  [default: from the --report extension ({extensions}), else json]"
 
 

@@ -17,11 +17,12 @@ from typing import TYPE_CHECKING, Any
 
 from meshcol.errors import InvalidMeshError
 from meshcol.io.mesh_trimesh import load_scene, scene_nodes
+from meshcol.io.paths import confine_uris
 
 if TYPE_CHECKING:
     from meshcol.io.mesh_formats import MeshNode
 
-__all__ = ["check_references", "read_glb", "read_gltf"]
+__all__ = ["check_references", "read_document", "read_glb", "read_gltf"]
 
 
 def read_gltf(file: Path, source: str) -> list[MeshNode]:
@@ -107,6 +108,7 @@ def check_references(document: Any, kind: str, source: str) -> None:
     """Refuse references to objects the glTF document does not have, naming the reference
     (``kind``: ``GLTF`` or ``GLB``, for the message)."""
     gltf = _Document(document, kind, source)
+    confine_uris(document, source)  # every buffer and image file inside --root (io.paths)
     for check in _CHECKS:
         check(gltf)
 
@@ -194,3 +196,26 @@ def _file_order(file: Path, file_type: str, nodes: list) -> list:
         index.setdefault(str(node.get("name", "")), k)
     # unnamed nodes keep trimesh's relative order, after the named ones
     return sorted(nodes, key=lambda item: index.get(item[0], len(index)))
+
+
+def read_document(file: Path, source: str) -> tuple[Any, bytes | None]:
+    """A ``.gltf`` or ``.glb`` file's JSON document and a GLB's binary chunk (None for
+    ``.gltf`` or a GLB without one): for the physics extensions' reader
+    (:mod:`meshcol.io.gltf_physics`)."""
+    if file.suffix.lower() == ".glb":
+        return _glb_json(file, source), _glb_binary(file.read_bytes())
+    return _gltf_json(file, source), None
+
+
+def _glb_binary(data: bytes) -> bytes | None:
+    """The binary chunk of a GLB file's bytes (after its JSON chunk), or None."""
+    if len(data) < 20:
+        return None
+    length = struct.unpack("<I", data[12:16])[0]
+    start = 20 + length + (-length % 4)
+    if start + 8 > len(data):
+        return None
+    size, kind = struct.unpack("<I4s", data[start : start + 8])
+    if kind != b"BIN\x00" or start + 8 + size > len(data):
+        return None
+    return data[start + 8 : start + 8 + size]

@@ -116,7 +116,8 @@ def parts_body(name: str, source: str, pose: np.ndarray, elements: Sequence[Link
         if primitive is not None:
             vertices, faces = tessellate(primitive)
         assert vertices is not None and faces is not None
-        blocks_v.append(vertices @ origin[:3, :3].T + origin[:3, 3])
+        identity = np.array_equal(origin, np.eye(4))  # the USD and glTF readers' parts
+        blocks_v.append(vertices if identity else vertices @ origin[:3, :3].T + origin[:3, 3])
         blocks_f.append(faces + base)
         counts.append(len(faces))
         base += len(vertices)

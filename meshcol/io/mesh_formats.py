@@ -23,7 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from meshcol.errors import InputFileError, MissingDependencyError
-from meshcol.io import gltf, mesh_trimesh, off
+from meshcol.io import gltf, gltf_physics, mesh_trimesh, off, usd_read
+from meshcol.io.physics_bodies import FileScene
 
 __all__ = [
     "FORMATS",
@@ -65,6 +66,11 @@ class MeshFormat:
         format (``collada``); such a format is not one of the commands' own inputs.
     requires : tuple of str or None
         ``(module, install hint)``: a module the reader needs, checked before reading.
+    scene : callable or None
+        ``scene(file: Path, source: str) -> FileScene | None``: for a file that is a scene
+        of its own (USD, glTF with physics extensions: bodies with their colliders and exact
+        primitives, excluded pairs, units, warnings; :mod:`meshcol.io.physics_bodies`),
+        read instead of ``read``; None from it: nothing beyond ``read``'s nodes.
     """
 
     name: str
@@ -74,6 +80,7 @@ class MeshFormat:
     unnamed: str | None = None
     opt_in: str | None = None
     requires: tuple[str, str] | None = None
+    scene: Callable[[Path, str], FileScene | None] | None = None
 
 
 #: Every format, in the order messages list their extensions.
@@ -82,8 +89,8 @@ FORMATS: tuple[MeshFormat, ...] = (
     MeshFormat("stl", (".stl",), native=1),
     MeshFormat("ply", (".ply",), read=mesh_trimesh.read_ply),
     MeshFormat("off", (".off",), read=off.read_off_file),
-    MeshFormat("glb", (".glb",), read=gltf.read_glb),
-    MeshFormat("gltf", (".gltf",), read=gltf.read_gltf),
+    MeshFormat("glb", (".glb",), read=gltf.read_glb, scene=gltf_physics.read_glb_scene),
+    MeshFormat("gltf", (".gltf",), read=gltf.read_gltf, scene=gltf_physics.read_gltf_scene),
     MeshFormat(
         "dae",
         (".dae",),
@@ -93,6 +100,12 @@ FORMATS: tuple[MeshFormat, ...] = (
             "collada",  # trimesh reads COLLADA with pycollada
             "reading COLLADA (.dae) needs pycollada: pip install 'meshcol[robots]'",
         ),
+    ),
+    MeshFormat(
+        "usd",
+        usd_read.USD_EXTENSIONS,
+        scene=usd_read.read_usd_scene,
+        requires=("pxr", "reading USD needs usd-core: pip install 'meshcol[usd]'"),
     ),
 )
 

@@ -11,6 +11,7 @@ and vertices split along UV or normal seams are merged back by position.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -20,10 +21,12 @@ import numpy as np
 
 from meshcol.errors import InputFileError, InvalidMeshError
 from meshcol.io.mesh_formats import MESH_EXTENSIONS, MeshFormat, check_file, mesh_format
-from meshcol.types import Body
+from meshcol.io.physics_bodies import BodyGroup, axis_turn, choose_collider, scaled_primitive
+from meshcol.types import Body, Scene
 
 __all__ = [
     "MAX_COORDINATE",
+    "load_file_scene",
     "MESH_EXTENSIONS",
     "check_magnitude",
     "load_mesh",
@@ -106,9 +109,13 @@ def load_mesh(
     """
     source = os.fspath(path)
     fmt = check_file(source, frozenset({"collada"}) if collada else frozenset())
+    file = Path(source)
+    if fmt.scene is not None:
+        scene = load_file_scene(source, merge=merge)
+        if scene is not None:
+            return list(scene.bodies)
     if fmt.read is None:
         return load_meshes([source], merge=merge)[0]
-    file = Path(source)
     nodes = fmt.read(file, source)
     if not nodes:
         raise InvalidMeshError("mesh has no faces", source)
@@ -118,6 +125,84 @@ def load_mesh(
         full = _unique(file.stem if len(nodes) == 1 else f"{file.stem}/{name}", used)
         bodies.append(_node_body(full, matrix, vertices, faces, source, merge))
     return bodies
+
+
+def load_file_scene(path: str | os.PathLike[str], *, merge: bool = True) -> Scene | None:
+    """The scene a file declares of itself (its format's ``scene`` reader: USD, glTF with
+    physics extensions), or None for a file that is only meshes (then :func:`load_mesh`
+    has everything). ``merge``: as :func:`load_mesh`.
+
+    Returns
+    -------
+    Scene or None
+        One body per group the reader found, named as :func:`load_mesh` names bodies
+        (``<stem>`` alone for one, else ``<stem>/<name>``, ``#2``... for a name taken); the
+        reader's excluded pairs, units and warnings; ``source`` the path.
+    """
+    source = os.fspath(path)
+    fmt = check_file(source)
+    found = None if fmt.scene is None else fmt.scene(Path(source), source)
+    if found is None:
+        return None
+    if not found.groups:
+        raise InvalidMeshError("mesh has no faces", source)
+    stem = Path(source).stem
+    used: set[str] = set()
+    warnings = list(found.warnings)
+    names: dict[str, str] = {}
+    bodies = []
+    for group in found.groups:
+        full = stem if len(found.groups) == 1 else f"{stem}/{group.name}"
+        names[group.key] = name = _unique(full, used)
+        bodies.append(_group_body(name, source, group, warnings, merge))
+    excluded = sorted(
+        {(*sorted((names[a], names[b])), reason) for a, b, reason in found.excluded if a != b}
+    )
+    return Scene(
+        bodies=tuple(bodies),
+        units=found.units,
+        source=source,
+        excluded_pairs=tuple((a, b, reason) for a, b, reason in excluded),
+        warnings=tuple(warnings),
+    )
+
+
+def _group_body(
+    name: str, source: str, group: BodyGroup, warnings: list[str], merge: bool = True
+) -> Body:
+    """One body from a group of collision shapes (:mod:`meshcol.io.physics_bodies`): a lone
+    primitive stays exact when its transform allows; anything else is a body of parts,
+    every part merged; ``warnings`` gets a line when its parts ask for different colliders."""
+    from meshcol.io.links import LinkElement, parts_body, primitive_body
+    from meshcol.io.primitives import primitive_mesh
+
+    pose, _ = split_rigid(group.world)
+    inverse = np.linalg.inv(pose)
+    elements = []
+    for element in group.elements:
+        origin = inverse @ element.world
+        if element.primitive is not None:
+            origin = origin @ axis_turn(element.axis)
+            exact = scaled_primitive(element.primitive, origin)
+            if exact is not None and len(group.elements) == 1:
+                primitive, rigid = exact
+                return primitive_body(name, source, primitive, pose @ rigid)
+            vertices, faces = primitive_mesh(element.primitive)
+        else:
+            assert element.vertices is not None and element.faces is not None
+            vertices, faces = element.vertices, element.faces
+        # einsum, not matmul: a (n, 3) @ (3, 3) goes to BLAS, whose threads stall on a
+        # loaded machine (seconds for a million points)
+        vertices = np.einsum("ij,nj->ni", origin[:3, :3], vertices) + origin[:3, 3]
+        check_magnitude(vertices, "vertex", source)
+        if np.linalg.det(origin[:3, :3]) < 0:
+            faces = faces[:, ::-1]
+        if merge:
+            vertices, faces = merge_vertices(vertices, faces)
+        elements.append(LinkElement(element.name, np.eye(4), None, vertices, faces))
+    body = parts_body(name, source, pose, elements)
+    collider = choose_collider([e.collider for e in group.elements], warnings, name)
+    return body if collider is None else dataclasses.replace(body, collider=collider)
 
 
 def _node_body(name: str, matrix, vertices, faces, source: str, merge: bool) -> Body:

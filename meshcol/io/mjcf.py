@@ -33,6 +33,7 @@ from meshcol.io.links import (
     primitive_body,
     tessellate,
 )
+from meshcol.io.paths import confine_mjcf
 from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere
 
 if TYPE_CHECKING:
@@ -83,6 +84,7 @@ def read_mjcf(
         name, and the model's kinematics.
     """
     mujoco = _import_mujoco(source)
+    confine_mjcf(source)  # every included and asset file inside --root (io.paths)
     try:
         model = mujoco.MjModel.from_xml_path(source)
     except Exception as exc:  # noqa: BLE001 - MuJoCo raises ValueError and others; its words

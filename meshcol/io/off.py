@@ -314,6 +314,10 @@ def _convex(points: np.ndarray) -> np.ndarray:
     edge = np.roll(uv, -1, axis=-2) - uv
     prev = np.roll(edge, 1, axis=-2)
     turn = prev[..., 0] * edge[..., 1] - prev[..., 1] * edge[..., 0]
+    if points.shape[-2] <= 4:
+        # k left turns, each under half a turn, add up to less than k/2 turns: for k <= 4
+        # that is one turn exactly (a pentagram's two need k >= 5), so the sum needs no check
+        return np.all(turn > 0, axis=-1)
     angle = np.arctan2(turn, np.sum(prev * edge, axis=-1))
     total = np.sum(angle, axis=-1)
     return np.all(turn > 0, axis=-1) & (np.abs(total - 2 * np.pi) < 1e-6)

@@ -193,13 +193,14 @@ def manifest_inputs(paths: Iterable[PathLike]) -> list[tuple[str, str]]:
     A manifest that cannot be parsed contributes only itself: loading it reports the problem.
     """
     from meshcol.io.inputs import is_manifest
-    from meshcol.io.scene import manifest_mesh_files
 
     found: list[tuple[str, str]] = []
     for path in paths:
         path = os.fspath(path)
         found.append(("the input", path))
         if is_manifest(path):
+            from meshcol.io.scene import manifest_mesh_files  # numpy: only for a manifest
+
             description = f"a mesh file of {path}"  # once, not once a mesh
             found.extend((description, mesh) for mesh in manifest_mesh_files(path))
     return found

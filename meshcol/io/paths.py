@@ -8,11 +8,27 @@ absolute paths and a message names what the user typed.
 
 from __future__ import annotations
 
+import contextlib
 import os
-from collections.abc import Iterable
-from typing import overload
+from collections.abc import Iterable, Iterator
+from contextvars import ContextVar
+from typing import Any, overload
+from urllib.parse import unquote
 
-__all__ = ["display_path", "display_paths"]
+from meshcol.errors import InputFileError
+
+__all__ = [
+    "ROOT_ENV",
+    "OutsideRootError",
+    "confine",
+    "confine_mjcf",
+    "confine_uris",
+    "confined_to",
+    "current_root",
+    "display_path",
+    "display_paths",
+    "recording_reads",
+]
 
 
 @overload
@@ -83,3 +99,140 @@ def display_paths(
             shown = name if inside == "." else os.path.join(inside, name)
         out.append(shown.replace(os.sep, "/") if posix else shown)
     return out
+
+
+# --- the root every path a file names must stay inside (untrusted inputs) ----------------------
+
+#: The environment variable that carries the root to worker processes (and lets a user set it).
+ROOT_ENV = "MESHCOL_ROOT"
+_ROOT: ContextVar[str | None] = ContextVar("meshcol_root", default=None)
+_READS: ContextVar[set[str] | None] = ContextVar("meshcol_reads", default=None)
+
+
+class OutsideRootError(InputFileError):
+    """A file names a path that resolves outside the root (``--root``, ``meshcol ci``)."""
+
+
+def current_root() -> str | None:
+    """The root paths named by files must resolve inside (real path), or None: no limit.
+    Set by :func:`confined_to`, else by ``$MESHCOL_ROOT``."""
+    root = _ROOT.get()
+    if root is None:
+        env = os.environ.get(ROOT_ENV)
+        root = os.path.realpath(env) if env else None
+    return root
+
+
+@contextlib.contextmanager
+def confined_to(root: str | os.PathLike[str] | None) -> Iterator[None]:
+    """Within the block every path a file names must resolve inside ``root`` (None: no
+    limit); nested blocks replace it."""
+    token = _ROOT.set(None if root is None else os.path.realpath(root))
+    try:
+        yield
+    finally:
+        _ROOT.reset(token)
+
+
+@contextlib.contextmanager
+def recording_reads() -> Iterator[set[str]]:
+    """Collect, in the set yielded, the real path of every file a file names that
+    :func:`confine` lets through during the block (what a scene depends on)."""
+    reads: set[str] = set()
+    token = _READS.set(reads)
+    try:
+        yield reads
+    finally:
+        _READS.reset(token)
+
+
+@overload
+def confine(path: str, source: str | os.PathLike[str], reference: str | None = None) -> str: ...
+
+
+@overload
+def confine(path: None, source: str | os.PathLike[str], reference: str | None = None) -> None: ...
+
+
+def confine(
+    path: str | None, source: str | os.PathLike[str], reference: str | None = None
+) -> str | None:
+    """``path``, a file that ``source`` names (a manifest's mesh, a URDF's mesh, a glTF
+    buffer, an MJCF include), as it was; the one check that it lies inside the root.
+
+    The path is resolved first (symlinks followed, ``..`` collapsed): a link inside the root
+    that points out of it is outside. With no root (:func:`current_root`) every path passes.
+
+    Raises
+    ------
+    OutsideRootError
+        ``source: path 'REFERENCE' resolves outside the root ROOT (to REAL)``: the path
+        leaves the root.
+    """
+    if path is None:
+        return None
+    real = os.path.realpath(path)
+    reads = _READS.get()
+    if reads is not None:
+        reads.add(real)
+    root = current_root()
+    if root is None or real == root or real.startswith(root.rstrip(os.sep) + os.sep):
+        return path
+    named = path if reference is None else reference
+    raise OutsideRootError(
+        f"path {named!r} resolves outside the root {display_path(root)} (to {real})",
+        display_path(source),
+    )
+
+
+def confine_uris(document: Any, source: str | os.PathLike[str]) -> None:
+    """:func:`confine` every external ``uri`` of a glTF document's buffers and images
+    (``data:`` URIs are inline; other schemes are never fetched and refused under a root)."""
+    folder = os.path.dirname(os.fspath(source))
+    for name in ("buffers", "images"):
+        items = document.get(name) if isinstance(document, dict) else None
+        for item in items if isinstance(items, list) else []:
+            uri = item.get("uri") if isinstance(item, dict) else None
+            if not isinstance(uri, str) or uri.startswith("data:"):
+                continue
+            target = unquote(uri)
+            if "://" in target and current_root() is not None:
+                raise OutsideRootError(f"{name[:-1]} uri {uri!r} is not a file", source)
+            confine(os.path.join(folder, target), source, uri)
+
+
+def confine_mjcf(source: str | os.PathLike[str]) -> None:
+    """:func:`confine` every file an MJCF file names (``<include file>``, followed; assets'
+    ``file`` under the compiler's ``meshdir``, ``texturedir`` or ``assetdir``), before MuJoCo's
+    compiler reads them. Does nothing without a root; a file that does not parse is left for
+    the compiler to name."""
+    if current_root() is None:
+        return
+    import xml.etree.ElementTree as ET
+
+    pending, seen = [os.fspath(source)], set()
+    dirs: dict[str, str] = {}
+    while pending:
+        file = pending.pop()
+        if file in seen:
+            continue
+        seen.add(file)
+        try:
+            tree = ET.parse(file)
+        except (OSError, ET.ParseError):
+            continue
+        folder = os.path.dirname(os.fspath(source))  # MuJoCo: paths from the main file's folder
+        for compiler in tree.iter("compiler"):
+            for key in ("assetdir", "meshdir", "texturedir"):
+                if compiler.get(key):
+                    dirs[key] = compiler.get(key, "")
+        for element in tree.iter():
+            name = element.get("file")
+            if name is None:
+                continue
+            if element.tag == "include":
+                pending.append(confine(os.path.join(folder, name), file, name))
+                continue
+            sub = dirs.get("texturedir" if element.tag == "texture" else "meshdir")
+            sub = sub or dirs.get("assetdir", "")
+            confine(os.path.join(folder, sub, name), file, name)

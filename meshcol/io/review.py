@@ -237,6 +237,30 @@ class ReviewPage:
             }
         )
 
+    # -- reading (the offscreen snapshots, io.snapshots) -----------------------------------
+
+    def rows(self) -> list[dict[str, Any]]:
+        """The table's rows as added: ``cells``, ``bodies`` (indices of :attr:`bodies`),
+        ``points``, ``normal``, ``label``, ``severity``, ``group``."""
+        return list(self._rows)
+
+    def meshes(self) -> list[dict[str, Any]]:
+        """Every mesh as added, with its geometry: ``vertices`` and ``faces`` (local frame),
+        ``pose``, ``group``, ``color``, ``opacity``, ``body`` (-1: none), ``name``."""
+        return [
+            {
+                **obj,
+                "vertices": self._geometries[obj["g"]].vertices,
+                "faces": self._geometries[obj["g"]].faces,
+            }
+            for obj in self._objects
+        ]
+
+    def lines(self) -> list[dict[str, Any]]:
+        """Every set of line segments as added: ``p`` ``(n, 2, 3)`` world, ``group``,
+        ``color``, ``body``."""
+        return list(self._lines)
+
     # -- writing ------------------------------------------------------------------------
 
     def _centre_and_radius(self) -> tuple[np.ndarray, np.ndarray]:

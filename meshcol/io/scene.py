@@ -22,6 +22,7 @@ from typing import Any
 from meshcol.errors import InputFileError, MeshcolError, SceneError
 from meshcol.io.inputs import input_kind, is_robot_file
 from meshcol.io.mesh_read import load_mesh
+from meshcol.io.paths import confine
 from meshcol.io.robot import RobotOptions, load_robot
 from meshcol.io.scene_bodies import (
     build_bodies,
@@ -37,6 +38,7 @@ from meshcol.types import Body, Scene
 
 __all__ = [
     "SCHEMA_PATH",
+    "is_scene_file",
     "iter_inputs",
     "load_inputs",
     "as_scene",
@@ -166,9 +168,56 @@ def load_inputs(
         if is_robot_file(manifest):
             return load_robot(manifest, robot_options)
         return load_scene(manifest)
-    bodies = [body for _, file_bodies in iter_inputs(paths) for body in file_bodies]
     source = os.fspath(paths[0]) if len(paths) == 1 else None
+    if any(is_scene_file(path) for path in paths):
+        return _file_scenes(paths, source)
+    bodies = [body for _, file_bodies in iter_inputs(paths) for body in file_bodies]
     return Scene(bodies=tuple(bodies), units=None, source=source)
+
+
+def is_scene_file(path: str | os.PathLike[str]) -> bool:
+    """True for a mesh file whose format reads it as a scene of its own (USD: excluded pairs,
+    units, warnings beside the bodies; ``MeshFormat.scene``)."""
+    from meshcol.io.mesh_formats import mesh_format
+
+    try:
+        return mesh_format(os.fspath(path)).scene is not None
+    except InputFileError:
+        return False
+
+
+def _file_scenes(paths: Sequence[str | os.PathLike[str]], source: str | None) -> Scene:
+    """Mesh files of which some are scenes of their own: every file's bodies named as
+    :func:`load_inputs` names them, the files' excluded pairs (renamed with their bodies),
+    their warnings, and their units when every file declares the same."""
+    from meshcol.io.mesh_read import load_file_scene
+
+    used: set[str] = set()
+    bodies: list[Body] = []
+    pairs: list[tuple[str, str, str]] = []
+    warnings: list[str] = []
+    units: set[str | None] = set()
+    for path in paths:
+        scene = load_file_scene(path)
+        if scene is None:
+            scene = Scene(bodies=tuple(load_mesh(path)))
+        renamed: dict[str, str] = {}
+        for body in scene.bodies:
+            renamed[body.name] = name = unique_name(body.name, used)
+            bodies.append(body if name == body.name else dataclasses.replace(body, name=name))
+        for a, b, reason in scene.excluded_pairs:
+            a, b = sorted((renamed[a], renamed[b]))
+            pairs.append((a, b, reason))
+        prefix = "" if len(paths) == 1 else f"{os.fspath(path)}: "
+        warnings.extend(prefix + warning for warning in scene.warnings)
+        units.add(scene.units)
+    return Scene(
+        bodies=tuple(bodies),
+        units=units.pop() if len(units) == 1 else None,
+        source=source,
+        excluded_pairs=tuple(pairs),
+        warnings=tuple(warnings),
+    )
 
 
 def _single_manifest(paths: Sequence[str | os.PathLike[str]]) -> str | os.PathLike[str] | None:
@@ -260,4 +309,4 @@ def manifest_mesh_files(path: str | os.PathLike[str]) -> list[str]:
         if isinstance(mesh, str) and mesh:
             meshes[mesh] = None
     folder = os.path.dirname(source)
-    return list(dict.fromkeys(os.path.join(folder, mesh) for mesh in meshes))
+    return list(dict.fromkeys(confine(os.path.join(folder, m), source, m) for m in meshes))

@@ -18,6 +18,7 @@ import numpy as np
 
 from meshcol.errors import MeshcolError, SceneError
 from meshcol.io.mesh_read import MAX_COORDINATE, check_magnitude, load_mesh, split_rigid
+from meshcol.io.paths import confine
 from meshcol.io.primitives import primitive_mesh
 from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Sphere, Spin
 
@@ -90,7 +91,9 @@ def read_mesh_files(document: Any, source: str) -> dict[str, list[Body]]:
     meshes = dict.fromkeys(
         spec["mesh"] for spec in document["bodies"] if isinstance(spec.get("mesh"), str)
     )  # each name once before the path arithmetic: 300,000 bodies may share 16 files
-    paths = list(dict.fromkeys(os.path.normpath(os.path.join(folder, m)) for m in meshes))
+    paths = list(
+        dict.fromkeys(confine(os.path.normpath(os.path.join(folder, m)), source, m) for m in meshes)
+    )  # each inside --root (meshcol.io.paths)
     try:
         return dict(zip(paths, load_meshes(paths)))
     except MeshcolError:

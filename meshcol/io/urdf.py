@@ -37,6 +37,7 @@ from meshcol.io.links import (
     primitive_body,
 )
 from meshcol.io.packages import PackageResolver
+from meshcol.io.paths import confine
 from meshcol.io.xacro_leftovers import resolve_xacro_leftovers
 from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere
 
@@ -438,6 +439,7 @@ def _link_elements(
         raise SceneError(f"{label}: {role} {index} has no shape", source)
     reference = mesh.filename
     path, why = meshes.resolver.resolve(reference)
+    path = confine(path, source, reference)  # inside --root (meshcol.io.paths)
     if path is None:
         raise SceneError(f"{label}: mesh {reference!r}: {why}", source)
     scale = _mesh_scale(mesh.scale, label, source)

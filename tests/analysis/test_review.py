@@ -300,9 +300,10 @@ def test_decompose_page_rows_per_part(tmp_path):
 
 #: Slots of the page's skeleton, each filled once.
 SLOTS = ["TITLE", "STYLE", "ERRORS", "VIEWER", "DATA", "APP"]
-#: sha256 of _small_page() as ee068ea wrote it, when the page was strings in review.py: the
-#: page read from its files must not change by a byte (change it only with the page).
-SMALL_PAGE_SHA256 = "6b6da322999444e2898d2a7d0e410ea14af92e5fdc6fce4b8b6005aca5c3230d"
+#: sha256 of _small_page(): ee068ea's page (when it was strings in review.py) but for issue
+#: 29 item 19's changes (a chosen body alone on single-body pages, cut cells with titles):
+#: the page must not change by a byte unless on purpose (change it only with the page).
+SMALL_PAGE_SHA256 = "74a1fa00c96cb0629199d65c6f6bafd02218aa674c6f1ba03cf113fbe3f729aa"
 
 
 def _small_page(monkeypatch) -> str:
@@ -511,7 +512,7 @@ def test_browser_inspect_findings_and_hull(tmp_path):
     assert result.exit_code == 0
     pixels, dom = chromium(page, tmp_path)
     assert_drew(pixels, dom)
-    cells = re.findall(r"<td>([^<]*)</td>", dom)
+    cells = re.findall(r"<td[^>]*>([^<]*)</td>", dom)
     assert "open" in cells and "4" in cells  # 4 open edges listed for the body
 
 
@@ -589,3 +590,40 @@ def test_decompose_command_writes_its_page(tmp_path):
     text = page.read_text()
     assert '"title":"block.obj"' in text and '"columns":["body","part","vertices"' in text
     assert "block.html" not in os.listdir(tmp_path / "parts")
+
+
+def test_hull_page_under_a_target_names_it_not_an_exact_hull(samples):
+    # Issue 29 item 19: the page said "max vertices: exact hull" for hulls a target shaped.
+    from meshcol.analysis.hull import hull
+    from meshcol.analysis.review import hull_page
+    from meshcol.io.targets import load_target
+
+    bowl = str(samples / "bowl" / "bowl.obj")
+    info = dict(hull_page(hull([bowl], target=load_target("physx-gpu")), [bowl]).info)
+    assert info["target"].startswith("physx-gpu (") and "max_hull_vertices 64" in info["target"]
+    assert "max vertices" not in info
+    assert dict(hull_page(hull([bowl]), [bowl]).info)["max vertices"] == "exact hull"
+    assert dict(hull_page(hull([bowl], max_vertices=32), [bowl]).info)["max vertices"] == "32"
+
+
+@browser
+@pytest.mark.slow
+def test_browser_inspect_shows_a_chosen_body_alone(tmp_path):
+    # Issue 29 item 19: choosing a body on the inspect page left the others drawn, so a body
+    # inside another stayed hidden behind it.
+    trimesh.creation.box((4.0, 4.0, 4.0)).export(tmp_path / "outer.obj")
+    trimesh.creation.box((1.0, 1.0, 1.0)).export(tmp_path / "inner.obj")
+    page = tmp_path / "inspect.html"
+    inputs = [str(tmp_path / "outer.obj"), str(tmp_path / "inner.obj")]
+    assert run(["inspect", *inputs, "--html", str(page)]).exit_code == 0
+    chosen, dom = chromium(page, tmp_path, "#pair=1")
+    view = assert_drew(chosen, dom)
+    assert magenta(view) > 0.005, "the chosen inner body is hidden by the outer one"
+    assert 'title="inner"' in dom  # every cell whole in its title, cut or not
+
+
+def test_long_names_are_cut_with_an_ellipsis_not_the_table():
+    # Issue 29 item 19: long link names pushed the check page's numbers out of view.
+    style = (Path(review.__file__).parent / "review_assets" / "page.css").read_text()
+    rule = re.search(r"#rows td \{([^}]*)\}", style)
+    assert rule and "text-overflow: ellipsis" in rule[1] and "max-width" in rule[1]

@@ -341,6 +341,21 @@ def _pair(rule_id: str, tmp_path: Path, other_at: tuple, other_size: tuple, **op
     return report.exit_code == 1
 
 
+@case("MC505")
+def _undecided(tmp_path: Path, rule_id: str) -> tuple[bool, bool]:
+    """A box across a Moebius strip under ``--shape mesh`` is undecided (neither contact nor
+    penetration is claimed); the same box clear of the strip's hull is not."""
+    from dirty_meshes import moebius
+
+    strip = write_obj(tmp_path / "strip.obj", {"strip": moebius()})
+
+    def fails(at: tuple) -> bool:
+        b = write_obj(tmp_path / "b.obj", {"b": box((0.2, 0.2, 0.2), at)})
+        return check([strip, b], fail_on=rule_id, collider="mesh", clearance=0.5).exit_code == 1
+
+    return fails((1.0, 0.0, 0.0)), fails((1.6, 0.0, 0.0))
+
+
 @case("MC501", "MC502", "MC503", "MC504")
 def _pairs(tmp_path: Path, rule_id: str) -> tuple[bool, bool]:
     """Each pair status fails the run when its rule is listed; the next status does not."""
@@ -452,7 +467,7 @@ def test_rules_command_lists_and_shows_one() -> None:
     # The registry has no findings for CI annotations: refused, never JSON in their place.
     for fmt in ("junit", "github"):
         refused = run("rules", "--format", fmt)
-        assert refused.exit_code == 2 and "writes json or csv" in refused.stderr
+        assert refused.exit_code == 2 and "is not one of 'json', 'csv'" in refused.stderr
 
 
 @pytest.mark.parametrize("name", ["7_8ths_cube.stl", "angle_block.STL", "featuretype.STL"])

@@ -42,7 +42,9 @@ def meshes(tmp_path_factory) -> dict[str, Path]:
 
 
 def run(args: list[str]) -> tuple[int, str, str]:
-    result = CliRunner().invoke(main, ["decompose", *args])
+    """``meshcol decompose ARGS`` with its report on stdout (``--report -`` unless given)."""
+    report = [] if "--report" in args else ["--report", "-"]
+    result = CliRunner().invoke(main, ["decompose", *args, *report])
     if result.exception and not isinstance(result.exception, SystemExit):
         raise result.exception
     return result.exit_code, result.stdout, result.stderr
@@ -639,8 +641,8 @@ def test_outputs_are_checked_before_any_work(meshes, tmp_path, monkeypatch) -> N
         (
             ["-o", "out", "--report", box],  # refused by its extension before anything else
             f"invalid value for '--report': unknown report extension '.obj' in '{box}': "
-            "expected .json, .csv, .xml or .tap (or give --report-format "
-            "json|csv|junit|github|tap) "
+            "expected .json, .csv, .xml, .tap, .sarif or .md (or give --report-format "
+            "json|csv|junit|github|tap|sarif|markdown) "
             "(see 'meshcol decompose -h')",
         ),
         (

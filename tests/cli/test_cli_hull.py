@@ -290,7 +290,8 @@ BAD_MESHES = {
     ),
     "unknown.xyz": (
         "x\n",
-        "unknown mesh file extension '.xyz' (expected .obj, .stl, .ply, .off, .glb, .gltf)",
+        "unknown mesh file extension '.xyz' "
+        "(expected .obj, .stl, .ply, .off, .glb, .gltf, .usd, .usda, .usdc, .usdz)",
     ),
 }
 

@@ -175,7 +175,8 @@ def test_broken_manifest(tmp_path: Path, name: str) -> None:
         (
             "mesh.dae",
             "<xml/>\n",
-            "unknown mesh file extension '.dae' (expected .obj, .stl, .ply, .off, .glb, .gltf)",
+            "unknown mesh file extension '.dae' "
+            "(expected .obj, .stl, .ply, .off, .glb, .gltf, .usd, .usda, .usdc, .usdz)",
         ),
     ],
 )

@@ -315,3 +315,30 @@ def test_a_killed_check_worker_fails_only_its_file(batch, tmp_path) -> None:
     )
     assert clean.exit_code == 0, clean.stderr
     assert cache_entries(tmp_path / "c1") == cache_entries(tmp_path / "c2") != []
+
+
+def test_a_cluster_that_refuses_the_client_gets_the_token_hint(monkeypatch) -> None:
+    # Issue 29 item 19: joining a Ray cluster started with RAY_AUTH_MODE=token, without the
+    # token, said only "Failed to connect to Ray cluster at ..." (Ray's GCS logs the
+    # InvalidAuthToken refusal in lines of its own). Seen on a real head started here with
+    # `RAY_AUTH_MODE=token ray start --head`.
+    pytest.importorskip("ray")
+    from meshcol.decomposition import executor
+
+    refused = ConnectionError("Failed to connect to Ray cluster at 127.0.0.1:6390")
+    line = executor._join_failure("127.0.0.1:6390", refused, environ={})
+    assert line.startswith("Failed to connect to Ray cluster at 127.0.0.1:6390; ")
+    assert "RAY_AUTH_MODE=token" in line and "RAY_AUTH_TOKEN" in line and "\n" not in line
+    line = executor._join_failure("x:1", refused, environ={"RAY_AUTH_MODE": "token"})
+    assert line.endswith("(RAY_AUTH_MODE=token: is the token the cluster's?)")
+
+    import ray
+
+    def init(**kwargs):
+        raise refused
+
+    monkeypatch.setattr(ray, "is_initialized", lambda: False)
+    monkeypatch.setattr(ray, "init", init)
+    monkeypatch.delenv("RAY_AUTH_MODE", raising=False)
+    with pytest.raises(ConnectionError, match="needs RAY_AUTH_MODE=token here too"):
+        executor.RayExecutor(print, 1, address="10.1.2.3:6379")._connect()

@@ -192,7 +192,9 @@ def _l_shape() -> trimesh.Trimesh:
 
 
 def run(args: list[str]) -> tuple[int, str, str]:
-    result = CliRunner().invoke(main, ["decompose", *args])
+    """``meshcol decompose ARGS`` with its report on stdout (``--report -`` unless given)."""
+    report = [] if "--report" in args else ["--report", "-"]
+    result = CliRunner().invoke(main, ["decompose", *args, *report])
     if result.exception and not isinstance(result.exception, SystemExit):
         raise result.exception
     return result.exit_code, result.stdout, result.stderr

@@ -78,7 +78,7 @@ def _sleep_or_record(task):
 
 @pytest.mark.slow
 def test_ray_outputs_are_byte_identical_to_the_local_pool(ray_cluster, meshes, tmp_path) -> None:
-    args = [*map(str, meshes), "--no-cache", *FAST_DECOMPOSE, "--jobs", "2"]
+    args = [*map(str, meshes), "--no-cache", *FAST_DECOMPOSE, "--jobs", "2", "--report", "-"]
     runner = CliRunner()
     local = runner.invoke(main, ["decompose", *args, "-o", str(tmp_path / "local")])
     remote = runner.invoke(

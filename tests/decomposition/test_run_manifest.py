@@ -156,6 +156,7 @@ def test_resume_after_sigint_skips_the_files_that_finished(meshes, corpus, tmp_p
     inputs = [str(meshes["box"]), str(meshes["capsule"]), str(meshes["torus"]), str(slow)]
     command = [sys.executable, "-m", "meshcol", "decompose", *inputs, "-o", str(out)]
     command += ["--cache-dir", str(cache), "--run-manifest", str(manifest), "--preprocess", "off"]
+    command += ["--report", "-"]
     command += FAST_DECOMPOSE
     proc = subprocess.Popen(
         [*command, "--timeout", "600"],

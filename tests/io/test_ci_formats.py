@@ -238,6 +238,7 @@ def test_decompose_junit_fails_bodies_over_max_hausdorff(samples, schema, tmp_pa
     base = ["decompose", bullet, wall, "-o", str(tmp_path / "parts"), *FAST_DECOMPOSE]
     base += ["--cache-dir", str(tmp_path / "cache"), "--max-hausdorff", "1e-9"]
     base += ["--search-steps", "1"]  # one step misses 1e-9 as eight do (eight: 8x the time)
+    base += ["--report", "-"]
     code_json, out_json, _ = run(*base)
     code, out, _ = run(*base, "--report-format", "junit")
     assert code == code_json == 1
@@ -269,7 +270,11 @@ def test_decompose_format_junit_names_the_report_option(samples, tmp_path):
 def test_unknown_and_contradicting_formats_are_usage_errors(samples, tmp_path):
     bowl = str(samples / "bowl" / "bowl.obj")
     code, _, err = run("inspect", bowl, "--format", "yaml")
-    assert code == 2 and "'yaml' is not one of 'json', 'csv', 'junit', 'github', 'tap'" in err
+    assert (
+        code == 2
+        and "'yaml' is not one of 'json', 'csv', 'junit', 'github', 'tap', 'sarif', 'markdown'"
+        in err
+    )
     code, _, err = run("inspect", bowl, "--format", "github", "--report", str(tmp_path / "r.xml"))
     assert code == 2 and "is a .junit file: it cannot hold a github report" in err
     code, _, err = run("inspect", bowl, "--format", "junit", "--report", str(tmp_path / "r.json"))
@@ -490,8 +495,10 @@ def test_the_help_and_messages_list_the_registry():
 
     assert describe_formats() == (
         "json, csv, junit (JUnit XML for Jenkins and GitHub test reporters), github "
-        "(workflow-command annotations) or tap (Test Anything Protocol 14).  [default: from "
-        "the --report extension (.json, .csv, .xml, .tap), else json]"
+        "(workflow-command annotations), tap (Test Anything Protocol 14), sarif (SARIF "
+        "2.1.0 for GitHub code scanning) or markdown (a pull-request comment: what is new or "
+        "worse, per rule and per case).  [default: from the --report extension (.json, "
+        ".csv, .xml, .tap, .sarif, .md), else json]"
     )
     assert report_format("out.XML", None) == "junit"
     assert report_format("-", None) == report_format(None, None) == "json"

@@ -25,12 +25,16 @@ def test_every_extension_is_lower_case_and_belongs_to_one_format():
     assert len(extensions) == len(set(extensions))
     assert all(e.startswith(".") and e == e.lower() for e in extensions)
     assert all(fmt.name == fmt.name.lower() for fmt in FORMATS)
-    assert all((fmt.read is None) != (fmt.native is None) for fmt in FORMATS)
+    # read by the core, or by Python (mesh nodes, or a whole scene: USD)
+    assert all((fmt.read is None and fmt.scene is None) != (fmt.native is None) for fmt in FORMATS)
 
 
 def test_the_commands_read_what_they_always_read():
     # the unknown-extension message lists these, in this order
-    assert list(MESH_EXTENSIONS) == [".obj", ".stl", ".ply", ".off", ".glb", ".gltf"]
+    assert list(MESH_EXTENSIONS) == [
+        *(".obj", ".stl", ".ply", ".off", ".glb", ".gltf"),
+        *(".usd", ".usda", ".usdc", ".usdz"),
+    ]
     assert read_natively("a.OBJ") and read_natively("b.stl") and not read_natively("c.ply")
     assert not read_natively("d.dae") and not read_natively("noextension")
 

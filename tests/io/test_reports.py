@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 import json
+import shutil
 from pathlib import Path
 
 import jsonschema
@@ -21,7 +22,7 @@ from meshcol.io.report import ENVELOPE_KEYS, SCHEMA_VERSION, envelope
 
 #: The commands that write a run's report (``meshcol targets`` lists the packaged engine
 #: profiles: data, not a run, so no envelope).
-REPORT_COMMANDS = sorted(set(COMMANDS) - {"targets", "rules"})  # listings, not runs
+REPORT_COMMANDS = sorted(set(COMMANDS) - {"targets", "rules", "config"})  # listings, not runs
 
 SCHEMAS = Path(__file__).resolve().parents[2] / "meshcol" / "schemas"
 GOLDEN = Path(__file__).resolve().parents[1] / "golden"
@@ -113,10 +114,19 @@ def test_decompose_golden(
         "-o",
         str(tmp_path / "parts"),
         "--no-cache",
+        "--report",
+        "-",
         *FAST,
     )
     assert report["settings"]["out_dir"] == str(tmp_path / "parts")
     assert report["summary"]["ok"] == 2
+    # The settings state the values used (issue 29 item 18), which every body's params repeat
+    # but for the preprocessing CoACD's auto mode decides per mesh.
+    used = report["settings"]["engine_parameters"]
+    assert used["threshold"] == 0.2 and used["mcts_nodes"] == 8 and used["max_ch_vertex"] == 256
+    for entry in report["files"]:
+        for body in entry["bodies"]:
+            assert {**used, "preprocess_mode": body["params"]["preprocess_mode"]} == body["params"]
     report["settings"]["out_dir"] = "<out_dir>"
     for entry in report["files"]:
         entry["seconds"] = 0.0
@@ -241,6 +251,17 @@ def test_envelope_function() -> None:
     }
 
 
+def _ci_report(samples: Path, tmp_path: Path):
+    """``meshcol ci``'s report on one asset (inspected)."""
+    from meshcol.analysis.ci import run_ci
+    from meshcol.io.config import load_config
+
+    (tmp_path / "repo").mkdir()
+    shutil.copy(samples / "bullet" / "wall.obj", tmp_path / "repo" / "wall.obj")
+    (tmp_path / "repo" / "meshcol.toml").write_text('[[assets]]\nglob = "*.obj"\n')
+    return run_ci(load_config(tmp_path / "repo" / "meshcol.toml"), use_cache=False)
+
+
 def test_envelope_is_the_same_in_every_command_report(samples: Path, tmp_path: Path) -> None:
     """Each library report object starts from the one envelope, in the same shape."""
     from meshcol.analysis.check import check
@@ -274,6 +295,7 @@ def test_envelope_is_the_same_in_every_command_report(samples: Path, tmp_path: P
             engine_options={"mcts_iterations": "20", "mcts_nodes": "8", "mcts_max_depth": "2"},
         ),
         "collision-matrix": collision_matrix(robot, samples=10),
+        "ci": _ci_report(samples, tmp_path),
     }
     assert set(reports) == set(REPORT_COMMANDS)
     shapes = {}

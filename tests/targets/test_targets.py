@@ -175,6 +175,30 @@ def test_targets_table_shows_limits_and_conventions() -> None:
     assert next(line for line in lines if line.startswith("unreal")).split()[1] == "cm"
 
 
+def test_targets_and_rules_both_print_a_table_unless_asked_for_json() -> None:
+    # One behaviour for the two listings (issue 29 item 18): a table on stdout, piped or not
+    # (the CliRunner's stdout is not a terminal), and JSON only with --format json.
+    for command in ("targets", "rules"):
+        result = run(command)
+        assert result.exit_code == 0, result.output
+        assert result.output.split()[0] in ("name", "id"), (command, result.output[:80])
+        listed = run(command, "--format", "json")
+        assert listed.exit_code == 0 and isinstance(json.loads(listed.output), dict)
+
+
+def test_rules_help_lists_only_the_formats_it_writes() -> None:
+    from meshcol.analysis.rules import rules_report
+    from meshcol.cli.rules import RULES_FORMATS
+    from meshcol.io.formats import formats_for
+
+    assert formats_for(type(rules_report(()))) == RULES_FORMATS
+    help_text = " ".join(run("rules", "-h").output.split())
+    assert "[json|csv]" in help_text
+    for refused in ("junit", "github", "tap"):
+        assert refused not in help_text
+        assert run("rules", "--format", refused).exit_code == 2
+
+
 def test_targets_with_a_bad_profile_exits_2_naming_file_and_key(tmp_path: Path) -> None:
     path = tmp_path / "engine.toml"
     path.write_text("[limits]\nmax_hulls = -1\n")

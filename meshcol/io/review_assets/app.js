@@ -148,7 +148,9 @@ var trs = [];
 data.table.rows.forEach(function (row, i) {
   var tr = rowsEl.insertRow();
   if (row.severity === "violation") tr.className = "violation";
-  [i].concat(row.cells).forEach(function (c) { tr.insertCell().textContent = c; });
+  [i].concat(row.cells).forEach(function (c) {
+    var td = tr.insertCell(); td.textContent = c; td.title = c;  // cut cells show it whole
+  });
   tr.onclick = function () { location.hash = "pair=" + i; };
   trs.push(tr);
 });
@@ -159,6 +161,16 @@ function setGroup(name, visible) {
   cmd({type: "set_property", path: "/meshcol/" + name, property: "visible", value: visible});
 }
 Object.keys(rowGroups).forEach(function (g) { setGroup(g, false); });
+// Pages of single bodies (inspect, hull, decompose): a chosen body is shown alone, so that a
+// body inside another is not hidden by it; pair pages keep every body for context.
+var isolate = data.command !== "check" && data.command !== "sweep";
+function showOthers(row, visible) {
+  if (!isolate) return;
+  Object.keys(byBody).forEach(function (b) {
+    if (row.bodies.indexOf(parseInt(b, 10)) >= 0) return;
+    byBody[b].forEach(function (o) { o.visible = visible; });
+  });
+}
 function choose(i) {
   if (i === chosen) return;
   if (chosen >= 0) {
@@ -172,6 +184,7 @@ function choose(i) {
       });
     });
     if (before.group) setGroup(before.group, false);
+    showOthers(before, true);
   }
   if (marks) { viewer.scene.remove(marks); marks = null; }
   chosen = i; labelPoint = null; label.style.display = "none";
@@ -179,6 +192,7 @@ function choose(i) {
   var row = data.table.rows[i];
   trs[i].classList.add("chosen");
   trs[i].scrollIntoView({block: "nearest"});
+  showOthers(row, false);
   if (row.group) setGroup(row.group, true);
   var box = new THREE.Box3();
   viewer.scene.updateMatrixWorld(true);

@@ -1,0 +1,528 @@
+"""``meshcol ci``: every configured inspect, hull, fit and check over a repository, as one run.
+
+The stages: :func:`plan` (every file the configuration names, the commands it runs with its
+resolved settings, each checked once here: rule names, targets, ignore rules), then
+:func:`run_ci` (each job looked up in the result cache, :mod:`meshcol.decomposition.
+result_cache`, by its file's content, settings and meshcol's version; the misses run as
+tasks of one process pool, :func:`meshcol.decomposition.executor.run_each`, each confined
+to the root, :func:`meshcol.io.paths.confined_to`), then one :class:`~meshcol.analysis.
+ci_report.CiReport` (one verdict, one exit code, every format). ``changed`` (``--changed-
+since``) limits the run to the jobs whose file, or a file it read, changed.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import functools
+import hashlib
+import os
+import subprocess
+from collections.abc import Callable, Collection, Iterable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from meshcol.analysis.ci_report import CiReport, CiRun
+from meshcol.errors import MeshcolError
+from meshcol.io.config import Config, ConfigError, Resolved, resolve
+
+__all__ = ["Job", "changed_files", "plan", "repository_root", "run_ci", "run_job"]
+
+
+@dataclass(frozen=True)
+class Job:
+    """One command on one file: its settings as the command takes them (JSON values), the
+    files besides the input whose content it depends on (baseline, target profile)."""
+
+    command: str
+    path: str
+    kind: str
+    settings: Mapping[str, Any]
+    sections: tuple[str, ...] = ()
+    extra_files: tuple[str, ...] = field(default_factory=tuple)
+
+    @property
+    def label(self) -> str:
+        return f"{self.command} {self.path}"
+
+
+def _origin_error(resolved: Resolved, config: Config, key: str, problem: str) -> ConfigError:
+    origin = resolved.origins.get(key, "default")
+    if origin.startswith(config.path.name + ":"):
+        where = f"{config.path}:{origin.rsplit(':', 1)[1]}"
+        return ConfigError(f"{key}: {problem} (for {resolved.path})", where)
+    return ConfigError(f"{key}: {problem} (from {origin}, for {resolved.path})")
+
+
+def _ignored_rules(resolved: Resolved, config: Config, command: str) -> tuple[str, ...]:
+    from meshcol.analysis.rules import UnknownRuleError, select_rules
+
+    rules: list[str] = []
+    for entry in resolved.values["ignore"]:
+        if "rule" in entry:
+            try:
+                rules.extend(select_rules(entry["rule"], command))
+            except UnknownRuleError:
+                continue  # a rule of another command: not this one's to ignore
+    return tuple(rules)
+
+
+def _settings(resolved: Resolved, config: Config, command: str) -> dict[str, Any]:
+    """The settings of one command, checked (rule names, levels, ignore entries, target):
+    a bad one is a ConfigError naming the key and its line."""
+    from meshcol.analysis.check_policy import failing_rules, parse_ignore_rule
+    from meshcol.analysis.rules import UnknownRuleError, select_rules
+    from meshcol.io.targets import load_target
+
+    values = resolved.command_settings(command)
+    out: dict[str, Any] = {
+        k: v for k, v in values.items() if k not in ("ignore", "fail-on", "baseline")
+    }
+    ignored = _ignored_rules(resolved, config, command)
+    out["ignored_rules"] = list(ignored)
+    if values["target"] is not None:
+        try:
+            load_target(_in_folder(config, values["target"]))
+        except MeshcolError as exc:
+            raise _origin_error(resolved, config, "target", exc.message) from None
+    for entry in values["ignore"]:
+        if "rule" not in entry and "pair" not in entry:
+            raise _origin_error(resolved, config, "ignore", "an entry needs 'rule' or 'pair'")
+    if command == "inspect":
+        try:
+            fail_on = select_rules(values["fail-on"], "inspect")
+        except UnknownRuleError as exc:
+            raise _origin_error(resolved, config, "inspect.fail-on", str(exc)) from None
+        out["fail-on"] = [rule for rule in fail_on if rule not in ignored]
+    if command == "check":
+        try:
+            rules = failing_rules(values["fail-on"], target=values["target"] is not None)
+        except UnknownRuleError as exc:
+            raise _origin_error(resolved, config, "check.fail-on", str(exc)) from None
+        kept = [rule for rule in rules if rule not in ignored]
+        out["fail-on"] = values["fail-on"] if len(kept) == len(rules) else ",".join(kept) or "none"
+        pairs = [entry["pair"] for entry in values["ignore"] if "pair" in entry]
+        for pair in pairs:
+            try:
+                parse_ignore_rule(pair)
+            except ValueError as exc:
+                raise _origin_error(resolved, config, "ignore", str(exc)) from None
+        out["ignore"] = pairs
+        out["baseline"] = values["baseline"]
+    return out
+
+
+def _checked(
+    resolved: Resolved, config: Config, command: str
+) -> tuple[dict[str, Any], tuple[str, ...]]:
+    """A command's settings checked (:func:`_settings`) and the files besides the input
+    they name (a baseline, a target's .toml), whose content is part of the job's key."""
+    settings = _settings(resolved, config, command)
+    named = [("baseline", settings.get("baseline")), ("target", settings["target"])]
+    extra = tuple(
+        _in_folder(config, value)
+        for key, value in named
+        if isinstance(value, str) and (key == "baseline" or value.endswith(".toml"))
+    )
+    return settings, extra
+
+
+def _in_folder(config: Config, path: str) -> str:
+    return _in_folder_path(os.fspath(config.folder), path)
+
+
+def plan(
+    config: Config,
+    overrides: Mapping[str, tuple[Any, str]] = {},
+    files: Iterable[str] | None = None,
+) -> list[Job]:
+    """Every job of the configuration: per file the sections match (``files``: default
+    every file under the config's folder), per command it runs, in file then command order.
+
+    Raises
+    ------
+    ConfigError
+        A setting no command accepts (an unknown rule, a bad ``ignore`` entry, a target
+        that does not load), naming the key and its line.
+    """
+    jobs = []
+    # one check per resolution the files share
+    checked: dict[tuple[int, str], tuple[dict[str, Any], tuple[str, ...]]] = {}
+    for path in files if files is not None else config.files():
+        for resolved in resolve(config, path, overrides, shared=True):
+            for command in resolved.commands:
+                memo = (id(resolved.values), command)
+                if memo not in checked:
+                    named = dataclasses.replace(resolved, path=path)  # for its messages
+                    checked[memo] = _checked(named, config, command)
+                settings, extra = checked[memo]
+                jobs.append(Job(command, path, resolved.kind, settings, resolved.sections, extra))
+    return jobs
+
+
+def changed_files(folder: str | os.PathLike[str], ref: str) -> set[str]:
+    """Files changed since ``ref`` (``git diff --name-only REF``, and files git does not
+    track yet), relative to ``folder``, ``/``-separated.
+
+    Raises
+    ------
+    MeshcolError
+        Not a git repository, or an unknown ``ref`` (git's words).
+    """
+    out: set[str] = set()
+    for args in (
+        ["diff", "--name-only", "--relative", ref, "--"],
+        ["ls-files", "--others", "--exclude-standard"],
+    ):
+        try:
+            done = subprocess.run(
+                ["git", "-C", os.fspath(folder), *args],
+                capture_output=True,
+                text=True,
+                check=False,
+            )
+        except OSError as exc:
+            raise MeshcolError(f"--changed-since needs git: {exc}") from None
+        if done.returncode != 0:
+            words = " ".join(done.stderr.split()) or f"git {' '.join(args)} failed"
+            raise MeshcolError(f"--changed-since {ref}: {words}")
+        out.update(line.strip() for line in done.stdout.splitlines() if line.strip())
+    return out
+
+
+def repository_root(folder: str | os.PathLike[str]) -> str:
+    """The top folder of the git repository holding ``folder``; ``folder`` itself outside
+    one (or without git)."""
+    try:
+        done = subprocess.run(
+            ["git", "-C", os.fspath(folder), "rev-parse", "--show-toplevel"],
+            capture_output=True,
+            text=True,
+            check=False,
+        )
+    except OSError:
+        return os.fspath(folder)
+    top = done.stdout.strip()
+    return top if done.returncode == 0 and top else os.fspath(folder)
+
+
+# --- one job -------------------------------------------------------------------------------------
+
+
+def _robot(settings: Mapping[str, Any], folder: str) -> Any:
+    from meshcol.io.robot import RobotOptions
+
+    srdf = settings["srdf"]
+    packages = {
+        name: os.path.join(folder, path) for name, path in settings["package-paths"].items()
+    }
+    return RobotOptions(
+        dict(settings["joints"]),
+        settings["keyframe"],
+        packages,
+        None if srdf is None else os.path.join(folder, srdf),
+        settings["include-adjacent"],
+    )
+
+
+def _execute(job: Job, folder: str) -> Any:
+    """Run the job's command in this process; its report."""
+    from meshcol.io.targets import load_target
+
+    s = job.settings
+    _confine_named(s, folder)
+    target = None if s["target"] is None else load_target(_in_folder_path(folder, s["target"]))
+    robot = _robot(s, folder)
+    if job.command == "inspect":
+        from meshcol.analysis.inspect import inspect
+        from meshcol.analysis.physics import PhysicsOptions
+
+        physics = PhysicsOptions(
+            shape=s["shape"],
+            volume_ratio=s["volume-ratio"],
+            com_offset=s["com-offset"],
+            inertia_ratio=s["inertia-ratio"],
+            min_relative_volume=s["min-relative-volume"],
+            min_volume=s["min-volume"],
+            target=target,
+        )
+        return inspect(
+            [job.path], fail_on=tuple(s["fail-on"]), physics=physics, robot_options=robot
+        )
+    if job.command == "hull":
+        from meshcol.analysis.hull import hull
+
+        return hull([job.path], max_vertices=s["max-vertices"], target=target, robot_options=robot)
+    if job.command == "fit":
+        from meshcol.analysis.fit import fit
+
+        return fit(
+            [job.path],
+            shape=s["shape"],
+            volume_tolerance=s["volume-tolerance"],
+            robot_options=robot,
+        )
+    from meshcol.analysis.check import check
+
+    baseline = s["baseline"]
+    return check(
+        [job.path],
+        collider=s["shape"],
+        tolerance=s["tolerance"],
+        clearance=s["clearance"],
+        fail_on=s["fail-on"],
+        ignore=tuple(s["ignore"]),
+        baseline=None if baseline is None else os.path.join(folder, baseline),
+        target=target,
+        robot_options=robot,
+    )
+
+
+def _confine_named(settings: Mapping[str, Any], folder: str) -> None:
+    """The files the configuration names for a job (baseline, target profile, SRDF, package
+    folders) inside the root too: a pull request can change the configuration as well."""
+    from meshcol.io.paths import confine
+
+    named = [settings.get("baseline"), settings.get("srdf"), *settings["package-paths"].values()]
+    target = settings["target"]
+    if target is not None and _in_folder_path(folder, target) != target:
+        named.append(target)
+    for path in named:
+        if path is not None:
+            confine(os.path.join(folder, path), "the configuration", path)
+
+
+def _in_folder_path(folder: str, path: str) -> str:
+    """A path the config names: relative to its folder (a target's bare name stays)."""
+    if path.endswith(".toml") or "/" in path or os.sep in path:
+        return os.path.join(folder, path)
+    return path
+
+
+@contextlib.contextmanager
+def _working_folder(folder: str) -> Iterator[None]:
+    """The block runs in ``folder`` (job inputs and report paths are relative to it)."""
+    before = os.getcwd()
+    os.chdir(folder)
+    try:
+        yield
+    finally:
+        os.chdir(before)
+
+
+def run_job(task: tuple[Job, str, str | None]) -> dict[str, Any]:
+    """One job in this process (a worker's entry): ``(job, folder, root)``. Returns its
+    result as JSON values (the report, its CI suite, the exit code) and ``reads``, every
+    file its input named; an unusable input is ``{"error": message}``."""
+    from meshcol.io.paths import confined_to, recording_reads
+
+    job, folder, root = task
+    with _working_folder(folder), confined_to(root), recording_reads() as reads:
+        try:
+            report = _execute(job, folder)
+        except MeshcolError as exc:
+            return {"error": str(exc), "reads": []}
+        result = CiRun.result_of(report)
+    result["reads"] = sorted({_rel(folder, path) for path in reads})
+    return result
+
+
+# --- the run -------------------------------------------------------------------------------------
+
+
+def run_ci(
+    config: Config,
+    *,
+    overrides: Mapping[str, tuple[Any, str]] = {},
+    root: str | os.PathLike[str] | None = None,
+    changed: Collection[str] | None = None,
+    changed_since: str | None = None,
+    cache_dir: str | os.PathLike[str] | None = None,
+    use_cache: bool = True,
+    jobs: int = 1,
+    progress: Callable[[str], None] | None = None,
+) -> CiReport:
+    """Run every job of ``config`` (:func:`plan`) and gather one report.
+
+    Parameters
+    ----------
+    root : path, optional
+        Every path a file names must resolve inside it (default the config's ``root``, else
+        its folder).
+    changed : collection of str, optional
+        Files (relative to the config's folder) changed since ``changed_since``: only the
+        jobs whose file is among them, or that read one of them in their cached run (a
+        scene whose mesh changed), or that have no cached run to tell, run.
+    cache_dir : path or URL, optional
+        The store (default the config's ``cache-dir``, else the user cache).
+    use_cache : bool
+        Look results up and store them (``--no-cache``: neither).
+    """
+    from meshcol.decomposition.executor import run_each
+
+    folder = os.fspath(config.folder)
+    if root is None:
+        root = os.path.join(folder, config.get("root") or ".")
+    root = os.path.realpath(root)
+    if cache_dir is None and config.get("cache-dir") is not None:
+        cache_dir = _store(folder, config.get("cache-dir"))
+    store = _Results(config, cache_dir if use_cache else None, use_cache)
+    runs: dict[int, CiRun] = {}
+    pending: list[tuple[int, Job, str]] = []
+    skipped = 0
+    for index, job in enumerate(plan(config, overrides)):
+        key = store.key(job)
+        cached = store.look_up(key)
+        if changed is not None and not _touched(job, changed, cached, folder):
+            skipped += 1
+            continue
+        if cached is not None:
+            runs[index] = CiRun(job, cached, cached=True, fetch=store.fetcher(key))
+        else:
+            pending.append((index, job, key))
+    if progress is not None and pending:
+        progress(f"ci: {len(runs)} jobs from the cache, {len(pending)} to run")
+    tasks = [(job, folder, root) for _, job, _ in pending]
+    # one job (the asset that changed) runs here: starting a pool costs seconds
+    here = jobs == 1 or len(tasks) == 1
+    outcomes = (
+        (run_job(task) for task in tasks)
+        if here
+        else (_outcome(o, tasks) for o in run_each(run_job, tasks, jobs=jobs))
+    )
+    for done, (position, result) in enumerate(_numbered(outcomes, here), start=1):
+        index, job, key = pending[position]
+        runs[index] = CiRun(job, result, cached=False)
+        store.keep(key, job, result)
+        if progress is not None:
+            progress(f"ci: {done}/{len(pending)} jobs")
+    store.write_index(runs.values())
+    return CiReport(
+        runs=tuple(runs[i] for i in sorted(runs)),
+        config=config.path,
+        root=root,
+        changed_since=changed_since,
+        skipped=skipped,
+    )
+
+
+class _Results:
+    """The result cache as a run uses it: the run's index read once (a warm run's lookups),
+    entries read when the index lacks a job or a report is written, each result stored as
+    it comes and the index written at the end."""
+
+    def __init__(self, config: Config, cache_dir: Any, enabled: bool) -> None:
+        from meshcol.decomposition.result_cache import (
+            Digests,
+            load_index,
+            read_index,
+            result_key,
+        )
+
+        self.folder = os.fspath(config.folder)
+        self.cache_dir, self.enabled = cache_dir, enabled
+        self.name = f"{Digests()(config.path)}:{config.path.name}"
+        index = read_index(self.name, cache_dir) if enabled else {}
+        self.digests = Digests(self.folder, index.get("stats"), index.get("written_ns", 0))
+        self.result_key = result_key
+        self.index = load_index(index, self.digests)
+        self.changed = False
+        self._keys: dict[int, str] = {}
+        self._settings: dict[int, str] = {}
+
+    def key(self, job: Job) -> str:
+        """The job's cache key (the settings' part once per settings shared by jobs)."""
+        known = self._keys.get(id(job))
+        if known is not None:
+            return known
+        shared = self._settings.get(id(job.settings))
+        if shared is None:
+            shared = self.result_key(job.command, dict(job.settings), "")
+            self._settings[id(job.settings)] = shared
+        parts = [shared, job.path, self.digests(job.path)]
+        for extra in job.extra_files:
+            parts += [_rel(self.folder, extra), self.digests(extra)]
+        key = hashlib.sha256("\0".join(parts).encode()).hexdigest()
+        self._keys[id(job)] = key
+        return key
+
+    def look_up(self, key: str) -> dict[str, Any] | None:
+        """What the run keeps of a cached result (the index's summary, else the entry)."""
+        from meshcol.decomposition.result_cache import load_result
+
+        if not self.enabled:
+            return None
+        if key in self.index:
+            return dict(self.index[key])
+        self.changed = True
+        return load_result(key, self.digests, self.cache_dir)
+
+    def fetcher(self, key: str) -> Callable[[], dict[str, Any] | None]:
+        return functools.partial(self._fetch, key)
+
+    def _fetch(self, key: str) -> dict[str, Any] | None:
+        from meshcol.decomposition.result_cache import load_result
+
+        return load_result(key, self.digests, self.cache_dir)
+
+    def _depends(self, job: Job, result: Mapping[str, Any]) -> dict[str, str]:
+        depends = {path: self.digests(path) for path in result.get("reads", [])}
+        for extra in job.extra_files:
+            depends[_rel(self.folder, extra)] = self.digests(extra)
+        return depends
+
+    def keep(self, key: str, job: Job, result: dict[str, Any]) -> None:
+        from meshcol.decomposition.result_cache import store_result
+
+        if self.enabled and "error" not in result:
+            store_result(key, result, self._depends(job, result), self.cache_dir)
+
+    def write_index(self, runs: Iterable[CiRun]) -> None:
+        from meshcol.decomposition.result_cache import store_index
+
+        if not self.enabled or not self.changed:
+            return  # every job came from the index, whose files were unchanged
+        entries = {}
+        for run in runs:
+            if "error" not in run.result:
+                summary = {k: v for k, v in run.result.items() if k != "report"}
+                entries[self.key(run.job)] = (summary, self._depends(run.job, run.result))
+        store_index(self.name, entries, self.digests.stats(), self.cache_dir)
+
+
+def _store(folder: str, cache_dir: str) -> str:
+    from meshcol.decomposition.cache import is_url
+
+    return cache_dir if is_url(cache_dir) else os.path.join(folder, cache_dir)
+
+
+def _rel(folder: str, path: str) -> str:
+    """A dependency as the cache keeps it: relative to the config's folder when inside."""
+    relative = os.path.relpath(path, folder)
+    return path if relative.startswith("..") else relative.replace(os.sep, "/")
+
+
+def _touched(job: Job, changed: Collection[str], cached: Any, folder: str) -> bool:
+    """Whether ``job`` must run under ``--changed-since``: its file changed, or a file its
+    last run read (per the cache, a miss runs), or a baseline or target file."""
+    if job.path in changed or any(_rel(folder, e) in changed for e in job.extra_files):
+        return True
+    if cached is None:
+        return job.kind == "scenes"  # a scene's meshes are unknown without a cached run
+    reads = set(cached.get("reads", []))
+    return not reads.isdisjoint(changed)
+
+
+def _outcome(outcome: Any, tasks: Sequence[Any]) -> tuple[int, dict[str, Any]]:
+    if outcome.status == "ok":
+        return outcome.index, outcome.value
+    job = tasks[outcome.index][0]
+    why = outcome.message or outcome.status
+    return outcome.index, {"error": f"{job.path}: {job.command} did not finish: {why}", "reads": []}
+
+
+def _numbered(outcomes: Iterable[Any], in_order: bool) -> Iterable[tuple[int, dict[str, Any]]]:
+    if in_order:
+        yield from enumerate(outcomes)
+    else:
+        yield from outcomes

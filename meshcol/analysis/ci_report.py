@@ -1,0 +1,223 @@
+"""The report of ``meshcol ci``: every job's report, one verdict, one exit code.
+
+A :class:`CiReport` has the methods the report format registry writes from
+(:data:`meshcol.io.formats.FORMATS`: ``to_json``, ``ci_suite``), so ``meshcol ci`` writes
+every registered format its report has the method for, a format added to the registry
+included. Its CI suite is every job's cases in one suite (each case's file is the job's
+input); its JSON is every job's own JSON report, untouched, under ``runs``.
+
+Nothing in it says which job came from the cache: a run from the cache and a run from cold
+give the same bytes.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from meshcol.errors import MeshcolError
+
+if TYPE_CHECKING:
+    from meshcol.analysis.ci import Job
+
+__all__ = ["CiReport", "CiRun"]
+
+
+def _plain(value: Any) -> Any:
+    """``value`` as plain JSON values (through the one encoder: numpy numbers, tuples)."""
+    from meshcol.io.report import dumps_json
+
+    return json.loads(dumps_json(value, compact=True))
+
+
+@dataclass(frozen=True)
+class CiRun:
+    """One job and its result: ``{"report", "suite", "exit_code", "reads"}`` or
+    ``{"error"}``; from the cache's index the report is left out, and ``fetch`` reads it
+    when a format needs it (the JSON report): a run that writes only CI formats never
+    reads the reports of its unchanged jobs."""
+
+    job: Job
+    result: dict[str, Any]
+    cached: bool = False
+    fetch: Callable[[], dict[str, Any] | None] | None = None
+
+    def report(self) -> Any:
+        """The job's own JSON report (None for an error)."""
+        if "error" in self.result:
+            return None
+        if "report" not in self.result and self.fetch is not None:
+            entry = self.fetch()
+            if entry is None:
+                raise MeshcolError(
+                    f"{self.job.path}: the cached {self.job.command} report is gone from the "
+                    "result cache (run again, or with --no-cache)"
+                )
+            return entry["report"]
+        return self.result["report"]
+
+    @staticmethod
+    def result_of(report: Any) -> dict[str, Any]:
+        """What ``meshcol ci`` keeps of a command's report (and caches): its JSON report,
+        its CI suite and its exit code, as JSON values."""
+        suite = report.ci_suite()
+        fields = {f.name: getattr(suite, f.name) for f in dataclasses.fields(suite)}
+        fields["cases"] = [dataclasses.asdict(case) for case in suite.cases]
+        return {
+            "report": json.loads(report.to_json()),
+            "suite": _plain(fields),
+            "exit_code": int(report.exit_code),
+        }
+
+    @property
+    def exit_code(self) -> int:
+        return 2 if "error" in self.result else int(self.result["exit_code"])
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "command": self.job.command,
+            "input": self.job.path,
+            "kind": self.job.kind.rstrip("s"),
+            "sections": list(self.job.sections),
+            "settings": dict(sorted(self.job.settings.items())),
+            "exit_code": self.exit_code,
+            "error": self.result.get("error"),
+            "report": self.report(),
+        }
+
+    def cases(self) -> list[Any]:
+        """The job's CI cases, each named with its file when its name does not say it."""
+        from meshcol.io.ci import CiCase
+
+        classname = f"meshcol.{self.job.command}"
+        if "error" in self.result:
+            message = self.result["error"]
+            return [
+                CiCase(
+                    self.job.path,
+                    classname,
+                    "error",
+                    message,
+                    file=self.job.path,
+                    kind="unusable-input",
+                )
+            ]
+        out = []
+        for case in self.result["suite"]["cases"]:
+            name = case["name"]
+            if self.job.path not in name:
+                name = f"{self.job.path}::{name}"
+            out.append(CiCase(**{**case, "name": name, "file": case["file"] or self.job.path}))
+        return out
+
+
+@dataclass(frozen=True)
+class CiReport:
+    """The run: its jobs in plan order (file, then command), the config, the root."""
+
+    runs: tuple[CiRun, ...]
+    config: str | os.PathLike[str]
+    root: str | os.PathLike[str]
+    changed_since: str | None = None
+    skipped: int = 0
+
+    @property
+    def exit_code(self) -> int:
+        """2 when a job could not run (unusable input, a path outside the root), else 1
+        when a job's policy fails, else 0."""
+        codes = {run.exit_code for run in self.runs}
+        return 2 if 2 in codes else (1 if 1 in codes else 0)
+
+    @property
+    def cached(self) -> int:
+        """Jobs whose result came from the cache (for the summary line; not in the report)."""
+        return sum(run.cached for run in self.runs)
+
+    @property
+    def errors(self) -> list[str]:
+        return [run.result["error"] for run in self.runs if "error" in run.result]
+
+    @property
+    def summary(self) -> dict[str, Any]:
+        codes = [run.exit_code for run in self.runs]
+        by_command: dict[str, int] = {}
+        for run in self.runs:
+            by_command[run.job.command] = by_command.get(run.job.command, 0) + 1
+        return {
+            "jobs": len(self.runs),
+            "jobs_by_command": by_command,
+            "inputs": len({run.job.path for run in self.runs}),
+            "skipped_unchanged": self.skipped,
+            "passed": codes.count(0),
+            "failed": codes.count(1),
+            "errors": codes.count(2),
+            "exit_code": self.exit_code,
+        }
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON report; paths relative to the config's folder, as every job's input is
+        (the same bytes wherever the repository is checked out)."""
+        from meshcol.io.report import envelope
+
+        return {
+            **envelope("ci", self.settings, None),
+            "summary": self.summary,
+            "runs": [run.to_dict() for run in self.runs],
+        }
+
+    @property
+    def settings(self) -> dict[str, Any]:
+        folder = os.path.dirname(os.fspath(self.config))
+        return {
+            "config": os.path.basename(os.fspath(self.config)),
+            "root": os.path.relpath(self.root, folder).replace(os.sep, "/"),
+            "changed_since": self.changed_since,
+        }
+
+    def to_csv(self) -> str:
+        """One row per job: command, input, kind, exit code, error, its report's verdict."""
+        from meshcol.io.report import dumps_csv
+
+        rows = [
+            {
+                "command": run.job.command,
+                "input": run.job.path,
+                "kind": run.job.kind.rstrip("s"),
+                "exit_code": run.exit_code,
+                "error": run.result.get("error"),
+                "verdict": run.result.get("suite", {}).get("verdict"),
+            }
+            for run in self.runs
+        ]
+        return dumps_csv(rows, ("command", "input", "kind", "exit_code", "error", "verdict"))
+
+    def to_json(self) -> str:
+        from meshcol.io.report import dumps_json
+
+        return dumps_json(self.to_dict())
+
+    def verdict(self) -> str:
+        s = self.summary
+        text = (
+            f"{s['jobs']} jobs on {s['inputs']} files: {s['failed']} failing, {s['errors']} errors"
+        )
+        if self.changed_since is not None:
+            text += f" ({s['skipped_unchanged']} unchanged since {self.changed_since} not run)"
+        return text
+
+    def ci_suite(self) -> Any:
+        """Every job's cases in one suite (command ``ci``)."""
+        from meshcol.io.ci import CiSuite
+
+        cases = [case for run in self.runs for case in run.cases()]
+        warnings = tuple(
+            warning
+            for run in self.runs
+            if "suite" in run.result
+            for warning in run.result["suite"]["warnings"]
+        )
+        return CiSuite("ci", tuple(cases), self.settings, warnings=warnings, verdict=self.verdict())

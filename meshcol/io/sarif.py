@@ -1,0 +1,305 @@
+"""SARIF 2.1.0: a run's findings for code-scanning services (GitHub code scanning, Azure DevOps).
+
+Written from a report's CI suite (:class:`meshcol.io.ci.CiSuite`), like JUnit, so every
+command that has one writes it. One ``result`` per rule a case breaks (a mesh with two
+findings is two results), with:
+
+- ``ruleId`` the rule's stable id (``MC401``) and ``ruleIndex`` its place in
+  ``tool.driver.rules``, which describes every rule the command can report from the rules
+  registry (:data:`meshcol.analysis.rules.RULES`, passed in as ``suite.rules``): short and
+  full descriptions, the fix as help, the default level from the rule's severity, and
+  ``helpUri`` the rules page. A case whose kind is no registered rule (decompose's
+  ``max-hausdorff``, hull's ``max-vertices``, sweep's ``HIT``) cites its kind as the rule, with
+  a descriptor made for it.
+- ``level`` from the severity (``error``, ``warning``; ``info`` is ``note``); a kind that is no
+  registered rule is ``error`` when the policy fails on it, else ``warning``.
+- a physical location on the asset file: ``artifactLocation.uri`` relative to the repository
+  root (``$GITHUB_WORKSPACE``, else the working folder) with ``uriBaseId`` ``%SRCROOT%``
+  (``run.originalUriBaseIds`` says where that is); in a text input (a manifest, a robot
+  description) the line that names the case's (first) body as its ``region``, so that a
+  pull request shows the alert on that line; a mesh file has no region (a finding is about
+  the whole mesh). The body or pair is the logical location.
+- ``partialFingerprints`` that hash the command, the rule, the file and the body or pair, and
+  none of the numbers, so that a code-scanning service keeps tracking one alert across runs
+  whose depths differ.
+- ``suppressions`` for a case the user's ``--ignore`` spares.
+
+Inputs that could not be read (``error`` cases) are the invocation's
+``toolExecutionNotifications``, not results: they are about the run, not the code.
+``run.automationDetails.id`` is ``meshcol/COMMAND/``, so the alerts of each command are one
+category.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import urllib.parse
+from collections.abc import Mapping
+from typing import Any
+
+from meshcol.io.ci import CiCase, CiSuite
+from meshcol.io.report import dumps_json
+
+__all__ = ["SARIF_SCHEMA", "SARIF_VERSION", "dumps_sarif", "sarif_log", "source_root"]
+
+SARIF_VERSION = "2.1.0"
+#: The OASIS schema of SARIF 2.1.0 (errata 01), as ``$schema`` names it.
+SARIF_SCHEMA = (
+    "https://docs.oasis-open.org/sarif/sarif/v2.1.0/errata01/os/schemas/sarif-schema-2.1.0.json"
+)
+#: Where the rules are documented, relative to the project's home (docs/rules.md).
+RULES_PAGE = "docs/rules.md"
+#: The project's public home; rule ``helpUri`` is this plus :data:`RULES_PAGE` (the
+#: environment variable ``MESHCOL_DOCS_URL`` replaces it, for a mirror or a fork).
+HOME_ENV = "MESHCOL_DOCS_URL"
+DEFAULT_HOME = "https://github.com/meshcol/meshcol/blob/main/"
+#: ``uriBaseId`` of every location: the repository root.
+ROOT_ID = "%SRCROOT%"
+#: SARIF level of each rule severity.
+LEVELS = {"error": "error", "warning": "warning", "info": "note"}
+#: Name of the partial fingerprint (versioned: a change of recipe is a new name).
+FINGERPRINT = "meshcolFinding/v1"
+
+
+def source_root() -> str:
+    """The folder locations are relative to: ``$GITHUB_WORKSPACE``, else the working folder."""
+    return os.path.abspath(os.environ.get("GITHUB_WORKSPACE") or os.getcwd())
+
+
+def _home() -> str:
+    home = os.environ.get(HOME_ENV) or DEFAULT_HOME
+    return home if home.endswith("/") else home + "/"
+
+
+def _text(value: Any) -> str:
+    return " ".join(str(value).split())
+
+
+def _registered(rule_id: str, rule: Mapping[str, Any]) -> dict[str, Any]:
+    """A ``reportingDescriptor`` of a registered rule."""
+    summary = _text(rule.get("summary", ""))
+    measured = _text(rule.get("measured", ""))
+    fix = _text(rule.get("fix", ""))
+    name = str(rule.get("name", rule_id))
+    severity = str(rule.get("severity", "error"))
+    uri = f"{_home()}{RULES_PAGE}#{rule_id.lower()}"
+    return {
+        "id": rule_id,
+        "name": name,
+        "shortDescription": {"text": f"{name}: {summary}"},
+        "fullDescription": {"text": f"{summary} {measured}".strip()},
+        "help": {
+            "text": f"{summary}\nMeasured: {measured}\nFix: {fix}",
+            "markdown": f"**{rule_id} `{name}`** ({severity}): {summary}\n\n"
+            f"*Measured*: {measured}\n\n*Fix*: {fix}\n\nSee [{rule_id}]({uri}).",
+        },
+        "helpUri": uri,
+        "defaultConfiguration": {"level": LEVELS.get(severity, "warning")},
+        "properties": {
+            "tags": ["meshcol", str(rule.get("category", "")) or "rule"],
+            "precision": "very-high",
+        },
+    }
+
+
+def _kind_descriptor(kind: str, command: str) -> dict[str, Any]:
+    """A ``reportingDescriptor`` of a kind that is no registered rule (``max-hausdorff``)."""
+    return {
+        "id": kind,
+        "name": kind,
+        "shortDescription": {"text": f"meshcol {command}: {kind}"},
+        "fullDescription": {
+            "text": f"A case of meshcol {command} that its policy judged ({kind}); the "
+            "result's message has the numbers."
+        },
+        "defaultConfiguration": {"level": "error"},
+        "properties": {"tags": ["meshcol", command]},
+    }
+
+
+def _uri(path: str, root: str) -> tuple[str, str | None]:
+    """``path`` as a URI relative to ``root`` (with the root's base id), else absolute."""
+    absolute = os.path.abspath(path)
+    relative = (
+        os.path.relpath(absolute, root)
+        if os.path.splitdrive(absolute)[0] == (os.path.splitdrive(root)[0])
+        else None
+    )
+    if relative is not None and relative != ".." and not relative.startswith(".." + os.sep):
+        return urllib.parse.quote(relative.replace(os.sep, "/")), ROOT_ID
+    return urllib.parse.urljoin("file:", urllib.parse.quote(absolute.replace(os.sep, "/"))), None
+
+
+#: Text files whose lines name bodies (manifests, robot descriptions): a result on one gets
+#: the line that names its (first) body as its region.
+TEXT_INPUTS = (".json", ".toml", ".urdf", ".xml", ".mjcf", ".srdf")
+#: Largest text file searched for a body's line.
+MAX_REGION_BYTES = 8 * 1024 * 1024
+
+
+def _body(case: CiCase) -> str:
+    """The (first) body a case is about: ``a`` of ``a <-> b``, ``body`` of ``file::body``."""
+    name = case.name.split("::")[-1] if "::" in case.name else case.name
+    return name.split(" <-> ")[0].split("/")[0]
+
+
+def body_line(path: str, body: str, lines: dict[str, list[str] | None]) -> int | None:
+    """The first line (1-based) of the text file ``path`` that names ``body`` as a name
+    (``"name": "crate"``, ``name = "crate"``, ``name="crate"``); None when none does or the
+    file is not a text input. ``lines`` caches each file's lines."""
+    if not path.lower().endswith(TEXT_INPUTS) or not body:
+        return None
+    if path not in lines:
+        try:
+            if os.path.getsize(path) > MAX_REGION_BYTES:
+                raise OSError
+            with open(path, encoding="utf-8", errors="replace") as handle:
+                lines[path] = handle.read().splitlines()
+        except OSError:
+            lines[path] = None
+    text = lines[path]
+    if text is None:
+        return None
+    quoted = (json.dumps(body), f"'{body}'")
+    for number, line in enumerate(text, 1):
+        if "name" in line and any(q in line for q in quoted):
+            return number
+    return None
+
+
+def _location(
+    case: CiCase, root: str, lines: dict[str, list[str] | None] | None = None
+) -> dict[str, Any]:
+    location: dict[str, Any] = {}
+    if case.file:
+        uri, base = _uri(case.file, root)
+        artifact = {"uri": uri, **({"uriBaseId": base} if base else {})}
+        location["physicalLocation"] = {"artifactLocation": artifact}
+        line = body_line(case.file, _body(case), lines if lines is not None else {})
+        if line is not None:
+            location["physicalLocation"]["region"] = {"startLine": line}
+    location["logicalLocations"] = [{"fullyQualifiedName": case.name, "kind": "object"}]
+    return location
+
+
+def _fingerprint(command: str, rule_id: str, case: CiCase) -> str:
+    key = "\0".join((command, rule_id, case.file or "", case.name))
+    return hashlib.sha256(key.encode("utf-8", "surrogatepass")).hexdigest()[:32]
+
+
+def _case_rules(case: CiCase) -> tuple[str, ...]:
+    """The rules a case reports: its registered rules, else its kind; none for a case that
+    neither fails, is spared, nor warns."""
+    if case.outcome == "passed" and not case.warn:
+        return ()
+    if case.rules:
+        return case.rules
+    return (case.kind,) if case.kind else ()
+
+
+def _result(
+    case: CiCase,
+    rule_id: str,
+    index: int,
+    level: str,
+    suite: CiSuite,
+    root: str,
+    lines: dict[str, list[str] | None],
+) -> dict[str, Any]:
+    several = len(_case_rules(case)) > 1
+    rule = suite.rules.get(rule_id)
+    prefix = f"{rule_id} {rule['name']}: " if several and rule else ""
+    result: dict[str, Any] = {
+        "ruleId": rule_id,
+        "ruleIndex": index,
+        "level": level,
+        "kind": "fail",
+        "message": {"text": prefix + (case.message or case.name)},
+        "locations": [_location(case, root, lines)],
+        "partialFingerprints": {FINGERPRINT: _fingerprint(suite.command, rule_id, case)},
+        "properties": {"case": case.name, "outcome": case.outcome},
+    }
+    if case.details:
+        result["properties"]["details"] = case.details
+    if case.numbers:
+        result["properties"]["numbers"] = dict(case.numbers)
+    if case.outcome == "skipped":
+        result["suppressions"] = [
+            {"kind": "external", "status": "accepted", "justification": case.message}
+        ]
+    return result
+
+
+def _notification(case: CiCase, root: str) -> dict[str, Any]:
+    note: dict[str, Any] = {
+        "level": "error",
+        "message": {"text": case.message or case.name},
+        "descriptor": {"id": case.kind or "error"},
+    }
+    if case.file:
+        note["locations"] = [_location(case, root)]
+    return note
+
+
+def sarif_log(suite: CiSuite, root: str | None = None) -> dict[str, Any]:
+    """The SARIF log of ``suite`` as a dict (one run); ``root`` the repository root that
+    locations are relative to (default :func:`source_root`)."""
+    from meshcol._version import __version__
+
+    root = os.path.abspath(root) if root is not None else source_root()
+    descriptors = [_registered(rule_id, suite.rules[rule_id]) for rule_id in sorted(suite.rules)]
+    index = {d["id"]: k for k, d in enumerate(descriptors)}
+    results: list[dict[str, Any]] = []
+    notes: list[dict[str, Any]] = []
+    lines: dict[str, list[str] | None] = {}  # each text input read once
+    for case in suite.cases:
+        if case.outcome == "error":
+            notes.append(_notification(case, root))
+            continue
+        for rule_id in _case_rules(case):
+            if rule_id not in index:
+                index[rule_id] = len(descriptors)
+                descriptors.append(_kind_descriptor(rule_id, suite.command))
+            rule = suite.rules.get(rule_id)
+            if rule is not None:
+                level = LEVELS.get(str(rule.get("severity")), "warning")
+            else:
+                level = "error" if case.outcome == "failure" else "warning"
+            results.append(_result(case, rule_id, index[rule_id], level, suite, root, lines))
+    base_uri = urllib.parse.urljoin("file:", urllib.parse.quote(root.replace(os.sep, "/")))
+    run: dict[str, Any] = {
+        "tool": {
+            "driver": {
+                "name": "meshcol",
+                "version": __version__,
+                "semanticVersion": __version__,
+                "informationUri": _home().rsplit("/blob/", 1)[0],
+                "rules": descriptors,
+            }
+        },
+        "automationDetails": {"id": f"meshcol/{suite.command}/"},
+        "originalUriBaseIds": {ROOT_ID: {"uri": base_uri.rstrip("/") + "/"}},
+        "invocations": [
+            {
+                "executionSuccessful": True,
+                "toolExecutionNotifications": notes,
+                "properties": {"command": suite.command, "passed": suite.passed},
+            }
+        ],
+        "results": results,
+        "columnKind": "unicodeCodePoints",
+        "properties": {
+            "verdict": suite.verdict,
+            "units": suite.units,
+            "warnings": list(suite.warnings),
+        },
+    }
+    return {"$schema": SARIF_SCHEMA, "version": SARIF_VERSION, "runs": [run]}
+
+
+def dumps_sarif(suite: CiSuite) -> str:
+    """SARIF 2.1.0 text of ``suite`` (see the module's notes), keys sorted, two-space
+    indented, locations relative to :func:`source_root`."""
+    return dumps_json(sarif_log(suite))

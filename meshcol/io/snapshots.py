@@ -1,0 +1,243 @@
+"""Snapshots: one PNG per violation, drawn offscreen from a review page (``--snapshots DIR``).
+
+The review page (:class:`meshcol.io.review.ReviewPage`) already holds what a reviewer wants to
+see of each row: the bodies, the witness points, the normal and the depth label. A snapshot
+is one row of it drawn by the CPU rasterizer of :mod:`meshcol.io.raster` (no display, no
+browser): the row's bodies framed and drawn in their own colours (the first
+:data:`PAIR_COLORS`, the second blue), every other body faded behind them, the row's findings
+(open edges, crossing faces) over them, each witness point a green disc, the normal an orange
+arrow from the first point, and a caption (the case, its rule and numbers). Pillow writes the
+PNG and draws the text (``pip install 'meshcol[snapshots]'``).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from meshcol.errors import MissingDependencyError
+from meshcol.io.raster import Camera, Raster, hex_rgb
+from meshcol.io.review import ReviewPage
+
+__all__ = [
+    "PAIR_COLORS",
+    "SUBJECT_COLOR",
+    "WITNESS_COLOR",
+    "NORMAL_COLOR",
+    "Shot",
+    "pillow",
+    "render_shots",
+]
+
+#: The colours of the bodies a picture is about, in the row's order (red, blue).
+PAIR_COLORS = ("#e6194b", "#4363d8")
+#: The colour of a picture's one body (an inspected mesh): blue, apart from the findings'
+#: red edges and magenta faces.
+SUBJECT_COLOR = "#4363d8"
+#: Witness points (green discs) and the normal (an orange arrow).
+WITNESS_COLOR = "#00c000"
+NORMAL_COLOR = "#ff8c00"
+#: Other bodies: grey, faded towards the white background.
+CONTEXT_COLOR = "#b8b8b8"
+CONTEXT_FADE = 0.55
+WIDTH, HEIGHT = 800, 600
+WITNESS_RADIUS = 6
+#: The normal arrow's length as a fraction of the image's height.
+ARROW = 0.22
+#: A body this many times larger (bounding-box diagonal) than the other is framed only
+#: around the contact.
+DWARFS = 4.0
+HINT = "--snapshots needs Pillow: pip install 'meshcol[snapshots]'"
+
+
+def pillow() -> Any:
+    """The PIL package, or MissingDependencyError with the install hint."""
+    try:
+        import PIL.Image
+        import PIL.ImageDraw
+        import PIL.ImageFont
+    except ImportError:
+        raise MissingDependencyError(HINT) from None
+    return PIL
+
+
+@dataclass(frozen=True)
+class Shot:
+    """One picture to draw: the page row whose bodies are ``bodies`` (names, in the row's
+    order), saved as ``name`` (a file name), captioned ``title`` and ``caption``."""
+
+    bodies: tuple[str, ...]
+    name: str
+    title: str
+    caption: str = ""
+
+
+def file_name(index: int, text: str) -> str:
+    """``003-crate--table.png``: the index, then the text's letters and digits."""
+    slug = re.sub(r"[^A-Za-z0-9._-]+", "-", text).strip("-.")[:60] or "case"
+    return f"{index:03d}-{slug}.png"
+
+
+def _world(mesh: Mapping[str, Any]) -> np.ndarray:
+    pose = np.asarray(mesh["pose"], dtype=np.float64)
+    v = np.asarray(mesh["vertices"], dtype=np.float64) @ pose[:3, :3].T + pose[:3, 3]
+    return v[np.asarray(mesh["faces"], dtype=np.int64)]
+
+
+def _box(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    points = points.reshape(-1, 3)
+    return points.min(axis=0), points.max(axis=0)
+
+
+def _frame(
+    bodies: Sequence[Sequence[np.ndarray]], points: np.ndarray, extras: Sequence[np.ndarray]
+) -> tuple[np.ndarray, np.ndarray]:
+    """The box a picture frames: every body of the row whole, with the witness points and
+    extras (findings); but when one body dwarfs the other (:data:`DWARFS`: a crate on a
+    100 m floor), the small one whole and the witness points with half its size around them,
+    so that the contact is seen, not the floor. Padded by 8%."""
+    boxes = [_box(np.concatenate([t.reshape(-1, 3) for t in tris])) for tris in bodies if tris]
+    sizes = [float(np.linalg.norm(high - low)) for low, high in boxes]
+    if len(points) and len(boxes) > 1 and max(sizes) > DWARFS * max(min(sizes), 1e-12):
+        low, high = boxes[int(np.argmin(sizes))]
+        reach = 0.5 * max(min(sizes), 1e-9)
+        low = np.minimum(low, points.min(axis=0) - reach)
+        high = np.maximum(high, points.max(axis=0) + reach)
+    else:
+        corners = [b for box in boxes for b in box]
+        parts = [p.reshape(-1, 3) for p in (*corners, points, *extras)]
+        low, high = _box(np.concatenate([p for p in parts if p.size]))
+    pad = 0.08 * max(float(np.linalg.norm(high - low)), 1e-9)
+    return low - pad, high + pad
+
+
+def _font(size: int) -> Any:
+    font = pillow().ImageFont
+    try:
+        return font.load_default(size=size)
+    except TypeError:  # Pillow < 10.1: one bitmap size
+        return font.load_default()
+
+
+def _paint(
+    meshes: Sequence[Mapping[str, Any]],
+    ids: Sequence[int],
+    own: Sequence[tuple[Mapping[str, Any], np.ndarray]],
+    camera: Camera,
+) -> Raster:
+    """The triangles: the context faded (where near the frame), then the row's bodies in
+    their colours over it, then the row's findings faces."""
+    raster = Raster(camera)
+    for mesh in meshes:
+        if mesh["group"] != "meshes" or mesh["body"] in ids:
+            continue
+        tris = _world(mesh)
+        near = np.all((tris.max(axis=1) >= camera.low) & (tris.min(axis=1) <= camera.high), axis=1)
+        raster.triangles(tris[near], hex_rgb(CONTEXT_COLOR), fade=CONTEXT_FADE)
+    raster.depth[:] = -np.inf  # the row's bodies are drawn over the context, never hidden
+    for mesh, tris in own:
+        slot = min(list(ids).index(mesh["body"]), len(PAIR_COLORS) - 1)
+        raster.triangles(tris, hex_rgb(SUBJECT_COLOR if len(ids) == 1 else PAIR_COLORS[slot]))
+    for mesh in meshes:
+        if mesh["body"] in ids and mesh["group"] == "findings":
+            raster.triangles(_world(mesh), hex_rgb(mesh["color"]))
+    return raster
+
+
+def _marks(
+    draw: Any, camera: Camera, lines: Sequence[Mapping[str, Any]], points: np.ndarray, normal: Any
+) -> None:
+    """Over the triangles: findings lines, the normal's arrow, the witness points."""
+    for line in lines:
+        for a, b in camera.project(line["p"])[:, :, :2]:
+            draw.line([tuple(a), tuple(b)], fill=hex_rgb(line["color"]), width=3)
+    projected = camera.project(points)[:, :2] if len(points) else np.zeros((0, 2))
+    if len(projected) and normal is not None and np.all(np.isfinite(normal)):
+        _arrow(draw, camera, points[0], np.asarray(normal, dtype=np.float64))
+    r = WITNESS_RADIUS
+    for x, y in projected:
+        draw.ellipse([x - r, y - r, x + r, y + r], fill=hex_rgb(WITNESS_COLOR), outline=(0, 0, 0))
+
+
+def _draw_row(page: ReviewPage, row: Mapping[str, Any], shot: Shot, path: str) -> None:
+    PIL = pillow()
+    ids = list(row["bodies"])
+    meshes = page.meshes()
+    own = [(m, _world(m)) for m in meshes if m["body"] in ids and m["group"] == "meshes"]
+    lines = [line for line in page.lines() if line["body"] in ids]
+    points = row["points"] if row["points"] is not None else np.zeros((0, 3))
+    by_body = [[t for m, t in own if m["body"] == i] for i in ids]
+    low, high = _frame(by_body, points, [line["p"] for line in lines])
+    camera = Camera(low, high, WIDTH, HEIGHT)
+    image = PIL.Image.fromarray(_paint(meshes, ids, own, camera).pixels, "RGB")
+    draw = PIL.ImageDraw.Draw(image)
+    _marks(draw, camera, lines, points, row["normal"])
+    _caption(draw, shot, row, page, bool(len(points)))
+    image.save(path, format="PNG", optimize=False)
+
+
+def _arrow(draw: Any, camera: Camera, origin: np.ndarray, normal: np.ndarray) -> None:
+    right, up, _ = camera.axes
+    direction = np.array([normal @ right, -(normal @ up)])
+    length = float(np.linalg.norm(direction))
+    if length < 1e-6:  # along the view: a ring shows it points at the viewer
+        x, y = camera.project(origin)[:2]
+        draw.ellipse([x - 14, y - 14, x + 14, y + 14], outline=hex_rgb(NORMAL_COLOR), width=3)
+        return
+    direction /= length
+    start = camera.project(origin)[:2]
+    end = start + direction * ARROW * camera.height
+    color = hex_rgb(NORMAL_COLOR)
+    draw.line([tuple(start), tuple(end)], fill=color, width=4)
+    side = np.array([-direction[1], direction[0]])
+    head = [
+        tuple(end),
+        tuple(end - 16 * direction + 7 * side),
+        tuple(end - 16 * direction - 7 * side),
+    ]
+    draw.polygon(head, fill=color)
+
+
+def _caption(
+    draw: Any, shot: Shot, row: Mapping[str, Any], page: ReviewPage, witnesses: bool
+) -> None:
+    big, small = _font(18), _font(14)
+    lines = [(shot.title, big, (0, 0, 0))]
+    label = shot.caption or row["label"]
+    if label:
+        lines.append((label, small, (40, 40, 40)))
+    y = 8
+    for text, font, color in lines:
+        box = draw.textbbox((10, y), text, font=font)
+        draw.rectangle([box[0] - 4, box[1] - 3, box[2] + 4, box[3] + 3], fill=(255, 255, 255))
+        draw.text((10, y), text, fill=color, font=font)
+        y = box[3] + 8
+    legend = f"meshcol {page.command}: " + " / ".join(shot.bodies)
+    legend += "; green: witness points; orange: normal" if witnesses else ""
+    if page.command == "inspect":
+        legend += "; red: open edges; orange: non-manifold; magenta: crossing faces"
+    draw.text((10, HEIGHT - 22), legend[:120], fill=(90, 90, 90), font=small)
+
+
+def render_shots(page: ReviewPage, shots: Sequence[Shot], folder: str) -> dict[str, str]:
+    """Draw each shot whose bodies are a row of ``page`` into ``folder``; returns shot name
+    -> file path. A shot whose bodies are no row of the page is skipped."""
+    pillow()
+    rows: dict[tuple[str, ...], Mapping[str, Any]] = {}
+    for row in page.rows():
+        key = tuple(page.bodies[i] for i in row["bodies"])
+        rows.setdefault(key, row)
+    written: dict[str, str] = {}
+    for shot in shots:
+        found = rows.get(shot.bodies) or rows.get(tuple(reversed(shot.bodies)))
+        if found is None:
+            continue
+        path = os.path.join(folder, shot.name)
+        _draw_row(page, found, shot, path)
+        written[shot.name] = path
+    return written
