@@ -9,7 +9,7 @@ PIP    := $(BIN)/python -m pip --disable-pip-version-check
 BUILD_TOOLS := $(if $(shell command -v cmake),,"cmake>=3.18") $(if $(shell command -v ninja),,ninja)
 BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4" $(BUILD_TOOLS)
 
-.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs test-cpp test-sanitize gltf-validator fbx-fixtures
+.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs test-cpp test-sanitize gltf-validator fbx-fixtures robots-wild
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -142,6 +142,13 @@ fbx-fixtures: install-test
 	$(BPY_VENV)/bin/python scripts/make_fbx_fixtures.py tests/data/fbx
 	$(BIN)/python -m pytest -q -p no:cacheprovider tests/io/test_fbx.py
 	git status --short tests/data/fbx
+
+# Robots from the wild: every robot of example-robot-data, gymnasium and dm_control checked,
+# rebuilt (--to urdf, mjcf, usd) and loaded by pybullet, yourdfpy, MuJoCo and usd-core.
+robots-wild: install-test
+	$(PIP) install -q --no-build-isolation -e ".[robots-wild]"
+	@mkdir -p benchmarks/.cache
+	$(BIN)/python benchmarks/bench_robots_wild.py --json benchmarks/.cache/robots-wild.json
 
 # The Khronos glTF validator (npm package gltf-validator, needs node and npm) in
 # .venv/node/node_modules, where tests/io/test_gltf_physics.py finds it (it skips without).

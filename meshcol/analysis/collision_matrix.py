@@ -5,12 +5,16 @@ pair of links with collision geometry getting the first class that applies:
 
 1. ``adjacent``: joined by a joint, or with only links without geometry between them
    (:func:`meshcol.io.kinematics.adjacent_links`, MoveIt's connection graph);
-2. ``default``: colliding at the default configuration (zero, or the middle of the limits when
+2. ``excluded``: a pair the description itself never collides, with its reason in
+   ``excluded_by`` (MJCF: ``<contact><exclude>``, bodies welded together, geoms whose
+   ``contype``/``conaffinity`` never match; an ``--srdf`` file's pairs), written to SRDF with
+   MoveIt's reason for pairs disabled by hand, ``User``;
+3. ``default``: colliding at the default configuration (zero, or the middle of the limits when
    zero is outside them, as MoveIt's ``setToDefaultValues``; ``--joint`` values win; MJCF:
    ``qpos0`` or the first keyframe);
-3. ``always``: colliding in at least ``always_fraction`` of the samples (MoveIt: 95 %);
-4. ``never``: colliding in none of the samples;
-5. ``sometimes``: the others, with their collision rate; these stay checked.
+4. ``always``: colliding in at least ``always_fraction`` of the samples (MoveIt: 95 %);
+5. ``never``: colliding in none of the samples;
+6. ``sometimes``: the others, with their collision rate; these stay checked.
 
 The first four are written as SRDF ``<disable_collisions>`` entries with MoveIt's reasons
 (``Adjacent``, ``Default``, ``Always``, ``Never``). Where MoveIt estimates ``always`` in rounds
@@ -28,7 +32,8 @@ every part of every configuration (each part's local box, moved: Arvo 1990); the
 link boxes then part boxes, vectorised over (configuration, pair) (the batched form of the
 broad phase ``check`` uses, :func:`meshcol.analysis.pairs.broad_phase_batch`); the boolean GJK
 of the survivors in one batched call (:func:`meshcol.collision.narrowphase.intersects_batch`;
-with a padding, the GJK distance).
+then the GJK distance of the pairs found apart: within the padding and the contact
+tolerance counts as colliding, as touching does for ``check``).
 
 Stages: ``_robot_links`` (the robot and its links' colliders) -> ``_sample`` (the default
 configuration and the samples, chunk by chunk: poses, boxes, broad phase, narrow phase) ->
@@ -47,6 +52,7 @@ from typing import Any
 
 import numpy as np
 
+from meshcol.analysis.check_policy import CheckOptions
 from meshcol.analysis.colliders import build_colliders
 from meshcol.analysis.pairs import NO_ANSWER, PartPairIndex, broad_phase_batch
 from meshcol.errors import SceneError
@@ -63,9 +69,15 @@ __all__ = [
 ]
 
 #: Classes of a link pair, in precedence order.
-MATRIX_CLASSES = ("adjacent", "default", "always", "never", "sometimes")
+MATRIX_CLASSES = ("adjacent", "excluded", "default", "always", "never", "sometimes")
 #: The SRDF reason written for each class (``sometimes`` pairs are not written).
-SRDF_REASON = {"adjacent": "Adjacent", "default": "Default", "always": "Always", "never": "Never"}
+SRDF_REASON = {
+    "adjacent": "Adjacent",
+    "excluded": "User",
+    "default": "Default",
+    "always": "Always",
+    "never": "Never",
+}
 #: Columns of :meth:`CollisionMatrixReport.to_csv`, one row per link pair.
 CSV_COLUMNS = [
     "link_a",
@@ -75,6 +87,7 @@ CSV_COLUMNS = [
     "collisions",
     "rate",
     "adjacent",
+    "excluded_by",
     "default_collision",
     "failed_queries",
 ]
@@ -100,6 +113,10 @@ class MatrixOptions:
         ``hull`` (each collision element's convex hull; primitives exact) or ``decomposed``.
     padding : float
         Metres: links closer than this count as colliding (0: touching or overlapping).
+    tolerance : float
+        Metres: the contact tolerance, as ``check``'s (``CheckOptions.tolerance``): links
+        within ``padding + tolerance`` of each other count as colliding, so that a pair
+        touching at 1e-11 m is in contact here as it is for ``check`` and pybullet.
     always_fraction : float
         Pairs colliding in at least this fraction of the samples are ``always`` (MoveIt: 0.95).
     threads : int
@@ -115,6 +132,7 @@ class MatrixOptions:
     seed: int = 0
     collider: str = "hull"
     padding: float = 0.0
+    tolerance: float = CheckOptions.tolerance
     always_fraction: float = 0.95
     threads: int = 0
     batch: int | None = None
@@ -131,6 +149,8 @@ class MatrixOptions:
             )
         if not (math.isfinite(self.padding) and self.padding >= 0):
             raise ValueError(f"padding must be a finite number >= 0, got {self.padding!r}")
+        if not (math.isfinite(self.tolerance) and self.tolerance >= 0):
+            raise ValueError(f"tolerance must be a finite number >= 0, got {self.tolerance!r}")
         if not (0 < self.always_fraction <= 1):
             raise ValueError(f"always_fraction must be in (0, 1], got {self.always_fraction!r}")
         if self.batch is not None and self.batch < 1:
@@ -149,8 +169,10 @@ class CollisionMatrixReport:
         Every pair of links with collision geometry, sorted by (link_a, link_b), link_a <
         link_b: ``class``, ``reason`` (the SRDF reason, None for ``sometimes``),
         ``collisions`` (samples in collision), ``rate`` (collisions / samples), ``adjacent``,
-        ``default_collision``, ``failed_queries``; adjacent pairs are never measured (their
-        collisions, rate and default_collision are None), as MoveIt never checks them.
+        ``excluded_by`` (the description's reason for an ``excluded`` pair, else None),
+        ``default_collision``, ``failed_queries``; adjacent and excluded pairs are never
+        measured (their collisions, rate and default_collision are None), as MoveIt never
+        checks disabled pairs.
     joints : list of dict
         The sampled joints: name, lower, upper, default.
     summary : dict
@@ -233,6 +255,8 @@ class _RobotLinks:
         Each body's pose in its link's frame.
     adjacent : set of (str, str)
         Adjacent link pairs (sorted names), never measured.
+    excluded : dict of (str, str) to str
+        The other pairs the description excludes (sorted names -> reason), never measured.
     given_joints : mapping
         Joint values given by the robot options (``--joint``).
     """
@@ -244,6 +268,7 @@ class _RobotLinks:
     body_link: np.ndarray
     offsets: np.ndarray
     adjacent: set[tuple[str, str]]
+    excluded: dict[tuple[str, str], str]
     given_joints: Any
 
     @property
@@ -289,7 +314,14 @@ def _robot_links(
     offsets = np.linalg.inv(loaded[body_link]) @ np.stack([b.pose for b in bodies])
     names = [b.name for b in bodies]
     adjacent = set(adjacent_links(kinematics.links, kinematics.edges, names))
-    return _RobotLinks(source, scene, kinematics, colliders, body_link, offsets, adjacent, given)
+    excluded = {
+        (min(a, b), max(a, b)): reason
+        for a, b, reason in scene.excluded_pairs
+        if reason != "adjacent" and (min(a, b), max(a, b)) not in adjacent
+    }
+    return _RobotLinks(
+        source, scene, kinematics, colliders, body_link, offsets, adjacent, excluded, given
+    )
 
 
 class _Sampler:
@@ -386,8 +418,9 @@ class _Sampler:
         part_pairs: np.ndarray,
         c: int,
     ) -> np.ndarray:
-        """(c, pairs) bool from the part pairs the broad phase kept: boolean GJK (with a
-        padding, the GJK distance); a failed query counts in ``failed``, never as a hit."""
+        """(c, pairs) bool from the part pairs the broad phase kept: boolean GJK, then the GJK
+        distance of the pairs it finds apart (within the padding and contact tolerance: a
+        hit); a failed query counts in ``failed``, never as a hit."""
         from meshcol.collision.narrowphase import distance_batch, intersects_batch
 
         h = self.h
@@ -395,13 +428,16 @@ class _Sampler:
             [configuration * h + part_pairs[:, 0], configuration * h + part_pairs[:, 1]], axis=1
         )
         self.narrow_pairs += len(narrow)
-        if self.padding > 0:
-            measured = distance_batch(self.tiled, poses, narrow, threads=self.threads)
-            hit, status = measured.distance <= self.padding, measured.status
-        else:
-            checked = intersects_batch(self.tiled, poses, narrow, threads=self.threads)
-            hit, status = checked.intersects, checked.status
-        bad = np.isin(np.asarray(status), NO_ANSWER)
+        checked = intersects_batch(self.tiled, poses, narrow, threads=self.threads)
+        hit = np.asarray(checked.intersects, dtype=bool).copy()
+        bad = np.isin(np.asarray(checked.status), NO_ANSWER)
+        apart = np.flatnonzero(~hit & ~bad)
+        if self.padding > 0 and len(apart):
+            measured = distance_batch(self.tiled, poses, narrow[apart], threads=self.threads)
+            near = np.asarray(measured.distance) <= self.padding
+            failed = np.isin(np.asarray(measured.status), NO_ANSWER)
+            hit[apart] = near & ~failed
+            bad[apart] = failed
         np.add.at(self.failed, pair[bad], 1)
         collides = np.zeros((c, len(self.pairs)), dtype=bool)
         collides[configuration[hit & ~bad], pair[hit & ~bad]] = True
@@ -458,11 +494,16 @@ def collision_matrix(
 
 
 def _sampler(links: _RobotLinks, options: MatrixOptions) -> _Sampler:
-    """The sampler of every link pair but the adjacent ones."""
+    """The sampler of every link pair but the adjacent and excluded ones."""
     names = links.names
     i, j = np.triu_indices(len(names), k=1)
     skip = np.array(
-        [tuple(sorted((names[a], names[b]))) in links.adjacent for a, b in zip(i, j)], dtype=bool
+        [
+            (pair := tuple(sorted((names[a], names[b])))) in links.adjacent
+            or pair in links.excluded
+            for a, b in zip(i, j)
+        ],
+        dtype=bool,
     )
     colliders = links.colliders
     return _Sampler(
@@ -470,7 +511,7 @@ def _sampler(links: _RobotLinks, options: MatrixOptions) -> _Sampler:
         colliders,
         links.body_link,
         links.offsets,
-        options.padding,
+        options.padding + options.tolerance,
         _batch(options, len(colliders.shapes.vertices)),
         options.threads,
         skip,
@@ -493,10 +534,14 @@ def _sample(
     return at_default, counts
 
 
-def _pair_class(adjacent: bool, default: bool, rate: float, hits: int, always: float) -> str:
+def _pair_class(
+    adjacent: bool, excluded: bool, default: bool, rate: float, hits: int, always: float
+) -> str:
     """MoveIt's class of a link pair: the first that applies."""
     if adjacent:
         return "adjacent"
+    if excluded:
+        return "excluded"
     if default:
         return "default"
     if rate >= always:
@@ -526,17 +571,22 @@ def _classify(
     ):
         a, b = sorted((names[i], names[j]))
         is_adjacent = (a, b) in links.adjacent
-        kind = _pair_class(is_adjacent, default, r, hits, options.always_fraction)
+        excluded_by = None if is_adjacent else links.excluded.get((a, b))
+        unmeasured = is_adjacent or excluded_by is not None
+        kind = _pair_class(
+            is_adjacent, excluded_by is not None, default, r, hits, options.always_fraction
+        )
         pairs.append(
             {
                 "link_a": a,
                 "link_b": b,
                 "class": kind,
                 "reason": SRDF_REASON.get(kind),
-                "collisions": None if is_adjacent else hits,
-                "rate": None if is_adjacent else r,
+                "collisions": None if unmeasured else hits,
+                "rate": None if unmeasured else r,
                 "adjacent": is_adjacent,
-                "default_collision": None if is_adjacent else bool(default),
+                "excluded_by": excluded_by,
+                "default_collision": None if unmeasured else bool(default),
                 "failed_queries": failed,
             }
         )
@@ -584,6 +634,7 @@ def _matrix_report(
         "seed": options.seed,
         "collider": options.collider,
         "padding": options.padding,
+        "tolerance": options.tolerance,
         "always_fraction": options.always_fraction,
         "threads": options.threads,
         "inputs": [display_path(links.source, posix=True)],

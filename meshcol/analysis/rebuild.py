@@ -197,6 +197,7 @@ def robot_colliders(
         colliders=tuple(by_element[(link, index)] for link, index, _ in groups),
         link_poses=_link_poses(scene, elements),
         package_paths=dict(robot_options.package_paths),
+        excluded_pairs=tuple(scene.excluded_pairs),
     )
     return robot, [entry for _, entry in made]
 

@@ -153,7 +153,8 @@ def check(
 
     INPUT is mesh files (each body at its own coordinates, as parts exported in place), one
     scene manifest (JSON/TOML), glTF/GLB scenes, or one robot description (URDF, MJCF): its
-    links are the bodies, posed at --joint/--joints (default zero), their collision elements
+    links are the bodies, posed at --joint/--joints (default: MoveIt's default configuration, zero or the middle of
+    limits that exclude zero, as collision-matrix), their collision elements
     the parts; links joined by a joint are left out (--include-adjacent keeps them), and so
     are the --srdf file's <disable_collisions> pairs. Files given directly give one body per
     object; a manifest body is its whole file, whose objects are its parts (never checked

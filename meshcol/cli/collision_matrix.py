@@ -105,12 +105,15 @@ def collision_matrix(
     Joint configurations are sampled uniformly within the limits (continuous joints over
     [-pi, pi]; mimic joints follow their leader; fixed joints stay fixed). Each pair of links
     with collision geometry is, in this order: adjacent (joined by a joint, or through links
-    without geometry), default (colliding at the default configuration: zero, or the middle of
-    the limits when zero is outside them; --joint/--joints set it), always (colliding in at
-    least --always-fraction of the samples), never (in none of them), or sometimes (with its
-    rate). The first four are written as SRDF <disable_collisions> entries (reasons Adjacent,
-    Default, Always, Never) to --output; --report writes every pair with its class and
-    collision rate as JSON. Exit 0 when written, 2 on bad input (nothing written).
+    without geometry), excluded (a pair the description never collides: MJCF <exclude>,
+    bodies welded together, contype/conaffinity that never match), default (colliding at the
+    default configuration, the one check uses: zero, or the middle of limits that exclude
+    zero; --joint/--joints set it), always (colliding in at least --always-fraction of the
+    samples), never (in none of them), or sometimes (with its rate). Colliding means within
+    --padding plus check's contact tolerance (1e-6 m): touching counts. The first five are
+    written as SRDF <disable_collisions> entries (reasons Adjacent, User, Default, Always,
+    Never) to --output; --report writes every pair with its class and collision rate as
+    JSON. Exit 0 when written, 2 on bad input (nothing written).
 
     \b
     Examples:

@@ -308,8 +308,9 @@ _ROBOT_FLAGS = (
         "--joint",
         multiple=True,
         metavar="NAME=VALUE",
-        help="Robot: one joint value (wins over --joints); repeatable.  [default: zero, or the "
-        "limit nearest zero]",
+        help="Robot: one joint value (wins over --joints); repeatable.  [default: the default "
+        "configuration, as MoveIt's: zero, or the middle of limits that exclude zero (MJCF: "
+        "qpos0, or that middle when qpos0 is outside the limits); the same for every command]",
     ),
     click.option(
         "--joints",
@@ -318,7 +319,7 @@ _ROBOT_FLAGS = (
         default=None,
         metavar="FILE.json",
         help='Robot: joint values {"name": value} (radians, metres).  [default: none, every '
-        "joint at zero]",
+        "joint at the default configuration]",
     ),
     click.option(
         "--keyframe",

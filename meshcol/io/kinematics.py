@@ -90,7 +90,8 @@ class Kinematics:
         The configuration the description was read at (the scene's link poses).
     held : tuple of str
         Joints that are never sampled and not fixed (URDF floating and planar joints, MJCF
-        free and ball joints): they keep their default, one line each for the report.
+        free and ball joints and slide joints without a range, a floating base's translation):
+        they keep their default, one line each for the report.
     """
 
     name: str
@@ -204,6 +205,16 @@ class UrdfKinematics(Kinematics):
 _Step = tuple[int, int, np.ndarray, str, np.ndarray, int, float, float]
 
 
+def default_joint_value(lower: float, upper: float) -> float:
+    """A joint's value in the default configuration, as MoveIt's ``setToDefaultValues``: zero,
+    or the middle of limits that exclude zero (``check`` and ``collision-matrix`` alike)."""
+    if lower <= 0.0 <= upper:
+        return 0.0
+    if not (math.isfinite(lower) and math.isfinite(upper)):
+        return lower if math.isfinite(lower) else upper  # a half-open range: its one limit
+    return 0.5 * (lower + upper)
+
+
 def _urdf_joint_space(
     free: list[Any],
     limits: Callable[[Any], tuple[float, float] | None],
@@ -225,12 +236,7 @@ def _urdf_joint_space(
             bounds = (-math.pi, math.pi)
         lower.append(bounds[0])
         upper.append(bounds[1])
-        zero_inside = bounds[0] <= 0.0 <= bounds[1]
-        default.append(
-            float(given[j.name])
-            if j.name in given
-            else (0.0 if zero_inside else 0.5 * (bounds[0] + bounds[1]))
-        )
+        default.append(float(given[j.name]) if j.name in given else default_joint_value(*bounds))
     return JointSpace(
         tuple(j.name for j in free),
         np.asarray(lower, dtype=np.float64),
@@ -344,10 +350,9 @@ class MjcfKinematics(Kinematics):
                 lo, hi = (float(x) for x in model.jnt_range[jid])
             elif kind == hinge:
                 lo, hi = -math.pi, math.pi
-            else:
-                raise SceneError(
-                    f"joint {name!r}: slide joint without a range: it cannot be sampled", source
-                )
+            else:  # a floating base's translation (rootx of a planar walker): not sampled
+                held.append(f"joint {name!r} is a slide joint without a range: kept at its default")
+                continue
             names.append(name)
             lower.append(lo)
             upper.append(hi)

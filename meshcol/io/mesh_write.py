@@ -65,10 +65,20 @@ def obj_text(objects: Sequence[tuple[str, np.ndarray, np.ndarray]]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def glb_bytes(objects: Sequence[tuple[str, np.ndarray, np.ndarray]]) -> bytes:
+#: glTF's node matrix (column-major) that turns a Z-up frame into glTF's Y-up one: a rotation
+#: of -90 degrees about X, (x, y, z) -> (x, z, -y).
+Z_UP_TO_Y_UP = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]
+
+
+def glb_bytes(objects: Sequence[tuple[str, np.ndarray, np.ndarray]], z_up: bool = False) -> bytes:
     """Binary glTF 2.0 with one node (and mesh) per (name, vertices, faces).
 
     Positions are float32 (as glTF requires), indices uint32; no timestamps, sorted JSON keys.
+    ``z_up``: the coordinates are in a Z-up frame (a robot's world, ROS REP 103): the nodes
+    become children of one root node ``z_up_to_y_up`` whose matrix (:data:`Z_UP_TO_Y_UP`)
+    turns them into glTF's Y-up frame (glTF 2.0, 3.4: "glTF uses a right-handed coordinate
+    system ... +Y up"), and ``asset.extras.meshcol_source_up_axis`` says ``"Z"``: a reader
+    that applies node transforms (every conforming one) sees the robot upright.
     """
     blob = bytearray()
     views: list[dict[str, Any]] = []
@@ -106,10 +116,16 @@ def glb_bytes(objects: Sequence[tuple[str, np.ndarray, np.ndarray]]) -> bytes:
             }
         )
         nodes.append({"name": name, "mesh": i})
+    roots = list(range(len(nodes)))
+    asset: dict[str, Any] = {"version": "2.0", "generator": "meshcol"}
+    if z_up:
+        nodes.append({"name": "z_up_to_y_up", "children": roots, "matrix": Z_UP_TO_Y_UP})
+        roots = [len(nodes) - 1]
+        asset["extras"] = {"meshcol_source_up_axis": "Z"}
     doc = {
-        "asset": {"version": "2.0", "generator": "meshcol"},
+        "asset": asset,
         "scene": 0,
-        "scenes": [{"nodes": list(range(len(nodes)))}],
+        "scenes": [{"nodes": roots}],
         "nodes": nodes,
         "meshes": meshes,
         "accessors": accessors,
@@ -185,9 +201,12 @@ def write_parts(
 
 
 def write_meshes(
-    path: str | os.PathLike[str], meshes: Sequence[tuple[str, np.ndarray, np.ndarray]]
+    path: str | os.PathLike[str],
+    meshes: Sequence[tuple[str, np.ndarray, np.ndarray]],
+    z_up: bool = False,
 ) -> None:
-    """Write named meshes ``(name, vertices, faces)`` to ``path``, atomically.
+    """Write named meshes ``(name, vertices, faces)`` to ``path``, atomically (``z_up``: GLB of
+    Z-up coordinates, turned to glTF's Y-up by a root node, :func:`glb_bytes`).
 
     The format comes from the extension (:data:`MESH_OUTPUT_EXTENSIONS`). OBJ and GLB are
     written by :func:`obj_text` and :func:`glb_bytes` (one object or node per mesh); STL, PLY
@@ -213,7 +232,7 @@ def write_meshes(
                 f.write(obj_text(meshes))
         elif extension == ".glb":
             with open(tmp, "wb") as f:
-                f.write(glb_bytes(meshes))
+                f.write(glb_bytes(meshes, z_up=z_up))
         else:
             import trimesh
 

@@ -125,7 +125,7 @@ def _configure(mujoco: Any, model: Any, data: Any, options: RobotOptions, source
     """Set ``data.qpos`` to the configuration the scene is read at; the warnings it gave.
 
     ``qpos0`` (or the first keyframe), then the values given; a joint whose ``qpos0`` is
-    outside its limits is clamped to them (not with a keyframe); followers of
+    outside its limits is set to their middle (not with a keyframe); followers of
     ``<equality><joint>`` are set from their leaders; then every value must be within its
     joint's limits."""
     if options.keyframe:
@@ -189,7 +189,8 @@ def _set_given(
 def _clamp_defaults(
     mujoco: Any, model: Any, data: Any, given: set[int], followers: Followers
 ) -> list[str]:
-    """Clamp each limited joint not given whose ``qpos0`` is outside its limits; a warning
+    """Set each limited joint not given whose ``qpos0`` is outside its limits to their middle
+    (MoveIt's default configuration, as URDF joints whose limits exclude zero); a warning
     for each."""
     warnings: list[str] = []
     for jid in range(model.njnt):
@@ -200,13 +201,14 @@ def _clamp_defaults(
         lower, upper = (float(x) for x in model.jnt_range[jid])
         address = model.jnt_qposadr[jid]
         value = float(data.qpos[address])
-        nearest = min(max(value, lower), upper)
-        if nearest != value:
-            data.qpos[address] = nearest
+        if not lower <= value <= upper:
+            middle = 0.5 * (lower + upper)
+            data.qpos[address] = middle
             name = _joint_name(mujoco, model, jid)
             warnings.append(
                 f"joint {name!r}: qpos0 {value:g} is outside its limits "
-                f"[{lower:g}, {upper:g}]; at {nearest:g} (give --joint {name}=VALUE to choose)"
+                f"[{lower:g}, {upper:g}]; at their middle, {middle:g}, as MoveIt's default "
+                f"configuration (give --joint {name}=VALUE to choose)"
             )
     return warnings
 
@@ -311,8 +313,17 @@ def _bodies(
 
 
 def _exclusions(model: Any, names: list[str], include_adjacent: bool) -> list[tuple[str, str, str]]:
-    """Parent and child bodies (as MuJoCo filters them; never the world body's children),
-    unless ``include_adjacent``, and the model's ``<contact><exclude>`` pairs."""
+    """The body pairs MuJoCo never collides (``mj_collision``'s filters), each with its reason:
+
+    - ``adjacent``: parent and child bodies (never the world body's children), unless
+      ``include_adjacent``;
+    - ``mjcf <exclude>``: the model's ``<contact><exclude>`` pairs;
+    - ``mjcf welded``: bodies welded together (the same ``body_weldid``: no joint between
+      them), which MuJoCo never tests against each other;
+    - ``mjcf contype/conaffinity``: bodies no geom pair of which passes MuJoCo's bitmask rule
+      (``contype_a & conaffinity_b || contype_b & conaffinity_a``, after the compiler resolved
+      defaults and classes), unless a ``<contact><pair>`` names two of their geoms.
+    """
     excluded: list[tuple[str, str, str]] = []
     if not include_adjacent:
         for b in range(1, model.nbody):
@@ -322,4 +333,35 @@ def _exclusions(model: Any, names: list[str], include_adjacent: bool) -> list[tu
     for signature in model.exclude_signature:
         a, b = int(signature) >> 16, int(signature) & 0xFFFF
         excluded.append((names[a], names[b], "mjcf <exclude>"))
+    excluded.extend(_filtered_pairs(model, names))
     return excluded
+
+
+def _filtered_pairs(model: Any, names: list[str]) -> list[tuple[str, str, str]]:
+    """Body pairs MuJoCo's weld and bitmask filters leave untested (see :func:`_exclusions`)."""
+    contype = np.asarray(model.geom_contype, dtype=np.int64)
+    conaffinity = np.asarray(model.geom_conaffinity, dtype=np.int64)
+    colliding = np.flatnonzero((contype != 0) | (conaffinity != 0))
+    geom_body = np.asarray(model.geom_bodyid, dtype=np.int64)
+    bodies = sorted({int(b) for b in geom_body[colliding]})
+    weld = np.asarray(model.body_weldid, dtype=np.int64)
+    explicit = {
+        tuple(sorted((int(geom_body[g1]), int(geom_body[g2]))))
+        for g1, g2 in zip(model.pair_geom1, model.pair_geom2)
+    }
+    geoms_of = {b: colliding[geom_body[colliding] == b] for b in bodies}
+    pairs: list[tuple[str, str, str]] = []
+    for i, a in enumerate(bodies):
+        for b in bodies[i + 1 :]:
+            if (a, b) in explicit:
+                continue
+            if weld[a] == weld[b]:
+                pairs.append((names[a], names[b], "mjcf welded"))
+                continue
+            ga, gb = geoms_of[a], geoms_of[b]
+            passes = (contype[ga][:, None] & conaffinity[gb][None, :]) | (
+                contype[gb][None, :] & conaffinity[ga][:, None]
+            )
+            if not passes.any():
+                pairs.append((names[a], names[b], "mjcf contype/conaffinity"))
+    return pairs

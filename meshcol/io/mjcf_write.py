@@ -69,15 +69,21 @@ def mjcf_text(robot: RobotColliders, files: dict[int, list[str]], stage: str, ou
     ``robot.colliders``), written in ``stage`` and moved to ``out_dir`` afterwards."""
     mujoco = _mujoco(robot.source)
     stage_abs = os.path.abspath(stage)
+    notes: list[str] = []
     if robot.kind == "urdf":
-        spec, exact = _spec_of_urdf(mujoco, robot, files, stage_abs)
+        spec, exact = _spec_of_urdf(mujoco, robot, files, stage_abs, notes)
     else:
         spec, exact = _spec_of_mjcf(mujoco, robot, files, stage_abs)
     # Files by absolute path for MuJoCo's check and writer, then relative to OUT in the text.
     _absolute_asset_files(spec, robot.source if robot.kind == "mjcf" else None)
     spec.meshdir = ""
     spec.texturedir = ""
-    _compile(mujoco, spec, robot.source)
+    excludes = _add_excludes(spec, robot)
+    bounds = _bound_inertia(mujoco, spec, robot.source)
+    if excludes:
+        notes.append(f"{excludes} <contact><exclude> pair(s) written: {_EXCLUDE_NOTE}")
+    if bounds:
+        notes.append(bounds)
     markers = _mark(mujoco, spec, exact)
     try:
         text = spec.to_xml()
@@ -85,15 +91,169 @@ def mjcf_text(robot: RobotColliders, files: dict[int, list[str]], stage: str, ou
         raise SceneError(
             f"MuJoCo cannot write the rebuilt model: {' '.join(str(exc).split())}", robot.source
         ) from None
-    return _relative_files(_exact_geoms(text, markers), stage_abs, os.path.abspath(out_dir))
+    text = _relative_files(_exact_geoms(text, markers), stage_abs, os.path.abspath(out_dir))
+    return _with_notes(text, notes, spec.compiler if bounds else None)
+
+
+#: What the written ``<contact><exclude>`` elements are, for the note at the top of the file.
+_EXCLUDE_NOTE = (
+    "the link pairs meshcol leaves out of self-collision (adjacent links, SRDF pairs), so that "
+    "MuJoCo leaves them out too (its own parent-child filter misses the child of a body "
+    "welded to the world)"
+)
+
+#: Lower bounds MuJoCo's compiler puts on a moving body's mass (kg) and inertia (kg m^2)
+#: when the model does not compile without them (``<compiler boundmass boundinertia>``).
+BOUND_MASS = 1e-3
+BOUND_INERTIA = 1e-6
+
+
+def _add_excludes(spec: Any, robot: RobotColliders) -> int:
+    """A ``<contact><exclude>`` for each pair meshcol excludes but MuJoCo's own filters (MJCF
+    excludes, welds, contype/conaffinity) do not already cover; how many were added."""
+    bodies = {body.name for body in spec.bodies}
+    present = {tuple(sorted((e.bodyname1, e.bodyname2))) for e in spec.excludes}
+    added = 0
+    for a, b, reason in robot.excluded_pairs:
+        key = tuple(sorted((a, b)))
+        if reason.startswith("mjcf") or key in present or a not in bodies or b not in bodies:
+            continue
+        spec.add_exclude(bodyname1=key[0], bodyname2=key[1])
+        present.add(key)
+        added += 1
+    return added
+
+
+def _bound_inertia(mujoco: Any, spec: Any, source: str) -> str | None:
+    """Compile; a model MuJoCo rejects for a body's mass or inertia (below ``mjMINVAL`` on a
+    moving body, as a quadruped's motor links; breaking the triangle inequality; a full
+    inertia that is not positive definite) is compiled again with MuJoCo's own remedies, as
+    converters do: ``<compiler boundmass boundinertia balanceinertia>`` (:data:`BOUND_MASS`,
+    :data:`BOUND_INERTIA`: lower bounds on every body's mass and inertia but the world's),
+    and if that is not enough ``inertiafromgeom="true"`` (every inertia from the body's
+    geoms); the note saying so."""
+    why = _inertia_rejection(spec, source)
+    if why is None:
+        return None
+    first, shells = why, _shell_inertias(mujoco, spec, source, why)
+    if shells:
+        why = _inertia_rejection(spec, source)
+        shell = f'; mesh(es) {", ".join(repr(n) for n in shells)} with inertia="shell"'
+        if why is None:
+            return (
+                f"MuJoCo rejected the model as written ({first}); compiled{shell[1:]} (a "
+                "mesh too thin for a volume inertia, MuJoCo's advice), as converters do"
+            )
+    else:
+        shell = ""
+    from_geoms = _inertia_from_geoms(spec)
+    spec.compiler.balanceinertia = True
+    spec.compiler.boundmass = max(float(spec.compiler.boundmass), BOUND_MASS)
+    spec.compiler.boundinertia = max(float(spec.compiler.boundinertia), BOUND_INERTIA)
+    remedy = f'boundmass="{BOUND_MASS:g}" boundinertia="{BOUND_INERTIA:g}" balanceinertia="true"'
+    if _inertia_rejection(spec, source) is not None:
+        spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_TRUE
+        remedy += ' inertiafromgeom="true"'
+    _compile(mujoco, spec, source)
+    geoms = (
+        f"; the inertia of {', '.join(repr(name) for name in from_geoms)} (not positive "
+        "definite) from its geoms"
+        if from_geoms
+        else ""
+    )
+    return (
+        f"MuJoCo rejected the model as written ({first}); compiled with <compiler {remedy}> "
+        f"(MuJoCo's remedies for the masses and inertias of bodies){geoms}{shell}, as "
+        "converters do"
+    )
+
+
+def _shell_inertias(mujoco: Any, spec: Any, source: str, why: str | None) -> list[str]:
+    """While MuJoCo rejects a mesh whose volume is too small for its inertia (a visual mesh
+    of open or paper-thin surfaces), that mesh gets ``inertia="shell"``, as MuJoCo advises;
+    the names of those meshes."""
+    import re
+
+    shells: list[str] = []
+    while why is not None and "mesh volume is too small" in why:
+        found = re.search(r"too small: (.+?) \. Try", why)
+        mesh = spec.mesh(found.group(1)) if found else None
+        if mesh is None or mesh.name in shells:
+            break
+        mesh.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL
+        shells.append(mesh.name)
+        why = _inertia_rejection(spec, source)
+    return shells
+
+
+def _inertia_from_geoms(spec: Any) -> list[str]:
+    """Bodies whose full inertia is not positive definite (MuJoCo refuses it before any
+    bound applies) get their inertial from their geoms instead; their names."""
+    names = []
+    for body in spec.bodies:
+        full = np.asarray(body.fullinertia, dtype=np.float64)
+        if not body.explicitinertial or not np.all(np.isfinite(full)):
+            continue
+        matrix = np.array(
+            [[full[0], full[3], full[4]], [full[3], full[1], full[5]], [full[4], full[5], full[2]]]
+        )
+        if np.linalg.eigvalsh(matrix).min() <= 0.0:
+            body.explicitinertial = False
+            body.fullinertia = [np.nan] * 6
+            names.append(body.name)
+    return names
+
+
+#: Words of MuJoCo's compiler errors about a body's mass or inertia.
+_INERTIA_ERRORS = ("mjMINVAL", "A + B >= C", "positive eigenvalues", "mesh volume is too small")
+
+
+def _inertia_rejection(spec: Any, source: str) -> str | None:
+    """None when the spec compiles; MuJoCo's words when it rejects a mass or inertia; any
+    other rejection is a SceneError."""
+    try:
+        spec.compile()
+        return None
+    except Exception as exc:  # noqa: BLE001 - as _spec
+        why = " ".join(str(exc).split())
+    if not any(words in why for words in _INERTIA_ERRORS):
+        raise SceneError(f"MuJoCo rejects the rebuilt model: {why}", source) from None
+    return why
+
+
+def _with_notes(text: str, notes: list[str], compiler: Any = None) -> str:
+    """The XML with one comment per note after its root's opening tag ("meshcol: ..."), and
+    with ``compiler``: the bounds :func:`_bound_inertia` set on ``<compiler>`` (MuJoCo's
+    writer leaves ``balanceinertia`` out, and the file must compile as it did here)."""
+    if not notes:
+        return text
+    from lxml import etree
+
+    root = etree.fromstring(text.encode("utf-8"))
+    if compiler is not None:
+        element = root.find("compiler")
+        if element is None:
+            element = etree.Element("compiler")
+            element.tail = "\n  "
+            root.insert(0, element)
+        element.set("boundmass", format_numbers([compiler.boundmass]))
+        element.set("boundinertia", format_numbers([compiler.boundinertia]))
+        element.set("balanceinertia", "true")
+        if int(compiler.inertiafromgeom) == 1:  # mjINERTIAFROMGEOM_TRUE
+            element.set("inertiafromgeom", "true")
+    for k, note in enumerate(notes):
+        comment = etree.Comment(f" meshcol: {note.replace('--', '- -')} ")
+        comment.tail = "\n  "
+        root.insert(k, comment)
+    return etree.tostring(root, encoding="unicode") + "\n"
 
 
 def _spec_of_urdf(
-    mujoco: Any, robot: RobotColliders, files: dict[int, list[str]], stage: str
+    mujoco: Any, robot: RobotColliders, files: dict[int, list[str]], stage: str, notes: list[str]
 ) -> tuple[Any, list[Any]]:
     """The rebuilt URDF as MuJoCo imports it, visual geoms in group 2 and collision geoms in
     group 3; and the geoms of its fitted primitives (written at full precision)."""
-    spec = _spec_from_urdf(mujoco, robot, files, stage)
+    spec = _spec_from_urdf(mujoco, robot, files, stage, notes)
     exact = _imported_primitives(mujoco, spec, robot)
     for geom in spec.geoms:
         if geom.contype == 0 and geom.conaffinity == 0:
@@ -355,26 +515,31 @@ def _compile(mujoco: Any, spec: Any, source: str) -> Any:
 
 
 def _absolute_asset_files(spec: Any, mjcf: str | None) -> None:
-    """Each mesh, height field and texture file by its absolute path."""
+    """Each mesh, height field, texture and skin file by its absolute path."""
     base = spec.modelfiledir or (os.path.dirname(os.path.abspath(mjcf)) if mjcf else "")
     for assets, folder in (
         (spec.meshes, spec.meshdir),
         (spec.hfields, spec.meshdir),
         (spec.textures, spec.texturedir),
+        (spec.skins, spec.meshdir),
     ):
         for asset in assets:
             file = getattr(asset, "file", "")
             if not file:
                 continue
             path = file if os.path.isabs(file) else os.path.join(base, folder or "", file)
+            if not os.path.isfile(path) and os.path.isfile(os.path.join(base, file)):
+                path = os.path.join(base, file)  # a skin MuJoCo found beside the model
             asset.file = os.path.abspath(path)
 
 
 def _spec_from_urdf(
-    mujoco: Any, robot: RobotColliders, files: dict[int, list[str]], stage: str
+    mujoco: Any, robot: RobotColliders, files: dict[int, list[str]], stage: str, notes: list[str]
 ) -> Any:
     """MuJoCo's URDF importer on the rebuilt URDF: every mesh by absolute path, COLLADA and
-    other visual meshes MuJoCo does not read converted to OBJ in the stage."""
+    other visual meshes MuJoCo does not read converted to OBJ in the stage; a visual mesh
+    that is not found or has no triangles to convert (a COLLADA of lines only) is left out,
+    with a note."""
     from lxml import etree
 
     text = urdf_text(robot, files, {"collider": stage + os.sep})
@@ -385,13 +550,18 @@ def _spec_from_urdf(
             for mesh in visual.iter("mesh"):
                 reference = mesh.get("filename") or ""
                 path = resolve_mesh_reference(robot.source, reference, robot.package_paths)
-                if path is None or not os.path.isfile(path):
-                    raise SceneError(
-                        f"link {link.get('name')!r}: visual mesh {reference!r} not found",
-                        robot.source,
+                try:
+                    if path is None or not os.path.isfile(path):
+                        raise SceneError("not found", robot.source)
+                    if Path(path).suffix.lower() not in _MUJOCO_MESH_FORMATS:
+                        path = converted.get(path) or _convert_visual(path, stage, converted)
+                except MeshcolError as error:
+                    link.remove(visual)  # what a link looks like: no collider depends on it
+                    notes.append(
+                        f"link {link.get('name')!r}: visual mesh {reference!r} left out "
+                        f"({error.message})"
                     )
-                if Path(path).suffix.lower() not in _MUJOCO_MESH_FORMATS:
-                    path = converted.get(path) or _convert_visual(path, stage, converted, robot)
+                    break
                 mesh.set("filename", path)
     extension = root.find("mujoco")
     if extension is None:
@@ -407,15 +577,13 @@ def _spec_from_urdf(
     return _spec(mujoco, robot.source, lambda: mujoco.MjSpec.from_string(xml))
 
 
-def _convert_visual(path: str, stage: str, converted: dict[str, str], robot: RobotColliders) -> str:
-    """A visual mesh MuJoCo cannot read, as one OBJ in the stage (``visual_<stem>.obj``)."""
+def _convert_visual(path: str, stage: str, converted: dict[str, str]) -> str:
+    """A visual mesh MuJoCo cannot read, as one OBJ in the stage (``visual_<stem>.obj``);
+    the reader's error (MeshcolError) for a file it cannot read."""
     from meshcol.io.mesh_read import load_mesh
     from meshcol.io.mesh_write import safe_name, write_meshes
 
-    try:
-        bodies = load_mesh(path, collada=True)
-    except MeshcolError as error:
-        raise SceneError(f"visual mesh {path}: {error.message}", robot.source) from None
+    bodies = load_mesh(path, collada=True)
     vertices, faces, base = [], [], 0
     for body in bodies:
         vertices.append(body.vertices @ body.pose[:3, :3].T + body.pose[:3, 3])

@@ -1,11 +1,23 @@
 """Mesh references of robot descriptions to files: ``package://``, ``file://``, relative, absolute.
 
-``package://NAME/REST`` is resolved, in order, through the folders given for ``NAME``
-(``--package-path NAME=DIR``), the folders of ``ROS_PACKAGE_PATH`` (``ENTRY/NAME``, an entry
-named ``NAME``, or a folder ``NAME`` holding a ``package.xml`` a few levels below an entry),
-an ancestor folder of the description named ``NAME``, and an ancestor folder in which ``REST``
-exists (a package checked out under another name, as the ``example-robot-data`` layout is).
-A relative reference is relative to the description's folder.
+``package://NAME/REST`` is resolved, in order, through:
+
+1. the folders given for ``NAME`` (``--package-path NAME=DIR``);
+2. the folders of ``ROS_PACKAGE_PATH`` (``ENTRY/NAME``, an entry named ``NAME``, or a folder
+   ``NAME`` holding a ``package.xml`` a few levels below an entry);
+3. an ancestor folder of the description named ``NAME`` (the description inside its package);
+4. ``FOLDER/NAME/REST`` for the description's folder and then each of its ancestors, nearest
+   first: a folder ``NAME`` beside the description, as pybullet's URDF importer finds it (the
+   reference without ``package://``, relative to the description's folder), or beside an
+   ancestor (the same rule a folder up at a time). ``package://meshes/base.stl`` is so
+   ``meshes/base.stl`` beside the file;
+5. ``FOLDER/REST`` for the description's folder and its ancestors: yourdfpy's
+   ``filename_handler_magic`` (``package://NAME/`` dropped, the rest relative to the folder
+   and to each of its parents), which finds a package checked out under another name, as the
+   ``example-robot-data`` layout is.
+
+Rules 4 and 5 take the first file that exists. A relative reference is relative to the
+description's folder.
 """
 
 from __future__ import annotations
@@ -54,8 +66,11 @@ class PackageResolver:
                 return os.fspath(found / rest), None
         ancestors = [self.folder, *self.folder.parents]
         for folder in ancestors:
-            if folder.name == name:
+            if name and folder.name == name:
                 return os.fspath(folder / rest), None
+        for folder in ancestors:
+            if rest and (folder / name / rest).is_file():
+                return os.fspath(folder / name / rest), None
         for folder in ancestors:
             if rest and (folder / rest).is_file():
                 return os.fspath(folder / rest), None

@@ -12,7 +12,9 @@ One module per output format, this one dispatching (:func:`write_robot`):
 - ``urdf`` (URDF input): the input's tree edited in place (:mod:`meshcol.io.urdf_write`);
 - ``mjcf``: MuJoCo's model editor, in MuJoCo Menagerie's convention (:mod:`meshcol.io.mjcf_write`);
 - ``glb``: one node per collider part (``<link>_NN``, primitives tessellated as
-  ``<link>_<kind><element>``), in the world frame at the scene's joint configuration (here);
+  ``<link>_<kind><element>``), in the world frame at the scene's joint configuration (here),
+  under a root node that turns the robot's Z-up world into glTF's Y-up frame
+  (:func:`meshcol.io.mesh_write.glb_bytes`, ``z_up``);
 - ``usd``: one ``Xform`` per link, one collision prim per part (:mod:`meshcol.io.usd_write`).
 
 Everything goes through :func:`meshcol.io.outputs.staged_folder`: the files of one run appear
@@ -103,6 +105,10 @@ class RobotColliders:
     package_paths : dict of str to str
         ``package://`` folders the description was read with (visual meshes of a URDF
         converted to MJCF are found through them).
+    excluded_pairs : tuple of (str, str, str)
+        The link pairs meshcol leaves out of self-collision (adjacent links, an SRDF's
+        pairs, the MJCF's own filters; :attr:`meshcol.types.Scene.excluded_pairs`): an MJCF
+        written gets a ``<contact><exclude>`` for each pair MuJoCo would not filter itself.
     """
 
     source: str
@@ -110,6 +116,7 @@ class RobotColliders:
     colliders: tuple[Collider, ...]
     link_poses: dict[str, np.ndarray]
     package_paths: dict[str, str] = field(default_factory=dict)
+    excluded_pairs: tuple[tuple[str, str, str], ...] = ()
 
 
 def description_path(
@@ -212,7 +219,7 @@ def write_robot(
         elif to == "mjcf":
             atomic_write(target, mjcf_text(robot, files, stage, out_dir))
         elif to == "glb":
-            write_meshes(target, _world_meshes(robot))
+            write_meshes(target, _world_meshes(robot), z_up=True)
         else:
             write_usd(robot, part_labels(robot), target)
         written = sorted(os.listdir(stage))

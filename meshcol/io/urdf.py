@@ -22,7 +22,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from meshcol.errors import InputFileError, MeshcolError, MissingDependencyError, SceneError
-from meshcol.io.kinematics import Kinematics, UrdfKinematics, adjacent_links
+from meshcol.io.kinematics import (
+    Kinematics,
+    UrdfKinematics,
+    adjacent_links,
+    default_joint_value,
+)
 from meshcol.io.links import (
     JOINT_TOLERANCE,
     CollisionElement,
@@ -33,6 +38,7 @@ from meshcol.io.links import (
 )
 from meshcol.io.packages import PackageResolver
 from meshcol.io.paths import confine
+from meshcol.io.xacro_leftovers import resolve_xacro_leftovers
 from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere
 
 if TYPE_CHECKING:
@@ -70,12 +76,13 @@ def read_urdf(
     root = _parse_strictly(etree, source)
     if options.keyframe:
         raise SceneError("--keyframe: a URDF has no keyframes (MJCF only)", source)
+    warnings: list[str] = []
+    resolve_xacro_leftovers(root, source, warnings)
     capsules = {} if visual else _take_capsules(root, source)
     robot = _yourdfpy_robot(yourdfpy, etree, root, source)
     links = [link.name for link in robot.links]
     parent_joint = _joint_tree(robot, links, source)
     root_link = _root_link(parent_joint, links, source)
-    warnings: list[str] = []
     joints = {joint.name: joint for joint in robot.joints}
     values = _urdf_joint_values(joints, options.joints, source, warnings)
     _check_reached(robot.joints, parent_joint, links, root_link, source)
@@ -258,19 +265,22 @@ def _limits(joint: Any, source: str) -> tuple[float, float] | None:
 def _urdf_joint_values(
     joints: dict[str, Any], given: Mapping[str, float], source: str, warnings: list[str]
 ) -> dict[str, float]:
-    """Every joint's value: given, else zero (the limit nearest zero when zero is outside the
-    limits, with a warning), mimic joints from their master; checked against the limits."""
+    """Every joint's value: given, else the default configuration of MoveIt's
+    ``setToDefaultValues`` (zero, or the middle of limits that exclude zero, with a warning;
+    the one :mod:`meshcol.analysis.collision_matrix` uses), mimic joints from their master;
+    checked against the limits."""
     values = _given_values(joints, given, source)
     for name, joint in joints.items():
         limits = _limits(joint, source)
         if name in values or joint.mimic is not None or limits is None:
             continue
-        nearest = min(max(0.0, limits[0]), limits[1])
-        if nearest != 0.0:
-            values[name] = nearest
+        if not limits[0] <= 0.0 <= limits[1]:
+            middle = default_joint_value(*limits)
+            values[name] = middle
             warnings.append(
                 f"joint {name!r}: zero is outside its limits [{limits[0]:g}, {limits[1]:g}]; "
-                f"at {nearest:g} (give --joint {name}=VALUE to choose)"
+                f"at their middle, {middle:g}, as MoveIt's default configuration "
+                f"(give --joint {name}=VALUE to choose)"
             )
     _mimic_values(joints, values, source)
     for name, value in values.items():

@@ -47,19 +47,14 @@ def urdf_text(
 ) -> str:
     """The input URDF with each rebuilt ``<collision>`` pointing at its part files
     (``prefix``: folder prepended to the part file names, for MuJoCo's importer). With
-    ``out_dir``, the other relative mesh references (visuals) are made relative to it, so that
-    they still name the input's files; ``package://`` and absolute references stay as written."""
+    ``out_dir``, the other mesh references (visuals) are rewritten by
+    :func:`_references_from` so that they name the input's files from there."""
     from lxml import etree
 
     tree = parse_xml(robot.source)
     root = tree.getroot()
     if out_dir is not None:
-        folder = os.path.dirname(os.path.abspath(robot.source))
-        for mesh in root.iter("mesh"):
-            reference = mesh.get("filename") or ""
-            if reference and "://" not in reference and not os.path.isabs(reference):
-                moved = os.path.relpath(os.path.join(folder, reference), os.path.abspath(out_dir))
-                mesh.set("filename", Path(moved).as_posix())
+        _references_from(root, robot, out_dir)
     links = {link.get("name"): link for link in root.findall("link")}
     for i, collider in enumerate(robot.colliders):
         if collider.kept:
@@ -97,6 +92,27 @@ def urdf_text(
     ]
     body = "\n".join(etree.tostring(e, encoding="unicode", with_tail=False) for e in siblings)
     return '<?xml version="1.0" encoding="utf-8"?>\n' + body + "\n"
+
+
+def _references_from(root: Any, robot: RobotColliders, out_dir: str) -> None:
+    """Every relative, ``package://`` or ``file://`` mesh reference of ``root`` made a path
+    relative to ``out_dir`` naming the file it resolved to (:mod:`meshcol.io.packages`, with
+    the package folders the robot was read with): pybullet, yourdfpy and MuJoCo load the
+    written URDF from the output folder without ROS; a reference that resolves to no file,
+    and an absolute one, stay as written."""
+    from meshcol.io.packages import resolve_mesh_reference
+
+    for mesh in root.iter("mesh"):
+        reference = mesh.get("filename") or ""
+        if not reference or os.path.isabs(reference):
+            continue
+        if "://" in reference and not reference.startswith(("package://", "file://")):
+            continue
+        path = resolve_mesh_reference(robot.source, reference, robot.package_paths)
+        if path is None or ("://" in reference and not os.path.isfile(path)):
+            continue
+        moved = os.path.relpath(os.path.abspath(path), os.path.abspath(out_dir))
+        mesh.set("filename", Path(moved).as_posix())
 
 
 def _cleared(element: Any) -> tuple[Any, str | None]:

@@ -65,7 +65,9 @@ def write_usd(robot: RobotColliders, labels: list[list[str]], path: str) -> None
                 links[collider.link] = xform
             parent = xform.GetPath()
             if collider.primitive is not None:
-                prim = _usd_primitive(stage, UsdGeom, Gf, parent.AppendChild(names[0]), collider)
+                prim = _usd_primitive(
+                    stage, UsdGeom, Gf, parent.AppendChild(_usd_name(names[0])), collider
+                )
                 UsdPhysics.CollisionAPI.Apply(prim)
                 continue
             for label, (v, f) in zip(names, collider.parts):

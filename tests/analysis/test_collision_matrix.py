@@ -142,6 +142,7 @@ def test_classes_and_rates_at_the_zero_default(arm: Path) -> None:
     s = report.summary
     assert s["pairs_by_class"] == {
         "adjacent": 6,
+        "excluded": 0,
         "default": 5,
         "always": 0,
         "never": 10,

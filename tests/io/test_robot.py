@@ -367,15 +367,16 @@ def test_robot_options_reach_the_library_as_an_argument(tmp_path):
     assert not np.allclose(moved, arm_pose(load_inputs([path])))
 
 
-def test_zero_outside_limits_is_clamped_with_a_warning(tmp_path):
+def test_zero_outside_limits_is_the_middle_of_the_limits_with_a_warning(tmp_path):
+    """MoveIt's default configuration (issue 29, item 9): the one collision-matrix uses."""
     text = urdf(
         "<link name='a'/><link name='b'><collision><geometry><sphere radius='0.1'/></geometry>"
         "</collision></link><joint name='j' type='prismatic'><parent link='a'/><child link='b'/>"
         "<axis xyz='1 0 0'/><limit lower='0.5' upper='1' effort='1' velocity='1'/></joint>"
     )
     scene = load_robot(write(tmp_path, "z.urdf", text))
-    np.testing.assert_allclose(scene.bodies[0].pose[:3, 3], [0.5, 0, 0])
-    assert any("zero is outside its limits" in w for w in scene.warnings)
+    np.testing.assert_allclose(scene.bodies[0].pose[:3, 3], [0.75, 0, 0])
+    assert any("zero is outside its limits" in w and "middle, 0.75" in w for w in scene.warnings)
 
 
 TOUCHING = """
@@ -756,13 +757,13 @@ def test_mjcf_equality_joint_is_a_mimic(tmp_path):
     assert "eq.xml" in line and "joint 'b' follows joint 'a'" in line
 
 
-def test_mjcf_qpos0_outside_limits_is_clamped(tmp_path):
+def test_mjcf_qpos0_outside_limits_is_the_middle_of_the_limits(tmp_path):
     pytest.importorskip("mujoco")
     text = """<mujoco><worldbody><body name="a">
       <joint name="s" type="slide" axis="1 0 0" range="0.5 1"/><geom type="sphere" size="0.1"/>
     </body></worldbody></mujoco>"""
     scene = load_robot(write(tmp_path, "q.xml", text))
-    np.testing.assert_allclose(scene.bodies[0].pose[:3, 3], [0.5, 0, 0])
+    np.testing.assert_allclose(scene.bodies[0].pose[:3, 3], [0.75, 0, 0])
     assert any("qpos0 0 is outside its limits [0.5, 1]" in w for w in scene.warnings)
 
 
@@ -856,7 +857,8 @@ def test_panda_primitive_model_matches_fcl_on_exact_primitives(panda):
     scene = load_robot(path)
     report = check_scene(scene)
     poses = {b.name: b.pose for b in scene.bodies}
-    expected = _yourdfpy_poses(path, {"panda_joint4": -0.0698})
+    # panda_joint4's limits [-3.0718, -0.0698] exclude zero: MoveIt's default, their middle
+    expected = _yourdfpy_poses(path, {"panda_joint4": (-3.0718 - 0.0698) / 2})
     for name, pose in poses.items():
         np.testing.assert_allclose(pose, expected[name], atol=1e-9)
         assert next(b for b in scene.bodies if b.name == name).parts[0] == "cylinder0"
@@ -890,7 +892,7 @@ def test_panda_primitive_model_matches_fcl_on_exact_primitives(panda):
         if pair is None or pair["distance"] > 2e-3:
             assert not hit, (a, b)
     deep = [p for p in report.pairs if p["signed_distance"] < -2e-3]
-    assert len(deep) == 6  # the coarse spheres of the wrist reach the hand, fingers, link1
+    assert len(deep) == 5  # the coarse spheres of the wrist reach the hand, fingers, link1
 
 
 _coord = st.floats(-2.0, 2.0, allow_nan=False, width=32)

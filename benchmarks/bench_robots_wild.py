@@ -1,0 +1,347 @@
+"""Robots from the wild: every robot of real collections installable from PyPI, checked by
+meshcol, rebuilt with ``meshcol hull --to urdf|mjcf|usd``, and every output loaded by the
+consumers that read it.
+
+Collections (each skipped, with the reason, when its package is missing):
+
+- ``example-robot-data`` (a cmeel wheel: every ``robots/*/**/*.urdf`` under its share folder,
+  ``package://example-robot-data/robots/...`` found by meshcol's folder layout);
+- ``gymnasium`` (its MuJoCo environments' MJCF, ``gymnasium/envs/mujoco/assets/*.xml``);
+- ``dm_control`` (the control suite's MJCF, ``dm_control/suite/*.xml``);
+- ``samples`` (the project's own arm, ``samples/robot/arm.urdf`` and ``arm.xml``).
+
+For each robot:
+
+1. ``meshcol check ROBOT --report R.json``: exit 0 or 1 (a self-collision finding) counts as
+   checked, exit 2 (refused) does not;
+2. ``meshcol hull ROBOT --out-dir OUT --to FMT`` for ``urdf`` (URDF inputs), ``mjcf`` and
+   ``usd``; then each output is loaded:
+   - URDF: ``pybullet.loadURDF`` (DIRECT, from the output folder) and ``yourdfpy.URDF.load``
+     with every mesh loaded (a mesh it cannot find is a failure);
+   - MJCF: ``mujoco.MjModel.from_xml_path``, ``mj_forward`` at rest (``qpos0``, the first
+     keyframe when it has one), then 100 ``mj_step``; "rest contacts" counts the contacts at
+     rest between body pairs meshcol excludes (adjacent, SRDF, MJCF filters): it must be 0;
+     "finite" says every ``qpos`` stayed finite over the 100 steps;
+   - USD: ``pxr.Usd.Stage.Open``, the number of prims with ``UsdPhysics.CollisionAPI`` (> 0).
+
+The table goes to stdout (Markdown) and, with ``--json``, every row to a file.
+
+Run:  make robots-wild   (installs the peers: pip install -e '.[robots-wild]')
+      .venv/bin/python benchmarks/bench_robots_wild.py [--only NAME] [--limit N] [--json F]
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+#: The folder the script was started from (it then works in a scratch folder).
+ORIGIN = Path.cwd()
+#: Seconds one meshcol command may take before the row says "timeout".
+TIMEOUT = 600
+#: Steps simulated in MuJoCo.
+STEPS = 100
+
+
+def package_folder(name: str) -> Path | None:
+    """The folder of an installed package, or None."""
+    spec = importlib.util.find_spec(name)
+    if spec is None or spec.submodule_search_locations is None:
+        return None
+    return Path(next(iter(spec.submodule_search_locations)))
+
+
+def example_robot_data() -> list[Path]:
+    """Every URDF of the example-robot-data wheel (cmeel prefix)."""
+    import site
+
+    found: list[Path] = []
+    for base in [*site.getsitepackages(), site.getusersitepackages()]:
+        share = Path(base) / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
+        if share.is_dir():
+            found = sorted(share.rglob("*.urdf"))
+            break
+    return found
+
+
+def gymnasium_mjcf() -> list[Path]:
+    folder = package_folder("gymnasium")
+    if folder is None:
+        return []
+    return sorted((folder / "envs" / "mujoco" / "assets").glob("*.xml"))
+
+
+def dm_control_mjcf() -> list[Path]:
+    folder = package_folder("dm_control")
+    if folder is None:
+        return []
+    return sorted((folder / "suite").glob("*.xml"))
+
+
+def samples() -> list[Path]:
+    return [ROOT / "samples" / "robot" / "arm.urdf", ROOT / "samples" / "robot" / "arm.xml"]
+
+
+COLLECTIONS = {
+    "example-robot-data": example_robot_data,
+    "gymnasium": gymnasium_mjcf,
+    "dm_control": dm_control_mjcf,
+    "samples": samples,
+}
+
+
+def meshcol(*args: str) -> tuple[int, str]:
+    """Exit code and last stderr line of one meshcol command (124 on timeout)."""
+    try:
+        done = subprocess.run(
+            [sys.executable, "-m", "meshcol", *args],
+            capture_output=True,
+            text=True,
+            timeout=TIMEOUT,
+        )
+    except subprocess.TimeoutExpired:
+        return 124, f"timeout after {TIMEOUT} s"
+    lines = [line for line in done.stderr.splitlines() if line.strip()]
+    last = lines[-1] if lines else ""
+    # "meshcol: error: /long/path/robot.urdf: what" -> "what"
+    return done.returncode, last.split(".urdf: ", 1)[-1].split(".xml: ", 1)[-1]
+
+
+def excluded_pairs(robot: Path) -> set[tuple[str, str]]:
+    """The body pairs meshcol leaves out of self-collision for this robot."""
+    from meshcol.errors import MeshcolError
+    from meshcol.io.robot import load_robot
+
+    try:
+        scene = load_robot(robot)
+    except MeshcolError:  # check said the same, in its row
+        return set()
+    return {(min(a, b), max(a, b)) for a, b, _ in scene.excluded_pairs}
+
+
+def load_pybullet(urdf: Path) -> str:
+    try:
+        import pybullet
+    except ImportError:
+        return "skip (no pybullet)"
+    client = pybullet.connect(pybullet.DIRECT)
+    try:
+        pybullet.loadURDF(str(urdf), useFixedBase=True, physicsClientId=client)
+        return "ok"
+    except pybullet.error as exc:
+        return f"FAIL ({exc})"
+    finally:
+        pybullet.disconnect(client)
+
+
+def load_yourdfpy(urdf: Path) -> str:
+    import yourdfpy
+
+    try:
+        robot = yourdfpy.URDF.load(
+            str(urdf), build_collision_scene_graph=True, load_collision_meshes=True
+        )
+    except Exception as exc:  # noqa: BLE001 - the peer's own failure is the result
+        return f"FAIL ({' '.join(str(exc).split())[:80]})"
+    if robot.collision_scene is None or not robot.collision_scene.geometry:
+        return "FAIL (no collision geometry loaded)"
+    return "ok"
+
+
+def simulate(xml: Path, excluded: set[tuple[str, str]]) -> dict:
+    """MuJoCo: compile, contacts at rest between excluded pairs, 100 steps finite."""
+    import mujoco
+    import numpy as np
+
+    try:
+        model = mujoco.MjModel.from_xml_path(str(xml))
+    except ValueError as exc:
+        return {"mujoco": f"FAIL ({' '.join(str(exc).split())[:80]})"}
+    data = mujoco.MjData(model)
+    if model.nkey:
+        mujoco.mj_resetDataKeyframe(model, data, 0)
+    mujoco.mj_forward(model, data)
+
+    def name(body: int) -> str:
+        return mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, body) or f"body{body}"
+
+    rest = []
+    for k in range(data.ncon):
+        contact = data.contact[k]
+        a = name(int(model.geom_bodyid[contact.geom1]))
+        b = name(int(model.geom_bodyid[contact.geom2]))
+        if (min(a, b), max(a, b)) in excluded:
+            rest.append(f"{a}/{b} {contact.dist:+.2g} m")
+    finite = True
+    for _ in range(STEPS):
+        mujoco.mj_step(model, data)
+        if not np.all(np.isfinite(data.qpos)):
+            finite = False
+            break
+    return {"mujoco": "ok", "rest_contacts": rest, "finite": finite}
+
+
+def load_usd(usda: Path) -> str:
+    try:
+        from pxr import Usd, UsdPhysics
+    except ImportError:
+        return "skip (no usd-core)"
+    stage = Usd.Stage.Open(str(usda))
+    if stage is None:
+        return "FAIL (not opened)"
+    colliders = sum(1 for prim in stage.Traverse() if prim.HasAPI(UsdPhysics.CollisionAPI))
+    return "ok" if colliders else "FAIL (no collision prim)"
+
+
+def run_robot(collection: str, robot: Path, work: Path) -> dict:
+    began = time.perf_counter()
+    name = f"{robot.parent.parent.name}/{robot.name}" if collection == "example-robot-data" else ""
+    row: dict = {"collection": collection, "robot": name or robot.name, "path": str(robot)}
+    code, line = meshcol("check", str(robot), "--report", str(work / "check.json"))
+    row["check"] = code
+    if code not in (0, 1):
+        row["note"] = line
+        row["seconds"] = round(time.perf_counter() - began, 1)
+        return row
+    report = json.loads((work / "check.json").read_text())
+    row["pairs"] = len(report.get("pairs", []))
+    excluded = excluded_pairs(robot)
+    formats = ["urdf", "mjcf", "usd"] if robot.suffix == ".urdf" else ["mjcf", "usd"]
+    for fmt in formats:
+        out = work / fmt
+        code, line = meshcol("hull", str(robot), "--out-dir", str(out), "--to", fmt)
+        if code != 0:
+            row[fmt] = f"FAIL hull exit {code}: {line[:100]}"
+            continue
+        description = next(
+            p for p in out.iterdir() if p.suffix in (".urdf", ".xml", ".usda") and p.is_file()
+        )
+        if fmt == "urdf":
+            row["urdf"] = {
+                "pybullet": load_pybullet(description),
+                "yourdfpy": load_yourdfpy(description),
+            }
+        elif fmt == "mjcf":
+            row["mjcf"] = simulate(description, excluded)
+        else:
+            row["usd"] = load_usd(description)
+    row["seconds"] = round(time.perf_counter() - began, 1)
+    return row
+
+
+#: A description meshcol refuses because it has nothing to check: no collision geometry.
+NOTHING_TO_CHECK = "no link has collision geometry"
+
+
+def verdict(row: dict) -> bool:
+    if row["check"] not in (0, 1):
+        return False
+    for fmt in ("urdf", "mjcf", "usd"):
+        value = row.get(fmt)
+        if value is None:
+            continue
+        if isinstance(value, str) and not value.startswith(("ok", "skip")):
+            return False
+        if fmt == "urdf" and any(not v.startswith(("ok", "skip")) for v in value.values()):
+            return False
+        if fmt == "mjcf" and (
+            value["mujoco"] != "ok" or value["rest_contacts"] or not value["finite"]
+        ):
+            return False
+    return True
+
+
+def cell(row: dict, fmt: str) -> str:
+    value = row.get(fmt)
+    if value is None:
+        return "-"
+    if isinstance(value, str):
+        return value
+    if fmt == "urdf":
+        return f"pybullet {value['pybullet']}, yourdfpy {value['yourdfpy']}"
+    if value["mujoco"] != "ok":
+        return value["mujoco"]
+    rest = value["rest_contacts"]
+    text = f"ok, {len(rest)} rest contacts among excluded pairs"
+    if rest:
+        text += f" ({'; '.join(rest[:3])})"
+    return text + ("" if value["finite"] else ", NOT finite")
+
+
+def table(rows: list[dict]) -> str:
+    lines = [
+        "| collection | robot | check | --to urdf (pybullet, yourdfpy) | --to mjcf (MuJoCo, "
+        "100 steps) | --to usd (usd-core) | all ok | s |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    for row in rows:
+        note = row.get("note", "").split(".urdf: ", 1)[-1].split(".xml: ", 1)[-1]
+        check = f"exit {row['check']}" + (f": {note[:90]}" if note else "")
+        lines.append(
+            f"| {row['collection']} | {row['robot']} | {check} | {cell(row, 'urdf')} | "
+            f"{cell(row, 'mjcf')} | {cell(row, 'usd')} | {'yes' if verdict(row) else 'NO'} "
+            f"| {row['seconds']} |"
+        )
+    passed = sum(verdict(row) for row in rows)
+    empty = sum(NOTHING_TO_CHECK in row.get("note", "") for row in rows)
+    lines.append("")
+    lines.append(
+        f"{passed} of {len(rows)} robots: checked, and every output loads and simulates; "
+        f"{empty} refused for having no collision geometry (nothing to check)."
+    )
+    return "\n".join(lines)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--only", choices=sorted(COLLECTIONS), action="append")
+    parser.add_argument("--limit", type=int, default=None, help="robots per collection")
+    parser.add_argument("--json", type=Path, default=None, help="every row, as JSON")
+    parser.add_argument("--match", action="append", help="only robots whose file name is this")
+    parser.add_argument("--shard", default="0/1", help="K/N: every N-th robot from the K-th")
+    parser.add_argument(
+        "--table", type=Path, nargs="+", default=None, help="print the table of --json files"
+    )
+    args = parser.parse_args()
+    if args.json is not None:
+        args.json = ORIGIN / args.json
+    if args.table:
+        args.table = [ORIGIN / file for file in args.table]
+        merged: dict[str, dict] = {}
+        for file in args.table:  # a later file's row for the same robot wins
+            merged.update((row["path"], row) for row in json.loads(file.read_text()))
+        print(table(list(merged.values())))
+        return 0
+    rows = []
+    for collection in args.only or COLLECTIONS:
+        robots = COLLECTIONS[collection]()
+        if not robots:
+            print(f"{collection}: not installed, skipped", file=sys.stderr)
+            continue
+        if args.match:
+            robots = [robot for robot in robots if robot.name in args.match]
+        shard, shards = (int(x) for x in args.shard.split("/"))
+        for robot in robots[: args.limit][shard::shards]:
+            with tempfile.TemporaryDirectory() as work:
+                row = run_robot(collection, robot, Path(work))
+            print(f"{collection} {robot.name}: {'ok' if verdict(row) else 'NO'}", file=sys.stderr)
+            rows.append(row)
+            if args.json is not None:
+                args.json.write_text(json.dumps(rows, indent=1) + "\n")
+    print(table(rows))
+    return 0 if all(verdict(row) for row in rows) else 1
+
+
+if __name__ == "__main__":
+    os.environ.setdefault("PYTHONHASHSEED", "0")
+    with tempfile.TemporaryDirectory() as scratch:
+        os.chdir(scratch)  # MuJoCo writes MUJOCO_LOG.TXT into the working folder
+        sys.exit(main())
