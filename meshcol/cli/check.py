@@ -169,7 +169,7 @@ def check(
       meshcol check props/*.obj --shape decomposed -j 2 --executor ray
     """
     from meshcol.analysis.check import check as run_check
-    from meshcol.cli.common import emit_report, render_html, write_html
+    from meshcol.cli.common import emit_report, finish_outputs, render_html, write_html
     from meshcol.io.outputs import check_outputs
 
     check_outputs(
@@ -196,6 +196,7 @@ def check(
     )
     emit_report(result, fmt, report)
     write_html(html, page)
+    finish_outputs()
     for warning in result.warnings:
         click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_table(result), err=True)

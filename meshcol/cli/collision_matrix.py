@@ -12,6 +12,7 @@ from meshcol.cli.common import (
     Progress,
     cache_dir_option,
     engine_option,
+    finish_outputs,
     plural,
     report_format,
     robot_options,
@@ -157,6 +158,7 @@ def collision_matrix(
             (report, report_text(result, fmt)),
         ]
     )
+    finish_outputs()
     for warning in result.warnings:
         click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_table(result), err=True)

@@ -15,6 +15,7 @@ from meshcol.cli.common import (
     cache_dir_option,
     engine_option,
     executor_options,
+    finish_outputs,
     html_option,
     jobs_option,
     plural,
@@ -237,6 +238,7 @@ def inspect(
     page = render_html(html, lambda: inspect_page(result, inputs, robot_options))
     emit_report(result, fmt, report)
     write_html(html, page)
+    finish_outputs()
     click.echo("\n".join(summary_lines(result)), err=True)
     sys.exit(result.exit_code)
 

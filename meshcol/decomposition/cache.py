@@ -190,7 +190,7 @@ def store(result: Decomposition, cache_dir: str | os.PathLike[str] | None = None
     if cache_dir is None or local is not None:
         path = entry_path(result.cache_key, local)
         path.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_path(path) as tmp, open(tmp, "wb") as f:
+        with atomic_path(path, staged=False) as tmp, open(tmp, "wb") as f:
             f.write(data)
         return path
     url = os.fspath(cache_dir)

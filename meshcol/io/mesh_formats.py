@@ -24,6 +24,7 @@ import numpy as np
 
 from meshcol.errors import InputFileError, MissingDependencyError
 from meshcol.io import gltf, mesh_trimesh, off
+from meshcol.io.safe_read import check_input
 
 __all__ = [
     "FORMATS",
@@ -128,6 +129,8 @@ def check_file(source: str, opted_in: frozenset[str] = frozenset()) -> MeshForma
     an unknown extension, a missing dependency or an unreadable file raise, in that order."""
     file = Path(source)
     if not file.exists():
+        if os.path.lexists(source):  # a symbolic link that loops or dangles
+            check_input(source, "mesh")
         raise InputFileError("file not found", source)
     if file.is_dir():
         raise InputFileError("is a directory, not a mesh file", source)
@@ -136,10 +139,5 @@ def check_file(source: str, opted_in: frozenset[str] = frozenset()) -> MeshForma
         module, hint = fmt.requires
         if importlib.util.find_spec(module) is None:
             raise MissingDependencyError(hint, source)
-        return fmt  # its reader opens the file (and says what is wrong with it)
-    try:
-        with open(file, "rb"):
-            pass
-    except OSError as error:
-        raise InputFileError(f"cannot read file: {error.strerror or error}", source) from None
+    check_input(source, "mesh")  # a regular file within the cap, never a pipe or a device
     return fmt
