@@ -43,11 +43,10 @@ def _run(args: list[str], pipes: list[Path] = ()) -> tuple[object, bool]:
     def watchdog() -> None:
         if done.wait(PATIENCE):
             return
-        for pipe in pipes:  # a writer that closes at once: the blocked reader sees the end
-            fd = os.open(pipe, os.O_WRONLY | os.O_NONBLOCK) if _has_reader(pipe) else None
-            if fd is not None:
-                released.append(pipe)
-                os.close(fd)
+        while not done.wait(0.2):  # a reader may open the pipe again: release it each time
+            for pipe in pipes:  # a writer that closes at once: the blocked reader sees the end
+                if _has_reader(pipe):
+                    released.append(pipe)
 
     thread = threading.Thread(target=watchdog, daemon=True)
     thread.start()
