@@ -269,8 +269,14 @@ def _context(env: dict[str, str]) -> Any:
             "trimesh",
         ]
     )
-    saved = {key: os.environ.get(key) for key in env}
-    os.environ.update(env)
+    # The server runs `python -c`, which puts the working folder first on sys.path before it
+    # imports the preloaded modules: run from a folder that holds a `meshcol/` directory (the
+    # repository's root, with a regular install), the workers imported that instead of the
+    # installed package. PYTHONSAFEPATH (Python 3.11+) leaves it out, for the server and the
+    # workers it forks.
+    server_env = {**env, "PYTHONSAFEPATH": "1"}
+    saved = {key: os.environ.get(key) for key in server_env}
+    os.environ.update(server_env)
     try:
         from multiprocessing import forkserver, resource_tracker
 
