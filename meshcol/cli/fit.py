@@ -6,6 +6,7 @@ import click
 
 from meshcol.analysis.fit import DEFAULT_VOLUME_TOLERANCE, SHAPE_CHOICES
 from meshcol.cli.common import (
+    FiniteFloat,
     mesh_outputs,
     plural,
     report_format,
@@ -35,7 +36,7 @@ from meshcol.io.robot import RobotOptions
 )
 @click.option(
     "--volume-tolerance",
-    type=click.FloatRange(min=0.0),
+    type=FiniteFloat(min=0.0),
     default=DEFAULT_VOLUME_TOLERANCE,
     show_default=True,
     metavar="T",

@@ -39,6 +39,8 @@ __all__ = [
 
 # Seconds a worker gets to exit after terminate() before kill().
 _TERMINATE_GRACE = 2.0
+# Longest single wait on the workers (a day; the loop waits again): what select() accepts.
+_LONGEST_WAIT = 86400.0
 
 
 @dataclass(frozen=True)
@@ -446,6 +448,8 @@ class WorkerPool:
             wait_for = limit if wait_for is None else min(wait_for, limit)
         handles: list[Any] = [w.conn for w in self._busy]
         handles += [w.process.sentinel for w in self._busy]
+        if wait_for is not None:  # a timeout of 1e308 s waits as long as none: no overflow
+            wait_for = min(wait_for, _LONGEST_WAIT)
         return set(multiprocessing.connection.wait(handles, wait_for))
 
     def _collect(self, ready: set[Any]) -> Iterator[TaskOutcome]:
