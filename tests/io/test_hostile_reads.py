@@ -117,11 +117,6 @@ def _robot(folder: Path) -> None:
             r".*f\.json: is a named pipe, not a regular file.*",
         ),
         ("urdf", ["check", "f.urdf"], r"f\.urdf: is a named pipe, not a regular file"),
-        (
-            "robot_mesh",
-            ["check", "robot.urdf"],
-            r"robot\.urdf: .*'f\.obj'.*",
-        ),
     ],
     ids=lambda v: v if isinstance(v, str) else None,
 )
@@ -137,10 +132,6 @@ def test_a_named_pipe_is_refused_without_blocking(tmp_path, monkeypatch, setup, 
         pipes.append(_pipe(tmp_path, "f.json"))
     elif setup == "urdf":
         pipes.append(_pipe(tmp_path, "f.urdf"))
-    elif setup == "robot_mesh":
-        pipes.append(_pipe(tmp_path, "f.obj"))
-        text = (tmp_path / "arm.urdf").read_text().replace("tetra.obj", "f.obj")
-        (tmp_path / "robot.urdf").write_text(text)
     if setup == "manifest_mesh":
         (tmp_path / "scene.json").write_text(
             json.dumps(
