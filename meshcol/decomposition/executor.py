@@ -78,6 +78,28 @@ def check_run(jobs: Any, timeout: Any = None, threads: Any = 0) -> None:
         )
 
 
+@contextlib.contextmanager
+def _native_stderr_dropped() -> Iterator[None]:
+    """Drop what is written to file descriptor 2 during the block: Ray's core logs each failed
+    attempt to reach an address from C++ (about 25 lines for an unreachable one), past
+    Python's logging; the error that follows is the command's one line."""
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError, AttributeError):
+        yield
+        return
+    try:
+        with open(os.devnull, "wb") as sink:
+            os.dup2(sink.fileno(), 2)
+        yield
+    finally:
+        with contextlib.suppress(OSError, ValueError):
+            sys.stderr.flush()
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
 def make_executor(
     kind: str,
     fn: Callable[[Any], Any],
@@ -444,7 +466,7 @@ class RayExecutor:
                     self._init_local(ray, common)
                 else:
                     common.pop("include_dashboard")
-                    with _loopback_only(self.address):
+                    with _loopback_only(self.address), _native_stderr_dropped():
                         ray.init(address=self.address, **common)
                 self._owned = True
         _errors_to_stderr()
