@@ -364,6 +364,11 @@ def split_rigid(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     linear = matrix[:3, :3]
     rigid = np.eye(4)
     rigid[:3, 3] = matrix[:3, 3]
+    largest = float(np.abs(linear).max())
+    if not np.isfinite(largest) or largest > MAX_COORDINATE:  # before squaring it overflows
+        raise InvalidMeshError(
+            f"scene graph transform has scale {largest:.6g}, beyond the limit of {MAX_COORDINATE:g}"
+        )
     if np.abs(linear.T @ linear - np.eye(3)).max() <= _RIGID_TOL and np.linalg.det(linear) > 0:
         rigid[:3, :3] = linear
         return rigid, None
