@@ -88,3 +88,20 @@ def test_a_huge_timeout_means_no_limit(folder) -> None:
 def test_the_api_refuses_what_the_command_line_refuses(folder, function, keywords, message):
     with pytest.raises(ValueError, match=message):
         function(["t.obj"], **keywords)
+
+
+def test_running_out_of_memory_is_one_line(folder, monkeypatch) -> None:
+    """A result larger than memory (the core's pair list of 100,000 overlapping bodies raises
+    std::bad_alloc, which its thread pool now rethrows as MemoryError instead of aborting)
+    is one line and exit 2, not a traceback."""
+    import meshcol.analysis.check as check_module
+
+    def exhausted(*args, **kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr(check_module, "check_scene", exhausted)
+    result = CliRunner().invoke(main, ["check", "t.obj"])
+    assert result.exit_code == 2, result.output
+    assert result.stderr == (
+        "meshcol: error: out of memory: the input needs more memory than this machine has\n"
+    )
