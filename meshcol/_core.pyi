@@ -135,6 +135,8 @@ class defaults:
 
     fit_min_sets_per_thread: int = 1
 
+    max_mesh_file_bytes: int = 4294967296
+
 def hardware_threads() -> int:
     """Number of hardware threads (at least 1)."""
 

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <exception>
+#include <mutex>
 #include <thread>
 #include <vector>
 
@@ -27,18 +29,37 @@ void parallel_for(long long n, int threads, const std::function<void(long long, 
     // Dynamic chunks, about 8 per thread: pairs differ a lot in cost (separated vs deep).
     const long long chunk = std::max<long long>(1, n / (static_cast<long long>(threads) * 8));
     std::atomic<long long> next{0};
+    // An exception in any thread (std::bad_alloc when a result outgrows memory) stops the
+    // others at their next chunk and is rethrown here once every thread has joined: a
+    // joinable std::thread destroyed during unwinding would call std::terminate (abort,
+    // exit 134) instead of reaching the binding, which turns it into a Python error.
+    std::mutex failure_lock;
+    std::exception_ptr failure;
     auto worker = [&]() {
-        for (;;) {
-            const long long begin = next.fetch_add(chunk);
-            if (begin >= n) return;
-            body(begin, std::min(n, begin + chunk));
+        try {
+            for (;;) {
+                const long long begin = next.fetch_add(chunk);
+                if (begin >= n) return;
+                body(begin, std::min(n, begin + chunk));
+            }
+        } catch (...) {
+            next.store(n);
+            const std::lock_guard<std::mutex> hold(failure_lock);
+            if (!failure) failure = std::current_exception();
         }
     };
     std::vector<std::thread> pool;
     pool.reserve(static_cast<size_t>(threads - 1));
-    for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
+    try {
+        for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
+    } catch (...) {  // a thread that cannot start: the started ones finish the work
+        next.store(n);
+        for (auto& t : pool) t.join();
+        throw;
+    }
     worker();
     for (auto& t : pool) t.join();
+    if (failure) std::rethrow_exception(failure);
 }
 
 }  // namespace meshcol

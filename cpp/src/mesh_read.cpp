@@ -17,9 +17,12 @@
 #include <string_view>
 #include <utility>
 
+#include <fcntl.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "meshcol/batch.hpp"
+#include "meshcol/defaults.hpp"
 
 namespace meshcol {
 namespace {
@@ -285,11 +288,13 @@ MeshFile parse_stl(const char* data, size_t size) {
     std::vector<std::string_view> tokens;
     MeshObject* object = nullptr;
     int loop_corners = 0;
+    size_t loop_line = 0;  // the line of the `outer loop` still open (0: none)
     for_each_line(data, size, [&](size_t line_number, std::string_view line) {
         tokenize(line, tokens);
         if (tokens.empty()) return true;
         const std::string_view key = tokens[0];
         if (key == "solid") {
+            loop_line = 0;
             std::string_view name = trim(line);
             name.remove_prefix(5);
             file.objects.push_back(MeshObject{std::string(trim(name)), {}, {}});
@@ -331,11 +336,18 @@ MeshFile parse_stl(const char* data, size_t size) {
             const std::int64_t first = static_cast<std::int64_t>(object->vertices.size() / 3) - 3;
             for (int k = 0; k < 3; ++k) object->faces.push_back(first + k);
             loop_corners = 0;
+            loop_line = 0;
         } else if (key == "outer") {
             loop_corners = 0;
+            loop_line = line_number;
         }
         return true;
     });
+    if (!file.error.empty()) return file;
+    // A file cut short inside a facet (a copy or download that stopped) is not a whole mesh:
+    // its last triangle would be dropped silently.
+    if (loop_line != 0 || loop_corners != 0)
+        file.error = at_line(loop_line, "the file ends inside this facet's loop (cut short?)");
     if (!file.error.empty()) return file;
     std::vector<MeshObject> kept;
     for (auto& o : file.objects)
@@ -470,21 +482,47 @@ void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& fa
 
 namespace {
 
+/// What a file that is not regular is, for the message (as meshcol/io/safe_read.py says it).
+const char* special_kind(mode_t mode) {
+    if (S_ISFIFO(mode)) return "a named pipe";
+    if (S_ISCHR(mode) || S_ISBLK(mode)) return "a device";
+    if (S_ISSOCK(mode)) return "a socket";
+    return "not a regular file";
+}
+
 void read_one(const std::string& path, MeshFormat format, bool merge, std::vector<char>& buffer,
               MeshFile& out) {
-    std::FILE* stream = std::fopen(path.c_str(), "rb");
+    // Opened without blocking (a named pipe would wait for a writer forever) and checked on the
+    // open descriptor before a byte is read: only a regular file within the cap is read.
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+    std::FILE* stream = fd < 0 ? nullptr : ::fdopen(fd, "rb");
     if (stream == nullptr) {
         const int code = errno;
+        if (fd >= 0) ::close(fd);
         out.status = code == ENOENT ? ReadStatus::NotFound : ReadStatus::Unreadable;
         out.error = code == ENOENT ? "file not found"
                                    : std::string("cannot read file: ") + std::strerror(code);
         return;
     }
     struct stat info {};
-    if (fstat(fileno(stream), &info) == 0 && S_ISDIR(info.st_mode)) {
+    if (fstat(fileno(stream), &info) != 0 || S_ISDIR(info.st_mode)) {
         std::fclose(stream);
         out.status = ReadStatus::Directory;
         out.error = "is a directory, not a mesh file";
+        return;
+    }
+    if (!S_ISREG(info.st_mode)) {
+        std::fclose(stream);
+        out.status = ReadStatus::Unreadable;
+        out.error = std::string("is ") + special_kind(info.st_mode) + ", not a regular file";
+        return;
+    }
+    const std::uint64_t cap = static_cast<std::uint64_t>(defaults::max_mesh_file_bytes);
+    if (static_cast<std::uint64_t>(info.st_size) > cap) {
+        std::fclose(stream);
+        out.status = ReadStatus::Unreadable;
+        out.error = "mesh file is " + std::to_string(info.st_size) + " bytes, over the limit of " +
+                    std::to_string(cap) + " bytes";
         return;
     }
     buffer.clear();
@@ -494,8 +532,15 @@ void read_one(const std::string& path, MeshFormat format, bool merge, std::vecto
     }
     char chunk[1 << 16];
     size_t got = 0;
-    while ((got = std::fread(chunk, 1, sizeof chunk, stream)) > 0)  // what a growing file adds
+    while ((got = std::fread(chunk, 1, sizeof chunk, stream)) > 0) {  // what a growing file adds
         buffer.insert(buffer.end(), chunk, chunk + got);
+        if (buffer.size() > cap) {
+            std::fclose(stream);
+            out.status = ReadStatus::Unreadable;
+            out.error = "mesh file grew over the limit of " + std::to_string(cap) + " bytes";
+            return;
+        }
+    }
     const int code = std::ferror(stream) != 0 ? errno : 0;
     std::fclose(stream);
     if (code != 0) {

@@ -153,3 +153,13 @@ TEST_CASE("mesh read: merge_vertices rounds to the digits and renumbers") {
     CHECK_EQ(signed_vertices.size(), size_t{6});
     CHECK((signed_faces == std::vector<std::int64_t>{0, 1, 0, 0, 1, 1}));
 }
+
+TEST_CASE("mesh read: an ASCII STL cut inside a facet is refused, naming the loop") {
+    const MeshFile cut = stl("solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n");
+    CHECK_EQ(cut.error, std::string("line 3: the file ends inside this facet's loop (cut short?)"));
+    const MeshFile whole =
+        stl("solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n"
+            "endloop\nendfacet\n");  // cut after a whole triangle: nothing of it is lost
+    CHECK(whole.error.empty());
+    CHECK_EQ(whole.objects.size(), size_t(1));
+}

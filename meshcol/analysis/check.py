@@ -175,6 +175,9 @@ def check(
     paths = [inputs] if isinstance(inputs, (str, os.PathLike)) else list(inputs)
     if executor != "ray" and ray_address is not None:
         raise ValueError("ray_address needs executor 'ray'")
+    from meshcol.decomposition.executor import check_run
+
+    check_run(jobs, timeout, options.get("threads", 0))
     opts = CheckOptions.from_keywords(**options)
     started = time.perf_counter()
     run = {"jobs": jobs, "timeout": timeout, "executor": executor, "address": ray_address}

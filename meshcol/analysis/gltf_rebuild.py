@@ -104,6 +104,7 @@ def decompose_gltf(path: str, out_dir: str, options: Any, run: Any, **kwargs: An
         write_gltf_physics,
     )
     from meshcol.io.mesh_read import load_mesh
+    from meshcol.io.staging import written_path
 
     if not is_gltf(path):
         raise MeshcolError("--to gltf-physics needs a glTF or GLB asset", path)
@@ -116,7 +117,8 @@ def decompose_gltf(path: str, out_dir: str, options: Any, run: Any, **kwargs: An
         for body in entry["bodies"]:
             parts = []
             for output in body["outputs"]:
-                (part,) = load_mesh(os.path.join(out_dir, os.path.basename(output)), merge=False)
+                written = written_path(os.path.join(out_dir, os.path.basename(output)))
+                (part,) = load_mesh(written, merge=False)
                 parts.append(("mesh", part.world_vertices(), part.faces))
             colliders.append(NodeColliders(body["name"], tuple(parts)))
     write_gltf_physics(path, colliders, target)

@@ -310,10 +310,12 @@ def write_body_meshes(
         write_meshes(output, list(meshes))
         return [output] * len(bodies)
     if out_dir is not None:
+        from meshcol.io.outputs import staged_folder
+
         paths = out_dir_paths(out_dir, names)
-        os.makedirs(out_dir, exist_ok=True)
-        for path, mesh in zip(paths, meshes):
-            write_meshes(path, [mesh])
+        with staged_folder(out_dir) as stage:  # every hull, or none (and no folder)
+            for path, mesh in zip(paths, meshes):
+                write_meshes(os.path.join(stage, os.path.basename(path)), [mesh])
         return list(paths)
     return [None] * len(bodies)
 

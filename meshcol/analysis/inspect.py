@@ -154,6 +154,9 @@ def _task_run(
 ) -> dict[str, Any] | None:
     """How the executor tasks run (:func:`meshcol.decomposition.executor.run_each`'s
     keywords), or None: every mesh in this process."""
+    from meshcol.decomposition.executor import check_run
+
+    check_run(jobs, timeout)
     if executor != "ray" and ray_address is not None:
         raise ValueError("ray_address needs executor 'ray'")
     if jobs > 1 or timeout is not None or executor != "local":

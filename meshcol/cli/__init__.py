@@ -115,8 +115,11 @@ class MeshcolGroup(click.Group):
 
     def invoke(self, ctx: click.Context) -> Any:
         debug = bool(ctx.params.get("debug"))
+        from meshcol.io.staging import staged_outputs
+
         try:
-            with _sigterm_raises():
+            # every output of the command goes in place together at its end, or none does
+            with _sigterm_raises(), staged_outputs():
                 return super().invoke(ctx)
         except MeshcolError as exc:
             if debug:
@@ -128,6 +131,11 @@ class MeshcolGroup(click.Group):
                 raise
             where = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
             fail(f"{where}{exc.strerror or exc}")
+        except MemoryError:
+            # a result larger than memory (millions of overlapping pairs): unusable input
+            if debug:
+                raise
+            fail("out of memory: the input needs more memory than this machine has")
         except KeyboardInterrupt:
             click.echo("meshcol: interrupted", err=True)
             sys.exit(130)

@@ -173,7 +173,13 @@ def check(
       meshcol check props/*.obj --shape decomposed -j 2 --executor ray
     """
     from meshcol.analysis.check import check as run_check
-    from meshcol.cli.common import emit_report, render_html, snapshots_written, write_html
+    from meshcol.cli.common import (
+        emit_report,
+        finish_outputs,
+        render_html,
+        snapshots_written,
+        write_html,
+    )
     from meshcol.io.outputs import check_outputs
 
     check_outputs(
@@ -204,6 +210,7 @@ def check(
     with snapshots_written(result, snapshots, report, review) as written:
         emit_report(written, fmt, report)
     write_html(html, page)
+    finish_outputs()
     for warning in result.warnings:
         click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_table(result), err=True)

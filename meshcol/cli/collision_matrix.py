@@ -12,6 +12,7 @@ from meshcol.cli.common import (
     Progress,
     cache_dir_option,
     engine_option,
+    finish_outputs,
     plural,
     report_format,
     robot_options,
@@ -25,6 +26,20 @@ from meshcol.vocabulary import MATRIX_COLLIDERS
 TABLE_ROWS = 10
 
 
+#: Most joint configurations one run samples (MoveIt's default is 10,000; each sample's link
+#: poses are held at once).
+MAX_SAMPLES = 10_000_000
+
+
+def _at_most_max_samples(value: int) -> int:
+    if value > MAX_SAMPLES:
+        raise click.BadParameter(
+            f"{value} is more than the {MAX_SAMPLES:,} samples one run can hold",
+            param_hint="'--samples'",
+        )
+    return value
+
+
 @click.command(
     "collision-matrix",
     short_help="Sample a robot's joints: link pairs adjacent, default, always, never, sometimes.",
@@ -33,6 +48,7 @@ TABLE_ROWS = 10
 @click.option(
     "--samples",
     type=click.IntRange(min=1),
+    callback=lambda ctx, param, value: _at_most_max_samples(value),
     default=10_000,
     show_default=True,
     help="Random joint configurations (uniform within the limits).",
@@ -160,6 +176,7 @@ def collision_matrix(
             (report, report_text(result, fmt)),
         ]
     )
+    finish_outputs()
     for warning in result.warnings:
         click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_table(result), err=True)

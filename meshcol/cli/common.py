@@ -175,10 +175,14 @@ class Progress:
     heartbeat thread repeats the latest message while the library is busy between two
     messages (a single 26 s file still shows that the run is alive).
 
+    Off a terminal, the command line's progress (``stream`` left to its default) is silent
+    unless the environment sets ``MESHCOL_PROGRESS=1``: a CI log then gets its lines, and
+    otherwise a slow run that fails says one line, its error, on stderr.
+
     Parameters
     ----------
     stream : file, optional
-        Defaults to ``sys.stderr``.
+        Defaults to ``sys.stderr`` (silent off a terminal without ``MESHCOL_PROGRESS=1``).
     delay, interval : float
         Seconds before the first message, and between lines off a terminal.
     clock : callable, optional
@@ -201,6 +205,8 @@ class Progress:
     ) -> None:
         self.stream = stream if stream is not None else sys.stderr
         self.live = bool(getattr(self.stream, "isatty", lambda: False)())
+        # stderr that is no terminal (a pipe, a log): no lines unless asked for
+        self.silent = stream is None and not self.live and not progress_requested()
         self.clock = clock
         self.start = clock()
         self.delay = delay
@@ -231,7 +237,7 @@ class Progress:
             self.last_text = text
             now = self.clock()
             elapsed = now - self.start
-            if elapsed < self.delay or self._stop.is_set():
+            if elapsed < self.delay or self._stop.is_set() or self.silent:
                 return
             if (
                 not self.live
@@ -272,6 +278,12 @@ class Progress:
             if self.shown and self.live:
                 self.stream.write("\r\033[K")
                 self.stream.flush()
+
+
+def progress_requested() -> bool:
+    """True when the environment asks for progress lines off a terminal
+    (``MESHCOL_PROGRESS=1``, for CI logs)."""
+    return os.environ.get("MESHCOL_PROGRESS", "").strip().lower() in ("1", "true", "yes", "on")
 
 
 def _duration(seconds: float) -> str:
@@ -467,10 +479,24 @@ def write_html(path: str | None, text: str | None) -> None:
         return
     from meshcol.io.paths import display_path
     from meshcol.io.report import atomic_write
+    from meshcol.io.staging import once_written
 
     atomic_write(path, text)
     size = len(text.encode("utf-8"))
-    click.echo(f"meshcol: review page: {display_path(path)} ({size / 1e6:.1f} MB)", err=True)
+    once_written(
+        lambda: click.echo(
+            f"meshcol: review page: {display_path(path)} ({size / 1e6:.1f} MB)", err=True
+        )
+    )
+
+
+def finish_outputs() -> None:
+    """Put every output of the command in place, together, before its summary and verdict: a
+    report, page or mesh that cannot be written (``--report /dev/full``) leaves none of the
+    others and exits 2 naming it (:mod:`meshcol.io.staging`)."""
+    from meshcol.io.staging import commit_outputs
+
+    commit_outputs()
 
 
 def snapshots_option(func: Callable[..., Any]) -> Callable[..., Any]:

@@ -14,6 +14,7 @@ from meshcol.cli.common import (
     Progress,
     emit_report,
     executor_options,
+    finish_outputs,
     html_option,
     jobs_option,
     render_html,
@@ -517,6 +518,7 @@ def _print_robot(result: Any, outputs: _Outputs) -> None:
     """A robot's report (with --report), its target findings and the verdict."""
     if outputs.report is not None:
         emit_report(result, outputs.report_fmt, outputs.report)
+    finish_outputs()
     _echo_target_violations(result)
     detail = f"{_summary(result)}, written to {result.settings['description']}"
     click.echo(verdict("decompose", result.exit_code == 0, detail), err=True)
@@ -535,6 +537,7 @@ def _print_files(
     if outputs.report is not None:  # the parts are the output, as for hull -o
         emit_report(result, outputs.report_fmt, outputs.report)
     write_html(outputs.html, page)
+    finish_outputs()
     for entry in result.files:
         if entry["status"] != "ok":
             click.echo(f"meshcol: {entry['status']}: {entry['path']}: {entry['message']}", err=True)

@@ -6,6 +6,7 @@ import click
 
 from meshcol.analysis.fit import DEFAULT_VOLUME_TOLERANCE, SHAPE_CHOICES
 from meshcol.cli.common import (
+    FiniteFloat,
     mesh_outputs,
     plural,
     report_format,
@@ -35,7 +36,7 @@ from meshcol.io.robot import RobotOptions
 )
 @click.option(
     "--volume-tolerance",
-    type=click.FloatRange(min=0.0),
+    type=FiniteFloat(min=0.0),
     default=DEFAULT_VOLUME_TOLERANCE,
     show_default=True,
     metavar="T",
@@ -105,7 +106,7 @@ def fit(
     robot = mesh_outputs(inputs, output, out_dir, to, fmt, report)
 
     from meshcol.analysis.fit import fit as run_fit
-    from meshcol.cli.common import emit_report
+    from meshcol.cli.common import emit_report, finish_outputs
 
     check_outputs(
         files={"-o": output, "--report": report}, folders={"--out-dir": out_dir}, inputs=inputs
@@ -126,6 +127,7 @@ def fit(
     )
     if report is not None or not (output or out_dir):
         emit_report(result, fmt, report)
+    finish_outputs()
     s = result.summary
     shapes = ", ".join(f"{count} {name}" for name, count in s["shapes"].items() if count)
     detail = f"{plural(s['bodies'], 'body', 'bodies')} ({shapes or 'none'})"

@@ -7,6 +7,7 @@ from typing import Any
 import click
 
 from meshcol.cli.common import (
+    finish_outputs,
     html_option,
     mesh_outputs,
     plural,
@@ -149,6 +150,7 @@ def hull(
     if report is not None or not (output or out_dir):
         emit_report(result, fmt, report)
     write_html(html, page)
+    finish_outputs()
     _say_violations(result)
     detail = _summary(result, target, output, out_dir, robot)
     click.echo(verdict("hull", result.exit_code == 0, detail), err=True)

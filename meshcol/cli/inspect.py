@@ -15,6 +15,7 @@ from meshcol.cli.common import (
     cache_dir_option,
     engine_option,
     executor_options,
+    finish_outputs,
     html_option,
     jobs_option,
     plural,
@@ -250,6 +251,7 @@ def inspect(
     with snapshots_written(result, snapshots, report, review) as written:
         emit_report(written, fmt, report)
     write_html(html, page)
+    finish_outputs()
     click.echo("\n".join(summary_lines(result)), err=True)
     sys.exit(result.exit_code)
 

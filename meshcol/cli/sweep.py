@@ -11,6 +11,7 @@ from meshcol.cli.common import (
     FiniteFloat,
     Progress,
     cache_dir_option,
+    finish_outputs,
     html_option,
     plural,
     render_html,
@@ -120,6 +121,7 @@ def sweep(
     page = render_html(html, lambda: sweep_page(result))
     emit_report(result, fmt, report)
     write_html(html, page)
+    finish_outputs()
     for warning in result.warnings:
         click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_lines(manifest, result), err=True)

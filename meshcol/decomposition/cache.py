@@ -221,7 +221,7 @@ def write_bytes(
     if cache_dir is None or local is not None:
         path = (Path(local) if local is not None else default_cache_dir()) / name
         path.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_path(path) as tmp, open(tmp, "wb") as f:
+        with atomic_path(path, staged=False) as tmp, open(tmp, "wb") as f:
             f.write(data)
         return path
     url = os.fspath(cache_dir)

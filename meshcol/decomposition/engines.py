@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
@@ -63,6 +64,39 @@ _VHACD_DEFAULTS: dict[str, Any] = {
     "min_edge_length": 2,
     "find_best_plane": False,
 }
+
+
+# The range of each numeric engine parameter: (least, greatest), None for no bound; a float
+# must also be finite. Outside it the engine misbehaves silently (a negative iteration count
+# runs no search) or loops: refused when the options are made.
+_RANGES: dict[str, tuple[float | None, float | None]] = {
+    "max_convex_hull": (-1, None),  # -1: no limit
+    "preprocess_resolution": (1, None),
+    "resolution": (1, None),
+    "mcts_nodes": (1, None),
+    "mcts_iterations": (1, None),
+    "mcts_max_depth": (1, None),
+    "max_ch_vertex": (4, None),
+    "extrude_margin": (0, None),
+    "seed": (0, None),
+    "max_convex_hulls": (1, None),
+    "minimum_volume_percent_error_allowed": (0, 100),
+    "max_recursion_depth": (1, None),
+    "max_num_vertices_per_ch": (4, None),
+    "min_edge_length": (1, None),
+}
+
+
+def _check_range(engine: str, key: str, value: Any) -> None:
+    """ValueError naming the option when a number is non-finite or out of its range."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return
+    if not math.isfinite(value):
+        raise ValueError(f"{engine} option {key!r} must be finite, got {value!r}")
+    low, high = _RANGES.get(key, (None, None))
+    if (low is not None and value < low) or (high is not None and value > high):
+        bounds = f">= {low:g}" if high is None else f"in [{low:g}, {high:g}]"
+        raise ValueError(f"{engine} option {key!r} must be {bounds}, got {value!r}")
 
 
 def engine_version(engine: str) -> str:
@@ -148,6 +182,7 @@ def _engine_options(engine: str, engine_options: Mapping[str, Any]) -> dict[str,
             raise ValueError(
                 f"{engine} option {key!r} must be {kind.__name__}, got {value!r}"
             ) from None
+        _check_range(engine, key, coerced[key])
     return coerced
 
 

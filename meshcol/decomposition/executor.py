@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import math
 import os
 import signal
 import sys
@@ -34,7 +35,7 @@ from meshcol.decomposition.jobs import (
 )
 from meshcol.errors import MissingDependencyError
 
-__all__ = ["EXECUTORS", "Executor", "RayExecutor", "make_executor", "run_each"]
+__all__ = ["EXECUTORS", "Executor", "RayExecutor", "check_run", "make_executor", "run_each"]
 
 #: The values of ``meshcol decompose --executor``.
 EXECUTORS = ("local", "ray")
@@ -56,6 +57,47 @@ class Executor(Protocol):
     def close(self, *, interrupted: bool = False) -> None:
         """Stop every worker (``interrupted``: at once, nothing waited for)."""
         ...
+
+
+def check_run(jobs: Any, timeout: Any = None, threads: Any = 0) -> None:
+    """Raise ValueError, as the command line refuses them, for ``jobs`` below 1, a
+    ``timeout`` that is not a finite number above 0, or ``threads`` below 0 (0: all cores):
+    the one check of the public functions' run keywords (``check``, ``inspect``)."""
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
+        raise ValueError(f"jobs must be an integer of at least 1, got {jobs!r}")
+    if timeout is not None and (
+        isinstance(timeout, bool)
+        or not isinstance(timeout, (int, float))
+        or not math.isfinite(timeout)
+        or timeout <= 0
+    ):
+        raise ValueError(f"timeout must be a finite number of seconds above 0, got {timeout!r}")
+    if isinstance(threads, bool) or not isinstance(threads, int) or threads < 0:
+        raise ValueError(
+            f"threads must be an integer of at least 0 (0: all cores), got {threads!r}"
+        )
+
+
+@contextlib.contextmanager
+def _native_stderr_dropped() -> Iterator[None]:
+    """Drop what is written to file descriptor 2 during the block: Ray's core logs each failed
+    attempt to reach an address from C++ (about 25 lines for an unreachable one), past
+    Python's logging; the error that follows is the command's one line."""
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError, AttributeError):
+        yield
+        return
+    try:
+        with open(os.devnull, "wb") as sink:
+            os.dup2(sink.fileno(), 2)
+        yield
+    finally:
+        with contextlib.suppress(OSError, ValueError):
+            sys.stderr.flush()
+        os.dup2(saved, 2)
+        os.close(saved)
 
 
 def make_executor(
@@ -424,7 +466,7 @@ class RayExecutor:
                     self._init_local(ray, common)
                 else:
                     common.pop("include_dashboard")
-                    with _loopback_only(self.address):
+                    with _loopback_only(self.address), _native_stderr_dropped():
                         try:
                             ray.init(address=self.address, **common)
                         except ConnectionError as exc:

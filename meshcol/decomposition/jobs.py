@@ -39,6 +39,8 @@ __all__ = [
 
 # Seconds a worker gets to exit after terminate() before kill().
 _TERMINATE_GRACE = 2.0
+# Longest single wait on the workers (a day; the loop waits again): what select() accepts.
+_LONGEST_WAIT = 86400.0
 
 
 @dataclass(frozen=True)
@@ -75,15 +77,35 @@ def _die_with_parent() -> None:
         ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
 
 
+def _watch_parent(alive: multiprocessing.connection.Connection) -> None:
+    """End this worker the moment the process that started it is gone, however it went
+    (SIGKILL too): a thread waits on a pipe whose only writing end that process holds, and
+    the kernel closes it when the process dies. The worker's parent is the fork server, which
+    outlives a killed main process, so ``_die_with_parent`` alone does not end it; this works
+    on every platform, while the engine computes in the main thread."""
+
+    def wait() -> None:
+        try:
+            alive.recv()
+        except (EOFError, OSError):
+            pass
+        os._exit(1)
+
+    threading.Thread(target=wait, name="meshcol-parent-watch", daemon=True).start()
+
+
 def _worker_main(
     conn: multiprocessing.connection.Connection,
     fn: Callable[[Any], Any],
     env: dict[str, str],
     prepare: Callable[[], None] | None,
+    alive: multiprocessing.connection.Connection | None = None,
 ) -> None:
     # Ctrl-C reaches the whole process group; the parent stops the workers itself.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     _die_with_parent()
+    if alive is not None:
+        _watch_parent(alive)
     # Before any engine loads: OpenMP reads OMP_NUM_THREADS once, when its library loads.
     os.environ.update(env)
     if prepare is not None:
@@ -174,9 +196,14 @@ class _Worker:
         prepare: Callable[[], None] | None,
     ) -> None:
         self.conn, child = ctx.Pipe()
-        self.process = ctx.Process(target=_worker_main, args=(child, fn, env, prepare), daemon=True)
+        # `alive`: the worker's watchdog reads it; only this process holds its writing end
+        watched, self.alive = ctx.Pipe(duplex=False)
+        self.process = ctx.Process(
+            target=_worker_main, args=(child, fn, env, prepare, watched), daemon=True
+        )
         self.process.start()
         child.close()
+        watched.close()
         self.index: int | None = None
         self.started = 0.0
         self.used = False
@@ -198,6 +225,7 @@ class _Worker:
             self.process.kill()
             self.process.join()
         self.conn.close()
+        self.alive.close()
 
     def close(self) -> None:
         try:
@@ -209,6 +237,7 @@ class _Worker:
             self.kill()
         else:
             self.conn.close()
+            self.alive.close()
 
 
 @contextlib.contextmanager
@@ -242,8 +271,14 @@ def _context(env: dict[str, str]) -> Any:
             "trimesh",
         ]
     )
-    saved = {key: os.environ.get(key) for key in env}
-    os.environ.update(env)
+    # The server runs `python -c`, which puts the working folder first on sys.path before it
+    # imports the preloaded modules: run from a folder that holds a `meshcol/` directory (the
+    # repository's root, with a regular install), the workers imported that instead of the
+    # installed package. PYTHONSAFEPATH (Python 3.11+) leaves it out, for the server and the
+    # workers it forks.
+    server_env = {**env, "PYTHONSAFEPATH": "1"}
+    saved = {key: os.environ.get(key) for key in server_env}
+    os.environ.update(server_env)
     try:
         from multiprocessing import forkserver, resource_tracker
 
@@ -413,6 +448,8 @@ class WorkerPool:
             wait_for = limit if wait_for is None else min(wait_for, limit)
         handles: list[Any] = [w.conn for w in self._busy]
         handles += [w.process.sentinel for w in self._busy]
+        if wait_for is not None:  # a timeout of 1e308 s waits as long as none: no overflow
+            wait_for = min(wait_for, _LONGEST_WAIT)
         return set(multiprocessing.connection.wait(handles, wait_for))
 
     def _collect(self, ready: set[Any]) -> Iterator[TaskOutcome]:

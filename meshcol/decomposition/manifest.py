@@ -177,7 +177,7 @@ class RunManifest:
             "files": list(self.files.values()),
         }
         text = dumps_json(data)
-        with atomic_path(self.path) as tmp, open(tmp, "w", encoding="utf-8") as f:
+        with atomic_path(self.path, staged=False) as tmp, open(tmp, "w", encoding="utf-8") as f:
             f.write(text)
         self._written_at = self.clock()
         self._dirty = False

@@ -9,6 +9,7 @@ reference is checked first and a bad one named (``node 3 refers to mesh 7, but t
 
 from __future__ import annotations
 
+import io
 import json
 import struct
 from collections.abc import Callable
@@ -16,8 +17,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from meshcol.errors import InvalidMeshError
-from meshcol.io.mesh_trimesh import load_scene, scene_nodes
+from meshcol.io.mesh_trimesh import load_scene, local_uri, scene_nodes
 from meshcol.io.paths import confine_uris
+from meshcol.io.safe_read import read_input
 
 if TYPE_CHECKING:
     from meshcol.io.mesh_formats import MeshNode
@@ -27,43 +29,80 @@ __all__ = ["check_references", "read_document", "read_glb", "read_gltf"]
 
 def read_gltf(file: Path, source: str) -> list[MeshNode]:
     """The mesh nodes of a ``.gltf`` file, in the file's node order."""
-    check_references(_gltf_json(file, source), "GLTF", source)
-    return _file_order(file, "gltf", scene_nodes(load_scene(file, "gltf", source)))
+    data = read_input(source, "mesh")
+    document = _gltf_json(data, source)
+    check_references(document, "GLTF", source)
+    nodes = scene_nodes(load_scene(file, "gltf", source, io.BytesIO(data)))
+    return _file_order(document, nodes)
 
 
 def read_glb(file: Path, source: str) -> list[MeshNode]:
     """The mesh nodes of a ``.glb`` file, in the file's node order."""
-    check_references(_glb_json(file, source), "GLB", source)
-    return _file_order(file, "glb", scene_nodes(load_scene(file, "glb", source)))
+    data = read_input(source, "mesh")
+    document = _glb_json(data, source)
+    check_references(document, "GLB", source)
+    nodes = scene_nodes(load_scene(file, "glb", source, io.BytesIO(data)))
+    return _file_order(document, nodes)
 
 
-def _gltf_json(file: Path, source: str) -> Any:
+def _decode_json(text: bytes, kind: str, source: str) -> Any:
+    """A glTF document's JSON (a GLB's JSON chunk), every problem one line."""
     try:
-        return json.loads(file.read_bytes().decode("utf-8-sig"))
+        return json.loads(text.decode("utf-8-sig"))
     except json.JSONDecodeError as error:
         raise InvalidMeshError(
-            f"cannot parse GLTF file: invalid JSON at line {error.lineno} column {error.colno}: "
-            f"{error.msg}",
+            f"cannot parse {kind} file: invalid JSON at line {error.lineno} column "
+            f"{error.colno}: {error.msg}",
             source,
         ) from None
     except UnicodeDecodeError:
-        raise InvalidMeshError("cannot parse GLTF file: not UTF-8 text", source) from None
+        raise InvalidMeshError(f"cannot parse {kind} file: not UTF-8 text", source) from None
+    except RecursionError:
+        raise InvalidMeshError(
+            f"cannot parse {kind} file: its JSON nests arrays and objects too deep", source
+        ) from None
+    except ValueError as error:  # an integer of thousands of digits
+        raise InvalidMeshError(
+            f"cannot parse {kind} file: {str(error).splitlines()[0][:120]}", source
+        ) from None
 
 
-def _glb_json(file: Path, source: str) -> Any:
-    """The JSON chunk of a GLB file (its header checked)."""
-    data = file.read_bytes()
+def _gltf_json(data: bytes, source: str) -> Any:
+    return _decode_json(data, "GLTF", source)
+
+
+def _glb_json(data: bytes, source: str) -> Any:
+    """The JSON chunk of a GLB file, its header and chunk lengths checked (glTF 2.0, 4.4: the
+    header's length is the file's, every chunk lies within it)."""
     if len(data) < 20 or data[:4] != b"glTF":
         raise InvalidMeshError("cannot parse GLB file: no glTF binary header", source)
-    length, kind = struct.unpack("<I4s", data[12:20])
+    version, total, length, kind = struct.unpack("<III4s", data[4:20])
+    if version != 2:
+        raise InvalidMeshError(
+            f"cannot parse GLB file: version {version} (only glTF 2.0 is read)", source
+        )
+    if total != len(data):
+        raise InvalidMeshError(
+            f"cannot parse GLB file: its header says {total} bytes, the file has {len(data)}",
+            source,
+        )
     if kind != b"JSON" or 20 + length > len(data):
         raise InvalidMeshError("cannot parse GLB file: the first chunk is not JSON", source)
-    try:
-        return json.loads(data[20 : 20 + length].decode("utf-8-sig"))
-    except (json.JSONDecodeError, UnicodeDecodeError):
-        raise InvalidMeshError(
-            "cannot parse GLB file: its JSON chunk is not valid", source
-        ) from None
+    end = 20 + length
+    while end < len(data):  # the chunks after the JSON one (the BIN chunk) fit in the file
+        if end + 8 > len(data):
+            raise InvalidMeshError(
+                f"cannot parse GLB file: a chunk header is cut off at byte {end}", source
+            )
+        (chunk,) = struct.unpack("<I", data[end : end + 4])
+        if end + 8 + chunk > len(data):
+            raise InvalidMeshError(
+                f"cannot parse GLB file: the chunk at byte {end} says {chunk} bytes, past the "
+                "end of the file",
+                source,
+            )
+        end += 8 + chunk
+    return _decode_json(data[20 : 20 + length], "GLB", source)
 
 
 _SINGULAR = {
@@ -174,9 +213,43 @@ def _check_buffers(gltf: _Document) -> None:
                 f"buffer {k} has no uri (only the first buffer of a GLB file may be its binary "
                 "chunk)"
             )
+        uri = buffer.get("uri") if isinstance(buffer, dict) else None
+        if uri is None:
+            continue
+        if not isinstance(uri, str):
+            raise gltf.error(f"buffer {k} has uri {uri!r}, not a string")
+        if uri.startswith("data:"):
+            if ";base64," not in uri[:200]:
+                raise gltf.error(f"buffer {k} is a data: URI that is not base64")
+            continue
+        problem = local_uri(uri)
+        if problem is not None:
+            raise gltf.error(f"buffer {k} has uri {uri[:120]!r}: {problem}")
+
+
+#: Extensions that change how geometry is stored: a reader that does not decode them would read
+#: the file's fallback (or nothing) as if it were the mesh. None is decoded here.
+_COMPRESSION_EXTENSIONS = {
+    "KHR_draco_mesh_compression": "Draco mesh compression",
+    "EXT_meshopt_compression": "meshopt compression",
+    "KHR_meshopt_compression": "meshopt compression",
+}
+
+
+def _check_required_extensions(gltf: _Document) -> None:
+    """Refuse a file that requires an extension which compresses geometry (glTF 2.0, 3.12: a
+    loader must not load a file whose required extension it does not support)."""
+    required = gltf.items("extensionsRequired")
+    for name in required:
+        if isinstance(name, str) and name in _COMPRESSION_EXTENSIONS:
+            raise gltf.error(
+                f"it requires {name} ({_COMPRESSION_EXTENSIONS[name]}), which meshcol does not "
+                "decode: export it uncompressed"
+            )
 
 
 _CHECKS: tuple[Callable[[_Document], None], ...] = (
+    _check_required_extensions,
     _check_scenes,
     _check_nodes,
     _check_meshes,
@@ -185,14 +258,10 @@ _CHECKS: tuple[Callable[[_Document], None], ...] = (
 )
 
 
-def _file_order(file: Path, file_type: str, nodes: list) -> list:
+def _file_order(document: Any, nodes: list) -> list:
     """Order glTF mesh nodes as the file's node list does (trimesh's graph order differs)."""
-    data = file.read_bytes()
-    if file_type == "glb":
-        length = struct.unpack("<I", data[12:16])[0]
-        data = data[20 : 20 + length]
     index: dict[str, int] = {}
-    for k, node in enumerate(json.loads(data).get("nodes", [])):
+    for k, node in enumerate(document.get("nodes", [])):
         index.setdefault(str(node.get("name", "")), k)
     # unnamed nodes keep trimesh's relative order, after the named ones
     return sorted(nodes, key=lambda item: index.get(item[0], len(index)))
@@ -202,9 +271,10 @@ def read_document(file: Path, source: str) -> tuple[Any, bytes | None]:
     """A ``.gltf`` or ``.glb`` file's JSON document and a GLB's binary chunk (None for
     ``.gltf`` or a GLB without one): for the physics extensions' reader
     (:mod:`meshcol.io.gltf_physics`)."""
+    data = read_input(file, "mesh")  # the guarded read every glTF reader uses
     if file.suffix.lower() == ".glb":
-        return _glb_json(file, source), _glb_binary(file.read_bytes())
-    return _gltf_json(file, source), None
+        return _glb_json(data, source), _glb_binary(data)
+    return _gltf_json(data, source), None
 
 
 def _glb_binary(data: bytes) -> bytes | None:

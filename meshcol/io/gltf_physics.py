@@ -36,6 +36,7 @@ import numpy as np
 from meshcol.errors import InvalidMeshError
 from meshcol.io.gltf import check_references, read_document
 from meshcol.io.physics_bodies import BodyGroup, FileScene, ShapeElement
+from meshcol.io.safe_read import read_input
 from meshcol.types import Box, Capsule, Cylinder, Primitive, Sphere
 
 __all__ = [
@@ -131,7 +132,7 @@ class GltfFile:
         else:
             path = self.file.parent / unquote(uri)
             try:
-                data = path.read_bytes()
+                data = read_input(path, "mesh")  # a regular file within the cap, never a pipe
             except OSError as error:
                 raise self.error(
                     f"buffer {index} file {uri!r} cannot be read: {error.strerror or error}"

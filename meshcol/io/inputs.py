@@ -64,10 +64,12 @@ def is_whole_scene(inputs: Sequence[PathLike]) -> bool:
 
 def root_tag(path: PathLike) -> str | None:
     """The root element's name, from the file's first 64 KiB (None if unreadable)."""
-    try:
-        with open(os.fspath(path), "rb") as f:
-            head = f.read(65536).decode("utf-8", errors="replace")
-    except OSError:
+    from meshcol.errors import InputFileError
+    from meshcol.io.safe_read import read_input
+
+    try:  # never blocks on a pipe, never reads a device
+        head = read_input(path, "robot", limit=65536).decode("utf-8", errors="replace")
+    except InputFileError:
         return None
     head = re.sub(r"<\?.*?\?>|<!--.*?-->|<!DOCTYPE[^>]*>", "", head, flags=re.S)
     match = re.search(r"<\s*([A-Za-z_][\w.-]*)", head)

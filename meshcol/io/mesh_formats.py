@@ -25,6 +25,7 @@ import numpy as np
 from meshcol.errors import InputFileError, MeshcolError, MissingDependencyError
 from meshcol.io import fbx, gltf, gltf_physics, mesh_trimesh, off, usd_read
 from meshcol.io.physics_bodies import FileScene
+from meshcol.io.safe_read import check_input
 
 __all__ = [
     "FORMATS",
@@ -205,6 +206,8 @@ def check_file(source: str, opted_in: frozenset[str] = frozenset()) -> MeshForma
     an unknown extension, a missing dependency or an unreadable file raise, in that order."""
     file = Path(source)
     if not file.exists():
+        if os.path.lexists(source):  # a symbolic link that loops or dangles
+            check_input(source, "mesh")
         raise InputFileError("file not found", source)
     if file.is_dir():
         raise InputFileError("is a directory, not a mesh file", source)
@@ -213,10 +216,5 @@ def check_file(source: str, opted_in: frozenset[str] = frozenset()) -> MeshForma
         module, hint = fmt.requires
         if importlib.util.find_spec(module) is None:
             raise MissingDependencyError(hint, source)
-        return fmt  # its reader opens the file (and says what is wrong with it)
-    try:
-        with open(file, "rb"):
-            pass
-    except OSError as error:
-        raise InputFileError(f"cannot read file: {error.strerror or error}", source) from None
+    check_input(source, "mesh")  # a regular file within the cap, never a pipe or a device
     return fmt

@@ -236,6 +236,11 @@ def _node_body(name: str, matrix, vertices, faces, source: str, merge: bool) -> 
         vertices = vertices @ linear.T
         if np.linalg.det(linear) < 0:
             faces = faces[:, ::-1]
+        if not np.isfinite(vertices).all():
+            raise InvalidMeshError(
+                "scene graph scale makes vertex coordinates overflow (non-finite)", source
+            )
+        check_magnitude(vertices, "vertex (after the scene graph's scale)", source)
     if merge:
         vertices, faces = merge_vertices(vertices, faces)
     return Body(
@@ -453,12 +458,26 @@ def split_rigid(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     linear = matrix[:3, :3]
     rigid = np.eye(4)
     rigid[:3, 3] = matrix[:3, 3]
+    largest = float(np.abs(linear).max())
+    if not np.isfinite(largest) or largest > MAX_COORDINATE:  # before squaring it overflows
+        raise InvalidMeshError(
+            f"scene graph transform has scale {largest:.6g}, beyond the limit of {MAX_COORDINATE:g}"
+        )
     if np.abs(linear.T @ linear - np.eye(3)).max() <= _RIGID_TOL and np.linalg.det(linear) > 0:
         rigid[:3, :3] = linear
         return rigid, None
     w, s, vt = np.linalg.svd(linear)
-    if s[-1] <= s[0] * 1e-12:
+    if not np.isfinite(s).all() or s[0] > MAX_COORDINATE:
+        raise InvalidMeshError(
+            f"scene graph transform has scale {s[0]:.6g}, beyond the limit of {MAX_COORDINATE:g}"
+        )
+    if s[-1] == 0:
         raise InvalidMeshError("scene graph transform is singular (zero scale)")
+    if s[-1] <= s[0] * 1e-12:
+        raise InvalidMeshError(
+            f"scene graph transform is degenerate (scales {s[0]:.6g} and {s[-1]:.6g} differ "
+            "by more than 1e12)"
+        )
     if np.linalg.det(w @ vt) < 0:
         w[:, -1] = -w[:, -1]
         s = s.copy()

@@ -8,14 +8,17 @@ without Pillow.
 from __future__ import annotations
 
 import io
+import os
 import struct
+import urllib.parse
 import zlib
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from meshcol.errors import InputFileError, InvalidMeshError
+from meshcol.errors import InvalidMeshError, MeshcolError
+from meshcol.io.safe_read import read_input
 
 if TYPE_CHECKING:
     from meshcol.io.mesh_formats import MeshNode
@@ -70,14 +73,21 @@ def scene_nodes(scene: Any, by_geometry: bool = False) -> list[MeshNode]:
 
 def load_scene(file: Path, file_type: str, source: str, stream: io.BytesIO | None = None):
     """trimesh's scene of ``file`` (or of ``stream``, its bytes mended), every parse error
-    as :class:`InvalidMeshError` ``cannot parse <TYPE> file: ...``."""
+    as :class:`InvalidMeshError` ``cannot parse <TYPE> file: ...``.
+
+    trimesh never opens a file itself: the file's bytes come from the guarded read, and the
+    files it refers to (glTF buffers, COLLADA images) from :func:`local_resolver`'s."""
     import trimesh
 
+    if stream is None:
+        stream = io.BytesIO(read_input(source, "mesh"))
+    stream.name = file.name  # trimesh names an unnamed object after it
     try:
-        if stream is not None:
-            stream.name = file.name  # trimesh names an unnamed object after it
-            return trimesh.load_scene(stream, file_type=file_type, process=False)
-        return trimesh.load_scene(str(file), file_type=file_type, process=False)
+        return trimesh.load_scene(
+            stream, file_type=file_type, process=False, resolver=local_resolver(file, source)
+        )
+    except MeshcolError:
+        raise  # a reference refused, or a referenced file the guarded read refused
     except FileNotFoundError as error:
         # a glTF buffer or image the file refers to
         raise InvalidMeshError(
@@ -91,12 +101,55 @@ def load_scene(file: Path, file_type: str, source: str, stream: io.BytesIO | Non
         ) from None
 
 
+def local_uri(uri: str) -> str | None:
+    """What is wrong with a reference ``uri`` inside a mesh file (a glTF buffer), or None for a
+    local relative path: meshcol reads no network resource, and no absolute path, which would
+    make the file mean something else on another machine."""
+    parsed = urllib.parse.urlsplit(uri)
+    if parsed.scheme and len(parsed.scheme) > 1:  # one letter: a Windows drive
+        return f"{parsed.scheme}: URIs are not read (only files beside the mesh file)"
+    if uri.startswith(("/", "\\")) or (parsed.scheme and len(parsed.scheme) == 1):
+        return "absolute paths are not read (only files beside the mesh file)"
+    return None
+
+
+def local_resolver(file: Path, source: str) -> Any:
+    """A trimesh resolver for the files ``file`` refers to: relative local paths only (URIs
+    with a scheme and absolute paths raise :class:`InvalidMeshError`), read by the guarded
+    read with the cap of a glTF buffer; never trimesh's fallback to a file of the same name
+    in the mesh's folder."""
+    import trimesh.resolvers
+
+    class _LocalResolver(trimesh.resolvers.Resolver):
+        def __init__(self) -> None:
+            self.folder = file.parent
+
+        def get(self, name: str) -> bytes:
+            problem = local_uri(name)
+            if problem is not None:
+                raise InvalidMeshError(f"cannot read reference {name[:200]!r}: {problem}", source)
+            target = self.folder / urllib.parse.unquote(name)
+            if not os.path.lexists(target):
+                raise FileNotFoundError(name)
+            return read_input(target, "buffer")
+
+        def write(self, name: str, data: Any) -> None:
+            raise NotImplementedError("meshcol never writes through a reader")
+
+        def keys(self) -> Any:
+            return iter(())
+
+        def namespaced(self, namespace: str) -> Any:
+            raise NotImplementedError("meshcol reads no archives")
+
+    return _LocalResolver()
+
+
 def read_bytes(file: Path, source: str) -> bytes:
-    """The file's bytes (InputFileError naming it when it cannot be read)."""
-    try:
-        return file.read_bytes()
-    except OSError as error:
-        raise InputFileError(f"cannot read file: {error.strerror or error}", source) from None
+    """The file's bytes, by the guarded read (:func:`meshcol.io.safe_read.read_input`):
+    InputFileError naming it when it cannot be read, is not a regular file or is too large."""
+    del file  # ``source`` names the same file as the user typed it
+    return read_input(source, "mesh")
 
 
 def _ply_bytes(file: Path, source: str) -> bytes | None:

@@ -15,14 +15,13 @@ from __future__ import annotations
 import contextlib
 import os
 import shutil
-import signal
 import tempfile
-import threading
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 
 from meshcol.errors import MeshcolError, OutputPathError
 from meshcol.io.paths import display_path
 from meshcol.io.report import is_special_file
+from meshcol.io.staging import OPEN_STAGES, active_batch, move_staged, signals_held
 
 __all__ = [
     "check_destinations",
@@ -253,26 +252,6 @@ def check_outputs(
 
 
 @contextlib.contextmanager
-def _signals_held() -> Iterator[None]:
-    """Hold SIGINT and SIGTERM for the block (delivered when it ends), in the main thread."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    held: list[int] = []
-    wanted = [signal.SIGINT, *([signal.SIGTERM] if hasattr(signal, "SIGTERM") else [])]
-    # A handler not installed from Python (getsignal None) could not be put back: leave it.
-    wanted = [s for s in wanted if signal.getsignal(s) is not None]
-    previous = {s: signal.signal(s, lambda signum, frame: held.append(signum)) for s in wanted}
-    try:
-        yield
-    finally:
-        for s, handler in previous.items():
-            signal.signal(s, handler)
-        for number in dict.fromkeys(held):
-            signal.raise_signal(number)
-
-
-@contextlib.contextmanager
 def staged_folder(folder: PathLike) -> Iterator[str]:
     """Yield a hidden folder inside ``folder``; when the block succeeds, move its files into
     ``folder``; otherwise remove them, and the folders this created.
@@ -291,11 +270,17 @@ def staged_folder(folder: PathLike) -> Iterator[str]:
     stage = None
     try:
         stage = tempfile.mkdtemp(prefix=".meshcol-", dir=folder)
-        yield stage
-        with _signals_held():
-            for name in sorted(os.listdir(stage)):
-                os.replace(os.path.join(stage, name), os.path.join(folder, name))
-            os.rmdir(stage)
+        OPEN_STAGES.add(stage)
+        try:
+            yield stage
+        finally:
+            OPEN_STAGES.discard(stage)
+        batch = active_batch()
+        if batch is not None:  # moved with the run's other outputs, at its end
+            batch.add_folder(stage, folder, created)
+        else:
+            with signals_held():
+                move_staged(stage, folder)
     except BaseException as exc:
         if stage is not None:
             shutil.rmtree(stage, ignore_errors=True)

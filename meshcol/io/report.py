@@ -13,7 +13,6 @@ import json
 import math
 import os
 import re
-import shutil
 import stat
 import sys
 import tempfile
@@ -21,6 +20,7 @@ from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
 from meshcol.errors import InputFileError
+from meshcol.io.staging import batch_for, copy_into
 
 __all__ = [
     "ENVELOPE_KEYS",
@@ -75,8 +75,15 @@ def envelope(command: str, settings: Mapping[str, Any], units: str | None) -> di
 
 
 @contextlib.contextmanager
-def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iterator[str]:
+def atomic_path(
+    path: str | os.PathLike[str], suffix: str | None = None, *, staged: bool = True
+) -> Iterator[str]:
     """Yield a temporary path beside ``path``; rename it onto ``path`` if the block succeeds.
+
+    Inside a run's :func:`meshcol.io.staging.staged_outputs` (``staged``, the default) the
+    finished file waits for the run's end and goes in place with every other output of the
+    run, or not at all; ``staged=False`` puts it in place at once (the decomposition cache, the
+    run manifest).
 
     The temporary file keeps ``path``'s extension (or ``suffix``) so writers that pick a format
     from the name still work. On any exception the temporary file is removed. A destination
@@ -97,10 +104,11 @@ def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iter
     os.chmod(tmp, 0o666 & ~_umask())
     try:
         yield tmp
-        if special:
-            with open(tmp, "rb") as source, open(path, "wb") as target:
-                shutil.copyfileobj(source, target)
-            os.unlink(tmp)
+        batch = batch_for(path) if staged else None
+        if batch is not None:
+            batch.add_file(tmp, path, special)
+        elif special:
+            copy_into(tmp, path)
         else:
             os.replace(tmp, path)
     except BaseException as exc:
@@ -183,13 +191,15 @@ def read_json_file(path: str | os.PathLike[str], name: str, short: str | None = 
         Missing, unreadable, not UTF-8, not JSON (with line and column), or nested deeper than
         the decoder recurses.
     """
+    from meshcol.io.safe_read import read_input
+
     short = short or name
+    if not os.path.lexists(path):
+        raise InputFileError(f"{name} not found", path)
+    data = read_input(path, "json")  # a regular file within the cap: never a pipe or device
     try:
-        with open(path, encoding="utf-8") as f:
-            return json.load(f)
-    except FileNotFoundError:
-        raise InputFileError(f"{name} not found", path) from None
-    except (OSError, UnicodeDecodeError) as exc:
+        return json.loads(data.decode("utf-8"))
+    except UnicodeDecodeError as exc:
         raise InputFileError(f"cannot read {name}: {exc}", path) from None
     except json.JSONDecodeError as exc:
         raise InputFileError(
@@ -197,6 +207,10 @@ def read_json_file(path: str | os.PathLike[str], name: str, short: str | None = 
         ) from None
     except RecursionError:
         raise InputFileError(f"{short} nests arrays and objects too deep", path) from None
+    except ValueError as exc:  # an integer of thousands of digits
+        raise InputFileError(
+            f"{short} has a number too long to read ({str(exc).splitlines()[0][:120]})", path
+        ) from None
 
 
 def dumps_json(

@@ -40,6 +40,7 @@ from meshcol.io.kinematics import Kinematics
 from meshcol.io.links import CollisionElement
 from meshcol.io.mjcf import read_mjcf
 from meshcol.io.report import read_json_file
+from meshcol.io.safe_read import check_input, check_mjcf_files
 from meshcol.io.srdf import read_srdf
 from meshcol.io.urdf import read_urdf
 from meshcol.types import Body, Scene, primitive_reach
@@ -280,6 +281,9 @@ def load_robot_model(
         raise InputFileError("file not found", source)
     if file.is_dir():
         raise InputFileError("is a directory, not a robot description", source)
+    check_input(source, "robot")  # a regular file within the cap: never a pipe or a device
+    if description_kind(source) == "mjcf":
+        check_mjcf_files(source)  # its includes and meshes, before MuJoCo opens them
     read = _READERS[description_kind(source)]
     scene, links, kinematics = read(source, options, elements, visual)
     if not scene.bodies and not visual:

@@ -307,7 +307,7 @@ def _mesh_file(
     key = os.path.normpath(mesh_source)
     loaded = files.get(key)
     if loaded is None:
-        if not os.path.isfile(mesh_source) and not os.path.isdir(mesh_source):
+        if not os.path.lexists(mesh_source):  # a pipe or a device: load_mesh says what it is
             raise SceneError(f"{label}: mesh file {mesh!r} not found", source)
         try:
             loaded = load_mesh(mesh_source)

@@ -20,6 +20,7 @@ from typing import Any
 
 from meshcol.errors import InputFileError, SceneError
 from meshcol.io.inputs import is_manifest
+from meshcol.io.safe_read import read_input
 
 __all__ = [
     "MAX_NESTING",
@@ -69,10 +70,7 @@ def read_document(source: str) -> tuple[Any, str]:
     """
     file = Path(source)
     _check_manifest_file(file, source)
-    try:
-        data = file.read_bytes()
-    except OSError as error:
-        raise InputFileError(f"cannot read file: {error.strerror or error}", source) from None
+    data = read_input(source, "manifest")
     key = os.path.abspath(source)
     cached = _READ.get(key)
     if cached is not None and cached[0] == data:
@@ -118,6 +116,8 @@ def _decode(file: Path, text: str, source: str) -> Any:
             raise SceneError(f"invalid TOML: {str(error).splitlines()[0]}", source) from None
         except RecursionError:
             raise SceneError(too_deep(text), source) from None
+        except ValueError as error:  # an integer of thousands of digits
+            raise SceneError(_number_problem(error), source) from None
     try:
         return json.loads(text)
     except json.JSONDecodeError as error:
@@ -126,6 +126,14 @@ def _decode(file: Path, text: str, source: str) -> Any:
         ) from None
     except RecursionError:
         raise SceneError(too_deep(text), source) from None
+    except ValueError as error:  # an integer of thousands of digits
+        raise SceneError(_number_problem(error), source) from None
+
+
+def _number_problem(error: ValueError) -> str:
+    """Python's refusal of an integer longer than ``sys.get_int_max_str_digits()`` digits
+    (4,300 by default), as one line."""
+    return f"a number is too long to read ({str(error).splitlines()[0][:120]})"
 
 
 def too_deep(text: str, openers: str = "[{") -> str:

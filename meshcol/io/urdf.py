@@ -190,6 +190,8 @@ def _joint_tree(robot: Any, links: list[str], source: str) -> dict[str, Any]:
 
 def _root_link(parent_joint: dict[str, Any], links: list[str], source: str) -> str:
     """The one link without a parent joint."""
+    if not links:
+        raise SceneError("the robot has no <link> element", source)
     roots = [name for name in links if name not in parent_joint]
     if not roots:
         raise SceneError(f"joint cycle: {_cycle(parent_joint, links[0])} (no root link)", source)
@@ -255,6 +257,8 @@ def _limits(joint: Any, source: str) -> tuple[float, float] | None:
         return None
     lower = -math.inf if limit.lower is None else float(limit.lower)
     upper = math.inf if limit.upper is None else float(limit.upper)
+    if math.isnan(lower) or math.isnan(upper):
+        raise SceneError(f"joint {joint.name!r}: limit is not a number (nan)", source)
     if lower > upper:
         raise SceneError(
             f"joint {joint.name!r}: lower limit {lower:g} is above upper limit {upper:g}", source

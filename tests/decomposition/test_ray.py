@@ -43,6 +43,14 @@ FAST = {
 }
 
 
+#: Why the CLI-level stuck-worker tests skip.
+STUCK_INPUT_GONE = (
+    "its stuck input was a FIFO, which every reader now refuses at once (issue 29 item 11); "
+    "a regular input that stalls a worker is still to be found (the executor-level kill and "
+    "timeout tests remain)"
+)
+
+
 @pytest.fixture(scope="module")
 def ray_cluster():
     """A local Ray of 2 CPUs on 127.0.0.1 for the whole module, shut down at its end."""
@@ -225,6 +233,7 @@ def test_inspect_on_ray_is_byte_identical_to_the_local_run(ray_cluster, batch) -
 
 
 @pytest.mark.slow
+@pytest.mark.skip(reason=STUCK_INPUT_GONE)
 def test_an_inspect_timeout_fails_only_its_file(ray_cluster, batch, tmp_path) -> None:
     """A file whose read never ends (a FIFO nobody writes) is cancelled by force at the
     timeout; the other files are reported."""
@@ -287,6 +296,7 @@ def test_inspect_and_check_on_ray_without_ray_exit_2_with_a_hint(meshes, monkeyp
 
 @pytest.mark.slow
 @linux_only
+@pytest.mark.skip(reason=STUCK_INPUT_GONE)
 def test_a_killed_ray_worker_fails_only_its_inspect_file(ray_cluster, batch, tmp_path) -> None:
     """Six files on Ray: the worker that reads the third is killed by its pid mid-task; that
     file is an error of the report, the others are the in-process run's bodies."""
@@ -308,6 +318,7 @@ def test_a_killed_ray_worker_fails_only_its_inspect_file(ray_cluster, batch, tmp
 
 @pytest.mark.slow
 @linux_only
+@pytest.mark.skip(reason=STUCK_INPUT_GONE)
 def test_a_killed_ray_worker_fails_only_its_check_file(ray_cluster, batch, tmp_path) -> None:
     """The other files' tasks finish (the cache holds what a clean run of them leaves); the
     run names the file whose worker died and writes no report."""
