@@ -1,11 +1,27 @@
-"""Exact mesh-mesh queries: meshcol (MeshSet + mesh_distance_batch) vs python-fcl BVHModel.
+"""Exact mesh-mesh queries: meshcol (MeshSet + mesh_distance_batch) vs coal BVHModelOBBRSS and
+python-fcl BVHModel.
 
-Run: .venv/bin/python benchmarks/bench_mesh_query.py [--runs 3] [--coal] [--coal-only]
+Run: .venv/bin/python benchmarks/bench_mesh_query.py [--runs 3] [--family-only]
 
-With --runs N the whole set runs N times (meshcol and fcl side by side in each) and a summary
-gives each row's fcl/meshcol ratio as a range over the runs. The single-pair rows (distance,
-intersects) time meshcol and fcl in alternating windows of at least a millisecond, best of 9
-each, so that both sides see the same load on a shared machine.
+coal (``pip install coal``, the ``bench`` extra) is a peer column when installed; without it
+its columns are left out. Each peer is called from a Python loop, one call a pair, with its
+geometry built once per mesh and its request objects reused (a result is cleared before each
+call: coal and fcl keep the smaller distance of an uncleared result). With --runs N the whole
+set runs N times and a summary gives each row's peer/meshcol ratio as a range over the runs.
+The single-pair rows (distance, intersects) time meshcol and the peers in alternating windows
+of at least a millisecond, best of 9 each, so that all sides see the same load on a shared
+machine.
+
+The real-mesh family (``family_rows``; alone with --family-only): for each of four corpus
+meshes, 300 pairs of posed copies (random rotations, b moved along a random direction from
+a's centre), in three configurations placed by bisection on the contact offset: ``near``
+(gaps of 1-5% of the mesh's extent along the direction), ``touching`` (0-2% into each other:
+the surfaces cross) and ``apart`` (30-100% of the extent). Per configuration: the distance
+batch (meshcol one call on 300 pairs; the peers a loop of distance calls), the same as a loop
+of one-pair meshcol calls, and the intersects batch (peers: collide); on ``touching`` also
+the penetration depth batch (peers: collide with contacts, the deepest contact). Every row is
+checked: distances agree with coal's to 1e-9 (relative) where the meshes are apart, and the
+intersects verdicts agree with both peers.
 
 Then the mesh penetration depth (mesh_penetration_depth_batch) against fcl.collide with
 contacts (the deepest contact's penetration_depth), on overlapping and resting pairs. With
@@ -13,14 +29,6 @@ contacts (the deepest contact's penetration_depth), on overlapping and resting p
 (its meshcol) in alternation with this one's for an A/B of the core, e.g.
 ``for i in 1 2 3; do for py in ../main/.venv/bin/python .venv/bin/python; do $py
 benchmarks/bench_mesh_query.py --depth-only; done; done``.
-
-Coal (issue 32, item 3): ``--coal`` adds a peer column, coal's ``BVHModelOBBRSS`` (``pip
-install coal``, in the ``bench`` extra), on a real-mesh family from the corpus (torus,
-fandisk, teapot, ballA), each against a randomly turned copy posed apart (a gap of half its
-extent), near (5%), touching (1e-4) and overlapping; distance and intersection, single pair,
-each side timed in alternating windows with meshcol; then a batch (60 posed copies of the
-torus, every near pair: coal and fcl collide-then-distance loops). ``--coal-only`` runs just
-that family. Rows print coal/meshcol and fcl/meshcol.
 
 For each corpus mesh pair: hierarchy build time, one distance query, one collision query (meshcol
 answers both with mesh_distance_batch, which also tests containment; fcl needs fcl.distance and
@@ -44,6 +52,11 @@ import fcl
 import numpy as np
 import trimesh
 
+try:
+    import coal
+except ImportError:  # an optional peer: its columns are left out
+    coal = None
+
 import meshcol
 from meshcol.collision.mesh_query import (
     MeshSet,
@@ -52,20 +65,29 @@ from meshcol.collision.mesh_query import (
     mesh_penetration_depth_batch,
 )
 
-CORPUS = Path(__file__).resolve().parents[1].parent / "shared" / "corpus" / "trimesh-models"
+CORPUS = Path(__file__).resolve().parents[1].parent / "shared" / "corpus"
+MODELS = CORPUS / "trimesh-models"
+# The real-mesh family: closed corpus meshes of the sizes assets are made of.
+FAMILY = (
+    ("fandisk", MODELS / "fandisk.obj"),
+    (
+        "solo lower leg",
+        CORPUS / "robots/solo_description/meshes/stl/with_foot/solo_lower_leg_left_side.stl",
+    ),
+    ("idler riser", MODELS / "idler_riser.STL"),
+    ("panda link3", CORPUS / "robots/panda_description/meshes/collision/link3.stl"),
+)
+
+RATIOS: dict[tuple[str, str], list[float]] = defaultdict(list)  # (row, peer) -> peer/meshcol
 
 
-RATIOS: dict[str, list[float]] = defaultdict(list)  # row -> fcl/meshcol of each run
-
-
-def row(name: str, ours: float, theirs: float, label: str = "fcl") -> None:
-    """Prints one timed row (seconds) and records its ratio for the summary."""
-    RATIOS[name if label == "fcl" else f"{name} [{label}]"].append(theirs / ours)
-    peer = label.split()[0]
-    print(
-        f"  {name.split(': ', 1)[-1]:<22} meshcol {ours * 1e3:8.4f} ms   {label} {theirs * 1e3:8.4f} ms   "
-        f"{peer}/meshcol {theirs / ours:6.2f}"
-    )
+def row(name: str, ours: float, peers: dict[str, float]) -> None:
+    """Prints one timed row (seconds a call) and records each peer's ratio for the summary."""
+    cells = []
+    for peer, theirs in peers.items():
+        RATIOS[(name, peer)].append(theirs / ours)
+        cells.append(f"{peer} {theirs * 1e3:9.4f} ms (x{theirs / ours:5.2f})")
+    print(f"  {name.split(': ', 1)[-1]:<24} meshcol {ours * 1e3:9.4f} ms   " + "   ".join(cells))
 
 
 def loops_for(fn) -> int:
@@ -95,16 +117,21 @@ def best_of(fn, repeat: int = 5) -> float:
     return min(window(fn, loops) for _ in range(repeat))
 
 
-def best_of_alternated(ours, theirs, repeat: int = 9) -> tuple[float, float]:
-    """Fastest of `repeat` runs of each, seconds a call, the two timed in alternating windows
-    of at least a millisecond: on a shared machine both sides then see the same moments of
-    load (timed one after the other, a burst of load on one side alone moves the ratio)."""
-    loops_ours, loops_theirs = loops_for(ours), loops_for(theirs)
-    t_ours, t_theirs = [], []
+def best_of_alternated(*fns, repeat: int = 9) -> list[float]:
+    """Fastest of `repeat` runs of each, seconds a call, the functions timed in turn in
+    windows of at least a millisecond: on a shared machine all sides then see the same moments
+    of load (timed one after the other, a burst of load on one side alone moves the ratio)."""
+    loops = [loops_for(fn) for fn in fns]
+    times: list[list[float]] = [[] for _ in fns]
     for _ in range(repeat):
-        t_ours.append(window(ours, loops_ours))
-        t_theirs.append(window(theirs, loops_theirs))
-    return min(t_ours), min(t_theirs)
+        for fn, n, t in zip(fns, loops, times):
+            t.append(window(fn, n))
+    return [min(t) for t in times]
+
+
+def peers_of(t_fcl: float, t_coal: float | None) -> dict[str, float]:
+    """The peer columns of one row: coal first when installed."""
+    return ({"coal": t_coal} if t_coal is not None else {}) | {"fcl": t_fcl}
 
 
 def fcl_model(mesh: trimesh.Trimesh):
@@ -113,6 +140,38 @@ def fcl_model(mesh: trimesh.Trimesh):
     m.addSubModel(np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.int32))
     m.endModel()
     return m
+
+
+def coal_model(mesh: trimesh.Trimesh):
+    """coal's BVHModelOBBRSS of one mesh (its fastest hierarchy for distance)."""
+    m = coal.BVHModelOBBRSS()
+    m.beginModel(len(mesh.faces), len(mesh.vertices))
+    m.addVertices(np.asarray(mesh.vertices, float))
+    m.addTriangles(np.asarray(mesh.faces, np.int64))
+    m.endModel()
+    return m
+
+
+def coal_transform(p: np.ndarray):
+    return coal.Transform3s(np.ascontiguousarray(p[:3, :3]), np.ascontiguousarray(p[:3, 3]))
+
+
+class CoalPair:
+    """One pair's coal geometry and transforms, with request and result objects reused."""
+
+    def __init__(self, ma, mb, pa: np.ndarray, pb: np.ndarray) -> None:
+        self.ma, self.mb = ma, mb
+        self.ta, self.tb = coal_transform(pa), coal_transform(pb)
+        self.dreq, self.dres = coal.DistanceRequest(), coal.DistanceResult()
+        self.creq, self.cres = coal.CollisionRequest(), coal.CollisionResult()
+
+    def distance(self) -> float:
+        self.dres.clear()
+        return coal.distance(self.ma, self.ta, self.mb, self.tb, self.dreq, self.dres)
+
+    def collide(self) -> bool:
+        self.cres.clear()
+        return coal.collide(self.ma, self.ta, self.mb, self.tb, self.creq, self.cres) > 0
 
 
 def pose(rotation=None, translation=(0, 0, 0)) -> np.ndarray:
@@ -134,6 +193,7 @@ def random_rotation(rng) -> np.ndarray:
 def case(name: str, a: trimesh.Trimesh, b: trimesh.Trimesh, pb: np.ndarray) -> None:
     build_meshcol = best_of(lambda: MeshSet.from_arrays([a, b], threads=1), 3)
     build_fcl = best_of(lambda: (fcl_model(a), fcl_model(b)), 3)
+    build_coal = best_of(lambda: (coal_model(a), coal_model(b)), 3) if coal else None
     meshes = MeshSet.from_arrays([a, b], np.stack([np.eye(4), pb]), threads=1)
     ma, mb = fcl_model(a), fcl_model(b)
     oa = fcl.CollisionObject(ma, fcl.Transform())
@@ -160,29 +220,48 @@ def case(name: str, a: trimesh.Trimesh, b: trimesh.Trimesh, pb: np.ndarray) -> N
     r = mesh_distance_batch(meshes, None, pairs, threads=1)
     d_fcl, hit_fcl = fcl_distance(), fcl_collide()
     assert meshes.intersects(0, 1) == hit_fcl == meshes.intersects(0, 1, None, pose_b)
-    t_ours, t_fcl = best_of_alternated(
-        lambda: mesh_distance_batch(meshes, None, pairs, threads=1), fcl_distance
-    )
+    fns_d = [lambda: mesh_distance_batch(meshes, None, pairs, threads=1), fcl_distance]
     # what a user calls: the batch, then its verdict read (fcl's side reads is_collision)
-    t_ours_hit, t_fcl_hit = best_of_alternated(
-        lambda: mesh_intersects_batch(meshes, None, pairs, threads=1).intersecting[0], fcl_collide
-    )
-    t_ours_pair, t_fcl_pair = best_of_alternated(lambda: meshes.intersects(0, 1), fcl_collide)
-    t_ours_posed, t_fcl_posed = best_of_alternated(
-        lambda: meshes.intersects(0, 1, None, pose_b), fcl_collide_posed
-    )
+    fns_hit = [
+        lambda: mesh_intersects_batch(meshes, None, pairs, threads=1).intersecting[0],
+        fcl_collide,
+    ]
+    fns_pair = [lambda: meshes.intersects(0, 1), fcl_collide]
+    fns_posed = [lambda: meshes.intersects(0, 1, None, pose_b), fcl_collide_posed]
+    d_coal = None
+    if coal:
+        cp = CoalPair(coal_model(a), coal_model(b), np.eye(4), pb)
+        d_coal = cp.distance()
+        assert cp.collide() == hit_fcl
+        coal_tb = coal_transform(pb)
+
+        def coal_collide_posed():
+            cp.tb = coal_tb  # coal takes the transform per call: the pose is passed
+            return cp.collide()
+
+        for fns, extra in (
+            (fns_d, cp.distance),
+            (fns_hit, cp.collide),
+            (fns_pair, cp.collide),
+            (fns_posed, coal_collide_posed),
+        ):
+            fns.append(extra)
+    times = [best_of_alternated(*fns) for fns in (fns_d, fns_hit, fns_pair, fns_posed)]
     agree = (bool(r.intersecting[0]) == hit_fcl) and (
         hit_fcl or abs(r.distance[0] - d_fcl) <= 1e-9 * d_fcl
     )
+    if d_coal is not None:
+        agree = agree and (hit_fcl or abs(r.distance[0] - d_coal) <= 1e-9 * d_coal)
     print(
         f"{name}: {len(a.faces)} + {len(b.faces)} faces, distance {r.distance[0]:.6g} "
-        f"(fcl {d_fcl:.6g}, intersecting {bool(r.intersecting[0])}/{hit_fcl}, agree {agree})"
+        f"(fcl {d_fcl:.6g}, coal {d_coal if d_coal is None else f'{d_coal:.6g}'}, "
+        f"intersecting {bool(r.intersecting[0])}/{hit_fcl}, agree {agree})"
     )
-    row(f"{name}: build", build_meshcol, build_fcl)
-    row(f"{name}: distance", t_ours, t_fcl)
-    row(f"{name}: intersects (batch)", t_ours_hit, t_fcl_hit)
-    row(f"{name}: intersects (pair)", t_ours_pair, t_fcl_pair)
-    row(f"{name}: intersects (posed)", t_ours_posed, t_fcl_posed)
+    row(f"{name}: build", build_meshcol, peers_of(build_fcl, build_coal))
+    for label, t in zip(
+        ("distance", "intersects (batch)", "intersects (pair)", "intersects (posed)"), times
+    ):
+        row(f"{name}: {label}", t[0], peers_of(t[1], t[2] if coal else None))
 
 
 def batch_case(mesh: trimesh.Trimesh, count: int, rng) -> None:
@@ -214,18 +293,41 @@ def batch_case(mesh: trimesh.Trimesh, count: int, rng) -> None:
             )
         return out
 
+    def coal_loop():
+        cm = coal_models[0]
+        out = np.empty(len(pairs))
+        for k, (i, j) in enumerate(pairs):
+            cres.clear()
+            if coal.collide(cm, transforms[i], cm, transforms[j], creq, cres):
+                out[k] = 0.0
+            else:
+                dres.clear()
+                out[k] = coal.distance(cm, transforms[i], cm, transforms[j], dreq, dres)
+        return out
+
     d_fcl = fcl_loop()
     r = mesh_distance_batch(meshes, None, pairs, threads=1)
     ok = np.isclose(r.distance, d_fcl, rtol=1e-9, atol=0)
     t1 = best_of(lambda: mesh_distance_batch(meshes, None, pairs, threads=1), 3)
     t2 = best_of(lambda: mesh_distance_batch(meshes, None, pairs, threads=0), 3)
     tf = best_of(fcl_loop, 2)
+    tc = None
+    agree_coal = ""
+    if coal:
+        coal_models = [coal_model(mesh)]
+        transforms = [coal_transform(p) for p in poses]
+        creq, cres = coal.CollisionRequest(), coal.CollisionResult()
+        dreq, dres = coal.DistanceRequest(), coal.DistanceResult()
+        ok_coal = np.isclose(r.distance, coal_loop(), rtol=1e-9, atol=0)
+        agree_coal = f", with coal on {int(ok_coal.sum())}/{len(pairs)}"
+        tc = best_of(coal_loop, 2)
     print(
         f"batch: {count} posed copies of {len(mesh.faces)} faces, {len(pairs)} near pairs "
-        f"({int(r.intersecting.sum())} intersecting), distances agree with fcl on {int(ok.sum())}/{len(pairs)}"
+        f"({int(r.intersecting.sum())} intersecting), distances agree with fcl on "
+        f"{int(ok.sum())}/{len(pairs)}{agree_coal}"
     )
     print(f"  meshcol all threads {t2 * 1e3:8.2f} ms")
-    row("batch: 1 thread", t1, tf, "fcl collide+distance loop")
+    row("batch: 1 thread (peers: collide, then distance)", t1, peers_of(tf, tc))
 
 
 def depth_case(name: str, a: trimesh.Trimesh, b: trimesh.Trimesh, pb: np.ndarray) -> None:
@@ -239,172 +341,253 @@ def depth_case(name: str, a: trimesh.Trimesh, b: trimesh.Trimesh, pb: np.ndarray
         fcl.collide(oa, ob, fcl.CollisionRequest(num_max_contacts=100000, enable_contact=True), res)
         return max((c.penetration_depth for c in res.contacts), default=0.0)
 
+    fns = [lambda: mesh_penetration_depth_batch(meshes, None, pairs, threads=1), fcl_depth]
+    coal_text = ""
+    if coal:
+        cp = CoalPair(coal_model(a), coal_model(b), np.eye(4), pb)
+        cp.creq = coal.CollisionRequest(coal.CollisionRequestFlag.CONTACT, 100000)
+
+        def coal_depth():
+            cp.collide()
+            return max((c.penetration_depth for c in cp.cres.getContacts()), default=0.0)
+
+        fns.append(coal_depth)
+        coal_text = f", coal deepest contact {coal_depth():.6g}"
     r = mesh_penetration_depth_batch(meshes, None, pairs, threads=1)
-    t_ours, t_fcl = best_of_alternated(
-        lambda: mesh_penetration_depth_batch(meshes, None, pairs, threads=1), fcl_depth, 5
-    )
+    times = best_of_alternated(*fns, repeat=5)
     print(
         f"depth {name}: {len(a.faces)} + {len(b.faces)} faces, meshcol depth {r.depth[0]:.6g} "
         f"({int(r.points_tested[0])} exact inside tests), fcl deepest contact {fcl_depth():.6g}"
+        f"{coal_text}"
     )
-    row(f"depth {name}: depth", t_ours, t_fcl, "fcl collide+contacts")
-
-
-def coal_model(mesh: trimesh.Trimesh):
-    import coal
-
-    m = coal.BVHModelOBBRSS()
-    m.beginModel(len(mesh.faces), len(mesh.vertices))
-    m.addVertices(np.asarray(mesh.vertices, dtype=np.float64))
-    m.addTriangles(np.asarray(mesh.faces, dtype=np.int64))
-    m.endModel()
-    return m
-
-
-def coal_pair(name: str, mesh: trimesh.Trimesh, pb: np.ndarray) -> None:
-    """One pair of the coal family: meshcol against coal and fcl, distance and intersects."""
-    import coal
-
-    meshes = MeshSet.from_arrays([mesh, mesh], np.stack([np.eye(4), pb]), threads=1)
-    pairs = np.array([[0, 1]])
-    model = coal_model(mesh)
-    ta, tb = coal.Transform3s(), coal.Transform3s(pb[:3, :3].copy(), pb[:3, 3].copy())
-    oa = fcl.CollisionObject(fcl_model(mesh), fcl.Transform())
-    ob = fcl.CollisionObject(fcl_model(mesh), fcl.Transform(pb[:3, :3], pb[:3, 3]))
-
-    def coal_distance():
-        res = coal.DistanceResult()
-        coal.distance(model, ta, model, tb, coal.DistanceRequest(), res)
-        return res.min_distance
-
-    def coal_collide():
-        res = coal.CollisionResult()
-        coal.collide(model, ta, model, tb, coal.CollisionRequest(), res)
-        return res.isCollision()
-
-    def fcl_distance():
-        return fcl.distance(oa, ob, fcl.DistanceRequest(), fcl.DistanceResult())
-
-    def fcl_collide():
-        res = fcl.CollisionResult()
-        fcl.collide(oa, ob, fcl.CollisionRequest(), res)
-        return res.is_collision
-
-    def ours_distance():
-        return mesh_distance_batch(meshes, None, pairs, threads=1)
-
-    def ours_collide():
-        return mesh_intersects_batch(meshes, None, pairs, threads=1).intersecting[0]
-
-    r = ours_distance()
-    print(
-        f"{name}: {len(mesh.faces)} faces; meshcol distance {r.distance[0]:.6g} "
-        f"(intersecting {bool(r.intersecting[0])}), coal {coal_distance():.6g} "
-        f"(collide {coal_collide()}), fcl {fcl_distance():.6g} (collide {fcl_collide()})"
+    row(
+        f"depth {name}: depth (peers: collide+contacts)",
+        times[0],
+        peers_of(times[1], times[2] if coal else None),
     )
-    for query, ours, peers in (
-        ("distance", ours_distance, (("coal", coal_distance), ("fcl", fcl_distance))),
-        ("intersects", ours_collide, (("coal", coal_collide), ("fcl", fcl_collide))),
-    ):
-        for label, theirs in peers:
-            t_ours, t_theirs = best_of_alternated(ours, theirs)
-            row(f"{name}: {query}", t_ours, t_theirs, label)
 
 
-def coal_batch(mesh: trimesh.Trimesh, count: int, rng) -> None:
-    """``count`` posed copies in a loose cluster, every near pair: meshcol's batch (one
-    thread) against coal's and fcl's collide-then-distance loops."""
-    import coal
+def centred(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
+    """A copy with its box centre at the origin (the copies are moved from their centres)."""
+    out = mesh.copy()
+    out.apply_translation(-mesh.bounds.mean(axis=0))
+    return out
 
+
+def contact_offsets(mesh: trimesh.Trimesh, rotations: np.ndarray, directions: np.ndarray):
+    """For each pair (a at rotations[k, 0] about the origin, b at rotations[k, 1] moved by
+    s * directions[k]): the smallest s > 0 beyond which the two never meet, approached from
+    outside by conservative advancement (moving b by less than the distance cannot make the
+    surfaces meet), to within 1e-7 of the extent."""
+    count = len(rotations)
+    reach = float(np.linalg.norm(mesh.vertices, axis=1).max())
     extent = float(mesh.extents.max())
-    poses = np.stack(
-        [pose(random_rotation(rng), rng.uniform(0, 4 * extent, 3)) for _ in range(count)]
-    )
-    meshes = MeshSet.from_arrays([mesh] * count, poses)
-    ii, jj = np.triu_indices(count, 1)
-    near = np.linalg.norm(poses[ii, :3, 3] - poses[jj, :3, 3], axis=1) < 2 * extent
-    pairs = np.c_[ii[near], jj[near]]
-    model = coal_model(mesh)
-    transforms = [coal.Transform3s(p[:3, :3].copy(), p[:3, 3].copy()) for p in poses]
+    s = np.full(count, 2.0 * reach * 1.01)
+    poses = np.tile(np.eye(4), (2 * count, 1, 1))
+    poses[0::2, :3, :3] = rotations[:, 0]
+    poses[1::2, :3, :3] = rotations[:, 1]
+    meshes = MeshSet.from_arrays([mesh] * (2 * count), poses.copy(), threads=0)
+    pairs = np.arange(2 * count, dtype=np.int64).reshape(count, 2)
+    todo = np.arange(count)
+    for _ in range(200):
+        poses[1::2, :3, 3] = s[:, None] * directions
+        d = mesh_distance_batch(meshes, poses, pairs[todo], threads=0).distance
+        assert np.all(d > 0), "conservative advancement reached a contact"
+        s[todo] -= d
+        todo = todo[d > 1e-7 * extent]
+        if len(todo) == 0:
+            break
+    return s, extent
 
-    def coal_loop():
-        out = np.empty(len(pairs))
-        for k, (i, j) in enumerate(pairs.tolist()):
-            res = coal.CollisionResult()
-            coal.collide(model, transforms[i], model, transforms[j], coal.CollisionRequest(), res)
-            if res.isCollision():
-                out[k] = 0.0
-                continue
-            dres = coal.DistanceResult()
-            coal.distance(model, transforms[i], model, transforms[j], coal.DistanceRequest(), dres)
-            out[k] = dres.min_distance
+
+def family_sets(mesh: trimesh.Trimesh, count: int, rng):
+    """The three configurations of one mesh: name -> (count, 2, 4, 4) poses."""
+    rotations = np.stack(
+        [np.stack([random_rotation(rng), random_rotation(rng)]) for _ in range(count)]
+    )
+    directions = rng.normal(size=(count, 3))
+    directions /= np.linalg.norm(directions, axis=1)[:, None]
+    s, extent = contact_offsets(mesh, rotations, directions)
+    out = {}
+    for config, lo, hi in (("near", 0.01, 0.05), ("touching", -0.02, -0.002), ("apart", 0.3, 1.0)):
+        offset = s + rng.uniform(lo, hi, count) * extent
+        poses = np.tile(np.eye(4), (count, 2, 1, 1))
+        poses[:, :, :3, :3] = rotations
+        poses[:, 1, :3, 3] = offset[:, None] * directions
+        out[config] = poses
+    return out
+
+
+def family_config(name: str, mesh: trimesh.Trimesh, config: str, pair_poses: np.ndarray) -> None:
+    """The rows of one mesh in one configuration: 300 pairs, the same for every library."""
+    count = len(pair_poses)
+    flat = np.ascontiguousarray(pair_poses.reshape(2 * count, 4, 4))
+    meshes = MeshSet.from_arrays([mesh] * (2 * count), flat, threads=1)
+    pairs = np.arange(2 * count, dtype=np.int64).reshape(count, 2)
+    one_pair = [np.ascontiguousarray(pairs[k : k + 1]) for k in range(count)]
+    model = fcl_model(mesh)
+    objects = [fcl.CollisionObject(model, fcl.Transform(p[:3, :3], p[:3, 3])) for p in flat]
+    fcl_dreq, fcl_creq = fcl.DistanceRequest(), fcl.CollisionRequest()
+
+    def fcl_distances():
+        return [
+            fcl.distance(objects[i], objects[j], fcl_dreq, fcl.DistanceResult())
+            for i, j in pairs.tolist()
+        ]
+
+    def fcl_collides():
+        out = []
+        for i, j in pairs.tolist():
+            res = fcl.CollisionResult()
+            fcl.collide(objects[i], objects[j], fcl_creq, res)
+            out.append(res.is_collision)
         return out
 
-    d_coal = coal_loop()
+    def ours_pair_distances():
+        return [mesh_distance_batch(meshes, None, p, threads=1).distance[0] for p in one_pair]
+
+    def ours_pair_intersects():
+        return [meshes.intersects(i, j) for i, j in pairs.tolist()]
+
     r = mesh_distance_batch(meshes, None, pairs, threads=1)
-    ok = np.isclose(r.distance, d_coal, rtol=1e-9, atol=1e-12)
-    t1 = best_of(lambda: mesh_distance_batch(meshes, None, pairs, threads=1), 3)
-    tc = best_of(coal_loop, 2)
+    hit = mesh_intersects_batch(meshes, None, pairs, threads=1).intersecting
+    assert np.array_equal(hit, r.intersecting)
+    assert np.array_equal(hit, np.array(fcl_collides())), "intersects disagree with fcl"
+    rows = {
+        "distance (batch)": [
+            lambda: mesh_distance_batch(meshes, None, pairs, threads=1),
+            fcl_distances,
+        ],
+        "distance (pair loop)": [ours_pair_distances, fcl_distances],
+        "intersects (batch)": [
+            lambda: mesh_intersects_batch(meshes, None, pairs, threads=1),
+            fcl_collides,
+        ],
+        "intersects (pair loop)": [ours_pair_intersects, fcl_collides],
+    }
+    agree = ""
+    if coal:
+        cm = coal_model(mesh)
+        tfs = [coal_transform(p) for p in flat]
+        dreq, dres = coal.DistanceRequest(), coal.DistanceResult()
+        creq, cres = coal.CollisionRequest(), coal.CollisionResult()
+
+        def coal_distances():
+            out = []
+            for i, j in pairs.tolist():
+                dres.clear()
+                out.append(coal.distance(cm, tfs[i], cm, tfs[j], dreq, dres))
+            return out
+
+        def coal_collides():
+            out = []
+            for i, j in pairs.tolist():
+                cres.clear()
+                out.append(coal.collide(cm, tfs[i], cm, tfs[j], creq, cres) > 0)
+            return out
+
+        assert np.array_equal(hit, np.array(coal_collides())), "intersects disagree with coal"
+        d_coal = np.array(coal_distances())
+        apart = ~hit
+        close = np.abs(r.distance[apart] - d_coal[apart]) <= 1e-9 * d_coal[apart]
+        agree = f", distances agree with coal's on {int(close.sum())}/{int(apart.sum())} apart"
+        for key, fn in zip(rows, (coal_distances, coal_distances, coal_collides, coal_collides)):
+            rows[key].append(fn)
     print(
-        f"coal batch: {count} posed copies of {len(mesh.faces)} faces, {len(pairs)} near pairs, "
-        f"distances agree with coal on {int(ok.sum())}/{len(pairs)}"
+        f"{name} ({len(mesh.faces)} faces), {config}: {count} pairs, {int(hit.sum())} "
+        f"intersecting, distance {np.median(r.distance):.4g} median of "
+        f"{float(mesh.extents.max()):.4g} extent{agree}"
     )
-    row("coal batch: 1 thread", t1, tc, "coal collide+distance loop")
+    for key, fns in rows.items():
+        times = best_of_alternated(*fns, repeat=3)
+        row(
+            f"{name} {config}: {key}",
+            times[0] / count,
+            peers_of(times[1] / count, times[2] / count if coal else None),
+        )
+    if config == "touching":
+        family_depth(name, mesh, meshes, pairs, flat, objects)
 
 
-def coal_rows() -> None:
-    rng = np.random.default_rng(32)
-    load = lambda name: trimesh.load(CORPUS / name, force="mesh")
-    for file in ("torus.STL", "fandisk.obj", "teapot.stl", "ballA.off"):
-        mesh = load(file)
-        mesh.apply_translation(-mesh.bounds.mean(axis=0))
-        e = float(mesh.extents.max())
-        turn = random_rotation(rng)
-        near = pose(turn, (1.05 * e, 0.0, 0.0))
-        # touching: the near copy moved by its closest points' gap, so that they meet
-        meshes = MeshSet.from_arrays([mesh, mesh], np.stack([np.eye(4), near]), threads=1)
-        closest = mesh_distance_batch(meshes, None, np.array([[0, 1]]), threads=1)
-        touching = near.copy()
-        touching[:3, 3] += closest.point_a[0] - closest.point_b[0]
-        for label, posed in (
-            ("apart", pose(turn, (1.5 * e, 0.0, 0.0))),
-            ("near", near),
-            ("touching", touching),
-            ("overlapping", pose(turn, (0.6 * e, 0.0, 0.0))),
-        ):
-            coal_pair(f"{file} {label}", mesh, posed)
-    coal_batch(load("torus.STL"), 60, rng)
+def family_depth(name, mesh, meshes, pairs, flat, objects) -> None:
+    """The depth row of the touching configuration (peers: collide with contacts, the deepest
+    contact's depth, per pair)."""
+    count = len(pairs)
+    fcl_req = fcl.CollisionRequest(num_max_contacts=100000, enable_contact=True)
+
+    def fcl_depths():
+        out = []
+        for i, j in pairs.tolist():
+            res = fcl.CollisionResult()
+            fcl.collide(objects[i], objects[j], fcl_req, res)
+            out.append(max((c.penetration_depth for c in res.contacts), default=0.0))
+        return out
+
+    fns = [lambda: mesh_penetration_depth_batch(meshes, None, pairs, threads=1), fcl_depths]
+    if coal:
+        cm = coal_model(mesh)
+        tfs = [coal_transform(p) for p in flat]
+        creq = coal.CollisionRequest(coal.CollisionRequestFlag.CONTACT, 100000)
+        cres = coal.CollisionResult()
+
+        def coal_depths():
+            out = []
+            for i, j in pairs.tolist():
+                cres.clear()
+                coal.collide(cm, tfs[i], cm, tfs[j], creq, cres)
+                out.append(max((c.penetration_depth for c in cres.getContacts()), default=0.0))
+            return out
+
+        fns.append(coal_depths)
+    times = best_of_alternated(*fns, repeat=3)
+    row(
+        f"{name} touching: depth (batch; peers: contacts)",
+        times[0] / count,
+        peers_of(times[1] / count, times[2] / count if coal else None),
+    )
+
+
+def family_rows(count: int = 300) -> None:
+    rng = np.random.default_rng(7)
+    for name, path in FAMILY:
+        if not path.exists():
+            print(f"{name}: {path} missing, skipped")
+            continue
+        mesh = centred(trimesh.load(path, force="mesh"))
+        for config, pair_poses in family_sets(mesh, count, rng).items():
+            family_config(name, mesh, config, pair_poses)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=1, help="repeat the whole set (ranges)")
     parser.add_argument("--depth-only", action="store_true", help="only the depth rows")
-    parser.add_argument("--coal", action="store_true", help="the coal family too")
-    parser.add_argument("--coal-only", action="store_true", help="only the coal family")
+    parser.add_argument("--family-only", action="store_true", help="only the real-mesh family")
+    parser.add_argument("--pairs", type=int, default=300, help="pairs a family configuration")
     args = parser.parse_args()
-    print(f"meshcol from {Path(meshcol.__file__).resolve().parent}, load average {os.getloadavg()}")
+    print(
+        f"meshcol from {Path(meshcol.__file__).resolve().parent}, "
+        f"coal {getattr(coal, '__version__', 'not installed')}, "
+        f"load average {os.getloadavg()}"
+    )
     for run in range(args.runs):
         if args.runs > 1:
             print(f"== run {run + 1} of {args.runs}")
-        if args.coal_only:
-            coal_rows()
-        elif args.depth_only:
+        if not args.family_only:
+            if not args.depth_only:
+                one_run()
             depth_rows()
-        else:
-            one_run()
-            depth_rows()
-            if args.coal:
-                coal_rows()
+        if not args.depth_only:
+            family_rows(args.pairs)
     if args.runs > 1:
         print(f"\npeer/meshcol over {args.runs} runs (min-max):")
-        for name, ratios in RATIOS.items():
-            print(f"  {name:<60} {min(ratios):6.2f} - {max(ratios):6.2f}")
+        for (name, peer), ratios in RATIOS.items():
+            print(f"  {name:<64} {peer:<5} {min(ratios):6.2f} - {max(ratios):6.2f}")
 
 
 def one_run() -> None:
     rng = np.random.default_rng(1)
-    load = lambda name: trimesh.load(CORPUS / name, force="mesh")
+    load = lambda name: trimesh.load(MODELS / name, force="mesh")
     torus, fandisk = load("torus.STL"), load("fandisk.obj")
     counter = load("counter.unitsmm.STL")
     ball_a, ball_b = load("ballA.off"), load("ballB.off")
@@ -435,7 +618,7 @@ def one_run() -> None:
 
 
 def depth_rows() -> None:
-    load = lambda name: trimesh.load(CORPUS / name, force="mesh")
+    load = lambda name: trimesh.load(MODELS / name, force="mesh")
     torus = load("torus.STL")
     ball_a, ball_b = load("ballA.off"), load("ballB.off")
     depth_case("ballA vs ballB (overlapping)", ball_a, ball_b, np.eye(4))

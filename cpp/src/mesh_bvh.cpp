@@ -210,6 +210,14 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         face_index_[static_cast<size_t>(i)] = f;
         for (int k = 0; k < 3; ++k) corners_[3 * static_cast<size_t>(i) + k] = vertex(faces[3 * f + k]);
     }
+    normals_.resize(static_cast<size_t>(n));
+    for (std::int32_t i = 0; i < n; ++i) {
+        const Vec3* t = triangle(i);
+        const Vec3 normal = cross(t[1] - t[0], t[2] - t[0]);
+        const double length = norm(normal);
+        // Zero for a degenerate triangle, and for one whose normal under- or overflows.
+        normals_[static_cast<size_t>(i)] = length > 0.0 && std::isfinite(length) ? normal / length : Vec3{0.0, 0.0, 0.0};
+    }
     build_winding_nodes();
     build_obbs();
     {

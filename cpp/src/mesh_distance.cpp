@@ -89,6 +89,26 @@ inline double triangle_axis_squared_distance(const Vec3 a[3], const Vec3 b[3]) {
     return gap > 0.0 ? gap * gap / dot(axis, axis) : 0.0;
 }
 
+// Lower bound of the distance between triangles a and b from their planes (unit normals na
+// and nb, zero for a degenerate triangle): when b lies wholly on one side of a's plane, at
+// least h from it, no point of a (in that plane) is nearer than h; likewise a and b's plane.
+// For two patches facing each other across a gap (the pairs a near query measures) this is
+// nearly the distance, where the boxes of slanted triangles and the centroid line prune
+// little. Each gap is lowered by `slack` (the pair's rounding allowance, far above the
+// rounding of these dot products and of the unit normals) so that rounding can only keep a
+// pair. Returns a squared distance.
+inline double plane_gap(const Vec3& n, const Vec3& origin, const Vec3 t[3], double slack) {
+    const double s0 = dot(n, t[0] - origin), s1 = dot(n, t[1] - origin), s2 = dot(n, t[2] - origin);
+    const double low = min2(s0, min2(s1, s2)), high = max2(s0, max2(s1, s2));
+    const double gap = (low > 0.0 ? low : (high < 0.0 ? -high : 0.0)) - slack;
+    return gap > 0.0 ? gap * gap : 0.0;
+}
+
+inline double triangle_plane_squared_distance(const Vec3 a[3], const Vec3& na, const Vec3 b[3], const Vec3& nb,
+                                              double slack) {
+    return max2(plane_gap(na, a[0], b, slack), plane_gap(nb, b[0], a, slack));
+}
+
 struct StackItem {
     std::int32_t a, b;
     double bound;  // squared box distance when pushed
@@ -129,20 +149,15 @@ SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative&
             for (std::int32_t i = x.index; i < x.index + x.count; ++i) {
                 const Vec3* ta = a.triangle(i);
                 const TriangleBox box_a = triangle_box(ta);
+                const Vec3& normal_a = a.triangle_normal(i);
                 for (int j = 0; j < leaf_b.count; ++j) {
-                    const double lb2 = triangle_box_squared_distance(box_a, leaf_b.boxes[j]);
-                    if (lb2 == 0.0) {
-                        Vec3 w;
-                        if (triangles_intersect(ta, leaf_b.corners[j], &w)) {
-                            r.found = r.intersecting = true;
-                            r.squared_distance = 0.0;
-                            r.point_a = r.point_b = w;
-                            r.triangle_a = i;
-                            r.triangle_b = y.index + j;
-                            return r;
-                        }
-                    }
-                    if (pruned(lb2) || pruned(triangle_axis_squared_distance(ta, leaf_b.corners[j]))) continue;
+                    // The surfaces are disjoint (first_crossing found no crossing pair among
+                    // those whose boxes touch, which are all that can cross): measure only.
+                    if (pruned(triangle_box_squared_distance(box_a, leaf_b.boxes[j])) ||
+                        pruned(triangle_axis_squared_distance(ta, leaf_b.corners[j])) ||
+                        pruned(triangle_plane_squared_distance(ta, normal_a, leaf_b.corners[j],
+                                                               rel.rotation * b.triangle_normal(y.index + j), rel.slack)))
+                        continue;
                     Vec3 pa, pb;
                     const double d2 = triangle_separated_squared_distance(ta, leaf_b.corners[j], &pa, &pb);
                     if (!pruned(d2)) {
@@ -155,7 +170,7 @@ SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative&
                     }
                 }
             }
-            // Touching without a detected intersection (rounding): nothing can beat zero.
+            // Touching (a distance that rounds to zero): nothing can beat zero.
             if (r.found && r.squared_distance == 0.0) return r;
             continue;
         }

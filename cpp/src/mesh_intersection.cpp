@@ -124,6 +124,23 @@ bool for_each_touching_pair(const MeshBvh& a, const MeshBvh& b, const Relative& 
     return false;
 }
 
+// Whether triangle i of a and triangle j of b (corners ta, and tb mapped into a's frame) lie
+// strictly apart across either one's plane: all three corners of one more than rel.slack
+// (the pair's rounding allowance, far above the rounding of these dot products, of the unit
+// normals and of the mapping) to the same side of the other's plane. Such a pair cannot
+// meet, so the exact test would say no: it is skipped, a dozen multiplications against the
+// exact predicates of triangles_intersect. A degenerate triangle (zero normal) separates
+// nothing.
+inline bool planes_separate(const MeshBvh& a, std::int32_t i, const Vec3* ta, const MeshBvh& b, std::int32_t j,
+                            const Vec3* tb, const Relative& rel) {
+    const auto apart = [&rel](const Vec3& n, const Vec3& origin, const Vec3* t) {
+        const double s0 = dot(n, t[0] - origin), s1 = dot(n, t[1] - origin), s2 = dot(n, t[2] - origin);
+        return (s0 > rel.slack && s1 > rel.slack && s2 > rel.slack) ||
+               (s0 < -rel.slack && s1 < -rel.slack && s2 < -rel.slack);
+    };
+    return apart(a.triangle_normal(i), ta[0], tb) || apart(rel.rotation * b.triangle_normal(j), tb[0], ta);
+}
+
 // The near pairs (index into a, index into b) grouped by `side`'s triangle.
 void group_near_pairs(const std::vector<std::pair<std::int32_t, std::int32_t>>& pairs, int side,
                       std::int32_t count, TriangleMarks& marks) {
@@ -146,7 +163,7 @@ bool first_crossing(const MeshBvh& a, const MeshBvh& b, const Relative& rel, std
                     std::int32_t* triangle_b, Vec3* witness) {
     return for_each_touching_pair(a, b, rel, [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
         Vec3 w;
-        if (!triangles_intersect(ta, tb, &w)) return false;
+        if (planes_separate(a, i, ta, b, j, tb, rel) || !triangles_intersect(ta, tb, &w)) return false;
         *witness = w;
         *triangle_a = i;
         *triangle_b = j;
@@ -174,7 +191,7 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
             in_a.near[si] = in_b.near[sj] = 1;
             near_pairs.push_back({i, j});
             if (triangle_box_squared_distance(triangle_box(ta), triangle_box(tb)) == 0.0 &&
-                triangles_intersect(ta, tb, nullptr)) {
+                !planes_separate(a, i, ta, b, j, tb, rel) && triangles_intersect(ta, tb, nullptr)) {
                 in_a.crossing[si] = in_b.crossing[sj] = 1;
                 if (in_a.partner[si] < 0) in_a.partner[si] = j;
                 if (in_b.partner[sj] < 0) in_b.partner[sj] = i;
@@ -213,8 +230,9 @@ void segment_crossings(const MeshBvh& mesh, const Vec3& p, const Vec3& q, std::v
 }  // namespace mesh_detail
 
 bool mesh_intersects(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b, const Pose& pose_b) {
-    return for_each_touching_pair(a, b, Relative(pose_a, pose_b, a, b), [](std::int32_t, std::int32_t, const Vec3* ta, const Vec3* tb) {
-        return triangles_intersect(ta, tb, nullptr);
+    const Relative rel(pose_a, pose_b, a, b);
+    return for_each_touching_pair(a, b, rel, [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
+        return !planes_separate(a, i, ta, b, j, tb, rel) && triangles_intersect(ta, tb, nullptr);
     });
 }
 

@@ -79,6 +79,9 @@ public:
     std::int32_t triangle_count() const { return static_cast<std::int32_t>(face_index_.size()); }
     /// The three corners of triangle `i` (leaf order), local frame.
     const Vec3* triangle(std::int32_t i) const { return &corners_[3 * static_cast<size_t>(i)]; }
+    /// The unit normal of triangle `i` (leaf order), local frame, (p1 - p0) x (p2 - p0)
+    /// normalised; zero for a degenerate triangle. The distance search's plane bound reads it.
+    const Vec3& triangle_normal(std::int32_t i) const { return normals_[static_cast<size_t>(i)]; }
     /// The vertices used by at least one face, each once, local frame (input order).
     const std::vector<Vec3>& vertices() const { return vertices_; }
     /// The three corners of triangle `i` (leaf order) as indices into `vertices()`.
@@ -107,6 +110,7 @@ private:
     std::vector<WindingNode> winding_nodes_;
     std::vector<NodeObb> obbs_;
     std::vector<Vec3> corners_;            ///< 3 per triangle, leaf order
+    std::vector<Vec3> normals_;            ///< 1 per triangle, leaf order, unit or zero
     std::vector<Vec3> vertices_;           ///< vertices referenced by a face, input order
     std::vector<std::int32_t> corner_vertices_;  ///< 3 per triangle, leaf order, into vertices_
     bool closed_ = false;
