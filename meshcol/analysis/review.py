@@ -357,10 +357,12 @@ def _add_decomposed_body(page: ReviewPage, body: Body, row: dict, out_dir: str, 
 def _part_points(outputs: Sequence[str], out_dir: str) -> list[np.ndarray]:
     """The vertices (world frame) of every part of the files a body's decomposition wrote."""
     from meshcol.io.mesh_read import load_mesh
+    from meshcol.io.staging import written_path
 
     parts: list[np.ndarray] = []
     for output in outputs:
-        for part_body in load_mesh(os.path.join(out_dir, output), merge=False):
+        # the run's outputs may still wait to be put in place (meshcol.io.staging)
+        for part_body in load_mesh(written_path(os.path.join(out_dir, output)), merge=False):
             for _name, v, _f in part_body.part_meshes():
                 parts.append(v @ part_body.pose[:3, :3].T + part_body.pose[:3, 3])
     return parts

@@ -143,8 +143,9 @@ def written_path(path: str) -> str:
             if os.path.abspath(destination) == target:
                 return tmp
         for stage, folder, _ in batch.folders:
-            if os.path.dirname(target) == os.path.abspath(folder):
-                staged = os.path.join(stage, os.path.basename(target))
+            inside = os.path.relpath(target, os.path.abspath(folder))
+            if not inside.startswith(os.pardir):
+                staged = os.path.join(stage, inside)
                 if os.path.exists(staged):
                     return staged
     return path
