@@ -129,8 +129,11 @@ class CheckReport:
         settings = self.settings
         old = self.baseline or {}
         cases = [_ci_case(p, files, scene, least, settings, self.units, old) for p in self.pairs]
+        cases += _finding_cases(self.findings, files, scene)
         s = self.summary
         verb = "violates" if s["violations"] == 1 else "violate"
+        failed = s.get("failed_findings") or 0
+        also = f"; {failed} body finding{'s' if failed != 1 else ''} fail" if failed else ""
         return CiSuite(
             "check",
             tuple(collapse_passed(cases, "pairs", "meshcol.check")),
@@ -138,7 +141,7 @@ class CheckReport:
             seconds=(s["seconds"] or 0.0) + (s["load_seconds"] or 0.0),
             warnings=tuple(self.warnings),
             verdict=f"{s['violations']} of {s['candidate_pairs']} candidate pairs {verb} "
-            f"--fail-on {settings['fail_on']}",
+            f"--fail-on {settings['fail_on']}{also}",
             units=self.units,
             rules={rule.id: rule.to_dict() for rule in command_rules("check")},
             baseline=settings.get("baseline"),
@@ -174,6 +177,41 @@ CSV_COLUMNS = [
     "intersection_volume",
     "units",
 ]
+
+
+def _finding_cases(
+    findings: list[dict], files: dict[str, str | None], scene: str | None
+) -> list[Any]:
+    """The CI cases of a check report's body findings (MC301, a target's limits): a failure
+    when the finding fails the run, else a passed case worth a warning; so that JUnit, SARIF
+    and the other CI formats carry what fails the run besides the pairs."""
+    from meshcol.io.ci import CiCase, details
+
+    cases: list[Any] = []
+    names: set[str] = set()
+    for finding in findings:
+        body = finding["body"]
+        part = "" if finding.get("part") is None else f" part {finding['part']}"
+        name = f"{body}{part}: {finding['rule']} {finding['name']}"
+        if name in names:  # one case per finding, each name unique in the suite
+            name = f"{name} #{sum(n.startswith(name) for n in names) + 1}"
+        names.add(name)
+        numbers = {k: finding[k] for k in ("measured", "limit") if finding.get(k) is not None}
+        cases.append(
+            CiCase(
+                name=name,
+                classname="meshcol.check",
+                outcome="failure" if finding["failed"] else "passed",
+                message=finding["message"],
+                file=scene or files.get(body),
+                kind=finding["name"],
+                details=details([("body", body), *numbers.items()]) if finding["failed"] else "",
+                warn=not finding["failed"],
+                rules=(finding["rule"],),
+                numbers=numbers,
+            )
+        )
+    return cases
 
 
 def _ci_case(

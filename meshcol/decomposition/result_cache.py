@@ -36,7 +36,7 @@ __all__ = [
 ]
 
 #: The version of the entries' layout (and of what ci keeps of a report); a new one misses.
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # 2: check suites carry body findings as cases
 #: Seconds before an index was written within which a file's stat is not trusted.
 RACY_SECONDS = 2.0
 _CHUNK = 1 << 20

@@ -598,3 +598,29 @@ def test_tap_report_of_check_from_its_extension(samples, tmp_path, monkeypatch):
         "1..1",
         "ok 1 - samples/bowl/bowl.obj::bowl",
     ]
+
+
+def test_check_target_findings_are_cases_as_the_exit_code_counts_them(
+    samples, schema, tmp_path, monkeypatch
+):
+    # A check under --target fails on its bodies' limits (MC101...), which the CI suite left
+    # out: JUnit listed every pair passed or failed while the run exited 1 on the findings.
+    monkeypatch.chdir(samples.parent)
+    args = ["check", "samples/level/scene.json", "--target", "physx-gpu"]
+    code, out, _ = run(*args, "--report", "-")
+    report = json.loads(out)
+    failed = [f for f in report["findings"] if f["failed"]]
+    assert code == 1 and len(failed) == report["summary"]["failed_findings"] >= 2
+    code, out, _ = run(*args, "--format", "junit", "--report", "-")
+    validate(out, schema)
+    suite = parse(out, tmp_path)
+    cases = {case.name: case for case in suite}
+    for finding in failed:
+        case = cases[f"{finding['body']}: {finding['rule']} {finding['name']}"]
+        assert outcome(case) == "failure" and case.result[0].message == finding["message"]
+    assert suite.failures == report["summary"]["violations"] + len(failed)
+    code, out, _ = run(*args, "--format", "sarif", "--report", "-")
+    results = json.loads(out)["runs"][0]["results"]
+    assert sorted(r["ruleId"] for r in results if r["ruleId"] != "MC501") == sorted(
+        f["rule"] for f in failed
+    )
