@@ -117,7 +117,7 @@ def test_the_walk_of_checks_inputs_is_no_longer_than_now(stays: list[str]) -> No
 
 @pytest.mark.xfail(
     strict=True,
-    reason="issue 28: io, analysis/colliders and collision alone re-enter 14 times here",
+    reason="issue 28: 61 re-entries now; a flat list of stages spends most of 12 in check.py",
 )
 def test_the_walk_of_checks_inputs_re_enters_a_file_at_most_12_times(stays: list[str]) -> None:
     count = re_entries(stays)
