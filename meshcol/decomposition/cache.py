@@ -120,23 +120,25 @@ def entry_path(key: str, cache_dir: str | os.PathLike[str] | None = None) -> Pat
 
 
 def _read(key: str, cache_dir: str | os.PathLike[str] | None) -> Any:
-    """The entry's bytes or path (for np.load); None when it is absent."""
-    local = local_folder(cache_dir) if cache_dir is not None else None
-    if cache_dir is None or local is not None:
-        return entry_path(key, local)
+    """The entry's bytes (for np.load); None when it is absent or not a regular file."""
     data = read_bytes(_entry_name(key), cache_dir)
     return None if data is None else io.BytesIO(data)
 
 
 def read_bytes(name: str, cache_dir: str | os.PathLike[str] | None = None) -> bytes | None:
     """The bytes of the entry ``name`` (a path inside the store, ``ab/abcd.npz``); None
-    when it is absent or unreadable."""
+    when it is absent or unreadable. A local entry is read through the guarded read
+    (:func:`meshcol.io.safe_read.read_input`): one that is not a regular file (a FIFO
+    planted in a shared cache) or over the cap is a miss, never a read that blocks."""
+    from meshcol.errors import MeshcolError
+    from meshcol.io.safe_read import read_input
+
     local = local_folder(cache_dir) if cache_dir is not None else None
     if cache_dir is None or local is not None:
         root = Path(local) if local is not None else default_cache_dir()
         try:
-            return (root / name).read_bytes()
-        except OSError:
+            return read_input(root / name, "mesh")
+        except (OSError, MeshcolError):
             return None
     fs, root_path = _filesystem(os.fspath(cache_dir))
     try:

@@ -400,3 +400,24 @@ def test_a_number_of_5000_digits_is_one_line(tmp_path, monkeypatch, kind):
         pattern = r"m\.json: baseline has a number too long to read \(.*\)"
     result, _ = _run(args)
     _one_line(result, pattern)
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no named pipes here")
+def test_a_fifo_planted_in_the_cache_is_a_miss_not_a_read_that_blocks(tmp_path) -> None:
+    # The decomposition cache (a shared folder) read its entries with a plain read: a FIFO
+    # under an entry's name blocked the run for ever. It is now a miss, as a corrupt entry is.
+    import threading
+
+    from meshcol.decomposition import cache
+
+    key = "ab" + "0" * 62
+    folder = tmp_path / "cache" / key[:2]
+    folder.mkdir(parents=True)
+    os.mkfifo(folder / f"{key}.npz")
+    found: list = []
+    reader = threading.Thread(target=lambda: found.append(cache.load(key, tmp_path / "cache")))
+    reader.daemon = True
+    reader.start()
+    reader.join(timeout=20)
+    assert not reader.is_alive(), "reading a FIFO in the cache blocked"
+    assert found == [None]
