@@ -29,19 +29,21 @@ __all__ = ["check_references", "read_document", "read_glb", "read_gltf"]
 
 def read_gltf(file: Path, source: str) -> list[MeshNode]:
     """The mesh nodes of a ``.gltf`` file, in the file's node order."""
-    data = read_input(source, "mesh")
-    document = _gltf_json(data, source)
-    check_references(document, "GLTF", source)
-    nodes = scene_nodes(load_scene(file, "gltf", source, io.BytesIO(data)))
-    return _file_order(document, nodes)
+    return _read_nodes(file, source, "gltf")
 
 
 def read_glb(file: Path, source: str) -> list[MeshNode]:
     """The mesh nodes of a ``.glb`` file, in the file's node order."""
+    return _read_nodes(file, source, "glb")
+
+
+def _read_nodes(file: Path, source: str, kind: str) -> list[MeshNode]:
+    """The mesh nodes of a glTF (``kind`` ``gltf``) or GLB file: read once through the guarded
+    read, its document checked, then trimesh's scene of the same bytes."""
     data = read_input(source, "mesh")
-    document = _glb_json(data, source)
-    check_references(document, "GLB", source)
-    nodes = scene_nodes(load_scene(file, "glb", source, io.BytesIO(data)))
+    document = _glb_json(data, source) if kind == "glb" else _gltf_json(data, source)
+    check_references(document, kind.upper(), source)
+    nodes = scene_nodes(load_scene(file, kind, source, io.BytesIO(data)))
     return _file_order(document, nodes)
 
 
