@@ -12,7 +12,13 @@ each time, so the times include Python's start and every import):
    (the changed jobs recomputed, the others not run), and without it.
 
 Each run's JSON report of the unchanged tree is compared: the cold and the cached report
-must be the same bytes. Rounds alternate the warm and one-change runs.
+must be the same bytes. Rounds alternate the warm and one-change runs. Each run prints its
+wall time and its CPU time (user + system of the command and the processes it waited for:
+what a loaded machine does not move).
+
+``--compare CMD`` (another build's command line, e.g. ``/work/base/.venv/bin/meshcol``) also
+runs the warm and one-changed steps with CMD, alternated with this build's in every round
+(A/B), on the same repository and cache.
 
     .venv/bin/python benchmarks/bench_ci.py --assets 10000 --jobs 2 --rounds 3
 """
@@ -22,6 +28,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import shutil
 import subprocess
 import sys
@@ -72,13 +79,62 @@ def make(root: Path, count: int) -> list[Path]:
 COMMAND: list[str] = [str(Path(sys.executable).with_name("meshcol"))]
 
 
-def meshcol(root: Path, *args: str) -> tuple[float, str, str]:
+#: CPU seconds (user + system) of the last :func:`meshcol` run and the processes it waited for.
+LAST_CPU: list[float] = [0.0]
+
+
+def _children_cpu() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def meshcol(root: Path, *args: str, command: list[str] | None = None) -> tuple[float, str, str]:
+    before = _children_cpu()
     start = time.perf_counter()
-    done = subprocess.run([*COMMAND, "ci", *args], cwd=root, capture_output=True, text=True)
+    done = subprocess.run(
+        [*(command or COMMAND), "ci", *args], cwd=root, capture_output=True, text=True
+    )
     seconds = time.perf_counter() - start
+    LAST_CPU[0] = _children_cpu() - before
     if done.returncode not in (0, 1):
         raise SystemExit(f"meshcol ci failed ({done.returncode}): {done.stderr[-2000:]}")
     return seconds, done.stdout, done.stderr.strip().splitlines()[-1]
+
+
+def span(times: list[float], cold: float | None = None) -> str:
+    """``min-max s`` (and the ratio to ``cold``)."""
+    text = f"{min(times):.2f}-{max(times):.2f} s"
+    if cold is not None:
+        text += f" ({cold / max(times):.0f}x-{cold / min(times):.0f}x)"
+    return text
+
+
+def compare(
+    root: Path, files: list[Path], jobs: tuple[str, ...], rounds: int, other: list[str]
+) -> None:
+    """The warm and one-changed steps, this build (B) and ``other`` (A) alternated per round;
+    wall and CPU ranges of each."""
+    wall: dict[str, list[float]] = {f"{k} {w}": [] for k in "AB" for w in ("warm", "changed")}
+    cpu: dict[str, list[float]] = {key: [] for key in wall}
+    edit = len(files) // 2
+    for k in range(rounds):
+        for name in "AB" if k % 2 == 0 else "BA":
+            command = other if name == "A" else COMMAND
+            seconds, _, _ = meshcol(root, *jobs, command=command)
+            wall[f"{name} warm"].append(seconds)
+            cpu[f"{name} warm"].append(LAST_CPU[0])
+            path = files[edit]
+            edit += 1
+            path.write_text(box_obj(7.0 + k, name=path.stem))
+            seconds, _, line = meshcol(root, *jobs, command=command)
+            wall[f"{name} changed"].append(seconds)
+            cpu[f"{name} changed"].append(LAST_CPU[0])
+            print(
+                f"  round {k + 1} {name} one changed: {seconds:.2f} s, CPU {LAST_CPU[0]:.2f} s  {line}"
+            )
+    print(f"A = {' '.join(other)}; B = {' '.join(COMMAND)}")
+    for key in wall:
+        print(f"  {key:<10} wall {span(wall[key])}, CPU {span(cpu[key])}")
 
 
 def main() -> None:
@@ -91,6 +147,7 @@ def main() -> None:
     parser.add_argument(
         "--fresh", action="store_true", help="also a second cold run, compared but its times"
     )
+    parser.add_argument("--compare", help="another build's meshcol command line (A/B rounds)")
     args = parser.parse_args()
     if args.meshcol:
         COMMAND[:] = args.meshcol.split()
@@ -105,12 +162,14 @@ def main() -> None:
         jobs = ("-j", str(args.jobs), "--cache-dir", str(cache))
 
         cold, cold_report, line = meshcol(root, *jobs, "--report", "-")
-        print(f"cold:      {cold:7.2f} s   {line}")
+        print(f"cold:      {cold:7.2f} s, CPU {LAST_CPU[0]:.2f} s   {line}")
         if args.fresh:
             _, fresh, _ = meshcol(root, "-j", str(args.jobs), "--no-cache", "--report", "-")
             assert untimed(fresh) == untimed(cold_report), "--no-cache report differs"
             print("a second cold run (--no-cache) gives the same report but its times")
         warm_times, change_times, junit_times, json_times = [], [], [], []
+        warm_cpu: list[float] = []
+        change_cpu: list[float] = []
         junit, report = str(root.parent / "r.xml"), str(root.parent / "r.json")
         reference = cold_report  # the report of the tree as it is, as first computed
         for k in range(args.rounds):
@@ -119,7 +178,8 @@ def main() -> None:
             assert warm_report == reference, "the cached report differs from the computed one"
             seconds, _, line = meshcol(root, *jobs)
             warm_times.append(seconds)
-            print(f"warm, verdict:     {seconds:7.2f} s   {line}")
+            warm_cpu.append(LAST_CPU[0])
+            print(f"warm, verdict:     {seconds:7.2f} s, CPU {LAST_CPU[0]:.2f} s   {line}")
             for n, (times, outputs) in enumerate(
                 (
                     (change_times, ()),
@@ -131,32 +191,39 @@ def main() -> None:
                 path.write_text(box_obj(5.0 + k, name=path.stem))
                 seconds, _, line = meshcol(root, *jobs, *outputs)
                 times.append(seconds)
+                if not outputs:
+                    change_cpu.append(LAST_CPU[0])
                 if outputs and outputs[0] == "--report":
                     reference = Path(report).read_text()
                 print(
-                    f"1 changed {' '.join(outputs) or '(verdict)':<20}: {seconds:7.2f} s   {line}"
+                    f"1 changed {' '.join(outputs) or '(verdict)':<20}: {seconds:7.2f} s, "
+                    f"CPU {LAST_CPU[0]:.2f} s   {line}"
                 )
         print("every cached report == the report first computed for that tree, byte for byte")
+        if args.compare:
+            compare(root, files, jobs, args.rounds, args.compare.split())
+            commit(root, "the A/B rounds' edits")  # not in the 1% commit below
 
         touched = files[-max(1, args.assets // 100) :]
         for path in touched:
             path.write_text(box_obj(9.0, name=path.stem))
         commit(root, "1% of the assets")
         since, _, line = meshcol(root, *jobs, "--changed-since", "HEAD~1")
-        print(f"--changed-since HEAD~1 ({len(touched)} files), cache: {since:7.2f} s   {line}")
+        since_cpu = LAST_CPU[0]
+        print(
+            f"--changed-since HEAD~1 ({len(touched)} files), cache: {since:7.2f} s, "
+            f"CPU {since_cpu:.2f} s   {line}"
+        )
         nocache, _, line = meshcol(
             root, "-j", str(args.jobs), "--no-cache", "--changed-since", "HEAD~1"
         )
         print(f"--changed-since HEAD~1, --no-cache: {nocache:7.2f} s   {line}")
-
-        def span(times: list[float]) -> str:
-            return f"{min(times):.2f}-{max(times):.2f} s ({cold / max(times):.0f}x-{cold / min(times):.0f}x)"
-
         print(
-            f"summary: cold {cold:.2f} s; warm verdict {span(warm_times)}; one changed: "
-            f"verdict {span(change_times)}, --junit {span(junit_times)}, --report JSON "
-            f"{span(json_times)}; changed-since 1%: {since:.2f} s ({cold / since:.0f}x), "
-            f"without the cache {nocache:.2f} s"
+            f"summary: cold {cold:.2f} s; warm verdict {span(warm_times, cold)} (CPU "
+            f"{span(warm_cpu)}); one changed: verdict {span(change_times, cold)} (CPU "
+            f"{span(change_cpu)}), --junit {span(junit_times, cold)}, --report JSON "
+            f"{span(json_times, cold)}; changed-since 1%: {since:.2f} s ({cold / since:.0f}x, "
+            f"CPU {since_cpu:.2f} s), without the cache {nocache:.2f} s"
         )
     finally:
         if not args.keep:

@@ -1,7 +1,8 @@
 """meshcol: mesh collision analysis for asset pipelines.
 
 The public API is re-exported here and imported lazily, so ``import meshcol`` (and the
-command line's ``--help``) stays fast: trimesh, scipy and the native core load on first use.
+command line's ``--help``) stays fast: numpy, trimesh, scipy and the native core load on
+first use (``tests/test_imports.py`` holds it).
 
 Frames and signs are fixed once for the whole package: every point is in the world frame;
 ``distance >= 0``; penetration ``depth >= 0``; ``signed_distance = distance - depth``; a
@@ -21,21 +22,20 @@ from meshcol.errors import (
     MissingDependencyError,
     SceneError,
 )
-from meshcol.types import (
-    Body,
-    Box,
-    Capsule,
-    Cylinder,
-    Primitive,
-    Scene,
-    Sphere,
-    Spin,
-    Status,
-    TimeOfImpactStatus,
-)
 
 # public name -> module that defines it (imported on first use)
 _LAZY: dict[str, str] = {
+    # bodies, scenes and statuses (meshcol.types imports numpy)
+    "Body": "meshcol.types",
+    "Box": "meshcol.types",
+    "Capsule": "meshcol.types",
+    "Cylinder": "meshcol.types",
+    "Primitive": "meshcol.types",
+    "Scene": "meshcol.types",
+    "Sphere": "meshcol.types",
+    "Spin": "meshcol.types",
+    "Status": "meshcol.types",
+    "TimeOfImpactStatus": "meshcol.types",
     # mesh and scene loading, writing
     "load_mesh": "meshcol.io.mesh_read",
     "load_scene": "meshcol.io.scene",
@@ -126,16 +126,6 @@ __all__ = [
     "InvalidMeshError",
     "SceneError",
     "MissingDependencyError",
-    "Body",
-    "Primitive",
-    "Sphere",
-    "Spin",
-    "Box",
-    "Capsule",
-    "Cylinder",
-    "Scene",
-    "Status",
-    "TimeOfImpactStatus",
     *_LAZY,
 ]
 

@@ -70,7 +70,6 @@ def _ignored_rules(resolved: Resolved, config: Config, command: str) -> tuple[st
 def _settings(resolved: Resolved, config: Config, command: str) -> dict[str, Any]:
     """The settings of one command, checked (rule names, levels, ignore entries, target):
     a bad one is a ConfigError naming the key and its line."""
-    from meshcol.analysis.check_policy import failing_rules, parse_ignore_rule
     from meshcol.analysis.rules import UnknownRuleError, select_rules
     from meshcol.io.targets import load_target
 
@@ -95,6 +94,8 @@ def _settings(resolved: Resolved, config: Config, command: str) -> dict[str, Any
             raise _origin_error(resolved, config, "inspect.fail-on", str(exc)) from None
         out["fail-on"] = [rule for rule in fail_on if rule not in ignored]
     if command == "check":
+        from meshcol.analysis.check_policy import failing_rules, parse_ignore_rule
+
         try:
             rules = failing_rules(values["fail-on"], target=values["target"] is not None)
         except UnknownRuleError as exc:

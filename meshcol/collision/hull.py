@@ -679,16 +679,15 @@ def _intersect(normals, offsets, interior, scale):
 
 def _merge_close(points: np.ndarray, radius: float) -> np.ndarray:
     """One representative per cluster of points closer than ``radius`` (the farthest out)."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
     from scipy.spatial import cKDTree
+
+    from meshcol.geometry.graph import connected_components
 
     pairs = cKDTree(points).query_pairs(radius, output_type="ndarray")
     if len(pairs) == 0:
         return points
     n = len(points)
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-    _, labels = connected_components(graph, directed=False)
+    _, labels = connected_components(n, pairs)
     # keep, per cluster, the point farthest from the centroid: the merged polytope then
     # still contains the cluster up to ``radius``
     centroid = points.mean(axis=0)

@@ -124,10 +124,9 @@ def polygon_labels(vertices: np.ndarray, faces: np.ndarray, tolerance: float) ->
     Triangles sharing an edge are paired by sorting their undirected edges; a pair is
     coplanar when both far vertices lie within ``tolerance`` of the other's plane and the
     normals point the same way. Polygons are the connected components of the coplanar pairs
-    (``scipy.sparse.csgraph``), all vectorised.
+    (:func:`meshcol.geometry.graph.connected_components`), all vectorised.
     """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
+    from meshcol.geometry.graph import connected_components
 
     faces = np.asarray(faces, dtype=np.int64)
     m = len(faces)
@@ -157,8 +156,7 @@ def polygon_labels(vertices: np.ndarray, faces: np.ndarray, tolerance: float) ->
     coplanar = (
         (d12 <= limit) & (d21 <= limit) & (np.einsum("ij,ij->i", normals[f1], normals[f2]) > 0)
     )
-    graph = coo_matrix((np.ones(int(coplanar.sum())), (f1[coplanar], f2[coplanar])), shape=(m, m))
-    _, labels = connected_components(graph, directed=False)
+    _, labels = connected_components(m, np.stack([f1[coplanar], f2[coplanar]], axis=1))
     return labels.astype(np.int64)
 
 

@@ -200,6 +200,7 @@ def _run_files(
     stays responsive to signals."""
     from meshcol.decomposition.engines import prepare_engine
     from meshcol.decomposition.executor import make_executor
+    from meshcol.decomposition.jobs import ENGINE_PRELOAD
 
     total = None if _is_manifest(paths) else len(paths)
     counter = _FileCounter(progress, total)
@@ -212,6 +213,7 @@ def _run_files(
         timeout=run.timeout,
         prepare=functools.partial(prepare_engine, options.engine),
         address=run.ray_address,
+        preload=ENGINE_PRELOAD,
     )
     try:
         if run.jobs > 1 or run.executor != "local":
@@ -432,14 +434,16 @@ def _decompose_missing(
     """The meshes the cache did not have, one worker task each, stored as they arrive."""
     from meshcol.decomposition import cache
     from meshcol.decomposition.engines import prepare_engine
-    from meshcol.decomposition.jobs import WorkerPool
+    from meshcol.decomposition.jobs import ENGINE_PRELOAD, WorkerPool
 
     report = progress or (lambda message: None)
     cache_root = run.cache_root()
     done = len(canonical) - len(missing)
     report(f"decompose: {done}/{len(canonical)} meshes")
     prepare = functools.partial(prepare_engine, task_options.options.engine)
-    pool: Any = WorkerPool(decompose_task, run.jobs, timeout=run.timeout, prepare=prepare)
+    pool: Any = WorkerPool(
+        decompose_task, run.jobs, timeout=run.timeout, prepare=prepare, preload=ENGINE_PRELOAD
+    )
     tasks = ((canonical[i][0], [canonical[i]], task_options) for i in missing)
     try:
         with contextlib.closing(pool.run(tasks)) as outcomes:

@@ -29,13 +29,12 @@ import sys
 import uuid
 import zipfile
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
-from meshcol.decomposition.fidelity import METRICS_VERSION
-from meshcol.decomposition.result import Decomposition, Fidelity
 from meshcol.io.report import atomic_path
+
+if TYPE_CHECKING:  # numpy and the results load with an entry: a warm `meshcol ci` needs neither
+    from meshcol.decomposition.result import Decomposition
 
 __all__ = [
     "default_cache_dir",
@@ -150,6 +149,11 @@ def read_bytes(name: str, cache_dir: str | os.PathLike[str] | None = None) -> by
 
 def load(key: str, cache_dir: str | os.PathLike[str] | None = None) -> Decomposition | None:
     """The cached decomposition for ``key``, or None when absent or unreadable."""
+    import numpy as np
+
+    from meshcol.decomposition.fidelity import METRICS_VERSION
+    from meshcol.decomposition.result import Decomposition, Fidelity
+
     source = _read(key, cache_dir)
     if source is None:
         return None
@@ -190,6 +194,10 @@ def load(key: str, cache_dir: str | os.PathLike[str] | None = None) -> Decomposi
 def store(result: Decomposition, cache_dir: str | os.PathLike[str] | None = None) -> Path | str:
     """Write ``result`` under its key, atomically (see the module's notes); returns where the
     entry is (a Path, or the entry's URL)."""
+    import numpy as np
+
+    from meshcol.decomposition.fidelity import METRICS_VERSION
+
     header = {
         "key": result.cache_key,
         "engine": result.engine,

@@ -109,8 +109,12 @@ def make_executor(
     threads_per_job: int | None = None,
     prepare: Callable[[], None] | None = None,
     address: str | None = None,
+    preload: tuple[str, ...] | None = None,
 ) -> Executor:
     """The executor ``kind`` (``local`` or ``ray``) for ``fn`` over ``jobs`` parallel tasks.
+
+    ``preload``: local only, what the workers' fork server imports first (default the
+    task's module: :func:`~meshcol.decomposition.jobs.task_preload`).
 
     ``address``: Ray only, the cluster to join (``ray://host:10001``, ``host:6379``, ``auto``);
     default a local Ray of ``jobs`` CPUs on 127.0.0.1, stopped on ``close()``.
@@ -126,7 +130,12 @@ def make_executor(
         if address is not None:
             raise ValueError("a Ray address needs the ray executor")
         return WorkerPool(
-            fn, jobs, timeout=timeout, threads_per_job=threads_per_job, prepare=prepare
+            fn,
+            jobs,
+            timeout=timeout,
+            threads_per_job=threads_per_job,
+            prepare=prepare,
+            preload=preload,
         )
     if kind == "ray":
         return RayExecutor(

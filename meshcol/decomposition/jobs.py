@@ -253,24 +253,37 @@ def _sigint_blocked() -> Iterator[None]:
         signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
-def _context(env: dict[str, str]) -> Any:
+#: What the fork server of a decompose run imports before it forks the workers: the heavy
+#: modules every decomposition needs (not the engines: they load OpenMP, whose thread count
+#: each worker sets first).
+ENGINE_PRELOAD = (
+    "meshcol.decomposition.decompose",
+    "meshcol.decomposition.jobs",
+    "scipy.spatial",
+    "manifold3d",
+    "trimesh",
+)
+
+
+def task_preload(fn: Callable[[Any], Any]) -> tuple[str, ...]:
+    """What the fork server imports for the tasks of ``fn`` by default: this module and the
+    meshcol module that defines ``fn`` (the task imports the rest it needs). An inspect or
+    ``meshcol ci`` pool then imports no scipy or trimesh it would not use (issue 31)."""
+    module = getattr(getattr(fn, "func", fn), "__module__", None) or ""
+    extra = (module,) if module.startswith("meshcol.") and module != __name__ else ()
+    return (__name__, *extra)
+
+
+def _context(env: dict[str, str], preload: tuple[str, ...] = ENGINE_PRELOAD) -> Any:
     methods = multiprocessing.get_all_start_methods()
     if "forkserver" not in methods:
         return multiprocessing.get_context("spawn")  # each worker applies `env` first
     ctx = multiprocessing.get_context("forkserver")
-    # Workers fork from a server that has already imported the heavy modules (not the engines:
-    # they load OpenMP, whose thread count each worker sets first). The server inherits this
-    # process's environment when it starts, and its preloaded numpy sizes its thread pool
-    # then: start it with the workers' thread settings.
-    ctx.set_forkserver_preload(
-        [
-            "meshcol.decomposition.decompose",
-            "meshcol.decomposition.jobs",
-            "scipy.spatial",
-            "manifold3d",
-            "trimesh",
-        ]
-    )
+    # Workers fork from a server that has already imported ``preload``. The server inherits
+    # this process's environment when it starts, and its preloaded numpy sizes its thread
+    # pool then: start it with the workers' thread settings. One server serves the process:
+    # the first pool's preload stays (a later pool's workers import what they miss).
+    ctx.set_forkserver_preload(list(preload))
     # The server runs `python -c`, which puts the working folder first on sys.path before it
     # imports the preloaded modules: run from a folder that holds a `meshcol/` directory (the
     # repository's root, with a regular install), the workers imported that instead of the
@@ -345,11 +358,12 @@ def worker_env(jobs: int, threads_per_job: int | None = None) -> dict[str, str]:
 class WorkerPool:
     """Worker processes for :func:`run_tasks`, which can start before the tasks are known.
 
-    ``start()`` forks the workers (from a ``forkserver`` that has imported the heavy modules)
-    and lets each run ``prepare`` (for instance, import the engine), so their start-up
-    overlaps the caller's own work (reading the input files); ``run(tasks)`` then feeds them.
-    A worker that exceeds ``timeout`` on a task is killed and replaced. Use as a context
-    manager, or call ``close()``.
+    ``start()`` forks the workers (from a ``forkserver`` that has imported ``preload``:
+    default :func:`task_preload`, :data:`ENGINE_PRELOAD` for decompose) and lets each run
+    ``prepare`` (for instance, import the engine), so their start-up overlaps the caller's
+    own work (reading the input files); ``run(tasks)`` then feeds them. A worker that
+    exceeds ``timeout`` on a task is killed and replaced. Use as a context manager, or call
+    ``close()``.
     """
 
     def __init__(
@@ -360,10 +374,12 @@ class WorkerPool:
         timeout: float | None = None,
         threads_per_job: int | None = None,
         prepare: Callable[[], None] | None = None,
+        preload: tuple[str, ...] | None = None,
     ) -> None:
         if jobs < 1:
             raise ValueError(f"jobs must be at least 1, got {jobs}")
         self.fn, self.jobs, self.timeout, self.prepare = fn, jobs, timeout, prepare
+        self.preload = task_preload(fn) if preload is None else preload
         self.env = worker_env(jobs, threads_per_job)
         self._ctx: Any = None
         self._idle: list[_Worker] = []
@@ -383,7 +399,7 @@ class WorkerPool:
 
     def _new_worker(self) -> _Worker:
         if self._ctx is None:  # the fork server starts with the first worker, not before
-            self._ctx = _context(self.env)
+            self._ctx = _context(self.env, self.preload)
         return _Worker(self._ctx, self.fn, self.env, self.prepare)
 
     def run(self, tasks: Iterable[Any]) -> Iterator[TaskOutcome]:

@@ -175,14 +175,9 @@ def duplicate_face_count(faces: np.ndarray) -> int:
 
 
 def component_count(faces: np.ndarray, vertex_count: int) -> int:
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
+    from meshcol.geometry.graph import connected_components
 
-    edges = faces[:, [0, 1, 1, 2]].reshape(-1, 2)
-    graph = coo_matrix(
-        (np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(vertex_count, vertex_count)
-    )
-    _, labels = connected_components(graph, directed=False)
+    _, labels = connected_components(vertex_count, faces[:, [0, 1, 1, 2]].reshape(-1, 2))
     return len(np.unique(labels[np.unique(faces)]))
 
 
@@ -259,13 +254,14 @@ def _component_parity(m: int, pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray
     from the root of the breadth-first forest, summed by pointer jumping (log depth rounds
     of array operations, no loop over faces)."""
     from scipy.sparse import csr_matrix
-    from scipy.sparse.csgraph import breadth_first_order, connected_components
+    from scipy.sparse.csgraph import breadth_first_order
+
+    from meshcol.geometry.graph import connected_components
 
     links = np.concatenate([pairs, pairs[:, [1, 0, 2]]])
     _, first = np.unique(links[:, 0] * m + links[:, 1], return_index=True)
     links = links[first]  # one link per ordered face pair (two shared edges: the first)
-    graph = csr_matrix((np.ones(len(links)), (links[:, 0], links[:, 1])), shape=(m, m))
-    count, label = connected_components(graph, directed=False)
+    count, label = connected_components(m, links[:, :2])
     _, roots = np.unique(label, return_index=True)
     # a virtual root (face m) above every component's first face, one search for all
     rows = np.concatenate([links[:, 0], np.full(count, m)])

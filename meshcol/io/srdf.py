@@ -10,7 +10,6 @@ from __future__ import annotations
 import os
 from collections.abc import Iterable
 from pathlib import Path
-from xml.sax.saxutils import quoteattr
 
 from meshcol.errors import InputFileError, SceneError
 from meshcol.io.report import atomic_write
@@ -38,6 +37,8 @@ def srdf_text(robot: str, pairs: Iterable[tuple[str, str, str]], comment: str | 
     str
         UTF-8 XML text with a trailing newline.
     """
+    from xml.sax.saxutils import quoteattr  # urllib, email, http: only when writing
+
     lines = ['<?xml version="1.0" encoding="UTF-8"?>', f"<robot name={quoteattr(robot)}>"]
     if comment:
         lines.append(f"    <!-- {comment.replace('--', '- -')} -->")
