@@ -403,6 +403,7 @@ def run_ci(
         root=root,
         changed_since=changed_since,
         skipped=skipped,
+        docs_url=config.get("docs-url"),
     )
 
 

@@ -124,6 +124,8 @@ class CiReport:
     root: str | os.PathLike[str]
     changed_since: str | None = None
     skipped: int = 0
+    #: the configuration's ``docs-url`` (the rules' links in SARIF); not in the JSON report
+    docs_url: str | None = None
 
     @property
     def exit_code(self) -> int:
@@ -220,4 +222,19 @@ class CiReport:
             if "suite" in run.result
             for warning in run.result["suite"]["warnings"]
         )
-        return CiSuite("ci", tuple(cases), self.settings, warnings=warnings, verdict=self.verdict())
+        # the registered rules every job's command can report (SARIF describes them)
+        rules = {
+            rule_id: rule
+            for run in self.runs
+            if "suite" in run.result
+            for rule_id, rule in (run.result["suite"].get("rules") or {}).items()
+        }
+        return CiSuite(
+            "ci",
+            tuple(cases),
+            self.settings,
+            warnings=warnings,
+            verdict=self.verdict(),
+            rules=dict(sorted(rules.items())),
+            docs_url=self.docs_url,
+        )

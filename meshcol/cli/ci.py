@@ -92,7 +92,11 @@ def output_files(
     "[default: the config's cache-dir, else the user cache]",
 )
 @click.option("--no-cache", is_flag=True, help="Neither read nor write the result cache.")
-@jobs_option("Jobs run at once, each a task in a worker process (1: all in this process).")
+@jobs_option(
+    "Jobs run at once, each a task in a worker process (1: all in this process).  "
+    "[default: the config's jobs, else 1]",
+    default=None,
+)
 @click.option(
     "--report",
     type=click.Path(dir_okay=False, allow_dash=True),
@@ -131,7 +135,7 @@ def ci(
     changed_since: str | None,
     cache_dir: str | None,
     no_cache: bool,
-    jobs: int,
+    jobs: int | None,
     report: str | None,
     junit: str | None,
     github: bool,
@@ -162,8 +166,11 @@ def ci(
       meshcol ci --set shape=decomposed --set check.clearance=0.01
     """
     from meshcol.analysis.ci import changed_files, repository_root, run_ci
+    from meshcol.io.config import run_settings
     from meshcol.io.formats import write_report
     from meshcol.io.outputs import check_outputs
+
+    workers = run_settings(config, {"jobs": (jobs, "flag -j")})["jobs"][0]
 
     if out_dir is not None:
         os.makedirs(out_dir, exist_ok=True)
@@ -183,7 +190,7 @@ def ci(
             changed_since=changed_since,
             cache_dir=cache_dir,
             use_cache=not no_cache,
-            jobs=jobs,
+            jobs=workers,
             progress=progress,
         )
     finally:
