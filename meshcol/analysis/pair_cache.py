@@ -54,13 +54,20 @@ def body_digests(placed: PlacedColliders, bodies: np.ndarray) -> dict[int, bytes
     in ``bodies`` (indices into ``placed.colliders.bodies``)."""
     colliders = placed.colliders
     shapes = colliders.shapes
-    offsets = colliders.body_part_offsets
+    offsets = colliders.body_part_offsets.tolist()
+    vertex_offsets = np.asarray(shapes.offsets, dtype=np.int64)
+    # every part's rows as bytes, sliced per body without copies
+    vertices = _rows(shapes.vertices, np.float64, 24)
+    kinds = _rows(shapes.kinds, np.int8, 1)
+    params = _rows(shapes.params, np.float64, 32)
+    labels = _rows(colliders.part_label, np.int64, 8)
+    poses = _rows(placed.part_poses, np.float64, 128)
+    starts = vertex_offsets.tolist()
     out: dict[int, bytes] = {}
     for i in np.unique(bodies).tolist():
         body = colliders.bodies[i]
-        first, last = int(offsets[i]), int(offsets[i + 1])
-        h = hashlib.blake2b(digest_size=16)
-        h.update(colliders.kinds[i].encode() + b"\0")
+        first, last = offsets[i], offsets[i + 1]
+        h = hashlib.blake2b(colliders.kinds[i].encode() + b"\0", digest_size=16)
         if body.primitive is not None:
             h.update(repr(body.primitive).encode() + b"\0")
         else:
@@ -68,15 +75,22 @@ def body_digests(placed: PlacedColliders, bodies: np.ndarray) -> dict[int, bytes
             _update(h, body.faces, np.int64)
         if body.part_faces is not None:
             _update(h, body.part_faces, np.int64)
-        vertex_from, vertex_to = int(shapes.offsets[first]), int(shapes.offsets[last])
-        _update(h, shapes.vertices[vertex_from:vertex_to], np.float64)
-        _update(h, np.asarray(shapes.offsets[first : last + 1]) - vertex_from, np.int64)
-        _update(h, shapes.kinds[first:last], np.int8)
-        _update(h, shapes.params[first:last], np.float64)
-        _update(h, colliders.part_label[first:last], np.int64)
-        _update(h, placed.part_poses[first:last], np.float64)  # the pose, and part offsets
+        _update(h, vertex_offsets[first : last + 1] - starts[first], np.int64)
+        h.update(vertices[starts[first] : starts[last]])
+        h.update(kinds[first:last])
+        h.update(params[first:last])
+        h.update(labels[first:last])
+        h.update(poses[first:last])  # the pose, and part offsets
         out[i] = h.digest()
     return out
+
+
+def _rows(array: Any, dtype: Any, width: int) -> memoryview:
+    """``array`` as one byte row per item (``width`` bytes each), for slicing by item."""
+    values = np.ascontiguousarray(array, dtype=dtype)
+    if values.size == 0:
+        return memoryview(b"")  # every slice of it is empty, as every body's rows are
+    return values.reshape(-1).view(np.uint8).data.cast("B", (len(values), width))
 
 
 def _update(h: Any, array: Any, dtype: Any) -> None:

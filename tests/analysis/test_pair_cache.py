@@ -145,3 +145,18 @@ def test_select_rows_keeps_each_rows_part_pairs(tmp_path):
         mine = part.part_pairs[part.part_row == new]
         theirs = table.part_pairs[table.part_row == old]
         assert np.array_equal(mine, theirs)
+
+
+def test_primitive_only_scenes_and_every_pose_change_are_keyed(tmp_path):
+    """Bodies of primitives only (no hull vertices at all) are keyed too, and a turn as
+    small as one ulp of the pose is another key."""
+    bodies = [body(f"p{i}", 2, pose(0.6 * i, 0, 0)) for i in range(4)]
+    cache = PairCache(tmp_path / "store", "boxes")
+    cold, data = report_bytes(bodies, cache)
+    assert report_bytes(bodies, cache)[0] == cold and cache.counts["measured"] == 0
+    nudged = list(bodies)
+    turned = pose(0.6, 0, 0)
+    turned[0, 3] = np.nextafter(turned[0, 3], 1.0)
+    nudged[1] = dataclasses.replace(bodies[1], pose=turned)
+    assert report_bytes(nudged, cache)[0] == report_bytes(nudged)[0]
+    assert cache.counts["measured"] == pairs_with(data, {"p1"}) > 0
