@@ -18,14 +18,14 @@ import trimesh
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests" / "geometry"))
 
-from orientation_reference import reference_orientation  # noqa: E402
+from orientation_reference import reference_orientation
 
-from meshcol.collision.orientation import orient_consistently  # noqa: E402
+from meshcol.collision.orientation import orient_consistently
 
 
 def shuffled_torus(faces: int, seed: int = 29) -> tuple[np.ndarray, np.ndarray]:
     """A torus of about ``faces`` faces, half of them reversed at random."""
-    minor = max(3, int(round((faces / 8) ** 0.5)))
+    minor = max(3, round((faces / 8) ** 0.5))
     major = max(3, faces // (2 * minor))
     mesh = trimesh.creation.torus(1.0, 0.3, major_sections=major, minor_sections=minor)
     f = np.asarray(mesh.faces, dtype=np.int64)
