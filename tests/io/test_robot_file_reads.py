@@ -76,7 +76,9 @@ def test_a_texture_that_reads_well_still_compiles(tmp_path, monkeypatch, mujoco)
     ],
     ids=["file", "texturedir", "cube-face-assetdir"],
 )
-def test_a_texture_that_is_a_pipe_is_refused(tmp_path, monkeypatch, mujoco, texture, compiler, name):
+def test_a_texture_that_is_a_pipe_is_refused(
+    tmp_path, monkeypatch, mujoco, texture, compiler, name
+):
     monkeypatch.chdir(tmp_path)
     (tmp_path / name).parent.mkdir(exist_ok=True)
     for folder in {(tmp_path / name).parent}:
