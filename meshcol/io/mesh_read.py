@@ -202,7 +202,8 @@ def _group_body(
             vertices, faces = element.vertices, element.faces
         # einsum, not matmul: a (n, 3) @ (3, 3) goes to BLAS, whose threads stall on a
         # loaded machine (seconds for a million points)
-        vertices = np.einsum("ij,nj->ni", origin[:3, :3], vertices) + origin[:3, 3]
+        vertices = np.einsum("ij,nj->ni", origin[:3, :3], vertices)
+        vertices += origin[:3, 3]  # in place: a second array of a million points costs
         check_magnitude(vertices, "vertex", source)
         if np.linalg.det(origin[:3, :3]) < 0:
             faces = faces[:, ::-1]
