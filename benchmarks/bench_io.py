@@ -27,7 +27,9 @@ Rounds alternate the readers; the range (min-max) over rounds is printed with th
 reader in a fresh single-process child (``PYTHON``, e.g. ``/work/base/.venv/bin/python``, the
 build before the polygon splitter moved into the core, then this one, alternated round by
 round); CPU time (``time.process_time``, what a loaded machine moves least) and wall time of
-usd-core alone, ``load_mesh(merge=False)`` and ``load_mesh``.
+usd-core alone, usd-core plus the least triangulation any reader needs (the quads fanned by
+numpy indexing, the points transformed: the floor), ``load_mesh(merge=False)`` and
+``load_mesh``.
 """
 
 from __future__ import annotations
@@ -306,10 +308,22 @@ def compare(label: str, readers: dict, rounds: int, per: int) -> None:
         )
 
 
+def usd_core_fanned(path: Path) -> list:
+    """usd-core alone, then the least any reader must add: every quad fanned into two
+    triangles by numpy indexing (no convexity test), every point turned into the world."""
+    out = []
+    for points, _, indices in usd_core_alone(path):
+        quads = indices.reshape(-1, 4)
+        triangles = quads[:, [0, 1, 2, 0, 2, 3]].reshape(-1, 3)
+        out.append((np.einsum("ij,nj->ni", np.eye(3), points), triangles))
+    return out
+
+
 def usd_child(path: Path) -> None:
     """One fresh process's CPU and wall times of the USD readers (``--usd-child``), as JSON."""
     readers = {
         "usd-core alone": lambda: usd_core_alone(path),
+        "usd-core + fan": lambda: usd_core_fanned(path),
         "load_mesh merge=False": lambda: load_mesh(path, merge=False),
         "load_mesh": lambda: load_mesh(path),
     }
