@@ -27,6 +27,9 @@ Units are metres (glTF's), Y up as the file has it: ``Scene.units`` is ``"m"``.
 from __future__ import annotations
 
 import base64
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 from typing import Any
 from urllib.parse import unquote
@@ -46,6 +49,7 @@ __all__ = [
     "node_worlds",
     "read_glb_scene",
     "read_gltf_scene",
+    "render_meshes_only",
 ]
 
 KHR_BODIES = "KHR_physics_rigid_bodies"
@@ -61,6 +65,21 @@ _DTYPES = {5120: "<i1", 5121: "<u1", 5122: "<i2", 5123: "<u2", 5125: "<u4", 5126
 _COMPRESSIONS = {"KHR_draco_mesh_compression", "EXT_meshopt_compression"}
 #: Most nodes one file may hold (a bound on the work of a hostile file).
 MAX_NODES = 1_000_000
+
+
+_RENDER_ONLY: ContextVar[bool] = ContextVar("meshcol_gltf_render_only", default=False)
+
+
+@contextmanager
+def render_meshes_only() -> Iterator[None]:
+    """Within it, a glTF file reads as its mesh nodes whatever physics it has (the scene
+    readers return None): ``--to gltf-physics`` makes new colliders from the render meshes,
+    not from the colliders it replaces."""
+    token = _RENDER_ONLY.set(True)
+    try:
+        yield
+    finally:
+        _RENDER_ONLY.reset(token)
 
 
 def read_gltf_scene(file: Path, source: str) -> FileScene | None:
@@ -277,7 +296,7 @@ def _legacy_omi(extensions: dict) -> tuple[dict, str]:
 def _scene(
     document: Any, binary: bytes | None, file: Path, source: str, kind: str
 ) -> FileScene | None:
-    if not has_physics(document):
+    if not has_physics(document) or _RENDER_ONLY.get():
         return None
     check_references(document, kind, source)
     gltf = GltfFile(document, binary, file, source, kind)

@@ -80,32 +80,40 @@ def gltf_physics_path(source: str, out_dir: str) -> str:
     return str(Path(out_dir) / f"{Path(source).stem}.glb")
 
 
-def write_gltf_physics(source: str, colliders: Sequence[NodeColliders], path: str) -> None:
-    """Write the asset ``source`` with ``colliders`` added as one GLB at ``path`` (atomic).
+def write_gltf_physics(source: str, colliders: Sequence[NodeColliders], path: str) -> str:
+    """Write the asset ``source`` with ``colliders`` as one GLB at ``path`` (atomic).
+
+    Colliders the asset already has (either extension) are replaced: taken out with what
+    existed only for them (:func:`meshcol.io.gltf_physics_strip.strip_colliders`), everything
+    else kept.
+
+    Returns
+    -------
+    str
+        What was replaced (``replaced 2 KHR_physics_rigid_bodies and 2 OMI_physics_body
+        collider(s) already in the asset``), empty when the asset had none.
 
     Raises
     ------
     InvalidMeshError
-        The asset already has physics colliders, or a body names no mesh node of it.
+        A body that is no mesh node of the asset.
     """
+    from meshcol.io.gltf_physics_strip import strip_colliders
     from meshcol.io.report import atomic_path
 
     file = Path(source)
     document, binary = read_document(file, source)
     kind = "GLB" if file.suffix.lower() == ".glb" else "GLTF"
-    if has_physics(document):
-        raise InvalidMeshError(
-            "--to gltf-physics: the asset already has physics colliders (KHR_physics_rigid_"
-            "bodies or OMI_physics_body); write into an asset without them",
-            source,
-        )
     document = copy.deepcopy(document)
     gltf = GltfFile(document, binary, file, source, kind)
+    owners = _render_nodes(gltf, [c.body for c in colliders])  # before any node is renumbered
+    stripped = strip_colliders(document) if has_physics(document) else None
+    if stripped is not None and stripped.nodes:
+        owners = [stripped.renumbered[k] for k in owners]
     out = _Builder(gltf)
-    out.pack_buffers()
+    out.pack_buffers(compact=stripped is not None and bool(stripped.colliders))
     worlds, _ = node_worlds(gltf)
     nodes = out.nodes
-    owners = _render_nodes(gltf, [c.body for c in colliders])
     for entry, k in zip(colliders, owners):
         base = _node_name(nodes, k)
         inverse = np.linalg.inv(worlds[k])
@@ -117,6 +125,7 @@ def write_gltf_physics(source: str, colliders: Sequence[NodeColliders], path: st
         raise InvalidMeshError(f"--to gltf-physics wrote an invalid extension: {problems[0]}")
     with atomic_path(path) as tmp, open(tmp, "wb") as f:
         f.write(data)
+    return stripped.summary() if stripped is not None else ""
 
 
 def physics_schema_problems(document: Any) -> list[str]:
@@ -144,6 +153,12 @@ def physics_schema_problems(document: Any) -> list[str]:
             where = "".join(f"/{p}" for p in error.absolute_path)
             problems.append(f"{pointer}{where}: {error.message}")
     return problems
+
+
+def _shapes(document: dict, name: str) -> list:
+    container = document.get("extensions", {}).get(name)
+    shapes = container.get("shapes") if isinstance(container, dict) else None
+    return shapes if isinstance(shapes, list) else []
 
 
 def _node_name(nodes: list, k: int) -> str:
@@ -208,8 +223,9 @@ class _Builder:
         self.document = gltf.document
         self.nodes: list = gltf.items("nodes")
         self.blob = bytearray()
-        self.khr_shapes: list[dict[str, Any]] = []
-        self.omi_shapes: list[dict[str, Any]] = []
+        # the shapes an asset keeps (its triggers'), the new ones after them
+        self.khr_shapes: list[dict[str, Any]] = list(_shapes(self.document, KHR_SHAPES))
+        self.omi_shapes: list[dict[str, Any]] = list(_shapes(self.document, OMI_SHAPE))
 
     def _append(self, data: bytes, target: int | None = None) -> int:
         """A new bufferView over ``data`` (4-byte aligned) in buffer 0; its index."""
@@ -222,18 +238,29 @@ class _Builder:
         views.append(view)
         return len(views) - 1
 
-    def pack_buffers(self) -> None:
+    def pack_buffers(self, compact: bool = False) -> None:
         """Every input buffer into the one binary chunk, views re-pointed; image files
-        embedded."""
-        buffers = self.gltf.items("buffers")
-        offsets = []
-        for k in range(len(buffers)):
-            self.blob += b"\x00" * (-len(self.blob) % 4)
-            offsets.append(len(self.blob))
-            self.blob += self.gltf.buffer(k)
-        for view in self.gltf.items("bufferViews"):
-            view["byteOffset"] = int(view.get("byteOffset", 0)) + offsets[view["buffer"]]
-            view["buffer"] = 0
+        embedded. ``compact``: only the bytes of the views there are (after colliders were
+        taken out), each view 4-byte aligned."""
+        if compact:
+            for view in self.gltf.items("bufferViews"):
+                start = int(view.get("byteOffset", 0))
+                end = start + int(view.get("byteLength", 0))
+                data = self.gltf.buffer(view["buffer"])[start:end]
+                self.blob += b"\x00" * (-len(self.blob) % 4)
+                view["byteOffset"] = len(self.blob)
+                view["buffer"] = 0
+                self.blob += data
+        else:
+            buffers = self.gltf.items("buffers")
+            offsets = []
+            for k in range(len(buffers)):
+                self.blob += b"\x00" * (-len(self.blob) % 4)
+                offsets.append(len(self.blob))
+                self.blob += self.gltf.buffer(k)
+            for view in self.gltf.items("bufferViews"):
+                view["byteOffset"] = int(view.get("byteOffset", 0)) + offsets[view["buffer"]]
+                view["buffer"] = 0
         for k, image in enumerate(self.gltf.items("images")):
             uri = image.get("uri") if isinstance(image, dict) else None
             if isinstance(uri, str) and not uri.startswith("data:"):
@@ -326,9 +353,9 @@ class _Builder:
         used = document.setdefault("extensionsUsed", [])
         wanted = [KHR_BODIES, OMI_BODY, OMI_SHAPE]
         if self.khr_shapes:
-            extensions[KHR_SHAPES] = {"shapes": self.khr_shapes}
+            extensions[KHR_SHAPES] = {**extensions.get(KHR_SHAPES, {}), "shapes": self.khr_shapes}
             wanted.insert(1, KHR_SHAPES)
-        extensions[OMI_SHAPE] = {"shapes": self.omi_shapes}
+        extensions[OMI_SHAPE] = {**extensions.get(OMI_SHAPE, {}), "shapes": self.omi_shapes}
         used.extend(name for name in wanted if name not in used)
         self.blob += b"\x00" * (-len(self.blob) % 4)
         document["buffers"] = [{"byteLength": len(self.blob)}] if self.blob else []

@@ -155,13 +155,23 @@ def test_the_khronos_validator_finds_no_error(asset: Path, tmp_path: Path) -> No
     out = tmp_path / "out"
     assert run("hull", str(asset), "--out-dir", str(out), "--to", "gltf-physics")[0] == 0
     assert run("fit", str(asset), "--out-dir", str(tmp_path / "f"), "--to", "gltf-physics")[0] == 0
+    # the hulls replaced by fits (the old colliders, their nodes, meshes and bytes taken out)
+    again = (
+        "fit",
+        str(out / "props.glb"),
+        "--out-dir",
+        str(tmp_path / "r"),
+        "--to",
+        "gltf-physics",
+    )
+    assert run(*again)[0] == 0
     script = (
         "const v = require('gltf-validator'); const fs = require('fs');"
         "v.validateBytes(new Uint8Array(fs.readFileSync(process.argv[1])))"
         ".then(r => console.log(JSON.stringify(r.issues)))"
         ".catch(e => { console.error(String(e)); process.exit(3); });"
     )
-    for path in (out / "props.glb", tmp_path / "f" / "props.glb"):
+    for path in (out / "props.glb", tmp_path / "f" / "props.glb", tmp_path / "r" / "props.glb"):
         done = subprocess.run(
             [node, "-e", script, str(path)],
             env={**os.environ, "NODE_PATH": str(modules)},
