@@ -114,10 +114,12 @@ def write_gltf_physics(source: str, colliders: Sequence[NodeColliders], path: st
     out.pack_buffers(compact=stripped is not None and bool(stripped.colliders))
     worlds, _ = node_worlds(gltf)
     nodes = out.nodes
+    numbered: dict[int, int] = {}  # a node of several primitives is several bodies
     for entry, k in zip(colliders, owners):
         base = _node_name(nodes, k)
         inverse = np.linalg.inv(worlds[k])
-        for j, part in enumerate(entry.parts):
+        for part in entry.parts:
+            j = numbered[k] = numbered.get(k, -1) + 1
             out.collider(k, f"{base}_collider_{j:02d}", part, worlds[k], inverse)
     data = out.glb()
     problems = physics_schema_problems(out.document)
@@ -167,28 +169,23 @@ def _node_name(nodes: list, k: int) -> str:
 
 
 def _render_nodes(gltf: GltfFile, bodies: list[str]) -> list[int]:
-    """The mesh node each body was read from: the file's only mesh node for a body named by
-    the stem, else the mesh node named after ``<stem>/``."""
-    nodes = gltf.items("nodes")
-    meshes = [k for k, n in enumerate(nodes) if isinstance(n, dict) and "mesh" in n]
-    by_name: dict[str, list[int]] = {}
-    for k in meshes:
-        by_name.setdefault(_node_name(nodes, k), []).append(k)
-    stem = gltf.file.stem
+    """The index of the mesh node each body was read from: the asset's mesh nodes read as
+    :func:`meshcol.io.mesh_read.load_mesh` reads them, each with its node index
+    (:func:`meshcol.io.gltf.mesh_node_indices`) and the body name it gets; names are only
+    how a body is looked up, so repeated and missing node names match too."""
+    from meshcol.io.gltf import mesh_node_indices
+    from meshcol.io.mesh_read import node_body_names
+
+    indexed = mesh_node_indices(gltf.file, gltf.source)
+    names = node_body_names(gltf.file, [node[0] for _, node in indexed], godot_hints=True)
+    index_of = {name: index for (name, _), (index, _) in zip(names, indexed)}
     found = []
     for body in bodies:
-        if body == stem and len(meshes) == 1:
-            found.append(meshes[0])
-            continue
-        name = body[len(stem) + 1 :] if body.startswith(stem + "/") else body
-        candidates = by_name.get(name, [])
-        if len(candidates) != 1:
+        if body not in index_of:
             raise InvalidMeshError(
-                f"--to gltf-physics: body '{body}' matches {len(candidates)} mesh nodes of the "
-                "asset (each mesh node needs a name of its own)",
-                gltf.source,
+                f"--to gltf-physics: body '{body}' is none of the asset's mesh nodes", gltf.source
             )
-        found.append(candidates[0])
+        found.append(index_of[body])
     return found
 
 

@@ -159,3 +159,33 @@ def test_bodies_triggers_and_filters_of_a_khr_asset_are_kept(tmp_path: Path) -> 
     low, high = body.world_vertices().min(0), body.world_vertices().max(0)
     assert low == pytest.approx([1.5, -0.5, 4.5], abs=1e-6)  # the bin cube, nothing else
     assert high == pytest.approx([2.5, 0.5, 5.5], abs=1e-6)
+
+
+def test_bodies_match_their_nodes_by_index_not_by_name(tmp_path: Path) -> None:
+    """Two nodes named alike and two unnamed ones, each drawing the unit cube at its own x:
+    every body's colliders go under its own node."""
+    from test_gltf_physics import gltf_file
+
+    xs = [0.0, 3.0, 6.0, 9.0]
+    nodes = [
+        {"name": "crate", "mesh": 0, "translation": [xs[0], 0, 0]},
+        {"name": "crate", "mesh": 0, "translation": [xs[1], 0, 0]},
+        {"mesh": 0, "translation": [xs[2], 0, 0]},
+        {"mesh": 0, "translation": [xs[3], 0, 0]},
+    ]
+    source = gltf_file(tmp_path / "yard.gltf", nodes, {}, [], [3, 2, 1, 0])
+    out = tmp_path / "out"
+    code, _, stderr = run("hull", str(source), "--out-dir", str(out), "--to", "gltf-physics")
+    assert code == 0, stderr
+    document, _ = glb_document(out / "yard.glb")
+    for k, x in enumerate(xs):
+        (child,) = document["nodes"][k]["children"]
+        collider = document["nodes"][child]
+        assert collider["name"] == f"{nodes[k].get('name', f'node_{k}')}_collider_00"
+        geometry = collider["extensions"][KHR]["collider"]["geometry"]["node"]
+        matrix = np.asarray(document["nodes"][geometry].get("matrix", np.eye(4).ravel()))
+        matrix = matrix.reshape(4, 4).T
+        assert matrix[:3, 3] == pytest.approx([x, 0, 0])  # the hull sits where its cube is
+    scene = load_inputs([out / "yard.glb"])
+    centres = sorted(float(b.world_vertices().mean(0)[0]) for b in scene.bodies)
+    assert centres == pytest.approx(xs, abs=1e-6)
