@@ -189,3 +189,69 @@ def test_bodies_match_their_nodes_by_index_not_by_name(tmp_path: Path) -> None:
     scene = load_inputs([out / "yard.glb"])
     centres = sorted(float(b.world_vertices().mean(0)[0]) for b in scene.bodies)
     assert centres == pytest.approx(xs, abs=1e-6)
+
+
+# -- Godot hints beside the physics extensions (meshcol.io.gltf_godot) -----------------------
+
+
+def hinted_level(tmp_path: Path) -> Path:
+    from test_gltf_physics import gltf_file
+
+    shapes = {"shapes": [{"type": "box", "box": {"size": [1, 2, 3]}}]}
+    nodes = [
+        {
+            "name": "Crate-convcol",
+            "mesh": 0,
+            "extensions": {KHR: {"collider": {"geometry": {"shape": 0}}}},
+        },
+        {
+            "name": "Barrel-convcol",
+            "mesh": 0,
+            "translation": [3, 0, 0],
+            "extensions": {KHR: {"collider": {"geometry": {"node": 1, "convexHull": True}}}},
+        },
+        {"name": "Floor-col", "mesh": 0, "translation": [6, 0, 0]},
+        {"name": "Rock-convcolonly", "mesh": 0, "translation": [9, 0, 0]},
+        {"name": "Deco", "mesh": 0, "translation": [12, 0, 0]},
+        {
+            "name": "Cart",
+            "translation": [0, 5, 0],
+            "children": [6],
+            "extensions": {KHR: {"motion": {}}},
+        },
+        {"name": "Wheel-convcol", "mesh": 0},
+    ]
+    used = [KHR, "KHR_implicit_shapes"]
+    return gltf_file(
+        tmp_path / "hinted.gltf", nodes, {"KHR_implicit_shapes": shapes}, used, [0, 1, 2, 3, 4, 5]
+    )
+
+
+def test_physics_extensions_win_and_hints_apply_to_nodes_without_them(tmp_path: Path) -> None:
+    scene = load_inputs([hinted_level(tmp_path)])
+    bodies = {b.name: b for b in scene.bodies}
+    assert set(bodies) == {
+        "hinted/Crate",
+        "hinted/Barrel",
+        "hinted/Floor",
+        "hinted/Rock",
+        "hinted/Cart",
+    }
+    # explicit physics wins: the box, not -convcol's hull; the disagreement is said
+    assert bodies["hinted/Crate"].primitive == Box((1.0, 2.0, 3.0))
+    assert (
+        "node 'Crate-convcol': its physics extension's collider (box) is read, not the Godot "
+        "hint -convcol (hull)"
+    ) in scene.warnings
+    # agreeing: a convex-hull collider under -convcol, no warning about it
+    assert bodies["hinted/Barrel"].collider == "hull"
+    assert not any("Barrel" in w for w in scene.warnings)
+    # no physics of their own: the hint decides, as in a file without extensions
+    assert bodies["hinted/Floor"].collider == "mesh"
+    assert bodies["hinted/Rock"].collider == "hull"
+    assert float(bodies["hinted/Floor"].world_vertices()[:, 0].mean()) == pytest.approx(6.0)
+    # a hinted mesh inside a rigid body is that body's shape
+    assert float(bodies["hinted/Cart"].world_vertices()[:, 1].mean()) == pytest.approx(5.0)
+    assert bodies["hinted/Cart"].collider == "hull"
+    # Deco has neither: render geometry, counted
+    assert any("1 mesh node(s) with no collider of their own" in w for w in scene.warnings)
