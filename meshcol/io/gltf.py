@@ -208,20 +208,40 @@ def check_references(document: Any, kind: str, source: str) -> None:
 
 def _check_scenes(gltf: _Document) -> None:
     for k, scene in enumerate(gltf.items("scenes")):
-        for node in scene.get("nodes", []) if isinstance(scene, dict) else []:
+        roots = scene.get("nodes", []) if isinstance(scene, dict) else []
+        if not isinstance(roots, list):
+            raise gltf.error(f"scene {k} nodes is not an array")
+        for node in roots:
             gltf.check(f"scene {k}", node, "nodes")
     if "scene" in gltf.document:
         gltf.check("'scene'", gltf.document["scene"], "scenes")
 
 
 def _check_nodes(gltf: _Document) -> None:
+    parent: dict[int, int] = {}
     for k, node in enumerate(gltf.items("nodes")):
         if not isinstance(node, dict):
             continue
-        for child in node.get("children", []):
+        children = node.get("children", [])
+        if not isinstance(children, list):
+            raise gltf.error(f"node {k} children is not an array")
+        for child in children:
             gltf.check(f"node {k} children", child, "nodes")
+            if child in parent or child == k:
+                raise gltf.error(f"node {child} has two parents or is its own child")
+            parent[child] = k
         if "mesh" in node:
             gltf.check(f"node {k}", node["mesh"], "meshes")
+    done: set[int] = set()  # glTF 2.0, 3.5.3: the nodes form disjoint trees, no cycle
+    for k in sorted(parent):
+        path: set[int] = set()
+        current = k
+        while current in parent and current not in done:
+            if current in path:
+                raise gltf.error(f"node {k}'s parents form a cycle")
+            path.add(current)
+            current = parent[current]
+        done |= path
 
 
 def _check_meshes(gltf: _Document) -> None:

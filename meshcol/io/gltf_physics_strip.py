@@ -13,6 +13,7 @@ names and extras.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -42,8 +43,12 @@ class Stripped:
         return f"replaced {parts} collider(s) already in the asset"
 
 
-def strip_colliders(document: dict[str, Any]) -> Stripped:
-    """Take every physics collider out of ``document`` (changed in place; see the module)."""
+def strip_colliders(
+    document: dict[str, Any], check: Callable[[dict[str, Any]], None] | None = None
+) -> Stripped:
+    """Take every physics collider out of ``document`` (changed in place; see the module).
+    ``check(document)`` is called once the colliders are out and before anything is
+    renumbered (what it reports names the nodes as the file does)."""
     out = Stripped()
     nodes = _list(document, "nodes")
     geometry_nodes: set[int] = set()
@@ -72,6 +77,8 @@ def strip_colliders(document: dict[str, Any]) -> Stripped:
             candidates.add(k)
         if not extensions:
             del node["extensions"]
+    if check is not None:
+        check(document)
     if not out.colliders:
         return out
     dropped_meshes = _strip_shapes(document, nodes)
@@ -81,6 +88,11 @@ def strip_colliders(document: dict[str, Any]) -> Stripped:
     out.renumbered = _renumber_nodes(document, removed)
     out.meshes = _drop_meshes(document, dropped_meshes)
     return out
+
+
+def _top(document: dict) -> dict:
+    value = document.get("extensions", {})
+    return value if isinstance(value, dict) else {}
 
 
 def _list(owner: Any, name: str) -> list:
@@ -117,7 +129,7 @@ def _trigger_shape_users(nodes: list) -> dict[str, list[dict]]:
 
 def _shape_mesh_holders(document: dict) -> list[dict]:
     """The ``convex``/``trimesh`` objects of the OMI shapes, each holding a mesh index."""
-    container = document.get("extensions", {}).get(OMI_SHAPE, {})
+    container = _top(document).get(OMI_SHAPE, {})
     out = []
     for shape in _list(container, "shapes"):
         for kind in ("convex", "trimesh"):
@@ -131,16 +143,22 @@ def _strip_shapes(document: dict, nodes: list) -> set[int]:
     """Keep the shapes of both extensions the remaining triggers use, renumbered; the meshes
     of the OMI shapes that go."""
     before = {id(h): h["mesh"] for h in _shape_mesh_holders(document)}
-    top = document.get("extensions", {})
+    top = _top(document)
     for name, holders in _trigger_shape_users(nodes).items():
         container = top.get(name) if isinstance(top, dict) else None
         shapes = _list(container, "shapes")
         keep = sorted({h["shape"] for h in holders if _index(h["shape"], len(shapes))})
         new = {old: i for i, old in enumerate(keep)}
         for holder in holders:
-            holder["shape"] = new.get(holder["shape"], holder["shape"])
+            if _index(holder["shape"], None):
+                holder["shape"] = new.get(holder["shape"], holder["shape"])
         if isinstance(container, dict):
             container["shapes"] = [shapes[k] for k in keep]
+            if not keep and set(container) == {"shapes"}:  # nothing left: the writer adds it
+                del top[name]
+                used = _list(document, "extensionsUsed")
+                if name in used:
+                    used.remove(name)
     after = {id(h) for h in _shape_mesh_holders(document)}
     return {mesh for key, mesh in before.items() if key not in after}
 

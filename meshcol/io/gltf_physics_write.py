@@ -106,8 +106,17 @@ def write_gltf_physics(source: str, colliders: Sequence[NodeColliders], path: st
     kind = "GLB" if file.suffix.lower() == ".glb" else "GLTF"
     document = copy.deepcopy(document)
     gltf = GltfFile(document, binary, file, source, kind)
+    for key, want in (("extensions", dict), ("extensionsUsed", list)):
+        if not isinstance(document.get(key, want()), want):
+            raise gltf.error(f"'{key}' is not an {'object' if want is dict else 'array'}")
     owners = _render_nodes(gltf, [c.body for c in colliders])  # before any node is renumbered
-    stripped = strip_colliders(document) if has_physics(document) else None
+
+    def sound(left: dict) -> None:  # what stays of the asset's physics (bodies, triggers)
+        problems = physics_schema_problems(left)
+        if problems:
+            raise gltf.error(f"its physics extensions break their schema: {problems[0]}")
+
+    stripped = strip_colliders(document, sound) if has_physics(document) else None
     if stripped is not None and stripped.nodes:
         owners = [stripped.renumbered[k] for k in owners]
     out = _Builder(gltf)
@@ -139,13 +148,14 @@ def physics_schema_problems(document: Any) -> list[str]:
         schema = json.loads((SCHEMA_FOLDER / f"{name}.schema.json").read_text())
         return jsonschema.Draft202012Validator(schema)
 
+    top = _extensions(document)
     checks = [
-        ("/extensions/" + name, document.get("extensions", {}).get(name), name)
-        for name in (KHR_BODIES, KHR_SHAPES, OMI_SHAPE)
+        ("/extensions/" + name, top.get(name), name) for name in (KHR_BODIES, KHR_SHAPES, OMI_SHAPE)
     ]
-    for k, node in enumerate(document.get("nodes", [])):
+    nodes = document.get("nodes", [])
+    for k, node in enumerate(nodes if isinstance(nodes, list) else []):
         for name in (KHR_BODIES, OMI_BODY):
-            value = node.get("extensions", {}).get(name) if isinstance(node, dict) else None
+            value = _extensions(node).get(name)
             checks.append((f"/nodes/{k}/extensions/{name}", value, f"{name}.node"))
     problems = []
     for pointer, value, schema in checks:
@@ -157,8 +167,14 @@ def physics_schema_problems(document: Any) -> list[str]:
     return problems
 
 
+def _extensions(holder: Any) -> dict:
+    """``holder``'s ``extensions`` object ({} when it has none or not an object)."""
+    value = holder.get("extensions", {}) if isinstance(holder, dict) else {}
+    return value if isinstance(value, dict) else {}
+
+
 def _shapes(document: dict, name: str) -> list:
-    container = document.get("extensions", {}).get(name)
+    container = _extensions(document).get(name)
     shapes = container.get("shapes") if isinstance(container, dict) else None
     return shapes if isinstance(shapes, list) else []
 

@@ -255,3 +255,30 @@ def test_physics_extensions_win_and_hints_apply_to_nodes_without_them(tmp_path: 
     assert bodies["hinted/Cart"].collider == "hull"
     # Deco has neither: render geometry, counted
     assert any("1 mesh node(s) with no collider of their own" in w for w in scene.warnings)
+
+
+@pytest.mark.parametrize(
+    ("change", "words"),
+    [
+        (lambda d: d.update(extensions=[]), "'extensions' is not an object"),
+        (
+            lambda d: d["nodes"][5]["extensions"][KHR]["trigger"].update(geometry=7),
+            "its physics extensions break their schema: /nodes/5/extensions/",
+        ),
+        (lambda d: d["scenes"][0].update(nodes=3), "scene 0 nodes is not an array"),
+        (lambda d: d["nodes"][2].update(children=1.5), "node 2 children is not an array"),
+        (lambda d: d["nodes"][2].update(children=[0]), "node 0's parents form a cycle"),
+    ],
+)
+def test_a_broken_asset_to_rewrite_exits_2_with_one_line(tmp_path: Path, change, words) -> None:
+    path = khr_level(tmp_path)
+    document = json.loads(path.read_text())
+    change(document)
+    path.write_text(json.dumps(document))
+    code, _, stderr = run(
+        "hull", str(path), "--out-dir", str(tmp_path / "o"), "--to", "gltf-physics"
+    )
+    assert code == 2 and stderr.count("\n") == 1, stderr
+    assert stderr.startswith(f"meshcol: error: {path}: cannot parse GLTF file: ")
+    assert words in stderr
+    assert not (tmp_path / "o" / "level.glb").exists()
