@@ -22,12 +22,23 @@ Cases, each measured as a user pays it (Python call to geometry in numpy arrays)
   triangulation, units and axes; with and without the vertex merge).
 
 Rounds alternate the readers; the range (min-max) over rounds is printed with the ratios.
+
+``--usd-ab PYTHON`` (with ``--usd-quads Q``): the USD case A/B against another build, each
+reader in a fresh single-process child (``PYTHON``, e.g. ``/work/base/.venv/bin/python``, the
+build before the polygon splitter moved into the core, then this one, alternated round by
+round); CPU time (``time.process_time``, what a loaded machine moves least) and wall time of
+usd-core alone, usd-core plus the least triangulation any reader needs (the quads fanned by
+numpy indexing, the points transformed: the floor), ``load_mesh(merge=False)`` and
+``load_mesh``.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import struct
+import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -297,6 +308,58 @@ def compare(label: str, readers: dict, rounds: int, per: int) -> None:
         )
 
 
+def usd_core_fanned(path: Path) -> list:
+    """usd-core alone, then the least any reader must add: every quad fanned into two
+    triangles by numpy indexing (no convexity test), every point turned into the world."""
+    out = []
+    for points, _, indices in usd_core_alone(path):
+        quads = indices.reshape(-1, 4)
+        triangles = quads[:, [0, 1, 2, 0, 2, 3]].reshape(-1, 3)
+        out.append((np.einsum("ij,nj->ni", np.eye(3), points), triangles))
+    return out
+
+
+def usd_child(path: Path) -> None:
+    """One fresh process's CPU and wall times of the USD readers (``--usd-child``), as JSON."""
+    readers = {
+        "usd-core alone": lambda: usd_core_alone(path),
+        "usd-core + fan": lambda: usd_core_fanned(path),
+        "load_mesh merge=False": lambda: load_mesh(path, merge=False),
+        "load_mesh": lambda: load_mesh(path),
+    }
+    usd_core_alone(path)  # imports and usd-core's first open out of the figures
+    out = {}
+    for name, fn in readers.items():
+        cpu, wall = time.process_time(), time.perf_counter()
+        fn()
+        out[name] = (time.process_time() - cpu, time.perf_counter() - wall)
+    print(json.dumps(out))
+
+
+def usd_ab(path: Path, other: str, rounds: int) -> None:
+    """A (``other``'s build) and B (this one) alternated, each round a fresh child of each."""
+    builds = {"A " + other: other, "B " + sys.executable: sys.executable}
+    times: dict[tuple[str, str], list[tuple[float, float]]] = {}
+    for _ in range(rounds):
+        for build, python in builds.items():
+            run = subprocess.run(
+                [python, __file__, "--usd-child", str(path)],
+                capture_output=True,
+                text=True,
+                check=True,
+            )
+            for name, value in json.loads(run.stdout.splitlines()[-1]).items():
+                times.setdefault((build, name), []).append(tuple(value))
+    print(f"USD {path.stat().st_size / 1e6:.0f} MB, {rounds} rounds, CPU s (wall s) min-max")
+    for (build, name), values in times.items():
+        cpu = [v[0] for v in values]
+        wall = [v[1] for v in values]
+        print(
+            f"{build[:60]:<60} {name:<22} {min(cpu):7.2f}-{max(cpu):7.2f}"
+            f"  ({min(wall):6.2f}-{max(wall):6.2f})"
+        )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--files", type=int, default=2000)
@@ -304,7 +367,15 @@ def main() -> None:
     parser.add_argument("--fbx", action="store_true", help="only the large FBX case")
     parser.add_argument("--usd-quads", type=int, default=0, help="the USD case's size (0: none)")
     parser.add_argument("--usd-only", action="store_true", help="only the USD case")
+    parser.add_argument("--usd-ab", metavar="PYTHON", help="the USD case A/B against PYTHON")
+    parser.add_argument("--usd-child", metavar="PATH", help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.usd_child:
+        usd_child(Path(args.usd_child))
+        return
+    if args.usd_ab:
+        usd_ab(usd_level(args.usd_quads or 1_600_000), args.usd_ab, args.rounds)
+        return
     if args.fbx:
         compare_fbx(args.rounds)
         return

@@ -6,6 +6,11 @@ and its colliders stay one file.
 ``fit``: the chosen primitive per body (exact), or its hull when ``auto`` kept the hull;
 ``decompose``: each body's convex parts as the run wrote them (``OUT/<body>_NN.obj``, world
 frame; its cache, jobs and target apply as to any run), read back and written into the asset.
+
+An asset that already has colliders (a re-run on what ``--to gltf-physics`` wrote, or an
+engine's export) is read as its render meshes (its physics ignored), and its colliders are
+replaced by the new ones; the report says what was replaced (``warnings``; decompose's
+``settings["replaced"]``).
 """
 
 from __future__ import annotations
@@ -71,6 +76,7 @@ def rebuild_gltf(
         or the asset cannot take the colliders (see
         :func:`meshcol.io.gltf_physics_write.write_gltf_physics`).
     """
+    from meshcol.io.gltf_physics import render_meshes_only
     from meshcol.io.gltf_physics_write import gltf_physics_path, write_gltf_physics
     from meshcol.io.outputs import check_outputs
 
@@ -82,9 +88,13 @@ def rebuild_gltf(
         files={"the asset written": target, **dict(reserved)},
         inputs=[path],
     )
-    result = run([path], output=None, out_dir=None, reserved=reserved, progress=progress, **options)
-    write_gltf_physics(path, node_colliders(result), target)
-    return dataclasses.replace(result, description=target, to="gltf-physics")
+    with render_meshes_only():
+        result = run(
+            [path], output=None, out_dir=None, reserved=reserved, progress=progress, **options
+        )
+    replaced = write_gltf_physics(path, node_colliders(result), target)
+    warnings = (*result.warnings, replaced) if replaced else result.warnings
+    return dataclasses.replace(result, description=target, to="gltf-physics", warnings=warnings)
 
 
 def decompose_gltf(path: str, out_dir: str, options: Any, run: Any, **kwargs: Any) -> Any:
@@ -98,6 +108,7 @@ def decompose_gltf(path: str, out_dir: str, options: Any, run: Any, **kwargs: An
         The run's report, ``settings`` naming the GLB (``description``) and ``to``.
     """
     from meshcol.decomposition.batch import decompose_files
+    from meshcol.io.gltf_physics import render_meshes_only
     from meshcol.io.gltf_physics_write import (
         NodeColliders,
         gltf_physics_path,
@@ -109,7 +120,8 @@ def decompose_gltf(path: str, out_dir: str, options: Any, run: Any, **kwargs: An
     if not is_gltf(path):
         raise MeshcolError("--to gltf-physics needs a glTF or GLB asset", path)
     target = gltf_physics_path(path, out_dir)
-    report = decompose_files([path], out_dir, options, run, layout="parts", fmt="obj", **kwargs)
+    with render_meshes_only():
+        report = decompose_files([path], out_dir, options, run, layout="parts", fmt="obj", **kwargs)
     colliders = []
     for entry in report.files:
         if entry["status"] != "ok":
@@ -121,6 +133,8 @@ def decompose_gltf(path: str, out_dir: str, options: Any, run: Any, **kwargs: An
                 (part,) = load_mesh(written, merge=False)
                 parts.append(("mesh", part.world_vertices(), part.faces))
             colliders.append(NodeColliders(body["name"], tuple(parts)))
-    write_gltf_physics(path, colliders, target)
+    replaced = write_gltf_physics(path, colliders, target)
     report.settings.update(description=target, to="gltf-physics")
+    if replaced:
+        report.settings["replaced"] = replaced
     return report

@@ -521,6 +521,8 @@ def _print_robot(result: Any, outputs: _Outputs) -> None:
     finish_outputs()
     _echo_target_violations(result)
     detail = f"{_summary(result)}, written to {result.settings['description']}"
+    if result.settings.get("replaced"):  # --to gltf-physics on an asset with colliders
+        detail += f" ({result.settings['replaced']})"
     click.echo(verdict("decompose", result.exit_code == 0, detail), err=True)
 
 

@@ -36,7 +36,9 @@ def written_to(result: Any, output: str | None, out_dir: str | None, robot: bool
     if output:
         return f", written to {display_path(output)}"
     if robot and result.description is not None:
-        return f", written to {display_path(result.description)}"
+        # --to gltf-physics says which colliders of the asset it replaced
+        replaced = "".join(f" ({w})" for w in result.warnings if w.startswith("replaced "))
+        return f", written to {display_path(result.description)}{replaced}"
     if out_dir:
         files = plural(result.summary["files_written"], "file")
         return f", {files} written to {display_path(out_dir)}"

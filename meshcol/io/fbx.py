@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from meshcol.errors import InvalidMeshError
-from meshcol.io.off import triangulate_polygons
+from meshcol.io.polygons import triangulate_polygons
 
 if TYPE_CHECKING:
     from meshcol.io.mesh_formats import MeshNode
@@ -228,7 +228,7 @@ def polygon_triangles(
 ) -> np.ndarray:
     """Triangles of the polygons ``indices[begin:begin + count]`` (those of fewer than 3
     corners, points and lines, skipped), split as OFF's are
-    (:func:`meshcol.io.off.triangulate_polygons`: a fan when convex, else ear clipping),
+    (:func:`meshcol.io.polygons.triangulate_polygons`: a fan when convex, else ear clipping),
     (m, 3) int64."""
     keep = count >= 3
     if not keep.all():

@@ -24,7 +24,11 @@ from meshcol.io.safe_read import read_input
 if TYPE_CHECKING:
     from meshcol.io.mesh_formats import MeshNode
 
-__all__ = ["check_references", "read_document", "read_glb", "read_gltf"]
+__all__ = ["check_references", "mesh_node_indices", "read_document", "read_glb", "read_gltf"]
+
+#: A mesh node of a glTF file as read (:data:`meshcol.io.mesh_formats.MeshNode`) with the
+#: index of the document's node it comes from.
+IndexedNode = tuple[int, "MeshNode"]
 
 
 def read_gltf(file: Path, source: str) -> list[MeshNode]:
@@ -37,14 +41,62 @@ def read_glb(file: Path, source: str) -> list[MeshNode]:
     return _read_nodes(file, source, "glb")
 
 
+def mesh_node_indices(file: Path, source: str) -> list[IndexedNode]:
+    """Each mesh node :func:`read_glb`/:func:`read_gltf` return, in the same order, with the
+    index of the document's node it comes from (a node of several primitives gives several
+    mesh nodes, one index): what a body read from the file is matched back to (``--to
+    gltf-physics``), whatever the nodes' names (missing, repeated)."""
+    kind = "glb" if file.suffix.lower() == ".glb" else "gltf"
+    return _read_indexed(file, source, kind)
+
+
 def _read_nodes(file: Path, source: str, kind: str) -> list[MeshNode]:
-    """The mesh nodes of a glTF (``kind`` ``gltf``) or GLB file: read once through the guarded
-    read, its document checked, then trimesh's scene of the same bytes."""
+    """The mesh nodes of a glTF (``kind`` ``gltf``) or GLB file."""
+    return [node for _, node in _read_indexed(file, source, kind)]
+
+
+def _read_indexed(file: Path, source: str, kind: str) -> list[IndexedNode]:
+    """The mesh nodes of a glTF or GLB file with their node indices: read once through the
+    guarded read, its document checked, then trimesh's scene of the same bytes."""
     data = read_input(source, "mesh")
     document = _glb_json(data, source) if kind == "glb" else _gltf_json(data, source)
     check_references(document, kind.upper(), source)
-    nodes = scene_nodes(load_scene(file, kind, source, io.BytesIO(data)))
-    return _file_order(document, nodes)
+    scene = load_scene(file, kind, source, io.BytesIO(data))
+    nodes = _file_order(document, scene_nodes(scene))
+    return list(zip(_node_indices(document, scene, [n[0] for n in nodes], source), nodes))
+
+
+def _node_indices(document: Any, scene: Any, frames: list[str], source: str) -> list[int]:
+    """The document node each of trimesh's frames ``frames`` stands for. trimesh names the
+    frame of node ``i`` ``unique_name(name or str(i))`` in node order (a node named as its
+    base frame renamed), and a node of several primitives has one child frame per primitive;
+    the same names are made here, so repeated and missing names are told apart."""
+    from trimesh.exchange.gltf import DEFAULT_BASE_FRAME
+    from trimesh.util import unique_name
+
+    nodes = document.get("nodes", [])
+    name_index: dict[str, int] = {}
+    counts: dict[str | None, int] = {}
+    for i, node in enumerate(nodes):
+        name = node.get("name", str(i)) if isinstance(node, dict) else str(i)
+        name_index[unique_name(name, name_index, counts=counts)] = i
+    names = {v: k for k, v in name_index.items()}
+    world = name_index.get(DEFAULT_BASE_FRAME)
+    if world is not None:
+        names[world] = unique_name(DEFAULT_BASE_FRAME, set(names.values()))
+    index_of = {name: i for i, name in names.items()}
+    parents = scene.graph.transforms.parents
+    out = []
+    for frame in frames:
+        index = index_of.get(frame, index_of.get(parents.get(frame, None)))
+        if index is None:  # trimesh named a frame otherwise: a change of trimesh's
+            raise InvalidMeshError(
+                f"cannot parse {'GLB' if source.lower().endswith('.glb') else 'GLTF'} file: "
+                f"mesh frame {frame!r} matches no node",
+                source,
+            )
+        out.append(index)
+    return out
 
 
 def _decode_json(text: bytes, kind: str, source: str) -> Any:
@@ -156,20 +208,40 @@ def check_references(document: Any, kind: str, source: str) -> None:
 
 def _check_scenes(gltf: _Document) -> None:
     for k, scene in enumerate(gltf.items("scenes")):
-        for node in scene.get("nodes", []) if isinstance(scene, dict) else []:
+        roots = scene.get("nodes", []) if isinstance(scene, dict) else []
+        if not isinstance(roots, list):
+            raise gltf.error(f"scene {k} nodes is not an array")
+        for node in roots:
             gltf.check(f"scene {k}", node, "nodes")
     if "scene" in gltf.document:
         gltf.check("'scene'", gltf.document["scene"], "scenes")
 
 
 def _check_nodes(gltf: _Document) -> None:
+    parent: dict[int, int] = {}
     for k, node in enumerate(gltf.items("nodes")):
         if not isinstance(node, dict):
             continue
-        for child in node.get("children", []):
+        children = node.get("children", [])
+        if not isinstance(children, list):
+            raise gltf.error(f"node {k} children is not an array")
+        for child in children:
             gltf.check(f"node {k} children", child, "nodes")
+            if child in parent or child == k:
+                raise gltf.error(f"node {child} has two parents or is its own child")
+            parent[child] = k
         if "mesh" in node:
             gltf.check(f"node {k}", node["mesh"], "meshes")
+    done: set[int] = set()  # glTF 2.0, 3.5.3: the nodes form disjoint trees, no cycle
+    for k in sorted(parent):
+        path: set[int] = set()
+        current = k
+        while current in parent and current not in done:
+            if current in path:
+                raise gltf.error(f"node {k}'s parents form a cycle")
+            path.add(current)
+            current = parent[current]
+        done |= path
 
 
 def _check_meshes(gltf: _Document) -> None:

@@ -27,6 +27,9 @@ Units are metres (glTF's), Y up as the file has it: ``Scene.units`` is ``"m"``.
 from __future__ import annotations
 
 import base64
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 from typing import Any
 from urllib.parse import unquote
@@ -35,6 +38,7 @@ import numpy as np
 
 from meshcol.errors import InvalidMeshError
 from meshcol.io.gltf import check_references, read_document
+from meshcol.io.gltf_godot import hint_conflict, hint_groups, hinted_name
 from meshcol.io.physics_bodies import BodyGroup, FileScene, ShapeElement
 from meshcol.io.safe_read import read_input
 from meshcol.types import Box, Capsule, Cylinder, Primitive, Sphere
@@ -46,6 +50,7 @@ __all__ = [
     "node_worlds",
     "read_glb_scene",
     "read_gltf_scene",
+    "render_meshes_only",
 ]
 
 KHR_BODIES = "KHR_physics_rigid_bodies"
@@ -61,6 +66,21 @@ _DTYPES = {5120: "<i1", 5121: "<u1", 5122: "<i2", 5123: "<u2", 5125: "<u4", 5126
 _COMPRESSIONS = {"KHR_draco_mesh_compression", "EXT_meshopt_compression"}
 #: Most nodes one file may hold (a bound on the work of a hostile file).
 MAX_NODES = 1_000_000
+
+
+_RENDER_ONLY: ContextVar[bool] = ContextVar("meshcol_gltf_render_only", default=False)
+
+
+@contextmanager
+def render_meshes_only() -> Iterator[None]:
+    """Within it, a glTF file reads as its mesh nodes whatever physics it has (the scene
+    readers return None): ``--to gltf-physics`` makes new colliders from the render meshes,
+    not from the colliders it replaces."""
+    token = _RENDER_ONLY.set(True)
+    try:
+        yield
+    finally:
+        _RENDER_ONLY.reset(token)
 
 
 def read_gltf_scene(file: Path, source: str) -> FileScene | None:
@@ -277,7 +297,7 @@ def _legacy_omi(extensions: dict) -> tuple[dict, str]:
 def _scene(
     document: Any, binary: bytes | None, file: Path, source: str, kind: str
 ) -> FileScene | None:
-    if not has_physics(document):
+    if not has_physics(document) or _RENDER_ONLY.get():
         return None
     check_references(document, kind, source)
     gltf = GltfFile(document, binary, file, source, kind)
@@ -288,6 +308,7 @@ def _scene(
     warnings: list[str] = []
     triggers = planes = 0
     colliders_of: set[int] = set()
+    conflicts: set[str] = set()
     for k, node in enumerate(nodes):
         ext, name = _ext(node)
         if "trigger" in ext:
@@ -305,9 +326,8 @@ def _scene(
             continue
         colliders_of.add(k)
         owner = _body_node(k, parent, nodes)
-        group = groups.get(owner)
-        if group is None:
-            group = groups[owner] = BodyGroup(str(owner), _node_name(nodes, owner), worlds[owner])
+        group = _owner_group(groups, owner, nodes, worlds)
+        conflicts.update(_conflicts(nodes, {k, owner}, element))
         element.name = _node_name(nodes, k) if k != owner else element.name
         group.elements.append(element)
         filters.setdefault(owner, []).append(collider.get("collisionFilter"))
@@ -317,6 +337,8 @@ def _scene(
         if isinstance(geometry, dict) and isinstance(geometry.get("node"), int):
             colliders_of.add(geometry["node"])
     drawn = _in_scenes(gltf)
+    _add_hinted(gltf, drawn, parent, worlds, groups, colliders_of)
+    warnings.extend(sorted(conflicts))
     render = sum(
         1
         for k in drawn
@@ -331,6 +353,44 @@ def _scene(
             f"{render} mesh node(s) with no collider of their own not read (render geometry)"
         )
     return FileScene(list(groups.values()), _filtered_pairs(gltf, filters), "m", warnings)
+
+
+def _owner_group(groups: dict[int, BodyGroup], owner: int, nodes: list, worlds: dict) -> BodyGroup:
+    """The group of body node ``owner``, made on first use; named as the node without a Godot
+    hint (the extensions win over it)."""
+    group = groups.get(owner)
+    if group is None:
+        name = hinted_name(_node_name(nodes, owner))
+        group = groups[owner] = BodyGroup(str(owner), name, worlds[owner])
+    return group
+
+
+def _conflicts(nodes: list, which: set[int], element: ShapeElement) -> list[str]:
+    """A warning for each of the nodes ``which`` whose Godot hint asks for another collider
+    than ``element``, the one the extensions give."""
+    found = (hint_conflict(_node_name(nodes, n), element) for n in sorted(which))
+    return [w for w in found if w]
+
+
+def _add_hinted(
+    gltf: GltfFile,
+    drawn: set[int],
+    parent: dict[int, int],
+    worlds: dict,
+    groups: dict[int, BodyGroup],
+    colliders_of: set[int],
+) -> None:
+    """The drawn mesh nodes with no collider whose name carries a Godot collision hint
+    (:mod:`meshcol.io.gltf_godot`): each a body of its own, or a part of the rigid body
+    (``motion``) it hangs under; added to ``groups`` and ``colliders_of``."""
+    nodes = gltf.items("nodes")
+    for k, hinted in hint_groups(gltf, nodes, drawn - colliders_of - set(groups), worlds).items():
+        colliders_of.add(k)
+        body = _motion_node(k, parent, nodes)
+        if body is None:
+            groups[k] = hinted
+            continue
+        _owner_group(groups, body, nodes, worlds).elements.extend(hinted.elements)
 
 
 def _in_scenes(gltf: GltfFile) -> set[int]:
@@ -357,14 +417,22 @@ def _node_name(nodes: list, k: int) -> str:
     return name if isinstance(name, str) and name else f"node_{k}"
 
 
-def _body_node(k: int, parent: dict[int, int], nodes: list) -> int:
-    """The node with ``motion`` at or above node ``k``; else the render node (a node with a
-    mesh and no collider) node ``k`` hangs from, whose collider it is; else ``k``."""
+def _motion_node(k: int, parent: dict[int, int], nodes: list) -> int | None:
+    """The node with ``motion`` (a rigid body) at or above node ``k``, or None."""
     current: int | None = k
     while current is not None:
         if "motion" in _ext(nodes[current])[0]:
             return current
         current = parent.get(current)
+    return None
+
+
+def _body_node(k: int, parent: dict[int, int], nodes: list) -> int:
+    """The node with ``motion`` at or above node ``k``; else the render node (a node with a
+    mesh and no collider) node ``k`` hangs from, whose collider it is; else ``k``."""
+    body = _motion_node(k, parent, nodes)
+    if body is not None:
+        return body
     up = parent.get(k)
     if up is not None and "mesh" in nodes[up] and "collider" not in _ext(nodes[up])[0]:
         return up

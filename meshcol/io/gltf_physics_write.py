@@ -80,36 +80,55 @@ def gltf_physics_path(source: str, out_dir: str) -> str:
     return str(Path(out_dir) / f"{Path(source).stem}.glb")
 
 
-def write_gltf_physics(source: str, colliders: Sequence[NodeColliders], path: str) -> None:
-    """Write the asset ``source`` with ``colliders`` added as one GLB at ``path`` (atomic).
+def write_gltf_physics(source: str, colliders: Sequence[NodeColliders], path: str) -> str:
+    """Write the asset ``source`` with ``colliders`` as one GLB at ``path`` (atomic).
+
+    Colliders the asset already has (either extension) are replaced: taken out with what
+    existed only for them (:func:`meshcol.io.gltf_physics_strip.strip_colliders`), everything
+    else kept.
+
+    Returns
+    -------
+    str
+        What was replaced (``replaced 2 KHR_physics_rigid_bodies and 2 OMI_physics_body
+        collider(s) already in the asset``), empty when the asset had none.
 
     Raises
     ------
     InvalidMeshError
-        The asset already has physics colliders, or a body names no mesh node of it.
+        A body that is no mesh node of the asset.
     """
+    from meshcol.io.gltf_physics_strip import strip_colliders
     from meshcol.io.report import atomic_path
 
     file = Path(source)
     document, binary = read_document(file, source)
     kind = "GLB" if file.suffix.lower() == ".glb" else "GLTF"
-    if has_physics(document):
-        raise InvalidMeshError(
-            "--to gltf-physics: the asset already has physics colliders (KHR_physics_rigid_"
-            "bodies or OMI_physics_body); write into an asset without them",
-            source,
-        )
     document = copy.deepcopy(document)
     gltf = GltfFile(document, binary, file, source, kind)
+    for key, want in (("extensions", dict), ("extensionsUsed", list)):
+        if not isinstance(document.get(key, want()), want):
+            raise gltf.error(f"'{key}' is not an {'object' if want is dict else 'array'}")
+    owners = _render_nodes(gltf, [c.body for c in colliders])  # before any node is renumbered
+
+    def sound(left: dict) -> None:  # what stays of the asset's physics (bodies, triggers)
+        problems = physics_schema_problems(left)
+        if problems:
+            raise gltf.error(f"its physics extensions break their schema: {problems[0]}")
+
+    stripped = strip_colliders(document, sound) if has_physics(document) else None
+    if stripped is not None and stripped.nodes:
+        owners = [stripped.renumbered[k] for k in owners]
     out = _Builder(gltf)
-    out.pack_buffers()
+    out.pack_buffers(compact=stripped is not None and bool(stripped.colliders))
     worlds, _ = node_worlds(gltf)
     nodes = out.nodes
-    owners = _render_nodes(gltf, [c.body for c in colliders])
+    numbered: dict[int, int] = {}  # a node of several primitives is several bodies
     for entry, k in zip(colliders, owners):
         base = _node_name(nodes, k)
         inverse = np.linalg.inv(worlds[k])
-        for j, part in enumerate(entry.parts):
+        for part in entry.parts:
+            j = numbered[k] = numbered.get(k, -1) + 1
             out.collider(k, f"{base}_collider_{j:02d}", part, worlds[k], inverse)
     data = out.glb()
     problems = physics_schema_problems(out.document)
@@ -117,6 +136,7 @@ def write_gltf_physics(source: str, colliders: Sequence[NodeColliders], path: st
         raise InvalidMeshError(f"--to gltf-physics wrote an invalid extension: {problems[0]}")
     with atomic_path(path) as tmp, open(tmp, "wb") as f:
         f.write(data)
+    return stripped.summary() if stripped is not None else ""
 
 
 def physics_schema_problems(document: Any) -> list[str]:
@@ -128,13 +148,14 @@ def physics_schema_problems(document: Any) -> list[str]:
         schema = json.loads((SCHEMA_FOLDER / f"{name}.schema.json").read_text())
         return jsonschema.Draft202012Validator(schema)
 
+    top = _extensions(document)
     checks = [
-        ("/extensions/" + name, document.get("extensions", {}).get(name), name)
-        for name in (KHR_BODIES, KHR_SHAPES, OMI_SHAPE)
+        ("/extensions/" + name, top.get(name), name) for name in (KHR_BODIES, KHR_SHAPES, OMI_SHAPE)
     ]
-    for k, node in enumerate(document.get("nodes", [])):
+    nodes = document.get("nodes", [])
+    for k, node in enumerate(nodes if isinstance(nodes, list) else []):
         for name in (KHR_BODIES, OMI_BODY):
-            value = node.get("extensions", {}).get(name) if isinstance(node, dict) else None
+            value = _extensions(node).get(name)
             checks.append((f"/nodes/{k}/extensions/{name}", value, f"{name}.node"))
     problems = []
     for pointer, value, schema in checks:
@@ -146,34 +167,41 @@ def physics_schema_problems(document: Any) -> list[str]:
     return problems
 
 
+def _extensions(holder: Any) -> dict:
+    """``holder``'s ``extensions`` object ({} when it has none or not an object)."""
+    value = holder.get("extensions", {}) if isinstance(holder, dict) else {}
+    return value if isinstance(value, dict) else {}
+
+
+def _shapes(document: dict, name: str) -> list:
+    container = _extensions(document).get(name)
+    shapes = container.get("shapes") if isinstance(container, dict) else None
+    return shapes if isinstance(shapes, list) else []
+
+
 def _node_name(nodes: list, k: int) -> str:
     name = nodes[k].get("name")
     return name if isinstance(name, str) and name else f"node_{k}"
 
 
 def _render_nodes(gltf: GltfFile, bodies: list[str]) -> list[int]:
-    """The mesh node each body was read from: the file's only mesh node for a body named by
-    the stem, else the mesh node named after ``<stem>/``."""
-    nodes = gltf.items("nodes")
-    meshes = [k for k, n in enumerate(nodes) if isinstance(n, dict) and "mesh" in n]
-    by_name: dict[str, list[int]] = {}
-    for k in meshes:
-        by_name.setdefault(_node_name(nodes, k), []).append(k)
-    stem = gltf.file.stem
+    """The index of the mesh node each body was read from: the asset's mesh nodes read as
+    :func:`meshcol.io.mesh_read.load_mesh` reads them, each with its node index
+    (:func:`meshcol.io.gltf.mesh_node_indices`) and the body name it gets; names are only
+    how a body is looked up, so repeated and missing node names match too."""
+    from meshcol.io.gltf import mesh_node_indices
+    from meshcol.io.mesh_read import node_body_names
+
+    indexed = mesh_node_indices(gltf.file, gltf.source)
+    names = node_body_names(gltf.file, [node[0] for _, node in indexed], godot_hints=True)
+    index_of = {name: index for (name, _), (index, _) in zip(names, indexed)}
     found = []
     for body in bodies:
-        if body == stem and len(meshes) == 1:
-            found.append(meshes[0])
-            continue
-        name = body[len(stem) + 1 :] if body.startswith(stem + "/") else body
-        candidates = by_name.get(name, [])
-        if len(candidates) != 1:
+        if body not in index_of:
             raise InvalidMeshError(
-                f"--to gltf-physics: body '{body}' matches {len(candidates)} mesh nodes of the "
-                "asset (each mesh node needs a name of its own)",
-                gltf.source,
+                f"--to gltf-physics: body '{body}' is none of the asset's mesh nodes", gltf.source
             )
-        found.append(candidates[0])
+        found.append(index_of[body])
     return found
 
 
@@ -208,8 +236,9 @@ class _Builder:
         self.document = gltf.document
         self.nodes: list = gltf.items("nodes")
         self.blob = bytearray()
-        self.khr_shapes: list[dict[str, Any]] = []
-        self.omi_shapes: list[dict[str, Any]] = []
+        # the shapes an asset keeps (its triggers'), the new ones after them
+        self.khr_shapes: list[dict[str, Any]] = list(_shapes(self.document, KHR_SHAPES))
+        self.omi_shapes: list[dict[str, Any]] = list(_shapes(self.document, OMI_SHAPE))
 
     def _append(self, data: bytes, target: int | None = None) -> int:
         """A new bufferView over ``data`` (4-byte aligned) in buffer 0; its index."""
@@ -222,18 +251,29 @@ class _Builder:
         views.append(view)
         return len(views) - 1
 
-    def pack_buffers(self) -> None:
+    def pack_buffers(self, compact: bool = False) -> None:
         """Every input buffer into the one binary chunk, views re-pointed; image files
-        embedded."""
-        buffers = self.gltf.items("buffers")
-        offsets = []
-        for k in range(len(buffers)):
-            self.blob += b"\x00" * (-len(self.blob) % 4)
-            offsets.append(len(self.blob))
-            self.blob += self.gltf.buffer(k)
-        for view in self.gltf.items("bufferViews"):
-            view["byteOffset"] = int(view.get("byteOffset", 0)) + offsets[view["buffer"]]
-            view["buffer"] = 0
+        embedded. ``compact``: only the bytes of the views there are (after colliders were
+        taken out), each view 4-byte aligned."""
+        if compact:
+            for view in self.gltf.items("bufferViews"):
+                start = int(view.get("byteOffset", 0))
+                end = start + int(view.get("byteLength", 0))
+                data = self.gltf.buffer(view["buffer"])[start:end]
+                self.blob += b"\x00" * (-len(self.blob) % 4)
+                view["byteOffset"] = len(self.blob)
+                view["buffer"] = 0
+                self.blob += data
+        else:
+            buffers = self.gltf.items("buffers")
+            offsets = []
+            for k in range(len(buffers)):
+                self.blob += b"\x00" * (-len(self.blob) % 4)
+                offsets.append(len(self.blob))
+                self.blob += self.gltf.buffer(k)
+            for view in self.gltf.items("bufferViews"):
+                view["byteOffset"] = int(view.get("byteOffset", 0)) + offsets[view["buffer"]]
+                view["buffer"] = 0
         for k, image in enumerate(self.gltf.items("images")):
             uri = image.get("uri") if isinstance(image, dict) else None
             if isinstance(uri, str) and not uri.startswith("data:"):
@@ -326,9 +366,9 @@ class _Builder:
         used = document.setdefault("extensionsUsed", [])
         wanted = [KHR_BODIES, OMI_BODY, OMI_SHAPE]
         if self.khr_shapes:
-            extensions[KHR_SHAPES] = {"shapes": self.khr_shapes}
+            extensions[KHR_SHAPES] = {**extensions.get(KHR_SHAPES, {}), "shapes": self.khr_shapes}
             wanted.insert(1, KHR_SHAPES)
-        extensions[OMI_SHAPE] = {"shapes": self.omi_shapes}
+        extensions[OMI_SHAPE] = {**extensions.get(OMI_SHAPE, {}), "shapes": self.omi_shapes}
         used.extend(name for name in wanted if name not in used)
         self.blob += b"\x00" * (-len(self.blob) % 4)
         document["buffers"] = [{"byteLength": len(self.blob)}] if self.blob else []

@@ -115,7 +115,9 @@ def parts_body(name: str, source: str, pose: np.ndarray, elements: Sequence[Link
         assert vertices is not None and faces is not None
         identity = np.array_equal(origin, np.eye(4))  # the USD and glTF readers' parts
         blocks_v.append(vertices if identity else vertices @ origin[:3, :3].T + origin[:3, 3])
-        blocks_f.append(faces + base)
+        # a first mesh part's faces are taken as they are (a million-triangle copy saved);
+        # a primitive's come from a shared cache: copied
+        blocks_f.append(faces + base if base or primitive is not None else faces)
         counts.append(len(faces))
         base += len(vertices)
         unique, k = part, 2

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from meshcol.errors import InputFileError, InvalidMeshError
-from meshcol.io.collision_names import godot_hint
+from meshcol.io.collision_names import GodotHint, godot_hint
 from meshcol.io.mesh_formats import MESH_EXTENSIONS, MeshFormat, check_file, mesh_format
 from meshcol.io.physics_bodies import BodyGroup, axis_turn, choose_collider, scaled_primitive
 from meshcol.types import Body, Scene
@@ -33,6 +33,7 @@ __all__ = [
     "load_mesh",
     "load_meshes",
     "merge_vertices",
+    "node_body_names",
     "split_rigid",
 ]
 
@@ -122,18 +123,30 @@ def load_mesh(
     nodes = fmt.read(file, source)
     if not nodes:
         raise InvalidMeshError("mesh has no faces", source)
-    used: set[str] = set()
     bodies = []
-    for name, matrix, vertices, faces in nodes:
-        hint = godot_hint(name) if fmt.godot_hints else None
-        if hint is not None:
-            name = hint.name
-        full = _unique(file.stem if len(nodes) == 1 else f"{file.stem}/{name}", used)
+    names = node_body_names(file, [node[0] for node in nodes], fmt.godot_hints)
+    for (full, hint), (_, matrix, vertices, faces) in zip(names, nodes):
         body = _node_body(full, matrix, vertices, faces, source, merge)
         if hint is not None and hint.collider is not None:
             body = dataclasses.replace(body, collider=hint.collider)
         bodies.append(body)
     return bodies
+
+
+def node_body_names(
+    file: Path, names: Sequence[str], godot_hints: bool
+) -> list[tuple[str, GodotHint | None]]:
+    """The name :func:`load_mesh` gives the body of each mesh node named ``names`` of
+    ``file`` (the stem alone for one node, else ``<stem>/<node>``, a Godot hint cut when the
+    format has them, ``#2``... for a name taken), with the node's hint (None: none)."""
+    used: set[str] = set()
+    out = []
+    for name in names:
+        hint = godot_hint(name) if godot_hints else None
+        if hint is not None:
+            name = hint.name
+        out.append((_unique(file.stem if len(names) == 1 else f"{file.stem}/{name}", used), hint))
+    return out
 
 
 def load_file_scene(path: str | os.PathLike[str], *, merge: bool = True) -> Scene | None:
@@ -202,7 +215,8 @@ def _group_body(
             vertices, faces = element.vertices, element.faces
         # einsum, not matmul: a (n, 3) @ (3, 3) goes to BLAS, whose threads stall on a
         # loaded machine (seconds for a million points)
-        vertices = np.einsum("ij,nj->ni", origin[:3, :3], vertices) + origin[:3, 3]
+        vertices = np.einsum("ij,nj->ni", origin[:3, :3], vertices)
+        vertices += origin[:3, 3]  # in place: a second array of a million points costs
         check_magnitude(vertices, "vertex", source)
         if np.linalg.det(origin[:3, :3]) < 0:
             faces = faces[:, ::-1]

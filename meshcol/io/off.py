@@ -33,6 +33,7 @@ import numpy as np
 
 from meshcol.errors import InvalidMeshError
 from meshcol.io.mesh_trimesh import read_bytes
+from meshcol.io.polygons import triangulate_polygons
 
 if TYPE_CHECKING:
     from meshcol.io.mesh_formats import MeshNode
@@ -230,133 +231,6 @@ def _face(k: int, number: int, tokens: list[str], n_vertices: int, source: str) 
             source,
         )
     return indices
-
-
-def triangulate_polygons(
-    vertices: np.ndarray, corners: np.ndarray, sizes: np.ndarray
-) -> np.ndarray:
-    """Triangles of polygon faces, in face order.
-
-    Parameters
-    ----------
-    vertices : (n, 3) float
-    corners : (sum(sizes),) int
-        Every polygon's vertex indices, one polygon after the other.
-    sizes : (m,) int
-        Corners of each polygon (>= 3).
-
-    Returns
-    -------
-    (sum(sizes) - 2 m, 3) int64
-        Polygon ``f``'s ``sizes[f] - 2`` triangles, consecutive, winding kept.
-
-    Notes
-    -----
-    Polygons of the same size are handled together. A polygon is convex when, in the plane
-    of its Newell normal, every turn has the same sign and the turns add up to one full turn
-    (a pentagram turns twice): those are split by a fan from their first corner. The others
-    are ear clipped (Eberly, "Triangulation by Ear Clipping", 2002) in that plane; a polygon
-    without area has no ears and is fanned.
-    """
-    vertices = np.asarray(vertices, dtype=np.float64)
-    corners = np.asarray(corners, dtype=np.int64)
-    sizes = np.asarray(sizes, dtype=np.int64)
-    starts = np.zeros(len(sizes), dtype=np.int64)
-    np.cumsum(sizes[:-1], out=starts[1:])
-    first_triangle = starts - 2 * np.arange(len(sizes), dtype=np.int64)
-    out = np.empty((int(sizes.sum()) - 2 * len(sizes), 3), dtype=np.int64)
-    for size in np.unique(sizes).tolist():
-        which = np.flatnonzero(sizes == size)
-        polygons = corners[starts[which][:, None] + np.arange(size)]  # (p, size)
-        rows = first_triangle[which][:, None] + np.arange(size - 2)  # (p, size - 2)
-        if size == 3:
-            out[rows[:, 0]] = polygons
-            continue
-        fan = np.stack(
-            [
-                np.repeat(polygons[:, :1], size - 2, axis=1),
-                polygons[:, 1:-1],
-                polygons[:, 2:],
-            ],
-            axis=2,
-        )  # (p, size - 2, 3)
-        convex = _convex(vertices[polygons])
-        out[rows[convex].ravel()] = fan[convex].reshape(-1, 3)
-        for p in np.flatnonzero(~convex).tolist():
-            out[rows[p]] = _ear_clip(vertices, polygons[p])
-    return out
-
-
-def _plane_coordinates(points: np.ndarray) -> np.ndarray:
-    """(..., k, 2) coordinates of polygons (..., k, 3) in the plane of their Newell normal,
-    oriented so that a counter-clockwise turn about the normal is positive."""
-    nxt = np.roll(points, -1, axis=-2)
-    normal = np.stack(
-        [
-            np.sum((points[..., 1] - nxt[..., 1]) * (points[..., 2] + nxt[..., 2]), axis=-1),
-            np.sum((points[..., 2] - nxt[..., 2]) * (points[..., 0] + nxt[..., 0]), axis=-1),
-            np.sum((points[..., 0] - nxt[..., 0]) * (points[..., 1] + nxt[..., 1]), axis=-1),
-        ],
-        axis=-1,
-    )
-    axis = np.argmax(np.abs(normal), axis=-1)  # drop the dominant axis
-    u = (axis + 1) % 3
-    v = (axis + 2) % 3
-    pu = np.take_along_axis(points, u[..., None, None].repeat(points.shape[-2], -2), -1)[..., 0]
-    pv = np.take_along_axis(points, v[..., None, None].repeat(points.shape[-2], -2), -1)[..., 0]
-    sign = np.where(np.take_along_axis(normal, axis[..., None], -1)[..., 0] < 0, -1.0, 1.0)
-    return np.stack([pu, pv * sign[..., None]], axis=-1)
-
-
-def _convex(points: np.ndarray) -> np.ndarray:
-    """(p,) bool: polygons (p, k, 3) that are strictly convex and simple."""
-    uv = _plane_coordinates(points)
-    edge = np.roll(uv, -1, axis=-2) - uv
-    prev = np.roll(edge, 1, axis=-2)
-    turn = prev[..., 0] * edge[..., 1] - prev[..., 1] * edge[..., 0]
-    if points.shape[-2] <= 4:
-        # k left turns, each under half a turn, add up to less than k/2 turns: for k <= 4
-        # that is one turn exactly (a pentagram's two need k >= 5), so the sum needs no check
-        return np.all(turn > 0, axis=-1)
-    angle = np.arctan2(turn, np.sum(prev * edge, axis=-1))
-    total = np.sum(angle, axis=-1)
-    return np.all(turn > 0, axis=-1) & (np.abs(total - 2 * np.pi) < 1e-6)
-
-
-def _ear_clip(vertices: np.ndarray, polygon: np.ndarray) -> np.ndarray:
-    """(k - 2, 3) triangles of one simple polygon, by ear clipping in its plane."""
-    uv = _plane_coordinates(vertices[polygon][None])[0]
-    remaining = list(range(len(polygon)))
-    triangles = []
-
-    def cross(o: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
-        return float((a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]))
-
-    while len(remaining) > 3:
-        n = len(remaining)
-        for k in range(n):
-            i, j, m = remaining[k - 1], remaining[k], remaining[(k + 1) % n]
-            a, b, c = uv[i], uv[j], uv[m]
-            if cross(a, b, c) <= 0:
-                continue  # a reflex or flat corner is not an ear
-            inside = False
-            for r in remaining:
-                if r in (i, j, m):
-                    continue
-                p = uv[r]
-                if cross(a, b, p) >= 0 and cross(b, c, p) >= 0 and cross(c, a, p) >= 0:
-                    inside = True
-                    break
-            if not inside:
-                triangles.append((i, j, m))
-                del remaining[k]
-                break
-        else:
-            break  # no ear: no area (or not simple); fan what is left
-    triangles.extend(
-        (remaining[0], remaining[t], remaining[t + 1]) for t in range(1, len(remaining) - 1)
-    )
-    return polygon[np.asarray(triangles, dtype=np.int64)]
 
 
 def _integer(token: str, what: str, line: int, source: str) -> int:

@@ -13,7 +13,7 @@ some, geometry without ``CollisionAPI`` is render geometry and not read (a warni
 Collision prims with ``physics:collisionEnabled = false`` are skipped (a warning counts them).
 
 Values are read at the earliest time sample where an attribute has some (an animated
-transform often has no default), else at its default. Geometry: ``UsdGeom.Mesh`` (polygons triangulated by :func:`meshcol.io.off.triangulate_polygons`,
+transform often has no default), else at its default. Geometry: ``UsdGeom.Mesh`` (polygons triangulated by :func:`meshcol.io.polygons.triangulate_faces`,
 ``holeIndices`` dropped, ``orientation = "leftHanded"`` winding reversed) and ``Cube``,
 ``Sphere``, ``Capsule``, ``Cylinder`` at their world transforms (``UsdGeom.XformCache``,
 instance proxies of instanceable prims and references included, ``PointInstancer``
@@ -295,40 +295,30 @@ class _Reader:
     def _mesh(self, mesh: Any, where: str) -> tuple[np.ndarray, np.ndarray]:
         from pxr import UsdGeom
 
-        from meshcol.io.off import triangulate_polygons
+        from meshcol.io.polygons import PolygonError, TooManyTriangles, triangulate_faces
 
         points = np.asarray(mesh.GetPointsAttr().Get(self.time) or [], dtype=np.float64).reshape(
             -1, 3
         )
         counts = np.asarray(mesh.GetFaceVertexCountsAttr().Get(self.time) or [], dtype=np.int64)
         indices = np.asarray(mesh.GetFaceVertexIndicesAttr().Get(self.time) or [], dtype=np.int64)
-        if counts.size and (counts.min() < 0 or int(counts.sum()) != len(indices)):
-            raise self.error(
-                f"cannot parse USD file: {where}: faceVertexCounts add up to "
-                f"{int(counts.sum())}, but faceVertexIndices has {len(indices)} entries"
-            )
-        if indices.size and (indices.min() < 0 or indices.max() >= len(points)):
-            raise self.error(
-                f"cannot parse USD file: {where}: faceVertexIndices refers to a point the mesh "
-                f"does not have ({len(points)} points)"
-            )
         holes = np.asarray(mesh.GetHoleIndicesAttr().Get(self.time) or [], dtype=np.int64)
-        keep = counts >= 3
-        if holes.size:
-            keep[holes[(holes >= 0) & (holes < len(counts))]] = False
-        starts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
-        corners = np.repeat(keep, counts)
-        sizes = counts[keep]
-        self.triangles += int((sizes - 2).sum())
-        if self.triangles > MAX_TRIANGLES:
-            raise self.error(f"stage has more than {MAX_TRIANGLES} triangles")
-        del starts
-        faces = triangulate_polygons(points, indices[corners], sizes) if sizes.size else None
-        if faces is None:
-            faces = np.zeros((0, 3), dtype=np.int64)
-        if mesh.GetOrientationAttr().Get(self.time) == UsdGeom.Tokens.leftHanded:
-            faces = faces[:, ::-1]
-        return points, np.ascontiguousarray(faces, dtype=np.int64)
+        left = mesh.GetOrientationAttr().Get(self.time) == UsdGeom.Tokens.leftHanded
+        try:
+            faces = triangulate_faces(
+                points,
+                counts,
+                indices,
+                holes=holes,
+                reverse=left,
+                max_triangles=MAX_TRIANGLES - self.triangles,
+            )
+        except TooManyTriangles:
+            raise self.error(f"stage has more than {MAX_TRIANGLES} triangles") from None
+        except PolygonError as error:
+            raise self.error(f"cannot parse USD file: {where}: {error}") from None
+        self.triangles += len(faces)
+        return points, faces
 
     def _instances(self, instancer: Any, UsdGeom: Any, UsdPhysics: Any) -> None:
         """Every instance of a ``PointInstancer``: its prototypes' geometry placed by the

@@ -155,13 +155,23 @@ def test_the_khronos_validator_finds_no_error(asset: Path, tmp_path: Path) -> No
     out = tmp_path / "out"
     assert run("hull", str(asset), "--out-dir", str(out), "--to", "gltf-physics")[0] == 0
     assert run("fit", str(asset), "--out-dir", str(tmp_path / "f"), "--to", "gltf-physics")[0] == 0
+    # the hulls replaced by fits (the old colliders, their nodes, meshes and bytes taken out)
+    again = (
+        "fit",
+        str(out / "props.glb"),
+        "--out-dir",
+        str(tmp_path / "r"),
+        "--to",
+        "gltf-physics",
+    )
+    assert run(*again)[0] == 0
     script = (
         "const v = require('gltf-validator'); const fs = require('fs');"
         "v.validateBytes(new Uint8Array(fs.readFileSync(process.argv[1])))"
         ".then(r => console.log(JSON.stringify(r.issues)))"
         ".catch(e => { console.error(String(e)); process.exit(3); });"
     )
-    for path in (out / "props.glb", tmp_path / "f" / "props.glb"):
+    for path in (out / "props.glb", tmp_path / "f" / "props.glb", tmp_path / "r" / "props.glb"):
         done = subprocess.run(
             [node, "-e", script, str(path)],
             env={**os.environ, "NODE_PATH": str(modules)},
@@ -480,6 +490,32 @@ def test_decompose_to_gltf_physics_reads_back_its_parts(asset: Path, tmp_path: P
         assert len(got) == len(parts)
         for want, mine in zip(parts, got):
             assert point_gap(mine, want) <= 1e-6 * float(np.ptp(want, axis=0).max())
+    # again on what it wrote: the render meshes decomposed again (the cache hits), the parts
+    # replace the old ones, the report says so
+    again = tmp_path / "again"
+    code, stdout, stderr = run(
+        "decompose",
+        str(out / "props.glb"),
+        "--out-dir",
+        str(again),
+        "--to",
+        "gltf-physics",
+        "--cache-dir",
+        str(tmp_path / "cache"),
+        "--report",
+        "-",
+    )
+    assert code == 0, stderr
+    settings = json.loads(stdout)["settings"]
+    n = sum(len(body["outputs"]) for body in report["files"][0]["bodies"])
+    assert settings["replaced"] == (
+        f"replaced {n} KHR_physics_rigid_bodies and {n} OMI_physics_body collider(s) already "
+        "in the asset"
+    )
+    rewritten = {b.name: b for b in load_inputs([again / "props.glb"]).bodies}
+    assert {n: len(b.part_meshes()) for n, b in rewritten.items()} == {
+        n: len(b.part_meshes()) for n, b in by_name.items()
+    }
     usage = run("decompose", str(asset), str(asset), "--out-dir", str(out), "--to", "gltf-physics")
     assert usage[0] == 2 and "--to gltf-physics needs one glTF/GLB asset and --out-dir" in usage[2]
 

@@ -439,6 +439,16 @@ def bad_files(tmp_path: Path) -> dict[str, tuple[Path, str]]:
         '#usda 1.0\ndef Mesh "m" {\n  point3f[] points = [(0,0,0), (1,0,0), (0,1,0)]\n'
         "  int[] faceVertexCounts = [3]\n  int[] faceVertexIndices = [0, 1, 7]\n}\n"
     )
+    negative = tmp_path / "negative.usda"
+    negative.write_text(
+        '#usda 1.0\ndef Mesh "m" {\n  point3f[] points = [(0,0,0), (1,0,0), (0,1,0)]\n'
+        "  int[] faceVertexCounts = [3, -3, 3]\n  int[] faceVertexIndices = [0, 1, 2]\n}\n"
+    )
+    short = tmp_path / "short.usda"
+    short.write_text(
+        '#usda 1.0\ndef Mesh "m" {\n  point3f[] points = [(0,0,0), (1,0,0), (0,1,0)]\n'
+        "  int[] faceVertexCounts = [4]\n  int[] faceVertexIndices = [0, 1, 2, 0, 1]\n}\n"
+    )
     empty = tmp_path / "empty.usda"
     empty.write_text('#usda 1.0\ndef Xform "nothing" {}\n')
     return {
@@ -446,14 +456,27 @@ def bad_files(tmp_path: Path) -> dict[str, tuple[Path, str]]:
         "garbage": (garbage, "cannot parse USD file: "),
         "sublayers": (a, "cannot compose USD stage: Sublayer hierarchy"),
         "references": (loop, "cannot compose USD stage: Cycle detected"),
-        "counts": (counts, "faceVertexCounts add up to 2000000000, but faceVertexIndices has 3"),
-        "index": (index, "faceVertexIndices refers to a point the mesh does not have"),
+        "counts": (counts, "face vertex counts add up to 2000000000, but there are 3 face vertex"),
+        "index": (index, "face vertex index 7 refers to a point the mesh does not have"),
+        "negative": (negative, "/m: face 1 has a negative vertex count (-3)"),
+        "short": (short, "/m: face vertex counts add up to 4, but there are 5 face vertex"),
         "empty": (empty, "mesh has no faces"),
     }
 
 
 @pytest.mark.parametrize(
-    "case", ["truncated", "garbage", "sublayers", "references", "counts", "index", "empty"]
+    "case",
+    [
+        "truncated",
+        "garbage",
+        "sublayers",
+        "references",
+        "counts",
+        "index",
+        "negative",
+        "short",
+        "empty",
+    ],
 )
 def test_bad_usd_exits_2_with_one_line(tmp_path: Path, case: str) -> None:
     path, words = bad_files(tmp_path)[case]
