@@ -50,13 +50,14 @@ def repo(tmp_path, monkeypatch):
 
 @pytest.fixture
 def seen_jobs(monkeypatch):
-    """The ``jobs`` each run_ci call got (the real run_ci still runs)."""
+    """The ``jobs`` each run_ci call got (the real run_ci still runs, in this process: a
+    pool's start-up would only cost the test time)."""
     seen: list[int] = []
     real = ci_module.run_ci
 
     def spy(*args, **kwargs):
         seen.append(kwargs["jobs"])
-        return real(*args, **kwargs)
+        return real(*args, **{**kwargs, "jobs": 1})
 
     monkeypatch.setattr(ci_module, "run_ci", spy)
     return seen
