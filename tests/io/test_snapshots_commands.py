@@ -60,12 +60,16 @@ def test_sweep_pictures_the_pair_at_the_time_of_impact(tmp_path):
     markdown = (tmp_path / "sweep.md").read_text(encoding="utf-8")
     assert f"(shots/{picture.name})" in markdown and "| HIT | 1 |" in markdown
     image = pixels(picture)
-    first, second = (hue_mask(image, color) for color in PAIR_COLORS)
-    assert first.sum() > 300 and second.sum() > 300
-    # at the time of impact the bullet touches the wall (at the start it is 1 m away, as
-    # far as the wall is wide): the two colours meet, and the contact point is drawn
-    assert gap(first, second) < 12
-    assert exact_mask(image, WITNESS_COLOR).sum() > 20
+    wall, bullet = (hue_mask(image, color) for color in PAIR_COLORS)
+    assert wall.sum() > 300 and bullet.sum() > 3000
+    # seen from the bullet's side (the wall would hide it): the bullet whole in the view
+    ys, xs = np.nonzero(bullet)
+    assert xs.min() > 0 and ys.min() > 0 and xs.max() < 799 and ys.max() < 599
+    # at the time of impact the contact point is on the bullet (at its start pose the
+    # bullet is 1 m, twice its length, from that point) and the wall meets it there
+    witness = exact_mask(image, WITNESS_COLOR)
+    assert witness.sum() > 20
+    assert gap(witness, bullet) < 12 and gap(witness, wall) < 12
     # with --fail-on none nothing fails: no pictures, no folder left behind
     code, _, _ = run("sweep", scene, "--fail-on", "none", "--snapshots", str(tmp_path / "none"))
     assert code == 0 and list((tmp_path / "none").iterdir()) == []
