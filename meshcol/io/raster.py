@@ -22,8 +22,8 @@ VIEW_FROM = np.array([1.0, -1.35, 0.9])
 #: Light direction (from the surface towards the light), before normalisation.
 LIGHT_FROM = np.array([0.45, -0.6, 1.0])
 AMBIENT = 0.35
-#: A contact normal whose horizontal part is shorter than this is seen from the default view.
-VERTICAL_NORMAL = 0.3
+#: A mirrored view this close to vertical (sine of its angle to the vertical) is not used.
+VERTICAL_VIEW = 0.2
 #: Triangles drawn one by one at most; the rest (smallest first) are splatted.
 MAX_FILLED = 60_000
 
@@ -168,22 +168,24 @@ class Raster:
         self.pixels[y, x] = colors
 
 
-def view_across(normal: np.ndarray | None) -> np.ndarray:
-    """A direction to look from that sees a contact of unit ``normal`` from the side, so that
-    neither body hides the other: :data:`VIEW_FROM` turned about the vertical until its
-    horizontal part is square to the normal's (its elevation kept). A mostly vertical normal
-    (a body resting on another) keeps :data:`VIEW_FROM`, which already looks down at the
-    contact, as does no usable normal."""
+def view_across(normal: np.ndarray | None, toward: float = 1.0) -> np.ndarray:
+    """A direction to look from that sees a contact of ``normal`` (from body a to body b)
+    from the side of the body that could be hidden: ``toward`` +1 for b (the smaller one),
+    -1 for a. :data:`VIEW_FROM` when it already looks from that side (or there is no usable
+    normal); else :data:`VIEW_FROM` mirrored across the contact plane, so that the view
+    keeps its angle to the contact (a wall no longer hides the bullet that hits it)."""
     if normal is None or not np.all(np.isfinite(normal)):
         return VIEW_FROM
     n = np.asarray(normal, dtype=np.float64)
     length = float(np.linalg.norm(n))
-    across = np.array([-n[1], n[0]]) / length if length > 1e-12 else np.zeros(2)
-    size = float(np.linalg.norm(across))
-    if size < VERTICAL_NORMAL:
+    if length < 1e-12:
         return VIEW_FROM
-    across /= size
-    horizontal = VIEW_FROM[:2]
-    if across @ horizontal < 0:
-        across = -across
-    return np.array([*(across * np.linalg.norm(horizontal)), VIEW_FROM[2]])
+    side = toward * n / length
+    along = float(VIEW_FROM @ side)
+    if along >= 0:
+        return VIEW_FROM
+    mirrored = VIEW_FROM - 2.0 * along * side
+    up = float(np.linalg.norm(np.cross([0.0, 0.0, 1.0], mirrored)))
+    if up < VERTICAL_VIEW * float(np.linalg.norm(mirrored)):
+        return VIEW_FROM  # straight down or up: no up axis to frame with
+    return mirrored

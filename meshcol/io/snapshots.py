@@ -125,6 +125,18 @@ def _frame(
     return low - pad, high + pad
 
 
+def _smaller_side(bodies: Sequence[Sequence[np.ndarray]]) -> float:
+    """+1 when the row's second body is the smaller (bounding-box diagonal), else -1: the
+    side a picture looks from (:func:`meshcol.io.raster.view_across`)."""
+    sizes = []
+    for tris in bodies:
+        if not tris:
+            return 1.0
+        low, high = _box(np.concatenate([t.reshape(-1, 3) for t in tris]))
+        sizes.append(float(np.linalg.norm(high - low)))
+    return 1.0 if len(sizes) < 2 or sizes[1] <= sizes[0] else -1.0
+
+
 def _font(size: int) -> Any:
     font = pillow().ImageFont
     try:
@@ -208,7 +220,8 @@ def _draw_row(page: ReviewPage, row: Mapping[str, Any], shot: Shot, path: str) -
     points = row["points"] if row["points"] is not None else np.zeros((0, 3))
     by_body = [[t for m, t in own if m["body"] == i] for i in ids]
     low, high = _frame(by_body, points, [line["p"] for line in lines])
-    camera = Camera(low, high, WIDTH, HEIGHT, view_from=view_across(row["normal"]))
+    view = view_across(row["normal"], _smaller_side(by_body))
+    camera = Camera(low, high, WIDTH, HEIGHT, view_from=view)
     image = PIL.Image.fromarray(_paint(meshes, ids, own, camera).pixels, "RGB")
     draw = PIL.ImageDraw.Draw(image)
     _marks(draw, camera, lines, points, row["normal"])

@@ -50,13 +50,14 @@ def repo(tmp_path, monkeypatch):
 
 @pytest.fixture
 def seen_jobs(monkeypatch):
-    """The ``jobs`` each run_ci call got (the real run_ci still runs)."""
+    """The ``jobs`` each run_ci call got (the real run_ci still runs, in this process: a
+    pool's start-up would only cost the test time)."""
     seen: list[int] = []
     real = ci_module.run_ci
 
     def spy(*args, **kwargs):
         seen.append(kwargs["jobs"])
-        return real(*args, **kwargs)
+        return real(*args, **{**kwargs, "jobs": 1})
 
     monkeypatch.setattr(ci_module, "run_ci", spy)
     return seen
@@ -162,3 +163,43 @@ def test_no_base_no_link_to_a_made_up_host(repo):
                 assert "Fix:" in rule["help"]["text"]  # the help is embedded
                 assert "http" not in json.dumps(rule)
         assert sarif_run["results"][0]["ruleId"] == "MC401"
+
+
+def test_ci_measures_only_the_pairs_of_the_changed_mesh(tmp_path, monkeypatch):
+    """Through meshcol ci: a scene whose one mesh changed is checked again with its other
+    pairs from the per-pair cache, and its report is the cold run's bytes."""
+    from meshcol.analysis.pair_cache import PairCache
+
+    monkeypatch.chdir(tmp_path)
+    bodies = []
+    for i in range(6):
+        Path(f"m{i}.obj").write_text(box(f"m{i}"))
+        bodies.append({"name": f"b{i}", "mesh": f"m{i}.obj", "position": [0.8 * i, 0.0, 0.0]})
+    Path("scene.json").write_text(json.dumps({"units": "m", "bodies": bodies}))
+    Path("meshcol.toml").write_text('[[scenes]]\npath = "scene.json"\ncheck = {}\n')
+    counts: list[dict] = []
+    real = PairCache.measure
+
+    def spy(self, *args, **kwargs):
+        out = real(self, *args, **kwargs)
+        counts.append(dict(self.counts))
+        return out
+
+    monkeypatch.setattr(PairCache, "measure", spy)
+    cache = ["--cache-dir", str(tmp_path / "cache"), "--report", "-"]
+    code, cold, err = run("ci", *cache)
+    assert code == 1, err  # neighbours 0.8 apart, each 1 wide: penetrating
+    Path("m5.obj").write_text(box("m5").replace("v 1 ", "v 1.5 "))  # the last one longer
+    code, warm, err = run("ci", *cache)
+    code, fresh, _ = run("ci", "--no-cache", "--report", "-")
+    assert counts == [{"hits": 0, "measured": 5}, {"hits": 4, "measured": 1}]
+
+    def untimed(text: str) -> dict:
+        data = json.loads(text)
+        for r in data["runs"]:
+            r["report"]["summary"]["seconds"] = r["report"]["summary"]["load_seconds"] = 0
+            r["report"]["generated_at"] = None
+        data["generated_at"] = None
+        return data
+
+    assert untimed(warm) == untimed(fresh) != untimed(cold)
