@@ -21,14 +21,35 @@ using namespace hull_detail;
 
 // The packed arrays of a run of consecutive shapes, concatenated (per-shape vectors cost an
 // allocation each, about as much as a small hull): the chunks are joined in order at the end.
+// Vertices, face normals and edge directions as flat (x, y, z) triples: a single chunk's
+// arrays become the result's without a copy.
 struct ChunkPack {
     std::vector<HullStatus> status;
-    std::vector<Vec3> vertices;
+    std::vector<double> vertices;
     std::vector<std::int64_t> vertex_counts, face_counts, edge_counts;  // per shape
     std::vector<std::int64_t> adjacency_counts;                          // per vertex
     std::vector<std::int32_t> adjacency;
-    std::vector<Vec3> faces, edges;
+    std::vector<double> faces, edges;
+
+    // Room for shapes of `points` points in all (a hull of k vertices has at most 2k - 4
+    // triangles and 3k - 6 edges), so the arrays never move while they fill; large inputs
+    // (mostly interior points) grow as they fill instead of reserving for every point.
+    void reserve(long long shapes, long long points) {
+        const auto p = static_cast<size_t>(std::min<long long>(points, 1 << 20));
+        const auto h = static_cast<size_t>(shapes);
+        status.reserve(h);
+        vertex_counts.reserve(h);
+        face_counts.reserve(h);
+        edge_counts.reserve(h);
+        vertices.reserve(3 * p);
+        adjacency_counts.reserve(p);
+        adjacency.reserve(6 * p + 3 * p + 4 * h);
+        faces.reserve(3 * (2 * p + 2 * h));
+        edges.reserve(3 * (3 * p + h));
+    }
 };
+
+void push(std::vector<double>& dst, const Vec3& v) { dst.insert(dst.end(), {v.x, v.y, v.z}); }
 
 // A cell of unique_directions' table: a rounded key, current when its stamp is the call's.
 struct DirectionCell {
@@ -57,7 +78,7 @@ inline long long floor_to_integer(double x) {
 // First occurrences kept, in input order (an open-addressing table of the rounded keys:
 // linear in the count). Returns how many were appended.
 std::int64_t unique_directions(const std::vector<Vec3>& d, bool signed_classes, PackScratch& s,
-                               std::vector<Vec3>& out) {
+                               std::vector<double>& out) {
     size_t size = 16;
     while (size < 2 * d.size()) size *= 2;
     // Stamped cells: the table is cleared by a new stamp, not rewritten, on every call.
@@ -67,7 +88,7 @@ std::int64_t unique_directions(const std::vector<Vec3>& d, bool signed_classes, 
     }
     size = s.table.size();
     const unsigned stamp = s.stamp;
-    const size_t before = out.size();
+    std::int64_t kept = 0;
     for (size_t i = 0; i < d.size(); ++i) {
         Vec3 v = d[i];
         const double len = norm(v);
@@ -100,9 +121,9 @@ std::int64_t unique_directions(const std::vector<Vec3>& d, bool signed_classes, 
                 break;
             }
         }
-        if (fresh) out.push_back(v);
+        if (fresh) push(out, v), ++kept;
     }
-    return static_cast<std::int64_t>(out.size() - before);
+    return kept;
 }
 
 // Neighbour lists of `count` vertices from undirected edges, ascending, padded with the
@@ -156,11 +177,11 @@ void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
     const int k = static_cast<int>(hull.vertices.size());
     if (hull.dimension < 0) {
         // Kept as given: the core reports INVALID_INPUT for every pair that uses it.
-        out.vertices.insert(out.vertices.end(), points, points + std::max<long long>(n, 0));
+        for (long long i = 0; i < n; ++i) push(out.vertices, points[i]);
         out.adjacency_counts.resize(out.adjacency_counts.size() +
                                     static_cast<size_t>(std::max<long long>(n, 0)), 0);
     } else {
-        for (int v : hull.vertices) out.vertices.push_back(points[v] + zero);  // -0.0 as 0.0
+        for (int v : hull.vertices) push(out.vertices, points[v] + zero);  // -0.0 as 0.0
     }
     if (hull.dimension == 0) {
         out.adjacency_counts.push_back(0);
@@ -176,8 +197,8 @@ void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
                                    points[hull.vertices[i]]);
         }
         adjacency_from_edges(k, s, out);
-        out.faces.push_back(hull.normal);
-        out.faces.push_back(-hull.normal);
+        push(out.faces, hull.normal);
+        push(out.faces, -hull.normal);
         faces = 2;
         edges = unique_directions(s.directions, false, s, out.edges);
     } else if (hull.dimension == 3) {
@@ -197,14 +218,9 @@ void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
         faces = unique_directions(hull.plane_normals, true, s, out.faces);
         edges = unique_directions(s.directions, false, s, out.edges);
     }
-    out.vertex_counts.push_back(static_cast<std::int64_t>(out.vertices.size() - vertices_before));
+    out.vertex_counts.push_back(static_cast<std::int64_t>(out.vertices.size() - vertices_before) / 3);
     out.face_counts.push_back(faces);
     out.edge_counts.push_back(edges);
-}
-
-// Appends `src` to `dst` as flat (x, y, z) triples.
-void put(double* dst, const std::vector<Vec3>& src) {
-    for (const Vec3& x : src) *dst++ = x.x, *dst++ = x.y, *dst++ = x.z;
 }
 
 }  // namespace
@@ -226,52 +242,55 @@ PackedPolytopes pack_polytopes(const Vec3* points, const std::int64_t* offsets, 
         PackScratch scratch;
         for (long long c = begin; c < end; ++c) {
             ChunkPack& out = packs[static_cast<size_t>(c)];
-            const long long last = std::min(shapes, (c + 1) * chunk);
-            for (long long h = c * chunk; h < last; ++h)
+            const long long first = c * chunk, last = std::min(shapes, (c + 1) * chunk);
+            out.reserve(last - first, offsets[last] - offsets[first]);
+            for (long long h = first; h < last; ++h)
                 pack_one(points + offsets[h], offsets[h + 1] - offsets[h], w, analysis, scratch,
                          out);
         }
     });
-    size_t v = 0, a = 0, f = 0, e = 0;
-    for (const ChunkPack& s : packs) {
-        v += s.vertices.size();
-        a += s.adjacency.size();
-        f += s.faces.size();
-        e += s.edges.size();
-    }
     PackedPolytopes out;
     const auto hs = static_cast<size_t>(shapes);
-    out.status.reserve(hs);
-    out.vertices.resize(3 * v);
     out.offsets.resize(hs + 1);
-    out.adjacency_offsets.resize(v + 1);
-    out.adjacency.resize(a);
     out.face_offsets.resize(hs + 1);
-    out.face_normals.resize(3 * f);
     out.edge_offsets.resize(hs + 1);
-    out.edge_directions.resize(3 * e);
-    out.offsets[0] = out.face_offsets[0] = out.edge_offsets[0] = out.adjacency_offsets[0] = 0;
-    size_t h = 0, vi = 0, pi = 0, ai = 0, fi = 0, ei = 0;
+    out.offsets[0] = out.face_offsets[0] = out.edge_offsets[0] = 0;
+    size_t v = 0, h = 0;
     for (const ChunkPack& s : packs) {
-        out.status.insert(out.status.end(), s.status.begin(), s.status.end());
+        v += s.adjacency_counts.size();
         for (size_t k = 0; k < s.vertex_counts.size(); ++k, ++h) {
             out.offsets[h + 1] = out.offsets[h] + s.vertex_counts[k];
             out.face_offsets[h + 1] = out.face_offsets[h] + s.face_counts[k];
             out.edge_offsets[h + 1] = out.edge_offsets[h] + s.edge_counts[k];
         }
+    }
+    out.adjacency_offsets.resize(v + 1);
+    out.adjacency_offsets[0] = 0;
+    size_t vi = 0;
+    for (const ChunkPack& s : packs)
         for (std::int64_t c : s.adjacency_counts) {
             out.adjacency_offsets[vi + 1] = out.adjacency_offsets[vi] + c;
             ++vi;
         }
-        std::copy(s.adjacency.begin(), s.adjacency.end(), out.adjacency.begin() + ai);
-        ai += s.adjacency.size();
-        put(out.vertices.data() + 3 * pi, s.vertices);
-        pi += s.vertices.size();
-        put(out.face_normals.data() + 3 * fi, s.faces);
-        fi += s.faces.size();
-        put(out.edge_directions.data() + 3 * ei, s.edges);
-        ei += s.edges.size();
+    if (packs.size() == 1) {
+        out.status = std::move(packs[0].status);
+        out.vertices = std::move(packs[0].vertices);
+        out.adjacency = std::move(packs[0].adjacency);
+        out.face_normals = std::move(packs[0].faces);
+        out.edge_directions = std::move(packs[0].edges);
+        return out;
     }
+    auto join = [&](auto member, auto& dst) {
+        size_t total = 0;
+        for (const ChunkPack& s : packs) total += (s.*member).size();
+        dst.reserve(total);
+        for (const ChunkPack& s : packs) dst.insert(dst.end(), (s.*member).begin(), (s.*member).end());
+    };
+    join(&ChunkPack::status, out.status);
+    join(&ChunkPack::vertices, out.vertices);
+    join(&ChunkPack::adjacency, out.adjacency);
+    join(&ChunkPack::faces, out.face_normals);
+    join(&ChunkPack::edges, out.edge_directions);
     return out;
 }
 

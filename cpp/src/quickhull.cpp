@@ -203,10 +203,14 @@ bool find_horizon(Workspace& w, int seed, int q, unsigned stamp) {
     auto horizon_edge = [&](int fi, int e, int gi) {
         const Face& f = faces[fi];
         const Face& g = faces[gi];
-        HorizonEdge he{f.v[e], f.v[kNext[e]], gi, -1};
+        // Written in place (a 16-byte copy of fields just stored stalls store forwarding).
+        HorizonEdge& he = w.edges.emplace_back();
+        he.a = f.v[e];
+        he.b = f.v[kNext[e]];
+        he.outside = gi;
+        he.slot = -1;
         for (int s = 0; s < 3; ++s)
             if (g.n[s] == fi && g.v[s] == he.b) he.slot = s;
-        w.edges.push_back(he);
         return he.slot >= 0;
     };
     while (top > 0) {
