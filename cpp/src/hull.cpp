@@ -216,9 +216,12 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
         Triangulation& t = analysis.t;
         Triangulation& previous = analysis.previous;
         Planes& pl = analysis.pl;
-        std::vector<int> subset = all;
+        std::vector<int>& subset = w.subset;
+        subset = all;
         bool have = false, planes_current = false;
-        std::vector<int> removed, dropped;  // the vertices a rerun leaves out
+        std::vector<int>& removed = w.removed;  // the vertices a rerun leaves out
+        std::vector<int>& dropped = w.dropped;
+        removed.clear();
         for (int run = 0; run <= defaults::hull_max_reruns; ++run) {
             const Build b = quickhull(w, subset, t);
             if (b == Build::FAILED && !have) {
@@ -288,24 +291,27 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
         if (have) {
             if (!planes_current) planes_of(w, t, pl);
             // Vertices in lexicographic order.
-            std::vector<int> verts;
+            // The points are in lexicographic order: the used ones in index order are.
+            std::vector<int>& verts = hull.vertices;
             std::vector<int>& local = w.local;
             local.assign(static_cast<size_t>(n), -1);
             for (const auto& tri : t.tri)
-                for (int v : tri)
-                    if (local[v] < 0) local[v] = 0, verts.push_back(v);
-            std::sort(verts.begin(), verts.end());  // the points are in lexicographic order
-            for (size_t k = 0; k < verts.size(); ++k) local[verts[k]] = static_cast<int>(k);
+                for (int v : tri) local[v] = 0;
+            for (long long i = 0; i < n; ++i)
+                if (local[i] == 0) {
+                    local[i] = static_cast<int>(verts.size());
+                    verts.push_back(static_cast<int>(i));
+                }
             hull.status = HullStatus::OK;
             hull.dimension = 3;
-            hull.vertices = verts;
             const size_t m = t.tri.size();
             hull.faces.resize(m);
             hull.face_normals.resize(m);
             hull.face_offsets.resize(m);
             hull.face_planes = pl.group;
             hull.plane_normals.assign(static_cast<size_t>(pl.groups), Vec3{});
-            std::vector<double> largest(static_cast<size_t>(pl.groups), -1.0);
+            std::vector<double>& largest = w.largest;
+            largest.assign(static_cast<size_t>(pl.groups), -1.0);
             double volume = 0.0, area = 0.0;
             const Vec3 origin = w.p[verts[0]];
             for (size_t i = 0; i < m; ++i) {

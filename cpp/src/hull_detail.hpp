@@ -60,7 +60,8 @@ struct Workspace {
     std::vector<Frame> dfs;
     unsigned stamp = 0;
     // scratch of the analysis and the packing, kept across shapes
-    std::vector<int> all, real, local, keep, parent, id;
+    std::vector<int> all, real, local, keep, parent, id, subset, removed, dropped;
+    std::vector<double> largest;
     std::vector<char> used;
     std::vector<std::int64_t> start;
     std::vector<long long> table;
