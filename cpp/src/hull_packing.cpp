@@ -2,6 +2,7 @@
 // (hull.cpp) with its vertex adjacency for hill climbing and its face normals and edge
 // directions for SAT, on threads, concatenated.
 #include <algorithm>
+#include <array>
 #include <climits>
 #include <cmath>
 #include <cstdint>
@@ -51,10 +52,12 @@ struct ChunkPack {
 
 void push(std::vector<double>& dst, const Vec3& v) { dst.insert(dst.end(), {v.x, v.y, v.z}); }
 
-// A cell of unique_directions' table: a rounded key, current when its stamp is the call's.
+// A cell of unique_directions' table: the index of a rounded key in the call's list of
+// keys, current when its stamp is the call's (8 bytes: a 1,024-vertex hull's table stays
+// within the L2 cache).
 struct DirectionCell {
-    long long key[3];
     unsigned stamp;
+    std::int32_t key;
 };
 
 // Scratch of the packing, kept across the shapes of a chunk.
@@ -62,6 +65,7 @@ struct PackScratch {
     std::vector<std::pair<int, int>> pairs;  // undirected edges of the triangulation
     std::vector<std::int64_t> start, fill;
     std::vector<DirectionCell> table;  // unique_directions' hash table
+    std::vector<std::array<long long, 3>> keys;  // and the keys it has seen this call
     unsigned stamp = 0;                // the table's cells of the current call carry it
     std::vector<Vec3> directions;
 };
@@ -83,11 +87,12 @@ std::int64_t unique_directions(const std::vector<Vec3>& d, bool signed_classes, 
     while (size < 2 * d.size()) size *= 2;
     // Stamped cells: the table is cleared by a new stamp, not rewritten, on every call.
     if (s.table.size() < size || ++s.stamp == 0) {
-        s.table.assign(std::max(size, s.table.size()), DirectionCell{{0, 0, 0}, 0});
+        s.table.assign(std::max(size, s.table.size()), DirectionCell{0, 0});
         s.stamp = 1;
     }
     size = s.table.size();
     const unsigned stamp = s.stamp;
+    s.keys.clear();
     std::int64_t kept = 0;
     for (size_t i = 0; i < d.size(); ++i) {
         Vec3 v = d[i];
@@ -102,9 +107,9 @@ std::int64_t unique_directions(const std::vector<Vec3>& d, bool signed_classes, 
         }
         // floor(x + 0.5): ties may round either way (as np.round's half-to-even does
         // differently), which only splits a class in two. |v| <= 1: the keys fit.
-        const long long key[3] = {floor_to_integer(v.x * 1e12 + 0.5),
-                                  floor_to_integer(v.y * 1e12 + 0.5),
-                                  floor_to_integer(v.z * 1e12 + 0.5)};
+        const std::array<long long, 3> key = {floor_to_integer(v.x * 1e12 + 0.5),
+                                              floor_to_integer(v.y * 1e12 + 0.5),
+                                              floor_to_integer(v.z * 1e12 + 0.5)};
         std::uint64_t hash = 1469598103934665603ull;
         for (long long k : key) hash = (hash ^ static_cast<std::uint64_t>(k)) * 1099511628211ull;
         size_t slot = static_cast<size_t>(hash ^ (hash >> 29)) & (size - 1);
@@ -112,11 +117,12 @@ std::int64_t unique_directions(const std::vector<Vec3>& d, bool signed_classes, 
         for (;; slot = (slot + 1) & (size - 1)) {
             DirectionCell& cell = s.table[slot];
             if (cell.stamp != stamp) {
-                cell.key[0] = key[0], cell.key[1] = key[1], cell.key[2] = key[2];
                 cell.stamp = stamp;
+                cell.key = static_cast<std::int32_t>(s.keys.size());
+                s.keys.push_back(key);
                 break;
             }
-            if (cell.key[0] == key[0] && cell.key[1] == key[1] && cell.key[2] == key[2]) {
+            if (s.keys[static_cast<size_t>(cell.key)] == key) {
                 fresh = false;
                 break;
             }
