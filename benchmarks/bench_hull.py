@@ -15,13 +15,31 @@ and reported per shape: 40,000 took 73.6 s); a UV sphere of 2 million triangles 
 one hull of about a million vertices); and `check_scene` end to end on that sphere beside a
 cube. Wall and CPU times are printed: on a shared machine the wall time includes waiting.
 
+Peers, on the smooth hulls (``--sizes``, 16 to 1,024 points) and the clouds, one shape at a
+time in the same run: qhull through scipy (`ConvexHull`: the hull alone), trimesh
+(`trimesh.convex.convex_hull`: qhull plus its mesh) and coal (`coal.Convex.convexHull`,
+qhull inside), each where installed; ratios are the peer's CPU time a shape over meshcol's
+single-threaded one (`pack_hulls(..., threads=1)`: hulls, adjacency and SAT features).
+
+A/B against another build (issue 32): ``--baseline OTHER_PYTHON`` runs the single-threaded
+rows in a child process of each interpreter, alternated ``--rounds`` times, and prints CPU
+ranges and whether the packed arrays of both builds are byte-identical on every family
+(smooth hulls, clouds, and degenerate sets: 1e-12 noise on a sphere, lattice points with
+coplanar faces, duplicates, a flat set, huge and tiny coordinates).
+
 Run:  .venv/bin/python benchmarks/bench_hull.py [--shapes 40000] [--old-shapes 2000]
-      [--sphere-count 708] [--skip-old-mesh] [--on-hull-sizes 64 256 1024] [--only-on-hull]
+      [--sphere-count 708] [--skip-old-mesh] [--sizes 16 64 256 1024] [--only-on-hull]
+      [--peer-shapes 2000] [--baseline /work/base/.venv/bin/python --rounds 3]
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import hashlib
+import json
+import subprocess
+import sys
 import time
 
 import numpy as np
@@ -116,6 +134,9 @@ def clouds_case(shapes: int, old_shapes: int) -> None:
         f"({new_cpu:.3f} s CPU) from a list of arrays, {new_array:.3f} s ({array_cpu:.3f} s CPU) "
         f"from an (H, 64, 3) array; {cs!r}"
     )
+    one_cpu, _ = single_thread_cpu(clouds)
+    print(f"  one thread {one_cpu / shapes * 1e6:.1f} us CPU a shape")
+    peer_rows(clouds, one_cpu / shapes * 1e6, 2000)
     per_old, per_new = old / old_shapes, new / shapes
     per_old_cpu, per_new_cpu = old_cpu / old_shapes, new_cpu / shapes
     print(
@@ -136,7 +157,55 @@ def on_hull_points(rng: np.random.Generator, shapes: int, n: int) -> np.ndarray:
     return np.ascontiguousarray(np.einsum("hij,hnj->hni", turn, p))
 
 
-def on_hull_case(shapes: int, sizes: list[int]) -> None:
+def peers() -> dict[str, object]:
+    """The hull functions of the peers that are installed: name -> f(points)."""
+    found: dict[str, object] = {}
+    from scipy.spatial import ConvexHull
+
+    found["scipy qhull"] = ConvexHull
+    try:
+        import trimesh
+
+        found["trimesh"] = trimesh.convex.convex_hull
+    except ImportError:
+        pass
+    try:
+        import coal
+
+        def coal_hull(p: np.ndarray) -> object:
+            v = coal.StdVec_Vec3s()
+            v.extend(list(p))
+            return coal.ConvexBase.convexHull(v, False, None)
+
+        found["coal"] = coal_hull
+    except ImportError:
+        print("  (coal not installed: pip install meshcol[bench])")
+    return found
+
+
+def single_thread_cpu(points: np.ndarray, repeats: int = 3) -> tuple[float, object]:
+    """Best CPU time of `pack_hulls(points, threads=1)` and its result."""
+    from meshcol.collision.hull import pack_hulls
+
+    best, out = np.inf, None
+    for _ in range(repeats):
+        c = time.process_time()
+        out = pack_hulls(points, threads=1)
+        best = min(best, time.process_time() - c)
+    return best, out
+
+
+def peer_rows(points: np.ndarray, ours_us: float, peer_shapes: int) -> None:
+    for name, fn in peers().items():
+        sample = points[: min(len(points), peer_shapes)]
+        c = time.process_time()
+        for p in sample:
+            fn(p)  # type: ignore[operator]
+        us = (time.process_time() - c) / len(sample) * 1e6
+        print(f"  {name}: {us:.1f} us CPU a shape ({len(sample)} shapes): x{us / ours_us:.2f}")
+
+
+def on_hull_case(shapes: int, sizes: list[int], peer_shapes: int) -> None:
     from meshcol import ConvexSet
 
     rng = np.random.default_rng(1)
@@ -146,12 +215,76 @@ def on_hull_case(shapes: int, sizes: list[int]) -> None:
         as_list = list(points)
         array, array_cpu, cs = timed(lambda: ConvexSet.from_vertices(points), 3)
         listed, list_cpu, _ = timed(lambda: ConvexSet.from_vertices(as_list), 3)
+        one_cpu, _ = single_thread_cpu(points)
         kept = len(cs.vertices) / (count * n)
         print(
             f"{count} smooth hulls of {n} points ({kept:.0%} on the hull), from one array: "
             f"{array:.3f} s wall ({array_cpu:.3f} s CPU), {array / count * 1e6:.1f} us a shape "
             f"({array_cpu / count * 1e6:.1f} us CPU); from a list {listed:.3f} s "
-            f"({list_cpu:.3f} s CPU)"
+            f"({list_cpu:.3f} s CPU); one thread {one_cpu / count * 1e6:.1f} us CPU a shape"
+        )
+        peer_rows(points, one_cpu / count * 1e6, peer_shapes)
+
+
+# ---------------------------------------------------------------------------------------
+# A/B against another build: the same single-threaded rows in a child of each interpreter
+
+
+def families(shapes: int, sizes: list[int]) -> list[tuple[str, np.ndarray]]:
+    """Named (H, n, 3) inputs: the timed rows, then degenerate sets for the identity check."""
+    rng = np.random.default_rng(1)
+    rows = [(f"smooth {n}", on_hull_points(rng, max(1, shapes * 64 // n), n)) for n in sizes]
+    rows.append(("clouds 64", rng.normal(size=(shapes, 64, 3))))
+    few = max(1, shapes // 20)
+    sphere = on_hull_points(rng, few, 64)
+    rows.append(("sphere + 1e-12 noise", sphere + 1e-12 * rng.normal(size=sphere.shape)))
+    rows.append(("lattice", np.floor(2.0 * rng.normal(size=(few, 64, 3)))))
+    dup = rng.normal(size=(few, 64, 3))
+    dup[:, 1::3] = dup[:, 0:-1:3]
+    rows.append(("duplicates", dup))
+    flat = rng.normal(size=(few, 64, 3))
+    flat[..., 2] = 0.25 * flat[..., 0] - 0.5 * flat[..., 1]
+    rows.append(("flat", flat))
+    rows.append(("huge", sphere * 1e90))
+    rows.append(("tiny", sphere * 1e-150))
+    return rows
+
+
+def digest(packed: object) -> str:
+    h = hashlib.sha256()
+    for field in dataclasses.fields(packed):  # type: ignore[arg-type]
+        h.update(np.ascontiguousarray(getattr(packed, field.name)).tobytes())
+    return h.hexdigest()[:16]
+
+
+def worker(shapes: int, sizes: list[int]) -> None:
+    """Prints {row: [CPU us a shape, digest of the packed arrays]} as JSON."""
+    out = {}
+    for name, points in families(shapes, sizes):
+        cpu, packed = single_thread_cpu(points, 3 if name.startswith(("smooth", "clouds")) else 1)
+        out[name] = [cpu / len(points) * 1e6, digest(packed)]
+    print(json.dumps(out))
+
+
+def ab_case(baseline: str, rounds: int, shapes: int, sizes: list[int]) -> None:
+    runs: dict[str, list[dict[str, list]]] = {"old": [], "new": []}
+    command = [__file__, "--worker", "--shapes", str(shapes), "--sizes", *map(str, sizes)]
+    for r in range(rounds):
+        order = [("old", baseline), ("new", sys.executable)]
+        for label, python in order if r % 2 == 0 else order[::-1]:
+            done = subprocess.run([python, *command], capture_output=True, text=True, check=True)
+            runs[label].append(json.loads(done.stdout.splitlines()[-1]))
+    print(f"A/B, {rounds} alternated rounds, one thread, CPU us a shape (old: {baseline}):")
+    print("| row | old | new | old / new | packed arrays |")
+    print("| --- | --- | --- | --- | --- |")
+    for row in runs["new"][0]:
+        old = [run[row][0] for run in runs["old"]]
+        new = [run[row][0] for run in runs["new"]]
+        same = {run[row][1] for run in runs["old"] + runs["new"]}
+        print(
+            f"| {row} | {min(old):.1f}-{max(old):.1f} | {min(new):.1f}-{max(new):.1f} | "
+            f"{min(old) / max(new):.2f}-{max(old) / min(new):.2f} | "
+            f"{'identical' if len(same) == 1 else 'DIFFERENT'} |"
         )
 
 
@@ -200,12 +333,24 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--shapes", type=int, default=40000)
     parser.add_argument("--old-shapes", type=int, default=2000)
+    parser.add_argument("--peer-shapes", type=int, default=2000)
     parser.add_argument("--sphere-count", type=int, default=708)
     parser.add_argument("--skip-old-mesh", action="store_true")
-    parser.add_argument("--on-hull-sizes", type=int, nargs="*", default=[64, 256, 1024])
+    parser.add_argument(
+        "--sizes", "--on-hull-sizes", type=int, nargs="*", default=[16, 64, 256, 1024]
+    )
     parser.add_argument("--only-on-hull", action="store_true", help="the smooth hulls alone")
+    parser.add_argument("--baseline", help="another build's python: A/B alternated rows")
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
-    on_hull_case(args.shapes, args.on_hull_sizes)
+    if args.worker:
+        worker(args.shapes, args.sizes)
+        return
+    if args.baseline:
+        ab_case(args.baseline, args.rounds, args.shapes, args.sizes)
+        return
+    on_hull_case(args.shapes, args.sizes, args.peer_shapes)
     if args.only_on_hull:
         return
     clouds_case(args.shapes, args.old_shapes)

@@ -28,17 +28,7 @@ int find_root(std::vector<int>& parent, int i) {
 
 void planes_of(Workspace& w, const Triangulation& t, Planes& out) {
     const size_t m = t.tri.size();
-    out.normal.resize(m);
-    out.offset.resize(m);
-    out.area2.resize(m);
-    for (size_t i = 0; i < m; ++i) {
-        const Vec3& a = w.p[t.tri[i][0]];
-        const Vec3 n = triangle_normal(a, w.p[t.tri[i][1]], w.p[t.tri[i][2]]);
-        const double len = norm(n);
-        out.area2[i] = len;
-        out.normal[i] = len > 0.0 ? n / len : Vec3{};
-        out.offset[i] = dot(out.normal[i], a);
-    }
+    // The triangles' planes are Quickhull's (t.normal, t.offset, t.area2).
     // Neighbours are coplanar when each one's far corner lies within eps of the other's
     // plane; coplanar groups are the connected components (one plane, one SAT normal).
     std::vector<int>& parent = w.parent;
@@ -54,8 +44,8 @@ void planes_of(Workspace& w, const Triangulation& t, Planes& out) {
                 if (t.neighbor[j][k] == static_cast<int>(i)) far_j = t.tri[j][(k + 2) % 3];
             if (far_j < 0) continue;
             const bool coplanar =
-                std::fabs(dot(out.normal[i], w.p[far_j]) - out.offset[i]) <= w.eps &&
-                std::fabs(dot(out.normal[j], w.p[far_i]) - out.offset[j]) <= w.eps;
+                std::fabs(dot(t.normal[i], w.p[far_j]) - t.offset[i]) <= w.eps &&
+                std::fabs(dot(t.normal[j], w.p[far_i]) - t.offset[j]) <= w.eps;
             if (coplanar) parent[find_root(parent, j)] = find_root(parent, static_cast<int>(i));
         }
     out.group.assign(m, -1);
@@ -226,9 +216,12 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
         Triangulation& t = analysis.t;
         Triangulation& previous = analysis.previous;
         Planes& pl = analysis.pl;
-        std::vector<int> subset = all;
+        std::vector<int>& subset = w.subset;
+        subset = all;
         bool have = false, planes_current = false;
-        std::vector<int> removed, dropped;  // the vertices a rerun leaves out
+        std::vector<int>& removed = w.removed;  // the vertices a rerun leaves out
+        std::vector<int>& dropped = w.dropped;
+        removed.clear();
         for (int run = 0; run <= defaults::hull_max_reruns; ++run) {
             const Build b = quickhull(w, subset, t);
             if (b == Build::FAILED && !have) {
@@ -250,7 +243,7 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
                 bool holds = true;
                 for (size_t k = 0; holds && k < removed.size(); ++k)
                     for (size_t i = 0; holds && i < t.tri.size(); ++i)
-                        holds = dot(pl.normal[i], w.p[removed[k]]) - pl.offset[i] <= 4.0 * w.eps;
+                        holds = dot(t.normal[i], w.p[removed[k]]) - t.offset[i] <= 4.0 * w.eps;
                 if (!holds) {
                     t = previous;
                     planes_current = false;
@@ -298,37 +291,40 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
         if (have) {
             if (!planes_current) planes_of(w, t, pl);
             // Vertices in lexicographic order.
-            std::vector<int> verts;
+            // The points are in lexicographic order: the used ones in index order are.
+            std::vector<int>& verts = hull.vertices;
             std::vector<int>& local = w.local;
             local.assign(static_cast<size_t>(n), -1);
             for (const auto& tri : t.tri)
-                for (int v : tri)
-                    if (local[v] < 0) local[v] = 0, verts.push_back(v);
-            std::sort(verts.begin(), verts.end());  // the points are in lexicographic order
-            for (size_t k = 0; k < verts.size(); ++k) local[verts[k]] = static_cast<int>(k);
+                for (int v : tri) local[v] = 0;
+            for (long long i = 0; i < n; ++i)
+                if (local[i] == 0) {
+                    local[i] = static_cast<int>(verts.size());
+                    verts.push_back(static_cast<int>(i));
+                }
             hull.status = HullStatus::OK;
             hull.dimension = 3;
-            hull.vertices = verts;
             const size_t m = t.tri.size();
             hull.faces.resize(m);
             hull.face_normals.resize(m);
             hull.face_offsets.resize(m);
             hull.face_planes = pl.group;
             hull.plane_normals.assign(static_cast<size_t>(pl.groups), Vec3{});
-            std::vector<double> largest(static_cast<size_t>(pl.groups), -1.0);
+            std::vector<double>& largest = w.largest;
+            largest.assign(static_cast<size_t>(pl.groups), -1.0);
             double volume = 0.0, area = 0.0;
             const Vec3 origin = w.p[verts[0]];
             for (size_t i = 0; i < m; ++i) {
                 const auto& tri = t.tri[i];
                 hull.faces[i] = {local[tri[0]], local[tri[1]], local[tri[2]]};
-                hull.face_normals[i] = pl.normal[i];
-                hull.face_offsets[i] = -dot(pl.normal[i], points[tri[0]]);
+                hull.face_normals[i] = t.normal[i];
+                hull.face_offsets[i] = -dot(t.normal[i], points[tri[0]]);
                 const int g = pl.group[i];
-                if (pl.area2[i] > largest[g]) {
-                    largest[g] = pl.area2[i];
-                    hull.plane_normals[g] = pl.normal[i];
+                if (t.area2[i] > largest[g]) {
+                    largest[g] = t.area2[i];
+                    hull.plane_normals[g] = t.normal[i];
                 }
-                area += pl.area2[i];
+                area += t.area2[i];
                 volume += dot(w.p[tri[0]] - origin,
                               cross(w.p[tri[1]] - origin, w.p[tri[2]] - origin));
             }

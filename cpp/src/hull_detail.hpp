@@ -26,6 +26,7 @@ struct Face {
     int n[3];  // neighbour across edge v[i] -> v[(i + 1) % 3]
     Vec3 normal;
     double offset = 0.0;  // dot(normal, x) - offset is the distance of x
+    double area2 = 0.0;   // the unnormalised normal's length: twice the area
     std::vector<Conflict> conflicts;  // the points outside this face (farther than eps)
     int furthest = -1;
     double furthest_distance = 0.0;
@@ -40,8 +41,10 @@ struct HorizonEdge {
     int slot;      // the edge index in `outside` that pointed to the visible face
 };
 
+// A face of the depth-first search for the faces a point sees: its next edge and how many
+// edges are left.
 struct Frame {
-    int face, start, count, done;
+    int face, edge, left;
 };
 
 struct Workspace {
@@ -52,12 +55,13 @@ struct Workspace {
     size_t face_count = 0;
     std::vector<int> free_faces, pending, visible, new_faces;
     std::vector<Conflict> orphans;
-    std::vector<std::pair<int, int>> horizon;
     std::vector<HorizonEdge> edges;
+    std::vector<double> new_planes;  // the new faces' planes (nx, ny, nz, offset), packed
     std::vector<Frame> dfs;
     unsigned stamp = 0;
     // scratch of the analysis and the packing, kept across shapes
-    std::vector<int> all, real, local, keep, parent, id;
+    std::vector<int> all, real, local, keep, parent, id, subset, removed, dropped;
+    std::vector<double> largest;
     std::vector<char> used;
     std::vector<std::int64_t> start;
     std::vector<long long> table;
@@ -68,29 +72,37 @@ struct Workspace {
     std::vector<double> filter_planes;
 };
 
-// A triangulated 3-D hull: triangles of point indices and their neighbours.
+// A triangulated 3-D hull: triangles of point indices, their neighbours and their planes
+// (unit normal, offset and twice the area, scaled frame, as Quickhull computed them).
 struct Triangulation {
     std::vector<std::array<int, 3>> tri;
     std::vector<std::array<int, 3>> neighbor;
+    std::vector<Vec3> normal;
+    std::vector<double> offset, area2;
 };
 
 enum class Build { OK, DEGENERATE, FAILED };
 
-/// The outward normal (b - a) x (c - a), unnormalised, accurate for thin triangles too
-/// (quickhull.cpp).
-Vec3 triangle_normal(const Vec3& a, const Vec3& b, const Vec3& c);
+/// triangle_normal's case of a sharp first corner (quickhull.cpp).
+Vec3 triangle_normal_at_widest(const Vec3& a, const Vec3& b, const Vec3& c);
+
+/// The outward normal (b - a) x (c - a), unnormalised, accurate for thin triangles too: the
+/// plain product when the corner at a is not sharp (the sine of its angle at least 1/4: within
+/// a few ulps of the exact one), else taken at the widest corner or compensated.
+inline Vec3 triangle_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
+    const Vec3 u = b - a, v = c - a;
+    const Vec3 n = cross(u, v);
+    if (16.0 * squared_norm(n) >= squared_norm(u) * squared_norm(v)) return n;
+    return triangle_normal_at_widest(a, b, c);
+}
 
 /// The 3-D hull of the points `subset` of w.p (quickhull.cpp): large inputs first lose their
 /// clearly interior points (the interior filter), then Quickhull.
 Build quickhull(Workspace& w, const std::vector<int>& subset, Triangulation& out);
 
-// Plane of each triangle (scaled frame), coplanar groups and the number of edges between
-// different planes at each point.
+// The coplanar groups of a triangulation's triangles (their planes are the triangulation's).
 struct Planes {
-    std::vector<Vec3> normal;
-    std::vector<double> offset;
-    std::vector<double> area2;  // twice the triangle's area
-    std::vector<int> group;     // plane id per triangle
+    std::vector<int> group;  // plane id per triangle
     int groups = 0;
 };
 

@@ -2,6 +2,7 @@
 // (hull.cpp) with its vertex adjacency for hill climbing and its face normals and edge
 // directions for SAT, on threads, concatenated.
 #include <algorithm>
+#include <array>
 #include <climits>
 #include <cmath>
 #include <cstdint>
@@ -19,198 +20,283 @@ namespace {
 
 using namespace hull_detail;
 
-struct ShapePack {
-    HullStatus status = HullStatus::EMPTY;
-    std::vector<Vec3> vertices;
-    std::vector<std::int64_t> adjacency_counts;  // per vertex
+// The packed arrays of a run of consecutive shapes, concatenated (per-shape vectors cost an
+// allocation each, about as much as a small hull): the chunks are joined in order at the end.
+// Vertices, face normals and edge directions as flat (x, y, z) triples: a single chunk's
+// arrays become the result's without a copy.
+struct ChunkPack {
+    std::vector<HullStatus> status;
+    std::vector<double> vertices;
+    std::vector<std::int64_t> vertex_counts, face_counts, edge_counts;  // per shape
+    std::vector<std::int64_t> adjacency_counts;                          // per vertex
     std::vector<std::int32_t> adjacency;
-    std::vector<Vec3> faces;
-    std::vector<Vec3> edges;
+    std::vector<double> faces, edges;
+
+    // Room for shapes of `points` points in all (a hull of k vertices has at most 2k - 4
+    // triangles and 3k - 6 edges), so the arrays never move while they fill; large inputs
+    // (mostly interior points) grow as they fill instead of reserving for every point.
+    void reserve(long long shapes, long long points) {
+        const auto p = static_cast<size_t>(std::min<long long>(points, 1 << 20));
+        const auto h = static_cast<size_t>(shapes);
+        status.reserve(h);
+        vertex_counts.reserve(h);
+        face_counts.reserve(h);
+        edge_counts.reserve(h);
+        vertices.reserve(3 * p);
+        adjacency_counts.reserve(p);
+        adjacency.reserve(6 * p + 3 * p + 4 * h);
+        faces.reserve(3 * (2 * p + 2 * h));
+        edges.reserve(3 * (3 * p + h));
+    }
 };
 
-// One direction per class: unit, rounded to 12 digits for grouping; unsigned classes get a
-// canonical sign (the first component clearly non-zero positive). First occurrences kept,
-// in input order (an open-addressing table of the rounded keys: linear in the count).
-void unique_directions(std::vector<Vec3>& d, bool signed_classes, std::vector<long long>& table) {
+void push(std::vector<double>& dst, const Vec3& v) { dst.insert(dst.end(), {v.x, v.y, v.z}); }
+
+// A cell of unique_directions' table: the index of a rounded key in the call's list of
+// keys, current when its stamp is the call's (8 bytes: a 1,024-vertex hull's table stays
+// within the L2 cache).
+struct DirectionCell {
+    unsigned stamp;
+    std::int32_t key;
+};
+
+// Scratch of the packing, kept across the shapes of a chunk.
+struct PackScratch {
+    std::vector<std::pair<int, int>> pairs;  // undirected edges of the triangulation
+    std::vector<std::int64_t> start, fill;
+    std::vector<DirectionCell> table;  // unique_directions' hash table
+    std::vector<std::array<long long, 3>> keys;  // and the keys it has seen this call
+    unsigned stamp = 0;                // the table's cells of the current call carry it
+    std::vector<Vec3> directions;
+};
+
+// floor(x) for |x| < 2^62 as the library's floor gives it (an inline conversion where
+// std::floor is a libm call on the default x86-64 target).
+inline long long floor_to_integer(double x) {
+    const auto t = static_cast<long long>(x);  // truncation towards zero
+    return t - (static_cast<double>(t) > x ? 1 : 0);
+}
+
+// One direction per class of `d`, appended to `out`: unit, rounded to 12 digits for grouping;
+// unsigned classes get a canonical sign (the first component clearly non-zero positive).
+// First occurrences kept, in input order (an open-addressing table of the rounded keys:
+// linear in the count). Returns how many were appended.
+std::int64_t unique_directions(const std::vector<Vec3>& d, bool signed_classes, PackScratch& s,
+                               std::vector<double>& out) {
     size_t size = 16;
     while (size < 2 * d.size()) size *= 2;
-    table.assign(3 * size, LLONG_MIN);
-    size_t kept = 0;
+    // Stamped cells: the table is cleared by a new stamp, not rewritten, on every call.
+    if (s.table.size() < size || ++s.stamp == 0) {
+        s.table.assign(std::max(size, s.table.size()), DirectionCell{0, 0});
+        s.stamp = 1;
+    }
+    size = s.table.size();
+    const unsigned stamp = s.stamp;
+    s.keys.clear();
+    std::int64_t kept = 0;
     for (size_t i = 0; i < d.size(); ++i) {
         Vec3 v = d[i];
         const double len = norm(v);
         if (!(len > 0.0)) continue;
         v = v / len;
         if (!signed_classes) {
-            double s = 0.0;
-            for (int k = 0; k < 3 && s == 0.0; ++k)
-                if (std::fabs(v[k]) > 1e-12) s = v[k] > 0.0 ? 1.0 : -1.0;
-            if (s < 0.0) v = -v;
+            double sign = 0.0;
+            for (int k = 0; k < 3 && sign == 0.0; ++k)
+                if (std::fabs(v[k]) > 1e-12) sign = v[k] > 0.0 ? 1.0 : -1.0;
+            if (sign < 0.0) v = -v;
         }
-        // floor(x + 0.5) inlines where llround is a libm call; ties may round either way
-        // (as np.round's half-to-even does differently), which only splits a class in two.
-        const long long key[3] = {static_cast<long long>(std::floor(v.x * 1e12 + 0.5)),
-                                  static_cast<long long>(std::floor(v.y * 1e12 + 0.5)),
-                                  static_cast<long long>(std::floor(v.z * 1e12 + 0.5))};
+        // floor(x + 0.5): ties may round either way (as np.round's half-to-even does
+        // differently), which only splits a class in two. |v| <= 1: the keys fit.
+        const std::array<long long, 3> key = {floor_to_integer(v.x * 1e12 + 0.5),
+                                              floor_to_integer(v.y * 1e12 + 0.5),
+                                              floor_to_integer(v.z * 1e12 + 0.5)};
         std::uint64_t hash = 1469598103934665603ull;
         for (long long k : key) hash = (hash ^ static_cast<std::uint64_t>(k)) * 1099511628211ull;
         size_t slot = static_cast<size_t>(hash ^ (hash >> 29)) & (size - 1);
         bool fresh = true;
         for (;; slot = (slot + 1) & (size - 1)) {
-            long long* cell = &table[3 * slot];
-            if (cell[0] == LLONG_MIN) {
-                cell[0] = key[0], cell[1] = key[1], cell[2] = key[2];
+            DirectionCell& cell = s.table[slot];
+            if (cell.stamp != stamp) {
+                cell.stamp = stamp;
+                cell.key = static_cast<std::int32_t>(s.keys.size());
+                s.keys.push_back(key);
                 break;
             }
-            if (cell[0] == key[0] && cell[1] == key[1] && cell[2] == key[2]) {
+            if (s.keys[static_cast<size_t>(cell.key)] == key) {
                 fresh = false;
                 break;
             }
         }
-        if (fresh) d[kept++] = v;
+        if (fresh) push(out, v), ++kept;
     }
-    d.resize(kept);
+    return kept;
 }
 
 // Neighbour lists of `count` vertices from undirected edges, ascending, padded with the
-// vertex itself to a multiple of four (the climb's blocks: see climb.hpp).
-void adjacency_from_edges(int count, const std::vector<std::pair<int, int>>& edges,
-                          std::vector<std::int64_t>& start, ShapePack& out) {
+// vertex itself to a multiple of four (the climb's blocks: see climb.hpp), appended.
+void adjacency_from_edges(int count, PackScratch& s, ChunkPack& out) {
+    std::vector<std::int64_t>& start = s.start;
     start.assign(static_cast<size_t>(count) + 1, 0);
-    for (const auto& [a, b] : edges) ++start[a + 1], ++start[b + 1];
-    for (int i = 0; i < count; ++i) start[i + 1] += start[i];
-    std::vector<std::int32_t>& list = out.adjacency;
+    for (const auto& [a, b] : s.pairs) ++start[a + 1], ++start[b + 1];
     // Each list padded to a multiple of four: room for the padding first.
-    out.adjacency_counts.resize(static_cast<size_t>(count));
-    std::int64_t total = 0;
+    std::vector<std::int64_t>& fill = s.fill;
+    fill.resize(static_cast<size_t>(count));
+    const size_t first = out.adjacency.size();
+    std::int64_t at = static_cast<std::int64_t>(first);
     for (int i = 0; i < count; ++i) {
-        const std::int64_t degree = start[i + 1] - start[i];
-        out.adjacency_counts[i] = (degree + 3) / 4 * 4;
-        total += out.adjacency_counts[i];
-    }
-    list.assign(static_cast<size_t>(total), 0);
-    std::vector<std::int64_t> fill(static_cast<size_t>(count));
-    std::int64_t at = 0;
-    for (int i = 0; i < count; ++i) {
+        const std::int64_t padded = (start[i + 1] + 3) / 4 * 4;
+        out.adjacency_counts.push_back(padded);
         fill[i] = at;
-        at += out.adjacency_counts[i];
+        at += padded;
     }
-    for (const auto& [a, b] : edges) list[fill[a]++] = b, list[fill[b]++] = a;
-    at = 0;
+    out.adjacency.resize(static_cast<size_t>(at));
+    std::int32_t* list = out.adjacency.data();
+    for (const auto& [a, b] : s.pairs) list[fill[a]++] = b, list[fill[b]++] = a;
+    at = static_cast<std::int64_t>(first);
     for (int i = 0; i < count; ++i) {
         const std::int64_t end = fill[i];
-        std::sort(list.begin() + at, list.begin() + end);
-        for (std::int64_t k = end; k < at + out.adjacency_counts[i]; ++k) list[k] = i;
-        at += out.adjacency_counts[i];
+        // Insertion sort: the lists are short (six on average).
+        for (std::int64_t k = at + 1; k < end; ++k) {
+            const std::int32_t x = list[k];
+            std::int64_t j = k;
+            for (; j > at && list[j - 1] > x; --j) list[j] = list[j - 1];
+            list[j] = x;
+        }
+        const std::int64_t padded = (start[i + 1] + 3) / 4 * 4;
+        for (std::int64_t k = end; k < at + padded; ++k) list[k] = i;
+        at += padded;
     }
 }
 
 void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
-              ShapePack& out) {
+              PackScratch& s, ChunkPack& out) {
     hull_with(points, n, w, analysis);
     const Hull& hull = analysis.hull;
     const Triangulation& t = analysis.t;
     const Planes& pl = analysis.pl;
-    out.status = hull.status;
+    out.status.push_back(hull.status);
+    const size_t vertices_before = out.vertices.size();
+    std::int64_t faces = 0, edges = 0;
+    s.pairs.clear();
+    s.directions.clear();
+    const Vec3 zero{0.0, 0.0, 0.0};
+    const int k = static_cast<int>(hull.vertices.size());
     if (hull.dimension < 0) {
         // Kept as given: the core reports INVALID_INPUT for every pair that uses it.
-        out.vertices.assign(points, points + std::max<long long>(n, 0));
-        out.adjacency_counts.assign(out.vertices.size(), 0);
-        return;
+        for (long long i = 0; i < n; ++i) push(out.vertices, points[i]);
+        out.adjacency_counts.resize(out.adjacency_counts.size() +
+                                    static_cast<size_t>(std::max<long long>(n, 0)), 0);
+    } else {
+        for (int v : hull.vertices) push(out.vertices, points[v] + zero);  // -0.0 as 0.0
     }
-    const Vec3 zero{0.0, 0.0, 0.0};
-    for (int v : hull.vertices) out.vertices.push_back(points[v] + zero);  // -0.0 as 0.0
-    const int k = static_cast<int>(hull.vertices.size());
-    std::vector<std::pair<int, int>> edges;
     if (hull.dimension == 0) {
-        out.adjacency_counts.assign(1, 0);
-        return;
-    }
-    if (hull.dimension == 1) {
-        edges.emplace_back(0, 1);
-        adjacency_from_edges(2, edges, w.start, out);
-        out.edges.push_back(points[hull.vertices[1]] - points[hull.vertices[0]]);
-        unique_directions(out.edges, false, w.table);
-        return;
-    }
-    if (hull.dimension == 2) {
+        out.adjacency_counts.push_back(0);
+    } else if (hull.dimension == 1) {
+        s.pairs.emplace_back(0, 1);
+        adjacency_from_edges(2, s, out);
+        s.directions.push_back(points[hull.vertices[1]] - points[hull.vertices[0]]);
+        edges = unique_directions(s.directions, false, s, out.edges);
+    } else if (hull.dimension == 2) {
         for (int i = 0; i < k; ++i) {
-            edges.emplace_back(i, (i + 1) % k);
-            out.edges.push_back(points[hull.vertices[(i + 1) % k]] - points[hull.vertices[i]]);
+            s.pairs.emplace_back(i, (i + 1) % k);
+            s.directions.push_back(points[hull.vertices[(i + 1) % k]] -
+                                   points[hull.vertices[i]]);
         }
-        adjacency_from_edges(k, edges, w.start, out);
-        out.faces = {hull.normal, -hull.normal};
-        unique_directions(out.edges, false, w.table);
-        return;
+        adjacency_from_edges(k, s, out);
+        push(out.faces, hull.normal);
+        push(out.faces, -hull.normal);
+        faces = 2;
+        edges = unique_directions(s.directions, false, s, out.edges);
+    } else if (hull.dimension == 3) {
+        // Every triangulation edge drives hill climbing; edges between different planes
+        // are the polytope's true edges (SAT).
+        const size_t m = hull.faces.size();
+        for (size_t i = 0; i < m; ++i)
+            for (int e = 0; e < 3; ++e) {
+                const int j = t.neighbor[i][e];
+                if (j < static_cast<int>(i)) continue;
+                const int a = hull.faces[i][e], b = hull.faces[i][(e + 1) % 3];
+                s.pairs.emplace_back(a, b);
+                if (pl.group[i] != pl.group[j])
+                    s.directions.push_back(points[hull.vertices[b]] - points[hull.vertices[a]]);
+            }
+        adjacency_from_edges(k, s, out);
+        faces = unique_directions(hull.plane_normals, true, s, out.faces);
+        edges = unique_directions(s.directions, false, s, out.edges);
     }
-    // 3-D: every triangulation edge drives hill climbing; edges between different planes
-    // are the polytope's true edges (SAT).
-    const size_t m = hull.faces.size();
-    edges.reserve(3 * m / 2);
-    for (size_t i = 0; i < m; ++i)
-        for (int e = 0; e < 3; ++e) {
-            const int j = t.neighbor[i][e];
-            if (j < static_cast<int>(i)) continue;
-            const int a = hull.faces[i][e], b = hull.faces[i][(e + 1) % 3];
-            edges.emplace_back(a, b);
-            if (pl.group[i] != pl.group[j])
-                out.edges.push_back(points[hull.vertices[b]] - points[hull.vertices[a]]);
-        }
-    adjacency_from_edges(k, edges, w.start, out);
-    out.faces = hull.plane_normals;
-    unique_directions(out.faces, true, w.table);
-    unique_directions(out.edges, false, w.table);
+    out.vertex_counts.push_back(static_cast<std::int64_t>(out.vertices.size() - vertices_before) / 3);
+    out.face_counts.push_back(faces);
+    out.edge_counts.push_back(edges);
 }
-
 
 }  // namespace
 
 PackedPolytopes pack_polytopes(const Vec3* points, const std::int64_t* offsets, long long shapes,
                                int threads) {
-    std::vector<ShapePack> packs(static_cast<size_t>(std::max<long long>(shapes, 0)));
+    shapes = std::max<long long>(shapes, 0);
     const int t = resolve_threads(threads, shapes, defaults::hull_min_shapes_per_thread);
-    parallel_for(shapes, t, [&](long long begin, long long end) {
+    // Fixed chunks of consecutive shapes (about 8 a thread, handed out dynamically), each
+    // packed into arrays of its own, joined in chunk order: the result never depends on the
+    // threads.
+    const long long chunk = t <= 1 ? std::max<long long>(shapes, 1)
+                                   : std::max<long long>(1, (shapes + 8LL * t - 1) / (8LL * t));
+    const long long chunks = (shapes + chunk - 1) / chunk;
+    std::vector<ChunkPack> packs(static_cast<size_t>(chunks));
+    parallel_for(chunks, t, [&](long long begin, long long end) {
         Workspace w;
         Analysis analysis;
-        for (long long h = begin; h < end; ++h)
-            pack_one(points + offsets[h], offsets[h + 1] - offsets[h], w, analysis, packs[h]);
+        PackScratch scratch;
+        for (long long c = begin; c < end; ++c) {
+            ChunkPack& out = packs[static_cast<size_t>(c)];
+            const long long first = c * chunk, last = std::min(shapes, (c + 1) * chunk);
+            out.reserve(last - first, offsets[last] - offsets[first]);
+            for (long long h = first; h < last; ++h)
+                pack_one(points + offsets[h], offsets[h + 1] - offsets[h], w, analysis, scratch,
+                         out);
+        }
     });
     PackedPolytopes out;
-    out.status.resize(packs.size());
-    out.offsets.assign(1, 0);
-    out.face_offsets.assign(1, 0);
-    out.edge_offsets.assign(1, 0);
-    out.adjacency_offsets.assign(1, 0);
-    size_t v = 0, a = 0, f = 0, e = 0;
-    for (const ShapePack& s : packs) {
-        v += s.vertices.size();
-        a += s.adjacency.size();
-        f += s.faces.size();
-        e += s.edges.size();
+    const auto hs = static_cast<size_t>(shapes);
+    out.offsets.resize(hs + 1);
+    out.face_offsets.resize(hs + 1);
+    out.edge_offsets.resize(hs + 1);
+    out.offsets[0] = out.face_offsets[0] = out.edge_offsets[0] = 0;
+    size_t v = 0, h = 0;
+    for (const ChunkPack& s : packs) {
+        v += s.adjacency_counts.size();
+        for (size_t k = 0; k < s.vertex_counts.size(); ++k, ++h) {
+            out.offsets[h + 1] = out.offsets[h] + s.vertex_counts[k];
+            out.face_offsets[h + 1] = out.face_offsets[h] + s.face_counts[k];
+            out.edge_offsets[h + 1] = out.edge_offsets[h] + s.edge_counts[k];
+        }
     }
-    out.vertices.reserve(3 * v);
-    out.adjacency.reserve(a);
-    out.adjacency_offsets.reserve(v + 1);
-    out.face_normals.reserve(3 * f);
-    out.edge_directions.reserve(3 * e);
-    auto put = [](std::vector<double>& dst, const std::vector<Vec3>& src) {
-        for (const Vec3& x : src) dst.insert(dst.end(), {x.x, x.y, x.z});
+    out.adjacency_offsets.resize(v + 1);
+    out.adjacency_offsets[0] = 0;
+    size_t vi = 0;
+    for (const ChunkPack& s : packs)
+        for (std::int64_t c : s.adjacency_counts) {
+            out.adjacency_offsets[vi + 1] = out.adjacency_offsets[vi] + c;
+            ++vi;
+        }
+    if (packs.size() == 1) {
+        out.status = std::move(packs[0].status);
+        out.vertices = std::move(packs[0].vertices);
+        out.adjacency = std::move(packs[0].adjacency);
+        out.face_normals = std::move(packs[0].faces);
+        out.edge_directions = std::move(packs[0].edges);
+        return out;
+    }
+    auto join = [&](auto member, auto& dst) {
+        size_t total = 0;
+        for (const ChunkPack& s : packs) total += (s.*member).size();
+        dst.reserve(total);
+        for (const ChunkPack& s : packs) dst.insert(dst.end(), (s.*member).begin(), (s.*member).end());
     };
-    for (size_t h = 0; h < packs.size(); ++h) {
-        const ShapePack& s = packs[h];
-        out.status[h] = s.status;
-        put(out.vertices, s.vertices);
-        out.offsets.push_back(out.offsets.back() + static_cast<std::int64_t>(s.vertices.size()));
-        for (std::int64_t c : s.adjacency_counts)
-            out.adjacency_offsets.push_back(out.adjacency_offsets.back() + c);
-        out.adjacency.insert(out.adjacency.end(), s.adjacency.begin(), s.adjacency.end());
-        put(out.face_normals, s.faces);
-        out.face_offsets.push_back(out.face_offsets.back() +
-                                   static_cast<std::int64_t>(s.faces.size()));
-        put(out.edge_directions, s.edges);
-        out.edge_offsets.push_back(out.edge_offsets.back() +
-                                   static_cast<std::int64_t>(s.edges.size()));
-    }
+    join(&ChunkPack::status, out.status);
+    join(&ChunkPack::vertices, out.vertices);
+    join(&ChunkPack::adjacency, out.adjacency);
+    join(&ChunkPack::faces, out.face_normals);
+    join(&ChunkPack::edges, out.edge_directions);
     return out;
 }
 

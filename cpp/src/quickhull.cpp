@@ -51,17 +51,11 @@ Vec3 accurate_cross(const Vec3& a, const Vec3& b, const Vec3& c) {
 
 }  // namespace
 
-// The outward normal (b - a) x (c - a), unnormalised, taken at the corner opposite the
-// longest edge: its rounding error relative to its length is about one ulp over the sine of
-// that corner's angle, small unless the triangle is a cap (three nearly collinear corners),
-// which gets the compensated product.
-Vec3 triangle_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
-    {
-        // Most triangles are well shaped at their first corner already.
-        const Vec3 u = b - a, v = c - a;
-        const Vec3 n = cross(u, v);
-        if (16.0 * squared_norm(n) >= squared_norm(u) * squared_norm(v)) return n;
-    }
+// The normal of a triangle whose first corner is sharp (triangle_normal's slow case), taken
+// at the corner opposite the longest edge: its rounding error relative to its length is about
+// one ulp over the sine of that corner's angle, small unless the triangle is a cap (three
+// nearly collinear corners), which gets the compensated product.
+Vec3 triangle_normal_at_widest(const Vec3& a, const Vec3& b, const Vec3& c) {
     const double ab = squared_norm(b - a), bc = squared_norm(c - b), ca = squared_norm(a - c);
     const Vec3 *o = &a, *p = &b, *q = &c;  // o: the corner; o p q counter-clockwise
     if (ab >= bc && ab >= ca)
@@ -79,12 +73,15 @@ Vec3 triangle_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
 
 namespace {
 
+constexpr int kNext[3] = {1, 2, 0};  // the edge after edge e of a face
+
 void set_plane(Workspace& w, Face& f) {
     const Vec3& a = w.p[f.v[0]];
     const Vec3 n = triangle_normal(a, w.p[f.v[1]], w.p[f.v[2]]);
     const double len = norm(n);
     f.normal = len > 0.0 ? n / len : Vec3{};
     f.offset = dot(f.normal, a);
+    f.area2 = len;
 }
 
 int new_face(Workspace& w, int a, int b, int c) {
@@ -112,8 +109,7 @@ int new_face(Workspace& w, int a, int b, int c) {
     return id;
 }
 
-void add_conflict(Workspace& w, int face, const Conflict& c, double d) {
-    Face& f = w.faces[face];
+void add_conflict(Face& f, const Conflict& c, double d) {
     f.conflicts.push_back(c);
     if (d > f.furthest_distance) {
         f.furthest_distance = d;
@@ -121,13 +117,14 @@ void add_conflict(Workspace& w, int face, const Conflict& c, double d) {
     }
 }
 
-// Assigns `q` to the first of `candidates` it is outside of (farther than eps); false when
+// Assigns `c` to the first of `candidates` it is outside of (farther than eps); false when
 // it is inside them all.
-bool assign(Workspace& w, const Conflict& c, const std::vector<int>& candidates) {
-    for (int f : candidates) {
+bool assign(Workspace& w, const Conflict& c, const int* candidates, int count) {
+    for (int k = 0; k < count; ++k) {
+        const int f = candidates[k];
         const double d = distance(w.faces[f], c.p);
         if (d > w.eps) {
-            add_conflict(w, f, c, d);
+            add_conflict(w.faces[f], c, d);
             return true;
         }
     }
@@ -166,6 +163,157 @@ void link_faces(Workspace& w, const int* ids, int count) {
                     if (g.v[k] == b && g.v[(k + 1) % 3] == a) f.n[e] = ids[j];
             }
         }
+}
+
+// The furthest point q of face `seed` is not outside it exactly (a plane rounded badly, never
+// seen since planes are accurate): moves q to a face it is outside of, or drops it when it is
+// outside none.
+void reassign_furthest(Workspace& w, int seed, int q) {
+    const std::vector<Vec3>& p = w.p;
+    drop_conflict(w, seed, q);
+    for (size_t g = 0; g < w.face_count; ++g) {
+        Face& h = w.faces[g];
+        if (!h.alive || static_cast<int>(g) == seed) continue;
+        const double d = distance(h, p[q]);
+        if (d > w.eps && orientation(p[h.v[0]], p[h.v[1]], p[h.v[2]], p[q]) > 0) {
+            add_conflict(h, Conflict{p[q], q}, d);
+            w.pending.push_back(static_cast<int>(g));
+            return;
+        }
+    }
+}
+
+// The faces q sees, depth first from the seed, into w.visible, and the horizon edges in
+// order, into w.edges: the horizon comes out as a loop, counter-clockwise seen from q
+// (Gregorius 2014, "Implementing Quickhull"). False when the horizon is not one simple loop
+// (exact orientations guarantee it is).
+bool find_horizon(Workspace& w, int seed, int q, unsigned stamp) {
+    const std::vector<Vec3>& p = w.p;
+    Face* faces = w.faces.data();
+    w.visible.clear();
+    w.edges.clear();
+    // Every face enters the stack at most once.
+    if (w.dfs.size() < w.face_count + 1) w.dfs.resize(w.face_count + 1);
+    Frame* stack = w.dfs.data();
+    int top = 0;
+    faces[seed].visit = stamp;
+    faces[seed].visible = true;
+    w.visible.push_back(seed);
+    stack[top++] = {seed, 0, 3};
+    auto horizon_edge = [&](int fi, int e, int gi) {
+        const Face& f = faces[fi];
+        const Face& g = faces[gi];
+        // Written in place (a 16-byte copy of fields just stored stalls store forwarding).
+        HorizonEdge& he = w.edges.emplace_back();
+        he.a = f.v[e];
+        he.b = f.v[kNext[e]];
+        he.outside = gi;
+        he.slot = -1;
+        for (int s = 0; s < 3; ++s)
+            if (g.n[s] == fi && g.v[s] == he.b) he.slot = s;
+        return he.slot >= 0;
+    };
+    while (top > 0) {
+        Frame& fr = stack[top - 1];
+        if (fr.left == 0) {
+            --top;
+            continue;
+        }
+        const int fi = fr.face;
+        const int e = fr.edge;
+        fr.edge = kNext[e];
+        --fr.left;
+        const int gi = faces[fi].n[e];
+        Face& g = faces[gi];
+        if (g.visit == stamp) {
+            if (!g.visible && !horizon_edge(fi, e, gi)) return false;
+            continue;
+        }
+        g.visit = stamp;
+        g.visible = orientation(p[g.v[0]], p[g.v[1]], p[g.v[2]], p[q]) > 0;
+        if (!g.visible) {
+            if (!horizon_edge(fi, e, gi)) return false;
+            continue;
+        }
+        w.visible.push_back(gi);
+        int back = -1;
+        for (int k = 0; k < 3; ++k)
+            if (g.n[k] == fi) back = k;
+        if (back < 0) return false;
+        stack[top++] = {gi, kNext[back], 2};
+    }
+    const size_t h = w.edges.size();
+    if (h < 3) return false;
+    for (size_t k = 0; k < h; ++k) {
+        const HorizonEdge& next = w.edges[k + 1 < h ? k + 1 : 0];
+        if (w.edges[k].b != next.a) return false;
+        if (w.mark[w.edges[k].a] == static_cast<int>(stamp)) return false;
+        w.mark[w.edges[k].a] = static_cast<int>(stamp);
+    }
+    return true;
+}
+
+// Cones the horizon (w.edges) to q in place of the visible faces, whose points are reassigned
+// to the new faces (or, outside none of them, to a face of the horizon).
+void cone(Workspace& w, int q) {
+    // The visible faces go; their points wait for the new faces.
+    w.orphans.clear();
+    for (int fi : w.visible) {
+        Face& f = w.faces[fi];
+        for (const Conflict& c : f.conflicts)
+            if (c.index != q) w.orphans.push_back(c);
+        f.alive = false;
+        f.conflicts.clear();
+        w.free_faces.push_back(fi);
+    }
+    const size_t h = w.edges.size();
+    // Grown only (a resize that grows fills with zeros, every step).
+    if (w.new_faces.size() < h) w.new_faces.resize(h);
+    if (w.new_planes.size() < 4 * h) w.new_planes.resize(4 * h);
+    for (size_t k = 0; k < h; ++k) {
+        const HorizonEdge& he = w.edges[k];
+        const int id = new_face(w, he.a, he.b, q);
+        const Face& f = w.faces[id];
+        w.faces[id].n[0] = he.outside;
+        w.faces[he.outside].n[he.slot] = id;
+        w.new_faces[k] = id;
+        double* plane = &w.new_planes[4 * k];
+        plane[0] = f.normal.x, plane[1] = f.normal.y, plane[2] = f.normal.z;
+        plane[3] = f.offset;
+    }
+    for (size_t k = 0; k < h; ++k) {
+        Face& f = w.faces[w.new_faces[k]];
+        f.n[1] = w.new_faces[k + 1 < h ? k + 1 : 0];
+        f.n[2] = w.new_faces[k > 0 ? k - 1 : h - 1];
+    }
+    const double* planes = w.new_planes.data();
+    const double eps = w.eps;
+    for (const Conflict& x : w.orphans) {
+        // The first new face x is outside of (distance as `distance` computes it).
+        size_t k = 0;
+        double d = 0.0;
+        for (; k < h; ++k) {
+            const double* e = planes + 4 * k;
+            d = (e[0] * x.p.x + e[1] * x.p.y + e[2] * x.p.z) - e[3];
+            if (d > eps) break;
+        }
+        if (k < h) {
+            add_conflict(w.faces[w.new_faces[k]], x, d);
+            continue;
+        }
+        // Outside no new face: then inside the new hull, unless outside a face of the
+        // horizon (it had been listed on the first face it was outside of).
+        for (const HorizonEdge& he : w.edges) {
+            const double dx = distance(w.faces[he.outside], x.p);
+            if (dx > eps) {
+                add_conflict(w.faces[he.outside], x, dx);
+                w.pending.push_back(he.outside);
+                break;
+            }
+        }
+    }
+    for (size_t k = 0; k < h; ++k)
+        if (!w.faces[w.new_faces[k]].conflicts.empty()) w.pending.push_back(w.new_faces[k]);
 }
 
 Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulation& out) {
@@ -214,9 +362,8 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
     int start[4] = {new_face(w, a, b, c), new_face(w, a, d, b), new_face(w, b, d, c),
                     new_face(w, c, d, a)};
     link_faces(w, start, 4);
-    w.new_faces.assign(start, start + 4);
     for (int i : subset)
-        if (i != a && i != b && i != c && i != d) assign(w, Conflict{p[i], i}, w.new_faces);
+        if (i != a && i != b && i != c && i != d) assign(w, Conflict{p[i], i}, start, 4);
     for (int f : start)
         if (!w.faces[f].conflicts.empty()) w.pending.push_back(f);
 
@@ -233,121 +380,12 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
         {
             const Face& f = w.faces[seed];
             if (orientation(p[f.v[0]], p[f.v[1]], p[f.v[2]], p[q]) <= 0) {
-                // Farther than eps by the rounded plane but not outside exactly (a plane
-                // rounded badly, never seen since planes are accurate): move the point to a
-                // face it is outside of, or drop it when it is outside none.
-                drop_conflict(w, seed, q);
-                for (size_t g = 0; g < w.face_count; ++g) {
-                    const Face& h = w.faces[g];
-                    if (!h.alive || static_cast<int>(g) == seed) continue;
-                    const double d = distance(h, p[q]);
-                    if (d > w.eps && orientation(p[h.v[0]], p[h.v[1]], p[h.v[2]], p[q]) > 0) {
-                        add_conflict(w, static_cast<int>(g), Conflict{p[q], q}, d);
-                        w.pending.push_back(static_cast<int>(g));
-                        break;
-                    }
-                }
+                reassign_furthest(w, seed, q);
                 continue;
             }
         }
-        // The faces q sees, depth first from the seed: the horizon comes out as a loop,
-        // counter-clockwise seen from q (Gregorius 2014, "Implementing Quickhull").
-        const unsigned stamp = ++w.stamp;
-        w.visible.clear();
-        w.horizon.clear();
-        w.dfs.clear();
-        w.faces[seed].visit = stamp;
-        w.faces[seed].visible = true;
-        w.visible.push_back(seed);
-        w.dfs.push_back({seed, 0, 3, 0});
-        while (!w.dfs.empty()) {
-            Frame& fr = w.dfs.back();
-            if (fr.done == fr.count) {
-                w.dfs.pop_back();
-                continue;
-            }
-            const int fi = fr.face;
-            const int e = (fr.start + fr.done) % 3;
-            ++fr.done;
-            const int gi = w.faces[fi].n[e];
-            Face& g = w.faces[gi];
-            if (g.visit == stamp) {
-                if (!g.visible) w.horizon.emplace_back(fi, e);
-                continue;
-            }
-            g.visit = stamp;
-            g.visible = orientation(p[g.v[0]], p[g.v[1]], p[g.v[2]], p[q]) > 0;
-            if (!g.visible) {
-                w.horizon.emplace_back(fi, e);
-                continue;
-            }
-            w.visible.push_back(gi);
-            int back = -1;
-            for (int k = 0; k < 3; ++k)
-                if (g.n[k] == fi) back = k;
-            if (back < 0) return Build::FAILED;
-            w.dfs.push_back({gi, (back + 1) % 3, 2, 0});
-        }
-        // The horizon must be one simple loop (exact orientations guarantee it).
-        const size_t h = w.horizon.size();
-        if (h < 3) return Build::FAILED;
-        w.edges.resize(h);
-        for (size_t k = 0; k < h; ++k) {
-            const auto [fi, e] = w.horizon[k];
-            const Face& f = w.faces[fi];
-            HorizonEdge& he = w.edges[k];
-            he.a = f.v[e];
-            he.b = f.v[(e + 1) % 3];
-            he.outside = f.n[e];
-            he.slot = -1;
-            const Face& g = w.faces[he.outside];
-            for (int s = 0; s < 3; ++s)
-                if (g.n[s] == fi && g.v[s] == he.b) he.slot = s;
-            if (he.slot < 0) return Build::FAILED;
-        }
-        for (size_t k = 0; k < h; ++k) {
-            if (w.edges[k].b != w.edges[(k + 1) % h].a) return Build::FAILED;
-            if (w.mark[w.edges[k].a] == static_cast<int>(stamp)) return Build::FAILED;
-            w.mark[w.edges[k].a] = static_cast<int>(stamp);
-        }
-        // The visible faces go; their points wait for the new faces.
-        w.orphans.clear();
-        for (int fi : w.visible) {
-            Face& f = w.faces[fi];
-            for (const Conflict& c : f.conflicts)
-                if (c.index != q) w.orphans.push_back(c);
-            f.alive = false;
-            f.conflicts.clear();
-            w.free_faces.push_back(fi);
-        }
-        w.new_faces.resize(h);
-        for (size_t k = 0; k < h; ++k) {
-            const HorizonEdge& he = w.edges[k];
-            const int id = new_face(w, he.a, he.b, q);
-            w.faces[id].n[0] = he.outside;
-            w.faces[he.outside].n[he.slot] = id;
-            w.new_faces[k] = id;
-        }
-        for (size_t k = 0; k < h; ++k) {
-            Face& f = w.faces[w.new_faces[k]];
-            f.n[1] = w.new_faces[(k + 1) % h];
-            f.n[2] = w.new_faces[(k + h - 1) % h];
-        }
-        for (const Conflict& x : w.orphans) {
-            if (assign(w, x, w.new_faces)) continue;
-            // Outside no new face: then inside the new hull, unless outside a face of the
-            // horizon (it had been listed on the first face it was outside of).
-            for (const HorizonEdge& he : w.edges) {
-                const double dx = distance(w.faces[he.outside], x.p);
-                if (dx > w.eps) {
-                    add_conflict(w, he.outside, x, dx);
-                    w.pending.push_back(he.outside);
-                    break;
-                }
-            }
-        }
-        for (int id : w.new_faces)
-            if (!w.faces[id].conflicts.empty()) w.pending.push_back(id);
+        if (!find_horizon(w, seed, q, ++w.stamp)) return Build::FAILED;
+        cone(w, q);
     }
     // Compact triangulation.
     std::vector<int>& index = w.id;
@@ -357,11 +395,17 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
         if (w.faces[i].alive) index[i] = m++;
     out.tri.resize(m);
     out.neighbor.resize(m);
+    out.normal.resize(m);
+    out.offset.resize(m);
+    out.area2.resize(m);
     for (size_t i = 0; i < w.face_count; ++i) {
         const Face& f = w.faces[i];
         if (!f.alive) continue;
         const int t = index[i];
         out.tri[t] = {f.v[0], f.v[1], f.v[2]};
+        out.normal[t] = f.normal;
+        out.offset[t] = f.offset;
+        out.area2[t] = f.area2;
         for (int e = 0; e < 3; ++e) {
             if (f.n[e] < 0 || !w.faces[f.n[e]].alive) return Build::FAILED;
             out.neighbor[t][e] = index[f.n[e]];

@@ -1,5 +1,7 @@
 // Quickhull (hull.hpp): known hulls, the flatness rule's statuses, packing.
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -129,4 +131,110 @@ TEST_CASE("hull: pack_polytopes packs each shape's hull and features") {
     CHECK_EQ(p.edge_offsets[1] - p.edge_offsets[0], std::int64_t{3});
     CHECK_EQ(p.face_offsets[2] - p.face_offsets[1], std::int64_t{4});
     CHECK_EQ(p.edge_offsets[2] - p.edge_offsets[1], std::int64_t{6});
+}
+
+namespace {
+
+// n points of shape `family` from a small linear congruential generator (deterministic on
+// every platform): 0 on an ellipsoid (every point a vertex), 1 a Gaussian-like cloud, 2 a
+// lattice (coplanar faces), 3 duplicates, 4 a flat set, 5 a NaN, 6 none.
+std::vector<Vec3> family_points(int family, int n, std::uint64_t& state) {
+    auto uniform = [&]() {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return static_cast<double>(state >> 11) * 0x1p-53 * 2.0 - 1.0;
+    };
+    std::vector<Vec3> p;
+    if (family == 6) return p;
+    for (int i = 0; i < n; ++i) {
+        Vec3 q{uniform(), uniform(), uniform() + uniform()};
+        if (family == 0) q = q / norm(q) * 1.3, q.y *= 0.6;
+        if (family == 2) q = Vec3{std::floor(3 * q.x), std::floor(3 * q.y), std::floor(3 * q.z)};
+        if (family == 3 && i % 3 == 2) q = p.back();
+        if (family == 4) q.z = 0.25 * q.x - 0.5 * q.y;
+        p.push_back(q);
+    }
+    if (family == 5) p[n / 2].y = std::numeric_limits<double>::quiet_NaN();
+    return p;
+}
+
+// The same bytes (NaN coordinates of a shape kept as given compare equal).
+template <class T>
+bool same_bytes(const T* a, const T* b, size_t count) {
+    return count == 0 || std::memcmp(a, b, count * sizeof(T)) == 0;
+}
+
+template <class T>
+bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
+    return a.size() == b.size() && same_bytes(a.data(), b.data(), a.size());
+}
+
+}  // namespace
+
+TEST_CASE("hull: packing on threads equals packing one shape at a time, byte for byte") {
+    // Shapes of every family, packed together on one and on two threads (chunks joined in
+    // order) and one by one: the same arrays.
+    std::vector<Vec3> points;
+    std::vector<std::int64_t> offsets = {0};
+    std::uint64_t state = 7;
+    for (int h = 0; h < 70; ++h) {
+        const std::vector<Vec3> p = family_points(h % 7, 8 + (h * 13) % 90, state);
+        points.insert(points.end(), p.begin(), p.end());
+        offsets.push_back(static_cast<std::int64_t>(points.size()));
+    }
+    const long long shapes = static_cast<long long>(offsets.size()) - 1;
+    const PackedPolytopes one = pack_polytopes(points.data(), offsets.data(), shapes, 1);
+    const PackedPolytopes two = pack_polytopes(points.data(), offsets.data(), shapes, 2);
+    CHECK(same_bytes(one.status, two.status));
+    CHECK(same_bytes(one.vertices, two.vertices));
+    CHECK(same_bytes(one.offsets, two.offsets));
+    CHECK(same_bytes(one.adjacency_offsets, two.adjacency_offsets));
+    CHECK(same_bytes(one.adjacency, two.adjacency));
+    CHECK(same_bytes(one.face_offsets, two.face_offsets));
+    CHECK(same_bytes(one.face_normals, two.face_normals));
+    CHECK(same_bytes(one.edge_offsets, two.edge_offsets));
+    CHECK(same_bytes(one.edge_directions, two.edge_directions));
+    CHECK(one.status[5] == HullStatus::NON_FINITE);
+    CHECK(one.status[6] == HullStatus::EMPTY);
+    for (long long h = 0; h < shapes; ++h) {
+        const std::int64_t at[2] = {0, offsets[h + 1] - offsets[h]};
+        const PackedPolytopes alone = pack_polytopes(points.data() + offsets[h], at, 1, 1);
+        const auto v0 = one.offsets[h], v1 = one.offsets[h + 1];
+        REQUIRE(alone.offsets[1] == v1 - v0);
+        CHECK(alone.status[0] == one.status[h]);
+        CHECK(same_bytes(alone.vertices.data(), one.vertices.data() + 3 * v0,
+                         alone.vertices.size()));
+        const auto a0 = one.adjacency_offsets[v0];
+        for (std::int64_t k = 0; k <= v1 - v0; ++k)
+            CHECK_EQ(alone.adjacency_offsets[k], one.adjacency_offsets[v0 + k] - a0);
+        CHECK(same_bytes(alone.adjacency.data(), one.adjacency.data() + a0,
+                         alone.adjacency.size()));
+        const auto f0 = one.face_offsets[h], e0 = one.edge_offsets[h];
+        CHECK_EQ(alone.face_offsets[1], one.face_offsets[h + 1] - f0);
+        CHECK_EQ(alone.edge_offsets[1], one.edge_offsets[h + 1] - e0);
+        CHECK(same_bytes(alone.face_normals.data(), one.face_normals.data() + 3 * f0,
+                         alone.face_normals.size()));
+        CHECK(same_bytes(alone.edge_directions.data(), one.edge_directions.data() + 3 * e0,
+                         alone.edge_directions.size()));
+    }
+}
+
+TEST_CASE("hull: every point of an ellipsoid is a vertex, every vertex list sorted and padded") {
+    std::uint64_t state = 11;
+    const std::vector<Vec3> p = family_points(0, 64, state);
+    const std::int64_t at[2] = {0, 64};
+    const PackedPolytopes packed = pack_polytopes(p.data(), at, 1, 1);
+    REQUIRE(packed.status[0] == HullStatus::OK);
+    CHECK_EQ(packed.offsets[1], std::int64_t{64});
+    // Euler: 64 vertices in general position, 124 triangles, each its own plane; 186 edges.
+    CHECK_EQ(packed.face_offsets[1], std::int64_t{124});
+    CHECK_EQ(packed.edge_offsets[1], std::int64_t{186});
+    std::int64_t degrees = 0;
+    for (int v = 0; v < 64; ++v) {
+        const auto b = packed.adjacency_offsets[v], e = packed.adjacency_offsets[v + 1];
+        CHECK_EQ((e - b) % 4, std::int64_t{0});
+        for (auto k = b + 1; k < e; ++k)
+            CHECK(packed.adjacency[k - 1] <= packed.adjacency[k] || packed.adjacency[k] == v);
+        for (auto k = b; k < e; ++k) degrees += packed.adjacency[k] != v ? 1 : 0;
+    }
+    CHECK_EQ(degrees, std::int64_t{2 * 186});
 }
