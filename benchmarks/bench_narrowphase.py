@@ -3,8 +3,10 @@ per call, on the same pairs of convex hulls (the smooth-hull family of issue 32:
 random ellipsoids, every one a hull vertex, randomly turned; 16, 32, 64, 128, 256 and 512
 vertices, ``--sizes``), separated, touching (each pair of a separated case moved along its
 normal until it touches: signed distance about 0) and penetrating, with meshcol on one
-thread and on all threads, python-fcl and coal per call from Python, and their ratios to
-meshcol on one thread. Also reports the worst accuracy
+thread, python-fcl and coal per call from Python, in CPU time over rounds that alternate the
+three (a shared machine moves wall times 2-6x; CPU time far less), and the ratios of their
+best times to meshcol's; plus coal's per-call floor from Python (two spheres), so the reader
+sees how much of coal's figure is the Python loop. Also reports the worst accuracy
 seen against the exact brute-force oracles (tests/oracles.py) on a subset of the pairs.
 
 Then the cache case of issue 14 (``--only-unique`` runs it alone): 40,000 bodies, each with
@@ -18,7 +20,7 @@ reference, 256 bodies whose few hundred pairs repeat. Ratio to the in-cache row 
 target <= 1.5.
 
 Run: .venv/bin/python benchmarks/bench_narrowphase.py [--pairs 4000] [--unique-shapes 40000]
-     [--only-unique] [--sizes 16 64 256] [--skip-unique]
+     [--only-unique] [--sizes 16 64 256] [--skip-unique] [--rounds 5]
 """
 
 from __future__ import annotations
@@ -33,7 +35,6 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from meshcol import ConvexSet, distance_batch, signed_distance_batch
-from meshcol._native import core as _core
 
 
 def sphere_hull(n: int, rng: np.random.Generator) -> np.ndarray:
@@ -227,11 +228,132 @@ def unique_case(args) -> None:
             print(f"{query:>11} {label:>40} {us:>8.3f} {us / best[0]:>8.2f}")
 
 
+def cpu_time(fn) -> float:
+    """CPU seconds of one call (this process, every thread): what the load moves least."""
+    t0 = time.process_time()
+    fn()
+    return time.process_time() - t0
+
+
+def span(values: list[float]) -> str:
+    return f"{min(values):.3f}-{max(values):.3f}"
+
+
+def coal_trivial_call_us(rounds: int, calls: int = 2000) -> list[float]:
+    """Coal's per-call floor from Python: ``coal.distance`` on two unit spheres 3 apart, in
+    the same loop as the family's rows (request and result reused), us per call, per round."""
+    import coal
+
+    a, b = coal.Sphere(1.0), coal.Sphere(1.0)
+    ta, tb = coal.Transform3s(np.eye(3), np.zeros(3)), coal.Transform3s(np.eye(3), np.ones(3))
+    req, res = coal.DistanceRequest(), coal.DistanceResult()
+    pairs = [(0, 1)] * calls
+    objs = [(a, ta), (b, tb)]
+
+    def run():
+        for ia, ib in pairs:
+            res.clear()
+            ga, tfa = objs[ia]
+            gb, tfb = objs[ib]
+            coal.distance(ga, tfa, gb, tfb, req, res)
+
+    return [cpu_time(run) / calls * 1e6 for _ in range(rounds)]
+
+
+def peer_runners(fcl, coal, shapes, poses, pairs, penetrating: bool):
+    """The peers' loops over ``pairs`` (None when a peer is missing), per call from Python:
+    fcl ``collide`` with one contact (depth) or ``distance``; coal ``distance`` (signed:
+    EPA's depth when the shapes overlap), request and result reused."""
+    run_fcl = run_coal = None
+    if fcl is not None:
+        objs = fcl_objects(shapes, poses)
+        if penetrating:
+
+            def run_fcl():
+                for ia, ib in pairs:
+                    req = fcl.CollisionRequest(enable_contact=True, num_max_contacts=1)
+                    fcl.collide(objs[ia], objs[ib], req, fcl.CollisionResult())
+        else:
+
+            def run_fcl():
+                for ia, ib in pairs:
+                    fcl.distance(objs[ia], objs[ib], fcl.DistanceRequest(), fcl.DistanceResult())
+
+    if coal is not None:
+        objs_c = coal_objects(shapes, poses)
+        req = coal.DistanceRequest()
+        res_c = coal.DistanceResult()
+
+        def run_coal():
+            for ia, ib in pairs:
+                res_c.clear()
+                ga, ta = objs_c[ia]
+                gb, tb = objs_c[ib]
+                coal.distance(ga, ta, gb, tb, req, res_c)
+
+    return run_fcl, run_coal
+
+
+def family_accuracy(res, shapes, poses, pairs, label: str, k_acc: int) -> float:
+    """Worst error of meshcol against the exact oracles (tests/oracles.py) on ``k_acc`` pairs:
+    relative, absolute for touching pairs (about 0 either way)."""
+    from oracles import polytope_distance, sat_depth, transform
+
+    worst = 0.0
+    for k in range(k_acc):
+        ia, ib = pairs[k]
+        wa, wb = transform(shapes[ia], poses[ia]), transform(shapes[ib], poses[ib])
+        if label == "touching":
+            worst = max(worst, abs(res.depth[k] - max(sat_depth(wa, wb), 0.0)))
+        elif label == "penetrating":
+            truth = max(sat_depth(wa, wb), 0.0)
+            worst = max(worst, abs(res.depth[k] - truth) / max(truth, 1e-300))
+        else:
+            truth = polytope_distance(wa, wb)
+            worst = max(worst, abs(res.distance[k] - truth) / max(truth, 1e-300))
+    return worst
+
+
+def family_row(args, fcl, coal, n: int, label: str) -> float:
+    """One size and configuration: meshcol (one thread), fcl and coal timed in CPU time in
+    ``args.rounds`` alternated rounds; prints ranges and the ratios of the best times."""
+    penetrating = label != "separated"
+    cs, poses, pairs, shapes = make_case(n, args.pairs, label == "penetrating", seed=n)
+    if label == "touching":
+        cs, poses, pairs, shapes = touching_case(cs, poses, pairs, shapes)
+    query, fn = (
+        ("penetration", signed_distance_batch) if penetrating else ("distance", distance_batch)
+    )
+    n_peer = min(args.peer_pairs, len(pairs))
+    run_fcl, run_coal = peer_runners(fcl, coal, shapes, poses, pairs[:n_peer], penetrating)
+    mc: list[float] = []
+    fc: list[float] = []
+    co: list[float] = []
+    for _ in range(args.rounds):
+        mc.append(cpu_time(lambda: fn(cs, poses, pairs, threads=1)) / len(pairs) * 1e6)
+        if run_fcl is not None:
+            fc.append(cpu_time(run_fcl) / n_peer * 1e6)
+        if run_coal is not None:
+            co.append(cpu_time(run_coal) / n_peer * 1e6)
+    res = fn(cs, poses, pairs, threads=1)
+    k_acc = min(args.accuracy_pairs, len(pairs)) if n <= 128 else 6
+    worst = family_accuracy(res, shapes, poses, pairs, label, k_acc)
+    nan = [float("nan")]
+    fcl_ratio = min(fc or nan) / min(mc)
+    coal_ratio = min(co or nan) / min(mc)
+    print(
+        f"{n:>5} {label:>11} {query:>11} {span(mc):>13} {span(fc or nan):>15} "
+        f"{span(co or nan):>15} {fcl_ratio:>8.1f} {coal_ratio:>8.1f} {worst:>13.2e}"
+    )
+    return worst
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--pairs", type=int, default=4000)
     parser.add_argument("--peer-pairs", type=int, default=1000, help="pairs timed for peers")
     parser.add_argument("--accuracy-pairs", type=int, default=40)
+    parser.add_argument("--rounds", type=int, default=5, help="alternated timing rounds")
     parser.add_argument("--unique-shapes", type=int, default=40000)
     parser.add_argument("--repeat", type=int, default=3, help="best of, unique-shape case")
     parser.add_argument("--only-unique", action="store_true", help="the cache case alone")
@@ -252,87 +374,22 @@ def main() -> None:
     for name, module in (("python-fcl", fcl), ("coal", coal)):
         if module is None:
             print(f"{name}: skipped (not installed); its columns are nan")
-    from oracles import polytope_distance, sat_depth, transform
-
-    threads = _core.hardware_threads()
     print(
-        f"hardware threads: {threads}; pairs per case: {args.pairs}; "
-        f"peers timed on {args.peer_pairs} pairs (per call from Python)"
+        f"pairs per case: {args.pairs}; peers timed on {args.peer_pairs} pairs (per call from "
+        f"Python); CPU time (time.process_time) in us a pair, min-max over {args.rounds} "
+        "rounds that alternate meshcol (one thread), fcl and coal; ratios of the minima"
     )
-    header = (
-        f"{'hull':>5} {'case':>11} {'query':>11} {'mc 1t us':>9} {'mc all us':>9} "
-        f"{'fcl us':>8} {'coal us':>8} {'fcl/mc1':>8} {'coal/mc1':>8} {'worst rel err':>13}"
+    if coal is not None:
+        floor = coal_trivial_call_us(args.rounds)
+        print(f"coal per-call floor (two spheres, the same Python loop): {span(floor)} us")
+    print(
+        f"{'hull':>5} {'case':>11} {'query':>11} {'meshcol 1t':>13} {'fcl':>15} {'coal':>15} "
+        f"{'fcl/mc':>8} {'coal/mc':>8} {'worst rel err':>13}"
     )
-    print(header)
     worst_overall = 0.0
     for n in args.sizes:
         for label in ("separated", "touching", "penetrating"):
-            penetrating = label != "separated"
-            cs, poses, pairs, shapes = make_case(n, args.pairs, label == "penetrating", seed=n)
-            if label == "touching":
-                cs, poses, pairs, shapes = touching_case(cs, poses, pairs, shapes)
-            if penetrating:
-                query, fn = "penetration", signed_distance_batch
-            else:
-                query, fn = "distance", distance_batch
-            t1 = time_it(lambda: fn(cs, poses, pairs, threads=1), 5) / len(pairs) * 1e6
-            tn = time_it(lambda: fn(cs, poses, pairs, threads=0), 5) / len(pairs) * 1e6
-            res = fn(cs, poses, pairs, threads=1)
-            # Accuracy against the exact oracles on a subset.
-            worst = 0.0
-            k_acc = min(args.accuracy_pairs, len(pairs)) if n <= 128 else 6
-            for k in range(k_acc):
-                ia, ib = pairs[k]
-                wa, wb = transform(shapes[ia], poses[ia]), transform(shapes[ib], poses[ib])
-                if label == "touching":  # about 0 either way: the error is absolute
-                    truth = max(sat_depth(wa, wb), 0.0)
-                    got = res.depth[k]
-                    worst = max(worst, abs(got - truth))
-                    continue
-                if penetrating:
-                    truth = max(sat_depth(wa, wb), 0.0)
-                    got = res.depth[k]
-                else:
-                    truth = polytope_distance(wa, wb)
-                    got = res.distance[k]
-                worst = max(worst, abs(got - truth) / max(truth, 1e-300))
-            worst_overall = max(worst_overall, worst)
-            n_peer = min(args.peer_pairs, len(pairs))
-            t_fcl = t_coal = float("nan")
-            if fcl is not None:
-                objs = fcl_objects(shapes, poses)
-                if penetrating:
-
-                    def run_fcl():
-                        for ia, ib in pairs[:n_peer]:
-                            req = fcl.CollisionRequest(enable_contact=True, num_max_contacts=1)
-                            fcl.collide(objs[ia], objs[ib], req, fcl.CollisionResult())
-                else:
-
-                    def run_fcl():
-                        for ia, ib in pairs[:n_peer]:
-                            fcl.distance(
-                                objs[ia], objs[ib], fcl.DistanceRequest(), fcl.DistanceResult()
-                            )
-
-                t_fcl = time_it(run_fcl, 2) / n_peer * 1e6
-            if coal is not None:
-                objs_c = coal_objects(shapes, poses)
-                req = coal.DistanceRequest()
-                res_c = coal.DistanceResult()
-
-                def run_coal():
-                    for ia, ib in pairs[:n_peer]:
-                        res_c.clear()
-                        ga, ta = objs_c[ia]
-                        gb, tb = objs_c[ib]
-                        coal.distance(ga, ta, gb, tb, req, res_c)
-
-                t_coal = time_it(run_coal, 2) / n_peer * 1e6
-            print(
-                f"{n:>5} {label:>11} {query:>11} {t1:>9.3f} {tn:>9.3f} {t_fcl:>8.2f} "
-                f"{t_coal:>8.2f} {t_fcl / t1:>8.1f} {t_coal / t1:>8.1f} {worst:>13.2e}"
-            )
+            worst_overall = max(worst_overall, family_row(args, fcl, coal, n, label))
     print(f"worst error vs exact oracles (relative; absolute for touching): {worst_overall:.2e}")
     if not args.skip_unique:
         unique_case(args)

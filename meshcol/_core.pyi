@@ -37,6 +37,8 @@ class defaults:
 
     epa_max_vertices: int = 256
 
+    epa_blow_up_enough: float = 0.5
+
     epa_relative_tolerance: float = 1e-12
 
     epa_absolute_tolerance_ratio: float = 0.01

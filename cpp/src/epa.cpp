@@ -195,13 +195,17 @@ bool blow_up(MinkowskiDifference& md, Simplex& s, double tol) {
         const double dn = norm(d);
         double best = -1.0;
         SimplexVertex best_w;
-        for (const Vec3& e : {e1, -e1, e2, -e2, e1 + e2, -e1 - e2, e1 - e2, e2 - e1}) {
-            const SimplexVertex w = md.support(e);
+        const Vec3 dirs[8] = {e1, -e1, e2, -e2, e1 + e2, -e1 - e2, e1 - e2, e2 - e1};
+        for (int k = 0; k < 8; ++k) {
+            const SimplexVertex w = md.support(dirs[k]);
             const double off = norm(cross(w.w - s.vertices[0].w, d)) / dn;
             if (off > best) {
                 best = off;
                 best_w = w;
             }
+            // After each opposite pair: a point as far off the line as the segment is long
+            // makes a well-shaped triangle, and the remaining directions cost a support each.
+            if (k % 2 == 1 && best > tol && best >= defaults::epa_blow_up_enough * dn) break;
         }
         if (!(best > tol)) return false;
         s.vertices[2] = best_w;
@@ -211,11 +215,22 @@ bool blow_up(MinkowskiDifference& md, Simplex& s, double tol) {
         const Vec3 n = cross(s.vertices[1].w - s.vertices[0].w, s.vertices[2].w - s.vertices[0].w);
         const double nn = norm(n);
         if (!(nn > 0.0)) return false;
-        const SimplexVertex up = md.support(n), down = md.support(-n);
+        // Up first; down only when up lies no farther off the plane than the triangle's
+        // longest edge (else the tetrahedron is already well shaped).
+        const SimplexVertex up = md.support(n);
         const double hu = dot(up.w - s.vertices[0].w, n) / nn;
-        const double hd = -dot(down.w - s.vertices[0].w, n) / nn;
-        if (!(std::fmax(hu, hd) > tol)) return false;
-        s.vertices[3] = hu >= hd ? up : down;
+        const double edge = std::sqrt(std::fmax(
+            std::fmax(squared_norm(s.vertices[1].w - s.vertices[0].w),
+                      squared_norm(s.vertices[2].w - s.vertices[0].w)),
+            squared_norm(s.vertices[2].w - s.vertices[1].w)));
+        if (hu > tol && hu >= defaults::epa_blow_up_enough * edge) {
+            s.vertices[3] = up;
+        } else {
+            const SimplexVertex down = md.support(-n);
+            const double hd = -dot(down.w - s.vertices[0].w, n) / nn;
+            if (!(std::fmax(hu, hd) > tol)) return false;
+            s.vertices[3] = hu >= hd ? up : down;
+        }
         s.size = 4;
     }
     return true;

@@ -186,8 +186,8 @@ void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t
         for (long long h = begin; h < end; ++h) {
             if (!ok[h]) continue;
             const ShapeView s = set.shape(h);
-            bool good = is_valid(s);
-            if (good) radius[h] = bounding_radius(s);
+            radius[h] = valid_bounding_radius(s);
+            bool good = !std::isnan(radius[h]);
             if (poses != nullptr) {
                 const double* m = poses + 16 * h;
                 if (!is_rigid_matrix4(m, defaults::rigid_tolerance)) good = false;

@@ -1,6 +1,7 @@
 #include "meshcol/shapes.hpp"
 
 #include <cmath>
+#include <limits>
 
 #include "meshcol/defaults.hpp"
 #include "climb.hpp"
@@ -156,6 +157,38 @@ bool is_valid(const ShapeView& s) {
             return s.params[0] >= 0.0 && s.params[1] >= 0.0;
     }
     return false;
+}
+
+double valid_bounding_radius(const ShapeView& s) {
+    constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+    const auto careful = [&s] { return is_valid(s) ? bounding_radius(s) : kNaN; };
+    if (s.kind != ShapeKind::POLYTOPE || s.vertex_count <= 0 || s.vertices == nullptr)
+        return careful();
+    for (double p : s.params)
+        if (!std::isfinite(p)) return kNaN;
+    // One pass: the largest squared norm, and the sum of them, which is finite only when
+    // every coordinate is (an infinity or a NaN makes its square so) and no square
+    // overflows; otherwise the careful path decides. Four independent chains each (a max is
+    // exact, so the order does not change it: `bounding_radius`'s answer, bit for bit).
+    const Vec3* v = s.vertices;
+    const int n = s.vertex_count;
+    double r[4] = {0.0, 0.0, 0.0, 0.0}, sum[4] = {0.0, 0.0, 0.0, 0.0};
+    int i = 0;
+    for (; i + 3 < n; i += 4)
+        for (int l = 0; l < 4; ++l) {
+            const double q = squared_norm(v[i + l]);
+            r[l] = q > r[l] ? q : r[l];
+            sum[l] += q;
+        }
+    for (; i < n; ++i) {
+        const double q = squared_norm(v[i]);
+        r[0] = q > r[0] ? q : r[0];
+        sum[0] += q;
+    }
+    const double total = (sum[0] + sum[1]) + (sum[2] + sum[3]);
+    const double r2 = std::fmax(std::fmax(r[0], r[1]), std::fmax(r[2], r[3]));
+    if (std::isfinite(total) && r2 >= 0x1p-1000 && r2 <= 0x1p1000) return std::sqrt(r2);
+    return careful();
 }
 
 }  // namespace meshcol

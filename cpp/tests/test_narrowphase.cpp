@@ -148,3 +148,37 @@ TEST_CASE("narrow phase: a batch sets each pair's status, a bad pose is INVALID_
     CHECK(status[1] == static_cast<std::int8_t>(Status::INVALID_INPUT));
     CHECK(std::isnan(distance[1]));
 }
+
+TEST_CASE("shapes: valid_bounding_radius is is_valid plus bounding_radius, bit for bit") {
+    // Smooth hulls of every size class (the four-chain loop and its tail), tiny and huge
+    // coordinates (squares out of range: the careful path), and invalid data (NaN, inf).
+    std::uint64_t state = 12345;
+    auto uniform = [&state] {
+        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+        return static_cast<double>(state >> 11) * 0x1p-53 * 2.0 - 1.0;
+    };
+    const double scales[] = {1.0, 1e-3, 1e3, 1e-160, 1e160, 1e300};
+    for (int n : {1, 2, 3, 4, 5, 7, 8, 16, 33, 64, 255}) {
+        for (double scale : scales) {
+            std::vector<Vec3> v(static_cast<size_t>(n));
+            for (Vec3& p : v) p = Vec3{uniform(), uniform(), uniform()} * scale;
+            ShapeView s;
+            s.vertices = v.data();
+            s.vertex_count = n;
+            CHECK(valid_bounding_radius(s) == bounding_radius(s));
+            for (double bad : {std::nan(""), HUGE_VAL, -HUGE_VAL}) {
+                std::vector<Vec3> w = v;
+                w[static_cast<size_t>(n / 2)].y = bad;
+                s.vertices = w.data();
+                CHECK(!is_valid(s));
+                CHECK(std::isnan(valid_bounding_radius(s)));
+            }
+        }
+    }
+    ShapeView empty;
+    CHECK(std::isnan(valid_bounding_radius(empty)));
+    const ShapeView sphere = fixtures::sphere(2.5);
+    CHECK(valid_bounding_radius(sphere) == 2.5);
+    ShapeView bad_sphere = fixtures::sphere(-1.0);
+    CHECK(std::isnan(valid_bounding_radius(bad_sphere)));
+}

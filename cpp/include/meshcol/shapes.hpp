@@ -80,6 +80,11 @@ double bounding_radius(const ShapeView& shape);
 /// for a polytope, non-negative radii and extents.
 bool is_valid(const ShapeView& shape);
 
+/// `bounding_radius` of a shape that `is_valid`, else NaN: the same numbers from one tight
+/// pass over a polytope's vertices (the batches check every shape a pair uses, and in
+/// broad-phase output a shape is in only a few pairs, so the check costs as much as a query).
+double valid_bounding_radius(const ShapeView& shape);
+
 /// A triangle as a three-vertex polytope (for exact mesh queries). `vertices` must outlive it.
 inline ShapeView triangle_view(const Vec3* vertices) {
     ShapeView v;
