@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "meshcol/defaults.hpp"
+#include "meshcol/triangle.hpp"
 
 namespace meshcol {
 namespace {
@@ -217,6 +218,26 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         const double length = norm(normal);
         // Zero for a degenerate triangle, and for one whose normal under- or overflows.
         normals_[static_cast<size_t>(i)] = length > 0.0 && std::isfinite(length) ? normal / length : Vec3{0.0, 0.0, 0.0};
+    }
+    capsules_.resize(static_cast<size_t>(n));
+    for (std::int32_t i = 0; i < n; ++i) {
+        const Vec3* t = triangle(i);
+        std::int32_t edge = 0;
+        double longest = -1.0;
+        for (std::int32_t k = 0; k < 3; ++k) {
+            const double length2 = squared_norm(t[(k + 1) % 3] - t[k]);
+            if (length2 > longest) {
+                longest = length2;
+                edge = k;
+            }
+        }
+        const Vec3& p = t[(edge + 2) % 3];
+        const double h2 = segment_closest_points(p, p, t[edge], t[(edge + 1) % 3]).squared_distance;
+        // Rounded up well past the rounding of the square root and of the closest point; an
+        // overflow (coordinates beyond 1e154) gives inf, a bound that prunes nothing.
+        double radius = std::sqrt(h2) * (1.0 + 1e-12);
+        if (!(radius >= 0.0)) radius = kInf;  // NaN
+        capsules_[static_cast<size_t>(i)] = {radius, edge, 16.0 * h2 < longest};
     }
     build_winding_nodes();
     build_obbs();
@@ -443,6 +464,17 @@ bool MeshBvh::validate() const {
     for (size_t k = 0; k < corners_.size(); ++k) {
         const std::int32_t v = corner_vertices_[k];
         if (v < 0 || static_cast<size_t>(v) >= vertices_.size() || !same_point(vertices_[static_cast<size_t>(v)], corners_[k]))
+            return false;
+    }
+    if (capsules_.size() != static_cast<size_t>(n)) return false;
+    for (std::int32_t i = 0; i < n; ++i) {
+        // Every corner within the capsule's radius of its spine (the spine's own ends at 0).
+        const TriangleCapsule& c = capsules_[static_cast<size_t>(i)];
+        if (c.edge < 0 || c.edge > 2 || !(c.radius >= 0.0)) return false;
+        if (c.radius == kInf) continue;  // overflowing lengths: a capsule that bounds nothing
+        const Vec3* t = triangle(i);
+        const Vec3& p = t[(c.edge + 2) % 3];
+        if (!(std::sqrt(segment_closest_points(p, p, t[c.edge], t[(c.edge + 1) % 3]).squared_distance) <= c.radius))
             return false;
     }
     std::vector<char> seen(static_cast<size_t>(n), 0);
