@@ -200,3 +200,18 @@ TEST_CASE("mesh query: the pruned distance search returns the brute-force minimu
     }
     CHECK(disjoint >= 30);
 }
+
+TEST_CASE("mesh bvh: closed means every edge pairs with one reversed twin, short lists or long") {
+    fixtures::TriangleMesh flipped = unit_cube();
+    std::swap(flipped.faces[1], flipped.faces[2]);  // one face wound the other way
+    CHECK(!flipped.bvh().closed());
+    fixtures::TriangleMesh doubled = unit_cube();
+    doubled.faces.insert(doubled.faces.end(), {0, 2, 3, 3, 2, 0});  // a face and its reverse, again
+    CHECK(!doubled.bvh().closed());
+    // A tube of 100 sides: its cap centres have 100 out-edges each (the sorting path).
+    CHECK(tube(100, 0.5, 1.0).bvh().closed());
+    fixtures::TriangleMesh open_tube = tube(100, 0.5, 1.0);
+    open_tube.faces.resize(open_tube.faces.size() - 3);  // one cap triangle gone
+    CHECK(!open_tube.bvh().closed());
+    CHECK(tube(24, 0.5, 1.0).bvh().closed());
+}
