@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "meshcol/defaults.hpp"
+#include "meshcol/triangle.hpp"
 
 namespace meshcol {
 namespace {
@@ -75,6 +76,61 @@ inline int bin_of(double c, double lo, double extent) {
     const double x = (c - lo) / extent * kBins;
     if (!(x > 0.0)) return 0;  // also NaN
     return x >= kBins - 1 ? kBins - 1 : static_cast<int>(x);
+}
+
+// Closed and consistently wound: every directed edge (u, v), u != v, appears once and so does
+// (v, u). By the out-edges of each vertex (a vertex's list is short: about six on a mesh), so
+// each edge is checked by two scans of short lists; a vertex with a long list (a fan of many
+// faces) sends the whole check to sorting, where the sorted directed edges, with no repeat,
+// must equal the sorted reversed ones.
+bool edges_pair_up_sorted(const std::int64_t* faces, std::int64_t face_count) {
+    std::vector<std::pair<std::int64_t, std::int64_t>> forward, backward;
+    for (std::int64_t f = 0; f < face_count; ++f)
+        for (int k = 0; k < 3; ++k) {
+            const std::int64_t u = faces[3 * f + k], v = faces[3 * f + (k + 1) % 3];
+            if (u == v) continue;
+            forward.push_back({u, v});
+            backward.push_back({v, u});
+        }
+    if (forward.empty()) return false;
+    std::sort(forward.begin(), forward.end());
+    if (std::adjacent_find(forward.begin(), forward.end()) != forward.end()) return false;
+    std::sort(backward.begin(), backward.end());
+    return forward == backward;
+}
+
+bool closed_and_consistent(const std::int64_t* faces, std::int64_t face_count, std::int64_t vertex_count) {
+    constexpr std::int64_t kShortList = 64;
+    std::vector<std::int64_t> first(static_cast<size_t>(vertex_count) + 1, 0);
+    std::int64_t edges = 0;
+    for (std::int64_t f = 0; f < face_count; ++f)
+        for (int k = 0; k < 3; ++k) {
+            const std::int64_t u = faces[3 * f + k], v = faces[3 * f + (k + 1) % 3];
+            if (u == v) continue;
+            if (++first[static_cast<size_t>(u) + 1] > kShortList) return edges_pair_up_sorted(faces, face_count);
+            ++edges;
+        }
+    if (edges == 0) return false;
+    for (size_t i = 0; i < static_cast<size_t>(vertex_count); ++i) first[i + 1] += first[i];
+    std::vector<std::int64_t> target(static_cast<size_t>(edges));
+    std::vector<std::int64_t> next(first.begin(), first.end() - 1);
+    for (std::int64_t f = 0; f < face_count; ++f)
+        for (int k = 0; k < 3; ++k) {
+            const std::int64_t u = faces[3 * f + k], v = faces[3 * f + (k + 1) % 3];
+            if (u != v) target[static_cast<size_t>(next[static_cast<size_t>(u)]++)] = v;
+        }
+    const auto out_edges = [&](std::int64_t u) {
+        return std::make_pair(target.begin() + first[static_cast<size_t>(u)], target.begin() + first[static_cast<size_t>(u) + 1]);
+    };
+    for (std::int64_t u = 0; u < vertex_count; ++u) {
+        const auto [begin, end] = out_edges(u);
+        for (auto e = begin; e != end; ++e) {
+            if (std::find(e + 1, end, *e) != end) return false;  // (u, v) repeated
+            const auto [back_begin, back_end] = out_edges(*e);
+            if (std::find(back_begin, back_end, u) == back_end) return false;  // no (v, u)
+        }
+    }
+    return true;
 }
 
 struct BuildTask {
@@ -218,6 +274,26 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         // Zero for a degenerate triangle, and for one whose normal under- or overflows.
         normals_[static_cast<size_t>(i)] = length > 0.0 && std::isfinite(length) ? normal / length : Vec3{0.0, 0.0, 0.0};
     }
+    capsules_.resize(static_cast<size_t>(n));
+    for (std::int32_t i = 0; i < n; ++i) {
+        const Vec3* t = triangle(i);
+        std::int32_t edge = 0;
+        double longest = -1.0;
+        for (std::int32_t k = 0; k < 3; ++k) {
+            const double length2 = squared_norm(t[(k + 1) % 3] - t[k]);
+            if (length2 > longest) {
+                longest = length2;
+                edge = k;
+            }
+        }
+        const Vec3& p = t[(edge + 2) % 3];
+        const double h2 = segment_closest_points(p, p, t[edge], t[(edge + 1) % 3]).squared_distance;
+        // Rounded up well past the rounding of the square root and of the closest point; an
+        // overflow (coordinates beyond 1e154) gives inf, a bound that prunes nothing.
+        double radius = std::sqrt(h2) * (1.0 + 1e-12);
+        if (!(radius >= 0.0)) radius = kInf;  // NaN
+        capsules_[static_cast<size_t>(i)] = {radius, edge, 16.0 * h2 < longest};
+    }
     build_winding_nodes();
     build_obbs();
     {
@@ -229,21 +305,7 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         const NodeObb& obb = obbs_.front();
         obb_reach_ = max_abs(obb.center) + max_abs(obb.half);
     }
-    // Closed and consistently wound: sorted directed edges pair up as (u, v) and (v, u).
-    std::vector<std::pair<std::int64_t, std::int64_t>> edges;
-    edges.reserve(3 * static_cast<size_t>(face_count));
-    for (std::int64_t f = 0; f < face_count; ++f)
-        for (int k = 0; k < 3; ++k) {
-            const std::int64_t u = faces[3 * f + k], v = faces[3 * f + (k + 1) % 3];
-            if (u != v) edges.push_back({u, v});
-        }
-    std::sort(edges.begin(), edges.end());
-    closed_ = !edges.empty();
-    for (size_t e = 0; e < edges.size() && closed_; ++e) {
-        const auto [u, v] = edges[e];
-        const bool repeated = e + 1 < edges.size() && edges[e + 1] == edges[e];
-        closed_ = !repeated && std::binary_search(edges.begin(), edges.end(), std::make_pair(v, u));
-    }
+    closed_ = closed_and_consistent(faces, face_count, vertex_count);
     // Used vertices renumbered in input order (-1: unused), for the triangles' corner indices.
     std::vector<std::int32_t> compact(static_cast<size_t>(vertex_count), -1);
     for (std::int64_t k = 0; k < 3 * face_count; ++k) compact[static_cast<size_t>(faces[k])] = 0;
@@ -443,6 +505,17 @@ bool MeshBvh::validate() const {
     for (size_t k = 0; k < corners_.size(); ++k) {
         const std::int32_t v = corner_vertices_[k];
         if (v < 0 || static_cast<size_t>(v) >= vertices_.size() || !same_point(vertices_[static_cast<size_t>(v)], corners_[k]))
+            return false;
+    }
+    if (capsules_.size() != static_cast<size_t>(n)) return false;
+    for (std::int32_t i = 0; i < n; ++i) {
+        // Every corner within the capsule's radius of its spine (the spine's own ends at 0).
+        const TriangleCapsule& c = capsules_[static_cast<size_t>(i)];
+        if (c.edge < 0 || c.edge > 2 || !(c.radius >= 0.0)) return false;
+        if (c.radius == kInf) continue;  // overflowing lengths: a capsule that bounds nothing
+        const Vec3* t = triangle(i);
+        const Vec3& p = t[(c.edge + 2) % 3];
+        if (!(std::sqrt(segment_closest_points(p, p, t[c.edge], t[(c.edge + 1) % 3]).squared_distance) <= c.radius))
             return false;
     }
     std::vector<char> seen(static_cast<size_t>(n), 0);

@@ -7,6 +7,8 @@
 #include "check.hpp"
 #include "fixtures.hpp"
 #include "meshcol/mesh_query.hpp"
+#include "meshcol/triangle.hpp"
+#include "mesh_query_detail.hpp"
 
 using namespace meshcol;
 using fixtures::at;
@@ -123,4 +125,93 @@ TEST_CASE("mesh query: lengths out of range are refused, not guessed") {
     CHECK(!mesh_pair_in_range(cube, at(0, 0, 0), cube, at(1e40, 0, 0)));
     const MeshDistanceOutput r = mesh_distance(pair_of(cube, at(0, 0, 0), cube, at(1e40, 0, 0)));
     CHECK(r.status == Status::OUT_OF_RANGE);
+}
+
+namespace {
+
+// A closed tube about z of `sides` sides, radius r, from z = 0 to z = length, one ring of
+// long side triangles (slivers when length >> r / sides) and fan caps.
+fixtures::TriangleMesh tube(int sides, double r, double length) {
+    fixtures::TriangleMesh m;
+    const double kTwoPi = 6.283185307179586;
+    for (int ring = 0; ring < 2; ++ring)
+        for (int k = 0; k < sides; ++k)
+            m.vertices.insert(m.vertices.end(), {r * std::cos(kTwoPi * k / sides), r * std::sin(kTwoPi * k / sides),
+                                                 ring * length});
+    const std::int64_t bottom = 2 * sides, top = 2 * sides + 1;
+    m.vertices.insert(m.vertices.end(), {0.0, 0.0, 0.0, 0.0, 0.0, length});
+    for (std::int64_t k = 0; k < sides; ++k) {
+        const std::int64_t k1 = (k + 1) % sides;
+        m.faces.insert(m.faces.end(), {k, k1, sides + k1, k, sides + k1, sides + k});
+        m.faces.insert(m.faces.end(), {bottom, k1, k, top, sides + k, sides + k1});
+    }
+    return m;
+}
+
+// A rotation from four numbers in [-1, 1] (a quaternion, normalised).
+Pose posed(double qw, double qx, double qy, double qz, const Vec3& t) {
+    const double n = std::sqrt(qw * qw + qx * qx + qy * qy + qz * qz);
+    qw /= n, qx /= n, qy /= n, qz /= n;
+    Pose p;
+    p.rotation.m[0][0] = 1 - 2 * (qy * qy + qz * qz), p.rotation.m[0][1] = 2 * (qx * qy - qz * qw),
+    p.rotation.m[0][2] = 2 * (qx * qz + qy * qw);
+    p.rotation.m[1][0] = 2 * (qx * qy + qz * qw), p.rotation.m[1][1] = 1 - 2 * (qx * qx + qz * qz),
+    p.rotation.m[1][2] = 2 * (qy * qz - qx * qw);
+    p.rotation.m[2][0] = 2 * (qx * qz - qy * qw), p.rotation.m[2][1] = 2 * (qy * qz + qx * qw),
+    p.rotation.m[2][2] = 1 - 2 * (qx * qx + qy * qy);
+    p.translation = t;
+    return p;
+}
+
+}  // namespace
+
+TEST_CASE("mesh query: the pruned distance search returns the brute-force minimum bit for bit") {
+    // Slivers (the tube's sides are 40 times longer than wide) are where the capsule bound
+    // prunes: every bound of the search must only drop triangle pairs that could not win, so
+    // its distance is exactly the smallest of the same triangle-pair distances over all pairs,
+    // measured in a's frame with b mapped there as the search maps it.
+    const fixtures::TriangleMesh thin = tube(24, 0.05, 0.5);
+    const MeshBvh mesh = thin.bvh();
+    REQUIRE(mesh.validate());
+    std::uint64_t state = 12345;
+    const auto uniform = [&state]() {  // in [-1, 1)
+        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+        return static_cast<double>(state >> 11) * (2.0 / 9007199254740992.0) - 1.0;
+    };
+    int disjoint = 0;
+    for (int trial = 0; trial < 60; ++trial) {
+        const Pose pa = posed(uniform(), uniform(), uniform(), uniform(), {uniform() * 0.1, 0.0, 0.0});
+        // near (a few thousandths of the length apart) to well apart
+        const double gap = trial % 3 == 0 ? 0.4 : 0.11 + 0.01 * std::fabs(uniform());
+        const Pose pb = posed(uniform(), uniform(), uniform(), uniform(), {gap, uniform() * 0.05, 0.25 * uniform()});
+        const MeshDistanceOutput r = mesh_distance(pair_of(mesh, pa, mesh, pb));
+        REQUIRE(r.status == Status::CONVERGED);
+        if (r.intersecting) continue;
+        ++disjoint;
+        const mesh_detail::Relative rel(pa, pb, mesh, mesh);
+        double best = std::numeric_limits<double>::infinity();
+        for (std::int32_t i = 0; i < mesh.triangle_count(); ++i)
+            for (std::int32_t j = 0; j < mesh.triangle_count(); ++j) {
+                const Vec3 tb[3] = {rel.apply(mesh.triangle(j)[0]), rel.apply(mesh.triangle(j)[1]),
+                                    rel.apply(mesh.triangle(j)[2])};
+                best = std::fmin(best, triangle_separated_squared_distance(mesh.triangle(i), tb, nullptr, nullptr));
+            }
+        CHECK_EQ(r.distance, std::sqrt(best));
+    }
+    CHECK(disjoint >= 30);
+}
+
+TEST_CASE("mesh bvh: closed means every edge pairs with one reversed twin, short lists or long") {
+    fixtures::TriangleMesh flipped = unit_cube();
+    std::swap(flipped.faces[1], flipped.faces[2]);  // one face wound the other way
+    CHECK(!flipped.bvh().closed());
+    fixtures::TriangleMesh doubled = unit_cube();
+    doubled.faces.insert(doubled.faces.end(), {0, 2, 3, 3, 2, 0});  // a face and its reverse, again
+    CHECK(!doubled.bvh().closed());
+    // A tube of 100 sides: its cap centres have 100 out-edges each (the sorting path).
+    CHECK(tube(100, 0.5, 1.0).bvh().closed());
+    fixtures::TriangleMesh open_tube = tube(100, 0.5, 1.0);
+    open_tube.faces.resize(open_tube.faces.size() - 3);  // one cap triangle gone
+    CHECK(!open_tube.bvh().closed());
+    CHECK(tube(24, 0.5, 1.0).bvh().closed());
 }

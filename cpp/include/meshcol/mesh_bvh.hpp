@@ -51,6 +51,18 @@ struct NodeObb {
     Vec3 half;    ///< half extents along the rows of axes, padded outwards for rounding
 };
 
+/// A capsule holding one triangle: the segment of its longest edge (corners `edge` and
+/// `edge + 1` mod 3) swept by a ball of `radius`, the distance of the opposite corner from that
+/// segment (rounded up). For a sliver it is nearly the triangle, so the distance between two
+/// capsules bounds a triangle pair's distance tightly from below where boxes and planes do not.
+struct TriangleCapsule {
+    double radius;
+    std::int32_t edge;
+    /// A sliver: the radius is under a quarter of the spine's length (for fatter triangles the
+    /// capsule bounds no better than the box and plane bounds, and is not worth its cost).
+    bool thin;
+};
+
 /// The hierarchy of one triangle mesh. Immutable once built; safe to share between threads.
 class MeshBvh {
 public:
@@ -82,6 +94,9 @@ public:
     /// The unit normal of triangle `i` (leaf order), local frame, (p1 - p0) x (p2 - p0)
     /// normalised; zero for a degenerate triangle. The distance search's plane bound reads it.
     const Vec3& triangle_normal(std::int32_t i) const { return normals_[static_cast<size_t>(i)]; }
+    /// The capsule of triangle `i` (leaf order), local frame: the distance search's bound for
+    /// long thin triangles.
+    const TriangleCapsule& triangle_capsule(std::int32_t i) const { return capsules_[static_cast<size_t>(i)]; }
     /// The vertices used by at least one face, each once, local frame (input order).
     const std::vector<Vec3>& vertices() const { return vertices_; }
     /// The three corners of triangle `i` (leaf order) as indices into `vertices()`.
@@ -111,6 +126,7 @@ private:
     std::vector<NodeObb> obbs_;
     std::vector<Vec3> corners_;            ///< 3 per triangle, leaf order
     std::vector<Vec3> normals_;            ///< 1 per triangle, leaf order, unit or zero
+    std::vector<TriangleCapsule> capsules_;  ///< 1 per triangle, leaf order
     std::vector<Vec3> vertices_;           ///< vertices referenced by a face, input order
     std::vector<std::int32_t> corner_vertices_;  ///< 3 per triangle, leaf order, into vertices_
     bool closed_ = false;

@@ -49,9 +49,11 @@ bool mesh_pair_in_range(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b, 
 
 /// Minimum distance between the surfaces of two meshes. First the intersection descent (as
 /// mesh_intersects) looks for a crossing triangle pair; without one, a simultaneous descent of
-/// the hierarchies, closer child first, prunes node pairs whose oriented-box distance bound is
-/// no less than the best distance found (branch and bound, as Larsen et al. 1999 and FCL's
-/// mesh distance), exact triangle-pair distance at the leaves. Then, when the surfaces do not
+/// the hierarchies, nearest node pair first, prunes node pairs whose oriented-box distance
+/// bound is no less than the best distance found (branch and bound, as Larsen et al. 1999 and
+/// FCL's mesh distance), exact triangle-pair distance at the leaves. The distance is the
+/// smallest triangle-pair distance bit for bit; of pairs tied at it, which one reports the
+/// triangles and points is the search's choice. Then, when the surfaces do not
 /// intersect, tests containment with the generalized winding number (winding_number_inside).
 /// The caller checks that poses are rigid.
 MeshDistanceOutput mesh_distance(const MeshDistanceInput& input);
