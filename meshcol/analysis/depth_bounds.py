@@ -163,20 +163,46 @@ def _vertex_maxima(shapes: Any, index: np.ndarray, local: np.ndarray) -> np.ndar
     return out
 
 
+def _penetrations(
+    table: PairTable,
+    rows: np.ndarray,
+    single: np.ndarray,
+    shapes: Any,
+    poses: np.ndarray,
+    pairs: np.ndarray,
+    threads: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Depth, normal and status of the enclosing sets' penetration query of each row. Two
+    bodies of one part each (``single``) are enclosed by those parts, the very pair the narrow phase
+    measured (``PairTable.convex_*``): its answer is taken, the same bits a second query
+    would give (a query's answer depends on its shapes and poses alone); the others are
+    measured in one batch."""
+    from meshcol.collision.narrowphase import penetration_batch
+
+    reuse = single & (table.convex_status[rows] >= 0)
+    depth = table.convex_depth[rows].copy()
+    normal = table.convex_normal[rows].copy()
+    status = table.convex_status[rows].copy()
+    fresh = np.flatnonzero(~reuse)
+    if len(fresh):
+        found = penetration_batch(shapes, poses, pairs[fresh], threads=threads)
+        depth[fresh], normal[fresh], status[fresh] = found.depth, found.normal, found.status
+    return depth, normal, status
+
+
 def _enclosing_depths(
     table: PairTable, placed: PlacedColliders, rows: np.ndarray, threads: int
 ) -> np.ndarray:
     """The enclosing sets' penetration depth of each row, as the support overlap along the
     normal EPA / SAT finds (NaN when the query gave no answer)."""
-    from meshcol.collision.narrowphase import penetration_batch
-
     a, b = table.body_a[rows], table.body_b[rows]
     shapes, poses, slot = _enclosing_sets(placed, np.unique(np.concatenate([a, b])))
     pairs = np.stack([slot[a], slot[b]], axis=1)
-    found = penetration_batch(shapes, poses, pairs, threads=threads)
-    depth, normal = found.depth, found.normal
+    counts = np.diff(placed.colliders.body_part_offsets)
+    single = (counts[a] == 1) & (counts[b] == 1)
+    depth, normal, status = _penetrations(table, rows, single, shapes, poses, pairs, threads)
     out = np.full(len(rows), np.nan)
-    answered = ~np.isin(found.status, NO_ANSWER)
+    answered = ~np.isin(status, NO_ANSWER)
     deep = answered & (depth > 0.0) & np.isfinite(normal).all(axis=1)
     out[answered & ~deep & (depth == 0.0)] = 0.0
     k = np.flatnonzero(deep)

@@ -89,3 +89,40 @@ def test_support_of_a_sphere_and_a_box_is_their_reach_along_the_direction() -> N
     found = supports(shapes, np.array([0, 1]), poses, d)
     assert found[0] == pytest.approx(3.5)
     assert found[1] == pytest.approx((6.0 + 1.0 + 2.0 + 3.0) / np.sqrt(3.0))
+
+
+def test_single_part_rows_take_the_narrow_phase_answer_to_the_bit() -> None:
+    """Two bodies of one part each: depth_bounds reads the convex phase's own penetration
+    answer instead of asking again; the interval is the same bits as a fresh query's."""
+    import dataclasses
+
+    from scipy.spatial import ConvexHull
+
+    from meshcol.analysis.colliders import build_colliders
+    from meshcol.analysis.depth_bounds import depth_bounds
+    from meshcol.analysis.pairs import broad_phase, convex_phase, place
+    from meshcol.types import Body
+
+    rng = np.random.default_rng(7)
+    bodies = []
+    poses = random_poses(rng, 60)
+    poses[:, :3, 3] = rng.uniform(0.0, 2.5, size=(60, 3))
+    for i in range(60):
+        if i % 3 == 0:
+            primitive = [Sphere(0.4), Box((0.6, 0.3, 0.5)), Capsule(0.2, 0.5)][i % 9 // 3]
+            bodies.append(Body.of_primitive(f"p{i}", None, primitive, pose=poses[i]))
+        else:
+            points = rng.normal(size=(int(rng.integers(8, 40)), 3)) * 0.3
+            hull = ConvexHull(points)
+            bodies.append(Body(f"m{i}", None, points, hull.simplices.astype(np.int64), poses[i]))
+    placed = place(build_colliders(bodies, "hull"))
+    table = broad_phase(placed, 0.0)
+    table = convex_phase(table, placed)
+    reused = depth_bounds(table, placed)
+    fresh = depth_bounds(
+        dataclasses.replace(table, convex_status=np.full(len(table), -1, dtype=np.int64)), placed
+    )
+    assert (table.convex_status >= 0).all()
+    assert (reused.depth_upper > 0).sum() > 10  # overlapping pairs were bounded
+    for name in ("depth_upper", "depth", "signed_distance"):
+        assert np.array_equal(getattr(reused, name), getattr(fresh, name), equal_nan=True), name
