@@ -68,7 +68,7 @@ class TimeOfImpactStatus(enum.IntEnum):
 
 def _check_length(name: str, value: float) -> float:
     value = float(value)
-    if not np.isfinite(value) or value < 0.0:
+    if not math.isfinite(value) or value < 0.0:
         raise ValueError(f"{name} must be finite and >= 0, got {value}")
     return value
 
@@ -218,14 +218,14 @@ def primitive_vertex_count(primitive: Primitive) -> int:
     """``len(primitive_mesh(primitive)[0])``, without tessellating a primitive whose lengths
     are all within :data:`REGULAR_LENGTHS`."""
     low, high = REGULAR_LENGTHS
-    lengths = (
-        primitive.size
-        if isinstance(primitive, Box)
-        else (primitive.radius,)
-        if isinstance(primitive, Sphere)
-        else (primitive.radius, primitive.length)
-    )
-    if all(low <= x <= high for x in lengths):
+    if isinstance(primitive, Sphere):
+        regular = low <= primitive.radius <= high
+    elif isinstance(primitive, Box):
+        x, y, z = primitive.size
+        regular = low <= x <= high and low <= y <= high and low <= z <= high
+    else:
+        regular = low <= primitive.radius <= high and low <= primitive.length <= high
+    if regular:
         return REGULAR_VERTEX_COUNTS[type(primitive)]
     return len(primitive_mesh(primitive)[0])
 
@@ -419,6 +419,37 @@ class Body:
         """A primitive body whose tessellation is made on first use of ``vertices`` or
         ``faces`` (never, when nothing draws or exports it); ``fields`` as the constructor's."""
         return cls(name, source, _UNMADE, _UNMADE, primitive=primitive, **fields)
+
+    @classmethod
+    def plain(
+        cls,
+        name: str,
+        source: str | None,
+        vertices: Any,
+        faces: Any,
+        pose: np.ndarray,
+        primitive: Primitive | None = None,
+        collider: str | None = None,
+    ) -> Body:
+        """``Body(name, source, vertices, faces, pose, primitive=primitive,
+        collider=collider)``, the common body (one part, no motion), made without the frozen
+        constructor's per-field calls: a loader builds 1,000,000 of them. ``vertices`` and
+        ``faces`` None with a primitive: made on first use, as :meth:`of_primitive`."""
+        body = object.__new__(cls)
+        body.__dict__.update(
+            name=name,
+            source=source,
+            vertices=vertices,
+            faces=faces,
+            pose=pose,
+            end_pose=None,
+            primitive=primitive,
+            collider=collider,
+            parts=(),
+            part_faces=None,
+            spin=None,
+        )
+        return body
 
     @property
     def vertex_count(self) -> int:

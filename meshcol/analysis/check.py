@@ -195,6 +195,7 @@ def check(
     number containment test (Jacobson et al. 2013) for ``mesh`` shapes.
     """
     from meshcol.io.scene import collector_paused
+    from meshcol.io.scene_parse import forget_documents
 
     paths = [inputs] if isinstance(inputs, (str, os.PathLike)) else list(inputs)
     if executor != "ray" and ray_address is not None:
@@ -206,6 +207,7 @@ def check(
     started = time.perf_counter()
     run = {"jobs": jobs, "timeout": timeout, "executor": executor, "address": ray_address}
     scene, decompose = _load(paths, opts, progress, robot_options, **run)
+    forget_documents()  # loaded: its manifest's decoded text is not read again
     with collector_paused():
         return check_scene(
             scene,

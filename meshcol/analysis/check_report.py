@@ -318,7 +318,7 @@ def check_report(
     colliders = placed.colliders
     names = [body.name for body in colliders.bodies]
     table = table.take(_report_order(table, names))
-    files = display_paths([body.source for body in colliders.bodies], posix=True)
+    files = _files(colliders.bodies)
     findings = _findings(colliders, options, scene.units)
     return CheckReport(
         _body_rows(placed, files),
@@ -332,6 +332,15 @@ def check_report(
         table,
         _baseline_pairs(options.baseline),
     )
+
+
+def _files(bodies: Sequence[Any]) -> list[str | None]:
+    """Each body's file as the report shows it, each distinct file made relative once (the
+    100,000 primitives of a manifest share one)."""
+    sources = [body.source for body in bodies]
+    distinct = list(dict.fromkeys(sources))
+    shown = dict(zip(distinct, display_paths(distinct, posix=True)))
+    return [shown[source] for source in sources]
 
 
 def _baseline_pairs(baseline: dict | None) -> dict | None:

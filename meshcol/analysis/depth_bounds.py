@@ -20,7 +20,7 @@ import numpy as np
 
 from meshcol.analysis.pairs import NO_ANSWER, PairTable, PlacedColliders
 
-__all__ = ["depth_bounds", "support"]
+__all__ = ["depth_bounds", "support", "supports"]
 
 _SPHERE, _BOX, _CAPSULE, _CYLINDER = 1, 2, 3, 4
 
@@ -49,31 +49,40 @@ def depth_bounds(table: PairTable, placed: PlacedColliders, threads: int = 0) ->
     return dataclasses.replace(table, depth=depth, depth_upper=upper, signed_distance=signed)
 
 
-class _Enclosing:
-    """The convex set enclosing each body, built once per body the rows involve."""
+def _enclosing_sets(
+    placed: PlacedColliders, bodies: np.ndarray
+) -> tuple[Any, np.ndarray, np.ndarray]:
+    """The convex set enclosing each body of ``bodies`` (sorted, unique) as one set with its
+    world poses, and each body's shape there (``slot``, indexed by body): a body of one part
+    is that part of the colliders' own set, at its pose (nothing copied); a body of several
+    parts is the hull of its parts' points (:func:`_part_points`), at the identity, after
+    them."""
+    from meshcol.collision.shapes import ConvexSet
 
-    def __init__(self, placed: PlacedColliders) -> None:
-        self.placed = placed
-        self.colliders = placed.colliders
-        self.made: dict[int, tuple[Any, np.ndarray]] = {}
-
-    def of(self, body: int) -> tuple[Any, np.ndarray]:
-        """(ConvexSet of one shape, its world pose) enclosing ``body``."""
-        if body not in self.made:
-            self.made[body] = self._make(body)
-        return self.made[body]
-
-    def _make(self, body: int) -> tuple[Any, np.ndarray]:
-        from meshcol.collision.shapes import ConvexSet
-
-        shapes = self.colliders.shapes
-        lo, hi = self.colliders.body_part_offsets[body : body + 2].tolist()
-        if hi - lo == 1:
-            return shapes.take([lo]), self.placed.part_poses[lo]
-        points = np.concatenate(
-            [_part_points(shapes, p, self.placed.part_poses[p]) for p in range(lo, hi)]
-        )
-        return ConvexSet.from_vertices([points]), np.eye(4)
+    colliders = placed.colliders
+    offsets = colliders.body_part_offsets
+    slot = np.full(len(offsets) - 1, -1, dtype=np.int64)
+    single = offsets[bodies + 1] - offsets[bodies] == 1
+    slot[bodies[single]] = offsets[bodies[single]]
+    several = bodies[~single].tolist()
+    if not several:
+        return colliders.shapes, placed.part_poses, slot
+    hulls = ConvexSet.from_vertices(
+        [
+            np.concatenate(
+                [
+                    _part_points(colliders.shapes, p, placed.part_poses[p])
+                    for p in range(offsets[body], offsets[body + 1])
+                ]
+            )
+            for body in several
+        ]
+    )
+    count = len(colliders.shapes)
+    slot[several] = count + np.arange(len(several))
+    shapes = ConvexSet.concatenate(colliders.shapes, hulls)
+    poses = np.concatenate([placed.part_poses, np.tile(np.eye(4), (len(several), 1, 1))])
+    return shapes, np.ascontiguousarray(poses), slot
 
 
 def _part_points(shapes: Any, part: int, pose: np.ndarray) -> np.ndarray:
@@ -98,25 +107,87 @@ def _part_points(shapes: Any, part: int, pose: np.ndarray) -> np.ndarray:
 def support(shapes: Any, index: int, pose: np.ndarray, direction: np.ndarray) -> float:
     """``max over x in shape of x . direction``, shape ``index`` of ``shapes`` at the world
     ``pose`` (its support function; exact for primitives, over the hull vertices for a
-    polytope)."""
-    rotation, origin = pose[:3, :3], pose[:3, 3]
-    local = rotation.T @ direction
-    base = float(origin @ direction)
-    kind = int(shapes.kinds[index])
+    polytope). One shape; :func:`supports` is the same for many at once, to the bit."""
+    index_array = np.array([index], dtype=np.int64)
+    poses = np.asarray(pose, dtype=np.float64).reshape(1, 4, 4)
+    return float(supports(shapes, index_array, poses, np.reshape(direction, (1, 3)))[0])
+
+
+def supports(
+    shapes: Any, index: np.ndarray, poses: np.ndarray, directions: np.ndarray
+) -> np.ndarray:
+    """The support function of shape ``index[k]`` at ``poses[k]`` along ``directions[k]``,
+    for every k: arrays in, arrays out, no loop over shapes (polytopes: one stacked product
+    per vertex count).
+
+    Each value is what the one-shape arithmetic gives (``R.T @ d``, ``t @ d``, then the
+    shape's formula), to the bit: the stacked products make the same BLAS call per item as
+    the one-shape products (``tests/test_depth_bounds.py`` holds them to it).
+    """
+    k = len(index)
+    out = np.empty(k)
+    if k == 0:
+        return out
+    rotation_t = poses[:, :3, :3].transpose(0, 2, 1)
+    local = np.matmul(rotation_t, directions[:, :, None])[:, :, 0]
+    base = np.matmul(poses[:, None, :3, 3], directions[:, :, None])[:, 0, 0]
+    kind = shapes.kinds[index].astype(np.int64)
     p = shapes.params[index]
-    if kind == 0:
-        vertices = shapes.vertices[shapes.offsets[index] : shapes.offsets[index + 1]]
-        return base + float((vertices @ local).max())
-    length = float(np.linalg.norm(local))
-    along = abs(float(local[2]))
-    if kind == _SPHERE:
-        return base + p[0] * length
-    if kind == _BOX:
-        return base + float(np.abs(local[:3]) @ p[:3])
-    if kind == _CAPSULE:
-        return base + p[1] * along + p[0] * length
-    radial = float(np.sqrt(max(length * length - along * along, 0.0)))
-    return base + p[1] * along + p[0] * radial
+    length = np.sqrt(np.matmul(local[:, None, :], local[:, :, None])[:, 0, 0])
+    along = np.abs(local[:, 2])
+    box = np.matmul(np.abs(local)[:, None, :], p[:, :3, None])[:, 0, 0]
+    radial = np.sqrt(np.maximum(length * length - along * along, 0.0))
+    primitive = np.select(
+        [kind == _SPHERE, kind == _BOX, kind == _CAPSULE],
+        [base + p[:, 0] * length, base + box, base + p[:, 1] * along + p[:, 0] * length],
+        base + p[:, 1] * along + p[:, 0] * radial,
+    )
+    out[:] = primitive
+    polytope = np.flatnonzero(kind == 0)
+    if len(polytope):
+        out[polytope] = base[polytope] + _vertex_maxima(shapes, index[polytope], local[polytope])
+    return out
+
+
+def _vertex_maxima(shapes: Any, index: np.ndarray, local: np.ndarray) -> np.ndarray:
+    """``max(vertices_h @ local[k])`` of each polytope ``h = index[k]``, grouped by vertex
+    count (NaN for one without vertices: its queries never answer, so none asks)."""
+    starts = shapes.offsets[index]
+    counts = shapes.offsets[index + 1] - starts
+    out = np.empty(len(index))
+    for count in np.unique(counts).tolist():
+        group = np.flatnonzero(counts == count)
+        rows = starts[group][:, None] + np.arange(count)
+        products = np.matmul(shapes.vertices[rows], local[group][:, :, None])[:, :, 0]
+        out[group] = products.max(axis=1) if count else np.nan
+    return out
+
+
+def _penetrations(
+    table: PairTable,
+    rows: np.ndarray,
+    single: np.ndarray,
+    shapes: Any,
+    poses: np.ndarray,
+    pairs: np.ndarray,
+    threads: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Depth, normal and status of the enclosing sets' penetration query of each row. Two
+    bodies of one part each (``single``) are enclosed by those parts, the very pair the narrow phase
+    measured (``PairTable.convex_*``): its answer is taken, the same bits a second query
+    would give (a query's answer depends on its shapes and poses alone); the others are
+    measured in one batch."""
+    from meshcol.collision.narrowphase import penetration_batch
+
+    reuse = single & (table.convex_status[rows] >= 0)
+    depth = table.convex_depth[rows].copy()
+    normal = table.convex_normal[rows].copy()
+    status = table.convex_status[rows].copy()
+    fresh = np.flatnonzero(~reuse)
+    if len(fresh):
+        found = penetration_batch(shapes, poses, pairs[fresh], threads=threads)
+        depth[fresh], normal[fresh], status[fresh] = found.depth, found.normal, found.status
+    return depth, normal, status
 
 
 def _enclosing_depths(
@@ -124,32 +195,20 @@ def _enclosing_depths(
 ) -> np.ndarray:
     """The enclosing sets' penetration depth of each row, as the support overlap along the
     normal EPA / SAT finds (NaN when the query gave no answer)."""
-    from meshcol.collision.narrowphase import penetration_batch
-    from meshcol.collision.shapes import ConvexSet
-
-    enclosing = _Enclosing(placed)
-    bodies = np.unique(np.concatenate([table.body_a[rows], table.body_b[rows]])).tolist()
-    slot = {body: k for k, body in enumerate(bodies)}
-    made = [enclosing.of(body) for body in bodies]
-    shapes = ConvexSet.concatenate(*(m[0] for m in made))
-    poses = np.ascontiguousarray(np.stack([m[1] for m in made]))
-    pairs = np.array(
-        [
-            [slot[a], slot[b]]
-            for a, b in zip(table.body_a[rows].tolist(), table.body_b[rows].tolist())
-        ],
-        dtype=np.int64,
-    ).reshape(-1, 2)
-    found = penetration_batch(shapes, poses, pairs, threads=threads)
+    a, b = table.body_a[rows], table.body_b[rows]
+    shapes, poses, slot = _enclosing_sets(placed, np.unique(np.concatenate([a, b])))
+    pairs = np.stack([slot[a], slot[b]], axis=1)
+    counts = np.diff(placed.colliders.body_part_offsets)
+    single = (counts[a] == 1) & (counts[b] == 1)
+    depth, normal, status = _penetrations(table, rows, single, shapes, poses, pairs, threads)
     out = np.full(len(rows), np.nan)
-    for k, (i, j) in enumerate(pairs.tolist()):
-        if int(found.status[k]) in NO_ANSWER:
-            continue
-        normal = found.normal[k]
-        if not found.depth[k] > 0.0 or not np.all(np.isfinite(normal)):
-            out[k] = 0.0 if found.depth[k] == 0.0 else np.nan
-            continue
-        # moving b by t * normal separates the sets once t >= h_a(n) + h_b(-n)
-        overlap = support(shapes, i, poses[i], normal) + support(shapes, j, poses[j], -normal)
-        out[k] = max(overlap, float(found.depth[k]), 0.0)
+    answered = ~np.isin(status, NO_ANSWER)
+    deep = answered & (depth > 0.0) & np.isfinite(normal).all(axis=1)
+    out[answered & ~deep & (depth == 0.0)] = 0.0
+    k = np.flatnonzero(deep)
+    i, j = pairs[k, 0], pairs[k, 1]
+    # moving b by t * normal separates the sets once t >= h_a(n) + h_b(-n)
+    overlap = supports(shapes, i, poses[i], normal[k]) + supports(shapes, j, poses[j], -normal[k])
+    # max(overlap, depth, 0.0) as Python's max: NaN only when the overlap is NaN
+    out[k] = np.where(np.isnan(overlap), np.nan, np.maximum(np.maximum(overlap, depth[k]), 0.0))
     return out

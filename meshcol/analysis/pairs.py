@@ -110,6 +110,12 @@ class PairTable:
         Index into :data:`meshcol.vocabulary.PAIR_STATUSES`; 0 (separated) until classified.
     ignored, violation : (k,) bool
         Policy flags of ``check``: spared by an ignore rule; fails the run.
+    convex_depth, convex_normal, convex_status : (k,) float64, (k, 3) float64, (k,) int64
+        The narrow phase's own answer for the row's closest part pair (depth, normal, query
+        status), as :func:`convex_phase` found it, whatever later stages make of the row;
+        status -1 until measured. For two bodies of one convex part each, that pair is the
+        bodies' enclosing sets, whose depth :func:`~meshcol.analysis.depth_bounds.
+        depth_bounds` then reads here instead of measuring it again.
     """
 
     body_a: np.ndarray
@@ -135,6 +141,9 @@ class PairTable:
     status: np.ndarray
     ignored: np.ndarray
     violation: np.ndarray
+    convex_depth: np.ndarray
+    convex_normal: np.ndarray
+    convex_status: np.ndarray
 
     @classmethod
     def of_candidates(
@@ -170,6 +179,9 @@ class PairTable:
             status=np.zeros(k, dtype=np.int64),
             ignored=np.zeros(k, dtype=bool),
             violation=np.zeros(k, dtype=bool),
+            convex_depth=np.full(k, np.nan),
+            convex_normal=np.full((k, 3), np.nan),
+            convex_status=np.full(k, -1, dtype=np.int64),
         )
 
     def __len__(self) -> int:
@@ -505,7 +517,10 @@ def convex_phase(table: PairTable, placed: PlacedColliders, threads: int = 0) ->
     best = _closest_per_row(table.part_row, np.where(failed, np.inf, found.signed_distance))
     rows = table.part_row[best]
     closest_a, closest_b = table.part_pairs[best, 0], table.part_pairs[best, 1]
-    out = table.writable(*MEASURES)
+    out = table.writable(*MEASURES, "convex_depth", "convex_normal", "convex_status")
+    out.convex_depth[rows] = found.depth[best]
+    out.convex_normal[rows] = found.normal[best]
+    out.convex_status[rows] = found.status[best]
     out.signed_distance[rows] = found.signed_distance[best]
     out.distance[rows] = found.distance[best]
     out.depth[rows] = found.depth[best]

@@ -378,14 +378,15 @@ def _plain_files(read: _NativeRead, sources: list[str]) -> list[list[Body]]:
     """The common scene: every file read, one object each, no coordinate too big. Each body is
     what :func:`_checked_files` builds (a lone object is named by its file's stem)."""
     vo, fo = read.v_off.tolist(), read.f_off.tolist()
+    vertices, faces, plain = read.vertices, read.faces, Body.plain
     return [
         [
-            Body(
-                name=_stem(source),
-                source=source,
-                vertices=read.vertices[vo[j] : vo[j + 1]],
-                faces=read.faces[fo[j] : fo[j + 1]],
-                pose=_EYE.copy(),
+            plain(
+                _stem(source),
+                source,
+                vertices[vo[j] : vo[j + 1]],
+                faces[fo[j] : fo[j + 1]],
+                _EYE.copy(),
             )
         ]
         for j, source in enumerate(sources)

@@ -355,20 +355,13 @@ def bulk_bodies(found: Columns, source: str, files: dict[str, list[Body]]) -> li
     out: list[Body | None] = [None] * n
     shapes = found.shapes
     kinds, lengths = found.primitive_type.tolist(), found.primitive_lengths.tolist()
+    plain = Body.plain
     for i in np.flatnonzero(common & primitive).tolist():
-        out[i] = Body.of_primitive(
-            names[i], source, _primitive(kinds[i], lengths[i]), pose=poses[i], collider=shapes[i]
-        )
+        primitive_i = _primitive(kinds[i], lengths[i])
+        out[i] = plain(names[i], source, None, None, poses[i], primitive_i, shapes[i])
     for i in np.flatnonzero(common & ~primitive).tolist():
         mesh_source, vertices, faces = objects[found.meshes[i]]
-        out[i] = Body(
-            name=names[i],
-            source=mesh_source,
-            vertices=vertices,
-            faces=faces,
-            pose=poses[i],
-            collider=shapes[i],
-        )
+        out[i] = plain(names[i], mesh_source, vertices, faces, poses[i], None, shapes[i])
     return out
 
 

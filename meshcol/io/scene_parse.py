@@ -27,6 +27,7 @@ __all__ = [
     "children",
     "collector_paused",
     "first_non_finite",
+    "forget_documents",
     "nesting",
     "read_document",
     "too_deep",
@@ -89,6 +90,13 @@ def read_document(source: str) -> tuple[Any, str]:
 # The last manifest read, by absolute path: its bytes, its document (never modified by the
 # readers) and its text.
 _READ: dict[str, tuple[bytes, Any, str]] = {}
+
+
+def forget_documents() -> None:
+    """Drop the manifest kept by :func:`read_document`, once a run has loaded its scene: the
+    decoded document of 1,000,000 bodies holds about a gigabyte that nothing reads again
+    (a later read decodes it anew)."""
+    _READ.clear()
 
 
 def _check_manifest_file(file: Path, source: str) -> None:

@@ -1,0 +1,84 @@
+"""CPU time of each stage of one ``meshcol check`` (issue 32, items 4-5): where a big manifest's
+time goes, from the command line, in one process.
+
+Wraps the stage functions the command calls (the output guard's manifest read, the manifest's
+document, validation and bodies, colliders, the broad, narrow, mesh and depth stages, the
+report's rows and its writing) with ``time.process_time`` counters, runs ``meshcol check`` with
+the given arguments, and prints each stage's CPU seconds, the whole run's CPU time and its peak
+resident memory. CPU time, not wall time: the figure a loaded machine does not move.
+
+Run: .venv/bin/python benchmarks/check_stages.py MANIFEST [meshcol check options]
+     e.g. benchmarks/check_stages.py benchmarks/.cache/scale/primitives-spheres100000/scene.json
+          --report /tmp/r.json --fail-on none --threads 1
+"""
+
+from __future__ import annotations
+
+import importlib
+import resource
+import sys
+import time
+from collections.abc import Callable
+from typing import Any
+
+#: (module, function) of each stage, in the order a check meets them.
+STAGES = [
+    ("meshcol.io.outputs", "manifest_inputs"),
+    ("meshcol.io.scene", "read_document"),
+    ("meshcol.io.scene", "validate"),
+    ("meshcol.io.scene", "read_mesh_files"),
+    ("meshcol.io.scene", "bulk_bodies"),
+    ("meshcol.io.scene", "build_bodies"),
+    ("meshcol.analysis.check", "build_colliders"),
+    ("meshcol.analysis.check", "place"),
+    ("meshcol.analysis.check", "broad_phase"),
+    ("meshcol.analysis.check", "convex_phase"),
+    ("meshcol.analysis.check", "mesh_phase"),
+    ("meshcol.analysis.check", "depth_bounds"),
+    ("meshcol.analysis.check", "classify"),
+    ("meshcol.analysis.check", "apply_policy"),
+    ("meshcol.analysis.check", "check_report"),
+    ("meshcol.io.formats", "write_report"),
+]
+
+
+def timed(times: dict[str, float], label: str, fn: Callable[..., Any]) -> Callable[..., Any]:
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        start = time.process_time()
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            times[label] = times.get(label, 0.0) + time.process_time() - start
+
+    return wrapper
+
+
+def main() -> None:
+    start = time.process_time()
+    import meshcol.cli
+
+    times: dict[str, float] = {}
+    for module_name, name in STAGES:
+        module = importlib.import_module(module_name)
+        label = f"{module_name.rsplit('.', 1)[1]}.{name}"
+        setattr(module, name, timed(times, label, getattr(module, name)))
+    sys.argv = ["meshcol", "check", *sys.argv[1:]]
+    code: Any = 0
+    try:
+        meshcol.cli.main()
+    except SystemExit as exit_:
+        code = exit_.code
+    total = time.process_time() - start
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    print("stage CPU seconds (nested: read_document and below are inside manifest_inputs or")
+    print("the load; the load's total is the report's load_seconds):")
+    for label, seconds in times.items():
+        print(f"  {label:32s} {seconds:7.2f}")
+    print(
+        f"whole run: {total:.2f} s CPU (user {usage.ru_utime:.2f}, system {usage.ru_stime:.2f}), "
+        f"peak {usage.ru_maxrss / 1024:.0f} MiB, exit {code}"
+    )
+
+
+if __name__ == "__main__":
+    main()
