@@ -190,9 +190,9 @@ def _shared_rules(entries: dict[str, Any]) -> dict[str, Any]:
     by_object: dict[int, str] = {}
     for entry in entries.values():
         suite = entry["summary"].get("suite") if isinstance(entry["summary"], dict) else None
-        rules = suite.get("rules") if isinstance(suite, dict) else None
-        if not isinstance(rules, dict):
+        if not isinstance(suite, dict) or not isinstance(suite.get("rules"), dict):
             continue
+        rules = suite["rules"]
         ref = by_object.get(id(rules))
         if ref is None:
             text = json.dumps(rules, sort_keys=True, separators=(",", ":"), allow_nan=True)
