@@ -19,7 +19,12 @@ found by its address file), and, with ``--compare CMD``, on another build's Ray 
 rounds alternate the order. Wall time, and the CPU time of the command and what it waited
 for (Ray's daemons are not all waited for: wall is the figure here). Outputs compared.
 
+``--start-up`` times Ray's start alone, each run a new process: a RayExecutor of its own
+(2 CPUs on 127.0.0.1) started, 4 trivial tasks, closed; this build's light start against
+Ray's default processes (the autoscaler monitor, the log monitor: main's), alternated.
+
 Usage: python benchmarks/bench_ray.py [--rounds 3] [--copies 3]
+       python benchmarks/bench_ray.py --start-up [--rounds 3]
        python benchmarks/bench_ray.py --one-off [--rounds 5] [--compare /work/base/.venv/bin/meshcol]
 """
 
@@ -80,6 +85,49 @@ def _ray_head(temp: str, env: dict[str, str]) -> subprocess.Popen:
     if proc.returncode != 0:
         raise SystemExit(f"ray start failed: {out.decode()[-2000:]}")
     return proc
+
+
+#: One start of a local Ray as RayExecutor makes it (KIND=light) or with Ray's defaults.
+START_UP = """
+import contextlib, os, time
+t0 = time.perf_counter()
+import meshcol.decomposition.executor as ex
+if os.environ["KIND"] == "default":
+    ex.light_head, ex.LIGHT_INIT = contextlib.nullcontext, {}
+with ex.RayExecutor(abs, 2, address="local") as e:
+    e.start()
+    assert sorted(o.value for o in e.run([-1, -2, 3, 4])) == [1, 2, 3, 4]
+    from ray._private import worker
+    kinds = sorted(worker._global_node.all_processes)
+print(time.perf_counter() - t0, ",".join(kinds))
+"""
+
+
+def start_up(rounds: int) -> None:
+    """Ray's start alone: light (this build) and default, alternated, a process each."""
+    env = {**os.environ, "RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0"}
+    env.pop("RAY_ADDRESS", None)
+    wall: dict[str, list[float]] = {"light": [], "default": []}
+    cpu: dict[str, list[float]] = {"light": [], "default": []}
+    for r in range(rounds):
+        for kind in ("light", "default") if r % 2 == 0 else ("default", "light"):
+            before = _cpu()
+            done = subprocess.run(
+                [sys.executable, "-c", START_UP],
+                capture_output=True,
+                text=True,
+                env={**env, "KIND": kind},
+            )
+            if done.returncode != 0:
+                raise SystemExit(done.stderr[-2000:])
+            seconds, kinds = done.stdout.split()
+            wall[kind].append(float(seconds))
+            cpu[kind].append(_cpu() - before)
+            print(
+                f"round {r + 1} {kind}: {float(seconds):.2f} s, CPU {cpu[kind][-1]:.2f} s, {kinds}"
+            )
+    for kind in wall:
+        print(f"{kind:<8} wall {spread(wall[kind])}, CPU (waited for) {spread(cpu[kind])}")
 
 
 def one_off(rounds: int, compare: str | None) -> None:
@@ -144,6 +192,7 @@ def main() -> None:
     parser.add_argument("--copies", type=int, default=3, help="times each corpus file is given")
     parser.add_argument("--one-off", action="store_true", help="a one-off command's start-up")
     parser.add_argument("--compare", help="with --one-off: another build's meshcol command")
+    parser.add_argument("--start-up", action="store_true", help="Ray's start alone")
     args = parser.parse_args()
     try:
         import ray
@@ -152,6 +201,9 @@ def main() -> None:
         return
     if args.one_off:
         one_off(args.rounds, args.compare)
+        return
+    if args.start_up:
+        start_up(args.rounds)
         return
     from meshcol.analysis.check import check
     from meshcol.analysis.inspect import inspect
