@@ -491,3 +491,13 @@ def dumps_indented(document: object | None, builtin: object) -> str | None:
 
 def float_reprs(values: Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C', device='cpu', writable=False)]) -> list[str]:
     """repr(float(x)) of each value, by the core's formatter (for tests)."""
+
+def ray_parity(vertices: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], faces: Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)]) -> Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')]:
+    """
+    Per point (N,) int8: 1 inside, 0 outside by the even-odd rule (exact), -1 undecided (on the surface, or the faces are not closed modulo 2).
+    """
+
+def orient_faces(vertices: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], faces: Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], nesting_max_components: int, flat_volume: float) -> tuple[Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')], bool, bool]:
+    """
+    (flipped (M,) bool, orientable, balanced): each component wound consistently, closed ones outward (inward for a cavity's wall).
+    """

@@ -13,6 +13,7 @@ void bind_inspect(nb::module_& m);
 void bind_hull(nb::module_& m);
 void bind_fit(nb::module_& m);
 void bind_report(nb::module_& m);
+void bind_orientation(nb::module_& m);
 
 NB_MODULE(_core, m) {
     m.doc() = "meshcol native core (private: use the meshcol package API)";
@@ -26,4 +27,5 @@ NB_MODULE(_core, m) {
     bind_hull(m);
     bind_fit(m);
     bind_report(m);
+    bind_orientation(m);
 }

@@ -52,7 +52,14 @@ from meshcol.analysis.check_report import CheckReport, check_report
 from meshcol.analysis.colliders import _geometry_key, build_colliders
 from meshcol.analysis.depth_bounds import depth_bounds
 from meshcol.analysis.mesh_phase import mesh_phase
-from meshcol.analysis.pairs import broad_phase, classify, convex_phase, place
+from meshcol.analysis.pairs import (
+    PairTable,
+    PlacedColliders,
+    broad_phase,
+    classify,
+    convex_phase,
+    place,
+)
 from meshcol.io.robot import RobotOptions
 from meshcol.types import Scene
 from meshcol.vocabulary import PAIR_STATUSES
@@ -109,13 +116,30 @@ def check_scene(
     report(f"{len(colliders.bodies)} bodies, {len(colliders.part_body)} convex parts")
     # the broad phase pairs bodies within the clearance band and the contact tolerance
     table = broad_phase(placed, options.clearance + options.tolerance, scene.excluded_pairs)
-    table = convex_phase(table, placed, options.threads)
-    table = mesh_phase(table, placed, options.tolerance, options.threads)
-    table = depth_bounds(table, placed, options.threads)
+    table = narrow_phase(table, placed, options)
     table = classify(table, options.tolerance, options.clearance)
     table = apply_policy(table, [body.name for body in colliders.bodies], options)
     seconds = time.perf_counter() - started
     return check_report(table, placed, scene, options, seconds, load_seconds)
+
+
+def narrow_phase(table: PairTable, placed: PlacedColliders, options: CheckOptions) -> PairTable:
+    """The measuring stages (convex, mesh, depth bounds) on the broad phase's pairs; with
+    ``options.pair_cache``, only on the pairs it has no answer for
+    (:mod:`meshcol.analysis.pair_cache`)."""
+
+    def stages(rows: PairTable) -> PairTable:
+        rows = convex_phase(rows, placed, options.threads)
+        rows = mesh_phase(rows, placed, options.tolerance, options.threads)
+        return depth_bounds(rows, placed, options.threads)
+
+    if options.pair_cache is None:
+        return stages(table)
+    margin = options.clearance + options.tolerance
+    measured: PairTable = options.pair_cache.measure(
+        table, placed, options.tolerance, margin, stages
+    )
+    return measured
 
 
 def check(

@@ -111,6 +111,9 @@ class CheckOptions:
         An engine profile: each body's convex parts are measured against its limits
         (:func:`meshcol.analysis.rules.target_findings`); with a status level in ``fail_on``
         (not ``none``) its findings fail the run too.
+    pair_cache : meshcol.analysis.pair_cache.PairCache, optional
+        Where the narrow phase's answers per pair are kept between runs (``meshcol ci``):
+        only pairs with a changed body are measured again. Not a setting of the report.
     """
 
     collider: str = "hull"
@@ -123,6 +126,7 @@ class CheckOptions:
     threads: int = 0
     decompose_options: dict = field(default_factory=dict)
     target: Any = None
+    pair_cache: Any = field(default=None, compare=False, repr=False)
     #: The rule ids the run fails on (:func:`failing_rules` of ``fail_on`` and ``target``),
     #: made with the options.
     fail_rules: tuple[str, ...] = field(init=False, repr=False, compare=False)

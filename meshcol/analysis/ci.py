@@ -26,7 +26,16 @@ from meshcol.analysis.ci_report import CiReport, CiRun
 from meshcol.errors import MeshcolError
 from meshcol.io.config import Config, ConfigError, Resolved, resolve
 
-__all__ = ["Job", "changed_files", "plan", "repository_root", "run_ci", "run_job"]
+__all__ = [
+    "Job",
+    "changed_files",
+    "job_pair_cache",
+    "plan",
+    "repository_root",
+    "result_store",
+    "run_ci",
+    "run_job",
+]
 
 
 @dataclass(frozen=True)
@@ -226,8 +235,9 @@ def _robot(settings: Mapping[str, Any], folder: str) -> Any:
     )
 
 
-def _execute(job: Job, folder: str) -> Any:
-    """Run the job's command in this process; its report."""
+def _execute(job: Job, folder: str, pair_cache: Any = None) -> Any:
+    """Run the job's command in this process; its report (a check keeps its pairs'
+    answers in ``pair_cache``, :class:`meshcol.analysis.pair_cache.PairCache`)."""
     from meshcol.io.targets import load_target
 
     s = job.settings
@@ -276,6 +286,7 @@ def _execute(job: Job, folder: str) -> Any:
         baseline=None if baseline is None else os.path.join(folder, baseline),
         target=target,
         robot_options=robot,
+        pair_cache=pair_cache,
     )
 
 
@@ -311,16 +322,17 @@ def _working_folder(folder: str) -> Iterator[None]:
         os.chdir(before)
 
 
-def run_job(task: tuple[Job, str, str | None]) -> dict[str, Any]:
-    """One job in this process (a worker's entry): ``(job, folder, root)``. Returns its
-    result as JSON values (the report, its CI suite, the exit code) and ``reads``, every
+def run_job(task: tuple[Job, str, str | None, Any]) -> dict[str, Any]:
+    """One job in this process (a worker's entry): ``(job, folder, root, pair_cache)``
+    (the last None, or a check's :class:`~meshcol.analysis.pair_cache.PairCache`). Returns
+    its result as JSON values (the report, its CI suite, the exit code) and ``reads``, every
     file its input named; an unusable input is ``{"error": message}``."""
     from meshcol.io.paths import confined_to, recording_reads
 
-    job, folder, root = task
+    job, folder, root, pair_cache = task
     with _working_folder(folder), confined_to(root), recording_reads() as reads:
         try:
-            report = _execute(job, folder)
+            report = _execute(job, folder, pair_cache)
         except MeshcolError as exc:
             return {"error": str(exc), "reads": []}
         result = CiRun.result_of(report)
@@ -365,8 +377,7 @@ def run_ci(
     if root is None:
         root = os.path.join(folder, config.get("root") or ".")
     root = os.path.realpath(root)
-    if cache_dir is None and config.get("cache-dir") is not None:
-        cache_dir = _store(folder, config.get("cache-dir"))
+    cache_dir = result_store(config, cache_dir)
     store = _Results(config, cache_dir if use_cache else None, use_cache)
     runs: dict[int, CiRun] = {}
     pending: list[tuple[int, Job, str]] = []
@@ -383,7 +394,7 @@ def run_ci(
             pending.append((index, job, key))
     if progress is not None and pending:
         progress(f"ci: {len(runs)} jobs from the cache, {len(pending)} to run")
-    tasks = [(job, folder, root) for _, job, _ in pending]
+    tasks = [(job, folder, root, store.pair_cache(job)) for _, job, _ in pending]
     # one job (the asset that changed) runs here: starting a pool costs seconds
     here = jobs == 1 or len(tasks) == 1
     outcomes = (
@@ -404,6 +415,7 @@ def run_ci(
         root=root,
         changed_since=changed_since,
         skipped=skipped,
+        docs_url=config.get("docs-url"),
     )
 
 
@@ -447,6 +459,10 @@ class _Results:
         self._keys[id(job)] = key
         return key
 
+    def pair_cache(self, job: Job) -> Any:
+        """The job's pair cache (:func:`job_pair_cache`), None without a cache."""
+        return job_pair_cache(job, self.cache_dir) if self.enabled else None
+
     def look_up(self, key: str) -> dict[str, Any] | None:
         """What the run keeps of a cached result (the index's summary, else the entry)."""
         from meshcol.decomposition.result_cache import load_result
@@ -489,6 +505,26 @@ class _Results:
                 summary = {k: v for k, v in run.result.items() if k != "report"}
                 entries[self.key(run.job)] = (summary, self._depends(run.job, run.result))
         store_index(self.name, entries, self.digests.stats(), self.cache_dir)
+
+
+def job_pair_cache(job: Job, cache_dir: Any) -> Any:
+    """Where a check job keeps its pairs' answers (:mod:`meshcol.analysis.pair_cache`): the
+    store ``cache_dir`` (as :func:`result_store` gives it), under the scene's path and the
+    job's settings; None for the other commands."""
+    from meshcol.analysis.pair_cache import PairCache
+    from meshcol.decomposition.result_cache import result_key
+
+    if job.command != "check":
+        return None
+    return PairCache(cache_dir, f"{job.path}\0{result_key(job.command, dict(job.settings), '')}")
+
+
+def result_store(config: Config, cache_dir: str | os.PathLike[str] | None) -> Any:
+    """The result cache's store of a run: ``cache_dir`` (``--cache-dir``), else the
+    config's ``cache-dir`` (relative to its folder), else None (the user cache)."""
+    if cache_dir is None and config.get("cache-dir") is not None:
+        return _store(os.fspath(config.folder), config.get("cache-dir"))
+    return cache_dir
 
 
 def _store(folder: str, cache_dir: str) -> str:

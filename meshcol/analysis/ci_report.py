@@ -66,7 +66,10 @@ class CiRun:
         its CI suite and its exit code, as JSON values."""
         suite = report.ci_suite()
         fields = {f.name: getattr(suite, f.name) for f in dataclasses.fields(suite)}
-        fields["cases"] = [dataclasses.asdict(case) for case in suite.cases]
+        # one level deep: _plain's JSON round trip copies the values (asdict's deep copy
+        # of 10,000 cases cost more than the check of a warm scene)
+        names = [f.name for f in dataclasses.fields(suite.cases[0])] if suite.cases else []
+        fields["cases"] = [{name: getattr(case, name) for name in names} for case in suite.cases]
         return {
             "report": json.loads(report.to_json()),
             "suite": _plain(fields),
@@ -124,6 +127,8 @@ class CiReport:
     root: str | os.PathLike[str]
     changed_since: str | None = None
     skipped: int = 0
+    #: the configuration's ``docs-url`` (the rules' links in SARIF); not in the JSON report
+    docs_url: str | None = None
 
     @property
     def exit_code(self) -> int:
@@ -220,4 +225,19 @@ class CiReport:
             if "suite" in run.result
             for warning in run.result["suite"]["warnings"]
         )
-        return CiSuite("ci", tuple(cases), self.settings, warnings=warnings, verdict=self.verdict())
+        # the registered rules every job's command can report (SARIF describes them)
+        rules = {
+            rule_id: rule
+            for run in self.runs
+            if "suite" in run.result
+            for rule_id, rule in (run.result["suite"].get("rules") or {}).items()
+        }
+        return CiSuite(
+            "ci",
+            tuple(cases),
+            self.settings,
+            warnings=warnings,
+            verdict=self.verdict(),
+            rules=dict(sorted(rules.items())),
+            docs_url=self.docs_url,
+        )

@@ -387,7 +387,9 @@ class FitReport:
     def ci_suite(self) -> Any:
         """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one passed case per body
         (``FILE::BODY``) with the primitive, its size, volume ratios and largest gap (a fit
-        always contains the mesh; unusable input stops the run before any report)."""
+        always contains the mesh; unusable input stops the run before any report); a
+        warning (``volume-tolerance``) when the primitive's volume is over the hull's by more
+        than the volume tolerance (a shape chosen with ``--shape`` that fits loosely)."""
         from meshcol.io.ci import CiCase, CiSuite, number
 
         units = self.units
@@ -411,12 +413,17 @@ class FitReport:
             message = ", ".join(parts)
             if row["simpler_primitive"]:
                 message += " (could use a simpler primitive than the hull)"
+            loose = row["hull_ratio"] is not None and row["hull_ratio"] > 1 + self.volume_tolerance
+            if loose:
+                message += f"; over the hull's volume by more than {number(self.volume_tolerance)}"
             cases.append(
                 CiCase(
                     name=f"{row['source']}::{row['name']}" if row["source"] else row["name"],
                     classname="meshcol.fit",
                     message=message,
                     file=row["source"],
+                    kind="volume-tolerance" if loose else None,
+                    warn=loose,
                 )
             )
         s = self.summary

@@ -199,13 +199,16 @@ class HullReport:
     def ci_suite(self) -> Any:
         """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one case per body
         (``FILE::BODY``) with the hull's size, volume and, with a budget, what the budget
-        cost; a failure if a hull were over its vertex budget (unusable input stops the run
-        before any report, so there are no error cases)."""
+        cost; a failure if a hull were over its vertex budget, or misses a limit of the
+        ``--target`` (the rules it breaks, MC1xx/MC201, as the exit code counts them;
+        unusable input stops the run before any report, so there are no error cases)."""
+        from meshcol.analysis.rules import get_rule
         from meshcol.io.ci import CiCase, CiSuite, number
 
         units = self.units
         cases = []
-        for row in self.bodies:
+        for row, fitted in zip(self.bodies, self.fits):
+            missed = tuple(fitted.violations) if fitted is not None else ()
             message = (
                 f"{row['hull_vertices']} vertices, {row['hull_faces']} faces, volume "
                 f"{number(row['hull_volume'])}"
@@ -222,17 +225,25 @@ class HullReport:
                     f"{number(row['added_volume_fraction'])} of the hull's, max distance "
                     f"{number(row['max_distance'], units)}"
                 )
+            if over:
+                message = f"over the --max-vertices budget: {message}"
+            if missed:
+                past = "; ".join(f"{v.rule} {v.rule_name}: {v.message}" for v in missed)
+                message = f"misses the target's limits: {past}; {message}"
+            rules = tuple(dict.fromkeys(v.rule for v in missed))
             cases.append(
                 CiCase(
                     name=f"{row['source']}::{row['name']}" if row["source"] else row["name"],
                     classname="meshcol.hull",
-                    outcome="failure" if over else "passed",
-                    message=f"over the --max-vertices budget: {message}" if over else message,
+                    outcome="failure" if over or missed else "passed",
+                    message=message,
                     file=row["source"],
-                    kind="max-vertices" if over else None,
+                    kind="max-vertices" if over else (rules[0] if rules else None),
+                    rules=rules,
                 )
             )
         s = self.summary
+        cited = sorted({rule for case in cases for rule in case.rules})
         return CiSuite(
             "hull",
             tuple(cases),
@@ -240,6 +251,7 @@ class HullReport:
             warnings=self.warnings,
             verdict=f"{s['bodies']} hulls, {s['hull_vertices']} vertices, {s['flat']} flat",
             units=units,
+            rules={rule: get_rule(rule).to_dict() for rule in cited},
         )
 
 

@@ -72,9 +72,10 @@ def _containment(
     found: Any, surfaces: _Surfaces, pairs: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """``(contained, undecided)`` per pair: one mesh inside the other by the winding number,
-    or, against a non-orientable mesh, by ray parity voted over several directions
-    (:func:`meshcol.geometry.ray_parity.ray_parity`) of one vertex of the other mesh;
-    undecided where the vote splits. Surfaces that cross are never contained."""
+    or, against a non-orientable mesh, by the exact even-odd rule
+    (:func:`meshcol.collision.ray_parity.ray_parity`) of one vertex of the other mesh;
+    undecided where that is not defined (the vertex on the surface, or a surface that does
+    not close up). Surfaces that cross are never contained."""
     inside = (found.a_inside_b | found.b_inside_a) & ~found.intersecting
     unsure = np.zeros(len(pairs), dtype=bool)
     meshes = surfaces.meshes
@@ -96,7 +97,7 @@ def _containment(
 
 def _parity_of_vertex(surfaces: _Surfaces, inner: int, outer: int) -> tuple[bool, bool]:
     """Ray parity of the first vertex of mesh ``inner`` against mesh ``outer``."""
-    from meshcol.geometry.ray_parity import ray_parity
+    from meshcol.collision.ray_parity import ray_parity
 
     vertices, _ = surfaces.meshes.mesh(inner)
     world = surfaces.poses[inner] @ np.append(vertices[0], 1.0)

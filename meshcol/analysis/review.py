@@ -24,6 +24,7 @@ from meshcol.vocabulary import SEVERITY_ORDER
 __all__ = [
     "check_page",
     "decompose_page",
+    "fit_page",
     "hull_page",
     "inspect_page",
     "sweep_page",
@@ -535,6 +536,24 @@ def hull_page(
         page.info.append(("target", f"{report.target.name} ({limits})"))
     if report.max_vertices or report.target is None:
         page.info.append(("max vertices", str(report.max_vertices or "exact hull")))
+    return page
+
+
+def fit_page(
+    report: Any, inputs: Sequence[Any], robot_options: RobotOptions | None = None
+) -> ReviewPage:
+    """The page of ``meshcol fit``: each body's fitted primitive (or the hull it kept) over
+    its mesh, and the mesh's findings. Fits in a link's frame (a robot rebuilt) are shown
+    as the bodies' hulls."""
+    from meshcol.analysis.fit import _fit_mesh
+
+    fits: dict[str, tuple] = {}
+    if report.frame == "world":
+        for row, result in zip(report.bodies, report.fits):
+            _, vertices, faces = _fit_mesh(str(row["name"]), result)
+            fits[str(row["name"])] = (vertices, faces)
+    page = _shape_page("fit", inputs, report.units, fits, robot_options)
+    page.info.append(("shape", f"{report.shape} (volume tolerance {report.volume_tolerance:g})"))
     return page
 
 

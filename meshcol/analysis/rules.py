@@ -614,17 +614,21 @@ class RulesReport:
             "Every finding of `meshcol inspect` and `meshcol check` names one of these rules by",
             "its id; ids are stable (a retired rule keeps its id, never reused). `--fail-on` takes",
             "ids or names, comma separated, or `all`. Generated from `meshcol/analysis/rules.py`",
-            "(`meshcol rules`).",
+            "(`meshcol rules`). Each rule's section has the anchor `#` plus its id in lower case",
+            "(`rules.md#mc501`): SARIF's `helpUri` links there.",
             "",
             "| id | name | severity | commands | what it means |",
             "| --- | --- | --- | --- | --- |",
         ]
         lines += [
-            f"| {r.id} | `{r.name}` | {r.severity} | {', '.join(r.commands)} | {r.summary} |"
+            f"| [{r.id}](#{r.id.lower()}) | `{r.name}` | {r.severity} | "
+            f"{', '.join(r.commands)} | {r.summary} |"
             for r in self.rules
         ]
         for r in self.rules:
             lines += [
+                "",
+                f'<a id="{r.id.lower()}"></a>',
                 "",
                 f"## {r.id} {r.name}",
                 "",

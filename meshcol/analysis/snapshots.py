@@ -2,7 +2,11 @@
 
 One picture per failing case of a run: per violating pair of ``check`` (the pair framed, its
 witness points, normal and depth), per failing mesh of ``inspect`` (the mesh with its
-findings drawn on it). The pictures are rows of the command's review page
+findings drawn on it), per pair of ``sweep`` that hits (the two bodies at the time of impact,
+the contact point and normal), per body of ``hull`` whose hull breaks its budget (over
+``--max-vertices`` or a ``--target`` limit) and of ``fit`` whose primitive misses the
+fidelity asked (its volume over the hull's by more than ``--volume-tolerance``): the mesh
+with its collider's edges over it. The pictures are rows of the command's review page
 (:mod:`meshcol.analysis.review`) drawn offscreen by :mod:`meshcol.io.snapshots`;
 :class:`SnapshotReport` is the command's report with each case's picture attached to its CI
 case (``CiCase.snapshot``), so that the Markdown summary links to it.
@@ -53,15 +57,88 @@ def _inspect_shots(report: Any) -> list[tuple[str, Shot]]:
     return shots
 
 
+def _sweep_shots(report: Any) -> list[tuple[str, Shot]]:
+    """Per pair that fails ``--fail-on hit``: the two bodies at the time of impact (the
+    page row's own poses), the contact point and normal."""
+    from meshcol.io.ci import number
+    from meshcol.types import TimeOfImpactStatus
+
+    if report.exit_code == 0:
+        return []
+    shots: list[tuple[str, Shot]] = []
+    for hit in sorted(report.hits, key=lambda h: h.time_of_impact):
+        case = f"{hit.body_a} <-> {hit.body_b}"
+        caption = f"{hit.status.name} at time of impact {number(hit.time_of_impact)}"
+        if hit.status == TimeOfImpactStatus.OVERLAPPED_AT_START:
+            caption = "OVERLAPPED_AT_START: the bodies overlap before they move"
+        if hit.time is not None and hit.status != TimeOfImpactStatus.OVERLAPPED_AT_START:
+            caption += f" (t = {number(hit.time, 's')})"
+        shot = Shot((hit.body_a, hit.body_b), file_name(len(shots) + 1, case), case, caption)
+        shots.append((case, shot))
+    return shots
+
+
+def _collider_shots(report: Any, failures: list[tuple[dict, str]]) -> list[tuple[str, Shot]]:
+    """Per failing body of hull or fit (``(row, why)``): the mesh with its collider's edges
+    over it (the page's ``hulls`` group)."""
+    shots: list[tuple[str, Shot]] = []
+    for row, why in failures:
+        body = str(row["name"]).split("/")[0]
+        case = f"{row['source']}::{row['name']}" if row["source"] else str(row["name"])
+        name = file_name(len(shots) + 1, case)
+        shots.append((case, Shot((body,), name, case, why, outline="hulls")))
+    return shots
+
+
+def _hull_shots(report: Any) -> list[tuple[str, Shot]]:
+    """Per body whose hull breaks its budget: over ``--max-vertices``, or past a limit of
+    the ``--target`` it was fitted to (each violation in the caption)."""
+    failures = []
+    for row, fitted in zip(report.bodies, report.fits):
+        why = [v.message for v in fitted.violations] if fitted is not None else []
+        if row["max_vertices"] is not None and row["hull_vertices"] > row["max_vertices"]:
+            why.insert(0, f"{row['hull_vertices']} vertices > budget {row['max_vertices']}")
+        if why:
+            failures.append((row, "; ".join(why)))
+    return _collider_shots(report, failures)
+
+
+def _fit_shots(report: Any) -> list[tuple[str, Shot]]:
+    """Per body whose fitted primitive misses the fidelity asked for: its volume over the
+    hull's by more than ``--volume-tolerance`` (a shape the user chose that fits badly)."""
+    from meshcol.io.ci import number
+
+    failures = []
+    for row in report.bodies:
+        ratio = row["hull_ratio"]
+        if ratio is not None and ratio > 1.0 + report.volume_tolerance:
+            why = (
+                f"{row['shape']}: volume/hull {number(ratio)} > 1 + volume tolerance "
+                f"{number(report.volume_tolerance)}"
+            )
+            failures.append((row, why))
+    return _collider_shots(report, failures)
+
+
 def shots_of(report: Any) -> list[tuple[str, Shot]]:
     """(CI case name, the picture to draw of it) per failing case of ``report``."""
     from meshcol.analysis.check_report import CheckReport
+    from meshcol.analysis.fit import FitReport
+    from meshcol.analysis.hull import HullReport
     from meshcol.analysis.inspect_report import InspectReport
+    from meshcol.analysis.sweep import SweepReport
 
-    if isinstance(report, CheckReport):
-        return _check_shots(report)
-    if isinstance(report, InspectReport):
-        return _inspect_shots(report)
+    kinds: list[tuple[type, Any]] = [
+        (CheckReport, _check_shots),
+        (InspectReport, _inspect_shots),
+        (SweepReport, _sweep_shots),
+        (HullReport, _hull_shots),
+        (FitReport, _fit_shots),
+    ]
+    for kind, shots in kinds:
+        if isinstance(report, kind):
+            found: list[tuple[str, Shot]] = shots(report)
+            return found
     return []
 
 

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
+from collections.abc import Iterator
 from typing import Any
 
 import click
 
-from meshcol.cli.common import Progress, jobs_option, plural, verdict
+from meshcol.cli.common import Progress, jobs_option, plural, snapshots_option, verdict
 from meshcol.cli.config import settings_options
 
 #: The file name of each format under ``--outputs DIR`` (its extension from the registry).
@@ -92,7 +94,11 @@ def output_files(
     "[default: the config's cache-dir, else the user cache]",
 )
 @click.option("--no-cache", is_flag=True, help="Neither read nor write the result cache.")
-@jobs_option("Jobs run at once, each a task in a worker process (1: all in this process).")
+@jobs_option(
+    "Jobs run at once, each a task in a worker process (1: all in this process).  "
+    "[default: the config's jobs, else 1]",
+    default=None,
+)
 @click.option(
     "--report",
     type=click.Path(dir_okay=False, allow_dash=True),
@@ -124,6 +130,7 @@ def output_files(
     metavar="DIR",
     help="Every report format with a file extension, as DIR/meshcol-ci.EXT.  [default: none]",
 )
+@snapshots_option
 def ci(
     config: Any,
     overrides: dict,
@@ -131,12 +138,13 @@ def ci(
     changed_since: str | None,
     cache_dir: str | None,
     no_cache: bool,
-    jobs: int,
+    jobs: int | None,
     report: str | None,
     junit: str | None,
     github: bool,
     outputs: tuple[tuple[str, str], ...],
     out_dir: str | None,
+    snapshots: str | None,
 ) -> None:
     """Run every inspect, hull, fit and check the configuration asks for, over the
     repository, as one job: one verdict, one exit code, every output at once.
@@ -160,16 +168,20 @@ def ci(
       meshcol ci --changed-since origin/main --outputs reports/
       meshcol ci -j 2 --cache-dir s3://bucket/meshcol-cache
       meshcol ci --set shape=decomposed --set check.clearance=0.01
+      meshcol ci --output markdown=pr/comment.md --snapshots pr/
     """
     from meshcol.analysis.ci import changed_files, repository_root, run_ci
+    from meshcol.io.config import run_settings
     from meshcol.io.formats import write_report
     from meshcol.io.outputs import check_outputs
+
+    workers = run_settings(config, {"jobs": (jobs, "flag -j")})["jobs"][0]
 
     if out_dir is not None:
         os.makedirs(out_dir, exist_ok=True)
     files = output_files(report, junit, github, outputs, out_dir)
     named = {f"--output {fmt}": file for fmt, file in files if file is not None}
-    check_outputs(files=named, folders={"--outputs": out_dir})
+    check_outputs(files=named, folders={"--outputs": out_dir, "--snapshots": snapshots})
     changed = None if changed_since is None else changed_files(config.folder, changed_since)
     if root is None and config.data.get("root") is None:
         root = repository_root(config.folder)
@@ -183,13 +195,14 @@ def ci(
             changed_since=changed_since,
             cache_dir=cache_dir,
             use_cache=not no_cache,
-            jobs=jobs,
+            jobs=workers,
             progress=progress,
         )
     finally:
         progress.done()
-    for fmt, file in files:
-        write_report(result, fmt, file)
+    with _with_snapshots(result, snapshots, files, config, (cache_dir, no_cache)) as written:
+        for fmt, file in files:
+            write_report(written, fmt, file)
     for run in result.runs:
         if run.exit_code == 1:
             click.echo(f"meshcol: fail: {run.job.label}: {_run_verdict(run)}", err=True)
@@ -198,6 +211,43 @@ def ci(
     detail = result.verdict() + f"; {plural(result.cached, 'job')} from the cache"
     click.echo(verdict("ci", result.exit_code == 0, detail), err=True)
     sys.exit(result.exit_code)
+
+
+@contextlib.contextmanager
+def _with_snapshots(
+    result: Any,
+    folder: str | None,
+    files: list[tuple[str, str | None]],
+    config: Any,
+    cache: tuple[str | None, bool],
+) -> Iterator[Any]:
+    """The report to write: ``result``, or with ``--snapshots`` the report whose cases link
+    to their pictures, drawn into a staged folder that becomes ``folder`` with the reports
+    written in the block, or not at all. Links are relative to the Markdown output's
+    folder (the working folder when it goes to stdout or is not asked for)."""
+    if folder is None:
+        yield result
+        return
+    from meshcol.analysis.ci import job_pair_cache, result_store
+    from meshcol.analysis.ci_snapshots import ci_snapshots
+    from meshcol.io.outputs import staged_folder
+    from meshcol.io.paths import display_path
+
+    cache_dir, no_cache = cache
+    store = result_store(config, cache_dir)
+    markdown = [file for fmt, file in files if fmt == "markdown" and file is not None]
+    link_from = os.path.dirname(os.path.abspath(markdown[0])) if markdown else None
+
+    def pair_cache(job: Any) -> Any:
+        return None if no_cache else job_pair_cache(job, store)
+
+    with staged_folder(folder) as stage:
+        written = ci_snapshots(
+            result, os.fspath(config.folder), stage, folder, link_from, pair_cache
+        )
+        yield written
+    count = len(written.snapshots)
+    click.echo(f"meshcol: snapshots: {count} in {display_path(folder)}", err=True)
 
 
 def _run_verdict(run: Any) -> str:

@@ -583,14 +583,18 @@ def executor_options() -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     return decorate
 
 
-def jobs_option(help_text: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
-    """Add ``--jobs N`` / ``-j N`` (at least 1): files processed at once, one task each."""
+def jobs_option(
+    help_text: str, default: int | None = 1
+) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Add ``--jobs N`` / ``-j N`` (at least 1): files processed at once, one task each.
+    ``default`` None: the command takes its default from elsewhere (the configuration's
+    ``jobs``) and says so in ``help_text``."""
     return click.option(
         "--jobs",
         "-j",
         type=click.IntRange(min=1),
-        default=1,
-        show_default=True,
+        default=default,
+        show_default=default is not None,
         help=help_text,
     )
 

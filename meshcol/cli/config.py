@@ -93,32 +93,50 @@ def settings_options(command: Callable[..., Any]) -> Callable[..., Any]:
     show_default=True,
     help="text for people, json for scripts.",
 )
+@click.option(
+    "--jobs",
+    "-j",
+    type=click.IntRange(min=1),
+    default=None,
+    help="Show the run with meshcol ci's -j N (the flag over the file's jobs).  "
+    "[default: the file's jobs, else 1]",
+)
 @settings_options
-def config_command(path: str | None, fmt: str, config: Any, overrides: dict) -> None:
+def config_command(
+    path: str | None, fmt: str, jobs: int | None, config: Any, overrides: dict
+) -> None:
     """Show the configuration meshcol finds (meshcol.toml, or [tool.meshcol] in
     pyproject.toml, in this folder or the closest above it, as ruff finds its own) and,
     for PATH, the settings it gives that file: whether it is an asset, a scene or both,
     the sections that match it, the commands it runs, and every setting with where it came
-    from: the file and line, a flag (--set, --shape, --target) or the default.
+    from: the file and line, a flag (--set, --shape, --target) or the default. Without
+    PATH, the run's own settings too (root, cache-dir, jobs, docs-url), each with its
+    origin: a flag (-j), the environment (MESHCOL_DOCS_URL), the file's line or the default.
 
     \b
     Examples:
-      meshcol config                              the file, its sections
+      meshcol config                              the file, its run settings, sections
+      meshcol config -j 4                         ... with meshcol ci's -j 4
       meshcol config props/crate.obj              what meshcol ci does with this file
       meshcol config level.json --set check.clearance=0.01 --format json
     """
-    from meshcol.io.config import resolve
+    from meshcol.io.config import resolve, run_settings
     from meshcol.io.paths import display_path
 
     where = display_path(config.path)
+    run = run_settings(config, {"jobs": (jobs, "flag -j")})
     if path is None:
         sections = [
             {"section": s.label, "line": config.origin(s.kind, s.index)} for s in config.sections
         ]
         if fmt == "json":
-            click.echo(json.dumps({"config": where, "sections": sections}, indent=2))
+            settings = {k: {"value": v, "from": origin} for k, (v, origin) in run.items()}
+            document = {"config": where, "run": settings, "sections": sections}
+            click.echo(json.dumps(document, indent=2))
             return
         click.echo(f"config: {where}")
+        for key, (value, origin) in run.items():
+            click.echo(f"  {key:<12} {json.dumps(value):<24} # {origin}")
         for item in sections:
             click.echo(f"  {item['section']:<12} {item['line']}")
         return

@@ -12,6 +12,7 @@ from meshcol.cli.common import (
     report_format,
     report_options,
     robot_options,
+    snapshots_option,
     to_option,
     verdict,
 )
@@ -61,6 +62,7 @@ from meshcol.io.robot import RobotOptions
 @to_option("the fits", gltf=True)
 @report_options(default="stdout when no mesh is written, else no report")
 @robot_options()
+@snapshots_option
 def fit(
     inputs: tuple[str, ...],
     shape: str,
@@ -71,6 +73,7 @@ def fit(
     report: str | None,
     fmt: str | None,
     robot_options: RobotOptions,
+    snapshots: str | None,
 ) -> None:
     """Enclosing primitive of each body: it contains every vertex of the mesh.
 
@@ -102,6 +105,7 @@ def fit(
       meshcol fit props/*.obj --shape box --report boxes.csv
       meshcol fit level.json -o level_colliders.obj --report fits.json
       meshcol fit panda.urdf --out-dir panda_fits/ --to mjcf --shape capsule
+      meshcol fit props/*.obj --shape box --format markdown --snapshots pr/
     """
     robot = mesh_outputs(inputs, output, out_dir, to, fmt, report)
 
@@ -109,7 +113,9 @@ def fit(
     from meshcol.cli.common import emit_report, finish_outputs
 
     check_outputs(
-        files={"-o": output, "--report": report}, folders={"--out-dir": out_dir}, inputs=inputs
+        files={"-o": output, "--report": report},
+        folders={"--out-dir": out_dir, "--snapshots": snapshots},
+        inputs=inputs,
     )
     fmt = report_format(report, fmt)
     from meshcol.analysis.rebuild import rebuild_fits
@@ -125,8 +131,15 @@ def fit(
         volume_tolerance=volume_tolerance,
         robot_options=robot_options,
     )
-    if report is not None or not (output or out_dir):
-        emit_report(result, fmt, report)
+    from meshcol.analysis.review import fit_page
+    from meshcol.cli.common import snapshots_written
+
+    def review() -> object:
+        return fit_page(result, inputs, robot_options)
+
+    with snapshots_written(result, snapshots, report, review) as written:
+        if report is not None or not (output or out_dir):
+            emit_report(written, fmt, report)
     finish_outputs()
     s = result.summary
     shapes = ", ".join(f"{count} {name}" for name, count in s["shapes"].items() if count)

@@ -15,6 +15,8 @@ from meshcol.cli.common import (
     report_format,
     report_options,
     robot_options,
+    snapshots_option,
+    snapshots_written,
     target_option,
     to_option,
     verdict,
@@ -63,6 +65,7 @@ from meshcol.io.targets import target_names
 @report_options(default="stdout when no mesh is written, else no report")
 @robot_options()
 @html_option
+@snapshots_option
 def hull(
     inputs: tuple[str, ...],
     output: str | None,
@@ -73,6 +76,7 @@ def hull(
     report: str | None,
     fmt: str | None,
     html: str | None,
+    snapshots: str | None,
     robot_options: RobotOptions,
 ) -> None:
     """Convex hull of each body, optionally within a vertex budget.
@@ -119,6 +123,7 @@ def hull(
       meshcol hull props/*.obj --target physx-gpu --out-dir hulls
       meshcol hull props/*.obj --max-vertices 255 --out-dir hulls --report hulls.csv
       meshcol hull level.json -o level_hulls.glb --report -
+      meshcol hull props/*.obj --target physx-gpu --format markdown --snapshots pr/
     """
     robot = mesh_outputs(inputs, output, out_dir, to, fmt, report)
 
@@ -128,7 +133,7 @@ def hull(
 
     check_outputs(
         files={"-o": output, "--report": report, "--html": html},
-        folders={"--out-dir": out_dir},
+        folders={"--out-dir": out_dir, "--snapshots": snapshots},
         inputs=inputs,
     )
     fmt = report_format(report, fmt)
@@ -146,9 +151,14 @@ def hull(
         warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
         robot_options=robot_options,
     )
-    page = render_html(html, lambda: hull_page(result, inputs, robot_options))
-    if report is not None or not (output or out_dir):
-        emit_report(result, fmt, report)
+
+    def review() -> Any:
+        return hull_page(result, inputs, robot_options)
+
+    page = render_html(html, review)
+    with snapshots_written(result, snapshots, report, review) as written:
+        if report is not None or not (output or out_dir):
+            emit_report(written, fmt, report)
     write_html(html, page)
     finish_outputs()
     _say_violations(result)

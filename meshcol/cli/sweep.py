@@ -18,6 +18,8 @@ from meshcol.cli.common import (
     report_format,
     report_options,
     robot_options,
+    snapshots_option,
+    snapshots_written,
     threads_option,
     verdict,
     write_html,
@@ -65,6 +67,7 @@ from meshcol.vocabulary import COLLIDER_KINDS
 )
 @robot_options()
 @html_option
+@snapshots_option
 def sweep(
     manifest: str,
     shape: str,
@@ -75,6 +78,7 @@ def sweep(
     threads: int,
     cache_dir: str | None,
     html: str | None,
+    snapshots: str | None,
     robot_options: RobotOptions,
 ) -> None:
     """First contact of moving bodies: meshcol sweep MANIFEST [options].
@@ -97,12 +101,17 @@ def sweep(
       meshcol sweep samples/bullet/scene.json            JSON report on stdout
       meshcol sweep level.json --report sweep.csv --fail-on none
       meshcol sweep level.json --shape mesh --tolerance 1e-5 --report -
+      meshcol sweep level.json --format markdown --snapshots pr/ > pr/sweep.md
     """
     from meshcol.analysis.review import sweep_page
     from meshcol.analysis.sweep import sweep as run_sweep
     from meshcol.cli.common import emit_report
 
-    check_outputs(files={"--report": report, "--html": html}, inputs=[manifest])
+    check_outputs(
+        files={"--report": report, "--html": html},
+        folders={"--snapshots": snapshots},
+        inputs=[manifest],
+    )
     fmt = report_format(report, fmt)
     decompose_options = {} if cache_dir is None else {"cache_dir": cache_dir}
     progress = Progress(command="sweep", heartbeat=True)  # the library reports no steps
@@ -119,7 +128,8 @@ def sweep(
     finally:
         progress.done()
     page = render_html(html, lambda: sweep_page(result))
-    emit_report(result, fmt, report)
+    with snapshots_written(result, snapshots, report, lambda: sweep_page(result)) as written:
+        emit_report(written, fmt, report)
     write_html(html, page)
     finish_outputs()
     for warning in result.warnings:

@@ -21,7 +21,8 @@ import numpy as np
 
 from meshcol._native import core
 from meshcol.collision.arrays import as_pairs, as_points, as_pose, as_poses
-from meshcol.geometry.topology import is_closed_manifold, orient_consistently
+from meshcol.collision.orientation import orient_consistently
+from meshcol.geometry.topology import is_closed_manifold
 from meshcol.types import Body, Status
 
 __all__ = [
@@ -115,7 +116,7 @@ class MeshSet:
         invalid mesh report ``Status.INVALID_INPUT``.
     reoriented : (M,) bool
         Some faces of the mesh were reversed when the set was built
-        (:func:`meshcol.geometry.topology.orient_consistently`: its winding was inconsistent,
+        (:func:`meshcol.collision.orientation.orient_consistently`: its winding was inconsistent,
         MC403); ``faces`` holds them as reversed, in input order.
     orientable : (M,) bool
         Every component of the mesh can be wound consistently. When False the winding number
@@ -159,7 +160,7 @@ class MeshSet:
         orient : bool
             Reverse the faces of an inconsistently wound mesh so that each of its components
             is wound consistently, closed ones outward
-            (:func:`meshcol.geometry.topology.orient_consistently`), before any inside test:
+            (:func:`meshcol.collision.orientation.orient_consistently`), before any inside test:
             the winding number of a mesh wound both ways at random means nothing. A mesh
             without inconsistent edges is kept as given. False keeps every mesh as given.
 

@@ -7,8 +7,9 @@ from typing import Any
 
 import numpy as np
 
+from meshcol.collision.orientation import orient_consistently
 from meshcol.decomposition.result import Fidelity
-from meshcol.geometry.topology import is_closed_manifold, orient_consistently
+from meshcol.geometry.topology import is_closed_manifold
 from meshcol.geometry.triangles import point_triangle_distances, sample_surface
 
 __all__ = [
@@ -292,7 +293,7 @@ def fidelity(
 
     Volumes: manifold3d (hull of each part, boolean union; the mesh itself when manifold).
     An inconsistently wound mesh is wound consistently first
-    (:func:`meshcol.geometry.topology.orient_consistently`), so a closed one is a solid.
+    (:func:`meshcol.collision.orientation.orient_consistently`), so a closed one is a solid.
     """
     vertices = np.asarray(vertices, dtype=np.float64)
     faces = orient_consistently(vertices, np.asarray(faces, dtype=np.int64)).faces

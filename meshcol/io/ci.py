@@ -142,6 +142,9 @@ class CiSuite:
         the rules they cite (SARIF).
     baseline : str or None
         The ``--baseline`` report the run compared with, as the user gave it.
+    docs_url : str or None
+        The docs' base URL from the configuration (``docs-url``), for the rules' links
+        (SARIF ``helpUri``; ``$MESHCOL_DOCS_URL`` overrides it); None: not configured.
     """
 
     command: str
@@ -153,6 +156,7 @@ class CiSuite:
     units: str | None = None
     rules: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     baseline: str | None = None
+    docs_url: str | None = None
 
     def count(self, outcome: str) -> int:
         return sum(1 for case in self.cases if case.outcome == outcome)

@@ -46,6 +46,7 @@ __all__ = [
     "load_config",
     "parse_override",
     "resolve",
+    "run_settings",
 ]
 
 #: The files that hold a configuration, in the order one folder is searched.
@@ -579,3 +580,34 @@ def _relative(config: Config, path: str | os.PathLike[str]) -> str:
         except ValueError:
             return file.as_posix()
     return os.path.normpath(file).replace(os.sep, "/")
+
+
+# --- run settings (top-level keys) ------------------------------------------------------------
+
+#: The top-level keys that set how a run runs (not which files are what), in display order.
+RUN_KEYS = ("root", "cache-dir", "jobs", "docs-url")
+
+
+def run_settings(
+    config: Config, flags: Mapping[str, tuple[Any, str]] = {}
+) -> dict[str, tuple[Any, str]]:
+    """Each top-level run setting (:data:`RUN_KEYS`) as ``key -> (value, origin)``: a flag
+    given in ``flags`` (``{"jobs": (2, "flag -j")}``, None values ignored) wins over an
+    environment variable (``docs-url``: ``$MESHCOL_DOCS_URL``), which wins over the file
+    (``meshcol.toml:3``), which wins over the schema's default (``default``)."""
+    from meshcol.io.sarif import HOME_ENV
+
+    environment = {"docs-url": HOME_ENV}
+    out: dict[str, tuple[Any, str]] = {}
+    for key in RUN_KEYS:
+        flag = flags.get(key)
+        variable = environment.get(key)
+        if flag is not None and flag[0] is not None:
+            out[key] = flag
+        elif variable is not None and os.environ.get(variable):
+            out[key] = (os.environ[variable], f"env {variable}")
+        elif key in config.data:
+            out[key] = (config.data[key], config.origin(key))
+        else:
+            out[key] = (config.get(key), "default")
+    return out

@@ -141,6 +141,20 @@ def _case_table(suite: CiSuite, failing: Sequence[CiCase], baseline: bool) -> li
     return lines + _more(len(failing) - TABLE_ROWS, f"failing {what}s")
 
 
+def _pictured_warnings(suite: CiSuite) -> list[str]:
+    """Warned cases that have a snapshot (``fit``'s loose primitives): a table of their
+    pictures, so that every picture ``--snapshots`` drew is linked from the comment."""
+    pictured = [c for c in suite.cases if c.warn and c.outcome != "failure" and c.snapshot]
+    if not pictured:
+        return []
+    what = "pair" if suite.command in ("check", "sweep") else "asset"
+    lines = ["", f"| | rule | {what} | file | snapshot |", "| --- | --- | --- | --- | --- |"]
+    for case in pictured[:TABLE_ROWS]:
+        cells = ["warns", _rule_label(_case_rule(case), suite.rules), case.name, case.file or ""]
+        lines.append("| " + " | ".join(_cell(c) for c in cells) + f" | {_snapshot(case)} |")
+    return lines + _more(len(pictured) - TABLE_ROWS, f"pictured {what}s")
+
+
 def dumps_markdown(suite: CiSuite) -> str:
     """The pull-request comment of ``suite`` (see the module's notes)."""
     failing = [case for case in suite.cases if case.outcome == "failure"]
@@ -161,6 +175,7 @@ def dumps_markdown(suite: CiSuite) -> str:
         ]
     lines += _rule_table(suite, failing, baseline)
     lines += _case_table(suite, failing, baseline)
+    lines += _pictured_warnings(suite)
     if errors:
         lines += ["", "Inputs that could not be used:", ""]
         lines += [f"- {_cell(c.file or c.name)}: {_cell(c.message)}" for c in errors[:TABLE_ROWS]]

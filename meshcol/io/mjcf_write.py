@@ -269,6 +269,9 @@ def _spec_of_mjcf(
     """The input MJCF as MuJoCo read it, each rebuilt geom made its parts (or its fitted
     primitive), visual geoms in group 2 and collision geoms in group 3, collision meshes no
     geom uses any more deleted; and the geoms of the fitted primitives."""
+    from meshcol.io.safe_read import check_mjcf_files
+
+    check_mjcf_files(robot.source)  # its includes and assets, before MuJoCo opens them
     spec = _spec(mujoco, robot.source, lambda: mujoco.MjSpec.from_file(robot.source))
     _compile(mujoco, spec, robot.source)
     geoms = {geom.id: geom for geom in spec.geoms}

@@ -210,6 +210,8 @@ def confine_mjcf(source: str | os.PathLike[str]) -> None:
         return
     import xml.etree.ElementTree as ET
 
+    from meshcol.io.safe_read import read_input
+
     pending, seen = [os.fspath(source)], set()
     dirs: dict[str, str] = {}
     while pending:
@@ -217,9 +219,11 @@ def confine_mjcf(source: str | os.PathLike[str]) -> None:
         if file in seen:
             continue
         seen.add(file)
-        try:
-            tree = ET.parse(file)
-        except (OSError, ET.ParseError):
+        if not os.path.isfile(file):
+            continue  # missing: the compiler names it
+        try:  # the guarded read: never a pipe or a device, capped
+            tree = ET.ElementTree(ET.fromstring(read_input(file, "robot")))
+        except ET.ParseError:
             continue
         folder = os.path.dirname(os.fspath(source))  # MuJoCo: paths from the main file's folder
         for compiler in tree.iter("compiler"):

@@ -15,13 +15,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Camera", "Raster", "hex_rgb"]
+__all__ = ["Camera", "Raster", "hex_rgb", "view_across"]
 
 #: Direction the camera looks from (towards the target), before normalisation.
 VIEW_FROM = np.array([1.0, -1.35, 0.9])
 #: Light direction (from the surface towards the light), before normalisation.
 LIGHT_FROM = np.array([0.45, -0.6, 1.0])
 AMBIENT = 0.35
+#: A contact normal whose horizontal part is shorter than this is seen from the default view.
+VERTICAL_NORMAL = 0.3
 #: Triangles drawn one by one at most; the rest (smallest first) are splatted.
 MAX_FILLED = 60_000
 
@@ -47,11 +49,13 @@ class Camera:
     width: int = 640
     height: int = 480
     margin: float = 0.12
+    #: Direction the camera looks from; None: :data:`VIEW_FROM`.
+    view_from: np.ndarray | None = None
 
     @property
     def axes(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(right, up, towards the viewer), orthonormal, world frame."""
-        back = _unit(VIEW_FROM)
+        back = _unit(VIEW_FROM if self.view_from is None else np.asarray(self.view_from))
         right = _unit(np.cross(np.array([0.0, 0.0, 1.0]), back))
         up = np.cross(back, right)
         return right, up, back
@@ -162,3 +166,24 @@ class Raster:
         x, y, z, colors = x[nearer], y[nearer], z[nearer], colors[nearer]
         self.depth[y, x] = z
         self.pixels[y, x] = colors
+
+
+def view_across(normal: np.ndarray | None) -> np.ndarray:
+    """A direction to look from that sees a contact of unit ``normal`` from the side, so that
+    neither body hides the other: :data:`VIEW_FROM` turned about the vertical until its
+    horizontal part is square to the normal's (its elevation kept). A mostly vertical normal
+    (a body resting on another) keeps :data:`VIEW_FROM`, which already looks down at the
+    contact, as does no usable normal."""
+    if normal is None or not np.all(np.isfinite(normal)):
+        return VIEW_FROM
+    n = np.asarray(normal, dtype=np.float64)
+    length = float(np.linalg.norm(n))
+    across = np.array([-n[1], n[0]]) / length if length > 1e-12 else np.zeros(2)
+    size = float(np.linalg.norm(across))
+    if size < VERTICAL_NORMAL:
+        return VIEW_FROM
+    across /= size
+    horizontal = VIEW_FROM[:2]
+    if across @ horizontal < 0:
+        across = -across
+    return np.array([*(across * np.linalg.norm(horizontal)), VIEW_FROM[2]])

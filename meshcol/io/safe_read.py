@@ -34,7 +34,7 @@ __all__ = [
 ]
 
 #: What a file is read as; each kind has its cap in :data:`MAX_BYTES`.
-InputKind = Literal["mesh", "manifest", "json", "robot", "buffer"]
+InputKind = Literal["mesh", "manifest", "json", "robot", "buffer", "texture"]
 
 _GIB = 1 << 30
 _MIB = 1 << 20
@@ -49,13 +49,16 @@ _MIB = 1 << 20
 #: - ``json`` (``--baseline`` reports, ``--joints`` files): 1 GiB (a check report of
 #:   100,000 pairs is about 150 MB; a joints file is a few hundred bytes);
 #: - ``robot`` (URDF, MJCF and its ``<include>`` files, SRDF, xacro leftovers): 256 MiB (the
-#:   largest descriptions of the public collections are a few MB).
+#:   largest descriptions of the public collections are a few MB);
+#: - ``texture`` (an MJCF ``<texture>``'s PNG or custom files, which MuJoCo's compiler decodes):
+#:   1 GiB (a 16384 x 16384 RGBA image uncompressed).
 MAX_BYTES: dict[str, int] = {
     "mesh": 4 * _GIB,
     "buffer": 4 * _GIB,
     "manifest": _GIB,
     "json": _GIB,
     "robot": 256 * _MIB,
+    "texture": _GIB,
 }
 
 _WHAT = {
@@ -64,6 +67,7 @@ _WHAT = {
     "manifest": "scene manifest",
     "json": "JSON file",
     "robot": "robot description",
+    "texture": "texture",
 }
 
 
@@ -205,19 +209,33 @@ def _size(count: int) -> str:
     return f"{count} bytes"
 
 
+#: MJCF asset elements and their file attributes (a cube map's six faces too), with the
+#: compiler directory each is found under (``assetdir`` when that one is not set).
+_MJCF_FILES = {
+    "mesh": (("file",), "meshdir"),
+    "hfield": (("file",), "meshdir"),
+    "skin": (("file",), "meshdir"),
+    "texture": (
+        ("file", "fileright", "fileleft", "fileup", "filedown", "filefront", "fileback"),
+        "texturedir",
+    ),
+}
+
+
 def check_mjcf_files(source: str) -> None:
     """Refuse, before MuJoCo's compiler opens them, the files an MJCF model names that are not
     regular files or are over their cap: its ``<include file>`` (relative to the main file's
-    folder, as MuJoCo resolves them, nested includes too) and its ``<mesh>``, ``<hfield>`` and
-    ``<skin>`` files (under ``<compiler meshdir>`` or ``assetdir``). A missing file is left to
+    folder, as MuJoCo resolves them, nested includes too), its ``<mesh>``, ``<hfield>`` and
+    ``<skin>`` files (under ``<compiler meshdir>`` or ``assetdir``) and its ``<texture>`` files,
+    a cube map's six too (under ``texturedir`` or ``assetdir``). A missing file is left to
     MuJoCo's own message; a file that does not parse too."""
     from lxml import etree
 
     folder = os.path.dirname(source)  # paths as the user would type them, for messages
     parser = etree.XMLParser(resolve_entities=False, no_network=True, huge_tree=False)
     pending, seen = [source], set[str]()
-    meshdir: str | None = None
-    assets: list[str] = []
+    dirs: dict[str, str] = {}
+    assets: list[tuple[str, str]] = []  # (file, its compiler directory's key)
     while pending and len(seen) < 1000:
         path = pending.pop()
         if path in seen:
@@ -230,13 +248,19 @@ def check_mjcf_files(source: str) -> None:
             root = etree.fromstring(read_input(path, "robot"), parser)
         except etree.XMLSyntaxError:
             continue  # MuJoCo says what is wrong with it
-        for element in root.iter("include", "compiler", "mesh", "hfield", "skin"):
-            file = element.get("file")
+        for element in root.iter("include", "compiler", *_MJCF_FILES):
             if element.tag == "compiler":
-                meshdir = meshdir or element.get("meshdir") or element.get("assetdir")
-            elif file and element.tag == "include":
-                pending.append(os.path.join(folder, file))
-            elif file:
-                assets.append(file)
-    for file in assets:
-        refuse_special(os.path.join(folder, meshdir or "", file), "mesh")
+                for key in ("assetdir", "meshdir", "texturedir"):
+                    if element.get(key) and key not in dirs:
+                        dirs[key] = element.get(key, "")
+            elif element.tag == "include":
+                if element.get("file"):
+                    pending.append(os.path.join(folder, element.get("file")))
+            else:
+                names, key = _MJCF_FILES[element.tag]
+                assets += [(element.get(a), key) for a in names if element.get(a)]
+    for file, key in assets:
+        sub = dirs.get(key) or dirs.get("assetdir") or ""
+        refuse_special(
+            os.path.join(folder, sub, file), "texture" if key == "texturedir" else "mesh"
+        )

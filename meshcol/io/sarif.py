@@ -7,8 +7,12 @@ findings is two results), with:
 - ``ruleId`` the rule's stable id (``MC401``) and ``ruleIndex`` its place in
   ``tool.driver.rules``, which describes every rule the command can report from the rules
   registry (:data:`meshcol.analysis.rules.RULES`, passed in as ``suite.rules``): short and
-  full descriptions, the fix as help, the default level from the rule's severity, and
-  ``helpUri`` the rules page. A case whose kind is no registered rule (decompose's
+  full descriptions, the fix as help (embedded: a consumer needs no link), the default
+  level from the rule's severity, and ``helpUri`` the rule's anchor in the rules page
+  (``docs/rules.md``, generated from the registry) under the docs' base URL when one is set
+  (:func:`docs_base`: ``$MESHCOL_DOCS_URL``, else the configuration's ``docs-url``); with
+  none, no ``helpUri`` and no ``informationUri`` (no link to a host that is not there). A
+  case whose kind is no registered rule (decompose's
   ``max-hausdorff``, hull's ``max-vertices``, sweep's ``HIT``) cites its kind as the rule, with
   a descriptor made for it.
 - ``level`` from the severity (``error``, ``warning``; ``info`` is ``note``); a kind that is no
@@ -42,19 +46,27 @@ from typing import Any
 from meshcol.io.ci import CiCase, CiSuite
 from meshcol.io.report import dumps_json
 
-__all__ = ["SARIF_SCHEMA", "SARIF_VERSION", "dumps_sarif", "sarif_log", "source_root"]
+__all__ = [
+    "SARIF_SCHEMA",
+    "SARIF_VERSION",
+    "docs_base",
+    "dumps_sarif",
+    "rule_uri",
+    "sarif_log",
+    "source_root",
+]
 
 SARIF_VERSION = "2.1.0"
 #: The OASIS schema of SARIF 2.1.0 (errata 01), as ``$schema`` names it.
 SARIF_SCHEMA = (
     "https://docs.oasis-open.org/sarif/sarif/v2.1.0/errata01/os/schemas/sarif-schema-2.1.0.json"
 )
-#: Where the rules are documented, relative to the project's home (docs/rules.md).
-RULES_PAGE = "docs/rules.md"
-#: The project's public home; rule ``helpUri`` is this plus :data:`RULES_PAGE` (the
-#: environment variable ``MESHCOL_DOCS_URL`` replaces it, for a mirror or a fork).
+#: The rules page, as the docs folder holds it (generated from the registry).
+RULES_PAGE = "rules.md"
+#: The environment variable that sets the docs' base URL (over the config's ``docs-url``).
 HOME_ENV = "MESHCOL_DOCS_URL"
-DEFAULT_HOME = "https://github.com/meshcol/meshcol/blob/main/"
+#: Suffixes of a base URL that is the rules page itself (a rendered site's ``rules.html``).
+_PAGE_SUFFIXES = (".md", ".html", ".htm")
 #: ``uriBaseId`` of every location: the repository root.
 ROOT_ID = "%SRCROOT%"
 #: SARIF level of each rule severity.
@@ -68,24 +80,38 @@ def source_root() -> str:
     return os.path.abspath(os.environ.get("GITHUB_WORKSPACE") or os.getcwd())
 
 
-def _home() -> str:
-    home = os.environ.get(HOME_ENV) or DEFAULT_HOME
-    return home if home.endswith("/") else home + "/"
+def docs_base(configured: str | None = None) -> str | None:
+    """The base URL of the docs the rules' ``helpUri`` point into: ``$MESHCOL_DOCS_URL``,
+    else ``configured`` (the configuration's ``docs-url``), else None (no links)."""
+    base = os.environ.get(HOME_ENV) or configured
+    return base or None
+
+
+def rule_uri(base: str | None, rule_id: str) -> str | None:
+    """The rule's anchor in the rules page under ``base``: the docs folder
+    (``https://host/docs/`` gives ``https://host/docs/rules.md#mc501``), or the page itself
+    when ``base`` ends in ``.md`` or ``.html`` (``https://host/rules.html#mc501``); None
+    without a base."""
+    if base is None:
+        return None
+    page = base if base.lower().endswith(_PAGE_SUFFIXES) else base.rstrip("/") + "/" + RULES_PAGE
+    return f"{page}#{rule_id.lower()}"
 
 
 def _text(value: Any) -> str:
     return " ".join(str(value).split())
 
 
-def _registered(rule_id: str, rule: Mapping[str, Any]) -> dict[str, Any]:
-    """A ``reportingDescriptor`` of a registered rule."""
+def _registered(rule_id: str, rule: Mapping[str, Any], base: str | None) -> dict[str, Any]:
+    """A ``reportingDescriptor`` of a registered rule (``helpUri`` under ``base``, if any)."""
     summary = _text(rule.get("summary", ""))
     measured = _text(rule.get("measured", ""))
     fix = _text(rule.get("fix", ""))
     name = str(rule.get("name", rule_id))
     severity = str(rule.get("severity", "error"))
-    uri = f"{_home()}{RULES_PAGE}#{rule_id.lower()}"
-    return {
+    uri = rule_uri(base, rule_id)
+    see = f"\n\nSee [{rule_id}]({uri})." if uri is not None else ""
+    descriptor = {
         "id": rule_id,
         "name": name,
         "shortDescription": {"text": f"{name}: {summary}"},
@@ -93,15 +119,17 @@ def _registered(rule_id: str, rule: Mapping[str, Any]) -> dict[str, Any]:
         "help": {
             "text": f"{summary}\nMeasured: {measured}\nFix: {fix}",
             "markdown": f"**{rule_id} `{name}`** ({severity}): {summary}\n\n"
-            f"*Measured*: {measured}\n\n*Fix*: {fix}\n\nSee [{rule_id}]({uri}).",
+            f"*Measured*: {measured}\n\n*Fix*: {fix}{see}",
         },
-        "helpUri": uri,
         "defaultConfiguration": {"level": LEVELS.get(severity, "warning")},
         "properties": {
             "tags": ["meshcol", str(rule.get("category", "")) or "rule"],
             "precision": "very-high",
         },
     }
+    if uri is not None:
+        descriptor["helpUri"] = uri
+    return descriptor
 
 
 def _kind_descriptor(kind: str, command: str) -> dict[str, Any]:
@@ -245,11 +273,15 @@ def _notification(case: CiCase, root: str) -> dict[str, Any]:
 
 def sarif_log(suite: CiSuite, root: str | None = None) -> dict[str, Any]:
     """The SARIF log of ``suite`` as a dict (one run); ``root`` the repository root that
-    locations are relative to (default :func:`source_root`)."""
+    locations are relative to (default :func:`source_root`); rule links under
+    :func:`docs_base` of the suite's ``docs_url``."""
     from meshcol._version import __version__
 
     root = os.path.abspath(root) if root is not None else source_root()
-    descriptors = [_registered(rule_id, suite.rules[rule_id]) for rule_id in sorted(suite.rules)]
+    base = docs_base(suite.docs_url)
+    descriptors = [
+        _registered(rule_id, suite.rules[rule_id], base) for rule_id in sorted(suite.rules)
+    ]
     index = {d["id"]: k for k, d in enumerate(descriptors)}
     results: list[dict[str, Any]] = []
     notes: list[dict[str, Any]] = []
@@ -269,16 +301,16 @@ def sarif_log(suite: CiSuite, root: str | None = None) -> dict[str, Any]:
                 level = "error" if case.outcome == "failure" else "warning"
             results.append(_result(case, rule_id, index[rule_id], level, suite, root, lines))
     base_uri = urllib.parse.urljoin("file:", urllib.parse.quote(root.replace(os.sep, "/")))
+    driver: dict[str, Any] = {
+        "name": "meshcol",
+        "version": __version__,
+        "semanticVersion": __version__,
+        "rules": descriptors,
+    }
+    if base is not None:
+        driver["informationUri"] = base
     run: dict[str, Any] = {
-        "tool": {
-            "driver": {
-                "name": "meshcol",
-                "version": __version__,
-                "semanticVersion": __version__,
-                "informationUri": _home().rsplit("/blob/", 1)[0],
-                "rules": descriptors,
-            }
-        },
+        "tool": {"driver": driver},
         "automationDetails": {"id": f"meshcol/{suite.command}/"},
         "originalUriBaseIds": {ROOT_ID: {"uri": base_uri.rstrip("/") + "/"}},
         "invocations": [

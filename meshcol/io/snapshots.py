@@ -21,10 +21,11 @@ from typing import Any
 import numpy as np
 
 from meshcol.errors import MissingDependencyError
-from meshcol.io.raster import Camera, Raster, hex_rgb
+from meshcol.io.raster import Camera, Raster, hex_rgb, view_across
 from meshcol.io.review import ReviewPage
 
 __all__ = [
+    "COLLIDER_COLOR",
     "PAIR_COLORS",
     "SUBJECT_COLOR",
     "WITNESS_COLOR",
@@ -42,6 +43,11 @@ SUBJECT_COLOR = "#4363d8"
 #: Witness points (green discs) and the normal (an orange arrow).
 WITNESS_COLOR = "#00c000"
 NORMAL_COLOR = "#ff8c00"
+#: A collider's edges over its mesh (hull's hull, fit's primitive): green.
+COLLIDER_COLOR = "#3cb44b"
+#: Two faces of a collider meeting at less than this angle (radians) show no edge between
+#: them (a polygon's triangulation is not drawn).
+FEATURE_ANGLE = 1e-3
 #: Other bodies: grey, faded towards the white background.
 CONTEXT_COLOR = "#b8b8b8"
 CONTEXT_FADE = 0.55
@@ -69,12 +75,15 @@ def pillow() -> Any:
 @dataclass(frozen=True)
 class Shot:
     """One picture to draw: the page row whose bodies are ``bodies`` (names, in the row's
-    order), saved as ``name`` (a file name), captioned ``title`` and ``caption``."""
+    order), saved as ``name`` (a file name), captioned ``title`` and ``caption``;
+    ``outline`` a group of the page whose meshes of those bodies are drawn as edges over
+    them (the ``hulls`` of hull and fit: the collider on its mesh)."""
 
     bodies: tuple[str, ...]
     name: str
     title: str
     caption: str = ""
+    outline: str | None = None
 
 
 def file_name(index: int, text: str) -> str:
@@ -164,21 +173,76 @@ def _marks(
         draw.ellipse([x - r, y - r, x + r, y + r], fill=hex_rgb(WITNESS_COLOR), outline=(0, 0, 0))
 
 
+def _own_meshes(meshes: Sequence[Mapping[str, Any]], row: Mapping[str, Any]) -> list[dict]:
+    """The meshes of the row's bodies as the picture shows them: the row's own group when it
+    has one (sweep's bodies at the time of impact, each the body whose geometry it shares),
+    else the bodies where the scene has them."""
+    ids = list(row["bodies"])
+    placed = [m for m in meshes if m["body"] in ids and m["group"] == "meshes"]
+    group = row.get("group")
+    if not group:
+        return [dict(m) for m in placed]
+    geometry = {m["g"]: m["body"] for m in placed}
+    posed = [
+        {**m, "body": geometry[m["g"]]}
+        for m in meshes
+        if m["group"] == group and m["g"] in geometry
+    ]
+    return posed or [dict(m) for m in placed]
+
+
 def _draw_row(page: ReviewPage, row: Mapping[str, Any], shot: Shot, path: str) -> None:
     PIL = pillow()
     ids = list(row["bodies"])
     meshes = page.meshes()
-    own = [(m, _world(m)) for m in meshes if m["body"] in ids and m["group"] == "meshes"]
+    own = [(m, _world(m)) for m in _own_meshes(meshes, row)]
     lines = [line for line in page.lines() if line["body"] in ids]
+    if shot.outline is not None:
+        lines += [
+            {"p": edges, "color": COLLIDER_COLOR, "body": m["body"]}
+            for m in meshes
+            if m["body"] in ids and m["group"] == shot.outline
+            for edges in [_feature_edges(m)]
+            if len(edges)
+        ]
     points = row["points"] if row["points"] is not None else np.zeros((0, 3))
     by_body = [[t for m, t in own if m["body"] == i] for i in ids]
     low, high = _frame(by_body, points, [line["p"] for line in lines])
-    camera = Camera(low, high, WIDTH, HEIGHT)
+    camera = Camera(low, high, WIDTH, HEIGHT, view_from=view_across(row["normal"]))
     image = PIL.Image.fromarray(_paint(meshes, ids, own, camera).pixels, "RGB")
     draw = PIL.ImageDraw.Draw(image)
     _marks(draw, camera, lines, points, row["normal"])
     _caption(draw, shot, row, page, bool(len(points)))
     image.save(path, format="PNG", optimize=False)
+
+
+def _feature_edges(mesh: Mapping[str, Any]) -> np.ndarray:
+    """``(n, 2, 3)`` world segments: the mesh's edges where its faces meet at an angle
+    (every boundary edge too), so that a hull shows its polygons, not their triangles."""
+    tris = _world(mesh)
+    faces = np.asarray(mesh["faces"], dtype=np.int64)
+    normals = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-300)
+    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    owner = np.tile(np.arange(len(faces)), 3)
+    ordered = np.sort(edges, axis=1)
+    _, first, inverse, counts = np.unique(
+        ordered, axis=0, return_index=True, return_inverse=True, return_counts=True
+    )
+    inverse = inverse.reshape(-1)
+    keep = counts != 2
+    two = np.flatnonzero(counts == 2)
+    if len(two):
+        # the two faces of each shared edge: the first occurrence and the other one
+        second = np.full(len(counts), -1, dtype=np.int64)
+        rows = np.flatnonzero(np.arange(len(edges)) != first[inverse])
+        second[inverse[rows]] = rows
+        cosine = np.einsum("ij,ij->i", normals[owner[first[two]]], normals[owner[second[two]]])
+        keep[two] = cosine < np.cos(FEATURE_ANGLE)
+    chosen = edges[first[keep]]
+    pose = np.asarray(mesh["pose"], dtype=np.float64)
+    world = np.asarray(mesh["vertices"], dtype=np.float64) @ pose[:3, :3].T + pose[:3, 3]
+    return world[chosen]
 
 
 def _arrow(draw: Any, camera: Camera, origin: np.ndarray, normal: np.ndarray) -> None:
@@ -221,6 +285,8 @@ def _caption(
     legend += "; green: witness points; orange: normal" if witnesses else ""
     if page.command == "inspect":
         legend += "; red: open edges; orange: non-manifold; magenta: crossing faces"
+    if shot.outline is not None:
+        legend += "; green: the collider's edges"
     draw.text((10, HEIGHT - 22), legend[:120], fill=(90, 90, 90), font=small)
 
 

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterable
-from pathlib import Path
 
 from meshcol.errors import InputFileError, SceneError
 from meshcol.io.report import atomic_write
@@ -85,14 +84,15 @@ def read_srdf(path: str, links: set[str]) -> tuple[list[tuple[str, str, str]], l
     """
     from lxml import etree
 
-    if not Path(path).is_file():
+    if not os.path.lexists(path):
         raise InputFileError("SRDF file not found", path)
+    from meshcol.io.safe_read import read_input
+
+    data = read_input(path, "robot")  # the guarded read: never a pipe or a device, capped
     try:
-        root = etree.parse(path, etree.XMLParser(resolve_entities=False)).getroot()
+        root = etree.fromstring(data, etree.XMLParser(resolve_entities=False))
     except etree.XMLSyntaxError as exc:
         raise SceneError(f"malformed XML: {' '.join(str(exc).split())}", path) from None
-    except OSError as exc:
-        raise InputFileError(f"cannot read: {exc}", path) from None
     pairs: list[tuple[str, str, str]] = []
     unknown: list[str] = []
     for element in root.iter("disable_collisions"):

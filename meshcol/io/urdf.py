@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from meshcol.errors import InputFileError, MeshcolError, MissingDependencyError, SceneError
+from meshcol.errors import MeshcolError, MissingDependencyError, SceneError
 from meshcol.io.kinematics import (
     Kinematics,
     UrdfKinematics,
@@ -136,13 +136,15 @@ def _urdf_modules(source: str) -> tuple[Any, Any]:
 
 def _parse_strictly(etree: Any, source: str) -> Any:
     """The root element of a well-formed file whose root is ``<robot>``."""
+    from meshcol.io.safe_read import read_input
+
+    data = read_input(source, "robot")  # the guarded read: never a pipe or a device, capped
     try:
-        tree = etree.parse(source, etree.XMLParser(remove_blank_text=True, resolve_entities=False))
+        root = etree.fromstring(
+            data, etree.XMLParser(remove_blank_text=True, resolve_entities=False)
+        )
     except etree.XMLSyntaxError as exc:
         raise SceneError(f"malformed XML: {one_line(str(exc))}", source) from None
-    except OSError as exc:
-        raise InputFileError(f"cannot read: {exc}", source) from None
-    root = tree.getroot()
     if root.tag != "robot":
         raise SceneError(f"not a URDF: the root element is <{root.tag}>, not <robot>", source)
     return root

@@ -33,9 +33,12 @@ def parse_xml(source: str) -> Any:
         raise MissingDependencyError(
             "writing URDF needs lxml (pip install 'meshcol[robots]')", source
         ) from None
+    from meshcol.io.safe_read import read_input
+
+    data = read_input(source, "robot")  # the guarded read: never a pipe or a device, capped
     try:
-        return etree.parse(source, etree.XMLParser(resolve_entities=False))
-    except (etree.XMLSyntaxError, OSError) as exc:
+        return etree.ElementTree(etree.fromstring(data, etree.XMLParser(resolve_entities=False)))
+    except etree.XMLSyntaxError as exc:
         raise SceneError(f"cannot read the XML: {' '.join(str(exc).split())}", source) from None
 
 

@@ -16,7 +16,8 @@ import trimesh
 from dirty_meshes import HOSTS, at, blob, check_pair, cube, inner, moebius, on_top, shuffled
 
 from meshcol.collision.mesh_query import MeshSet
-from meshcol.geometry.topology import edge_table, is_balanced, orient_consistently
+from meshcol.collision.orientation import orient_consistently
+from meshcol.geometry.topology import edge_table, is_balanced
 
 
 def test_orientation_undoes_a_random_shuffle() -> None:
@@ -148,7 +149,7 @@ def test_mesh_set_flags_and_opt_out() -> None:
 
 
 def test_ray_parity_votes_and_abstains() -> None:
-    from meshcol.geometry.ray_parity import ray_parity
+    from meshcol.collision.ray_parity import ray_parity
 
     outer = trimesh.creation.box(extents=(1, 1, 1))
     inner_box = trimesh.creation.box(extents=(0.8, 0.8, 0.8))

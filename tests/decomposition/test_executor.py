@@ -5,24 +5,26 @@ worker killed by its pid mid-task failing only its file while the others finish.
 The inputs and helpers here are shared with tests/test_ray.py, which runs the same scenarios
 on a real local Ray.
 
-A stuck file is a FIFO nobody writes: its task blocks opening it. The killed-worker tests
-find the worker through the FIFO itself (:class:`FifoReaderKiller`): opening the write end
-without blocking succeeds only once a reader has it open, and that reader's pid is the
-process holding it in ``/proc``; it is killed, then the write end closed. Every wait is
-bounded (a deadline in the killer, ``--timeout`` as a backstop in the run), so that a kill
-that never happens fails the test instead of hanging it.
+A stuck file is a regular mesh that keeps its worker busy for real (:func:`stall`: half a
+million triangles, seconds of CPU to inspect, minutes for CoACD to decompose); nothing in the
+code under test waits on purpose. The killed-worker tests learn which worker runs that file's
+task (a spy on the pool's assignment here, the task itself on Ray) and kill it once it has
+used a second of CPU on it (:class:`WorkerKiller`). Every wait is bounded (a deadline in the
+killer, ``--timeout`` as a backstop in the run), so that a kill that never happens fails the
+test instead of hanging it.
 """
 
 from __future__ import annotations
 
-import errno
 import json
 import os
 import signal
 import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 import trimesh
@@ -35,12 +37,21 @@ linux_only = pytest.mark.skipif(
 )
 
 
-#: Why the CLI-level stuck-worker tests skip.
-STUCK_INPUT_GONE = (
-    "its stuck input was a FIFO, which every reader now refuses at once (issue 29 item 11); "
-    "a regular input that stalls a worker is still to be found (the executor-level kill and "
-    "timeout tests remain)"
-)
+#: Faces of the stalling input (:func:`stall`). Inspecting it takes about 7 s of CPU here
+#: (the self-intersection candidates, the edge table, manifold3d) and 600 MB; CoACD takes
+#: minutes on it. Its worker is stopped (a timeout of 3-4 s, or killed) long before the end.
+STALL_FACES = 500_000
+
+
+@pytest.fixture(scope="module")
+def stall(tmp_path_factory) -> Path:
+    """A regular mesh file whose task keeps a worker busy many seconds: a torus of
+    :data:`STALL_FACES` faces (binary PLY, 9.5 MB), watertight and consistently wound."""
+    mesh = trimesh.creation.torus(1.0, 0.3, major_sections=1000, minor_sections=250)
+    assert len(mesh.faces) == STALL_FACES
+    path = tmp_path_factory.mktemp("executor-stall") / "stall.ply"
+    mesh.export(path)
+    return path
 
 
 @pytest.fixture(scope="module")
@@ -117,74 +128,84 @@ def cache_entries(folder: Path) -> list[str]:
     return sorted(p.name for p in folder.rglob("*") if p.is_file())
 
 
-class FifoReaderKiller(threading.Thread):
-    """Kills (SIGKILL) the process that opens ``fifo`` for reading, within ``deadline`` s.
+def cpu_seconds(pid: int) -> float | None:
+    """CPU time (user + system, all threads) ``pid`` has used; None once it is gone."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+    except OSError:
+        return None
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
-    Never blocks: the write end is opened with ``O_NONBLOCK`` (ENXIO until a reader has
-    the FIFO open), the reader is the other process holding the FIFO in ``/proc/*/fd``.
-    Once the reader is dead (or at the deadline) the write end is closed, so a reader that
-    was not killed reads end-of-file instead of waiting for ever. ``pid``: the process
-    killed (None: none found)."""
 
-    def __init__(self, fifo: Path, deadline: float = 60.0) -> None:
+class WorkerKiller(threading.Thread):
+    """Kills (SIGKILL) the worker that runs the stalled task, mid-task, within ``deadline`` s.
+
+    ``find()`` gives that worker's pid once the task has gone to it (None: not yet); it is
+    killed once it has used ``busy`` more seconds of CPU, so that it dies computing (the
+    stalled input takes it many seconds). ``pid``: the process killed (None: none found)."""
+
+    def __init__(
+        self, find: Callable[[], int | None], deadline: float = 60.0, busy: float = 1.0
+    ) -> None:
         super().__init__(daemon=True)
-        self.fifo, self.deadline = fifo, time.monotonic() + deadline
+        self.find, self.deadline, self.busy = find, time.monotonic() + deadline, busy
         self.pid: int | None = None
 
     def run(self) -> None:
-        fd = None
-        try:
-            while fd is None and time.monotonic() < self.deadline:
-                try:
-                    fd = os.open(self.fifo, os.O_WRONLY | os.O_NONBLOCK)
-                except OSError as error:
-                    if error.errno != errno.ENXIO:
-                        raise
-                    time.sleep(0.02)
-            while fd is not None and self.pid is None and time.monotonic() < self.deadline:
-                self.pid = self._reader()
-                if self.pid is None:
-                    time.sleep(0.02)
-            if self.pid is not None:
-                os.kill(self.pid, signal.SIGKILL)
-                while alive(self.pid) and time.monotonic() < self.deadline:
-                    time.sleep(0.02)
-        finally:
-            if fd is not None:
-                os.close(fd)
+        pid = None
+        while pid is None and time.monotonic() < self.deadline:
+            pid = self.find()
+            time.sleep(0.02)
+        if pid is not None:
+            self._kill_when_busy(pid)
 
-    def _reader(self) -> int | None:
-        target = os.stat(self.fifo)
-        for entry in Path("/proc").iterdir():
-            if not entry.name.isdigit() or int(entry.name) == os.getpid():
-                continue
-            try:
-                fds = list((entry / "fd").iterdir())
-            except OSError:
-                continue
-            for link in fds:
-                try:
-                    st = os.stat(link)
-                except OSError:
-                    continue
-                if (st.st_dev, st.st_ino) == (target.st_dev, target.st_ino):
-                    return int(entry.name)
-        return None
+    def _kill_when_busy(self, pid: int) -> None:
+        start = cpu_seconds(pid)
+        while start is not None and time.monotonic() < self.deadline:
+            used = cpu_seconds(pid)
+            if used is None:
+                return  # it died on its own: no kill, the test fails on ``pid``
+            if used - start >= self.busy:
+                self.pid = pid
+                os.kill(pid, signal.SIGKILL)
+                while alive(pid) and time.monotonic() < self.deadline:
+                    time.sleep(0.02)
+                return
+            time.sleep(0.05)
 
 
-def run_killing_reader(fifo: Path, args: list[str]):
-    """``meshcol args`` (in this process) while the worker that opens ``fifo`` is killed; the
-    result and the killed pid. ``args`` should carry a ``--timeout`` as a backstop."""
-    killer = FifoReaderKiller(fifo)
+def run_killing(find: Callable[[], int | None], args: list[str]):
+    """``meshcol args`` (in this process) while the worker ``find()`` names is killed
+    mid-task (:class:`WorkerKiller`); the result and the killed pid. ``args`` should carry a
+    ``--timeout`` as a backstop."""
+    killer = WorkerKiller(find)
     killer.start()
     try:
         result = CliRunner().invoke(main, args)
     finally:
         killer.join(timeout=70)
     assert not killer.is_alive()
-    assert killer.pid is not None, "no worker opened the FIFO"
+    assert killer.pid is not None, "the stalled task's worker was not found busy"
     assert killer.pid != os.getpid()
     return result, killer.pid
+
+
+@pytest.fixture
+def pool_pids(monkeypatch) -> dict[str, int]:
+    """The local pool's worker pid per task's file (``task[0]``), as tasks are assigned: a
+    spy on the pool's own assignment, which it leaves as it is."""
+    from meshcol.decomposition import jobs
+
+    pids: dict[str, int] = {}
+    assign = jobs._Worker.assign
+
+    def spy(self: Any, index: int, task: Any) -> None:
+        pids[str(task[0])] = self.process.pid
+        assign(self, index, task)
+
+    monkeypatch.setattr(jobs._Worker, "assign", spy)
+    return pids
 
 
 def _inspect(args: list[str]):
@@ -218,41 +239,37 @@ def test_inspect_on_the_local_pool_is_byte_identical_to_the_in_process_run(batch
 
 @pytest.mark.slow
 @linux_only
-@pytest.mark.skip(reason=STUCK_INPUT_GONE)
-def test_an_inspect_timeout_on_the_local_pool_fails_only_its_file(batch, tmp_path) -> None:
-    hang = tmp_path / "hang.obj"
-    os.mkfifo(hang)
+def test_an_inspect_timeout_on_the_local_pool_fails_only_its_file(batch, stall) -> None:
     start = time.perf_counter()
-    result = _inspect([batch[0], str(hang), batch[1], "--jobs", "2", "--timeout", "3"])
+    result = _inspect([batch[0], str(stall), batch[1], "--jobs", "2", "--timeout", "3"])
     assert time.perf_counter() - start < 60
     assert result.exit_code == 2, result.stderr
     report = json.loads(result.stdout)
     assert [b["name"] for b in report["bodies"]] == ["torus", "box"]
     assert report["errors"] == [
-        {"source": str(hang), "body": None, "message": "timed out after 3 s"}
+        {"source": str(stall), "body": None, "message": "timed out after 3 s"}
     ]
-    assert f"meshcol: error: {hang}: timed out after 3 s" in result.stderr
+    assert f"meshcol: error: {stall}: timed out after 3 s" in result.stderr
 
 
 @pytest.mark.slow
 @linux_only
-@pytest.mark.skip(reason=STUCK_INPUT_GONE)
-def test_a_killed_inspect_worker_fails_only_its_file(batch, tmp_path) -> None:
-    """Six files, two workers: the worker reading the third is killed by its pid; the
+def test_a_killed_inspect_worker_fails_only_its_file(batch, stall, pool_pids) -> None:
+    """Six files, two workers: the worker computing the third is killed by its pid; the
     report is the in-process run's plus that file's error."""
-    fifo = tmp_path / "killed.obj"
-    os.mkfifo(fifo)
-    inputs = [*batch[:2], str(fifo), *batch[2:3], *batch[5:]]
-    result, pid = run_killing_reader(fifo, ["inspect", *inputs, "--jobs", "2", "--timeout", "60"])
+    inputs = [*batch[:2], str(stall), *batch[2:3], *batch[5:]]
+    result, pid = run_killing(
+        lambda: pool_pids.get(str(stall)), ["inspect", *inputs, "--jobs", "2", "--timeout", "60"]
+    )
     assert not alive(pid)
     assert result.exit_code == 2, result.stderr
     report = json.loads(result.stdout)
     expected = json.loads(_inspect([*batch[:3], *batch[5:]]).stdout)
     assert report["bodies"] == expected["bodies"]
     assert report["errors"] == [
-        {"source": str(fifo), "body": None, "message": "worker process died (exit code -9)"}
+        {"source": str(stall), "body": None, "message": "worker process died (exit code -9)"}
     ]
-    assert f"meshcol: error: {fifo}: worker process died (exit code -9)" in result.stderr
+    assert f"meshcol: error: {stall}: worker process died (exit code -9)" in result.stderr
 
 
 # --------------------------------------------------------------------------------------------
@@ -284,42 +301,36 @@ def test_check_on_the_local_pool_is_byte_identical_to_the_in_process_run(batch, 
 
 @pytest.mark.slow
 @linux_only
-@pytest.mark.skip(reason=STUCK_INPUT_GONE)
-def test_a_check_timeout_on_the_local_pool_names_the_stuck_file(batch, tmp_path) -> None:
-    hang = tmp_path / "hang.obj"
-    os.mkfifo(hang)
+def test_a_check_timeout_on_the_local_pool_names_the_stuck_file(batch, stall) -> None:
     start = time.perf_counter()
     result = CliRunner().invoke(
-        main, ["check", batch[1], str(hang), batch[2], *CHECK, "-j", "2", "--timeout", "3"]
+        main, ["check", batch[1], str(stall), batch[2], *CHECK, "-j", "2", "--timeout", "3"]
     )
     assert time.perf_counter() - start < 60
     assert result.exit_code == 2
     assert result.stdout == ""
     assert result.stderr.strip().splitlines()[-1] == (
-        f"meshcol: error: {hang}: its task timed out after 3 s"
+        f"meshcol: error: {stall}: its task timed out after 3 s"
     )
 
 
 @pytest.mark.slow
 @linux_only
-@pytest.mark.skip(reason=STUCK_INPUT_GONE)
-def test_a_killed_check_worker_fails_only_its_file(batch, tmp_path) -> None:
+def test_a_killed_check_worker_fails_only_its_file(batch, stall, pool_pids, tmp_path) -> None:
     """The other files' tasks finish (their decompositions are in the cache, as a clean run
     of them leaves it); the run names the file whose worker died, and writes no report."""
-    fifo = tmp_path / "killed.obj"
-    os.mkfifo(fifo)
     others = [batch[1], batch[2], batch[4], batch[5]]
-    inputs = [*others[:2], str(fifo), *others[2:]]
+    inputs = [*others[:2], str(stall), *others[2:]]
     out = tmp_path / "report.json"
-    result, pid = run_killing_reader(
-        fifo,
+    result, pid = run_killing(
+        lambda: pool_pids.get(str(stall)),
         ["check", *inputs, *CHECK, "-j", "2", "--timeout", "60"]
         + ["--cache-dir", str(tmp_path / "c1"), "--report", str(out)],
     )
     assert not alive(pid)
     assert result.exit_code == 2
     assert result.stderr.strip().splitlines()[-1] == (
-        f"meshcol: error: {fifo}: its task failed: worker process died (exit code -9)"
+        f"meshcol: error: {stall}: its task failed: worker process died (exit code -9)"
     )
     assert not out.exists()
     clean = CliRunner().invoke(

@@ -3,7 +3,8 @@
 A sample of 2,000 points read up to 23% below a denser sampling, so ``--max-hausdorff`` could
 pass a body over its limit. The figure is now a branch-and-bound maximum over the parts'
 triangles of a 1-Lipschitz distance: checked against a dense oracle (the parts' surfaces
-sampled at 40,000 points; 1,000,000 on a real organic mesh in the slow lane), it is never
+sampled at 40,000 points; on a real organic mesh in the slow lane, 250,000 under ``make test``
+and 1,000,000 under the nightly profile), it is never
 below it and not above it by more than 5% (the bound's 2% of what it measured, plus the
 dense sample's own shortfall) plus 1e-4 of the diagonal.
 """
@@ -11,6 +12,7 @@ dense sample's own shortfall) plus 1e-4 of the diagonal.
 from __future__ import annotations
 
 import itertools
+import os
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +32,11 @@ from meshcol.geometry.triangles import sample_surface
 
 CORPUS = Path(__file__).resolve().parents[3] / "shared" / "corpus" / "coacd-examples"
 DENSE = 40_000
+#: The dense oracle on the real mesh: a million points a part set under the nightly profile
+#: (HYPOTHESIS_PROFILE=nightly, 45 s for the two sizes), a quarter of that otherwise (11 s).
+#: Measured on Octocat, the 250,000-point figure is within 0.4% of the million-point one
+#: (17.068 against 17.078 at one slab, 14.292 against 14.342 at four).
+REAL_DENSE = 1_000_000 if os.environ.get("HYPOTHESIS_PROFILE") == "nightly" else 250_000
 #: The reported bound is at most this factor of the dense figure (plus 1e-4 of the diagonal).
 LOOSE = 1.05
 
@@ -97,9 +104,9 @@ def test_parts_to_mesh_bounds_a_dense_sampling() -> None:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("k", [1, 4])
-def test_parts_to_mesh_bounds_a_million_points_on_a_real_mesh(k) -> None:
+def test_parts_to_mesh_bounds_a_dense_oracle_on_a_real_mesh(k) -> None:
     mesh = _octocat()
-    _check_bound(mesh, _parts(mesh, k), 1_000_000)
+    _check_bound(mesh, _parts(mesh, k), REAL_DENSE)
 
 
 def test_parts_equal_to_the_mesh_are_at_distance_0() -> None:

@@ -14,6 +14,7 @@ import sys
 import threading
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 import test_executor
@@ -25,7 +26,7 @@ from test_executor import (
     cache_entries,
     files,
     linux_only,
-    run_killing_reader,
+    run_killing,
     strip_progress,
     untimed,
 )
@@ -33,7 +34,7 @@ from test_executor import (
 from meshcol.cli import main
 
 # The inputs of tests/test_executor.py (fixtures), for the same scenarios on Ray.
-meshes, batch = test_executor.meshes, test_executor.batch
+meshes, batch, stall = test_executor.meshes, test_executor.batch, test_executor.stall
 
 # Engine options of FAST_DECOMPOSE, for decompose_files.
 FAST = {
@@ -41,14 +42,6 @@ FAST = {
     "resolution": 500,
     "engine_options": {"mcts_iterations": "20", "mcts_nodes": "8", "mcts_max_depth": "2"},
 }
-
-
-#: Why the CLI-level stuck-worker tests skip.
-STUCK_INPUT_GONE = (
-    "its stuck input was a FIFO, which every reader now refuses at once (issue 29 item 11); "
-    "a regular input that stalls a worker is still to be found (the executor-level kill and "
-    "timeout tests remain)"
-)
 
 
 @pytest.fixture(scope="module")
@@ -219,6 +212,24 @@ def _inspect(args: list[str]):
     return CliRunner().invoke(main, ["inspect", *args])
 
 
+def _pid_recorded(fn: Any, path: str, record: Path) -> Any:
+    """``fn`` (a task function) that first writes its worker's pid to ``record`` when its
+    task is ``path``'s, then runs as it is: which Ray worker runs that task."""
+
+    def recorded(task: Any) -> Any:
+        if task[0] == path:
+            partial = record.with_suffix(".partial")
+            partial.write_text(str(os.getpid()))
+            partial.replace(record)
+        return fn(task)
+
+    return recorded
+
+
+def _recorded_pid(record: Path) -> int | None:
+    return int(record.read_text()) if record.exists() else None
+
+
 @pytest.mark.slow
 def test_inspect_on_ray_is_byte_identical_to_the_local_run(ray_cluster, batch) -> None:
     local = _inspect(batch)
@@ -233,27 +244,24 @@ def test_inspect_on_ray_is_byte_identical_to_the_local_run(ray_cluster, batch) -
 
 
 @pytest.mark.slow
-@pytest.mark.skip(reason=STUCK_INPUT_GONE)
-def test_an_inspect_timeout_fails_only_its_file(ray_cluster, batch, tmp_path) -> None:
-    """A file whose read never ends (a FIFO nobody writes) is cancelled by force at the
-    timeout; the other files are reported."""
-    hang = tmp_path / "hang.obj"
-    os.mkfifo(hang)
+def test_an_inspect_timeout_fails_only_its_file(ray_cluster, batch, stall) -> None:
+    """A file whose task computes for many seconds (:func:`test_executor.stall`) is
+    cancelled by force at the timeout; the other files are reported."""
     # The timeout counts from a task's submission, a new worker's start-up included (these
     # tasks' thread settings are a runtime_env of their own on this Ray: new workers, seconds
-    # each on a loaded machine): warm two up first, so that only the FIFO's task times out.
+    # each on a loaded machine): warm two up first, so that only the stalled task times out.
     warm = _inspect([batch[0], batch[1], "--executor", "ray"])
     assert warm.exit_code == 0, warm.stderr
     start = time.perf_counter()
-    result = _inspect([batch[0], str(hang), batch[1], "--executor", "ray", "--timeout", "4"])
+    result = _inspect([batch[0], str(stall), batch[1], "--executor", "ray", "--timeout", "4"])
     assert time.perf_counter() - start < 60
     assert result.exit_code == 2, result.stderr
     report = json.loads(result.stdout)
     assert [b["name"] for b in report["bodies"]] == ["torus", "box"]
     assert report["errors"] == [
-        {"source": str(hang), "body": None, "message": "timed out after 4 s"}
+        {"source": str(stall), "body": None, "message": "timed out after 4 s"}
     ]
-    assert f"meshcol: error: {hang}: timed out after 4 s" in result.stderr
+    assert f"meshcol: error: {stall}: timed out after 4 s" in result.stderr
 
 
 @pytest.mark.slow
@@ -296,45 +304,58 @@ def test_inspect_and_check_on_ray_without_ray_exit_2_with_a_hint(meshes, monkeyp
 
 @pytest.mark.slow
 @linux_only
-@pytest.mark.skip(reason=STUCK_INPUT_GONE)
-def test_a_killed_ray_worker_fails_only_its_inspect_file(ray_cluster, batch, tmp_path) -> None:
-    """Six files on Ray: the worker that reads the third is killed by its pid mid-task; that
+def test_a_killed_ray_worker_fails_only_its_inspect_file(
+    ray_cluster, batch, stall, tmp_path, monkeypatch
+) -> None:
+    """Six files on Ray: the worker computing the third is killed by its pid mid-task; that
     file is an error of the report, the others are the in-process run's bodies."""
-    fifo = tmp_path / "killed.obj"
-    os.mkfifo(fifo)
-    inputs = [*batch[:2], str(fifo), *batch[2:3], *batch[5:]]
-    result, pid = run_killing_reader(
-        fifo, ["inspect", *inputs, "--executor", "ray", "-j", "2", "--timeout", "60"]
+    from meshcol.analysis import inspect_tasks
+
+    record = tmp_path / "pid"
+    monkeypatch.setattr(
+        inspect_tasks,
+        "_inspect_file",
+        _pid_recorded(inspect_tasks._inspect_file, str(stall), record),
+    )
+    inputs = [*batch[:2], str(stall), *batch[2:3], *batch[5:]]
+    result, pid = run_killing(
+        lambda: _recorded_pid(record),
+        ["inspect", *inputs, "--executor", "ray", "-j", "2", "--timeout", "60"],
     )
     assert not alive(pid)
     assert result.exit_code == 2, result.stderr
+    monkeypatch.undo()
     report = json.loads(result.stdout)
     assert report["bodies"] == json.loads(_inspect([*batch[:3], *batch[5:]]).stdout)["bodies"]
     ((error),) = report["errors"]
-    assert error["source"] == str(fifo) and error["body"] is None
+    assert error["source"] == str(stall) and error["body"] is None
     assert error["message"].startswith("worker process died ("), error
-    assert f"meshcol: error: {fifo}: worker process died (" in result.stderr
+    assert f"meshcol: error: {stall}: worker process died (" in result.stderr
 
 
 @pytest.mark.slow
 @linux_only
-@pytest.mark.skip(reason=STUCK_INPUT_GONE)
-def test_a_killed_ray_worker_fails_only_its_check_file(ray_cluster, batch, tmp_path) -> None:
+def test_a_killed_ray_worker_fails_only_its_check_file(
+    ray_cluster, batch, stall, tmp_path, monkeypatch
+) -> None:
     """The other files' tasks finish (the cache holds what a clean run of them leaves); the
     run names the file whose worker died and writes no report."""
-    fifo = tmp_path / "killed.obj"
-    os.mkfifo(fifo)
+    from meshcol.analysis import check
+
+    record = tmp_path / "pid"
+    monkeypatch.setattr(check, "_check_file", _pid_recorded(check._check_file, str(stall), record))
     others = [batch[1], batch[2], batch[4], batch[5]]
     out = tmp_path / "report.json"
-    result, pid = run_killing_reader(
-        fifo,
-        ["check", *others[:2], str(fifo), *others[2:], *CHECK, "--executor", "ray", "-j", "2"]
+    result, pid = run_killing(
+        lambda: _recorded_pid(record),
+        ["check", *others[:2], str(stall), *others[2:], *CHECK, "--executor", "ray", "-j", "2"]
         + ["--timeout", "60", "--cache-dir", str(tmp_path / "c1"), "--report", str(out)],
     )
     assert not alive(pid)
     assert result.exit_code == 2
+    monkeypatch.undo()
     # (Ray's own message about the dead worker may come on stderr too, before or after)
-    expected = f"meshcol: error: {fifo}: its task failed: worker process died ("
+    expected = f"meshcol: error: {stall}: its task failed: worker process died ("
     assert any(line.startswith(expected) for line in result.stderr.splitlines()), result.stderr
     assert not out.exists()
     clean = CliRunner().invoke(

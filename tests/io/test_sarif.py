@@ -74,6 +74,7 @@ def test_the_schema_is_strict_enough_to_catch_a_broken_log(validator):
 def test_check_sarif_cites_the_pair_rules_with_registry_help(samples, validator, monkeypatch):
     monkeypatch.chdir(samples.parent)
     monkeypatch.delenv("GITHUB_WORKSPACE", raising=False)
+    monkeypatch.setenv("MESHCOL_DOCS_URL", "https://docs.example.org/meshcol/docs/")
     args = ["check", "samples/level/scene.json", "--fail-on", "contact"]
     code_json, out_json, _ = run(*args)
     code, out, _ = run(*args, "--format", "sarif")
@@ -92,7 +93,9 @@ def test_check_sarif_cites_the_pair_rules_with_registry_help(samples, validator,
         assert registered.summary in rule["shortDescription"]["text"]
         assert rule["fullDescription"]["text"].startswith(registered.summary)
         assert registered.fix in rule["help"]["text"]
-        assert rule["helpUri"].endswith(f"docs/rules.md#{registered.id.lower()}")
+        assert rule["helpUri"] == (
+            f"https://docs.example.org/meshcol/docs/rules.md#{registered.id.lower()}"
+        )
         level = {"error": "error", "warning": "warning", "info": "note"}[registered.severity]
         assert rule["defaultConfiguration"]["level"] == level
     violating = [p for p in report["pairs"] if p["violation"]]

@@ -1,0 +1,252 @@
+// Consistent winding of a mesh's components (orientation.hpp: orient_faces), the core of
+// meshcol.geometry.topology.orient_consistently.
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <numeric>
+#include <tuple>
+#include <vector>
+
+#include "meshcol/orientation.hpp"
+#include "meshcol/vec.hpp"
+#include "ray_parity.hpp"
+
+namespace meshcol {
+namespace {
+
+// The real half-edges (two different vertex indices) grouped by undirected edge: `order`
+// holds half-edge ids (3 * face + corner) sorted by (low, high, id); `start` the first
+// position of each edge in it, plus the end.
+struct HalfEdges {
+    std::vector<std::int64_t> order;
+    std::vector<size_t> start;
+    std::vector<std::int64_t> low, high;  // per half-edge id
+    std::vector<std::uint8_t> forward;    // per half-edge id: low -> high
+
+    explicit HalfEdges(const std::int64_t* faces, std::int64_t m)
+        : low(static_cast<size_t>(3 * m)), high(static_cast<size_t>(3 * m)),
+          forward(static_cast<size_t>(3 * m)) {
+        order.reserve(static_cast<size_t>(3 * m));
+        for (std::int64_t h = 0; h < 3 * m; ++h) {
+            const std::int64_t f = h / 3, k = h % 3;
+            const std::int64_t a = faces[h], b = faces[3 * f + (k + 1) % 3];
+            low[static_cast<size_t>(h)] = std::min(a, b);
+            high[static_cast<size_t>(h)] = std::max(a, b);
+            forward[static_cast<size_t>(h)] = a < b;
+            if (a != b) order.push_back(h);
+        }
+        std::sort(order.begin(), order.end(), [this](std::int64_t i, std::int64_t j) {
+            const auto u = static_cast<size_t>(i), v = static_cast<size_t>(j);
+            return std::tie(low[u], high[u], i) < std::tie(low[v], high[v], j);
+        });
+        for (size_t k = 0; k < order.size(); ++k) {
+            const auto h = static_cast<size_t>(order[k]);
+            if (k == 0 || low[h] != low[static_cast<size_t>(order[k - 1])] ||
+                high[h] != high[static_cast<size_t>(order[k - 1])])
+                start.push_back(k);
+        }
+        start.push_back(order.size());
+    }
+
+    size_t edge_count() const { return start.size() - 1; }
+};
+
+// A link of the face graph: two faces sharing a manifold edge, and whether they traverse it the
+// same way (one of them must then be reversed).
+struct Link {
+    std::int64_t from, to;
+    std::uint8_t same;
+    size_t edge;
+};
+
+// Every edge traversed as often each way, the faces reversed where `flipped`.
+bool balanced(const HalfEdges& h, const std::vector<std::uint8_t>& flipped) {
+    if (h.order.empty()) return false;
+    for (size_t e = 0; e < h.edge_count(); ++e) {
+        long long balance = 0;
+        for (size_t k = h.start[e]; k < h.start[e + 1]; ++k) {
+            const auto id = static_cast<size_t>(h.order[k]);
+            balance += (h.forward[id] != flipped[id / 3]) ? 1 : -1;
+        }
+        if (balance != 0) return false;
+    }
+    return true;
+}
+
+// Labels of the components of the face graph (in order of their lowest face, as scipy's
+// connected_components numbers them) and the flips of one breadth-first search from every
+// component's lowest face at once, neighbours in increasing index (scipy's
+// breadth_first_order from a virtual root above those faces).
+void search(std::int64_t m, const std::vector<Link>& links, std::vector<std::int64_t>* label,
+            std::vector<std::uint8_t>* flipped) {
+    // CSR adjacency, one link per ordered face pair: the one of the lowest edge.
+    std::vector<Link> both;
+    both.reserve(2 * links.size());
+    for (const Link& l : links) {
+        both.push_back(l);
+        both.push_back({l.to, l.from, l.same, l.edge});
+    }
+    std::sort(both.begin(), both.end(), [](const Link& a, const Link& b) {
+        return std::tie(a.from, a.to, a.edge) < std::tie(b.from, b.to, b.edge);
+    });
+    both.erase(std::unique(both.begin(), both.end(),
+                           [](const Link& a, const Link& b) { return a.from == b.from && a.to == b.to; }),
+               both.end());
+    std::vector<size_t> row(static_cast<size_t>(m) + 1, 0);
+    for (const Link& l : both) ++row[static_cast<size_t>(l.from) + 1];
+    std::partial_sum(row.begin(), row.end(), row.begin());
+
+    label->assign(static_cast<size_t>(m), -1);
+    std::vector<std::int64_t> roots;
+    std::vector<std::int64_t> stack;
+    for (std::int64_t f = 0; f < m; ++f) {
+        if ((*label)[static_cast<size_t>(f)] >= 0) continue;
+        const auto id = static_cast<std::int64_t>(roots.size());
+        roots.push_back(f);
+        (*label)[static_cast<size_t>(f)] = id;
+        stack.assign(1, f);
+        while (!stack.empty()) {
+            const auto u = static_cast<size_t>(stack.back());
+            stack.pop_back();
+            for (size_t k = row[u]; k < row[u + 1]; ++k) {
+                const auto v = static_cast<size_t>(both[k].to);
+                if ((*label)[v] < 0) {
+                    (*label)[v] = id;
+                    stack.push_back(both[k].to);
+                }
+            }
+        }
+    }
+    flipped->assign(static_cast<size_t>(m), 0);
+    std::vector<std::uint8_t> seen(static_cast<size_t>(m), 0);
+    std::deque<std::int64_t> queue(roots.begin(), roots.end());
+    for (const std::int64_t r : roots) seen[static_cast<size_t>(r)] = 1;
+    while (!queue.empty()) {
+        const auto u = static_cast<size_t>(queue.front());
+        queue.pop_front();
+        for (size_t k = row[u]; k < row[u + 1]; ++k) {
+            const auto v = static_cast<size_t>(both[k].to);
+            if (seen[v]) continue;
+            seen[v] = 1;
+            (*flipped)[v] = (*flipped)[u] ^ both[k].same;
+            queue.push_back(both[k].to);
+        }
+    }
+}
+
+// The centre of the vertices' bounding box (NaN if any coordinate is NaN, as numpy's min).
+Vec3 box_centre(const double* vertices, std::int64_t n) {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    Vec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf};
+    bool nan = false;
+    for (std::int64_t i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k) {
+            const double x = vertices[3 * i + k];
+            nan |= std::isnan(x);
+            lo[k] = std::min(lo[k], x);
+            hi[k] = std::max(hi[k], x);
+        }
+    if (nan) return {std::nan(""), std::nan(""), std::nan("")};
+    return (lo + hi) / 2.0;
+}
+
+inline Vec3 corner(const double* vertices, const std::int64_t* faces, std::int64_t f, int k,
+                   bool reversed) {
+    const std::int64_t i = faces[3 * f + (reversed ? 2 - k : k)];
+    return {vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]};
+}
+
+}  // namespace
+
+FaceOrientation orient_faces(const double* vertices, std::int64_t vertex_count,
+                             const std::int64_t* faces, std::int64_t m,
+                             int nesting_max_components, double flat_volume) {
+    FaceOrientation out;
+    out.flipped.assign(static_cast<size_t>(m), 0);
+    const HalfEdges h(faces, m);
+    std::vector<Link> links;
+    bool inconsistent = false;
+    for (size_t e = 0; e < h.edge_count(); ++e) {
+        if (h.start[e + 1] - h.start[e] != 2) continue;
+        const std::int64_t a = h.order[h.start[e]], b = h.order[h.start[e] + 1];
+        const std::uint8_t same = h.forward[static_cast<size_t>(a)] == h.forward[static_cast<size_t>(b)];
+        inconsistent |= same != 0;
+        if (a / 3 != b / 3) links.push_back({a / 3, b / 3, same, e});
+    }
+    if (!inconsistent) {  // the author's winding, either way round
+        out.balanced = balanced(h, out.flipped);
+        return out;
+    }
+    std::vector<std::int64_t> label;
+    search(m, links, &label, &out.flipped);
+    for (const Link& l : links)
+        if ((out.flipped[static_cast<size_t>(l.from)] ^ out.flipped[static_cast<size_t>(l.to)]) != l.same)
+            out.orientable = false;
+
+    // Closed components: each of their edges used by exactly two of their faces.
+    const size_t count = static_cast<size_t>(*std::max_element(label.begin(), label.end())) + 1;
+    std::vector<std::uint8_t> open(count, 0);
+    std::vector<std::int64_t> owners;
+    for (size_t e = 0; e < h.edge_count(); ++e) {
+        owners.clear();
+        for (size_t k = h.start[e]; k < h.start[e + 1]; ++k)
+            owners.push_back(label[static_cast<size_t>(h.order[k] / 3)]);
+        std::sort(owners.begin(), owners.end());
+        for (size_t k = 0; k < owners.size();) {
+            size_t end = k;
+            while (end < owners.size() && owners[end] == owners[k]) ++end;
+            if (end - k != 2) open[static_cast<size_t>(owners[k])] = 1;
+            k = end;
+        }
+    }
+    // Outward: the signed volume of each closed component, cones from the box centre.
+    const Vec3 centre = box_centre(vertices, vertex_count);
+    std::vector<double> volume(count, 0.0), magnitude(count, 0.0);
+    for (std::int64_t f = 0; f < m; ++f) {
+        const bool r = out.flipped[static_cast<size_t>(f)] != 0;
+        const Vec3 p = corner(vertices, faces, f, 0, r) - centre;
+        const Vec3 q = corner(vertices, faces, f, 1, r) - centre;
+        const Vec3 s = corner(vertices, faces, f, 2, r) - centre;
+        const double cone = dot(p, cross(q, s)) / 6.0;
+        volume[static_cast<size_t>(label[static_cast<size_t>(f)])] += cone;
+        magnitude[static_cast<size_t>(label[static_cast<size_t>(f)])] += std::fabs(cone);
+    }
+    // A flat component (its volume within the rounding of its cones) has no outward: kept.
+    for (std::int64_t f = 0; f < m; ++f) {
+        const auto c = static_cast<size_t>(label[static_cast<size_t>(f)]);
+        if (!open[c] && volume[c] < -flat_volume * magnitude[c]) out.flipped[static_cast<size_t>(f)] ^= 1;
+    }
+    // Nesting: a closed component inside an odd number of the others is a cavity's wall.
+    std::vector<std::int64_t> shut;
+    for (size_t c = 0; c < count; ++c)
+        if (!open[c]) shut.push_back(static_cast<std::int64_t>(c));
+    if (shut.size() > 1 && shut.size() <= static_cast<size_t>(std::max(nesting_max_components, 0))) {
+        std::vector<std::int64_t> closed_faces, tags;
+        std::vector<std::int64_t> first(count, -1);
+        for (std::int64_t f = 0; f < m; ++f) {
+            const std::int64_t c = label[static_cast<size_t>(f)];
+            if (open[static_cast<size_t>(c)]) continue;
+            closed_faces.push_back(f);
+            tags.push_back(c);
+            if (first[static_cast<size_t>(c)] < 0) first[static_cast<size_t>(c)] = f;
+        }
+        const parity_detail::ParityFaces all(vertices, faces, closed_faces, tags);
+        std::vector<std::uint8_t> turn(count, 0);
+        for (const std::int64_t c : shut) {
+            const std::int64_t f = first[static_cast<size_t>(c)];
+            const bool r = out.flipped[static_cast<size_t>(f)] != 0;
+            // numpy's mean of the three corners: ((a + b) + c) / 3
+            const Vec3 probe = (corner(vertices, faces, f, 0, r) + corner(vertices, faces, f, 1, r) +
+                                corner(vertices, faces, f, 2, r)) /
+                               3.0;
+            turn[static_cast<size_t>(c)] = all.classify(probe, c) == Parity::inside;
+        }
+        for (std::int64_t f = 0; f < m; ++f)
+            out.flipped[static_cast<size_t>(f)] ^= turn[static_cast<size_t>(label[static_cast<size_t>(f)])];
+    }
+    out.balanced = balanced(h, out.flipped);
+    return out;
+}
+
+}  // namespace meshcol
