@@ -11,21 +11,175 @@ in-process each round, reports compared for equality (timings aside):
 
 decompose itself (Ray vs local on the corpus meshes): ``bench_decompose.py --only ray``.
 
+``--one-off`` (issue 32 item 6) instead times a one-off command, each run a new process as a
+user types it: ``meshcol decompose`` of 3 corpus files (``--jobs 2 --no-cache``, the CoACD
+settings of bench_decompose.py), on the local pool, on a Ray of its own (``--ray-address
+local``: this build's light one), on a Ray that ``ray start --head`` left running (joined,
+found by its address file), and, with ``--compare CMD``, on another build's Ray of its own;
+rounds alternate the order. Wall time, and the CPU time of the command and what it waited
+for (Ray's daemons are not all waited for: wall is the figure here). Outputs compared.
+
+``--start-up`` times Ray's start alone, each run a new process: a RayExecutor of its own
+(2 CPUs on 127.0.0.1) started, 4 trivial tasks, closed; this build's light start against
+Ray's default processes (the autoscaler monitor, the log monitor: main's), alternated.
+
 Usage: python benchmarks/bench_ray.py [--rounds 3] [--copies 3]
+       python benchmarks/bench_ray.py --start-up [--rounds 3]
+       python benchmarks/bench_ray.py --one-off [--rounds 5] [--compare /work/base/.venv/bin/meshcol]
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import resource
+import secrets
 import shutil
+import signal
+import socket
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_decompose import CORPUS, MESHES, spread, task_overhead
+from bench_decompose import COACD, CORPUS, MESHES, same_tree, spread, task_overhead
+
+#: The one-off command's files: three small corpus meshes.
+ONE_OFF = ["trimesh-models/torus.STL", "trimesh-models/angle_block.STL", "trimesh-models/round.stl"]
+
+
+def _cpu() -> float:
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def _decompose(
+    command: list[str], out: Path, extra: list[str], env: dict[str, str]
+) -> tuple[float, float]:
+    """One ``meshcol decompose`` of the ONE_OFF files into ``out``: (wall s, CPU s)."""
+    files = [str(CORPUS / name) for name in ONE_OFF]
+    args = [*command, "decompose", *files, "-o", str(out), "--no-cache", "--jobs", "2", *COACD]
+    cpu, start = _cpu(), time.perf_counter()
+    done = subprocess.run([*args, *extra], capture_output=True, text=True, env=env)
+    seconds = time.perf_counter() - start
+    if done.returncode != 0:
+        raise SystemExit(f"{' '.join(args[:2])} failed ({done.returncode}): {done.stderr[-2000:]}")
+    return seconds, _cpu() - cpu
+
+
+def _ray_head(temp: str, env: dict[str, str]) -> subprocess.Popen:
+    """``ray start --head`` of 2 CPUs on 127.0.0.1 whose address file is under ``temp``."""
+    ray_cli = shutil.which("ray", path=os.path.dirname(sys.executable)) or "ray"
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    start = [ray_cli, "start", "--head", f"--port={port}", "--num-cpus=2", "--disable-usage-stats"]
+    start += ["--node-ip-address=127.0.0.1", "--include-dashboard=false"]
+    proc = subprocess.Popen(
+        start, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True
+    )
+    out, _ = proc.communicate(timeout=300)
+    if proc.returncode != 0:
+        raise SystemExit(f"ray start failed: {out.decode()[-2000:]}")
+    return proc
+
+
+#: One start of a local Ray as RayExecutor makes it (KIND=light) or with Ray's defaults.
+START_UP = """
+import contextlib, os, time
+t0 = time.perf_counter()
+import meshcol.decomposition.executor as ex
+if os.environ["KIND"] == "default":
+    ex.light_head, ex.LIGHT_INIT = contextlib.nullcontext, {}
+with ex.RayExecutor(abs, 2, address="local") as e:
+    e.start()
+    assert sorted(o.value for o in e.run([-1, -2, 3, 4])) == [1, 2, 3, 4]
+    from ray._private import worker
+    kinds = sorted(worker._global_node.all_processes)
+print(time.perf_counter() - t0, ",".join(kinds))
+"""
+
+
+def start_up(rounds: int) -> None:
+    """Ray's start alone: light (this build) and default, alternated, a process each."""
+    env = {**os.environ, "RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0"}
+    env.pop("RAY_ADDRESS", None)
+    wall: dict[str, list[float]] = {"light": [], "default": []}
+    cpu: dict[str, list[float]] = {"light": [], "default": []}
+    for r in range(rounds):
+        for kind in ("light", "default") if r % 2 == 0 else ("default", "light"):
+            before = _cpu()
+            done = subprocess.run(
+                [sys.executable, "-c", START_UP],
+                capture_output=True,
+                text=True,
+                env={**env, "KIND": kind},
+            )
+            if done.returncode != 0:
+                raise SystemExit(done.stderr[-2000:])
+            seconds, kinds = done.stdout.split()
+            wall[kind].append(float(seconds))
+            cpu[kind].append(_cpu() - before)
+            print(
+                f"round {r + 1} {kind}: {float(seconds):.2f} s, CPU {cpu[kind][-1]:.2f} s, {kinds}"
+            )
+    for kind in wall:
+        print(f"{kind:<8} wall {spread(wall[kind])}, CPU (waited for) {spread(cpu[kind])}")
+
+
+def one_off(rounds: int, compare: str | None) -> None:
+    """The one-off command on each executor, a new process each time, alternated."""
+    work = Path(tempfile.mkdtemp(prefix="bench_ray_once_"))
+    temp = tempfile.mkdtemp(prefix="mcb", dir="/tmp")  # Ray's socket paths stay short
+    mine = [sys.executable, "-m", "meshcol"]
+    # Two environments: one where nothing runs (RAY_TMPDIR of its own, no address file) and
+    # one whose address file names the running `ray start` cluster (token auth: Ray 2.60).
+    auth = {"RAY_AUTH_MODE": "token", "RAY_AUTH_TOKEN": secrets.token_hex(32)}
+    base = {k: v for k, v in os.environ.items() if k != "RAY_ADDRESS"}
+    alone = {**base, **auth, "RAY_TMPDIR": str(work / "none")}
+    joined = {**base, **auth, "RAY_TMPDIR": temp, "RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER": "0"}
+    kinds: dict[str, tuple[list[str], list[str], dict[str, str]]] = {
+        "local pool": (mine, [], alone),
+        "own Ray (light)": (mine, ["--executor", "ray", "--ray-address", "local"], alone),
+        "joined Ray": (mine, ["--executor", "ray"], joined),
+    }
+    if compare:
+        kinds["own Ray (--compare)"] = (compare.split(), ["--executor", "ray"], alone)
+    head = _ray_head(temp, joined)
+    wall: dict[str, list[float]] = {k: [] for k in kinds}
+    cpu: dict[str, list[float]] = {k: [] for k in kinds}
+    try:
+        _decompose(mine, work / "warm-up", ["--executor", "ray"], joined)  # the workers up
+        order = list(kinds)
+        for r in range(rounds):
+            for kind in order if r % 2 == 0 else order[::-1]:
+                command, extra, env = kinds[kind]
+                seconds, used = _decompose(command, work / f"{kind}-{r}", extra, env)
+                wall[kind].append(seconds)
+                cpu[kind].append(used)
+            print(f"round {r + 1}: " + ", ".join(f"{k} {wall[k][-1]:.2f} s" for k in kinds))
+        reference = work / "local pool-0"
+        same = all(same_tree(reference, work / f"{k}-{r}") for k in kinds for r in range(rounds))
+        local = wall["local pool"]
+        for kind in kinds:
+            ratios = [b / a for a, b in zip(local, wall[kind], strict=True)]
+            print(
+                f"{kind:<22} wall {spread(wall[kind])}, CPU {spread(cpu[kind])}; / local pool "
+                f"{min(ratios):.2f}-{max(ratios):.2f} (median {statistics.median(ratios):.2f})"
+            )
+        print(f"identical outputs: {same}")
+    finally:
+        for sig in (signal.SIGTERM, signal.SIGKILL):
+            try:
+                os.killpg(head.pid, sig)
+            except ProcessLookupError:
+                break
+            time.sleep(2)
+        shutil.rmtree(work, ignore_errors=True)
+        shutil.rmtree(temp, ignore_errors=True)
 
 
 def _noop(x: int) -> int:
@@ -36,11 +190,20 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--copies", type=int, default=3, help="times each corpus file is given")
+    parser.add_argument("--one-off", action="store_true", help="a one-off command's start-up")
+    parser.add_argument("--compare", help="with --one-off: another build's meshcol command")
+    parser.add_argument("--start-up", action="store_true", help="Ray's start alone")
     args = parser.parse_args()
     try:
         import ray
     except ImportError:
         print("Ray is not installed (pip install 'meshcol[ray]'): nothing to compare")
+        return
+    if args.one_off:
+        one_off(args.rounds, args.compare)
+        return
+    if args.start_up:
+        start_up(args.rounds)
         return
     from meshcol.analysis.check import check
     from meshcol.analysis.inspect import inspect

@@ -173,7 +173,8 @@ def check(
     executor : {"local", "ray"}
         Where the tasks run (:func:`meshcol.decomposition.executor.make_executor`).
     ray_address : str, optional
-        The Ray cluster (default: a local Ray of ``jobs`` CPUs, stopped at the end).
+        The Ray cluster (default: a running one, else a local Ray of ``jobs`` CPUs,
+        stopped at the end: :class:`~meshcol.decomposition.executor.RayExecutor`).
     robot_options : RobotOptions, optional
         How a robot description is read (:func:`meshcol.io.scene.load_inputs`).
     **options

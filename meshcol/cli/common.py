@@ -564,8 +564,10 @@ def executor_options() -> Callable[[Callable[..., Any]], Callable[..., Any]]:
             default=None,
             metavar="ADDR",
             callback=check_address,
-            help="Ray cluster to run on (ray://HOST:10001, HOST:6379, auto).  [default: a "
-            "local Ray of --jobs CPUs on 127.0.0.1, stopped at the end]",
+            help="Ray cluster to run on (ray://HOST:10001, HOST:6379, auto; local: a Ray "
+            "of this run's own).  [default: $RAY_ADDRESS, else the Ray that 'ray start' left "
+            "running on this machine, else a local Ray of --jobs CPUs on 127.0.0.1, stopped "
+            "at the end]",
         )(func)
         func = click.option(
             "--executor",

@@ -33,6 +33,7 @@ from meshcol.decomposition.jobs import (
     _SignalGuard,
     worker_env,
 )
+from meshcol.decomposition.ray_start import LIGHT_INIT, OWN_CLUSTER, light_head, running_cluster
 from meshcol.errors import MissingDependencyError
 
 __all__ = ["EXECUTORS", "Executor", "RayExecutor", "check_run", "make_executor", "run_each"]
@@ -117,7 +118,8 @@ def make_executor(
     task's module: :func:`~meshcol.decomposition.jobs.task_preload`).
 
     ``address``: Ray only, the cluster to join (``ray://host:10001``, ``host:6379``, ``auto``);
-    default a local Ray of ``jobs`` CPUs on 127.0.0.1, stopped on ``close()``.
+    default a running Ray (``RAY_ADDRESS``, ``ray start`` on this machine), else a local Ray
+    of ``jobs`` CPUs on 127.0.0.1, stopped on ``close()`` (``"local"``: always that).
 
     Raises
     ------
@@ -420,8 +422,11 @@ class RayExecutor:
     prepare : callable, optional
         Run once per worker by ``start()`` (loads the engine).
     address : str, optional
-        A running cluster (else a local Ray is started, and stopped by ``close()``); a Ray
-        already initialised in this process (``ray.init()`` by the caller) is used as is.
+        A running cluster. Default: the Ray already running that
+        :func:`~meshcol.decomposition.ray_start.running_cluster` finds (``RAY_ADDRESS``, a
+        ``ray start`` on this machine), else a light local Ray is started, and stopped by
+        ``close()``; ``"local"``: always that. A Ray already initialised in this process
+        (``ray.init()`` by the caller) is used as is.
     """
 
     def __init__(
@@ -437,6 +442,13 @@ class RayExecutor:
         if jobs < 1:
             raise ValueError(f"jobs must be at least 1, got {jobs}")
         self.fn, self.jobs, self.timeout, self.prepare = fn, jobs, timeout, prepare
+        found = address is None
+        if address is None:
+            # a Ray already running (RAY_ADDRESS, `ray start`) is joined; else one is started
+            address = running_cluster()
+        elif address == OWN_CLUSTER:
+            address = None
+        self._found = found and address is not None
         self.address = address
         self.ray = import_ray(local=address is None or _is_loopback(address))
         self._owned = False
@@ -479,7 +491,14 @@ class RayExecutor:
                         try:
                             ray.init(address=self.address, **common)
                         except ConnectionError as exc:
-                            raise ConnectionError(_join_failure(self.address, exc)) from None
+                            message = _join_failure(self.address, exc)
+                            if self._found:
+                                message += (
+                                    f"; {self.address} was found running ($RAY_ADDRESS or "
+                                    "`ray start`): --ray-address local starts a Ray of the "
+                                    "run's own"
+                                )
+                            raise ConnectionError(message) from None
                 self._owned = True
         _errors_to_stderr()
         if self.address is None and self._owned:
@@ -497,11 +516,17 @@ class RayExecutor:
     def _init_local(self, ray: Any, common: dict[str, Any]) -> None:
         # The local Ray's processes inherit this environment: its workers, prestarted with
         # it, run the tasks as they are (a per-task environment would start other workers,
-        # seconds each on a small machine).
+        # seconds each on a small machine). It starts light (ray_start.light_head).
         saved = {key: os.environ.get(key) for key in self.env}
         os.environ.update(self.env)
         try:
-            ray.init(address="local", num_cpus=self.jobs, _node_ip_address="127.0.0.1", **common)
+            with light_head():
+                ray.init(
+                    address="local",
+                    num_cpus=self.jobs,
+                    _node_ip_address="127.0.0.1",
+                    **{**common, **LIGHT_INIT},
+                )
         finally:
             for key, value in saved.items():
                 if value is None:

@@ -7,7 +7,6 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.collision.orientation import orient_consistently
 from meshcol.decomposition.result import Fidelity
 from meshcol.geometry.topology import is_closed_manifold
 from meshcol.geometry.triangles import point_triangle_distances, sample_surface
@@ -295,6 +294,9 @@ def fidelity(
     An inconsistently wound mesh is wound consistently first
     (:func:`meshcol.collision.orientation.orient_consistently`), so a closed one is a solid.
     """
+    # the native core, imported when a fidelity is measured (`meshcol --help` imports this)
+    from meshcol.collision.orientation import orient_consistently
+
     vertices = np.asarray(vertices, dtype=np.float64)
     faces = orient_consistently(vertices, np.asarray(faces, dtype=np.int64)).faces
     tol = coverage_tolerance(vertices, tolerance)
