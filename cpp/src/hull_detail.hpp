@@ -63,8 +63,6 @@ struct Workspace {
     std::vector<int> all, real, local, keep, parent, id, subset, removed, dropped;
     std::vector<double> largest;
     std::vector<char> used;
-    std::vector<std::int64_t> start;
-    std::vector<long long> table;
     std::vector<Conflict> sorted;  // the input, sorted and without duplicates
     std::vector<Vec3> unique_points;
     std::vector<int> unique_index;
