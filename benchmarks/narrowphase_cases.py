@@ -1,0 +1,39 @@
+"""Dumps bench_narrowphase.py's smooth-hull cases (16, 64 and 256 points; separated, touching
+and penetrating; 2,000 pairs each) as raw arrays for narrowphase_driver.cpp, so that
+callgrind counts the core's instructions on exactly the benchmark's pairs.
+
+Run: .venv/bin/python benchmarks/narrowphase_cases.py OUT_DIR
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from bench_narrowphase import make_case, touching_case
+
+
+def main() -> None:
+    out = Path(sys.argv[1])
+    out.mkdir(parents=True, exist_ok=True)
+    for n in (16, 64, 256):
+        for label in ("separated", "touching", "penetrating"):
+            cs, poses, pairs, shapes = make_case(n, 2000, label == "penetrating", seed=n)
+            if label == "touching":
+                cs, poses, pairs, shapes = touching_case(cs, poses, pairs, shapes)
+            arrays = {f: np.ascontiguousarray(getattr(cs, f)) for f in cs._FIELDS}
+            arrays["poses"] = np.ascontiguousarray(poses, dtype=np.float64)
+            arrays["pairs"] = np.ascontiguousarray(pairs, dtype=np.int64)
+            case = out / f"{n}_{label}"
+            case.mkdir(exist_ok=True)
+            for name, a in arrays.items():
+                a.tofile(case / f"{name}.bin")
+            print(case, len(cs), len(pairs))
+
+
+if __name__ == "__main__":
+    main()
