@@ -10,7 +10,8 @@ call: coal and fcl keep the smaller distance of an uncleared result). With --run
 set runs N times and a summary gives each row's peer/meshcol ratio as a range over the runs.
 The single-pair rows (distance, intersects) time meshcol and the peers in alternating windows
 of at least a millisecond, best of 9 each, so that all sides see the same load on a shared
-machine.
+machine; the windows are timed in this process's CPU time (``MESHCOL_BENCH_CLOCK=wall`` for
+wall time), which other processes inflate far less than wall time.
 
 The real-mesh family (``family_rows``; alone with --family-only): for each of four corpus
 meshes, 300 pairs of posed copies (random rotations, b moved along a random direction from
@@ -90,24 +91,30 @@ def row(name: str, ours: float, peers: dict[str, float]) -> None:
     print(f"  {name.split(': ', 1)[-1]:<24} meshcol {ours * 1e3:9.4f} ms   " + "   ".join(cells))
 
 
+# The clock of every timed window: this process's CPU time (every call here runs on one
+# thread), which the other processes of a loaded machine do not inflate the way they inflate
+# wall time. MESHCOL_BENCH_CLOCK=wall times wall-clock instead.
+clock = time.perf_counter if os.environ.get("MESHCOL_BENCH_CLOCK") == "wall" else time.process_time
+
+
 def loops_for(fn) -> int:
     """How many calls of `fn` take at least a millisecond (a lone sub-microsecond call times
     the clock, not the call)."""
     loops = 1
     while True:
-        t = time.perf_counter()
+        t = clock()
         for _ in range(loops):
             fn()
-        if time.perf_counter() - t >= 1e-3:
+        if clock() - t >= 1e-3:
             return loops
         loops *= 4
 
 
 def window(fn, loops: int) -> float:
-    t = time.perf_counter()
+    t = clock()
     for _ in range(loops):
         fn()
-    return (time.perf_counter() - t) / loops
+    return (clock() - t) / loops
 
 
 def best_of(fn, repeat: int = 5) -> float:

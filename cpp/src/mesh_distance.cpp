@@ -160,12 +160,19 @@ SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative&
     };
     const double root2 = obb_squared_distance(oa[0], ob[0], rel, bound2);
     if (pruned(root2)) return r;
-    push({0, 0, root2});
     MappedLeaf leaf_b;
-    while (!heap.empty()) {
-        std::pop_heap(heap.begin(), heap.end(), farther);
-        const StackItem item = heap.back();
-        heap.pop_back();
+    // The pair at hand: popped from the heap, or the nearer child of the last one when it is
+    // no farther than the heap's nearest (what the heap would give back, without the push and
+    // the pop).
+    StackItem item{0, 0, root2};
+    bool held = true;
+    while (held || !heap.empty()) {
+        if (!held) {
+            std::pop_heap(heap.begin(), heap.end(), farther);
+            item = heap.back();
+            heap.pop_back();
+        }
+        held = false;
         // Every pair left is at least as far: done.
         if (pruned(item.bound)) break;
         const BvhNode& x = na[static_cast<size_t>(item.a)];
@@ -219,8 +226,16 @@ SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative&
             c1.bound = max2(c1.bound, aabb_squared_distance(na[static_cast<size_t>(c1.a)], nb[static_cast<size_t>(c1.b)], rel));
             c2.bound = max2(c2.bound, aabb_squared_distance(na[static_cast<size_t>(c2.a)], nb[static_cast<size_t>(c2.b)], rel));
         }
+        if (c1.bound > c2.bound) std::swap(c1, c2);
         if (!pruned(c2.bound)) push(c2);
-        if (!pruned(c1.bound)) push(c1);
+        if (!pruned(c1.bound)) {
+            if (heap.empty() || c1.bound <= heap.front().bound) {
+                item = c1;
+                held = true;
+            } else {
+                push(c1);
+            }
+        }
     }
     return r;
 }
