@@ -84,6 +84,7 @@ def read_urdf(
     parent_joint = _joint_tree(robot, links, source)
     root_link = _root_link(parent_joint, links, source)
     joints = {joint.name: joint for joint in robot.joints}
+    _drop_dangling_mimics(joints, warnings)
     values = _urdf_joint_values(joints, options.joints, source, warnings)
     _check_reached(robot.joints, parent_joint, links, root_link, source)
     kinematics = UrdfKinematics(
@@ -327,6 +328,19 @@ def _given_values(
             )
         values[name] = float(value)
     return values
+
+
+def _drop_dangling_mimics(joints: dict[str, Any], warnings: list[str]) -> None:
+    """A ``<mimic>`` naming a joint that does not exist is ignored, with a warning, as
+    pybullet (which never reads mimics) and yourdfpy (whose validation only logs it) load
+    such a robot: the joint then moves on its own (its default value, or ``--joint``)."""
+    for name, joint in joints.items():
+        if joint.mimic is not None and joint.mimic.joint not in joints:
+            warnings.append(
+                f"joint {name!r} mimics joint {joint.mimic.joint!r}, which does not exist: "
+                "the mimic is ignored (as pybullet and yourdfpy do), the joint moves on its own"
+            )
+            joint.mimic = None
 
 
 def _mimic_values(joints: dict[str, Any], values: dict[str, float], source: str) -> None:
