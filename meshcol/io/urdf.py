@@ -78,6 +78,11 @@ def read_urdf(
         raise SceneError("--keyframe: a URDF has no keyframes (MJCF only)", source)
     warnings: list[str] = []
     resolve_xacro_leftovers(root, source, warnings)
+    if root.find("link") is None:  # before yourdfpy, whose words would be "invalid URDF: 'name'"
+        raise SceneError("the robot has no <link> element", source)
+    if not root.get("name"):  # required by the format; pybullet does without it
+        warnings.append("the <robot> element has no name: named after the file")
+        root.set("name", Path(source).stem)
     capsules = {} if visual else _take_capsules(root, source)
     robot = _yourdfpy_robot(yourdfpy, etree, root, source)
     links = [link.name for link in robot.links]

@@ -816,6 +816,17 @@ def test_hostile_urdf(tmp_path, text, words):
         assert word in line, line
 
 
+def test_a_robot_without_links_or_name(tmp_path):
+    # Issue 29: example-robot-data's ur3.urdf is an empty <robot> without a name (xacro's
+    # output of a macro file); yourdfpy's words were "invalid URDF: 'name'".
+    empty = write(tmp_path, "ur3.urdf", '<robot xmlns:xacro="http://wiki.ros.org/xacro"></robot>')
+    assert error_line("check", str(empty)).endswith("ur3.urdf: the robot has no <link> element")
+    box = "<link name='a'><collision><geometry><box size='1 1 1'/></geometry></collision></link>"
+    scene = load_robot(write(tmp_path, "anon.urdf", f"<robot>{box}</robot>"))
+    assert [b.name for b in scene.bodies] == ["a"]
+    assert "the <robot> element has no name: named after the file" in scene.warnings
+
+
 def test_a_mimic_of_a_missing_joint_is_ignored_with_a_warning(tmp_path):
     # Issue 29: alex_psyonic_hands (example-robot-data) names a joint that does not exist in a
     # <mimic>; pybullet never reads mimics and yourdfpy only logs it: both load the robot.
