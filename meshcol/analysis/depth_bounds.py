@@ -130,9 +130,29 @@ def _enclosing_depths(
     enclosing = _Enclosing(placed)
     bodies = np.unique(np.concatenate([table.body_a[rows], table.body_b[rows]])).tolist()
     slot = {body: k for k, body in enumerate(bodies)}
-    made = [enclosing.of(body) for body in bodies]
-    shapes = ConvexSet.concatenate(*(m[0] for m in made))
-    poses = np.ascontiguousarray(np.stack([m[1] for m in made]))
+    # One-part bodies are their part: taken together, one take per run of them (a take per
+    # body copied the whole set's offsets each time: quadratic in the bodies, minutes for a
+    # 100,000-node glTF); bodies of several parts get their enclosing hull.
+    offsets = placed.colliders.body_part_offsets
+    pieces: list[Any] = []
+    pose_list: list[np.ndarray] = []
+    run: list[int] = []
+    for body in bodies:
+        lo, hi = int(offsets[body]), int(offsets[body + 1])
+        if hi - lo == 1:
+            run.append(lo)
+            pose_list.append(placed.part_poses[lo])
+            continue
+        if run:
+            pieces.append(placed.colliders.shapes.take(run))
+            run = []
+        made, pose = enclosing.of(body)
+        pieces.append(made)
+        pose_list.append(pose)
+    if run:
+        pieces.append(placed.colliders.shapes.take(run))
+    shapes = pieces[0] if len(pieces) == 1 else ConvexSet.concatenate(*pieces)
+    poses = np.ascontiguousarray(np.stack(pose_list))
     pairs = np.array(
         [
             [slot[a], slot[b]]
