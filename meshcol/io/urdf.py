@@ -78,12 +78,18 @@ def read_urdf(
         raise SceneError("--keyframe: a URDF has no keyframes (MJCF only)", source)
     warnings: list[str] = []
     resolve_xacro_leftovers(root, source, warnings)
+    if root.find("link") is None:  # before yourdfpy, whose words would be "invalid URDF: 'name'"
+        raise SceneError("the robot has no <link> element", source)
+    if not root.get("name"):  # required by the format; pybullet does without it
+        warnings.append("the <robot> element has no name: named after the file")
+        root.set("name", Path(source).stem)
     capsules = {} if visual else _take_capsules(root, source)
     robot = _yourdfpy_robot(yourdfpy, etree, root, source)
     links = [link.name for link in robot.links]
     parent_joint = _joint_tree(robot, links, source)
     root_link = _root_link(parent_joint, links, source)
     joints = {joint.name: joint for joint in robot.joints}
+    _drop_dangling_mimics(joints, warnings)
     values = _urdf_joint_values(joints, options.joints, source, warnings)
     _check_reached(robot.joints, parent_joint, links, root_link, source)
     kinematics = UrdfKinematics(
@@ -327,6 +333,19 @@ def _given_values(
             )
         values[name] = float(value)
     return values
+
+
+def _drop_dangling_mimics(joints: dict[str, Any], warnings: list[str]) -> None:
+    """A ``<mimic>`` naming a joint that does not exist is ignored, with a warning, as
+    pybullet (which never reads mimics) and yourdfpy (whose validation only logs it) load
+    such a robot: the joint then moves on its own (its default value, or ``--joint``)."""
+    for name, joint in joints.items():
+        if joint.mimic is not None and joint.mimic.joint not in joints:
+            warnings.append(
+                f"joint {name!r} mimics joint {joint.mimic.joint!r}, which does not exist: "
+                "the mimic is ignored (as pybullet and yourdfpy do), the joint moves on its own"
+            )
+            joint.mimic = None
 
 
 def _mimic_values(joints: dict[str, Any], values: dict[str, float], source: str) -> None:

@@ -785,14 +785,6 @@ def test_mjcf_qpos0_outside_limits_is_the_middle_of_the_limits(tmp_path):
         (urdf("<link name='a'/><link name='b'/>"), ["several root links", "'a'", "'b'"]),
         (
             urdf(
-                "<link name='a'/><link name='b'/><joint name='m' type='revolute'>"
-                "<parent link='a'/><child link='b'/><mimic joint='ghost'/>"
-                "<limit lower='-1' upper='1' effort='1' velocity='1'/></joint>"
-            ),
-            ["joint 'm' mimics joint 'ghost', which does not exist"],
-        ),
-        (
-            urdf(
                 "<link name='a'><collision><geometry><mesh filename='x.obj' scale='1 0 1'/>"
                 "</geometry></collision></link>"
             ),
@@ -822,6 +814,43 @@ def test_hostile_urdf(tmp_path, text, words):
     assert "h.urdf" in line
     for word in words:
         assert word in line, line
+
+
+def test_a_robot_without_links_or_name(tmp_path):
+    # Issue 29: example-robot-data's ur3.urdf is an empty <robot> without a name (xacro's
+    # output of a macro file); yourdfpy's words were "invalid URDF: 'name'".
+    empty = write(tmp_path, "ur3.urdf", '<robot xmlns:xacro="http://wiki.ros.org/xacro"></robot>')
+    assert error_line("check", str(empty)).endswith("ur3.urdf: the robot has no <link> element")
+    box = "<link name='a'><collision><geometry><box size='1 1 1'/></geometry></collision></link>"
+    scene = load_robot(write(tmp_path, "anon.urdf", f"<robot>{box}</robot>"))
+    assert [b.name for b in scene.bodies] == ["a"]
+    assert "the <robot> element has no name: named after the file" in scene.warnings
+
+
+def test_a_mimic_of_a_missing_joint_is_ignored_with_a_warning(tmp_path):
+    # Issue 29: alex_psyonic_hands (example-robot-data) names a joint that does not exist in a
+    # <mimic>; pybullet never reads mimics and yourdfpy only logs it: both load the robot.
+    # Before, meshcol refused it ("mimics joint 'ghost', which does not exist").
+    text = urdf(
+        "<link name='a'><collision><geometry><box size='1 1 1'/></geometry></collision></link>"
+        "<link name='b'><collision><origin xyz='0 3 0'/><geometry><box size='1 1 1'/>"
+        "</geometry></collision></link><joint name='m' type='revolute'><parent link='a'/>"
+        "<child link='b'/><axis xyz='0 0 1'/><mimic joint='ghost' multiplier='2'/>"
+        "<limit lower='0.5' upper='1' effort='1' velocity='1'/></joint>"
+    )
+    path = write(tmp_path, "m.urdf", text)
+    scene = load_robot(path)
+    assert any(
+        "joint 'm' mimics joint 'ghost', which does not exist: the mimic is ignored" in w
+        for w in scene.warnings
+    )
+    # a joint of its own: MoveIt's default (the middle of limits excluding zero), or given
+    b = next(body for body in scene.bodies if body.name == "b")
+    turned = np.array([[np.cos(0.75), -np.sin(0.75)], [np.sin(0.75), np.cos(0.75)]])
+    np.testing.assert_allclose(b.pose[:2, :2], turned, atol=1e-12)
+    given = load_robot(path, RobotOptions(joints={"m": 1.0}))
+    b = next(body for body in given.bodies if body.name == "b")
+    np.testing.assert_allclose(b.pose[0, 0], np.cos(1.0), atol=1e-12)
 
 
 def test_ros_package_path_finds_nested_packages(tmp_path, monkeypatch):
