@@ -1,7 +1,7 @@
 """The faster hull path of issue 32 (item 2) against the path it replaced.
 
 Oracles: the packed arrays the old path (main 50405b3) produced for a fixed set of inputs,
-kept in tests/golden/hull_pack_50405b3.json and compared exactly (every vertex, adjacency
+kept in tests/data/hull_pack_50405b3.json and compared exactly (every vertex, adjacency
 list, face normal and edge direction bit for bit: smooth hulls, clouds and degenerate sets);
 and qhull through scipy on smooth hulls, whose triangulation is unique (no four points
 coplanar): the same triangles and the same vertex adjacency.
@@ -20,7 +20,7 @@ from scipy.spatial.transform import Rotation
 
 from meshcol.collision.hull import HullStatus, exact_hull, pack_hulls
 
-GOLDEN_PACK = Path(__file__).resolve().parents[1] / "golden" / "hull_pack_50405b3.json"
+GOLDEN_PACK = Path(__file__).resolve().parents[1] / "data" / "hull_pack_50405b3.json"
 
 
 def ellipsoid_points(rng: np.random.Generator, n: int) -> np.ndarray:
