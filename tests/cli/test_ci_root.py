@@ -145,3 +145,15 @@ def test_files_the_configuration_names_stay_inside_the_root(repo):
     code, _, err = run("ci", "--no-cache", "--root", str(repo))
     assert code == 2, err
     assert "the configuration: path '../secret/base.json' resolves outside the root" in err
+
+
+@pytest.mark.parametrize("env", [None, "root"])
+def test_a_nul_byte_in_a_mesh_path_is_one_line_with_or_without_a_root(repo, env):
+    """A path with a NUL byte names no file: "not found", exit 2, never a traceback (the
+    root's check used to raise realpath's ValueError)."""
+    (repo / "scene.json").write_text(manifest("meshes/ok\u0000.obj"))
+    code, out, err = run(
+        "check", "scene.json", env=None if env is None else {"MESHCOL_ROOT": str(repo)}
+    )
+    assert code == 2 and out == "", err
+    assert "not found" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
