@@ -40,6 +40,7 @@ body ``a`` to body ``b``, ``signed_distance = distance - depth``.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import os
 import time
 from collections.abc import Callable, Sequence
@@ -195,6 +196,7 @@ def check(
     2003) and EPA with exact SAT on small polytopes; exact triangle-mesh distance and a winding
     number containment test (Jacobson et al. 2013) for ``mesh`` shapes.
     """
+    from meshcol.io.mesh_formats import format_notes
     from meshcol.io.scene import collector_paused
     from meshcol.io.scene_parse import forget_documents
 
@@ -209,6 +211,9 @@ def check(
     run = {"jobs": jobs, "timeout": timeout, "executor": executor, "address": ray_address}
     scene, decompose = _load(paths, opts, progress, robot_options, **run)
     forget_documents()  # loaded: its manifest's decoded text is not read again
+    notes = format_notes(paths)  # what the readers left out (an FBX's lights...), as inspect
+    if notes:
+        scene = dataclasses.replace(scene, warnings=(*scene.warnings, *notes))
     with collector_paused():
         return check_scene(
             scene,

@@ -303,6 +303,10 @@ def test_materials_cameras_lights_and_animation_are_ignored_with_a_note():
         json.loads(_run("inspect", DATA / "rig_yup.fbx", "--format", "json").stdout)["warnings"]
         == []
     )
+    # check says it too, in its report's warnings
+    result = _run("check", DATA / "level.fbx", "--format", "json", "--fail-on", "none")
+    assert result.exit_code == 0, result.stderr
+    assert json.loads(result.stdout)["warnings"] == [note]
 
 
 def test_several_mesh_objects_are_the_parts_of_a_manifest_body(tmp_path):
