@@ -11,7 +11,22 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["as_points", "as_pose", "as_poses", "as_pairs"]
+__all__ = ["as_mesh", "as_points", "as_pose", "as_poses", "as_pairs"]
+
+
+def as_mesh(vertices: Any, faces: Any) -> tuple[np.ndarray, np.ndarray]:
+    """A triangle mesh's arrays: vertices as C-contiguous (n, 3) float64, faces as given
+    (an empty array as (0, 3)) once they are (m, 3); the caller converts the faces after
+    its own checks of their type."""
+    v = np.ascontiguousarray(vertices, dtype=np.float64)
+    f = np.asarray(faces)
+    if v.ndim != 2 or v.shape[1] != 3:
+        raise ValueError(f"vertices must be (n, 3), got {v.shape}")
+    if f.size == 0:
+        f = f.reshape(0, 3)
+    if f.ndim != 2 or f.shape[1] != 3:
+        raise ValueError(f"faces must be (m, 3), got {f.shape}")
+    return v, f
 
 
 def as_points(v: Any, name: str) -> np.ndarray:

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from meshcol._native import core
+from meshcol.collision.arrays import as_mesh
 
 __all__ = ["ray_parity"]
 
@@ -58,13 +59,6 @@ def ray_parity(points: Any, vertices: Any, faces: Any) -> tuple[np.ndarray, np.n
     triangle test. Nothing is rounded but the caller's transform into the mesh's frame.
     """
     p = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
-    v = np.ascontiguousarray(vertices, dtype=np.float64)
-    f = np.ascontiguousarray(faces, dtype=np.int64)
-    if v.ndim != 2 or v.shape[1] != 3:
-        raise ValueError(f"vertices must be (n, 3), got {v.shape}")
-    if f.size == 0:
-        f = f.reshape(0, 3)
-    if f.ndim != 2 or f.shape[1] != 3:
-        raise ValueError(f"faces must be (m, 3), got {f.shape}")
-    verdict = core.ray_parity(v, f, p)
+    v, f = as_mesh(vertices, faces)
+    verdict = core.ray_parity(v, np.ascontiguousarray(f, dtype=np.int64), p)
     return verdict == 1, verdict >= 0

@@ -18,20 +18,14 @@ from typing import Any
 import numpy as np
 
 from meshcol._native import core
+from meshcol.collision.arrays import as_mesh
 from meshcol.collision.broadphase import sort_and_sweep
 
 __all__ = ["face_pairs_cross", "self_intersecting_pairs"]
 
 
 def _mesh(vertices: Any, faces: Any) -> tuple[np.ndarray, np.ndarray]:
-    v = np.ascontiguousarray(vertices, dtype=np.float64)
-    f = np.asarray(faces)
-    if v.ndim != 2 or v.shape[1] != 3:
-        raise ValueError(f"vertices must be (n, 3), got {v.shape}")
-    if f.size == 0:
-        f = f.reshape(0, 3)
-    if f.ndim != 2 or f.shape[1] != 3:
-        raise ValueError(f"faces must be (m, 3), got {f.shape}")
+    v, f = as_mesh(vertices, faces)
     if f.size and not np.issubdtype(f.dtype, np.integer):
         raise ValueError(f"faces must be integers, got {f.dtype}")
     if not np.isfinite(v).all():
