@@ -54,6 +54,9 @@ APPLY_ORDER = (
 #: Growth rounds (thickness, volume, oblong ratio) and budget rounds tried before a limit is
 #: declared unmet.
 GROWTH_ROUNDS = 12
+#: A round of growing and simplifying again that lowers the oblong ratio by less than this
+#: fraction has made no progress: the fit keeps the previous round's (smaller) part.
+OBLONG_PROGRESS = 0.01
 BUDGET_ROUNDS = 8
 
 
@@ -301,12 +304,27 @@ def _fit_one(points: np.ndarray, limits: Mapping[str, float], notes: list[str]):
     so a part whose growth limits it broke is grown again from the simplified hull."""
     pts = points
     result = None
+    kept: tuple[Any, float] | None = None  # the last round's result and its oblong ratio
+    others = {key: value for key, value in limits.items() if key != "max_oblong_ratio"}
     for _ in range(3):
+        written = len(notes)
         result = _budgeted(_grow(pts, limits, notes), limits, notes)
         if result.flat:
             return result
-        if _growth_met(measure_hull(exact_hull(result.vertices)), limits):
+        m = measure_hull(exact_hull(result.vertices))
+        if _growth_met(m, limits):
             return result
+        rounder = kept is None or m["oblong_ratio"] < kept[1] * (1 - OBLONG_PROGRESS)
+        if not rounder and _growth_met(m, others):
+            # Grown rounder, then simplified back no rounder (four vertices cannot have a
+            # ratio under 3): the earlier, smaller part, and the ratio left as a violation.
+            del notes[written:]
+            notes.append(
+                f"max_oblong_ratio {float(limits['max_oblong_ratio']):g} not reached: "
+                "growing the part and simplifying it again made it no rounder"
+            )
+            return kept[0]  # type: ignore[index]
+        kept = (result, float(m["oblong_ratio"]))
         pts = result.vertices
     return result
 

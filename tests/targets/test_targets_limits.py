@@ -114,3 +114,19 @@ def test_a_needle_meets_the_gpu_oblong_ratio() -> None:
     assert fit.met, [v.message for v in fit.violations]
     assert fit.measures.oblong_ratio[0] <= 100
     check_independently(rod, fit.parts[0][0], dict(load_target("physx-gpu").limits))
+
+
+def test_an_oblong_ratio_four_vertices_cannot_meet_is_left_unmet_not_inflated() -> None:
+    """At most 4 vertices and an oblong ratio under 3 cannot both hold (a tetrahedron's ratio
+    is at least 3): the part is the vertex-budget tetrahedron, with the ratio a violation,
+    not a tetrahedron grown round after round (a sphere of volume 0.52 got one of 160)."""
+    sphere = np.random.default_rng(3).normal(size=(400, 3))
+    sphere /= np.linalg.norm(sphere, axis=1)[:, None] * 2.0  # radius 0.5
+    fit = fit_hull(sphere, {"max_hull_vertices": 4, "max_oblong_ratio": 2.0})
+    assert [v.limit for v in fit.violations] == ["max_oblong_ratio"]
+    assert len(fit.parts[0][0]) == 4
+    tetra = ConvexHull(fit.parts[0][0])
+    assert tetra.volume < 4.0  # the smallest enclosing tetrahedron of the ball is 4.2 / 2.35
+    assert max(np.linalg.norm(fit.parts[0][0], axis=1)) < 3.0
+    assert any("not reached" in note for note in fit.notes)
+    assert fit_hull(sphere, {"max_hull_vertices": 4}).met  # the budget alone is met
