@@ -272,7 +272,7 @@ MeshFile parse_stl(const char* data, size_t size) {
     }
     // ASCII: solid name / facet normal ... / outer loop / vertex x y z (x3) / endloop /
     // endfacet / endsolid.
-    if (std::memchr(data, '\0', size) != nullptr) {
+    if (size > 0 && std::memchr(data, '\0', size) != nullptr) {  // data: null when empty
         file.error =
             "neither binary STL (size does not match the triangle count) nor ASCII text";
         return file;

@@ -116,6 +116,8 @@ TEST_CASE("mesh read: corrupt STL files say why") {
     const MeshFile split = stl("solid a\n vertex 0 0 0\n vertex 1 0 0\n vertex 0 1 0\n"
                                "solid b\n endloop\nendsolid\n");
     CHECK_EQ(split.error, std::string("line 6: a facet has 0 vertices, not 3"));
+    // an empty file read into a null buffer: refused, without passing null to memchr (UBSan)
+    CHECK(starts_with(parse_stl(nullptr, 0).error, "neither binary STL"));
 }
 
 TEST_CASE("mesh read: files read in parallel, each with its status") {
