@@ -17,6 +17,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 #: Never imported by ``import meshcol``.
 HEAVY = (
     "numpy",
@@ -130,6 +132,7 @@ def test_import_meshcol_loads_nothing_heavy() -> None:
     assert "numpy" in loaded
 
 
+@pytest.mark.slow  # 1-2 s: the fast lane (make test-fast) stays under 40 s
 def test_warm_and_one_changed_ci_import_neither_scipy_nor_trimesh(tmp_path) -> None:
     root, cache = tmp_path / "repo", tmp_path / "cache"
     (root / "props").mkdir(parents=True)

@@ -592,6 +592,7 @@ def test_decompose_command_writes_its_page(tmp_path):
     assert "block.html" not in os.listdir(tmp_path / "parts")
 
 
+@pytest.mark.slow  # 1-2 s: the fast lane (make test-fast) stays under 40 s
 def test_hull_page_under_a_target_names_it_not_an_exact_hull(samples):
     # Issue 29 item 19: the page said "max vertices: exact hull" for hulls a target shaped.
     from meshcol.analysis.hull import hull

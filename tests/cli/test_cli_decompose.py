@@ -403,6 +403,7 @@ def test_usage_errors(meshes, tmp_path, extra, message) -> None:
     assert message in stderr
 
 
+@pytest.mark.slow  # 1-2 s: the fast lane (make test-fast) stays under 40 s
 def test_same_stem_in_two_folders_gets_two_names(meshes, tmp_path) -> None:
     other = tmp_path / "again"
     other.mkdir()

@@ -475,6 +475,7 @@ def _torus_solid_distance(points: np.ndarray, major: float, minor: float) -> np.
     return np.maximum(ring - minor, 0.0)
 
 
+@pytest.mark.slow  # 1-2 s: the fast lane (make test-fast) stays under 40 s
 def test_fidelity_torus_wedges_with_gaps_report_how_far_they_stick_out() -> None:
     # Regression (#12): a torus whose parts lie within 0.8% of its surface reported 10.7%.
     # Twelve wedges, each the hull of 9 rings of the mesh, the end rings turned 1e-3 rad

@@ -247,6 +247,7 @@ def test_search_meets_the_target_with_fewer_parts_and_caches_every_step(l_shape,
     assert files(tmp_path / "a") == files(tmp_path / "b")
 
 
+@pytest.mark.slow  # 1-2 s: the fast lane (make test-fast) stays under 40 s
 def test_a_target_no_step_meets_fails_naming_the_best_step(l_shape, tmp_path) -> None:
     args = [str(l_shape), "--no-cache", "-o", str(tmp_path / "o"), *FAST]
     code, stdout, stderr = run([*args, "--max-hausdorff", "1e-9", "--search-steps", "2"])

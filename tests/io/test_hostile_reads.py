@@ -188,6 +188,7 @@ def _capped_child(args: list[str], folder: Path) -> subprocess.CompletedProcess:
     )
 
 
+@pytest.mark.slow  # 1-2 s: the fast lane (make test-fast) stays under 40 s
 @pytest.mark.skipif(not os.path.exists("/dev/zero"), reason="needs /dev/zero")
 def test_endless_devices_are_never_read(tmp_path):
     """``--baseline /dev/zero``, ``--joints /dev/zero`` and ``/dev/zero`` under a mesh name:

@@ -123,6 +123,7 @@ def test_fit_pictures_a_primitive_past_the_volume_tolerance(tmp_path, monkeypatc
     assert cys.max() - cys.min() > 2 * (ys.max() - ys.min())
 
 
+@pytest.mark.slow  # 1-2 s: the fast lane (make test-fast) stays under 40 s
 def test_ci_snapshots_every_failing_job_linked_from_the_markdown(tmp_path, monkeypatch):
     pytest.importorskip("yourdfpy", reason="the test repository's robot needs yourdfpy")
     import sys
