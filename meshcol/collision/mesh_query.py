@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from meshcol._native import core
-from meshcol.collision.arrays import as_pairs, as_points, as_pose, as_poses
+from meshcol.collision.arrays import as_mesh, as_pairs, as_points, as_pose, as_poses
 from meshcol.collision.orientation import orient_consistently
 from meshcol.geometry.topology import is_closed_manifold
 from meshcol.types import Body, Status
@@ -49,14 +49,10 @@ def _mesh_arrays(index: int, mesh: Any) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(
             f"meshes[{index}] must be a (vertices, faces) pair or have .vertices and .faces"
         )
-    vertices = np.ascontiguousarray(vertices, dtype=np.float64)
-    faces = np.asarray(faces)
-    if vertices.ndim != 2 or vertices.shape[1] != 3:
-        raise ValueError(f"meshes[{index}]: vertices must be (n, 3), got {vertices.shape}")
-    if faces.size == 0:
-        faces = faces.reshape(0, 3)
-    if faces.ndim != 2 or faces.shape[1] != 3:
-        raise ValueError(f"meshes[{index}]: faces must be (m, 3), got {faces.shape}")
+    try:
+        vertices, faces = as_mesh(vertices, faces)
+    except ValueError as error:
+        raise ValueError(f"meshes[{index}]: {error}") from None
     if not np.issubdtype(faces.dtype, np.integer):
         raise ValueError(f"meshes[{index}]: faces must be integers, got {faces.dtype}")
     faces = np.ascontiguousarray(faces, dtype=np.int64)

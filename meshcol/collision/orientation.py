@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from meshcol._native import core
+from meshcol.collision.arrays import as_mesh
 from meshcol.geometry.topology import ORIENTATION_RELATIVE_VOLUME, Orientation
 
 __all__ = ["NESTING_MAX_COMPONENTS", "orient_consistently"]
@@ -51,15 +52,10 @@ def orient_consistently(vertices: np.ndarray, faces: np.ndarray) -> Orientation:
     first face; a component whose links contradict each other (non-orientable) is left as
     propagated and ``orientable`` is False.
     """
-    faces = np.ascontiguousarray(faces, dtype=np.int64)
-    m = len(faces)
-    if m == 0:
-        return Orientation(faces.reshape(0, 3), np.zeros(0, dtype=bool), True, False)
-    if faces.ndim != 2 or faces.shape[1] != 3:
-        raise ValueError(f"faces must be (m, 3), got {faces.shape}")
-    v = np.ascontiguousarray(vertices, dtype=np.float64)
-    if v.ndim != 2 or v.shape[1] != 3:
-        raise ValueError(f"vertices must be (n, 3), got {v.shape}")
+    v, given = as_mesh(vertices, faces)
+    faces = np.ascontiguousarray(given, dtype=np.int64)
+    if len(faces) == 0:
+        return Orientation(faces, np.zeros(0, dtype=bool), True, False)
     flipped, orientable, balanced = core.orient_faces(
         v, faces, NESTING_MAX_COMPONENTS, ORIENTATION_RELATIVE_VOLUME
     )
