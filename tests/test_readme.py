@@ -59,8 +59,9 @@ def test_readme_command_table_names_every_command() -> None:
     from meshcol.cli import COMMANDS
 
     text = (REPO / "README.md").read_text().split("## What it does")[1].split("\n\n##")[0]
-    listed = set(re.findall(r"^\| `meshcol ([a-z-]+)`", text, flags=re.M))
-    assert listed == set(COMMANDS), sorted(set(COMMANDS) ^ listed)
+    rows = re.findall(r"^\| `meshcol ([a-z-]+)`", text, flags=re.M)
+    assert set(rows) == set(COMMANDS), sorted(set(COMMANDS) ^ set(rows))
+    assert len(rows) == len(set(rows)), sorted(row for row in rows if rows.count(row) > 1)
 
 
 #: Lines of a live progress display (a slow run on a loaded machine prints them): not part of
