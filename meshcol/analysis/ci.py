@@ -24,7 +24,7 @@ from typing import Any
 
 from meshcol.analysis.ci_report import CiReport, CiRun
 from meshcol.errors import MeshcolError
-from meshcol.io.config import Config, ConfigError, Resolved, resolve
+from meshcol.io.config import Config, ConfigError, Resolved, resolve_all
 
 __all__ = [
     "Job",
@@ -158,8 +158,9 @@ def plan(
     jobs = []
     # one check per resolution the files share
     checked: dict[tuple[int, str], tuple[dict[str, Any], tuple[str, ...]]] = {}
-    for path in files if files is not None else config.files():
-        for resolved in resolve(config, path, overrides, shared=True):
+    listed = files if files is not None else config.files()
+    for path, resolutions in resolve_all(config, listed, overrides):
+        for resolved in resolutions:
             for command in resolved.commands:
                 memo = (id(resolved.values), command)
                 if memo not in checked:
@@ -382,10 +383,13 @@ def run_ci(
     runs: dict[int, CiRun] = {}
     pending: list[tuple[int, Job, str]] = []
     skipped = 0
+    keys: dict[int, str] = {}
     for index, job in enumerate(plan(config, overrides)):
-        key = store.key(job)
+        # without the cache no key is needed: no file of the repository is read for one
+        key = keys[index] = store.key(job) if store.enabled else ""
         cached = store.look_up(key)
-        if changed is not None and not _touched(job, changed, cached, folder):
+        reads = None if cached is None else store.reads(key, cached)
+        if changed is not None and not _touched(job, changed, reads, folder):
             skipped += 1
             continue
         if cached is not None:
@@ -408,7 +412,7 @@ def run_ci(
         store.keep(key, job, result)
         if progress is not None:
             progress(f"ci: {done}/{len(pending)} jobs")
-    store.write_index(runs.values())
+    store.write_index((runs[i], keys[i]) for i in sorted(runs))
     return CiReport(
         runs=tuple(runs[i] for i in sorted(runs)),
         config=config.path,
@@ -439,15 +443,13 @@ class _Results:
         self.digests = Digests(self.folder, index.get("stats"), index.get("written_ns", 0))
         self.result_key = result_key
         self.index = load_index(index, self.digests)
+        entries = index.get("entries", {})
+        self.depends = {key: entries[key]["depends"] for key in self.index}
         self.changed = False
-        self._keys: dict[int, str] = {}
         self._settings: dict[int, str] = {}
 
     def key(self, job: Job) -> str:
         """The job's cache key (the settings' part once per settings shared by jobs)."""
-        known = self._keys.get(id(job))
-        if known is not None:
-            return known
         shared = self._settings.get(id(job.settings))
         if shared is None:
             shared = self.result_key(job.command, dict(job.settings), "")
@@ -455,24 +457,29 @@ class _Results:
         parts = [shared, job.path, self.digests(job.path)]
         for extra in job.extra_files:
             parts += [_rel(self.folder, extra), self.digests(extra)]
-        key = hashlib.sha256("\0".join(parts).encode()).hexdigest()
-        self._keys[id(job)] = key
-        return key
+        return hashlib.sha256("\0".join(parts).encode()).hexdigest()
 
     def pair_cache(self, job: Job) -> Any:
         """The job's pair cache (:func:`job_pair_cache`), None without a cache."""
         return job_pair_cache(job, self.cache_dir) if self.enabled else None
 
-    def look_up(self, key: str) -> dict[str, Any] | None:
+    def look_up(self, key: str) -> Mapping[str, Any] | None:
         """What the run keeps of a cached result (the index's summary, else the entry)."""
         from meshcol.decomposition.result_cache import load_result
 
         if not self.enabled:
             return None
-        if key in self.index:
-            return dict(self.index[key])
+        summary = self.index.get(key)
+        if summary is not None:
+            return summary
         self.changed = True
         return load_result(key, self.digests, self.cache_dir)
+
+    def reads(self, key: str, cached: Mapping[str, Any]) -> Collection[str]:
+        """The files a cached result read (its dependencies, from the index without
+        decoding its summary)."""
+        depends = self.depends.get(key)
+        return list(cached.get("reads", [])) if depends is None else depends.keys()
 
     def fetcher(self, key: str) -> Callable[[], dict[str, Any] | None]:
         return functools.partial(self._fetch, key)
@@ -483,7 +490,7 @@ class _Results:
         return load_result(key, self.digests, self.cache_dir)
 
     def _depends(self, job: Job, result: Mapping[str, Any]) -> dict[str, str]:
-        depends = {path: self.digests(path) for path in result.get("reads", [])}
+        depends = {path: self.digests(path) for path in result["reads"]}
         for extra in job.extra_files:
             depends[_rel(self.folder, extra)] = self.digests(extra)
         return depends
@@ -494,16 +501,23 @@ class _Results:
         if self.enabled and "error" not in result:
             store_result(key, result, self._depends(job, result), self.cache_dir)
 
-    def write_index(self, runs: Iterable[CiRun]) -> None:
+    def write_index(self, runs: Iterable[tuple[CiRun, str]]) -> None:
         from meshcol.decomposition.result_cache import store_index
 
         if not self.enabled or not self.changed:
             return  # every job came from the index, whose files were unchanged
         entries = {}
-        for run in runs:
-            if "error" not in run.result:
-                summary = {k: v for k, v in run.result.items() if k != "report"}
-                entries[self.key(run.job)] = (summary, self._depends(run.job, run.result))
+        for run, key in runs:
+            if "error" in run.result:
+                continue
+            summary: Mapping[str, Any] = run.result
+            if not run.cached and "report" in summary:  # a Summary has no report
+                summary = {k: v for k, v in summary.items() if k != "report"}
+            depends = self.depends.get(key) if run.cached else None
+            entries[key] = (
+                summary,
+                self._depends(run.job, summary) if depends is None else depends,
+            )
         store_index(self.name, entries, self.digests.stats(), self.cache_dir)
 
 
@@ -511,11 +525,11 @@ def job_pair_cache(job: Job, cache_dir: Any) -> Any:
     """Where a check job keeps its pairs' answers (:mod:`meshcol.analysis.pair_cache`): the
     store ``cache_dir`` (as :func:`result_store` gives it), under the scene's path and the
     job's settings; None for the other commands."""
+    if job.command != "check":
+        return None  # and no numpy imported for it
     from meshcol.analysis.pair_cache import PairCache
     from meshcol.decomposition.result_cache import result_key
 
-    if job.command != "check":
-        return None
     return PairCache(cache_dir, f"{job.path}\0{result_key(job.command, dict(job.settings), '')}")
 
 
@@ -539,15 +553,17 @@ def _rel(folder: str, path: str) -> str:
     return path if relative.startswith("..") else relative.replace(os.sep, "/")
 
 
-def _touched(job: Job, changed: Collection[str], cached: Any, folder: str) -> bool:
+def _touched(
+    job: Job, changed: Collection[str], reads: Collection[str] | None, folder: str
+) -> bool:
     """Whether ``job`` must run under ``--changed-since``: its file changed, or a file its
-    last run read (per the cache, a miss runs), or a baseline or target file."""
+    last run read (``reads``, per the cache; None: a miss, which runs when a scene's), or a
+    baseline or target file."""
     if job.path in changed or any(_rel(folder, e) in changed for e in job.extra_files):
         return True
-    if cached is None:
+    if reads is None:
         return job.kind == "scenes"  # a scene's meshes are unknown without a cached run
-    reads = set(cached.get("reads", []))
-    return not reads.isdisjoint(changed)
+    return any(path in changed for path in reads)
 
 
 def _outcome(outcome: Any, tasks: Sequence[Any]) -> tuple[int, dict[str, Any]]:

@@ -13,9 +13,10 @@ give the same bytes.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -42,7 +43,7 @@ class CiRun:
     reads the reports of its unchanged jobs."""
 
     job: Job
-    result: dict[str, Any]
+    result: Mapping[str, Any]
     cached: bool = False
     fetch: Callable[[], dict[str, Any] | None] | None = None
 
@@ -130,7 +131,7 @@ class CiReport:
     #: the configuration's ``docs-url`` (the rules' links in SARIF); not in the JSON report
     docs_url: str | None = None
 
-    @property
+    @functools.cached_property
     def exit_code(self) -> int:
         """2 when a job could not run (unusable input, a path outside the root), else 1
         when a job's policy fails, else 0."""
@@ -146,7 +147,7 @@ class CiReport:
     def errors(self) -> list[str]:
         return [run.result["error"] for run in self.runs if "error" in run.result]
 
-    @property
+    @functools.cached_property
     def summary(self) -> dict[str, Any]:
         codes = [run.exit_code for run in self.runs]
         by_command: dict[str, int] = {}
