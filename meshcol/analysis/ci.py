@@ -22,7 +22,7 @@ from collections.abc import Callable, Collection, Iterable, Iterator, Mapping, S
 from dataclasses import dataclass, field
 from typing import Any
 
-from meshcol.analysis.ci_report import CiReport, CiRun
+from meshcol.analysis.ci_report import REPORT_KEYS, CiReport, CiRun
 from meshcol.errors import MeshcolError
 from meshcol.io.config import Config, ConfigError, Resolved, resolve_all
 
@@ -393,7 +393,8 @@ def run_ci(
             skipped += 1
             continue
         if cached is not None:
-            runs[index] = CiRun(job, cached, cached=True, fetch=store.fetcher(key))
+            fetch, text = store.fetchers(key)
+            runs[index] = CiRun(job, cached, cached=True, fetch=fetch, fetch_text=text)
         else:
             pending.append((index, job, key))
     if progress is not None and pending:
@@ -481,8 +482,15 @@ class _Results:
         depends = self.depends.get(key)
         return list(cached.get("reads", [])) if depends is None else depends.keys()
 
-    def fetcher(self, key: str) -> Callable[[], dict[str, Any] | None]:
-        return functools.partial(self._fetch, key)
+    def fetchers(
+        self, key: str
+    ) -> tuple[Callable[[], dict[str, Any] | None], Callable[[], str | None]]:
+        """What reads the entry's result, and its report's text, when a format needs them."""
+        from meshcol.decomposition.result_cache import load_text
+
+        return functools.partial(self._fetch, key), functools.partial(
+            load_text, key, self.cache_dir
+        )
 
     def _fetch(self, key: str) -> dict[str, Any] | None:
         from meshcol.decomposition.result_cache import load_result
@@ -499,7 +507,9 @@ class _Results:
         from meshcol.decomposition.result_cache import store_result
 
         if self.enabled and "error" not in result:
-            store_result(key, result, self._depends(job, result), self.cache_dir)
+            entry = {k: v for k, v in result.items() if k != "report_text"}
+            text = result.get("report_text")
+            store_result(key, entry, self._depends(job, result), self.cache_dir, text)
 
     def write_index(self, runs: Iterable[tuple[CiRun, str]]) -> None:
         from meshcol.decomposition.result_cache import store_index
@@ -512,7 +522,7 @@ class _Results:
                 continue
             summary: Mapping[str, Any] = run.result
             if not run.cached and "report" in summary:  # a Summary has no report
-                summary = {k: v for k, v in summary.items() if k != "report"}
+                summary = {k: v for k, v in summary.items() if k not in REPORT_KEYS}
             depends = self.depends.get(key) if run.cached else None
             entries[key] = (
                 summary,

@@ -29,6 +29,7 @@ __all__ = [
     "Digests",
     "load_index",
     "load_result",
+    "load_text",
     "read_index",
     "result_key",
     "store_index",
@@ -169,12 +170,34 @@ def store_result(
     result: Any,
     depends: Mapping[str, str],
     cache_dir: str | os.PathLike[str] | None = None,
+    text: str | None = None,
 ) -> None:
     """Store ``result`` (a JSON value) under ``key`` with the digests of the files it read
-    (``path -> digest``)."""
+    (``path -> digest``); and ``text``, the report as its JSON file has it, when given
+    (:func:`load_text`), first: an entry read is never one whose text is still to come."""
+    if text is not None:
+        write_bytes(_text_name(key), text.encode(), cache_dir)
     entry = {"key": key, "depends": dict(sorted(depends.items())), "result": result}
     data = json.dumps(entry, sort_keys=True, separators=(",", ":"), allow_nan=True).encode()
     write_bytes(_name(key), data, cache_dir)
+
+
+def _text_name(key: str) -> str:
+    return f"results/{key[:2]}/{key}.report.json"
+
+
+def load_text(key: str, cache_dir: str | os.PathLike[str] | None = None) -> str | None:
+    """The report text stored with the entry ``key`` (:func:`store_result`), None when
+    there is none (an entry of an older build) or it is unreadable. A report of 10,000 cached
+    jobs is these texts joined: nothing decoded, nothing encoded again. The caller has
+    checked the entry (its index line or :func:`load_result`)."""
+    data = read_bytes(_text_name(key), cache_dir)
+    if data is None:
+        return None
+    try:
+        return data.decode("ascii")  # the report's JSON escapes every other character
+    except UnicodeDecodeError:
+        return None
 
 
 # --- the run index: what a run needs of each entry, in one object -------------------------------
@@ -224,6 +247,8 @@ class Summary(Mapping[str, Any]):
             return True
         if key == "error" and self.exit_code != 2:
             return False  # a failed run's summary has its error; no other has one
+        if key in ("report", "report_text"):
+            return False  # a summary is what a run keeps of a result but its report
         return key in self.value()
 
     def __iter__(self) -> Any:
