@@ -323,20 +323,28 @@ def _working_folder(folder: str) -> Iterator[None]:
         os.chdir(before)
 
 
-def run_job(task: tuple[Job, str, str | None, Any]) -> dict[str, Any]:
-    """One job in this process (a worker's entry): ``(job, folder, root, pair_cache)``
-    (the last None, or a check's :class:`~meshcol.analysis.pair_cache.PairCache`). Returns
-    its result as JSON values (the report, its CI suite, the exit code) and ``reads``, every
-    file its input named; an unusable input is ``{"error": message}``."""
+def run_job(task: tuple[Job, str, str | None, Any, bool]) -> dict[str, Any]:
+    """One job in this process (a worker's entry): ``(job, folder, root, pair_cache,
+    pictures)`` (``pair_cache`` None, or a check's :class:`~meshcol.analysis.pair_cache.
+    PairCache`). Returns its result as JSON values (the report, its CI suite, the exit code)
+    and ``reads``, every file its input named; with ``pictures``, a failing job's result
+    keeps what its pictures need (:func:`meshcol.analysis.snapshots.pictures_data`).
+    An unusable input is ``{"error": message}``."""
     from meshcol.io.paths import confined_to, recording_reads
 
-    job, folder, root, pair_cache = task
+    job, folder, root, pair_cache, pictures = task
     with _working_folder(folder), confined_to(root), recording_reads() as reads:
         try:
             report = _execute(job, folder, pair_cache)
+            result = CiRun.result_of(report)
+            if pictures and result["exit_code"] == 1:
+                from meshcol.analysis.snapshots import pictures_data
+
+                robot = _robot(job.settings, folder)
+                shape = job.settings["shape"]
+                result["pictures"] = pictures_data(job.command, job.path, shape, report, robot)
         except MeshcolError as exc:
             return {"error": str(exc), "reads": []}
-        result = CiRun.result_of(report)
     result["reads"] = sorted({_rel(folder, path) for path in reads})
     return result
 
@@ -355,6 +363,7 @@ def run_ci(
     use_cache: bool = True,
     jobs: int = 1,
     progress: Callable[[str], None] | None = None,
+    snapshots: bool = False,
 ) -> CiReport:
     """Run every job of ``config`` (:func:`plan`) and gather one report.
 
@@ -371,6 +380,9 @@ def run_ci(
         The store (default the config's ``cache-dir``, else the user cache).
     use_cache : bool
         Look results up and store them (``--no-cache``: neither).
+    snapshots : bool
+        Each failing job's result keeps what its pictures need (``--snapshots``): a
+        failing job whose cache entry has none (from a run without) runs again.
     """
     from meshcol.decomposition.executor import run_each
 
@@ -392,6 +404,8 @@ def run_ci(
         if changed is not None and not _touched(job, changed, reads, folder):
             skipped += 1
             continue
+        if cached is not None and snapshots and cached["exit_code"] == 1:
+            cached = store.with_pictures(key, cached)
         if cached is not None:
             fetch, text = store.fetchers(key)
             runs[index] = CiRun(job, cached, cached=True, fetch=fetch, fetch_text=text)
@@ -399,7 +413,7 @@ def run_ci(
             pending.append((index, job, key))
     if progress is not None and pending:
         progress(f"ci: {len(runs)} jobs from the cache, {len(pending)} to run")
-    tasks = [(job, folder, root, store.pair_cache(job)) for _, job, _ in pending]
+    tasks = [(job, folder, root, store.pair_cache(job), snapshots) for _, job, _ in pending]
     # one job (the asset that changed) runs here: starting a pool costs seconds
     here = jobs == 1 or len(tasks) == 1
     outcomes = (
@@ -475,6 +489,16 @@ class _Results:
             return summary
         self.changed = True
         return load_result(key, self.digests, self.cache_dir)
+
+    def with_pictures(self, key: str, cached: Mapping[str, Any]) -> Mapping[str, Any] | None:
+        """A cached failing result with what its pictures need (its entry, read here), or
+        None: its entry has none, the job runs again."""
+        from meshcol.decomposition.result_cache import load_result
+
+        entry = (
+            cached if isinstance(cached, dict) else load_result(key, self.digests, self.cache_dir)
+        )
+        return entry if isinstance(entry, dict) and "pictures" in entry else None
 
     def reads(self, key: str, cached: Mapping[str, Any]) -> Collection[str]:
         """The files a cached result read (its dependencies, from the index without

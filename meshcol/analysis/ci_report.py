@@ -27,8 +27,9 @@ if TYPE_CHECKING:
 
 __all__ = ["REPORT_KEYS", "CiReport", "CiRun"]
 
-#: The keys of a job's result that hold its report (the run index keeps neither).
-REPORT_KEYS = ("report", "report_text")
+#: The keys of a job's result that the run index does not keep: its report, the report's
+#: text and what its pictures need (``--snapshots``).
+REPORT_KEYS = ("report", "report_text", "pictures")
 #: A value in a report's JSON that stands for text put in after encoding (:func:`_fill`).
 _SLOT = "\x00meshcol-slot-{}\x00"
 

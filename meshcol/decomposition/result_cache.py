@@ -247,7 +247,7 @@ class Summary(Mapping[str, Any]):
             return True
         if key == "error" and self.exit_code != 2:
             return False  # a failed run's summary has its error; no other has one
-        if key in ("report", "report_text"):
+        if key in ("report", "report_text", "pictures"):
             return False  # a summary is what a run keeps of a result but its report
         return key in self.value()
 
