@@ -384,8 +384,6 @@ def run_ci(
         Each failing job's result keeps what its pictures need (``--snapshots``): a
         failing job whose cache entry has none (from a run without) runs again.
     """
-    from meshcol.decomposition.executor import run_each
-
     folder = os.fspath(config.folder)
     if root is None:
         root = os.path.join(folder, config.get("root") or ".")
@@ -415,12 +413,13 @@ def run_ci(
         progress(f"ci: {len(runs)} jobs from the cache, {len(pending)} to run")
     tasks = [(job, folder, root, store.pair_cache(job), snapshots) for _, job, _ in pending]
     # one job (the asset that changed) runs here: starting a pool costs seconds
-    here = jobs == 1 or len(tasks) == 1
-    outcomes = (
-        (run_job(task) for task in tasks)
-        if here
-        else (_outcome(o, tasks) for o in run_each(run_job, tasks, jobs=jobs))
-    )
+    here = jobs == 1 or len(tasks) <= 1
+    if here:
+        outcomes: Iterable[Any] = (run_job(task) for task in tasks)
+    else:
+        from meshcol.decomposition.executor import run_each  # not for a warm run
+
+        outcomes = (_outcome(o, tasks) for o in run_each(run_job, tasks, jobs=jobs))
     for done, (position, result) in enumerate(_numbered(outcomes, here), start=1):
         index, job, key = pending[position]
         runs[index] = CiRun(job, result, cached=False)

@@ -161,10 +161,15 @@ class CiReport:
     docs_url: str | None = None
 
     @functools.cached_property
+    def exit_codes(self) -> list[int]:
+        """Each run's exit code, in order (each read once: 10,000 of them)."""
+        return [run.exit_code for run in self.runs]
+
+    @functools.cached_property
     def exit_code(self) -> int:
         """2 when a job could not run (unusable input, a path outside the root), else 1
         when a job's policy fails, else 0."""
-        codes = {run.exit_code for run in self.runs}
+        codes = set(self.exit_codes)
         return 2 if 2 in codes else (1 if 1 in codes else 0)
 
     @property
@@ -178,7 +183,7 @@ class CiReport:
 
     @functools.cached_property
     def summary(self) -> dict[str, Any]:
-        codes = [run.exit_code for run in self.runs]
+        codes = self.exit_codes
         by_command: dict[str, int] = {}
         for run in self.runs:
             by_command[run.job.command] = by_command.get(run.job.command, 0) + 1
@@ -244,7 +249,7 @@ class CiReport:
             return dumps_json(self.to_dict())  # a setting spelled like the slot: the long way
         templates: dict[tuple[Any, ...], list[str]] = {}
         items = []
-        for run in self.runs:
+        for run, code in zip(self.runs, self.exit_codes):
             job = run.job
             memo = (job.command, job.kind, job.sections, id(job.settings))
             parts = templates.get(memo)
@@ -252,7 +257,7 @@ class CiReport:
                 parts = templates[memo] = _run_template(run)
             values = {
                 "error": json.dumps(run.result.get("error")),
-                "exit_code": str(run.exit_code),
+                "exit_code": str(code),
                 "input": json.dumps(job.path),
                 "report": run.report_json().replace("\n", "\n" + " " * 6),
             }

@@ -204,8 +204,8 @@ def ci(
     with _with_snapshots(result, snapshots, files) as written:
         for fmt, file in files:
             write_report(written, fmt, file)
-    for run in result.runs:
-        if run.exit_code == 1:
+    for run, code in zip(result.runs, result.exit_codes):
+        if code == 1:
             click.echo(f"meshcol: fail: {run.job.label}: {_run_verdict(run)}", err=True)
     for error in result.errors:
         click.echo(f"meshcol: error: {error}", err=True)

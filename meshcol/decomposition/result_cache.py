@@ -22,7 +22,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from meshcol._version import __version__
-from meshcol.decomposition.cache import read_bytes, write_bytes
+from meshcol.decomposition.cache import local_folder, read_bytes, write_bytes
 
 __all__ = [
     "FORMAT_VERSION",
@@ -186,12 +186,28 @@ def _text_name(key: str) -> str:
     return f"results/{key[:2]}/{key}.report.json"
 
 
+def _read_local(path: str) -> bytes | None:
+    """A local entry's bytes through the guarded read (:func:`meshcol.io.safe_read.
+    read_input`: a regular file under the cap), None when it is absent or not one."""
+    from meshcol.errors import MeshcolError
+    from meshcol.io.safe_read import read_input
+
+    try:
+        return read_input(path, "mesh")
+    except (OSError, MeshcolError):
+        return None
+
+
 def load_text(key: str, cache_dir: str | os.PathLike[str] | None = None) -> str | None:
     """The report text stored with the entry ``key`` (:func:`store_result`), None when
     there is none (an entry of an older build) or it is unreadable. A report of 10,000 cached
     jobs is these texts joined: nothing decoded, nothing encoded again. The caller has
     checked the entry (its index line or :func:`load_result`)."""
-    data = read_bytes(_text_name(key), cache_dir)
+    local = local_folder(cache_dir) if cache_dir is not None else None
+    if local is not None:
+        data = _read_local(os.path.join(local, _text_name(key)))  # as read_bytes, no pathlib
+    else:
+        data = read_bytes(_text_name(key), cache_dir)
     if data is None:
         return None
     try:
