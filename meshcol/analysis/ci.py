@@ -22,9 +22,9 @@ from collections.abc import Callable, Collection, Iterable, Iterator, Mapping, S
 from dataclasses import dataclass, field
 from typing import Any
 
-from meshcol.analysis.ci_report import CiReport, CiRun
+from meshcol.analysis.ci_report import REPORT_KEYS, CiReport, CiRun
 from meshcol.errors import MeshcolError
-from meshcol.io.config import Config, ConfigError, Resolved, resolve
+from meshcol.io.config import Config, ConfigError, Resolved, resolve_all
 
 __all__ = [
     "Job",
@@ -158,8 +158,9 @@ def plan(
     jobs = []
     # one check per resolution the files share
     checked: dict[tuple[int, str], tuple[dict[str, Any], tuple[str, ...]]] = {}
-    for path in files if files is not None else config.files():
-        for resolved in resolve(config, path, overrides, shared=True):
+    listed = files if files is not None else config.files()
+    for path, resolutions in resolve_all(config, listed, overrides):
+        for resolved in resolutions:
             for command in resolved.commands:
                 memo = (id(resolved.values), command)
                 if memo not in checked:
@@ -322,20 +323,28 @@ def _working_folder(folder: str) -> Iterator[None]:
         os.chdir(before)
 
 
-def run_job(task: tuple[Job, str, str | None, Any]) -> dict[str, Any]:
-    """One job in this process (a worker's entry): ``(job, folder, root, pair_cache)``
-    (the last None, or a check's :class:`~meshcol.analysis.pair_cache.PairCache`). Returns
-    its result as JSON values (the report, its CI suite, the exit code) and ``reads``, every
-    file its input named; an unusable input is ``{"error": message}``."""
+def run_job(task: tuple[Job, str, str | None, Any, bool]) -> dict[str, Any]:
+    """One job in this process (a worker's entry): ``(job, folder, root, pair_cache,
+    pictures)`` (``pair_cache`` None, or a check's :class:`~meshcol.analysis.pair_cache.
+    PairCache`). Returns its result as JSON values (the report, its CI suite, the exit code)
+    and ``reads``, every file its input named; with ``pictures``, a failing job's result
+    keeps what its pictures need (:func:`meshcol.analysis.snapshots.pictures_data`).
+    An unusable input is ``{"error": message}``."""
     from meshcol.io.paths import confined_to, recording_reads
 
-    job, folder, root, pair_cache = task
+    job, folder, root, pair_cache, pictures = task
     with _working_folder(folder), confined_to(root), recording_reads() as reads:
         try:
             report = _execute(job, folder, pair_cache)
+            result = CiRun.result_of(report)
+            if pictures and result["exit_code"] == 1:
+                from meshcol.analysis.snapshots import pictures_data
+
+                robot = _robot(job.settings, folder)
+                shape = job.settings["shape"]
+                result["pictures"] = pictures_data(job.command, job.path, shape, report, robot)
         except MeshcolError as exc:
             return {"error": str(exc), "reads": []}
-        result = CiRun.result_of(report)
     result["reads"] = sorted({_rel(folder, path) for path in reads})
     return result
 
@@ -354,6 +363,7 @@ def run_ci(
     use_cache: bool = True,
     jobs: int = 1,
     progress: Callable[[str], None] | None = None,
+    snapshots: bool = False,
 ) -> CiReport:
     """Run every job of ``config`` (:func:`plan`) and gather one report.
 
@@ -370,9 +380,10 @@ def run_ci(
         The store (default the config's ``cache-dir``, else the user cache).
     use_cache : bool
         Look results up and store them (``--no-cache``: neither).
+    snapshots : bool
+        Each failing job's result keeps what its pictures need (``--snapshots``): a
+        failing job whose cache entry has none (from a run without) runs again.
     """
-    from meshcol.decomposition.executor import run_each
-
     folder = os.fspath(config.folder)
     if root is None:
         root = os.path.join(folder, config.get("root") or ".")
@@ -382,33 +393,40 @@ def run_ci(
     runs: dict[int, CiRun] = {}
     pending: list[tuple[int, Job, str]] = []
     skipped = 0
+    keys: dict[int, str] = {}
     for index, job in enumerate(plan(config, overrides)):
-        key = store.key(job)
+        # without the cache no key is needed: no file of the repository is read for one
+        key = keys[index] = store.key(job) if store.enabled else ""
         cached = store.look_up(key)
-        if changed is not None and not _touched(job, changed, cached, folder):
+        reads = None if cached is None else store.reads(key, cached)
+        if changed is not None and not _touched(job, changed, reads, folder):
             skipped += 1
             continue
+        if cached is not None and snapshots and cached["exit_code"] == 1:
+            cached = store.with_pictures(key, cached)
         if cached is not None:
-            runs[index] = CiRun(job, cached, cached=True, fetch=store.fetcher(key))
+            fetch, text = store.fetchers(key)
+            runs[index] = CiRun(job, cached, cached=True, fetch=fetch, fetch_text=text)
         else:
             pending.append((index, job, key))
     if progress is not None and pending:
         progress(f"ci: {len(runs)} jobs from the cache, {len(pending)} to run")
-    tasks = [(job, folder, root, store.pair_cache(job)) for _, job, _ in pending]
+    tasks = [(job, folder, root, store.pair_cache(job), snapshots) for _, job, _ in pending]
     # one job (the asset that changed) runs here: starting a pool costs seconds
-    here = jobs == 1 or len(tasks) == 1
-    outcomes = (
-        (run_job(task) for task in tasks)
-        if here
-        else (_outcome(o, tasks) for o in run_each(run_job, tasks, jobs=jobs))
-    )
+    here = jobs == 1 or len(tasks) <= 1
+    if here:
+        outcomes: Iterable[Any] = (run_job(task) for task in tasks)
+    else:
+        from meshcol.decomposition.executor import run_each  # not for a warm run
+
+        outcomes = (_outcome(o, tasks) for o in run_each(run_job, tasks, jobs=jobs))
     for done, (position, result) in enumerate(_numbered(outcomes, here), start=1):
         index, job, key = pending[position]
         runs[index] = CiRun(job, result, cached=False)
         store.keep(key, job, result)
         if progress is not None:
             progress(f"ci: {done}/{len(pending)} jobs")
-    store.write_index(runs.values())
+    store.write_index((runs[i], keys[i]) for i in sorted(runs))
     return CiReport(
         runs=tuple(runs[i] for i in sorted(runs)),
         config=config.path,
@@ -439,15 +457,13 @@ class _Results:
         self.digests = Digests(self.folder, index.get("stats"), index.get("written_ns", 0))
         self.result_key = result_key
         self.index = load_index(index, self.digests)
+        entries = index.get("entries", {})
+        self.depends = {key: entries[key]["depends"] for key in self.index}
         self.changed = False
-        self._keys: dict[int, str] = {}
         self._settings: dict[int, str] = {}
 
     def key(self, job: Job) -> str:
         """The job's cache key (the settings' part once per settings shared by jobs)."""
-        known = self._keys.get(id(job))
-        if known is not None:
-            return known
         shared = self._settings.get(id(job.settings))
         if shared is None:
             shared = self.result_key(job.command, dict(job.settings), "")
@@ -455,27 +471,49 @@ class _Results:
         parts = [shared, job.path, self.digests(job.path)]
         for extra in job.extra_files:
             parts += [_rel(self.folder, extra), self.digests(extra)]
-        key = hashlib.sha256("\0".join(parts).encode()).hexdigest()
-        self._keys[id(job)] = key
-        return key
+        return hashlib.sha256("\0".join(parts).encode()).hexdigest()
 
     def pair_cache(self, job: Job) -> Any:
         """The job's pair cache (:func:`job_pair_cache`), None without a cache."""
         return job_pair_cache(job, self.cache_dir) if self.enabled else None
 
-    def look_up(self, key: str) -> dict[str, Any] | None:
+    def look_up(self, key: str) -> Mapping[str, Any] | None:
         """What the run keeps of a cached result (the index's summary, else the entry)."""
         from meshcol.decomposition.result_cache import load_result
 
         if not self.enabled:
             return None
-        if key in self.index:
-            return dict(self.index[key])
+        summary = self.index.get(key)
+        if summary is not None:
+            return summary
         self.changed = True
         return load_result(key, self.digests, self.cache_dir)
 
-    def fetcher(self, key: str) -> Callable[[], dict[str, Any] | None]:
-        return functools.partial(self._fetch, key)
+    def with_pictures(self, key: str, cached: Mapping[str, Any]) -> Mapping[str, Any] | None:
+        """A cached failing result with what its pictures need (its entry, read here), or
+        None: its entry has none, the job runs again."""
+        from meshcol.decomposition.result_cache import load_result
+
+        entry = (
+            cached if isinstance(cached, dict) else load_result(key, self.digests, self.cache_dir)
+        )
+        return entry if isinstance(entry, dict) and "pictures" in entry else None
+
+    def reads(self, key: str, cached: Mapping[str, Any]) -> Collection[str]:
+        """The files a cached result read (its dependencies, from the index without
+        decoding its summary)."""
+        depends = self.depends.get(key)
+        return list(cached.get("reads", [])) if depends is None else depends.keys()
+
+    def fetchers(
+        self, key: str
+    ) -> tuple[Callable[[], dict[str, Any] | None], Callable[[], str | None]]:
+        """What reads the entry's result, and its report's text, when a format needs them."""
+        from meshcol.decomposition.result_cache import load_text
+
+        return functools.partial(self._fetch, key), functools.partial(
+            load_text, key, self.cache_dir
+        )
 
     def _fetch(self, key: str) -> dict[str, Any] | None:
         from meshcol.decomposition.result_cache import load_result
@@ -483,7 +521,7 @@ class _Results:
         return load_result(key, self.digests, self.cache_dir)
 
     def _depends(self, job: Job, result: Mapping[str, Any]) -> dict[str, str]:
-        depends = {path: self.digests(path) for path in result.get("reads", [])}
+        depends = {path: self.digests(path) for path in result["reads"]}
         for extra in job.extra_files:
             depends[_rel(self.folder, extra)] = self.digests(extra)
         return depends
@@ -492,18 +530,27 @@ class _Results:
         from meshcol.decomposition.result_cache import store_result
 
         if self.enabled and "error" not in result:
-            store_result(key, result, self._depends(job, result), self.cache_dir)
+            entry = {k: v for k, v in result.items() if k != "report_text"}
+            text = result.get("report_text")
+            store_result(key, entry, self._depends(job, result), self.cache_dir, text)
 
-    def write_index(self, runs: Iterable[CiRun]) -> None:
+    def write_index(self, runs: Iterable[tuple[CiRun, str]]) -> None:
         from meshcol.decomposition.result_cache import store_index
 
         if not self.enabled or not self.changed:
             return  # every job came from the index, whose files were unchanged
         entries = {}
-        for run in runs:
-            if "error" not in run.result:
-                summary = {k: v for k, v in run.result.items() if k != "report"}
-                entries[self.key(run.job)] = (summary, self._depends(run.job, run.result))
+        for run, key in runs:
+            if "error" in run.result:
+                continue
+            summary: Mapping[str, Any] = run.result
+            if not run.cached and "report" in summary:  # a Summary has no report
+                summary = {k: v for k, v in summary.items() if k not in REPORT_KEYS}
+            depends = self.depends.get(key) if run.cached else None
+            entries[key] = (
+                summary,
+                self._depends(run.job, summary) if depends is None else depends,
+            )
         store_index(self.name, entries, self.digests.stats(), self.cache_dir)
 
 
@@ -511,11 +558,11 @@ def job_pair_cache(job: Job, cache_dir: Any) -> Any:
     """Where a check job keeps its pairs' answers (:mod:`meshcol.analysis.pair_cache`): the
     store ``cache_dir`` (as :func:`result_store` gives it), under the scene's path and the
     job's settings; None for the other commands."""
+    if job.command != "check":
+        return None  # and no numpy imported for it
     from meshcol.analysis.pair_cache import PairCache
     from meshcol.decomposition.result_cache import result_key
 
-    if job.command != "check":
-        return None
     return PairCache(cache_dir, f"{job.path}\0{result_key(job.command, dict(job.settings), '')}")
 
 
@@ -539,15 +586,17 @@ def _rel(folder: str, path: str) -> str:
     return path if relative.startswith("..") else relative.replace(os.sep, "/")
 
 
-def _touched(job: Job, changed: Collection[str], cached: Any, folder: str) -> bool:
+def _touched(
+    job: Job, changed: Collection[str], reads: Collection[str] | None, folder: str
+) -> bool:
     """Whether ``job`` must run under ``--changed-since``: its file changed, or a file its
-    last run read (per the cache, a miss runs), or a baseline or target file."""
+    last run read (``reads``, per the cache; None: a miss, which runs when a scene's), or a
+    baseline or target file."""
     if job.path in changed or any(_rel(folder, e) in changed for e in job.extra_files):
         return True
-    if cached is None:
+    if reads is None:
         return job.kind == "scenes"  # a scene's meshes are unknown without a cached run
-    reads = set(cached.get("reads", []))
-    return not reads.isdisjoint(changed)
+    return any(path in changed for path in reads)
 
 
 def _outcome(outcome: Any, tasks: Sequence[Any]) -> tuple[int, dict[str, Any]]:

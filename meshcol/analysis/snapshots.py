@@ -20,7 +20,7 @@ from typing import Any
 
 from meshcol.io.snapshots import Shot, file_name, render_shots
 
-__all__ = ["SnapshotReport", "shots_of", "with_snapshots"]
+__all__ = ["SnapshotReport", "pictures_data", "shots_of", "with_snapshots"]
 
 
 def _check_shots(report: Any) -> list[tuple[str, Shot]]:
@@ -177,3 +177,33 @@ def with_snapshots(
             target = os.path.join(os.path.abspath(folder), shot.name)
             links[case] = os.path.relpath(target, base).replace(os.sep, "/")
     return SnapshotReport(report, links)
+
+
+def _page(command: str, path: str, shape: str, report: Any, robot: Any) -> Any:
+    """The review page of one input's ``command`` run, whose rows the pictures draw."""
+    from meshcol.analysis import review
+
+    if command == "check":
+        return review.check_page(report, [path], shape, {}, robot)
+    pages = {"inspect": review.inspect_page, "hull": review.hull_page, "fit": review.fit_page}
+    return pages[command](report, [path], robot)
+
+
+def pictures_data(command: str, path: str, shape: str, report: Any, robot: Any) -> dict:
+    """What the pictures of a report's failing cases need, as JSON values: ``shots``
+    (``[case, shot fields]`` per failing case, :func:`shots_of`; names are given when
+    drawn) and ``page`` (:meth:`meshcol.io.snapshots.ShotPage.to_data` of its review page,
+    None without a shot). For one input ``path`` of ``command`` (collider ``shape``, the
+    robot's options ``robot``), where it ran: the review page reads the input."""
+    from meshcol.io.snapshots import shot_page
+
+    shots = shots_of(report)
+    page = None
+    if shots:
+        page = shot_page(_page(command, path, shape, report, robot), [s for _, s in shots])
+    listed = [
+        [case, {"bodies": list(s.bodies), "title": s.title, "caption": s.caption,
+                "outline": s.outline}]
+        for case, s in shots
+    ]  # fmt: skip
+    return {"shots": listed, "page": None if page is None else page.to_data()}

@@ -197,14 +197,15 @@ def ci(
             use_cache=not no_cache,
             jobs=workers,
             progress=progress,
+            snapshots=snapshots is not None,
         )
     finally:
         progress.done()
-    with _with_snapshots(result, snapshots, files, config, (cache_dir, no_cache)) as written:
+    with _with_snapshots(result, snapshots, files) as written:
         for fmt, file in files:
             write_report(written, fmt, file)
-    for run in result.runs:
-        if run.exit_code == 1:
+    for run, code in zip(result.runs, result.exit_codes):
+        if code == 1:
             click.echo(f"meshcol: fail: {run.job.label}: {_run_verdict(run)}", err=True)
     for error in result.errors:
         click.echo(f"meshcol: error: {error}", err=True)
@@ -215,11 +216,7 @@ def ci(
 
 @contextlib.contextmanager
 def _with_snapshots(
-    result: Any,
-    folder: str | None,
-    files: list[tuple[str, str | None]],
-    config: Any,
-    cache: tuple[str | None, bool],
+    result: Any, folder: str | None, files: list[tuple[str, str | None]]
 ) -> Iterator[Any]:
     """The report to write: ``result``, or with ``--snapshots`` the report whose cases link
     to their pictures, drawn into a staged folder that becomes ``folder`` with the reports
@@ -228,23 +225,14 @@ def _with_snapshots(
     if folder is None:
         yield result
         return
-    from meshcol.analysis.ci import job_pair_cache, result_store
     from meshcol.analysis.ci_snapshots import ci_snapshots
     from meshcol.io.outputs import staged_folder
     from meshcol.io.paths import display_path
 
-    cache_dir, no_cache = cache
-    store = result_store(config, cache_dir)
     markdown = [file for fmt, file in files if fmt == "markdown" and file is not None]
     link_from = os.path.dirname(os.path.abspath(markdown[0])) if markdown else None
-
-    def pair_cache(job: Any) -> Any:
-        return None if no_cache else job_pair_cache(job, store)
-
     with staged_folder(folder) as stage:
-        written = ci_snapshots(
-            result, os.fspath(config.folder), stage, folder, link_from, pair_cache
-        )
+        written = ci_snapshots(result, stage, folder, link_from)
         yield written
     count = len(written.snapshots)
     click.echo(f"meshcol: snapshots: {count} in {display_path(folder)}", err=True)

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -31,8 +31,10 @@ __all__ = [
     "WITNESS_COLOR",
     "NORMAL_COLOR",
     "Shot",
+    "ShotPage",
     "pillow",
     "render_shots",
+    "shot_page",
 ]
 
 #: The colours of the bodies a picture is about, in the row's order (red, blue).
@@ -203,8 +205,19 @@ def _own_meshes(meshes: Sequence[Mapping[str, Any]], row: Mapping[str, Any]) -> 
     return posed or [dict(m) for m in placed]
 
 
-def _draw_row(page: ReviewPage, row: Mapping[str, Any], shot: Shot, path: str) -> None:
-    PIL = pillow()
+@dataclass(frozen=True)
+class _Layout:
+    """What a picture of one row draws: the row's bodies (their meshes, posed), the lines
+    over them, the witness points and the camera that frames them."""
+
+    ids: list[int]
+    own: list[tuple[dict, np.ndarray]]
+    lines: list[Mapping[str, Any]]
+    points: np.ndarray
+    camera: Camera
+
+
+def _layout(page: Any, row: Mapping[str, Any], shot: Shot) -> _Layout:
     ids = list(row["bodies"])
     meshes = page.meshes()
     own = [(m, _world(m)) for m in _own_meshes(meshes, row)]
@@ -221,12 +234,26 @@ def _draw_row(page: ReviewPage, row: Mapping[str, Any], shot: Shot, path: str) -
     by_body = [[t for m, t in own if m["body"] == i] for i in ids]
     low, high = _frame(by_body, points, [line["p"] for line in lines])
     view = view_across(row["normal"], _smaller_side(by_body))
-    camera = Camera(low, high, WIDTH, HEIGHT, view_from=view)
-    image = PIL.Image.fromarray(_paint(meshes, ids, own, camera).pixels, "RGB")
+    return _Layout(ids, own, lines, points, Camera(low, high, WIDTH, HEIGHT, view_from=view))
+
+
+def _draw_row(page: Any, row: Mapping[str, Any], shot: Shot, path: str) -> None:
+    PIL = pillow()
+    layout = _layout(page, row, shot)
+    camera = layout.camera
+    raster = _paint(page.meshes(), layout.ids, layout.own, camera)
+    image = PIL.Image.fromarray(raster.pixels, "RGB")
     draw = PIL.ImageDraw.Draw(image)
-    _marks(draw, camera, lines, points, row["normal"])
-    _caption(draw, shot, row, page, bool(len(points)))
+    _marks(draw, camera, layout.lines, layout.points, row["normal"])
+    _caption(draw, shot, row, page, bool(len(layout.points)))
     image.save(path, format="PNG", optimize=False)
+
+
+def _near(mesh: Mapping[str, Any], camera: Camera) -> bool:
+    """Whether :func:`_paint` draws any triangle of ``mesh`` as context of ``camera``."""
+    tris = _world(mesh)
+    near = np.all((tris.max(axis=1) >= camera.low) & (tris.min(axis=1) <= camera.high), axis=1)
+    return bool(near.any())
 
 
 def _feature_edges(mesh: Mapping[str, Any]) -> np.ndarray:
@@ -280,9 +307,7 @@ def _arrow(draw: Any, camera: Camera, origin: np.ndarray, normal: np.ndarray) ->
     draw.polygon(head, fill=color)
 
 
-def _caption(
-    draw: Any, shot: Shot, row: Mapping[str, Any], page: ReviewPage, witnesses: bool
-) -> None:
+def _caption(draw: Any, shot: Shot, row: Mapping[str, Any], page: Any, witnesses: bool) -> None:
     big, small = _font(18), _font(14)
     lines = [(shot.title, big, (0, 0, 0))]
     label = shot.caption or row["label"]
@@ -303,20 +328,122 @@ def _caption(
     draw.text((10, HEIGHT - 22), legend[:120], fill=(90, 90, 90), font=small)
 
 
-def render_shots(page: ReviewPage, shots: Sequence[Shot], folder: str) -> dict[str, str]:
-    """Draw each shot whose bodies are a row of ``page`` into ``folder``; returns shot name
-    -> file path. A shot whose bodies are no row of the page is skipped."""
-    pillow()
+def _shot_rows(page: Any, shots: Sequence[Shot]) -> Iterator[tuple[Shot, Mapping[str, Any]]]:
+    """Each shot whose bodies are a row of ``page`` (either order), and that row."""
     rows: dict[tuple[str, ...], Mapping[str, Any]] = {}
     for row in page.rows():
         key = tuple(page.bodies[i] for i in row["bodies"])
         rows.setdefault(key, row)
-    written: dict[str, str] = {}
     for shot in shots:
         found = rows.get(shot.bodies) or rows.get(tuple(reversed(shot.bodies)))
-        if found is None:
-            continue
+        if found is not None:
+            yield shot, found
+
+
+def render_shots(page: ReviewPage | ShotPage, shots: Sequence[Shot], folder: str) -> dict[str, str]:
+    """Draw each shot whose bodies are a row of ``page`` (a review page, or the part of one
+    :func:`shot_page` keeps) into ``folder``; returns shot name -> file path. A shot whose
+    bodies are no row of the page is skipped."""
+    pillow()
+    written: dict[str, str] = {}
+    for shot, row in _shot_rows(page, shots):
         path = os.path.join(folder, shot.name)
-        _draw_row(page, found, shot, path)
+        _draw_row(page, row, shot, path)
         written[shot.name] = path
     return written
+
+
+# --- what pictures need of a page, kept apart from it -------------------------------------------
+
+#: The fields of meshes, lines and rows that are arrays (float64; ``faces`` int64).
+_ARRAYS = ("vertices", "faces", "pose", "p", "points", "normal")
+
+
+@dataclass(frozen=True)
+class ShotPage:
+    """The part of a review page that some shots draw, as :func:`render_shots` reads a page
+    (``command``, ``bodies``, :meth:`rows`, :meth:`meshes`, :meth:`lines`): the shots' rows,
+    every mesh of their bodies, the other meshes a picture shows behind them (those with a
+    triangle in its frame) and their bodies' lines. The pictures drawn from it are those
+    drawn from the page, pixel for pixel; it is JSON values (:meth:`to_data`), so a job's
+    cached result keeps it and ``meshcol ci --snapshots`` draws without running the job."""
+
+    command: str
+    bodies: tuple[str, ...]
+    kept_rows: tuple[Mapping[str, Any], ...]
+    kept_meshes: tuple[Mapping[str, Any], ...]
+    kept_lines: tuple[Mapping[str, Any], ...]
+
+    def rows(self) -> list[Mapping[str, Any]]:
+        return list(self.kept_rows)
+
+    def meshes(self) -> list[Mapping[str, Any]]:
+        return list(self.kept_meshes)
+
+    def lines(self) -> list[Mapping[str, Any]]:
+        return list(self.kept_lines)
+
+    def to_data(self) -> dict[str, Any]:
+        """JSON values (arrays as nested lists: float64 round-trips exactly)."""
+        return {
+            "command": self.command,
+            "bodies": list(self.bodies),
+            "rows": [{**_plain(r), "cells": []} for r in self.kept_rows],  # not drawn
+            "meshes": [_plain(m) for m in self.kept_meshes],
+            "lines": [_plain(line) for line in self.kept_lines],
+        }
+
+    @classmethod
+    def from_data(cls, data: Mapping[str, Any]) -> ShotPage:
+        """The page :meth:`to_data` gave. Raises KeyError, TypeError or ValueError on
+        anything else."""
+        return cls(
+            str(data["command"]),
+            tuple(str(b) for b in data["bodies"]),
+            tuple(
+                {**_arrays(r), "bodies": tuple(int(i) for i in r["bodies"])} for r in data["rows"]
+            ),
+            tuple(_arrays(m) for m in data["meshes"]),
+            tuple(_arrays(line) for line in data["lines"]),
+        )
+
+
+def _plain(item: Mapping[str, Any]) -> dict[str, Any]:
+    return {
+        k: (np.asarray(v).tolist() if k in _ARRAYS and v is not None else v)
+        for k, v in item.items()
+    }
+
+
+def _arrays(item: Mapping[str, Any]) -> dict[str, Any]:
+    out = dict(item)
+    for key in _ARRAYS:
+        if out.get(key) is not None:
+            out[key] = np.asarray(out[key], dtype=np.int64 if key == "faces" else np.float64)
+    return out
+
+
+def shot_page(page: ReviewPage, shots: Sequence[Shot]) -> ShotPage:
+    """What drawing ``shots`` needs of ``page`` (:class:`ShotPage`): a page of 3,000 bodies
+    is kept as the few a failing pair's picture shows."""
+    meshes = page.meshes()
+    rows: dict[int, Mapping[str, Any]] = {}
+    kept: set[int] = set()
+    bodies: set[int] = set()
+    for shot, row in _shot_rows(page, shots):
+        rows.setdefault(id(row), row)
+        layout = _layout(page, row, shot)
+        bodies.update(layout.ids)
+        group = row.get("group")
+        for n, mesh in enumerate(meshes):
+            own = mesh["body"] in layout.ids or bool(group and mesh["group"] == group)
+            # another body's mesh: kept when the picture shows some of it behind
+            if own or (mesh["group"] == "meshes" and n not in kept and _near(mesh, layout.camera)):
+                kept.add(n)
+    return ShotPage(
+        page.command,
+        tuple(page.bodies),
+        tuple(rows.values()),
+        tuple(meshes[n] for n in sorted(kept)),
+        tuple(line for line in page.lines() if line["body"] in bodies),
+    )

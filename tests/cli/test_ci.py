@@ -190,6 +190,17 @@ def test_changed_since_runs_what_a_commit_touched(tmp_path, monkeypatch):
         and report["settings"]["changed_since"] == "HEAD~1"
     )
     assert code == 1  # the level still penetrates
+    # the same selection from the run index (read above) and from the entries one by one
+    index = Path(cache) / "results" / "index"
+    assert any(index.iterdir())
+    shutil.rmtree(index)
+    _, again, _ = run("ci", "--changed-since", "HEAD~1", "--report", "-", "--cache-dir", cache)
+    assert sorted((r["command"], r["input"]) for r in json.loads(again)["runs"]) == ran
+    # without the cache a scene's meshes are unknown: every scene runs, no asset unchanged
+    _, cold, _ = run("ci", "--changed-since", "HEAD~1", "--report", "-", "--no-cache")
+    assert sorted((r["command"], r["input"]) for r in json.loads(cold)["runs"]) == sorted(
+        [*ran, ("check", "robots/arm/arm.urdf")]
+    )
     code, _, err = run("ci", "--changed-since", "no-such-ref")
     assert code == 2 and "--changed-since no-such-ref" in err
 

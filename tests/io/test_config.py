@@ -176,3 +176,34 @@ def test_every_key_is_documented():
     documented = set(re.findall(r"^\| `([a-z.\-]+)` \|", page, re.M))
     top = set(schema["properties"])
     assert top | {"glob", "path"} | set(setting_keys()) <= documented
+
+
+def test_resolve_all_gives_each_file_what_resolve_gives_it(tmp_path):
+    """The plan's fast path (one pattern per section and one for them all, one resolution
+    per set of sections) against ``resolve`` file by file, with overlapping sections, a
+    section's own ``exclude``, files no section matches, a config-level exclude and odd
+    spellings of a path."""
+    from meshcol.io.config import resolve_all
+
+    text = GOOD.replace(
+        'glob = ["props/hard/*.obj"]',
+        'glob = ["props/hard/*.obj", "extra/*.stl"]\nexclude = ["props/hard/skip*.obj"]',
+    )
+    config = load_config(write(tmp_path / "meshcol.toml", text))
+    names = [
+        "props/a.obj", "props/hard/b.obj", "props/hard/skip1.obj", "props/x/y/c.obj",
+        "extra/d.stl", "extra/e.obj", "level.json", "readme.md", "build/props/f.obj",
+        "./props/a.obj", "props//hard/b.obj",
+    ]  # fmt: skip
+    for name in names:
+        write(tmp_path / name.replace("//", "/"), "x")
+    overrides = {"shape": ("convex", "flag --shape")}
+    fast = dict(resolve_all(config, names, overrides))
+    for name in names:
+        slow = resolve(config, name, overrides, shared=True)
+        assert fast.get(name, []) == slow, name
+        assert all(a is b for a, b in zip(fast.get(name, []), slow))  # the shared objects
+    assert "readme.md" not in fast and "props/hard/skip1.obj" in fast
+    assert [s.index for s in config.sections if s.matches("props/hard/skip1.obj")] == [0]
+    listed = list(config.files())
+    assert "build/props/f.obj" not in listed and "props/hard/b.obj" in listed

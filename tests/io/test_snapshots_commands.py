@@ -174,3 +174,63 @@ def test_ci_snapshots_every_failing_job_linked_from_the_markdown(tmp_path, monke
     code, _, err = run("ci", "--cache-dir", cache, "--snapshots", "pics", "--report", "pr2.json")
     assert code != 0 and "No space left on device" in err
     assert not Path("pics").exists()
+
+
+def test_ci_snapshots_draw_from_the_cached_jobs_without_running_them(tmp_path, monkeypatch):
+    """A failing job keeps what its pictures need (the part of its review page they draw)
+    with its result: pictures of cached jobs come without running them again, the same
+    bytes; a job cached by a run without --snapshots runs once more, and only such a job."""
+    pytest.importorskip("yourdfpy", reason="the test repository's robot needs yourdfpy")
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "cli"))
+    from ci_repo import make_repo
+
+    import meshcol.analysis.ci as ci
+
+    root = make_repo(tmp_path / "repo")
+    monkeypatch.chdir(root)
+    executed: list[str] = []
+    execute = ci._execute
+
+    def counted(job, folder, pair_cache=None):
+        executed.append(job.label)
+        return execute(job, folder, pair_cache)
+
+    monkeypatch.setattr(ci, "_execute", counted)
+    cache = str(tmp_path / "cache")
+    assert run("ci", "--cache-dir", cache)[0] == 1  # cached without pictures
+    total = len(executed)
+    assert run("ci", "--cache-dir", cache, "--snapshots", "one")[0] == 1
+    failing = executed[total:]  # the failing jobs only, once each
+    assert sorted(failing) == ["check levels/level/scene.json", "inspect props/hard/open.obj"]
+    del executed[:]
+    assert run("ci", "--cache-dir", cache, "--snapshots", "two")[0] == 1
+    assert executed == []  # drawn from the cache
+    one, two = sorted(Path("one").iterdir()), sorted(Path("two").iterdir())
+    assert [p.name for p in one] == [p.name for p in two] and len(one) >= 2
+    assert all(a.read_bytes() == b.read_bytes() for a, b in zip(one, two))
+
+
+def test_a_shot_page_draws_what_the_review_page_draws(tmp_path):
+    """The part of a page the shots need, through JSON, gives the page's pictures pixel for
+    pixel, and keeps fewer meshes than the page when a picture shows part of a scene."""
+    from meshcol.analysis.check import check
+    from meshcol.analysis.review import check_page
+    from meshcol.analysis.snapshots import shots_of
+    from meshcol.io.snapshots import ShotPage, render_shots, shot_page
+
+    scene = str(SAMPLES / "level" / "scene.json")
+    report = check([scene], fail_on="contact")
+    page = check_page(report, [scene], "hull", {})
+    shots = [shot for _, shot in shots_of(report)][:2]
+    assert len(shots) == 2
+    kept = ShotPage.from_data(json.loads(json.dumps(shot_page(page, shots).to_data())))
+    assert len(kept.meshes()) < len(page.meshes())
+    (tmp_path / "page").mkdir()
+    (tmp_path / "kept").mkdir()
+    whole = render_shots(page, shots, str(tmp_path / "page"))
+    part = render_shots(kept, shots, str(tmp_path / "kept"))
+    assert list(whole) == list(part) == [shot.name for shot in shots]
+    for name in whole:
+        assert Path(whole[name]).read_bytes() == Path(part[name]).read_bytes(), name
