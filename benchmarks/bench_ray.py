@@ -15,9 +15,12 @@ decompose itself (Ray vs local on the corpus meshes): ``bench_decompose.py --onl
 user types it: ``meshcol decompose`` of 3 corpus files (``--jobs 2 --no-cache``, the CoACD
 settings of bench_decompose.py), on the local pool, on a Ray of its own (``--ray-address
 local``: this build's light one), on a Ray that ``ray start --head`` left running (joined,
-found by its address file), and, with ``--compare CMD``, on another build's Ray of its own;
-rounds alternate the order. Wall time, and the CPU time of the command and what it waited
-for (Ray's daemons are not all waited for: wall is the figure here). Outputs compared.
+found by its address file), and, with ``--compare CMD``, on another build's Ray of its own
+and joined; rounds alternate the order. Wall time (the issue's figure); the CPU time of the
+command and what it waited for (Ray's daemons are not all waited for); the CPU time of every
+process it started (sampled every 0.05 s: :class:`TreeCPU`), and of the running cluster's
+processes and workers meanwhile. A run that leaves a process it started behind fails the
+benchmark. Outputs compared.
 
 ``--start-up`` times Ray's start alone, each run a new process: a RayExecutor of its own
 (2 CPUs on 127.0.0.1) started, 4 trivial tasks, closed; this build's light start against
@@ -41,6 +44,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -56,18 +60,82 @@ def _cpu() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
+class TreeCPU:
+    """CPU time (user + system) of every process under some roots, sampled every ``every`` s
+    in a thread: a process's last sample counts, so a process that exits between two samples
+    loses at most ``every`` s of its CPU; one that lives less than ``every`` s may be missed.
+    Processes that leave the tree (orphans of a killed raylet) keep their last sample."""
+
+    def __init__(self, roots: list[int], every: float = 0.05) -> None:
+        import psutil
+
+        self.psutil, self.every = psutil, every
+        self.roots = [psutil.Process(pid) for pid in roots]
+        self.last: dict[tuple[int, float], float] = {}
+        self.first: dict[tuple[int, float], float] = {}
+        self.alive: set[tuple[int, float]] = set()
+        self._stop = threading.Event()
+        self.sample()
+        self.first = dict(self.last)
+        self._thread = threading.Thread(target=self._loop, daemon=True)
+        self._thread.start()
+
+    def sample(self) -> None:
+        alive = set()
+        for root in self.roots:
+            try:
+                tree = [root, *root.children(recursive=True)]
+            except self.psutil.Error:
+                continue
+            for each in tree:
+                try:
+                    key = (each.pid, each.create_time())
+                    times = each.cpu_times()
+                except self.psutil.Error:
+                    continue
+                self.last[key] = times.user + times.system
+                alive.add(key)
+        self.alive = alive
+
+    def _loop(self) -> None:
+        while not self._stop.wait(self.every):
+            self.sample()
+
+    def stop(self) -> float:
+        """CPU s used since this started, by the processes seen."""
+        self._stop.set()
+        self._thread.join()
+        return sum(v - self.first.get(k, 0.0) for k, v in self.last.items())
+
+
 def _decompose(
-    command: list[str], out: Path, extra: list[str], env: dict[str, str]
-) -> tuple[float, float]:
-    """One ``meshcol decompose`` of the ONE_OFF files into ``out``: (wall s, CPU s)."""
+    command: list[str],
+    out: Path,
+    extra: list[str],
+    env: dict[str, str],
+    cluster: list[int] | None = None,
+) -> tuple[float, float, float, float]:
+    """One ``meshcol decompose`` of the ONE_OFF files into ``out``: (wall s, CPU s it waited
+    for, CPU s of every process it started (sampled), CPU s of the ``cluster`` processes and
+    their workers meanwhile (sampled)). Fails if a process it started outlives it."""
     files = [str(CORPUS / name) for name in ONE_OFF]
     args = [*command, "decompose", *files, "-o", str(out), "--no-cache", "--jobs", "2", *COACD]
     cpu, start = _cpu(), time.perf_counter()
-    done = subprocess.run([*args, *extra], capture_output=True, text=True, env=env)
+    nearby = TreeCPU(cluster or [])
+    proc = subprocess.Popen(
+        [*args, *extra], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env
+    )
+    tree = TreeCPU([proc.pid])
+    _, stderr = proc.communicate()
     seconds = time.perf_counter() - start
-    if done.returncode != 0:
-        raise SystemExit(f"{' '.join(args[:2])} failed ({done.returncode}): {done.stderr[-2000:]}")
-    return seconds, _cpu() - cpu
+    tree.sample()
+    left = [pid for pid, _ in tree.alive if pid != proc.pid]
+    started, around = tree.stop(), nearby.stop()
+    if proc.returncode != 0:
+        raise SystemExit(f"{' '.join(args[:2])} failed ({proc.returncode}): {stderr[-2000:]}")
+    if left:
+        raise SystemExit(f"{' '.join(args[:2])} left processes running: {left}")
+    return seconds, _cpu() - cpu, started, around
 
 
 def _ray_head(temp: str, env: dict[str, str]) -> subprocess.Popen:
@@ -130,6 +198,17 @@ def start_up(rounds: int) -> None:
         print(f"{kind:<8} wall {spread(wall[kind])}, CPU (waited for) {spread(cpu[kind])}")
 
 
+def _cluster_pids(temp: str) -> list[int]:
+    """The processes of the ``ray start`` cluster whose files are under ``temp``."""
+    import psutil
+
+    found = []
+    for each in psutil.process_iter(["cmdline"]):
+        if any(temp in arg for arg in each.info["cmdline"] or ()):
+            found.append(each.pid)
+    return found
+
+
 def one_off(rounds: int, compare: str | None) -> None:
     """The one-off command on each executor, a new process each time, alternated."""
     work = Path(tempfile.mkdtemp(prefix="bench_ray_once_"))
@@ -148,29 +227,37 @@ def one_off(rounds: int, compare: str | None) -> None:
     }
     if compare:
         kinds["own Ray (--compare)"] = (compare.split(), ["--executor", "ray"], alone)
+        kinds["joined Ray (--compare)"] = (compare.split(), ["--executor", "ray"], joined)
     head = _ray_head(temp, joined)
-    wall: dict[str, list[float]] = {k: [] for k in kinds}
-    cpu: dict[str, list[float]] = {k: [] for k in kinds}
+    cluster = _cluster_pids(temp)
+    figures = ("wall", "CPU waited for", "CPU started", "CPU cluster")
+    seen: dict[str, dict[str, list[float]]] = {k: {f: [] for f in figures} for k in kinds}
     try:
         _decompose(mine, work / "warm-up", ["--executor", "ray"], joined)  # the workers up
         order = list(kinds)
         for r in range(rounds):
             for kind in order if r % 2 == 0 else order[::-1]:
                 command, extra, env = kinds[kind]
-                seconds, used = _decompose(command, work / f"{kind}-{r}", extra, env)
-                wall[kind].append(seconds)
-                cpu[kind].append(used)
-            print(f"round {r + 1}: " + ", ".join(f"{k} {wall[k][-1]:.2f} s" for k in kinds))
+                out = work / f"{kind}-{r}"
+                values = _decompose(command, out, extra, env, cluster)
+                for figure, value in zip(figures, values, strict=True):
+                    seen[kind][figure].append(value)
+            print(
+                f"round {r + 1} (load {os.getloadavg()[0]:.1f}): "
+                + ", ".join(f"{k} {seen[k]['wall'][-1]:.2f} s" for k in kinds)
+            )
         reference = work / "local pool-0"
         same = all(same_tree(reference, work / f"{k}-{r}") for k in kinds for r in range(rounds))
-        local = wall["local pool"]
+        local = seen["local pool"]["wall"]
         for kind in kinds:
-            ratios = [b / a for a, b in zip(local, wall[kind], strict=True)]
+            ratios = [b / a for a, b in zip(local, seen[kind]["wall"], strict=True)]
             print(
-                f"{kind:<22} wall {spread(wall[kind])}, CPU {spread(cpu[kind])}; / local pool "
-                f"{min(ratios):.2f}-{max(ratios):.2f} (median {statistics.median(ratios):.2f})"
+                f"{kind:<24} / local pool {min(ratios):.2f}-{max(ratios):.2f} "
+                f"(median {statistics.median(ratios):.2f})"
             )
-        print(f"identical outputs: {same}")
+            for figure in figures:
+                print(f"  {figure:<15} {spread(seen[kind][figure])}")
+        print(f"identical outputs: {same}; no process left behind by any run")
     finally:
         for sig in (signal.SIGTERM, signal.SIGKILL):
             try:

@@ -22,7 +22,7 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from typing import Any, Protocol
 
 from meshcol.decomposition.jobs import (
@@ -33,7 +33,14 @@ from meshcol.decomposition.jobs import (
     _SignalGuard,
     worker_env,
 )
-from meshcol.decomposition.ray_start import LIGHT_INIT, OWN_CLUSTER, light_head, running_cluster
+from meshcol.decomposition.ray_start import (
+    LIGHT_INIT,
+    OWN_CLUSTER,
+    in_worker,
+    light_head,
+    running_cluster,
+    task_payload,
+)
 from meshcol.errors import MissingDependencyError
 
 __all__ = ["EXECUTORS", "Executor", "RayExecutor", "check_run", "make_executor", "run_each"]
@@ -387,13 +394,20 @@ def _stop_remaining(processes: Sequence[Any], grace: float = 2.0, bound: float =
     psutil.wait_procs(alive, timeout=bound)
 
 
-def _ray_call(fn: Callable[[Any], Any], task: Any) -> tuple[str, Any]:
+def _ray_call(
+    fn: Callable[[Any], Any], task: Any, env: Mapping[str, str] | None = None
+) -> tuple[str, Any]:
     # Runs in a Ray worker: an error of the task is its outcome (as in the local pool); only a
-    # dead or cancelled worker reaches the driver as a Ray error.
+    # dead or cancelled worker reaches the driver as a Ray error. ``env``: on a cluster, the
+    # task comes pickled, opened once the thread settings are in place (ray_start.in_worker).
+    if env is not None:
+        task = in_worker(env, task)
     return _call(fn, task)
 
 
-def _ray_prepare(prepare: Callable[[], None]) -> None:
+def _ray_prepare(prepare: Callable[[], None], env: Mapping[str, str] | None = None) -> None:
+    if env is not None:
+        in_worker(env)
     try:
         prepare()
     except Exception:  # noqa: BLE001 - the first task meets the same error and reports it
@@ -453,6 +467,7 @@ class RayExecutor:
         self.ray = import_ray(local=address is None or _is_loopback(address))
         self._owned = False
         self._remote: Any = None
+        self._task_env: dict[str, str] | None = None
         self._slots = jobs
         self._inflight: dict[Any, tuple[int, float]] = {}
         # Environment of each task's worker: the local pool's thread settings for ``jobs``
@@ -507,9 +522,10 @@ class RayExecutor:
             cpus = int(ray.cluster_resources().get("CPU", 0))
             self._slots = max(1, cpus)
         options: dict[str, Any] = {"num_cpus": 1, "max_retries": 0}
-        if not (self._owned and self.address is None):
-            # A cluster (or a Ray the caller started): the thread settings go with each task.
-            options["runtime_env"] = {"env_vars": dict(self.env)}
+        # A cluster (or a Ray the caller started): the thread settings go with each task, set
+        # by the task itself. Not a runtime_env: Ray starts new workers for one (seconds each),
+        # never the idle ones the cluster keeps (ray_start.in_worker).
+        self._task_env = None if self._owned and self.address is None else dict(self.env)
         self._remote = ray.remote(_ray_call).options(**options)
         self._prepare_remote = ray.remote(_ray_prepare).options(**options)
 
@@ -541,7 +557,7 @@ class RayExecutor:
             count = self._slots if workers is None else min(workers, self._slots)
             # Fire and forget: each warms a worker (the engine imported) that later tasks reuse.
             for _ in range(count):
-                self._prepare_remote.remote(self.prepare)
+                self._prepare_remote.remote(self.prepare, self._task_env)
         return self
 
     def run(self, tasks: Iterable[Any]) -> Iterator[TaskOutcome]:
@@ -563,7 +579,10 @@ class RayExecutor:
         while True:
             while pending and len(inflight) < self._slots:
                 index, task = pending.pop(0)
-                inflight[self._remote.remote(self.fn, task)] = (index, time.perf_counter())
+                if self._task_env is not None:
+                    task = task_payload(task)
+                ref = self._remote.remote(self.fn, task, self._task_env)
+                inflight[ref] = (index, time.perf_counter())
             if more:
                 item = next(source, None)
                 if item is None:

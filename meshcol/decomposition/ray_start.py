@@ -18,13 +18,22 @@ from __future__ import annotations
 
 import contextlib
 import os
+import pickle
 import socket
+import subprocess
 import sys
 import tempfile
 from collections.abc import Iterator, Mapping
 from typing import Any
 
-__all__ = ["LIGHT_INIT", "OWN_CLUSTER", "light_head", "running_cluster"]
+__all__ = [
+    "LIGHT_INIT",
+    "OWN_CLUSTER",
+    "in_worker",
+    "light_head",
+    "running_cluster",
+    "task_payload",
+]
 
 #: ``--ray-address`` meaning "start a Ray of this run's own" (Ray's own word for it), never
 #: the running one :func:`running_cluster` would find.
@@ -106,13 +115,43 @@ def _is_this_machine(host: str) -> bool:
     return False
 
 
+#: RayParams fields of a light head's agent ports: set, the raylet starts at once; left at 0,
+#: it waits (blocking) until each agent has imported Ray, bound a port and written it in a
+#: file (``WaitForPersistedPort``): a second or more on two busy cores, before any worker.
+AGENT_PORTS = (
+    "metrics_agent_port",
+    "metrics_export_port",
+    "dashboard_agent_listen_port",
+    "runtime_env_agent_port",
+)
+
+
 @contextlib.contextmanager
 def light_head() -> Iterator[None]:
-    """While ``ray.init`` starts a local Ray: without the autoscaler's monitor (a local
-    cluster of a fixed size never scales) and the log monitor (``log_to_driver=False``: no
-    worker log is streamed), two Python processes that import Ray on a machine whose cores
-    the run needs. Ray's parameters are private and ``ray.init`` passes neither: the
-    defaults are changed for the block; if their layout differs, Ray starts as usual."""
+    """While ``ray.init`` starts a local Ray, what a one-off run on this machine does not use
+    is left out, and what it waits for is not waited for:
+
+    - the autoscaler's monitor (a local cluster of a fixed size never scales) and the log
+      monitor (``log_to_driver=False``: no worker log is streamed): two Python processes that
+      import Ray;
+    - the dashboard's head process (its API server: jobs, state, metrics pages), which Ray
+      starts even with ``include_dashboard=False`` and which ``ray.init`` waits for before it
+      starts the raylet;
+    - the raylet's wait for its two agents (:data:`AGENT_PORTS`: free ports are given them).
+
+    Ray's parameters and node are private and ``ray.init`` passes none of this: Ray's
+    defaults are changed for the block only; a part whose layout differs is left as Ray has
+    it (Ray then starts as usual)."""
+    ports = dict(zip(AGENT_PORTS, free_ports(len(AGENT_PORTS)), strict=True))
+    with contextlib.ExitStack() as stack:
+        stack.enter_context(_light_params(ports))
+        stack.enter_context(_no_api_server())
+        stack.enter_context(_light_raylet(ports["dashboard_agent_listen_port"]))
+        yield
+
+
+@contextlib.contextmanager
+def _light_params(ports: Mapping[str, int]) -> Iterator[None]:
     try:
         from ray._private import parameter
 
@@ -124,11 +163,14 @@ def light_head() -> Iterator[None]:
     if "no_monitor" not in fields or "include_log_monitor" not in fields:
         yield
         return
+    known = all(name in fields for name in AGENT_PORTS)
 
     def init(self: Any, *args: Any, **kwargs: Any) -> None:
         kwargs.setdefault("no_monitor", True)
         if kwargs.get("include_log_monitor") is None:
             kwargs["include_log_monitor"] = False
+        if known and all(not kwargs.get(name) for name in AGENT_PORTS):
+            kwargs.update(ports)
         original(self, *args, **kwargs)
 
     parameter.RayParams.__init__ = init  # type: ignore[method-assign]
@@ -136,3 +178,103 @@ def light_head() -> Iterator[None]:
         yield
     finally:
         parameter.RayParams.__init__ = original  # type: ignore[method-assign]
+
+
+@contextlib.contextmanager
+def _no_api_server() -> Iterator[None]:
+    try:
+        from ray._private.node import Node
+
+        original = Node.start_api_server
+    except (ImportError, AttributeError):
+        yield
+        return
+
+    def skipped(self: Any, *args: Any, **kwargs: Any) -> None:
+        return None
+
+    Node.start_api_server = skipped  # type: ignore[method-assign]
+    try:
+        yield
+    finally:
+        Node.start_api_server = original  # type: ignore[method-assign]
+
+
+#: What stands in for the raylet's two agents in a light head (see :func:`_light_raylet`): a
+#: Python without site packages that waits, as Ray's agents do, until the raylet is gone (EOF
+#: on the pipe the raylet gives it as stdin; else its parent's exit) or it is stopped.
+IDLE_AGENT = (
+    "import os, stat, sys, time\n"
+    "parent = os.getppid()\n"
+    "if stat.S_ISFIFO(os.fstat(0).st_mode):\n"
+    "    sys.stdin.buffer.read()\n"
+    "else:\n"
+    "    while os.getppid() == parent:\n"
+    "        time.sleep(1)\n"
+)
+
+#: The raylet's flags of its agents' commands.
+AGENT_COMMANDS = ("--dashboard_agent_command=", "--runtime_env_agent_command=")
+
+
+@contextlib.contextmanager
+def _light_raylet(port: int) -> Iterator[None]:
+    """The raylet of a light head: told the dashboard agent's listen port (Ray gives it to
+    the agent only, and the raylet, told nothing, waits for the agent's port file), with an
+    idle process (:data:`IDLE_AGENT`) for each of its agents. Ray's dashboard agent (metrics,
+    logs and stats for the dashboard) and runtime-env agent (the environments of tasks that
+    name one: meshcol's tasks in a Ray of their own inherit the run's environment) are Python
+    processes that import Ray, about a second of CPU together, while the workers start."""
+    try:
+        from ray._private import ray_constants, services
+
+        original = services.start_ray_process
+        raylet = ray_constants.PROCESS_TYPE_RAYLET
+    except (ImportError, AttributeError):
+        yield
+        return
+    flag = "--dashboard_agent_listen_port"
+    idle = subprocess.list2cmdline([sys.executable, "-S", "-c", IDLE_AGENT])
+
+    def start(command: list[str], process_type: str, *args: Any, **kwargs: Any) -> Any:
+        if process_type == raylet and not any(a.startswith(flag) for a in command):
+            command = [*command, f"{flag}={port}"]
+            command = [
+                next((f"{name}{idle}" for name in AGENT_COMMANDS if a.startswith(name)), a)
+                for a in command
+            ]
+        return original(command, process_type, *args, **kwargs)
+
+    services.start_ray_process = start
+    try:
+        yield
+    finally:
+        services.start_ray_process = original
+
+
+def free_ports(count: int, host: str = "127.0.0.1") -> list[int]:
+    """``count`` distinct ports free on ``host`` now (bound together, then released)."""
+    with contextlib.ExitStack() as stack:
+        sockets = [stack.enter_context(socket.socket()) for _ in range(count)]
+        for each in sockets:
+            each.bind((host, 0))
+        return [each.getsockname()[1] for each in sockets]
+
+
+def task_payload(task: Any) -> bytes:
+    """A task as it goes to a cluster's worker: pickled here, opened by :func:`in_worker` once
+    the thread settings are in place (opening it imports numpy, whose OpenBLAS sizes its
+    thread pool from the environment only then)."""
+    return pickle.dumps(task, protocol=pickle.HIGHEST_PROTOCOL)
+
+
+def in_worker(env: Mapping[str, str], payload: bytes | None = None) -> Any:
+    """In a cluster's worker, before the task: the thread settings of ``env`` (the local
+    pool's, :func:`~meshcol.decomposition.jobs.worker_env`) set in its environment, where the
+    engine's OpenMP runtime and numpy read them as they load; then the task of ``payload``.
+
+    Instead of a ``runtime_env``, for which Ray starts new workers (a Python process that
+    imports Ray: about a second each on two cores), never the idle ones a ``ray start``
+    cluster keeps ready. A worker serves one job (one run), so the settings are this run's."""
+    os.environ.update(env)
+    return None if payload is None else pickle.loads(payload)
