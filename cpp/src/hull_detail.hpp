@@ -5,6 +5,7 @@
 // Private to the core.
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -27,6 +28,9 @@ struct Face {
     Vec3 normal;
     double offset = 0.0;  // dot(normal, x) - offset is the distance of x
     double area2 = 0.0;   // the unnormalised normal's length: twice the area
+    // The plane filter: a point's distance beyond it decides its side exactly (INFINITY:
+    // never, the exact orientation decides).
+    double filter = INFINITY;
     std::vector<Conflict> conflicts;  // the points outside this face (farther than eps)
     int furthest = -1;
     double furthest_distance = 0.0;
@@ -81,17 +85,22 @@ struct Triangulation {
 
 enum class Build { OK, DEGENERATE, FAILED };
 
-/// triangle_normal's case of a sharp first corner (quickhull.cpp).
-Vec3 triangle_normal_at_widest(const Vec3& a, const Vec3& b, const Vec3& c);
+/// triangle_normal's case of a sharp first corner (quickhull.cpp); `bounded` as there.
+Vec3 triangle_normal_at_widest(const Vec3& a, const Vec3& b, const Vec3& c, bool& bounded);
 
 /// The outward normal (b - a) x (c - a), unnormalised, accurate for thin triangles too: the
 /// plain product when the corner at a is not sharp (the sine of its angle at least 1/4: within
-/// a few ulps of the exact one), else taken at the widest corner or compensated.
-inline Vec3 triangle_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
+/// a few ulps of the exact one), else taken at the widest corner or compensated. `bounded`
+/// says the plain product was taken (at a or at the widest corner): then the unit normal's
+/// direction is within 60 ulps of the exact one (the plane filter's premise, quickhull.cpp).
+inline Vec3 triangle_normal(const Vec3& a, const Vec3& b, const Vec3& c, bool& bounded) {
     const Vec3 u = b - a, v = c - a;
     const Vec3 n = cross(u, v);
-    if (16.0 * squared_norm(n) >= squared_norm(u) * squared_norm(v)) return n;
-    return triangle_normal_at_widest(a, b, c);
+    if (16.0 * squared_norm(n) >= squared_norm(u) * squared_norm(v)) {
+        bounded = true;
+        return n;
+    }
+    return triangle_normal_at_widest(a, b, c, bounded);
 }
 
 /// The 3-D hull of the points `subset` of w.p (quickhull.cpp): large inputs first lose their

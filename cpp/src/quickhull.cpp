@@ -55,7 +55,7 @@ Vec3 accurate_cross(const Vec3& a, const Vec3& b, const Vec3& c) {
 // at the corner opposite the longest edge: its rounding error relative to its length is about
 // one ulp over the sine of that corner's angle, small unless the triangle is a cap (three
 // nearly collinear corners), which gets the compensated product.
-Vec3 triangle_normal_at_widest(const Vec3& a, const Vec3& b, const Vec3& c) {
+Vec3 triangle_normal_at_widest(const Vec3& a, const Vec3& b, const Vec3& c, bool& bounded) {
     const double ab = squared_norm(b - a), bc = squared_norm(c - b), ca = squared_norm(a - c);
     const Vec3 *o = &a, *p = &b, *q = &c;  // o: the corner; o p q counter-clockwise
     if (ab >= bc && ab >= ca)
@@ -67,7 +67,8 @@ Vec3 triangle_normal_at_widest(const Vec3& a, const Vec3& b, const Vec3& c) {
     const Vec3 u = *p - *o, v = *q - *o;
     const Vec3 n = cross(u, v);
     // sin(angle) >= 1/4: the plain product is within a few ulps of the exact one.
-    if (16.0 * squared_norm(n) >= squared_norm(u) * squared_norm(v)) return n;
+    bounded = 16.0 * squared_norm(n) >= squared_norm(u) * squared_norm(v);
+    if (bounded) return n;
     return accurate_cross(*o, *p, *q);
 }
 
@@ -75,13 +76,41 @@ namespace {
 
 constexpr int kNext[3] = {1, 2, 0};  // the edge after edge e of a face
 
+// The plane filter (Shewchuk's static filter, on the plane): the side of x decided by its
+// plane distance d = fl(fl(n . x) - offset) when |d| > kPlaneFilter, by the exact orientation
+// otherwise. The bound, for points scaled into (-1, 1)^3 and eps = 2^-53:
+// - the plain product n' = fl(u') x fl(v') of a corner whose rounded edges pass
+//   16 |n'|^2 >= |u'|^2 |v'|^2 (so |n'| >= |u| |v| / 4 up to a few eps) is within
+//   4.01 eps sqrt(3) |u| |v| <= 28.1 eps |n'| of the exact N = u x v (each component of a
+//   2 x 2 minor: two rounded differences, a product, a difference: four roundings);
+// - the unit normal n = fl(n' / fl(sqrt(fl(n' . n')))) is within 3.6 eps of n'/|n'|, and
+//   n'/|n'| within 2 x 28.1 eps of N/|N|: |n - N/|N|| <= 60 eps;
+// - fl(n . x) and offset = fl(n . a) are within gamma_3 |n|_1 < 5.8e-16 of n . x and n . a;
+// - so d / (1 + eps) is within 60 eps |x - a| + 1.16e-15 < 4.8e-14 of N/|N| . (x - a), whose
+//   sign is the orientation's (|x - a| < 2 sqrt(3)): |d| > 1e-13 decides it.
+// A normal taken by the compensated product, or of length below 1e-140 (where the squares of
+// the test may lose their relative accuracy to underflow), gets no filter.
+constexpr double kPlaneFilter = 1e-13;
+
 void set_plane(Workspace& w, Face& f) {
     const Vec3& a = w.p[f.v[0]];
-    const Vec3 n = triangle_normal(a, w.p[f.v[1]], w.p[f.v[2]]);
+    bool bounded = false;
+    const Vec3 n = triangle_normal(a, w.p[f.v[1]], w.p[f.v[2]], bounded);
     const double len = norm(n);
     f.normal = len > 0.0 ? n / len : Vec3{};
     f.offset = dot(f.normal, a);
     f.area2 = len;
+    f.filter = bounded && len >= 1e-140 ? kPlaneFilter : INFINITY;
+}
+
+// The side of p[q] from face f: +1 outside, -1 inside, 0 on its plane, exactly (the plane
+// filter, else the exact orientation).
+int side(const Workspace& w, const Face& f, int q) {
+    const Vec3& x = w.p[q];
+    const double d = dot(f.normal, x) - f.offset;
+    if (d > f.filter) return 1;
+    if (d < -f.filter) return -1;
+    return orientation(w.p[f.v[0]], w.p[f.v[1]], w.p[f.v[2]], x);
 }
 
 int new_face(Workspace& w, int a, int b, int c) {
@@ -230,7 +259,7 @@ bool find_horizon(Workspace& w, int seed, int q, unsigned stamp) {
             continue;
         }
         g.visit = stamp;
-        g.visible = orientation(p[g.v[0]], p[g.v[1]], p[g.v[2]], p[q]) > 0;
+        g.visible = side(w, g, q) > 0;
         if (!g.visible) {
             if (!horizon_edge(fi, e, gi)) return false;
             continue;
@@ -378,8 +407,7 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
         }
         const int q = w.faces[seed].furthest;
         {
-            const Face& f = w.faces[seed];
-            if (orientation(p[f.v[0]], p[f.v[1]], p[f.v[2]], p[q]) <= 0) {
+            if (side(w, w.faces[seed], q) <= 0) {
                 reassign_furthest(w, seed, q);
                 continue;
             }
