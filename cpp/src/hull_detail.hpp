@@ -76,11 +76,18 @@ struct Workspace {
 
 // A triangulated 3-D hull: triangles of point indices, their neighbours and their planes
 // (unit normal, offset and twice the area, scaled frame, as Quickhull computed them).
+// An edge of a triangulation, once: edge e of triangle i (from tri[i][e] to tri[i][e + 1]),
+// whose neighbour j > i has it as its edge k (-1: no edge of j leads back to i).
+struct TriangulationEdge {
+    int i, e, j, k;
+};
+
 struct Triangulation {
     std::vector<std::array<int, 3>> tri;
     std::vector<std::array<int, 3>> neighbor;
     std::vector<Vec3> normal;
     std::vector<double> offset, area2;
+    std::vector<TriangulationEdge> edges;  // in order of (i, e)
 };
 
 enum class Build { OK, DEGENERATE, FAILED };

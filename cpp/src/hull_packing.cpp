@@ -64,6 +64,7 @@ struct DirectionCell {
 struct PackScratch {
     std::vector<std::pair<int, int>> pairs;  // undirected edges of the triangulation
     std::vector<std::int64_t> start, fill;
+    std::vector<std::int32_t> around;  // adjacency_from_edges' neighbours, unordered
     std::vector<DirectionCell> table;  // unique_directions' hash table
     std::vector<std::array<long long, 3>> keys;  // and the keys it has seen this call
     unsigned stamp = 0;                // the table's cells of the current call carry it
@@ -147,37 +148,40 @@ std::int64_t unique_directions(const Vec3* d, size_t count, bool signed_classes,
 }
 
 // Neighbour lists of `count` vertices from undirected edges, ascending, padded with the
-// vertex itself to a multiple of four (the climb's blocks: see climb.hpp), appended.
+// vertex itself to a multiple of four (the climb's blocks: see climb.hpp), appended. Two
+// counting passes, no comparisons (a sort per list mispredicted a branch per shift): the
+// edges bucketed by one end give each vertex's neighbours; walking the vertices in order
+// and appending each to its neighbours' lists leaves every list ascending.
 void adjacency_from_edges(int count, PackScratch& s, ChunkPack& out) {
+    const auto n = static_cast<size_t>(count);
     std::vector<std::int64_t>& start = s.start;
-    start.assign(static_cast<size_t>(count) + 1, 0);
+    start.assign(n + 1, 0);
     for (const auto& [a, b] : s.pairs) ++start[a + 1], ++start[b + 1];
-    // Each list padded to a multiple of four: room for the padding first.
+    for (size_t i = 0; i < n; ++i) start[i + 1] += start[i];
+    // Each vertex's neighbours, unordered, at start[v] .. start[v + 1].
+    std::vector<std::int32_t>& around = s.around;
+    around.resize(static_cast<size_t>(start[n]));
     std::vector<std::int64_t>& fill = s.fill;
-    fill.resize(static_cast<size_t>(count));
+    fill.assign(start.begin(), start.end() - 1);
+    for (const auto& [a, b] : s.pairs) around[fill[b]++] = a, around[fill[a]++] = b;
+    // Each list padded to a multiple of four: room for the padding first.
     const size_t first = out.adjacency.size();
     std::int64_t at = static_cast<std::int64_t>(first);
-    for (int i = 0; i < count; ++i) {
-        const std::int64_t padded = (start[i + 1] + 3) / 4 * 4;
+    for (size_t i = 0; i < n; ++i) {
+        const std::int64_t padded = (start[i + 1] - start[i] + 3) / 4 * 4;
         out.adjacency_counts.push_back(padded);
         fill[i] = at;
         at += padded;
     }
     out.adjacency.resize(static_cast<size_t>(at));
     std::int32_t* list = out.adjacency.data();
-    for (const auto& [a, b] : s.pairs) list[fill[a]++] = b, list[fill[b]++] = a;
+    for (size_t v = 0; v < n; ++v)
+        for (std::int64_t k = start[v]; k < start[v + 1]; ++k)
+            list[fill[around[k]]++] = static_cast<std::int32_t>(v);
     at = static_cast<std::int64_t>(first);
-    for (int i = 0; i < count; ++i) {
-        const std::int64_t end = fill[i];
-        // Insertion sort: the lists are short (six on average).
-        for (std::int64_t k = at + 1; k < end; ++k) {
-            const std::int32_t x = list[k];
-            std::int64_t j = k;
-            for (; j > at && list[j - 1] > x; --j) list[j] = list[j - 1];
-            list[j] = x;
-        }
-        const std::int64_t padded = (start[i + 1] + 3) / 4 * 4;
-        for (std::int64_t k = end; k < at + padded; ++k) list[k] = i;
+    for (size_t i = 0; i < n; ++i) {
+        const std::int64_t padded = (start[i + 1] - start[i] + 3) / 4 * 4;
+        for (std::int64_t k = fill[i]; k < at + padded; ++k) list[k] = static_cast<std::int32_t>(i);
         at += padded;
     }
 }
@@ -231,16 +235,19 @@ void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
     } else if (hull.dimension == 3) {
         // Every triangulation edge drives hill climbing; edges between different planes
         // are the polytope's true edges (SAT).
-        const size_t m = hull.faces.size();
-        for (size_t i = 0; i < m; ++i)
-            for (int e = 0; e < 3; ++e) {
-                const int j = t.neighbor[i][e];
-                if (j < static_cast<int>(i)) continue;
-                const int a = hull.faces[i][e], b = hull.faces[i][(e + 1) % 3];
-                s.pairs.emplace_back(a, b);
-                if (pl.group[i] != pl.group[j])
-                    s.directions.push_back(points[hull.vertices[b]] - points[hull.vertices[a]]);
-            }
+        // Each edge once (from its lower triangle: the triangulation's list).
+        s.pairs.resize(t.edges.size());
+        s.directions.resize(t.edges.size());
+        size_t directions = 0;
+        for (size_t g = 0; g < t.edges.size(); ++g) {
+            const TriangulationEdge& edge = t.edges[g];
+            const auto& face = hull.faces[edge.i];
+            const int a = face[edge.e], b = face[edge.e == 2 ? 0 : edge.e + 1];
+            s.pairs[g] = {a, b};
+            s.directions[directions] = points[hull.vertices[b]] - points[hull.vertices[a]];
+            directions += pl.group[edge.i] != pl.group[edge.j];  // no branch: no pattern
+        }
+        s.directions.resize(directions);
         adjacency_from_edges(k, s, out);
         faces = unique_directions(hull.plane_normals.data(), hull.plane_normals.size(), true, s,
                                   out.faces);

@@ -439,6 +439,19 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
             out.neighbor[t][e] = index[f.n[e]];
         }
     }
+    // Each edge once, from its lower triangle, with its slot in the other: written always
+    // and kept by a count (which side is lower follows no pattern a branch could predict).
+    out.edges.resize(3 * static_cast<size_t>(m));
+    size_t count = 0;
+    for (int t = 0; t < m; ++t)
+        for (int e = 0; e < 3; ++e) {
+            const int j = out.neighbor[t][e];
+            const std::array<int, 3>& back = out.neighbor[j];
+            const int k = back[2] == t ? 2 : (back[1] == t ? 1 : (back[0] == t ? 0 : -1));
+            out.edges[count] = {t, e, j, k};
+            count += j > t;
+        }
+    out.edges.resize(count);
     return Build::OK;
 }
 
