@@ -57,7 +57,9 @@ struct Workspace {
     std::vector<int> mark;  // per point: stamp of the horizon check
     std::vector<Face> faces;  // a pool: faces[0 .. face_count) are this hull's
     size_t face_count = 0;
-    std::vector<int> free_faces, pending, visible, new_faces;
+    std::vector<int> free_faces;  // the free slots: free_faces[0 .. free_top)
+    size_t free_top = 0;
+    std::vector<int> pending, visible, new_faces;
     std::vector<Conflict> orphans;
     std::vector<HorizonEdge> edges;
     std::vector<double> new_planes;  // the new faces' planes (nx, ny, nz, offset), packed
