@@ -34,20 +34,15 @@ void planes_of(Workspace& w, const Triangulation& t, Planes& out) {
     std::vector<int>& parent = w.parent;
     parent.resize(m);
     std::iota(parent.begin(), parent.end(), 0);
-    for (size_t i = 0; i < m; ++i)
-        for (int e = 0; e < 3; ++e) {
-            const int j = t.neighbor[i][e];
-            if (j < static_cast<int>(i)) continue;
-            const int far_i = t.tri[i][(e + 2) % 3];
-            int far_j = -1;
-            for (int k = 0; k < 3; ++k)
-                if (t.neighbor[j][k] == static_cast<int>(i)) far_j = t.tri[j][(k + 2) % 3];
-            if (far_j < 0) continue;
-            const bool coplanar =
-                std::fabs(dot(t.normal[i], w.p[far_j]) - t.offset[i]) <= w.eps &&
-                std::fabs(dot(t.normal[j], w.p[far_i]) - t.offset[j]) <= w.eps;
-            if (coplanar) parent[find_root(parent, j)] = find_root(parent, static_cast<int>(i));
-        }
+    constexpr int kFar[3] = {2, 0, 1};  // the corner opposite edge e
+    for (const TriangulationEdge& g : t.edges) {
+        if (g.k < 0) continue;
+        const int i = g.i, j = g.j;
+        const int far_i = t.tri[i][kFar[g.e]], far_j = t.tri[j][kFar[g.k]];
+        const bool coplanar = std::fabs(dot(t.normal[i], w.p[far_j]) - t.offset[i]) <= w.eps &&
+                              std::fabs(dot(t.normal[j], w.p[far_i]) - t.offset[j]) <= w.eps;
+        if (coplanar) parent[find_root(parent, j)] = find_root(parent, i);
+    }
     out.group.assign(m, -1);
     std::vector<int>& id = w.id;
     id.assign(m, -1);
@@ -258,15 +253,12 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
             std::vector<char>& used = w.used;
             real.assign(static_cast<size_t>(n), 0);
             used.assign(static_cast<size_t>(n), 0);
-            for (size_t i = 0; i < t.tri.size(); ++i)
-                for (int e = 0; e < 3; ++e) {
-                    used[t.tri[i][e]] = 1;
-                    const int j = t.neighbor[i][e];
-                    if (j > static_cast<int>(i) && pl.group[i] != pl.group[j]) {
-                        ++real[t.tri[i][e]];
-                        ++real[t.tri[i][(e + 1) % 3]];
-                    }
-                }
+            for (const auto& tri : t.tri) used[tri[0]] = used[tri[1]] = used[tri[2]] = 1;
+            for (const TriangulationEdge& g : t.edges) {
+                const int between = pl.group[g.i] != pl.group[g.j];  // no branch: no pattern
+                real[t.tri[g.i][g.e]] += between;
+                real[t.tri[g.i][g.e == 2 ? 0 : g.e + 1]] += between;
+            }
             std::vector<int>& keep = w.keep;
             keep.clear();
             dropped.clear();

@@ -5,6 +5,7 @@
 // Private to the core.
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -27,6 +28,9 @@ struct Face {
     Vec3 normal;
     double offset = 0.0;  // dot(normal, x) - offset is the distance of x
     double area2 = 0.0;   // the unnormalised normal's length: twice the area
+    // The plane filter: a point's distance beyond it decides its side exactly (INFINITY:
+    // never, the exact orientation decides).
+    double filter = INFINITY;
     std::vector<Conflict> conflicts;  // the points outside this face (farther than eps)
     int furthest = -1;
     double furthest_distance = 0.0;
@@ -53,7 +57,9 @@ struct Workspace {
     std::vector<int> mark;  // per point: stamp of the horizon check
     std::vector<Face> faces;  // a pool: faces[0 .. face_count) are this hull's
     size_t face_count = 0;
-    std::vector<int> free_faces, pending, visible, new_faces;
+    std::vector<int> free_faces;  // the free slots: free_faces[0 .. free_top)
+    size_t free_top = 0;
+    std::vector<int> pending, visible, new_faces;
     std::vector<Conflict> orphans;
     std::vector<HorizonEdge> edges;
     std::vector<double> new_planes;  // the new faces' planes (nx, ny, nz, offset), packed
@@ -72,26 +78,38 @@ struct Workspace {
 
 // A triangulated 3-D hull: triangles of point indices, their neighbours and their planes
 // (unit normal, offset and twice the area, scaled frame, as Quickhull computed them).
+// An edge of a triangulation, once: edge e of triangle i (from tri[i][e] to tri[i][e + 1]),
+// whose neighbour j > i has it as its edge k (-1: no edge of j leads back to i).
+struct TriangulationEdge {
+    int i, e, j, k;
+};
+
 struct Triangulation {
     std::vector<std::array<int, 3>> tri;
     std::vector<std::array<int, 3>> neighbor;
     std::vector<Vec3> normal;
     std::vector<double> offset, area2;
+    std::vector<TriangulationEdge> edges;  // in order of (i, e)
 };
 
 enum class Build { OK, DEGENERATE, FAILED };
 
-/// triangle_normal's case of a sharp first corner (quickhull.cpp).
-Vec3 triangle_normal_at_widest(const Vec3& a, const Vec3& b, const Vec3& c);
+/// triangle_normal's case of a sharp first corner (quickhull.cpp); `bounded` as there.
+Vec3 triangle_normal_at_widest(const Vec3& a, const Vec3& b, const Vec3& c, bool& bounded);
 
 /// The outward normal (b - a) x (c - a), unnormalised, accurate for thin triangles too: the
 /// plain product when the corner at a is not sharp (the sine of its angle at least 1/4: within
-/// a few ulps of the exact one), else taken at the widest corner or compensated.
-inline Vec3 triangle_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
+/// a few ulps of the exact one), else taken at the widest corner or compensated. `bounded`
+/// says the plain product was taken (at a or at the widest corner): then the unit normal's
+/// direction is within 60 ulps of the exact one (the plane filter's premise, quickhull.cpp).
+inline Vec3 triangle_normal(const Vec3& a, const Vec3& b, const Vec3& c, bool& bounded) {
     const Vec3 u = b - a, v = c - a;
     const Vec3 n = cross(u, v);
-    if (16.0 * squared_norm(n) >= squared_norm(u) * squared_norm(v)) return n;
-    return triangle_normal_at_widest(a, b, c);
+    if (16.0 * squared_norm(n) >= squared_norm(u) * squared_norm(v)) {
+        bounded = true;
+        return n;
+    }
+    return triangle_normal_at_widest(a, b, c, bounded);
 }
 
 /// The 3-D hull of the points `subset` of w.p (quickhull.cpp): large inputs first lose their

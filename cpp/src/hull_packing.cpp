@@ -64,6 +64,7 @@ struct DirectionCell {
 struct PackScratch {
     std::vector<std::pair<int, int>> pairs;  // undirected edges of the triangulation
     std::vector<std::int64_t> start, fill;
+    std::vector<std::int32_t> around;  // adjacency_from_edges' neighbours, unordered
     std::vector<DirectionCell> table;  // unique_directions' hash table
     std::vector<std::array<long long, 3>> keys;  // and the keys it has seen this call
     unsigned stamp = 0;                // the table's cells of the current call carry it
@@ -77,93 +78,110 @@ inline long long floor_to_integer(double x) {
     return t - (static_cast<double>(t) > x ? 1 : 0);
 }
 
-// One direction per class of `d`, appended to `out`: unit, rounded to 12 digits for grouping;
-// unsigned classes get a canonical sign (the first component clearly non-zero positive).
-// First occurrences kept, in input order (an open-addressing table of the rounded keys:
-// linear in the count). Returns how many were appended.
-std::int64_t unique_directions(const std::vector<Vec3>& d, bool signed_classes, PackScratch& s,
+// One direction per class of the `count` directions `d`, appended to `out`: unit, rounded to
+// 12 digits for grouping; unsigned classes get a canonical sign (the first component clearly
+// non-zero positive). First occurrences kept, in input order (an open-addressing table of the
+// rounded keys: linear in the count). Returns how many were appended.
+std::int64_t unique_directions(const Vec3* d, size_t count, bool signed_classes, PackScratch& s,
                                std::vector<double>& out) {
     size_t size = 16;
-    while (size < 2 * d.size()) size *= 2;
+    while (size < 2 * count) size *= 2;
     // Stamped cells: the table is cleared by a new stamp, not rewritten, on every call.
     if (s.table.size() < size || ++s.stamp == 0) {
         s.table.assign(std::max(size, s.table.size()), DirectionCell{0, 0});
         s.stamp = 1;
     }
     size = s.table.size();
+    const size_t mask = size - 1;
     const unsigned stamp = s.stamp;
-    s.keys.clear();
+    DirectionCell* table = s.table.data();
+    if (s.keys.size() < count) s.keys.resize(count);
+    std::array<long long, 3>* keys = s.keys.data();
+    // Written in place (room for all, cut to the kept ones at the end).
+    const size_t base = out.size();
+    out.resize(base + 3 * count);
+    double* o = out.data() + base;
+    std::int32_t seen = 0;
     std::int64_t kept = 0;
-    for (size_t i = 0; i < d.size(); ++i) {
-        Vec3 v = d[i];
-        const double len = norm(v);
+    for (size_t i = 0; i < count; ++i) {
+        double x = d[i].x, y = d[i].y, z = d[i].z;
+        const double len = std::sqrt(x * x + y * y + z * z);
         if (!(len > 0.0)) continue;
-        v = v / len;
+        x = x / len, y = y / len, z = z / len;
         if (!signed_classes) {
-            double sign = 0.0;
-            for (int k = 0; k < 3 && sign == 0.0; ++k)
-                if (std::fabs(v[k]) > 1e-12) sign = v[k] > 0.0 ? 1.0 : -1.0;
-            if (sign < 0.0) v = -v;
+            // The first component clearly non-zero decides the sign.
+            const double lead = std::fabs(x) > 1e-12 ? x : (std::fabs(y) > 1e-12 ? y : z);
+            if (lead < 0.0 && std::fabs(lead) > 1e-12) x = -x, y = -y, z = -z;
         }
         // floor(x + 0.5): ties may round either way (as np.round's half-to-even does
         // differently), which only splits a class in two. |v| <= 1: the keys fit.
-        const std::array<long long, 3> key = {floor_to_integer(v.x * 1e12 + 0.5),
-                                              floor_to_integer(v.y * 1e12 + 0.5),
-                                              floor_to_integer(v.z * 1e12 + 0.5)};
+        const long long k0 = floor_to_integer(x * 1e12 + 0.5),
+                        k1 = floor_to_integer(y * 1e12 + 0.5),
+                        k2 = floor_to_integer(z * 1e12 + 0.5);
         std::uint64_t hash = 1469598103934665603ull;
-        for (long long k : key) hash = (hash ^ static_cast<std::uint64_t>(k)) * 1099511628211ull;
-        size_t slot = static_cast<size_t>(hash ^ (hash >> 29)) & (size - 1);
+        hash = (hash ^ static_cast<std::uint64_t>(k0)) * 1099511628211ull;
+        hash = (hash ^ static_cast<std::uint64_t>(k1)) * 1099511628211ull;
+        hash = (hash ^ static_cast<std::uint64_t>(k2)) * 1099511628211ull;
+        size_t slot = static_cast<size_t>(hash ^ (hash >> 29)) & mask;
         bool fresh = true;
-        for (;; slot = (slot + 1) & (size - 1)) {
-            DirectionCell& cell = s.table[slot];
+        for (;; slot = (slot + 1) & mask) {
+            DirectionCell& cell = table[slot];
             if (cell.stamp != stamp) {
                 cell.stamp = stamp;
-                cell.key = static_cast<std::int32_t>(s.keys.size());
-                s.keys.push_back(key);
+                cell.key = seen;
+                keys[seen++] = {k0, k1, k2};
                 break;
             }
-            if (s.keys[static_cast<size_t>(cell.key)] == key) {
+            const std::array<long long, 3>& k = keys[cell.key];
+            if (k[0] == k0 && k[1] == k1 && k[2] == k2) {
                 fresh = false;
                 break;
             }
         }
-        if (fresh) push(out, v), ++kept;
+        if (!fresh) continue;
+        o[0] = x, o[1] = y, o[2] = z;
+        o += 3;
+        ++kept;
     }
+    out.resize(base + 3 * static_cast<size_t>(kept));
     return kept;
 }
 
 // Neighbour lists of `count` vertices from undirected edges, ascending, padded with the
-// vertex itself to a multiple of four (the climb's blocks: see climb.hpp), appended.
+// vertex itself to a multiple of four (the climb's blocks: see climb.hpp), appended. Two
+// counting passes, no comparisons (a sort per list mispredicted a branch per shift): the
+// edges bucketed by one end give each vertex's neighbours; walking the vertices in order
+// and appending each to its neighbours' lists leaves every list ascending.
 void adjacency_from_edges(int count, PackScratch& s, ChunkPack& out) {
+    const auto n = static_cast<size_t>(count);
     std::vector<std::int64_t>& start = s.start;
-    start.assign(static_cast<size_t>(count) + 1, 0);
+    start.assign(n + 1, 0);
     for (const auto& [a, b] : s.pairs) ++start[a + 1], ++start[b + 1];
-    // Each list padded to a multiple of four: room for the padding first.
+    for (size_t i = 0; i < n; ++i) start[i + 1] += start[i];
+    // Each vertex's neighbours, unordered, at start[v] .. start[v + 1].
+    std::vector<std::int32_t>& around = s.around;
+    around.resize(static_cast<size_t>(start[n]));
     std::vector<std::int64_t>& fill = s.fill;
-    fill.resize(static_cast<size_t>(count));
+    fill.assign(start.begin(), start.end() - 1);
+    for (const auto& [a, b] : s.pairs) around[fill[b]++] = a, around[fill[a]++] = b;
+    // Each list padded to a multiple of four: room for the padding first.
     const size_t first = out.adjacency.size();
     std::int64_t at = static_cast<std::int64_t>(first);
-    for (int i = 0; i < count; ++i) {
-        const std::int64_t padded = (start[i + 1] + 3) / 4 * 4;
+    for (size_t i = 0; i < n; ++i) {
+        const std::int64_t padded = (start[i + 1] - start[i] + 3) / 4 * 4;
         out.adjacency_counts.push_back(padded);
         fill[i] = at;
         at += padded;
     }
     out.adjacency.resize(static_cast<size_t>(at));
     std::int32_t* list = out.adjacency.data();
-    for (const auto& [a, b] : s.pairs) list[fill[a]++] = b, list[fill[b]++] = a;
+    for (size_t v = 0; v < n; ++v)
+        for (std::int64_t k = start[v]; k < start[v + 1]; ++k)
+            list[fill[around[k]]++] = static_cast<std::int32_t>(v);
     at = static_cast<std::int64_t>(first);
-    for (int i = 0; i < count; ++i) {
-        const std::int64_t end = fill[i];
-        // Insertion sort: the lists are short (six on average).
-        for (std::int64_t k = at + 1; k < end; ++k) {
-            const std::int32_t x = list[k];
-            std::int64_t j = k;
-            for (; j > at && list[j - 1] > x; --j) list[j] = list[j - 1];
-            list[j] = x;
-        }
-        const std::int64_t padded = (start[i + 1] + 3) / 4 * 4;
-        for (std::int64_t k = end; k < at + padded; ++k) list[k] = i;
+    for (size_t i = 0; i < n; ++i) {
+        const std::int64_t padded = (start[i + 1] - start[i] + 3) / 4 * 4;
+        for (std::int64_t k = fill[i]; k < at + padded; ++k) list[k] = static_cast<std::int32_t>(i);
         at += padded;
     }
 }
@@ -187,7 +205,14 @@ void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
         out.adjacency_counts.resize(out.adjacency_counts.size() +
                                     static_cast<size_t>(std::max<long long>(n, 0)), 0);
     } else {
-        for (int v : hull.vertices) push(out.vertices, points[v] + zero);  // -0.0 as 0.0
+        const size_t at = out.vertices.size();
+        out.vertices.resize(at + 3 * static_cast<size_t>(k));
+        double* o = out.vertices.data() + at;
+        for (int v : hull.vertices) {
+            const Vec3 q = points[v] + zero;  // -0.0 as 0.0
+            o[0] = q.x, o[1] = q.y, o[2] = q.z;
+            o += 3;
+        }
     }
     if (hull.dimension == 0) {
         out.adjacency_counts.push_back(0);
@@ -195,7 +220,7 @@ void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
         s.pairs.emplace_back(0, 1);
         adjacency_from_edges(2, s, out);
         s.directions.push_back(points[hull.vertices[1]] - points[hull.vertices[0]]);
-        edges = unique_directions(s.directions, false, s, out.edges);
+        edges = unique_directions(s.directions.data(), s.directions.size(), false, s, out.edges);
     } else if (hull.dimension == 2) {
         for (int i = 0; i < k; ++i) {
             s.pairs.emplace_back(i, (i + 1) % k);
@@ -206,23 +231,27 @@ void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
         push(out.faces, hull.normal);
         push(out.faces, -hull.normal);
         faces = 2;
-        edges = unique_directions(s.directions, false, s, out.edges);
+        edges = unique_directions(s.directions.data(), s.directions.size(), false, s, out.edges);
     } else if (hull.dimension == 3) {
         // Every triangulation edge drives hill climbing; edges between different planes
         // are the polytope's true edges (SAT).
-        const size_t m = hull.faces.size();
-        for (size_t i = 0; i < m; ++i)
-            for (int e = 0; e < 3; ++e) {
-                const int j = t.neighbor[i][e];
-                if (j < static_cast<int>(i)) continue;
-                const int a = hull.faces[i][e], b = hull.faces[i][(e + 1) % 3];
-                s.pairs.emplace_back(a, b);
-                if (pl.group[i] != pl.group[j])
-                    s.directions.push_back(points[hull.vertices[b]] - points[hull.vertices[a]]);
-            }
+        // Each edge once (from its lower triangle: the triangulation's list).
+        s.pairs.resize(t.edges.size());
+        s.directions.resize(t.edges.size());
+        size_t directions = 0;
+        for (size_t g = 0; g < t.edges.size(); ++g) {
+            const TriangulationEdge& edge = t.edges[g];
+            const auto& face = hull.faces[edge.i];
+            const int a = face[edge.e], b = face[edge.e == 2 ? 0 : edge.e + 1];
+            s.pairs[g] = {a, b};
+            s.directions[directions] = points[hull.vertices[b]] - points[hull.vertices[a]];
+            directions += pl.group[edge.i] != pl.group[edge.j];  // no branch: no pattern
+        }
+        s.directions.resize(directions);
         adjacency_from_edges(k, s, out);
-        faces = unique_directions(hull.plane_normals, true, s, out.faces);
-        edges = unique_directions(s.directions, false, s, out.edges);
+        faces = unique_directions(hull.plane_normals.data(), hull.plane_normals.size(), true, s,
+                                  out.faces);
+        edges = unique_directions(s.directions.data(), s.directions.size(), false, s, out.edges);
     }
     out.vertex_counts.push_back(static_cast<std::int64_t>(out.vertices.size() - vertices_before) / 3);
     out.face_counts.push_back(faces);

@@ -55,7 +55,7 @@ Vec3 accurate_cross(const Vec3& a, const Vec3& b, const Vec3& c) {
 // at the corner opposite the longest edge: its rounding error relative to its length is about
 // one ulp over the sine of that corner's angle, small unless the triangle is a cap (three
 // nearly collinear corners), which gets the compensated product.
-Vec3 triangle_normal_at_widest(const Vec3& a, const Vec3& b, const Vec3& c) {
+Vec3 triangle_normal_at_widest(const Vec3& a, const Vec3& b, const Vec3& c, bool& bounded) {
     const double ab = squared_norm(b - a), bc = squared_norm(c - b), ca = squared_norm(a - c);
     const Vec3 *o = &a, *p = &b, *q = &c;  // o: the corner; o p q counter-clockwise
     if (ab >= bc && ab >= ca)
@@ -67,7 +67,8 @@ Vec3 triangle_normal_at_widest(const Vec3& a, const Vec3& b, const Vec3& c) {
     const Vec3 u = *p - *o, v = *q - *o;
     const Vec3 n = cross(u, v);
     // sin(angle) >= 1/4: the plain product is within a few ulps of the exact one.
-    if (16.0 * squared_norm(n) >= squared_norm(u) * squared_norm(v)) return n;
+    bounded = 16.0 * squared_norm(n) >= squared_norm(u) * squared_norm(v);
+    if (bounded) return n;
     return accurate_cross(*o, *p, *q);
 }
 
@@ -75,37 +76,86 @@ namespace {
 
 constexpr int kNext[3] = {1, 2, 0};  // the edge after edge e of a face
 
+// c ? a : b by masks: GCC turns a ternary whose sides are cheap into a branch, which
+// mispredicts when c follows no pattern.
+inline int select(bool c, int a, int b) { return b ^ ((a ^ b) & -static_cast<int>(c)); }
+
+// The plane filter (Shewchuk's static filter, on the plane): the side of x decided by its
+// plane distance d = fl(fl(n . x) - offset) when |d| > kPlaneFilter, by the exact orientation
+// otherwise. The bound, for points scaled into (-1, 1)^3 and eps = 2^-53:
+// - the plain product n' = fl(u') x fl(v') of a corner whose rounded edges pass
+//   16 |n'|^2 >= |u'|^2 |v'|^2 (so |n'| >= |u| |v| / 4 up to a few eps) is within
+//   4.01 eps sqrt(3) |u| |v| <= 28.1 eps |n'| of the exact N = u x v (each component of a
+//   2 x 2 minor: two rounded differences, a product, a difference: four roundings);
+// - the unit normal n = fl(n' / fl(sqrt(fl(n' . n')))) is within 3.6 eps of n'/|n'|, and
+//   n'/|n'| within 2 x 28.1 eps of N/|N|: |n - N/|N|| <= 60 eps;
+// - fl(n . x) and offset = fl(n . a) are within gamma_3 |n|_1 < 5.8e-16 of n . x and n . a;
+// - so d / (1 + eps) is within 60 eps |x - a| + 1.16e-15 < 4.8e-14 of N/|N| . (x - a), whose
+//   sign is the orientation's (|x - a| < 2 sqrt(3)): |d| > 1e-13 decides it.
+// A normal taken by the compensated product, or of length below 1e-140 (where the squares of
+// the test may lose their relative accuracy to underflow), gets no filter.
+constexpr double kPlaneFilter = 1e-13;
+
 void set_plane(Workspace& w, Face& f) {
     const Vec3& a = w.p[f.v[0]];
-    const Vec3 n = triangle_normal(a, w.p[f.v[1]], w.p[f.v[2]]);
+    bool bounded = false;
+    const Vec3 n = triangle_normal(a, w.p[f.v[1]], w.p[f.v[2]], bounded);
     const double len = norm(n);
     f.normal = len > 0.0 ? n / len : Vec3{};
     f.offset = dot(f.normal, a);
     f.area2 = len;
+    f.filter = bounded && len >= 1e-140 ? kPlaneFilter : INFINITY;
 }
 
-int new_face(Workspace& w, int a, int b, int c) {
-    int id;
-    if (!w.free_faces.empty()) {
-        id = w.free_faces.back();
-        w.free_faces.pop_back();
-    } else {
-        // Slots past face_count keep their conflict lists' memory from earlier hulls.
-        id = static_cast<int>(w.face_count++);
-        if (w.faces.size() < w.face_count) w.faces.emplace_back();
-    }
+// The side of p[q] from face f: +1 outside, -1 inside, 0 on its plane, exactly (the plane
+// filter, else the exact orientation).
+int side(const Workspace& w, const Face& f, int q) {
+    const Vec3& x = w.p[q];
+    const double d = dot(f.normal, x) - f.offset;
+    if (d > f.filter) return 1;
+    if (d < -f.filter) return -1;
+    return orientation(w.p[f.v[0]], w.p[f.v[1]], w.p[f.v[2]], x);
+}
+
+// Face `id` as the triangle a b c (counter-clockwise from outside), alive, no neighbours
+// linked, no points.
+inline void init_face(Workspace& w, int id, int a, int b, int c) {
     Face& f = w.faces[id];
     f.v[0] = a;
     f.v[1] = b;
     f.v[2] = c;
     f.n[0] = f.n[1] = f.n[2] = -1;
-    f.conflicts.clear();
+    f.conflicts.clear();  // slots past face_count keep their lists' memory from earlier hulls
     f.furthest = -1;
     f.furthest_distance = 0.0;
     f.visit = 0;
     f.visible = false;
     f.alive = true;
     set_plane(w, f);
+}
+
+// The slots of `count` new faces into `ids`: the free list from its end, then fresh slots
+// (taken in this order, whether one face or a cone of them is made). No branch per face:
+// how many a cone reuses follows no pattern.
+void allocate_faces(Workspace& w, size_t count, int* ids) {
+    size_t top = w.free_top;
+    const int* free_list = w.free_faces.data();  // at least one element (quickhull_points)
+    int fresh = static_cast<int>(w.face_count);
+    for (size_t k = 0; k < count; ++k) {
+        const bool reuse = top > 0;
+        ids[k] = select(reuse, free_list[top - reuse], fresh);
+        top -= reuse;
+        fresh += !reuse;
+    }
+    w.free_top = top;
+    w.face_count = static_cast<size_t>(fresh);
+    if (w.faces.size() < w.face_count) w.faces.resize(w.face_count);
+}
+
+int new_face(Workspace& w, int a, int b, int c) {
+    int id;
+    allocate_faces(w, 1, &id);
+    init_face(w, id, a, b, c);
     return id;
 }
 
@@ -208,10 +258,13 @@ bool find_horizon(Workspace& w, int seed, int q, unsigned stamp) {
         he.a = f.v[e];
         he.b = f.v[kNext[e]];
         he.outside = gi;
-        he.slot = -1;
-        for (int s = 0; s < 3; ++s)
-            if (g.n[s] == fi && g.v[s] == he.b) he.slot = s;
-        return he.slot >= 0;
+        // The last slot that leads back (none: -1), without branches.
+        const int b = he.b;
+        int slot = static_cast<int>((g.n[0] == fi) & (g.v[0] == b)) - 1;
+        slot = select((g.n[1] == fi) & (g.v[1] == b), 1, slot);
+        slot = select((g.n[2] == fi) & (g.v[2] == b), 2, slot);
+        he.slot = slot;
+        return slot >= 0;
     };
     while (top > 0) {
         Frame& fr = stack[top - 1];
@@ -230,15 +283,15 @@ bool find_horizon(Workspace& w, int seed, int q, unsigned stamp) {
             continue;
         }
         g.visit = stamp;
-        g.visible = orientation(p[g.v[0]], p[g.v[1]], p[g.v[2]], p[q]) > 0;
+        g.visible = side(w, g, q) > 0;
         if (!g.visible) {
             if (!horizon_edge(fi, e, gi)) return false;
             continue;
         }
         w.visible.push_back(gi);
-        int back = -1;
-        for (int k = 0; k < 3; ++k)
-            if (g.n[k] == fi) back = k;
+        int back = static_cast<int>(g.n[0] == fi) - 1;
+        back = select(g.n[1] == fi, 1, back);
+        back = select(g.n[2] == fi, 2, back);
         if (back < 0) return false;
         stack[top++] = {gi, kNext[back], 2};
     }
@@ -258,33 +311,34 @@ bool find_horizon(Workspace& w, int seed, int q, unsigned stamp) {
 void cone(Workspace& w, int q) {
     // The visible faces go; their points wait for the new faces.
     w.orphans.clear();
+    if (w.free_faces.size() < w.free_top + w.visible.size() + 1)
+        w.free_faces.resize(w.free_top + w.visible.size() + 1);
     for (int fi : w.visible) {
         Face& f = w.faces[fi];
         for (const Conflict& c : f.conflicts)
             if (c.index != q) w.orphans.push_back(c);
         f.alive = false;
         f.conflicts.clear();
-        w.free_faces.push_back(fi);
+        w.free_faces[w.free_top++] = fi;
     }
     const size_t h = w.edges.size();
     // Grown only (a resize that grows fills with zeros, every step).
     if (w.new_faces.size() < h) w.new_faces.resize(h);
     if (w.new_planes.size() < 4 * h) w.new_planes.resize(4 * h);
+    int* ids = w.new_faces.data();
+    allocate_faces(w, h, ids);
     for (size_t k = 0; k < h; ++k) {
         const HorizonEdge& he = w.edges[k];
-        const int id = new_face(w, he.a, he.b, q);
-        const Face& f = w.faces[id];
-        w.faces[id].n[0] = he.outside;
+        const int id = ids[k];
+        init_face(w, id, he.a, he.b, q);
+        Face& f = w.faces[id];
+        f.n[0] = he.outside;
+        f.n[1] = ids[k + 1 < h ? k + 1 : 0];
+        f.n[2] = ids[k > 0 ? k - 1 : h - 1];
         w.faces[he.outside].n[he.slot] = id;
-        w.new_faces[k] = id;
         double* plane = &w.new_planes[4 * k];
         plane[0] = f.normal.x, plane[1] = f.normal.y, plane[2] = f.normal.z;
         plane[3] = f.offset;
-    }
-    for (size_t k = 0; k < h; ++k) {
-        Face& f = w.faces[w.new_faces[k]];
-        f.n[1] = w.new_faces[k + 1 < h ? k + 1 : 0];
-        f.n[2] = w.new_faces[k > 0 ? k - 1 : h - 1];
     }
     const double* planes = w.new_planes.data();
     const double eps = w.eps;
@@ -319,7 +373,8 @@ void cone(Workspace& w, int q) {
 Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulation& out) {
     const std::vector<Vec3>& p = w.p;
     w.face_count = 0;
-    w.free_faces.clear();
+    w.free_top = 0;
+    if (w.free_faces.empty()) w.free_faces.resize(16);
     w.pending.clear();
     if (subset.size() < 4) return Build::DEGENERATE;
     // Starting tetrahedron: the farthest pair of the axis extremes, the point farthest from
@@ -378,8 +433,7 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
         }
         const int q = w.faces[seed].furthest;
         {
-            const Face& f = w.faces[seed];
-            if (orientation(p[f.v[0]], p[f.v[1]], p[f.v[2]], p[q]) <= 0) {
+            if (side(w, w.faces[seed], q) <= 0) {
                 reassign_furthest(w, seed, q);
                 continue;
             }
@@ -411,6 +465,21 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
             out.neighbor[t][e] = index[f.n[e]];
         }
     }
+    // Each edge once, from its lower triangle, with its slot in the other: written always
+    // and kept by a count (which side is lower follows no pattern a branch could predict).
+    out.edges.resize(3 * static_cast<size_t>(m));
+    size_t count = 0;
+    for (int t = 0; t < m; ++t)
+        for (int e = 0; e < 3; ++e) {
+            const int j = out.neighbor[t][e];
+            const std::array<int, 3>& back = out.neighbor[j];
+            int k = static_cast<int>(back[0] == t) - 1;
+            k = select(back[1] == t, 1, k);
+            k = select(back[2] == t, 2, k);
+            out.edges[count] = {t, e, j, k};
+            count += j > t;
+        }
+    out.edges.resize(count);
     return Build::OK;
 }
 
