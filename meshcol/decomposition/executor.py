@@ -18,6 +18,7 @@ import contextlib
 import logging
 import math
 import os
+import queue
 import signal
 import sys
 import threading
@@ -26,6 +27,7 @@ from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from typing import Any, Protocol
 
 from meshcol.decomposition.jobs import (
+    STEP,
     TaskOutcome,
     WorkerPool,
     _call,
@@ -41,6 +43,7 @@ from meshcol.decomposition.ray_start import (
     running_cluster,
     task_payload,
 )
+from meshcol.decomposition.steps import reporting_to
 from meshcol.errors import MissingDependencyError
 
 __all__ = ["EXECUTORS", "Executor", "RayExecutor", "check_run", "make_executor", "run_each"]
@@ -396,13 +399,29 @@ def _stop_remaining(processes: Sequence[Any], grace: float = 2.0, bound: float =
 
 def _ray_call(
     fn: Callable[[Any], Any], task: Any, env: Mapping[str, str] | None = None
-) -> tuple[str, Any]:
-    # Runs in a Ray worker: an error of the task is its outcome (as in the local pool); only a
-    # dead or cancelled worker reaches the driver as a Ray error. ``env``: on a cluster, the
-    # task comes pickled, opened once the thread settings are in place (ray_start.in_worker).
+) -> Iterator[tuple[str, Any]]:
+    """Runs in a Ray worker, as a Ray generator: the task's steps as it makes them
+    (``(STEP, snapshot)``, :mod:`meshcol.decomposition.steps`), then its outcome (an error of
+    the task is its outcome, as in the local pool; only a dead or cancelled worker reaches
+    the driver as a Ray error). The task runs in a thread of the worker; this generator
+    passes on what it reports, so the driver's progress line has the steps on Ray too.
+    ``env``: on a cluster, the task comes pickled, opened once the thread settings are in
+    place (ray_start.in_worker)."""
     if env is not None:
         task = in_worker(env, task)
-    return _call(fn, task)
+    reports: queue.Queue[tuple[str, Any]] = queue.Queue()
+
+    def work() -> None:
+        with reporting_to(lambda snapshot: reports.put((STEP, snapshot))):
+            outcome = _call(fn, task)
+        reports.put(("done", outcome))
+
+    threading.Thread(target=work, name="meshcol-task", daemon=True).start()
+    while True:
+        kind, value = reports.get()
+        yield kind, value
+        if kind == "done":
+            return
 
 
 def _ray_prepare(prepare: Callable[[], None], env: Mapping[str, str] | None = None) -> None:
@@ -470,6 +489,8 @@ class RayExecutor:
         self._task_env: dict[str, str] | None = None
         self._slots = jobs
         self._inflight: dict[Any, tuple[int, float]] = {}
+        #: receives (task index, steps snapshot) as tasks report their steps
+        self.on_step: Callable[[int, Any], None] | None = None
         # Environment of each task's worker: the local pool's thread settings for ``jobs``
         # processes; on a cluster, each CPU runs a task (the pool's ``jobs == cores``).
         self.env = worker_env(jobs, threads_per_job)
@@ -608,17 +629,9 @@ class RayExecutor:
                 ready, _ = ray.wait(list(inflight), num_returns=len(inflight), timeout=0)
             now = time.perf_counter()
             for ref in ready:
-                index, started = inflight.pop(ref)
-                seconds = now - started
-                try:
-                    status, value = ray.get(ref)
-                except ray.exceptions.RayError as exc:
-                    yield TaskOutcome(index, "failed", message=_ray_failure(exc), seconds=seconds)
-                    continue
-                if status == "ok":
-                    yield TaskOutcome(index, status, value, seconds=seconds)
-                else:
-                    yield TaskOutcome(index, status, message=value, seconds=seconds)
+                outcome = self._next(ref, now)
+                if outcome is not None:
+                    yield outcome
             if timeout is not None:
                 now = time.perf_counter()
                 for ref, (index, started) in list(inflight.items()):
@@ -631,6 +644,28 @@ class RayExecutor:
                             message=f"timed out after {timeout:g} s",
                             seconds=now - started,
                         )
+
+    def _next(self, generator: Any, now: float) -> TaskOutcome | None:
+        """The next item of a task (a Ray generator, :func:`_ray_call`) that has one: its
+        steps go to ``on_step`` (None: the task goes on), its outcome ends it."""
+        ray = self.ray
+        index, started = self._inflight[generator]
+        try:
+            kind, value = ray.get(next(generator))
+        except StopIteration:  # cannot happen: the outcome is its last item
+            kind, value = "done", ("failed", "the task ended without an outcome")
+        except ray.exceptions.RayError as exc:
+            del self._inflight[generator]
+            return TaskOutcome(index, "failed", message=_ray_failure(exc), seconds=now - started)
+        if kind == STEP:
+            if self.on_step is not None:
+                self.on_step(index, value)
+            return None
+        del self._inflight[generator]
+        status, result = value
+        if status == "ok":
+            return TaskOutcome(index, status, result, seconds=now - started)
+        return TaskOutcome(index, status, message=result, seconds=now - started)
 
     def _cancel(self, ref: Any) -> None:
         try:

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import functools
 import multiprocessing
 import multiprocessing.connection
 import os
@@ -29,6 +30,8 @@ from collections import deque
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
+
+from meshcol.decomposition.steps import reporting_to
 
 __all__ = [
     "TaskOutcome",
@@ -122,8 +125,18 @@ def _worker_main(
         if message is None:
             return
         index, task = message
-        status, value = _call(fn, task)
+        # the engine's own steps go to the parent as they happen (its progress line)
+        with reporting_to(functools.partial(_send_step, conn, index)):
+            status, value = _call(fn, task)
         conn.send((index, status, value))
+
+
+#: The status of a worker's message that reports a step, not the task's outcome.
+STEP = "step"
+
+
+def _send_step(conn: multiprocessing.connection.Connection, index: int, snapshot: Any) -> None:
+    conn.send((index, STEP, snapshot))
 
 
 # Seconds between deliveries of a signal whose exception was swallowed (see _SignalGuard).
@@ -185,6 +198,10 @@ class _SignalGuard:
             self._done.set()
         for number, handler in self.previous.items():
             signal.signal(number, handler)
+
+
+class _Pending(Exception):
+    """A worker reported steps, and its task goes on."""
 
 
 class _Worker:
@@ -382,6 +399,8 @@ class WorkerPool:
         self.preload = task_preload(fn) if preload is None else preload
         self.env = worker_env(jobs, threads_per_job)
         self._ctx: Any = None
+        #: receives (task index, steps snapshot) as workers report their steps
+        self.on_step: Callable[[int, Any], None] | None = None
         self._idle: list[_Worker] = []
         self._busy: list[_Worker] = []
 
@@ -474,20 +493,34 @@ class WorkerPool:
         for worker in list(self._busy):
             seconds = now - worker.started
             if worker.conn in ready:
-                outcome = self._receive(worker, seconds)
-                if outcome is not None:
-                    yield outcome
-                    continue
-                ready.add(worker.process.sentinel)
+                try:
+                    outcome = self._receive(worker, seconds)
+                except _Pending:
+                    outcome = None
+                    ready.discard(worker.conn)  # steps only: the task goes on
+                else:
+                    if outcome is not None:
+                        yield outcome
+                        continue
+                    ready.add(worker.process.sentinel)
             if worker.process.sentinel in ready:
                 yield self._died(worker, seconds)
             elif self.timeout is not None and seconds >= self.timeout:
                 yield self._timed_out(worker, seconds)
 
     def _receive(self, worker: _Worker, seconds: float) -> TaskOutcome | None:
-        """A worker's answer (the worker is idle again), or None when its pipe broke."""
+        """A worker's answer (the worker is idle again), or None when its pipe broke. The
+        step reports before it go to ``on_step``; with no answer yet, the worker stays busy
+        (``_Pending``)."""
         try:
-            index, status, value = worker.conn.recv()
+            while True:
+                index, status, value = worker.conn.recv()
+                if status != STEP:
+                    break
+                if self.on_step is not None:
+                    self.on_step(index, value)
+                if not worker.conn.poll():
+                    raise _Pending
         except (EOFError, OSError):
             return None
         self._busy.remove(worker)

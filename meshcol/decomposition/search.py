@@ -54,6 +54,7 @@ from meshcol.decomposition.options import (
     search_target,
 )
 from meshcol.decomposition.result import Decomposition
+from meshcol.decomposition.steps import Stage, stage
 
 __all__ = [
     "COACD_THRESHOLD_RANGE",
@@ -340,13 +341,19 @@ class _Search:
         self.target, self.axis, self.resolution = target, axis, resolution
         self.evaluate, self.max_hulls, self.clock = evaluate, max_hulls, clock
         self.steps: list[SearchStep] = []
+        self._progress = Stage("search step", None, False)
         # With a Hausdorff limit, the predicate that brackets is "within D" (true at the fine
         # end, the fewest parts at its coarse edge); with a part limit alone, "at most N
         # parts" (true at the coarse end, the best fidelity at its fine edge).
         self.by_hausdorff = target.max_hausdorff is not None
 
     def run(self) -> str:
-        """Every stage, from the start of the axis: why the search stopped."""
+        """Every stage, from the start of the axis: why the search stopped (each step a unit
+        of the task's steps, :mod:`meshcol.decomposition.steps`, out of the step budget)."""
+        with stage("search step", at_most=self.target.max_steps) as self._progress:
+            return self._stages()
+
+    def _stages(self) -> str:
         x, raises = self.axis.start, 0
         while True:
             stopped, good_x, bad_x = self._bracket(x)
@@ -432,6 +439,7 @@ class _Search:
             meets_target(metrics, self.target.max_hausdorff, self.target.max_parts),
         )
         self.steps.append(s)
+        self._progress.advance()
         return s
 
     def _good(self, s: SearchStep) -> bool:

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from meshcol.decomposition.options import DecomposeOptions, RunOptions
+from meshcol.decomposition.steps import stage
 from meshcol.errors import InvalidMeshError
 
 if TYPE_CHECKING:
@@ -80,20 +81,34 @@ def decompose_task(
     from meshcol.decomposition.decompose import decompose
 
     _, bodies, settings = task
-    return [
-        (
-            name,
-            decompose(
-                (vertices, faces),
-                settings.options,
-                cache_dir=settings.cache_dir,
-                use_cache=settings.use_cache,
-                write_cache=False,
-                threads=settings.threads,
-            ),
-        )
-        for name, vertices, faces in bodies
-    ]
+    return _each_body(
+        bodies,
+        lambda mesh: decompose(
+            mesh,
+            settings.options,
+            cache_dir=settings.cache_dir,
+            use_cache=settings.use_cache,
+            write_cache=False,
+            threads=settings.threads,
+        ),
+    )
+
+
+def _each_body(
+    bodies: list[tuple[str, np.ndarray, np.ndarray]], run: Callable[[Any], Any]
+) -> list[tuple[str, Any]]:
+    """``run`` on every body, in order; several bodies are a stage of the task's steps
+    (:mod:`meshcol.decomposition.steps`), one unit each."""
+    if len(bodies) == 1:
+        name, vertices, faces = bodies[0]
+        return [(name, run((vertices, faces)))]
+    results = []
+    with stage("body", len(bodies)) as bodies_done:
+        bodies_done.note = bodies[0][0] if bodies else None
+        for k, (name, vertices, faces) in enumerate(bodies):
+            results.append((name, run((vertices, faces))))
+            bodies_done.advance(bodies[k + 1][0] if k + 1 < len(bodies) else None)
+    return results
 
 
 def search_task(
@@ -107,21 +122,18 @@ def search_task(
     _, bodies, settings = task
     target = settings.options.search_target()
     assert target is not None, "a search task needs a target"
-    return [
-        (
-            name,
-            search_decomposition(
-                (vertices, faces),
-                target,
-                settings.options,
-                cache_dir=settings.cache_dir,
-                use_cache=settings.use_cache,
-                write_cache=False,
-                threads=settings.threads,
-            ),
-        )
-        for name, vertices, faces in bodies
-    ]
+    return _each_body(
+        bodies,
+        lambda mesh: search_decomposition(
+            mesh,
+            target,
+            settings.options,
+            cache_dir=settings.cache_dir,
+            use_cache=settings.use_cache,
+            write_cache=False,
+            threads=settings.threads,
+        ),
+    )
 
 
 def iter_files(

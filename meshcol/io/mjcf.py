@@ -4,7 +4,8 @@ The file is compiled by ``mujoco.MjModel.from_xml_path``, so defaults, classes a
 mean what MuJoCo says; geom poses come from ``mj_kinematics`` at the configuration (``qpos0``,
 or the first keyframe with ``keyframe``, then the joint values given; a joint coupled by
 ``<equality><joint>`` follows its polynomial, as a URDF mimic joint). A body's collision
-geoms (``contype`` or ``conaffinity`` non-zero) are its parts; planes and height fields are
+geoms (``contype`` or ``conaffinity`` non-zero, or named by a ``<contact><pair>``) are its
+parts; planes and height fields are
 skipped (not solids), ellipsoids are tessellated.
 
 :func:`read_mjcf` is the reader :func:`meshcol.io.robot.load_robot_model` dispatches to.
@@ -238,9 +239,10 @@ def _geoms_by_body(mujoco: Any, model: Any, data: Any, visual: bool) -> dict[int
     """The collision geoms (``visual``: the geoms that collide with nothing) of each body, at
     their world poses; planes, height fields and unknown types left out."""
     geom_type = {int(t): t.name for t in mujoco.mjtGeom.__members__.values()}
+    colliders = set(_colliding_geoms(model).tolist())
     by_body: dict[int, list[_Geom]] = {}
     for g in range(model.ngeom):
-        if (model.geom_contype[g] == 0 and model.geom_conaffinity[g] == 0) != visual:
+        if (g not in colliders) != visual:
             continue
         shape = _geom_shape(model, g, geom_type.get(int(model.geom_type[g]), ""))
         if shape is None:
@@ -334,21 +336,41 @@ def _exclusions(model: Any, names: list[str], include_adjacent: bool) -> list[tu
         a, b = int(signature) >> 16, int(signature) & 0xFFFF
         excluded.append((names[a], names[b], "mjcf <exclude>"))
     excluded.extend(_filtered_pairs(model, names))
-    return excluded
+    # An explicit <contact><pair> is collided whatever else says (parent and child, <exclude>).
+    explicit = {frozenset((names[a], names[b])) for a, b in _explicit_body_pairs(model)}
+    return [pair for pair in excluded if frozenset(pair[:2]) not in explicit]
+
+
+def _explicit_body_pairs(model: Any) -> set[tuple[int, int]]:
+    """The body pairs of the model's ``<contact><pair>`` elements, (smaller id, larger)."""
+    geom_body = np.asarray(model.geom_bodyid, dtype=np.int64)
+    return {
+        (min(int(geom_body[g1]), int(geom_body[g2])), max(int(geom_body[g1]), int(geom_body[g2])))
+        for g1, g2 in zip(model.pair_geom1, model.pair_geom2)
+    }
+
+
+def _colliding_geoms(model: Any) -> np.ndarray:
+    """The geoms MuJoCo may collide: ``contype`` or ``conaffinity`` non-zero, or named by a
+    ``<contact><pair>`` (an explicit pair collides whatever its geoms' bitmasks: Menagerie's
+    humanoids give every geom ``contype="0" conaffinity="0"`` and list the pairs)."""
+    contype = np.asarray(model.geom_contype, dtype=np.int64)
+    conaffinity = np.asarray(model.geom_conaffinity, dtype=np.int64)
+    colliding = (contype != 0) | (conaffinity != 0)
+    paired = np.concatenate([np.asarray(model.pair_geom1), np.asarray(model.pair_geom2)])
+    colliding[paired.astype(np.int64)] = True
+    return np.flatnonzero(colliding)
 
 
 def _filtered_pairs(model: Any, names: list[str]) -> list[tuple[str, str, str]]:
     """Body pairs MuJoCo's weld and bitmask filters leave untested (see :func:`_exclusions`)."""
     contype = np.asarray(model.geom_contype, dtype=np.int64)
     conaffinity = np.asarray(model.geom_conaffinity, dtype=np.int64)
-    colliding = np.flatnonzero((contype != 0) | (conaffinity != 0))
+    colliding = _colliding_geoms(model)
     geom_body = np.asarray(model.geom_bodyid, dtype=np.int64)
     bodies = sorted({int(b) for b in geom_body[colliding]})
     weld = np.asarray(model.body_weldid, dtype=np.int64)
-    explicit = {
-        tuple(sorted((int(geom_body[g1]), int(geom_body[g2]))))
-        for g1, g2 in zip(model.pair_geom1, model.pair_geom2)
-    }
+    explicit = _explicit_body_pairs(model)
     geoms_of = {b: colliding[geom_body[colliding] == b] for b in bodies}
     pairs: list[tuple[str, str, str]] = []
     for i, a in enumerate(bodies):

@@ -275,6 +275,13 @@ def _spec_of_mjcf(
     spec = _spec(mujoco, robot.source, lambda: mujoco.MjSpec.from_file(robot.source))
     _compile(mujoco, spec, robot.source)
     geoms = {geom.id: geom for geom in spec.geoms}
+    colliding = {c.index for c in robot.colliders}
+    # visual: colliding with nothing, and no collider (a geom of a <contact><pair> is one)
+    visual = [
+        geom
+        for geom in spec.geoms
+        if geom.contype == 0 and geom.conaffinity == 0 and geom.id not in colliding
+    ]
     rebuilt = [geoms[c.index] for c in robot.colliders if not c.kept]
     in_frame = _frame_inverses(mujoco, spec, robot.source, rebuilt)
     mesh_names = {m.name for m in spec.meshes}
@@ -291,9 +298,8 @@ def _spec_of_mjcf(
             continue
         added = _part_geoms(mujoco, spec, geom, files[i], stage, mesh_names, in_frame)
         new_assets.update(added)
-    for geom in spec.geoms:
-        if geom.contype == 0 and geom.conaffinity == 0:
-            geom.group = 2
+    for geom in visual:
+        geom.group = 2
     used = {geom.meshname for geom in spec.geoms if geom.meshname}
     for mesh in list(spec.meshes):
         if mesh.name not in used and mesh.name not in new_assets:
