@@ -23,6 +23,8 @@ class defaults:
 
     hill_climbing_min_vertices: int = 32
 
+    prefetch_max_vertices: int = 512
+
     gjk_max_iterations: int = 128
 
     support_warm_start_min_cosine: float = 0.5

@@ -1,5 +1,6 @@
 #include "meshcol/narrowphase.hpp"
 
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -141,6 +142,9 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 PairResult query_pair(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
                       const Pose& pose_b, QueryKind kind, double radius_a, double radius_b) {
+    // The climbs' reads are dependent loads; fetched up front, their misses overlap.
+    prefetch(a);
+    prefetch(b);
     if (radius_a < 0.0) radius_a = bounding_radius(a);
     if (radius_b < 0.0) radius_b = bounding_radius(b);
     double half = std::fmax(0.5 * radius_a, 0.5 * radius_b);
@@ -176,38 +180,48 @@ void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t
     const std::int64_t h_count = set.shape_count;
     // Each shape and pose a pair uses is checked once, not once per pair, on every thread;
     // a shape no pair uses is not read at all (a big set queried for a few pairs pays for
-    // those few: the checks read every vertex).
+    // those few: the checks read every vertex). Poses are checked up front; a shape's
+    // vertices (validity and bounding radius, one pass) by the first pair that uses it, just
+    // before its query reads them again: in broad-phase output most shapes are in only a few
+    // pairs, and a separate pass over them all would bring each shape from memory twice.
     std::vector<char> ok(static_cast<size_t>(h_count), 0);
     for (long long i = 0; i < 2 * pair_count; ++i) ok[pairs[i]] = 1;
     std::vector<Pose> pose(static_cast<size_t>(h_count));
-    std::vector<double> radius(static_cast<size_t>(h_count), 0.0);
+    // kUnchecked until the first pair's thread computes it (threads that meet the shape at
+    // the same moment both compute it, the same value: relaxed atomics suffice).
+    constexpr double kUnchecked = -1.0;
+    std::vector<std::atomic<double>> radius(static_cast<size_t>(h_count));
     const int shape_threads = resolve_threads(threads, h_count, defaults::min_shapes_per_thread);
     parallel_for(h_count, shape_threads, [&](long long begin, long long end) {
         for (long long h = begin; h < end; ++h) {
-            if (!ok[h]) continue;
-            const ShapeView s = set.shape(h);
-            radius[h] = valid_bounding_radius(s);
-            bool good = !std::isnan(radius[h]);
-            if (poses != nullptr) {
-                const double* m = poses + 16 * h;
-                if (!is_rigid_matrix4(m, defaults::rigid_tolerance)) good = false;
-                else pose[h] = Pose::from_matrix4(m);
-            }
-            ok[h] = good ? 1 : 0;
+            radius[h].store(kUnchecked, std::memory_order_relaxed);
+            if (!ok[h] || poses == nullptr) continue;
+            const double* m = poses + 16 * h;
+            if (!is_rigid_matrix4(m, defaults::rigid_tolerance)) ok[h] = 0;
+            else pose[h] = Pose::from_matrix4(m);
         }
     });
+    const auto checked_radius = [&](std::int64_t h) {
+        double r = radius[h].load(std::memory_order_relaxed);
+        if (r == kUnchecked) {
+            r = valid_bounding_radius(set.shape(h));
+            radius[h].store(r, std::memory_order_relaxed);
+        }
+        return r;
+    };
     const int n_threads = resolve_threads(threads, pair_count, defaults::min_pairs_per_thread);
     parallel_for(pair_count, n_threads, [&](long long begin, long long end) {
         for (long long i = begin; i < end; ++i) {
             const std::int64_t ia = pairs[2 * i], ib = pairs[2 * i + 1];
             PairResult r;
-            if (!ok[ia] || !ok[ib]) {
+            const double ra = ok[ia] ? checked_radius(ia) : kNaN;
+            const double rb = ok[ib] ? checked_radius(ib) : kNaN;
+            if (std::isnan(ra) || std::isnan(rb)) {
                 r.status = Status::INVALID_INPUT;
                 r.distance = r.depth = kNaN;
                 r.normal = r.point_a = r.point_b = Vec3{kNaN, kNaN, kNaN};
             } else {
-                r = query_pair(set.shape(ia), pose[ia], set.shape(ib), pose[ib], kind,
-                               radius[ia], radius[ib]);
+                r = query_pair(set.shape(ia), pose[ia], set.shape(ib), pose[ib], kind, ra, rb);
             }
             if (out.distance) out.distance[i] = r.distance;
             if (out.depth) out.depth[i] = r.depth;

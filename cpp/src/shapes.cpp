@@ -1,6 +1,7 @@
 #include "meshcol/shapes.hpp"
 
 #include <cmath>
+#include <cstddef>
 #include <limits>
 
 #include "meshcol/defaults.hpp"
@@ -60,6 +61,34 @@ SupportPoint support_core(const ShapeView& s, const Vec3& d, int hint) {
         }
     }
     return {Vec3{}, -1};
+}
+
+namespace {
+
+// A hint to fetch the cache lines of [begin, end) (a no-op where the compiler has no hint).
+void prefetch_bytes(const void* begin, const void* end) {
+#if defined(__GNUC__) || defined(__clang__)
+    constexpr std::ptrdiff_t kLine = 64;
+    const char* p = static_cast<const char*>(begin);
+    const char* e = static_cast<const char*>(end);
+    for (; p < e; p += kLine) __builtin_prefetch(p);
+#else
+    (void)begin;
+    (void)end;
+#endif
+}
+
+}  // namespace
+
+void prefetch(const ShapeView& s) {
+    if (s.kind != ShapeKind::POLYTOPE || s.vertices == nullptr || s.vertex_count <= 0 ||
+        s.vertex_count > defaults::prefetch_max_vertices)
+        return;
+    const int n = s.vertex_count;
+    prefetch_bytes(s.vertices, s.vertices + n);
+    if (s.adjacency_offsets == nullptr || s.adjacency == nullptr) return;
+    prefetch_bytes(s.adjacency_offsets, s.adjacency_offsets + n + 1);
+    prefetch_bytes(s.adjacency + s.adjacency_offsets[0], s.adjacency + s.adjacency_offsets[n]);
 }
 
 Vec3 support(const ShapeView& s, const Vec3& d) {

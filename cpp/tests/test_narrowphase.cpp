@@ -182,3 +182,33 @@ TEST_CASE("shapes: valid_bounding_radius is is_valid plus bounding_radius, bit f
     ShapeView bad_sphere = fixtures::sphere(-1.0);
     CHECK(std::isnan(valid_bounding_radius(bad_sphere)));
 }
+
+TEST_CASE("shapes: prefetch reads only the shape's own data and changes no answer") {
+    // A regular tetrahedron with its hull adjacency (each vertex's three neighbours padded
+    // with itself to four), in arrays of exactly the shape's size: the sanitizer lane sees
+    // any read past them. Every kind, no data, no adjacency and a shape over the cap too.
+    const std::vector<Vec3> corners = {{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
+    const std::vector<std::int64_t> offsets = {0, 4, 8, 12, 16};
+    const std::vector<std::int32_t> adjacency = {1, 2, 3, 0, 0, 2, 3, 1,
+                                                 0, 1, 3, 2, 0, 1, 2, 3};
+    ShapeView tetra = fixtures::polytope(corners);
+    ShapeView climbing = tetra;
+    climbing.adjacency_offsets = offsets.data();
+    climbing.adjacency = adjacency.data();
+    std::vector<Vec3> many(static_cast<size_t>(defaults::prefetch_max_vertices) + 1,
+                           Vec3{0.5, 0.5, 0.5});
+    const ShapeView over = fixtures::polytope(many);
+    for (const ShapeView& s : {ShapeView{}, fixtures::box(1, 2, 3), fixtures::sphere(1.0),
+                               fixtures::capsule(0.5, 1.0), tetra, climbing, over})
+        prefetch(s);
+    // Overlapping tetrahedra: the view with adjacency (prefetched with it) and the one
+    // without give the same answer.
+    const PairResult with = query_pair(climbing, at(0, 0, 0), climbing, at(1.5, 0, 0),
+                                       QueryKind::PENETRATION);
+    const PairResult without =
+        query_pair(tetra, at(0, 0, 0), tetra, at(1.5, 0, 0), QueryKind::PENETRATION);
+    CHECK(with.status == Status::CONVERGED);
+    CHECK(with.depth > 0.0);
+    CHECK(with.depth == without.depth);
+    CHECK(with.normal.x == without.normal.x);
+}

@@ -49,9 +49,13 @@ def check_against_sat(shapes, cs, poses, pairs, tolerance: float) -> None:
         truth = max(sat_depth(wa, wb), 0.0)
         assert abs(got.depth[k] - truth) <= tolerance, (k, got.depth[k], truth)
         assert got.distance[k] <= tolerance
-        # The normal is only checked to be a unit vector: at a distance of 1e-16 either way
-        # its direction is rounding (GJK's v / |v|), on main as on this branch.
+        # A unit vector along which the two do not overlap: b moved by depth * normal only
+        # touches. It need not be the direction the pair came from: touching at a vertex or
+        # an edge of a - b (most pairs of smooth hulls), every direction of its normal cone
+        # is as good, and EPA gives one of its faces' normals (see the next tests).
         assert abs(np.linalg.norm(got.normal[k]) - 1.0) <= 1e-9
+        n = got.normal[k]
+        assert (wa @ n).max() - (wb @ n).min() <= tolerance, (k, n)
 
 
 def test_smooth_hulls_touching_match_sat():
@@ -81,6 +85,41 @@ def test_flush_faces_have_depth_zero_and_the_face_normal():
     got = signed_distance_batch(cs, poses, pairs, threads=1)
     np.testing.assert_array_equal(got.depth, [0.0, 0.0])
     np.testing.assert_array_equal(got.distance, [0.0, 0.0])
+    np.testing.assert_allclose(got.normal, [[0, 0, 1], [0, 0, 1]], atol=1e-12)
+
+
+def test_touching_at_a_face_has_that_face_normal():
+    # Touching at a face of a - b, the normal is unique: a tetrahedron's vertex on a cube's
+    # top face (vertex-face) and two turned boxes edge on edge (edge-edge, the normal along
+    # the cross product of the edges), each a little apart, then moved along the normal by
+    # the distance as the smooth-hull family is.
+    tetra = np.array([[0.0, 0.0, -1.0], [1.0, 0.0, 0.5], [-0.5, 0.9, 0.5], [-0.5, -0.9, 0.5]])
+    cube = box_corners((1, 1, 1))  # edges 1 long
+    # Bars 2 long with a square section of side 0.2 turned by 45 degrees about their length,
+    # so that an edge runs along the top and the bottom (0.1 * sqrt(2) off the axis).
+    c, s = np.cos(np.pi / 4), np.sin(np.pi / 4)
+    on_edge = np.array([[1, 0, 0], [0, c, -s], [0, s, c]])
+    bar = box_corners((2, 0.2, 0.2)) @ on_edge.T
+    c, s = np.cos(0.7), np.sin(0.7)
+    turn = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+    shapes = [cube, tetra, bar, bar]
+    poses = np.stack(
+        [
+            pose_matrix(np.eye(3), (0, 0, 0)),
+            pose_matrix(np.eye(3), (0.1, -0.2, 0.5 + 1.0 + 0.25)),
+            pose_matrix(np.eye(3), (0, 0, 0)),
+            pose_matrix(turn, (0.05, 0.03, 0.2 * np.sqrt(2) + 0.3)),
+        ]
+    )
+    cs = ConvexSet.from_vertices(shapes)
+    pairs = np.array([[0, 1], [2, 3]], dtype=np.int64)
+    apart = distance_batch(cs, poses, pairs, threads=1)
+    np.testing.assert_allclose(apart.distance, [0.25, 0.3], atol=1e-12)
+    moved = poses.copy()
+    moved[1::2, :3, 3] -= apart.distance[:, None] * apart.normal
+    got = signed_distance_batch(cs, moved, pairs, threads=1)
+    assert np.all(got.status == Status.CONVERGED)
+    assert np.all(np.abs(got.depth) <= 1e-15) and np.all(got.distance == 0.0)
     np.testing.assert_allclose(got.normal, [[0, 0, 1], [0, 0, 1]], atol=1e-12)
 
 
