@@ -33,7 +33,8 @@ with a winding-number inside test per region of points; coal and fcl enumerate e
 triangle pair and report the deepest pair's own penetration (a local quantity of two
 triangles: neither a bound of the meshes' depth nor zero for a resting contact). meshcol has
 no query that gives the peers' quantity, so no like-for-like depth row exists; each depth row
-prints both medians so the difference shows. With
+prints both medians so the difference shows. coal signs a penetration negative: its depth is
+read as the largest |penetration_depth| of the contacts. With
 --depth-only just those rows (about 2 s): run this script with another checkout's interpreter
 (its meshcol) in alternation with this one's for an A/B of the core, e.g.
 ``for i in 1 2 3; do for py in ../main/.venv/bin/python .venv/bin/python; do $py
@@ -372,7 +373,7 @@ def depth_case(name: str, a: trimesh.Trimesh, b: trimesh.Trimesh, pb: np.ndarray
 
         def coal_depth():
             cp.collide()
-            return max((c.penetration_depth for c in cp.cres.getContacts()), default=0.0)
+            return max((abs(c.penetration_depth) for c in cp.cres.getContacts()), default=0.0)
 
         fns.append(coal_depth)
         coal_text = f", coal deepest contact {coal_depth():.6g}"
@@ -558,7 +559,7 @@ def family_depth(name, mesh, meshes, pairs, flat, objects) -> None:
             for i, j in pairs.tolist():
                 cres.clear()
                 coal.collide(cm, tfs[i], cm, tfs[j], creq, cres)
-                out.append(max((c.penetration_depth for c in cres.getContacts()), default=0.0))
+                out.append(max((abs(c.penetration_depth) for c in cres.getContacts()), default=0.0))
             return out
 
         fns.append(coal_depths)
