@@ -25,7 +25,16 @@ checked: distances agree with coal's to 1e-9 (relative) where the meshes are apa
 intersects verdicts agree with both peers.
 
 Then the mesh penetration depth (mesh_penetration_depth_batch) against fcl.collide with
-contacts (the deepest contact's penetration_depth), on overlapping and resting pairs. With
+contacts (the deepest contact's penetration_depth), on overlapping and resting pairs. These
+rows are NOT like for like (DEPTH_MEANING, printed with them): meshcol computes a bound of the
+meshes' true penetration depth (the deepest sampled point of one mesh inside the other solid,
+measured to the other surface: at most the minimum translation that separates closed meshes),
+with a winding-number inside test per region of points; coal and fcl enumerate every crossing
+triangle pair and report the deepest pair's own penetration (a local quantity of two
+triangles: neither a bound of the meshes' depth nor zero for a resting contact). meshcol has
+no query that gives the peers' quantity, so no like-for-like depth row exists; each depth row
+prints both medians so the difference shows. coal signs a penetration negative: its depth is
+read as the largest |penetration_depth| of the contacts. With
 --depth-only just those rows (about 2 s): run this script with another checkout's interpreter
 (its meshcol) in alternation with this one's for an A/B of the core, e.g.
 ``for i in 1 2 3; do for py in ../main/.venv/bin/python .venv/bin/python; do $py
@@ -80,6 +89,14 @@ FAMILY = (
 )
 
 RATIOS: dict[tuple[str, str], list[float]] = defaultdict(list)  # (row, peer) -> peer/meshcol
+
+# What the depth rows compare: two different quantities (see the module docstring).
+DEPTH_MEANING = (
+    "depth rows are not like for like: meshcol = the meshes' penetration depth (deepest "
+    "sampled point inside the other solid, to its surface; a lower bound of the separating "
+    "translation), coal/fcl = the deepest crossing triangle pair's own penetration (a local "
+    "contact quantity)"
+)
 
 
 def row(name: str, ours: float, peers: dict[str, float]) -> None:
@@ -356,7 +373,7 @@ def depth_case(name: str, a: trimesh.Trimesh, b: trimesh.Trimesh, pb: np.ndarray
 
         def coal_depth():
             cp.collide()
-            return max((c.penetration_depth for c in cp.cres.getContacts()), default=0.0)
+            return max((abs(c.penetration_depth) for c in cp.cres.getContacts()), default=0.0)
 
         fns.append(coal_depth)
         coal_text = f", coal deepest contact {coal_depth():.6g}"
@@ -368,7 +385,7 @@ def depth_case(name: str, a: trimesh.Trimesh, b: trimesh.Trimesh, pb: np.ndarray
         f"{coal_text}"
     )
     row(
-        f"depth {name}: depth (peers: collide+contacts)",
+        f"depth {name}: depth, not like for like (peers: collide+contacts)",
         times[0],
         peers_of(times[1], times[2] if coal else None),
     )
@@ -542,19 +559,27 @@ def family_depth(name, mesh, meshes, pairs, flat, objects) -> None:
             for i, j in pairs.tolist():
                 cres.clear()
                 coal.collide(cm, tfs[i], cm, tfs[j], creq, cres)
-                out.append(max((c.penetration_depth for c in cres.getContacts()), default=0.0))
+                out.append(max((abs(c.penetration_depth) for c in cres.getContacts()), default=0.0))
             return out
 
         fns.append(coal_depths)
     times = best_of_alternated(*fns, repeat=3)
+    ours = mesh_penetration_depth_batch(meshes, None, pairs, threads=1).depth
+    theirs = fns[2]() if coal else fns[1]()
+    print(
+        f"  depth, not like for like: meshcol mesh depth median {np.median(ours):.4g} "
+        f"(max {np.max(ours):.4g}), {'coal' if coal else 'fcl'} deepest triangle-pair contact "
+        f"median {np.median(theirs):.4g} (max {np.max(theirs):.4g})"
+    )
     row(
-        f"{name} touching: depth (batch; peers: contacts)",
+        f"{name} touching: depth, not like for like (batch; peers: contacts)",
         times[0] / count,
         peers_of(times[1] / count, times[2] / count if coal else None),
     )
 
 
 def family_rows(count: int = 300) -> None:
+    print(DEPTH_MEANING)
     rng = np.random.default_rng(7)
     for name, path in FAMILY:
         if not path.exists():
@@ -625,6 +650,7 @@ def one_run() -> None:
 
 
 def depth_rows() -> None:
+    print(DEPTH_MEANING)
     load = lambda name: trimesh.load(MODELS / name, force="mesh")
     torus = load("torus.STL")
     ball_a, ball_b = load("ballA.off"), load("ballB.off")

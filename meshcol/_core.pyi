@@ -369,6 +369,11 @@ class MeshBvhSet:
 
     def node_count(self, i: int) -> int: ...
 
+    def distinct_count(self) -> int:
+        """
+        Hierarchies built: one per distinct mesh (meshes of the same vertex and face bytes share one).
+        """
+
     def validate(self) -> bool:
         """Checks every hierarchy's invariants (for tests)."""
 

@@ -7,14 +7,17 @@
 #include <nanobind/stl/tuple.h>
 #include <nanobind/typing.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <tuple>
+#include <unordered_map>
 #include <vector>
 
 #include "meshcol/batch.hpp"
@@ -36,8 +39,73 @@ using meshcol::Vec3;
 /// The hierarchies of M meshes, packed as in meshcol.mesh_query.MeshSet, and the set's default
 /// poses, read and checked for rigidity once (`set_poses`) so that a query without poses reads
 /// no array.
+/// The hierarchies of a set, one per distinct mesh: meshes whose vertex and face blocks are
+/// the same bytes (instances of one asset) share one hierarchy, built once (the build is
+/// deterministic, so a copy's own would be the same, bit for bit). Shared read-only across
+/// threads (MeshBvh is immutable).
+class SharedHierarchies {
+public:
+    const meshcol::MeshBvh& operator[](size_t i) const { return built_[which_[i]]; }
+    size_t size() const { return which_.size(); }
+    size_t distinct() const { return built_.size(); }
+    std::vector<meshcol::MeshBvh>::const_iterator begin() const { return built_.begin(); }
+    std::vector<meshcol::MeshBvh>::const_iterator end() const { return built_.end(); }
+
+    /// Groups the m meshes (vertex rows vo[i]..vo[i + 1] of v, face rows fo[i]..fo[i + 1] of
+    /// f) by their bytes and builds each distinct one on `threads` threads.
+    void build(const double* v, const std::int64_t* vo, const std::int64_t* f, const std::int64_t* fo, long long m,
+               int threads) {
+        which_.assign(static_cast<size_t>(m), 0);
+        std::vector<long long> first;  // the mesh each distinct hierarchy is built from
+        // Candidates by a cheap key (the block sizes and a few leading values), then compared
+        // whole: a lookup is one memcmp per earlier distinct mesh of the same key.
+        std::unordered_map<std::uint64_t, std::vector<size_t>> by_key;
+        const auto same = [&](long long i, long long j) {
+            const std::int64_t nv = vo[i + 1] - vo[i], nf = fo[i + 1] - fo[i];
+            return nv == vo[j + 1] - vo[j] && nf == fo[j + 1] - fo[j] &&
+                   std::memcmp(v + 3 * vo[i], v + 3 * vo[j], sizeof(double) * 3 * static_cast<size_t>(nv)) == 0 &&
+                   std::memcmp(f + 3 * fo[i], f + 3 * fo[j], sizeof(std::int64_t) * 3 * static_cast<size_t>(nf)) == 0;
+        };
+        for (long long i = 0; i < m; ++i) {
+            const std::int64_t nv = vo[i + 1] - vo[i], nf = fo[i + 1] - fo[i];
+            std::uint64_t key = static_cast<std::uint64_t>(nv) * 0x9E3779B97F4A7C15ULL ^ static_cast<std::uint64_t>(nf);
+            const std::int64_t sample = std::min<std::int64_t>(3 * nv, 12);
+            for (std::int64_t k = 0; k < sample; ++k) {
+                std::uint64_t bits;
+                std::memcpy(&bits, v + 3 * vo[i] + k, sizeof(bits));
+                key = (key ^ bits) * 0x100000001B3ULL;
+            }
+            std::vector<size_t>& bucket = by_key[key];
+            size_t found = first.size();
+            for (const size_t d : bucket)
+                if (same(i, first[d])) {
+                    found = d;
+                    break;
+                }
+            if (found == first.size()) {
+                bucket.push_back(found);
+                first.push_back(i);
+            }
+            which_[static_cast<size_t>(i)] = found;
+        }
+        built_.resize(first.size());
+        const auto n = static_cast<long long>(first.size());
+        meshcol::parallel_for(n, meshcol::resolve_threads(threads, n, 1), [&](long long begin, long long end) {
+            for (long long d = begin; d < end; ++d) {
+                const long long i = first[static_cast<size_t>(d)];
+                built_[static_cast<size_t>(d)] =
+                    meshcol::MeshBvh(v + 3 * vo[i], vo[i + 1] - vo[i], f + 3 * fo[i], fo[i + 1] - fo[i]);
+            }
+        });
+    }
+
+private:
+    std::vector<meshcol::MeshBvh> built_;
+    std::vector<size_t> which_;  // mesh -> its hierarchy in built_
+};
+
 struct MeshBvhSet {
-    std::vector<meshcol::MeshBvh> meshes;
+    SharedHierarchies meshes;
     std::vector<meshcol::Pose> poses;  // default world-from-local poses (identity until set)
     std::vector<char> rigid;           // poses[i] is rigid and finite
 
@@ -76,17 +144,12 @@ void build_set(MeshBvhSet* self, Points vertices, Faces faces, Index64 vertex_of
             throw std::invalid_argument("mesh " + std::to_string(i) + " has too many faces");
     }
     new (self) MeshBvhSet();
-    self->meshes.resize(static_cast<size_t>(m));
     meshcol::Pose identity;
     identity.rotation = meshcol::Mat3::identity();
     self->poses.assign(static_cast<size_t>(m), identity);
     self->rigid.assign(static_cast<size_t>(m), 1);
     nb::gil_scoped_release release;
-    meshcol::parallel_for(m, meshcol::resolve_threads(threads, m, 1), [&](long long begin, long long end) {
-        for (long long i = begin; i < end; ++i)
-            self->meshes[static_cast<size_t>(i)] =
-                meshcol::MeshBvh(v + 3 * vo[i], vo[i + 1] - vo[i], f + 3 * fo[i], fo[i + 1] - fo[i]);
-    });
+    self->meshes.build(v, vo, f, fo, m, threads);
 }
 
 // The poses of a query: the set's defaults, or read and checked for rigidity from `poses`.
@@ -535,6 +598,8 @@ void bind_mesh_query(nb::module_& m) {
         .def("closed", [](const MeshBvhSet& s, std::int64_t i) { return s.at(i).closed(); }, "i"_a,
              "Whether mesh i is a closed, consistently wound surface (MeshBvh::closed).")
         .def("node_count", [](const MeshBvhSet& s, std::int64_t i) { return s.at(i).nodes().size(); }, "i"_a)
+        .def("distinct_count", [](const MeshBvhSet& s) { return s.meshes.distinct(); },
+             "Hierarchies built: one per distinct mesh (meshes of the same vertex and face bytes share one).")
         .def("validate", [](const MeshBvhSet& s) {
             for (const auto& mesh : s.meshes)
                 if (!mesh.validate()) return false;

@@ -277,17 +277,82 @@ Vec3 closest_point_on_triangle(const Vec3& p, const Vec3 t[3]) {
 
 double triangle_separated_squared_distance(const Vec3 a[3], const Vec3 b[3], Vec3* point_a,
                                            Vec3* point_b) {
+    return triangle_separated_squared_distance_below(a, b, std::numeric_limits<double>::infinity(), 0.0, point_a,
+                                                     point_b);
+}
+
+double triangle_separated_squared_distance_below(const Vec3 a[3], const Vec3 b[3], double limit2, double slack,
+                                                 Vec3* point_a, Vec3* point_b) {
+    // The 9 edge pairs in the order of segment_closest_points(a[i], a[i + 1], b[j], b[j + 1]),
+    // with its very expressions (so its very roundings) and the per-edge terms computed once.
+    // A pair is skipped when the distance between the two edges' lines, less `slack`, is above
+    // min(limit, best so far): its computed distance (that of two rounded points on the edges,
+    // at least the exact edge distance less far under `slack`) would be above it too, so it
+    // could neither be the minimum nor tie it. Likewise a vertex-face pair by its plane
+    // distance. With limit2 = inf and slack = 0 nothing is skipped.
     double best = std::numeric_limits<double>::infinity();
     Vec3 best_a = a[0], best_b = b[0];
+    const Vec3 da[3] = {a[1] - a[0], a[2] - a[1], a[0] - a[2]};
+    const Vec3 db[3] = {b[1] - b[0], b[2] - b[1], b[0] - b[2]};
+    const double la[3] = {dot(da[0], da[0]), dot(da[1], da[1]), dot(da[2], da[2])};
+    const double lb[3] = {dot(db[0], db[0]), dot(db[1], db[1]), dot(db[2], db[2])};
+    const bool filter = limit2 < std::numeric_limits<double>::infinity();
+    // The reach below which a pair may still beat min(limit, best), squared, with the slack.
+    auto reach2 = [&]() {
+        const double r = std::sqrt(best < limit2 ? best : limit2) + slack;
+        return r * r * (1.0 + 1e-9);
+    };
+    double within2 = filter ? reach2() : 0.0;
     for (int i = 0; i < 3; ++i) {
         const Vec3& p1 = a[i];
-        const Vec3& q1 = a[(i + 1) % 3];
+        const Vec3& d1 = da[i];
+        const double sa = la[i];
         for (int j = 0; j < 3; ++j) {
-            const SegmentClosestPoints s = segment_closest_points(p1, q1, b[j], b[(j + 1) % 3]);
-            if (s.squared_distance < best) {
-                best = s.squared_distance;
-                best_a = s.point_a;
-                best_b = s.point_b;
+            const Vec3& p2 = b[j];
+            const Vec3& d2 = db[j];
+            const Vec3 r = p1 - p2;
+            if (filter) {
+                // The distance between the lines: |r . (d1 x d2)| / |d1 x d2|.
+                // Only for edges at least 5.7 degrees from parallel (|d1 x d2|^2 >= 1e-2
+                // |d1|^2 |d2|^2): the rounding of d1 x d2, relative to its length, grows as
+                // 1 / sin of the angle, and the bound's error stays about 1e-14 |r| here, far
+                // under `slack` (the caller's rounding allowance, >= 1e-13 of the coordinates).
+                const Vec3 n = cross(d1, d2);
+                const double rn = dot(r, n), nn = dot(n, n);
+                if (nn > 1e-2 * sa * lb[j] && rn * rn > within2 * nn) continue;
+            }
+            const double e = lb[j], f = dot(d2, r);
+            double s = 0.0, t = 0.0;
+            if (sa == 0.0 && e == 0.0) {
+                s = t = 0.0;
+            } else if (sa == 0.0) {
+                t = clamp01(f / e);
+            } else {
+                const double c = dot(d1, r);
+                if (e == 0.0) {
+                    s = clamp01(-c / sa);
+                } else {
+                    const double bb = dot(d1, d2);
+                    const double denom = sa * e - bb * bb;
+                    s = denom > 0.0 ? clamp01((bb * f - c * e) / denom) : 0.0;
+                    t = (bb * s + f) / e;
+                    if (t < 0.0) {
+                        t = 0.0;
+                        s = clamp01(-c / sa);
+                    } else if (t > 1.0) {
+                        t = 1.0;
+                        s = clamp01((bb - c) / sa);
+                    }
+                }
+            }
+            const Vec3 qa = p1 + d1 * s;
+            const Vec3 qb = p2 + d2 * t;
+            const double d2ist = squared_norm(qb - qa);
+            if (d2ist < best) {
+                best = d2ist;
+                best_a = qa;
+                best_b = qb;
+                if (filter) within2 = reach2();
             }
         }
     }
@@ -303,15 +368,18 @@ double triangle_separated_squared_distance(const Vec3 a[3], const Vec3 b[3], Vec
         if (!(nn > 0.0)) continue;
         for (int i = 0; i < 3; ++i) {
             const Vec3& p = verts[i];
+            const double h = dot(p - face[0], n);
+            if (filter && h * h > within2 * nn) continue;
             if (dot(cross(e0, p - face[0]), n) < 0.0 || dot(cross(e1, p - face[1]), n) < 0.0 ||
                 dot(cross(e2, p - face[2]), n) < 0.0)
                 continue;
-            const Vec3 q = p - n * (dot(p - face[0], n) / nn);
+            const Vec3 q = p - n * (h / nn);
             const double d2 = squared_norm(p - q);
             if (d2 < best) {
                 best = d2;
                 best_a = side == 0 ? p : q;
                 best_b = side == 0 ? q : p;
+                if (filter) within2 = reach2();
             }
         }
     }

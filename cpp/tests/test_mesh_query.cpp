@@ -215,3 +215,83 @@ TEST_CASE("mesh bvh: closed means every edge pairs with one reversed twin, short
     CHECK(!open_tube.bvh().closed());
     CHECK(tube(24, 0.5, 1.0).bvh().closed());
 }
+
+TEST_CASE("triangle distance with a limit: the full distance bit for bit whenever it can count") {
+    // The mesh distance search measures triangle pairs against the best distance so far
+    // (triangle_separated_squared_distance_below): whenever the full 15-feature distance is at
+    // most the limit, the value and both points must be the very same doubles; otherwise the
+    // value must be above the limit (the search then drops the pair, as it drops the full one).
+    std::uint64_t state = 777;
+    const auto uniform = [&state]() {  // in [-1, 1)
+        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+        return static_cast<double>(state >> 11) * (2.0 / 9007199254740992.0) - 1.0;
+    };
+    int counted = 0, skipped = 0;
+    for (int trial = 0; trial < 20000; ++trial) {
+        Vec3 a[3], b[3];
+        const double scale = trial % 4 == 0 ? 1e3 : 1.0;
+        for (int k = 0; k < 3; ++k) a[k] = Vec3{uniform(), uniform(), uniform()} * scale;
+        const Vec3 shift = Vec3{uniform(), uniform(), uniform()} * (scale * (trial % 2 == 0 ? 0.5 : 3.0));
+        for (int k = 0; k < 3; ++k) b[k] = Vec3{uniform(), uniform(), uniform()} * scale + shift;
+        if (trial % 5 == 1) a[2] = a[0] + (a[1] - a[0]) * 0.5 + Vec3{1e-9, 0, 0} * scale;  // a sliver
+        if (trial % 5 == 2) b[1] = b[0] + (a[1] - a[0]) * 0.7 + Vec3{0, 1e-12, 0} * scale;  // nearly parallel edges
+        if (trial % 7 == 3) b[2] = b[1];  // degenerate: a segment
+        Vec3 fa, fb;
+        const double full = triangle_separated_squared_distance(a, b, &fa, &fb);
+        double largest = 0.0;
+        for (int k = 0; k < 3; ++k)
+            for (int c = 0; c < 3; ++c) largest = std::fmax(largest, std::fmax(std::fabs(a[k][c]), std::fabs(b[k][c])));
+        const double slack = 1e-13 * largest;
+        // limits below, at and above the full value, and far below it
+        const double limits[4] = {full * (0.5 + 0.6 * std::fabs(uniform())), full, full * 1.5, full * 1e-4};
+        for (const double limit : limits) {
+            Vec3 pa, pb;
+            const double below = triangle_separated_squared_distance_below(a, b, limit, slack, &pa, &pb);
+            if (full <= limit) {
+                ++counted;
+                REQUIRE(below == full);
+                REQUIRE((pa.x == fa.x && pa.y == fa.y && pa.z == fa.z));
+                REQUIRE((pb.x == fb.x && pb.y == fb.y && pb.z == fb.z));
+            } else {
+                ++skipped;
+                REQUIRE(below > limit);
+            }
+        }
+    }
+    CHECK(counted > 20000);
+    CHECK(skipped > 20000);
+}
+
+TEST_CASE("mesh query: the ordered crossing descent gives every pair the brute-force verdict") {
+    // mesh_intersects descends the deeper-overlapping child pair first: the verdict must still
+    // be that of all triangle pairs (b mapped into a's frame as the queries map it), and that
+    // of the distance query's crossing descent, which keeps the unordered order.
+    const fixtures::TriangleMesh thin = tube(16, 0.1, 0.5);
+    const MeshBvh mesh = thin.bvh();
+    std::uint64_t state = 4242;
+    const auto uniform = [&state]() {  // in [-1, 1)
+        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+        return static_cast<double>(state >> 11) * (2.0 / 9007199254740992.0) - 1.0;
+    };
+    int crossing = 0, apart = 0;
+    for (int trial = 0; trial < 120; ++trial) {
+        const Pose pa = posed(uniform(), uniform(), uniform(), uniform(), {0.0, 0.0, 0.0});
+        const double reach = 0.05 + 0.3 * std::fabs(uniform());
+        const Pose pb = posed(uniform(), uniform(), uniform(), uniform(), {reach, 0.1 * uniform(), 0.1 * uniform()});
+        const mesh_detail::Relative rel(pa, pb, mesh, mesh);
+        bool brute = false;
+        for (std::int32_t i = 0; i < mesh.triangle_count() && !brute; ++i)
+            for (std::int32_t j = 0; j < mesh.triangle_count() && !brute; ++j) {
+                const Vec3 tb[3] = {rel.apply(mesh.triangle(j)[0]), rel.apply(mesh.triangle(j)[1]),
+                                    rel.apply(mesh.triangle(j)[2])};
+                brute = triangles_intersect(mesh.triangle(i), tb, nullptr);
+            }
+        std::int32_t ta = -1, tb = -1;
+        Vec3 witness;
+        CHECK_EQ(mesh_intersects(mesh, pa, mesh, pb), brute);
+        CHECK_EQ(mesh_detail::first_crossing(mesh, mesh, rel, &ta, &tb, &witness), brute);
+        (brute ? crossing : apart) += 1;
+    }
+    CHECK(crossing >= 20);
+    CHECK(apart >= 20);
+}

@@ -1108,3 +1108,34 @@ def test_intersects_batch_result_of_any_dataclass() -> None:
         assert r.status.tolist() == [Status.CONVERGED] * 2
     with pytest.raises(TypeError, match=r"result_type must be a class"):
         meshes._handle.intersects_batch(None, pairs, 1, "not a class")
+
+
+# --------------------------------------------------------------------------- shared hierarchies
+
+
+def test_instances_share_one_hierarchy_with_the_answers_of_their_own() -> None:
+    """Meshes of the same vertex and face bytes (instances of one asset, or equal copies) share
+    one hierarchy; every query on a set of interleaved instances gives, bit for bit, what the
+    sets of the two meshes of each pair alone give."""
+    from meshcol.collision.mesh_query import mesh_penetration_depth_batch
+
+    a, b = trimesh.creation.icosphere(2), trimesh.creation.capsule(height=1.0, radius=0.4)
+    rng = np.random.default_rng(5)
+    order = [a, b, a, a.copy(), b, b.copy()]  # copies: other arrays, the same bytes
+    poses = np.tile(np.eye(4), (len(order), 1, 1))
+    for p in poses:  # random rotations (det +1), centres within reach of each other
+        q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+        p[:3, :3] = q * np.sign(np.diag(r)) * np.sign(np.linalg.det(q * np.sign(np.diag(r))))
+        p[:3, 3] = rng.uniform(-0.8, 0.8, 3)
+    shared = MeshSet.from_arrays(order, poses, threads=1)
+    assert len(shared) == 6 and shared._handle.distinct_count() == 2
+    assert shared.validate()
+    pairs = np.array([(i, j) for i in range(6) for j in range(6) if i != j])
+    for i, j in pairs.tolist():
+        alone = MeshSet.from_arrays([order[i], order[j]], poses[[i, j]], threads=1)
+        one = np.array([[0, 1]])
+        for query in (mesh_distance_batch, mesh_intersects_batch, mesh_penetration_depth_batch):
+            want = query(alone, None, one, threads=1)
+            got = query(shared, None, np.array([[i, j]]), threads=1)
+            for field in dataclasses.fields(want):
+                np.testing.assert_array_equal(getattr(got, field.name), getattr(want, field.name))

@@ -49,6 +49,15 @@ bool segment_crosses_triangle(const Vec3& p, const Vec3& q, const Vec3 t[3], dou
 double triangle_separated_squared_distance(const Vec3 a[3], const Vec3 b[3], Vec3* point_a,
                                            Vec3* point_b);
 
+/// `triangle_separated_squared_distance` with early outs against `limit2`: bit for bit the same
+/// value and points whenever that value is at most `limit2`; otherwise some value above
+/// `limit2` (the points then mean nothing). An edge pair or vertex-face pair is skipped when a
+/// lower bound of its distance, less `slack`, is above the smaller of sqrt(limit2) and the
+/// best distance so far. `slack` must be at least 1e-13 of the largest coordinate magnitude
+/// of the six corners (it covers the rounding of the bounds; a mesh pair's allowance is).
+double triangle_separated_squared_distance_below(const Vec3 a[3], const Vec3 b[3], double limit2, double slack,
+                                                 Vec3* point_a, Vec3* point_b);
+
 /// Distance between two triangles and their closest points.
 struct TriangleDistanceOutput {
     double distance = 0.0;      ///< >= 0; 0 when they intersect (or, rounded, closer than ~1e-16)
