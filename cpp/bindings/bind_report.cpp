@@ -5,6 +5,7 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/optional.h>
+#include <nanobind/stl/string.h>
 
 #include <Python.h>
 
@@ -70,10 +71,6 @@ public:
         --conversions_;
         Py_DECREF(plain);
     }
-
-private:
-    PyObject* builtin_;
-    int conversions_ = 0;
 
     void newline(int level) {
         text.push_back('\n');
@@ -145,6 +142,10 @@ private:
         }
         text.push_back('"');
     }
+
+private:
+    PyObject* builtin_;
+    int conversions_ = 0;
 
     void sequence(PyObject* o, int level) {
         const bool list = PyList_Check(o);
@@ -231,6 +232,136 @@ std::optional<nb::str> dumps_indented(nb::handle document, nb::handle builtin) {
     return nb::steal<nb::str>(text);
 }
 
+// --- rows of one shape from columns -------------------------------------------------------
+
+/// One column of `dumps_rows`: a key (already escaped, with ": ") and how to write a row's
+/// value from its arrays.
+struct Column {
+    enum Kind { kNumber, kVector, kBox, kInteger, kIndex, kBoolean, kString, kRaw } kind;
+    std::string key;
+    const double* reals = nullptr;
+    const std::int64_t* integers = nullptr;
+    const bool* flags = nullptr;
+    std::vector<std::string> table;  // kString: escaped; kRaw: as given
+};
+
+Column::Kind column_kind(const std::string& name) {
+    static const std::pair<const char*, Column::Kind> kinds[] = {
+        {"number", Column::kNumber},   {"vector", Column::kVector},
+        {"box", Column::kBox},         {"integer", Column::kInteger},
+        {"index", Column::kIndex},     {"boolean", Column::kBoolean},
+        {"string", Column::kString},   {"raw", Column::kRaw},
+    };
+    for (const auto& [word, kind] : kinds)
+        if (name == word) return kind;
+    throw nb::value_error(("unknown column kind " + name).c_str());
+}
+
+/// The array of `object` as T with `width` values a row (n rows), or a ValueError.
+template <class T>
+const T* column_array(Buffer& buffer, nb::handle object, size_t n, Py_ssize_t width) {
+    const T* data = width == 1 ? buffer.get<T>(object.ptr(), {static_cast<Py_ssize_t>(n)})
+                               : buffer.get<T>(object.ptr(), {static_cast<Py_ssize_t>(n), width});
+    if (data == nullptr) throw nb::value_error("a column's array has the wrong type or shape");
+    return data;
+}
+
+void vector_text(Encoder& out, const double* v, int level) {
+    if (!(std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2])))
+        return out.text.append("null"), void();
+    out.text.push_back('[');
+    for (int k = 0; k < 3; ++k) {
+        if (k) out.text.push_back(',');
+        out.newline(level + 1);
+        out.real(v[k]);
+    }
+    out.newline(level);
+    out.text.push_back(']');
+}
+
+void cell(Encoder& out, const Column& c, size_t i, int level) {
+    switch (c.kind) {
+        case Column::kNumber: return out.real(c.reals[i]);
+        case Column::kVector: return vector_text(out, c.reals + 3 * i, level);
+        case Column::kBox:
+            out.text.push_back('[');
+            out.newline(level + 1);
+            vector_text(out, c.reals + 6 * i, level + 1);
+            out.text.push_back(',');
+            out.newline(level + 1);
+            vector_text(out, c.reals + 6 * i + 3, level + 1);
+            out.newline(level);
+            out.text.push_back(']');
+            return;
+        case Column::kInteger: return out.text.append(std::to_string(c.integers[i])), void();
+        case Column::kIndex:
+            if (c.integers[i] < 0) return out.text.append("null"), void();
+            return out.text.append(std::to_string(c.integers[i])), void();
+        case Column::kBoolean: return out.text.append(c.flags[i] ? "true" : "false"), void();
+        case Column::kString:
+        case Column::kRaw: {
+            const std::int64_t code = c.integers[i];
+            if (code < 0) return out.text.append("null"), void();
+            if (static_cast<size_t>(code) >= c.table.size())
+                throw nb::index_error("a column's code is past its table");
+            return out.text.append(c.table[static_cast<size_t>(code)]), void();
+        }
+    }
+}
+
+nb::str dumps_rows(nb::list columns, size_t count, size_t start, size_t stop, int level) {
+    if (start > stop || stop > count) throw nb::value_error("rows out of range");
+    std::vector<Column> parsed(nb::len(columns));
+    std::vector<Buffer> buffers(parsed.size());
+    Encoder out(nullptr);
+    for (size_t k = 0; k < parsed.size(); ++k) {
+        auto spec = nb::cast<nb::tuple>(columns[k]);
+        Column& c = parsed[k];
+        out.text.clear();
+        out.escape(nb::cast<std::string>(spec[0]));
+        c.key = out.text + ": ";
+        c.kind = column_kind(nb::cast<std::string>(spec[1]));
+        Buffer& b = buffers[k];
+        switch (c.kind) {
+            case Column::kNumber: c.reals = column_array<double>(b, spec[2], count, 1); break;
+            case Column::kVector: c.reals = column_array<double>(b, spec[2], count, 3); break;
+            case Column::kBox: c.reals = column_array<double>(b, spec[2], count, 6); break;
+            case Column::kBoolean: c.flags = column_array<bool>(b, spec[2], count, 1); break;
+            default: c.integers = column_array<std::int64_t>(b, spec[2], count, 1);
+        }
+        if (c.kind == Column::kString || c.kind == Column::kRaw) {
+            for (nb::handle item : nb::cast<nb::list>(spec[3])) {
+                const std::string s = nb::cast<std::string>(item);
+                if (c.kind == Column::kRaw) {
+                    c.table.push_back(s);
+                } else {
+                    out.text.clear();
+                    out.escape(s);
+                    c.table.push_back(out.text);
+                }
+            }
+        }
+    }
+    out.text.clear();
+    for (size_t i = start; i < stop; ++i) {
+        if (i) out.text.push_back(',');
+        out.newline(level + 1);
+        out.text.push_back('{');
+        for (size_t k = 0; k < parsed.size(); ++k) {
+            if (k) out.text.push_back(',');
+            out.newline(level + 2);
+            out.text.append(parsed[k].key);
+            cell(out, parsed[k], i, level + 2);
+        }
+        out.newline(level + 1);
+        out.text.push_back('}');
+    }
+    PyObject* text = PyUnicode_DecodeASCII(out.text.data(),
+                                           static_cast<Py_ssize_t>(out.text.size()), nullptr);
+    if (text == nullptr) throw nb::python_error();
+    return nb::steal<nb::str>(text);
+}
+
 }  // namespace
 
 void bind_report(nb::module_& m) {
@@ -240,6 +371,13 @@ void bind_report(nb::module_& m) {
           "is one to leave to Python's json (a key that is not a string, an int beyond 64 "
           "bits, a dict subclass, a string that is not UTF-8, nesting past 400, or builtin "
           "raising).");
+    m.def("dumps_rows", &dumps_rows, "columns"_a, "count"_a, "start"_a, "stop"_a, "level"_a,
+          "The rows start..stop of a list of `count` dicts of one set of keys, as dumps_indented "
+          "writes them inside a list at nesting `level`: each row ',' (but the first of the "
+          "list), a newline, the dict. columns: (key, kind, array[, table]) in key order; kind "
+          "number (n,) float64, vector (n, 3) and box (n, 6) float64 (a non-finite row null), "
+          "integer (n,) int64, index (n,) int64 (negative null), boolean (n,) bool, string and "
+          "raw (n,) int64 codes into a list of str (negative null; raw: JSON text as given).");
     m.def(
         "float_reprs",
         [](const Values& values) {

@@ -30,6 +30,7 @@ __all__ = [
     "is_special_file",
     "dumps_csv",
     "dumps_json",
+    "dumps_rows",
     "emit",
     "envelope",
     "split_vectors",
@@ -283,6 +284,27 @@ def dumps_json(
         default=_builtin,
     )
     return text if compact else text + "\n"
+
+
+def dumps_rows(columns: list[tuple], count: int, level: int) -> str:
+    """The JSON text of a list of ``count`` dicts of one set of keys held as columns, as
+    :func:`dumps_json` writes it as a value at nesting ``level`` (a report's ``pairs``: 1),
+    from the columns by the core's row writer (``dumps_rows``: ``columns`` are its
+    ``(key, kind, array[, table])`` in key order), a bounded number of rows per call."""
+    if not count:
+        return "[]"
+    from meshcol._native import core
+
+    chunks = ["["]
+    for start in range(0, count, _ROWS_PER_CALL):
+        stop = min(start + _ROWS_PER_CALL, count)
+        chunks.append(core.dumps_rows(columns, count, start, stop, level))
+    chunks.append("\n" + "  " * level + "]")
+    return "".join(chunks)
+
+
+#: Rows :func:`dumps_rows` has written per native call.
+_ROWS_PER_CALL = 1 << 16
 
 
 def _nulled(value: Any) -> Any:
