@@ -10,7 +10,9 @@
 #include <Python.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
+#include <cstring>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -266,54 +268,95 @@ const T* column_array(Buffer& buffer, nb::handle object, size_t n, Py_ssize_t wi
     return data;
 }
 
-void vector_text(Encoder& out, const double* v, int level) {
-    if (!(std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2])))
-        return out.text.append("null"), void();
-    out.text.push_back('[');
-    for (int k = 0; k < 3; ++k) {
-        if (k) out.text.push_back(',');
-        out.newline(level + 1);
-        out.real(v[k]);
-    }
-    out.newline(level);
-    out.text.push_back(']');
+// The row writer writes through a cursor into room made once per row (`row_bound` chars),
+// never checking capacity per character.
+
+void put(char*& p, const char* s, size_t n) {
+    std::memcpy(p, s, n);
+    p += n;
 }
 
-void cell(Encoder& out, const Column& c, size_t i, int level) {
+void newline_at(char*& p, int level) {
+    *p++ = '\n';
+    std::memset(p, ' ', static_cast<size_t>(2 * level));
+    p += 2 * level;
+}
+
+void real_at(char*& p, double x) {
+    if (!std::isfinite(x)) return put(p, "null", 4);
+    p += meshcol::format_double_repr(x, p);
+}
+
+void vector_at(char*& p, const double* v, int level) {
+    if (!(std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2])))
+        return put(p, "null", 4);
+    *p++ = '[';
+    for (int k = 0; k < 3; ++k) {
+        if (k) *p++ = ',';
+        newline_at(p, level + 1);
+        p += meshcol::format_double_repr(v[k], p);
+    }
+    newline_at(p, level);
+    *p++ = ']';
+}
+
+/// The most chars `cell` writes for a column at nesting `level`.
+size_t cell_bound(const Column& c, int level) {
+    const size_t number = meshcol::kDoubleReprSize;
+    auto line = [](int l) { return 1 + 2 * static_cast<size_t>(l); };
+    auto vector = [&](int l) { return 2 + 3 * (1 + line(l + 1) + number) + line(l); };
     switch (c.kind) {
-        case Column::kNumber: return out.real(c.reals[i]);
-        case Column::kVector: return vector_text(out, c.reals + 3 * i, level);
+        case Column::kNumber: return number;
+        case Column::kVector: return vector(level);
+        case Column::kBox: return 3 + 2 * (line(level + 1) + vector(level + 1)) + line(level);
+        case Column::kString:
+        case Column::kRaw: {
+            size_t most = 4;
+            for (const auto& entry : c.table) most = std::max(most, entry.size());
+            return most;
+        }
+        default: return 24;  // an int64, "null", "false"
+    }
+}
+
+void cell(char*& p, const Column& c, size_t i, int level) {
+    switch (c.kind) {
+        case Column::kNumber: return real_at(p, c.reals[i]);
+        case Column::kVector: return vector_at(p, c.reals + 3 * i, level);
         case Column::kBox:
-            out.text.push_back('[');
-            out.newline(level + 1);
-            vector_text(out, c.reals + 6 * i, level + 1);
-            out.text.push_back(',');
-            out.newline(level + 1);
-            vector_text(out, c.reals + 6 * i + 3, level + 1);
-            out.newline(level);
-            out.text.push_back(']');
+            *p++ = '[';
+            newline_at(p, level + 1);
+            vector_at(p, c.reals + 6 * i, level + 1);
+            *p++ = ',';
+            newline_at(p, level + 1);
+            vector_at(p, c.reals + 6 * i + 3, level + 1);
+            newline_at(p, level);
+            *p++ = ']';
             return;
-        case Column::kInteger: return out.text.append(std::to_string(c.integers[i])), void();
         case Column::kIndex:
-            if (c.integers[i] < 0) return out.text.append("null"), void();
-            return out.text.append(std::to_string(c.integers[i])), void();
-        case Column::kBoolean: return out.text.append(c.flags[i] ? "true" : "false"), void();
+            if (c.integers[i] < 0) return put(p, "null", 4);
+            [[fallthrough]];
+        case Column::kInteger:
+            p = std::to_chars(p, p + 24, c.integers[i]).ptr;
+            return;
+        case Column::kBoolean: return c.flags[i] ? put(p, "true", 4) : put(p, "false", 5);
         case Column::kString:
         case Column::kRaw: {
             const std::int64_t code = c.integers[i];
-            if (code < 0) return out.text.append("null"), void();
-            if (static_cast<size_t>(code) >= c.table.size())
-                throw nb::index_error("a column's code is past its table");
-            return out.text.append(c.table[static_cast<size_t>(code)]), void();
+            if (code < 0) return put(p, "null", 4);
+            const std::string& entry = c.table[static_cast<size_t>(code)];
+            return put(p, entry.data(), entry.size());
         }
     }
 }
 
 nb::str dumps_rows(nb::list columns, size_t count, size_t start, size_t stop, int level) {
     if (start > stop || stop > count) throw nb::value_error("rows out of range");
+    if (level < 0 || level > 64) throw nb::value_error("level out of range");
     std::vector<Column> parsed(nb::len(columns));
     std::vector<Buffer> buffers(parsed.size());
     Encoder out(nullptr);
+    size_t row_bound = 2 * (1 + 2 * static_cast<size_t>(level + 1)) + 2;
     for (size_t k = 0; k < parsed.size(); ++k) {
         auto spec = nb::cast<nb::tuple>(columns[k]);
         Column& c = parsed[k];
@@ -340,26 +383,34 @@ nb::str dumps_rows(nb::list columns, size_t count, size_t start, size_t stop, in
                     c.table.push_back(out.text);
                 }
             }
+            const auto size = static_cast<std::int64_t>(c.table.size());
+            for (size_t i = start; i < stop; ++i)
+                if (c.integers[i] >= size) throw nb::index_error("a column's code is past its table");
         }
+        row_bound += 2 + (1 + 2 * static_cast<size_t>(level + 2)) + c.key.size() +
+                     cell_bound(c, level + 2);
     }
-    out.text.clear();
+    std::string text;
+    size_t used = 0;
     for (size_t i = start; i < stop; ++i) {
-        if (i) out.text.push_back(',');
-        out.newline(level + 1);
-        out.text.push_back('{');
+        if (used + row_bound > text.size()) text.resize(std::max(2 * text.size(), used + row_bound));
+        char* p = text.data() + used;
+        if (i) *p++ = ',';
+        newline_at(p, level + 1);
+        *p++ = '{';
         for (size_t k = 0; k < parsed.size(); ++k) {
-            if (k) out.text.push_back(',');
-            out.newline(level + 2);
-            out.text.append(parsed[k].key);
-            cell(out, parsed[k], i, level + 2);
+            if (k) *p++ = ',';
+            newline_at(p, level + 2);
+            put(p, parsed[k].key.data(), parsed[k].key.size());
+            cell(p, parsed[k], i, level + 2);
         }
-        out.newline(level + 1);
-        out.text.push_back('}');
+        newline_at(p, level + 1);
+        *p++ = '}';
+        used = static_cast<size_t>(p - text.data());
     }
-    PyObject* text = PyUnicode_DecodeASCII(out.text.data(),
-                                           static_cast<Py_ssize_t>(out.text.size()), nullptr);
-    if (text == nullptr) throw nb::python_error();
-    return nb::steal<nb::str>(text);
+    PyObject* result = PyUnicode_DecodeASCII(text.data(), static_cast<Py_ssize_t>(used), nullptr);
+    if (result == nullptr) throw nb::python_error();
+    return nb::steal<nb::str>(result);
 }
 
 }  // namespace

@@ -173,9 +173,15 @@ class CheckReport:
         )
 
     def to_json(self) -> str:
-        """The JSON report; rows kept as columns (:class:`ReportRows`) are written from them
-        into the text of the rest, to the same bytes."""
-        from meshcol.io.report import dumps_json, dumps_rows
+        """The JSON report (:meth:`json_chunks` joined)."""
+        return "".join(self.json_chunks())
+
+    def json_chunks(self) -> Iterator[str]:
+        """The JSON report's text in pieces, in order: rows kept as columns
+        (:class:`ReportRows`) are written from them a bounded number at a time
+        (:func:`meshcol.io.report.rows_chunks`) between the text of the rest, to the same
+        bytes as the whole document encoded at once; never the whole text in memory."""
+        from meshcol.io.report import dumps_json, rows_chunks
 
         document = self._document()
         streamed = {}
@@ -185,12 +191,16 @@ class CheckReport:
                 document[key] = marker = f"\x00meshcol rows: {key}\x00"
                 streamed[f'\n  "{key}": {dumps_json(marker)[:-1]},'] = (key, rows)
         text = dumps_json(document)
-        for line, (key, rows) in streamed.items():
-            before, found, after = text.partition(line)
-            if not found:  # cannot happen: a top-level key's line is unique
+        start = 0
+        for line, (key, rows) in sorted(streamed.items(), key=lambda item: text.find(item[0])):
+            at = text.find(line, start)
+            if at < 0:  # cannot happen: a top-level key's line is unique
                 raise AssertionError(f"report text lost its {key}")
-            text = f'{before}\n  "{key}": {dumps_rows(rows.columns(), len(rows), 1)},{after}'
-        return text
+            yield text[start:at] + f'\n  "{key}": '
+            yield from rows_chunks(rows.columns(), len(rows), 1)
+            yield ","
+            start = at + len(line)
+        yield text[start:]
 
     def ci_suite(self) -> Any:
         """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one case per candidate pair
