@@ -16,7 +16,8 @@ fresh process).
 Primitive rows (issue 32): manifests of N primitive bodies and no mesh file (``--primitives``):
 ``spheres`` (every body a sphere) and ``mixed`` (spheres, boxes, capsules and cylinders in
 turn, a third of them turned), on a jittered 3-D grid of pitch 0.8 m with sizes 0.2-0.45 m, so
-a few bodies in a hundred touch or overlap a neighbour; ``meshcol check`` from the command
+a few bodies in a hundred touch or overlap a neighbour; ``pile`` (spheres all within 0.1 m of
+the origin: N(N-1)/2 candidate pairs, the memory a pair costs); ``meshcol check`` from the command
 line, report written, with its wall and CPU time and peak memory.
 
 Each meshcol row also gives its stages from the report (load, check, and the rest of the wall
@@ -194,7 +195,8 @@ def instances_folder(n: int = 300_000) -> Path:
 
 
 def primitives_folder(n: int, kind: str) -> Path:
-    """A manifest of ``n`` primitive bodies (``kind``: spheres or mixed), no mesh file."""
+    """A manifest of ``n`` primitive bodies (``kind``: spheres, mixed, or pile: spheres all
+    overlapping), no mesh file."""
     folder = CACHE / f"primitives-{kind}{n}"
     manifest = folder / "scene.json"
     if manifest.exists():
@@ -205,6 +207,8 @@ def primitives_folder(n: int, kind: str) -> Path:
     index = np.arange(n)
     grid = np.stack([index % side, index // side % side, index // side // side], axis=1)
     position = (0.8 * grid + rng.uniform(-0.05, 0.05, (n, 3))).round(6).tolist()
+    if kind == "pile":  # every body within 0.1 m of the origin: every pair a candidate
+        position = rng.uniform(-0.05, 0.05, (n, 3)).round(6).tolist()
     size = rng.uniform(0.2, 0.45, n).round(6).tolist()
     quaternion = rng.normal(size=(n, 4)).round(6).tolist()
     bodies = []
@@ -408,7 +412,11 @@ def main() -> None:
         help="sizes of the primitive-body manifests to check (e.g. 100000 1000000)",
     )
     parser.add_argument(
-        "--primitive-kinds", nargs="+", default=["spheres", "mixed"], choices=["spheres", "mixed"]
+        "--primitive-kinds",
+        nargs="+",
+        default=["spheres", "mixed"],
+        choices=["spheres", "mixed", "pile"],
+        help="pile: N spheres within 0.1 m of the origin, N(N-1)/2 candidate pairs",
     )
     parser.add_argument(
         "--baseline",

@@ -498,6 +498,11 @@ def dumps_indented(document: object | None, builtin: object) -> str | None:
     json.dumps(document, sort_keys=True, indent=2) + newline, NaN and infinities as null; builtin(o) turns any other object into one of those; None when the document is one to leave to Python's json (a key that is not a string, an int beyond 64 bits, a dict subclass, a string that is not UTF-8, nesting past 400, or builtin raising).
     """
 
+def dumps_rows(columns: list, count: int, start: int, stop: int, level: int) -> str:
+    """
+    The rows start..stop of a list of `count` dicts of one set of keys, as dumps_indented writes them inside a list at nesting `level`: each row ',' (but the first of the list), a newline, the dict. columns: (key, kind, array[, table]) in key order; kind number (n,) float64, vector (n, 3) and box (n, 6) float64 (a non-finite row null), integer (n,) int64, index (n,) int64 (negative null), boolean (n,) bool, string and raw (n,) int64 codes into a list of str (negative null; raw: JSON text as given).
+    """
+
 def float_reprs(values: Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C', device='cpu', writable=False)]) -> list[str]:
     """repr(float(x)) of each value, by the core's formatter (for tests)."""
 

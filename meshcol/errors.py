@@ -64,3 +64,8 @@ class OutputPathError(MeshcolError, ValueError):
 
 class TargetError(MeshcolError, ValueError):
     """An engine target profile is unknown, malformed, or has an unknown or ill-typed key."""
+
+
+class TooManyPairsError(MeshcolError, ValueError):
+    """A scene has more candidate pairs than a run may hold (``--max-pairs``): nothing is
+    measured or written."""

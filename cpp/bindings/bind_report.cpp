@@ -5,11 +5,14 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/optional.h>
+#include <nanobind/stl/string.h>
 
 #include <Python.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
+#include <cstring>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -70,10 +73,6 @@ public:
         --conversions_;
         Py_DECREF(plain);
     }
-
-private:
-    PyObject* builtin_;
-    int conversions_ = 0;
 
     void newline(int level) {
         text.push_back('\n');
@@ -145,6 +144,10 @@ private:
         }
         text.push_back('"');
     }
+
+private:
+    PyObject* builtin_;
+    int conversions_ = 0;
 
     void sequence(PyObject* o, int level) {
         const bool list = PyList_Check(o);
@@ -231,6 +234,185 @@ std::optional<nb::str> dumps_indented(nb::handle document, nb::handle builtin) {
     return nb::steal<nb::str>(text);
 }
 
+// --- rows of one shape from columns -------------------------------------------------------
+
+/// One column of `dumps_rows`: a key (already escaped, with ": ") and how to write a row's
+/// value from its arrays.
+struct Column {
+    enum Kind { kNumber, kVector, kBox, kInteger, kIndex, kBoolean, kString, kRaw } kind;
+    std::string key;
+    const double* reals = nullptr;
+    const std::int64_t* integers = nullptr;
+    const bool* flags = nullptr;
+    std::vector<std::string> table;  // kString: escaped; kRaw: as given
+};
+
+Column::Kind column_kind(const std::string& name) {
+    static const std::pair<const char*, Column::Kind> kinds[] = {
+        {"number", Column::kNumber},   {"vector", Column::kVector},
+        {"box", Column::kBox},         {"integer", Column::kInteger},
+        {"index", Column::kIndex},     {"boolean", Column::kBoolean},
+        {"string", Column::kString},   {"raw", Column::kRaw},
+    };
+    for (const auto& [word, kind] : kinds)
+        if (name == word) return kind;
+    throw nb::value_error(("unknown column kind " + name).c_str());
+}
+
+/// The array of `object` as T with `width` values a row (n rows), or a ValueError.
+template <class T>
+const T* column_array(Buffer& buffer, nb::handle object, size_t n, Py_ssize_t width) {
+    const T* data = width == 1 ? buffer.get<T>(object.ptr(), {static_cast<Py_ssize_t>(n)})
+                               : buffer.get<T>(object.ptr(), {static_cast<Py_ssize_t>(n), width});
+    if (data == nullptr) throw nb::value_error("a column's array has the wrong type or shape");
+    return data;
+}
+
+// The row writer writes through a cursor into room made once per row (`row_bound` chars),
+// never checking capacity per character.
+
+void put(char*& p, const char* s, size_t n) {
+    std::memcpy(p, s, n);
+    p += n;
+}
+
+void newline_at(char*& p, int level) {
+    *p++ = '\n';
+    std::memset(p, ' ', static_cast<size_t>(2 * level));
+    p += 2 * level;
+}
+
+void real_at(char*& p, double x) {
+    if (!std::isfinite(x)) return put(p, "null", 4);
+    p += meshcol::format_double_repr(x, p);
+}
+
+void vector_at(char*& p, const double* v, int level) {
+    if (!(std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2])))
+        return put(p, "null", 4);
+    *p++ = '[';
+    for (int k = 0; k < 3; ++k) {
+        if (k) *p++ = ',';
+        newline_at(p, level + 1);
+        p += meshcol::format_double_repr(v[k], p);
+    }
+    newline_at(p, level);
+    *p++ = ']';
+}
+
+/// The most chars `cell` writes for a column at nesting `level`.
+size_t cell_bound(const Column& c, int level) {
+    const size_t number = meshcol::kDoubleReprSize;
+    auto line = [](int l) { return 1 + 2 * static_cast<size_t>(l); };
+    auto vector = [&](int l) { return 2 + 3 * (1 + line(l + 1) + number) + line(l); };
+    switch (c.kind) {
+        case Column::kNumber: return number;
+        case Column::kVector: return vector(level);
+        case Column::kBox: return 3 + 2 * (line(level + 1) + vector(level + 1)) + line(level);
+        case Column::kString:
+        case Column::kRaw: {
+            size_t most = 4;
+            for (const auto& entry : c.table) most = std::max(most, entry.size());
+            return most;
+        }
+        default: return 24;  // an int64, "null", "false"
+    }
+}
+
+void cell(char*& p, const Column& c, size_t i, int level) {
+    switch (c.kind) {
+        case Column::kNumber: return real_at(p, c.reals[i]);
+        case Column::kVector: return vector_at(p, c.reals + 3 * i, level);
+        case Column::kBox:
+            *p++ = '[';
+            newline_at(p, level + 1);
+            vector_at(p, c.reals + 6 * i, level + 1);
+            *p++ = ',';
+            newline_at(p, level + 1);
+            vector_at(p, c.reals + 6 * i + 3, level + 1);
+            newline_at(p, level);
+            *p++ = ']';
+            return;
+        case Column::kIndex:
+            if (c.integers[i] < 0) return put(p, "null", 4);
+            [[fallthrough]];
+        case Column::kInteger:
+            p = std::to_chars(p, p + 24, c.integers[i]).ptr;
+            return;
+        case Column::kBoolean: return c.flags[i] ? put(p, "true", 4) : put(p, "false", 5);
+        case Column::kString:
+        case Column::kRaw: {
+            const std::int64_t code = c.integers[i];
+            if (code < 0) return put(p, "null", 4);
+            const std::string& entry = c.table[static_cast<size_t>(code)];
+            return put(p, entry.data(), entry.size());
+        }
+    }
+}
+
+nb::str dumps_rows(nb::list columns, size_t count, size_t start, size_t stop, int level) {
+    if (start > stop || stop > count) throw nb::value_error("rows out of range");
+    if (level < 0 || level > 64) throw nb::value_error("level out of range");
+    std::vector<Column> parsed(nb::len(columns));
+    std::vector<Buffer> buffers(parsed.size());
+    Encoder out(nullptr);
+    size_t row_bound = 2 * (1 + 2 * static_cast<size_t>(level + 1)) + 2;
+    for (size_t k = 0; k < parsed.size(); ++k) {
+        auto spec = nb::cast<nb::tuple>(columns[k]);
+        Column& c = parsed[k];
+        out.text.clear();
+        out.escape(nb::cast<std::string>(spec[0]));
+        c.key = out.text + ": ";
+        c.kind = column_kind(nb::cast<std::string>(spec[1]));
+        Buffer& b = buffers[k];
+        switch (c.kind) {
+            case Column::kNumber: c.reals = column_array<double>(b, spec[2], count, 1); break;
+            case Column::kVector: c.reals = column_array<double>(b, spec[2], count, 3); break;
+            case Column::kBox: c.reals = column_array<double>(b, spec[2], count, 6); break;
+            case Column::kBoolean: c.flags = column_array<bool>(b, spec[2], count, 1); break;
+            default: c.integers = column_array<std::int64_t>(b, spec[2], count, 1);
+        }
+        if (c.kind == Column::kString || c.kind == Column::kRaw) {
+            for (nb::handle item : nb::cast<nb::list>(spec[3])) {
+                const std::string s = nb::cast<std::string>(item);
+                if (c.kind == Column::kRaw) {
+                    c.table.push_back(s);
+                } else {
+                    out.text.clear();
+                    out.escape(s);
+                    c.table.push_back(out.text);
+                }
+            }
+            const auto size = static_cast<std::int64_t>(c.table.size());
+            for (size_t i = start; i < stop; ++i)
+                if (c.integers[i] >= size) throw nb::index_error("a column's code is past its table");
+        }
+        row_bound += 2 + (1 + 2 * static_cast<size_t>(level + 2)) + c.key.size() +
+                     cell_bound(c, level + 2);
+    }
+    std::string text;
+    size_t used = 0;
+    for (size_t i = start; i < stop; ++i) {
+        if (used + row_bound > text.size()) text.resize(std::max(2 * text.size(), used + row_bound));
+        char* p = text.data() + used;
+        if (i) *p++ = ',';
+        newline_at(p, level + 1);
+        *p++ = '{';
+        for (size_t k = 0; k < parsed.size(); ++k) {
+            if (k) *p++ = ',';
+            newline_at(p, level + 2);
+            put(p, parsed[k].key.data(), parsed[k].key.size());
+            cell(p, parsed[k], i, level + 2);
+        }
+        newline_at(p, level + 1);
+        *p++ = '}';
+        used = static_cast<size_t>(p - text.data());
+    }
+    PyObject* result = PyUnicode_DecodeASCII(text.data(), static_cast<Py_ssize_t>(used), nullptr);
+    if (result == nullptr) throw nb::python_error();
+    return nb::steal<nb::str>(result);
+}
+
 }  // namespace
 
 void bind_report(nb::module_& m) {
@@ -240,6 +422,13 @@ void bind_report(nb::module_& m) {
           "is one to leave to Python's json (a key that is not a string, an int beyond 64 "
           "bits, a dict subclass, a string that is not UTF-8, nesting past 400, or builtin "
           "raising).");
+    m.def("dumps_rows", &dumps_rows, "columns"_a, "count"_a, "start"_a, "stop"_a, "level"_a,
+          "The rows start..stop of a list of `count` dicts of one set of keys, as dumps_indented "
+          "writes them inside a list at nesting `level`: each row ',' (but the first of the "
+          "list), a newline, the dict. columns: (key, kind, array[, table]) in key order; kind "
+          "number (n,) float64, vector (n, 3) and box (n, 6) float64 (a non-finite row null), "
+          "integer (n,) int64, index (n,) int64 (negative null), boolean (n,) bool, string and "
+          "raw (n,) int64 codes into a list of str (negative null; raw: JSON text as given).");
     m.def(
         "float_reprs",
         [](const Values& values) {

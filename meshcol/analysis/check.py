@@ -61,6 +61,7 @@ from meshcol.analysis.pairs import (
     convex_phase,
     place,
 )
+from meshcol.errors import TooManyPairsError
 from meshcol.io.robot import RobotOptions
 from meshcol.types import Scene
 from meshcol.vocabulary import PAIR_STATUSES
@@ -116,7 +117,8 @@ def check_scene(
     placed = place(colliders, options.threads)
     report(f"{len(colliders.bodies)} bodies, {len(colliders.part_body)} convex parts")
     # the broad phase pairs bodies within the clearance band and the contact tolerance
-    table = broad_phase(placed, options.clearance + options.tolerance, scene.excluded_pairs)
+    margin = options.clearance + options.tolerance
+    table = broad_phase(placed, margin, scene.excluded_pairs, options.max_pairs)
     table = narrow_phase(table, placed, options)
     table = classify(table, options.tolerance, options.clearance)
     table = apply_policy(table, [body.name for body in colliders.bodies], options)
@@ -215,13 +217,17 @@ def check(
     if notes:
         scene = dataclasses.replace(scene, warnings=(*scene.warnings, *notes))
     with collector_paused():
-        return check_scene(
-            scene,
-            opts,
-            progress=progress,
-            load_seconds=time.perf_counter() - started,
-            decompose=decompose,
-        )
+        try:
+            return check_scene(
+                scene,
+                opts,
+                progress=progress,
+                load_seconds=time.perf_counter() - started,
+                decompose=decompose,
+            )
+        except TooManyPairsError as error:  # the scene named: the one line says which
+            name = os.fspath(paths[0]) + (f" and {len(paths) - 1} more" if len(paths) > 1 else "")
+            raise TooManyPairsError(error.message, scene.source or name) from None
 
 
 def _load(

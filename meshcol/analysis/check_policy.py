@@ -21,6 +21,7 @@ from meshcol.vocabulary import COLLIDER_KINDS, PAIR_STATUSES
 
 __all__ = [
     "FAIL_ON",
+    "MAX_PAIRS",
     "PAIR_RULES",
     "CheckOptions",
     "apply_policy",
@@ -79,6 +80,11 @@ def parse_ignore_rule(rule: str) -> tuple[str, str]:
     return parts[0], parts[1]
 
 
+#: The default cap on a check's candidate pairs (``--max-pairs``): what a 24 GB machine holds
+#: with room to spare (benchmarks/RESULTS.md, "Big manifests": bytes a pair at its peak).
+MAX_PAIRS = 4_000_000
+
+
 @dataclass(frozen=True)
 class CheckOptions:
     """Settings of one check run.
@@ -111,6 +117,10 @@ class CheckOptions:
         An engine profile: each body's convex parts are measured against its limits
         (:func:`meshcol.analysis.rules.target_findings`); with a status level in ``fail_on``
         (not ``none``) its findings fail the run too.
+    max_pairs : int or None
+        The most candidate pairs a run may hold (:data:`MAX_PAIRS` by default; None: no
+        cap); a scene with more is refused before its pairs are measured
+        (:class:`~meshcol.errors.TooManyPairsError`).
     pair_cache : meshcol.analysis.pair_cache.PairCache, optional
         Where the narrow phase's answers per pair are kept between runs (``meshcol ci``):
         only pairs with a changed body are measured again. Not a setting of the report.
@@ -126,6 +136,7 @@ class CheckOptions:
     threads: int = 0
     decompose_options: dict = field(default_factory=dict)
     target: Any = None
+    max_pairs: int | None = MAX_PAIRS
     pair_cache: Any = field(default=None, compare=False, repr=False)
     #: The rule ids the run fails on (:func:`failing_rules` of ``fail_on`` and ``target``),
     #: made with the options.
@@ -159,6 +170,9 @@ class CheckOptions:
             raise ValueError(f"tolerance must be a finite number >= 0, got {self.tolerance!r}")
         if not (math.isfinite(self.clearance) and self.clearance >= 0):
             raise ValueError(f"clearance must be a finite number >= 0, got {self.clearance!r}")
+        cap = self.max_pairs
+        if cap is not None and (isinstance(cap, bool) or not isinstance(cap, int) or cap < 0):
+            raise ValueError(f"max_pairs must be an integer >= 0 or None, got {cap!r}")
         failing_rules(self.fail_on)
         for rule in self.ignore:
             parse_ignore_rule(rule)

@@ -6,7 +6,7 @@ turns the classified :class:`~meshcol.analysis.pairs.PairTable` into its rows.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
 from typing import Any
@@ -20,7 +20,66 @@ from meshcol.io.report import vector_columns
 from meshcol.types import Scene
 from meshcol.vocabulary import PAIR_STATUSES
 
-__all__ = ["CSV_COLUMNS", "CheckReport", "check_report"]
+__all__ = ["CSV_COLUMNS", "CheckReport", "ReportRows", "check_report"]
+
+
+class ReportRows(Sequence[dict]):
+    """A report's rows (its ``pairs`` or ``bodies``) kept as columns: each row's dict is made
+    only when a reader asks for rows (:meth:`rows`), and the JSON writer writes them from the
+    columns (:func:`meshcol.io.report.dumps_rows`), so that a run of a million pairs holds
+    arrays, not a million dicts.
+
+    Parameters
+    ----------
+    count : int
+        The number of rows.
+    build : callable
+        ``build(index)``: the dicts of the rows ``index`` ((k,) int64), in that order.
+    columns : callable
+        The columns for :func:`meshcol.io.report.dumps_rows`, in key order.
+    """
+
+    def __init__(
+        self,
+        count: int,
+        build: Callable[[np.ndarray], list[dict]],
+        columns: Callable[[], list[tuple]],
+    ) -> None:
+        self._count = count
+        self._build = build
+        self.columns = columns
+        self._rows: list[dict] | None = None
+
+    def rows(self, index: np.ndarray | None = None) -> list[dict]:
+        """The dicts of the rows ``index`` (all when None; made once, then kept)."""
+        if index is not None and self._rows is None:
+            return self._build(np.asarray(index, dtype=np.int64))
+        if self._rows is None:
+            self._rows = self._build(np.arange(self._count, dtype=np.int64))
+        return self._rows if index is None else [self._rows[i] for i in index.tolist()]
+
+    def __len__(self) -> int:
+        return self._count
+
+    def __getitem__(self, item: Any) -> Any:
+        return self.rows()[item]
+
+    def __iter__(self) -> Iterator[dict]:
+        return iter(self.rows())
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, (list, ReportRows)):
+            return self.rows() == list(other)
+        return NotImplemented
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def tolist(self) -> list[dict]:
+        """The rows as a list (what the JSON encoder asks of an object that is not one)."""
+        return list(self.rows())
+
+    def __repr__(self) -> str:
+        return f"ReportRows({self._count} rows)"
 
 
 @dataclass(frozen=True)
@@ -59,8 +118,8 @@ class CheckReport:
         summaries that show what got worse (None without a baseline).
     """
 
-    bodies: list[dict]
-    pairs: list[dict]
+    bodies: Sequence[dict]
+    pairs: Sequence[dict]
     summary: dict
     settings: dict
     units: str | None
@@ -81,6 +140,10 @@ class CheckReport:
 
     def to_dict(self) -> dict:
         """The JSON report: the common envelope, ``generated_at``, bodies, summary, pairs."""
+        return {**self._document(), "bodies": list(self.bodies), "pairs": list(self.pairs)}
+
+    def _document(self) -> dict:
+        """:meth:`to_dict` with its rows as they are held (perhaps :class:`ReportRows`)."""
         from meshcol.io.report import envelope
 
         return {
@@ -99,6 +162,8 @@ class CheckReport:
         without sorting 100,000 pairs to print ten)."""
         import heapq
 
+        if isinstance(self.pairs, ReportRows) and self.table is not None:
+            return self.pairs.rows(_worst_rows(self.table, count))
         inf = float("inf")
         touching = (p for p in self.pairs if p["status"] != "separated")
         return heapq.nsmallest(
@@ -108,9 +173,34 @@ class CheckReport:
         )
 
     def to_json(self) -> str:
-        from meshcol.io.report import dumps_json
+        """The JSON report (:meth:`json_chunks` joined)."""
+        return "".join(self.json_chunks())
 
-        return dumps_json(self.to_dict())
+    def json_chunks(self) -> Iterator[str]:
+        """The JSON report's text in pieces, in order: rows kept as columns
+        (:class:`ReportRows`) are written from them a bounded number at a time
+        (:func:`meshcol.io.report.rows_chunks`) between the text of the rest, to the same
+        bytes as the whole document encoded at once; never the whole text in memory."""
+        from meshcol.io.report import dumps_json, rows_chunks
+
+        document = self._document()
+        streamed = {}
+        for key in ("bodies", "pairs"):
+            rows = document[key]
+            if isinstance(rows, ReportRows):
+                document[key] = marker = f"\x00meshcol rows: {key}\x00"
+                streamed[f'\n  "{key}": {dumps_json(marker)[:-1]},'] = (key, rows)
+        text = dumps_json(document)
+        start = 0
+        for line, (key, rows) in sorted(streamed.items(), key=lambda item: text.find(item[0])):
+            at = text.find(line, start)
+            if at < 0:  # cannot happen: a top-level key's line is unique
+                raise AssertionError(f"report text lost its {key}")
+            yield text[start:at] + f'\n  "{key}": '
+            yield from rows_chunks(rows.columns(), len(rows), 1)
+            yield ","
+            start = at + len(line)
+        yield text[start:]
 
     def ci_suite(self) -> Any:
         """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one case per candidate pair
@@ -314,15 +404,17 @@ def check_report(
     load_seconds: float | None,
 ) -> CheckReport:
     """The report of a classified table with its policy applied: the pairs as rows sorted by
-    (body_a, body_b) names, the bodies, the findings, the summary and the settings."""
+    (body_a, body_b) names, the bodies, the findings, the summary and the settings. Pairs and
+    bodies stay columns (:class:`ReportRows`) until a reader asks for their dicts."""
     colliders = placed.colliders
     names = [body.name for body in colliders.bodies]
-    table = table.take(_report_order(table, names))
+    rank = _name_ranks(names)
+    table = table.take(_report_order(table, rank))
     files = _files(colliders.bodies)
     findings = _findings(colliders, options, scene.units)
     return CheckReport(
-        _body_rows(placed, files),
-        pair_rows(table, colliders),
+        _body_rows(placed, files, rank),
+        _pair_rows(table, colliders),
         _summary(table, len(names), findings, seconds, load_seconds),
         _settings(scene, options, colliders.bodies, files),
         scene.units,
@@ -350,37 +442,115 @@ def _baseline_pairs(baseline: dict | None) -> dict | None:
     return {tuple(sorted((p["body_a"], p["body_b"]))): p for p in baseline.get("pairs", [])}
 
 
-def _report_order(table: PairTable, names: Sequence[str]) -> np.ndarray:
+def _name_ranks(names: Sequence[str]) -> np.ndarray:
+    """(n,) int64: each body's place in name order, equal names equal ranks."""
+    order = sorted(range(len(names)), key=names.__getitem__)
+    rank = np.zeros(len(names), dtype=np.int64)
+    if order:
+        ordered = [names[i] for i in order]
+        new = np.ones(len(order), dtype=np.int64)
+        new[0] = 0
+        new[1:] = [x != y for x, y in zip(ordered[1:], ordered[:-1])]
+        rank[np.asarray(order, dtype=np.int64)] = np.cumsum(new)
+    return rank
+
+
+def _report_order(table: PairTable, rank: np.ndarray) -> np.ndarray:
     """The rows sorted by (body_a, body_b) names, ties in table order."""
-    a, b = table.body_a.tolist(), table.body_b.tolist()
-    order = sorted(range(len(a)), key=lambda row: (names[a[row]], names[b[row]]))
-    return np.asarray(order, dtype=np.int64)
+    return np.lexsort((rank[table.body_b], rank[table.body_a])).astype(np.int64)
 
 
-def pair_rows(table: PairTable, colliders: Any) -> list[dict]:
-    """One dict per row (the report's ``pairs``), in table order; non-finite numbers as None,
-    parts by name. Columns are converted once, then zipped (no per-pair numpy calls)."""
+def _worst_rows(table: PairTable, count: int) -> np.ndarray:
+    """The rows of :meth:`CheckReport.worst_pairs`: up to ``count`` rows that are not
+    separated, smallest signed distance first (non-finite last), ties in row order."""
+    rows = np.flatnonzero(table.status != SEVERITY["separated"])
+    key = table.signed_distance[rows]
+    key = np.where(np.isfinite(key), key, np.inf)
+    return rows[np.lexsort((rows, key))[:count]]
+
+
+def _pair_rows(table: PairTable, colliders: Any) -> ReportRows:
+    """The report's ``pairs``: the rows of ``table`` as :class:`ReportRows`."""
+
+    def build(index: np.ndarray) -> list[dict]:
+        return pair_rows(table, colliders, index)
+
+    def columns() -> list[tuple]:
+        return _pair_columns(table, colliders)
+
+    return ReportRows(len(table), build, columns)
+
+
+def _pair_columns(table: PairTable, colliders: Any) -> list[tuple]:
+    """The columns of :func:`pair_rows`, for the native row writer, in key order."""
     names = [body.name for body in colliders.bodies]
-    a, b = table.body_a, table.body_b
+
+    def part(bodies: np.ndarray, labels: np.ndarray) -> tuple:
+        if not (labels >= 0).any():
+            return np.full(len(labels), -1, dtype=np.int64), []
+        found = colliders.part_names(bodies, labels)
+        table_of = {name: k for k, name in enumerate(dict.fromkeys(n for n in found if n))}
+        codes = [-1 if n is None else table_of[n] for n in found]
+        return np.asarray(codes, dtype=np.int64), list(table_of)
+
+    def real(values: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(values, dtype=np.float64)
+
+    def whole(values: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(values, dtype=np.int64)
+
+    def flag(values: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(values, dtype=bool)
+
+    columns = [
+        ("body_a", "string", whole(table.body_a), names),
+        ("body_b", "string", whole(table.body_b), names),
+        ("convex_part_a", "index", whole(table.part_a)),
+        ("convex_part_b", "index", whole(table.part_b)),
+        ("depth", "number", real(table.depth)),
+        ("depth_upper", "number", real(table.depth_upper)),
+        ("distance", "number", real(table.distance)),
+        ("ignored", "boolean", flag(table.ignored)),
+        ("intersection_volume", "number", real(table.intersection_volume)),
+        ("normal", "vector", real(table.normal)),
+        ("part_a", "string", *part(table.body_a, table.label_a)),
+        ("part_b", "string", *part(table.body_b, table.label_b)),
+        ("point_a", "vector", real(table.point_a)),
+        ("point_b", "vector", real(table.point_b)),
+        ("query_failed", "boolean", flag(table.query_failed)),
+        ("signed_distance", "number", real(table.signed_distance)),
+        ("status", "string", whole(table.status), list(PAIR_STATUSES)),
+        ("violation", "boolean", flag(table.violation)),
+    ]
+    return columns
+
+
+def pair_rows(table: PairTable, colliders: Any, index: np.ndarray | None = None) -> list[dict]:
+    """One dict per row (the report's ``pairs``), in table order (the rows ``index`` only,
+    when given); non-finite numbers as None, parts by name. Columns are converted once, then
+    zipped (no per-pair numpy calls)."""
+    names = [body.name for body in colliders.bodies]
+    rows = slice(None) if index is None else index
+    a, b = table.body_a[rows], table.body_b[rows]
     columns = zip(
         a.tolist(),
         b.tolist(),
-        table.status.tolist(),
-        _nums(table.distance),
-        _nums(table.depth),
-        _nums(table.depth_upper),
-        _nums(table.signed_distance),
-        _vecs(table.normal),
-        _vecs(table.point_a),
-        _vecs(table.point_b),
-        table.part_a.tolist(),
-        table.part_b.tolist(),
-        colliders.part_names(a, table.label_a),
-        colliders.part_names(b, table.label_b),
-        table.ignored.tolist(),
-        table.violation.tolist(),
-        table.query_failed.tolist(),
-        _nums(table.intersection_volume),
+        table.status[rows].tolist(),
+        _nums(table.distance[rows]),
+        _nums(table.depth[rows]),
+        _nums(table.depth_upper[rows]),
+        _nums(table.signed_distance[rows]),
+        _vecs(table.normal[rows]),
+        _vecs(table.point_a[rows]),
+        _vecs(table.point_b[rows]),
+        table.part_a[rows].tolist(),
+        table.part_b[rows].tolist(),
+        colliders.part_names(a, table.label_a[rows]),
+        colliders.part_names(b, table.label_b[rows]),
+        table.ignored[rows].tolist(),
+        table.violation[rows].tolist(),
+        table.query_failed[rows].tolist(),
+        _nums(table.intersection_volume[rows]),
     )
     return [
         {
@@ -426,11 +596,30 @@ def pair_rows(table: PairTable, colliders: Any) -> list[dict]:
     ]
 
 
-def _body_rows(placed: PlacedColliders, files: Sequence[str | None]) -> list[dict]:
-    """One dict per body, sorted by name: file, collider kind, parts, box."""
+def _body_rows(
+    placed: PlacedColliders, files: Sequence[str | None], rank: np.ndarray
+) -> ReportRows:
+    """The report's ``bodies``, sorted by name (:func:`body_rows`), as :class:`ReportRows`."""
+    order = np.argsort(rank, kind="stable")
+
+    def build(index: np.ndarray) -> list[dict]:
+        return body_rows(placed, files, order[index])
+
+    def columns() -> list[tuple]:
+        return _body_columns(placed, files, order)
+
+    return ReportRows(len(order), build, columns)
+
+
+def body_rows(
+    placed: PlacedColliders, files: Sequence[str | None], index: np.ndarray
+) -> list[dict]:
+    """One dict per body ``index`` (in that order): file, collider kind, parts, box."""
     colliders = placed.colliders
-    part_counts = np.diff(colliders.body_part_offsets).tolist()
-    rows = [
+    part_counts = np.diff(colliders.body_part_offsets)[index].tolist()
+    picked = index.tolist()
+    bodies = [colliders.bodies[i] for i in picked]
+    return [
         {
             "name": body.name,
             "file": file,
@@ -441,16 +630,48 @@ def _body_rows(placed: PlacedColliders, files: Sequence[str | None]) -> list[dic
             "aabb": [lo, hi],
         }
         for body, file, kind, parts, lo, hi in zip(
-            colliders.bodies,
-            files,
-            colliders.kinds,
+            bodies,
+            [files[i] for i in picked],
+            [colliders.kinds[i] for i in picked],
             part_counts,
-            _vecs(placed.body_min),
-            _vecs(placed.body_max),
+            _vecs(placed.body_min[index]),
+            _vecs(placed.body_max[index]),
         )
     ]
-    rows.sort(key=lambda r: r["name"])
-    return rows
+
+
+def _body_columns(
+    placed: PlacedColliders, files: Sequence[str | None], order: np.ndarray
+) -> list[tuple]:
+    """The columns of :func:`body_rows` of every body in ``order``, in key order."""
+    from meshcol.io.report import dumps_json
+
+    colliders = placed.colliders
+    picked = order.tolist()
+    bodies = [colliders.bodies[i] for i in picked]
+
+    def codes(values: Sequence[Any]) -> tuple[np.ndarray, list]:
+        table = {v: k for k, v in enumerate(dict.fromkeys(v for v in values if v is not None))}
+        found = [-1 if v is None else table[v] for v in values]
+        return np.asarray(found, dtype=np.int64).reshape(len(values)), list(table)
+
+    parts, part_texts = codes([tuple(body.parts) for body in bodies])
+    indent = "\n" + "  " * 3
+    box = np.concatenate([placed.body_min[order], placed.body_max[order]], axis=1)
+    return [
+        ("aabb", "box", np.ascontiguousarray(box, dtype=np.float64)),
+        ("collider", "string", *codes([colliders.kinds[i] for i in picked])),
+        ("convex_parts", "integer", np.diff(colliders.body_part_offsets)[order]),
+        ("file", "string", *codes([files[i] for i in picked])),
+        ("name", "string", np.arange(len(bodies), dtype=np.int64), [b.name for b in bodies]),
+        (
+            "parts",
+            "raw",
+            parts,
+            [dumps_json(list(p))[:-1].replace("\n", indent) for p in part_texts],
+        ),
+        ("vertices", "integer", np.asarray([b.vertex_count for b in bodies], dtype=np.int64)),
+    ]
 
 
 def _summary(

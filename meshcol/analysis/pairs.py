@@ -366,7 +366,10 @@ def cartesian_part_pairs(body_pairs: np.ndarray, offsets: np.ndarray) -> np.ndar
 
 
 def broad_phase(
-    placed: PlacedColliders, margin: float, excluded: Sequence[tuple[str, str, str]] = ()
+    placed: PlacedColliders,
+    margin: float,
+    excluded: Sequence[tuple[str, str, str]] = (),
+    max_pairs: int | None = None,
 ) -> PairTable:
     """Candidate body pairs and the part pairs to measure for each.
 
@@ -374,12 +377,26 @@ def broad_phase(
     those ``excluded`` names; for each, the part pairs whose boxes overlap the same way (parts
     of one body never pair), or every part pair when none does (so that every candidate gets
     a distance).
+
+    Raises
+    ------
+    TooManyPairsError
+        More than ``max_pairs`` candidate body pairs: counted on the body sweep's index pairs
+        (16 bytes each), before any part pair, table row or measure is made.
     """
     colliders = placed.colliders
     names = [body.name for body in colliders.bodies]
     body_pairs = overlapping_pairs(placed.body_min, placed.body_max, margin)
     left_out = excluded_mask(names, excluded, body_pairs)
     body_pairs = body_pairs[~left_out]
+    if max_pairs is not None and len(body_pairs) > max_pairs:
+        from meshcol.errors import TooManyPairsError
+
+        raise TooManyPairsError(
+            f"{len(body_pairs):,} candidate pairs among {len(names):,} bodies, more than "
+            f"--max-pairs {max_pairs:,} allows (the memory a run holds grows with its pairs: "
+            "raise --max-pairs, or check the scene in parts)"
+        )
     if len(body_pairs) == 0:
         empty = np.zeros((0, 2), dtype=np.int64)
         return PairTable.of_candidates(body_pairs, empty, empty[:, 0], int(left_out.sum()))

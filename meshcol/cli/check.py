@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from meshcol.analysis.check_policy import FAIL_ON
+from meshcol.analysis.check_policy import FAIL_ON, MAX_PAIRS
 from meshcol.cli.common import (
     FiniteFloat,
     Progress,
@@ -108,6 +108,15 @@ def _parse_ignore(
     metavar="OLD.json",
     help="Previous JSON report: fail only on pairs that are new or worse.  [default: none, "
     "every violating pair fails]",
+)
+@click.option(
+    "--max-pairs",
+    type=click.IntRange(min=0),
+    default=MAX_PAIRS,
+    show_default=True,
+    metavar="N",
+    help="Most candidate pairs a run may hold (each costs memory): a scene with more is "
+    "refused (exit 2, nothing written) before its pairs are measured.",
 )
 @threads_option()
 @engine_option("Decomposition engine for 'decomposed' bodies missing from the cache.")

@@ -55,6 +55,10 @@ class ReportFormat:
     after : callable or None
         Called with the same result once the text is written (``github`` appends its
         Markdown summary to ``$GITHUB_STEP_SUMMARY``).
+    stream : str or None
+        A report method giving the same text in pieces (``json_chunks``), which
+        :func:`write_report` writes one after another when the report has it (a check
+        report of a million pairs is never one string).
     """
 
     name: str
@@ -63,13 +67,14 @@ class ReportFormat:
     render: Callable[[Any], str]
     note: str = ""
     after: Callable[[Any], object] | None = None
+    stream: str | None = None
 
 
 #: Every report format, in the order help texts and messages list them.
 FORMATS: dict[str, ReportFormat] = {
     entry.name: entry
     for entry in (
-        ReportFormat("json", ".json", "to_json", str),
+        ReportFormat("json", ".json", "to_json", str, stream="json_chunks"),
         ReportFormat("csv", ".csv", "to_csv", str),
         ReportFormat(
             "junit",
@@ -183,6 +188,10 @@ def write_report(report: Any, fmt: str, output: str | os.PathLike[str] | None) -
     run the format's ``after`` (``github``: the step summary, when
     ``$GITHUB_STEP_SUMMARY`` is set)."""
     entry = _entry(fmt)
+    pieces = getattr(report, entry.stream, None) if entry.stream else None
+    if pieces is not None and entry.after is None:
+        emit(pieces(), output)
+        return
     source = getattr(report, entry.source)()
     emit(entry.render(source), output)
     if entry.after is not None:

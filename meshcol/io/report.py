@@ -16,7 +16,7 @@ import re
 import stat
 import sys
 import tempfile
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import Any
 
 from meshcol.errors import InputFileError
@@ -30,7 +30,9 @@ __all__ = [
     "is_special_file",
     "dumps_csv",
     "dumps_json",
+    "dumps_rows",
     "emit",
+    "rows_chunks",
     "envelope",
     "split_vectors",
     "vector_columns",
@@ -285,6 +287,33 @@ def dumps_json(
     return text if compact else text + "\n"
 
 
+def dumps_rows(columns: list[tuple], count: int, level: int) -> str:
+    """The JSON text of a list of ``count`` dicts of one set of keys held as columns, as
+    :func:`dumps_json` writes it as a value at nesting ``level`` (a report's ``pairs``: 1):
+    :func:`rows_chunks` joined."""
+    return "".join(rows_chunks(columns, count, level))
+
+
+def rows_chunks(columns: list[tuple], count: int, level: int) -> Iterator[str]:
+    """:func:`dumps_rows`'s text in pieces of a bounded number of rows each, written from the
+    columns by the core's row writer (``dumps_rows``: ``columns`` are its ``(key, kind,
+    array[, table])`` in key order)."""
+    if not count:
+        yield "[]"
+        return
+    from meshcol._native import core
+
+    yield "["
+    for start in range(0, count, _ROWS_PER_CALL):
+        stop = min(start + _ROWS_PER_CALL, count)
+        yield core.dumps_rows(columns, count, start, stop, level)
+    yield "\n" + "  " * level + "]"
+
+
+#: Rows :func:`dumps_rows` has written per native call.
+_ROWS_PER_CALL = 1 << 16
+
+
 def _nulled(value: Any) -> Any:
     """``value`` with every non-finite float (numpy's too) made None and numpy values made
     Python ones; keys and everything else as they are (``json`` encodes them)."""
@@ -471,10 +500,15 @@ def dumps_csv(rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> str:
     return buf.getvalue()
 
 
-def emit(text: str, output: str | os.PathLike[str] | None) -> None:
-    """Write report text to ``output`` atomically, or to stdout when ``output`` is None or '-'."""
+def emit(text: str | Iterable[str], output: str | os.PathLike[str] | None) -> None:
+    """Write report text (or its pieces, in order: to a file never joined whole) to
+    ``output`` atomically, or to stdout when ``output`` is None or '-'."""
+    pieces = [text] if isinstance(text, str) else text
     if output is None or os.fspath(output) == "-":
-        sys.stdout.write(text)
+        # made whole first: a failure while making it leaves nothing on stdout
+        sys.stdout.write(text if isinstance(text, str) else "".join(pieces))
         sys.stdout.flush()
-    else:
-        atomic_write(output, text)
+        return
+    with atomic_path(output) as tmp, open(tmp, "w", encoding="utf-8", newline="") as handle:
+        for piece in pieces:
+            handle.write(piece)

@@ -1,0 +1,126 @@
+"""The check report's rows kept as columns (issue 32 item 4): the native row writer gives the
+bytes the dict path gives, and the rows read as the dicts they stand for."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from meshcol.analysis.check import check
+from meshcol.analysis.check_report import ReportRows
+from meshcol.io.report import dumps_json, dumps_rows
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_rows_from_columns_are_json_dumps_of_the_dicts() -> None:
+    rng = np.random.default_rng(3)
+    n = 7
+    reals = rng.normal(size=n) * 10.0 ** rng.integers(-30, 30, size=n)
+    reals[:4] = [np.nan, np.inf, -0.0, 1e16]
+    vectors = rng.normal(size=(n, 3))
+    vectors[1, 2] = -np.inf
+    box = rng.normal(size=(n, 6))
+    box[2, 0] = np.nan
+    codes = np.array([0, 1, -1, 2, 0, 1, 2], dtype=np.int64)
+    table = ["plain", 'quote " and \\ slash', "caf\u00e9 \u2603 \U0001f600 \n\t"]
+    raw = ["[]", '[\n        "x"\n      ]']  # as written at nesting 3
+    columns = [
+        ("a box", "box", box),
+        ("flag", "boolean", rng.random(n) < 0.5),
+        ("index", "index", np.array([-1, 0, 5, -3, 2, 1, 0], dtype=np.int64)),
+        ("integer", "integer", np.arange(n, dtype=np.int64) - 3),
+        ("number", "number", reals),
+        ("raw", "raw", np.array([0, 1, -1, 0, 1, 0, 1], dtype=np.int64), raw),
+        ("string", "string", codes, table),
+        ("vector", "vector", vectors),
+    ]
+
+    def finite(values: np.ndarray) -> list | None:
+        return values.tolist() if np.isfinite(values).all() else None
+
+    rows = [
+        {
+            "a box": [finite(box[i, :3]), finite(box[i, 3:])],
+            "flag": bool(columns[1][2][i]),
+            "index": None if columns[2][2][i] < 0 else int(columns[2][2][i]),
+            "integer": i - 3,
+            "number": float(reals[i]) if np.isfinite(reals[i]) else None,
+            "raw": None if columns[5][2][i] < 0 else json.loads(raw[columns[5][2][i]]),
+            "string": None if codes[i] < 0 else table[codes[i]],
+            "vector": finite(vectors[i]),
+        }
+        for i in range(n)
+    ]
+    expected = json.dumps({"rows": rows}, sort_keys=True, indent=2)
+    assert dumps_json({"rows": rows}) == expected + "\n"
+    text = '{\n  "rows": ' + dumps_rows(columns, n, 1) + "\n}"
+    assert text == expected
+    assert dumps_rows(columns, 0, 1) == "[]"
+
+
+def test_rows_refuse_a_column_of_the_wrong_shape() -> None:
+    with pytest.raises(ValueError, match="wrong type or shape"):
+        dumps_rows([("x", "vector", np.zeros(3))], 3, 1)
+    with pytest.raises(ValueError, match="unknown column kind"):
+        dumps_rows([("x", "text", np.zeros(3))], 3, 1)
+    with pytest.raises(IndexError, match="past its table"):
+        dumps_rows([("x", "string", np.array([1], dtype=np.int64), ["a"])], 1, 1)
+
+
+@pytest.mark.parametrize(
+    "inputs",
+    [
+        ["samples/level/scene.json"],
+        ["samples/bowl/scene.json"],
+        ["samples/bowl/ball.obj", "samples/bowl/bowl.obj"],
+    ],
+)
+def test_a_check_report_from_columns_is_the_report_from_dicts(inputs: list[str]) -> None:
+    report = check([str(ROOT / i) for i in inputs], clearance=0.5)
+    assert isinstance(report.pairs, ReportRows) and isinstance(report.bodies, ReportRows)
+    assert len(report.pairs) > 0
+    # the dict path: every row made in Python, the whole document encoded as one value
+    assert report.to_json() == dumps_json(report.to_dict())
+    worst = report.worst_pairs(3)
+    plain = [dict(p) for p in report.pairs]
+    touching = [p for p in plain if p["status"] != "separated"]
+    key = [float("inf") if p["signed_distance"] is None else p["signed_distance"] for p in touching]
+    order = sorted(range(len(touching)), key=lambda i: key[i])[:3]
+    assert worst == [touching[i] for i in order]
+    assert report.pairs == plain and report.pairs[0] == plain[0]
+
+
+def _cube_obj(centres: list[tuple[float, float, float]], names: list[str]) -> str:
+    lines: list[str] = []
+    for k, ((x, y, z), name) in enumerate(zip(centres, names)):
+        lines.append(f"o {name}")
+        for dx in (-0.5, 0.5):
+            for dy in (-0.5, 0.5):
+                for dz in (-0.5, 0.5):
+                    lines.append(f"v {x + dx} {y + dy} {z + dz}")
+        quads = [(1, 2, 4, 3), (5, 7, 8, 6), (1, 5, 6, 2), (3, 4, 8, 7), (1, 3, 7, 5), (2, 6, 8, 4)]
+        for quad in quads:
+            a, b, c, d = (8 * k + i for i in quad)
+            lines += [f"f {a} {b} {c}", f"f {a} {c} {d}"]
+    return "\n".join(lines) + "\n"
+
+
+def test_named_parts_and_other_names_are_written_from_columns(tmp_path: Path) -> None:
+    (tmp_path / "pair.obj").write_text(_cube_obj([(0, 0, 0), (3, 0, 0)], ["left", "r\u00e9ght"]))
+    (tmp_path / "one.obj").write_text(_cube_obj([(0, 0, 0)], ["cube"]))
+    bodies = [
+        {"name": "tw\u00f6", "mesh": "pair.obj"},
+        {"name": "near", "mesh": "one.obj", "position": [3.4, 0.2, 0.1]},
+        {"name": "apart", "mesh": "one.obj", "position": [0.0, 5.0, 0.0]},
+        {"name": "a ball", "primitive": {"type": "sphere", "radius": 0.6}, "position": [0, 0, 1]},
+    ]
+    (tmp_path / "scene.json").write_text(json.dumps({"bodies": bodies}))
+    report = check([str(tmp_path / "scene.json")], clearance=3.0)
+    assert isinstance(report.pairs, ReportRows)
+    named = [p for p in report.pairs if p["part_a"] or p["part_b"]]
+    assert named and any(b["parts"] for b in report.bodies)
+    assert report.to_json() == dumps_json(report.to_dict())
