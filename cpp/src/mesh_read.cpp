@@ -699,6 +699,9 @@ void read_one(const std::string& path, MeshFormat format, bool merge, std::vecto
         const ssize_t got = ::read(fd, buffer.data() + size, buffer.size() - size);
         if (got > 0) {
             size += static_cast<size_t>(got);
+            // a short read that ends where fstat said the file ends: the whole file, with no
+            // second read to hear the end (a file growing meanwhile reads on to its end)
+            if (size == static_cast<size_t>(info.st_size) && size < buffer.size()) break;
             continue;
         }
         if (got < 0 && errno == EINTR) continue;
@@ -745,6 +748,20 @@ std::vector<MeshFile> read_mesh_files(const std::vector<std::string>& paths,
         }
     });
     return files;
+}
+
+void file_identities(const std::vector<std::string>& paths, int threads, std::uint64_t* device,
+                     std::uint64_t* inode, std::uint8_t* found) {
+    const long long n = static_cast<long long>(paths.size());
+    parallel_for(n, resolve_threads(threads, n, 256), [&](long long begin, long long end) {
+        for (long long i = begin; i < end; ++i) {
+            struct stat info {};
+            const bool ok = ::stat(paths[static_cast<size_t>(i)].c_str(), &info) == 0;
+            device[i] = ok ? static_cast<std::uint64_t>(info.st_dev) : 0;
+            inode[i] = ok ? static_cast<std::uint64_t>(info.st_ino) : 0;
+            found[i] = ok ? 1 : 0;
+        }
+    });
 }
 
 }  // namespace meshcol
