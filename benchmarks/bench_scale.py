@@ -21,7 +21,11 @@ the origin: N(N-1)/2 candidate pairs, the memory a pair costs); ``meshcol check`
 line, report written, with its wall and CPU time and peak memory.
 
 Each meshcol row also gives its stages from the report (load, check, and the rest of the wall
-time: start-up, imports, writing the report).
+time: start-up, imports, writing the report). With ``--stages`` each unique-asset size is also
+run once more under ``check_stages.py`` (CPU seconds of every stage, in one process: the output
+guard, reading the files, the native read inside it, the bodies, the colliders, the hulls
+inside them, the geometry keys, the pair stages, the report), the figures a loaded machine
+does not move.
 
 Every meshcol figure is a fresh ``meshcol check`` process, timed from outside, with its peak
 resident memory (``RUSAGE_CHILDREN`` of a one-child wrapper). Peers run in this process,
@@ -29,6 +33,7 @@ loading included, and are skipped with a printed reason when missing or past ``-
 
 Run: .venv/bin/python benchmarks/bench_scale.py [--sizes 1000 10000 100000] [--peer-max 10000]
      [--extras] [--threads 0] [--primitives 100000 1000000] [--primitive-kinds spheres mixed]
+     [--stages]
 A/B: .venv/bin/python benchmarks/bench_scale.py --baseline ../main/.venv/bin/meshcol --repeat 3
      [--sizes 10000 100000] [--extras] [--primitives 10000]   (runs alternated; wall, CPU and peak RSS ranges;
      the two sides' last reports compared byte for byte, clock fields masked)
@@ -293,6 +298,32 @@ def meshcol_check(
     return rc, seconds, rss, data
 
 
+#: Stages of a unique-asset check beyond ``check_stages.STAGES``: inside the file read, the
+#: native read; inside the colliders, the hulls (one batched call) and the geometry keys.
+UNIQUE_STAGES = [
+    ("meshcol.io.mesh_read", "_read_native"),
+    ("meshcol.collision.shapes", "pack_hulls"),
+    ("meshcol.analysis.colliders", "_geometry_key"),
+]
+
+_STAGE_RUN = (
+    "import sys; sys.path.insert(0, {bench!r}); import check_stages as c; "
+    "c.STAGES += {extra!r}; sys.argv = ['check_stages.py', *sys.argv[1:]]; c.main()"
+)
+
+
+def stage_times(folder: Path, threads: int, python: str = sys.executable) -> list[str]:
+    """CPU seconds of each stage of one ``meshcol check`` of the folder's manifest
+    (``check_stages.py`` with :data:`UNIQUE_STAGES` added), as its printed lines."""
+    code = _STAGE_RUN.format(bench=str(ROOT), extra=UNIQUE_STAGES)
+    command = [python, "-c", code, str(folder / "scene.json"), "--threads", str(threads)]
+    command += ["--report", str(folder / "report-stages.json"), "--fail-on", "none"]
+    out = subprocess.run(command, capture_output=True, text=True, check=False).stdout
+    lines = out.splitlines()
+    start = next((i for i, line in enumerate(lines) if line.startswith("stage CPU")), None)
+    return lines[start:] if start is not None else [f"stages failed: {out[-300:]}"]
+
+
 def loaded_meshes(folder: Path):
     """Every body of the manifest as (name, trimesh, 4x4 pose), loaded as a user would."""
     import trimesh
@@ -412,6 +443,11 @@ def main() -> None:
         help="sizes of the primitive-body manifests to check (e.g. 100000 1000000)",
     )
     parser.add_argument(
+        "--stages",
+        action="store_true",
+        help="each unique-asset size also run under check_stages.py: CPU seconds per stage",
+    )
+    parser.add_argument(
         "--primitive-kinds",
         nargs="+",
         default=["spheres", "mixed"],
@@ -456,6 +492,9 @@ def main() -> None:
             f"{t_coal:>24} {ratio(t_coal):>6} {os.getloadavg()[0]:>9.2f}"
         )
         print(f"{'':>7} {stages(report, seconds)}")
+        if args.stages:
+            for line in stage_times(folder, args.threads):
+                print(f"{'':>7} {line}")
     for n in args.primitives:
         for kind in args.primitive_kinds:
             folder = primitives_folder(n, kind)

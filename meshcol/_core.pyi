@@ -435,6 +435,11 @@ def read_mesh_files(paths: Sequence[str], formats: Sequence[int], merge: bool = 
     Reads OBJ (format 0) and STL (format 1) files in parallel. Returns (vertices (V, 3), faces (F, 3) local to each object, vertex_offsets (O + 1,), face_offsets (O + 1,), object_file (O,), object names (bytes), status (N,) int8 per file (0 read, 1 not found, 2 a directory, 3 unreadable, 4 corrupt), one message per file ('' when read)).
     """
 
+def file_identities(paths: Sequence[str], threads: int = 0) -> tuple[Annotated[NDArray[numpy.uint64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.uint64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.uint8], dict(shape=(None,), order='C')]]:
+    """
+    Device and inode of each path, symbolic links followed, stat'ed in parallel. Returns (device (N,) uint64, inode (N,) uint64, found (N,) uint8: 0 where stat fails).
+    """
+
 def merge_vertices(vertices: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], faces: Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], digits: int = 8) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C')]]:
     """
     Merges vertices equal after rounding to `digits` decimals (trimesh's rule), drops unused ones, renumbers faces. Returns (vertices, faces).

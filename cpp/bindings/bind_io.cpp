@@ -104,6 +104,19 @@ auto merge(Points vertices, Faces faces, int digits) {
                            vector_array<FaceArray>(std::move(f), face_rows, 3));
 }
 
+auto identities(const std::vector<std::string>& paths, int threads) {
+    const size_t n = paths.size();
+    std::vector<std::uint64_t> device(n), inode(n);
+    std::vector<std::uint8_t> found(n);
+    {
+        nb::gil_scoped_release release;
+        meshcol::file_identities(paths, threads, device.data(), inode.data(), found.data());
+    }
+    return std::make_tuple(vector_array<Out<std::uint64_t, -1>>(std::move(device), n, 0),
+                           vector_array<Out<std::uint64_t, -1>>(std::move(inode), n, 0),
+                           vector_array<Out<std::uint8_t, -1>>(std::move(found), n, 0));
+}
+
 }  // namespace
 
 void bind_io(nb::module_& m) {
@@ -113,6 +126,9 @@ void bind_io(nb::module_& m) {
           "faces (F, 3) local to each object, vertex_offsets (O + 1,), face_offsets (O + 1,), "
           "object_file (O,), object names (bytes), status (N,) int8 per file (0 read, 1 not found, 2 a "
           "directory, 3 unreadable, 4 corrupt), one message per file ('' when read)).");
+    m.def("file_identities", &identities, "paths"_a, "threads"_a = 0,
+          "Device and inode of each path, symbolic links followed, stat'ed in parallel. Returns "
+          "(device (N,) uint64, inode (N,) uint64, found (N,) uint8: 0 where stat fails).");
     m.def("merge_vertices", &merge, "vertices"_a, "faces"_a, "digits"_a = 8,
           "Merges vertices equal after rounding to `digits` decimals (trimesh's rule), drops "
           "unused ones, renumbers faces. Returns (vertices, faces).");

@@ -104,32 +104,111 @@ void for_each_line(const char* data, size_t size, F&& each) {
     if (!joined.empty()) each(first_line, std::string_view(joined));
 }
 
-/// Whether an OBJ text has an `o` line (then `g` lines do not split objects).
-bool has_object_lines(const char* data, size_t size) {
-    bool found = false;
-    for_each_line(data, size, [&](size_t, std::string_view line) {
-        line = trim(line);
-        if (line.size() >= 2 && line[0] == 'o' && is_space(line[1])) found = true;
-        if (line == "o") found = true;
-        return !found;
-    });
-    return found;
-}
+/// A face corner or vertex line read without tokenizing it whole: the common lines of a
+/// well-formed file take this path; any line it does not read to the end goes to the exact
+/// tokenizing path, which says what is wrong (the same messages as always).
+class LineScanner {
+  public:
+    explicit LineScanner(std::string_view line) : line_(line) {}
 
-/// Copies the vertices `faces` (global indices into `vertices`) use into a new object, in the
-/// order of their global index, and renumbers the faces locally. `remap` (one entry per global
-/// vertex, all -1) is scratch space, returned all -1 again.
+    /// Skips separators; false at the end of the line or at a comment.
+    bool more() {
+        while (at_ < line_.size() && is_space(line_[at_])) ++at_;
+        return at_ < line_.size() && line_[at_] != '#';
+    }
+    /// The key (first token), cut at a comment; call after more().
+    std::string_view key() {
+        const size_t start = at_;
+        while (at_ < line_.size() && !is_space(line_[at_]) && line_[at_] != '#') ++at_;
+        return line_.substr(start, at_ - start);
+    }
+    /// A whole token that is a number (one leading '+' allowed), finite; false for anything
+    /// else (the exact path then says why).
+    bool number(double& value) {
+        if (!more()) return false;
+        const char* begin = line_.data() + at_;
+        const char* end = line_.data() + line_.size();
+        if (*begin == '+') ++begin;
+        const char* stop = plain_decimal(begin, end, value);
+        if (stop == nullptr) {
+            const auto result = std::from_chars(begin, end, value);
+            if (result.ec != std::errc()) return false;
+            stop = result.ptr;
+        }
+        if (!ends_token(stop) || !std::isfinite(value)) return false;
+        at_ = static_cast<size_t>(stop - line_.data());
+        return true;
+    }
+    /// A face corner ("7", "7/2", "7//3", "-1/4/4"): its leading integer, the rest of the
+    /// token skipped; false when it is not one.
+    bool corner(long long& value) {
+        const char* begin = line_.data() + at_;
+        const char* end = line_.data() + line_.size();
+        if (*begin == '+') ++begin;
+        const auto result = std::from_chars(begin, end, value);
+        if (result.ec != std::errc() || result.ptr == begin) return false;
+        if (result.ptr < end && *result.ptr == '/') {
+            at_ = static_cast<size_t>(result.ptr - line_.data());
+            while (at_ < line_.size() && !is_space(line_[at_]) && line_[at_] != '#') ++at_;
+            return true;
+        }
+        if (!ends_token(result.ptr)) return false;
+        at_ = static_cast<size_t>(result.ptr - line_.data());
+        return true;
+    }
+
+  private:
+    /// A plain decimal (`-0.123456`: at most 15 digits, no exponent) read exactly: its digits
+    /// as an integer, divided by a power of ten, both exact in a double, so the one rounding
+    /// of the division gives the correctly rounded value, the bits std::from_chars gives
+    /// (Clinger 1990). Where it ends, or nullptr for any other number (std::from_chars then).
+    static const char* plain_decimal(const char* p, const char* end, double& value) {
+        static constexpr double kPow10[] = {1e0, 1e1, 1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                            1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15};
+        const bool negative = p < end && *p == '-';
+        if (negative) ++p;
+        std::uint64_t digits = 0;
+        int count = 0, fraction = 0;
+        for (; p < end && static_cast<unsigned>(*p - '0') < 10; ++p, ++count)
+            digits = digits * 10 + static_cast<unsigned>(*p - '0');
+        if (p < end && *p == '.')
+            for (++p; p < end && static_cast<unsigned>(*p - '0') < 10; ++p, ++count, ++fraction)
+                digits = digits * 10 + static_cast<unsigned>(*p - '0');
+        if (count == 0 || count > 15 || (p < end && (*p == 'e' || *p == 'E'))) return nullptr;
+        value = static_cast<double>(digits) / kPow10[fraction];
+        if (negative) value = -value;
+        return p;
+    }
+    bool ends_token(const char* p) const {
+        return p == line_.data() + line_.size() || is_space(*p) || *p == '#';
+    }
+    std::string_view line_;
+    size_t at_ = 0;
+};
+
+/// Copies the vertices `faces[begin, end)` (global indices into `vertices`) use into a new
+/// object, in the order of their global index, and renumbers the faces locally. `remap` (one
+/// entry per global vertex, all -1) is scratch space, returned all -1 again.
 MeshObject gather(std::string name, const std::vector<double>& vertices,
-                  const std::vector<std::int64_t>& faces, std::vector<std::int64_t>& remap) {
+                  const std::vector<std::int64_t>& faces, size_t begin, size_t end,
+                  std::vector<std::int64_t>& remap) {
     MeshObject object;
     object.name = std::move(name);
+    const size_t count = remap.size();
     std::vector<std::int64_t> ids;
-    for (const std::int64_t global : faces) {
-        std::int64_t& slot = remap[static_cast<size_t>(global)];
+    for (size_t k = begin; k < end; ++k) {
+        std::int64_t& slot = remap[static_cast<size_t>(faces[k])];
         if (slot < 0) {
             slot = 0;
-            ids.push_back(global);
+            ids.push_back(faces[k]);
         }
+    }
+    if (ids.size() == count) {  // every vertex used (a file of one object): kept as it is
+        for (const std::int64_t global : ids) remap[static_cast<size_t>(global)] = -1;
+        object.vertices = vertices;
+        object.faces.assign(faces.begin() + static_cast<std::ptrdiff_t>(begin),
+                            faces.begin() + static_cast<std::ptrdiff_t>(end));
+        return object;
     }
     std::sort(ids.begin(), ids.end());
     object.vertices.resize(3 * ids.size());
@@ -138,26 +217,74 @@ MeshObject gather(std::string name, const std::vector<double>& vertices,
         std::memcpy(&object.vertices[3 * k], &vertices[3 * static_cast<size_t>(ids[k])],
                     3 * sizeof(double));
     }
-    object.faces.resize(faces.size());
-    for (size_t k = 0; k < faces.size(); ++k) object.faces[k] = remap[static_cast<size_t>(faces[k])];
+    object.faces.resize(end - begin);
+    for (size_t k = begin; k < end; ++k)
+        object.faces[k - begin] = remap[static_cast<size_t>(faces[k])];
     for (const std::int64_t global : ids) remap[static_cast<size_t>(global)] = -1;
     return object;
 }
+
+/// Where an `o` line (or a `g` line) starts an object: at face `start` of the file.
+struct ObjectStart {
+    size_t start;
+    std::string name;
+    bool group;  ///< a `g` line: starts an object only in a file with no `o` line
+};
 
 }  // namespace
 
 MeshFile parse_obj(const char* data, size_t size) {
     MeshFile file;
-    const bool split_on_groups = !has_object_lines(data, size);
+    // One pass: vertices, faces (global, 0-based) and where each `o` and `g` line falls; at the
+    // end, `g` lines split objects only when no line is an `o` line.
+    bool has_object_lines = false;
     std::vector<double> vertices;
-    // per object: name and faces in global (0-based) indices
-    std::vector<std::pair<std::string, std::vector<std::int64_t>>> objects(1);
+    std::vector<std::int64_t> faces;
+    std::vector<ObjectStart> starts;
     long long largest = -1;      // the largest positive index seen, 0-based
     size_t largest_line = 0;
     std::vector<std::string_view> tokens;
+    std::vector<long long> raw;
     std::vector<std::int64_t> corners;
 
-    for_each_line(data, size, [&](size_t line_number, std::string_view line) {
+    // A face's corners, in order, as the file gives them: checked and triangulated.
+    auto add_face = [&](size_t line_number, const std::vector<long long>& indices) {
+        corners.clear();
+        const long long defined = static_cast<long long>(vertices.size() / 3);
+        for (long long index : indices) {
+            if (index == 0) {
+                file.error = at_line(line_number, "face index 0 (OBJ indices start at 1)");
+                return false;
+            }
+            if (index < 0) {
+                if (-index > defined) {
+                    file.error = at_line(line_number,
+                                         "relative face index " + std::to_string(index) +
+                                             " but only " + std::to_string(defined) +
+                                             " vertices precede it");
+                    return false;
+                }
+                index = defined + index;
+            } else {
+                index -= 1;
+                if (index > largest) {
+                    largest = index;
+                    largest_line = line_number;
+                }
+            }
+            corners.push_back(index);
+        }
+        // A face of fewer than three vertices has no area: skipped, as trimesh does.
+        for (size_t k = 1; k + 1 < corners.size(); ++k) {
+            faces.push_back(corners[0]);
+            faces.push_back(corners[k]);
+            faces.push_back(corners[k + 1]);
+        }
+        return true;
+    };
+
+    // The exact path: the line tokenized whole, every fault named.
+    auto exact_line = [&](size_t line_number, std::string_view line) {
         const size_t hash = line.find('#');
         if (hash != std::string_view::npos) line = line.substr(0, hash);
         tokenize(line, tokens);
@@ -183,7 +310,7 @@ MeshFile parse_obj(const char* data, size_t size) {
             }
             vertices.insert(vertices.end(), xyz, xyz + 3);
         } else if (key == "f") {
-            corners.clear();
+            raw.clear();
             const long long defined = static_cast<long long>(vertices.size() / 3);
             for (size_t k = 1; k < tokens.size(); ++k) {
                 long long index = 0;
@@ -197,37 +324,54 @@ MeshFile parse_obj(const char* data, size_t size) {
                     file.error = at_line(line_number, "face index 0 (OBJ indices start at 1)");
                     return false;
                 }
-                if (index < 0) {
-                    if (-index > defined) {
-                        file.error = at_line(line_number,
-                                             "relative face index " + std::to_string(index) +
-                                                 " but only " + std::to_string(defined) +
-                                                 " vertices precede it");
-                        return false;
-                    }
-                    index = defined + index;
-                } else {
-                    index -= 1;
-                    if (index > largest) {
-                        largest = index;
-                        largest_line = line_number;
-                    }
+                if (index < 0 && -index > defined) {
+                    file.error = at_line(line_number, "relative face index " +
+                                                          std::to_string(index) + " but only " +
+                                                          std::to_string(defined) +
+                                                          " vertices precede it");
+                    return false;
                 }
-                corners.push_back(index);
+                raw.push_back(index);
             }
-            // A face of fewer than three vertices has no area: skipped, as trimesh does.
-            auto& faces = objects.back().second;
-            for (size_t k = 1; k + 1 < corners.size(); ++k) {
-                faces.push_back(corners[0]);
-                faces.push_back(corners[k]);
-                faces.push_back(corners[k + 1]);
-            }
-        } else if (key == "o" || (split_on_groups && key == "g")) {
+            return add_face(line_number, raw);
+        } else if (key == "o" || key == "g") {
             std::string_view name = trim(line);
             name.remove_prefix(1);
-            objects.emplace_back(std::string(trim(name)), std::vector<std::int64_t>());
+            starts.push_back(ObjectStart{faces.size() / 3, std::string(trim(name)), key == "g"});
         }
         return true;
+    };
+
+    for_each_line(data, size, [&](size_t line_number, std::string_view line) {
+        LineScanner scan(line);
+        if (!scan.more()) return true;  // blank, or a comment
+        const std::string_view key = scan.key();
+        if (key.data()[0] == 'o') {  // an `o` line as the file has it, comment and all
+            const size_t after = static_cast<size_t>(key.data() - line.data()) + 1;
+            has_object_lines |= after == line.size() || is_space(line[after]);
+        }
+        if (key == "v") {
+            double xyz[3];
+            if (scan.number(xyz[0]) && scan.number(xyz[1]) && scan.number(xyz[2])) {
+                vertices.insert(vertices.end(), xyz, xyz + 3);
+                return true;
+            }
+        } else if (key == "f") {
+            raw.clear();
+            long long index = 0;
+            bool whole = true;
+            while (scan.more()) {
+                if (!scan.corner(index)) {
+                    whole = false;
+                    break;
+                }
+                raw.push_back(index);
+            }
+            if (whole) return add_face(line_number, raw);
+        } else if (key != "o" && key != "g") {
+            return true;  // vt, vn, usemtl, s, ...: skipped
+        }
+        return exact_line(line_number, line);
     });
     if (!file.error.empty()) return file;
     const long long count = static_cast<long long>(vertices.size() / 3);
@@ -238,8 +382,21 @@ MeshFile parse_obj(const char* data, size_t size) {
         return file;
     }
     std::vector<std::int64_t> remap(static_cast<size_t>(count), -1);
-    for (auto& [name, faces] : objects)
-        if (!faces.empty()) file.objects.push_back(gather(std::move(name), vertices, faces, remap));
+    // the objects: from the first face, then from each `o` line (and `g` line, without `o`)
+    std::string first_name;
+    size_t begin = 0;
+    std::string* name = &first_name;
+    auto close = [&](size_t end) {
+        if (end > begin)
+            file.objects.push_back(gather(std::move(*name), vertices, faces, 3 * begin, 3 * end, remap));
+    };
+    for (ObjectStart& at : starts) {
+        if (at.group && has_object_lines) continue;
+        close(at.start);
+        begin = at.start;
+        name = &at.name;
+    }
+    close(faces.size() / 3);
     return file;
 }
 
@@ -494,63 +651,76 @@ void read_one(const std::string& path, MeshFormat format, bool merge, std::vecto
               MeshFile& out) {
     // Opened without blocking (a named pipe would wait for a writer forever) and checked on the
     // open descriptor before a byte is read: only a regular file within the cap is read.
+    // Plain descriptors, no stdio: a scene may name 100,000 small files.
     const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
-    std::FILE* stream = fd < 0 ? nullptr : ::fdopen(fd, "rb");
-    if (stream == nullptr) {
+    if (fd < 0) {
         const int code = errno;
-        if (fd >= 0) ::close(fd);
         out.status = code == ENOENT ? ReadStatus::NotFound : ReadStatus::Unreadable;
         out.error = code == ENOENT ? "file not found"
                                    : std::string("cannot read file: ") + std::strerror(code);
         return;
     }
+    struct Closer {  // closed on every way out, a std::bad_alloc of the buffer included
+        int fd;
+        ~Closer() { ::close(fd); }
+    } closer{fd};
     struct stat info {};
-    if (fstat(fileno(stream), &info) != 0 || S_ISDIR(info.st_mode)) {
-        std::fclose(stream);
+    if (fstat(fd, &info) != 0 || S_ISDIR(info.st_mode)) {
         out.status = ReadStatus::Directory;
         out.error = "is a directory, not a mesh file";
         return;
     }
     if (!S_ISREG(info.st_mode)) {
-        std::fclose(stream);
         out.status = ReadStatus::Unreadable;
         out.error = std::string("is ") + special_kind(info.st_mode) + ", not a regular file";
         return;
     }
     const std::uint64_t cap = static_cast<std::uint64_t>(defaults::max_mesh_file_bytes);
     if (static_cast<std::uint64_t>(info.st_size) > cap) {
-        std::fclose(stream);
         out.status = ReadStatus::Unreadable;
         out.error = "mesh file is " + std::to_string(info.st_size) + " bytes, over the limit of " +
                     std::to_string(cap) + " bytes";
         return;
     }
-    buffer.clear();
-    if (info.st_size > 0) {  // the whole file in one read, straight into the buffer
-        buffer.resize(static_cast<size_t>(info.st_size));
-        buffer.resize(std::fread(buffer.data(), 1, buffer.size(), stream));
-    }
-    char chunk[1 << 16];
-    size_t got = 0;
-    while ((got = std::fread(chunk, 1, sizeof chunk, stream)) > 0) {  // what a growing file adds
-        buffer.insert(buffer.end(), chunk, chunk + got);
-        if (buffer.size() > cap) {
-            std::fclose(stream);
-            out.status = ReadStatus::Unreadable;
-            out.error = "mesh file grew over the limit of " + std::to_string(cap) + " bytes";
-            return;
+    // The whole file straight into the buffer, then whatever a growing file adds (to the cap).
+    if (buffer.size() < static_cast<size_t>(info.st_size) + (1 << 12))
+        buffer.resize(static_cast<size_t>(info.st_size) + (1 << 12));
+    size_t size = 0;
+    int code = 0;
+    for (;;) {
+        if (size == buffer.size()) {
+            if (size > cap) {
+                out.status = ReadStatus::Unreadable;
+                out.error = "mesh file grew over the limit of " + std::to_string(cap) + " bytes";
+                return;
+            }
+            buffer.resize(std::min<size_t>(2 * size, static_cast<size_t>(cap) + 1));
         }
+        const ssize_t got = ::read(fd, buffer.data() + size, buffer.size() - size);
+        if (got > 0) {
+            size += static_cast<size_t>(got);
+            // a short read that ends where fstat said the file ends: the whole file, with no
+            // second read to hear the end (a file growing meanwhile reads on to its end)
+            if (size == static_cast<size_t>(info.st_size) && size < buffer.size()) break;
+            continue;
+        }
+        if (got < 0 && errno == EINTR) continue;
+        if (got < 0) code = errno;
+        break;
     }
-    const int code = std::ferror(stream) != 0 ? errno : 0;
-    std::fclose(stream);
+    if (size > cap) {
+        out.status = ReadStatus::Unreadable;
+        out.error = "mesh file grew over the limit of " + std::to_string(cap) + " bytes";
+        return;
+    }
     if (code != 0) {
         out.status = code == EISDIR ? ReadStatus::Directory : ReadStatus::Unreadable;
         out.error = code == EISDIR ? "is a directory, not a mesh file"
                                    : std::string("cannot read file: ") + std::strerror(code);
         return;
     }
-    out = format == MeshFormat::Obj ? parse_obj(buffer.data(), buffer.size())
-                                    : parse_stl(buffer.data(), buffer.size());
+    // the buffer keeps its size for the next file (never shrunk, so never filled again)
+    out = format == MeshFormat::Obj ? parse_obj(buffer.data(), size) : parse_stl(buffer.data(), size);
     if (!out.error.empty()) out.status = ReadStatus::Corrupt;
     if (merge && out.error.empty())
         for (MeshObject& object : out.objects) merge_vertices(object.vertices, object.faces, 8);
@@ -578,6 +748,20 @@ std::vector<MeshFile> read_mesh_files(const std::vector<std::string>& paths,
         }
     });
     return files;
+}
+
+void file_identities(const std::vector<std::string>& paths, int threads, std::uint64_t* device,
+                     std::uint64_t* inode, std::uint8_t* found) {
+    const long long n = static_cast<long long>(paths.size());
+    parallel_for(n, resolve_threads(threads, n, 256), [&](long long begin, long long end) {
+        for (long long i = begin; i < end; ++i) {
+            struct stat info {};
+            const bool ok = ::stat(paths[static_cast<size_t>(i)].c_str(), &info) == 0;
+            device[i] = ok ? static_cast<std::uint64_t>(info.st_dev) : 0;
+            inode[i] = ok ? static_cast<std::uint64_t>(info.st_ino) : 0;
+            found[i] = ok ? 1 : 0;
+        }
+    });
 }
 
 }  // namespace meshcol

@@ -8,8 +8,11 @@
 #include <string>
 #include <vector>
 
+#include <random>
+
 #include "check.hpp"
 #include "meshcol/mesh_read.hpp"
+#include "obj_reference.hpp"
 
 using namespace meshcol;
 
@@ -164,4 +167,73 @@ TEST_CASE("mesh read: an ASCII STL cut inside a facet is refused, naming the loo
             "endloop\nendfacet\n");  // cut after a whole triangle: nothing of it is lost
     CHECK(whole.error.empty());
     CHECK_EQ(whole.objects.size(), size_t(1));
+}
+
+namespace {
+
+// A random OBJ text of a few lines drawn from well-formed and broken lines alike: spaces, tabs
+// and CRs, comments, backslash continuations, objects and groups, every kind of bad token.
+std::string random_obj(std::mt19937& rng) {
+    static const char* const lines[] = {
+        "v 0 0 0", "v 1 0 0", "v 0 1 0", "v 0 0 1", "v 1.5 -2e-3 +7", "v 1 2 3 0.5 0.5 0.5",
+        "v 1 2", "v", "v 1 2 x", "v 1 nan 0", "v inf 0 0", "v 1 2 3#c", "v 1 2#c 3", "v#c",
+        "v +-1 2 3", "v ++1 2 3", "v 1e400 0 0", "v .5 5. 0x1", "v1 2 3", "vt 0 0", "vn 0 0 1",
+        "f 1 2 3", "f 1/1/1 2//2 3/3", "f -1 -2 -3", "f -3 -2 -1 -4", "f 0 1 2", "f 1 2 99",
+        "f +1 2 3 4 5", "f 1 a 2", "f 1 2", "f", "f 1/ 2/x 3//", "f /1 2 3", "f 1 2 3#c",
+        "f 1 2#c 3", "f 99999999999999999999 1 2", "f -9 1 2", "f 1 2 -0", "f 2 3 4 1",
+        "o first", "o", "o#x", "obj x", "o  spaced  name  ", "g group", "g", "g a b",
+        "# comment", "", "   ", "usemtl m", "s off", "mtllib x.mtl", "f 1 2 \\", "v 0 \\",
+        "l 1 2", "o \\", "p 1"};
+    std::uniform_int_distribution<size_t> pick(0, sizeof lines / sizeof lines[0] - 1);
+    std::uniform_int_distribution<int> count(1, 14), lead(0, 5);
+    std::string text;
+    const int n = count(rng);
+    for (int k = 0; k < n; ++k) {
+        const int pad = lead(rng);
+        if (pad == 4) text += "  ";
+        if (pad == 5) text += "\t";
+        if (lead(rng) == 0) {  // a vertex of random decimals: 1-20 digits, a point anywhere
+            text += "v";
+            std::uniform_int_distribution<int> digit(0, 9), length(1, 20), sign(0, 3);
+            for (int c = 0; c < 3; ++c) {
+                const int digits = length(rng);
+                std::uniform_int_distribution<int> point(-1, digits);
+                const int at = point(rng);
+                text += sign(rng) == 0 ? " -" : sign(rng) == 1 ? " +" : " ";
+                for (int d = 0; d < digits; ++d) {
+                    if (d == at) text += ".";
+                    text += static_cast<char>('0' + digit(rng));
+                }
+                if (at == digits) text += ".";
+            }
+        } else {
+            text += lines[pick(rng)];
+        }
+        if (pad == 3) text += " \r";
+        text += k + 1 < n || pad != 2 ? "\n" : "";
+    }
+    return text;
+}
+
+}  // namespace
+
+TEST_CASE("mesh read: the one-pass OBJ parser reads as the tokenizing one did, faults too") {
+    std::mt19937 rng(20260512);
+    for (int round = 0; round < 20000; ++round) {
+        const std::string text = random_obj(rng);
+        const MeshFile got = obj(text);
+        const MeshFile want = reference::parse_obj(text.data(), text.size());
+        bool same = got.error == want.error && got.objects.size() == want.objects.size();
+        for (size_t k = 0; same && k < got.objects.size(); ++k) {
+            const auto& a = got.objects[k].vertices;
+            const auto& b = want.objects[k].vertices;
+            same = got.objects[k].name == want.objects[k].name &&
+                   got.objects[k].faces == want.objects[k].faces && a.size() == b.size() &&
+                   std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+        }
+        if (!same)
+            std::fprintf(stderr, "differs on:\n%s\n(error '%s', reference '%s')\n", text.c_str(),
+                         got.error.c_str(), want.error.c_str());
+        REQUIRE(same);
+    }
 }

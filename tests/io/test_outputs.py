@@ -186,3 +186,27 @@ def test_an_output_spelled_as_a_missing_input_is_refused(tmp_path, monkeypatch, 
     with pytest.raises(MeshcolError, match=r"would overwrite a mesh file of scene\.json"):
         check_destinations(inputs, [("--report", spelling)])
     check_destinations(inputs, [("--report", "other.json")])  # another name: accepted
+
+
+def test_an_output_that_is_any_input_is_found_among_many(tmp_path) -> None:
+    """The inputs are stat'ed at once in the core: an existing output that is an input by a
+    hard link, a symbolic link or a name of undecodable bytes is named by the first input
+    that is it; missing and odd inputs match nothing."""
+    from meshcol.errors import OutputPathError
+    from meshcol.io.outputs import check_destinations
+
+    report = tmp_path / "report.json"
+    report.write_text("{}")
+    os.link(report, tmp_path / "hard.obj")
+    (tmp_path / "soft.obj").symlink_to(report)
+    odd = os.fsdecode(b"\xff\xfe.obj")  # surrogates: no UTF-8 text for the core
+    os.link(report, os.path.join(tmp_path, odd))
+    others = [("a mesh", str(tmp_path / f"m{i}.obj")) for i in range(300)]
+    for _, path in others[:10]:
+        Path(path).write_text("v 0 0 0\n")
+    strange = [("a nul", "bad\x00.obj"), ("a gone one", str(tmp_path / "gone.obj"))]
+    for linked, what in (("hard.obj", "the hard link"), ("soft.obj", "the link"), (odd, "odd")):
+        inputs = [*strange, *others, (what, os.path.join(tmp_path, linked)), ("later", str(report))]
+        with pytest.raises(OutputPathError, match=f"--report would overwrite {what}"):
+            check_destinations(inputs, [("--report", report)])
+    check_destinations([*strange, *others], [("--report", report)])  # none of them is it

@@ -51,6 +51,12 @@ std::vector<MeshFile> read_mesh_files(const std::vector<std::string>& paths,
                                       const std::vector<MeshFormat>& formats, bool merge,
                                       int threads);
 
+/// Device and inode of each of `paths` (symbolic links followed, as stat does), on `threads`
+/// threads (0: all cores); `found[i]` is 0 where the path names nothing stat can reach. What
+/// tells whether an output is one of a run's 100,000 input files, without reading them.
+void file_identities(const std::vector<std::string>& paths, int threads, std::uint64_t* device,
+                     std::uint64_t* inode, std::uint8_t* found);
+
 /// Merges vertices whose coordinates round to the same multiple of 10^-digits, keeps only the
 /// vertices faces use, in the order of their first index, and renumbers the faces (none is
 /// removed). The rounding is trimesh's (`round(x * 10^digits - 1e-6)`), so watertightness
