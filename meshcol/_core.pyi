@@ -244,9 +244,9 @@ class PackedConvexSet:
         Radius (H,) of a ball about each shape's local origin holding the whole shape; NaN for an invalid shape.
         """
 
-def sort_and_sweep(aabb_min: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], aabb_max: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], axis: int = -1, threads: int = 0, groups: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)] | None = None) -> Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C')]:
+def sort_and_sweep(aabb_min: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], aabb_max: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], axis: int = -1, threads: int = 0, groups: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)] | None = None, max_pairs: int = -1) -> Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C')] | None:
     """
-    Overlapping pairs (K, 2) int64, i < j, sorted; axis -1 chooses by variance; boxes of one group (groups: (N,) int64) never pair.
+    Overlapping pairs (K, 2) int64, i < j, sorted; axis -1 chooses by variance; boxes of one group (groups: (N,) int64) never pair; None when there are more than max_pairs (>= 0) pairs, found without holding them all.
     """
 
 def choose_sweep_axis(aabb_min: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], aabb_max: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)]) -> int:

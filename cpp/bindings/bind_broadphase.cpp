@@ -83,22 +83,28 @@ void check_ids(const meshcol::AabbTree& tree, const Ids& ids) {
 void bind_broadphase(nb::module_& m) {
     m.def(
         "sort_and_sweep",
-        [](const Boxes& lo, const Boxes& hi, int axis, int threads, std::optional<Ids> groups) {
+        [](const Boxes& lo, const Boxes& hi, int axis, int threads, std::optional<Ids> groups,
+           std::int64_t max_pairs) -> std::optional<PairsOut> {
             const std::int64_t n = box_count(lo, hi);
             if (groups && static_cast<std::int64_t>(groups->shape(0)) != n)
                 throw std::invalid_argument("groups must be (" + std::to_string(n) + ",), got (" +
                                             std::to_string(groups->shape(0)) + ",)");
             const std::int64_t* group_ids = groups ? groups->data() : nullptr;
             std::vector<std::int64_t> flat;
+            bool exceeded = false;
             {
                 nb::gil_scoped_release release;
-                flat = meshcol::sort_and_sweep(lo.data(), hi.data(), n, axis, threads, group_ids);
+                flat = meshcol::sort_and_sweep(lo.data(), hi.data(), n, axis, threads, group_ids,
+                                               max_pairs, &exceeded);
             }
+            if (exceeded) return std::nullopt;
             return pairs_array(std::move(flat));
         },
         "aabb_min"_a, "aabb_max"_a, "axis"_a = -1, "threads"_a = 0, "groups"_a = nb::none(),
+        "max_pairs"_a = -1,
         "Overlapping pairs (K, 2) int64, i < j, sorted; axis -1 chooses by variance; boxes of "
-        "one group (groups: (N,) int64) never pair.");
+        "one group (groups: (N,) int64) never pair; None when there are more than max_pairs "
+        "(>= 0) pairs, found without holding them all.");
     m.def("choose_sweep_axis", [](const Boxes& lo, const Boxes& hi) {
         const std::int64_t n = box_count(lo, hi);
         meshcol::validate_boxes(lo.data(), hi.data(), n);

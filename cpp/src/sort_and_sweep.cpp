@@ -11,6 +11,7 @@
 // max(a.cu0, b.cu0) == cu and the same on v; as cu0 <= cu for both, it is "a or b starts in
 // column cu" and "a or b starts in row cv": two bits per entry, or-ed.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
@@ -276,10 +277,18 @@ struct KeyBuffer {
 /// tested without a branch: about one in five passes, at random, so a branch on the tests
 /// would mispredict often. Every candidate's key is written and the end advanced by the
 /// test's result.
-void sweep_cell(const Entry* e, std::int64_t count, KeyBuffer& out, const std::int64_t* groups = nullptr) {
+///
+/// Stops once the buffer holds more than `limit` keys (the caller's cap on pairs: a pile of
+/// boxes in one cell would otherwise fill memory with quadratically many), returning false.
+bool sweep_cell(const Entry* e, std::int64_t count, KeyBuffer& out, const std::int64_t* groups = nullptr,
+                size_t limit = SIZE_MAX) {
     size_t k = out.size;  // a local: the key stores could alias the member
     const Entry* const end = e + count;
     for (const Entry* a = e; a < end; ++a) {
+        if (k > limit) {
+            out.size = k;
+            return false;
+        }
         const double hi_a = a->hi_a, lo_u = a->lo_u, hi_u = a->hi_u, lo_v = a->lo_v, hi_v = a->hi_v;
         const std::uint64_t id = a->id;
         const unsigned home = a->home;
@@ -301,6 +310,7 @@ void sweep_cell(const Entry* e, std::int64_t count, KeyBuffer& out, const std::i
         }
     }
     out.size = k;
+    return k <= limit;
 }
 
 /// Writes the `count` entries of `src` to `dst` sorted by lo_a: sorts 16-byte (key, slot)
@@ -398,12 +408,19 @@ inline Entry make_entry(const double* lo, const double* hi, const Grid& g, const
 
 /// Sorts the slots of every cell, builds the cell's entries in a per-thread buffer (one cell
 /// at a time: it stays in cache) and sweeps it, on `threads` threads; returns the sorted
-/// pairs. With `keep`, each sorted cell is also copied to (*keep)[c].
+/// pairs. With `keep`, each sorted cell is also copied to (*keep)[c]. With `max_pairs` >= 0,
+/// the sweep stops once more than that many pairs are found (every thread's count is added
+/// up after each cell, and one thread alone stops inside a cell), sets `*exceeded` and
+/// returns no pairs: the memory held stays about `threads` x `max_pairs` keys.
 std::vector<std::int64_t> sort_and_sweep_cells(const double* lo, const double* hi, const Grid& g, Slot* slots,
                                                const std::vector<std::int64_t>& offsets,
                                                std::int64_t n, int threads,
                                                std::vector<std::vector<Entry>>* keep,
-                                               const std::int64_t* groups = nullptr) {
+                                               const std::int64_t* groups = nullptr,
+                                               std::int64_t max_pairs = -1, bool* exceeded = nullptr) {
+    const size_t limit = max_pairs < 0 ? SIZE_MAX : static_cast<size_t>(max_pairs);
+    std::atomic<size_t> total{0};
+    std::atomic<bool> over{false};
     const int cells = g.cells();
     const std::vector<int> task_begin = make_tasks(
         cells, offsets[cells], threads, [&](int c) { return offsets[c + 1] - offsets[c]; });
@@ -416,6 +433,7 @@ std::vector<std::int64_t> sort_and_sweep_cells(const double* lo, const double* h
             // About 1.2 pairs per entry for boxes that overlap 2 to 3 others: one allocation.
             out.reserve_more(static_cast<size_t>(offsets[task_begin[t + 1]] - offsets[task_begin[t]]) * 3 / 2);
             for (int c = task_begin[t]; c < task_begin[t + 1]; ++c) {
+                if (over.load(std::memory_order_relaxed)) return;
                 const std::int64_t count = offsets[c + 1] - offsets[c];
                 if (static_cast<std::int64_t>(sorted.size()) < count) sorted.resize(static_cast<size_t>(count));
                 Slot* first = slots + offsets[c];
@@ -429,7 +447,12 @@ std::vector<std::int64_t> sort_and_sweep_cells(const double* lo, const double* h
                     }
                     sorted[q] = make_entry(lo, hi, g, first[q]);
                 }
-                sweep_cell(sorted.data(), count, out, groups);
+                const size_t before = out.size;
+                if (!sweep_cell(sorted.data(), count, out, groups, limit) ||
+                    total.fetch_add(out.size - before) + (out.size - before) > limit) {
+                    over.store(true);
+                    return;
+                }
                 if (keep) {
                     std::vector<Entry>& cell = (*keep)[static_cast<size_t>(c)];
                     cell.reserve(static_cast<size_t>(count + count / 8 + 8));  // room for boxes moving in
@@ -438,6 +461,11 @@ std::vector<std::int64_t> sort_and_sweep_cells(const double* lo, const double* h
             }
         }
     });
+    if (over.load()) {
+        if (exceeded) *exceeded = true;
+        return {};
+    }
+    if (exceeded) *exceeded = false;
     std::vector<std::uint32_t> row;
     return sorted_pairs(found, n, row);
 }
@@ -454,7 +482,8 @@ void check_count(std::int64_t n) {
 }  // namespace
 
 std::vector<std::int64_t> sort_and_sweep(const double* lo, const double* hi, std::int64_t n,
-                                         int axis, int threads, const std::int64_t* groups) {
+                                         int axis, int threads, const std::int64_t* groups,
+                                         std::int64_t max_pairs, bool* exceeded) {
     check_axis(axis);
     check_count(n);
     validate_boxes(lo, hi, n);
@@ -465,7 +494,8 @@ std::vector<std::int64_t> sort_and_sweep(const double* lo, const double* hi, std
     std::unique_ptr<Slot[]> slots;
     std::vector<std::int64_t> offsets;
     fill_cells(lo, n, g, span, slots, offsets);
-    return sort_and_sweep_cells(lo, hi, g, slots.get(), offsets, n, threads, nullptr, groups);
+    return sort_and_sweep_cells(lo, hi, g, slots.get(), offsets, n, threads, nullptr, groups, max_pairs,
+                                exceeded);
 }
 
 /// The incremental sweep's memory between steps: the grid of the first step (or of the last

@@ -114,3 +114,34 @@ TEST_CASE("broad phase: the AABB tree's pairs and queries, valid after edits") {
     const std::vector<std::int64_t> hits = edited.query({{0, 0, 0}, {1, 1, 1}});
     CHECK(hits.size() >= static_cast<size_t>(b.size() / 2));  // every moved box at least
 }
+
+TEST_CASE("broad phase: a cap on pairs stops the sweep, exactly at the count") {
+    // A pile (every box overlaps every other: one grid cell, n(n-1)/2 pairs) and a scatter.
+    Boxes pile;
+    for (int i = 0; i < 400; ++i)
+        for (int k = 0; k < 3; ++k) {
+            pile.lo.push_back(0.001 * i);
+            pile.hi.push_back(1.0 + 0.001 * i);
+        }
+    const Boxes scatter = random_boxes(2000, 100.0, 4.0, 7);
+    for (const Boxes* b : {static_cast<const Boxes*>(&pile), &scatter}) {
+        const std::vector<std::int64_t> all = brute_force(*b);
+        const std::int64_t count = static_cast<std::int64_t>(all.size() / 2);
+        for (int threads : {1, 2}) {
+            bool exceeded = true;
+            // At the count: every pair, not exceeded.
+            CHECK(sort_and_sweep(b->lo.data(), b->hi.data(), b->size(), -1, threads, nullptr, count,
+                                 &exceeded) == all);
+            CHECK(!exceeded);
+            // One under: stopped, no pairs.
+            const std::vector<std::int64_t> none =
+                sort_and_sweep(b->lo.data(), b->hi.data(), b->size(), -1, threads, nullptr, count - 1, &exceeded);
+            CHECK(exceeded);
+            CHECK(none.empty());
+            // A cap of 0 on a scene with pairs.
+            sort_and_sweep(b->lo.data(), b->hi.data(), b->size(), -1, threads, nullptr, 0, &exceeded);
+            CHECK(exceeded);
+        }
+    }
+    CHECK(brute_force(pile).size() / 2 == 400 * 399 / 2);
+}

@@ -76,7 +76,11 @@ def _axis(axis: int | None) -> int:
 
 
 def sort_and_sweep(
-    aabb_min: Any, aabb_max: Any, axis: int | None = None, groups: Any = None
+    aabb_min: Any,
+    aabb_max: Any,
+    axis: int | None = None,
+    groups: Any = None,
+    max_pairs: int | None = None,
 ) -> np.ndarray:
     """All pairs of overlapping boxes, by sort and sweep.
 
@@ -91,6 +95,10 @@ def sort_and_sweep(
     groups : (n,) int, optional
         A group id per box: boxes of the same group are never paired (the convex parts of
         one body). None pairs every overlapping box.
+    max_pairs : int, optional
+        A cap on the pairs: with more, the sweep stops early, holding at most about this
+        many pairs a thread, and raises :class:`meshcol.errors.TooManyPairsError`. A pile of
+        n boxes that all overlap has n(n-1)/2 pairs; the cap keeps it from filling memory.
 
     Returns
     -------
@@ -103,6 +111,8 @@ def sort_and_sweep(
     ValueError
         Wrong shapes (naming the argument), or a box that is not finite or has min > max
         (naming the first such box).
+    TooManyPairsError
+        More than ``max_pairs`` pairs (a subclass of ValueError).
 
     Notes
     -----
@@ -115,12 +125,20 @@ def sort_and_sweep(
     result. Runs in C++ on all cores with the GIL released.
     """
     lo, hi = _boxes(aabb_min, aabb_max)
-    if groups is None:
-        return core.sort_and_sweep(lo, hi, _axis(axis))
-    ids = np.ascontiguousarray(groups, dtype=np.int64)
-    if ids.shape != (len(lo),):
-        raise ValueError(f"groups must be ({len(lo)},), got {ids.shape}")
-    return core.sort_and_sweep(lo, hi, _axis(axis), groups=ids)
+    if max_pairs is not None and max_pairs < 0:
+        raise ValueError(f"max_pairs must be None or >= 0, got {max_pairs}")
+    cap = -1 if max_pairs is None else int(max_pairs)
+    ids = None
+    if groups is not None:
+        ids = np.ascontiguousarray(groups, dtype=np.int64)
+        if ids.shape != (len(lo),):
+            raise ValueError(f"groups must be ({len(lo)},), got {ids.shape}")
+    pairs = core.sort_and_sweep(lo, hi, _axis(axis), groups=ids, max_pairs=cap)
+    if pairs is None:
+        from meshcol.errors import TooManyPairsError
+
+        raise TooManyPairsError(f"more than {cap:,} overlapping pairs among {len(lo):,} boxes")
+    return pairs
 
 
 def brute_force_pairs(aabb_min: Any, aabb_max: Any) -> np.ndarray:

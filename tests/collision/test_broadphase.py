@@ -541,3 +541,25 @@ def test_incremental_sweep_with_grid_cells_equals_brute_force(seed, motion):
         assert np.array_equal(sweep.pairs(), brute_force_pairs(lo, hi))
     if motion == 1e-3:
         assert sweep.last_shifts >= 0  # kept the cells: no rebuild for small motions
+
+
+def test_a_cap_on_pairs_stops_a_pile_without_holding_its_pairs():
+    from meshcol.errors import TooManyPairsError
+
+    n = 3000  # a pile: 4,498,500 pairs, 72 MB as the (k, 2) array it would return
+    lo = np.repeat(np.linspace(0.0, 0.01, n)[:, None], 3, axis=1)
+    hi = lo + 1.0
+    with pytest.raises(TooManyPairsError, match=r"more than 1,000 overlapping pairs among 3,000"):
+        sort_and_sweep(lo, hi, max_pairs=1000)
+    groups = np.arange(n) // 2  # pairs within a group do not count towards the cap
+    with pytest.raises(TooManyPairsError):
+        sort_and_sweep(lo, hi, groups=groups, max_pairs=10_000)
+    few_lo, few_hi = lo[:50], hi[:50]
+    every = sort_and_sweep(few_lo, few_hi)
+    assert len(every) == 50 * 49 // 2
+    np.testing.assert_array_equal(sort_and_sweep(few_lo, few_hi, max_pairs=len(every)), every)
+    with pytest.raises(TooManyPairsError):
+        sort_and_sweep(few_lo, few_hi, max_pairs=len(every) - 1)
+    assert len(sort_and_sweep(lo[:1], hi[:1], max_pairs=0)) == 0
+    with pytest.raises(ValueError, match="max_pairs must be None or >= 0"):
+        sort_and_sweep(lo, hi, max_pairs=-1)

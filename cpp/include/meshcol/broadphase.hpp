@@ -35,10 +35,13 @@ void sort_pair_keys(std::vector<std::uint64_t>& keys);
 /// All overlapping pairs, by sort and sweep along `axis` (-1: `choose_sweep_axis`).
 /// `threads` <= 0 means all cores. With `groups` (n group ids, or nullptr), boxes of the same
 /// group are never paired (the parts of one body). Validates the boxes first
-/// (std::invalid_argument).
+/// (std::invalid_argument). With `max_pairs` >= 0 and more pairs than that, stops early,
+/// sets `*exceeded` (when given) and returns no pairs, holding at most about `threads` x
+/// `max_pairs` pairs on the way: a cap on the memory a pile of boxes can take.
 std::vector<std::int64_t> sort_and_sweep(const double* lo, const double* hi, std::int64_t n,
                                          int axis, int threads,
-                                         const std::int64_t* groups = nullptr);
+                                         const std::int64_t* groups = nullptr,
+                                         std::int64_t max_pairs = -1, bool* exceeded = nullptr);
 
 /// Incremental sort and sweep for a moving scene: keeps the grid of the first step and the
 /// sorted order of every grid cell, so a step where boxes move a little costs an insertion
