@@ -206,7 +206,8 @@ void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
         out.adjacency_counts.resize(out.adjacency_counts.size() +
                                     static_cast<size_t>(std::max<long long>(n, 0)), 0);
     } else {
-        if (s.unique.size() < 3 * static_cast<size_t>(k)) s.unique.resize(3 * static_cast<size_t>(k));
+        const size_t coordinates = 3 * static_cast<size_t>(k);
+        if (s.unique.size() < coordinates) s.unique.resize(coordinates);
         double* const first = s.unique.data();
         double* o = first;
         for (int v : hull.vertices) {

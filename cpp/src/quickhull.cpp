@@ -86,7 +86,8 @@ void set_plane(Workspace& w, Face& f) {
 
 // The side of p[q] from face f: +1 outside, -1 inside, 0 on its plane, exactly.
 int side(const Workspace& w, const Face& f, int q) {
-    return plane_side(f.plane.normal, f.plane.offset, f.plane.filter, w.p[f.v[0]], w.p[f.v[1]], w.p[f.v[2]],
+    const Plane& pl = f.plane;
+    return plane_side(pl.normal, pl.offset, pl.filter, w.p[f.v[0]], w.p[f.v[1]], w.p[f.v[2]],
                       w.p[q]);
 }
 

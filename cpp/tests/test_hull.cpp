@@ -253,7 +253,8 @@ TEST_CASE("hull: the plane filter decides a side only as the exact orientation d
         state = state * 6364136223846793005ull + 1442695040888963407ull;
         return static_cast<double>(state >> 11) * 0x1p-53;
     };
-    auto point = [&]() { return Vec3{1.8 * uniform() - 0.9, 1.8 * uniform() - 0.9, 1.8 * uniform() - 0.9}; };
+    auto coordinate = [&]() { return 1.8 * uniform() - 0.9; };
+    auto point = [&]() { return Vec3{coordinate(), coordinate(), coordinate()}; };
     long long decided = 0, exact = 0, wrong = 0, unfiltered = 0;
     for (int trial = 0; trial < 6000; ++trial) {
         const Vec3 a = point(), b = point();
