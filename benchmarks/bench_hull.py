@@ -25,7 +25,9 @@ A/B against another build (issue 32): ``--baseline OTHER_PYTHON`` runs the singl
 rows in a child process of each interpreter, alternated ``--rounds`` times, and prints CPU
 ranges and whether the packed arrays of both builds are byte-identical on every family
 (smooth hulls, clouds, and degenerate sets: 1e-12 noise on a sphere, lattice points with
-coplanar faces, duplicates, a flat set, huge and tiny coordinates).
+coplanar faces, duplicates, a flat set, huge and tiny coordinates). The peers are timed in the
+new build's child of every round on the first ``--peer-shapes`` shapes of the timed rows (0:
+none), so their ratios come from the same runs.
 
 Run:  .venv/bin/python benchmarks/bench_hull.py [--shapes 40000] [--old-shapes 2000]
       [--sphere-count 708] [--skip-old-mesh] [--sizes 16 64 256 1024] [--only-on-hull]
@@ -257,34 +259,69 @@ def digest(packed: object) -> str:
     return h.hexdigest()[:16]
 
 
-def worker(shapes: int, sizes: list[int]) -> None:
-    """Prints {row: [CPU us a shape, digest of the packed arrays]} as JSON."""
+def peer_cpu(points: np.ndarray, peer_shapes: int) -> dict[str, float]:
+    """CPU us a shape of each installed peer on the first `peer_shapes` shapes."""
+    out = {}
+    for name, fn in peers().items():
+        sample = points[: min(len(points), peer_shapes)]
+        c = time.process_time()
+        for p in sample:
+            fn(p)  # type: ignore[operator]
+        out[name] = (time.process_time() - c) / len(sample) * 1e6
+    return out
+
+
+def worker(shapes: int, sizes: list[int], peer_shapes: int) -> None:
+    """Prints {row: [CPU us a shape, digest of the packed arrays, {peer: CPU us a shape}]}
+    as JSON (peers with --peer-shapes > 0, on the timed rows)."""
     out = {}
     for name, points in families(shapes, sizes):
-        cpu, packed = single_thread_cpu(points, 3 if name.startswith(("smooth", "clouds")) else 1)
-        out[name] = [cpu / len(points) * 1e6, digest(packed)]
+        timed_row = name.startswith(("smooth", "clouds"))
+        cpu, packed = single_thread_cpu(points, 3 if timed_row else 1)
+        theirs = peer_cpu(points, peer_shapes) if timed_row and peer_shapes > 0 else {}
+        out[name] = [cpu / len(points) * 1e6, digest(packed), theirs]
     print(json.dumps(out))
 
 
-def ab_case(baseline: str, rounds: int, shapes: int, sizes: list[int]) -> None:
+def ab_case(baseline: str, rounds: int, shapes: int, sizes: list[int], peer_shapes: int) -> None:
+    """Old and new builds alternated, round by round; the peers are timed in the new build's
+    child of each round, on the same shapes (their ratios are to the new build's time)."""
     runs: dict[str, list[dict[str, list]]] = {"old": [], "new": []}
     command = [__file__, "--worker", "--shapes", str(shapes), "--sizes", *map(str, sizes)]
     for r in range(rounds):
-        order = [("old", baseline), ("new", sys.executable)]
-        for label, python in order if r % 2 == 0 else order[::-1]:
-            done = subprocess.run([python, *command], capture_output=True, text=True, check=True)
+        order = [("old", baseline, 0), ("new", sys.executable, peer_shapes)]
+        for label, python, theirs in order if r % 2 == 0 else order[::-1]:
+            done = subprocess.run(
+                [python, *command, "--peer-shapes", str(theirs)],
+                capture_output=True,
+                text=True,
+                check=True,
+            )
             runs[label].append(json.loads(done.stdout.splitlines()[-1]))
     print(f"A/B, {rounds} alternated rounds, one thread, CPU us a shape (old: {baseline}):")
-    print("| row | old | new | old / new | packed arrays |")
-    print("| --- | --- | --- | --- | --- |")
+    names = sorted({name for run in runs["new"] for row in run.values() for name in row[2]})
+    head = "".join(f" {name} (x new) |" for name in names)
+    print(f"| row | old | new | old / new | packed arrays |{head}")
+    print("| --- | --- | --- | --- | --- |" + " --- |" * len(names))
     for row in runs["new"][0]:
         old = [run[row][0] for run in runs["old"]]
         new = [run[row][0] for run in runs["new"]]
         same = {run[row][1] for run in runs["old"] + runs["new"]}
+        cells = ""
+        for name in names:
+            theirs = [
+                (run[row][2][name], run[row][0]) for run in runs["new"] if name in run[row][2]
+            ]
+            if not theirs:
+                cells += " |"
+                continue
+            us = [t for t, _ in theirs]
+            ratio = [t / ours for t, ours in theirs]
+            cells += f" {min(us):.1f}-{max(us):.1f} (x{min(ratio):.1f}-{max(ratio):.1f}) |"
         print(
             f"| {row} | {min(old):.1f}-{max(old):.1f} | {min(new):.1f}-{max(new):.1f} | "
             f"{min(old) / max(new):.2f}-{max(old) / min(new):.2f} | "
-            f"{'identical' if len(same) == 1 else 'DIFFERENT'} |"
+            f"{'identical' if len(same) == 1 else 'DIFFERENT'} |{cells}"
         )
 
 
@@ -345,10 +382,10 @@ def main() -> None:
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.worker:
-        worker(args.shapes, args.sizes)
+        worker(args.shapes, args.sizes, args.peer_shapes)
         return
     if args.baseline:
-        ab_case(args.baseline, args.rounds, args.shapes, args.sizes)
+        ab_case(args.baseline, args.rounds, args.shapes, args.sizes, args.peer_shapes)
         return
     on_hull_case(args.shapes, args.sizes, args.peer_shapes)
     if args.only_on_hull:

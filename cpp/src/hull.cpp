@@ -257,7 +257,7 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
             for (const TriangulationEdge& g : t.edges) {
                 const int between = pl.group[g.i] != pl.group[g.j];  // no branch: no pattern
                 real[t.tri[g.i][g.e]] += between;
-                real[t.tri[g.i][g.e == 2 ? 0 : g.e + 1]] += between;
+                real[t.tri[g.i][kNextCorner[g.e]]] += between;
             }
             std::vector<int>& keep = w.keep;
             keep.clear();

@@ -22,15 +22,18 @@ struct Conflict {
     int index;
 };
 
+/// A triangle's plane as Quickhull keeps it: the unit normal, the offset (n . x - offset is
+/// the distance of x), twice the area, and the plane filter: a distance beyond it decides
+/// the side of a point exactly (INFINITY: never; the bound is proved beside face_plane).
+struct Plane {
+    Vec3 normal;
+    double offset = 0.0, area2 = 0.0, filter = INFINITY;
+};
+
 struct Face {
     int v[3];  // point indices, counter-clockwise seen from outside
     int n[3];  // neighbour across edge v[i] -> v[(i + 1) % 3]
-    Vec3 normal;
-    double offset = 0.0;  // dot(normal, x) - offset is the distance of x
-    double area2 = 0.0;   // the unnormalised normal's length: twice the area
-    // The plane filter: a point's distance beyond it decides its side exactly (INFINITY:
-    // never, the exact orientation decides).
-    double filter = INFINITY;
+    Plane plane;
     std::vector<Conflict> conflicts;  // the points outside this face (farther than eps)
     int furthest = -1;
     double furthest_distance = 0.0;
@@ -78,6 +81,10 @@ struct Workspace {
 
 // A triangulated 3-D hull: triangles of point indices, their neighbours and their planes
 // (unit normal, offset and twice the area, scaled frame, as Quickhull computed them).
+// The corner after corner e of a triangle (a table: `e == 2 ? 0 : e + 1` compiles to a branch
+// that mispredicts when e follows no pattern).
+inline constexpr int kNextCorner[3] = {1, 2, 0};
+
 // An edge of a triangulation, once: edge e of triangle i (from tri[i][e] to tri[i][e + 1]),
 // whose neighbour j > i has it as its edge k (-1: no edge of j leads back to i).
 struct TriangulationEdge {
@@ -110,6 +117,35 @@ inline Vec3 triangle_normal(const Vec3& a, const Vec3& b, const Vec3& c, bool& b
         return n;
     }
     return triangle_normal_at_widest(a, b, c, bounded);
+}
+
+/// The plane of the counter-clockwise triangle a b c, points scaled into (-1, 1)^3.
+///
+/// The plane filter (Shewchuk's static filter, on the plane): the side of x decided by its
+// plane distance d = fl(fl(n . x) - offset) when |d| > kPlaneFilter, by the exact orientation
+// otherwise. The bound, for points scaled into (-1, 1)^3 and eps = 2^-53:
+// - the plain product n' = fl(u') x fl(v') of a corner whose rounded edges pass
+//   16 |n'|^2 >= |u'|^2 |v'|^2 (so |n'| >= |u| |v| / 4 up to a few eps) is within
+//   4.01 eps sqrt(3) |u| |v| <= 28.1 eps |n'| of the exact N = u x v (each component of a
+//   2 x 2 minor: two rounded differences, a product, a difference: four roundings);
+// - the unit normal n = fl(n' / fl(sqrt(fl(n' . n')))) is within 3.6 eps of n'/|n'|, and
+//   n'/|n'| within 2 x 28.1 eps of N/|N|: |n - N/|N|| <= 60 eps;
+// - fl(n . x) and offset = fl(n . a) are within gamma_3 |n|_1 < 5.8e-16 of n . x and n . a;
+// - so d / (1 + eps) is within 60 eps |x - a| + 1.16e-15 < 4.8e-14 of N/|N| . (x - a), whose
+//   sign is the orientation's (|x - a| < 2 sqrt(3)): |d| > 1e-13 decides it.
+// A normal taken by the compensated product, or of length below 1e-140 (where the squares of
+// the test may lose their relative accuracy to underflow), gets no filter.
+inline Plane face_plane(const Vec3& a, const Vec3& b, const Vec3& c) {
+    constexpr double kPlaneFilter = 1e-13;
+    bool bounded = false;
+    const Vec3 n = triangle_normal(a, b, c, bounded);
+    const double len = norm(n);
+    Plane plane;
+    plane.normal = len > 0.0 ? n / len : Vec3{};
+    plane.offset = dot(plane.normal, a);
+    plane.area2 = len;
+    plane.filter = bounded && len >= 1e-140 ? kPlaneFilter : INFINITY;
+    return plane;
 }
 
 /// The 3-D hull of the points `subset` of w.p (quickhull.cpp): large inputs first lose their

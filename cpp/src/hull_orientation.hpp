@@ -197,4 +197,15 @@ inline int orientation(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& 
     return orientation_exact(a, b, c, p);
 }
 
+// The side of x from the plane of the counter-clockwise triangle a b c whose unit normal,
+// offset and filter face_plane gave (hull_detail.hpp): +1 outside, -1 inside, 0 on it,
+// exactly: the plane distance decides beyond the filter, the orientation otherwise.
+inline int plane_side(const Vec3& normal, double offset, double filter, const Vec3& a,
+                      const Vec3& b, const Vec3& c, const Vec3& x) {
+    const double d = dot(normal, x) - offset;
+    if (d > filter) return 1;
+    if (d < -filter) return -1;
+    return orientation(a, b, c, x);
+}
+
 }  // namespace meshcol::hull_detail

@@ -69,6 +69,7 @@ struct PackScratch {
     std::vector<std::array<long long, 3>> keys;  // and the keys it has seen this call
     unsigned stamp = 0;                // the table's cells of the current call carry it
     std::vector<Vec3> directions;
+    std::vector<double> unique;  // unique_directions' output before it is appended
 };
 
 // floor(x) for |x| < 2^62 as the library's floor gives it (an inline conversion where
@@ -97,10 +98,10 @@ std::int64_t unique_directions(const Vec3* d, size_t count, bool signed_classes,
     DirectionCell* table = s.table.data();
     if (s.keys.size() < count) s.keys.resize(count);
     std::array<long long, 3>* keys = s.keys.data();
-    // Written in place (room for all, cut to the kept ones at the end).
-    const size_t base = out.size();
-    out.resize(base + 3 * count);
-    double* o = out.data() + base;
+    // Written to scratch and appended once (a resize of `out` would zero its room first).
+    if (s.unique.size() < 3 * count) s.unique.resize(3 * count);
+    double* const first = s.unique.data();
+    double* o = first;
     std::int32_t seen = 0;
     std::int64_t kept = 0;
     for (size_t i = 0; i < count; ++i) {
@@ -143,7 +144,7 @@ std::int64_t unique_directions(const Vec3* d, size_t count, bool signed_classes,
         o += 3;
         ++kept;
     }
-    out.resize(base + 3 * static_cast<size_t>(kept));
+    out.insert(out.end(), first, o);
     return kept;
 }
 
@@ -205,14 +206,16 @@ void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
         out.adjacency_counts.resize(out.adjacency_counts.size() +
                                     static_cast<size_t>(std::max<long long>(n, 0)), 0);
     } else {
-        const size_t at = out.vertices.size();
-        out.vertices.resize(at + 3 * static_cast<size_t>(k));
-        double* o = out.vertices.data() + at;
+        const size_t coordinates = 3 * static_cast<size_t>(k);
+        if (s.unique.size() < coordinates) s.unique.resize(coordinates);
+        double* const first = s.unique.data();
+        double* o = first;
         for (int v : hull.vertices) {
             const Vec3 q = points[v] + zero;  // -0.0 as 0.0
             o[0] = q.x, o[1] = q.y, o[2] = q.z;
             o += 3;
         }
+        out.vertices.insert(out.vertices.end(), first, o);
     }
     if (hull.dimension == 0) {
         out.adjacency_counts.push_back(0);
@@ -242,7 +245,7 @@ void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
         for (size_t g = 0; g < t.edges.size(); ++g) {
             const TriangulationEdge& edge = t.edges[g];
             const auto& face = hull.faces[edge.i];
-            const int a = face[edge.e], b = face[edge.e == 2 ? 0 : edge.e + 1];
+            const int a = face[edge.e], b = face[kNextCorner[edge.e]];
             s.pairs[g] = {a, b};
             s.directions[directions] = points[hull.vertices[b]] - points[hull.vertices[a]];
             directions += pl.group[edge.i] != pl.group[edge.j];  // no branch: no pattern

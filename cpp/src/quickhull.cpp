@@ -23,7 +23,7 @@ namespace meshcol {
 namespace hull_detail {
 namespace {
 
-double distance(const Face& f, const Vec3& x) { return dot(f.normal, x) - f.offset; }
+double distance(const Face& f, const Vec3& x) { return dot(f.plane.normal, x) - f.plane.offset; }
 
 // (b - a) x (c - a) to about one rounding per component: the differences kept exactly
 // (two_diff) and each 2 x 2 minor accumulated in double-double (Ogita, Rump and Oishi 2005).
@@ -80,41 +80,15 @@ constexpr int kNext[3] = {1, 2, 0};  // the edge after edge e of a face
 // mispredicts when c follows no pattern.
 inline int select(bool c, int a, int b) { return b ^ ((a ^ b) & -static_cast<int>(c)); }
 
-// The plane filter (Shewchuk's static filter, on the plane): the side of x decided by its
-// plane distance d = fl(fl(n . x) - offset) when |d| > kPlaneFilter, by the exact orientation
-// otherwise. The bound, for points scaled into (-1, 1)^3 and eps = 2^-53:
-// - the plain product n' = fl(u') x fl(v') of a corner whose rounded edges pass
-//   16 |n'|^2 >= |u'|^2 |v'|^2 (so |n'| >= |u| |v| / 4 up to a few eps) is within
-//   4.01 eps sqrt(3) |u| |v| <= 28.1 eps |n'| of the exact N = u x v (each component of a
-//   2 x 2 minor: two rounded differences, a product, a difference: four roundings);
-// - the unit normal n = fl(n' / fl(sqrt(fl(n' . n')))) is within 3.6 eps of n'/|n'|, and
-//   n'/|n'| within 2 x 28.1 eps of N/|N|: |n - N/|N|| <= 60 eps;
-// - fl(n . x) and offset = fl(n . a) are within gamma_3 |n|_1 < 5.8e-16 of n . x and n . a;
-// - so d / (1 + eps) is within 60 eps |x - a| + 1.16e-15 < 4.8e-14 of N/|N| . (x - a), whose
-//   sign is the orientation's (|x - a| < 2 sqrt(3)): |d| > 1e-13 decides it.
-// A normal taken by the compensated product, or of length below 1e-140 (where the squares of
-// the test may lose their relative accuracy to underflow), gets no filter.
-constexpr double kPlaneFilter = 1e-13;
-
 void set_plane(Workspace& w, Face& f) {
-    const Vec3& a = w.p[f.v[0]];
-    bool bounded = false;
-    const Vec3 n = triangle_normal(a, w.p[f.v[1]], w.p[f.v[2]], bounded);
-    const double len = norm(n);
-    f.normal = len > 0.0 ? n / len : Vec3{};
-    f.offset = dot(f.normal, a);
-    f.area2 = len;
-    f.filter = bounded && len >= 1e-140 ? kPlaneFilter : INFINITY;
+    f.plane = face_plane(w.p[f.v[0]], w.p[f.v[1]], w.p[f.v[2]]);
 }
 
-// The side of p[q] from face f: +1 outside, -1 inside, 0 on its plane, exactly (the plane
-// filter, else the exact orientation).
+// The side of p[q] from face f: +1 outside, -1 inside, 0 on its plane, exactly.
 int side(const Workspace& w, const Face& f, int q) {
-    const Vec3& x = w.p[q];
-    const double d = dot(f.normal, x) - f.offset;
-    if (d > f.filter) return 1;
-    if (d < -f.filter) return -1;
-    return orientation(w.p[f.v[0]], w.p[f.v[1]], w.p[f.v[2]], x);
+    const Plane& pl = f.plane;
+    return plane_side(pl.normal, pl.offset, pl.filter, w.p[f.v[0]], w.p[f.v[1]], w.p[f.v[2]],
+                      w.p[q]);
 }
 
 // Face `id` as the triangle a b c (counter-clockwise from outside), alive, no neighbours
@@ -238,7 +212,6 @@ void reassign_furthest(Workspace& w, int seed, int q) {
 // (Gregorius 2014, "Implementing Quickhull"). False when the horizon is not one simple loop
 // (exact orientations guarantee it is).
 bool find_horizon(Workspace& w, int seed, int q, unsigned stamp) {
-    const std::vector<Vec3>& p = w.p;
     Face* faces = w.faces.data();
     w.visible.clear();
     w.edges.clear();
@@ -337,8 +310,8 @@ void cone(Workspace& w, int q) {
         f.n[2] = ids[k > 0 ? k - 1 : h - 1];
         w.faces[he.outside].n[he.slot] = id;
         double* plane = &w.new_planes[4 * k];
-        plane[0] = f.normal.x, plane[1] = f.normal.y, plane[2] = f.normal.z;
-        plane[3] = f.offset;
+        plane[0] = f.plane.normal.x, plane[1] = f.plane.normal.y, plane[2] = f.plane.normal.z;
+        plane[3] = f.plane.offset;
     }
     const double* planes = w.new_planes.data();
     const double eps = w.eps;
@@ -457,9 +430,9 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
         if (!f.alive) continue;
         const int t = index[i];
         out.tri[t] = {f.v[0], f.v[1], f.v[2]};
-        out.normal[t] = f.normal;
-        out.offset[t] = f.offset;
-        out.area2[t] = f.area2;
+        out.normal[t] = f.plane.normal;
+        out.offset[t] = f.plane.offset;
+        out.area2[t] = f.plane.area2;
         for (int e = 0; e < 3; ++e) {
             if (f.n[e] < 0 || !w.faces[f.n[e]].alive) return Build::FAILED;
             out.neighbor[t][e] = index[f.n[e]];
@@ -568,7 +541,8 @@ void interior_filter(Workspace& w, const std::vector<int>& subset, std::vector<i
     for (size_t f = 0; f < w.face_count; ++f) {
         const Face& face = w.faces[f];
         if (!face.alive) continue;
-        plane.insert(plane.end(), {face.normal.x, face.normal.y, face.normal.z, face.offset});
+        plane.insert(plane.end(), {face.plane.normal.x, face.plane.normal.y, face.plane.normal.z,
+                                    face.plane.offset});
     }
     const size_t planes = plane.size() / 4;
     // Inside by this much (the points are scaled to at most 1): far above the rounding of a

@@ -7,6 +7,8 @@
 
 #include "check.hpp"
 #include "fixtures.hpp"
+#include "hull_detail.hpp"
+#include "hull_orientation.hpp"
 #include "meshcol/hull.hpp"
 
 using namespace meshcol;
@@ -237,4 +239,45 @@ TEST_CASE("hull: every point of an ellipsoid is a vertex, every vertex list sort
         for (auto k = b; k < e; ++k) degrees += packed.adjacency[k] != v ? 1 : 0;
     }
     CHECK_EQ(degrees, std::int64_t{2 * 186});
+}
+
+TEST_CASE("hull: the plane filter decides a side only as the exact orientation does") {
+    // Quickhull's faces decide which side a point is on by the plane distance when it is
+    // beyond the face's filter (a proved bound), else by the exact orientation: the two must
+    // agree everywhere, most of all just beyond the bound and on thin triangles.
+    using hull_detail::face_plane;
+    using hull_detail::orientation;
+    using hull_detail::plane_side;
+    std::uint64_t state = 5;
+    auto uniform = [&]() {  // in [0, 1)
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return static_cast<double>(state >> 11) * 0x1p-53;
+    };
+    auto coordinate = [&]() { return 1.8 * uniform() - 0.9; };
+    auto point = [&]() { return Vec3{coordinate(), coordinate(), coordinate()}; };
+    long long decided = 0, exact = 0, wrong = 0, unfiltered = 0;
+    for (int trial = 0; trial < 6000; ++trial) {
+        const Vec3 a = point(), b = point();
+        // Every other triangle thin: c within 1e-3 .. 1e-9 of the line ab.
+        const Vec3 c = trial % 2 == 0 ? point()
+                                      : a + (b - a) * uniform() +
+                                            point() * std::ldexp(1.0, -10 - trial % 21);
+        const hull_detail::Plane pl = face_plane(a, b, c);
+        unfiltered += std::isinf(pl.filter) ? 1 : 0;
+        for (int k = 0; k < 24; ++k) {
+            // Heights from 2^-30 down to 2^-53 (the bound is 1e-13, about 2^-43), both sides.
+            const double s = uniform(), t = uniform() * (1.0 - s);
+            const double height = (k % 2 == 0 ? 1.0 : -1.0) * std::ldexp(1.0 + uniform(), -30 - k);
+            const Vec3 x = a + (b - a) * s + (c - a) * t + pl.normal * height;
+            const int side = plane_side(pl.normal, pl.offset, pl.filter, a, b, c, x);
+            wrong += side != orientation(a, b, c, x) ? 1 : 0;
+            const double d = dot(pl.normal, x) - pl.offset;
+            (std::fabs(d) > pl.filter ? decided : exact) += 1;
+        }
+    }
+    CHECK_EQ(wrong, 0LL);
+    // Both ways were taken, many times (the test is not vacuous).
+    CHECK(decided > 30000);
+    CHECK(exact > 30000);
+    CHECK(unfiltered < 6000);
 }
