@@ -186,26 +186,24 @@ SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative&
                 for (int j = 0; j < leaf_b.count; ++j) {
                     // The surfaces are disjoint (first_crossing found no crossing pair among
                     // those whose boxes touch, which are all that can cross): measure only.
-                    double lower2 = triangle_box_squared_distance(box_a, leaf_b.boxes[j]);
-                    if (pruned(lower2)) continue;
-                    lower2 = max2(lower2, triangle_axis_squared_distance(ta, leaf_b.corners[j]));
-                    if (pruned(lower2)) continue;
-                    lower2 = max2(lower2, triangle_plane_squared_distance(ta, normal_a, leaf_b.corners[j],
-                                                                          rel.rotation * b.triangle_normal(y.index + j),
-                                                                          rel.slack));
-                    if (pruned(lower2)) continue;
-                    if ((a.triangle_capsule(i).thin || b.triangle_capsule(y.index + j).thin) &&
-                        pruned(triangle_capsule_squared_distance(ta, a.triangle_capsule(i), leaf_b.corners[j],
-                                                                 b.triangle_capsule(y.index + j), rel.slack)))
+                    // The surfaces are disjoint (first_crossing found no crossing pair among
+                    // those whose boxes touch, which are all that can cross): measure only.
+                    if (pruned(triangle_box_squared_distance(box_a, leaf_b.boxes[j])) ||
+                        pruned(triangle_axis_squared_distance(ta, leaf_b.corners[j])) ||
+                        pruned(triangle_plane_squared_distance(ta, normal_a, leaf_b.corners[j],
+                                                               rel.rotation * b.triangle_normal(y.index + j), rel.slack)) ||
+                        ((a.triangle_capsule(i).thin || b.triangle_capsule(y.index + j).thin) &&
+                         pruned(triangle_capsule_squared_distance(ta, a.triangle_capsule(i), leaf_b.corners[j],
+                                                                  b.triangle_capsule(y.index + j), rel.slack))))
                         continue;
                     Vec3 pa, pb;
                     // Bit for bit the full triangle distance whenever it can count (at most the
-                    // best so far). Where the pair's bounds are well under the best (patches
+                    // best so far). Where the leaf pair's bound is well under the best (patches
                     // facing across a gap, slanted slivers), most of its edge pairs are farther
-                    // than the best and are skipped by their lines' distance; where they are
-                    // near it (meshes far apart: the pairs measured are all about as far) that
-                    // test would prune little and is left out.
-                    const bool loose = lower2 < 0.5 * r.squared_distance;
+                    // than the best and are skipped by their lines' distance; where it is near
+                    // it (meshes far apart: the pairs measured are all about as far) that test
+                    // would prune little and is left out.
+                    const bool loose = item.bound < 0.5 * r.squared_distance;
                     const double d2 = triangle_separated_squared_distance_below(
                         ta, leaf_b.corners[j], loose ? r.squared_distance : kInf, loose ? rel.slack : 0.0, &pa, &pb);
                     if (!pruned(d2)) {

@@ -53,8 +53,10 @@ double triangle_separated_squared_distance(const Vec3 a[3], const Vec3 b[3], Vec
 /// value and points whenever that value is at most `limit2`; otherwise some value above
 /// `limit2` (the points then mean nothing). An edge pair or vertex-face pair is skipped when a
 /// lower bound of its distance, less `slack`, is above the smaller of sqrt(limit2) and the
-/// best distance so far. `slack` must be at least 1e-13 of the largest coordinate magnitude
-/// of the six corners (it covers the rounding of the bounds; a mesh pair's allowance is).
+/// best distance so far. `slack` must be at least 3e-14 of the largest coordinate magnitude
+/// of the six corners: it covers the rounding of the edge-line bound, under 2e-14 of it (a
+/// mesh pair's allowance, 1e-13 of the translation and both oriented-box reaches, is at
+/// least 5.7e-14 of it).
 double triangle_separated_squared_distance_below(const Vec3 a[3], const Vec3 b[3], double limit2, double slack,
                                                  Vec3* point_a, Vec3* point_b);
 
