@@ -35,7 +35,9 @@ Run: .venv/bin/python benchmarks/bench_scale.py [--sizes 1000 10000 100000] [--p
      [--stages]
 Reader alone: .venv/bin/python benchmarks/bench_scale.py --reader --sizes 100000 --repeat 3
      [--baseline ../main/.venv/bin/meshcol]   (the core's read_mesh_files over the unique-asset
-     files, one thread, CPU seconds of the call in a fresh process; with --baseline, alternated)
+     files, one thread, user and system CPU seconds of the call in a fresh process: the system
+     part is the kernel's opening and reading, which a loaded machine inflates; with
+     --baseline, alternated)
 A/B: .venv/bin/python benchmarks/bench_scale.py --baseline ../main/.venv/bin/meshcol --repeat 3
      [--sizes 10000 100000] [--extras] [--primitives 10000]   (runs alternated; wall, CPU and peak RSS ranges;
      the two sides' last reports compared byte for byte, clock fields masked)
@@ -324,14 +326,15 @@ def stage_times(folder: Path, threads: int, python: str = sys.executable) -> lis
 
 
 _READ_ONLY = (
-    "import json, os, sys, time\n"
+    "import json, os, resource, sys\n"
     "from meshcol._native import core\n"
     "folder = sys.argv[1]\n"
     "bodies = json.load(open(os.path.join(folder, 'scene.json')))['bodies']\n"
     "paths = [os.path.join(folder, b['mesh']) for b in bodies]\n"
-    "start = time.process_time()\n"
+    "a = resource.getrusage(resource.RUSAGE_SELF)\n"
     "core.read_mesh_files(paths, [0] * len(paths), merge=True, threads=1)\n"
-    "print(time.process_time() - start)\n"
+    "b = resource.getrusage(resource.RUSAGE_SELF)\n"
+    "print(b.ru_utime - a.ru_utime, b.ru_stime - a.ru_stime)\n"
 )
 
 
@@ -343,9 +346,12 @@ def reader_rows(args: argparse.Namespace) -> None:
         sides["baseline"] = str(Path(args.baseline).parent / "python")
     for n in args.sizes:
         folder = scene_folder(n)
-        runs: dict[str, list[float]] = {side: [] for side in sides}
-        for _ in range(args.repeat):
-            for side, python in sides.items():
+        runs: dict[str, list[tuple[float, float]]] = {side: [] for side in sides}
+        for round_ in range(args.repeat):
+            # each side first every other round: the first run of a round may find the files
+            # out of the page cache (a loaded machine evicts them) and pay for the disk
+            order = list(sides.items())
+            for side, python in order[::-1] if round_ % 2 else order:
                 out = subprocess.run(
                     [python, "-c", _READ_ONLY, str(folder)],
                     capture_output=True,
@@ -353,11 +359,14 @@ def reader_rows(args: argparse.Namespace) -> None:
                     check=True,
                     cwd=ROOT.parent.parent,  # not a worktree: each side imports its own meshcol
                 )
-                runs[side].append(float(out.stdout.split()[-1]))
-        for side, cpu in runs.items():
+                user, system = out.stdout.split()[-2:]
+                runs[side].append((float(user), float(system)))
+        for side, figures in runs.items():
+            user_s, system_s = zip(*figures)
             print(
-                f"read {n:,} files, {side}: {min(cpu):.2f}-{max(cpu):.2f} s CPU "
-                f"({len(cpu)} runs; load avg {os.getloadavg()[0]:.2f})"
+                f"read {n:,} files, {side}: user {min(user_s):.2f}-{max(user_s):.2f} s, "
+                f"system {min(system_s):.2f}-{max(system_s):.2f} s "
+                f"({len(figures)} runs; load avg {os.getloadavg()[0]:.2f})"
             )
 
 
