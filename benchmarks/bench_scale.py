@@ -34,6 +34,11 @@ loading included, and are skipped with a printed reason when missing or past ``-
 Run: .venv/bin/python benchmarks/bench_scale.py [--sizes 1000 10000 100000] [--peer-max 10000]
      [--extras] [--threads 0] [--primitives 100000 1000000] [--primitive-kinds spheres mixed]
      [--stages]
+Reader alone: .venv/bin/python benchmarks/bench_scale.py --reader --sizes 100000 --repeat 3
+     [--baseline ../main/.venv/bin/meshcol]   (the core's read_mesh_files over the unique-asset
+     files, one thread, user and system CPU seconds of the call in a fresh process: the system
+     part is the kernel's opening and reading, which a loaded machine inflates; with
+     --baseline, alternated)
 A/B: .venv/bin/python benchmarks/bench_scale.py --baseline ../main/.venv/bin/meshcol --repeat 3
      [--sizes 10000 100000] [--extras] [--primitives 10000]   (runs alternated; wall, CPU and peak RSS ranges;
      the two sides' last reports compared byte for byte, clock fields masked)
@@ -324,6 +329,51 @@ def stage_times(folder: Path, threads: int, python: str = sys.executable) -> lis
     return lines[start:] if start is not None else [f"stages failed: {out[-300:]}"]
 
 
+_READ_ONLY = (
+    "import json, os, resource, sys\n"
+    "from meshcol._native import core\n"
+    "folder = sys.argv[1]\n"
+    "bodies = json.load(open(os.path.join(folder, 'scene.json')))['bodies']\n"
+    "paths = [os.path.join(folder, b['mesh']) for b in bodies]\n"
+    "a = resource.getrusage(resource.RUSAGE_SELF)\n"
+    "core.read_mesh_files(paths, [0] * len(paths), merge=True, threads=1)\n"
+    "b = resource.getrusage(resource.RUSAGE_SELF)\n"
+    "print(b.ru_utime - a.ru_utime, b.ru_stime - a.ru_stime)\n"
+)
+
+
+def reader_rows(args: argparse.Namespace) -> None:
+    """CPU seconds of the core's ``read_mesh_files`` over each unique-asset scene's files (one
+    thread, a fresh process a run; with ``--baseline``, its Python alternated with this)."""
+    sides = {"this": sys.executable}
+    if args.baseline:
+        sides["baseline"] = str(Path(args.baseline).parent / "python")
+    for n in args.sizes:
+        folder = scene_folder(n)
+        runs: dict[str, list[tuple[float, float]]] = {side: [] for side in sides}
+        for round_ in range(args.repeat):
+            # each side first every other round: the first run of a round may find the files
+            # out of the page cache (a loaded machine evicts them) and pay for the disk
+            order = list(sides.items())
+            for side, python in order[::-1] if round_ % 2 else order:
+                out = subprocess.run(
+                    [python, "-c", _READ_ONLY, str(folder)],
+                    capture_output=True,
+                    text=True,
+                    check=True,
+                    cwd=ROOT.parent.parent,  # not a worktree: each side imports its own meshcol
+                )
+                user, system = out.stdout.split()[-2:]
+                runs[side].append((float(user), float(system)))
+        for side, figures in runs.items():
+            user_s, system_s = zip(*figures)
+            print(
+                f"read {n:,} files, {side}: user {min(user_s):.2f}-{max(user_s):.2f} s, "
+                f"system {min(system_s):.2f}-{max(system_s):.2f} s "
+                f"({len(figures)} runs; load avg {os.getloadavg()[0]:.2f})"
+            )
+
+
 def loaded_meshes(folder: Path):
     """Every body of the manifest as (name, trimesh, 4x4 pose), loaded as a user would."""
     import trimesh
@@ -443,6 +493,11 @@ def main() -> None:
         help="sizes of the primitive-body manifests to check (e.g. 100000 1000000)",
     )
     parser.add_argument(
+        "--reader",
+        action="store_true",
+        help="only the core's read of each unique-asset scene's files (see the docstring)",
+    )
+    parser.add_argument(
         "--stages",
         action="store_true",
         help="each unique-asset size also run under check_stages.py: CPU seconds per stage",
@@ -461,6 +516,9 @@ def main() -> None:
         "with this one's, --repeat times each, and only meshcol is timed (A/B)",
     )
     args = parser.parse_args()
+    if args.reader:
+        reader_rows(args)
+        return
     if args.baseline:
         ab(args)
         return

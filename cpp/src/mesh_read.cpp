@@ -573,6 +573,11 @@ void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& fa
     };
     std::vector<std::int64_t> remap(n, -1);
     std::vector<double> merged;
+    // A small object's merged vertices fit in what its corners take (no regrowth); a large
+    // soup's are about a sixth of its corners.
+    const size_t reserve = n < 65536 ? n : n / 4;
+    keys.reserve(reserve);
+    merged.reserve(3 * reserve);
     size_t recent_size = 16;  // at most 4096 slots (64 KiB), a power of two
     while (recent_size < n && recent_size < 4096) recent_size <<= 1;
     const size_t kRecent = recent_size;

@@ -11,6 +11,7 @@ and vertices split along UV or normal seams are merged back by position.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import os
 from collections.abc import Sequence
@@ -30,6 +31,7 @@ __all__ = [
     "load_file_scene",
     "MESH_EXTENSIONS",
     "check_magnitude",
+    "file_identities",
     "load_mesh",
     "load_meshes",
     "merge_vertices",
@@ -316,6 +318,38 @@ def load_meshes(
         bodies if bodies is not None else load_mesh(source, merge=merge)
         for source, bodies in zip(sources, out)
     ]
+
+
+def file_identities(paths: Sequence[str]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Device and inode of each of ``paths`` (symbolic links followed, as :func:`os.stat`),
+    stat'ed at once by the core's threads: (n,) uint64 each, and (n,) uint8 ``found``, 0
+    where the path names nothing that can be stat'ed. What tells the output guard
+    (:mod:`meshcol.io.outputs`) whether a report is one of 100,000 input files."""
+    from meshcol._native import core
+
+    # The core takes UTF-8 text without NUL; any other path (a file name of undecodable bytes,
+    # kept as surrogates) is stat'ed here.
+    apart = [i for i, p in enumerate(paths) if not _core_path(p)]
+    usable = list(paths) if not apart else [p if _core_path(p) else "" for p in paths]
+    device, inode, found = core.file_identities(usable)
+    for i in apart:
+        with contextlib.suppress(OSError, ValueError):
+            info = os.stat(paths[i])
+            device[i], inode[i], found[i] = info.st_dev, info.st_ino, 1
+    return device, inode, found
+
+
+def _core_path(path: str) -> bool:
+    """Whether the core can take ``path`` as given: UTF-8 text without NUL."""
+    if "\x00" in path:
+        return False
+    if path.isascii():
+        return True
+    try:
+        path.encode("utf-8")
+    except UnicodeEncodeError:
+        return False
+    return True
 
 
 def _format_of(source: str) -> MeshFormat:

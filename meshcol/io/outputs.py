@@ -191,36 +191,15 @@ def _last_name(path: str) -> str:
     return os.path.normcase(tail)
 
 
-def _core_path(path: str) -> bool:
-    """Whether the core can stat ``path`` as given: UTF-8 text without NUL."""
-    if "\x00" in path:
-        return False
-    if path.isascii():
-        return True
-    try:
-        path.encode("utf-8")
-    except UnicodeEncodeError:
-        return False
-    return True
-
-
 class _Identities:
-    """Device and inode of every input (symbolic links followed), stat'ed at once by the
-    core's threads (:func:`meshcol._native.core.file_identities`); inputs that cannot be
-    stat'ed match nothing."""
+    """Device and inode of every input (symbolic links followed), stat'ed at once
+    (:func:`meshcol.io.mesh_read.file_identities`); inputs that cannot be stat'ed match
+    nothing."""
 
     def __init__(self, paths: list[str]) -> None:
-        from meshcol._native import core
+        from meshcol.io.mesh_read import file_identities
 
-        # The core takes UTF-8 text without NUL; any other path (a file name of undecodable
-        # bytes, kept as surrogates) is stat'ed here.
-        apart = [i for i, p in enumerate(paths) if not _core_path(p)]
-        usable = paths if not apart else [p if _core_path(p) else "" for p in paths]
-        self.device, self.inode, self.found = core.file_identities(usable)
-        for i in apart:
-            with contextlib.suppress(OSError, ValueError):
-                info = os.stat(paths[i])
-                self.device[i], self.inode[i], self.found[i] = info.st_dev, info.st_ino, 1
+        self.device, self.inode, self.found = file_identities(paths)
 
     def first(self, device: int, inode: int) -> int | None:
         """The index of the first input that is the file (``device``, ``inode``), or None."""
