@@ -154,3 +154,25 @@ def test_primitive_bodies_are_packed_in_one_pass_as_body_by_body() -> None:
     assert np.array_equal(mine.kinds, theirs.kinds)
     assert np.array_equal(mine.params, theirs.params)
     assert len(mine) == n
+
+
+def test_the_json_report_is_written_in_pieces_and_never_half(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from meshcol.io import report as report_io
+    from meshcol.io.formats import write_report
+
+    report = check([str(ROOT / "samples/level/scene.json")], clearance=0.5)
+    path = tmp_path / "report.json"
+    write_report(report, "json", str(path))
+    assert path.read_text() == report.to_json() == dumps_json(report.to_dict())
+
+    def failing(columns: list, count: int, level: int):  # the pairs fail after one piece
+        yield "["
+        raise MemoryError("no room for the rows")
+
+    monkeypatch.setattr(report_io, "rows_chunks", failing)
+    other = tmp_path / "other.json"
+    with pytest.raises(MemoryError):
+        write_report(report, "json", str(other))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["report.json"]
