@@ -51,7 +51,7 @@ import numpy as np
 from meshcol.collision.hull import FLAT_RELATIVE_TOLERANCE, exact_hull
 from meshcol.collision.shapes import ConvexSet
 from meshcol.errors import InvalidMeshError
-from meshcol.io.collision_names import collision_part
+from meshcol.io.collision_names import UNREAL_PREFIXES, collision_part
 from meshcol.types import Body
 from meshcol.vocabulary import COLLIDER_KINDS
 
@@ -217,6 +217,9 @@ def split_ucx(bodies: Sequence[Body]) -> tuple[list[Body], dict[str, _Ucx], list
     warnings : list of str
         One line per owner name that matched nothing.
     """
+    joined = "\n".join(b.name for b in bodies)  # one search, not a match per body
+    if not any(f"{p}_" in joined for p in UNREAL_PREFIXES) and not any(b.parts for b in bodies):
+        return list(bodies), {}, []
     names = {b.name for b in bodies}
     by_name = {b.name: b for b in bodies}
     ucx: dict[str, _Ucx] = {}
@@ -530,6 +533,8 @@ def build_colliders(
         decompose_options=dict(decompose_options or {}),
         fits=_fits_of(kept, kind, report),
     )
+    if not ucx and not any(body.primitive is None for body in kept):
+        return build.pool.of_primitives(kept, warnings)
     for body_number, body in enumerate(kept):
         block = _Block(body_number)
         if body.primitive is not None:
@@ -628,11 +633,23 @@ class _Pool:
         counts = np.asarray([len(r) for r in rows_per_body], dtype=np.int64)
         return np.concatenate(rows_per_body), np.concatenate(labels_per_body), counts
 
-    def colliders(self, bodies: list[Body], warnings: list[str]) -> Colliders:
-        """The packed :class:`Colliders` of every closed block."""
+    def of_primitives(self, bodies: list[Body], warnings: list[str]) -> Colliders:
+        """The packed :class:`Colliders` of bodies that are all primitives (each one part, its
+        exact primitive): what a block per body gives, in one pass over them."""
+        index = self.unique_index
+        keys = (index.setdefault(("primitive", b.primitive), len(index)) for b in bodies)
+        rows = np.fromiter(keys, dtype=np.int64, count=len(bodies))
+        self.unique = [key[1] for key in index]
+        self.kinds = ["primitive"] * len(bodies)
+        ones = np.ones(len(bodies), dtype=np.int64)
+        return self.colliders(bodies, warnings, (rows, -ones, ones))
+
+    def colliders(self, bodies: list[Body], warnings: list[str], parts: Any = None) -> Colliders:
+        """The packed :class:`Colliders` of every closed block (or of ``parts``: the pool
+        row and label of every part and each body's part count, given)."""
         single = ConvexSet.from_shapes(self.unique)
         pool = ConvexSet.concatenate(single, *self.triangle_sets) if self.triangle_sets else single
-        rows, part_label, counts = self._rows(single)
+        rows, part_label, counts = self._rows(single) if parts is None else parts
         offsets = np.zeros(len(bodies) + 1, dtype=np.int64)
         np.cumsum(counts, out=offsets[1:])
         part_body = np.repeat(np.arange(len(bodies), dtype=np.int64), counts)

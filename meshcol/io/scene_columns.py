@@ -27,10 +27,10 @@ from meshcol.io.scene_schema import (
     BODY_FIELDS,
     MAX_TURN,
     ORDERS,
+    PRIMITIVE_KEYS,
     PRIMITIVE_TYPES,
     SHAPES,
     VECTOR_FIELDS,
-    is_primitive,
     plain_top,
 )
 from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Sphere
@@ -190,26 +190,43 @@ def columns(document: Any) -> Columns | None:
 
 
 def _primitives(table: _Table) -> tuple[np.ndarray, np.ndarray]:
-    """The primitive bodies' types and lengths (see :class:`Columns`), each checked."""
+    """The primitive bodies' types and lengths (see :class:`Columns`), each checked as
+    :func:`~meshcol.io.scene_schema.is_primitive` checks one, a type's bodies at a time."""
     kinds = np.full(table.n, -1, dtype=np.int8)
     lengths = np.zeros((table.n, 3))
     if not table.count["primitive"]:
         return kinds, lengths
     values, mask = table.column("primitive")
-    if not all(map(is_primitive, values)):
+    if set(map(type, values)) != {dict}:
         raise _Unplain
-    rows = [
-        p["size"]
-        if p["type"] == "box"
-        else [p["radius"], 0.0, 0.0]
-        if p["type"] == "sphere"
-        else [p["radius"], p["length"], 0.0]
-        for p in values
-    ]
+    types = [p.get("type") for p in values]
+    if set(map(type, types)) != {str} or not set(types) <= PRIMITIVE_KEYS.keys():
+        raise _Unplain
     index = {kind: k for k, kind in enumerate(PRIMITIVE_TYPES)}
-    given = np.array([index[p["type"]] for p in values], dtype=np.int8).reshape(-1, 1)
-    kinds = _spread(given, mask, table.n, -1).astype(np.int8).reshape(table.n)
-    return kinds, _spread(_rows(rows, 3), mask, table.n, 0.0)
+    given = np.array([index[t] for t in types], dtype=np.int8).reshape(len(values))
+    rows = np.zeros((len(values), 3))
+    for kind, fields in PRIMITIVE_KEYS.items():
+        picked = np.flatnonzero(given == index[kind])
+        group = [values[i] for i in picked.tolist()]
+        if not group:
+            continue
+        if set(map(len, group)) != {len(fields)}:  # with every field there: exactly them
+            raise _Unplain
+        try:
+            if kind == "box":
+                block, width = _rows([p["size"] for p in group], 3), 3
+            else:
+                block, width = np.zeros((len(group), 3)), 1 if kind == "sphere" else 2
+                block[:, 0] = _rows([[p["radius"]] for p in group], 1)[:, 0]
+                if width == 2:
+                    block[:, 1] = _rows([[p["length"]] for p in group], 1)[:, 0]
+        except KeyError:
+            raise _Unplain from None
+        if not (block[:, :width] > 0).all():
+            raise _Unplain
+        rows[picked] = block
+    kinds = _spread(given.reshape(-1, 1), mask, table.n, -1).astype(np.int8).reshape(table.n)
+    return kinds, _spread(rows, mask, table.n, 0.0)
 
 
 def _rows(values: list, width: int) -> np.ndarray:

@@ -124,3 +124,55 @@ def test_named_parts_and_other_names_are_written_from_columns(tmp_path: Path) ->
     named = [p for p in report.pairs if p["part_a"] or p["part_b"]]
     assert named and any(b["parts"] for b in report.bodies)
     assert report.to_json() == dumps_json(report.to_dict())
+
+
+def test_primitive_bodies_are_packed_in_one_pass_as_body_by_body() -> None:
+    """``build_colliders`` of bodies that are all primitives (one pass) gives each body the
+    parts the body-by-body loop gives it (that loop runs when one mesh body joins them)."""
+    from meshcol.analysis.colliders import build_colliders
+    from meshcol.types import Body, Box, Capsule, Cylinder, Sphere
+
+    rng = np.random.default_rng(32)
+    shapes = [Sphere(0.5), Box((1.0, 2.0, 0.5)), Capsule(0.2, 1.0), Cylinder(0.3, 0.4)]
+    bodies = []
+    for i in range(40):
+        pose = np.eye(4)
+        pose[:3, 3] = rng.normal(size=3)
+        shape = shapes[i % 4] if i % 3 else Sphere(float(rng.uniform(0.1, 1.0)))
+        bodies.append(Body.of_primitive(f"b{i}", "scene.json", shape, pose=pose))
+    mesh = Body("mesh", "m.obj", np.eye(3), np.array([[0, 1, 2]]))
+    one_pass = build_colliders(bodies)
+    by_body = build_colliders([*bodies, mesh])
+    n = len(bodies)
+    assert one_pass.kinds == by_body.kinds[:n] == ("primitive",) * n
+    for name in ("part_body", "part_index", "part_label"):
+        assert np.array_equal(getattr(one_pass, name), getattr(by_body, name)[:n]), name
+    assert np.array_equal(one_pass.body_part_offsets, by_body.body_part_offsets[: n + 1])
+    poses = one_pass.part_poses()
+    assert np.array_equal(poses, by_body.part_poses()[:n])
+    mine, theirs = one_pass.shapes, by_body.shapes.take(np.arange(n))
+    assert np.array_equal(mine.kinds, theirs.kinds)
+    assert np.array_equal(mine.params, theirs.params)
+    assert len(mine) == n
+
+
+def test_the_json_report_is_written_in_pieces_and_never_half(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from meshcol.io import report as report_io
+    from meshcol.io.formats import write_report
+
+    report = check([str(ROOT / "samples/level/scene.json")], clearance=0.5)
+    path = tmp_path / "report.json"
+    write_report(report, "json", str(path))
+    assert path.read_text() == report.to_json() == dumps_json(report.to_dict())
+
+    def failing(columns: list, count: int, level: int):  # the pairs fail after one piece
+        yield "["
+        raise MemoryError("no room for the rows")
+
+    monkeypatch.setattr(report_io, "rows_chunks", failing)
+    other = tmp_path / "other.json"
+    with pytest.raises(MemoryError):
+        write_report(report, "json", str(other))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["report.json"]

@@ -259,3 +259,55 @@ def test_the_first_error_in_manifest_order_is_the_one_reported(assets):
     with_columns, without = load_both(assets, {"bodies": bodies})
     assert with_columns == without
     assert with_columns.endswith("body 'b3': name used by an earlier body")
+
+
+@pytest.mark.parametrize(
+    "primitive",
+    [
+        {"type": "sphere", "radius": 2},
+        {"type": "box", "size": [1, 2.5, 3]},
+        {"type": "capsule", "radius": 0.5, "length": 1},
+        {"type": "cylinder", "radius": 0.5, "length": 1e-300},
+        {"type": "sphere", "radius": 0},
+        {"type": "sphere", "radius": -1.0},
+        {"type": "sphere", "radius": True},
+        {"type": "sphere", "radius": "1"},
+        {"type": "sphere", "radius": float("nan")},
+        {"type": "sphere", "radius": 10**400},
+        {"type": "sphere", "radius": 1, "length": 1},
+        {"type": "sphere", "size": 1},
+        {"type": "capsule", "radius": 1},
+        {"type": "capsule", "radius": 1, "size": 1},
+        {"type": "cylinder", "radius": 1, "length": 0},
+        {"type": "box", "size": [1, 2]},
+        {"type": "box", "size": [1, 0, 2]},
+        {"type": "box", "size": [1, 2, False]},
+        {"type": "box", "size": (1, 2, 3)},
+        {"type": "cone", "radius": 1},
+        {"type": 1, "radius": 1},
+        {"radius": 1},
+        [1, 2, 3],
+    ],
+)
+def test_the_columns_take_a_primitive_exactly_when_the_body_check_does(primitive) -> None:
+    from meshcol.io.scene_columns import columns
+    from meshcol.io.scene_schema import PRIMITIVE_TYPES, is_primitive
+
+    good = {"type": "box", "size": [1.0, 2.0, 3.0]}
+    document = {
+        "bodies": [
+            {"name": "a", "primitive": {"type": "sphere", "radius": 0.5}},
+            {"name": "b", "primitive": primitive, "position": [1, 2, 3]},
+            {"name": "c", "primitive": good},
+        ]
+    }
+    found = columns(document)
+    plain = is_primitive(primitive) and abs(primitive.get("radius", 1)) < 1e300
+    assert (found is not None) == plain
+    if found is not None:
+        p = primitive
+        row = p["size"] if p["type"] == "box" else [p["radius"], p.get("length", 0.0), 0.0]
+        assert found.primitive_lengths.tolist() == [[0.5, 0, 0], row, [1.0, 2.0, 3.0]]
+        assert found.primitive_type.tolist() == [
+            PRIMITIVE_TYPES.index(t) for t in ("sphere", p["type"], "box")
+        ]
