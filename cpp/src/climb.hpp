@@ -29,8 +29,10 @@ inline int scan_support(const Vec3* v, int n, const Vec3& d) {
 // climbs slow down by a tenth.
 #if defined(__GNUC__) || defined(__clang__)
 #define MESHCOL_CLIMB_INLINE inline __attribute__((always_inline))
+#define MESHCOL_CLIMB_PREFETCH(address) __builtin_prefetch(address)
 #else
 #define MESHCOL_CLIMB_INLINE inline
+#define MESHCOL_CLIMB_PREFETCH(address) ((void)(address))
 #endif
 
 // The climb's start: the hint when valid (a previous support point of this shape, when the
@@ -69,10 +71,14 @@ MESHCOL_CLIMB_INLINE int climb_step(const ShapeView& s, const Vec3& d, int best,
     // so the trip count is predictable), then any remainder (lists packed by other means).
     // The body is written out twice on purpose: shared through a lambda, GCC's code for it
     // ran 2% slower (A/B, 64-vertex penetration).
+    // Each neighbour's own list is asked for as it is read: the next step's list is then in
+    // the nearest cache whichever neighbour wins, and the step waits on one load fewer (at 256
+    // vertices a shape, a fifth of a deep pair's time; the same answers).
     std::int64_t k = begin;
     for (; k + 3 < end; k += 4) {
         for (int l = 0; l < 4; ++l) {
             const int j = s.adjacency[k + l];
+            MESHCOL_CLIMB_PREFETCH(s.adjacency + s.adjacency_offsets[j]);
             const double dj = dot(v[j], d);
             if (dj > best_dot) {
                 best_dot = dj;

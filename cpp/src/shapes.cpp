@@ -81,12 +81,13 @@ void prefetch_bytes(const void* begin, const void* end) {
 }  // namespace
 
 void prefetch(const ShapeView& s) {
-    if (s.kind != ShapeKind::POLYTOPE || s.vertices == nullptr || s.vertex_count <= 0 ||
+    // Only shapes that climb: a scan reads its vertices in order, which the hardware's own
+    // prefetcher follows, and never reads the adjacency.
+    if (!climbs(s) || s.vertices == nullptr || s.adjacency == nullptr ||
         s.vertex_count > defaults::prefetch_max_vertices)
         return;
     const int n = s.vertex_count;
     prefetch_bytes(s.vertices, s.vertices + n);
-    if (s.adjacency_offsets == nullptr || s.adjacency == nullptr) return;
     prefetch_bytes(s.adjacency_offsets, s.adjacency_offsets + n + 1);
     prefetch_bytes(s.adjacency + s.adjacency_offsets[0], s.adjacency + s.adjacency_offsets[n]);
 }

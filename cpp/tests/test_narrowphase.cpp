@@ -198,8 +198,23 @@ TEST_CASE("shapes: prefetch reads only the shape's own data and changes no answe
     std::vector<Vec3> many(static_cast<size_t>(defaults::prefetch_max_vertices) + 1,
                            Vec3{0.5, 0.5, 0.5});
     const ShapeView over = fixtures::polytope(many);
+    // A shape that climbs (more than hill_climbing_min_vertices), with CSR arrays of exactly
+    // its size: prefetch reads the offsets' first and last entries and asks for the rest.
+    const int n = defaults::hill_climbing_min_vertices + 8;
+    std::vector<Vec3> ring(static_cast<size_t>(n));
+    std::vector<std::int64_t> ring_offsets(static_cast<size_t>(n) + 1);
+    std::vector<std::int32_t> ring_adjacency(4 * static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i) {
+        ring[i] = Vec3{std::cos(0.1 * i), std::sin(0.1 * i), 0.01 * i};
+        ring_offsets[i + 1] = 4 * (i + 1);
+        for (int k = 0; k < 4; ++k) ring_adjacency[4 * i + k] = (i + k + 1) % n;
+    }
+    ShapeView large = fixtures::polytope(ring);
+    large.adjacency_offsets = ring_offsets.data();
+    large.adjacency = ring_adjacency.data();
+    CHECK(climbs(large));
     for (const ShapeView& s : {ShapeView{}, fixtures::box(1, 2, 3), fixtures::sphere(1.0),
-                               fixtures::capsule(0.5, 1.0), tetra, climbing, over})
+                               fixtures::capsule(0.5, 1.0), tetra, climbing, over, large})
         prefetch(s);
     // Overlapping tetrahedra: the view with adjacency (prefetched with it) and the one
     // without give the same answer.

@@ -63,9 +63,9 @@ SupportPoint support_core(const ShapeView& shape, const Vec3& direction, int hin
 /// adjacency and more than `defaults::hill_climbing_min_vertices` vertices).
 bool climbs(const ShapeView& shape);
 
-/// Asks the memory system for the shape's data (a polytope's vertices and hull adjacency, when
-/// it has at most `defaults::prefetch_max_vertices` vertices) ahead of a query: no effect on any
-/// result, only on how long the first reads wait.
+/// Asks the memory system for the data hill climbing reads (the vertices and hull adjacency of
+/// a polytope that `climbs`, when it has at most `defaults::prefetch_max_vertices` vertices)
+/// ahead of a query: no effect on any result, only on how long the climbs wait.
 void prefetch(const ShapeView& shape);
 
 /// Support point of the full shape (core plus margin) in `direction` (local frame).
