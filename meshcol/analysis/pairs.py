@@ -290,7 +290,11 @@ def body_boxes(
 
 
 def overlapping_pairs(
-    aabb_min: np.ndarray, aabb_max: np.ndarray, margin: float, groups: np.ndarray | None = None
+    aabb_min: np.ndarray,
+    aabb_max: np.ndarray,
+    margin: float,
+    groups: np.ndarray | None = None,
+    max_pairs: int | None = None,
 ) -> np.ndarray:
     """Pairs of boxes that overlap once each side grows by ``margin / 2``, by sort and sweep.
 
@@ -303,6 +307,9 @@ def overlapping_pairs(
     groups : (n,) int64, optional
         A group per box (the body of a part): boxes of one group never pair, and each pair is
         oriented so that its first box has the smaller group.
+    max_pairs : int, optional
+        The sweep's cap (:func:`meshcol.collision.broadphase.sort_and_sweep`): more pairs
+        raise ``TooManyPairsError`` without holding them all.
 
     Returns
     -------
@@ -313,7 +320,7 @@ def overlapping_pairs(
     from meshcol.collision.broadphase import sort_and_sweep
 
     half = 0.5 * margin
-    pairs = sort_and_sweep(aabb_min - half, aabb_max + half, groups=groups)
+    pairs = sort_and_sweep(aabb_min - half, aabb_max + half, groups=groups, max_pairs=max_pairs)
     if groups is not None and len(pairs):
         swap = groups[pairs[:, 0]] > groups[pairs[:, 1]]
         pairs[swap] = pairs[swap][:, ::-1]
@@ -365,6 +372,16 @@ def cartesian_part_pairs(body_pairs: np.ndarray, offsets: np.ndarray) -> np.ndar
     return np.stack([ia, ib], axis=1)
 
 
+def _too_many(count: str, bodies: int, max_pairs: int | None) -> Exception:
+    from meshcol.errors import TooManyPairsError
+
+    return TooManyPairsError(
+        f"{count} candidate pairs among {bodies:,} bodies, more than --max-pairs "
+        f"{max_pairs:,} allows (the memory a run holds grows with its pairs: raise "
+        "--max-pairs, or check the scene in parts)"
+    )
+
+
 def broad_phase(
     placed: PlacedColliders,
     margin: float,
@@ -381,22 +398,26 @@ def broad_phase(
     Raises
     ------
     TooManyPairsError
-        More than ``max_pairs`` candidate body pairs: counted on the body sweep's index pairs
-        (16 bytes each), before any part pair, table row or measure is made.
+        More than ``max_pairs`` candidate body pairs, found before any part pair, table row
+        or measure is made: the sweep itself stops once it holds ``max_pairs`` plus one pair
+        per ``excluded`` entry (the most the exclusions could remove), so that a pile of
+        bodies never fills memory with its pairs; within that, the exact count is named.
     """
+    from meshcol.errors import TooManyPairsError
+
     colliders = placed.colliders
     names = [body.name for body in colliders.bodies]
-    body_pairs = overlapping_pairs(placed.body_min, placed.body_max, margin)
+    sweep_cap = None if max_pairs is None else max_pairs + len(excluded)
+    try:
+        body_pairs = overlapping_pairs(
+            placed.body_min, placed.body_max, margin, max_pairs=sweep_cap
+        )
+    except TooManyPairsError:
+        raise _too_many(f"more than {max_pairs:,}", len(names), max_pairs) from None
     left_out = excluded_mask(names, excluded, body_pairs)
     body_pairs = body_pairs[~left_out]
     if max_pairs is not None and len(body_pairs) > max_pairs:
-        from meshcol.errors import TooManyPairsError
-
-        raise TooManyPairsError(
-            f"{len(body_pairs):,} candidate pairs among {len(names):,} bodies, more than "
-            f"--max-pairs {max_pairs:,} allows (the memory a run holds grows with its pairs: "
-            "raise --max-pairs, or check the scene in parts)"
-        )
+        raise _too_many(f"{len(body_pairs):,}", len(names), max_pairs)
     if len(body_pairs) == 0:
         empty = np.zeros((0, 2), dtype=np.int64)
         return PairTable.of_candidates(body_pairs, empty, empty[:, 0], int(left_out.sum()))

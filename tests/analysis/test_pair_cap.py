@@ -41,7 +41,8 @@ def test_a_pile_over_the_cap_is_one_line_exit_2_and_nothing_written(pile: Path) 
     assert result.exit_code == 2, result.output
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1, lines
-    assert str(pile) in lines[0] and f"{PAIRS:,} candidate pairs" in lines[0]
+    # The sweep stops at the cap: it never holds a pile's pairs to count them all.
+    assert str(pile) in lines[0] and f"more than {PAIRS - 1:,} candidate pairs" in lines[0]
     assert "--max-pairs" in lines[0] and f"{PAIRS - 1:,}" in lines[0]
     assert "Traceback" not in result.output
     assert not report.exists() and not page.exists()
@@ -61,7 +62,9 @@ def test_a_pile_at_the_cap_is_checked_as_without_one(pile: Path) -> None:
 
 
 def test_the_api_refuses_a_pile_over_the_cap_naming_the_scene(pile: Path) -> None:
-    with pytest.raises(TooManyPairsError, match="435 candidate pairs among 30 bodies") as info:
+    with pytest.raises(
+        TooManyPairsError, match="more than 10 candidate pairs among 30 bodies"
+    ) as info:
         check([str(pile)], max_pairs=10)
     assert info.value.path == str(pile)
     assert CheckOptions().max_pairs == MAX_PAIRS
@@ -77,6 +80,26 @@ def test_mesh_files_over_the_cap_are_named_by_their_first_file(tmp_path: Path) -
     for name in ("a", "b", "c"):
         (tmp_path / f"{name}.obj").write_text(cube)
         paths.append(str(tmp_path / f"{name}.obj"))
-    with pytest.raises(TooManyPairsError, match="3 candidate pairs among 3 bodies") as info:
+    with pytest.raises(
+        TooManyPairsError, match="more than 2 candidate pairs among 3 bodies"
+    ) as info:
         check(paths, max_pairs=2)
     assert info.value.path == f"{paths[0]} and 2 more"
+
+
+def test_excluded_pairs_do_not_count_and_within_them_the_count_is_exact(pile: Path) -> None:
+    from meshcol.analysis.colliders import build_colliders
+    from meshcol.analysis.pairs import broad_phase, place
+    from meshcol.io.scene import load_scene
+
+    placed = place(build_colliders(load_scene(str(pile)).bodies, "hull"))
+    excluded = [("s00", f"s{i:02d}", "test") for i in range(1, 6)]  # 5 of the 435 pairs
+    table = broad_phase(placed, 0.0, excluded, max_pairs=PAIRS - 5)
+    assert len(table.body_a) == PAIRS - 5 and table.excluded_pairs == 5
+    # The sweep holds up to the cap plus one pair per exclusion (the most they can remove):
+    # past that, "more than"; within it but past the cap after the exclusions, the count.
+    with pytest.raises(TooManyPairsError, match=r"^more than 429 candidate pairs among 30"):
+        broad_phase(placed, 0.0, excluded, max_pairs=PAIRS - 6)
+    partly = excluded[:3] + [("s00", "nobody", "test"), ("nobody", "s01", "test")]
+    with pytest.raises(TooManyPairsError, match=rf"^{PAIRS - 3:,} candidate pairs among 30"):
+        broad_phase(placed, 0.0, partly, max_pairs=PAIRS - 5)
