@@ -394,6 +394,7 @@ def run_ci(
     pending: list[tuple[int, Job, str]] = []
     skipped = 0
     keys: dict[int, str] = {}
+    unchanged: dict[int, CiRun] = {}  # --changed-since: cached jobs it leaves out
     for index, job in enumerate(plan(config, overrides)):
         # without the cache no key is needed: no file of the repository is read for one
         key = keys[index] = store.key(job) if store.enabled else ""
@@ -401,6 +402,8 @@ def run_ci(
         reads = None if cached is None else store.reads(key, cached)
         if changed is not None and not _touched(job, changed, reads, folder):
             skipped += 1
+            if cached is not None:  # not in the report, but kept in the next run's index
+                unchanged[index] = CiRun(job, cached, cached=True)
             continue
         if cached is not None and snapshots and cached["exit_code"] == 1:
             cached = store.with_pictures(key, cached)
@@ -426,7 +429,8 @@ def run_ci(
         store.keep(key, job, result)
         if progress is not None:
             progress(f"ci: {done}/{len(pending)} jobs")
-    store.write_index((runs[i], keys[i]) for i in sorted(runs))
+    everything = {**runs, **unchanged}
+    store.write_index((everything[i], keys[i]) for i in sorted(everything))
     return CiReport(
         runs=tuple(runs[i] for i in sorted(runs)),
         config=config.path,
@@ -544,7 +548,7 @@ class _Results:
             if "error" in run.result:
                 continue
             summary: Mapping[str, Any] = run.result
-            if not run.cached and "report" in summary:  # a Summary has no report
+            if isinstance(summary, dict):  # not a Summary of the index: drop its report
                 summary = {k: v for k, v in summary.items() if k not in REPORT_KEYS}
             depends = self.depends.get(key) if run.cached else None
             entries[key] = (
