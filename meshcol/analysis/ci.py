@@ -323,16 +323,18 @@ def _working_folder(folder: str) -> Iterator[None]:
         os.chdir(before)
 
 
-def run_job(task: tuple[Job, str, str | None, Any, bool]) -> dict[str, Any]:
+def run_job(task: tuple[Job, str, str | None, Any, bool, Any]) -> dict[str, Any]:
     """One job in this process (a worker's entry): ``(job, folder, root, pair_cache,
-    pictures)`` (``pair_cache`` None, or a check's :class:`~meshcol.analysis.pair_cache.
+    pictures, keep)`` (``pair_cache`` None, or a check's :class:`~meshcol.analysis.pair_cache.
     PairCache`). Returns its result as JSON values (the report, its CI suite, the exit code)
     and ``reads``, every file its input named; with ``pictures``, a failing job's result
     keeps what its pictures need (:func:`meshcol.analysis.snapshots.pictures_data`).
-    An unusable input is ``{"error": message}``."""
+    An unusable input is ``{"error": message}``. ``keep`` (``(key, store)`` or None): the
+    result is stored here, in the worker, while the run goes on (the process that hands out
+    the jobs writes nothing per job, and no worker waits for it)."""
     from meshcol.io.paths import confined_to, recording_reads
 
-    job, folder, root, pair_cache, pictures = task
+    job, folder, root, pair_cache, pictures, keep = task
     with _working_folder(folder), confined_to(root), recording_reads() as reads:
         try:
             report = _execute(job, folder, pair_cache)
@@ -346,7 +348,26 @@ def run_job(task: tuple[Job, str, str | None, Any, bool]) -> dict[str, Any]:
         except MeshcolError as exc:
             return {"error": str(exc), "reads": []}
     result["reads"] = sorted({_rel(folder, path) for path in reads})
+    if keep is not None:
+        from meshcol.decomposition.result_cache import Digests
+
+        _keep(keep[0], job, result, folder, keep[1], Digests(folder))
     return result
+
+
+def _keep(
+    key: str, job: Job, result: Mapping[str, Any], folder: str, store: Any, digests: Any
+) -> None:
+    """Store a job's result (:func:`meshcol.decomposition.result_cache.store_result`): its
+    entry, the digests of the files it read and of its baseline or target file, its
+    report's text beside it."""
+    from meshcol.decomposition.result_cache import store_result
+
+    depends = {path: digests(path) for path in result["reads"]}
+    for extra in job.extra_files:
+        depends[_rel(folder, extra)] = digests(extra)
+    entry = {k: v for k, v in result.items() if k != "report_text"}
+    store_result(key, entry, depends, store, result.get("report_text"))
 
 
 # --- the run -------------------------------------------------------------------------------------
@@ -414,7 +435,10 @@ def run_ci(
             pending.append((index, job, key))
     if progress is not None and pending:
         progress(f"ci: {len(runs)} jobs from the cache, {len(pending)} to run")
-    tasks = [(job, folder, root, store.pair_cache(job), snapshots) for _, job, _ in pending]
+    tasks = [
+        (job, folder, root, store.pair_cache(job), snapshots, store.keeper(key))
+        for _, job, key in pending
+    ]
     # one job (the asset that changed) runs here: starting a pool costs seconds
     here = jobs == 1 or len(tasks) <= 1
     if here:
@@ -424,9 +448,8 @@ def run_ci(
 
         outcomes = (_outcome(o, tasks) for o in run_each(run_job, tasks, jobs=jobs))
     for done, (position, result) in enumerate(_numbered(outcomes, here), start=1):
-        index, job, key = pending[position]
+        index, job, _ = pending[position]
         runs[index] = CiRun(job, result, cached=False)
-        store.keep(key, job, result)
         if progress is not None:
             progress(f"ci: {done}/{len(pending)} jobs")
     everything = {**runs, **unchanged}
@@ -530,13 +553,9 @@ class _Results:
             depends[_rel(self.folder, extra)] = self.digests(extra)
         return depends
 
-    def keep(self, key: str, job: Job, result: dict[str, Any]) -> None:
-        from meshcol.decomposition.result_cache import store_result
-
-        if self.enabled and "error" not in result:
-            entry = {k: v for k, v in result.items() if k != "report_text"}
-            text = result.get("report_text")
-            store_result(key, entry, self._depends(job, result), self.cache_dir, text)
+    def keeper(self, key: str) -> tuple[str, Any] | None:
+        """Where a job stores its result (:func:`run_job`'s ``keep``); None without a cache."""
+        return (key, self.cache_dir) if self.enabled else None
 
     def write_index(self, runs: Iterable[tuple[CiRun, str]]) -> None:
         from meshcol.decomposition.result_cache import store_index
