@@ -351,7 +351,8 @@ def run_job(task: tuple[Job, str, str | None, Any, bool, Any]) -> dict[str, Any]
     if keep is not None:
         from meshcol.decomposition.result_cache import Digests
 
-        _keep(keep[0], job, result, folder, keep[1], Digests(folder))
+        digests = keep[2] if len(keep) > 2 else Digests(folder)
+        _keep(keep[0], job, result, folder, keep[1], digests)
     return result
 
 
@@ -435,12 +436,12 @@ def run_ci(
             pending.append((index, job, key))
     if progress is not None and pending:
         progress(f"ci: {len(runs)} jobs from the cache, {len(pending)} to run")
+    # one job (the asset that changed) runs here: starting a pool costs seconds
+    here = jobs == 1 or len(pending) <= 1
     tasks = [
-        (job, folder, root, store.pair_cache(job), snapshots, store.keeper(key))
+        (job, folder, root, store.pair_cache(job), snapshots, store.keeper(key, here))
         for _, job, key in pending
     ]
-    # one job (the asset that changed) runs here: starting a pool costs seconds
-    here = jobs == 1 or len(tasks) <= 1
     if here:
         outcomes: Iterable[Any] = (run_job(task) for task in tasks)
     else:
@@ -553,9 +554,13 @@ class _Results:
             depends[_rel(self.folder, extra)] = self.digests(extra)
         return depends
 
-    def keeper(self, key: str) -> tuple[str, Any] | None:
-        """Where a job stores its result (:func:`run_job`'s ``keep``); None without a cache."""
-        return (key, self.cache_dir) if self.enabled else None
+    def keeper(self, key: str, here: bool) -> tuple[Any, ...] | None:
+        """Where a job stores its result (:func:`run_job`'s ``keep``); None without a cache.
+        A job run ``here`` (in this process) digests its files with the run's digests (the
+        index's stats: a scene's 3,000 meshes are not read again); a worker with its own."""
+        if not self.enabled:
+            return None
+        return (key, self.cache_dir, self.digests) if here else (key, self.cache_dir)
 
     def write_index(self, runs: Iterable[tuple[CiRun, str]]) -> None:
         from meshcol.decomposition.result_cache import store_index
