@@ -323,16 +323,18 @@ def _working_folder(folder: str) -> Iterator[None]:
         os.chdir(before)
 
 
-def run_job(task: tuple[Job, str, str | None, Any, bool]) -> dict[str, Any]:
+def run_job(task: tuple[Job, str, str | None, Any, bool, Any]) -> dict[str, Any]:
     """One job in this process (a worker's entry): ``(job, folder, root, pair_cache,
-    pictures)`` (``pair_cache`` None, or a check's :class:`~meshcol.analysis.pair_cache.
+    pictures, keep)`` (``pair_cache`` None, or a check's :class:`~meshcol.analysis.pair_cache.
     PairCache`). Returns its result as JSON values (the report, its CI suite, the exit code)
     and ``reads``, every file its input named; with ``pictures``, a failing job's result
     keeps what its pictures need (:func:`meshcol.analysis.snapshots.pictures_data`).
-    An unusable input is ``{"error": message}``."""
+    An unusable input is ``{"error": message}``. ``keep`` (``(key, store)`` or None): the
+    result is stored here, in the worker, while the run goes on (the process that hands out
+    the jobs writes nothing per job, and no worker waits for it)."""
     from meshcol.io.paths import confined_to, recording_reads
 
-    job, folder, root, pair_cache, pictures = task
+    job, folder, root, pair_cache, pictures, keep = task
     with _working_folder(folder), confined_to(root), recording_reads() as reads:
         try:
             report = _execute(job, folder, pair_cache)
@@ -346,7 +348,27 @@ def run_job(task: tuple[Job, str, str | None, Any, bool]) -> dict[str, Any]:
         except MeshcolError as exc:
             return {"error": str(exc), "reads": []}
     result["reads"] = sorted({_rel(folder, path) for path in reads})
+    if keep is not None:
+        from meshcol.decomposition.result_cache import Digests
+
+        digests = keep[2] if len(keep) > 2 else Digests(folder)
+        _keep(keep[0], job, result, folder, keep[1], digests)
     return result
+
+
+def _keep(
+    key: str, job: Job, result: Mapping[str, Any], folder: str, store: Any, digests: Any
+) -> None:
+    """Store a job's result (:func:`meshcol.decomposition.result_cache.store_result`): its
+    entry, the digests of the files it read and of its baseline or target file, its
+    report's text beside it."""
+    from meshcol.decomposition.result_cache import store_result
+
+    depends = {path: digests(path) for path in result["reads"]}
+    for extra in job.extra_files:
+        depends[_rel(folder, extra)] = digests(extra)
+    entry = {k: v for k, v in result.items() if k != "report_text"}
+    store_result(key, entry, depends, store, result.get("report_text"))
 
 
 # --- the run -------------------------------------------------------------------------------------
@@ -394,6 +416,7 @@ def run_ci(
     pending: list[tuple[int, Job, str]] = []
     skipped = 0
     keys: dict[int, str] = {}
+    unchanged: dict[int, CiRun] = {}  # --changed-since: cached jobs it leaves out
     for index, job in enumerate(plan(config, overrides)):
         # without the cache no key is needed: no file of the repository is read for one
         key = keys[index] = store.key(job) if store.enabled else ""
@@ -401,6 +424,8 @@ def run_ci(
         reads = None if cached is None else store.reads(key, cached)
         if changed is not None and not _touched(job, changed, reads, folder):
             skipped += 1
+            if cached is not None:  # not in the report, but kept in the next run's index
+                unchanged[index] = CiRun(job, cached, cached=True)
             continue
         if cached is not None and snapshots and cached["exit_code"] == 1:
             cached = store.with_pictures(key, cached)
@@ -411,9 +436,12 @@ def run_ci(
             pending.append((index, job, key))
     if progress is not None and pending:
         progress(f"ci: {len(runs)} jobs from the cache, {len(pending)} to run")
-    tasks = [(job, folder, root, store.pair_cache(job), snapshots) for _, job, _ in pending]
     # one job (the asset that changed) runs here: starting a pool costs seconds
-    here = jobs == 1 or len(tasks) <= 1
+    here = jobs == 1 or len(pending) <= 1
+    tasks = [
+        (job, folder, root, store.pair_cache(job), snapshots, store.keeper(key, here))
+        for _, job, key in pending
+    ]
     if here:
         outcomes: Iterable[Any] = (run_job(task) for task in tasks)
     else:
@@ -421,12 +449,12 @@ def run_ci(
 
         outcomes = (_outcome(o, tasks) for o in run_each(run_job, tasks, jobs=jobs))
     for done, (position, result) in enumerate(_numbered(outcomes, here), start=1):
-        index, job, key = pending[position]
+        index, job, _ = pending[position]
         runs[index] = CiRun(job, result, cached=False)
-        store.keep(key, job, result)
         if progress is not None:
             progress(f"ci: {done}/{len(pending)} jobs")
-    store.write_index((runs[i], keys[i]) for i in sorted(runs))
+    everything = {**runs, **unchanged}
+    store.write_index((everything[i], keys[i]) for i in sorted(everything))
     return CiReport(
         runs=tuple(runs[i] for i in sorted(runs)),
         config=config.path,
@@ -526,13 +554,13 @@ class _Results:
             depends[_rel(self.folder, extra)] = self.digests(extra)
         return depends
 
-    def keep(self, key: str, job: Job, result: dict[str, Any]) -> None:
-        from meshcol.decomposition.result_cache import store_result
-
-        if self.enabled and "error" not in result:
-            entry = {k: v for k, v in result.items() if k != "report_text"}
-            text = result.get("report_text")
-            store_result(key, entry, self._depends(job, result), self.cache_dir, text)
+    def keeper(self, key: str, here: bool) -> tuple[Any, ...] | None:
+        """Where a job stores its result (:func:`run_job`'s ``keep``); None without a cache.
+        A job run ``here`` (in this process) digests its files with the run's digests (the
+        index's stats: a scene's 3,000 meshes are not read again); a worker with its own."""
+        if not self.enabled:
+            return None
+        return (key, self.cache_dir, self.digests) if here else (key, self.cache_dir)
 
     def write_index(self, runs: Iterable[tuple[CiRun, str]]) -> None:
         from meshcol.decomposition.result_cache import store_index
@@ -544,7 +572,7 @@ class _Results:
             if "error" in run.result:
                 continue
             summary: Mapping[str, Any] = run.result
-            if not run.cached and "report" in summary:  # a Summary has no report
+            if isinstance(summary, dict):  # not a Summary of the index: drop its report
                 summary = {k: v for k, v in summary.items() if k not in REPORT_KEYS}
             depends = self.depends.get(key) if run.cached else None
             entries[key] = (

@@ -173,7 +173,7 @@ def test_changed_since_runs_what_a_commit_touched(tmp_path, monkeypatch):
     root = make_repo(tmp_path / "repo", git=True)
     monkeypatch.chdir(root)
     cache = str(tmp_path / "cache")
-    assert run("ci", "--cache-dir", cache)[0] == 1
+    assert run("ci", "--cache-dir", cache, "-j", "2")[0] == 1  # the workers store the results
     (root / "props" / "hard" / "closed.obj").write_text(box_obj(3.0, name="closed"))
     (root / "levels" / "level" / "props" / "pillar.obj").write_text(box_obj(0.3, name="pillar"))
     commit(root, "two assets")
@@ -190,12 +190,19 @@ def test_changed_since_runs_what_a_commit_touched(tmp_path, monkeypatch):
         and report["settings"]["changed_since"] == "HEAD~1"
     )
     assert code == 1  # the level still penetrates
-    # the same selection from the run index (read above) and from the entries one by one
+    # the index it wrote keeps the jobs it left out: the next run reads none one by one
     index = Path(cache) / "results" / "index"
-    assert any(index.iterdir())
+    (written,) = index.iterdir()
+    lines = written.read_bytes().split(b"\n")
+    assert len(lines) - 4 == 10  # magic, header, stats, one line per job, the final newline
+    assert all(b'"report"' not in line for line in lines[3:])
+    # the same selection from the run index (read above) and from the entries one by one
     shutil.rmtree(index)
     _, again, _ = run("ci", "--changed-since", "HEAD~1", "--report", "-", "--cache-dir", cache)
     assert sorted((r["command"], r["input"]) for r in json.loads(again)["runs"]) == ran
+    (written,) = index.iterdir()  # from entries read one by one: summaries without reports
+    lines = written.read_bytes().split(b"\n")
+    assert len(lines) - 4 == 10 and all(b'"report"' not in line for line in lines[3:])
     # without the cache a scene's meshes are unknown: every scene runs, no asset unchanged
     _, cold, _ = run("ci", "--changed-since", "HEAD~1", "--report", "-", "--no-cache")
     assert sorted((r["command"], r["input"]) for r in json.loads(cold)["runs"]) == sorted(
