@@ -40,6 +40,8 @@ from meshcol.decomposition.ray_start import (
     OWN_CLUSTER,
     in_worker,
     light_head,
+    node_manager_address,
+    prestart_workers,
     running_cluster,
     task_payload,
 )
@@ -217,6 +219,14 @@ def _is_loopback(address: str) -> bool:
     this machine's loopback interface only."""
     host = address.split("://", 1)[-1].rsplit(":", 1)[0].strip("[]").lower()
     return host in ("localhost", "::1") or host.startswith("127.")
+
+
+def _is_local(address: str) -> bool:
+    """A cluster whose head is on this machine (a loopback address, or one ``ray start``
+    recorded here): not Ray Client (``ray://``), whose raylets this process cannot reach."""
+    return not address.startswith("ray://") and (
+        _is_loopback(address) or address == running_cluster()
+    )
 
 
 @contextlib.contextmanager
@@ -424,9 +434,10 @@ def _ray_call(
             return
 
 
-def _ray_prepare(prepare: Callable[[], None], env: Mapping[str, str] | None = None) -> None:
-    if env is not None:
-        in_worker(env)
+def _ray_prepare(prepare: Callable[[], None]) -> None:
+    # A task of its own, sent through _ray_call like the others: tasks of one remote function
+    # are one scheduling class, for which Ray leases the same workers (a second function got
+    # a third worker started on a two-CPU cluster, seconds after the first two).
     try:
         prepare()
     except Exception:  # noqa: BLE001 - the first task meets the same error and reports it
@@ -548,7 +559,6 @@ class RayExecutor:
         # never the idle ones the cluster keeps (ray_start.in_worker).
         self._task_env = None if self._owned and self.address is None else dict(self.env)
         self._remote = ray.remote(_ray_call).options(**options)
-        self._prepare_remote = ray.remote(_ray_prepare).options(**options)
 
     def _init_local(self, ray: Any, common: dict[str, Any]) -> None:
         # The local Ray's processes inherit this environment: its workers, prestarted with
@@ -577,8 +587,11 @@ class RayExecutor:
         if self.prepare is not None:
             count = self._slots if workers is None else min(workers, self._slots)
             # Fire and forget: each warms a worker (the engine imported) that later tasks reuse.
+            prepare: Any = self.prepare
+            if self._task_env is not None:
+                prepare = task_payload(prepare)
             for _ in range(count):
-                self._prepare_remote.remote(self.prepare, self._task_env)
+                self._remote.remote(_ray_prepare, prepare, self._task_env)
         return self
 
     def run(self, tasks: Iterable[Any]) -> Iterator[TaskOutcome]:
@@ -682,6 +695,11 @@ class RayExecutor:
                 self._cancel(ref)
         self._inflight.clear()
         if self._owned:
+            # A cluster joined on this machine keeps idle workers ready for the next run (see
+            # ray_start.prestart_workers), once this run's job (and its workers) is gone.
+            raylet = None
+            if self.address is not None and not interrupted and _is_local(self.address):
+                raylet = node_manager_address(self.ray)
             # Never interrupted half-way (see _signals_deferred).
             with _signals_deferred():
                 started = _local_ray_processes()
@@ -689,6 +707,8 @@ class RayExecutor:
                     self.ray.shutdown()
                     self._owned = False
                 _stop_remaining(started)
+            if raylet is not None:
+                prestart_workers(raylet, self._slots)
         self._remote = None
 
     def __enter__(self) -> RayExecutor:

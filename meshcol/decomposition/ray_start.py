@@ -17,6 +17,7 @@ before a Ray executor starts.
 from __future__ import annotations
 
 import contextlib
+import importlib
 import os
 import pickle
 import socket
@@ -31,6 +32,8 @@ __all__ = [
     "OWN_CLUSTER",
     "in_worker",
     "light_head",
+    "node_manager_address",
+    "prestart_workers",
     "running_cluster",
     "task_payload",
 ]
@@ -278,3 +281,42 @@ def in_worker(env: Mapping[str, str], payload: bytes | None = None) -> Any:
     cluster keeps ready. A worker serves one job (one run), so the settings are this run's."""
     os.environ.update(env)
     return None if payload is None else pickle.loads(payload)
+
+
+def node_manager_address(ray: Any) -> str | None:
+    """``host:port`` of the raylet of this driver's node in a joined cluster, or None (Ray
+    Client, a node not found, another layout of Ray's node table)."""
+    try:
+        node_id = ray.get_runtime_context().get_node_id()
+        for node in ray.nodes():
+            if node.get("NodeID") == node_id and node.get("Alive"):
+                return f"{node['NodeManagerAddress']}:{node['NodeManagerPort']}"
+    except Exception:  # noqa: BLE001 - only a speed-up hangs on it: none is asked for
+        return None
+    return None
+
+
+def prestart_workers(address: str, count: int, seconds: float = 1.0) -> bool:
+    """Ask the raylet at ``address`` to start ``count`` idle Python workers for no job in
+    particular (as ``ray start`` does when it starts), so that the next run finds workers
+    that have imported Ray waiting (as this run did), instead of starting its own: workers
+    serve one job and end with it. The raylet starts at most as many as it has free CPUs,
+    and Ray's idle-worker rules apply to them (kept up to the node's free CPUs).
+
+    Returns whether the raylet accepted; nothing is waited for but its answer (at most
+    ``seconds``). Ray's gRPC layer is private: any other layout returns False."""
+    try:
+        from ray._private.grpc_utils import init_grpc_channel
+
+        messages: Any = importlib.import_module("ray.core.generated.node_manager_pb2")
+        service: Any = importlib.import_module("ray.core.generated.node_manager_pb2_grpc")
+        request = messages.PrestartWorkersRequest(language="PYTHON", num_workers=count)
+        request.runtime_env_info.serialized_runtime_env = "{}"  # none: the tasks' default
+        channel = init_grpc_channel(address)
+        try:
+            service.NodeManagerServiceStub(channel).PrestartWorkers(request, timeout=seconds)
+        finally:
+            channel.close()
+    except Exception:  # noqa: BLE001 - a speed-up for the next run only
+        return False
+    return True

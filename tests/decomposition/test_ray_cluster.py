@@ -9,6 +9,7 @@ stopped at the end of its module), so the runs join the cluster, then leave it.
 from __future__ import annotations
 
 import os
+import re
 import secrets
 import shutil
 import signal
@@ -168,3 +169,75 @@ def test_the_cluster_is_stopped_by_its_process_group(ray_head) -> None:
         if "gcs_server" in cmdline and f"--gcs_server_port={port}" in cmdline.replace("\0", " "):
             groups.add(pgid)
     assert len(groups) == 1
+
+
+def _idle_workers(port: str) -> set[int]:
+    """The idle Python workers (``ray::IDLE``) of the raylet of the cluster at ``port``."""
+    raylets, idle = set(), {}
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/cmdline", "rb") as f:
+                cmdline = f.read().decode(errors="replace").replace("\0", " ")
+            with open(f"/proc/{entry}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        # the GCS's host: 127.0.0.1, or this machine's address (Ray's multi-machine default)
+        if "raylet/raylet" in cmdline and re.search(rf"--gcs-address=\S+:{port} ", cmdline):
+            raylets.add(int(entry))
+        elif cmdline.startswith("ray::IDLE") and fields[0] != "Z":
+            idle[int(entry)] = int(fields[1])
+    return {pid for pid, parent in idle.items() if parent in raylets}
+
+
+def _wait_for(what, seconds: float = 90.0):
+    deadline = time.monotonic() + seconds  # a bound, not a speed
+    while not (found := what()) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    return found
+
+
+_WORKER_PIDS = """
+import os, sys
+from meshcol.decomposition.executor import RayExecutor
+
+def where(_):
+    return os.getpid(), os.environ.get("OMP_NUM_THREADS"), os.environ.get("OPENBLAS_NUM_THREADS")
+
+with RayExecutor(where, 1, address=sys.argv[1]) as executor:
+    print(sorted({o.value for o in executor.run(range(3))}))
+"""
+
+
+def _where(address: str) -> list[tuple[int, str, str]]:
+    """(worker pid, OMP_NUM_THREADS, OPENBLAS_NUM_THREADS) of the tasks of a run on the
+    cluster at ``address``, in a process of its own."""
+    out = subprocess.run(
+        [sys.executable, "-c", _WORKER_PIDS, address],
+        capture_output=True,
+        text=True,
+        timeout=240,
+        env={**os.environ, **AUTH},
+    )
+    assert out.returncode == 0, out.stderr[-3000:]
+    return eval(out.stdout.strip().splitlines()[-1])
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_a_joined_run_takes_the_idle_workers_and_leaves_idle_ones(ray_head) -> None:
+    """A run on a cluster has its tasks run by the idle workers the cluster keeps (no
+    runtime_env, for which Ray would start new ones), with the local pool's thread settings
+    set in them; its job's workers end with it, and the raylet is asked for idle workers
+    again, which the next run finds."""
+    pytest.importorskip("grpc", reason="grpcio is not installed (pip install 'meshcol[ray]')")
+    port = ray_head.rsplit(":", 1)[1]
+    _where(ray_head)  # whatever the cluster had: it leaves idle workers
+    before = _wait_for(lambda: _idle_workers(port))
+    assert before, "no idle worker was started for the next run"
+    seen = _where(ray_head)
+    assert {pid for pid, _, _ in seen} <= before  # no worker started for the run
+    assert {(omp, blas) for _, omp, blas in seen} == {("2", "1")}  # jobs == the cluster's CPUs
+    assert _wait_for(lambda: _idle_workers(port) - before), "no idle worker for the next run"

@@ -1,6 +1,7 @@
 """Where the Ray executor's cluster comes from (issue 32 item 6): a running Ray is joined
 (``RAY_ADDRESS``; the cluster ``ray start`` recorded in Ray's address file, if it answers),
-else a light local Ray of the run's own starts (no autoscaler monitor, no log monitor).
+else a light local Ray of the run's own starts (no autoscaler monitor, no log monitor, no
+dashboard head, idle stand-ins for the raylet's agents, whose ports it is told).
 
 The address-file checks need no Ray; the two tests that start one (``ray start --head`` on
 127.0.0.1 in a temp folder of its own, and a light local Ray) are slow and skip without it.
@@ -18,10 +19,18 @@ import sys
 import tempfile
 from pathlib import Path
 
+import numpy as np
 import pytest
+import test_executor
+from click.testing import CliRunner
+from conftest import FAST_DECOMPOSE
+from test_executor import files
 
+from meshcol.cli import main
 from meshcol.decomposition import ray_start
 from meshcol.decomposition.ray_start import running_cluster
+
+meshes = test_executor.meshes
 
 
 def _address_file(folder: Path, address: str) -> str:
@@ -149,4 +158,116 @@ def test_a_ray_start_cluster_is_joined_and_outlives_the_run(monkeypatch, tmp_pat
                 proc.wait(timeout=5)
             except subprocess.TimeoutExpired:
                 continue
+        shutil.rmtree(temp, ignore_errors=True)
+
+
+def test_a_task_opens_in_the_worker_after_its_thread_settings(monkeypatch) -> None:
+    """A cluster's task travels pickled and is opened once the run's thread settings are in
+    the worker's environment (numpy's OpenBLAS reads them as it loads), not by a
+    runtime_env (for which Ray starts new workers)."""
+    monkeypatch.delenv("OMP_NUM_THREADS", raising=False)
+    task = ("a.obj", [("body", np.arange(12.0).reshape(4, 3), np.array([[0, 1, 2]]))], None)
+    payload = ray_start.task_payload(task)
+    assert isinstance(payload, bytes)
+    opened = ray_start.in_worker({"OMP_NUM_THREADS": "3"}, payload)
+    assert os.environ["OMP_NUM_THREADS"] == "3"
+    assert opened[0] == "a.obj" and opened[2] is None
+    assert np.array_equal(opened[1][0][1], task[1][0][1])
+    assert ray_start.in_worker({"OMP_NUM_THREADS": "4"}) is None
+    assert os.environ["OMP_NUM_THREADS"] == "4"
+
+
+def test_free_ports_are_distinct_and_bindable() -> None:
+    ports = ray_start.free_ports(4)
+    assert len(set(ports)) == 4 and all(p > 0 for p in ports)
+    for port in ports:
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", port))
+
+
+def test_the_light_head_tells_the_raylet_its_agent_ports_and_idles_the_agents(
+    monkeypatch,
+) -> None:
+    """In the block only: RayParams get free agent ports (the raylet then does not wait for
+    the agents' port files), the dashboard head is not started, and the raylet's command
+    gets the agents' listen port and an idle stand-in for each agent."""
+    services = pytest.importorskip("ray._private.services", reason="Ray is not installed")
+    from ray._private import parameter, ray_constants
+    from ray._private.node import Node
+
+    started: list[tuple[list[str], str]] = []
+    monkeypatch.setattr(
+        services,
+        "start_ray_process",
+        lambda command, kind, *a, **k: started.append((command, kind)),
+    )
+    api_server = Node.start_api_server
+    agents = ["--dashboard_agent_command=python agent.py", "--runtime_env_agent_command=python x"]
+    raylet = ["raylet", "--node_ip_address=127.0.0.1", *agents]
+    with ray_start.light_head():
+        params = parameter.RayParams(num_cpus=1)
+        assert Node.start_api_server is not api_server
+        assert Node.start_api_server(None, include_dashboard=False, raise_on_failure=False) is None
+        services.start_ray_process(list(raylet), ray_constants.PROCESS_TYPE_RAYLET, True)
+        services.start_ray_process(["gcs_server"], ray_constants.PROCESS_TYPE_GCS_SERVER, True)
+    ports = [getattr(params, name) for name in ray_start.AGENT_PORTS]
+    assert len(set(ports)) == 4 and all(p > 0 for p in ports)
+    (command, _), (other, _) = started
+    assert f"--dashboard_agent_listen_port={params.dashboard_agent_listen_port}" in command
+    stand_ins = [a for a in command if a.startswith(ray_start.AGENT_COMMANDS)]
+    assert len(stand_ins) == 2 and all("-S -c" in a and "agent.py" not in a for a in stand_ins)
+    assert other == ["gcs_server"]
+    # after the block, Ray as it was
+    assert Node.start_api_server is api_server
+    assert parameter.RayParams(num_cpus=1).metrics_agent_port is None
+
+
+def _session_processes(sid: int) -> list[tuple[int, str]]:
+    """(pid, command line) of every live process of session ``sid`` (Linux /proc)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+            cmdline = (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode()
+        except OSError:
+            continue
+        if int(fields[3]) == sid and fields[0] != "Z":
+            found.append((int(entry.name), cmdline))
+    return found
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_a_one_off_on_a_light_ray_of_its_own_matches_the_local_pool(meshes, tmp_path) -> None:
+    """``meshcol decompose --executor ray`` in a process of its own, nothing running to join:
+    the outputs of the local pool, byte for byte; the Ray it started ran no dashboard head
+    and no agent of Ray's (their stand-ins log nothing); and when the command exits, no
+    process it started is left, not one (each of Ray's is in the command's session)."""
+    pytest.importorskip("ray", reason="Ray is not installed (pip install 'meshcol[ray]')")
+    args = [*map(str, meshes), "--no-cache", *FAST_DECOMPOSE, "--jobs", "2"]
+    local = CliRunner().invoke(main, ["decompose", *args, "-o", str(tmp_path / "local")])
+    assert local.exit_code == 0, local.output
+    temp = tempfile.mkdtemp(prefix="mcl", dir="/tmp")  # Ray's socket paths stay short
+    env = {k: v for k, v in os.environ.items() if k != "RAY_ADDRESS"}
+    try:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "meshcol", "decompose", *args, "-o", str(tmp_path / "ray")]
+            + ["--executor", "ray"],
+            env={**env, "RAY_TMPDIR": temp},
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            start_new_session=True,
+        )
+        _, stderr = proc.communicate(timeout=240)
+        left = _session_processes(proc.pid)  # as the command exits: nothing waited for
+        assert proc.returncode == 0, stderr.decode()[-3000:]
+        assert left == []
+        assert files(tmp_path / "local") == files(tmp_path / "ray")
+        logs = Path(temp) / "ray" / "session_latest" / "logs"
+        assert (logs / "raylet.out").exists()
+        names = {p.name for p in logs.iterdir()}
+        assert not names & {"dashboard.log", "dashboard_agent.log", "runtime_env_agent.log"}
+    finally:
         shutil.rmtree(temp, ignore_errors=True)
