@@ -389,6 +389,9 @@ def main() -> int:
     parser.add_argument("--match", action="append", help="only robots whose file name is this")
     parser.add_argument("--shard", default="0/1", help="K/N: every N-th robot from the K-th")
     parser.add_argument(
+        "--reverse", action="store_true", help="last robot first (a second process per shard)"
+    )
+    parser.add_argument(
         "--table", type=Path, nargs="+", default=None, help="print the table of --json files"
     )
     args = parser.parse_args()
@@ -410,7 +413,8 @@ def main() -> int:
         if args.match:
             robots = [robot for robot in robots if robot.name in args.match]
         shard, shards = (int(x) for x in args.shard.split("/"))
-        for robot in robots[: args.limit][shard::shards]:
+        chosen = robots[: args.limit][shard::shards]
+        for robot in reversed(chosen) if args.reverse else chosen:
             with tempfile.TemporaryDirectory() as work:
                 row = run_robot(collection, robot, Path(work))
             print(f"{collection} {robot.name}: {'ok' if verdict(row) else 'NO'}", file=sys.stderr)
