@@ -352,6 +352,12 @@ def cell(row: dict, fmt: str) -> str:
     return text + ("" if value["finite"] else ", NOT finite")
 
 
+def _all_ok(row: dict) -> str:
+    if row["check"] == "fragment":
+        return "n/a"
+    return "yes" if verdict(row) else "NO"
+
+
 def table(rows: list[dict]) -> str:
     lines = [
         "| collection | robot | check | --to urdf (pybullet, yourdfpy) | --to mjcf (MuJoCo, "
@@ -364,7 +370,7 @@ def table(rows: list[dict]) -> str:
         check += f": {note[:90]}" if note else ""
         lines.append(
             f"| {row['collection']} | {row['robot']} | {check} | {cell(row, 'urdf')} | "
-            f"{cell(row, 'mjcf')} | {cell(row, 'usd')} | {'yes' if verdict(row) else 'NO'} "
+            f"{cell(row, 'mjcf')} | {cell(row, 'usd')} | {_all_ok(row)} "
             f"| {row['seconds']} |"
         )
     fragments = sum(row["check"] == "fragment" for row in rows)
@@ -386,8 +392,13 @@ def main() -> int:
     parser.add_argument("--only", choices=sorted(COLLECTIONS), action="append")
     parser.add_argument("--limit", type=int, default=None, help="robots per collection")
     parser.add_argument("--json", type=Path, default=None, help="every row, as JSON")
-    parser.add_argument("--match", action="append", help="only robots whose file name is this")
+    parser.add_argument(
+        "--match", action="append", help="only robots whose file name (or FOLDER/NAME) is this"
+    )
     parser.add_argument("--shard", default="0/1", help="K/N: every N-th robot from the K-th")
+    parser.add_argument(
+        "--reverse", action="store_true", help="last robot first (a second process per shard)"
+    )
     parser.add_argument(
         "--table", type=Path, nargs="+", default=None, help="print the table of --json files"
     )
@@ -408,9 +419,14 @@ def main() -> int:
             print(f"{collection}: not installed, skipped", file=sys.stderr)
             continue
         if args.match:
-            robots = [robot for robot in robots if robot.name in args.match]
+            robots = [
+                robot
+                for robot in robots
+                if robot.name in args.match or f"{robot.parent.name}/{robot.name}" in args.match
+            ]
         shard, shards = (int(x) for x in args.shard.split("/"))
-        for robot in robots[: args.limit][shard::shards]:
+        chosen = robots[: args.limit][shard::shards]
+        for robot in reversed(chosen) if args.reverse else chosen:
             with tempfile.TemporaryDirectory() as work:
                 row = run_robot(collection, robot, Path(work))
             print(f"{collection} {robot.name}: {'ok' if verdict(row) else 'NO'}", file=sys.stderr)

@@ -265,9 +265,8 @@ class Progress:
             # the engine's own steps (meshcol.decomposition.steps): a number only once a
             # finished step justifies one, counted down at each redraw
             left = time_left()
-            if left is not None:
-                seconds, bound = left
-                status += f", about {_duration(seconds)} left{' at most' if bound else ''}"
+            if left is not None:  # (a budget's steps are counted whole: the text says "at most")
+                status += f", about {_duration(left[0])} left"
             match = None
         if match is not None:
             done, total = int(match.group(1)), int(match.group(2))

@@ -240,9 +240,12 @@ class _FileCounter:
     every file left is running, where each is (the engine's steps, :mod:`meshcol.decomposition.
     steps`) and the time left they justify."""
 
-    def __init__(self, progress: Callable[[str], None] | None, total: int | None) -> None:
+    def __init__(
+        self, progress: Callable[[str], None] | None, total: int | None, noun: str = "files"
+    ) -> None:
         self.report = progress or (lambda message: None)
         self.total = total  # None until a manifest's files are all read
+        self.noun = noun
         self.slots = 1
         self.done = self.failed = self.sent = 0
         self.clocks: dict[int, tuple[str, StepClock]] = {}  # per running task: file, steps
@@ -256,7 +259,8 @@ class _FileCounter:
         self.report(self._text())
 
     def _text(self) -> str:
-        text = f"decompose: {self.done}{'' if self.total is None else f'/{self.total}'} files"
+        total = "" if self.total is None else f"/{self.total}"
+        text = f"decompose: {self.done}{total} {self.noun}"
         if self.failed:
             text += f", {self.failed} failed"
         running = min(self.sent, self.slots)
@@ -475,17 +479,23 @@ def _decompose_missing(
     from meshcol.decomposition.engines import prepare_engine
     from meshcol.decomposition.jobs import ENGINE_PRELOAD, WorkerPool
 
-    report = progress or (lambda message: None)
     cache_root = run.cache_root()
-    done = len(canonical) - len(missing)
-    report(f"decompose: {done}/{len(canonical)} meshes")
+    counter = _FileCounter(progress, len(canonical), noun="meshes")
+    counter.done, counter.slots = len(canonical) - len(missing), run.jobs
+    counter.report(counter._text())
     prepare = functools.partial(prepare_engine, task_options.options.engine)
     pool: Any = WorkerPool(
         decompose_task, run.jobs, timeout=run.timeout, prepare=prepare, preload=ENGINE_PRELOAD
     )
-    tasks = ((canonical[i][0], [canonical[i]], task_options) for i in missing)
+    pool.on_step = lambda k, snapshot: counter.step(k, canonical[missing[k]][0], snapshot)
+
+    def tasks() -> Iterator[tuple[str, list, TaskOptions]]:
+        for i in missing:
+            counter.sent += 1
+            yield (canonical[i][0], [canonical[i]], task_options)
+
     try:
-        with contextlib.closing(pool.run(tasks)) as outcomes:
+        with contextlib.closing(pool.run(tasks())) as outcomes:
             for outcome in outcomes:
                 i = missing[outcome.index]
                 if outcome.status != "ok":
@@ -496,8 +506,7 @@ def _decompose_missing(
                 results[i] = outcome.value[0][1]
                 if cache_root is not None:
                     cache.store(results[i], cache_root)
-                done += 1
-                report(f"decompose: {done}/{len(canonical)} meshes")
+                counter.file_done(task=outcome.index)
     except BaseException as exc:
         pool.close(interrupted=not isinstance(exc, Exception))
         raise

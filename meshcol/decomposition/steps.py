@@ -10,10 +10,10 @@ outermost first, as :data:`Snapshot` (plain tuples: it crosses a pipe). Without 
 
 The parent keeps a :class:`StepClock` per task: the time each unit of each stage took, and
 from it an estimate of the time left that is honest: none until a unit of the stage that
-decides it has finished (the average of finished units, times the units left, plus what is
-left of the unit under way); never negative; a stage whose total is a budget (``at_most``: a
-search stops early when its bracket closes) makes the estimate an upper bound, and the line
-says so. A stage without a total (an engine that does not say how much it has left) gives
+decides it has finished (the average of finished units, raised by a unit under way that
+overruns it, times the units left, plus what is left of the unit under way); never negative;
+a stage whose total is a budget (``at_most``: a search stops early when its bracket closes)
+counts every unit of the budget, and says so (``search step 3 of at most 12``). A stage without a total (an engine that does not say how much it has left) gives
 no number: the line shows where the work is and its elapsed time.
 """
 
@@ -156,8 +156,8 @@ class StepClock:
         self.snapshot = snapshot
 
     def left(self) -> tuple[float, bool] | None:
-        """(seconds left, whether that is an upper bound), or None while no finished unit
-        justifies a number."""
+        """(seconds left, whether it counts a budget's units that may not run), or None while
+        no finished unit justifies a number."""
         return self._left(0, self.clock())
 
     def _left(self, depth: int, now: float) -> tuple[float, bool] | None:
@@ -173,11 +173,15 @@ class StepClock:
             if remaining == 0 and inner is not None:
                 return inner[0], inner[1] or at_most
             return None
+        in_unit = now - self._started[depth]
         mean = sum(durations) / len(durations)
+        # A unit that overruns the average raises it: the units to come are no cheaper than
+        # the finished ones and the one under way (so the estimate never falls as it overruns).
+        mean = max(mean, (sum(durations) + in_unit) / (len(durations) + 1))
         if inner is not None:
             current, bound = inner
         else:
-            current, bound = max(0.0, mean - (now - self._started[depth])), False
+            current, bound = max(0.0, mean - in_unit), False
         if done >= total:
             current = 0.0
         return max(0.0, current + remaining * mean), bound or at_most

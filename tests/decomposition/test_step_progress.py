@@ -41,13 +41,13 @@ def test_no_time_left_until_a_step_has_finished() -> None:
     steps.update((("search step", 1, 10, True, None),))  # one step took 30 s
     left = steps.left()
     assert left is not None
-    # the current step (30 s on average) and 8 more, at most: the budget is an upper bound
+    # the current step (30 s on average) and the 8 more the budget allows (flagged: a budget)
     assert left == (270.0, True)
     clock.now = 40.0
     assert steps.left() == (260.0, True)  # counts down between reports
-    clock.now = 500.0  # far past the average: never negative
+    clock.now = 500.0  # far past the average: the step under way raises it, never negative
     seconds, _ = steps.left() or (None, None)
-    assert seconds is not None and seconds >= 0
+    assert seconds is not None and seconds == 8 * 250.0
 
 
 def test_nested_stages_take_the_inner_estimate_for_the_unit_under_way() -> None:
