@@ -16,7 +16,7 @@ user types it: ``meshcol decompose`` of 3 corpus files (``--jobs 2 --no-cache``,
 settings of bench_decompose.py), on the local pool, on a Ray of its own (``--ray-address
 local``: this build's light one), on a Ray that ``ray start --head`` left running (joined,
 found by its address file), and, with ``--compare CMD``, on another build's Ray of its own
-and joined; rounds alternate the order. Wall time (the issue's figure); the CPU time of the
+(never joined: the cluster's workers run this build); rounds alternate the order. Wall time (the issue's figure); the CPU time of the
 command and what it waited for (Ray's daemons are not all waited for); the CPU time of every
 process it started (sampled every 0.05 s: :class:`TreeCPU`), and of the running cluster's
 processes and workers meanwhile. A run that leaves a process it started behind fails the
@@ -226,8 +226,10 @@ def one_off(rounds: int, compare: str | None) -> None:
         "joined Ray": (mine, ["--executor", "ray"], joined),
     }
     if compare:
+        # Only its own Ray: the running cluster's workers run this build's meshcol, so another
+        # build joining it would time a driver of one build on workers of another (an old
+        # driver passed 0 bodies on new workers; it is not a measure of either build).
         kinds["own Ray (--compare)"] = (compare.split(), ["--executor", "ray"], alone)
-        kinds["joined Ray (--compare)"] = (compare.split(), ["--executor", "ray"], joined)
     head = _ray_head(temp, joined)
     cluster = _cluster_pids(temp)
     figures = ("wall", "CPU waited for", "CPU started", "CPU cluster")

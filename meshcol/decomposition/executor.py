@@ -434,6 +434,10 @@ def _ray_call(
             return
 
 
+def _is_pair(value: Any) -> bool:
+    return isinstance(value, tuple) and len(value) == 2
+
+
 def _ray_prepare(prepare: Callable[[], None]) -> None:
     # A task of its own, sent through _ray_call like the others: tasks of one remote function
     # are one scheduling class, for which Ray leases the same workers (a second function got
@@ -664,18 +668,27 @@ class RayExecutor:
         ray = self.ray
         index, started = self._inflight[generator]
         try:
-            kind, value = ray.get(next(generator))
+            item = ray.get(next(generator))
         except StopIteration:  # cannot happen: the outcome is its last item
-            kind, value = "done", ("failed", "the task ended without an outcome")
+            item = ("done", ("failed", "the task ended without an outcome"))
         except ray.exceptions.RayError as exc:
             del self._inflight[generator]
             return TaskOutcome(index, "failed", message=_ray_failure(exc), seconds=now - started)
-        if kind == STEP:
+        if _is_pair(item) and item[0] == STEP:
             if self.on_step is not None:
-                self.on_step(index, value)
+                self.on_step(index, item[1])
             return None
         del self._inflight[generator]
-        status, result = value
+        if not (_is_pair(item) and item[0] == "done" and _is_pair(item[1])):
+            # A worker of another meshcol build (a cluster installed apart from this run)
+            # answers in another form: never read as an outcome (an old driver took a new
+            # worker's steps for results and passed a run of 0 bodies).
+            message = (
+                "the Ray worker's reply is not this meshcol's: is the cluster running "
+                "another meshcol build?"
+            )
+            return TaskOutcome(index, "failed", message=message, seconds=now - started)
+        status, result = item[1]
         if status == "ok":
             return TaskOutcome(index, status, result, seconds=now - started)
         return TaskOutcome(index, status, message=result, seconds=now - started)

@@ -18,6 +18,7 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -271,3 +272,41 @@ def test_a_one_off_on_a_light_ray_of_its_own_matches_the_local_pool(meshes, tmp_
         assert not names & {"dashboard.log", "dashboard_agent.log", "runtime_env_agent.log"}
     finally:
         shutil.rmtree(temp, ignore_errors=True)
+
+
+def test_a_reply_in_another_builds_form_is_a_failed_task_never_an_outcome() -> None:
+    """A cluster installed apart from the run may run another meshcol build, whose worker
+    answers in another form: an old driver took a new worker's steps for outcomes and passed
+    a run of 0 bodies. The driver reads only its own form; anything else fails the task."""
+    from types import SimpleNamespace
+
+    from meshcol.decomposition.executor import RayExecutor
+    from meshcol.decomposition.jobs import STEP
+
+    class Ray:
+        exceptions = SimpleNamespace(RayError=RuntimeError)
+
+        @staticmethod
+        def get(item: Any) -> Any:
+            return item
+
+    steps: list[Any] = []
+    for replies, status in (
+        ([(STEP, "s1"), ("done", ("ok", 7))], "ok"),
+        ([("ok", 7)], "failed"),  # an outcome with no "done" tag
+        ([(STEP, "s1"), "whatever"], "failed"),
+        ([("done", "ok")], "failed"),
+    ):
+        generator = iter(replies)
+        fake = SimpleNamespace(ray=Ray, _inflight={generator: (3, 0.0)}, on_step=None)
+        fake.on_step = lambda index, snapshot: steps.append((index, snapshot))
+        outcome = None
+        while outcome is None:
+            outcome = RayExecutor._next(fake, generator, 1.0)  # type: ignore[arg-type]
+        assert outcome.index == 3 and outcome.status == status, (replies, outcome)
+        if status == "ok":
+            assert outcome.value == 7
+        else:
+            assert "another meshcol build" in outcome.message
+        assert not fake._inflight
+    assert steps == [(3, "s1"), (3, "s1")]
