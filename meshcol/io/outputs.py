@@ -191,18 +191,35 @@ def _last_name(path: str) -> str:
     return os.path.normcase(tail)
 
 
+#: Inputs from which on the guard stats them in the core's threads (numpy and the native
+#: module loaded); fewer are stat'ed here, so that a warm ``meshcol ci`` imports neither.
+STAT_IN_CORE = 256
+
+
 class _Identities:
     """Device and inode of every input (symbolic links followed), stat'ed at once
-    (:func:`meshcol.io.mesh_read.file_identities`); inputs that cannot be stat'ed match
-    nothing."""
+    (:func:`meshcol.io.mesh_read.file_identities`) from :data:`STAT_IN_CORE` inputs on, one by
+    one below; inputs that cannot be stat'ed match nothing."""
 
     def __init__(self, paths: list[str]) -> None:
+        self.index: dict[tuple[int, int], int] | None = None
+        if len(paths) < STAT_IN_CORE:
+            self.index = {}
+            for i, path in enumerate(paths):
+                try:
+                    info = os.stat(path)
+                except (OSError, ValueError):
+                    continue
+                self.index.setdefault((info.st_dev, info.st_ino), i)
+            return
         from meshcol.io.mesh_read import file_identities
 
         self.device, self.inode, self.found = file_identities(paths)
 
     def first(self, device: int, inode: int) -> int | None:
         """The index of the first input that is the file (``device``, ``inode``), or None."""
+        if self.index is not None:
+            return self.index.get((device, inode))
         import numpy as np
 
         hits = np.flatnonzero(

@@ -188,12 +188,15 @@ def test_an_output_spelled_as_a_missing_input_is_refused(tmp_path, monkeypatch, 
     check_destinations(inputs, [("--report", "other.json")])  # another name: accepted
 
 
-def test_an_output_that_is_any_input_is_found_among_many(tmp_path) -> None:
-    """The inputs are stat'ed at once in the core: an existing output that is an input by a
-    hard link, a symbolic link or a name of undecodable bytes is named by the first input
-    that is it; missing and odd inputs match nothing."""
+@pytest.mark.parametrize("count", [20, 300])
+def test_an_output_that_is_any_input_is_found_among_many(tmp_path, count) -> None:
+    """The inputs are stat'ed one by one (few) or at once in the core (many): an existing
+    output that is an input by a hard link, a symbolic link or a name of undecodable bytes is
+    named by the first input that is it; missing and odd inputs match nothing."""
     from meshcol.errors import OutputPathError
-    from meshcol.io.outputs import check_destinations
+    from meshcol.io.outputs import STAT_IN_CORE, check_destinations
+
+    assert 20 < STAT_IN_CORE < 300  # both ways are tested
 
     report = tmp_path / "report.json"
     report.write_text("{}")
@@ -201,7 +204,7 @@ def test_an_output_that_is_any_input_is_found_among_many(tmp_path) -> None:
     (tmp_path / "soft.obj").symlink_to(report)
     odd = os.fsdecode(b"\xff\xfe.obj")  # surrogates: no UTF-8 text for the core
     os.link(report, os.path.join(tmp_path, odd))
-    others = [("a mesh", str(tmp_path / f"m{i}.obj")) for i in range(300)]
+    others = [("a mesh", str(tmp_path / f"m{i}.obj")) for i in range(count)]
     for _, path in others[:10]:
         Path(path).write_text("v 0 0 0\n")
     strange = [("a nul", "bad\x00.obj"), ("a gone one", str(tmp_path / "gone.obj"))]
