@@ -33,6 +33,9 @@ import tempfile
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_ci import untimed
+
 CONFIG = """[[scenes]]
 path = "level/scene.json"
 check = { fail-on = "penetration", clearance = 0.05 }
@@ -40,23 +43,6 @@ check = { fail-on = "penetration", clearance = 0.05 }
 
 #: The command line of meshcol; default the entry point beside this Python.
 COMMAND: list[str] = [str(Path(sys.executable).with_name("meshcol"))]
-
-
-def untimed(text: str) -> object:
-    """A JSON report without its measured times."""
-
-    def strip(value: object) -> object:
-        if isinstance(value, dict):
-            return {
-                k: strip(v)
-                for k, v in value.items()
-                if "seconds" not in k and k not in ("time", "generated_at")
-            }
-        if isinstance(value, list):
-            return [strip(v) for v in value]
-        return value
-
-    return strip(json.loads(text))
 
 
 def mesh_text(kind: int, size: float) -> str:

@@ -17,6 +17,29 @@ CORPUS = SHARED / "corpus"
 ORACLES = SHARED / "oracles" / "cases.json"
 SAMPLES = REPO / "samples"
 GOLDEN = Path(__file__).resolve().parent / "golden"
+#: The unit cube [0, 1]^3 as OBJ text, closed and wound outward (12 faces).
+UNIT_CUBE_OBJ = """\
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+v 0 0 1
+v 1 0 1
+v 1 1 1
+v 0 1 1
+f 1 3 2
+f 1 4 3
+f 5 6 7
+f 5 7 8
+f 1 2 6
+f 1 6 5
+f 2 3 7
+f 2 7 6
+f 3 4 8
+f 3 8 7
+f 4 1 5
+f 4 5 8
+"""
 
 #: The tests mirror the package, a folder a room; the shared helpers (oracles.py,
 #: strategies.py, ...) are here. A test imports a helper or another test module (its fixtures

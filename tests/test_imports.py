@@ -18,6 +18,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from conftest import UNIT_CUBE_OBJ
 
 #: Never imported by ``import meshcol``.
 HEAVY = (
@@ -44,28 +45,7 @@ glob = "props/**/*"
 inspect = { fail-on = ["not-watertight"] }
 """
 
-BOX = """o box
-v 0 0 0
-v 1 0 0
-v 1 1 0
-v 0 1 0
-v 0 0 1
-v 1 0 1
-v 1 1 1
-v 0 1 1
-f 1 3 2
-f 1 4 3
-f 5 6 7
-f 5 7 8
-f 1 2 6
-f 1 6 5
-f 2 3 7
-f 2 7 6
-f 3 4 8
-f 3 8 7
-f 4 1 5
-f 4 5 8
-"""
+BOX = "o box\n" + UNIT_CUBE_OBJ
 
 TETRA_STL = """solid t
 facet normal 0 0 -1

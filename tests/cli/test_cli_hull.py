@@ -11,31 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from conftest import UNIT_CUBE_OBJ
 
 from meshcol.cli import main
-
-CUBE_OBJ = """\
-v 0 0 0
-v 1 0 0
-v 1 1 0
-v 0 1 0
-v 0 0 1
-v 1 0 1
-v 1 1 1
-v 0 1 1
-f 1 3 2
-f 1 4 3
-f 5 6 7
-f 5 7 8
-f 1 2 6
-f 1 6 5
-f 2 3 7
-f 2 7 6
-f 3 4 8
-f 3 8 7
-f 4 1 5
-f 4 5 8
-"""
 
 
 def run(*args: str):
@@ -56,7 +34,7 @@ def outside_distance(points: np.ndarray, hull_vertices: np.ndarray) -> float:
 
 
 def test_report_on_stdout_without_mesh_output(tmp_path: Path) -> None:
-    cube = write(tmp_path, "cube.obj", CUBE_OBJ)
+    cube = write(tmp_path, "cube.obj", UNIT_CUBE_OBJ)
     result = run("hull", cube)
     assert result.exit_code == 0, result.output
     assert result.stderr == "meshcol: hull: PASS: 1 hull, 8 vertices\n"
@@ -151,7 +129,7 @@ def test_out_dir_writes_one_file_per_body(corpus, tmp_path: Path) -> None:
 
 
 def test_csv_report_on_stdout(tmp_path: Path) -> None:
-    cube = write(tmp_path, "cube.obj", CUBE_OBJ)
+    cube = write(tmp_path, "cube.obj", UNIT_CUBE_OBJ)
     result = run("hull", cube, "--format", "csv", "--max-vertices", "4")
     assert result.exit_code == 0, result.output
     header, row = result.stdout.splitlines()
@@ -180,7 +158,7 @@ def test_flat_mesh_warns_and_reports_flat(tmp_path: Path) -> None:
 def test_inside_out_mesh_gets_the_outward_hull_and_a_warning(tmp_path: Path) -> None:
     flipped = "".join(
         "f " + " ".join(reversed(line.split()[1:])) + "\n" if line.startswith("f ") else line + "\n"
-        for line in CUBE_OBJ.splitlines()
+        for line in UNIT_CUBE_OBJ.splitlines()
     )
     cube = write(tmp_path, "inside_out.obj", flipped)
     result = run("hull", cube)
@@ -194,7 +172,9 @@ def test_inside_out_mesh_gets_the_outward_hull_and_a_warning(tmp_path: Path) -> 
     assert body["hull_volume"] == pytest.approx(1.0) and body["volume_ratio"] == pytest.approx(1.0)
     assert (body["hull_vertices"], body["hull_faces"]) == (8, 12)
     assert body["note"].startswith("inside-out mesh: its faces point inward")
-    outward = json.loads(run("hull", write(tmp_path, "cube.obj", CUBE_OBJ)).stdout)["bodies"][0]
+    outward = json.loads(run("hull", write(tmp_path, "cube.obj", UNIT_CUBE_OBJ)).stdout)["bodies"][
+        0
+    ]
     assert outward["note"] is None and outward["hull_volume"] == body["hull_volume"]
 
 
@@ -222,7 +202,7 @@ def test_soup_hull_uses_its_points(corpus) -> None:
 
 
 def test_output_and_out_dir_together_is_a_usage_error(tmp_path: Path) -> None:
-    cube = write(tmp_path, "cube.obj", CUBE_OBJ)
+    cube = write(tmp_path, "cube.obj", UNIT_CUBE_OBJ)
     result = run("hull", cube, "-o", tmp_path / "a.obj", "--out-dir", tmp_path / "d")
     assert result.exit_code == 2
     assert result.stderr == (
@@ -231,7 +211,7 @@ def test_output_and_out_dir_together_is_a_usage_error(tmp_path: Path) -> None:
 
 
 def test_unknown_output_extension(tmp_path: Path) -> None:
-    cube = write(tmp_path, "cube.obj", CUBE_OBJ)
+    cube = write(tmp_path, "cube.obj", UNIT_CUBE_OBJ)
     result = run("hull", cube, "-o", "hull.xyz")
     assert result.exit_code == 2
     assert result.stderr == (
@@ -253,7 +233,7 @@ def test_several_bodies_into_stl_is_refused(corpus, tmp_path: Path) -> None:
 
 
 def test_budget_below_four_is_a_usage_error(tmp_path: Path) -> None:
-    cube = write(tmp_path, "cube.obj", CUBE_OBJ)
+    cube = write(tmp_path, "cube.obj", UNIT_CUBE_OBJ)
     result = run("hull", cube, "--max-vertices", "3")
     assert result.exit_code == 2
     assert result.stderr == (
@@ -360,7 +340,7 @@ def test_broken_manifest_maps_the_scene_error(tmp_path: Path, name: str) -> None
     from meshcol.errors import SceneError
     from meshcol.io.scene import load_inputs
 
-    write(tmp_path, "cube.obj", CUBE_OBJ)
+    write(tmp_path, "cube.obj", UNIT_CUBE_OBJ)
     manifest = write(tmp_path, name, MANIFESTS[name])
     with pytest.raises(SceneError) as info:
         load_inputs([str(manifest)])
@@ -391,7 +371,7 @@ def test_debug_shows_a_traceback(tmp_path: Path) -> None:
 def test_library_hull_returns_the_report_and_writes_meshes(tmp_path: Path) -> None:
     from meshcol.analysis.hull import HullReport, OutputDestinationError, hull, out_dir_paths
 
-    cube = write(tmp_path, "cube.obj", CUBE_OBJ)
+    cube = write(tmp_path, "cube.obj", UNIT_CUBE_OBJ)
     report = hull([cube], out_dir=tmp_path / "hulls")
     assert isinstance(report, HullReport) and report.exit_code == 0
     assert report.summary == {"bodies": 1, "flat": 0, "hull_vertices": 8, "files_written": 1}
@@ -404,6 +384,6 @@ def test_library_hull_returns_the_report_and_writes_meshes(tmp_path: Path) -> No
     ]
     with pytest.raises(ValueError, match="either output or out_dir"):
         hull([cube], output=tmp_path / "a.obj", out_dir=tmp_path / "d")
-    two = write(tmp_path, "two.obj", CUBE_OBJ)
+    two = write(tmp_path, "two.obj", UNIT_CUBE_OBJ)
     with pytest.raises(OutputDestinationError):
         hull([cube, two], output=tmp_path / "both.stl")

@@ -13,35 +13,16 @@ from click.testing import CliRunner
 from conftest import SAMPLES
 
 from meshcol.cli import main
-from meshcol.io.raster import Camera, Raster, hex_rgb
+from meshcol.io.raster import Camera, Raster
 from meshcol.io.snapshots import NORMAL_COLOR, PAIR_COLORS, SUBJECT_COLOR, WITNESS_COLOR
 
 Image = pytest.importorskip("PIL.Image", reason="Pillow (meshcol[snapshots]) is not installed")
+from snapshot_pixels import exact_mask, hue_mask, pixels  # noqa: E402 - after the skip
 
 
 def run(*args: str) -> tuple[int, str, str]:
     result = CliRunner().invoke(main, list(args))
     return result.exit_code, result.stdout, result.stderr
-
-
-def pixels(path: Path) -> np.ndarray:
-    with Image.open(path) as image:
-        assert image.mode == "RGB" and image.size == (800, 600)
-        return np.asarray(image)
-
-
-def hue_mask(image: np.ndarray, color: str) -> np.ndarray:
-    """Pixels of ``color`` under any flat shade: proportional to it channel by channel."""
-    target = np.asarray(hex_rgb(color), dtype=np.float32)
-    rgb = image.astype(np.float32)
-    total = rgb.sum(axis=2)
-    scale = total / target.sum()
-    close = np.abs(rgb - scale[..., None] * target).max(axis=2) <= 6
-    return close & (scale > 0.3) & (total > 60)
-
-
-def exact_mask(image: np.ndarray, color: str) -> np.ndarray:
-    return np.all(image == np.asarray(hex_rgb(color), dtype=np.uint8), axis=2)
 
 
 def test_rasterizer_fills_a_triangle_and_keeps_the_nearest():

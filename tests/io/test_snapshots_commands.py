@@ -12,36 +12,17 @@ from click.testing import CliRunner
 from conftest import SAMPLES
 
 from meshcol.cli import main
-from meshcol.io.raster import hex_rgb
 from meshcol.io.snapshots import COLLIDER_COLOR, PAIR_COLORS, SUBJECT_COLOR, WITNESS_COLOR
 
 Image = pytest.importorskip("PIL.Image", reason="Pillow (meshcol[snapshots]) is not installed")
+from snapshot_pixels import exact_mask, hue_mask, pixels  # noqa: E402 - after the skip
+
 trimesh = pytest.importorskip("trimesh", reason="the test meshes are made with trimesh")
 
 
 def run(*args: str) -> tuple[int, str, str]:
     result = CliRunner().invoke(main, list(args))
     return result.exit_code, result.stdout, result.stderr
-
-
-def pixels(path: Path) -> np.ndarray:
-    with Image.open(path) as image:
-        assert image.mode == "RGB" and image.size == (800, 600)
-        return np.asarray(image)
-
-
-def hue_mask(image: np.ndarray, color: str) -> np.ndarray:
-    """Pixels of ``color`` under any flat shade: proportional to it channel by channel."""
-    target = np.asarray(hex_rgb(color), dtype=np.float32)
-    rgb = image.astype(np.float32)
-    total = rgb.sum(axis=2)
-    scale = total / target.sum()
-    close = np.abs(rgb - scale[..., None] * target).max(axis=2) <= 6
-    return close & (scale > 0.3) & (total > 60)
-
-
-def exact_mask(image: np.ndarray, color: str) -> np.ndarray:
-    return np.all(image == np.asarray(hex_rgb(color), dtype=np.uint8), axis=2)
 
 
 def gap(a: np.ndarray, b: np.ndarray) -> float:
