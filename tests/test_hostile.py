@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
-from test_cli_hull import CUBE_OBJ
+from conftest import UNIT_CUBE_OBJ as CUBE_OBJ
 
 from meshcol.cli import main
 from meshcol.cli.common import Progress

@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
-from test_cli_hull import CUBE_OBJ, MANIFESTS, assert_clean_failure, outside_distance, write
+from conftest import UNIT_CUBE_OBJ as CUBE_OBJ
+from test_cli_hull import MANIFESTS, assert_clean_failure, outside_distance, write
 
 from meshcol.analysis.rules import command_rules
 from meshcol.cli import main
