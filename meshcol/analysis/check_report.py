@@ -411,7 +411,7 @@ def check_report(
     rank = _name_ranks(names)
     table = table.take(_report_order(table, rank))
     files = _files(colliders.bodies)
-    findings = _findings(colliders, options, scene.units)
+    findings = _findings(colliders, options, scene)
     return CheckReport(
         _body_rows(placed, files, rank),
         _pair_rows(table, colliders),
@@ -730,15 +730,17 @@ def _settings(
     return settings
 
 
-def _findings(colliders: Any, options: CheckOptions, units: str | None) -> list[dict]:
-    """Body finding records, each with ``failed`` (its rule fails the run): MC301 per body
-    without a usable collider (every convex part a segment or a point: no area), then a
-    target's limits (:func:`meshcol.analysis.rules.target_findings`). Pairs are not
+def _findings(colliders: Any, options: CheckOptions, scene: Scene) -> list[dict]:
+    """Body finding records, each with ``failed`` (its rule fails the run): MC506 for a
+    robot with no collision geometry (:func:`meshcol.analysis.rules.robot_findings`), MC301
+    per body without a usable collider (every convex part a segment or a point: no area),
+    then a target's limits (:func:`meshcol.analysis.rules.target_findings`). Pairs are not
     repeated here: a pair's status is its rule (:data:`PAIR_RULES`, ``meshcol rules``)."""
-    from meshcol.analysis.rules import finding, target_findings
+    from meshcol.analysis.rules import finding, robot_findings, target_findings
     from meshcol.collision.hull import HullStatus
 
-    records = []
+    units = scene.units
+    records = robot_findings(scene)
     no_area = np.isin(colliders.shapes.hull_status, (HullStatus.COLLINEAR, HullStatus.SINGLE_POINT))
     no_area &= colliders.shapes.kinds == 0  # polytopes
     counts = np.diff(colliders.body_part_offsets)

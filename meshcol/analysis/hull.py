@@ -179,11 +179,14 @@ class HullReport:
         """The JSON report: the common envelope, the summary and one entry per body."""
         from meshcol.io.report import envelope
 
-        return {
+        report = {
             **envelope("hull", self.settings, self.units),
             "summary": self.summary,
             "bodies": self.bodies,
         }
+        if self.description is not None:  # a robot rebuilt: what the description leaves out
+            report["warnings"] = list(self.warnings)
+        return report
 
     def to_json(self) -> str:
         from meshcol.io.report import dumps_json
