@@ -3,7 +3,8 @@
 Every finding meshcol reports names a rule of :data:`RULES` by its id (``MC401``) and its name
 (``not-watertight``); ids are stable forever (a rule that goes keeps its id retired, never
 reused). Ranges: 1xx engine limits of a ``--target`` profile, 2xx physics readiness and mass,
-3xx colliders present and named, 4xx mesh health, 5xx pair findings of check and sweep.
+3xx colliders present and named, 4xx mesh health, 5xx pair findings of check and sweep
+(and MC506, a robot with no collision geometry: nothing to pair).
 
 :func:`finding` is the one way to make a finding, so nothing can cite an unregistered rule;
 :func:`select_rules` is the one parser of ``--fail-on`` lists (ids, names, ``all``).
