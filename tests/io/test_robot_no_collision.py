@@ -261,3 +261,32 @@ def test_hull_of_the_robot_as_meshes_warns(ghost_urdf: Path, tmp_path: Path) -> 
     code, err = run("hull", str(ghost_urdf), "-o", str(tmp_path / "all.obj"))
     assert code == 0, err
     assert "MC506 no-collision-geometry" in err and "ghost.urdf" in err
+
+
+@pytest.mark.parametrize("fmt", ["junit", "sarif", "github"])
+def test_ci_formats_carry_the_failing_finding(ghost_urdf: Path, tmp_path: Path, fmt) -> None:
+    # A --fail-on list of rules (not a level) crashed every CI format (KeyError: 'MC506').
+    report = tmp_path / f"r.{fmt}"
+    code, err = run(
+        "check", str(ghost_urdf), "--fail-on", "MC506", "--format", fmt, "--report", str(report)
+    )
+    assert code == 1, err
+    assert "MC506" in report.read_text() and "Traceback" not in err
+
+
+def test_a_rule_list_spares_ignored_pairs_in_junit(tmp_path: Path) -> None:
+    # Two overlapping boxes, --fail-on MC501 with the pair ignored: a skipped case (as the
+    # level 'penetration' gives), not a KeyError.
+    box = "<geometry><box size='1 1 1'/></geometry>"
+    robot = tmp_path / "two.urdf"
+    robot.write_text(
+        f"<robot name='two'><link name='a'><collision>{box}</collision></link>"
+        f"<link name='b'><collision><origin xyz='0.5 0 0'/>{box}</collision></link>"
+        "<joint name='j' type='floating'><parent link='a'/><child link='b'/></joint></robot>"
+    )
+    for fail_on in ("MC501", "penetration"):
+        report = tmp_path / f"{fail_on}.xml"
+        args = ["--include-adjacent", "--ignore", "a:b", "--format", "junit"]
+        code, err = run("check", str(robot), "--fail-on", fail_on, *args, "--report", str(report))
+        assert code == 0, err
+        assert "<skipped" in report.read_text() and "ignored by --ignore" in report.read_text()
