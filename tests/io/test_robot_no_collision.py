@@ -290,3 +290,18 @@ def test_a_rule_list_spares_ignored_pairs_in_junit(tmp_path: Path) -> None:
         code, err = run("check", str(robot), "--fail-on", fail_on, *args, "--report", str(report))
         assert code == 0, err
         assert "<skipped" in report.read_text() and "ignored by --ignore" in report.read_text()
+
+
+def test_inspect_keeps_the_warnings_of_reading_the_robot(tmp_path: Path) -> None:
+    # inspect dropped what reading the description warned of (here a xacro leftover).
+    robot = tmp_path / "x.urdf"
+    robot.write_text(
+        "<robot name='x'><link name='a'><collision><origin xyz='0 0 $(optenv Z 0.5)'/>"
+        "<geometry><box size='1 1 1'/></geometry></collision></link></robot>"
+    )
+    report = tmp_path / "i.json"
+    code, err = run("inspect", str(robot), "--report", str(report))
+    assert code == 0, err
+    (warning,) = json.loads(report.read_text())["warnings"]
+    assert "xacro leftover" in warning and "$(optenv Z 0.5)" in warning
+    assert "xacro leftover" in err
