@@ -38,6 +38,7 @@ The table goes to stdout (Markdown) and, with ``--json``, every row to a file.
 
 Run:  make robots-wild   (installs the peers: pip install -e '.[robots-wild]')
       .venv/bin/python benchmarks/bench_robots_wild.py [--only NAME] [--limit N] [--json F]
+      [--shard K/N] [--reverse] [--skip-done F.json ...]; --table F.json ... merges the rows
 """
 
 from __future__ import annotations
@@ -406,6 +407,20 @@ def table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def _row_in_scratch(collection: str, robot: Path) -> dict:
+    with tempfile.TemporaryDirectory() as work:
+        return run_robot(collection, robot, Path(work))
+
+
+def isolated_row(collection: str, robot: Path) -> dict:
+    """:func:`run_robot` in a process of its own: the robot read here (its exclusions) and
+    MuJoCo's models leave nothing behind (a sweep process had grown to 3 GB)."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(max_workers=1, max_tasks_per_child=1) as pool:
+        return pool.submit(_row_in_scratch, collection, robot).result()
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--only", choices=sorted(COLLECTIONS), action="append")
@@ -421,9 +436,20 @@ def main() -> int:
     parser.add_argument(
         "--table", type=Path, nargs="+", default=None, help="print the table of --json files"
     )
+    parser.add_argument(
+        "--skip-done",
+        type=Path,
+        nargs="+",
+        default=None,
+        help="leave out the robots that have a row in these --json files (resume a sweep)",
+    )
     args = parser.parse_args()
     if args.json is not None:
         args.json = ORIGIN / args.json
+    done: set[str] = set()
+    for file in args.skip_done or []:
+        if (ORIGIN / file).is_file():
+            done.update(row["path"] for row in json.loads((ORIGIN / file).read_text()))
     if args.table:
         args.table = [ORIGIN / file for file in args.table]
         merged: dict[str, dict] = {}
@@ -443,11 +469,11 @@ def main() -> int:
                 for robot in robots
                 if robot.name in args.match or f"{robot.parent.name}/{robot.name}" in args.match
             ]
+        robots = [robot for robot in robots if str(robot) not in done]
         shard, shards = (int(x) for x in args.shard.split("/"))
         chosen = robots[: args.limit][shard::shards]
         for robot in reversed(chosen) if args.reverse else chosen:
-            with tempfile.TemporaryDirectory() as work:
-                row = run_robot(collection, robot, Path(work))
+            row = isolated_row(collection, robot)
             print(f"{collection} {robot.name}: {'ok' if verdict(row) else 'NO'}", file=sys.stderr)
             rows.append(row)
             if args.json is not None:
