@@ -415,8 +415,9 @@ RULES: tuple[Rule, ...] = (
         "but there is nothing to check: zero pairs, an empty collision matrix, outputs "
         "without colliders.",
         "measured: the collision elements found (0); limit: 1. The finding names the file.",
-        "Add <collision> elements (URDF) or give geoms a contype/conaffinity (MJCF); meshcol "
-        "decompose or hull of the visual meshes makes them. --fail-on MC506 fails a run on it.",
+        "Add <collision> elements (URDF) or give geoms a non-zero contype or conaffinity "
+        "(MJCF); meshcol hull or decompose of a link's visual mesh file makes a collider mesh "
+        "to reference. --fail-on MC506 fails a run on it.",
     ),
 )
 
