@@ -21,7 +21,9 @@ Collections (each skipped, with the reason, when its package is missing):
 For each robot:
 
 1. ``meshcol check ROBOT --report R.json``: exit 0 or 1 (a self-collision finding) counts as
-   checked, exit 2 (refused) does not;
+   checked, exit 2 (refused) does not; a robot whose links have no collision geometry is
+   checked with zero pairs and the finding MC506, and its outputs must load with no collider
+   (yourdfpy loads none, usd-core finds no collision prim);
 2. ``meshcol hull ROBOT --out-dir OUT --to FMT`` for ``urdf`` (URDF inputs), ``mjcf`` and
    ``usd``; then each output is loaded:
    - URDF: ``pybullet.loadURDF`` (DIRECT, from the output folder) and ``yourdfpy.URDF.load``
@@ -36,6 +38,7 @@ The table goes to stdout (Markdown) and, with ``--json``, every row to a file.
 
 Run:  make robots-wild   (installs the peers: pip install -e '.[robots-wild]')
       .venv/bin/python benchmarks/bench_robots_wild.py [--only NAME] [--limit N] [--json F]
+      [--shard K/N] [--reverse] [--skip-done F.json ...]; --table F.json ... merges the rows
 """
 
 from __future__ import annotations
@@ -190,7 +193,9 @@ def load_pybullet(urdf: Path) -> str:
         pybullet.disconnect(client)
 
 
-def load_yourdfpy(urdf: Path) -> str:
+def load_yourdfpy(urdf: Path, colliders: bool = True) -> str:
+    """yourdfpy loads the URDF with every collision mesh (``colliders``: at least one; a
+    robot with no collision geometry, MC506, has none to load)."""
     import yourdfpy
 
     try:
@@ -199,9 +204,10 @@ def load_yourdfpy(urdf: Path) -> str:
         )
     except Exception as exc:  # noqa: BLE001 - the peer's own failure is the result
         return f"FAIL ({' '.join(str(exc).split())[:80]})"
-    if robot.collision_scene is None or not robot.collision_scene.geometry:
-        return "FAIL (no collision geometry loaded)"
-    return "ok"
+    loaded = robot.collision_scene is not None and bool(robot.collision_scene.geometry)
+    if loaded != colliders:
+        return "FAIL (no collision geometry loaded)" if colliders else "FAIL (colliders found)"
+    return "ok" if colliders else "ok (no colliders)"
 
 
 def simulate(xml: Path, excluded: set[tuple[str, str]]) -> dict:
@@ -237,7 +243,8 @@ def simulate(xml: Path, excluded: set[tuple[str, str]]) -> dict:
     return {"mujoco": "ok", "rest_contacts": rest, "finite": finite}
 
 
-def load_usd(usda: Path) -> str:
+def load_usd(usda: Path, colliders: bool = True) -> str:
+    """usd-core opens the stage; it has collision prims (``colliders``), or none (MC506)."""
     try:
         from pxr import Usd, UsdPhysics
     except ImportError:
@@ -245,8 +252,10 @@ def load_usd(usda: Path) -> str:
     stage = Usd.Stage.Open(str(usda))
     if stage is None:
         return "FAIL (not opened)"
-    colliders = sum(1 for prim in stage.Traverse() if prim.HasAPI(UsdPhysics.CollisionAPI))
-    return "ok" if colliders else "FAIL (no collision prim)"
+    found = sum(1 for prim in stage.Traverse() if prim.HasAPI(UsdPhysics.CollisionAPI))
+    if not colliders:
+        return "FAIL (collision prims found)" if found else "ok (no colliders)"
+    return "ok" if found else "FAIL (no collision prim)"
 
 
 def compiles_in_mujoco(xml: Path) -> str | None:
@@ -286,6 +295,11 @@ def run_robot(collection: str, robot: Path, work: Path) -> dict:
         return row
     report = json.loads((work / "check.json").read_text())
     row["pairs"] = len(report.get("pairs", []))
+    # MC506: no link has collision geometry; checked (zero pairs), outputs have no collider
+    empty = any(f["rule"] == "MC506" for f in report.get("findings", []))
+    if empty:
+        row["note"] = "MC506 no collision geometry (zero pairs)"
+        row["empty"] = True
     excluded = excluded_pairs(robot)
     formats = ["urdf", "mjcf", "usd"] if robot.suffix == ".urdf" else ["mjcf", "usd"]
     for fmt in formats:
@@ -300,19 +314,20 @@ def run_robot(collection: str, robot: Path, work: Path) -> dict:
         if fmt == "urdf":
             row["urdf"] = {
                 "pybullet": load_pybullet(description),
-                "yourdfpy": load_yourdfpy(description),
+                "yourdfpy": load_yourdfpy(description, not empty),
             }
         elif fmt == "mjcf":
             row["mjcf"] = simulate(description, excluded)
         else:
-            row["usd"] = load_usd(description)
+            row["usd"] = load_usd(description, not empty)
     row["seconds"] = round(time.perf_counter() - began, 1)
     return row
 
 
-#: What meshcol says of a description it refuses because it has nothing to check: no
-#: collision geometry (or no link at all, as example-robot-data's empty ur3.urdf).
-NOTHING_TO_CHECK = ("no link has collision geometry", "the robot has no <link> element")
+#: What meshcol says of a description it refuses because it is no robot: no link at all, as
+#: example-robot-data's empty ur3.urdf (xacro's output of a macro file; pybullet and
+#: yourdfpy refuse it too). A robot with links but no collision geometry is checked (MC506).
+NOTHING_TO_CHECK = ("the robot has no <link> element",)
 #: The note of an XML that MuJoCo itself does not compile: an include fragment, not a model.
 FRAGMENT = "not a model (MuJoCo does not compile it either)"
 
@@ -377,14 +392,33 @@ def table(rows: list[dict]) -> str:
     models = [row for row in rows if row["check"] != "fragment"]
     passed = sum(verdict(row) for row in models)
     empty = sum(any(n in row.get("note", "") for n in NOTHING_TO_CHECK) for row in models)
+    visual = sum(bool(row.get("empty")) and verdict(row) for row in models)
+    failed = [row["robot"] for row in models if not verdict(row)]
     lines.append("")
     lines.append(
-        f"{passed} of {len(models)} robots: checked, and every output loads and simulates; "
-        f"{empty} refused for having no collision geometry (nothing to check)."
+        f"{passed} of {len(models)} robots: checked, and every output loads and simulates "
+        f"({visual} of them with no collision geometry: MC506, zero pairs, outputs without "
+        f"colliders); {empty} refused for having no link at all."
     )
+    if failed:
+        lines.append(f"Not passed: {', '.join(failed)}.")
     if fragments:
         lines.append(f"{fragments} XML files are include fragments, not models (not counted).")
     return "\n".join(lines)
+
+
+def _row_in_scratch(collection: str, robot: Path) -> dict:
+    with tempfile.TemporaryDirectory() as work:
+        return run_robot(collection, robot, Path(work))
+
+
+def isolated_row(collection: str, robot: Path) -> dict:
+    """:func:`run_robot` in a process of its own: the robot read here (its exclusions) and
+    MuJoCo's models leave nothing behind (a sweep process had grown to 3 GB)."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(max_workers=1, max_tasks_per_child=1) as pool:
+        return pool.submit(_row_in_scratch, collection, robot).result()
 
 
 def main() -> int:
@@ -402,9 +436,20 @@ def main() -> int:
     parser.add_argument(
         "--table", type=Path, nargs="+", default=None, help="print the table of --json files"
     )
+    parser.add_argument(
+        "--skip-done",
+        type=Path,
+        nargs="+",
+        default=None,
+        help="leave out the robots that have a row in these --json files (resume a sweep)",
+    )
     args = parser.parse_args()
     if args.json is not None:
         args.json = ORIGIN / args.json
+    done: set[str] = set()
+    for file in args.skip_done or []:
+        if (ORIGIN / file).is_file():
+            done.update(row["path"] for row in json.loads((ORIGIN / file).read_text()))
     if args.table:
         args.table = [ORIGIN / file for file in args.table]
         merged: dict[str, dict] = {}
@@ -424,11 +469,11 @@ def main() -> int:
                 for robot in robots
                 if robot.name in args.match or f"{robot.parent.name}/{robot.name}" in args.match
             ]
+        robots = [robot for robot in robots if str(robot) not in done]
         shard, shards = (int(x) for x in args.shard.split("/"))
         chosen = robots[: args.limit][shard::shards]
         for robot in reversed(chosen) if args.reverse else chosen:
-            with tempfile.TemporaryDirectory() as work:
-                row = run_robot(collection, robot, Path(work))
+            row = isolated_row(collection, robot)
             print(f"{collection} {robot.name}: {'ok' if verdict(row) else 'NO'}", file=sys.stderr)
             rows.append(row)
             if args.json is not None:

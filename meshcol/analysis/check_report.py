@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.analysis.check_policy import FAIL_ON, CheckOptions
+from meshcol.analysis.check_policy import CheckOptions
 from meshcol.analysis.pairs import SEVERITY, PairTable, PlacedColliders
 from meshcol.io.paths import display_path, display_paths
 from meshcol.io.report import vector_columns
@@ -214,11 +214,10 @@ class CheckReport:
         files = {b["name"]: b["file"] for b in self.bodies}
         inputs = self.settings.get("inputs") or []
         scene = inputs[0] if len(inputs) == 1 else None
-        threshold = FAIL_ON[self.settings["fail_on"]]
-        least = SEVERITY[threshold] if threshold is not None else len(PAIR_STATUSES)
         settings = self.settings
+        fails = frozenset(settings["fail_on_rules"])  # a level's rules, or the rules listed
         old = self.baseline or {}
-        cases = [_ci_case(p, files, scene, least, settings, self.units, old) for p in self.pairs]
+        cases = [_ci_case(p, files, scene, fails, settings, self.units, old) for p in self.pairs]
         cases += _finding_cases(self.findings, files, scene)
         s = self.summary
         verb = "violates" if s["violations"] == 1 else "violate"
@@ -308,12 +307,14 @@ def _ci_case(
     pair: dict,
     files: dict[str, str | None],
     scene: str | None,
-    least: int,
+    fails: frozenset[str],
     settings: dict,
     units: str | None,
     baseline: dict | None = None,
 ) -> Any:
-    """The CI case of one pair of a check report (:meth:`CheckReport.ci_suite`)."""
+    """The CI case of one pair of a check report (:meth:`CheckReport.ci_suite`); ``fails``:
+    the rules that fail the run (a pair whose status's rule is one of them and that does not
+    violate was spared by ``--ignore`` or the baseline)."""
     from meshcol.analysis.check_policy import PAIR_RULES
     from meshcol.io.ci import CiCase, details, number
 
@@ -352,7 +353,7 @@ def _ci_case(
     if pair["violation"]:
         outcome = "failure"
         message += f" (--fail-on {settings['fail_on']})"
-    elif SEVERITY[status] >= least:
+    elif PAIR_RULES.get(status) in fails:
         if pair["ignored"]:
             outcome = "skipped"
             message = f"ignored by --ignore: {message}"
@@ -411,7 +412,7 @@ def check_report(
     rank = _name_ranks(names)
     table = table.take(_report_order(table, rank))
     files = _files(colliders.bodies)
-    findings = _findings(colliders, options, scene.units)
+    findings = _findings(colliders, options, scene)
     return CheckReport(
         _body_rows(placed, files, rank),
         _pair_rows(table, colliders),
@@ -730,15 +731,17 @@ def _settings(
     return settings
 
 
-def _findings(colliders: Any, options: CheckOptions, units: str | None) -> list[dict]:
-    """Body finding records, each with ``failed`` (its rule fails the run): MC301 per body
-    without a usable collider (every convex part a segment or a point: no area), then a
-    target's limits (:func:`meshcol.analysis.rules.target_findings`). Pairs are not
+def _findings(colliders: Any, options: CheckOptions, scene: Scene) -> list[dict]:
+    """Body finding records, each with ``failed`` (its rule fails the run): MC506 for a
+    robot with no collision geometry (:func:`meshcol.analysis.rules.robot_findings`), MC301
+    per body without a usable collider (every convex part a segment or a point: no area),
+    then a target's limits (:func:`meshcol.analysis.rules.target_findings`). Pairs are not
     repeated here: a pair's status is its rule (:data:`PAIR_RULES`, ``meshcol rules``)."""
-    from meshcol.analysis.rules import finding, target_findings
+    from meshcol.analysis.rules import finding, robot_findings, target_findings
     from meshcol.collision.hull import HullStatus
 
-    records = []
+    units = scene.units
+    records = robot_findings(scene)
     no_area = np.isin(colliders.shapes.hull_status, (HullStatus.COLLINEAR, HullStatus.SINGLE_POINT))
     no_area &= colliders.shapes.kinds == 0  # polytopes
     counts = np.diff(colliders.body_part_offsets)

@@ -55,6 +55,7 @@ import numpy as np
 from meshcol.analysis.check_policy import CheckOptions
 from meshcol.analysis.colliders import build_colliders
 from meshcol.analysis.pairs import NO_ANSWER, PartPairIndex, broad_phase_batch
+from meshcol.analysis.rules import robot_findings
 from meshcol.errors import SceneError
 from meshcol.io.paths import display_path
 from meshcol.io.robot import RobotOptions
@@ -181,6 +182,9 @@ class CollisionMatrixReport:
         The options used.
     warnings : list of str
         Joints held at their default, colliders that could not be built as asked.
+    findings : list of dict
+        Findings of registered rules (:mod:`meshcol.analysis.rules`): MC506 for a robot
+        with no collision geometry (no pairs, an SRDF that disables none).
     """
 
     robot: str
@@ -189,6 +193,7 @@ class CollisionMatrixReport:
     summary: dict
     settings: dict
     warnings: list[str] = field(default_factory=list)
+    findings: list[dict] = field(default_factory=list)
 
     @property
     def exit_code(self) -> int:
@@ -209,6 +214,7 @@ class CollisionMatrixReport:
             **envelope("collision-matrix", self.settings, "m"),
             "robot": self.robot,
             "warnings": self.warnings,
+            "findings": self.findings,
             "joints": self.joints,
             "summary": self.summary,
             "pairs": self.pairs,
@@ -311,7 +317,8 @@ def _robot_links(
         raise SceneError(f"body {stray[0]!r} is no link of the robot (a UCX_ link name?)", source)
     body_link = np.array([link_index[b.name] for b in bodies], dtype=np.int64)
     loaded = kinematics.link_poses(kinematics.loaded[None])[0]
-    offsets = np.linalg.inv(loaded[body_link]) @ np.stack([b.pose for b in bodies])
+    poses = np.stack([b.pose for b in bodies]) if bodies else np.zeros((0, 4, 4))
+    offsets = np.linalg.inv(loaded[body_link]) @ poses  # none: no link has geometry (MC506)
     names = [b.name for b in bodies]
     adjacent = set(adjacent_links(kinematics.links, kinematics.edges, names))
     excluded = {
@@ -640,7 +647,10 @@ def _matrix_report(
         "inputs": [display_path(links.source, posix=True)],
     }
     robot = links.kinematics.name or Path(links.source).stem
-    return CollisionMatrixReport(robot, pairs, joints, summary, settings, _warnings(links))
+    findings = [f.to_dict() for f in robot_findings(links.scene)]
+    return CollisionMatrixReport(
+        robot, pairs, joints, summary, settings, _warnings(links), findings
+    )
 
 
 def _warnings(links: _RobotLinks) -> list[str]:

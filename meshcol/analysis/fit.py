@@ -373,11 +373,14 @@ class FitReport:
     def to_dict(self) -> dict[str, Any]:
         from meshcol.io.report import envelope
 
-        return {
+        report = {
             **envelope("fit", self.settings, self.units),
             "summary": self.summary,
             "bodies": self.bodies,
         }
+        if self.description is not None:  # a robot rebuilt: what the description leaves out
+            report["warnings"] = list(self.warnings)
+        return report
 
     def to_json(self) -> str:
         from meshcol.io.report import dumps_json

@@ -179,11 +179,14 @@ class HullReport:
         """The JSON report: the common envelope, the summary and one entry per body."""
         from meshcol.io.report import envelope
 
-        return {
+        report = {
             **envelope("hull", self.settings, self.units),
             "summary": self.summary,
             "bodies": self.bodies,
         }
+        if self.description is not None:  # a robot rebuilt: what the description leaves out
+            report["warnings"] = list(self.warnings)
+        return report
 
     def to_json(self) -> str:
         from meshcol.io.report import dumps_json
@@ -443,6 +446,7 @@ def _body_hulls(
     """The hull of every body of ``scene`` (within the budget or the target's limits), the
     mesh volume of each (None when not closed), and the warnings (flat, inside-out bodies),
     each also given to ``warn`` as it is found."""
+    from meshcol.analysis.rules import robot_findings
     from meshcol.collision.hull import convex_hull
     from meshcol.geometry.topology import oriented_volume
 
@@ -455,6 +459,8 @@ def _body_hulls(
         if warn is not None:
             warn(message)
 
+    for empty in robot_findings(scene):  # a robot with no collision geometry (MC506)
+        say(f"{empty.message} ({empty.rule} {empty.name})")
     for done, body in enumerate(scene.bodies, start=1):
         if progress is not None:
             progress(f"hull: {done}/{len(scene.bodies)} bodies")

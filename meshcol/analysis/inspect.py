@@ -128,7 +128,7 @@ def inspect(
         rules,
         scene.units,
         tuple(errors.records),
-        tuple(findings + physics_findings),
+        tuple(scene.findings + findings + physics_findings),
         tuple(rows),
         options,
         tuple(scene.warnings),
@@ -182,12 +182,14 @@ class _InputErrors:
 @dataclass
 class _Inputs:
     """What :func:`inspect` read before inspecting: the bodies (None: the files are read in
-    their tasks), the manifest's units, a robot's visual geometry per link."""
+    their tasks), the manifest's units, a robot's visual geometry per link, the warnings of
+    the reading and a robot's findings (MC506)."""
 
     bodies: list[Body] | None
     units: str | None = None
     visuals: dict[str, Body] | None = None
     warnings: list[str] = field(default_factory=list)
+    findings: list[Finding] = field(default_factory=list)
 
 
 def _read_inputs(
@@ -229,16 +231,18 @@ def _read_inputs(
 def _read_robot(path: Any, robot_options: RobotOptions | None = None) -> _Inputs:
     """A robot's links (their collision geometry) and its visual geometry per link, read with
     ``robot_options``."""
+    from meshcol.analysis.rules import robot_findings
     from meshcol.io.robot import load_robot
 
     scene = load_robot(path, robot_options)
+    warnings, findings = list(scene.warnings), robot_findings(scene)  # MC506: nothing collides
     try:
         visual = load_robot(path, robot_options, visual=True)
         visuals = {body.name: body for body in visual.bodies}
     except MeshcolError as error:
         warning = f"visual geometry not read, links compared with their collision meshes: {error}"
-        return _Inputs(list(scene.bodies), scene.units, {}, [warning])
-    return _Inputs(list(scene.bodies), scene.units, visuals)
+        return _Inputs(list(scene.bodies), scene.units, {}, [*warnings, warning], findings)
+    return _Inputs(list(scene.bodies), scene.units, visuals, warnings, findings)
 
 
 def _inspect_bodies(

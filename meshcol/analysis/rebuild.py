@@ -198,6 +198,7 @@ def robot_colliders(
         link_poses=_link_poses(scene, elements),
         package_paths=dict(robot_options.package_paths),
         excluded_pairs=tuple(scene.excluded_pairs),
+        warnings=tuple(scene.warnings),
     )
     return robot, [entry for _, entry in made]
 
@@ -462,7 +463,7 @@ def rebuild_hulls(
     written = write_robot(robot, out_dir, to, protected=reserved)
     files = part_files(robot) if to in ("urdf", "mjcf") else {}
     at = {(c.link, c.index): i for i, c in enumerate(robot.colliders)}
-    rows, hulls, warnings = [], [], []
+    rows, hulls, warnings = [], [], _warned(robot, to, warn)
     for entry in info:
         body, result = entry["body"], entry["results"]
         names = files.get(at[(entry["link"], entry["index"])])
@@ -502,6 +503,7 @@ def rebuild_decomposition(
     progress: Callable[[str], None] | None = None,
     target: Any = None,
     robot_options: RobotOptions | None = None,
+    warn: Callable[[str], None] | None = None,
 ) -> Any:
     """``meshcol decompose ROBOT --out-dir OUT``: the convex parts of every collision element
     and the description that uses them.
@@ -538,12 +540,13 @@ def rebuild_decomposition(
     )
     to = to or robot.kind
     write_robot(robot, out_dir, to, protected=reserved)
+    warnings = _warned(robot, to, warn)
     description = description_path(robot.source, out_dir, to)
     bodies, rows = _decomposed_bodies(robot, info, to, description, options, target)
     entry_file = {
         "path": robot.source,
         "status": "ok",
-        "message": None,
+        "message": "; ".join(warnings) or None,  # the reading's and the writing's warnings
         "bodies": bodies,
         "seconds": round(time.perf_counter() - start, 3),
     }
@@ -614,6 +617,7 @@ def rebuild_fits(
     reserved: tuple[tuple[str, str], ...] = (),
     progress: Callable[[str], None] | None = None,
     robot_options: RobotOptions | None = None,
+    warn: Callable[[str], None] | None = None,
 ) -> Any:
     """``meshcol fit ROBOT --out-dir OUT``: one enclosing primitive per collision element,
     written into the description as its own primitive element.
@@ -638,6 +642,7 @@ def rebuild_fits(
     )
     to = to or robot.kind
     written = write_robot(robot, out_dir, to, protected=reserved)
+    warnings = _warned(robot, to, warn)
     files = part_files(robot) if to in ("urdf", "mjcf") else {}
     at = {(c.link, c.index): i for i, c in enumerate(robot.colliders)}
     rows, fits = [], []
@@ -655,7 +660,21 @@ def rebuild_fits(
         None,
         os.fspath(out_dir),
         "m",
+        tuple(warnings),
         frame="link",
         description=description_path(robot.source, out_dir, to),
         to=to,
     )
+
+
+def _warned(robot: Any, to: str, warn: Callable[[str], None] | None) -> list[str]:
+    """The warnings of the description written (:func:`meshcol.io.robot_write.output_warnings`:
+    the reading's, MC506 for a robot with no collision geometry, visuals left out), each
+    given to ``warn`` (the command line prints them)."""
+    from meshcol.io.robot_write import output_warnings
+
+    warnings = output_warnings(robot, to)
+    for message in warnings:
+        if warn is not None:
+            warn(message)
+    return warnings

@@ -3,7 +3,8 @@
 Every finding meshcol reports names a rule of :data:`RULES` by its id (``MC401``) and its name
 (``not-watertight``); ids are stable forever (a rule that goes keeps its id retired, never
 reused). Ranges: 1xx engine limits of a ``--target`` profile, 2xx physics readiness and mass,
-3xx colliders present and named, 4xx mesh health, 5xx pair findings of check and sweep.
+3xx colliders present and named, 4xx mesh health, 5xx pair findings of check and sweep
+(and MC506, a robot with no collision geometry: nothing to pair).
 
 :func:`finding` is the one way to make a finding, so nothing can cite an unregistered rule;
 :func:`select_rules` is the one parser of ``--fail-on`` lists (ids, names, ``all``).
@@ -13,6 +14,7 @@ reused). Ranges: 1xx engine limits of a ``--target`` profile, 2xx physics readin
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
@@ -28,6 +30,7 @@ __all__ = [
     "UnknownRuleError",
     "finding",
     "get_rule",
+    "robot_findings",
     "rules_report",
     "select_rules",
     "target_findings",
@@ -402,6 +405,20 @@ RULES: tuple[Rule, ...] = (
         "measured: depth_upper, the most the pair can penetrate; limit: --tolerance.",
         "Repair the mesh's winding (inspect reports MC403), or check the pair as hull.",
     ),
+    Rule(
+        "MC506",
+        "no-collision-geometry",
+        "warning",
+        ("inspect", "check", "collision-matrix"),
+        "A robot description (URDF, MJCF) whose links have no collision geometry: no "
+        "<collision> element, no geom MuJoCo collides. It loads (pybullet and MuJoCo load it), "
+        "but there is nothing to check: zero pairs, an empty collision matrix, outputs "
+        "without colliders.",
+        "measured: the collision elements found (0); limit: 1. The finding names the file.",
+        "Add <collision> elements (URDF) or give geoms a non-zero contype or conaffinity "
+        "(MJCF); meshcol hull or decompose of a link's visual mesh file makes a collider mesh "
+        "to reference. --fail-on MC506 fails a run on it.",
+    ),
 )
 
 _BY_ID = {rule.id: rule for rule in RULES}
@@ -556,6 +573,25 @@ def finding(
         other_body,
         other_part,
     )
+
+
+def robot_findings(scene: Any) -> list[Finding]:
+    """MC506 for a robot description read with no collision geometry (a scene of no bodies
+    whose source is a URDF or MJCF, :func:`meshcol.io.robot.load_robot`); else none.
+
+    The finding's body is the file's name, its message the file's path."""
+    from meshcol.io.inputs import is_robot_file
+    from meshcol.io.paths import display_path
+
+    source = getattr(scene, "source", None)
+    if scene.bodies or not source or not is_robot_file(source):
+        return []
+    shown = display_path(source, posix=True)
+    message = (
+        f"{shown}: no link has collision geometry (no <collision> element, no geom that "
+        "collides): nothing to check"
+    )
+    return [finding("MC506", os.path.basename(source), None, 0, 1, message)]
 
 
 # ---------------------------------------------------------------------------------------------

@@ -91,7 +91,8 @@ def _parse_ignore(
     help="Least severe status that fails the run (exit 1): "
     + ", ".join(FAIL_ON_CHOICES)
     + "; or comma-separated rule ids or names (MC501,MC301, penetrating, missing-collider, "
-    "all; 'meshcol rules').",
+    "all; 'meshcol rules'): MC506 fails a robot with no collision geometry, which a level "
+    "passes.",
 )
 @click.option(
     "--ignore",

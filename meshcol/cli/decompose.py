@@ -497,6 +497,7 @@ def _decompose(
             progress=progress,
             target=target,
             robot_options=robot_options,
+            warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
         )
     return decompose_files(
         inputs,

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import click
 
 from meshcol.analysis.fit import DEFAULT_VOLUME_TOLERANCE, SHAPE_CHOICES
@@ -126,7 +128,9 @@ def fit(
         robot,
         (output, out_dir, to, report),
         run_fit,
-        rebuild_fits,
+        functools.partial(
+            rebuild_fits, warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True)
+        ),
         shape=shape,
         volume_tolerance=volume_tolerance,
         robot_options=robot_options,

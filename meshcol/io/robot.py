@@ -287,14 +287,35 @@ def load_robot_model(
     read = _READERS[description_kind(source)]
     scene, links, kinematics = read(source, options, elements, visual)
     if not scene.bodies and not visual:
-        raise SceneError(
-            f"no link has collision geometry ({len(links)} link(s), no <collision> element "
-            "or collision geom)",
-            source,
-        )
+        scene = _without_colliders(scene, links, kinematics, source)
     for body in scene.bodies:
         _check_body(body, source)
     return RobotModel(_with_exclusions(scene, links, options.srdf), kinematics)
+
+
+#: The start of the warning a robot without collision geometry gets (rule MC506, whose
+#: finding :func:`meshcol.analysis.rules.robot_findings` makes).
+NO_COLLISION_GEOMETRY = "no link has collision geometry"
+
+
+def _without_colliders(scene: Scene, links: set[str], kinematics: Any, source: str) -> Scene:
+    """A robot whose links have no collision geometry (visual-only, as pybullet and MuJoCo
+    load it): a scene of no bodies, with the warning that says so. A description with no
+    link at all is broken, not empty (URDF: no ``<link>``, refused by its reader; MJCF: no
+    body but the world and no geom)."""
+    from meshcol.io.paths import display_path
+
+    model = getattr(kinematics, "model", None)  # MJCF: MuJoCo's compiled model
+    if model is not None and model.nbody <= 1 and model.ngeom == 0:
+        raise SceneError("the model has no body and no geom", source)
+    count = f"{len(links)} link(s), no <collision> element"
+    if model is not None:
+        count = f"{model.nbody - 1} body(ies), no geom that collides"
+    warning = (
+        f"{display_path(source)}: {NO_COLLISION_GEOMETRY} ({count}): nothing to check, "
+        "and what is written of it has no collider (MC506 no-collision-geometry)"
+    )
+    return dataclasses.replace(scene, warnings=(*scene.warnings, warning))
 
 
 def _check_body(body: Body, source: str) -> None:

@@ -42,6 +42,7 @@ __all__ = [
     "Collider",
     "RobotColliders",
     "description_path",
+    "output_warnings",
     "write_robot",
 ]
 
@@ -109,6 +110,9 @@ class RobotColliders:
         The link pairs meshcol leaves out of self-collision (adjacent links, an SRDF's
         pairs, the MJCF's own filters; :attr:`meshcol.types.Scene.excluded_pairs`): an MJCF
         written gets a ``<contact><exclude>`` for each pair MuJoCo would not filter itself.
+    warnings : tuple of str
+        What reading the description warned of (:attr:`meshcol.types.Scene.warnings`: a
+        robot with no collision geometry, MC506; xacro leftovers ...).
     """
 
     source: str
@@ -117,6 +121,23 @@ class RobotColliders:
     link_poses: dict[str, np.ndarray]
     package_paths: dict[str, str] = field(default_factory=dict)
     excluded_pairs: tuple[tuple[str, str, str], ...] = ()
+    warnings: tuple[str, ...] = ()
+
+
+def output_warnings(robot: RobotColliders, to: str) -> list[str]:
+    """What the user of the description written in format ``to`` must know, one line each:
+    the reading's warnings, then (URDF or MJCF written from a URDF) each visual whose mesh
+    file is missing, which the description leaves out (:func:`meshcol.io.urdf_write.missing_visuals`)."""
+    from meshcol.io.urdf_write import missing_visuals
+
+    warnings = list(robot.warnings)
+    if robot.kind == "urdf" and to in ("urdf", "mjcf"):
+        written = "URDF" if to == "urdf" else "MJCF"
+        warnings += [
+            f"link {link!r}: visual mesh {reference!r} left out of the {written} written ({why})"
+            for link, reference, why in missing_visuals(robot)
+        ]
+    return warnings
 
 
 def description_path(

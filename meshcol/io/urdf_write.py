@@ -22,7 +22,7 @@ from meshcol.types import Box, Capsule, Cylinder, Sphere
 if TYPE_CHECKING:
     from meshcol.io.robot_write import Collider, RobotColliders
 
-__all__ = ["format_numbers", "parse_xml", "urdf_text"]
+__all__ = ["format_numbers", "missing_visuals", "parse_xml", "urdf_text"]
 
 
 def parse_xml(source: str) -> Any:
@@ -97,14 +97,52 @@ def urdf_text(
     return '<?xml version="1.0" encoding="utf-8"?>\n' + body + "\n"
 
 
+def missing_visuals(robot: RobotColliders) -> list[tuple[str, str, str]]:
+    """``(link, reference, why)`` of every ``<visual>`` of a URDF whose mesh reference names
+    no file (a package that is not found, a file that is not there): pybullet refuses a URDF
+    with such a visual, so the URDF written leaves it out (:func:`urdf_text`). Collision
+    meshes are never missing here: the robot could not be read without them."""
+    return [(link, reference, why) for link, _, reference, why in _visuals_missing(robot)]
+
+
+def _visuals_missing(robot: RobotColliders, root: Any = None) -> list[tuple[str, Any, str, str]]:
+    """``(link, <visual> element, reference, why)`` of each visual of ``root`` (default: the
+    description's tree) whose mesh names no file."""
+    from meshcol.io.packages import PackageResolver
+
+    root = parse_xml(robot.source).getroot() if root is None else root
+    resolver = PackageResolver(robot.source, robot.package_paths)
+    found = []
+    for link in root.findall("link"):
+        for visual in link.findall("visual"):
+            for mesh in visual.iter("mesh"):
+                reference = mesh.get("filename") or ""
+                path, why = resolver.resolve(reference) if reference else (None, "no filename")
+                if path is not None and not os.path.isfile(path):
+                    why = f"no file {os.path.normpath(path)}"
+                if why is not None:
+                    found.append((link.get("name") or "", visual, reference, why))
+                    break
+    return found
+
+
 def _references_from(root: Any, robot: RobotColliders, out_dir: str) -> None:
     """Every relative, ``package://`` or ``file://`` mesh reference of ``root`` made a path
     relative to ``out_dir`` naming the file it resolved to (:mod:`meshcol.io.packages`, with
     the package folders the robot was read with): pybullet, yourdfpy and MuJoCo load the
-    written URDF from the output folder without ROS; a reference that resolves to no file,
-    and an absolute one, stay as written."""
+    written URDF from the output folder without ROS. A ``<visual>`` whose mesh names no file
+    is left out (:func:`missing_visuals`: pybullet refuses the URDF otherwise), with a
+    comment in its place; an absolute reference stays as written."""
+    from lxml import etree
+
     from meshcol.io.packages import resolve_mesh_reference
 
+    for _, visual, reference, why in _visuals_missing(robot, root):
+        text = f"meshcol: visual mesh {reference!r} left out ({why})".replace("--", "- -")
+        note = etree.Comment(f" {text} ")
+        note.tail = visual.tail
+        visual.addprevious(note)
+        visual.getparent().remove(visual)
     for mesh in root.iter("mesh"):
         reference = mesh.get("filename") or ""
         if not reference or os.path.isabs(reference):

@@ -356,6 +356,22 @@ def _undecided(tmp_path: Path, rule_id: str) -> tuple[bool, bool]:
     return fails((1.0, 0.0, 0.0)), fails((1.6, 0.0, 0.0))
 
 
+@case("MC506")
+def _no_collision_geometry(tmp_path: Path, rule_id: str) -> tuple[bool, bool]:
+    """A robot whose one link has a visual box and no collision element fails a check that
+    fails on MC506 (zero pairs); the same link with a collision box does not."""
+    shape = "<geometry><box size='1 1 1'/></geometry>"
+
+    def fails(element: str) -> bool:
+        robot = tmp_path / f"{element}.urdf"
+        robot.write_text(
+            f"<robot name='r'><link name='a'><{element}>{shape}</{element}></link></robot>"
+        )
+        return check(robot, fail_on=rule_id).exit_code == 1
+
+    return fails("visual"), fails("collision")
+
+
 @case("MC501", "MC502", "MC503", "MC504")
 def _pairs(tmp_path: Path, rule_id: str) -> tuple[bool, bool]:
     """Each pair status fails the run when its rule is listed; the next status does not."""
