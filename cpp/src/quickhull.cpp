@@ -72,6 +72,12 @@ Vec3 triangle_normal_at_widest(const Vec3& a, const Vec3& b, const Vec3& c, bool
     return accurate_cross(*o, *p, *q);
 }
 
+Plane face_plane_at_widest(const Vec3& a, const Vec3& b, const Vec3& c) {
+    bool bounded = false;
+    const Vec3 n = triangle_normal_at_widest(a, b, c, bounded);
+    return plane_of_normal(n, bounded, a);
+}
+
 namespace {
 
 constexpr int kNext[3] = {1, 2, 0};  // the edge after edge e of a face
@@ -212,33 +218,24 @@ void reassign_furthest(Workspace& w, int seed, int q) {
 // (Gregorius 2014, "Implementing Quickhull"). False when the horizon is not one simple loop
 // (exact orientations guarantee it is).
 bool find_horizon(Workspace& w, int seed, int q, unsigned stamp) {
+    // Raw arrays with room for every face (each enters the stack and the visible list at
+    // most once, and gives at most three horizon edges): no capacity check per entry.
+    const size_t room = w.face_count + 1;
+    if (w.dfs.size() < room) w.dfs.resize(2 * room);
+    if (w.visible.size() < room) w.visible.resize(2 * room);
+    if (w.edges.size() < 3 * room) w.edges.resize(6 * room);
     Face* faces = w.faces.data();
-    w.visible.clear();
-    w.edges.clear();
-    // Every face enters the stack at most once.
-    if (w.dfs.size() < w.face_count + 1) w.dfs.resize(w.face_count + 1);
     Frame* stack = w.dfs.data();
+    int* visible = w.visible.data();
+    HorizonEdge* edges = w.edges.data();
+    const std::vector<Vec3>& p = w.p;
+    const Vec3 x = p[q];
+    size_t nv = 0, ne = 0;
     int top = 0;
     faces[seed].visit = stamp;
     faces[seed].visible = true;
-    w.visible.push_back(seed);
+    visible[nv++] = seed;
     stack[top++] = {seed, 0, 3};
-    auto horizon_edge = [&](int fi, int e, int gi) {
-        const Face& f = faces[fi];
-        const Face& g = faces[gi];
-        // Written in place (a 16-byte copy of fields just stored stalls store forwarding).
-        HorizonEdge& he = w.edges.emplace_back();
-        he.a = f.v[e];
-        he.b = f.v[kNext[e]];
-        he.outside = gi;
-        // The last slot that leads back (none: -1), without branches.
-        const int b = he.b;
-        int slot = static_cast<int>((g.n[0] == fi) & (g.v[0] == b)) - 1;
-        slot = select((g.n[1] == fi) & (g.v[1] == b), 1, slot);
-        slot = select((g.n[2] == fi) & (g.v[2] == b), 2, slot);
-        he.slot = slot;
-        return slot >= 0;
-    };
     while (top > 0) {
         Frame& fr = stack[top - 1];
         if (fr.left == 0) {
@@ -249,32 +246,50 @@ bool find_horizon(Workspace& w, int seed, int q, unsigned stamp) {
         const int e = fr.edge;
         fr.edge = kNext[e];
         --fr.left;
-        const int gi = faces[fi].n[e];
+        const Face& f = faces[fi];
+        const int gi = f.n[e];
         Face& g = faces[gi];
-        if (g.visit == stamp) {
-            if (!g.visible && !horizon_edge(fi, e, gi)) return false;
+        if (g.visit != stamp) {
+            g.visit = stamp;
+            const Plane& pl = g.plane;
+            g.visible = plane_side(pl.normal, pl.offset, pl.filter, p[g.v[0]], p[g.v[1]],
+                                   p[g.v[2]], x) > 0;
+            if (g.visible) {
+                visible[nv++] = gi;
+                int back = static_cast<int>(g.n[0] == fi) - 1;
+                back = select(g.n[1] == fi, 1, back);
+                back = select(g.n[2] == fi, 2, back);
+                if (back < 0) return false;
+                stack[top++] = {gi, kNext[back], 2};
+                continue;
+            }
+        } else if (g.visible) {
             continue;
         }
-        g.visit = stamp;
-        g.visible = side(w, g, q) > 0;
-        if (!g.visible) {
-            if (!horizon_edge(fi, e, gi)) return false;
-            continue;
-        }
-        w.visible.push_back(gi);
-        int back = static_cast<int>(g.n[0] == fi) - 1;
-        back = select(g.n[1] == fi, 1, back);
-        back = select(g.n[2] == fi, 2, back);
-        if (back < 0) return false;
-        stack[top++] = {gi, kNext[back], 2};
+        // A horizon edge, from the visible f to the non-visible g, with the last slot of g
+        // that leads back (none: -1, no branches).
+        HorizonEdge& he = edges[ne++];
+        const int b = f.v[kNext[e]];
+        he.a = f.v[e];
+        he.b = b;
+        he.outside = gi;
+        int slot = static_cast<int>((g.n[0] == fi) & (g.v[0] == b)) - 1;
+        slot = select((g.n[1] == fi) & (g.v[1] == b), 1, slot);
+        slot = select((g.n[2] == fi) & (g.v[2] == b), 2, slot);
+        he.slot = slot;
+        if (slot < 0) return false;
     }
-    const size_t h = w.edges.size();
+    w.visible_count = nv;
+    w.edge_count = ne;
+    const size_t h = ne;
     if (h < 3) return false;
+    int* mark = w.mark.data();
+    const int current = static_cast<int>(stamp);
     for (size_t k = 0; k < h; ++k) {
-        const HorizonEdge& next = w.edges[k + 1 < h ? k + 1 : 0];
-        if (w.edges[k].b != next.a) return false;
-        if (w.mark[w.edges[k].a] == static_cast<int>(stamp)) return false;
-        w.mark[w.edges[k].a] = static_cast<int>(stamp);
+        const HorizonEdge& next = edges[k + 1 < h ? k + 1 : 0];
+        if (edges[k].b != next.a) return false;
+        if (mark[edges[k].a] == current) return false;
+        mark[edges[k].a] = current;
     }
     return true;
 }
@@ -284,9 +299,11 @@ bool find_horizon(Workspace& w, int seed, int q, unsigned stamp) {
 void cone(Workspace& w, int q) {
     // The visible faces go; their points wait for the new faces.
     w.orphans.clear();
-    if (w.free_faces.size() < w.free_top + w.visible.size() + 1)
-        w.free_faces.resize(w.free_top + w.visible.size() + 1);
-    for (int fi : w.visible) {
+    const size_t visible = w.visible_count;
+    if (w.free_faces.size() < w.free_top + visible + 1)
+        w.free_faces.resize(w.free_top + visible + 1);
+    for (size_t v = 0; v < visible; ++v) {
+        const int fi = w.visible[v];
         Face& f = w.faces[fi];
         for (const Conflict& c : f.conflicts)
             if (c.index != q) w.orphans.push_back(c);
@@ -294,7 +311,7 @@ void cone(Workspace& w, int q) {
         f.conflicts.clear();
         w.free_faces[w.free_top++] = fi;
     }
-    const size_t h = w.edges.size();
+    const size_t h = w.edge_count;
     // Grown only (a resize that grows fills with zeros, every step).
     if (w.new_faces.size() < h) w.new_faces.resize(h);
     if (w.new_planes.size() < 4 * h) w.new_planes.resize(4 * h);
@@ -330,7 +347,8 @@ void cone(Workspace& w, int q) {
         }
         // Outside no new face: then inside the new hull, unless outside a face of the
         // horizon (it had been listed on the first face it was outside of).
-        for (const HorizonEdge& he : w.edges) {
+        for (size_t k2 = 0; k2 < h; ++k2) {
+            const HorizonEdge& he = w.edges[k2];
             const double dx = distance(w.faces[he.outside], x.p);
             if (dx > eps) {
                 add_conflict(w.faces[he.outside], x, dx);
