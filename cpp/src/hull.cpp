@@ -294,28 +294,32 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
                     local[i] = static_cast<int>(verts.size());
                     verts.push_back(static_cast<int>(i));
                 }
-            hull.status = HullStatus::OK;
-            hull.dimension = 3;
             const size_t m = t.tri.size();
             hull.faces.resize(m);
-            hull.face_normals.resize(m);
-            hull.face_offsets.resize(m);
-            hull.face_planes = pl.group;
             hull.plane_normals.assign(static_cast<size_t>(pl.groups), Vec3{});
             std::vector<double>& largest = w.largest;
             largest.assign(static_cast<size_t>(pl.groups), -1.0);
-            double volume = 0.0, area = 0.0;
-            const Vec3 origin = w.p[verts[0]];
             for (size_t i = 0; i < m; ++i) {
                 const auto& tri = t.tri[i];
                 hull.faces[i] = {local[tri[0]], local[tri[1]], local[tri[2]]};
-                hull.face_normals[i] = t.normal[i];
-                hull.face_offsets[i] = -dot(t.normal[i], points[tri[0]]);
                 const int g = pl.group[i];
                 if (t.area2[i] > largest[g]) {
                     largest[g] = t.area2[i];
                     hull.plane_normals[g] = t.normal[i];
                 }
+            }
+            hull.status = HullStatus::OK;
+            hull.dimension = 3;
+            if (!analysis.geometry) return;
+            hull.face_normals.resize(m);
+            hull.face_offsets.resize(m);
+            hull.face_planes = pl.group;
+            double volume = 0.0, area = 0.0;
+            const Vec3 origin = w.p[verts[0]];
+            for (size_t i = 0; i < m; ++i) {
+                const auto& tri = t.tri[i];
+                hull.face_normals[i] = t.normal[i];
+                hull.face_offsets[i] = -dot(t.normal[i], points[tri[0]]);
                 area += t.area2[i];
                 volume += dot(w.p[tri[0]] - origin,
                               cross(w.p[tri[1]] - origin, w.p[tri[2]] - origin));

@@ -191,6 +191,9 @@ struct Analysis {
     Triangulation t, previous;
     Planes pl;
     Hull hull;
+    /// Whether a 3-D hull gets its per-face normals, offsets and planes, its volume and its
+    /// area (the packing reads none of them: pack_polytopes turns this off).
+    bool geometry = true;
 
     void reset() {
         hull.status = HullStatus::EMPTY;

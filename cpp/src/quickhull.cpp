@@ -97,6 +97,12 @@ int side(const Workspace& w, const Face& f, int q) {
                       w.p[q]);
 }
 
+// The exact side of x from face g (its orientation), for the points its plane filter leaves
+// undecided.
+__attribute__((noinline)) int exact_side(const std::vector<Vec3>& p, const Face& g, const Vec3& x) {
+    return orientation(p[g.v[0]], p[g.v[1]], p[g.v[2]], x);
+}
+
 // Face `id` as the triangle a b c (counter-clockwise from outside), alive, no neighbours
 // linked, no points.
 inline void init_face(Workspace& w, int id, int a, int b, int c) {
@@ -231,36 +237,41 @@ bool find_horizon(Workspace& w, int seed, int q, unsigned stamp) {
     const std::vector<Vec3>& p = w.p;
     const Vec3 x = p[q];
     size_t nv = 0, ne = 0;
-    int top = 0;
     faces[seed].visit = stamp;
     faces[seed].visible = true;
     visible[nv++] = seed;
-    stack[top++] = {seed, 0, 3};
-    while (top > 0) {
-        Frame& fr = stack[top - 1];
-        if (fr.left == 0) {
-            --top;
+    // The current face, its next edge and how many are left, in registers; the stack holds
+    // the faces below it.
+    int top = 0;
+    int fi = seed, next = 0, left = 3;
+    for (;;) {
+        if (left == 0) {
+            if (top == 0) break;
+            const Frame& below = stack[--top];
+            fi = below.face, next = below.edge, left = below.left;
             continue;
         }
-        const int fi = fr.face;
-        const int e = fr.edge;
-        fr.edge = kNext[e];
-        --fr.left;
+        const int e = next;
+        next = kNext[e];
+        --left;
         const Face& f = faces[fi];
         const int gi = f.n[e];
         Face& g = faces[gi];
         if (g.visit != stamp) {
             g.visit = stamp;
+            // The plane filter inline, the exact orientation out of line (inlined, its
+            // registers spilled the loop's).
             const Plane& pl = g.plane;
-            g.visible = plane_side(pl.normal, pl.offset, pl.filter, p[g.v[0]], p[g.v[1]],
-                                   p[g.v[2]], x) > 0;
+            const double d = dot(pl.normal, x) - pl.offset;
+            g.visible = d > pl.filter || (!(d < -pl.filter) && exact_side(p, g, x) > 0);
             if (g.visible) {
                 visible[nv++] = gi;
                 int back = static_cast<int>(g.n[0] == fi) - 1;
                 back = select(g.n[1] == fi, 1, back);
                 back = select(g.n[2] == fi, 2, back);
                 if (back < 0) return false;
-                stack[top++] = {gi, kNext[back], 2};
+                stack[top++] = {fi, next, left};
+                fi = gi, next = kNext[back], left = 2;
                 continue;
             }
         } else if (g.visible) {
@@ -432,19 +443,26 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
         if (!find_horizon(w, seed, q, ++w.stamp)) return Build::FAILED;
         cone(w, q);
     }
-    // Compact triangulation.
+    // Compact triangulation, and each edge once, from its lower triangle, with its slot in
+    // the other: written always and kept by a count (which side is lower follows no pattern a
+    // branch could predict), in one pass.
+    const auto slots = static_cast<unsigned>(w.face_count);
     std::vector<int>& index = w.id;
     index.assign(w.face_count, -1);
     int m = 0;
+    const Face* faces = w.faces.data();
     for (size_t i = 0; i < w.face_count; ++i)
-        if (w.faces[i].alive) index[i] = m++;
+        if (faces[i].alive) index[i] = m++;
     out.tri.resize(m);
     out.neighbor.resize(m);
     out.normal.resize(m);
     out.offset.resize(m);
     out.area2.resize(m);
+    out.edges.resize(3 * static_cast<size_t>(m));
+    TriangulationEdge* edges = out.edges.data();
+    size_t count = 0;
     for (size_t i = 0; i < w.face_count; ++i) {
-        const Face& f = w.faces[i];
+        const Face& f = faces[i];
         if (!f.alive) continue;
         const int t = index[i];
         out.tri[t] = {f.v[0], f.v[1], f.v[2]};
@@ -452,24 +470,22 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
         out.offset[t] = f.plane.offset;
         out.area2[t] = f.plane.area2;
         for (int e = 0; e < 3; ++e) {
-            if (f.n[e] < 0 || !w.faces[f.n[e]].alive) return Build::FAILED;
-            out.neighbor[t][e] = index[f.n[e]];
-        }
-    }
-    // Each edge once, from its lower triangle, with its slot in the other: written always
-    // and kept by a count (which side is lower follows no pattern a branch could predict).
-    out.edges.resize(3 * static_cast<size_t>(m));
-    size_t count = 0;
-    for (int t = 0; t < m; ++t)
-        for (int e = 0; e < 3; ++e) {
-            const int j = out.neighbor[t][e];
-            const std::array<int, 3>& back = out.neighbor[j];
-            int k = static_cast<int>(back[0] == t) - 1;
-            k = select(back[1] == t, 1, k);
-            k = select(back[2] == t, 2, k);
-            out.edges[count] = {t, e, j, k};
+            // A dead or missing neighbour has no index (the slots are below face_count).
+            const int g = f.n[e];
+            if (static_cast<unsigned>(g) >= slots || index[g] < 0) return Build::FAILED;
+            const int j = index[g];
+            out.neighbor[t][e] = j;
+            // The slot of the neighbour that leads back (the last one, as the faces have it:
+            // the same as its compacted list's, the index being one to one).
+            const int* back = faces[g].n;
+            const int self = static_cast<int>(i);
+            int k = static_cast<int>(back[0] == self) - 1;
+            k = select(back[1] == self, 1, k);
+            k = select(back[2] == self, 2, k);
+            edges[count] = {t, e, j, k};
             count += j > t;
         }
+    }
     out.edges.resize(count);
     return Build::OK;
 }
