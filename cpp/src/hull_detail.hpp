@@ -22,6 +22,13 @@ struct Conflict {
     int index;
 };
 
+// A point's place in the lexicographic order (hull.cpp): its x as an integer of the same
+// order, and its index.
+struct SortKey {
+    std::uint64_t x;
+    int index;
+};
+
 /// A triangle's plane as Quickhull keeps it: the unit normal, the offset (n . x - offset is
 /// the distance of x), twice the area, and the plane filter: a distance beyond it decides
 /// the side of a point exactly (INFINITY: never; the bound is proved beside face_plane).
@@ -74,7 +81,7 @@ struct Workspace {
     std::vector<int> all, real, local, keep, parent, id, subset, removed, dropped;
     std::vector<double> largest;
     std::vector<char> used;
-    std::vector<Conflict> sorted;  // the input, sorted and without duplicates
+    std::vector<SortKey> sort_keys;  // hull_with's sort of the input
     std::vector<Vec3> unique_points;
     std::vector<int> unique_index;
     std::vector<int> filtered, filter_extremes;  // interior_filter's

@@ -121,19 +121,15 @@ inline void init_face(Workspace& w, int id, int a, int b, int c) {
 }
 
 // The slots of `count` new faces into `ids`: the free list from its end, then fresh slots
-// (taken in this order, whether one face or a cone of them is made). No branch per face:
-// how many a cone reuses follows no pattern.
+// (taken in this order, whether one face or a cone of them is made).
 void allocate_faces(Workspace& w, size_t count, int* ids) {
-    size_t top = w.free_top;
-    const int* free_list = w.free_faces.data();  // at least one element (quickhull_points)
+    const size_t top = w.free_top;
+    const size_t reused = std::min(top, count);
+    const int* free_list = w.free_faces.data();
+    for (size_t k = 0; k < reused; ++k) ids[k] = free_list[top - 1 - k];
     int fresh = static_cast<int>(w.face_count);
-    for (size_t k = 0; k < count; ++k) {
-        const bool reuse = top > 0;
-        ids[k] = select(reuse, free_list[top - reuse], fresh);
-        top -= reuse;
-        fresh += !reuse;
-    }
-    w.free_top = top;
+    for (size_t k = reused; k < count; ++k) ids[k] = fresh++;
+    w.free_top = top - reused;
     w.face_count = static_cast<size_t>(fresh);
     if (w.faces.size() < w.face_count) w.faces.resize(w.face_count);
 }
