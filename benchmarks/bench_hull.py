@@ -198,6 +198,8 @@ def single_thread_cpu(points: np.ndarray, repeats: int = 3) -> tuple[float, obje
 
 
 def peer_rows(points: np.ndarray, ours_us: float, peer_shapes: int) -> None:
+    if peer_shapes <= 0:  # --peer-shapes 0: meshcol's rows alone
+        return
     for name, fn in peers().items():
         sample = points[: min(len(points), peer_shapes)]
         c = time.process_time()

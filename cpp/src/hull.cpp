@@ -3,6 +3,7 @@
 // 2-D hull by the monotone chain, a segment or a point.
 #include <algorithm>
 #include <climits>
+#include <cstring>
 #include <cmath>
 #include <cstdint>
 #include <numeric>
@@ -56,12 +57,15 @@ void planes_of(Workspace& w, const Triangulation& t, Planes& out) {
 
 // Principal axes of points (Jacobi eigenvectors of their covariance), largest spread first.
 void principal_axes(const Vec3* p, const std::vector<int>& idx, const Vec3& centre, Vec3 axes[3]) {
-    double a[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+    // The covariance's six distinct sums (d[r] * d[c] and d[c] * d[r] are the same product,
+    // added in the same order: the mirrored entries are the same bits).
+    double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
     for (int i : idx) {
         const Vec3 d = p[i] - centre;
-        for (int r = 0; r < 3; ++r)
-            for (int c = 0; c < 3; ++c) a[r][c] += d[r] * d[c];
+        xx += d.x * d.x, xy += d.x * d.y, xz += d.x * d.z;
+        yy += d.y * d.y, yz += d.y * d.z, zz += d.z * d.z;
     }
+    double a[3][3] = {{xx, xy, xz}, {xy, yy, yz}, {xz, yz, zz}};
     double v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
     for (int sweep = 0; sweep < 50; ++sweep) {
         const double off = std::fabs(a[0][1]) + std::fabs(a[0][2]) + std::fabs(a[1][2]);
@@ -197,16 +201,19 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
     const Vec3 centre = sum / static_cast<double>(n);
     Vec3 axes[3];
     principal_axes(w.p.data(), all, centre, axes);
-    int dim = 0;
-    for (int k = 0; k < 3; ++k) {
-        double a = INFINITY, b = -INFINITY;
-        for (long long i = 0; i < n; ++i) {
-            const double t = dot(w.p[i] - centre, axes[k]);
-            a = t < a ? t : a;
-            b = t > b ? t : b;
+    // The three widths in one pass.
+    double low[3] = {INFINITY, INFINITY, INFINITY}, high[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (long long i = 0; i < n; ++i) {
+        const Vec3 d = w.p[i] - centre;
+        for (int k = 0; k < 3; ++k) {
+            const double t = dot(d, axes[k]);
+            low[k] = t < low[k] ? t : low[k];
+            high[k] = t > high[k] ? t : high[k];
         }
-        if (b - a > defaults::flat_relative_tolerance * diagonal) ++dim;
     }
+    int dim = 0;
+    for (int k = 0; k < 3; ++k)
+        if (high[k] - low[k] > defaults::flat_relative_tolerance * diagonal) ++dim;
     if (dim == 3) {
         Triangulation& t = analysis.t;
         Triangulation& previous = analysis.previous;
@@ -294,28 +301,32 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
                     local[i] = static_cast<int>(verts.size());
                     verts.push_back(static_cast<int>(i));
                 }
-            hull.status = HullStatus::OK;
-            hull.dimension = 3;
             const size_t m = t.tri.size();
             hull.faces.resize(m);
-            hull.face_normals.resize(m);
-            hull.face_offsets.resize(m);
-            hull.face_planes = pl.group;
             hull.plane_normals.assign(static_cast<size_t>(pl.groups), Vec3{});
             std::vector<double>& largest = w.largest;
             largest.assign(static_cast<size_t>(pl.groups), -1.0);
-            double volume = 0.0, area = 0.0;
-            const Vec3 origin = w.p[verts[0]];
             for (size_t i = 0; i < m; ++i) {
                 const auto& tri = t.tri[i];
                 hull.faces[i] = {local[tri[0]], local[tri[1]], local[tri[2]]};
-                hull.face_normals[i] = t.normal[i];
-                hull.face_offsets[i] = -dot(t.normal[i], points[tri[0]]);
                 const int g = pl.group[i];
                 if (t.area2[i] > largest[g]) {
                     largest[g] = t.area2[i];
                     hull.plane_normals[g] = t.normal[i];
                 }
+            }
+            hull.status = HullStatus::OK;
+            hull.dimension = 3;
+            if (!analysis.geometry) return;
+            hull.face_normals.resize(m);
+            hull.face_offsets.resize(m);
+            hull.face_planes = pl.group;
+            double volume = 0.0, area = 0.0;
+            const Vec3 origin = w.p[verts[0]];
+            for (size_t i = 0; i < m; ++i) {
+                const auto& tri = t.tri[i];
+                hull.face_normals[i] = t.normal[i];
+                hull.face_offsets[i] = -dot(t.normal[i], points[tri[0]]);
                 area += t.area2[i];
                 volume += dot(w.p[tri[0]] - origin,
                               cross(w.p[tri[1]] - origin, w.p[tri[2]] - origin));
@@ -383,20 +394,35 @@ void hull_with(const Vec3* points, long long n, Workspace& w, Analysis& analysis
     if (hull.status != HullStatus::OK) return;
     // Sorted, without exact duplicates (-0.0 as 0.0), the points give the same hull in any
     // order: equal point sets, equal triangulations (decomposition parts rely on it).
-    std::vector<Conflict>& sorted = w.sorted;
-    sorted.resize(static_cast<size_t>(n));
+    // Sorted as 16-byte keys: x as an integer of the same order (the sign bit flipped for
+    // positive numbers, every bit for negative ones; -0.0 is 0.0 by then), ties by y, z and
+    // index. A total order: any sort gives the order of the comparison of whole points.
+    std::vector<SortKey>& keys = w.sort_keys;
+    keys.resize(static_cast<size_t>(n));
     const Vec3 zero{0.0, 0.0, 0.0};
-    for (long long i = 0; i < n; ++i) sorted[i] = {points[i] + zero, static_cast<int>(i)};
-    std::sort(sorted.begin(), sorted.end(), [](const Conflict& a, const Conflict& b) {
-        return lexicographic_less(a.p, b.p) ||
-               (!lexicographic_less(b.p, a.p) && a.index < b.index);
+    for (long long i = 0; i < n; ++i) {
+        const double x = points[i].x + 0.0;
+        std::uint64_t bits;
+        std::memcpy(&bits, &x, sizeof bits);
+        constexpr std::uint64_t sign = std::uint64_t{1} << 63;
+        keys[i] = {(bits & sign) ? ~bits : (bits | sign), static_cast<int>(i)};
+    }
+    std::sort(keys.begin(), keys.end(), [points](const SortKey& a, const SortKey& b) {
+        if (a.x != b.x) return a.x < b.x;
+        const Vec3& p = points[a.index];
+        const Vec3& q = points[b.index];
+        if (p.y != q.y) return p.y < q.y;
+        if (p.z != q.z) return p.z < q.z;
+        return a.index < b.index;
     });
     w.unique_points.clear();
     w.unique_index.clear();
     for (long long i = 0; i < n; ++i) {
-        if (i > 0 && !lexicographic_less(sorted[i - 1].p, sorted[i].p)) continue;
-        w.unique_points.push_back(sorted[i].p);
-        w.unique_index.push_back(sorted[i].index);
+        const int k = keys[i].index;
+        const Vec3 q = points[k] + zero;
+        if (i > 0 && !lexicographic_less(w.unique_points.back(), q)) continue;
+        w.unique_points.push_back(q);
+        w.unique_index.push_back(k);
     }
     compute(w.unique_points.data(), static_cast<long long>(w.unique_points.size()), w, analysis);
     for (int& v : hull.vertices) v = w.unique_index[v];

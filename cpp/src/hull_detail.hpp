@@ -22,6 +22,13 @@ struct Conflict {
     int index;
 };
 
+// A point's place in the lexicographic order (hull.cpp): its x as an integer of the same
+// order, and its index.
+struct SortKey {
+    std::uint64_t x;
+    int index;
+};
+
 /// A triangle's plane as Quickhull keeps it: the unit normal, the offset (n . x - offset is
 /// the distance of x), twice the area, and the plane filter: a distance beyond it decides
 /// the side of a point exactly (INFINITY: never; the bound is proved beside face_plane).
@@ -62,9 +69,11 @@ struct Workspace {
     size_t face_count = 0;
     std::vector<int> free_faces;  // the free slots: free_faces[0 .. free_top)
     size_t free_top = 0;
-    std::vector<int> pending, visible, new_faces;
+    std::vector<int> pending, new_faces;
+    std::vector<int> visible;  // find_horizon's visible faces: visible[0 .. visible_count)
+    std::vector<HorizonEdge> edges;  // and its horizon: edges[0 .. edge_count)
+    size_t visible_count = 0, edge_count = 0;
     std::vector<Conflict> orphans;
-    std::vector<HorizonEdge> edges;
     std::vector<double> new_planes;  // the new faces' planes (nx, ny, nz, offset), packed
     std::vector<Frame> dfs;
     unsigned stamp = 0;
@@ -72,7 +81,7 @@ struct Workspace {
     std::vector<int> all, real, local, keep, parent, id, subset, removed, dropped;
     std::vector<double> largest;
     std::vector<char> used;
-    std::vector<Conflict> sorted;  // the input, sorted and without duplicates
+    std::vector<SortKey> sort_keys;  // hull_with's sort of the input
     std::vector<Vec3> unique_points;
     std::vector<int> unique_index;
     std::vector<int> filtered, filter_extremes;  // interior_filter's
@@ -135,16 +144,41 @@ inline Vec3 triangle_normal(const Vec3& a, const Vec3& b, const Vec3& c, bool& b
 //   sign is the orientation's (|x - a| < 2 sqrt(3)): |d| > 1e-13 decides it.
 // A normal taken by the compensated product, or of length below 1e-140 (where the squares of
 // the test may lose their relative accuracy to underflow), gets no filter.
-inline Plane face_plane(const Vec3& a, const Vec3& b, const Vec3& c) {
+inline Plane plane_of_normal(const Vec3& n, bool bounded, const Vec3& a) {
     constexpr double kPlaneFilter = 1e-13;
-    bool bounded = false;
-    const Vec3 n = triangle_normal(a, b, c, bounded);
     const double len = norm(n);
     Plane plane;
     plane.normal = len > 0.0 ? n / len : Vec3{};
     plane.offset = dot(plane.normal, a);
     plane.area2 = len;
     plane.filter = bounded && len >= 1e-140 ? kPlaneFilter : INFINITY;
+    return plane;
+}
+
+/// face_plane's case of a sharp first corner (quickhull.cpp), out of line.
+Plane face_plane_at_widest(const Vec3& a, const Vec3& b, const Vec3& c);
+
+inline Plane face_plane(const Vec3& a, const Vec3& b, const Vec3& c) {
+    // triangle_normal's fast case spelled out in scalars (the same operations in the same
+    // order, so the same bits): a Vec3 passed by reference with a flag spilled it to memory.
+    const double ux = b.x - a.x, uy = b.y - a.y, uz = b.z - a.z;
+    const double vx = c.x - a.x, vy = c.y - a.y, vz = c.z - a.z;
+    const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
+    const double nn = nx * nx + ny * ny + nz * nz;
+    if (!(16.0 * nn >= (ux * ux + uy * uy + uz * uz) * (vx * vx + vy * vy + vz * vz)))
+        return face_plane_at_widest(a, b, c);
+    constexpr double kPlaneFilter = 1e-13;
+    // nn is a sum of squares: never negative, so the square root needs no errno path.
+    const double len = __builtin_sqrt(nn);
+    Plane plane;
+    if (len > 0.0) {
+        plane.normal = Vec3{nx / len, ny / len, nz / len};
+    } else {
+        plane.normal = Vec3{};
+    }
+    plane.offset = plane.normal.x * a.x + plane.normal.y * a.y + plane.normal.z * a.z;
+    plane.area2 = len;
+    plane.filter = len >= 1e-140 ? kPlaneFilter : INFINITY;
     return plane;
 }
 
@@ -164,6 +198,9 @@ struct Analysis {
     Triangulation t, previous;
     Planes pl;
     Hull hull;
+    /// Whether a 3-D hull gets its per-face normals, offsets and planes, its volume and its
+    /// area (the packing reads none of them: pack_polytopes turns this off).
+    bool geometry = true;
 
     void reset() {
         hull.status = HullStatus::EMPTY;

@@ -277,6 +277,7 @@ PackedPolytopes pack_polytopes(const Vec3* points, const std::int64_t* offsets, 
     parallel_for(chunks, t, [&](long long begin, long long end) {
         Workspace w;
         Analysis analysis;
+        analysis.geometry = false;  // the per-face geometry of a Hull is not packed
         PackScratch scratch;
         for (long long c = begin; c < end; ++c) {
             ChunkPack& out = packs[static_cast<size_t>(c)];

@@ -72,6 +72,12 @@ Vec3 triangle_normal_at_widest(const Vec3& a, const Vec3& b, const Vec3& c, bool
     return accurate_cross(*o, *p, *q);
 }
 
+Plane face_plane_at_widest(const Vec3& a, const Vec3& b, const Vec3& c) {
+    bool bounded = false;
+    const Vec3 n = triangle_normal_at_widest(a, b, c, bounded);
+    return plane_of_normal(n, bounded, a);
+}
+
 namespace {
 
 constexpr int kNext[3] = {1, 2, 0};  // the edge after edge e of a face
@@ -89,6 +95,12 @@ int side(const Workspace& w, const Face& f, int q) {
     const Plane& pl = f.plane;
     return plane_side(pl.normal, pl.offset, pl.filter, w.p[f.v[0]], w.p[f.v[1]], w.p[f.v[2]],
                       w.p[q]);
+}
+
+// The exact side of x from face g (its orientation), for the points its plane filter leaves
+// undecided.
+__attribute__((noinline)) int exact_side(const std::vector<Vec3>& p, const Face& g, const Vec3& x) {
+    return orientation(p[g.v[0]], p[g.v[1]], p[g.v[2]], x);
 }
 
 // Face `id` as the triangle a b c (counter-clockwise from outside), alive, no neighbours
@@ -109,19 +121,15 @@ inline void init_face(Workspace& w, int id, int a, int b, int c) {
 }
 
 // The slots of `count` new faces into `ids`: the free list from its end, then fresh slots
-// (taken in this order, whether one face or a cone of them is made). No branch per face:
-// how many a cone reuses follows no pattern.
+// (taken in this order, whether one face or a cone of them is made).
 void allocate_faces(Workspace& w, size_t count, int* ids) {
-    size_t top = w.free_top;
-    const int* free_list = w.free_faces.data();  // at least one element (quickhull_points)
+    const size_t top = w.free_top;
+    const size_t reused = std::min(top, count);
+    const int* free_list = w.free_faces.data();
+    for (size_t k = 0; k < reused; ++k) ids[k] = free_list[top - 1 - k];
     int fresh = static_cast<int>(w.face_count);
-    for (size_t k = 0; k < count; ++k) {
-        const bool reuse = top > 0;
-        ids[k] = select(reuse, free_list[top - reuse], fresh);
-        top -= reuse;
-        fresh += !reuse;
-    }
-    w.free_top = top;
+    for (size_t k = reused; k < count; ++k) ids[k] = fresh++;
+    w.free_top = top - reused;
     w.face_count = static_cast<size_t>(fresh);
     if (w.faces.size() < w.face_count) w.faces.resize(w.face_count);
 }
@@ -212,69 +220,83 @@ void reassign_furthest(Workspace& w, int seed, int q) {
 // (Gregorius 2014, "Implementing Quickhull"). False when the horizon is not one simple loop
 // (exact orientations guarantee it is).
 bool find_horizon(Workspace& w, int seed, int q, unsigned stamp) {
+    // Raw arrays with room for every face (each enters the stack and the visible list at
+    // most once, and gives at most three horizon edges): no capacity check per entry.
+    const size_t room = w.face_count + 1;
+    if (w.dfs.size() < room) w.dfs.resize(2 * room);
+    if (w.visible.size() < room) w.visible.resize(2 * room);
+    if (w.edges.size() < 3 * room) w.edges.resize(6 * room);
     Face* faces = w.faces.data();
-    w.visible.clear();
-    w.edges.clear();
-    // Every face enters the stack at most once.
-    if (w.dfs.size() < w.face_count + 1) w.dfs.resize(w.face_count + 1);
     Frame* stack = w.dfs.data();
-    int top = 0;
+    int* visible = w.visible.data();
+    HorizonEdge* edges = w.edges.data();
+    const std::vector<Vec3>& p = w.p;
+    const Vec3 x = p[q];
+    size_t nv = 0, ne = 0;
     faces[seed].visit = stamp;
     faces[seed].visible = true;
-    w.visible.push_back(seed);
-    stack[top++] = {seed, 0, 3};
-    auto horizon_edge = [&](int fi, int e, int gi) {
+    visible[nv++] = seed;
+    // The current face, its next edge and how many are left, in registers; the stack holds
+    // the faces below it.
+    int top = 0;
+    int fi = seed, next = 0, left = 3;
+    for (;;) {
+        if (left == 0) {
+            if (top == 0) break;
+            const Frame& below = stack[--top];
+            fi = below.face, next = below.edge, left = below.left;
+            continue;
+        }
+        const int e = next;
+        next = kNext[e];
+        --left;
         const Face& f = faces[fi];
-        const Face& g = faces[gi];
-        // Written in place (a 16-byte copy of fields just stored stalls store forwarding).
-        HorizonEdge& he = w.edges.emplace_back();
+        const int gi = f.n[e];
+        Face& g = faces[gi];
+        if (g.visit != stamp) {
+            g.visit = stamp;
+            // The plane filter inline, the exact orientation out of line (inlined, its
+            // registers spilled the loop's).
+            const Plane& pl = g.plane;
+            const double d = dot(pl.normal, x) - pl.offset;
+            g.visible = d > pl.filter || (!(d < -pl.filter) && exact_side(p, g, x) > 0);
+            if (g.visible) {
+                visible[nv++] = gi;
+                int back = static_cast<int>(g.n[0] == fi) - 1;
+                back = select(g.n[1] == fi, 1, back);
+                back = select(g.n[2] == fi, 2, back);
+                if (back < 0) return false;
+                stack[top++] = {fi, next, left};
+                fi = gi, next = kNext[back], left = 2;
+                continue;
+            }
+        } else if (g.visible) {
+            continue;
+        }
+        // A horizon edge, from the visible f to the non-visible g, with the last slot of g
+        // that leads back (none: -1, no branches).
+        HorizonEdge& he = edges[ne++];
+        const int b = f.v[kNext[e]];
         he.a = f.v[e];
-        he.b = f.v[kNext[e]];
+        he.b = b;
         he.outside = gi;
-        // The last slot that leads back (none: -1), without branches.
-        const int b = he.b;
         int slot = static_cast<int>((g.n[0] == fi) & (g.v[0] == b)) - 1;
         slot = select((g.n[1] == fi) & (g.v[1] == b), 1, slot);
         slot = select((g.n[2] == fi) & (g.v[2] == b), 2, slot);
         he.slot = slot;
-        return slot >= 0;
-    };
-    while (top > 0) {
-        Frame& fr = stack[top - 1];
-        if (fr.left == 0) {
-            --top;
-            continue;
-        }
-        const int fi = fr.face;
-        const int e = fr.edge;
-        fr.edge = kNext[e];
-        --fr.left;
-        const int gi = faces[fi].n[e];
-        Face& g = faces[gi];
-        if (g.visit == stamp) {
-            if (!g.visible && !horizon_edge(fi, e, gi)) return false;
-            continue;
-        }
-        g.visit = stamp;
-        g.visible = side(w, g, q) > 0;
-        if (!g.visible) {
-            if (!horizon_edge(fi, e, gi)) return false;
-            continue;
-        }
-        w.visible.push_back(gi);
-        int back = static_cast<int>(g.n[0] == fi) - 1;
-        back = select(g.n[1] == fi, 1, back);
-        back = select(g.n[2] == fi, 2, back);
-        if (back < 0) return false;
-        stack[top++] = {gi, kNext[back], 2};
+        if (slot < 0) return false;
     }
-    const size_t h = w.edges.size();
+    w.visible_count = nv;
+    w.edge_count = ne;
+    const size_t h = ne;
     if (h < 3) return false;
+    int* mark = w.mark.data();
+    const int current = static_cast<int>(stamp);
     for (size_t k = 0; k < h; ++k) {
-        const HorizonEdge& next = w.edges[k + 1 < h ? k + 1 : 0];
-        if (w.edges[k].b != next.a) return false;
-        if (w.mark[w.edges[k].a] == static_cast<int>(stamp)) return false;
-        w.mark[w.edges[k].a] = static_cast<int>(stamp);
+        const HorizonEdge& next = edges[k + 1 < h ? k + 1 : 0];
+        if (edges[k].b != next.a) return false;
+        if (mark[edges[k].a] == current) return false;
+        mark[edges[k].a] = current;
     }
     return true;
 }
@@ -284,9 +306,11 @@ bool find_horizon(Workspace& w, int seed, int q, unsigned stamp) {
 void cone(Workspace& w, int q) {
     // The visible faces go; their points wait for the new faces.
     w.orphans.clear();
-    if (w.free_faces.size() < w.free_top + w.visible.size() + 1)
-        w.free_faces.resize(w.free_top + w.visible.size() + 1);
-    for (int fi : w.visible) {
+    const size_t visible = w.visible_count;
+    if (w.free_faces.size() < w.free_top + visible + 1)
+        w.free_faces.resize(w.free_top + visible + 1);
+    for (size_t v = 0; v < visible; ++v) {
+        const int fi = w.visible[v];
         Face& f = w.faces[fi];
         for (const Conflict& c : f.conflicts)
             if (c.index != q) w.orphans.push_back(c);
@@ -294,7 +318,7 @@ void cone(Workspace& w, int q) {
         f.conflicts.clear();
         w.free_faces[w.free_top++] = fi;
     }
-    const size_t h = w.edges.size();
+    const size_t h = w.edge_count;
     // Grown only (a resize that grows fills with zeros, every step).
     if (w.new_faces.size() < h) w.new_faces.resize(h);
     if (w.new_planes.size() < 4 * h) w.new_planes.resize(4 * h);
@@ -330,7 +354,8 @@ void cone(Workspace& w, int q) {
         }
         // Outside no new face: then inside the new hull, unless outside a face of the
         // horizon (it had been listed on the first face it was outside of).
-        for (const HorizonEdge& he : w.edges) {
+        for (size_t k2 = 0; k2 < h; ++k2) {
+            const HorizonEdge& he = w.edges[k2];
             const double dx = distance(w.faces[he.outside], x.p);
             if (dx > eps) {
                 add_conflict(w.faces[he.outside], x, dx);
@@ -414,19 +439,26 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
         if (!find_horizon(w, seed, q, ++w.stamp)) return Build::FAILED;
         cone(w, q);
     }
-    // Compact triangulation.
+    // Compact triangulation, and each edge once, from its lower triangle, with its slot in
+    // the other: written always and kept by a count (which side is lower follows no pattern a
+    // branch could predict), in one pass.
+    const auto slots = static_cast<unsigned>(w.face_count);
     std::vector<int>& index = w.id;
     index.assign(w.face_count, -1);
     int m = 0;
+    const Face* faces = w.faces.data();
     for (size_t i = 0; i < w.face_count; ++i)
-        if (w.faces[i].alive) index[i] = m++;
+        if (faces[i].alive) index[i] = m++;
     out.tri.resize(m);
     out.neighbor.resize(m);
     out.normal.resize(m);
     out.offset.resize(m);
     out.area2.resize(m);
+    out.edges.resize(3 * static_cast<size_t>(m));
+    TriangulationEdge* edges = out.edges.data();
+    size_t count = 0;
     for (size_t i = 0; i < w.face_count; ++i) {
-        const Face& f = w.faces[i];
+        const Face& f = faces[i];
         if (!f.alive) continue;
         const int t = index[i];
         out.tri[t] = {f.v[0], f.v[1], f.v[2]};
@@ -434,24 +466,22 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
         out.offset[t] = f.plane.offset;
         out.area2[t] = f.plane.area2;
         for (int e = 0; e < 3; ++e) {
-            if (f.n[e] < 0 || !w.faces[f.n[e]].alive) return Build::FAILED;
-            out.neighbor[t][e] = index[f.n[e]];
-        }
-    }
-    // Each edge once, from its lower triangle, with its slot in the other: written always
-    // and kept by a count (which side is lower follows no pattern a branch could predict).
-    out.edges.resize(3 * static_cast<size_t>(m));
-    size_t count = 0;
-    for (int t = 0; t < m; ++t)
-        for (int e = 0; e < 3; ++e) {
-            const int j = out.neighbor[t][e];
-            const std::array<int, 3>& back = out.neighbor[j];
-            int k = static_cast<int>(back[0] == t) - 1;
-            k = select(back[1] == t, 1, k);
-            k = select(back[2] == t, 2, k);
-            out.edges[count] = {t, e, j, k};
+            // A dead or missing neighbour has no index (the slots are below face_count).
+            const int g = f.n[e];
+            if (static_cast<unsigned>(g) >= slots || index[g] < 0) return Build::FAILED;
+            const int j = index[g];
+            out.neighbor[t][e] = j;
+            // The slot of the neighbour that leads back (the last one, as the faces have it:
+            // the same as its compacted list's, the index being one to one).
+            const int* back = faces[g].n;
+            const int self = static_cast<int>(i);
+            int k = static_cast<int>(back[0] == self) - 1;
+            k = select(back[1] == self, 1, k);
+            k = select(back[2] == self, 2, k);
+            edges[count] = {t, e, j, k};
             count += j > t;
         }
+    }
     out.edges.resize(count);
     return Build::OK;
 }

@@ -281,3 +281,52 @@ TEST_CASE("hull: the plane filter decides a side only as the exact orientation d
     CHECK(exact > 30000);
     CHECK(unfiltered < 6000);
 }
+
+TEST_CASE("hull: any input order and either zero give the same hull (the sort is total)") {
+    // Cube corners and octahedron tips, with repeated x and (x, y), -0.0 and 0.0 spellings of
+    // one point and exact duplicates: every permutation gives the same vertex coordinates in
+    // lexicographic order, each vertex the first index of its point, and the same faces.
+    std::vector<Vec3> points = fixtures::cube_corners(1.0);
+    const double tips[][3] = {{1.5, 0.0, 0.0},  {1.5, -0.0, -0.0}, {-1.5, 0.0, -0.0},
+                              {0.0, 1.5, 0.0},  {-0.0, 1.5, 0.0},  {0.0, -1.5, 0.0},
+                              {0.0, 0.0, 1.5},  {-0.0, -0.0, 1.5}, {0.0, 0.0, -1.5},
+                              {0.25, 0.0, 0.0}, {0.0, 0.0, 0.0},   {-0.0, -0.0, -0.0}};
+    for (const auto& t : tips) points.push_back({t[0], t[1], t[2]});
+    points.push_back(points[3]);
+    points.push_back(points[0]);
+    const auto n = static_cast<long long>(points.size());
+    auto coordinates = [](const Vec3& p) { return Vec3{p.x + 0.0, p.y + 0.0, p.z + 0.0}; };
+    auto same_point = [](const Vec3& a, const Vec3& b) {
+        return a.x == b.x && a.y == b.y && a.z == b.z;
+    };
+    const Hull first = exact_hull(points.data(), n);
+    REQUIRE(first.status == HullStatus::OK);
+    CHECK_EQ(first.vertices.size(), size_t{14});
+    std::uint64_t state = 12345;
+    for (int round = 0; round < 40; ++round) {
+        std::vector<int> order(static_cast<size_t>(n));
+        for (int i = 0; i < n; ++i) order[i] = i;
+        for (long long i = n - 1; i > 0; --i) {
+            state = state * 6364136223846793005ull + 1442695040888963407ull;
+            std::swap(order[i], order[(state >> 33) % static_cast<std::uint64_t>(i + 1)]);
+        }
+        std::vector<Vec3> shuffled(static_cast<size_t>(n));
+        for (int i = 0; i < n; ++i) shuffled[i] = points[order[i]];
+        const Hull h = exact_hull(shuffled.data(), n);
+        REQUIRE(h.vertices.size() == first.vertices.size());
+        REQUIRE(h.faces.size() == first.faces.size());
+        for (size_t v = 0; v < h.vertices.size(); ++v) {
+            const Vec3 p = coordinates(shuffled[h.vertices[v]]);
+            const Vec3 expected = coordinates(points[first.vertices[v]]);
+            CHECK(std::memcmp(&p, &expected, sizeof p) == 0);
+            if (v > 0) {
+                const Vec3 q = coordinates(shuffled[h.vertices[v - 1]]);
+                CHECK((q.x < p.x) || (q.x == p.x && (q.y < p.y || (q.y == p.y && q.z < p.z))));
+            }
+            // The first index (in the shuffled input) of the equal points.
+            for (int i = 0; i < h.vertices[v]; ++i) CHECK(!same_point(shuffled[i], p));
+        }
+        for (size_t f = 0; f < h.faces.size(); ++f)
+            for (int c = 0; c < 3; ++c) CHECK_EQ(h.faces[f][c], first.faces[f][c]);
+    }
+}
