@@ -246,13 +246,14 @@ SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative&
             item = heap.back();
             heap.pop_back();
         }
-        held = false;
         // Every pair left is at least as far: done.
         if (pruned(item.bound)) break;
-        // A pair pushed before the best pair's direction was known (or moved) may be dropped
-        // by it now.
-        if (axis.active() && pruned(axis.nodes(oa[static_cast<size_t>(item.a)], ob[static_cast<size_t>(item.b)])))
+        // A pair from the heap, pushed before the best pair's direction was known (or moved),
+        // may be dropped by it now (a held pair's bound has just been taken with it).
+        if (!held && axis.active() &&
+            pruned(axis.nodes(oa[static_cast<size_t>(item.a)], ob[static_cast<size_t>(item.b)])))
             continue;
+        held = false;
         const BvhNode& x = na[static_cast<size_t>(item.a)];
         const BvhNode& y = nb[static_cast<size_t>(item.b)];
         if (x.is_leaf() && y.is_leaf()) {
