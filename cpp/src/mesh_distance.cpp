@@ -26,8 +26,61 @@ namespace {
 // candidate, Gottschalk, Lin and Manocha 1996) and the box distances in a's and in b's box
 // frame (the nine edge-pair axes of the overlap test cost more than they prune here). The centre line comes first and needs no relative rotation of the boxes: when
 // it alone reaches `enough2` (a bound that already prunes the pair), the rest is skipped.
-inline double obb_squared_distance(const NodeObb& a, const NodeObb& b, const Relative& rel, double enough2) {
-    const Vec3 d = rel.apply(b.center) - a.center;  // a's local frame
+// Node b's oriented box mapped into a's frame: its centre and its axes (rel.apply(b.center),
+// rel.rotation * b.axes.row(j)), what every bound of a pair with b computes first.
+struct MappedObb {
+    Vec3 center;
+    Vec3 axes[3];
+
+    void map(const NodeObb& b, const Relative& rel) {
+        center = rel.apply(b.center);
+        for (int j = 0; j < 3; ++j) axes[j] = rel.rotation * b.axes.row(j);
+    }
+};
+
+// The mapped boxes of b's nodes for one search, each mapped when first asked for: a node of b
+// meets several nodes of a (the search descends the larger box of a pair, so a node of b
+// stays while a's side is split), and its mapping is about a third of a pair's bound. The
+// same numbers as mapping it at each pair, so the bounds are unchanged bit for bit. Kept per
+// thread between searches (a generation stamp marks the current search's entries); a mesh of
+// more than kMaxNodes nodes maps at each pair instead, so the cache stays small.
+class MappedObbCache {
+public:
+    static constexpr size_t kMaxNodes = 1 << 16;
+
+    // Starts a search over `mesh`'s nodes; false when the mesh is too large to cache.
+    bool start(const MeshBvh& mesh) {
+        const size_t n = mesh.nodes().size();
+        if (n > kMaxNodes) return false;
+        if (stamp_.size() < n) {
+            stamp_.assign(n, 0);
+            boxes_.resize(n);
+            generation_ = 0;
+        }
+        if (++generation_ == 0) {  // wrapped: every old stamp could read as current
+            std::fill(stamp_.begin(), stamp_.end(), 0u);
+            generation_ = 1;
+        }
+        return true;
+    }
+    const MappedObb& get(std::int32_t id, const NodeObb& b, const Relative& rel) {
+        const auto k = static_cast<size_t>(id);
+        if (stamp_[k] != generation_) {
+            boxes_[k].map(b, rel);
+            stamp_[k] = generation_;
+        }
+        return boxes_[k];
+    }
+
+private:
+    std::vector<MappedObb> boxes_;
+    std::vector<std::uint32_t> stamp_;
+    std::uint32_t generation_ = 0;
+};
+
+inline double obb_squared_distance(const NodeObb& a, const NodeObb& b, const MappedObb& mapped, const Relative& rel,
+                                   double enough2) {
+    const Vec3 d = mapped.center - a.center;  // a's local frame
     const Vec3 t = a.axes * d;                      // a's box frame
     const Vec3 tb = b.axes * rel.rotation.transpose_times(d);  // b's box frame
     double best = 0.0;
@@ -41,7 +94,7 @@ inline double obb_squared_distance(const NodeObb& a, const NodeObb& b, const Rel
     }
     double abs_c[3][3];  // |a_i . b_j|, both axes in a's local frame
     for (int j = 0; j < 3; ++j) {
-        const Vec3 bj = rel.rotation * b.axes.row(j);
+        const Vec3& bj = mapped.axes[j];
         for (int i = 0; i < 3; ++i) abs_c[i][j] = std::fabs(dot(a.axes.row(i), bj));
     }
     // In a's box frame, b's box lies in the axis-aligned box of half extents
@@ -211,8 +264,12 @@ struct SearchResult {
     std::int32_t triangle_a = -1, triangle_b = -1;  // leaf order
 };
 
-// Branch and bound over node pairs. `bound2` is the squared max_distance.
-SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative& rel, double bound2) {
+// Branch and bound over node pairs. `bound2` is the squared max_distance. `start` (leaf
+// order, a < 0: none) is a triangle pair measured first: its distance, when within the bound,
+// is the first best and its direction the first axis, so that the search prunes from its
+// first node pairs (a pair whose boxes touch: near the closest pair when the meshes are near).
+SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative& rel, double bound2,
+                             CrossingPair start) {
     SearchResult r;
     r.squared_distance = bound2;
     // A pair at exactly max_distance still counts, so before the first find the test is strict.
@@ -231,10 +288,36 @@ SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative&
         heap.push_back(item);
         std::push_heap(heap.begin(), heap.end(), farther);
     };
-    const double root2 = obb_squared_distance(oa[0], ob[0], rel, bound2);
+    thread_local MappedObbCache cache;
+    const bool cached = cache.start(b);
+    MappedObb scratch;
+    // b's node j mapped into a's frame: from the cache, or mapped here for a large mesh.
+    const auto mapped = [&](std::int32_t j) -> const MappedObb& {
+        if (cached) return cache.get(j, ob[static_cast<size_t>(j)], rel);
+        scratch.map(ob[static_cast<size_t>(j)], rel);
+        return scratch;
+    };
+    const double root2 = obb_squared_distance(oa[0], ob[0], mapped(0), rel, bound2);
     if (pruned(root2)) return r;
     MappedLeaf leaf_b;
     WitnessAxis axis;
+    if (start.a >= 0) {
+        // As the leaves measure it (b's corners mapped one by one, the full distance): the
+        // same number that pair gives wherever it is measured.
+        const Vec3* source = b.triangle(start.b);
+        const Vec3 tb[3] = {rel.apply(source[0]), rel.apply(source[1]), rel.apply(source[2])};
+        Vec3 pa, pb;
+        const double d2 = triangle_separated_squared_distance(a.triangle(start.a), tb, &pa, &pb);
+        if (d2 <= bound2) {
+            r.found = true;
+            r.squared_distance = d2;
+            r.point_a = pa;
+            r.point_b = pb;
+            r.triangle_a = start.a;
+            r.triangle_b = start.b;
+            axis.set(pa, pb, rel);
+        }
+    }
     // The pair at hand: popped from the heap, or the nearer child of the last one when it is
     // no farther than the heap's nearest (what the heap would give back, without the push and
     // the pop).
@@ -317,7 +400,7 @@ SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative&
             const NodeObb& box_b = ob[static_cast<size_t>(c->b)];
             c->bound = axis.active() ? axis.nodes(box_a, box_b) : 0.0;
             if (!pruned(c->bound))
-                c->bound = max2(c->bound, obb_squared_distance(box_a, box_b, rel, r.squared_distance));
+                c->bound = max2(c->bound, obb_squared_distance(box_a, box_b, mapped(c->b), rel, r.squared_distance));
         }
         if (rel.aligned) {
             c1.bound = max2(c1.bound, aabb_squared_distance(na[static_cast<size_t>(c1.a)], nb[static_cast<size_t>(c1.b)], rel));
@@ -411,12 +494,13 @@ MeshDistanceOutput mesh_distance(const MeshDistanceInput& input) {
     // pairs whose boxes touch and measures nothing, than by the distance search, which measures
     // every near triangle pair on its way to the first crossing one.
     SearchResult r;
-    if (first_crossing(a, b, rel, &r.triangle_a, &r.triangle_b, &r.point_a)) {
+    CrossingPair touching{-1, -1};
+    if (first_crossing(a, b, rel, &r.triangle_a, &r.triangle_b, &r.point_a, &touching)) {
         r.found = r.intersecting = true;
         r.squared_distance = 0.0;
         r.point_b = r.point_a;
     } else {
-        r = search_distance(a, b, rel, bound2);
+        r = search_distance(a, b, rel, bound2, touching);
     }
     if (r.found) {
         out.distance = std::sqrt(r.squared_distance);
