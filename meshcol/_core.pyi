@@ -405,9 +405,9 @@ class MeshBvhSet:
         Whether meshes i and j intersect, at the default poses or the given C-contiguous (4, 4) float64 ones (None when a pose is another object: convert it and call again); ValueError when the pair has no verdict (invalid mesh or pose, out of range).
         """
 
-    def distance_batch(self, poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)] | None, pairs: Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', device='cpu', writable=False)], threads: int = 0, max_distance: float = float('inf')) -> dict:
+    def distance_batch(self, poses: object | None, pairs: object, threads: int, max_distance: float, result_type: type[ResultT]) -> ResultT | None:
         """
-        Mesh-pair distances: {distance, point_a, point_b, intersecting, a_inside_b, b_inside_a, triangle_a, triangle_b, status}.
+        Mesh-pair distances as result_type(distance, point_a, point_b, intersecting, a_inside_b, b_inside_a, triangle_a, triangle_b, status); None when poses or pairs are not in the form intersects_batch reads in place (convert them and call again).
         """
 
     def depth_batch(self, poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)] | None, pairs: Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', device='cpu', writable=False)], threads: int = 0) -> dict:

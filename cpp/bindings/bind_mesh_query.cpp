@@ -236,12 +236,6 @@ inline meshcol::Status intersects_one(const meshcol::MeshBvh& a, const meshcol::
 using meshcol::MeshDepthOutput;
 using meshcol::MeshDistanceOutput;
 using meshcol::MeshRayOutput;
-const auto kDistanceColumns = std::make_tuple(
-    field("distance", &MeshDistanceOutput::distance), field("point_a", &MeshDistanceOutput::point_a),
-    field("point_b", &MeshDistanceOutput::point_b), field("intersecting", &MeshDistanceOutput::intersecting),
-    field("a_inside_b", &MeshDistanceOutput::a_inside_b), field("b_inside_a", &MeshDistanceOutput::b_inside_a),
-    field("triangle_a", &MeshDistanceOutput::triangle_a), field("triangle_b", &MeshDistanceOutput::triangle_b),
-    field_as<std::int8_t>("status", &MeshDistanceOutput::status));
 const auto kDepthColumns = std::make_tuple(
     field("depth", &MeshDepthOutput::depth), field("point_a", &MeshDepthOutput::point_a),
     field("point_b", &MeshDepthOutput::point_b), field("normal", &MeshDepthOutput::normal),
@@ -255,23 +249,30 @@ const auto kRayColumns = std::make_tuple(
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 const Vec3 kNaN3{kNaN, kNaN, kNaN};
 
-nb::dict distance_batch(const MeshBvhSet& set, std::optional<Poses> poses, Pairs pairs, int threads,
-                        double max_distance) {
+// The distance result of one posed pair (shared by both batch entries, so they cannot
+// disagree): INVALID_INPUT with NaN fields for a pose that is not rigid.
+MeshDistanceOutput distance_one(const meshcol::MeshBvh& a, const meshcol::Pose& pose_a, bool rigid_a,
+                                const meshcol::MeshBvh& b, const meshcol::Pose& pose_b, bool rigid_b,
+                                double max_distance) {
+    if (rigid_a && rigid_b) {
+        meshcol::MeshDistanceInput q;
+        q.a = &a;
+        q.b = &b;
+        q.pose_a = pose_a;
+        q.pose_b = pose_b;
+        q.max_distance = max_distance;
+        return meshcol::mesh_distance(q);
+    }
+    MeshDistanceOutput r;
+    r.distance = kNaN;
+    r.point_a = r.point_b = kNaN3;
+    r.status = meshcol::Status::INVALID_INPUT;
+    return r;
+}
+
+void check_max_distance(double max_distance) {
     if (!(max_distance >= 0.0))
         throw std::invalid_argument("max_distance must be >= 0, got " + std::to_string(max_distance));
-    const PosedPairs in = read_pairs(set, poses, pairs);
-    auto columns = columns_of<MeshDistanceOutput>(static_cast<size_t>(in.count), kDistanceColumns);
-    run_items(in.count, threads, meshcol::defaults::mesh_min_pairs_per_thread, columns, [&](long long k) {
-        meshcol::MeshDistanceInput q = in.input(set, k);
-        q.max_distance = max_distance;
-        if (in.rigid_pair(k)) return meshcol::mesh_distance(q);
-        MeshDistanceOutput r;
-        r.distance = kNaN;
-        r.point_a = r.point_b = kNaN3;
-        r.status = meshcol::Status::INVALID_INPUT;
-        return r;
-    });
-    return columns.dict();
 }
 
 nb::dict depth_batch(const MeshBvhSet& set, std::optional<Poses> poses, Pairs pairs, int threads) {
@@ -465,26 +466,35 @@ PyObject* interned(const char* name) {
 // form; otherwise the call returns None and the caller converts them (as_poses, as_pairs) and
 // calls again. A batch of one pair thus costs one native call, two numpy.empty calls and the
 // query: no DLPack import or export, no Python-level checks.
+// The poses of a call that takes them as a plain object: None (the set's defaults) or a
+// C-contiguous (M, 4, 4) float64 buffer, read in place; false for anything else (the caller
+// converts it with as_poses and calls again).
+bool read_poses_object(const MeshBvhSet& set, nb::handle poses, PosedMeshes& out) {
+    out.poses = set.poses.data();
+    out.rigid = set.rigid.data();
+    if (poses.is_none()) return true;
+    const size_t m = set.meshes.size();
+    Buffer buffer;
+    const double* p = buffer.get<double>(poses.ptr(), {static_cast<Py_ssize_t>(m), 4, 4});
+    if (p == nullptr) return false;
+    out.owned_poses.resize(m);
+    out.owned_rigid.resize(m);
+    for (size_t i = 0; i < m; ++i) {
+        out.owned_rigid[i] = meshcol::is_rigid_matrix4(p + 16 * i, meshcol::defaults::rigid_tolerance);
+        out.owned_poses[i] = meshcol::Pose::from_matrix4(p + 16 * i);
+    }
+    out.poses = out.owned_poses.data();
+    out.rigid = out.owned_rigid.data();
+    return true;
+}
+
 nb::object intersects_batch(const MeshBvhSet& set, nb::handle poses, nb::handle pairs, int threads,
                             nb::handle result_type) {
     const size_t m = set.meshes.size();
-    std::vector<meshcol::Pose> owned_poses;
-    std::vector<char> owned_rigid;
-    const meshcol::Pose* pose = set.poses.data();
-    const char* rigid = set.rigid.data();
-    Buffer pose_buffer;
-    if (!poses.is_none()) {
-        const double* p = pose_buffer.get<double>(poses.ptr(), {static_cast<Py_ssize_t>(m), 4, 4});
-        if (p == nullptr) return nb::none();
-        owned_poses.resize(m);
-        owned_rigid.resize(m);
-        for (size_t i = 0; i < m; ++i) {
-            owned_rigid[i] = meshcol::is_rigid_matrix4(p + 16 * i, meshcol::defaults::rigid_tolerance);
-            owned_poses[i] = meshcol::Pose::from_matrix4(p + 16 * i);
-        }
-        pose = owned_poses.data();
-        rigid = owned_rigid.data();
-    }
+    PosedMeshes posed;
+    if (!read_poses_object(set, poses, posed)) return nb::none();
+    const meshcol::Pose* pose = posed.poses;
+    const char* rigid = posed.rigid;
     PairsArg in;
     if (!in.read(pairs.ptr())) return nb::none();
     check_pairs(in.data, in.count, m);
@@ -515,6 +525,61 @@ nb::object intersects_batch(const MeshBvhSet& set, nb::handle poses, nb::handle 
     static const std::array<PyObject*, 2> names = {interned("intersecting"), interned("status")};
     static DataclassMaker<2> maker;
     return maker.make(result_type, names, {intersecting_arr, status_arr});
+}
+
+// Mesh-pair distances as a `result_type(distance, point_a, point_b, intersecting, a_inside_b,
+// b_inside_a, triangle_a, triangle_b, status)` (meshcol.collision.mesh_query.MeshDistanceBatch),
+// `poses` and `pairs` taken as intersects_batch takes them (None when not in the core's form:
+// the caller converts them and calls again). A one-pair batch costs the query and nine
+// numpy_empty calls, where DLPack arrays gathered in a dict cost about ten microseconds.
+nb::object distance_batch(const MeshBvhSet& set, nb::handle poses, nb::handle pairs, int threads,
+                                 double max_distance, nb::handle result_type) {
+    check_max_distance(max_distance);
+    PosedMeshes posed;
+    if (!read_poses_object(set, poses, posed)) return nb::none();
+    PairsArg in;
+    if (!in.read(pairs.ptr())) return nb::none();
+    check_pairs(in.data, in.count, set.meshes.size());
+    const auto n = static_cast<size_t>(in.count);
+    double *distance = nullptr, *point_a = nullptr, *point_b = nullptr;
+    bool *intersecting = nullptr, *a_inside_b = nullptr, *b_inside_a = nullptr;
+    std::int64_t *triangle_a = nullptr, *triangle_b = nullptr;
+    std::int8_t* status = nullptr;
+    const std::array<nb::object, 9> arrays = {
+        numpy_empty(n, &distance),   numpy_empty(n, &point_a, 3),    numpy_empty(n, &point_b, 3),
+        numpy_empty(n, &intersecting), numpy_empty(n, &a_inside_b),  numpy_empty(n, &b_inside_a),
+        numpy_empty(n, &triangle_a), numpy_empty(n, &triangle_b),    numpy_empty(n, &status)};
+    in.pin();  // the loop reads the copy, never numpy's array, once the GIL is released
+    const std::int64_t* ij = in.data;
+    {
+        nb::gil_scoped_release release;
+        const int t = meshcol::resolve_threads(threads, in.count, meshcol::defaults::mesh_min_pairs_per_thread);
+        meshcol::parallel_for(in.count, t, [&](long long begin, long long end) {
+            for (long long k = begin; k < end; ++k) {
+                const auto i = static_cast<size_t>(ij[2 * k]), j = static_cast<size_t>(ij[2 * k + 1]);
+                const MeshDistanceOutput r = distance_one(set.meshes[i], posed.poses[i], posed.rigid[i] != 0,
+                                                          set.meshes[j], posed.poses[j], posed.rigid[j] != 0,
+                                                          max_distance);
+                distance[k] = r.distance;
+                store_row(point_a, k, r.point_a);
+                store_row(point_b, k, r.point_b);
+                intersecting[k] = r.intersecting;
+                a_inside_b[k] = r.a_inside_b;
+                b_inside_a[k] = r.b_inside_a;
+                triangle_a[k] = r.triangle_a;
+                triangle_b[k] = r.triangle_b;
+                status[k] = static_cast<std::int8_t>(r.status);
+            }
+        });
+    }
+    static const std::array<PyObject*, 9> names = {
+        interned("distance"),   interned("point_a"),    interned("point_b"),    interned("intersecting"),
+        interned("a_inside_b"), interned("b_inside_a"), interned("triangle_a"), interned("triangle_b"),
+        interned("status")};
+    static DataclassMaker<9> maker;
+    std::array<nb::handle, 9> values;
+    for (size_t k = 0; k < 9; ++k) values[k] = arrays[k];
+    return maker.make(result_type, names, values);
 }
 
 // Why a single pair has no verdict, as the message of the ValueError the single-pair entry
@@ -703,10 +768,13 @@ void bind_mesh_query(nb::module_& m) {
              "(4, 4) float64 ones (None when a pose is another object: convert it and call "
              "again); ValueError when the pair has no verdict (invalid mesh or pose, out of "
              "range).")
-        .def("distance_batch", &distance_batch, "poses"_a.none(), "pairs"_a, "threads"_a = 0,
-             "max_distance"_a = std::numeric_limits<double>::infinity(),
-             "Mesh-pair distances: {distance, point_a, point_b, intersecting, a_inside_b, "
-             "b_inside_a, triangle_a, triangle_b, status}.")
+        .def("distance_batch", &distance_batch, "poses"_a.none(), "pairs"_a, "threads"_a,
+             "max_distance"_a, "result_type"_a,
+             nb::sig("def distance_batch(self, poses: object | None, pairs: object, threads: int, "
+                     "max_distance: float, result_type: type[ResultT]) -> ResultT | None"),
+             "Mesh-pair distances as result_type(distance, point_a, point_b, intersecting, a_inside_b, "
+             "b_inside_a, triangle_a, triangle_b, status); None when poses or pairs are not in the form "
+             "intersects_batch reads in place (convert them and call again).")
         .def("depth_batch", &depth_batch, "poses"_a.none(), "pairs"_a, "threads"_a = 0,
              "Mesh-pair penetration depths (lower bounds of the minimum translation distance): "
              "{depth, point_a, point_b, normal, deepest_mesh, points_tested, status}.")

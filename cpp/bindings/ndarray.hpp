@@ -202,8 +202,9 @@ private:
     }
 };
 
-/// A new, uninitialised, C-contiguous 1-D numpy array of `n` entries of T (bool or std::int8_t),
-/// and its data in `*data`, for results of a few entries: numpy's own constructor
+/// A new, uninitialised, C-contiguous numpy array of T (bool, std::int8_t, std::int64_t or
+/// double), of `n` entries or, with `columns` > 0, of shape (n, columns), and its data in
+/// `*data`, for results of a few entries: numpy's own constructor
 /// (NumpyApi) costs a small fraction of exporting an `Out` (numpy.asarray of a DLPack view),
 /// numpy.empty about a third. The data pointer is read where every extension compiled against
 /// numpy reads it (the first field after the object header of numpy's array struct, what
@@ -211,23 +212,33 @@ private:
 /// checked once against the buffer protocol, which is used from then on should the two ever
 /// disagree. Holds the GIL.
 template <class T>
-nb::object numpy_empty(size_t n, T** data) {
-    static_assert(std::is_same_v<T, bool> || std::is_same_v<T, std::int8_t>, "add the dtype");
-    constexpr int type_number = std::is_same_v<T, bool> ? 0 : 1;  // NPY_BOOL, NPY_BYTE
+nb::object numpy_empty(size_t n, T** data, size_t columns = 0) {
+    static_assert(std::is_same_v<T, bool> || std::is_same_v<T, std::int8_t> || std::is_same_v<T, std::int64_t> ||
+                      std::is_same_v<T, double>,
+                  "add the dtype");
+    // NPY_BOOL, NPY_BYTE, NPY_LONG or NPY_LONGLONG (whichever is 64 bits), NPY_DOUBLE
+    constexpr int type_number = std::is_same_v<T, bool>           ? 0
+                                : std::is_same_v<T, std::int8_t>  ? 1
+                                : std::is_same_v<T, std::int64_t> ? (sizeof(long) == 8 ? 7 : 9)
+                                                                  : 12;
+    constexpr const char* type_name = std::is_same_v<T, bool>           ? "bool"
+                                      : std::is_same_v<T, std::int8_t>  ? "int8"
+                                      : std::is_same_v<T, std::int64_t> ? "int64"
+                                                                        : "float64";
     static int layout_checked = 0;  // 0: not yet, 1: the struct read agrees, -1: use the buffer
     const NumpyApi& api = NumpyApi::get();
     nb::object array;
+    const int ndim = columns > 0 ? 2 : 1;
     if (api.new_array != nullptr) {
-        const Py_ssize_t shape[1] = {static_cast<Py_ssize_t>(n)};
-        array = nb::steal(api.new_array(api.array_type, 1, shape, type_number, nullptr, nullptr, 0, 0, nullptr));
+        const Py_ssize_t shape[2] = {static_cast<Py_ssize_t>(n), static_cast<Py_ssize_t>(columns)};
+        array = nb::steal(api.new_array(api.array_type, ndim, shape, type_number, nullptr, nullptr, 0, 0, nullptr));
     } else {
         // never released: they live as long as the interpreter's numpy
         static PyObject* const empty = nb::object(nb::module_::import_("numpy").attr("empty")).release().ptr();
         static PyObject* const dtype =
-            nb::object(nb::module_::import_("numpy").attr("dtype")(type_number == 0 ? "bool" : "int8"))
-                .release()
-                .ptr();
-        nb::object size = nb::steal(PyLong_FromSize_t(n));
+            nb::object(nb::module_::import_("numpy").attr("dtype")(type_name)).release().ptr();
+        const auto rows = static_cast<Py_ssize_t>(n), width = static_cast<Py_ssize_t>(columns);
+        nb::object size = nb::steal(ndim == 1 ? PyLong_FromSsize_t(rows) : Py_BuildValue("(nn)", rows, width));
         if (!size.is_valid()) throw nb::python_error();
         PyObject* args[] = {size.ptr(), dtype};
         array = nb::steal(PyObject_Vectorcall(empty, args, 2, nullptr));

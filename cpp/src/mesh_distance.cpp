@@ -26,8 +26,61 @@ namespace {
 // candidate, Gottschalk, Lin and Manocha 1996) and the box distances in a's and in b's box
 // frame (the nine edge-pair axes of the overlap test cost more than they prune here). The centre line comes first and needs no relative rotation of the boxes: when
 // it alone reaches `enough2` (a bound that already prunes the pair), the rest is skipped.
-inline double obb_squared_distance(const NodeObb& a, const NodeObb& b, const Relative& rel, double enough2) {
-    const Vec3 d = rel.apply(b.center) - a.center;  // a's local frame
+// Node b's oriented box mapped into a's frame: its centre and its axes (rel.apply(b.center),
+// rel.rotation * b.axes.row(j)), what every bound of a pair with b computes first.
+struct MappedObb {
+    Vec3 center;
+    Vec3 axes[3];
+
+    void map(const NodeObb& b, const Relative& rel) {
+        center = rel.apply(b.center);
+        for (int j = 0; j < 3; ++j) axes[j] = rel.rotation * b.axes.row(j);
+    }
+};
+
+// The mapped boxes of b's nodes for one search, each mapped when first asked for: a node of b
+// meets several nodes of a (the search descends the larger box of a pair, so a node of b
+// stays while a's side is split), and its mapping is about a third of a pair's bound. The
+// same numbers as mapping it at each pair, so the bounds are unchanged bit for bit. Kept per
+// thread between searches (a generation stamp marks the current search's entries); a mesh of
+// more than kMaxNodes nodes maps at each pair instead, so the cache stays small.
+class MappedObbCache {
+public:
+    static constexpr size_t kMaxNodes = 1 << 16;
+
+    // Starts a search over `mesh`'s nodes; false when the mesh is too large to cache.
+    bool start(const MeshBvh& mesh) {
+        const size_t n = mesh.nodes().size();
+        if (n > kMaxNodes) return false;
+        if (stamp_.size() < n) {
+            stamp_.assign(n, 0);
+            boxes_.resize(n);
+            generation_ = 0;
+        }
+        if (++generation_ == 0) {  // wrapped: every old stamp could read as current
+            std::fill(stamp_.begin(), stamp_.end(), 0u);
+            generation_ = 1;
+        }
+        return true;
+    }
+    const MappedObb& get(std::int32_t id, const NodeObb& b, const Relative& rel) {
+        const auto k = static_cast<size_t>(id);
+        if (stamp_[k] != generation_) {
+            boxes_[k].map(b, rel);
+            stamp_[k] = generation_;
+        }
+        return boxes_[k];
+    }
+
+private:
+    std::vector<MappedObb> boxes_;
+    std::vector<std::uint32_t> stamp_;
+    std::uint32_t generation_ = 0;
+};
+
+inline double obb_squared_distance(const NodeObb& a, const NodeObb& b, const MappedObb& mapped, const Relative& rel,
+                                   double enough2) {
+    const Vec3 d = mapped.center - a.center;  // a's local frame
     const Vec3 t = a.axes * d;                      // a's box frame
     const Vec3 tb = b.axes * rel.rotation.transpose_times(d);  // b's box frame
     double best = 0.0;
@@ -41,7 +94,7 @@ inline double obb_squared_distance(const NodeObb& a, const NodeObb& b, const Rel
     }
     double abs_c[3][3];  // |a_i . b_j|, both axes in a's local frame
     for (int j = 0; j < 3; ++j) {
-        const Vec3 bj = rel.rotation * b.axes.row(j);
+        const Vec3& bj = mapped.axes[j];
         for (int i = 0; i < 3; ++i) abs_c[i][j] = std::fabs(dot(a.axes.row(i), bj));
     }
     // In a's box frame, b's box lies in the axis-aligned box of half extents
@@ -80,15 +133,35 @@ inline double aabb_squared_distance(const BvhNode& na, const BvhNode& nb, const 
     return d2;
 }
 
+// Lower bound of the distance between the boxes of triangles a and b, each axis's gap lowered
+// by `slack` (the pair's rounding allowance): with u the lowered gaps and g the box gaps,
+// |g|^2 >= |u|^2 + 2 slack sum(u) + slack^2 >= (|u| + slack)^2, so the bound is at most the
+// box distance less `slack`, and the rounding of the triangle distance (far under `slack`)
+// can never take a pair it drops below the bound. Unlowered, a face-to-face pair whose box
+// gap is its distance was dropped when its computed distance rounded a few ulps under the
+// box's (parallel caps: the search missed the smallest pair by 3 ulps). Returns a squared
+// distance.
+inline double triangle_box_lowered_squared_distance(const TriangleBox& a, const TriangleBox& b, double slack) {
+    double d2 = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        const double gap = max2(a.lower[k] - b.upper[k], b.lower[k] - a.upper[k]) - slack;
+        if (gap > 0.0) d2 += gap * gap;
+    }
+    return d2;
+}
+
 // Lower bound of the distance between triangles a and b from their projections on the line
 // through their centroids (separating-axis bound): tight when the triangles are far apart
-// relative to their size, where the box bound is loose. Returns a squared distance.
-inline double triangle_axis_squared_distance(const Vec3 a[3], const Vec3 b[3]) {
+// relative to their size, where the box bound is loose. The gap is lowered by `slack`, as
+// the box bound's. Returns a squared distance.
+inline double triangle_axis_squared_distance(const Vec3 a[3], const Vec3 b[3], double slack) {
     const Vec3 axis = (b[0] + b[1] + b[2]) - (a[0] + a[1] + a[2]);
     const double a_max = max2(dot(axis, a[0]), max2(dot(axis, a[1]), dot(axis, a[2])));
     const double b_min = min2(dot(axis, b[0]), min2(dot(axis, b[1]), dot(axis, b[2])));
     const double gap = b_min - a_max;
-    return gap > 0.0 ? gap * gap / dot(axis, axis) : 0.0;
+    if (!(gap > 0.0)) return 0.0;
+    const double lowered = gap / std::sqrt(dot(axis, axis)) - slack;
+    return lowered > 0.0 ? lowered * lowered : 0.0;
 }
 
 // Lower bound of the distance between triangles a and b from their planes (unit normals na
@@ -125,6 +198,59 @@ inline double triangle_capsule_squared_distance(const Vec3 a[3], const TriangleC
     return gap > 0.0 ? gap * gap : 0.0;
 }
 
+// A separating-axis bound along the direction of the best pair so far (from its point on a
+// to its point on b, a's frame): for any unit n the distance between two sets is at least
+// min over the second of n . y less max over the first of n . x. Near the end of a search n is
+// (nearly) the normal of the closest pair's separating plane, which supports both meshes where
+// they are locally convex there, so every node or triangle pair beside the closest features
+// projects past the gap and is dropped, where the boxes, centroid lines and planes (whose
+// bounds fall short of the distance by a share of the pieces' sizes) keep the pairs around the
+// closest vertex that are within a few percent of it (meshes far apart: those were most of the
+// triangle pairs measured). Each gap is lowered by the pair's rounding allowance `slack`, far
+// above the rounding of these dot products (the boxes are padded for theirs, MeshBvh), so that
+// rounding can only keep a pair. Inactive (bounds of 0) until a first pair is measured.
+class WitnessAxis {
+public:
+    bool active() const { return active_; }
+    void set(const Vec3& point_a, const Vec3& point_b, const Relative& rel) {
+        const Vec3 d = point_b - point_a;
+        const double length = norm(d);
+        active_ = length > 0.0 && std::isfinite(length);
+        if (!active_) return;
+        n_ = d / length;
+        n_b_ = rel.rotation.transpose_times(n_);
+        offset_ = dot(rel.translation, n_);
+        slack_ = rel.slack;
+    }
+    // Squared gap between node a's oriented box and node b's (b's local frame) along n.
+    double nodes(const NodeObb& a, const NodeObb& b) const {
+        const double a_high = dot(a.center, n_) + reach(a, n_);
+        const double b_low = dot(b.center, n_b_) + offset_ - reach(b, n_b_);
+        return squared_gap(b_low - a_high);
+    }
+    // Squared gap between triangle a and triangle b (both in a's frame) along n.
+    double triangles(const Vec3 a[3], const Vec3 b[3]) const {
+        const double a_high = max2(dot(a[0], n_), max2(dot(a[1], n_), dot(a[2], n_)));
+        const double b_low = min2(dot(b[0], n_), min2(dot(b[1], n_), dot(b[2], n_)));
+        return squared_gap(b_low - a_high);
+    }
+
+private:
+    // Half the width of a box's projection on unit n (box frame axes in the frame of n).
+    static double reach(const NodeObb& box, const Vec3& n) {
+        return box.half.x * std::fabs(dot(box.axes.row(0), n)) + box.half.y * std::fabs(dot(box.axes.row(1), n)) +
+               box.half.z * std::fabs(dot(box.axes.row(2), n));
+    }
+    double squared_gap(double gap) const {
+        const double lowered = gap - slack_;
+        return lowered > 0.0 ? lowered * lowered : 0.0;  // also NaN (an overflow): no bound
+    }
+    bool active_ = false;
+    Vec3 n_, n_b_;  // unit, a's frame; the same in b's frame
+    double offset_ = 0.0;  // translation . n: b's points at y (b's frame) project at y . n_b + offset
+    double slack_ = 0.0;
+};
+
 struct StackItem {
     std::int32_t a, b;
     double bound;  // squared box distance when pushed
@@ -138,8 +264,12 @@ struct SearchResult {
     std::int32_t triangle_a = -1, triangle_b = -1;  // leaf order
 };
 
-// Branch and bound over node pairs. `bound2` is the squared max_distance.
-SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative& rel, double bound2) {
+// Branch and bound over node pairs. `bound2` is the squared max_distance. `start` (leaf
+// order, a < 0: none) is a triangle pair measured first: its distance, when within the bound,
+// is the first best and its direction the first axis, so that the search prunes from its
+// first node pairs (a pair whose boxes touch: near the closest pair when the meshes are near).
+SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative& rel, double bound2,
+                             CrossingPair start) {
     SearchResult r;
     r.squared_distance = bound2;
     // A pair at exactly max_distance still counts, so before the first find the test is strict.
@@ -158,9 +288,36 @@ SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative&
         heap.push_back(item);
         std::push_heap(heap.begin(), heap.end(), farther);
     };
-    const double root2 = obb_squared_distance(oa[0], ob[0], rel, bound2);
+    thread_local MappedObbCache cache;
+    const bool cached = cache.start(b);
+    MappedObb scratch;
+    // b's node j mapped into a's frame: from the cache, or mapped here for a large mesh.
+    const auto mapped = [&](std::int32_t j) -> const MappedObb& {
+        if (cached) return cache.get(j, ob[static_cast<size_t>(j)], rel);
+        scratch.map(ob[static_cast<size_t>(j)], rel);
+        return scratch;
+    };
+    const double root2 = obb_squared_distance(oa[0], ob[0], mapped(0), rel, bound2);
     if (pruned(root2)) return r;
     MappedLeaf leaf_b;
+    WitnessAxis axis;
+    if (start.a >= 0) {
+        // As the leaves measure it (b's corners mapped one by one, the full distance): the
+        // same number that pair gives wherever it is measured.
+        const Vec3* source = b.triangle(start.b);
+        const Vec3 tb[3] = {rel.apply(source[0]), rel.apply(source[1]), rel.apply(source[2])};
+        Vec3 pa, pb;
+        const double d2 = triangle_separated_squared_distance(a.triangle(start.a), tb, &pa, &pb);
+        if (d2 <= bound2) {
+            r.found = true;
+            r.squared_distance = d2;
+            r.point_a = pa;
+            r.point_b = pb;
+            r.triangle_a = start.a;
+            r.triangle_b = start.b;
+            axis.set(pa, pb, rel);
+        }
+    }
     // The pair at hand: popped from the heap, or the nearer child of the last one when it is
     // no farther than the heap's nearest (what the heap would give back, without the push and
     // the pop).
@@ -172,9 +329,14 @@ SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative&
             item = heap.back();
             heap.pop_back();
         }
-        held = false;
         // Every pair left is at least as far: done.
         if (pruned(item.bound)) break;
+        // A pair from the heap, pushed before the best pair's direction was known (or moved),
+        // may be dropped by it now (a held pair's bound has just been taken with it).
+        if (!held && axis.active() &&
+            pruned(axis.nodes(oa[static_cast<size_t>(item.a)], ob[static_cast<size_t>(item.b)])))
+            continue;
+        held = false;
         const BvhNode& x = na[static_cast<size_t>(item.a)];
         const BvhNode& y = nb[static_cast<size_t>(item.b)];
         if (x.is_leaf() && y.is_leaf()) {
@@ -188,8 +350,9 @@ SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative&
                     // those whose boxes touch, which are all that can cross): measure only.
                     // The surfaces are disjoint (first_crossing found no crossing pair among
                     // those whose boxes touch, which are all that can cross): measure only.
-                    if (pruned(triangle_box_squared_distance(box_a, leaf_b.boxes[j])) ||
-                        pruned(triangle_axis_squared_distance(ta, leaf_b.corners[j])) ||
+                    if ((axis.active() && pruned(axis.triangles(ta, leaf_b.corners[j]))) ||
+                        pruned(triangle_box_lowered_squared_distance(box_a, leaf_b.boxes[j], rel.slack)) ||
+                        pruned(triangle_axis_squared_distance(ta, leaf_b.corners[j], rel.slack)) ||
                         pruned(triangle_plane_squared_distance(ta, normal_a, leaf_b.corners[j],
                                                                rel.rotation * b.triangle_normal(y.index + j), rel.slack)) ||
                         ((a.triangle_capsule(i).thin || b.triangle_capsule(y.index + j).thin) &&
@@ -213,6 +376,7 @@ SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative&
                         r.point_b = pb;
                         r.triangle_a = i;
                         r.triangle_b = y.index + j;
+                        axis.set(pa, pb, rel);
                     }
                 }
             }
@@ -230,8 +394,14 @@ SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative&
             c1 = {item.a, item.b + 1, 0.0};
             c2 = {item.a, y.index, 0.0};
         }
-        c1.bound = obb_squared_distance(oa[static_cast<size_t>(c1.a)], ob[static_cast<size_t>(c1.b)], rel, r.squared_distance);
-        c2.bound = obb_squared_distance(oa[static_cast<size_t>(c2.a)], ob[static_cast<size_t>(c2.b)], rel, r.squared_distance);
+        // The best pair's axis first: where it drops a pair the box bound is not needed.
+        for (StackItem* c : {&c1, &c2}) {
+            const NodeObb& box_a = oa[static_cast<size_t>(c->a)];
+            const NodeObb& box_b = ob[static_cast<size_t>(c->b)];
+            c->bound = axis.active() ? axis.nodes(box_a, box_b) : 0.0;
+            if (!pruned(c->bound))
+                c->bound = max2(c->bound, obb_squared_distance(box_a, box_b, mapped(c->b), rel, r.squared_distance));
+        }
         if (rel.aligned) {
             c1.bound = max2(c1.bound, aabb_squared_distance(na[static_cast<size_t>(c1.a)], nb[static_cast<size_t>(c1.b)], rel));
             c2.bound = max2(c2.bound, aabb_squared_distance(na[static_cast<size_t>(c2.a)], nb[static_cast<size_t>(c2.b)], rel));
@@ -324,12 +494,13 @@ MeshDistanceOutput mesh_distance(const MeshDistanceInput& input) {
     // pairs whose boxes touch and measures nothing, than by the distance search, which measures
     // every near triangle pair on its way to the first crossing one.
     SearchResult r;
-    if (first_crossing(a, b, rel, &r.triangle_a, &r.triangle_b, &r.point_a)) {
+    CrossingPair touching{-1, -1};
+    if (first_crossing(a, b, rel, &r.triangle_a, &r.triangle_b, &r.point_a, &touching)) {
         r.found = r.intersecting = true;
         r.squared_distance = 0.0;
         r.point_b = r.point_a;
     } else {
-        r = search_distance(a, b, rel, bound2);
+        r = search_distance(a, b, rel, bound2, touching);
     }
     if (r.found) {
         out.distance = std::sqrt(r.squared_distance);

@@ -215,8 +215,9 @@ void group_near_pairs(const std::vector<std::pair<std::int32_t, std::int32_t>>& 
 namespace mesh_detail {
 
 bool first_crossing(const MeshBvh& a, const MeshBvh& b, const Relative& rel, std::int32_t* triangle_a,
-                    std::int32_t* triangle_b, Vec3* witness) {
+                    std::int32_t* triangle_b, Vec3* witness, CrossingPair* touching) {
     return for_each_touching_pair(a, b, rel, [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
+        if (touching != nullptr && touching->a < 0) *touching = CrossingPair{i, j};
         Vec3 w;
         if (planes_separate(a, i, ta, b, j, tb, rel) || !triangles_intersect(ta, tb, &w)) return false;
         *witness = w;

@@ -213,8 +213,10 @@ bool inside_mesh(const MeshBvh& mesh, const Vec3& p, long long* work);
 
 /// The first intersecting triangle pair (leaf order) of the descent of mesh_intersects and a
 /// point they share (a's frame); false when the surfaces do not meet (mesh_intersection.cpp).
+/// `touching`, when given with a < 0, gets the first triangle pair whose boxes touch (a near
+/// pair for the distance search to start from), left as it is when there is none.
 bool first_crossing(const MeshBvh& a, const MeshBvh& b, const Relative& rel, std::int32_t* triangle_a,
-                    std::int32_t* triangle_b, Vec3* witness);
+                    std::int32_t* triangle_b, Vec3* witness, CrossingPair* touching = nullptr);
 
 /// The descent of mesh_intersects run to the end: the intersecting triangle pairs in descent
 /// order, and the marks of both meshes' triangles (mesh_intersection.cpp).

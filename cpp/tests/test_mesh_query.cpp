@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <vector>
 
 #include "check.hpp"
 #include "fixtures.hpp"
@@ -199,6 +200,51 @@ TEST_CASE("mesh query: the pruned distance search returns the brute-force minimu
         CHECK_EQ(r.distance, std::sqrt(best));
     }
     CHECK(disjoint >= 30);
+}
+
+TEST_CASE("mesh query: the best pair's axis drops only pairs that cannot win, ties included") {
+    // Tubes end to end, cap facing cap: the fan caps put 24 triangles around one vertex and the
+    // caps are parallel planes when the tubes are aligned, so many triangle pairs tie at (or
+    // come within rounding of) the distance, and the separating-axis bound along the best
+    // pair's direction, taken in the middle of the search, sits at the distance for them. The
+    // search must still return the smallest triangle-pair distance bit for bit, and the
+    // triangles it reports must be at that distance.
+    const fixtures::TriangleMesh m = tube(24, 0.05, 0.5);
+    const MeshBvh mesh = m.bvh();
+    REQUIRE(mesh.validate());
+    std::vector<std::int32_t> leaf_of(static_cast<size_t>(mesh.triangle_count()));
+    for (std::int32_t i = 0; i < mesh.triangle_count(); ++i) leaf_of[static_cast<size_t>(mesh.face_index(i))] = i;
+    std::uint64_t state = 99;
+    const auto uniform = [&state]() {  // in [-1, 1)
+        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+        return static_cast<double>(state >> 11) * (2.0 / 9007199254740992.0) - 1.0;
+    };
+    for (int trial = 0; trial < 24; ++trial) {
+        // Aligned (parallel caps, exact ties), slightly tilted, or turned about the axis.
+        const double tilt = trial % 3 == 0 ? 0.0 : 0.02 * uniform();
+        const double gap = 0.01 + 0.5 * std::fabs(uniform());
+        const Pose pa = posed(1.0, 0.0, 0.0, trial % 2 ? 0.3 * uniform() : 0.0, {0.0, 0.0, 0.0});
+        const Pose pb = posed(1.0, tilt, 0.0, trial % 2 ? 0.0 : 0.3 * uniform(),
+                              {trial % 4 == 1 ? 0.01 : 0.0, 0.0, 0.5 + gap});
+        const MeshDistanceOutput r = mesh_distance(pair_of(mesh, pa, mesh, pb));
+        REQUIRE(r.status == Status::CONVERGED);
+        REQUIRE(!r.intersecting);
+        const mesh_detail::Relative rel(pa, pb, mesh, mesh);
+        const auto pair_distance2 = [&](std::int32_t i, std::int32_t j) {
+            const Vec3 tb[3] = {rel.apply(mesh.triangle(j)[0]), rel.apply(mesh.triangle(j)[1]),
+                                rel.apply(mesh.triangle(j)[2])};
+            return triangle_separated_squared_distance(mesh.triangle(i), tb, nullptr, nullptr);
+        };
+        double best = std::numeric_limits<double>::infinity();
+        for (std::int32_t i = 0; i < mesh.triangle_count(); ++i)
+            for (std::int32_t j = 0; j < mesh.triangle_count(); ++j) best = std::fmin(best, pair_distance2(i, j));
+        CHECK_EQ(r.distance, std::sqrt(best));
+        REQUIRE(r.triangle_a >= 0);
+        REQUIRE(r.triangle_b >= 0);
+        const std::int32_t ia = leaf_of[static_cast<size_t>(r.triangle_a)];
+        const std::int32_t ib = leaf_of[static_cast<size_t>(r.triangle_b)];
+        CHECK_EQ(pair_distance2(ia, ib), best);
+    }
 }
 
 TEST_CASE("mesh bvh: closed means every edge pairs with one reversed twin, short lists or long") {

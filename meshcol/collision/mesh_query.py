@@ -487,16 +487,22 @@ def mesh_distance_batch(
     """
     if not isinstance(meshes, MeshSet):
         raise TypeError(f"meshes must be a MeshSet, got {type(meshes).__name__}")
-    if poses is not None:
-        poses = as_poses(poses, len(meshes))
-    pairs = _pairs(pairs, len(meshes))
     max_distance = float(max_distance)
     if not max_distance >= 0.0:
         raise ValueError(f"max_distance must be >= 0, got {max_distance}")
-    columns = meshes._handle.distance_batch(
-        poses, pairs, threads=threads, max_distance=max_distance
-    )
-    return MeshDistanceBatch(**columns)
+    # As mesh_intersects_batch: poses and pairs already in the core's form are read in place by
+    # one native call that builds the result (a one-pair batch then costs about the query);
+    # anything else is None, converted and checked here, and asked again.
+    handle = meshes._handle
+    result = handle.distance_batch(poses, pairs, threads, max_distance, MeshDistanceBatch)
+    if result is None:
+        if poses is not None:
+            poses = as_poses(poses, len(meshes))
+        pairs = as_pairs(pairs, len(meshes), "meshes")
+        result = handle.distance_batch(poses, pairs, threads, max_distance, MeshDistanceBatch)
+        if result is None:  # as_poses and as_pairs give the core's form: never declined twice
+            raise AssertionError("the core declined converted poses and pairs")
+    return result
 
 
 def mesh_intersects_batch(
