@@ -25,6 +25,43 @@ inline int scan_support(const Vec3* v, int n, const Vec3& d) {
     return best;
 }
 
+// `scan_support` of two shapes at once (a in `da`, b in `db`): the two chains of compares
+// side by side in one loop, as `climb_pair` runs two climbs. Same answers as two scans.
+inline void scan_pair(const Vec3* va, int na, const Vec3& da, const Vec3* vb, int nb,
+                      const Vec3& db, int& out_a, int& out_b) {
+    int best_a = 0, best_b = 0;
+    double top_a = dot(va[0], da), top_b = dot(vb[0], db);
+    const int n = na < nb ? na : nb;
+    int i = 1;
+    for (; i < n; ++i) {
+        const double xa = dot(va[i], da), xb = dot(vb[i], db);
+        if (xa > top_a) {
+            top_a = xa;
+            best_a = i;
+        }
+        if (xb > top_b) {
+            top_b = xb;
+            best_b = i;
+        }
+    }
+    for (int k = i; k < na; ++k) {
+        const double xa = dot(va[k], da);
+        if (xa > top_a) {
+            top_a = xa;
+            best_a = k;
+        }
+    }
+    for (int k = i; k < nb; ++k) {
+        const double xb = dot(vb[k], db);
+        if (xb > top_b) {
+            top_b = xb;
+            best_b = k;
+        }
+    }
+    out_a = best_a;
+    out_b = best_b;
+}
+
 // Forced inlining: as plain functions shared by two callers, GCC stops inlining them and the
 // climbs slow down by a tenth.
 #if defined(__GNUC__) || defined(__clang__)

@@ -17,6 +17,7 @@ MinkowskiDifference::MinkowskiDifference(const ShapeView& shape_a, const Pose& p
     if (radius_a < 0.0) radius_a = bounding_radius(shape_a);
     if (radius_b < 0.0) radius_b = bounding_radius(shape_b);
     climb_both = climbs(shape_a) && climbs(shape_b);
+    scan_both = scans(shape_a) && scans(shape_b);
     scale = radius_a + radius_b + norm(translation_b);
     if (!(scale > 0.0)) scale = 1.0;
 }
@@ -37,6 +38,12 @@ SimplexVertex MinkowskiDifference::support(const Vec3& d) {
     SupportPoint sa, sb;
     if (climb_both) {
         climb::climb_pair(*a, d, start_a, *b, db, start_b, sa, sb);
+    } else if (scan_both) {
+        int ia, ib;
+        climb::scan_pair(a->vertices, a->vertex_count, d, b->vertices, b->vertex_count, db, ia,
+                         ib);
+        sa = {a->vertices[ia], ia};
+        sb = {b->vertices[ib], ib};
     } else {
         sa = support_core(*a, d, start_a);
         sb = support_core(*b, db, start_b);

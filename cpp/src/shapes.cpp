@@ -30,6 +30,11 @@ SupportPoint polytope_support(const ShapeView& s, const Vec3& d, int hint) {
 
 }  // namespace
 
+bool scans(const ShapeView& s) {
+    return s.kind == ShapeKind::POLYTOPE && s.vertices != nullptr && s.vertex_count > 0 &&
+           !climbs(s);
+}
+
 bool climbs(const ShapeView& s) {
     return s.kind == ShapeKind::POLYTOPE && s.adjacency_offsets != nullptr &&
            s.vertex_count > defaults::hill_climbing_min_vertices;

@@ -9,6 +9,7 @@
 #include "meshcol/gjk.hpp"
 #include "meshcol/narrowphase.hpp"
 #include "meshcol/sat.hpp"
+#include "climb.hpp"
 
 using namespace meshcol;
 using fixtures::at;
@@ -226,4 +227,56 @@ TEST_CASE("shapes: prefetch reads only the shape's own data and changes no answe
     CHECK(with.depth > 0.0);
     CHECK(with.depth == without.depth);
     CHECK(with.normal.x == without.normal.x);
+}
+
+TEST_CASE("shapes: the joint scan of two polytopes is two scans, bit for bit") {
+    // Sizes on both sides of each other (the shared loop and either tail), vertices with
+    // repeats (ties go to the first), and directions with NaN (no product wins: index 0).
+    std::uint64_t state = 777;
+    auto uniform = [&state] {
+        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+        return static_cast<double>(state >> 11) * 0x1p-53 * 2.0 - 1.0;
+    };
+    const int sizes[] = {1, 2, 5, 16, 17, 31, 32};
+    int pairs = 0;
+    for (int na : sizes) {
+        for (int nb : sizes) {
+            std::vector<Vec3> va(static_cast<size_t>(na)), vb(static_cast<size_t>(nb));
+            for (Vec3& p : va) p = Vec3{uniform(), uniform(), uniform()};
+            for (Vec3& p : vb) p = Vec3{uniform(), uniform(), uniform()};
+            if (na > 3) va[static_cast<size_t>(na - 1)] = va[1];  // a tie
+            if (nb > 3) vb[static_cast<size_t>(nb - 2)] = vb[0];
+            const ShapeView a = fixtures::polytope(va), b = fixtures::polytope(vb);
+            CHECK(scans(a));
+            CHECK(scans(b));
+            for (int k = 0; k < 20; ++k) {
+                Vec3 da{uniform(), uniform(), uniform()}, db{uniform(), uniform(), uniform()};
+                if (k == 0) da = va[na > 3 ? 1 : 0];  // towards the repeated vertex
+                if (k == 1) db = Vec3{std::nan(""), 0.0, 1.0};
+                int ia = -1, ib = -1;
+                climb::scan_pair(a.vertices, na, da, b.vertices, nb, db, ia, ib);
+                CHECK(ia == support_core(a, da).index);
+                CHECK(ib == support_core(b, db).index);
+                ++pairs;
+            }
+            // The Minkowski difference's support through the joint scan.
+            const Pose pb = fixtures::turned_about_z(0.7, 0.3, -0.2, 0.1);
+            MinkowskiDifference md(a, at(0, 0, 0), b, pb, false);
+            CHECK(md.scan_both);
+            const Vec3 d{uniform(), uniform(), uniform()};
+            const SimplexVertex w = md.support(d);
+            const SupportPoint sa = support_core(a, d);
+            const SupportPoint sb = support_core(b, pb.rotation.transpose_times(-d));
+            CHECK(w.index_a == sa.index);
+            CHECK(w.index_b == sb.index);
+            CHECK(w.a.x == sa.point.x);
+            CHECK(w.b.y == (pb.rotation * sb.point + pb.translation).y);
+        }
+    }
+    CHECK(pairs == 7 * 7 * 20);
+    // A box does not scan: the pair keeps the general path.
+    std::vector<Vec3> one = {{0, 0, 0}};
+    MinkowskiDifference mixed(fixtures::box(1, 1, 1), at(0, 0, 0), fixtures::polytope(one),
+                              at(3, 0, 0), false);
+    CHECK(!mixed.scan_both);
 }

@@ -39,6 +39,7 @@ struct MinkowskiDifference {
     int hint_a = -1;       ///< warm start for hill climbing on a
     int hint_b = -1;       ///< warm start for hill climbing on b
     bool climb_both = false;  ///< both shapes climb (`climbs`): one joint climb per support
+    bool scan_both = false;   ///< both shapes scan (`scans`): one joint scan per support
     Vec3 last_direction;      ///< direction of the previous support call (zero: none)
 
     /// `radius_a` and `radius_b` are the shapes' `bounding_radius` when the caller has them

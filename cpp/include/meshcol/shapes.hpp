@@ -63,6 +63,10 @@ SupportPoint support_core(const ShapeView& shape, const Vec3& direction, int hin
 /// adjacency and more than `defaults::hill_climbing_min_vertices` vertices).
 bool climbs(const ShapeView& shape);
 
+/// True when `support_core` of this shape scans all its vertices: a polytope with vertices
+/// that does not climb.
+bool scans(const ShapeView& shape);
+
 /// Asks the memory system for the data hill climbing reads (the vertices and hull adjacency of
 /// a polytope that `climbs`, when it has at most `defaults::prefetch_max_vertices` vertices)
 /// ahead of a query: no effect on any result, only on how long the climbs wait.
