@@ -22,7 +22,14 @@ import numpy as np
 
 from meshcol.errors import InputFileError, InvalidMeshError
 from meshcol.io.collision_names import GodotHint, godot_hint
-from meshcol.io.mesh_formats import MESH_EXTENSIONS, MeshFormat, check_file, mesh_format
+from meshcol.io.mesh_files import MeshFiles, PackedObjects, stem
+from meshcol.io.mesh_formats import (
+    MESH_EXTENSIONS,
+    MeshFormat,
+    check_file,
+    formats_of,
+    mesh_format,
+)
 from meshcol.io.physics_bodies import BodyGroup, axis_turn, choose_collider, scaled_primitive
 from meshcol.types import Body, Scene
 
@@ -34,6 +41,7 @@ __all__ = [
     "file_identities",
     "load_mesh",
     "load_meshes",
+    "read_meshes",
     "merge_vertices",
     "node_body_names",
     "split_rigid",
@@ -304,20 +312,39 @@ def load_meshes(
     the file has none. STL: binary when the size is 84 + 50 x the triangle count, else ASCII
     (one body per ``solid``). Other formats go through trimesh, one file at a time.
     """
+    return read_meshes(paths, merge=merge, threads=threads).per_file()
+
+
+def read_meshes(
+    paths: Sequence[str | os.PathLike[str]], *, merge: bool = True, threads: int = 0
+) -> MeshFiles:
+    """:func:`load_meshes` as a mapping from each path (``os.fspath``) to its bodies, whose
+    Body objects are built only when asked for: a scene of files of one object each keeps the
+    core's packed arrays (:func:`meshcol.io.mesh_files.lone_objects` reads them in bulk).
+    Same arguments, same errors."""
     sources = [os.fspath(p) for p in paths]
-    formats = [_format_of(source) for source in sources]
-    native = [i for i, fmt in enumerate(formats) if fmt.native is not None]
+    formats = formats_of(sources)
+    for source, fmt in zip(sources, formats):
+        if fmt is None:
+            _format_of(source)  # says what is wrong with the first such path
+    known = [fmt for fmt in formats if fmt is not None]
+    native = [i for i, fmt in enumerate(known) if fmt.native is not None]
+    if len(native) == len(sources):
+        return _read_native(sources, known, merge, threads)
     out: list[list[Body] | None] = [None] * len(sources)
     if native:
         read = _read_native(
-            [sources[i] for i in native], [formats[i] for i in native], merge, threads
+            [sources[i] for i in native], [known[i] for i in native], merge, threads
         )
-        for i, bodies in zip(native, read):
+        for i, bodies in zip(native, read.per_file()):
             out[i] = bodies
-    return [
-        bodies if bodies is not None else load_mesh(source, merge=merge)
-        for source, bodies in zip(sources, out)
-    ]
+    return MeshFiles(
+        sources,
+        [
+            bodies if bodies is not None else load_mesh(source, merge=merge)
+            for source, bodies in zip(sources, out)
+        ],
+    )
 
 
 def file_identities(paths: Sequence[str]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -390,8 +417,8 @@ class _NativeRead:
 
 def _read_native(
     sources: list[str], formats: list[MeshFormat], merge: bool, threads: int
-) -> list[list[Body]]:
-    """The bodies of files the core reads, read in parallel: one list per file."""
+) -> MeshFiles:
+    """The bodies of files the core reads, read in parallel."""
     from meshcol._native import core
 
     codes = [fmt.native for fmt in formats if fmt.native is not None]
@@ -404,27 +431,11 @@ def _read_native(
         (read.owner == np.arange(len(sources))).all()
     )
     if not big and one_each and not read.status.any():
-        return _plain_files(read, sources)
-    return _checked_files(read, sources, formats, big)
-
-
-def _plain_files(read: _NativeRead, sources: list[str]) -> list[list[Body]]:
-    """The common scene: every file read, one object each, no coordinate too big. Each body is
-    what :func:`_checked_files` builds (a lone object is named by its file's stem)."""
-    vo, fo = read.v_off.tolist(), read.f_off.tolist()
-    vertices, faces, plain = read.vertices, read.faces, Body.plain
-    return [
-        [
-            plain(
-                _stem(source),
-                source,
-                vertices[vo[j] : vo[j + 1]],
-                faces[fo[j] : fo[j + 1]],
-                _EYE.copy(),
-            )
-        ]
-        for j, source in enumerate(sources)
-    ]
+        # the common scene: every file read, one object each, no coordinate too big; each
+        # body, when asked for, is what _checked_files builds (named by its file's stem)
+        packed = PackedObjects(read.vertices, read.faces, read.v_off, read.f_off)
+        return MeshFiles(sources, [None] * len(sources), packed)
+    return MeshFiles(sources, list(_checked_files(read, sources, formats, big)))
 
 
 def _checked_files(
@@ -445,27 +456,17 @@ def _checked_files(
         objects = per_file[j]
         if not objects:
             raise InvalidMeshError("mesh has no faces", source)
-        stem = _stem(source)
+        file_stem = stem(source)
         used: set[str] = set()
         bodies = []
         for k in objects:
             if k + 1 in big:
                 check_magnitude(read.vertices[read.v_off[k] : read.v_off[k + 1]], "vertex", source)
-            name = names[k] or (fmt.unnamed or stem)
-            bodies.append(
-                read.body(k, _unique(stem if len(objects) == 1 else f"{stem}/{name}", used), source)
-            )
+            name = names[k] or (fmt.unnamed or file_stem)
+            full = file_stem if len(objects) == 1 else f"{file_stem}/{name}"
+            bodies.append(read.body(k, _unique(full, used), source))
         out.append(bodies)
     return out
-
-
-def _stem(source: str) -> str:
-    """``Path(source).stem`` without building a Path (a scene may name 100,000 files)."""
-    name = (
-        os.path.basename(source.rstrip("/")) if source.endswith("/") else os.path.basename(source)
-    )
-    dot = name.rfind(".")
-    return name[:dot] if 0 < dot < len(name) - 1 else name
 
 
 def _text(data: bytes) -> str:
