@@ -304,9 +304,14 @@ def meshcol_check(
 
 
 #: Stages of a unique-asset check beyond ``check_stages.STAGES``: inside the file read, the
-#: native read; inside the colliders, the hulls (one batched call) and the geometry keys.
+#: native read (and the Python around it); inside the bodies in bulk, the files' arrays read
+#: in bulk; inside the colliders, the colliders built as arrays and in them the hulls (one
+#: batched call), or the per-body path's hull call and geometry keys when a scene needs it.
 UNIQUE_STAGES = [
     ("meshcol.io.mesh_read", "_read_native"),
+    ("meshcol.io.scene_columns", "lone_objects"),
+    ("meshcol.analysis.colliders", "bulk_colliders"),
+    ("meshcol.collision.shapes", "pack_hull_slices"),
     ("meshcol.collision.shapes", "pack_hulls"),
     ("meshcol.analysis.colliders", "_geometry_key"),
 ]
