@@ -643,7 +643,7 @@ class _Pool:
             tuple(bodies),
             tuple(self.kinds),
             # every part its own unique shape, in pool order (a scene of unique assets): as is
-            pool if np.array_equal(rows, np.arange(len(pool))) else pool.take(rows),
+            pool if np.array_equal(rows, np.arange(len(pool.kinds))) else pool.take(rows),
             part_body,
             np.arange(len(rows), dtype=np.int64) - offsets[part_body],
             offsets,

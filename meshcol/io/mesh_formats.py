@@ -165,22 +165,6 @@ def mesh_format(source: str, opted_in: frozenset[str] = frozenset()) -> MeshForm
     return fmt
 
 
-def formats_of(sources: Sequence[str]) -> list[MeshFormat | None]:
-    """The format of each of ``sources``, as :func:`mesh_format` finds it with nothing opted
-    in (None where it raises): each extension looked up once, for 100,000 files."""
-    found: dict[str, MeshFormat | None] = {}
-    out = []
-    for source in sources:
-        extension = os.path.splitext(source)[1]
-        if extension not in found:
-            try:
-                found[extension] = mesh_format(source)
-            except InputFileError:
-                found[extension] = None
-        out.append(found[extension])
-    return out
-
-
 def declared_units(sources: Sequence[str | os.PathLike[str]]) -> str | None:
     """The units every one of ``sources`` is read in (:attr:`MeshFormat.units`), or None
     when one format does not say, two differ, or there are none."""

@@ -18,7 +18,7 @@ import numpy as np
 
 from meshcol.errors import MeshcolError, SceneError
 from meshcol.io.mesh_read import MAX_COORDINATE, check_magnitude, load_mesh, split_rigid
-from meshcol.io.paths import confine
+from meshcol.io.paths import confine_all, joined_paths
 from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Sphere, Spin, primitive_reach
 
 __all__ = [
@@ -82,7 +82,7 @@ def build_bodies(
 
 def read_mesh_files(document: Any, source: str) -> MutableMapping[str, list[Body]]:
     """Every mesh file the manifest names, read at once (OBJ and STL by the core, in parallel),
-    keyed by normalised path (:class:`meshcol.io.mesh_files.MeshFiles`: the bodies of a file
+    keyed by normalised path (:class:`meshcol.io.mesh_read.MeshFiles`: the bodies of a file
     built when asked for). Empty when a file fails: the body loop then reads the files one
     by one and reports the first bad one with its body's name."""
     from meshcol.io.mesh_read import read_meshes
@@ -91,9 +91,9 @@ def read_mesh_files(document: Any, source: str) -> MutableMapping[str, list[Body
     meshes = dict.fromkeys(
         spec["mesh"] for spec in document["bodies"] if isinstance(spec.get("mesh"), str)
     )  # each name once before the path arithmetic: 300,000 bodies may share 16 files
-    paths = list(
-        dict.fromkeys(confine(os.path.normpath(os.path.join(folder, m)), source, m) for m in meshes)
-    )  # each inside --root (meshcol.io.paths)
+    names = list(meshes)
+    joined = joined_paths(folder, names, normalise=True)
+    paths = list(dict.fromkeys(confine_all(joined, source, names)))  # inside --root
     try:
         return read_meshes(paths)
     except MeshcolError:

@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.io.mesh_files import lone_objects
-from meshcol.io.mesh_read import MAX_COORDINATE
+from meshcol.io.mesh_read import MAX_COORDINATE, lone_objects
+from meshcol.io.paths import joined_paths
 from meshcol.io.scene_bodies import AXES
 from meshcol.io.scene_schema import (
     BODY_FIELDS,
@@ -418,11 +418,11 @@ def _plain_objects(
     """Per mesh name: ``(path, vertices, faces)`` of its file's one object without a transform
     (None: the body loop builds its bodies), and the reach of the world check, sqrt(3)
     max |v| (inf for the others); per file, but in one numpy pass for all
-    (:func:`meshcol.io.mesh_files.lone_objects`)."""
+    (:func:`meshcol.io.mesh_read.lone_objects`)."""
     folder = os.path.dirname(source)
     meshes = list(dict.fromkeys(m for m in found.meshes if m is not None))
-    paths = [os.path.join(folder, mesh) for mesh in meshes]
-    _, largest, arrays = lone_objects(files, [os.path.normpath(path) for path in paths])
+    paths = joined_paths(folder, meshes)
+    _, largest, arrays = lone_objects(files, joined_paths(folder, meshes, normalise=True))
     reaches = largest * math.sqrt(3.0)
     objects: dict[str | None, Any] = {None: None}
     reach_of: dict[str | None, float] = {None: math.inf}

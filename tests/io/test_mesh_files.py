@@ -13,8 +13,7 @@ from click.testing import CliRunner
 
 from meshcol.cli import main
 from meshcol.errors import InputFileError, InvalidMeshError
-from meshcol.io.mesh_files import MeshFiles, lone_objects
-from meshcol.io.mesh_read import load_mesh, read_meshes
+from meshcol.io.mesh_read import MeshFiles, load_mesh, lone_objects, read_meshes
 
 
 def _obj(path, points, faces=((0, 1, 2), (0, 2, 3), (0, 3, 1), (1, 3, 2))) -> str:

@@ -20,7 +20,6 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 import meshcol
-import meshcol.io.mesh_files
 from meshcol.errors import InputFileError, InvalidMeshError
 from meshcol.io.mesh_read import load_mesh, merge_vertices, split_rigid
 
@@ -801,7 +800,7 @@ def test_load_meshes_plain_scene_pass_builds_what_the_general_loop_builds(tmp_pa
     "source", ["a/b.obj", ".obj", "a/b.tar.obj", "b", "a/.x.obj", "a/b.", "x/..obj", "/x/y.stl"]
 )
 def test_stem_is_paths_stem(source):
-    assert meshcol.io.mesh_files.stem(source) == Path(source).stem
+    assert meshcol.io.mesh_read._stem(source) == Path(source).stem
 
 
 @pytest.mark.slow
