@@ -40,8 +40,10 @@ Reader alone: .venv/bin/python benchmarks/bench_scale.py --reader --sizes 100000
      part is the kernel's opening and reading, which a loaded machine inflates; with
      --baseline, alternated)
 A/B: .venv/bin/python benchmarks/bench_scale.py --baseline ../main/.venv/bin/meshcol --repeat 3
-     [--sizes 10000 100000] [--extras] [--primitives 10000]   (runs alternated; wall, CPU and peak RSS ranges;
-     the two sides' last reports compared byte for byte, clock fields masked)
+     [--sizes 10000 100000] [--extras] [--primitives 10000] [--stages]   (runs alternated, each
+     side first every other round; wall, CPU and peak RSS ranges; the two sides' last reports
+     compared byte for byte, clock fields masked; --stages: each side's CPU seconds per stage,
+     one run each, for the unique-asset sizes)
 """
 
 from __future__ import annotations
@@ -317,9 +319,10 @@ UNIQUE_STAGES = [
 ]
 
 _STAGE_RUN = (
-    "import sys; sys.path.insert(0, {bench!r}); import check_stages as c; "
-    "c.STAGES += {extra!r}; sys.argv = ['check_stages.py', *sys.argv[1:]]; c.main()"
-)
+    "import importlib, sys; sys.path.insert(0, {bench!r}); import check_stages as c; "
+    "c.STAGES += [(m, f) for m, f in {extra!r} if hasattr(importlib.import_module(m), f)]; "
+    "sys.argv = ['check_stages.py', *sys.argv[1:]]; c.main()"
+)  # a stage the build (a --baseline) does not have is left out
 
 
 def stage_times(folder: Path, threads: int, python: str = sys.executable) -> list[str]:
@@ -635,8 +638,11 @@ def ab(args: argparse.Namespace) -> None:
     ]
     for case, folder in cases:
         figures: dict[str, list[tuple[float, float, float]]] = {side: [] for side in sides}
-        for _ in range(args.repeat):
-            for side, meshcol in sides.items():
+        for round_ in range(args.repeat):
+            # each side first every other round (the first run of a round may find the files
+            # out of the page cache)
+            order = list(sides.items())
+            for side, meshcol in order[::-1] if round_ % 2 else order:
                 rc, seconds, rss, _ = meshcol_check(
                     folder, args.threads, meshcol, f"report-{side}.json"
                 )
@@ -645,6 +651,11 @@ def ab(args: argparse.Namespace) -> None:
                 figures[side].append((seconds, LAST_CPU[0], rss))
         show(case, figures)
         print(f"{'':>24} reports: {same_reports(folder, list(sides))}")
+        if args.stages and "unique" in case:  # CPU seconds per stage, one run a side
+            for side, meshcol in sides.items():
+                print(f"{'':>24} {side} stages:")
+                for line in stage_times(folder, args.threads, str(Path(meshcol).parent / "python")):
+                    print(f"{'':>26} {line}")
     if args.extras:
         manifest = str(instances_folder() / "scene.json")
         code = f"import meshcol; s = meshcol.load_inputs([{manifest!r}]); print(len(s.bodies))"
