@@ -253,11 +253,12 @@ _WRAPPER = (
     "rc = subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL).returncode\n"
     "t = time.perf_counter() - t\n"
     "u = resource.getrusage(resource.RUSAGE_CHILDREN)\n"
-    "print(rc, t, u.ru_maxrss, u.ru_utime + u.ru_stime)\n"
+    "print(rc, t, u.ru_maxrss, u.ru_utime + u.ru_stime, u.ru_utime)\n"
 )
 
-#: Figures of the last :func:`timed` call: CPU seconds (user + system, every thread).
-LAST_CPU = [0.0]
+#: Figures of the last :func:`timed` call: CPU seconds (user + system, every thread), and the
+#: user part alone (the system part, page faults and file opens, swings most with the load).
+LAST_CPU = [0.0, 0.0]
 
 
 def timed(command: list[str]) -> tuple[int, float, float]:
@@ -266,7 +267,7 @@ def timed(command: list[str]) -> tuple[int, float, float]:
     out = subprocess.run(
         [sys.executable, "-c", _WRAPPER, *command], capture_output=True, text=True, check=True
     ).stdout.split()
-    LAST_CPU[0] = float(out[3])
+    LAST_CPU[0], LAST_CPU[1] = float(out[3]), float(out[4])
     return int(out[0]), float(out[1]), float(out[2]) / 1024
 
 
@@ -621,14 +622,15 @@ def ab(args: argparse.Namespace) -> None:
     mine = str(Path(sys.executable).parent / "meshcol")
     sides = {"this": mine, "baseline": args.baseline}
     print(f"cores: {os.cpu_count()}; A/B, {args.repeat} alternated runs each; {os.getloadavg()}")
-    print(f"{'case':>24} {'side':>9} {'wall s':>13} {'CPU s':>13} {'peak MiB':>11}")
+    print(f"{'case':>24} {'side':>9} {'wall s':>13} {'CPU s':>13} {'user s':>13} {'peak MiB':>11}")
 
-    def show(case: str, figures: dict[str, list[tuple[float, float, float]]]) -> None:
+    def show(case: str, figures: dict[str, list[tuple[float, ...]]]) -> None:
         for side, runs in figures.items():
-            wall, cpu, rss = zip(*runs)
+            wall, cpu, rss, user = zip(*runs)
             print(
                 f"{case:>24} {side:>9} {min(wall):6.2f}-{max(wall):<6.2f} "
-                f"{min(cpu):6.2f}-{max(cpu):<6.2f} {min(rss):5.0f}-{max(rss):<5.0f}"
+                f"{min(cpu):6.2f}-{max(cpu):<6.2f} {min(user):6.2f}-{max(user):<6.2f} "
+                f"{min(rss):5.0f}-{max(rss):<5.0f}"
             )
 
     cases = [(f"check, {n} unique", scene_folder(n)) for n in args.sizes] + [
@@ -637,7 +639,7 @@ def ab(args: argparse.Namespace) -> None:
         for kind in args.primitive_kinds
     ]
     for case, folder in cases:
-        figures: dict[str, list[tuple[float, float, float]]] = {side: [] for side in sides}
+        figures: dict[str, list[tuple[float, ...]]] = {side: [] for side in sides}
         for round_ in range(args.repeat):
             # each side first every other round (the first run of a round may find the files
             # out of the page cache)
@@ -648,7 +650,7 @@ def ab(args: argparse.Namespace) -> None:
                 )
                 if rc != 0:  # --fail-on none: anything else is a crash (a traceback is 1)
                     raise SystemExit(f"{side} meshcol check exited {rc} on {folder}")
-                figures[side].append((seconds, LAST_CPU[0], rss))
+                figures[side].append((seconds, LAST_CPU[0], rss, LAST_CPU[1]))
         show(case, figures)
         print(f"{'':>24} reports: {same_reports(folder, list(sides))}")
         if args.stages and "unique" in case:  # CPU seconds per stage, one run a side
@@ -666,7 +668,7 @@ def ab(args: argparse.Namespace) -> None:
                 rc, seconds, rss = timed([python, "-c", code])
                 if rc != 0:
                     raise SystemExit(f"{side} load_inputs exited {rc}")
-                figures[side].append((seconds, LAST_CPU[0], rss))
+                figures[side].append((seconds, LAST_CPU[0], rss, LAST_CPU[1]))
         show("load 300,000 bodies", figures)
     print(f"load average after: {os.getloadavg()}")
 
