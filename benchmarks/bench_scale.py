@@ -40,8 +40,10 @@ Reader alone: .venv/bin/python benchmarks/bench_scale.py --reader --sizes 100000
      part is the kernel's opening and reading, which a loaded machine inflates; with
      --baseline, alternated)
 A/B: .venv/bin/python benchmarks/bench_scale.py --baseline ../main/.venv/bin/meshcol --repeat 3
-     [--sizes 10000 100000] [--extras] [--primitives 10000]   (runs alternated; wall, CPU and peak RSS ranges;
-     the two sides' last reports compared byte for byte, clock fields masked)
+     [--sizes 10000 100000] [--extras] [--primitives 10000] [--stages]   (runs alternated, each
+     side first every other round; wall, CPU and peak RSS ranges; the two sides' last reports
+     compared byte for byte, clock fields masked; --stages: each side's CPU seconds per stage,
+     one run each, for the unique-asset sizes)
 """
 
 from __future__ import annotations
@@ -251,11 +253,12 @@ _WRAPPER = (
     "rc = subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL).returncode\n"
     "t = time.perf_counter() - t\n"
     "u = resource.getrusage(resource.RUSAGE_CHILDREN)\n"
-    "print(rc, t, u.ru_maxrss, u.ru_utime + u.ru_stime)\n"
+    "print(rc, t, u.ru_maxrss, u.ru_utime + u.ru_stime, u.ru_utime)\n"
 )
 
-#: Figures of the last :func:`timed` call: CPU seconds (user + system, every thread).
-LAST_CPU = [0.0]
+#: Figures of the last :func:`timed` call: CPU seconds (user + system, every thread), and the
+#: user part alone (the system part, page faults and file opens, swings most with the load).
+LAST_CPU = [0.0, 0.0]
 
 
 def timed(command: list[str]) -> tuple[int, float, float]:
@@ -264,7 +267,7 @@ def timed(command: list[str]) -> tuple[int, float, float]:
     out = subprocess.run(
         [sys.executable, "-c", _WRAPPER, *command], capture_output=True, text=True, check=True
     ).stdout.split()
-    LAST_CPU[0] = float(out[3])
+    LAST_CPU[0], LAST_CPU[1] = float(out[3]), float(out[4])
     return int(out[0]), float(out[1]), float(out[2]) / 1024
 
 
@@ -304,17 +307,23 @@ def meshcol_check(
 
 
 #: Stages of a unique-asset check beyond ``check_stages.STAGES``: inside the file read, the
-#: native read; inside the colliders, the hulls (one batched call) and the geometry keys.
+#: native read (and the Python around it); inside the bodies in bulk, the files' arrays read
+#: in bulk; inside the colliders, the colliders built as arrays and in them the hulls (one
+#: batched call), or the per-body path's hull call and geometry keys when a scene needs it.
 UNIQUE_STAGES = [
     ("meshcol.io.mesh_read", "_read_native"),
+    ("meshcol.io.scene_columns", "lone_objects"),
+    ("meshcol.analysis.colliders", "bulk_colliders"),
+    ("meshcol.collision.shapes", "pack_hull_slices"),
     ("meshcol.collision.shapes", "pack_hulls"),
     ("meshcol.analysis.colliders", "_geometry_key"),
 ]
 
 _STAGE_RUN = (
-    "import sys; sys.path.insert(0, {bench!r}); import check_stages as c; "
-    "c.STAGES += {extra!r}; sys.argv = ['check_stages.py', *sys.argv[1:]]; c.main()"
-)
+    "import importlib, sys; sys.path.insert(0, {bench!r}); import check_stages as c; "
+    "c.STAGES += [(m, f) for m, f in {extra!r} if hasattr(importlib.import_module(m), f)]; "
+    "sys.argv = ['check_stages.py', *sys.argv[1:]]; c.main()"
+)  # a stage the build (a --baseline) does not have is left out
 
 
 def stage_times(folder: Path, threads: int, python: str = sys.executable) -> list[str]:
@@ -613,14 +622,15 @@ def ab(args: argparse.Namespace) -> None:
     mine = str(Path(sys.executable).parent / "meshcol")
     sides = {"this": mine, "baseline": args.baseline}
     print(f"cores: {os.cpu_count()}; A/B, {args.repeat} alternated runs each; {os.getloadavg()}")
-    print(f"{'case':>24} {'side':>9} {'wall s':>13} {'CPU s':>13} {'peak MiB':>11}")
+    print(f"{'case':>24} {'side':>9} {'wall s':>13} {'CPU s':>13} {'user s':>13} {'peak MiB':>11}")
 
-    def show(case: str, figures: dict[str, list[tuple[float, float, float]]]) -> None:
+    def show(case: str, figures: dict[str, list[tuple[float, ...]]]) -> None:
         for side, runs in figures.items():
-            wall, cpu, rss = zip(*runs)
+            wall, cpu, rss, user = zip(*runs)
             print(
                 f"{case:>24} {side:>9} {min(wall):6.2f}-{max(wall):<6.2f} "
-                f"{min(cpu):6.2f}-{max(cpu):<6.2f} {min(rss):5.0f}-{max(rss):<5.0f}"
+                f"{min(cpu):6.2f}-{max(cpu):<6.2f} {min(user):6.2f}-{max(user):<6.2f} "
+                f"{min(rss):5.0f}-{max(rss):<5.0f}"
             )
 
     cases = [(f"check, {n} unique", scene_folder(n)) for n in args.sizes] + [
@@ -629,17 +639,25 @@ def ab(args: argparse.Namespace) -> None:
         for kind in args.primitive_kinds
     ]
     for case, folder in cases:
-        figures: dict[str, list[tuple[float, float, float]]] = {side: [] for side in sides}
-        for _ in range(args.repeat):
-            for side, meshcol in sides.items():
+        figures: dict[str, list[tuple[float, ...]]] = {side: [] for side in sides}
+        for round_ in range(args.repeat):
+            # each side first every other round (the first run of a round may find the files
+            # out of the page cache)
+            order = list(sides.items())
+            for side, meshcol in order[::-1] if round_ % 2 else order:
                 rc, seconds, rss, _ = meshcol_check(
                     folder, args.threads, meshcol, f"report-{side}.json"
                 )
                 if rc != 0:  # --fail-on none: anything else is a crash (a traceback is 1)
                     raise SystemExit(f"{side} meshcol check exited {rc} on {folder}")
-                figures[side].append((seconds, LAST_CPU[0], rss))
+                figures[side].append((seconds, LAST_CPU[0], rss, LAST_CPU[1]))
         show(case, figures)
         print(f"{'':>24} reports: {same_reports(folder, list(sides))}")
+        if args.stages and "unique" in case:  # CPU seconds per stage, one run a side
+            for side, meshcol in sides.items():
+                print(f"{'':>24} {side} stages:")
+                for line in stage_times(folder, args.threads, str(Path(meshcol).parent / "python")):
+                    print(f"{'':>26} {line}")
     if args.extras:
         manifest = str(instances_folder() / "scene.json")
         code = f"import meshcol; s = meshcol.load_inputs([{manifest!r}]); print(len(s.bodies))"
@@ -650,7 +668,7 @@ def ab(args: argparse.Namespace) -> None:
                 rc, seconds, rss = timed([python, "-c", code])
                 if rc != 0:
                     raise SystemExit(f"{side} load_inputs exited {rc}")
-                figures[side].append((seconds, LAST_CPU[0], rss))
+                figures[side].append((seconds, LAST_CPU[0], rss, LAST_CPU[1]))
         show("load 300,000 bodies", figures)
     print(f"load average after: {os.getloadavg()}")
 

@@ -19,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "meshcol/batch.hpp"
 #include "meshcol/format.hpp"
 #include "ndarray.hpp"
 
@@ -350,6 +351,32 @@ void cell(char*& p, const Column& c, size_t i, int level) {
     }
 }
 
+/// Rows from which on `dumps_rows` writes blocks of rows on several threads.
+constexpr long long kRowsPerBlock = 4096;
+
+/// Rows `from..to` of the columns, as `dumps_rows` writes them, into `text` (sized to fit).
+void write_rows(const std::vector<Column>& parsed, size_t from, size_t to, int level,
+                size_t row_bound, std::string& text) {
+    size_t used = 0;
+    for (size_t i = from; i < to; ++i) {
+        if (used + row_bound > text.size()) text.resize(std::max(2 * text.size(), used + row_bound));
+        char* p = text.data() + used;
+        if (i) *p++ = ',';
+        newline_at(p, level + 1);
+        *p++ = '{';
+        for (size_t k = 0; k < parsed.size(); ++k) {
+            if (k) *p++ = ',';
+            newline_at(p, level + 2);
+            put(p, parsed[k].key.data(), parsed[k].key.size());
+            cell(p, parsed[k], i, level + 2);
+        }
+        newline_at(p, level + 1);
+        *p++ = '}';
+        used = static_cast<size_t>(p - text.data());
+    }
+    text.resize(used);
+}
+
 nb::str dumps_rows(nb::list columns, size_t count, size_t start, size_t stop, int level) {
     if (start > stop || stop > count) throw nb::value_error("rows out of range");
     if (level < 0 || level > 64) throw nb::value_error("level out of range");
@@ -390,25 +417,36 @@ nb::str dumps_rows(nb::list columns, size_t count, size_t start, size_t stop, in
         row_bound += 2 + (1 + 2 * static_cast<size_t>(level + 2)) + c.key.size() +
                      cell_bound(c, level + 2);
     }
-    std::string text;
-    size_t used = 0;
-    for (size_t i = start; i < stop; ++i) {
-        if (used + row_bound > text.size()) text.resize(std::max(2 * text.size(), used + row_bound));
-        char* p = text.data() + used;
-        if (i) *p++ = ',';
-        newline_at(p, level + 1);
-        *p++ = '{';
-        for (size_t k = 0; k < parsed.size(); ++k) {
-            if (k) *p++ = ',';
-            newline_at(p, level + 2);
-            put(p, parsed[k].key.data(), parsed[k].key.size());
-            cell(p, parsed[k], i, level + 2);
-        }
-        newline_at(p, level + 1);
-        *p++ = '}';
-        used = static_cast<size_t>(p - text.data());
+    // Rows are written independently (the text of a row depends on its index and columns
+    // only), so blocks of rows are written on the core's threads, without the GIL, and joined
+    // in order: the same text as one pass.
+    const size_t rows = stop - start;
+    const int threads = meshcol::resolve_threads(0, static_cast<long long>(rows), kRowsPerBlock);
+    const size_t blocks = threads <= 1 ? 1 : static_cast<size_t>(threads) * 4;
+    std::vector<std::string> pieces(blocks);
+    {
+        nb::gil_scoped_release unlocked;
+        meshcol::parallel_for(static_cast<long long>(blocks), threads, [&](long long b, long long e) {
+            for (long long k = b; k < e; ++k) {
+                const size_t from = start + rows * static_cast<size_t>(k) / blocks;
+                const size_t to = start + rows * static_cast<size_t>(k + 1) / blocks;
+                write_rows(parsed, from, to, level, row_bound, pieces[static_cast<size_t>(k)]);
+            }
+        });
     }
-    PyObject* result = PyUnicode_DecodeASCII(text.data(), static_cast<Py_ssize_t>(used), nullptr);
+    std::string joined;
+    if (blocks > 1) {
+        size_t total = 0;
+        for (const auto& piece : pieces) total += piece.size();
+        joined.reserve(total);
+        for (auto& piece : pieces) {
+            joined += piece;
+            std::string().swap(piece);
+        }
+    }
+    const std::string& text = blocks > 1 ? joined : pieces[0];
+    PyObject* result =
+        PyUnicode_DecodeASCII(text.data(), static_cast<Py_ssize_t>(text.size()), nullptr);
     if (result == nullptr) throw nb::python_error();
     return nb::steal<nb::str>(result);
 }

@@ -48,7 +48,9 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.collision.hull import FLAT_RELATIVE_TOLERANCE, exact_hull
+from meshcol.analysis.bulk_colliders import bulk_colliders
+from meshcol.analysis.triangle_parts import _triangle_parts, triangle_parts
+from meshcol.collision.hull import exact_hull
 from meshcol.collision.shapes import ConvexSet
 from meshcol.errors import InvalidMeshError
 from meshcol.io.collision_names import UNREAL_PREFIXES, collision_part
@@ -399,49 +401,6 @@ def convex_parts(mesh: Any, **options: Any) -> list[np.ndarray]:
     return [np.asarray(v, dtype=np.float64) for v, _ in result.parts]
 
 
-def triangle_parts(body: Body) -> ConvexSet:
-    """Every triangle of a body's mesh as a convex part (local frame).
-
-    A triangle with an area is a 3-vertex polytope; one that is collinear or a point by the
-    flatness rule (:data:`meshcol.collision.hull.FLAT_RELATIVE_TOLERANCE`, relative to its own
-    size) is packed as the segment or point it is, so no triangle is ever dropped.
-    """
-    return _triangle_parts(body)[0]
-
-
-def _triangle_parts(body: Body) -> tuple[ConvexSet, np.ndarray]:
-    """:func:`triangle_parts` and the face of each part (solid triangles first, then flat)."""
-    tri = np.asarray(body.vertices, dtype=np.float64)[np.asarray(body.faces, dtype=np.int64)]
-    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    area2 = np.linalg.norm(n, axis=1)
-    longest = np.linalg.norm(tri - tri[:, [1, 2, 0]], axis=2).max(axis=1) if len(tri) else area2
-    with np.errstate(invalid="ignore", divide="ignore"):
-        height = np.where(longest > 0, area2 / longest, 0.0)
-    keep = np.isfinite(height) & (height > FLAT_RELATIVE_TOLERANCE * longest)
-    flat = ConvexSet.from_vertices(list(tri[~keep])) if np.any(~keep) else None
-    tri, n, area2 = tri[keep], n[keep], area2[keep]
-    t = len(tri)
-    unit = n / area2[:, None] if t else np.zeros((0, 3))
-    edges = np.stack([tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 1], tri[:, 0] - tri[:, 2]], axis=1)
-    edges = edges / np.linalg.norm(edges, axis=2, keepdims=True) if t else np.zeros((0, 3, 3))
-    step3 = np.arange(t + 1, dtype=np.int64) * 3
-    local = np.array([[1, 2], [0, 2], [0, 1]], dtype=np.int32)
-    solid = ConvexSet(
-        vertices=tri.reshape(-1, 3),
-        offsets=step3,
-        kinds=np.zeros(t, np.int8),
-        params=np.zeros((t, 4)),
-        adjacency_offsets=np.arange(3 * t + 1, dtype=np.int64) * 2,
-        adjacency=np.tile(local.reshape(-1), t),
-        face_offsets=np.arange(t + 1, dtype=np.int64) * 2,
-        face_normals=np.stack([unit, -unit], axis=1).reshape(-1, 3),
-        edge_offsets=step3,
-        edge_directions=edges.reshape(-1, 3),
-    )
-    order = np.concatenate([np.flatnonzero(keep), np.flatnonzero(~keep)])
-    return (solid if flat is None else ConvexSet.concatenate(solid, flat)), order
-
-
 #: Collider kinds whose parts are enclosing primitives, and the fit each asks for
 #: (:func:`meshcol.analysis.fit.fit_point_sets`): ``fit`` the simplest within the volume
 #: tolerance (else the hull), ``box`` and ``sphere`` always that primitive.
@@ -522,6 +481,10 @@ def build_colliders(
     if mesh_parts not in ("hull", "triangles"):
         raise ValueError(f"mesh_parts must be hull or triangles, got {mesh_parts!r}")
     kept, ucx, warnings = split_ucx(bodies)
+    meshes = any(body.primitive is None for body in kept)
+    bulk = bulk_colliders(kept, kind, mesh_parts) if meshes and not ucx else None
+    if bulk is not None:  # plain bodies: built as arrays (meshcol.analysis.bulk_colliders)
+        return _Pool().of_bulk(kept, warnings, *bulk)
     report = progress or (lambda message: None)
     build = _Build(
         kind=kind,
@@ -533,7 +496,7 @@ def build_colliders(
         decompose_options=dict(decompose_options or {}),
         fits=_fits_of(kept, kind, report),
     )
-    if not ucx and not any(body.primitive is None for body in kept):
+    if not ucx and not meshes:
         return build.pool.of_primitives(kept, warnings)
     for body_number, body in enumerate(kept):
         block = _Block(body_number)
@@ -644,10 +607,28 @@ class _Pool:
         ones = np.ones(len(bodies), dtype=np.int64)
         return self.colliders(bodies, warnings, (rows, -ones, ones))
 
-    def colliders(self, bodies: list[Body], warnings: list[str], parts: Any = None) -> Colliders:
+    def of_bulk(
+        self,
+        bodies: list[Body],
+        warnings: list[str],
+        kinds: list[str],
+        shapes: ConvexSet,
+        rows: Any,
+    ) -> Colliders:
+        """The packed :class:`Colliders` of one-part bodies whose unique shapes are packed
+        already (:func:`meshcol.analysis.bulk_colliders.bulk_colliders`): ``rows`` their row
+        of each body, ``kinds`` the kind of each."""
+        self.kinds = kinds
+        ones = np.ones(len(bodies), dtype=np.int64)
+        return self.colliders(bodies, warnings, (rows, -ones, ones), shapes)
+
+    def colliders(
+        self, bodies: list[Body], warnings: list[str], parts: Any = None, single: Any = None
+    ) -> Colliders:
         """The packed :class:`Colliders` of every closed block (or of ``parts``: the pool
-        row and label of every part and each body's part count, given)."""
-        single = ConvexSet.from_shapes(self.unique)
+        row and label of every part and each body's part count, given; and of ``single``,
+        the unique shapes packed already)."""
+        single = ConvexSet.from_shapes(self.unique) if single is None else single
         pool = ConvexSet.concatenate(single, *self.triangle_sets) if self.triangle_sets else single
         rows, part_label, counts = self._rows(single) if parts is None else parts
         offsets = np.zeros(len(bodies) + 1, dtype=np.int64)
@@ -662,7 +643,7 @@ class _Pool:
             tuple(bodies),
             tuple(self.kinds),
             # every part its own unique shape, in pool order (a scene of unique assets): as is
-            pool if np.array_equal(rows, np.arange(len(pool))) else pool.take(rows),
+            pool if np.array_equal(rows, np.arange(len(pool.kinds))) else pool.take(rows),
             part_body,
             np.arange(len(rows), dtype=np.int64) - offsets[part_body],
             offsets,

@@ -437,8 +437,6 @@ def pack_hulls(point_sets: Sequence[np.ndarray] | np.ndarray, threads: int = 0) 
     features exact SAT needs. Flat sets give their polygon, its two normals and its edges;
     collinear sets their segment; single points the point.
     """
-    from meshcol._native import core
-
     if isinstance(point_sets, np.ndarray) and point_sets.ndim == 3:
         h, n = point_sets.shape[:2]
         points = np.ascontiguousarray(point_sets, dtype=np.float64).reshape(-1, 3)
@@ -452,6 +450,15 @@ def pack_hulls(point_sets: Sequence[np.ndarray] | np.ndarray, threads: int = 0) 
             if len(point_sets)
             else np.zeros((0, 3))
         )
+    return pack_hull_slices(points, offsets, threads)
+
+
+def pack_hull_slices(points: np.ndarray, offsets: np.ndarray, threads: int = 0) -> PackedHulls:
+    """:func:`pack_hulls` of point sets already packed: set ``h`` is
+    ``points[offsets[h]:offsets[h + 1]]``, ``points`` (V, 3) float64 C-contiguous and
+    ``offsets`` (H + 1,) int64 (a reader's arrays, no copy per set)."""
+    from meshcol._native import core
+
     return PackedHulls(*core.pack_polytopes(points, offsets, int(threads)))
 
 

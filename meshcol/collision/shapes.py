@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from meshcol.collision.arrays import as_points, as_poses
-from meshcol.collision.hull import PackedHulls, pack_hulls
+from meshcol.collision.hull import PackedHulls, pack_hull_slices, pack_hulls
 from meshcol.types import Body, Box, Capsule, Cylinder, Sphere
 
 __all__ = [
@@ -255,6 +255,26 @@ class ConvexSet:
         return cls._assemble(
             np.zeros(h, np.int8), np.zeros((h, 4)), np.arange(h, dtype=np.int64), pack_hulls(points)
         )
+
+    @classmethod
+    def from_point_slices(
+        cls, kinds: np.ndarray, params: np.ndarray, points: np.ndarray, offsets: np.ndarray
+    ) -> ConvexSet:
+        """Shapes of given ``kinds`` (H,) int8 and ``params`` (H, 4) whose polytopes (the
+        shapes of kind 0, in order) are the convex hulls of ``points[offsets[j]:offsets[j +
+        1]]``: (V, 3) float64 and (P + 1,) int64 for P polytopes, packed in one native call
+        with no array per shape (what :meth:`from_shapes` gives for the same shapes)."""
+        kinds = np.ascontiguousarray(kinds, dtype=np.int8)
+        params = np.ascontiguousarray(params, dtype=np.float64).reshape(-1, 4)
+        points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+        offsets = np.ascontiguousarray(offsets, dtype=np.int64)
+        polytopes = np.flatnonzero(kinds == ShapeKind.POLYTOPE)
+        if len(params) != len(kinds) or len(offsets) != len(polytopes) + 1:
+            raise ValueError(
+                f"{len(kinds)} kinds need as many params and {len(polytopes) + 1} offsets, got "
+                f"{len(params)} and {len(offsets)}"
+            )
+        return cls._assemble(kinds, params, polytopes, pack_hull_slices(points, offsets))
 
     @classmethod
     def from_shapes(cls, shapes: Sequence[Any], names: Sequence[str] | None = None) -> ConvexSet:

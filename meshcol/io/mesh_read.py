@@ -7,6 +7,11 @@ local frame with any scale, shear or mirror of the scene graph baked in, and who
 
 Materials, textures, normals and UVs are never loaded: a textured file loads without Pillow,
 and vertices split along UV or normal seams are merged back by position.
+
+Many files are read at once (:func:`read_meshes`) into a :class:`MeshFiles` mapping, which
+keeps the core's packed arrays when every file is one object and builds a file's Body only
+when asked for: a manifest of 100,000 unique assets takes their arrays in bulk
+(:func:`lone_objects`).
 """
 
 from __future__ import annotations
@@ -14,7 +19,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import os
-from collections.abc import Sequence
+from collections.abc import Iterator, Mapping, MutableMapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -22,18 +27,27 @@ import numpy as np
 
 from meshcol.errors import InputFileError, InvalidMeshError
 from meshcol.io.collision_names import GodotHint, godot_hint
-from meshcol.io.mesh_formats import MESH_EXTENSIONS, MeshFormat, check_file, mesh_format
+from meshcol.io.mesh_formats import (
+    MESH_EXTENSIONS,
+    MeshFormat,
+    check_file,
+    mesh_format,
+)
 from meshcol.io.physics_bodies import BodyGroup, axis_turn, choose_collider, scaled_primitive
 from meshcol.types import Body, Scene
 
 __all__ = [
     "MAX_COORDINATE",
+    "MeshFiles",
+    "PackedObjects",
     "load_file_scene",
     "MESH_EXTENSIONS",
     "check_magnitude",
     "file_identities",
     "load_mesh",
     "load_meshes",
+    "lone_objects",
+    "read_meshes",
     "merge_vertices",
     "node_body_names",
     "split_rigid",
@@ -304,20 +318,39 @@ def load_meshes(
     the file has none. STL: binary when the size is 84 + 50 x the triangle count, else ASCII
     (one body per ``solid``). Other formats go through trimesh, one file at a time.
     """
+    return read_meshes(paths, merge=merge, threads=threads).per_file()
+
+
+def read_meshes(
+    paths: Sequence[str | os.PathLike[str]], *, merge: bool = True, threads: int = 0
+) -> MeshFiles:
+    """:func:`load_meshes` as a mapping from each path (``os.fspath``) to its bodies, whose
+    Body objects are built only when asked for: a scene of files of one object each keeps the
+    core's packed arrays (:func:`meshcol.io.mesh_read.lone_objects` reads them in bulk).
+    Same arguments, same errors."""
     sources = [os.fspath(p) for p in paths]
-    formats = [_format_of(source) for source in sources]
-    native = [i for i, fmt in enumerate(formats) if fmt.native is not None]
+    formats = _formats_of(sources)
+    for source, fmt in zip(sources, formats):
+        if fmt is None:
+            _format_of(source)  # says what is wrong with the first such path
+    known = [fmt for fmt in formats if fmt is not None]
+    native = [i for i, fmt in enumerate(known) if fmt.native is not None]
+    if len(native) == len(sources):
+        return _read_native(sources, known, merge, threads)
     out: list[list[Body] | None] = [None] * len(sources)
     if native:
         read = _read_native(
-            [sources[i] for i in native], [formats[i] for i in native], merge, threads
+            [sources[i] for i in native], [known[i] for i in native], merge, threads
         )
-        for i, bodies in zip(native, read):
+        for i, bodies in zip(native, read.per_file()):
             out[i] = bodies
-    return [
-        bodies if bodies is not None else load_mesh(source, merge=merge)
-        for source, bodies in zip(sources, out)
-    ]
+    return MeshFiles(
+        sources,
+        [
+            bodies if bodies is not None else load_mesh(source, merge=merge)
+            for source, bodies in zip(sources, out)
+        ],
+    )
 
 
 def file_identities(paths: Sequence[str]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -350,6 +383,22 @@ def _core_path(path: str) -> bool:
     except UnicodeEncodeError:
         return False
     return True
+
+
+def _formats_of(sources: Sequence[str]) -> list[MeshFormat | None]:
+    """The format of each of ``sources``, as :func:`mesh_format` finds it with nothing opted
+    in (None where it raises): each extension looked up once, for 100,000 files."""
+    found: dict[str, MeshFormat | None] = {}
+    out = []
+    for source in sources:
+        extension = os.path.splitext(source)[1]
+        if extension not in found:
+            try:
+                found[extension] = mesh_format(source)
+            except InputFileError:
+                found[extension] = None
+        out.append(found[extension])
+    return out
 
 
 def _format_of(source: str) -> MeshFormat:
@@ -390,8 +439,8 @@ class _NativeRead:
 
 def _read_native(
     sources: list[str], formats: list[MeshFormat], merge: bool, threads: int
-) -> list[list[Body]]:
-    """The bodies of files the core reads, read in parallel: one list per file."""
+) -> MeshFiles:
+    """The bodies of files the core reads, read in parallel."""
     from meshcol._native import core
 
     codes = [fmt.native for fmt in formats if fmt.native is not None]
@@ -404,27 +453,11 @@ def _read_native(
         (read.owner == np.arange(len(sources))).all()
     )
     if not big and one_each and not read.status.any():
-        return _plain_files(read, sources)
-    return _checked_files(read, sources, formats, big)
-
-
-def _plain_files(read: _NativeRead, sources: list[str]) -> list[list[Body]]:
-    """The common scene: every file read, one object each, no coordinate too big. Each body is
-    what :func:`_checked_files` builds (a lone object is named by its file's stem)."""
-    vo, fo = read.v_off.tolist(), read.f_off.tolist()
-    vertices, faces, plain = read.vertices, read.faces, Body.plain
-    return [
-        [
-            plain(
-                _stem(source),
-                source,
-                vertices[vo[j] : vo[j + 1]],
-                faces[fo[j] : fo[j + 1]],
-                _EYE.copy(),
-            )
-        ]
-        for j, source in enumerate(sources)
-    ]
+        # the common scene: every file read, one object each, no coordinate too big; each
+        # body, when asked for, is what _checked_files builds (named by its file's stem)
+        packed = PackedObjects(read.vertices, read.faces, read.v_off, read.f_off)
+        return MeshFiles(sources, [None] * len(sources), packed)
+    return MeshFiles(sources, list(_checked_files(read, sources, formats, big)))
 
 
 def _checked_files(
@@ -445,18 +478,165 @@ def _checked_files(
         objects = per_file[j]
         if not objects:
             raise InvalidMeshError("mesh has no faces", source)
-        stem = _stem(source)
+        file_stem = _stem(source)
         used: set[str] = set()
         bodies = []
         for k in objects:
             if k + 1 in big:
                 check_magnitude(read.vertices[read.v_off[k] : read.v_off[k + 1]], "vertex", source)
-            name = names[k] or (fmt.unnamed or stem)
-            bodies.append(
-                read.body(k, _unique(stem if len(objects) == 1 else f"{stem}/{name}", used), source)
-            )
+            name = names[k] or (fmt.unnamed or file_stem)
+            full = file_stem if len(objects) == 1 else f"{file_stem}/{name}"
+            bodies.append(read.body(k, _unique(full, used), source))
         out.append(bodies)
     return out
+
+
+def _text(data: bytes) -> str:
+    """Bytes of a file as text: UTF-8, else Latin-1 (which maps every byte)."""
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("latin-1")
+
+
+# --- many files read at once, kept packed ------------------------------------------------------
+
+
+class PackedObjects:
+    """One object per file, packed: file ``j``'s vertices are
+    ``vertices[v_off[j]:v_off[j + 1]]`` ((V, 3) float64) and its faces
+    ``faces[f_off[j]:f_off[j + 1]]`` ((F, 3) int64, indexing its own vertices), in its frame
+    (no transform)."""
+
+    def __init__(
+        self, vertices: np.ndarray, faces: np.ndarray, v_off: np.ndarray, f_off: np.ndarray
+    ) -> None:
+        self.vertices, self.faces = vertices, faces
+        self.v_off, self.f_off = v_off.tolist(), f_off.tolist()
+        self._largest: np.ndarray | None = None
+
+    def arrays(self, j: int) -> tuple[np.ndarray, np.ndarray]:
+        """(vertices, faces) of file ``j``: views, C-contiguous."""
+        vo, fo = self.v_off, self.f_off
+        return self.vertices[vo[j] : vo[j + 1]], self.faces[fo[j] : fo[j + 1]]
+
+    def largest(self) -> np.ndarray:
+        """The largest |coordinate| of each file's vertices (0 for none): one reduction over
+        the flat coordinates."""
+        if self._largest is None:
+            starts = np.asarray(self.v_off, dtype=np.int64)
+            sizes = np.diff(starts)
+            largest = np.zeros(len(sizes))
+            filled = sizes > 0
+            if filled.any():
+                magnitudes = np.abs(self.vertices.reshape(-1))
+                largest[filled] = np.maximum.reduceat(magnitudes, starts[:-1][filled] * 3)
+            self._largest = largest
+        return self._largest
+
+
+class MeshFiles(MutableMapping[str, list[Body]]):
+    """The bodies of each file read, by its path as given (the first of repeated paths), in
+    the order :func:`meshcol.io.mesh_read.load_mesh` gives them; files read later may be
+    added (``files[path] = bodies``).
+
+    ``sources[j]``'s bodies are ``bodies[j]`` when built already, else the one object
+    ``packed`` holds for it, named after the file's stem, identity pose.
+    """
+
+    def __init__(
+        self,
+        sources: Sequence[str],
+        bodies: list[list[Body] | None],
+        packed: PackedObjects | None = None,
+    ) -> None:
+        self.sources = list(sources)
+        self._bodies = bodies
+        self.packed = packed
+        self._index: dict[str, int] | None = None
+
+    def index(self) -> dict[str, int]:
+        """Position of each path (its first)."""
+        if self._index is None:
+            index: dict[str, int] = {}
+            for j, source in enumerate(self.sources):
+                index.setdefault(source, j)
+            self._index = index
+        return self._index
+
+    def file(self, j: int) -> list[Body]:
+        """The bodies of ``sources[j]``."""
+        bodies = self._bodies[j]
+        if bodies is None:
+            assert self.packed is not None
+            source = self.sources[j]
+            vertices, faces = self.packed.arrays(j)
+            bodies = [Body.plain(_stem(source), source, vertices, faces, _EYE.copy())]
+            self._bodies[j] = bodies
+        return bodies
+
+    def per_file(self) -> list[list[Body]]:
+        """The bodies of every path, in order (repeated paths included)."""
+        return [self.file(j) for j in range(len(self.sources))]
+
+    def __getitem__(self, key: str) -> list[Body]:
+        return self.file(self.index()[key])
+
+    def __setitem__(self, key: str, bodies: list[Body]) -> None:
+        j = self.index().get(key)
+        if j is None:
+            self.index()[key] = len(self.sources)
+            self.sources.append(key)
+            self._bodies.append(bodies)
+        else:
+            self._bodies[j] = bodies
+
+    def __delitem__(self, key: str) -> None:
+        raise TypeError("mesh files read are never removed")
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.index())
+
+    def __len__(self) -> int:
+        return len(self.index())
+
+
+def lone_objects(
+    files: Mapping[str, list[Body]], keys: Sequence[str]
+) -> tuple[np.ndarray, np.ndarray, list[tuple[np.ndarray, np.ndarray] | None]]:
+    """Of each of ``keys`` (paths of ``files``): whether its file is read and holds one object
+    without a transform, the largest |coordinate| of that object (0 without vertices, inf
+    when it is not such an object), and its (vertices, faces), C-contiguous (None when not).
+
+    In one numpy pass for the files a :class:`MeshFiles` holds packed; from the bodies for
+    the others.
+    """
+    n = len(keys)
+    lone = np.zeros(n, dtype=bool)
+    largest = np.full(n, np.inf)
+    arrays: list[tuple[np.ndarray, np.ndarray] | None] = [None] * n
+    others = list(range(n))
+    if isinstance(files, MeshFiles) and files.packed is not None:
+        index, built, packed = files.index(), files._bodies, files.packed
+        spots = [index.get(key, -1) for key in keys]
+        packed_rows = [k for k, j in enumerate(spots) if j >= 0 and built[j] is None]
+        if packed_rows:
+            positions = np.asarray([spots[k] for k in packed_rows], dtype=np.int64)
+            lone[packed_rows] = True
+            largest[packed_rows] = packed.largest()[positions]
+            for k, j in zip(packed_rows, positions.tolist()):
+                arrays[k] = packed.arrays(j)
+            done = set(packed_rows)
+            others = [k for k in others if k not in done]
+    loaded = [files.get(keys[k]) for k in others]
+    ones = [(k, f[0]) for k, f in zip(others, loaded) if f is not None and len(f) == 1]
+    for k, body in ones:
+        if (np.asarray(body.pose) == _EYE).all():
+            lone[k] = True
+            vertices = np.ascontiguousarray(body.vertices)
+            largest[k] = float(np.abs(vertices).max()) if vertices.size else 0.0
+            arrays[k] = (vertices, np.ascontiguousarray(body.faces))
+    return lone, largest, arrays
 
 
 def _stem(source: str) -> str:
@@ -466,14 +646,6 @@ def _stem(source: str) -> str:
     )
     dot = name.rfind(".")
     return name[:dot] if 0 < dot < len(name) - 1 else name
-
-
-def _text(data: bytes) -> str:
-    """Bytes of a file as text: UTF-8, else Latin-1 (which maps every byte)."""
-    try:
-        return data.decode("utf-8")
-    except UnicodeDecodeError:
-        return data.decode("latin-1")
 
 
 def split_rigid(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import os
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from contextvars import ContextVar
 from typing import Any, overload
 from urllib.parse import unquote
@@ -21,12 +21,14 @@ __all__ = [
     "ROOT_ENV",
     "OutsideRootError",
     "confine",
+    "confine_all",
     "confine_mjcf",
     "confine_uris",
     "confined_to",
     "current_root",
     "display_path",
     "display_paths",
+    "joined_paths",
     "recording_reads",
 ]
 
@@ -101,6 +103,33 @@ def display_paths(
     return out
 
 
+def joined_paths(folder: str, names: Sequence[str], *, normalise: bool = False) -> list[str]:
+    """``os.path.join(folder, name)`` of each of ``names`` (``os.path.normpath`` of it with
+    ``normalise``), in bulk: a plain relative name (no empty, ``.`` or ``..`` part, no name
+    starting with a dot) under a normal folder is joined with one concatenation, the same
+    text (a manifest names 100,000 mesh files; join and normpath cost about 1 us each)."""
+    plain_folder = os.sep == "/" and (
+        not folder or (folder not in ("/", ".") and os.path.normpath(folder) == folder)
+    )
+    prefix = f"{folder}/" if folder else ""
+    out = []
+    for name in names:
+        if (
+            plain_folder
+            and name
+            and name[0] not in "/."
+            and "/." not in name
+            and "//" not in name
+            and name[-1] != "/"
+        ):
+            out.append(prefix + name)
+        elif normalise:
+            out.append(os.path.normpath(os.path.join(folder, name)))
+        else:
+            out.append(os.path.join(folder, name))
+    return out
+
+
 # --- the root every path a file names must stay inside (untrusted inputs) ----------------------
 
 #: The environment variable that carries the root to worker processes (and lets a user set it).
@@ -144,6 +173,17 @@ def recording_reads() -> Iterator[set[str]]:
         yield reads
     finally:
         _READS.reset(token)
+
+
+def confine_all(
+    paths: Sequence[str], source: str | os.PathLike[str], references: Sequence[str]
+) -> list[str]:
+    """:func:`confine` of each of ``paths`` (``references[i]`` naming ``paths[i]`` in the
+    error), in bulk: nothing done per path when there is no root to check and no read to
+    record (the common run)."""
+    if current_root() is None and _READS.get() is None:
+        return list(paths)
+    return [confine(path, source, reference) for path, reference in zip(paths, references)]
 
 
 @overload

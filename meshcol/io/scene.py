@@ -23,7 +23,7 @@ from meshcol.errors import InputFileError, MeshcolError, SceneError
 from meshcol.io.inputs import input_kind, is_robot_file
 from meshcol.io.mesh_formats import declared_units
 from meshcol.io.mesh_read import load_mesh
-from meshcol.io.paths import confine
+from meshcol.io.paths import confine_all, joined_paths
 from meshcol.io.robot import RobotOptions, load_robot
 from meshcol.io.scene_bodies import (
     build_bodies,
@@ -310,5 +310,6 @@ def manifest_mesh_files(path: str | os.PathLike[str]) -> list[str]:
         mesh = spec.get("mesh") if isinstance(spec, dict) else None
         if isinstance(mesh, str) and mesh:
             meshes[mesh] = None
-    folder = os.path.dirname(source)
-    return list(dict.fromkeys(confine(os.path.join(folder, m), source, m) for m in meshes))
+    names = list(meshes)
+    paths = joined_paths(os.path.dirname(source), names)
+    return list(dict.fromkeys(confine_all(paths, source, names)))

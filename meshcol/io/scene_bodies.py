@@ -11,14 +11,14 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import MutableMapping, Sequence
 from typing import Any
 
 import numpy as np
 
 from meshcol.errors import MeshcolError, SceneError
 from meshcol.io.mesh_read import MAX_COORDINATE, check_magnitude, load_mesh, split_rigid
-from meshcol.io.paths import confine
+from meshcol.io.paths import confine_all, joined_paths
 from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Sphere, Spin, primitive_reach
 
 __all__ = [
@@ -39,7 +39,7 @@ IDENTITY.flags.writeable = False
 
 
 def build_bodies(
-    document: dict, source: str, files: dict[str, list[Body]], bulk: Sequence | None
+    document: dict, source: str, files: MutableMapping[str, list[Body]], bulk: Sequence | None
 ) -> list[Body]:
     """Every body of a valid manifest, in order: ``bulk[i]`` where built already, else built
     here (and checked: names, motion, mesh file, world coordinates).
@@ -80,21 +80,22 @@ def build_bodies(
     return bodies
 
 
-def read_mesh_files(document: Any, source: str) -> dict[str, list[Body]]:
+def read_mesh_files(document: Any, source: str) -> MutableMapping[str, list[Body]]:
     """Every mesh file the manifest names, read at once (OBJ and STL by the core, in parallel),
-    keyed by normalised path. Empty when a file fails: the body loop then reads the files one
+    keyed by normalised path (:class:`meshcol.io.mesh_read.MeshFiles`: the bodies of a file
+    built when asked for). Empty when a file fails: the body loop then reads the files one
     by one and reports the first bad one with its body's name."""
-    from meshcol.io.mesh_read import load_meshes
+    from meshcol.io.mesh_read import read_meshes
 
     folder = os.path.dirname(source)
     meshes = dict.fromkeys(
         spec["mesh"] for spec in document["bodies"] if isinstance(spec.get("mesh"), str)
     )  # each name once before the path arithmetic: 300,000 bodies may share 16 files
-    paths = list(
-        dict.fromkeys(confine(os.path.normpath(os.path.join(folder, m)), source, m) for m in meshes)
-    )  # each inside --root (meshcol.io.paths)
+    names = list(meshes)
+    joined = joined_paths(folder, names, normalise=True)
+    paths = list(dict.fromkeys(confine_all(joined, source, names)))  # inside --root
     try:
-        return dict(zip(paths, load_meshes(paths)))
+        return read_meshes(paths)
     except MeshcolError:
         return {}
 
@@ -274,7 +275,7 @@ def _mesh_body(
     label: str,
     motion: _Motion,
     scale: np.ndarray,
-    files: dict[str, list[Body]],
+    files: MutableMapping[str, list[Body]],
 ) -> Body:
     mesh_source = os.path.join(os.path.dirname(source), spec["mesh"])
     loaded = _mesh_file(spec["mesh"], mesh_source, source, label, files)
@@ -300,7 +301,7 @@ def _mesh_body(
 
 
 def _mesh_file(
-    mesh: str, mesh_source: str, source: str, label: str, files: dict[str, list[Body]]
+    mesh: str, mesh_source: str, source: str, label: str, files: MutableMapping[str, list[Body]]
 ) -> list[Body]:
     """The objects of a body's mesh file: read already, or read now (the error names the
     body)."""

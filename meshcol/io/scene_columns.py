@@ -16,13 +16,14 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import MutableMapping, Sequence
 from typing import Any
 
 import numpy as np
 
-from meshcol.io.mesh_read import MAX_COORDINATE
-from meshcol.io.scene_bodies import AXES, IDENTITY
+from meshcol.io.mesh_read import MAX_COORDINATE, lone_objects
+from meshcol.io.paths import joined_paths
+from meshcol.io.scene_bodies import AXES
 from meshcol.io.scene_schema import (
     BODY_FIELDS,
     MAX_TURN,
@@ -345,7 +346,7 @@ def near_limits(found: Columns, duration: float | None) -> np.ndarray:
 # --- bodies in bulk ------------------------------------------------------------------------------
 
 
-def bulk_bodies(found: Columns, source: str, files: dict[str, list[Body]]) -> list | None:
+def bulk_bodies(found: Columns, source: str, files: MutableMapping[str, list[Body]]) -> list | None:
     """The manifest's common bodies, built together: index-aligned with its bodies, a Body
     for each static, unscaled mesh body whose file holds one object without a transform, and
     each static, unscaled primitive body, whose world coordinates are plainly within the
@@ -412,47 +413,25 @@ def _primitive(kind: int, lengths: list[float]) -> Primitive:
 
 
 def _plain_objects(
-    found: Columns, source: str, files: dict[str, list[Body]]
+    found: Columns, source: str, files: MutableMapping[str, list[Body]]
 ) -> tuple[dict[str | None, Any], dict[str | None, float]]:
     """Per mesh name: ``(path, vertices, faces)`` of its file's one object without a transform
     (None: the body loop builds its bodies), and the reach of the world check, sqrt(3)
-    max |v| (inf for the others); per file, but in one numpy pass for all."""
+    max |v| (inf for the others); per file, but in one numpy pass for all
+    (:func:`meshcol.io.mesh_read.lone_objects`)."""
     folder = os.path.dirname(source)
     meshes = list(dict.fromkeys(m for m in found.meshes if m is not None))
-    paths = [os.path.join(folder, mesh) for mesh in meshes]
-    loaded = [files.get(os.path.normpath(path)) for path in paths]
-    single = [f is not None and len(f) == 1 for f in loaded]
-    ones = [f[0] for f, one in zip(loaded, single) if one]  # type: ignore[index]
-    plain = np.zeros(len(meshes), dtype=bool)
-    reaches = np.full(len(meshes), math.inf)
-    if ones:
-        rows = np.flatnonzero(single)
-        plain[rows] = (np.stack([b.pose for b in ones]) == IDENTITY).all(axis=(1, 2))
-        reaches[rows] = _largest_coordinates(ones) * math.sqrt(3.0)
+    paths = joined_paths(folder, meshes)
+    _, largest, arrays = lone_objects(files, joined_paths(folder, meshes, normalise=True))
+    reaches = largest * math.sqrt(3.0)
     objects: dict[str | None, Any] = {None: None}
     reach_of: dict[str | None, float] = {None: math.inf}
-    for k, (mesh, path, files_of) in enumerate(zip(meshes, paths, loaded)):
-        if plain[k]:
-            (sub,) = files_of  # type: ignore[misc]
-            vertices, faces = np.ascontiguousarray(sub.vertices), np.ascontiguousarray(sub.faces)
-            objects[mesh], reach_of[mesh] = (path, vertices, faces), float(reaches[k])
+    for k, (mesh, path, found_arrays) in enumerate(zip(meshes, paths, arrays)):
+        if found_arrays is not None:
+            objects[mesh], reach_of[mesh] = (path, *found_arrays), float(reaches[k])
         else:
             objects[mesh], reach_of[mesh] = None, math.inf
     return objects, reach_of
-
-
-def _largest_coordinates(bodies: Sequence[Body]) -> np.ndarray:
-    """The largest |coordinate| of each body's vertices (0 for none): one reduction over the
-    flat coordinates (a max over rows of 3 first costs more than the rest of the bulk path)."""
-    arrays = [np.ascontiguousarray(b.vertices) for b in bodies]
-    sizes = np.array([len(v) for v in arrays], dtype=np.int64)
-    largest = np.zeros(len(bodies))
-    filled = sizes > 0
-    if filled.any():
-        magnitudes = np.abs(np.concatenate(arrays).reshape(-1))
-        starts = np.concatenate([[0], np.cumsum(sizes[filled])[:-1]]) * 3
-        largest[filled] = np.maximum.reduceat(magnitudes, starts)
-    return largest
 
 
 def _poses(found: Columns, position: np.ndarray, common: np.ndarray) -> np.ndarray:

@@ -16,25 +16,28 @@ from meshcol.io.report import dumps_json, dumps_rows
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def test_rows_from_columns_are_json_dumps_of_the_dicts() -> None:
+@pytest.mark.parametrize("n", [7, 8_700])  # 8,700: blocks of rows on the core's threads
+def test_rows_from_columns_are_json_dumps_of_the_dicts(n: int, monkeypatch) -> None:
+    import meshcol.io.report
+
+    monkeypatch.setattr(meshcol.io.report, "_ROWS_PER_CALL", 8_300)  # and a second call
     rng = np.random.default_rng(3)
-    n = 7
     reals = rng.normal(size=n) * 10.0 ** rng.integers(-30, 30, size=n)
     reals[:4] = [np.nan, np.inf, -0.0, 1e16]
     vectors = rng.normal(size=(n, 3))
     vectors[1, 2] = -np.inf
     box = rng.normal(size=(n, 6))
     box[2, 0] = np.nan
-    codes = np.array([0, 1, -1, 2, 0, 1, 2], dtype=np.int64)
+    codes = np.resize(np.array([0, 1, -1, 2, 0, 1, 2], dtype=np.int64), n)
     table = ["plain", 'quote " and \\ slash', "caf\u00e9 \u2603 \U0001f600 \n\t"]
     raw = ["[]", '[\n        "x"\n      ]']  # as written at nesting 3
     columns = [
         ("a box", "box", box),
         ("flag", "boolean", rng.random(n) < 0.5),
-        ("index", "index", np.array([-1, 0, 5, -3, 2, 1, 0], dtype=np.int64)),
+        ("index", "index", np.resize(np.array([-1, 0, 5, -3, 2, 1, 0], dtype=np.int64), n)),
         ("integer", "integer", np.arange(n, dtype=np.int64) - 3),
         ("number", "number", reals),
-        ("raw", "raw", np.array([0, 1, -1, 0, 1, 0, 1], dtype=np.int64), raw),
+        ("raw", "raw", np.resize(np.array([0, 1, -1, 0, 1, 0, 1], dtype=np.int64), n), raw),
         ("string", "string", codes, table),
         ("vector", "vector", vectors),
     ]

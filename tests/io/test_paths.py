@@ -5,7 +5,18 @@ from __future__ import annotations
 
 import os
 
-from meshcol.io.paths import display_path, display_paths
+import numpy as np
+import pytest
+
+from meshcol.io.paths import (
+    OutsideRootError,
+    confine_all,
+    confined_to,
+    display_path,
+    display_paths,
+    joined_paths,
+    recording_reads,
+)
 
 
 def test_display_paths_are_those_of_display_path_one_by_one(tmp_path, monkeypatch):
@@ -43,3 +54,31 @@ def test_posix_paths_use_forward_slashes(monkeypatch):
     monkeypatch.setattr(os, "sep", "\\")
     assert display_path("props\\crate.obj", posix=True) == "props/crate.obj"
     assert display_path("props\\crate.obj") == "props\\crate.obj"
+
+
+def test_joined_paths_are_join_and_normpath_of_each():
+    rng = np.random.default_rng(5)
+    parts = ["a", "b.obj", ".", "..", "", ".hidden", "x y", "c..obj", "é"]
+    names = ["/abs/m.obj", "a//b.obj", "a/", "./a.obj", "../a.obj", "a/./b", "a/../b", "."]
+    names += ["/".join(rng.choice(parts, size=rng.integers(1, 4))) for _ in range(400)]
+    folders = ["", "/", "/x/y", "x", "x/", "./x", "x/../y", "//x", "x//y", "/x/./y", "."]
+    for folder in folders:
+        assert joined_paths(folder, names) == [os.path.join(folder, n) for n in names]
+        assert joined_paths(folder, names, normalise=True) == [
+            os.path.normpath(os.path.join(folder, n)) for n in names
+        ]
+
+
+def test_confine_all_is_confine_of_each(tmp_path):
+    inside = tmp_path / "root"
+    inside.mkdir()
+    (inside / "a.obj").write_text("")
+    paths = [str(inside / "a.obj"), str(inside / "missing.obj")]
+    assert confine_all(paths, "scene.json", ["a.obj", "missing.obj"]) == paths
+    with confined_to(inside):
+        assert confine_all(paths, "scene.json", ["a.obj", "missing.obj"]) == paths
+        with pytest.raises(OutsideRootError, match=r"path '\.\./b\.obj' resolves outside the root"):
+            confine_all([*paths, str(tmp_path / "b.obj")], "s.json", ["a", "m", "../b.obj"])
+    with recording_reads() as reads:
+        confine_all(paths, "scene.json", ["a.obj", "missing.obj"])
+    assert reads == {os.path.realpath(p) for p in paths}

@@ -1,0 +1,158 @@
+"""The colliders of a scene of plain bodies, built as arrays: what the per-body builders of
+:mod:`meshcol.analysis.colliders` give, bit for bit, without Python work per body beyond one
+pass that reads its fields.
+
+A scene qualifies when every body is one part (no ``Body.parts``) and either a primitive or a
+mesh whose collider is its hull (kind ``hull``, or ``mesh`` when the caller's ``mesh_parts``
+is ``hull``), and no body is an Unreal collision part (the caller's :func:`split_ucx` found
+none): 100,000 unique assets from a manifest. Identical geometry is still packed once, in the
+order the body loop meets it, by an exact comparison of the vertex bits (what the geometry key
+compares) instead of a digest per body; every mesh hull comes from one batched core call
+(:meth:`meshcol.collision.shapes.ConvexSet.from_point_slices`) over the packed vertices.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from meshcol.collision.shapes import ConvexSet, _item
+from meshcol.types import Body
+
+__all__ = ["bulk_colliders"]
+
+# Odd 64-bit multipliers (splitmix64's): the fingerprint of a point set mixes every coordinate's
+# bits with its place in the set. A fingerprint only proposes a match; the bits decide it.
+_MIX = np.uint64(0xBF58476D1CE4E5B9)
+_PLACE = np.uint64(0x94D049BB133111EB)
+
+
+def bulk_colliders(
+    bodies: Sequence[Body], kind: str, mesh_parts: str
+) -> tuple[list[str], ConvexSet, np.ndarray] | None:
+    """Per body its reported kind, the unique shapes in the order the body loop packs them,
+    and each body's row among them; None when a body needs the per-body builders (several
+    parts, a collider other than its hull) or the geometry does not pack as points.
+
+    Parameters
+    ----------
+    bodies : sequence of Body
+        After :func:`meshcol.analysis.colliders.split_ucx`, which found no ``UCX_`` part.
+    kind : str
+        The run's default collider kind.
+    mesh_parts : {"hull", "triangles"}
+        What stands for a ``mesh`` body (hull: its hull, as a ``hull`` body).
+    """
+    hulled = {"hull", "mesh"} if mesh_parts == "hull" else {"hull"}
+    kinds: list[str] = []
+    meshes: list[int] = []
+    arrays: list[np.ndarray] = []
+    primitives: dict[object, int] = {}
+    first = np.empty(len(bodies), dtype=np.int64)  # the first body of the same shape
+    same_array: dict[int, int] = {}  # instances share their file's array: one comparison
+    for i, body in enumerate(bodies):
+        if body.parts:
+            return None
+        if body.primitive is not None:
+            kinds.append("primitive")
+            first[i] = primitives.setdefault(body.primitive, i)
+            continue
+        body_kind = body.collider or kind
+        if body_kind not in hulled:
+            return None
+        kinds.append(body_kind)
+        vertices = body.vertices
+        owner = same_array.setdefault(id(vertices), i)
+        if owner == i:
+            meshes.append(i)
+            arrays.append(vertices)
+        first[i] = owner
+    mesh_rows = np.asarray(meshes, dtype=np.int64)
+    if meshes:
+        found = _first_equal(arrays)
+        if found is None:
+            return None
+        points, offsets, first_mesh = found
+        first[mesh_rows] = mesh_rows[first_mesh]
+        first = first[first]  # an instance's array owner may itself repeat an earlier mesh
+    else:
+        points, offsets = np.zeros((0, 3)), np.zeros(1, dtype=np.int64)
+    # pool rows in the order the body loop meets each shape first
+    unique, rows = np.unique(first, return_inverse=True)
+    is_mesh = np.zeros(len(bodies), dtype=bool)
+    is_mesh[mesh_rows] = True
+    shape_kinds = np.zeros(len(unique), dtype=np.int8)
+    params = np.zeros((len(unique), 4))
+    for row in np.flatnonzero(~is_mesh[unique]).tolist():
+        primitive = bodies[int(unique[row])].primitive
+        shape_kinds[row], params[row], _ = _item(primitive, f"shapes[{row}]")
+    unique_meshes = np.searchsorted(mesh_rows, unique[is_mesh[unique]])
+    points, offsets = _gather(points, offsets, unique_meshes)
+    shapes = ConvexSet.from_point_slices(shape_kinds, params, points, offsets)
+    return kinds, shapes, rows.astype(np.int64, copy=False)
+
+
+def _first_equal(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """The point sets packed ((V, 3) float64 and offsets), and for each the index of the first
+    one with the same float64 bits (itself when none); None when they do not pack as (n, 3)."""
+    try:
+        points = np.ascontiguousarray(np.concatenate(arrays), dtype=np.float64)
+    except ValueError:
+        return None
+    if points.ndim != 2 or points.shape[1] != 3:
+        return None
+    counts = np.fromiter((len(a) for a in arrays), dtype=np.int64, count=len(arrays))
+    offsets = np.zeros(len(arrays) + 1, dtype=np.int64)
+    np.cumsum(counts, out=offsets[1:])
+    bits = points.reshape(-1).view(np.uint64)
+    n = len(arrays)
+    place = np.arange(len(bits), dtype=np.uint64) - np.repeat(
+        (offsets[:-1] * 3).astype(np.uint64), counts * 3
+    )
+    with np.errstate(over="ignore"):
+        mixed = (bits ^ (bits >> np.uint64(31))) * _MIX + (place + np.uint64(1)) * _PLACE
+    fingerprint = np.zeros(n, dtype=np.uint64)
+    filled = counts > 0
+    if filled.any():
+        fingerprint[filled] = np.add.reduceat(mixed, offsets[:-1][filled] * 3)
+    # sets in order of (count, fingerprint, index): the first of each run is the first set
+    order = np.lexsort((np.arange(n), fingerprint, counts))
+    starts = np.ones(n, dtype=bool)
+    starts[1:] = (counts[order][1:] != counts[order][:-1]) | (
+        fingerprint[order][1:] != fingerprint[order][:-1]
+    )
+    run = np.cumsum(starts) - 1
+    first = np.empty(n, dtype=np.int64)
+    first[order] = order[np.flatnonzero(starts)][run]
+    if not _same_bits(bits, offsets, counts, first):
+        return None  # two sets of one fingerprint differ: the per-body path keys them
+    return points, offsets, first
+
+
+def _same_bits(
+    bits: np.ndarray, offsets: np.ndarray, counts: np.ndarray, first: np.ndarray
+) -> bool:
+    """Whether every set whose ``first`` is an earlier set has the same bits as that set."""
+    repeat = np.flatnonzero(first != np.arange(len(first)))
+    if not len(repeat):
+        return True
+    size = counts[repeat] * 3
+    local = np.arange(int(size.sum())) - np.repeat(np.cumsum(size) - size, size)
+    mine = np.repeat(offsets[repeat] * 3, size) + local
+    theirs = np.repeat(offsets[first[repeat]] * 3, size) + local
+    return bool(np.array_equal(bits[mine], bits[theirs]))
+
+
+def _gather(
+    points: np.ndarray, offsets: np.ndarray, sets: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The point sets ``sets`` (indices, ascending) packed alone: as they are when they are
+    all of them."""
+    if len(sets) == len(offsets) - 1:
+        return points, offsets
+    counts = np.diff(offsets)[sets]
+    out = np.zeros(len(sets) + 1, dtype=np.int64)
+    np.cumsum(counts, out=out[1:])
+    local = np.arange(int(out[-1])) - np.repeat(out[:-1], counts)
+    return points[np.repeat(offsets[:-1][sets], counts) + local], out

@@ -1,0 +1,127 @@
+"""Mesh files read at once and kept packed (``io.mesh_files``, ``mesh_read.read_meshes``): the
+bodies each path maps to are those ``load_mesh`` reads from the file alone, the bulk reading of
+lone objects is the per-body one, and a bad file among many is named as before."""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from meshcol.cli import main
+from meshcol.errors import InputFileError, InvalidMeshError
+from meshcol.io.mesh_read import MeshFiles, load_mesh, lone_objects, read_meshes
+
+
+def _obj(path, points, faces=((0, 1, 2), (0, 2, 3), (0, 3, 1), (1, 3, 2))) -> str:
+    lines = [f"v {float(x)!r} {float(y)!r} {float(z)!r}" for x, y, z in points]
+    lines += ["f " + " ".join(str(i + 1) for i in face) for face in faces]
+    path.write_text("\n".join(lines) + "\n")
+    return os.fspath(path)
+
+
+def _files(folder, n: int = 12) -> list[str]:
+    rng = np.random.default_rng(11)
+    folder.mkdir(exist_ok=True)
+    return [
+        _obj(folder / f"p{k:03d}.obj", rng.normal(size=(4, 3)) * 10.0 ** (k % 7)) for k in range(n)
+    ]
+
+
+def _same_bodies(got, want) -> None:
+    assert [b.name for b in got] == [b.name for b in want]
+    for a, b in zip(got, want):
+        assert a.source == b.source
+        assert a.vertices.tobytes() == b.vertices.tobytes()
+        assert a.faces.dtype == b.faces.dtype and a.faces.tobytes() == b.faces.tobytes()
+        np.testing.assert_array_equal(a.pose, b.pose)
+        assert (a.parts, a.collider, a.primitive) == (b.parts, b.collider, b.primitive)
+
+
+def test_packed_files_map_to_the_bodies_load_mesh_reads(tmp_path):
+    paths = _files(tmp_path / "a")
+    files = read_meshes([*paths, paths[3]], threads=2)  # a path twice: one entry
+    assert files.packed is not None  # one object each: kept packed
+    assert list(files) == paths and len(files) == len(paths)
+    for path in paths:
+        _same_bodies(files[path], load_mesh(path))
+    assert files.get(os.fspath(tmp_path / "other.obj")) is None
+    later = _obj(tmp_path / "later.obj", np.eye(4)[:, :3])
+    files[later] = load_mesh(later)
+    _same_bodies(files[later], load_mesh(later))
+    assert len(files) == len(paths) + 1
+
+
+def test_lone_objects_in_bulk_are_those_of_the_bodies(tmp_path):
+    paths = _files(tmp_path / "a")
+    two = tmp_path / "two.obj"
+    two.write_text(
+        "o x\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\no y\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf 4 5 6\n"
+    )
+    keys = [paths[2], os.fspath(tmp_path / "missing.obj"), *paths, os.fspath(two)]
+    packed = read_meshes(paths)
+    packed[os.fspath(two)] = load_mesh(two)  # a file of two objects, added as bodies
+    by_body = {path: load_mesh(path) for path in [*paths, os.fspath(two)]}
+    got, want = lone_objects(packed, keys), lone_objects(by_body, keys)
+    np.testing.assert_array_equal(got[0], want[0])
+    assert got[1].tobytes() == want[1].tobytes()
+    assert got[0].tolist() == [True, False, *[True] * len(paths), False]
+    assert got[1][2] == np.abs(load_mesh(paths[0])[0].vertices).max()
+    for a, b in zip(got[2], want[2]):
+        assert (a is None) == (b is None)
+        if a is not None:
+            assert a[0].tobytes() == b[0].tobytes() and a[1].tobytes() == b[1].tobytes()
+            assert a[0].flags.c_contiguous and a[1].flags.c_contiguous
+
+
+def test_files_of_several_objects_are_not_packed(tmp_path):
+    paths = _files(tmp_path / "a", 3)
+    two = tmp_path / "two.obj"
+    two.write_text(
+        "o x\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\no y\nv 0 0 1\nv 1 0 1\nv 0 1 1\nf 4 5 6\n"
+    )
+    files = read_meshes([*paths, two])
+    assert isinstance(files, MeshFiles) and files.packed is None
+    _same_bodies(files[os.fspath(two)], load_mesh(two))
+
+
+def test_one_bad_file_among_many_is_named(tmp_path):
+    paths = _files(tmp_path / "a", 40)
+    os.remove(paths[17])
+    with pytest.raises(InputFileError, match="file not found") as info:
+        read_meshes(paths)
+    assert info.value.path == paths[17]
+    paths = _files(tmp_path / "b", 40)
+    with open(paths[29], "a") as f:
+        f.write("f 1 2 99\n")
+    with pytest.raises(InvalidMeshError) as broken:
+        read_meshes(paths)
+    assert broken.value.path == paths[29]
+
+
+@pytest.mark.parametrize("fault", ["missing", "corrupt"])
+def test_a_bad_file_in_a_manifest_of_many_is_one_line_exit_2_nothing_written(tmp_path, fault):
+    paths = _files(tmp_path / "assets", 60)
+    bad = paths[41]
+    if fault == "missing":
+        os.remove(bad)
+    else:
+        with open(bad, "a") as f:
+            f.write("f 1 2 99\n")
+    bodies = [
+        {"name": f"b{k}", "mesh": f"assets/{os.path.basename(p)}", "position": [3.0 * k, 0, 0]}
+        for k, p in enumerate(paths)
+    ]
+    manifest = tmp_path / "scene.json"
+    manifest.write_text(json.dumps({"units": "m", "bodies": bodies}))
+    report = tmp_path / "report.json"
+    result = CliRunner().invoke(main, ["check", str(manifest), "--report", str(report)])
+    assert result.exit_code == 2, result.output
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("meshcol: error: ")
+    assert "body 'b41'" in lines[0] and "p041.obj" in lines[0]
+    assert "Traceback" not in result.output
+    assert not report.exists()
