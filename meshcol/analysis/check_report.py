@@ -17,6 +17,7 @@ from meshcol.analysis.check_policy import FAIL_ON, CheckOptions
 from meshcol.analysis.pairs import SEVERITY, PairTable, PlacedColliders
 from meshcol.io.paths import display_path, display_paths
 from meshcol.io.report import vector_columns
+from meshcol.io.scene_primitives import body_names, body_parts, body_sources, vertex_counts
 from meshcol.types import Scene
 from meshcol.vocabulary import PAIR_STATUSES
 
@@ -407,7 +408,7 @@ def check_report(
     (body_a, body_b) names, the bodies, the findings, the summary and the settings. Pairs and
     bodies stay columns (:class:`ReportRows`) until a reader asks for their dicts."""
     colliders = placed.colliders
-    names = [body.name for body in colliders.bodies]
+    names = body_names(colliders.bodies)
     rank = _name_ranks(names)
     table = table.take(_report_order(table, rank))
     files = _files(colliders.bodies)
@@ -429,7 +430,7 @@ def check_report(
 def _files(bodies: Sequence[Any]) -> list[str | None]:
     """Each body's file as the report shows it, each distinct file made relative once (the
     100,000 primitives of a manifest share one)."""
-    sources = [body.source for body in bodies]
+    sources = body_sources(bodies)
     distinct = list(dict.fromkeys(sources))
     shown = dict(zip(distinct, display_paths(distinct, posix=True)))
     return [shown[source] for source in sources]
@@ -483,7 +484,7 @@ def _pair_rows(table: PairTable, colliders: Any) -> ReportRows:
 
 def _pair_columns(table: PairTable, colliders: Any) -> list[tuple]:
     """The columns of :func:`pair_rows`, for the native row writer, in key order."""
-    names = [body.name for body in colliders.bodies]
+    names = body_names(colliders.bodies)
 
     def part(bodies: np.ndarray, labels: np.ndarray) -> tuple:
         if not (labels >= 0).any():
@@ -529,7 +530,7 @@ def pair_rows(table: PairTable, colliders: Any, index: np.ndarray | None = None)
     """One dict per row (the report's ``pairs``), in table order (the rows ``index`` only,
     when given); non-finite numbers as None, parts by name. Columns are converted once, then
     zipped (no per-pair numpy calls)."""
-    names = [body.name for body in colliders.bodies]
+    names = body_names(colliders.bodies)
     rows = slice(None) if index is None else index
     a, b = table.body_a[rows], table.body_b[rows]
     columns = zip(
@@ -648,14 +649,14 @@ def _body_columns(
 
     colliders = placed.colliders
     picked = order.tolist()
-    bodies = [colliders.bodies[i] for i in picked]
+    names = body_names(colliders.bodies)
 
     def codes(values: Sequence[Any]) -> tuple[np.ndarray, list]:
         table = {v: k for k, v in enumerate(dict.fromkeys(v for v in values if v is not None))}
         found = [-1 if v is None else table[v] for v in values]
         return np.asarray(found, dtype=np.int64).reshape(len(values)), list(table)
 
-    parts, part_texts = codes([tuple(body.parts) for body in bodies])
+    parts, part_texts = codes(body_parts(colliders.bodies, picked))
     indent = "\n" + "  " * 3
     box = np.concatenate([placed.body_min[order], placed.body_max[order]], axis=1)
     return [
@@ -663,14 +664,14 @@ def _body_columns(
         ("collider", "string", *codes([colliders.kinds[i] for i in picked])),
         ("convex_parts", "integer", np.diff(colliders.body_part_offsets)[order]),
         ("file", "string", *codes([files[i] for i in picked])),
-        ("name", "string", np.arange(len(bodies), dtype=np.int64), [b.name for b in bodies]),
+        ("name", "string", np.arange(len(picked), dtype=np.int64), [names[i] for i in picked]),
         (
             "parts",
             "raw",
             parts,
             [dumps_json(list(p))[:-1].replace("\n", indent) for p in part_texts],
         ),
-        ("vertices", "integer", np.asarray([b.vertex_count for b in bodies], dtype=np.int64)),
+        ("vertices", "integer", vertex_counts(colliders.bodies, order)),
     ]
 
 

@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from meshcol.io.scene_primitives import body_names
 from meshcol.types import Status
 from meshcol.vocabulary import PAIR_STATUSES
 
@@ -406,7 +407,7 @@ def broad_phase(
     from meshcol.errors import TooManyPairsError
 
     colliders = placed.colliders
-    names = [body.name for body in colliders.bodies]
+    names = body_names(colliders.bodies)
     sweep_cap = None if max_pairs is None else max_pairs + len(excluded)
     try:
         body_pairs = overlapping_pairs(

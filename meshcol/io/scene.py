@@ -9,7 +9,8 @@ naming the manifest, the body and the field.
 Loading a manifest is a list of stages, each in its module: read the text
 (:mod:`meshcol.io.scene_parse`), validate it (:mod:`meshcol.io.scene_validate`; the common
 manifest column by column, :mod:`meshcol.io.scene_columns`), read its mesh files once, build
-its common bodies in bulk, then the others one by one (:mod:`meshcol.io.scene_bodies`).
+its common bodies in bulk, then the others one by one (:mod:`meshcol.io.scene_bodies`). A
+manifest of static primitives only stays columns (:mod:`meshcol.io.scene_primitives`).
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from meshcol.io.scene_bodies import (
     rotation_from_euler,
     rotation_from_quaternion,
 )
-from meshcol.io.scene_columns import bulk_bodies
+from meshcol.io.scene_columns import bulk_bodies, primitive_bodies
 from meshcol.io.scene_parse import collector_paused, read_document
 from meshcol.io.scene_schema import SCHEMA_PATH
 from meshcol.io.scene_validate import check_magnitudes, check_nesting, validate
@@ -93,12 +94,15 @@ def _load_scene(source: str) -> Scene:
     document, text = read_document(source)
     columns = validate(document, text, source)  # None: the manifest takes the body-by-body path
     check_magnitudes(document, source, columns)
+    units, duration = document.get("units"), document.get("duration")
+    primitives = primitive_bodies(columns, source) if columns is not None else None
+    if primitives is not None:  # every body a static primitive: columns, no object per body
+        return Scene(bodies=primitives, units=units, source=source, duration=duration)
     files = read_mesh_files(document, source)  # each mesh file read once, all in parallel
     # The common bodies (static, unscaled, one object each) built together; every other body,
     # and every body whose checks might fail, one by one in order, so errors come as before.
     bulk = bulk_bodies(columns, source, files) if columns is not None else None
     bodies = build_bodies(document, source, files, bulk)
-    units, duration = document.get("units"), document.get("duration")
     return Scene(bodies=tuple(bodies), units=units, source=source, duration=duration)
 
 

@@ -23,6 +23,7 @@ import numpy as np
 
 from meshcol.io.mesh_read import MAX_COORDINATE
 from meshcol.io.scene_bodies import AXES, IDENTITY
+from meshcol.io.scene_primitives import PrimitiveBodies, primitive_of
 from meshcol.io.scene_schema import (
     BODY_FIELDS,
     MAX_TURN,
@@ -33,7 +34,7 @@ from meshcol.io.scene_schema import (
     VECTOR_FIELDS,
     plain_top,
 )
-from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Sphere
+from meshcol.types import Body
 
 __all__ = [
     "Columns",
@@ -41,6 +42,7 @@ __all__ = [
     "columns",
     "euler_matrices",
     "near_limits",
+    "primitive_bodies",
     "quaternion_matrices",
 ]
 
@@ -362,24 +364,47 @@ def bulk_bodies(found: Columns, source: str, files: dict[str, list[Body]]) -> li
     if len(set(names)) != n:
         return None
     objects, reach_of = _plain_objects(found, source, files)
-    reach = np.array([reach_of[m] for m in found.meshes]).reshape(n)
-    primitive = found.primitive
-    reach[primitive] = _primitive_reach(found.primitive_type, found.primitive_lengths)[primitive]
-    position = found.vectors.get("position", np.zeros((n, 3)))
-    common = ~found.moving & ~found.scaled
-    common &= reach + np.abs(position).max(axis=1, initial=0.0) <= MAX_COORDINATE
-    poses = _poses(found, position, common)
+    common, poses = _common(found, np.array([reach_of[m] for m in found.meshes]).reshape(n))
     out: list[Body | None] = [None] * n
     shapes = found.shapes
     kinds, lengths = found.primitive_type.tolist(), found.primitive_lengths.tolist()
     plain = Body.plain
+    primitive = found.primitive
     for i in np.flatnonzero(common & primitive).tolist():
-        primitive_i = _primitive(kinds[i], lengths[i])
+        primitive_i = primitive_of(kinds[i], lengths[i])
         out[i] = plain(names[i], source, None, None, poses[i], primitive_i, shapes[i])
     for i in np.flatnonzero(common & ~primitive).tolist():
         mesh_source, vertices, faces = objects[found.meshes[i]]
         out[i] = plain(names[i], mesh_source, vertices, faces, poses[i], None, shapes[i])
     return out
+
+
+def primitive_bodies(found: Columns, source: str) -> PrimitiveBodies | None:
+    """The manifest's bodies as :class:`PrimitiveBodies` (no Python object per body) when
+    every one is a primitive that :func:`bulk_bodies` would build and names are unique;
+    else None (the bodies are built as objects)."""
+    n = len(found.names)
+    if not n or not found.primitive.all() or len(set(found.names)) != n:
+        return None
+    common, poses = _common(found, np.full(n, np.inf))
+    if not common.all():
+        return None
+    kinds = np.ascontiguousarray(found.primitive_type, dtype=np.int8)
+    lengths = np.ascontiguousarray(found.primitive_lengths, dtype=np.float64)
+    return PrimitiveBodies(found.names, source, kinds, lengths, poses, found.shapes)
+
+
+def _common(found: Columns, reach: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(n,) bool: the bodies :func:`bulk_bodies` builds (static, unscaled, a nonzero
+    quaternion, plainly within the limit: ``reach`` bounds a mesh body's |v|, a primitive's
+    is its own); and every body's (n, 4, 4) start pose."""
+    n = len(found.names)
+    primitive = found.primitive
+    reach[primitive] = _primitive_reach(found.primitive_type, found.primitive_lengths)[primitive]
+    position = found.vectors.get("position", np.zeros((n, 3)))
+    common = ~found.moving & ~found.scaled
+    common &= reach + np.abs(position).max(axis=1, initial=0.0) <= MAX_COORDINATE
+    return common, _poses(found, position, common)
 
 
 def _primitive_reach(kinds: np.ndarray, lengths: np.ndarray) -> np.ndarray:
@@ -398,17 +423,6 @@ def _primitive_reach(kinds: np.ndarray, lengths: np.ndarray) -> np.ndarray:
 _SPHERE, _BOX, _CAPSULE, _CYLINDER = (
     PRIMITIVE_TYPES.index(k) for k in ("sphere", "box", "capsule", "cylinder")
 )
-
-
-def _primitive(kind: int, lengths: list[float]) -> Primitive:
-    """A body's primitive from its columns' type and lengths, as the body loop builds it
-    from the same numbers."""
-    a, b, c = lengths
-    if kind == _BOX:
-        return Box((a, b, c))
-    if kind == _SPHERE:
-        return Sphere(a)
-    return Capsule(a, b) if kind == _CAPSULE else Cylinder(a, b)
 
 
 def _plain_objects(
