@@ -82,6 +82,7 @@ def read_document(source: str) -> tuple[Any, str]:
         raise SceneError("manifest is not UTF-8 text", source) from None
     with collector_paused():
         document = _decode(file, text, source)
+        _to_oldest_generation()
     _READ.clear()  # one manifest kept: a run reads its manifest twice, never many
     _READ[key] = (data, document, text)
     return document, text
@@ -97,6 +98,16 @@ def forget_documents() -> None:
     decoded document of 1,000,000 bodies holds about a gigabyte that nothing reads again
     (a later read decodes it anew)."""
     _READ.clear()
+
+
+def _to_oldest_generation() -> None:
+    """Every object the collector tracks moved to its oldest generation at once (frozen and
+    thawed: ``gc.unfreeze`` puts them there), so that the young collections that follow never
+    walk a decoded document's million objects (each one walked them all before they aged);
+    not when the program keeps objects frozen of its own."""
+    if gc.get_freeze_count() == 0:
+        gc.freeze()
+        gc.unfreeze()
 
 
 def _check_manifest_file(file: Path, source: str) -> None:
