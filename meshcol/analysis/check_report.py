@@ -6,6 +6,7 @@ turns the classified :class:`~meshcol.analysis.pairs.PairTable` into its rows.
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
@@ -448,10 +449,10 @@ def _name_ranks(names: Sequence[str]) -> np.ndarray:
     order = sorted(range(len(names)), key=names.__getitem__)
     rank = np.zeros(len(names), dtype=np.int64)
     if order:
-        ordered = [names[i] for i in order]
+        ordered = list(map(names.__getitem__, order))
         new = np.ones(len(order), dtype=np.int64)
         new[0] = 0
-        new[1:] = [x != y for x, y in zip(ordered[1:], ordered[:-1])]
+        new[1:] = list(map(operator.ne, ordered[1:], ordered[:-1]))
         rank[np.asarray(order, dtype=np.int64)] = np.cumsum(new)
     return rank
 
@@ -652,9 +653,11 @@ def _body_columns(
     names = body_names(colliders.bodies)
 
     def codes(values: Sequence[Any]) -> tuple[np.ndarray, list]:
-        table = {v: k for k, v in enumerate(dict.fromkeys(v for v in values if v is not None))}
-        found = [-1 if v is None else table[v] for v in values]
-        return np.asarray(found, dtype=np.int64).reshape(len(values)), list(table)
+        distinct = [v for v in dict.fromkeys(values) if v is not None]
+        table: dict[Any, int] = {v: k for k, v in enumerate(distinct)}
+        table[None] = -1
+        found = np.fromiter(map(table.__getitem__, values), dtype=np.int64, count=len(values))
+        return found, distinct
 
     parts, part_texts = codes(body_parts(colliders.bodies, picked))
     indent = "\n" + "  " * 3
@@ -740,7 +743,8 @@ def _findings(colliders: Any, options: CheckOptions, units: str | None) -> list[
     from meshcol.collision.hull import HullStatus
 
     records = []
-    no_area = np.isin(colliders.shapes.hull_status, (HullStatus.COLLINEAR, HullStatus.SINGLE_POINT))
+    status = colliders.shapes.hull_status  # (np.isin sorts a million statuses for two values)
+    no_area = (status == HullStatus.COLLINEAR) | (status == HullStatus.SINGLE_POINT)
     no_area &= colliders.shapes.kinds == 0  # polytopes
     counts = np.diff(colliders.body_part_offsets)
     starts = colliders.body_part_offsets[:-1]

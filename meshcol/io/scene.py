@@ -35,7 +35,12 @@ from meshcol.io.scene_bodies import (
 from meshcol.io.scene_columns import bulk_bodies, primitive_bodies
 from meshcol.io.scene_parse import collector_paused, read_document
 from meshcol.io.scene_schema import SCHEMA_PATH
-from meshcol.io.scene_validate import check_magnitudes, check_nesting, validate
+from meshcol.io.scene_validate import (
+    check_magnitudes,
+    check_nesting,
+    document_columns,
+    validate,
+)
 from meshcol.types import Body, Scene
 
 __all__ = [
@@ -308,9 +313,12 @@ def manifest_mesh_files(path: str | os.PathLike[str]) -> list[str]:
         check_nesting(document, text, source)
     except MeshcolError:
         return []
+    found = document_columns(document)
     bodies = document.get("bodies") if isinstance(document, dict) else None
     meshes: dict[str, None] = {}
-    for spec in bodies if isinstance(bodies, list) else []:
+    if found is not None:  # valid: the column of names, without a loop over the bodies
+        meshes = dict.fromkeys(m for m in dict.fromkeys(found.meshes) if m is not None)
+    for spec in bodies if isinstance(bodies, list) and found is None else []:
         mesh = spec.get("mesh") if isinstance(spec, dict) else None
         if isinstance(mesh, str) and mesh:
             meshes[mesh] = None

@@ -44,7 +44,7 @@ from meshcol.io.scene_schema import (
     is_scale,
 )
 
-__all__ = ["check_magnitudes", "check_nesting", "first_problem", "validate"]
+__all__ = ["check_magnitudes", "check_nesting", "document_columns", "first_problem", "validate"]
 
 # How problems at one place rank (JSON Schema's validators as meshcol orders them).
 _UNKNOWN, _MISSING, _OTHER = 0, 1, 2
@@ -97,6 +97,12 @@ def check_nesting(document: Any, text: str, source: str) -> None:
     (a valid one is at most five levels deep: only another needs the walk)."""
     if _assess(document)[1] is not None and nesting(document) > MAX_NESTING:
         raise SceneError(too_deep(text), source)
+
+
+def document_columns(document: Any) -> Columns | None:
+    """The columns of a plainly valid ``document`` (:func:`validate`'s), else None; assessed
+    once per document."""
+    return _assess(document)[0]
 
 
 # The last document assessed (by identity), its columns and its first problem: the output
