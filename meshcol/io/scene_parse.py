@@ -14,7 +14,7 @@ import json
 import math
 import os
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +23,7 @@ from meshcol.io.inputs import is_manifest
 from meshcol.io.safe_read import read_input
 
 __all__ = [
+    "KEPT_OF_DOCUMENTS",
     "MAX_NESTING",
     "children",
     "collector_paused",
@@ -96,8 +97,15 @@ _READ: dict[str, tuple[bytes, Any, str]] = {}
 def forget_documents() -> None:
     """Drop the manifest kept by :func:`read_document`, once a run has loaded its scene: the
     decoded document of 1,000,000 bodies holds about a gigabyte that nothing reads again
-    (a later read decodes it anew)."""
+    (a later read decodes it anew), and what was kept of it (:data:`KEPT_OF_DOCUMENTS`)."""
     _READ.clear()
+    for forget in KEPT_OF_DOCUMENTS:
+        forget()
+
+
+#: How to drop what a reader keeps of the last document (its columns, its first problem):
+#: :func:`forget_documents` calls each.
+KEPT_OF_DOCUMENTS: list[Callable[[], None]] = []
 
 
 def _to_oldest_generation() -> None:

@@ -23,7 +23,13 @@ from typing import Any
 from meshcol.errors import SceneError
 from meshcol.io.mesh_read import MAX_COORDINATE
 from meshcol.io.scene_columns import Columns, columns, near_limits
-from meshcol.io.scene_parse import MAX_NESTING, first_non_finite, nesting, too_deep
+from meshcol.io.scene_parse import (
+    KEPT_OF_DOCUMENTS,
+    MAX_NESTING,
+    first_non_finite,
+    nesting,
+    too_deep,
+)
 from meshcol.io.scene_schema import (
     BODY_FIELDS,
     EXPECTED,
@@ -108,6 +114,7 @@ def document_columns(document: Any) -> Columns | None:
 # The last document assessed (by identity), its columns and its first problem: the output
 # check and the loading of one run both ask.
 _LAST: list[Any] = [object(), None, None]
+KEPT_OF_DOCUMENTS.append(lambda: _LAST.__setitem__(slice(None), [object(), None, None]))
 
 
 def _assess(document: Any) -> tuple[Columns | None, str | None]:
