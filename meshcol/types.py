@@ -13,6 +13,7 @@ from __future__ import annotations
 import enum
 import functools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -502,8 +503,10 @@ class Scene:
 
     Attributes
     ----------
-    bodies : tuple of Body
-        In input order; names are unique.
+    bodies : sequence of Body
+        In input order; names are unique. A tuple, or for a manifest of static primitives
+        only a :class:`meshcol.io.scene_primitives.PrimitiveBodies` (its bodies as columns,
+        each Body made when indexed).
     units : str or None
         Length unit declared by the manifest (reported back verbatim), or None.
     source : str or None
@@ -518,7 +521,7 @@ class Scene:
         What reading the scene could not do as asked, one line each (reports repeat them).
     """
 
-    bodies: tuple[Body, ...]
+    bodies: Sequence[Body]
     units: str | None = None
     source: str | None = None
     duration: float | None = None

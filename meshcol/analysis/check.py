@@ -61,8 +61,10 @@ from meshcol.analysis.pairs import (
     convex_phase,
     place,
 )
+from meshcol.analysis.primitive_colliders import primitive_colliders
 from meshcol.errors import TooManyPairsError
 from meshcol.io.robot import RobotOptions
+from meshcol.io.scene_primitives import body_names
 from meshcol.types import Scene
 from meshcol.vocabulary import PAIR_STATUSES
 
@@ -106,7 +108,8 @@ def check_scene(
     options = options or CheckOptions()
     report = progress or (lambda message: None)
     started = time.perf_counter()
-    colliders = build_colliders(
+    # a manifest of primitives only, as columns: packed from its arrays, no object a body
+    colliders = primitive_colliders(scene.bodies) or build_colliders(
         scene.bodies,
         options.collider,
         mesh_parts="hull",
@@ -121,7 +124,7 @@ def check_scene(
     table = broad_phase(placed, margin, scene.excluded_pairs, options.max_pairs)
     table = narrow_phase(table, placed, options)
     table = classify(table, options.tolerance, options.clearance)
-    table = apply_policy(table, [body.name for body in colliders.bodies], options)
+    table = apply_policy(table, body_names(colliders.bodies), options)
     seconds = time.perf_counter() - started
     return check_report(table, placed, scene, options, seconds, load_seconds)
 

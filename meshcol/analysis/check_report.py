@@ -6,6 +6,7 @@ turns the classified :class:`~meshcol.analysis.pairs.PairTable` into its rows.
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime, timezone
@@ -17,6 +18,7 @@ from meshcol.analysis.check_policy import CheckOptions
 from meshcol.analysis.pairs import SEVERITY, PairTable, PlacedColliders
 from meshcol.io.paths import display_path, display_paths
 from meshcol.io.report import vector_columns
+from meshcol.io.scene_primitives import body_names, body_parts, body_sources, vertex_counts
 from meshcol.types import Scene
 from meshcol.vocabulary import PAIR_STATUSES
 
@@ -408,7 +410,7 @@ def check_report(
     (body_a, body_b) names, the bodies, the findings, the summary and the settings. Pairs and
     bodies stay columns (:class:`ReportRows`) until a reader asks for their dicts."""
     colliders = placed.colliders
-    names = [body.name for body in colliders.bodies]
+    names = body_names(colliders.bodies)
     rank = _name_ranks(names)
     table = table.take(_report_order(table, rank))
     files = _files(colliders.bodies)
@@ -430,7 +432,7 @@ def check_report(
 def _files(bodies: Sequence[Any]) -> list[str | None]:
     """Each body's file as the report shows it, each distinct file made relative once (the
     100,000 primitives of a manifest share one)."""
-    sources = [body.source for body in bodies]
+    sources = body_sources(bodies)
     distinct = list(dict.fromkeys(sources))
     shown = dict(zip(distinct, display_paths(distinct, posix=True)))
     return [shown[source] for source in sources]
@@ -448,10 +450,10 @@ def _name_ranks(names: Sequence[str]) -> np.ndarray:
     order = sorted(range(len(names)), key=names.__getitem__)
     rank = np.zeros(len(names), dtype=np.int64)
     if order:
-        ordered = [names[i] for i in order]
+        ordered = list(map(names.__getitem__, order))
         new = np.ones(len(order), dtype=np.int64)
         new[0] = 0
-        new[1:] = [x != y for x, y in zip(ordered[1:], ordered[:-1])]
+        new[1:] = list(map(operator.ne, ordered[1:], ordered[:-1]))
         rank[np.asarray(order, dtype=np.int64)] = np.cumsum(new)
     return rank
 
@@ -484,7 +486,7 @@ def _pair_rows(table: PairTable, colliders: Any) -> ReportRows:
 
 def _pair_columns(table: PairTable, colliders: Any) -> list[tuple]:
     """The columns of :func:`pair_rows`, for the native row writer, in key order."""
-    names = [body.name for body in colliders.bodies]
+    names = body_names(colliders.bodies)
 
     def part(bodies: np.ndarray, labels: np.ndarray) -> tuple:
         if not (labels >= 0).any():
@@ -530,7 +532,7 @@ def pair_rows(table: PairTable, colliders: Any, index: np.ndarray | None = None)
     """One dict per row (the report's ``pairs``), in table order (the rows ``index`` only,
     when given); non-finite numbers as None, parts by name. Columns are converted once, then
     zipped (no per-pair numpy calls)."""
-    names = [body.name for body in colliders.bodies]
+    names = body_names(colliders.bodies)
     rows = slice(None) if index is None else index
     a, b = table.body_a[rows], table.body_b[rows]
     columns = zip(
@@ -649,14 +651,16 @@ def _body_columns(
 
     colliders = placed.colliders
     picked = order.tolist()
-    bodies = [colliders.bodies[i] for i in picked]
+    names = body_names(colliders.bodies)
 
     def codes(values: Sequence[Any]) -> tuple[np.ndarray, list]:
-        table = {v: k for k, v in enumerate(dict.fromkeys(v for v in values if v is not None))}
-        found = [-1 if v is None else table[v] for v in values]
-        return np.asarray(found, dtype=np.int64).reshape(len(values)), list(table)
+        distinct = [v for v in dict.fromkeys(values) if v is not None]
+        table: dict[Any, int] = {v: k for k, v in enumerate(distinct)}
+        table[None] = -1
+        found = np.fromiter(map(table.__getitem__, values), dtype=np.int64, count=len(values))
+        return found, distinct
 
-    parts, part_texts = codes([tuple(body.parts) for body in bodies])
+    parts, part_texts = codes(body_parts(colliders.bodies, picked))
     indent = "\n" + "  " * 3
     box = np.concatenate([placed.body_min[order], placed.body_max[order]], axis=1)
     return [
@@ -664,14 +668,14 @@ def _body_columns(
         ("collider", "string", *codes([colliders.kinds[i] for i in picked])),
         ("convex_parts", "integer", np.diff(colliders.body_part_offsets)[order]),
         ("file", "string", *codes([files[i] for i in picked])),
-        ("name", "string", np.arange(len(bodies), dtype=np.int64), [b.name for b in bodies]),
+        ("name", "string", np.arange(len(picked), dtype=np.int64), [names[i] for i in picked]),
         (
             "parts",
             "raw",
             parts,
             [dumps_json(list(p))[:-1].replace("\n", indent) for p in part_texts],
         ),
-        ("vertices", "integer", np.asarray([b.vertex_count for b in bodies], dtype=np.int64)),
+        ("vertices", "integer", vertex_counts(colliders.bodies, order)),
     ]
 
 
@@ -742,7 +746,8 @@ def _findings(colliders: Any, options: CheckOptions, scene: Scene) -> list[dict]
 
     units = scene.units
     records = robot_findings(scene)
-    no_area = np.isin(colliders.shapes.hull_status, (HullStatus.COLLINEAR, HullStatus.SINGLE_POINT))
+    status = colliders.shapes.hull_status  # (np.isin sorts a million statuses for two values)
+    no_area = (status == HullStatus.COLLINEAR) | (status == HullStatus.SINGLE_POINT)
     no_area &= colliders.shapes.kinds == 0  # polytopes
     counts = np.diff(colliders.body_part_offsets)
     starts = colliders.body_part_offsets[:-1]

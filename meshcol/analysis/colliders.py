@@ -76,7 +76,7 @@ class Colliders:
 
     Attributes
     ----------
-    bodies : tuple of Body
+    bodies : sequence of Body
         The bodies, in input order, without the ``UCX_`` parts that became colliders (a body
         of several parts loses its matched ``UCX_`` parts; ``UCX_`` parts naming no body
         become bodies of their own, after the others).
@@ -102,7 +102,7 @@ class Colliders:
         (a ``fit`` primitive); None when every part is.
     """
 
-    bodies: tuple[Body, ...]
+    bodies: Sequence[Body]
     kinds: tuple[str, ...]
     shapes: ConvexSet
     part_body: np.ndarray

@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from meshcol.io.scene_primitives import body_names
 from meshcol.types import Status
 from meshcol.vocabulary import PAIR_STATUSES
 
@@ -406,7 +407,7 @@ def broad_phase(
     from meshcol.errors import TooManyPairsError
 
     colliders = placed.colliders
-    names = [body.name for body in colliders.bodies]
+    names = body_names(colliders.bodies)
     sweep_cap = None if max_pairs is None else max_pairs + len(excluded)
     try:
         body_pairs = overlapping_pairs(
@@ -421,9 +422,12 @@ def broad_phase(
     if len(body_pairs) == 0:
         empty = np.zeros((0, 2), dtype=np.int64)
         return PairTable.of_candidates(body_pairs, empty, empty[:, 0], int(left_out.sum()))
+    owner = colliders.part_body
+    if len(owner) == len(names):  # one part a body: its box is the body's, its pairs theirs
+        rows = np.arange(len(body_pairs), dtype=np.int64)
+        return PairTable.of_candidates(body_pairs, body_pairs.copy(), rows, int(left_out.sum()))
     n = max(len(names), 1)
     key = body_pairs[:, 0] * n + body_pairs[:, 1]
-    owner = colliders.part_body
     part_pairs = overlapping_pairs(placed.part_min, placed.part_max, margin, groups=owner)
     part_key = owner[part_pairs[:, 0]] * n + owner[part_pairs[:, 1]]
     if left_out.any():  # part pairs of excluded body pairs
@@ -528,6 +532,8 @@ def broad_phase_batch(
 
 def _closest_per_row(rows: np.ndarray, values: np.ndarray) -> np.ndarray:
     """Index of the smallest value of each row (rows need not be sorted; ties: first)."""
+    if len(rows) < 2 or bool((rows[1:] > rows[:-1]).all()):  # each row once, in order
+        return np.arange(len(rows), dtype=np.int64)
     order = np.lexsort((values, rows))
     sorted_rows = rows[order]
     first = np.ones(len(order), dtype=bool)

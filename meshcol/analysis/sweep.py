@@ -412,7 +412,7 @@ def sweep(
     hits, separated, candidate_pairs = _first_contacts(colliders, motion, pairs, contacts, scene)
     return SweepReport(
         scene=scene,
-        bodies=colliders.bodies,
+        bodies=tuple(colliders.bodies),
         collider=collider,
         tolerance=tol,
         hits=tuple(hits),

@@ -285,6 +285,28 @@ class ConvexSet:
         return cls._from_items([_item(s, n) for s, n in zip(shapes, labels)])
 
     @classmethod
+    def from_primitives(cls, kinds: Any, params: Any) -> ConvexSet:
+        """Primitives given as arrays (no object per shape: a scene may hold 1,000,000).
+
+        Parameters
+        ----------
+        kinds : (H,) int
+            :class:`ShapeKind` of each shape, SPHERE to CYLINDER.
+        params : (H, 4) float
+            Each one's parameters as :attr:`params` holds them (half extents, half lengths),
+            finite and >= 0.
+        """
+        k = np.ascontiguousarray(kinds, dtype=np.int8).reshape(-1)
+        p = np.ascontiguousarray(params, dtype=np.float64)
+        if p.shape != (len(k), 4):
+            raise ValueError(f"params must be ({len(k)}, 4), got {p.shape}")
+        if len(k) and (k.min() < ShapeKind.SPHERE or k.max() > ShapeKind.CYLINDER):
+            raise ValueError("kinds must be primitive shape kinds (SPHERE to CYLINDER)")
+        if not (np.isfinite(p) & (p >= 0.0)).all():
+            raise ValueError("params must be finite and >= 0")
+        return cls._assemble(k, p, np.zeros(0, dtype=np.int64), pack_hulls([]))
+
+    @classmethod
     def from_meshes(cls, meshes: Sequence[Any]) -> ConvexSet:
         """Convex hulls of ``trimesh.Trimesh`` meshes or :class:`meshcol.types.Body`
         objects, in their local frames (a Body with a primitive uses the primitive)."""

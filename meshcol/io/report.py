@@ -306,12 +306,35 @@ def rows_chunks(columns: list[tuple], count: int, level: int) -> Iterator[str]:
     yield "["
     for start in range(0, count, _ROWS_PER_CALL):
         stop = min(start + _ROWS_PER_CALL, count)
-        yield core.dumps_rows(columns, count, start, stop, level)
+        if start:
+            yield ","  # the core writes a list's first row without one
+        window = [_column_window(column, start, stop) for column in columns]
+        yield core.dumps_rows(window, stop - start, 0, stop - start, level)
     yield "\n" + "  " * level + "]"
 
 
-#: Rows :func:`dumps_rows` has written per native call.
-_ROWS_PER_CALL = 1 << 16
+#: Rows :func:`dumps_rows` has written per native call: a few megabytes of text, so that the
+#: memory of one call's text is reused by the next (not mapped anew for each).
+_ROWS_PER_CALL = 1 << 13
+
+
+def _column_window(column: tuple, start: int, stop: int) -> tuple:
+    """A column of the core's row writer cut to the rows ``start:stop``; a string column's
+    table cut to the entries those rows use (the core escapes its whole table every call: the
+    names of 1,000,000 bodies, for a window of a few thousand rows)."""
+    key, kind, array, *rest = column
+    part = array[start:stop]
+    if not rest:
+        return key, kind, part
+    (table,) = rest
+    if len(table) <= 2 * len(part):
+        return key, kind, part, table
+    import numpy as np
+
+    used, codes = np.unique(part, return_inverse=True)
+    if len(used) and used[0] < 0:  # -1 (null) stays -1
+        used, codes = used[1:], codes - 1
+    return key, kind, codes.astype(np.int64), [table[u] for u in used.tolist()]
 
 
 def _nulled(value: Any) -> Any:

@@ -9,7 +9,8 @@ naming the manifest, the body and the field.
 Loading a manifest is a list of stages, each in its module: read the text
 (:mod:`meshcol.io.scene_parse`), validate it (:mod:`meshcol.io.scene_validate`; the common
 manifest column by column, :mod:`meshcol.io.scene_columns`), read its mesh files once, build
-its common bodies in bulk, then the others one by one (:mod:`meshcol.io.scene_bodies`).
+its common bodies in bulk, then the others one by one (:mod:`meshcol.io.scene_bodies`). A
+manifest of static primitives only stays columns (:mod:`meshcol.io.scene_primitives`).
 """
 
 from __future__ import annotations
@@ -31,10 +32,15 @@ from meshcol.io.scene_bodies import (
     rotation_from_euler,
     rotation_from_quaternion,
 )
-from meshcol.io.scene_columns import bulk_bodies
+from meshcol.io.scene_columns import bulk_bodies, primitive_bodies
 from meshcol.io.scene_parse import collector_paused, read_document
 from meshcol.io.scene_schema import SCHEMA_PATH
-from meshcol.io.scene_validate import check_magnitudes, check_nesting, validate
+from meshcol.io.scene_validate import (
+    check_magnitudes,
+    check_nesting,
+    document_columns,
+    validate,
+)
 from meshcol.types import Body, Scene
 
 __all__ = [
@@ -93,12 +99,15 @@ def _load_scene(source: str) -> Scene:
     document, text = read_document(source)
     columns = validate(document, text, source)  # None: the manifest takes the body-by-body path
     check_magnitudes(document, source, columns)
+    units, duration = document.get("units"), document.get("duration")
+    primitives = primitive_bodies(columns, source) if columns is not None else None
+    if primitives is not None:  # every body a static primitive: columns, no object per body
+        return Scene(bodies=primitives, units=units, source=source, duration=duration)
     files = read_mesh_files(document, source)  # each mesh file read once, all in parallel
     # The common bodies (static, unscaled, one object each) built together; every other body,
     # and every body whose checks might fail, one by one in order, so errors come as before.
     bulk = bulk_bodies(columns, source, files) if columns is not None else None
     bodies = build_bodies(document, source, files, bulk)
-    units, duration = document.get("units"), document.get("duration")
     return Scene(bodies=tuple(bodies), units=units, source=source, duration=duration)
 
 
@@ -304,9 +313,12 @@ def manifest_mesh_files(path: str | os.PathLike[str]) -> list[str]:
         check_nesting(document, text, source)
     except MeshcolError:
         return []
+    found = document_columns(document)
     bodies = document.get("bodies") if isinstance(document, dict) else None
     meshes: dict[str, None] = {}
-    for spec in bodies if isinstance(bodies, list) else []:
+    if found is not None:  # valid: the column of names, without a loop over the bodies
+        meshes = dict.fromkeys(m for m in dict.fromkeys(found.meshes) if m is not None)
+    for spec in bodies if isinstance(bodies, list) and found is None else []:
         mesh = spec.get("mesh") if isinstance(spec, dict) else None
         if isinstance(mesh, str) and mesh:
             meshes[mesh] = None

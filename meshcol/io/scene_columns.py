@@ -13,8 +13,11 @@ the bit what the body loop of :mod:`meshcol.io.scene_bodies` builds.
 
 from __future__ import annotations
 
+import collections
 import dataclasses
+import itertools
 import math
+import operator
 import os
 from collections.abc import MutableMapping, Sequence
 from typing import Any
@@ -24,6 +27,7 @@ import numpy as np
 from meshcol.io.mesh_read import MAX_COORDINATE, lone_objects
 from meshcol.io.paths import joined_paths
 from meshcol.io.scene_bodies import AXES
+from meshcol.io.scene_primitives import PrimitiveBodies, primitive_of
 from meshcol.io.scene_schema import (
     BODY_FIELDS,
     MAX_TURN,
@@ -34,7 +38,7 @@ from meshcol.io.scene_schema import (
     VECTOR_FIELDS,
     plain_top,
 )
-from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Sphere
+from meshcol.types import Body
 
 __all__ = [
     "Columns",
@@ -42,6 +46,7 @@ __all__ = [
     "columns",
     "euler_matrices",
     "near_limits",
+    "primitive_bodies",
     "quaternion_matrices",
 ]
 
@@ -109,8 +114,10 @@ class _Table:
         if set(map(type, bodies)) != {dict}:
             raise _Unplain
         layouts: dict[frozenset, int] = {}
-        for keys in map(frozenset, bodies):
-            layouts[keys] = layouts.get(keys, 0) + 1
+        # counted by key tuple first (C loops; a frozenset a body costs twice as much)
+        for ordered, count in collections.Counter(map(tuple, bodies)).items():
+            layout = frozenset(ordered)
+            layouts[layout] = layouts.get(layout, 0) + count
         for keys in layouts:
             if not keys <= BODY_FIELDS or "name" not in keys:
                 raise _Unplain
@@ -123,7 +130,7 @@ class _Table:
     def column(self, field: str) -> tuple[list, np.ndarray | None]:
         """The values of the bodies that have ``field``, and which those are (None: all)."""
         if self.count[field] == self.n:
-            return [b[field] for b in self.bodies], None
+            return list(map(operator.itemgetter(field), self.bodies)), None
         mask = np.fromiter((field in b for b in self.bodies), dtype=bool, count=self.n)
         return [b[field] for b in self.bodies if field in b], mask
 
@@ -200,27 +207,27 @@ def _primitives(table: _Table) -> tuple[np.ndarray, np.ndarray]:
     values, mask = table.column("primitive")
     if set(map(type, values)) != {dict}:
         raise _Unplain
-    types = [p.get("type") for p in values]
+    types = list(map(dict.get, values, itertools.repeat("type")))
     if set(map(type, types)) != {str} or not set(types) <= PRIMITIVE_KEYS.keys():
         raise _Unplain
     index = {kind: k for k, kind in enumerate(PRIMITIVE_TYPES)}
-    given = np.array([index[t] for t in types], dtype=np.int8).reshape(len(values))
+    given = np.fromiter(map(index.__getitem__, types), dtype=np.int8, count=len(types))
     rows = np.zeros((len(values), 3))
     for kind, fields in PRIMITIVE_KEYS.items():
         picked = np.flatnonzero(given == index[kind])
-        group = [values[i] for i in picked.tolist()]
+        group = values if len(picked) == len(values) else list(map(values.__getitem__, picked))
         if not group:
             continue
         if set(map(len, group)) != {len(fields)}:  # with every field there: exactly them
             raise _Unplain
         try:
             if kind == "box":
-                block, width = _rows([p["size"] for p in group], 3), 3
+                block, width = _rows(list(map(operator.itemgetter("size"), group)), 3), 3
             else:
                 block, width = np.zeros((len(group), 3)), 1 if kind == "sphere" else 2
-                block[:, 0] = _rows([[p["radius"]] for p in group], 1)[:, 0]
+                block[:, 0] = _numbers(list(map(operator.itemgetter("radius"), group)))
                 if width == 2:
-                    block[:, 1] = _rows([[p["length"]] for p in group], 1)[:, 0]
+                    block[:, 1] = _numbers(list(map(operator.itemgetter("length"), group)))
         except KeyError:
             raise _Unplain from None
         if not (block[:, :width] > 0).all():
@@ -237,16 +244,28 @@ def _rows(values: list, width: int) -> np.ndarray:
         return np.zeros((0, width))
     if set(map(type, values)) != {list} or set(map(len, values)) != {width}:
         raise _Unplain
-    flat = [v for row in values for v in row]
-    if not set(map(type, flat)) <= _NUMBER_TYPES:
+    if not set(map(type, itertools.chain.from_iterable(values))) <= _NUMBER_TYPES:
         raise _Unplain
     try:
-        rows = np.array(flat, dtype=np.float64).reshape(-1, width)
+        rows = np.array(values, dtype=np.float64).reshape(-1, width)
     except OverflowError:
         raise _Unplain from None
     if not np.isfinite(rows).all():
         raise _Unplain
     return rows
+
+
+def _numbers(values: list) -> np.ndarray:
+    """``values``, finite JSON numbers, as (len,) float64 (as :func:`_rows` takes them)."""
+    if not set(map(type, values)) <= _NUMBER_TYPES:
+        raise _Unplain
+    try:
+        numbers = np.array(values, dtype=np.float64).reshape(len(values))
+    except OverflowError:
+        raise _Unplain from None
+    if not np.isfinite(numbers).all():
+        raise _Unplain
+    return numbers
 
 
 def _spread(rows: np.ndarray, mask: np.ndarray | None, n: int, fill: float) -> np.ndarray:
@@ -363,24 +382,47 @@ def bulk_bodies(found: Columns, source: str, files: MutableMapping[str, list[Bod
     if len(set(names)) != n:
         return None
     objects, reach_of = _plain_objects(found, source, files)
-    reach = np.array([reach_of[m] for m in found.meshes]).reshape(n)
-    primitive = found.primitive
-    reach[primitive] = _primitive_reach(found.primitive_type, found.primitive_lengths)[primitive]
-    position = found.vectors.get("position", np.zeros((n, 3)))
-    common = ~found.moving & ~found.scaled
-    common &= reach + np.abs(position).max(axis=1, initial=0.0) <= MAX_COORDINATE
-    poses = _poses(found, position, common)
+    common, poses = _common(found, np.array([reach_of[m] for m in found.meshes]).reshape(n))
     out: list[Body | None] = [None] * n
     shapes = found.shapes
     kinds, lengths = found.primitive_type.tolist(), found.primitive_lengths.tolist()
     plain = Body.plain
+    primitive = found.primitive
     for i in np.flatnonzero(common & primitive).tolist():
-        primitive_i = _primitive(kinds[i], lengths[i])
+        primitive_i = primitive_of(kinds[i], lengths[i])
         out[i] = plain(names[i], source, None, None, poses[i], primitive_i, shapes[i])
     for i in np.flatnonzero(common & ~primitive).tolist():
         mesh_source, vertices, faces = objects[found.meshes[i]]
         out[i] = plain(names[i], mesh_source, vertices, faces, poses[i], None, shapes[i])
     return out
+
+
+def primitive_bodies(found: Columns, source: str) -> PrimitiveBodies | None:
+    """The manifest's bodies as :class:`PrimitiveBodies` (no Python object per body) when
+    every one is a primitive that :func:`bulk_bodies` would build and names are unique;
+    else None (the bodies are built as objects)."""
+    n = len(found.names)
+    if not n or not found.primitive.all() or len(set(found.names)) != n:
+        return None
+    common, poses = _common(found, np.full(n, np.inf))
+    if not common.all():
+        return None
+    kinds = np.ascontiguousarray(found.primitive_type, dtype=np.int8)
+    lengths = np.ascontiguousarray(found.primitive_lengths, dtype=np.float64)
+    return PrimitiveBodies(found.names, source, kinds, lengths, poses, found.shapes)
+
+
+def _common(found: Columns, reach: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(n,) bool: the bodies :func:`bulk_bodies` builds (static, unscaled, a nonzero
+    quaternion, plainly within the limit: ``reach`` bounds a mesh body's |v|, a primitive's
+    is its own); and every body's (n, 4, 4) start pose."""
+    n = len(found.names)
+    primitive = found.primitive
+    reach[primitive] = _primitive_reach(found.primitive_type, found.primitive_lengths)[primitive]
+    position = found.vectors.get("position", np.zeros((n, 3)))
+    common = ~found.moving & ~found.scaled
+    common &= reach + np.abs(position).max(axis=1, initial=0.0) <= MAX_COORDINATE
+    return common, _poses(found, position, common)
 
 
 def _primitive_reach(kinds: np.ndarray, lengths: np.ndarray) -> np.ndarray:
@@ -399,17 +441,6 @@ def _primitive_reach(kinds: np.ndarray, lengths: np.ndarray) -> np.ndarray:
 _SPHERE, _BOX, _CAPSULE, _CYLINDER = (
     PRIMITIVE_TYPES.index(k) for k in ("sphere", "box", "capsule", "cylinder")
 )
-
-
-def _primitive(kind: int, lengths: list[float]) -> Primitive:
-    """A body's primitive from its columns' type and lengths, as the body loop builds it
-    from the same numbers."""
-    a, b, c = lengths
-    if kind == _BOX:
-        return Box((a, b, c))
-    if kind == _SPHERE:
-        return Sphere(a)
-    return Capsule(a, b) if kind == _CAPSULE else Cylinder(a, b)
 
 
 def _plain_objects(
@@ -438,21 +469,20 @@ def _poses(found: Columns, position: np.ndarray, common: np.ndarray) -> np.ndarr
     """(n, 4, 4) start poses of the columns' bodies; a body with a zero quaternion leaves
     ``common`` (the body loop says what is wrong with it)."""
     n = len(found.names)
-    rotations = np.tile(np.eye(3), (n, 1, 1))
+    poses = np.zeros((n, 4, 4))
+    diagonal = np.arange(4)
+    poses[:, diagonal, diagonal] = 1.0  # identity rotations (the pose's own 1 too)
     quaternion = found.rotation == 1
     if quaternion.any():
         q = found.quaternion
         nonzero = np.abs(q).max(axis=1) > 0
         rows = np.flatnonzero(quaternion)
         common[rows[~nonzero]] = False
-        rotations[rows[nonzero]] = quaternion_matrices(q[nonzero])
+        poses[rows[nonzero], :3, :3] = quaternion_matrices(q[nonzero])
     euler = found.rotation == 2
     if euler.any():
-        rotations[euler] = euler_matrices(found.euler, found.orders)
-    poses = np.zeros((n, 4, 4))
-    poses[:, :3, :3] = rotations
+        poses[np.flatnonzero(euler), :3, :3] = euler_matrices(found.euler, found.orders)
     poses[:, :3, 3] = position
-    poses[:, 3, 3] = 1.0
     return poses
 
 

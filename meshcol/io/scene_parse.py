@@ -14,7 +14,7 @@ import json
 import math
 import os
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +23,7 @@ from meshcol.io.inputs import is_manifest
 from meshcol.io.safe_read import read_input
 
 __all__ = [
+    "KEPT_OF_DOCUMENTS",
     "MAX_NESTING",
     "children",
     "collector_paused",
@@ -82,6 +83,7 @@ def read_document(source: str) -> tuple[Any, str]:
         raise SceneError("manifest is not UTF-8 text", source) from None
     with collector_paused():
         document = _decode(file, text, source)
+        _to_oldest_generation()
     _READ.clear()  # one manifest kept: a run reads its manifest twice, never many
     _READ[key] = (data, document, text)
     return document, text
@@ -95,8 +97,25 @@ _READ: dict[str, tuple[bytes, Any, str]] = {}
 def forget_documents() -> None:
     """Drop the manifest kept by :func:`read_document`, once a run has loaded its scene: the
     decoded document of 1,000,000 bodies holds about a gigabyte that nothing reads again
-    (a later read decodes it anew)."""
+    (a later read decodes it anew), and what was kept of it (:data:`KEPT_OF_DOCUMENTS`)."""
     _READ.clear()
+    for forget in KEPT_OF_DOCUMENTS:
+        forget()
+
+
+#: How to drop what a reader keeps of the last document (its columns, its first problem):
+#: :func:`forget_documents` calls each.
+KEPT_OF_DOCUMENTS: list[Callable[[], None]] = []
+
+
+def _to_oldest_generation() -> None:
+    """Every object the collector tracks moved to its oldest generation at once (frozen and
+    thawed: ``gc.unfreeze`` puts them there), so that the young collections that follow never
+    walk a decoded document's million objects (each one walked them all before they aged);
+    not when the program keeps objects frozen of its own."""
+    if gc.get_freeze_count() == 0:
+        gc.freeze()
+        gc.unfreeze()
 
 
 def _check_manifest_file(file: Path, source: str) -> None:

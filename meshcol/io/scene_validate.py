@@ -23,7 +23,13 @@ from typing import Any
 from meshcol.errors import SceneError
 from meshcol.io.mesh_read import MAX_COORDINATE
 from meshcol.io.scene_columns import Columns, columns, near_limits
-from meshcol.io.scene_parse import MAX_NESTING, first_non_finite, nesting, too_deep
+from meshcol.io.scene_parse import (
+    KEPT_OF_DOCUMENTS,
+    MAX_NESTING,
+    first_non_finite,
+    nesting,
+    too_deep,
+)
 from meshcol.io.scene_schema import (
     BODY_FIELDS,
     EXPECTED,
@@ -44,7 +50,7 @@ from meshcol.io.scene_schema import (
     is_scale,
 )
 
-__all__ = ["check_magnitudes", "check_nesting", "first_problem", "validate"]
+__all__ = ["check_magnitudes", "check_nesting", "document_columns", "first_problem", "validate"]
 
 # How problems at one place rank (JSON Schema's validators as meshcol orders them).
 _UNKNOWN, _MISSING, _OTHER = 0, 1, 2
@@ -99,9 +105,16 @@ def check_nesting(document: Any, text: str, source: str) -> None:
         raise SceneError(too_deep(text), source)
 
 
+def document_columns(document: Any) -> Columns | None:
+    """The columns of a plainly valid ``document`` (:func:`validate`'s), else None; assessed
+    once per document."""
+    return _assess(document)[0]
+
+
 # The last document assessed (by identity), its columns and its first problem: the output
 # check and the loading of one run both ask.
 _LAST: list[Any] = [object(), None, None]
+KEPT_OF_DOCUMENTS.append(lambda: _LAST.__setitem__(slice(None), [object(), None, None]))
 
 
 def _assess(document: Any) -> tuple[Columns | None, str | None]:

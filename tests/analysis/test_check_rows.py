@@ -65,6 +65,33 @@ def test_rows_from_columns_are_json_dumps_of_the_dicts(n: int, monkeypatch) -> N
     assert dumps_rows(columns, 0, 1) == "[]"
 
 
+def test_rows_written_in_windows_are_the_rows_written_at_once(monkeypatch) -> None:
+    import meshcol.io.report as report
+
+    rng = np.random.default_rng(5)
+    n = 23
+    names = [f"body {k} \u2603" for k in range(200)]  # far more names than a window uses
+    codes = rng.integers(-1, len(names), n).astype(np.int64)
+    columns = [
+        ("name", "string", codes, names),
+        ("number", "number", rng.normal(size=n)),
+        ("other", "string", rng.integers(0, 3, n).astype(np.int64), ["a", "b", "c"]),
+    ]
+    rows = [
+        {
+            "name": None if codes[i] < 0 else names[codes[i]],
+            "number": float(columns[1][2][i]),
+            "other": "abc"[columns[2][2][i]],
+        }
+        for i in range(n)
+    ]
+    expected = json.dumps(rows, sort_keys=True, indent=2).replace("\n", "\n  ")
+    whole = dumps_rows(columns, n, 1)
+    assert whole == expected
+    monkeypatch.setattr(report, "_ROWS_PER_CALL", 4)
+    assert dumps_rows(columns, n, 1) == whole
+
+
 def test_rows_refuse_a_column_of_the_wrong_shape() -> None:
     with pytest.raises(ValueError, match="wrong type or shape"):
         dumps_rows([("x", "vector", np.zeros(3))], 3, 1)
