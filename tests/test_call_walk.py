@@ -43,8 +43,12 @@ SAMPLES = PACKAGE.parent / "samples" / "level" / "props"
 #: The small scene: two mesh files, each body at its own coordinates, checked as hulls.
 INPUTS = [str(SAMPLES / "crate.obj"), str(SAMPLES / "barrel.obj")]
 
-#: Re-entries of the walk now: 52 (73 stays in 21 files) after session 14's report columns and
-#: pair cap; 61 before (83 stays in 22 files). 43 after issue 28's last step (61 stays
+#: Re-entries of the walk now: 57 (83 stays in 26 files) after session 15's column paths (the
+#: manifest's primitives and mesh files as arrays: ``io/scene_primitives.py``,
+#: ``analysis/primitive_colliders.py``, ``analysis/bulk_colliders.py``) and robots4's MC506
+#: (``analysis/rules.py`` from the report): five more files, five more re-entries, and the
+#: same 32 above the floor of files - 1 as before. 52 (73 stays in 21 files) after session
+#: 14's report columns and pair cap; 61 before (83 stays in 22 files). 43 after issue 28's last step (61 stays
 #: in 17 files: each stage of ``check_scene`` a call into ``analysis/pairs.py`` or the mesh
 #: stage's, the policy's, the report's file, and a return into ``analysis/check.py``); issue
 #: 29 and 30's mechanisms added 18 (the guarded read of ``io/safe_read.py``, ``--root``'s
@@ -53,7 +57,7 @@ INPUTS = [str(SAMPLES / "crate.obj"), str(SAMPLES / "barrel.obj")]
 #: walk of at most 12 allows about 12 such calls from the options to the report: a flat list
 #: of named stages (item 1 of the issue) spends most of them in ``check.py`` alone. A
 #: regression bound: lower it when the walk gets shorter.
-MAX_RE_ENTRIES_NOW = 52
+MAX_RE_ENTRIES_NOW = 57
 #: The target of issue 28.
 MAX_RE_ENTRIES = 12
 
@@ -135,7 +139,7 @@ def test_the_re_entries_are_at_least_the_files_but_one(stays: list[str]) -> None
 
 @pytest.mark.xfail(
     strict=True,
-    reason="issue 28: 52 re-entries in 21 files; at least files - 1 (module docstring)",
+    reason="issue 28: 57 re-entries in 26 files; at least files - 1 (module docstring)",
 )
 def test_the_walk_of_checks_inputs_re_enters_a_file_at_most_12_times(stays: list[str]) -> None:
     count = re_entries(stays)
