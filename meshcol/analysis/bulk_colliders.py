@@ -22,10 +22,12 @@ from meshcol.types import Body
 
 __all__ = ["bulk_colliders"]
 
-# Odd 64-bit multipliers (splitmix64's): the fingerprint of a point set mixes every coordinate's
-# bits with its place in the set. A fingerprint only proposes a match; the bits decide it.
+# Odd 64-bit multipliers (splitmix64's and wyhash's): the fingerprint of a point set mixes each
+# vertex's three coordinates' bits, then weighs the vertex by its place in the set. A
+# fingerprint only proposes a match; the bits decide it.
 _MIX = np.uint64(0xBF58476D1CE4E5B9)
 _PLACE = np.uint64(0x94D049BB133111EB)
+_THIRD = np.uint64(0xD6E8FEB86659FD93)
 
 
 def bulk_colliders(
@@ -107,15 +109,21 @@ def _first_equal(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.n
     np.cumsum(counts, out=offsets[1:])
     bits = points.reshape(-1).view(np.uint64)
     n = len(arrays)
-    place = np.arange(len(bits), dtype=np.uint64) - np.repeat(
-        (offsets[:-1] * 3).astype(np.uint64), counts * 3
-    )
-    with np.errstate(over="ignore"):
-        mixed = (bits ^ (bits >> np.uint64(31))) * _MIX + (place + np.uint64(1)) * _PLACE
+    rows = bits.reshape(-1, 3)
+    # per vertex (a third of the coordinates: less memory to touch), in place
+    mixed = rows[:, 0] * _MIX
+    mixed += rows[:, 1] * _PLACE
+    mixed += rows[:, 2] * _THIRD
+    mixed ^= mixed >> np.uint64(29)
+    place = np.arange(len(rows), dtype=np.uint64)
+    place -= np.repeat(offsets[:-1].astype(np.uint64), counts)
+    place <<= np.uint64(1)
+    place += np.uint64(1)  # odd: a vertex weighed by its place in its set
+    mixed *= place
     fingerprint = np.zeros(n, dtype=np.uint64)
     filled = counts > 0
     if filled.any():
-        fingerprint[filled] = np.add.reduceat(mixed, offsets[:-1][filled] * 3)
+        fingerprint[filled] = np.add.reduceat(mixed, offsets[:-1][filled])
     # sets in order of (count, fingerprint, index): the first of each run is the first set
     order = np.lexsort((np.arange(n), fingerprint, counts))
     starts = np.ones(n, dtype=bool)

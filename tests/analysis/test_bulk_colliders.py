@@ -102,7 +102,8 @@ def test_bulk_of_unique_meshes_only(monkeypatch):
 def test_a_fingerprint_that_matches_different_sets_goes_to_the_per_body_build(monkeypatch):
     bodies = _scene()
     monkeypatch.setattr(bulk_module, "_MIX", np.uint64(0))
-    monkeypatch.setattr(bulk_module, "_PLACE", np.uint64(0))  # every set of one size alike
+    monkeypatch.setattr(bulk_module, "_PLACE", np.uint64(0))
+    monkeypatch.setattr(bulk_module, "_THIRD", np.uint64(0))  # every set of one size alike
     assert bulk_colliders(bodies, "hull", "hull") is None
     _same(build_colliders(bodies), _per_body(bodies, monkeypatch))
 
