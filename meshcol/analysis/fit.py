@@ -608,6 +608,10 @@ def fit(
         fit_row(body, result, volume, gap, destination, shape)
         for (body, result, volume, gap), destination in zip(rows_input, destinations)
     ]
+    from meshcol.analysis.rules import robot_findings
+
+    # a robot with no collision geometry (MC506) has no body to fit: the report says why
+    warnings = tuple(f"{f.message} ({f.rule} {f.name})" for f in robot_findings(scene))
     return FitReport(
-        rows, tuple(results), shape, float(volume_tolerance), output, out_dir, scene.units
+        rows, tuple(results), shape, float(volume_tolerance), output, out_dir, scene.units, warnings
     )

@@ -257,8 +257,9 @@ def test_the_api_returns_the_finding(ghost_urdf: Path) -> None:
     assert meshcol.load_robot(ghost_urdf).bodies == ()
 
 
-def test_hull_of_the_robot_as_meshes_warns(ghost_urdf: Path, tmp_path: Path) -> None:
-    code, err = run("hull", str(ghost_urdf), "-o", str(tmp_path / "all.obj"))
+@pytest.mark.parametrize("command", ["hull", "fit"])
+def test_the_robot_as_meshes_warns(ghost_urdf: Path, tmp_path: Path, command: str) -> None:
+    code, err = run(command, str(ghost_urdf), "-o", str(tmp_path / "all.obj"))
     assert code == 0, err
     assert "MC506 no-collision-geometry" in err and "ghost.urdf" in err
 
