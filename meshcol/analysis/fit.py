@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from meshcol.analysis.rules import robot_warnings
 from meshcol.collision.fit import FIT_SHAPES, PrimitiveFit, fit_batch
 from meshcol.errors import InvalidMeshError
 from meshcol.geometry.rotations import quaternion_from_matrix
@@ -608,10 +609,7 @@ def fit(
         fit_row(body, result, volume, gap, destination, shape)
         for (body, result, volume, gap), destination in zip(rows_input, destinations)
     ]
-    from meshcol.analysis.rules import robot_findings
-
-    # a robot with no collision geometry (MC506) has no body to fit: the report says why
-    warnings = tuple(f"{f.message} ({f.rule} {f.name})" for f in robot_findings(scene))
+    warnings = robot_warnings(scene)  # a robot with no collision geometry: nothing to fit
     return FitReport(
         rows, tuple(results), shape, float(volume_tolerance), output, out_dir, scene.units, warnings
     )

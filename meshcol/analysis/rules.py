@@ -31,6 +31,7 @@ __all__ = [
     "finding",
     "get_rule",
     "robot_findings",
+    "robot_warnings",
     "rules_report",
     "select_rules",
     "target_findings",
@@ -592,6 +593,12 @@ def robot_findings(scene: Any) -> list[Finding]:
         "collides): nothing to check"
     )
     return [finding("MC506", os.path.basename(source), None, 0, 1, message)]
+
+
+def robot_warnings(scene: Any) -> tuple[str, ...]:
+    """The warning lines of :func:`robot_findings` (``... (MC506 no-collision-geometry)``),
+    for the commands that report warnings, not findings (``hull``, ``fit``)."""
+    return tuple(f"{f.message} ({f.rule} {f.name})" for f in robot_findings(scene))
 
 
 # ---------------------------------------------------------------------------------------------
