@@ -583,14 +583,15 @@ def robot_findings(scene: Any) -> list[Finding]:
     The finding's body is the file's name, its message the file's path."""
     from meshcol.io.inputs import is_robot_file
     from meshcol.io.paths import display_path
+    from meshcol.io.robot import NO_COLLISION_GEOMETRY
 
     source = getattr(scene, "source", None)
     if scene.bodies or not source or not is_robot_file(source):
         return []
     shown = display_path(source, posix=True)
     message = (
-        f"{shown}: no link has collision geometry (no <collision> element, no geom that "
-        "collides): nothing to check"
+        f"{shown}: {NO_COLLISION_GEOMETRY} (no <collision> element, no geom that collides): "
+        "nothing to check"
     )
     return [finding("MC506", os.path.basename(source), None, 0, 1, message)]
 
