@@ -72,6 +72,16 @@ def ghost_mjcf(tmp_path: Path) -> Path:
     return path
 
 
+def _valid(report: dict) -> dict:
+    """The report, checked against its published schema."""
+    import jsonschema
+
+    schemas = Path(__file__).resolve().parents[2] / "meshcol" / "schemas"
+    schema = json.loads((schemas / f"{report['command']}_report.schema.json").read_text())
+    jsonschema.validate(report, schema)
+    return report
+
+
 def _mc506(findings: list[dict], robot: Path) -> dict:
     (found,) = [f for f in findings if f["rule"] == "MC506"]
     assert found["name"] == "no-collision-geometry" and found["severity"] == "warning"
@@ -86,7 +96,7 @@ def test_check_reports_zero_pairs_and_the_finding(kind, request, tmp_path: Path)
     report = tmp_path / "r.json"
     code, err = run("check", str(robot), "--report", str(report))
     assert code == 0, err
-    data = json.loads(report.read_text())
+    data = _valid(json.loads(report.read_text()))
     assert data["pairs"] == [] and data["summary"]["bodies"] == 0
     _mc506(data["findings"], robot)
     assert not any(f["failed"] for f in data["findings"])
@@ -133,7 +143,7 @@ def test_collision_matrix_writes_an_srdf_that_disables_nothing(
     assert root.tag == "robot" and root.get("name") == "ghost"
     assert root.findall("disable_collisions") == []
     assert read_srdf(str(srdf), {"base", "arm", "hand"}) == ([], [])
-    data = json.loads(report.read_text())
+    data = _valid(json.loads(report.read_text()))
     assert data["pairs"] == [] and data["summary"]["links"] == 0
     _mc506(data["findings"], ghost_urdf)
     assert "MC506" in err
@@ -218,6 +228,8 @@ def test_decompose_writes_the_description(ghost_urdf: Path, tmp_path: Path) -> N
     assert code == 0, err
     assert sorted(p.name for p in out.iterdir()) == ["ghost.urdf"]
     assert "MC506" in err
+    (entry,) = _valid(json.loads(report.read_text()))["files"]
+    assert "MC506" in entry["message"] and entry["status"] == "ok"
     _load_urdf_peers(out / "ghost.urdf")
 
 
