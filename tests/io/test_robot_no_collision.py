@@ -318,3 +318,15 @@ def test_inspect_keeps_the_warnings_of_reading_the_robot(tmp_path: Path) -> None
     (warning,) = json.loads(report.read_text())["warnings"]
     assert "xacro leftover" in warning and "$(optenv Z 0.5)" in warning
     assert "xacro leftover" in err
+
+
+def test_a_rebuild_prints_the_warnings_of_reading_the_robot(tmp_path: Path) -> None:
+    # hull/fit/decompose ROBOT --out-dir dropped what reading the robot warned of.
+    robot = tmp_path / "x.urdf"
+    robot.write_text(
+        "<robot name='x'><link name='a'><collision><origin xyz='0 0 $(optenv Z 0.5)'/>"
+        "<geometry><box size='1 1 1'/></geometry></collision></link></robot>"
+    )
+    code, err = run("hull", str(robot), "--out-dir", str(tmp_path / "out"))
+    assert code == 0, err
+    assert "xacro leftover" in err and "$(optenv Z 0.5)" in err
