@@ -455,7 +455,12 @@ def main() -> int:
         merged: dict[str, dict] = {}
         for file in args.table:  # a later file's row for the same robot wins
             merged.update((row["path"], row) for row in json.loads(file.read_text()))
-        print(table(list(merged.values())))
+        order = {name: k for k, name in enumerate(COLLECTIONS)}
+        rows = sorted(
+            merged.values(),
+            key=lambda row: (order.get(row["collection"].split(" ")[0], 99), row["robot"]),
+        )
+        print(table(rows))
         return 0
     rows = []
     for collection in args.only or COLLECTIONS:

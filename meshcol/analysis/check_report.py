@@ -314,9 +314,7 @@ def _ci_case(
     units: str | None,
     baseline: dict | None = None,
 ) -> Any:
-    """The CI case of one pair of a check report (:meth:`CheckReport.ci_suite`); ``fails``:
-    the rules that fail the run (a pair whose status's rule is one of them and that does not
-    violate was spared by ``--ignore`` or the baseline)."""
+    """The CI case of one pair of a check report (``fails``: the rules that fail the run)."""
     from meshcol.analysis.check_policy import PAIR_RULES
     from meshcol.io.ci import CiCase, details, number
 

@@ -232,7 +232,9 @@ class CollisionMatrixReport:
         return dumps_csv(self.pairs, CSV_COLUMNS)
 
     def to_srdf(self) -> str:
-        """The SRDF text: one ``<disable_collisions>`` per disabled pair."""
+        """The SRDF text: one ``<disable_collisions>`` per disabled pair. A robot with no
+        collision geometry (MC506) gets its ``<robot name>`` alone: MoveIt's parser (srdfdom,
+        ``Model::initXml``) needs only that root and its name, every child being optional."""
         from meshcol.io.srdf import srdf_text
 
         s = self.summary

@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from meshcol.analysis.rules import robot_warnings
 from meshcol.collision.fit import FIT_SHAPES, PrimitiveFit, fit_batch
 from meshcol.errors import InvalidMeshError
 from meshcol.geometry.rotations import quaternion_from_matrix
@@ -608,6 +609,7 @@ def fit(
         fit_row(body, result, volume, gap, destination, shape)
         for (body, result, volume, gap), destination in zip(rows_input, destinations)
     ]
+    warnings = robot_warnings(scene)  # a robot with no collision geometry: nothing to fit
     return FitReport(
-        rows, tuple(results), shape, float(volume_tolerance), output, out_dir, scene.units
+        rows, tuple(results), shape, float(volume_tolerance), output, out_dir, scene.units, warnings
     )

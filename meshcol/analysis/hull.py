@@ -446,7 +446,7 @@ def _body_hulls(
     """The hull of every body of ``scene`` (within the budget or the target's limits), the
     mesh volume of each (None when not closed), and the warnings (flat, inside-out bodies),
     each also given to ``warn`` as it is found."""
-    from meshcol.analysis.rules import robot_findings
+    from meshcol.analysis.rules import robot_warnings
     from meshcol.collision.hull import convex_hull
     from meshcol.geometry.topology import oriented_volume
 
@@ -459,8 +459,8 @@ def _body_hulls(
         if warn is not None:
             warn(message)
 
-    for empty in robot_findings(scene):  # a robot with no collision geometry (MC506)
-        say(f"{empty.message} ({empty.rule} {empty.name})")
+    for empty in robot_warnings(scene):  # a robot with no collision geometry (MC506)
+        say(empty)
     for done, body in enumerate(scene.bodies, start=1):
         if progress is not None:
             progress(f"hull: {done}/{len(scene.bodies)} bodies")

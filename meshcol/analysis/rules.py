@@ -31,6 +31,7 @@ __all__ = [
     "finding",
     "get_rule",
     "robot_findings",
+    "robot_warnings",
     "rules_report",
     "select_rules",
     "target_findings",
@@ -582,16 +583,23 @@ def robot_findings(scene: Any) -> list[Finding]:
     The finding's body is the file's name, its message the file's path."""
     from meshcol.io.inputs import is_robot_file
     from meshcol.io.paths import display_path
+    from meshcol.io.robot import NO_COLLISION_GEOMETRY
 
     source = getattr(scene, "source", None)
     if scene.bodies or not source or not is_robot_file(source):
         return []
     shown = display_path(source, posix=True)
     message = (
-        f"{shown}: no link has collision geometry (no <collision> element, no geom that "
-        "collides): nothing to check"
+        f"{shown}: {NO_COLLISION_GEOMETRY} (no <collision> element, no geom that collides): "
+        "nothing to check"
     )
     return [finding("MC506", os.path.basename(source), None, 0, 1, message)]
+
+
+def robot_warnings(scene: Any) -> tuple[str, ...]:
+    """The warning lines of :func:`robot_findings` (``... (MC506 no-collision-geometry)``),
+    for the commands that report warnings, not findings (``hull``, ``fit``)."""
+    return tuple(f"{f.message} ({f.rule} {f.name})" for f in robot_findings(scene))
 
 
 # ---------------------------------------------------------------------------------------------

@@ -135,6 +135,8 @@ def fit(
         volume_tolerance=volume_tolerance,
         robot_options=robot_options,
     )
+    for warning in () if robot else result.warnings:  # a robot rebuilt warned as it went
+        click.echo(f"meshcol: warning: {warning}", err=True)
     from meshcol.analysis.review import fit_page
     from meshcol.cli.common import snapshots_written
 

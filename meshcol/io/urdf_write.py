@@ -109,6 +109,7 @@ def _visuals_missing(robot: RobotColliders, root: Any = None) -> list[tuple[str,
     """``(link, <visual> element, reference, why)`` of each visual of ``root`` (default: the
     description's tree) whose mesh names no file."""
     from meshcol.io.packages import PackageResolver
+    from meshcol.io.paths import display_path
 
     root = parse_xml(robot.source).getroot() if root is None else root
     resolver = PackageResolver(robot.source, robot.package_paths)
@@ -119,7 +120,7 @@ def _visuals_missing(robot: RobotColliders, root: Any = None) -> list[tuple[str,
                 reference = mesh.get("filename") or ""
                 path, why = resolver.resolve(reference) if reference else (None, "no filename")
                 if path is not None and not os.path.isfile(path):
-                    why = f"no file {os.path.normpath(path)}"
+                    why = f"no file {display_path(os.path.normpath(path))}"
                 if why is not None:
                     found.append((link.get("name") or "", visual, reference, why))
                     break

@@ -69,6 +69,9 @@ def test_missing_visuals_are_left_out_and_the_rest_resolves(robot: Path, tmp_pat
     urdf, err, report = _written(robot, tmp_path, "hull")
     _missing_lines([line for line in err.splitlines() if line.startswith("meshcol: warning:")])
     _missing_lines(report["warnings"])  # the note in the report
+    jsonschema = pytest.importorskip("jsonschema")
+    schema = Path(__file__).resolve().parents[2] / "meshcol/schemas/hull_report.schema.json"
+    jsonschema.validate(report, json.loads(schema.read_text()))
     root = etree.parse(str(urdf)).getroot()
     visuals = {
         link.get("name"): [m.get("filename") for m in link.iter("mesh") if m.getparent().getparent().tag == "visual"]

@@ -72,6 +72,16 @@ def ghost_mjcf(tmp_path: Path) -> Path:
     return path
 
 
+def _valid(report: dict) -> dict:
+    """The report, checked against its published schema."""
+    import jsonschema
+
+    schemas = Path(__file__).resolve().parents[2] / "meshcol" / "schemas"
+    schema = json.loads((schemas / f"{report['command']}_report.schema.json").read_text())
+    jsonschema.validate(report, schema)
+    return report
+
+
 def _mc506(findings: list[dict], robot: Path) -> dict:
     (found,) = [f for f in findings if f["rule"] == "MC506"]
     assert found["name"] == "no-collision-geometry" and found["severity"] == "warning"
@@ -86,7 +96,7 @@ def test_check_reports_zero_pairs_and_the_finding(kind, request, tmp_path: Path)
     report = tmp_path / "r.json"
     code, err = run("check", str(robot), "--report", str(report))
     assert code == 0, err
-    data = json.loads(report.read_text())
+    data = _valid(json.loads(report.read_text()))
     assert data["pairs"] == [] and data["summary"]["bodies"] == 0
     _mc506(data["findings"], robot)
     assert not any(f["failed"] for f in data["findings"])
@@ -133,7 +143,7 @@ def test_collision_matrix_writes_an_srdf_that_disables_nothing(
     assert root.tag == "robot" and root.get("name") == "ghost"
     assert root.findall("disable_collisions") == []
     assert read_srdf(str(srdf), {"base", "arm", "hand"}) == ([], [])
-    data = json.loads(report.read_text())
+    data = _valid(json.loads(report.read_text()))
     assert data["pairs"] == [] and data["summary"]["links"] == 0
     _mc506(data["findings"], ghost_urdf)
     assert "MC506" in err
@@ -218,6 +228,8 @@ def test_decompose_writes_the_description(ghost_urdf: Path, tmp_path: Path) -> N
     assert code == 0, err
     assert sorted(p.name for p in out.iterdir()) == ["ghost.urdf"]
     assert "MC506" in err
+    (entry,) = _valid(json.loads(report.read_text()))["files"]
+    assert "MC506" in entry["message"] and entry["status"] == "ok"
     _load_urdf_peers(out / "ghost.urdf")
 
 
@@ -257,8 +269,9 @@ def test_the_api_returns_the_finding(ghost_urdf: Path) -> None:
     assert meshcol.load_robot(ghost_urdf).bodies == ()
 
 
-def test_hull_of_the_robot_as_meshes_warns(ghost_urdf: Path, tmp_path: Path) -> None:
-    code, err = run("hull", str(ghost_urdf), "-o", str(tmp_path / "all.obj"))
+@pytest.mark.parametrize("command", ["hull", "fit"])
+def test_the_robot_as_meshes_warns(ghost_urdf: Path, tmp_path: Path, command: str) -> None:
+    code, err = run(command, str(ghost_urdf), "-o", str(tmp_path / "all.obj"))
     assert code == 0, err
     assert "MC506 no-collision-geometry" in err and "ghost.urdf" in err
 
@@ -305,3 +318,15 @@ def test_inspect_keeps_the_warnings_of_reading_the_robot(tmp_path: Path) -> None
     (warning,) = json.loads(report.read_text())["warnings"]
     assert "xacro leftover" in warning and "$(optenv Z 0.5)" in warning
     assert "xacro leftover" in err
+
+
+def test_a_rebuild_prints_the_warnings_of_reading_the_robot(tmp_path: Path) -> None:
+    # hull/fit/decompose ROBOT --out-dir dropped what reading the robot warned of.
+    robot = tmp_path / "x.urdf"
+    robot.write_text(
+        "<robot name='x'><link name='a'><collision><origin xyz='0 0 $(optenv Z 0.5)'/>"
+        "<geometry><box size='1 1 1'/></geometry></collision></link></robot>"
+    )
+    code, err = run("hull", str(robot), "--out-dir", str(tmp_path / "out"))
+    assert code == 0, err
+    assert "xacro leftover" in err and "$(optenv Z 0.5)" in err
