@@ -29,6 +29,8 @@ STAGES = [
     ("meshcol.io.scene", "read_mesh_files"),
     ("meshcol.io.scene", "bulk_bodies"),
     ("meshcol.io.scene", "build_bodies"),
+    ("meshcol.io.scene", "primitive_bodies"),
+    ("meshcol.analysis.check", "primitive_colliders"),
     ("meshcol.analysis.check", "build_colliders"),
     ("meshcol.analysis.check", "place"),
     ("meshcol.analysis.check", "broad_phase"),

@@ -35,9 +35,12 @@ class PrimitiveColliders(Colliders):
     """:class:`Colliders` of :class:`PrimitiveBodies`: each body one part at its pose."""
 
     def part_poses(self, end: bool = False) -> np.ndarray:
-        """Every part's world pose: its body's (none moves, so the end pose is the start)."""
+        """Every part's world pose: its body's (none moves, so the end pose is the start), a
+        read-only view of the bodies' poses (128 MB at 1,000,000 bodies, not copied)."""
         assert isinstance(self.bodies, PrimitiveBodies)
-        return np.array(self.bodies.poses, dtype=np.float64, order="C")
+        poses = self.bodies.poses.view()
+        poses.flags.writeable = False
+        return poses
 
 
 def primitive_params(types: np.ndarray, lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

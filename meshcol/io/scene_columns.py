@@ -131,8 +131,9 @@ class _Table:
         """The values of the bodies that have ``field``, and which those are (None: all)."""
         if self.count[field] == self.n:
             return list(map(operator.itemgetter(field), self.bodies)), None
-        mask = np.fromiter((field in b for b in self.bodies), dtype=bool, count=self.n)
-        return [b[field] for b in self.bodies if field in b], mask
+        there = list(map(operator.contains, self.bodies, itertools.repeat(field)))
+        values = list(map(operator.itemgetter(field), itertools.compress(self.bodies, there)))
+        return values, np.array(there, dtype=bool).reshape(self.n)
 
     def spread_list(self, values: list, mask: np.ndarray | None) -> list:
         """``values`` of the bodies ``mask`` selects at their places, None elsewhere."""
@@ -215,7 +216,7 @@ def _primitives(table: _Table) -> tuple[np.ndarray, np.ndarray]:
     rows = np.zeros((len(values), 3))
     for kind, fields in PRIMITIVE_KEYS.items():
         picked = np.flatnonzero(given == index[kind])
-        group = values if len(picked) == len(values) else list(map(values.__getitem__, picked))
+        group = values if len(picked) == len(values) else [values[i] for i in picked.tolist()]
         if not group:
             continue
         if set(map(len, group)) != {len(fields)}:  # with every field there: exactly them

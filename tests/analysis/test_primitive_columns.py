@@ -285,3 +285,25 @@ def test_random_primitive_manifests_give_the_object_paths_report(tmp_path_factor
     assert isinstance(columns.bodies, PrimitiveBodies)
     options = CheckOptions(clearance=gap)
     assert report_text(columns, options) == report_text(objects, options)
+
+
+def test_bodies_of_one_part_pair_as_their_parts_do(tmp_path):
+    from meshcol.analysis.pairs import broad_phase, place
+
+    columns, _ = load_both(write(tmp_path, document()))
+    placed = place(primitive_colliders(columns.bodies))
+    margin = 0.2
+    table = broad_phase(placed, margin, (("box001", "capsule002", "adjacent"),))
+    lo, hi = placed.body_min - margin / 2, placed.body_max + margin / 2
+    a, b = np.triu_indices(len(lo), 1)
+    meet = np.all((lo[a] <= hi[b]) & (lo[b] <= hi[a]), axis=1)
+    names = body_names(columns.bodies)
+    excluded = {(names.index("box001"), names.index("capsule002"))}
+    expected = [
+        (i, j) for i, j in zip(a[meet].tolist(), b[meet].tolist()) if (i, j) not in excluded
+    ]
+    found = list(zip(table.body_a.tolist(), table.body_b.tolist()))
+    assert sorted(found) == expected and len(found) > 50
+    assert table.part_pairs.tolist() == [list(p) for p in found]  # each body's one part
+    assert table.part_row.tolist() == list(range(len(found)))
+    assert table.excluded_pairs == 1
