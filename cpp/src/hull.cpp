@@ -313,16 +313,24 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
                 }
             const size_t m = t.tri.size();
             hull.faces.resize(m);
-            hull.plane_normals.assign(static_cast<size_t>(pl.groups), Vec3{});
-            std::vector<double>& largest = w.largest;
-            largest.assign(static_cast<size_t>(pl.groups), -1.0);
             for (size_t i = 0; i < m; ++i) {
                 const auto& tri = t.tri[i];
                 hull.faces[i] = {local[tri[0]], local[tri[1]], local[tri[2]]};
-                const int g = pl.group[i];
-                if (t.area2[i] > largest[g]) {
-                    largest[g] = t.area2[i];
-                    hull.plane_normals[g] = t.normal[i];
+            }
+            // Each plane's normal is that of its largest triangle; a plane per triangle
+            // (groups in triangle order, planes_of) is the triangles' normals.
+            if (pl.groups == static_cast<int>(m)) {
+                hull.plane_normals.assign(t.normal.begin(), t.normal.end());
+            } else {
+                hull.plane_normals.assign(static_cast<size_t>(pl.groups), Vec3{});
+                std::vector<double>& largest = w.largest;
+                largest.assign(static_cast<size_t>(pl.groups), -1.0);
+                for (size_t i = 0; i < m; ++i) {
+                    const int g = pl.group[i];
+                    if (t.area2[i] > largest[g]) {
+                        largest[g] = t.area2[i];
+                        hull.plane_normals[g] = t.normal[i];
+                    }
                 }
             }
             hull.status = HullStatus::OK;
