@@ -36,15 +36,21 @@ void planes_of(Workspace& w, const Triangulation& t, Planes& out) {
     parent.resize(m);
     std::iota(parent.begin(), parent.end(), 0);
     constexpr int kFar[3] = {2, 0, 1};  // the corner opposite edge e
+    bool merged = false;
     for (const TriangulationEdge& g : t.edges) {
         if (g.k < 0) continue;
         const int i = g.i, j = g.j;
         const int far_i = t.tri[i][kFar[g.e]], far_j = t.tri[j][kFar[g.k]];
         const bool coplanar = std::fabs(dot(t.normal[i], w.p[far_j]) - t.offset[i]) <= w.eps &&
                               std::fabs(dot(t.normal[j], w.p[far_i]) - t.offset[j]) <= w.eps;
-        if (coplanar) parent[find_root(parent, j)] = find_root(parent, i);
+        if (coplanar) parent[find_root(parent, j)] = find_root(parent, i), merged = true;
     }
-    out.group.assign(m, -1);
+    out.group.resize(m);
+    if (!merged) {  // every triangle its own plane (a smooth hull): the groups in order
+        std::iota(out.group.begin(), out.group.end(), 0);
+        out.groups = static_cast<int>(m);
+        return;
+    }
     std::vector<int>& id = w.id;
     id.assign(m, -1);
     out.groups = 0;
@@ -253,6 +259,10 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
                 }
             }
             have = true;
+            // Every triangle its own plane (a smooth hull): every edge is between two planes,
+            // and every vertex of a triangulated sphere has at least three edges, so none is
+            // left out below.
+            if (pl.groups == static_cast<int>(t.tri.size())) break;
             // A vertex with at most two edges between different planes lies on an edge or
             // in a face of its hull (a coplanar tie Quickhull took first): hull again
             // without those.
@@ -303,16 +313,24 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
                 }
             const size_t m = t.tri.size();
             hull.faces.resize(m);
-            hull.plane_normals.assign(static_cast<size_t>(pl.groups), Vec3{});
-            std::vector<double>& largest = w.largest;
-            largest.assign(static_cast<size_t>(pl.groups), -1.0);
             for (size_t i = 0; i < m; ++i) {
                 const auto& tri = t.tri[i];
                 hull.faces[i] = {local[tri[0]], local[tri[1]], local[tri[2]]};
-                const int g = pl.group[i];
-                if (t.area2[i] > largest[g]) {
-                    largest[g] = t.area2[i];
-                    hull.plane_normals[g] = t.normal[i];
+            }
+            // Each plane's normal is that of its largest triangle; a plane per triangle
+            // (groups in triangle order, planes_of) is the triangles' normals.
+            if (pl.groups == static_cast<int>(m)) {
+                hull.plane_normals.assign(t.normal.begin(), t.normal.end());
+            } else {
+                hull.plane_normals.assign(static_cast<size_t>(pl.groups), Vec3{});
+                std::vector<double>& largest = w.largest;
+                largest.assign(static_cast<size_t>(pl.groups), -1.0);
+                for (size_t i = 0; i < m; ++i) {
+                    const int g = pl.group[i];
+                    if (t.area2[i] > largest[g]) {
+                        largest[g] = t.area2[i];
+                        hull.plane_normals[g] = t.normal[i];
+                    }
                 }
             }
             hull.status = HullStatus::OK;
