@@ -13,6 +13,7 @@ import meshcol.analysis.bulk_colliders as bulk_module
 import meshcol.analysis.colliders as colliders_module
 from meshcol.analysis.bulk_colliders import bulk_colliders
 from meshcol.analysis.colliders import Colliders, build_colliders
+from meshcol.collision.shapes import ConvexSet
 from meshcol.types import Body, Box, Capsule, Sphere
 
 
@@ -35,19 +36,7 @@ def _same(a: Colliders, b: Colliders) -> None:
     for field in ("part_body", "part_index", "body_part_offsets", "part_label"):
         assert np.array_equal(getattr(a, field), getattr(b, field)), field
     assert (a.part_offsets is None) == (b.part_offsets is None)
-    for name in (
-        "vertices",
-        "offsets",
-        "kinds",
-        "params",
-        "adjacency_offsets",
-        "adjacency",
-        "face_offsets",
-        "face_normals",
-        "edge_offsets",
-        "edge_directions",
-        "hull_status",
-    ):
+    for name in (*ConvexSet._FIELDS, "hull_status"):  # every array of the packed set
         x, y = getattr(a.shapes, name), getattr(b.shapes, name)
         assert x.dtype == y.dtype and x.shape == y.shape, name
         assert x.tobytes() == y.tobytes(), name

@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 import trimesh
+from array_forms import pair_forms
 
 from meshcol.collision.mesh_query import MeshDistanceBatch, MeshSet, mesh_distance_batch
 from meshcol.types import Status
@@ -65,13 +66,6 @@ def scene() -> tuple[MeshSet, np.ndarray, np.ndarray]:
     return meshes, p, pairs
 
 
-def unaligned_copy(a: np.ndarray) -> np.ndarray:
-    raw = np.empty(a.nbytes + 1, dtype=np.uint8)
-    out = raw[1:].view(a.dtype).reshape(a.shape)
-    out[...] = a
-    return out
-
-
 def same(r: MeshDistanceBatch, expected: MeshDistanceBatch) -> None:
     for name in FIELDS:
         got, want = getattr(r, name), getattr(expected, name)
@@ -90,18 +84,7 @@ def test_distance_batch_reads_every_input_form_alike() -> None:
     assert statuses.count(Status.INVALID_INPUT) == 1 and statuses.count(Status.CONVERGED) == 6
     assert expected.intersecting.tolist() == [False, True, False, False, False, False, True]
     assert expected.b_inside_a[0] and math.isnan(expected.distance[5])
-    read_only = pairs.copy()
-    read_only.flags.writeable = False
-    forms = [
-        pairs,
-        read_only,
-        pairs.tolist(),
-        tuple(map(tuple, pairs.tolist())),
-        pairs.astype(np.int32),
-        np.asfortranarray(pairs),
-        pairs.astype(pairs.dtype.newbyteorder()),
-        unaligned_copy(pairs),
-    ]
+    forms = pair_forms(pairs)
     for poses in (None, p, p.tolist(), np.asfortranarray(p), p.astype(np.float32)):
         for form in forms:
             r = mesh_distance_batch(meshes, poses, form, threads=1)

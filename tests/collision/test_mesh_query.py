@@ -10,6 +10,7 @@ from fractions import Fraction
 import numpy as np
 import pytest
 import trimesh
+from array_forms import pair_forms
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -1012,15 +1013,6 @@ def test_int64_pairs_are_range_checked_by_the_core_with_the_same_message() -> No
         mesh_intersects_batch(meshes, None, np.array([[0.0, 1.0]]))
 
 
-def unaligned_copy(a: np.ndarray) -> np.ndarray:
-    """A C-contiguous copy of ``a`` whose data sits one byte off its dtype's alignment."""
-    raw = np.empty(a.nbytes + 1, dtype=np.uint8)
-    out = raw[1:].view(a.dtype).reshape(a.shape)
-    out[...] = a
-    assert not out.flags.aligned and out.flags.c_contiguous
-    return out
-
-
 def test_intersects_batch_reads_every_input_form_alike() -> None:
     """The batch's one-call path (arrays already in the core's form, and lists of int pairs,
     read in place) and its converting path give the same results, in a result built with
@@ -1030,22 +1022,7 @@ def test_intersects_batch_reads_every_input_form_alike() -> None:
     meshes = MeshSet.from_arrays([cube, cube, cube], p)
     pairs = np.array([[0, 1], [0, 2], [1, 2], [2, 2]], dtype=np.int64)
     expected = [True, False, False, True]
-    read_only = pairs.copy()
-    read_only.flags.writeable = False
-    forms = [
-        pairs,
-        read_only,
-        pairs.tolist(),
-        tuple(map(tuple, pairs.tolist())),
-        [list(map(np.int64, row)) for row in pairs],  # numpy scalars: converted
-        pairs.astype(np.int32),
-        np.asfortranarray(pairs),
-        np.ascontiguousarray(pairs.T).T,  # a strided view
-        pairs.astype(pairs.dtype.newbyteorder()),  # non-native byte order: converted
-        pairs.view(np.ma.MaskedArray),  # a subclass: not read from numpy's struct
-        unaligned_copy(pairs),
-        pairs.reshape(1, 4, 2)[0],  # a C-contiguous view of another array
-    ]
+    forms = pair_forms(pairs)
     for poses in (None, p, p.tolist(), p.astype(np.float32).astype(np.float64)):
         for form in forms:
             r = mesh_intersects_batch(meshes, poses, form, threads=1)
