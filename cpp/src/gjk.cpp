@@ -54,9 +54,9 @@ MESHCOL_CLIMB_INLINE SimplexVertex finish_support(MinkowskiDifference& md, const
 }  // namespace
 
 SimplexVertex MinkowskiDifference::support(const Vec3& d) {
-    const Vec3 db = rotation_b.transpose_times(-d);
     SupportPoint sa, sb;
     if (scan_both) {
+        const Vec3 db = rotation_b.transpose_times(-d);
         // Scans start nowhere: no warm start to decide.
         int ia, ib;
         climb::scan_pair(a->vertices, a->vertex_count, d, b->vertices, b->vertex_count, db, ia,
@@ -75,6 +75,7 @@ SimplexVertex MinkowskiDifference::support(const Vec3& d) {
         dd > 0.0 && dd * dd > c2 * (squared_norm(d) * squared_norm(last_direction));
     last_direction = d;
     const int start_a = near ? hint_a : -1, start_b = near ? hint_b : -1;
+    const Vec3 db = rotation_b.transpose_times(-d);
     if (climb_both) {
         climb::climb_pair(*a, d, start_a, *b, db, start_b, sa, sb);
     } else {
