@@ -22,40 +22,21 @@ MinkowskiDifference::MinkowskiDifference(const ShapeView& shape_a, const Pose& p
     if (!(scale > 0.0)) scale = 1.0;
 }
 
-SimplexVertex MinkowskiDifference::support(const Vec3& d) {
+namespace {
+
+// The support point of a - b from the shapes' support points `sa` and `sb` in `d` (b's in its
+// own frame), with the margins when asked; records them as the next climbs' hints.
+MESHCOL_CLIMB_INLINE SimplexVertex finish_support(MinkowskiDifference& md, const Vec3& d,
+                                                  const SupportPoint& sa, const SupportPoint& sb) {
     SimplexVertex v;
-    // The previous support points are good starts for the climbs when the direction turned
-    // little (as in EPA and late GJK); after a larger turn (early GJK) a few strided samples
-    // start them nearer the top. Compares squares: cos^2 > c^2 without a square root.
-    constexpr double c2 = defaults::support_warm_start_min_cosine *
-                          defaults::support_warm_start_min_cosine;
-    const double dd = dot(d, last_direction);
-    const bool near =
-        dd > 0.0 && dd * dd > c2 * (squared_norm(d) * squared_norm(last_direction));
-    last_direction = d;
-    const int start_a = near ? hint_a : -1, start_b = near ? hint_b : -1;
-    const Vec3 db = rotation_b.transpose_times(-d);
-    SupportPoint sa, sb;
-    if (climb_both) {
-        climb::climb_pair(*a, d, start_a, *b, db, start_b, sa, sb);
-    } else if (scan_both) {
-        int ia, ib;
-        climb::scan_pair(a->vertices, a->vertex_count, d, b->vertices, b->vertex_count, db, ia,
-                         ib);
-        sa = {a->vertices[ia], ia};
-        sb = {b->vertices[ib], ib};
-    } else {
-        sa = support_core(*a, d, start_a);
-        sb = support_core(*b, db, start_b);
-    }
-    hint_a = sa.index;
-    hint_b = sb.index;
+    md.hint_a = sa.index;
+    md.hint_b = sb.index;
     v.a = sa.point;
-    v.b = rotation_b * sb.point + translation_b;
+    v.b = md.rotation_b * sb.point + md.translation_b;
     v.index_a = sa.index;
     v.index_b = sb.index;
-    if (with_margins) {
-        const double ma = margin(*a), mb = margin(*b);
+    if (md.with_margins) {
+        const double ma = margin(*md.a), mb = margin(*md.b);
         if (ma > 0.0 || mb > 0.0) {
             const double n = norm(d);
             if (n > 0.0) {
@@ -68,6 +49,40 @@ SimplexVertex MinkowskiDifference::support(const Vec3& d) {
     }
     v.w = v.a - v.b;
     return v;
+}
+
+}  // namespace
+
+SimplexVertex MinkowskiDifference::support(const Vec3& d) {
+    SupportPoint sa, sb;
+    if (scan_both) {
+        const Vec3 db = rotation_b.transpose_times(-d);
+        // Scans start nowhere: no warm start to decide.
+        int ia, ib;
+        climb::scan_pair(a->vertices, a->vertex_count, d, b->vertices, b->vertex_count, db, ia,
+                         ib);
+        sa = {a->vertices[ia], ia};
+        sb = {b->vertices[ib], ib};
+        return finish_support(*this, d, sa, sb);
+    }
+    // The previous support points are good starts for the climbs when the direction turned
+    // little (as in EPA and late GJK); after a larger turn (early GJK) a few strided samples
+    // start them nearer the top. Compares squares: cos^2 > c^2 without a square root.
+    constexpr double c2 = defaults::support_warm_start_min_cosine *
+                          defaults::support_warm_start_min_cosine;
+    const double dd = dot(d, last_direction);
+    const bool near =
+        dd > 0.0 && dd * dd > c2 * (squared_norm(d) * squared_norm(last_direction));
+    last_direction = d;
+    const int start_a = near ? hint_a : -1, start_b = near ? hint_b : -1;
+    const Vec3 db = rotation_b.transpose_times(-d);
+    if (climb_both) {
+        climb::climb_pair(*a, d, start_a, *b, db, start_b, sa, sb);
+    } else {
+        sa = support_core(*a, d, start_a);
+        sb = support_core(*b, db, start_b);
+    }
+    return finish_support(*this, d, sa, sb);
 }
 
 SimplexVertex MinkowskiDifference::support_from(const Vec3& d, int start_a, int start_b) {
