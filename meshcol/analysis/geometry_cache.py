@@ -20,6 +20,7 @@ from meshcol.geometry.topology import (
     component_count,
     duplicate_face_count,
     edge_table,
+    manifold_solid,
     oriented_volume,
 )
 from meshcol.geometry.triangles import face_heights
@@ -131,11 +132,5 @@ class GeometryCache:
 
 
 def _manifold_status(vertices: np.ndarray, faces: np.ndarray) -> str:
-    import manifold3d
-
-    mesh = manifold3d.Mesh64(
-        vert_properties=np.ascontiguousarray(vertices),
-        tri_verts=np.ascontiguousarray(faces, dtype=np.uint64),
-    )
-    status = manifold3d.Manifold(mesh).status()
+    status = manifold_solid(vertices, faces).status()
     return str(getattr(status, "name", status)).split(".")[-1]

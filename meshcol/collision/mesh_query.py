@@ -22,7 +22,7 @@ import numpy as np
 from meshcol._native import core
 from meshcol.collision.arrays import as_mesh, as_pairs, as_points, as_pose, as_poses
 from meshcol.collision.orientation import orient_consistently
-from meshcol.geometry.topology import is_closed_manifold
+from meshcol.geometry.topology import is_closed_manifold, manifold_solid
 from meshcol.types import Body, Status
 
 __all__ = [
@@ -653,12 +653,7 @@ def mesh_intersection_volume(
             made = None
             if meshes.valid[i] and np.all(np.isfinite(world[i])) and is_closed_manifold(faces):
                 placed = vertices @ world[i][:3, :3].T + world[i][:3, 3]
-                m = manifold3d.Manifold(
-                    manifold3d.Mesh64(
-                        np.ascontiguousarray(placed, dtype=np.float64),
-                        np.ascontiguousarray(faces, dtype=np.uint64),
-                    )
-                )
+                m = manifold_solid(placed, faces)
                 if m.status() == manifold3d.Error.NoError:
                     made = m
             solids[i] = made

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from meshcol.decomposition.result import Fidelity
-from meshcol.geometry.topology import is_closed_manifold
+from meshcol.geometry.topology import is_closed_manifold, manifold_solid
 from meshcol.geometry.triangles import point_triangle_distances, sample_surface
 
 __all__ = [
@@ -219,21 +219,10 @@ def _inside_face(q: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> 
     return (denominator > 0) & (v > margin) & (u > margin) & (1.0 - u - v > margin)
 
 
-def _manifold(vertices: np.ndarray, faces: np.ndarray):
-    import manifold3d
-
-    return manifold3d.Manifold(
-        manifold3d.Mesh64(
-            np.ascontiguousarray(vertices, dtype=np.float64),
-            np.ascontiguousarray(faces, dtype=np.uint64),
-        )
-    )
-
-
 def _manifold_volume(vertices: np.ndarray, faces: np.ndarray) -> float | None:
     import manifold3d
 
-    m = _manifold(vertices, faces)
+    m = manifold_solid(vertices, faces)
     if m.status() != manifold3d.Error.NoError or m.is_empty():
         return None
     return float(m.volume())
@@ -611,7 +600,7 @@ def _union_volume(parts: tuple[tuple[np.ndarray, np.ndarray], ...]) -> float:
     import manifold3d
 
     # The parts are convex hulls already (closed, outward): their meshes are the solids.
-    solids = [_manifold(v, f) for v, f in parts]
+    solids = [manifold_solid(v, f) for v, f in parts]
     union = manifold3d.Manifold.batch_boolean(solids, manifold3d.OpType.Add)
     return float(union.volume())
 
