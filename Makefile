@@ -60,7 +60,9 @@ test-cpp: install-test
 
 # pytest exits 5 when it collected nothing: that fails here like any other error. Both lanes
 # run on two workers (pytest-xdist; tests/conftest.py groups what cannot share a machine).
-XDIST := -n 2 --dist loadgroup
+# A worker that crashes (a segfault in a native library) fails the run at once: restarted,
+# xdist's load-group scheduling waits forever for the tests the dead worker held.
+XDIST := -n 2 --dist loadgroup --max-worker-restart=0
 test: lint test-cpp
 	@test -d ../shared/corpus || echo "WARNING: ../shared/corpus is absent: every corpus test will SKIP (the count is printed at the end)"
 	$(BIN)/pytest -q -p no:cacheprovider $(XDIST)
