@@ -40,6 +40,7 @@ struct Plane {
 struct Face {
     int v[3];  // point indices, counter-clockwise seen from outside
     int n[3];  // neighbour across edge v[i] -> v[(i + 1) % 3]
+    int s[3];  // the edge of n[i] that leads back here (its twin)
     Plane plane;
     std::vector<Conflict> conflicts;  // the points outside this face (farther than eps)
     int furthest = -1;

@@ -148,12 +148,47 @@ std::int64_t unique_directions(const Vec3* d, size_t count, bool signed_classes,
     return kept;
 }
 
+// adjacency_from_edges for at most 64 vertices: each vertex's neighbours as a bit mask,
+// read out lowest bit first (ascending), then padded. The same lists when every edge is listed
+// once (a triangulation's edges are); false, with nothing appended, when an edge repeats (the
+// lists would then hold it twice).
+bool adjacency_from_masks(int count, PackScratch& s, ChunkPack& out) {
+    const auto n = static_cast<size_t>(count);
+    std::uint64_t mask[64];
+    int degree[64];
+    std::fill(mask, mask + n, std::uint64_t{0});
+    std::fill(degree, degree + n, 0);
+    std::uint64_t repeated = 0;  // a bit already set: the edge came before
+    for (const auto& [a, b] : s.pairs) {
+        repeated |= mask[a] >> b;
+        mask[a] |= std::uint64_t{1} << b;
+        mask[b] |= std::uint64_t{1} << a;
+        ++degree[a], ++degree[b];
+    }
+    if (repeated & 1) return false;
+    size_t padded_total = 0;
+    for (size_t i = 0; i < n; ++i) padded_total += static_cast<size_t>((degree[i] + 3) / 4 * 4);
+    const size_t first = out.adjacency.size();
+    out.adjacency.resize(first + padded_total);
+    std::int32_t* list = out.adjacency.data() + first;
+    for (size_t i = 0; i < n; ++i) {
+        const int padded = (degree[i] + 3) / 4 * 4;
+        out.adjacency_counts.push_back(padded);
+        std::int32_t* const end = list + padded;
+        for (std::uint64_t m = mask[i]; m != 0; m &= m - 1)
+            *list++ = static_cast<std::int32_t>(__builtin_ctzll(m));
+        while (list < end) *list++ = static_cast<std::int32_t>(i);
+    }
+    return true;
+}
+
 // Neighbour lists of `count` vertices from undirected edges, ascending, padded with the
 // vertex itself to a multiple of four (the climb's blocks: see climb.hpp), appended. Two
 // counting passes, no comparisons (a sort per list mispredicted a branch per shift): the
 // edges bucketed by one end give each vertex's neighbours; walking the vertices in order
 // and appending each to its neighbours' lists leaves every list ascending.
 void adjacency_from_edges(int count, PackScratch& s, ChunkPack& out) {
+    if (count <= 64 && adjacency_from_masks(count, s, out)) return;
     const auto n = static_cast<size_t>(count);
     std::vector<std::int64_t>& start = s.start;
     start.assign(n + 1, 0);
