@@ -220,4 +220,8 @@ struct Analysis {
 /// The hull of `points` into analysis.hull (and its triangulation and planes, 3-D) (hull.cpp).
 void hull_with(const Vec3* points, long long n, Workspace& w, Analysis& analysis);
 
+/// The packing's one direction per class of `count` directions (hull_packing.cpp), flat
+/// (x, y, z) triples: for the tests.
+std::vector<double> unique_directions_of(const Vec3* d, size_t count, bool signed_classes);
+
 }  // namespace meshcol::hull_detail
