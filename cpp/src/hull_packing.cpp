@@ -177,7 +177,7 @@ void unit_keys(const Vec3* d, size_t count, bool signed_classes, double* unit, d
 std::int64_t unique_directions(const Vec3* d, size_t count, bool signed_classes, PackScratch& s,
                                std::vector<double>& out) {
     size_t size = 16;
-    while (size < 2 * count) size *= 2;
+    while (size < 4 * count) size *= 2;  // a quarter full at most: few probes collide
     // Stamped cells: the table is cleared by a new stamp, not rewritten, on every call.
     if (s.table.size() < size || ++s.stamp == 0) {
         s.table.assign(std::max(size, s.table.size()), DirectionCell{0, 0});
