@@ -40,6 +40,7 @@ struct Plane {
 struct Face {
     int v[3];  // point indices, counter-clockwise seen from outside
     int n[3];  // neighbour across edge v[i] -> v[(i + 1) % 3]
+    int s[3];  // the edge of n[i] that leads back here (its twin)
     Plane plane;
     std::vector<Conflict> conflicts;  // the points outside this face (farther than eps)
     int furthest = -1;
@@ -218,5 +219,9 @@ struct Analysis {
 
 /// The hull of `points` into analysis.hull (and its triangulation and planes, 3-D) (hull.cpp).
 void hull_with(const Vec3* points, long long n, Workspace& w, Analysis& analysis);
+
+/// The packing's one direction per class of `count` directions (hull_packing.cpp), flat
+/// (x, y, z) triples: for the tests.
+std::vector<double> unique_directions_of(const Vec3* d, size_t count, bool signed_classes);
 
 }  // namespace meshcol::hull_detail

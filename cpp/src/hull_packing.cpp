@@ -6,9 +6,14 @@
 #include <climits>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <numeric>
 #include <utility>
 #include <vector>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "meshcol/batch.hpp"
 #include "meshcol/defaults.hpp"
@@ -52,8 +57,8 @@ struct ChunkPack {
 
 void push(std::vector<double>& dst, const Vec3& v) { dst.insert(dst.end(), {v.x, v.y, v.z}); }
 
-// A cell of unique_directions' table: the index of a rounded key in the call's list of
-// keys, current when its stamp is the call's (8 bytes: a 1,024-vertex hull's table stays
+// A cell of unique_directions' table: the index of a direction in the call's list (its key
+// the class's), current when its stamp is the call's (8 bytes: a 1,024-vertex hull's table stays
 // within the L2 cache).
 struct DirectionCell {
     unsigned stamp;
@@ -66,27 +71,113 @@ struct PackScratch {
     std::vector<std::int64_t> start, fill;
     std::vector<std::int32_t> around;  // adjacency_from_edges' neighbours, unordered
     std::vector<DirectionCell> table;  // unique_directions' hash table
-    std::vector<std::array<long long, 3>> keys;  // and the keys it has seen this call
+    std::vector<double> unit, keys;    // and each direction's unit vector and key (unit_keys)
+    std::vector<char> valid;
     unsigned stamp = 0;                // the table's cells of the current call carry it
     std::vector<Vec3> directions;
     std::vector<double> unique;  // unique_directions' output before it is appended
 };
 
+// The unit direction of d[i] and its grouping key into unit[3 i ..] and key[3 i ..]
+// (valid[i] 0 for a zero or NaN length: no class): the unit vector d / |d|, sign-flipped for
+// unsigned classes when its first component clearly non-zero (beyond 1e-12) is negative;
+// the key floor(u * 1e12 + 0.5) of each component, as a double (|u| <= 1 and a little: an
+// integer far below 2^51, exact). Ties may round either way (as np.round's half-to-even does
+// differently), which only splits a class in two.
+//
+// Two directions at a time in SSE2 lanes: IEEE's operations are the same in a lane as alone,
+// so the bits are the scalar loop's; floor as rint(t) (t + 1.5 * 2^52 - 1.5 * 2^52, exact
+// for |t| < 2^51) less one where that is above t.
+#if defined(__SSE2__)
+void unit_keys(const Vec3* d, size_t count, bool signed_classes, double* unit, double* key,
+               char* valid) {
+    const __m128d zero = _mm_setzero_pd();
+    const __m128d sign = _mm_set1_pd(-0.0);
+    const __m128d tiny = _mm_set1_pd(1e-12);
+    const __m128d scale = _mm_set1_pd(1e12);
+    const __m128d half = _mm_set1_pd(0.5);
+    const __m128d one = _mm_set1_pd(1.0);
+    const __m128d magic = _mm_set1_pd(6755399441055744.0);  // 1.5 * 2^52
+    for (size_t i = 0; i < count; i += 2) {
+        const size_t j = i + 1 < count ? i + 1 : i;  // an odd count's last one twice
+        __m128d x = _mm_set_pd(d[j].x, d[i].x);
+        __m128d y = _mm_set_pd(d[j].y, d[i].y);
+        __m128d z = _mm_set_pd(d[j].z, d[i].z);
+        const __m128d len = _mm_sqrt_pd(_mm_add_pd(
+            _mm_add_pd(_mm_mul_pd(x, x), _mm_mul_pd(y, y)), _mm_mul_pd(z, z)));
+        const int ok = _mm_movemask_pd(_mm_cmpgt_pd(len, zero));
+        x = _mm_div_pd(x, len);
+        y = _mm_div_pd(y, len);
+        z = _mm_div_pd(z, len);
+        if (!signed_classes) {
+            const __m128d clear_x = _mm_cmpgt_pd(_mm_andnot_pd(sign, x), tiny);
+            const __m128d clear_y = _mm_cmpgt_pd(_mm_andnot_pd(sign, y), tiny);
+            __m128d lead = _mm_or_pd(_mm_and_pd(clear_y, y), _mm_andnot_pd(clear_y, z));
+            lead = _mm_or_pd(_mm_and_pd(clear_x, x), _mm_andnot_pd(clear_x, lead));
+            const __m128d flip =
+                _mm_and_pd(_mm_and_pd(_mm_cmplt_pd(lead, zero),
+                                      _mm_cmpgt_pd(_mm_andnot_pd(sign, lead), tiny)),
+                           sign);
+            x = _mm_xor_pd(x, flip);
+            y = _mm_xor_pd(y, flip);
+            z = _mm_xor_pd(z, flip);
+        }
+        const __m128d c[3] = {x, y, z};
+        __m128d k[3];
+        for (int a = 0; a < 3; ++a) {
+            const __m128d t = _mm_add_pd(_mm_mul_pd(c[a], scale), half);
+            const __m128d r = _mm_sub_pd(_mm_add_pd(t, magic), magic);
+            k[a] = _mm_sub_pd(r, _mm_and_pd(_mm_cmpgt_pd(r, t), one));
+        }
+        // Lane 1 is written to j's place (i's again for an odd count's last one, after
+        // lane 0, which it equals).
+        for (int a = 0; a < 3; ++a) {
+            _mm_storel_pd(unit + 3 * i + a, c[a]);
+            _mm_storel_pd(key + 3 * i + a, k[a]);
+            _mm_storeh_pd(unit + 3 * j + a, c[a]);
+            _mm_storeh_pd(key + 3 * j + a, k[a]);
+        }
+        valid[i] = static_cast<char>(ok & 1);
+        valid[j] = static_cast<char>(ok >> 1);
+    }
+}
+#else
 // floor(x) for |x| < 2^62 as the library's floor gives it (an inline conversion where
-// std::floor is a libm call on the default x86-64 target).
+// std::floor is a libm call on some targets).
 inline long long floor_to_integer(double x) {
     const auto t = static_cast<long long>(x);  // truncation towards zero
     return t - (static_cast<double>(t) > x ? 1 : 0);
 }
 
+void unit_keys(const Vec3* d, size_t count, bool signed_classes, double* unit, double* key,
+               char* valid) {
+    for (size_t i = 0; i < count; ++i) {
+        double x = d[i].x, y = d[i].y, z = d[i].z;
+        const double len = std::sqrt(x * x + y * y + z * z);
+        valid[i] = len > 0.0;
+        x = x / len, y = y / len, z = z / len;
+        if (!signed_classes) {
+            // The first component clearly non-zero decides the sign.
+            const double lead = std::fabs(x) > 1e-12 ? x : (std::fabs(y) > 1e-12 ? y : z);
+            if (lead < 0.0 && std::fabs(lead) > 1e-12) x = -x, y = -y, z = -z;
+        }
+        unit[3 * i] = x, unit[3 * i + 1] = y, unit[3 * i + 2] = z;
+        if (!valid[i]) continue;
+        key[3 * i] = static_cast<double>(floor_to_integer(x * 1e12 + 0.5));
+        key[3 * i + 1] = static_cast<double>(floor_to_integer(y * 1e12 + 0.5));
+        key[3 * i + 2] = static_cast<double>(floor_to_integer(z * 1e12 + 0.5));
+    }
+}
+#endif
+
 // One direction per class of the `count` directions `d`, appended to `out`: unit, rounded to
 // 12 digits for grouping; unsigned classes get a canonical sign (the first component clearly
-// non-zero positive). First occurrences kept, in input order (an open-addressing table of the
-// rounded keys: linear in the count). Returns how many were appended.
+// non-zero positive) (unit_keys). First occurrences kept, in input order (an open-addressing
+// table of the rounded keys: linear in the count). Returns how many were appended.
 std::int64_t unique_directions(const Vec3* d, size_t count, bool signed_classes, PackScratch& s,
                                std::vector<double>& out) {
     size_t size = 16;
-    while (size < 2 * count) size *= 2;
+    while (size < 4 * count) size *= 2;  // a quarter full at most: few probes collide
     // Stamped cells: the table is cleared by a new stamp, not rewritten, on every call.
     if (s.table.size() < size || ++s.stamp == 0) {
         s.table.assign(std::max(size, s.table.size()), DirectionCell{0, 0});
@@ -96,56 +187,98 @@ std::int64_t unique_directions(const Vec3* d, size_t count, bool signed_classes,
     const size_t mask = size - 1;
     const unsigned stamp = s.stamp;
     DirectionCell* table = s.table.data();
-    if (s.keys.size() < count) s.keys.resize(count);
-    std::array<long long, 3>* keys = s.keys.data();
+    if (s.unit.size() < 3 * count) {
+        s.unit.resize(3 * count);
+        s.keys.resize(3 * count);
+        s.valid.resize(count);
+    }
+    unit_keys(d, count, signed_classes, s.unit.data(), s.keys.data(), s.valid.data());
+    const double* keys = s.keys.data();
+    const double* unit = s.unit.data();
     // Written to scratch and appended once (a resize of `out` would zero its room first).
     if (s.unique.size() < 3 * count) s.unique.resize(3 * count);
     double* const first = s.unique.data();
     double* o = first;
-    std::int32_t seen = 0;
     std::int64_t kept = 0;
     for (size_t i = 0; i < count; ++i) {
-        double x = d[i].x, y = d[i].y, z = d[i].z;
-        const double len = std::sqrt(x * x + y * y + z * z);
-        if (!(len > 0.0)) continue;
-        x = x / len, y = y / len, z = z / len;
-        if (!signed_classes) {
-            // The first component clearly non-zero decides the sign.
-            const double lead = std::fabs(x) > 1e-12 ? x : (std::fabs(y) > 1e-12 ? y : z);
-            if (lead < 0.0 && std::fabs(lead) > 1e-12) x = -x, y = -y, z = -z;
-        }
-        // floor(x + 0.5): ties may round either way (as np.round's half-to-even does
-        // differently), which only splits a class in two. |v| <= 1: the keys fit.
-        const long long k0 = floor_to_integer(x * 1e12 + 0.5),
-                        k1 = floor_to_integer(y * 1e12 + 0.5),
-                        k2 = floor_to_integer(z * 1e12 + 0.5);
+        if (!s.valid[i]) continue;
+        const double* k = keys + 3 * i;
+        std::uint64_t bits[3];
+        std::memcpy(bits, k, sizeof bits);
         std::uint64_t hash = 1469598103934665603ull;
-        hash = (hash ^ static_cast<std::uint64_t>(k0)) * 1099511628211ull;
-        hash = (hash ^ static_cast<std::uint64_t>(k1)) * 1099511628211ull;
-        hash = (hash ^ static_cast<std::uint64_t>(k2)) * 1099511628211ull;
+        hash = (hash ^ bits[0]) * 1099511628211ull;
+        hash = (hash ^ bits[1]) * 1099511628211ull;
+        hash = (hash ^ bits[2]) * 1099511628211ull;
         size_t slot = static_cast<size_t>(hash ^ (hash >> 29)) & mask;
         bool fresh = true;
         for (;; slot = (slot + 1) & mask) {
             DirectionCell& cell = table[slot];
             if (cell.stamp != stamp) {
                 cell.stamp = stamp;
-                cell.key = seen;
-                keys[seen++] = {k0, k1, k2};
+                cell.key = static_cast<std::int32_t>(i);
                 break;
             }
-            const std::array<long long, 3>& k = keys[cell.key];
-            if (k[0] == k0 && k[1] == k1 && k[2] == k2) {
+            const double* seen = keys + 3 * static_cast<size_t>(cell.key);
+            if (seen[0] == k[0] && seen[1] == k[1] && seen[2] == k[2]) {
                 fresh = false;
                 break;
             }
         }
         if (!fresh) continue;
-        o[0] = x, o[1] = y, o[2] = z;
+        const double* u = unit + 3 * i;
+        o[0] = u[0], o[1] = u[1], o[2] = u[2];
         o += 3;
         ++kept;
     }
     out.insert(out.end(), first, o);
     return kept;
+}
+
+}  // namespace
+
+namespace hull_detail {
+std::vector<double> unique_directions_of(const Vec3* d, size_t count, bool signed_classes) {
+    PackScratch s;
+    std::vector<double> out;
+    unique_directions(d, count, signed_classes, s, out);
+    return out;
+}
+}  // namespace hull_detail
+
+namespace {
+
+// adjacency_from_edges for at most 64 vertices: each vertex's neighbours as a bit mask,
+// read out lowest bit first (ascending), then padded. The same lists when every edge is listed
+// once (a triangulation's edges are); false, with nothing appended, when an edge repeats (the
+// lists would then hold it twice).
+bool adjacency_from_masks(int count, PackScratch& s, ChunkPack& out) {
+    const auto n = static_cast<size_t>(count);
+    std::uint64_t mask[64];
+    int degree[64];
+    std::fill(mask, mask + n, std::uint64_t{0});
+    std::fill(degree, degree + n, 0);
+    std::uint64_t repeated = 0;  // a bit already set: the edge came before
+    for (const auto& [a, b] : s.pairs) {
+        repeated |= mask[a] >> b;
+        mask[a] |= std::uint64_t{1} << b;
+        mask[b] |= std::uint64_t{1} << a;
+        ++degree[a], ++degree[b];
+    }
+    if (repeated & 1) return false;
+    size_t padded_total = 0;
+    for (size_t i = 0; i < n; ++i) padded_total += static_cast<size_t>((degree[i] + 3) / 4 * 4);
+    const size_t first = out.adjacency.size();
+    out.adjacency.resize(first + padded_total);
+    std::int32_t* list = out.adjacency.data() + first;
+    for (size_t i = 0; i < n; ++i) {
+        const int padded = (degree[i] + 3) / 4 * 4;
+        out.adjacency_counts.push_back(padded);
+        std::int32_t* const end = list + padded;
+        for (std::uint64_t m = mask[i]; m != 0; m &= m - 1)
+            *list++ = static_cast<std::int32_t>(__builtin_ctzll(m));
+        while (list < end) *list++ = static_cast<std::int32_t>(i);
+    }
+    return true;
 }
 
 // Neighbour lists of `count` vertices from undirected edges, ascending, padded with the
@@ -154,6 +287,7 @@ std::int64_t unique_directions(const Vec3* d, size_t count, bool signed_classes,
 // edges bucketed by one end give each vertex's neighbours; walking the vertices in order
 // and appending each to its neighbours' lists leaves every list ascending.
 void adjacency_from_edges(int count, PackScratch& s, ChunkPack& out) {
+    if (count <= 64 && adjacency_from_masks(count, s, out)) return;
     const auto n = static_cast<size_t>(count);
     std::vector<std::int64_t>& start = s.start;
     start.assign(n + 1, 0);

@@ -82,10 +82,6 @@ namespace {
 
 constexpr int kNext[3] = {1, 2, 0};  // the edge after edge e of a face
 
-// c ? a : b by masks: GCC turns a ternary whose sides are cheap into a branch, which
-// mispredicts when c follows no pattern.
-inline int select(bool c, int a, int b) { return b ^ ((a ^ b) & -static_cast<int>(c)); }
-
 void set_plane(Workspace& w, Face& f) {
     f.plane = face_plane(w.p[f.v[0]], w.p[f.v[1]], w.p[f.v[2]]);
 }
@@ -192,7 +188,7 @@ void link_faces(Workspace& w, const int* ids, int count) {
                 if (j == i) continue;
                 const Face& g = w.faces[ids[j]];
                 for (int k = 0; k < 3; ++k)
-                    if (g.v[k] == b && g.v[(k + 1) % 3] == a) f.n[e] = ids[j];
+                    if (g.v[k] == b && g.v[(k + 1) % 3] == a) f.n[e] = ids[j], f.s[e] = k;
             }
         }
 }
@@ -262,10 +258,7 @@ bool find_horizon(Workspace& w, int seed, int q, unsigned stamp) {
             g.visible = d > pl.filter || (!(d < -pl.filter) && exact_side(p, g, x) > 0);
             if (g.visible) {
                 visible[nv++] = gi;
-                int back = static_cast<int>(g.n[0] == fi) - 1;
-                back = select(g.n[1] == fi, 1, back);
-                back = select(g.n[2] == fi, 2, back);
-                if (back < 0) return false;
+                const int back = f.s[e];  // g's edge back to f
                 stack[top++] = {fi, next, left};
                 fi = gi, next = kNext[back], left = 2;
                 continue;
@@ -273,18 +266,12 @@ bool find_horizon(Workspace& w, int seed, int q, unsigned stamp) {
         } else if (g.visible) {
             continue;
         }
-        // A horizon edge, from the visible f to the non-visible g, with the last slot of g
-        // that leads back (none: -1, no branches).
+        // A horizon edge, from the visible f to the non-visible g, with g's edge back.
         HorizonEdge& he = edges[ne++];
-        const int b = f.v[kNext[e]];
         he.a = f.v[e];
-        he.b = b;
+        he.b = f.v[kNext[e]];
         he.outside = gi;
-        int slot = static_cast<int>((g.n[0] == fi) & (g.v[0] == b)) - 1;
-        slot = select((g.n[1] == fi) & (g.v[1] == b), 1, slot);
-        slot = select((g.n[2] == fi) & (g.v[2] == b), 2, slot);
-        he.slot = slot;
-        if (slot < 0) return false;
+        he.slot = f.s[e];
     }
     w.visible_count = nv;
     w.edge_count = ne;
@@ -332,7 +319,10 @@ void cone(Workspace& w, int q) {
         f.n[0] = he.outside;
         f.n[1] = ids[k + 1 < h ? k + 1 : 0];
         f.n[2] = ids[k > 0 ? k - 1 : h - 1];
-        w.faces[he.outside].n[he.slot] = id;
+        f.s[0] = he.slot, f.s[1] = 2, f.s[2] = 1;  // the cone's next face leads back by its edge 2
+        Face& outside = w.faces[he.outside];
+        outside.n[he.slot] = id;
+        outside.s[he.slot] = 0;
         double* plane = &w.new_planes[4 * k];
         plane[0] = f.plane.normal.x, plane[1] = f.plane.normal.y, plane[2] = f.plane.normal.z;
         plane[3] = f.plane.offset;
@@ -471,14 +461,9 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
             if (static_cast<unsigned>(g) >= slots || index[g] < 0) return Build::FAILED;
             const int j = index[g];
             out.neighbor[t][e] = j;
-            // The slot of the neighbour that leads back (the last one, as the faces have it:
-            // the same as its compacted list's, the index being one to one).
-            const int* back = faces[g].n;
-            const int self = static_cast<int>(i);
-            int k = static_cast<int>(back[0] == self) - 1;
-            k = select(back[1] == self, 1, k);
-            k = select(back[2] == self, 2, k);
-            edges[count] = {t, e, j, k};
+            // The neighbour's edge that leads back (the compacted list's too, the index
+            // being one to one).
+            edges[count] = {t, e, j, f.s[e]};
             count += j > t;
         }
     }

@@ -1,8 +1,10 @@
 // Quickhull (hull.hpp): known hulls, the flatness rule's statuses, packing.
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <random>
 #include <vector>
 
 #include "check.hpp"
@@ -328,5 +330,99 @@ TEST_CASE("hull: any input order and either zero give the same hull (the sort is
         }
         for (size_t f = 0; f < h.faces.size(); ++f)
             for (int c = 0; c < 3; ++c) CHECK_EQ(h.faces[f][c], first.faces[f][c]);
+    }
+}
+
+namespace {
+
+// unique_directions as main ccdc8db wrote it (scalar, integer keys, a linear search for the
+// classes): the reference the packing's two-lane version must equal bit for bit.
+std::vector<double> reference_unique_directions(const std::vector<Vec3>& d, bool signed_classes) {
+    auto floor_to_integer = [](double x) {
+        const auto t = static_cast<long long>(x);
+        return t - (static_cast<double>(t) > x ? 1 : 0);
+    };
+    std::vector<std::array<long long, 3>> keys;
+    std::vector<double> out;
+    for (const Vec3& v : d) {
+        double x = v.x, y = v.y, z = v.z;
+        const double len = std::sqrt(x * x + y * y + z * z);
+        if (!(len > 0.0)) continue;
+        x = x / len, y = y / len, z = z / len;
+        if (!signed_classes) {
+            const double lead = std::fabs(x) > 1e-12 ? x : (std::fabs(y) > 1e-12 ? y : z);
+            if (lead < 0.0 && std::fabs(lead) > 1e-12) x = -x, y = -y, z = -z;
+        }
+        const std::array<long long, 3> k = {floor_to_integer(x * 1e12 + 0.5),
+                                             floor_to_integer(y * 1e12 + 0.5),
+                                             floor_to_integer(z * 1e12 + 0.5)};
+        bool fresh = true;
+        for (const auto& seen : keys) fresh = fresh && seen != k;
+        if (!fresh) continue;
+        keys.push_back(k);
+        out.insert(out.end(), {x, y, z});
+    }
+    return out;
+}
+
+}  // namespace
+
+TEST_CASE("hull: the packing's direction classes equal the scalar ones bit for bit") {
+    std::mt19937_64 rng(7);
+    std::normal_distribution<double> g;
+    std::uniform_int_distribution<int> pick(0, 11);
+    // Components that stress the keys and the sign rule: exact halves of the 1e-12 grid
+    // (x * 1e12 + 0.5 an integer: rint's ties), values at and beside +-1e-12, zeros of both
+    // signs, exact binary fractions, denormal-sized and huge vectors, and near-repeats (one
+    // ulp or 1e-13 apart) so that classes merge.
+    auto component = [&]() {
+        switch (pick(rng)) {
+            case 0: return 0.0;
+            case 1: return -0.0;
+            case 2: return 1e-12 * (g(rng) > 0 ? 1 : -1);
+            case 3: return std::nextafter(1e-12, g(rng) > 0 ? 1.0 : 0.0) * (g(rng) > 0 ? 1 : -1);
+            case 4: return std::ldexp(std::floor(g(rng) * 64), -6);
+            case 5: return (std::floor(g(rng) * 1e6) + 0.5) * 1e-12;
+            default: return g(rng);
+        }
+    };
+    // Unit vectors whose small component is exactly at or one ulp beside 1e-12 (the sign
+    // rule's threshold): s^2 + 1 rounds to 1, so the length is exactly 1.
+    std::vector<Vec3> edge_cases;
+    for (double s : {1e-12, std::nextafter(1e-12, 0.0), std::nextafter(1e-12, 1.0)})
+        for (double a : {s, -s})
+            for (double b : {1.0, -1.0})
+                edge_cases.insert(edge_cases.end(), {{a, 0.0, b}, {a, b, 0.0}, {0.0, a, b},
+                                                     {-0.0, a, b}, {a, -0.0, b}, {a, a, b}});
+    for (bool signed_classes : {true, false}) {
+        const std::vector<double> want = reference_unique_directions(edge_cases, signed_classes);
+        const std::vector<double> got =
+            hull_detail::unique_directions_of(edge_cases.data(), edge_cases.size(), signed_classes);
+        CHECK(got.size() == want.size() &&
+              std::memcmp(got.data(), want.data(), 8 * got.size()) == 0);
+    }
+    for (int round = 0; round < 400; ++round) {
+        std::vector<Vec3> d;
+        const int n = 1 + round % 37;
+        for (int i = 0; i < n; ++i) {
+            Vec3 v{component(), component(), component()};
+            const int scale = pick(rng);
+            if (scale == 0) v = v * 1e-160;
+            if (scale == 1) v = v * 1e95;
+            d.push_back(v);
+            if (pick(rng) < 3) d.push_back(d.back() * -1.0);
+            if (pick(rng) < 3) {
+                const Vec3 w = d.back();
+                d.push_back({std::nextafter(w.x, 2.0), w.y, w.z + 1e-13});
+            }
+        }
+        for (bool signed_classes : {true, false}) {
+            const std::vector<double> want = reference_unique_directions(d, signed_classes);
+            const std::vector<double> got =
+                hull_detail::unique_directions_of(d.data(), d.size(), signed_classes);
+            CHECK(got.size() == want.size());
+            CHECK(got.size() == want.size() &&
+                  std::memcmp(got.data(), want.data(), 8 * got.size()) == 0);
+        }
     }
 }
