@@ -48,6 +48,9 @@ struct Polytope {
     int free_faces[kMaxFaces];
     int dead[kMaxFaces];
     HorizonEdge stack[kMaxFaces + 2];
+    // One bit a vertex (its key's `key_bit`): a key whose bit is clear is no vertex's, and
+    // `has_vertex` answers without the scan (most calls, which find nothing).
+    std::uint64_t key_bits;
     int vertex_count;
     int face_count;  // slots in use, alive or dead
     int free_count;  // dead slots ready for reuse
@@ -62,16 +65,25 @@ struct Polytope {
                static_cast<std::uint32_t>(w.index_b);
     }
 
-    void reset() { vertex_count = face_count = free_count = horizon_count = dead_count = 0; }
+    static std::uint64_t key_bit(std::uint64_t key) {
+        return std::uint64_t{1} << ((key ^ (key >> 29) ^ (key >> 35)) & 63);
+    }
+
+    void reset() {
+        vertex_count = face_count = free_count = horizon_count = dead_count = 0;
+        key_bits = 0;
+    }
 
     void add_vertex(const SimplexVertex& w) {
         vertices[vertex_count] = w;
-        keys[vertex_count] = key_of(w);
+        const std::uint64_t key = key_of(w);
+        keys[vertex_count] = key;
+        key_bits |= key_bit(key);
         ++vertex_count;
     }
 
     bool has_vertex(std::uint64_t key) const {
-        if (key == kNoKey) return false;
+        if (key == kNoKey || (key_bits & key_bit(key)) == 0) return false;
         bool found = false;
         for (int i = 0; i < vertex_count; ++i) found |= keys[i] == key;
         return found;
@@ -340,9 +352,12 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
         poly.dead_count = 0;
         poly.kill(best_face);
         poly.silhouette(best_face, w.w);
+        // One pass over the silhouette: each new face is linked to the living face beyond its
+        // edge and to the previous new face, once the loop is seen to close there (the
+        // previous face's edge ends where this one's starts); the last closes on the first.
         const int count = poly.horizon_count;
-        int fan[kMaxFaces];
         bool ok = count >= 3;
+        int first = -1, previous = -1, previous_end = -1, first_start = -1;
         for (int k = 0; k < count && ok; ++k) {
             const HorizonEdge& h = poly.horizon[k];
             const EpaFace& beyond = poly.faces[h.face];
@@ -353,18 +368,21 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
                 ok = false;
                 break;
             }
-            fan[k] = f;
             poly.link(f, 0, h.face, h.edge);
             if (poly.distance[f] < -tol * tol) ok = false;
-        }
-        for (int k = 0; k < count && ok; ++k) {
-            const int f = fan[k], g = fan[k + 1 == count ? 0 : k + 1];
-            if (poly.faces[f].v[1] != poly.faces[g].v[0]) {
+            if (previous < 0) {
+                first = f;
+                first_start = a;
+            } else if (previous_end != a) {
                 ok = false;
-                break;
+            } else {
+                poly.link(previous, 1, f, 2);
             }
-            poly.link(f, 1, g, 2);
+            previous = f;
+            previous_end = b;
         }
+        if (ok && previous_end == first_start) poly.link(previous, 1, first, 2);
+        else ok = false;
         if (!ok) {
             res.status = Status::DEGENERATE;
             break;

@@ -4,6 +4,10 @@
 #include <cstddef>
 #include <limits>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "meshcol/defaults.hpp"
 #include "climb.hpp"
 
@@ -209,12 +213,44 @@ double valid_bounding_radius(const ShapeView& s) {
     const int n = s.vertex_count;
     double r[4] = {0.0, 0.0, 0.0, 0.0}, sum[4] = {0.0, 0.0, 0.0, 0.0};
     int i = 0;
+#if defined(__SSE2__)
+    // Two vertices (six coordinates, three loads) at a time, their squares regrouped as
+    // (x0, x1), (y0, y1), (z0, z1) so each lane sums (x x + y y) + z z, `squared_norm`'s
+    // order: the same squared norms bit for bit, in half the instructions. `_mm_max_pd(q, r)`
+    // is q > r ? q : r per lane, as below.
+    {
+        const double* c = &v[0].x;
+        __m128d r01 = _mm_setzero_pd(), r23 = _mm_setzero_pd();
+        __m128d s01 = _mm_setzero_pd(), s23 = _mm_setzero_pd();
+        const auto squares = [c](int k) {
+            const __m128d a = _mm_loadu_pd(c + 3 * k);      // x0 y0
+            const __m128d b = _mm_loadu_pd(c + 3 * k + 2);  // z0 x1
+            const __m128d d = _mm_loadu_pd(c + 3 * k + 4);  // y1 z1
+            const __m128d aa = _mm_mul_pd(a, a), bb = _mm_mul_pd(b, b), dd = _mm_mul_pd(d, d);
+            const __m128d xs = _mm_shuffle_pd(aa, bb, 2), ys = _mm_shuffle_pd(aa, dd, 1);
+            const __m128d zs = _mm_shuffle_pd(bb, dd, 2);
+            return _mm_add_pd(_mm_add_pd(xs, ys), zs);
+        };
+        for (; i + 3 < n; i += 4) {
+            const __m128d q01 = squares(i), q23 = squares(i + 2);
+            r01 = _mm_max_pd(q01, r01);
+            r23 = _mm_max_pd(q23, r23);
+            s01 = _mm_add_pd(s01, q01);
+            s23 = _mm_add_pd(s23, q23);
+        }
+        _mm_storeu_pd(r, r01);
+        _mm_storeu_pd(r + 2, r23);
+        _mm_storeu_pd(sum, s01);
+        _mm_storeu_pd(sum + 2, s23);
+    }
+#else
     for (; i + 3 < n; i += 4)
         for (int l = 0; l < 4; ++l) {
             const double q = squared_norm(v[i + l]);
             r[l] = q > r[l] ? q : r[l];
             sum[l] += q;
         }
+#endif
     for (; i < n; ++i) {
         const double q = squared_norm(v[i]);
         r[0] = q > r[0] ? q : r[0];

@@ -151,7 +151,7 @@ TEST_CASE("narrow phase: a batch sets each pair's status, a bad pose is INVALID_
 }
 
 TEST_CASE("shapes: valid_bounding_radius is is_valid plus bounding_radius, bit for bit") {
-    // Smooth hulls of every size class (the four-chain loop and its tail), tiny and huge
+    // Smooth hulls of every size class (the four-vertex loop and its tail), tiny and huge
     // coordinates (squares out of range: the careful path), and invalid data (NaN, inf).
     std::uint64_t state = 12345;
     auto uniform = [&state] {
@@ -167,13 +167,17 @@ TEST_CASE("shapes: valid_bounding_radius is is_valid plus bounding_radius, bit f
             s.vertices = v.data();
             s.vertex_count = n;
             CHECK(valid_bounding_radius(s) == bounding_radius(s));
-            for (double bad : {std::nan(""), HUGE_VAL, -HUGE_VAL}) {
-                std::vector<Vec3> w = v;
-                w[static_cast<size_t>(n / 2)].y = bad;
-                s.vertices = w.data();
-                CHECK(!is_valid(s));
-                CHECK(std::isnan(valid_bounding_radius(s)));
-            }
+            // Every coordinate of the first, a middle and the last vertex: both lanes of the
+            // two-vertex SSE2 step and the scalar tail.
+            for (double bad : {std::nan(""), HUGE_VAL, -HUGE_VAL})
+                for (int at : {0, n / 2, n - 1})
+                    for (int coordinate = 0; coordinate < 3; ++coordinate) {
+                        std::vector<Vec3> w = v;
+                        w[static_cast<size_t>(at)][coordinate] = bad;
+                        s.vertices = w.data();
+                        CHECK(!is_valid(s));
+                        CHECK(std::isnan(valid_bounding_radius(s)));
+                    }
         }
     }
     ShapeView empty;
