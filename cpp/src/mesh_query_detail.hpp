@@ -235,12 +235,15 @@ struct DisjointSearch {
     bool found = false;
     double squared_distance = kInf;
     std::int32_t triangle_a = -1, triangle_b = -1;
-    int rounds = 0;  ///< of candidates collected (distance_across_hulls: 1 or 2; 0 before any)
 };
 
 /// The search by the hulls' supporting planes (mesh_distance.cpp), tried first on pairs whose
-/// hulls are apart; undecided when the hulls meet or the candidates are too many.
-DisjointSearch distance_across_hulls(const MeshBvh& a, const MeshBvh& b, const Relative& rel, double bound2);
+/// hulls are apart; undecided when the hulls meet, the candidates are too many or the best
+/// pair at the planes cannot be proven the nearest. `screen`: as mesh_distance runs it, giving
+/// up at once when the hulls' closest points are not on the meshes; without, it measures the
+/// candidates of every such pair too (for tests of the bound that decides).
+DisjointSearch distance_across_hulls(const MeshBvh& a, const MeshBvh& b, const Relative& rel, double bound2,
+                                     bool screen = true);
 
 /// The best-first node-pair search (mesh_distance.cpp), from no start pair: always decides.
 DisjointSearch distance_by_node_pairs(const MeshBvh& a, const MeshBvh& b, const Relative& rel, double bound2);
