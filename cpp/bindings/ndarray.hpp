@@ -265,7 +265,7 @@ nb::object numpy_empty(size_t n, T** data, size_t columns = 0) {
 }
 
 /// The data of `object` when it is exactly a numpy array (not a subclass), C-contiguous and
-/// aligned, of int64 in native byte order, with `ndim` dimensions whose sizes go to `shape`;
+/// aligned, of T (int64 or float64) in native byte order, with `ndim` dimensions whose sizes go to `shape`;
 /// null otherwise (the caller then asks the buffer protocol, which says the same for such an
 /// array, only slower: a buffer export costs about as much as a one-pair query). Read from
 /// numpy's array and dtype structs where every extension compiled against numpy reads them
@@ -273,7 +273,9 @@ nb::object numpy_empty(size_t n, T** data, size_t columns = 0) {
 /// characters, whose offsets numpy 1.x and 2.x share), checked once against the buffer
 /// protocol (data, shape) and not used again should the two ever disagree. No reference to the
 /// data is held: read it under the GIL, or export a buffer before releasing it. Holds the GIL.
-inline const std::int64_t* numpy_int64_data(PyObject* object, int ndim, Py_ssize_t* shape) {
+template <class T>
+const T* numpy_data(PyObject* object, int ndim, Py_ssize_t* shape) {
+    static_assert(std::is_same_v<T, std::int64_t> || std::is_same_v<T, double>, "add the dtype");
     struct ArrayHead {
         PyObject head;
         char* data;
@@ -301,8 +303,10 @@ inline const std::int64_t* numpy_int64_data(PyObject* object, int ndim, Py_ssize
     const bool little = *reinterpret_cast<const unsigned char*>(&one) == 1;
     const bool native = d->byteorder == '=' || d->byteorder == '|' || (d->byteorder == '<' && little) ||
                         (d->byteorder == '>' && !little);
-    const bool int64 = d->kind == 'i' && (d->type == 'q' || (d->type == 'l' && sizeof(long) == 8));
-    if (a->nd != ndim || !native || !int64 || (a->flags & (c_contiguous | aligned)) != (c_contiguous | aligned))
+    const bool typed = std::is_same_v<T, double>
+                           ? d->kind == 'f' && d->type == 'd'
+                           : d->kind == 'i' && (d->type == 'q' || (d->type == 'l' && sizeof(long) == 8));
+    if (a->nd != ndim || !native || !typed || (a->flags & (c_contiguous | aligned)) != (c_contiguous | aligned))
         return nullptr;
     if (layout_checked == 0) {
         Py_buffer view;
@@ -317,7 +321,11 @@ inline const std::int64_t* numpy_int64_data(PyObject* object, int ndim, Py_ssize
         if (!agree) return nullptr;
     }
     for (int k = 0; k < ndim; ++k) shape[k] = a->dimensions[k];
-    return reinterpret_cast<const std::int64_t*>(a->data);
+    return reinterpret_cast<const T*>(a->data);
+}
+
+inline const std::int64_t* numpy_int64_data(PyObject* object, int ndim, Py_ssize_t* shape) {
+    return numpy_data<std::int64_t>(object, ndim, shape);
 }
 
 /// Throws unless `offsets` (n entries) starts at 0, ends at `total` and never decreases.

@@ -7,12 +7,15 @@
 // far are dropped. At the leaves, triangle pairs are dropped by boxes, planes and capsules
 // before the exact triangle-pair distance. The pair is first tried for a crossing
 // (mesh_intersection.cpp) and, when its surfaces are disjoint, for containment
-// (mesh_winding.cpp).
+// (mesh_winding.cpp). Pairs whose hulls are apart are first tried by their hulls' supporting
+// planes (search_across_hulls), which measures only the triangle pairs at those planes and
+// decides most pairs of meshes apart without a node pair.
 #include <algorithm>
 #include <cmath>
 #include <utility>
 #include <vector>
 
+#include "meshcol/gjk.hpp"
 #include "meshcol/mesh_query.hpp"
 #include "meshcol/triangle.hpp"
 #include "mesh_query_detail.hpp"
@@ -253,6 +256,21 @@ private:
     double slack_ = 0.0;
 };
 
+// Whether the bounds of a triangle pair (a's triangle i with corners ta and box box_a; b's
+// triangle j, its corners tb and box box_b mapped into a's frame) drop it: its box, centroid
+// line and plane bounds, and its capsule bound when one is a sliver, each tested by `pruned`.
+template <class Pruned>
+inline bool triangle_pair_dropped(const MeshBvh& a, std::int32_t i, const Vec3 ta[3], const TriangleBox& box_a,
+                                  const MeshBvh& b, std::int32_t j, const Vec3 tb[3], const TriangleBox& box_b,
+                                  const Relative& rel, const Pruned& pruned) {
+    return pruned(triangle_box_lowered_squared_distance(box_a, box_b, rel.slack)) ||
+           pruned(triangle_axis_squared_distance(ta, tb, rel.slack)) ||
+           pruned(triangle_plane_squared_distance(ta, a.triangle_normal(i), tb, rel.rotation * b.triangle_normal(j),
+                                                  rel.slack)) ||
+           ((a.triangle_capsule(i).thin || b.triangle_capsule(j).thin) &&
+            pruned(triangle_capsule_squared_distance(ta, a.triangle_capsule(i), tb, b.triangle_capsule(j), rel.slack)));
+}
+
 struct StackItem {
     std::int32_t a, b;
     double bound;  // squared box distance when pushed
@@ -346,20 +364,12 @@ SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative&
             for (std::int32_t i = x.index; i < x.index + x.count; ++i) {
                 const Vec3* ta = a.triangle(i);
                 const TriangleBox box_a = triangle_box(ta);
-                const Vec3& normal_a = a.triangle_normal(i);
                 for (int j = 0; j < leaf_b.count; ++j) {
                     // The surfaces are disjoint (first_crossing found no crossing pair among
                     // those whose boxes touch, which are all that can cross): measure only.
-                    // The surfaces are disjoint (first_crossing found no crossing pair among
-                    // those whose boxes touch, which are all that can cross): measure only.
                     if ((axis.active() && pruned(axis.triangles(ta, leaf_b.corners[j]))) ||
-                        pruned(triangle_box_lowered_squared_distance(box_a, leaf_b.boxes[j], rel.slack)) ||
-                        pruned(triangle_axis_squared_distance(ta, leaf_b.corners[j], rel.slack)) ||
-                        pruned(triangle_plane_squared_distance(ta, normal_a, leaf_b.corners[j],
-                                                               rel.rotation * b.triangle_normal(y.index + j), rel.slack)) ||
-                        ((a.triangle_capsule(i).thin || b.triangle_capsule(y.index + j).thin) &&
-                         pruned(triangle_capsule_squared_distance(ta, a.triangle_capsule(i), leaf_b.corners[j],
-                                                                  b.triangle_capsule(y.index + j), rel.slack))))
+                        triangle_pair_dropped(a, i, ta, box_a, b, y.index + j, leaf_b.corners[j], leaf_b.boxes[j],
+                                              rel, pruned))
                         continue;
                     Vec3 pa, pb;
                     // Bit for bit the full triangle distance whenever it can count (at most the
@@ -422,6 +432,328 @@ SearchResult search_distance(const MeshBvh& a, const MeshBvh& b, const Relative&
     return r;
 }
 
+// The search of a pair whose hulls are apart (meshes apart by a share of their size, the
+// pairs a scene's near-phase hands over most often): any unit direction n bounds every
+// triangle pair from below by the gap of their projections on it, and that gap splits into
+// g + s_a + s_b, g the gap between the meshes' extreme projections and s_a (s_b) how far the
+// triangle of a (of b) falls short of its mesh's extreme. Along the direction of the hulls'
+// distance (GJK on the vertices) g is the hulls' distance, at most the meshes'; where the
+// meshes' closest points lie on their hulls (their usual place when apart) it is the distance
+// itself, and only the triangles within best - g of their mesh's supporting plane (those
+// around the closest features) can hold a pair that beats the best: each mesh's are found by
+// a descent of its own hierarchy, and only their pairs are bounded and measured. No node pair
+// is visited. Each pair's gap is lowered by the pair's rounding allowance, as every bound of
+// search_distance, and the triangle distances are the ones search_distance measures, so the
+// distance is the same, bit for bit.
+class HullPlanes {
+public:
+    // A triangle (leaf order) and how far its projection falls short of the mesh's extreme.
+    struct Candidate {
+        std::int32_t triangle;
+        double high;  // the largest projection of its corners on the direction
+    };
+
+    // Triangles of `mesh` whose largest corner projection on `n` is within `reach` of the
+    // mesh's largest, into `out` (nearest the extreme first); returns that largest, or NaN
+    // when there are more than `limit` of them. A descent of the hierarchy, larger box
+    // projection first, dropping nodes whose oriented box ends short of the largest found
+    // less `reach`.
+    static double collect(const MeshBvh& mesh, const Vec3& n, double reach, size_t limit,
+                          std::vector<Candidate>& out, std::vector<std::int32_t>& stack) {
+        const std::vector<BvhNode>& nodes = mesh.nodes();
+        const std::vector<NodeObb>& boxes = mesh.obbs();
+        const auto top = [&](std::int32_t id) {
+            const NodeObb& box = boxes[static_cast<size_t>(id)];
+            return dot(box.center, n) + box.half.x * std::fabs(dot(box.axes.row(0), n)) +
+                   box.half.y * std::fabs(dot(box.axes.row(1), n)) + box.half.z * std::fabs(dot(box.axes.row(2), n));
+        };
+        out.clear();
+        stack.clear();
+        stack.push_back(0);
+        double high = -kInf;
+        while (!stack.empty()) {
+            const std::int32_t id = stack.back();
+            stack.pop_back();
+            const BvhNode& node = nodes[static_cast<size_t>(id)];
+            if (node.is_leaf()) {
+                for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
+                    const Vec3* t = mesh.triangle(i);
+                    const double p = max2(dot(t[0], n), max2(dot(t[1], n), dot(t[2], n)));
+                    high = max2(high, p);
+                    if (p >= high - reach) out.push_back({i, p});
+                }
+                if (out.size() > limit) {
+                    const double floor = high - reach;
+                    out.erase(std::remove_if(out.begin(), out.end(),
+                                             [floor](const Candidate& c) { return c.high < floor; }),
+                              out.end());
+                    if (out.size() > limit) return kNaN;
+                }
+                continue;
+            }
+            const std::int32_t left = id + 1, right = node.index;
+            const double tl = top(left), tr = top(right);
+            // The boxes are padded for the rounding of these projections (MeshBvh): a node
+            // that ends short holds no corner above its end.
+            const bool keep_l = tl >= high - reach, keep_r = tr >= high - reach;
+            if (tl >= tr) {
+                if (keep_r) stack.push_back(right);
+                if (keep_l) stack.push_back(left);
+            } else {
+                if (keep_l) stack.push_back(left);
+                if (keep_r) stack.push_back(right);
+            }
+        }
+        const double floor = high - reach;
+        out.erase(std::remove_if(out.begin(), out.end(), [floor](const Candidate& c) { return c.high < floor; }),
+                  out.end());
+        std::sort(out.begin(), out.end(), [](const Candidate& p, const Candidate& q) {
+            return p.high > q.high || (p.high == q.high && p.triangle < q.triangle);
+        });
+        return high;
+    }
+};
+
+// Meshes of at most this many vertices (both) are tried (search_across_hulls): the support
+// function of the hulls' GJK scans every vertex, which for larger meshes costs more than the
+// node-pair search saves where it succeeds.
+constexpr size_t kHullScanVertices = 1024;
+// Meshes this small are tried whatever their root boxes say (worth_hulls).
+constexpr size_t kHullSmallVertices = 256;
+
+// The distance between the hulls of a and b, both in a's frame: the unit direction from a
+// towards b and the closest points on the two hulls (a guess of where the meshes' closest
+// triangles lie; any direction bounds, so rounding costs candidates, never an answer).
+struct HullWitness {
+    Vec3 normal, point_a, point_b;
+    double distance = 0.0;
+};
+
+// The vertex of `mesh` farthest along `d` (local frame), by a descent of the hierarchy that
+// skips the nodes whose oriented box ends short of the best corner so far: the support
+// function of a large mesh's hull at a few dozen nodes, where a scan reads every vertex.
+Vec3 mesh_support(const MeshBvh& mesh, const Vec3& d, std::vector<std::pair<std::int32_t, double>>& stack) {
+    const std::vector<BvhNode>& nodes = mesh.nodes();
+    const std::vector<NodeObb>& boxes = mesh.obbs();
+    const auto top = [&](std::int32_t id) {
+        const NodeObb& box = boxes[static_cast<size_t>(id)];
+        return dot(box.center, d) + box.half.x * std::fabs(dot(box.axes.row(0), d)) +
+               box.half.y * std::fabs(dot(box.axes.row(1), d)) + box.half.z * std::fabs(dot(box.axes.row(2), d));
+    };
+    double best = -kInf;
+    Vec3 point = mesh.triangle(0)[0];
+    stack.clear();
+    stack.push_back({0, kInf});
+    while (!stack.empty()) {
+        const auto [id, bound] = stack.back();
+        stack.pop_back();
+        if (bound <= best) continue;
+        const BvhNode& node = nodes[static_cast<size_t>(id)];
+        if (node.is_leaf()) {
+            for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
+                const Vec3* t = mesh.triangle(i);
+                for (int k = 0; k < 3; ++k) {
+                    const double p = dot(t[k], d);
+                    if (p > best) {
+                        best = p;
+                        point = t[k];
+                    }
+                }
+            }
+            continue;
+        }
+        std::pair<std::int32_t, double> near{id + 1, top(id + 1)}, far{node.index, top(node.index)};
+        if (near.second < far.second) std::swap(near, far);
+        if (far.second > best) stack.push_back(far);
+        if (near.second > best) stack.push_back(near);
+    }
+    return point;
+}
+
+// hull_direction for large meshes: GJK (van den Bergen 2003) with mesh_support as the support
+// functions, Ericson's closest point of the simplex (closest_point_on_simplex).
+bool hull_direction_by_descent(const MeshBvh& a, const MeshBvh& b, const Relative& rel, HullWitness& out) {
+    thread_local std::vector<std::pair<std::int32_t, double>> stack;
+    const auto support = [&](const Vec3& d) {
+        SimplexVertex v;
+        v.a = mesh_support(a, d, stack);
+        v.b = rel.apply(mesh_support(b, rel.rotation.transpose_times(-d), stack));
+        v.w = v.a - v.b;
+        return v;
+    };
+    Simplex s;
+    s.vertices[0] = support(squared_norm(rel.translation) > 0.0 ? rel.translation : Vec3{1.0, 0.0, 0.0});
+    s.weights[0] = 1.0;
+    s.size = 1;
+    Vec3 v = s.vertices[0].w;
+    double vv = squared_norm(v);
+    for (int it = 0; it < defaults::gjk_max_iterations && vv > 0.0; ++it) {
+        const SimplexVertex w = support(-v);
+        bool repeated = false;
+        for (int i = 0; i < s.size; ++i)
+            repeated = repeated || (squared_norm(s.vertices[i].w - w.w) == 0.0);
+        if (repeated || vv - dot(v, w.w) <= defaults::gjk_relative_tolerance * vv) break;
+        s.vertices[s.size++] = w;
+        Vec3 closest;
+        if (!closest_point_on_simplex(s, closest)) return false;  // the origin is inside: they meet
+        const double cc = squared_norm(closest);
+        if (!(cc < vv)) break;
+        v = closest;
+        vv = cc;
+    }
+    if (!(vv > 0.0)) return false;
+    out.distance = std::sqrt(vv);
+    out.normal = v * (-1.0 / out.distance);
+    out.point_a = out.point_b = Vec3{};
+    for (int i = 0; i < s.size; ++i) {
+        out.point_a += s.vertices[i].a * s.weights[i];
+        out.point_b += s.vertices[i].b * s.weights[i];
+    }
+    return is_finite(out.normal);
+}
+
+// The direction of the distance between the hulls of a and b (b mapped into a's frame by
+// rel): the narrow phase's GJK on the two vertex sets (its support scans them). False when
+// the hulls meet. Any unit direction bounds the pairs (HullPlanes), so its rounding only
+// costs candidates, never an answer.
+bool hull_direction(const MeshBvh& a, const MeshBvh& b, const Relative& rel, HullWitness& out) {
+    if (a.vertices().size() > kHullScanVertices || b.vertices().size() > kHullScanVertices)
+        return hull_direction_by_descent(a, b, rel, out);
+    ShapeView shape_a, shape_b;
+    shape_a.vertices = a.vertices().data();
+    shape_a.vertex_count = static_cast<int>(a.vertices().size());
+    shape_b.vertices = b.vertices().data();
+    shape_b.vertex_count = static_cast<int>(b.vertices().size());
+    // b's pose in a's frame: the difference maps it with rel's own numbers (times identity).
+    Pose relative;
+    relative.rotation = rel.rotation;
+    relative.translation = rel.translation;
+    MinkowskiDifference difference(shape_a, Pose{}, shape_b, relative, false, a.box_reach(), b.box_reach());
+    GjkOptions options;
+    options.with_margins = false;
+    const GjkResult hulls = gjk_run(difference, options);
+    if (hulls.overlap || !(hulls.distance > 0.0) || !is_finite(hulls.normal)) return false;
+    out.normal = hulls.normal;
+    out.distance = hulls.distance;
+    out.point_a = hulls.point_a;
+    out.point_b = hulls.point_b;
+    return true;
+}
+
+// The pairs of candidates measured: at most this many (else the node-pair search).
+constexpr size_t kHullPairCap = 4096;
+
+// The hull-plane search (HullPlanes) of a pair search_distance would search: true with `r`
+// set when it decided the distance (the same number search_distance gives), false when it
+// cannot (the hulls meet, the candidates are too many, or the best pair at the planes is
+// farther than the hulls' distance by more than the planes' reach: the closest points lie off
+// the hulls), `r` then holding the best pair found, if any (a start for the search). With
+// `screen`, a pair whose hulls' closest points are not on both meshes is given up before any
+// triangle is measured (the planes then cannot decide it).
+bool search_across_hulls(const MeshBvh& a, const MeshBvh& b, const Relative& rel, double bound2, SearchResult& r,
+                         bool screen = true) {
+    r = SearchResult{};
+    r.squared_distance = bound2;
+    HullWitness hulls;
+    if (!hull_direction(a, b, rel, hulls)) return false;
+    const Vec3 n = hulls.normal;  // a's frame, unit, from a towards b
+    // The meshes' closest points are the hulls' only where the hulls' lie on the meshes: when
+    // either is off its mesh (a hull face over a concave region) the planes cannot decide,
+    // and the node-pair search is cheaper on its own.
+    const double off = 1e-9 * (hulls.distance + a.box_reach() + b.box_reach());
+    if (screen && (closest_point(a, hulls.point_a).distance > off ||
+                   closest_point(b, rel.apply_inverse(hulls.point_b)).distance > off))
+        return false;
+    const Vec3 n_b = rel.rotation.transpose_times(-n);  // b's frame: b's lowest points are its highest on n_b
+    const double offset = dot(rel.translation, n);  // y (b's frame) projects on n at offset - y . n_b
+    thread_local std::vector<HullPlanes::Candidate> in_a, in_b;
+    thread_local std::vector<std::int32_t> stack;
+    thread_local std::vector<Vec3> corners_b;  // the candidates of b mapped into a's frame, 3 each
+    thread_local std::vector<TriangleBox> boxes_b;
+    // The triangles at the supporting planes, within rounding of the hulls' distance. The gap
+    // of a pair is offset - high_b - high_a (less the allowance): rounding moves these sums by
+    // far under the allowance (the gap a node pair's axis bound takes, WitnessAxis).
+    const double reach = 4.0 * rel.slack + 1e-9 * hulls.distance;
+    const double high_a = HullPlanes::collect(a, n, reach, kHullPairCap, in_a, stack);
+    const double high_b = HullPlanes::collect(b, n_b, reach, kHullPairCap, in_b, stack);
+    const double gap = offset - high_b - high_a;
+    if (!(gap > 0.0)) return false;  // also NaN: too many candidates
+    // Every pair is beyond max_distance (as search_distance finds: nothing within it).
+    if (gap - rel.slack > 0.0 && (gap - rel.slack) * (gap - rel.slack) > bound2) return true;
+    if (in_a.size() * in_b.size() > kHullPairCap) return false;
+    corners_b.resize(3 * in_b.size());
+    boxes_b.resize(in_b.size());
+    for (size_t j = 0; j < in_b.size(); ++j) {
+        const Vec3* source = b.triangle(in_b[j].triangle);
+        for (int k = 0; k < 3; ++k) corners_b[3 * j + static_cast<size_t>(k)] = rel.apply(source[k]);
+        boxes_b[j] = triangle_box(&corners_b[3 * j]);
+    }
+    auto pruned = [&r](double lb2) { return r.found ? lb2 >= r.squared_distance : lb2 > r.squared_distance; };
+    const auto measure = [&](std::int32_t i, const Vec3* ta, std::int32_t j, const Vec3* tb) {
+        Vec3 pa, pb;
+        const double d2 = r.found ? triangle_separated_squared_distance_below(ta, tb, r.squared_distance, rel.slack,
+                                                                              &pa, &pb)
+                                  : triangle_separated_squared_distance(ta, tb, &pa, &pb);
+        if (pruned(d2)) return;
+        r.found = true;
+        r.squared_distance = d2;
+        r.point_a = pa;
+        r.point_b = pb;
+        r.triangle_a = i;
+        r.triangle_b = j;
+    };
+    // The pair nearest the hulls' closest points first: where those lie on the meshes it is
+    // (nearly) the answer, and its distance then drops the others by their boxes (a flat side
+    // holds hundreds of candidates at the plane).
+    const auto nearest = [](const TriangleBox& box, const Vec3& p) {
+        return squared_norm(max3(box.lower - p, max3(p - box.upper, Vec3{})));
+    };
+    size_t seed_a = 0, seed_b = 0;
+    double best_a = kInf, best_b = kInf;
+    for (size_t i = 0; i < in_a.size(); ++i) {
+        const double d2 = nearest(triangle_box(a.triangle(in_a[i].triangle)), hulls.point_a);
+        if (d2 < best_a) best_a = d2, seed_a = i;
+    }
+    for (size_t j = 0; j < in_b.size(); ++j) {
+        const double d2 = nearest(boxes_b[j], hulls.point_b);
+        if (d2 < best_b) best_b = d2, seed_b = j;
+    }
+    measure(in_a[seed_a].triangle, a.triangle(in_a[seed_a].triangle), in_b[seed_b].triangle,
+            &corners_b[3 * seed_b]);
+    for (const HullPlanes::Candidate& ca : in_a) {
+        const Vec3* ta = a.triangle(ca.triangle);
+        const TriangleBox box_a = triangle_box(ta);
+        for (size_t j = 0; j < in_b.size(); ++j) {
+            const HullPlanes::Candidate& cb = in_b[j];
+            const double lowered = offset - cb.high - ca.high - rel.slack;
+            // b's candidates fall further short in their order: the rest of the row too.
+            if (lowered > 0.0 && pruned(lowered * lowered)) break;
+            const Vec3* tb = &corners_b[3 * j];
+            if (!triangle_pair_dropped(a, ca.triangle, ta, box_a, b, cb.triangle, tb, boxes_b[j], rel, pruned))
+                measure(ca.triangle, ta, cb.triangle, tb);
+        }
+    }
+    // Beyond max_distance or nothing within it: the node-pair search decides.
+    if (!r.found) return false;
+    // Every pair left out has a triangle farther than `reach` short of its plane: its bound
+    // is above gap + reach less the allowance, so it cannot beat the best when the best is
+    // at most that (with a margin for the rounding of this sum).
+    const double needed = std::sqrt(r.squared_distance) - gap + rel.slack;
+    return needed * (1.0 + 1e-9) + rel.slack <= reach;
+}
+
+// Whether the pair is worth trying by its hulls (search_across_hulls) before the node-pair
+// search: its root oriented boxes are apart (by more than the rounding allowance), where the
+// hulls are usually apart too; or both meshes are small enough (kHullSmallVertices) for the
+// attempt to cost little when it fails. Near pairs of larger meshes (whose hulls mostly meet,
+// or whose closest points lie in a concave region) go straight to the search.
+bool worth_hulls(const MeshBvh& a, const MeshBvh& b, const Relative& rel) {
+    if (a.vertices().size() <= kHullSmallVertices && b.vertices().size() <= kHullSmallVertices) return true;
+    MappedObb root_b;
+    root_b.map(b.obbs()[0], rel);
+    return obb_squared_distance(a.obbs()[0], b.obbs()[0], root_b, rel, 0.0) > 0.0;
+}
+
 // Whether `point` (world frame) is inside `mesh` posed at `pose`.
 bool point_inside(const MeshBvh& mesh, const Pose& pose, const Vec3& point) {
     const Vec3 local = pose.apply_inverse(point);
@@ -430,6 +762,27 @@ bool point_inside(const MeshBvh& mesh, const Pose& pose, const Vec3& point) {
 }
 
 }  // namespace
+
+namespace mesh_detail {
+
+DisjointSearch distance_across_hulls(const MeshBvh& a, const MeshBvh& b, const Relative& rel, double bound2,
+                                     bool screen) {
+    SearchResult r;
+    DisjointSearch out;
+    out.decided = search_across_hulls(a, b, rel, bound2, r, screen);
+    out.found = r.found;
+    out.squared_distance = r.squared_distance;
+    out.triangle_a = r.triangle_a;
+    out.triangle_b = r.triangle_b;
+    return out;
+}
+
+DisjointSearch distance_by_node_pairs(const MeshBvh& a, const MeshBvh& b, const Relative& rel, double bound2) {
+    const SearchResult r = search_distance(a, b, rel, bound2, CrossingPair{-1, -1});
+    return {true, r.found, r.squared_distance, r.triangle_a, r.triangle_b};
+}
+
+}  // namespace mesh_detail
 
 PointDistanceOutput closest_point(const MeshBvh& mesh, const Vec3& point) {
     PointDistanceOutput out;
@@ -501,7 +854,12 @@ MeshDistanceOutput mesh_distance(const MeshDistanceInput& input) {
         r.found = r.intersecting = true;
         r.squared_distance = 0.0;
         r.point_b = r.point_a;
-    } else {
+    } else if (touching.a >= 0 || !worth_hulls(a, b, rel) ||
+               !search_across_hulls(a, b, rel, bound2, r)) {
+        // Triangle boxes that touch, or root boxes that meet: the meshes are near, where their
+        // hulls (nearly always) meet. Else the hulls' attempt failed, and its best pair (if
+        // any) starts the search.
+        if (touching.a < 0 && r.found) touching = CrossingPair{r.triangle_a, r.triangle_b};
         r = search_distance(a, b, rel, bound2, touching);
     }
     if (r.found) {

@@ -227,4 +227,25 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
 /// isolated points, appended to `out` (mesh_intersection.cpp).
 void segment_crossings(const MeshBvh& mesh, const Vec3& p, const Vec3& q, std::vector<double>& out);
 
+/// One of mesh_distance's searches of a pair whose surfaces are disjoint, alone (for tests):
+/// whether it decided the pair, and then its answer (leaf-order triangles; squared distance
+/// bound2 and found false when nothing is within bound2, the squared max_distance).
+struct DisjointSearch {
+    bool decided = false;
+    bool found = false;
+    double squared_distance = kInf;
+    std::int32_t triangle_a = -1, triangle_b = -1;
+};
+
+/// The search by the hulls' supporting planes (mesh_distance.cpp), tried first on pairs whose
+/// hulls are apart; undecided when the hulls meet, the candidates are too many or the best
+/// pair at the planes cannot be proven the nearest. `screen`: as mesh_distance runs it, giving
+/// up at once when the hulls' closest points are not on the meshes; without, it measures the
+/// candidates of every such pair too (for tests of the bound that decides).
+DisjointSearch distance_across_hulls(const MeshBvh& a, const MeshBvh& b, const Relative& rel, double bound2,
+                                     bool screen = true);
+
+/// The best-first node-pair search (mesh_distance.cpp), from no start pair: always decides.
+DisjointSearch distance_by_node_pairs(const MeshBvh& a, const MeshBvh& b, const Relative& rel, double bound2);
+
 }  // namespace meshcol::mesh_detail

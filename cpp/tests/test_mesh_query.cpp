@@ -247,6 +247,127 @@ TEST_CASE("mesh query: the best pair's axis drops only pairs that cannot win, ti
     }
 }
 
+namespace {
+
+// Appends mesh `part` to `whole` (a triangle soup: the distance queries need no closed mesh).
+void append(fixtures::TriangleMesh& whole, const fixtures::TriangleMesh& part) {
+    const auto base = static_cast<std::int64_t>(whole.vertices.size() / 3);
+    whole.vertices.insert(whole.vertices.end(), part.vertices.begin(), part.vertices.end());
+    for (const std::int64_t f : part.faces) whole.faces.push_back(base + f);
+}
+
+// A tray of three boxes, a floor between two low rims (the closest points of a mesh lying
+// just over it are often on the floor, off the hull), and a flat 12 x 12 grid of 288
+// coplanar triangles on a box (hundreds of triangles on one supporting plane).
+fixtures::TriangleMesh tray() {
+    fixtures::TriangleMesh m = fixtures::box_mesh({-0.5, -0.3, 0.0}, {0.5, 0.3, 0.1});
+    append(m, fixtures::box_mesh({-0.5, -0.3, 0.1}, {-0.35, 0.3, 0.16}));
+    append(m, fixtures::box_mesh({0.35, -0.3, 0.1}, {0.5, 0.3, 0.16}));
+    return m;
+}
+
+// A tetrahedron whose apex (the origin) points down -z.
+fixtures::TriangleMesh spike() {
+    fixtures::TriangleMesh m;
+    m.vertices = {0.0, 0.0, 0.0, 0.1, 0.0, 0.1, -0.05, 0.08, 0.1, -0.05, -0.08, 0.1};
+    m.faces = {0, 2, 1, 0, 3, 2, 0, 1, 3, 1, 2, 3};
+    return m;
+}
+
+fixtures::TriangleMesh gridded_slab() {
+    fixtures::TriangleMesh m = fixtures::box_mesh({-0.3, -0.3, -0.1}, {0.3, 0.3, 0.0});
+    const int n = 12;
+    const auto base = static_cast<std::int64_t>(m.vertices.size() / 3);
+    for (int i = 0; i <= n; ++i)
+        for (int j = 0; j <= n; ++j) m.vertices.insert(m.vertices.end(), {-0.3 + 0.6 * i / n, -0.3 + 0.6 * j / n, 0.0});
+    for (std::int64_t i = 0; i < n; ++i)
+        for (std::int64_t j = 0; j < n; ++j) {
+            const std::int64_t c = base + i * (n + 1) + j;
+            m.faces.insert(m.faces.end(), {c, c + n + 1, c + n + 2, c, c + n + 2, c + 1});
+        }
+    return m;
+}
+
+}  // namespace
+
+TEST_CASE("mesh query: the hulls' supporting planes give the node-pair search's distance bit for bit") {
+    // The search across the hulls (tried first on pairs whose hulls are apart) against the
+    // node-pair search on the same pairs: a convex tube with fan caps (many pairs tied around
+    // one vertex), a tray whose floor holds the closest points of a spike just over it (the
+    // hulls' distance falls short of the meshes': no decision), and a slab with 288 coplanar
+    // triangles on one face. Where it decides, the distance must be the node-pair search's bit
+    // for bit, its triangles at that distance, and a max_distance below it must find nothing;
+    // mesh_distance must give the same distance either way.
+    const fixtures::TriangleMesh sources[4] = {tube(24, 0.05, 0.5), tray(), gridded_slab(), spike()};
+    std::vector<MeshBvh> meshes;
+    for (const auto& m : sources) meshes.push_back(m.bvh());
+    std::uint64_t state = 2024;
+    const auto uniform = [&state]() {  // in [-1, 1)
+        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+        return static_cast<double>(state >> 11) * (2.0 / 9007199254740992.0) - 1.0;
+    };
+    int decided = 0, undecided = 0, tray_decided = 0, tray_refused = 0;
+    for (int trial = 0; trial < 180; ++trial) {
+        const MeshBvh& a = meshes[static_cast<size_t>(trial % 3)];
+        // trial % 9 == 4: a is the tray, b the spike (placed over its floor below)
+        const MeshBvh& b = meshes[trial % 9 == 4 ? 3 : static_cast<size_t>((trial / 3) % 3)];
+        const double reach = 0.9 + 0.5 * std::fabs(uniform());  // centres 0.9-1.4 apart: near to well apart
+        Vec3 dir{uniform(), uniform(), uniform()};
+        dir = dir / norm(dir);
+        const Pose pa = posed(uniform(), uniform(), uniform(), uniform(), {0.0, 0.0, 0.0});
+        // Some pairs axis-aligned (exact ties between parallel faces), the rest turned.
+        Pose pb = trial % 5 == 0 ? at(1.0 + 0.2 * std::fabs(uniform()), 0.0, 0.0)
+                                 : posed(uniform(), uniform(), uniform(), uniform(), dir * reach);
+        if (trial % 9 == 4) {
+            // The spike just over the tray's rims, apex down: the hulls' distance is to the
+            // hull's face over the floor, the meshes' (mostly) to the floor, off the hull.
+            pb = posed(1.0, 0.1 * uniform(), 0.1 * uniform(), 0.3 * uniform(), {0.0, 0.0, 0.0});
+            pb.translation = pa.apply(Vec3{0.15 * uniform(), 0.1 * uniform(), 0.165 + 0.03 * std::fabs(uniform())});
+            pb.rotation = pa.rotation * pb.rotation;
+        }
+        const mesh_detail::Relative rel(pa, pb, a, b);
+        const MeshDistanceOutput full = mesh_distance(pair_of(a, pa, b, pb));
+        REQUIRE(full.status == Status::CONVERGED);
+        if (full.intersecting) continue;
+        const double inf = std::numeric_limits<double>::infinity();
+        const mesh_detail::DisjointSearch slow = mesh_detail::distance_by_node_pairs(a, b, rel, inf);
+        REQUIRE(slow.found);
+        CHECK_EQ(full.distance, std::sqrt(slow.squared_distance));
+        // As mesh_distance runs it (screened), and measuring every pair whose hulls are apart.
+        for (const bool screen : {true, false}) {
+            const mesh_detail::DisjointSearch fast = mesh_detail::distance_across_hulls(a, b, rel, inf, screen);
+            const bool is_tray = &a == &meshes[1] || &b == &meshes[1];
+            if (!fast.decided) {
+                undecided += screen;
+                tray_refused += !screen && is_tray && fast.found;  // measured, then not proven
+                continue;
+            }
+            decided += screen;
+            tray_decided += screen && is_tray;
+            REQUIRE(fast.found);
+            CHECK_EQ(fast.squared_distance, slow.squared_distance);
+            const Vec3* source = b.triangle(fast.triangle_b);
+            const Vec3 tb[3] = {rel.apply(source[0]), rel.apply(source[1]), rel.apply(source[2])};
+            CHECK_EQ(triangle_separated_squared_distance(a.triangle(fast.triangle_a), tb, nullptr, nullptr),
+                     fast.squared_distance);
+            // max_distance: exactly the distance still finds it; below it nothing is found.
+            const mesh_detail::DisjointSearch at_bound =
+                mesh_detail::distance_across_hulls(a, b, rel, slow.squared_distance, screen);
+            CHECK((!at_bound.decided || (at_bound.found && at_bound.squared_distance == slow.squared_distance)));
+            const mesh_detail::DisjointSearch below =
+                mesh_detail::distance_across_hulls(a, b, rel, 0.99 * slow.squared_distance, screen);
+            CHECK((!below.decided || !below.found));
+        }
+        CHECK(!mesh_detail::distance_by_node_pairs(a, b, rel, 0.99 * slow.squared_distance).found);
+    }
+    CHECK(decided >= 60);
+    CHECK(undecided >= 10);
+    CHECK(tray_decided >= 5);
+    // The spike over the tray's floor: its best pair at the planes is farther than the hulls'
+    // distance, and the bound must refuse to decide (returning it would be a wrong distance).
+    CHECK(tray_refused >= 5);
+}
+
 TEST_CASE("mesh bvh: closed means every edge pairs with one reversed twin, short lists or long") {
     fixtures::TriangleMesh flipped = unit_cube();
     std::swap(flipped.faces[1], flipped.faces[2]);  // one face wound the other way

@@ -48,7 +48,11 @@ struct MeshDistanceOutput {
 bool mesh_pair_in_range(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b, const Pose& pose_b);
 
 /// Minimum distance between the surfaces of two meshes. First the intersection descent (as
-/// mesh_intersects) looks for a crossing triangle pair; without one, a simultaneous descent of
+/// mesh_intersects) looks for a crossing triangle pair. Without one, a pair whose hulls are
+/// apart and whose hulls' closest points lie on the meshes is tried along the direction of the
+/// hulls' distance (GJK on the vertices): only the triangles near each mesh's supporting plane
+/// can beat the best pair found there, and when the bound proves it no other pair is measured.
+/// Otherwise (or when that bound cannot decide), a simultaneous descent of
 /// the hierarchies, nearest node pair first, prunes node pairs whose oriented-box distance
 /// bound is no less than the best distance found (branch and bound, as Larsen et al. 1999 and
 /// FCL's mesh distance), exact triangle-pair distance at the leaves. The distance is the
