@@ -123,7 +123,7 @@ test-sanitize:
 		-DMESHCOL_BUILD_TESTS=ON > /dev/null
 	PATH="$(CURDIR)/$(SANITIZE_BIN):$$PATH" cmake --build $(SANITIZE_BUILD)/cpp-tests
 	UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 $(SANITIZE_BUILD)/cpp-tests/meshcol_cpp_tests
-	@for target in readers convex meshes; do \
+	@for target in readers convex meshes manifest; do \
 		LD_PRELOAD="$(SANITIZE_RUNTIMES)" $(SANITIZE_OPTIONS) \
 			$(SANITIZE_BIN)/python fuzz/run.py $$target --replay --mutations 500 || exit 1; \
 	done
@@ -133,7 +133,7 @@ test-sanitize:
 # Fuzz every target (fuzz/targets.py) for FUZZ_SECONDS each; crashes land in fuzz/crashes/.
 FUZZ_SECONDS ?= 60
 fuzz: install-test
-	@for target in readers convex meshes; do \
+	@for target in readers convex meshes manifest; do \
 		$(BIN)/python fuzz/run.py $$target --seconds $(FUZZ_SECONDS) || exit 1; \
 	done
 

@@ -9,8 +9,9 @@ Only clocks are masked: JSON fields ``generated_at`` and ``*seconds``, JUnit ``t
 attributes, ``N.NNN s`` figures and progress lines in text; and the installed package's own
 paths (``meshcol targets`` prints them).
 
-Inputs: ``samples/``, the corpus robots (``../shared/corpus/robots``, skipped when absent) and
-a 10,000-body scene of unique assets (``bench_scale.scene_folder``, written once).
+Inputs: ``samples/``, the corpus robots (``../shared/corpus/robots``, skipped when absent), a
+10,000-body scene of unique assets (``bench_scale.scene_folder``, written once) and manifests
+of 5,000 primitives (``bench_scale.primitives_folder``).
 
 Run: .venv/bin/python benchmarks/report_identity.py --baseline ../base/.venv/bin/meshcol
      [--only check,inspect] [--keep DIR]
@@ -29,7 +30,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_scale import scene_folder
+from bench_scale import primitives_folder, scene_folder
 
 ROOT = Path(__file__).resolve().parent.parent
 ROBOTS = ROOT.parent / "shared" / "corpus" / "robots"
@@ -361,6 +362,14 @@ def main() -> None:
             ),
             ("inspect-10k", ["inspect", str(scene), "--report", "{out}/inspect-10k.json"]),
         ]
+        # a manifest of primitives only (read natively, kept as columns: issue 32 item 4)
+        for kind in ("mixed", "spheres"):
+            manifest = str(primitives_folder(5_000, kind) / "scene.json")
+            report = ["--fail-on", "none", "--report", f"{{out}}/primitives-{kind}.json"]
+            commands.append((f"check-primitives-{kind}", ["check", manifest, *report]))
+        csv = ["--format", "csv", "--report", "{out}/primitives-mixed.csv"]
+        manifest = str(primitives_folder(5_000, "mixed") / "scene.json")
+        commands.append(("check-primitives-csv", ["check", manifest, "--fail-on", "none", *csv]))
     if args.only:
         prefixes = tuple(args.only.split(","))
         commands = [c for c in commands if c[0].startswith(prefixes)]

@@ -11,10 +11,12 @@ Usage::
 ``make test-sanitize`` runs the sanitized core on them this way. It prints
 ``fuzz TARGET: replayed N inputs``.
 
-``TARGET`` is ``readers``, ``convex`` or ``meshes``. The seeds are built afresh in a temporary
-folder: for ``readers`` every sample mesh and manifest in ``samples/`` and every corpus file
-under 64 KB in ``../shared/corpus`` (each prefixed with its format byte); for the numeric
-targets a few hand-made inputs (a cube, a flat square, huge and tiny coordinates).
+``TARGET`` is ``readers``, ``convex``, ``meshes`` or ``manifest``. The seeds are built afresh in
+a temporary folder: for ``readers`` every sample mesh and manifest in ``samples/`` and every
+corpus file under 64 KB in ``../shared/corpus`` (each prefixed with its format byte); for
+``manifest`` the JSON manifests in ``samples/`` and plain primitive manifests (every type,
+rotation form and shape; numbers of every spelling); for the numeric targets a few hand-made
+inputs (a cube, a flat square, huge and tiny coordinates).
 
 A crash, a timeout (10 s for one input) or an unexpected exception stops the run: the input is
 written to ``--artifacts`` (default ``fuzz/crashes/``) and the exit code is non-zero. Turn it
@@ -58,6 +60,45 @@ def _reader_seeds(folder: Path) -> int:
         (folder / f"seed{count:04d}{suffix}").write_bytes(data)
         count += 1
     return count
+
+
+def _manifest_seeds(folder: Path) -> int:
+    files = [p for p in sorted((REPO / "samples").rglob("*.json")) if p.is_file()]
+    seeds = [p.read_bytes() for p in files if p.stat().st_size <= MAX_SEED_BYTES]
+    kinds = [
+        '{"type": "sphere", "radius": 0.5}',
+        '{"size": [1, 2.5e-1, 3E0], "type": "box"}',
+        '{"type": "capsule", "radius": 1, "length": 0.25}',
+        '{"length": 2, "type": "cylinder", "radius": 0.1000000000000000055511151231257827}',
+    ]
+    extras = [
+        ', "shape": "hull"',
+        ', "rotation": {"quaternion": [1, -0.0, 0, 2]}',
+        ', "rotation": {"euler_deg": [90, -0, 45.5], "order": "zyx"}',
+    ]
+    bodies = [
+        f'{{"name": "bNAME{i}", "primitive": {kinds[i % 4]}, "position": [{i}, -0, 1e-3]'
+        + extras[i % 3]
+        + "}"
+        for i in range(12)
+    ]
+    text = '{"units": "m", "duration": 2, "bodies": [' + ", ".join(bodies) + "]}"
+    seeds.append(text.replace("NAME", "").encode())
+    seeds.append(text.replace("NAME", "\u00e9").encode())  # not ASCII
+    seeds.append(text.replace("NAME", "\\u00e9").encode())  # an escape
+    seeds.append(b"\xef\xbb\xbf" + text.replace("NAME", "").encode())
+    for i, data in enumerate(seeds):
+        (folder / f"seed{i}.json").write_bytes(data)
+    return len(seeds)
+
+
+def _seeds(target: str, folder: Path) -> int:
+    """The seeds of ``target``, written into ``folder``; their count."""
+    if target == "readers":
+        return _reader_seeds(folder)
+    if target == "manifest":
+        return _manifest_seeds(folder)
+    return _numeric_seeds(folder)
 
 
 def _encode(points: list[tuple[float, float, float]]) -> bytes:
@@ -112,10 +153,7 @@ def _replay(target: str, mutations: int) -> int:
     import targets
 
     seeds = Path(tempfile.mkdtemp(prefix=f"meshcol-seeds-{target}-"))
-    if target == "readers":
-        _reader_seeds(seeds)
-    else:
-        _numeric_seeds(seeds)
+    _seeds(target, seeds)
     paths = sorted(seeds.iterdir()) + sorted((HERE / "regressions" / target).glob("*"))
     inputs = [path.read_bytes() for path in paths]
     random = Random(f"meshcol-fuzz-{target}")
@@ -128,7 +166,7 @@ def _replay(target: str, mutations: int) -> int:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("target", choices=("readers", "convex", "meshes"))
+    parser.add_argument("target", choices=("readers", "convex", "meshes", "manifest"))
     limit = parser.add_mutually_exclusive_group()
     limit.add_argument("--seconds", type=int, default=60)
     limit.add_argument("--runs", type=int)
@@ -150,7 +188,7 @@ def main() -> int:
         import targets
 
     seeds = Path(tempfile.mkdtemp(prefix=f"meshcol-seeds-{args.target}-"))
-    count = _reader_seeds(seeds) if args.target == "readers" else _numeric_seeds(seeds)
+    count = _seeds(args.target, seeds)
     args.artifacts.mkdir(parents=True, exist_ok=True)
     flags = [
         sys.argv[0],

@@ -20,10 +20,15 @@ convex
 meshes
     Floats and indices from the input become two triangle meshes and poses; a ``MeshSet`` is
     built (BVHs in the core) and distance and intersection are queried.
+manifest
+    The input is a JSON manifest's bytes for the core's reader of plain primitive manifests
+    (``meshcol.io.scene_native``), held to the Python reader: whatever it passes, Python's json
+    module must decode and the column check pass, as equal columns to the bit.
 """
 
 from __future__ import annotations
 
+import json
 import os
 import struct
 import sys
@@ -177,7 +182,43 @@ def meshes(data: bytes) -> None:
     mesh_intersects_batch(mesh_set, poses, pairs, threads=1)
 
 
-TARGETS = {"readers": readers, "convex": convex, "meshes": meshes}
+def manifest(data: bytes) -> None:
+    from meshcol.io.scene_columns import columns
+    from meshcol.io.scene_native import native_columns
+
+    found = native_columns(data)
+    if found is None:
+        return
+    document = json.loads(data.decode("utf-8-sig"))  # it passed: Python must read it too
+    expected = columns(document)
+    if expected is None:
+        raise AssertionError("the native reader passed a manifest the column check refuses")
+    for field in expected.__dataclass_fields__:
+        if not _same(getattr(found.columns, field), getattr(expected, field)):
+            raise AssertionError(f"the native reader's {field} differs from the column check's")
+    for field in ("units", "duration"):
+        value, wanted = getattr(found, field), document.get(field)
+        if (value, type(value)) != (wanted, type(wanted)):
+            raise AssertionError(f"the native reader's {field} differs from the document's")
+
+
+def _same(a: object, b: object) -> bool:
+    """Equal to the bit: arrays by dtype, shape and bytes; dicts and lists item for item."""
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return (
+            isinstance(a, np.ndarray)
+            and isinstance(b, np.ndarray)
+            and (a.dtype, a.shape) == (b.dtype, b.shape)
+            and a.tobytes() == b.tobytes()
+        )
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, list) and isinstance(b, list):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+    return type(a) is type(b) and a == b
+
+
+TARGETS = {"readers": readers, "convex": convex, "meshes": meshes, "manifest": manifest}
 
 
 def replay(target: str, paths: list[Path]) -> None:

@@ -525,3 +525,8 @@ def triangulate_polygons(vertices: Annotated[NDArray[numpy.float64], dict(shape=
     """
     Splits polygon faces (counts (F,) corners each, indices (sum(counts),) into vertices (V, 3)) into triangles (T, 3) int64 in face order: convex faces fanned from their first corner, others ear clipped in the plane of their Newell normal. Faces of fewer than 3 corners and the faces in holes give none; reverse flips each triangle's winding. Raises ValueError on a negative count, counts not adding up to len(indices), an index out of range, or more than max_triangles (>= 0) triangles.
     """
+
+def read_primitive_manifest(data: bytes, types: Sequence[str], type_fields: Sequence[int], orders: Sequence[str], shapes: Sequence[str]) -> dict | None:
+    """
+    Reads a plain JSON manifest of static primitive bodies into columns; None for any other document (Python's reader decides). Returns a dict: names (list of str), units and duration (str as written, or None), kinds, rotation, shapes (int8 codes: indices into types, and shapes with -1 where absent), lengths and positions (N, 3), position_count, quaternions (NQ, 4), euler (NE, 3) and orders (NE,) of the bodies so rotated, in order. type_fields: per type, its fields besides type (bits: 1 radius, 2 length, 4 size).
+    """

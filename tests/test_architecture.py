@@ -109,6 +109,7 @@ def test_only_the_native_module_imports_the_core() -> None:
 def test_only_collision_the_mesh_readers_and_the_report_writer_use_the_native_module() -> None:
     users = sorted(m for m, deps in GRAPH.items() if "meshcol._native" in deps)
     io_users = {"meshcol.io.mesh_read", "meshcol.io.polygons", "meshcol.io.report"}
+    io_users.add("meshcol.io.scene_native")  # the manifest reader
     assert users and all(_layer(m) == "collision" or m in io_users for m in users), users
 
 

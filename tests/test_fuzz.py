@@ -16,7 +16,7 @@ import pytest
 from conftest import REPO
 
 FUZZ = REPO / "fuzz"
-TARGETS = ("readers", "convex", "meshes")
+TARGETS = ("readers", "convex", "meshes", "manifest")
 
 
 def _targets_module():

@@ -15,6 +15,7 @@ void bind_fit(nb::module_& m);
 void bind_report(nb::module_& m);
 void bind_orientation(nb::module_& m);
 void bind_triangulate(nb::module_& m);
+void bind_manifest(nb::module_& m);
 
 NB_MODULE(_core, m) {
     m.doc() = "meshcol native core (private: use the meshcol package API)";
@@ -30,4 +31,5 @@ NB_MODULE(_core, m) {
     bind_report(m);
     bind_orientation(m);
     bind_triangulate(m);
+    bind_manifest(m);
 }

@@ -196,7 +196,9 @@ def _enclosing_depths(
     """The enclosing sets' penetration depth of each row, as the support overlap along the
     normal EPA / SAT finds (NaN when the query gave no answer)."""
     a, b = table.body_a[rows], table.body_b[rows]
-    shapes, poses, slot = _enclosing_sets(placed, np.unique(np.concatenate([a, b])))
+    used = np.zeros(len(placed.body_min), dtype=bool)  # the bodies of the rows, sorted, once:
+    used[a] = used[b] = True  # np.unique's hash of 500,000 indices costs 0.4 s, this 5 ms
+    shapes, poses, slot = _enclosing_sets(placed, np.flatnonzero(used))
     pairs = np.stack([slot[a], slot[b]], axis=1)
     counts = np.diff(placed.colliders.body_part_offsets)
     single = (counts[a] == 1) & (counts[b] == 1)

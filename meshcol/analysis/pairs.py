@@ -284,6 +284,8 @@ def body_boxes(
     if len(starts) == 0:
         empty = np.zeros((*part_min.shape[:-2], 0, 3))
         return empty, empty.copy()
+    if len(starts) == part_min.shape[-2]:  # one part a body: its box is the body's (as is)
+        return part_min, part_max
     return (
         np.minimum.reduceat(part_min, starts, axis=-2),
         np.maximum.reduceat(part_max, starts, axis=-2),
@@ -558,24 +560,44 @@ def convex_phase(table: PairTable, placed: PlacedColliders, threads: int = 0) ->
         colliders.shapes, placed.part_poses, table.part_pairs, threads=threads
     )
     failed = np.isin(found.status, NO_ANSWER)
-    best = _closest_per_row(table.part_row, np.where(failed, np.inf, found.signed_distance))
-    rows = table.part_row[best]
-    closest_a, closest_b = table.part_pairs[best, 0], table.part_pairs[best, 1]
+    part_row = table.part_row
+    # one part pair a row, in row order (every body one part): each row takes its own
+    in_order = len(part_row) == len(table) and bool((part_row[1:] > part_row[:-1]).all())
+    best = (
+        None
+        if in_order
+        else _closest_per_row(part_row, np.where(failed, np.inf, found.signed_distance))
+    )
+
+    def pick(values: np.ndarray) -> np.ndarray:
+        return values if best is None else values[best]
+
+    closest_a, closest_b = pick(table.part_pairs[:, 0]), pick(table.part_pairs[:, 1])
+    values = {
+        "convex_depth": pick(found.depth).copy(),  # depth's own array: no column shares one
+        "convex_normal": pick(found.normal),
+        "convex_status": pick(found.status),
+        "signed_distance": pick(found.signed_distance),
+        "distance": pick(found.distance),
+        "depth": pick(found.depth),
+        "normal": pick(found.normal),
+        "point_a": pick(found.point_a),
+        "point_b": pick(found.point_b),
+        "part_a": colliders.part_index[closest_a],
+        "part_b": colliders.part_index[closest_b],
+        "label_a": colliders.part_label[closest_a],
+        "label_b": colliders.part_label[closest_b],
+        "query_failed": pick(failed),
+    }
+    if best is None:  # every row filled in order: the values are the columns (their types)
+        columns = {
+            name: v.astype(getattr(table, name).dtype, copy=False) for name, v in values.items()
+        }
+        return dataclasses.replace(table, **columns)
+    rows = part_row[best]
     out = table.writable(*MEASURES, "convex_depth", "convex_normal", "convex_status")
-    out.convex_depth[rows] = found.depth[best]
-    out.convex_normal[rows] = found.normal[best]
-    out.convex_status[rows] = found.status[best]
-    out.signed_distance[rows] = found.signed_distance[best]
-    out.distance[rows] = found.distance[best]
-    out.depth[rows] = found.depth[best]
-    out.normal[rows] = found.normal[best]
-    out.point_a[rows] = found.point_a[best]
-    out.point_b[rows] = found.point_b[best]
-    out.part_a[rows] = colliders.part_index[closest_a]
-    out.part_b[rows] = colliders.part_index[closest_b]
-    out.label_a[rows] = colliders.part_label[closest_a]
-    out.label_b[rows] = colliders.part_label[closest_b]
-    out.query_failed[rows] = failed[best]
+    for name, v in values.items():
+        getattr(out, name)[rows] = v
     return out
 
 

@@ -10,7 +10,8 @@ Loading a manifest is a list of stages, each in its module: read the text
 (:mod:`meshcol.io.scene_parse`), validate it (:mod:`meshcol.io.scene_validate`; the common
 manifest column by column, :mod:`meshcol.io.scene_columns`), read its mesh files once, build
 its common bodies in bulk, then the others one by one (:mod:`meshcol.io.scene_bodies`). A
-manifest of static primitives only stays columns (:mod:`meshcol.io.scene_primitives`).
+manifest of static primitives only stays columns (:mod:`meshcol.io.scene_primitives`); a JSON
+one is read natively, straight into those columns (:mod:`meshcol.io.scene_native`).
 """
 
 from __future__ import annotations
@@ -33,6 +34,7 @@ from meshcol.io.scene_bodies import (
     rotation_from_quaternion,
 )
 from meshcol.io.scene_columns import bulk_bodies, primitive_bodies
+from meshcol.io.scene_native import native_manifest, primitive_scene
 from meshcol.io.scene_parse import collector_paused, read_document
 from meshcol.io.scene_schema import SCHEMA_PATH
 from meshcol.io.scene_validate import (
@@ -96,6 +98,9 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
 
 
 def _load_scene(source: str) -> Scene:
+    scene = primitive_scene(source)  # a plain JSON manifest of static primitives, read natively
+    if scene is not None:
+        return scene
     document, text = read_document(source)
     columns = validate(document, text, source)  # None: the manifest takes the body-by-body path
     check_magnitudes(document, source, columns)
@@ -308,6 +313,8 @@ def manifest_mesh_files(path: str | os.PathLike[str]) -> list[str]:
         :func:`load_scene` reports why).
     """
     source = os.fspath(path)
+    if native_manifest(source) is not None:  # read natively: every body a primitive
+        return []
     try:
         document, text = read_document(source)
         check_nesting(document, text, source)

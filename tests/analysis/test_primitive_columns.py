@@ -16,6 +16,7 @@ import pytest
 from click.testing import CliRunner
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from manifest_readers import python_reader
 
 import meshcol.io.scene_validate as scene_validate
 from meshcol.analysis.check import CheckOptions, check_scene
@@ -73,14 +74,17 @@ def forget() -> None:
 
 
 def load_both(path: Path):
-    """The scene as columns, and the scene built body by body (the columns switched off)."""
+    """The scene as columns, and the scene built body by body (the columns switched off);
+    both by the Python reader (tests/io/test_scene_native.py holds the native one to it)."""
     forget()
-    columns = load_scene(path)
+    with python_reader():
+        columns = load_scene(path)
     original = scene_validate.columns
     forget()
     scene_validate.columns = lambda document: None
     try:
-        objects = load_scene(path)
+        with python_reader():
+            objects = load_scene(path)
     finally:
         scene_validate.columns = original
         forget()

@@ -1,0 +1,145 @@
+"""A JSON manifest of static primitive bodies read natively, straight into columns.
+
+Decoding a manifest of 1,000,000 primitive bodies with Python's json module makes a million
+dicts (1.8 s) that :func:`meshcol.io.scene_columns.columns` then reads field by field (1.2 s).
+The core reads the common shape of such a manifest from its bytes into the same columns
+(``read_primitive_manifest``, ``cpp/src/manifest_read.cpp``: 0.3 s, no object per body but
+its name). It only passes over documents, never rejects one: anything outside that shape
+(a mesh body, a moving or scaled one, an escape in a string, a duplicate key, a syntax
+error...) returns None here and the manifest takes the one reader and validation of
+:mod:`meshcol.io.scene_parse` and :mod:`meshcol.io.scene_validate`, with their messages.
+What it passes, :func:`columns` of the decoded document passes too, as equal columns to the
+bit (``tests/test_scene_native.py``, with hypothesis-made manifests; the fuzz target
+``manifest``).
+
+:func:`primitive_scene` is the loader's fast path: the scene of such a manifest when its
+bodies stay columns (:func:`meshcol.io.scene_columns.primitive_bodies`) and no value is near
+a limit (else the body-by-body magnitude check, which needs the decoded document, decides).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from meshcol.errors import MeshcolError
+from meshcol.io.safe_read import read_input
+from meshcol.io.scene_columns import Columns, near_limits, primitive_bodies
+from meshcol.io.scene_parse import KEPT_OF_DOCUMENTS
+from meshcol.io.scene_schema import (
+    ORDERS,
+    PRIMITIVE_FIELDS,
+    PRIMITIVE_KEYS,
+    PRIMITIVE_TYPES,
+    SHAPES,
+    TOP_FIELDS,
+    VECTOR_FIELDS,
+)
+from meshcol.types import Scene
+
+__all__ = ["NativeManifest", "native_columns", "native_manifest", "primitive_scene"]
+
+#: The fields the core knows a primitive by, each a bit of its ``type_fields``.
+_FIELD_BITS = {"radius": 1, "length": 2, "size": 4}
+_ORDER_WORDS = sorted(ORDERS)
+_SHAPE_WORDS = sorted(SHAPES)
+_WORDS = (
+    list(PRIMITIVE_TYPES),
+    [sum(_FIELD_BITS[f] for f in PRIMITIVE_KEYS[t] - {"type"}) for t in PRIMITIVE_TYPES],
+    _ORDER_WORDS,
+    _SHAPE_WORDS,
+)
+# The core reads exactly these fields; a field added to the schema must be taught to it first.
+if {"type", *_FIELD_BITS} != PRIMITIVE_FIELDS or {"units", "duration", "bodies"} != TOP_FIELDS:
+    raise ImportError("the native manifest reader does not know every field of the schema")
+if VECTOR_FIELDS[0] != "position":  # pragma: no cover - the schema's first vector field
+    raise ImportError("the native manifest reader reads position as the first vector field")
+
+
+class NativeManifest(NamedTuple):
+    """A plain manifest read natively: its columns, ``units`` and ``duration`` as the decoded
+    document gives them (None where absent; the duration an int when written as one)."""
+
+    columns: Columns
+    units: str | None
+    duration: int | float | None
+
+
+def native_columns(data: bytes) -> NativeManifest | None:
+    """The columns of the manifest bytes ``data`` when the core reads them as a plain manifest
+    of primitive bodies, equal to :func:`meshcol.io.scene_columns.columns` of the decoded
+    document; else None (the document takes the Python reader)."""
+    from meshcol._native import core
+
+    found = core.read_primitive_manifest(data, *_WORDS)
+    if found is None:
+        return None
+    names: list[str] = found["names"]
+    n = len(names)
+    shape_codes = found["shapes"]
+    if (shape_codes < 0).all():
+        shapes: list[str | None] = [None] * n
+    else:  # code -1 picks the last entry, None
+        shapes = np.array([*_SHAPE_WORDS, None], dtype=object)[shape_codes].tolist()
+    orders = np.array(_ORDER_WORDS, dtype=object)[found["orders"]].tolist()
+    columns = Columns(
+        names=names,
+        meshes=[None] * n,
+        shapes=shapes,
+        primitive=np.ones(n, dtype=bool),
+        moving=np.zeros(n, dtype=bool),
+        scaled=np.zeros(n, dtype=bool),
+        vectors={"position": found["positions"]} if found["position_count"] else {},
+        scale=None,
+        rotation=found["rotation"],
+        quaternion=found["quaternions"],
+        euler=found["euler"],
+        orders=orders,
+        primitive_type=found["kinds"],
+        primitive_lengths=found["lengths"],
+    )
+    duration = found["duration"]
+    return NativeManifest(
+        columns, found["units"], None if duration is None else json.loads(duration)
+    )
+
+
+def native_manifest(source: str) -> NativeManifest | None:
+    """:func:`native_columns` of the JSON manifest ``source`` (read capped, as every manifest
+    is); None for any other file or one that cannot be read (the Python reader says why).
+    The last one read is kept (by absolute path and bytes): a run asks twice (the output
+    check, then the loading)."""
+    if not source.lower().endswith(".json") or not os.path.isfile(source):
+        return None
+    try:
+        data = read_input(source, "manifest")
+    except MeshcolError:
+        return None
+    key = os.path.abspath(source)
+    if _KEPT[:2] == [key, data]:
+        return _KEPT[2]
+    found = native_columns(data)
+    _KEPT[:] = [key, data, found]
+    return found
+
+
+# The last manifest read natively: its absolute path, its bytes and what it gave.
+_KEPT: list[Any] = [None, None, None]
+KEPT_OF_DOCUMENTS.append(lambda: _KEPT.__setitem__(slice(None), [None, None, None]))
+
+
+def primitive_scene(source: str) -> Scene | None:
+    """The scene of the manifest ``source`` when the core reads it as a plain manifest of
+    primitive bodies that stay columns (:class:`meshcol.io.scene_primitives.PrimitiveBodies`)
+    with every value plainly within its limit: the scene the Python reader makes of it. Else
+    None: the manifest takes that reader."""
+    found = native_manifest(source)
+    if found is None or near_limits(found.columns, found.duration).any():
+        return None
+    bodies = primitive_bodies(found.columns, source)
+    if bodies is None:
+        return None
+    return Scene(bodies=bodies, units=found.units, source=source, duration=found.duration)
