@@ -17,7 +17,7 @@ import numpy as np
 from meshcol.analysis.check_policy import CheckOptions
 from meshcol.analysis.pairs import SEVERITY, PairTable, PlacedColliders
 from meshcol.io.paths import display_path, display_paths
-from meshcol.io.report import vector_columns
+from meshcol.io.report import RowsPiece, vector_columns
 from meshcol.io.scene_primitives import body_names, body_parts, body_sources, vertex_counts
 from meshcol.types import Scene
 from meshcol.vocabulary import PAIR_STATUSES
@@ -179,11 +179,20 @@ class CheckReport:
         return "".join(self.json_chunks())
 
     def json_chunks(self) -> Iterator[str]:
-        """The JSON report's text in pieces, in order: rows kept as columns
-        (:class:`ReportRows`) are written from them a bounded number at a time
-        (:func:`meshcol.io.report.rows_chunks`) between the text of the rest, to the same
-        bytes as the whole document encoded at once; never the whole text in memory."""
-        from meshcol.io.report import dumps_json, rows_chunks
+        """The JSON report's text in pieces, in order (:meth:`json_pieces` as text): rows
+        kept as columns are written a bounded number at a time; never the whole text in
+        memory."""
+        from meshcol.io.report import text_pieces
+
+        return text_pieces(self.json_pieces())
+
+    def json_pieces(self) -> Iterator[str | RowsPiece]:
+        """The JSON report in pieces, in order: the text of the rest, and each list of rows
+        kept as columns (:class:`ReportRows`) as a :class:`~meshcol.io.report.RowsPiece`
+        between, which a file gets straight from the core's row writer
+        (:func:`meshcol.io.report.emit`); the same bytes as the whole document encoded at
+        once."""
+        from meshcol.io.report import RowsPiece, dumps_json
 
         document = self._document()
         streamed = {}
@@ -199,7 +208,7 @@ class CheckReport:
             if at < 0:  # cannot happen: a top-level key's line is unique
                 raise AssertionError(f"report text lost its {key}")
             yield text[start:at] + f'\n  "{key}": '
-            yield from rows_chunks(rows.columns(), len(rows), 1)
+            yield RowsPiece(rows.columns(), len(rows), 1)
             yield ","
             start = at + len(line)
         yield text[start:]

@@ -4,6 +4,7 @@ bytes the dict path gives, and the rows read as the dicts they stand for."""
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -197,12 +198,20 @@ def test_the_json_report_is_written_in_pieces_and_never_half(
     write_report(report, "json", str(path))
     assert path.read_text() == report.to_json() == dumps_json(report.to_dict())
 
-    def failing(columns: list, count: int, level: int):  # the pairs fail after one piece
-        yield "["
+    def failing(piece: report_io.RowsPiece, fd: int) -> None:  # fails after a piece
+        os.write(fd, b"[")
         raise MemoryError("no room for the rows")
 
-    monkeypatch.setattr(report_io, "rows_chunks", failing)
+    monkeypatch.setattr(report_io.RowsPiece, "write_into", failing)
     other = tmp_path / "other.json"
     with pytest.raises(MemoryError):
         write_report(report, "json", str(other))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["report.json"]
+
+    def failing_text(columns: list, count: int, level: int):  # the text path (stdout)
+        yield "["
+        raise MemoryError("no room for the rows")
+
+    monkeypatch.setattr(report_io, "rows_chunks", failing_text)
+    with pytest.raises(MemoryError):
+        report.to_json()
