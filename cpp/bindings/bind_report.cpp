@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstring>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -261,6 +262,26 @@ const T* column_array(Buffer& buffer, nb::handle object, size_t n, Py_ssize_t wi
     return data;
 }
 
+/// A string column's table: its entries JSON-escaped (`raw`: as given, JSON text already).
+std::shared_ptr<const std::vector<std::string>> table_of(nb::handle list, bool raw, Encoder& out) {
+    auto entries = nb::cast<nb::list>(list);
+    auto table = std::make_shared<std::vector<std::string>>();
+    table->reserve(nb::len(entries));
+    for (nb::handle item : entries) {
+        Py_ssize_t size = 0;
+        const char* s = PyUnicode_AsUTF8AndSize(item.ptr(), &size);
+        if (s == nullptr) throw nb::python_error();
+        if (raw) {
+            table->emplace_back(s, static_cast<size_t>(size));
+        } else {
+            out.text.clear();
+            out.escape(std::string_view(s, static_cast<size_t>(size)));
+            table->push_back(out.text);
+        }
+    }
+    return table;
+}
+
 /// The columns of one `dumps_rows` or `write_rows` call, parsed and checked once (keys and
 /// string tables escaped, codes in their tables), the arrays' buffers held until it ends.
 struct Rows {
@@ -274,6 +295,9 @@ struct Rows {
         if (level < 0 || level > 64) throw nb::value_error("level out of range");
         std::vector<C> parsed(buffers.size());
         Encoder out(nullptr);
+        // tables by the list they came from (held by `columns` for the call)
+        std::vector<std::pair<PyObject*, std::shared_ptr<const std::vector<std::string>>>>
+            string_tables, raw_tables;
         for (size_t k = 0; k < parsed.size(); ++k) {
             auto spec = nb::cast<nb::tuple>(columns[k]);
             C& c = parsed[k];
@@ -290,21 +314,17 @@ struct Rows {
                 default: c.integers = column_array<std::int64_t>(b, spec[2], count, 1);
             }
             if (c.kind == C::kString || c.kind == C::kRaw) {
-                auto table = nb::cast<nb::list>(spec[3]);
-                c.table.reserve(nb::len(table));
-                for (nb::handle item : table) {
-                    Py_ssize_t size = 0;
-                    const char* s = PyUnicode_AsUTF8AndSize(item.ptr(), &size);
-                    if (s == nullptr) throw nb::python_error();
-                    if (c.kind == C::kRaw) {
-                        c.table.emplace_back(s, static_cast<size_t>(size));
-                    } else {
-                        out.text.clear();
-                        out.escape(std::string_view(s, static_cast<size_t>(size)));
-                        c.table.push_back(out.text);
-                    }
+                nb::handle list = spec[3];
+                auto& known = c.kind == C::kRaw ? raw_tables : string_tables;
+                auto found = std::find_if(known.begin(), known.end(),
+                                          [&](const auto& t) { return t.first == list.ptr(); });
+                if (found != known.end()) {
+                    c.table = found->second;  // one list for several columns: escaped once
+                } else {
+                    c.table = table_of(list, c.kind == C::kRaw, out);
+                    known.emplace_back(list.ptr(), c.table);
                 }
-                const auto size = static_cast<std::int64_t>(c.table.size());
+                const auto size = static_cast<std::int64_t>(c.table->size());
                 for (size_t i = start; i < stop; ++i)
                     if (c.integers[i] >= size)
                         throw nb::index_error("a column's code is past its table");

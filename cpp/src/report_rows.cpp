@@ -69,7 +69,8 @@ std::size_t cell_bound(const RowColumn& c, int level) {
         case RowColumn::kString:
         case RowColumn::kRaw: {
             std::size_t most = 4;
-            for (const auto& entry : c.table) most = std::max(most, entry.size());
+            if (c.table)
+                for (const auto& entry : *c.table) most = std::max(most, entry.size());
             return most;
         }
         default: return 24;  // an int64, "null", "false"
@@ -101,7 +102,7 @@ void cell(char*& p, const RowColumn& c, std::size_t i, int level) {
         case RowColumn::kRaw: {
             const std::int64_t code = c.integers[i];
             if (code < 0) return put(p, "null", 4);
-            const std::string& entry = c.table[static_cast<std::size_t>(code)];
+            const std::string& entry = (*c.table)[static_cast<std::size_t>(code)];
             return put(p, entry.data(), entry.size());
         }
     }

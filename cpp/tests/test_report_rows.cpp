@@ -44,7 +44,8 @@ RowWriter writer_of(Table& t, std::size_t n, std::size_t long_entry) {
     columns[0].kind = RowColumn::kBoolean, columns[0].key = "\"flag\"", columns[0].flags = t.flags.get();
     columns[1].kind = RowColumn::kNumber, columns[1].key = "\"number\"", columns[1].reals = t.numbers.data();
     columns[2].kind = RowColumn::kString, columns[2].key = "\"string\"", columns[2].integers = t.codes.data();
-    columns[2].table = {"\"a\"", "\"" + std::string(long_entry, 'x') + "\""};
+    columns[2].table = std::make_shared<const std::vector<std::string>>(
+        std::vector<std::string>{"\"a\"", "\"" + std::string(long_entry, 'x') + "\""});
     columns[3].kind = RowColumn::kVector, columns[3].key = "\"vector\"", columns[3].reals = t.vectors.data();
     return RowWriter(std::move(columns), 1);
 }

@@ -657,25 +657,27 @@ def _body_columns(
     from meshcol.io.report import dumps_json
 
     colliders = placed.colliders
-    picked = order.tolist()
     names = body_names(colliders.bodies)
+    order = np.ascontiguousarray(order, dtype=np.int64)
 
     def codes(values: Sequence[Any]) -> tuple[np.ndarray, list]:
+        """Each body's code into a table of the distinct values (in body order, None -1),
+        then taken in report order: no list of a million values made in that order."""
         distinct = [v for v in dict.fromkeys(values) if v is not None]
         table: dict[Any, int] = {v: k for k, v in enumerate(distinct)}
         table[None] = -1
         found = np.fromiter(map(table.__getitem__, values), dtype=np.int64, count=len(values))
-        return found, distinct
+        return found[order], distinct
 
-    parts, part_texts = codes(body_parts(colliders.bodies, picked))
+    parts, part_texts = codes(body_parts(colliders.bodies, range(len(names))))
     indent = "\n" + "  " * 3
     box = np.concatenate([placed.body_min[order], placed.body_max[order]], axis=1)
     return [
         ("aabb", "box", np.ascontiguousarray(box, dtype=np.float64)),
-        ("collider", "string", *codes([colliders.kinds[i] for i in picked])),
+        ("collider", "string", *codes(colliders.kinds)),
         ("convex_parts", "integer", np.diff(colliders.body_part_offsets)[order]),
-        ("file", "string", *codes([files[i] for i in picked])),
-        ("name", "string", np.arange(len(picked), dtype=np.int64), [names[i] for i in picked]),
+        ("file", "string", *codes(files)),
+        ("name", "string", order, names),
         (
             "parts",
             "raw",

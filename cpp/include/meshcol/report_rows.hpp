@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -20,7 +21,9 @@ struct RowColumn {
     const double* reals = nullptr;           ///< kNumber (n), kVector (n x 3), kBox (n x 6)
     const std::int64_t* integers = nullptr;  ///< kInteger, kIndex, and the codes of kString, kRaw
     const bool* flags = nullptr;             ///< kBoolean
-    std::vector<std::string> table;          ///< kString: escaped entries; kRaw: JSON text
+    /// kString: escaped entries; kRaw: JSON text (shared: the columns of body_a and body_b
+    /// are one table of a million names)
+    std::shared_ptr<const std::vector<std::string>> table;
 };
 
 /// Rows of `columns` (in key order) as a list's items at nesting `level`: row i is ',' (but
