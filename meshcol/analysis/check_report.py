@@ -5,6 +5,7 @@ turns the classified :class:`~meshcol.analysis.pairs.PairTable` into its rows.
 
 from __future__ import annotations
 
+import itertools
 import math
 import operator
 from collections.abc import Callable, Iterator, Sequence
@@ -454,6 +455,8 @@ def _baseline_pairs(baseline: dict | None) -> dict | None:
 
 def _name_ranks(names: Sequence[str]) -> np.ndarray:
     """(n,) int64: each body's place in name order, equal names equal ranks."""
+    if all(map(operator.lt, names, itertools.islice(names, 1, None))):
+        return np.arange(len(names), dtype=np.int64)  # in name order already (generated scenes)
     order = sorted(range(len(names)), key=names.__getitem__)
     rank = np.zeros(len(names), dtype=np.int64)
     if order:

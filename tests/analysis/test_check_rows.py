@@ -215,3 +215,16 @@ def test_the_json_report_is_written_in_pieces_and_never_half(
     monkeypatch.setattr(report_io, "rows_chunks", failing_text)
     with pytest.raises(MemoryError):
         report.to_json()
+
+
+def test_name_ranks_of_names_in_order_and_not() -> None:
+    """Each body's place among the distinct names (names already in order take a shortcut)."""
+    from meshcol.analysis.check_report import _name_ranks
+
+    rng = np.random.default_rng(7)
+    cases = [[], ["a"], ["a", "b", "c"], ["a", "a", "b"], ["b", "a"], ["a", "b", "b", "c"]]
+    cases += [sorted({str(x) for x in rng.integers(0, 50, 20)}) for _ in range(5)]
+    cases += [[str(x) for x in rng.integers(0, 6, 12)] for _ in range(20)]
+    for names in cases:
+        distinct = sorted(set(names))
+        assert _name_ranks(names).tolist() == [distinct.index(n) for n in names], names
