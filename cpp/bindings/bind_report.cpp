@@ -10,10 +10,13 @@
 #include <Python.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstring>
 #include <cstdint>
+#include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -21,6 +24,7 @@
 
 #include "meshcol/batch.hpp"
 #include "meshcol/format.hpp"
+#include "meshcol/report_rows.hpp"
 #include "ndarray.hpp"
 
 namespace nb = nanobind;
@@ -235,25 +239,14 @@ std::optional<nb::str> dumps_indented(nb::handle document, nb::handle builtin) {
     return nb::steal<nb::str>(text);
 }
 
-// --- rows of one shape from columns -------------------------------------------------------
+// --- rows of one shape from columns (meshcol/report_rows.hpp) ---------------------------
 
-/// One column of `dumps_rows`: a key (already escaped, with ": ") and how to write a row's
-/// value from its arrays.
-struct Column {
-    enum Kind { kNumber, kVector, kBox, kInteger, kIndex, kBoolean, kString, kRaw } kind;
-    std::string key;
-    const double* reals = nullptr;
-    const std::int64_t* integers = nullptr;
-    const bool* flags = nullptr;
-    std::vector<std::string> table;  // kString: escaped; kRaw: as given
-};
-
-Column::Kind column_kind(const std::string& name) {
-    static const std::pair<const char*, Column::Kind> kinds[] = {
-        {"number", Column::kNumber},   {"vector", Column::kVector},
-        {"box", Column::kBox},         {"integer", Column::kInteger},
-        {"index", Column::kIndex},     {"boolean", Column::kBoolean},
-        {"string", Column::kString},   {"raw", Column::kRaw},
+meshcol::RowColumn::Kind column_kind(const std::string& name) {
+    using C = meshcol::RowColumn;
+    static const std::pair<const char*, C::Kind> kinds[] = {
+        {"number", C::kNumber},   {"vector", C::kVector}, {"box", C::kBox},
+        {"integer", C::kInteger}, {"index", C::kIndex},   {"boolean", C::kBoolean},
+        {"string", C::kString},   {"raw", C::kRaw},
     };
     for (const auto& [word, kind] : kinds)
         if (name == word) return kind;
@@ -269,168 +262,101 @@ const T* column_array(Buffer& buffer, nb::handle object, size_t n, Py_ssize_t wi
     return data;
 }
 
-// The row writer writes through a cursor into room made once per row (`row_bound` chars),
-// never checking capacity per character.
-
-void put(char*& p, const char* s, size_t n) {
-    std::memcpy(p, s, n);
-    p += n;
-}
-
-void newline_at(char*& p, int level) {
-    *p++ = '\n';
-    std::memset(p, ' ', static_cast<size_t>(2 * level));
-    p += 2 * level;
-}
-
-void real_at(char*& p, double x) {
-    if (!std::isfinite(x)) return put(p, "null", 4);
-    p += meshcol::format_double_repr(x, p);
-}
-
-void vector_at(char*& p, const double* v, int level) {
-    if (!(std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2])))
-        return put(p, "null", 4);
-    *p++ = '[';
-    for (int k = 0; k < 3; ++k) {
-        if (k) *p++ = ',';
-        newline_at(p, level + 1);
-        p += meshcol::format_double_repr(v[k], p);
-    }
-    newline_at(p, level);
-    *p++ = ']';
-}
-
-/// The most chars `cell` writes for a column at nesting `level`.
-size_t cell_bound(const Column& c, int level) {
-    const size_t number = meshcol::kDoubleReprSize;
-    auto line = [](int l) { return 1 + 2 * static_cast<size_t>(l); };
-    auto vector = [&](int l) { return 2 + 3 * (1 + line(l + 1) + number) + line(l); };
-    switch (c.kind) {
-        case Column::kNumber: return number;
-        case Column::kVector: return vector(level);
-        case Column::kBox: return 3 + 2 * (line(level + 1) + vector(level + 1)) + line(level);
-        case Column::kString:
-        case Column::kRaw: {
-            size_t most = 4;
-            for (const auto& entry : c.table) most = std::max(most, entry.size());
-            return most;
-        }
-        default: return 24;  // an int64, "null", "false"
-    }
-}
-
-void cell(char*& p, const Column& c, size_t i, int level) {
-    switch (c.kind) {
-        case Column::kNumber: return real_at(p, c.reals[i]);
-        case Column::kVector: return vector_at(p, c.reals + 3 * i, level);
-        case Column::kBox:
-            *p++ = '[';
-            newline_at(p, level + 1);
-            vector_at(p, c.reals + 6 * i, level + 1);
-            *p++ = ',';
-            newline_at(p, level + 1);
-            vector_at(p, c.reals + 6 * i + 3, level + 1);
-            newline_at(p, level);
-            *p++ = ']';
-            return;
-        case Column::kIndex:
-            if (c.integers[i] < 0) return put(p, "null", 4);
-            [[fallthrough]];
-        case Column::kInteger:
-            p = std::to_chars(p, p + 24, c.integers[i]).ptr;
-            return;
-        case Column::kBoolean: return c.flags[i] ? put(p, "true", 4) : put(p, "false", 5);
-        case Column::kString:
-        case Column::kRaw: {
-            const std::int64_t code = c.integers[i];
-            if (code < 0) return put(p, "null", 4);
-            const std::string& entry = c.table[static_cast<size_t>(code)];
-            return put(p, entry.data(), entry.size());
+/// A string column's table: its entries JSON-escaped (`raw`: as given, JSON text already).
+std::shared_ptr<const std::vector<std::string>> table_of(nb::handle list, bool raw, Encoder& out) {
+    auto entries = nb::cast<nb::list>(list);
+    auto table = std::make_shared<std::vector<std::string>>();
+    table->reserve(nb::len(entries));
+    for (nb::handle item : entries) {
+        Py_ssize_t size = 0;
+        const char* s = PyUnicode_AsUTF8AndSize(item.ptr(), &size);
+        if (s == nullptr) throw nb::python_error();
+        if (raw) {
+            table->emplace_back(s, static_cast<size_t>(size));
+        } else {
+            out.text.clear();
+            out.escape(std::string_view(s, static_cast<size_t>(size)));
+            table->push_back(out.text);
         }
     }
+    return table;
 }
+
+/// The columns of one `dumps_rows` or `write_rows` call, parsed and checked once (keys and
+/// string tables escaped, codes in their tables), the arrays' buffers held until it ends.
+struct Rows {
+    std::vector<Buffer> buffers;
+    std::optional<meshcol::RowWriter> writer;
+
+    Rows(nb::list columns, size_t count, size_t start, size_t stop, int level)
+        : buffers(nb::len(columns)) {
+        using C = meshcol::RowColumn;
+        if (start > stop || stop > count) throw nb::value_error("rows out of range");
+        if (level < 0 || level > 64) throw nb::value_error("level out of range");
+        std::vector<C> parsed(buffers.size());
+        Encoder out(nullptr);
+        // tables by the list they came from (held by `columns` for the call)
+        std::vector<std::pair<PyObject*, std::shared_ptr<const std::vector<std::string>>>>
+            string_tables, raw_tables;
+        for (size_t k = 0; k < parsed.size(); ++k) {
+            auto spec = nb::cast<nb::tuple>(columns[k]);
+            C& c = parsed[k];
+            out.text.clear();
+            out.escape(nb::cast<std::string>(spec[0]));
+            c.key = out.text;
+            c.kind = column_kind(nb::cast<std::string>(spec[1]));
+            Buffer& b = buffers[k];
+            switch (c.kind) {
+                case C::kNumber: c.reals = column_array<double>(b, spec[2], count, 1); break;
+                case C::kVector: c.reals = column_array<double>(b, spec[2], count, 3); break;
+                case C::kBox: c.reals = column_array<double>(b, spec[2], count, 6); break;
+                case C::kBoolean: c.flags = column_array<bool>(b, spec[2], count, 1); break;
+                default: c.integers = column_array<std::int64_t>(b, spec[2], count, 1);
+            }
+            if (c.kind == C::kString || c.kind == C::kRaw) {
+                nb::handle list = spec[3];
+                auto& known = c.kind == C::kRaw ? raw_tables : string_tables;
+                auto found = std::find_if(known.begin(), known.end(),
+                                          [&](const auto& t) { return t.first == list.ptr(); });
+                if (found != known.end()) {
+                    c.table = found->second;  // one list for several columns: escaped once
+                } else {
+                    c.table = table_of(list, c.kind == C::kRaw, out);
+                    known.emplace_back(list.ptr(), c.table);
+                }
+                const auto size = static_cast<std::int64_t>(c.table->size());
+                for (size_t i = start; i < stop; ++i)
+                    if (c.integers[i] >= size)
+                        throw nb::index_error("a column's code is past its table");
+            }
+        }
+        writer.emplace(std::move(parsed), level);
+    }
+};
 
 /// Rows from which on `dumps_rows` writes blocks of rows on several threads.
 constexpr long long kRowsPerBlock = 4096;
 
-/// Rows `from..to` of the columns, as `dumps_rows` writes them, into `text` (sized to fit).
-void write_rows(const std::vector<Column>& parsed, size_t from, size_t to, int level,
-                size_t row_bound, std::string& text) {
-    size_t used = 0;
-    for (size_t i = from; i < to; ++i) {
-        if (used + row_bound > text.size()) text.resize(std::max(2 * text.size(), used + row_bound));
-        char* p = text.data() + used;
-        if (i) *p++ = ',';
-        newline_at(p, level + 1);
-        *p++ = '{';
-        for (size_t k = 0; k < parsed.size(); ++k) {
-            if (k) *p++ = ',';
-            newline_at(p, level + 2);
-            put(p, parsed[k].key.data(), parsed[k].key.size());
-            cell(p, parsed[k], i, level + 2);
-        }
-        newline_at(p, level + 1);
-        *p++ = '}';
-        used = static_cast<size_t>(p - text.data());
-    }
-    text.resize(used);
-}
-
 nb::str dumps_rows(nb::list columns, size_t count, size_t start, size_t stop, int level) {
-    if (start > stop || stop > count) throw nb::value_error("rows out of range");
-    if (level < 0 || level > 64) throw nb::value_error("level out of range");
-    std::vector<Column> parsed(nb::len(columns));
-    std::vector<Buffer> buffers(parsed.size());
-    Encoder out(nullptr);
-    size_t row_bound = 2 * (1 + 2 * static_cast<size_t>(level + 1)) + 2;
-    for (size_t k = 0; k < parsed.size(); ++k) {
-        auto spec = nb::cast<nb::tuple>(columns[k]);
-        Column& c = parsed[k];
-        out.text.clear();
-        out.escape(nb::cast<std::string>(spec[0]));
-        c.key = out.text + ": ";
-        c.kind = column_kind(nb::cast<std::string>(spec[1]));
-        Buffer& b = buffers[k];
-        switch (c.kind) {
-            case Column::kNumber: c.reals = column_array<double>(b, spec[2], count, 1); break;
-            case Column::kVector: c.reals = column_array<double>(b, spec[2], count, 3); break;
-            case Column::kBox: c.reals = column_array<double>(b, spec[2], count, 6); break;
-            case Column::kBoolean: c.flags = column_array<bool>(b, spec[2], count, 1); break;
-            default: c.integers = column_array<std::int64_t>(b, spec[2], count, 1);
-        }
-        if (c.kind == Column::kString || c.kind == Column::kRaw) {
-            for (nb::handle item : nb::cast<nb::list>(spec[3])) {
-                const std::string s = nb::cast<std::string>(item);
-                if (c.kind == Column::kRaw) {
-                    c.table.push_back(s);
-                } else {
-                    out.text.clear();
-                    out.escape(s);
-                    c.table.push_back(out.text);
-                }
-            }
-            const auto size = static_cast<std::int64_t>(c.table.size());
-            for (size_t i = start; i < stop; ++i)
-                if (c.integers[i] >= size) throw nb::index_error("a column's code is past its table");
-        }
-        row_bound += 2 + (1 + 2 * static_cast<size_t>(level + 2)) + c.key.size() +
-                     cell_bound(c, level + 2);
-    }
+    const Rows rows(columns, count, start, stop, level);
+    const meshcol::RowWriter& writer = *rows.writer;
     // Rows are written independently (the text of a row depends on its index and columns
     // only), so blocks of rows are written on the core's threads, without the GIL, and joined
     // in order: the same text as one pass.
-    const size_t rows = stop - start;
-    const int threads = meshcol::resolve_threads(0, static_cast<long long>(rows), kRowsPerBlock);
+    const size_t n = stop - start;
+    const int threads = meshcol::resolve_threads(0, static_cast<long long>(n), kRowsPerBlock);
     const size_t blocks = threads <= 1 ? 1 : static_cast<size_t>(threads) * 4;
     std::vector<std::string> pieces(blocks);
     {
         nb::gil_scoped_release unlocked;
         meshcol::parallel_for(static_cast<long long>(blocks), threads, [&](long long b, long long e) {
             for (long long k = b; k < e; ++k) {
-                const size_t from = start + rows * static_cast<size_t>(k) / blocks;
-                const size_t to = start + rows * static_cast<size_t>(k + 1) / blocks;
-                write_rows(parsed, from, to, level, row_bound, pieces[static_cast<size_t>(k)]);
+                const size_t from = start + n * static_cast<size_t>(k) / blocks;
+                const size_t to = start + n * static_cast<size_t>(k + 1) / blocks;
+                std::string& piece = pieces[static_cast<size_t>(k)];
+                piece.resize((to - from) * writer.row_bound());
+                char* end = writer.write(from, to, piece.data());
+                piece.resize(static_cast<size_t>(end - piece.data()));
             }
         });
     }
@@ -451,6 +377,20 @@ nb::str dumps_rows(nb::list columns, size_t count, size_t start, size_t stop, in
     return nb::steal<nb::str>(result);
 }
 
+void write_rows_fd(int fd, nb::list columns, size_t count, int level) {
+    const Rows rows(columns, count, 0, count, level);
+    int failed = 0;
+    {
+        nb::gil_scoped_release unlocked;
+        failed = rows.writer->write_to(fd, count, 0);
+    }
+    if (failed != 0) {
+        errno = failed;
+        PyErr_SetFromErrno(PyExc_OSError);
+        throw nb::python_error();
+    }
+}
+
 }  // namespace
 
 void bind_report(nb::module_& m) {
@@ -467,6 +407,12 @@ void bind_report(nb::module_& m) {
           "number (n,) float64, vector (n, 3) and box (n, 6) float64 (a non-finite row null), "
           "integer (n,) int64, index (n,) int64 (negative null), boolean (n,) bool, string and "
           "raw (n,) int64 codes into a list of str (negative null; raw: JSON text as given).");
+    m.def("write_rows", &write_rows_fd, "fd"_a, "columns"_a, "count"_a, "level"_a,
+          "dumps_rows's text of all `count` rows as a list ('[', the rows, a newline and "
+          "']'; '[]' when empty) written to the open file descriptor `fd` at its offset, "
+          "formatted on the core's threads and written in blocks of a few megabytes, never "
+          "whole in memory. OSError (errno set) when a write fails: the file then holds "
+          "part of the text.");
     m.def(
         "float_reprs",
         [](const Values& values) {

@@ -25,53 +25,45 @@ std::size_t format_double_repr(double value, char* out) {
         std::memcpy(out, word, n);
         return n;
     }
+    // to_chars' scientific form: [-]d[.ddd]e(+|-)XX[X], the exponent two digits at least,
+    // as Python writes it: outside the fixed range, the text is Python's as it is.
     char buf[kDoubleReprSize];
-    const auto result = std::to_chars(buf, buf + sizeof buf, value, std::chars_format::scientific);
-    const char* p = buf;
-    const char* end = result.ptr;
-    char* o = out;
-    if (*p == '-') *o++ = *p++;
-    char digits[24];
-    int count = 0;
-    for (; p < end && *p != 'e'; ++p)
-        if (*p != '.') digits[count++] = *p;
-    int exponent = 0;
-    bool negative = false;
-    if (p < end) {  // 'e', a sign, two or three digits
-        ++p;
-        if (*p == '-' || *p == '+') negative = *p++ == '-';
-        for (; p < end; ++p) exponent = exponent * 10 + (*p - '0');
-    }
-    if (negative) exponent = -exponent;
+    const char* end = std::to_chars(buf, buf + sizeof buf, value, std::chars_format::scientific).ptr;
+    const bool wide = end[-5] == 'e';  // a three-digit exponent
+    const char* e = wide ? end - 5 : end - 4;
+    int exponent = (end[-2] - '0') * 10 + (end[-1] - '0');
+    if (wide) exponent += (end[-3] - '0') * 100;
+    if (e[1] == '-') exponent = -exponent;
     const int decpt = exponent + 1;
     if (decpt <= -4 || decpt > 16) {
-        *o++ = digits[0];
-        if (count > 1) {
-            *o++ = '.';
-            std::memcpy(o, digits + 1, static_cast<std::size_t>(count - 1));
-            o += count - 1;
-        }
-        *o++ = 'e';
-        *o++ = exponent < 0 ? '-' : '+';
-        const int magnitude = exponent < 0 ? -exponent : exponent;
-        if (magnitude >= 100) *o++ = static_cast<char>('0' + magnitude / 100);
-        *o++ = static_cast<char>('0' + magnitude / 10 % 10);
-        *o++ = static_cast<char>('0' + magnitude % 10);
-    } else if (decpt <= 0) {
+        std::memcpy(out, buf, static_cast<std::size_t>(end - buf));
+        return static_cast<std::size_t>(end - buf);
+    }
+    const char* p = buf;
+    char* o = out;
+    if (*p == '-') *o++ = *p++;
+    const char first = *p++;
+    const char* rest = *p == '.' ? p + 1 : p;  // the digits after the first
+    const int more = static_cast<int>(e - rest);
+    const int count = 1 + more;
+    if (decpt <= 0) {
         *o++ = '0';
         *o++ = '.';
         for (int i = 0; i < -decpt; ++i) *o++ = '0';
-        std::memcpy(o, digits, static_cast<std::size_t>(count));
-        o += count;
+        *o++ = first;
+        std::memcpy(o, rest, static_cast<std::size_t>(more));
+        o += more;
     } else if (decpt < count) {
-        std::memcpy(o, digits, static_cast<std::size_t>(decpt));
-        o += decpt;
+        *o++ = first;
+        std::memcpy(o, rest, static_cast<std::size_t>(decpt - 1));
+        o += decpt - 1;
         *o++ = '.';
-        std::memcpy(o, digits + decpt, static_cast<std::size_t>(count - decpt));
+        std::memcpy(o, rest + decpt - 1, static_cast<std::size_t>(count - decpt));
         o += count - decpt;
     } else {
-        std::memcpy(o, digits, static_cast<std::size_t>(count));
-        o += count;
+        *o++ = first;
+        std::memcpy(o, rest, static_cast<std::size_t>(more));
+        o += more;
         for (int i = count; i < decpt; ++i) *o++ = '0';
         *o++ = '.';
         *o++ = '0';

@@ -5,6 +5,7 @@ turns the classified :class:`~meshcol.analysis.pairs.PairTable` into its rows.
 
 from __future__ import annotations
 
+import itertools
 import math
 import operator
 from collections.abc import Callable, Iterator, Sequence
@@ -17,7 +18,7 @@ import numpy as np
 from meshcol.analysis.check_policy import CheckOptions
 from meshcol.analysis.pairs import SEVERITY, PairTable, PlacedColliders
 from meshcol.io.paths import display_path, display_paths
-from meshcol.io.report import vector_columns
+from meshcol.io.report import RowsPiece, vector_columns
 from meshcol.io.scene_primitives import body_names, body_parts, body_sources, vertex_counts
 from meshcol.types import Scene
 from meshcol.vocabulary import PAIR_STATUSES
@@ -179,11 +180,20 @@ class CheckReport:
         return "".join(self.json_chunks())
 
     def json_chunks(self) -> Iterator[str]:
-        """The JSON report's text in pieces, in order: rows kept as columns
-        (:class:`ReportRows`) are written from them a bounded number at a time
-        (:func:`meshcol.io.report.rows_chunks`) between the text of the rest, to the same
-        bytes as the whole document encoded at once; never the whole text in memory."""
-        from meshcol.io.report import dumps_json, rows_chunks
+        """The JSON report's text in pieces, in order (:meth:`json_pieces` as text): rows
+        kept as columns are written a bounded number at a time; never the whole text in
+        memory."""
+        from meshcol.io.report import text_pieces
+
+        return text_pieces(self.json_pieces())
+
+    def json_pieces(self) -> Iterator[str | RowsPiece]:
+        """The JSON report in pieces, in order: the text of the rest, and each list of rows
+        kept as columns (:class:`ReportRows`) as a :class:`~meshcol.io.report.RowsPiece`
+        between, which a file gets straight from the core's row writer
+        (:func:`meshcol.io.report.emit`); the same bytes as the whole document encoded at
+        once."""
+        from meshcol.io.report import RowsPiece, dumps_json
 
         document = self._document()
         streamed = {}
@@ -199,7 +209,7 @@ class CheckReport:
             if at < 0:  # cannot happen: a top-level key's line is unique
                 raise AssertionError(f"report text lost its {key}")
             yield text[start:at] + f'\n  "{key}": '
-            yield from rows_chunks(rows.columns(), len(rows), 1)
+            yield RowsPiece(rows.columns(), len(rows), 1)
             yield ","
             start = at + len(line)
         yield text[start:]
@@ -445,6 +455,8 @@ def _baseline_pairs(baseline: dict | None) -> dict | None:
 
 def _name_ranks(names: Sequence[str]) -> np.ndarray:
     """(n,) int64: each body's place in name order, equal names equal ranks."""
+    if all(map(operator.lt, names, itertools.islice(names, 1, None))):
+        return np.arange(len(names), dtype=np.int64)  # in name order already (generated scenes)
     order = sorted(range(len(names)), key=names.__getitem__)
     rank = np.zeros(len(names), dtype=np.int64)
     if order:
@@ -648,25 +660,27 @@ def _body_columns(
     from meshcol.io.report import dumps_json
 
     colliders = placed.colliders
-    picked = order.tolist()
     names = body_names(colliders.bodies)
+    order = np.ascontiguousarray(order, dtype=np.int64)
 
     def codes(values: Sequence[Any]) -> tuple[np.ndarray, list]:
+        """Each body's code into a table of the distinct values (in body order, None -1),
+        then taken in report order: no list of a million values made in that order."""
         distinct = [v for v in dict.fromkeys(values) if v is not None]
         table: dict[Any, int] = {v: k for k, v in enumerate(distinct)}
         table[None] = -1
         found = np.fromiter(map(table.__getitem__, values), dtype=np.int64, count=len(values))
-        return found, distinct
+        return found[order], distinct
 
-    parts, part_texts = codes(body_parts(colliders.bodies, picked))
+    parts, part_texts = codes(body_parts(colliders.bodies, range(len(names))))
     indent = "\n" + "  " * 3
     box = np.concatenate([placed.body_min[order], placed.body_max[order]], axis=1)
     return [
         ("aabb", "box", np.ascontiguousarray(box, dtype=np.float64)),
-        ("collider", "string", *codes([colliders.kinds[i] for i in picked])),
+        ("collider", "string", *codes(colliders.kinds)),
         ("convex_parts", "integer", np.diff(colliders.body_part_offsets)[order]),
-        ("file", "string", *codes([files[i] for i in picked])),
-        ("name", "string", np.arange(len(picked), dtype=np.int64), [names[i] for i in picked]),
+        ("file", "string", *codes(files)),
+        ("name", "string", order, names),
         (
             "parts",
             "raw",

@@ -56,9 +56,10 @@ class ReportFormat:
         Called with the same result once the text is written (``github`` appends its
         Markdown summary to ``$GITHUB_STEP_SUMMARY``).
     stream : str or None
-        A report method giving the same text in pieces (``json_chunks``), which
-        :func:`write_report` writes one after another when the report has it (a check
-        report of a million pairs is never one string).
+        A report method giving the same text in pieces (``json_pieces``: strings and
+        :class:`~meshcol.io.report.RowsPiece`), which :func:`write_report` writes one after
+        another when the report has it (a check report of a million pairs is never one
+        string: its rows go from the core's row writer into the file).
     """
 
     name: str
@@ -74,7 +75,7 @@ class ReportFormat:
 FORMATS: dict[str, ReportFormat] = {
     entry.name: entry
     for entry in (
-        ReportFormat("json", ".json", "to_json", str, stream="json_chunks"),
+        ReportFormat("json", ".json", "to_json", str, stream="json_pieces"),
         ReportFormat("csv", ".csv", "to_csv", str),
         ReportFormat(
             "junit",

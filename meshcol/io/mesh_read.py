@@ -362,7 +362,9 @@ def file_identities(paths: Sequence[str]) -> tuple[np.ndarray, np.ndarray, np.nd
 
     # The core takes UTF-8 text without NUL; any other path (a file name of undecodable bytes,
     # kept as surrogates) is stat'ed here.
-    apart = [i for i, p in enumerate(paths) if not _core_path(p)]
+    joined = "".join(paths)  # the common case in two string scans: ASCII, no NUL
+    plain = joined.isascii() and "\x00" not in joined
+    apart = [] if plain else [i for i, p in enumerate(paths) if not _core_path(p)]
     usable = list(paths) if not apart else [p if _core_path(p) else "" for p in paths]
     device, inode, found = core.file_identities(usable)
     for i in apart:

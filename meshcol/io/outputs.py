@@ -169,12 +169,8 @@ def check_destinations(
         # path ends in its own last name (nothing of it exists to resolve), so only inputs
         # named as the output's resolved path ends are looked at: no lstat per input.
         name = os.path.normcase(os.path.basename(os.path.realpath(path)))
-        for description, in_path in read:
-            if (
-                _last_name(in_path) == name
-                and not os.path.lexists(in_path)
-                and _key(path) == _key(in_path)
-            ):
+        for description, in_path in _named(read, name):
+            if not os.path.lexists(in_path) and _key(path) == _key(in_path):
                 raise OutputPathError(f"{label} would overwrite {description}", path)
         for out_label, out_path in written:
             if same_file(path, out_path):
@@ -189,6 +185,26 @@ def _last_name(path: str) -> str:
     if tail in ("", ".", ".."):
         tail = os.path.basename(os.path.normpath(path))
     return os.path.normcase(tail)
+
+
+#: The ends of a path whose last name :func:`_last_name` takes from ``normpath`` ("", ".",
+#: "..").
+_ODD_TAILS = (os.sep, os.altsep or os.sep, ".")
+
+
+def _named(read: list[tuple[str, str]], name: str) -> list[tuple[str, str]]:
+    """The inputs of ``read`` whose :func:`_last_name` is ``name``. Where case is kept
+    (``normcase`` changes nothing), such a path ends with ``name`` or with one of
+    :data:`_ODD_TAILS`, or is empty: one string test per input, :func:`_last_name` only on
+    those."""
+    if os.path.normcase("Aa") != "Aa":
+        return [item for item in read if _last_name(item[1]) == name]
+    ends = (name, *_ODD_TAILS)
+    return [
+        item
+        for item in read
+        if (not item[1] or item[1].endswith(ends)) and _last_name(item[1]) == name
+    ]
 
 
 #: Inputs from which on the guard stats them in the core's threads (numpy and the native

@@ -17,6 +17,7 @@ import stat
 import sys
 import tempfile
 from collections.abc import Iterable, Iterator, Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 from meshcol.errors import InputFileError
@@ -33,6 +34,7 @@ __all__ = [
     "dumps_rows",
     "emit",
     "rows_chunks",
+    "RowsPiece",
     "envelope",
     "split_vectors",
     "vector_columns",
@@ -523,15 +525,76 @@ def dumps_csv(rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> str:
     return buf.getvalue()
 
 
-def emit(text: str | Iterable[str], output: str | os.PathLike[str] | None) -> None:
-    """Write report text (or its pieces, in order: to a file never joined whole) to
-    ``output`` atomically, or to stdout when ``output`` is None or '-'."""
+@dataclass(frozen=True)
+class RowsPiece:
+    """A list of rows held as columns, as one piece of a report's text (what a report's
+    ``json_pieces`` yields between its strings): :func:`emit` has the core write it straight
+    into the file (:meth:`write_into`); anywhere else it is its text, in bounded pieces
+    (:meth:`chunks`). Either way the bytes of :func:`dumps_rows`.
+
+    Attributes
+    ----------
+    columns : list of tuple
+        The core's row writer's ``(key, kind, array[, table])``, in key order.
+    count : int
+        The number of rows.
+    level : int
+        The list's nesting in the document (a report's ``pairs``: 1).
+    """
+
+    columns: list[tuple]
+    count: int
+    level: int
+
+    def chunks(self) -> Iterator[str]:
+        """The text, a bounded number of rows a piece (:func:`rows_chunks`)."""
+        return rows_chunks(self.columns, self.count, self.level)
+
+    def write_into(self, fd: int) -> None:
+        """Write the text to the open file ``fd`` at its offset: the rows are formatted on the
+        core's threads and written a few megabytes at a time, with no Python string made."""
+        from meshcol._native import core
+
+        core.write_rows(fd, self.columns, self.count, self.level)
+
+
+def text_pieces(pieces: Iterable[str | RowsPiece]) -> Iterator[str]:
+    """``pieces`` as text only: each :class:`RowsPiece` as its chunks."""
+    for piece in pieces:
+        if isinstance(piece, str):
+            yield piece
+        else:
+            yield from piece.chunks()
+
+
+def emit(text: str | Iterable[str | RowsPiece], output: str | os.PathLike[str] | None) -> None:
+    """Write report text (or its pieces, in order: to a file never joined whole; a
+    :class:`RowsPiece` written by the core) to ``output`` atomically, or to stdout when
+    ``output`` is None or '-'."""
     pieces = [text] if isinstance(text, str) else text
     if output is None or os.fspath(output) == "-":
         # made whole first: a failure while making it leaves nothing on stdout
-        sys.stdout.write(text if isinstance(text, str) else "".join(pieces))
+        sys.stdout.write(text if isinstance(text, str) else "".join(text_pieces(pieces)))
         sys.stdout.flush()
         return
-    with atomic_path(output) as tmp, open(tmp, "w", encoding="utf-8", newline="") as handle:
-        for piece in pieces:
-            handle.write(piece)
+    with atomic_path(output) as tmp:
+        fd = os.open(tmp, os.O_WRONLY | os.O_TRUNC | getattr(os, "O_BINARY", 0))
+        try:
+            for piece in pieces:
+                if isinstance(piece, str):
+                    _write_all(fd, piece.encode("utf-8"))
+                else:
+                    piece.write_into(fd)
+        except OSError as exc:
+            if exc.filename is None:  # named as the temporary file: atomic_path names output
+                raise OSError(exc.errno, exc.strerror or str(exc), tmp) from None
+            raise
+        finally:
+            os.close(fd)
+
+
+def _write_all(fd: int, data: bytes) -> None:
+    """``os.write`` until all of ``data`` is written (a write may take only part of it)."""
+    view = memoryview(data)
+    while view:
+        view = view[os.write(fd, view) :]

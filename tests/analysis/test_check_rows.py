@@ -4,6 +4,7 @@ bytes the dict path gives, and the rows read as the dicts they stand for."""
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -197,12 +198,33 @@ def test_the_json_report_is_written_in_pieces_and_never_half(
     write_report(report, "json", str(path))
     assert path.read_text() == report.to_json() == dumps_json(report.to_dict())
 
-    def failing(columns: list, count: int, level: int):  # the pairs fail after one piece
-        yield "["
+    def failing(piece: report_io.RowsPiece, fd: int) -> None:  # fails after a piece
+        os.write(fd, b"[")
         raise MemoryError("no room for the rows")
 
-    monkeypatch.setattr(report_io, "rows_chunks", failing)
+    monkeypatch.setattr(report_io.RowsPiece, "write_into", failing)
     other = tmp_path / "other.json"
     with pytest.raises(MemoryError):
         write_report(report, "json", str(other))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["report.json"]
+
+    def failing_text(columns: list, count: int, level: int):  # the text path (stdout)
+        yield "["
+        raise MemoryError("no room for the rows")
+
+    monkeypatch.setattr(report_io, "rows_chunks", failing_text)
+    with pytest.raises(MemoryError):
+        report.to_json()
+
+
+def test_name_ranks_of_names_in_order_and_not() -> None:
+    """Each body's place among the distinct names (names already in order take a shortcut)."""
+    from meshcol.analysis.check_report import _name_ranks
+
+    rng = np.random.default_rng(7)
+    cases = [[], ["a"], ["a", "b", "c"], ["a", "a", "b"], ["b", "a"], ["a", "b", "b", "c"]]
+    cases += [sorted({str(x) for x in rng.integers(0, 50, 20)}) for _ in range(5)]
+    cases += [[str(x) for x in rng.integers(0, 6, 12)] for _ in range(20)]
+    for names in cases:
+        distinct = sorted(set(names))
+        assert _name_ranks(names).tolist() == [distinct.index(n) for n in names], names

@@ -213,3 +213,29 @@ def test_an_output_that_is_any_input_is_found_among_many(tmp_path, count) -> Non
         with pytest.raises(OutputPathError, match=f"--report would overwrite {what}"):
             check_destinations(inputs, [("--report", report)])
     check_destinations([*strange, *others], [("--report", report)])  # none of them is it
+
+
+def test_inputs_named_as_an_output_are_found_by_their_ends_as_one_by_one() -> None:
+    """The guard's shortcut (:func:`meshcol.io.outputs._named`: a string test per input
+    before the last name) finds what the last name of every input finds."""
+    from meshcol.io.outputs import _last_name, _named
+
+    paths = [
+        "r.json",
+        "a/r.json",
+        "a/r.json/",
+        "a/r.json/.",
+        "r.json/x/..",
+        "a/xr.json",
+        "",
+        ".",
+        "..",
+        "/",
+        "a/b/../r.json",
+        "R.JSON",
+        "a/r.jsonx",
+        "r.json/sub/",
+    ]
+    read = [(f"input {i}", p) for i, p in enumerate(paths)]
+    for name in ("r.json", "x", "sub", "a", "b", ".", ""):
+        assert _named(read, name) == [item for item in read if _last_name(item[1]) == name]
