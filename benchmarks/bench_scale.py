@@ -509,7 +509,7 @@ def main() -> None:
     parser.add_argument(
         "--stages",
         action="store_true",
-        help="each unique-asset size also run under check_stages.py: CPU seconds per stage",
+        help="each unique-asset size also run under check_stages.py: CPU and wall seconds per stage",
     )
     parser.add_argument(
         "--primitive-kinds",

@@ -755,6 +755,59 @@ std::vector<MeshFile> read_mesh_files(const std::vector<std::string>& paths,
     return files;
 }
 
+std::vector<PackedStart> packed_starts(const std::vector<MeshFile>& files) {
+    std::vector<PackedStart> starts(files.size() + 1);
+    PackedStart at;
+    for (size_t i = 0; i < files.size(); ++i) {
+        starts[i] = at;
+        for (const MeshObject& o : files[i].objects) {
+            at.object += 1;
+            at.vertex += static_cast<std::int64_t>(o.vertices.size() / 3);
+            at.face += static_cast<std::int64_t>(o.faces.size() / 3);
+        }
+    }
+    starts[files.size()] = at;
+    return starts;
+}
+
+void pack_mesh_files(std::vector<MeshFile>& files, const std::vector<PackedStart>& starts,
+                     int threads, double* vertices, std::int64_t* faces,
+                     std::int64_t* vertex_offsets, std::int64_t* face_offsets,
+                     std::int64_t* object_file, double* largest) {
+    const long long n = static_cast<long long>(files.size());
+    vertex_offsets[starts[files.size()].object] = starts[files.size()].vertex;
+    face_offsets[starts[files.size()].object] = starts[files.size()].face;
+    parallel_for(n, resolve_threads(threads, n, 256), [&](long long begin, long long end) {
+        for (long long i = begin; i < end; ++i) {
+            PackedStart at = starts[static_cast<size_t>(i)];
+            for (MeshObject& o : files[static_cast<size_t>(i)].objects) {
+                const size_t k = static_cast<size_t>(at.object);
+                vertex_offsets[k] = at.vertex;
+                face_offsets[k] = at.face;
+                object_file[k] = i;
+                double top = 0.0;
+                for (const double v : o.vertices) {
+                    const double a = std::fabs(v);
+                    top = a > top || a != a ? a : top;  // NaN sticks: never "within a limit"
+                    if (top != top) break;
+                }
+                largest[k] = top;
+                if (!o.vertices.empty())
+                    std::memcpy(vertices + 3 * at.vertex, o.vertices.data(),
+                                o.vertices.size() * sizeof(double));
+                if (!o.faces.empty())
+                    std::memcpy(faces + 3 * at.face, o.faces.data(),
+                                o.faces.size() * sizeof(std::int64_t));
+                at.object += 1;
+                at.vertex += static_cast<std::int64_t>(o.vertices.size() / 3);
+                at.face += static_cast<std::int64_t>(o.faces.size() / 3);
+                std::vector<double>().swap(o.vertices);
+                std::vector<std::int64_t>().swap(o.faces);
+            }
+        }
+    });
+}
+
 void file_identities(const std::vector<std::string>& paths, int threads, std::uint64_t* device,
                      std::uint64_t* inode, std::uint8_t* found) {
     const long long n = static_cast<long long>(paths.size());

@@ -414,8 +414,8 @@ def _format_of(source: str) -> MeshFormat:
 @dataclass(frozen=True, eq=False)
 class _NativeRead:
     """What the core's ``read_mesh_files`` returns: every object's vertices and faces packed,
-    with offsets (k + 1 entries for k objects), the file of each object, its name, and per
-    file a status and an error text."""
+    with offsets (k + 1 entries for k objects), the file of each object, its name, per file a
+    status and an error text, and per object its largest |coordinate|."""
 
     vertices: np.ndarray
     faces: np.ndarray
@@ -425,6 +425,7 @@ class _NativeRead:
     names: list
     status: np.ndarray
     errors: list
+    largest: np.ndarray
 
     def body(self, k: int, name: str, source: str) -> Body:
         """Object ``k`` as a body named ``name``."""
@@ -446,16 +447,15 @@ def _read_native(
     codes = [fmt.native for fmt in formats if fmt.native is not None]
     assert len(codes) == len(formats), "every format read here has a native reader"
     read = _NativeRead(*core.read_mesh_files(sources, codes, merge=merge, threads=threads))
-    # one vectorised pass finds the objects with a coordinate beyond the limit
-    big_rows = np.flatnonzero((np.abs(read.vertices) > MAX_COORDINATE).any(axis=1))
-    big = set(np.searchsorted(read.v_off, big_rows, side="right").tolist())
+    # the objects with a coordinate beyond the limit (the core measured each object's largest)
+    big = set((np.flatnonzero(read.largest > MAX_COORDINATE) + 1).tolist())
     one_each = len(read.owner) == len(sources) and bool(
         (read.owner == np.arange(len(sources))).all()
     )
     if not big and one_each and not read.status.any():
         # the common scene: every file read, one object each, no coordinate too big; each
         # body, when asked for, is what _checked_files builds (named by its file's stem)
-        packed = PackedObjects(read.vertices, read.faces, read.v_off, read.f_off)
+        packed = PackedObjects(read.vertices, read.faces, read.v_off, read.f_off, read.largest)
         return MeshFiles(sources, [None] * len(sources), packed)
     return MeshFiles(sources, list(_checked_files(read, sources, formats, big)))
 
@@ -506,14 +506,20 @@ class PackedObjects:
     """One object per file, packed: file ``j``'s vertices are
     ``vertices[v_off[j]:v_off[j + 1]]`` ((V, 3) float64) and its faces
     ``faces[f_off[j]:f_off[j + 1]]`` ((F, 3) int64, indexing its own vertices), in its frame
-    (no transform)."""
+    (no transform); ``largest``, when given, each file's largest |coordinate| (as
+    :meth:`largest` computes it)."""
 
     def __init__(
-        self, vertices: np.ndarray, faces: np.ndarray, v_off: np.ndarray, f_off: np.ndarray
+        self,
+        vertices: np.ndarray,
+        faces: np.ndarray,
+        v_off: np.ndarray,
+        f_off: np.ndarray,
+        largest: np.ndarray | None = None,
     ) -> None:
         self.vertices, self.faces = vertices, faces
         self.v_off, self.f_off = v_off.tolist(), f_off.tolist()
-        self._largest: np.ndarray | None = None
+        self._largest: np.ndarray | None = largest
 
     def arrays(self, j: int) -> tuple[np.ndarray, np.ndarray]:
         """(vertices, faces) of file ``j``: views, C-contiguous."""
