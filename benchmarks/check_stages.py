@@ -46,9 +46,7 @@ STAGES = [
 ]
 
 
-def timed(
-    times: dict[str, list[float]], label: str, fn: Callable[..., Any]
-) -> Callable[..., Any]:
+def timed(times: dict[str, list[float]], label: str, fn: Callable[..., Any]) -> Callable[..., Any]:
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         start, start_wall = time.process_time(), time.perf_counter()
         try:

@@ -430,9 +430,9 @@ def triangle_distance_batch(a: Annotated[NDArray[numpy.float64], dict(shape=(Non
     Exact distances of triangle pairs a[k], b[k] (n, 3, 3): (distance, point_a, point_b, intersecting).
     """
 
-def read_mesh_files(paths: Sequence[str], formats: Sequence[int], merge: bool = True, threads: int = 0) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], list, Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')], list]:
+def read_mesh_files(paths: Sequence[str], formats: Sequence[int], merge: bool = True, threads: int = 0) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], list, Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')], list, Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')]]:
     """
-    Reads OBJ (format 0) and STL (format 1) files in parallel. Returns (vertices (V, 3), faces (F, 3) local to each object, vertex_offsets (O + 1,), face_offsets (O + 1,), object_file (O,), object names (bytes), status (N,) int8 per file (0 read, 1 not found, 2 a directory, 3 unreadable, 4 corrupt), one message per file ('' when read)).
+    Reads OBJ (format 0) and STL (format 1) files in parallel. Returns (vertices (V, 3), faces (F, 3) local to each object, vertex_offsets (O + 1,), face_offsets (O + 1,), object_file (O,), object names (bytes), status (N,) int8 per file (0 read, 1 not found, 2 a directory, 3 unreadable, 4 corrupt), one message per file ('' when read), the largest |coordinate| of each object (O,), 0 without vertices).
     """
 
 def file_identities(paths: Sequence[str], threads: int = 0) -> tuple[Annotated[NDArray[numpy.uint64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.uint64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.uint8], dict(shape=(None,), order='C')]]:

@@ -125,3 +125,38 @@ def test_a_bad_file_in_a_manifest_of_many_is_one_line_exit_2_nothing_written(tmp
     assert "body 'b41'" in lines[0] and "p041.obj" in lines[0]
     assert "Traceback" not in result.output
     assert not report.exists()
+
+
+def test_the_cores_packing_is_the_files_objects_in_order_on_any_threads(tmp_path):
+    """``read_mesh_files`` packs every object of every file on the core's threads: the same
+    arrays on 1 and 3 threads, each object's arrays those of ``load_mesh``, each object's
+    largest |coordinate| what a numpy reduction of its vertices gives (beyond the limit too),
+    and a bad file among them gives no object and its message."""
+    from meshcol._native import core
+
+    paths = _files(tmp_path / "a", 30)
+    two = tmp_path / "a" / "two.obj"
+    two.write_text(
+        "o x\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\no y\nv 0 0 9e9\nv 1 0 1\nv 0 1 1\nf 4 5 6\n"
+    )
+    paths[7:7] = [os.fspath(two), os.fspath(tmp_path / "a" / "missing.obj")]
+    one, three = (core.read_mesh_files(paths, [0] * len(paths), threads=t) for t in (1, 3))
+    for a, b in zip(one, three):
+        if isinstance(a, np.ndarray):
+            assert a.dtype == b.dtype and a.tobytes() == b.tobytes()
+        else:
+            assert a == b
+    vertices, faces, v_off, f_off, owner, _, status, errors, largest = one
+    assert status.tolist() == [0] * 8 + [1] + [0] * 23 and errors[8] == b"file not found"
+    want = [(j, body) for j, p in enumerate(paths) if j != 8 for body in load_mesh(p)]
+    assert owner.tolist() == [j for j, _ in want] and len(v_off) == len(want) + 1
+    for k, (_, body) in enumerate(want):
+        assert vertices[v_off[k] : v_off[k + 1]].tobytes() == body.vertices.tobytes()
+        assert faces[f_off[k] : f_off[k + 1]].tobytes() == body.faces.tobytes()
+    reduced = np.maximum.reduceat(np.abs(vertices).max(axis=1), v_off[:-1])
+    assert largest.tobytes() == reduced.tobytes() and largest.max() == 9e9
+    two.write_text(two.read_text().replace("9e9", "-1e12"))  # beyond the limit: named
+    del paths[8]
+    with pytest.raises(InvalidMeshError, match=r"vertex 1 has coordinate -1e\+12") as big:
+        read_meshes(paths)
+    assert big.value.path == os.fspath(two)
