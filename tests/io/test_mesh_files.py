@@ -160,3 +160,41 @@ def test_the_cores_packing_is_the_files_objects_in_order_on_any_threads(tmp_path
     with pytest.raises(InvalidMeshError, match=r"vertex 1 has coordinate -1e\+12") as big:
         read_meshes(paths)
     assert big.value.path == os.fspath(two)
+
+
+def test_files_of_folders_in_any_order_are_each_their_own(tmp_path):
+    """The core opens a file relative to its folder when the file before it was in the same
+    folder: files of three folders interleaved (same names in each, a folder reached through
+    ``..`` and through a symbolic link) each read as themselves, and a loop, a named pipe, a
+    folder and a missing file among them say what they are."""
+    from meshcol._native import core
+
+    rng = np.random.default_rng(5)
+    points = {}
+    for folder in ("a", "b", "c"):
+        (tmp_path / folder).mkdir()
+        for k in range(4):
+            path = tmp_path / folder / f"p{k}.obj"
+            points[os.fspath(path)] = rng.normal(size=(4, 3))
+            _obj(path, points[os.fspath(path)])
+    os.symlink(tmp_path / "c", tmp_path / "link")
+    os.symlink("loop.obj", tmp_path / "b" / "loop.obj")
+    os.mkfifo(tmp_path / "b" / "pipe.obj")
+    (tmp_path / "a" / "dir.obj").mkdir()
+    t = os.fspath(tmp_path)
+    order = [f"{t}/a/p0.obj", f"{t}/a/p1.obj", f"{t}/b/p1.obj", f"{t}/b/loop.obj"]
+    order += [f"{t}/b/pipe.obj", f"{t}/a/../b/p2.obj", f"{t}/link/p3.obj", f"{t}/c/p3.obj"]
+    order += [f"{t}/a/dir.obj", f"{t}/c/none.obj", f"{t}/a/p2.obj", f"{t}/b/p0.obj"]
+    same = {f"{t}/a/../b/p2.obj": f"{t}/b/p2.obj", f"{t}/link/p3.obj": f"{t}/c/p3.obj"}
+    for threads in (1, 2):
+        vertices, _, v_off, _, owner, _, status, errors, _ = core.read_mesh_files(
+            order, [0] * len(order), threads=threads
+        )
+        assert status.tolist() == [0, 0, 0, 3, 3, 0, 0, 0, 2, 1, 0, 0]
+        assert (
+            b"symbolic links" in errors[3] and errors[4] == b"is a named pipe, not a regular file"
+        )
+        assert errors[9] == b"file not found"
+        for k, j in enumerate(owner.tolist()):
+            want = points[same.get(order[j], order[j])]
+            assert vertices[v_off[k] : v_off[k + 1]].tobytes() == want.tobytes()
