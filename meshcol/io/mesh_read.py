@@ -526,6 +526,11 @@ class PackedObjects:
         vo, fo = self.v_off, self.f_off
         return self.vertices[vo[j] : vo[j + 1]], self.faces[fo[j] : fo[j + 1]]
 
+    def views(self, files: Sequence[int]) -> list[tuple[np.ndarray, np.ndarray]]:
+        """:meth:`arrays` of each of ``files``, in one pass."""
+        vo, fo, vertices, faces = self.v_off, self.f_off, self.vertices, self.faces
+        return [(vertices[vo[j] : vo[j + 1]], faces[fo[j] : fo[j + 1]]) for j in files]
+
     def largest(self) -> np.ndarray:
         """The largest |coordinate| of each file's vertices (0 for none): one reduction over
         the flat coordinates."""
@@ -624,16 +629,23 @@ def lone_objects(
     others = list(range(n))
     if isinstance(files, MeshFiles) and files.packed is not None:
         index, built, packed = files.index(), files._bodies, files.packed
-        spots = [index.get(key, -1) for key in keys]
-        packed_rows = [k for k, j in enumerate(spots) if j >= 0 and built[j] is None]
-        if packed_rows:
-            positions = np.asarray([spots[k] for k in packed_rows], dtype=np.int64)
-            lone[packed_rows] = True
-            largest[packed_rows] = packed.largest()[positions]
-            for k, j in zip(packed_rows, positions.tolist()):
-                arrays[k] = packed.arrays(j)
+        spots = list(map(index.get, keys))  # None: not read
+        if None not in spots and built.count(None) == len(built):
+            packed_rows, others = others, []  # every key read, every file packed
+        else:
+            packed_rows = [k for k, j in enumerate(spots) if j is not None and built[j] is None]
             done = set(packed_rows)
             others = [k for k in others if k not in done]
+        if packed_rows:
+            positions = [spots[k] for k in packed_rows] if others else spots
+            lone[packed_rows] = True
+            largest[packed_rows] = packed.largest()[np.asarray(positions, dtype=np.int64)]
+            views = packed.views(positions)  # type: ignore[arg-type]
+            if others:
+                for k, pair in zip(packed_rows, views):
+                    arrays[k] = pair
+            else:
+                arrays = list(views)
     loaded = [files.get(keys[k]) for k in others]
     ones = [(k, f[0]) for k, f in zip(others, loaded) if f is not None and len(f) == 1]
     for k, body in ones:

@@ -65,6 +65,10 @@ def test_lone_objects_in_bulk_are_those_of_the_bodies(tmp_path):
     packed = read_meshes(paths)
     packed[os.fspath(two)] = load_mesh(two)  # a file of two objects, added as bodies
     by_body = {path: load_mesh(path) for path in [*paths, os.fspath(two)]}
+    every = lone_objects(read_meshes(paths), paths[::-1])  # every key packed: one pass
+    assert every[0].all() and every[1].tobytes() == lone_objects(by_body, paths[::-1])[1].tobytes()
+    for (v, f), body in zip(every[2], (load_mesh(p)[0] for p in paths[::-1])):  # type: ignore[misc]
+        assert v.tobytes() == body.vertices.tobytes() and f.tobytes() == body.faces.tobytes()
     got, want = lone_objects(packed, keys), lone_objects(by_body, keys)
     np.testing.assert_array_equal(got[0], want[0])
     assert got[1].tobytes() == want[1].tobytes()
