@@ -440,6 +440,11 @@ def file_identities(paths: Sequence[str], threads: int = 0) -> tuple[Annotated[N
     Device and inode of each path, symbolic links followed, stat'ed in parallel. Returns (device (N,) uint64, inode (N,) uint64, found (N,) uint8: 0 where stat fails).
     """
 
+def point_set_fingerprints(points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], threads: int = 0) -> Annotated[NDArray[numpy.uint64], dict(shape=(None,), order='C')]:
+    """
+    The fingerprint (uint64) of each point set packed in points (V, 3), set s being rows offsets[s]:offsets[s + 1]: see meshcol/point_sets.hpp (bulk colliders find repeats with it, then compare the bits).
+    """
+
 def merge_vertices(vertices: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], faces: Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], digits: int = 8) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C')]]:
     """
     Merges vertices equal after rounding to `digits` decimals (trimesh's rule), drops unused ones, renumbers faces. Returns (vertices, faces).

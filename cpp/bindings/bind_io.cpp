@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "meshcol/mesh_read.hpp"
+#include "meshcol/point_sets.hpp"
 #include "ndarray.hpp"
 
 namespace nb = nanobind;
@@ -103,6 +104,22 @@ auto identities(const std::vector<std::string>& paths, int threads) {
                            vector_array<Out<std::uint8_t, -1>>(std::move(found), n, 0));
 }
 
+auto fingerprints(Points points, Index64 offsets, int threads) {
+    const size_t sets = offsets.shape(0) == 0 ? 0 : offsets.shape(0) - 1;
+    const std::int64_t* o = offsets.data();
+    const std::int64_t rows = static_cast<std::int64_t>(points.shape(0));
+    for (size_t s = 0; s < sets; ++s)
+        if (o[s] < 0 || o[s + 1] < o[s] || o[s + 1] > rows)
+            throw std::invalid_argument("offsets must rise from 0 within the points");
+    auto out = new_array<Out<std::uint64_t, -1>>({sets});
+    {
+        nb::gil_scoped_release release;
+        meshcol::point_set_fingerprints(points.data(), o, static_cast<std::int64_t>(sets), threads,
+                                        out.data());
+    }
+    return out;
+}
+
 }  // namespace
 
 void bind_io(nb::module_& m) {
@@ -116,6 +133,10 @@ void bind_io(nb::module_& m) {
     m.def("file_identities", &identities, "paths"_a, "threads"_a = 0,
           "Device and inode of each path, symbolic links followed, stat'ed in parallel. Returns "
           "(device (N,) uint64, inode (N,) uint64, found (N,) uint8: 0 where stat fails).");
+    m.def("point_set_fingerprints", &fingerprints, "points"_a, "offsets"_a, "threads"_a = 0,
+          "The fingerprint (uint64) of each point set packed in points (V, 3), set s being rows "
+          "offsets[s]:offsets[s + 1]: see meshcol/point_sets.hpp (bulk colliders find repeats "
+          "with it, then compare the bits).");
     m.def("merge_vertices", &merge, "vertices"_a, "faces"_a, "digits"_a = 8,
           "Merges vertices equal after rounding to `digits` decimals (trimesh's rule), drops "
           "unused ones, renumbers faces. Returns (vertices, faces).");

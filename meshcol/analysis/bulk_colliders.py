@@ -26,13 +26,6 @@ __all__ = ["bulk_colliders"]
 _PARTS, _PRIMITIVE = attrgetter("parts"), attrgetter("primitive")
 _COLLIDER, _VERTICES = attrgetter("collider"), attrgetter("vertices")
 
-# Odd 64-bit multipliers (splitmix64's and wyhash's): the fingerprint of a point set mixes each
-# vertex's three coordinates' bits, then weighs the vertex by its place in the set. A
-# fingerprint only proposes a match; the bits decide it.
-_MIX = np.uint64(0xBF58476D1CE4E5B9)
-_PLACE = np.uint64(0x94D049BB133111EB)
-_THIRD = np.uint64(0xD6E8FEB86659FD93)
-
 
 def bulk_colliders(
     bodies: Sequence[Body], kind: str, mesh_parts: str
@@ -118,21 +111,7 @@ def _first_equal(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.n
     np.cumsum(counts, out=offsets[1:])
     bits = points.reshape(-1).view(np.uint64)
     n = len(arrays)
-    rows = bits.reshape(-1, 3)
-    # per vertex (a third of the coordinates: less memory to touch), in place
-    mixed = rows[:, 0] * _MIX
-    mixed += rows[:, 1] * _PLACE
-    mixed += rows[:, 2] * _THIRD
-    mixed ^= mixed >> np.uint64(29)
-    place = np.arange(len(rows), dtype=np.uint64)
-    place -= np.repeat(offsets[:-1].astype(np.uint64), counts)
-    place <<= np.uint64(1)
-    place += np.uint64(1)  # odd: a vertex weighed by its place in its set
-    mixed *= place
-    fingerprint = np.zeros(n, dtype=np.uint64)
-    filled = counts > 0
-    if filled.any():
-        fingerprint[filled] = np.add.reduceat(mixed, offsets[:-1][filled])
+    fingerprint = _fingerprints(points, offsets)
     # sets in order of (count, fingerprint, index): the first of each run is the first set
     order = np.lexsort((np.arange(n), fingerprint, counts))
     starts = np.ones(n, dtype=bool)
@@ -145,6 +124,15 @@ def _first_equal(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.n
     if not _same_bits(bits, offsets, counts, first):
         return None  # two sets of one fingerprint differ: the per-body path keys them
     return points, offsets, first
+
+
+def _fingerprints(points: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """(n,) uint64: the fingerprint of each set, computed by the core on its threads (one pass
+    over the points, no temporaries): each vertex's three coordinates' bits mixed, weighed by
+    its place in its set, summed (``meshcol/point_sets.hpp`` says how)."""
+    from meshcol._native import core
+
+    return core.point_set_fingerprints(points, offsets)
 
 
 def _same_bits(
