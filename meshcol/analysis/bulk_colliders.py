@@ -18,6 +18,7 @@ from operator import attrgetter
 
 import numpy as np
 
+from meshcol.collision.point_sets import point_set_fingerprints
 from meshcol.collision.shapes import ConvexSet, _item
 from meshcol.types import Body
 
@@ -130,9 +131,7 @@ def _fingerprints(points: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     """(n,) uint64: the fingerprint of each set, computed by the core on its threads (one pass
     over the points, no temporaries): each vertex's three coordinates' bits mixed, weighed by
     its place in its set, summed (``meshcol/point_sets.hpp`` says how)."""
-    from meshcol._native import core
-
-    return core.point_set_fingerprints(points, offsets)
+    return point_set_fingerprints(points, offsets)
 
 
 def _same_bits(
