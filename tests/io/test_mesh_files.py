@@ -202,3 +202,51 @@ def test_files_of_folders_in_any_order_are_each_their_own(tmp_path):
         for k, j in enumerate(owner.tolist()):
             want = points[same.get(order[j], order[j])]
             assert vertices[v_off[k] : v_off[k + 1]].tobytes() == want.tobytes()
+
+
+def test_formats_found_from_the_ends_of_paths_are_splitexts():
+    """The format of each path, found once per distinct end of the paths, is what
+    ``mesh_format`` says of the path itself (None where it refuses it)."""
+    from meshcol.io.mesh_formats import mesh_format
+    from meshcol.io.mesh_read import _formats_of
+
+    names = [
+        ".obj",
+        "a/.obj",
+        "a..obj",
+        "a.b/c",
+        "a.OBJ",
+        "x.stl",
+        "dir.obj/file",
+        "ab",
+        ".",
+        "a/b.c.d.obj",
+        "a/b.ply",
+        "...obj",
+        "a/..obj",
+        "a./obj",
+        "x.glb",
+        "y.gltf",
+        "z.off",
+        "q.fbx",
+        "r.dae",
+        "s.usd",
+        "",
+        "/",
+        "a/",
+        "a.obj/",
+        "#.obj",
+        "é.obj",
+        "a b.Stl",
+    ]
+    folders = ["", "f/", "/abs/deep/folder.with.dots/", "x" * 40 + "/", "..", "a.obj/"]
+    paths = [folder + name for folder in folders for name in names]
+    paths += ["p" * k + ".obj" for k in range(20)] + [".o" * k for k in range(12)]
+
+    def old(path):
+        try:
+            return mesh_format(path)
+        except InputFileError:
+            return None
+
+    assert _formats_of(paths) == [old(p) for p in paths]
