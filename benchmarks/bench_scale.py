@@ -306,14 +306,22 @@ def meshcol_check(
     return rc, seconds, rss, data
 
 
-#: Stages of a unique-asset check beyond ``check_stages.STAGES``: inside the file read, the
-#: native read (and the Python around it); inside the bodies in bulk, the files' arrays read
-#: in bulk; inside the colliders, the colliders built as arrays and in them the hulls (one
-#: batched call), or the per-body path's hull call and geometry keys when a scene needs it.
+#: Stages of a unique-asset check beyond ``check_stages.STAGES``: the whole output guard and
+#: its mesh paths; the whole load; inside the file read, the formats and the native read (and
+#: the Python around it); inside the bodies in bulk, the files' objects and their arrays read
+#: in bulk; inside the colliders, the colliders built as arrays, their repeats found
+#: (``_first_equal``) and the hulls (one batched call), or the per-body path's hull call and
+#: geometry keys when a scene needs it.
 UNIQUE_STAGES = [
+    ("meshcol.io.outputs", "check_outputs"),
+    ("meshcol.io.scene", "manifest_mesh_files"),
+    ("meshcol.io.mesh_read", "_formats_of"),
     ("meshcol.io.mesh_read", "_read_native"),
     ("meshcol.io.scene_columns", "lone_objects"),
+    ("meshcol.io.scene_columns", "_plain_objects"),
+    ("meshcol.analysis.check", "_load"),
     ("meshcol.analysis.colliders", "bulk_colliders"),
+    ("meshcol.analysis.bulk_colliders", "_first_equal"),
     ("meshcol.collision.shapes", "pack_hull_slices"),
     ("meshcol.collision.shapes", "pack_hulls"),
     ("meshcol.analysis.colliders", "_geometry_key"),
@@ -509,7 +517,7 @@ def main() -> None:
     parser.add_argument(
         "--stages",
         action="store_true",
-        help="each unique-asset size also run under check_stages.py: CPU seconds per stage",
+        help="each unique-asset size also run under check_stages.py: CPU and wall seconds per stage",
     )
     parser.add_argument(
         "--primitive-kinds",

@@ -3,9 +3,11 @@ time goes, from the command line, in one process.
 
 Wraps the stage functions the command calls (the output guard's manifest read, the manifest's
 document, validation and bodies, colliders, the broad, narrow, mesh and depth stages, the
-report's rows and its writing) with ``time.process_time`` counters, runs ``meshcol check`` with
-the given arguments, and prints each stage's CPU seconds, the whole run's CPU time and its peak
-resident memory. CPU time, not wall time: the figure a loaded machine does not move.
+report's rows and its writing) with ``time.process_time`` and ``time.perf_counter`` counters,
+runs ``meshcol check`` with the given arguments, and prints each stage's CPU and wall seconds
+(the imports first), the whole run's CPU and wall time and its peak resident memory. The CPU
+time is the figure a loaded machine does not move; the wall time says, on a quiet machine,
+which stages run on one core (wall = CPU) and which on all of them (wall < CPU).
 
 Run: .venv/bin/python benchmarks/check_stages.py MANIFEST [meshcol check options]
      e.g. benchmarks/check_stages.py benchmarks/.cache/scale/primitives-spheres100000/scene.json
@@ -46,22 +48,25 @@ STAGES = [
 ]
 
 
-def timed(times: dict[str, float], label: str, fn: Callable[..., Any]) -> Callable[..., Any]:
+def timed(times: dict[str, list[float]], label: str, fn: Callable[..., Any]) -> Callable[..., Any]:
     def wrapper(*args: Any, **kwargs: Any) -> Any:
-        start = time.process_time()
+        start, start_wall = time.process_time(), time.perf_counter()
         try:
             return fn(*args, **kwargs)
         finally:
-            times[label] = times.get(label, 0.0) + time.process_time() - start
+            spent = times.setdefault(label, [0.0, 0.0])
+            spent[0] += time.process_time() - start
+            spent[1] += time.perf_counter() - start_wall
 
     return wrapper
 
 
 def main() -> None:
-    start = time.process_time()
+    start, start_wall = time.process_time(), time.perf_counter()
     import meshcol.cli
 
-    times: dict[str, float] = {}
+    imported = time.process_time() - start, time.perf_counter() - start_wall
+    times: dict[str, list[float]] = {}
     for module_name, name in STAGES:
         module = importlib.import_module(module_name)
         if not hasattr(module, name):  # a stage an older build (a --baseline) does not have
@@ -74,15 +79,16 @@ def main() -> None:
         meshcol.cli.main()
     except SystemExit as exit_:
         code = exit_.code
-    total = time.process_time() - start
+    total, wall = time.process_time() - start, time.perf_counter() - start_wall
     usage = resource.getrusage(resource.RUSAGE_SELF)
-    print("stage CPU seconds (nested: read_document and below are inside manifest_inputs or")
-    print("the load; the load's total is the report's load_seconds):")
-    for label, seconds in times.items():
-        print(f"  {label:32s} {seconds:7.2f}")
+    print("stage CPU and wall seconds (nested: read_document and below are inside")
+    print("manifest_inputs or the load; the load's total is the report's load_seconds):")
+    print(f"  {'imports (meshcol.cli)':32s} {imported[0]:7.2f} {imported[1]:7.2f}")
+    for label, (seconds, elapsed) in times.items():
+        print(f"  {label:32s} {seconds:7.2f} {elapsed:7.2f}")
     print(
         f"whole run: {total:.2f} s CPU (user {usage.ru_utime:.2f}, system {usage.ru_stime:.2f}), "
-        f"peak {usage.ru_maxrss / 1024:.0f} MiB, exit {code}"
+        f"{wall:.2f} s wall, peak {usage.ru_maxrss / 1024:.0f} MiB, exit {code}"
     )
 
 

@@ -430,14 +430,19 @@ def triangle_distance_batch(a: Annotated[NDArray[numpy.float64], dict(shape=(Non
     Exact distances of triangle pairs a[k], b[k] (n, 3, 3): (distance, point_a, point_b, intersecting).
     """
 
-def read_mesh_files(paths: Sequence[str], formats: Sequence[int], merge: bool = True, threads: int = 0) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], list, Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')], list]:
+def read_mesh_files(paths: Sequence[str], formats: Sequence[int], merge: bool = True, threads: int = 0) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], list, Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')], list, Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')]]:
     """
-    Reads OBJ (format 0) and STL (format 1) files in parallel. Returns (vertices (V, 3), faces (F, 3) local to each object, vertex_offsets (O + 1,), face_offsets (O + 1,), object_file (O,), object names (bytes), status (N,) int8 per file (0 read, 1 not found, 2 a directory, 3 unreadable, 4 corrupt), one message per file ('' when read)).
+    Reads OBJ (format 0) and STL (format 1) files in parallel. Returns (vertices (V, 3), faces (F, 3) local to each object, vertex_offsets (O + 1,), face_offsets (O + 1,), object_file (O,), object names (bytes), status (N,) int8 per file (0 read, 1 not found, 2 a directory, 3 unreadable, 4 corrupt), one message per file ('' when read), the largest |coordinate| of each object (O,), 0 without vertices).
     """
 
 def file_identities(paths: Sequence[str], threads: int = 0) -> tuple[Annotated[NDArray[numpy.uint64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.uint64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.uint8], dict(shape=(None,), order='C')]]:
     """
     Device and inode of each path, symbolic links followed, stat'ed in parallel. Returns (device (N,) uint64, inode (N,) uint64, found (N,) uint8: 0 where stat fails).
+    """
+
+def point_set_fingerprints(points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], threads: int = 0) -> Annotated[NDArray[numpy.uint64], dict(shape=(None,), order='C')]:
+    """
+    The fingerprint (uint64) of each point set packed in points (V, 3), set s being rows offsets[s]:offsets[s + 1]: see meshcol/point_sets.hpp (bulk colliders find repeats with it, then compare the bits).
     """
 
 def merge_vertices(vertices: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], faces: Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], digits: int = 8) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C')]]:

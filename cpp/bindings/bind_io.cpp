@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "meshcol/mesh_read.hpp"
+#include "meshcol/point_sets.hpp"
 #include "ndarray.hpp"
 
 namespace nb = nanobind;
@@ -35,56 +36,42 @@ auto read_files(const std::vector<std::string>& paths, const std::vector<int>& f
         kinds.push_back(static_cast<meshcol::MeshFormat>(f));
     }
     std::vector<meshcol::MeshFile> files;
+    std::vector<meshcol::PackedStart> starts;
     {
         nb::gil_scoped_release release;
         files = meshcol::read_mesh_files(paths, kinds, merge, threads);
+        starts = meshcol::packed_starts(files);
     }
-    std::vector<double> vertices;
-    std::vector<std::int64_t> faces;
-    std::vector<std::int64_t> vertex_offsets{0}, face_offsets{0}, object_file;
-    std::vector<std::string> names, errors;
-    std::vector<std::int8_t> status;
-    size_t total_v = 0, total_f = 0, total_o = 0;
-    for (const meshcol::MeshFile& file : files)
-        for (const meshcol::MeshObject& o : file.objects) {
-            total_v += o.vertices.size();
-            total_f += o.faces.size();
-            ++total_o;
-        }
-    vertices.reserve(total_v);  // one allocation each: 100,000 files append without regrowth
-    faces.reserve(total_f);
-    vertex_offsets.reserve(total_o + 1);
-    face_offsets.reserve(total_o + 1);
-    object_file.reserve(total_o);
-    names.reserve(total_o);
-    errors.reserve(files.size());
-    status.reserve(files.size());
-    for (size_t i = 0; i < files.size(); ++i) {
-        errors.push_back(std::move(files[i].error));
-        status.push_back(static_cast<std::int8_t>(files[i].status));
-        for (meshcol::MeshObject& o : files[i].objects) {
-            vertices.insert(vertices.end(), o.vertices.begin(), o.vertices.end());
-            faces.insert(faces.end(), o.faces.begin(), o.faces.end());
-            vertex_offsets.push_back(static_cast<std::int64_t>(vertices.size() / 3));
-            face_offsets.push_back(static_cast<std::int64_t>(faces.size() / 3));
-            object_file.push_back(static_cast<std::int64_t>(i));
-            names.push_back(std::move(o.name));
-        }
-        files[i].objects.clear();
+    const meshcol::PackedStart total = starts.back();
+    const size_t v = static_cast<size_t>(total.vertex), f = static_cast<size_t>(total.face),
+                 o = static_cast<size_t>(total.object);
+    auto vertices = new_array<VertexArray>({v, 3});
+    auto faces = new_array<FaceArray>({f, 3});
+    auto vertex_offsets = new_array<IndexArray>({o + 1});
+    auto face_offsets = new_array<IndexArray>({o + 1});
+    auto object_file = new_array<IndexArray>({o});
+    auto largest = new_array<Out<double, -1>>({o});
+    auto status = new_array<Out<std::int8_t, -1>>({files.size()});
+    {
+        // one copy into numpy's arrays, on the core's threads (each file's objects freed as
+        // they are copied): 100,000 files' vertices and faces are a few hundred MB
+        nb::gil_scoped_release release;
+        meshcol::pack_mesh_files(files, starts, threads, vertices.data(), faces.data(),
+                                 vertex_offsets.data(), face_offsets.data(), object_file.data(),
+                                 largest.data());
+        for (size_t i = 0; i < files.size(); ++i)
+            status.data()[i] = static_cast<std::int8_t>(files[i].status);
     }
-    const size_t v = vertices.size() / 3, f = faces.size() / 3, o = object_file.size();
     // Names and messages carry bytes of the file (an object name, a bad token) in whatever
     // encoding it has: bytes, decoded in Python (UTF-8, else Latin-1), never a decode error here.
     nb::list name_bytes, error_bytes;
-    for (const std::string& name : names) name_bytes.append(nb::bytes(name.data(), name.size()));
-    for (const std::string& error : errors) error_bytes.append(nb::bytes(error.data(), error.size()));
-    return std::make_tuple(vector_array<VertexArray>(std::move(vertices), v, 3),
-                           vector_array<FaceArray>(std::move(faces), f, 3),
-                           vector_array<IndexArray>(std::move(vertex_offsets), o + 1, 0),
-                           vector_array<IndexArray>(std::move(face_offsets), o + 1, 0),
-                           vector_array<IndexArray>(std::move(object_file), o, 0), name_bytes,
-                           vector_array<Out<std::int8_t, -1>>(std::move(status), files.size(), 0),
-                           error_bytes);
+    for (const meshcol::MeshFile& file : files) {
+        error_bytes.append(nb::bytes(file.error.data(), file.error.size()));
+        for (const meshcol::MeshObject& object : file.objects)
+            name_bytes.append(nb::bytes(object.name.data(), object.name.size()));
+    }
+    return std::make_tuple(vertices, faces, vertex_offsets, face_offsets, object_file, name_bytes,
+                           status, error_bytes, largest);
 }
 
 auto merge(Points vertices, Faces faces, int digits) {
@@ -117,6 +104,22 @@ auto identities(const std::vector<std::string>& paths, int threads) {
                            vector_array<Out<std::uint8_t, -1>>(std::move(found), n, 0));
 }
 
+auto fingerprints(Points points, Index64 offsets, int threads) {
+    const size_t sets = offsets.shape(0) == 0 ? 0 : offsets.shape(0) - 1;
+    const std::int64_t* o = offsets.data();
+    const std::int64_t rows = static_cast<std::int64_t>(points.shape(0));
+    for (size_t s = 0; s < sets; ++s)
+        if (o[s] < 0 || o[s + 1] < o[s] || o[s + 1] > rows)
+            throw std::invalid_argument("offsets must rise from 0 within the points");
+    auto out = new_array<Out<std::uint64_t, -1>>({sets});
+    {
+        nb::gil_scoped_release release;
+        meshcol::point_set_fingerprints(points.data(), o, static_cast<std::int64_t>(sets), threads,
+                                        out.data());
+    }
+    return out;
+}
+
 }  // namespace
 
 void bind_io(nb::module_& m) {
@@ -125,10 +128,15 @@ void bind_io(nb::module_& m) {
           "Reads OBJ (format 0) and STL (format 1) files in parallel. Returns (vertices (V, 3), "
           "faces (F, 3) local to each object, vertex_offsets (O + 1,), face_offsets (O + 1,), "
           "object_file (O,), object names (bytes), status (N,) int8 per file (0 read, 1 not found, 2 a "
-          "directory, 3 unreadable, 4 corrupt), one message per file ('' when read)).");
+          "directory, 3 unreadable, 4 corrupt), one message per file ('' when read), the largest "
+          "|coordinate| of each object (O,), 0 without vertices).");
     m.def("file_identities", &identities, "paths"_a, "threads"_a = 0,
           "Device and inode of each path, symbolic links followed, stat'ed in parallel. Returns "
           "(device (N,) uint64, inode (N,) uint64, found (N,) uint8: 0 where stat fails).");
+    m.def("point_set_fingerprints", &fingerprints, "points"_a, "offsets"_a, "threads"_a = 0,
+          "The fingerprint (uint64) of each point set packed in points (V, 3), set s being rows "
+          "offsets[s]:offsets[s + 1]: see meshcol/point_sets.hpp (bulk colliders find repeats "
+          "with it, then compare the bits).");
     m.def("merge_vertices", &merge, "vertices"_a, "faces"_a, "digits"_a = 8,
           "Merges vertices equal after rounding to `digits` decimals (trimesh's rule), drops "
           "unused ones, renumbers faces. Returns (vertices, faces).");

@@ -145,19 +145,36 @@ class LineScanner {
         const char* begin = line_.data() + at_;
         const char* end = line_.data() + line_.size();
         if (*begin == '+') ++begin;
-        const auto result = std::from_chars(begin, end, value);
-        if (result.ec != std::errc() || result.ptr == begin) return false;
-        if (result.ptr < end && *result.ptr == '/') {
-            at_ = static_cast<size_t>(result.ptr - line_.data());
+        const char* stop = plain_integer(begin, end, value);
+        if (stop == nullptr) {
+            const auto result = std::from_chars(begin, end, value);
+            if (result.ec != std::errc() || result.ptr == begin) return false;
+            stop = result.ptr;
+        }
+        if (stop < end && *stop == '/') {
+            at_ = static_cast<size_t>(stop - line_.data());
             while (at_ < line_.size() && !is_space(line_[at_]) && line_[at_] != '#') ++at_;
             return true;
         }
-        if (!ends_token(result.ptr)) return false;
-        at_ = static_cast<size_t>(result.ptr - line_.data());
+        if (!ends_token(stop)) return false;
+        at_ = static_cast<size_t>(stop - line_.data());
         return true;
     }
 
   private:
+    /// An optional '-' and 1 to 18 digits (no overflow possible), read as std::from_chars
+    /// reads them; where it ends, or nullptr for anything else (std::from_chars then).
+    static const char* plain_integer(const char* p, const char* end, long long& value) {
+        const bool negative = p < end && *p == '-';
+        if (negative) ++p;
+        const char* first = p;
+        long long digits = 0;
+        for (; p < end && static_cast<unsigned>(*p - '0') < 10 && p - first < 18; ++p)
+            digits = digits * 10 + (*p - '0');
+        if (p == first || (p < end && static_cast<unsigned>(*p - '0') < 10)) return nullptr;
+        value = negative ? -digits : digits;
+        return p;
+    }
     /// A plain decimal (`-0.123456`: at most 15 digits, no exponent) read exactly: its digits
     /// as an integer, divided by a power of ten, both exact in a double, so the one rounding
     /// of the division gives the correctly rounded value, the bits std::from_chars gives
@@ -191,11 +208,11 @@ class LineScanner {
 /// entry per global vertex, all -1) is scratch space, returned all -1 again.
 MeshObject gather(std::string name, const std::vector<double>& vertices,
                   const std::vector<std::int64_t>& faces, size_t begin, size_t end,
-                  std::vector<std::int64_t>& remap) {
+                  std::vector<std::int64_t>& remap, std::vector<std::int64_t>& ids) {
     MeshObject object;
     object.name = std::move(name);
     const size_t count = remap.size();
-    std::vector<std::int64_t> ids;
+    ids.clear();
     for (size_t k = begin; k < end; ++k) {
         std::int64_t& slot = remap[static_cast<size_t>(faces[k])];
         if (slot < 0) {
@@ -231,21 +248,74 @@ struct ObjectStart {
     bool group;  ///< a `g` line: starts an object only in a file with no `o` line
 };
 
+/// The working arrays of `parse_obj`, kept from one file to the next by a reader thread (a
+/// scene's 100,000 small files would otherwise grow and free a dozen vectors each).
+struct ObjScratch {
+    std::vector<double> vertices;
+    std::vector<std::int64_t> faces;
+    std::vector<ObjectStart> starts;
+    std::vector<std::string_view> tokens;
+    std::vector<long long> raw;
+    std::vector<std::int64_t> corners, remap, ids;
+};
+
+/// A vertex's rounded coordinates: what `merge_vertices` compares.
+struct Key {
+    std::int64_t q[3];
+    bool operator==(const Key& o) const {
+        return q[0] == o.q[0] && q[1] == o.q[1] && q[2] == o.q[2];
+    }
+};
+
+/// A slot of `merge_vertices`' table: a key's hash beside its merged index.
+struct Slot {
+    std::uint64_t hash;
+    std::int64_t index;  // -1: empty
+};
+
+/// The working arrays of `merge_vertices`, kept the same way.
+struct MergeScratch {
+    std::vector<char> used;
+    std::vector<std::int64_t> remap;
+    std::vector<double> merged;
+    std::vector<Slot> slots, recent;
+    std::vector<Key> keys;
+};
+
+MeshFile parse_obj_with(const char* data, size_t size, ObjScratch& scratch);
+void merge_with(std::vector<double>& vertices, std::vector<std::int64_t>& faces, int digits,
+                MergeScratch& scratch);
+
 }  // namespace
 
 MeshFile parse_obj(const char* data, size_t size) {
+    ObjScratch scratch;
+    return parse_obj_with(data, size, scratch);
+}
+
+void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& faces, int digits) {
+    MergeScratch scratch;
+    merge_with(vertices, faces, digits, scratch);
+}
+
+namespace {
+
+MeshFile parse_obj_with(const char* data, size_t size, ObjScratch& scratch) {
     MeshFile file;
     // One pass: vertices, faces (global, 0-based) and where each `o` and `g` line falls; at the
     // end, `g` lines split objects only when no line is an `o` line.
     bool has_object_lines = false;
-    std::vector<double> vertices;
-    std::vector<std::int64_t> faces;
-    std::vector<ObjectStart> starts;
+    std::vector<double>& vertices = scratch.vertices;
+    std::vector<std::int64_t>& faces = scratch.faces;
+    std::vector<ObjectStart>& starts = scratch.starts;
+    vertices.clear();
+    faces.clear();
+    starts.clear();
     long long largest = -1;      // the largest positive index seen, 0-based
     size_t largest_line = 0;
-    std::vector<std::string_view> tokens;
-    std::vector<long long> raw;
-    std::vector<std::int64_t> corners;
+    std::vector<std::string_view>& tokens = scratch.tokens;
+    std::vector<long long>& raw = scratch.raw;
+    std::vector<std::int64_t>& corners = scratch.corners;
 
     // A face's corners, in order, as the file gives them: checked and triangulated.
     auto add_face = [&](size_t line_number, const std::vector<long long>& indices) {
@@ -381,14 +451,16 @@ MeshFile parse_obj(const char* data, size_t size) {
                                                (count == 1 ? " vertex" : " vertices"));
         return file;
     }
-    std::vector<std::int64_t> remap(static_cast<size_t>(count), -1);
+    std::vector<std::int64_t>& remap = scratch.remap;
+    remap.assign(static_cast<size_t>(count), -1);
     // the objects: from the first face, then from each `o` line (and `g` line, without `o`)
     std::string first_name;
     size_t begin = 0;
     std::string* name = &first_name;
     auto close = [&](size_t end) {
         if (end > begin)
-            file.objects.push_back(gather(std::move(*name), vertices, faces, 3 * begin, 3 * end, remap));
+            file.objects.push_back(
+                gather(std::move(*name), vertices, faces, 3 * begin, 3 * end, remap, scratch.ids));
     };
     for (ObjectStart& at : starts) {
         if (at.group && has_object_lines) continue;
@@ -399,6 +471,8 @@ MeshFile parse_obj(const char* data, size_t size) {
     close(faces.size() / 3);
     return file;
 }
+
+}  // namespace
 
 MeshFile parse_stl(const char* data, size_t size) {
     MeshFile file;
@@ -513,17 +587,15 @@ MeshFile parse_stl(const char* data, size_t size) {
     return file;
 }
 
-void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& faces, int digits) {
+namespace {
+
+void merge_with(std::vector<double>& vertices, std::vector<std::int64_t>& faces, int digits,
+                MergeScratch& scratch) {
     const size_t n = vertices.size() / 3;
-    std::vector<char> used(n, 0);
+    std::vector<char>& used = scratch.used;
+    used.assign(n, 0);
     for (const std::int64_t f : faces) used[static_cast<size_t>(f)] = 1;
 
-    struct Key {
-        std::int64_t q[3];
-        bool operator==(const Key& o) const {
-            return q[0] == o.q[0] && q[1] == o.q[1] && q[2] == o.q[2];
-        }
-    };
     struct KeyHash {
         std::uint64_t operator()(const Key& k) const {
             std::uint64_t h = 0;
@@ -552,10 +624,6 @@ void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& fa
     // Open addressing with linear probing, kept at most half full and grown as merged vertices
     // are found (a triangle soup has ~6x fewer than its corners). A slot holds the key's hash
     // beside the merged index, so a probe reads the key itself only on a hash match.
-    struct Slot {
-        std::uint64_t hash;
-        std::int64_t index;  // -1: empty
-    };
     // Sized to the object: a scene's props are small, and tables of a fixed 80 KiB each
     // cost more to clear than to fill (results never depend on the sizes).
     // A large soup (a 2-million-triangle STL) starts near its final size, half full at the
@@ -563,16 +631,20 @@ void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& fa
     size_t capacity = 16;
     const size_t expected = n >= 65536 ? n / 3 : 0;
     while (capacity < 2 * n && (capacity < 1024 || capacity < expected)) capacity <<= 1;
-    std::vector<Slot> slots(capacity, Slot{0, -1});
-    std::vector<Key> keys;
+    std::vector<Slot>& slots = scratch.slots;
+    slots.assign(capacity, Slot{0, -1});
+    std::vector<Key>& keys = scratch.keys;
+    keys.clear();
     const KeyHash hasher;
     auto insert_slot = [&](std::uint64_t h, std::int64_t index) {
         size_t at = h & (capacity - 1);
         while (slots[at].index >= 0) at = (at + 1) & (capacity - 1);
         slots[at] = Slot{h, index};
     };
-    std::vector<std::int64_t> remap(n, -1);
-    std::vector<double> merged;
+    std::vector<std::int64_t>& remap = scratch.remap;
+    remap.assign(n, -1);
+    std::vector<double>& merged = scratch.merged;
+    merged.clear();
     // A small object's merged vertices fit in what its corners take (no regrowth); a large
     // soup's are about a sixth of its corners.
     const size_t reserve = n < 65536 ? n : n / 4;
@@ -581,7 +653,8 @@ void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& fa
     size_t recent_size = 16;  // at most 4096 slots (64 KiB), a power of two
     while (recent_size < n && recent_size < 4096) recent_size <<= 1;
     const size_t kRecent = recent_size;
-    std::vector<Slot> recent(kRecent, Slot{0, -1});
+    std::vector<Slot>& recent = scratch.recent;
+    recent.assign(kRecent, Slot{0, -1});
     // Corners go in blocks: each block's keys and hashes first, with their table slots
     // prefetched, then looked up one by one in order (the same lookups as one at a time, so
     // the same numbering). A big soup's lookups are cache misses in a table of tens of MiB;
@@ -639,10 +712,8 @@ void merge_vertices(std::vector<double>& vertices, std::vector<std::int64_t>& fa
         }
     }
     for (std::int64_t& f : faces) f = remap[static_cast<size_t>(f)];
-    vertices = std::move(merged);
+    vertices.assign(merged.begin(), merged.end());  // within its room: no new allocation
 }
-
-namespace {
 
 /// What a file that is not regular is, for the message (as meshcol/io/safe_read.py says it).
 const char* special_kind(mode_t mode) {
@@ -652,12 +723,50 @@ const char* special_kind(mode_t mode) {
     return "not a regular file";
 }
 
-void read_one(const std::string& path, MeshFormat format, bool merge, std::vector<char>& buffer,
+/// What a reader thread keeps from one file to the next: the file's bytes and the parser's and
+/// the merge's working arrays.
+struct ReadScratch {
+    std::vector<char> buffer;
+    ObjScratch obj;
+    MergeScratch merge;
+    std::string folder;  ///< the folder `folder_fd` is open on ("" with -1: none)
+    int folder_fd = -1;
+    ~ReadScratch() {
+        if (folder_fd >= 0) ::close(folder_fd);
+    }
+};
+
+/// Opens `path` as `open` would, relative to its folder's descriptor when the last file was
+/// in the same folder: the kernel then walks one name instead of the whole path (100,000
+/// files in one folder). The same file, the same errors: the folder is opened by the same
+/// path (symbolic links followed as the walk would) with O_PATH, which needs no read
+/// permission, and any failure to open it falls back to the whole path.
+int open_in_folder(const std::string& path, int flags, ReadScratch& scratch) {
+#ifdef O_PATH
+    const size_t slash = path.rfind('/');
+    if (slash != std::string::npos && slash > 0 && slash + 1 < path.size()) {
+        const std::string_view folder(path.data(), slash);
+        if (scratch.folder_fd < 0 || folder != scratch.folder) {
+            if (scratch.folder_fd >= 0) ::close(scratch.folder_fd);
+            scratch.folder.assign(folder);
+            scratch.folder_fd =
+                ::open(scratch.folder.c_str(), O_PATH | O_DIRECTORY | O_CLOEXEC);
+        }
+        if (scratch.folder_fd >= 0) return ::openat(scratch.folder_fd, path.c_str() + slash + 1, flags);
+    }
+#else
+    (void)scratch;
+#endif
+    return ::open(path.c_str(), flags);
+}
+
+void read_one(const std::string& path, MeshFormat format, bool merge, ReadScratch& scratch,
               MeshFile& out) {
+    std::vector<char>& buffer = scratch.buffer;
     // Opened without blocking (a named pipe would wait for a writer forever) and checked on the
     // open descriptor before a byte is read: only a regular file within the cap is read.
     // Plain descriptors, no stdio: a scene may name 100,000 small files.
-    const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+    const int fd = open_in_folder(path, O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC, scratch);
     if (fd < 0) {
         const int code = errno;
         out.status = code == ENOENT ? ReadStatus::NotFound : ReadStatus::Unreadable;
@@ -725,10 +834,12 @@ void read_one(const std::string& path, MeshFormat format, bool merge, std::vecto
         return;
     }
     // the buffer keeps its size for the next file (never shrunk, so never filled again)
-    out = format == MeshFormat::Obj ? parse_obj(buffer.data(), size) : parse_stl(buffer.data(), size);
+    out = format == MeshFormat::Obj ? parse_obj_with(buffer.data(), size, scratch.obj)
+                                    : parse_stl(buffer.data(), size);
     if (!out.error.empty()) out.status = ReadStatus::Corrupt;
     if (merge && out.error.empty())
-        for (MeshObject& object : out.objects) merge_vertices(object.vertices, object.faces, 8);
+        for (MeshObject& object : out.objects)
+            merge_with(object.vertices, object.faces, 8, scratch.merge);
 }
 
 }  // namespace
@@ -739,12 +850,12 @@ std::vector<MeshFile> read_mesh_files(const std::vector<std::string>& paths,
     std::vector<MeshFile> files(paths.size());
     const long long n = static_cast<long long>(paths.size());
     parallel_for(n, resolve_threads(threads, n, 4), [&](long long begin, long long end) {
-        std::vector<char> buffer;
+        ReadScratch scratch;
         for (long long i = begin; i < end; ++i) {
             MeshFile& out = files[static_cast<size_t>(i)];
             try {
                 read_one(paths[static_cast<size_t>(i)], formats[static_cast<size_t>(i)], merge,
-                         buffer, out);
+                         scratch, out);
             } catch (const std::bad_alloc&) {
                 out = MeshFile{};
                 out.status = ReadStatus::Unreadable;
@@ -753,6 +864,59 @@ std::vector<MeshFile> read_mesh_files(const std::vector<std::string>& paths,
         }
     });
     return files;
+}
+
+std::vector<PackedStart> packed_starts(const std::vector<MeshFile>& files) {
+    std::vector<PackedStart> starts(files.size() + 1);
+    PackedStart at;
+    for (size_t i = 0; i < files.size(); ++i) {
+        starts[i] = at;
+        for (const MeshObject& o : files[i].objects) {
+            at.object += 1;
+            at.vertex += static_cast<std::int64_t>(o.vertices.size() / 3);
+            at.face += static_cast<std::int64_t>(o.faces.size() / 3);
+        }
+    }
+    starts[files.size()] = at;
+    return starts;
+}
+
+void pack_mesh_files(std::vector<MeshFile>& files, const std::vector<PackedStart>& starts,
+                     int threads, double* vertices, std::int64_t* faces,
+                     std::int64_t* vertex_offsets, std::int64_t* face_offsets,
+                     std::int64_t* object_file, double* largest) {
+    const long long n = static_cast<long long>(files.size());
+    vertex_offsets[starts[files.size()].object] = starts[files.size()].vertex;
+    face_offsets[starts[files.size()].object] = starts[files.size()].face;
+    parallel_for(n, resolve_threads(threads, n, 256), [&](long long begin, long long end) {
+        for (long long i = begin; i < end; ++i) {
+            PackedStart at = starts[static_cast<size_t>(i)];
+            for (MeshObject& o : files[static_cast<size_t>(i)].objects) {
+                const size_t k = static_cast<size_t>(at.object);
+                vertex_offsets[k] = at.vertex;
+                face_offsets[k] = at.face;
+                object_file[k] = i;
+                double top = 0.0;
+                for (const double v : o.vertices) {
+                    const double a = std::fabs(v);
+                    top = a > top || a != a ? a : top;  // NaN sticks: never "within a limit"
+                    if (top != top) break;
+                }
+                largest[k] = top;
+                if (!o.vertices.empty())
+                    std::memcpy(vertices + 3 * at.vertex, o.vertices.data(),
+                                o.vertices.size() * sizeof(double));
+                if (!o.faces.empty())
+                    std::memcpy(faces + 3 * at.face, o.faces.data(),
+                                o.faces.size() * sizeof(std::int64_t));
+                at.object += 1;
+                at.vertex += static_cast<std::int64_t>(o.vertices.size() / 3);
+                at.face += static_cast<std::int64_t>(o.faces.size() / 3);
+                std::vector<double>().swap(o.vertices);
+                std::vector<std::int64_t>().swap(o.faces);
+            }
+        }
+    });
 }
 
 void file_identities(const std::vector<std::string>& paths, int threads, std::uint64_t* device,

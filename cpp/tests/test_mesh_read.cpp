@@ -1,5 +1,7 @@
 // OBJ and STL readers and the vertex merge (mesh_read.hpp): what they read, and the status and
 // one-line message of every kind of bad input.
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -142,6 +144,71 @@ TEST_CASE("mesh read: files read in parallel, each with its status") {
     CHECK(files[3].status == ReadStatus::NotFound);
     CHECK_EQ(files[3].error, std::string("file not found"));
     CHECK(files[4].status == ReadStatus::Directory);
+}
+
+TEST_CASE("mesh read: files read with kept working arrays are each read alone") {
+    // A reader thread keeps its arrays and its folder's descriptor from file to file: every
+    // file of a long list (big after small, several objects after one, faults between, files
+    // of two folders interleaved) reads as it does alone.
+    const TemporaryFolder one, two;
+    std::vector<std::string> paths;
+    std::mt19937 random(7);
+    for (int k = 0; k < 60; ++k) {
+        std::string text;
+        const int points = 3 + static_cast<int>(random() % 40);
+        for (int p = 0; p < points; ++p)
+            text += "v " + std::to_string(random() % 1000 * 1e-3) + " " + std::to_string(p) +
+                    " " + std::to_string(k) + "\n";
+        if (k % 7 == 3) text += "o second\n";
+        for (int p = 2; p < points; ++p)
+            text += "f 1 " + std::to_string(p) + " " + std::to_string(p + 1) + "\n";
+        if (k % 11 == 5) text += "f 1 2 999\n";
+        paths.push_back((k % 2 ? one : two).write("f" + std::to_string(k) + ".obj", text));
+    }
+    paths.push_back((one.path / "missing.obj").string());
+    const std::vector<MeshFormat> formats(paths.size(), MeshFormat::Obj);
+    for (const int threads : {1, 3}) {
+        const std::vector<MeshFile> files = read_mesh_files(paths, formats, true, threads);
+        for (size_t i = 0; i < paths.size(); ++i) {
+            const MeshFile alone = read_mesh_files({paths[i]}, {MeshFormat::Obj}, true, 1)[0];
+            CHECK(files[i].status == alone.status);
+            CHECK_EQ(files[i].error, alone.error);
+            REQUIRE(files[i].objects.size() == alone.objects.size());
+            for (size_t o = 0; o < alone.objects.size(); ++o) {
+                CHECK(files[i].objects[o].vertices == alone.objects[o].vertices);
+                CHECK(files[i].objects[o].faces == alone.objects[o].faces);
+                CHECK_EQ(files[i].objects[o].name, alone.objects[o].name);
+            }
+        }
+        // packed: each object's arrays in order, its file and its largest |coordinate|
+        std::vector<MeshFile> copy = files;
+        const std::vector<PackedStart> starts = packed_starts(copy);
+        const PackedStart total = starts.back();
+        std::vector<double> vertices(3 * static_cast<size_t>(total.vertex));
+        std::vector<std::int64_t> faces(3 * static_cast<size_t>(total.face));
+        std::vector<std::int64_t> v_off(static_cast<size_t>(total.object) + 1);
+        std::vector<std::int64_t> f_off(v_off.size()), owner(v_off.size() - 1);
+        std::vector<double> largest(owner.size());
+        pack_mesh_files(copy, starts, threads, vertices.data(), faces.data(), v_off.data(),
+                        f_off.data(), owner.data(), largest.data());
+        size_t k = 0;
+        for (size_t i = 0; i < files.size(); ++i)
+            for (const MeshObject& object : files[i].objects) {
+                CHECK_EQ(owner[k], static_cast<std::int64_t>(i));
+                const std::vector<double> got(vertices.begin() + 3 * v_off[k],
+                                              vertices.begin() + 3 * v_off[k + 1]);
+                CHECK(got == object.vertices);
+                const std::vector<std::int64_t> got_faces(faces.begin() + 3 * f_off[k],
+                                                          faces.begin() + 3 * f_off[k + 1]);
+                CHECK(got_faces == object.faces);
+                double top = 0;
+                for (const double v : object.vertices) top = std::max(top, std::fabs(v));
+                CHECK_EQ(largest[k], top);
+                CHECK(copy[i].objects[&object - files[i].objects.data()].vertices.empty());
+                ++k;
+            }
+        CHECK_EQ(k, owner.size());
+    }
 }
 
 TEST_CASE("mesh read: merge_vertices rounds to the digits and renumbers") {

@@ -14,20 +14,18 @@ compares) instead of a digest per body; every mesh hull comes from one batched c
 from __future__ import annotations
 
 from collections.abc import Sequence
+from operator import attrgetter
 
 import numpy as np
 
+from meshcol.collision.point_sets import point_set_fingerprints
 from meshcol.collision.shapes import ConvexSet, _item
 from meshcol.types import Body
 
 __all__ = ["bulk_colliders"]
 
-# Odd 64-bit multipliers (splitmix64's and wyhash's): the fingerprint of a point set mixes each
-# vertex's three coordinates' bits, then weighs the vertex by its place in the set. A
-# fingerprint only proposes a match; the bits decide it.
-_MIX = np.uint64(0xBF58476D1CE4E5B9)
-_PLACE = np.uint64(0x94D049BB133111EB)
-_THIRD = np.uint64(0xD6E8FEB86659FD93)
+_PARTS, _PRIMITIVE = attrgetter("parts"), attrgetter("primitive")
+_COLLIDER, _VERTICES = attrgetter("collider"), attrgetter("vertices")
 
 
 def bulk_colliders(
@@ -47,29 +45,34 @@ def bulk_colliders(
         What stands for a ``mesh`` body (hull: its hull, as a ``hull`` body).
     """
     hulled = {"hull", "mesh"} if mesh_parts == "hull" else {"hull"}
-    kinds: list[str] = []
-    meshes: list[int] = []
-    arrays: list[np.ndarray] = []
-    primitives: dict[object, int] = {}
-    first = np.empty(len(bodies), dtype=np.int64)  # the first body of the same shape
-    same_array: dict[int, int] = {}  # instances share their file's array: one comparison
-    for i, body in enumerate(bodies):
-        if body.parts:
-            return None
-        if body.primitive is not None:
-            kinds.append("primitive")
-            first[i] = primitives.setdefault(body.primitive, i)
-            continue
-        body_kind = body.collider or kind
-        if body_kind not in hulled:
-            return None
-        kinds.append(body_kind)
-        vertices = body.vertices
-        owner = same_array.setdefault(id(vertices), i)
-        if owner == i:
-            meshes.append(i)
-            arrays.append(vertices)
-        first[i] = owner
+    # each field read for all bodies at once (a C loop each), then one pass where needed
+    if any(map(_PARTS, bodies)):
+        return None
+    n = len(bodies)
+    given = list(map(_PRIMITIVE, bodies))
+    kinds = [collider or kind for collider in map(_COLLIDER, bodies)]
+    first = np.arange(n, dtype=np.int64)  # the first body of the same shape
+    if given.count(None) == n:  # no primitive: every body a mesh
+        meshes, primitive_rows = list(range(n)), []
+    else:
+        primitive_rows = [i for i, p in enumerate(given) if p is not None]
+        meshes = [i for i, p in enumerate(given) if p is None]
+        primitives: dict[object, int] = {}
+        for i in primitive_rows:
+            kinds[i] = "primitive"
+            first[i] = primitives.setdefault(given[i], i)
+    if not {kinds[i] for i in meshes} <= hulled:
+        return None
+    arrays = (
+        [bodies[i].vertices for i in meshes] if primitive_rows else list(map(_VERTICES, bodies))
+    )
+    if len(set(map(id, arrays))) != len(arrays):
+        # instances share their file's array: one comparison per array
+        same_array: dict[int, int] = {}
+        owners = [same_array.setdefault(id(v), i) for i, v in zip(meshes, arrays)]
+        first[meshes] = owners
+        kept = [k for k, (i, owner) in enumerate(zip(meshes, owners)) if owner == i]
+        meshes, arrays = [meshes[k] for k in kept], [arrays[k] for k in kept]
     mesh_rows = np.asarray(meshes, dtype=np.int64)
     if meshes:
         found = _first_equal(arrays)
@@ -109,21 +112,7 @@ def _first_equal(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.n
     np.cumsum(counts, out=offsets[1:])
     bits = points.reshape(-1).view(np.uint64)
     n = len(arrays)
-    rows = bits.reshape(-1, 3)
-    # per vertex (a third of the coordinates: less memory to touch), in place
-    mixed = rows[:, 0] * _MIX
-    mixed += rows[:, 1] * _PLACE
-    mixed += rows[:, 2] * _THIRD
-    mixed ^= mixed >> np.uint64(29)
-    place = np.arange(len(rows), dtype=np.uint64)
-    place -= np.repeat(offsets[:-1].astype(np.uint64), counts)
-    place <<= np.uint64(1)
-    place += np.uint64(1)  # odd: a vertex weighed by its place in its set
-    mixed *= place
-    fingerprint = np.zeros(n, dtype=np.uint64)
-    filled = counts > 0
-    if filled.any():
-        fingerprint[filled] = np.add.reduceat(mixed, offsets[:-1][filled])
+    fingerprint = _fingerprints(points, offsets)
     # sets in order of (count, fingerprint, index): the first of each run is the first set
     order = np.lexsort((np.arange(n), fingerprint, counts))
     starts = np.ones(n, dtype=bool)
@@ -136,6 +125,13 @@ def _first_equal(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.n
     if not _same_bits(bits, offsets, counts, first):
         return None  # two sets of one fingerprint differ: the per-body path keys them
     return points, offsets, first
+
+
+def _fingerprints(points: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """(n,) uint64: the fingerprint of each set, computed by the core on its threads (one pass
+    over the points, no temporaries): each vertex's three coordinates' bits mixed, weighed by
+    its place in its set, summed (``meshcol/point_sets.hpp`` says how)."""
+    return point_set_fingerprints(points, offsets)
 
 
 def _same_bits(

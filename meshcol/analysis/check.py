@@ -208,7 +208,7 @@ def check(
     paths = [inputs] if isinstance(inputs, (str, os.PathLike)) else list(inputs)
     if executor != "ray" and ray_address is not None:
         raise ValueError("ray_address needs executor 'ray'")
-    from meshcol.decomposition.executor import check_run
+    from meshcol.decomposition.run_keywords import check_run
 
     check_run(jobs, timeout, options.get("threads", 0))
     opts = CheckOptions.from_keywords(**options)

@@ -155,7 +155,7 @@ def _task_run(
 ) -> dict[str, Any] | None:
     """How the executor tasks run (:func:`meshcol.decomposition.executor.run_each`'s
     keywords), or None: every mesh in this process."""
-    from meshcol.decomposition.executor import check_run
+    from meshcol.decomposition.run_keywords import check_run
 
     check_run(jobs, timeout)
     if executor != "ray" and ray_address is not None:

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import math
 import os
 import queue
 import signal
@@ -45,6 +44,7 @@ from meshcol.decomposition.ray_start import (
     running_cluster,
     task_payload,
 )
+from meshcol.decomposition.run_keywords import check_run
 from meshcol.decomposition.steps import reporting_to
 from meshcol.errors import MissingDependencyError
 
@@ -70,25 +70,6 @@ class Executor(Protocol):
     def close(self, *, interrupted: bool = False) -> None:
         """Stop every worker (``interrupted``: at once, nothing waited for)."""
         ...
-
-
-def check_run(jobs: Any, timeout: Any = None, threads: Any = 0) -> None:
-    """Raise ValueError, as the command line refuses them, for ``jobs`` below 1, a
-    ``timeout`` that is not a finite number above 0, or ``threads`` below 0 (0: all cores):
-    the one check of the public functions' run keywords (``check``, ``inspect``)."""
-    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
-        raise ValueError(f"jobs must be an integer of at least 1, got {jobs!r}")
-    if timeout is not None and (
-        isinstance(timeout, bool)
-        or not isinstance(timeout, (int, float))
-        or not math.isfinite(timeout)
-        or timeout <= 0
-    ):
-        raise ValueError(f"timeout must be a finite number of seconds above 0, got {timeout!r}")
-    if isinstance(threads, bool) or not isinstance(threads, int) or threads < 0:
-        raise ValueError(
-            f"threads must be an integer of at least 0 (0: all cores), got {threads!r}"
-        )
 
 
 @contextlib.contextmanager

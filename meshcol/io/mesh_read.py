@@ -21,6 +21,7 @@ import dataclasses
 import os
 from collections.abc import Iterator, Mapping, MutableMapping, Sequence
 from dataclasses import dataclass
+from operator import itemgetter
 from pathlib import Path
 
 import numpy as np
@@ -389,18 +390,40 @@ def _core_path(path: str) -> bool:
 
 def _formats_of(sources: Sequence[str]) -> list[MeshFormat | None]:
     """The format of each of ``sources``, as :func:`mesh_format` finds it with nothing opted
-    in (None where it raises): each extension looked up once, for 100,000 files."""
-    found: dict[str, MeshFormat | None] = {}
-    out = []
-    for source in sources:
-        extension = os.path.splitext(source)[1]
-        if extension not in found:
-            try:
-                found[extension] = mesh_format(source)
-            except InputFileError:
-                found[extension] = None
-        out.append(found[extension])
-    return out
+    in (None where it raises): each extension looked up once, and each extension found from
+    the distinct ends of the paths (:func:`_extension_of_end`), not a ``splitext`` per path,
+    for 100,000 files."""
+    ends = list(map(_END, sources))
+    by_end = {end: _extension_of_end(end) for end in set(ends)}
+    if None in by_end.values():  # an end that cannot tell: splitext for those paths
+        extensions = [
+            os.path.splitext(source)[1] if by_end[end] is None else by_end[end]
+            for source, end in zip(sources, ends)
+        ]
+    else:
+        extensions = list(map(by_end.__getitem__, ends))
+    found: dict[str | None, MeshFormat | None] = {}
+    for extension in set(extensions):
+        try:
+            found[extension] = mesh_format(f"x{extension}")  # by its extension alone
+        except InputFileError:
+            found[extension] = None
+    return list(map(found.__getitem__, extensions))
+
+
+_END_LENGTH = 6  # a dot, up to four letters and the character before it
+_END = itemgetter(slice(-_END_LENGTH, None))  # a path's last characters
+
+
+def _extension_of_end(end: str) -> str | None:
+    """``os.path.splitext``'s extension of every path that ends with ``end`` (its last
+    :data:`_END_LENGTH` characters, or all of a shorter path), or None when the end alone
+    cannot tell: its last dot, when no slash follows it and a character other than a dot or
+    a slash comes just before it (the name then does not start with that dot)."""
+    dot = end.rfind(".")
+    if dot >= 1 and end.rfind("/") < dot and end[dot - 1] not in "./":
+        return end[dot:]
+    return None
 
 
 def _format_of(source: str) -> MeshFormat:
@@ -416,8 +439,8 @@ def _format_of(source: str) -> MeshFormat:
 @dataclass(frozen=True, eq=False)
 class _NativeRead:
     """What the core's ``read_mesh_files`` returns: every object's vertices and faces packed,
-    with offsets (k + 1 entries for k objects), the file of each object, its name, and per
-    file a status and an error text."""
+    with offsets (k + 1 entries for k objects), the file of each object, its name, per file a
+    status and an error text, and per object its largest |coordinate|."""
 
     vertices: np.ndarray
     faces: np.ndarray
@@ -427,6 +450,7 @@ class _NativeRead:
     names: list
     status: np.ndarray
     errors: list
+    largest: np.ndarray
 
     def body(self, k: int, name: str, source: str) -> Body:
         """Object ``k`` as a body named ``name``."""
@@ -448,16 +472,15 @@ def _read_native(
     codes = [fmt.native for fmt in formats if fmt.native is not None]
     assert len(codes) == len(formats), "every format read here has a native reader"
     read = _NativeRead(*core.read_mesh_files(sources, codes, merge=merge, threads=threads))
-    # one vectorised pass finds the objects with a coordinate beyond the limit
-    big_rows = np.flatnonzero((np.abs(read.vertices) > MAX_COORDINATE).any(axis=1))
-    big = set(np.searchsorted(read.v_off, big_rows, side="right").tolist())
+    # the objects with a coordinate beyond the limit (the core measured each object's largest)
+    big = set((np.flatnonzero(read.largest > MAX_COORDINATE) + 1).tolist())
     one_each = len(read.owner) == len(sources) and bool(
         (read.owner == np.arange(len(sources))).all()
     )
     if not big and one_each and not read.status.any():
         # the common scene: every file read, one object each, no coordinate too big; each
         # body, when asked for, is what _checked_files builds (named by its file's stem)
-        packed = PackedObjects(read.vertices, read.faces, read.v_off, read.f_off)
+        packed = PackedObjects(read.vertices, read.faces, read.v_off, read.f_off, read.largest)
         return MeshFiles(sources, [None] * len(sources), packed)
     return MeshFiles(sources, list(_checked_files(read, sources, formats, big)))
 
@@ -508,19 +531,30 @@ class PackedObjects:
     """One object per file, packed: file ``j``'s vertices are
     ``vertices[v_off[j]:v_off[j + 1]]`` ((V, 3) float64) and its faces
     ``faces[f_off[j]:f_off[j + 1]]`` ((F, 3) int64, indexing its own vertices), in its frame
-    (no transform)."""
+    (no transform); ``largest``, when given, each file's largest |coordinate| (as
+    :meth:`largest` computes it)."""
 
     def __init__(
-        self, vertices: np.ndarray, faces: np.ndarray, v_off: np.ndarray, f_off: np.ndarray
+        self,
+        vertices: np.ndarray,
+        faces: np.ndarray,
+        v_off: np.ndarray,
+        f_off: np.ndarray,
+        largest: np.ndarray | None = None,
     ) -> None:
         self.vertices, self.faces = vertices, faces
         self.v_off, self.f_off = v_off.tolist(), f_off.tolist()
-        self._largest: np.ndarray | None = None
+        self._largest: np.ndarray | None = largest
 
     def arrays(self, j: int) -> tuple[np.ndarray, np.ndarray]:
         """(vertices, faces) of file ``j``: views, C-contiguous."""
         vo, fo = self.v_off, self.f_off
         return self.vertices[vo[j] : vo[j + 1]], self.faces[fo[j] : fo[j + 1]]
+
+    def views(self, files: Sequence[int]) -> list[tuple[np.ndarray, np.ndarray]]:
+        """:meth:`arrays` of each of ``files``, in one pass."""
+        vo, fo, vertices, faces = self.v_off, self.f_off, self.vertices, self.faces
+        return [(vertices[vo[j] : vo[j + 1]], faces[fo[j] : fo[j + 1]]) for j in files]
 
     def largest(self) -> np.ndarray:
         """The largest |coordinate| of each file's vertices (0 for none): one reduction over
@@ -620,16 +654,23 @@ def lone_objects(
     others = list(range(n))
     if isinstance(files, MeshFiles) and files.packed is not None:
         index, built, packed = files.index(), files._bodies, files.packed
-        spots = [index.get(key, -1) for key in keys]
-        packed_rows = [k for k, j in enumerate(spots) if j >= 0 and built[j] is None]
-        if packed_rows:
-            positions = np.asarray([spots[k] for k in packed_rows], dtype=np.int64)
-            lone[packed_rows] = True
-            largest[packed_rows] = packed.largest()[positions]
-            for k, j in zip(packed_rows, positions.tolist()):
-                arrays[k] = packed.arrays(j)
+        spots = list(map(index.get, keys))  # None: not read
+        if None not in spots and built.count(None) == len(built):
+            packed_rows, others = others, []  # every key read, every file packed
+        else:
+            packed_rows = [k for k, j in enumerate(spots) if j is not None and built[j] is None]
             done = set(packed_rows)
             others = [k for k in others if k not in done]
+        if packed_rows:
+            positions = [spots[k] for k in packed_rows] if others else spots
+            lone[packed_rows] = True
+            largest[packed_rows] = packed.largest()[np.asarray(positions, dtype=np.int64)]
+            views = packed.views(positions)  # type: ignore[arg-type]
+            if others:
+                for k, pair in zip(packed_rows, views):
+                    arrays[k] = pair
+            else:
+                arrays = list(views)
     loaded = [files.get(keys[k]) for k in others]
     ones = [(k, f[0]) for k, f in zip(others, loaded) if f is not None and len(f) == 1]
     for k, body in ones:

@@ -30,20 +30,19 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from meshcol.errors import InputFileError, MeshcolError, SceneError
 from meshcol.io.inputs import input_kind, root_tag
-from meshcol.io.kinematics import Kinematics
 from meshcol.io.links import CollisionElement
-from meshcol.io.mjcf import read_mjcf
 from meshcol.io.report import read_json_file
 from meshcol.io.safe_read import check_input, check_mjcf_files
-from meshcol.io.srdf import read_srdf
-from meshcol.io.urdf import read_urdf
 from meshcol.types import Body, Scene, primitive_reach
+
+if TYPE_CHECKING:
+    from meshcol.io.kinematics import Kinematics
 
 __all__ = [
     "CollisionElement",
@@ -218,7 +217,16 @@ class RobotModel:
 
 
 #: The reader of each kind of description (:func:`description_kind`).
-_READERS = {"urdf": read_urdf, "mjcf": read_mjcf}
+def _reader(kind: str) -> Any:
+    """The reader of a description of ``kind``, imported when first needed: a command that
+    reads no robot (a scene's check) never imports the URDF and MJCF readers."""
+    if kind == "urdf":
+        from meshcol.io.urdf import read_urdf
+
+        return read_urdf
+    from meshcol.io.mjcf import read_mjcf
+
+    return read_mjcf
 
 
 def load_robot(
@@ -284,7 +292,7 @@ def load_robot_model(
     check_input(source, "robot")  # a regular file within the cap: never a pipe or a device
     if description_kind(source) == "mjcf":
         check_mjcf_files(source)  # its includes and meshes, before MuJoCo opens them
-    read = _READERS[description_kind(source)]
+    read = _reader(description_kind(source))
     scene, links, kinematics = read(source, options, elements, visual)
     if not scene.bodies and not visual:
         scene = _without_colliders(scene, links, kinematics, source)
@@ -345,6 +353,8 @@ def _with_exclusions(scene: Scene, links: set[str], srdf: str | None) -> Scene:
     excluded = list(scene.excluded_pairs)
     warnings = list(scene.warnings)
     if srdf is not None:
+        from meshcol.io.srdf import read_srdf
+
         srdf_pairs, unknown = read_srdf(srdf, links)
         excluded.extend(srdf_pairs)
         if unknown:

@@ -382,19 +382,23 @@ def bulk_bodies(found: Columns, source: str, files: MutableMapping[str, list[Bod
     n = len(names)
     if len(set(names)) != n:
         return None
-    objects, reach_of = _plain_objects(found, source, files)
-    common, poses = _common(found, np.array([reach_of[m] for m in found.meshes]).reshape(n))
+    paths, arrays, reaches, slot = _plain_objects(found, source, files)
+    # each body's mesh among the files' (the last slot, inf reach, for a primitive)
+    mesh_of = np.fromiter(map(slot.__getitem__, found.meshes), dtype=np.int64, count=n)
+    common, poses = _common(found, reaches[mesh_of])
     out: list[Body | None] = [None] * n
     shapes = found.shapes
     kinds, lengths = found.primitive_type.tolist(), found.primitive_lengths.tolist()
     plain = Body.plain
     primitive = found.primitive
+    pose_of = list(poses)  # one view per body, made in one C loop
     for i in np.flatnonzero(common & primitive).tolist():
         primitive_i = primitive_of(kinds[i], lengths[i])
-        out[i] = plain(names[i], source, None, None, poses[i], primitive_i, shapes[i])
-    for i in np.flatnonzero(common & ~primitive).tolist():
-        mesh_source, vertices, faces = objects[found.meshes[i]]
-        out[i] = plain(names[i], mesh_source, vertices, faces, poses[i], None, shapes[i])
+        out[i] = plain(names[i], source, None, None, pose_of[i], primitive_i, shapes[i])
+    rows = np.flatnonzero(common & ~primitive)
+    for i, k in zip(rows.tolist(), mesh_of[rows].tolist()):
+        vertices, faces = arrays[k]  # a common body's file is lone
+        out[i] = plain(names[i], paths[k], vertices, faces, pose_of[i], None, shapes[i])
     return out
 
 
@@ -446,24 +450,21 @@ _SPHERE, _BOX, _CAPSULE, _CYLINDER = (
 
 def _plain_objects(
     found: Columns, source: str, files: MutableMapping[str, list[Body]]
-) -> tuple[dict[str | None, Any], dict[str | None, float]]:
-    """Per mesh name: ``(path, vertices, faces)`` of its file's one object without a transform
-    (None: the body loop builds its bodies), and the reach of the world check, sqrt(3)
-    max |v| (inf for the others); per file, but in one numpy pass for all
-    (:func:`meshcol.io.mesh_read.lone_objects`)."""
+) -> tuple[list[str], list[Any], np.ndarray, dict[str | None, int]]:
+    """Of each mesh name, in order of first use: its path, ``(vertices, faces)`` of its
+    file's one object without a transform (None: the body loop builds its bodies), and the
+    reach of the world check, sqrt(3) max |v| (inf for the others); one more reach, inf, for
+    no mesh; and each name's place among them (None's is the last). Per file, but in one
+    numpy pass for all (:func:`meshcol.io.mesh_read.lone_objects`)."""
     folder = os.path.dirname(source)
     meshes = list(dict.fromkeys(m for m in found.meshes if m is not None))
     paths = joined_paths(folder, meshes)
-    _, largest, arrays = lone_objects(files, joined_paths(folder, meshes, normalise=True))
-    reaches = largest * math.sqrt(3.0)
-    objects: dict[str | None, Any] = {None: None}
-    reach_of: dict[str | None, float] = {None: math.inf}
-    for k, (mesh, path, found_arrays) in enumerate(zip(meshes, paths, arrays)):
-        if found_arrays is not None:
-            objects[mesh], reach_of[mesh] = (path, *found_arrays), float(reaches[k])
-        else:
-            objects[mesh], reach_of[mesh] = None, math.inf
-    return objects, reach_of
+    lone, largest, arrays = lone_objects(files, joined_paths(folder, meshes, normalise=True))
+    reaches = np.full(len(meshes) + 1, math.inf)
+    reaches[:-1][lone] = largest[lone] * math.sqrt(3.0)
+    slot: dict[str | None, int] = dict(zip(meshes, range(len(meshes))))
+    slot[None] = len(meshes)
+    return paths, arrays, reaches, slot
 
 
 def _poses(found: Columns, position: np.ndarray, common: np.ndarray) -> np.ndarray:

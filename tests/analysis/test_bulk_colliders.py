@@ -90,9 +90,8 @@ def test_bulk_of_unique_meshes_only(monkeypatch):
 
 def test_a_fingerprint_that_matches_different_sets_goes_to_the_per_body_build(monkeypatch):
     bodies = _scene()
-    monkeypatch.setattr(bulk_module, "_MIX", np.uint64(0))
-    monkeypatch.setattr(bulk_module, "_PLACE", np.uint64(0))
-    monkeypatch.setattr(bulk_module, "_THIRD", np.uint64(0))  # every set of one size alike
+    # every set of one size alike
+    monkeypatch.setattr(bulk_module, "_fingerprints", lambda p, o: np.zeros(len(o) - 1, np.uint64))
     assert bulk_colliders(bodies, "hull", "hull") is None
     _same(build_colliders(bodies), _per_body(bodies, monkeypatch))
 
@@ -120,3 +119,46 @@ def test_a_body_of_parts_goes_to_the_per_body_build():
         part_faces=np.array([0, 1, 2]),
     )
     assert bulk_colliders([plain, parts], "hull", "hull") is None
+
+
+def _numpy_fingerprints(points: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """The fingerprints as the bulk colliders computed them in numpy before the core did."""
+    counts = np.diff(offsets)
+    rows = points.reshape(-1).view(np.uint64).reshape(-1, 3)
+    mixed = rows[:, 0] * np.uint64(0xBF58476D1CE4E5B9)
+    mixed += rows[:, 1] * np.uint64(0x94D049BB133111EB)
+    mixed += rows[:, 2] * np.uint64(0xD6E8FEB86659FD93)
+    mixed ^= mixed >> np.uint64(29)
+    place = np.arange(len(rows), dtype=np.uint64)
+    place -= np.repeat(offsets[:-1].astype(np.uint64), counts)
+    place <<= np.uint64(1)
+    place += np.uint64(1)
+    mixed *= place
+    out = np.zeros(len(counts), dtype=np.uint64)
+    filled = counts > 0
+    if filled.any():
+        out[filled] = np.add.reduceat(mixed, offsets[:-1][filled])
+    return out
+
+
+def test_the_cores_fingerprints_are_the_numpy_ones():
+    from meshcol._native import core
+    from meshcol.collision.point_sets import point_set_fingerprints
+
+    rng = np.random.default_rng(8)
+    counts = rng.integers(0, 70, size=3000)
+    counts[:5] = 0  # empty sets, first and among the others
+    counts[100:110] = 0
+    offsets = np.zeros(len(counts) + 1, dtype=np.int64)
+    np.cumsum(counts, out=offsets[1:])
+    points = rng.normal(size=(int(offsets[-1]), 3)) * 10.0 ** rng.integers(-300, 300, (1, 3))
+    points[::7] = -0.0
+    points[1::11] = np.nan
+    points[2::13] = np.float32(1.0) / np.float32(3.0)
+    got = point_set_fingerprints(points, offsets)
+    assert (
+        got.dtype == np.uint64 and got.tobytes() == _numpy_fingerprints(points, offsets).tobytes()
+    )
+    assert core.point_set_fingerprints(points, offsets, threads=1).tobytes() == got.tobytes()
+    with pytest.raises(ValueError, match="offsets"):
+        core.point_set_fingerprints(points, offsets[::-1].copy())

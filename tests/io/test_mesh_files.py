@@ -65,6 +65,10 @@ def test_lone_objects_in_bulk_are_those_of_the_bodies(tmp_path):
     packed = read_meshes(paths)
     packed[os.fspath(two)] = load_mesh(two)  # a file of two objects, added as bodies
     by_body = {path: load_mesh(path) for path in [*paths, os.fspath(two)]}
+    every = lone_objects(read_meshes(paths), paths[::-1])  # every key packed: one pass
+    assert every[0].all() and every[1].tobytes() == lone_objects(by_body, paths[::-1])[1].tobytes()
+    for (v, f), body in zip(every[2], (load_mesh(p)[0] for p in paths[::-1])):  # type: ignore[misc]
+        assert v.tobytes() == body.vertices.tobytes() and f.tobytes() == body.faces.tobytes()
     got, want = lone_objects(packed, keys), lone_objects(by_body, keys)
     np.testing.assert_array_equal(got[0], want[0])
     assert got[1].tobytes() == want[1].tobytes()
@@ -125,3 +129,124 @@ def test_a_bad_file_in_a_manifest_of_many_is_one_line_exit_2_nothing_written(tmp
     assert "body 'b41'" in lines[0] and "p041.obj" in lines[0]
     assert "Traceback" not in result.output
     assert not report.exists()
+
+
+def test_the_cores_packing_is_the_files_objects_in_order_on_any_threads(tmp_path):
+    """``read_mesh_files`` packs every object of every file on the core's threads: the same
+    arrays on 1 and 3 threads, each object's arrays those of ``load_mesh``, each object's
+    largest |coordinate| what a numpy reduction of its vertices gives (beyond the limit too),
+    and a bad file among them gives no object and its message."""
+    from meshcol._native import core
+
+    paths = _files(tmp_path / "a", 30)
+    two = tmp_path / "a" / "two.obj"
+    two.write_text(
+        "o x\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\no y\nv 0 0 9e9\nv 1 0 1\nv 0 1 1\nf 4 5 6\n"
+    )
+    paths[7:7] = [os.fspath(two), os.fspath(tmp_path / "a" / "missing.obj")]
+    one, three = (core.read_mesh_files(paths, [0] * len(paths), threads=t) for t in (1, 3))
+    for a, b in zip(one, three):
+        if isinstance(a, np.ndarray):
+            assert a.dtype == b.dtype and a.tobytes() == b.tobytes()
+        else:
+            assert a == b
+    vertices, faces, v_off, f_off, owner, _, status, errors, largest = one
+    assert status.tolist() == [0] * 8 + [1] + [0] * 23 and errors[8] == b"file not found"
+    want = [(j, body) for j, p in enumerate(paths) if j != 8 for body in load_mesh(p)]
+    assert owner.tolist() == [j for j, _ in want] and len(v_off) == len(want) + 1
+    for k, (_, body) in enumerate(want):
+        assert vertices[v_off[k] : v_off[k + 1]].tobytes() == body.vertices.tobytes()
+        assert faces[f_off[k] : f_off[k + 1]].tobytes() == body.faces.tobytes()
+    reduced = np.maximum.reduceat(np.abs(vertices).max(axis=1), v_off[:-1])
+    assert largest.tobytes() == reduced.tobytes() and largest.max() == 9e9
+    two.write_text(two.read_text().replace("9e9", "-1e12"))  # beyond the limit: named
+    del paths[8]
+    with pytest.raises(InvalidMeshError, match=r"vertex 1 has coordinate -1e\+12") as big:
+        read_meshes(paths)
+    assert big.value.path == os.fspath(two)
+
+
+def test_files_of_folders_in_any_order_are_each_their_own(tmp_path):
+    """The core opens a file relative to its folder when the file before it was in the same
+    folder: files of three folders interleaved (same names in each, a folder reached through
+    ``..`` and through a symbolic link) each read as themselves, and a loop, a named pipe, a
+    folder and a missing file among them say what they are."""
+    from meshcol._native import core
+
+    rng = np.random.default_rng(5)
+    points = {}
+    for folder in ("a", "b", "c"):
+        (tmp_path / folder).mkdir()
+        for k in range(4):
+            path = tmp_path / folder / f"p{k}.obj"
+            points[os.fspath(path)] = rng.normal(size=(4, 3))
+            _obj(path, points[os.fspath(path)])
+    os.symlink(tmp_path / "c", tmp_path / "link")
+    os.symlink("loop.obj", tmp_path / "b" / "loop.obj")
+    os.mkfifo(tmp_path / "b" / "pipe.obj")
+    (tmp_path / "a" / "dir.obj").mkdir()
+    t = os.fspath(tmp_path)
+    order = [f"{t}/a/p0.obj", f"{t}/a/p1.obj", f"{t}/b/p1.obj", f"{t}/b/loop.obj"]
+    order += [f"{t}/b/pipe.obj", f"{t}/a/../b/p2.obj", f"{t}/link/p3.obj", f"{t}/c/p3.obj"]
+    order += [f"{t}/a/dir.obj", f"{t}/c/none.obj", f"{t}/a/p2.obj", f"{t}/b/p0.obj"]
+    same = {f"{t}/a/../b/p2.obj": f"{t}/b/p2.obj", f"{t}/link/p3.obj": f"{t}/c/p3.obj"}
+    for threads in (1, 2):
+        vertices, _, v_off, _, owner, _, status, errors, _ = core.read_mesh_files(
+            order, [0] * len(order), threads=threads
+        )
+        assert status.tolist() == [0, 0, 0, 3, 3, 0, 0, 0, 2, 1, 0, 0]
+        assert (
+            b"symbolic links" in errors[3] and errors[4] == b"is a named pipe, not a regular file"
+        )
+        assert errors[9] == b"file not found"
+        for k, j in enumerate(owner.tolist()):
+            want = points[same.get(order[j], order[j])]
+            assert vertices[v_off[k] : v_off[k + 1]].tobytes() == want.tobytes()
+
+
+def test_formats_found_from_the_ends_of_paths_are_splitexts():
+    """The format of each path, found once per distinct end of the paths, is what
+    ``mesh_format`` says of the path itself (None where it refuses it)."""
+    from meshcol.io.mesh_formats import mesh_format
+    from meshcol.io.mesh_read import _formats_of
+
+    names = [
+        ".obj",
+        "a/.obj",
+        "a..obj",
+        "a.b/c",
+        "a.OBJ",
+        "x.stl",
+        "dir.obj/file",
+        "ab",
+        ".",
+        "a/b.c.d.obj",
+        "a/b.ply",
+        "...obj",
+        "a/..obj",
+        "a./obj",
+        "x.glb",
+        "y.gltf",
+        "z.off",
+        "q.fbx",
+        "r.dae",
+        "s.usd",
+        "",
+        "/",
+        "a/",
+        "a.obj/",
+        "#.obj",
+        "é.obj",
+        "a b.Stl",
+    ]
+    folders = ["", "f/", "/abs/deep/folder.with.dots/", "x" * 40 + "/", "..", "a.obj/"]
+    paths = [folder + name for folder in folders for name in names]
+    paths += ["p" * k + ".obj" for k in range(20)] + [".o" * k for k in range(12)]
+
+    def old(path):
+        try:
+            return mesh_format(path)
+        except InputFileError:
+            return None
+
+    assert _formats_of(paths) == [old(p) for p in paths]

@@ -51,6 +51,24 @@ std::vector<MeshFile> read_mesh_files(const std::vector<std::string>& paths,
                                       const std::vector<MeshFormat>& formats, bool merge,
                                       int threads);
 
+/// Where each file's objects go in the packed arrays of `pack_mesh_files`: `starts[i]` holds
+/// file i's first object, vertex and face (3 counts), `starts[n]` the totals.
+struct PackedStart {
+    std::int64_t object = 0, vertex = 0, face = 0;
+};
+std::vector<PackedStart> packed_starts(const std::vector<MeshFile>& files);
+
+/// Copies every object of `files` (in file order, each file's in its order) into packed
+/// arrays sized by `packed_starts` (its last entry): `vertices` (3 per vertex), `faces` (3 per
+/// triangle, local to the object), `vertex_offsets` and `face_offsets` (objects + 1 entries,
+/// from 0), `object_file` (the file of each object) and `largest` (the largest |coordinate|
+/// of each object, 0 without vertices; NaN when a coordinate is NaN). On `threads` threads;
+/// each object's vertices and faces are freed once copied (its name is kept).
+void pack_mesh_files(std::vector<MeshFile>& files, const std::vector<PackedStart>& starts,
+                     int threads, double* vertices, std::int64_t* faces,
+                     std::int64_t* vertex_offsets, std::int64_t* face_offsets,
+                     std::int64_t* object_file, double* largest);
+
 /// Device and inode of each of `paths` (symbolic links followed, as stat does), on `threads`
 /// threads (0: all cores); `found[i]` is 0 where the path names nothing stat can reach. What
 /// tells whether an output is one of a run's 100,000 input files, without reading them.
