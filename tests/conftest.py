@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import sys
 from pathlib import Path
 from typing import Any
@@ -209,6 +210,11 @@ XDIST_GROUPS = {
 
 
 def pytest_configure(config: pytest.Config) -> None:
+    # A shell starts a background job (`make test &`, nohup) with SIGINT ignored, and Python
+    # then leaves it ignored: the tests of what Ctrl-C does would see no KeyboardInterrupt.
+    # Run them as from a terminal (each xdist worker configures itself too).
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     if config.pluginmanager.hasplugin("xdist"):
         config.pluginmanager.register(_XdistGroups(), "meshcol-xdist-groups")
 
