@@ -126,9 +126,10 @@ def native_manifest(source: str) -> NativeManifest | None:
     return found
 
 
-# The last manifest read natively: its absolute path, its bytes and what it gave.
-_KEPT: list[Any] = [None, None, None]
-KEPT_OF_DOCUMENTS.append(lambda: _KEPT.__setitem__(slice(None), [None, None, None]))
+# The last manifest read natively: its absolute path, its bytes and what it gave (emptied by
+# forget_documents: a list's own clear, no function of this module in check's walk).
+_KEPT: list[Any] = []
+KEPT_OF_DOCUMENTS.append(_KEPT.clear)
 
 
 def primitive_scene(source: str) -> Scene | None:
