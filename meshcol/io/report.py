@@ -35,6 +35,7 @@ __all__ = [
     "emit",
     "rows_chunks",
     "RowsPiece",
+    "text_pieces",
     "envelope",
     "split_vectors",
     "vector_columns",
