@@ -43,7 +43,10 @@ SAMPLES = PACKAGE.parent / "samples" / "level" / "props"
 #: The small scene: two mesh files, each body at its own coordinates, checked as hulls.
 INPUTS = [str(SAMPLES / "crate.obj"), str(SAMPLES / "barrel.obj")]
 
-#: Re-entries of the walk now: 57 (83 stays in 26 files) after session 15's column paths (the
+#: Re-entries of the walk now: 58 (85 stays in 27 files) after session 16's
+#: ``collision/point_sets.py`` (the bulk colliders' fingerprints in the core, called through
+#: the collision layer): one more file, one more re-entry, the same 32 above the floor of
+#: files - 1. 57 (83 stays in 26 files) after session 15's column paths (the
 #: manifest's primitives and mesh files as arrays: ``io/scene_primitives.py``,
 #: ``analysis/primitive_colliders.py``, ``analysis/bulk_colliders.py``) and robots4's MC506
 #: (``analysis/rules.py`` from the report): five more files, five more re-entries, and the
@@ -57,7 +60,7 @@ INPUTS = [str(SAMPLES / "crate.obj"), str(SAMPLES / "barrel.obj")]
 #: walk of at most 12 allows about 12 such calls from the options to the report: a flat list
 #: of named stages (item 1 of the issue) spends most of them in ``check.py`` alone. A
 #: regression bound: lower it when the walk gets shorter.
-MAX_RE_ENTRIES_NOW = 57
+MAX_RE_ENTRIES_NOW = 58
 #: The target of issue 28.
 MAX_RE_ENTRIES = 12
 

@@ -836,7 +836,10 @@ void read_one(const std::string& path, MeshFormat format, bool merge, ReadScratc
     // the buffer keeps its size for the next file (never shrunk, so never filled again)
     out = format == MeshFormat::Obj ? parse_obj_with(buffer.data(), size, scratch.obj)
                                     : parse_stl(buffer.data(), size);
-    if (!out.error.empty()) out.status = ReadStatus::Corrupt;
+    if (!out.error.empty()) {
+        out.status = ReadStatus::Corrupt;
+        out.objects.clear();  // a file that does not parse gives a message instead of objects
+    }
     if (merge && out.error.empty())
         for (MeshObject& object : out.objects)
             merge_with(object.vertices, object.faces, 8, scratch.merge);
@@ -903,12 +906,14 @@ void pack_mesh_files(std::vector<MeshFile>& files, const std::vector<PackedStart
                     if (top != top) break;
                 }
                 largest[k] = top;
-                if (!o.vertices.empty())
+                // whole rows only, as packed_starts counted them
+                const size_t v_rows = o.vertices.size() / 3, f_rows = o.faces.size() / 3;
+                if (v_rows != 0)
                     std::memcpy(vertices + 3 * at.vertex, o.vertices.data(),
-                                o.vertices.size() * sizeof(double));
-                if (!o.faces.empty())
+                                3 * v_rows * sizeof(double));
+                if (f_rows != 0)
                     std::memcpy(faces + 3 * at.face, o.faces.data(),
-                                o.faces.size() * sizeof(std::int64_t));
+                                3 * f_rows * sizeof(std::int64_t));
                 at.object += 1;
                 at.vertex += static_cast<std::int64_t>(o.vertices.size() / 3);
                 at.face += static_cast<std::int64_t>(o.faces.size() / 3);

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import MutableMapping, Sequence
+from itertools import repeat
 from typing import Any
 
 import numpy as np
@@ -88,10 +89,13 @@ def read_mesh_files(document: Any, source: str) -> MutableMapping[str, list[Body
     from meshcol.io.mesh_read import read_meshes
 
     folder = os.path.dirname(source)
-    meshes = dict.fromkeys(
-        spec["mesh"] for spec in document["bodies"] if isinstance(spec.get("mesh"), str)
-    )  # each name once before the path arithmetic: 300,000 bodies may share 16 files
-    names = list(meshes)
+    bodies = document["bodies"]
+    try:  # each value once (a C loop), then only the distinct ones looked at
+        found = dict.fromkeys(map(dict.get, bodies, repeat("mesh")))
+    except TypeError:  # not a dict, or a value that is not hashable: one body at a time
+        found = dict.fromkeys(spec["mesh"] for spec in bodies if isinstance(spec.get("mesh"), str))
+    # each name once before the path arithmetic: 300,000 bodies may share 16 files
+    names = [name for name in found if isinstance(name, str)]
     joined = joined_paths(folder, names, normalise=True)
     paths = list(dict.fromkeys(confine_all(joined, source, names)))  # inside --root
     try:

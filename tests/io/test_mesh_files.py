@@ -144,15 +144,22 @@ def test_the_cores_packing_is_the_files_objects_in_order_on_any_threads(tmp_path
         "o x\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\no y\nv 0 0 9e9\nv 1 0 1\nv 0 1 1\nf 4 5 6\n"
     )
     paths[7:7] = [os.fspath(two), os.fspath(tmp_path / "a" / "missing.obj")]
-    one, three = (core.read_mesh_files(paths, [0] * len(paths), threads=t) for t in (1, 3))
+    cut = tmp_path / "a" / "cut.stl"  # parsed into a facet's second vertex, then refused
+    cut.write_text(
+        "solid x\n facet normal 0 0 1\n  outer loop\n   vertex 0 0 0\n   vertex 1 0 nan\n"
+    )
+    formats = [0] * len(paths) + [1]
+    paths.append(os.fspath(cut))
+    one, three = (core.read_mesh_files(paths, formats, threads=t) for t in (1, 3))
     for a, b in zip(one, three):
         if isinstance(a, np.ndarray):
             assert a.dtype == b.dtype and a.tobytes() == b.tobytes()
         else:
             assert a == b
     vertices, faces, v_off, f_off, owner, _, status, errors, largest = one
-    assert status.tolist() == [0] * 8 + [1] + [0] * 23 and errors[8] == b"file not found"
-    want = [(j, body) for j, p in enumerate(paths) if j != 8 for body in load_mesh(p)]
+    assert status.tolist() == [0] * 8 + [1] + [0] * 23 + [4] and errors[8] == b"file not found"
+    assert owner.max() < len(paths) - 1  # the refused file gives no object
+    want = [(j, body) for j, p in enumerate(paths[:-1]) if j != 8 for body in load_mesh(p)]
     assert owner.tolist() == [j for j, _ in want] and len(v_off) == len(want) + 1
     for k, (_, body) in enumerate(want):
         assert vertices[v_off[k] : v_off[k + 1]].tobytes() == body.vertices.tobytes()
@@ -160,7 +167,7 @@ def test_the_cores_packing_is_the_files_objects_in_order_on_any_threads(tmp_path
     reduced = np.maximum.reduceat(np.abs(vertices).max(axis=1), v_off[:-1])
     assert largest.tobytes() == reduced.tobytes() and largest.max() == 9e9
     two.write_text(two.read_text().replace("9e9", "-1e12"))  # beyond the limit: named
-    del paths[8]
+    del paths[8], paths[-1]
     with pytest.raises(InvalidMeshError, match=r"vertex 1 has coordinate -1e\+12") as big:
         read_meshes(paths)
     assert big.value.path == os.fspath(two)
