@@ -122,6 +122,13 @@ inline double obb_squared_distance(const NodeObb& a, const NodeObb& b, const Map
 
 // The distance between node a's axis-aligned box and the axis-aligned box (in a's frame)
 // enclosing node b's: exact under pure translation, looser the more b is rotated.
+// The largest projection on `n` of a point of the oriented box (box and n in one frame): the
+// box's support height along n, as the hierarchy descents along a direction bound a node.
+inline double obb_top(const NodeObb& box, const Vec3& n) {
+    return dot(box.center, n) + box.half.x * std::fabs(dot(box.axes.row(0), n)) +
+           box.half.y * std::fabs(dot(box.axes.row(1), n)) + box.half.z * std::fabs(dot(box.axes.row(2), n));
+}
+
 inline double aabb_squared_distance(const BvhNode& na, const BvhNode& nb, const Relative& rel) {
     double d2 = 0.0;
     const Vec3 b_center = rel.apply(Vec3{0.5 * (static_cast<double>(nb.lower[0]) + nb.upper[0]),
@@ -463,9 +470,7 @@ public:
         const std::vector<BvhNode>& nodes = mesh.nodes();
         const std::vector<NodeObb>& boxes = mesh.obbs();
         const auto top = [&](std::int32_t id) {
-            const NodeObb& box = boxes[static_cast<size_t>(id)];
-            return dot(box.center, n) + box.half.x * std::fabs(dot(box.axes.row(0), n)) +
-                   box.half.y * std::fabs(dot(box.axes.row(1), n)) + box.half.z * std::fabs(dot(box.axes.row(2), n));
+            return obb_top(boxes[static_cast<size_t>(id)], n);
         };
         out.clear();
         stack.clear();
@@ -535,11 +540,7 @@ struct HullWitness {
 Vec3 mesh_support(const MeshBvh& mesh, const Vec3& d, std::vector<std::pair<std::int32_t, double>>& stack) {
     const std::vector<BvhNode>& nodes = mesh.nodes();
     const std::vector<NodeObb>& boxes = mesh.obbs();
-    const auto top = [&](std::int32_t id) {
-        const NodeObb& box = boxes[static_cast<size_t>(id)];
-        return dot(box.center, d) + box.half.x * std::fabs(dot(box.axes.row(0), d)) +
-               box.half.y * std::fabs(dot(box.axes.row(1), d)) + box.half.z * std::fabs(dot(box.axes.row(2), d));
-    };
+    const auto top = [&](std::int32_t id) { return obb_top(boxes[static_cast<size_t>(id)], d); };
     double best = -kInf;
     Vec3 point = mesh.triangle(0)[0];
     stack.clear();
