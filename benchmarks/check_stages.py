@@ -27,7 +27,8 @@ from typing import Any
 STAGES = [
     ("meshcol.io.outputs", "manifest_inputs"),
     ("meshcol.io.scene", "native_manifest"),
-    ("meshcol.io.scene", "primitive_scene"),
+    ("meshcol.io.scene", "primitive_scene"),  # a --baseline's: native_scene since session 17
+    ("meshcol.io.scene", "native_scene"),
     ("meshcol.io.scene", "read_document"),
     ("meshcol.io.scene", "validate"),
     ("meshcol.io.scene", "read_mesh_files"),
