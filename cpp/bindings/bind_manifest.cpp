@@ -41,14 +41,17 @@ std::optional<nb::dict> read_manifest(nb::bytes data, std::vector<std::string> t
     const size_t n = found.names.size();
     nb::list names;
     for (const std::string_view name : found.names) names.append(nb::str(name.data(), name.size()));
-    nb::list meshes;
-    for (const std::string_view mesh : found.meshes)
-        meshes.append(mesh.empty() ? nb::object(nb::none())
-                                   : nb::object(nb::str(mesh.data(), mesh.size())));
+    nb::object meshes = nb::none();  // no mesh body: None, not n of them
+    if (found.mesh_count > 0) {
+        nb::list listed;
+        for (const std::string_view mesh : found.meshes)
+            listed.append(mesh.empty() ? nb::object(nb::none())
+                                       : nb::object(nb::str(mesh.data(), mesh.size())));
+        meshes = listed;
+    }
     nb::dict out;
     out["names"] = names;
     out["meshes"] = meshes;
-    out["mesh_count"] = found.mesh_count;
     out["units"] = found.has_units ? nb::object(nb::str(found.units.data(), found.units.size()))
                                    : nb::none();
     out["duration"] = found.has_duration
@@ -74,10 +77,11 @@ void bind_manifest(nb::module_& m) {
           "orders"_a, "shapes"_a,
           "Reads a plain JSON manifest of static mesh and primitive bodies into columns; None "
           "for any other document (Python's reader decides). Returns a dict: names (list of "
-          "str), meshes (list of str, None for a primitive body), mesh_count, units and "
-          "duration (str as written, or None), kinds, rotation, shapes (int8 codes: indices "
-          "into types, -1 for a mesh body, and shapes with -1 where absent), lengths (zeros "
-          "for a mesh body) and positions (N, 3), position_count, quaternions (NQ, 4), euler "
-          "(NE, 3) and orders (NE,) of the bodies so rotated, in order. type_fields: per "
-          "type, its fields besides type (bits: 1 radius, 2 length, 4 size).");
+          "str), meshes (list of str, None for a primitive body; None when no body has a "
+          "mesh), units and duration (str as written, or None), kinds (int8: index into types, "
+          "-1 for a mesh body), rotation and shapes (int8 codes, shapes indexing shapes with "
+          "-1 where absent), lengths (zeros for a mesh body) and positions (N, 3), "
+          "position_count, quaternions (NQ, 4), euler (NE, 3) and orders (NE,) of the bodies "
+          "so rotated, in order. type_fields: per type, its fields besides type (bits: 1 "
+          "radius, 2 length, 4 size).");
 }

@@ -95,7 +95,7 @@ def native_columns(data: bytes) -> NativeManifest | None:
         return None
     names: list[str] = found["names"]
     n = len(names)
-    kinds = found["kinds"]
+    kinds, meshes = found["kinds"], found["meshes"]
     shape_codes = found["shapes"]
     if (shape_codes < 0).all():
         shapes: list[str | None] = [None] * n
@@ -104,9 +104,9 @@ def native_columns(data: bytes) -> NativeManifest | None:
     orders = np.array(_ORDER_WORDS, dtype=object)[found["orders"]].tolist()
     columns = Columns(
         names=names,
-        meshes=found["meshes"],
+        meshes=[None] * n if meshes is None else meshes,
         shapes=shapes,
-        primitive=kinds >= 0 if found["mesh_count"] else np.ones(n, dtype=bool),
+        primitive=np.ones(n, dtype=bool) if meshes is None else kinds >= 0,
         moving=np.zeros(n, dtype=bool),
         scaled=np.zeros(n, dtype=bool),
         vectors={"position": found["positions"]} if found["position_count"] else {},
@@ -151,6 +151,8 @@ KEPT_OF_DOCUMENTS.append(_KEPT.clear)
 
 def manifest_meshes(found: Columns) -> list[str]:
     """The mesh names of a manifest's columns, each once, in order of first use."""
+    if found.primitive.all():
+        return []
     return [mesh for mesh in dict.fromkeys(found.meshes) if mesh is not None]
 
 
