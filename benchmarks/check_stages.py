@@ -27,7 +27,10 @@ from typing import Any
 STAGES = [
     ("meshcol.io.outputs", "manifest_inputs"),
     ("meshcol.io.scene", "native_manifest"),
-    ("meshcol.io.scene", "primitive_scene"),
+    ("meshcol.io.scene", "primitive_scene"),  # a --baseline's: native_scene since session 17
+    ("meshcol.io.scene", "native_scene"),
+    ("meshcol.io.scene_native", "read_mesh_names"),  # inside native_scene
+    ("meshcol.io.scene_native", "bulk_bodies"),
     ("meshcol.io.scene", "read_document"),
     ("meshcol.io.scene", "validate"),
     ("meshcol.io.scene", "read_mesh_files"),

@@ -14,9 +14,9 @@ Usage::
 ``TARGET`` is ``readers``, ``convex``, ``meshes`` or ``manifest``. The seeds are built afresh in
 a temporary folder: for ``readers`` every sample mesh and manifest in ``samples/`` and every
 corpus file under 64 KB in ``../shared/corpus`` (each prefixed with its format byte); for
-``manifest`` the JSON manifests in ``samples/`` and plain primitive manifests (every type,
-rotation form and shape; numbers of every spelling); for the numeric targets a few hand-made
-inputs (a cube, a flat square, huge and tiny coordinates).
+``manifest`` the JSON manifests in ``samples/`` and plain manifests of primitive bodies (every
+type, rotation form and shape; numbers of every spelling), of mesh bodies and of both; for
+the numeric targets a few hand-made inputs (a cube, a flat square, huge and tiny coordinates).
 
 A crash, a timeout (10 s for one input) or an unexpected exception stops the run: the input is
 written to ``--artifacts`` (default ``fuzz/crashes/``) and the exit code is non-zero. Turn it
@@ -87,6 +87,18 @@ def _manifest_seeds(folder: Path) -> int:
     seeds.append(text.replace("NAME", "\u00e9").encode())  # not ASCII
     seeds.append(text.replace("NAME", "\\u00e9").encode())  # an escape
     seeds.append(b"\xef\xbb\xbf" + text.replace("NAME", "").encode())
+    # mesh bodies, alone and among primitives (a file name as written; one escaped)
+    meshes = [
+        f'{{"name": "m{i}", "mesh": "assets/a{i:06d}.obj", "position": [{i}, 0.5, -0]'
+        + extras[i % 3]
+        + "}"
+        for i in range(8)
+    ]
+    seeds.append(('{"units": "m", "bodies": [' + ", ".join(meshes) + "]}").encode())
+    mixed = [body for pair in zip(bodies, meshes) for body in pair]
+    mixed_text = '{"bodies": [' + ", ".join(mixed).replace("NAME", "") + "]}"
+    seeds.append(mixed_text.encode())
+    seeds.append(mixed_text.replace("assets/", "../\\u00e9/").encode())
     for i, data in enumerate(seeds):
         (folder / f"seed{i}.json").write_bytes(data)
     return len(seeds)

@@ -21,8 +21,8 @@ meshes
     Floats and indices from the input become two triangle meshes and poses; a ``MeshSet`` is
     built (BVHs in the core) and distance and intersection are queried.
 manifest
-    The input is a JSON manifest's bytes for the core's reader of plain primitive manifests
-    (``meshcol.io.scene_native``), held to the Python reader: whatever it passes, Python's json
+    The input is a JSON manifest's bytes for the core's reader of plain manifests of mesh and
+    primitive bodies (``meshcol.io.scene_native``), held to the Python reader: whatever it passes, Python's json
     module must decode and the column check pass, as equal columns to the bit.
 """
 

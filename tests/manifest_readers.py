@@ -1,5 +1,5 @@
 """Switches for the tests that compare the manifest's readers: the native reader of plain
-primitive manifests (meshcol.io.scene_native) off, so a load takes the Python reader (the
+manifests (meshcol.io.scene_native) off, so a load takes the Python reader (the
 columns of meshcol.io.scene_columns, or the body loop when those are off too)."""
 
 from __future__ import annotations
@@ -13,10 +13,10 @@ import meshcol.io.scene as scene
 @contextlib.contextmanager
 def python_reader() -> Iterator[None]:
     """Within the block, ``load_scene`` and ``manifest_mesh_files`` never read natively."""
-    saved = scene.primitive_scene, scene.native_manifest
-    scene.primitive_scene = lambda source: None  # type: ignore[assignment]
+    saved = scene.native_scene, scene.native_manifest
+    scene.native_scene = lambda source: None  # type: ignore[assignment]
     scene.native_manifest = lambda source: None  # type: ignore[assignment]
     try:
         yield
     finally:
-        scene.primitive_scene, scene.native_manifest = saved
+        scene.native_scene, scene.native_manifest = saved

@@ -1,4 +1,5 @@
-// Exposes manifest_read.hpp: a plain JSON manifest of primitive bodies read into columns.
+// Exposes manifest_read.hpp: a plain JSON manifest of mesh and primitive bodies read into
+// columns.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/optional.h>
@@ -31,17 +32,26 @@ std::optional<nb::dict> read_manifest(nb::bytes data, std::vector<std::string> t
     const meshcol::ManifestWords words{std::move(types), std::move(type_fields),
                                        std::move(orders), std::move(shapes)};
     const std::string_view text(data.c_str(), data.size());
-    meshcol::PrimitiveColumns found;
+    meshcol::ManifestColumns found;
     {
         nb::gil_scoped_release release;
-        found = meshcol::read_primitive_manifest(text, words);
+        found = meshcol::read_plain_manifest(text, words);
     }
     if (!found.plain) return std::nullopt;
     const size_t n = found.names.size();
     nb::list names;
     for (const std::string_view name : found.names) names.append(nb::str(name.data(), name.size()));
+    nb::object meshes = nb::none();  // no mesh body: None, not n of them
+    if (found.mesh_count > 0) {
+        nb::list listed;
+        for (const std::string_view mesh : found.meshes)
+            listed.append(mesh.empty() ? nb::object(nb::none())
+                                       : nb::object(nb::str(mesh.data(), mesh.size())));
+        meshes = listed;
+    }
     nb::dict out;
     out["names"] = names;
+    out["meshes"] = meshes;
     out["units"] = found.has_units ? nb::object(nb::str(found.units.data(), found.units.size()))
                                    : nb::none();
     out["duration"] = found.has_duration
@@ -63,12 +73,14 @@ std::optional<nb::dict> read_manifest(nb::bytes data, std::vector<std::string> t
 }  // namespace
 
 void bind_manifest(nb::module_& m) {
-    m.def("read_primitive_manifest", &read_manifest, "data"_a, "types"_a, "type_fields"_a,
+    m.def("read_plain_manifest", &read_manifest, "data"_a, "types"_a, "type_fields"_a,
           "orders"_a, "shapes"_a,
-          "Reads a plain JSON manifest of static primitive bodies into columns; None for any "
-          "other document (Python's reader decides). Returns a dict: names (list of str), units "
-          "and duration (str as written, or None), kinds, rotation, shapes (int8 codes: "
-          "indices into types, and shapes with -1 where absent), lengths and positions (N, 3), "
+          "Reads a plain JSON manifest of static mesh and primitive bodies into columns; None "
+          "for any other document (Python's reader decides). Returns a dict: names (list of "
+          "str), meshes (list of str, None for a primitive body; None when no body has a "
+          "mesh), units and duration (str as written, or None), kinds (int8: index into types, "
+          "-1 for a mesh body), rotation and shapes (int8 codes, shapes indexing shapes with "
+          "-1 where absent), lengths (zeros for a mesh body) and positions (N, 3), "
           "position_count, quaternions (NQ, 4), euler (NE, 3) and orders (NE,) of the bodies "
           "so rotated, in order. type_fields: per type, its fields besides type (bits: 1 "
           "radius, 2 length, 4 size).");

@@ -1,4 +1,4 @@
-// The plain primitive manifest read into columns (see manifest_read.hpp).
+// The plain manifest of mesh and primitive bodies read into columns (see manifest_read.hpp).
 //
 // A recursive-descent reader of the one document shape it passes, on the raw bytes: every
 // departure from that shape throws NotPlain and the whole document is left to Python. So
@@ -17,7 +17,7 @@
 namespace meshcol {
 namespace {
 
-/// The document is not a plain primitive manifest (thrown once, caught at the top).
+/// The document is not a plain manifest (thrown once, caught at the top).
 struct NotPlain {};
 
 [[noreturn]] void not_plain() { throw NotPlain{}; }
@@ -70,7 +70,7 @@ class Reader {
     Reader(std::string_view text, const ManifestWords& words)
         : p_(text.data()), end_(text.data() + text.size()), words_(words) {}
 
-    void document(PrimitiveColumns& out) {
+    void document(ManifestColumns& out) {
         static constexpr std::string_view kBom = "\xEF\xBB\xBF";
         if (std::string_view(p_, static_cast<size_t>(end_ - p_)).substr(0, 3) == kBom) p_ += 3;
         space();
@@ -79,8 +79,7 @@ class Reader {
         members([&](std::string_view key) {
             if (key == "units") {
                 once(units);
-                out.units = string();
-                if (out.units.empty() || !valid_utf8(out.units)) not_plain();
+                out.units = utf8_string();
                 out.has_units = true;
             } else if (key == "duration") {
                 once(duration);
@@ -194,7 +193,7 @@ class Reader {
         }
     }
 
-    void body_array(PrimitiveColumns& out) {
+    void body_array(ManifestColumns& out) {
         expect('[');
         space();
         if (p_ < end_ && *p_ == ']') not_plain();  // no bodies: Python says so
@@ -203,18 +202,23 @@ class Reader {
         } while (more(']'));
     }
 
-    void body(PrimitiveColumns& out) {
+    void body(ManifestColumns& out) {
         expect('{');
-        bool name = false, primitive = false, position = false, rotation = false, shape = false;
+        bool name = false, mesh = false, primitive = false, position = false, rotation = false,
+             shape = false;
         out.positions.insert(out.positions.end(), 3, 0.0);
         out.rotation.push_back(0);
         out.shapes.push_back(-1);
+        out.meshes.emplace_back();
         members([&](std::string_view key) {
             if (key == "name") {
                 once(name);
-                const std::string_view s = string();
-                if (s.empty() || !valid_utf8(s)) not_plain();
-                out.names.push_back(s);
+                out.names.push_back(utf8_string());
+            } else if (key == "mesh") {
+                // the name as written: Python's reader confines and reads it (no escapes here,
+                // so the text is the decoded string)
+                once(mesh);
+                out.meshes.back() = utf8_string();
             } else if (key == "primitive") {
                 once(primitive);
                 primitive_of(out);
@@ -235,13 +239,25 @@ class Reader {
                 if (code < 0) not_plain();
                 out.shapes.back() = static_cast<std::int8_t>(code);
             } else {
-                not_plain();  // a mesh body, a moving or scaled one, an unknown field
+                not_plain();  // a moving or scaled body, an unknown field
             }
         });
-        if (!name || !primitive) not_plain();
+        if (!name || mesh == primitive) not_plain();  // exactly one of mesh and primitive
+        if (mesh) {
+            ++out.mesh_count;
+            out.kinds.push_back(-1);
+            out.lengths.insert(out.lengths.end(), 3, 0.0);
+        }
     }
 
-    void primitive_of(PrimitiveColumns& out) {
+    /// A non-empty string of valid UTF-8 without escapes.
+    std::string_view utf8_string() {
+        const std::string_view s = string();
+        if (s.empty() || !valid_utf8(s)) not_plain();
+        return s;
+    }
+
+    void primitive_of(ManifestColumns& out) {
         expect('{');
         int kind = -1, given = 0;
         bool type = false;
@@ -291,7 +307,7 @@ class Reader {
         return value;
     }
 
-    void rotation_of(PrimitiveColumns& out) {
+    void rotation_of(ManifestColumns& out) {
         expect('{');
         bool quaternion = false, angles = false, order = false;
         int code = -1;
@@ -378,13 +394,13 @@ bool json_number(std::string_view token, double& value) {
     return true;
 }
 
-PrimitiveColumns read_primitive_manifest(std::string_view text, const ManifestWords& words) {
-    PrimitiveColumns out;
+ManifestColumns read_plain_manifest(std::string_view text, const ManifestWords& words) {
+    ManifestColumns out;
     if (words.type_fields.size() != words.types.size()) return out;
     try {
         Reader(text, words).document(out);
     } catch (const NotPlain&) {
-        return PrimitiveColumns{};
+        return ManifestColumns{};
     }
     return out;
 }

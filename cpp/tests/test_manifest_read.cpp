@@ -1,4 +1,4 @@
-// The plain primitive manifest reader (manifest_read.hpp): what it passes and the columns it
+// The plain manifest reader (manifest_read.hpp): what it passes and the columns it
 // gives; everything else is passed over, never read halfway.
 #include <cmath>
 #include <cstring>
@@ -16,7 +16,7 @@ const ManifestWords kWords{{"sphere", "box", "capsule", "cylinder"},
                            {"xyz", "zyx"},
                            {"decomposed", "hull", "mesh"}};
 
-PrimitiveColumns read(const std::string& text) { return read_primitive_manifest(text, kWords); }
+ManifestColumns read(const std::string& text) { return read_plain_manifest(text, kWords); }
 
 double number(const char* token) {
     double value = std::nan("");
@@ -36,7 +36,7 @@ TEST_CASE("manifest_read: a plain manifest into columns") {
     CHECK(!read(text).plain);  // an escape: left to Python
     std::string plain = text;
     plain.replace(plain.find("\\u00e9"), 6, "\xC3\xA9");
-    const PrimitiveColumns c = read(plain);
+    const ManifestColumns c = read(plain);
     CHECK(c.plain);
     CHECK_EQ(c.names.size(), size_t(2));
     CHECK(c.names[1] == "b\xC3\xA9");
@@ -84,4 +84,46 @@ TEST_CASE("manifest_read: numbers as Python reads them") {
     double value = 0;
     CHECK(!json_number("1e400", value));
     CHECK(!json_number(std::string(65, '1'), value));
+}
+
+TEST_CASE("manifest_read: mesh bodies beside primitive bodies") {
+    const ManifestColumns c = read(
+        "{\"bodies\": [{\"mesh\": \"assets/a \xC3\xA9.obj\", \"name\": \"a\", \"position\": "
+        "[1, 2, 3], \"rotation\": {\"euler_deg\": [0, 0, 90], \"order\": \"zyx\"}},"
+        " {\"name\": \"b\", \"primitive\": {\"type\": \"sphere\", \"radius\": 2}},"
+        " {\"name\": \"c\", \"shape\": \"hull\", \"mesh\": \"../c.stl\"}]}");
+    CHECK(c.plain);
+    CHECK_EQ(c.names.size(), size_t(3));
+    CHECK_EQ(c.meshes.size(), size_t(3));
+    CHECK_EQ(c.mesh_count, size_t(2));
+    CHECK(c.meshes[0] == "assets/a \xC3\xA9.obj");
+    CHECK(c.meshes[1].empty());
+    CHECK(c.meshes[2] == "../c.stl");  // confined, or refused, by Python's loader
+    CHECK_EQ(int(c.kinds[0]), -1);
+    CHECK_EQ(int(c.kinds[1]), 0);
+    CHECK_EQ(int(c.kinds[2]), -1);
+    CHECK_EQ(c.lengths.size(), size_t(9));
+    CHECK_EQ(c.lengths[0], 0.0);
+    CHECK_EQ(c.lengths[3], 2.0);
+    CHECK_EQ(c.lengths[6], 0.0);
+    CHECK_EQ(int(c.rotation[0]), 2);
+    CHECK_EQ(int(c.orders[0]), 1);
+    CHECK_EQ(int(c.shapes[2]), 1);
+    CHECK_EQ(c.position_count, size_t(1));
+
+    const std::string name = "{\"bodies\": [{\"name\": \"a\", ";
+    CHECK(read(name + "\"mesh\": \"a.obj\"}]}").plain);
+    for (const char* rest :
+         {"\"mesh\": \"\"}]}",                         // empty: Python says so
+          "\"mesh\": \"a\\u002eobj\"}]}",              // an escape: left to Python
+          "\"mesh\": \"a\\\\b.obj\"}]}",               // an escaped backslash
+          "\"mesh\": \"a\tb.obj\"}]}",                 // a raw control character
+          "\"mesh\": \"\xC3\x28.obj\"}]}",             // not UTF-8
+          "\"mesh\": 1}]}", "\"mesh\": null}]}", "\"mesh\": [\"a.obj\"]}]}",
+          "\"mesh\": \"a.obj\", \"mesh\": \"b.obj\"}]}",  // Python keeps the last
+          "\"mesh\": \"a.obj\", \"primitive\": {\"type\": \"sphere\", \"radius\": 1}}]}",
+          "\"mesh\": \"a.obj\", \"scale\": 2}]}", "\"mesh\": \"a.obj\", \"velocity\": [0, 0, 0]}]}",
+          "\"mesh\": \"a.obj\"", "\"mesh\": \"a.obj}]}"}) {
+        CHECK(!read(name + rest).plain);
+    }
 }

@@ -10,8 +10,9 @@ Loading a manifest is a list of stages, each in its module: read the text
 (:mod:`meshcol.io.scene_parse`), validate it (:mod:`meshcol.io.scene_validate`; the common
 manifest column by column, :mod:`meshcol.io.scene_columns`), read its mesh files once, build
 its common bodies in bulk, then the others one by one (:mod:`meshcol.io.scene_bodies`). A
-manifest of static primitives only stays columns (:mod:`meshcol.io.scene_primitives`); a JSON
-one is read natively, straight into those columns (:mod:`meshcol.io.scene_native`).
+manifest of static primitives only stays columns (:mod:`meshcol.io.scene_primitives`). A plain
+JSON manifest of static mesh and primitive bodies is read natively, straight into those columns
+(:mod:`meshcol.io.scene_native`), and needs no document when every body is built from them.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from meshcol.io.scene_bodies import (
     rotation_from_quaternion,
 )
 from meshcol.io.scene_columns import bulk_bodies, primitive_bodies
-from meshcol.io.scene_native import native_manifest, primitive_scene
+from meshcol.io.scene_native import manifest_meshes, native_manifest, native_scene
 from meshcol.io.scene_parse import collector_paused, read_document
 from meshcol.io.scene_schema import SCHEMA_PATH
 from meshcol.io.scene_validate import (
@@ -98,9 +99,9 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
 
 
 def _load_scene(source: str) -> Scene:
-    scene = primitive_scene(source)  # a plain JSON manifest of static primitives, read natively
-    if scene is not None:
-        return scene
+    native = native_scene(source)  # a plain JSON manifest, read natively
+    if native is not None and native.scene is not None:
+        return native.scene
     document, text = read_document(source)
     columns = validate(document, text, source)  # None: the manifest takes the body-by-body path
     check_magnitudes(document, source, columns)
@@ -108,10 +109,14 @@ def _load_scene(source: str) -> Scene:
     primitives = primitive_bodies(columns, source) if columns is not None else None
     if primitives is not None:  # every body a static primitive: columns, no object per body
         return Scene(bodies=primitives, units=units, source=source, duration=duration)
-    files = read_mesh_files(document, source)  # each mesh file read once, all in parallel
-    # The common bodies (static, unscaled, one object each) built together; every other body,
-    # and every body whose checks might fail, one by one in order, so errors come as before.
-    bulk = bulk_bodies(columns, source, files) if columns is not None else None
+    if native is not None and native.files is not None:  # read natively, bodies left over
+        files, bulk = native.files, native.bulk  # what the next two lines make of it
+    else:
+        files = read_mesh_files(document, source)  # each mesh file read once, all in parallel
+        # The common bodies (static, unscaled, one object each) built together; every other
+        # body, and every body whose checks might fail, one by one in order, so errors come
+        # as before.
+        bulk = bulk_bodies(columns, source, files) if columns is not None else None
     bodies = build_bodies(document, source, files, bulk)
     return Scene(bodies=tuple(bodies), units=units, source=source, duration=duration)
 
@@ -313,22 +318,29 @@ def manifest_mesh_files(path: str | os.PathLike[str]) -> list[str]:
         :func:`load_scene` reports why).
     """
     source = os.fspath(path)
-    if native_manifest(source) is not None:  # read natively: every body a primitive
-        return []
-    try:
-        document, text = read_document(source)
-        check_nesting(document, text, source)
-    except MeshcolError:
-        return []
+    native = native_manifest(source)
+    if native is not None:  # read natively: the column of names, without the document
+        names = manifest_meshes(native.columns)
+    else:
+        try:
+            document, text = read_document(source)
+            check_nesting(document, text, source)
+        except MeshcolError:
+            return []
+        names = _document_meshes(document)
+    paths = joined_paths(os.path.dirname(source), names)
+    return list(dict.fromkeys(confine_all(paths, source, names)))
+
+
+def _document_meshes(document: Any) -> list[str]:
+    """The mesh names of a decoded manifest, valid or not, each once, in order."""
     found = document_columns(document)
+    if found is not None:  # valid: the column of names, without a loop over the bodies
+        return manifest_meshes(found)
     bodies = document.get("bodies") if isinstance(document, dict) else None
     meshes: dict[str, None] = {}
-    if found is not None:  # valid: the column of names, without a loop over the bodies
-        meshes = dict.fromkeys(m for m in dict.fromkeys(found.meshes) if m is not None)
-    for spec in bodies if isinstance(bodies, list) and found is None else []:
+    for spec in bodies if isinstance(bodies, list) else []:
         mesh = spec.get("mesh") if isinstance(spec, dict) else None
         if isinstance(mesh, str) and mesh:
             meshes[mesh] = None
-    names = list(meshes)
-    paths = joined_paths(os.path.dirname(source), names)
-    return list(dict.fromkeys(confine_all(paths, source, names)))
+    return list(meshes)

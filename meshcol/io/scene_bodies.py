@@ -27,6 +27,7 @@ __all__ = [
     "IDENTITY",
     "build_bodies",
     "read_mesh_files",
+    "read_mesh_names",
     "rotation_from_euler",
     "rotation_from_quaternion",
 ]
@@ -86,16 +87,21 @@ def read_mesh_files(document: Any, source: str) -> MutableMapping[str, list[Body
     keyed by normalised path (:class:`meshcol.io.mesh_read.MeshFiles`: the bodies of a file
     built when asked for). Empty when a file fails: the body loop then reads the files one
     by one and reports the first bad one with its body's name."""
-    from meshcol.io.mesh_read import read_meshes
-
-    folder = os.path.dirname(source)
     bodies = document["bodies"]
     try:  # each value once (a C loop), then only the distinct ones looked at
         found = dict.fromkeys(map(dict.get, bodies, repeat("mesh")))
     except TypeError:  # not a dict, or a value that is not hashable: one body at a time
         found = dict.fromkeys(spec["mesh"] for spec in bodies if isinstance(spec.get("mesh"), str))
     # each name once before the path arithmetic: 300,000 bodies may share 16 files
-    names = [name for name in found if isinstance(name, str)]
+    return read_mesh_names([name for name in found if isinstance(name, str)], source)
+
+
+def read_mesh_names(names: Sequence[str], source: str) -> MutableMapping[str, list[Body]]:
+    """:func:`read_mesh_files` of the mesh names a manifest uses, each once, in order of first
+    use (a manifest's columns give them without its document)."""
+    from meshcol.io.mesh_read import read_meshes
+
+    folder = os.path.dirname(source)
     joined = joined_paths(folder, names, normalise=True)
     paths = list(dict.fromkeys(confine_all(joined, source, names)))  # inside --root
     try:

@@ -1,29 +1,33 @@
-"""The native reader of plain primitive manifests (meshcol.io.scene_native, issue 32 item 4)
-against the Python reader it stands in for: on any bytes it passes, Python's json module and
-the column check (meshcol.io.scene_columns.columns) pass the same document as equal columns,
-to the bit; it passes every plain manifest; the scenes, reports and error lines of a load are
-the Python reader's."""
+"""The native reader of plain manifests (meshcol.io.scene_native; primitive bodies: issue 32
+item 4, mesh bodies: item 5) against the Python reader it stands in for: on any bytes it
+passes, Python's json module and the column check (meshcol.io.scene_columns.columns) pass the
+same document as equal columns, to the bit; it passes every plain manifest; the scenes,
+reports, mesh file lists and error lines of a load are the Python reader's."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
-from hypothesis import given, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from manifest_readers import python_reader
+from test_scene_columns import ASSETS, describe, manifests
 
 from meshcol.analysis.check import CheckOptions, check_scene
 from meshcol.cli import main
 from meshcol.errors import MeshcolError
 from meshcol.io import scene_parse, scene_validate
+from meshcol.io.paths import confined_to
 from meshcol.io.scene import load_scene, manifest_mesh_files
 from meshcol.io.scene_columns import Columns, columns
-from meshcol.io.scene_native import native_columns
+from meshcol.io.scene_native import native_columns, native_scene
 from meshcol.io.scene_primitives import PrimitiveBodies
 
 # --- columns ----------------------------------------------------------------------------------
@@ -148,6 +152,66 @@ def test_each_field_passes_only_as_the_python_reader_does(text, passed):
 
 
 @pytest.mark.parametrize(
+    ("text", "passed"),
+    [
+        ('"mesh": "a.obj"', True),
+        ('"mesh": "assets/a000001.obj", "shape": "hull", "position": [1, 2, 3]', True),
+        ('"rotation": {"euler_deg": [0, 0, 90], "order": "xyz"}, "mesh": "a b.obj"', True),
+        ('"mesh": "../outside/a.obj"', True),  # the loader confines it (--root)
+        ('"mesh": "/abs/a.obj"', True),
+        ('"mesh": "\\u00e9.obj"', False),  # an escape: left to Python
+        ('"mesh": "a\\/b.obj"', False),
+        ('"mesh": "a\\\\b.obj"', False),
+        ('"mesh": ""', False),  # Python: "mesh must be a non-empty string"
+        ('"mesh": 1', False),
+        ('"mesh": null', False),
+        ('"mesh": ["a.obj"]', False),
+        ('"mesh": {}', False),
+        ('"mesh": "a.obj", "mesh": "b.obj"', False),  # Python keeps the last
+        ('"mesh": "a.obj", "primitive": {"type": "sphere", "radius": 1}', False),
+        ('"primitive": {"type": "sphere", "radius": 1}, "mesh": "a.obj"', False),
+        ('"mesh": "a.obj", "scale": 1', False),
+        ('"mesh": "a.obj", "end_position": [0, 0, 0]', False),
+        ('"mesh": "a.obj", "colour": "red"', False),
+        ('"shape": "hull"', False),  # neither mesh nor primitive
+    ],
+)
+def test_each_field_of_a_mesh_body_passes_only_as_the_python_reader_does(text, passed):
+    data = '{"bodies": [{"name": "a", ' + text + "}]}"
+    assert assert_native_is_python(data.encode()) == passed
+
+
+def test_a_mesh_string_passes_as_its_utf8_bytes_only():
+    for raw, passed in [
+        (b"\xc3\xa9t\xc3\xa9.obj", True),
+        (b"\xe6\xbc\xa2/\x7f.obj", True),  # DEL is no control character to JSON
+        (b"a\x00.obj", False),  # a raw control character: Python's json refuses it
+        (b"a\x1f.obj", False),
+        (b"\xc3\x28.obj", False),  # not UTF-8
+        (b"\xed\xa0\x80.obj", False),  # a surrogate
+    ]:
+        data = b'{"bodies": [{"name": "a", "mesh": "' + raw + b'"}]}'
+        assert assert_native_is_python(data) == passed, raw
+
+
+def test_a_mixed_manifest_reads_to_the_python_readers_columns():
+    document = json.loads(plain_text(30))
+    for i, body in enumerate(document["bodies"]):
+        if i % 3 == 1:
+            del body["primitive"]
+            body["mesh"] = f"assets/a{i:06d}.obj"
+    data = json.dumps(document, ensure_ascii=False).encode()
+    assert assert_native_is_python(data)
+    found = native_columns(data)
+    assert found is not None
+    assert found.columns.meshes[1] == "assets/a000001.obj" and found.columns.meshes[0] is None
+    assert found.columns.primitive.tolist() == [i % 3 != 1 for i in range(30)]
+    assert found.columns.primitive_type[1] == -1
+    only_meshes = {"bodies": [b for b in document["bodies"] if "mesh" in b]}
+    assert assert_native_is_python(json.dumps(only_meshes).encode())
+
+
+@pytest.mark.parametrize(
     ("data", "passed"),
     [
         (b'\xef\xbb\xbf{"bodies": [B]}', True),  # a byte-order mark, dropped as utf-8-sig does
@@ -242,10 +306,30 @@ def primitive_text(draw, plain: bool) -> str:
 
 
 @st.composite
+def mesh_text(draw, plain: bool) -> str:
+    """A mesh body's ``mesh``: a file name as written (plain: no escapes), or a near miss."""
+    name = draw(st.from_regex(r"(\.\./|/)?[a-z0-9_ é漢/.\-]{0,10}\.(obj|stl|glb)", fullmatch=True))
+    if plain:
+        return json.dumps(name, ensure_ascii=False)
+    return draw(
+        st.one_of(
+            st.just(json.dumps(name, ensure_ascii=False)),
+            st.just(json.dumps(name, ensure_ascii=True)),  # escapes where not ASCII
+            strings(False),
+            st.sampled_from(['""', '"a\\u002eobj"', '"a\\/b.obj"', "1", "null", '["a.obj"]']),
+        )
+    )
+
+
+@st.composite
 def body_text(draw, plain: bool) -> str:
     plain = plain or draw(st.integers(0, 3)) > 0  # most bodies of a spoilt manifest are plain
     value = plain_numbers if plain else st.one_of(plain_numbers, numbers)
-    fields = [("name", draw(strings(plain))), ("primitive", draw(primitive_text(plain)))]
+    fields = [("name", draw(strings(plain)))]
+    if draw(st.integers(0, 2)) == 0:  # a mesh body, one in three
+        fields.append(("mesh", draw(mesh_text(plain))))
+    else:
+        fields.append(("primitive", draw(primitive_text(plain))))
     if draw(st.booleans()):
         fields.append(("position", array(draw, value, 3)))
     form = draw(st.integers(0, 2))
@@ -260,9 +344,11 @@ def body_text(draw, plain: bool) -> str:
     if not plain:
         for _ in range(draw(st.integers(0, 2))):
             key = draw(
-                st.sampled_from(["name", "position", "mesh", "scale", "velocity", "shape", "x"])
+                st.sampled_from(
+                    ["name", "position", "mesh", "scale", "velocity", "shape", "x", "primitive"]
+                )
             )
-            fields.append((key, draw(st.sampled_from(['"a"', "[1, 2, 3]", "1", "{}"]))))
+            fields.append((key, draw(st.sampled_from(['"a"', "[1, 2, 3]", "1", "{}", '"a.obj"']))))
     fields = draw(st.permutations(fields))
     space = draw(st.sampled_from(["", " ", "\n  ", "\t"]))
     return "{" + f",{space}".join(f'"{k}":{space}{v}' for k, v in fields) + "}"
@@ -388,3 +474,158 @@ def test_a_bad_manifest_is_one_line_naming_the_file_and_the_body(tmp_path):
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in result.output
     assert str(path) in lines[0] and "body 'b5': position must be an array of 3" in lines[0]
+
+
+# --- mesh bodies: the load --------------------------------------------------------------------
+
+
+def load_readers(path: Path) -> list:
+    """Of the native reader, then the Python reader: the scene (its bodies to the bit) or the
+    error line, and the mesh files of the manifest (or the error line)."""
+    out = []
+    for python in (False, True):
+        with python_reader() if python else contextlib.nullcontext():
+            forget()
+            try:
+                loaded: Any = describe(load_scene(path))
+            except MeshcolError as error:
+                loaded = str(error)
+            forget()
+            try:
+                files: Any = manifest_mesh_files(path)
+            except MeshcolError as error:
+                files = str(error)
+        out.append((loaded, files))
+    forget()
+    return out
+
+
+@pytest.fixture(scope="module")
+def mesh_assets(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("native") / "scene"
+    folder.mkdir()
+    for name, text in ASSETS.items():
+        (folder / name).write_text(text)
+    (folder / "big.obj").write_text(ASSETS["tet.obj"].replace("v 0 0 1", "v 0 0 250.5"))
+    (folder.parent / "outside.obj").write_text(ASSETS["tet.obj"])
+    return folder
+
+
+def natively_read(document: dict) -> dict:
+    """``document`` with unique names and no field the native reader passes over (scale,
+    motion): mostly read natively, its bodies all built in bulk or some one by one."""
+    for i, body in enumerate(document["bodies"]):
+        body["name"] += str(i)
+        for field in ("scale", "end_position", "end_rotation", "velocity", "angular_velocity"):
+            body.pop(field, None)
+    return document
+
+
+@settings(suppress_health_check=[HealthCheck.function_scoped_fixture], deadline=None)
+@given(st.one_of(manifests(), manifests().map(natively_read)))
+def test_a_manifest_of_mesh_bodies_loads_as_the_python_reader_loads_it(mesh_assets, document):
+    path = mesh_assets / "scene.json"
+    path.write_text(json.dumps(document))
+    native, python = load_readers(path)
+    assert native == python
+
+
+def test_a_large_mixed_manifest_is_read_natively_to_the_python_readers_scene(mesh_assets):
+    rng = np.random.default_rng(5)
+    bodies: list[dict[str, Any]] = []
+    for i in range(300):
+        body: dict[str, Any] = {"name": f"b{i}", "position": rng.uniform(-50, 50, 3).tolist()}
+        if i % 5 == 4:
+            body["primitive"] = {"type": "capsule", "radius": 0.5, "length": 1.5}
+        else:
+            body["mesh"] = ["tet.obj", "big.obj"][i % 2]
+        if i % 3 == 0:
+            body["rotation"] = {"quaternion": rng.normal(size=4).tolist()}
+        elif i % 3 == 1:
+            body["rotation"] = {"euler_deg": rng.uniform(-400, 400, 3).tolist(), "order": "zxz"}
+        if i % 7 == 0:
+            body["shape"] = "hull"
+        bodies.append(body)
+    path = mesh_assets / "scene.json"
+    path.write_text(json.dumps({"units": "m", "bodies": bodies}))
+    forget()
+    found = native_scene(str(path))
+    assert found is not None and found.scene is not None  # no document decoded
+    assert len(found.scene.bodies) == 300
+    native, python = load_readers(path)
+    assert native == python and isinstance(native[0], list)
+    assert native[1] == [str(mesh_assets / "tet.obj"), str(mesh_assets / "big.obj")]
+    reports = []
+    for reader in (contextlib.nullcontext, python_reader):
+        forget()
+        with reader():
+            scene = load_scene(path)
+        reports.append(CLOCKS.sub("", check_scene(scene, CheckOptions()).to_json()))
+    forget()
+    assert reports[0] == reports[1]
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"mesh": "pair.obj"}, None),  # two objects: that body built one by one
+        ({"mesh": "missing.obj"}, "body 'b3': mesh file 'missing.obj' not found"),
+        ({"mesh": "broken.obj"}, "body 'b3': mesh file 'broken.obj'"),
+        ({"mesh": "notes.txt"}, "body 'b3': mesh file 'notes.txt'"),
+        ({"name": "b1"}, "body 'b1': name used by an earlier body"),
+        ({"rotation": {"quaternion": [0, 0, 0, 0]}}, "rotation.quaternion must be non-zero"),
+        ({"mesh": "far.obj", "position": [6e9, 0, 0]}, "body 'b3'"),  # near the limit
+        ({"position": [2e10, 0, 0]}, "position 2e+10 is beyond the limit"),
+        ({"mesh": "../outside.obj"}, None),  # no root: read
+    ],
+)
+def test_a_mesh_manifest_the_loader_refuses_or_builds_body_by_body_is_the_same(
+    mesh_assets, change, message
+):
+    bodies = [{"name": f"b{i}", "mesh": "tet.obj", "position": [3 * i, 0, 0]} for i in range(6)]
+    bodies[3].update(change)
+    path = mesh_assets / "scene.json"
+    path.write_text(json.dumps({"bodies": bodies}))
+    assert native_columns(path.read_bytes()) is not None
+    native, python = load_readers(path)
+    assert native == python
+    if message is None:
+        assert isinstance(native[0], list)
+    else:
+        assert message in native[0], native
+
+
+def test_a_mesh_outside_the_root_is_the_python_readers_error(mesh_assets):
+    bodies = [{"name": "a", "mesh": "tet.obj"}, {"name": "b", "mesh": "../outside.obj"}]
+    path = mesh_assets / "scene.json"
+    path.write_text(json.dumps({"bodies": bodies}))
+    assert native_columns(path.read_bytes()) is not None
+    with confined_to(mesh_assets):
+        native, python = load_readers(path)
+    assert native == python
+    assert "path '../outside.obj' resolves outside the root" in native[0]
+    assert native[1] == native[0]  # the mesh file list refuses it the same way
+    with confined_to(mesh_assets.parent):
+        native, python = load_readers(path)
+    assert native == python and isinstance(native[0], list)
+
+
+def test_a_mesh_manifest_near_miss_gives_the_python_readers_error(mesh_assets):
+    for body, message in [
+        ('{"name": "a", "mesh": ""}', "body 'a': mesh must be a non-empty string"),
+        ('{"name": "a", "mesh": 1}', "body 'a': mesh must be a non-empty string"),
+        ('{"name": "a", "mesh": "tet.obj", "primitive": {"type": "sphere", "radius": 1}}', None),
+        ('{"name": "a", "mesh": "tet.obj", "mesh": "nothing.obj"}', "'nothing.obj' not found"),
+        ('{"name": "a", "mesh": "t\\u0065t.obj"}', ""),  # an escape: read by Python, loads
+    ]:
+        path = mesh_assets / "scene.json"
+        path.write_text('{"bodies": [' + body + "]}")
+        assert native_columns(path.read_bytes()) is None, body
+        native, python = load_readers(path)
+        assert native == python, body
+        if message is None:
+            assert "needs exactly one of 'mesh' or 'primitive'" in native[0], native
+        elif message:
+            assert message in native[0], native
+        else:
+            assert isinstance(native[0], list)

@@ -1,12 +1,13 @@
 #pragma once
-/// A JSON scene manifest of static primitive bodies read straight into columns, without a
-/// Python object per body: the fast path of `meshcol.io.scene_native`.
+/// A JSON scene manifest of static mesh and primitive bodies read straight into columns,
+/// without a Python object per body but its name and mesh: the fast path of
+/// `meshcol.io.scene_native`.
 ///
 /// It reads one shape of document only, the common one: a top object of `units`, `duration`
-/// and a non-empty `bodies` array, each body an object of `name`, `primitive` (a known type
-/// with exactly its fields, positive numbers), and optionally `position`, `rotation` (a
-/// quaternion, or Euler angles and an order) and `shape`; numbers finite, names non-empty
-/// UTF-8 without escapes, no key twice. Anything else (another field, an escape, a syntax
+/// and a non-empty `bodies` array, each body an object of `name`, exactly one of `mesh` (a
+/// file name) or `primitive` (a known type with exactly its fields, positive numbers), and
+/// optionally `position`, `rotation` (a quaternion, or Euler angles and an order) and `shape`;
+/// numbers finite, names and mesh names non-empty UTF-8 without escapes, no key twice. Anything else (another field, an escape, a syntax
 /// error, a NaN, a number out of range, a duplicate key...) gives `plain == false` and the
 /// Python reader decides, with its messages: this reader never rejects, it only passes over.
 /// What it passes is what Python's json module and `meshcol.io.scene_columns.columns` make
@@ -32,15 +33,18 @@ struct ManifestWords {
 /// Bits of `ManifestWords::type_fields`.
 enum PrimitiveField : int { kRadius = 1, kLength = 2, kSize = 4 };
 
-/// The columns of a plain manifest of primitive bodies (n of them), index-aligned.
-struct PrimitiveColumns {
+/// The columns of a plain manifest (n bodies), index-aligned.
+struct ManifestColumns {
     bool plain = false;                  ///< false: not of the common shape (nothing else set)
     bool has_units = false, has_duration = false;
     std::string_view units;              ///< UTF-8, non-empty, a view into the text
     std::string_view duration;           ///< the number as written (Python reads its type)
     std::vector<std::string_view> names; ///< UTF-8, non-empty, views into the text
-    std::vector<std::int8_t> kinds;      ///< index into `types`
-    std::vector<double> lengths;         ///< 3 a body: size, (radius, 0, 0), (radius, length, 0)
+    std::vector<std::string_view> meshes; ///< UTF-8 views into the text, empty: a primitive body
+    std::size_t mesh_count = 0;          ///< mesh bodies
+    std::vector<std::int8_t> kinds;      ///< index into `types`, -1 for a mesh body
+    std::vector<double> lengths;         ///< 3 a body: size, (radius, 0, 0), (radius, length, 0);
+                                         ///< zeros for a mesh body
     std::vector<double> positions;       ///< 3 a body, zeros where absent
     std::size_t position_count = 0;      ///< bodies that give a position
     std::vector<std::int8_t> rotation;   ///< 0 none, 1 quaternion, 2 Euler angles
@@ -51,9 +55,9 @@ struct PrimitiveColumns {
 };
 
 /// Reads `text` (the manifest's bytes; a leading UTF-8 byte-order mark is skipped) when it
-/// is a plain manifest of primitive bodies; else `plain == false`. The views point into
-/// `text`, which must outlive the result.
-PrimitiveColumns read_primitive_manifest(std::string_view text, const ManifestWords& words);
+/// is a plain manifest; else `plain == false`. The views point into `text`, which must
+/// outlive the result.
+ManifestColumns read_plain_manifest(std::string_view text, const ManifestWords& words);
 
 /// A token of the JSON number grammar (checked by the caller) as Python's json module and
 /// float() make it a double: the correctly rounded value, +0.0 for an integer zero ("-0" is
