@@ -112,7 +112,9 @@ def _first_equal(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.n
     np.cumsum(counts, out=offsets[1:])
     bits = points.reshape(-1).view(np.uint64)
     n = len(arrays)
-    fingerprint = _fingerprints(points, offsets)
+    # each vertex's coordinates' bits mixed, weighed by its place in its set, summed per set
+    # (cpp/include/meshcol/point_sets.hpp), on the core's threads
+    fingerprint = point_set_fingerprints(points, offsets)
     # sets in order of (count, fingerprint, index): the first of each run is the first set
     order = np.lexsort((np.arange(n), fingerprint, counts))
     starts = np.ones(n, dtype=bool)
@@ -125,13 +127,6 @@ def _first_equal(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.n
     if not _same_bits(bits, offsets, counts, first):
         return None  # two sets of one fingerprint differ: the per-body path keys them
     return points, offsets, first
-
-
-def _fingerprints(points: np.ndarray, offsets: np.ndarray) -> np.ndarray:
-    """(n,) uint64: the fingerprint of each set, computed by the core on its threads (one pass
-    over the points, no temporaries): each vertex's three coordinates' bits mixed, weighed by
-    its place in its set, summed (``meshcol/point_sets.hpp`` says how)."""
-    return point_set_fingerprints(points, offsets)
 
 
 def _same_bits(

@@ -34,8 +34,8 @@ from meshcol.io.scene_bodies import (
     rotation_from_euler,
     rotation_from_quaternion,
 )
-from meshcol.io.scene_columns import bulk_bodies, primitive_bodies
-from meshcol.io.scene_native import manifest_meshes, native_manifest, native_scene
+from meshcol.io.scene_columns import bulk_bodies, manifest_meshes, primitive_bodies
+from meshcol.io.scene_native import native_manifest, native_scene
 from meshcol.io.scene_parse import collector_paused, read_document
 from meshcol.io.scene_schema import SCHEMA_PATH
 from meshcol.io.scene_validate import (

@@ -45,6 +45,7 @@ __all__ = [
     "bulk_bodies",
     "columns",
     "euler_matrices",
+    "manifest_meshes",
     "near_limits",
     "primitive_bodies",
     "quaternion_matrices",
@@ -448,6 +449,13 @@ _SPHERE, _BOX, _CAPSULE, _CYLINDER = (
 )
 
 
+def manifest_meshes(found: Columns) -> list[str]:
+    """The mesh names of a manifest's columns, each once, in order of first use."""
+    if found.primitive.all():
+        return []
+    return [mesh for mesh in dict.fromkeys(found.meshes) if mesh is not None]
+
+
 def _plain_objects(
     found: Columns, source: str, files: MutableMapping[str, list[Body]]
 ) -> tuple[list[str], list[Any], np.ndarray, dict[str | None, int]]:
@@ -457,7 +465,7 @@ def _plain_objects(
     no mesh; and each name's place among them (None's is the last). Per file, but in one
     numpy pass for all (:func:`meshcol.io.mesh_read.lone_objects`)."""
     folder = os.path.dirname(source)
-    meshes = list(dict.fromkeys(m for m in found.meshes if m is not None))
+    meshes = manifest_meshes(found)
     paths = joined_paths(folder, meshes)
     lone, largest, arrays = lone_objects(files, joined_paths(folder, meshes, normalise=True))
     reaches = np.full(len(meshes) + 1, math.inf)

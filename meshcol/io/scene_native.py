@@ -36,7 +36,13 @@ import numpy as np
 from meshcol.errors import MeshcolError
 from meshcol.io.safe_read import read_input
 from meshcol.io.scene_bodies import read_mesh_names
-from meshcol.io.scene_columns import Columns, bulk_bodies, near_limits, primitive_bodies
+from meshcol.io.scene_columns import (
+    Columns,
+    bulk_bodies,
+    manifest_meshes,
+    near_limits,
+    primitive_bodies,
+)
 from meshcol.io.scene_parse import KEPT_OF_DOCUMENTS
 from meshcol.io.scene_schema import (
     ORDERS,
@@ -52,7 +58,6 @@ from meshcol.types import Body, Scene
 __all__ = [
     "NativeManifest",
     "NativeScene",
-    "manifest_meshes",
     "native_columns",
     "native_manifest",
     "native_scene",
@@ -147,13 +152,6 @@ def native_manifest(source: str) -> NativeManifest | None:
 # forget_documents: a list's own clear, no function of this module in check's walk).
 _KEPT: list[Any] = []
 KEPT_OF_DOCUMENTS.append(_KEPT.clear)
-
-
-def manifest_meshes(found: Columns) -> list[str]:
-    """The mesh names of a manifest's columns, each once, in order of first use."""
-    if found.primitive.all():
-        return []
-    return [mesh for mesh in dict.fromkeys(found.meshes) if mesh is not None]
 
 
 class NativeScene(NamedTuple):

@@ -91,7 +91,9 @@ def test_bulk_of_unique_meshes_only(monkeypatch):
 def test_a_fingerprint_that_matches_different_sets_goes_to_the_per_body_build(monkeypatch):
     bodies = _scene()
     # every set of one size alike
-    monkeypatch.setattr(bulk_module, "_fingerprints", lambda p, o: np.zeros(len(o) - 1, np.uint64))
+    monkeypatch.setattr(
+        bulk_module, "point_set_fingerprints", lambda p, o: np.zeros(len(o) - 1, np.uint64)
+    )
     assert bulk_colliders(bodies, "hull", "hull") is None
     _same(build_colliders(bodies), _per_body(bodies, monkeypatch))
 
