@@ -20,6 +20,7 @@ import numpy as np
 
 from meshcol.collision.point_sets import point_set_fingerprints
 from meshcol.collision.shapes import ConvexSet, _item
+from meshcol.io.column_bodies import MeshBodies
 from meshcol.types import Body
 
 __all__ = ["bulk_colliders"]
@@ -45,6 +46,8 @@ def bulk_colliders(
         What stands for a ``mesh`` body (hull: its hull, as a ``hull`` body).
     """
     hulled = {"hull", "mesh"} if mesh_parts == "hull" else {"hull"}
+    if isinstance(bodies, MeshBodies):
+        return _mesh_columns(bodies, kind, hulled)
     # each field read for all bodies at once (a C loop each), then one pass where needed
     if any(map(_PARTS, bodies)):
         return None
@@ -74,15 +77,47 @@ def bulk_colliders(
         kept = [k for k, (i, owner) in enumerate(zip(meshes, owners)) if owner == i]
         meshes, arrays = [meshes[k] for k in kept], [arrays[k] for k in kept]
     mesh_rows = np.asarray(meshes, dtype=np.int64)
-    if meshes:
-        found = _first_equal(arrays)
-        if found is None:
+    packed = _packed(arrays) if meshes else (np.zeros((0, 3)), np.zeros(1, dtype=np.int64))
+    if packed is None:
+        return None
+    return _shapes(bodies, kinds, first, mesh_rows, *packed)
+
+
+def _mesh_columns(
+    bodies: MeshBodies, kind: str, hulled: set[str]
+) -> tuple[list[str], ConvexSet, np.ndarray] | None:
+    """:func:`bulk_colliders` of mesh bodies kept as columns: the same result from the
+    packed arrays of their files, with no body made."""
+    kinds = [collider or kind for collider in bodies.colliders]
+    if not set(kinds) <= hulled:
+        return None
+    # the first body of each file (its bodies share its arrays), in body order
+    files, owner = np.unique(bodies.mesh, return_index=True)
+    first = owner[np.searchsorted(files, bodies.mesh)]
+    mesh_rows = np.sort(owner)
+    objects = bodies.objects[bodies.mesh[mesh_rows]]
+    offsets = np.asarray(bodies.packed.v_off, dtype=np.int64)
+    points, offsets = _gather(bodies.packed.vertices, offsets, objects)
+    return _shapes(bodies, kinds, first, mesh_rows, points, offsets)
+
+
+def _shapes(
+    bodies: Sequence[Body],
+    kinds: list[str],
+    first: np.ndarray,
+    mesh_rows: np.ndarray,
+    points: np.ndarray,
+    offsets: np.ndarray,
+) -> tuple[list[str], ConvexSet, np.ndarray] | None:
+    """The unique shapes and each body's row among them: ``first`` the first body of the
+    same array (or primitive) of each body, ``mesh_rows`` the bodies that own their mesh
+    arrays, ascending, and ``points``/``offsets`` those arrays packed in that order."""
+    if len(mesh_rows):
+        first_mesh = _first_equal(points, offsets)
+        if first_mesh is None:
             return None
-        points, offsets, first_mesh = found
         first[mesh_rows] = mesh_rows[first_mesh]
         first = first[first]  # an instance's array owner may itself repeat an earlier mesh
-    else:
-        points, offsets = np.zeros((0, 3)), np.zeros(1, dtype=np.int64)
     # pool rows in the order the body loop meets each shape first
     unique, rows = np.unique(first, return_inverse=True)
     is_mesh = np.zeros(len(bodies), dtype=bool)
@@ -98,9 +133,9 @@ def bulk_colliders(
     return kinds, shapes, rows.astype(np.int64, copy=False)
 
 
-def _first_equal(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """The point sets packed ((V, 3) float64 and offsets), and for each the index of the first
-    one with the same float64 bits (itself when none); None when they do not pack as (n, 3)."""
+def _packed(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray] | None:
+    """The point sets packed ((V, 3) float64 and offsets); None when they do not pack as
+    (n, 3)."""
     try:
         points = np.ascontiguousarray(np.concatenate(arrays), dtype=np.float64)
     except ValueError:
@@ -110,8 +145,16 @@ def _first_equal(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.n
     counts = np.fromiter((len(a) for a in arrays), dtype=np.int64, count=len(arrays))
     offsets = np.zeros(len(arrays) + 1, dtype=np.int64)
     np.cumsum(counts, out=offsets[1:])
+    return points, offsets
+
+
+def _first_equal(points: np.ndarray, offsets: np.ndarray) -> np.ndarray | None:
+    """For each point set packed in ``points`` ((V, 3) float64, C-contiguous) by
+    ``offsets``, the index of the first one with the same float64 bits (itself when none);
+    None when two sets of one fingerprint differ (the per-body path keys them)."""
+    counts = np.diff(offsets)
     bits = points.reshape(-1).view(np.uint64)
-    n = len(arrays)
+    n = len(counts)
     # each vertex's coordinates' bits mixed, weighed by its place in its set, summed per set
     # (cpp/include/meshcol/point_sets.hpp), on the core's threads
     fingerprint = point_set_fingerprints(points, offsets)
@@ -126,7 +169,7 @@ def _first_equal(arrays: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.n
     first[order] = order[np.flatnonzero(starts)][run]
     if not _same_bits(bits, offsets, counts, first):
         return None  # two sets of one fingerprint differ: the per-body path keys them
-    return points, offsets, first
+    return first
 
 
 def _same_bits(
@@ -146,9 +189,9 @@ def _same_bits(
 def _gather(
     points: np.ndarray, offsets: np.ndarray, sets: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The point sets ``sets`` (indices, ascending) packed alone: as they are when they are
-    all of them."""
-    if len(sets) == len(offsets) - 1:
+    """The point sets ``sets`` (indices) packed alone, in that order: as they are when they
+    are all of them in order."""
+    if np.array_equal(sets, np.arange(len(offsets) - 1)):
         return points, offsets
     counts = np.diff(offsets)[sets]
     out = np.zeros(len(sets) + 1, dtype=np.int64)

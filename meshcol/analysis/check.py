@@ -63,8 +63,8 @@ from meshcol.analysis.pairs import (
 )
 from meshcol.analysis.primitive_colliders import primitive_colliders
 from meshcol.errors import TooManyPairsError
+from meshcol.io.column_bodies import body_names
 from meshcol.io.robot import RobotOptions
-from meshcol.io.scene_primitives import body_names
 from meshcol.types import Scene
 from meshcol.vocabulary import PAIR_STATUSES
 

@@ -17,9 +17,9 @@ import numpy as np
 
 from meshcol.analysis.check_policy import CheckOptions
 from meshcol.analysis.pairs import SEVERITY, PairTable, PlacedColliders
+from meshcol.io.column_bodies import body_names, body_parts, body_sources, vertex_counts
 from meshcol.io.paths import display_path, display_paths
 from meshcol.io.report import RowsPiece, vector_columns
-from meshcol.io.scene_primitives import body_names, body_parts, body_sources, vertex_counts
 from meshcol.types import Scene
 from meshcol.vocabulary import PAIR_STATUSES
 

@@ -54,6 +54,7 @@ from meshcol.collision.hull import exact_hull
 from meshcol.collision.shapes import ConvexSet
 from meshcol.errors import InvalidMeshError
 from meshcol.io.collision_names import UNREAL_PREFIXES, collision_part
+from meshcol.io.column_bodies import ColumnBodies, MeshBodies, body_names
 from meshcol.types import Body
 from meshcol.vocabulary import COLLIDER_KINDS
 
@@ -117,6 +118,9 @@ class Colliders:
         its end pose (the start pose for a body that does not move)."""
         if not self.bodies:
             return np.zeros((0, 4, 4))
+        if isinstance(self.bodies, ColumnBodies):  # no body moves: the poses column
+            poses = self.bodies.poses[self.part_body]
+            return poses @ self.part_offsets if self.part_offsets is not None else poses
         poses = np.stack(
             [
                 np.asarray(
@@ -199,7 +203,7 @@ def _restrict(body: Body, keep: list[int]) -> Body:
     )
 
 
-def split_ucx(bodies: Sequence[Body]) -> tuple[list[Body], dict[str, _Ucx], list[str]]:
+def split_ucx(bodies: Sequence[Body]) -> tuple[Sequence[Body], dict[str, _Ucx], list[str]]:
     """Separate ``UCX_<owner>_NN`` collision parts from the bodies they belong to.
 
     Matching, for a part of a body of several parts (a manifest body): the part named
@@ -210,8 +214,9 @@ def split_ucx(bodies: Sequence[Body]) -> tuple[list[Body], dict[str, _Ucx], list
 
     Returns
     -------
-    bodies : list of Body
-        The bodies without their matched ``UCX_`` parts, in order; loose ``UCX_`` bodies that
+    bodies : sequence of Body
+        The bodies without their matched ``UCX_`` parts, in order (column bodies as they
+        are when no name is a ``UCX_`` part's: they have no parts); loose ``UCX_`` bodies that
         match nothing become one body of parts per owner name they give (``<file>/<owner>``),
         after the others; a ``UCX_`` part of a body that matches nothing stays a part of it.
     ucx : dict
@@ -219,9 +224,12 @@ def split_ucx(bodies: Sequence[Body]) -> tuple[list[Body], dict[str, _Ucx], list
     warnings : list of str
         One line per owner name that matched nothing.
     """
-    joined = "\n".join(b.name for b in bodies)  # one search, not a match per body
-    if not any(f"{p}_" in joined for p in UNREAL_PREFIXES) and not any(b.parts for b in bodies):
-        return list(bodies), {}, []
+    joined = "\n".join(body_names(bodies))  # one search, not a match per body
+    if not any(f"{p}_" in joined for p in UNREAL_PREFIXES):
+        if isinstance(bodies, ColumnBodies):
+            return bodies, {}, []
+        if not any(b.parts for b in bodies):
+            return list(bodies), {}, []
     names = {b.name for b in bodies}
     by_name = {b.name: b for b in bodies}
     ucx: dict[str, _Ucx] = {}
@@ -481,7 +489,7 @@ def build_colliders(
     if mesh_parts not in ("hull", "triangles"):
         raise ValueError(f"mesh_parts must be hull or triangles, got {mesh_parts!r}")
     kept, ucx, warnings = split_ucx(bodies)
-    meshes = any(body.primitive is None for body in kept)
+    meshes = isinstance(kept, MeshBodies) or any(body.primitive is None for body in kept)
     bulk = bulk_colliders(kept, kind, mesh_parts) if meshes and not ucx else None
     if bulk is not None:  # plain bodies: built as arrays (meshcol.analysis.bulk_colliders)
         return _Pool().of_bulk(kept, warnings, *bulk)
@@ -596,7 +604,7 @@ class _Pool:
         counts = np.asarray([len(r) for r in rows_per_body], dtype=np.int64)
         return np.concatenate(rows_per_body), np.concatenate(labels_per_body), counts
 
-    def of_primitives(self, bodies: list[Body], warnings: list[str]) -> Colliders:
+    def of_primitives(self, bodies: Sequence[Body], warnings: list[str]) -> Colliders:
         """The packed :class:`Colliders` of bodies that are all primitives (each one part, its
         exact primitive): what a block per body gives, in one pass over them."""
         index = self.unique_index
@@ -609,7 +617,7 @@ class _Pool:
 
     def of_bulk(
         self,
-        bodies: list[Body],
+        bodies: Sequence[Body],
         warnings: list[str],
         kinds: list[str],
         shapes: ConvexSet,
@@ -623,7 +631,7 @@ class _Pool:
         return self.colliders(bodies, warnings, (rows, -ones, ones), shapes)
 
     def colliders(
-        self, bodies: list[Body], warnings: list[str], parts: Any = None, single: Any = None
+        self, bodies: Sequence[Body], warnings: list[str], parts: Any = None, single: Any = None
     ) -> Colliders:
         """The packed :class:`Colliders` of every closed block (or of ``parts``: the pool
         row and label of every part and each body's part count, given; and of ``single``,
@@ -640,7 +648,7 @@ class _Pool:
             for (body_number, k), pose in self.part_poses.items():
                 part_offsets[offsets[body_number] + k] = pose
         return Colliders(
-            tuple(bodies),
+            bodies if isinstance(bodies, ColumnBodies) else tuple(bodies),
             tuple(self.kinds),
             # every part its own unique shape, in pool order (a scene of unique assets): as is
             pool if np.array_equal(rows, np.arange(len(pool.kinds))) else pool.take(rows),

@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.io.scene_primitives import body_names
+from meshcol.io.column_bodies import body_names
 from meshcol.types import Status
 from meshcol.vocabulary import PAIR_STATUSES
 

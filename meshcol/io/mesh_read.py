@@ -611,6 +611,12 @@ class MeshFiles(MutableMapping[str, list[Body]]):
             self._bodies[j] = bodies
         return bodies
 
+    def packed_positions(self, keys: Sequence[str]) -> np.ndarray | None:
+        """Each of ``keys``' object in ``packed``: None unless all are read, none built."""
+        spots = list(map(self.index().get, keys))
+        ok = self.packed is not None and self._bodies.count(None) == len(self._bodies)
+        return np.asarray(spots, dtype=np.int64) if ok and None not in spots else None
+
     def per_file(self) -> list[list[Body]]:
         """The bodies of every path, in order (repeated paths included)."""
         return [self.file(j) for j in range(len(self.sources))]
@@ -684,9 +690,7 @@ def lone_objects(
 
 def _stem(source: str) -> str:
     """``Path(source).stem`` without building a Path (a scene may name 100,000 files)."""
-    name = (
-        os.path.basename(source.rstrip("/")) if source.endswith("/") else os.path.basename(source)
-    )
+    name = os.path.basename(source.rstrip("/"))
     dot = name.rfind(".")
     return name[:dot] if 0 < dot < len(name) - 1 else name
 

@@ -24,7 +24,8 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.io.mesh_read import MAX_COORDINATE, lone_objects
+from meshcol.io.column_bodies import MeshBodies
+from meshcol.io.mesh_read import MAX_COORDINATE, MeshFiles, lone_objects
 from meshcol.io.paths import joined_paths
 from meshcol.io.scene_bodies import AXES
 from meshcol.io.scene_primitives import PrimitiveBodies, primitive_of
@@ -46,6 +47,7 @@ __all__ = [
     "columns",
     "euler_matrices",
     "manifest_meshes",
+    "mesh_bodies",
     "near_limits",
     "primitive_bodies",
     "quaternion_matrices",
@@ -401,6 +403,31 @@ def bulk_bodies(found: Columns, source: str, files: MutableMapping[str, list[Bod
         vertices, faces = arrays[k]  # a common body's file is lone
         out[i] = plain(names[i], paths[k], vertices, faces, pose_of[i], None, shapes[i])
     return out
+
+
+def mesh_bodies(
+    found: Columns, source: str, files: MutableMapping[str, list[Body]]
+) -> MeshBodies | None:
+    """The manifest's bodies as :class:`MeshBodies` (no Python object per body) when every
+    one is a mesh body that :func:`bulk_bodies` would build from a file the core read and
+    packed, and names are unique; else None (the bodies are built as objects)."""
+    n = len(found.names)
+    if not n or found.primitive.any() or not isinstance(files, MeshFiles) or None in found.meshes:
+        return None
+    folder = os.path.dirname(source)
+    meshes = manifest_meshes(found)
+    objects = files.packed_positions(joined_paths(folder, meshes, normalise=True))
+    if objects is None or files.packed is None or len(set(found.names)) != n:
+        return None
+    slot: dict[str | None, int] = dict(zip(meshes, range(len(meshes))))
+    mesh = np.fromiter(map(slot.__getitem__, found.meshes), dtype=np.int64, count=n)
+    # the reach of the world check, as _plain_objects gives it for a packed file
+    reaches = files.packed.largest()[objects] * math.sqrt(3.0)
+    common, poses = _common(found, reaches[mesh])
+    if not common.all():
+        return None
+    paths = joined_paths(folder, meshes)
+    return MeshBodies(found.names, paths, mesh, objects, files.packed, poses, found.shapes)
 
 
 def primitive_bodies(found: Columns, source: str) -> PrimitiveBodies | None:

@@ -40,6 +40,7 @@ from meshcol.io.scene_columns import (
     Columns,
     bulk_bodies,
     manifest_meshes,
+    mesh_bodies,
     near_limits,
     primitive_bodies,
 )
@@ -188,6 +189,10 @@ def native_scene(source: str) -> NativeScene | None:
     if columns.primitive.all():  # primitives refused by the body loop (a name twice...)
         return None
     files = read_mesh_names(manifest_meshes(columns), source)
+    meshes = mesh_bodies(columns, source, files)
+    if meshes is not None:  # every body a static mesh body of a packed file: columns
+        scene = Scene(bodies=meshes, units=found.units, source=source, duration=found.duration)
+        return NativeScene(scene, files, None)
     bulk = bulk_bodies(columns, source, files)
     if bulk is None or any(map(operator.is_, bulk, itertools.repeat(None))):
         return NativeScene(None, files, bulk)  # some bodies built one by one: the document

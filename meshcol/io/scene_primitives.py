@@ -5,8 +5,9 @@ body to be checked: its names, primitive types, lengths and poses are arrays alr
 (:class:`meshcol.io.scene_columns.Columns`). :class:`PrimitiveBodies` keeps them so: a
 sequence of :class:`~meshcol.types.Body` that makes a body only when one is asked for by
 index (a writer, a pair that needs its triangles), each the body the body loop builds, to the
-bit. The check reads its columns instead (:func:`body_names`, :func:`body_sources`,
-:func:`vertex_counts`, and the packing of :mod:`meshcol.analysis.primitive_colliders`).
+bit. The check reads its columns instead (the readers of
+:mod:`meshcol.io.column_bodies`, and the packing of
+:mod:`meshcol.analysis.primitive_colliders`).
 
 The loader takes this path when every body of a plainly valid manifest is a static, unscaled
 primitive within the coordinate limit, and names are unique (:func:`primitive_bodies`); any
@@ -15,11 +16,11 @@ other manifest is built body by body as before.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
-from typing import Any, overload
+from collections.abc import Sequence
 
 import numpy as np
 
+from meshcol.io.column_bodies import ColumnBodies
 from meshcol.io.scene_schema import PRIMITIVE_TYPES
 from meshcol.types import (
     REGULAR_LENGTHS,
@@ -33,13 +34,7 @@ from meshcol.types import (
     primitive_vertex_count,
 )
 
-__all__ = [
-    "PrimitiveBodies",
-    "body_names",
-    "body_parts",
-    "body_sources",
-    "vertex_counts",
-]
+__all__ = ["PrimitiveBodies", "primitive_of"]
 
 _SPHERE, _BOX, _CAPSULE, _CYLINDER = (
     PRIMITIVE_TYPES.index(k) for k in ("sphere", "box", "capsule", "cylinder")
@@ -60,9 +55,8 @@ def primitive_of(kind: int, lengths: Sequence[float]) -> Primitive:
     return Capsule(a, b) if kind == _CAPSULE else Cylinder(a, b)
 
 
-class PrimitiveBodies(Sequence[Body]):
-    """Static primitive bodies as columns: a sequence of :class:`~meshcol.types.Body` whose
-    bodies are made on first access by index (then kept).
+class PrimitiveBodies(ColumnBodies):
+    """Static primitive bodies as columns (:class:`~meshcol.io.column_bodies.ColumnBodies`).
 
     Attributes
     ----------
@@ -89,41 +83,27 @@ class PrimitiveBodies(Sequence[Body]):
         poses: np.ndarray,
         colliders: list[str | None],
     ) -> None:
+        super().__init__(names, poses, colliders)
         n = len(names)
-        if kinds.shape != (n,) or lengths.shape != (n, 3) or poses.shape != (n, 4, 4):
+        if kinds.shape != (n,) or lengths.shape != (n, 3):
             raise ValueError(f"primitive columns of {n} bodies have other lengths")
-        self.names = names
         self.source = source
         self.kinds = kinds
         self.lengths = lengths
-        self.poses = poses
-        self.colliders = colliders
-        self._made: dict[int, Body] = {}
 
-    def __len__(self) -> int:
-        return len(self.names)
+    def make(self, i: int) -> Body:
+        return Body.plain(
+            self.names[i],
+            self.source,
+            None,
+            None,
+            self.poses[i],
+            self.primitive(i),
+            self.colliders[i],
+        )
 
-    @overload
-    def __getitem__(self, index: int) -> Body: ...
-
-    @overload
-    def __getitem__(self, index: slice) -> Sequence[Body]: ...
-
-    def __getitem__(self, index: int | slice) -> Body | Sequence[Body]:
-        if isinstance(index, slice):
-            return tuple(self[i] for i in range(len(self))[index])
-        i = range(len(self))[index]  # IndexError, negative indices
-        body = self._made.get(i)
-        if body is None:
-            primitive = self.primitive(i)
-            body = Body.plain(
-                self.names[i], self.source, None, None, self.poses[i], primitive, self.colliders[i]
-            )
-            self._made[i] = body
-        return body
-
-    def __iter__(self) -> Iterator[Body]:
-        return (self[i] for i in range(len(self)))
+    def sources(self) -> list[str | None]:
+        return [self.source] * len(self)
 
     def primitive(self, index: int) -> Primitive:
         """The primitive of body ``index``."""
@@ -146,33 +126,3 @@ class PrimitiveBodies(Sequence[Body]):
         for i in np.flatnonzero(~regular).tolist():
             counts[i] = primitive_vertex_count(self.primitive(i))
         return counts
-
-
-def body_names(bodies: Sequence[Body]) -> list[str]:
-    """Each body's name, in order (a :class:`PrimitiveBodies`' without making its bodies)."""
-    if isinstance(bodies, PrimitiveBodies):
-        return bodies.names
-    return [body.name for body in bodies]
-
-
-def body_sources(bodies: Sequence[Body]) -> list[str | None]:
-    """Each body's ``source``, in order (without making a :class:`PrimitiveBodies`' bodies)."""
-    if isinstance(bodies, PrimitiveBodies):
-        return [bodies.source] * len(bodies)
-    return [body.source for body in bodies]
-
-
-def body_parts(bodies: Sequence[Body], index: Sequence[int]) -> list[tuple[str, ...]]:
-    """The part names of the bodies ``index``, in that order (a primitive body has none)."""
-    if isinstance(bodies, PrimitiveBodies):
-        return [()] * len(index)
-    return [tuple(bodies[i].parts) for i in index]
-
-
-def vertex_counts(bodies: Sequence[Body], index: Any = None) -> np.ndarray:
-    """(k,) int64: ``vertex_count`` of the bodies ``index`` (all when None), in that order,
-    never tessellating a primitive for it."""
-    picked = np.arange(len(bodies)) if index is None else np.asarray(index, dtype=np.int64)
-    if isinstance(bodies, PrimitiveBodies):
-        return bodies.vertex_counts()[picked]
-    return np.asarray([bodies[i].vertex_count for i in picked.tolist()], dtype=np.int64)

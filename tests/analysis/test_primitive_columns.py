@@ -26,8 +26,9 @@ from meshcol.cli import main
 from meshcol.collision.shapes import ConvexSet, ShapeKind
 from meshcol.errors import SceneError
 from meshcol.io import scene_parse
+from meshcol.io.column_bodies import body_names, vertex_counts
 from meshcol.io.scene import load_scene
-from meshcol.io.scene_primitives import PrimitiveBodies, body_names, vertex_counts
+from meshcol.io.scene_primitives import PrimitiveBodies
 from meshcol.types import Cylinder, primitive_vertex_count
 
 KINDS = ("sphere", "box", "capsule", "cylinder")
