@@ -112,6 +112,8 @@ def joined_paths(folder: str, names: Sequence[str], *, normalise: bool = False) 
         not folder or (folder not in ("/", ".") and os.path.normpath(folder) == folder)
     )
     prefix = f"{folder}/" if folder else ""
+    if plain_folder and names and _all_plain("\n".join(names), len(names)):
+        return [prefix + name for name in names]
     out = []
     for name in names:
         if (
@@ -128,6 +130,17 @@ def joined_paths(folder: str, names: Sequence[str], *, normalise: bool = False) 
         else:
             out.append(os.path.join(folder, name))
     return out
+
+
+def _all_plain(joined: str, count: int) -> bool:
+    """Whether each of ``count`` names joined by newlines is a plain relative name (as the
+    loop of :func:`joined_paths` tests one), in a few scans of the joined text."""
+    return (
+        joined.count("\n") == count - 1  # no name holds a newline of its own
+        and joined[:1] not in ("", "\n", "/", ".")  # the first name empty, absolute, dotted
+        and joined[-1] not in ("\n", "/")  # the last name empty, or a folder
+        and not any(mark in joined for mark in ("\n\n", "\n/", "\n.", "/\n", "/.", "//"))
+    )
 
 
 # --- the root every path a file names must stay inside (untrusted inputs) ----------------------

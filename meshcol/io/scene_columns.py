@@ -557,8 +557,10 @@ def euler_matrices(angles_deg: np.ndarray, orders: Sequence[str]) -> np.ndarray:
     rows = np.arange(n)
     matrix = np.tile(np.eye(3), (n, 1, 1))
     others = np.array([(1, 2), (2, 0), (0, 1)])
+    by_order = {order: [AXES[letter] for letter in order] for order in set(orders)}
+    axes = np.array([by_order[order] for order in orders], dtype=np.int64).reshape(n, 3)
     for step in range(3):
-        axis = np.array([AXES[order[step]] for order in orders], dtype=np.int64).reshape(n)
+        axis = axes[:, step]
         # the exact cosine and sine of each angle: math.radians is one product by pi / 180
         angle = angles_deg[:, step] * (math.pi / 180.0)
         quarter = angle / (math.pi / 2)

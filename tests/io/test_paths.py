@@ -4,6 +4,7 @@ outside it; in bulk exactly as one by one."""
 from __future__ import annotations
 
 import os
+import random
 
 import numpy as np
 import pytest
@@ -67,6 +68,31 @@ def test_joined_paths_are_join_and_normpath_of_each():
         assert joined_paths(folder, names, normalise=True) == [
             os.path.normpath(os.path.join(folder, n)) for n in names
         ]
+
+
+def test_joined_paths_of_short_lists_are_join_and_normpath_of_each():
+    # lists of a few names: most are all plain (the one concatenation for the whole list),
+    # and the others differ from that by one name (empty, absolute, dotted, a folder, a
+    # newline in a name, a doubled slash...), where the text of the joined names must tell
+    pick = random.Random(7)
+    parts = ["", "a", "b.obj", "/", ".", "..", "\n", "//", "/.", "x/y", "é", " "]
+    plain = 0
+    for folder in ["", "d", "/abs/d", "d/", ".", "/"]:
+        for _ in range(1500):
+            names = [
+                "".join(pick.choices(parts, k=pick.randint(0, 3)))
+                for _ in range(pick.randint(0, 4))
+            ]
+            joined = [os.path.join(folder, n) for n in names]
+            assert joined_paths(folder, names) == joined
+            assert joined_paths(folder, names, normalise=True) == list(
+                map(os.path.normpath, joined)
+            )
+            plain += bool(names) and all(
+                n and n[0] not in "/.\n" and "/." not in n and "//" not in n and n[-1] != "/"
+                for n in names
+            )
+    assert plain > 300  # the lists the one concatenation joins
 
 
 def test_confine_all_is_confine_of_each(tmp_path):
