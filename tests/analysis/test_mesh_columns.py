@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -80,14 +81,13 @@ def forget() -> None:
     scene_validate._LAST[:] = [object(), None, None]
 
 
-@pytest.fixture
-def both(tmp_path):
-    """The scene as the native reader loads it (columns) and as the Python reader does
-    (bodies built in bulk, one object each)."""
+def load_both(folder: Path, doc: dict) -> tuple:
+    """The scene of ``doc`` over :data:`FILES` as the native reader loads it (columns) and
+    as the Python reader does (bodies built in bulk, one object each)."""
     for name, text in FILES.items():
-        (tmp_path / name).write_text(text)
-    path = tmp_path / "scene.json"
-    path.write_text(json.dumps(document()))
+        (folder / name).write_text(text)
+    path = folder / "scene.json"
+    path.write_text(json.dumps(doc))
     forget()
     columns = load_scene(path)
     forget()
@@ -95,6 +95,11 @@ def both(tmp_path):
         objects = load_scene(path)
     forget()
     return columns, objects
+
+
+@pytest.fixture
+def both(tmp_path):
+    return load_both(tmp_path, document())
 
 
 def report_text(scene, options: CheckOptions) -> str:
@@ -133,20 +138,11 @@ def test_a_check_of_mesh_columns_makes_no_body_and_writes_the_same_bytes(both):
 
 
 def test_a_check_of_hulls_in_columns_makes_no_body(tmp_path):
-    for name, text in FILES.items():
-        (tmp_path / name).write_text(text)
     doc = document()
     for body in doc["bodies"]:
         body["mesh"] = "cube.obj" if body["mesh"] != "octahedron.obj" else body["mesh"]
         body.pop("shape", None)
-    path = tmp_path / "scene.json"
-    path.write_text(json.dumps(doc))
-    forget()
-    columns = load_scene(path)
-    forget()
-    with python_reader():
-        objects = load_scene(path)
-    forget()
+    columns, objects = load_both(tmp_path, doc)
     assert isinstance(columns.bodies, MeshBodies)
     assert report_text(columns, CheckOptions()) == report_text(objects, CheckOptions())
     assert not columns.bodies._made
