@@ -2,7 +2,9 @@
 /// Exact penetration depth of two polytopes (or boxes) by the separating axis theorem: the
 /// minimum over the face normals of both shapes and the cross products of their edge
 /// directions of the overlap along that axis (Ericson 2004, sec. 5.2.1; Gottschalk 1996).
-/// Quadratic in the edge count, so only for shapes with few faces: EPA verification.
+/// Quadratic in the edge count, so only for shapes with few faces: EPA verification. Edge
+/// axes that a bound from two inner balls shows cannot be the smallest are skipped, with the
+/// same answer to the bit (sat.cpp).
 
 #include "meshcol/defaults.hpp"
 #include "meshcol/shapes.hpp"
@@ -17,7 +19,7 @@ struct SatResult {
     double depth = 0.0;      ///< >= 0: the minimum overlap over all candidate axes
     Vec3 normal;             ///< world frame, unit, from a to b: moving b by depth * normal
                              ///< brings the shapes to contact
-    int axes = 0;            ///< candidate axes tested
+    int axes = 0;            ///< candidate axes measured (not those the bound skipped)
 };
 
 /// True when `shape` carries SAT data (a box, or a polytope with its features attached).
