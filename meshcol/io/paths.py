@@ -79,12 +79,15 @@ def display_paths(
     can name 100,000 files)."""
     folders: dict[str, str] = {}
     out: list[str | None] = []
+    slash = os.sep == "/"  # posixpath's isabs and split of a plain path, as string methods
     for path in paths:
-        text = None if path is None else os.fspath(path)
-        if text is None or not os.path.isabs(text):
+        text = path if type(path) is str else None if path is None else os.fspath(path)
+        if text is None or not (text[:1] == "/" if slash else os.path.isabs(text)):
             out.append(display_path(text, posix=posix))
             continue
-        folder, name = os.path.split(text)
+        folder, _, name = text.rpartition("/") if slash else ("", "", "")
+        if not folder or folder[-1] == "/":  # the root, a doubled slash, or not posix
+            folder, name = os.path.split(text)
         if folder not in folders:
             folders[folder] = os.path.relpath(folder)
         inside = folders[folder]

@@ -34,6 +34,10 @@ def test_display_paths_are_those_of_display_path_one_by_one(tmp_path, monkeypatc
         str(tmp_path / "work" / "level" / ".." / "d.obj"),
         str(tmp_path / "work" / "level" / ".."),
         "/",
+        "/c.obj",
+        str(inner) + "//e.obj",
+        str(inner) + "/",
+        tmp_path / "work" / "f.obj",
     ]
     for posix in (False, True):
         assert display_paths(paths, posix=posix) == [display_path(p, posix=posix) for p in paths]
