@@ -5,9 +5,13 @@
 //   MODE dist | inter | depth: the 300 pairs of mesh K in CONFIG (near, touching, apart), one
 //   call each (REPS times); "print" writes every result (%.17g) for an old/new comparison;
 //   CPU microseconds a query go to stderr.  MODE build: K's hierarchy built CONFIG times.
+//   MODE hash: a hash (FNV-1a) of every array of K's hierarchy and its node count (CONFIG is
+//   ignored): equal between two checkouts' drivers when their builds make the same tree, bit
+//   for bit.
 // Build against a checkout's core (every cpp/src/*.cpp, -O3), e.g.
 //   g++ -std=c++17 -O3 -Icpp/include benchmarks/mesh_query_driver/driver.cpp cpp/src/*.cpp -lpthread -o driver
 // then: valgrind --tool=callgrind --toggle-collect='meshcol::mesh_distance(*' ./driver dist 3 near
+#include <cstdint>
 #include <cstdio>
 #include <ctime>
 #include <cstdlib>
@@ -31,6 +35,33 @@ int main(int argc, char** argv) {
     std::string dir = std::string(std::getenv("FAMILY") ? std::getenv("FAMILY") : "family") + "/";
     auto v = load<double>(dir + "m" + k + ".v");
     auto f = load<std::int64_t>(dir + "m" + k + ".f");
+    if (mode == "hash") {
+        MeshBvh m(v.data(), v.size() / 3, f.data(), f.size() / 3);
+        std::uint64_t h = 1469598103934665603ULL;
+        const auto add = [&h](const void* p, size_t n) {
+            for (size_t i = 0; i < n; ++i) h = (h ^ static_cast<const unsigned char*>(p)[i]) * 1099511628211ULL;
+        };
+        add(m.nodes().data(), m.nodes().size() * sizeof(BvhNode));
+        for (const WindingNode& w : m.winding_nodes()) {
+            add(&w.center, sizeof(Vec3)); add(&w.dipole, sizeof(Vec3)); add(w.moment, sizeof(w.moment));
+            add(&w.radius, sizeof(double)); add(&w.area, sizeof(double));
+        }
+        for (const NodeObb& o : m.obbs()) { add(&o.axes, sizeof(Mat3)); add(&o.center, sizeof(Vec3)); add(&o.half, sizeof(Vec3)); }
+        for (std::int32_t i = 0; i < m.triangle_count(); ++i) {
+            const TriangleCapsule& c = m.triangle_capsule(i);
+            const std::int64_t face = m.face_index(i);
+            const char thin = c.thin;
+            add(m.triangle(i), 3 * sizeof(Vec3)); add(&m.triangle_normal(i), sizeof(Vec3));
+            add(&c.radius, sizeof(double)); add(&c.edge, sizeof(c.edge)); add(&thin, 1);
+            add(m.triangle_vertices(i), 3 * sizeof(std::int32_t)); add(&face, sizeof(face));
+        }
+        add(m.vertices().data(), m.vertices().size() * sizeof(Vec3));
+        const double reach[2] = {m.box_reach(), m.obb_reach()};
+        const char closed = m.closed(), valid = m.validate();
+        add(reach, sizeof(reach)); add(&closed, 1); add(&valid, 1);
+        std::printf("%s %zu %016llx\n", k.c_str(), m.nodes().size(), static_cast<unsigned long long>(h));
+        return 0;
+    }
     if (mode == "build") {
         int reps = std::atoi(config.c_str());
         long long s = 0;

@@ -133,10 +133,86 @@ bool closed_and_consistent(const std::int64_t* faces, std::int64_t face_count, s
     return true;
 }
 
+// One triangle's box and the centre of that box (the point the SAH bins), side by side.
+struct TriangleBounds {
+    Box box;
+    Vec3 centroid;
+};
+
+// The bounds of a range of triangles: the union of their boxes and the bounds of their
+// centroids.
+struct RangeBounds {
+    Box boxes;
+    Box centroids;
+
+    // Grown in the range's order, the first of equal coordinates kept (Box::grow), so a zero
+    // keeps the sign the first triangle gives it.
+    void add(const TriangleBounds& t) {
+        boxes.grow(t.box);
+        centroids.grow(t.centroid);
+    }
+    // Grown against the range's order, the last of equal coordinates kept: the same box, zeros
+    // signed alike, as add() in order.
+    void add_before(const TriangleBounds& t) {
+        take_lower(boxes.lower, t.box.lower);
+        take_upper(boxes.upper, t.box.upper);
+        take_lower(centroids.lower, t.centroid);
+        take_upper(centroids.upper, t.centroid);
+    }
+
+private:
+    static void take_lower(Vec3& a, const Vec3& b) {
+        a = {b.x <= a.x ? b.x : a.x, b.y <= a.y ? b.y : a.y, b.z <= a.z ? b.z : a.z};
+    }
+    static void take_upper(Vec3& a, const Vec3& b) {
+        a = {b.x >= a.x ? b.x : a.x, b.y >= a.y ? b.y : a.y, b.z >= a.z ? b.z : a.z};
+    }
+};
+
 struct BuildTask {
     std::int32_t begin, end;
     std::int32_t patch;  // node whose right-child index is this task's node, or -1
+    bool known;          // `bounds` holds the range's bounds (the parent's split grew them)
+    RangeBounds bounds;
 };
+
+// Hoare's two-ended partition, step for step as libstdc++'s std::partition (bidirectional
+// form), so the leaf order does not depend on the standard library: the triangles of
+// order[begin, end) for which `left` holds first. On the way it grows each side's bounds,
+// each triangle once, as it settles, so neither child needs a pass of its own: the left side
+// settles front to back, the right side back to front, so its bounds take the last of equal
+// coordinates (the sign of a zero as a pass in order gives it). Returns the first index of the
+// right side.
+template <class Left>
+std::int32_t partition_triangles(std::vector<std::int32_t>& order, std::int32_t begin, std::int32_t end,
+                                 const std::vector<TriangleBounds>& triangles, Left left, RangeBounds& left_bounds,
+                                 RangeBounds& right_bounds) {
+    std::int32_t* first = order.data() + begin;
+    std::int32_t* last = order.data() + end;
+    const auto bounds = [&](std::int32_t f) -> const TriangleBounds& { return triangles[static_cast<size_t>(f)]; };
+    while (true) {
+        while (true) {
+            if (first == last) return static_cast<std::int32_t>(first - order.data());
+            if (!left(*first)) break;
+            left_bounds.add(bounds(*first));
+            ++first;
+        }
+        --last;
+        while (true) {
+            if (first == last) {
+                right_bounds.add_before(bounds(*first));  // the one that stopped the scan above
+                return static_cast<std::int32_t>(first - order.data());
+            }
+            if (left(*last)) break;
+            right_bounds.add_before(bounds(*last));
+            --last;
+        }
+        std::swap(*first, *last);
+        left_bounds.add(bounds(*first));
+        right_bounds.add_before(bounds(*last));
+        ++first;
+    }
+}
 
 }  // namespace
 
@@ -158,41 +234,42 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
     auto vertex = [&](std::int64_t i) {
         return Vec3{vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]};
     };
-    std::vector<Box> boxes(static_cast<size_t>(n));
-    std::vector<Vec3> centroids(static_cast<size_t>(n));
+    std::vector<TriangleBounds> triangles(static_cast<size_t>(n));
+    RangeBounds root;
     for (std::int32_t f = 0; f < n; ++f) {
-        Box b;
-        for (int k = 0; k < 3; ++k) b.grow(vertex(faces[3 * f + k]));
-        boxes[static_cast<size_t>(f)] = b;
-        centroids[static_cast<size_t>(f)] = (b.lower + b.upper) * 0.5;
+        TriangleBounds& t = triangles[static_cast<size_t>(f)];
+        for (int k = 0; k < 3; ++k) t.box.grow(vertex(faces[3 * f + k]));
+        t.centroid = (t.box.lower + t.box.upper) * 0.5;
+        root.add(t);
     }
     std::vector<std::int32_t> order(static_cast<size_t>(n));
     for (std::int32_t f = 0; f < n; ++f) order[static_cast<size_t>(f)] = f;
 
     constexpr int kBins = defaults::mesh_bvh_bins;
     constexpr int kLeaf = defaults::mesh_bvh_leaf_size;
+    static_assert(kBins >= 2 && kBins <= 256, "a bin number is kept in a byte");
     nodes_.reserve(static_cast<size_t>(2 * (n / kLeaf + 1)));
-    std::vector<BuildTask> stack{{0, n, -1}};
-    Box bin_box[kBins];
-    std::int32_t bin_count[kBins];
+    std::vector<BuildTask> stack{{0, n, -1, true, root}};
+    // Each triangle's bin along each axis, written by its node's binning and read by the split.
+    std::vector<std::uint8_t> bin_index(3 * static_cast<size_t>(n));
+    Box bin_box[3][kBins];
+    std::int32_t bin_count[3][kBins];
+    int used[kBins];  // the non-empty bins of one axis, in order
     double right_area[kBins];
     std::int32_t right_count[kBins];
 
     while (!stack.empty()) {
-        const BuildTask task = stack.back();
+        BuildTask task = stack.back();
         stack.pop_back();
         const auto id = static_cast<std::int32_t>(nodes_.size());
         if (task.patch >= 0) nodes_[static_cast<size_t>(task.patch)].index = id;
-        Box bounds, centroid_bounds;
-        for (std::int32_t i = task.begin; i < task.end; ++i) {
-            const std::int32_t f = order[static_cast<size_t>(i)];
-            bounds.grow(boxes[static_cast<size_t>(f)]);
-            centroid_bounds.grow(centroids[static_cast<size_t>(f)]);
-        }
+        if (!task.known)
+            for (std::int32_t i = task.begin; i < task.end; ++i)
+                task.bounds.add(triangles[static_cast<size_t>(order[static_cast<size_t>(i)])]);
         BvhNode node{};
         for (int k = 0; k < 3; ++k) {
-            node.lower[k] = round_down(bounds.lower[k]);
-            node.upper[k] = round_up(bounds.upper[k]);
+            node.lower[k] = round_down(task.bounds.boxes.lower[k]);
+            node.upper[k] = round_up(task.bounds.boxes.upper[k]);
         }
         const std::int32_t count = task.end - task.begin;
         if (count <= kLeaf) {
@@ -201,62 +278,83 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
             nodes_.push_back(node);
             continue;
         }
-        // Best binned SAH split over the three axes.
+        // Best binned SAH split over the three axes, binned in one pass. Only the non-empty
+        // bins are swept: a split after an empty bin costs what the split after the non-empty
+        // bin before it costs, and the first of equal costs is kept, so the split chosen is
+        // the one a sweep over every bin chooses.
+        double lo[3], extent[3];
+        bool binned[3];
+        for (int axis = 0; axis < 3; ++axis) {
+            lo[axis] = task.bounds.centroids.lower[axis];
+            extent[axis] = task.bounds.centroids.upper[axis] - lo[axis];
+            binned[axis] = extent[axis] > 0.0;
+            if (!binned[axis]) continue;
+            for (int b = 0; b < kBins; ++b) {
+                bin_box[axis][b] = Box{};
+                bin_count[axis][b] = 0;
+            }
+        }
+        for (std::int32_t i = task.begin; i < task.end; ++i) {
+            const std::int32_t f = order[static_cast<size_t>(i)];
+            const TriangleBounds& t = triangles[static_cast<size_t>(f)];
+            for (int axis = 0; axis < 3; ++axis) {
+                if (!binned[axis]) continue;
+                const int b = bin_of(t.centroid[axis], lo[axis], extent[axis]);
+                bin_index[3 * static_cast<size_t>(f) + static_cast<size_t>(axis)] = static_cast<std::uint8_t>(b);
+                bin_box[axis][b].grow(t.box);
+                ++bin_count[axis][b];
+            }
+        }
         double best_cost = kInf;
         int best_axis = -1, best_bin = -1;
         for (int axis = 0; axis < 3; ++axis) {
-            const double lo = centroid_bounds.lower[axis];
-            const double extent = centroid_bounds.upper[axis] - lo;
-            if (!(extent > 0.0)) continue;
-            for (int b = 0; b < kBins; ++b) {
-                bin_box[b] = Box{};
-                bin_count[b] = 0;
-            }
-            for (std::int32_t i = task.begin; i < task.end; ++i) {
-                const std::int32_t f = order[static_cast<size_t>(i)];
-                const int b = bin_of(centroids[static_cast<size_t>(f)][axis], lo, extent);
-                bin_box[b].grow(boxes[static_cast<size_t>(f)]);
-                ++bin_count[b];
-            }
+            if (!binned[axis]) continue;
+            int m = 0;
+            for (int b = 0; b < kBins; ++b)
+                if (bin_count[axis][b] > 0) used[m++] = b;
             Box right;
             std::int32_t right_n = 0;
-            for (int b = kBins - 1; b > 0; --b) {
-                right.grow(bin_box[b]);
-                right_n += bin_count[b];
-                right_area[b] = right.half_area();
-                right_count[b] = right_n;
+            for (int k = m - 1; k > 0; --k) {
+                right.grow(bin_box[axis][used[k]]);
+                right_n += bin_count[axis][used[k]];
+                right_area[k] = right.half_area();
+                right_count[k] = right_n;
             }
             Box left;
             std::int32_t left_n = 0;
-            for (int b = 0; b < kBins - 1; ++b) {
-                left.grow(bin_box[b]);
-                left_n += bin_count[b];
-                if (left_n == 0 || right_count[b + 1] == 0) continue;
-                const double cost = left_n * left.half_area() + right_count[b + 1] * right_area[b + 1];
+            for (int k = 0; k + 1 < m; ++k) {
+                left.grow(bin_box[axis][used[k]]);
+                left_n += bin_count[axis][used[k]];
+                const double cost = left_n * left.half_area() + right_count[k + 1] * right_area[k + 1];
                 if (cost < best_cost) {
                     best_cost = cost;
                     best_axis = axis;
-                    best_bin = b;
+                    best_bin = used[k];
                 }
             }
         }
         std::int32_t mid = task.begin + count / 2;
+        BuildTask left_task{task.begin, mid, -1, false, RangeBounds{}};
+        BuildTask right_task{mid, task.end, id, false, RangeBounds{}};
         if (best_axis >= 0) {
-            const double lo = centroid_bounds.lower[best_axis];
-            const double extent = centroid_bounds.upper[best_axis] - lo;
-            auto first = order.begin() + task.begin, last = order.begin() + task.end;
-            auto split = std::partition(first, last, [&](std::int32_t f) {
-                return bin_of(centroids[static_cast<size_t>(f)][best_axis], lo, extent) <= best_bin;
-            });
-            const auto m = static_cast<std::int32_t>(split - order.begin());
-            if (m > task.begin && m < task.end) mid = m;
+            const size_t axis = static_cast<size_t>(best_axis);
+            RangeBounds left_bounds, right_bounds;
+            const std::int32_t m = partition_triangles(
+                order, task.begin, task.end, triangles,
+                [&](std::int32_t f) { return bin_index[3 * static_cast<size_t>(f) + axis] <= best_bin; },
+                left_bounds, right_bounds);
+            if (m > task.begin && m < task.end) {
+                mid = m;
+                left_task = {task.begin, mid, -1, true, left_bounds};
+                right_task = {mid, task.end, id, true, right_bounds};
+            }
         }
         // Otherwise all centroids coincide: any split is as good, halve by count.
         node.index = -1;
         node.count = 0;
         nodes_.push_back(node);
-        stack.push_back({mid, task.end, id});
-        stack.push_back({task.begin, mid, -1});
+        stack.push_back(right_task);
+        stack.push_back(left_task);
     }
 
     corners_.resize(3 * static_cast<size_t>(n));

@@ -27,19 +27,16 @@ struct HalfEdges {
     explicit HalfEdges(const std::int64_t* faces, std::int64_t m)
         : low(static_cast<size_t>(3 * m)), high(static_cast<size_t>(3 * m)),
           forward(static_cast<size_t>(3 * m)) {
-        order.reserve(static_cast<size_t>(3 * m));
+        std::int64_t top = -1;  // the largest low end
         for (std::int64_t h = 0; h < 3 * m; ++h) {
             const std::int64_t f = h / 3, k = h % 3;
             const std::int64_t a = faces[h], b = faces[3 * f + (k + 1) % 3];
             low[static_cast<size_t>(h)] = std::min(a, b);
             high[static_cast<size_t>(h)] = std::max(a, b);
             forward[static_cast<size_t>(h)] = a < b;
-            if (a != b) order.push_back(h);
+            if (a != b) top = std::max(top, low[static_cast<size_t>(h)]);
         }
-        std::sort(order.begin(), order.end(), [this](std::int64_t i, std::int64_t j) {
-            const auto u = static_cast<size_t>(i), v = static_cast<size_t>(j);
-            return std::tie(low[u], high[u], i) < std::tie(low[v], high[v], j);
-        });
+        sort_by_ends(top + 1);
         for (size_t k = 0; k < order.size(); ++k) {
             const auto h = static_cast<size_t>(order[k]);
             if (k == 0 || low[h] != low[static_cast<size_t>(order[k - 1])] ||
@@ -50,6 +47,38 @@ struct HalfEdges {
     }
 
     size_t edge_count() const { return start.size() - 1; }
+
+private:
+    // `order`: the real half-edges by (low, high, id). A counting sort by the low end (ids
+    // stay increasing within a low end), then each low end's few half-edges by the high end,
+    // stably: a vertex is the low end of a handful of edges, so this is linear where one
+    // comparison sort of every half-edge was most of orient_faces' time.
+    void sort_by_ends(std::int64_t vertex_count) {
+        const auto n = static_cast<std::int64_t>(low.size());
+        std::vector<size_t> first(static_cast<size_t>(vertex_count) + 1, 0);
+        for (std::int64_t h = 0; h < n; ++h)
+            if (low[static_cast<size_t>(h)] != high[static_cast<size_t>(h)]) ++first[static_cast<size_t>(low[static_cast<size_t>(h)]) + 1];
+        std::partial_sum(first.begin(), first.end(), first.begin());
+        order.resize(first.back());
+        std::vector<size_t> next(first.begin(), first.end() - 1);
+        for (std::int64_t h = 0; h < n; ++h)
+            if (low[static_cast<size_t>(h)] != high[static_cast<size_t>(h)]) order[next[static_cast<size_t>(low[static_cast<size_t>(h)])]++] = h;
+        constexpr size_t kInsertion = 32;  // longer runs (a fan of many faces) go to std::sort
+        const auto by_high = [this](std::int64_t i, std::int64_t j) {
+            const auto u = static_cast<size_t>(i), v = static_cast<size_t>(j);
+            return std::tie(high[u], i) < std::tie(high[v], j);
+        };
+        for (size_t v = 0; v + 1 < first.size(); ++v) {
+            const auto begin = order.begin() + static_cast<std::ptrdiff_t>(first[v]);
+            const auto end = order.begin() + static_cast<std::ptrdiff_t>(first[v + 1]);
+            if (static_cast<size_t>(end - begin) > kInsertion) {
+                std::sort(begin, end, by_high);
+                continue;
+            }
+            for (auto i = begin + (begin != end); i < end; ++i)
+                for (auto j = i; j != begin && by_high(*j, *(j - 1)); --j) std::iter_swap(j, j - 1);
+        }
+    }
 };
 
 // A link of the face graph: two faces sharing a manifold edge, and whether they traverse it the

@@ -39,16 +39,19 @@ __all__ = [
 ]
 
 
-def _mesh_arrays(index: int, mesh: Any) -> tuple[np.ndarray, np.ndarray]:
-    """(vertices (n, 3) float64, faces (m, 3) int64) of one input mesh, checked."""
+def _mesh_parts(index: int, mesh: Any) -> tuple[Any, Any]:
+    """The (vertices, faces) objects of one input mesh, as given (not yet checked)."""
     if isinstance(mesh, tuple | list) and len(mesh) == 2:
-        vertices, faces = mesh
-    elif hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
-        vertices, faces = mesh.vertices, mesh.faces
-    else:
-        raise ValueError(
-            f"meshes[{index}] must be a (vertices, faces) pair or have .vertices and .faces"
-        )
+        return mesh[0], mesh[1]
+    if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
+        return mesh.vertices, mesh.faces
+    raise ValueError(
+        f"meshes[{index}] must be a (vertices, faces) pair or have .vertices and .faces"
+    )
+
+
+def _mesh_arrays(index: int, vertices: Any, faces: Any) -> tuple[np.ndarray, np.ndarray]:
+    """(vertices (n, 3) float64, faces (m, 3) int64) of one input mesh, checked."""
     try:
         vertices, faces = as_mesh(vertices, faces)
     except ValueError as error:
@@ -165,7 +168,17 @@ class MeshSet:
         ValueError
             On malformed arrays or a face index out of range, naming the mesh (``meshes[3]: ...``).
         """
-        arrays = [_mesh_arrays(i, m) for i, m in enumerate(meshes)]
+        # Checked and converted once per distinct pair of input arrays (a trimesh's vertices
+        # convert to a new array object at each call): instances of one asset then share their
+        # arrays. `parts` holds every input array, so no id is reused while these run.
+        parts: list[tuple[Any, Any]] = []
+        checked: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
+        for i, mesh in enumerate(meshes):
+            v, f = _mesh_parts(i, mesh)
+            parts.append((v, f))
+            if (id(v), id(f)) not in checked:
+                checked[(id(v), id(f))] = _mesh_arrays(i, v, f)
+        arrays = [checked[(id(v), id(f))] for v, f in parts]
         # once per distinct mesh: instances of one asset share their arrays
         distinct: dict[tuple[int, int], _Oriented] = {}
         for v, f in arrays:

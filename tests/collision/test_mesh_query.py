@@ -1090,6 +1090,26 @@ def test_intersects_batch_result_of_any_dataclass() -> None:
 # --------------------------------------------------------------------------- shared hierarchies
 
 
+def test_one_mesh_object_given_twice_is_checked_and_wound_once(monkeypatch) -> None:
+    """The same input arrays given for several meshes (one trimesh twice, whose vertices
+    convert to a new array at each call) are checked and wound once, and the meshes share the
+    arrays; other arrays of the same bytes are wound on their own and still share a hierarchy."""
+    import meshcol.collision.mesh_query as mesh_query
+
+    calls = []
+    wound = mesh_query._oriented
+    monkeypatch.setattr(
+        mesh_query, "_oriented", lambda v, f, orient: calls.append(len(f)) or wound(v, f, orient)
+    )
+    a = trimesh.creation.icosphere(1)
+    meshes = MeshSet.from_arrays([a, a, (a.vertices, a.faces), a.copy()], threads=1)
+    assert len(calls) == 2  # a (also given as the pair of its own arrays), and the copy
+    assert meshes._handle.distinct_count() == 1
+    blocks = [meshes.faces[meshes.face_offsets[i] : meshes.face_offsets[i + 1]] for i in range(4)]
+    for block in blocks[1:]:
+        np.testing.assert_array_equal(block, blocks[0])
+
+
 def test_instances_share_one_hierarchy_with_the_answers_of_their_own() -> None:
     """Meshes of the same vertex and face bytes (instances of one asset, or equal copies) share
     one hierarchy; every query on a set of interleaved instances gives, bit for bit, what the
