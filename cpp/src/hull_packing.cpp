@@ -484,6 +484,16 @@ public:
     }
 
 private:
+    // The running sums of `counts` after offsets' last one.
+    static void append_offsets(const std::vector<std::int64_t>& counts,
+                               std::vector<std::int64_t>& offsets) {
+        const size_t first = offsets.size();
+        offsets.resize(first + counts.size());
+        std::int64_t* o = offsets.data() + first;
+        std::int64_t sum = o[-1];
+        for (size_t k = 0; k < counts.size(); ++k) o[k] = sum += counts[k];
+    }
+
     std::unique_ptr<ChunkPack> take_spare() {
         if (spare_.empty()) return std::make_unique<ChunkPack>();
         std::unique_ptr<ChunkPack> pack = std::move(spare_.back());
@@ -494,13 +504,10 @@ private:
     void append(ChunkPack& s) {
         PackedPolytopes& o = out_;
         o.status.insert(o.status.end(), s.status.begin(), s.status.end());
-        for (size_t k = 0; k < s.vertex_counts.size(); ++k) {
-            o.offsets.push_back(o.offsets.back() + s.vertex_counts[k]);
-            o.face_offsets.push_back(o.face_offsets.back() + s.face_counts[k]);
-            o.edge_offsets.push_back(o.edge_offsets.back() + s.edge_counts[k]);
-        }
-        for (std::int64_t c : s.adjacency_counts)
-            o.adjacency_offsets.push_back(o.adjacency_offsets.back() + c);
+        append_offsets(s.vertex_counts, o.offsets);
+        append_offsets(s.face_counts, o.face_offsets);
+        append_offsets(s.edge_counts, o.edge_offsets);
+        append_offsets(s.adjacency_counts, o.adjacency_offsets);
         o.vertices.insert(o.vertices.end(), s.vertices.begin(), s.vertices.end());
         o.adjacency.insert(o.adjacency.end(), s.adjacency.begin(), s.adjacency.end());
         o.face_normals.insert(o.face_normals.end(), s.faces.begin(), s.faces.end());
