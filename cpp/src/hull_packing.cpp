@@ -40,10 +40,10 @@ struct ChunkPack {
     std::vector<double> faces, edges;
 
     // Room for shapes of `points` points in all (a hull of k vertices has at most 2k - 4
-    // triangles and 3k - 6 edges), so the arrays never move while they fill; large inputs
-    // (mostly interior points) grow as they fill instead of reserving for every point.
+    // triangles and 3k - 6 edges), so the arrays never move while they fill (points_to_reserve
+    // bounds the room of large inputs: mostly interior points, their arrays grow as they fill).
     void reserve(long long shapes, long long points) {
-        const auto p = static_cast<size_t>(std::min<long long>(points, 1 << 20));
+        const auto p = static_cast<size_t>(points);
         const auto h = static_cast<size_t>(shapes);
         status.reserve(h);
         vertex_counts.reserve(h);
@@ -530,17 +530,18 @@ PackedPolytopes pack_polytopes(const Vec3* points, const std::int64_t* offsets, 
     const int t = resolve_threads(threads, shapes, defaults::hull_min_shapes_per_thread);
     PackedPolytopes out;
     const auto hs = static_cast<size_t>(shapes);
-    // Chunks of consecutive shapes of about kChunkPoints points (their arrays stay in the
-    // cache until they are committed), and about 8 a thread (handed out dynamically). The
-    // result never depends on the chunks or the threads: their arrays are joined in order.
+    // On threads: chunks of consecutive shapes of about kChunkPoints points (their arrays stay
+    // in the cache until they are committed), and about 8 a thread (handed out dynamically).
+    // The result never depends on the chunks or the threads: their arrays are joined in order.
     constexpr long long kChunkPoints = 1 << 14;
     const long long total = shapes > 0 ? offsets[shapes] - offsets[0] : 0;
     const long long per_shape = std::max<long long>(1, total / std::max<long long>(shapes, 1));
-    long long chunk = std::max<long long>(1, kChunkPoints / per_shape);
-    if (t > 1) chunk = std::min(chunk, std::max<long long>(1, (shapes + 8LL * t - 1) / (8LL * t)));
+    const long long chunk = std::min(std::max<long long>(1, kChunkPoints / per_shape),
+                                     std::max<long long>(1, (shapes + 8LL * t - 1) / (8LL * t)));
     const long long chunks = shapes > 0 ? (shapes + chunk - 1) / chunk : 0;
-    if (chunks <= 1) {
-        // One chunk (one large shape, or a few small ones): its arrays become the result.
+    if (t <= 1 || chunks <= 1) {
+        // One thread, or one chunk: the shapes are packed straight into the arrays that become
+        // the result (reserved for their points: they are neither moved nor copied).
         ChunkPack pack;
         if (shapes > 0) {
             pack.reserve(shapes, points_to_reserve(offsets, 0, shapes));

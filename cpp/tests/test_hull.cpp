@@ -175,9 +175,8 @@ bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
 }  // namespace
 
 TEST_CASE("hull: packing on threads equals packing one shape at a time, byte for byte") {
-    // Shapes of every family, packed together on one, two and three threads (chunks of
-    // about 16,000 points committed in order: 400 shapes make several even on one thread,
-    // and threads finish them out of order) and one by one: the same arrays.
+    // Shapes of every family, packed together on one thread, on two and three (chunks
+    // committed in order: threads finish them out of order) and one by one: the same arrays.
     std::vector<Vec3> points;
     std::vector<std::int64_t> offsets = {0};
     std::uint64_t state = 7;
