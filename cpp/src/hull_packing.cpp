@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <memory>
+#include <mutex>
 #include <numeric>
 #include <utility>
 #include <vector>
@@ -38,10 +40,10 @@ struct ChunkPack {
     std::vector<double> faces, edges;
 
     // Room for shapes of `points` points in all (a hull of k vertices has at most 2k - 4
-    // triangles and 3k - 6 edges), so the arrays never move while they fill; large inputs
-    // (mostly interior points) grow as they fill instead of reserving for every point.
+    // triangles and 3k - 6 edges), so the arrays never move while they fill (points_to_reserve
+    // bounds the room of large inputs: mostly interior points, their arrays grow as they fill).
     void reserve(long long shapes, long long points) {
-        const auto p = static_cast<size_t>(std::min<long long>(points, 1 << 20));
+        const auto p = static_cast<size_t>(points);
         const auto h = static_cast<size_t>(shapes);
         status.reserve(h);
         vertex_counts.reserve(h);
@@ -52,6 +54,19 @@ struct ChunkPack {
         adjacency.reserve(6 * p + 3 * p + 4 * h);
         faces.reserve(3 * (2 * p + 2 * h));
         edges.reserve(3 * (3 * p + h));
+    }
+
+    /// Empty, keeping the room (the buffers of the next chunk).
+    void clear() {
+        status.clear();
+        vertices.clear();
+        vertex_counts.clear();
+        face_counts.clear();
+        edge_counts.clear();
+        adjacency_counts.clear();
+        adjacency.clear();
+        faces.clear();
+        edges.clear();
     }
 };
 
@@ -395,75 +410,192 @@ void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
     out.edge_counts.push_back(edges);
 }
 
+// One thread's packing of consecutive shapes: the scratch of every hull, kept across them.
+struct Packer {
+    const Vec3* points;
+    const std::int64_t* offsets;
+    Workspace w;
+    Analysis analysis;
+    PackScratch scratch;
+
+    Packer(const Vec3* p, const std::int64_t* o) : points(p), offsets(o) {
+        analysis.geometry = false;  // the per-face geometry of a Hull is not packed
+    }
+
+    void pack(long long first, long long last, ChunkPack& out) {
+        for (long long h = first; h < last; ++h)
+            pack_one(points + offsets[h], offsets[h + 1] - offsets[h], w, analysis, scratch, out);
+    }
+};
+
+// The points a packing reserves room for: every point of shapes up to 4,096 points (a smooth
+// hull keeps them all), at least 2^20 in all for larger ones (mostly interior points: their
+// arrays grow as they fill instead), never more than there are, nor than 2^24 (about 3 GB of
+// address space: past it the arrays grow as they fill).
+long long points_to_reserve(const std::int64_t* offsets, long long first, long long last) {
+    constexpr long long kAllPointsUpTo = 4096, kAtLeast = 1 << 20, kAtMost = 1 << 24;
+    long long small = 0;
+    for (long long h = first; h < last; ++h)
+        small += std::min<long long>(offsets[h + 1] - offsets[h], kAllPointsUpTo);
+    const long long room = std::max(std::min(small, kAtMost), kAtLeast);
+    return std::min<long long>(offsets[last] - offsets[first], room);
+}
+
+// The result of many chunks, filled in chunk order as they finish: a chunk's arrays are
+// copied in while they are still in the cache, and its buffers then pack the next chunk, so
+// the packing touches fresh memory once, for the result. (Packing every chunk into arrays of
+// its own and joining them at the end touched twice as much: each page costs a fault, about
+// a third of the time of 40,000 small hulls.) A chunk that finishes before the one ahead of
+// it is parked, and committed by the thread that commits that one.
+class OrderedCommits {
+public:
+    OrderedCommits(PackedPolytopes& out, long long chunks)
+        : out_(out), parked_(static_cast<size_t>(chunks)) {}
+
+    /// Chunk c's arrays, packed into `pack`: committed now if every chunk before it is (with
+    /// the parked ones it unblocks), else parked. Returns empty buffers to pack the next chunk
+    /// into (`pack`'s own when it was committed).
+    std::unique_ptr<ChunkPack> finish(long long c, std::unique_ptr<ChunkPack> pack) {
+        const std::lock_guard<std::mutex> hold(lock_);
+        if (c != next_) {
+            parked_[static_cast<size_t>(c)] = std::move(pack);
+            return take_spare();
+        }
+        append(*pack);
+        ++next_;
+        for (; next_ < static_cast<long long>(parked_.size()); ++next_) {
+            std::unique_ptr<ChunkPack>& waiting = parked_[static_cast<size_t>(next_)];
+            if (!waiting) break;
+            append(*waiting);
+            spare_.push_back(std::move(waiting));
+        }
+        return pack;
+    }
+
+    /// Buffers a thread no longer needs, for another to reuse.
+    void give_back(std::unique_ptr<ChunkPack> pack) {
+        const std::lock_guard<std::mutex> hold(lock_);
+        spare_.push_back(std::move(pack));
+    }
+
+    std::unique_ptr<ChunkPack> take() {
+        const std::lock_guard<std::mutex> hold(lock_);
+        return take_spare();
+    }
+
+private:
+    // The running sums of `counts` after offsets' last one.
+    static void append_offsets(const std::vector<std::int64_t>& counts,
+                               std::vector<std::int64_t>& offsets) {
+        const size_t first = offsets.size();
+        offsets.resize(first + counts.size());
+        std::int64_t* o = offsets.data() + first;
+        std::int64_t sum = o[-1];
+        for (size_t k = 0; k < counts.size(); ++k) o[k] = sum += counts[k];
+    }
+
+    std::unique_ptr<ChunkPack> take_spare() {
+        if (spare_.empty()) return std::make_unique<ChunkPack>();
+        std::unique_ptr<ChunkPack> pack = std::move(spare_.back());
+        spare_.pop_back();
+        return pack;
+    }
+
+    void append(ChunkPack& s) {
+        PackedPolytopes& o = out_;
+        o.status.insert(o.status.end(), s.status.begin(), s.status.end());
+        append_offsets(s.vertex_counts, o.offsets);
+        append_offsets(s.face_counts, o.face_offsets);
+        append_offsets(s.edge_counts, o.edge_offsets);
+        append_offsets(s.adjacency_counts, o.adjacency_offsets);
+        o.vertices.insert(o.vertices.end(), s.vertices.begin(), s.vertices.end());
+        o.adjacency.insert(o.adjacency.end(), s.adjacency.begin(), s.adjacency.end());
+        o.face_normals.insert(o.face_normals.end(), s.faces.begin(), s.faces.end());
+        o.edge_directions.insert(o.edge_directions.end(), s.edges.begin(), s.edges.end());
+        s.clear();
+    }
+
+    PackedPolytopes& out_;
+    std::mutex lock_;
+    long long next_ = 0;
+    std::vector<std::unique_ptr<ChunkPack>> parked_;  // by chunk
+    std::vector<std::unique_ptr<ChunkPack>> spare_;
+};
+
 }  // namespace
 
 PackedPolytopes pack_polytopes(const Vec3* points, const std::int64_t* offsets, long long shapes,
                                int threads) {
     shapes = std::max<long long>(shapes, 0);
     const int t = resolve_threads(threads, shapes, defaults::hull_min_shapes_per_thread);
-    // Fixed chunks of consecutive shapes (about 8 a thread, handed out dynamically), each
-    // packed into arrays of its own, joined in chunk order: the result never depends on the
-    // threads.
-    const long long chunk = t <= 1 ? std::max<long long>(shapes, 1)
-                                   : std::max<long long>(1, (shapes + 8LL * t - 1) / (8LL * t));
-    const long long chunks = (shapes + chunk - 1) / chunk;
-    std::vector<ChunkPack> packs(static_cast<size_t>(chunks));
-    parallel_for(chunks, t, [&](long long begin, long long end) {
-        Workspace w;
-        Analysis analysis;
-        analysis.geometry = false;  // the per-face geometry of a Hull is not packed
-        PackScratch scratch;
-        for (long long c = begin; c < end; ++c) {
-            ChunkPack& out = packs[static_cast<size_t>(c)];
-            const long long first = c * chunk, last = std::min(shapes, (c + 1) * chunk);
-            out.reserve(last - first, offsets[last] - offsets[first]);
-            for (long long h = first; h < last; ++h)
-                pack_one(points + offsets[h], offsets[h + 1] - offsets[h], w, analysis, scratch,
-                         out);
-        }
-    });
     PackedPolytopes out;
     const auto hs = static_cast<size_t>(shapes);
-    out.offsets.resize(hs + 1);
-    out.face_offsets.resize(hs + 1);
-    out.edge_offsets.resize(hs + 1);
-    out.offsets[0] = out.face_offsets[0] = out.edge_offsets[0] = 0;
-    size_t v = 0, h = 0;
-    for (const ChunkPack& s : packs) {
-        v += s.adjacency_counts.size();
-        for (size_t k = 0; k < s.vertex_counts.size(); ++k, ++h) {
-            out.offsets[h + 1] = out.offsets[h] + s.vertex_counts[k];
-            out.face_offsets[h + 1] = out.face_offsets[h] + s.face_counts[k];
-            out.edge_offsets[h + 1] = out.edge_offsets[h] + s.edge_counts[k];
+    // On threads: chunks of consecutive shapes of about kChunkPoints points (their arrays stay
+    // in the cache until they are committed), and about 8 a thread (handed out dynamically).
+    // The result never depends on the chunks or the threads: their arrays are joined in order.
+    constexpr long long kChunkPoints = 1 << 14;
+    const long long total = shapes > 0 ? offsets[shapes] - offsets[0] : 0;
+    const long long per_shape = std::max<long long>(1, total / std::max<long long>(shapes, 1));
+    const long long chunk = std::min(std::max<long long>(1, kChunkPoints / per_shape),
+                                     std::max<long long>(1, (shapes + 8LL * t - 1) / (8LL * t)));
+    const long long chunks = shapes > 0 ? (shapes + chunk - 1) / chunk : 0;
+    if (t <= 1 || chunks <= 1) {
+        // One thread, or one chunk: the shapes are packed straight into the arrays that become
+        // the result, never copied (and, reserved by points_to_reserve, never moved by shapes
+        // of up to 4,096 points).
+        ChunkPack pack;
+        if (shapes > 0) {
+            pack.reserve(shapes, points_to_reserve(offsets, 0, shapes));
+            Packer(points, offsets).pack(0, shapes, pack);
         }
-    }
-    out.adjacency_offsets.resize(v + 1);
-    out.adjacency_offsets[0] = 0;
-    size_t vi = 0;
-    for (const ChunkPack& s : packs)
-        for (std::int64_t c : s.adjacency_counts) {
-            out.adjacency_offsets[vi + 1] = out.adjacency_offsets[vi] + c;
-            ++vi;
+        out.offsets.resize(hs + 1);
+        out.face_offsets.resize(hs + 1);
+        out.edge_offsets.resize(hs + 1);
+        out.offsets[0] = out.face_offsets[0] = out.edge_offsets[0] = 0;
+        for (size_t h = 0; h < hs; ++h) {
+            out.offsets[h + 1] = out.offsets[h] + pack.vertex_counts[h];
+            out.face_offsets[h + 1] = out.face_offsets[h] + pack.face_counts[h];
+            out.edge_offsets[h + 1] = out.edge_offsets[h] + pack.edge_counts[h];
         }
-    if (packs.size() == 1) {
-        out.status = std::move(packs[0].status);
-        out.vertices = std::move(packs[0].vertices);
-        out.adjacency = std::move(packs[0].adjacency);
-        out.face_normals = std::move(packs[0].faces);
-        out.edge_directions = std::move(packs[0].edges);
+        const size_t v = pack.adjacency_counts.size();
+        out.adjacency_offsets.resize(v + 1);
+        out.adjacency_offsets[0] = 0;
+        for (size_t i = 0; i < v; ++i)
+            out.adjacency_offsets[i + 1] = out.adjacency_offsets[i] + pack.adjacency_counts[i];
+        out.status = std::move(pack.status);
+        out.vertices = std::move(pack.vertices);
+        out.adjacency = std::move(pack.adjacency);
+        out.face_normals = std::move(pack.faces);
+        out.edge_directions = std::move(pack.edges);
         return out;
     }
-    auto join = [&](auto member, auto& dst) {
-        size_t total = 0;
-        for (const ChunkPack& s : packs) total += (s.*member).size();
-        dst.reserve(total);
-        for (const ChunkPack& s : packs) dst.insert(dst.end(), (s.*member).begin(), (s.*member).end());
-    };
-    join(&ChunkPack::status, out.status);
-    join(&ChunkPack::vertices, out.vertices);
-    join(&ChunkPack::adjacency, out.adjacency);
-    join(&ChunkPack::faces, out.face_normals);
-    join(&ChunkPack::edges, out.edge_directions);
+    // Room for the whole result, so that it never moves while chunks are copied in.
+    const auto p = static_cast<size_t>(points_to_reserve(offsets, 0, shapes));
+    out.status.reserve(hs);
+    out.offsets.reserve(hs + 1);
+    out.face_offsets.reserve(hs + 1);
+    out.edge_offsets.reserve(hs + 1);
+    out.vertices.reserve(3 * p);
+    out.adjacency_offsets.reserve(p + 1);
+    out.adjacency.reserve(6 * p + 3 * p + 4 * hs);
+    out.face_normals.reserve(3 * (2 * p + 2 * hs));
+    out.edge_directions.reserve(3 * (3 * p + hs));
+    out.offsets.push_back(0);
+    out.face_offsets.push_back(0);
+    out.edge_offsets.push_back(0);
+    out.adjacency_offsets.push_back(0);
+    OrderedCommits commits(out, chunks);
+    parallel_for(chunks, t, [&](long long begin, long long end) {
+        Packer packer(points, offsets);
+        std::unique_ptr<ChunkPack> pack = commits.take();
+        for (long long c = begin; c < end; ++c) {
+            const long long first = c * chunk, last = std::min(shapes, (c + 1) * chunk);
+            pack->reserve(last - first, points_to_reserve(offsets, first, last));
+            packer.pack(first, last, *pack);
+            pack = commits.finish(c, std::move(pack));
+        }
+        commits.give_back(std::move(pack));
+    });
     return out;
 }
 

@@ -175,28 +175,30 @@ bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
 }  // namespace
 
 TEST_CASE("hull: packing on threads equals packing one shape at a time, byte for byte") {
-    // Shapes of every family, packed together on one and on two threads (chunks joined in
-    // order) and one by one: the same arrays.
+    // Shapes of every family, packed together on one thread, on two and three (chunks
+    // committed in order: threads finish them out of order) and one by one: the same arrays.
     std::vector<Vec3> points;
     std::vector<std::int64_t> offsets = {0};
     std::uint64_t state = 7;
-    for (int h = 0; h < 70; ++h) {
+    for (int h = 0; h < 400; ++h) {
         const std::vector<Vec3> p = family_points(h % 7, 8 + (h * 13) % 90, state);
         points.insert(points.end(), p.begin(), p.end());
         offsets.push_back(static_cast<std::int64_t>(points.size()));
     }
     const long long shapes = static_cast<long long>(offsets.size()) - 1;
     const PackedPolytopes one = pack_polytopes(points.data(), offsets.data(), shapes, 1);
-    const PackedPolytopes two = pack_polytopes(points.data(), offsets.data(), shapes, 2);
-    CHECK(same_bytes(one.status, two.status));
-    CHECK(same_bytes(one.vertices, two.vertices));
-    CHECK(same_bytes(one.offsets, two.offsets));
-    CHECK(same_bytes(one.adjacency_offsets, two.adjacency_offsets));
-    CHECK(same_bytes(one.adjacency, two.adjacency));
-    CHECK(same_bytes(one.face_offsets, two.face_offsets));
-    CHECK(same_bytes(one.face_normals, two.face_normals));
-    CHECK(same_bytes(one.edge_offsets, two.edge_offsets));
-    CHECK(same_bytes(one.edge_directions, two.edge_directions));
+    for (int threads : {2, 3}) {
+        const PackedPolytopes two = pack_polytopes(points.data(), offsets.data(), shapes, threads);
+        CHECK(same_bytes(one.status, two.status));
+        CHECK(same_bytes(one.vertices, two.vertices));
+        CHECK(same_bytes(one.offsets, two.offsets));
+        CHECK(same_bytes(one.adjacency_offsets, two.adjacency_offsets));
+        CHECK(same_bytes(one.adjacency, two.adjacency));
+        CHECK(same_bytes(one.face_offsets, two.face_offsets));
+        CHECK(same_bytes(one.face_normals, two.face_normals));
+        CHECK(same_bytes(one.edge_offsets, two.edge_offsets));
+        CHECK(same_bytes(one.edge_directions, two.edge_directions));
+    }
     CHECK(one.status[5] == HullStatus::NON_FINITE);
     CHECK(one.status[6] == HullStatus::EMPTY);
     for (long long h = 0; h < shapes; ++h) {
