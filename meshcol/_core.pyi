@@ -41,6 +41,10 @@ class defaults:
 
     epa_blow_up_enough: float = 0.5
 
+    epa_deep_start_depth: float = 0.05
+
+    epa_deep_start_spread: float = 0.65
+
     epa_relative_tolerance: float = 1e-12
 
     epa_absolute_tolerance_ratio: float = 0.01

@@ -181,6 +181,55 @@ void face_weights(const Polytope& poly, const EpaFace& f, const Vec3& normal, do
     }
 }
 
+// Adds support point `w` to the polytope: removes every face it sees, starting from
+// `visible` (a face it sees), and closes the hole with a fan of faces over the silhouette.
+// False when the silhouette does not close or a new face passes the wrong side of the origin
+// (rounding on a degenerate polytope).
+inline bool expand(Polytope& poly, int visible, const SimplexVertex& w, double tol) {
+    const int nw = poly.vertex_count;
+    poly.add_vertex(w);
+    // Remove the faces the new point sees (the closest one does, by construction) and
+    // close the hole with a fan of faces over the silhouette.
+    poly.horizon_count = 0;
+    poly.dead_count = 0;
+    poly.kill(visible);
+    poly.silhouette(visible, w.w);
+    // One pass over the silhouette: each new face is linked to the living face beyond its
+    // edge and to the previous new face, once the loop is seen to close there (the
+    // previous face's edge ends where this one's starts); the last closes on the first.
+    const int count = poly.horizon_count;
+    bool ok = count >= 3;
+    int first = -1, previous = -1, previous_end = -1, first_start = -1;
+    for (int k = 0; k < count && ok; ++k) {
+        const HorizonEdge& h = poly.horizon[k];
+        const EpaFace& beyond = poly.faces[h.face];
+        // The edge runs b -> a in the living face, so a -> b in the new one.
+        const int a = beyond.v[kNext[h.edge]], b = beyond.v[h.edge];
+        const int f = poly.add_face(a, b, nw);
+        if (f < 0) {
+            ok = false;
+            break;
+        }
+        poly.link(f, 0, h.face, h.edge);
+        if (poly.distance[f] < -tol * tol) ok = false;
+        if (previous < 0) {
+            first = f;
+            first_start = a;
+        } else if (previous_end != a) {
+            ok = false;
+        } else {
+            poly.link(previous, 1, f, 2);
+        }
+        previous = f;
+        previous_end = b;
+    }
+    if (ok && previous_end == first_start) poly.link(previous, 1, first, 2);
+    else ok = false;
+    if (!ok) return false;
+    poly.release();
+    return true;
+}
+
 // Blows a touching simplex of fewer than four vertices up to a tetrahedron holding the origin
 // (as coal and parry do): supports along directions spanning the missing dimensions.
 // Returns false when a - b is flat (zero volume): the depth is then zero.
@@ -248,53 +297,23 @@ bool blow_up(MinkowskiDifference& md, Simplex& s, double tol) {
     return true;
 }
 
-}  // namespace
-
-// EPA after van den Bergen 2003 (sec. 4.3.9): the closest face of the polytope to the origin
-// gives a lower bound on the depth, the support point in its normal an upper bound; a new
-// support point removes every face it sees and closes the hole with a fan over the silhouette
-// (no 1-to-3 splitting, which leaves the polytope non-convex). Ends exactly on polytopes
-// when a support point repeats.
-EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const EpaOptions& opt) {
-    EpaResult res;
-    const double tol = opt.contact_tolerance * md.scale;
-    Simplex s = start;
-    if (s.size < 4 && !blow_up(md, s, tol)) {
-        // The Minkowski difference is flat: the shapes touch, depth zero.
-        res.status = Status::CONVERGED;
-        Vec3 pa{}, pb{};
-        for (int i = 0; i < s.size; ++i) {
-            pa += s.vertices[i].a * s.weights[i];
-            pb += s.vertices[i].b * s.weights[i];
-        }
-        res.point_a = pa;
-        res.point_b = pa;
-        // The normal of the flat set when it has one, oriented from a to b.
-        Vec3 n = md.translation_b;
-        if (s.size == 3) {
-            const Vec3 c = cross(s.vertices[1].w - s.vertices[0].w, s.vertices[2].w - s.vertices[0].w);
-            if (norm(c) > 0.0) n = dot(c, md.translation_b) < 0.0 ? -c : c;
-        } else if (s.size == 2) {
-            const Vec3 d = s.vertices[1].w - s.vertices[0].w;
-            const Vec3 c =
-                n - d * (dot(n, d) / std::fmax(squared_norm(d), defaults::epa_min_squared_length));
-            if (norm(c) > 0.0) n = c;
-        }
-        const double nn = norm(n);
-        res.normal = nn > 0.0 ? n / nn : Vec3{1.0, 0.0, 0.0};
-        return res;
-    }
+// The polytope of this thread: trivially constructible, so no allocation and no guard.
+Polytope& thread_polytope() {
     thread_local Polytope scratch;
-    // One TLS lookup per call. Read through a volatile pointer so the compiler cannot see the
-    // helpers work on the thread_local and specialise them to look it up on every access.
+    // Read through a volatile pointer so the compiler cannot see the helpers work on the
+    // thread_local and specialise them to look it up on every access.
     Polytope* volatile scratch_address = &scratch;
-    Polytope& poly = *scratch_address;
+    return *scratch_address;
+}
+
+// Starts `poly` from the tetrahedron `v` (any orientation; reordered in place).
+void start_tetrahedron(Polytope& poly, SimplexVertex v[4]) {
     poly.reset();
     {
-        const Vec3 a = s.vertices[0].w, b = s.vertices[1].w, c = s.vertices[2].w, d = s.vertices[3].w;
-        if (dot(cross(b - a, c - a), d - a) > 0.0) std::swap(s.vertices[1], s.vertices[2]);
+        const Vec3 a = v[0].w, b = v[1].w, c = v[2].w, d = v[3].w;
+        if (dot(cross(b - a, c - a), d - a) > 0.0) std::swap(v[1], v[2]);
     }
-    for (int i = 0; i < 4; ++i) poly.add_vertex(s.vertices[i]);
+    for (int i = 0; i < 4; ++i) poly.add_vertex(v[i]);
     // Outward orientation: (0,1,2) has the opposite vertex 3 behind it. Each edge i -> j of a
     // face meets j -> i of its neighbour.
     poly.add_face(0, 1, 2);
@@ -307,7 +326,28 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
     poly.link(1, 0, 2, 2);
     poly.link(1, 1, 3, 0);
     poly.link(2, 1, 3, 1);
+}
 
+// True when the origin lies strictly inside the tetrahedron abcd (either orientation): the
+// four signed volumes with the origin in place of each vertex share the sign of the whole's.
+bool holds_origin(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+    const double whole = dot(d - a, cross(b - a, c - a));
+    const double va = dot(d, cross(b, c));
+    const double vb = dot(d, cross(c, a));
+    const double vc = dot(d, cross(a, b));
+    const double vd = whole - va - vb - vc;
+    if (whole > 0.0) return va > 0.0 && vb > 0.0 && vc > 0.0 && vd > 0.0;
+    return whole < 0.0 && va < 0.0 && vb < 0.0 && vc < 0.0 && vd < 0.0;
+}
+
+// EPA's loop on a polytope that holds the origin (van den Bergen 2003, sec. 4.3.9): the
+// closest face of the polytope to the origin gives a lower bound on the depth, the support
+// point in its normal an upper bound; a new support point removes every face it sees and
+// closes the hole with a fan over the silhouette (no 1-to-3 splitting, which leaves the
+// polytope non-convex). Ends exactly on polytopes when a support point repeats.
+EpaResult expand_to_depth(MinkowskiDifference& md, Polytope& poly, const EpaOptions& opt,
+                          double tol) {
+    EpaResult res;
     res.status = Status::MAX_ITERATIONS;
     // The closest face of the last iteration: its slot keeps its data to the end (a killed
     // face is released only after the new faces are made, and nothing is added after that).
@@ -344,50 +384,10 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
             break;
         }
         if (poly.vertex_count >= defaults::epa_max_vertices) break;
-        const int nw = poly.vertex_count;
-        poly.add_vertex(w);
-        // Remove the faces the new point sees (the closest one does, by construction) and
-        // close the hole with a fan of faces over the silhouette.
-        poly.horizon_count = 0;
-        poly.dead_count = 0;
-        poly.kill(best_face);
-        poly.silhouette(best_face, w.w);
-        // One pass over the silhouette: each new face is linked to the living face beyond its
-        // edge and to the previous new face, once the loop is seen to close there (the
-        // previous face's edge ends where this one's starts); the last closes on the first.
-        const int count = poly.horizon_count;
-        bool ok = count >= 3;
-        int first = -1, previous = -1, previous_end = -1, first_start = -1;
-        for (int k = 0; k < count && ok; ++k) {
-            const HorizonEdge& h = poly.horizon[k];
-            const EpaFace& beyond = poly.faces[h.face];
-            // The edge runs b -> a in the living face, so a -> b in the new one.
-            const int a = beyond.v[kNext[h.edge]], b = beyond.v[h.edge];
-            const int f = poly.add_face(a, b, nw);
-            if (f < 0) {
-                ok = false;
-                break;
-            }
-            poly.link(f, 0, h.face, h.edge);
-            if (poly.distance[f] < -tol * tol) ok = false;
-            if (previous < 0) {
-                first = f;
-                first_start = a;
-            } else if (previous_end != a) {
-                ok = false;
-            } else {
-                poly.link(previous, 1, f, 2);
-            }
-            previous = f;
-            previous_end = b;
-        }
-        if (ok && previous_end == first_start) poly.link(previous, 1, first, 2);
-        else ok = false;
-        if (!ok) {
+        if (!expand(poly, best_face, w, tol)) {
             res.status = Status::DEGENERATE;
             break;
         }
-        poly.release();
     }
     res.iterations = it;
     if (last_face < 0) {
@@ -409,6 +409,110 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
     res.normal = normal;
     res.point_a = pa;
     res.point_b = pb;
+    return res;
+}
+
+}  // namespace
+
+// EPA from GJK's simplex, blown up to a tetrahedron when the pair touches.
+EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const EpaOptions& opt) {
+    EpaResult res;
+    const double tol = opt.contact_tolerance * md.scale;
+    Simplex s = start;
+    if (s.size < 4 && !blow_up(md, s, tol)) {
+        // The Minkowski difference is flat: the shapes touch, depth zero.
+        res.status = Status::CONVERGED;
+        Vec3 pa{}, pb{};
+        for (int i = 0; i < s.size; ++i) {
+            pa += s.vertices[i].a * s.weights[i];
+            pb += s.vertices[i].b * s.weights[i];
+        }
+        res.point_a = pa;
+        res.point_b = pa;
+        // The normal of the flat set when it has one, oriented from a to b.
+        Vec3 n = md.translation_b;
+        if (s.size == 3) {
+            const Vec3 c = cross(s.vertices[1].w - s.vertices[0].w, s.vertices[2].w - s.vertices[0].w);
+            if (norm(c) > 0.0) n = dot(c, md.translation_b) < 0.0 ? -c : c;
+        } else if (s.size == 2) {
+            const Vec3 d = s.vertices[1].w - s.vertices[0].w;
+            const Vec3 c =
+                n - d * (dot(n, d) / std::fmax(squared_norm(d), defaults::epa_min_squared_length));
+            if (norm(c) > 0.0) n = c;
+        }
+        const double nn = norm(n);
+        res.normal = nn > 0.0 ? n / nn : Vec3{1.0, 0.0, 0.0};
+        return res;
+    }
+    Polytope& poly = thread_polytope();
+    start_tetrahedron(poly, s.vertices);
+    return expand_to_depth(md, poly, opt, tol);
+}
+
+EpaResult epa_penetration_deep(MinkowskiDifference& md, const SimplexVertex& first,
+                               const EpaOptions& opt) {
+    EpaResult res;
+    const double tol = opt.contact_tolerance * md.scale;
+    const Vec3 n = md.translation_b;
+    const double nn = squared_norm(n);
+    if (!(nn > 0.0) || !std::isfinite(nn)) return res;
+    // Each support bounds the depth from above (the depth is the least, over directions, of
+    // how far the support lies past the origin): a pair that is shallow along any of them is
+    // left to GJK at once.
+    const double length = std::sqrt(nn);
+    const double deep = defaults::epa_deep_start_depth * md.scale;
+    if (!(dot(first.w, n) > deep * length)) return res;
+    // Two directions perpendicular to n, each defaults::epa_deep_start_spread times as long:
+    // n plus or minus either points that far off the centre line.
+    int k = 0;
+    if (std::fabs(n.y) < std::fabs(n[k])) k = 1;
+    if (std::fabs(n.z) < std::fabs(n[k])) k = 2;
+    const Vec3 axes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    const Vec3 c = cross(n, axes[k]);
+    const Vec3 u = c * (defaults::epa_deep_start_spread * length / norm(c));
+    const Vec3 v = cross(n, u) * (1.0 / length);
+    // A ring around the centre line, in order, then the far side: each climb starts from the
+    // previous support points (the directions turn by less than 60 degrees) but the last.
+    const Vec3 directions[4] = {n + u, n + v, n - u, n - v};
+    const double ring_length = length * std::sqrt(1.0 + defaults::epa_deep_start_spread *
+                                                            defaults::epa_deep_start_spread);
+    SimplexVertex ring[4];
+    for (int r = 0; r < 4; ++r) {
+        ring[r] = md.support(directions[r]);
+        if (!(dot(ring[r].w, directions[r]) > deep * ring_length)) return res;
+    }
+    const SimplexVertex back = md.support(-n);
+    // The segment back -> first crosses the ring's span near the origin on a deep pair: one
+    // of the four tetrahedra around it holds the origin, which must be clear of its faces by
+    // more than the contact distance (else the pair is left to GJK).
+    int held = -1;
+    for (int r = 0; r < 4 && held < 0; ++r)
+        if (holds_origin(back.w, first.w, ring[r].w, ring[(r + 1) % 4].w)) held = r;
+    if (held < 0) return res;
+    Polytope& poly = thread_polytope();
+    SimplexVertex start[4] = {back, first, ring[held], ring[(held + 1) % 4]};
+    start_tetrahedron(poly, start);
+    for (int f = 0; f < 4; ++f)
+        if (!(poly.distance[f] > tol * tol) || !std::isfinite(poly.distance[f])) return res;
+    if (held < 0) return res;
+    // The rest of the ring, where it lies outside: each one from the face it sees most.
+    for (int q = 2; q < 4; ++q) {
+        const SimplexVertex& w = ring[(held + q) % 4];
+        if (poly.has_vertex(Polytope::key_of(w))) continue;
+        int visible = -1;
+        double most = 0.0;
+        for (int f = 0; f < poly.face_count; ++f) {
+            const EpaFace& face = poly.faces[f];
+            const double x = dot(face.normal, w.w) - face.offset;
+            if (face.alive && x > most) {
+                most = x;
+                visible = f;
+            }
+        }
+        if (visible >= 0 && !expand(poly, visible, w, tol)) return res;
+    }
+    res = expand_to_depth(md, poly, opt, tol);
+    res.iterations += 6;
     return res;
 }
 

@@ -313,7 +313,7 @@ void weighted_points(const Simplex& s, Vec3& pa, Vec3& pb) {
 // GJK after van den Bergen 2003 (sec. 4.3): v is the closest point of the current simplex to
 // the origin, w the support point of a - b in -v. v.v - v.w bounds the squared error; on
 // polytopes the loop ends exactly when a support point repeats (a finite number of features).
-GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt) {
+GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexVertex* first) {
     GjkResult res;
     Simplex& s = res.simplex;
     const double touch = opt.contact_tolerance * md.scale;
@@ -324,7 +324,7 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt) {
     // Start from the support in the direction of b's centre as seen from a: a good first guess.
     Vec3 dir = md.translation_b;
     if (!(squared_norm(dir) > 0.0)) dir = Vec3{1.0, 0.0, 0.0};
-    s.vertices[0] = md.support(dir);
+    s.vertices[0] = first != nullptr ? *first : md.support(dir);
     s.weights[0] = 1.0;
     s.size = 1;
     Vec3 v = s.vertices[0].w;

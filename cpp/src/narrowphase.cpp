@@ -53,55 +53,17 @@ Status worse(Status x, Status y) {
 
 namespace {
 
-// The pipeline (as coal and parry): GJK on the cores (sphere and capsule radii are margins,
-// added exactly afterwards); EPA on the full shapes only when the cores overlap; for small
-// polytopes an exact SAT that verifies EPA's depth and replaces it when they disagree. The
-// pair's lengths must be within rescale::kSafeLow..kSafeHigh (`query_pair` sees to it).
-PairResult query_in_range(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
-                          const Pose& pose_b, QueryKind kind, double radius_a, double radius_b) {
-    PairResult r;
-    MinkowskiDifference core(a, pose_a, b, pose_b, false, radius_a, radius_b);
-    GjkOptions opt;
-    opt.stop_when_separated = kind == QueryKind::INTERSECTS;
-    const GjkResult g = gjk_run(core, opt);
-    const double ma = margin(a), mb = margin(b), msum = ma + mb;
-    const double touch = defaults::contact_tolerance * core.scale;
-    r.status = g.status;
-    r.iterations = g.iterations;
-    if (!g.overlap) {
-        const double d = g.distance - msum;
-        const Vec3 n = g.normal;  // a's frame, a to b
-        r.normal = n;
-        r.point_a = g.point_a + n * ma;
-        r.point_b = g.point_b - n * mb;
-        if (d > touch) {
-            r.distance = d;
-            r.intersects = false;
-        } else {
-            // The cores are apart but the radii overlap: the depth is exact.
-            r.intersects = true;
-            r.distance = 0.0;
-            if (kind == QueryKind::PENETRATION) r.depth = std::fmax(0.0, -d);
-            else if (kind == QueryKind::DISTANCE) r.normal = Vec3{};
-        }
-        return to_world(r, pose_a);
-    }
+// The penetration result from EPA's (a's frame), checked by exact SAT on small polytopes:
+// SAT verifies EPA's depth and replaces it when they disagree.
+PairResult penetration_result(PairResult r, const EpaResult& e, const ShapeView& a,
+                              const Pose& pose_a, const ShapeView& b, const Pose& pose_b,
+                              double touch) {
+    const double ma = margin(a), mb = margin(b);
     r.intersects = true;
     r.distance = 0.0;
-    r.point_a = g.point_a;
-    r.point_b = g.point_a;
-    if (kind != QueryKind::PENETRATION) return to_world(r, pose_a);
-
-    // EPA on the cores: for swept shapes the depth of (core_a + ball) - (core_b + ball) is the
-    // core depth plus both radii (the support function gains the radii in every direction),
-    // so spheres and capsules stay exact and EPA only meets curved surfaces on cylinders.
-    EpaOptions eopt;
-    if (a.kind == ShapeKind::CYLINDER || b.kind == ShapeKind::CYLINDER)
-        eopt.relative_tolerance = defaults::epa_curved_relative_tolerance;
-    const EpaResult e = epa_penetration(core, g.simplex, eopt);
     r.iterations += e.iterations;
     r.status = worse(r.status, e.status);
-    r.depth = e.depth + msum;
+    r.depth = e.depth + (ma + mb);
     r.normal = e.normal;
     r.point_a = e.point_a + e.normal * ma;
     r.point_b = e.point_b - e.normal * mb;
@@ -134,6 +96,78 @@ PairResult query_in_range(const ShapeView& a, const Pose& pose_a, const ShapeVie
         }
     }
     return world;
+}
+
+// The pipeline (as coal and parry): GJK on the cores (sphere and capsule radii are margins,
+// added exactly afterwards); EPA on the full shapes only when the cores overlap; for small
+// polytopes an exact SAT that verifies EPA's depth and replaces it when they disagree. The
+// pair's lengths must be within rescale::kSafeLow..kSafeHigh (`query_pair` sees to it).
+PairResult query_in_range(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
+                          const Pose& pose_b, QueryKind kind, double radius_a, double radius_b) {
+    PairResult r;
+    MinkowskiDifference core(a, pose_a, b, pose_b, false, radius_a, radius_b);
+    const double touch = defaults::contact_tolerance * core.scale;
+    EpaOptions eopt;
+    if (a.kind == ShapeKind::CYLINDER || b.kind == ShapeKind::CYLINDER)
+        eopt.relative_tolerance = defaults::epa_curved_relative_tolerance;
+    // Two polytopes whose supports along and around the centre line lie well past the origin
+    // overlap deeply, as a rule: EPA then starts from those supports and GJK is not run. The
+    // first is GJK's first, so a pair left to GJK loses only the supports the attempt took.
+    // Only for polytopes that climb: on small ones (a scan a support) GJK is cheap and EPA
+    // short, and the attempt saved less than it cost on touching pairs.
+    SimplexVertex first;
+    bool have_first = false;
+    const Vec3 line = core.translation_b;
+    if (kind == QueryKind::PENETRATION && core.climb_both && squared_norm(line) > 0.0) {
+        first = core.support(line);
+        have_first = true;
+        const int hint_a = core.hint_a, hint_b = core.hint_b;
+        const Vec3 last_direction = core.last_direction;
+        const EpaResult e = epa_penetration_deep(core, first, eopt);
+        if (e.status != Status::NOT_RUN) {
+            r.status = Status::CONVERGED;
+            return penetration_result(r, e, a, pose_a, b, pose_b, touch);
+        }
+        // GJK goes on from its first support as if the attempt had not been made.
+        core.hint_a = hint_a;
+        core.hint_b = hint_b;
+        core.last_direction = last_direction;
+    }
+    GjkOptions opt;
+    opt.stop_when_separated = kind == QueryKind::INTERSECTS;
+    const GjkResult g = gjk_run(core, opt, have_first ? &first : nullptr);
+    const double ma = margin(a), mb = margin(b), msum = ma + mb;
+    r.status = g.status;
+    r.iterations = g.iterations;
+    if (!g.overlap) {
+        const double d = g.distance - msum;
+        const Vec3 n = g.normal;  // a's frame, a to b
+        r.normal = n;
+        r.point_a = g.point_a + n * ma;
+        r.point_b = g.point_b - n * mb;
+        if (d > touch) {
+            r.distance = d;
+            r.intersects = false;
+        } else {
+            // The cores are apart but the radii overlap: the depth is exact.
+            r.intersects = true;
+            r.distance = 0.0;
+            if (kind == QueryKind::PENETRATION) r.depth = std::fmax(0.0, -d);
+            else if (kind == QueryKind::DISTANCE) r.normal = Vec3{};
+        }
+        return to_world(r, pose_a);
+    }
+    r.intersects = true;
+    r.distance = 0.0;
+    r.point_a = g.point_a;
+    r.point_b = g.point_a;
+    if (kind != QueryKind::PENETRATION) return to_world(r, pose_a);
+
+    // EPA on the cores: for swept shapes the depth of (core_a + ball) - (core_b + ball) is the
+    // core depth plus both radii (the support function gains the radii in every direction),
+    // so spheres and capsules stay exact and EPA only meets curved surfaces on cylinders.
+    const EpaResult e = epa_penetration(core, g.simplex, eopt);
+    return penetration_result(r, e, a, pose_a, b, pose_b, touch);
 }
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();

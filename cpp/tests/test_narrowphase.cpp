@@ -6,7 +6,9 @@
 
 #include "check.hpp"
 #include "fixtures.hpp"
+#include "meshcol/epa.hpp"
 #include "meshcol/gjk.hpp"
+#include "meshcol/hull.hpp"
 #include "meshcol/narrowphase.hpp"
 #include "meshcol/sat.hpp"
 #include "climb.hpp"
@@ -283,4 +285,97 @@ TEST_CASE("shapes: the joint scan of two polytopes is two scans, bit for bit") {
     MinkowskiDifference mixed(fixtures::box(1, 1, 1), at(0, 0, 0), fixtures::polytope(one),
                               at(3, 0, 0), false);
     CHECK(!mixed.scan_both);
+}
+
+namespace {
+
+// Two 64-point ellipsoid hulls (every point on the hull, as the benchmark's smooth family)
+// with their hull adjacency, so that both climb: the deep start's case.
+struct SmoothPair {
+    PackedPolytopes packed;
+    ShapeView a, b;
+
+    SmoothPair() {
+        const int n = 64;
+        std::vector<Vec3> points;
+        for (int s = 0; s < 2; ++s) {
+            const Vec3 axes = s == 0 ? Vec3{1.2, 0.9, 0.75} : Vec3{0.8, 1.1, 1.3};
+            for (int i = 0; i < n; ++i) {
+                // A Fibonacci lattice on the unit sphere, stretched.
+                const double z = 1.0 - (2.0 * i + 1.0) / n;
+                const double r = std::sqrt(1.0 - z * z), t = 2.399963229728653 * i + s;
+                points.push_back({axes.x * r * std::cos(t), axes.y * r * std::sin(t), axes.z * z});
+            }
+        }
+        const std::int64_t offsets[3] = {0, n, 2 * n};
+        packed = pack_polytopes(points.data(), offsets, 2, 1);
+        a = view(0);
+        b = view(1);
+    }
+
+    ShapeView view(int h) const {
+        ShapeView v;
+        v.kind = ShapeKind::POLYTOPE;
+        v.vertices = reinterpret_cast<const Vec3*>(packed.vertices.data()) + packed.offsets[h];
+        v.vertex_count = static_cast<int>(packed.offsets[h + 1] - packed.offsets[h]);
+        v.adjacency_offsets = packed.adjacency_offsets.data() + packed.offsets[h];
+        v.adjacency = packed.adjacency.data();
+        return v;
+    }
+};
+
+}  // namespace
+
+TEST_CASE("epa: the deep start gives the depth that GJK's simplex gives") {
+    const SmoothPair pair;
+    REQUIRE(climbs(pair.a) && climbs(pair.b));
+    int deep = 0;
+    for (int k = 0; k < 24; ++k) {
+        // b turned and moved around a, 0.6 to 1.7 apart: from deep to barely overlapping.
+        const Pose pose_b = fixtures::turned_about_z(0.7 * k, 0.6 + 0.05 * k,
+                                                     0.3 * std::sin(1.3 * k), 0.2 * std::cos(k));
+        MinkowskiDifference md(pair.a, at(0, 0, 0), pair.b, pose_b, false);
+        const SimplexVertex first = md.support(md.translation_b);
+        const EpaResult started = epa_penetration_deep(md, first);
+        MinkowskiDifference plain(pair.a, at(0, 0, 0), pair.b, pose_b, false);
+        const GjkResult g = gjk_run(plain, GjkOptions{});
+        REQUIRE(g.overlap);
+        const EpaResult reference = epa_penetration(plain, g.simplex);
+        REQUIRE(reference.status == Status::CONVERGED);
+        if (started.status == Status::NOT_RUN) continue;
+        ++deep;
+        CHECK(started.status == Status::CONVERGED);
+        // The same face of a - b, found from another polytope: equal to rounding.
+        CHECK_NEAR(started.depth, reference.depth, 1e-14 * reference.depth);
+        CHECK(dot(started.normal, reference.normal) >= 1.0 - 1e-14);
+        CHECK_NEAR(norm(started.point_a - started.point_b), started.depth, 1e-13);
+    }
+    // Most of these pairs are deep enough to start there.
+    CHECK(deep >= 12);
+}
+
+TEST_CASE("epa: the deep start leaves touching and separated pairs to GJK, untouched") {
+    const SmoothPair pair;
+    // The same shapes without adjacency scan: they never try the deep start.
+    ShapeView scan_a = pair.a, scan_b = pair.b;
+    scan_a.adjacency_offsets = scan_b.adjacency_offsets = nullptr;
+    scan_a.adjacency = scan_b.adjacency = nullptr;
+    REQUIRE(scans(scan_a) && scans(scan_b));
+    for (const double x : {1.9, 2.0, 2.2, 3.5}) {
+        const Pose pose_b = fixtures::turned_about_z(0.4, x, 0.1, -0.05);
+        MinkowskiDifference md(pair.a, at(0, 0, 0), pair.b, pose_b, false);
+        const SimplexVertex first = md.support(md.translation_b);
+        CHECK(epa_penetration_deep(md, first).status == Status::NOT_RUN);
+        // After a failed attempt the query goes on as GJK would have: the same answer as
+        // the scanning shapes', bit for bit (the supports have no ties).
+        const PairResult climbed =
+            query_pair(pair.a, at(0, 0, 0), pair.b, pose_b, QueryKind::PENETRATION);
+        const PairResult scanned =
+            query_pair(scan_a, at(0, 0, 0), scan_b, pose_b, QueryKind::PENETRATION);
+        CHECK_EQ(climbed.distance, scanned.distance);
+        CHECK_EQ(climbed.depth, scanned.depth);
+        CHECK_EQ(climbed.iterations, scanned.iterations);
+        CHECK_EQ(climbed.normal.x, scanned.normal.x);
+        CHECK_EQ(climbed.point_a.y, scanned.point_a.y);
+    }
 }

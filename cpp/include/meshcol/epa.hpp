@@ -33,4 +33,12 @@ struct EpaResult {
 EpaResult epa_penetration(MinkowskiDifference& difference, const Simplex& simplex,
                           const EpaOptions& options = {});
 
+/// EPA on a deep pair without GJK: `first` is the support of `difference` along the centre
+/// line (`translation_b`, as GJK's first), past the origin. Starts from supports around the
+/// centre line; status NOT_RUN (and nothing else set) when they do not hold the origin clear
+/// of the contact distance, and the caller then runs GJK and `epa_penetration`. Frame: shape
+/// a's local frame. The iterations count the start's six supports.
+EpaResult epa_penetration_deep(MinkowskiDifference& difference, const SimplexVertex& first,
+                               const EpaOptions& options = {});
+
 }  // namespace meshcol

@@ -95,8 +95,11 @@ GjkResult gjk_distance(const ShapeView& a, const Pose& pose_a, const ShapeView& 
 /// Runs GJK on a prepared Minkowski difference (a's frame): the result's points and normal
 /// stay in a's local frame, and its distance is that of the shapes `difference` describes
 /// (the cores only unless `with_margins`). Used by the narrow phase (`query_pair`), whose
-/// final simplex starts EPA; time of impact calls `gjk_distance`.
-GjkResult gjk_run(MinkowskiDifference& difference, const GjkOptions& options);
+/// final simplex starts EPA; time of impact calls `gjk_distance`. `first`, when given, is
+/// the support along `translation_b` (GJK's first) that the caller already asked
+/// `difference` for, with no support call since.
+GjkResult gjk_run(MinkowskiDifference& difference, const GjkOptions& options,
+                  const SimplexVertex* first = nullptr);
 
 /// Closest point of the simplex to the origin (Ericson 2004, sec. 5.1.2-5.1.6): shrinks
 /// `simplex` to the smallest face holding it and sets its weights. Returns false when the
