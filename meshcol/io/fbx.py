@@ -25,6 +25,7 @@ parse FBX file: ...`` line, a truncated binary file's naming the record it cuts.
 
 from __future__ import annotations
 
+import ctypes
 import gc
 import os
 import struct
@@ -182,6 +183,18 @@ def _extract(
         scene.free()
 
 
+def _kept(element: Any) -> Any:
+    """``element``, a ufbx element object (or None), with the reference ufbx 0.0.5 does not
+    add: its bindings hand out an element's cached object without a new reference, so each
+    access leaves the object a reference short; once the caller drops it, the cache (which
+    the scene's context releases when freed) holds freed memory, and the Python heap is
+    corrupted at random (workers segfaulted in ``scene.free()``). One reference added per
+    access keeps the count right."""
+    if element is not None:
+        ctypes.pythonapi.Py_IncRef(ctypes.py_object(element))
+    return element
+
+
 def _mesh_nodes(scene: Any) -> tuple[list[tuple[str, np.ndarray, int]], dict[int, tuple]]:
     """``(name, geometry-to-world matrix, mesh key)`` of every node with a mesh, and per mesh
     key its vertices, polygons ``(begin, count)`` and polygon-vertex indices, copied out."""
@@ -189,8 +202,8 @@ def _mesh_nodes(scene: Any) -> tuple[list[tuple[str, np.ndarray, int]], dict[int
     geometry: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
     total = 0
     # one pass over the nodes only: iterating ufbx's mesh list as well crashes ufbx 0.0.5
-    for k, node in enumerate(scene.nodes):
-        mesh = node.mesh
+    for k, node in enumerate(map(_kept, scene.nodes)):
+        mesh = _kept(node.mesh)
         if mesh is None or mesh.num_faces == 0:
             continue
         key = int(mesh.element_id)
