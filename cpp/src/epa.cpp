@@ -494,7 +494,6 @@ EpaResult epa_penetration_deep(MinkowskiDifference& md, const SimplexVertex& fir
     start_tetrahedron(poly, start);
     for (int f = 0; f < 4; ++f)
         if (!(poly.distance[f] > tol * tol) || !std::isfinite(poly.distance[f])) return res;
-    if (held < 0) return res;
     // The rest of the ring, where it lies outside: each one from the face it sees most.
     for (int q = 2; q < 4; ++q) {
         const SimplexVertex& w = ring[(held + q) % 4];

@@ -441,6 +441,15 @@ long long points_to_reserve(const std::int64_t* offsets, long long first, long l
     return std::min<long long>(offsets[last] - offsets[first], room);
 }
 
+// The running sums of `counts` after offsets' last one (offsets holds at least its 0).
+void append_offsets(const std::vector<std::int64_t>& counts, std::vector<std::int64_t>& offsets) {
+    const size_t first = offsets.size();
+    offsets.resize(first + counts.size());
+    std::int64_t* o = offsets.data() + first;
+    std::int64_t sum = o[-1];
+    for (size_t k = 0; k < counts.size(); ++k) o[k] = sum += counts[k];
+}
+
 // The result of many chunks, filled in chunk order as they finish: a chunk's arrays are
 // copied in while they are still in the cache, and its buffers then pack the next chunk, so
 // the packing touches fresh memory once, for the result. (Packing every chunk into arrays of
@@ -484,16 +493,6 @@ public:
     }
 
 private:
-    // The running sums of `counts` after offsets' last one.
-    static void append_offsets(const std::vector<std::int64_t>& counts,
-                               std::vector<std::int64_t>& offsets) {
-        const size_t first = offsets.size();
-        offsets.resize(first + counts.size());
-        std::int64_t* o = offsets.data() + first;
-        std::int64_t sum = o[-1];
-        for (size_t k = 0; k < counts.size(); ++k) o[k] = sum += counts[k];
-    }
-
     std::unique_ptr<ChunkPack> take_spare() {
         if (spare_.empty()) return std::make_unique<ChunkPack>();
         std::unique_ptr<ChunkPack> pack = std::move(spare_.back());
@@ -548,20 +547,14 @@ PackedPolytopes pack_polytopes(const Vec3* points, const std::int64_t* offsets, 
             pack.reserve(shapes, points_to_reserve(offsets, 0, shapes));
             Packer(points, offsets).pack(0, shapes, pack);
         }
-        out.offsets.resize(hs + 1);
-        out.face_offsets.resize(hs + 1);
-        out.edge_offsets.resize(hs + 1);
-        out.offsets[0] = out.face_offsets[0] = out.edge_offsets[0] = 0;
-        for (size_t h = 0; h < hs; ++h) {
-            out.offsets[h + 1] = out.offsets[h] + pack.vertex_counts[h];
-            out.face_offsets[h + 1] = out.face_offsets[h] + pack.face_counts[h];
-            out.edge_offsets[h + 1] = out.edge_offsets[h] + pack.edge_counts[h];
-        }
-        const size_t v = pack.adjacency_counts.size();
-        out.adjacency_offsets.resize(v + 1);
-        out.adjacency_offsets[0] = 0;
-        for (size_t i = 0; i < v; ++i)
-            out.adjacency_offsets[i + 1] = out.adjacency_offsets[i] + pack.adjacency_counts[i];
+        out.offsets.assign(1, 0);
+        out.face_offsets.assign(1, 0);
+        out.edge_offsets.assign(1, 0);
+        out.adjacency_offsets.assign(1, 0);
+        append_offsets(pack.vertex_counts, out.offsets);
+        append_offsets(pack.face_counts, out.face_offsets);
+        append_offsets(pack.edge_counts, out.edge_offsets);
+        append_offsets(pack.adjacency_counts, out.adjacency_offsets);
         out.status = std::move(pack.status);
         out.vertices = std::move(pack.vertices);
         out.adjacency = std::move(pack.adjacency);

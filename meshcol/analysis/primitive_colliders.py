@@ -22,25 +22,13 @@ from meshcol.io.scene_primitives import PrimitiveBodies
 from meshcol.io.scene_schema import PRIMITIVE_TYPES
 from meshcol.types import Body
 
-__all__ = ["PrimitiveColliders", "primitive_colliders", "primitive_params"]
+__all__ = ["primitive_colliders", "primitive_params"]
 
 #: The core's shape kind of each manifest primitive type (index of :data:`PRIMITIVE_TYPES`).
 _SHAPE_KINDS = np.array(
     [ShapeKind[name.upper()] for name in PRIMITIVE_TYPES], dtype=np.int8
 ).reshape(len(PRIMITIVE_TYPES))
 _BOX = PRIMITIVE_TYPES.index("box")
-
-
-class PrimitiveColliders(Colliders):
-    """:class:`Colliders` of :class:`PrimitiveBodies`: each body one part at its pose."""
-
-    def part_poses(self, end: bool = False) -> np.ndarray:
-        """Every part's world pose: its body's (none moves, so the end pose is the start), a
-        read-only view of the bodies' poses (128 MB at 1,000,000 bodies, not copied)."""
-        assert isinstance(self.bodies, PrimitiveBodies)
-        poses = self.bodies.poses.view()
-        poses.flags.writeable = False
-        return poses
 
 
 def primitive_params(types: np.ndarray, lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -69,7 +57,7 @@ def primitive_colliders(bodies: Sequence[Body]) -> Colliders | None:
     n = len(bodies)
     shapes = ConvexSet.from_primitives(*primitive_params(bodies.kinds, bodies.lengths))
     every = np.arange(n, dtype=np.int64)
-    return PrimitiveColliders(
+    return Colliders(
         bodies,
         ("primitive",) * n,
         shapes,

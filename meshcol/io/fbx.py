@@ -156,7 +156,8 @@ def read_fbx(file: Path, source: str) -> list[MeshNode]:
 def _with_scene(file: Path, source: str, extract: Callable[[Any], Any], **options: Any) -> Any:
     """``extract(scene)`` of the file's ufbx scene, with Python's garbage collector off from
     the load until the scene is freed and every ufbx object is gone: ufbx 0.0.5's objects
-    crash the collector while their scene lives (and after it is freed). ``extract`` returns
+    crashed the collector while their scene lived (most likely the missing references that
+    :func:`_kept` now adds; kept off as a second guard). ``extract`` returns
     plain data; an :class:`InvalidMeshError` it raises is raised again out here, so that no
     traceback keeps a ufbx object alive."""
     enabled = gc.isenabled()

@@ -414,19 +414,15 @@ def mesh_bodies(
     n = len(found.names)
     if not n or found.primitive.any() or not isinstance(files, MeshFiles) or None in found.meshes:
         return None
-    folder = os.path.dirname(source)
-    meshes = manifest_meshes(found)
-    objects = files.packed_positions(joined_paths(folder, meshes, normalise=True))
+    paths, keys, slot = _mesh_slots(found, source)
+    objects = files.packed_positions(keys)
     if objects is None or files.packed is None or len(set(found.names)) != n:
         return None
-    slot: dict[str | None, int] = dict(zip(meshes, range(len(meshes))))
     mesh = np.fromiter(map(slot.__getitem__, found.meshes), dtype=np.int64, count=n)
     # the reach of the world check, as _plain_objects gives it for a packed file
-    reaches = files.packed.largest()[objects] * math.sqrt(3.0)
-    common, poses = _common(found, reaches[mesh])
+    common, poses = _common(found, (files.packed.largest()[objects] * _REACH)[mesh])
     if not common.all():
         return None
-    paths = joined_paths(folder, meshes)
     return MeshBodies(found.names, paths, mesh, objects, files.packed, poses, found.shapes)
 
 
@@ -491,15 +487,26 @@ def _plain_objects(
     reach of the world check, sqrt(3) max |v| (inf for the others); one more reach, inf, for
     no mesh; and each name's place among them (None's is the last). Per file, but in one
     numpy pass for all (:func:`meshcol.io.mesh_read.lone_objects`)."""
+    paths, keys, slot = _mesh_slots(found, source)
+    lone, largest, arrays = lone_objects(files, keys)
+    reaches = np.full(len(keys) + 1, math.inf)
+    reaches[:-1][lone] = largest[lone] * _REACH
+    return paths, arrays, reaches, slot
+
+
+#: A bound of |v| over a file's vertices turned by any rotation, from their largest |coordinate|.
+_REACH = math.sqrt(3.0)
+
+
+def _mesh_slots(found: Columns, source: str) -> tuple[list[str], list[str], dict[str | None, int]]:
+    """Of each mesh name, in order of first use: its path as the body loop joins it (a body's
+    ``source``) and as its file is keyed (normalised); and each name's place among them
+    (None's, for no mesh, after them)."""
     folder = os.path.dirname(source)
     meshes = manifest_meshes(found)
-    paths = joined_paths(folder, meshes)
-    lone, largest, arrays = lone_objects(files, joined_paths(folder, meshes, normalise=True))
-    reaches = np.full(len(meshes) + 1, math.inf)
-    reaches[:-1][lone] = largest[lone] * math.sqrt(3.0)
     slot: dict[str | None, int] = dict(zip(meshes, range(len(meshes))))
     slot[None] = len(meshes)
-    return paths, arrays, reaches, slot
+    return joined_paths(folder, meshes), joined_paths(folder, meshes, normalise=True), slot
 
 
 def _poses(found: Columns, position: np.ndarray, common: np.ndarray) -> np.ndarray:
