@@ -252,13 +252,8 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
     std::vector<BuildTask> stack{{0, n, -1, true, root}};
     // Each triangle's bin along each axis, written by its node's binning and read by the split.
     std::vector<std::uint8_t> bin_index(3 * static_cast<size_t>(n));
-    // Two sets of bins: a node of many triangles bins them alternately into each and merges
-    // the two, since neighbouring triangles often share a bin and growing one bin's box
-    // triangle after triangle makes a chain of loads and stores. A box is the same union
-    // either way (only the sign of a zero coordinate may differ, which no cost can tell).
-    constexpr std::int32_t kTwoSets = 64;  // fewer triangles: one set (less to clear)
-    Box bin_box[2][3][kBins];
-    std::int32_t bin_count[2][3][kBins];
+    Box bin_box[3][kBins];
+    std::int32_t bin_count[3][kBins];
     int used[kBins];  // the non-empty bins of one axis, in order
     double right_area[kBins];
     std::int32_t right_count[kBins];
@@ -289,59 +284,47 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         // the one a sweep over every bin chooses.
         double lo[3], extent[3];
         bool binned[3];
-        const int sets = count >= kTwoSets ? 2 : 1;
         for (int axis = 0; axis < 3; ++axis) {
             lo[axis] = task.bounds.centroids.lower[axis];
             extent[axis] = task.bounds.centroids.upper[axis] - lo[axis];
             binned[axis] = extent[axis] > 0.0;
             if (!binned[axis]) continue;
-            for (int set = 0; set < sets; ++set)
-                for (int b = 0; b < kBins; ++b) {
-                    bin_box[set][axis][b] = Box{};
-                    bin_count[set][axis][b] = 0;
-                }
+            for (int b = 0; b < kBins; ++b) {
+                bin_box[axis][b] = Box{};
+                bin_count[axis][b] = 0;
+            }
         }
         for (std::int32_t i = task.begin; i < task.end; ++i) {
             const std::int32_t f = order[static_cast<size_t>(i)];
             const TriangleBounds& t = triangles[static_cast<size_t>(f)];
-            const int set = (i - task.begin) & (sets - 1);
             for (int axis = 0; axis < 3; ++axis) {
                 if (!binned[axis]) continue;
                 const int b = bin_of(t.centroid[axis], lo[axis], extent[axis]);
                 bin_index[3 * static_cast<size_t>(f) + static_cast<size_t>(axis)] = static_cast<std::uint8_t>(b);
-                bin_box[set][axis][b].grow(t.box);
-                ++bin_count[set][axis][b];
+                bin_box[axis][b].grow(t.box);
+                ++bin_count[axis][b];
             }
         }
         double best_cost = kInf;
         int best_axis = -1, best_bin = -1;
         for (int axis = 0; axis < 3; ++axis) {
             if (!binned[axis]) continue;
-            Box* box = bin_box[0][axis];
-            std::int32_t* bin_n = bin_count[0][axis];
-            if (sets == 2)
-                for (int b = 0; b < kBins; ++b) {
-                    box[b].grow(bin_box[1][axis][b]);
-                    bin_n[b] += bin_count[1][axis][b];
-                }
             int m = 0;
-            for (int b = 0; b < kBins; ++b) {
-                used[m] = b;  // kept when the bin is not empty
-                m += bin_n[b] > 0 ? 1 : 0;
-            }
+            for (int b = 0; b < kBins; ++b)
+                if (bin_count[axis][b] > 0) used[m++] = b;
             Box right;
             std::int32_t right_n = 0;
             for (int k = m - 1; k > 0; --k) {
-                right.grow(box[used[k]]);
-                right_n += bin_n[used[k]];
+                right.grow(bin_box[axis][used[k]]);
+                right_n += bin_count[axis][used[k]];
                 right_area[k] = right.half_area();
                 right_count[k] = right_n;
             }
             Box left;
             std::int32_t left_n = 0;
             for (int k = 0; k + 1 < m; ++k) {
-                left.grow(box[used[k]]);
-                left_n += bin_n[used[k]];
+                left.grow(bin_box[axis][used[k]]);
+                left_n += bin_count[axis][used[k]];
                 const double cost = left_n * left.half_area() + right_count[k + 1] * right_area[k + 1];
                 if (cost < best_cost) {
                     best_cost = cost;
