@@ -585,6 +585,7 @@ void MeshBvh::build_obbs() {
             }
         const Vec3 half = (high * 0.5 - low * 0.5) + Vec3{pad, pad, pad};
         if (half.x * half.y * half.z < box.half.x * box.half.y * box.half.z) {
+            box.axis_aligned = false;
             box.axes = axes;
             box.center = axes.transpose_times(low * 0.5 + high * 0.5);
             box.half = half;
@@ -667,6 +668,12 @@ bool MeshBvh::validate() const {
         const WindingNode& w = winding_nodes_[id];
         if (!(w.radius >= 0.0) || !(w.area >= 0.0) || !(norm(w.dipole) <= w.area * (1.0 + 1e-12) + 1e-300)) return false;
         const NodeObb& box = obbs_[id];
+        // The pair tests skip the products with an axis-aligned box's axes: they must be the
+        // identity, exactly.
+        if (box.axis_aligned)
+            for (int i = 0; i < 3; ++i)
+                for (int k = 0; k < 3; ++k)
+                    if (box.axes.m[i][k] != (i == k ? 1.0 : 0.0)) return false;
         const auto [begin, end] = triangle_range(static_cast<std::int32_t>(id));
         for (std::int32_t t = begin; t < end; ++t)
             for (int c = 0; c < 3; ++c) {

@@ -83,11 +83,16 @@ private:
     std::uint32_t generation_ = 0;
 };
 
+//
+// A box whose axes are the identity (NodeObb::axis_aligned) skips its products with them, as
+// mesh_intersection.cpp's obb_overlap does: the same values up to the sign of a zero, and
+// every one is used through its absolute value, so the bound is the same bit for bit.
 inline double obb_squared_distance(const NodeObb& a, const NodeObb& b, const MappedObb& mapped, const Relative& rel,
                                    double enough2) {
     const Vec3 d = mapped.center - a.center;  // a's local frame
-    const Vec3 t = a.axes * d;                      // a's box frame
-    const Vec3 tb = b.axes * rel.rotation.transpose_times(d);  // b's box frame
+    const Vec3 t = a.axis_aligned ? d : a.axes * d;  // a's box frame
+    const Vec3 d_in_b = rel.rotation.transpose_times(d);
+    const Vec3 tb = b.axis_aligned ? d_in_b : b.axes * d_in_b;  // b's box frame
     double best = 0.0;
     const double length2 = dot(d, d);
     if (length2 > 0.0) {
@@ -97,10 +102,14 @@ inline double obb_squared_distance(const NodeObb& a, const NodeObb& b, const Map
         best = max2(0.0, length - reach / length - rel.slack);
         if (best > 0.0 && best * best >= enough2) return best * best;
     }
-    double abs_c[3][3];  // |a_i . b_j|, both axes in a's local frame
-    for (int j = 0; j < 3; ++j) {
-        const Vec3& bj = mapped.axes[j];
-        for (int i = 0; i < 3; ++i) abs_c[i][j] = std::fabs(dot(a.axes.row(i), bj));
+    double product[3][3];  // |a_i . b_j|, both axes in a's local frame
+    const double(*abs_c)[3] = rel.abs_rotation.m;
+    if (!a.axis_aligned || !b.axis_aligned) {
+        for (int j = 0; j < 3; ++j) {
+            const Vec3& bj = mapped.axes[j];
+            for (int i = 0; i < 3; ++i) product[i][j] = std::fabs(a.axis_aligned ? bj[i] : dot(a.axes.row(i), bj));
+        }
+        abs_c = product;
     }
     // In a's box frame, b's box lies in the axis-aligned box of half extents
     // sum_j |a_i . b_j| b.half_j about t: the distance between that box and a's box bounds the

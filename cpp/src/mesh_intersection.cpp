@@ -39,11 +39,18 @@ struct CentreLineDepth {
 
 // With `overlap` set, writes the boxes' CentreLineDepth (zero for coincident centres); the
 // ordered descent of mesh_intersects reads it.
+//
+// A box whose axes are the identity (NodeObb::axis_aligned, most boxes near the root) skips its
+// products with them: the same values up to the sign of a zero, which every use below takes
+// the absolute value of, multiplies into a term whose absolute value is taken, or compares
+// with zero, so every decision is the same. Two such boxes read a_i . b_j and its absolute
+// value from rel.rotation and rel.abs_rotation.
 inline bool obb_overlap(const NodeObb& a, const NodeObb& b, const Relative& rel, CentreLineDepth* overlap = nullptr) {
     const Vec3 d = rel.apply(b.center) - a.center;  // a's local frame
-    const Vec3 t = a.axes * d;                      // a's box frame
+    const Vec3 t = a.axis_aligned ? d : a.axes * d;  // a's box frame
     const double length2 = dot(d, d);
-    const Vec3 tb = b.axes * rel.rotation.transpose_times(d);  // b's box frame
+    const Vec3 d_in_b = rel.rotation.transpose_times(d);
+    const Vec3 tb = b.axis_aligned ? d_in_b : b.axes * d_in_b;  // b's box frame
     if (length2 > 0.0) {
         const double reach = std::fabs(t.x) * a.half.x + std::fabs(t.y) * a.half.y + std::fabs(t.z) * a.half.z +
                              std::fabs(tb.x) * b.half.x + std::fabs(tb.y) * b.half.y + std::fabs(tb.z) * b.half.z;
@@ -51,13 +58,20 @@ inline bool obb_overlap(const NodeObb& a, const NodeObb& b, const Relative& rel,
         if (excess > 0.0 && excess * excess > rel.slack * rel.slack * length2) return false;
         if (overlap != nullptr) *overlap = CentreLineDepth{reach, length2};
     }
-    double c[3][3], abs_c[3][3];  // a_i . b_j and its absolute value, both axes in a's local frame
-    for (int j = 0; j < 3; ++j) {
-        const Vec3 bj = rel.rotation * b.axes.row(j);
-        for (int i = 0; i < 3; ++i) {
-            c[i][j] = dot(a.axes.row(i), bj);
-            abs_c[i][j] = std::fabs(c[i][j]);
+    // a_i . b_j and its absolute value, both axes in a's local frame
+    double product[3][3], abs_product[3][3];
+    const double(*c)[3] = rel.rotation.m;
+    const double(*abs_c)[3] = rel.abs_rotation.m;
+    if (!a.axis_aligned || !b.axis_aligned) {
+        for (int j = 0; j < 3; ++j) {
+            const Vec3 bj = b.axis_aligned ? rel.rotation.column(j) : rel.rotation * b.axes.row(j);
+            for (int i = 0; i < 3; ++i) {
+                product[i][j] = a.axis_aligned ? bj[i] : dot(a.axes.row(i), bj);
+                abs_product[i][j] = std::fabs(product[i][j]);
+            }
         }
+        c = product;
+        abs_c = abs_product;
     }
     for (int i = 0; i < 3; ++i)
         if (std::fabs(t[i]) - a.half[i] - (abs_c[i][0] * b.half.x + abs_c[i][1] * b.half.y + abs_c[i][2] * b.half.z) -

@@ -2,6 +2,8 @@
 // epa.hpp, sat.hpp, narrowphase.hpp), on pairs whose answers are known in closed form.
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <random>
 #include <vector>
 
 #include "check.hpp"
@@ -378,4 +380,66 @@ TEST_CASE("epa: the deep start leaves touching and separated pairs to GJK, untou
         CHECK_EQ(climbed.normal.x, scanned.normal.x);
         CHECK_EQ(climbed.point_a.y, scanned.point_a.y);
     }
+}
+
+// The plain definition is_rigid_matrix4 shortens (every entry finite, every entry of R R^T):
+// the same verdict on rigid poses, on poses perturbed about the tolerance, and with an
+// infinity, a NaN or an odd value in any entry.
+namespace {
+bool rigid_by_definition(const double* m, double tolerance) {
+    for (int i = 0; i < 16; ++i)
+        if (!std::isfinite(m[i])) return false;
+    if (std::fabs(m[12]) > tolerance || std::fabs(m[13]) > tolerance || std::fabs(m[14]) > tolerance ||
+        std::fabs(m[15] - 1.0) > tolerance)
+        return false;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            double d = 0.0;
+            for (int k = 0; k < 3; ++k) d += m[i * 4 + k] * m[j * 4 + k];
+            if (std::fabs(d - (i == j ? 1.0 : 0.0)) > tolerance) return false;
+        }
+    const Vec3 r0{m[0], m[1], m[2]}, r1{m[4], m[5], m[6]}, r2{m[8], m[9], m[10]};
+    return dot(cross(r0, r1), r2) > 0.0;
+}
+}  // namespace
+
+TEST_CASE("is_rigid_matrix4: the plain definition's verdict, rigid, perturbed and broken") {
+    const double tolerance = defaults::rigid_tolerance;
+    const double inf = std::numeric_limits<double>::infinity();
+    const double specials[] = {0.0, -0.0, 1.0, -1.0, tolerance, -tolerance, 1.0 + 0.5 * tolerance,
+                               1.0 - 2.0 * tolerance, 1e300, -1e300, inf, -inf,
+                               std::numeric_limits<double>::quiet_NaN(), 1e-300};
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    std::normal_distribution<double> normal;
+    int rigid = 0, not_rigid = 0;
+    for (int n = 0; n < 200000; ++n) {
+        // a random rotation (unit quaternion) and translation
+        double q[4], length = 0.0;
+        for (double& x : q) length += (x = normal(rng)) * x;
+        length = std::sqrt(length);
+        for (double& x : q) x /= length;
+        const double w = q[0], x = q[1], y = q[2], z = q[3];
+        double m[16] = {1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y), 3.0 * unit(rng),
+                        2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x), 3.0 * unit(rng),
+                        2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y), 3.0 * unit(rng),
+                        0.0, 0.0, 0.0, 1.0};
+        switch (n % 6) {
+            case 0: break;
+            case 1: m[rng() % 16] += 2.0 * tolerance * unit(rng); break;
+            case 2: for (double& v : m) v += tolerance * unit(rng); break;
+            case 3: m[rng() % 16] = specials[rng() % std::size(specials)]; break;
+            case 4:
+                for (double& v : m)
+                    if (rng() % 5 == 0) v = specials[rng() % std::size(specials)];
+                break;
+            default:  // a reflection
+                for (int k = 0; k < 3; ++k) m[4 + k] = -m[4 + k];
+        }
+        const bool expected = rigid_by_definition(m, tolerance);
+        CHECK_EQ(is_rigid_matrix4(m, tolerance), expected);
+        (expected ? rigid : not_rigid) += 1;
+    }
+    CHECK(rigid > 50000);
+    CHECK(not_rigid > 50000);
 }

@@ -49,6 +49,9 @@ struct NodeObb {
     Mat3 axes;    ///< rows: orthonormal axes, local frame
     Vec3 center;  ///< local frame
     Vec3 half;    ///< half extents along the rows of axes, padded outwards for rounding
+    /// The axis-aligned box was kept: axes is the identity, exactly, and the pair tests skip
+    /// their products with it (most nodes near the root: their normals cancel).
+    bool axis_aligned = true;
 };
 
 /// A capsule holding one triangle: the segment of its longest edge (corners `edge` and

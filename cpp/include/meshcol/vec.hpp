@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <initializer_list>
 
 namespace meshcol {
 
@@ -123,15 +124,19 @@ struct Pose {
 };
 
 /// True when a row-major 4x4 matrix is finite, has last row (0, 0, 0, 1), and an orthonormal
-/// rotation block with determinant +1, each within `tolerance`.
+/// rotation block with determinant +1, each within `tolerance` (finite, >= 0).
+/// The rotation block is not tested for finiteness on its own: an infinite entry makes its
+/// row's squared length infinite, and a NaN makes the determinant NaN, so either fails below.
+/// R R^T is symmetric (its (i, j) and (j, i) entries are the same products), so its upper half
+/// is tested.
 inline bool is_rigid_matrix4(const double* m, double tolerance) {
-    for (int i = 0; i < 16; ++i)
+    for (int i : {3, 7, 11, 12, 13, 14, 15})
         if (!std::isfinite(m[i])) return false;
     if (std::fabs(m[12]) > tolerance || std::fabs(m[13]) > tolerance ||
         std::fabs(m[14]) > tolerance || std::fabs(m[15] - 1.0) > tolerance)
         return false;
     for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) {
+        for (int j = i; j < 3; ++j) {
             double d = 0.0;
             for (int k = 0; k < 3; ++k) d += m[i * 4 + k] * m[j * 4 + k];
             if (std::fabs(d - (i == j ? 1.0 : 0.0)) > tolerance) return false;
