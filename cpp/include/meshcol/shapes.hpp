@@ -67,6 +67,13 @@ bool climbs(const ShapeView& shape);
 /// that does not climb.
 bool scans(const ShapeView& shape);
 
+/// Reads the vertices of a polytope that `climbs` in order, about one load a cache line, and
+/// does nothing for other shapes: the batches do it for a shape's first pair, when no check
+/// of the shape has just read it (the hardware prefetcher follows the loads in order; the
+/// climbs' scattered reads then find the vertices in cache, which `prefetch` instructions of
+/// the same lines did not bring about as well). No effect on any result.
+void read_vertices(const ShapeView& shape);
+
 /// Asks the memory system for the data hill climbing reads (the vertices and hull adjacency of
 /// a polytope that `climbs`, when it has at most `defaults::prefetch_max_vertices` vertices)
 /// ahead of a query: no effect on any result, only on how long the climbs wait.
