@@ -6,7 +6,9 @@
 // Run: ./driver CASE_DIR KIND(0 distance, 1 penetration) REPEAT [RESULTS_FILE]
 //   valgrind --tool=callgrind ./driver cases/64_penetrating 1 1
 // It prints the best CPU time of REPEAT runs a pair and checksums of the results (equal
-// checksums: the same answers), and writes the raw results when asked.
+// checksums: the same answers), and writes the raw results when asked. The runs share the
+// set's checked radii, as the extension's batches on one set do (a core without
+// `ShapeRadii`: build with -DNO_SHAPE_RADII).
 // narrowphase_identity.py compares two checkouts' raw results on every case, byte for byte.
 #include <cstdio>
 #include <cstdlib>
@@ -55,9 +57,16 @@ int main(int argc, char** argv) {
     out.point_b = pb.data(); out.iterations = its.data(); out.status = st.data();
     if (kind == 1) out.depth = depth.data();
     double best = 1e300;
+#ifndef NO_SHAPE_RADII
+    ShapeRadii radii(s.shape_count);
+#endif
     for (int r = 0; r < reps; ++r) {
         std::clock_t t0 = std::clock();
+#ifdef NO_SHAPE_RADII
         run_batch(s, poses.data(), pairs.data(), p, static_cast<QueryKind>(kind), 1, out);
+#else
+        run_batch(s, poses.data(), pairs.data(), p, static_cast<QueryKind>(kind), 1, out, &radii);
+#endif
         double t = double(std::clock() - t0) / CLOCKS_PER_SEC;
         if (t < best) best = t;
     }

@@ -25,6 +25,9 @@ def build(checkout: Path, out: Path) -> Path:
     """The driver compiled against ``checkout``'s core (the flags of its header comment)."""
     sources = sorted(str(p) for p in (checkout / "cpp" / "src").glob("*.cpp"))
     cmd = ["g++", "-std=c++17", "-O3", f"-I{checkout / 'cpp' / 'include'}", str(DRIVER)]
+    header = checkout / "cpp" / "include" / "meshcol" / "narrowphase.hpp"
+    if "class ShapeRadii" not in header.read_text():
+        cmd.append("-DNO_SHAPE_RADII")  # a core from before the radii kept between batches
     subprocess.run([*cmd, *sources, "-lpthread", "-o", str(out)], check=True)
     return out
 

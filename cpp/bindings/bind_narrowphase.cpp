@@ -70,7 +70,7 @@ QueryArrays query(const PackedConvexSet& set, int kind, std::optional<Poses> pos
     }
     {
         nb::gil_scoped_release release;
-        meshcol::run_batch(set.view(), pose_data, pairs.data(), p, q, threads, out);
+        meshcol::run_batch(set.view(), pose_data, pairs.data(), p, q, threads, out, &set.radii());
     }
     auto held = [](auto& a) { return a ? std::optional(a->cast()) : std::nullopt; };
     return QueryArrays{held(distance), held(depth),      held(normal),  held(point_a),

@@ -26,7 +26,8 @@ class PackedConvexSet {
         : vertices_(vertices), offsets_(offsets), kinds_(kinds), params_(params),
           adjacency_offsets_(adjacency_offsets), adjacency_(adjacency),
           face_offsets_(face_offsets), face_normals_(face_normals), edge_offsets_(edge_offsets),
-          edge_directions_(edge_directions) {
+          edge_directions_(edge_directions),
+          radii_(static_cast<std::int64_t>(kinds.shape(0))) {
         const std::int64_t v = static_cast<std::int64_t>(vertices.shape(0));
         const std::int64_t h = static_cast<std::int64_t>(kinds.shape(0));
         if (static_cast<std::int64_t>(offsets.shape(0)) != h + 1)
@@ -86,6 +87,9 @@ class PackedConvexSet {
 
     std::int64_t size() const { return view_.shape_count; }
     const ConvexSetView& view() const { return view_; }
+    /// The shapes' checked radii, kept from the first batch that uses each shape for the
+    /// batches after it (the arrays are read-only in Python, so the shapes never change).
+    ShapeRadii& radii() const { return radii_; }
 
     /// The pose data, after checking there is one (4, 4) pose per shape (null: identity).
     const double* check_poses(const std::optional<Poses>& poses, const char* name = "poses") const {
@@ -118,6 +122,7 @@ class PackedConvexSet {
     std::optional<Points> face_normals_;
     std::optional<Index64> edge_offsets_;
     std::optional<Points> edge_directions_;
+    mutable ShapeRadii radii_;
     ConvexSetView view_;
 };
 

@@ -199,7 +199,14 @@ Vec3 closest_triangle(const Vec3* w, int i, int j, int k, Feature& f) {
 bool closest_tetrahedron(const Vec3* w, Feature& f, Vec3& closest) {
     const Vec3 a = w[0], b = w[1], c = w[2], d = w[3];
     const double volume = dot(d - a, cross(b - a, c - a));
-    const double size = std::fmax(std::fmax(max_abs(b - a), max_abs(c - a)), max_abs(d - a));
+    // The largest coordinate of the three edges from a, by plain compares: std::fmax (a libm
+    // call here, which also spills the caller's registers) gives the same number on finite
+    // points, all these are >= +0, and a NaN makes `volume` NaN and `flat` false either way.
+    const auto larger = [](double x, double y) { return x > y ? x : y; };
+    const auto largest_abs = [&larger](const Vec3& v) {
+        return larger(std::fabs(v.x), larger(std::fabs(v.y), std::fabs(v.z)));
+    };
+    const double size = larger(larger(largest_abs(b - a), largest_abs(c - a)), largest_abs(d - a));
     const bool flat =
         std::fabs(volume) <= defaults::gjk_flat_tetrahedron_volume * size * size * size;
     static constexpr int kFaces[4][4] = {{0, 1, 2, 3}, {0, 2, 3, 1}, {0, 3, 1, 2}, {1, 3, 2, 0}};

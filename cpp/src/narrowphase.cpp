@@ -3,6 +3,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "meshcol/batch.hpp"
@@ -209,8 +210,15 @@ PairResult query_pair(const ShapeView& a, const Pose& pose_a, const ShapeView& b
     return r;
 }
 
+ShapeRadii::ShapeRadii(std::int64_t shape_count)
+    : radius_(new std::atomic<double>[static_cast<size_t>(shape_count)]) {
+    for (std::int64_t h = 0; h < shape_count; ++h)
+        radius_[h].store(kUnchecked, std::memory_order_relaxed);
+}
+
 void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t* pairs,
-               long long pair_count, QueryKind kind, int threads, const BatchOutput& out) {
+               long long pair_count, QueryKind kind, int threads, const BatchOutput& out,
+               ShapeRadii* radii) {
     const std::int64_t h_count = set.shape_count;
     // Each shape and pose a pair uses is checked once, not once per pair, on every thread;
     // a shape no pair uses is not read at all (a big set queried for a few pairs pays for
@@ -218,44 +226,49 @@ void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t
     // vertices (validity and bounding radius, one pass) by the first pair that uses it, just
     // before its query reads them again: in broad-phase output most shapes are in only a few
     // pairs, and a separate pass over them all would bring each shape from memory twice.
+    // The set's owner keeps the radii between batches (`radii`); else they last this batch.
     std::vector<char> ok(static_cast<size_t>(h_count), 0);
     for (long long i = 0; i < 2 * pair_count; ++i) ok[pairs[i]] = 1;
+    // Shapes a pair of this batch has met (`read_vertices` on the first; a thread that meets
+    // one at the same moment as another reads it twice, harmlessly).
+    std::unique_ptr<std::atomic<char>[]> met(new std::atomic<char>[static_cast<size_t>(h_count)]);
+    for (std::int64_t h = 0; h < h_count; ++h) met[h].store(0, std::memory_order_relaxed);
+    const auto first_meeting = [&](std::int64_t h) {
+        if (met[h].load(std::memory_order_relaxed) != 0) return false;
+        met[h].store(1, std::memory_order_relaxed);
+        return true;
+    };
     std::vector<Pose> pose(static_cast<size_t>(h_count));
-    // kUnchecked until the first pair's thread computes it (threads that meet the shape at
-    // the same moment both compute it, the same value: relaxed atomics suffice).
-    constexpr double kUnchecked = -1.0;
-    std::vector<std::atomic<double>> radius(static_cast<size_t>(h_count));
+    std::unique_ptr<ShapeRadii> batch_radii;
+    if (radii == nullptr) {
+        batch_radii = std::make_unique<ShapeRadii>(h_count);
+        radii = batch_radii.get();
+    }
     const int shape_threads = resolve_threads(threads, h_count, defaults::min_shapes_per_thread);
     parallel_for(h_count, shape_threads, [&](long long begin, long long end) {
         for (long long h = begin; h < end; ++h) {
-            radius[h].store(kUnchecked, std::memory_order_relaxed);
             if (!ok[h] || poses == nullptr) continue;
             const double* m = poses + 16 * h;
             if (!is_rigid_matrix4(m, defaults::rigid_tolerance)) ok[h] = 0;
             else pose[h] = Pose::from_matrix4(m);
         }
     });
-    const auto checked_radius = [&](std::int64_t h) {
-        double r = radius[h].load(std::memory_order_relaxed);
-        if (r == kUnchecked) {
-            r = valid_bounding_radius(set.shape(h));
-            radius[h].store(r, std::memory_order_relaxed);
-        }
-        return r;
-    };
     const int n_threads = resolve_threads(threads, pair_count, defaults::min_pairs_per_thread);
     parallel_for(pair_count, n_threads, [&](long long begin, long long end) {
         for (long long i = begin; i < end; ++i) {
             const std::int64_t ia = pairs[2 * i], ib = pairs[2 * i + 1];
             PairResult r;
-            const double ra = ok[ia] ? checked_radius(ia) : kNaN;
-            const double rb = ok[ib] ? checked_radius(ib) : kNaN;
+            const double ra = ok[ia] ? radii->get(set, ia) : kNaN;
+            const double rb = ok[ib] ? radii->get(set, ib) : kNaN;
             if (std::isnan(ra) || std::isnan(rb)) {
                 r.status = Status::INVALID_INPUT;
                 r.distance = r.depth = kNaN;
                 r.normal = r.point_a = r.point_b = Vec3{kNaN, kNaN, kNaN};
             } else {
-                r = query_pair(set.shape(ia), pose[ia], set.shape(ib), pose[ib], kind, ra, rb);
+                const ShapeView sa = set.shape(ia), sb = set.shape(ib);
+                if (first_meeting(ia)) read_vertices(sa);
+                if (first_meeting(ib)) read_vertices(sb);
+                r = query_pair(sa, pose[ia], sb, pose[ib], kind, ra, rb);
             }
             if (out.distance) out.distance[i] = r.distance;
             if (out.depth) out.depth[i] = r.depth;

@@ -154,6 +154,50 @@ TEST_CASE("narrow phase: a batch sets each pair's status, a bad pose is INVALID_
     CHECK(std::isnan(distance[1]));
 }
 
+TEST_CASE("narrow phase: radii kept between batches give each batch the same answers") {
+    // Three cubes as polytopes, the third with a NaN corner: batches that share a ShapeRadii
+    // (the second reads what the first checked, the NaN included) answer as a batch alone.
+    const std::vector<Vec3> corners = fixtures::cube_corners(0.5);
+    std::vector<double> vertices;
+    for (int h = 0; h < 3; ++h)
+        for (const Vec3& c : corners) vertices.insert(vertices.end(), {c.x, c.y, c.z});
+    vertices[3 * 16 + 1] = std::nan("");
+    const std::int64_t offsets[4] = {0, 8, 16, 24};
+    const std::int8_t kinds[3] = {0, 0, 0};
+    const double params[12] = {};
+    ConvexSetView set;
+    set.vertices = vertices.data();
+    set.vertex_count = 24;
+    set.offsets = offsets;
+    set.shape_count = 3;
+    set.kinds = kinds;
+    set.params = params;
+    double poses[48] = {};
+    for (int h = 0; h < 3; ++h)
+        for (int k = 0; k < 4; ++k) poses[16 * h + 5 * k] = 1.0;
+    poses[16 * 1 + 3] = 0.75;  // cube 1 overlaps cube 0 by a quarter
+    poses[16 * 2 + 3] = -3.0;
+    const std::int64_t pairs[6] = {0, 1, 0, 2, 1, 0};
+    double depth[3], alone[3];
+    std::int8_t status[3], alone_status[3];
+    BatchOutput out;
+    out.depth = alone;
+    out.status = alone_status;
+    run_batch(set, poses, pairs, 3, QueryKind::PENETRATION, 1, out);
+    CHECK_NEAR(alone[0], 0.25, 1e-12);
+    CHECK(alone_status[1] == static_cast<std::int8_t>(Status::INVALID_INPUT));
+    ShapeRadii radii(3);
+    out.depth = depth;
+    out.status = status;
+    for (int batch = 0; batch < 2; ++batch) {
+        run_batch(set, poses, pairs, 3, QueryKind::PENETRATION, 1, out, &radii);
+        CHECK(depth[0] == alone[0]);
+        CHECK(depth[2] == alone[2]);
+        CHECK(std::isnan(depth[1]));
+        for (int i = 0; i < 3; ++i) CHECK(status[i] == alone_status[i]);
+    }
+}
+
 TEST_CASE("shapes: valid_bounding_radius is is_valid plus bounding_radius, bit for bit") {
     // Smooth hulls of every size class (the four-vertex loop and its tail), tiny and huge
     // coordinates (squares out of range: the careful path), and invalid data (NaN, inf).

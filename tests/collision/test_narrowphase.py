@@ -635,6 +635,30 @@ def test_malformed_calls_raise_value_error_naming_the_argument():
         )
 
 
+def test_later_batches_on_a_set_answer_as_a_fresh_set():
+    # The set keeps each shape's checked radius from the first batch that uses it: later
+    # batches (shapes met before and new ones, the NaN shape, a pose made non-rigid after the
+    # first batch) must give a fresh set's answers, bit for bit.
+    rng = np.random.default_rng(9)
+    clouds = [rng.normal(size=(40, 3)) for _ in range(30)]
+    clouds[4] = clouds[4].copy()
+    clouds[4][0] = np.nan
+    kept = ConvexSet.from_vertices(clouds)
+    poses_ = np.stack([translation(*rng.uniform(-3, 3, 3)) for _ in clouds])
+    first = np.array([[0, 1], [2, 3], [4, 5], [1, 2]])
+    signed_distance_batch(kept, poses_, first, threads=1)
+    poses_[3, 0, 0] = 2.0  # not rigid from now on
+    later = np.concatenate([first, rng.integers(0, 30, size=(60, 2))])
+    for _ in range(2):
+        got = signed_distance_batch(kept, poses_, later, threads=1)
+        fresh = signed_distance_batch(ConvexSet.from_vertices(clouds), poses_, later, threads=1)
+        for name in ("signed_distance", "normal", "point_a", "point_b", "status", "iterations"):
+            np.testing.assert_array_equal(getattr(got, name), getattr(fresh, name))
+    bad = np.isin(later, [3, 4]).any(axis=1)
+    assert np.all(got.status[bad] == Status.INVALID_INPUT)
+    assert np.all(got.status[~bad] != Status.INVALID_INPUT)
+
+
 def test_empty_pairs():
     cs = ConvexSet.from_shapes([CUBE, CUBE])
     r = signed_distance_batch(cs, None, np.zeros((0, 2), np.int64))

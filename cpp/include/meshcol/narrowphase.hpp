@@ -6,7 +6,9 @@
 /// point and normal is in the world frame; `distance >= 0`, `depth >= 0`; the normal is unit
 /// and points from a to b; moving b by `depth * normal` brings the shapes to contact.
 
+#include <atomic>
 #include <cstdint>
+#include <memory>
 
 #include "meshcol/shapes.hpp"
 #include "meshcol/status.hpp"
@@ -73,11 +75,37 @@ struct BatchOutput {
     bool* intersects = nullptr;
 };
 
+/// Each shape's `valid_bounding_radius` (NaN: not a valid shape), computed by the first batch
+/// that uses the shape and kept for the batches after it: a set's shapes do not change between
+/// queries, only the poses do (the Python `ConvexSet`'s arrays are read-only). One per set,
+/// shared by every thread and batch: threads that meet an unchecked shape at the same moment
+/// both compute it, the same value, so relaxed atomics suffice.
+class ShapeRadii {
+  public:
+    explicit ShapeRadii(std::int64_t shape_count);
+
+    /// Shape `h`'s checked radius, computed on first use.
+    double get(const ConvexSetView& set, std::int64_t h) {
+        double r = radius_[h].load(std::memory_order_relaxed);
+        if (r == kUnchecked) {
+            r = valid_bounding_radius(set.shape(h));
+            radius_[h].store(r, std::memory_order_relaxed);
+        }
+        return r;
+    }
+
+  private:
+    static constexpr double kUnchecked = -1.0;  // a radius is >= 0 or NaN
+    std::unique_ptr<std::atomic<double>[]> radius_;
+};
+
 /// Runs `kind` on every pair (P, 2) of `set` under `poses` ((H, 4, 4) row-major, or null for
 /// identity) on `threads` threads (0: all cores). Pairs with a bad shape or pose get
 /// `Status::INVALID_INPUT` and NaN fields. Pair indices must be in range (callers check).
+/// `radii`: the set's checked radii kept between batches (null: checked for this batch only).
 void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t* pairs,
-               long long pair_count, QueryKind kind, int threads, const BatchOutput& out);
+               long long pair_count, QueryKind kind, int threads, const BatchOutput& out,
+               ShapeRadii* radii = nullptr);
 
 /// World AABBs (H, 3) + (H, 3) of every shape under `poses` (null: identity). A bad shape or
 /// pose gives NaN bounds.
