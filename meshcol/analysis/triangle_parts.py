@@ -40,7 +40,7 @@ def _triangle_parts(body: Body) -> tuple[ConvexSet, np.ndarray]:
     edges = edges / np.linalg.norm(edges, axis=2, keepdims=True) if t else np.zeros((0, 3, 3))
     step3 = np.arange(t + 1, dtype=np.int64) * 3
     local = np.array([[1, 2], [0, 2], [0, 1]], dtype=np.int32)
-    solid = ConvexSet(
+    solid = ConvexSet._adopt(
         vertices=tri.reshape(-1, 3),
         offsets=step3,
         kinds=np.zeros(t, np.int8),

@@ -88,6 +88,11 @@ def _readonly(a: np.ndarray) -> np.ndarray:
     return a
 
 
+def _copied(a: Any, dtype: Any = None) -> np.ndarray:
+    """A C-contiguous copy of ``a`` that nothing outside the set can write."""
+    return np.array(a, dtype=dtype, order="C", copy=True)
+
+
 class ConvexSet:
     """A packed set of H convex shapes, each in its local frame.
 
@@ -153,12 +158,27 @@ class ConvexSet:
     hull_status: np.ndarray
 
     def __init__(self, *, hull_status: np.ndarray | None = None, **arrays: np.ndarray) -> None:
+        """A set over the given arrays (the attributes above), copied: the core keeps facts
+        about each shape (its checked bounding radius) from one query to the next, so the
+        arrays must not change under it, and a caller's array (or another view of its
+        memory) could. The builders below hand over arrays they made (:meth:`_adopt`)."""
+        self._hold(hull_status, {name: _copied(arrays[name]) for name in self._FIELDS})
+
+    @classmethod
+    def _adopt(cls, *, hull_status: np.ndarray | None = None, **arrays: np.ndarray) -> ConvexSet:
+        """A set over arrays its caller made for it and keeps no other reference to: not
+        copied (a hull packing's arrays can be hundreds of megabytes)."""
+        self = cls.__new__(cls)
+        self._hold(hull_status, arrays)
+        return self
+
+    def _hold(self, hull_status: np.ndarray | None, arrays: dict[str, np.ndarray]) -> None:
         from meshcol._native import core
 
         for name in self._FIELDS:
             setattr(self, name, _readonly(arrays[name]))
         status = np.zeros(len(self.kinds), np.int8) if hull_status is None else hull_status
-        self.hull_status = _readonly(np.asarray(status, dtype=np.int8))
+        self.hull_status = _readonly(_copied(status, np.int8))
         self._core = core.PackedConvexSet(
             self.vertices,
             self.offsets,
@@ -208,7 +228,8 @@ class ConvexSet:
     def _assemble(
         cls, kinds: np.ndarray, params: np.ndarray, polytopes: np.ndarray, packed: PackedHulls
     ) -> ConvexSet:
-        """A set of ``len(kinds)`` shapes whose polytopes (at rows ``polytopes``) are packed."""
+        """A set of ``len(kinds)`` shapes whose polytopes (at rows ``polytopes``) are packed
+        (``kinds`` and ``params`` may be the caller's arrays: copied)."""
         h = len(kinds)
 
         def spread(offsets: np.ndarray) -> np.ndarray:
@@ -221,11 +242,11 @@ class ConvexSet:
 
         status = np.zeros(h, dtype=np.int8)
         status[polytopes] = packed.status
-        return cls(
+        return cls._adopt(
             vertices=packed.vertices,
             offsets=spread(packed.offsets),
-            kinds=kinds,
-            params=params,
+            kinds=_copied(kinds),
+            params=_copied(params),
             adjacency_offsets=packed.adjacency_offsets,
             adjacency=packed.adjacency,
             face_offsets=spread(packed.face_offsets),
@@ -326,7 +347,7 @@ class ConvexSet:
                 base += len(getattr(s, sizes))
             return np.concatenate(parts)
 
-        return cls(
+        return cls._adopt(
             vertices=np.concatenate([s.vertices for s in sets]),
             offsets=offsets("offsets", "vertices"),
             kinds=np.concatenate([s.kinds for s in sets]),
@@ -372,7 +393,7 @@ class ConvexSet:
         np.cumsum(np.diff(self.adjacency_offsets)[vertex_rows], out=adjacency_offsets[1:])
         face_offsets, face_rows = blocks(self.face_offsets)
         edge_offsets, edge_rows = blocks(self.edge_offsets)
-        return ConvexSet(
+        return ConvexSet._adopt(
             vertices=self.vertices[vertex_rows],
             offsets=offsets,
             kinds=self.kinds[idx],

@@ -659,6 +659,35 @@ def test_later_batches_on_a_set_answer_as_a_fresh_set():
     assert np.all(got.status[~bad] != Status.INVALID_INPUT)
 
 
+def test_a_set_is_not_changed_by_writes_to_the_arrays_it_was_made_from():
+    # The kept radii are only right while the set's arrays never change: the constructor copies
+    # what it is given, so a write through the caller's array (or another view of its memory)
+    # after a first batch cannot leave a NaN shape with a radius checked before it (a
+    # confident answer instead of INVALID_INPUT).
+    rng = np.random.default_rng(3)
+    made = ConvexSet.from_vertices([rng.normal(size=(8, 3)), rng.normal(size=(8, 3)) + [5, 0, 0]])
+    arrays = {name: np.array(getattr(made, name)) for name in ConvexSet._FIELDS}
+    memory = arrays["vertices"]
+    arrays["vertices"] = memory[:]  # a view: the set sees no more of the caller's memory
+    kinds = np.zeros(2, np.int8)
+    params = np.ones((2, 4))
+    given = ConvexSet(**arrays)
+    primitives = ConvexSet.from_primitives(kinds + ShapeKind.SPHERE, params[:])
+    pairs = np.array([[0, 1]])
+    before = signed_distance_batch(given, None, pairs, threads=1)
+    spheres = signed_distance_batch(primitives, None, pairs, threads=1)
+    memory[:] = np.nan
+    params[:] = np.nan
+    assert memory.flags.writeable and params.flags.writeable  # the caller's arrays stay theirs
+    after = signed_distance_batch(given, None, pairs, threads=1)
+    np.testing.assert_array_equal(after.signed_distance, before.signed_distance)
+    np.testing.assert_array_equal(after.status, [Status.CONVERGED])
+    again = signed_distance_batch(primitives, None, pairs, threads=1)
+    np.testing.assert_array_equal(again.signed_distance, spheres.signed_distance)
+    np.testing.assert_array_equal(again.status, [Status.CONVERGED])
+    assert not np.shares_memory(given.vertices, memory)
+
+
 def test_empty_pairs():
     cs = ConvexSet.from_shapes([CUBE, CUBE])
     r = signed_distance_batch(cs, None, np.zeros((0, 2), np.int64))
