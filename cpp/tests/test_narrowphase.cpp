@@ -124,6 +124,16 @@ TEST_CASE("narrow phase: a polytope from points equals the box it spans") {
     CHECK_NEAR(r.normal.z, 1.0, 1e-12);
 }
 
+namespace {
+
+// `count` row-major 4x4 identity poses from `poses` on (the rest of each left as it is).
+void identity_poses(double* poses, int count) {
+    for (int h = 0; h < count; ++h)
+        for (int k = 0; k < 4; ++k) poses[16 * h + 5 * k] = 1.0;
+}
+
+}  // namespace
+
 TEST_CASE("narrow phase: a batch sets each pair's status, a bad pose is INVALID_INPUT") {
     // two unit boxes and a sphere; no polytope vertices
     const std::int64_t offsets[4] = {0, 0, 0, 0};
@@ -137,8 +147,7 @@ TEST_CASE("narrow phase: a batch sets each pair's status, a bad pose is INVALID_
     set.kinds = kinds;
     set.params = params;
     double poses[48] = {};
-    for (int h = 0; h < 3; ++h)
-        for (int k = 0; k < 4; ++k) poses[16 * h + 5 * k] = 1.0;
+    identity_poses(poses, 3);
     poses[16 * 1 + 3] = 3.0;                                   // box 1 at x = 3
     poses[16 * 2 + 0] = 2.0;                                   // sphere 2: not rigid
     const std::int64_t pairs[4] = {0, 1, 0, 2};
@@ -173,8 +182,7 @@ TEST_CASE("narrow phase: radii kept between batches give each batch the same ans
     set.kinds = kinds;
     set.params = params;
     double poses[48] = {};
-    for (int h = 0; h < 3; ++h)
-        for (int k = 0; k < 4; ++k) poses[16 * h + 5 * k] = 1.0;
+    identity_poses(poses, 3);
     poses[16 * 1 + 3] = 0.75;  // cube 1 overlaps cube 0 by a quarter
     poses[16 * 2 + 3] = -3.0;
     const std::int64_t pairs[6] = {0, 1, 0, 2, 1, 0};

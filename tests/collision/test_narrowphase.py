@@ -550,16 +550,24 @@ def test_threads_give_identical_results():
     np.testing.assert_array_equal(one.point_a, many.point_a)
 
 
+def _clouds_one_nan(
+    rng: np.random.Generator, count: int, points: int, nan_shape: int, spread: float
+) -> tuple[list[np.ndarray], np.ndarray]:
+    """``count`` Gaussian clouds of ``points`` points, the first point of shape ``nan_shape``
+    NaN, and a translation pose each within ``spread`` of the origin."""
+    clouds = [rng.normal(size=(points, 3)) for _ in range(count)]
+    clouds[nan_shape][0] = np.nan
+    poses_ = np.stack([translation(*rng.uniform(-spread, spread, 3)) for _ in clouds])
+    return clouds, poses_
+
+
 def test_large_set_checks_only_the_shapes_pairs_use():
     # 600 shapes (the per-shape checks run on threads), a NaN shape and a non-rigid pose
     # among them, pairs on a subset: each pair's answer is the two-shape set's, bad ones
     # INVALID_INPUT, the same on any number of threads.
     rng = np.random.default_rng(5)
-    clouds = [rng.normal(size=(24, 3)) for _ in range(600)]
-    clouds[7] = clouds[7].copy()
-    clouds[7][3] = np.nan
+    clouds, poses_ = _clouds_one_nan(rng, 600, 24, nan_shape=7, spread=6.0)
     cs = ConvexSet.from_vertices(clouds)
-    poses_ = np.stack([translation(*rng.uniform(-6, 6, 3)) for _ in clouds])
     poses_[11, 0, 0] = 2.0  # not rigid
     pairs = np.concatenate([rng.integers(0, 600, size=(300, 2)), [[7, 8], [9, 11], [12, 13]]])
     one = signed_distance_batch(cs, poses_, pairs, threads=1)
@@ -640,11 +648,8 @@ def test_later_batches_on_a_set_answer_as_a_fresh_set():
     # batches (shapes met before and new ones, the NaN shape, a pose made non-rigid after the
     # first batch) must give a fresh set's answers, bit for bit.
     rng = np.random.default_rng(9)
-    clouds = [rng.normal(size=(40, 3)) for _ in range(30)]
-    clouds[4] = clouds[4].copy()
-    clouds[4][0] = np.nan
+    clouds, poses_ = _clouds_one_nan(rng, 30, 40, nan_shape=4, spread=3.0)
     kept = ConvexSet.from_vertices(clouds)
-    poses_ = np.stack([translation(*rng.uniform(-3, 3, 3)) for _ in clouds])
     first = np.array([[0, 1], [2, 3], [4, 5], [1, 2]])
     signed_distance_batch(kept, poses_, first, threads=1)
     poses_[3, 0, 0] = 2.0  # not rigid from now on
