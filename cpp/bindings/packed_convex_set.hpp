@@ -88,7 +88,8 @@ class PackedConvexSet {
     std::int64_t size() const { return view_.shape_count; }
     const ConvexSetView& view() const { return view_; }
     /// The shapes' checked radii, kept from the first batch that uses each shape for the
-    /// batches after it (the arrays are read-only in Python, so the shapes never change).
+    /// batches after it (the Python ConvexSet makes or copies its arrays and holds them
+    /// read-only, so the shapes never change).
     ShapeRadii& radii() const { return radii_; }
 
     /// The pose data, after checking there is one (4, 4) pose per shape (null: identity).

@@ -83,7 +83,6 @@ private:
     std::uint32_t generation_ = 0;
 };
 
-//
 // A box whose axes are the identity (NodeObb::axis_aligned) skips its products with them, as
 // mesh_intersection.cpp's obb_overlap does: the same values up to the sign of a zero, and
 // every one is used through its absolute value, so the bound is the same bit for bit.

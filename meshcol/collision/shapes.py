@@ -162,7 +162,8 @@ class ConvexSet:
         about each shape (its checked bounding radius) from one query to the next, so the
         arrays must not change under it, and a caller's array (or another view of its
         memory) could. The builders below hand over arrays they made (:meth:`_adopt`)."""
-        self._hold(hull_status, {name: _copied(arrays[name]) for name in self._FIELDS})
+        status = None if hull_status is None else _copied(hull_status, np.int8)
+        self._hold(status, {name: _copied(arrays[name]) for name in self._FIELDS})
 
     @classmethod
     def _adopt(cls, *, hull_status: np.ndarray | None = None, **arrays: np.ndarray) -> ConvexSet:
@@ -178,7 +179,7 @@ class ConvexSet:
         for name in self._FIELDS:
             setattr(self, name, _readonly(arrays[name]))
         status = np.zeros(len(self.kinds), np.int8) if hull_status is None else hull_status
-        self.hull_status = _readonly(_copied(status, np.int8))
+        self.hull_status = _readonly(np.asarray(status, dtype=np.int8))
         self._core = core.PackedConvexSet(
             self.vertices,
             self.offsets,
@@ -229,7 +230,7 @@ class ConvexSet:
         cls, kinds: np.ndarray, params: np.ndarray, polytopes: np.ndarray, packed: PackedHulls
     ) -> ConvexSet:
         """A set of ``len(kinds)`` shapes whose polytopes (at rows ``polytopes``) are packed
-        (``kinds`` and ``params`` may be the caller's arrays: copied)."""
+        (``kinds`` and ``params`` adopted: the callers make them, or copy the user's)."""
         h = len(kinds)
 
         def spread(offsets: np.ndarray) -> np.ndarray:
@@ -245,8 +246,8 @@ class ConvexSet:
         return cls._adopt(
             vertices=packed.vertices,
             offsets=spread(packed.offsets),
-            kinds=_copied(kinds),
-            params=_copied(params),
+            kinds=kinds,
+            params=params,
             adjacency_offsets=packed.adjacency_offsets,
             adjacency=packed.adjacency,
             face_offsets=spread(packed.face_offsets),
@@ -285,8 +286,8 @@ class ConvexSet:
         shapes of kind 0, in order) are the convex hulls of ``points[offsets[j]:offsets[j +
         1]]``: (V, 3) float64 and (P + 1,) int64 for P polytopes, packed in one native call
         with no array per shape (what :meth:`from_shapes` gives for the same shapes)."""
-        kinds = np.ascontiguousarray(kinds, dtype=np.int8)
-        params = np.ascontiguousarray(params, dtype=np.float64).reshape(-1, 4)
+        kinds = _copied(kinds, np.int8)  # the set keeps them: not the caller's
+        params = _copied(params, np.float64).reshape(-1, 4)
         points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
         offsets = np.ascontiguousarray(offsets, dtype=np.int64)
         polytopes = np.flatnonzero(kinds == ShapeKind.POLYTOPE)
@@ -317,8 +318,8 @@ class ConvexSet:
             Each one's parameters as :attr:`params` holds them (half extents, half lengths),
             finite and >= 0.
         """
-        k = np.ascontiguousarray(kinds, dtype=np.int8).reshape(-1)
-        p = np.ascontiguousarray(params, dtype=np.float64)
+        k = _copied(kinds, np.int8).reshape(-1)  # the set keeps them: not the caller's
+        p = _copied(params, np.float64)
         if p.shape != (len(k), 4):
             raise ValueError(f"params must be ({len(k)}, 4), got {p.shape}")
         if len(k) and (k.min() < ShapeKind.SPHERE or k.max() > ShapeKind.CYLINDER):

@@ -77,9 +77,10 @@ struct BatchOutput {
 
 /// Each shape's `valid_bounding_radius` (NaN: not a valid shape), computed by the first batch
 /// that uses the shape and kept for the batches after it: a set's shapes do not change between
-/// queries, only the poses do (the Python `ConvexSet`'s arrays are read-only). One per set,
-/// shared by every thread and batch: threads that meet an unchecked shape at the same moment
-/// both compute it, the same value, so relaxed atomics suffice.
+/// queries, only the poses do (the Python `ConvexSet` makes or copies its arrays and holds
+/// them read-only). One per set, shared by every thread and batch: threads that meet an
+/// unchecked shape at the same moment both compute it, the same value, so relaxed atomics
+/// suffice.
 class ShapeRadii {
   public:
     explicit ShapeRadii(std::int64_t shape_count);
