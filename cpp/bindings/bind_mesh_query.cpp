@@ -152,12 +152,25 @@ void build_set(MeshBvhSet* self, Points vertices, Faces faces, Index64 vertex_of
     self->meshes.build(v, vo, f, fo, m, threads);
 }
 
-// The poses of a query: the set's defaults, or read and checked for rigidity from `poses`.
+// The poses of a query: the set's defaults, or the call's (M, 4, 4) matrices, each read and
+// checked for rigidity where a pair or a ray uses it: a batch of a few pairs on a set of many
+// meshes reads those few, not every pose. A matrix is copied before it is checked, so the pose
+// used is the one checked even if its memory changes meanwhile.
 struct PosedMeshes {
-    std::vector<meshcol::Pose> owned_poses;
-    std::vector<char> owned_rigid;
-    const meshcol::Pose* poses = nullptr;
-    const char* rigid = nullptr;
+    const MeshBvhSet* set = nullptr;
+    const double* matrices = nullptr;  // null: the set's poses
+
+    /// The pose of mesh i into `pose`, and whether it is rigid and finite.
+    bool pose(size_t i, meshcol::Pose& pose) const {
+        if (matrices == nullptr) {
+            pose = set->poses[i];
+            return set->rigid[i] != 0;
+        }
+        double m[16];
+        std::memcpy(m, matrices + 16 * i, sizeof m);
+        pose = meshcol::Pose::from_matrix4(m);
+        return meshcol::is_rigid_matrix4(m, meshcol::defaults::rigid_tolerance);
+    }
 };
 
 // The poses of a query and its pairs, range-checked on this thread so that the parallel loop
@@ -167,17 +180,12 @@ struct PosedPairs : PosedMeshes {
     long long count = 0;
 
     // The meshes and poses of pair k, and whether both poses are rigid.
-    meshcol::MeshDistanceInput input(const MeshBvhSet& set, long long k) const {
+    bool input(const MeshBvhSet& set, long long k, meshcol::MeshDistanceInput& q) const {
         const auto i = static_cast<size_t>(pairs[2 * k]), j = static_cast<size_t>(pairs[2 * k + 1]);
-        meshcol::MeshDistanceInput q;
         q.a = &set.meshes[i];
         q.b = &set.meshes[j];
-        q.pose_a = poses[i];
-        q.pose_b = poses[j];
-        return q;
-    }
-    bool rigid_pair(long long k) const {
-        return rigid[static_cast<size_t>(pairs[2 * k])] && rigid[static_cast<size_t>(pairs[2 * k + 1])];
+        const bool rigid_a = pose(i, q.pose_a);
+        return pose(j, q.pose_b) && rigid_a;
     }
 };
 
@@ -190,22 +198,12 @@ void check_pairs(const std::int64_t* pairs, long long count, size_t m) {
 
 void read_poses(const MeshBvhSet& set, const std::optional<Poses>& poses, PosedMeshes& out) {
     const size_t m = set.meshes.size();
+    out.set = &set;
     if (poses) {
         if (poses->shape(0) != m)
             throw std::invalid_argument("poses must be (" + std::to_string(m) + ", 4, 4), got (" +
                                         std::to_string(poses->shape(0)) + ", 4, 4)");
-        out.owned_poses.resize(m);
-        out.owned_rigid.resize(m);
-        for (size_t i = 0; i < m; ++i) {
-            const double* p = poses->data() + 16 * i;
-            out.owned_rigid[i] = meshcol::is_rigid_matrix4(p, meshcol::defaults::rigid_tolerance);
-            out.owned_poses[i] = meshcol::Pose::from_matrix4(p);
-        }
-        out.poses = out.owned_poses.data();
-        out.rigid = out.owned_rigid.data();
-    } else {
-        out.poses = set.poses.data();
-        out.rigid = set.rigid.data();
+        out.matrices = poses->data();
     }
 }
 
@@ -279,7 +277,8 @@ nb::dict depth_batch(const MeshBvhSet& set, std::optional<Poses> poses, Pairs pa
     const PosedPairs in = read_pairs(set, poses, pairs);
     auto columns = columns_of<MeshDepthOutput>(static_cast<size_t>(in.count), kDepthColumns);
     run_items(in.count, threads, meshcol::defaults::mesh_min_pairs_per_thread, columns, [&](long long k) {
-        if (in.rigid_pair(k)) return meshcol::mesh_penetration_depth(in.input(set, k));
+        meshcol::MeshDistanceInput q;
+        if (in.input(set, k, q)) return meshcol::mesh_penetration_depth(q);
         MeshDepthOutput r;
         r.depth = kNaN;
         r.point_a = r.point_b = r.normal = kNaN3;
@@ -313,11 +312,11 @@ nb::dict ray_cast_batch(const MeshBvhSet& set, Index64 meshes, Points origins, P
         const auto i = static_cast<size_t>(index[k]);
         meshcol::MeshRayInput q;
         q.mesh = &set.meshes[i];
-        q.pose = posed.poses[i];
+        const bool rigid = posed.pose(i, q.pose);
         q.origin = Vec3{o[3 * k], o[3 * k + 1], o[3 * k + 2]};
         q.direction = Vec3{d[3 * k], d[3 * k + 1], d[3 * k + 2]};
         q.max_distance = max_distance;
-        if (posed.rigid[i]) return meshcol::mesh_ray_cast(q);
+        if (rigid) return meshcol::mesh_ray_cast(q);
         MeshRayOutput r;
         r.distance = kNaN;
         r.point = r.normal = kNaN3;
@@ -469,32 +468,20 @@ PyObject* interned(const char* name) {
 // The poses of a call that takes them as a plain object: None (the set's defaults) or a
 // C-contiguous (M, 4, 4) float64 buffer, read in place; false for anything else (the caller
 // converts it with as_poses and calls again).
-bool read_poses_object(const MeshBvhSet& set, nb::handle poses, PosedMeshes& out) {
-    out.poses = set.poses.data();
-    out.rigid = set.rigid.data();
+bool read_poses_object(const MeshBvhSet& set, nb::handle poses, Buffer& buffer, PosedMeshes& out) {
+    out.set = &set;
     if (poses.is_none()) return true;
     const size_t m = set.meshes.size();
-    Buffer buffer;
-    const double* p = buffer.get<double>(poses.ptr(), {static_cast<Py_ssize_t>(m), 4, 4});
-    if (p == nullptr) return false;
-    out.owned_poses.resize(m);
-    out.owned_rigid.resize(m);
-    for (size_t i = 0; i < m; ++i) {
-        out.owned_rigid[i] = meshcol::is_rigid_matrix4(p + 16 * i, meshcol::defaults::rigid_tolerance);
-        out.owned_poses[i] = meshcol::Pose::from_matrix4(p + 16 * i);
-    }
-    out.poses = out.owned_poses.data();
-    out.rigid = out.owned_rigid.data();
-    return true;
+    out.matrices = buffer.get<double>(poses.ptr(), {static_cast<Py_ssize_t>(m), 4, 4});
+    return out.matrices != nullptr;
 }
 
 nb::object intersects_batch(const MeshBvhSet& set, nb::handle poses, nb::handle pairs, int threads,
                             nb::handle result_type) {
     const size_t m = set.meshes.size();
+    Buffer pose_buffer;  // held until the call returns: `posed` reads the poses in place
     PosedMeshes posed;
-    if (!read_poses_object(set, poses, posed)) return nb::none();
-    const meshcol::Pose* pose = posed.poses;
-    const char* rigid = posed.rigid;
+    if (!read_poses_object(set, poses, pose_buffer, posed)) return nb::none();
     PairsArg in;
     if (!in.read(pairs.ptr())) return nb::none();
     check_pairs(in.data, in.count, m);
@@ -508,9 +495,10 @@ nb::object intersects_batch(const MeshBvhSet& set, nb::handle poses, nb::handle 
         for (long long k = begin; k < end; ++k) {
             const auto i = static_cast<size_t>(ij[2 * k]);
             const auto j = static_cast<size_t>(ij[2 * k + 1]);
-            status[k] = static_cast<std::int8_t>(intersects_one(set.meshes[i], pose[i], rigid[i] != 0,
-                                                                set.meshes[j], pose[j], rigid[j] != 0,
-                                                                &intersecting[k]));
+            meshcol::Pose pose_i, pose_j;
+            const bool rigid_i = posed.pose(i, pose_i), rigid_j = posed.pose(j, pose_j);
+            status[k] = static_cast<std::int8_t>(
+                intersects_one(set.meshes[i], pose_i, rigid_i, set.meshes[j], pose_j, rigid_j, &intersecting[k]));
         }
     };
     const int t = meshcol::resolve_threads(threads, in.count, meshcol::defaults::mesh_min_pairs_per_thread);
@@ -535,8 +523,9 @@ nb::object intersects_batch(const MeshBvhSet& set, nb::handle poses, nb::handle 
 nb::object distance_batch(const MeshBvhSet& set, nb::handle poses, nb::handle pairs, int threads,
                                  double max_distance, nb::handle result_type) {
     check_max_distance(max_distance);
+    Buffer pose_buffer;  // held until the call returns: `posed` reads the poses in place
     PosedMeshes posed;
-    if (!read_poses_object(set, poses, posed)) return nb::none();
+    if (!read_poses_object(set, poses, pose_buffer, posed)) return nb::none();
     PairsArg in;
     if (!in.read(pairs.ptr())) return nb::none();
     check_pairs(in.data, in.count, set.meshes.size());
@@ -557,9 +546,10 @@ nb::object distance_batch(const MeshBvhSet& set, nb::handle poses, nb::handle pa
         meshcol::parallel_for(in.count, t, [&](long long begin, long long end) {
             for (long long k = begin; k < end; ++k) {
                 const auto i = static_cast<size_t>(ij[2 * k]), j = static_cast<size_t>(ij[2 * k + 1]);
-                const MeshDistanceOutput r = distance_one(set.meshes[i], posed.poses[i], posed.rigid[i] != 0,
-                                                          set.meshes[j], posed.poses[j], posed.rigid[j] != 0,
-                                                          max_distance);
+                meshcol::Pose pose_i, pose_j;
+                const bool rigid_i = posed.pose(i, pose_i), rigid_j = posed.pose(j, pose_j);
+                const MeshDistanceOutput r =
+                    distance_one(set.meshes[i], pose_i, rigid_i, set.meshes[j], pose_j, rigid_j, max_distance);
                 distance[k] = r.distance;
                 store_row(point_a, k, r.point_a);
                 store_row(point_b, k, r.point_b);

@@ -62,4 +62,25 @@ void parallel_for(long long n, int threads, const std::function<void(long long, 
     if (failure) std::rethrow_exception(failure);
 }
 
+BatchShapes::BatchShapes(std::int64_t shape_count, const std::int64_t* pairs, long long pair_count)
+    : pairs_(pairs) {
+    const long long ends = 2 * pair_count;
+    dense_ = ends * kSparseRatio >= shape_count;
+    if (dense_) {
+        slots_ = shape_count;
+        used_.assign(static_cast<size_t>(shape_count), 0);
+        for (long long e = 0; e < ends; ++e) used_[static_cast<size_t>(pairs[e])] = 1;
+        return;
+    }
+    shapes_.assign(pairs, pairs + ends);
+    std::sort(shapes_.begin(), shapes_.end());
+    shapes_.erase(std::unique(shapes_.begin(), shapes_.end()), shapes_.end());
+    slots_ = static_cast<std::int64_t>(shapes_.size());
+    used_.assign(shapes_.size(), 1);
+    ends_.resize(static_cast<size_t>(ends));
+    for (long long e = 0; e < ends; ++e)
+        ends_[static_cast<size_t>(e)] =
+            std::lower_bound(shapes_.begin(), shapes_.end(), pairs[e]) - shapes_.begin();
+}
+
 }  // namespace meshcol

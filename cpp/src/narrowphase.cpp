@@ -222,53 +222,61 @@ void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t
     const std::int64_t h_count = set.shape_count;
     // Each shape and pose a pair uses is checked once, not once per pair, on every thread;
     // a shape no pair uses is not read at all (a big set queried for a few pairs pays for
-    // those few: the checks read every vertex). Poses are checked up front; a shape's
-    // vertices (validity and bounding radius, one pass) by the first pair that uses it, just
-    // before its query reads them again: in broad-phase output most shapes are in only a few
-    // pairs, and a separate pass over them all would bring each shape from memory twice.
-    // The set's owner keeps the radii between batches (`radii`); else they last this batch.
-    std::vector<char> ok(static_cast<size_t>(h_count), 0);
-    for (long long i = 0; i < 2 * pair_count; ++i) ok[pairs[i]] = 1;
-    // Shapes a pair of this batch has met (`read_vertices` on the first; a thread that meets
+    // those few: the checks read every vertex, and the per-shape state is kept for the
+    // batch's shapes only, `BatchShapes`). Poses are checked up front; a shape's vertices
+    // (validity and bounding radius, one pass) by the first pair that uses it, just before
+    // its query reads them again: in broad-phase output most shapes are in only a few pairs,
+    // and a separate pass over them all would bring each shape from memory twice. The set's
+    // owner keeps the radii between batches (`radii`); else they last this batch.
+    const BatchShapes shapes(h_count, pairs, pair_count);
+    const std::int64_t slots = shapes.size();
+    std::vector<char> ok = shapes.used();
+    // Slots a pair of this batch has met (`read_vertices` on the first; a thread that meets
     // one at the same moment as another reads it twice, harmlessly).
-    std::unique_ptr<std::atomic<char>[]> met(new std::atomic<char>[static_cast<size_t>(h_count)]);
-    for (std::int64_t h = 0; h < h_count; ++h) met[h].store(0, std::memory_order_relaxed);
-    const auto first_meeting = [&](std::int64_t h) {
-        if (met[h].load(std::memory_order_relaxed) != 0) return false;
-        met[h].store(1, std::memory_order_relaxed);
+    std::unique_ptr<std::atomic<char>[]> met(new std::atomic<char>[static_cast<size_t>(slots)]);
+    for (std::int64_t k = 0; k < slots; ++k) met[k].store(0, std::memory_order_relaxed);
+    const auto first_meeting = [&](std::int64_t slot) {
+        if (met[slot].load(std::memory_order_relaxed) != 0) return false;
+        met[slot].store(1, std::memory_order_relaxed);
         return true;
     };
-    std::vector<Pose> pose(static_cast<size_t>(h_count));
+    std::vector<Pose> pose(static_cast<size_t>(poses == nullptr ? 0 : slots));
     std::unique_ptr<ShapeRadii> batch_radii;
     if (radii == nullptr) {
         batch_radii = std::make_unique<ShapeRadii>(h_count);
         radii = batch_radii.get();
     }
-    const int shape_threads = resolve_threads(threads, h_count, defaults::min_shapes_per_thread);
-    parallel_for(h_count, shape_threads, [&](long long begin, long long end) {
-        for (long long h = begin; h < end; ++h) {
-            if (!ok[h] || poses == nullptr) continue;
-            const double* m = poses + 16 * h;
-            if (!is_rigid_matrix4(m, defaults::rigid_tolerance)) ok[h] = 0;
-            else pose[h] = Pose::from_matrix4(m);
-        }
-    });
+    if (poses != nullptr) {
+        const int pose_threads = resolve_threads(threads, slots, defaults::min_shapes_per_thread);
+        parallel_for(slots, pose_threads, [&](long long begin, long long end) {
+            for (long long k = begin; k < end; ++k) {
+                if (!ok[k]) continue;
+                const double* m = poses + 16 * shapes.shape(k);
+                if (!is_rigid_matrix4(m, defaults::rigid_tolerance)) ok[k] = 0;
+                else pose[k] = Pose::from_matrix4(m);
+            }
+        });
+    }
+    const Pose identity{};
     const int n_threads = resolve_threads(threads, pair_count, defaults::min_pairs_per_thread);
     parallel_for(pair_count, n_threads, [&](long long begin, long long end) {
         for (long long i = begin; i < end; ++i) {
             const std::int64_t ia = pairs[2 * i], ib = pairs[2 * i + 1];
+            const std::int64_t ka = shapes.slot_of(2 * i), kb = shapes.slot_of(2 * i + 1);
             PairResult r;
-            const double ra = ok[ia] ? radii->get(set, ia) : kNaN;
-            const double rb = ok[ib] ? radii->get(set, ib) : kNaN;
+            const double ra = ok[ka] ? radii->get(set, ia) : kNaN;
+            const double rb = ok[kb] ? radii->get(set, ib) : kNaN;
             if (std::isnan(ra) || std::isnan(rb)) {
                 r.status = Status::INVALID_INPUT;
                 r.distance = r.depth = kNaN;
                 r.normal = r.point_a = r.point_b = Vec3{kNaN, kNaN, kNaN};
             } else {
                 const ShapeView sa = set.shape(ia), sb = set.shape(ib);
-                if (first_meeting(ia)) read_vertices(sa);
-                if (first_meeting(ib)) read_vertices(sb);
-                r = query_pair(sa, pose[ia], sb, pose[ib], kind, ra, rb);
+                if (first_meeting(ka)) read_vertices(sa);
+                if (first_meeting(kb)) read_vertices(sb);
+                const Pose& pa = poses == nullptr ? identity : pose[ka];
+                const Pose& pb = poses == nullptr ? identity : pose[kb];
+                r = query_pair(sa, pa, sb, pb, kind, ra, rb);
             }
             if (out.distance) out.distance[i] = r.distance;
             if (out.depth) out.depth[i] = r.depth;

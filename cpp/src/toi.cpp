@@ -505,32 +505,30 @@ Pose Motion::at(double t) const {
     return p;
 }
 
+bool make_motion(const double* start_pose, const double* end_pose, const double* rotation,
+                 const double* pivot, Motion& motion) {
+    if (!is_rigid_matrix4(start_pose, defaults::rigid_tolerance) ||
+        !is_rigid_matrix4(end_pose, defaults::rigid_tolerance))
+        return false;
+    const Pose p0 = Pose::from_matrix4(start_pose), p1 = Pose::from_matrix4(end_pose);
+    if (rotation == nullptr && pivot == nullptr) {
+        motion = Motion(p0, p1);
+        return is_finite(motion.velocity);  // a path longer than DBL_MAX
+    }
+    const Vec3 turn = rotation != nullptr ? Vec3{rotation[0], rotation[1], rotation[2]}
+                                          : shortest_rotation(p0.rotation, p1.rotation);
+    const Vec3 centre = pivot != nullptr ? Vec3{pivot[0], pivot[1], pivot[2]} : p0.translation;
+    return Motion::from_turn(p0, p1, turn, centre, defaults::rigid_tolerance, motion);
+}
+
 void make_motions(long long count, const double* start_poses, const double* end_poses,
                   const double* rotations, const double* pivots, Motion* motions, char* ok) {
-    for (long long h = 0; h < count; ++h) {
-        const double* m0 = start_poses + 16 * h;
-        const double* m1 = end_poses + 16 * h;
-        ok[h] = 0;
-        if (!is_rigid_matrix4(m0, defaults::rigid_tolerance) ||
-            !is_rigid_matrix4(m1, defaults::rigid_tolerance))
-            continue;
-        const Pose p0 = Pose::from_matrix4(m0), p1 = Pose::from_matrix4(m1);
-        if (rotations == nullptr && pivots == nullptr) {
-            motions[h] = Motion(p0, p1);
-            ok[h] = is_finite(motions[h].velocity) ? 1 : 0;  // a path longer than DBL_MAX
-            continue;
-        }
-        const Vec3 rotation =
-            rotations != nullptr
-                ? Vec3{rotations[3 * h], rotations[3 * h + 1], rotations[3 * h + 2]}
-                : shortest_rotation(p0.rotation, p1.rotation);
-        const Vec3 pivot = pivots != nullptr
-                               ? Vec3{pivots[3 * h], pivots[3 * h + 1], pivots[3 * h + 2]}
-                               : p0.translation;
-        ok[h] = Motion::from_turn(p0, p1, rotation, pivot, defaults::rigid_tolerance, motions[h])
+    for (long long h = 0; h < count; ++h)
+        ok[h] = make_motion(start_poses + 16 * h, end_poses + 16 * h,
+                            rotations != nullptr ? rotations + 3 * h : nullptr,
+                            pivots != nullptr ? pivots + 3 * h : nullptr, motions[h])
                     ? 1
                     : 0;
-    }
 }
 
 ToiResult time_of_impact(const ShapeView& a, const Motion& motion_a, const ShapeView& b,
@@ -547,27 +545,34 @@ void run_toi_batch(const ConvexSetView& set, const double* start_poses, const do
                    const ToiBatchOutput& out) {
     const std::int64_t h_count = set.shape_count;
     const bool options_ok = options.tolerance > 0.0 && std::isfinite(options.tolerance);
-    // Shapes, motions and their lever arms once per shape, not once per pair.
-    std::vector<ShapeView> shapes(static_cast<size_t>(h_count));
-    std::vector<Motion> motions(static_cast<size_t>(h_count));
-    std::vector<Mover> movers(static_cast<size_t>(h_count));
-    std::vector<char> ok(static_cast<size_t>(h_count), 0);
-    make_motions(h_count, start_poses, end_poses, rotations, pivots, motions.data(), ok.data());
-    for (std::int64_t h = 0; h < h_count; ++h) {
-        shapes[h] = set.shape(h);
-        if (!options_ok || !is_valid(shapes[h])) ok[h] = 0;
-        if (ok[h]) movers[h] = make_mover(shapes[h], motions[h]);
+    // Shapes, motions and their lever arms once per shape of the batch, not once per pair
+    // nor for the shapes no pair names (`BatchShapes`).
+    const BatchShapes batch(h_count, pairs, pair_count);
+    const std::int64_t slots = batch.size();
+    std::vector<ShapeView> shapes(static_cast<size_t>(slots));  // the movers point at these
+    std::vector<Mover> movers(static_cast<size_t>(slots));
+    std::vector<char> ok = batch.used();
+    for (std::int64_t k = 0; k < slots; ++k) {
+        if (!ok[k]) continue;
+        const std::int64_t h = batch.shape(k);
+        const ShapeView& shape = shapes[k] = set.shape(h);
+        Motion motion;
+        ok[k] = options_ok && is_valid(shape) &&
+                make_motion(start_poses + 16 * h, end_poses + 16 * h,
+                            rotations != nullptr ? rotations + 3 * h : nullptr,
+                            pivots != nullptr ? pivots + 3 * h : nullptr, motion);
+        if (ok[k]) movers[k] = make_mover(shape, motion);
     }
     // Advancement can take many GJK calls per pair: smaller chunks balance better.
     const int n_threads = resolve_threads(threads, pair_count, defaults::toi_min_pairs_per_thread);
     parallel_for(pair_count, n_threads, [&](long long begin, long long end) {
         for (long long i = begin; i < end; ++i) {
-            const std::int64_t ia = pairs[2 * i], ib = pairs[2 * i + 1];
+            const std::int64_t ka = batch.slot_of(2 * i), kb = batch.slot_of(2 * i + 1);
             ToiResult r;
-            if (!ok[ia] || !ok[ib]) {
+            if (!ok[ka] || !ok[kb]) {
                 r = invalid_result();
             } else {
-                r = pair_toi(movers[ia], movers[ib], options);
+                r = pair_toi(movers[ka], movers[kb], options);
             }
             if (out.toi) out.toi[i] = r.toi;
             store_row(out.point, i, r.point);

@@ -88,6 +88,13 @@ Mat3 axis_angle_matrix(const Vec3& axis, double angle);
 /// `start` to `end`: end = Rot(rotation) start.
 Vec3 shortest_rotation(const Mat3& start, const Mat3& end);
 
+/// The motion of one shape from its row-major 4 x 4 `start_pose` and `end_pose`, its turn's
+/// world rotation vector `rotation` (3, null: the shortest rotation) and world `pivot` (3,
+/// null: the local origin). False for a non-rigid pose or a turn that does not reach the end
+/// rotation (defaults::rigid_tolerance).
+bool make_motion(const double* start_pose, const double* end_pose, const double* rotation,
+                 const double* pivot, Motion& motion);
+
 /// The motions of H shapes from row-major (H, 4, 4) `start_poses` and `end_poses`; `rotations`
 /// (H, 3) world rotation vectors of the turns and `pivots` (H, 3) world points, each null for
 /// the shortest rotation and the local origin. `ok[h]` is 0 for a non-rigid pose or a turn
