@@ -620,9 +620,6 @@ const double* pose_in_place(nb::handle pose, Buffer& buffer) {
 struct ReadPose {
     meshcol::Pose pose;
     bool rigid;
-
-    explicit ReadPose(const double* p)
-        : pose(meshcol::Pose::from_matrix4(p)), rigid(meshcol::is_rigid_matrix4(p, meshcol::defaults::rigid_tolerance)) {}
 };
 
 // A pose that is not read in place (a list, another dtype or byte order, a strided view, a
@@ -639,7 +636,21 @@ struct ReadPose {
     Buffer buffer;
     const double* p = pose_in_place(copy, buffer);
     if (p == nullptr) throw std::invalid_argument(std::string(name) + " could not be read as (4, 4) float64");
-    return ReadPose(p);
+    return {meshcol::Pose::from_matrix4(p), meshcol::is_rigid_matrix4(p, meshcol::defaults::rigid_tolerance)};
+}
+
+// `then(pose, rigid)` with the given pose read (in place when it can be) or, for None, the
+// set's default pose of mesh k. No pose is copied (a Pose is 96 bytes, which the compiler
+// copies or clears with `rep movs` / `rep stos`, whose start-up was about a tenth of the call)
+// and nothing is built for None.
+template <class Then>
+bool with_pose(const MeshBvhSet& set, size_t k, nb::handle pose, const char* name, const Then& then) {
+    if (pose.is_none()) return then(set.poses[k], set.rigid[k] != 0);
+    Buffer buffer;
+    if (const double* p = pose_in_place(pose, buffer); p != nullptr)
+        return then(meshcol::Pose::from_matrix4(p), meshcol::is_rigid_matrix4(p, meshcol::defaults::rigid_tolerance));
+    const ReadPose read = converted_pose(pose, name);
+    return then(read.pose, read.rigid);
 }
 
 // One pair at the set's default poses, or at the given ones: the GIL is kept (a disjoint
@@ -649,25 +660,14 @@ struct ReadPose {
 bool intersects_pair(const MeshBvhSet& set, std::int64_t i, std::int64_t j, nb::handle pose_i,
                      nb::handle pose_j) {
     const size_t a = mesh_index(set, i), b = mesh_index(set, j);
-    meshcol::Pose pa = set.poses[a], pb = set.poses[b];
-    bool ra = set.rigid[a] != 0, rb = set.rigid[b] != 0;
-    Buffer buffer_i, buffer_j;
-    if (!pose_i.is_none()) {
-        const double* p = pose_in_place(pose_i, buffer_i);
-        const ReadPose read = p != nullptr ? ReadPose(p) : converted_pose(pose_i, "pose_i");
-        pa = read.pose;
-        ra = read.rigid;
-    }
-    if (!pose_j.is_none()) {
-        const double* p = pose_in_place(pose_j, buffer_j);
-        const ReadPose read = p != nullptr ? ReadPose(p) : converted_pose(pose_j, "pose_j");
-        pb = read.pose;
-        rb = read.rigid;
-    }
-    bool hit = false;
-    const meshcol::Status status = intersects_one(set.meshes[a], pa, ra, set.meshes[b], pb, rb, &hit);
-    if (status != meshcol::Status::CONVERGED) no_verdict(status, i, j, set, ra, rb);
-    return hit;
+    return with_pose(set, a, pose_i, "pose_i", [&](const meshcol::Pose& pa, bool ra) {
+        return with_pose(set, b, pose_j, "pose_j", [&](const meshcol::Pose& pb, bool rb) {
+            bool hit = false;
+            const meshcol::Status status = intersects_one(set.meshes[a], pa, ra, set.meshes[b], pb, rb, &hit);
+            if (status != meshcol::Status::CONVERGED) no_verdict(status, i, j, set, ra, rb);
+            return hit;
+        });
+    });
 }
 
 void set_poses(MeshBvhSet& set, Poses poses) {
