@@ -404,9 +404,9 @@ class MeshBvhSet:
         Sets the default poses (M, 4, 4) that queries with poses=None use (read and checked for rigidity once).
         """
 
-    def intersects_pair(self, i: int, j: int, pose_i: object | None = None, pose_j: object | None = None) -> bool | None:
+    def intersects_pair(self, i: int, j: int, pose_i: object | None = None, pose_j: object | None = None) -> bool:
         """
-        Whether meshes i and j intersect, at the default poses or the given C-contiguous (4, 4) float64 ones (None when a pose is another object: convert it and call again); ValueError when the pair has no verdict (invalid mesh or pose, out of range).
+        Whether meshes i and j intersect, at the default poses or the given (4, 4) ones (read in place when C-contiguous float64, else converted); ValueError when a pose is not (4, 4) or the pair has no verdict (invalid mesh or pose, out of range).
         """
 
     def distance_batch(self, poses: object | None, pairs: object, threads: int, max_distance: float, result_type: type[ResultT]) -> ResultT | None:

@@ -596,40 +596,68 @@ size_t mesh_index(const MeshBvhSet& set, std::int64_t i) {
     return static_cast<size_t>(i);
 }
 
+// A pose read in place: a (4, 4) float64 numpy array from numpy's struct (a buffer export
+// costs about a third of a disjoint pair's call), other objects through the buffer protocol.
+// Null when neither reads it.
+const double* pose_in_place(nb::handle pose, Buffer& buffer) {
+    Py_ssize_t shape[2];
+    if (const double* p = numpy_data<double>(pose.ptr(), 2, shape); p != nullptr)
+        return shape[0] == 4 && shape[1] == 4 ? p : nullptr;
+    return buffer.get<double>(pose.ptr(), {4, 4});
+}
+
+// A pose as a query reads it, and whether it is rigid and finite.
+struct ReadPose {
+    meshcol::Pose pose;
+    bool rigid;
+};
+
+// A pose that is not read in place (a list, another dtype or byte order, a strided view, a
+// wrong shape): converted as meshcol.collision.arrays.as_pose converts one (numpy.asarray to
+// float64, ValueError naming it unless (4, 4)), made C-contiguous, then read. Out of line: the
+// pair call's frame keeps none of this.
+[[gnu::noinline]] ReadPose converted_pose(nb::handle pose, const char* name) {
+    const nb::module_ numpy = nb::module_::import_("numpy");
+    const nb::object m = numpy.attr("asarray")(pose, "dtype"_a = numpy.attr("float64"));
+    const nb::object shape = m.attr("shape");
+    if (!shape.equal(nb::make_tuple(4, 4)))
+        throw std::invalid_argument(std::string(name) + " must be (4, 4), got " + nb::repr(shape).c_str());
+    const nb::object copy = numpy.attr("ascontiguousarray")(m);
+    Buffer buffer;
+    const double* p = pose_in_place(copy, buffer);
+    if (p == nullptr) throw std::invalid_argument(std::string(name) + " could not be read as (4, 4) float64");
+    return {meshcol::Pose::from_matrix4(p), meshcol::is_rigid_matrix4(p, meshcol::defaults::rigid_tolerance)};
+}
+
+// `then(pose, rigid)` with the given pose read (in place when it can be) or, for None, the
+// set's default pose of mesh k. No pose is copied (a Pose is 96 bytes, which the compiler
+// copies or clears with `rep movs` / `rep stos`, whose start-up was about a tenth of the call)
+// and nothing is built for None.
+template <class Then>
+bool with_pose(const MeshBvhSet& set, size_t k, nb::handle pose, const char* name, const Then& then) {
+    if (pose.is_none()) return then(set.poses[k], set.rigid[k] != 0);
+    Buffer buffer;
+    if (const double* p = pose_in_place(pose, buffer); p != nullptr)
+        return then(meshcol::Pose::from_matrix4(p), meshcol::is_rigid_matrix4(p, meshcol::defaults::rigid_tolerance));
+    const ReadPose read = converted_pose(pose, name);
+    return then(read.pose, read.rigid);
+}
+
 // One pair at the set's default poses, or at the given ones: the GIL is kept (a disjoint
-// pair's root-box test costs less than releasing it) and nothing is allocated. A pose is read in
-// place when it is a C-contiguous (4, 4) float64 buffer; any other pose object makes the call
-// return None, and the caller converts it (as_pose) and calls again.
-std::optional<bool> intersects_pair(const MeshBvhSet& set, std::int64_t i, std::int64_t j,
-                                   nb::handle pose_i, nb::handle pose_j) {
+// pair's root-box test costs less than releasing it) and nothing is allocated for a pose read
+// in place. MeshSet.intersects is this method itself (bound per set), so it takes any pose
+// form the Python method took.
+bool intersects_pair(const MeshBvhSet& set, std::int64_t i, std::int64_t j, nb::handle pose_i,
+                     nb::handle pose_j) {
     const size_t a = mesh_index(set, i), b = mesh_index(set, j);
-    meshcol::Pose pa = set.poses[a], pb = set.poses[b];
-    bool ra = set.rigid[a] != 0, rb = set.rigid[b] != 0;
-    Buffer buffer_i, buffer_j;
-    // A (4, 4) float64 numpy array is read from numpy's struct (a buffer export costs about a
-    // third of a disjoint pair's call); other objects through the buffer protocol.
-    const auto read = [](nb::handle pose, Buffer& buffer) -> const double* {
-        Py_ssize_t shape[2];
-        if (const double* p = numpy_data<double>(pose.ptr(), 2, shape); p != nullptr)
-            return shape[0] == 4 && shape[1] == 4 ? p : nullptr;
-        return buffer.get<double>(pose.ptr(), {4, 4});
-    };
-    if (!pose_i.is_none()) {
-        const double* p = read(pose_i, buffer_i);
-        if (p == nullptr) return std::nullopt;
-        ra = meshcol::is_rigid_matrix4(p, meshcol::defaults::rigid_tolerance);
-        pa = meshcol::Pose::from_matrix4(p);
-    }
-    if (!pose_j.is_none()) {
-        const double* p = read(pose_j, buffer_j);
-        if (p == nullptr) return std::nullopt;
-        rb = meshcol::is_rigid_matrix4(p, meshcol::defaults::rigid_tolerance);
-        pb = meshcol::Pose::from_matrix4(p);
-    }
-    bool hit = false;
-    const meshcol::Status status = intersects_one(set.meshes[a], pa, ra, set.meshes[b], pb, rb, &hit);
-    if (status != meshcol::Status::CONVERGED) no_verdict(status, i, j, set, ra, rb);
-    return hit;
+    return with_pose(set, a, pose_i, "pose_i", [&](const meshcol::Pose& pa, bool ra) {
+        return with_pose(set, b, pose_j, "pose_j", [&](const meshcol::Pose& pb, bool rb) {
+            bool hit = false;
+            const meshcol::Status status = intersects_one(set.meshes[a], pa, ra, set.meshes[b], pb, rb, &hit);
+            if (status != meshcol::Status::CONVERGED) no_verdict(status, i, j, set, ra, rb);
+            return hit;
+        });
+    });
 }
 
 void set_poses(MeshBvhSet& set, Poses poses) {
@@ -762,10 +790,9 @@ void bind_mesh_query(nb::module_& m) {
              "checked for rigidity once).")
         .def("intersects_pair", &intersects_pair, "i"_a, "j"_a, "pose_i"_a = nb::none(),
              "pose_j"_a = nb::none(),
-             "Whether meshes i and j intersect, at the default poses or the given C-contiguous "
-             "(4, 4) float64 ones (None when a pose is another object: convert it and call "
-             "again); ValueError when the pair has no verdict (invalid mesh or pose, out of "
-             "range).")
+             "Whether meshes i and j intersect, at the default poses or the given (4, 4) ones "
+             "(read in place when C-contiguous float64, else converted); ValueError when a pose "
+             "is not (4, 4) or the pair has no verdict (invalid mesh or pose, out of range).")
         .def("distance_batch", &distance_batch, "poses"_a.none(), "pairs"_a, "threads"_a,
              "max_distance"_a, "result_type"_a,
              nb::sig("def distance_batch(self, poses: object | None, pairs: object, threads: int, "

@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "meshcol/defaults.hpp"
+#include "meshcol/orientation.hpp"
 #include "meshcol/triangle.hpp"
 
 namespace meshcol {
@@ -76,61 +77,6 @@ inline int bin_of(double c, double lo, double extent) {
     const double x = (c - lo) / extent * kBins;
     if (!(x > 0.0)) return 0;  // also NaN
     return x >= kBins - 1 ? kBins - 1 : static_cast<int>(x);
-}
-
-// Closed and consistently wound: every directed edge (u, v), u != v, appears once and so does
-// (v, u). By the out-edges of each vertex (a vertex's list is short: about six on a mesh), so
-// each edge is checked by two scans of short lists; a vertex with a long list (a fan of many
-// faces) sends the whole check to sorting, where the sorted directed edges, with no repeat,
-// must equal the sorted reversed ones.
-bool edges_pair_up_sorted(const std::int64_t* faces, std::int64_t face_count) {
-    std::vector<std::pair<std::int64_t, std::int64_t>> forward, backward;
-    for (std::int64_t f = 0; f < face_count; ++f)
-        for (int k = 0; k < 3; ++k) {
-            const std::int64_t u = faces[3 * f + k], v = faces[3 * f + (k + 1) % 3];
-            if (u == v) continue;
-            forward.push_back({u, v});
-            backward.push_back({v, u});
-        }
-    if (forward.empty()) return false;
-    std::sort(forward.begin(), forward.end());
-    if (std::adjacent_find(forward.begin(), forward.end()) != forward.end()) return false;
-    std::sort(backward.begin(), backward.end());
-    return forward == backward;
-}
-
-bool closed_and_consistent(const std::int64_t* faces, std::int64_t face_count, std::int64_t vertex_count) {
-    constexpr std::int64_t kShortList = 64;
-    std::vector<std::int64_t> first(static_cast<size_t>(vertex_count) + 1, 0);
-    std::int64_t edges = 0;
-    for (std::int64_t f = 0; f < face_count; ++f)
-        for (int k = 0; k < 3; ++k) {
-            const std::int64_t u = faces[3 * f + k], v = faces[3 * f + (k + 1) % 3];
-            if (u == v) continue;
-            if (++first[static_cast<size_t>(u) + 1] > kShortList) return edges_pair_up_sorted(faces, face_count);
-            ++edges;
-        }
-    if (edges == 0) return false;
-    for (size_t i = 0; i < static_cast<size_t>(vertex_count); ++i) first[i + 1] += first[i];
-    std::vector<std::int64_t> target(static_cast<size_t>(edges));
-    std::vector<std::int64_t> next(first.begin(), first.end() - 1);
-    for (std::int64_t f = 0; f < face_count; ++f)
-        for (int k = 0; k < 3; ++k) {
-            const std::int64_t u = faces[3 * f + k], v = faces[3 * f + (k + 1) % 3];
-            if (u != v) target[static_cast<size_t>(next[static_cast<size_t>(u)]++)] = v;
-        }
-    const auto out_edges = [&](std::int64_t u) {
-        return std::make_pair(target.begin() + first[static_cast<size_t>(u)], target.begin() + first[static_cast<size_t>(u) + 1]);
-    };
-    for (std::int64_t u = 0; u < vertex_count; ++u) {
-        const auto [begin, end] = out_edges(u);
-        for (auto e = begin; e != end; ++e) {
-            if (std::find(e + 1, end, *e) != end) return false;  // (u, v) repeated
-            const auto [back_begin, back_end] = out_edges(*e);
-            if (std::find(back_begin, back_end, u) == back_end) return false;  // no (v, u)
-        }
-    }
-    return true;
 }
 
 // One triangle's box and the centre of that box (the point the SAH bins), side by side.

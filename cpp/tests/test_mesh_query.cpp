@@ -1,13 +1,17 @@
 // Mesh hierarchies and mesh-pair queries (mesh_bvh.hpp, mesh_query.hpp) on boxes whose
 // distances, crossings, containment and depths are known.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <random>
+#include <utility>
 #include <vector>
 
 #include "check.hpp"
 #include "fixtures.hpp"
 #include "meshcol/mesh_query.hpp"
+#include "meshcol/orientation.hpp"
 #include "meshcol/triangle.hpp"
 #include "mesh_query_detail.hpp"
 
@@ -381,6 +385,74 @@ TEST_CASE("mesh bvh: closed means every edge pairs with one reversed twin, short
     open_tube.faces.resize(open_tube.faces.size() - 3);  // one cap triangle gone
     CHECK(!open_tube.bvh().closed());
     CHECK(tube(24, 0.5, 1.0).bvh().closed());
+}
+
+namespace {
+
+// The definition of closed_and_consistent by sorting: the directed edges (u != v), sorted, with
+// no repeat, equal to the sorted reversed ones.
+bool closed_by_sorting(const std::vector<std::int64_t>& faces) {
+    std::vector<std::pair<std::int64_t, std::int64_t>> forward, backward;
+    for (size_t f = 0; 3 * f < faces.size(); ++f)
+        for (size_t k = 0; k < 3; ++k) {
+            const std::int64_t u = faces[3 * f + k], v = faces[3 * f + (k + 1) % 3];
+            if (u == v) continue;
+            forward.push_back({u, v});
+            backward.push_back({v, u});
+        }
+    if (forward.empty()) return false;
+    std::sort(forward.begin(), forward.end());
+    if (std::adjacent_find(forward.begin(), forward.end()) != forward.end()) return false;
+    std::sort(backward.begin(), backward.end());
+    return forward == backward;
+}
+
+}  // namespace
+
+TEST_CASE("closed_and_consistent: the sorting definition's verdict on closed and broken meshes") {
+    std::mt19937_64 random(32);
+    const std::vector<fixtures::TriangleMesh> bases = {unit_cube(), tube(100, 0.5, 1.0), tube(7, 0.5, 1.0)};
+    int closed = 0, not_closed = 0;
+    for (int trial = 0; trial < 6000; ++trial) {
+        std::vector<std::int64_t> faces;
+        std::int64_t vertex_count = 0;
+        if (trial % 3 == 2) {  // a small random soup, often closed (two faces back to back)
+            vertex_count = 2 + static_cast<std::int64_t>(random() % 4);
+            const int count = 1 + static_cast<int>(random() % 4);
+            for (int f = 0; f < count; ++f) {
+                std::int64_t c[3];
+                for (auto& x : c) x = static_cast<std::int64_t>(random() % static_cast<std::uint64_t>(vertex_count));
+                faces.insert(faces.end(), {c[0], c[1], c[2]});
+                if (random() % 2) faces.insert(faces.end(), {c[0], c[2], c[1]});
+            }
+        } else {  // a closed mesh, then up to two changes
+            const fixtures::TriangleMesh& base = bases[static_cast<size_t>(trial) % bases.size()];
+            faces.assign(base.faces.begin(), base.faces.end());
+            vertex_count = static_cast<std::int64_t>(base.vertices.size() / 3);
+            const int changes = static_cast<int>(random() % 3);
+            for (int c = 0; c < changes; ++c) {
+                const size_t face_count = faces.size() / 3;
+                const size_t f = static_cast<size_t>(random() % face_count);
+                switch (random() % 6) {
+                    case 0: std::swap(faces[3 * f + 1], faces[3 * f + 2]); break;  // wound the other way
+                    case 1: faces.erase(faces.begin() + static_cast<std::ptrdiff_t>(3 * f), faces.begin() + static_cast<std::ptrdiff_t>(3 * f + 3)); break;
+                    case 2: faces.insert(faces.end(), {faces[3 * f], faces[3 * f + 1], faces[3 * f + 2]}); break;  // repeated
+                    case 3: faces.insert(faces.end(), {faces[3 * f], faces[3 * f + 2], faces[3 * f + 1]}); break;  // its reverse
+                    case 4: faces[3 * f + random() % 3] = static_cast<std::int64_t>(random() % static_cast<std::uint64_t>(vertex_count)); break;
+                    default: {  // a degenerate face and its reverse
+                        const std::int64_t u = faces[3 * f], v = faces[3 * f + 1];
+                        faces.insert(faces.end(), {u, u, v, v, u, u});
+                    }
+                }
+                if (faces.empty()) break;
+            }
+        }
+        const bool expected = closed_by_sorting(faces);
+        CHECK_EQ(closed_and_consistent(faces.data(), static_cast<std::int64_t>(faces.size() / 3), vertex_count), expected);
+        (expected ? closed : not_closed) += 1;
+    }
+    CHECK(closed > 1000);
+    CHECK(not_closed > 1000);
 }
 
 TEST_CASE("triangle distance with a limit: the full distance bit for bit whenever it can count") {

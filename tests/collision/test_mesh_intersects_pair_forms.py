@@ -1,5 +1,5 @@
 """MeshSet.intersects with poses passed per call: a (4, 4) float64 numpy array is read from
-numpy's own struct, every other form through the buffer protocol or converted in Python; each
+numpy's own struct, every other form through the buffer protocol or converted by numpy; each
 form must give the batch's verdict, and a wrong shape the same error, whatever the form."""
 
 from __future__ import annotations
@@ -57,6 +57,8 @@ def test_every_pose_form_gives_the_batch_verdict() -> None:
         for form in pose_forms(p):
             assert meshes.intersects(0, 1, None, form) is expected, type(form)
             assert meshes.intersects(1, 0, form, None) is expected, type(form)
+            # the class's method, which a set's own (the native method, bound) stands in for
+            assert MeshSet.intersects(meshes, 0, 1, None, form) is expected, type(form)
         assert meshes.intersects(0, 1, np.eye(4), p) is expected
     assert verdicts == [True, False, False]
 

@@ -43,6 +43,11 @@ void ray_parity(const double* vertices, std::int64_t vertex_count, const std::in
 bool closed_mod_two(const double* vertices, std::int64_t vertex_count, const std::int64_t* faces,
                     std::int64_t face_count);
 
+/// Closed and consistently wound: every directed edge (u, v), u != v, appears exactly once
+/// among the faces' edges and so does (v, u) (MeshBvh::closed). False without such an edge.
+bool closed_and_consistent(const std::int64_t* faces, std::int64_t face_count,
+                           std::int64_t vertex_count);
+
 /// What orient_faces did.
 struct FaceOrientation {
     std::vector<std::uint8_t> flipped;  ///< per face: reversed
