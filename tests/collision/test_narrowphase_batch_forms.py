@@ -5,11 +5,11 @@ the same results, field for field and bit for bit, whatever form the inputs come
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import numpy as np
 import pytest
 from array_forms import pair_forms
+from strategies import turned_about_z
 
 from meshcol import (
     Box,
@@ -48,14 +48,6 @@ DTYPES = {
 }
 
 
-def posed(angle: float, translation) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    p = np.eye(4)
-    p[:3, :3] = [[c, -s, 0], [s, c, 0], [0, 0, 1]]
-    p[:3, 3] = translation
-    return p
-
-
 def scene() -> tuple[ConvexSet, np.ndarray, np.ndarray]:
     """A box, a sphere overlapping it, a capsule apart, a tetrahedron touching nothing, a
     sphere with a non-rigid pose (its pairs INVALID_INPUT), and pairs over them."""
@@ -71,9 +63,9 @@ def scene() -> tuple[ConvexSet, np.ndarray, np.ndarray]:
     p = np.stack(
         [
             np.eye(4),
-            posed(0.3, (0.8, 0.1, 0.0)),
-            posed(0.7, (3.0, 0.0, 0.5)),
-            posed(1.1, (-4.0, 1.0, 0.5)),
+            turned_about_z(0.3, (0.8, 0.1, 0.0)),
+            turned_about_z(0.7, (3.0, 0.0, 0.5)),
+            turned_about_z(1.1, (-4.0, 1.0, 0.5)),
             np.diag([2.0, 1.0, 1.0, 1.0]),
         ]
     )
