@@ -189,43 +189,6 @@ class ShapeKind(enum.Enum):
 
     CYLINDER = 4
 
-class QueryArrays:
-    """
-    Arrays of a PackedConvexSet.query batch, in pair order; None for a field the query kind does not compute.
-    """
-
-    @property
-    def distance(self) -> Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')] | None:
-        """(P,) float64, >= 0"""
-
-    @property
-    def depth(self) -> Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')] | None:
-        """(P,) float64, >= 0 (penetration only)"""
-
-    @property
-    def normal(self) -> Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')] | None:
-        """(P, 3) float64, world, unit, a to b"""
-
-    @property
-    def point_a(self) -> Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')] | None:
-        """(P, 3) float64, world"""
-
-    @property
-    def point_b(self) -> Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')] | None:
-        """(P, 3) float64, world"""
-
-    @property
-    def iterations(self) -> Annotated[NDArray[numpy.int32], dict(shape=(None,), order='C')] | None:
-        """(P,) int32"""
-
-    @property
-    def status(self) -> Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')]:
-        """(P,) int8 Status codes"""
-
-    @property
-    def intersects(self) -> Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')] | None:
-        """(P,) bool (intersects only)"""
-
 class PackedConvexSet:
     """
     Packed convex shapes (the arrays of meshcol.collision.shapes.ConvexSet).
@@ -235,9 +198,9 @@ class PackedConvexSet:
 
     def __len__(self) -> int: ...
 
-    def query(self, kind: int, poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)] | None, pairs: Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', device='cpu', writable=False)], threads: int = 0) -> QueryArrays:
+    def query_object(self, layout: int, poses: object | None, pairs: object | None, threads: int, result_type: object) -> object:
         """
-        Runs query kind (0 distance, 1 penetration, 2 intersects) on (P, 2) pairs.
+        One batch as result_type (layout 0 distance, 1 penetration, 2 intersects, 3 signed distance); None when poses or pairs are not in the core's form.
         """
 
     def aabbs(self, poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)] | None, threads: int = 0) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')]]:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from hypothesis import strategies as st
 
@@ -24,6 +26,12 @@ def pose_matrix(rotation: np.ndarray, translation) -> np.ndarray:
     m[:3, :3] = rotation
     m[:3, 3] = translation
     return m
+
+
+def turned_about_z(angle: float, translation) -> np.ndarray:
+    """The pose turned by ``angle`` radians about z, then moved by ``translation``."""
+    c, s = math.cos(angle), math.sin(angle)
+    return pose_matrix(np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]), translation)
 
 
 coordinate = st.floats(-2.0, 2.0, allow_nan=False, allow_infinity=False)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import enum
 import re
 
@@ -10,6 +11,7 @@ import pytest
 
 from meshcol._native import core, defaults
 from meshcol.collision.hull import FLAT_RELATIVE_TOLERANCE, MAX_ABS_COORDINATE, HullStatus
+from meshcol.collision.narrowphase import DistanceBatch, IntersectsBatch
 from meshcol.collision.shapes import ConvexSet, ShapeKind
 from meshcol.types import Status, TimeOfImpactStatus
 
@@ -33,18 +35,24 @@ def test_python_enums_match_the_bound_cpp_enums(python_enum, native_enum) -> Non
     assert len(python_enum) == len(native_enum)
 
 
-def test_query_results_are_typed_objects() -> None:
+def test_query_results_are_the_python_result_classes() -> None:
+    """The core builds a batch's result object itself, each field an array of its own."""
     cs = ConvexSet.from_vertices([np.eye(3), np.eye(3) + 5.0])
     pairs = np.array([[0, 1]], dtype=np.int64)
-    r = cs._core.query(0, None, pairs)
-    assert type(r).__name__ == "QueryArrays"
+    r = cs._core.query_object(0, None, pairs, 1, DistanceBatch)
+    assert type(r) is DistanceBatch
     assert r.distance.shape == (1,) and r.normal.shape == (1, 3)
-    assert r.depth is None and r.intersects is None
-    assert r.distance is r.distance  # one array per field, not a new view per read
-    with pytest.raises(AttributeError):
-        r.distance = np.zeros(1)
-    hit = cs._core.query(2, None, pairs)
-    assert hit.distance is None and hit.intersects.dtype == np.bool_
+    assert r.iterations.dtype == np.int32 and r.status.dtype == np.int8
+    assert len({id(getattr(r, f.name)) for f in dataclasses.fields(r)}) == 6
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        r.distance = np.zeros(1)  # type: ignore[misc]
+    hit = cs._core.query_object(2, None, pairs, 1, IntersectsBatch)
+    assert hit.intersects.dtype == np.bool_ and hit.intersects.tolist() == [False]
+    # anything not in the core's form is declined, for the caller to convert
+    assert cs._core.query_object(0, None, pairs.astype(np.int32), 1, DistanceBatch) is None
+    assert cs._core.query_object(0, np.eye(4), pairs, 1, DistanceBatch) is None
+    with pytest.raises(ValueError, match=r"^layout must be 0\.\.3, got 4$"):
+        cs._core.query_object(4, None, pairs, 1, DistanceBatch)
 
 
 def test_time_of_impact_results_are_typed_objects() -> None:

@@ -5,11 +5,15 @@
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/pair.h>
 
+#include <array>
 #include <cstdint>
 #include <optional>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "meshcol/narrowphase.hpp"
+#include "call_args.hpp"
 #include "ndarray.hpp"
 #include "packed_convex_set.hpp"
 
@@ -22,59 +26,97 @@ namespace {
 using Column = Out<double, -1>;
 using Rows = Out<double, -1, 3>;
 
-/// The arrays of one batched query, P entries each (P x 3 for vectors); a field the query
-/// kind does not compute is None.
-struct QueryArrays {
-    std::optional<ArrayObject<Column>> distance;
-    std::optional<ArrayObject<Column>> depth;
-    std::optional<ArrayObject<Rows>> normal;
-    std::optional<ArrayObject<Rows>> point_a;
-    std::optional<ArrayObject<Rows>> point_b;
-    std::optional<ArrayObject<Out<std::int32_t, -1>>> iterations;
-    ArrayObject<Out<std::int8_t, -1>> status;
-    std::optional<ArrayObject<Out<bool, -1>>> intersects;
-};
+/// The result layouts of `query_object`: the query kind run, and the fields of the Python
+/// result class in its field order (meshcol/collision/narrowphase.py).
+enum class Layout : int { DISTANCE = 0, PENETRATION = 1, INTERSECTS = 2, SIGNED_DISTANCE = 3 };
 
-QueryArrays query(const PackedConvexSet& set, int kind, std::optional<Poses> poses, Pairs pairs,
-                  int threads) {
-    const double* pose_data = set.check_poses(poses);
-    set.check_pairs(pairs);
-    const long long p = static_cast<long long>(pairs.shape(0));
-    const auto q = static_cast<meshcol::QueryKind>(kind);
-    const size_t n = static_cast<size_t>(p);
+// One batched query as its Python result: `result_type(...)`, the DistanceBatch,
+// PenetrationBatch, IntersectsBatch or SignedDistanceBatch of `layout`, its arrays made by numpy
+// and filled in place. `poses` (None: identity) and `pairs` are plain objects, read in place
+// when already in the core's form (a C-contiguous (H, 4, 4) float64 array; a (P, 2) int64 one
+// or a list of int pairs); anything else makes the call return None, and the caller converts
+// them (as_poses, as_pairs: their messages) and calls again. A batch of one pair costs its
+// query, its arrays and the result object: no DLPack export and no Python frame.
+nb::object query_object(const PackedConvexSet& set, int layout, nb::handle poses, nb::handle pairs,
+                        int threads, nb::handle result_type) {
+    if (layout < 0 || layout > 3)
+        throw std::invalid_argument("layout must be 0..3, got " + std::to_string(layout));
+    const auto form = static_cast<Layout>(layout);
+    const std::int64_t h = set.size();
+    Buffer pose_buffer;  // held until the call returns: the batch reads the poses in place
+    const double* pose_data = nullptr;
+    if (!poses.is_none()) {
+        Py_ssize_t shape[3];
+        pose_data = numpy_data<double>(poses.ptr(), 3, shape);
+        if (pose_data != nullptr && (shape[0] != h || shape[1] != 4 || shape[2] != 4)) return nb::none();
+        if (pose_data == nullptr) pose_data = pose_buffer.get<double>(poses.ptr(), {static_cast<Py_ssize_t>(h), 4, 4});
+        if (pose_data == nullptr) return nb::none();
+    }
+    PairsArg in;
+    if (!in.read(pairs.ptr())) return nb::none();
+    set.check_pairs(in.data, in.count);
+    const auto n = static_cast<size_t>(in.count);
     meshcol::BatchOutput out;
-    auto status = new_array<Out<std::int8_t, -1>>({n});
-    out.status = status.data();
-    std::optional<Out<bool, -1>> hit;
-    std::optional<Column> distance, depth;
-    std::optional<Rows> normal, point_a, point_b;
-    std::optional<Out<std::int32_t, -1>> iterations;
-    if (q == meshcol::QueryKind::INTERSECTS) {
-        hit = new_array<Out<bool, -1>>({n});
-        out.intersects = hit->data();
+    std::int8_t* status = nullptr;
+    nb::object status_array = numpy_empty(n, &status);
+    out.status = status;
+    const auto q = form == Layout::DISTANCE     ? meshcol::QueryKind::DISTANCE
+                   : form == Layout::INTERSECTS ? meshcol::QueryKind::INTERSECTS
+                                                : meshcol::QueryKind::PENETRATION;
+    nb::object hit, distance, depth, normal, point_a, point_b, iterations, signed_distance;
+    if (form == Layout::INTERSECTS) {
+        hit = numpy_empty(n, &out.intersects);
     } else {
-        distance = new_array<Column>({n});
-        normal = new_array<Rows>({n, 3});
-        point_a = new_array<Rows>({n, 3});
-        point_b = new_array<Rows>({n, 3});
-        iterations = new_array<Out<std::int32_t, -1>>({n});
-        out.distance = distance->data();
-        out.normal = normal->data();
-        out.point_a = point_a->data();
-        out.point_b = point_b->data();
-        out.iterations = iterations->data();
-        if (q == meshcol::QueryKind::PENETRATION) {
-            depth = new_array<Column>({n});
-            out.depth = depth->data();
+        normal = numpy_empty(n, &out.normal, 3);
+        point_a = numpy_empty(n, &out.point_a, 3);
+        point_b = numpy_empty(n, &out.point_b, 3);
+        iterations = numpy_empty(n, &out.iterations);
+        if (form != Layout::PENETRATION) distance = numpy_empty(n, &out.distance);
+        if (form != Layout::DISTANCE) depth = numpy_empty(n, &out.depth);
+    }
+    double* sd = nullptr;
+    if (form == Layout::SIGNED_DISTANCE) signed_distance = numpy_empty(n, &sd);
+    const auto run = [&] {
+        meshcol::run_batch(set.view(), pose_data, in.data, in.count, q, threads, out, &set.radii());
+        for (size_t k = 0; k < (sd != nullptr ? n : 0); ++k) sd[k] = out.distance[k] - out.depth[k];
+    };
+    if (in.count <= 1) {
+        run();  // one pair: its query can cost less than releasing the GIL
+    } else {
+        in.pin();  // the batch reads the copy, never numpy's array, once the GIL is released
+        nb::gil_scoped_release release;
+        run();
+    }
+    switch (form) {
+        case Layout::DISTANCE: {
+            static const std::array<PyObject*, 6> names = {interned("distance"), interned("point_a"),
+                                                           interned("point_b"),  interned("normal"),
+                                                           interned("iterations"), interned("status")};
+            static DataclassMaker<6> maker;
+            return maker.make(result_type, names, {distance, point_a, point_b, normal, iterations, status_array});
+        }
+        case Layout::PENETRATION: {
+            static const std::array<PyObject*, 6> names = {interned("depth"),   interned("normal"),
+                                                           interned("point_a"), interned("point_b"),
+                                                           interned("iterations"), interned("status")};
+            static DataclassMaker<6> maker;
+            return maker.make(result_type, names, {depth, normal, point_a, point_b, iterations, status_array});
+        }
+        case Layout::INTERSECTS: {
+            static const std::array<PyObject*, 2> names = {interned("intersects"), interned("status")};
+            static DataclassMaker<2> maker;
+            return maker.make(result_type, names, {hit, status_array});
+        }
+        default: {
+            static const std::array<PyObject*, 8> names = {
+                interned("signed_distance"), interned("distance"), interned("depth"),
+                interned("normal"),          interned("point_a"),  interned("point_b"),
+                interned("iterations"),      interned("status")};
+            static DataclassMaker<8> maker;
+            return maker.make(result_type, names,
+                              {signed_distance, distance, depth, normal, point_a, point_b, iterations, status_array});
         }
     }
-    {
-        nb::gil_scoped_release release;
-        meshcol::run_batch(set.view(), pose_data, pairs.data(), p, q, threads, out, &set.radii());
-    }
-    auto held = [](auto& a) { return a ? std::optional(a->cast()) : std::nullopt; };
-    return QueryArrays{held(distance), held(depth),      held(normal),  held(point_a),
-                       held(point_b),  held(iterations), status.cast(), held(hit)};
 }
 
 std::pair<Rows, Rows> aabbs(const PackedConvexSet& set, std::optional<Poses> poses, int threads) {
@@ -101,31 +143,6 @@ Column bounding_radii(const PackedConvexSet& set, int threads) {
 }  // namespace
 
 void bind_narrowphase(nb::module_& m) {
-    // Fields are returned as they are (rv_policy::automatic): the arrays own their data.
-    const auto ro = nb::rv_policy::automatic;
-    nb::class_<QueryArrays>(m, "QueryArrays",
-                            "Arrays of a PackedConvexSet.query batch, in pair order; None for "
-                            "a field the query kind does not compute.")
-        .def_prop_ro(
-            "distance", [](const QueryArrays& r) { return r.distance; }, ro, "(P,) float64, >= 0")
-        .def_prop_ro(
-            "depth", [](const QueryArrays& r) { return r.depth; }, ro,
-            "(P,) float64, >= 0 (penetration only)")
-        .def_prop_ro(
-            "normal", [](const QueryArrays& r) { return r.normal; }, ro,
-            "(P, 3) float64, world, unit, a to b")
-        .def_prop_ro(
-            "point_a", [](const QueryArrays& r) { return r.point_a; }, ro, "(P, 3) float64, world")
-        .def_prop_ro(
-            "point_b", [](const QueryArrays& r) { return r.point_b; }, ro, "(P, 3) float64, world")
-        .def_prop_ro(
-            "iterations", [](const QueryArrays& r) { return r.iterations; }, ro, "(P,) int32")
-        .def_prop_ro(
-            "status", [](const QueryArrays& r) { return r.status; }, ro, "(P,) int8 Status codes")
-        .def_prop_ro(
-            "intersects", [](const QueryArrays& r) { return r.intersects; }, ro,
-            "(P,) bool (intersects only)");
-
     nb::class_<PackedConvexSet>(m, "PackedConvexSet",
                                 "Packed convex shapes (the arrays of meshcol.collision.shapes."
                                 "ConvexSet).")
@@ -136,8 +153,10 @@ void bind_narrowphase(nb::module_& m) {
              "adjacency"_a.none(), "face_offsets"_a.none(), "face_normals"_a.none(),
              "edge_offsets"_a.none(), "edge_directions"_a.none())
         .def("__len__", &PackedConvexSet::size)
-        .def("query", &query, "kind"_a, "poses"_a.none(), "pairs"_a, "threads"_a = 0,
-             "Runs query kind (0 distance, 1 penetration, 2 intersects) on (P, 2) pairs.")
+        .def("query_object", &query_object, "layout"_a, "poses"_a.none(), "pairs"_a.none(),
+             "threads"_a, "result_type"_a,
+             "One batch as result_type (layout 0 distance, 1 penetration, 2 intersects, 3 "
+             "signed distance); None when poses or pairs are not in the core's form.")
         .def("aabbs", &aabbs, "poses"_a.none(), "threads"_a = 0,
              "World AABBs (H, 3), (H, 3) under poses (None: identity).")
         .def("bounding_radii", &bounding_radii, "threads"_a = 0,

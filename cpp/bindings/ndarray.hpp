@@ -202,8 +202,8 @@ private:
     }
 };
 
-/// A new, uninitialised, C-contiguous numpy array of T (bool, std::int8_t, std::int64_t or
-/// double), of `n` entries or, with `columns` > 0, of shape (n, columns), and its data in
+/// A new, uninitialised, C-contiguous numpy array of T (bool, std::int8_t, std::int32_t,
+/// std::int64_t or double), of `n` entries or, with `columns` > 0, of shape (n, columns), and its data in
 /// `*data`, for results of a few entries: numpy's own constructor
 /// (NumpyApi) costs a small fraction of exporting an `Out` (numpy.asarray of a DLPack view),
 /// numpy.empty about a third. The data pointer is read where every extension compiled against
@@ -213,16 +213,20 @@ private:
 /// disagree. Holds the GIL.
 template <class T>
 nb::object numpy_empty(size_t n, T** data, size_t columns = 0) {
-    static_assert(std::is_same_v<T, bool> || std::is_same_v<T, std::int8_t> || std::is_same_v<T, std::int64_t> ||
-                      std::is_same_v<T, double>,
+    static_assert(std::is_same_v<T, bool> || std::is_same_v<T, std::int8_t> || std::is_same_v<T, std::int32_t> ||
+                      std::is_same_v<T, std::int64_t> || std::is_same_v<T, double>,
                   "add the dtype");
-    // NPY_BOOL, NPY_BYTE, NPY_LONG or NPY_LONGLONG (whichever is 64 bits), NPY_DOUBLE
+    // NPY_BOOL, NPY_BYTE, NPY_INT (32 bits where int is), NPY_LONG or NPY_LONGLONG (whichever
+    // is 64 bits), NPY_DOUBLE
+    static_assert(sizeof(int) == 4, "NPY_INT is int32 only where int is 32 bits");
     constexpr int type_number = std::is_same_v<T, bool>           ? 0
                                 : std::is_same_v<T, std::int8_t>  ? 1
+                                : std::is_same_v<T, std::int32_t> ? 5
                                 : std::is_same_v<T, std::int64_t> ? (sizeof(long) == 8 ? 7 : 9)
                                                                   : 12;
     constexpr const char* type_name = std::is_same_v<T, bool>           ? "bool"
                                       : std::is_same_v<T, std::int8_t>  ? "int8"
+                                      : std::is_same_v<T, std::int32_t> ? "int32"
                                       : std::is_same_v<T, std::int64_t> ? "int64"
                                                                         : "float64";
     static int layout_checked = 0;  // 0: not yet, 1: the struct read agrees, -1: use the buffer

@@ -104,8 +104,10 @@ class PackedConvexSet {
 
     /// Throws unless every index of the (P, 2) pairs names a shape of the set.
     void check_pairs(const Pairs& pairs) const {
-        const std::int64_t* idx = pairs.data();
-        for (size_t i = 0; i < 2 * pairs.shape(0); ++i)
+        check_pairs(pairs.data(), static_cast<long long>(pairs.shape(0)));
+    }
+    void check_pairs(const std::int64_t* idx, long long count) const {
+        for (long long i = 0; i < 2 * count; ++i)
             if (idx[i] < 0 || idx[i] >= view_.shape_count)
                 throw std::invalid_argument("pairs: index " + std::to_string(idx[i]) +
                                             " out of range for " +

@@ -36,11 +36,10 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Any, TypeVar
+from typing import Any, TypeVar, cast
 
 import numpy as np
 
-from meshcol._native import core
 from meshcol.collision.arrays import as_pairs, as_pose, as_poses
 from meshcol.collision.shapes import ConvexSet, as_convex_set
 from meshcol.types import Body, Status
@@ -197,21 +196,34 @@ class SignedDistanceResult:
 # ---------------------------------------------------------------------------------------------
 # Batched queries
 
-_DISTANCE, _PENETRATION, _INTERSECTS = 0, 1, 2
+# The result layouts of the core's query_object (bind_narrowphase.cpp).
+_DISTANCE, _PENETRATION, _INTERSECTS, _SIGNED_DISTANCE = 0, 1, 2, 3
+
+_Batch = TypeVar("_Batch", DistanceBatch, PenetrationBatch, SignedDistanceBatch, IntersectsBatch)
 
 
-def _run(kind: int, shapes: Any, poses: Any, pairs: Any, threads: int) -> core.QueryArrays:
-    """The native ``QueryArrays`` of one batch (fields the kind does not compute are None)."""
-    cs = as_convex_set(shapes)
-    h = len(cs)
-    return cs._core.query(kind, as_poses(poses, h), as_pairs(pairs, h), int(threads))
-
-
-def _computed(field: np.ndarray | None) -> np.ndarray:
-    """A field of ``QueryArrays`` that the batch's kind computes (only the others are None)."""
-    if field is None:
-        raise AssertionError("the core left out a field its query kind computes")
-    return field
+def _batch(
+    layout: int, result_type: type[_Batch], shapes: Any, poses: Any, pairs: Any, threads: int
+) -> _Batch:
+    """One batch as ``result_type``, built by the core. Poses and pairs already in the core's
+    form (C-contiguous float64 (H, 4, 4) poses; int64 (P, 2) pairs or a list of int pairs) are
+    read in place by one native call; anything else is None, then converted and checked here
+    (as_poses, as_pairs: their messages) and asked again. A one-pair batch thus costs about its
+    query, its arrays and the result object."""
+    threads = int(threads)
+    try:
+        result = shapes._core.query_object(layout, poses, pairs, threads, result_type)
+    except AttributeError:
+        as_convex_set(shapes)  # TypeError for the wrong container
+        raise
+    if result is None:
+        h = len(shapes)
+        result = shapes._core.query_object(
+            layout, as_poses(poses, h), as_pairs(pairs, h), threads, result_type
+        )
+        if result is None:  # as_poses and as_pairs give the core's form: never declined twice
+            raise AssertionError("the core declined converted poses and pairs")
+    return cast(_Batch, result)
 
 
 def distance_batch(shapes: ConvexSet, poses: Any, pairs: Any, *, threads: int = 0) -> DistanceBatch:
@@ -238,15 +250,7 @@ def distance_batch(shapes: ConvexSet, poses: Any, pairs: Any, *, threads: int = 
     ValueError
         Wrong array shapes, non-integer pairs or an index out of range.
     """
-    r = _run(_DISTANCE, shapes, poses, pairs, threads)
-    return DistanceBatch(
-        _computed(r.distance),
-        _computed(r.point_a),
-        _computed(r.point_b),
-        _computed(r.normal),
-        _computed(r.iterations),
-        r.status,
-    )
+    return _batch(_DISTANCE, DistanceBatch, shapes, poses, pairs, threads)
 
 
 def penetration_batch(
@@ -257,15 +261,7 @@ def penetration_batch(
     Parameters and errors as :func:`distance_batch`. Separated pairs get ``depth = 0`` and
     their closest points.
     """
-    r = _run(_PENETRATION, shapes, poses, pairs, threads)
-    return PenetrationBatch(
-        _computed(r.depth),
-        _computed(r.normal),
-        _computed(r.point_a),
-        _computed(r.point_b),
-        _computed(r.iterations),
-        r.status,
-    )
+    return _batch(_PENETRATION, PenetrationBatch, shapes, poses, pairs, threads)
 
 
 def signed_distance_batch(
@@ -276,18 +272,7 @@ def signed_distance_batch(
 
     Parameters and errors as :func:`distance_batch`.
     """
-    r = _run(_PENETRATION, shapes, poses, pairs, threads)
-    distance, depth = _computed(r.distance), _computed(r.depth)
-    return SignedDistanceBatch(
-        distance - depth,
-        distance,
-        depth,
-        _computed(r.normal),
-        _computed(r.point_a),
-        _computed(r.point_b),
-        _computed(r.iterations),
-        r.status,
-    )
+    return _batch(_SIGNED_DISTANCE, SignedDistanceBatch, shapes, poses, pairs, threads)
 
 
 def intersects_batch(
@@ -298,8 +283,7 @@ def intersects_batch(
     Parameters and errors as :func:`distance_batch`; invalid pairs give ``False`` with
     ``Status.INVALID_INPUT``.
     """
-    r = _run(_INTERSECTS, shapes, poses, pairs, threads)
-    return IntersectsBatch(_computed(r.intersects), r.status)
+    return _batch(_INTERSECTS, IntersectsBatch, shapes, poses, pairs, threads)
 
 
 # ---------------------------------------------------------------------------------------------

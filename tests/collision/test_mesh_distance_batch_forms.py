@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 import trimesh
 from array_forms import pair_forms
+from strategies import turned_about_z
 
 from meshcol.collision.mesh_query import MeshDistanceBatch, MeshSet, mesh_distance_batch
 from meshcol.types import Status
@@ -39,14 +40,6 @@ DTYPES = {
 }
 
 
-def posed(angle: float, translation) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    p = np.eye(4)
-    p[:3, :3] = [[c, -s, 0], [s, c, 0], [0, 0, 1]]
-    p[:3, 3] = translation
-    return p
-
-
 def scene() -> tuple[MeshSet, np.ndarray, np.ndarray]:
     """A torus, a box inside it, one crossing it and one apart: apart, crossing, nested, and a
     non-rigid pose (its pairs INVALID_INPUT)."""
@@ -55,9 +48,9 @@ def scene() -> tuple[MeshSet, np.ndarray, np.ndarray]:
     p = np.stack(
         [
             np.eye(4),
-            posed(0.3, (1.0, 0.0, 0.0)),  # inside the torus's tube
-            posed(0.7, (1.3, 0.0, 0.0)),  # across its surface
-            posed(1.1, (4.0, 1.0, 0.5)),  # apart
+            turned_about_z(0.3, (1.0, 0.0, 0.0)),  # inside the torus's tube
+            turned_about_z(0.7, (1.3, 0.0, 0.0)),  # across its surface
+            turned_about_z(1.1, (4.0, 1.0, 0.5)),  # apart
             np.diag([2.0, 1.0, 1.0, 1.0]),  # not rigid
         ]
     )

@@ -30,6 +30,7 @@ from meshcol import (
     signed_distance,
     signed_distance_batch,
 )
+from meshcol.collision.narrowphase import SignedDistanceBatch
 from meshcol.types import Body, Status
 
 CUBE = box_corners((1, 1, 1))
@@ -419,8 +420,8 @@ def test_hill_climbing_matches_vertex_scan():
         ]
     )
     pairs = np.array([(i, j) for i in range(h) for j in range(h) if i != j], dtype=np.int64)
-    got = cs._core.query(1, pose_list, pairs, 1)
-    want = scan.query(1, pose_list, pairs, 1)
+    got = cs._core.query_object(3, pose_list, pairs, 1, SignedDistanceBatch)
+    want = scan.query_object(3, pose_list, pairs, 1, SignedDistanceBatch)
     assert np.sum(got.depth > 0) > 10 and np.sum(got.distance > 0) > 10
     np.testing.assert_array_equal(got.status, want.status)
     np.testing.assert_allclose(got.distance, want.distance, rtol=1e-12, atol=1e-14)
