@@ -25,6 +25,8 @@ class defaults:
 
     prefetch_max_vertices: int = 512
 
+    climb_prefetch_min_vertices: int = 128
+
     gjk_max_iterations: int = 128
 
     support_warm_start_min_cosine: float = 0.5

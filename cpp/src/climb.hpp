@@ -5,6 +5,7 @@
 
 #include <cstdint>
 
+#include "meshcol/defaults.hpp"
 #include "meshcol/shapes.hpp"
 #include "meshcol/vec.hpp"
 
@@ -97,7 +98,9 @@ MESHCOL_CLIMB_INLINE int climb_start(const ShapeView& s, const Vec3& d, int hint
 }
 
 // One step of steepest ascent from `best`: the best neighbour strictly above `best_dot`
-// (first in list order on ties), or -1 at a local (hence global) maximum.
+// (first in list order on ties), or -1 at a local (hence global) maximum. `kPrefetch`: ask
+// for each neighbour's own list as it is read (below).
+template <bool kPrefetch = true>
 MESHCOL_CLIMB_INLINE int climb_step(const ShapeView& s, const Vec3& d, int best,
                                     double& best_dot) {
     const Vec3* v = s.vertices;
@@ -108,14 +111,14 @@ MESHCOL_CLIMB_INLINE int climb_step(const ShapeView& s, const Vec3& d, int best,
     // so the trip count is predictable), then any remainder (lists packed by other means).
     // The body is written out twice on purpose: shared through a lambda, GCC's code for it
     // ran 2% slower (A/B, 64-vertex penetration).
-    // Each neighbour's own list is asked for as it is read: the next step's list is then in
-    // the nearest cache whichever neighbour wins, and the step waits on one load fewer (at 256
-    // vertices a shape, a fifth of a deep pair's time; the same answers).
+    // With `kPrefetch`, each neighbour's own list is asked for as it is read: the next step's
+    // list is then in the nearest cache whichever neighbour wins, and the step waits on one
+    // load fewer (at 256 vertices a shape, a fifth of a deep pair's time; the same answers).
     std::int64_t k = begin;
     for (; k + 3 < end; k += 4) {
         for (int l = 0; l < 4; ++l) {
             const int j = s.adjacency[k + l];
-            MESHCOL_CLIMB_PREFETCH(s.adjacency + s.adjacency_offsets[j]);
+            if constexpr (kPrefetch) MESHCOL_CLIMB_PREFETCH(s.adjacency + s.adjacency_offsets[j]);
             const double dj = dot(v[j], d);
             if (dj > best_dot) {
                 best_dot = dj;
@@ -136,18 +139,19 @@ MESHCOL_CLIMB_INLINE int climb_step(const ShapeView& s, const Vec3& d, int best,
 
 // A climb's step from `best` when still going up: `best` moves, or `up` turns false at the
 // top.
+template <bool kPrefetch = true>
 MESHCOL_CLIMB_INLINE void advance(const ShapeView& s, const Vec3& d, int& best, double& best_dot,
                                   bool& up) {
-    const int next = climb_step(s, d, best, best_dot);
+    const int next = climb_step<kPrefetch>(s, d, best, best_dot);
     up = next >= 0;
     best = up ? next : best;
 }
 
-/// `support_core` of two climbing shapes at once (`climbs` true for both): a in `da` from
-/// `hint_a`, b in `db` from `hint_b` (negative: no hint). Same answers as two calls, faster.
-MESHCOL_CLIMB_INLINE void climb_pair(const ShapeView& a, const Vec3& da, int hint_a,
-                                     const ShapeView& b, const Vec3& db, int hint_b,
-                                     SupportPoint& out_a, SupportPoint& out_b) {
+// `climb_pair`'s body, with or without the neighbour lists' prefetch.
+template <bool kPrefetch>
+MESHCOL_CLIMB_INLINE void climb_pair_with(const ShapeView& a, const Vec3& da, int hint_a,
+                                          const ShapeView& b, const Vec3& db, int hint_b,
+                                          SupportPoint& out_a, SupportPoint& out_b) {
     // Both climbs advance in one loop: each step is a chain of dependent loads and compares,
     // and two independent chains side by side keep the core busy while either waits.
     double dot_a, dot_b;
@@ -158,19 +162,37 @@ MESHCOL_CLIMB_INLINE void climb_pair(const ShapeView& a, const Vec3& da, int hin
     bool up_a = true, up_b = true;
     int steps_a = 0, steps_b = 0;
     while (up_a && up_b && steps_a < a.vertex_count) {
-        advance(a, da, best_a, dot_a, up_a);
-        advance(b, db, best_b, dot_b, up_b);
+        advance<kPrefetch>(a, da, best_a, dot_a, up_a);
+        advance<kPrefetch>(b, db, best_b, dot_b, up_b);
         ++steps_a;
         ++steps_b;
     }
-    for (; up_a && steps_a < a.vertex_count; ++steps_a) advance(a, da, best_a, dot_a, up_a);
-    for (; up_b && steps_b < b.vertex_count; ++steps_b) advance(b, db, best_b, dot_b, up_b);
+    for (; up_a && steps_a < a.vertex_count; ++steps_a)
+        advance<kPrefetch>(a, da, best_a, dot_a, up_a);
+    for (; up_b && steps_b < b.vertex_count; ++steps_b)
+        advance<kPrefetch>(b, db, best_b, dot_b, up_b);
     // A capped climb (never seen: the edge graph is finite and every step goes up) falls
     // back to the scan.
     if (up_a) best_a = scan_support(a.vertices, a.vertex_count, da);
     if (up_b) best_b = scan_support(b.vertices, b.vertex_count, db);
     out_a = {a.vertices[best_a], best_a};
     out_b = {b.vertices[best_b], best_b};
+}
+
+/// `support_core` of two climbing shapes at once (`climbs` true for both): a in `da` from
+/// `hint_a`, b in `db` from `hint_b` (negative: no hint). Same answers as two calls, faster.
+/// The neighbour lists are prefetched only when a shape has at least
+/// `defaults::climb_prefetch_min_vertices` vertices: a smaller one's lists are already near
+/// (`prefetch` asked for the whole shape), and the prefetch would cost two instructions a
+/// neighbour for nothing.
+MESHCOL_CLIMB_INLINE void climb_pair(const ShapeView& a, const Vec3& da, int hint_a,
+                                     const ShapeView& b, const Vec3& db, int hint_b,
+                                     SupportPoint& out_a, SupportPoint& out_b) {
+    if (a.vertex_count >= defaults::climb_prefetch_min_vertices ||
+        b.vertex_count >= defaults::climb_prefetch_min_vertices)
+        climb_pair_with<true>(a, da, hint_a, b, db, hint_b, out_a, out_b);
+    else
+        climb_pair_with<false>(a, da, hint_a, b, db, hint_b, out_a, out_b);
 }
 
 }  // namespace climb

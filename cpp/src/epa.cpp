@@ -340,6 +340,41 @@ bool holds_origin(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
     return whole < 0.0 && va < 0.0 && vb < 0.0 && vc < 0.0 && vd < 0.0;
 }
 
+// Starts `poly` from the octahedron with apexes `first` and `back` and the ring's four points
+// around them, when it is the six points' convex hull (every face has the other three
+// vertices strictly behind it) and holds the origin clear of every face by more than `tol`.
+// The same polytope as a tetrahedron of them with the other two ring points added, without
+// the two expansions; false (and `poly` to be reset) otherwise.
+bool start_octahedron(Polytope& poly, const SimplexVertex& first, const SimplexVertex& back,
+                      const SimplexVertex ring[4], double tol) {
+    poly.reset();
+    poly.add_vertex(first);  // 0
+    poly.add_vertex(back);   // 1
+    // The ring in the order that makes (first, ring[i], ring[i + 1]) face away from `back`
+    // (when the guess is wrong, the tests below fail).
+    const bool forward =
+        dot(cross(ring[0].w - first.w, ring[1].w - first.w), back.w - first.w) < 0.0;
+    for (int r = 0; r < 4; ++r) poly.add_vertex(ring[forward ? r : 3 - r]);  // 2 to 5
+    // Slots 0-3: (first, ring i, ring i + 1); slots 4-7: (back, ring i + 1, ring i).
+    for (int i = 0; i < 4; ++i) poly.add_face(0, 2 + i, 2 + (i + 1) % 4);
+    for (int i = 0; i < 4; ++i) poly.add_face(1, 2 + (i + 1) % 4, 2 + i);
+    for (int f = 0; f < 8; ++f) {
+        const EpaFace& face = poly.faces[f];
+        if (!(poly.distance[f] > tol * tol) || !std::isfinite(poly.distance[f])) return false;
+        for (int q = 0; q < 6; ++q) {
+            if (q == face.v[0] || q == face.v[1] || q == face.v[2]) continue;
+            if (!(dot(face.normal, poly.vertices[q].w) < face.offset)) return false;
+        }
+    }
+    for (int i = 0; i < 4; ++i) {
+        const int next = (i + 1) % 4;
+        poly.link(i, 2, next, 0);          // ring i + 1 -> first, first -> ring i + 1
+        poly.link(i, 1, 4 + i, 1);         // ring i -> ring i + 1, and back below it
+        poly.link(4 + i, 0, 4 + next, 2);  // back -> ring i + 1, ring i + 1 -> back
+    }
+    return true;
+}
+
 // EPA's loop on a polytope that holds the origin (van den Bergen 2003, sec. 4.3.9): the
 // closest face of the polytope to the origin gives a lower bound on the depth, the support
 // point in its normal an upper bound; a new support point removes every face it sees and
@@ -482,14 +517,21 @@ EpaResult epa_penetration_deep(MinkowskiDifference& md, const SimplexVertex& fir
         if (!(dot(ring[r].w, directions[r]) > deep * ring_length)) return res;
     }
     const SimplexVertex back = md.support(-n);
-    // The segment back -> first crosses the ring's span near the origin on a deep pair: one
-    // of the four tetrahedra around it holds the origin, which must be clear of its faces by
-    // more than the contact distance (else the pair is left to GJK).
+    // The segment back -> first crosses the ring's span near the origin on a deep pair, and
+    // the six points' hull is most often the octahedron around that segment: EPA starts there
+    // when it holds the origin clear of its faces by more than the contact distance.
+    Polytope& poly = thread_polytope();
+    if (start_octahedron(poly, first, back, ring, tol)) {
+        res = expand_to_depth(md, poly, opt, tol);
+        res.iterations += 6;
+        return res;
+    }
+    // Else one of the four tetrahedra around the segment must hold the origin, clear of its
+    // faces (else the pair is left to GJK), and the other two ring points are added to it.
     int held = -1;
     for (int r = 0; r < 4 && held < 0; ++r)
         if (holds_origin(back.w, first.w, ring[r].w, ring[(r + 1) % 4].w)) held = r;
     if (held < 0) return res;
-    Polytope& poly = thread_polytope();
     SimplexVertex start[4] = {back, first, ring[held], ring[(held + 1) % 4]};
     start_tetrahedron(poly, start);
     for (int f = 0; f < 4; ++f)
