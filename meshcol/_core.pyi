@@ -55,7 +55,7 @@ class defaults:
 
     sat_max_work: int = 40000
 
-    sat_edge_class_prefix: int = 32
+    sat_edge_class_prefix: int = 8
 
     sat_parallel_edge_sine: float = 1e-09
 

@@ -102,20 +102,21 @@ EdgeClasses::List EdgeClasses::get(const ConvexSetView& set, std::int64_t h) {
             static_cast<int>(entry->directions.size() / 3)};
 }
 
-int EdgeClasses::lower_bound(const ConvexSetView& set, std::int64_t h) {
+int EdgeClasses::lower_bound(const ConvexSetView& set, std::int64_t h, int wanted) {
     if (const Entry* entry = entries_[h].load(std::memory_order_acquire))
         return static_cast<int>(entry->directions.size() / 3);
-    const int known = lower_[h].load(std::memory_order_relaxed);
-    if (known > 0) return known - 1;
+    const int known = lower_[h].load(std::memory_order_relaxed) - 1;  // -1: none yet
+    if (known >= wanted) return known;
     const std::int64_t first = set.edge_pair_offsets[h];
     const std::int64_t count = set.edge_pair_offsets[h + 1] - first;
-    // Few edges: the classes themselves, kept, cost about what the bound would.
-    if (count <= defaults::sat_edge_class_prefix) return get(set, h).count;
-    const auto bound = static_cast<int>(
-        edge_direction_class_count(shape_vertices(set, h), set.edge_pairs + 2 * first,
-                                   static_cast<size_t>(defaults::sat_edge_class_prefix)));
-    lower_[h].store(bound + 1, std::memory_order_relaxed);
-    return bound;
+    const std::int64_t prefix = std::max<std::int64_t>(wanted, defaults::sat_edge_class_prefix);
+    // Most of the edges: the classes themselves, kept, cost about what the bound would.
+    if (4 * prefix >= 3 * count) return get(set, h).count;
+    const auto bound = static_cast<int>(edge_direction_class_count(
+        shape_vertices(set, h), set.edge_pairs + 2 * first, static_cast<size_t>(prefix)));
+    // Any bound found is one (a thread's smaller one may replace a larger: still a bound).
+    if (bound > known) lower_[h].store(bound + 1, std::memory_order_relaxed);
+    return std::max(bound, known);
 }
 
 void attach_edges(ShapeView& shape) {
@@ -127,9 +128,15 @@ void attach_edges(ShapeView& shape) {
     shape.set_index = -1;
 }
 
-int edge_count_lower_bound(const ShapeView& shape) {
+int edge_count_upper_bound(const ShapeView& shape) {
     if (shape.set == nullptr) return shape.edge_count;
-    return shape.set->edge_classes->lower_bound(*shape.set, shape.set_index);
+    const std::int64_t* offsets = shape.set->edge_pair_offsets;
+    return static_cast<int>(offsets[shape.set_index + 1] - offsets[shape.set_index]);
+}
+
+int edge_count_lower_bound(const ShapeView& shape, int wanted) {
+    if (shape.set == nullptr) return shape.edge_count;
+    return shape.set->edge_classes->lower_bound(*shape.set, shape.set_index, wanted);
 }
 
 namespace {

@@ -1,5 +1,6 @@
 #include "meshcol/sat.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -170,19 +171,45 @@ SatResult sat_attached(const ShapeView& a, const Pose& pose_a, const ShapeView& 
 // A polytope whose edge classes are computed on first use (ShapeView::set) gets them attached
 // only when the work bound may let SAT run and its partner may have edges. The work
 // (F_a + F_b + 2 E_a E_b)(V_a + V_b) only grows with the class counts: when it is above
-// max_work with lower bounds of the counts (0, then the set's cached bound), it is above with
-// the counts themselves, and SAT returns unrun, as it would with the classes attached. And
-// against a partner without edges a shape's count adds nothing to the work and its directions
-// are never read.
+// max_work with lower bounds of the counts (0, then the classes of a prefix of the edges, as
+// long as the pair needs: EdgeClasses::lower_bound), it is above with the counts themselves,
+// and SAT returns unrun, as it would with the classes attached. Against a partner without
+// edges a shape's count adds nothing to the work, and its directions are never read.
 SatResult sat_penetration(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
                           const Pose& pose_b, long long max_work) {
     if (!has_sat_features(a) || !has_sat_features(b)) return SatResult{};
     if (a.set == nullptr && b.set == nullptr) return sat_attached(a, pose_a, b, pose_b, max_work);
     const Features fa = features_of(a), fb = features_of(b);
     if (work(fa, fa.edge_count, fb, fb.edge_count) > max_work) return SatResult{};
-    const int lower_a = a.set != nullptr ? edge_count_lower_bound(a) : fa.edge_count;
-    const int lower_b = b.set != nullptr ? edge_count_lower_bound(b) : fb.edge_count;
-    if (work(fa, lower_a, fb, lower_b) > max_work) return SatResult{};
+    // Classes are at most the true edges: when the work with those counts is within the cap,
+    // SAT runs. Else the counts that would put the work above the cap: against a known count,
+    // the fewest such; both unknown, the fewest that do so on both sides alike (0: the count
+    // adds nothing to the work, the partner having no edges).
+    const int upper_a = a.set != nullptr ? edge_count_upper_bound(a) : fa.edge_count;
+    const int upper_b = b.set != nullptr ? edge_count_upper_bound(b) : fb.edge_count;
+    if (work(fa, upper_a, fb, upper_b) > max_work) {
+        long long wanted_a = 0, wanted_b = 0;
+        const long long vertices = std::max(fa.vertices + fb.vertices, 1);
+        if (a.set != nullptr && b.set != nullptr) {
+            const long long spare = max_work / vertices - fa.face_count - fb.face_count;
+            auto both = static_cast<long long>(
+                std::sqrt(0.5 * static_cast<double>(std::max(spare, 0LL))));
+            const long long most = std::max(upper_a, upper_b);  // the work is above the cap there
+            while (both < most && work(fa, both, fb, both) <= max_work) ++both;
+            wanted_a = wanted_b = both;
+        } else if (a.set != nullptr && fb.edge_count > 0) {
+            wanted_a = (max_work - work(fa, 0, fb, 0)) / (2LL * fb.edge_count * vertices) + 1;
+        } else if (b.set != nullptr && fa.edge_count > 0) {
+            wanted_b = (max_work - work(fa, 0, fb, 0)) / (2LL * fa.edge_count * vertices) + 1;
+        }
+        const auto bound = [](const ShapeView& s, long long wanted, int upper) {
+            if (wanted == 0) return 0;
+            return edge_count_lower_bound(s, static_cast<int>(std::min<long long>(wanted, upper)));
+        };
+        const int lower_a = a.set != nullptr ? bound(a, wanted_a, upper_a) : fa.edge_count;
+        const int lower_b = b.set != nullptr ? bound(b, wanted_b, upper_b) : fb.edge_count;
+        if (work(fa, lower_a, fb, lower_b) > max_work) return SatResult{};
+    }
     ShapeView whole_a = a, whole_b = b;
     if (b.set != nullptr || fb.edge_count > 0) attach_edges(whole_a);
     if (features_of(whole_a).edge_count > 0) attach_edges(whole_b);

@@ -86,6 +86,7 @@ TEST_CASE("edge classes: threads asking for the same shapes at once get the clas
         std::vector<std::vector<EdgeClasses::List>> got(kThreads,
                                                         std::vector<EdgeClasses::List>(h_count));
         std::vector<std::vector<int>> bounds(kThreads, std::vector<int>(h_count, -1));
+        auto wanted = [](size_t h, int t) { return 1 + static_cast<int>((h * 5 + 3 * t) % 40); };
         std::atomic<int> ready{0};
         std::vector<std::thread> threads;
         for (int t = 0; t < kThreads; ++t)
@@ -96,7 +97,8 @@ TEST_CASE("edge classes: threads asking for the same shapes at once get the clas
                     const size_t h = round == 0 ? k : (k * 7 + 61 * static_cast<size_t>(t)) % h_count;
                     // half the threads ask for the bound first (which may compute the classes)
                     if ((t + static_cast<int>(h)) % 2 == 0)
-                        bounds[t][h] = classes.lower_bound(set, static_cast<std::int64_t>(h));
+                        bounds[t][h] =
+                            classes.lower_bound(set, static_cast<std::int64_t>(h), wanted(h, t));
                     got[t][h] = classes.get(set, static_cast<std::int64_t>(h));
                 }
             });
@@ -113,8 +115,16 @@ TEST_CASE("edge classes: threads asking for the same shapes at once get the clas
                 CHECK(same_bytes(reinterpret_cast<const double*>(l.directions), want.data(),
                                  want.size()));
                 if (bounds[t][h] >= 0) {
+                    // a bound, and at least the wanted count when the prefix holds it
+                    const std::int64_t prefix = std::min<std::int64_t>(
+                        pairs, std::max(wanted(h, t), defaults::sat_edge_class_prefix));
+                    const std::int64_t first = s.packed.edge_pair_offsets[h];
+                    const std::int64_t in_prefix = edge_direction_class_count(
+                        reinterpret_cast<const Vec3*>(s.packed.vertices.data()) + s.packed.offsets[h],
+                        s.packed.edge_pairs.data() + 2 * first, static_cast<size_t>(prefix));
                     CHECK(bounds[t][h] <= l.count);
-                    if (pairs <= defaults::sat_edge_class_prefix) CHECK_EQ(bounds[t][h], l.count);
+                    CHECK(bounds[t][h] >= std::min<std::int64_t>(wanted(h, t), in_prefix));
+                    if (4 * prefix >= 3 * pairs) CHECK_EQ(bounds[t][h], l.count);
                     bounded += bounds[t][h] < l.count;
                 }
                 ++checked;
@@ -183,7 +193,7 @@ TEST_CASE("edge classes: SAT's work bound decides on lower bounds as on the clas
     for (std::int64_t h = 0; h < set.shape_count; ++h) {
         if (h % 6 > 1 || s.packed.offsets[h + 1] - s.packed.offsets[h] < 64) continue;
         ++smooth;
-        uncomputed += classes.lower_bound(set, h) < attached_classes.get(attached_set, h).count;
+        uncomputed += classes.lower_bound(set, h, 1) < attached_classes.get(attached_set, h).count;
     }
     CHECK(smooth > 5);
     CHECK_EQ(uncomputed, smooth);

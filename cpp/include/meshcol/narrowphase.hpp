@@ -69,10 +69,11 @@ class EdgeClasses {
     /// Shape `h`'s classes of `set` (whose cache this is), computed on first use.
     List get(const ConvexSetView& set, std::int64_t h);
 
-    /// A lower bound on shape `h`'s class count, found without computing them all (the
-    /// classes of its first `defaults::sat_edge_class_prefix` edges, or all of them when
-    /// there are no more; kept like the classes).
-    int lower_bound(const ConvexSetView& set, std::int64_t h);
+    /// A lower bound on shape `h`'s class count, at least `wanted` when the count is, found
+    /// without computing them all where it can be: the classes of its first
+    /// max(`wanted`, `defaults::sat_edge_class_prefix`) edges (the classes themselves, kept,
+    /// when that is most of them). The largest bound found is kept like the classes.
+    int lower_bound(const ConvexSetView& set, std::int64_t h, int wanted);
 
   private:
     struct Entry;

@@ -55,8 +55,13 @@ struct ShapeView {
 void attach_edges(ShapeView& shape);
 
 /// A lower bound on a polytope's edge-class count: `edge_count` when its directions are
-/// complete, else from its set's cache without computing them all.
-int edge_count_lower_bound(const ShapeView& shape);
+/// complete, else from its set's cache without computing them all where it can (at least
+/// `wanted` when the count is: see narrowphase.hpp, `EdgeClasses::lower_bound`).
+int edge_count_lower_bound(const ShapeView& shape, int wanted);
+
+/// An upper bound on a polytope's edge-class count: `edge_count` when its directions are
+/// complete, else its number of true edges.
+int edge_count_upper_bound(const ShapeView& shape);
 
 /// A support point of a shape's core with the feature that produced it.
 struct SupportPoint {
