@@ -105,7 +105,7 @@ EdgeClasses::List EdgeClasses::get(const ConvexSetView& set, std::int64_t h) {
 int EdgeClasses::lower_bound(const ConvexSetView& set, std::int64_t h, int wanted) {
     if (const Entry* entry = entries_[h].load(std::memory_order_acquire))
         return static_cast<int>(entry->directions.size() / 3);
-    const int known = lower_[h].load(std::memory_order_relaxed) - 1;  // -1: none yet
+    const int known = std::max(lower_[h].load(std::memory_order_relaxed) - 1, 0);  // 0: none yet
     if (known >= wanted) return known;
     const std::int64_t first = set.edge_pair_offsets[h];
     const std::int64_t count = set.edge_pair_offsets[h + 1] - first;

@@ -181,6 +181,11 @@ SatResult sat_penetration(const ShapeView& a, const Pose& pose_a, const ShapeVie
     if (a.set == nullptr && b.set == nullptr) return sat_attached(a, pose_a, b, pose_b, max_work);
     const Features fa = features_of(a), fb = features_of(b);
     if (work(fa, fa.edge_count, fb, fb.edge_count) > max_work) return SatResult{};
+    // The bounds (or counts) earlier pairs found, read without computing: they settle most
+    // pairs of shapes met before.
+    if (work(fa, a.set != nullptr ? edge_count_lower_bound(a, 0) : fa.edge_count, fb,
+             b.set != nullptr ? edge_count_lower_bound(b, 0) : fb.edge_count) > max_work)
+        return SatResult{};
     // Classes are at most the true edges: when the work with those counts is within the cap,
     // SAT runs. Else the counts that would put the work above the cap: against a known count,
     // the fewest such; both unknown, the fewest that do so on both sides alike (0: the count

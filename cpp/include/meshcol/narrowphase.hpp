@@ -72,7 +72,8 @@ class EdgeClasses {
     /// A lower bound on shape `h`'s class count, at least `wanted` when the count is, found
     /// without computing them all where it can be: the classes of its first
     /// max(`wanted`, `defaults::sat_edge_class_prefix`) edges (the classes themselves, kept,
-    /// when that is most of them). The largest bound found is kept like the classes.
+    /// when that is most of them). The largest bound found is kept like the classes;
+    /// `wanted` 0 reads it (or the count) without computing anything.
     int lower_bound(const ConvexSetView& set, std::int64_t h, int wanted);
 
   private:
