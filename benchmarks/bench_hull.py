@@ -255,9 +255,19 @@ def families(shapes: int, sizes: list[int]) -> list[tuple[str, np.ndarray]]:
 
 
 def digest(packed: object) -> str:
+    """A hash of the packed arrays and of the edge classes, the same for a build that packs
+    the classes and one that packs the edges and computes them (a ConvexSet's fields)."""
+    from meshcol import ConvexSet
+
     h = hashlib.sha256()
     for field in dataclasses.fields(packed):  # type: ignore[arg-type]
-        h.update(np.ascontiguousarray(getattr(packed, field.name)).tobytes())
+        if not field.name.startswith("edge_"):
+            h.update(np.ascontiguousarray(getattr(packed, field.name)).tobytes())
+    count = len(packed.status)  # type: ignore[attr-defined]
+    polytopes = np.arange(count, dtype=np.int64)
+    cs = ConvexSet._assemble(np.zeros(count, np.int8), np.zeros((count, 4)), polytopes, packed)  # type: ignore[arg-type]
+    h.update(cs.edge_offsets.tobytes())
+    h.update(cs.edge_directions.tobytes())
     return h.hexdigest()[:16]
 
 

@@ -1,7 +1,10 @@
 // A driver for callgrind and perf (issue 32, item 2): pack_polytopes, one thread by default,
 // on H shapes of n points: "hull" (random ellipsoids, randomly turned: every point a vertex),
 // "cloud" (Gaussian), or a degenerate family (grid, noisy, flat, line, dup, huge, tiny, box).
-// HASH=1 prints a hash of the packed arrays (compare two builds on the same inputs).
+// HASH=1 prints a hash of the packed arrays and of the edge classes (compare two builds on the
+// same inputs: a build whose packing stores the classes hashes them in the same place as one
+// that computes them from the packed edges, so equal hashes mean equal classes; -DEAGER_EDGES
+// for a core from before the classes were computed lazily).
 //
 // Build (from the repository's root) and count:
 //   g++ -std=gnu++17 -O3 -g -Icpp/include -Icpp/src benchmarks/hull_driver.cpp
@@ -66,7 +69,23 @@ int main(int argc, char** argv) {
     mix(p.status.data(), p.status.size()); mix(p.vertices.data(), 8*p.vertices.size()); mix(p.offsets.data(), 8*p.offsets.size());
     mix(p.adjacency_offsets.data(), 8*p.adjacency_offsets.size()); mix(p.adjacency.data(), 4*p.adjacency.size());
     mix(p.face_offsets.data(), 8*p.face_offsets.size()); mix(p.face_normals.data(), 8*p.face_normals.size());
-    mix(p.edge_offsets.data(), 8*p.edge_offsets.size()); mix(p.edge_directions.data(), 8*p.edge_directions.size());
-    std::printf("hash %016llx faces %zu edges %zu\n", (unsigned long long)hsh, p.face_normals.size()/3, p.edge_directions.size()/3);
+#ifdef EAGER_EDGES
+    const std::vector<std::int64_t>& edge_offsets = p.edge_offsets;
+    const std::vector<double>& edge_directions = p.edge_directions;
+#else
+    // The classes as SAT computes them, shape by shape, from the packed vertices and edges.
+    std::vector<std::int64_t> edge_offsets{0};
+    std::vector<double> edge_directions;
+    for (long long h = 0; h < H; ++h) {
+        const std::int64_t first = p.edge_pair_offsets[h];
+        const std::int64_t count = edge_direction_classes(
+            reinterpret_cast<const Vec3*>(p.vertices.data()) + p.offsets[h],
+            p.edge_pairs.data() + 2 * first, static_cast<size_t>(p.edge_pair_offsets[h + 1] - first),
+            edge_directions);
+        edge_offsets.push_back(edge_offsets.back() + count);
+    }
+#endif
+    mix(edge_offsets.data(), 8*edge_offsets.size()); mix(edge_directions.data(), 8*edge_directions.size());
+    std::printf("hash %016llx faces %zu edges %zu\n", (unsigned long long)hsh, p.face_normals.size()/3, edge_directions.size()/3);
     return 0;
 }

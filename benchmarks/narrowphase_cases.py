@@ -1,6 +1,9 @@
 """Dumps bench_narrowphase.py's smooth-hull cases (16, 64 and 256 points; separated, touching
 and penetrating; 2,000 pairs each) as raw arrays for narrowphase_driver.cpp, so that
-callgrind counts the core's instructions on exactly the benchmark's pairs.
+callgrind counts the core's instructions on exactly the benchmark's pairs; and the same cases
+of 8-point hulls, the one size whose penetrating pairs run SAT (its work bound stops it on
+the larger ones). The set's computed edge classes (``edge_offsets``, ``edge_directions``) are
+written beside its arrays, for a core from before they were computed on first use.
 
 Run: .venv/bin/python benchmarks/narrowphase_cases.py OUT_DIR
 """
@@ -20,12 +23,13 @@ from bench_narrowphase import make_case, touching_case
 def main() -> None:
     out = Path(sys.argv[1])
     out.mkdir(parents=True, exist_ok=True)
-    for n in (16, 64, 256):
+    for n in (8, 16, 64, 256):
         for label in ("separated", "touching", "penetrating"):
             cs, poses, pairs, shapes = make_case(n, 2000, label == "penetrating", seed=n)
             if label == "touching":
                 cs, poses, pairs, shapes = touching_case(cs, poses, pairs, shapes)
-            arrays = {f: np.ascontiguousarray(getattr(cs, f)) for f in cs._FIELDS}
+            fields = (*cs._FIELDS, "edge_offsets", "edge_directions")
+            arrays = {f: np.ascontiguousarray(getattr(cs, f)) for f in fields}
             arrays["poses"] = np.ascontiguousarray(poses, dtype=np.float64)
             arrays["pairs"] = np.ascontiguousarray(pairs, dtype=np.int64)
             case = out / f"{n}_{label}"

@@ -7,8 +7,9 @@
 //   valgrind --tool=callgrind ./driver cases/64_penetrating 1 1
 // It prints the best CPU time of REPEAT runs a pair and checksums of the results (equal
 // checksums: the same answers), and writes the raw results when asked. The runs share the
-// set's checked radii, as the extension's batches on one set do (a core without
-// `ShapeRadii`: build with -DNO_SHAPE_RADII).
+// set's checked radii and edge classes, as the extension's batches on one set do (a core
+// without `ShapeRadii`: build with -DNO_SHAPE_RADII; one whose set holds the edge classes
+// themselves, not the edges they are computed from: -DEAGER_EDGES).
 // narrowphase_identity.py compares two checkouts' raw results on every case, byte for byte.
 #include <cstdio>
 #include <cstdlib>
@@ -38,8 +39,13 @@ int main(int argc, char** argv) {
     auto adj = load<std::int32_t>(dir, "adjacency");
     auto face_off = load<std::int64_t>(dir, "face_offsets");
     auto face_n = load<double>(dir, "face_normals");
+#ifdef EAGER_EDGES
     auto edge_off = load<std::int64_t>(dir, "edge_offsets");
     auto edge_d = load<double>(dir, "edge_directions");
+#else
+    auto edge_pair_off = load<std::int64_t>(dir, "edge_pair_offsets");
+    auto edge_pairs = load<std::int32_t>(dir, "edge_pairs");
+#endif
     auto poses = load<double>(dir, "poses");
     auto pairs = load<std::int64_t>(dir, "pairs");
     ConvexSetView s;
@@ -47,7 +53,13 @@ int main(int argc, char** argv) {
     s.offsets = offsets.data(); s.shape_count = kinds.size(); s.kinds = kinds.data();
     s.params = params.data(); s.adjacency_offsets = adj_off.data(); s.adjacency = adj.data();
     s.face_offsets = face_off.data(); s.face_normals = face_n.data();
+#ifdef EAGER_EDGES
     s.edge_offsets = edge_off.data(); s.edge_directions = edge_d.data();
+#else
+    EdgeClasses classes(s.shape_count);
+    s.edge_pair_offsets = edge_pair_off.data(); s.edge_pairs = edge_pairs.data();
+    s.edge_classes = &classes;
+#endif
     long long p = pairs.size() / 2;
     std::vector<double> dist(p), depth(p), normal(3 * p), pa(3 * p), pb(3 * p);
     std::vector<std::int32_t> its(p);

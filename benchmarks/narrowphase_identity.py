@@ -28,6 +28,8 @@ def build(checkout: Path, out: Path) -> Path:
     header = checkout / "cpp" / "include" / "meshcol" / "narrowphase.hpp"
     if "class ShapeRadii" not in header.read_text():
         cmd.append("-DNO_SHAPE_RADII")  # a core from before the radii kept between batches
+    if "class EdgeClasses" not in header.read_text():
+        cmd.append("-DEAGER_EDGES")  # a core from before the edge classes were computed lazily
     subprocess.run([*cmd, *sources, "-lpthread", "-o", str(out)], check=True)
     return out
 

@@ -101,7 +101,7 @@ void bind_hull(nb::module_& m) {
             for (size_t i = 0; i < status.size(); ++i)
                 status[i] = static_cast<std::int8_t>(p.status[i]);
             const size_t v = p.vertices.size() / 3, k = p.adjacency.size();
-            const size_t f = p.face_normals.size() / 3, e = p.edge_directions.size() / 3;
+            const size_t f = p.face_normals.size() / 3, e = p.edge_pairs.size() / 2;
             const size_t hs = static_cast<size_t>(h);
             return std::make_tuple(
                 vector_array<Out<std::int8_t, -1>>(std::move(status), hs, 0),
@@ -111,11 +111,11 @@ void bind_hull(nb::module_& m) {
                 vector_array<Out<std::int32_t, -1>>(std::move(p.adjacency), k, 0),
                 vector_array<Out<std::int64_t, -1>>(std::move(p.face_offsets), hs + 1, 0),
                 vector_array<Out<double, -1, 3>>(std::move(p.face_normals), f, 3),
-                vector_array<Out<std::int64_t, -1>>(std::move(p.edge_offsets), hs + 1, 0),
-                vector_array<Out<double, -1, 3>>(std::move(p.edge_directions), e, 3));
+                vector_array<Out<std::int64_t, -1>>(std::move(p.edge_pair_offsets), hs + 1, 0),
+                vector_array<Out<std::int32_t, -1, 2>>(std::move(p.edge_pairs), e, 2));
         },
         "points"_a, "offsets"_a, "threads"_a = 0,
         "Hulls of H point sets (shape h owns points[offsets[h]:offsets[h + 1]]) packed for a "
         "ConvexSet: (status (H,), vertices, offsets, adjacency_offsets, adjacency, "
-        "face_offsets, face_normals, edge_offsets, edge_directions).");
+        "face_offsets, face_normals, edge_pair_offsets, edge_pairs).");
 }

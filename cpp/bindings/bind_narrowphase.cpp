@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "meshcol/narrowphase.hpp"
 #include "call_args.hpp"
@@ -130,6 +131,18 @@ std::pair<Rows, Rows> aabbs(const PackedConvexSet& set, std::optional<Poses> pos
     return {lo, hi};
 }
 
+std::pair<Out<std::int64_t, -1>, Rows> edge_classes(const PackedConvexSet& set, int threads) {
+    std::vector<std::int64_t> offsets;
+    std::vector<double> directions;
+    {
+        nb::gil_scoped_release release;
+        meshcol::all_edge_classes(set.view(), threads, offsets, directions);
+    }
+    const size_t rows = offsets.size(), e = directions.size() / 3;
+    return {vector_array<Out<std::int64_t, -1>>(std::move(offsets), rows, 0),
+            vector_array<Rows>(std::move(directions), e, 3)};
+}
+
 Column bounding_radii(const PackedConvexSet& set, int threads) {
     const size_t h = static_cast<size_t>(set.view().shape_count);
     auto radii = new_array<Column>({h});
@@ -148,10 +161,10 @@ void bind_narrowphase(nb::module_& m) {
                                 "ConvexSet).")
         .def(nb::init<Points, Index64, Kinds, Params, std::optional<Index64>,
                       std::optional<Index32>, std::optional<Index64>, std::optional<Points>,
-                      std::optional<Index64>, std::optional<Points>>(),
+                      std::optional<Index64>, std::optional<Pairs32>>(),
              "vertices"_a, "offsets"_a, "kinds"_a, "params"_a, "adjacency_offsets"_a.none(),
              "adjacency"_a.none(), "face_offsets"_a.none(), "face_normals"_a.none(),
-             "edge_offsets"_a.none(), "edge_directions"_a.none())
+             "edge_pair_offsets"_a.none(), "edge_pairs"_a.none())
         .def("__len__", &PackedConvexSet::size)
         .def("query_object", &query_object, "layout"_a, "poses"_a.none(), "pairs"_a.none(),
              "threads"_a, "result_type"_a,
@@ -159,6 +172,9 @@ void bind_narrowphase(nb::module_& m) {
              "signed distance); None when poses or pairs are not in the core's form.")
         .def("aabbs", &aabbs, "poses"_a.none(), "threads"_a = 0,
              "World AABBs (H, 3), (H, 3) under poses (None: identity).")
+        .def("edge_classes", &edge_classes, "threads"_a = 0,
+             "Every shape's edge-direction classes, each computed at most once in the set's "
+             "life (SAT shares them): offsets (H + 1,) int64 and unit directions (E, 3).")
         .def("bounding_radii", &bounding_radii, "threads"_a = 0,
              "Radius (H,) of a ball about each shape's local origin holding the whole shape; "
              "NaN for an invalid shape.");

@@ -33,6 +33,7 @@ using Index64 = In<std::int64_t, -1>;    ///< (N,) int64 indices or offsets
 using Index32 = In<std::int32_t, -1>;    ///< (N,) int32 indices
 using Kinds = In<std::int8_t, -1>;       ///< (H,) ShapeKind codes
 using Pairs = In<std::int64_t, -1, 2>;   ///< (P, 2) index pairs
+using Pairs32 = In<std::int32_t, -1, 2>; ///< (P, 2) int32 local index pairs
 using Faces = In<std::int64_t, -1, 3>;   ///< (F, 3) vertex indices
 
 /// A writable numpy output array of `T` with shape `Shape`.

@@ -22,12 +22,13 @@ class PackedConvexSet {
     PackedConvexSet(Points vertices, Index64 offsets, Kinds kinds, Params params,
                     std::optional<Index64> adjacency_offsets, std::optional<Index32> adjacency,
                     std::optional<Index64> face_offsets, std::optional<Points> face_normals,
-                    std::optional<Index64> edge_offsets, std::optional<Points> edge_directions)
+                    std::optional<Index64> edge_pair_offsets, std::optional<Pairs32> edge_pairs)
         : vertices_(vertices), offsets_(offsets), kinds_(kinds), params_(params),
           adjacency_offsets_(adjacency_offsets), adjacency_(adjacency),
-          face_offsets_(face_offsets), face_normals_(face_normals), edge_offsets_(edge_offsets),
-          edge_directions_(edge_directions),
-          radii_(static_cast<std::int64_t>(kinds.shape(0))) {
+          face_offsets_(face_offsets), face_normals_(face_normals),
+          edge_pair_offsets_(edge_pair_offsets), edge_pairs_(edge_pairs),
+          radii_(static_cast<std::int64_t>(kinds.shape(0))),
+          edge_classes_(static_cast<std::int64_t>(kinds.shape(0))) {
         const std::int64_t v = static_cast<std::int64_t>(vertices.shape(0));
         const std::int64_t h = static_cast<std::int64_t>(kinds.shape(0));
         if (static_cast<std::int64_t>(offsets.shape(0)) != h + 1)
@@ -66,22 +67,33 @@ class PackedConvexSet {
             view_.adjacency_offsets = adjacency_offsets->data();
             view_.adjacency = adjacency->data();
         }
-        const bool any_features = face_offsets || face_normals || edge_offsets || edge_directions;
+        const bool any_features = face_offsets || face_normals || edge_pair_offsets || edge_pairs;
         if (any_features) {
-            if (!(face_offsets && face_normals && edge_offsets && edge_directions))
+            if (!(face_offsets && face_normals && edge_pair_offsets && edge_pairs))
                 throw std::invalid_argument(
-                    "face_offsets, face_normals, edge_offsets and edge_directions go together");
+                    "face_offsets, face_normals, edge_pair_offsets and edge_pairs go together");
             if (static_cast<std::int64_t>(face_offsets->shape(0)) != h + 1 ||
-                static_cast<std::int64_t>(edge_offsets->shape(0)) != h + 1)
-                throw std::invalid_argument("face_offsets and edge_offsets must be (H + 1,)");
+                static_cast<std::int64_t>(edge_pair_offsets->shape(0)) != h + 1)
+                throw std::invalid_argument("face_offsets and edge_pair_offsets must be (H + 1,)");
             check_offsets(face_offsets->data(), face_offsets->shape(0),
                           static_cast<std::int64_t>(face_normals->shape(0)), "face_offsets");
-            check_offsets(edge_offsets->data(), edge_offsets->shape(0),
-                          static_cast<std::int64_t>(edge_directions->shape(0)), "edge_offsets");
+            check_offsets(edge_pair_offsets->data(), edge_pair_offsets->shape(0),
+                          static_cast<std::int64_t>(edge_pairs->shape(0)), "edge_pair_offsets");
+            // Every edge must join two vertices of its own shape (the classes read them).
+            for (std::int64_t s = 0; s < h; ++s) {
+                const std::int64_t n = offsets.data()[s + 1] - offsets.data()[s];
+                for (std::int64_t j = 2 * edge_pair_offsets->data()[s];
+                     j < 2 * edge_pair_offsets->data()[s + 1]; ++j) {
+                    const std::int32_t v = edge_pairs->data()[j];
+                    if (v < 0 || v >= n)
+                        throw std::invalid_argument("edge_pairs holds an index out of range");
+                }
+            }
             view_.face_offsets = face_offsets->data();
             view_.face_normals = face_normals->data();
-            view_.edge_offsets = edge_offsets->data();
-            view_.edge_directions = edge_directions->data();
+            view_.edge_pair_offsets = edge_pair_offsets->data();
+            view_.edge_pairs = edge_pairs->data();
+            view_.edge_classes = &edge_classes_;
         }
     }
 
@@ -123,9 +135,10 @@ class PackedConvexSet {
     std::optional<Index32> adjacency_;
     std::optional<Index64> face_offsets_;
     std::optional<Points> face_normals_;
-    std::optional<Index64> edge_offsets_;
-    std::optional<Points> edge_directions_;
+    std::optional<Index64> edge_pair_offsets_;
+    std::optional<Pairs32> edge_pairs_;
     mutable ShapeRadii radii_;
+    mutable EdgeClasses edge_classes_;  // the view's cache: its pointer, set once
     ConvexSetView view_;
 };
 

@@ -1,6 +1,7 @@
 // Many hulls packed in one call for a ConvexSet (hull.hpp: pack_polytopes): each shape's hull
-// (hull.cpp) with its vertex adjacency for hill climbing and its face normals and edge
-// directions for SAT, on threads, concatenated.
+// (hull.cpp) with its vertex adjacency for hill climbing and its face normals and true edges
+// for SAT, on threads, concatenated; and the edges' direction classes, which SAT computes for
+// a shape when it first needs them (edge_direction_classes).
 #include <algorithm>
 #include <array>
 #include <climits>
@@ -29,15 +30,16 @@ using namespace hull_detail;
 
 // The packed arrays of a run of consecutive shapes, concatenated (per-shape vectors cost an
 // allocation each, about as much as a small hull): the chunks are joined in order at the end.
-// Vertices, face normals and edge directions as flat (x, y, z) triples: a single chunk's
-// arrays become the result's without a copy.
+// Vertices and face normals as flat (x, y, z) triples, edges as flat (from, to) pairs: a
+// single chunk's arrays become the result's without a copy.
 struct ChunkPack {
     std::vector<HullStatus> status;
     std::vector<double> vertices;
     std::vector<std::int64_t> vertex_counts, face_counts, edge_counts;  // per shape
     std::vector<std::int64_t> adjacency_counts;                          // per vertex
     std::vector<std::int32_t> adjacency;
-    std::vector<double> faces, edges;
+    std::vector<double> faces;
+    std::vector<std::int32_t> edges;  // (from, to) pairs
 
     // Room for shapes of `points` points in all (a hull of k vertices has at most 2k - 4
     // triangles and 3k - 6 edges), so the arrays never move while they fill (points_to_reserve
@@ -53,7 +55,7 @@ struct ChunkPack {
         adjacency_counts.reserve(p);
         adjacency.reserve(6 * p + 3 * p + 4 * h);
         faces.reserve(3 * (2 * p + 2 * h));
-        edges.reserve(3 * (3 * p + h));
+        edges.reserve(2 * (3 * p + h));
     }
 
     /// Empty, keeping the room (the buffers of the next chunk).
@@ -91,6 +93,7 @@ struct PackScratch {
     unsigned stamp = 0;                // the table's cells of the current call carry it
     std::vector<Vec3> directions;
     std::vector<double> unique;  // unique_directions' output before it is appended
+    std::vector<double> classes;  // edge_direction_class_count's (discarded) classes
 };
 
 // The unit direction of d[i] and its grouping key into unit[3 i ..] and key[3 i ..]
@@ -344,9 +347,9 @@ void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
     const Planes& pl = analysis.pl;
     out.status.push_back(hull.status);
     const size_t vertices_before = out.vertices.size();
-    std::int64_t faces = 0, edges = 0;
+    std::int64_t faces = 0;
+    const size_t edges_before = out.edges.size();
     s.pairs.clear();
-    s.directions.clear();
     const Vec3 zero{0.0, 0.0, 0.0};
     const int k = static_cast<int>(hull.vertices.size());
     if (hull.dimension < 0) {
@@ -371,43 +374,38 @@ void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
     } else if (hull.dimension == 1) {
         s.pairs.emplace_back(0, 1);
         adjacency_from_edges(2, s, out);
-        s.directions.push_back(points[hull.vertices[1]] - points[hull.vertices[0]]);
-        edges = unique_directions(s.directions.data(), s.directions.size(), false, s, out.edges);
+        out.edges.insert(out.edges.end(), {0, 1});
     } else if (hull.dimension == 2) {
-        for (int i = 0; i < k; ++i) {
-            s.pairs.emplace_back(i, (i + 1) % k);
-            s.directions.push_back(points[hull.vertices[(i + 1) % k]] -
-                                   points[hull.vertices[i]]);
-        }
+        for (int i = 0; i < k; ++i) s.pairs.emplace_back(i, (i + 1) % k);
         adjacency_from_edges(k, s, out);
+        for (const auto& [a, b] : s.pairs) out.edges.insert(out.edges.end(), {a, b});
         push(out.faces, hull.normal);
         push(out.faces, -hull.normal);
         faces = 2;
-        edges = unique_directions(s.directions.data(), s.directions.size(), false, s, out.edges);
     } else if (hull.dimension == 3) {
         // Every triangulation edge drives hill climbing; edges between different planes
         // are the polytope's true edges (SAT).
         // Each edge once (from its lower triangle: the triangulation's list).
         s.pairs.resize(t.edges.size());
-        s.directions.resize(t.edges.size());
-        size_t directions = 0;
+        out.edges.resize(edges_before + 2 * t.edges.size());
+        std::int32_t* e = out.edges.data() + edges_before;
+        size_t kept = 0;
         for (size_t g = 0; g < t.edges.size(); ++g) {
             const TriangulationEdge& edge = t.edges[g];
             const auto& face = hull.faces[edge.i];
             const int a = face[edge.e], b = face[kNextCorner[edge.e]];
             s.pairs[g] = {a, b};
-            s.directions[directions] = points[hull.vertices[b]] - points[hull.vertices[a]];
-            directions += pl.group[edge.i] != pl.group[edge.j];  // no branch: no pattern
+            e[2 * kept] = a, e[2 * kept + 1] = b;
+            kept += pl.group[edge.i] != pl.group[edge.j];  // no branch: no pattern
         }
-        s.directions.resize(directions);
+        out.edges.resize(edges_before + 2 * kept);
         adjacency_from_edges(k, s, out);
         faces = unique_directions(hull.plane_normals.data(), hull.plane_normals.size(), true, s,
                                   out.faces);
-        edges = unique_directions(s.directions.data(), s.directions.size(), false, s, out.edges);
     }
     out.vertex_counts.push_back(static_cast<std::int64_t>(out.vertices.size() - vertices_before) / 3);
     out.face_counts.push_back(faces);
-    out.edge_counts.push_back(edges);
+    out.edge_counts.push_back(static_cast<std::int64_t>(out.edges.size() - edges_before) / 2);
 }
 
 // One thread's packing of consecutive shapes: the scratch of every hull, kept across them.
@@ -505,12 +503,12 @@ private:
         o.status.insert(o.status.end(), s.status.begin(), s.status.end());
         append_offsets(s.vertex_counts, o.offsets);
         append_offsets(s.face_counts, o.face_offsets);
-        append_offsets(s.edge_counts, o.edge_offsets);
+        append_offsets(s.edge_counts, o.edge_pair_offsets);
         append_offsets(s.adjacency_counts, o.adjacency_offsets);
         o.vertices.insert(o.vertices.end(), s.vertices.begin(), s.vertices.end());
         o.adjacency.insert(o.adjacency.end(), s.adjacency.begin(), s.adjacency.end());
         o.face_normals.insert(o.face_normals.end(), s.faces.begin(), s.faces.end());
-        o.edge_directions.insert(o.edge_directions.end(), s.edges.begin(), s.edges.end());
+        o.edge_pairs.insert(o.edge_pairs.end(), s.edges.begin(), s.edges.end());
         s.clear();
     }
 
@@ -549,17 +547,17 @@ PackedPolytopes pack_polytopes(const Vec3* points, const std::int64_t* offsets, 
         }
         out.offsets.assign(1, 0);
         out.face_offsets.assign(1, 0);
-        out.edge_offsets.assign(1, 0);
+        out.edge_pair_offsets.assign(1, 0);
         out.adjacency_offsets.assign(1, 0);
         append_offsets(pack.vertex_counts, out.offsets);
         append_offsets(pack.face_counts, out.face_offsets);
-        append_offsets(pack.edge_counts, out.edge_offsets);
+        append_offsets(pack.edge_counts, out.edge_pair_offsets);
         append_offsets(pack.adjacency_counts, out.adjacency_offsets);
         out.status = std::move(pack.status);
         out.vertices = std::move(pack.vertices);
         out.adjacency = std::move(pack.adjacency);
         out.face_normals = std::move(pack.faces);
-        out.edge_directions = std::move(pack.edges);
+        out.edge_pairs = std::move(pack.edges);
         return out;
     }
     // Room for the whole result, so that it never moves while chunks are copied in.
@@ -567,15 +565,15 @@ PackedPolytopes pack_polytopes(const Vec3* points, const std::int64_t* offsets, 
     out.status.reserve(hs);
     out.offsets.reserve(hs + 1);
     out.face_offsets.reserve(hs + 1);
-    out.edge_offsets.reserve(hs + 1);
+    out.edge_pair_offsets.reserve(hs + 1);
     out.vertices.reserve(3 * p);
     out.adjacency_offsets.reserve(p + 1);
     out.adjacency.reserve(6 * p + 3 * p + 4 * hs);
     out.face_normals.reserve(3 * (2 * p + 2 * hs));
-    out.edge_directions.reserve(3 * (3 * p + hs));
+    out.edge_pairs.reserve(2 * (3 * p + hs));
     out.offsets.push_back(0);
     out.face_offsets.push_back(0);
-    out.edge_offsets.push_back(0);
+    out.edge_pair_offsets.push_back(0);
     out.adjacency_offsets.push_back(0);
     OrderedCommits commits(out, chunks);
     parallel_for(chunks, t, [&](long long begin, long long end) {
@@ -590,6 +588,39 @@ PackedPolytopes pack_polytopes(const Vec3* points, const std::int64_t* offsets, 
         commits.give_back(std::move(pack));
     });
     return out;
+}
+
+namespace {
+
+// The directions of `count` true edges, vertices[to] - vertices[from], into s.directions.
+void edge_vectors(const Vec3* vertices, const std::int32_t* pairs, size_t count, PackScratch& s) {
+    s.directions.resize(count);
+    for (size_t i = 0; i < count; ++i)
+        s.directions[i] = vertices[pairs[2 * i + 1]] - vertices[pairs[2 * i]];
+}
+
+// Each thread's scratch for the classes SAT computes one shape at a time (its table and
+// buffers are kept, as the packing keeps them across a chunk's shapes).
+PackScratch& class_scratch() {
+    thread_local PackScratch s;
+    return s;
+}
+
+}  // namespace
+
+std::int64_t edge_direction_classes(const Vec3* vertices, const std::int32_t* pairs,
+                                    size_t count, std::vector<double>& out) {
+    PackScratch& s = class_scratch();
+    edge_vectors(vertices, pairs, count, s);
+    return unique_directions(s.directions.data(), count, false, s, out);
+}
+
+std::int64_t edge_direction_class_count(const Vec3* vertices, const std::int32_t* pairs,
+                                        size_t count) {
+    PackScratch& s = class_scratch();
+    edge_vectors(vertices, pairs, count, s);
+    s.classes.clear();
+    return unique_directions(s.directions.data(), count, false, s, s.classes);
 }
 
 }  // namespace meshcol

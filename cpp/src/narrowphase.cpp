@@ -1,15 +1,19 @@
 #include "meshcol/narrowphase.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <memory>
+#include <new>
 #include <vector>
 
 #include "meshcol/batch.hpp"
 #include "meshcol/defaults.hpp"
 #include "meshcol/epa.hpp"
 #include "meshcol/gjk.hpp"
+#include "meshcol/hull.hpp"
 #include "meshcol/sat.hpp"
 #include "rescale.hpp"
 
@@ -26,15 +30,113 @@ ShapeView ConvexSetView::shape(std::int64_t h) const {
         s.adjacency_offsets = adjacency_offsets + begin;
         s.adjacency = adjacency;
     }
-    if (face_offsets != nullptr && edge_offsets != nullptr) {
+    if (face_offsets != nullptr && edge_pair_offsets != nullptr) {
         s.has_features = true;
         s.face_normals = reinterpret_cast<const Vec3*>(face_normals + 3 * face_offsets[h]);
         s.face_count = static_cast<int>(face_offsets[h + 1] - face_offsets[h]);
-        s.edge_directions = reinterpret_cast<const Vec3*>(edge_directions + 3 * edge_offsets[h]);
-        s.edge_count = static_cast<int>(edge_offsets[h + 1] - edge_offsets[h]);
+        // Edge classes when SAT needs them (no edges: none to compute).
+        if (edge_pair_offsets[h + 1] > edge_pair_offsets[h]) {
+            s.set = this;
+            s.set_index = h;
+        }
     }
     for (int k = 0; k < 4; ++k) s.params[k] = params[4 * h + k];
     return s;
+}
+
+struct EdgeClasses::Entry {
+    std::vector<double> directions;  // (count, 3)
+};
+
+// The entries are zeroed by calloc, not written: a large allocation's pages stay unmapped
+// until a shape's classes are stored (an atomic pointer or int of zero bytes is null or 0:
+// they are lock-free and hold their value's bytes).
+EdgeClasses::EdgeClasses(std::int64_t shape_count)
+    : shape_count_(std::max<std::int64_t>(shape_count, 0)),
+      entries_(static_cast<std::atomic<Entry*>*>(
+          std::calloc(static_cast<size_t>(shape_count_) + 1, sizeof(std::atomic<Entry*>)))),
+      lower_(static_cast<std::atomic<int>*>(
+          std::calloc(static_cast<size_t>(shape_count_) + 1, sizeof(std::atomic<int>)))) {
+    static_assert(std::atomic<Entry*>::is_always_lock_free && std::atomic<int>::is_always_lock_free);
+    static_assert(sizeof(std::atomic<Entry*>) == sizeof(Entry*));
+    static_assert(sizeof(std::atomic<int>) == sizeof(int));
+    if (entries_ == nullptr || lower_ == nullptr) {
+        std::free(entries_);
+        std::free(lower_);
+        throw std::bad_alloc();
+    }
+}
+
+EdgeClasses::~EdgeClasses() {
+    for (std::int64_t h = 0; h < shape_count_; ++h)
+        delete entries_[h].load(std::memory_order_relaxed);
+    std::free(entries_);
+    std::free(lower_);
+}
+
+namespace {
+
+const Vec3* shape_vertices(const ConvexSetView& set, std::int64_t h) {
+    return reinterpret_cast<const Vec3*>(set.vertices + 3 * set.offsets[h]);
+}
+
+}  // namespace
+
+EdgeClasses::List EdgeClasses::get(const ConvexSetView& set, std::int64_t h) {
+    Entry* entry = entries_[h].load(std::memory_order_acquire);
+    if (entry == nullptr) {
+        auto made = std::make_unique<Entry>();
+        const std::int64_t first = set.edge_pair_offsets[h];
+        const auto count = static_cast<size_t>(set.edge_pair_offsets[h + 1] - first);
+        edge_direction_classes(shape_vertices(set, h), set.edge_pairs + 2 * first, count,
+                               made->directions);
+        // The first list published is every thread's (a thread that lost frees its own).
+        Entry* seen = nullptr;
+        if (entries_[h].compare_exchange_strong(seen, made.get(), std::memory_order_acq_rel,
+                                                std::memory_order_acquire))
+            entry = made.release();
+        else
+            entry = seen;
+    }
+    return {reinterpret_cast<const Vec3*>(entry->directions.data()),
+            static_cast<int>(entry->directions.size() / 3)};
+}
+
+int EdgeClasses::lower_bound(const ConvexSetView& set, std::int64_t h, int wanted) {
+    if (const Entry* entry = entries_[h].load(std::memory_order_acquire))
+        return static_cast<int>(entry->directions.size() / 3);
+    const int known = std::max(lower_[h].load(std::memory_order_relaxed) - 1, 0);  // 0: none yet
+    if (known >= wanted) return known;
+    const std::int64_t first = set.edge_pair_offsets[h];
+    const std::int64_t count = set.edge_pair_offsets[h + 1] - first;
+    const std::int64_t prefix = std::max<std::int64_t>(wanted, defaults::sat_edge_class_prefix);
+    // Most of the edges: the classes themselves, kept, cost about what the bound would.
+    if (4 * prefix >= 3 * count) return get(set, h).count;
+    const auto bound = static_cast<int>(edge_direction_class_count(
+        shape_vertices(set, h), set.edge_pairs + 2 * first, static_cast<size_t>(prefix)));
+    // Any bound found is one (a thread's smaller one may replace a larger: still a bound).
+    if (bound > known) lower_[h].store(bound + 1, std::memory_order_relaxed);
+    return std::max(bound, known);
+}
+
+void attach_edges(ShapeView& shape) {
+    if (shape.set == nullptr) return;
+    const EdgeClasses::List list = shape.set->edge_classes->get(*shape.set, shape.set_index);
+    shape.edge_directions = list.directions;
+    shape.edge_count = list.count;
+    shape.set = nullptr;
+    shape.set_index = -1;
+}
+
+int edge_count_upper_bound(const ShapeView& shape) {
+    if (shape.set == nullptr) return shape.edge_count;
+    const std::int64_t* offsets = shape.set->edge_pair_offsets;
+    return static_cast<int>(offsets[shape.set_index + 1] - offsets[shape.set_index]);
+}
+
+int edge_count_lower_bound(const ShapeView& shape, int wanted) {
+    if (shape.set == nullptr) return shape.edge_count;
+    return shape.set->edge_classes->lower_bound(*shape.set, shape.set_index, wanted);
 }
 
 namespace {
@@ -288,6 +390,31 @@ void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t
             if (out.intersects) out.intersects[i] = r.intersects;
         }
     });
+}
+
+void all_edge_classes(const ConvexSetView& set, int threads, std::vector<std::int64_t>& offsets,
+                      std::vector<double>& directions) {
+    const std::int64_t h_count = set.shape_count;
+    std::vector<EdgeClasses::List> lists(static_cast<size_t>(h_count));
+    const bool pending = set.edge_pair_offsets != nullptr && set.edge_classes != nullptr;
+    if (pending) {
+        const int n_threads = resolve_threads(threads, h_count, defaults::min_shapes_per_thread);
+        parallel_for(h_count, n_threads, [&](long long begin, long long end) {
+            for (long long h = begin; h < end; ++h)
+                if (set.edge_pair_offsets[h + 1] > set.edge_pair_offsets[h])
+                    lists[static_cast<size_t>(h)] = set.edge_classes->get(set, h);
+        });
+    }
+    offsets.assign(static_cast<size_t>(h_count) + 1, 0);
+    for (std::int64_t h = 0; h < h_count; ++h)
+        offsets[static_cast<size_t>(h) + 1] = offsets[static_cast<size_t>(h)] + lists[static_cast<size_t>(h)].count;
+    directions.resize(3 * static_cast<size_t>(offsets.back()));
+    for (std::int64_t h = 0; h < h_count; ++h) {
+        const EdgeClasses::List& l = lists[static_cast<size_t>(h)];
+        if (l.count > 0)
+            std::copy_n(reinterpret_cast<const double*>(l.directions), 3 * static_cast<size_t>(l.count),
+                        directions.data() + 3 * offsets[static_cast<size_t>(h)]);
+    }
 }
 
 void world_aabbs(const ConvexSetView& set, const double* poses, double* lo, double* hi,

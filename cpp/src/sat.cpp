@@ -1,5 +1,6 @@
 #include "meshcol/sat.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -46,6 +47,13 @@ void middle_and_reach(const ShapeView& s, Vec3& middle, double& reach) {
                                 std::fmax(std::fabs(lo.z), std::fabs(hi.z))));
 }
 
+// SAT's work on shapes of these features with `ea` and `eb` edge classes: (candidate axes) x
+// (vertices of both), what max_work bounds.
+long long work(const Features& fa, long long ea, const Features& fb, long long eb) {
+    const long long axes = static_cast<long long>(fa.face_count) + fb.face_count + 2LL * ea * eb;
+    return axes * (fa.vertices + fb.vertices);
+}
+
 }  // namespace
 
 bool has_sat_features(const ShapeView& s) {
@@ -53,6 +61,8 @@ bool has_sat_features(const ShapeView& s) {
     return s.kind == ShapeKind::BOX ||
            (s.kind == ShapeKind::POLYTOPE && (s.has_features || s.vertex_count == 1));
 }
+
+namespace {
 
 // The Minkowski difference a - b of two polytopes has as face normals the face normals of a,
 // minus those of b, and +-(e_a x e_b) for edge directions e_a, e_b: the smallest support value
@@ -67,14 +77,14 @@ bool has_sat_features(const ShapeView& s) {
 // so the overlap along a unit n is at least n . (c_a - c_b) + r_a + r_b. An axis whose bound
 // exceeds the best by more than the rounding of either side (`slack`, a millionth of a
 // millionth of the coordinates, where rounding is a few parts in 1e16) would not replace it.
-SatResult sat_penetration(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
-                          const Pose& pose_b, long long max_work) {
+//
+// Both shapes have SAT data, and each its edge directions attached unless the other has no
+// edges (then E_a E_b = 0 and the edge loop is empty: they would not be read).
+SatResult sat_attached(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
+                       const Pose& pose_b, long long max_work) {
     SatResult res;
-    if (!has_sat_features(a) || !has_sat_features(b)) return res;
     const Features fa = features_of(a), fb = features_of(b);
-    const long long axes = static_cast<long long>(fa.face_count) + fb.face_count +
-                           2LL * fa.edge_count * fb.edge_count;
-    if (axes * (fa.vertices + fb.vertices) > max_work) return res;
+    if (work(fa, fa.edge_count, fb, fb.edge_count) > max_work) return res;
     res.ran = true;
     // Work in a's frame: b's rotation and origin mapped into it.
     const Mat3 rot = pose_a.rotation.transposed() * pose_b.rotation;
@@ -154,6 +164,61 @@ SatResult sat_penetration(const ShapeView& a, const Pose& pose_a, const ShapeVie
     }
     res.normal = pose_a.rotate(best_axis);
     return res;
+}
+
+}  // namespace
+
+// A polytope whose edge classes are computed on first use (ShapeView::set) gets them attached
+// only when the work bound may let SAT run and its partner may have edges. The work
+// (F_a + F_b + 2 E_a E_b)(V_a + V_b) only grows with the class counts: when it is above
+// max_work with lower bounds of the counts (0, then the classes of a prefix of the edges, as
+// long as the pair needs: EdgeClasses::lower_bound), it is above with the counts themselves,
+// and SAT returns unrun, as it would with the classes attached. Against a partner without
+// edges a shape's count adds nothing to the work, and its directions are never read.
+SatResult sat_penetration(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
+                          const Pose& pose_b, long long max_work) {
+    if (!has_sat_features(a) || !has_sat_features(b)) return SatResult{};
+    if (a.set == nullptr && b.set == nullptr) return sat_attached(a, pose_a, b, pose_b, max_work);
+    const Features fa = features_of(a), fb = features_of(b);
+    if (work(fa, fa.edge_count, fb, fb.edge_count) > max_work) return SatResult{};
+    // The bounds (or counts) earlier pairs found, read without computing: they settle most
+    // pairs of shapes met before.
+    if (work(fa, a.set != nullptr ? edge_count_lower_bound(a, 0) : fa.edge_count, fb,
+             b.set != nullptr ? edge_count_lower_bound(b, 0) : fb.edge_count) > max_work)
+        return SatResult{};
+    // Classes are at most the true edges: when the work with those counts is within the cap,
+    // SAT runs. Else the counts that would put the work above the cap: against a known count,
+    // the fewest such; both unknown, the fewest that do so on both sides alike (0: the count
+    // adds nothing to the work, the partner having no edges).
+    const int upper_a = a.set != nullptr ? edge_count_upper_bound(a) : fa.edge_count;
+    const int upper_b = b.set != nullptr ? edge_count_upper_bound(b) : fb.edge_count;
+    if (work(fa, upper_a, fb, upper_b) > max_work) {
+        long long wanted_a = 0, wanted_b = 0;
+        const long long vertices = std::max(fa.vertices + fb.vertices, 1);
+        if (a.set != nullptr && b.set != nullptr) {
+            const long long spare = max_work / vertices - fa.face_count - fb.face_count;
+            auto both = static_cast<long long>(
+                std::sqrt(0.5 * static_cast<double>(std::max(spare, 0LL))));
+            const long long most = std::max(upper_a, upper_b);  // the work is above the cap there
+            while (both < most && work(fa, both, fb, both) <= max_work) ++both;
+            wanted_a = wanted_b = both;
+        } else if (a.set != nullptr && fb.edge_count > 0) {
+            wanted_a = (max_work - work(fa, 0, fb, 0)) / (2LL * fb.edge_count * vertices) + 1;
+        } else if (b.set != nullptr && fa.edge_count > 0) {
+            wanted_b = (max_work - work(fa, 0, fb, 0)) / (2LL * fa.edge_count * vertices) + 1;
+        }
+        const auto bound = [](const ShapeView& s, long long wanted, int upper) {
+            if (wanted == 0) return 0;
+            return edge_count_lower_bound(s, static_cast<int>(std::min<long long>(wanted, upper)));
+        };
+        const int lower_a = a.set != nullptr ? bound(a, wanted_a, upper_a) : fa.edge_count;
+        const int lower_b = b.set != nullptr ? bound(b, wanted_b, upper_b) : fb.edge_count;
+        if (work(fa, lower_a, fb, lower_b) > max_work) return SatResult{};
+    }
+    ShapeView whole_a = a, whole_b = b;
+    if (b.set != nullptr || fb.edge_count > 0) attach_edges(whole_a);
+    if (features_of(whole_a).edge_count > 0) attach_edges(whole_b);
+    return sat_attached(whole_a, pose_a, whole_b, pose_b, max_work);
 }
 
 }  // namespace meshcol

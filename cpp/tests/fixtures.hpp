@@ -5,7 +5,9 @@
 #include <cstdint>
 #include <vector>
 
+#include "meshcol/hull.hpp"
 #include "meshcol/mesh_bvh.hpp"
+#include "meshcol/narrowphase.hpp"
 #include "meshcol/shapes.hpp"
 #include "meshcol/vec.hpp"
 
@@ -100,5 +102,34 @@ inline TriangleMesh box_mesh(const Vec3& lo, const Vec3& hi) {
     for (const auto& q : quads) m.faces.insert(m.faces.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
     return m;
 }
+
+/// A set of polytopes over packed hulls (`pack_polytopes`' arrays, which the caller keeps),
+/// with its own kinds, params and edge-class cache (not copied: the view points to them).
+struct PolytopeSet {
+    std::vector<std::int8_t> kinds;
+    std::vector<double> params;
+    EdgeClasses classes;
+    ConvexSetView view;
+
+    explicit PolytopeSet(const PackedPolytopes& p)
+        : kinds(p.status.size(), static_cast<std::int8_t>(ShapeKind::POLYTOPE)),
+          params(4 * p.status.size(), 0.0), classes(static_cast<std::int64_t>(p.status.size())) {
+        view.vertices = p.vertices.data();
+        view.vertex_count = static_cast<std::int64_t>(p.vertices.size() / 3);
+        view.offsets = p.offsets.data();
+        view.shape_count = static_cast<std::int64_t>(p.status.size());
+        view.kinds = kinds.data();
+        view.params = params.data();
+        view.adjacency_offsets = p.adjacency_offsets.data();
+        view.adjacency = p.adjacency.data();
+        view.face_offsets = p.face_offsets.data();
+        view.face_normals = p.face_normals.data();
+        view.edge_pair_offsets = p.edge_pair_offsets.data();
+        view.edge_pairs = p.edge_pairs.data();
+        view.edge_classes = &classes;
+    }
+    PolytopeSet(const PolytopeSet&) = delete;
+    PolytopeSet& operator=(const PolytopeSet&) = delete;
+};
 
 }  // namespace meshcol::fixtures

@@ -130,11 +130,19 @@ TEST_CASE("hull: pack_polytopes packs each shape's hull and features") {
     REQUIRE(p.offsets.size() == 3);
     CHECK_EQ(p.offsets[1] - p.offsets[0], std::int64_t{8});
     CHECK_EQ(p.offsets[2] - p.offsets[1], std::int64_t{4});
-    // a cube has 6 planes and 3 edge directions; a tetrahedron 4 planes and 6 directions
+    // a cube has 6 planes, 12 true edges and 3 edge directions; a tetrahedron 4 planes and 6
+    // edges of 6 directions
     CHECK_EQ(p.face_offsets[1] - p.face_offsets[0], std::int64_t{6});
-    CHECK_EQ(p.edge_offsets[1] - p.edge_offsets[0], std::int64_t{3});
+    CHECK_EQ(p.edge_pair_offsets[1] - p.edge_pair_offsets[0], std::int64_t{12});
     CHECK_EQ(p.face_offsets[2] - p.face_offsets[1], std::int64_t{4});
-    CHECK_EQ(p.edge_offsets[2] - p.edge_offsets[1], std::int64_t{6});
+    CHECK_EQ(p.edge_pair_offsets[2] - p.edge_pair_offsets[1], std::int64_t{6});
+    const auto* vertices = reinterpret_cast<const Vec3*>(p.vertices.data());
+    std::vector<double> cube, tetrahedron;
+    CHECK_EQ(edge_direction_classes(vertices, p.edge_pairs.data(), 12, cube), std::int64_t{3});
+    CHECK_EQ(edge_direction_classes(vertices + 8, p.edge_pairs.data() + 24, 6, tetrahedron),
+             std::int64_t{6});
+    CHECK_EQ(edge_direction_class_count(vertices, p.edge_pairs.data(), 12), std::int64_t{3});
+    CHECK_EQ(edge_direction_class_count(vertices, p.edge_pairs.data(), 1), std::int64_t{1});
 }
 
 namespace {
@@ -196,8 +204,8 @@ TEST_CASE("hull: packing on threads equals packing one shape at a time, byte for
         CHECK(same_bytes(one.adjacency, two.adjacency));
         CHECK(same_bytes(one.face_offsets, two.face_offsets));
         CHECK(same_bytes(one.face_normals, two.face_normals));
-        CHECK(same_bytes(one.edge_offsets, two.edge_offsets));
-        CHECK(same_bytes(one.edge_directions, two.edge_directions));
+        CHECK(same_bytes(one.edge_pair_offsets, two.edge_pair_offsets));
+        CHECK(same_bytes(one.edge_pairs, two.edge_pairs));
     }
     CHECK(one.status[5] == HullStatus::NON_FINITE);
     CHECK(one.status[6] == HullStatus::EMPTY);
@@ -214,13 +222,13 @@ TEST_CASE("hull: packing on threads equals packing one shape at a time, byte for
             CHECK_EQ(alone.adjacency_offsets[k], one.adjacency_offsets[v0 + k] - a0);
         CHECK(same_bytes(alone.adjacency.data(), one.adjacency.data() + a0,
                          alone.adjacency.size()));
-        const auto f0 = one.face_offsets[h], e0 = one.edge_offsets[h];
+        const auto f0 = one.face_offsets[h], e0 = one.edge_pair_offsets[h];
         CHECK_EQ(alone.face_offsets[1], one.face_offsets[h + 1] - f0);
-        CHECK_EQ(alone.edge_offsets[1], one.edge_offsets[h + 1] - e0);
+        CHECK_EQ(alone.edge_pair_offsets[1], one.edge_pair_offsets[h + 1] - e0);
         CHECK(same_bytes(alone.face_normals.data(), one.face_normals.data() + 3 * f0,
                          alone.face_normals.size()));
-        CHECK(same_bytes(alone.edge_directions.data(), one.edge_directions.data() + 3 * e0,
-                         alone.edge_directions.size()));
+        CHECK(same_bytes(alone.edge_pairs.data(), one.edge_pairs.data() + 2 * e0,
+                         alone.edge_pairs.size()));
     }
 }
 
@@ -233,7 +241,11 @@ TEST_CASE("hull: every point of an ellipsoid is a vertex, every vertex list sort
     CHECK_EQ(packed.offsets[1], std::int64_t{64});
     // Euler: 64 vertices in general position, 124 triangles, each its own plane; 186 edges.
     CHECK_EQ(packed.face_offsets[1], std::int64_t{124});
-    CHECK_EQ(packed.edge_offsets[1], std::int64_t{186});
+    CHECK_EQ(packed.edge_pair_offsets[1], std::int64_t{186});
+    std::vector<double> classes;
+    CHECK_EQ(edge_direction_classes(reinterpret_cast<const Vec3*>(packed.vertices.data()),
+                                    packed.edge_pairs.data(), 186, classes),
+             std::int64_t{186});
     std::int64_t degrees = 0;
     for (int v = 0; v < 64; ++v) {
         const auto b = packed.adjacency_offsets[v], e = packed.adjacency_offsets[v + 1];

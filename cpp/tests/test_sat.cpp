@@ -151,32 +151,24 @@ TEST_CASE("sat: the axes the inner balls skip change no answer, bit for bit") {
         std::vector<Vec3> scaled(kept.size());
         for (size_t i = 0; i < kept.size(); ++i) scaled[i] = kept[i] * scale;
         const PackedPolytopes p = pack_polytopes(scaled.data(), offsets.data(), shapes, 1);
-        ConvexSetView set;
-        set.vertices = p.vertices.data();
-        set.vertex_count = static_cast<std::int64_t>(p.vertices.size() / 3);
-        set.offsets = p.offsets.data();
-        set.shape_count = shapes;
-        std::vector<std::int8_t> kinds(static_cast<size_t>(shapes),
-                                       static_cast<std::int8_t>(ShapeKind::POLYTOPE));
-        std::vector<double> params(static_cast<size_t>(4 * shapes), 0.0);
-        set.kinds = kinds.data();
-        set.params = params.data();
-        set.adjacency_offsets = p.adjacency_offsets.data();
-        set.adjacency = p.adjacency.data();
-        set.face_offsets = p.face_offsets.data();
-        set.face_normals = p.face_normals.data();
-        set.edge_offsets = p.edge_offsets.data();
-        set.edge_directions = p.edge_directions.data();
-        std::vector<ShapeView> views;
+        fixtures::PolytopeSet packed(p);
+        const ConvexSetView& set = packed.view;
+        // SAT gets the views whose edge classes it computes on first need; the reference the
+        // same views with their classes attached.
+        std::vector<ShapeView> views, whole;
         for (long long h = 0; h < shapes; ++h) views.push_back(set.shape(h));
         views.push_back(fixtures::box(0.3 * scale, 0.5 * scale, 0.2 * scale));
+        for (ShapeView v : views) {
+            attach_edges(v);
+            whole.push_back(v);
+        }
         for (int trial = 0; trial < 150; ++trial) {
             for (size_t i = 0; i < views.size(); ++i)
                 for (size_t j = 0; j < views.size(); ++j) {
                     if (!has_sat_features(views[i]) || !has_sat_features(views[j])) continue;
                     const double spread = scale * (0.2 + 1.2 * (trial % 5) / 4.0);
                     const Pose pa = random_pose(r, spread), pb = random_pose(r, spread);
-                    const SatResult want = every_axis(views[i], pa, views[j], pb);
+                    const SatResult want = every_axis(whole[i], pa, whole[j], pb);
                     const SatResult got = sat_penetration(views[i], pa, views[j], pb,
                                                           std::numeric_limits<long long>::max());
                     REQUIRE(got.ran == want.ran);

@@ -36,8 +36,9 @@ def _triangle_parts(body: Body) -> tuple[ConvexSet, np.ndarray]:
     tri, n, area2 = tri[keep], n[keep], area2[keep]
     t = len(tri)
     unit = n / area2[:, None] if t else np.zeros((0, 3))
-    edges = np.stack([tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 1], tri[:, 0] - tri[:, 2]], axis=1)
-    edges = edges / np.linalg.norm(edges, axis=2, keepdims=True) if t else np.zeros((0, 3, 3))
+    # the three sides as true edges: their direction classes are the core's (computed when
+    # SAT first needs them)
+    sides = np.array([[0, 1], [1, 2], [2, 0]], dtype=np.int32)
     step3 = np.arange(t + 1, dtype=np.int64) * 3
     local = np.array([[1, 2], [0, 2], [0, 1]], dtype=np.int32)
     solid = ConvexSet._adopt(
@@ -49,8 +50,8 @@ def _triangle_parts(body: Body) -> tuple[ConvexSet, np.ndarray]:
         adjacency=np.tile(local.reshape(-1), t),
         face_offsets=np.arange(t + 1, dtype=np.int64) * 2,
         face_normals=np.stack([unit, -unit], axis=1).reshape(-1, 3),
-        edge_offsets=step3,
-        edge_directions=edges.reshape(-1, 3),
+        edge_pair_offsets=step3,
+        edge_pairs=np.tile(sides, (t, 1)),
     )
     order = np.concatenate([np.flatnonzero(keep), np.flatnonzero(~keep)])
     return (solid if flat is None else ConvexSet.concatenate(solid, flat)), order

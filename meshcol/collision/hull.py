@@ -410,8 +410,8 @@ class PackedHulls:
     adjacency: np.ndarray
     face_offsets: np.ndarray
     face_normals: np.ndarray
-    edge_offsets: np.ndarray
-    edge_directions: np.ndarray
+    edge_pair_offsets: np.ndarray
+    edge_pairs: np.ndarray
 
 
 def pack_hulls(point_sets: Sequence[np.ndarray] | np.ndarray, threads: int = 0) -> PackedHulls:
@@ -432,10 +432,13 @@ def pack_hulls(point_sets: Sequence[np.ndarray] | np.ndarray, threads: int = 0) 
     -----
     Per set, the hull of :func:`exact_hull` and, in the same pass: the neighbours of each
     vertex in the hull's triangulation (ascending, padded with the vertex itself to a multiple
-    of four for the core's hill climbing), one outward normal per plane, and one direction per
-    class of parallel edges between different planes (unsigned, grouped at 12 digits), the
-    features exact SAT needs. Flat sets give their polygon, its two normals and its edges;
-    collinear sets their segment; single points the point.
+    of four for the core's hill climbing), one outward normal per plane, and the true edges
+    (triangulation edges between different planes, as local vertex index pairs), the features
+    exact SAT needs. Flat sets give their polygon, its two normals and its edges; collinear
+    sets their segment; single points the point. The edges' direction classes (one unit
+    direction per class of parallel edges, unsigned, grouped at 12 digits) are not packed: a
+    :class:`ConvexSet` computes each shape's when SAT first needs them, or all of them when
+    its ``edge_directions`` are first read.
     """
     if isinstance(point_sets, np.ndarray) and point_sets.ndim == 3:
         h, n = point_sets.shape[:2]

@@ -114,8 +114,14 @@ class ConvexSet:
         in fixed blocks of four; a vertex never beats itself).
     face_offsets : (H + 1,) int64, face_normals : (F, 3) float64
         Outward unit face normals (one per plane) of each polytope, for exact SAT.
+    edge_pair_offsets : (H + 1,) int64, edge_pairs : (P, 2) int32
+        The true edges of each polytope (triangulation edges between different planes), as
+        local vertex index pairs ``(from, to)``, for exact SAT.
     edge_offsets : (H + 1,) int64, edge_directions : (E, 3) float64
-        Unit edge directions (one per parallel class) of each polytope, for exact SAT.
+        Unit edge directions (one per parallel class) of each polytope, for exact SAT:
+        computed from the vertices and ``edge_pairs`` when first read (all shapes in one
+        native call, then kept; the core computes a shape's when SAT first needs them, with
+        the same code and bits, and shares them).
     hull_status : (H,) int8
         :class:`meshcol.collision.hull.HullStatus` of each polytope's hull (OK, FLAT,
         COLLINEAR, SINGLE_POINT, or why it has none); 0 (OK) for primitives and for sets
@@ -141,8 +147,8 @@ class ConvexSet:
         "adjacency",
         "face_offsets",
         "face_normals",
-        "edge_offsets",
-        "edge_directions",
+        "edge_pair_offsets",
+        "edge_pairs",
     )
 
     vertices: np.ndarray
@@ -153,8 +159,8 @@ class ConvexSet:
     adjacency: np.ndarray
     face_offsets: np.ndarray
     face_normals: np.ndarray
-    edge_offsets: np.ndarray
-    edge_directions: np.ndarray
+    edge_pair_offsets: np.ndarray
+    edge_pairs: np.ndarray
     hull_status: np.ndarray
 
     def __init__(self, *, hull_status: np.ndarray | None = None, **arrays: np.ndarray) -> None:
@@ -162,6 +168,9 @@ class ConvexSet:
         about each shape (its checked bounding radius) from one query to the next, so the
         arrays must not change under it, and a caller's array (or another view of its
         memory) could. The builders below hand over arrays they made (:meth:`_adopt`)."""
+        unknown = sorted(set(arrays) - set(self._FIELDS))
+        if unknown:
+            raise TypeError(f"ConvexSet got unexpected arrays {unknown}; it takes {self._FIELDS}")
         status = None if hull_status is None else _copied(hull_status, np.int8)
         self._hold(status, {name: _copied(arrays[name]) for name in self._FIELDS})
 
@@ -189,9 +198,30 @@ class ConvexSet:
             self.adjacency,
             self.face_offsets,
             self.face_normals,
-            self.edge_offsets,
-            self.edge_directions,
+            self.edge_pair_offsets,
+            self.edge_pairs,
         )
+        self._edge_classes: tuple[np.ndarray, np.ndarray] | None = None
+
+    def _classes(self) -> tuple[np.ndarray, np.ndarray]:
+        # every shape's edge-direction classes, once (the core keeps them for SAT too)
+        if self._edge_classes is None:
+            offsets, directions = self._core.edge_classes(0)
+            self._edge_classes = (_readonly(offsets), _readonly(directions))
+        return self._edge_classes
+
+    @property
+    def edge_offsets(self) -> np.ndarray:
+        """(H + 1,) int64 offsets of each shape's :attr:`edge_directions` (computed on first
+        read)."""
+        return self._classes()[0]
+
+    @property
+    def edge_directions(self) -> np.ndarray:
+        """(E, 3) float64 unit edge directions, one per class of parallel edges of each
+        polytope, local frame (computed on first read from the vertices and
+        :attr:`edge_pairs`)."""
+        return self._classes()[1]
 
     def __len__(self) -> int:
         return len(self.kinds)
@@ -252,8 +282,8 @@ class ConvexSet:
             adjacency=packed.adjacency,
             face_offsets=spread(packed.face_offsets),
             face_normals=packed.face_normals,
-            edge_offsets=spread(packed.edge_offsets),
-            edge_directions=packed.edge_directions,
+            edge_pair_offsets=spread(packed.edge_pair_offsets),
+            edge_pairs=packed.edge_pairs,
             hull_status=status,
         )
 
@@ -357,8 +387,8 @@ class ConvexSet:
             adjacency=np.concatenate([s.adjacency for s in sets]),
             face_offsets=offsets("face_offsets", "face_normals"),
             face_normals=np.concatenate([s.face_normals for s in sets]),
-            edge_offsets=offsets("edge_offsets", "edge_directions"),
-            edge_directions=np.concatenate([s.edge_directions for s in sets]),
+            edge_pair_offsets=offsets("edge_pair_offsets", "edge_pairs"),
+            edge_pairs=np.concatenate([s.edge_pairs for s in sets]),
             hull_status=np.concatenate([s.hull_status for s in sets]),
         )
 
@@ -393,7 +423,7 @@ class ConvexSet:
         adjacency_offsets = np.zeros(len(vertex_rows) + 1, dtype=np.int64)
         np.cumsum(np.diff(self.adjacency_offsets)[vertex_rows], out=adjacency_offsets[1:])
         face_offsets, face_rows = blocks(self.face_offsets)
-        edge_offsets, edge_rows = blocks(self.edge_offsets)
+        edge_pair_offsets, edge_rows = blocks(self.edge_pair_offsets)
         return ConvexSet._adopt(
             vertices=self.vertices[vertex_rows],
             offsets=offsets,
@@ -403,8 +433,8 @@ class ConvexSet:
             adjacency=self.adjacency[adjacency_rows],
             face_offsets=face_offsets,
             face_normals=self.face_normals[face_rows],
-            edge_offsets=edge_offsets,
-            edge_directions=self.edge_directions[edge_rows],
+            edge_pair_offsets=edge_pair_offsets,
+            edge_pairs=self.edge_pairs[edge_rows],
             hull_status=self.hull_status[idx],
         )
 

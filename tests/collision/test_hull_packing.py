@@ -2,9 +2,17 @@
 
 Oracles: the packed arrays the old path (main 50405b3) produced for a fixed set of inputs,
 kept in tests/data/hull_pack_50405b3.json and compared exactly (every vertex, adjacency
-list, face normal and edge direction bit for bit: smooth hulls, clouds and degenerate sets);
+list, face normal and edge direction bit for bit: smooth hulls, clouds and degenerate sets;
+the edge directions, no longer packed, as a ConvexSet computes them from the packed edges);
 and qhull through scipy on smooth hulls, whose triangulation is unique (no four points
 coplanar): the same triangles and the same vertex adjacency.
+
+The edge classes a ConvexSet computes on first read from its vertices and true edges
+(``edge_pairs``) against those the packing stored before (main 6b141aa): the golden packing
+byte for byte (signs of zero included); for concatenated and taken sets, the rows of their
+sources' classes that the old ``concatenate`` and ``take`` copied; for triangle parts, the
+unit sides the old ``triangle_parts`` wrote (the core gives each class its canonical sign, so
+equal up to sign); and SAT's answers, the same whether a query or a read computed them first.
 """
 
 from __future__ import annotations
@@ -13,12 +21,17 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial import ConvexHull
 from scipy.spatial.transform import Rotation
 
+from meshcol.analysis.triangle_parts import triangle_parts
 from meshcol.collision.hull import HullStatus, exact_hull, pack_hulls
+from meshcol.collision.narrowphase import penetration_batch
+from meshcol.collision.shapes import Box, ConvexSet, Sphere
+from meshcol.types import Body
 
 GOLDEN_PACK = Path(__file__).resolve().parents[1] / "data" / "hull_pack_50405b3.json"
 
@@ -57,10 +70,14 @@ def golden_inputs() -> list[np.ndarray]:
 
 def packed_as_lists(point_sets: list[np.ndarray]) -> dict[str, list]:
     packed = pack_hulls(point_sets, threads=1)
-    return {name: np.asarray(getattr(packed, name)).tolist() for name in FIELDS}
+    got = {name: np.asarray(getattr(packed, name)).tolist() for name in PACKED_FIELDS}
+    computed = ConvexSet.from_vertices(point_sets)  # every shape a polytope: the same offsets
+    for name in COMPUTED_FIELDS:
+        got[name] = getattr(computed, name).tolist()
+    return got
 
 
-FIELDS = (
+PACKED_FIELDS = (
     "status",
     "vertices",
     "offsets",
@@ -68,16 +85,15 @@ FIELDS = (
     "adjacency",
     "face_offsets",
     "face_normals",
-    "edge_offsets",
-    "edge_directions",
 )
+COMPUTED_FIELDS = ("edge_offsets", "edge_directions")
 
 
 def test_packing_equals_the_old_paths_arrays_bit_for_bit() -> None:
     want = json.loads(GOLDEN_PACK.read_text())
     got = packed_as_lists(golden_inputs())
     assert got["status"][-2] == int(HullStatus.OVERFLOW)
-    for name in FIELDS:
+    for name in PACKED_FIELDS + COMPUTED_FIELDS:
         assert got[name] == want[name], name
 
 
@@ -85,7 +101,7 @@ def test_packing_on_two_threads_equals_one() -> None:
     rng = np.random.default_rng(3)
     sets = [ellipsoid_points(rng, 64) for _ in range(40)] + golden_inputs()
     one, two = pack_hulls(sets, threads=1), pack_hulls(sets, threads=2)
-    for name in FIELDS:
+    for name in (*PACKED_FIELDS, "edge_pair_offsets", "edge_pairs"):
         assert np.array_equal(getattr(one, name), getattr(two, name), equal_nan=True), name
 
 
@@ -113,3 +129,103 @@ def test_smooth_hulls_equal_qhull_triangle_for_triangle(n: int, seed: int) -> No
     pairs = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
     assert ours_edges == {(int(a), int(b)) for a, b in np.concatenate([pairs, pairs[:, ::-1]])}
     assert len(packed.face_normals) == len(reference.simplices)
+
+
+def test_computed_classes_equal_the_old_packings_bytes() -> None:
+    want = json.loads(GOLDEN_PACK.read_text())
+    cs = ConvexSet.from_vertices(golden_inputs())
+    assert cs.edge_offsets.tobytes() == np.array(want["edge_offsets"], np.int64).tobytes()
+    old = np.array(want["edge_directions"], np.float64).reshape(-1, 3)
+    assert cs.edge_directions.tobytes() == old.tobytes()
+    assert np.any((old == 0.0) & np.signbit(old))  # -0.0 in the golden: compared as such
+    assert not cs.edge_directions.flags.writeable and not cs.edge_offsets.flags.writeable
+    assert cs.edge_directions is cs.edge_directions  # computed once
+
+
+def _rows(offsets: np.ndarray, indices: np.ndarray) -> np.ndarray:
+    return np.concatenate(
+        [np.arange(offsets[h], offsets[h + 1]) for h in indices] + [np.zeros(0, np.int64)]
+    )
+
+
+def _mesh_body(rng: np.random.Generator) -> Body:
+    vertices = rng.normal(size=(30, 3))
+    faces = rng.integers(0, 30, size=(40, 3))
+    faces[0] = [0, 1, 1]  # a segment
+    faces[1] = [2, 3, 4]
+    vertices[4] = 0.5 * (vertices[2] + vertices[3])  # collinear: flat
+    return Body(name="mesh", source=None, vertices=vertices, faces=faces)
+
+
+def test_concatenated_and_taken_sets_compute_their_sources_classes() -> None:
+    rng = np.random.default_rng(12)
+    hulls = ConvexSet.from_vertices(golden_inputs())
+    mixed = ConvexSet.from_shapes([Box((1, 2, 3)), rng.normal(size=(40, 3)), Sphere(1.0)])
+    parts = triangle_parts(_mesh_body(rng))
+    sets = (hulls, mixed, parts)
+    # each source read only after the combined set's classes (no reuse of a cache)
+    both = ConvexSet.concatenate(*sets)
+    old = np.concatenate([s.edge_directions for s in sets])
+    assert both.edge_directions.tobytes() == old.tobytes()
+    assert np.array_equal(
+        np.diff(both.edge_offsets), np.concatenate([np.diff(s.edge_offsets) for s in sets])
+    )
+    idx = np.array([5, 0, 5, len(both) - 1, len(hulls) + 1, len(hulls), 12, len(hulls) + 4])
+    taken = both.take(idx)
+    assert (
+        taken.edge_directions.tobytes()
+        == both.edge_directions[_rows(both.edge_offsets, idx)].tobytes()
+    )
+    assert np.array_equal(np.diff(taken.edge_offsets), np.diff(both.edge_offsets)[idx])
+
+
+def test_triangle_parts_classes_are_their_unit_sides_up_to_sign() -> None:
+    body = _mesh_body(np.random.default_rng(4))
+    parts = triangle_parts(body)
+    solid = np.flatnonzero(np.diff(parts.offsets) == 3)
+    tri = parts.vertices[_rows(parts.offsets, solid)].reshape(-1, 3, 3)
+    sides = np.stack([tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 1], tri[:, 0] - tri[:, 2]], axis=1)
+    old = (sides / np.linalg.norm(sides, axis=2, keepdims=True)).reshape(-1, 3)  # as written before
+    assert np.array_equal(np.diff(parts.edge_offsets)[solid], np.full(len(solid), 3))
+    got = parts.edge_directions[_rows(parts.edge_offsets, solid)]
+    flipped = np.all(got == -old, axis=1)
+    assert np.all(np.all(got == old, axis=1) | flipped)
+    assert 0 < flipped.sum() < len(old)  # both signs occur: the test tells them apart
+    # the canonical sign: the first component beyond 1e-12 is positive
+    lead = np.where(
+        np.abs(got[:, 0]) > 1e-12,
+        got[:, 0],
+        np.where(np.abs(got[:, 1]) > 1e-12, got[:, 1], got[:, 2]),
+    )
+    assert np.all(lead > 0)
+
+
+@pytest.mark.parametrize("read_first", [False, True])
+def test_sat_reads_the_same_classes_whoever_computes_them(read_first: bool) -> None:
+    # Small polytopes (SAT runs) and a box, penetrating: a set whose classes were read before
+    # the query (one native call over all shapes) and one whose query computed them answer
+    # alike, bit for bit.
+    rng = np.random.default_rng(21)
+    shapes = [rng.normal(size=(n, 3)) for n in (6, 8, 10, 12) * 6] + [Box((1.0, 0.5, 0.8))]
+    pairs = np.array([(i, j) for i in range(len(shapes)) for j in range(len(shapes)) if i != j])
+    poses = np.tile(np.eye(4), (len(shapes), 1, 1))
+    poses[:, :3, 3] = rng.uniform(-0.3, 0.3, size=(len(shapes), 3))
+    first, second = ConvexSet.from_shapes(shapes), ConvexSet.from_shapes(shapes)
+    if read_first:
+        assert len(first.edge_directions) > 0
+    a = penetration_batch(first, poses, pairs, threads=2)
+    b = penetration_batch(second, poses, pairs, threads=1)
+    for name in ("depth", "normal", "point_a", "point_b", "status", "iterations"):
+        assert getattr(a, name).tobytes() == getattr(b, name).tobytes(), name
+    assert first.edge_directions.tobytes() == second.edge_directions.tobytes()
+
+
+def test_a_set_takes_the_edges_not_their_classes() -> None:
+    made = ConvexSet.from_vertices([np.random.default_rng(1).normal(size=(9, 3))])
+    arrays = {name: getattr(made, name) for name in ConvexSet._FIELDS}
+    assert ConvexSet(**arrays).edge_directions.tobytes() == made.edge_directions.tobytes()
+    with pytest.raises(TypeError, match="edge_directions"):
+        ConvexSet(**arrays, edge_directions=made.edge_directions)
+    bad = dict(arrays, edge_pairs=np.array(arrays["edge_pairs"]) + 9)
+    with pytest.raises(ValueError, match="edge_pairs holds an index out of range"):
+        ConvexSet(**bad)

@@ -409,8 +409,8 @@ def test_hill_climbing_matches_vertex_scan():
         None,
         cs.face_offsets,
         cs.face_normals,
-        cs.edge_offsets,
-        cs.edge_directions,
+        cs.edge_pair_offsets,
+        cs.edge_pairs,
     )
     h = len(clouds)
     pose_list = np.stack(

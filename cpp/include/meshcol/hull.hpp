@@ -1,7 +1,7 @@
 #pragma once
 /// Exact convex hulls of point sets (Quickhull) and the packed polytope data the narrow phase
-/// runs on (vertices, hull adjacency for hill climbing, face normals and edge directions for
-/// SAT), batched over shapes.
+/// runs on (vertices, hull adjacency for hill climbing, face normals and true edges for SAT),
+/// batched over shapes.
 ///
 /// Every hull of meshcol comes from `exact_hull`: collision shapes, `meshcol hull`, the
 /// budgeted hull's exact start and decomposition parts.
@@ -65,8 +65,10 @@ struct PackedPolytopes {
     std::vector<std::int32_t> adjacency;       ///< (K,) local neighbour indices, padded
     std::vector<std::int64_t> face_offsets;    ///< (H + 1,)
     std::vector<double> face_normals;          ///< (F, 3) outward unit normals, one per plane
-    std::vector<std::int64_t> edge_offsets;    ///< (H + 1,)
-    std::vector<double> edge_directions;       ///< (E, 3) unit, one per parallel class
+    std::vector<std::int64_t> edge_pair_offsets;  ///< (H + 1,)
+    /// (P, 2) the true edges as local vertex index pairs (from, to), in the order their
+    /// directions are grouped (`edge_direction_classes`)
+    std::vector<std::int32_t> edge_pairs;
 };
 
 /// Hulls of H point sets (shape h owns `points[offsets[h] .. offsets[h + 1])`), packed in one
@@ -77,10 +79,26 @@ struct PackedPolytopes {
 ///
 /// Per shape: 3-D, the hull's vertices (lexicographic order), the neighbours of each vertex
 /// in the triangulation (ascending, padded with the vertex itself to a multiple of four),
-/// one normal per plane and one direction per class of parallel edges between different
-/// planes; 2-D, the ring, its two neighbours per vertex, the plane's two normals and the
-/// ring's edge directions; 1-D, both ends and the segment's direction; 0-D, the point.
+/// one normal per plane and the true edges (triangulation edges between different planes);
+/// 2-D, the ring, its two neighbours per vertex, the plane's two normals and the ring's edges;
+/// 1-D, both ends and the segment; 0-D, the point. The edges' direction classes are not
+/// packed: SAT computes a shape's when it first needs them (`edge_direction_classes`).
 PackedPolytopes pack_polytopes(const Vec3* points, const std::int64_t* offsets, long long shapes,
                                int threads);
+
+/// One unit direction per class of parallel edges of a polytope, from its `vertices` (local
+/// frame) and its true edges `pairs` ((count, 2) local vertex indices, as `pack_polytopes`
+/// lists them), appended to `out` as (x, y, z) triples; returns how many. Each edge's
+/// direction is `vertices[to] - vertices[from]`; the unit vectors are grouped by their
+/// components rounded to 12 digits, with a canonical sign (the first component clearly
+/// non-zero positive), first occurrences kept in edge order. Edges of zero or NaN length have
+/// no class. Thread-safe.
+std::int64_t edge_direction_classes(const Vec3* vertices, const std::int32_t* pairs,
+                                    size_t count, std::vector<double>& out);
+
+/// The number of classes `edge_direction_classes` finds among the first `count` edges: a lower
+/// bound on the whole list's (a prefix has no class the list lacks). Thread-safe.
+std::int64_t edge_direction_class_count(const Vec3* vertices, const std::int32_t* pairs,
+                                        size_t count);
 
 }  // namespace meshcol

@@ -9,12 +9,15 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "meshcol/shapes.hpp"
 #include "meshcol/status.hpp"
 #include "meshcol/vec.hpp"
 
 namespace meshcol {
+
+class EdgeClasses;
 
 /// Non-owning view of a packed convex set (the arrays of the Python `ConvexSet`).
 struct ConvexSetView {
@@ -28,14 +31,56 @@ struct ConvexSetView {
     const std::int64_t* adjacency_offsets = nullptr;
     const std::int32_t* adjacency = nullptr;
     /// Optional SAT features: (H + 1,) offsets into (F, 3) unit face normals and (H + 1,)
-    /// offsets into (E, 3) unit edge directions, or null.
+    /// offsets into (P, 2) true edges (local vertex indices (from, to), `pack_polytopes`),
+    /// or null; with them, the cache of the edges' direction classes.
     const std::int64_t* face_offsets = nullptr;
     const double* face_normals = nullptr;
-    const std::int64_t* edge_offsets = nullptr;
-    const double* edge_directions = nullptr;
+    const std::int64_t* edge_pair_offsets = nullptr;
+    const std::int32_t* edge_pairs = nullptr;
+    EdgeClasses* edge_classes = nullptr;
 
-    /// The view of shape `h` (0 <= h < H).
+    /// The view of shape `h` (0 <= h < H). Its edge directions are attached when SAT needs
+    /// them (shapes.hpp: `attach_edges`), except for a shape without edges. `edge_classes`
+    /// must be set when `edge_pairs` is.
     ShapeView shape(std::int64_t h) const;
+};
+
+/// Each polytope's edge-direction classes (SAT's edge axes: `edge_direction_classes` of its
+/// vertices and true edges, the packing's classes to the bit), computed the first time a
+/// query needs them and kept for the set's life: the shapes of a set never change (the
+/// Python `ConvexSet` makes or copies its arrays and holds them read-only). One per set,
+/// shared by every thread and batch. Thread-safe: threads that meet an uncomputed shape at
+/// the same moment each compute it, the same classes, and the first to publish its list wins
+/// (the others free theirs). A shape's entry is a pointer in a zeroed allocation, so shapes
+/// never asked for cost no written memory (no page faults).
+class EdgeClasses {
+  public:
+    explicit EdgeClasses(std::int64_t shape_count);
+    ~EdgeClasses();
+    EdgeClasses(const EdgeClasses&) = delete;
+    EdgeClasses& operator=(const EdgeClasses&) = delete;
+
+    /// Shape `h`'s classes: (count, 3) unit directions.
+    struct List {
+        const Vec3* directions = nullptr;
+        int count = 0;
+    };
+
+    /// Shape `h`'s classes of `set` (whose cache this is), computed on first use.
+    List get(const ConvexSetView& set, std::int64_t h);
+
+    /// A lower bound on shape `h`'s class count, at least `wanted` when the count is, found
+    /// without computing them all where it can be: the classes of its first
+    /// max(`wanted`, `defaults::sat_edge_class_prefix`) edges (the classes themselves, kept,
+    /// when that is most of them). The largest bound found is kept like the classes;
+    /// `wanted` 0 reads it (or the count) without computing anything.
+    int lower_bound(const ConvexSetView& set, std::int64_t h, int wanted);
+
+  private:
+    struct Entry;
+    std::int64_t shape_count_;
+    std::atomic<Entry*>* entries_;   // (H,) null until computed
+    std::atomic<int>* lower_;        // (H,) lower bound + 1; 0: not yet found
 };
 
 /// What a pair query computes.
@@ -112,6 +157,13 @@ void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t
 /// pose gives NaN bounds.
 void world_aabbs(const ConvexSetView& set, const double* poses, double* aabb_min,
                  double* aabb_max, int threads);
+
+/// Every shape's edge-direction classes through the set's cache (`set.edge_classes`; each
+/// computed at most once in the set's life) on `threads` threads: (H + 1,) offsets into
+/// `offsets` and the (E, 3) unit directions into `directions`, concatenated in shape order
+/// (a shape without true edges, or a set without features, has none).
+void all_edge_classes(const ConvexSetView& set, int threads, std::vector<std::int64_t>& offsets,
+                      std::vector<double>& directions);
 
 /// Radius (H,) of a ball about each shape's local origin holding the whole shape
 /// (`bounding_radius`); NaN for a shape that is not `is_valid`.

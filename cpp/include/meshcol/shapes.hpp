@@ -12,6 +12,8 @@
 
 namespace meshcol {
 
+struct ConvexSetView;
+
 /// Kind of a shape. The numeric values are part of the binary interface (mirrored by the
 /// Python `meshcol.collision.shapes.ShapeKind`; tests/test_native.py checks it): never renumber.
 enum class ShapeKind : std::int8_t {
@@ -39,8 +41,27 @@ struct ShapeView {
     int face_count = 0;
     const Vec3* edge_directions = nullptr;
     int edge_count = 0;
+    /// Set when the edge directions are not attached yet: the shape is shape `set_index` of
+    /// `set`, whose classes are computed on first use (narrowphase.hpp: `attach_edges`), and
+    /// `edge_directions`/`edge_count` stay null/0 until then. Null: they are complete.
+    const ConvexSetView* set = nullptr;
+    std::int64_t set_index = -1;
     double params[4] = {0.0, 0.0, 0.0, 0.0};  ///< see `ShapeKind`
 };
+
+/// Attaches the edge directions of a shape whose classes are computed on first use
+/// (`ShapeView::set`): reads them from its set's cache, computing them the first time
+/// (narrowphase.cpp); a no-op for a shape whose directions are complete.
+void attach_edges(ShapeView& shape);
+
+/// A lower bound on a polytope's edge-class count: `edge_count` when its directions are
+/// complete, else from its set's cache without computing them all where it can (at least
+/// `wanted` when the count is: see narrowphase.hpp, `EdgeClasses::lower_bound`).
+int edge_count_lower_bound(const ShapeView& shape, int wanted);
+
+/// An upper bound on a polytope's edge-class count: `edge_count` when its directions are
+/// complete, else its number of true edges.
+int edge_count_upper_bound(const ShapeView& shape);
 
 /// A support point of a shape's core with the feature that produced it.
 struct SupportPoint {
