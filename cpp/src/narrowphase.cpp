@@ -330,9 +330,9 @@ void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t
     // its query reads them again: in broad-phase output most shapes are in only a few pairs,
     // and a separate pass over them all would bring each shape from memory twice. The set's
     // owner keeps the radii between batches (`radii`); else they last this batch.
-    const BatchShapes shapes(h_count, pairs, pair_count);
+    BatchShapes shapes(h_count, pairs, pair_count);
     const std::int64_t slots = shapes.size();
-    std::vector<char> ok = shapes.used();
+    std::vector<char> ok = shapes.take_used();
     // Slots a pair of this batch has met (`read_vertices` on the first; a thread that meets
     // one at the same moment as another reads it twice, harmlessly).
     std::unique_ptr<std::atomic<char>[]> met(new std::atomic<char>[static_cast<size_t>(slots)]);

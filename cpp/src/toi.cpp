@@ -547,11 +547,11 @@ void run_toi_batch(const ConvexSetView& set, const double* start_poses, const do
     const bool options_ok = options.tolerance > 0.0 && std::isfinite(options.tolerance);
     // Shapes, motions and their lever arms once per shape of the batch, not once per pair
     // nor for the shapes no pair names (`BatchShapes`).
-    const BatchShapes batch(h_count, pairs, pair_count);
+    BatchShapes batch(h_count, pairs, pair_count);
     const std::int64_t slots = batch.size();
     std::vector<ShapeView> shapes(static_cast<size_t>(slots));  // the movers point at these
     std::vector<Mover> movers(static_cast<size_t>(slots));
-    std::vector<char> ok = batch.used();
+    std::vector<char> ok = batch.take_used();
     for (std::int64_t k = 0; k < slots; ++k) {
         if (!ok[k]) continue;
         const std::int64_t h = batch.shape(k);

@@ -132,4 +132,21 @@ struct PolytopeSet {
     PolytopeSet& operator=(const PolytopeSet&) = delete;
 };
 
+/// A packed set of `count` shapes over the caller's arrays (`vertices` (V, 3) flat, or null for
+/// primitives only), with no adjacency or SAT features.
+inline ConvexSetView convex_set(const std::int64_t* offsets, const std::int8_t* kinds,
+                                const double* params, std::int64_t count,
+                                const std::vector<double>* vertices = nullptr) {
+    ConvexSetView set;
+    if (vertices != nullptr) {
+        set.vertices = vertices->data();
+        set.vertex_count = static_cast<std::int64_t>(vertices->size() / 3);
+    }
+    set.offsets = offsets;
+    set.shape_count = count;
+    set.kinds = kinds;
+    set.params = params;
+    return set;
+}
+
 }  // namespace meshcol::fixtures

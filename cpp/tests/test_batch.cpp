@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "check.hpp"
+#include "fixtures.hpp"
 #include "meshcol/batch.hpp"
 #include "meshcol/narrowphase.hpp"
 #include "meshcol/toi.hpp"
@@ -39,22 +40,26 @@ TEST_CASE("batch: every item runs once when nothing throws") {
 
 TEST_CASE("batch shapes: dense slots are the shapes, sparse slots the distinct shapes named") {
     const std::int64_t pairs[6] = {7, 3, 3, 90, 5, 5};
-    const BatchShapes sparse(100, pairs, 3);  // 6 ends x 8 < 100
+    BatchShapes sparse(100, pairs, 3);  // 6 ends x 8 < 100
     REQUIRE(!sparse.dense());
     REQUIRE(sparse.size() == 4);
     const std::int64_t shapes[4] = {3, 5, 7, 90};
+    const std::vector<char> named = sparse.take_used();
+    REQUIRE(named.size() == 4);
     for (int k = 0; k < 4; ++k) {
         CHECK_EQ(sparse.shape(k), shapes[k]);
-        CHECK(sparse.used()[k] == 1);
+        CHECK(named[k] == 1);
     }
     for (int e = 0; e < 6; ++e) CHECK_EQ(sparse.shape(sparse.slot_of(e)), pairs[e]);
     // 4 ends x 8 >= 32 shapes: every shape a slot, the named ones marked.
     const std::int64_t few[4] = {7, 3, 3, 7};
-    const BatchShapes dense(32, few, 2);
+    BatchShapes dense(32, few, 2);
     REQUIRE(dense.dense());
     REQUIRE(dense.size() == 32);
     for (int e = 0; e < 4; ++e) CHECK_EQ(dense.slot_of(e), few[e]);
-    for (int h = 0; h < 32; ++h) CHECK(dense.used()[h] == (h == 3 || h == 7 ? 1 : 0));
+    const std::vector<char> marked = dense.take_used();
+    REQUIRE(marked.size() == 32);
+    for (int h = 0; h < 32; ++h) CHECK(marked[h] == (h == 3 || h == 7 ? 1 : 0));
     CHECK(!BatchShapes(33, few, 2).dense());
     CHECK_EQ(BatchShapes(10, nullptr, 0).size(), 0);
 }
@@ -100,12 +105,7 @@ struct Scene {
     }
 
     ConvexSetView view() const {
-        ConvexSetView v;
-        v.offsets = offsets.data();
-        v.shape_count = kShapes;
-        v.kinds = kinds.data();
-        v.params = params.data();
-        return v;
+        return fixtures::convex_set(offsets.data(), kinds.data(), params.data(), kShapes);
     }
     long long all() const { return static_cast<long long>(pairs.size() / 2); }
 };

@@ -141,11 +141,7 @@ TEST_CASE("narrow phase: a batch sets each pair's status, a bad pose is INVALID_
                                   static_cast<std::int8_t>(ShapeKind::BOX),
                                   static_cast<std::int8_t>(ShapeKind::SPHERE)};
     const double params[12] = {0.5, 0.5, 0.5, 0, 0.5, 0.5, 0.5, 0, 1.0, 0, 0, 0};
-    ConvexSetView set;
-    set.offsets = offsets;
-    set.shape_count = 3;
-    set.kinds = kinds;
-    set.params = params;
+    const ConvexSetView set = fixtures::convex_set(offsets, kinds, params, 3);
     double poses[48] = {};
     identity_poses(poses, 3);
     poses[16 * 1 + 3] = 3.0;                                   // box 1 at x = 3
@@ -174,13 +170,7 @@ TEST_CASE("narrow phase: radii kept between batches give each batch the same ans
     const std::int64_t offsets[4] = {0, 8, 16, 24};
     const std::int8_t kinds[3] = {0, 0, 0};
     const double params[12] = {};
-    ConvexSetView set;
-    set.vertices = vertices.data();
-    set.vertex_count = 24;
-    set.offsets = offsets;
-    set.shape_count = 3;
-    set.kinds = kinds;
-    set.params = params;
+    const ConvexSetView set = fixtures::convex_set(offsets, kinds, params, 3, &vertices);
     double poses[48] = {};
     identity_poses(poses, 3);
     poses[16 * 1 + 3] = 0.75;  // cube 1 overlaps cube 0 by a quarter

@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <utility>
 #include <vector>
 
 namespace meshcol {
@@ -23,7 +24,7 @@ void parallel_for(long long n, int threads, const std::function<void(long long, 
 
 /// The shapes that a batch of (P, 2) pairs over a set of `shape_count` shapes uses, as slots
 /// of the batch's per-shape state (checked poses, motions, flags). When the pairs name a good
-/// share of the set, every shape is a slot (slot = shape index) and `used` marks the ones
+/// share of the set, every shape is a slot (slot = shape index) and `take_used` marks the ones
 /// named. When they name few (2P * kSparseRatio < shape_count), the slots are only the
 /// distinct shapes named, ascending: a few pairs on a set of a million shapes then cost what
 /// those pairs need, not a pass over the whole set. Either way a pair's results do not depend
@@ -41,8 +42,9 @@ class BatchShapes {
     std::int64_t shape(std::int64_t slot) const { return dense() ? slot : shapes_[slot]; }
     /// The slot of pair end `end` (pair i's shapes are ends 2i and 2i + 1).
     std::int64_t slot_of(long long end) const { return dense() ? pairs_[end] : ends_[end]; }
-    /// Per slot, 1 when a pair names its shape (every slot of a sparse batch).
-    const std::vector<char>& used() const { return used_; }
+    /// Per slot, 1 when a pair names its shape (every slot of a sparse batch): handed over,
+    /// not copied, as the batch's own per-slot flags (empty after the first call).
+    std::vector<char> take_used() { return std::move(used_); }
     bool dense() const { return dense_; }
 
   private:
