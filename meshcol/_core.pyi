@@ -283,32 +283,9 @@ class AabbTree:
 
     def __len__(self) -> int: ...
 
-class TimeOfImpactArrays:
-    """Arrays of a time_of_impact_batch, in pair order."""
-
-    @property
-    def time_of_impact(self) -> Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')]:
-        """(P,) float64 fraction of the motion; NaN when SEPARATED or invalid"""
-
-    @property
-    def point(self) -> Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')]:
-        """(P, 3) float64, world"""
-
-    @property
-    def normal(self) -> Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')]:
-        """(P, 3) float64, world, unit, a to b"""
-
-    @property
-    def iterations(self) -> Annotated[NDArray[numpy.int32], dict(shape=(None,), order='C')]:
-        """(P,) int32"""
-
-    @property
-    def status(self) -> Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')]:
-        """(P,) int8 TimeOfImpactStatus codes"""
-
-def time_of_impact_batch(shapes: PackedConvexSet, start_poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)], end_poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)], pairs: Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', device='cpu', writable=False)], rotations: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)] | None = None, pivots: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)] | None = None, tolerance: float = 1e-06, max_iterations: int = 1000, threads: int = 0) -> TimeOfImpactArrays:
+def time_of_impact_object(shapes: PackedConvexSet, start_poses: object | None, end_poses: object | None, pairs: object | None, rotations: object | None, pivots: object | None, tolerance: float, max_iterations: int, threads: int, result_type: object) -> object:
     """
-    Time of impact of (P, 2) pairs of a PackedConvexSet's shapes moving from start_poses to end_poses ((H, 4, 4) each), turning by the world rotation vectors rotations (H, 3; None: the shortest rotation) about the world points pivots (H, 3; None: the local origins).
+    Time of impact of the (P, 2) pairs of a PackedConvexSet's shapes moving from start_poses to end_poses ((H, 4, 4) each), turning by the world rotation vectors rotations (H, 3; None: the shortest rotation) about the world points pivots (H, 3; None: the local origins), as result_type; None when an argument is not in the core's form.
     """
 
 def interpolate_poses(start_poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)], end_poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)], t: Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C', device='cpu', writable=False)], rotations: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)] | None = None, pivots: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)] | None = None) -> Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C')]:

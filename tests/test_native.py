@@ -56,11 +56,31 @@ def test_query_results_are_the_python_result_classes() -> None:
 
 
 def test_time_of_impact_results_are_typed_objects() -> None:
+    from meshcol.collision.time_of_impact import TimeOfImpactBatch
+
     cs = ConvexSet.from_vertices([np.eye(3), np.eye(3) + 5.0])
     poses = np.tile(np.eye(4), (2, 1, 1))
-    r = core.time_of_impact_batch(cs._core, poses, poses, np.array([[0, 1]], dtype=np.int64))
-    assert type(r).__name__ == "TimeOfImpactArrays"
+    pairs = np.array([[0, 1]], dtype=np.int64)
+
+    def toi(*args):
+        return core.time_of_impact_object(cs._core, *args, 1e-6, 100, 1, TimeOfImpactBatch)
+
+    r = toi(poses, poses, pairs, None, None)
+    assert type(r) is TimeOfImpactBatch
     assert r.status[0] == TimeOfImpactStatus.SEPARATED and np.isnan(r.time_of_impact[0])
+    assert r.iterations.dtype == np.int32 and r.status.dtype == np.int8
+    # anything not in the core's form is declined, for the caller to convert
+    assert toi(None, poses, pairs, None, None) is None
+    assert toi(poses, poses.astype(np.float32), pairs, None, None) is None
+    assert toi(poses, poses, pairs, np.zeros((2, 3), dtype=np.float32), None) is None
+    assert toi(poses, poses, pairs, None, np.zeros((3, 3))) is None
+    assert toi(poses[:1], poses[:1], pairs, None, None) is None
+    with pytest.raises(ValueError, match=r"^pairs: index 2 out of range for 2 shapes$"):
+        toi(poses, poses, [(0, 2)], None, None)
+    with pytest.raises(ValueError, match=r"^max_iterations must be >= 1, got 0$"):
+        core.time_of_impact_object(
+            cs._core, poses, poses, pairs, None, None, 1e-6, 0, 1, TimeOfImpactBatch
+        )
 
 
 def test_bounding_radii_match_the_shapes() -> None:

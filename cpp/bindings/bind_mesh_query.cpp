@@ -468,10 +468,7 @@ size_t mesh_index(const MeshBvhSet& set, std::int64_t i) {
 // costs about a third of a disjoint pair's call), other objects through the buffer protocol.
 // Null when neither reads it.
 const double* pose_in_place(nb::handle pose, Buffer& buffer) {
-    Py_ssize_t shape[2];
-    if (const double* p = numpy_data<double>(pose.ptr(), 2, shape); p != nullptr)
-        return shape[0] == 4 && shape[1] == 4 ? p : nullptr;
-    return buffer.get<double>(pose.ptr(), {4, 4});
+    return float64_array(pose.ptr(), {4, 4}, buffer);
 }
 
 // A pose as a query reads it, and whether it is rigid and finite.

@@ -44,15 +44,8 @@ nb::object query_object(const PackedConvexSet& set, int layout, nb::handle poses
         throw std::invalid_argument("layout must be 0..3, got " + std::to_string(layout));
     const auto form = static_cast<Layout>(layout);
     const std::int64_t h = set.size();
-    Buffer pose_buffer;  // held until the call returns: the batch reads the poses in place
-    const double* pose_data = nullptr;
-    if (!poses.is_none()) {
-        Py_ssize_t shape[3];
-        pose_data = numpy_data<double>(poses.ptr(), 3, shape);
-        if (pose_data != nullptr && (shape[0] != h || shape[1] != 4 || shape[2] != 4)) return nb::none();
-        if (pose_data == nullptr) pose_data = pose_buffer.get<double>(poses.ptr(), {static_cast<Py_ssize_t>(h), 4, 4});
-        if (pose_data == nullptr) return nb::none();
-    }
+    Float64Arg pose_arg;  // the batch reads the poses in place
+    if (!pose_arg.read(poses, {static_cast<Py_ssize_t>(h), 4, 4})) return nb::none();
     PairsArg in;
     if (!in.read(pairs.ptr())) return nb::none();
     set.check_pairs(in.data, in.count);
@@ -78,13 +71,14 @@ nb::object query_object(const PackedConvexSet& set, int layout, nb::handle poses
     double* sd = nullptr;
     if (form == Layout::SIGNED_DISTANCE) signed_distance = numpy_empty(n, &sd);
     const auto run = [&] {
-        meshcol::run_batch(set.view(), pose_data, in.data, in.count, q, threads, out, &set.radii());
+        meshcol::run_batch(set.view(), pose_arg.data(), in.data, in.count, q, threads, out, &set.radii());
         for (size_t k = 0; k < (sd != nullptr ? n : 0); ++k) sd[k] = out.distance[k] - out.depth[k];
     };
     if (in.count <= 1) {
         run();  // one pair: its query can cost less than releasing the GIL
     } else {
         in.pin();  // the batch reads the copy, never numpy's array, once the GIL is released
+        pose_arg.pin();
         nb::gil_scoped_release release;
         run();
     }

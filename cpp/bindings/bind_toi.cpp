@@ -1,10 +1,11 @@
 // Exposes toi.hpp: batched time of impact over the arrays of a
-// meshcol.collision.shapes.ConvexSet, its typed result, and the pose interpolation the motion
-// model uses. The Python API is meshcol/collision/time_of_impact.py.
+// meshcol.collision.shapes.ConvexSet, its result object made natively, and the pose
+// interpolation the motion model uses. The Python API is meshcol/collision/time_of_impact.py.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/optional.h>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <optional>
@@ -14,6 +15,7 @@
 
 #include "meshcol/defaults.hpp"
 #include "meshcol/toi.hpp"
+#include "call_args.hpp"
 #include "ndarray.hpp"
 #include "packed_convex_set.hpp"
 
@@ -22,15 +24,6 @@ using namespace nb::literals;
 using namespace meshcol::bindings;
 
 namespace {
-
-/// The arrays of one time-of-impact batch, P entries each (P x 3 for vectors).
-struct TimeOfImpactArrays {
-    ArrayObject<Out<double, -1>> time_of_impact;
-    ArrayObject<Out<double, -1, 3>> point;
-    ArrayObject<Out<double, -1, 3>> normal;
-    ArrayObject<Out<std::int32_t, -1>> iterations;
-    ArrayObject<Out<std::int8_t, -1>> status;
-};
 
 /// The data of an optional (N, 3) array of the turns, checked to have `n` rows (null: absent).
 const double* turn_rows(const std::optional<Points>& rows, size_t n, const char* name) {
@@ -41,46 +34,59 @@ const double* turn_rows(const std::optional<Points>& rows, size_t n, const char*
     return rows->data();
 }
 
-TimeOfImpactArrays time_of_impact_batch(const PackedConvexSet& set, Poses start_poses,
-                                        Poses end_poses, Pairs pairs,
-                                        std::optional<Points> rotations,
-                                        std::optional<Points> pivots, double tolerance,
-                                        int max_iterations, int threads) {
-    set.check_poses(start_poses, "start_poses");
-    set.check_poses(end_poses, "end_poses");
-    const size_t h = start_poses.shape(0);
-    const double* turns = turn_rows(rotations, h, "rotations");
-    const double* centres = turn_rows(pivots, h, "pivots");
-    set.check_pairs(pairs);
+// One time-of-impact batch as `result_type(time_of_impact, point, normal, iterations, status)`
+// (meshcol.collision.time_of_impact.TimeOfImpactBatch), made as query_object makes the narrow
+// phase's batches: the poses ((H, 4, 4) float64), the turns and pivots ((H, 3) float64 or
+// None) and the pairs are plain objects read in place when they are in the core's form;
+// anything else makes the call return None, and the caller converts them (as_poses,
+// as_vectors, as_pairs: their messages) and calls again. A batch of one pair thus costs its
+// query, five numpy.empty calls and the result object.
+nb::object time_of_impact_object(const PackedConvexSet& set, nb::handle start_poses,
+                                 nb::handle end_poses, nb::handle pairs, nb::handle rotations,
+                                 nb::handle pivots, double tolerance, int max_iterations,
+                                 int threads, nb::handle result_type) {
     if (!(tolerance > 0.0) || !std::isfinite(tolerance))
         throw std::invalid_argument("tolerance must be finite and > 0, got " +
                                     std::to_string(tolerance));
     if (max_iterations < 1)
         throw std::invalid_argument("max_iterations must be >= 1, got " +
                                     std::to_string(max_iterations));
-    const long long p = static_cast<long long>(pairs.shape(0));
-    const size_t n = static_cast<size_t>(p);
-    auto toi = new_array<Out<double, -1>>({n});
-    auto point = new_array<Out<double, -1, 3>>({n, 3});
-    auto normal = new_array<Out<double, -1, 3>>({n, 3});
-    auto iterations = new_array<Out<std::int32_t, -1>>({n});
-    auto status = new_array<Out<std::int8_t, -1>>({n});
+    const auto h = static_cast<Py_ssize_t>(set.size());
+    Float64Arg start, end, turns, centres;
+    if (start_poses.is_none() || end_poses.is_none() || !start.read(start_poses, {h, 4, 4}) ||
+        !end.read(end_poses, {h, 4, 4}) || !turns.read(rotations, {h, 3}) ||
+        !centres.read(pivots, {h, 3}))
+        return nb::none();
+    PairsArg in;
+    if (!in.read(pairs.ptr())) return nb::none();
+    set.check_pairs(in.data, in.count);
+    const auto n = static_cast<size_t>(in.count);
     meshcol::ToiBatchOutput out;
-    out.toi = toi.data();
-    out.point = point.data();
-    out.normal = normal.data();
-    out.iterations = iterations.data();
-    out.status = status.data();
+    const std::array<nb::object, 5> arrays = {
+        numpy_empty(n, &out.toi), numpy_empty(n, &out.point, 3), numpy_empty(n, &out.normal, 3),
+        numpy_empty(n, &out.iterations), numpy_empty(n, &out.status)};
     meshcol::ToiOptions options;
     options.tolerance = tolerance;
     options.max_iterations = max_iterations;
-    {
+    const auto run = [&] {
+        meshcol::run_toi_batch(set.view(), start.data(), end.data(), turns.data(), centres.data(),
+                               in.data, in.count, options, threads, out);
+    };
+    if (in.count <= 1) {
+        run();  // one pair: its query can cost less than releasing the GIL
+    } else {
+        in.pin();  // the batch reads copies or exported buffers once the GIL is released
+        for (Float64Arg* arg : {&start, &end, &turns, &centres}) arg->pin();
         nb::gil_scoped_release release;
-        meshcol::run_toi_batch(set.view(), start_poses.data(), end_poses.data(), turns, centres,
-                               pairs.data(), p, options, threads, out);
+        run();
     }
-    return TimeOfImpactArrays{toi.cast(), point.cast(), normal.cast(), iterations.cast(),
-                              status.cast()};
+    static const std::array<PyObject*, 5> names = {interned("time_of_impact"), interned("point"),
+                                                   interned("normal"), interned("iterations"),
+                                                   interned("status")};
+    static DataclassMaker<5> maker;
+    std::array<nb::handle, 5> values;
+    for (size_t k = 0; k < 5; ++k) values[k] = arrays[k];
+    return maker.make(result_type, names, values);
 }
 
 Out<double, -1, 4, 4> interpolate_poses(Poses start_poses, Poses end_poses, Values t,
@@ -133,28 +139,14 @@ Out<double, -1, 3> shortest_rotations(Poses start_poses, Poses end_poses) {
 }  // namespace
 
 void bind_toi(nb::module_& m) {
-    const auto ro = nb::rv_policy::automatic;
-    nb::class_<TimeOfImpactArrays>(m, "TimeOfImpactArrays",
-                                   "Arrays of a time_of_impact_batch, in pair order.")
-        .def_prop_ro("time_of_impact",
-                     [](const TimeOfImpactArrays& r) { return r.time_of_impact; }, ro,
-                     "(P,) float64 fraction of the motion; NaN when SEPARATED or invalid")
-        .def_prop_ro("point", [](const TimeOfImpactArrays& r) { return r.point; }, ro,
-                     "(P, 3) float64, world")
-        .def_prop_ro("normal", [](const TimeOfImpactArrays& r) { return r.normal; }, ro,
-                     "(P, 3) float64, world, unit, a to b")
-        .def_prop_ro("iterations", [](const TimeOfImpactArrays& r) { return r.iterations; },
-                     ro, "(P,) int32")
-        .def_prop_ro("status", [](const TimeOfImpactArrays& r) { return r.status; }, ro,
-                     "(P,) int8 TimeOfImpactStatus codes");
-    m.def("time_of_impact_batch", &time_of_impact_batch, "shapes"_a, "start_poses"_a,
-          "end_poses"_a, "pairs"_a, "rotations"_a.none() = nb::none(),
-          "pivots"_a.none() = nb::none(), "tolerance"_a = meshcol::defaults::toi_tolerance,
-          "max_iterations"_a = meshcol::defaults::toi_max_iterations, "threads"_a = 0,
-          "Time of impact of (P, 2) pairs of a PackedConvexSet's shapes moving from start_poses to "
-          "end_poses ((H, 4, 4) each), turning by the world rotation vectors rotations (H, 3; "
-          "None: the shortest rotation) about the world points pivots (H, 3; None: the local "
-          "origins).");
+    m.def("time_of_impact_object", &time_of_impact_object, "shapes"_a, "start_poses"_a.none(),
+          "end_poses"_a.none(), "pairs"_a.none(), "rotations"_a.none(), "pivots"_a.none(),
+          "tolerance"_a, "max_iterations"_a, "threads"_a, "result_type"_a,
+          "Time of impact of the (P, 2) pairs of a PackedConvexSet's shapes moving from "
+          "start_poses to end_poses ((H, 4, 4) each), turning by the world rotation vectors "
+          "rotations (H, 3; None: the shortest rotation) about the world points pivots (H, 3; "
+          "None: the local origins), as result_type; None when an argument is not in the core's "
+          "form.");
     m.def("interpolate_poses", &interpolate_poses, "start_poses"_a, "end_poses"_a, "t"_a,
           "rotations"_a.none() = nb::none(), "pivots"_a.none() = nb::none(),
           "Poses (N, 4, 4) at times t (N,) of the motions start -> end (the pivot moves "

@@ -5,9 +5,12 @@
 // frame. Bindings only: no nanobind code outside cpp/bindings/.
 #include <nanobind/nanobind.h>
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
+#include <stdexcept>
 #include <vector>
 
 #include "ndarray.hpp"
@@ -83,6 +86,56 @@ struct PairsArg {
         copied.assign(data, data + 2 * count);
         data = copied.data();
     }
+};
+
+// A float64 array of exactly `shape` read in place: from numpy's struct, else from a buffer that
+// `buffer` holds until it is destroyed. Null when `object` is in another form (a list, another
+// dtype or shape, strides): the caller declines, and Python converts it and calls again.
+inline const double* float64_array(PyObject* object, std::initializer_list<Py_ssize_t> shape,
+                                   Buffer& buffer) {
+    constexpr size_t kMaxDims = 4;
+    Py_ssize_t got[kMaxDims];
+    if (shape.size() > kMaxDims) return nullptr;
+    if (const double* p = numpy_data<double>(object, static_cast<int>(shape.size()), got))
+        return std::equal(shape.begin(), shape.end(), got) ? p : nullptr;
+    return buffer.get<double>(object, shape);
+}
+
+// An optional float64 array argument of a call that reads its arguments in place: None is
+// absent (null data), anything float64_array reads is present, anything else is declined.
+// Read from numpy's struct, it holds no reference to the data, so `pin` exports its buffer
+// before the GIL is released: while a buffer is exported numpy refuses to resize or free it.
+class Float64Arg {
+public:
+    bool read(nb::handle object, std::initializer_list<Py_ssize_t> shape) {
+        object_ = object.ptr();
+        if (object.is_none()) return true;
+        ndim_ = shape.size();
+        std::copy(shape.begin(), shape.end(), shape_.begin());
+        data_ = float64_array(object_, shape, buffer_);
+        return data_ != nullptr;
+    }
+
+    const double* data() const { return data_; }
+
+    void pin() {
+        if (data_ == nullptr || buffer_.held()) return;
+        const double* exported = nullptr;
+        switch (ndim_) {  // the same shape, which the numpy read has already matched
+            case 2: exported = buffer_.get<double>(object_, {shape_[0], shape_[1]}); break;
+            case 3: exported = buffer_.get<double>(object_, {shape_[0], shape_[1], shape_[2]}); break;
+            default: break;
+        }
+        if (exported == nullptr) throw std::runtime_error("an array read in place refused its buffer");
+        data_ = exported;
+    }
+
+private:
+    Buffer buffer_;
+    PyObject* object_ = nullptr;
+    std::array<Py_ssize_t, 4> shape_{};
+    size_t ndim_ = 0;
+    const double* data_ = nullptr;
 };
 
 // A result dataclass instance made as its generated __init__ makes it (object.__setattr__ of

@@ -10,8 +10,14 @@
 namespace meshcol {
 
 int hardware_threads() {
-    const unsigned n = std::thread::hardware_concurrency();
-    return n == 0 ? 1 : static_cast<int>(n);
+    // Read once: libstdc++ asks glibc's get_nprocs, which opens and reads
+    // /sys/devices/system/cpu/online on every call (76 us a call on the project's VM), and
+    // every batch whose caller leaves `threads` at 0 asks.
+    static const int n = [] {
+        const unsigned count = std::thread::hardware_concurrency();
+        return count == 0 ? 1 : static_cast<int>(count);
+    }();
+    return n;
 }
 
 int resolve_threads(int requested, long long n, long long min_items) {

@@ -53,7 +53,7 @@ step aims at ``tolerance / 2`` so a contact is never stepped over.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -248,20 +248,36 @@ def time_of_impact_batch(
     -----
     See the module docstring for the motion model, the guarantees and the algorithms.
     """
-    cs = as_convex_set(shapes)
-    h = len(cs)
-    start = as_poses(start_poses, h, "start_poses")
-    end = as_poses(end_poses, h, "end_poses")
-    if start is None or end is None:
-        raise ValueError("start_poses and end_poses are required")
-    idx = as_pairs(pairs, h)
-    turns = as_vectors(rotations, h, "rotations")
-    centres = as_vectors(pivots, h, "pivots")
+    # One native call reads arguments already in the core's form in place and builds the
+    # result (None: an argument to convert here, with its message, and ask again), as the
+    # narrow phase's batches do.
+    tol = contact_tolerance(tolerance)
     cap = int(defaults.toi_max_iterations if max_iterations is None else max_iterations)
-    r = core.time_of_impact_batch(
-        cs._core, start, end, idx, turns, centres, contact_tolerance(tolerance), cap, int(threads)
-    )
-    return TimeOfImpactBatch(r.time_of_impact, r.point, r.normal, r.iterations, r.status)
+    threads = int(threads)
+    try:
+        packed = shapes._core
+    except AttributeError:
+        as_convex_set(shapes)  # TypeError for the wrong container
+        raise
+    args = (start_poses, end_poses, pairs, rotations, pivots)
+    result = core.time_of_impact_object(packed, *args, tol, cap, threads, TimeOfImpactBatch)
+    if result is None:
+        h = len(shapes)
+        start = as_poses(start_poses, h, "start_poses")
+        end = as_poses(end_poses, h, "end_poses")
+        if start is None or end is None:
+            raise ValueError("start_poses and end_poses are required")
+        args = (
+            start,
+            end,
+            as_pairs(pairs, h),
+            as_vectors(rotations, h, "rotations"),
+            as_vectors(pivots, h, "pivots"),
+        )
+        result = core.time_of_impact_object(packed, *args, tol, cap, threads, TimeOfImpactBatch)
+        if result is None:  # the converters give the core's form: never declined twice
+            raise AssertionError("the core declined converted arguments")
+    return cast(TimeOfImpactBatch, result)
 
 
 def time_of_impact(

@@ -10,7 +10,7 @@
 
 namespace meshcol {
 
-/// Number of hardware threads (at least 1).
+/// Number of hardware threads (at least 1), read once per process.
 int hardware_threads();
 
 /// Resolves a user's `threads` option: 0 or negative means all cores; never more than the
