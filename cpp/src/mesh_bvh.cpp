@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -20,12 +21,28 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// The float next to a finite float `f` towards -infinity (`down`) or +infinity, as
+// std::nextafter gives it, inlined: a step of one in the bits of its magnitude, and from a zero
+// of either sign to the smallest denormal of the step's sign.
+inline float step(float f, bool down) {
+    std::uint32_t bits;
+    std::memcpy(&bits, &f, sizeof(bits));
+    if ((bits & 0x7fffffffU) == 0) {
+        bits = down ? 0x80000001U : 0x00000001U;
+    } else {
+        const bool negative = (bits >> 31) != 0;
+        bits = negative == down ? bits + 1 : bits - 1;
+    }
+    std::memcpy(&f, &bits, sizeof(f));
+    return f;
+}
+
 // Largest float <= x (never above it), so a float lower bound stays below the double.
 float round_down(double x) {
     if (x > static_cast<double>(FLT_MAX)) return FLT_MAX;
     if (x < -static_cast<double>(FLT_MAX)) return -std::numeric_limits<float>::infinity();
     float f = static_cast<float>(x);
-    if (static_cast<double>(f) > x) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+    if (static_cast<double>(f) > x) f = step(f, true);
     return f;
 }
 
@@ -34,7 +51,7 @@ float round_up(double x) {
     if (x > static_cast<double>(FLT_MAX)) return std::numeric_limits<float>::infinity();
     if (x < -static_cast<double>(FLT_MAX)) return -FLT_MAX;
     float f = static_cast<float>(x);
-    if (static_cast<double>(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+    if (static_cast<double>(f) < x) f = step(f, false);
     return f;
 }
 
@@ -198,8 +215,9 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
     std::vector<BuildTask> stack{{0, n, -1, true, root}};
     // Each triangle's bin along each axis, written by its node's binning and read by the split.
     std::vector<std::uint8_t> bin_index(3 * static_cast<size_t>(n));
+    // Empty between nodes: a node empties the bins it filled once it has read them.
     Box bin_box[3][kBins];
-    std::int32_t bin_count[3][kBins];
+    std::int32_t bin_count[3][kBins] = {};
     int used[kBins];  // the non-empty bins of one axis, in order
     double right_area[kBins];
     std::int32_t right_count[kBins];
@@ -234,11 +252,6 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
             lo[axis] = task.bounds.centroids.lower[axis];
             extent[axis] = task.bounds.centroids.upper[axis] - lo[axis];
             binned[axis] = extent[axis] > 0.0;
-            if (!binned[axis]) continue;
-            for (int b = 0; b < kBins; ++b) {
-                bin_box[axis][b] = Box{};
-                bin_count[axis][b] = 0;
-            }
         }
         for (std::int32_t i = task.begin; i < task.end; ++i) {
             const std::int32_t f = order[static_cast<size_t>(i)];
@@ -256,8 +269,10 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         for (int axis = 0; axis < 3; ++axis) {
             if (!binned[axis]) continue;
             int m = 0;
-            for (int b = 0; b < kBins; ++b)
-                if (bin_count[axis][b] > 0) used[m++] = b;
+            for (int b = 0; b < kBins; ++b) {
+                used[m] = b;
+                m += bin_count[axis][b] > 0;
+            }
             Box right;
             std::int32_t right_n = 0;
             for (int k = m - 1; k > 0; --k) {
@@ -277,6 +292,10 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
                     best_axis = axis;
                     best_bin = used[k];
                 }
+            }
+            for (int k = 0; k < m; ++k) {
+                bin_box[axis][used[k]] = Box{};
+                bin_count[axis][used[k]] = 0;
             }
         }
         std::int32_t mid = task.begin + count / 2;
