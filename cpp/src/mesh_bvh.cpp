@@ -61,11 +61,27 @@ float round_up(double x) {
 
 // Componentwise minimum and maximum of finite (or infinite) coordinates, inlined: std::fmin
 // and std::fmax are library calls for their NaN rules, which validated vertices do not need.
+// Of equal coordinates (zeros of both signs) a's is kept. With SSE2, x and y in one register:
+// `_mm_min_pd(b, a)` is b < a ? b : a per lane, `_mm_max_pd(b, a)` b > a ? b : a.
 inline Vec3 min3(const Vec3& a, const Vec3& b) {
+#if defined(__SSE2__)
+    Vec3 r;
+    _mm_storeu_pd(&r.x, _mm_min_pd(_mm_loadu_pd(&b.x), _mm_loadu_pd(&a.x)));
+    r.z = b.z < a.z ? b.z : a.z;
+    return r;
+#else
     return {b.x < a.x ? b.x : a.x, b.y < a.y ? b.y : a.y, b.z < a.z ? b.z : a.z};
+#endif
 }
 inline Vec3 max3(const Vec3& a, const Vec3& b) {
+#if defined(__SSE2__)
+    Vec3 r;
+    _mm_storeu_pd(&r.x, _mm_max_pd(_mm_loadu_pd(&b.x), _mm_loadu_pd(&a.x)));
+    r.z = b.z > a.z ? b.z : a.z;
+    return r;
+#else
     return {b.x > a.x ? b.x : a.x, b.y > a.y ? b.y : a.y, b.z > a.z ? b.z : a.z};
+#endif
 }
 
 struct Box {
@@ -128,11 +144,23 @@ struct RangeBounds {
     }
 
 private:
+    // Of equal coordinates b's is kept. `_mm_min_pd(a, b)` is a < b ? a : b per lane, which
+    // is b <= a ? b : a for coordinates that are not NaN (validated vertices).
     static void take_lower(Vec3& a, const Vec3& b) {
+#if defined(__SSE2__)
+        _mm_storeu_pd(&a.x, _mm_min_pd(_mm_loadu_pd(&a.x), _mm_loadu_pd(&b.x)));
+        a.z = b.z <= a.z ? b.z : a.z;
+#else
         a = {b.x <= a.x ? b.x : a.x, b.y <= a.y ? b.y : a.y, b.z <= a.z ? b.z : a.z};
+#endif
     }
     static void take_upper(Vec3& a, const Vec3& b) {
+#if defined(__SSE2__)
+        _mm_storeu_pd(&a.x, _mm_max_pd(_mm_loadu_pd(&a.x), _mm_loadu_pd(&b.x)));
+        a.z = b.z >= a.z ? b.z : a.z;
+#else
         a = {b.x >= a.x ? b.x : a.x, b.y >= a.y ? b.y : a.y, b.z >= a.z ? b.z : a.z};
+#endif
     }
 };
 
