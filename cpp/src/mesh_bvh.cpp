@@ -116,6 +116,24 @@ inline int bin_of(double c, double lo, double extent) {
     return x >= kBins - 1 ? kBins - 1 : static_cast<int>(x);
 }
 
+// bin_of along the three axes, into `bins` (z only when `binned_z`; x and y always, an axis of
+// no extent giving some bin in range). With SSE2, x and y in one register, each lane as bin_of
+// computes it: `_mm_max_pd(x, 0)` is x > 0 ? x : 0 (0 for NaN), then `_mm_min_pd(x, top)` is
+// x < top ? x : top, and the truncation is the conversion's.
+inline void bins_of(const Vec3& c, const double lo[3], const double extent[3], bool binned_z, int bins[3]) {
+#if defined(__SSE2__)
+    constexpr int kBins = defaults::mesh_bvh_bins;
+    const __m128d x = _mm_mul_pd(_mm_div_pd(_mm_sub_pd(_mm_loadu_pd(&c.x), _mm_loadu_pd(lo)), _mm_loadu_pd(extent)),
+                                 _mm_set1_pd(kBins));
+    const __m128i b = _mm_cvttpd_epi32(_mm_min_pd(_mm_max_pd(x, _mm_setzero_pd()), _mm_set1_pd(kBins - 1)));
+    bins[0] = _mm_cvtsi128_si32(b);
+    bins[1] = _mm_cvtsi128_si32(_mm_shuffle_epi32(b, 1));
+#else
+    for (int axis = 0; axis < 2; ++axis) bins[axis] = extent[axis] > 0.0 ? bin_of(c[axis], lo[axis], extent[axis]) : 0;
+#endif
+    bins[2] = binned_z ? bin_of(c.z, lo[2], extent[2]) : 0;
+}
+
 // One triangle's box and the centre of that box (the point the SAH bins), side by side.
 struct TriangleBounds {
     Box box;
@@ -288,9 +306,11 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         for (std::int32_t i = task.begin; i < task.end; ++i) {
             const std::int32_t f = order[static_cast<size_t>(i)];
             const TriangleBounds& t = triangles[static_cast<size_t>(f)];
+            int bins[3];
+            bins_of(t.centroid, lo, extent, binned[2], bins);
             for (int axis = 0; axis < 3; ++axis) {
                 if (!binned[axis]) continue;
-                const int b = bin_of(t.centroid[axis], lo[axis], extent[axis]);
+                const int b = bins[axis];
                 bin_index[3 * static_cast<size_t>(f) + static_cast<size_t>(axis)] = static_cast<std::uint8_t>(b);
                 bin_box[axis][b].grow(t.box);
                 ++bin_count[axis][b];
