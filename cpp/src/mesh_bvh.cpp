@@ -116,10 +116,11 @@ inline int bin_of(double c, double lo, double extent) {
     return x >= kBins - 1 ? kBins - 1 : static_cast<int>(x);
 }
 
-// bin_of along the three axes, into `bins` (z only when `binned_z`; x and y always, an axis of
-// no extent giving some bin in range). With SSE2, x and y in one register, each lane as bin_of
-// computes it: `_mm_max_pd(x, 0)` is x > 0 ? x : 0 (0 for NaN), then `_mm_min_pd(x, top)` is
-// x < top ? x : top, and the truncation is the conversion's.
+// bin_of along the three axes, into `bins` (z only when `binned_z`, else 0; x and y always, an
+// axis of no extent giving some bin in range). With SSE2, without a branch: x and y in one
+// register, each lane and z as bin_of computes them: `_mm_max_pd(x, 0)` is x > 0 ? x : 0 (0
+// for NaN), then `_mm_min_pd(x, top)` is x < top ? x : top, and the truncation is the
+// conversion's (and likewise the `_sd` forms for z).
 inline void bins_of(const Vec3& c, const double lo[3], const double extent[3], bool binned_z, int bins[3]) {
 #if defined(__SSE2__)
     constexpr int kBins = defaults::mesh_bvh_bins;
@@ -128,10 +129,15 @@ inline void bins_of(const Vec3& c, const double lo[3], const double extent[3], b
     const __m128i b = _mm_cvttpd_epi32(_mm_min_pd(_mm_max_pd(x, _mm_setzero_pd()), _mm_set1_pd(kBins - 1)));
     bins[0] = _mm_cvtsi128_si32(b);
     bins[1] = _mm_cvtsi128_si32(_mm_shuffle_epi32(b, 1));
+    bins[2] = 0;
+    if (binned_z) {
+        const __m128d z = _mm_set_sd((c.z - lo[2]) / extent[2] * kBins);
+        bins[2] = _mm_cvttsd_si32(_mm_min_sd(_mm_max_sd(z, _mm_setzero_pd()), _mm_set_sd(kBins - 1)));
+    }
 #else
     for (int axis = 0; axis < 2; ++axis) bins[axis] = extent[axis] > 0.0 ? bin_of(c[axis], lo[axis], extent[axis]) : 0;
-#endif
     bins[2] = binned_z ? bin_of(c.z, lo[2], extent[2]) : 0;
+#endif
 }
 
 // One triangle's box and the centre of that box (the point the SAH bins), side by side.
