@@ -456,7 +456,6 @@ void add_moment(double m[6], const Vec3& a, const Vec3& g) {
     m[5] += 0.5 * (a.z * g.x + a.x * g.z);
 }
 
-
 // The sums over corners p of pu = (p - center) . u and pv = (p - center) . v: of pu, pv, pu^2,
 // pv^2 and pu pv, each added in the corners' order.
 struct TangentMoments {
