@@ -6,10 +6,15 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
 #include <utility>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "meshcol/defaults.hpp"
 #include "meshcol/orientation.hpp"
@@ -20,12 +25,28 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// The float next to a finite float `f` towards -infinity (`down`) or +infinity, as
+// std::nextafter gives it, inlined: a step of one in the bits of its magnitude, and from a zero
+// of either sign to the smallest denormal of the step's sign.
+inline float step(float f, bool down) {
+    std::uint32_t bits;
+    std::memcpy(&bits, &f, sizeof(bits));
+    if ((bits & 0x7fffffffU) == 0) {
+        bits = down ? 0x80000001U : 0x00000001U;
+    } else {
+        const bool negative = (bits >> 31) != 0;
+        bits = negative == down ? bits + 1 : bits - 1;
+    }
+    std::memcpy(&f, &bits, sizeof(f));
+    return f;
+}
+
 // Largest float <= x (never above it), so a float lower bound stays below the double.
 float round_down(double x) {
     if (x > static_cast<double>(FLT_MAX)) return FLT_MAX;
     if (x < -static_cast<double>(FLT_MAX)) return -std::numeric_limits<float>::infinity();
     float f = static_cast<float>(x);
-    if (static_cast<double>(f) > x) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+    if (static_cast<double>(f) > x) f = step(f, true);
     return f;
 }
 
@@ -34,17 +55,33 @@ float round_up(double x) {
     if (x > static_cast<double>(FLT_MAX)) return std::numeric_limits<float>::infinity();
     if (x < -static_cast<double>(FLT_MAX)) return -FLT_MAX;
     float f = static_cast<float>(x);
-    if (static_cast<double>(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+    if (static_cast<double>(f) < x) f = step(f, false);
     return f;
 }
 
 // Componentwise minimum and maximum of finite (or infinite) coordinates, inlined: std::fmin
 // and std::fmax are library calls for their NaN rules, which validated vertices do not need.
+// Of equal coordinates (zeros of both signs) a's is kept. With SSE2, x and y in one register:
+// `_mm_min_pd(b, a)` is b < a ? b : a per lane, `_mm_max_pd(b, a)` b > a ? b : a.
 inline Vec3 min3(const Vec3& a, const Vec3& b) {
+#if defined(__SSE2__)
+    Vec3 r;
+    _mm_storeu_pd(&r.x, _mm_min_pd(_mm_loadu_pd(&b.x), _mm_loadu_pd(&a.x)));
+    r.z = b.z < a.z ? b.z : a.z;
+    return r;
+#else
     return {b.x < a.x ? b.x : a.x, b.y < a.y ? b.y : a.y, b.z < a.z ? b.z : a.z};
+#endif
 }
 inline Vec3 max3(const Vec3& a, const Vec3& b) {
+#if defined(__SSE2__)
+    Vec3 r;
+    _mm_storeu_pd(&r.x, _mm_max_pd(_mm_loadu_pd(&b.x), _mm_loadu_pd(&a.x)));
+    r.z = b.z > a.z ? b.z : a.z;
+    return r;
+#else
     return {b.x > a.x ? b.x : a.x, b.y > a.y ? b.y : a.y, b.z > a.z ? b.z : a.z};
+#endif
 }
 
 struct Box {
@@ -79,6 +116,30 @@ inline int bin_of(double c, double lo, double extent) {
     return x >= kBins - 1 ? kBins - 1 : static_cast<int>(x);
 }
 
+// bin_of along the three axes, into `bins` (z only when `binned_z`, else 0; x and y always, an
+// axis of no extent giving some bin in range). With SSE2, without a branch: x and y in one
+// register, each lane and z as bin_of computes them: `_mm_max_pd(x, 0)` is x > 0 ? x : 0 (0
+// for NaN), then `_mm_min_pd(x, top)` is x < top ? x : top, and the truncation is the
+// conversion's (and likewise the `_sd` forms for z).
+inline void bins_of(const Vec3& c, const double lo[3], const double extent[3], bool binned_z, int bins[3]) {
+#if defined(__SSE2__)
+    constexpr int kBins = defaults::mesh_bvh_bins;
+    const __m128d x = _mm_mul_pd(_mm_div_pd(_mm_sub_pd(_mm_loadu_pd(&c.x), _mm_loadu_pd(lo)), _mm_loadu_pd(extent)),
+                                 _mm_set1_pd(kBins));
+    const __m128i b = _mm_cvttpd_epi32(_mm_min_pd(_mm_max_pd(x, _mm_setzero_pd()), _mm_set1_pd(kBins - 1)));
+    bins[0] = _mm_cvtsi128_si32(b);
+    bins[1] = _mm_cvtsi128_si32(_mm_shuffle_epi32(b, 1));
+    bins[2] = 0;
+    if (binned_z) {
+        const __m128d z = _mm_set_sd((c.z - lo[2]) / extent[2] * kBins);
+        bins[2] = _mm_cvttsd_si32(_mm_min_sd(_mm_max_sd(z, _mm_setzero_pd()), _mm_set_sd(kBins - 1)));
+    }
+#else
+    for (int axis = 0; axis < 2; ++axis) bins[axis] = extent[axis] > 0.0 ? bin_of(c[axis], lo[axis], extent[axis]) : 0;
+    bins[2] = binned_z ? bin_of(c.z, lo[2], extent[2]) : 0;
+#endif
+}
+
 // One triangle's box and the centre of that box (the point the SAH bins), side by side.
 struct TriangleBounds {
     Box box;
@@ -107,11 +168,23 @@ struct RangeBounds {
     }
 
 private:
+    // Of equal coordinates b's is kept. `_mm_min_pd(a, b)` is a < b ? a : b per lane, which
+    // is b <= a ? b : a for coordinates that are not NaN (validated vertices).
     static void take_lower(Vec3& a, const Vec3& b) {
+#if defined(__SSE2__)
+        _mm_storeu_pd(&a.x, _mm_min_pd(_mm_loadu_pd(&a.x), _mm_loadu_pd(&b.x)));
+        a.z = b.z <= a.z ? b.z : a.z;
+#else
         a = {b.x <= a.x ? b.x : a.x, b.y <= a.y ? b.y : a.y, b.z <= a.z ? b.z : a.z};
+#endif
     }
     static void take_upper(Vec3& a, const Vec3& b) {
+#if defined(__SSE2__)
+        _mm_storeu_pd(&a.x, _mm_max_pd(_mm_loadu_pd(&a.x), _mm_loadu_pd(&b.x)));
+        a.z = b.z >= a.z ? b.z : a.z;
+#else
         a = {b.x >= a.x ? b.x : a.x, b.y >= a.y ? b.y : a.y, b.z >= a.z ? b.z : a.z};
+#endif
     }
 };
 
@@ -198,8 +271,9 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
     std::vector<BuildTask> stack{{0, n, -1, true, root}};
     // Each triangle's bin along each axis, written by its node's binning and read by the split.
     std::vector<std::uint8_t> bin_index(3 * static_cast<size_t>(n));
+    // Empty between nodes: a node empties the bins it filled once it has read them.
     Box bin_box[3][kBins];
-    std::int32_t bin_count[3][kBins];
+    std::int32_t bin_count[3][kBins] = {};
     int used[kBins];  // the non-empty bins of one axis, in order
     double right_area[kBins];
     std::int32_t right_count[kBins];
@@ -234,18 +308,15 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
             lo[axis] = task.bounds.centroids.lower[axis];
             extent[axis] = task.bounds.centroids.upper[axis] - lo[axis];
             binned[axis] = extent[axis] > 0.0;
-            if (!binned[axis]) continue;
-            for (int b = 0; b < kBins; ++b) {
-                bin_box[axis][b] = Box{};
-                bin_count[axis][b] = 0;
-            }
         }
         for (std::int32_t i = task.begin; i < task.end; ++i) {
             const std::int32_t f = order[static_cast<size_t>(i)];
             const TriangleBounds& t = triangles[static_cast<size_t>(f)];
+            int bins[3];
+            bins_of(t.centroid, lo, extent, binned[2], bins);
             for (int axis = 0; axis < 3; ++axis) {
                 if (!binned[axis]) continue;
-                const int b = bin_of(t.centroid[axis], lo[axis], extent[axis]);
+                const int b = bins[axis];
                 bin_index[3 * static_cast<size_t>(f) + static_cast<size_t>(axis)] = static_cast<std::uint8_t>(b);
                 bin_box[axis][b].grow(t.box);
                 ++bin_count[axis][b];
@@ -256,8 +327,10 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         for (int axis = 0; axis < 3; ++axis) {
             if (!binned[axis]) continue;
             int m = 0;
-            for (int b = 0; b < kBins; ++b)
-                if (bin_count[axis][b] > 0) used[m++] = b;
+            for (int b = 0; b < kBins; ++b) {
+                used[m] = b;
+                m += bin_count[axis][b] > 0;
+            }
             Box right;
             std::int32_t right_n = 0;
             for (int k = m - 1; k > 0; --k) {
@@ -277,6 +350,10 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
                     best_axis = axis;
                     best_bin = used[k];
                 }
+            }
+            for (int k = 0; k < m; ++k) {
+                bin_box[axis][used[k]] = Box{};
+                bin_count[axis][used[k]] = 0;
             }
         }
         std::int32_t mid = task.begin + count / 2;
@@ -377,6 +454,94 @@ void add_moment(double m[6], const Vec3& a, const Vec3& g) {
     m[3] += 0.5 * (a.x * g.y + a.y * g.x);
     m[4] += 0.5 * (a.y * g.z + a.z * g.y);
     m[5] += 0.5 * (a.z * g.x + a.x * g.z);
+}
+
+// The sums over corners p of pu = (p - center) . u and pv = (p - center) . v: of pu, pv, pu^2,
+// pv^2 and pu pv, each added in the corners' order.
+struct TangentMoments {
+    double mu = 0.0, mv = 0.0, cuu = 0.0, cvv = 0.0, cuv = 0.0;
+};
+
+TangentMoments tangent_moments(const Vec3* corner, std::int32_t count, const Vec3& center, const Vec3& u,
+                               const Vec3& v) {
+    TangentMoments m;
+#if defined(__SSE2__)
+    // pu in the low lane and pv in the high one, each computed as dot() computes it,
+    // ((x ux + y uy) + z uz), and each sum a chain of its own in the corners' order: the same
+    // bits as the scalar loop below, in fewer instructions.
+    const __m128d ux = _mm_set_pd(v.x, u.x), uy = _mm_set_pd(v.y, u.y), uz = _mm_set_pd(v.z, u.z);
+    const __m128d cxy = _mm_loadu_pd(&center.x);
+    __m128d sum = _mm_setzero_pd(), squares = _mm_setzero_pd();
+    double cuv = 0.0;
+    for (std::int32_t i = 0; i < count; ++i) {
+        const double* q = &corner[i].x;
+        const __m128d pxy = _mm_sub_pd(_mm_loadu_pd(q), cxy);
+        const double pz = q[2] - center.z;
+        const __m128d uv = _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_unpacklo_pd(pxy, pxy), ux),
+                                                 _mm_mul_pd(_mm_unpackhi_pd(pxy, pxy), uy)),
+                                      _mm_mul_pd(_mm_set1_pd(pz), uz));
+        sum = _mm_add_pd(sum, uv);
+        squares = _mm_add_pd(squares, _mm_mul_pd(uv, uv));
+        cuv += _mm_cvtsd_f64(uv) * _mm_cvtsd_f64(_mm_unpackhi_pd(uv, uv));
+    }
+    double lanes[2];
+    _mm_storeu_pd(lanes, sum);
+    m.mu = lanes[0];
+    m.mv = lanes[1];
+    _mm_storeu_pd(lanes, squares);
+    m.cuu = lanes[0];
+    m.cvv = lanes[1];
+    m.cuv = cuv;
+#else
+    for (std::int32_t i = 0; i < count; ++i) {
+        const Vec3 p = corner[i] - center;
+        const double pu = dot(p, u), pv = dot(p, v);
+        m.mu += pu;
+        m.mv += pv;
+        m.cuu += pu * pu;
+        m.cvv += pv * pv;
+        m.cuv += pu * pv;
+    }
+#endif
+    return m;
+}
+
+// The componentwise extremes of axes * p over the corners p (as min3 and max3 take them: the
+// first of equal values kept).
+void projection_extremes(const Vec3* corner, std::int32_t count, const Mat3& axes, Vec3& low, Vec3& high) {
+#if defined(__SSE2__)
+    // Rows 0 and 1 in the two lanes, each computed as Mat3 * Vec3 computes it,
+    // ((m0 x + m1 y) + m2 z), row 2 scalar. `_mm_min_pd(p, low)` is p < low ? p : low per
+    // lane, min3's choice (and max3's likewise).
+    const __m128d c0 = _mm_set_pd(axes.m[1][0], axes.m[0][0]);
+    const __m128d c1 = _mm_set_pd(axes.m[1][1], axes.m[0][1]);
+    const __m128d c2 = _mm_set_pd(axes.m[1][2], axes.m[0][2]);
+    __m128d low01 = _mm_set1_pd(kInf), high01 = _mm_set1_pd(-kInf);
+    double low2 = kInf, high2 = -kInf;
+    for (std::int32_t i = 0; i < count; ++i) {
+        const double* q = &corner[i].x;
+        const __m128d x = _mm_set1_pd(q[0]), y = _mm_set1_pd(q[1]), z = _mm_set1_pd(q[2]);
+        const __m128d p01 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(c0, x), _mm_mul_pd(c1, y)), _mm_mul_pd(c2, z));
+        const double p2 = axes.m[2][0] * q[0] + axes.m[2][1] * q[1] + axes.m[2][2] * q[2];
+        low01 = _mm_min_pd(p01, low01);
+        high01 = _mm_max_pd(p01, high01);
+        low2 = p2 < low2 ? p2 : low2;
+        high2 = p2 > high2 ? p2 : high2;
+    }
+    double lanes[2];
+    _mm_storeu_pd(lanes, low01);
+    low = {lanes[0], lanes[1], low2};
+    _mm_storeu_pd(lanes, high01);
+    high = {lanes[0], lanes[1], high2};
+#else
+    low = {kInf, kInf, kInf};
+    high = {-kInf, -kInf, -kInf};
+    for (std::int32_t i = 0; i < count; ++i) {
+        const Vec3 p = axes * corner[i];
+        low = min3(low, p);
+        high = max3(high, p);
+    }
+#endif
 }
 
 }  // namespace
@@ -493,23 +658,14 @@ void MeshBvh::build_obbs() {
         u = u / norm(u);
         Vec3 v = cross(n, u);
         const auto [begin, end] = triangle_range(static_cast<std::int32_t>(id));
-        double cuu = 0.0, cvv = 0.0, cuv = 0.0, mu = 0.0, mv = 0.0;
-        const double count = 3.0 * (end - begin);
-        for (std::int32_t t = begin; t < end; ++t)
-            for (int k = 0; k < 3; ++k) {
-                const Vec3 p = triangle(t)[k] - w.center;
-                const double pu = dot(p, u), pv = dot(p, v);
-                mu += pu;
-                mv += pv;
-                cuu += pu * pu;
-                cvv += pv * pv;
-                cuv += pu * pv;
-            }
-        mu /= count;
-        mv /= count;
-        cuu = cuu / count - mu * mu;
-        cvv = cvv / count - mv * mv;
-        cuv = cuv / count - mu * mv;
+        const Vec3* corner = triangle(begin);
+        const std::int32_t corners = 3 * (end - begin);
+        const TangentMoments t = tangent_moments(corner, corners, w.center, u, v);
+        const double count = corners;
+        const double mu = t.mu / count, mv = t.mv / count;
+        const double cuu = t.cuu / count - mu * mu;
+        const double cvv = t.cvv / count - mv * mv;
+        const double cuv = t.cuv / count - mu * mv;
         double angle = 0.5 * std::atan2(2.0 * cuv, cuu - cvv);
         if (!std::isfinite(angle)) angle = 0.0;  // squares beyond the double range
         const double c = std::cos(angle), s = std::sin(angle);
@@ -522,13 +678,8 @@ void MeshBvh::build_obbs() {
             axes.m[1][k] = u[k];
             axes.m[2][k] = v[k];
         }
-        Vec3 low{kInf, kInf, kInf}, high{-kInf, -kInf, -kInf};
-        for (std::int32_t t = begin; t < end; ++t)
-            for (int k = 0; k < 3; ++k) {
-                const Vec3 p = axes * triangle(t)[k];
-                low = min3(low, p);
-                high = max3(high, p);
-            }
+        Vec3 low, high;
+        projection_extremes(corner, corners, axes, low, high);
         const Vec3 half = (high * 0.5 - low * 0.5) + Vec3{pad, pad, pad};
         if (half.x * half.y * half.z < box.half.x * box.half.y * box.half.z) {
             box.axis_aligned = false;
