@@ -89,10 +89,8 @@ bool gauss_arcs(const Vec3* vertices, int vertex_count, const Vec3* face_normals
                           std::fabs(vertices[v].z)});
     const double tolerance = defaults::sat_arc_plane_tolerance * reach;
     if (!(tolerance > 0.0) || !std::isfinite(tolerance)) return false;
-    thread_local std::vector<std::uint64_t> faces_of;
-    thread_local std::vector<double> heights;
-    faces_of.assign(static_cast<size_t>(vertex_count), 0);
-    heights.resize(static_cast<size_t>(vertex_count));
+    std::vector<std::uint64_t> faces_of(static_cast<size_t>(vertex_count), 0);
+    std::vector<double> heights(static_cast<size_t>(vertex_count));
     for (int f = 0; f < face_count; ++f) {
         double top = -std::numeric_limits<double>::infinity();
         for (int v = 0; v < vertex_count; ++v) {
@@ -125,6 +123,14 @@ bool gauss_arcs(const Vec3* vertices, int vertex_count, const Vec3* face_normals
 
 namespace {
 
+// `crossing_classes`' working arrays, kept by each thread.
+struct CrossingScratch {
+    std::vector<double> columns;  // b's arcs' ends, then the first test's values
+    std::vector<Vec3> circles;    // b's arcs' circles
+    std::vector<int> near;        // the arcs the first test keeps
+    std::vector<int> found;       // the answer
+};
+
 // The axes of class pairs whose edges' arcs cross on the Gauss maps of a and of -b (in a's
 // frame), or nearly: the axes that may be face normals of the Minkowski difference a - b
 // (Gregorius, "The Separating Axis Test between convex polyhedra", GDC 2013). Each as
@@ -138,13 +144,16 @@ const std::vector<int>& crossing_classes(const ShapeView& a, const ShapeView& b,
     // R (v x u)); the ends as columns, so that the first test takes two arcs at a time (an
     // odd count's last twice: it is listed once more, and found once).
     const int count = b.arc_count, padded = count + (count & 1);
-    thread_local std::vector<double> columns;
-    thread_local std::vector<Vec3> circles;
-    thread_local std::vector<int> near, found;
-    columns.resize(8 * static_cast<size_t>(padded));
-    circles.resize(static_cast<size_t>(count));
-    near.resize(static_cast<size_t>(padded));
-    double* const cx = columns.data();
+    // One lookup of the thread's scratch (in a shared library each names a call).
+    thread_local CrossingScratch scratch;
+    CrossingScratch& s = scratch;
+    s.columns.resize(8 * static_cast<size_t>(padded));
+    s.circles.resize(static_cast<size_t>(count));
+    s.near.resize(static_cast<size_t>(padded));
+    Vec3* const circles = s.circles.data();
+    int* const near = s.near.data();
+    std::vector<int>& found = s.found;
+    double* const cx = s.columns.data();
     double* const cy = cx + padded;
     double* const cz = cy + padded;
     double* const dx = cz + padded;
