@@ -263,7 +263,8 @@ struct Overlaps {
           b(b_),
           rot(pose_a.rotation.transposed() * pose_b.rotation),
           trans(pose_a.rotation.transpose_times(pose_b.translation - pose_a.translation)),
-          // Two polytopes that scan their vertices scan them side by side (the same answers).
+          // Two polytopes that scan their vertices scan them with selects (`first_max`, the
+          // same supports as their support functions').
           scan_both(scans(a_) && scans(b_)) {}
 
     void test(const Vec3& n) {
