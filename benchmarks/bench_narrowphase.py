@@ -19,8 +19,11 @@ order (as a manifest may list them) and in spatial (Morton) order; plus the olde
 reference, 256 bodies whose few hundred pairs repeat. Ratio to the in-cache row per pair;
 target <= 1.5.
 
+With ``--boxes``, also a box-like family: cuboids (8 corners) and wedges (6), rotated, whose
+coplanar triangles merge into faces and whose edges are parallel in classes (row ``box``).
+
 Run: .venv/bin/python benchmarks/bench_narrowphase.py [--pairs 4000] [--unique-shapes 40000]
-     [--only-unique] [--sizes 16 64 256] [--skip-unique] [--rounds 5]
+     [--only-unique] [--sizes 16 64 256] [--boxes] [--skip-unique] [--rounds 5]
 """
 
 from __future__ import annotations
@@ -44,6 +47,18 @@ def sphere_hull(n: int, rng: np.random.Generator) -> np.ndarray:
     return p * rng.uniform(0.7, 1.3, size=3)
 
 
+def box_like(rng: np.random.Generator) -> np.ndarray:
+    """A cuboid (8 corners) or a wedge (a right triangular prism, 6 corners), half extents
+    0.4-1.3, as polytope vertices: the parts of assets with few vertices, whose coplanar
+    triangles merge into one face and whose edges fall into parallel classes."""
+    hx, hy, hz = rng.uniform(0.4, 1.3, size=3)
+    corners = np.array([[x, y, z] for x in (-hx, hx) for y in (-hy, hy) for z in (-hz, hz)])
+    if rng.uniform() < 0.5:
+        return corners
+    # The prism over the triangle (-hx, -hy), (-hx, hy), (hx, -hy), along z.
+    return corners[:6]
+
+
 def random_rotation(rng: np.random.Generator) -> np.ndarray:
     q = rng.normal(size=4)
     w, x, y, z = q / np.linalg.norm(q)
@@ -56,13 +71,14 @@ def random_rotation(rng: np.random.Generator) -> np.ndarray:
     )
 
 
-def make_case(n_vertices: int, n_pairs: int, penetrating: bool, seed: int):
+def make_case(n_vertices: int, n_pairs: int, penetrating: bool, seed: int, boxes: bool = False):
     """A scene of 256 hulls at random poses in a 9 x 9 x 9 box (each hull in several pairs,
     as broad-phase output is); pairs drawn from those that are separated (centres at most 4
-    apart) or that overlap, as asked."""
+    apart) or that overlap, as asked. With ``boxes``, cuboids and wedges (``box_like``)
+    instead of ``n_vertices`` points on ellipsoids."""
     rng = np.random.default_rng(seed)
     n_shapes = 256
-    shapes = [sphere_hull(n_vertices, rng) for _ in range(n_shapes)]
+    shapes = [box_like(rng) if boxes else sphere_hull(n_vertices, rng) for _ in range(n_shapes)]
     cs = ConvexSet.from_vertices(shapes)
     poses = np.tile(np.eye(4), (n_shapes, 1, 1))
     for p in poses:
@@ -316,9 +332,11 @@ def family_accuracy(res, shapes, poses, pairs, label: str, k_acc: int) -> float:
 
 def family_row(args, fcl, coal, n: int, label: str) -> float:
     """One size and configuration: meshcol (one thread), fcl and coal timed in CPU time in
-    ``args.rounds`` alternated rounds; prints ranges and the ratios of the best times."""
+    ``args.rounds`` alternated rounds; prints ranges and the ratios of the best times. Size 0
+    is the box-like family (``box_like``), printed as ``box``."""
     penetrating = label != "separated"
-    cs, poses, pairs, shapes = make_case(n, args.pairs, label == "penetrating", seed=n)
+    boxes = n == 0
+    cs, poses, pairs, shapes = make_case(n, args.pairs, label == "penetrating", n, boxes)
     if label == "touching":
         cs, poses, pairs, shapes = touching_case(cs, poses, pairs, shapes)
     query, fn = (
@@ -341,8 +359,9 @@ def family_row(args, fcl, coal, n: int, label: str) -> float:
     nan = [float("nan")]
     fcl_ratio = min(fc or nan) / min(mc)
     coal_ratio = min(co or nan) / min(mc)
+    size = "box" if boxes else str(n)
     print(
-        f"{n:>5} {label:>11} {query:>11} {span(mc):>13} {span(fc or nan):>15} "
+        f"{size:>5} {label:>11} {query:>11} {span(mc):>13} {span(fc or nan):>15} "
         f"{span(co or nan):>15} {fcl_ratio:>8.1f} {coal_ratio:>8.1f} {worst:>13.2e}"
     )
     return worst
@@ -359,6 +378,9 @@ def main() -> None:
     parser.add_argument("--only-unique", action="store_true", help="the cache case alone")
     parser.add_argument("--skip-unique", action="store_true", help="no cache case")
     parser.add_argument("--sizes", type=int, nargs="+", default=[16, 32, 64, 128, 256, 512])
+    parser.add_argument(
+        "--boxes", action="store_true", help="also the box-like family (cuboids and wedges)"
+    )
     args = parser.parse_args()
     if args.only_unique:
         unique_case(args)
@@ -387,7 +409,7 @@ def main() -> None:
         f"{'fcl/mc':>8} {'coal/mc':>8} {'worst rel err':>13}"
     )
     worst_overall = 0.0
-    for n in args.sizes:
+    for n in [*args.sizes, *([0] if args.boxes else [])]:
         for label in ("separated", "touching", "penetrating"):
             worst_overall = max(worst_overall, family_row(args, fcl, coal, n, label))
     print(f"worst error vs exact oracles (relative; absolute for touching): {worst_overall:.2e}")

@@ -61,6 +61,12 @@ class defaults:
 
     sat_parallel_edge_sine: float = 1e-09
 
+    sat_arc_crossing_margin: float = 1e-09
+
+    sat_arc_plane_tolerance: float = 1e-09
+
+    sat_arc_pair_cost: int = 8
+
     sat_agreement_relative_depth: float = 1e-09
 
     sat_agreement_normal_cosine: float = 1e-09

@@ -193,7 +193,7 @@ void unit_keys(const Vec3* d, size_t count, bool signed_classes, double* unit, d
 // non-zero positive) (unit_keys). First occurrences kept, in input order (an open-addressing
 // table of the rounded keys: linear in the count). Returns how many were appended.
 std::int64_t unique_directions(const Vec3* d, size_t count, bool signed_classes, PackScratch& s,
-                               std::vector<double>& out) {
+                               std::vector<double>& out, std::int32_t* class_of = nullptr) {
     size_t size = 16;
     while (size < 4 * count) size *= 2;  // a quarter full at most: few probes collide
     // Stamped cells: the table is cleared by a new stamp, not rewritten, on every call.
@@ -219,7 +219,10 @@ std::int64_t unique_directions(const Vec3* d, size_t count, bool signed_classes,
     double* o = first;
     std::int64_t kept = 0;
     for (size_t i = 0; i < count; ++i) {
-        if (!s.valid[i]) continue;
+        if (!s.valid[i]) {
+            if (class_of != nullptr) class_of[i] = -1;
+            continue;
+        }
         const double* k = keys + 3 * i;
         std::uint64_t bits[3];
         std::memcpy(bits, k, sizeof bits);
@@ -239,10 +242,12 @@ std::int64_t unique_directions(const Vec3* d, size_t count, bool signed_classes,
             const double* seen = keys + 3 * static_cast<size_t>(cell.key);
             if (seen[0] == k[0] && seen[1] == k[1] && seen[2] == k[2]) {
                 fresh = false;
+                if (class_of != nullptr) class_of[i] = class_of[cell.key];
                 break;
             }
         }
         if (!fresh) continue;
+        if (class_of != nullptr) class_of[i] = static_cast<std::int32_t>(kept);
         const double* u = unit + 3 * i;
         o[0] = u[0], o[1] = u[1], o[2] = u[2];
         o += 3;
@@ -609,10 +614,11 @@ PackScratch& class_scratch() {
 }  // namespace
 
 std::int64_t edge_direction_classes(const Vec3* vertices, const std::int32_t* pairs,
-                                    size_t count, std::vector<double>& out) {
+                                    size_t count, std::vector<double>& out,
+                                    std::int32_t* class_of) {
     PackScratch& s = class_scratch();
     edge_vectors(vertices, pairs, count, s);
-    return unique_directions(s.directions.data(), count, false, s, out);
+    return unique_directions(s.directions.data(), count, false, s, out, class_of);
 }
 
 std::int64_t edge_direction_class_count(const Vec3* vertices, const std::int32_t* pairs,

@@ -46,6 +46,7 @@ ShapeView ConvexSetView::shape(std::int64_t h) const {
 
 struct EdgeClasses::Entry {
     std::vector<double> directions;  // (count, 3)
+    std::vector<GaussArc> arcs;      // one per true edge, or none
 };
 
 // The entries are zeroed by calloc, not written: a large allocation's pages stay unmapped
@@ -88,8 +89,15 @@ EdgeClasses::List EdgeClasses::get(const ConvexSetView& set, std::int64_t h) {
         auto made = std::make_unique<Entry>();
         const std::int64_t first = set.edge_pair_offsets[h];
         const auto count = static_cast<size_t>(set.edge_pair_offsets[h + 1] - first);
-        edge_direction_classes(shape_vertices(set, h), set.edge_pairs + 2 * first, count,
-                               made->directions);
+        const std::int32_t* pairs = set.edge_pairs + 2 * first;
+        std::vector<std::int32_t> class_of(count);
+        edge_direction_classes(shape_vertices(set, h), pairs, count, made->directions,
+                               class_of.data());
+        const std::int64_t face_first = set.face_offsets[h];
+        gauss_arcs(shape_vertices(set, h), static_cast<int>(set.offsets[h + 1] - set.offsets[h]),
+                   reinterpret_cast<const Vec3*>(set.face_normals + 3 * face_first),
+                   static_cast<int>(set.face_offsets[h + 1] - face_first), pairs, class_of.data(),
+                   count, made->arcs);
         // The first list published is every thread's (a thread that lost frees its own).
         Entry* seen = nullptr;
         if (entries_[h].compare_exchange_strong(seen, made.get(), std::memory_order_acq_rel,
@@ -99,7 +107,9 @@ EdgeClasses::List EdgeClasses::get(const ConvexSetView& set, std::int64_t h) {
             entry = seen;
     }
     return {reinterpret_cast<const Vec3*>(entry->directions.data()),
-            static_cast<int>(entry->directions.size() / 3)};
+            static_cast<int>(entry->directions.size() / 3),
+            entry->arcs.empty() ? nullptr : entry->arcs.data(),
+            static_cast<int>(entry->arcs.size())};
 }
 
 int EdgeClasses::lower_bound(const ConvexSetView& set, std::int64_t h, int wanted) {
@@ -124,6 +134,8 @@ void attach_edges(ShapeView& shape) {
     const EdgeClasses::List list = shape.set->edge_classes->get(*shape.set, shape.set_index);
     shape.edge_directions = list.directions;
     shape.edge_count = list.count;
+    shape.arcs = list.arcs;
+    shape.arc_count = list.arc_count;
     shape.set = nullptr;
     shape.set_index = -1;
 }

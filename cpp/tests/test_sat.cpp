@@ -145,7 +145,7 @@ TEST_CASE("sat: the axes the inner balls skip change no answer, bit for bit") {
     }
     const long long shapes = static_cast<long long>(offsets.size()) - 1;
     const std::vector<Vec3> kept = points;
-    int compared = 0, deep = 0;
+    int compared = 0, deep = 0, with_arcs = 0;
     long long measured = 0, every = 0;
     for (double scale : {1.0, 1e-6, 1e6}) {
         std::vector<Vec3> scaled(kept.size());
@@ -182,12 +182,96 @@ TEST_CASE("sat: the axes the inner balls skip change no answer, bit for bit") {
                     every += want.axes;
                     ++compared;
                     deep += want.ran && !want.separated;
+                    with_arcs += whole[i].arcs != nullptr && whole[j].arcs != nullptr;
                 }
         }
     }
     CHECK(compared > 10000);
     CHECK(deep > 1000);
+    // The hulls of points on ellipsoids and the lattice box and prism have arcs on their Gauss
+    // maps: SAT measures only the edge pairs whose arcs cross there (when that pays), with
+    // the same answers.
+    CHECK(with_arcs > 5000);
     // The bound does skip: most axes of these pairs are never measured (a plain loop again,
     // or a bound that skips nothing, fails here).
     CHECK(measured * 2 < every);
+}
+
+namespace {
+
+// Unit vector along v.
+Vec3 unit(const Vec3& v) { return v / norm(v); }
+
+}  // namespace
+
+TEST_CASE("sat: a cube's and a wedge's arcs join the normals of each edge's two faces") {
+    std::vector<Vec3> points = fixtures::cube_corners(0.5);
+    // A wedge: the prism over the triangle (0, 0), (1, 0), (0, 1), along z, turned a little.
+    Random turns{7};
+    const Pose turn = random_pose(turns, 0.0);
+    for (const Vec3& p : std::vector<Vec3>{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}})
+        points.push_back(turn.apply(p));
+    const std::int64_t offsets[3] = {0, 8, 14};
+    const PackedPolytopes p = pack_polytopes(points.data(), offsets, 2, 1);
+    fixtures::PolytopeSet packed(p);
+    for (int h = 0; h < 2; ++h) {
+        ShapeView view = packed.view.shape(h);
+        attach_edges(view);
+        REQUIRE(view.arcs != nullptr);
+        CHECK_EQ(view.arc_count, h == 0 ? 12 : 9);      // true edges
+        CHECK_EQ(view.edge_count, h == 0 ? 3 : 4);      // their direction classes
+        CHECK_EQ(view.face_count, h == 0 ? 6 : 5);
+        for (int k = 0; k < view.arc_count; ++k) {
+            const GaussArc& arc = view.arcs[k];
+            REQUIRE(arc.direction_class >= 0);
+            REQUIRE(arc.direction_class < view.edge_count);
+            const Vec3 edge = view.edge_directions[arc.direction_class];
+            // The two faces differ, both hold the edge (normals at right angles to it), and
+            // the arc's circle has the edge's direction as its axis.
+            CHECK(dot(arc.normal_a, arc.normal_b) < 0.99);
+            CHECK(std::fabs(dot(arc.normal_a, edge)) < 1e-12);
+            CHECK(std::fabs(dot(arc.normal_b, edge)) < 1e-12);
+            CHECK(norm(cross(unit(arc.plane), edge)) < 1e-12);
+        }
+    }
+}
+
+TEST_CASE("sat: shapes that touch get a depth of rounding size from the crossing arcs") {
+    // Pairs of 8-point hulls moved along their normal until they touch: the smallest overlap
+    // is about 0 (either sign), and the axes whose arcs do not cross, which SAT no longer
+    // measures, tie with it within rounding at most.
+    Random r{20261206};
+    std::vector<Vec3> points;
+    std::vector<std::int64_t> offsets{0};
+    for (int s = 0; s < 24; ++s) {
+        for (int i = 0; i < 8; ++i) {
+            Vec3 q{r.uniform(), r.uniform(), r.uniform()};
+            points.push_back(q / norm(q) * (0.6 + 0.2 * s / 24.0));
+        }
+        offsets.push_back(static_cast<std::int64_t>(points.size()));
+    }
+    const PackedPolytopes p = pack_polytopes(points.data(), offsets.data(), 24, 1);
+    fixtures::PolytopeSet packed(p);
+    int touching = 0, gauss = 0;
+    for (int trial = 0; trial < 2000; ++trial) {
+        const int i = trial % 24, j = (trial * 7 + 3) % 24;
+        ShapeView a = packed.view.shape(i), b = packed.view.shape(j);
+        const Pose pa = random_pose(r, 2.0);
+        Pose pb = random_pose(r, 2.0);
+        const PairResult apart = query_pair(a, pa, b, pb, QueryKind::DISTANCE);
+        if (!(apart.distance > 1e-3)) continue;
+        pb.translation -= apart.normal * apart.distance;
+        attach_edges(a);
+        attach_edges(b);
+        gauss += a.arcs != nullptr && b.arcs != nullptr;
+        const SatResult got = sat_penetration(a, pa, b, pb);
+        const SatResult want = every_axis(a, pa, b, pb);
+        REQUIRE(got.ran);
+        CHECK(got.depth <= 1e-13);
+        CHECK(std::fabs(got.depth - want.depth) <= 1e-13);
+        CHECK(got.axes < want.axes);
+        ++touching;
+    }
+    CHECK(touching > 1500);
+    CHECK_EQ(gauss, touching);
 }

@@ -92,9 +92,11 @@ PackedPolytopes pack_polytopes(const Vec3* points, const std::int64_t* offsets, 
 /// direction is `vertices[to] - vertices[from]`; the unit vectors are grouped by their
 /// components rounded to 12 digits, with a canonical sign (the first component clearly
 /// non-zero positive), first occurrences kept in edge order. Edges of zero or NaN length have
-/// no class. Thread-safe.
+/// no class. Thread-safe. With `class_of` ((count,)), each edge's class there (its index in
+/// the list appended, counted from the call's first; -1 for an edge without one).
 std::int64_t edge_direction_classes(const Vec3* vertices, const std::int32_t* pairs,
-                                    size_t count, std::vector<double>& out);
+                                    size_t count, std::vector<double>& out,
+                                    std::int32_t* class_of = nullptr);
 
 /// The number of classes `edge_direction_classes` finds among the first `count` edges: a lower
 /// bound on the whole list's (a prefix has no class the list lacks). Thread-safe.

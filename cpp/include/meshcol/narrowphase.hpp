@@ -60,10 +60,13 @@ class EdgeClasses {
     EdgeClasses(const EdgeClasses&) = delete;
     EdgeClasses& operator=(const EdgeClasses&) = delete;
 
-    /// Shape `h`'s classes: (count, 3) unit directions.
+    /// Shape `h`'s classes: (count, 3) unit directions; and its true edges' arcs on the Gauss
+    /// map (sat.hpp: `gauss_arcs`), or none (null) when they could not be found.
     struct List {
         const Vec3* directions = nullptr;
         int count = 0;
+        const GaussArc* arcs = nullptr;
+        int arc_count = 0;
     };
 
     /// Shape `h`'s classes of `set` (whose cache this is), computed on first use.

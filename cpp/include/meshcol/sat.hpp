@@ -4,13 +4,38 @@
 /// directions of the overlap along that axis (Ericson 2004, sec. 5.2.1; Gottschalk 1996).
 /// Quadratic in the edge count, so only for shapes with few faces: EPA verification. Edge
 /// axes that a bound from two inner balls shows cannot be the smallest are skipped, with the
-/// same answer to the bit (sat.cpp).
+/// same answer to the bit; between polytopes with arcs on their Gauss maps (`GaussArc`), only
+/// the axes of edge pairs whose arcs cross are measured (Gregorius 2013): the same answer
+/// unless the shapes touch, where ties within rounding may fall to another axis (sat.cpp).
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include "meshcol/defaults.hpp"
 #include "meshcol/shapes.hpp"
 #include "meshcol/vec.hpp"
 
 namespace meshcol {
+
+/// One true edge of a polytope on its Gauss map (local frame): the arc between the outward unit
+/// normals of its two faces, on the great circle whose normal is `normal_b x normal_a`.
+struct GaussArc {
+    Vec3 normal_a;              ///< one face's unit normal
+    Vec3 normal_b;              ///< the other's
+    Vec3 plane;                 ///< normal_b x normal_a (not unit)
+    int direction_class = -1;   ///< the edge's direction class (index into the shape's classes)
+};
+
+/// The arcs of a polytope's true edges `pairs` ((count, 2) local vertex indices), whose
+/// direction classes are `class_of` ((count,), as `edge_direction_classes` gives them), with
+/// the faces among `face_normals` whose planes hold both ends (within
+/// `defaults::sat_arc_plane_tolerance`), appended to `out`. False, and `out` as it was, when
+/// an edge has no class or not exactly two such faces (a flat or degenerate shape): SAT then
+/// measures every edge pair of it.
+bool gauss_arcs(const Vec3* vertices, int vertex_count, const Vec3* face_normals, int face_count,
+                const std::int32_t* pairs, const std::int32_t* class_of, size_t count,
+                std::vector<GaussArc>& out);
 
 /// Result of `sat_penetration`.
 struct SatResult {

@@ -13,6 +13,7 @@
 namespace meshcol {
 
 struct ConvexSetView;
+struct GaussArc;
 
 /// Kind of a shape. The numeric values are part of the binary interface (mirrored by the
 /// Python `meshcol.collision.shapes.ShapeKind`; tests/test_native.py checks it): never renumber.
@@ -41,6 +42,10 @@ struct ShapeView {
     int face_count = 0;
     const Vec3* edge_directions = nullptr;
     int edge_count = 0;
+    /// Optional, with the edge directions: every true edge's arc on the Gauss map (sat.hpp),
+    /// its class an index into `edge_directions`. Null: SAT measures every edge pair's axis.
+    const GaussArc* arcs = nullptr;
+    int arc_count = 0;
     /// Set when the edge directions are not attached yet: the shape is shape `set_index` of
     /// `set`, whose classes are computed on first use (narrowphase.hpp: `attach_edges`), and
     /// `edge_directions`/`edge_count` stay null/0 until then. Null: they are complete.
