@@ -20,7 +20,9 @@ Frames and signs (fixed once, here, for every function of this module):
 
 Shapes are packed into a :class:`ConvexSet` (arrays, built once) and the ``*_batch`` functions
 query (P, 2) index pairs in one native call (GIL released, threads over pairs). The
-single-pair functions (:func:`distance`, ...) build a two-shape set and call the same code.
+single-pair functions (:func:`distance`, ...) run the same code on a two-shape set: for two
+primitives (or Bodies of one) one native call reads them and builds the result, and any
+other shape is packed by :meth:`ConvexSet.from_shapes` (its hull built per call).
 
 Notes
 -----
@@ -40,9 +42,10 @@ from typing import Any, TypeVar, cast
 
 import numpy as np
 
+from meshcol._native import core
 from meshcol.collision.arrays import as_pairs, as_pose, as_poses
-from meshcol.collision.shapes import ConvexSet, as_convex_set
-from meshcol.types import Body, Status
+from meshcol.collision.shapes import ConvexSet, ShapeKind, as_convex_set
+from meshcol.types import Body, Box, Capsule, Cylinder, Sphere, Status
 
 __all__ = [
     "DistanceBatch",
@@ -291,6 +294,34 @@ def intersects_batch(
 
 _PAIR = np.array([[0, 1]], dtype=np.int64)
 
+# The packed kind of each primitive type (exact types: anything else takes the packing path).
+PRIMITIVE_KINDS: dict[type, int] = {
+    Sphere: int(ShapeKind.SPHERE),
+    Box: int(ShapeKind.BOX),
+    Capsule: int(ShapeKind.CAPSULE),
+    Cylinder: int(ShapeKind.CYLINDER),
+}
+# Status members by value, for the core to hand out (calling the enum costs more than a query).
+_STATUSES = tuple(Status(v) for v in range(len(Status)))
+
+
+def _primitive_pair(
+    layout: int, result_type: type, a: Any, b: Any, pose_a: Any, pose_b: Any
+) -> Any:
+    """The single-pair result of two primitives or Bodies of one (a Body's own pose when
+    none is given), made by one native call; None for any other shape, or a shape or pose
+    in another form (the caller packs a set, whose messages then apply)."""
+    if type(a) is Body and a.primitive is not None:
+        a, pose_a = a.primitive, a.pose if pose_a is None else pose_a
+    if type(b) is Body and b.primitive is not None:
+        b, pose_b = b.primitive, b.pose if pose_b is None else pose_b
+    kind_a, kind_b = PRIMITIVE_KINDS.get(type(a)), PRIMITIVE_KINDS.get(type(b))
+    if kind_a is None or kind_b is None:
+        return None
+    return core.primitive_pair_object(
+        layout, kind_a, a, kind_b, b, pose_a, pose_b, result_type, _STATUSES
+    )
+
 
 def _pair_set(a: Any, b: Any, pose_a: Any, pose_b: Any) -> tuple[ConvexSet, np.ndarray | None]:
     """A two-shape set and its poses; a Body without an explicit pose uses ``Body.pose``."""
@@ -343,12 +374,18 @@ def distance(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> Distance
     DistanceResult
         See :class:`DistanceBatch` for the fields.
     """
+    result = _primitive_pair(_DISTANCE, DistanceResult, a, b, pose_a, pose_b)
+    if result is not None:
+        return cast(DistanceResult, result)
     cs, poses = _pair_set(a, b, pose_a, pose_b)
     return _first_row(distance_batch(cs, poses, _PAIR, threads=1), DistanceResult)
 
 
 def penetration(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> PenetrationResult:
     """Penetration depth of two convex shapes (0 when apart); arguments as :func:`distance`."""
+    result = _primitive_pair(_PENETRATION, PenetrationResult, a, b, pose_a, pose_b)
+    if result is not None:
+        return cast(PenetrationResult, result)
     cs, poses = _pair_set(a, b, pose_a, pose_b)
     return _first_row(penetration_batch(cs, poses, _PAIR, threads=1), PenetrationResult)
 
@@ -356,6 +393,9 @@ def penetration(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> Penet
 def signed_distance(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> SignedDistanceResult:
     """Signed distance (distance - depth) of two convex shapes; arguments as
     :func:`distance`."""
+    result = _primitive_pair(_SIGNED_DISTANCE, SignedDistanceResult, a, b, pose_a, pose_b)
+    if result is not None:
+        return cast(SignedDistanceResult, result)
     cs, poses = _pair_set(a, b, pose_a, pose_b)
     return _first_row(signed_distance_batch(cs, poses, _PAIR, threads=1), SignedDistanceResult)
 
@@ -369,6 +409,9 @@ def intersects(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> bool:
         Also for invalid data (NaN/inf, an empty shape, a non-rigid pose): a bool cannot
         carry a status (the batch form reports ``Status.INVALID_INPUT`` instead).
     """
+    hit = _primitive_pair(_INTERSECTS, IntersectsBatch, a, b, pose_a, pose_b)
+    if hit is not None:
+        return bool(hit)
     cs, poses = _pair_set(a, b, pose_a, pose_b)
     r = intersects_batch(cs, poses, _PAIR, threads=1)
     if r.status[0] == Status.INVALID_INPUT:
