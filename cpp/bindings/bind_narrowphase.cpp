@@ -17,7 +17,7 @@
 #include "call_args.hpp"
 #include "ndarray.hpp"
 #include "packed_convex_set.hpp"
-#include "primitive_pair.hpp"
+#include "shape_pair.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -115,21 +115,21 @@ nb::object query_object(const PackedConvexSet& set, int layout, nb::handle poses
     }
 }
 
-// One pair of primitives as its Python single-pair result (DistanceResult,
-// PenetrationResult or SignedDistanceResult of `layout`; for INTERSECTS a bool), computed by
-// the batch's own code on the two-shape set ConvexSet.from_shapes would pack, so it equals the
-// batch's row to the bit: the shapes are read from the primitives (`kind_a`, `kind_b`: their
-// ShapeKind), the poses in place ((4, 4) float64, None: identity; both None: no poses, as the
-// Python path passes them), the status enum's member taken from `statuses`. Returns None
+// One pair of shapes as its Python single-pair result (DistanceResult, PenetrationResult or
+// SignedDistanceResult of `layout`; for INTERSECTS a bool), computed by the batch's own code on
+// the two-shape set ConvexSet.from_shapes would pack (ShapePair), so it equals the batch's row
+// to the bit: the shapes are primitives or (n, 3) float64 points (`kind_a`, `kind_b`: their
+// ShapeKind), the poses read in place ((4, 4) float64, None: identity; both None: no poses, as
+// the Python path passes them), the status enum's member taken from `statuses`. Returns None
 // when a shape or pose is in another form, and for an INVALID_INPUT pair of INTERSECTS (a bool
 // cannot carry it): the caller then takes the Python path, with its messages.
-nb::object primitive_pair_object(int layout, int kind_a, nb::handle a, int kind_b, nb::handle b,
+nb::object shape_pair_object(int layout, int kind_a, nb::handle a, int kind_b, nb::handle b,
                                  nb::handle pose_a, nb::handle pose_b, nb::handle result_type,
                                  nb::handle statuses) {
     if (layout < 0 || layout > 3)
         throw std::invalid_argument("layout must be 0..3, got " + std::to_string(layout));
     const auto form = static_cast<Layout>(layout);
-    PrimitivePair shapes;
+    ShapePair shapes;
     if (!shapes.read(0, kind_a, a.ptr()) || !shapes.read(1, kind_b, b.ptr())) return nb::none();
     PairPoses poses;
     if (!poses.read(pose_a, pose_b)) return nb::none();
@@ -155,7 +155,7 @@ nb::object primitive_pair_object(int layout, int kind_a, nb::handle a, int kind_
     const auto q = form == Layout::DISTANCE     ? meshcol::QueryKind::DISTANCE
                    : form == Layout::INTERSECTS ? meshcol::QueryKind::INTERSECTS
                                                 : meshcol::QueryKind::PENETRATION;
-    meshcol::run_batch(shapes.view(), pose_data, pair, 1, q, 1, out);
+    meshcol::run_batch(shapes.pack(), pose_data, pair, 1, q, 1, out);
     if (form == Layout::INTERSECTS) {
         if (status == static_cast<std::int8_t>(meshcol::Status::INVALID_INPUT)) return nb::none();
         return nb::bool_(hit);
@@ -226,11 +226,12 @@ Column bounding_radii(const PackedConvexSet& set, int threads) {
 }  // namespace
 
 void bind_narrowphase(nb::module_& m) {
-    m.def("primitive_pair_object", &primitive_pair_object, "layout"_a, "kind_a"_a, "a"_a,
+    m.def("shape_pair_object", &shape_pair_object, "layout"_a, "kind_a"_a, "a"_a,
           "kind_b"_a, "b"_a, "pose_a"_a.none(), "pose_b"_a.none(), "result_type"_a, "statuses"_a,
-          "One pair of primitives as its single-pair result (layout as query_object; for "
-          "intersects a bool); None when a shape or pose is not in the core's form, or for an "
-          "invalid intersects pair.");
+          "One pair of shapes (primitives, or (n, 3) points by their hull; kind_a, kind_b their "
+          "ShapeKind) as its single-pair result (layout as query_object; for intersects a "
+          "bool); None when a shape or pose is not in the core's form, or for an invalid "
+          "intersects pair.");
     nb::class_<PackedConvexSet>(m, "PackedConvexSet",
                                 "Packed convex shapes (the arrays of meshcol.collision.shapes."
                                 "ConvexSet).")

@@ -18,7 +18,7 @@
 #include "call_args.hpp"
 #include "ndarray.hpp"
 #include "packed_convex_set.hpp"
-#include "primitive_pair.hpp"
+#include "shape_pair.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -96,21 +96,21 @@ nb::object time_of_impact_object(const PackedConvexSet& set, nb::handle start_po
     return maker.make(result_type, names, values);
 }
 
-// The time of impact of one pair of primitives as its Python single-pair result,
+// The time of impact of one pair of shapes as its Python single-pair result,
 // `result_type(status, time_of_impact, point, normal, iterations)` (TimeOfImpactResult; None
 // for the time when there is none), computed by the batch's own code on the two-shape set
-// ConvexSet.from_shapes would pack, so it equals the batch's row to the bit. The shapes are
-// read from the primitives (`kind_a`, `kind_b`: their ShapeKind), the poses in place ((4, 4)
-// float64, None: identity), turning the shortest way about their origins; the status member
-// is taken from `statuses`. Returns None when a shape or pose is in another form: the caller
-// then takes the Python path, with its messages.
-nb::object primitive_pair_toi_object(int kind_a, nb::handle a, int kind_b, nb::handle b,
+// ConvexSet.from_shapes would pack (ShapePair), so it equals the batch's row to the bit. The
+// shapes are primitives or (n, 3) float64 points (`kind_a`, `kind_b`: their ShapeKind), the
+// poses read in place ((4, 4) float64, None: identity), each shape turning the shortest way
+// about its origin; the status member is taken from `statuses`. Returns None when a shape or
+// pose is in another form: the caller then takes the Python path, with its messages.
+nb::object shape_pair_toi_object(int kind_a, nb::handle a, int kind_b, nb::handle b,
                                      nb::handle start_pose_a, nb::handle end_pose_a,
                                      nb::handle start_pose_b, nb::handle end_pose_b,
                                      double tolerance, int max_iterations,
                                      nb::handle result_type, nb::handle statuses) {
     const meshcol::ToiOptions options = toi_options(tolerance, max_iterations);
-    PrimitivePair shapes;
+    ShapePair shapes;
     if (!shapes.read(0, kind_a, a.ptr()) || !shapes.read(1, kind_b, b.ptr())) return nb::none();
     PairPoses starts, ends;
     if (!starts.read(start_pose_a, start_pose_b) || !ends.read(end_pose_a, end_pose_b))
@@ -124,7 +124,7 @@ nb::object primitive_pair_toi_object(int kind_a, nb::handle a, int kind_b, nb::h
     out.iterations = &iterations;
     out.status = &status;
     nb::object point = numpy_empty(3, &out.point), normal = numpy_empty(3, &out.normal);
-    meshcol::run_toi_batch(shapes.view(), starts.data(), ends.data(), nullptr, nullptr, pair, 1,
+    meshcol::run_toi_batch(shapes.pack(), starts.data(), ends.data(), nullptr, nullptr, pair, 1,
                            options, 1, out);
     static const std::array<PyObject*, 5> names = {interned("status"), interned("time_of_impact"),
                                                    interned("point"), interned("normal"),
@@ -185,12 +185,13 @@ Out<double, -1, 3> shortest_rotations(Poses start_poses, Poses end_poses) {
 }  // namespace
 
 void bind_toi(nb::module_& m) {
-    m.def("primitive_pair_toi_object", &primitive_pair_toi_object, "kind_a"_a, "a"_a, "kind_b"_a,
+    m.def("shape_pair_toi_object", &shape_pair_toi_object, "kind_a"_a, "a"_a, "kind_b"_a,
           "b"_a, "start_pose_a"_a.none(), "end_pose_a"_a.none(), "start_pose_b"_a.none(),
           "end_pose_b"_a.none(), "tolerance"_a, "max_iterations"_a, "result_type"_a,
           "statuses"_a,
-          "Time of impact of one pair of primitives (each turning the shortest way about its "
-          "origin) as result_type; None when a shape or pose is not in the core's form.");
+          "Time of impact of one pair of shapes (primitives, or (n, 3) points by their hull; "
+          "each turning the shortest way about its origin) as result_type; None when a shape "
+          "or pose is not in the core's form.");
     m.def("time_of_impact_object", &time_of_impact_object, "shapes"_a, "start_poses"_a.none(),
           "end_poses"_a.none(), "pairs"_a.none(), "rotations"_a.none(), "pivots"_a.none(),
           "tolerance"_a, "max_iterations"_a, "threads"_a, "result_type"_a,

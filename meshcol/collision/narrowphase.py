@@ -20,9 +20,9 @@ Frames and signs (fixed once, here, for every function of this module):
 
 Shapes are packed into a :class:`ConvexSet` (arrays, built once) and the ``*_batch`` functions
 query (P, 2) index pairs in one native call (GIL released, threads over pairs). The
-single-pair functions (:func:`distance`, ...) run the same code on a two-shape set: for two
-primitives (or Bodies of one) one native call reads them and builds the result, and any
-other shape is packed by :meth:`ConvexSet.from_shapes` (its hull built per call).
+single-pair functions (:func:`distance`, ...) run the same code on a two-shape set, packed
+by one native call that also builds the result (a point set's or mesh's hull is built per
+call); shapes or poses in other forms are packed by :meth:`ConvexSet.from_shapes`.
 
 Notes
 -----
@@ -44,7 +44,7 @@ import numpy as np
 
 from meshcol._native import core
 from meshcol.collision.arrays import as_pairs, as_pose, as_poses
-from meshcol.collision.shapes import ConvexSet, ShapeKind, as_convex_set
+from meshcol.collision.shapes import ConvexSet, ShapeKind, _item, as_convex_set
 from meshcol.types import Body, Box, Capsule, Cylinder, Sphere, Status
 
 __all__ = [
@@ -294,7 +294,7 @@ def intersects_batch(
 
 _PAIR = np.array([[0, 1]], dtype=np.int64)
 
-# The packed kind of each primitive type (exact types: anything else takes the packing path).
+# The packed kind of each primitive type (exact types: a subclass takes the packing path).
 PRIMITIVE_KINDS: dict[type, int] = {
     Sphere: int(ShapeKind.SPHERE),
     Box: int(ShapeKind.BOX),
@@ -305,21 +305,33 @@ PRIMITIVE_KINDS: dict[type, int] = {
 _STATUSES = tuple(Status(v) for v in range(len(Status)))
 
 
-def _primitive_pair(
-    layout: int, result_type: type, a: Any, b: Any, pose_a: Any, pose_b: Any
-) -> Any:
-    """The single-pair result of two primitives or Bodies of one (a Body's own pose when
-    none is given), made by one native call; None for any other shape, or a shape or pose
-    in another form (the caller packs a set, whose messages then apply)."""
-    if type(a) is Body and a.primitive is not None:
-        a, pose_a = a.primitive, a.pose if pose_a is None else pose_a
-    if type(b) is Body and b.primitive is not None:
-        b, pose_b = b.primitive, b.pose if pose_b is None else pose_b
-    kind_a, kind_b = PRIMITIVE_KINDS.get(type(a)), PRIMITIVE_KINDS.get(type(b))
-    if kind_a is None or kind_b is None:
+def native_shape(shape: Any, name: str) -> tuple[int, Any] | None:
+    """(kind, what the core's single-pair calls read) of one shape of a pair: a primitive
+    itself or a Body's, else the points of a Body, mesh or array as
+    :meth:`ConvexSet.from_shapes` takes them (with its messages, ``name`` in them); None for a
+    primitive of a subclass (the packing path reads it)."""
+    kind = PRIMITIVE_KINDS.get(type(shape))
+    if kind is not None:
+        return kind, shape
+    if isinstance(shape, Body) and shape.primitive is not None:
+        kind = PRIMITIVE_KINDS.get(type(shape.primitive))
+        return None if kind is None else (kind, shape.primitive)
+    kind, _, points = _item(shape, name)
+    return None if points is None else (kind, points)
+
+
+def _native_pair(layout: int, result_type: type, a: Any, b: Any, pose_a: Any, pose_b: Any) -> Any:
+    """The single-pair result made by one native call on the two shapes packed as
+    :meth:`ConvexSet.from_shapes` packs them (a Body at its own pose when none is given);
+    None when a shape or pose is in a form the core does not read (the caller packs a set,
+    whose messages then apply)."""
+    shape_a, shape_b = native_shape(a, "a"), native_shape(b, "b")
+    if shape_a is None or shape_b is None:
         return None
-    return core.primitive_pair_object(
-        layout, kind_a, a, kind_b, b, pose_a, pose_b, result_type, _STATUSES
+    pose_a = body_pose(a) if pose_a is None else pose_a
+    pose_b = body_pose(b) if pose_b is None else pose_b
+    return core.shape_pair_object(
+        layout, *shape_a, *shape_b, pose_a, pose_b, result_type, _STATUSES
     )
 
 
@@ -374,7 +386,7 @@ def distance(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> Distance
     DistanceResult
         See :class:`DistanceBatch` for the fields.
     """
-    result = _primitive_pair(_DISTANCE, DistanceResult, a, b, pose_a, pose_b)
+    result = _native_pair(_DISTANCE, DistanceResult, a, b, pose_a, pose_b)
     if result is not None:
         return cast(DistanceResult, result)
     cs, poses = _pair_set(a, b, pose_a, pose_b)
@@ -383,7 +395,7 @@ def distance(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> Distance
 
 def penetration(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> PenetrationResult:
     """Penetration depth of two convex shapes (0 when apart); arguments as :func:`distance`."""
-    result = _primitive_pair(_PENETRATION, PenetrationResult, a, b, pose_a, pose_b)
+    result = _native_pair(_PENETRATION, PenetrationResult, a, b, pose_a, pose_b)
     if result is not None:
         return cast(PenetrationResult, result)
     cs, poses = _pair_set(a, b, pose_a, pose_b)
@@ -393,7 +405,7 @@ def penetration(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> Penet
 def signed_distance(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> SignedDistanceResult:
     """Signed distance (distance - depth) of two convex shapes; arguments as
     :func:`distance`."""
-    result = _primitive_pair(_SIGNED_DISTANCE, SignedDistanceResult, a, b, pose_a, pose_b)
+    result = _native_pair(_SIGNED_DISTANCE, SignedDistanceResult, a, b, pose_a, pose_b)
     if result is not None:
         return cast(SignedDistanceResult, result)
     cs, poses = _pair_set(a, b, pose_a, pose_b)
@@ -409,7 +421,7 @@ def intersects(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> bool:
         Also for invalid data (NaN/inf, an empty shape, a non-rigid pose): a bool cannot
         carry a status (the batch form reports ``Status.INVALID_INPUT`` instead).
     """
-    hit = _primitive_pair(_INTERSECTS, IntersectsBatch, a, b, pose_a, pose_b)
+    hit = _native_pair(_INTERSECTS, IntersectsBatch, a, b, pose_a, pose_b)
     if hit is not None:
         return bool(hit)
     cs, poses = _pair_set(a, b, pose_a, pose_b)

@@ -60,7 +60,7 @@ import numpy as np
 
 from meshcol._native import core, defaults
 from meshcol.collision.arrays import as_pairs, as_pose, as_poses, as_vectors
-from meshcol.collision.narrowphase import PRIMITIVE_KINDS, body_pose
+from meshcol.collision.narrowphase import body_pose, native_shape
 from meshcol.collision.shapes import ConvexSet, ShapeKind, as_convex_set
 from meshcol.types import Body, Spin, TimeOfImpactStatus
 
@@ -313,7 +313,7 @@ def time_of_impact(
     TimeOfImpactResult
     """
     if spin_a is None and spin_b is None:
-        result = _primitive_pair(
+        result = _native_pair(
             (a, start_pose_a, end_pose_a), (b, start_pose_b, end_pose_b), tolerance, max_iterations
         )
         if result is not None:
@@ -343,26 +343,22 @@ _STATUSES = tuple(TimeOfImpactStatus(v) for v in range(len(TimeOfImpactStatus)))
 _INT_MAX = 2**31 - 1  # the core's iteration cap is a C int
 
 
-def _primitive_pair(
+def _native_pair(
     move_a: tuple[Any, Any, Any], move_b: tuple[Any, Any, Any], tolerance: Any, max_iterations: Any
 ) -> TimeOfImpactResult | None:
-    """The time of impact of two primitives or Bodies of one, each moving (shape, start pose,
-    end pose) the shortest way (no spin), made by one native call; None for any other shape,
-    a Body that spins, or an argument in another form (the caller packs a set, whose
-    messages then apply, in their order)."""
-    kinds, moves = [], []
-    for shape, start, end in (move_a, move_b):
-        if type(shape) is Body and shape.primitive is not None:
-            if end is None and shape.spin is not None:
-                return None
-            start = shape.pose if start is None else start
-            end = body_pose(shape, True) if end is None else end
-            shape = shape.primitive
-        kind = PRIMITIVE_KINDS.get(type(shape))
-        if kind is None:
+    """The time of impact made by one native call on two shapes, each moving (shape, start
+    pose, end pose) the shortest way (no spin), packed as :meth:`ConvexSet.from_shapes` packs
+    them; None for a Body that spins, or a shape, pose or option in a form the core does not
+    read (the caller packs a set, whose messages then apply, in their order)."""
+    args: list[Any] = []
+    for (shape, start, end), name in ((move_a, "a"), (move_b, "b")):
+        if end is None and isinstance(shape, Body) and shape.spin is not None:
             return None
-        kinds.append(kind)
-        moves.append((shape, start, end))
+        native = native_shape(shape, name)
+        if native is None:
+            return None
+        args += [*native, body_pose(shape) if start is None else start]
+        args.append(body_pose(shape, True) if end is None else end)
     # a tolerance or cap in another form is checked by the packing path, after the poses
     if tolerance is None:
         tolerance = defaults.toi_tolerance
@@ -372,12 +368,12 @@ def _primitive_pair(
         max_iterations = defaults.toi_max_iterations
     elif type(max_iterations) is not int or not 1 <= max_iterations <= _INT_MAX:
         return None
-    (shape_a, start_a, end_a), (shape_b, start_b, end_b) = moves
-    result = core.primitive_pair_toi_object(
-        kinds[0],
-        shape_a,
-        kinds[1],
-        shape_b,
+    kind_a, a, start_a, end_a, kind_b, b, start_b, end_b = args
+    result = core.shape_pair_toi_object(
+        kind_a,
+        a,
+        kind_b,
+        b,
         start_a,
         end_a,
         start_b,

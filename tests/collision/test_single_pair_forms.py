@@ -133,7 +133,23 @@ def test_point_sets_meshes_and_bodies_equal_the_batch_row() -> None:
     body_sphere = Body.of_primitive("s", None, Sphere(0.4), pose=turned_about_z(0.1, (1.0, 0, 0)))
     body_box = Body.of_primitive("b", None, Box((0.5, 0.5, 0.5)))
     body_mesh = Body("m", None, mesh.vertices, mesh.faces, pose=pose)
-    shapes = [points, mesh, body_sphere, body_box, body_mesh, Capsule(0.2, 0.4)]
+    flat = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [0.5, 0.5, 0]])
+    cloud = np.random.default_rng(4).normal(size=(64, 3))
+    shapes = [
+        points,
+        mesh,
+        body_sphere,
+        body_box,
+        body_mesh,
+        Capsule(0.2, 0.4),
+        flat,  # a polygon
+        flat[:2] * 2.0,  # a segment
+        flat[1:2],  # a point
+        np.zeros((0, 3)),  # no points: INVALID_INPUT
+        np.array([[0.0, 0, 0], [np.nan, 0, 0], [0, 1, 0], [0, 0, 1]]),  # INVALID_INPUT
+        points * 1e300,  # beyond the hull's range: kept as given, its points scanned
+        cloud,
+    ]
     for a, b in itertools.product(shapes, repeat=2):
         for pose_a, pose_b in [(None, None), (None, pose), (TILT, moved(TILT, (1.5, 0.0, 0.0)))]:
             # a Body without an explicit pose is at its own
@@ -290,15 +306,19 @@ def test_time_of_impact_options_and_bad_inputs() -> None:
         time_of_impact(a, b, None, np.ones(4), start_b, end_b)
 
 
-def test_primitives_pack_no_set(monkeypatch) -> None:
-    """Primitives and Bodies of one, with array or no poses, take the one native call."""
+def test_shapes_in_the_cores_form_pack_no_set(monkeypatch) -> None:
+    """Primitives, Bodies, meshes and float64 point arrays, with array or no poses, take the
+    one native call."""
 
     def refuse(*args, **kwargs):
         raise AssertionError("a set was packed")
 
     monkeypatch.setattr(ConvexSet, "from_shapes", classmethod(refuse))
     body = Body.of_primitive("b", None, Capsule(0.2, 0.5), pose=moved(np.eye(4), (1.0, 0, 0)))
-    for a, b in itertools.product([*PRIMITIVES, body], repeat=2):
+    mesh = trimesh.creation.icosphere(subdivisions=1)
+    points = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    mesh_body = Body("m", None, mesh.vertices, mesh.faces, pose=moved(np.eye(4), (0, 1.0, 0)))
+    for a, b in itertools.product([*PRIMITIVES, body, mesh, points, mesh_body], repeat=2):
         for pose_a, pose_b in POSES[:6]:
             for single, _, result_type in SINGLES:
                 assert type(single(a, b, pose_a, pose_b)) is result_type
