@@ -325,6 +325,11 @@ def _native_pair(layout: int, result_type: type, a: Any, b: Any, pose_a: Any, po
     :meth:`ConvexSet.from_shapes` packs them (a Body at its own pose when none is given);
     None when a shape or pose is in a form the core does not read (the caller packs a set,
     whose messages then apply)."""
+    kind_a, kind_b = PRIMITIVE_KINDS.get(type(a)), PRIMITIVE_KINDS.get(type(b))
+    if kind_a is not None and kind_b is not None:  # two primitives, the common call: no more
+        return core.shape_pair_object(
+            layout, kind_a, a, kind_b, b, pose_a, pose_b, result_type, _STATUSES
+        )
     shape_a, shape_b = native_shape(a, "a"), native_shape(b, "b")
     if shape_a is None or shape_b is None:
         return None
