@@ -21,6 +21,7 @@ import argparse
 import itertools
 import time
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -145,26 +146,31 @@ def batch_rows(rows, repeat: int, rounds: int) -> dict[str, float]:
     return out
 
 
+def geometry(library: Any, s: object) -> object:
+    """The primitive ``s`` as coal's or python-fcl's geometry (the same constructors)."""
+    if isinstance(s, Sphere):
+        return library.Sphere(s.radius)
+    if isinstance(s, Box):
+        return library.Box(*s.size)
+    if isinstance(s, Capsule):
+        return library.Capsule(s.radius, s.length)
+    assert isinstance(s, Cylinder)
+    return library.Cylinder(s.radius, s.length)
+
+
 def coal_rows(rows, repeat: int, rounds: int) -> dict[str, float] | None:
     try:
         import coal
     except ImportError:
         return None
 
-    def geometry(s: object) -> object:
-        if isinstance(s, Sphere):
-            return coal.Sphere(s.radius)
-        if isinstance(s, Box):
-            return coal.Box(*s.size)
-        if isinstance(s, Capsule):
-            return coal.Capsule(s.radius, s.length)
-        assert isinstance(s, Cylinder)
-        return coal.Cylinder(s.radius, s.length)
-
     def transform(m: np.ndarray) -> object:
         return coal.Transform3s(np.ascontiguousarray(m[:3, :3]), np.ascontiguousarray(m[:3, 3]))
 
-    made = [(geometry(a), transform(pa), geometry(b), transform(pb)) for a, b, pa, pb in rows]
+    made = [
+        (geometry(coal, a), transform(pa), geometry(coal, b), transform(pb))
+        for a, b, pa, pb in rows
+    ]
     d_request, d_result = coal.DistanceRequest(), coal.DistanceResult()
     c_request, c_result = coal.CollisionRequest(), coal.CollisionResult()
 
@@ -190,18 +196,8 @@ def fcl_rows(rows, repeat: int, rounds: int) -> dict[str, float] | None:
     except ImportError:
         return None
 
-    def geometry(s: object) -> object:
-        if isinstance(s, Sphere):
-            return fcl.Sphere(s.radius)
-        if isinstance(s, Box):
-            return fcl.Box(*s.size)
-        if isinstance(s, Capsule):
-            return fcl.Capsule(s.radius, s.length)
-        assert isinstance(s, Cylinder)
-        return fcl.Cylinder(s.radius, s.length)
-
     def obj(s: object, m: np.ndarray) -> object:
-        return fcl.CollisionObject(geometry(s), fcl.Transform(m[:3, :3], m[:3, 3]))
+        return fcl.CollisionObject(geometry(fcl, s), fcl.Transform(m[:3, :3], m[:3, 3]))
 
     made = [(obj(a, pa), obj(b, pb)) for a, b, pa, pb in rows]
     d_request = fcl.DistanceRequest(enable_nearest_points=True)

@@ -32,6 +32,30 @@ using Rows = Out<double, -1, 3>;
 /// result class in its field order (meshcol/collision/narrowphase.py).
 enum class Layout : int { DISTANCE = 0, PENETRATION = 1, INTERSECTS = 2, SIGNED_DISTANCE = 3 };
 
+// The field names of the results of each layout, in field order (DistanceBatch and
+// DistanceResult share theirs, and so on), interned once.
+const std::array<PyObject*, 6>& distance_fields() {
+    static const std::array<PyObject*, 6> names = {interned("distance"),   interned("point_a"),
+                                                   interned("point_b"),    interned("normal"),
+                                                   interned("iterations"), interned("status")};
+    return names;
+}
+
+const std::array<PyObject*, 6>& penetration_fields() {
+    static const std::array<PyObject*, 6> names = {interned("depth"),      interned("normal"),
+                                                   interned("point_a"),    interned("point_b"),
+                                                   interned("iterations"), interned("status")};
+    return names;
+}
+
+const std::array<PyObject*, 8>& signed_distance_fields() {
+    static const std::array<PyObject*, 8> names = {
+        interned("signed_distance"), interned("distance"), interned("depth"),
+        interned("normal"),          interned("point_a"),  interned("point_b"),
+        interned("iterations"),      interned("status")};
+    return names;
+}
+
 // One batched query as its Python result: `result_type(...)`, the DistanceBatch,
 // PenetrationBatch, IntersectsBatch or SignedDistanceBatch of `layout`, its arrays made by numpy
 // and filled in place. `poses` (None: identity) and `pairs` are plain objects, read in place
@@ -85,16 +109,12 @@ nb::object query_object(const PackedConvexSet& set, int layout, nb::handle poses
     }
     switch (form) {
         case Layout::DISTANCE: {
-            static const std::array<PyObject*, 6> names = {interned("distance"), interned("point_a"),
-                                                           interned("point_b"),  interned("normal"),
-                                                           interned("iterations"), interned("status")};
+            const auto& names = distance_fields();
             static DataclassMaker<6> maker;
             return maker.make(result_type, names, {distance, point_a, point_b, normal, iterations, status_array});
         }
         case Layout::PENETRATION: {
-            static const std::array<PyObject*, 6> names = {interned("depth"),   interned("normal"),
-                                                           interned("point_a"), interned("point_b"),
-                                                           interned("iterations"), interned("status")};
+            const auto& names = penetration_fields();
             static DataclassMaker<6> maker;
             return maker.make(result_type, names, {depth, normal, point_a, point_b, iterations, status_array});
         }
@@ -104,10 +124,7 @@ nb::object query_object(const PackedConvexSet& set, int layout, nb::handle poses
             return maker.make(result_type, names, {hit, status_array});
         }
         default: {
-            static const std::array<PyObject*, 8> names = {
-                interned("signed_distance"), interned("distance"), interned("depth"),
-                interned("normal"),          interned("point_a"),  interned("point_b"),
-                interned("iterations"),      interned("status")};
+            const auto& names = signed_distance_fields();
             static DataclassMaker<8> maker;
             return maker.make(result_type, names,
                               {signed_distance, distance, depth, normal, point_a, point_b, iterations, status_array});
@@ -164,24 +181,17 @@ nb::object shape_pair_object(int layout, int kind_a, nb::handle a, int kind_b, n
     const nb::object count = nb::int_(iterations);
     switch (form) {
         case Layout::DISTANCE: {
-            static const std::array<PyObject*, 6> names = {interned("distance"), interned("point_a"),
-                                                           interned("point_b"),  interned("normal"),
-                                                           interned("iterations"), interned("status")};
+            const auto& names = distance_fields();
             static DataclassMaker<6> maker;
             return maker.make(result_type, names, {nb::float_(distance), point_a, point_b, normal, count, member});
         }
         case Layout::PENETRATION: {
-            static const std::array<PyObject*, 6> names = {interned("depth"),   interned("normal"),
-                                                           interned("point_a"), interned("point_b"),
-                                                           interned("iterations"), interned("status")};
+            const auto& names = penetration_fields();
             static DataclassMaker<6> maker;
             return maker.make(result_type, names, {nb::float_(depth), normal, point_a, point_b, count, member});
         }
         default: {
-            static const std::array<PyObject*, 8> names = {
-                interned("signed_distance"), interned("distance"), interned("depth"),
-                interned("normal"),          interned("point_a"),  interned("point_b"),
-                interned("iterations"),      interned("status")};
+            const auto& names = signed_distance_fields();
             static DataclassMaker<8> maker;
             return maker.make(result_type, names,
                               {nb::float_(distance - depth), nb::float_(distance), nb::float_(depth), normal,
