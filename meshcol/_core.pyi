@@ -199,6 +199,11 @@ class ShapeKind(enum.Enum):
 
     CYLINDER = 4
 
+def shape_pair_object(layout: int, kind_a: int, a: object, kind_b: int, b: object, pose_a: object | None, pose_b: object | None, result_type: object, statuses: object) -> object:
+    """
+    One pair of shapes (primitives, or (n, 3) points by their hull; kind_a, kind_b their ShapeKind) as its single-pair result (layout as query_object; for intersects a bool); None when a shape or pose is not in the core's form, or for an invalid intersects pair.
+    """
+
 class PackedConvexSet:
     """
     Packed convex shapes (the arrays of meshcol.collision.shapes.ConvexSet).
@@ -288,6 +293,11 @@ class AabbTree:
     def area_ratio(self) -> float: ...
 
     def __len__(self) -> int: ...
+
+def shape_pair_toi_object(kind_a: int, a: object, kind_b: int, b: object, start_pose_a: object | None, end_pose_a: object | None, start_pose_b: object | None, end_pose_b: object | None, tolerance: float, max_iterations: int, result_type: object, statuses: object) -> object:
+    """
+    Time of impact of one pair of shapes (primitives, or (n, 3) points by their hull; each turning the shortest way about its origin) as result_type; None when a shape or pose is not in the core's form.
+    """
 
 def time_of_impact_object(shapes: PackedConvexSet, start_poses: object | None, end_poses: object | None, pairs: object | None, rotations: object | None, pivots: object | None, tolerance: float, max_iterations: int, threads: int, result_type: object) -> object:
     """

@@ -17,6 +17,7 @@
 #include "call_args.hpp"
 #include "ndarray.hpp"
 #include "packed_convex_set.hpp"
+#include "shape_pair.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -30,6 +31,30 @@ using Rows = Out<double, -1, 3>;
 /// The result layouts of `query_object`: the query kind run, and the fields of the Python
 /// result class in its field order (meshcol/collision/narrowphase.py).
 enum class Layout : int { DISTANCE = 0, PENETRATION = 1, INTERSECTS = 2, SIGNED_DISTANCE = 3 };
+
+// The field names of the results of each layout, in field order (DistanceBatch and
+// DistanceResult share theirs, and so on), interned once.
+const std::array<PyObject*, 6>& distance_fields() {
+    static const std::array<PyObject*, 6> names = {interned("distance"),   interned("point_a"),
+                                                   interned("point_b"),    interned("normal"),
+                                                   interned("iterations"), interned("status")};
+    return names;
+}
+
+const std::array<PyObject*, 6>& penetration_fields() {
+    static const std::array<PyObject*, 6> names = {interned("depth"),      interned("normal"),
+                                                   interned("point_a"),    interned("point_b"),
+                                                   interned("iterations"), interned("status")};
+    return names;
+}
+
+const std::array<PyObject*, 8>& signed_distance_fields() {
+    static const std::array<PyObject*, 8> names = {
+        interned("signed_distance"), interned("distance"), interned("depth"),
+        interned("normal"),          interned("point_a"),  interned("point_b"),
+        interned("iterations"),      interned("status")};
+    return names;
+}
 
 // One batched query as its Python result: `result_type(...)`, the DistanceBatch,
 // PenetrationBatch, IntersectsBatch or SignedDistanceBatch of `layout`, its arrays made by numpy
@@ -84,16 +109,12 @@ nb::object query_object(const PackedConvexSet& set, int layout, nb::handle poses
     }
     switch (form) {
         case Layout::DISTANCE: {
-            static const std::array<PyObject*, 6> names = {interned("distance"), interned("point_a"),
-                                                           interned("point_b"),  interned("normal"),
-                                                           interned("iterations"), interned("status")};
+            const auto& names = distance_fields();
             static DataclassMaker<6> maker;
             return maker.make(result_type, names, {distance, point_a, point_b, normal, iterations, status_array});
         }
         case Layout::PENETRATION: {
-            static const std::array<PyObject*, 6> names = {interned("depth"),   interned("normal"),
-                                                           interned("point_a"), interned("point_b"),
-                                                           interned("iterations"), interned("status")};
+            const auto& names = penetration_fields();
             static DataclassMaker<6> maker;
             return maker.make(result_type, names, {depth, normal, point_a, point_b, iterations, status_array});
         }
@@ -103,13 +124,78 @@ nb::object query_object(const PackedConvexSet& set, int layout, nb::handle poses
             return maker.make(result_type, names, {hit, status_array});
         }
         default: {
-            static const std::array<PyObject*, 8> names = {
-                interned("signed_distance"), interned("distance"), interned("depth"),
-                interned("normal"),          interned("point_a"),  interned("point_b"),
-                interned("iterations"),      interned("status")};
+            const auto& names = signed_distance_fields();
             static DataclassMaker<8> maker;
             return maker.make(result_type, names,
                               {signed_distance, distance, depth, normal, point_a, point_b, iterations, status_array});
+        }
+    }
+}
+
+// One pair of shapes as its Python single-pair result (DistanceResult, PenetrationResult or
+// SignedDistanceResult of `layout`; for INTERSECTS a bool), computed by the batch's own code on
+// the two-shape set ConvexSet.from_shapes would pack (ShapePair), so it equals the batch's row
+// to the bit: the shapes are primitives or (n, 3) float64 points (`kind_a`, `kind_b`: their
+// ShapeKind), the poses read in place ((4, 4) float64, None: identity; both None: no poses, as
+// the Python path passes them), the status enum's member taken from `statuses`. Returns None
+// when a shape or pose is in another form, and for an INVALID_INPUT pair of INTERSECTS (a bool
+// cannot carry it): the caller then takes the Python path, with its messages.
+nb::object shape_pair_object(int layout, int kind_a, nb::handle a, int kind_b, nb::handle b,
+                                 nb::handle pose_a, nb::handle pose_b, nb::handle result_type,
+                                 nb::handle statuses) {
+    if (layout < 0 || layout > 3)
+        throw std::invalid_argument("layout must be 0..3, got " + std::to_string(layout));
+    const auto form = static_cast<Layout>(layout);
+    ShapePair shapes;
+    if (!shapes.read(0, kind_a, a.ptr()) || !shapes.read(1, kind_b, b.ptr())) return nb::none();
+    PairPoses poses;
+    if (!poses.read(pose_a, pose_b)) return nb::none();
+    const double* pose_data = pose_a.is_none() && pose_b.is_none() ? nullptr : poses.data();
+    static constexpr std::int64_t pair[2] = {0, 1};
+    meshcol::BatchOutput out;
+    double distance = 0.0, depth = 0.0;
+    std::int32_t iterations = 0;
+    std::int8_t status = 0;
+    bool hit = false;
+    out.status = &status;
+    nb::object normal, point_a, point_b;
+    if (form == Layout::INTERSECTS) {
+        out.intersects = &hit;
+    } else {
+        normal = numpy_empty(3, &out.normal);
+        point_a = numpy_empty(3, &out.point_a);
+        point_b = numpy_empty(3, &out.point_b);
+        out.iterations = &iterations;
+        out.distance = &distance;
+        out.depth = &depth;
+    }
+    const auto q = form == Layout::DISTANCE     ? meshcol::QueryKind::DISTANCE
+                   : form == Layout::INTERSECTS ? meshcol::QueryKind::INTERSECTS
+                                                : meshcol::QueryKind::PENETRATION;
+    meshcol::run_batch(shapes.pack(), pose_data, pair, 1, q, 1, out);
+    if (form == Layout::INTERSECTS) {
+        if (status == static_cast<std::int8_t>(meshcol::Status::INVALID_INPUT)) return nb::none();
+        return nb::bool_(hit);
+    }
+    const nb::handle member = status_member(statuses, status);
+    const nb::object count = nb::int_(iterations);
+    switch (form) {
+        case Layout::DISTANCE: {
+            const auto& names = distance_fields();
+            static DataclassMaker<6> maker;
+            return maker.make(result_type, names, {nb::float_(distance), point_a, point_b, normal, count, member});
+        }
+        case Layout::PENETRATION: {
+            const auto& names = penetration_fields();
+            static DataclassMaker<6> maker;
+            return maker.make(result_type, names, {nb::float_(depth), normal, point_a, point_b, count, member});
+        }
+        default: {
+            const auto& names = signed_distance_fields();
+            static DataclassMaker<8> maker;
+            return maker.make(result_type, names,
+                              {nb::float_(distance - depth), nb::float_(distance), nb::float_(depth), normal,
+                               point_a, point_b, count, member});
         }
     }
 }
@@ -150,6 +236,12 @@ Column bounding_radii(const PackedConvexSet& set, int threads) {
 }  // namespace
 
 void bind_narrowphase(nb::module_& m) {
+    m.def("shape_pair_object", &shape_pair_object, "layout"_a, "kind_a"_a, "a"_a,
+          "kind_b"_a, "b"_a, "pose_a"_a.none(), "pose_b"_a.none(), "result_type"_a, "statuses"_a,
+          "One pair of shapes (primitives, or (n, 3) points by their hull; kind_a, kind_b their "
+          "ShapeKind) as its single-pair result (layout as query_object; for intersects a "
+          "bool); None when a shape or pose is not in the core's form, or for an invalid "
+          "intersects pair.");
     nb::class_<PackedConvexSet>(m, "PackedConvexSet",
                                 "Packed convex shapes (the arrays of meshcol.collision.shapes."
                                 "ConvexSet).")

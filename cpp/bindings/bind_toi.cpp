@@ -18,6 +18,7 @@
 #include "call_args.hpp"
 #include "ndarray.hpp"
 #include "packed_convex_set.hpp"
+#include "shape_pair.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -34,6 +35,20 @@ const double* turn_rows(const std::optional<Points>& rows, size_t n, const char*
     return rows->data();
 }
 
+/// The options of a time-of-impact call, checked.
+meshcol::ToiOptions toi_options(double tolerance, int max_iterations) {
+    if (!(tolerance > 0.0) || !std::isfinite(tolerance))
+        throw std::invalid_argument("tolerance must be finite and > 0, got " +
+                                    std::to_string(tolerance));
+    if (max_iterations < 1)
+        throw std::invalid_argument("max_iterations must be >= 1, got " +
+                                    std::to_string(max_iterations));
+    meshcol::ToiOptions options;
+    options.tolerance = tolerance;
+    options.max_iterations = max_iterations;
+    return options;
+}
+
 // One time-of-impact batch as `result_type(time_of_impact, point, normal, iterations, status)`
 // (meshcol.collision.time_of_impact.TimeOfImpactBatch), made as query_object makes the narrow
 // phase's batches: the poses ((H, 4, 4) float64), the turns and pivots ((H, 3) float64 or
@@ -45,12 +60,7 @@ nb::object time_of_impact_object(const PackedConvexSet& set, nb::handle start_po
                                  nb::handle end_poses, nb::handle pairs, nb::handle rotations,
                                  nb::handle pivots, double tolerance, int max_iterations,
                                  int threads, nb::handle result_type) {
-    if (!(tolerance > 0.0) || !std::isfinite(tolerance))
-        throw std::invalid_argument("tolerance must be finite and > 0, got " +
-                                    std::to_string(tolerance));
-    if (max_iterations < 1)
-        throw std::invalid_argument("max_iterations must be >= 1, got " +
-                                    std::to_string(max_iterations));
+    const meshcol::ToiOptions options = toi_options(tolerance, max_iterations);
     const auto h = static_cast<Py_ssize_t>(set.size());
     Float64Arg start, end, turns, centres;
     if (start_poses.is_none() || end_poses.is_none() || !start.read(start_poses, {h, 4, 4}) ||
@@ -65,9 +75,6 @@ nb::object time_of_impact_object(const PackedConvexSet& set, nb::handle start_po
     const std::array<nb::object, 5> arrays = {
         numpy_empty(n, &out.toi), numpy_empty(n, &out.point, 3), numpy_empty(n, &out.normal, 3),
         numpy_empty(n, &out.iterations), numpy_empty(n, &out.status)};
-    meshcol::ToiOptions options;
-    options.tolerance = tolerance;
-    options.max_iterations = max_iterations;
     const auto run = [&] {
         meshcol::run_toi_batch(set.view(), start.data(), end.data(), turns.data(), centres.data(),
                                in.data, in.count, options, threads, out);
@@ -87,6 +94,45 @@ nb::object time_of_impact_object(const PackedConvexSet& set, nb::handle start_po
     std::array<nb::handle, 5> values;
     for (size_t k = 0; k < 5; ++k) values[k] = arrays[k];
     return maker.make(result_type, names, values);
+}
+
+// The time of impact of one pair of shapes as its Python single-pair result,
+// `result_type(status, time_of_impact, point, normal, iterations)` (TimeOfImpactResult; None
+// for the time when there is none), computed by the batch's own code on the two-shape set
+// ConvexSet.from_shapes would pack (ShapePair), so it equals the batch's row to the bit. The
+// shapes are primitives or (n, 3) float64 points (`kind_a`, `kind_b`: their ShapeKind), the
+// poses read in place ((4, 4) float64, None: identity), each shape turning the shortest way
+// about its origin; the status member is taken from `statuses`. Returns None when a shape or
+// pose is in another form: the caller then takes the Python path, with its messages.
+nb::object shape_pair_toi_object(int kind_a, nb::handle a, int kind_b, nb::handle b,
+                                     nb::handle start_pose_a, nb::handle end_pose_a,
+                                     nb::handle start_pose_b, nb::handle end_pose_b,
+                                     double tolerance, int max_iterations,
+                                     nb::handle result_type, nb::handle statuses) {
+    const meshcol::ToiOptions options = toi_options(tolerance, max_iterations);
+    ShapePair shapes;
+    if (!shapes.read(0, kind_a, a.ptr()) || !shapes.read(1, kind_b, b.ptr())) return nb::none();
+    PairPoses starts, ends;
+    if (!starts.read(start_pose_a, start_pose_b) || !ends.read(end_pose_a, end_pose_b))
+        return nb::none();
+    static constexpr std::int64_t pair[2] = {0, 1};
+    meshcol::ToiBatchOutput out;
+    double toi = 0.0;
+    std::int32_t iterations = 0;
+    std::int8_t status = 0;
+    out.toi = &toi;
+    out.iterations = &iterations;
+    out.status = &status;
+    nb::object point = numpy_empty(3, &out.point), normal = numpy_empty(3, &out.normal);
+    meshcol::run_toi_batch(shapes.pack(), starts.data(), ends.data(), nullptr, nullptr, pair, 1,
+                           options, 1, out);
+    static const std::array<PyObject*, 5> names = {interned("status"), interned("time_of_impact"),
+                                                   interned("point"), interned("normal"),
+                                                   interned("iterations")};
+    static DataclassMaker<5> maker;
+    const nb::object fraction = std::isnan(toi) ? nb::none() : nb::object(nb::float_(toi));
+    return maker.make(result_type, names,
+                      {status_member(statuses, status), fraction, point, normal, nb::int_(iterations)});
 }
 
 Out<double, -1, 4, 4> interpolate_poses(Poses start_poses, Poses end_poses, Values t,
@@ -139,6 +185,13 @@ Out<double, -1, 3> shortest_rotations(Poses start_poses, Poses end_poses) {
 }  // namespace
 
 void bind_toi(nb::module_& m) {
+    m.def("shape_pair_toi_object", &shape_pair_toi_object, "kind_a"_a, "a"_a, "kind_b"_a,
+          "b"_a, "start_pose_a"_a.none(), "end_pose_a"_a.none(), "start_pose_b"_a.none(),
+          "end_pose_b"_a.none(), "tolerance"_a, "max_iterations"_a, "result_type"_a,
+          "statuses"_a,
+          "Time of impact of one pair of shapes (primitives, or (n, 3) points by their hull; "
+          "each turning the shortest way about its origin) as result_type; None when a shape "
+          "or pose is not in the core's form.");
     m.def("time_of_impact_object", &time_of_impact_object, "shapes"_a, "start_poses"_a.none(),
           "end_poses"_a.none(), "pairs"_a.none(), "rotations"_a.none(), "pivots"_a.none(),
           "tolerance"_a, "max_iterations"_a, "threads"_a, "result_type"_a,

@@ -20,7 +20,9 @@ Frames and signs (fixed once, here, for every function of this module):
 
 Shapes are packed into a :class:`ConvexSet` (arrays, built once) and the ``*_batch`` functions
 query (P, 2) index pairs in one native call (GIL released, threads over pairs). The
-single-pair functions (:func:`distance`, ...) build a two-shape set and call the same code.
+single-pair functions (:func:`distance`, ...) run the same code on a two-shape set, packed
+by one native call that also builds the result (a point set's or mesh's hull is built per
+call); shapes or poses in other forms are packed by :meth:`ConvexSet.from_shapes`.
 
 Notes
 -----
@@ -40,9 +42,10 @@ from typing import Any, TypeVar, cast
 
 import numpy as np
 
+from meshcol._native import core
 from meshcol.collision.arrays import as_pairs, as_pose, as_poses
-from meshcol.collision.shapes import ConvexSet, as_convex_set
-from meshcol.types import Body, Status
+from meshcol.collision.shapes import ConvexSet, ShapeKind, _item, as_convex_set
+from meshcol.types import Body, Box, Capsule, Cylinder, Sphere, Status
 
 __all__ = [
     "DistanceBatch",
@@ -291,6 +294,51 @@ def intersects_batch(
 
 _PAIR = np.array([[0, 1]], dtype=np.int64)
 
+# The packed kind of each primitive type (exact types: a subclass takes the packing path).
+PRIMITIVE_KINDS: dict[type, int] = {
+    Sphere: int(ShapeKind.SPHERE),
+    Box: int(ShapeKind.BOX),
+    Capsule: int(ShapeKind.CAPSULE),
+    Cylinder: int(ShapeKind.CYLINDER),
+}
+# Status members by value, for the core to hand out (calling the enum costs more than a query).
+_STATUSES = tuple(Status(v) for v in range(len(Status)))
+
+
+def native_shape(shape: Any, name: str) -> tuple[int, Any] | None:
+    """(kind, what the core's single-pair calls read) of one shape of a pair: a primitive
+    itself or a Body's, else the points of a Body, mesh or array as
+    :meth:`ConvexSet.from_shapes` takes them (with its messages, ``name`` in them); None for a
+    primitive of a subclass (the packing path reads it)."""
+    kind = PRIMITIVE_KINDS.get(type(shape))
+    if kind is not None:
+        return kind, shape
+    if isinstance(shape, Body) and shape.primitive is not None:
+        kind = PRIMITIVE_KINDS.get(type(shape.primitive))
+        return None if kind is None else (kind, shape.primitive)
+    kind, _, points = _item(shape, name)
+    return None if points is None else (kind, points)
+
+
+def _native_pair(layout: int, result_type: type, a: Any, b: Any, pose_a: Any, pose_b: Any) -> Any:
+    """The single-pair result made by one native call on the two shapes packed as
+    :meth:`ConvexSet.from_shapes` packs them (a Body at its own pose when none is given);
+    None when a shape or pose is in a form the core does not read (the caller packs a set,
+    whose messages then apply)."""
+    kind_a, kind_b = PRIMITIVE_KINDS.get(type(a)), PRIMITIVE_KINDS.get(type(b))
+    if kind_a is not None and kind_b is not None:  # two primitives, the common call: no more
+        return core.shape_pair_object(
+            layout, kind_a, a, kind_b, b, pose_a, pose_b, result_type, _STATUSES
+        )
+    shape_a, shape_b = native_shape(a, "a"), native_shape(b, "b")
+    if shape_a is None or shape_b is None:
+        return None
+    pose_a = body_pose(a) if pose_a is None else pose_a
+    pose_b = body_pose(b) if pose_b is None else pose_b
+    return core.shape_pair_object(
+        layout, *shape_a, *shape_b, pose_a, pose_b, result_type, _STATUSES
+    )
+
 
 def _pair_set(a: Any, b: Any, pose_a: Any, pose_b: Any) -> tuple[ConvexSet, np.ndarray | None]:
     """A two-shape set and its poses; a Body without an explicit pose uses ``Body.pose``."""
@@ -343,12 +391,18 @@ def distance(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> Distance
     DistanceResult
         See :class:`DistanceBatch` for the fields.
     """
+    result = _native_pair(_DISTANCE, DistanceResult, a, b, pose_a, pose_b)
+    if result is not None:
+        return cast(DistanceResult, result)
     cs, poses = _pair_set(a, b, pose_a, pose_b)
     return _first_row(distance_batch(cs, poses, _PAIR, threads=1), DistanceResult)
 
 
 def penetration(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> PenetrationResult:
     """Penetration depth of two convex shapes (0 when apart); arguments as :func:`distance`."""
+    result = _native_pair(_PENETRATION, PenetrationResult, a, b, pose_a, pose_b)
+    if result is not None:
+        return cast(PenetrationResult, result)
     cs, poses = _pair_set(a, b, pose_a, pose_b)
     return _first_row(penetration_batch(cs, poses, _PAIR, threads=1), PenetrationResult)
 
@@ -356,6 +410,9 @@ def penetration(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> Penet
 def signed_distance(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> SignedDistanceResult:
     """Signed distance (distance - depth) of two convex shapes; arguments as
     :func:`distance`."""
+    result = _native_pair(_SIGNED_DISTANCE, SignedDistanceResult, a, b, pose_a, pose_b)
+    if result is not None:
+        return cast(SignedDistanceResult, result)
     cs, poses = _pair_set(a, b, pose_a, pose_b)
     return _first_row(signed_distance_batch(cs, poses, _PAIR, threads=1), SignedDistanceResult)
 
@@ -369,6 +426,9 @@ def intersects(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> bool:
         Also for invalid data (NaN/inf, an empty shape, a non-rigid pose): a bool cannot
         carry a status (the batch form reports ``Status.INVALID_INPUT`` instead).
     """
+    hit = _native_pair(_INTERSECTS, IntersectsBatch, a, b, pose_a, pose_b)
+    if hit is not None:
+        return bool(hit)
     cs, poses = _pair_set(a, b, pose_a, pose_b)
     r = intersects_batch(cs, poses, _PAIR, threads=1)
     if r.status[0] == Status.INVALID_INPUT:

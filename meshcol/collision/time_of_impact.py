@@ -52,6 +52,7 @@ step aims at ``tolerance / 2`` so a contact is never stepped over.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, cast
 
@@ -59,7 +60,7 @@ import numpy as np
 
 from meshcol._native import core, defaults
 from meshcol.collision.arrays import as_pairs, as_pose, as_poses, as_vectors
-from meshcol.collision.narrowphase import body_pose
+from meshcol.collision.narrowphase import body_pose, native_shape
 from meshcol.collision.shapes import ConvexSet, ShapeKind, as_convex_set
 from meshcol.types import Body, Spin, TimeOfImpactStatus
 
@@ -311,6 +312,12 @@ def time_of_impact(
     -------
     TimeOfImpactResult
     """
+    if spin_a is None and spin_b is None:
+        result = _native_pair(
+            (a, start_pose_a, end_pose_a), (b, start_pose_b, end_pose_b), tolerance, max_iterations
+        )
+        if result is not None:
+            return result
     shapes = ConvexSet.from_shapes([a, b], names=("a", "b"))
     starts, ends = _pair_poses(
         (a, start_pose_a, end_pose_a, "a"), (b, start_pose_b, end_pose_b, "b")
@@ -329,6 +336,54 @@ def time_of_impact(
         threads=1,
     )
     return _first_result(batch)
+
+
+# Status members by value, for the core to hand out (calling the enum costs more than a query).
+_STATUSES = tuple(TimeOfImpactStatus(v) for v in range(len(TimeOfImpactStatus)))
+_INT_MAX = 2**31 - 1  # the core's iteration cap is a C int
+
+
+def _native_pair(
+    move_a: tuple[Any, Any, Any], move_b: tuple[Any, Any, Any], tolerance: Any, max_iterations: Any
+) -> TimeOfImpactResult | None:
+    """The time of impact made by one native call on two shapes, each moving (shape, start
+    pose, end pose) the shortest way (no spin), packed as :meth:`ConvexSet.from_shapes` packs
+    them; None for a Body that spins, or a shape, pose or option in a form the core does not
+    read (the caller packs a set, whose messages then apply, in their order)."""
+    args: list[Any] = []
+    for (shape, start, end), name in ((move_a, "a"), (move_b, "b")):
+        if end is None and isinstance(shape, Body) and shape.spin is not None:
+            return None
+        native = native_shape(shape, name)
+        if native is None:
+            return None
+        args += [*native, body_pose(shape) if start is None else start]
+        args.append(body_pose(shape, True) if end is None else end)
+    # a tolerance or cap in another form is checked by the packing path, after the poses
+    if tolerance is None:
+        tolerance = defaults.toi_tolerance
+    elif type(tolerance) is not float or not 0.0 < tolerance < math.inf:
+        return None
+    if max_iterations is None:
+        max_iterations = defaults.toi_max_iterations
+    elif type(max_iterations) is not int or not 1 <= max_iterations <= _INT_MAX:
+        return None
+    kind_a, a, start_a, end_a, kind_b, b, start_b, end_b = args
+    result = core.shape_pair_toi_object(
+        kind_a,
+        a,
+        kind_b,
+        b,
+        start_a,
+        end_a,
+        start_b,
+        end_b,
+        tolerance,
+        max_iterations,
+        TimeOfImpactResult,
+        _STATUSES,
+    )
+    return cast("TimeOfImpactResult | None", result)
 
 
 def _pair_poses(*moves: tuple[Any, Any, Any, str]) -> tuple[np.ndarray, np.ndarray]:
