@@ -46,8 +46,12 @@ FAST = {
 
 @pytest.fixture(scope="module")
 def ray_cluster():
-    """A local Ray of 2 CPUs on 127.0.0.1 for the whole module, shut down at its end."""
+    """A local Ray of 2 CPUs on 127.0.0.1 for the whole module, shut down at its end, its
+    workers at the caller's niceness as in a Ray of meshcol's own (at Ray's default of 15 the
+    stalled tasks below, beside other CPU-bound work, never got a second of CPU in a minute)."""
     ray = pytest.importorskip("ray", reason="Ray is not installed (pip install 'meshcol[ray]')")
+    from meshcol.decomposition.ray_start import LIGHT_INIT
+
     ray.init(
         address="local",
         num_cpus=2,
@@ -55,6 +59,7 @@ def ray_cluster():
         _node_ip_address="127.0.0.1",
         log_to_driver=False,
         logging_level="ERROR",
+        _system_config=dict(LIGHT_INIT["_system_config"]),
     )
     # The task functions below are sent by value: the workers cannot import this module.
     ray.cloudpickle.register_pickle_by_value(sys.modules[__name__])

@@ -97,16 +97,19 @@ from test_ray_local import _descendants
 from meshcol.decomposition.executor import RayExecutor
 
 def noop(task):
-    return task
+    return task, os.nice(0)
 
 executor = RayExecutor(noop, 2).start()
-done = sorted(o.value for o in executor.run(range(4)))
+values = [o.value for o in executor.run(range(4))]
+done = sorted(task for task, _ in values)
+niceness = sorted({{nice for _, nice in values}})
 before = [pid for pid, _ in _descendants(os.getpid())]
 start = time.perf_counter()
 executor.close()
 seconds = time.perf_counter() - start
 left = [pid for pid in before if os.path.exists(f"/proc/{{pid}}")]
-print(json.dumps({{"done": done, "before": before, "left": left, "seconds": seconds}}))
+print(json.dumps({{"done": done, "before": before, "left": left, "seconds": seconds,
+                  "niceness": niceness, "own": os.nice(0)}}))
 """
 
 
@@ -126,6 +129,9 @@ def test_closing_the_local_ray_stops_every_process_it_started() -> None:
     assert proc.returncode == 0, proc.stderr
     result = json.loads(proc.stdout.strip().splitlines()[-1])
     assert result["done"] == [0, 1, 2, 3]
+    # Its workers run at the caller's niceness, not Ray's default of 15, which starves them
+    # beside other CPU-bound work.
+    assert result["niceness"] == [result["own"]]
     # The raylet, the GCS server, the monitors and the workers were all running.
     assert len(result["before"]) >= 5
     # Checked as close() returns, before this process's exit could clean anything up.
