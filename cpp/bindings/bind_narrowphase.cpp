@@ -133,7 +133,7 @@ nb::object query_object(const PackedConvexSet& set, int layout, nb::handle poses
 }
 
 // One pair of shapes as its Python single-pair result (DistanceResult, PenetrationResult or
-// SignedDistanceResult of `layout`; for INTERSECTS a bool), computed by the batch's own code on
+// SignedDistanceResult of `layout`; for INTERSECTS a bool, and `result_type` None), computed by the batch's own code on
 // the two-shape set ConvexSet.from_shapes would pack (ShapePair), so it equals the batch's row
 // to the bit: the shapes are primitives or (n, 3) float64 points (`kind_a`, `kind_b`: their
 // ShapeKind), the poses read in place ((4, 4) float64, None: identity; both None: no poses, as
@@ -237,7 +237,7 @@ Column bounding_radii(const PackedConvexSet& set, int threads) {
 
 void bind_narrowphase(nb::module_& m) {
     m.def("shape_pair_object", &shape_pair_object, "layout"_a, "kind_a"_a, "a"_a,
-          "kind_b"_a, "b"_a, "pose_a"_a.none(), "pose_b"_a.none(), "result_type"_a, "statuses"_a,
+          "kind_b"_a, "b"_a, "pose_a"_a.none(), "pose_b"_a.none(), "result_type"_a.none(), "statuses"_a,
           "One pair of shapes (primitives, or (n, 3) points by their hull; kind_a, kind_b their "
           "ShapeKind) as its single-pair result (layout as query_object; for intersects a "
           "bool); None when a shape or pose is not in the core's form, or for an invalid "

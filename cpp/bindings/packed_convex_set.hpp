@@ -105,19 +105,16 @@ class PackedConvexSet {
     ShapeRadii& radii() const { return radii_; }
 
     /// The pose data, after checking there is one (4, 4) pose per shape (null: identity).
-    const double* check_poses(const std::optional<Poses>& poses, const char* name = "poses") const {
+    const double* check_poses(const std::optional<Poses>& poses) const {
         if (!poses) return nullptr;
         if (static_cast<std::int64_t>(poses->shape(0)) != view_.shape_count)
-            throw std::invalid_argument(std::string(name) + " must be (" +
+            throw std::invalid_argument("poses must be (" +
                                         std::to_string(view_.shape_count) + ", 4, 4), got (" +
                                         std::to_string(poses->shape(0)) + ", 4, 4)");
         return poses->data();
     }
 
-    /// Throws unless every index of the (P, 2) pairs names a shape of the set.
-    void check_pairs(const Pairs& pairs) const {
-        check_pairs(pairs.data(), static_cast<long long>(pairs.shape(0)));
-    }
+    /// Throws unless every index of the `count` (i, j) pairs names a shape of the set.
     void check_pairs(const std::int64_t* idx, long long count) const {
         for (long long i = 0; i < 2 * count; ++i)
             if (idx[i] < 0 || idx[i] >= view_.shape_count)

@@ -320,11 +320,14 @@ def native_shape(shape: Any, name: str) -> tuple[int, Any] | None:
     return None if points is None else (kind, points)
 
 
-def _native_pair(layout: int, result_type: type, a: Any, b: Any, pose_a: Any, pose_b: Any) -> Any:
+def _native_pair(
+    layout: int, result_type: type | None, a: Any, b: Any, pose_a: Any, pose_b: Any
+) -> Any:
     """The single-pair result made by one native call on the two shapes packed as
-    :meth:`ConvexSet.from_shapes` packs them (a Body at its own pose when none is given);
-    None when a shape or pose is in a form the core does not read (the caller packs a set,
-    whose messages then apply)."""
+    :meth:`ConvexSet.from_shapes` packs them (a Body at its own pose when none is given): a
+    ``result_type`` (for ``_INTERSECTS`` a bool, and ``result_type`` unused); None when a
+    shape or pose is in a form the core does not read (the caller packs a set, whose
+    messages then apply)."""
     kind_a, kind_b = PRIMITIVE_KINDS.get(type(a)), PRIMITIVE_KINDS.get(type(b))
     if kind_a is not None and kind_b is not None:  # two primitives, the common call: no more
         return core.shape_pair_object(
@@ -426,7 +429,7 @@ def intersects(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> bool:
         Also for invalid data (NaN/inf, an empty shape, a non-rigid pose): a bool cannot
         carry a status (the batch form reports ``Status.INVALID_INPUT`` instead).
     """
-    hit = _native_pair(_INTERSECTS, IntersectsBatch, a, b, pose_a, pose_b)
+    hit = _native_pair(_INTERSECTS, None, a, b, pose_a, pose_b)
     if hit is not None:
         return bool(hit)
     cs, poses = _pair_set(a, b, pose_a, pose_b)
