@@ -80,6 +80,13 @@ void prefetch_bytes(const void* begin, const void* end) {
     constexpr std::ptrdiff_t kLine = 64;
     const char* p = static_cast<const char*>(begin);
     const char* e = static_cast<const char*>(end);
+    // Four lines a trip: a 256-vertex shape is about 250 lines, asked for on every query.
+    for (; e - p > 3 * kLine; p += 4 * kLine) {
+        __builtin_prefetch(p);
+        __builtin_prefetch(p + kLine);
+        __builtin_prefetch(p + 2 * kLine);
+        __builtin_prefetch(p + 3 * kLine);
+    }
     for (; p < e; p += kLine) __builtin_prefetch(p);
 #else
     (void)begin;
