@@ -211,6 +211,41 @@ def test_files_of_folders_in_any_order_are_each_their_own(tmp_path):
             assert vertices[v_off[k] : v_off[k + 1]].tobytes() == want.tobytes()
 
 
+def test_identities_of_files_of_folders_in_any_order_are_what_stat_gives(tmp_path, monkeypatch):
+    """The core stats each path relative to the folder of the path before it when they share
+    one: paths of three folders interleaved (a folder reached through ``..`` and through a
+    symbolic link, a symbolic link to a file, a loop, a file used as a folder, a missing file
+    and folder, a bare name, a trailing slash) give each what ``os.stat`` gives, on 1 and 2
+    threads."""
+    from meshcol._native import core
+
+    for folder in ("a", "b", "c"):
+        (tmp_path / folder).mkdir()
+        for k in range(3):
+            (tmp_path / folder / f"p{k}.obj").write_text(f"v {k} 0 0\n")
+    os.symlink(tmp_path / "c", tmp_path / "link")
+    os.symlink(tmp_path / "a" / "p1.obj", tmp_path / "b" / "to_a1.obj")
+    os.symlink("loop.obj", tmp_path / "b" / "loop.obj")
+    monkeypatch.chdir(tmp_path / "a")
+    t = os.fspath(tmp_path)
+    order = [f"{t}/a/p0.obj", f"{t}/a/p1.obj", f"{t}/b/p1.obj", f"{t}/b/to_a1.obj"]
+    order += [f"{t}/b/loop.obj", f"{t}/a/../b/p2.obj", f"{t}/link/p2.obj", f"{t}/c/p2.obj"]
+    order += [f"{t}/a/p0.obj/x", f"{t}/none/p0.obj", f"{t}/c/none.obj", "p2.obj", "../b/p0.obj"]
+    order += [f"{t}/a/", f"{t}/a", "/", f"{t}/b/p0.obj", f"{t}/a/p2.obj"]
+    want = []
+    for path in order:
+        try:
+            info = os.stat(path)
+        except OSError:
+            want.append((0, 0, 0))
+        else:
+            want.append((info.st_dev, info.st_ino, 1))
+    assert sum(found for _, _, found in want) == len(order) - 4  # loop, x, two missing
+    for threads in (1, 2):
+        device, inode, found = core.file_identities(order, threads=threads)
+        assert list(zip(device.tolist(), inode.tolist(), found.tolist())) == want
+
+
 def test_formats_found_from_the_ends_of_paths_are_splitexts():
     """The format of each path, found once per distinct end of the paths, is what
     ``mesh_format`` says of the path itself (None where it refuses it)."""
