@@ -900,8 +900,14 @@ std::vector<PackedStart> packed_starts(const std::vector<MeshFile>& files) {
     return starts;
 }
 
+// A packed face index is an int32: an object's vertices number fewer than 2^31, since each
+// takes at least 8 bytes of its file (an OBJ "v 0 0 0" line; an STL corner, 12 bytes of a
+// 50-byte binary facet or a longer "vertex" line) and no file is over the cap.
+static_assert(defaults::max_mesh_file_bytes / 8 <= std::numeric_limits<std::int32_t>::max(),
+              "a face index of a file within the cap fits an int32");
+
 void pack_mesh_files(std::vector<MeshFile>& files, const std::vector<PackedStart>& starts,
-                     int threads, double* vertices, std::int64_t* faces,
+                     int threads, double* vertices, std::int32_t* faces,
                      std::int64_t* vertex_offsets, std::int64_t* face_offsets,
                      std::int64_t* object_file, double* largest) {
     const long long n = static_cast<long long>(files.size());
@@ -927,9 +933,9 @@ void pack_mesh_files(std::vector<MeshFile>& files, const std::vector<PackedStart
                 if (v_rows != 0)
                     std::memcpy(vertices + 3 * at.vertex, o.vertices.data(),
                                 3 * v_rows * sizeof(double));
-                if (f_rows != 0)
-                    std::memcpy(faces + 3 * at.face, o.faces.data(),
-                                3 * f_rows * sizeof(std::int64_t));
+                std::int32_t* to = faces + 3 * at.face;
+                for (size_t e = 0; e < 3 * f_rows; ++e)
+                    to[e] = static_cast<std::int32_t>(o.faces[e]);
                 at.object += 1;
                 at.vertex += static_cast<std::int64_t>(o.vertices.size() / 3);
                 at.face += static_cast<std::int64_t>(o.faces.size() / 3);

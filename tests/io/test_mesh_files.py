@@ -157,13 +157,14 @@ def test_the_cores_packing_is_the_files_objects_in_order_on_any_threads(tmp_path
         else:
             assert a == b
     vertices, faces, v_off, f_off, owner, _, status, errors, largest = one
+    assert faces.dtype == np.int32  # packed narrow; a body's faces are int64 (below)
     assert status.tolist() == [0] * 8 + [1] + [0] * 23 + [4] and errors[8] == b"file not found"
     assert owner.max() < len(paths) - 1  # the refused file gives no object
     want = [(j, body) for j, p in enumerate(paths[:-1]) if j != 8 for body in load_mesh(p)]
     assert owner.tolist() == [j for j, _ in want] and len(v_off) == len(want) + 1
     for k, (_, body) in enumerate(want):
         assert vertices[v_off[k] : v_off[k + 1]].tobytes() == body.vertices.tobytes()
-        assert faces[f_off[k] : f_off[k + 1]].tobytes() == body.faces.tobytes()
+        assert faces[f_off[k] : f_off[k + 1]].astype(np.int64).tobytes() == body.faces.tobytes()
     reduced = np.maximum.reduceat(np.abs(vertices).max(axis=1), v_off[:-1])
     assert largest.tobytes() == reduced.tobytes() and largest.max() == 9e9
     two.write_text(two.read_text().replace("9e9", "-1e12"))  # beyond the limit: named
