@@ -28,7 +28,8 @@ inside them, the geometry keys, the pair stages, the report), the figures a load
 does not move.
 
 Every meshcol figure is a fresh ``meshcol check`` process, timed from outside, with its peak
-resident memory (``RUSAGE_CHILDREN`` of a one-child wrapper). Peers run in this process,
+resident memory (``RUSAGE_CHILDREN`` of a one-child wrapper), after one untimed run of each
+side of each case (:func:`warm_up`: bytecode compiled, files in the page cache). Peers run in this process,
 loading included, and are skipped with a printed reason when missing or past ``--peer-max``.
 
 Run: .venv/bin/python benchmarks/bench_scale.py [--sizes 1000 10000 100000] [--peer-max 10000]
@@ -306,6 +307,29 @@ def meshcol_check(
     return rc, seconds, rss, data
 
 
+def warm_up(folder: Path, threads: int, meshcol: str | None = None) -> None:
+    """One untimed ``meshcol check`` of the folder's manifest: the timed runs then find the
+    package's bytecode compiled and the files in the page cache. The first run after a build
+    or a merge compiles every module the check imports (an editable install has no compiled
+    bytecode; about 0.6 s of CPU on one core), which made one timed run in two or three of a
+    fresh main about 2 s slower (RESULTS.md, issue 32 item 5, session 22)."""
+    rc, _, _, _ = meshcol_check(folder, threads, meshcol, "report-warm-up.json")
+    if rc not in (0, 1):
+        raise SystemExit(f"{meshcol or 'meshcol'} check exited {rc} on {folder} (warm-up)")
+    (folder / "report-warm-up.json").unlink(missing_ok=True)
+
+
+def bytecode_note() -> str:
+    """A line for the header when Python may not write bytecode: each run of a package without
+    compiled bytecode then compiles its modules again, and every run pays it."""
+    if os.environ.get("PYTHONDONTWRITEBYTECODE"):
+        return (
+            "note: PYTHONDONTWRITEBYTECODE is set: runs compile modules that have no bytecode "
+            "yet, every time (prefix env -u PYTHONDONTWRITEBYTECODE)"
+        )
+    return ""
+
+
 #: Stages of a unique-asset check beyond ``check_stages.STAGES``: the whole output guard and
 #: its mesh paths; the whole load; inside the file read, the formats and the native read (and
 #: the Python around it); inside the bodies in bulk, the files' objects and their arrays read
@@ -541,8 +565,10 @@ def main() -> None:
         return
     print(
         f"cores: {os.cpu_count()}; meshcol --threads {args.threads}; cache {CACHE}; "
-        f"load average {os.getloadavg()[0]:.2f} (each row: after it)"
+        f"load average {os.getloadavg()[0]:.2f} (each row: after it; one untimed run first)"
     )
+    if bytecode_note():
+        print(bytecode_note())
     print(
         f"{'N':>7} {'pairs':>7} {'meshcol s':>10} {'peak MiB':>9} {'trimesh+fcl':>24} "
         f"{'ratio':>6} {'coal':>24} {'ratio':>6} {'load avg':>9}"
@@ -553,6 +579,7 @@ def main() -> None:
         made = time.perf_counter() - t0
         if made > 1:
             print(f"  (generated {n} assets in {made:.1f} s)")
+        warm_up(folder, args.threads)
         runs = [meshcol_check(folder, args.threads) for _ in range(args.repeat)]
         rc, seconds, rss, report = min(runs, key=lambda r: r[1])
         pairs = len(report.get("pairs", [])) if rc in (0, 1) else f"rc={rc}"
@@ -573,6 +600,7 @@ def main() -> None:
     for n in args.primitives:
         for kind in args.primitive_kinds:
             folder = primitives_folder(n, kind)
+            warm_up(folder, args.threads)
             runs = []
             for _ in range(args.repeat):
                 rc, seconds, rss, report = meshcol_check(folder, args.threads)
@@ -630,6 +658,7 @@ def ab(args: argparse.Namespace) -> None:
     mine = str(Path(sys.executable).parent / "meshcol")
     sides = {"this": mine, "baseline": args.baseline}
     print(f"cores: {os.cpu_count()}; A/B, {args.repeat} alternated runs each; {os.getloadavg()}")
+    print(f"(one untimed run of each side first, for each case) {bytecode_note()}".rstrip())
     print(f"{'case':>24} {'side':>9} {'wall s':>13} {'CPU s':>13} {'user s':>13} {'peak MiB':>11}")
 
     def show(case: str, figures: dict[str, list[tuple[float, ...]]]) -> None:
@@ -648,6 +677,8 @@ def ab(args: argparse.Namespace) -> None:
     ]
     for case, folder in cases:
         figures: dict[str, list[tuple[float, ...]]] = {side: [] for side in sides}
+        for meshcol in sides.values():
+            warm_up(folder, args.threads, meshcol)
         for round_ in range(args.repeat):
             # each side first every other round (the first run of a round may find the files
             # out of the page cache)

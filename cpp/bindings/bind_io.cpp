@@ -24,6 +24,7 @@ namespace {
 
 using VertexArray = Out<double, -1, 3>;
 using FaceArray = Out<std::int64_t, -1, 3>;
+using PackedFaceArray = Out<std::int32_t, -1, 3>;  // read_mesh_files' (mesh_read.hpp)
 using IndexArray = Out<std::int64_t, -1>;
 
 auto read_files(const std::vector<std::string>& paths, const std::vector<int>& formats, bool merge,
@@ -46,7 +47,7 @@ auto read_files(const std::vector<std::string>& paths, const std::vector<int>& f
     const size_t v = static_cast<size_t>(total.vertex), f = static_cast<size_t>(total.face),
                  o = static_cast<size_t>(total.object);
     auto vertices = new_array<VertexArray>({v, 3});
-    auto faces = new_array<FaceArray>({f, 3});
+    auto faces = new_array<PackedFaceArray>({f, 3});
     auto vertex_offsets = new_array<IndexArray>({o + 1});
     auto face_offsets = new_array<IndexArray>({o + 1});
     auto object_file = new_array<IndexArray>({o});
@@ -126,7 +127,7 @@ void bind_io(nb::module_& m) {
     m.def("read_mesh_files", &read_files, "paths"_a, "formats"_a, "merge"_a = true,
           "threads"_a = 0,
           "Reads OBJ (format 0) and STL (format 1) files in parallel. Returns (vertices (V, 3), "
-          "faces (F, 3) local to each object, vertex_offsets (O + 1,), face_offsets (O + 1,), "
+          "faces (F, 3) int32 local to each object, vertex_offsets (O + 1,), face_offsets (O + 1,), "
           "object_file (O,), object names (bytes), status (N,) int8 per file (0 read, 1 not found, 2 a "
           "directory, 3 unreadable, 4 corrupt), one message per file ('' when read), the largest "
           "|coordinate| of each object (O,), 0 without vertices).");

@@ -723,41 +723,57 @@ const char* special_kind(mode_t mode) {
     return "not a regular file";
 }
 
-/// What a reader thread keeps from one file to the next: the file's bytes and the parser's and
-/// the merge's working arrays.
+/// A path's folder kept open from one path to the next, so that opening or stat'ing a file
+/// relative to it walks one name instead of the whole path (100,000 files in one folder).
+/// The same file, the same errors: the folder is opened by the same path (symbolic links
+/// followed as the walk would) with O_PATH, which needs no read permission, and any failure to
+/// open it, or a path without a folder and a name, falls back to the whole path.
+class FolderCursor {
+  public:
+    FolderCursor() = default;
+    FolderCursor(const FolderCursor&) = delete;
+    FolderCursor& operator=(const FolderCursor&) = delete;
+    ~FolderCursor() {
+        if (fd_ >= 0) ::close(fd_);
+    }
+
+    /// Where `path` is reached from: (the folder's descriptor, the last name) or (AT_FDCWD,
+    /// the whole path), for the *at system calls.
+    std::pair<int, const char*> locate(const std::string& path) {
+#ifdef O_PATH
+        const size_t slash = path.rfind('/');
+        if (slash != std::string::npos && slash > 0 && slash + 1 < path.size()) {
+            const std::string_view folder(path.data(), slash);
+            if (fd_ < 0 || folder != folder_) {
+                if (fd_ >= 0) ::close(fd_);
+                folder_.assign(folder);
+                fd_ = ::open(folder_.c_str(), O_PATH | O_DIRECTORY | O_CLOEXEC);
+            }
+            if (fd_ >= 0) return {fd_, path.c_str() + slash + 1};
+        }
+#endif
+        return {AT_FDCWD, path.c_str()};
+    }
+
+  private:
+    std::string folder_;  // the folder `fd_` is open on ("" with -1: none)
+    int fd_ = -1;
+};
+
+/// What a reader thread keeps from one file to the next: the file's bytes, the parser's and
+/// the merge's working arrays, and the folder of the last file.
 struct ReadScratch {
     std::vector<char> buffer;
     ObjScratch obj;
     MergeScratch merge;
-    std::string folder;  ///< the folder `folder_fd` is open on ("" with -1: none)
-    int folder_fd = -1;
-    ~ReadScratch() {
-        if (folder_fd >= 0) ::close(folder_fd);
-    }
+    FolderCursor folder;
 };
 
-/// Opens `path` as `open` would, relative to its folder's descriptor when the last file was
-/// in the same folder: the kernel then walks one name instead of the whole path (100,000
-/// files in one folder). The same file, the same errors: the folder is opened by the same
-/// path (symbolic links followed as the walk would) with O_PATH, which needs no read
-/// permission, and any failure to open it falls back to the whole path.
+/// Opens `path` as `open` would, relative to its folder when the last file was in the same
+/// folder (`FolderCursor`).
 int open_in_folder(const std::string& path, int flags, ReadScratch& scratch) {
-#ifdef O_PATH
-    const size_t slash = path.rfind('/');
-    if (slash != std::string::npos && slash > 0 && slash + 1 < path.size()) {
-        const std::string_view folder(path.data(), slash);
-        if (scratch.folder_fd < 0 || folder != scratch.folder) {
-            if (scratch.folder_fd >= 0) ::close(scratch.folder_fd);
-            scratch.folder.assign(folder);
-            scratch.folder_fd =
-                ::open(scratch.folder.c_str(), O_PATH | O_DIRECTORY | O_CLOEXEC);
-        }
-        if (scratch.folder_fd >= 0) return ::openat(scratch.folder_fd, path.c_str() + slash + 1, flags);
-    }
-#else
-    (void)scratch;
-#endif
-    return ::open(path.c_str(), flags);
+    const auto [folder, name] = scratch.folder.locate(path);
+    return ::openat(folder, name, flags);
 }
 
 void read_one(const std::string& path, MeshFormat format, bool merge, ReadScratch& scratch,
@@ -884,8 +900,14 @@ std::vector<PackedStart> packed_starts(const std::vector<MeshFile>& files) {
     return starts;
 }
 
+// A packed face index is an int32: an object's vertices number fewer than 2^31, since each
+// takes at least 8 bytes of its file (an OBJ "v 0 0 0" line; an STL corner, 12 bytes of a
+// 50-byte binary facet or a longer "vertex" line) and no file is over the cap.
+static_assert(defaults::max_mesh_file_bytes / 8 <= std::numeric_limits<std::int32_t>::max(),
+              "a face index of a file within the cap fits an int32");
+
 void pack_mesh_files(std::vector<MeshFile>& files, const std::vector<PackedStart>& starts,
-                     int threads, double* vertices, std::int64_t* faces,
+                     int threads, double* vertices, std::int32_t* faces,
                      std::int64_t* vertex_offsets, std::int64_t* face_offsets,
                      std::int64_t* object_file, double* largest) {
     const long long n = static_cast<long long>(files.size());
@@ -911,9 +933,9 @@ void pack_mesh_files(std::vector<MeshFile>& files, const std::vector<PackedStart
                 if (v_rows != 0)
                     std::memcpy(vertices + 3 * at.vertex, o.vertices.data(),
                                 3 * v_rows * sizeof(double));
-                if (f_rows != 0)
-                    std::memcpy(faces + 3 * at.face, o.faces.data(),
-                                3 * f_rows * sizeof(std::int64_t));
+                std::int32_t* to = faces + 3 * at.face;
+                for (size_t e = 0; e < 3 * f_rows; ++e)
+                    to[e] = static_cast<std::int32_t>(o.faces[e]);
                 at.object += 1;
                 at.vertex += static_cast<std::int64_t>(o.vertices.size() / 3);
                 at.face += static_cast<std::int64_t>(o.faces.size() / 3);
@@ -928,9 +950,11 @@ void file_identities(const std::vector<std::string>& paths, int threads, std::ui
                      std::uint64_t* inode, std::uint8_t* found) {
     const long long n = static_cast<long long>(paths.size());
     parallel_for(n, resolve_threads(threads, n, 256), [&](long long begin, long long end) {
+        FolderCursor cursor;  // stat as `stat` would, relative to the folder of the last path
         for (long long i = begin; i < end; ++i) {
             struct stat info {};
-            const bool ok = ::stat(paths[static_cast<size_t>(i)].c_str(), &info) == 0;
+            const auto [folder, name] = cursor.locate(paths[static_cast<size_t>(i)]);
+            const bool ok = ::fstatat(folder, name, &info, 0) == 0;
             device[i] = ok ? static_cast<std::uint64_t>(info.st_dev) : 0;
             inode[i] = ok ? static_cast<std::uint64_t>(info.st_ino) : 0;
             found[i] = ok ? 1 : 0;

@@ -185,7 +185,7 @@ TEST_CASE("mesh read: files read with kept working arrays are each read alone") 
         const std::vector<PackedStart> starts = packed_starts(copy);
         const PackedStart total = starts.back();
         std::vector<double> vertices(3 * static_cast<size_t>(total.vertex));
-        std::vector<std::int64_t> faces(3 * static_cast<size_t>(total.face));
+        std::vector<std::int32_t> faces(3 * static_cast<size_t>(total.face));
         std::vector<std::int64_t> v_off(static_cast<size_t>(total.object) + 1);
         std::vector<std::int64_t> f_off(v_off.size()), owner(v_off.size() - 1);
         std::vector<double> largest(owner.size());

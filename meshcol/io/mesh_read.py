@@ -438,9 +438,9 @@ def _format_of(source: str) -> MeshFormat:
 
 @dataclass(frozen=True, eq=False)
 class _NativeRead:
-    """What the core's ``read_mesh_files`` returns: every object's vertices and faces packed,
-    with offsets (k + 1 entries for k objects), the file of each object, its name, per file a
-    status and an error text, and per object its largest |coordinate|."""
+    """What the core's ``read_mesh_files`` returns: every object's vertices and faces (int32)
+    packed, with offsets (k + 1 entries for k objects), the file of each object, its name, per
+    file a status and an error text, and per object its largest |coordinate|."""
 
     vertices: np.ndarray
     faces: np.ndarray
@@ -458,7 +458,7 @@ class _NativeRead:
             name=name,
             source=source,
             vertices=self.vertices[self.v_off[k] : self.v_off[k + 1]],
-            faces=self.faces[self.f_off[k] : self.f_off[k + 1]],
+            faces=self.faces[self.f_off[k] : self.f_off[k + 1]].astype(np.int64),
             pose=_EYE.copy(),
         )
 
@@ -530,9 +530,13 @@ def _text(data: bytes) -> str:
 class PackedObjects:
     """One object per file, packed: file ``j``'s vertices are
     ``vertices[v_off[j]:v_off[j + 1]]`` ((V, 3) float64) and its faces
-    ``faces[f_off[j]:f_off[j + 1]]`` ((F, 3) int64, indexing its own vertices), in its frame
-    (no transform); ``largest``, when given, each file's largest |coordinate| (as
-    :meth:`largest` computes it)."""
+    ``faces[f_off[j]:f_off[j + 1]]`` ((F, 3) int32 as the core packs them, or int64, indexing
+    its own vertices), in its frame (no transform); ``largest``, when given, each file's
+    largest |coordinate| (as :meth:`largest` computes it).
+
+    The faces are kept as given; :meth:`arrays` and :meth:`views` give them as int64, a
+    body's type. The core's int32 halves a scene's largest array (100,000 files: 62 of
+    125 MB), held for the bodies few checks ever make."""
 
     def __init__(
         self,
@@ -547,13 +551,17 @@ class PackedObjects:
         self._largest: np.ndarray | None = largest
 
     def arrays(self, j: int) -> tuple[np.ndarray, np.ndarray]:
-        """(vertices, faces) of file ``j``: views, C-contiguous."""
+        """(vertices, faces) of file ``j``, C-contiguous: a view of the vertices, the faces as
+        int64 (a copy of int32 ones)."""
         vo, fo = self.v_off, self.f_off
-        return self.vertices[vo[j] : vo[j + 1]], self.faces[fo[j] : fo[j + 1]]
+        faces = self.faces[fo[j] : fo[j + 1]]
+        return self.vertices[vo[j] : vo[j + 1]], faces.astype(np.int64, copy=False)
 
     def views(self, files: Sequence[int]) -> list[tuple[np.ndarray, np.ndarray]]:
-        """:meth:`arrays` of each of ``files``, in one pass."""
-        vo, fo, vertices, faces = self.v_off, self.f_off, self.vertices, self.faces
+        """:meth:`arrays` of each of ``files``, in one pass: the faces widened to int64 once,
+        each file's a view of that."""
+        vo, fo, vertices = self.v_off, self.f_off, self.vertices
+        faces = self.faces.astype(np.int64, copy=False)
         return [(vertices[vo[j] : vo[j + 1]], faces[fo[j] : fo[j + 1]]) for j in files]
 
     def largest(self) -> np.ndarray:

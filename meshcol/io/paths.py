@@ -82,8 +82,13 @@ def display_paths(
     slash = os.sep == "/"  # posixpath's isabs and split of a plain path, as string methods
     for path in paths:
         text = path if type(path) is str else None if path is None else os.fspath(path)
-        if text is None or not (text[:1] == "/" if slash else os.path.isabs(text)):
-            out.append(display_path(text, posix=posix))
+        if text is None:
+            out.append(None)
+            continue
+        if not (text[:1] == "/" if slash else os.path.isabs(text)):
+            # relative: never rewritten, as display_path keeps it (a manifest's 100,000 mesh
+            # paths are usually relative: no call per path)
+            out.append(text.replace(os.sep, "/") if posix and not slash else text)
             continue
         folder, _, name = text.rpartition("/") if slash else ("", "", "")
         if not folder or folder[-1] == "/":  # the root, a doubled slash, or not posix

@@ -157,13 +157,14 @@ def test_the_cores_packing_is_the_files_objects_in_order_on_any_threads(tmp_path
         else:
             assert a == b
     vertices, faces, v_off, f_off, owner, _, status, errors, largest = one
+    assert faces.dtype == np.int32  # packed narrow; a body's faces are int64 (below)
     assert status.tolist() == [0] * 8 + [1] + [0] * 23 + [4] and errors[8] == b"file not found"
     assert owner.max() < len(paths) - 1  # the refused file gives no object
     want = [(j, body) for j, p in enumerate(paths[:-1]) if j != 8 for body in load_mesh(p)]
     assert owner.tolist() == [j for j, _ in want] and len(v_off) == len(want) + 1
     for k, (_, body) in enumerate(want):
         assert vertices[v_off[k] : v_off[k + 1]].tobytes() == body.vertices.tobytes()
-        assert faces[f_off[k] : f_off[k + 1]].tobytes() == body.faces.tobytes()
+        assert faces[f_off[k] : f_off[k + 1]].astype(np.int64).tobytes() == body.faces.tobytes()
     reduced = np.maximum.reduceat(np.abs(vertices).max(axis=1), v_off[:-1])
     assert largest.tobytes() == reduced.tobytes() and largest.max() == 9e9
     two.write_text(two.read_text().replace("9e9", "-1e12"))  # beyond the limit: named
@@ -209,6 +210,41 @@ def test_files_of_folders_in_any_order_are_each_their_own(tmp_path):
         for k, j in enumerate(owner.tolist()):
             want = points[same.get(order[j], order[j])]
             assert vertices[v_off[k] : v_off[k + 1]].tobytes() == want.tobytes()
+
+
+def test_identities_of_files_of_folders_in_any_order_are_what_stat_gives(tmp_path, monkeypatch):
+    """The core stats each path relative to the folder of the path before it when they share
+    one: paths of three folders interleaved (a folder reached through ``..`` and through a
+    symbolic link, a symbolic link to a file, a loop, a file used as a folder, a missing file
+    and folder, a bare name, a trailing slash) give each what ``os.stat`` gives, on 1 and 2
+    threads."""
+    from meshcol._native import core
+
+    for folder in ("a", "b", "c"):
+        (tmp_path / folder).mkdir()
+        for k in range(3):
+            (tmp_path / folder / f"p{k}.obj").write_text(f"v {k} 0 0\n")
+    os.symlink(tmp_path / "c", tmp_path / "link")
+    os.symlink(tmp_path / "a" / "p1.obj", tmp_path / "b" / "to_a1.obj")
+    os.symlink("loop.obj", tmp_path / "b" / "loop.obj")
+    monkeypatch.chdir(tmp_path / "a")
+    t = os.fspath(tmp_path)
+    order = [f"{t}/a/p0.obj", f"{t}/a/p1.obj", f"{t}/b/p1.obj", f"{t}/b/to_a1.obj"]
+    order += [f"{t}/b/loop.obj", f"{t}/a/../b/p2.obj", f"{t}/link/p2.obj", f"{t}/c/p2.obj"]
+    order += [f"{t}/a/p0.obj/x", f"{t}/none/p0.obj", f"{t}/c/none.obj", "p2.obj", "../b/p0.obj"]
+    order += [f"{t}/a/", f"{t}/a", "/", f"{t}/b/p0.obj", f"{t}/a/p2.obj"]
+    want = []
+    for path in order:
+        try:
+            info = os.stat(path)
+        except OSError:
+            want.append((0, 0, 0))
+        else:
+            want.append((info.st_dev, info.st_ino, 1))
+    assert sum(found for _, _, found in want) == len(order) - 4  # loop, x, two missing
+    for threads in (1, 2):
+        device, inode, found = core.file_identities(order, threads=threads)
+        assert list(zip(device.tolist(), inode.tolist(), found.tolist())) == want
 
 
 def test_formats_found_from_the_ends_of_paths_are_splitexts():

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import random
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -38,6 +39,9 @@ def test_display_paths_are_those_of_display_path_one_by_one(tmp_path, monkeypatc
         str(inner) + "//e.obj",
         str(inner) + "/",
         tmp_path / "work" / "f.obj",
+        "",
+        "../up.obj",
+        Path("rel") / "b.obj",
     ]
     for posix in (False, True):
         assert display_paths(paths, posix=posix) == [display_path(p, posix=posix) for p in paths]

@@ -60,12 +60,13 @@ std::vector<PackedStart> packed_starts(const std::vector<MeshFile>& files);
 
 /// Copies every object of `files` (in file order, each file's in its order) into packed
 /// arrays sized by `packed_starts` (its last entry): `vertices` (3 per vertex), `faces` (3 per
-/// triangle, local to the object), `vertex_offsets` and `face_offsets` (objects + 1 entries,
+/// triangle, local to the object, as int32: half the memory of a scene's largest array, and
+/// every index of a file within `max_mesh_file_bytes` fits), `vertex_offsets` and `face_offsets` (objects + 1 entries,
 /// from 0), `object_file` (the file of each object) and `largest` (the largest |coordinate|
 /// of each object, 0 without vertices; NaN when a coordinate is NaN). On `threads` threads;
 /// each object's vertices and faces are freed once copied (its name is kept).
 void pack_mesh_files(std::vector<MeshFile>& files, const std::vector<PackedStart>& starts,
-                     int threads, double* vertices, std::int64_t* faces,
+                     int threads, double* vertices, std::int32_t* faces,
                      std::int64_t* vertex_offsets, std::int64_t* face_offsets,
                      std::int64_t* object_file, double* largest);
 
