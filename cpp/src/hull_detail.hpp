@@ -62,6 +62,21 @@ struct Frame {
     int face, edge, left;
 };
 
+// A face of the flat construction (quickhull_flat.cpp): Face without its conflict vector,
+// whose points are a chain through the workspace's per-point links instead.
+struct alignas(128) FlatFace {
+    double nx, ny, nz, offset;  // the plane's unit normal and offset (Plane's)
+    double filter, area2;       // and its filter and twice the area
+    double furthest_distance;
+    int v[3];  // point indices, counter-clockwise seen from outside
+    int n[3];  // neighbour across edge v[i] -> v[(i + 1) % 3]
+    int s[3];  // the edge of n[i] that leads back here (its twin)
+    int head, tail;  // the chain of points outside this face (farther than eps), -1 for none
+    int furthest;
+    unsigned visit;
+    bool visible, alive;
+};
+
 struct Workspace {
     std::vector<Vec3> p;  // scaled points
     double eps = 0.0;
@@ -87,6 +102,10 @@ struct Workspace {
     std::vector<int> unique_index;
     std::vector<int> filtered, filter_extremes;  // interior_filter's
     std::vector<double> filter_planes;
+    // the flat construction's (quickhull_flat.cpp)
+    std::vector<FlatFace> flat_faces;
+    std::vector<int> next_point;  // per point: the next point of its face's chain, -1 at the end
+    std::vector<int> chain_heads;  // per visible face of a step: its chain
 };
 
 // A triangulated 3-D hull: triangles of point indices, their neighbours and their planes
@@ -182,6 +201,19 @@ inline Plane face_plane(const Vec3& a, const Vec3& b, const Vec3& c) {
     plane.filter = len >= 1e-140 ? kPlaneFilter : INFINITY;
     return plane;
 }
+
+/// The starting tetrahedron of `subset` (quickhull.cpp): corner[0 .. 4) with the faces
+/// (0 1 2), (0 3 1), (1 3 2) and (2 3 0) outward, or DEGENERATE.
+Build start_tetrahedron(const std::vector<Vec3>& p, double eps, const std::vector<int>& subset,
+                        int corner[4]);
+
+/// Quickhull of the points `subset` of w.p on flat storage (quickhull_flat.cpp): the same
+/// steps, the same triangulation and the same result as quickhull_reference, with less work.
+Build quickhull_flat(Workspace& w, const std::vector<int>& subset, Triangulation& out);
+
+/// Quickhull of the points `subset` of w.p as it was built before quickhull_flat
+/// (quickhull.cpp), without the interior filter: the tests' reference.
+Build quickhull_reference(Workspace& w, const std::vector<int>& subset, Triangulation& out);
 
 /// The 3-D hull of the points `subset` of w.p (quickhull.cpp): large inputs first lose their
 /// clearly interior points (the interior filter), then Quickhull.

@@ -358,15 +358,14 @@ void cone(Workspace& w, int q) {
         if (!w.faces[w.new_faces[k]].conflicts.empty()) w.pending.push_back(w.new_faces[k]);
 }
 
-Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulation& out) {
-    const std::vector<Vec3>& p = w.p;
-    w.face_count = 0;
-    w.free_top = 0;
-    if (w.free_faces.empty()) w.free_faces.resize(16);
-    w.pending.clear();
-    if (subset.size() < 4) return Build::DEGENERATE;
-    // Starting tetrahedron: the farthest pair of the axis extremes, the point farthest from
-    // their line, the point farthest from that plane.
+}  // namespace
+
+// The starting tetrahedron of `subset`: the farthest pair of the axis extremes, the point
+// farthest from their line, the point farthest from that plane; into corner[0 .. 4) so that
+// (0 1 2), (0 3 1), (1 3 2) and (2 3 0) face outward. DEGENERATE when the points span no
+// tetrahedron (by more than eps).
+Build start_tetrahedron(const std::vector<Vec3>& p, double eps, const std::vector<int>& subset,
+                        int corner[4]) {
     int extreme[6];
     for (int k = 0; k < 6; ++k) extreme[k] = subset[0];
     for (int i : subset)
@@ -398,10 +397,27 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
         const double h = std::fabs(dot(n, p[i] - p[a]));
         if (h > best) best = h, d = i;
     }
-    if (d < 0 || best <= w.eps) return Build::DEGENERATE;
+    if (d < 0 || best <= eps) return Build::DEGENERATE;
     const int o = orientation(p[a], p[b], p[c], p[d]);
     if (o == 0) return Build::DEGENERATE;
     if (o > 0) std::swap(b, c);  // d below abc: abc, adb, bdc, cda face outward
+    corner[0] = a, corner[1] = b, corner[2] = c, corner[3] = d;
+    return Build::OK;
+}
+
+namespace {
+
+Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulation& out) {
+    const std::vector<Vec3>& p = w.p;
+    w.face_count = 0;
+    w.free_top = 0;
+    if (w.free_faces.empty()) w.free_faces.resize(16);
+    w.pending.clear();
+    if (subset.size() < 4) return Build::DEGENERATE;
+    int corner[4];
+    const Build started = start_tetrahedron(p, w.eps, subset, corner);
+    if (started != Build::OK) return started;
+    const int a = corner[0], b = corner[1], c = corner[2], d = corner[3];
     int start[4] = {new_face(w, a, b, c), new_face(w, a, d, b), new_face(w, b, d, c),
                     new_face(w, c, d, a)};
     link_faces(w, start, 4);
@@ -596,11 +612,15 @@ void interior_filter(Workspace& w, const std::vector<int>& subset, std::vector<i
 
 }  // namespace
 
+Build quickhull_reference(Workspace& w, const std::vector<int>& subset, Triangulation& out) {
+    return quickhull_points(w, subset, out);
+}
+
 Build quickhull(Workspace& w, const std::vector<int>& subset, Triangulation& out) {
     if (subset.size() < kFilterMinPoints)
-        return quickhull_points(w, subset, out);
+        return quickhull_flat(w, subset, out);
     interior_filter(w, subset, w.filtered);
-    return quickhull_points(w, w.filtered, out);
+    return quickhull_flat(w, w.filtered, out);
 }
 
 }  // namespace hull_detail

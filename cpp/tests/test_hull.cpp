@@ -1,4 +1,5 @@
 // Quickhull (hull.hpp): known hulls, the flatness rule's statuses, packing.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -11,6 +12,7 @@
 #include "fixtures.hpp"
 #include "hull_detail.hpp"
 #include "hull_orientation.hpp"
+#include "meshcol/defaults.hpp"
 #include "meshcol/hull.hpp"
 
 using namespace meshcol;
@@ -230,6 +232,45 @@ TEST_CASE("hull: packing on threads equals packing one shape at a time, byte for
         CHECK(same_bytes(alone.edge_pairs.data(), one.edge_pairs.data() + 2 * e0,
                          alone.edge_pairs.size()));
     }
+}
+
+TEST_CASE("hull: the flat Quickhull builds the reference's triangulation, bit for bit") {
+    // quickhull_flat replays quickhull_reference's steps on other storage: the same
+    // triangles, neighbours, planes and edges, in the same order, on every family (and on
+    // near-spheres whose faces' sides need the exact orientation).
+    using hull_detail::Build;
+    using hull_detail::Triangulation;
+    using hull_detail::Workspace;
+    std::uint64_t state = 19;
+    int built = 0;
+    for (int h = 0; h < 240; ++h) {
+        const int family = h % 6;
+        const int n = 4 + (h * 37) % 700;
+        std::vector<Vec3> p = family_points(family == 5 ? 0 : family, n, state);
+        if (family == 5)  // a sphere with noise near the plane filter's bound
+            for (Vec3& q : p) q = q / norm(q) + Vec3{1e-14, -1e-14, 1e-14} * (q.x * 7.0 - q.y);
+        Workspace w;
+        double max_abs = 0.0;
+        for (const Vec3& q : p) max_abs = std::max(max_abs, meshcol::max_abs(q));
+        for (const Vec3& q : p) w.p.push_back(q / 2.0);  // into (-1, 1)^3, exactly
+        w.eps = defaults::hull_relative_tolerance * max_abs / 2.0;
+        w.mark.assign(p.size(), 0);
+        std::vector<int> subset(p.size());
+        for (size_t i = 0; i < subset.size(); ++i) subset[i] = static_cast<int>(i);
+        Triangulation reference, flat;
+        const Build a = hull_detail::quickhull_reference(w, subset, reference);
+        const Build b = hull_detail::quickhull_flat(w, subset, flat);
+        CHECK(a == b);
+        if (a != Build::OK || b != Build::OK) continue;
+        ++built;
+        CHECK(same_bytes(reference.tri, flat.tri));
+        CHECK(same_bytes(reference.neighbor, flat.neighbor));
+        CHECK(same_bytes(reference.normal, flat.normal));
+        CHECK(same_bytes(reference.offset, flat.offset));
+        CHECK(same_bytes(reference.area2, flat.area2));
+        CHECK(same_bytes(reference.edges, flat.edges));
+    }
+    CHECK(built >= 150);
 }
 
 TEST_CASE("hull: every point of an ellipsoid is a vertex, every vertex list sorted and padded") {
