@@ -62,11 +62,11 @@ void planes_of(Workspace& w, const Triangulation& t, Planes& out) {
 }
 
 // Principal axes of points (Jacobi eigenvectors of their covariance), largest spread first.
-void principal_axes(const Vec3* p, const std::vector<int>& idx, const Vec3& centre, Vec3 axes[3]) {
+void principal_axes(const Vec3* p, long long n, const Vec3& centre, Vec3 axes[3]) {
     // The covariance's six distinct sums (d[r] * d[c] and d[c] * d[r] are the same product,
     // added in the same order: the mirrored entries are the same bits).
     double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
-    for (int i : idx) {
+    for (long long i = 0; i < n; ++i) {
         const Vec3 d = p[i] - centre;
         xx += d.x * d.x, xy += d.x * d.y, xz += d.x * d.z;
         yy += d.y * d.y, yz += d.y * d.z, zz += d.z * d.z;
@@ -159,31 +159,21 @@ std::vector<int> polygon(const Workspace& w, const std::vector<int>& idx, const 
     return ring;
 }
 
-// The hull of points already checked finite and in range.
-void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) {
-    Hull& hull = analysis.hull;
-    double max_abs = 0.0;
-    for (long long i = 0; i < n; ++i) {
-        const Vec3& q = points[i];
-        const double m = std::max(std::fabs(q.x), std::max(std::fabs(q.y), std::fabs(q.z)));
-        max_abs = m > max_abs ? m : max_abs;
-    }
-    // A power of two scales exactly: the hull of the scaled points is the hull of the points.
+// The points scaled by a power of two into (-1, 1)^3 (w.p) and what hull_with's pass that
+// wrote them found: the scale's exponent, their bounding box and their sum.
+struct Scaled {
+    double max_abs = 0.0;  // of the points, before scaling
     int exponent = 0;
-    if (max_abs > 0.0) std::frexp(max_abs, &exponent);
-    const double to_unit = std::ldexp(1.0, -exponent);
-    w.p.resize(static_cast<size_t>(n));
-    Vec3 lo = points[0] * to_unit, hi = lo, sum{};
-    for (long long i = 0; i < n; ++i) {
-        const Vec3 q = points[i] * to_unit;
-        w.p[i] = q;
-        for (int k = 0; k < 3; ++k) {
-            lo[k] = q[k] < lo[k] ? q[k] : lo[k];
-            hi[k] = q[k] > hi[k] ? q[k] : hi[k];
-        }
-        sum += q;
-    }
-    w.eps = defaults::hull_relative_tolerance * std::ldexp(max_abs, -exponent);
+    Vec3 lo, hi, sum;  // scaled
+};
+
+// The hull of points already checked finite and in range, w.p holding them scaled.
+void compute(const Vec3* points, long long n, const Scaled& scaled, Workspace& w,
+             Analysis& analysis) {
+    Hull& hull = analysis.hull;
+    const int exponent = scaled.exponent;
+    const Vec3 lo = scaled.lo, hi = scaled.hi, sum = scaled.sum;
+    w.eps = defaults::hull_relative_tolerance * std::ldexp(scaled.max_abs, -exponent);
     w.mark.assign(static_cast<size_t>(n), 0);
     w.stamp = 0;
     const double diagonal = norm(hi - lo);
@@ -206,7 +196,7 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
     // The flatness rule: widths along the principal axes against the diagonal.
     const Vec3 centre = sum / static_cast<double>(n);
     Vec3 axes[3];
-    principal_axes(w.p.data(), all, centre, axes);
+    principal_axes(w.p.data(), n, centre, axes);
     // The three widths in one pass.
     double low[3] = {INFINITY, INFINITY, INFINITY}, high[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (long long i = 0; i < n; ++i) {
@@ -306,21 +296,28 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
             local.assign(static_cast<size_t>(n), -1);
             for (const auto& tri : t.tri)
                 for (int v : tri) local[v] = 0;
+            verts.resize(static_cast<size_t>(n));
+            int* vertex = verts.data();
+            int k = 0;
             for (long long i = 0; i < n; ++i)
                 if (local[i] == 0) {
-                    local[i] = static_cast<int>(verts.size());
-                    verts.push_back(static_cast<int>(i));
+                    local[i] = k;
+                    vertex[k++] = static_cast<int>(i);
                 }
+            verts.resize(static_cast<size_t>(k));
             const size_t m = t.tri.size();
-            hull.faces.resize(m);
-            for (size_t i = 0; i < m; ++i) {
-                const auto& tri = t.tri[i];
-                hull.faces[i] = {local[tri[0]], local[tri[1]], local[tri[2]]};
+            if (analysis.geometry) {  // the packing reads t.tri through w.local instead
+                hull.faces.resize(m);
+                for (size_t i = 0; i < m; ++i) {
+                    const auto& tri = t.tri[i];
+                    hull.faces[i] = {local[tri[0]], local[tri[1]], local[tri[2]]};
+                }
             }
             // Each plane's normal is that of its largest triangle; a plane per triangle
-            // (groups in triangle order, planes_of) is the triangles' normals.
+            // (groups in triangle order, planes_of) is the triangles' normals (which the
+            // packing reads from t.normal).
             if (pl.groups == static_cast<int>(m)) {
-                hull.plane_normals.assign(t.normal.begin(), t.normal.end());
+                if (analysis.geometry) hull.plane_normals.assign(t.normal.begin(), t.normal.end());
             } else {
                 hull.plane_normals.assign(static_cast<size_t>(pl.groups), Vec3{});
                 std::vector<double>& largest = w.largest;
@@ -389,42 +386,50 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
     hull.vertices = {smallest()};
 }
 
-// Status of points that have no hull at all, or OK when they can have one.
-HullStatus screen(const Vec3* points, long long n) {
-    if (n <= 0) return HullStatus::EMPTY;
-    if (n > INT_MAX) return HullStatus::FAILED;  // point indices are ints
-    bool huge = false;
-    for (long long i = 0; i < n; ++i) {
-        if (!is_finite(points[i])) return HullStatus::NON_FINITE;
-        huge = huge || meshcol::max_abs(points[i]) > defaults::hull_max_abs_coordinate;
-    }
-    return huge ? HullStatus::OVERFLOW : HullStatus::OK;
-}
-
-
 }  // namespace
 
 // The hull of `points` into analysis.hull (and its triangulation and planes, 3-D).
 void hull_with(const Vec3* points, long long n, Workspace& w, Analysis& analysis) {
     analysis.reset();
     Hull& hull = analysis.hull;
-    hull.status = screen(points, n);
-    if (hull.status != HullStatus::OK) return;
+    if (n <= 0) {
+        hull.status = HullStatus::EMPTY;
+        return;
+    }
+    if (n > INT_MAX) {  // point indices are ints
+        hull.status = HullStatus::FAILED;
+        return;
+    }
     // Sorted, without exact duplicates (-0.0 as 0.0), the points give the same hull in any
     // order: equal point sets, equal triangulations (decomposition parts rely on it).
     // Sorted as 16-byte keys: x as an integer of the same order (the sign bit flipped for
     // positive numbers, every bit for negative ones; -0.0 is 0.0 by then), ties by y, z and
     // index. A total order: any sort gives the order of the comparison of whole points.
+    // The same pass screens the points (non-finite: no hull; beyond the largest coordinate:
+    // none either) and finds their largest coordinate, the scale's.
     std::vector<SortKey>& keys = w.sort_keys;
     keys.resize(static_cast<size_t>(n));
-    const Vec3 zero{0.0, 0.0, 0.0};
+    bool finite = true, huge = false;
+    double largest = 0.0;
     for (long long i = 0; i < n; ++i) {
-        const double x = points[i].x + 0.0;
+        const Vec3& q = points[i];
+        finite &= is_finite(q);
+        // std::max, not fmax (a libm call here): the same for finite coordinates, and a
+        // non-finite one has no hull whatever m is.
+        const double m = std::max(std::fabs(q.x), std::max(std::fabs(q.y), std::fabs(q.z)));
+        huge |= m > defaults::hull_max_abs_coordinate;
+        largest = m > largest ? m : largest;
+        const double x = q.x + 0.0;
         std::uint64_t bits;
         std::memcpy(&bits, &x, sizeof bits);
         constexpr std::uint64_t sign = std::uint64_t{1} << 63;
         keys[i] = {(bits & sign) ? ~bits : (bits | sign), static_cast<int>(i)};
     }
+    if (!finite || huge) {
+        hull.status = finite ? HullStatus::OVERFLOW : HullStatus::NON_FINITE;
+        return;
+    }
+    hull.status = HullStatus::OK;
     std::sort(keys.begin(), keys.end(), [points](const SortKey& a, const SortKey& b) {
         if (a.x != b.x) return a.x < b.x;
         const Vec3& p = points[a.index];
@@ -433,17 +438,44 @@ void hull_with(const Vec3* points, long long n, Workspace& w, Analysis& analysis
         if (p.z != q.z) return p.z < q.z;
         return a.index < b.index;
     });
-    w.unique_points.clear();
-    w.unique_index.clear();
-    for (long long i = 0; i < n; ++i) {
+    // The unique points in order, and in the same pass scaled into w.p by a power of two
+    // (exact: the hull of the scaled points is the hull of the points; a duplicate has the
+    // largest coordinate of its twin), with their bounding box and sum.
+    Scaled scaled;
+    scaled.max_abs = largest;
+    if (largest > 0.0) std::frexp(largest, &scaled.exponent);
+    const double to_unit = std::ldexp(1.0, -scaled.exponent);
+    const auto count = static_cast<size_t>(n);
+    if (w.unique_points.size() < count) w.unique_points.resize(count);
+    if (w.unique_index.size() < count) w.unique_index.resize(count);
+    if (w.p.size() < count) w.p.resize(count);
+    Vec3* unique = w.unique_points.data();
+    int* index = w.unique_index.data();
+    Vec3* p = w.p.data();
+    const Vec3 zero{0.0, 0.0, 0.0};
+    Vec3 lo = (points[keys[0].index] + zero) * to_unit, hi = lo, sum{};
+    size_t m = 0;
+    for (size_t i = 0; i < count; ++i) {
         const int k = keys[i].index;
         const Vec3 q = points[k] + zero;
-        if (i > 0 && !lexicographic_less(w.unique_points.back(), q)) continue;
-        w.unique_points.push_back(q);
-        w.unique_index.push_back(k);
+        if (m > 0 && !lexicographic_less(unique[m - 1], q)) continue;
+        unique[m] = q;
+        index[m] = k;
+        const Vec3 s = q * to_unit;
+        p[m] = s;
+        for (int c = 0; c < 3; ++c) {
+            lo[c] = s[c] < lo[c] ? s[c] : lo[c];
+            hi[c] = s[c] > hi[c] ? s[c] : hi[c];
+        }
+        sum += s;
+        ++m;
     }
-    compute(w.unique_points.data(), static_cast<long long>(w.unique_points.size()), w, analysis);
-    for (int& v : hull.vertices) v = w.unique_index[v];
+    w.unique_points.resize(m);
+    w.unique_index.resize(m);
+    w.p.resize(m);
+    scaled.lo = lo, scaled.hi = hi, scaled.sum = sum;
+    compute(unique, static_cast<long long>(m), scaled, w, analysis);
+    for (int& v : hull.vertices) v = index[v];
 }
 
 }  // namespace hull_detail

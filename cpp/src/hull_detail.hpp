@@ -77,6 +77,12 @@ struct alignas(128) FlatFace {
     bool visible, alive;
 };
 
+// An edge of a triangulation, once: edge e of triangle i (from tri[i][e] to tri[i][e + 1]),
+// whose neighbour j > i has it as its edge k (-1: no edge of j leads back to i).
+struct TriangulationEdge {
+    int i, e, j, k;
+};
+
 struct Workspace {
     std::vector<Vec3> p;  // scaled points
     double eps = 0.0;
@@ -106,6 +112,7 @@ struct Workspace {
     std::vector<FlatFace> flat_faces;
     std::vector<int> next_point;  // per point: the next point of its face's chain, -1 at the end
     std::vector<int> chain_heads;  // per visible face of a step: its chain
+    std::vector<TriangulationEdge> edge_scratch;  // the compaction's edges before their count
 };
 
 // A triangulated 3-D hull: triangles of point indices, their neighbours and their planes
@@ -113,12 +120,6 @@ struct Workspace {
 // The corner after corner e of a triangle (a table: `e == 2 ? 0 : e + 1` compiles to a branch
 // that mispredicts when e follows no pattern).
 inline constexpr int kNextCorner[3] = {1, 2, 0};
-
-// An edge of a triangulation, once: edge e of triangle i (from tri[i][e] to tri[i][e + 1]),
-// whose neighbour j > i has it as its edge k (-1: no edge of j leads back to i).
-struct TriangulationEdge {
-    int i, e, j, k;
-};
 
 struct Triangulation {
     std::vector<std::array<int, 3>> tri;
@@ -231,8 +232,10 @@ struct Analysis {
     Triangulation t, previous;
     Planes pl;
     Hull hull;
-    /// Whether a 3-D hull gets its per-face normals, offsets and planes, its volume and its
-    /// area (the packing reads none of them: pack_polytopes turns this off).
+    /// Whether a 3-D hull gets its faces, its per-face normals, offsets and planes, its volume
+    /// and its area (pack_polytopes turns this off: it reads none of them, and takes the faces
+    /// from t.tri through Workspace::local, each point's vertex index). Without it, a hull
+    /// whose every triangle is its own plane leaves plane_normals empty: they are t.normal.
     bool geometry = true;
 
     void reset() {

@@ -394,19 +394,21 @@ void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
         s.pairs.resize(t.edges.size());
         out.edges.resize(edges_before + 2 * t.edges.size());
         std::int32_t* e = out.edges.data() + edges_before;
+        const int* local = w.local.data();  // hull_with's vertex index of each point
         size_t kept = 0;
         for (size_t g = 0; g < t.edges.size(); ++g) {
             const TriangulationEdge& edge = t.edges[g];
-            const auto& face = hull.faces[edge.i];
-            const int a = face[edge.e], b = face[kNextCorner[edge.e]];
+            const auto& tri = t.tri[edge.i];
+            const int a = local[tri[edge.e]], b = local[tri[kNextCorner[edge.e]]];
             s.pairs[g] = {a, b};
             e[2 * kept] = a, e[2 * kept + 1] = b;
             kept += pl.group[edge.i] != pl.group[edge.j];  // no branch: no pattern
         }
         out.edges.resize(edges_before + 2 * kept);
         adjacency_from_edges(k, s, out);
-        faces = unique_directions(hull.plane_normals.data(), hull.plane_normals.size(), true, s,
-                                  out.faces);
+        const bool own_planes = pl.groups == static_cast<int>(t.tri.size());
+        const std::vector<Vec3>& normals = own_planes ? t.normal : hull.plane_normals;
+        faces = unique_directions(normals.data(), normals.size(), true, s, out.faces);
     }
     out.vertex_counts.push_back(static_cast<std::int64_t>(out.vertices.size() - vertices_before) / 3);
     out.face_counts.push_back(faces);

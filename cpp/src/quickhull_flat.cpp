@@ -357,8 +357,10 @@ Build quickhull_flat(Workspace& w, const std::vector<int>& subset, Triangulation
     out.normal.resize(m);
     out.offset.resize(m);
     out.area2.resize(m);
-    out.edges.resize(3 * static_cast<size_t>(m));
-    TriangulationEdge* edges = out.edges.data();
+    // The edges into scratch that only grows, then copied: out.edges shrinks to the count,
+    // and growing it again for the next hull would zero what is about to be written.
+    if (w.edge_scratch.size() < 3 * static_cast<size_t>(m)) w.edge_scratch.resize(3 * static_cast<size_t>(m));
+    TriangulationEdge* edges = w.edge_scratch.data();
     size_t count = 0;
     for (size_t i = 0; i < s.face_count; ++i) {
         const FlatFace& f = faces[i];
@@ -377,7 +379,7 @@ Build quickhull_flat(Workspace& w, const std::vector<int>& subset, Triangulation
             count += j > t;
         }
     }
-    out.edges.resize(count);
+    out.edges.assign(edges, edges + count);
     return Build::OK;
 }
 
