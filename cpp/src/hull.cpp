@@ -32,9 +32,8 @@ void planes_of(Workspace& w, const Triangulation& t, Planes& out) {
     // The triangles' planes are Quickhull's (t.normal, t.offset, t.area2).
     // Neighbours are coplanar when each one's far corner lies within eps of the other's
     // plane; coplanar groups are the connected components (one plane, one SAT normal).
+    // The union-find's parents are set up at the first merge (a smooth hull has none).
     std::vector<int>& parent = w.parent;
-    parent.resize(m);
-    std::iota(parent.begin(), parent.end(), 0);
     constexpr int kFar[3] = {2, 0, 1};  // the corner opposite edge e
     bool merged = false;
     for (const TriangulationEdge& g : t.edges) {
@@ -43,7 +42,13 @@ void planes_of(Workspace& w, const Triangulation& t, Planes& out) {
         const int far_i = t.tri[i][kFar[g.e]], far_j = t.tri[j][kFar[g.k]];
         const bool coplanar = std::fabs(dot(t.normal[i], w.p[far_j]) - t.offset[i]) <= w.eps &&
                               std::fabs(dot(t.normal[j], w.p[far_i]) - t.offset[j]) <= w.eps;
-        if (coplanar) parent[find_root(parent, j)] = find_root(parent, i), merged = true;
+        if (!coplanar) continue;
+        if (!merged) {
+            parent.resize(m);
+            std::iota(parent.begin(), parent.end(), 0);
+            merged = true;
+        }
+        parent[find_root(parent, j)] = find_root(parent, i);
     }
     out.group.resize(m);
     if (!merged) {  // every triangle its own plane (a smooth hull): the groups in order

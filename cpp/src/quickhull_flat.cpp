@@ -204,7 +204,6 @@ void cone(Flat& s, Workspace& w, int q) {
         s.faces = w.flat_faces.data();
     }
     if (w.new_faces.size() < h) w.new_faces.resize(2 * h);
-    if (w.new_planes.size() < 4 * h) w.new_planes.resize(8 * h);
     int* ids = w.new_faces.data();
     // Slots: the free list from its end, then fresh ones (quickhull.cpp's allocate_faces).
     {
@@ -215,7 +214,6 @@ void cone(Flat& s, Workspace& w, int q) {
         s.free_top -= reused;
         s.face_count = static_cast<size_t>(fresh);
     }
-    double* __restrict planes = w.new_planes.data();
     const HorizonEdge* __restrict edges = w.edges.data();
     FlatFace* __restrict faces = s.faces;
     int previous = ids[h - 1];
@@ -229,8 +227,6 @@ void cone(Flat& s, Workspace& w, int q) {
         f.s[0] = he.slot, f.s[1] = 2, f.s[2] = 1;
         faces[he.outside].n[he.slot] = id;
         faces[he.outside].s[he.slot] = 0;
-        double* plane = planes + 4 * k;
-        plane[0] = f.nx, plane[1] = f.ny, plane[2] = f.nz, plane[3] = f.offset;
         previous = id;
     }
     const double eps = s.eps;
@@ -246,8 +242,8 @@ void cone(Flat& s, Workspace& w, int q) {
             size_t k = 0;
             double d = 0.0;
             for (; k < h; ++k) {
-                const double* e = planes + 4 * k;
-                d = (e[0] * px.x + e[1] * px.y + e[2] * px.z) - e[3];
+                const FlatFace& e = faces[ids[k]];
+                d = (e.nx * px.x + e.ny * px.y + e.nz * px.z) - e.offset;
                 if (d > eps) break;
             }
             if (k < h) {
