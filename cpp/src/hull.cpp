@@ -17,56 +17,7 @@
 
 namespace meshcol {
 namespace hull_detail {
-namespace {
 
-int find_root(std::vector<int>& parent, int i) {
-    while (parent[i] != i) {
-        parent[i] = parent[parent[i]];
-        i = parent[i];
-    }
-    return i;
-}
-
-void planes_of(Workspace& w, const Triangulation& t, Planes& out) {
-    const size_t m = t.tri.size();
-    // The triangles' planes are Quickhull's (t.normal, t.offset, t.area2).
-    // Neighbours are coplanar when each one's far corner lies within eps of the other's
-    // plane; coplanar groups are the connected components (one plane, one SAT normal).
-    // The union-find's parents are set up at the first merge (a smooth hull has none).
-    std::vector<int>& parent = w.parent;
-    constexpr int kFar[3] = {2, 0, 1};  // the corner opposite edge e
-    bool merged = false;
-    for (const TriangulationEdge& g : t.edges) {
-        if (g.k < 0) continue;
-        const int i = g.i, j = g.j;
-        const int far_i = t.tri[i][kFar[g.e]], far_j = t.tri[j][kFar[g.k]];
-        const bool coplanar = std::fabs(dot(t.normal[i], w.p[far_j]) - t.offset[i]) <= w.eps &&
-                              std::fabs(dot(t.normal[j], w.p[far_i]) - t.offset[j]) <= w.eps;
-        if (!coplanar) continue;
-        if (!merged) {
-            parent.resize(m);
-            std::iota(parent.begin(), parent.end(), 0);
-            merged = true;
-        }
-        parent[find_root(parent, j)] = find_root(parent, i);
-    }
-    out.group.resize(m);
-    if (!merged) {  // every triangle its own plane (a smooth hull): the groups in order
-        std::iota(out.group.begin(), out.group.end(), 0);
-        out.groups = static_cast<int>(m);
-        return;
-    }
-    std::vector<int>& id = w.id;
-    id.assign(m, -1);
-    out.groups = 0;
-    for (size_t i = 0; i < m; ++i) {
-        const int r = find_root(parent, static_cast<int>(i));
-        if (id[r] < 0) id[r] = out.groups++;
-        out.group[i] = id[r];
-    }
-}
-
-// Principal axes of points (Jacobi eigenvectors of their covariance), largest spread first.
 void principal_axes(const Vec3* p, long long n, const Vec3& centre, Vec3 axes[3]) {
     // The covariance's six distinct sums (d[r] * d[c] and d[c] * d[r] are the same product,
     // added in the same order: the mirrored entries are the same bits).
@@ -113,6 +64,86 @@ void principal_axes(const Vec3* p, long long n, const Vec3& centre, Vec3 axes[3]
         const int j = order[k];
         axes[k] = Vec3{v[0][j], v[1][j], v[2][j]};
         axes[k] = axes[k] / norm(axes[k]);
+    }
+}
+
+int flatness_dimension(const Vec3* p, long long n, const Vec3& centre, const Vec3 axes[3],
+                       double diagonal) {
+    // The three widths in one pass.
+    double low[3] = {INFINITY, INFINITY, INFINITY}, high[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (long long i = 0; i < n; ++i) {
+        const Vec3 d = p[i] - centre;
+        for (int k = 0; k < 3; ++k) {
+            const double t = dot(d, axes[k]);
+            low[k] = t < low[k] ? t : low[k];
+            high[k] = t > high[k] ? t : high[k];
+        }
+    }
+    int dim = 0;
+    for (int k = 0; k < 3; ++k)
+        if (high[k] - low[k] > defaults::flat_relative_tolerance * diagonal) ++dim;
+    return dim;
+}
+
+// For a unit u along which the points span a width w, write each edge from the first corner
+// as e_i = (e_i . u) u + f_i, f_i orthogonal to u, |e_i . u| <= w: the determinant is
+// trilinear and vanishes on three vectors of a plane or on u twice, so |det| <= 3 w D^2 (D the
+// points' diameter, at most the diagonal), and w >= |det| / (3 D^2). The margins: the points
+// are scaled below 1, so det rounds by under 1e-13 and a rule's width (along axes of unit
+// length within rounding) by under 1e-14; the factor 2 covers the rounded diagonal.
+bool clearly_solid(const Vec3* p, const int corner[4], double diagonal) {
+    const Vec3 a = p[corner[0]];
+    const double det = dot(p[corner[1]] - a, cross(p[corner[2]] - a, p[corner[3]] - a));
+    const double width = defaults::flat_relative_tolerance * diagonal + 1e-12;
+    return std::fabs(det) > 2.0 * 3.0 * diagonal * diagonal * width + 1e-12;
+}
+
+namespace {
+
+int find_root(std::vector<int>& parent, int i) {
+    while (parent[i] != i) {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    return i;
+}
+
+void planes_of(Workspace& w, const Triangulation& t, Planes& out) {
+    const size_t m = t.tri.size();
+    // The triangles' planes are Quickhull's (t.normal, t.offset, t.area2).
+    // Neighbours are coplanar when each one's far corner lies within eps of the other's
+    // plane; coplanar groups are the connected components (one plane, one SAT normal).
+    // The union-find's parents are set up at the first merge (a smooth hull has none).
+    std::vector<int>& parent = w.parent;
+    constexpr int kFar[3] = {2, 0, 1};  // the corner opposite edge e
+    bool merged = false;
+    for (const TriangulationEdge& g : t.edges) {
+        if (g.k < 0) continue;
+        const int i = g.i, j = g.j;
+        const int far_i = t.tri[i][kFar[g.e]], far_j = t.tri[j][kFar[g.k]];
+        const bool coplanar = std::fabs(dot(t.normal[i], w.p[far_j]) - t.offset[i]) <= w.eps &&
+                              std::fabs(dot(t.normal[j], w.p[far_i]) - t.offset[j]) <= w.eps;
+        if (!coplanar) continue;
+        if (!merged) {
+            parent.resize(m);
+            std::iota(parent.begin(), parent.end(), 0);
+            merged = true;
+        }
+        parent[find_root(parent, j)] = find_root(parent, i);
+    }
+    out.group.resize(m);
+    if (!merged) {  // every triangle its own plane (a smooth hull): the groups in order
+        std::iota(out.group.begin(), out.group.end(), 0);
+        out.groups = static_cast<int>(m);
+        return;
+    }
+    std::vector<int>& id = w.id;
+    id.assign(m, -1);
+    out.groups = 0;
+    for (size_t i = 0; i < m; ++i) {
+        const int r = find_root(parent, static_cast<int>(i));
+        if (id[r] < 0) id[r] = out.groups++;
+        out.group[i] = id[r];
     }
 }
 
@@ -198,23 +229,25 @@ void compute(const Vec3* points, long long n, const Scaled& scaled, Workspace& w
         hull.vertices = {smallest()};
         return;
     }
-    // The flatness rule: widths along the principal axes against the diagonal.
+    // The flatness rule: widths along the principal axes against the diagonal. The axes are
+    // found when a rule needs them (the same bits whenever).
     const Vec3 centre = sum / static_cast<double>(n);
     Vec3 axes[3];
-    principal_axes(w.p.data(), n, centre, axes);
-    // The three widths in one pass.
-    double low[3] = {INFINITY, INFINITY, INFINITY}, high[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (long long i = 0; i < n; ++i) {
-        const Vec3 d = w.p[i] - centre;
-        for (int k = 0; k < 3; ++k) {
-            const double t = dot(d, axes[k]);
-            low[k] = t < low[k] ? t : low[k];
-            high[k] = t > high[k] ? t : high[k];
-        }
+    bool have_axes = false;
+    auto principal = [&]() {
+        if (!have_axes) principal_axes(w.p.data(), n, centre, axes);
+        have_axes = true;
+    };
+    // Quickhull's starting tetrahedron first, when Quickhull starts from it (the interior
+    // filter leaves the input whole): clearly solid, it decides the rule without the axes.
+    int start[4];
+    const bool started = n >= 4 && static_cast<size_t>(n) < kFilterMinPoints &&
+                         start_tetrahedron(w.p, w.eps, all, start) == Build::OK;
+    int dim = 3;
+    if (!started || !clearly_solid(w.p.data(), start, diagonal)) {
+        principal();
+        dim = flatness_dimension(w.p.data(), n, centre, axes, diagonal);
     }
-    int dim = 0;
-    for (int k = 0; k < 3; ++k)
-        if (high[k] - low[k] > defaults::flat_relative_tolerance * diagonal) ++dim;
     if (dim == 3) {
         Triangulation& t = analysis.t;
         Triangulation& previous = analysis.previous;
@@ -226,7 +259,7 @@ void compute(const Vec3* points, long long n, const Scaled& scaled, Workspace& w
         std::vector<int>& dropped = w.dropped;
         removed.clear();
         for (int run = 0; run <= defaults::hull_max_reruns; ++run) {
-            const Build b = quickhull(w, subset, t);
+            const Build b = quickhull(w, subset, t, run == 0 && started ? start : nullptr);
             if (b == Build::FAILED && !have) {
                 hull.status = HullStatus::FAILED;
                 hull.dimension = -1;
@@ -359,6 +392,7 @@ void compute(const Vec3* points, long long n, const Scaled& scaled, Workspace& w
     }
     if (dim == 2) {
         double area = 0.0;
+        principal();
         std::vector<int> ring = polygon(w, all, centre, axes, area);
         if (ring.size() >= 3) {
             hull.status = HullStatus::FLAT;
@@ -374,6 +408,7 @@ void compute(const Vec3* points, long long n, const Scaled& scaled, Workspace& w
         dim = 1;
     }
     if (dim == 1) {
+        principal();
         int a = 0, b = 0;
         double ta = INFINITY, tb = -INFINITY;
         for (long long i = 0; i < n; ++i) {

@@ -210,15 +210,37 @@ Build start_tetrahedron(const std::vector<Vec3>& p, double eps, const std::vecto
 
 /// Quickhull of the points `subset` of w.p on flat storage (quickhull_flat.cpp): the same
 /// steps, the same triangulation and the same result as quickhull_reference, with less work.
-Build quickhull_flat(Workspace& w, const std::vector<int>& subset, Triangulation& out);
+/// `start`, when given, is start_tetrahedron's answer for this subset (not computed again).
+Build quickhull_flat(Workspace& w, const std::vector<int>& subset, Triangulation& out,
+                     const int* start = nullptr);
 
 /// Quickhull of the points `subset` of w.p as it was built before quickhull_flat
 /// (quickhull.cpp), without the interior filter: the tests' reference.
 Build quickhull_reference(Workspace& w, const std::vector<int>& subset, Triangulation& out);
 
+/// The principal axes of p[0 .. n) about `centre` (Jacobi eigenvectors of their covariance),
+/// unit, largest spread first (hull.cpp).
+void principal_axes(const Vec3* p, long long n, const Vec3& centre, Vec3 axes[3]);
+
+/// The flatness rule (hull.cpp): how many of the widths of p[0 .. n) along `axes` (the
+/// principal axes about `centre`) exceed flat_relative_tolerance times the box's `diagonal`.
+int flatness_dimension(const Vec3* p, long long n, const Vec3& centre, const Vec3 axes[3],
+                       double diagonal);
+
+/// Whether points scaled into (-1, 1)^3, whose box has this `diagonal`, among them the
+/// tetrahedron of p[corner[0 .. 4)], are clearly 3-D by the flatness rule (flatness_dimension
+/// 3 whatever its axes), from the tetrahedron's determinant alone (hull.cpp).
+bool clearly_solid(const Vec3* p, const int corner[4], double diagonal);
+
+/// Inputs of at least this many points first lose their clearly interior points
+/// (quickhull.cpp's interior filter).
+inline constexpr size_t kFilterMinPoints = 4096;
+
 /// The 3-D hull of the points `subset` of w.p (quickhull.cpp): large inputs first lose their
-/// clearly interior points (the interior filter), then Quickhull.
-Build quickhull(Workspace& w, const std::vector<int>& subset, Triangulation& out);
+/// clearly interior points (the interior filter), then Quickhull. `start` as quickhull_flat's,
+/// for a subset that the filter leaves whole (below kFilterMinPoints points).
+Build quickhull(Workspace& w, const std::vector<int>& subset, Triangulation& out,
+                const int* start = nullptr);
 
 // The coplanar groups of a triangulation's triangles (their planes are the triangulation's).
 struct Planes {

@@ -494,9 +494,8 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
 // the same apexes in the same order, the same triangulation. Without it, such points ride
 // on conflict lists until a late cone covers them, and each is then tested against every new
 // face of that cone (a torus's 500,000 inner points against a cone of 2,000 faces: most of the
-// build). Smaller inputs go unfiltered (the filter's own hull and scan would cost more than
-// it saves).
-constexpr size_t kFilterMinPoints = 4096;
+// build). Smaller inputs (below kFilterMinPoints) go unfiltered (the filter's own hull and
+// scan would cost more than it saves).
 
 void interior_filter(Workspace& w, const std::vector<int>& subset, std::vector<int>& kept) {
     constexpr int directions = 128;
@@ -616,9 +615,10 @@ Build quickhull_reference(Workspace& w, const std::vector<int>& subset, Triangul
     return quickhull_points(w, subset, out);
 }
 
-Build quickhull(Workspace& w, const std::vector<int>& subset, Triangulation& out) {
+Build quickhull(Workspace& w, const std::vector<int>& subset, Triangulation& out,
+                const int* start) {
     if (subset.size() < kFilterMinPoints)
-        return quickhull_flat(w, subset, out);
+        return quickhull_flat(w, subset, out, start);
     interior_filter(w, subset, w.filtered);
     return quickhull_flat(w, w.filtered, out);
 }

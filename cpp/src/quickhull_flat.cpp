@@ -267,12 +267,17 @@ void cone(Flat& s, Workspace& w, int q) {
 
 }  // namespace
 
-Build quickhull_flat(Workspace& w, const std::vector<int>& subset, Triangulation& out) {
+Build quickhull_flat(Workspace& w, const std::vector<int>& subset, Triangulation& out,
+                     const int* start) {
     const std::vector<Vec3>& points = w.p;
     if (subset.size() < 4) return Build::DEGENERATE;
     int corner[4];
-    const Build started = start_tetrahedron(points, w.eps, subset, corner);
-    if (started != Build::OK) return started;
+    if (start != nullptr) {
+        std::copy(start, start + 4, corner);
+    } else {
+        const Build started = start_tetrahedron(points, w.eps, subset, corner);
+        if (started != Build::OK) return started;
+    }
     // Room for every slot Quickhull can hold: the live faces (at most 2 n - 4) and a cone (at
     // most n faces) at once; grown on the way if ever short.
     const size_t room = 3 * subset.size() + 8;

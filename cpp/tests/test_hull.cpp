@@ -273,6 +273,61 @@ TEST_CASE("hull: the flat Quickhull builds the reference's triangulation, bit fo
     CHECK(built >= 150);
 }
 
+TEST_CASE("hull: a clearly solid starting tetrahedron means the flatness rule finds 3-D") {
+    // hull_with skips the principal axes when Quickhull's starting tetrahedron is clearly
+    // solid: on slabs from 1e-13 to 1e-3 of their size thick (the rule's bound, 1e-9 of the
+    // diagonal, among them), turned at random, and on ellipsoids, the rule itself must then
+    // find three dimensions. Both outcomes of the rule occur, and the shortcut is taken.
+    std::uint64_t state = 23;
+    auto uniform = [&]() {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return static_cast<double>(state >> 11) * 0x1p-53 * 2.0 - 1.0;
+    };
+    int solid = 0, flat = 0, decided_by_rule = 0;
+    for (int trial = 0; trial < 600; ++trial) {
+        const int n = 4 + trial % 97;
+        const double thickness = std::pow(10.0, -13.0 + 10.0 * (0.5 + 0.5 * uniform()));
+        Vec3 q{uniform(), uniform(), uniform()};
+        q = q / norm(q);
+        const double turn = kPi * uniform();
+        const Vec3 axis = q * std::sin(turn);
+        const double c = std::cos(turn);
+        std::vector<Vec3> p;
+        double max_abs = 0.0;
+        for (int i = 0; i < n; ++i) {
+            Vec3 x{uniform(), uniform(), thickness * uniform()};
+            if (trial % 5 == 4) x = Vec3{uniform(), uniform(), uniform()} / 2.0;  // solid
+            // Rodrigues' rotation about `axis` by twice `turn` (a unit quaternion's).
+            const Vec3 t = cross(axis, x) * 2.0;
+            x = x + t * c + cross(axis, t);
+            x = x / 2.0;  // into (-1, 1)^3
+            p.push_back(x);
+            max_abs = std::max(max_abs, meshcol::max_abs(x));
+        }
+        Vec3 lo = p[0], hi = p[0], sum{};
+        for (const Vec3& x : p) lo = component_min(lo, x), hi = component_max(hi, x), sum += x;
+        const double diagonal = norm(hi - lo);
+        const Vec3 centre = sum / static_cast<double>(n);
+        Vec3 axes[3];
+        hull_detail::principal_axes(p.data(), n, centre, axes);
+        const int dim = hull_detail::flatness_dimension(p.data(), n, centre, axes, diagonal);
+        std::vector<int> all(p.size());
+        for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+        int corner[4];
+        const bool started =
+            hull_detail::start_tetrahedron(p, defaults::hull_relative_tolerance * max_abs, all,
+                                           corner) == hull_detail::Build::OK;
+        const bool clearly = started && hull_detail::clearly_solid(p.data(), corner, diagonal);
+        CHECK(!clearly || dim == 3);
+        solid += clearly ? 1 : 0;
+        flat += dim < 3 ? 1 : 0;
+        decided_by_rule += !clearly && dim == 3 ? 1 : 0;
+    }
+    CHECK(solid >= 200);
+    CHECK(flat >= 100);
+    CHECK(decided_by_rule >= 10);
+}
+
 TEST_CASE("hull: every point of an ellipsoid is a vertex, every vertex list sorted and padded") {
     std::uint64_t state = 11;
     const std::vector<Vec3> p = family_points(0, 64, state);
