@@ -115,15 +115,15 @@ struct Workspace {
     std::vector<TriangulationEdge> edge_scratch;  // the compaction's edges before their count
 };
 
-// A triangulated 3-D hull: triangles of point indices, their neighbours and their planes
-// (unit normal, offset and twice the area, scaled frame, as Quickhull computed them).
 // The corner after corner e of a triangle (a table: `e == 2 ? 0 : e + 1` compiles to a branch
 // that mispredicts when e follows no pattern).
 inline constexpr int kNextCorner[3] = {1, 2, 0};
 
+// A triangulated 3-D hull: triangles of point indices, their planes (unit normal, offset and
+// twice the area, scaled frame, as Quickhull computed them), and each edge once with the
+// triangles on either side.
 struct Triangulation {
     std::vector<std::array<int, 3>> tri;
-    std::vector<std::array<int, 3>> neighbor;
     std::vector<Vec3> normal;
     std::vector<double> offset, area2;
     std::vector<TriangulationEdge> edges;  // in order of (i, e)

@@ -366,13 +366,24 @@ void cone(Workspace& w, int q) {
 // tetrahedron (by more than eps).
 Build start_tetrahedron(const std::vector<Vec3>& p, double eps, const std::vector<int>& subset,
                         int corner[4]) {
-    int extreme[6];
-    for (int k = 0; k < 6; ++k) extreme[k] = subset[0];
-    for (int i : subset)
-        for (int k = 0; k < 3; ++k) {
-            if (p[i][k] < p[extreme[2 * k]][k]) extreme[2 * k] = i;
-            if (p[i][k] > p[extreme[2 * k + 1]][k]) extreme[2 * k + 1] = i;
-        }
+    // The first point of least and of greatest x, y and z (the components by name: Vec3's
+    // operator[] selects among them with compares).
+    const Vec3* first = &p[subset[0]];
+    const Vec3 *low_x = first, *high_x = first, *low_y = first, *high_y = first;
+    const Vec3 *low_z = first, *high_z = first;
+    for (int i : subset) {
+        const Vec3* q = &p[i];
+        low_x = q->x < low_x->x ? q : low_x;
+        high_x = q->x > high_x->x ? q : high_x;
+        low_y = q->y < low_y->y ? q : low_y;
+        high_y = q->y > high_y->y ? q : high_y;
+        low_z = q->z < low_z->z ? q : low_z;
+        high_z = q->z > high_z->z ? q : high_z;
+    }
+    const Vec3* base = p.data();
+    const int extreme[6] = {static_cast<int>(low_x - base),  static_cast<int>(high_x - base),
+                            static_cast<int>(low_y - base),  static_cast<int>(high_y - base),
+                            static_cast<int>(low_z - base),  static_cast<int>(high_z - base)};
     int a = extreme[0], b = extreme[1];
     double best = -1.0;
     for (int i = 0; i < 6; ++i)
@@ -456,7 +467,6 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
     for (size_t i = 0; i < w.face_count; ++i)
         if (faces[i].alive) index[i] = m++;
     out.tri.resize(m);
-    out.neighbor.resize(m);
     out.normal.resize(m);
     out.offset.resize(m);
     out.area2.resize(m);
@@ -476,7 +486,6 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
             const int g = f.n[e];
             if (static_cast<unsigned>(g) >= slots || index[g] < 0) return Build::FAILED;
             const int j = index[g];
-            out.neighbor[t][e] = j;
             // The neighbour's edge that leads back (the compacted list's too, the index
             // being one to one).
             edges[count] = {t, e, j, f.s[e]};

@@ -354,7 +354,6 @@ Build quickhull_flat(Workspace& w, const std::vector<int>& subset, Triangulation
     for (size_t i = 0; i < s.face_count; ++i)
         if (faces[i].alive) index[i] = m++;
     out.tri.resize(m);
-    out.neighbor.resize(m);
     out.normal.resize(m);
     out.offset.resize(m);
     out.area2.resize(m);
@@ -375,7 +374,6 @@ Build quickhull_flat(Workspace& w, const std::vector<int>& subset, Triangulation
             const int g = f.n[e];
             if (static_cast<unsigned>(g) >= slots || index[g] < 0) return Build::FAILED;
             const int j = index[g];
-            out.neighbor[t][e] = j;
             edges[count] = {t, e, j, f.s[e]};
             count += j > t;
         }
