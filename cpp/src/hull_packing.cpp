@@ -92,7 +92,7 @@ struct PackScratch {
     std::vector<char> valid;
     unsigned stamp = 0;                // the table's cells of the current call carry it
     std::vector<Vec3> directions;
-    std::vector<double> unique;  // unique_directions' output before it is appended
+    std::vector<double> unique;  // pack_one's vertices before they are appended
     std::vector<double> classes;  // edge_direction_class_count's (discarded) classes
 };
 
@@ -212,11 +212,10 @@ std::int64_t unique_directions(const Vec3* d, size_t count, bool signed_classes,
     }
     unit_keys(d, count, signed_classes, s.unit.data(), s.keys.data(), s.valid.data());
     const double* keys = s.keys.data();
-    const double* unit = s.unit.data();
-    // Written to scratch and appended once (a resize of `out` would zero its room first).
-    if (s.unique.size() < 3 * count) s.unique.resize(3 * count);
-    double* const first = s.unique.data();
-    double* o = first;
+    // The kept unit vectors are compacted in place (kept <= i: nothing unread is written over;
+    // with no repeat nor zero, nothing moves) and appended once (a resize of `out` would zero
+    // its room first).
+    double* unit = s.unit.data();
     std::int64_t kept = 0;
     for (size_t i = 0; i < count; ++i) {
         if (!s.valid[i]) {
@@ -248,12 +247,14 @@ std::int64_t unique_directions(const Vec3* d, size_t count, bool signed_classes,
         }
         if (!fresh) continue;
         if (class_of != nullptr) class_of[i] = static_cast<std::int32_t>(kept);
-        const double* u = unit + 3 * i;
-        o[0] = u[0], o[1] = u[1], o[2] = u[2];
-        o += 3;
+        if (static_cast<size_t>(kept) != i) {
+            const double* u = unit + 3 * i;
+            double* o = unit + 3 * kept;
+            o[0] = u[0], o[1] = u[1], o[2] = u[2];
+        }
         ++kept;
     }
-    out.insert(out.end(), first, o);
+    out.insert(out.end(), unit, unit + 3 * kept);
     return kept;
 }
 
