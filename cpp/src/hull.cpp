@@ -98,6 +98,17 @@ bool clearly_solid(const Vec3* p, const int corner[4], double diagonal) {
     return std::fabs(det) > 2.0 * 3.0 * diagonal * diagonal * width + 1e-12;
 }
 
+bool clearly_solid_among(const Vec3* p, const int* candidate, int count, double diagonal) {
+    for (int i = 0; i < count; ++i)
+        for (int j = i + 1; j < count; ++j)
+            for (int k = j + 1; k < count; ++k)
+                for (int l = k + 1; l < count; ++l) {
+                    const int corner[4] = {candidate[i], candidate[j], candidate[k], candidate[l]};
+                    if (clearly_solid(p, corner, diagonal)) return true;
+                }
+    return false;
+}
+
 namespace {
 
 int find_root(std::vector<int>& parent, int i) {
@@ -238,13 +249,19 @@ void compute(const Vec3* points, long long n, const Scaled& scaled, Workspace& w
         if (!have_axes) principal_axes(w.p.data(), n, centre, axes);
         have_axes = true;
     };
-    // Quickhull's starting tetrahedron first, when Quickhull starts from it (the interior
-    // filter leaves the input whole): clearly solid, it decides the rule without the axes.
-    int start[4];
-    const bool started = n >= 4 && static_cast<size_t>(n) < kFilterMinPoints &&
-                         start_tetrahedron(w.p, w.eps, all, start) == Build::OK;
+    // The axis extremes first, when Quickhull starts from them (the interior filter leaves
+    // the input whole): when four of them are clearly solid, the rule can only find 3-D and
+    // runs without the axes, and Quickhull's starting tetrahedron is found from them here.
+    int extreme[6], start[4];
+    bool solid = false;
+    if (n >= 4 && static_cast<size_t>(n) < kFilterMinPoints) {
+        axis_extremes(w.p, all, extreme);
+        solid = clearly_solid_among(w.p.data(), extreme, 6, diagonal);
+    }
+    const bool started =
+        solid && start_tetrahedron(w.p, w.eps, all, extreme, start) == Build::OK;
     int dim = 3;
-    if (!started || !clearly_solid(w.p.data(), start, diagonal)) {
+    if (!solid) {
         principal();
         dim = flatness_dimension(w.p.data(), n, centre, axes, diagonal);
     }

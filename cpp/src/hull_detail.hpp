@@ -203,8 +203,15 @@ inline Plane face_plane(const Vec3& a, const Vec3& b, const Vec3& c) {
     return plane;
 }
 
+/// The first point of `subset` of least and of greatest x, y and z, into extreme[0 .. 6) in
+/// that order (quickhull.cpp).
+void axis_extremes(const std::vector<Vec3>& p, const std::vector<int>& subset, int extreme[6]);
+
 /// The starting tetrahedron of `subset` (quickhull.cpp): corner[0 .. 4) with the faces
-/// (0 1 2), (0 3 1), (1 3 2) and (2 3 0) outward, or DEGENERATE.
+/// (0 1 2), (0 3 1), (1 3 2) and (2 3 0) outward, or DEGENERATE; from the subset's
+/// axis_extremes when given.
+Build start_tetrahedron(const std::vector<Vec3>& p, double eps, const std::vector<int>& subset,
+                        const int extreme[6], int corner[4]);
 Build start_tetrahedron(const std::vector<Vec3>& p, double eps, const std::vector<int>& subset,
                         int corner[4]);
 
@@ -231,6 +238,9 @@ int flatness_dimension(const Vec3* p, long long n, const Vec3& centre, const Vec
 /// tetrahedron of p[corner[0 .. 4)], are clearly 3-D by the flatness rule (flatness_dimension
 /// 3 whatever its axes), from the tetrahedron's determinant alone (hull.cpp).
 bool clearly_solid(const Vec3* p, const int corner[4], double diagonal);
+
+/// Whether some four of p[candidate[0 .. count)] are clearly_solid (hull.cpp).
+bool clearly_solid_among(const Vec3* p, const int* candidate, int count, double diagonal);
 
 /// Inputs of at least this many points first lose their clearly interior points
 /// (quickhull.cpp's interior filter).

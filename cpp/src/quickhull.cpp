@@ -360,14 +360,9 @@ void cone(Workspace& w, int q) {
 
 }  // namespace
 
-// The starting tetrahedron of `subset`: the farthest pair of the axis extremes, the point
-// farthest from their line, the point farthest from that plane; into corner[0 .. 4) so that
-// (0 1 2), (0 3 1), (1 3 2) and (2 3 0) face outward. DEGENERATE when the points span no
-// tetrahedron (by more than eps).
-Build start_tetrahedron(const std::vector<Vec3>& p, double eps, const std::vector<int>& subset,
-                        int corner[4]) {
-    // The first point of least and of greatest x, y and z (the components by name: Vec3's
-    // operator[] selects among them with compares).
+// The first point of `subset` of least and of greatest x, y and z, into extreme[0 .. 6) in
+// that order (the components by name: Vec3's operator[] selects among them with compares).
+void axis_extremes(const std::vector<Vec3>& p, const std::vector<int>& subset, int extreme[6]) {
     const Vec3* first = &p[subset[0]];
     const Vec3 *low_x = first, *high_x = first, *low_y = first, *high_y = first;
     const Vec3 *low_z = first, *high_z = first;
@@ -381,9 +376,16 @@ Build start_tetrahedron(const std::vector<Vec3>& p, double eps, const std::vecto
         high_z = q->z > high_z->z ? q : high_z;
     }
     const Vec3* base = p.data();
-    const int extreme[6] = {static_cast<int>(low_x - base),  static_cast<int>(high_x - base),
-                            static_cast<int>(low_y - base),  static_cast<int>(high_y - base),
-                            static_cast<int>(low_z - base),  static_cast<int>(high_z - base)};
+    const Vec3* found[6] = {low_x, high_x, low_y, high_y, low_z, high_z};
+    for (int k = 0; k < 6; ++k) extreme[k] = static_cast<int>(found[k] - base);
+}
+
+// The starting tetrahedron of `subset`, from its axis extremes: the farthest pair of them,
+// the point farthest from their line, the point farthest from that plane; into
+// corner[0 .. 4) so that (0 1 2), (0 3 1), (1 3 2) and (2 3 0) face outward. DEGENERATE when
+// the points span no tetrahedron (by more than eps).
+Build start_tetrahedron(const std::vector<Vec3>& p, double eps, const std::vector<int>& subset,
+                        const int extreme[6], int corner[4]) {
     int a = extreme[0], b = extreme[1];
     double best = -1.0;
     for (int i = 0; i < 6; ++i)
@@ -414,6 +416,13 @@ Build start_tetrahedron(const std::vector<Vec3>& p, double eps, const std::vecto
     if (o > 0) std::swap(b, c);  // d below abc: abc, adb, bdc, cda face outward
     corner[0] = a, corner[1] = b, corner[2] = c, corner[3] = d;
     return Build::OK;
+}
+
+Build start_tetrahedron(const std::vector<Vec3>& p, double eps, const std::vector<int>& subset,
+                        int corner[4]) {
+    int extreme[6];
+    axis_extremes(p, subset, extreme);
+    return start_tetrahedron(p, eps, subset, extreme, corner);
 }
 
 namespace {

@@ -272,9 +272,9 @@ TEST_CASE("hull: the flat Quickhull builds the reference's triangulation, bit fo
     CHECK(built >= 150);
 }
 
-TEST_CASE("hull: a clearly solid starting tetrahedron means the flatness rule finds 3-D") {
-    // hull_with skips the principal axes when Quickhull's starting tetrahedron is clearly
-    // solid: on slabs from 1e-13 to 1e-3 of their size thick (the rule's bound, 1e-9 of the
+TEST_CASE("hull: clearly solid axis extremes mean the flatness rule finds 3-D") {
+    // hull_with skips the principal axes when four of the axis extremes are clearly solid:
+    // on slabs from 1e-13 to 1e-3 of their size thick (the rule's bound, 1e-9 of the
     // diagonal, among them), turned at random, and on ellipsoids, the rule itself must then
     // find three dimensions. Both outcomes of the rule occur, and the shortcut is taken.
     std::uint64_t state = 23;
@@ -292,7 +292,6 @@ TEST_CASE("hull: a clearly solid starting tetrahedron means the flatness rule fi
         const Vec3 axis = q * std::sin(turn);
         const double c = std::cos(turn);
         std::vector<Vec3> p;
-        double max_abs = 0.0;
         for (int i = 0; i < n; ++i) {
             Vec3 x{uniform(), uniform(), thickness * uniform()};
             if (trial % 5 == 4) x = Vec3{uniform(), uniform(), uniform()} / 2.0;  // solid
@@ -301,7 +300,6 @@ TEST_CASE("hull: a clearly solid starting tetrahedron means the flatness rule fi
             x = x + t * c + cross(axis, t);
             x = x / 2.0;  // into (-1, 1)^3
             p.push_back(x);
-            max_abs = std::max(max_abs, meshcol::max_abs(x));
         }
         Vec3 lo = p[0], hi = p[0], sum{};
         for (const Vec3& x : p) lo = component_min(lo, x), hi = component_max(hi, x), sum += x;
@@ -312,11 +310,9 @@ TEST_CASE("hull: a clearly solid starting tetrahedron means the flatness rule fi
         const int dim = hull_detail::flatness_dimension(p.data(), n, centre, axes, diagonal);
         std::vector<int> all(p.size());
         for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
-        int corner[4];
-        const bool started =
-            hull_detail::start_tetrahedron(p, defaults::hull_relative_tolerance * max_abs, all,
-                                           corner) == hull_detail::Build::OK;
-        const bool clearly = started && hull_detail::clearly_solid(p.data(), corner, diagonal);
+        int extreme[6];
+        hull_detail::axis_extremes(p, all, extreme);
+        const bool clearly = hull_detail::clearly_solid_among(p.data(), extreme, 6, diagonal);
         CHECK(!clearly || dim == 3);
         solid += clearly ? 1 : 0;
         flat += dim < 3 ? 1 : 0;
