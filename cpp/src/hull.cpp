@@ -17,56 +17,12 @@
 
 namespace meshcol {
 namespace hull_detail {
-namespace {
 
-int find_root(std::vector<int>& parent, int i) {
-    while (parent[i] != i) {
-        parent[i] = parent[parent[i]];
-        i = parent[i];
-    }
-    return i;
-}
-
-void planes_of(Workspace& w, const Triangulation& t, Planes& out) {
-    const size_t m = t.tri.size();
-    // The triangles' planes are Quickhull's (t.normal, t.offset, t.area2).
-    // Neighbours are coplanar when each one's far corner lies within eps of the other's
-    // plane; coplanar groups are the connected components (one plane, one SAT normal).
-    std::vector<int>& parent = w.parent;
-    parent.resize(m);
-    std::iota(parent.begin(), parent.end(), 0);
-    constexpr int kFar[3] = {2, 0, 1};  // the corner opposite edge e
-    bool merged = false;
-    for (const TriangulationEdge& g : t.edges) {
-        if (g.k < 0) continue;
-        const int i = g.i, j = g.j;
-        const int far_i = t.tri[i][kFar[g.e]], far_j = t.tri[j][kFar[g.k]];
-        const bool coplanar = std::fabs(dot(t.normal[i], w.p[far_j]) - t.offset[i]) <= w.eps &&
-                              std::fabs(dot(t.normal[j], w.p[far_i]) - t.offset[j]) <= w.eps;
-        if (coplanar) parent[find_root(parent, j)] = find_root(parent, i), merged = true;
-    }
-    out.group.resize(m);
-    if (!merged) {  // every triangle its own plane (a smooth hull): the groups in order
-        std::iota(out.group.begin(), out.group.end(), 0);
-        out.groups = static_cast<int>(m);
-        return;
-    }
-    std::vector<int>& id = w.id;
-    id.assign(m, -1);
-    out.groups = 0;
-    for (size_t i = 0; i < m; ++i) {
-        const int r = find_root(parent, static_cast<int>(i));
-        if (id[r] < 0) id[r] = out.groups++;
-        out.group[i] = id[r];
-    }
-}
-
-// Principal axes of points (Jacobi eigenvectors of their covariance), largest spread first.
-void principal_axes(const Vec3* p, const std::vector<int>& idx, const Vec3& centre, Vec3 axes[3]) {
+void principal_axes(const Vec3* p, long long n, const Vec3& centre, Vec3 axes[3]) {
     // The covariance's six distinct sums (d[r] * d[c] and d[c] * d[r] are the same product,
     // added in the same order: the mirrored entries are the same bits).
     double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
-    for (int i : idx) {
+    for (long long i = 0; i < n; ++i) {
         const Vec3 d = p[i] - centre;
         xx += d.x * d.x, xy += d.x * d.y, xz += d.x * d.z;
         yy += d.y * d.y, yz += d.y * d.z, zz += d.z * d.z;
@@ -108,6 +64,97 @@ void principal_axes(const Vec3* p, const std::vector<int>& idx, const Vec3& cent
         const int j = order[k];
         axes[k] = Vec3{v[0][j], v[1][j], v[2][j]};
         axes[k] = axes[k] / norm(axes[k]);
+    }
+}
+
+int flatness_dimension(const Vec3* p, long long n, const Vec3& centre, const Vec3 axes[3],
+                       double diagonal) {
+    // The three widths in one pass.
+    double low[3] = {INFINITY, INFINITY, INFINITY}, high[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (long long i = 0; i < n; ++i) {
+        const Vec3 d = p[i] - centre;
+        for (int k = 0; k < 3; ++k) {
+            const double t = dot(d, axes[k]);
+            low[k] = t < low[k] ? t : low[k];
+            high[k] = t > high[k] ? t : high[k];
+        }
+    }
+    int dim = 0;
+    for (int k = 0; k < 3; ++k)
+        if (high[k] - low[k] > defaults::flat_relative_tolerance * diagonal) ++dim;
+    return dim;
+}
+
+// For a unit u along which the points span a width w, write each edge from the first corner
+// as e_i = (e_i . u) u + f_i, f_i orthogonal to u, |e_i . u| <= w: the determinant is
+// trilinear and vanishes on three vectors of a plane or on u twice, so |det| <= 3 w D^2 (D the
+// points' diameter, at most the diagonal), and w >= |det| / (3 D^2). The margins: the points
+// are scaled below 1, so det rounds by under 1e-13 and a rule's width (along axes of unit
+// length within rounding) by under 1e-14; the factor 2 covers the rounded diagonal.
+bool clearly_solid(const Vec3* p, const int corner[4], double diagonal) {
+    const Vec3 a = p[corner[0]];
+    const double det = dot(p[corner[1]] - a, cross(p[corner[2]] - a, p[corner[3]] - a));
+    const double width = defaults::flat_relative_tolerance * diagonal + 1e-12;
+    return std::fabs(det) > 2.0 * 3.0 * diagonal * diagonal * width + 1e-12;
+}
+
+bool clearly_solid_among(const Vec3* p, const int* candidate, int count, double diagonal) {
+    for (int i = 0; i < count; ++i)
+        for (int j = i + 1; j < count; ++j)
+            for (int k = j + 1; k < count; ++k)
+                for (int l = k + 1; l < count; ++l) {
+                    const int corner[4] = {candidate[i], candidate[j], candidate[k], candidate[l]};
+                    if (clearly_solid(p, corner, diagonal)) return true;
+                }
+    return false;
+}
+
+namespace {
+
+int find_root(std::vector<int>& parent, int i) {
+    while (parent[i] != i) {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    return i;
+}
+
+void planes_of(Workspace& w, const Triangulation& t, Planes& out) {
+    const size_t m = t.tri.size();
+    // The triangles' planes are Quickhull's (t.normal, t.offset, t.area2).
+    // Neighbours are coplanar when each one's far corner lies within eps of the other's
+    // plane; coplanar groups are the connected components (one plane, one SAT normal).
+    // The union-find's parents are set up at the first merge (a smooth hull has none).
+    std::vector<int>& parent = w.parent;
+    constexpr int kFar[3] = {2, 0, 1};  // the corner opposite edge e
+    bool merged = false;
+    for (const TriangulationEdge& g : t.edges) {
+        if (g.k < 0) continue;
+        const int i = g.i, j = g.j;
+        const int far_i = t.tri[i][kFar[g.e]], far_j = t.tri[j][kFar[g.k]];
+        const bool coplanar = std::fabs(dot(t.normal[i], w.p[far_j]) - t.offset[i]) <= w.eps &&
+                              std::fabs(dot(t.normal[j], w.p[far_i]) - t.offset[j]) <= w.eps;
+        if (!coplanar) continue;
+        if (!merged) {
+            parent.resize(m);
+            std::iota(parent.begin(), parent.end(), 0);
+            merged = true;
+        }
+        parent[find_root(parent, j)] = find_root(parent, i);
+    }
+    out.group.resize(m);
+    if (!merged) {  // every triangle its own plane (a smooth hull): the groups in order
+        std::iota(out.group.begin(), out.group.end(), 0);
+        out.groups = static_cast<int>(m);
+        return;
+    }
+    std::vector<int>& id = w.id;
+    id.assign(m, -1);
+    out.groups = 0;
+    for (size_t i = 0; i < m; ++i) {
+        const int r = find_root(parent, static_cast<int>(i));
+        if (id[r] < 0) id[r] = out.groups++;
+        out.group[i] = id[r];
     }
 }
 
@@ -159,31 +206,21 @@ std::vector<int> polygon(const Workspace& w, const std::vector<int>& idx, const 
     return ring;
 }
 
-// The hull of points already checked finite and in range.
-void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) {
-    Hull& hull = analysis.hull;
-    double max_abs = 0.0;
-    for (long long i = 0; i < n; ++i) {
-        const Vec3& q = points[i];
-        const double m = std::max(std::fabs(q.x), std::max(std::fabs(q.y), std::fabs(q.z)));
-        max_abs = m > max_abs ? m : max_abs;
-    }
-    // A power of two scales exactly: the hull of the scaled points is the hull of the points.
+// The points scaled by a power of two into (-1, 1)^3 (w.p) and what hull_with's pass that
+// wrote them found: the scale's exponent, their bounding box and their sum.
+struct Scaled {
+    double max_abs = 0.0;  // of the points, before scaling
     int exponent = 0;
-    if (max_abs > 0.0) std::frexp(max_abs, &exponent);
-    const double to_unit = std::ldexp(1.0, -exponent);
-    w.p.resize(static_cast<size_t>(n));
-    Vec3 lo = points[0] * to_unit, hi = lo, sum{};
-    for (long long i = 0; i < n; ++i) {
-        const Vec3 q = points[i] * to_unit;
-        w.p[i] = q;
-        for (int k = 0; k < 3; ++k) {
-            lo[k] = q[k] < lo[k] ? q[k] : lo[k];
-            hi[k] = q[k] > hi[k] ? q[k] : hi[k];
-        }
-        sum += q;
-    }
-    w.eps = defaults::hull_relative_tolerance * std::ldexp(max_abs, -exponent);
+    Vec3 lo, hi, sum;  // scaled
+};
+
+// The hull of points already checked finite and in range, w.p holding them scaled.
+void compute(const Vec3* points, long long n, const Scaled& scaled, Workspace& w,
+             Analysis& analysis) {
+    Hull& hull = analysis.hull;
+    const int exponent = scaled.exponent;
+    const Vec3 lo = scaled.lo, hi = scaled.hi, sum = scaled.sum;
+    w.eps = defaults::hull_relative_tolerance * std::ldexp(scaled.max_abs, -exponent);
     w.mark.assign(static_cast<size_t>(n), 0);
     w.stamp = 0;
     const double diagonal = norm(hi - lo);
@@ -203,23 +240,31 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
         hull.vertices = {smallest()};
         return;
     }
-    // The flatness rule: widths along the principal axes against the diagonal.
+    // The flatness rule: widths along the principal axes against the diagonal. The axes are
+    // found when a rule needs them (the same bits whenever).
     const Vec3 centre = sum / static_cast<double>(n);
     Vec3 axes[3];
-    principal_axes(w.p.data(), all, centre, axes);
-    // The three widths in one pass.
-    double low[3] = {INFINITY, INFINITY, INFINITY}, high[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (long long i = 0; i < n; ++i) {
-        const Vec3 d = w.p[i] - centre;
-        for (int k = 0; k < 3; ++k) {
-            const double t = dot(d, axes[k]);
-            low[k] = t < low[k] ? t : low[k];
-            high[k] = t > high[k] ? t : high[k];
-        }
+    bool have_axes = false;
+    auto principal = [&]() {
+        if (!have_axes) principal_axes(w.p.data(), n, centre, axes);
+        have_axes = true;
+    };
+    // The axis extremes first, when Quickhull starts from them (the interior filter leaves
+    // the input whole): when four of them are clearly solid, the rule can only find 3-D and
+    // runs without the axes, and Quickhull's starting tetrahedron is found from them here.
+    int extreme[6], start[4];
+    bool solid = false;
+    if (n >= 4 && static_cast<size_t>(n) < kFilterMinPoints) {
+        axis_extremes(w.p, all, extreme);
+        solid = clearly_solid_among(w.p.data(), extreme, 6, diagonal);
     }
-    int dim = 0;
-    for (int k = 0; k < 3; ++k)
-        if (high[k] - low[k] > defaults::flat_relative_tolerance * diagonal) ++dim;
+    const bool started =
+        solid && start_tetrahedron(w.p, w.eps, all, extreme, start) == Build::OK;
+    int dim = 3;
+    if (!solid) {
+        principal();
+        dim = flatness_dimension(w.p.data(), n, centre, axes, diagonal);
+    }
     if (dim == 3) {
         Triangulation& t = analysis.t;
         Triangulation& previous = analysis.previous;
@@ -231,7 +276,7 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
         std::vector<int>& dropped = w.dropped;
         removed.clear();
         for (int run = 0; run <= defaults::hull_max_reruns; ++run) {
-            const Build b = quickhull(w, subset, t);
+            const Build b = quickhull(w, subset, t, run == 0 && started ? start : nullptr);
             if (b == Build::FAILED && !have) {
                 hull.status = HullStatus::FAILED;
                 hull.dimension = -1;
@@ -306,21 +351,28 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
             local.assign(static_cast<size_t>(n), -1);
             for (const auto& tri : t.tri)
                 for (int v : tri) local[v] = 0;
+            verts.resize(static_cast<size_t>(n));
+            int* vertex = verts.data();
+            int k = 0;
             for (long long i = 0; i < n; ++i)
                 if (local[i] == 0) {
-                    local[i] = static_cast<int>(verts.size());
-                    verts.push_back(static_cast<int>(i));
+                    local[i] = k;
+                    vertex[k++] = static_cast<int>(i);
                 }
+            verts.resize(static_cast<size_t>(k));
             const size_t m = t.tri.size();
-            hull.faces.resize(m);
-            for (size_t i = 0; i < m; ++i) {
-                const auto& tri = t.tri[i];
-                hull.faces[i] = {local[tri[0]], local[tri[1]], local[tri[2]]};
+            if (analysis.geometry) {  // the packing reads t.tri through w.local instead
+                hull.faces.resize(m);
+                for (size_t i = 0; i < m; ++i) {
+                    const auto& tri = t.tri[i];
+                    hull.faces[i] = {local[tri[0]], local[tri[1]], local[tri[2]]};
+                }
             }
             // Each plane's normal is that of its largest triangle; a plane per triangle
-            // (groups in triangle order, planes_of) is the triangles' normals.
+            // (groups in triangle order, planes_of) is the triangles' normals (which the
+            // packing reads from t.normal).
             if (pl.groups == static_cast<int>(m)) {
-                hull.plane_normals.assign(t.normal.begin(), t.normal.end());
+                if (analysis.geometry) hull.plane_normals.assign(t.normal.begin(), t.normal.end());
             } else {
                 hull.plane_normals.assign(static_cast<size_t>(pl.groups), Vec3{});
                 std::vector<double>& largest = w.largest;
@@ -357,6 +409,7 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
     }
     if (dim == 2) {
         double area = 0.0;
+        principal();
         std::vector<int> ring = polygon(w, all, centre, axes, area);
         if (ring.size() >= 3) {
             hull.status = HullStatus::FLAT;
@@ -372,6 +425,7 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
         dim = 1;
     }
     if (dim == 1) {
+        principal();
         int a = 0, b = 0;
         double ta = INFINITY, tb = -INFINITY;
         for (long long i = 0; i < n; ++i) {
@@ -389,42 +443,50 @@ void compute(const Vec3* points, long long n, Workspace& w, Analysis& analysis) 
     hull.vertices = {smallest()};
 }
 
-// Status of points that have no hull at all, or OK when they can have one.
-HullStatus screen(const Vec3* points, long long n) {
-    if (n <= 0) return HullStatus::EMPTY;
-    if (n > INT_MAX) return HullStatus::FAILED;  // point indices are ints
-    bool huge = false;
-    for (long long i = 0; i < n; ++i) {
-        if (!is_finite(points[i])) return HullStatus::NON_FINITE;
-        huge = huge || meshcol::max_abs(points[i]) > defaults::hull_max_abs_coordinate;
-    }
-    return huge ? HullStatus::OVERFLOW : HullStatus::OK;
-}
-
-
 }  // namespace
 
 // The hull of `points` into analysis.hull (and its triangulation and planes, 3-D).
 void hull_with(const Vec3* points, long long n, Workspace& w, Analysis& analysis) {
     analysis.reset();
     Hull& hull = analysis.hull;
-    hull.status = screen(points, n);
-    if (hull.status != HullStatus::OK) return;
+    if (n <= 0) {
+        hull.status = HullStatus::EMPTY;
+        return;
+    }
+    if (n > INT_MAX) {  // point indices are ints
+        hull.status = HullStatus::FAILED;
+        return;
+    }
     // Sorted, without exact duplicates (-0.0 as 0.0), the points give the same hull in any
     // order: equal point sets, equal triangulations (decomposition parts rely on it).
     // Sorted as 16-byte keys: x as an integer of the same order (the sign bit flipped for
     // positive numbers, every bit for negative ones; -0.0 is 0.0 by then), ties by y, z and
     // index. A total order: any sort gives the order of the comparison of whole points.
+    // The same pass screens the points (non-finite: no hull; beyond the largest coordinate:
+    // none either) and finds their largest coordinate, the scale's.
     std::vector<SortKey>& keys = w.sort_keys;
     keys.resize(static_cast<size_t>(n));
-    const Vec3 zero{0.0, 0.0, 0.0};
+    bool finite = true, huge = false;
+    double largest = 0.0;
     for (long long i = 0; i < n; ++i) {
-        const double x = points[i].x + 0.0;
+        const Vec3& q = points[i];
+        finite &= is_finite(q);
+        // std::max, not fmax (a libm call here): the same for finite coordinates, and a
+        // non-finite one has no hull whatever m is.
+        const double m = std::max(std::fabs(q.x), std::max(std::fabs(q.y), std::fabs(q.z)));
+        huge |= m > defaults::hull_max_abs_coordinate;
+        largest = m > largest ? m : largest;
+        const double x = q.x + 0.0;
         std::uint64_t bits;
         std::memcpy(&bits, &x, sizeof bits);
         constexpr std::uint64_t sign = std::uint64_t{1} << 63;
         keys[i] = {(bits & sign) ? ~bits : (bits | sign), static_cast<int>(i)};
     }
+    if (!finite || huge) {
+        hull.status = finite ? HullStatus::OVERFLOW : HullStatus::NON_FINITE;
+        return;
+    }
+    hull.status = HullStatus::OK;
     std::sort(keys.begin(), keys.end(), [points](const SortKey& a, const SortKey& b) {
         if (a.x != b.x) return a.x < b.x;
         const Vec3& p = points[a.index];
@@ -433,17 +495,44 @@ void hull_with(const Vec3* points, long long n, Workspace& w, Analysis& analysis
         if (p.z != q.z) return p.z < q.z;
         return a.index < b.index;
     });
-    w.unique_points.clear();
-    w.unique_index.clear();
-    for (long long i = 0; i < n; ++i) {
+    // The unique points in order, and in the same pass scaled into w.p by a power of two
+    // (exact: the hull of the scaled points is the hull of the points; a duplicate has the
+    // largest coordinate of its twin), with their bounding box and sum.
+    Scaled scaled;
+    scaled.max_abs = largest;
+    if (largest > 0.0) std::frexp(largest, &scaled.exponent);
+    const double to_unit = std::ldexp(1.0, -scaled.exponent);
+    const auto count = static_cast<size_t>(n);
+    if (w.unique_points.size() < count) w.unique_points.resize(count);
+    if (w.unique_index.size() < count) w.unique_index.resize(count);
+    if (w.p.size() < count) w.p.resize(count);
+    Vec3* unique = w.unique_points.data();
+    int* index = w.unique_index.data();
+    Vec3* p = w.p.data();
+    const Vec3 zero{0.0, 0.0, 0.0};
+    Vec3 lo = (points[keys[0].index] + zero) * to_unit, hi = lo, sum{};
+    size_t m = 0;
+    for (size_t i = 0; i < count; ++i) {
         const int k = keys[i].index;
         const Vec3 q = points[k] + zero;
-        if (i > 0 && !lexicographic_less(w.unique_points.back(), q)) continue;
-        w.unique_points.push_back(q);
-        w.unique_index.push_back(k);
+        if (m > 0 && !lexicographic_less(unique[m - 1], q)) continue;
+        unique[m] = q;
+        index[m] = k;
+        const Vec3 s = q * to_unit;
+        p[m] = s;
+        for (int c = 0; c < 3; ++c) {
+            lo[c] = s[c] < lo[c] ? s[c] : lo[c];
+            hi[c] = s[c] > hi[c] ? s[c] : hi[c];
+        }
+        sum += s;
+        ++m;
     }
-    compute(w.unique_points.data(), static_cast<long long>(w.unique_points.size()), w, analysis);
-    for (int& v : hull.vertices) v = w.unique_index[v];
+    w.unique_points.resize(m);
+    w.unique_index.resize(m);
+    w.p.resize(m);
+    scaled.lo = lo, scaled.hi = hi, scaled.sum = sum;
+    compute(unique, static_cast<long long>(m), scaled, w, analysis);
+    for (int& v : hull.vertices) v = index[v];
 }
 
 }  // namespace hull_detail

@@ -62,6 +62,27 @@ struct Frame {
     int face, edge, left;
 };
 
+// A face of the flat construction (quickhull_flat.cpp): Face without its conflict vector,
+// whose points are a chain through the workspace's per-point links instead.
+struct alignas(128) FlatFace {
+    double nx, ny, nz, offset;  // the plane's unit normal and offset (Plane's)
+    double filter, area2;       // and its filter and twice the area
+    double furthest_distance;
+    int v[3];  // point indices, counter-clockwise seen from outside
+    int n[3];  // neighbour across edge v[i] -> v[(i + 1) % 3]
+    int s[3];  // the edge of n[i] that leads back here (its twin)
+    int head, tail;  // the chain of points outside this face (farther than eps), -1 for none
+    int furthest;
+    unsigned visit;
+    bool visible, alive;
+};
+
+// An edge of a triangulation, once: edge e of triangle i (from tri[i][e] to tri[i][e + 1]),
+// whose neighbour j > i has it as its edge k (-1: no edge of j leads back to i).
+struct TriangulationEdge {
+    int i, e, j, k;
+};
+
 struct Workspace {
     std::vector<Vec3> p;  // scaled points
     double eps = 0.0;
@@ -87,23 +108,22 @@ struct Workspace {
     std::vector<int> unique_index;
     std::vector<int> filtered, filter_extremes;  // interior_filter's
     std::vector<double> filter_planes;
+    // the flat construction's (quickhull_flat.cpp)
+    std::vector<FlatFace> flat_faces;
+    std::vector<int> next_point;  // per point: the next point of its face's chain, -1 at the end
+    std::vector<int> chain_heads;  // per visible face of a step: its chain
+    std::vector<TriangulationEdge> edge_scratch;  // the compaction's edges before their count
 };
 
-// A triangulated 3-D hull: triangles of point indices, their neighbours and their planes
-// (unit normal, offset and twice the area, scaled frame, as Quickhull computed them).
 // The corner after corner e of a triangle (a table: `e == 2 ? 0 : e + 1` compiles to a branch
 // that mispredicts when e follows no pattern).
 inline constexpr int kNextCorner[3] = {1, 2, 0};
 
-// An edge of a triangulation, once: edge e of triangle i (from tri[i][e] to tri[i][e + 1]),
-// whose neighbour j > i has it as its edge k (-1: no edge of j leads back to i).
-struct TriangulationEdge {
-    int i, e, j, k;
-};
-
+// A triangulated 3-D hull: triangles of point indices, their planes (unit normal, offset and
+// twice the area, scaled frame, as Quickhull computed them), and each edge once with the
+// triangles on either side.
 struct Triangulation {
     std::vector<std::array<int, 3>> tri;
-    std::vector<std::array<int, 3>> neighbor;
     std::vector<Vec3> normal;
     std::vector<double> offset, area2;
     std::vector<TriangulationEdge> edges;  // in order of (i, e)
@@ -183,9 +203,54 @@ inline Plane face_plane(const Vec3& a, const Vec3& b, const Vec3& c) {
     return plane;
 }
 
+/// The first point of `subset` of least and of greatest x, y and z, into extreme[0 .. 6) in
+/// that order (quickhull.cpp).
+void axis_extremes(const std::vector<Vec3>& p, const std::vector<int>& subset, int extreme[6]);
+
+/// The starting tetrahedron of `subset` (quickhull.cpp): corner[0 .. 4) with the faces
+/// (0 1 2), (0 3 1), (1 3 2) and (2 3 0) outward, or DEGENERATE; from the subset's
+/// axis_extremes when given.
+Build start_tetrahedron(const std::vector<Vec3>& p, double eps, const std::vector<int>& subset,
+                        const int extreme[6], int corner[4]);
+Build start_tetrahedron(const std::vector<Vec3>& p, double eps, const std::vector<int>& subset,
+                        int corner[4]);
+
+/// Quickhull of the points `subset` of w.p on flat storage (quickhull_flat.cpp): the same
+/// steps, the same triangulation and the same result as quickhull_reference, with less work.
+/// `start`, when given, is start_tetrahedron's answer for this subset (not computed again).
+Build quickhull_flat(Workspace& w, const std::vector<int>& subset, Triangulation& out,
+                     const int* start = nullptr);
+
+/// Quickhull of the points `subset` of w.p as it was built before quickhull_flat
+/// (quickhull.cpp), without the interior filter: the tests' reference.
+Build quickhull_reference(Workspace& w, const std::vector<int>& subset, Triangulation& out);
+
+/// The principal axes of p[0 .. n) about `centre` (Jacobi eigenvectors of their covariance),
+/// unit, largest spread first (hull.cpp).
+void principal_axes(const Vec3* p, long long n, const Vec3& centre, Vec3 axes[3]);
+
+/// The flatness rule (hull.cpp): how many of the widths of p[0 .. n) along `axes` (the
+/// principal axes about `centre`) exceed flat_relative_tolerance times the box's `diagonal`.
+int flatness_dimension(const Vec3* p, long long n, const Vec3& centre, const Vec3 axes[3],
+                       double diagonal);
+
+/// Whether points scaled into (-1, 1)^3, whose box has this `diagonal`, among them the
+/// tetrahedron of p[corner[0 .. 4)], are clearly 3-D by the flatness rule (flatness_dimension
+/// 3 whatever its axes), from the tetrahedron's determinant alone (hull.cpp).
+bool clearly_solid(const Vec3* p, const int corner[4], double diagonal);
+
+/// Whether some four of p[candidate[0 .. count)] are clearly_solid (hull.cpp).
+bool clearly_solid_among(const Vec3* p, const int* candidate, int count, double diagonal);
+
+/// Inputs of at least this many points first lose their clearly interior points
+/// (quickhull.cpp's interior filter).
+inline constexpr size_t kFilterMinPoints = 4096;
+
 /// The 3-D hull of the points `subset` of w.p (quickhull.cpp): large inputs first lose their
-/// clearly interior points (the interior filter), then Quickhull.
-Build quickhull(Workspace& w, const std::vector<int>& subset, Triangulation& out);
+/// clearly interior points (the interior filter), then Quickhull. `start` as quickhull_flat's,
+/// for a subset that the filter leaves whole (below kFilterMinPoints points).
+Build quickhull(Workspace& w, const std::vector<int>& subset, Triangulation& out,
+                const int* start = nullptr);
 
 // The coplanar groups of a triangulation's triangles (their planes are the triangulation's).
 struct Planes {
@@ -199,8 +264,10 @@ struct Analysis {
     Triangulation t, previous;
     Planes pl;
     Hull hull;
-    /// Whether a 3-D hull gets its per-face normals, offsets and planes, its volume and its
-    /// area (the packing reads none of them: pack_polytopes turns this off).
+    /// Whether a 3-D hull gets its faces, its per-face normals, offsets and planes, its volume
+    /// and its area (pack_polytopes turns this off: it reads none of them, and takes the faces
+    /// from t.tri through Workspace::local, each point's vertex index). Without it, a hull
+    /// whose every triangle is its own plane leaves plane_normals empty: they are t.normal.
     bool geometry = true;
 
     void reset() {

@@ -92,7 +92,7 @@ struct PackScratch {
     std::vector<char> valid;
     unsigned stamp = 0;                // the table's cells of the current call carry it
     std::vector<Vec3> directions;
-    std::vector<double> unique;  // unique_directions' output before it is appended
+    std::vector<double> unique;  // pack_one's vertices before they are appended
     std::vector<double> classes;  // edge_direction_class_count's (discarded) classes
 };
 
@@ -212,11 +212,10 @@ std::int64_t unique_directions(const Vec3* d, size_t count, bool signed_classes,
     }
     unit_keys(d, count, signed_classes, s.unit.data(), s.keys.data(), s.valid.data());
     const double* keys = s.keys.data();
-    const double* unit = s.unit.data();
-    // Written to scratch and appended once (a resize of `out` would zero its room first).
-    if (s.unique.size() < 3 * count) s.unique.resize(3 * count);
-    double* const first = s.unique.data();
-    double* o = first;
+    // The kept unit vectors are compacted in place (kept <= i: nothing unread is written over;
+    // with no repeat nor zero, nothing moves) and appended once (a resize of `out` would zero
+    // its room first).
+    double* unit = s.unit.data();
     std::int64_t kept = 0;
     for (size_t i = 0; i < count; ++i) {
         if (!s.valid[i]) {
@@ -248,12 +247,14 @@ std::int64_t unique_directions(const Vec3* d, size_t count, bool signed_classes,
         }
         if (!fresh) continue;
         if (class_of != nullptr) class_of[i] = static_cast<std::int32_t>(kept);
-        const double* u = unit + 3 * i;
-        o[0] = u[0], o[1] = u[1], o[2] = u[2];
-        o += 3;
+        if (static_cast<size_t>(kept) != i) {
+            const double* u = unit + 3 * i;
+            double* o = unit + 3 * kept;
+            o[0] = u[0], o[1] = u[1], o[2] = u[2];
+        }
         ++kept;
     }
-    out.insert(out.end(), first, o);
+    out.insert(out.end(), unit, unit + 3 * kept);
     return kept;
 }
 
@@ -394,19 +395,21 @@ void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
         s.pairs.resize(t.edges.size());
         out.edges.resize(edges_before + 2 * t.edges.size());
         std::int32_t* e = out.edges.data() + edges_before;
+        const int* local = w.local.data();  // hull_with's vertex index of each point
         size_t kept = 0;
         for (size_t g = 0; g < t.edges.size(); ++g) {
             const TriangulationEdge& edge = t.edges[g];
-            const auto& face = hull.faces[edge.i];
-            const int a = face[edge.e], b = face[kNextCorner[edge.e]];
+            const auto& tri = t.tri[edge.i];
+            const int a = local[tri[edge.e]], b = local[tri[kNextCorner[edge.e]]];
             s.pairs[g] = {a, b};
             e[2 * kept] = a, e[2 * kept + 1] = b;
             kept += pl.group[edge.i] != pl.group[edge.j];  // no branch: no pattern
         }
         out.edges.resize(edges_before + 2 * kept);
         adjacency_from_edges(k, s, out);
-        faces = unique_directions(hull.plane_normals.data(), hull.plane_normals.size(), true, s,
-                                  out.faces);
+        const bool own_planes = pl.groups == static_cast<int>(t.tri.size());
+        const std::vector<Vec3>& normals = own_planes ? t.normal : hull.plane_normals;
+        faces = unique_directions(normals.data(), normals.size(), true, s, out.faces);
     }
     out.vertex_counts.push_back(static_cast<std::int64_t>(out.vertices.size() - vertices_before) / 3);
     out.face_counts.push_back(faces);

@@ -358,22 +358,34 @@ void cone(Workspace& w, int q) {
         if (!w.faces[w.new_faces[k]].conflicts.empty()) w.pending.push_back(w.new_faces[k]);
 }
 
-Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulation& out) {
-    const std::vector<Vec3>& p = w.p;
-    w.face_count = 0;
-    w.free_top = 0;
-    if (w.free_faces.empty()) w.free_faces.resize(16);
-    w.pending.clear();
-    if (subset.size() < 4) return Build::DEGENERATE;
-    // Starting tetrahedron: the farthest pair of the axis extremes, the point farthest from
-    // their line, the point farthest from that plane.
-    int extreme[6];
-    for (int k = 0; k < 6; ++k) extreme[k] = subset[0];
-    for (int i : subset)
-        for (int k = 0; k < 3; ++k) {
-            if (p[i][k] < p[extreme[2 * k]][k]) extreme[2 * k] = i;
-            if (p[i][k] > p[extreme[2 * k + 1]][k]) extreme[2 * k + 1] = i;
-        }
+}  // namespace
+
+// The first point of `subset` of least and of greatest x, y and z, into extreme[0 .. 6) in
+// that order (the components by name: Vec3's operator[] selects among them with compares).
+void axis_extremes(const std::vector<Vec3>& p, const std::vector<int>& subset, int extreme[6]) {
+    const Vec3* first = &p[subset[0]];
+    const Vec3 *low_x = first, *high_x = first, *low_y = first, *high_y = first;
+    const Vec3 *low_z = first, *high_z = first;
+    for (int i : subset) {
+        const Vec3* q = &p[i];
+        low_x = q->x < low_x->x ? q : low_x;
+        high_x = q->x > high_x->x ? q : high_x;
+        low_y = q->y < low_y->y ? q : low_y;
+        high_y = q->y > high_y->y ? q : high_y;
+        low_z = q->z < low_z->z ? q : low_z;
+        high_z = q->z > high_z->z ? q : high_z;
+    }
+    const Vec3* base = p.data();
+    const Vec3* found[6] = {low_x, high_x, low_y, high_y, low_z, high_z};
+    for (int k = 0; k < 6; ++k) extreme[k] = static_cast<int>(found[k] - base);
+}
+
+// The starting tetrahedron of `subset`, from its axis extremes: the farthest pair of them,
+// the point farthest from their line, the point farthest from that plane; into
+// corner[0 .. 4) so that (0 1 2), (0 3 1), (1 3 2) and (2 3 0) face outward. DEGENERATE when
+// the points span no tetrahedron (by more than eps).
+Build start_tetrahedron(const std::vector<Vec3>& p, double eps, const std::vector<int>& subset,
+                        const int extreme[6], int corner[4]) {
     int a = extreme[0], b = extreme[1];
     double best = -1.0;
     for (int i = 0; i < 6; ++i)
@@ -398,10 +410,34 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
         const double h = std::fabs(dot(n, p[i] - p[a]));
         if (h > best) best = h, d = i;
     }
-    if (d < 0 || best <= w.eps) return Build::DEGENERATE;
+    if (d < 0 || best <= eps) return Build::DEGENERATE;
     const int o = orientation(p[a], p[b], p[c], p[d]);
     if (o == 0) return Build::DEGENERATE;
     if (o > 0) std::swap(b, c);  // d below abc: abc, adb, bdc, cda face outward
+    corner[0] = a, corner[1] = b, corner[2] = c, corner[3] = d;
+    return Build::OK;
+}
+
+Build start_tetrahedron(const std::vector<Vec3>& p, double eps, const std::vector<int>& subset,
+                        int corner[4]) {
+    int extreme[6];
+    axis_extremes(p, subset, extreme);
+    return start_tetrahedron(p, eps, subset, extreme, corner);
+}
+
+namespace {
+
+Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulation& out) {
+    const std::vector<Vec3>& p = w.p;
+    w.face_count = 0;
+    w.free_top = 0;
+    if (w.free_faces.empty()) w.free_faces.resize(16);
+    w.pending.clear();
+    if (subset.size() < 4) return Build::DEGENERATE;
+    int corner[4];
+    const Build started = start_tetrahedron(p, w.eps, subset, corner);
+    if (started != Build::OK) return started;
+    const int a = corner[0], b = corner[1], c = corner[2], d = corner[3];
     int start[4] = {new_face(w, a, b, c), new_face(w, a, d, b), new_face(w, b, d, c),
                     new_face(w, c, d, a)};
     link_faces(w, start, 4);
@@ -440,7 +476,6 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
     for (size_t i = 0; i < w.face_count; ++i)
         if (faces[i].alive) index[i] = m++;
     out.tri.resize(m);
-    out.neighbor.resize(m);
     out.normal.resize(m);
     out.offset.resize(m);
     out.area2.resize(m);
@@ -460,7 +495,6 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
             const int g = f.n[e];
             if (static_cast<unsigned>(g) >= slots || index[g] < 0) return Build::FAILED;
             const int j = index[g];
-            out.neighbor[t][e] = j;
             // The neighbour's edge that leads back (the compacted list's too, the index
             // being one to one).
             edges[count] = {t, e, j, f.s[e]};
@@ -478,9 +512,8 @@ Build quickhull_points(Workspace& w, const std::vector<int>& subset, Triangulati
 // the same apexes in the same order, the same triangulation. Without it, such points ride
 // on conflict lists until a late cone covers them, and each is then tested against every new
 // face of that cone (a torus's 500,000 inner points against a cone of 2,000 faces: most of the
-// build). Smaller inputs go unfiltered (the filter's own hull and scan would cost more than
-// it saves).
-constexpr size_t kFilterMinPoints = 4096;
+// build). Smaller inputs (below kFilterMinPoints) go unfiltered (the filter's own hull and
+// scan would cost more than it saves).
 
 void interior_filter(Workspace& w, const std::vector<int>& subset, std::vector<int>& kept) {
     constexpr int directions = 128;
@@ -596,11 +629,16 @@ void interior_filter(Workspace& w, const std::vector<int>& subset, std::vector<i
 
 }  // namespace
 
-Build quickhull(Workspace& w, const std::vector<int>& subset, Triangulation& out) {
+Build quickhull_reference(Workspace& w, const std::vector<int>& subset, Triangulation& out) {
+    return quickhull_points(w, subset, out);
+}
+
+Build quickhull(Workspace& w, const std::vector<int>& subset, Triangulation& out,
+                const int* start) {
     if (subset.size() < kFilterMinPoints)
-        return quickhull_points(w, subset, out);
+        return quickhull_flat(w, subset, out, start);
     interior_filter(w, subset, w.filtered);
-    return quickhull_points(w, w.filtered, out);
+    return quickhull_flat(w, w.filtered, out);
 }
 
 }  // namespace hull_detail

@@ -1,4 +1,5 @@
 // Quickhull (hull.hpp): known hulls, the flatness rule's statuses, packing.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -11,6 +12,7 @@
 #include "fixtures.hpp"
 #include "hull_detail.hpp"
 #include "hull_orientation.hpp"
+#include "meshcol/defaults.hpp"
 #include "meshcol/hull.hpp"
 
 using namespace meshcol;
@@ -230,6 +232,95 @@ TEST_CASE("hull: packing on threads equals packing one shape at a time, byte for
         CHECK(same_bytes(alone.edge_pairs.data(), one.edge_pairs.data() + 2 * e0,
                          alone.edge_pairs.size()));
     }
+}
+
+TEST_CASE("hull: the flat Quickhull builds the reference's triangulation, bit for bit") {
+    // quickhull_flat replays quickhull_reference's steps on other storage: the same
+    // triangles, neighbours, planes and edges, in the same order, on every family (and on
+    // near-spheres whose faces' sides need the exact orientation).
+    using hull_detail::Build;
+    using hull_detail::Triangulation;
+    using hull_detail::Workspace;
+    std::uint64_t state = 19;
+    int built = 0;
+    for (int h = 0; h < 240; ++h) {
+        const int family = h % 6;
+        const int n = 4 + (h * 37) % 700;
+        std::vector<Vec3> p = family_points(family == 5 ? 0 : family, n, state);
+        if (family == 5)  // a sphere with noise near the plane filter's bound
+            for (Vec3& q : p) q = q / norm(q) + Vec3{1e-14, -1e-14, 1e-14} * (q.x * 7.0 - q.y);
+        Workspace w;
+        double max_abs = 0.0;
+        for (const Vec3& q : p) max_abs = std::max(max_abs, meshcol::max_abs(q));
+        for (const Vec3& q : p) w.p.push_back(q / 2.0);  // into (-1, 1)^3, exactly
+        w.eps = defaults::hull_relative_tolerance * max_abs / 2.0;
+        w.mark.assign(p.size(), 0);
+        std::vector<int> subset(p.size());
+        for (size_t i = 0; i < subset.size(); ++i) subset[i] = static_cast<int>(i);
+        Triangulation reference, flat;
+        const Build a = hull_detail::quickhull_reference(w, subset, reference);
+        const Build b = hull_detail::quickhull_flat(w, subset, flat);
+        CHECK(a == b);
+        if (a != Build::OK || b != Build::OK) continue;
+        ++built;
+        CHECK(same_bytes(reference.tri, flat.tri));
+        CHECK(same_bytes(reference.normal, flat.normal));
+        CHECK(same_bytes(reference.offset, flat.offset));
+        CHECK(same_bytes(reference.area2, flat.area2));
+        CHECK(same_bytes(reference.edges, flat.edges));
+    }
+    CHECK(built >= 150);
+}
+
+TEST_CASE("hull: clearly solid axis extremes mean the flatness rule finds 3-D") {
+    // hull_with skips the principal axes when four of the axis extremes are clearly solid:
+    // on slabs from 1e-13 to 1e-3 of their size thick (the rule's bound, 1e-9 of the
+    // diagonal, among them), turned at random, and on ellipsoids, the rule itself must then
+    // find three dimensions. Both outcomes of the rule occur, and the shortcut is taken.
+    std::uint64_t state = 23;
+    auto uniform = [&]() {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return static_cast<double>(state >> 11) * 0x1p-53 * 2.0 - 1.0;
+    };
+    int solid = 0, flat = 0, decided_by_rule = 0;
+    for (int trial = 0; trial < 600; ++trial) {
+        const int n = 4 + trial % 97;
+        const double thickness = std::pow(10.0, -13.0 + 10.0 * (0.5 + 0.5 * uniform()));
+        Vec3 q{uniform(), uniform(), uniform()};
+        q = q / norm(q);
+        const double turn = kPi * uniform();
+        const Vec3 axis = q * std::sin(turn);
+        const double c = std::cos(turn);
+        std::vector<Vec3> p;
+        for (int i = 0; i < n; ++i) {
+            Vec3 x{uniform(), uniform(), thickness * uniform()};
+            if (trial % 5 == 4) x = Vec3{uniform(), uniform(), uniform()} / 2.0;  // solid
+            // Rodrigues' rotation about `axis` by twice `turn` (a unit quaternion's).
+            const Vec3 t = cross(axis, x) * 2.0;
+            x = x + t * c + cross(axis, t);
+            x = x / 2.0;  // into (-1, 1)^3
+            p.push_back(x);
+        }
+        Vec3 lo = p[0], hi = p[0], sum{};
+        for (const Vec3& x : p) lo = component_min(lo, x), hi = component_max(hi, x), sum += x;
+        const double diagonal = norm(hi - lo);
+        const Vec3 centre = sum / static_cast<double>(n);
+        Vec3 axes[3];
+        hull_detail::principal_axes(p.data(), n, centre, axes);
+        const int dim = hull_detail::flatness_dimension(p.data(), n, centre, axes, diagonal);
+        std::vector<int> all(p.size());
+        for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+        int extreme[6];
+        hull_detail::axis_extremes(p, all, extreme);
+        const bool clearly = hull_detail::clearly_solid_among(p.data(), extreme, 6, diagonal);
+        CHECK(!clearly || dim == 3);
+        solid += clearly ? 1 : 0;
+        flat += dim < 3 ? 1 : 0;
+        decided_by_rule += !clearly && dim == 3 ? 1 : 0;
+    }
+    CHECK(solid >= 200);
+    CHECK(flat >= 100);
+    CHECK(decided_by_rule >= 10);
 }
 
 TEST_CASE("hull: every point of an ellipsoid is a vertex, every vertex list sorted and padded") {

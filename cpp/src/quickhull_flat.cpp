@@ -1,0 +1,385 @@
+// Quickhull on flat storage: the steps of quickhull.cpp's construction (the same starting
+// tetrahedron, the same apex of the same face at every step, the same horizon walk, face
+// slots and conflict assignments), so the same triangulation bit for bit, with less work a
+// step. The faces are plain records in one array sized once per call; a face's conflict
+// list is a chain of point indices through one per-point link array (appended in the same
+// order as the list was), so a cone moves no point copies and keeps no per-face vectors.
+//
+// Quickhull: Barber, Dobkin and Huhdanpaa 1996; the horizon as one depth-first walk,
+// Gregorius 2014, "Implementing Quickhull".
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "hull_detail.hpp"
+#include "hull_orientation.hpp"
+
+namespace meshcol::hull_detail {
+namespace {
+
+constexpr int kNext[3] = {1, 2, 0};  // the edge after edge e of a face
+
+// The step's state: raw pointers into the workspace's arrays, sized once per call.
+struct Flat {
+    const Vec3* p;
+    double eps;
+    FlatFace* faces;
+    size_t face_count = 0;
+    int* next;  // per point: the next point of its chain
+    int* pending;  // the faces to visit, a stack: pending[0 .. top)
+    size_t top = 0;
+    std::vector<int>* free_faces;
+    size_t free_top = 0;
+    size_t points = 0;  // in the subset
+};
+
+inline double distance(const FlatFace& f, const Vec3& x) {
+    return f.nx * x.x + f.ny * x.y + f.nz * x.z - f.offset;
+}
+
+inline void set_plane(FlatFace& f, const Vec3* p) {
+    const Plane plane = face_plane(p[f.v[0]], p[f.v[1]], p[f.v[2]]);
+    f.nx = plane.normal.x, f.ny = plane.normal.y, f.nz = plane.normal.z;
+    f.offset = plane.offset;
+    f.filter = plane.filter;
+    f.area2 = plane.area2;
+}
+
+inline void init_face(Flat& s, int id, int a, int b, int c) {
+    FlatFace& f = s.faces[id];
+    f.v[0] = a, f.v[1] = b, f.v[2] = c;
+    f.head = f.tail = f.furthest = -1;
+    f.furthest_distance = 0.0;
+    f.visit = 0;
+    f.visible = false;
+    f.alive = true;
+    set_plane(f, s.p);
+}
+
+// Appends point x, at distance d, to f's chain (quickhull.cpp's add_conflict).
+inline void add_conflict(Flat& s, FlatFace& f, int x, double d) {
+    if (f.head < 0)
+        f.head = x;
+    else
+        s.next[f.tail] = x;
+    f.tail = x;
+    s.next[x] = -1;
+    if (d > f.furthest_distance) {
+        f.furthest_distance = d;
+        f.furthest = x;
+    }
+}
+
+// quickhull.cpp's reassign_furthest: q leaves the seed's chain (it is not outside the seed
+// exactly), the seed's furthest point is found again, and q joins the first live face, in
+// slot order, that it is outside of, or is dropped.
+void reassign_furthest(Flat& s, int seed, int q) {
+    FlatFace& f = s.faces[seed];
+    int previous = -1;
+    for (int x = f.head; x >= 0; previous = x, x = s.next[x]) {
+        if (x != q) continue;
+        if (previous < 0)
+            f.head = s.next[x];
+        else
+            s.next[previous] = s.next[x];
+        if (f.tail == x) f.tail = previous;
+        break;
+    }
+    f.furthest = -1;
+    f.furthest_distance = 0.0;
+    for (int x = f.head; x >= 0; x = s.next[x]) {
+        const double d = distance(f, s.p[x]);
+        if (d > f.furthest_distance || f.furthest < 0) {
+            f.furthest_distance = d;
+            f.furthest = x;
+        }
+    }
+    for (size_t g = 0; g < s.face_count; ++g) {
+        FlatFace& h = s.faces[g];
+        if (!h.alive || static_cast<int>(g) == seed) continue;
+        const double d = distance(h, s.p[q]);
+        if (d > s.eps && orientation(s.p[h.v[0]], s.p[h.v[1]], s.p[h.v[2]], s.p[q]) > 0) {
+            add_conflict(s, h, q, d);
+            s.pending[s.top++] = static_cast<int>(g);
+            return;
+        }
+    }
+}
+
+__attribute__((noinline)) int exact_side(const Vec3* p, const FlatFace& g, const Vec3& x) {
+    return orientation(p[g.v[0]], p[g.v[1]], p[g.v[2]], x);
+}
+
+// quickhull.cpp's find_horizon on flat faces: the visible faces into w.visible and the
+// horizon loop into w.edges, in the same order.
+bool find_horizon(Flat& s, Workspace& w, int seed, int q, unsigned stamp) {
+    const size_t room = s.face_count + 1;
+    if (w.dfs.size() < room) w.dfs.resize(2 * room);
+    if (w.visible.size() < room) w.visible.resize(2 * room);
+    if (w.edges.size() < 3 * room) w.edges.resize(6 * room);
+    FlatFace* faces = s.faces;
+    Frame* stack = w.dfs.data();
+    int* visible = w.visible.data();
+    HorizonEdge* edges = w.edges.data();
+    const Vec3 x = s.p[q];
+    size_t nv = 0, ne = 0;
+    faces[seed].visit = stamp;
+    faces[seed].visible = true;
+    visible[nv++] = seed;
+    int top = 0;
+    int fi = seed, next = 0, left = 3;
+    for (;;) {
+        if (left == 0) {
+            if (top == 0) break;
+            const Frame& below = stack[--top];
+            fi = below.face, next = below.edge, left = below.left;
+            continue;
+        }
+        const int e = next;
+        next = kNext[e];
+        --left;
+        const FlatFace& f = faces[fi];
+        const int gi = f.n[e];
+        FlatFace& g = faces[gi];
+        if (g.visit != stamp) {
+            g.visit = stamp;
+            const double d = distance(g, x);
+            g.visible = d > g.filter || (!(d < -g.filter) && exact_side(s.p, g, x) > 0);
+            if (g.visible) {
+                visible[nv++] = gi;
+                const int back = f.s[e];
+                stack[top++] = {fi, next, left};
+                fi = gi, next = kNext[back], left = 2;
+                continue;
+            }
+        } else if (g.visible) {
+            continue;
+        }
+        HorizonEdge& he = edges[ne++];
+        he.a = f.v[e];
+        he.b = f.v[kNext[e]];
+        he.outside = gi;
+        he.slot = f.s[e];
+    }
+    w.visible_count = nv;
+    w.edge_count = ne;
+    const size_t h = ne;
+    if (h < 3) return false;
+    int* mark = w.mark.data();
+    const int current = static_cast<int>(stamp);
+    for (size_t k = 0; k < h; ++k) {
+        const HorizonEdge& following = edges[k + 1 < h ? k + 1 : 0];
+        if (edges[k].b != following.a) return false;
+        if (mark[edges[k].a] == current) return false;
+        mark[edges[k].a] = current;
+    }
+    return true;
+}
+
+// quickhull.cpp's cone: the visible faces die (their slots to the free list), the horizon is
+// coned to q in slots taken from that list, and the visible faces' points, chain after chain,
+// go to the first new face they are outside of, else to a horizon face, else nowhere.
+void cone(Flat& s, Workspace& w, int q) {
+    const size_t visible = w.visible_count;
+    // Room on the stack for a face per point moved and per new face.
+    const size_t pushes = s.top + w.edge_count + s.points;
+    if (w.pending.size() < pushes) {
+        w.pending.resize(2 * pushes);
+        s.pending = w.pending.data();
+    }
+    if (w.chain_heads.size() < visible) w.chain_heads.resize(2 * visible);
+    int* heads = w.chain_heads.data();
+    std::vector<int>& free_list = *s.free_faces;
+    if (free_list.size() < s.free_top + visible + 1) free_list.resize(2 * (s.free_top + visible + 1));
+    for (size_t v = 0; v < visible; ++v) {
+        const int fi = w.visible[v];
+        FlatFace& f = s.faces[fi];
+        heads[v] = f.head;
+        f.alive = false;
+        free_list[s.free_top++] = fi;
+    }
+    const size_t h = w.edge_count;
+    if (s.face_count + h > w.flat_faces.size()) {  // never below 3 n + 8 slots, in practice
+        w.flat_faces.resize(2 * (s.face_count + h));
+        s.faces = w.flat_faces.data();
+    }
+    if (w.new_faces.size() < h) w.new_faces.resize(2 * h);
+    int* ids = w.new_faces.data();
+    // Slots: the free list from its end, then fresh ones (quickhull.cpp's allocate_faces).
+    {
+        const size_t reused = std::min(s.free_top, h);
+        for (size_t k = 0; k < reused; ++k) ids[k] = free_list[s.free_top - 1 - k];
+        int fresh = static_cast<int>(s.face_count);
+        for (size_t k = reused; k < h; ++k) ids[k] = fresh++;
+        s.free_top -= reused;
+        s.face_count = static_cast<size_t>(fresh);
+    }
+    const HorizonEdge* __restrict edges = w.edges.data();
+    FlatFace* __restrict faces = s.faces;
+    int previous = ids[h - 1];
+    for (size_t k = 0; k < h; ++k) {
+        const HorizonEdge he = edges[k];
+        const int id = ids[k];
+        const int following = ids[k + 1 < h ? k + 1 : 0];
+        init_face(s, id, he.a, he.b, q);
+        FlatFace& f = faces[id];
+        f.n[0] = he.outside, f.n[1] = following, f.n[2] = previous;
+        f.s[0] = he.slot, f.s[1] = 2, f.s[2] = 1;
+        faces[he.outside].n[he.slot] = id;
+        faces[he.outside].s[he.slot] = 0;
+        previous = id;
+    }
+    const double eps = s.eps;
+    int* __restrict next = s.next;
+    const Vec3* __restrict p = s.p;
+    int* __restrict pending = s.pending;
+    size_t top = s.top;
+    for (size_t v = 0; v < visible; ++v)
+        for (int x = heads[v], after; x >= 0; x = after) {
+            after = next[x];  // read before x joins another chain
+            if (x == q) continue;
+            const Vec3 px = p[x];
+            size_t k = 0;
+            double d = 0.0;
+            for (; k < h; ++k) {
+                const FlatFace& e = faces[ids[k]];
+                d = (e.nx * px.x + e.ny * px.y + e.nz * px.z) - e.offset;
+                if (d > eps) break;
+            }
+            if (k < h) {
+                add_conflict(s, faces[ids[k]], x, d);
+                continue;
+            }
+            for (size_t k2 = 0; k2 < h; ++k2) {
+                FlatFace& outside = faces[edges[k2].outside];
+                const double dx = distance(outside, px);
+                if (dx > eps) {
+                    add_conflict(s, outside, x, dx);
+                    pending[top++] = edges[k2].outside;
+                    break;
+                }
+            }
+        }
+    for (size_t k = 0; k < h; ++k)
+        if (faces[ids[k]].head >= 0) pending[top++] = ids[k];
+    s.top = top;
+}
+
+}  // namespace
+
+Build quickhull_flat(Workspace& w, const std::vector<int>& subset, Triangulation& out,
+                     const int* start) {
+    const std::vector<Vec3>& points = w.p;
+    if (subset.size() < 4) return Build::DEGENERATE;
+    int corner[4];
+    if (start != nullptr) {
+        std::copy(start, start + 4, corner);
+    } else {
+        const Build started = start_tetrahedron(points, w.eps, subset, corner);
+        if (started != Build::OK) return started;
+    }
+    // Room for every slot Quickhull can hold: the live faces (at most 2 n - 4) and a cone (at
+    // most n faces) at once; grown on the way if ever short.
+    const size_t room = 3 * subset.size() + 8;
+    if (w.flat_faces.size() < room) w.flat_faces.resize(room);
+    if (w.next_point.size() < points.size()) w.next_point.resize(points.size());
+    if (w.free_faces.size() < 16) w.free_faces.resize(16);
+    Flat s;
+    s.p = points.data();
+    s.eps = w.eps;
+    s.faces = w.flat_faces.data();
+    s.next = w.next_point.data();
+    s.points = subset.size();
+    if (w.pending.size() < 2 * s.points + 8) w.pending.resize(2 * s.points + 8);
+    s.pending = w.pending.data();
+    s.free_faces = &w.free_faces;
+    const int a = corner[0], b = corner[1], c = corner[2], d = corner[3];
+    const int tetra[4][3] = {{a, b, c}, {a, d, b}, {b, d, c}, {c, d, a}};
+    for (int i = 0; i < 4; ++i) init_face(s, i, tetra[i][0], tetra[i][1], tetra[i][2]);
+    s.face_count = 4;
+    // The tetrahedron's neighbours (quickhull.cpp's link_faces).
+    for (int i = 0; i < 4; ++i)
+        for (int e = 0; e < 3; ++e) {
+            FlatFace& f = s.faces[i];
+            const int from = f.v[e], to = f.v[kNext[e]];
+            for (int j = 0; j < 4; ++j) {
+                if (j == i) continue;
+                const FlatFace& g = s.faces[j];
+                for (int k = 0; k < 3; ++k)
+                    if (g.v[k] == to && g.v[kNext[k]] == from) f.n[e] = j, f.s[e] = k;
+            }
+        }
+    for (int i : subset) {
+        if (i == a || i == b || i == c || i == d) continue;
+        const Vec3& x = s.p[i];
+        for (int f = 0; f < 4; ++f) {
+            const double dist = distance(s.faces[f], x);
+            if (dist > s.eps) {
+                add_conflict(s, s.faces[f], i, dist);
+                break;
+            }
+        }
+    }
+    for (int f = 0; f < 4; ++f)
+        if (s.faces[f].head >= 0) s.pending[s.top++] = f;
+
+    const long long cap = static_cast<long long>(subset.size()) + 16;
+    for (long long step = 0; s.top > 0; ++step) {
+        if (step > 4 * cap) return Build::FAILED;
+        const int seed = s.pending[s.top - 1];
+        FlatFace& f = s.faces[seed];
+        if (!f.alive || f.head < 0) {
+            --s.top;
+            continue;
+        }
+        const int q = f.furthest;
+        if (plane_side(Vec3{f.nx, f.ny, f.nz}, f.offset, f.filter, s.p[f.v[0]], s.p[f.v[1]],
+                       s.p[f.v[2]], s.p[q]) <= 0) {
+            if (w.pending.size() < s.top + 1) {
+                w.pending.resize(2 * (s.top + 1));
+                s.pending = w.pending.data();
+            }
+            reassign_furthest(s, seed, q);
+            continue;
+        }
+        if (!find_horizon(s, w, seed, q, ++w.stamp)) return Build::FAILED;
+        cone(s, w, q);
+    }
+    // The compact triangulation, as quickhull.cpp writes it.
+    const auto slots = static_cast<unsigned>(s.face_count);
+    std::vector<int>& index = w.id;
+    index.assign(s.face_count, -1);
+    int m = 0;
+    const FlatFace* faces = s.faces;
+    for (size_t i = 0; i < s.face_count; ++i)
+        if (faces[i].alive) index[i] = m++;
+    out.tri.resize(m);
+    out.normal.resize(m);
+    out.offset.resize(m);
+    out.area2.resize(m);
+    // The edges into scratch that only grows, then copied: out.edges shrinks to the count,
+    // and growing it again for the next hull would zero what is about to be written.
+    if (w.edge_scratch.size() < 3 * static_cast<size_t>(m)) w.edge_scratch.resize(3 * static_cast<size_t>(m));
+    TriangulationEdge* edges = w.edge_scratch.data();
+    size_t count = 0;
+    for (size_t i = 0; i < s.face_count; ++i) {
+        const FlatFace& f = faces[i];
+        if (!f.alive) continue;
+        const int t = index[i];
+        out.tri[t] = {f.v[0], f.v[1], f.v[2]};
+        out.normal[t] = Vec3{f.nx, f.ny, f.nz};
+        out.offset[t] = f.offset;
+        out.area2[t] = f.area2;
+        for (int e = 0; e < 3; ++e) {
+            const int g = f.n[e];
+            if (static_cast<unsigned>(g) >= slots || index[g] < 0) return Build::FAILED;
+            const int j = index[g];
+            edges[count] = {t, e, j, f.s[e]};
+            count += j > t;
+        }
+    }
+    out.edges.assign(edges, edges + count);
+    return Build::OK;
+}
+
+}  // namespace meshcol::hull_detail
