@@ -82,9 +82,7 @@ bool gauss_arcs(const Vec3* vertices, int vertex_count, const Vec3* face_normals
     // The faces through each vertex as the bits of a word (an edge's faces are then those of
     // both its ends). Beyond 64 faces, no arcs: SAT's work bound lets such a shape meet only
     // shapes of few edges, where the plain loop is cheap.
-    if (vertex_count <= 0 || face_count <= 0 || face_count > 64 ||
-        vertex_count > std::numeric_limits<std::int16_t>::max())
-        return false;
+    if (vertex_count <= 0 || face_count <= 0 || face_count > 64) return false;
     double reach = 0.0;
     for (int v = 0; v < vertex_count; ++v)
         reach = std::max({reach, std::fabs(vertices[v].x), std::fabs(vertices[v].y),
@@ -117,7 +115,6 @@ bool gauss_arcs(const Vec3* vertices, int vertex_count, const Vec3* face_normals
         GaussArc arc;
         arc.face_a = static_cast<std::int16_t>(lowest_bit(both));
         arc.face_b = static_cast<std::int16_t>(lowest_bit(rest));
-        arc.vertex = static_cast<std::int16_t>(pairs[2 * e]);
         arc.direction_class = static_cast<std::int16_t>(class_of[e]);
         out.push_back(arc);
     }
@@ -368,6 +365,109 @@ struct Overlaps {
     }
 };
 
+// The largest |coordinate| of a polytope's vertices.
+double reach_of(const ShapeView& s) {
+    // std::max from a number (never NaN) skips a NaN coordinate as std::fmax does, inline.
+    double reach = 0.0;
+    for (int i = 0; i < s.vertex_count; ++i) {
+        reach = std::max(reach, std::fabs(s.vertices[i].x));
+        reach = std::max(reach, std::fabs(s.vertices[i].y));
+        reach = std::max(reach, std::fabs(s.vertices[i].z));
+    }
+    return reach;
+}
+
+// The overlap along axes of a's frame as the largest of a's dots less the smallest of b's
+// vertices moved to a's frame (as `Overlaps::overlap_along` moves its support point), two
+// vertices a lane: a's part is the measured one (the same products, their maximum); b's
+// smallest is at most the measured support point's (one of these vertices), which is chosen
+// in b's frame and so is the smallest up to the rounding of the axis turned there and of the
+// move, a few parts in 1e16 of the coordinates. So the measured overlap is at least this
+// value less that rounding: an axis whose value is above the best by more than `slack`
+// (1e-12 of the coordinates) would not replace it, and need not be measured. For two scanning
+// polytopes of at most 64 vertices each, all finite.
+struct NearOverlaps {
+    static constexpr int kMaxVertices = 64;
+    alignas(16) double ax[kMaxVertices], ay[kMaxVertices], az[kMaxVertices];
+    alignas(16) double bx[kMaxVertices], by[kMaxVertices], bz[kMaxVertices];
+    int padded_a = 0, padded_b = 0;
+
+    // False (no values) unless both shapes scan, fit, and have finite coordinates and slack.
+    bool fill(const Overlaps& o, double slack) {
+        const ShapeView &a = o.a, &b = o.b;
+        if (!o.scan_both || a.vertex_count > kMaxVertices || b.vertex_count > kMaxVertices ||
+            !std::isfinite(slack))
+            return false;
+        // Odd counts padded with the last vertex again (no new maximum or minimum).
+        padded_a = a.vertex_count + (a.vertex_count & 1);
+        padded_b = b.vertex_count + (b.vertex_count & 1);
+        double sum = 0.0;  // NaN or infinite when a coordinate is
+        for (int i = 0; i < padded_a; ++i) {
+            const Vec3& v = a.vertices[std::min(i, a.vertex_count - 1)];
+            ax[i] = v.x, ay[i] = v.y, az[i] = v.z;
+            sum += v.x + v.y + v.z;
+        }
+        for (int j = 0; j < padded_b; ++j) {
+            const Vec3 w = o.rot * b.vertices[std::min(j, b.vertex_count - 1)] + o.trans;
+            bx[j] = w.x, by[j] = w.y, bz[j] = w.z;
+            sum += w.x + w.y + w.z;
+        }
+        return std::isfinite(sum * 0.0);
+    }
+
+    double operator()(const Vec3& n) const {
+#if defined(__SSE2__)
+        const __m128d nx = _mm_set1_pd(n.x), ny = _mm_set1_pd(n.y), nz = _mm_set1_pd(n.z);
+        __m128d high = _mm_set1_pd(-std::numeric_limits<double>::infinity());
+        __m128d low = _mm_set1_pd(std::numeric_limits<double>::infinity());
+        for (int i = 0; i < padded_a; i += 2)
+            high = _mm_max_pd(high, _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_load_pd(ax + i), nx),
+                                                          _mm_mul_pd(_mm_load_pd(ay + i), ny)),
+                                               _mm_mul_pd(_mm_load_pd(az + i), nz)));
+        for (int j = 0; j < padded_b; j += 2)
+            low = _mm_min_pd(low, _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_load_pd(bx + j), nx),
+                                                        _mm_mul_pd(_mm_load_pd(by + j), ny)),
+                                             _mm_mul_pd(_mm_load_pd(bz + j), nz)));
+        high = _mm_max_pd(high, _mm_shuffle_pd(high, high, 1));
+        low = _mm_min_pd(low, _mm_shuffle_pd(low, low, 1));
+        return _mm_cvtsd_f64(high) - _mm_cvtsd_f64(low);
+#else
+        double high = -std::numeric_limits<double>::infinity();
+        double low = std::numeric_limits<double>::infinity();
+        for (int i = 0; i < padded_a; ++i) high = std::max(high, ax[i] * n.x + ay[i] * n.y + az[i] * n.z);
+        for (int j = 0; j < padded_b; ++j) low = std::min(low, bx[j] * n.x + by[j] * n.y + bz[j] * n.z);
+        return high - low;
+#endif
+    }
+};
+
+// The face axes (a's normals, then -b's in a's frame) with the same answer, bit for bit, as
+// measuring each in order: first the axis of the smallest value (`NearOverlaps`) is measured,
+// whose overlap is at least the final answer; an axis whose value is above that by more than
+// `slack` cannot be the answer nor tie with it, and is skipped.
+void measure_faces(Overlaps& o, const NearOverlaps& near, const Vec3* faces_a, int count_a,
+                   const Vec3* faces_b, int count_b, double slack) {
+    constexpr int kMost = 64;
+    if (count_a > kMost || count_b > kMost) {
+        for (int i = 0; i < count_a; ++i) o.test(faces_a[i]);
+        for (int j = 0; j < count_b; ++j) o.test(-(o.rot * faces_b[j]));
+        return;
+    }
+    double value[2 * kMost];
+    Vec3 axis[2 * kMost];
+    const int count = count_a + count_b;
+    int first = 0;
+    for (int k = 0; k < count; ++k) {
+        axis[k] = k < count_a ? faces_a[k] : -(o.rot * faces_b[k - count_a]);
+        value[k] = near(axis[k]);
+        if (value[k] < value[first]) first = k;
+    }
+    // A NaN value is measured (the comparison fails), and so is every axis after a NaN cap.
+    const double cap = count > 0 ? o.overlap_along(axis[first]) + slack : 0.0;
+    for (int k = 0; k < count; ++k)
+        if (!(value[k] > cap)) o.test(axis[k]);
+}
+
 // The Minkowski difference a - b of two polytopes has as face normals the face normals of a,
 // minus those of b, and +-(e_a x e_b) for edge directions e_a, e_b: the smallest support value
 // over these axes is the exact depth (the distance from the origin to the boundary), since any
@@ -388,6 +488,23 @@ SatResult sat_every_edge_pair(const ShapeView& a, const Pose& pose_a, const Shap
                               const Pose& pose_b) {
     const Features fa = features_of(a), fb = features_of(b);
     Overlaps o(a, pose_a, b, pose_b);
+    {
+        // Two small scanning polytopes: the axes skipped by their near values (`NearOverlaps`).
+        const double slack = 1e-12 * (reach_of(a) + reach_of(b) + norm(o.trans));
+        NearOverlaps near;
+        if (near.fill(o, slack)) {
+            measure_faces(o, near, fa.faces, fa.face_count, fb.faces, fb.face_count, slack);
+            for (int i = 0; i < fa.edge_count; ++i) {
+                for (int j = 0; j < fb.edge_count; ++j) {
+                    Vec3 n;
+                    if (!o.edge_axis(fa.edges[i], fb.edges[j], n)) continue;
+                    if (!(near(n) > o.best + slack)) o.test(n);
+                    if (!(near(-n) > o.best + slack)) o.test(-n);
+                }
+            }
+            return o.result(pose_a);
+        }
+    }
     Vec3 middle_a, middle_b;
     double reach_a, reach_b;
     middle_and_reach(a, middle_a, reach_a);
@@ -427,70 +544,6 @@ SatResult sat_every_edge_pair(const ShapeView& a, const Pose& pose_a, const Shap
     return o.result(pose_a);
 }
 
-// The largest |coordinate| of a polytope's vertices.
-double reach_of(const ShapeView& s) {
-    // std::max from a number (never NaN) skips a NaN coordinate as std::fmax does, inline.
-    double reach = 0.0;
-    for (int i = 0; i < s.vertex_count; ++i) {
-        reach = std::max(reach, std::fabs(s.vertices[i].x));
-        reach = std::max(reach, std::fabs(s.vertices[i].y));
-        reach = std::max(reach, std::fabs(s.vertices[i].z));
-    }
-    return reach;
-}
-
-// The face axes of two scanning polytopes with arcs (a's face normals, then -b's), each
-// measured unless a bound shows it above the smallest: the same answer, bit for bit, as
-// measuring all in order. The bounds come from b's vertices in a's frame and, for each face,
-// a vertex on it (an end of one of its arcs' edges): along a's face normal n the overlap is at
-// least n . (a's vertex on the face) - min over b of n . v, and along -b's face normal n at
-// least max over a of n . v - n . (b's vertex on the face). The first is below the measured
-// overlap exactly (the same products, and b's support point is one of those vertices); the
-// second up to the rounding of b's support point, chosen in b's frame (a few parts in 1e16 of
-// the coordinates, against `slack`'s 1e-12). Measured first: the axis of the smallest bound,
-// whose overlap is at least the final answer; an axis whose bound exceeds it by more than
-// `slack` is above the answer, cannot be it nor tie with it, and is skipped. False (nothing
-// measured) for shapes that do not both scan or have more faces or vertices than kept here.
-bool measure_faces_bounded(Overlaps& o, const ShapeView& a, const ShapeView& b, double slack) {
-    constexpr int kMost = 64;
-    if (!o.scan_both || b.vertex_count > kMost || a.face_count > kMost || b.face_count > kMost ||
-        !std::isfinite(slack))
-        return false;
-    std::int16_t on_a[kMost] = {}, on_b[kMost] = {};  // a vertex on each face
-    for (int i = 0; i < a.arc_count; ++i) on_a[a.arcs[i].face_a] = on_a[a.arcs[i].face_b] = a.arcs[i].vertex;
-    for (int j = 0; j < b.arc_count; ++j) on_b[b.arcs[j].face_a] = on_b[b.arcs[j].face_b] = b.arcs[j].vertex;
-    Vec3 moved[kMost];  // b's vertices in a's frame, as `Overlaps::overlap_along` moves its support
-    for (int j = 0; j < b.vertex_count; ++j) moved[j] = o.rot * b.vertices[j] + o.trans;
-    double bound_a[kMost], bound_b[kMost];
-    Vec3 axis_b[kMost];
-    double least = std::numeric_limits<double>::infinity();
-    Vec3 pilot{};
-    for (int f = 0; f < a.face_count; ++f) {
-        const Vec3 n = a.face_normals[f];
-        double low = dot(n, moved[0]);
-        for (int j = 1; j < b.vertex_count; ++j) low = std::min(low, dot(n, moved[j]));
-        bound_a[f] = dot(n, a.vertices[on_a[f]]) - low;
-        if (bound_a[f] < least) least = bound_a[f], pilot = n;
-    }
-    for (int f = 0; f < b.face_count; ++f) {
-        const Vec3 n = -(o.rot * b.face_normals[f]);
-        double high = dot(n, a.vertices[0]);
-        for (int i = 1; i < a.vertex_count; ++i) high = std::max(high, dot(n, a.vertices[i]));
-        axis_b[f] = n;
-        bound_b[f] = high - dot(n, moved[on_b[f]]);
-        if (bound_b[f] < least) least = bound_b[f], pilot = n;
-    }
-    // A NaN anywhere: measure every axis.
-    if (!std::isfinite(least)) return false;
-    const double cap = o.overlap_along(pilot) + slack;
-    if (!std::isfinite(cap)) return false;
-    for (int f = 0; f < a.face_count; ++f)
-        if (!(bound_a[f] > cap)) o.test(a.face_normals[f]);
-    for (int f = 0; f < b.face_count; ++f)
-        if (!(bound_b[f] > cap)) o.test(axis_b[f]);
-    return true;
-}
-
 // Two polytopes with arcs on their Gauss maps: the face normals of both, then the axes of the
 // edge pairs whose arcs cross (Gregorius 2013), in the plain loop's order. Two polytopes
 // overlap exactly when every face normal of their Minkowski difference shows an overlap, and
@@ -502,33 +555,21 @@ bool sat_crossing_edge_pairs(const ShapeView& a, const Pose& pose_a, const Shape
                              const Pose& pose_b, SatResult& res) {
     Overlaps o(a, pose_a, b, pose_b);
     const double slack = 1e-12 * (reach_of(a) + reach_of(b) + norm(o.trans));
-    if (!measure_faces_bounded(o, a, b, slack)) {
+    NearOverlaps near;
+    const bool estimated = near.fill(o, slack);
+    if (estimated) {
+        measure_faces(o, near, a.face_normals, a.face_count, b.face_normals, b.face_count, slack);
+    } else {
         for (int i = 0; i < a.face_count; ++i) o.test(a.face_normals[i]);
         for (int j = 0; j < b.face_count; ++j) o.test(-(o.rot * b.face_normals[j]));
     }
-    // An end of an edge of each class on each side (vertex 0 for a class without one): the
-    // overlap along an edge axis is at least n . (end_a - end_b), and equal to it when the
-    // arcs cross (the two edges are the supports). The measured overlap is at least that
-    // bound less rounding (a's support value is the largest of the dots, this end's among
-    // them; b's support point is the lowest along n up to the rounding of n turned into b's
-    // frame), a few parts in 1e16 of the coordinates: an axis whose bound is above the best
-    // by more than `slack` would not replace it, and is not measured. Same answer, bit for bit.
-    constexpr int kClasses = 64;
-    std::int16_t end_a[kClasses] = {}, end_b[kClasses] = {};
-    const bool bounded = a.edge_count <= kClasses && b.edge_count <= kClasses;
-    if (bounded) {
-        for (int i = 0; i < a.arc_count; ++i) end_a[a.arcs[i].direction_class] = a.arcs[i].vertex;
-        for (int j = 0; j < b.arc_count; ++j) end_b[b.arcs[j].direction_class] = b.arcs[j].vertex;
-    }
     for (const int signed_pair : crossing_classes(a, b, o.rot)) {
-        const int k = signed_pair / 2, i = k / b.edge_count, j = k % b.edge_count;
+        const int k = signed_pair / 2;
         Vec3 n;
-        if (!o.edge_axis(a.edge_directions[i], b.edge_directions[j], n)) continue;
+        if (!o.edge_axis(a.edge_directions[k / b.edge_count], b.edge_directions[k % b.edge_count], n))
+            continue;
         if (signed_pair % 2 != 0) n = -n;
-        if (bounded) {
-            const Vec3 end = o.rot * b.vertices[end_b[j]] + o.trans;
-            if (dot(n, a.vertices[end_a[i]]) - dot(n, end) > o.best + slack) continue;
-        }
+        if (estimated && near(n) > o.best + slack) continue;
         o.test(n);
     }
     if (!(o.best >= -slack) || !std::isfinite(o.best)) return false;
