@@ -453,19 +453,19 @@ void measure_faces(Overlaps& o, const NearOverlaps& near, const Vec3* faces_a, i
         for (int j = 0; j < count_b; ++j) o.test(-(o.rot * faces_b[j]));
         return;
     }
-    double value[2 * kMost];
-    Vec3 axis[2 * kMost];
+    double value[2 * kMost], x[2 * kMost], y[2 * kMost], z[2 * kMost];  // (Vec3 zeroes itself)
     const int count = count_a + count_b;
     int first = 0;
     for (int k = 0; k < count; ++k) {
-        axis[k] = k < count_a ? faces_a[k] : -(o.rot * faces_b[k - count_a]);
-        value[k] = near(axis[k]);
+        const Vec3 n = k < count_a ? faces_a[k] : -(o.rot * faces_b[k - count_a]);
+        x[k] = n.x, y[k] = n.y, z[k] = n.z;
+        value[k] = near(n);
         if (value[k] < value[first]) first = k;
     }
     // A NaN value is measured (the comparison fails), and so is every axis after a NaN cap.
-    const double cap = count > 0 ? o.overlap_along(axis[first]) + slack : 0.0;
+    const double cap = count > 0 ? o.overlap_along(Vec3{x[first], y[first], z[first]}) + slack : 0.0;
     for (int k = 0; k < count; ++k)
-        if (!(value[k] > cap)) o.test(axis[k]);
+        if (!(value[k] > cap)) o.test(Vec3{x[k], y[k], z[k]});
 }
 
 // The Minkowski difference a - b of two polytopes has as face normals the face normals of a,
