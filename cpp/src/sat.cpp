@@ -82,7 +82,9 @@ bool gauss_arcs(const Vec3* vertices, int vertex_count, const Vec3* face_normals
     // The faces through each vertex as the bits of a word (an edge's faces are then those of
     // both its ends). Beyond 64 faces, no arcs: SAT's work bound lets such a shape meet only
     // shapes of few edges, where the plain loop is cheap.
-    if (vertex_count <= 0 || face_count <= 0 || face_count > 64) return false;
+    if (vertex_count <= 0 || face_count <= 0 || face_count > 64 ||
+        vertex_count > std::numeric_limits<std::int16_t>::max())
+        return false;
     double reach = 0.0;
     for (int v = 0; v < vertex_count; ++v)
         reach = std::max({reach, std::fabs(vertices[v].x), std::fabs(vertices[v].y),
@@ -115,6 +117,7 @@ bool gauss_arcs(const Vec3* vertices, int vertex_count, const Vec3* face_normals
         GaussArc arc;
         arc.face_a = static_cast<std::int16_t>(lowest_bit(both));
         arc.face_b = static_cast<std::int16_t>(lowest_bit(rest));
+        arc.vertex = static_cast<std::int16_t>(pairs[2 * e]);
         arc.direction_class = static_cast<std::int16_t>(class_of[e]);
         out.push_back(arc);
     }
@@ -415,30 +418,70 @@ struct NearOverlaps {
         return std::isfinite(sum * 0.0);
     }
 
-    double operator()(const Vec3& n) const {
+    // The largest of a's dots along n.
+    double high(const Vec3& n) const {
 #if defined(__SSE2__)
         const __m128d nx = _mm_set1_pd(n.x), ny = _mm_set1_pd(n.y), nz = _mm_set1_pd(n.z);
-        __m128d high = _mm_set1_pd(-std::numeric_limits<double>::infinity());
-        __m128d low = _mm_set1_pd(std::numeric_limits<double>::infinity());
+        __m128d top = _mm_set1_pd(-std::numeric_limits<double>::infinity());
         for (int i = 0; i < padded_a; i += 2)
-            high = _mm_max_pd(high, _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_load_pd(ax + i), nx),
-                                                          _mm_mul_pd(_mm_load_pd(ay + i), ny)),
-                                               _mm_mul_pd(_mm_load_pd(az + i), nz)));
-        for (int j = 0; j < padded_b; j += 2)
-            low = _mm_min_pd(low, _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_load_pd(bx + j), nx),
-                                                        _mm_mul_pd(_mm_load_pd(by + j), ny)),
-                                             _mm_mul_pd(_mm_load_pd(bz + j), nz)));
-        high = _mm_max_pd(high, _mm_shuffle_pd(high, high, 1));
-        low = _mm_min_pd(low, _mm_shuffle_pd(low, low, 1));
-        return _mm_cvtsd_f64(high) - _mm_cvtsd_f64(low);
+            top = _mm_max_pd(top, _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_load_pd(ax + i), nx),
+                                                        _mm_mul_pd(_mm_load_pd(ay + i), ny)),
+                                             _mm_mul_pd(_mm_load_pd(az + i), nz)));
+        return _mm_cvtsd_f64(_mm_max_pd(top, _mm_shuffle_pd(top, top, 1)));
 #else
-        double high = -std::numeric_limits<double>::infinity();
-        double low = std::numeric_limits<double>::infinity();
-        for (int i = 0; i < padded_a; ++i) high = std::max(high, ax[i] * n.x + ay[i] * n.y + az[i] * n.z);
-        for (int j = 0; j < padded_b; ++j) low = std::min(low, bx[j] * n.x + by[j] * n.y + bz[j] * n.z);
-        return high - low;
+        double top = -std::numeric_limits<double>::infinity();
+        for (int i = 0; i < padded_a; ++i) top = std::max(top, dot_a(n, i));
+        return top;
 #endif
     }
+
+    // The smallest of b's moved vertices' dots along n.
+    double low(const Vec3& n) const {
+#if defined(__SSE2__)
+        const __m128d nx = _mm_set1_pd(n.x), ny = _mm_set1_pd(n.y), nz = _mm_set1_pd(n.z);
+        __m128d bottom = _mm_set1_pd(std::numeric_limits<double>::infinity());
+        for (int j = 0; j < padded_b; j += 2)
+            bottom = _mm_min_pd(bottom, _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_load_pd(bx + j), nx),
+                                                              _mm_mul_pd(_mm_load_pd(by + j), ny)),
+                                                   _mm_mul_pd(_mm_load_pd(bz + j), nz)));
+        return _mm_cvtsd_f64(_mm_min_pd(bottom, _mm_shuffle_pd(bottom, bottom, 1)));
+#else
+        double bottom = std::numeric_limits<double>::infinity();
+        for (int j = 0; j < padded_b; ++j) bottom = std::min(bottom, dot_b(n, j));
+        return bottom;
+#endif
+    }
+
+    double operator()(const Vec3& n) const { return high(n) - low(n); }
+
+    // One vertex's dot: of a's vertex i, of b's moved vertex j. A vertex of a (on a face, at
+    // an edge's end) in place of a's largest dot, or one of b in place of b's smallest,
+    // gives a value at most the one above: still below the measured overlap up to rounding.
+    double dot_a(const Vec3& n, int i) const { return ax[i] * n.x + ay[i] * n.y + az[i] * n.z; }
+    double dot_b(const Vec3& n, int j) const { return bx[j] * n.x + by[j] * n.y + bz[j] * n.z; }
+};
+
+// A vertex on each face of both shapes (an end of one of its edges), from their arcs, and an
+// end of an edge of each direction class; index 0 where none is known, which only loosens a
+// value (`NearOverlaps::dot_a`). Unknown (`known_a`, `known_b` false) without arcs or beyond
+// 64 faces or classes.
+struct FaceVertices {
+    static constexpr int kMost = 64;
+    std::int16_t a[kMost] = {}, b[kMost] = {};            // on faces
+    std::int16_t end_a[kMost] = {}, end_b[kMost] = {};    // at edges, by class
+    bool known_a = false, known_b = false;
+
+    static bool fill(const ShapeView& s, std::int16_t* on, std::int16_t* end) {
+        if (s.arcs == nullptr || s.face_count > kMost || s.edge_count > kMost) return false;
+        for (int k = 0; k < s.arc_count; ++k) {
+            const GaussArc& arc = s.arcs[k];
+            on[arc.face_a] = on[arc.face_b] = end[arc.direction_class] = arc.vertex;
+        }
+        return true;
+    }
+
+    FaceVertices(const ShapeView& sa, const ShapeView& sb)
+        : known_a(fill(sa, a, end_a)), known_b(fill(sb, b, end_b)) {}
 };
 
 // The face axes (a's normals, then -b's in a's frame) with the same answer, bit for bit, as
@@ -446,7 +489,7 @@ struct NearOverlaps {
 // whose overlap is at least the final answer; an axis whose value is above that by more than
 // `slack` cannot be the answer nor tie with it, and is skipped.
 void measure_faces(Overlaps& o, const NearOverlaps& near, const Vec3* faces_a, int count_a,
-                   const Vec3* faces_b, int count_b, double slack) {
+                   const Vec3* faces_b, int count_b, double slack, const FaceVertices& on) {
     constexpr int kMost = 64;
     if (count_a > kMost || count_b > kMost) {
         for (int i = 0; i < count_a; ++i) o.test(faces_a[i]);
@@ -459,7 +502,11 @@ void measure_faces(Overlaps& o, const NearOverlaps& near, const Vec3* faces_a, i
     for (int k = 0; k < count; ++k) {
         const Vec3 n = k < count_a ? faces_a[k] : -(o.rot * faces_b[k - count_a]);
         x[k] = n.x, y[k] = n.y, z[k] = n.z;
-        value[k] = near(n);
+        // A vertex on the face in place of its shape's extreme: the same value up to rounding.
+        if (k < count_a)
+            value[k] = on.known_a ? near.dot_a(n, on.a[k]) - near.low(n) : near(n);
+        else
+            value[k] = on.known_b ? near.high(n) - near.dot_b(n, on.b[k - count_a]) : near(n);
         if (value[k] < value[first]) first = k;
     }
     // A NaN value is measured (the comparison fails), and so is every axis after a NaN cap.
@@ -493,7 +540,8 @@ SatResult sat_every_edge_pair(const ShapeView& a, const Pose& pose_a, const Shap
         const double slack = 1e-12 * (reach_of(a) + reach_of(b) + norm(o.trans));
         NearOverlaps near;
         if (near.fill(o, slack)) {
-            measure_faces(o, near, fa.faces, fa.face_count, fb.faces, fb.face_count, slack);
+            measure_faces(o, near, fa.faces, fa.face_count, fb.faces, fb.face_count, slack,
+                          FaceVertices(a, b));
             for (int i = 0; i < fa.edge_count; ++i) {
                 for (int j = 0; j < fb.edge_count; ++j) {
                     Vec3 n;
@@ -557,19 +605,24 @@ bool sat_crossing_edge_pairs(const ShapeView& a, const Pose& pose_a, const Shape
     const double slack = 1e-12 * (reach_of(a) + reach_of(b) + norm(o.trans));
     NearOverlaps near;
     const bool estimated = near.fill(o, slack);
+    const FaceVertices on(a, b);
     if (estimated) {
-        measure_faces(o, near, a.face_normals, a.face_count, b.face_normals, b.face_count, slack);
+        measure_faces(o, near, a.face_normals, a.face_count, b.face_normals, b.face_count, slack,
+                      on);
     } else {
         for (int i = 0; i < a.face_count; ++i) o.test(a.face_normals[i]);
         for (int j = 0; j < b.face_count; ++j) o.test(-(o.rot * b.face_normals[j]));
     }
     for (const int signed_pair : crossing_classes(a, b, o.rot)) {
-        const int k = signed_pair / 2;
+        const int k = signed_pair / 2, i = k / b.edge_count, j = k % b.edge_count;
         Vec3 n;
-        if (!o.edge_axis(a.edge_directions[k / b.edge_count], b.edge_directions[k % b.edge_count], n))
-            continue;
+        if (!o.edge_axis(a.edge_directions[i], b.edge_directions[j], n)) continue;
         if (signed_pair % 2 != 0) n = -n;
-        if (estimated && near(n) > o.best + slack) continue;
+        // Where the arcs cross, the two edges are the supports: their ends give the value.
+        if (estimated && (on.known_a && on.known_b
+                              ? near.dot_a(n, on.end_a[i]) - near.dot_b(n, on.end_b[j])
+                              : near(n)) > o.best + slack)
+            continue;
         o.test(n);
     }
     if (!(o.best >= -slack) || !std::isfinite(o.best)) return false;

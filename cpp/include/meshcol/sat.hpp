@@ -20,11 +20,12 @@ namespace meshcol {
 
 /// One true edge of a polytope on its Gauss map (local frame): the arc between the outward unit
 /// normals of its two faces, on the great circle whose normal is
-/// `face_normals[face_b] x face_normals[face_a]`. Indices only (6 bytes an edge): the normals
+/// `face_normals[face_b] x face_normals[face_a]`. Indices only (8 bytes an edge): the normals
 /// are the shape's own.
 struct GaussArc {
     std::int16_t face_a = -1;           ///< one face (index into the shape's face normals)
     std::int16_t face_b = -1;           ///< the other
+    std::int16_t vertex = -1;           ///< one end of the edge (a local vertex index)
     std::int16_t direction_class = -1;  ///< the edge's direction class (index into the shape's classes)
 };
 
@@ -33,7 +34,7 @@ struct GaussArc {
 /// the faces among `face_normals` whose planes hold both ends (within
 /// `defaults::sat_arc_plane_tolerance`), appended to `out`. False, and `out` as it was, when
 /// an edge has no class or not exactly two such faces (a flat or degenerate shape), or the
-/// shape has more than 64 faces or a class beyond the arc's field: SAT then measures every
+/// shape has more than 64 faces or an index beyond the arc's fields: SAT then measures every
 /// edge pair of it.
 bool gauss_arcs(const Vec3* vertices, int vertex_count, const Vec3* face_normals, int face_count,
                 const std::int32_t* pairs, const std::int32_t* class_of, size_t count,
