@@ -318,8 +318,10 @@ struct Overlaps {
           // same supports as their support functions').
           scan_both(scans(a_) && scans(b_)) {}
 
-    void test(const Vec3& n) {
-        const double overlap = overlap_along(n);
+    void test(const Vec3& n) { take(n, overlap_along(n)); }
+
+    // An axis measured before (`overlap_along`), taken in its turn.
+    void take(const Vec3& n, double overlap) {
         ++axes;
         if (overlap < best) {
             best = overlap;
@@ -510,9 +512,12 @@ void measure_faces(Overlaps& o, const NearOverlaps& near, const Vec3* faces_a, i
         if (value[k] < value[first]) first = k;
     }
     // A NaN value is measured (the comparison fails), and so is every axis after a NaN cap.
-    const double cap = count > 0 ? o.overlap_along(Vec3{x[first], y[first], z[first]}) + slack : 0.0;
-    for (int k = 0; k < count; ++k)
-        if (!(value[k] > cap)) o.test(Vec3{x[k], y[k], z[k]});
+    const double measured = count > 0 ? o.overlap_along(Vec3{x[first], y[first], z[first]}) : 0.0;
+    const double cap = measured + slack;
+    for (int k = 0; k < count; ++k) {
+        if (k == first) o.take(Vec3{x[k], y[k], z[k]}, measured);
+        else if (!(value[k] > cap)) o.test(Vec3{x[k], y[k], z[k]});
+    }
 }
 
 // The Minkowski difference a - b of two polytopes has as face normals the face normals of a,
