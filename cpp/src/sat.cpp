@@ -151,7 +151,12 @@ Vec3 arc_circle(const ShapeView& s, const GaussArc& arc) {
 // end at each face). An arc of b then meets up to 64 arcs of a in a few word operations,
 // without a branch an arc pair; the signs are those of the same products as a test of each
 // pair would take, so the answer is the same.
-const std::vector<int>& crossing_classes(const ShapeView& a, const ShapeView& b, const Mat3& rot) {
+//
+// `keep(i, j, axis)` (classes i of a and j of b, their unnormalised axis) says which signs of
+// a crossing are worth listing: bit 0 the axis, bit 1 its opposite.
+template <class Keep>
+const std::vector<int>& crossing_classes(const ShapeView& a, const ShapeView& b, const Mat3& rot,
+                                         const Keep& keep) {
     // One lookup of the thread's scratch (in a shared library each names a call).
     thread_local CrossingScratch scratch;
     std::vector<int>& found = scratch.found;
@@ -271,8 +276,10 @@ const std::vector<int>& crossing_classes(const ShapeView& a, const ShapeView& b,
                                         rot * b.edge_directions[cd.direction_class]);
                 const Vec3 middle = a.face_normals[ab.face_a] + a.face_normals[ab.face_b];
                 const double side = dot(axis, middle), scale = m * norm(axis) * norm(middle);
-                if (!(side < -scale)) found.push_back(2 * pair);
-                if (!(side > scale)) found.push_back(2 * pair + 1);
+                const int signs = ((side < -scale) ? 0 : 1) | ((side > scale) ? 0 : 2);
+                const int wanted = signs & keep(ab.direction_class, cd.direction_class, axis);
+                if (wanted & 1) found.push_back(2 * pair);
+                if (wanted & 2) found.push_back(2 * pair + 1);
             }
         }
     }
@@ -618,7 +625,22 @@ bool sat_crossing_edge_pairs(const ShapeView& a, const Pose& pose_a, const Shape
         for (int i = 0; i < a.face_count; ++i) o.test(a.face_normals[i]);
         for (int j = 0; j < b.face_count; ++j) o.test(-(o.rot * b.face_normals[j]));
     }
-    for (const int signed_pair : crossing_classes(a, b, o.rot)) {
+    // The crossings listed only when their value is within the slack of the best face axis
+    // (the loop below checks again against the best so far, which is at most that).
+    const double limit = o.best + slack;
+    const auto keep = [&](int i, int j, const Vec3& axis) {
+        if (!estimated) return 3;
+        const double length = norm(axis);
+        if (!(length > defaults::sat_parallel_edge_sine)) return 0;  // `edge_axis` drops it
+        const Vec3 n = axis / length;  // as `edge_axis` makes it
+        if (on.known_a && on.known_b) {
+            // The opposite axis's value is this one negated, exactly.
+            const double value = near.dot_a(n, on.end_a[i]) - near.dot_b(n, on.end_b[j]);
+            return (value > limit ? 0 : 1) | (-value > limit ? 0 : 2);
+        }
+        return (near(n) > limit ? 0 : 1) | (near(-n) > limit ? 0 : 2);
+    };
+    for (const int signed_pair : crossing_classes(a, b, o.rot, keep)) {
         const int k = signed_pair / 2, i = k / b.edge_count, j = k % b.edge_count;
         Vec3 n;
         if (!o.edge_axis(a.edge_directions[i], b.edge_directions[j], n)) continue;
