@@ -126,6 +126,22 @@ bool gauss_arcs(const Vec3* vertices, int vertex_count, const Vec3* face_normals
 
 namespace {
 
+#if defined(__SSE2__)
+// The dots of entries k and k + 1 of columns x, y, z with (nx, ny, nz), rounded as `dot`
+// rounds them (x, plus y, plus z).
+inline __m128d lane_dots(const double* x, const double* y, const double* z, int k, __m128d nx,
+                         __m128d ny, __m128d nz) {
+    return _mm_add_pd(
+        _mm_add_pd(_mm_mul_pd(_mm_load_pd(x + k), nx), _mm_mul_pd(_mm_load_pd(y + k), ny)),
+        _mm_mul_pd(_mm_load_pd(z + k), nz));
+}
+
+// The two lanes of x or'ed.
+inline std::uint64_t lanes_or(__m128i x) {
+    return static_cast<std::uint64_t>(_mm_cvtsi128_si64(_mm_or_si128(x, _mm_unpackhi_epi64(x, x))));
+}
+#endif
+
 // `crossing_classes`' answer, kept by each thread.
 struct CrossingScratch {
     std::vector<int> found;
@@ -202,16 +218,15 @@ const std::vector<int>& crossing_classes(const ShapeView& a, const ShapeView& b,
             const __m128d plus = _mm_set1_pd(m), minus = _mm_set1_pd(-m);
             __m128i bits = _mm_set_epi64x(2, 1), ups = _mm_setzero_si128(), downs = ups;
             for (int i = 0; i < padded; i += 2) {
-                const __m128d t = _mm_add_pd(
-                    _mm_add_pd(_mm_mul_pd(fx, _mm_load_pd(qx + i)), _mm_mul_pd(fy, _mm_load_pd(qy + i))),
-                    _mm_mul_pd(fz, _mm_load_pd(qz + i)));
-                ups = _mm_or_si128(ups, _mm_and_si128(_mm_castpd_si128(_mm_cmpgt_pd(t, plus)), bits));
-                downs = _mm_or_si128(downs, _mm_and_si128(_mm_castpd_si128(_mm_cmplt_pd(t, minus)), bits));
+                const __m128d t = lane_dots(qx, qy, qz, i, fx, fy, fz);  // c . q, as `dot(c, q)`
+                const __m128i above_i = _mm_castpd_si128(_mm_cmpgt_pd(t, plus));
+                const __m128i below_i = _mm_castpd_si128(_mm_cmplt_pd(t, minus));
+                ups = _mm_or_si128(ups, _mm_and_si128(above_i, bits));
+                downs = _mm_or_si128(downs, _mm_and_si128(below_i, bits));
                 bits = _mm_slli_epi64(bits, 2);
             }
-            up = static_cast<std::uint64_t>(_mm_cvtsi128_si64(_mm_or_si128(ups, _mm_unpackhi_epi64(ups, ups))));
-            down = static_cast<std::uint64_t>(
-                _mm_cvtsi128_si64(_mm_or_si128(downs, _mm_unpackhi_epi64(downs, downs))));
+            up = lanes_or(ups);
+            down = lanes_or(downs);
 #else
             for (int i = 0; i < arcs; ++i) {
                 const double t = cx[f] * qx[i] + cy[f] * qy[i] + cz[f] * qz[i];
@@ -229,13 +244,12 @@ const std::vector<int>& crossing_classes(const ShapeView& a, const ShapeView& b,
             // (B) at a face above or below it.
             std::uint64_t a_up = 0, a_down = 0, b_up = 0, b_down = 0;
 #if defined(__SSE2__)
-            const __m128d ux = _mm_set1_pd(circle.x), uy = _mm_set1_pd(circle.y), uz = _mm_set1_pd(circle.z);
+            const __m128d ux = _mm_set1_pd(circle.x), uy = _mm_set1_pd(circle.y);
+            const __m128d uz = _mm_set1_pd(circle.z);
             const __m128d plus = _mm_set1_pd(m), minus = _mm_set1_pd(-m);
             __m128i au = _mm_setzero_si128(), ad = au, bu = au, bd = au;
             for (int g = 0; g < padded_a; g += 2) {
-                const __m128d t = _mm_add_pd(
-                    _mm_add_pd(_mm_mul_pd(_mm_load_pd(ax + g), ux), _mm_mul_pd(_mm_load_pd(ay + g), uy)),
-                    _mm_mul_pd(_mm_load_pd(az + g), uz));
+                const __m128d t = lane_dots(ax, ay, az, g, ux, uy, uz);
                 const __m128i up = _mm_castpd_si128(_mm_cmpgt_pd(t, plus));
                 const __m128i down = _mm_castpd_si128(_mm_cmplt_pd(t, minus));
                 const __m128i from = _mm_load_si128(reinterpret_cast<const __m128i*>(with_a + g));
@@ -245,14 +259,12 @@ const std::vector<int>& crossing_classes(const ShapeView& a, const ShapeView& b,
                 bu = _mm_or_si128(bu, _mm_and_si128(up, to));
                 bd = _mm_or_si128(bd, _mm_and_si128(down, to));
             }
-            const auto lanes = [](__m128i x) {
-                return static_cast<std::uint64_t>(_mm_cvtsi128_si64(_mm_or_si128(x, _mm_unpackhi_epi64(x, x))));
-            };
-            a_up = lanes(au), a_down = lanes(ad), b_up = lanes(bu), b_down = lanes(bd);
+            a_up = lanes_or(au), a_down = lanes_or(ad), b_up = lanes_or(bu), b_down = lanes_or(bd);
 #else
             for (int g = 0; g < faces_a; ++g) {
                 const double t = ax[g] * circle.x + ay[g] * circle.y + az[g] * circle.z;
-                const std::uint64_t up = t > m ? ~std::uint64_t{0} : 0, down = t < -m ? ~std::uint64_t{0} : 0;
+                const std::uint64_t up = t > m ? ~std::uint64_t{0} : 0;
+                const std::uint64_t down = t < -m ? ~std::uint64_t{0} : 0;
                 a_up |= up & with_a[g], a_down |= down & with_a[g];
                 b_up |= up & with_b[g], b_down |= down & with_b[g];
             }
@@ -433,9 +445,7 @@ struct NearOverlaps {
         const __m128d nx = _mm_set1_pd(n.x), ny = _mm_set1_pd(n.y), nz = _mm_set1_pd(n.z);
         __m128d top = _mm_set1_pd(-std::numeric_limits<double>::infinity());
         for (int i = 0; i < padded_a; i += 2)
-            top = _mm_max_pd(top, _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_load_pd(ax + i), nx),
-                                                        _mm_mul_pd(_mm_load_pd(ay + i), ny)),
-                                             _mm_mul_pd(_mm_load_pd(az + i), nz)));
+            top = _mm_max_pd(top, lane_dots(ax, ay, az, i, nx, ny, nz));
         return _mm_cvtsd_f64(_mm_max_pd(top, _mm_shuffle_pd(top, top, 1)));
 #else
         double top = -std::numeric_limits<double>::infinity();
@@ -450,9 +460,7 @@ struct NearOverlaps {
         const __m128d nx = _mm_set1_pd(n.x), ny = _mm_set1_pd(n.y), nz = _mm_set1_pd(n.z);
         __m128d bottom = _mm_set1_pd(std::numeric_limits<double>::infinity());
         for (int j = 0; j < padded_b; j += 2)
-            bottom = _mm_min_pd(bottom, _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_load_pd(bx + j), nx),
-                                                              _mm_mul_pd(_mm_load_pd(by + j), ny)),
-                                                   _mm_mul_pd(_mm_load_pd(bz + j), nz)));
+            bottom = _mm_min_pd(bottom, lane_dots(bx, by, bz, j, nx, ny, nz));
         return _mm_cvtsd_f64(_mm_min_pd(bottom, _mm_shuffle_pd(bottom, bottom, 1)));
 #else
         double bottom = std::numeric_limits<double>::infinity();

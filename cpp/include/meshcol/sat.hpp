@@ -26,7 +26,7 @@ struct GaussArc {
     std::int16_t face_a = -1;           ///< one face (index into the shape's face normals)
     std::int16_t face_b = -1;           ///< the other
     std::int16_t vertex = -1;           ///< one end of the edge (a local vertex index)
-    std::int16_t direction_class = -1;  ///< the edge's direction class (index into the shape's classes)
+    std::int16_t direction_class = -1;  ///< the edge's direction class (into the shape's classes)
 };
 
 /// The arcs of a polytope's true edges `pairs` ((count, 2) local vertex indices), whose
