@@ -2,11 +2,13 @@
 /// Exact penetration depth of two polytopes (or boxes) by the separating axis theorem: the
 /// minimum over the face normals of both shapes and the cross products of their edge
 /// directions of the overlap along that axis (Ericson 2004, sec. 5.2.1; Gottschalk 1996).
-/// Quadratic in the edge count, so only for shapes with few faces: EPA verification. Edge
-/// axes that a bound from two inner balls shows cannot be the smallest are skipped, with the
-/// same answer to the bit; between polytopes with arcs on their Gauss maps (`GaussArc`), only
-/// the axes of edge pairs whose arcs cross are measured (Gregorius 2013): the same answer
-/// unless the shapes touch, where ties within rounding may fall to another axis (sat.cpp).
+/// Quadratic in the edge count, so only for shapes with few faces: EPA verification. Axes
+/// that a bound shows cannot be the smallest are skipped, with the same answer to the bit
+/// (two small scanning polytopes: a value within rounding of each axis's overlap; else two
+/// inner balls, for edge axes); between polytopes with arcs on their Gauss maps
+/// (`GaussArc`), only the axes of edge pairs whose arcs cross are measured (Gregorius 2013):
+/// the same answer unless the shapes touch, where ties within rounding may fall to another
+/// axis (sat.cpp).
 
 #include <cstddef>
 #include <cstdint>
