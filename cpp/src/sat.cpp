@@ -82,7 +82,9 @@ bool gauss_arcs(const Vec3* vertices, int vertex_count, const Vec3* face_normals
     // The faces through each vertex as the bits of a word (an edge's faces are then those of
     // both its ends). Beyond 64 faces, no arcs: SAT's work bound lets such a shape meet only
     // shapes of few edges, where the plain loop is cheap.
-    if (vertex_count <= 0 || face_count <= 0 || face_count > 64) return false;
+    if (vertex_count <= 0 || face_count <= 0 || face_count > 64 ||
+        vertex_count > std::numeric_limits<std::int16_t>::max())
+        return false;
     double reach = 0.0;
     for (int v = 0; v < vertex_count; ++v)
         reach = std::max({reach, std::fabs(vertices[v].x), std::fabs(vertices[v].y),
@@ -107,15 +109,16 @@ bool gauss_arcs(const Vec3* vertices, int vertex_count, const Vec3* face_normals
         std::uint64_t both = faces_of[pairs[2 * e]] & faces_of[pairs[2 * e + 1]];
         // Exactly two bits: clearing the lowest leaves one.
         const std::uint64_t rest = both & (both - 1);
-        if (both == 0 || rest == 0 || (rest & (rest - 1)) != 0 || class_of[e] < 0) {
+        if (both == 0 || rest == 0 || (rest & (rest - 1)) != 0 || class_of[e] < 0 ||
+            class_of[e] > std::numeric_limits<std::int16_t>::max()) {
             out.resize(kept);
             return false;
         }
         GaussArc arc;
-        arc.normal_a = face_normals[lowest_bit(both)];
-        arc.normal_b = face_normals[lowest_bit(rest)];
-        arc.plane = cross(arc.normal_b, arc.normal_a);
-        arc.direction_class = class_of[e];
+        arc.face_a = static_cast<std::int16_t>(lowest_bit(both));
+        arc.face_b = static_cast<std::int16_t>(lowest_bit(rest));
+        arc.vertex = static_cast<std::int16_t>(pairs[2 * e]);
+        arc.direction_class = static_cast<std::int16_t>(class_of[e]);
         out.push_back(arc);
     }
     return true;
@@ -123,106 +126,173 @@ bool gauss_arcs(const Vec3* vertices, int vertex_count, const Vec3* face_normals
 
 namespace {
 
-// `crossing_classes`' working arrays, kept by each thread.
+#if defined(__SSE2__)
+// The dots of entries k and k + 1 of columns x, y, z with (nx, ny, nz), rounded as `dot`
+// rounds them (x, plus y, plus z).
+inline __m128d lane_dots(const double* x, const double* y, const double* z, int k, __m128d nx,
+                         __m128d ny, __m128d nz) {
+    return _mm_add_pd(
+        _mm_add_pd(_mm_mul_pd(_mm_load_pd(x + k), nx), _mm_mul_pd(_mm_load_pd(y + k), ny)),
+        _mm_mul_pd(_mm_load_pd(z + k), nz));
+}
+
+// The two lanes of x or'ed.
+inline std::uint64_t lanes_or(__m128i x) {
+    return static_cast<std::uint64_t>(_mm_cvtsi128_si64(_mm_or_si128(x, _mm_unpackhi_epi64(x, x))));
+}
+#endif
+
+// `crossing_classes`' answer, kept by each thread.
 struct CrossingScratch {
-    std::vector<double> columns;  // b's arcs' ends, then the first test's values
-    std::vector<Vec3> circles;    // b's arcs' circles
-    std::vector<int> near;        // the arcs the first test keeps
-    std::vector<int> found;       // the answer
+    std::vector<int> found;
 };
+
+// The circle of an arc of shape s (its own frame): n_b x n_a, as the arc's two faces give it.
+Vec3 arc_circle(const ShapeView& s, const GaussArc& arc) {
+    return cross(s.face_normals[arc.face_b], s.face_normals[arc.face_a]);
+}
 
 // The axes of class pairs whose edges' arcs cross on the Gauss maps of a and of -b (in a's
 // frame), or nearly: the axes that may be face normals of the Minkowski difference a - b
 // (Gregorius, "The Separating Axis Test between convex polyhedra", GDC 2013). Each as
 // 2 (i * (b's class count) + j) for the axis `Overlaps::edge_axis` of classes i and j, plus 1
-// for its opposite: ascending (the plain loop's order), each once. Arcs AB and CD cross when
-// C and D lie on opposite sides of AB's great circle, A and B on opposite sides of CD's, and
-// the crossing is on the near side (CBA and BDC of one sign). A sign test decides only beyond
-// `sat_arc_crossing_margin`.
-const std::vector<int>& crossing_classes(const ShapeView& a, const ShapeView& b, const Mat3& rot) {
-    // -b's arcs in a's frame: C and D the normals negated, the circle's normal kept (D x C =
-    // R (v x u)); the ends as columns, so that the first test takes two arcs at a time (an
-    // odd count's last twice: it is listed once more, and found once).
-    const int count = b.arc_count, padded = count + (count & 1);
+// for its opposite: ascending (the plain loop's order), each once. Arcs AB (of a) and CD (of
+// -b) cross when C and D lie on opposite sides of AB's great circle, A and B on opposite
+// sides of CD's, and the crossing is on the near side (CBA and BDC of one sign). A sign test
+// decides only beyond `sat_arc_crossing_margin`.
+//
+// Every sign is that of a face normal against a circle, so the tests are taken as sets:
+// the faces of -b against each circle of a (bits over a's arcs, for each face of b), and the
+// faces of a against each circle of -b (turned into bits over a's arcs through the arcs that
+// end at each face). An arc of b then meets up to 64 arcs of a in a few word operations,
+// without a branch an arc pair; the signs are those of the same products as a test of each
+// pair would take, so the answer is the same.
+//
+// `keep(i, j, axis)` (classes i of a and j of b, their unnormalised axis) says which signs of
+// a crossing are worth listing: bit 0 the axis, bit 1 its opposite.
+template <class Keep>
+const std::vector<int>& crossing_classes(const ShapeView& a, const ShapeView& b, const Mat3& rot,
+                                         const Keep& keep) {
     // One lookup of the thread's scratch (in a shared library each names a call).
     thread_local CrossingScratch scratch;
-    CrossingScratch& s = scratch;
-    s.columns.resize(8 * static_cast<size_t>(padded));
-    s.circles.resize(static_cast<size_t>(count));
-    s.near.resize(static_cast<size_t>(padded));
-    Vec3* const circles = s.circles.data();
-    int* const near = s.near.data();
-    std::vector<int>& found = s.found;
-    double* const cx = s.columns.data();
-    double* const cy = cx + padded;
-    double* const cz = cy + padded;
-    double* const dx = cz + padded;
-    double* const dy = dx + padded;
-    double* const dz = dy + padded;
-    double* const cba = dz + padded;
-    double* const dba = cba + padded;
-    for (int k = 0; k < padded; ++k) {
-        const GaussArc& arc = b.arcs[k < count ? k : count - 1];
-        const Vec3 c = -(rot * arc.normal_a), d = -(rot * arc.normal_b);
-        cx[k] = c.x, cy[k] = c.y, cz[k] = c.z;
-        dx[k] = d.x, dy[k] = d.y, dz[k] = d.z;
-        if (k < count) circles[k] = rot * arc.plane;
+    std::vector<int>& found = scratch.found;
+    found.clear();
+    // Both shapes have arcs, so at most 64 faces each (`gauss_arcs`); the counts padded to
+    // even (two a lane), the padding's normals zero (no sign) and its arc sets empty.
+    constexpr int kFaces = 64;
+    const int faces_a = a.face_count, faces_b = b.face_count;
+    const int padded_a = faces_a + (faces_a & 1), padded_b = faces_b + (faces_b & 1);
+    alignas(16) double ax[kFaces], ay[kFaces], az[kFaces];  // a's normals
+    alignas(16) double cx[kFaces], cy[kFaces], cz[kFaces];  // -b's normals, in a's frame
+    for (int g = 0; g < padded_a; ++g) {
+        const Vec3 n = g < faces_a ? a.face_normals[g] : Vec3{};
+        ax[g] = n.x, ay[g] = n.y, az[g] = n.z;
+    }
+    for (int f = 0; f < padded_b; ++f) {
+        const Vec3 c = f < faces_b ? -(rot * b.face_normals[f]) : Vec3{};
+        cx[f] = c.x, cy[f] = c.y, cz[f] = c.z;
     }
     const double m = defaults::sat_arc_crossing_margin;
-    const auto same_side = [m](double x, double y) {
-        return (x > m && y > m) || (x < -m && y < -m);
-    };
-    found.clear();
-    for (int i = 0; i < a.arc_count; ++i) {
-        const GaussArc& ab = a.arcs[i];
-        const Vec3 q = ab.plane;
-        // The arcs with ends on both sides of AB's circle (or near it), listed without a
-        // branch an arc.
-        int listed = 0;
+    // a's arcs 64 at a time: bit i of each set is the chunk's arc i.
+    for (int first = 0; first < a.arc_count; first += 64) {
+        const int arcs = std::min(a.arc_count - first, 64);
+        const int padded = arcs + (arcs & 1);
+        const std::uint64_t all = arcs == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << arcs) - 1;
+        alignas(16) double qx[64], qy[64], qz[64];                // the arcs' circles
+        alignas(16) std::uint64_t with_a[kFaces], with_b[kFaces];  // arcs from / to each face
+        for (int g = 0; g < padded_a; ++g) with_a[g] = with_b[g] = 0;
+        for (int i = 0; i < padded; ++i) {
+            const Vec3 q = i < arcs ? arc_circle(a, a.arcs[first + i]) : Vec3{};
+            qx[i] = q.x, qy[i] = q.y, qz[i] = q.z;
+        }
+        for (int i = 0; i < arcs; ++i) {
+            with_a[a.arcs[first + i].face_a] |= std::uint64_t{1} << i;
+            with_b[a.arcs[first + i].face_b] |= std::uint64_t{1} << i;
+        }
+        // Each face of -b against each circle of the chunk: above and below, bits over arcs.
+        std::uint64_t above[kFaces], below[kFaces];
+        for (int f = 0; f < faces_b; ++f) {
+            std::uint64_t up = 0, down = 0;
 #if defined(__SSE2__)
-        const __m128d qx = _mm_set1_pd(q.x), qy = _mm_set1_pd(q.y), qz = _mm_set1_pd(q.z);
-        const __m128d above = _mm_set1_pd(m), below = _mm_set1_pd(-m);
-        for (int k = 0; k < padded; k += 2) {
-            const __m128d c = _mm_add_pd(
-                _mm_add_pd(_mm_mul_pd(_mm_loadu_pd(cx + k), qx), _mm_mul_pd(_mm_loadu_pd(cy + k), qy)),
-                _mm_mul_pd(_mm_loadu_pd(cz + k), qz));
-            const __m128d d = _mm_add_pd(
-                _mm_add_pd(_mm_mul_pd(_mm_loadu_pd(dx + k), qx), _mm_mul_pd(_mm_loadu_pd(dy + k), qy)),
-                _mm_mul_pd(_mm_loadu_pd(dz + k), qz));
-            _mm_storeu_pd(cba + k, c);
-            _mm_storeu_pd(dba + k, d);
-            const __m128d same = _mm_or_pd(
-                _mm_and_pd(_mm_cmpgt_pd(c, above), _mm_cmpgt_pd(d, above)),
-                _mm_and_pd(_mm_cmplt_pd(c, below), _mm_cmplt_pd(d, below)));
-            const int mask = _mm_movemask_pd(same);
-            near[listed] = k;
-            listed += !(mask & 1);
-            near[listed] = k + 1;
-            listed += !(mask & 2);
-        }
+            const __m128d fx = _mm_set1_pd(cx[f]), fy = _mm_set1_pd(cy[f]), fz = _mm_set1_pd(cz[f]);
+            const __m128d plus = _mm_set1_pd(m), minus = _mm_set1_pd(-m);
+            __m128i bits = _mm_set_epi64x(2, 1), ups = _mm_setzero_si128(), downs = ups;
+            for (int i = 0; i < padded; i += 2) {
+                const __m128d t = lane_dots(qx, qy, qz, i, fx, fy, fz);  // c . q, as `dot(c, q)`
+                const __m128i above_i = _mm_castpd_si128(_mm_cmpgt_pd(t, plus));
+                const __m128i below_i = _mm_castpd_si128(_mm_cmplt_pd(t, minus));
+                ups = _mm_or_si128(ups, _mm_and_si128(above_i, bits));
+                downs = _mm_or_si128(downs, _mm_and_si128(below_i, bits));
+                bits = _mm_slli_epi64(bits, 2);
+            }
+            up = lanes_or(ups);
+            down = lanes_or(downs);
 #else
-        for (int k = 0; k < padded; ++k) {
-            cba[k] = cx[k] * q.x + cy[k] * q.y + cz[k] * q.z;
-            dba[k] = dx[k] * q.x + dy[k] * q.y + dz[k] * q.z;
-            near[listed] = k;
-            listed += !same_side(cba[k], dba[k]);
-        }
+            for (int i = 0; i < arcs; ++i) {
+                const double t = cx[f] * qx[i] + cy[f] * qy[i] + cz[f] * qz[i];
+                up |= static_cast<std::uint64_t>(t > m) << i;
+                down |= static_cast<std::uint64_t>(t < -m) << i;
+            }
 #endif
-        const int row = ab.direction_class * b.edge_count;
-        const Vec3 middle = ab.normal_a + ab.normal_b;  // on AB's side of its circle's axis
-        for (int l = 0; l < listed; ++l) {
-            const int k = near[l] < count ? near[l] : count - 1;
-            const double adc = dot(ab.normal_a, circles[k]), bdc = dot(ab.normal_b, circles[k]);
-            if (same_side(adc, bdc) || same_side(cba[k], -bdc)) continue;
-            // The crossing is the axis of the two classes (`Overlaps::edge_axis`) or its
-            // opposite: the one on AB's side, whose angle to the arc's ends is below pi. Both
-            // when that is near a tie.
-            const int pair = row + b.arcs[k].direction_class;
-            const Vec3 axis = cross(a.edge_directions[ab.direction_class],
-                                    rot * b.edge_directions[b.arcs[k].direction_class]);
-            const double side = dot(axis, middle), scale = m * norm(axis) * norm(middle);
-            if (!(side < -scale)) found.push_back(2 * pair);
-            if (!(side > scale)) found.push_back(2 * pair + 1);
+            above[f] = up & all;
+            below[f] = down & all;
+        }
+        for (int k = 0; k < b.arc_count; ++k) {
+            const GaussArc& cd = b.arcs[k];
+            const Vec3 circle = rot * arc_circle(b, cd);
+            // a's faces against CD's circle, as the arcs of the chunk that start (A) or end
+            // (B) at a face above or below it.
+            std::uint64_t a_up = 0, a_down = 0, b_up = 0, b_down = 0;
+#if defined(__SSE2__)
+            const __m128d ux = _mm_set1_pd(circle.x), uy = _mm_set1_pd(circle.y);
+            const __m128d uz = _mm_set1_pd(circle.z);
+            const __m128d plus = _mm_set1_pd(m), minus = _mm_set1_pd(-m);
+            __m128i au = _mm_setzero_si128(), ad = au, bu = au, bd = au;
+            for (int g = 0; g < padded_a; g += 2) {
+                const __m128d t = lane_dots(ax, ay, az, g, ux, uy, uz);
+                const __m128i up = _mm_castpd_si128(_mm_cmpgt_pd(t, plus));
+                const __m128i down = _mm_castpd_si128(_mm_cmplt_pd(t, minus));
+                const __m128i from = _mm_load_si128(reinterpret_cast<const __m128i*>(with_a + g));
+                const __m128i to = _mm_load_si128(reinterpret_cast<const __m128i*>(with_b + g));
+                au = _mm_or_si128(au, _mm_and_si128(up, from));
+                ad = _mm_or_si128(ad, _mm_and_si128(down, from));
+                bu = _mm_or_si128(bu, _mm_and_si128(up, to));
+                bd = _mm_or_si128(bd, _mm_and_si128(down, to));
+            }
+            a_up = lanes_or(au), a_down = lanes_or(ad), b_up = lanes_or(bu), b_down = lanes_or(bd);
+#else
+            for (int g = 0; g < faces_a; ++g) {
+                const double t = ax[g] * circle.x + ay[g] * circle.y + az[g] * circle.z;
+                const std::uint64_t up = t > m ? ~std::uint64_t{0} : 0;
+                const std::uint64_t down = t < -m ? ~std::uint64_t{0} : 0;
+                a_up |= up & with_a[g], a_down |= down & with_a[g];
+                b_up |= up & with_b[g], b_down |= down & with_b[g];
+            }
+#endif
+            const int c = cd.face_a, d = cd.face_b;
+            // C and D on one side of AB's circle; A and B on one side of CD's; CBA and BDC
+            // of opposite signs (CBA is C against AB's circle, BDC is B against CD's).
+            const std::uint64_t same_cd = (above[c] & above[d]) | (below[c] & below[d]);
+            const std::uint64_t same_ab = (a_up & b_up) | (a_down & b_down);
+            const std::uint64_t far_side = (above[c] & b_down) | (below[c] & b_up);
+            std::uint64_t crossing = all & ~(same_cd | same_ab | far_side);
+            while (crossing != 0) {
+                const int i = first + __builtin_ctzll(crossing);
+                crossing &= crossing - 1;
+                const GaussArc& ab = a.arcs[i];
+                // The crossing is the axis of the two classes (`Overlaps::edge_axis`) or its
+                // opposite: the one on AB's side, whose angle to the arc's ends is below pi.
+                // Both when that is near a tie.
+                const int pair = ab.direction_class * b.edge_count + cd.direction_class;
+                const Vec3 axis = cross(a.edge_directions[ab.direction_class],
+                                        rot * b.edge_directions[cd.direction_class]);
+                const Vec3 middle = a.face_normals[ab.face_a] + a.face_normals[ab.face_b];
+                const double side = dot(axis, middle), scale = m * norm(axis) * norm(middle);
+                const int signs = ((side < -scale) ? 0 : 1) | ((side > scale) ? 0 : 2);
+                const int wanted = signs & keep(ab.direction_class, cd.direction_class, axis);
+                if (wanted & 1) found.push_back(2 * pair);
+                if (wanted & 2) found.push_back(2 * pair + 1);
+            }
         }
     }
     std::sort(found.begin(), found.end());
@@ -267,7 +337,19 @@ struct Overlaps {
           // same supports as their support functions').
           scan_both(scans(a_) && scans(b_)) {}
 
-    void test(const Vec3& n) {
+    void test(const Vec3& n) { take(n, overlap_along(n)); }
+
+    // An axis measured before (`overlap_along`), taken in its turn.
+    void take(const Vec3& n, double overlap) {
+        ++axes;
+        if (overlap < best) {
+            best = overlap;
+            best_axis = n;
+        }
+    }
+
+    // h_a(n) + h_b(-n), as `test` measures it (the supports kept in pa and pb_local).
+    double overlap_along(const Vec3& n) {
         // b's support taken in b's frame.
         const Vec3 nb = rot.transpose_times(-n);
         if (scan_both) {
@@ -278,12 +360,7 @@ struct Overlaps {
             pb_local = support_core(b, nb).point;
         }
         const Vec3 pb = rot * pb_local + trans;
-        const double overlap = dot(n, pa) - dot(n, pb);
-        ++axes;
-        if (overlap < best) {
-            best = overlap;
-            best_axis = n;
-        }
+        return dot(n, pa) - dot(n, pb);
     }
 
     // The axis of edge directions e_a and e_b (b's frame), or false for parallel ones: they
@@ -312,6 +389,152 @@ struct Overlaps {
     }
 };
 
+// The largest |coordinate| of a polytope's vertices.
+double reach_of(const ShapeView& s) {
+    // std::max from a number (never NaN) skips a NaN coordinate as std::fmax does, inline.
+    double reach = 0.0;
+    for (int i = 0; i < s.vertex_count; ++i) {
+        reach = std::max(reach, std::fabs(s.vertices[i].x));
+        reach = std::max(reach, std::fabs(s.vertices[i].y));
+        reach = std::max(reach, std::fabs(s.vertices[i].z));
+    }
+    return reach;
+}
+
+// The overlap along axes of a's frame as the largest of a's dots less the smallest of b's
+// vertices moved to a's frame (as `Overlaps::overlap_along` moves its support point), two
+// vertices a lane: a's part is the measured one (the same products, their maximum); b's
+// smallest is at most the measured support point's (one of these vertices), which is chosen
+// in b's frame and so is the smallest up to the rounding of the axis turned there and of the
+// move, a few parts in 1e16 of the coordinates. So the measured overlap is at least this
+// value less that rounding: an axis whose value is above the best by more than `slack`
+// (1e-12 of the coordinates) would not replace it, and need not be measured. For two scanning
+// polytopes of at most 64 vertices each, all finite.
+struct NearOverlaps {
+    static constexpr int kMaxVertices = 64;
+    alignas(16) double ax[kMaxVertices], ay[kMaxVertices], az[kMaxVertices];
+    alignas(16) double bx[kMaxVertices], by[kMaxVertices], bz[kMaxVertices];
+    int padded_a = 0, padded_b = 0;
+
+    // False (no values) unless both shapes scan, fit, and have finite coordinates and slack.
+    bool fill(const Overlaps& o, double slack) {
+        const ShapeView &a = o.a, &b = o.b;
+        if (!o.scan_both || a.vertex_count > kMaxVertices || b.vertex_count > kMaxVertices ||
+            !std::isfinite(slack))
+            return false;
+        // Odd counts padded with the last vertex again (no new maximum or minimum).
+        padded_a = a.vertex_count + (a.vertex_count & 1);
+        padded_b = b.vertex_count + (b.vertex_count & 1);
+        double sum = 0.0;  // NaN or infinite when a coordinate is
+        for (int i = 0; i < padded_a; ++i) {
+            const Vec3& v = a.vertices[std::min(i, a.vertex_count - 1)];
+            ax[i] = v.x, ay[i] = v.y, az[i] = v.z;
+            sum += v.x + v.y + v.z;
+        }
+        for (int j = 0; j < padded_b; ++j) {
+            const Vec3 w = o.rot * b.vertices[std::min(j, b.vertex_count - 1)] + o.trans;
+            bx[j] = w.x, by[j] = w.y, bz[j] = w.z;
+            sum += w.x + w.y + w.z;
+        }
+        return std::isfinite(sum * 0.0);
+    }
+
+    // The largest of a's dots along n.
+    double high(const Vec3& n) const {
+#if defined(__SSE2__)
+        const __m128d nx = _mm_set1_pd(n.x), ny = _mm_set1_pd(n.y), nz = _mm_set1_pd(n.z);
+        __m128d top = _mm_set1_pd(-std::numeric_limits<double>::infinity());
+        for (int i = 0; i < padded_a; i += 2)
+            top = _mm_max_pd(top, lane_dots(ax, ay, az, i, nx, ny, nz));
+        return _mm_cvtsd_f64(_mm_max_pd(top, _mm_shuffle_pd(top, top, 1)));
+#else
+        double top = -std::numeric_limits<double>::infinity();
+        for (int i = 0; i < padded_a; ++i) top = std::max(top, dot_a(n, i));
+        return top;
+#endif
+    }
+
+    // The smallest of b's moved vertices' dots along n.
+    double low(const Vec3& n) const {
+#if defined(__SSE2__)
+        const __m128d nx = _mm_set1_pd(n.x), ny = _mm_set1_pd(n.y), nz = _mm_set1_pd(n.z);
+        __m128d bottom = _mm_set1_pd(std::numeric_limits<double>::infinity());
+        for (int j = 0; j < padded_b; j += 2)
+            bottom = _mm_min_pd(bottom, lane_dots(bx, by, bz, j, nx, ny, nz));
+        return _mm_cvtsd_f64(_mm_min_pd(bottom, _mm_shuffle_pd(bottom, bottom, 1)));
+#else
+        double bottom = std::numeric_limits<double>::infinity();
+        for (int j = 0; j < padded_b; ++j) bottom = std::min(bottom, dot_b(n, j));
+        return bottom;
+#endif
+    }
+
+    double operator()(const Vec3& n) const { return high(n) - low(n); }
+
+    // One vertex's dot: of a's vertex i, of b's moved vertex j. A vertex of a (on a face, at
+    // an edge's end) in place of a's largest dot, or one of b in place of b's smallest,
+    // gives a value at most the one above: still below the measured overlap up to rounding.
+    double dot_a(const Vec3& n, int i) const { return ax[i] * n.x + ay[i] * n.y + az[i] * n.z; }
+    double dot_b(const Vec3& n, int j) const { return bx[j] * n.x + by[j] * n.y + bz[j] * n.z; }
+};
+
+// A vertex on each face of both shapes (an end of one of its edges), from their arcs, and an
+// end of an edge of each direction class; index 0 where none is known, which only loosens a
+// value (`NearOverlaps::dot_a`). Unknown (`known_a`, `known_b` false) without arcs or beyond
+// 64 faces or classes.
+struct FaceVertices {
+    static constexpr int kMost = 64;
+    std::int16_t a[kMost] = {}, b[kMost] = {};            // on faces
+    std::int16_t end_a[kMost] = {}, end_b[kMost] = {};    // at edges, by class
+    bool known_a = false, known_b = false;
+
+    static bool fill(const ShapeView& s, std::int16_t* on, std::int16_t* end) {
+        if (s.arcs == nullptr || s.face_count > kMost || s.edge_count > kMost) return false;
+        for (int k = 0; k < s.arc_count; ++k) {
+            const GaussArc& arc = s.arcs[k];
+            on[arc.face_a] = on[arc.face_b] = end[arc.direction_class] = arc.vertex;
+        }
+        return true;
+    }
+
+    FaceVertices(const ShapeView& sa, const ShapeView& sb)
+        : known_a(fill(sa, a, end_a)), known_b(fill(sb, b, end_b)) {}
+};
+
+// The face axes (a's normals, then -b's in a's frame) with the same answer, bit for bit, as
+// measuring each in order: first the axis of the smallest value (`NearOverlaps`) is measured,
+// whose overlap is at least the final answer; an axis whose value is above that by more than
+// `slack` cannot be the answer nor tie with it, and is skipped.
+void measure_faces(Overlaps& o, const NearOverlaps& near, const Vec3* faces_a, int count_a,
+                   const Vec3* faces_b, int count_b, double slack, const FaceVertices& on) {
+    constexpr int kMost = 64;
+    if (count_a > kMost || count_b > kMost) {
+        for (int i = 0; i < count_a; ++i) o.test(faces_a[i]);
+        for (int j = 0; j < count_b; ++j) o.test(-(o.rot * faces_b[j]));
+        return;
+    }
+    double value[2 * kMost], x[2 * kMost], y[2 * kMost], z[2 * kMost];  // (Vec3 zeroes itself)
+    const int count = count_a + count_b;
+    int first = 0;
+    for (int k = 0; k < count; ++k) {
+        const Vec3 n = k < count_a ? faces_a[k] : -(o.rot * faces_b[k - count_a]);
+        x[k] = n.x, y[k] = n.y, z[k] = n.z;
+        // A vertex on the face in place of its shape's extreme: the same value up to rounding.
+        if (k < count_a)
+            value[k] = on.known_a ? near.dot_a(n, on.a[k]) - near.low(n) : near(n);
+        else
+            value[k] = on.known_b ? near.high(n) - near.dot_b(n, on.b[k - count_a]) : near(n);
+        if (value[k] < value[first]) first = k;
+    }
+    // A NaN value is measured (the comparison fails), and so is every axis after a NaN cap.
+    const double measured = count > 0 ? o.overlap_along(Vec3{x[first], y[first], z[first]}) : 0.0;
+    const double cap = measured + slack;
+    for (int k = 0; k < count; ++k) {
+        if (k == first) o.take(Vec3{x[k], y[k], z[k]}, measured);
+        else if (!(value[k] > cap)) o.test(Vec3{x[k], y[k], z[k]});
+    }
+}
+
 // The Minkowski difference a - b of two polytopes has as face normals the face normals of a,
 // minus those of b, and +-(e_a x e_b) for edge directions e_a, e_b: the smallest support value
 // over these axes is the exact depth (the distance from the origin to the boundary), since any
@@ -332,6 +555,24 @@ SatResult sat_every_edge_pair(const ShapeView& a, const Pose& pose_a, const Shap
                               const Pose& pose_b) {
     const Features fa = features_of(a), fb = features_of(b);
     Overlaps o(a, pose_a, b, pose_b);
+    {
+        // Two small scanning polytopes: the axes skipped by their near values (`NearOverlaps`).
+        const double slack = 1e-12 * (reach_of(a) + reach_of(b) + norm(o.trans));
+        NearOverlaps near;
+        if (near.fill(o, slack)) {
+            measure_faces(o, near, fa.faces, fa.face_count, fb.faces, fb.face_count, slack,
+                          FaceVertices(a, b));
+            for (int i = 0; i < fa.edge_count; ++i) {
+                for (int j = 0; j < fb.edge_count; ++j) {
+                    Vec3 n;
+                    if (!o.edge_axis(fa.edges[i], fb.edges[j], n)) continue;
+                    if (!(near(n) > o.best + slack)) o.test(n);
+                    if (!(near(-n) > o.best + slack)) o.test(-n);
+                }
+            }
+            return o.result(pose_a);
+        }
+    }
     Vec3 middle_a, middle_b;
     double reach_a, reach_b;
     middle_and_reach(a, middle_a, reach_a);
@@ -371,16 +612,6 @@ SatResult sat_every_edge_pair(const ShapeView& a, const Pose& pose_a, const Shap
     return o.result(pose_a);
 }
 
-// The largest |coordinate| of a polytope's vertices.
-double reach_of(const ShapeView& s) {
-    double reach = 0.0;
-    for (int i = 0; i < s.vertex_count; ++i)
-        reach = std::fmax(reach, std::fmax(std::fabs(s.vertices[i].x),
-                                           std::fmax(std::fabs(s.vertices[i].y),
-                                                     std::fabs(s.vertices[i].z))));
-    return reach;
-}
-
 // Two polytopes with arcs on their Gauss maps: the face normals of both, then the axes of the
 // edge pairs whose arcs cross (Gregorius 2013), in the plain loop's order. Two polytopes
 // overlap exactly when every face normal of their Minkowski difference shows an overlap, and
@@ -391,17 +622,44 @@ double reach_of(const ShapeView& s) {
 bool sat_crossing_edge_pairs(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
                              const Pose& pose_b, SatResult& res) {
     Overlaps o(a, pose_a, b, pose_b);
-    for (int i = 0; i < a.face_count; ++i) o.test(a.face_normals[i]);
-    for (int j = 0; j < b.face_count; ++j) o.test(-(o.rot * b.face_normals[j]));
-    for (const int signed_pair : crossing_classes(a, b, o.rot)) {
-        const int k = signed_pair / 2;
-        Vec3 n;
-        if (!o.edge_axis(a.edge_directions[k / b.edge_count],
-                         b.edge_directions[k % b.edge_count], n))
-            continue;
-        o.test(signed_pair % 2 == 0 ? n : -n);
-    }
     const double slack = 1e-12 * (reach_of(a) + reach_of(b) + norm(o.trans));
+    NearOverlaps near;
+    const bool estimated = near.fill(o, slack);
+    const FaceVertices on(a, b);
+    if (estimated) {
+        measure_faces(o, near, a.face_normals, a.face_count, b.face_normals, b.face_count, slack,
+                      on);
+    } else {
+        for (int i = 0; i < a.face_count; ++i) o.test(a.face_normals[i]);
+        for (int j = 0; j < b.face_count; ++j) o.test(-(o.rot * b.face_normals[j]));
+    }
+    // The crossings listed only when their value is within the slack of the best face axis
+    // (the loop below checks again against the best so far, which is at most that).
+    const double limit = o.best + slack;
+    const auto keep = [&](int i, int j, const Vec3& axis) {
+        if (!estimated) return 3;
+        const double length = norm(axis);
+        if (!(length > defaults::sat_parallel_edge_sine)) return 0;  // `edge_axis` drops it
+        const Vec3 n = axis / length;  // as `edge_axis` makes it
+        if (on.known_a && on.known_b) {
+            // The opposite axis's value is this one negated, exactly.
+            const double value = near.dot_a(n, on.end_a[i]) - near.dot_b(n, on.end_b[j]);
+            return (value > limit ? 0 : 1) | (-value > limit ? 0 : 2);
+        }
+        return (near(n) > limit ? 0 : 1) | (near(-n) > limit ? 0 : 2);
+    };
+    for (const int signed_pair : crossing_classes(a, b, o.rot, keep)) {
+        const int k = signed_pair / 2, i = k / b.edge_count, j = k % b.edge_count;
+        Vec3 n;
+        if (!o.edge_axis(a.edge_directions[i], b.edge_directions[j], n)) continue;
+        if (signed_pair % 2 != 0) n = -n;
+        // Where the arcs cross, the two edges are the supports: their ends give the value.
+        if (estimated && (on.known_a && on.known_b
+                              ? near.dot_a(n, on.end_a[i]) - near.dot_b(n, on.end_b[j])
+                              : near(n)) > o.best + slack)
+            continue;
+        o.test(n);
+    }
     if (!(o.best >= -slack) || !std::isfinite(o.best)) return false;
     res = o.result(pose_a);
     return true;

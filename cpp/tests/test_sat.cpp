@@ -226,12 +226,18 @@ TEST_CASE("sat: a cube's and a wedge's arcs join the normals of each edge's two 
             REQUIRE(arc.direction_class >= 0);
             REQUIRE(arc.direction_class < view.edge_count);
             const Vec3 edge = view.edge_directions[arc.direction_class];
+            REQUIRE(arc.face_a >= 0);
+            REQUIRE(arc.face_a < view.face_count);
+            REQUIRE(arc.face_b >= 0);
+            REQUIRE(arc.face_b < view.face_count);
+            const Vec3 normal_a = view.face_normals[arc.face_a];
+            const Vec3 normal_b = view.face_normals[arc.face_b];
             // The two faces differ, both hold the edge (normals at right angles to it), and
             // the arc's circle has the edge's direction as its axis.
-            CHECK(dot(arc.normal_a, arc.normal_b) < 0.99);
-            CHECK(std::fabs(dot(arc.normal_a, edge)) < 1e-12);
-            CHECK(std::fabs(dot(arc.normal_b, edge)) < 1e-12);
-            CHECK(norm(cross(unit(arc.plane), edge)) < 1e-12);
+            CHECK(dot(normal_a, normal_b) < 0.99);
+            CHECK(std::fabs(dot(normal_a, edge)) < 1e-12);
+            CHECK(std::fabs(dot(normal_b, edge)) < 1e-12);
+            CHECK(norm(cross(unit(cross(normal_b, normal_a)), edge)) < 1e-12);
         }
     }
 }
