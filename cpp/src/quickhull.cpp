@@ -579,18 +579,17 @@ void interior_filter(Workspace& w, const std::vector<int>& subset, std::vector<i
     extremes.erase(std::unique(extremes.begin(), extremes.end()), extremes.end());
     kept.clear();
     Triangulation inner;
-    if (quickhull_points(w, extremes, inner) != Build::OK) {
+    if (quickhull_flat(w, extremes, inner) != Build::OK) {
         kept = subset;
         return;
     }
-    // The inner hull's planes, structure of arrays for the scan.
+    // The inner hull's planes (its faces' in slot order, as Quickhull keeps them), packed for
+    // the scan.
     std::vector<double>& plane = w.filter_planes;
     plane.clear();
-    for (size_t f = 0; f < w.face_count; ++f) {
-        const Face& face = w.faces[f];
-        if (!face.alive) continue;
-        plane.insert(plane.end(), {face.plane.normal.x, face.plane.normal.y, face.plane.normal.z,
-                                    face.plane.offset});
+    for (size_t f = 0; f < inner.normal.size(); ++f) {
+        const Vec3& n = inner.normal[f];
+        plane.insert(plane.end(), {n.x, n.y, n.z, inner.offset[f]});
     }
     const size_t planes = plane.size() / 4;
     // Inside by this much (the points are scaled to at most 1): far above the rounding of a
