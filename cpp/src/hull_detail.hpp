@@ -14,14 +14,6 @@
 
 namespace meshcol::hull_detail {
 
-// A point waiting outside a face, with its coordinates: the conflict lists are scanned far
-// more often than written, and a list of copies streams through the cache where a linked
-// list of indices would miss on every point.
-struct Conflict {
-    Vec3 p;
-    int index;
-};
-
 // A point's place in the lexicographic order (hull.cpp): its x as an integer of the same
 // order, and its index.
 struct SortKey {
@@ -37,19 +29,6 @@ struct Plane {
     double offset = 0.0, area2 = 0.0, filter = INFINITY;
 };
 
-struct Face {
-    int v[3];  // point indices, counter-clockwise seen from outside
-    int n[3];  // neighbour across edge v[i] -> v[(i + 1) % 3]
-    int s[3];  // the edge of n[i] that leads back here (its twin)
-    Plane plane;
-    std::vector<Conflict> conflicts;  // the points outside this face (farther than eps)
-    int furthest = -1;
-    double furthest_distance = 0.0;
-    unsigned visit = 0;
-    bool visible = false;
-    bool alive = false;
-};
-
 struct HorizonEdge {
     int a, b;      // the edge, as the visible face had it
     int outside;   // the non-visible face across it
@@ -62,8 +41,8 @@ struct Frame {
     int face, edge, left;
 };
 
-// A face of the flat construction (quickhull_flat.cpp): Face without its conflict vector,
-// whose points are a chain through the workspace's per-point links instead.
+// A face of Quickhull (quickhull_flat.cpp): its triangle, neighbours and plane, and the points
+// outside it as a chain through the workspace's per-point links.
 struct alignas(128) FlatFace {
     double nx, ny, nz, offset;  // the plane's unit normal and offset (Plane's)
     double filter, area2;       // and its filter and twice the area
@@ -87,16 +66,11 @@ struct Workspace {
     std::vector<Vec3> p;  // scaled points
     double eps = 0.0;
     std::vector<int> mark;  // per point: stamp of the horizon check
-    std::vector<Face> faces;  // a pool: faces[0 .. face_count) are this hull's
-    size_t face_count = 0;
-    std::vector<int> free_faces;  // the free slots: free_faces[0 .. free_top)
-    size_t free_top = 0;
+    std::vector<int> free_faces;  // the free slots
     std::vector<int> pending, new_faces;
     std::vector<int> visible;  // find_horizon's visible faces: visible[0 .. visible_count)
     std::vector<HorizonEdge> edges;  // and its horizon: edges[0 .. edge_count)
     size_t visible_count = 0, edge_count = 0;
-    std::vector<Conflict> orphans;
-    std::vector<double> new_planes;  // the new faces' planes (nx, ny, nz, offset), packed
     std::vector<Frame> dfs;
     unsigned stamp = 0;
     // scratch of the analysis and the packing, kept across shapes
@@ -216,14 +190,11 @@ Build start_tetrahedron(const std::vector<Vec3>& p, double eps, const std::vecto
                         int corner[4]);
 
 /// Quickhull of the points `subset` of w.p on flat storage (quickhull_flat.cpp): the same
-/// steps, the same triangulation and the same result as quickhull_reference, with less work.
+/// steps, triangulation and result as the construction it replaced, which the C++ tests keep
+/// as their reference (cpp/tests/quickhull_reference.hpp).
 /// `start`, when given, is start_tetrahedron's answer for this subset (not computed again).
 Build quickhull_flat(Workspace& w, const std::vector<int>& subset, Triangulation& out,
                      const int* start = nullptr);
-
-/// Quickhull of the points `subset` of w.p as it was built before quickhull_flat
-/// (quickhull.cpp), without the interior filter: the tests' reference.
-Build quickhull_reference(Workspace& w, const std::vector<int>& subset, Triangulation& out);
 
 /// The principal axes of p[0 .. n) about `centre` (Jacobi eigenvectors of their covariance),
 /// unit, largest spread first (hull.cpp).

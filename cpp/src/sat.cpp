@@ -401,6 +401,11 @@ double reach_of(const ShapeView& s) {
     return reach;
 }
 
+// The rounding of an overlap of a and b (o's frame) that `NearOverlaps`' values allow for.
+double near_slack(const ShapeView& a, const ShapeView& b, const Vec3& trans) {
+    return 1e-12 * (reach_of(a) + reach_of(b) + norm(trans));
+}
+
 // The overlap along axes of a's frame as the largest of a's dots less the smallest of b's
 // vertices moved to a's frame (as `Overlaps::overlap_along` moves its support point), two
 // vertices a lane: a's part is the measured one (the same products, their maximum); b's
@@ -557,7 +562,7 @@ SatResult sat_every_edge_pair(const ShapeView& a, const Pose& pose_a, const Shap
     Overlaps o(a, pose_a, b, pose_b);
     {
         // Two small scanning polytopes: the axes skipped by their near values (`NearOverlaps`).
-        const double slack = 1e-12 * (reach_of(a) + reach_of(b) + norm(o.trans));
+        const double slack = near_slack(a, b, o.trans);
         NearOverlaps near;
         if (near.fill(o, slack)) {
             measure_faces(o, near, fa.faces, fa.face_count, fb.faces, fb.face_count, slack,
@@ -622,7 +627,7 @@ SatResult sat_every_edge_pair(const ShapeView& a, const Pose& pose_a, const Shap
 bool sat_crossing_edge_pairs(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
                              const Pose& pose_b, SatResult& res) {
     Overlaps o(a, pose_a, b, pose_b);
-    const double slack = 1e-12 * (reach_of(a) + reach_of(b) + norm(o.trans));
+    const double slack = near_slack(a, b, o.trans);
     NearOverlaps near;
     const bool estimated = near.fill(o, slack);
     const FaceVertices on(a, b);
@@ -636,6 +641,12 @@ bool sat_crossing_edge_pairs(const ShapeView& a, const Pose& pose_a, const Shape
     // The crossings listed only when their value is within the slack of the best face axis
     // (the loop below checks again against the best so far, which is at most that).
     const double limit = o.best + slack;
+    // The value of the axis n of a's class i and b's class j: where the arcs cross, the two
+    // edges are the supports, and their ends give it.
+    const auto edge_value = [&](const Vec3& n, int i, int j) {
+        return on.known_a && on.known_b ? near.dot_a(n, on.end_a[i]) - near.dot_b(n, on.end_b[j])
+                                        : near(n);
+    };
     const auto keep = [&](int i, int j, const Vec3& axis) {
         if (!estimated) return 3;
         const double length = norm(axis);
@@ -643,7 +654,7 @@ bool sat_crossing_edge_pairs(const ShapeView& a, const Pose& pose_a, const Shape
         const Vec3 n = axis / length;  // as `edge_axis` makes it
         if (on.known_a && on.known_b) {
             // The opposite axis's value is this one negated, exactly.
-            const double value = near.dot_a(n, on.end_a[i]) - near.dot_b(n, on.end_b[j]);
+            const double value = edge_value(n, i, j);
             return (value > limit ? 0 : 1) | (-value > limit ? 0 : 2);
         }
         return (near(n) > limit ? 0 : 1) | (near(-n) > limit ? 0 : 2);
@@ -653,11 +664,7 @@ bool sat_crossing_edge_pairs(const ShapeView& a, const Pose& pose_a, const Shape
         Vec3 n;
         if (!o.edge_axis(a.edge_directions[i], b.edge_directions[j], n)) continue;
         if (signed_pair % 2 != 0) n = -n;
-        // Where the arcs cross, the two edges are the supports: their ends give the value.
-        if (estimated && (on.known_a && on.known_b
-                              ? near.dot_a(n, on.end_a[i]) - near.dot_b(n, on.end_b[j])
-                              : near(n)) > o.best + slack)
-            continue;
+        if (estimated && edge_value(n, i, j) > o.best + slack) continue;
         o.test(n);
     }
     if (!(o.best >= -slack) || !std::isfinite(o.best)) return false;

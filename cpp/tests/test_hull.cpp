@@ -10,6 +10,7 @@
 
 #include "check.hpp"
 #include "fixtures.hpp"
+#include "quickhull_reference.hpp"
 #include "hull_detail.hpp"
 #include "hull_orientation.hpp"
 #include "meshcol/defaults.hpp"
@@ -235,12 +236,11 @@ TEST_CASE("hull: packing on threads equals packing one shape at a time, byte for
 }
 
 TEST_CASE("hull: the flat Quickhull builds the reference's triangulation, bit for bit") {
-    // quickhull_flat replays quickhull_reference's steps on other storage: the same
-    // triangles, neighbours, planes and edges, in the same order, on every family (and on
-    // near-spheres whose faces' sides need the exact orientation).
+    // quickhull_flat replays the reference's steps (quickhull_reference.hpp) on other
+    // storage: the same triangles, neighbours, planes and edges, in the same order, on every
+    // family (and on near-spheres whose faces' sides need the exact orientation).
     using hull_detail::Build;
     using hull_detail::Triangulation;
-    using hull_detail::Workspace;
     std::uint64_t state = 19;
     int built = 0;
     for (int h = 0; h < 240; ++h) {
@@ -249,7 +249,7 @@ TEST_CASE("hull: the flat Quickhull builds the reference's triangulation, bit fo
         std::vector<Vec3> p = family_points(family == 5 ? 0 : family, n, state);
         if (family == 5)  // a sphere with noise near the plane filter's bound
             for (Vec3& q : p) q = q / norm(q) + Vec3{1e-14, -1e-14, 1e-14} * (q.x * 7.0 - q.y);
-        Workspace w;
+        hull_reference::Workspace w;
         double max_abs = 0.0;
         for (const Vec3& q : p) max_abs = std::max(max_abs, meshcol::max_abs(q));
         for (const Vec3& q : p) w.p.push_back(q / 2.0);  // into (-1, 1)^3, exactly
@@ -258,7 +258,7 @@ TEST_CASE("hull: the flat Quickhull builds the reference's triangulation, bit fo
         std::vector<int> subset(p.size());
         for (size_t i = 0; i < subset.size(); ++i) subset[i] = static_cast<int>(i);
         Triangulation reference, flat;
-        const Build a = hull_detail::quickhull_reference(w, subset, reference);
+        const Build a = hull_reference::quickhull(w, subset, reference);
         const Build b = hull_detail::quickhull_flat(w, subset, flat);
         CHECK(a == b);
         if (a != Build::OK || b != Build::OK) continue;
