@@ -1,6 +1,7 @@
 #include "meshcol/gjk.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "climb.hpp"
@@ -209,28 +210,33 @@ bool closest_tetrahedron(const Vec3* w, Feature& f, Vec3& closest) {
     const double size = larger(larger(largest_abs(b - a), largest_abs(c - a)), largest_abs(d - a));
     const bool flat =
         std::fabs(volume) <= defaults::gjk_flat_tetrahedron_volume * size * size * size;
-    static constexpr int kFaces[4][4] = {{0, 1, 2, 3}, {0, 2, 3, 1}, {0, 3, 1, 2}, {1, 3, 2, 0}};
     double best = std::numeric_limits<double>::infinity();
     bool outside_any = false;
     Feature best_f;
     Vec3 best_x;
-    for (const auto& face : kFaces) {
-        const Vec3 x0 = w[face[0]];
-        const Vec3 n = cross(w[face[1]] - x0, w[face[2]] - x0);
+    // Face (i, j, k) against the opposite vertex o; the four calls below are the faces in a
+    // fixed order (written out, so that the points' indices are constants).
+    const auto face = [&](int i, int j, int k, int o) {
+        const Vec3 x0 = w[i];
+        const Vec3 n = cross(w[j] - x0, w[k] - x0);
         const double side_origin = -dot(n, x0);
-        const double side_opposite = dot(n, w[face[3]] - x0);
+        const double side_opposite = dot(n, w[o] - x0);
         const bool outside = flat || side_origin * side_opposite < 0.0;
-        if (!outside) continue;
+        if (!outside) return;
         outside_any = true;
         Feature ff;
-        const Vec3 x = closest_triangle(w, face[0], face[1], face[2], ff);
+        const Vec3 x = closest_triangle(w, i, j, k, ff);
         const double dist = squared_norm(x);
         if (dist < best) {
             best = dist;
             best_f = ff;
             best_x = x;
         }
-    }
+    };
+    face(0, 1, 2, 3);
+    face(0, 2, 3, 1);
+    face(0, 3, 1, 2);
+    face(1, 3, 2, 0);
     if (outside_any && !(flat && best == 0.0)) {
         f = best_f;
         closest = best_x;
@@ -302,8 +308,14 @@ bool closest_point_on_simplex(Simplex& s, Vec3& closest) {
 
 namespace {
 
-bool same_feature(const SimplexVertex& x, const SimplexVertex& y) {
-    return x.index_a >= 0 && x.index_b >= 0 && x.index_a == y.index_a && x.index_b == y.index_b;
+// A vertex's two feature indices in one word; two vertices with the same word (other than
+// kNoFeature, a curved side's) came from the same features.
+constexpr std::uint64_t kNoFeature = ~std::uint64_t{0};
+
+std::uint64_t feature_key(const SimplexVertex& x) {
+    if (x.index_a < 0 || x.index_b < 0) return kNoFeature;
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(x.index_a)) << 32) |
+           static_cast<std::uint32_t>(x.index_b);
 }
 
 void weighted_points(const Simplex& s, Vec3& pa, Vec3& pb) {
@@ -320,21 +332,34 @@ void weighted_points(const Simplex& s, Vec3& pa, Vec3& pb) {
 // GJK after van den Bergen 2003 (sec. 4.3): v is the closest point of the current simplex to
 // the origin, w the support point of a - b in -v. v.v - v.w bounds the squared error; on
 // polytopes the loop ends exactly when a support point repeats (a finite number of features).
+//
+// The simplex's vertices stay in the slots of the result's simplex they were stored in,
+// listed in the simplex's order by `order`, and its Minkowski points are kept in that order
+// beside them: a shrinking simplex moves four indices and points, not its vertices (80 bytes
+// each), which are put in order once, at the end. The arithmetic sees the same points in the
+// same order as with the vertices moved.
 GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexVertex* first) {
     GjkResult res;
-    Simplex& s = res.simplex;
     const double touch = opt.contact_tolerance * md.scale;
     const double touch2 = touch * touch;
     // On the cores of swept shapes, separation needs a gap wider than the two radii.
     const double separation_gap =
         touch + (opt.with_margins && !md.with_margins ? margin(*md.a) + margin(*md.b) : 0.0);
+    SimplexVertex* slots = res.simplex.vertices;
+    int order[4] = {0, 1, 2, 3};
+    Vec3 points[4];
+    double weights[4] = {1.0, 0.0, 0.0, 0.0};
+    // Each vertex's two feature indices in one word (kNoFeature when either is curved), in
+    // the simplex's order: a repeated support point is one equal word.
+    std::uint64_t features[4];
+    int size = 1;
     // Start from the support in the direction of b's centre as seen from a: a good first guess.
     Vec3 dir = md.translation_b;
     if (!(squared_norm(dir) > 0.0)) dir = Vec3{1.0, 0.0, 0.0};
-    s.vertices[0] = first != nullptr ? *first : md.support(dir);
-    s.weights[0] = 1.0;
-    s.size = 1;
-    Vec3 v = s.vertices[0].w;
+    slots[0] = first != nullptr ? *first : md.support(dir);
+    points[0] = slots[0].w;
+    features[0] = feature_key(slots[0]);
+    Vec3 v = points[0];
     double vv = squared_norm(v);
     res.status = Status::MAX_ITERATIONS;
     int it = 0;
@@ -346,10 +371,17 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
             inside = true;
             break;
         }
-        const SimplexVertex w = md.support(-v);
+        // The slot no vertex of the simplex holds (size < 4 here).
+        unsigned used = 1u << order[0];
+        if (size > 1) used |= 1u << order[1];
+        if (size > 2) used |= 1u << order[2];
+        const int slot = used & 1u ? used & 2u ? used & 4u ? 3 : 2 : 1 : 0;
+        SimplexVertex& w = slots[slot];
+        w = md.support(-v);
+        const std::uint64_t key = feature_key(w);
         bool repeated = false;
-        for (int i = 0; i < s.size; ++i)
-            if (same_feature(s.vertices[i], w)) repeated = true;
+        if (key != kNoFeature)
+            for (int i = 0; i < size; ++i) repeated |= features[i] == key;
         const double vw = dot(v, w.w);
         if (opt.stop_when_separated && vw > separation_gap * std::sqrt(vv)) {
             // A separating plane with a positive gap: no contact (lower bound > tolerance).
@@ -360,14 +392,15 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
             res.status = Status::CONVERGED;
             break;
         }
-        s.vertices[s.size] = w;
-        ++s.size;
-        Vec3 points[4];
-        for (int i = 0; i < s.size; ++i) points[i] = s.vertices[i].w;
+        order[size] = slot;
+        points[size] = w.w;
+        features[size] = key;
+        ++size;
         Feature feature;
         Vec3 nv;
-        if (!closest_feature(points, s.size, feature, nv)) {
-            apply_feature(s, feature);
+        if (!closest_feature(points, size, feature, nv)) {
+            // Inside: the feature is the whole tetrahedron, in its order.
+            for (int k = 0; k < 4; ++k) weights[k] = feature.weight[k];
             inside = true;
             res.status = Status::CONVERGED;
             v = Vec3{};
@@ -377,14 +410,39 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
         const double nvv = squared_norm(nv);
         if (!(nvv < vv)) {
             // No progress in floating point: v is as close as rounding allows.
-            --s.size;
+            --size;
             res.status = Status::CONVERGED;
             break;
         }
-        apply_feature(s, feature);
+        // All four entries (a feature's unused indices are valid ones): fixed trips, no calls.
+        int kept_order[4];
+        Vec3 kept_points[4];
+        std::uint64_t kept_features[4];
+        for (int k = 0; k < 4; ++k) {
+            kept_order[k] = order[feature.index[k]];
+            kept_points[k] = points[feature.index[k]];
+            kept_features[k] = features[feature.index[k]];
+        }
+        for (int k = 0; k < 4; ++k) {
+            order[k] = kept_order[k];
+            points[k] = kept_points[k];
+            features[k] = kept_features[k];
+            weights[k] = feature.weight[k];
+        }
+        size = feature.count;
         v = nv;
         vv = nvv;
     }
+    Simplex& s = res.simplex;
+    bool in_order = true;
+    for (int k = 0; k < size; ++k) in_order = in_order && order[k] == k;
+    if (!in_order) {
+        SimplexVertex kept[4];
+        for (int k = 0; k < size; ++k) kept[k] = slots[order[k]];
+        for (int k = 0; k < size; ++k) slots[k] = kept[k];
+    }
+    s.size = size;
+    for (int k = 0; k < size; ++k) s.weights[k] = weights[k];
     res.iterations = it;
     res.overlap = inside || vv <= touch2;
     weighted_points(s, res.point_a, res.point_b);
