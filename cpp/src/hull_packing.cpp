@@ -18,6 +18,10 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__linux__)
+#include <sys/mman.h>
+#include <unistd.h>
+#endif
 
 #include "meshcol/batch.hpp"
 #include "meshcol/defaults.hpp"
@@ -28,6 +32,44 @@ namespace meshcol {
 namespace {
 
 using namespace hull_detail;
+
+// The pages of `v`'s room from element `from` to element `to` (within its capacity) made
+// present and writable in one call (Linux 5.14's MADV_POPULATE_WRITE; elsewhere, or on an
+// older kernel, nothing: it is advice, and the pages then fault one by one as they are first
+// written). A packing writes every byte of its result once, into fresh memory: at 64 points a
+// shape about 8.5 kB a hull, two page faults, whose traps cost more than their pages' zeroing
+// (prefaulting a chunk's room in one call saved 5-7% of the CPU of 40,000 hulls).
+template <class T>
+void prefault(const std::vector<T>& v, size_t from, size_t to) {
+#if defined(__linux__) && defined(MADV_POPULATE_WRITE)
+    to = std::min(to, v.capacity());
+    if (to <= from) return;
+    static const auto page = static_cast<std::uintptr_t>(sysconf(_SC_PAGESIZE));
+    const auto begin = reinterpret_cast<std::uintptr_t>(v.data() + from) & ~(page - 1);
+    const auto end = reinterpret_cast<std::uintptr_t>(v.data() + to);
+    madvise(reinterpret_cast<void*>(begin), end - begin, MADV_POPULATE_WRITE);
+#else
+    (void)v, (void)from, (void)to;
+#endif
+}
+
+// Keeps the room of a growing vector prefaulted a window ahead of its end (prefault): a
+// call every few hundred small hulls.
+class PrefaultAhead {
+public:
+    template <class T>
+    void keep(const std::vector<T>& v) {
+        constexpr size_t kWindowBytes = size_t{1} << 18;
+        constexpr size_t kWindow = kWindowBytes / sizeof(T);
+        if (v.size() + kWindow / 2 <= done_) return;
+        const size_t from = std::max(done_, v.size());
+        done_ = v.size() + kWindow;
+        prefault(v, from, done_);
+    }
+
+private:
+    size_t done_ = 0;  // the room below this element was prefaulted (or written)
+};
 
 // The packed arrays of a run of consecutive shapes, concatenated (per-shape vectors cost an
 // allocation each, about as much as a small hull): the chunks are joined in order at the end.
@@ -41,6 +83,7 @@ struct ChunkPack {
     std::vector<std::int32_t> adjacency;
     std::vector<double> faces;
     std::vector<std::int32_t> edges;  // (from, to) pairs
+    PrefaultAhead ahead[5];            // of vertices, adjacency_counts, adjacency, faces, edges
 
     // Room for shapes of `points` points in all (a hull of k vertices has at most 2k - 4
     // triangles and 3k - 6 edges), so the arrays never move while they fill (points_to_reserve
@@ -57,6 +100,16 @@ struct ChunkPack {
         adjacency.reserve(6 * p + 3 * p + 4 * h);
         faces.reserve(3 * (2 * p + 2 * h));
         edges.reserve(2 * (3 * p + h));
+    }
+
+    /// After a shape: the room of the large arrays prefaulted ahead of their ends (the
+    /// pages stay present when the buffers are cleared for the next chunk).
+    void prefault_ahead() {
+        ahead[0].keep(vertices);
+        ahead[1].keep(adjacency_counts);
+        ahead[2].keep(adjacency);
+        ahead[3].keep(faces);
+        ahead[4].keep(edges);
     }
 
     /// Empty, keeping the room (the buffers of the next chunk).
@@ -430,8 +483,10 @@ struct Packer {
     }
 
     void pack(long long first, long long last, ChunkPack& out) {
-        for (long long h = first; h < last; ++h)
+        for (long long h = first; h < last; ++h) {
             pack_one(points + offsets[h], offsets[h + 1] - offsets[h], w, analysis, scratch, out);
+            out.prefault_ahead();
+        }
     }
 };
 
@@ -517,6 +572,13 @@ private:
 
     void append(ChunkPack& s) {
         PackedPolytopes& o = out_;
+        // The result's room for this chunk prefaulted in a call an array (prefault).
+        prefault(o.vertices, o.vertices.size(), o.vertices.size() + s.vertices.size());
+        prefault(o.adjacency_offsets, o.adjacency_offsets.size(),
+                 o.adjacency_offsets.size() + s.adjacency_counts.size());
+        prefault(o.adjacency, o.adjacency.size(), o.adjacency.size() + s.adjacency.size());
+        prefault(o.face_normals, o.face_normals.size(), o.face_normals.size() + s.faces.size());
+        prefault(o.edge_pairs, o.edge_pairs.size(), o.edge_pairs.size() + s.edges.size());
         o.status.insert(o.status.end(), s.status.begin(), s.status.end());
         append_offsets(s.vertex_counts, o.offsets);
         append_offsets(s.face_counts, o.face_offsets);
