@@ -6,11 +6,14 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/stl/optional.h>
 
+#include <atomic>
 #include <cstdint>
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
+#include "meshcol/batch.hpp"
 #include "meshcol/narrowphase.hpp"
 #include "ndarray.hpp"
 
@@ -55,15 +58,12 @@ class PackedConvexSet {
             check_offsets(adjacency_offsets->data(), adjacency_offsets->shape(0), k,
                           "adjacency_offsets");
             // Every neighbour must be a vertex of the same shape.
-            for (std::int64_t s = 0; s < h; ++s) {
-                const std::int64_t begin = offsets.data()[s], end = offsets.data()[s + 1];
-                for (std::int64_t j = adjacency_offsets->data()[begin];
-                     j < adjacency_offsets->data()[end]; ++j) {
-                    const std::int32_t n = adjacency->data()[j];
-                    if (n < 0 || n >= end - begin)
-                        throw std::invalid_argument("adjacency holds an index out of range");
-                }
-            }
+            const std::int64_t* o = offsets.data();
+            const std::int64_t* ao = adjacency_offsets->data();
+            const bool in_range = indices_in_shapes(h, o, adjacency->data(), [&](std::int64_t s) {
+                return std::pair{ao[o[s]], ao[o[s + 1]]};
+            });
+            if (!in_range) throw std::invalid_argument("adjacency holds an index out of range");
             view_.adjacency_offsets = adjacency_offsets->data();
             view_.adjacency = adjacency->data();
         }
@@ -80,15 +80,12 @@ class PackedConvexSet {
             check_offsets(edge_pair_offsets->data(), edge_pair_offsets->shape(0),
                           static_cast<std::int64_t>(edge_pairs->shape(0)), "edge_pair_offsets");
             // Every edge must join two vertices of its own shape (the classes read them).
-            for (std::int64_t s = 0; s < h; ++s) {
-                const std::int64_t n = offsets.data()[s + 1] - offsets.data()[s];
-                for (std::int64_t j = 2 * edge_pair_offsets->data()[s];
-                     j < 2 * edge_pair_offsets->data()[s + 1]; ++j) {
-                    const std::int32_t v = edge_pairs->data()[j];
-                    if (v < 0 || v >= n)
-                        throw std::invalid_argument("edge_pairs holds an index out of range");
-                }
-            }
+            const std::int64_t* eo = edge_pair_offsets->data();
+            const bool in_range =
+                indices_in_shapes(h, offsets.data(), edge_pairs->data(), [&](std::int64_t s) {
+                    return std::pair{2 * eo[s], 2 * eo[s + 1]};
+                });
+            if (!in_range) throw std::invalid_argument("edge_pairs holds an index out of range");
             view_.face_offsets = face_offsets->data();
             view_.face_normals = face_normals->data();
             view_.edge_pair_offsets = edge_pair_offsets->data();
@@ -124,6 +121,28 @@ class PackedConvexSet {
     }
 
   private:
+    /// Whether every shape s < h indexes only its own vertices: index[j] in [0, its vertex
+    /// count) (offsets o) for j in [first, last) = range(s). On all cores for a large set: the
+    /// checks of the adjacency and the edges read every index once (about 20 ms for 40,000
+    /// hulls of 64 points, the serial part of ConvexSet.from_vertices after the threaded
+    /// packing).
+    template <class Range>
+    static bool indices_in_shapes(std::int64_t h, const std::int64_t* o,
+                                  const std::int32_t* index, const Range& range) {
+        constexpr long long kShapesPerThread = 4096;
+        std::atomic<bool> all{true};
+        parallel_for(h, resolve_threads(0, h, kShapesPerThread), [&](long long b, long long e) {
+            bool ok = true;
+            for (long long s = b; s < e; ++s) {
+                const std::int64_t n = o[s + 1] - o[s];
+                const auto [first, last] = range(s);
+                for (std::int64_t j = first; j < last; ++j) ok &= index[j] >= 0 && index[j] < n;
+            }
+            if (!ok) all = false;
+        });
+        return all;
+    }
+
     Points vertices_;
     Index64 offsets_;
     Kinds kinds_;

@@ -229,3 +229,21 @@ def test_a_set_takes_the_edges_not_their_classes() -> None:
     bad = dict(arrays, edge_pairs=np.array(arrays["edge_pairs"]) + 9)
     with pytest.raises(ValueError, match="edge_pairs holds an index out of range"):
         ConvexSet(**bad)
+
+
+@pytest.mark.parametrize("at", [0, 4095, 4096, 9999])
+def test_a_large_set_checks_every_shape_s_indices(at: int) -> None:
+    # 10,000 shapes: the checks of the adjacency and the edges run on threads (blocks of
+    # shapes); one wrong index in any shape's block is found.
+    made = ConvexSet.from_vertices(np.random.default_rng(3).normal(size=(10_000, 8, 3)))
+    arrays = {name: np.array(getattr(made, name)) for name in ConvexSet._FIELDS}
+    assert len(ConvexSet(**arrays)) == 10_000
+    n = made.offsets[at + 1] - made.offsets[at]
+    adjacency = arrays["adjacency"].copy()
+    adjacency[made.adjacency_offsets[made.offsets[at + 1]] - 1] = n
+    with pytest.raises(ValueError, match="adjacency holds an index out of range"):
+        ConvexSet(**dict(arrays, adjacency=adjacency))
+    edges = arrays["edge_pairs"].copy()
+    edges[made.edge_pair_offsets[at], 1] = -1
+    with pytest.raises(ValueError, match="edge_pairs holds an index out of range"):
+        ConvexSet(**dict(arrays, edge_pairs=edges))
