@@ -176,7 +176,7 @@ nb::object shape_pair_object(int layout, int kind_a, nb::handle a, int kind_b, n
         out.distance = &distance;
         out.depth = &depth;
     }
-    const nb::object &normal = arrays[0], &point_a = arrays[1], &point_b = arrays[2];
+    const nb::handle normal = arrays[0], point_a = arrays[1], point_b = arrays[2];
     const auto q = form == Layout::DISTANCE     ? meshcol::QueryKind::DISTANCE
                    : form == Layout::INTERSECTS ? meshcol::QueryKind::INTERSECTS
                                                 : meshcol::QueryKind::PENETRATION;

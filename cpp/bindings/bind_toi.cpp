@@ -131,7 +131,7 @@ nb::object shape_pair_toi_object(int kind_a, nb::handle a, int kind_b, nb::handl
     arrays.add(3, &out.point);
     arrays.add(3, &out.normal);
     arrays.make();
-    const nb::object &point = arrays[0], &normal = arrays[1];
+    const nb::handle point = arrays[0], normal = arrays[1];
     meshcol::run_toi_batch(shapes.pack(), starts.data(), ends.data(), nullptr, nullptr, pair, 1,
                            options, 1, out);
     static const std::array<PyObject*, 5> names = {interned("status"), interned("time_of_impact"),

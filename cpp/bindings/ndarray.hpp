@@ -288,6 +288,13 @@ public:
     static constexpr size_t kMaxColumns = 10;
     static constexpr size_t kBlockBytes = 4096;  ///< the most a block holds
 
+    NumpyColumns() = default;
+    NumpyColumns(const NumpyColumns&) = delete;
+    NumpyColumns& operator=(const NumpyColumns&) = delete;
+    ~NumpyColumns() {
+        for (size_t k = 0; k < made_; ++k) Py_DECREF(arrays_[k]);
+    }
+
     template <class T>
     size_t add(size_t n, T** data, size_t columns = 0) {
         if (count_ == kMaxColumns) throw std::logic_error("NumpyColumns: too many columns");
@@ -311,7 +318,8 @@ public:
         if (total > kBlockBytes || api.new_array == nullptr || api.set_base == nullptr) {
             for (size_t k = 0; k < count_; ++k) {
                 Column& c = columns_[k];
-                arrays_[k] = c.make_one(c.rows, c.data, c.columns);
+                arrays_[k] = c.make_one(c.rows, c.data, c.columns).release().ptr();
+                made_ = k + 1;
             }
             return;
         }
@@ -326,23 +334,27 @@ public:
             const int ndim = c.columns > 0 ? 2 : 1;
             const Py_ssize_t shape[2] = {static_cast<Py_ssize_t>(c.rows), static_cast<Py_ssize_t>(c.columns)};
             constexpr int carray = 0x0001 | 0x0100 | 0x0400;  // NPY_ARRAY_CARRAY: C order, aligned, writable
-            nb::object array = nb::steal(
-                api.new_array(api.array_type, ndim, shape, c.type_number, nullptr, data, 0, carray, nullptr));
-            if (!array.is_valid()) throw nb::python_error();
-            if (api.set_base(array.ptr(), block.inc_ref().ptr()) != 0) throw nb::python_error();  // steals
+            PyObject* array =
+                api.new_array(api.array_type, ndim, shape, c.type_number, nullptr, data, 0, carray, nullptr);
+            if (array == nullptr) throw nb::python_error();
+            arrays_[k] = array;
+            made_ = k + 1;
+            if (api.set_base(array, block.inc_ref().ptr()) != 0) throw nb::python_error();  // steals
             *c.data = data;
-            arrays_[k] = std::move(array);
         }
     }
 
-    const nb::object& operator[](size_t k) const { return arrays_[k]; }
+    /// Column k's array once `make` has run (a null handle before).
+    nb::handle operator[](size_t k) const { return k < made_ ? arrays_[k] : nullptr; }
 
 private:
+    // trivial, so that the unused entries of `columns_` cost nothing: a one-pair batch is
+    // a few hundred nanoseconds
     struct Column {
-        size_t rows = 0, columns = 0, item = 0;
-        void** data = nullptr;
-        int type_number = 0;
-        nb::object (*make_one)(size_t, void**, size_t) = nullptr;
+        size_t rows, columns, item;
+        void** data;
+        int type_number;
+        nb::object (*make_one)(size_t, void**, size_t);
     };
 
     // the block's data start 16-aligned after its object header, and so does each column
@@ -388,9 +400,9 @@ private:
         Py_DECREF(type);  // instances of a heap type hold a reference to it
     }
 
-    std::array<Column, kMaxColumns> columns_{};
-    std::array<nb::object, kMaxColumns> arrays_{};
-    size_t count_ = 0;
+    std::array<Column, kMaxColumns> columns_;  // the first count_ are set
+    std::array<PyObject*, kMaxColumns> arrays_;  // the first made_ are made (references owned)
+    size_t count_ = 0, made_ = 0;
 };
 
 /// The data of `object` when it is exactly a numpy array (not a subclass), C-contiguous and
