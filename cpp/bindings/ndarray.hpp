@@ -208,6 +208,22 @@ private:
     }
 };
 
+/// numpy's type number of T (bool, std::int8_t, std::int32_t, std::int64_t or double): NPY_BOOL,
+/// NPY_BYTE, NPY_INT (32 bits where int is), NPY_LONG or NPY_LONGLONG (whichever is 64 bits),
+/// NPY_DOUBLE.
+template <class T>
+constexpr int numpy_type_number() {
+    static_assert(std::is_same_v<T, bool> || std::is_same_v<T, std::int8_t> || std::is_same_v<T, std::int32_t> ||
+                      std::is_same_v<T, std::int64_t> || std::is_same_v<T, double>,
+                  "add the dtype");
+    static_assert(sizeof(int) == 4, "NPY_INT is int32 only where int is 32 bits");
+    return std::is_same_v<T, bool>           ? 0
+           : std::is_same_v<T, std::int8_t>  ? 1
+           : std::is_same_v<T, std::int32_t> ? 5
+           : std::is_same_v<T, std::int64_t> ? (sizeof(long) == 8 ? 7 : 9)
+                                             : 12;
+}
+
 /// A new, uninitialised, C-contiguous numpy array of T (bool, std::int8_t, std::int32_t,
 /// std::int64_t or double), of `n` entries or, with `columns` > 0, of shape (n, columns), and its data in
 /// `*data`, for results of a few entries: numpy's own constructor
@@ -219,17 +235,7 @@ private:
 /// disagree. Holds the GIL.
 template <class T>
 nb::object numpy_empty(size_t n, T** data, size_t columns = 0) {
-    static_assert(std::is_same_v<T, bool> || std::is_same_v<T, std::int8_t> || std::is_same_v<T, std::int32_t> ||
-                      std::is_same_v<T, std::int64_t> || std::is_same_v<T, double>,
-                  "add the dtype");
-    // NPY_BOOL, NPY_BYTE, NPY_INT (32 bits where int is), NPY_LONG or NPY_LONGLONG (whichever
-    // is 64 bits), NPY_DOUBLE
-    static_assert(sizeof(int) == 4, "NPY_INT is int32 only where int is 32 bits");
-    constexpr int type_number = std::is_same_v<T, bool>           ? 0
-                                : std::is_same_v<T, std::int8_t>  ? 1
-                                : std::is_same_v<T, std::int32_t> ? 5
-                                : std::is_same_v<T, std::int64_t> ? (sizeof(long) == 8 ? 7 : 9)
-                                                                  : 12;
+    constexpr int type_number = numpy_type_number<T>();
     constexpr const char* type_name = std::is_same_v<T, bool>           ? "bool"
                                       : std::is_same_v<T, std::int8_t>  ? "int8"
                                       : std::is_same_v<T, std::int32_t> ? "int32"
@@ -307,7 +313,7 @@ public:
         c.make_one = [](size_t rows, void** out, size_t cols) {
             return numpy_empty(rows, reinterpret_cast<T**>(out), cols);
         };
-        c.type_number = type_number<T>();
+        c.type_number = numpy_type_number<T>();
         return k;
     }
 
@@ -362,17 +368,6 @@ private:
     static constexpr size_t kHeader = (sizeof(PyObject) + kAlign - 1) / kAlign * kAlign;
     static size_t round_up(size_t b) { return (b + kAlign - 1) / kAlign * kAlign; }
     static size_t bytes(const Column& c) { return c.rows * (c.columns > 0 ? c.columns : 1) * c.item; }
-
-    template <class T>
-    static constexpr int type_number() {
-        // NPY_BOOL, NPY_BYTE, NPY_INT (32 bits where int is), NPY_LONG or NPY_LONGLONG
-        // (whichever is 64 bits), NPY_DOUBLE: as numpy_empty
-        return std::is_same_v<T, bool>           ? 0
-               : std::is_same_v<T, std::int8_t>  ? 1
-               : std::is_same_v<T, std::int32_t> ? 5
-               : std::is_same_v<T, std::int64_t> ? (sizeof(long) == 8 ? 7 : 9)
-                                                 : 12;
-    }
 
     // A block of `bytes` bytes after a plain object header: its type holds no references and
     // frees the memory with the object (PyObject_Malloc; no zeroing).
