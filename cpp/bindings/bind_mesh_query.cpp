@@ -331,8 +331,8 @@ nb::dict ray_cast_batch(const MeshBvhSet& set, Index64 meshes, Points origins, P
 // (meshcol.collision.mesh_query.MeshIntersectsBatch). `poses` (None: the set's defaults) and
 // `pairs` are taken as plain objects and read in place when they are already in the core's
 // form; otherwise the call returns None and the caller converts them (as_poses, as_pairs) and
-// calls again. A batch of one pair thus costs one native call, two numpy.empty calls and the
-// query: no DLPack import or export, no Python-level checks.
+// calls again. A batch of one pair thus costs one native call, its two arrays (NumpyColumns)
+// and the query: no DLPack import or export, no Python-level checks.
 // The poses of a call that takes them as a plain object: None (the set's defaults) or a
 // C-contiguous (M, 4, 4) float64 buffer, read in place; false for anything else (the caller
 // converts it with as_poses and calls again).
@@ -356,8 +356,9 @@ nb::object intersects_batch(const MeshBvhSet& set, nb::handle poses, nb::handle 
     const auto n = static_cast<size_t>(in.count);
     bool* intersecting = nullptr;
     std::int8_t* status = nullptr;
-    nb::object intersecting_arr = numpy_empty(n, &intersecting);
-    nb::object status_arr = numpy_empty(n, &status);
+    NumpyColumns arrays;
+    const size_t intersecting_arr = arrays.add(n, &intersecting), status_arr = arrays.add(n, &status);
+    arrays.make();
     const std::int64_t* ij = in.data;  // replaced by the pinned copy before the GIL goes
     const auto run = [&](long long begin, long long end) {
         for (long long k = begin; k < end; ++k) {
@@ -380,14 +381,14 @@ nb::object intersects_batch(const MeshBvhSet& set, nb::handle poses, nb::handle 
     }
     static const std::array<PyObject*, 2> names = {interned("intersecting"), interned("status")};
     static DataclassMaker<2> maker;
-    return maker.make(result_type, names, {intersecting_arr, status_arr});
+    return maker.make(result_type, names, {arrays[intersecting_arr], arrays[status_arr]});
 }
 
 // Mesh-pair distances as a `result_type(distance, point_a, point_b, intersecting, a_inside_b,
 // b_inside_a, triangle_a, triangle_b, status)` (meshcol.collision.mesh_query.MeshDistanceBatch),
 // `poses` and `pairs` taken as intersects_batch takes them (None when not in the core's form:
-// the caller converts them and calls again). A one-pair batch costs the query and nine
-// numpy_empty calls, where DLPack arrays gathered in a dict cost about ten microseconds.
+// the caller converts them and calls again). A one-pair batch costs the query and its nine
+// arrays (NumpyColumns), where DLPack arrays gathered in a dict cost about ten microseconds.
 nb::object distance_batch(const MeshBvhSet& set, nb::handle poses, nb::handle pairs, int threads,
                                  double max_distance, nb::handle result_type) {
     check_max_distance(max_distance);
@@ -402,10 +403,17 @@ nb::object distance_batch(const MeshBvhSet& set, nb::handle poses, nb::handle pa
     bool *intersecting = nullptr, *a_inside_b = nullptr, *b_inside_a = nullptr;
     std::int64_t *triangle_a = nullptr, *triangle_b = nullptr;
     std::int8_t* status = nullptr;
-    const std::array<nb::object, 9> arrays = {
-        numpy_empty(n, &distance),   numpy_empty(n, &point_a, 3),    numpy_empty(n, &point_b, 3),
-        numpy_empty(n, &intersecting), numpy_empty(n, &a_inside_b),  numpy_empty(n, &b_inside_a),
-        numpy_empty(n, &triangle_a), numpy_empty(n, &triangle_b),    numpy_empty(n, &status)};
+    NumpyColumns arrays;  // made in the order of `names`
+    arrays.add(n, &distance);
+    arrays.add(n, &point_a, 3);
+    arrays.add(n, &point_b, 3);
+    arrays.add(n, &intersecting);
+    arrays.add(n, &a_inside_b);
+    arrays.add(n, &b_inside_a);
+    arrays.add(n, &triangle_a);
+    arrays.add(n, &triangle_b);
+    arrays.add(n, &status);
+    arrays.make();
     in.pin();  // the loop reads the copy, never numpy's array, once the GIL is released
     const std::int64_t* ij = in.data;
     {

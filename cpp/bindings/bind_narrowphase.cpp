@@ -76,25 +76,26 @@ nb::object query_object(const PackedConvexSet& set, int layout, nb::handle poses
     set.check_pairs(in.data, in.count);
     const auto n = static_cast<size_t>(in.count);
     meshcol::BatchOutput out;
-    std::int8_t* status = nullptr;
-    nb::object status_array = numpy_empty(n, &status);
-    out.status = status;
+    NumpyColumns arrays;
+    const size_t status_array = arrays.add(n, &out.status);
     const auto q = form == Layout::DISTANCE     ? meshcol::QueryKind::DISTANCE
                    : form == Layout::INTERSECTS ? meshcol::QueryKind::INTERSECTS
                                                 : meshcol::QueryKind::PENETRATION;
-    nb::object hit, distance, depth, normal, point_a, point_b, iterations, signed_distance;
+    size_t hit = 0, distance = 0, depth = 0, normal = 0, point_a = 0, point_b = 0, iterations = 0,
+           signed_distance = 0;
     if (form == Layout::INTERSECTS) {
-        hit = numpy_empty(n, &out.intersects);
+        hit = arrays.add(n, &out.intersects);
     } else {
-        normal = numpy_empty(n, &out.normal, 3);
-        point_a = numpy_empty(n, &out.point_a, 3);
-        point_b = numpy_empty(n, &out.point_b, 3);
-        iterations = numpy_empty(n, &out.iterations);
-        if (form != Layout::PENETRATION) distance = numpy_empty(n, &out.distance);
-        if (form != Layout::DISTANCE) depth = numpy_empty(n, &out.depth);
+        normal = arrays.add(n, &out.normal, 3);
+        point_a = arrays.add(n, &out.point_a, 3);
+        point_b = arrays.add(n, &out.point_b, 3);
+        iterations = arrays.add(n, &out.iterations);
+        if (form != Layout::PENETRATION) distance = arrays.add(n, &out.distance);
+        if (form != Layout::DISTANCE) depth = arrays.add(n, &out.depth);
     }
     double* sd = nullptr;
-    if (form == Layout::SIGNED_DISTANCE) signed_distance = numpy_empty(n, &sd);
+    if (form == Layout::SIGNED_DISTANCE) signed_distance = arrays.add(n, &sd);
+    arrays.make();
     const auto run = [&] {
         meshcol::run_batch(set.view(), pose_arg.data(), in.data, in.count, q, threads, out, &set.radii());
         for (size_t k = 0; k < (sd != nullptr ? n : 0); ++k) sd[k] = out.distance[k] - out.depth[k];
@@ -111,23 +112,28 @@ nb::object query_object(const PackedConvexSet& set, int layout, nb::handle poses
         case Layout::DISTANCE: {
             const auto& names = distance_fields();
             static DataclassMaker<6> maker;
-            return maker.make(result_type, names, {distance, point_a, point_b, normal, iterations, status_array});
+            return maker.make(result_type, names,
+                              {arrays[distance], arrays[point_a], arrays[point_b], arrays[normal],
+                               arrays[iterations], arrays[status_array]});
         }
         case Layout::PENETRATION: {
             const auto& names = penetration_fields();
             static DataclassMaker<6> maker;
-            return maker.make(result_type, names, {depth, normal, point_a, point_b, iterations, status_array});
+            return maker.make(result_type, names,
+                              {arrays[depth], arrays[normal], arrays[point_a], arrays[point_b], arrays[iterations],
+                               arrays[status_array]});
         }
         case Layout::INTERSECTS: {
             static const std::array<PyObject*, 2> names = {interned("intersects"), interned("status")};
             static DataclassMaker<2> maker;
-            return maker.make(result_type, names, {hit, status_array});
+            return maker.make(result_type, names, {arrays[hit], arrays[status_array]});
         }
         default: {
             const auto& names = signed_distance_fields();
             static DataclassMaker<8> maker;
             return maker.make(result_type, names,
-                              {signed_distance, distance, depth, normal, point_a, point_b, iterations, status_array});
+                              {arrays[signed_distance], arrays[distance], arrays[depth], arrays[normal],
+                               arrays[point_a], arrays[point_b], arrays[iterations], arrays[status_array]});
         }
     }
 }
@@ -158,17 +164,19 @@ nb::object shape_pair_object(int layout, int kind_a, nb::handle a, int kind_b, n
     std::int8_t status = 0;
     bool hit = false;
     out.status = &status;
-    nb::object normal, point_a, point_b;
+    NumpyColumns arrays;  // normal, point_a, point_b: (3,) each
     if (form == Layout::INTERSECTS) {
         out.intersects = &hit;
     } else {
-        normal = numpy_empty(3, &out.normal);
-        point_a = numpy_empty(3, &out.point_a);
-        point_b = numpy_empty(3, &out.point_b);
+        arrays.add(3, &out.normal);
+        arrays.add(3, &out.point_a);
+        arrays.add(3, &out.point_b);
+        arrays.make();
         out.iterations = &iterations;
         out.distance = &distance;
         out.depth = &depth;
     }
+    const nb::handle normal = arrays[0], point_a = arrays[1], point_b = arrays[2];
     const auto q = form == Layout::DISTANCE     ? meshcol::QueryKind::DISTANCE
                    : form == Layout::INTERSECTS ? meshcol::QueryKind::INTERSECTS
                                                 : meshcol::QueryKind::PENETRATION;

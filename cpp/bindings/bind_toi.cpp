@@ -72,9 +72,13 @@ nb::object time_of_impact_object(const PackedConvexSet& set, nb::handle start_po
     set.check_pairs(in.data, in.count);
     const auto n = static_cast<size_t>(in.count);
     meshcol::ToiBatchOutput out;
-    const std::array<nb::object, 5> arrays = {
-        numpy_empty(n, &out.toi), numpy_empty(n, &out.point, 3), numpy_empty(n, &out.normal, 3),
-        numpy_empty(n, &out.iterations), numpy_empty(n, &out.status)};
+    NumpyColumns arrays;  // made in the order of `names`
+    arrays.add(n, &out.toi);
+    arrays.add(n, &out.point, 3);
+    arrays.add(n, &out.normal, 3);
+    arrays.add(n, &out.iterations);
+    arrays.add(n, &out.status);
+    arrays.make();
     const auto run = [&] {
         meshcol::run_toi_batch(set.view(), start.data(), end.data(), turns.data(), centres.data(),
                                in.data, in.count, options, threads, out);
@@ -123,7 +127,11 @@ nb::object shape_pair_toi_object(int kind_a, nb::handle a, int kind_b, nb::handl
     out.toi = &toi;
     out.iterations = &iterations;
     out.status = &status;
-    nb::object point = numpy_empty(3, &out.point), normal = numpy_empty(3, &out.normal);
+    NumpyColumns arrays;
+    arrays.add(3, &out.point);
+    arrays.add(3, &out.normal);
+    arrays.make();
+    const nb::handle point = arrays[0], normal = arrays[1];
     meshcol::run_toi_batch(shapes.pack(), starts.data(), ends.data(), nullptr, nullptr, pair, 1,
                            options, 1, out);
     static const std::array<PyObject*, 5> names = {interned("status"), interned("time_of_impact"),

@@ -5,10 +5,12 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <initializer_list>
+#include <new>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -158,13 +160,15 @@ private:
 /// numpy's array constructor from its C API table (the `_ARRAY_API` capsule every extension
 /// compiled against numpy reads at import_array), found without numpy's headers, which do not
 /// build under the stable ABI. Only entries fixed by numpy's ABI are used: 0
-/// (PyArray_GetNDArrayCVersion, checked to be ABI 1.x or 2.x), 2 (PyArray_Type) and 93
-/// (PyArray_New). Null members: numpy.empty is called instead.
+/// (PyArray_GetNDArrayCVersion, checked to be ABI 1.x or 2.x), 2 (PyArray_Type), 93
+/// (PyArray_New) and 282 (PyArray_SetBaseObject). Null members: numpy.empty is called instead.
 struct NumpyApi {
     using NewArray = PyObject* (*)(PyTypeObject*, int, const Py_ssize_t*, int, const Py_ssize_t*,
                                    void*, int, int, PyObject*);
+    using SetBase = int (*)(PyObject*, PyObject*);
     PyTypeObject* array_type = nullptr;
     NewArray new_array = nullptr;
+    SetBase set_base = nullptr;
 
     static const NumpyApi& get() {
         static const NumpyApi api = find();
@@ -197,11 +201,28 @@ private:
             if (abi < 0x01000009u || abi >= 0x03000000u) break;
             api.array_type = static_cast<PyTypeObject*>(table[2]);
             api.new_array = reinterpret_cast<NewArray>(table[93]);
+            api.set_base = reinterpret_cast<SetBase>(table[282]);
             break;
         }
         return api;
     }
 };
+
+/// numpy's type number of T (bool, std::int8_t, std::int32_t, std::int64_t or double): NPY_BOOL,
+/// NPY_BYTE, NPY_INT (32 bits where int is), NPY_LONG or NPY_LONGLONG (whichever is 64 bits),
+/// NPY_DOUBLE.
+template <class T>
+constexpr int numpy_type_number() {
+    static_assert(std::is_same_v<T, bool> || std::is_same_v<T, std::int8_t> || std::is_same_v<T, std::int32_t> ||
+                      std::is_same_v<T, std::int64_t> || std::is_same_v<T, double>,
+                  "add the dtype");
+    static_assert(sizeof(int) == 4, "NPY_INT is int32 only where int is 32 bits");
+    return std::is_same_v<T, bool>           ? 0
+           : std::is_same_v<T, std::int8_t>  ? 1
+           : std::is_same_v<T, std::int32_t> ? 5
+           : std::is_same_v<T, std::int64_t> ? (sizeof(long) == 8 ? 7 : 9)
+                                             : 12;
+}
 
 /// A new, uninitialised, C-contiguous numpy array of T (bool, std::int8_t, std::int32_t,
 /// std::int64_t or double), of `n` entries or, with `columns` > 0, of shape (n, columns), and its data in
@@ -214,17 +235,7 @@ private:
 /// disagree. Holds the GIL.
 template <class T>
 nb::object numpy_empty(size_t n, T** data, size_t columns = 0) {
-    static_assert(std::is_same_v<T, bool> || std::is_same_v<T, std::int8_t> || std::is_same_v<T, std::int32_t> ||
-                      std::is_same_v<T, std::int64_t> || std::is_same_v<T, double>,
-                  "add the dtype");
-    // NPY_BOOL, NPY_BYTE, NPY_INT (32 bits where int is), NPY_LONG or NPY_LONGLONG (whichever
-    // is 64 bits), NPY_DOUBLE
-    static_assert(sizeof(int) == 4, "NPY_INT is int32 only where int is 32 bits");
-    constexpr int type_number = std::is_same_v<T, bool>           ? 0
-                                : std::is_same_v<T, std::int8_t>  ? 1
-                                : std::is_same_v<T, std::int32_t> ? 5
-                                : std::is_same_v<T, std::int64_t> ? (sizeof(long) == 8 ? 7 : 9)
-                                                                  : 12;
+    constexpr int type_number = numpy_type_number<T>();
     constexpr const char* type_name = std::is_same_v<T, bool>           ? "bool"
                                       : std::is_same_v<T, std::int8_t>  ? "int8"
                                       : std::is_same_v<T, std::int32_t> ? "int32"
@@ -268,6 +279,126 @@ nb::object numpy_empty(size_t n, T** data, size_t columns = 0) {
     *data = reinterpret_cast<T*>(reinterpret_cast<ArrayHead*>(array.ptr())->data);
     return array;
 }
+
+/// The arrays of one small result, made together: their data are slices of one block (a
+/// small native object, each array's `base`), so a batch of a few pairs pays one allocation
+/// for all its columns and no numpy memory handler (about a third of what an array costs to
+/// make and free). `add` records a column (n entries of T, or (n, columns)) and where its data
+/// pointer goes; `make` makes them all, after which `operator[]` is column k's array. Columns
+/// whose total passes kBlockBytes are made one by one by `numpy_empty` instead (each array
+/// owns its data): a block lives as long as any of its arrays, and a caller that keeps one
+/// column of a large batch must not keep the others' memory. The arrays are writable and
+/// C-contiguous either way. Holds the GIL.
+class NumpyColumns {
+public:
+    static constexpr size_t kMaxColumns = 10;
+    static constexpr size_t kBlockBytes = 4096;  ///< the most a block holds
+
+    NumpyColumns() = default;
+    NumpyColumns(const NumpyColumns&) = delete;
+    NumpyColumns& operator=(const NumpyColumns&) = delete;
+    ~NumpyColumns() {
+        for (size_t k = 0; k < made_; ++k) Py_DECREF(arrays_[k]);
+    }
+
+    template <class T>
+    size_t add(size_t n, T** data, size_t columns = 0) {
+        if (count_ == kMaxColumns) throw std::logic_error("NumpyColumns: too many columns");
+        const size_t k = count_++;
+        Column& c = columns_[k];
+        c.rows = n;
+        c.columns = columns;
+        c.data = reinterpret_cast<void**>(data);
+        c.item = sizeof(T);
+        c.make_one = [](size_t rows, void** out, size_t cols) {
+            return numpy_empty(rows, reinterpret_cast<T**>(out), cols);
+        };
+        c.type_number = numpy_type_number<T>();
+        return k;
+    }
+
+    void make() {
+        size_t total = 0;
+        for (size_t k = 0; k < count_; ++k) total = round_up(total) + bytes(columns_[k]);
+        const NumpyApi& api = NumpyApi::get();
+        if (total > kBlockBytes || api.new_array == nullptr || api.set_base == nullptr) {
+            for (size_t k = 0; k < count_; ++k) {
+                Column& c = columns_[k];
+                arrays_[k] = c.make_one(c.rows, c.data, c.columns).release().ptr();
+                made_ = k + 1;
+            }
+            return;
+        }
+        nb::object block = nb::steal(new_block(total));
+        auto* base = reinterpret_cast<unsigned char*>(block.ptr()) + kHeader;
+        size_t offset = 0;
+        for (size_t k = 0; k < count_; ++k) {
+            Column& c = columns_[k];
+            offset = round_up(offset);
+            void* data = base + offset;
+            offset += bytes(c);
+            const int ndim = c.columns > 0 ? 2 : 1;
+            const Py_ssize_t shape[2] = {static_cast<Py_ssize_t>(c.rows), static_cast<Py_ssize_t>(c.columns)};
+            constexpr int carray = 0x0001 | 0x0100 | 0x0400;  // NPY_ARRAY_CARRAY: C order, aligned, writable
+            PyObject* array =
+                api.new_array(api.array_type, ndim, shape, c.type_number, nullptr, data, 0, carray, nullptr);
+            if (array == nullptr) throw nb::python_error();
+            arrays_[k] = array;
+            made_ = k + 1;
+            if (api.set_base(array, block.inc_ref().ptr()) != 0) throw nb::python_error();  // steals
+            *c.data = data;
+        }
+    }
+
+    /// Column k's array once `make` has run (a null handle before).
+    nb::handle operator[](size_t k) const { return k < made_ ? arrays_[k] : nullptr; }
+
+private:
+    // trivial, so that the unused entries of `columns_` cost nothing: a one-pair batch is
+    // a few hundred nanoseconds
+    struct Column {
+        size_t rows, columns, item;
+        void** data;
+        int type_number;
+        nb::object (*make_one)(size_t, void**, size_t);
+    };
+
+    // the block's data start 16-aligned after its object header, and so does each column
+    static constexpr size_t kAlign = 16;
+    static constexpr size_t kHeader = (sizeof(PyObject) + kAlign - 1) / kAlign * kAlign;
+    static size_t round_up(size_t b) { return (b + kAlign - 1) / kAlign * kAlign; }
+    static size_t bytes(const Column& c) { return c.rows * (c.columns > 0 ? c.columns : 1) * c.item; }
+
+    // A block of `bytes` bytes after a plain object header: its type holds no references and
+    // frees the memory with the object (PyObject_Malloc; no zeroing).
+    static PyObject* new_block(size_t bytes) {
+        static PyTypeObject* const type = block_type();
+        void* memory = PyObject_Malloc(kHeader + (bytes == 0 ? 1 : bytes));
+        if (memory == nullptr) throw std::bad_alloc();
+        return PyObject_Init(static_cast<PyObject*>(memory), type);  // a reference to the type
+    }
+
+    static PyTypeObject* block_type() {
+        static PyType_Slot slots[] = {{Py_tp_dealloc, reinterpret_cast<void*>(&free_block)},
+                                      {Py_tp_doc, const_cast<char*>("The memory of a small batch's result arrays.")},
+                                      {0, nullptr}};
+        static PyType_Spec spec = {"meshcol._core.ResultBlock", static_cast<int>(kHeader), 0, Py_TPFLAGS_DEFAULT,
+                                   slots};
+        PyObject* type = PyType_FromSpec(&spec);
+        if (type == nullptr) throw nb::python_error();
+        return reinterpret_cast<PyTypeObject*>(type);  // kept for the module's life
+    }
+
+    static void free_block(PyObject* self) {
+        PyTypeObject* type = Py_TYPE(self);
+        PyObject_Free(self);
+        Py_DECREF(type);  // instances of a heap type hold a reference to it
+    }
+
+    std::array<Column, kMaxColumns> columns_;  // the first count_ are set
+    std::array<PyObject*, kMaxColumns> arrays_;  // the first made_ are made (references owned)
+    size_t count_ = 0, made_ = 0;
+};
 
 /// The data of `object` when it is exactly a numpy array (not a subclass), C-contiguous and
 /// aligned, of T (int64 or float64) in native byte order, with `ndim` dimensions whose sizes go to `shape`;
