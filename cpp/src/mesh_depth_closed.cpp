@@ -195,9 +195,10 @@ public:
                                 });
             } else {
                 wedges_.clear();
+                const CrossingPair& pair = (*pairs_)[static_cast<size_t>(e.index)];
                 add_pair_wedge_points(a_, b_, rel_, *pairs_, static_cast<size_t>(e.index), wedges_);
                 for (size_t k = 0; k < wedges_.size() && ok; ++k)
-                    ok = try_wedge(wedges_[k], Order{2, e.index, static_cast<std::int64_t>(k), 0});
+                    ok = try_wedge(wedges_[k], pair, Order{2, e.index, static_cast<std::int64_t>(k), 0});
             }
             if (!ok) return false;
         }
@@ -352,10 +353,18 @@ private:
         return true;
     }
 
-    bool try_wedge(DepthCandidate& c, const Order& order) {
+    // A wedge point of crossing pair `pair`: the new best when inside both and deeper.
+    bool try_wedge(DepthCandidate& c, const CrossingPair& pair, const Order& order) {
         // Outside a closed mesh's box is outside it (the test's verdict, without its work).
         const Vec3 in_b = rel_.apply_inverse(c.point);
         if (!inside_box(a_.nodes()[0], c.point) || !inside_box(b_.nodes()[0], in_b)) return true;
+        // Its distances to the pair's own two triangles bound its depth from above (each
+        // surface's distance is a minimum over its triangles, these among them): a point that
+        // cannot reach the best depth is not measured. Most are, as the points step off the
+        // pair's shared points by at most half the shorter triangle's longest edge.
+        const double own = max2(triangle_distance_of(c.point, a_.triangle(pair.a)),
+                                triangle_distance_of(in_b, b_.triangle(pair.b)));
+        if (!(own + slack_ > best)) return true;
         auto measure = [&](double floor) {
             const double da = distance_beyond(a_, c.point, floor);
             const double db = distance_beyond(b_, rel_.apply_inverse(c.point), floor);
