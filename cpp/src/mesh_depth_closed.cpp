@@ -429,8 +429,13 @@ private:
         double d = distance_beyond(other, p, best, &triangle);
         if (!beats(d, order, [&] { return distance_beyond(other, p, 0.0, &triangle); })) return true;
         if (known == Side::UNKNOWN) {
-            if (!may_test()) return false;
-            known = inside_mesh(other, p, &work_) ? Side::INSIDE : Side::OUTSIDE;
+            // d is p's exact distance to other's surface here (beats measured it in full)
+            known = recorded_side(m == 0 ? 1 : 0, p);
+            if (known == Side::UNKNOWN) {
+                if (!may_test()) return false;
+                known = inside_mesh(other, p, &work_) ? Side::INSIDE : Side::OUTSIDE;
+                record_side(m == 0 ? 1 : 0, p, d, known);
+            }
             if (store != nullptr) *store = known;
         }
         if (known == Side::INSIDE) {
@@ -455,16 +460,32 @@ private:
         const double own = max2(triangle_distance_of(c.point, a_.triangle(pair.a)),
                                 triangle_distance_of(in_b, b_.triangle(pair.b)));
         if (!(own + slack_ > best)) return true;
+        // Each distance is exact when above the floor of its search (then a ball free of
+        // that surface, recorded with the point's side of it).
+        double da = 0.0, db = 0.0, floor_used = 0.0;
         auto measure = [&](double floor) {
-            const double da = distance_beyond(a_, c.point, floor);
-            const double db = distance_beyond(b_, rel_.apply_inverse(c.point), floor);
+            floor_used = floor;
+            da = distance_beyond(a_, c.point, floor);
+            db = distance_beyond(b_, rel_.apply_inverse(c.point), floor);
             c.farther_is_a = da >= db;
             return std::fmax(da, db);
         };
         c.distance = measure(best);
         if (!beats(c.distance, order, [&] { return measure(0.0); })) return true;
-        if (!may_test()) return false;
-        if (inside_mesh(a_, c.point, &work_) && inside_mesh(b_, in_b, &work_)) {
+        Side side_a = recorded_side(0, c.point);
+        Side side_b = side_a == Side::OUTSIDE ? Side::OUTSIDE : recorded_side(1, in_b);
+        if (side_a == Side::UNKNOWN || (side_a == Side::INSIDE && side_b == Side::UNKNOWN)) {
+            if (!may_test()) return false;
+            if (side_a == Side::UNKNOWN) {
+                side_a = inside_mesh(a_, c.point, &work_) ? Side::INSIDE : Side::OUTSIDE;
+                if (da > floor_used) record_side(0, c.point, da, side_a);
+            }
+            if (side_a == Side::INSIDE && side_b == Side::UNKNOWN) {
+                side_b = inside_mesh(b_, in_b, &work_) ? Side::INSIDE : Side::OUTSIDE;
+                if (db > floor_used) record_side(1, in_b, db, side_b);
+            }
+        }
+        if (side_a == Side::INSIDE && side_b == Side::INSIDE) {
             best = c.distance;
             winner = c;
             winner_triangle = -1;
@@ -472,6 +493,24 @@ private:
             have = true;
         }
         return true;
+    }
+
+    // The side of solid x (0: a, 1: b) of a point p (x's frame) that lies in a recorded ball:
+    // a ball free of x's surface has all its points on one side (the winding number of a
+    // closed surface is constant off it), the side of its centre. UNKNOWN when none holds p.
+    // The latest balls are read first: the points of one crossing follow each other.
+    Side recorded_side(int x, const Vec3& p) const {
+        const std::vector<Ball>& balls = balls_[x];
+        for (size_t k = balls.size(), read = 0; k-- > 0 && read < kBallsRead; ++read)
+            if (squared_norm(p - balls[k].center) < balls[k].radius2) return balls[k].side;
+        return Side::UNKNOWN;
+    }
+
+    // Records that p (x's frame), at exact distance d from x's surface, is on `side` of it:
+    // the ball about p of radius d less the rounding allowance holds no surface of x.
+    void record_side(int x, const Vec3& p, double d, Side side) {
+        const double radius = d - slack_;
+        if (radius > 0.0) balls_[x].push_back({p, radius * radius, side});
     }
 
     // Counts one exact inside test, or stops at the work cap.
@@ -496,6 +535,15 @@ private:
     const TriangleMarks* marks_[2] = {nullptr, nullptr};
     const std::vector<CrossingPair>* pairs_ = nullptr;
     std::vector<DepthCandidate> wedges_;  // scratch: one pair's wedge points
+    // Points whose side of solid x (0: a, 1: b) an exact test found, with a ball about each
+    // that holds no surface of x (recorded_side).
+    struct Ball {
+        Vec3 center;     // x's frame
+        double radius2;  // squared radius
+        Side side;
+    };
+    static constexpr size_t kBallsRead = 64;
+    std::vector<Ball> balls_[2];
     // Scratch of add_mesh: visited nodes, corners of visited leaves, and per-vertex state.
     std::vector<std::int32_t> visited_, corners_, stack_, parent_;
     std::vector<signed char> seen_;
