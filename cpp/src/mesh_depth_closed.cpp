@@ -273,9 +273,14 @@ public:
                 const Vec3 p = to_other(e.mesh, t[e.k]), q = to_other(e.mesh, t[(e.k + 1) % 3]);
                 const TriangleMarks& marks = *marks_[e.mesh];
                 cuts.assign({0.0, 1.0});
+                // A triangle whose box misses the segment's (compared exactly, on the same
+                // coordinates) has no point in common with it: not a cut.
+                const TriangleBox segment{min3(p, q), max3(p, q)};
                 for (std::int32_t n = marks.first[static_cast<size_t>(e.index)]; n < marks.first[static_cast<size_t>(e.index) + 1]; ++n) {
+                    const Vec3* t = other.triangle(marks.others[static_cast<size_t>(n)]);
                     double cut = 0.0;
-                    if (segment_crosses_triangle(p, q, other.triangle(marks.others[static_cast<size_t>(n)]), &cut))
+                    if (triangle_box_squared_distance(segment, triangle_box(t)) == 0.0 &&
+                        segment_crosses_triangle(p, q, t, &cut))
                         cuts.push_back(cut);
                 }
                 add_pieces(p, q, cuts,
@@ -286,7 +291,10 @@ public:
             } else {
                 wedges_.clear();
                 const CrossingPair& pair = (*pairs_)[static_cast<size_t>(e.index)];
-                add_pair_wedge_points(a_, b_, rel_, *pairs_, static_cast<size_t>(e.index), wedges_);
+                // try_wedge skips a point whose distances to the pair's triangles are within
+                // the best depth less the rounding allowance; so are shared points' steps (a
+                // second allowance for the rounding of those points).
+                add_pair_wedge_points(a_, b_, rel_, *pairs_, static_cast<size_t>(e.index), wedges_, best - 2.0 * slack_);
                 for (size_t k = 0; k < wedges_.size() && ok; ++k)
                     ok = try_wedge(wedges_[k], pair, Order{2, e.index, static_cast<std::int64_t>(k), 0});
             }
@@ -425,17 +433,21 @@ private:
     // verdict stored in `*store` when given): the new best when inside and deeper.
     bool try_point(int m, const Vec3& p, Side known, Side* store, const Order& order) {
         const MeshBvh& other = m == 0 ? b_ : a_;
+        if (known == Side::UNKNOWN) {  // a recorded ball may say outside before any measuring
+            known = recorded_side(m == 0 ? 1 : 0, p);
+            if (known == Side::OUTSIDE) {
+                if (store != nullptr) *store = known;
+                return true;
+            }
+        }
         std::int32_t triangle = -1;
         double d = distance_beyond(other, p, best, &triangle);
         if (!beats(d, order, [&] { return distance_beyond(other, p, 0.0, &triangle); })) return true;
         if (known == Side::UNKNOWN) {
             // d is p's exact distance to other's surface here (beats measured it in full)
-            known = recorded_side(m == 0 ? 1 : 0, p);
-            if (known == Side::UNKNOWN) {
-                if (!may_test()) return false;
-                known = inside_mesh(other, p, &work_) ? Side::INSIDE : Side::OUTSIDE;
-                record_side(m == 0 ? 1 : 0, p, d, known);
-            }
+            if (!may_test()) return false;
+            known = inside_mesh(other, p, &work_) ? Side::INSIDE : Side::OUTSIDE;
+            record_side(m == 0 ? 1 : 0, p, d, known);
             if (store != nullptr) *store = known;
         }
         if (known == Side::INSIDE) {
@@ -460,6 +472,11 @@ private:
         const double own = max2(triangle_distance_of(c.point, a_.triangle(pair.a)),
                                 triangle_distance_of(in_b, b_.triangle(pair.b)));
         if (!(own + slack_ > best)) return true;
+        // A point a recorded ball puts outside either solid is not measured.
+        Side side_a = recorded_side(0, c.point);
+        if (side_a == Side::OUTSIDE) return true;
+        Side side_b = recorded_side(1, in_b);
+        if (side_b == Side::OUTSIDE) return true;
         // Each distance is exact when above the floor of its search (then a ball free of
         // that surface, recorded with the point's side of it).
         double da = 0.0, db = 0.0, floor_used = 0.0;
@@ -472,8 +489,6 @@ private:
         };
         c.distance = measure(best);
         if (!beats(c.distance, order, [&] { return measure(0.0); })) return true;
-        Side side_a = recorded_side(0, c.point);
-        Side side_b = side_a == Side::OUTSIDE ? Side::OUTSIDE : recorded_side(1, in_b);
         if (side_a == Side::UNKNOWN || (side_a == Side::INSIDE && side_b == Side::UNKNOWN)) {
             if (!may_test()) return false;
             if (side_a == Side::UNKNOWN) {
