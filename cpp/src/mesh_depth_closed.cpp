@@ -204,14 +204,19 @@ public:
 
     // Queues the edges of mesh m's crossing triangles, each bounded by its ends' distances to
     // a triangle that its triangle crosses (after the vertices: most are then within the best
-    // depth already and never queued).
-    void add_edges(int m) {
+    // depth already and never queued). The crossing triangles are read off the crossing
+    // pairs, in triangle order, rather than off a pass over the whole mesh.
+    void add_edges(int m, const std::vector<CrossingPair>& pairs) {
         const MeshBvh& self = m == 0 ? a_ : b_;
         const MeshBvh& other = m == 0 ? b_ : a_;
         const TriangleMarks& marks = *marks_[m];
-        for (std::int32_t i = 0; i < self.triangle_count(); ++i) {
+        std::vector<std::int32_t>& crossing = stack_;  // scratch
+        crossing.clear();
+        for (const CrossingPair& pair : pairs) crossing.push_back(m == 0 ? pair.a : pair.b);
+        std::sort(crossing.begin(), crossing.end());
+        crossing.erase(std::unique(crossing.begin(), crossing.end()), crossing.end());
+        for (const std::int32_t i : crossing) {
             const std::int32_t partner = marks.partner[static_cast<size_t>(i)];
-            if (!marks.crossing[static_cast<size_t>(i)] || partner < 0) continue;
             const Vec3* t = self.triangle(i);
             const Vec3* tp = other.triangle(partner);
             double ends[3];
@@ -582,7 +587,7 @@ ClosedDepth search_closed_depth(const MeshBvh& a, const MeshBvh& b, const Relati
         if (closed_other[m]) running = search.add_mesh(m, m == 0 ? marks_a : marks_b);
     if (running) running = search.run();  // the vertices first: a best depth to prune with
     for (int m = 0; m < 2 && running; ++m)
-        if (closed_other[m]) search.add_edges(m);
+        if (closed_other[m]) search.add_edges(m, crossing_pairs);
     if (running && a.closed() && b.closed()) search.add_wedges(crossing_pairs);
     if (running) running = search.run();
     ClosedDepth found;
