@@ -595,7 +595,9 @@ def family_rows(count: int = 300, depth_only: bool = False) -> None:
                 meshes = MeshSet.from_arrays([mesh] * len(flat), flat, threads=1)
                 pairs = np.arange(len(flat), dtype=np.int64).reshape(-1, 2)
                 model = fcl_model(mesh)
-                objects = [fcl.CollisionObject(model, fcl.Transform(p[:3, :3], p[:3, 3])) for p in flat]
+                objects = [
+                    fcl.CollisionObject(model, fcl.Transform(p[:3, :3], p[:3, 3])) for p in flat
+                ]
                 family_depth(name, mesh, meshes, pairs, flat, objects)
 
 

@@ -61,7 +61,12 @@ def _groups():
     rows = (
         ("balls", load("ballA.off"), load("ballB.off"), np.eye(4)),
         ("torus moved", torus, torus, bench.pose(translation=(0.3 * e, 0.01 * e, 0))),
-        ("torus on floor", floor, torus, bench.pose(translation=(0, 0, -float(torus.bounds[0][2])))),
+        (
+            "torus on floor",
+            floor,
+            torus,
+            bench.pose(translation=(0, 0, -float(torus.bounds[0][2]))),
+        ),
     )
     for name, a, b, pb in rows:
         yield name, [a, b], np.stack([np.eye(4), pb]), np.array([[0, 1], [1, 0]])
@@ -102,7 +107,12 @@ def _groups():
                 pose_b = hosts._pose(_rotation(rng), shift)
             meshes += [a, b]
             poses += [hosts._pose(_rotation(rng)), pose_b]
-        yield f"primitives{' (b open)' if open_b else ''}", meshes, np.stack(poses), np.arange(400).reshape(-1, 2)
+        yield (
+            f"primitives{' (b open)' if open_b else ''}",
+            meshes,
+            np.stack(poses),
+            np.arange(400).reshape(-1, 2),
+        )
 
 
 def write(out: str) -> None:
@@ -110,9 +120,15 @@ def write(out: str) -> None:
 
     arrays = {}
     for name, meshes, poses, pairs in _groups():
-        arrays_in = [(np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces)) for m in meshes]
-        ms = MeshSet.from_arrays(arrays_in, np.ascontiguousarray(poses, dtype=np.float64), threads=1)
-        r = mesh_penetration_depth_batch(ms, None, np.ascontiguousarray(pairs, dtype=np.int64), threads=1)
+        arrays_in = [
+            (np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces)) for m in meshes
+        ]
+        ms = MeshSet.from_arrays(
+            arrays_in, np.ascontiguousarray(poses, dtype=np.float64), threads=1
+        )
+        r = mesh_penetration_depth_batch(
+            ms, None, np.ascontiguousarray(pairs, dtype=np.int64), threads=1
+        )
         for field in (*FIELDS, "points_tested"):
             arrays[f"{name}|{field}"] = np.asarray(getattr(r, field))
         print(f"{name}: {len(pairs)} pairs", flush=True)
@@ -124,13 +140,13 @@ def compare(a_path: str, b_path: str) -> int:
     groups = sorted({key.split("|")[0] for key in a.files})
     bad = 0
     for name in groups:
-        same = all(
-            a[f"{name}|{f}"].tobytes() == b[f"{name}|{f}"].tobytes() for f in FIELDS
-        )
+        same = all(a[f"{name}|{f}"].tobytes() == b[f"{name}|{f}"].tobytes() for f in FIELDS)
         bad += not same
         ta, tb = int(a[f"{name}|points_tested"].sum()), int(b[f"{name}|points_tested"].sum())
         count = len(a[f"{name}|depth"])
-        print(f"{name}: {count} pairs, answers {'identical' if same else 'DIFFER'}, inside tests {ta} -> {tb}")
+        print(
+            f"{name}: {count} pairs, answers {'identical' if same else 'DIFFER'}, inside tests {ta} -> {tb}"
+        )
     return 1 if bad else 0
 
 
