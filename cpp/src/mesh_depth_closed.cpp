@@ -39,89 +39,22 @@ public:
     // Adds the points of mesh m (0: a's, in b's frame; 1: b's, in a's frame): its regions
     // decided, its root node and the edges of its crossing triangles queued. False when the
     // work cap stopped it.
-    //
-    // Only the part of the mesh that may reach into the other's box is visited: the nodes of
-    // its own hierarchy whose bounding sphere (WindingNode: no corner of its triangles farther
-    // than the radius from the centre) meets the other's root box, grown by the rounding
-    // allowance of the frames. A vertex in that box lies in such a leaf, so every vertex left
-    // unvisited is outside the box, as the full pass over the vertices would find; the
-    // triangles, regions and tests are those of that pass, in the same vertex order.
     bool add_mesh(int m, const TriangleMarks& marks) {
         marks_[m] = &marks;
         const MeshBvh& self = m == 0 ? a_ : b_;
         const MeshBvh& other = m == 0 ? b_ : a_;
         const BvhNode& root = other.nodes()[0];
         const std::vector<Vec3>& vertices = self.vertices();
-        const std::vector<BvhNode>& nodes = self.nodes();
         const size_t vertex_count = vertices.size();
         std::vector<Side>& side = side_[m];
-        side.assign(vertex_count, Side::OUTSIDE);
+        side.assign(vertex_count, Side::UNKNOWN);
         done_[m].assign(vertex_count, 0);
-        std::vector<char>& live = live_[m];
-        live.assign(nodes.size(), 0);
-
-        // The visited nodes, children after their parent, and the corners of the visited
-        // leaves' triangles in vertex order (`seen`: whether each lies in the other's box).
-        // The spheres are tested when the other's box holds at most half of this mesh's box
-        // (mapped into the other's frame); when it holds more, nearly every node would pass,
-        // and every node and vertex is taken in one pass, as cheap as the tests.
-        std::vector<signed char>& seen = seen_;  // -1: not a visited corner; else in the box
-        visited_.clear();
-        corners_.clear();
-        if (box_share(m) > 0.5) {
-            seen.resize(vertex_count);
-            corners_.resize(vertex_count);
-            for (size_t v = 0; v < vertex_count; ++v) {
-                seen[v] = inside_box(root, to_other(m, vertices[v])) ? 1 : 0;
-                corners_[v] = static_cast<std::int32_t>(v);
-            }
-            visited_.resize(nodes.size());
-            for (size_t id = 0; id < nodes.size(); ++id) visited_[id] = static_cast<std::int32_t>(id);
-        } else {
-            seen.assign(vertex_count, -1);
-            stack_.assign(1, 0);
-            while (!stack_.empty()) {
-                const std::int32_t id = stack_.back();
-                stack_.pop_back();
-                const BvhNode& node = nodes[static_cast<size_t>(id)];
-                if (!node.is_leaf()) {  // a leaf's few corners cost about as much as its sphere
-                    const WindingNode& w = self.winding_nodes()[static_cast<size_t>(id)];
-                    const Vec3 c = to_other(m, w.center);
-                    double gap2 = 0.0;
-                    for (int k = 0; k < 3; ++k) {
-                        const double gap = max2(max2(root.lower[k] - c[k], c[k] - root.upper[k]), 0.0);
-                        gap2 += gap * gap;
-                    }
-                    const double reach = w.radius * (1.0 + 1e-9) + slack_;
-                    if (!(gap2 <= reach * reach)) continue;
-                }
-                visited_.push_back(id);
-                if (!node.is_leaf()) {
-                    stack_.push_back(node.index);
-                    stack_.push_back(id + 1);
-                    continue;
-                }
-                for (std::int32_t i = node.index; i < node.index + node.count; ++i)
-                    for (int k = 0; k < 3; ++k) {
-                        const std::int32_t v = self.triangle_vertices(i)[k];
-                        signed char& s = seen[static_cast<size_t>(v)];
-                        if (s >= 0) continue;
-                        s = inside_box(root, to_other(m, vertices[static_cast<size_t>(v)])) ? 1 : 0;
-                        corners_.push_back(v);
-                    }
-            }
-            std::sort(corners_.begin(), corners_.end());
+        std::vector<char> in_box(vertex_count), regular(vertex_count, 0);
+        std::vector<std::int32_t> parent(vertex_count);
+        for (size_t v = 0; v < vertex_count; ++v) {
+            in_box[v] = inside_box(root, to_other(m, vertices[v]));
+            parent[v] = static_cast<std::int32_t>(v);
         }
-
-        // Regions: the corners joined by edges of triangles that are not near the other
-        // surface and have a corner in the box (triangles wholly outside the box are left out:
-        // a region of the others reaches outside through a triangle with a corner in the box,
-        // so the regions found are parts of the true ones, each still on one side).
-        std::vector<std::int32_t>& parent = parent_;
-        parent.resize(vertex_count);
-        std::vector<char>& regular = regular_;
-        regular.assign(vertex_count, 0);
-        for (const std::int32_t v : corners_) parent[static_cast<size_t>(v)] = v;
         auto find = [&parent](std::int32_t v) {
             while (parent[static_cast<size_t>(v)] != v) {
                 parent[static_cast<size_t>(v)] = parent[static_cast<size_t>(parent[static_cast<size_t>(v)])];
@@ -129,46 +62,43 @@ public:
             }
             return v;
         };
-        for (const std::int32_t id : visited_) {
-            const BvhNode& node = nodes[static_cast<size_t>(id)];
-            if (!node.is_leaf()) continue;
-            for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
-                if (marks.near[static_cast<size_t>(i)]) continue;
-                const std::int32_t* t = self.triangle_vertices(i);
-                if (seen[static_cast<size_t>(t[0])] <= 0 && seen[static_cast<size_t>(t[1])] <= 0 &&
-                    seen[static_cast<size_t>(t[2])] <= 0)
-                    continue;
-                regular[static_cast<size_t>(t[0])] = regular[static_cast<size_t>(t[1])] = regular[static_cast<size_t>(t[2])] = 1;
-                for (int k = 0; k < 2; ++k) {  // two edges join the three corners
-                    const std::int32_t x = find(t[k]), y = find(t[k + 1]);
-                    if (x != y) parent[static_cast<size_t>(std::max(x, y))] = std::min(x, y);
-                }
+        // Triangles wholly outside the box are left out: a region of the others reaches
+        // outside through a triangle with a corner in the box, so the regions found are parts
+        // of the true ones, each still on one side.
+        for (std::int32_t i = 0; i < self.triangle_count(); ++i) {
+            if (marks.near[static_cast<size_t>(i)]) continue;
+            const std::int32_t* t = self.triangle_vertices(i);
+            if (!in_box[static_cast<size_t>(t[0])] && !in_box[static_cast<size_t>(t[1])] && !in_box[static_cast<size_t>(t[2])])
+                continue;
+            regular[static_cast<size_t>(t[0])] = regular[static_cast<size_t>(t[1])] = regular[static_cast<size_t>(t[2])] = 1;
+            for (int k = 0; k < 2; ++k) {  // two edges join the three corners
+                const std::int32_t x = find(t[k]), y = find(t[k + 1]);
+                if (x != y) parent[static_cast<size_t>(std::max(x, y))] = std::min(x, y);
             }
         }
         // A region with a vertex outside the other's box is outside; otherwise one vertex
         // (off the surface by more than the rounding allowance) decides it.
-        std::vector<Side>& region = region_;
-        region.resize(vertex_count);
-        for (const std::int32_t v : corners_) region[static_cast<size_t>(v)] = Side::UNKNOWN;
-        for (const std::int32_t v : corners_)
-            if (regular[static_cast<size_t>(v)] && seen[static_cast<size_t>(v)] == 0) region[static_cast<size_t>(find(v))] = Side::OUTSIDE;
-        for (const std::int32_t v : corners_) {
-            if (seen[static_cast<size_t>(v)] == 0) continue;  // outside the box
-            if (!regular[static_cast<size_t>(v)]) {
-                side[static_cast<size_t>(v)] = Side::UNKNOWN;  // decided alone, when it matters
+        std::vector<Side> region(vertex_count, Side::UNKNOWN);
+        for (size_t v = 0; v < vertex_count; ++v)
+            if (regular[v] && !in_box[v]) region[static_cast<size_t>(find(static_cast<std::int32_t>(v)))] = Side::OUTSIDE;
+        for (size_t v = 0; v < vertex_count; ++v) {
+            if (!in_box[v]) {
+                side[v] = Side::OUTSIDE;
                 continue;
             }
-            Side& r = region[static_cast<size_t>(find(v))];
+            if (!regular[v]) continue;  // decided alone, when it matters
+            Side& r = region[static_cast<size_t>(find(static_cast<std::int32_t>(v)))];
             if (r == Side::UNKNOWN) {
                 if (!may_test()) return false;
-                r = inside_mesh(other, to_other(m, vertices[static_cast<size_t>(v)]), &work_) ? Side::INSIDE : Side::OUTSIDE;
+                r = inside_mesh(other, to_other(m, vertices[v]), &work_) ? Side::INSIDE : Side::OUTSIDE;
             }
-            side[static_cast<size_t>(v)] = r;
+            side[v] = r;
         }
-        // Nodes holding a corner that may be inside: children before parents (reverse
-        // pre-order); an unvisited node holds none.
-        for (size_t n = visited_.size(); n-- > 0;) {
-            const auto id = static_cast<size_t>(visited_[n]);
+        // Nodes holding a corner that may be inside.
+        const std::vector<BvhNode>& nodes = self.nodes();
+        std::vector<char>& live = live_[m];
+        live.assign(nodes.size(), 0);
+        for (size_t id = nodes.size(); id-- > 0;) {
             const BvhNode& node = nodes[id];
             if (!node.is_leaf()) {
                 live[id] = live[id + 1] || live[static_cast<size_t>(node.index)];
@@ -182,26 +112,6 @@ public:
         return true;
     }
 
-    // The share of mesh m's root box, mapped into the other's frame (its enclosing box there),
-    // that lies in the other's root box: 0 to 1, a guide to how much of m is near the other.
-    double box_share(int m) const {
-        const BvhNode& own = (m == 0 ? a_ : b_).nodes()[0];
-        const BvhNode& root = (m == 0 ? b_ : a_).nodes()[0];
-        Vec3 center, half;
-        for (int k = 0; k < 3; ++k) {
-            center[k] = 0.5 * (static_cast<double>(own.lower[k]) + own.upper[k]);
-            half[k] = 0.5 * (static_cast<double>(own.upper[k]) - own.lower[k]);
-        }
-        const Vec3 c = to_other(m, center);
-        const Vec3 h = m == 0 ? rel_.abs_rotation.transpose_times(half) : rel_.abs_rotation * half;
-        double share = 1.0;
-        for (int k = 0; k < 3; ++k) {
-            const double overlap = min2(c[k] + h[k], root.upper[k]) - max2(c[k] - h[k], root.lower[k]);
-            share *= h[k] > 0.0 ? max2(0.0, overlap) / (2.0 * h[k]) : 1.0;
-        }
-        return share;
-    }
-
     // Queues the edges of mesh m's crossing triangles, each bounded by its ends' distances to
     // a triangle that its triangle crosses (after the vertices: most are then within the best
     // depth already and never queued). The crossing triangles are read off the crossing
@@ -210,7 +120,7 @@ public:
         const MeshBvh& self = m == 0 ? a_ : b_;
         const MeshBvh& other = m == 0 ? b_ : a_;
         const TriangleMarks& marks = *marks_[m];
-        std::vector<std::int32_t>& crossing = stack_;  // scratch
+        std::vector<std::int32_t>& crossing = crossing_;
         crossing.clear();
         for (const CrossingPair& pair : pairs) crossing.push_back(m == 0 ? pair.a : pair.b);
         std::sort(crossing.begin(), crossing.end());
@@ -564,11 +474,7 @@ private:
     };
     static constexpr size_t kBallsRead = 64;
     std::vector<Ball> balls_[2];
-    // Scratch of add_mesh: visited nodes, corners of visited leaves, and per-vertex state.
-    std::vector<std::int32_t> visited_, corners_, stack_, parent_;
-    std::vector<signed char> seen_;
-    std::vector<char> regular_;
-    std::vector<Side> region_;
+    std::vector<std::int32_t> crossing_;  // scratch of add_edges
     std::vector<Entry> heap_;
     Order winner_order_{};
 };
