@@ -35,7 +35,7 @@ triangles: neither a bound of the meshes' depth nor zero for a resting contact).
 no query that gives the peers' quantity, so no like-for-like depth row exists; each depth row
 prints both medians so the difference shows. coal signs a penetration negative: its depth is
 read as the largest |penetration_depth| of the contacts. With
---depth-only just those rows (about 2 s): run this script with another checkout's interpreter
+--depth-only just those rows and the family's depth rows (about 10 s): run this script with another checkout's interpreter
 (its meshcol) in alternation with this one's for an A/B of the core, e.g.
 ``for i in 1 2 3; do for py in ../main/.venv/bin/python .venv/bin/python; do $py
 benchmarks/bench_mesh_query.py --depth-only; done; done``.
@@ -578,7 +578,8 @@ def family_depth(name, mesh, meshes, pairs, flat, objects) -> None:
     )
 
 
-def family_rows(count: int = 300) -> None:
+def family_rows(count: int = 300, depth_only: bool = False) -> None:
+    """Every row of the family, or (depth_only) only the depth row of each touching set."""
     print(DEPTH_MEANING)
     rng = np.random.default_rng(7)
     for name, path in FAMILY:
@@ -587,13 +588,25 @@ def family_rows(count: int = 300) -> None:
             continue
         mesh = centred(trimesh.load(path, force="mesh"))
         for config, pair_poses in family_sets(mesh, count, rng).items():
-            family_config(name, mesh, config, pair_poses)
+            if not depth_only:
+                family_config(name, mesh, config, pair_poses)
+            elif config == "touching":
+                flat = np.ascontiguousarray(pair_poses.reshape(-1, 4, 4))
+                meshes = MeshSet.from_arrays([mesh] * len(flat), flat, threads=1)
+                pairs = np.arange(len(flat), dtype=np.int64).reshape(-1, 2)
+                model = fcl_model(mesh)
+                objects = [
+                    fcl.CollisionObject(model, fcl.Transform(p[:3, :3], p[:3, 3])) for p in flat
+                ]
+                family_depth(name, mesh, meshes, pairs, flat, objects)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=1, help="repeat the whole set (ranges)")
-    parser.add_argument("--depth-only", action="store_true", help="only the depth rows")
+    parser.add_argument(
+        "--depth-only", action="store_true", help="only the depth rows (with the family's)"
+    )
     parser.add_argument("--family-only", action="store_true", help="only the real-mesh family")
     parser.add_argument("--pairs", type=int, default=300, help="pairs a family configuration")
     args = parser.parse_args()
@@ -609,8 +622,7 @@ def main() -> None:
             if not args.depth_only:
                 one_run()
             depth_rows()
-        if not args.depth_only:
-            family_rows(args.pairs)
+        family_rows(args.pairs, depth_only=args.depth_only)
     if args.runs > 1:
         print(f"\npeer/meshcol over {args.runs} runs (min-max):")
         for (name, peer), ratios in RATIOS.items():

@@ -70,6 +70,10 @@ int main(int argc, char** argv) {
         return 0;
     }
     MeshBvh mesh(v.data(), v.size() / 3, f.data(), f.size() / 3);
+    const char* other = std::getenv("B");
+    std::vector<double> v2 = other ? load<double>(dir + "m" + other + ".v") : v;
+    std::vector<std::int64_t> f2 = other ? load<std::int64_t>(dir + "m" + other + ".f") : f;
+    MeshBvh mesh_b(v2.data(), v2.size() / 3, f2.data(), f2.size() / 3);
     auto p = load<double>(dir + "m" + k + "_" + config + ".p");
     size_t count = p.size() / 32;
     double sum = 0;
@@ -79,20 +83,21 @@ int main(int argc, char** argv) {
     for (size_t i = 0; i < count; ++i) {
         Pose pa = Pose::from_matrix4(&p[32 * i]), pb = Pose::from_matrix4(&p[32 * i + 16]);
         if (mode == "dist") {
-            MeshDistanceInput in; in.a = &mesh; in.b = &mesh; in.pose_a = pa; in.pose_b = pb;
+            MeshDistanceInput in; in.a = &mesh; in.b = &mesh_b; in.pose_a = pa; in.pose_b = pb;
             MeshDistanceOutput o = mesh_distance(in);
             sum += o.distance;
             if (print) std::printf("%zu %.17g %d %d %d %lld %lld %.17g %.17g %.17g %.17g %.17g %.17g\n", i, o.distance, o.intersecting, o.a_inside_b, o.b_inside_a,
                 (long long)o.triangle_a, (long long)o.triangle_b, o.point_a.x, o.point_a.y, o.point_a.z, o.point_b.x, o.point_b.y, o.point_b.z);
         } else if (mode == "inter") {
-            bool hit = mesh_intersects(mesh, pa, mesh, pb);
+            bool hit = mesh_intersects(mesh, pa, mesh_b, pb);
             sum += hit;
             if (print) std::printf("%zu %d\n", i, hit);
         } else if (mode == "depth") {
-            MeshDistanceInput in; in.a = &mesh; in.b = &mesh; in.pose_a = pa; in.pose_b = pb;
+            MeshDistanceInput in; in.a = &mesh; in.b = &mesh_b; in.pose_a = pa; in.pose_b = pb;
             MeshDepthOutput o = mesh_penetration_depth(in);
             sum += o.depth;
-            if (print) std::printf("%zu %.17g %d %.17g %.17g %.17g\n", i, o.depth, o.deepest_mesh, o.normal.x, o.normal.y, o.normal.z);
+            if (print) std::printf("%zu %.17g %d %d %lld %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", i, o.depth, o.deepest_mesh, static_cast<int>(o.status),
+                (long long)o.points_tested, o.normal.x, o.normal.y, o.normal.z, o.point_a.x, o.point_a.y, o.point_a.z, o.point_b.x, o.point_b.y, o.point_b.z);
         }
     }
     std::fprintf(stderr, "cpu_us_per_query %.2f\n", 1e6 * double(std::clock() - start) / CLOCKS_PER_SEC / double(reps * count));

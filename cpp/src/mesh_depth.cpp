@@ -60,18 +60,13 @@ namespace mesh_detail {
 
 // The wedge points of crossing pair k (add_wedge_candidates), appended to `out`.
 void add_pair_wedge_points(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
-                           const std::vector<CrossingPair>& pairs, size_t k, std::vector<DepthCandidate>& out) {
+                           const std::vector<CrossingPair>& pairs, size_t k, std::vector<DepthCandidate>& out,
+                           double floor) {
     {
         const CrossingPair& c = pairs[k];
         const Vec3* ta = a.triangle(c.a);
         const Vec3* tb_local = b.triangle(c.b);
         const Vec3 tb[3] = {rel.apply(tb_local[0]), rel.apply(tb_local[1]), rel.apply(tb_local[2])};
-        // Shared points found from a's side and from b's, so that the samples do not depend on
-        // the order of the pair.
-        Vec3 witnesses[2];
-        triangles_intersect(ta, tb, &witnesses[0]);
-        witnesses[1] = witnesses[0];
-        triangles_intersect(tb, ta, &witnesses[1]);
         const Vec3 na = cross(ta[1] - ta[0], ta[2] - ta[0]);
         const Vec3 nb = cross(tb[1] - tb[0], tb[2] - tb[0]);
         const double la = norm(na), lb = norm(nb);
@@ -88,6 +83,15 @@ void add_pair_wedge_points(const MeshBvh& a, const MeshBvh& b, const Relative& r
         const Vec3 sum = na / la + nb / lb;
         const double ls = norm(sum);
         if (!(ls > 1e-6)) return;  // opposite normals: faces resting on each other
+        // A shared point lies on both triangles, so a step of s from it is within s of both
+        // (the relative 1e-9 covers the rounding): none can be deeper than the floor.
+        if (!(0.5 * h * (1.0 + 1e-9) > floor)) return;
+        // Shared points found from a's side and from b's, so that the samples do not depend on
+        // the order of the pair.
+        Vec3 witnesses[2];
+        triangles_intersect(ta, tb, &witnesses[0]);
+        witnesses[1] = witnesses[0];
+        triangles_intersect(tb, ta, &witnesses[1]);
         const Vec3 inward = sum * (-1.0 / ls);
         for (const Vec3& witness : witnesses)
             for (double step : {0.5 * h, 0.125 * h, 0.03125 * h})

@@ -54,9 +54,12 @@ void add_pieces(const Vec3& p, const Vec3& q, std::vector<double>& cuts, Add add
         if (cuts[c + 1] > cuts[c]) add(p + (q - p) * (0.5 * (cuts[c] + cuts[c + 1])));
 }
 
-/// The wedge points of crossing pair k (mesh_depth.cpp), appended to `out`.
+/// The wedge points of crossing pair k (mesh_depth.cpp), appended to `out`: three stepped
+/// from each triangle's centroid, then six from each of two shared points, these left out when
+/// their steps (which bound their distances to both triangles) cannot exceed `floor`.
 void add_pair_wedge_points(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
-                           const std::vector<CrossingPair>& pairs, size_t k, std::vector<DepthCandidate>& out);
+                           const std::vector<CrossingPair>& pairs, size_t k, std::vector<DepthCandidate>& out,
+                           double floor = -kInf);
 
 /// Distance from `point` (mesh's local frame) to the surface when it exceeds `floor`;
 /// otherwise some value <= floor (mesh_depth.cpp). Writes the triangle (leaf order) at the

@@ -114,14 +114,19 @@ public:
 
     // Queues the edges of mesh m's crossing triangles, each bounded by its ends' distances to
     // a triangle that its triangle crosses (after the vertices: most are then within the best
-    // depth already and never queued).
-    void add_edges(int m) {
+    // depth already and never queued). The crossing triangles are read off the crossing
+    // pairs, in triangle order, rather than off a pass over the whole mesh.
+    void add_edges(int m, const std::vector<CrossingPair>& pairs) {
         const MeshBvh& self = m == 0 ? a_ : b_;
         const MeshBvh& other = m == 0 ? b_ : a_;
         const TriangleMarks& marks = *marks_[m];
-        for (std::int32_t i = 0; i < self.triangle_count(); ++i) {
+        std::vector<std::int32_t>& crossing = crossing_;
+        crossing.clear();
+        for (const CrossingPair& pair : pairs) crossing.push_back(m == 0 ? pair.a : pair.b);
+        std::sort(crossing.begin(), crossing.end());
+        crossing.erase(std::unique(crossing.begin(), crossing.end()), crossing.end());
+        for (const std::int32_t i : crossing) {
             const std::int32_t partner = marks.partner[static_cast<size_t>(i)];
-            if (!marks.crossing[static_cast<size_t>(i)] || partner < 0) continue;
             const Vec3* t = self.triangle(i);
             const Vec3* tp = other.triangle(partner);
             double ends[3];
@@ -183,9 +188,14 @@ public:
                 const Vec3 p = to_other(e.mesh, t[e.k]), q = to_other(e.mesh, t[(e.k + 1) % 3]);
                 const TriangleMarks& marks = *marks_[e.mesh];
                 cuts.assign({0.0, 1.0});
+                // A triangle whose box misses the segment's (compared exactly, on the same
+                // coordinates) has no point in common with it: not a cut.
+                const TriangleBox segment{min3(p, q), max3(p, q)};
                 for (std::int32_t n = marks.first[static_cast<size_t>(e.index)]; n < marks.first[static_cast<size_t>(e.index) + 1]; ++n) {
+                    const Vec3* t = other.triangle(marks.others[static_cast<size_t>(n)]);
                     double cut = 0.0;
-                    if (segment_crosses_triangle(p, q, other.triangle(marks.others[static_cast<size_t>(n)]), &cut))
+                    if (triangle_box_squared_distance(segment, triangle_box(t)) == 0.0 &&
+                        segment_crosses_triangle(p, q, t, &cut))
                         cuts.push_back(cut);
                 }
                 add_pieces(p, q, cuts,
@@ -195,9 +205,13 @@ public:
                                 });
             } else {
                 wedges_.clear();
-                add_pair_wedge_points(a_, b_, rel_, *pairs_, static_cast<size_t>(e.index), wedges_);
+                const CrossingPair& pair = (*pairs_)[static_cast<size_t>(e.index)];
+                // try_wedge skips a point whose distances to the pair's triangles are within
+                // the best depth less the rounding allowance; so are shared points' steps (a
+                // second allowance for the rounding of those points).
+                add_pair_wedge_points(a_, b_, rel_, *pairs_, static_cast<size_t>(e.index), wedges_, best - 2.0 * slack_);
                 for (size_t k = 0; k < wedges_.size() && ok; ++k)
-                    ok = try_wedge(wedges_[k], Order{2, e.index, static_cast<std::int64_t>(k), 0});
+                    ok = try_wedge(wedges_[k], pair, Order{2, e.index, static_cast<std::int64_t>(k), 0});
             }
             if (!ok) return false;
         }
@@ -334,12 +348,21 @@ private:
     // verdict stored in `*store` when given): the new best when inside and deeper.
     bool try_point(int m, const Vec3& p, Side known, Side* store, const Order& order) {
         const MeshBvh& other = m == 0 ? b_ : a_;
+        if (known == Side::UNKNOWN) {  // a recorded ball may say outside before any measuring
+            known = recorded_side(m == 0 ? 1 : 0, p);
+            if (known == Side::OUTSIDE) {
+                if (store != nullptr) *store = known;
+                return true;
+            }
+        }
         std::int32_t triangle = -1;
         double d = distance_beyond(other, p, best, &triangle);
         if (!beats(d, order, [&] { return distance_beyond(other, p, 0.0, &triangle); })) return true;
         if (known == Side::UNKNOWN) {
+            // d is p's exact distance to other's surface here (beats measured it in full)
             if (!may_test()) return false;
             known = inside_mesh(other, p, &work_) ? Side::INSIDE : Side::OUTSIDE;
+            record_side(m == 0 ? 1 : 0, p, d, known);
             if (store != nullptr) *store = known;
         }
         if (known == Side::INSIDE) {
@@ -352,20 +375,47 @@ private:
         return true;
     }
 
-    bool try_wedge(DepthCandidate& c, const Order& order) {
+    // A wedge point of crossing pair `pair`: the new best when inside both and deeper.
+    bool try_wedge(DepthCandidate& c, const CrossingPair& pair, const Order& order) {
         // Outside a closed mesh's box is outside it (the test's verdict, without its work).
         const Vec3 in_b = rel_.apply_inverse(c.point);
         if (!inside_box(a_.nodes()[0], c.point) || !inside_box(b_.nodes()[0], in_b)) return true;
+        // Its distances to the pair's own two triangles bound its depth from above (each
+        // surface's distance is a minimum over its triangles, these among them): a point that
+        // cannot reach the best depth is not measured. Most are, as the points step off the
+        // pair's shared points by at most half the shorter triangle's longest edge.
+        const double own = max2(triangle_distance_of(c.point, a_.triangle(pair.a)),
+                                triangle_distance_of(in_b, b_.triangle(pair.b)));
+        if (!(own + slack_ > best)) return true;
+        // A point a recorded ball puts outside either solid is not measured.
+        Side side_a = recorded_side(0, c.point);
+        if (side_a == Side::OUTSIDE) return true;
+        Side side_b = recorded_side(1, in_b);
+        if (side_b == Side::OUTSIDE) return true;
+        // Each distance is exact when above the floor of its search (then a ball free of
+        // that surface, recorded with the point's side of it).
+        double da = 0.0, db = 0.0, floor_used = 0.0;
         auto measure = [&](double floor) {
-            const double da = distance_beyond(a_, c.point, floor);
-            const double db = distance_beyond(b_, rel_.apply_inverse(c.point), floor);
+            floor_used = floor;
+            da = distance_beyond(a_, c.point, floor);
+            db = distance_beyond(b_, rel_.apply_inverse(c.point), floor);
             c.farther_is_a = da >= db;
             return std::fmax(da, db);
         };
         c.distance = measure(best);
         if (!beats(c.distance, order, [&] { return measure(0.0); })) return true;
-        if (!may_test()) return false;
-        if (inside_mesh(a_, c.point, &work_) && inside_mesh(b_, in_b, &work_)) {
+        if (side_a == Side::UNKNOWN || (side_a == Side::INSIDE && side_b == Side::UNKNOWN)) {
+            if (!may_test()) return false;
+            if (side_a == Side::UNKNOWN) {
+                side_a = inside_mesh(a_, c.point, &work_) ? Side::INSIDE : Side::OUTSIDE;
+                if (da > floor_used) record_side(0, c.point, da, side_a);
+            }
+            if (side_a == Side::INSIDE && side_b == Side::UNKNOWN) {
+                side_b = inside_mesh(b_, in_b, &work_) ? Side::INSIDE : Side::OUTSIDE;
+                if (db > floor_used) record_side(1, in_b, db, side_b);
+            }
+        }
+        if (side_a == Side::INSIDE && side_b == Side::INSIDE) {
             best = c.distance;
             winner = c;
             winner_triangle = -1;
@@ -373,6 +423,24 @@ private:
             have = true;
         }
         return true;
+    }
+
+    // The side of solid x (0: a, 1: b) of a point p (x's frame) that lies in a recorded ball:
+    // a ball free of x's surface has all its points on one side (the winding number of a
+    // closed surface is constant off it), the side of its centre. UNKNOWN when none holds p.
+    // The latest balls are read first: the points of one crossing follow each other.
+    Side recorded_side(int x, const Vec3& p) const {
+        const std::vector<Ball>& balls = balls_[x];
+        for (size_t k = balls.size(), read = 0; k-- > 0 && read < kBallsRead; ++read)
+            if (squared_norm(p - balls[k].center) < balls[k].radius2) return balls[k].side;
+        return Side::UNKNOWN;
+    }
+
+    // Records that p (x's frame), at exact distance d from x's surface, is on `side` of it:
+    // the ball about p of radius d less the rounding allowance holds no surface of x.
+    void record_side(int x, const Vec3& p, double d, Side side) {
+        const double radius = d - slack_;
+        if (radius > 0.0) balls_[x].push_back({p, radius * radius, side});
     }
 
     // Counts one exact inside test, or stops at the work cap.
@@ -397,6 +465,16 @@ private:
     const TriangleMarks* marks_[2] = {nullptr, nullptr};
     const std::vector<CrossingPair>* pairs_ = nullptr;
     std::vector<DepthCandidate> wedges_;  // scratch: one pair's wedge points
+    // Points whose side of solid x (0: a, 1: b) an exact test found, with a ball about each
+    // that holds no surface of x (recorded_side).
+    struct Ball {
+        Vec3 center;     // x's frame
+        double radius2;  // squared radius
+        Side side;
+    };
+    static constexpr size_t kBallsRead = 64;
+    std::vector<Ball> balls_[2];
+    std::vector<std::int32_t> crossing_;  // scratch of add_edges
     std::vector<Entry> heap_;
     Order winner_order_{};
 };
@@ -415,7 +493,7 @@ ClosedDepth search_closed_depth(const MeshBvh& a, const MeshBvh& b, const Relati
         if (closed_other[m]) running = search.add_mesh(m, m == 0 ? marks_a : marks_b);
     if (running) running = search.run();  // the vertices first: a best depth to prune with
     for (int m = 0; m < 2 && running; ++m)
-        if (closed_other[m]) search.add_edges(m);
+        if (closed_other[m]) search.add_edges(m, crossing_pairs);
     if (running && a.closed() && b.closed()) search.add_wedges(crossing_pairs);
     if (running) running = search.run();
     ClosedDepth found;

@@ -574,8 +574,10 @@ class MeshDepthBatch:
     deepest_mesh : (P,) int8
         0 when the deepest point is a's (inside b), 1 when it is b's, -1 when none is inside.
     points_tested : (P,) int64
-        Exact inside tests run: one per region of points when the other mesh is closed (see
-        the Notes of :func:`mesh_penetration_depth_batch`), one per point otherwise.
+        Exact inside tests run. When the other mesh is closed: one per region of points (see
+        the Notes of :func:`mesh_penetration_depth_batch`) and one per point the search
+        measures deeper than its best depth, unless a point tested before decides it (one
+        nearer to it than that point is to the surface). Otherwise one per point.
     status : (P,) int8
         :class:`meshcol.types.Status`: ``CONVERGED``; ``MAX_ITERATIONS`` when the pair used
         ``defaults.mesh_depth_max_work`` triangle visits (depth is then that of the points

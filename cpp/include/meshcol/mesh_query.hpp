@@ -78,8 +78,9 @@ struct MeshDepthOutput {
     /// not a guarantee that moving b by depth along it separates a non-convex pair.
     Vec3 normal;
     int deepest_mesh = -1;  ///< 0: the deepest point is a's (inside b); 1: b's; -1: none
-    /// exact inside tests run: one per region of points (closed other mesh), one per point
-    /// otherwise
+    /// exact inside tests run. Closed other mesh: one per region of points and one per point
+    /// measured deeper than the best depth found, unless a point tested before decides it
+    /// (one nearer to it than that point is to the surface). Otherwise one per point.
     std::int64_t points_tested = 0;
     Status status = Status::NOT_RUN;  ///< CONVERGED, MAX_ITERATIONS (work cap), INVALID_INPUT
 };

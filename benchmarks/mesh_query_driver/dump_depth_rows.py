@@ -1,0 +1,46 @@
+"""Writes bench_mesh_query.py's three single-pair depth rows as raw arrays for driver.cpp.
+
+Run: .venv/bin/python benchmarks/mesh_query_driver/dump_depth_rows.py OUT_DIR
+
+Meshes ``m4`` (ballA), ``m5`` (ballB), ``m6`` (torus), ``m7`` (the 12,288-face floor), in the
+format of dump_family.py, and one pose pair per row: ``m4_balls.p`` (query with ``B=5``),
+``m6_moved.p`` (the torus against its copy) and ``m7_floor.p`` (``B=6``: the floor against the
+resting torus), the very pairs of ``depth_rows``.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import bench_mesh_query as bench
+
+
+def main() -> None:
+    out = Path(sys.argv[1])
+    out.mkdir(parents=True, exist_ok=True)
+    load = lambda name: trimesh.load(bench.MODELS / name, force="mesh")
+    torus = load("torus.STL")
+    e = float(torus.extents[0])
+    floor = trimesh.creation.box(bounds=[[-3 * e, -3 * e, -e], [3 * e, 3 * e, 0]])
+    for _ in range(5):
+        floor = floor.subdivide()
+    meshes = {4: load("ballA.off"), 5: load("ballB.off"), 6: torus, 7: floor}
+    for k, mesh in meshes.items():
+        np.ascontiguousarray(mesh.vertices, dtype=np.float64).tofile(out / f"m{k}.v")
+        np.ascontiguousarray(mesh.faces, dtype=np.int64).tofile(out / f"m{k}.f")
+    rows = {
+        "m4_balls": np.eye(4),
+        "m6_moved": bench.pose(translation=(0.3 * e, 0.01 * e, 0)),
+        "m7_floor": bench.pose(translation=(0, 0, -float(torus.bounds[0][2]))),
+    }
+    for name, pb in rows.items():
+        np.ascontiguousarray(np.stack([np.eye(4), pb]), dtype=np.float64).tofile(out / f"{name}.p")
+
+
+if __name__ == "__main__":
+    main()
