@@ -661,23 +661,30 @@ def one_run() -> None:
     batch_case(load("torus.STL"), 60, rng)
 
 
-def depth_rows() -> None:
-    print(DEPTH_MEANING)
+def single_depth_rows() -> dict[str, tuple[trimesh.Trimesh, trimesh.Trimesh, np.ndarray]]:
+    """The three single-pair depth rows: name -> (mesh a, mesh b, b's pose; a at the origin).
+    Shared with depth_identity.py and mesh_query_driver/dump_depth_rows.py."""
     load = lambda name: trimesh.load(MODELS / name, force="mesh")
     torus = load("torus.STL")
-    ball_a, ball_b = load("ballA.off"), load("ballB.off")
-    depth_case("ballA vs ballB (overlapping)", ball_a, ball_b, np.eye(4))
     e = float(torus.extents[0])
-    depth_case("torus vs copy moved 30%", torus, torus, pose(translation=(0.3 * e, 0.01 * e, 0)))
     floor = trimesh.creation.box(bounds=[[-3 * e, -3 * e, -e], [3 * e, 3 * e, 0]])
     for _ in range(5):
         floor = floor.subdivide()
-    depth_case(
-        "torus resting on a 12,288-face floor",
-        floor,
-        torus,
-        pose(translation=(0, 0, -float(torus.bounds[0][2]))),
-    )
+    return {
+        "ballA vs ballB (overlapping)": (load("ballA.off"), load("ballB.off"), np.eye(4)),
+        "torus vs copy moved 30%": (torus, torus, pose(translation=(0.3 * e, 0.01 * e, 0))),
+        "torus resting on a 12,288-face floor": (
+            floor,
+            torus,
+            pose(translation=(0, 0, -float(torus.bounds[0][2]))),
+        ),
+    }
+
+
+def depth_rows() -> None:
+    print(DEPTH_MEANING)
+    for name, (a, b, pose_b) in single_depth_rows().items():
+        depth_case(name, a, b, pose_b)
 
 
 if __name__ == "__main__":

@@ -32,14 +32,6 @@ sys.path.insert(0, str(ROOT / "tests" / "collision"))
 FIELDS = ("depth", "point_a", "point_b", "normal", "deepest_mesh", "status")
 
 
-def _rotation(rng) -> np.ndarray:
-    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
-    q *= np.sign(np.diag(r))
-    if np.linalg.det(q) < 0:
-        q[:, 0] *= -1
-    return q
-
-
 def _groups():
     """(name, meshes as (vertices, faces), poses (n, 4, 4), pairs (P, 2))."""
     import bench_mesh_query as bench
@@ -52,23 +44,7 @@ def _groups():
             flat = poses.reshape(-1, 4, 4)
             pairs = np.arange(len(flat)).reshape(-1, 2)
             yield f"{name} {config}", [mesh] * len(flat), flat, pairs
-    load = lambda name: trimesh.load(bench.MODELS / name, force="mesh")
-    torus = load("torus.STL")
-    e = float(torus.extents[0])
-    floor = trimesh.creation.box(bounds=[[-3 * e, -3 * e, -e], [3 * e, 3 * e, 0]])
-    for _ in range(5):
-        floor = floor.subdivide()
-    rows = (
-        ("balls", load("ballA.off"), load("ballB.off"), np.eye(4)),
-        ("torus moved", torus, torus, bench.pose(translation=(0.3 * e, 0.01 * e, 0))),
-        (
-            "torus on floor",
-            floor,
-            torus,
-            bench.pose(translation=(0, 0, -float(torus.bounds[0][2]))),
-        ),
-    )
-    for name, a, b, pb in rows:
+    for name, (a, b, pb) in bench.single_depth_rows().items():
         yield name, [a, b], np.stack([np.eye(4), pb]), np.array([[0, 1], [1, 0]])
 
     rng = np.random.default_rng(11)
@@ -76,13 +52,16 @@ def _groups():
         meshes, poses = [], []
         for offset in (0.0, 1e-9, -1e-9, -1e-7, -1e-3, -0.02, -0.1):
             for _ in range(6):
-                motion = hosts._pose(_rotation(rng), rng.normal(size=3))
+                motion = hosts._pose(bench.random_rotation(rng), rng.normal(size=3))
                 meshes += [host, cube]
                 poses += [motion, motion @ hosts._pose(translation=(0.0, 0.0, offset))]
         for _ in range(20):  # the host against a moved, turned copy
             shift = rng.normal(size=3) * 0.1 * float(host.extents.max())
             meshes += [host, host]
-            poses += [np.eye(4), hosts._pose(_rotation(rng) if rng.random() < 0.5 else None, shift)]
+            poses += [
+                np.eye(4),
+                hosts._pose(bench.random_rotation(rng) if rng.random() < 0.5 else None, shift),
+            ]
         pairs = np.arange(len(meshes)).reshape(-1, 2)
         yield f"host {name}", meshes, np.stack(poses), pairs
 
@@ -104,9 +83,9 @@ def _groups():
             if rng.random() < 0.3:  # axis-aligned, flush-prone
                 pose_b = hosts._pose(None, np.round(shift, 1))
             else:
-                pose_b = hosts._pose(_rotation(rng), shift)
+                pose_b = hosts._pose(bench.random_rotation(rng), shift)
             meshes += [a, b]
-            poses += [hosts._pose(_rotation(rng)), pose_b]
+            poses += [hosts._pose(bench.random_rotation(rng)), pose_b]
         yield (
             f"primitives{' (b open)' if open_b else ''}",
             meshes,

@@ -14,7 +14,6 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import trimesh
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import bench_mesh_query as bench
@@ -23,21 +22,14 @@ import bench_mesh_query as bench
 def main() -> None:
     out = Path(sys.argv[1])
     out.mkdir(parents=True, exist_ok=True)
-    load = lambda name: trimesh.load(bench.MODELS / name, force="mesh")
-    torus = load("torus.STL")
-    e = float(torus.extents[0])
-    floor = trimesh.creation.box(bounds=[[-3 * e, -3 * e, -e], [3 * e, 3 * e, 0]])
-    for _ in range(5):
-        floor = floor.subdivide()
-    meshes = {4: load("ballA.off"), 5: load("ballB.off"), 6: torus, 7: floor}
+    (ball_a, ball_b, balls), (torus, _, moved), (floor, _, resting) = (
+        bench.single_depth_rows().values()
+    )
+    meshes = {4: ball_a, 5: ball_b, 6: torus, 7: floor}
     for k, mesh in meshes.items():
         np.ascontiguousarray(mesh.vertices, dtype=np.float64).tofile(out / f"m{k}.v")
         np.ascontiguousarray(mesh.faces, dtype=np.int64).tofile(out / f"m{k}.f")
-    rows = {
-        "m4_balls": np.eye(4),
-        "m6_moved": bench.pose(translation=(0.3 * e, 0.01 * e, 0)),
-        "m7_floor": bench.pose(translation=(0, 0, -float(torus.bounds[0][2]))),
-    }
+    rows = {"m4_balls": balls, "m6_moved": moved, "m7_floor": resting}
     for name, pb in rows.items():
         np.ascontiguousarray(np.stack([np.eye(4), pb]), dtype=np.float64).tofile(out / f"{name}.p")
 
