@@ -505,7 +505,10 @@ TEST_CASE("is_rigid_matrix4: the plain definition's verdict, rigid, perturbed an
     for (int n = 0; n < 200000; ++n) {
         // a random rotation (unit quaternion) and translation
         double q[4], length = 0.0;
-        for (double& x : q) length += (x = normal(rng)) * x;
+        for (double& x : q) {
+            x = normal(rng);
+            length += x * x;
+        }
         length = std::sqrt(length);
         for (double& x : q) x /= length;
         const double w = q[0], x = q[1], y = q[2], z = q[3];
