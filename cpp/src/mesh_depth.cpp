@@ -235,19 +235,10 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
                         undecided.end());
         std::sort(undecided.begin(), undecided.end(),
                   [](const DepthCandidate& x, const DepthCandidate& y) { return x.distance > y.distance; });
-        std::vector<std::pair<Vec3, double>> outside[2];
+        SideBalls outside[2];
         constexpr size_t kBallsChecked = 256;
         for (const DepthCandidate& c : undecided) {
-            if (c.mesh < 2) {
-                const auto& balls = outside[c.mesh];
-                bool known_outside = false;
-                for (size_t k = balls.size(); k-- > 0 && balls.size() - k <= kBallsChecked;)
-                    if (squared_norm(c.point - balls[k].first) < balls[k].second * balls[k].second) {
-                        known_outside = true;
-                        break;
-                    }
-                if (known_outside) continue;
-            }
+            if (c.mesh < 2 && outside[c.mesh].side_of(c.point, kBallsChecked) == Side::OUTSIDE) continue;
             if (work > defaults::mesh_depth_max_work) {
                 out.status = Status::MAX_ITERATIONS;
                 break;
@@ -260,7 +251,7 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
                 have = true;
                 break;
             }
-            if (c.mesh < 2) outside[c.mesh].push_back({c.point, c.distance});
+            if (c.mesh < 2) outside[c.mesh].add(c.point, c.distance, Side::OUTSIDE);
         }
     }
     if (!have) return out;

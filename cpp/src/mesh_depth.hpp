@@ -26,6 +26,37 @@ struct DepthCandidate {
     bool farther_is_a;  // mesh 2: a's surface is the farther one
 };
 
+// A point's side of a closed surface: outside, inside, or not known yet.
+enum class Side : signed char { OUTSIDE, INSIDE, UNKNOWN };
+
+// Balls that hold no point of one mesh's surface, each with the side of its centre: every
+// point of such a ball is on that side (the winding number of a closed surface is constant
+// off it). A point whose side an exact test found, at exact distance d from the surface,
+// gives the ball of radius d less any rounding allowance. The latest balls are read first,
+// the points of one crossing following each other.
+class SideBalls {
+public:
+    /// Records the ball about `center` of radius `radius` (none when it is not positive).
+    void add(const Vec3& center, double radius, Side side) {
+        if (radius > 0.0) balls_.push_back({center, radius * radius, side});
+    }
+
+    /// The side of `p` when one of the latest `read` balls holds it, else UNKNOWN.
+    Side side_of(const Vec3& p, size_t read) const {
+        for (size_t k = balls_.size(), n = 0; k-- > 0 && n < read; ++n)
+            if (squared_norm(p - balls_[k].center) < balls_[k].radius2) return balls_[k].side;
+        return Side::UNKNOWN;
+    }
+
+private:
+    struct Ball {
+        Vec3 center;
+        double radius2;  // squared radius
+        Side side;
+    };
+    std::vector<Ball> balls_;
+};
+
 inline double longest_edge(const Vec3 t[3]) {
     return std::sqrt(std::fmax(squared_norm(t[1] - t[0]),
                                std::fmax(squared_norm(t[2] - t[1]), squared_norm(t[0] - t[2]))));

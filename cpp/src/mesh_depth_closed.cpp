@@ -227,7 +227,6 @@ public:
     long long work() const { return work_; }
 
 private:
-    enum class Side : signed char { OUTSIDE, INSIDE, UNKNOWN };
     // A point's place in the per-point search's order: mesh (0, 1, 2: wedges), then its
     // vertices before its edge pieces (0, 1), then vertex, 3 * triangle + edge, or wedge
     // point, then the piece along the edge.
@@ -425,23 +424,12 @@ private:
         return true;
     }
 
-    // The side of solid x (0: a, 1: b) of a point p (x's frame) that lies in a recorded ball:
-    // a ball free of x's surface has all its points on one side (the winding number of a
-    // closed surface is constant off it), the side of its centre. UNKNOWN when none holds p.
-    // The latest balls are read first: the points of one crossing follow each other.
-    Side recorded_side(int x, const Vec3& p) const {
-        const std::vector<Ball>& balls = balls_[x];
-        for (size_t k = balls.size(), read = 0; k-- > 0 && read < kBallsRead; ++read)
-            if (squared_norm(p - balls[k].center) < balls[k].radius2) return balls[k].side;
-        return Side::UNKNOWN;
-    }
+    // The side of solid x (0: a, 1: b) of a point p (x's frame) that a recorded ball gives.
+    Side recorded_side(int x, const Vec3& p) const { return balls_[x].side_of(p, kBallsRead); }
 
     // Records that p (x's frame), at exact distance d from x's surface, is on `side` of it:
     // the ball about p of radius d less the rounding allowance holds no surface of x.
-    void record_side(int x, const Vec3& p, double d, Side side) {
-        const double radius = d - slack_;
-        if (radius > 0.0) balls_[x].push_back({p, radius * radius, side});
-    }
+    void record_side(int x, const Vec3& p, double d, Side side) { balls_[x].add(p, d - slack_, side); }
 
     // Counts one exact inside test, or stops at the work cap.
     bool may_test() {
@@ -466,14 +454,9 @@ private:
     const std::vector<CrossingPair>* pairs_ = nullptr;
     std::vector<DepthCandidate> wedges_;  // scratch: one pair's wedge points
     // Points whose side of solid x (0: a, 1: b) an exact test found, with a ball about each
-    // that holds no surface of x (recorded_side).
-    struct Ball {
-        Vec3 center;     // x's frame
-        double radius2;  // squared radius
-        Side side;
-    };
+    // that holds no surface of x (x's frame).
     static constexpr size_t kBallsRead = 64;
-    std::vector<Ball> balls_[2];
+    SideBalls balls_[2];
     std::vector<std::int32_t> crossing_;  // scratch of add_edges
     std::vector<Entry> heap_;
     Order winner_order_{};
