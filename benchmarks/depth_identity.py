@@ -18,6 +18,7 @@ tests (points_tested) of each file.
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -129,8 +130,19 @@ def compare(a_path: str, b_path: str) -> int:
     return 1 if bad else 0
 
 
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    verbs = parser.add_subparsers(dest="verb", required=True)
+    verbs.add_parser("write", help="write every answer to OUT.npz").add_argument("out")
+    both = verbs.add_parser("compare", help="compare two written files")
+    both.add_argument("a")
+    both.add_argument("b")
+    args = parser.parse_args()
+    if args.verb == "write":
+        write(args.out)
+        return 0
+    return compare(args.a, args.b)
+
+
 if __name__ == "__main__":
-    if sys.argv[1] == "write":
-        write(sys.argv[2])
-    else:
-        raise SystemExit(compare(sys.argv[2], sys.argv[3]))
+    raise SystemExit(main())

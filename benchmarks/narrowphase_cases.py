@@ -11,6 +11,7 @@ Run: .venv/bin/python benchmarks/narrowphase_cases.py OUT_DIR
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -22,7 +23,9 @@ from bench_narrowphase import make_case, touching_case
 
 
 def main() -> None:
-    out = Path(sys.argv[1])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("out_dir", type=Path, help="folder to write the cases into")
+    out = parser.parse_args().out_dir
     out.mkdir(parents=True, exist_ok=True)
     for n in (8, 16, 64, 256, 0):  # 0: the box-like family (cuboids and wedges)
         for label in ("separated", "touching", "penetrating"):
