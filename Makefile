@@ -9,7 +9,7 @@ PIP    := $(BIN)/python -m pip --disable-pip-version-check
 BUILD_TOOLS := $(if $(shell command -v cmake),,"cmake>=3.18") $(if $(shell command -v ninja),,ninja)
 BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4" $(BUILD_TOOLS)
 
-.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs test-cpp test-sanitize gltf-validator fbx-fixtures robots-wild robots-menagerie
+.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs test-cpp test-sanitize test-tsan gltf-validator fbx-fixtures robots-wild robots-menagerie
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -129,6 +129,22 @@ test-sanitize:
 	done
 	LD_PRELOAD="$(SANITIZE_RUNTIMES)" $(SANITIZE_OPTIONS) HYPOTHESIS_PROFILE=fast \
 		$(SANITIZE_BIN)/pytest -q -p no:cacheprovider -m "not slow" --capture=sys
+
+# The data-race lane, to run before landing a change to the core's threads: the C++ tests
+# (cpp/tests; test_threads.cpp runs every path parallel_for serves on 2 and 3 threads) built
+# with ThreadSanitizer (MESHCOL_TSAN) in build/tsan, then run with any report failing the run
+# (halt_on_error; exit code 66). Reports that are not races of the core are suppressed, each
+# with its reason, in cpp/tests/tsan.supp. C++ only: the extension under an uninstrumented
+# CPython reports the interpreter's own accesses (CONTRIBUTING.md). No venv of its own: the
+# system's cmake and ninja, else those of .venv (make install-test).
+TSAN_BUILD := build/tsan
+TSAN_OPTIONS_RUN := TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$(CURDIR)/cpp/tests/tsan.supp"
+test-tsan:
+	PATH="$$PATH:$(CURDIR)/$(BIN)" cmake -S . -B $(TSAN_BUILD)/cpp-tests -G Ninja \
+		-DCMAKE_BUILD_TYPE=RelWithDebInfo -DMESHCOL_TSAN=ON -DMESHCOL_BUILD_EXTENSION=OFF \
+		-DMESHCOL_BUILD_TESTS=ON > /dev/null
+	PATH="$$PATH:$(CURDIR)/$(BIN)" cmake --build $(TSAN_BUILD)/cpp-tests
+	$(TSAN_OPTIONS_RUN) $(TSAN_BUILD)/cpp-tests/meshcol_cpp_tests
 
 # Fuzz every target (fuzz/targets.py) for FUZZ_SECONDS each; crashes land in fuzz/crashes/.
 FUZZ_SECONDS ?= 60
