@@ -5,7 +5,6 @@
 // report even when the answers come out equal.
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <random>
 #include <string>
 #include <vector>
@@ -31,15 +30,7 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-template <class T>
-bool same_bytes(const T* a, const T* b, size_t count) {
-    return count == 0 || std::memcmp(a, b, count * sizeof(T)) == 0;
-}
-
-template <class T>
-bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
-    return a.size() == b.size() && same_bytes(a.data(), b.data(), a.size());
-}
+using fixtures::same_bytes;
 
 bool same_bytes(const Vec3& a, const Vec3& b) {
     return same_bytes(&a.x, &b.x, 1) && same_bytes(&a.y, &b.y, 1) && same_bytes(&a.z, &b.z, 1);
@@ -184,15 +175,7 @@ TEST_CASE("threads: hull packing commits chunks that finish out of order, byte f
     const PackedPolytopes one = pack_polytopes(points.data(), offsets.data(), 64, 1);
     for (int threads : {2, 3}) {
         const PackedPolytopes many = pack_polytopes(points.data(), offsets.data(), 64, threads);
-        CHECK(same_bytes(one.status, many.status));
-        CHECK(same_bytes(one.vertices, many.vertices));
-        CHECK(same_bytes(one.offsets, many.offsets));
-        CHECK(same_bytes(one.adjacency_offsets, many.adjacency_offsets));
-        CHECK(same_bytes(one.adjacency, many.adjacency));
-        CHECK(same_bytes(one.face_offsets, many.face_offsets));
-        CHECK(same_bytes(one.face_normals, many.face_normals));
-        CHECK(same_bytes(one.edge_pair_offsets, many.edge_pair_offsets));
-        CHECK(same_bytes(one.edge_pairs, many.edge_pairs));
+        CHECK(fixtures::same_packing(one, many));
     }
     CHECK(one.status[0] == HullStatus::OK);
     CHECK(one.offsets[1] > 1000);  // most points of a sphere are vertices
