@@ -9,7 +9,7 @@ PIP    := $(BIN)/python -m pip --disable-pip-version-check
 BUILD_TOOLS := $(if $(shell command -v cmake),,"cmake>=3.18") $(if $(shell command -v ninja),,ninja)
 BUILD_DEPS := "scikit-build-core>=0.10" "nanobind>=2.4" $(BUILD_TOOLS)
 
-.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs test-cpp test-sanitize gltf-validator fbx-fixtures robots-wild robots-menagerie
+.PHONY: demo test test-fast test-lowest lint install install-test bench fuzz clean stubs test-cpp test-sanitize test-tsan gltf-validator fbx-fixtures robots-wild robots-menagerie
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -129,6 +129,38 @@ test-sanitize:
 	done
 	LD_PRELOAD="$(SANITIZE_RUNTIMES)" $(SANITIZE_OPTIONS) HYPOTHESIS_PROFILE=fast \
 		$(SANITIZE_BIN)/pytest -q -p no:cacheprovider -m "not slow" --capture=sys
+
+# The data-race lane, to run before landing a change to the core's threads: the core built
+# with ThreadSanitizer (MESHCOL_TSAN) in build/tsan, then the C++ tests (test_threads.cpp runs
+# every path parallel_for serves on 2 and 3 threads) and the threaded batch tests of the
+# Python suite with the instrumented extension (a copy of the package beside it in
+# build/tsan/python, loaded by the venv's uninstrumented CPython with libtsan preloaded and
+# without site, so that the editable install's finder cannot load the normal build). Any
+# report fails the run (halt_on_error, exit code 66); a report that is not a race of the core
+# is suppressed, with its reason, in cpp/tests/tsan.supp. OpenBLAS on one thread: its
+# workers wait on plain flags that ThreadSanitizer cannot see, so numpy reading a matrix
+# product's result reads as a race (numpy's and OpenBLAS's, never the core's).
+TSAN_BUILD := build/tsan
+TSAN_RUNTIME = $(shell $(CXX) -print-file-name=libtsan.so)
+TSAN_OPTIONS_RUN := TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$(CURDIR)/cpp/tests/tsan.supp"
+TSAN_PYTHON_TESTS := tests/collision/test_hull_packing.py tests/collision/test_narrowphase_batch_forms.py \
+	tests/collision/test_mesh_distance_batch_forms.py tests/collision/test_time_of_impact_batch_forms.py \
+	tests/io/test_mesh_files.py
+# pytest on those files, once the instrumented copy (argv[1]) is the module that loaded
+TSAN_PYTEST := import sys, pytest, meshcol._core as c; assert c.__file__.startswith(sys.argv[1]), c.__file__; sys.exit(pytest.main(sys.argv[2:]))
+test-tsan: install-test
+	PATH="$(CURDIR)/$(BIN):$$PATH" cmake -S . -B $(TSAN_BUILD)/cpp-tests -G Ninja \
+		-DCMAKE_BUILD_TYPE=RelWithDebInfo -DMESHCOL_TSAN=ON -DMESHCOL_BUILD_EXTENSION=ON \
+		-DPython_EXECUTABLE=$(CURDIR)/$(BIN)/python -DMESHCOL_BUILD_TESTS=ON > /dev/null
+	PATH="$(CURDIR)/$(BIN):$$PATH" cmake --build $(TSAN_BUILD)/cpp-tests
+	$(TSAN_OPTIONS_RUN) $(TSAN_BUILD)/cpp-tests/meshcol_cpp_tests
+	rm -rf $(TSAN_BUILD)/python && mkdir -p $(TSAN_BUILD)/python
+	cp -r meshcol $(TSAN_BUILD)/python/ && cp $(TSAN_BUILD)/cpp-tests/_core.*.so $(TSAN_BUILD)/python/meshcol/
+	cd $(TSAN_BUILD) && LD_PRELOAD="$(TSAN_RUNTIME)" $(TSAN_OPTIONS_RUN) OPENBLAS_NUM_THREADS=1 \
+		HYPOTHESIS_PROFILE=fast PYTHONPATH="$(CURDIR)/$(TSAN_BUILD)/python:$$($(CURDIR)/$(BIN)/python \
+		-c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')" $(CURDIR)/$(BIN)/python -S \
+		-c '$(TSAN_PYTEST)' "$(CURDIR)/$(TSAN_BUILD)/python/" -q -p no:cacheprovider --capture=sys \
+		-m "not slow" -c $(CURDIR)/pyproject.toml --rootdir $(CURDIR) $(addprefix $(CURDIR)/,$(TSAN_PYTHON_TESTS))
 
 # Fuzz every target (fuzz/targets.py) for FUZZ_SECONDS each; crashes land in fuzz/crashes/.
 FUZZ_SECONDS ?= 60

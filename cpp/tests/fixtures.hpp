@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "meshcol/hull.hpp"
@@ -12,6 +13,17 @@
 #include "meshcol/vec.hpp"
 
 namespace meshcol::fixtures {
+
+/// The same bytes: answers compared bit for bit (NaNs of the same pattern compare equal).
+template <class T>
+bool same_bytes(const T* a, const T* b, size_t count) {
+    return count == 0 || std::memcmp(a, b, count * sizeof(T)) == 0;
+}
+
+template <class T>
+bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
+    return a.size() == b.size() && same_bytes(a.data(), b.data(), a.size());
+}
 
 inline Pose at(double x, double y, double z) {
     Pose p;
@@ -101,6 +113,15 @@ inline TriangleMesh box_mesh(const Vec3& lo, const Vec3& hi) {
     };
     for (const auto& q : quads) m.faces.insert(m.faces.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
     return m;
+}
+
+/// Whether two packings (`pack_polytopes`) hold the same arrays, byte for byte.
+inline bool same_packing(const PackedPolytopes& a, const PackedPolytopes& b) {
+    return same_bytes(a.status, b.status) && same_bytes(a.vertices, b.vertices) &&
+           same_bytes(a.offsets, b.offsets) && same_bytes(a.adjacency_offsets, b.adjacency_offsets) &&
+           same_bytes(a.adjacency, b.adjacency) && same_bytes(a.face_offsets, b.face_offsets) &&
+           same_bytes(a.face_normals, b.face_normals) &&
+           same_bytes(a.edge_pair_offsets, b.edge_pair_offsets) && same_bytes(a.edge_pairs, b.edge_pairs);
 }
 
 /// A set of polytopes over packed hulls (`pack_polytopes`' arrays, which the caller keeps),

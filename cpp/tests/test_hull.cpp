@@ -173,15 +173,7 @@ std::vector<Vec3> family_points(int family, int n, std::uint64_t& state) {
 }
 
 // The same bytes (NaN coordinates of a shape kept as given compare equal).
-template <class T>
-bool same_bytes(const T* a, const T* b, size_t count) {
-    return count == 0 || std::memcmp(a, b, count * sizeof(T)) == 0;
-}
-
-template <class T>
-bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
-    return a.size() == b.size() && same_bytes(a.data(), b.data(), a.size());
-}
+using fixtures::same_bytes;
 
 }  // namespace
 
@@ -200,15 +192,7 @@ TEST_CASE("hull: packing on threads equals packing one shape at a time, byte for
     const PackedPolytopes one = pack_polytopes(points.data(), offsets.data(), shapes, 1);
     for (int threads : {2, 3}) {
         const PackedPolytopes two = pack_polytopes(points.data(), offsets.data(), shapes, threads);
-        CHECK(same_bytes(one.status, two.status));
-        CHECK(same_bytes(one.vertices, two.vertices));
-        CHECK(same_bytes(one.offsets, two.offsets));
-        CHECK(same_bytes(one.adjacency_offsets, two.adjacency_offsets));
-        CHECK(same_bytes(one.adjacency, two.adjacency));
-        CHECK(same_bytes(one.face_offsets, two.face_offsets));
-        CHECK(same_bytes(one.face_normals, two.face_normals));
-        CHECK(same_bytes(one.edge_pair_offsets, two.edge_pair_offsets));
-        CHECK(same_bytes(one.edge_pairs, two.edge_pairs));
+        CHECK(fixtures::same_packing(one, two));
     }
     CHECK(one.status[5] == HullStatus::NON_FINITE);
     CHECK(one.status[6] == HullStatus::EMPTY);
