@@ -3,6 +3,7 @@
 // threshold (`resolve_threads` with its default), checked first, so the threads really run:
 // `make test-tsan` runs these under ThreadSanitizer, where a data race between them is a
 // report even when the answers come out equal.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
