@@ -516,14 +516,16 @@ EpaResult epa_penetration_deep(MinkowskiDifference& md, const SimplexVertex& fir
     const Vec3 c = cross(n, axes[k]);
     const Vec3 u = c * (defaults::epa_deep_start_spread * length / norm(c));
     const Vec3 v = cross(n, u) * (1.0 / length);
-    // A ring around the centre line, in order, then the far side: each climb starts from the
-    // previous support points (the directions turn by less than 60 degrees) but the last.
+    // A ring around the centre line, in order, then the far side. Each ring climb starts
+    // from the centre line's support points, which lie nearer each ring direction (about 33
+    // degrees off) than the previous ring point's (about 45 degrees); the far side's climbs
+    // start from a few samples.
     const Vec3 directions[4] = {n + u, n + v, n - u, n - v};
     const double ring_length = length * std::sqrt(1.0 + defaults::epa_deep_start_spread *
                                                             defaults::epa_deep_start_spread);
     SimplexVertex ring[4];
     for (int r = 0; r < 4; ++r) {
-        ring[r] = md.support(directions[r]);
+        ring[r] = md.support_from(directions[r], first.index_a, first.index_b);
         if (!(dot(ring[r].w, directions[r]) > deep * ring_length)) return res;
     }
     const SimplexVertex back = md.support(-n);
