@@ -139,7 +139,7 @@ public:
             for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
                 const std::int32_t* t = self.triangle_vertices(i);
                 RegionScratch::Vertex* c[3] = {&touch(t[0], inside), &touch(t[1], inside), &touch(t[2], inside)};
-                if (marks.near[static_cast<size_t>(i)] || !(c[0]->in_box || c[1]->in_box || c[2]->in_box)) continue;
+                if (marks.near(i) || !(c[0]->in_box || c[1]->in_box || c[2]->in_box)) continue;
                 for (int k = 0; k < 3; ++k) {
                     if (!c[k]->regular && !c[k]->in_box) s.outside.push_back(t[k]);
                     c[k]->regular = 1;
@@ -209,7 +209,7 @@ public:
         std::sort(crossing.begin(), crossing.end());
         crossing.erase(std::unique(crossing.begin(), crossing.end()), crossing.end());
         for (const std::int32_t i : crossing) {
-            const std::int32_t partner = marks.partner[static_cast<size_t>(i)];
+            const std::int32_t partner = marks.near_entry(i).partner;
             const Vec3* t = self.triangle(i);
             const Vec3* tp = other.triangle(partner);
             double ends[3];
@@ -274,7 +274,8 @@ public:
                 // A triangle whose box misses the segment's (compared exactly, on the same
                 // coordinates) has no point in common with it: not a cut.
                 const TriangleBox segment{min3(p, q), max3(p, q)};
-                for (std::int32_t n = marks.first[static_cast<size_t>(e.index)]; n < marks.first[static_cast<size_t>(e.index) + 1]; ++n) {
+                const auto [first, last] = marks.near_range(e.index);
+                for (std::int32_t n = first; n < last; ++n) {
                     const Vec3* t = other.triangle(marks.others[static_cast<size_t>(n)]);
                     double cut = 0.0;
                     if (triangle_box_squared_distance(segment, triangle_box(t)) == 0.0 &&
@@ -428,7 +429,8 @@ private:
                 // distance 0 from one (on the surface: the search would find 0) gives nothing.
                 double bound = triangle_distance_of(p, near);
                 const TriangleMarks& marks = *marks_[m];
-                for (std::int32_t n = marks.first[static_cast<size_t>(i)]; n < marks.first[static_cast<size_t>(i) + 1] && bound > 0.0; ++n)
+                const auto [first, last] = marks.near_range(i);
+                for (std::int32_t n = first; n < last && bound > 0.0; ++n)
                     bound = min2(bound, triangle_distance_of(p, other.triangle(marks.others[static_cast<size_t>(n)])));
                 if (bound == 0.0 || !(bound + slack_ > best)) continue;
                 if (!try_point(m, p, side, &side, Order{m, 0, v, 0})) return false;
