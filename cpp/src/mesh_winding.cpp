@@ -33,7 +33,10 @@ bool signed_crossings(const MeshBvh& mesh, const Vec3& p, const Vec3& q, int* co
     using predicates::orient3d_sign;
     const Vec3 d = q - p;
     const std::vector<BvhNode>& nodes = mesh.nodes();
-    std::vector<std::int32_t> stack{0};
+    // The thread's stack, kept between calls: a depth query runs dozens of these tests, and
+    // a fresh vector grew by reallocation in each.
+    thread_local std::vector<std::int32_t> stack;
+    stack.assign(1, 0);
     int total = 0;
     while (!stack.empty()) {
         const std::int32_t id = stack.back();
@@ -188,7 +191,8 @@ WindingEstimate refine_winding_number(const MeshBvh& mesh, const Vec3& point, En
 bool on_surface(const MeshBvh& mesh, const Vec3& p) {
     const std::vector<BvhNode>& nodes = mesh.nodes();
     const Vec3 point[3] = {p, p, p};
-    std::vector<std::int32_t> stack{0};
+    thread_local std::vector<std::int32_t> stack;  // kept between calls, as signed_crossings'
+    stack.assign(1, 0);
     while (!stack.empty()) {
         const std::int32_t id = stack.back();
         stack.pop_back();
