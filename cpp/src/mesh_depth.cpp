@@ -108,9 +108,10 @@ double distance_beyond(const MeshBvh& mesh, const Vec3& point, double floor, std
     const std::vector<BvhNode>& nodes = mesh.nodes();
     double best2 = kInf;
     bool found = false;
-    std::vector<std::pair<std::int32_t, double>> stack;
-    stack.reserve(64);
-    stack.push_back({0, point_node_squared_distance(mesh, 0, point)});
+    // The thread's stack, kept between calls: the depth search runs thousands of these, and
+    // each allocated its own.
+    thread_local std::vector<std::pair<std::int32_t, double>> stack;
+    stack.assign(1, {0, point_node_squared_distance(mesh, 0, point)});
     while (!stack.empty()) {
         const auto [index, bound] = stack.back();
         stack.pop_back();
@@ -142,9 +143,8 @@ double distance_within(const MeshBvh& mesh, const Vec3& point, double floor, dou
     const std::vector<BvhNode>& nodes = mesh.nodes();
     double best = kInf, prune2 = kInf;
     bool found = false;
-    std::vector<std::pair<std::int32_t, double>> stack;
-    stack.reserve(64);
-    stack.push_back({0, point_node_squared_distance(mesh, 0, point)});
+    thread_local std::vector<std::pair<std::int32_t, double>> stack;  // kept, as distance_beyond's
+    stack.assign(1, {0, point_node_squared_distance(mesh, 0, point)});
     while (!stack.empty()) {
         const auto [index, bound] = stack.back();
         stack.pop_back();

@@ -3,6 +3,7 @@
 // branch and bound.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -16,6 +17,52 @@
 namespace meshcol {
 using namespace mesh_detail;
 namespace {
+
+// What the depth search keeps of one mesh's vertices and nodes, reused by the searches on a
+// thread: a record is current only when its stamp is the search's generation, so a search
+// starts without a pass over the mesh (the MappedObbCache pattern of mesh_distance.cpp).
+struct RegionScratch {
+    struct Vertex {
+        std::uint32_t stamp;
+        std::int32_t parent;  // union-find of the regions
+        Side side;            // the vertex's side of the other solid
+        Side region;          // a root's: its region's side
+        char in_box;          // inside the other's root box (mapped into its frame)
+        char regular;         // a corner of a triangle that is not near the other surface
+        char done;            // measured (or passed over) by the search
+    };
+    std::vector<Vertex> vertices;
+    std::vector<std::uint32_t> live_stamp;  // a node holding a corner that may be inside
+    std::uint32_t generation = 0;
+    // Lists of this search: the vertices visited inside the box, the corners of regular
+    // triangles outside it, the nodes visited (preorder), the descent's stack.
+    std::vector<std::int32_t> in_box, outside, visited;
+    std::vector<std::pair<std::int32_t, bool>> stack;  // a node, and whether it lies inside the box
+
+    // Starts a search over a mesh of `vertex_count` vertices and `node_count` nodes.
+    void start(size_t vertex_count, size_t node_count) {
+        if (vertices.size() < vertex_count) vertices.resize(vertex_count, Vertex{});
+        if (live_stamp.size() < node_count) live_stamp.resize(node_count, 0u);
+        if (++generation == 0) {  // wrapped: every old stamp could read as current
+            for (Vertex& v : vertices) v.stamp = 0;
+            std::fill(live_stamp.begin(), live_stamp.end(), 0u);
+            generation = 1;
+        }
+        in_box.clear();
+        outside.clear();
+        visited.clear();
+    }
+    bool live(std::int32_t id) const { return live_stamp[static_cast<size_t>(id)] == generation; }
+};
+
+// Where a node of one mesh lies against the other's root box.
+enum class BoxOverlap { APART, PARTLY, INSIDE };
+
+// The scratch of the thread's searches, one per mesh of the pair.
+RegionScratch* thread_scratch() {
+    thread_local RegionScratch scratch[2];
+    return scratch;
+}
 
 // The depth search over the points of a mesh whose other mesh is closed. The winding number
 // of a closed surface is constant along a path that does not meet it (Jacobson et al. 2013),
@@ -34,81 +81,117 @@ namespace {
 class ClosedDepthSearch {
 public:
     ClosedDepthSearch(const MeshBvh& a, const MeshBvh& b, const Relative& rel, MeshDepthOutput& out)
-        : a_(a), b_(b), rel_(rel), out_(out), slack_(8.0 * rel.slack) {}
+        : a_(a), b_(b), rel_(rel), out_(out), slack_(8.0 * rel.slack), scratch_(thread_scratch()) {}
 
     // Adds the points of mesh m (0: a's, in b's frame; 1: b's, in a's frame): its regions
     // decided, its root node and the edges of its crossing triangles queued. False when the
-    // work cap stopped it.
+    // work cap stopped it. Only the part of the mesh that may reach the other's box is
+    // visited (a descent of its own hierarchy): every vertex outside that box is outside the
+    // other solid, and the state of the vertices and nodes lives in the thread's scratch,
+    // stamped per call, so that nothing is done over the rest of the mesh.
     bool add_mesh(int m, const TriangleMarks& marks) {
         marks_[m] = &marks;
         const MeshBvh& self = m == 0 ? a_ : b_;
         const MeshBvh& other = m == 0 ? b_ : a_;
         const BvhNode& root = other.nodes()[0];
         const std::vector<Vec3>& vertices = self.vertices();
-        const size_t vertex_count = vertices.size();
-        std::vector<Side>& side = side_[m];
-        side.assign(vertex_count, Side::UNKNOWN);
-        done_[m].assign(vertex_count, 0);
-        std::vector<char> in_box(vertex_count), regular(vertex_count, 0);
-        std::vector<std::int32_t> parent(vertex_count);
-        for (size_t v = 0; v < vertex_count; ++v) {
-            in_box[v] = inside_box(root, to_other(m, vertices[v]));
-            parent[v] = static_cast<std::int32_t>(v);
-        }
-        auto find = [&parent](std::int32_t v) {
-            while (parent[static_cast<size_t>(v)] != v) {
-                parent[static_cast<size_t>(v)] = parent[static_cast<size_t>(parent[static_cast<size_t>(v)])];
-                v = parent[static_cast<size_t>(v)];
+        const std::vector<BvhNode>& nodes = self.nodes();
+        RegionScratch& s = scratch_[m];
+        s.start(vertices.size(), nodes.size());
+        // The vertex's record, made on its first visit: outside when outside the box (known
+        // inside it when its node is, with room for the rounding of the map).
+        auto touch = [&](std::int32_t v, bool node_inside) -> RegionScratch::Vertex& {
+            RegionScratch::Vertex& x = s.vertices[static_cast<size_t>(v)];
+            if (x.stamp != s.generation) {
+                const bool in_box = node_inside || inside_box(root, to_other(m, vertices[static_cast<size_t>(v)]));
+                x = {s.generation, v, in_box ? Side::UNKNOWN : Side::OUTSIDE, Side::UNKNOWN, in_box, 0, 0};
+                if (in_box) s.in_box.push_back(v);
+            }
+            return x;
+        };
+        auto find = [&s](std::int32_t v) {
+            while (s.vertices[static_cast<size_t>(v)].parent != v) {
+                RegionScratch::Vertex& x = s.vertices[static_cast<size_t>(v)];
+                x.parent = s.vertices[static_cast<size_t>(x.parent)].parent;
+                v = x.parent;
             }
             return v;
         };
         // Triangles wholly outside the box are left out: a region of the others reaches
         // outside through a triangle with a corner in the box, so the regions found are parts
-        // of the true ones, each still on one side.
-        for (std::int32_t i = 0; i < self.triangle_count(); ++i) {
-            if (marks.near[static_cast<size_t>(i)]) continue;
-            const std::int32_t* t = self.triangle_vertices(i);
-            if (!in_box[static_cast<size_t>(t[0])] && !in_box[static_cast<size_t>(t[1])] && !in_box[static_cast<size_t>(t[2])])
+        // of the true ones, each still on one side. A node whose box misses the other's box
+        // holds no corner in it; one whose box lies inside it holds only corners inside, and
+        // its subtree is not tested again.
+        s.stack.assign(1, {0, false});
+        while (!s.stack.empty()) {
+            const auto [id, known_inside] = s.stack.back();
+            s.stack.pop_back();
+            const BvhNode& node = nodes[static_cast<size_t>(id)];
+            const BoxOverlap overlap = known_inside ? BoxOverlap::INSIDE : node_overlap(m, node, root);
+            if (overlap == BoxOverlap::APART) continue;
+            const bool inside = overlap == BoxOverlap::INSIDE;
+            s.visited.push_back(id);
+            if (!node.is_leaf()) {
+                s.stack.push_back({node.index, inside});
+                s.stack.push_back({id + 1, inside});
                 continue;
-            regular[static_cast<size_t>(t[0])] = regular[static_cast<size_t>(t[1])] = regular[static_cast<size_t>(t[2])] = 1;
-            for (int k = 0; k < 2; ++k) {  // two edges join the three corners
-                const std::int32_t x = find(t[k]), y = find(t[k + 1]);
-                if (x != y) parent[static_cast<size_t>(std::max(x, y))] = std::min(x, y);
+            }
+            for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
+                const std::int32_t* t = self.triangle_vertices(i);
+                RegionScratch::Vertex* c[3] = {&touch(t[0], inside), &touch(t[1], inside), &touch(t[2], inside)};
+                if (marks.near(i) || !(c[0]->in_box || c[1]->in_box || c[2]->in_box)) continue;
+                for (int k = 0; k < 3; ++k) {
+                    if (!c[k]->regular && !c[k]->in_box) s.outside.push_back(t[k]);
+                    c[k]->regular = 1;
+                }
+                for (int k = 0; k < 2; ++k) {  // two edges join the three corners
+                    const std::int32_t x = find(t[k]), y = find(t[k + 1]);
+                    if (x != y) s.vertices[static_cast<size_t>(std::max(x, y))].parent = std::min(x, y);
+                }
             }
         }
         // A region with a vertex outside the other's box is outside; otherwise one vertex
-        // (off the surface by more than the rounding allowance) decides it.
-        std::vector<Side> region(vertex_count, Side::UNKNOWN);
-        for (size_t v = 0; v < vertex_count; ++v)
-            if (regular[v] && !in_box[v]) region[static_cast<size_t>(find(static_cast<std::int32_t>(v)))] = Side::OUTSIDE;
-        for (size_t v = 0; v < vertex_count; ++v) {
-            if (!in_box[v]) {
-                side[v] = Side::OUTSIDE;
-                continue;
-            }
-            if (!regular[v]) continue;  // decided alone, when it matters
-            Side& r = region[static_cast<size_t>(find(static_cast<std::int32_t>(v)))];
+        // (off the surface by more than the rounding allowance) decides it, the first in
+        // vertex order.
+        for (const std::int32_t v : s.outside) s.vertices[static_cast<size_t>(find(v))].region = Side::OUTSIDE;
+        auto decide = [&](std::int32_t v) {
+            RegionScratch::Vertex& x = s.vertices[static_cast<size_t>(v)];
+            if (!x.regular) return true;  // decided alone, when it matters
+            Side& r = s.vertices[static_cast<size_t>(find(v))].region;
             if (r == Side::UNKNOWN) {
                 if (!may_test()) return false;
-                r = inside_mesh(other, to_other(m, vertices[v]), &work_) ? Side::INSIDE : Side::OUTSIDE;
+                r = inside_mesh(other, to_other(m, vertices[static_cast<size_t>(v)]), &work_) ? Side::INSIDE : Side::OUTSIDE;
             }
-            side[v] = r;
+            x.side = r;
+            return true;
+        };
+        // In vertex order: the visited ones sorted, or every record read when most are inside.
+        if (8 * s.in_box.size() < vertices.size()) {
+            std::sort(s.in_box.begin(), s.in_box.end());
+            for (const std::int32_t v : s.in_box)
+                if (!decide(v)) return false;
+        } else {
+            for (size_t v = 0; v < vertices.size(); ++v) {
+                const RegionScratch::Vertex& x = s.vertices[v];
+                if (x.stamp == s.generation && x.in_box && !decide(static_cast<std::int32_t>(v))) return false;
+            }
         }
-        // Nodes holding a corner that may be inside.
-        const std::vector<BvhNode>& nodes = self.nodes();
-        std::vector<char>& live = live_[m];
-        live.assign(nodes.size(), 0);
-        for (size_t id = nodes.size(); id-- > 0;) {
-            const BvhNode& node = nodes[id];
+        // Nodes holding a corner that may be inside: children before parents (the visit was
+        // in preorder), a node not visited holding none.
+        for (size_t n = s.visited.size(); n-- > 0;) {
+            const std::int32_t id = s.visited[n];
+            const BvhNode& node = nodes[static_cast<size_t>(id)];
+            bool live = false;
             if (!node.is_leaf()) {
-                live[id] = live[id + 1] || live[static_cast<size_t>(node.index)];
-                continue;
+                live = s.live(id + 1) || s.live(node.index);
+            } else {
+                for (std::int32_t i = node.index; i < node.index + node.count && !live; ++i)
+                    for (int k = 0; k < 3; ++k)
+                        if (s.vertices[static_cast<size_t>(self.triangle_vertices(i)[k])].side != Side::OUTSIDE) live = true;
             }
-            for (std::int32_t i = node.index; i < node.index + node.count && !live[id]; ++i)
-                for (int k = 0; k < 3; ++k)
-                    if (side[static_cast<size_t>(self.triangle_vertices(i)[k])] != Side::OUTSIDE) live[id] = 1;
+            if (live) s.live_stamp[static_cast<size_t>(id)] = s.generation;
         }
-        if (live[0]) refine_node({kInf, kNode, m, 0, 0});
+        if (s.live(0)) refine_node({kInf, kNode, m, 0, 0});
         return true;
     }
 
@@ -126,7 +209,7 @@ public:
         std::sort(crossing.begin(), crossing.end());
         crossing.erase(std::unique(crossing.begin(), crossing.end()), crossing.end());
         for (const std::int32_t i : crossing) {
-            const std::int32_t partner = marks.partner[static_cast<size_t>(i)];
+            const std::int32_t partner = marks.near_entry(i).partner;
             const Vec3* t = self.triangle(i);
             const Vec3* tp = other.triangle(partner);
             double ends[3];
@@ -191,7 +274,8 @@ public:
                 // A triangle whose box misses the segment's (compared exactly, on the same
                 // coordinates) has no point in common with it: not a cut.
                 const TriangleBox segment{min3(p, q), max3(p, q)};
-                for (std::int32_t n = marks.first[static_cast<size_t>(e.index)]; n < marks.first[static_cast<size_t>(e.index) + 1]; ++n) {
+                const auto [first, last] = marks.near_range(e.index);
+                for (std::int32_t n = first; n < last; ++n) {
                     const Vec3* t = other.triangle(marks.others[static_cast<size_t>(n)]);
                     double cut = 0.0;
                     if (triangle_box_squared_distance(segment, triangle_box(t)) == 0.0 &&
@@ -251,6 +335,27 @@ private:
 
     Vec3 to_other(int m, const Vec3& p) const { return m == 0 ? rel_.apply_inverse(p) : rel_.apply(p); }
 
+    // Where mesh m's node lies against `box` (the other's root) once to_other maps it: its
+    // box mapped into the other's frame and enclosed there, with a margin of a relative 1e-9
+    // and the rounding allowance of the map, so that rounding can only make it PARTLY: APART
+    // when no point of it maps into the box, INSIDE when every point does.
+    BoxOverlap node_overlap(int m, const BvhNode& node, const BvhNode& box) const {
+        const Vec3 lower{node.lower[0], node.lower[1], node.lower[2]};
+        const Vec3 upper{node.upper[0], node.upper[1], node.upper[2]};
+        const Vec3 half = (upper - lower) * 0.5;
+        const Vec3 center = to_other(m, (lower + upper) * 0.5);
+        const Vec3 reach = m == 0 ? rel_.abs_rotation.transpose_times(half) : rel_.abs_rotation * half;
+        bool inside = true;
+        for (int k = 0; k < 3; ++k) {
+            const double pad = slack_ + 1e-9 * (std::fabs(center[k]) + reach[k] + std::fabs(box.lower[k]) +
+                                                std::fabs(box.upper[k]));
+            const double low = center[k] - reach[k], high = center[k] + reach[k];
+            if (high + pad < box.lower[k] || low - pad > box.upper[k]) return BoxOverlap::APART;
+            inside = inside && low - pad >= box.lower[k] && high + pad <= box.upper[k];
+        }
+        return inside ? BoxOverlap::INSIDE : BoxOverlap::PARTLY;
+    }
+
     static double triangle_distance_of(const Vec3& p, const Vec3* t) {
         return std::sqrt(squared_norm(closest_point_on_triangle(p, t) - p));
     }
@@ -264,7 +369,7 @@ private:
     // Child `id` of mesh m's node whose other-mesh triangle is `near`: first bounded by its
     // centre's distance to that triangle, plus its radius (refined when it comes up).
     void push_node(int m, std::int32_t id, std::int32_t near) {
-        if (!live_[m][static_cast<size_t>(id)]) return;
+        if (!scratch_[m].live(id)) return;
         const MeshBvh& self = m == 0 ? a_ : b_;
         const MeshBvh& other = m == 0 ? b_ : a_;
         const WindingNode& w = self.winding_nodes()[static_cast<size_t>(id)];
@@ -313,17 +418,19 @@ private:
         for (std::int32_t i = node.index; i < node.index + node.count; ++i)
             for (int k = 0; k < 3; ++k) {
                 const std::int32_t v = self.triangle_vertices(i)[k];
-                char& done = done_[m][static_cast<size_t>(v)];
-                if (done) continue;
-                done = 1;
-                Side& side = side_[m][static_cast<size_t>(v)];
+                // A corner of a live leaf: visited by add_mesh, so its record is current.
+                RegionScratch::Vertex& vertex = scratch_[m].vertices[static_cast<size_t>(v)];
+                if (vertex.done) continue;
+                vertex.done = 1;
+                Side& side = vertex.side;
                 if (side == Side::OUTSIDE) continue;
                 const Vec3 p = to_other(m, self.vertices()[static_cast<size_t>(v)]);
                 // Bounded by the node's triangle and by the triangles near its own; a point at
                 // distance 0 from one (on the surface: the search would find 0) gives nothing.
                 double bound = triangle_distance_of(p, near);
                 const TriangleMarks& marks = *marks_[m];
-                for (std::int32_t n = marks.first[static_cast<size_t>(i)]; n < marks.first[static_cast<size_t>(i) + 1] && bound > 0.0; ++n)
+                const auto [first, last] = marks.near_range(i);
+                for (std::int32_t n = first; n < last && bound > 0.0; ++n)
                     bound = min2(bound, triangle_distance_of(p, other.triangle(marks.others[static_cast<size_t>(n)])));
                 if (bound == 0.0 || !(bound + slack_ > best)) continue;
                 if (!try_point(m, p, side, &side, Order{m, 0, v, 0})) return false;
@@ -447,9 +554,9 @@ private:
     MeshDepthOutput& out_;
     double slack_;  // allowance for rounding in the distance bounds (absolute)
     long long work_ = 0;
-    std::vector<Side> side_[2];
-    std::vector<char> done_[2];
-    std::vector<char> live_[2];
+    // The state of each mesh's vertices and nodes, in the thread's scratch (thread_local:
+    // the batch runs pairs on threads), valid for this search only.
+    RegionScratch* scratch_;
     const TriangleMarks* marks_[2] = {nullptr, nullptr};
     const std::vector<CrossingPair>* pairs_ = nullptr;
     std::vector<DepthCandidate> wedges_;  // scratch: one pair's wedge points

@@ -210,17 +210,22 @@ inline bool planes_separate(const MeshBvh& a, std::int32_t i, const Vec3* ta, co
     return apart(a.triangle_normal(i), ta[0], tb) || apart(rel.rotation * b.triangle_normal(j), tb[0], ta);
 }
 
-// The near pairs (index into a, index into b) grouped by `side`'s triangle.
+// The near pairs (index into a, index into b) grouped by `side`'s triangle: a counting sort
+// over its near triangles (whose `last` holds their count on entry), each group in the order
+// of the pairs.
 void group_near_pairs(const std::vector<std::pair<std::int32_t, std::int32_t>>& pairs, int side,
-                      std::int32_t count, TriangleMarks& marks) {
-    marks.first.assign(static_cast<size_t>(count) + 1, 0);
-    for (const auto& pair : pairs) ++marks.first[static_cast<size_t>(side == 0 ? pair.first : pair.second) + 1];
-    for (size_t i = 0; i < static_cast<size_t>(count); ++i) marks.first[i + 1] += marks.first[i];
+                      TriangleMarks& marks) {
+    std::int32_t next = 0;
+    for (TriangleMarks::Near& n : marks.near_triangles) {
+        n.first = next;
+        next += n.last;
+        n.last = n.first;
+    }
     marks.others.resize(pairs.size());
-    std::vector<std::int32_t> next(marks.first.begin(), marks.first.end() - 1);
     for (const auto& pair : pairs) {
         const auto [mine, theirs] = side == 0 ? pair : std::make_pair(pair.second, pair.first);
-        marks.others[static_cast<size_t>(next[static_cast<size_t>(mine)]++)] = theirs;
+        const auto slot = static_cast<size_t>(marks.near_slot[static_cast<size_t>(mine)]);
+        marks.others[static_cast<size_t>(marks.near_triangles[slot].last++)] = theirs;
     }
 }
 
@@ -250,28 +255,40 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
     pairs.clear();
     for (auto [marks, mesh] : {std::make_pair(&in_a, &a), std::make_pair(&in_b, &b)}) {
         marks->crossing.assign(static_cast<size_t>(mesh->triangle_count()), 0);
-        marks->near.assign(static_cast<size_t>(mesh->triangle_count()), 0);
-        marks->partner.assign(static_cast<size_t>(mesh->triangle_count()), -1);
+        marks->near_slot.assign(static_cast<size_t>(mesh->triangle_count()), -1);
+        marks->near_triangles.clear();
     }
+    // Triangle i's entry, made on its first near pair, with its pairs counted in `last`.
+    const auto entry = [](TriangleMarks& marks, size_t i) -> TriangleMarks::Near& {
+        std::int32_t& slot = marks.near_slot[i];
+        if (slot < 0) {
+            slot = static_cast<std::int32_t>(marks.near_triangles.size());
+            marks.near_triangles.push_back({-1, 0, 0});
+        }
+        TriangleMarks::Near& n = marks.near_triangles[static_cast<size_t>(slot)];
+        ++n.last;
+        return n;
+    };
     std::vector<std::pair<std::int32_t, std::int32_t>> near_pairs;
     for_each_touching_pair(
         a, b, rel,
         [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
             const auto si = static_cast<size_t>(i), sj = static_cast<size_t>(j);
-            in_a.near[si] = in_b.near[sj] = 1;
+            TriangleMarks::Near& near_a = entry(in_a, si);
+            TriangleMarks::Near& near_b = entry(in_b, sj);
             near_pairs.push_back({i, j});
             if (triangle_box_squared_distance(triangle_box(ta), triangle_box(tb)) == 0.0 &&
                 !planes_separate(a, i, ta, b, j, tb, rel) && triangles_intersect(ta, tb, nullptr)) {
                 in_a.crossing[si] = in_b.crossing[sj] = 1;
-                if (in_a.partner[si] < 0) in_a.partner[si] = j;
-                if (in_b.partner[sj] < 0) in_b.partner[sj] = i;
+                if (near_a.partner < 0) near_a.partner = j;
+                if (near_b.partner < 0) near_b.partner = i;
                 pairs.push_back({i, j});
             }
             return false;
         },
         rel.slack * rel.slack);
-    group_near_pairs(near_pairs, 0, a.triangle_count(), in_a);
-    group_near_pairs(near_pairs, 1, b.triangle_count(), in_b);
+    group_near_pairs(near_pairs, 0, in_a);
+    group_near_pairs(near_pairs, 1, in_b);
 }
 
 // Parameters along [p, q] (mesh's local frame) where the segment meets the mesh's surface in

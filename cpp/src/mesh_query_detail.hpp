@@ -162,15 +162,34 @@ struct CrossingPair {
     std::int32_t a, b;
 };
 
-// What the descent of the depth query learns about each mesh's triangles (leaf order).
+// What the descent of the depth query learns about each mesh's triangles (leaf order). Only
+// the two flags are kept per triangle of the mesh; the rest per near triangle, so that
+// grouping the near pairs costs their number, not the mesh's size.
 struct TriangleMarks {
     std::vector<char> crossing;  // intersects (touches) the other surface
-    // Within the other mesh's rounding allowance of its surface (every crossing one too): a
-    // triangle not near is farther than rel.slack from every triangle of the other mesh.
-    std::vector<char> near;
-    std::vector<std::int32_t> partner;  // a triangle of the other mesh it crosses, else -1
-    // The triangles of the other mesh near triangle i: others[first[i] .. first[i + 1]).
-    std::vector<std::int32_t> first, others;
+    // A triangle within the other mesh's rounding allowance of its surface (every crossing
+    // one too): its entry in `near_triangles`, else -1. A triangle not near is farther than
+    // rel.slack from every triangle of the other mesh.
+    std::vector<std::int32_t> near_slot;
+    struct Near {
+        std::int32_t partner;      // a triangle of the other mesh it crosses, else -1
+        std::int32_t first, last;  // the triangles of the other mesh near it: others[first .. last)
+    };
+    std::vector<Near> near_triangles;  // in the order the descent first met them
+    std::vector<std::int32_t> others;
+
+    bool near(std::int32_t i) const { return near_slot[static_cast<size_t>(i)] >= 0; }
+    /// Triangle i's entry; i must be near.
+    const Near& near_entry(std::int32_t i) const {
+        return near_triangles[static_cast<size_t>(near_slot[static_cast<size_t>(i)])];
+    }
+    /// The triangles of the other mesh near triangle i: others[first .. last), empty when not near.
+    std::pair<std::int32_t, std::int32_t> near_range(std::int32_t i) const {
+        const std::int32_t slot = near_slot[static_cast<size_t>(i)];
+        if (slot < 0) return {0, 0};
+        const Near& n = near_triangles[static_cast<size_t>(slot)];
+        return {n.first, n.last};
+    }
 };
 
 // Lower bound of the squared distance from `point` to the triangles of node `id`: the distance

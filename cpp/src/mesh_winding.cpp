@@ -33,7 +33,10 @@ bool signed_crossings(const MeshBvh& mesh, const Vec3& p, const Vec3& q, int* co
     using predicates::orient3d_sign;
     const Vec3 d = q - p;
     const std::vector<BvhNode>& nodes = mesh.nodes();
-    std::vector<std::int32_t> stack{0};
+    // The thread's stack, kept between calls: a depth query runs dozens of these tests, and
+    // a fresh vector grew by reallocation in each.
+    thread_local std::vector<std::int32_t> stack;
+    stack.assign(1, 0);
     int total = 0;
     while (!stack.empty()) {
         const std::int32_t id = stack.back();
@@ -188,7 +191,8 @@ WindingEstimate refine_winding_number(const MeshBvh& mesh, const Vec3& point, En
 bool on_surface(const MeshBvh& mesh, const Vec3& p) {
     const std::vector<BvhNode>& nodes = mesh.nodes();
     const Vec3 point[3] = {p, p, p};
-    std::vector<std::int32_t> stack{0};
+    thread_local std::vector<std::int32_t> stack;  // kept between calls, as signed_crossings'
+    stack.assign(1, 0);
     while (!stack.empty()) {
         const std::int32_t id = stack.back();
         stack.pop_back();
@@ -232,7 +236,26 @@ bool inside_mesh(const MeshBvh& mesh, const Vec3& p, long long* work) {
         const Vec3 lo{root.lower[0], root.lower[1], root.lower[2]};
         const Vec3 hi{root.upper[0], root.upper[1], root.upper[2]};
         const double reach = 2.0 * (norm(hi - lo) + norm(p - (lo + hi) * 0.5)) + 1.0;
-        for (const Vec3& direction : kDirections) {
+        // The direction that leaves the box soonest first (fewer nodes and triangles on its
+        // way), then the others in order. The count is the winding number whichever
+        // direction decides (an integer off a closed, consistently wound surface, constant
+        // between its sheets), and a point on the surface is in whichever finds it.
+        constexpr int kCount = sizeof(kDirections) / sizeof(kDirections[0]);
+        int first = 0;
+        double soonest = kInf;
+        for (int i = 0; i < kCount; ++i) {
+            double leave = kInf;
+            for (int k = 0; k < 3; ++k) {
+                const double d = kDirections[i][k];
+                leave = min2(leave, ((d > 0.0 ? hi[k] : lo[k]) - p[k]) / d);
+            }
+            if (leave < soonest) {
+                soonest = leave;
+                first = i;
+            }
+        }
+        for (int n = 0; n < kCount; ++n) {
+            const Vec3& direction = kDirections[n == 0 ? first : (n <= first ? n - 1 : n)];
             int count = 0;
             *work += 64;  // about the cost of one segment query, in triangle visits
             if (signed_crossings(mesh, p, p + direction * reach, &count)) return count != 0;
