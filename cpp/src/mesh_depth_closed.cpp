@@ -86,7 +86,8 @@ public:
     // Adds the points of mesh m (0: a's, in b's frame; 1: b's, in a's frame): its regions
     // decided, its root node and the edges of its crossing triangles queued. False when the
     // work cap stopped it. Only the part of the mesh that may reach the other's box is
-    // visited (a descent of its own hierarchy): every vertex outside that box is outside the
+    // visited (a descent of its own hierarchy), unless most of the mesh's box lies in it
+    // (then a pass over all of it in order): every vertex outside that box is outside the
     // other solid, and the state of the vertices and nodes lives in the thread's scratch,
     // stamped per call, so that nothing is done over the rest of the mesh.
     bool add_mesh(int m, const TriangleMarks& marks) {
@@ -119,34 +120,58 @@ public:
         };
         // Triangles wholly outside the box are left out: a region of the others reaches
         // outside through a triangle with a corner in the box, so the regions found are parts
-        // of the true ones, each still on one side. A node whose box misses the other's box
-        // holds no corner in it; one whose box lies inside it holds only corners inside, and
-        // its subtree is not tested again.
-        s.stack.assign(1, {0, false});
-        while (!s.stack.empty()) {
-            const auto [id, known_inside] = s.stack.back();
-            s.stack.pop_back();
-            const BvhNode& node = nodes[static_cast<size_t>(id)];
-            const BoxOverlap overlap = known_inside ? BoxOverlap::INSIDE : node_overlap(m, node, root);
-            if (overlap == BoxOverlap::APART) continue;
-            const bool inside = overlap == BoxOverlap::INSIDE;
-            s.visited.push_back(id);
-            if (!node.is_leaf()) {
-                s.stack.push_back({node.index, inside});
-                s.stack.push_back({id + 1, inside});
-                continue;
+        // of the true ones, each still on one side (a region's root is its least vertex,
+        // whatever the order the triangles are joined in).
+        auto join = [&](std::int32_t i, RegionScratch::Vertex* const* c) {
+            if (marks.near(i) || !(c[0]->in_box || c[1]->in_box || c[2]->in_box)) return;
+            const std::int32_t* t = self.triangle_vertices(i);
+            for (int k = 0; k < 3; ++k) {
+                if (!c[k]->regular && !c[k]->in_box) s.outside.push_back(t[k]);
+                c[k]->regular = 1;
             }
-            for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
+            // The three corners joined, each then pointing at the root, so later finds are short.
+            const std::int32_t x = find(t[0]), y = find(t[1]), z = find(t[2]);
+            const std::int32_t r = std::min(x, std::min(y, z));
+            s.vertices[static_cast<size_t>(x)].parent = s.vertices[static_cast<size_t>(y)].parent = r;
+            s.vertices[static_cast<size_t>(z)].parent = r;
+            c[0]->parent = c[1]->parent = c[2]->parent = r;
+        };
+        // When most of the mesh's box lies in the other's, nearly every node would be visited:
+        // one pass in order over all the vertices, then all the triangles, is cheaper.
+        const bool flat = mostly_inside(m, nodes[0], root);
+        if (flat) {
+            for (size_t v = 0; v < vertices.size(); ++v) {
+                const bool in_box = inside_box(root, to_other(m, vertices[v]));
+                s.vertices[v] = {s.generation, static_cast<std::int32_t>(v), in_box ? Side::UNKNOWN : Side::OUTSIDE,
+                                 Side::UNKNOWN, in_box, 0, 0};
+            }
+            for (std::int32_t i = 0; i < self.triangle_count(); ++i) {
                 const std::int32_t* t = self.triangle_vertices(i);
-                RegionScratch::Vertex* c[3] = {&touch(t[0], inside), &touch(t[1], inside), &touch(t[2], inside)};
-                if (marks.near(i) || !(c[0]->in_box || c[1]->in_box || c[2]->in_box)) continue;
-                for (int k = 0; k < 3; ++k) {
-                    if (!c[k]->regular && !c[k]->in_box) s.outside.push_back(t[k]);
-                    c[k]->regular = 1;
+                RegionScratch::Vertex* c[3] = {&s.vertices[static_cast<size_t>(t[0])], &s.vertices[static_cast<size_t>(t[1])],
+                                               &s.vertices[static_cast<size_t>(t[2])]};
+                join(i, c);
+            }
+        } else {
+            // A node whose box misses the other's box holds no corner in it; one whose box
+            // lies inside it holds only corners inside, and its subtree is not tested again.
+            s.stack.assign(1, {0, false});
+            while (!s.stack.empty()) {
+                const auto [id, known_inside] = s.stack.back();
+                s.stack.pop_back();
+                const BvhNode& node = nodes[static_cast<size_t>(id)];
+                const BoxOverlap overlap = known_inside ? BoxOverlap::INSIDE : node_overlap(m, node, root);
+                if (overlap == BoxOverlap::APART) continue;
+                const bool inside = overlap == BoxOverlap::INSIDE;
+                s.visited.push_back(id);
+                if (!node.is_leaf()) {
+                    s.stack.push_back({node.index, inside});
+                    s.stack.push_back({id + 1, inside});
+                    continue;
                 }
-                for (int k = 0; k < 2; ++k) {  // two edges join the three corners
-                    const std::int32_t x = find(t[k]), y = find(t[k + 1]);
-                    if (x != y) s.vertices[static_cast<size_t>(std::max(x, y))].parent = std::min(x, y);
+                for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
+                    const std::int32_t* t = self.triangle_vertices(i);
+                    RegionScratch::Vertex* c[3] = {&touch(t[0], inside), &touch(t[1], inside), &touch(t[2], inside)};
+                    join(i, c);
                 }
             }
         }
@@ -166,7 +191,7 @@ public:
             return true;
         };
         // In vertex order: the visited ones sorted, or every record read when most are inside.
-        if (8 * s.in_box.size() < vertices.size()) {
+        if (!flat && 8 * s.in_box.size() < vertices.size()) {
             std::sort(s.in_box.begin(), s.in_box.end());
             for (const std::int32_t v : s.in_box)
                 if (!decide(v)) return false;
@@ -176,10 +201,9 @@ public:
                 if (x.stamp == s.generation && x.in_box && !decide(static_cast<std::int32_t>(v))) return false;
             }
         }
-        // Nodes holding a corner that may be inside: children before parents (the visit was
-        // in preorder), a node not visited holding none.
-        for (size_t n = s.visited.size(); n-- > 0;) {
-            const std::int32_t id = s.visited[n];
+        // Nodes holding a corner that may be inside: children before parents (ids and the
+        // visit are in preorder), a node not visited holding none.
+        auto mark_live = [&](std::int32_t id) {
             const BvhNode& node = nodes[static_cast<size_t>(id)];
             bool live = false;
             if (!node.is_leaf()) {
@@ -190,6 +214,11 @@ public:
                         if (s.vertices[static_cast<size_t>(self.triangle_vertices(i)[k])].side != Side::OUTSIDE) live = true;
             }
             if (live) s.live_stamp[static_cast<size_t>(id)] = s.generation;
+        };
+        if (flat) {
+            for (size_t n = nodes.size(); n-- > 0;) mark_live(static_cast<std::int32_t>(n));
+        } else {
+            for (size_t n = s.visited.size(); n-- > 0;) mark_live(s.visited[n]);
         }
         if (s.live(0)) refine_node({kInf, kNode, m, 0, 0});
         return true;
@@ -335,16 +364,21 @@ private:
 
     Vec3 to_other(int m, const Vec3& p) const { return m == 0 ? rel_.apply_inverse(p) : rel_.apply(p); }
 
+    // Mesh m's node box mapped into the other's frame and enclosed there: its centre and its
+    // half extents.
+    std::pair<Vec3, Vec3> mapped_box(int m, const BvhNode& node) const {
+        const Vec3 lower{node.lower[0], node.lower[1], node.lower[2]};
+        const Vec3 upper{node.upper[0], node.upper[1], node.upper[2]};
+        const Vec3 half = (upper - lower) * 0.5;
+        return {to_other(m, (lower + upper) * 0.5), m == 0 ? rel_.abs_rotation.transpose_times(half) : rel_.abs_rotation * half};
+    }
+
     // Where mesh m's node lies against `box` (the other's root) once to_other maps it: its
     // box mapped into the other's frame and enclosed there, with a margin of a relative 1e-9
     // and the rounding allowance of the map, so that rounding can only make it PARTLY: APART
     // when no point of it maps into the box, INSIDE when every point does.
     BoxOverlap node_overlap(int m, const BvhNode& node, const BvhNode& box) const {
-        const Vec3 lower{node.lower[0], node.lower[1], node.lower[2]};
-        const Vec3 upper{node.upper[0], node.upper[1], node.upper[2]};
-        const Vec3 half = (upper - lower) * 0.5;
-        const Vec3 center = to_other(m, (lower + upper) * 0.5);
-        const Vec3 reach = m == 0 ? rel_.abs_rotation.transpose_times(half) : rel_.abs_rotation * half;
+        const auto [center, reach] = mapped_box(m, node);
         bool inside = true;
         for (int k = 0; k < 3; ++k) {
             const double pad = slack_ + 1e-9 * (std::fabs(center[k]) + reach[k] + std::fabs(box.lower[k]) +
@@ -354,6 +388,19 @@ private:
             inside = inside && low - pad >= box.lower[k] && high + pad <= box.upper[k];
         }
         return inside ? BoxOverlap::INSIDE : BoxOverlap::PARTLY;
+    }
+
+    // Whether over half the volume of mesh m's node, its box mapped and enclosed, lies in
+    // `box` (the other's root): the descent would then visit nearly every node.
+    bool mostly_inside(int m, const BvhNode& node, const BvhNode& box) const {
+        const auto [center, reach] = mapped_box(m, node);
+        double share = 1.0;
+        for (int k = 0; k < 3; ++k) {
+            const double low = center[k] - reach[k], high = center[k] + reach[k];
+            const double common = min2(high, box.upper[k]) - max2(low, box.lower[k]);
+            share *= high > low ? max2(0.0, common) / (high - low) : (low >= box.lower[k] && high <= box.upper[k] ? 1.0 : 0.0);
+        }
+        return share > 0.5;
     }
 
     static double triangle_distance_of(const Vec3& p, const Vec3* t) {
