@@ -101,11 +101,14 @@ public:
         s.start(vertices.size(), nodes.size());
         // The vertex's record, made on its first visit: outside when outside the box (known
         // inside it when its node is, with room for the rounding of the map).
+        auto fresh = [&](std::int32_t v, bool in_box) {
+            return RegionScratch::Vertex{s.generation, v, in_box ? Side::UNKNOWN : Side::OUTSIDE, Side::UNKNOWN, in_box, 0, 0};
+        };
         auto touch = [&](std::int32_t v, bool node_inside) -> RegionScratch::Vertex& {
             RegionScratch::Vertex& x = s.vertices[static_cast<size_t>(v)];
             if (x.stamp != s.generation) {
                 const bool in_box = node_inside || inside_box(root, to_other(m, vertices[static_cast<size_t>(v)]));
-                x = {s.generation, v, in_box ? Side::UNKNOWN : Side::OUTSIDE, Side::UNKNOWN, in_box, 0, 0};
+                x = fresh(v, in_box);
                 if (in_box) s.in_box.push_back(v);
             }
             return x;
@@ -140,11 +143,8 @@ public:
         // one pass in order over all the vertices, then all the triangles, is cheaper.
         const bool flat = mostly_inside(m, nodes[0], root);
         if (flat) {
-            for (size_t v = 0; v < vertices.size(); ++v) {
-                const bool in_box = inside_box(root, to_other(m, vertices[v]));
-                s.vertices[v] = {s.generation, static_cast<std::int32_t>(v), in_box ? Side::UNKNOWN : Side::OUTSIDE,
-                                 Side::UNKNOWN, in_box, 0, 0};
-            }
+            for (size_t v = 0; v < vertices.size(); ++v)
+                s.vertices[v] = fresh(static_cast<std::int32_t>(v), inside_box(root, to_other(m, vertices[v])));
             for (std::int32_t i = 0; i < self.triangle_count(); ++i) {
                 const std::int32_t* t = self.triangle_vertices(i);
                 RegionScratch::Vertex* c[3] = {&s.vertices[static_cast<size_t>(t[0])], &s.vertices[static_cast<size_t>(t[1])],
@@ -367,10 +367,7 @@ private:
     // Mesh m's node box mapped into the other's frame and enclosed there: its centre and its
     // half extents.
     std::pair<Vec3, Vec3> mapped_box(int m, const BvhNode& node) const {
-        const Vec3 lower{node.lower[0], node.lower[1], node.lower[2]};
-        const Vec3 upper{node.upper[0], node.upper[1], node.upper[2]};
-        const Vec3 half = (upper - lower) * 0.5;
-        return {to_other(m, (lower + upper) * 0.5), m == 0 ? rel_.abs_rotation.transpose_times(half) : rel_.abs_rotation * half};
+        return m == 0 ? rel_.enclose_in_b(node) : rel_.enclose_in_a(node);
     }
 
     // Where mesh m's node lies against `box` (the other's root) once to_other maps it: its

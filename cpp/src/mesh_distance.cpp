@@ -139,12 +139,7 @@ inline double obb_top(const NodeObb& box, const Vec3& n) {
 
 inline double aabb_squared_distance(const BvhNode& na, const BvhNode& nb, const Relative& rel) {
     double d2 = 0.0;
-    const Vec3 b_center = rel.apply(Vec3{0.5 * (static_cast<double>(nb.lower[0]) + nb.upper[0]),
-                                         0.5 * (static_cast<double>(nb.lower[1]) + nb.upper[1]),
-                                         0.5 * (static_cast<double>(nb.lower[2]) + nb.upper[2])});
-    const Vec3 b_half = rel.abs_rotation * Vec3{0.5 * (static_cast<double>(nb.upper[0]) - nb.lower[0]),
-                                                0.5 * (static_cast<double>(nb.upper[1]) - nb.lower[1]),
-                                                0.5 * (static_cast<double>(nb.upper[2]) - nb.lower[2])};
+    const auto [b_center, b_half] = rel.enclose_in_a(nb);
     for (int k = 0; k < 3; ++k) {
         const double gap = max2(static_cast<double>(na.lower[k]) - (b_center[k] + b_half[k]),
                                 (b_center[k] - b_half[k]) - static_cast<double>(na.upper[k])) - rel.slack;

@@ -72,6 +72,23 @@ struct Relative {
     }
     Vec3 apply(const Vec3& p) const { return rotation * p + translation; }
     Vec3 apply_inverse(const Vec3& p) const { return rotation.transpose_times(p - translation); }
+
+    // A node box of b (in b's frame) mapped into a's frame and enclosed there: its centre and
+    // half extents. enclose_in_b: a node box of a, into b's frame.
+    std::pair<Vec3, Vec3> enclose_in_a(const BvhNode& node) const {
+        const auto [centre, half] = centre_and_half(node);
+        return {apply(centre), abs_rotation * half};
+    }
+    std::pair<Vec3, Vec3> enclose_in_b(const BvhNode& node) const {
+        const auto [centre, half] = centre_and_half(node);
+        return {apply_inverse(centre), abs_rotation.transpose_times(half)};
+    }
+
+private:
+    static std::pair<Vec3, Vec3> centre_and_half(const BvhNode& n) {
+        const Vec3 lower{n.lower[0], n.lower[1], n.lower[2]}, upper{n.upper[0], n.upper[1], n.upper[2]};
+        return {(lower + upper) * 0.5, (upper - lower) * 0.5};
+    }
 };
 
 inline double node_size(const BvhNode& n) {
