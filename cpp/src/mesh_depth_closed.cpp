@@ -18,6 +18,16 @@ namespace meshcol {
 using namespace mesh_detail;
 namespace {
 
+// The region pass walks a mesh in one flat pass, every vertex then every triangle, instead of
+// descending its hierarchy, when more than this share of its root box (mapped into the other
+// mesh's frame and enclosed) lies in the other's root box: the descent would visit nearly
+// every node anyway.
+constexpr double kFlatPassShare = 0.5;
+// After a descent, the vertices it found inside the other's box are decided in vertex order
+// from their sorted list when they are fewer than 1 in this many of the mesh's vertices;
+// otherwise a pass in order over every record is cheaper than the sort.
+constexpr size_t kSortedVisitRatio = 8;
+
 // What the depth search keeps of one mesh's vertices and nodes, reused by the searches on a
 // thread: a record is current only when its stamp is the search's generation, so a search
 // starts without a pass over the mesh (the MappedObbCache pattern of mesh_distance.cpp).
@@ -191,7 +201,7 @@ public:
             return true;
         };
         // In vertex order: the visited ones sorted, or every record read when most are inside.
-        if (!flat && 8 * s.in_box.size() < vertices.size()) {
+        if (!flat && kSortedVisitRatio * s.in_box.size() < vertices.size()) {
             std::sort(s.in_box.begin(), s.in_box.end());
             for (const std::int32_t v : s.in_box)
                 if (!decide(v)) return false;
@@ -397,7 +407,7 @@ private:
             const double common = min2(high, box.upper[k]) - max2(low, box.lower[k]);
             share *= high > low ? max2(0.0, common) / (high - low) : (low >= box.lower[k] && high <= box.upper[k] ? 1.0 : 0.0);
         }
-        return share > 0.5;
+        return share > kFlatPassShare;
     }
 
     static double triangle_distance_of(const Vec3& p, const Vec3* t) {
