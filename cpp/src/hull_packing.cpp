@@ -343,15 +343,21 @@ bool adjacency_from_masks(int count, PackScratch& s, ChunkPack& out) {
         ++degree[a], ++degree[b];
     }
     if (repeated & 1) return false;
+    // Each list's padded length, written through a pointer (a push_back a vertex checked the
+    // capacity every time: 1.4k instructions a 64-vertex hull).
+    const size_t counts_first = out.adjacency_counts.size();
+    out.adjacency_counts.resize(counts_first + n);
+    std::int64_t* counts = out.adjacency_counts.data() + counts_first;
     size_t padded_total = 0;
-    for (size_t i = 0; i < n; ++i) padded_total += static_cast<size_t>((degree[i] + 3) / 4 * 4);
+    for (size_t i = 0; i < n; ++i) {
+        counts[i] = (degree[i] + 3) / 4 * 4;
+        padded_total += static_cast<size_t>(counts[i]);
+    }
     const size_t first = out.adjacency.size();
     out.adjacency.resize(first + padded_total);
     std::int32_t* list = out.adjacency.data() + first;
     for (size_t i = 0; i < n; ++i) {
-        const int padded = (degree[i] + 3) / 4 * 4;
-        out.adjacency_counts.push_back(padded);
-        std::int32_t* const end = list + padded;
+        std::int32_t* const end = list + counts[i];
         for (std::uint64_t m = mask[i]; m != 0; m &= m - 1)
             *list++ = static_cast<std::int32_t>(__builtin_ctzll(m));
         while (list < end) *list++ = static_cast<std::int32_t>(i);
@@ -379,12 +385,14 @@ void adjacency_from_edges(int count, PackScratch& s, ChunkPack& out) {
     for (const auto& [a, b] : s.pairs) around[fill[b]++] = a, around[fill[a]++] = b;
     // Each list padded to a multiple of four: room for the padding first.
     const size_t first = out.adjacency.size();
+    const size_t counts_first = out.adjacency_counts.size();
+    out.adjacency_counts.resize(counts_first + n);
+    std::int64_t* counts = out.adjacency_counts.data() + counts_first;
     std::int64_t at = static_cast<std::int64_t>(first);
     for (size_t i = 0; i < n; ++i) {
-        const std::int64_t padded = (start[i + 1] - start[i] + 3) / 4 * 4;
-        out.adjacency_counts.push_back(padded);
+        counts[i] = (start[i + 1] - start[i] + 3) / 4 * 4;
         fill[i] = at;
-        at += padded;
+        at += counts[i];
     }
     out.adjacency.resize(static_cast<size_t>(at));
     std::int32_t* list = out.adjacency.data();
@@ -393,9 +401,8 @@ void adjacency_from_edges(int count, PackScratch& s, ChunkPack& out) {
             list[fill[around[k]]++] = static_cast<std::int32_t>(v);
     at = static_cast<std::int64_t>(first);
     for (size_t i = 0; i < n; ++i) {
-        const std::int64_t padded = (start[i + 1] - start[i] + 3) / 4 * 4;
-        for (std::int64_t k = fill[i]; k < at + padded; ++k) list[k] = static_cast<std::int32_t>(i);
-        at += padded;
+        for (std::int64_t k = fill[i]; k < at + counts[i]; ++k) list[k] = static_cast<std::int32_t>(i);
+        at += counts[i];
     }
 }
 
