@@ -197,7 +197,8 @@ Vec3 closest_triangle(const Vec3* w, int i, int j, int k, Feature& f) {
 // away from the opposite vertex; the closest of the faces it lies outside of. Returns false
 // when the origin is inside: `f` then holds all four points with the origin's barycentric
 // weights.
-bool closest_tetrahedron(const Vec3* w, Feature& f, Vec3& closest) {
+// Whether the tetrahedron w[0..3] is too flat to tell the origin's side of its faces.
+bool flat_tetrahedron(const Vec3* w) {
     const Vec3 a = w[0], b = w[1], c = w[2], d = w[3];
     const double volume = dot(d - a, cross(b - a, c - a));
     // The largest coordinate of the three edges from a, by plain compares: std::fmax (a libm
@@ -208,8 +209,12 @@ bool closest_tetrahedron(const Vec3* w, Feature& f, Vec3& closest) {
         return larger(std::fabs(v.x), larger(std::fabs(v.y), std::fabs(v.z)));
     };
     const double size = larger(larger(largest_abs(b - a), largest_abs(c - a)), largest_abs(d - a));
-    const bool flat =
-        std::fabs(volume) <= defaults::gjk_flat_tetrahedron_volume * size * size * size;
+    return std::fabs(volume) <= defaults::gjk_flat_tetrahedron_volume * size * size * size;
+}
+
+bool closest_tetrahedron(const Vec3* w, Feature& f, Vec3& closest) {
+    const Vec3 a = w[0], b = w[1], c = w[2], d = w[3];
+    const bool flat = flat_tetrahedron(w);
     double best = std::numeric_limits<double>::infinity();
     bool outside_any = false;
     Feature best_f;
@@ -364,11 +369,19 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
     res.status = Status::MAX_ITERATIONS;
     int it = 0;
     bool inside = false;
+    // The simplex before the last shrink (`wide` points, 0: none kept), for EPA when the
+    // shrunk one touches the origin: it holds the origin on its boundary, and EPA then
+    // skips the blow-up of a point, segment or triangle (up to 16 supports).
+    int wide = 0;
+    int wide_order[4] = {0, 1, 2, 3};
+    double wide_weights[4] = {0.0, 0.0, 0.0, 0.0};
+    bool use_wide = false;
     while (it < opt.max_iterations) {
         ++it;
         if (vv <= touch2) {
             res.status = Status::CONVERGED;
             inside = true;
+            use_wide = wide > size;
             break;
         }
         // The slot no vertex of the simplex holds (size < 4 here).
@@ -414,6 +427,15 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
             res.status = Status::CONVERGED;
             break;
         }
+        wide = 0;
+        if (feature.count < size && (size < 4 || !flat_tetrahedron(points))) {
+            wide = size;
+            for (int k = 0; k < 4; ++k) {
+                wide_order[k] = order[k];
+                wide_weights[k] = 0.0;
+            }
+            for (int k = 0; k < feature.count; ++k) wide_weights[feature.index[k]] = feature.weight[k];
+        }
         // All four entries (a feature's unused indices are valid ones): fixed trips, no calls.
         int kept_order[4];
         Vec3 kept_points[4];
@@ -433,6 +455,9 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
         v = nv;
         vv = nvv;
     }
+    SimplexVertex wide_vertices[4];
+    if (use_wide)
+        for (int k = 0; k < wide; ++k) wide_vertices[k] = slots[wide_order[k]];
     Simplex& s = res.simplex;
     bool in_order = true;
     for (int k = 0; k < size; ++k) in_order = in_order && order[k] == k;
@@ -446,6 +471,14 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
     res.iterations = it;
     res.overlap = inside || vv <= touch2;
     weighted_points(s, res.point_a, res.point_b);
+    if (use_wide) {
+        // Handed to EPA only; the points above are the shrunk simplex's.
+        for (int k = 0; k < wide; ++k) {
+            s.vertices[k] = wide_vertices[k];
+            s.weights[k] = wide_weights[k];
+        }
+        s.size = wide;
+    }
     if (!res.overlap) {
         // v is the accurate answer; the barycentric weights behind the witness points are not
         // when the simplex is nearly degenerate (parallel edges, a curved side against an
