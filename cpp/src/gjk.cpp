@@ -197,7 +197,8 @@ Vec3 closest_triangle(const Vec3* w, int i, int j, int k, Feature& f) {
 // away from the opposite vertex; the closest of the faces it lies outside of. Returns false
 // when the origin is inside: `f` then holds all four points with the origin's barycentric
 // weights.
-bool closest_tetrahedron(const Vec3* w, Feature& f, Vec3& closest) {
+// Whether the tetrahedron w[0..3] is too flat to tell the origin's side of its faces.
+bool flat_tetrahedron(const Vec3* w) {
     const Vec3 a = w[0], b = w[1], c = w[2], d = w[3];
     const double volume = dot(d - a, cross(b - a, c - a));
     // The largest coordinate of the three edges from a, by plain compares: std::fmax (a libm
@@ -208,8 +209,12 @@ bool closest_tetrahedron(const Vec3* w, Feature& f, Vec3& closest) {
         return larger(std::fabs(v.x), larger(std::fabs(v.y), std::fabs(v.z)));
     };
     const double size = larger(larger(largest_abs(b - a), largest_abs(c - a)), largest_abs(d - a));
-    const bool flat =
-        std::fabs(volume) <= defaults::gjk_flat_tetrahedron_volume * size * size * size;
+    return std::fabs(volume) <= defaults::gjk_flat_tetrahedron_volume * size * size * size;
+}
+
+bool closest_tetrahedron(const Vec3* w, Feature& f, Vec3& closest) {
+    const Vec3 a = w[0], b = w[1], c = w[2], d = w[3];
+    const bool flat = flat_tetrahedron(w);
     double best = std::numeric_limits<double>::infinity();
     bool outside_any = false;
     Feature best_f;
@@ -327,6 +332,40 @@ void weighted_points(const Simplex& s, Vec3& pa, Vec3& pb) {
     }
 }
 
+// The end of a GJK run that stopped on a shrunk simplex (`size` points in the slots `order`,
+// with `weights`) touching the origin, when the simplex before that shrink (`wide` points in
+// the slots `wide_order`) is not flat: the result's points are the shrunk simplex's (the same
+// sums as `weighted_points`), its simplex the wide one, which holds the origin on its
+// boundary, so that EPA starts from it instead of blowing the shrunk one up again. False
+// (nothing written) when the wide simplex is a flat tetrahedron.
+bool hand_over_wide(SimplexVertex* slots, const int* order, const double* weights, int size,
+                    const int* wide_order, int wide, GjkResult& res) {
+    SimplexVertex kept[4];
+    Vec3 points[4];
+    double kept_weights[4] = {0.0, 0.0, 0.0, 0.0};
+    for (int k = 0; k < wide; ++k) {
+        kept[k] = slots[wide_order[k]];
+        points[k] = kept[k].w;
+        for (int j = 0; j < size; ++j)
+            if (order[j] == wide_order[k]) kept_weights[k] = weights[j];
+    }
+    if (wide == 4 && flat_tetrahedron(points)) return false;
+    Vec3 pa{}, pb{};
+    for (int k = 0; k < size; ++k) {
+        pa += slots[order[k]].a * weights[k];
+        pb += slots[order[k]].b * weights[k];
+    }
+    res.point_a = pa;
+    res.point_b = pb;
+    Simplex& s = res.simplex;
+    for (int k = 0; k < wide; ++k) {
+        s.vertices[k] = kept[k];
+        s.weights[k] = kept_weights[k];
+    }
+    s.size = wide;
+    return true;
+}
+
 }  // namespace
 
 // GJK after van den Bergen 2003 (sec. 4.3): v is the closest point of the current simplex to
@@ -364,6 +403,12 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
     res.status = Status::MAX_ITERATIONS;
     int it = 0;
     bool inside = false;
+    // The simplex of the last step before its shrink (`wide` points in the slots
+    // `wide_order`), for EPA when the shrunk one touches the origin: it holds the origin on
+    // its boundary, and EPA then skips the blow-up of a point, segment or triangle (up to 16
+    // supports).
+    int wide = 0;
+    int wide_order[4] = {0, 1, 2, 3};
     while (it < opt.max_iterations) {
         ++it;
         if (vv <= touch2) {
@@ -414,6 +459,8 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
             res.status = Status::CONVERGED;
             break;
         }
+        wide = size;
+        for (int k = 0; k < 4; ++k) wide_order[k] = order[k];
         // All four entries (a feature's unused indices are valid ones): fixed trips, no calls.
         int kept_order[4];
         Vec3 kept_points[4];
@@ -434,18 +481,22 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
         vv = nvv;
     }
     Simplex& s = res.simplex;
-    bool in_order = true;
-    for (int k = 0; k < size; ++k) in_order = in_order && order[k] == k;
-    if (!in_order) {
-        SimplexVertex kept[4];
-        for (int k = 0; k < size; ++k) kept[k] = slots[order[k]];
-        for (int k = 0; k < size; ++k) slots[k] = kept[k];
-    }
-    s.size = size;
-    for (int k = 0; k < size; ++k) s.weights[k] = weights[k];
     res.iterations = it;
     res.overlap = inside || vv <= touch2;
-    weighted_points(s, res.point_a, res.point_b);
+    if (inside && wide > size && hand_over_wide(slots, order, weights, size, wide_order, wide, res)) {
+        // Done: the points are the shrunk simplex's, the simplex the wide one.
+    } else {
+        bool in_order = true;
+        for (int k = 0; k < size; ++k) in_order = in_order && order[k] == k;
+        if (!in_order) {
+            SimplexVertex kept[4];
+            for (int k = 0; k < size; ++k) kept[k] = slots[order[k]];
+            for (int k = 0; k < size; ++k) slots[k] = kept[k];
+        }
+        s.size = size;
+        for (int k = 0; k < size; ++k) s.weights[k] = weights[k];
+        weighted_points(s, res.point_a, res.point_b);
+    }
     if (!res.overlap) {
         // v is the accurate answer; the barycentric weights behind the witness points are not
         // when the simplex is nearly degenerate (parallel edges, a curved side against an
