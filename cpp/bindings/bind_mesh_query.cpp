@@ -245,12 +245,14 @@ const auto kDepthColumns = std::make_tuple(
 const auto kContactsColumns = std::make_tuple(
     field("count", &MeshContactsOutput::count), field("depth", &MeshContactsOutput::depth),
     field("normal", &MeshContactsOutput::normal), field("point", &MeshContactsOutput::point),
+    field("face_depth", &MeshContactsOutput::face_depth),
     field("triangle_a", &MeshContactsOutput::triangle_a), field("triangle_b", &MeshContactsOutput::triangle_b),
     field_as<std::int8_t>("status", &MeshContactsOutput::status));
 // The listed contacts of every pair, one flat column each, named with a contact_ prefix.
 const auto kContactColumns = std::make_tuple(
     field("contact_depth", &MeshContact::depth), field("contact_normal", &MeshContact::normal),
-    field("contact_point", &MeshContact::point), field("contact_triangle_a", &MeshContact::triangle_a),
+    field("contact_point", &MeshContact::point), field("contact_face_depth", &MeshContact::face_depth),
+    field("contact_triangle_a", &MeshContact::triangle_a),
     field("contact_triangle_b", &MeshContact::triangle_b));
 const auto kRayColumns = std::make_tuple(
     field("hit", &MeshRayOutput::hit), field("distance", &MeshRayOutput::distance), field("point", &MeshRayOutput::point),
@@ -325,7 +327,7 @@ nb::dict contacts_batch(const MeshBvhSet& set, std::optional<Poses> poses, Pairs
         c.max_work = max_work;
         if (rigid) return meshcol::mesh_contacts(c, max_contacts > 0 ? &listed[static_cast<size_t>(k)] : nullptr);
         MeshContactsOutput r;
-        r.depth = kNaN;
+        r.depth = r.face_depth = kNaN;
         r.normal = r.point = kNaN3;
         r.status = meshcol::Status::INVALID_INPUT;
         return r;
@@ -737,9 +739,10 @@ void bind_mesh_query(nb::module_& m) {
         .def("contacts_batch", &contacts_batch, "poses"_a.none(), "pairs"_a, "threads"_a = 0,
              "max_contacts"_a = 0, "max_work"_a = meshcol::defaults::mesh_contacts_max_work,
              "Mesh-pair contacts (every crossing triangle pair, its own penetration): {count, "
-             "depth, normal, point, triangle_a, triangle_b, status} of the deepest, and up to "
-             "max_contacts listed contacts a pair: {contact_offsets, contact_depth, "
-             "contact_normal, contact_point, contact_triangle_a, contact_triangle_b}.")
+             "depth, normal, point, face_depth, triangle_a, triangle_b, status} of the deepest, "
+             "and up to max_contacts listed contacts a pair: {contact_offsets, contact_depth, "
+             "contact_normal, contact_point, contact_face_depth, contact_triangle_a, "
+             "contact_triangle_b}.")
         .def("ray_cast_batch", &ray_cast_batch, "meshes"_a, "origins"_a, "directions"_a, "poses"_a.none(),
              "max_distance"_a = std::numeric_limits<double>::infinity(), "threads"_a = 0,
              "First hits of rays (world frame) on meshes[k]: {hit, distance, point, normal, "

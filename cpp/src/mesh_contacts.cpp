@@ -16,9 +16,9 @@ namespace meshcol {
 using namespace mesh_detail;
 namespace {
 
-// A crossing pair found by the descent: leaf-order triangles, input faces, its depth.
+// A crossing pair found by the descent: leaf-order triangles, input faces, its depths.
 struct Found {
-    double depth;
+    double depth, face_depth;
     std::int64_t face_a, face_b;
     std::int32_t i, j;
 };
@@ -40,9 +40,18 @@ MeshContact contact_of(const Found& f, const MeshBvh& a, const MeshBvh& b, const
     c.depth = p.depth;
     c.normal = pose_a.rotate(p.normal);
     c.point = pose_a.apply((p.point_a + p.point_b) * 0.5);
+    c.face_depth = f.face_depth;
     c.triangle_a = f.face_a;
     c.triangle_b = f.face_b;
     return c;
+}
+
+// How far triangle tb (a's frame) reaches behind triangle i of a along its unit normal.
+double face_depth(const MeshBvh& a, std::int32_t i, const Vec3* ta, const Vec3* tb) {
+    const Vec3& n = a.triangle_normal(i);
+    double deepest = 0.0;
+    for (int k = 0; k < 3; ++k) deepest = max2(deepest, dot(n, ta[0] - tb[k]));
+    return deepest;
 }
 
 }  // namespace
@@ -53,28 +62,30 @@ MeshContactsOutput mesh_contacts(const MeshContactsInput& input, std::vector<Mes
     if (contacts != nullptr) contacts->clear();
     if (input.a == nullptr || input.b == nullptr || !input.a->valid() || !input.b->valid() ||
         input.max_contacts < 0 || input.max_work < 0) {
-        out.depth = kNaN;
+        out.depth = out.face_depth = kNaN;
         out.status = Status::INVALID_INPUT;
         return out;
     }
     const MeshBvh& a = *input.a;
     const MeshBvh& b = *input.b;
     if (!mesh_pair_in_range(a, input.pose_a, b, input.pose_b)) {
-        out.depth = kNaN;
+        out.depth = out.face_depth = kNaN;
         out.status = Status::OUT_OF_RANGE;
         return out;
     }
     const Relative rel(input.pose_a, input.pose_b, a, b);
     const bool listed = contacts != nullptr && input.max_contacts > 0;
     std::vector<Found> found;
-    Found best{-1.0, -1, -1, -1, -1};
+    Found best{-1.0, 0.0, -1, -1, -1, -1};
     long long work = 0;
     const bool capped = for_each_crossing_pair(
         a, b, rel, input.max_work, &work,
         [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
             ++out.count;
-            const Found f{triangle_penetration(ta, tb, false).depth, a.face_index(i), b.face_index(j), i, j};
+            const Found f{triangle_penetration(ta, tb, false).depth, face_depth(a, i, ta, tb), a.face_index(i),
+                          b.face_index(j), i, j};
             if (best.i < 0 || deeper(f, best)) best = f;
+            out.face_depth = max2(out.face_depth, f.face_depth);
             if (listed) found.push_back(f);
             return false;
         });

@@ -46,6 +46,14 @@ class MeshContactsBatch:
     point : (P, 3) float64
         World frame: midway between the deepest pair's witness points (b's point deepest past
         a, and where it meets a once b is moved by ``depth * normal``); NaN when count is 0.
+    face_depth : (P,) float64
+        >= 0: the largest, over the crossing pairs, of how far b's triangle reaches behind a's
+        triangle's face along a's unit face normal, ``(p1 - p0) x (p2 - p0)`` normalised:
+        ``max over b's corners q of n . (p0 - q)``. It separates the two triangles when b
+        moves by it along a's normal, but is not the shortest such move, and it depends on
+        a's winding: the per-pair ``penetration_depth`` coal 3.0.3's mesh ``collide`` reports
+        (measured: see ``benchmarks/RESULTS.md``), so ``face_depth`` is coal's deepest
+        contact. 0 when count is 0; NaN when the pair is invalid or out of range.
     triangle_a, triangle_b : (P,) int64
         The deepest pair's faces (indices local to each mesh); -1 when count is 0.
     status : (P,) int8
@@ -61,6 +69,8 @@ class MeshContactsBatch:
         Each listed contact's depth, as ``depth``.
     contact_normal, contact_point : (C, 3) float64
         Each listed contact's normal and point, as ``normal`` and ``point``.
+    contact_face_depth : (C,) float64
+        Each listed contact's face depth, as ``face_depth`` for its one pair.
     contact_triangle_a, contact_triangle_b : (C,) int64
         Each listed contact's faces.
     """
@@ -69,6 +79,7 @@ class MeshContactsBatch:
     depth: np.ndarray
     normal: np.ndarray
     point: np.ndarray
+    face_depth: np.ndarray
     triangle_a: np.ndarray
     triangle_b: np.ndarray
     status: np.ndarray
@@ -76,6 +87,7 @@ class MeshContactsBatch:
     contact_depth: np.ndarray
     contact_normal: np.ndarray
     contact_point: np.ndarray
+    contact_face_depth: np.ndarray
     contact_triangle_a: np.ndarray
     contact_triangle_b: np.ndarray
 
