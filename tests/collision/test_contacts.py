@@ -25,7 +25,10 @@ def _triangle_set(pairs_of_triangles) -> MeshSet:
     """One-triangle meshes a0, b0, a1, b1, ... (local frames = world)."""
     meshes = []
     for a, b in pairs_of_triangles:
-        meshes += [(np.asarray(a, float), np.array([[0, 1, 2]])), (np.asarray(b, float), np.array([[0, 1, 2]]))]
+        meshes += [
+            (np.asarray(a, float), np.array([[0, 1, 2]])),
+            (np.asarray(b, float), np.array([[0, 1, 2]])),
+        ]
     return MeshSet.from_arrays(meshes, orient=False, threads=1)
 
 
@@ -171,6 +174,7 @@ def test_moving_b_by_the_depth_along_the_normal_separates_the_pair(pair):
         return
     depth, normal = r.depth[0], r.normal[0]
     assert depth >= 0.0
+    assert depth <= r.face_depth[0] + 1e-12  # the minimum translation: no more than coal's
     if np.isnan(normal).any():  # two parallel segments or points: a flat difference
         assert depth == 0.0
         return
@@ -213,9 +217,16 @@ def test_every_status():
     far[0, 3] = 1e40
     near[:3, 3] = (0.5, 0.25, 0.125)
     empty = (np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64))
-    meshes = MeshSet.from_arrays([box, box, box, box, empty], np.stack([np.eye(4), sheared, far, near, np.eye(4)]))
+    meshes = MeshSet.from_arrays(
+        [box, box, box, box, empty], np.stack([np.eye(4), sheared, far, near, np.eye(4)])
+    )
     r = mesh_contacts_batch(meshes, None, [[0, 1], [0, 2], [0, 3], [0, 4]])
-    assert r.status.tolist() == [Status.INVALID_INPUT, Status.OUT_OF_RANGE, Status.CONVERGED, Status.INVALID_INPUT]
+    assert r.status.tolist() == [
+        Status.INVALID_INPUT,
+        Status.OUT_OF_RANGE,
+        Status.CONVERGED,
+        Status.INVALID_INPUT,
+    ]
     assert np.isnan(r.depth[[0, 1, 3]]).all()
     capped = mesh_contacts_batch(meshes, None, [[0, 3]], max_work=2)
     assert capped.status[0] == Status.MAX_ITERATIONS
@@ -235,3 +246,68 @@ def test_errors_name_the_argument():
         mesh_contacts_batch(meshes, np.eye(4)[None], [[0, 1]])
     with pytest.raises(TypeError, match="meshes must be a MeshSet, got list"):
         mesh_contacts_batch([], None, [[0, 1]])  # type: ignore[arg-type]
+
+
+def _pose_translated(x, y, z) -> np.ndarray:
+    pose = np.eye(4)
+    pose[:3, 3] = (x, y, z)
+    return pose
+
+
+@pytest.mark.parametrize("case", ["balls", "torus"])
+def test_contacts_agree_with_coal_on_corpus_meshes(corpus, case):
+    """bench_mesh_query.py's depth cases: every crossing pair is one of coal's contacts, with
+    coal's per-pair depth as face_depth; coal's other contacts are pairs its GJK puts within
+    its tolerance that the exact test finds apart; the minimum translation is never more."""
+    coal = pytest.importorskip("coal")
+    models = corpus / "trimesh-models"
+    if case == "balls":
+        a, b = (trimesh.load(models / n, force="mesh") for n in ("ballA.off", "ballB.off"))
+        pose_b = np.eye(4)
+    else:
+        a = b = trimesh.load(models / "torus.STL", force="mesh")
+        e = float(a.extents[0])
+        pose_b = _pose_translated(0.3 * e, 0.01 * e, 0)
+    meshes = MeshSet.from_arrays([a, b], np.stack([np.eye(4), pose_b]))
+    r = mesh_contacts_batch(meshes, None, [[0, 1]], max_contacts=10**6)
+    models_coal = []
+    for m in (a, b):
+        model = coal.BVHModelOBBRSS()
+        model.beginModel(len(m.faces), len(m.vertices))
+        model.addVertices(np.asarray(m.vertices, float))
+        model.addTriangles(np.asarray(m.faces, np.int64))
+        model.endModel()
+        models_coal.append(model)
+    request = coal.CollisionRequest(coal.CollisionRequestFlag.CONTACT, 10**6)
+    result = coal.CollisionResult()
+    coal.collide(
+        models_coal[0],
+        coal.Transform3s(np.eye(3), np.zeros(3)),
+        models_coal[1],
+        coal.Transform3s(np.ascontiguousarray(pose_b[:3, :3]), np.ascontiguousarray(pose_b[:3, 3])),
+        request,
+        result,
+    )
+    theirs = {(c.b1, c.b2): abs(c.penetration_depth) for c in result.getContacts()}
+    ours = {
+        (int(i), int(j)): (d, f)
+        for i, j, d, f in zip(
+            r.contact_triangle_a, r.contact_triangle_b, r.contact_depth, r.contact_face_depth
+        )
+    }
+    assert r.count[0] == len(ours) > 100
+    assert set(ours) <= set(theirs)
+    tolerance = request.gjk_tolerance  # coal's GJK and EPA tolerance, 1e-6
+    extra = sorted(set(theirs) - set(ours))
+    if extra:
+        ta = a.vertices[a.faces[[k[0] for k in extra]]]
+        tb = b.vertices[b.faces[[k[1] for k in extra]]] @ pose_b[:3, :3].T + pose_b[:3, 3]
+        gaps, _, _, hit = core.triangle_distance_batch(
+            np.ascontiguousarray(ta), np.ascontiguousarray(tb)
+        )
+        assert not hit.any() and gaps.max() <= tolerance
+    for key, (depth, face_depth) in ours.items():
+        assert face_depth == pytest.approx(theirs[key], abs=request.epa_tolerance)
+        assert depth <= face_depth + 1e-12
+    assert r.face_depth[0] == pytest.approx(max(theirs[k] for k in ours), abs=request.epa_tolerance)
+    assert r.depth[0] == r.contact_depth.max()
