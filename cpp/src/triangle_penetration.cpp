@@ -24,10 +24,16 @@ using predicates::orient3d;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// c scaled by a power of two (exactly) to a largest component in [1, 2): no overflow or
-// underflow in its square, and projections on it as exact as on c itself.
+// c scaled by a power of two (exactly) when its largest component is outside [2^-500, 2^500]:
+// no overflow or underflow in its square, and projections on it as exact as on c itself. A
+// power-of-two scale commutes with every rounding here (products, sums, the square root and
+// the quotient by the length), so within that range c itself gives the same bits; the scale,
+// two library calls a component, is then skipped (most of an axis's cost).
 Vec3 scaled(const Vec3& c) {
-    const int e = std::ilogb(max_abs(c));
+    const double ax = std::fabs(c.x), ay = std::fabs(c.y), az = std::fabs(c.z);
+    const double m = ax > ay ? (ax > az ? ax : az) : (ay > az ? ay : az);
+    if (m >= 0x1p-500 && m <= 0x1p500) return c;
+    const int e = std::ilogb(m);
     return {std::ldexp(c.x, -e), std::ldexp(c.y, -e), std::ldexp(c.z, -e)};
 }
 
