@@ -16,11 +16,14 @@ namespace meshcol {
 using namespace mesh_detail;
 namespace {
 
-// A crossing pair found by the descent: leaf-order triangles, input faces, its depths.
+// A crossing pair found by the descent: leaf-order triangles, input faces, its depths and
+// the normal of its penetration (a's frame), kept so that a listed contact needs only its
+// witness points.
 struct Found {
     double depth, face_depth;
     std::int64_t face_a, face_b;
     std::int32_t i, j;
+    Vec3 normal;
 };
 
 // Deeper first; of equal depths the lower (face_a, face_b).
@@ -35,7 +38,10 @@ MeshContact contact_of(const Found& f, const MeshBvh& a, const MeshBvh& b, const
     const Vec3* ta = a.triangle(f.i);
     const Vec3* local_b = b.triangle(f.j);
     const Vec3 tb[3] = {rel.apply(local_b[0]), rel.apply(local_b[1]), rel.apply(local_b[2])};
-    const TrianglePenetration p = triangle_penetration(ta, tb, true);
+    TrianglePenetration p;
+    p.depth = f.depth;
+    p.normal = f.normal;
+    triangle_penetration_points(ta, tb, p);
     MeshContact c;
     c.depth = p.depth;
     c.normal = pose_a.rotate(p.normal);
@@ -76,14 +82,14 @@ MeshContactsOutput mesh_contacts(const MeshContactsInput& input, std::vector<Mes
     const Relative rel(input.pose_a, input.pose_b, a, b);
     const bool listed = contacts != nullptr && input.max_contacts > 0;
     std::vector<Found> found;
-    Found best{-1.0, 0.0, -1, -1, -1, -1};
+    Found best{-1.0, 0.0, -1, -1, -1, -1, Vec3{}};
     long long work = 0;
     const bool capped = for_each_crossing_pair(
         a, b, rel, input.max_work, &work,
         [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
             ++out.count;
-            const Found f{triangle_penetration(ta, tb, false).depth, face_depth(a, i, ta, tb), a.face_index(i),
-                          b.face_index(j), i, j};
+            const TrianglePenetration p = triangle_penetration(ta, tb, false);
+            const Found f{p.depth, face_depth(a, i, ta, tb), a.face_index(i), b.face_index(j), i, j, p.normal};
             if (best.i < 0 || deeper(f, best)) best = f;
             out.face_depth = max2(out.face_depth, f.face_depth);
             if (listed) found.push_back(f);

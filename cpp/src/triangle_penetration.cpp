@@ -108,23 +108,26 @@ TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool 
         // No axis: both are points or segments on one line, a flat difference.
         out.depth = out.axis < 0 ? 0.0 : (best > 0.0 ? best : 0.0);
     }
-    if (!points) return out;
-    if (out.depth == 0.0) {
+    if (points) triangle_penetration_points(a, b, out);
+    return out;
+}
+
+void triangle_penetration_points(const Vec3 a[3], const Vec3 b[3], TrianglePenetration& p) {
+    if (p.depth == 0.0) {
         Vec3 shared;
         if (!triangles_intersect(a, b, &shared)) {
             // Not intersecting after all (a caller's misuse): the closest points.
-            triangle_separated_squared_distance(a, b, &out.point_a, &out.point_b);
-            return out;
+            triangle_separated_squared_distance(a, b, &p.point_a, &p.point_b);
+            return;
         }
-        out.point_a = out.point_b = shared;
-        return out;
+        p.point_a = p.point_b = shared;
+        return;
     }
-    const Vec3 shift = out.normal * out.depth;
+    const Vec3 shift = p.normal * p.depth;
     const Vec3 moved[3] = {b[0] + shift, b[1] + shift, b[2] + shift};
     Vec3 on_moved;
-    triangle_separated_squared_distance(a, moved, &out.point_a, &on_moved);
-    out.point_b = on_moved - shift;
-    return out;
+    triangle_separated_squared_distance(a, moved, &p.point_a, &on_moved);
+    p.point_b = on_moved - shift;
 }
 
 }  // namespace meshcol

@@ -102,6 +102,11 @@ struct TrianglePenetration {
 /// by depth * normal, Ericson 2004, 5.1.9).
 TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool points = true);
 
+/// The witness points of `p`, a `triangle_penetration(a, b, false)` of the same triangles (its
+/// depth and normal): what `points` adds, for a caller that keeps the penetration and wants
+/// the points of some pairs only.
+void triangle_penetration_points(const Vec3 a[3], const Vec3 b[3], TrianglePenetration& p);
+
 /// Whether two triangles cross: their relative interiors (the open triangles) share a point.
 ///
 /// Non-coplanar triangles cross when they meet along a segment through both interiors;
