@@ -34,7 +34,12 @@ triangle pair and report the deepest pair's own penetration (a local quantity of
 triangles: neither a bound of the meshes' depth nor zero for a resting contact). meshcol has
 no query that gives the peers' quantity, so no like-for-like depth row exists; each depth row
 prints both medians so the difference shows. coal signs a penetration negative: its depth is
-read as the largest |penetration_depth| of the contacts. With
+read as the largest |penetration_depth| of the contacts. Beside each depth row (the single
+ones and the family's), a like-for-like row (CONTACT_MEANING): mesh_contacts_batch with every
+contact listed against the same collide with contacts; its answers are checked against coal's
+in the run (the number of crossing triangle pairs, and the deepest contact: face_depth, the
+per-pair quantity coal 3.0.3 reports, how far b's triangle reaches behind a's face along
+a's normal; meshcol's own depth, the pair's minimum translation, is printed beside it). With
 --depth-only just those rows and the family's depth rows (about 10 s): run this script with another checkout's interpreter
 (its meshcol) in alternation with this one's for an A/B of the core, e.g.
 ``for i in 1 2 3; do for py in ../main/.venv/bin/python .venv/bin/python; do $py
@@ -75,6 +80,11 @@ from meshcol.collision.mesh_query import (
     mesh_penetration_depth_batch,
 )
 
+try:
+    from meshcol.collision.contacts import mesh_contacts_batch
+except ImportError:  # an older meshcol (an A/B run under another checkout): no contact rows
+    mesh_contacts_batch = None
+
 CORPUS = Path(__file__).resolve().parents[1].parent / "shared" / "corpus"
 MODELS = CORPUS / "trimesh-models"
 # The real-mesh family: closed corpus meshes of the sizes assets are made of.
@@ -96,6 +106,13 @@ DEPTH_MEANING = (
     "sampled point inside the other solid, to its surface; a lower bound of the separating "
     "translation), coal/fcl = the deepest crossing triangle pair's own penetration (a local "
     "contact quantity)"
+)
+# What the contact rows compare: the same quantity (see the module docstring).
+CONTACT_MEANING = (
+    "contact depth rows are like for like: every crossing triangle pair listed with its own "
+    "depth, as coal's collide with contacts; the deepest is mesh_contacts_batch's face_depth "
+    "(how far b's triangle reaches behind a's face along a's normal, coal 3.0.3's per-pair "
+    "penetration_depth), checked against coal's deepest contact and count in the run"
 )
 
 
@@ -389,6 +406,52 @@ def depth_case(name: str, a: trimesh.Trimesh, b: trimesh.Trimesh, pb: np.ndarray
         times[0],
         peers_of(times[1], times[2] if coal else None),
     )
+    if mesh_contacts_batch is not None:
+        contact_case(name, meshes, pairs, oa, ob, cp if coal else None)
+
+
+def contact_case(name, meshes, pairs, oa, ob, cp) -> None:
+    """The like-for-like row of one depth case: meshcol's contacts (every crossing pair
+    listed, as the peers' contacts are) against collide with contacts, answers checked
+    against coal's: the count of crossing pairs and the deepest contact's depth."""
+    fcl_req = fcl.CollisionRequest(num_max_contacts=100000, enable_contact=True)
+
+    def ours():
+        return mesh_contacts_batch(meshes, None, pairs, max_contacts=100000, threads=1)
+
+    def fcl_contacts():
+        res = fcl.CollisionResult()
+        fcl.collide(oa, ob, fcl_req, res)
+        return res.contacts
+
+    fns = [ours, fcl_contacts]
+    r = ours()
+    check = ""
+    if cp is not None:
+
+        def coal_contacts():
+            cp.collide()
+            return cp.cres.getContacts()
+
+        fns.append(coal_contacts)
+        theirs = coal_contacts()
+        deepest = max((abs(c.penetration_depth) for c in theirs), default=0.0)
+        same = abs(r.face_depth[0] - deepest) <= 1e-9 * max(deepest, 1e-300)
+        check = (
+            f", coal {len(theirs)} pairs, deepest {deepest:.9g} "
+            f"({'agrees' if same else 'DISAGREES'})"
+        )
+    times = best_of_alternated(*fns, repeat=5)
+    print(
+        f"contacts {name}: meshcol {int(r.count[0])} crossing pairs, deepest "
+        f"{r.face_depth[0]:.9g} (minimum translation {r.depth[0]:.6g}), fcl "
+        f"{len(fcl_contacts())} pairs{check}"
+    )
+    row(
+        f"depth {name}: contact depth (like for like)",
+        times[0],
+        peers_of(times[1], times[2] if cp is not None else None),
+    )
 
 
 def centred(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
@@ -576,11 +639,76 @@ def family_depth(name, mesh, meshes, pairs, flat, objects) -> None:
         times[0] / count,
         peers_of(times[1] / count, times[2] / count if coal else None),
     )
+    if mesh_contacts_batch is not None:
+        family_contacts(name, mesh, meshes, pairs, flat, objects)
+
+
+def family_contacts(name, mesh, meshes, pairs, flat, objects) -> None:
+    """The like-for-like contact row of the touching configuration: meshcol's contacts batch
+    (every crossing pair listed) against collide with contacts per pair, the count and the
+    deepest of every pair checked against coal's."""
+    count = len(pairs)
+    fcl_req = fcl.CollisionRequest(num_max_contacts=100000, enable_contact=True)
+
+    def ours():
+        return mesh_contacts_batch(meshes, None, pairs, max_contacts=100000, threads=1)
+
+    def fcl_contacts():
+        out = []
+        for i, j in pairs.tolist():
+            res = fcl.CollisionResult()
+            fcl.collide(objects[i], objects[j], fcl_req, res)
+            out.append(res.contacts)
+        return out
+
+    fns = [ours, fcl_contacts]
+    r = ours()
+    check = ""
+    if coal:
+        cm = coal_model(mesh)
+        tfs = [coal_transform(p) for p in flat]
+        creq = coal.CollisionRequest(coal.CollisionRequestFlag.CONTACT, 100000)
+        cres = coal.CollisionResult()
+
+        def coal_contacts():
+            out = []
+            for i, j in pairs.tolist():
+                cres.clear()
+                coal.collide(cm, tfs[i], cm, tfs[j], creq, cres)
+                out.append(cres.getContacts())
+            return out
+
+        fns.append(coal_contacts)
+        # read each pair's contacts before the next clear() (the list is the result's own)
+        counts, deepest = np.zeros(count, dtype=np.int64), np.zeros(count)
+        for k, (i, j) in enumerate(pairs.tolist()):
+            cres.clear()
+            coal.collide(cm, tfs[i], cm, tfs[j], creq, cres)
+            contacts = cres.getContacts()
+            counts[k] = len(contacts)
+            deepest[k] = max((abs(c.penetration_depth) for c in contacts), default=0.0)
+        same = np.abs(r.face_depth - deepest) <= 1e-9 * np.maximum(deepest, 1e-300)
+        check = (
+            f"; with coal: counts equal on {int((counts == r.count).sum())}/{count} (coal "
+            f"{int((counts - r.count).sum())} more in all), deepest agrees on "
+            f"{int(same.sum())}/{count}"
+        )
+    times = best_of_alternated(*fns, repeat=3)
+    print(
+        f"  contacts, like for like: meshcol {int(r.count.sum())} crossing pairs over {count} "
+        f"pairs{check}"
+    )
+    row(
+        f"{name} touching: contact depth (like for like; batch)",
+        times[0] / count,
+        peers_of(times[1] / count, times[2] / count if coal else None),
+    )
 
 
 def family_rows(count: int = 300, depth_only: bool = False) -> None:
     """Every row of the family, or (depth_only) only the depth row of each touching set."""
     print(DEPTH_MEANING)
+    print(CONTACT_MEANING)
     rng = np.random.default_rng(7)
     for name, path in FAMILY:
         if not path.exists():
@@ -683,6 +811,7 @@ def single_depth_rows() -> dict[str, tuple[trimesh.Trimesh, trimesh.Trimesh, np.
 
 def depth_rows() -> None:
     print(DEPTH_MEANING)
+    print(CONTACT_MEANING)
     for name, (a, b, pose_b) in single_depth_rows().items():
         depth_case(name, a, b, pose_b)
 

@@ -19,7 +19,7 @@ convex
     status must come with finite numbers.
 meshes
     Floats and indices from the input become two triangle meshes and poses; a ``MeshSet`` is
-    built (BVHs in the core) and distance and intersection are queried.
+    built (BVHs in the core) and distance, intersection and contacts are queried.
 manifest
     The input is a JSON manifest's bytes for the core's reader of plain manifests of mesh and
     primitive bodies (``meshcol.io.scene_native``), held to the Python reader: whatever it passes, Python's json
@@ -158,6 +158,7 @@ def convex(data: bytes) -> None:
 
 
 def meshes(data: bytes) -> None:
+    from meshcol.collision.contacts import mesh_contacts_batch
     from meshcol.collision.mesh_query import MeshSet, mesh_distance_batch, mesh_intersects_batch
     from meshcol.types import Status
 
@@ -180,6 +181,10 @@ def meshes(data: bytes) -> None:
     ok = int(Status.CONVERGED)
     _check_statuses(mesh_distance_batch(mesh_set, poses, pairs, threads=1), ok, "distance")
     mesh_intersects_batch(mesh_set, poses, pairs, threads=1)
+    contacts = mesh_contacts_batch(mesh_set, poses, pairs, max_contacts=8, threads=1)
+    _check_statuses(contacts, ok, "depth", "face_depth")
+    if np.any(contacts.contact_depth < 0) or not np.all(np.isfinite(contacts.contact_point)):
+        raise AssertionError("a listed contact with a negative depth or a non-finite point")
 
 
 def manifest(data: bytes) -> None:

@@ -98,6 +98,8 @@ _LAZY: dict[str, str] = {
     "MeshDepthBatch": "meshcol.collision.mesh_query",
     "mesh_penetration_depth_batch": "meshcol.collision.mesh_query",
     "mesh_intersection_volume": "meshcol.collision.mesh_query",
+    "MeshContactsBatch": "meshcol.collision.contacts",
+    "mesh_contacts_batch": "meshcol.collision.contacts",
     "MeshRayCastBatch": "meshcol.collision.ray_cast",
     "mesh_ray_cast_batch": "meshcol.collision.ray_cast",
     # broad phase

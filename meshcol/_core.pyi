@@ -109,6 +109,8 @@ class defaults:
 
     mesh_depth_max_work: int = 200000000
 
+    mesh_contacts_max_work: int = 200000000
+
     flat_relative_tolerance: float = 1e-09
 
     hull_relative_tolerance: float = 1e-14
@@ -382,6 +384,11 @@ class MeshBvhSet:
     def depth_batch(self, poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)] | None, pairs: Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', device='cpu', writable=False)], threads: int = 0) -> dict:
         """
         Mesh-pair penetration depths (lower bounds of the minimum translation distance): {depth, point_a, point_b, normal, deepest_mesh, points_tested, status}.
+        """
+
+    def contacts_batch(self, poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)] | None, pairs: Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', device='cpu', writable=False)], threads: int = 0, max_contacts: int = 0, max_work: int = 200000000) -> dict:
+        """
+        Mesh-pair contacts (every crossing triangle pair, its own penetration): {count, depth, normal, point, face_depth, triangle_a, triangle_b, status} of the deepest, and up to max_contacts listed contacts a pair: {contact_offsets, contact_depth, contact_normal, contact_point, contact_face_depth, contact_triangle_a, contact_triangle_b}.
         """
 
     def ray_cast_batch(self, meshes: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], origins: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], directions: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)] | None, max_distance: float = float('inf'), threads: int = 0) -> dict:

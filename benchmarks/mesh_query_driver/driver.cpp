@@ -2,7 +2,7 @@
 // as written by dump_family.py (benchmarks/RESULTS.md, "Issue 32 item 3 ... meshspeed2").
 //
 // usage: FAMILY=DIR [REPS=n] driver MODE K CONFIG [print]
-//   MODE dist | inter | depth: the 300 pairs of mesh K in CONFIG (near, touching, apart), one
+//   MODE dist | inter | depth | contacts | contacts_list (every contact listed): the 300 pairs of mesh K in CONFIG (near, touching, apart), one
 //   call each (REPS times); "print" writes every result (%.17g) for an old/new comparison;
 //   CPU microseconds a query go to stderr.  MODE build: K's hierarchy built CONFIG times.
 //   MODE hash: a hash (FNV-1a) of every array of K's hierarchy and its node count (CONFIG is
@@ -98,6 +98,19 @@ int main(int argc, char** argv) {
             sum += o.depth;
             if (print) std::printf("%zu %.17g %d %d %lld %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", i, o.depth, o.deepest_mesh, static_cast<int>(o.status),
                 (long long)o.points_tested, o.normal.x, o.normal.y, o.normal.z, o.point_a.x, o.point_a.y, o.point_a.z, o.point_b.x, o.point_b.y, o.point_b.z);
+        } else if (mode == "contacts" || mode == "contacts_list") {
+            MeshContactsInput in; in.a = &mesh; in.b = &mesh_b; in.pose_a = pa; in.pose_b = pb;
+            in.max_contacts = mode == "contacts_list" ? (1LL << 40) : 0;
+            std::vector<MeshContact> listed;
+            MeshContactsOutput o = mesh_contacts(in, &listed);
+            sum += o.depth + o.face_depth + static_cast<double>(o.count);
+            if (print) std::printf("%zu %lld %.17g %.17g %lld %lld %d %zu\n", i, (long long)o.count, o.depth, o.face_depth,
+                (long long)o.triangle_a, (long long)o.triangle_b, static_cast<int>(o.status), listed.size());
+            if (print)
+                for (const MeshContact& c : listed)
+                    std::printf("  %lld %lld %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", (long long)c.triangle_a,
+                        (long long)c.triangle_b, c.depth, c.face_depth, c.normal.x, c.normal.y, c.normal.z, c.point.x,
+                        c.point.y, c.point.z);
         }
     }
     std::fprintf(stderr, "cpu_us_per_query %.2f\n", 1e6 * double(std::clock() - start) / CLOCKS_PER_SEC / double(reps * count));

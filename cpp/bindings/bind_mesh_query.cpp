@@ -232,6 +232,8 @@ inline meshcol::Status intersects_one(const meshcol::MeshBvh& a, const meshcol::
 
 // The columns of each batched query kind: the fields of its output struct, named as the
 // Python result class names them (meshcol/collision/mesh_query.py, ray_cast.py).
+using meshcol::MeshContact;
+using meshcol::MeshContactsOutput;
 using meshcol::MeshDepthOutput;
 using meshcol::MeshDistanceOutput;
 using meshcol::MeshRayOutput;
@@ -240,6 +242,18 @@ const auto kDepthColumns = std::make_tuple(
     field("point_b", &MeshDepthOutput::point_b), field("normal", &MeshDepthOutput::normal),
     field_as<std::int8_t>("deepest_mesh", &MeshDepthOutput::deepest_mesh),
     field("points_tested", &MeshDepthOutput::points_tested), field_as<std::int8_t>("status", &MeshDepthOutput::status));
+const auto kContactsColumns = std::make_tuple(
+    field("count", &MeshContactsOutput::count), field("depth", &MeshContactsOutput::depth),
+    field("normal", &MeshContactsOutput::normal), field("point", &MeshContactsOutput::point),
+    field("face_depth", &MeshContactsOutput::face_depth),
+    field("triangle_a", &MeshContactsOutput::triangle_a), field("triangle_b", &MeshContactsOutput::triangle_b),
+    field_as<std::int8_t>("status", &MeshContactsOutput::status));
+// The listed contacts of every pair, one flat column each, named with a contact_ prefix.
+const auto kContactColumns = std::make_tuple(
+    field("contact_depth", &MeshContact::depth), field("contact_normal", &MeshContact::normal),
+    field("contact_point", &MeshContact::point), field("contact_face_depth", &MeshContact::face_depth),
+    field("contact_triangle_a", &MeshContact::triangle_a),
+    field("contact_triangle_b", &MeshContact::triangle_b));
 const auto kRayColumns = std::make_tuple(
     field("hit", &MeshRayOutput::hit), field("distance", &MeshRayOutput::distance), field("point", &MeshRayOutput::point),
     field("normal", &MeshRayOutput::normal), field("triangle", &MeshRayOutput::triangle),
@@ -287,6 +301,52 @@ nb::dict depth_batch(const MeshBvhSet& set, std::optional<Poses> poses, Pairs pa
         return r;
     });
     return columns.dict();
+}
+
+// The contacts of each pair: the per-pair columns, and with max_contacts > 0 the listed
+// contacts of every pair in pair order (pair k's are rows contact_offsets[k] ..
+// contact_offsets[k + 1] of the contact_ columns).
+nb::dict contacts_batch(const MeshBvhSet& set, std::optional<Poses> poses, Pairs pairs, int threads,
+                        std::int64_t max_contacts, long long max_work) {
+    if (max_contacts < 0)
+        throw std::invalid_argument("max_contacts must be >= 0, got " + std::to_string(max_contacts));
+    if (max_work < 0) throw std::invalid_argument("max_work must be >= 0, got " + std::to_string(max_work));
+    const PosedPairs in = read_pairs(set, poses, pairs);
+    const auto n = static_cast<size_t>(in.count);
+    auto columns = columns_of<MeshContactsOutput>(n, kContactsColumns);
+    std::vector<std::vector<MeshContact>> listed(max_contacts > 0 ? n : 0);
+    run_items(in.count, threads, meshcol::defaults::mesh_min_pairs_per_thread, columns, [&](long long k) {
+        meshcol::MeshDistanceInput q;
+        const bool rigid = in.input(set, k, q);
+        meshcol::MeshContactsInput c;
+        c.a = q.a;
+        c.b = q.b;
+        c.pose_a = q.pose_a;
+        c.pose_b = q.pose_b;
+        c.max_contacts = max_contacts;
+        c.max_work = max_work;
+        if (rigid) return meshcol::mesh_contacts(c, max_contacts > 0 ? &listed[static_cast<size_t>(k)] : nullptr);
+        MeshContactsOutput r;
+        r.depth = r.face_depth = kNaN;
+        r.normal = r.point = kNaN3;
+        r.status = meshcol::Status::INVALID_INPUT;
+        return r;
+    });
+    auto offsets = new_array<Out<std::int64_t, -1>>({n + 1});
+    std::int64_t total = 0;
+    offsets.data()[0] = 0;
+    for (size_t k = 0; k < n; ++k) {
+        total += max_contacts > 0 ? static_cast<std::int64_t>(listed[k].size()) : 0;
+        offsets.data()[k + 1] = total;
+    }
+    auto flat = columns_of<MeshContact>(static_cast<size_t>(total), kContactColumns);
+    for (size_t k = 0; k < listed.size(); ++k)
+        for (size_t i = 0; i < listed[k].size(); ++i)
+            flat.write(offsets.data()[k] + static_cast<std::int64_t>(i), listed[k][i]);
+    nb::dict out = columns.dict();
+    out["contact_offsets"] = offsets.cast();
+    for (auto item : flat.dict()) out[item.first] = item.second;
+    return out;
 }
 
 // The first hit of each ray (origins[k], directions[k], world frame) on mesh meshes[k].
@@ -676,6 +736,13 @@ void bind_mesh_query(nb::module_& m) {
         .def("depth_batch", &depth_batch, "poses"_a.none(), "pairs"_a, "threads"_a = 0,
              "Mesh-pair penetration depths (lower bounds of the minimum translation distance): "
              "{depth, point_a, point_b, normal, deepest_mesh, points_tested, status}.")
+        .def("contacts_batch", &contacts_batch, "poses"_a.none(), "pairs"_a, "threads"_a = 0,
+             "max_contacts"_a = 0, "max_work"_a = meshcol::defaults::mesh_contacts_max_work,
+             "Mesh-pair contacts (every crossing triangle pair, its own penetration): {count, "
+             "depth, normal, point, face_depth, triangle_a, triangle_b, status} of the deepest, "
+             "and up to max_contacts listed contacts a pair: {contact_offsets, contact_depth, "
+             "contact_normal, contact_point, contact_face_depth, contact_triangle_a, "
+             "contact_triangle_b}.")
         .def("ray_cast_batch", &ray_cast_batch, "meshes"_a, "origins"_a, "directions"_a, "poses"_a.none(),
              "max_distance"_a = std::numeric_limits<double>::infinity(), "threads"_a = 0,
              "First hits of rays (world frame) on meshes[k]: {hit, distance, point, normal, "

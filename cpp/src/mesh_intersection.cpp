@@ -4,6 +4,7 @@
 // segment crosses a surface.
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <utility>
 #include <vector>
 
@@ -289,6 +290,20 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
         rel.slack * rel.slack);
     group_near_pairs(near_pairs, 0, in_a);
     group_near_pairs(near_pairs, 1, in_b);
+}
+
+// The descent of mesh_intersects to the end for mesh_contacts: the same box tests, plane
+// screen and exact triangle test, no marks kept.
+bool for_each_crossing_pair(const MeshBvh& a, const MeshBvh& b, const Relative& rel, long long max_work,
+                            long long* work,
+                            const std::function<bool(std::int32_t, std::int32_t, const Vec3*, const Vec3*)>& visit) {
+    bool capped = false;
+    for_each_touching_pair(a, b, rel, [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
+        if (++*work > max_work) return capped = true;
+        if (planes_separate(a, i, ta, b, j, tb, rel) || !triangles_intersect(ta, tb, nullptr)) return false;
+        return visit(i, j, ta, tb);
+    });
+    return capped;
 }
 
 // Parameters along [p, q] (mesh's local frame) where the segment meets the mesh's surface in

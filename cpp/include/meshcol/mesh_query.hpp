@@ -8,7 +8,9 @@
 
 #include <cstdint>
 #include <limits>
+#include <vector>
 
+#include "meshcol/defaults.hpp"
 #include "meshcol/mesh_bvh.hpp"
 #include "meshcol/status.hpp"
 #include "meshcol/vec.hpp"
@@ -102,6 +104,70 @@ struct MeshDepthOutput {
 /// points. Pairs whose surfaces are disjoint still get the depth of the deepest vertex inside
 /// (containment).
 MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input);
+
+/// Two meshes, their poses and the options of `mesh_contacts`.
+struct MeshContactsInput {
+    const MeshBvh* a = nullptr;  ///< first mesh (local frame)
+    const MeshBvh* b = nullptr;  ///< second mesh (local frame)
+    Pose pose_a;                 ///< world from a's local frame, rigid
+    Pose pose_b;                 ///< world from b's local frame, rigid
+    /// Every contact is listed (in `contacts`, when given) up to this many, >= 0; the count
+    /// and the deepest contact are over all crossing pairs whatever it is.
+    std::int64_t max_contacts = 0;
+    /// Work cap: triangle pairs whose boxes touch (each tested exactly), >= 0; past it the
+    /// pair is MAX_ITERATIONS.
+    long long max_work = defaults::mesh_contacts_max_work;
+};
+
+/// One crossing triangle pair and its own penetration (`triangle_penetration`), world frame.
+struct MeshContact {
+    double depth = 0.0;  ///< >= 0: the minimum translation that separates the two triangles
+    /// World unit vector from a towards b: moving b by depth along it separates the two
+    /// triangles (NaN only for two triangles degenerate to parallel segments or points)
+    Vec3 normal;
+    Vec3 point;                    ///< world: midway between the witness points of the pair
+    /// >= 0: how far b's triangle reaches behind a's triangle's face, along a's unit face
+    /// normal (p1 - p0) x (p2 - p0): max over b's corners q of n . (a's p0 - q). A translation
+    /// that separates the two triangles (b moved by it along a's normal), not the shortest:
+    /// the per-pair penetration_depth coal 3.0.3's mesh collide reports (measured on every
+    /// contact of bench_mesh_query.py's depth rows, with a's face normal as its normal).
+    /// 0 for a degenerate triangle of a.
+    double face_depth = 0.0;
+    std::int64_t triangle_a = -1;  ///< input face of a
+    std::int64_t triangle_b = -1;  ///< input face of b
+};
+
+/// Result of `mesh_contacts`.
+struct MeshContactsOutput {
+    /// Crossing triangle pairs (the closed triangles share a point, touching counts), >= 0;
+    /// with MAX_ITERATIONS, those found before the work cap (a lower bound).
+    std::int64_t count = 0;
+    /// The deepest crossing pair's penetration, >= 0 (ties: the lowest triangle_a, then
+    /// triangle_b); 0 with NaN normal and point and -1 triangles when count is 0; NaN when
+    /// invalid or out of range.
+    double depth = 0.0;
+    Vec3 normal;                   ///< as MeshContact::normal, of the deepest pair
+    Vec3 point;                    ///< as MeshContact::point, of the deepest pair
+    /// The largest MeshContact::face_depth over the crossing pairs (coal's deepest contact),
+    /// 0 when count is 0, NaN when invalid or out of range.
+    double face_depth = 0.0;
+    std::int64_t triangle_a = -1;  ///< input face of a of the deepest pair, -1 when none
+    std::int64_t triangle_b = -1;  ///< input face of b of the deepest pair, -1 when none
+    /// CONVERGED; MAX_ITERATIONS when the triangle pairs whose boxes touch exceed max_work
+    /// (count and the deepest are then of the pairs found); INVALID_INPUT for an invalid mesh
+    /// or a negative max_contacts or max_work; OUT_OF_RANGE outside `mesh_pair_in_range`.
+    Status status = Status::NOT_RUN;
+};
+
+/// The contacts of two posed meshes as coal's and FCL's mesh collide with contacts report
+/// them: every crossing triangle pair (the descent of mesh_intersects run to the end, the
+/// same exact triangle test), each with its own penetration depth (`triangle_penetration`:
+/// the separating axis theorem over the 11 axes of two triangles, the quantity coal's EPA
+/// computes for a triangle pair). Not a depth of the meshes: a resting contact's pairs are
+/// shallow however deep a mesh sinks, and a pair deep inside the other solid has none (see
+/// `mesh_penetration_depth`). With `contacts`, it is cleared and gets every contact in order
+/// of (triangle_a, triangle_b), the first `max_contacts` of them.
+MeshContactsOutput mesh_contacts(const MeshContactsInput& input, std::vector<MeshContact>* contacts = nullptr);
 
 /// Whether the surfaces intersect (touching counts): descends only overlapping boxes, stops at
 /// the first intersecting triangle pair. Both meshes must be valid.

@@ -71,6 +71,42 @@ struct TriangleDistanceOutput {
 /// Exact distance between two triangles: `triangles_intersect`, then the 15 feature pairs.
 TriangleDistanceOutput triangle_distance(const Vec3 a[3], const Vec3 b[3]);
 
+/// Penetration of two intersecting triangles: the minimum translation of b that separates them
+/// (leaves them touching), as a convex pair's penetration depth.
+struct TrianglePenetration {
+    double depth = 0.0;  ///< >= 0, caller's units; 0 for coplanar (and flat) pairs
+    /// Unit, caller's frame: the direction to move b by `depth` to separate it from a (from a
+    /// towards b). NaN when no candidate axis exists (both triangles degenerate to parallel
+    /// segments or points: then depth is 0).
+    Vec3 normal;
+    /// Witness points, caller's frame (only with `points`): point_a on a and point_b on b with
+    /// point_a - point_b = depth * normal up to rounding (b's point deepest past a, and where
+    /// it meets a once b is moved); one shared point when depth is 0. NaN without `points`.
+    Vec3 point_a, point_b;
+    /// The axis of the minimum: 0 a's face normal, 1 b's, 2 + 3 i + j the cross product of
+    /// edge i of a (corners i, i + 1) and edge j of b; -1 when there is none.
+    int axis = -1;
+};
+
+/// Penetration depth of two triangles that intersect (`triangles_intersect`), exactly as the
+/// separating axis theorem gives it for two convex polytopes: the minimum, over the candidate
+/// axes (the two face normals and the nine edge-edge cross products, Gottschalk, Lin and
+/// Manocha 1996; Ericson 2004, 4.4), of the smaller of the two overlaps of the projections.
+/// The facets of the Minkowski difference a - b have normals among these axes, and the
+/// nearest facet to the origin gives the minimum translation distance; an axis that is not a
+/// facet normal only bounds it from above, so the minimum over all is the depth (up to the
+/// rounding of the projections). A zero cross product (parallel edges) or a zero face normal
+/// (a degenerate triangle) is no axis. Exactly coplanar triangles (orient3d) have depth 0 and
+/// a's normal (b's when a is degenerate). For triangles that do not intersect the result
+/// means nothing. With `points`, the witness points (the closest points of a and of b moved
+/// by depth * normal, Ericson 2004, 5.1.9).
+TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool points = true);
+
+/// The witness points of `p`, a `triangle_penetration(a, b, false)` of the same triangles (its
+/// depth and normal): what `points` adds, for a caller that keeps the penetration and wants
+/// the points of some pairs only.
+void triangle_penetration_points(const Vec3 a[3], const Vec3 b[3], TrianglePenetration& p);
+
 /// Whether two triangles cross: their relative interiors (the open triangles) share a point.
 ///
 /// Non-coplanar triangles cross when they meet along a segment through both interiors;

@@ -1,0 +1,120 @@
+// The contacts of two posed meshes (mesh_query.hpp: mesh_contacts): every crossing triangle
+// pair, as mesh_intersects finds the first one, each with its own penetration depth by the
+// separating axis theorem (triangle_penetration.cpp). The per-pair quantity of coal's and
+// FCL's mesh collide with contacts (a triangle pair's EPA), exact up to rounding here.
+#include <algorithm>
+#include <cstdint>
+#include <tuple>
+#include <vector>
+
+#include "meshcol/defaults.hpp"
+#include "meshcol/mesh_query.hpp"
+#include "meshcol/triangle.hpp"
+#include "mesh_query_detail.hpp"
+
+namespace meshcol {
+using namespace mesh_detail;
+namespace {
+
+// A crossing pair found by the descent: leaf-order triangles, input faces, its depths and
+// the normal of its penetration (a's frame), kept so that a listed contact needs only its
+// witness points.
+struct Found {
+    double depth, face_depth;
+    std::int64_t face_a, face_b;
+    std::int32_t i, j;
+    Vec3 normal;
+};
+
+// Deeper first; of equal depths the lower (face_a, face_b).
+bool deeper(const Found& x, const Found& y) {
+    if (x.depth != y.depth) return x.depth > y.depth;
+    return std::tie(x.face_a, x.face_b) < std::tie(y.face_a, y.face_b);
+}
+
+// The contact of pair `f` in the world frame (b's triangle mapped into a's frame again, as
+// the descent mapped it, so the depth is the same bits).
+MeshContact contact_of(const Found& f, const MeshBvh& a, const MeshBvh& b, const Relative& rel, const Pose& pose_a) {
+    const Vec3* ta = a.triangle(f.i);
+    const Vec3* local_b = b.triangle(f.j);
+    const Vec3 tb[3] = {rel.apply(local_b[0]), rel.apply(local_b[1]), rel.apply(local_b[2])};
+    TrianglePenetration p;
+    p.depth = f.depth;
+    p.normal = f.normal;
+    triangle_penetration_points(ta, tb, p);
+    MeshContact c;
+    c.depth = p.depth;
+    c.normal = pose_a.rotate(p.normal);
+    c.point = pose_a.apply((p.point_a + p.point_b) * 0.5);
+    c.face_depth = f.face_depth;
+    c.triangle_a = f.face_a;
+    c.triangle_b = f.face_b;
+    return c;
+}
+
+// How far triangle tb (a's frame) reaches behind triangle i of a along its unit normal.
+double face_depth(const MeshBvh& a, std::int32_t i, const Vec3* ta, const Vec3* tb) {
+    const Vec3& n = a.triangle_normal(i);
+    double deepest = 0.0;
+    for (int k = 0; k < 3; ++k) deepest = max2(deepest, dot(n, ta[0] - tb[k]));
+    return deepest;
+}
+
+}  // namespace
+
+MeshContactsOutput mesh_contacts(const MeshContactsInput& input, std::vector<MeshContact>* contacts) {
+    MeshContactsOutput out;
+    out.normal = out.point = Vec3{kNaN, kNaN, kNaN};
+    if (contacts != nullptr) contacts->clear();
+    if (input.a == nullptr || input.b == nullptr || !input.a->valid() || !input.b->valid() ||
+        input.max_contacts < 0 || input.max_work < 0) {
+        out.depth = out.face_depth = kNaN;
+        out.status = Status::INVALID_INPUT;
+        return out;
+    }
+    const MeshBvh& a = *input.a;
+    const MeshBvh& b = *input.b;
+    if (!mesh_pair_in_range(a, input.pose_a, b, input.pose_b)) {
+        out.depth = out.face_depth = kNaN;
+        out.status = Status::OUT_OF_RANGE;
+        return out;
+    }
+    const Relative rel(input.pose_a, input.pose_b, a, b);
+    const bool listed = contacts != nullptr && input.max_contacts > 0;
+    std::vector<Found> found;
+    Found best{-1.0, 0.0, -1, -1, -1, -1, Vec3{}};
+    long long work = 0;
+    const bool capped = for_each_crossing_pair(
+        a, b, rel, input.max_work, &work,
+        [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
+            ++out.count;
+            const TrianglePenetration p = triangle_penetration(ta, tb, false);
+            const Found f{p.depth, face_depth(a, i, ta, tb), a.face_index(i), b.face_index(j), i, j, p.normal};
+            if (best.i < 0 || deeper(f, best)) best = f;
+            out.face_depth = max2(out.face_depth, f.face_depth);
+            if (listed) found.push_back(f);
+            return false;
+        });
+    out.status = capped ? Status::MAX_ITERATIONS : Status::CONVERGED;
+    if (best.i < 0) {
+        out.depth = 0.0;
+        return out;
+    }
+    const MeshContact deepest = contact_of(best, a, b, rel, input.pose_a);
+    out.depth = deepest.depth;
+    out.normal = deepest.normal;
+    out.point = deepest.point;
+    out.triangle_a = deepest.triangle_a;
+    out.triangle_b = deepest.triangle_b;
+    if (listed) {
+        std::sort(found.begin(), found.end(), [](const Found& x, const Found& y) {
+            return std::tie(x.face_a, x.face_b) < std::tie(y.face_a, y.face_b);
+        });
+        const auto kept = static_cast<size_t>(std::min<std::int64_t>(input.max_contacts, out.count));
+        contacts->reserve(kept);
+        for (size_t k = 0; k < kept; ++k) contacts->push_back(contact_of(found[k], a, b, rel, input.pose_a));
+    }
+    return out;
+}
+
+}  // namespace meshcol

@@ -1,0 +1,133 @@
+// Penetration depth of two intersecting triangles by the separating axis theorem (triangle.hpp:
+// triangle_penetration), the per-pair quantity of mesh_contacts.
+//
+// Two triangles are convex polytopes, so their minimum translation distance is the distance
+// from the origin to the boundary of their Minkowski difference a - b, reached on its nearest
+// facet. The facets of a - b are spanned by a face of one and a vertex of the other, or by an
+// edge of each: their normals are the triangles' face normals and the edge-edge cross products
+// (Gottschalk, Lin and Manocha 1996; Ericson 2004, 4.4 and 5.2.1). On any unit axis u the
+// projections overlap by min(max_a - min_b, max_b - min_a), and moving b that far along u (or
+// -u) separates the pair; the minimum over the candidates is the depth. A flat difference (a
+// coplanar or degenerate pair) has depth 0, which the axes give too (its normal's overlap is
+// 0), up to rounding: exact coplanarity is decided first with orient3d so that it is 0 exactly.
+#include <cmath>
+#include <limits>
+
+#include "meshcol/triangle.hpp"
+#include "predicates.hpp"
+
+namespace meshcol {
+namespace {
+
+using predicates::collinear;
+using predicates::orient3d;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// c scaled by a power of two (exactly) when its largest component is outside [2^-500, 2^500]:
+// no overflow or underflow in its square, and projections on it as exact as on c itself. A
+// power-of-two scale commutes with every rounding here (products, sums, the square root and
+// the quotient by the length), so within that range c itself gives the same bits; the scale,
+// two library calls a component, is then skipped (most of an axis's cost).
+Vec3 scaled(const Vec3& c) {
+    const double ax = std::fabs(c.x), ay = std::fabs(c.y), az = std::fabs(c.z);
+    const double m = ax > ay ? (ax > az ? ax : az) : (ay > az ? ay : az);
+    if (m >= 0x1p-500 && m <= 0x1p500) return c;
+    const int e = std::ilogb(m);
+    return {std::ldexp(c.x, -e), std::ldexp(c.y, -e), std::ldexp(c.z, -e)};
+}
+
+Vec3 unit(const Vec3& c) {
+    const Vec3 s = scaled(c);
+    return s / norm(s);
+}
+
+// The overlap of the projections of a and b (corners relative to `origin`) on the axis c
+// (non-zero) and the unit direction to move b: +c (b's minimum up to a's maximum) or -c,
+// whichever is shorter. The projections are on c itself, divided by its length once at the
+// end: where they are exact (small integer corners, a touching pair's zero) the overlap is.
+struct Overlap {
+    double depth;
+    Vec3 normal;
+};
+
+Overlap overlap_on(const Vec3& c, const Vec3 a[3], const Vec3 b[3], const Vec3& origin) {
+    const Vec3 u = scaled(c);
+    double a_lo = dot(u, a[0] - origin), a_hi = a_lo;
+    double b_lo = dot(u, b[0] - origin), b_hi = b_lo;
+    for (int k = 1; k < 3; ++k) {
+        const double pa = dot(u, a[k] - origin), pb = dot(u, b[k] - origin);
+        a_lo = pa < a_lo ? pa : a_lo;
+        a_hi = pa > a_hi ? pa : a_hi;
+        b_lo = pb < b_lo ? pb : b_lo;
+        b_hi = pb > b_hi ? pb : b_hi;
+    }
+    const double length = norm(u);
+    const double up = a_hi - b_lo, down = b_hi - a_lo;
+    return up <= down ? Overlap{up / length, u / length} : Overlap{down / length, -u / length};
+}
+
+}  // namespace
+
+TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool points) {
+    TrianglePenetration out;
+    out.normal = out.point_a = out.point_b = Vec3{kNaN, kNaN, kNaN};
+    const Vec3 ea[3] = {a[1] - a[0], a[2] - a[1], a[0] - a[2]};
+    const Vec3 eb[3] = {b[1] - b[0], b[2] - b[1], b[0] - b[2]};
+    const Vec3 na = cross(ea[0], a[2] - a[0]), nb = cross(eb[0], b[2] - b[0]);
+    const auto nonzero = [](const Vec3& v) { return v.x != 0.0 || v.y != 0.0 || v.z != 0.0; };
+    // A triangle with collinear corners (exactly) has no plane; its rounded normal is no axis.
+    const bool a_plane = nonzero(na) && !collinear(a[0], a[1], a[2]);
+    const bool b_plane = nonzero(nb) && !collinear(b[0], b[1], b[2]);
+    // Exactly coplanar: the difference is flat, the depth 0 (the orientation signs are exact,
+    // as in triangles_intersect, where rounded axes would give a few ulps instead).
+    const auto on_plane = [](const Vec3* t, const Vec3* other) {
+        return orient3d(t[0], t[1], t[2], other[0]) == 0.0 && orient3d(t[0], t[1], t[2], other[1]) == 0.0 &&
+               orient3d(t[0], t[1], t[2], other[2]) == 0.0;
+    };
+    const bool coplanar = a_plane ? on_plane(a, b) : (b_plane && on_plane(b, a));
+    if (coplanar) {
+        out.depth = 0.0;
+        out.axis = a_plane ? 0 : 1;
+        out.normal = unit(out.axis == 0 ? na : nb);
+    } else {
+        double best = std::numeric_limits<double>::infinity();
+        const auto consider = [&](const Vec3& c, int axis) {
+            if (!nonzero(c)) return;
+            const Overlap o = overlap_on(c, a, b, a[0]);
+            if (o.depth < best) {
+                best = o.depth;
+                out.normal = o.normal;
+                out.axis = axis;
+            }
+        };
+        if (a_plane) consider(na, 0);
+        if (b_plane) consider(nb, 1);
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) consider(cross(ea[i], eb[j]), 2 + 3 * i + j);
+        // No axis: both are points or segments on one line, a flat difference.
+        out.depth = out.axis < 0 ? 0.0 : (best > 0.0 ? best : 0.0);
+    }
+    if (points) triangle_penetration_points(a, b, out);
+    return out;
+}
+
+void triangle_penetration_points(const Vec3 a[3], const Vec3 b[3], TrianglePenetration& p) {
+    if (p.depth == 0.0) {
+        Vec3 shared;
+        if (!triangles_intersect(a, b, &shared)) {
+            // Not intersecting after all (a caller's misuse): the closest points.
+            triangle_separated_squared_distance(a, b, &p.point_a, &p.point_b);
+            return;
+        }
+        p.point_a = p.point_b = shared;
+        return;
+    }
+    const Vec3 shift = p.normal * p.depth;
+    const Vec3 moved[3] = {b[0] + shift, b[1] + shift, b[2] + shift};
+    Vec3 on_moved;
+    triangle_separated_squared_distance(a, moved, &p.point_a, &on_moved);
+    p.point_b = on_moved - shift;
+}
+
+}  // namespace meshcol
