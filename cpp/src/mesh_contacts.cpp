@@ -1,7 +1,7 @@
 // The contacts of two posed meshes (mesh_query.hpp: mesh_contacts): every crossing triangle
 // pair, as mesh_intersects finds the first one, each with its own penetration depth by the
-// separating axis theorem (triangle_penetration.cpp). The per-pair quantity of coal's and
-// FCL's mesh collide with contacts (a triangle pair's EPA), exact up to rounding here.
+// separating axis theorem (triangle_penetration.cpp), and beside it coal's per-pair quantity
+// (face_depth: how far b's triangle reaches behind a's face, which coal 3.0.3 reports).
 #include <algorithm>
 #include <cstdint>
 #include <tuple>

@@ -1,9 +1,10 @@
 """Contacts between triangle meshes: every crossing triangle pair and its own penetration.
 
-What a physics or planning pipeline reads from coal's or FCL's mesh ``collide`` with contacts:
-for each pair of posed meshes of a :class:`meshcol.collision.mesh_query.MeshSet`, the triangle
-pairs whose closed triangles meet, each with the minimum translation that separates the two
-triangles (its depth), a unit normal and a point; per mesh pair their number and the deepest
+The pairs a physics or planning pipeline reads from coal's or FCL's mesh ``collide`` with
+contacts: for each pair of posed meshes of a :class:`meshcol.collision.mesh_query.MeshSet`,
+the triangle pairs whose closed triangles meet, each with the minimum translation that
+separates the two triangles (its depth), a unit normal, a point, and coal's own per-pair depth
+beside it (``face_depth``: along a's face normal, not the shortest); per mesh pair their number and the deepest
 (:class:`MeshContactsBatch`), and on request every contact, flat, with per-pair offsets. This
 is not the meshes' penetration depth (:func:`meshcol.collision.mesh_query.
 mesh_penetration_depth_batch`): a triangle pair's depth is local to the two triangles.
@@ -141,7 +142,8 @@ def mesh_contacts_batch(
     the separating axis theorem's over the two face normals and the nine edge-edge cross
     products (Gottschalk, Lin and Manocha 1996; Ericson 2004, 4.4): the facets of the two
     triangles' Minkowski difference have normals among these, so the minimum overlap is the
-    minimum translation distance, the per-pair quantity coal and FCL compute by EPA. A parallel
+    minimum translation distance (coal 3.0.3 reports another per-pair quantity instead, the
+    ``face_depth`` above, never smaller up to rounding). A parallel
     edge pair or a degenerate triangle's normal is no axis; exactly coplanar triangles have
     depth 0 (orient3d). The contact point is midway between the witness points: the closest
     points of the two triangles once b is moved by ``depth * normal`` (Ericson 2004, 5.1.9).

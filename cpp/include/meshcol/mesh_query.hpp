@@ -159,11 +159,12 @@ struct MeshContactsOutput {
     Status status = Status::NOT_RUN;
 };
 
-/// The contacts of two posed meshes as coal's and FCL's mesh collide with contacts report
-/// them: every crossing triangle pair (the descent of mesh_intersects run to the end, the
+/// The contacts of two posed meshes, the pairs coal's and FCL's mesh collide with contacts
+/// list: every crossing triangle pair (the descent of mesh_intersects run to the end, the
 /// same exact triangle test), each with its own penetration depth (`triangle_penetration`:
-/// the separating axis theorem over the 11 axes of two triangles, the quantity coal's EPA
-/// computes for a triangle pair). Not a depth of the meshes: a resting contact's pairs are
+/// the separating axis theorem over the 11 axes of two triangles, the minimum translation
+/// that separates them) and coal's per-pair depth (`face_depth`, a separating translation
+/// along a's face normal, not the shortest). Not a depth of the meshes: a resting contact's pairs are
 /// shallow however deep a mesh sinks, and a pair deep inside the other solid has none (see
 /// `mesh_penetration_depth`). With `contacts`, it is cleared and gets every contact in order
 /// of (triangle_a, triangle_b), the first `max_contacts` of them.
