@@ -52,9 +52,12 @@ Vec3 unit(const Vec3& c) {
 // (non-zero) and the unit direction to move b: +c (b's minimum up to a's maximum) or -c,
 // whichever is shorter. The projections are on c itself, divided by its length once at the
 // end: where they are exact (small integer corners, a touching pair's zero) the overlap is.
+// The unit direction is left to the caller (three divisions), which needs it for the best axis
+// only: u / length, negated when `down`.
 struct Overlap {
-    double depth;
-    Vec3 normal;
+    double depth, length;
+    Vec3 u;
+    bool down;
 };
 
 inline Overlap overlap_on(const Vec3& c, const Vec3 a[3], const Vec3 b[3]) {
@@ -70,7 +73,7 @@ inline Overlap overlap_on(const Vec3& c, const Vec3 a[3], const Vec3 b[3]) {
     }
     const double length = norm(u);
     const double up = a_hi - b_lo, down = b_hi - a_lo;
-    return up <= down ? Overlap{up / length, u / length} : Overlap{down / length, -u / length};
+    return up <= down ? Overlap{up / length, length, u, false} : Overlap{down / length, length, u, true};
 }
 
 }  // namespace
@@ -98,6 +101,7 @@ TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool 
         out.normal = unit(out.axis == 0 ? na : nb);
     } else {
         double best = std::numeric_limits<double>::infinity();
+        Overlap best_axis{};
         const Vec3 ra[3] = {a[0] - a[0], a[1] - a[0], a[2] - a[0]};
         const Vec3 rb[3] = {b[0] - a[0], b[1] - a[0], b[2] - a[0]};
         const auto consider = [&](const Vec3& c, int axis) {
@@ -105,7 +109,7 @@ TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool 
             const Overlap o = overlap_on(c, ra, rb);
             if (o.depth < best) {
                 best = o.depth;
-                out.normal = o.normal;
+                best_axis = o;
                 out.axis = axis;
             }
         };
@@ -113,6 +117,7 @@ TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool 
         if (b_plane) consider(nb, 1);
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) consider(cross(ea[i], eb[j]), 2 + 3 * i + j);
+        if (out.axis >= 0) out.normal = best_axis.down ? -best_axis.u / best_axis.length : best_axis.u / best_axis.length;
         // No axis: both are points or segments on one line, a flat difference.
         out.depth = out.axis < 0 ? 0.0 : (best > 0.0 ? best : 0.0);
     }
