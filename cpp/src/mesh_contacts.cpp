@@ -3,6 +3,7 @@
 // separating axis theorem (triangle_penetration.cpp), and beside it coal's per-pair quantity
 // (face_depth: how far b's triangle reaches behind a's face, which coal 3.0.3 reports).
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <tuple>
 #include <vector>
@@ -16,14 +17,15 @@ namespace meshcol {
 using namespace mesh_detail;
 namespace {
 
-// A crossing pair found by the descent: leaf-order triangles, input faces, its depths and
-// the normal of its penetration (a's frame), kept so that a listed contact needs only its
-// witness points.
+// A crossing pair found by the descent: leaf-order triangles, input faces, its depths, the
+// normal of its penetration and the exact test's shared point (a's frame; NaN unless the
+// contacts are listed), kept so that a listed contact needs only its witness points, and a
+// touching one (depth 0) not even those.
 struct Found {
     double depth, face_depth;
     std::int64_t face_a, face_b;
     std::int32_t i, j;
-    Vec3 normal;
+    Vec3 normal, shared;
 };
 
 // Deeper first; of equal depths the lower (face_a, face_b).
@@ -33,7 +35,9 @@ bool deeper(const Found& x, const Found& y) {
 }
 
 // The contact of pair `f` in the world frame (b's triangle mapped into a's frame again, as
-// the descent mapped it, so the depth is the same bits).
+// the descent mapped it, so the depth is the same bits). A depth-0 pair's witness points are
+// the point the exact test shared, when the descent kept it: triangle_penetration_points would
+// run that test again on the same triangles for the same point.
 MeshContact contact_of(const Found& f, const MeshBvh& a, const MeshBvh& b, const Relative& rel, const Pose& pose_a) {
     const Vec3* ta = a.triangle(f.i);
     const Vec3* local_b = b.triangle(f.j);
@@ -41,7 +45,11 @@ MeshContact contact_of(const Found& f, const MeshBvh& a, const MeshBvh& b, const
     TrianglePenetration p;
     p.depth = f.depth;
     p.normal = f.normal;
-    triangle_penetration_points(ta, tb, p);
+    if (f.depth == 0.0 && !std::isnan(f.shared.x)) {
+        p.point_a = p.point_b = f.shared;
+    } else {
+        triangle_penetration_points(ta, tb, p);
+    }
     MeshContact c;
     c.depth = p.depth;
     c.normal = pose_a.rotate(p.normal);
@@ -82,14 +90,14 @@ MeshContactsOutput mesh_contacts(const MeshContactsInput& input, std::vector<Mes
     const Relative rel(input.pose_a, input.pose_b, a, b);
     const bool listed = contacts != nullptr && input.max_contacts > 0;
     std::vector<Found> found;
-    Found best{-1.0, 0.0, -1, -1, -1, -1, Vec3{}};
+    Found best{-1.0, 0.0, -1, -1, -1, -1, Vec3{}, Vec3{kNaN, kNaN, kNaN}};
     long long work = 0;
     const bool capped = for_each_crossing_pair(
-        a, b, rel, input.max_work, &work,
-        [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
+        a, b, rel, input.max_work, &work, listed,
+        [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb, const Vec3& shared) {
             ++out.count;
             const TrianglePenetration p = triangle_penetration(ta, tb, false);
-            const Found f{p.depth, face_depth(a, i, ta, tb), a.face_index(i), b.face_index(j), i, j, p.normal};
+            const Found f{p.depth, face_depth(a, i, ta, tb), a.face_index(i), b.face_index(j), i, j, p.normal, shared};
             if (best.i < 0 || deeper(f, best)) best = f;
             out.face_depth = max2(out.face_depth, f.face_depth);
             if (listed) found.push_back(f);

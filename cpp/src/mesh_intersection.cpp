@@ -294,14 +294,17 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
 
 // The descent of mesh_intersects to the end for mesh_contacts: the same box tests, plane
 // screen and exact triangle test, no marks kept.
-bool for_each_crossing_pair(const MeshBvh& a, const MeshBvh& b, const Relative& rel, long long max_work,
-                            long long* work,
-                            const std::function<bool(std::int32_t, std::int32_t, const Vec3*, const Vec3*)>& visit) {
+bool for_each_crossing_pair(
+    const MeshBvh& a, const MeshBvh& b, const Relative& rel, long long max_work, long long* work, bool witnesses,
+    const std::function<bool(std::int32_t, std::int32_t, const Vec3*, const Vec3*, const Vec3&)>& visit) {
+    static const Vec3 kNoPoint{kNaN, kNaN, kNaN};
     bool capped = false;
     for_each_touching_pair(a, b, rel, [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
         if (++*work > max_work) return capped = true;
-        if (planes_separate(a, i, ta, b, j, tb, rel) || !triangles_intersect(ta, tb, nullptr)) return false;
-        return visit(i, j, ta, tb);
+        if (planes_separate(a, i, ta, b, j, tb, rel)) return false;
+        if (!witnesses) return triangles_intersect(ta, tb, nullptr) && visit(i, j, ta, tb, kNoPoint);
+        Vec3 shared;
+        return triangles_intersect(ta, tb, &shared) && visit(i, j, ta, tb, shared);
     });
     return capped;
 }

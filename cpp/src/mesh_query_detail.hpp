@@ -261,13 +261,15 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
                              TriangleMarks& in_b, std::vector<CrossingPair>& pairs);
 
 /// The descent of mesh_intersects run to the end (mesh_intersection.cpp): calls `visit(i, j,
-/// ta, tb)` for every intersecting triangle pair (leaf order; b's corners mapped into a's
-/// frame), by the same exact test, in descent order. Counts the triangle pairs whose boxes
-/// touch in `*work` and stops once it is above `max_work`: returns whether it stopped there.
-/// `visit` returning true stops the descent too (then the return is false).
-bool for_each_crossing_pair(const MeshBvh& a, const MeshBvh& b, const Relative& rel, long long max_work,
-                            long long* work,
-                            const std::function<bool(std::int32_t, std::int32_t, const Vec3*, const Vec3*)>& visit);
+/// ta, tb, shared)` for every intersecting triangle pair (leaf order; b's corners mapped into
+/// a's frame), by the same exact test, in descent order; with `witnesses`, `shared` is the
+/// point triangles_intersect(ta, tb, &shared) gives (the same test's exit, a few operations),
+/// else NaN. Counts the triangle pairs whose boxes touch in `*work` and stops once it is above
+/// `max_work`: returns whether it stopped there. `visit` returning true stops the descent too
+/// (then the return is false).
+bool for_each_crossing_pair(
+    const MeshBvh& a, const MeshBvh& b, const Relative& rel, long long max_work, long long* work, bool witnesses,
+    const std::function<bool(std::int32_t, std::int32_t, const Vec3*, const Vec3*, const Vec3&)>& visit);
 
 /// Parameters along [p, q] (mesh's local frame) where the segment meets the mesh's surface in
 /// isolated points, appended to `out` (mesh_intersection.cpp).

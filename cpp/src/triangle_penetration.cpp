@@ -28,13 +28,18 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // no overflow or underflow in its square, and projections on it as exact as on c itself. A
 // power-of-two scale commutes with every rounding here (products, sums, the square root and
 // the quotient by the length), so within that range c itself gives the same bits; the scale,
-// two library calls a component, is then skipped (most of an axis's cost).
-Vec3 scaled(const Vec3& c) {
+// two library calls a component, is then skipped (most of an axis's cost), and the test is
+// inlined into the axes' loop with the scale out of line.
+Vec3 rescaled(const Vec3& c, double m) {
+    const int e = std::ilogb(m);
+    return {std::ldexp(c.x, -e), std::ldexp(c.y, -e), std::ldexp(c.z, -e)};
+}
+
+inline Vec3 scaled(const Vec3& c) {
     const double ax = std::fabs(c.x), ay = std::fabs(c.y), az = std::fabs(c.z);
     const double m = ax > ay ? (ax > az ? ax : az) : (ay > az ? ay : az);
     if (m >= 0x1p-500 && m <= 0x1p500) return c;
-    const int e = std::ilogb(m);
-    return {std::ldexp(c.x, -e), std::ldexp(c.y, -e), std::ldexp(c.z, -e)};
+    return rescaled(c, m);
 }
 
 Vec3 unit(const Vec3& c) {
@@ -42,21 +47,25 @@ Vec3 unit(const Vec3& c) {
     return s / norm(s);
 }
 
-// The overlap of the projections of a and b (corners relative to `origin`) on the axis c
+// The overlap of the projections of a and b (corners already taken relative to a[0], once for
+// all the axes: the same differences, so the same bits, as taking them on each axis) on the axis c
 // (non-zero) and the unit direction to move b: +c (b's minimum up to a's maximum) or -c,
 // whichever is shorter. The projections are on c itself, divided by its length once at the
 // end: where they are exact (small integer corners, a touching pair's zero) the overlap is.
+// The unit direction is left to the caller (three divisions), which needs it for the best axis
+// only: u / length, negated when `down`.
 struct Overlap {
-    double depth;
-    Vec3 normal;
+    double depth, length;
+    Vec3 u;
+    bool down;
 };
 
-Overlap overlap_on(const Vec3& c, const Vec3 a[3], const Vec3 b[3], const Vec3& origin) {
+inline Overlap overlap_on(const Vec3& c, const Vec3 a[3], const Vec3 b[3]) {
     const Vec3 u = scaled(c);
-    double a_lo = dot(u, a[0] - origin), a_hi = a_lo;
-    double b_lo = dot(u, b[0] - origin), b_hi = b_lo;
+    double a_lo = dot(u, a[0]), a_hi = a_lo;
+    double b_lo = dot(u, b[0]), b_hi = b_lo;
     for (int k = 1; k < 3; ++k) {
-        const double pa = dot(u, a[k] - origin), pb = dot(u, b[k] - origin);
+        const double pa = dot(u, a[k]), pb = dot(u, b[k]);
         a_lo = pa < a_lo ? pa : a_lo;
         a_hi = pa > a_hi ? pa : a_hi;
         b_lo = pb < b_lo ? pb : b_lo;
@@ -64,7 +73,7 @@ Overlap overlap_on(const Vec3& c, const Vec3 a[3], const Vec3 b[3], const Vec3& 
     }
     const double length = norm(u);
     const double up = a_hi - b_lo, down = b_hi - a_lo;
-    return up <= down ? Overlap{up / length, u / length} : Overlap{down / length, -u / length};
+    return up <= down ? Overlap{up / length, length, u, false} : Overlap{down / length, length, u, true};
 }
 
 }  // namespace
@@ -92,12 +101,15 @@ TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool 
         out.normal = unit(out.axis == 0 ? na : nb);
     } else {
         double best = std::numeric_limits<double>::infinity();
+        Overlap best_axis{};
+        const Vec3 ra[3] = {a[0] - a[0], a[1] - a[0], a[2] - a[0]};
+        const Vec3 rb[3] = {b[0] - a[0], b[1] - a[0], b[2] - a[0]};
         const auto consider = [&](const Vec3& c, int axis) {
             if (!nonzero(c)) return;
-            const Overlap o = overlap_on(c, a, b, a[0]);
+            const Overlap o = overlap_on(c, ra, rb);
             if (o.depth < best) {
                 best = o.depth;
-                out.normal = o.normal;
+                best_axis = o;
                 out.axis = axis;
             }
         };
@@ -105,6 +117,7 @@ TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool 
         if (b_plane) consider(nb, 1);
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) consider(cross(ea[i], eb[j]), 2 + 3 * i + j);
+        if (out.axis >= 0) out.normal = best_axis.down ? -best_axis.u / best_axis.length : best_axis.u / best_axis.length;
         // No axis: both are points or segments on one line, a flat difference.
         out.depth = out.axis < 0 ? 0.0 : (best > 0.0 ? best : 0.0);
     }
