@@ -170,7 +170,7 @@ fuzz: install-test
 	done
 
 bench: install-test
-	-$(BIN)/pip install -q --no-build-isolation -e ".[bench]"  # coal; benchmarks skip it if this fails
+	$(BIN)/pip install -q --no-build-isolation -e ".[bench]"
 	$(BIN)/python benchmarks/bench_narrowphase.py
 	$(BIN)/python benchmarks/bench_broadphase.py
 	$(BIN)/python benchmarks/bench_mesh_query.py

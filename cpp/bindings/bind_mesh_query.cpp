@@ -180,8 +180,10 @@ struct PosedPairs : PosedMeshes {
     const std::int64_t* pairs = nullptr;
     long long count = 0;
 
-    // The meshes and poses of pair k, and whether both poses are rigid.
-    bool input(const MeshBvhSet& set, long long k, meshcol::MeshDistanceInput& q) const {
+    // The meshes and poses of pair k into a query's input (any with a, b, pose_a, pose_b),
+    // and whether both poses are rigid.
+    template <class Input>
+    bool input(const MeshBvhSet& set, long long k, Input& q) const {
         const auto i = static_cast<size_t>(pairs[2 * k]), j = static_cast<size_t>(pairs[2 * k + 1]);
         q.a = &set.meshes[i];
         q.b = &set.meshes[j];
@@ -316,16 +318,11 @@ nb::dict contacts_batch(const MeshBvhSet& set, std::optional<Poses> poses, Pairs
     auto columns = columns_of<MeshContactsOutput>(n, kContactsColumns);
     std::vector<std::vector<MeshContact>> listed(max_contacts > 0 ? n : 0);
     run_items(in.count, threads, meshcol::defaults::mesh_min_pairs_per_thread, columns, [&](long long k) {
-        meshcol::MeshDistanceInput q;
-        const bool rigid = in.input(set, k, q);
         meshcol::MeshContactsInput c;
-        c.a = q.a;
-        c.b = q.b;
-        c.pose_a = q.pose_a;
-        c.pose_b = q.pose_b;
         c.max_contacts = max_contacts;
         c.max_work = max_work;
-        if (rigid) return meshcol::mesh_contacts(c, max_contacts > 0 ? &listed[static_cast<size_t>(k)] : nullptr);
+        if (in.input(set, k, c))
+            return meshcol::mesh_contacts(c, max_contacts > 0 ? &listed[static_cast<size_t>(k)] : nullptr);
         MeshContactsOutput r;
         r.depth = r.face_depth = kNaN;
         r.normal = r.point = kNaN3;

@@ -24,22 +24,12 @@ using predicates::orient3d;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// c scaled by a power of two (exactly) when its largest component is outside [2^-500, 2^500]:
-// no overflow or underflow in its square, and projections on it as exact as on c itself. A
-// power-of-two scale commutes with every rounding here (products, sums, the square root and
-// the quotient by the length), so within that range c itself gives the same bits; the scale,
-// two library calls a component, is then skipped (most of an axis's cost), and the test is
-// inlined into the axes' loop with the scale out of line.
-Vec3 rescaled(const Vec3& c, double m) {
-    const int e = std::ilogb(m);
-    return {std::ldexp(c.x, -e), std::ldexp(c.y, -e), std::ldexp(c.z, -e)};
-}
-
+// c made safe to square (vec.hpp: safe_scaled), its largest component found by plain compares
+// (std::fmax's NaN handling costs more, and an axis here is never NaN for a valid mesh). In
+// range, c itself: projections on it as exact as on c, and most of an axis's cost saved.
 inline Vec3 scaled(const Vec3& c) {
     const double ax = std::fabs(c.x), ay = std::fabs(c.y), az = std::fabs(c.z);
-    const double m = ax > ay ? (ax > az ? ax : az) : (ay > az ? ay : az);
-    if (m >= 0x1p-500 && m <= 0x1p500) return c;
-    return rescaled(c, m);
+    return safe_scaled(c, ax > ay ? (ax > az ? ax : az) : (ay > az ? ay : az));
 }
 
 Vec3 unit(const Vec3& c) {

@@ -10,7 +10,7 @@ from fractions import Fraction
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from meshcol._native import core
@@ -159,9 +159,13 @@ def test_depths_equal_the_exact_separating_axis_oracle_on_integer_triangles():
 
 @st.composite
 def _crossing_triangles(draw):
+    """Two triangles, most of them crossing: b is moved (when drawn so) so that its centroid
+    lands on a's, a point of both up to rounding; the others stay where they were drawn."""
     coords = st.floats(-1, 1, allow_nan=False, allow_infinity=False, width=64)
     a = np.array(draw(st.lists(coords, min_size=9, max_size=9))).reshape(3, 3)
     b = np.array(draw(st.lists(coords, min_size=9, max_size=9))).reshape(3, 3)
+    if draw(st.booleans()):
+        b = b - b.mean(axis=0) + a.mean(axis=0)
     return a, b
 
 
@@ -170,8 +174,7 @@ def _crossing_triangles(draw):
 def test_moving_b_by_the_depth_along_the_normal_separates_the_pair(pair):
     a, b = pair
     r = _triangle_contacts([(a, b)])
-    if r.count[0] == 0:
-        return
+    assume(r.count[0] == 1)  # a pair that does not cross has nothing to check
     depth, normal = r.depth[0], r.normal[0]
     assert depth >= 0.0
     assert depth <= r.face_depth[0] + 1e-12  # the minimum translation: no more than coal's

@@ -49,15 +49,29 @@ inline double max_abs(const Vec3& v) {
     return std::fmax(std::fabs(v.x), std::fmax(std::fabs(v.y), std::fabs(v.z)));
 }
 
-/// |v| without overflow or underflow in the squares: exact scaling by a power of two when the
-/// largest component is outside [2^-500, 2^500] (plain `norm` otherwise, bit for bit).
+/// `v`, whose largest absolute component is `m` (> 0, finite), made safe to square: itself
+/// when m lies in [2^-500, 2^500], else divided by the power of two 2^e (exactly) that brings
+/// m into [1, 2), with e written to `*exponent` (0 when unscaled). Products, sums, square roots
+/// and quotients of the result round as those of v would (a power-of-two scale commutes with
+/// rounding away from the denormals), so in range every caller gets v's own bits.
+inline Vec3 safe_scaled(const Vec3& v, double m, int* exponent = nullptr) {
+    if (m >= 0x1p-500 && m <= 0x1p500) {
+        if (exponent != nullptr) *exponent = 0;
+        return v;
+    }
+    const int e = std::ilogb(m);
+    if (exponent != nullptr) *exponent = e;
+    return {std::ldexp(v.x, -e), std::ldexp(v.y, -e), std::ldexp(v.z, -e)};
+}
+
+/// |v| without overflow or underflow in the squares (`safe_scaled`: plain `norm` when the
+/// largest component is in [2^-500, 2^500], bit for bit).
 inline double safe_norm(const Vec3& v) {
     const double m = max_abs(v);
     if (!(m > 0.0) || !std::isfinite(m)) return m;
-    if (m >= 0x1p-500 && m <= 0x1p500) return norm(v);
-    const int e = std::ilogb(m);
-    const Vec3 u{std::ldexp(v.x, -e), std::ldexp(v.y, -e), std::ldexp(v.z, -e)};
-    return std::ldexp(norm(u), e);
+    int e = 0;
+    const Vec3 u = safe_scaled(v, m, &e);
+    return e == 0 ? norm(u) : std::ldexp(norm(u), e);
 }
 
 /// Writes `v` as row `i` of a row-major (n, 3) array; does nothing when `out` is null (an
