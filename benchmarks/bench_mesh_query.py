@@ -442,10 +442,16 @@ def contact_case(name, meshes, pairs, oa, ob, cp) -> None:
             f"({'agrees' if same else 'DISAGREES'})"
         )
     times = best_of_alternated(*fns, repeat=5)
+    # fcl lists a contact for each point where two triangles cross (up to two a pair), so
+    # its contacts are counted with the triangle pairs they come from
+    listed = fcl_contacts()
+    fcl_pairs = {(c.b1, c.b2) for c in listed}
+    same_pairs = fcl_pairs == set(zip(r.contact_triangle_a.tolist(), r.contact_triangle_b.tolist()))
     print(
         f"contacts {name}: meshcol {int(r.count[0])} crossing pairs, deepest "
         f"{r.face_depth[0]:.9g} (minimum translation {r.depth[0]:.6g}), fcl "
-        f"{len(fcl_contacts())} pairs{check}"
+        f"{len(listed)} contacts in {len(fcl_pairs)} pairs "
+        f"({'the same pairs' if same_pairs else 'OTHER PAIRS'}){check}"
     )
     row(
         f"depth {name}: contact depth (like for like)",
