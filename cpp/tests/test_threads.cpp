@@ -288,8 +288,9 @@ TEST_CASE("threads: a time-of-impact batch equals one thread") {
 
 TEST_CASE("threads: mesh hierarchies built and queried on threads, as the batches do") {
     // The loops of the mesh batches (cpp/bindings/bind_mesh_query.cpp: the hierarchies built
-    // on threads, then distance, depth, intersection, closest points and rays per pair or
-    // item on threads over the shared hierarchies), against the same queries on one thread.
+    // on threads, then distance, depth, intersection, contacts, closest points and rays per
+    // pair or item on threads over the shared hierarchies), against the same queries on one
+    // thread.
     const std::vector<fixtures::TriangleMesh> meshes = {
         uv_sphere(1.0, 8, 12), fixtures::box_mesh({-1, -1, -1}, {1, 1, 1}), uv_sphere(0.4, 6, 9),
         fixtures::box_mesh({-2, -0.1, -1}, {2, 0.1, 1}), uv_sphere(1.5, 10, 16)};
@@ -323,12 +324,15 @@ TEST_CASE("threads: mesh hierarchies built and queried on threads, as the batche
         std::vector<char> intersects;
         std::vector<PointDistanceOutput> closest;
         std::vector<MeshRayOutput> ray;
+        std::vector<MeshContactsOutput> contacts;
+        std::vector<std::vector<MeshContact>> listed;
     };
     const auto run = [&](int threads) {
         const std::vector<MeshBvh> built = build(threads);
         Answers r{std::vector<MeshDistanceOutput>(kPairs), std::vector<MeshDepthOutput>(kPairs),
                   std::vector<char>(kPairs), std::vector<PointDistanceOutput>(kPairs),
-                  std::vector<MeshRayOutput>(kPairs)};
+                  std::vector<MeshRayOutput>(kPairs), std::vector<MeshContactsOutput>(kPairs),
+                  std::vector<std::vector<MeshContact>>(kPairs)};
         parallel_for(kPairs, threads, [&](long long begin, long long end) {
             for (long long k = begin; k < end; ++k) {
                 MeshDistanceInput q;
@@ -346,6 +350,13 @@ TEST_CASE("threads: mesh hierarchies built and queried on threads, as the batche
                 ray.origin = pose_a[k].translation;
                 ray.direction = pose_b[k].translation - pose_a[k].translation + Vec3{0.01, 0.02, 0.03};
                 r.ray[k] = mesh_ray_cast(ray);
+                MeshContactsInput contacts;
+                contacts.a = q.a;
+                contacts.b = q.b;
+                contacts.pose_a = q.pose_a;
+                contacts.pose_b = q.pose_b;
+                contacts.max_contacts = 1000;
+                r.contacts[k] = mesh_contacts(contacts, &r.listed[k]);
             }
         });
         return r;
@@ -355,6 +366,9 @@ TEST_CASE("threads: mesh hierarchies built and queried on threads, as the batche
     for (const char c : one.intersects) intersecting += c;
     CHECK(intersecting > 0);
     CHECK(intersecting < kPairs);
+    size_t listed = 0;
+    for (const auto& list : one.listed) listed += list.size();
+    CHECK(listed > static_cast<size_t>(intersecting));  // pairs cross in more than one place
     for (int threads : {2, 3}) {
         const Answers many = run(threads);
         for (long long k = 0; k < kPairs; ++k) {
@@ -376,6 +390,18 @@ TEST_CASE("threads: mesh hierarchies built and queried on threads, as the batche
             CHECK(r1.hit == r2.hit && same_bytes(&r1.distance, &r2.distance, 1) &&
                   same_bytes(r1.point, r2.point) && same_bytes(r1.normal, r2.normal) &&
                   r1.triangle == r2.triangle && r1.status == r2.status);
+            const MeshContactsOutput &m1 = one.contacts[k], &m2 = many.contacts[k];
+            CHECK(m1.count == m2.count && same_bytes(&m1.depth, &m2.depth, 1) &&
+                  same_bytes(m1.normal, m2.normal) && same_bytes(m1.point, m2.point) &&
+                  same_bytes(&m1.face_depth, &m2.face_depth, 1) && m1.triangle_a == m2.triangle_a &&
+                  m1.triangle_b == m2.triangle_b && m1.status == m2.status);
+            REQUIRE(one.listed[k].size() == many.listed[k].size());
+            for (size_t i = 0; i < one.listed[k].size(); ++i) {
+                const MeshContact &l1 = one.listed[k][i], &l2 = many.listed[k][i];
+                CHECK(same_bytes(&l1.depth, &l2.depth, 1) && same_bytes(l1.normal, l2.normal) &&
+                      same_bytes(l1.point, l2.point) && same_bytes(&l1.face_depth, &l2.face_depth, 1) &&
+                      l1.triangle_a == l2.triangle_a && l1.triangle_b == l2.triangle_b);
+            }
         }
     }
 }
