@@ -44,7 +44,6 @@ struct Polytope {
     // The plane's signed squared distance from the origin, d |d| (+inf: sliver or dead face):
     // ordered as the distance, and found with one division and no square root per face.
     double distance[kMaxFaces];
-    HorizonEdge horizon[kMaxFaces];
     // One slot more than faces: `release` copies pairs, and may read and write one past
     // the last dead face.
     int free_faces[kMaxFaces + 1];
@@ -56,7 +55,6 @@ struct Polytope {
     int vertex_count;
     int face_count;  // slots in use, alive or dead
     int free_count;  // dead slots ready for reuse
-    int horizon_count;
     int dead_count;
 
     static constexpr std::uint64_t kNoKey = ~std::uint64_t{0};
@@ -72,7 +70,7 @@ struct Polytope {
     }
 
     void reset() {
-        vertex_count = face_count = free_count = horizon_count = dead_count = 0;
+        vertex_count = face_count = free_count = dead_count = 0;
         key_bits = 0;
     }
 
@@ -132,11 +130,15 @@ struct Polytope {
 
     // Walk over the faces that see w, starting from the edges of face `first` (already
     // killed), depth first (van den Bergen 2003, sec. 4.3.9): the visible region stays
-    // connected, so its border is one loop, collected in order. An explicit stack instead
-    // of recursion; edges are pushed in reverse so they are visited in the recursive order.
-    // Killed faces are freed only after the new faces are made (`release`), so none is
-    // reused while the walk still reads it, and the closest face keeps its data.
-    void silhouette(int first, const Vec3& w) {
+    // connected, so its border is one loop, handed to `border` edge by edge in order (each
+    // edge's living face and the edge's index in it), as the walk finds it. An explicit
+    // stack instead of recursion; edges are pushed in reverse so they are visited in the
+    // recursive order. Killed faces are freed only after the new faces are made
+    // (`release`), so none is reused while the walk still reads it, and the closest face
+    // keeps its data. `border` may make faces and link them to living faces: the walk reads
+    // only the adjacency of faces it kills, and a face beyond the border is never killed.
+    template <class Border>
+    void silhouette(int first, const Vec3& w, Border&& border) {
         int top = 0;
         const EpaFace& start = faces[first];
         for (int e = 2; e >= 0; --e) stack[top++] = {start.adj[e], start.adj_edge[e]};
@@ -147,7 +149,7 @@ struct Polytope {
             // w sees the face when it lies beyond the face's plane (a sliver's zero normal
             // and offset: never); the stored offset saves loading a vertex.
             if (!(dot(face.normal, w) > face.offset)) {
-                horizon[horizon_count++] = h;
+                border(h);
                 continue;
             }
             kill(h.face);
@@ -199,26 +201,25 @@ inline bool expand(Polytope& poly, int visible, const SimplexVertex& w, double t
     const int nw = poly.vertex_count;
     poly.add_vertex(w);
     // Remove the faces the new point sees (the closest one does, by construction) and
-    // close the hole with a fan of faces over the silhouette.
-    poly.horizon_count = 0;
+    // close the hole with a fan of faces over the silhouette, made as the walk finds its
+    // edges (no list of them in between): each new face is linked to the living face beyond
+    // its edge and to the previous new face, once the loop is seen to close there (the
+    // previous face's edge ends where this one's starts); the last closes on the first.
     poly.dead_count = 0;
     poly.kill(visible);
-    poly.silhouette(visible, w.w);
-    // One pass over the silhouette: each new face is linked to the living face beyond its
-    // edge and to the previous new face, once the loop is seen to close there (the
-    // previous face's edge ends where this one's starts); the last closes on the first.
-    const int count = poly.horizon_count;
-    bool ok = count >= 3;
+    int count = 0;
+    bool ok = true;
     int first = -1, previous = -1, previous_end = -1, first_start = -1;
-    for (int k = 0; k < count && ok; ++k) {
-        const HorizonEdge& h = poly.horizon[k];
+    poly.silhouette(visible, w.w, [&](const HorizonEdge& h) {
+        ++count;
+        if (!ok) return;
         const EpaFace& beyond = poly.faces[h.face];
         // The edge runs b -> a in the living face, so a -> b in the new one.
         const int a = beyond.v[kNext[h.edge]], b = beyond.v[h.edge];
         const int f = poly.add_face(a, b, nw);
         if (f < 0) {
             ok = false;
-            break;
+            return;
         }
         poly.link(f, 0, h.face, h.edge);
         if (poly.distance[f] < -tol * tol) ok = false;
@@ -232,8 +233,8 @@ inline bool expand(Polytope& poly, int visible, const SimplexVertex& w, double t
         }
         previous = f;
         previous_end = b;
-    }
-    if (ok && previous_end == first_start) poly.link(previous, 1, first, 2);
+    });
+    if (ok && count >= 3 && previous_end == first_start) poly.link(previous, 1, first, 2);
     else ok = false;
     if (!ok) return false;
     poly.release();
