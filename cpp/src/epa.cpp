@@ -174,10 +174,9 @@ struct Polytope {
 
 // Barycentric weights of the projection p of the origin on face f (Ericson 2004, sec. 3.4);
 // `normal` is the face's unit normal, `distance` its plane's distance from the origin.
-void face_weights(const Polytope& poly, const EpaFace& f, const Vec3& normal, double distance,
-                  double w[3]) {
+void face_weights(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& normal,
+                  double distance, double w[3]) {
     const Vec3 p = normal * distance;
-    const Vec3 a = poly.vertices[f.v[0]].w, b = poly.vertices[f.v[1]].w, c = poly.vertices[f.v[2]].w;
     const double u = dot(cross(b - p, c - p), normal);
     const double v = dot(cross(c - p, a - p), normal);
     const double x = dot(cross(a - p, b - p), normal);
@@ -189,6 +188,12 @@ void face_weights(const Polytope& poly, const EpaFace& f, const Vec3& normal, do
     } else {
         w[0] = w[1] = w[2] = 1.0 / 3.0;
     }
+}
+
+void face_weights(const Polytope& poly, const EpaFace& f, const Vec3& normal, double distance,
+                  double w[3]) {
+    face_weights(poly.vertices[f.v[0]].w, poly.vertices[f.v[1]].w, poly.vertices[f.v[2]].w,
+                 normal, distance, w);
 }
 
 // Adds support point `w` to the polytope: removes every face it sees, starting from
@@ -304,6 +309,86 @@ bool blow_up(MinkowskiDifference& md, Simplex& s, double tol) {
         }
         s.size = 4;
     }
+    return true;
+}
+
+// A touching pair's normal without EPA: the outward normal of the simplex's face nearest the
+// origin (a tetrahedron's face opposite its least weight; a triangle's plane; a segment's
+// perpendicular towards b), checked by one support along it. True, and `res` set, when the
+// shapes overlap along it by at most `tol`: a contact normal within the contact distance.
+// Else false, with `md`'s climb state as it was (EPA then runs as if this had not).
+bool touching_normal(MinkowskiDifference& md, const Simplex& s, double tol, EpaResult& res) {
+    const SimplexVertex* v = s.vertices;
+    const Vec3 line = md.translation_b;
+    Vec3 n;
+    int face[3] = {0, 1, 2};
+    if (s.size == 4) {
+        int low = 0;
+        for (int i = 1; i < 4; ++i)
+            if (s.weights[i] < s.weights[low]) low = i;
+        for (int k = 0; k < 3; ++k) face[k] = (low + 1 + k) & 3;
+        n = cross(v[face[1]].w - v[face[0]].w, v[face[2]].w - v[face[0]].w);
+        if (dot(n, v[low].w - v[face[0]].w) > 0.0) {
+            n = -n;
+            std::swap(face[1], face[2]);  // counter-clockwise about the outward normal
+        }
+    } else if (s.size == 3) {
+        n = cross(v[1].w - v[0].w, v[2].w - v[0].w);
+        if (dot(n, line) < 0.0) {
+            n = -n;
+            std::swap(face[1], face[2]);
+        }
+    } else if (s.size == 2) {
+        const Vec3 d = v[1].w - v[0].w;
+        n = line - d * (dot(line, d) / std::fmax(squared_norm(d), defaults::epa_min_squared_length));
+    } else {
+        n = line;
+    }
+    const double nn = squared_norm(n);
+    if (!(nn > 0.0) || !std::isfinite(nn)) return false;
+    // Only a plane through the origin (within the contact distance) can be a contact plane:
+    // a deep pair's tetrahedron, which holds the origin well inside, pays no support here.
+    const double offset = dot(n, v[face[0]].w);
+    if (!(offset * offset <= tol * tol * nn)) return false;
+    // The climbs start from the simplex's vertex highest along n (on a face of a - b, the
+    // answer or beside it).
+    int top = 0;
+    for (int i = 1; i < s.size; ++i)
+        if (dot(n, v[i].w) > dot(n, v[top].w)) top = i;
+    const int hint_a = md.hint_a, hint_b = md.hint_b;
+    const Vec3 last_direction = md.last_direction;
+    const SimplexVertex w = md.support_from(n, v[top].index_a, v[top].index_b);
+    const double length = std::sqrt(nn);
+    const double h = dot(n, w.w) / length;
+    if (!(h <= tol)) {
+        md.hint_a = hint_a;
+        md.hint_b = hint_b;
+        md.last_direction = last_direction;
+        return false;
+    }
+    const Vec3 normal = n * (1.0 / length);
+    Vec3 pa{}, pb{};
+    if (s.size >= 3) {
+        // As EPA's: the weights of the origin's projection on the face (the simplex's own,
+        // from a nearly flat tetrahedron, may be off by far more than rounding).
+        double wts[3];
+        face_weights(v[face[0]].w, v[face[1]].w, v[face[2]].w, normal, offset / length, wts);
+        for (int i = 0; i < 3; ++i) {
+            pa += v[face[i]].a * wts[i];
+            pb += v[face[i]].b * wts[i];
+        }
+    } else {
+        for (int i = 0; i < s.size; ++i) {
+            pa += v[i].a * s.weights[i];
+            pb += v[i].b * s.weights[i];
+        }
+    }
+    res.status = Status::CONVERGED;
+    res.depth = std::fmax(0.0, h);
+    res.normal = normal;
+    res.point_a = pa;
+    res.point_b = pb;
+    res.iterations = 1;
     return true;
 }
 
@@ -463,6 +548,7 @@ EpaResult expand_to_depth(MinkowskiDifference& md, Polytope& poly, const EpaOpti
 EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const EpaOptions& opt) {
     EpaResult res;
     const double tol = opt.contact_tolerance * md.scale;
+    if (touching_normal(md, start, tol, res)) return res;
     Simplex s = start;
     if (s.size < 4 && !blow_up(md, s, tol)) {
         // The Minkowski difference is flat: the shapes touch, depth zero.

@@ -397,6 +397,15 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
     if (!(squared_norm(dir) > 0.0)) dir = Vec3{1.0, 0.0, 0.0};
     slots[0] = first != nullptr ? *first : md.support(dir);
     points[0] = slots[0].w;
+    // A support within the contact distance of the origin along its direction: |h| <= touch
+    // for h = d.w / |d| (the overlap along d), by squares. Kept for EPA's caller (the last).
+    {
+        const double dw = dot(dir, points[0]);
+        if (dw * dw <= touch2 * squared_norm(dir)) {
+            res.contact_direction = dir;
+            res.contact_support = dw;
+        }
+    }
     features[0] = feature_key(slots[0]);
     Vec3 v = points[0];
     double vv = squared_norm(v);
@@ -428,6 +437,10 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
         if (key != kNoFeature)
             for (int i = 0; i < size; ++i) repeated |= features[i] == key;
         const double vw = dot(v, w.w);
+        if (vw * vw <= touch2 * vv) {
+            res.contact_direction = -v;
+            res.contact_support = -vw;
+        }
         if (opt.stop_when_separated && vw > separation_gap * std::sqrt(vv)) {
             // A separating plane with a positive gap: no contact (lower bound > tolerance).
             res.status = Status::CONVERGED;
