@@ -312,84 +312,126 @@ bool blow_up(MinkowskiDifference& md, Simplex& s, double tol) {
     return true;
 }
 
-// A touching pair's normal without EPA: the outward normal of the simplex's face nearest the
-// origin (a tetrahedron's face opposite its least weight; a triangle's plane; a segment's
-// perpendicular towards b), checked by one support along it. True, and `res` set, when the
-// shapes overlap along it by at most `tol`: a contact normal within the contact distance.
-// Else false, with `md`'s climb state as it was (EPA then runs as if this had not).
+// A touching pair's normal without EPA, from candidate faces through the origin, each checked
+// by one support along its outward normal: true, and `res` set, when the shapes overlap along
+// one by at most `tol` (a contact normal within the contact distance). The first candidate is
+// the simplex's face nearest the origin (a tetrahedron's face opposite its least weight, a
+// triangle's plane oriented towards b); when it fails and the origin lies on an edge of the
+// tetrahedron (a vertex-edge contact, whose normals form a wedge around that edge), the faces
+// of the wedge around the edge follow, each failed support replacing its side, as EPA would
+// expand around that edge (up to `defaults::epa_touching_supports` supports in all). A
+// segment's or point's candidate is the centre line, perpendicular to the segment. False
+// when none holds, with `md`'s climb state as it was (EPA then runs as if this had not).
 bool touching_normal(MinkowskiDifference& md, const Simplex& s, double tol, EpaResult& res) {
     const SimplexVertex* v = s.vertices;
     const Vec3 line = md.translation_b;
-    Vec3 n;
-    int face[3] = {0, 1, 2};
-    if (s.size == 4) {
-        int low = 0;
-        for (int i = 1; i < 4; ++i)
-            if (s.weights[i] < s.weights[low]) low = i;
-        for (int k = 0; k < 3; ++k) face[k] = (low + 1 + k) & 3;
-        n = cross(v[face[1]].w - v[face[0]].w, v[face[2]].w - v[face[0]].w);
-        if (dot(n, v[low].w - v[face[0]].w) > 0.0) {
-            n = -n;
-            std::swap(face[1], face[2]);  // counter-clockwise about the outward normal
-        }
-    } else if (s.size == 3) {
-        n = cross(v[1].w - v[0].w, v[2].w - v[0].w);
-        if (dot(n, line) < 0.0) {
-            n = -n;
-            std::swap(face[1], face[2]);
-        }
-    } else if (s.size == 2) {
-        const Vec3 d = v[1].w - v[0].w;
-        n = line - d * (dot(line, d) / std::fmax(squared_norm(d), defaults::epa_min_squared_length));
-    } else {
-        n = line;
-    }
-    const double nn = squared_norm(n);
-    if (!(nn > 0.0) || !std::isfinite(nn)) return false;
-    // Only a plane through the origin (within the contact distance) can be a contact plane:
-    // a deep pair's tetrahedron, which holds the origin well inside, pays no support here.
-    const double offset = dot(n, v[face[0]].w);
-    if (!(offset * offset <= tol * tol * nn)) return false;
-    // The climbs start from the simplex's vertex highest along n (on a face of a - b, the
-    // answer or beside it).
-    int top = 0;
-    for (int i = 1; i < s.size; ++i)
-        if (dot(n, v[i].w) > dot(n, v[top].w)) top = i;
     const int hint_a = md.hint_a, hint_b = md.hint_b;
     const Vec3 last_direction = md.last_direction;
-    const SimplexVertex w = md.support_from(n, v[top].index_a, v[top].index_b);
-    const double length = std::sqrt(nn);
-    const double h = dot(n, w.w) / length;
-    if (!(h <= tol)) {
-        md.hint_a = hint_a;
-        md.hint_b = hint_b;
-        md.last_direction = last_direction;
-        return false;
-    }
-    const Vec3 normal = n * (1.0 / length);
-    Vec3 pa{}, pb{};
-    if (s.size >= 3) {
-        // As EPA's: the weights of the origin's projection on the face (the simplex's own,
-        // from a nearly flat tetrahedron, may be off by far more than rounding).
-        double wts[3];
-        face_weights(v[face[0]].w, v[face[1]].w, v[face[2]].w, normal, offset / length, wts);
-        for (int i = 0; i < 3; ++i) {
-            pa += v[face[i]].a * wts[i];
-            pb += v[face[i]].b * wts[i];
+    if (s.size <= 2) {
+        Vec3 n = line;
+        if (s.size == 2) {
+            const Vec3 d = v[1].w - v[0].w;
+            n = line - d * (dot(line, d) / std::fmax(squared_norm(d), defaults::epa_min_squared_length));
         }
-    } else {
+        const double nn = squared_norm(n);
+        if (!(nn > 0.0) || !std::isfinite(nn)) return false;
+        const double length = std::sqrt(nn);
+        const double offset = dot(n, v[0].w);
+        if (!(std::fabs(offset) <= tol * length)) return false;
+        const SimplexVertex w = md.support_from(n, v[0].index_a, v[0].index_b);
+        const double h = dot(n, w.w) / length;
+        if (!(h <= tol)) {
+            md.hint_a = hint_a;
+            md.hint_b = hint_b;
+            md.last_direction = last_direction;
+            return false;
+        }
+        Vec3 pa{}, pb{};
         for (int i = 0; i < s.size; ++i) {
             pa += v[i].a * s.weights[i];
             pb += v[i].b * s.weights[i];
         }
+        res.status = Status::CONVERGED;
+        res.depth = std::fmax(0.0, h);
+        res.normal = n * (1.0 / length);
+        res.point_a = pa;
+        res.point_b = pb;
+        res.iterations = 1;
+        return true;
     }
-    res.status = Status::CONVERGED;
-    res.depth = std::fmax(0.0, h);
-    res.normal = normal;
-    res.point_a = pa;
-    res.point_b = pb;
-    res.iterations = 1;
-    return true;
+    // The candidate face (e0, e1, side) with `away` behind it: e0 and e1 are the edge the
+    // wedge turns about (the origin on it, or near).
+    SimplexVertex e0, e1, side, away;
+    bool beside = false;  // `away` is a point beside the triangle, not a vertex
+    if (s.size == 4) {
+        int low = 0;
+        for (int i = 1; i < 4; ++i)
+            if (s.weights[i] < s.weights[low]) low = i;
+        int low2 = low == 0 ? 1 : 0;
+        for (int i = 0; i < 4; ++i)
+            if (i != low && s.weights[i] < s.weights[low2]) low2 = i;
+        int k = 0, edge[2] = {0, 0};
+        for (int i = 0; i < 4; ++i)
+            if (i != low && i != low2) edge[k++] = i;
+        e0 = v[edge[0]];
+        e1 = v[edge[1]];
+        side = v[low2];
+        away = v[low];
+    } else {
+        e0 = v[0];
+        e1 = v[1];
+        side = v[2];
+        // No vertex behind a triangle: a point beside it, on the side away from b.
+        away = v[0];
+        const Vec3 n = cross(v[1].w - v[0].w, v[2].w - v[0].w);
+        away.w = v[0].w - (dot(n, line) < 0.0 ? -n : n);
+        beside = true;
+    }
+    for (int tries = 0; tries < defaults::epa_touching_supports; ++tries) {
+        Vec3 n = cross(e1.w - e0.w, side.w - e0.w);
+        const bool flip = dot(n, away.w - e0.w) > 0.0;
+        if (flip) n = -n;
+        const double nn = squared_norm(n);
+        if (!(nn > 0.0) || !std::isfinite(nn)) break;
+        const double length = std::sqrt(nn);
+        // Only a plane through the origin (within the contact distance) can be a contact
+        // plane: a deep pair's tetrahedron, which holds the origin well inside, pays no
+        // support here.
+        const double offset = dot(n, e0.w);
+        if (!(std::fabs(offset) <= tol * length)) break;
+        // The climbs start from the face's vertex highest along n.
+        const SimplexVertex* top = &e0;
+        if (dot(n, e1.w) > dot(n, top->w)) top = &e1;
+        if (dot(n, side.w) > dot(n, top->w)) top = &side;
+        const SimplexVertex w = md.support_from(n, top->index_a, top->index_b);
+        const double h = dot(n, w.w) / length;
+        if (h <= tol) {
+            // As EPA's: the weights of the origin's projection on the face, counter-clockwise
+            // about the outward normal.
+            const Vec3 normal = n * (1.0 / length);
+            const SimplexVertex& f1 = flip ? side : e1;
+            const SimplexVertex& f2 = flip ? e1 : side;
+            double wts[3];
+            face_weights(e0.w, f1.w, f2.w, normal, offset / length, wts);
+            res.status = Status::CONVERGED;
+            res.depth = std::fmax(0.0, h);
+            res.normal = normal;
+            res.point_a = e0.a * wts[0] + f1.a * wts[1] + f2.a * wts[2];
+            res.point_b = e0.b * wts[0] + f1.b * wts[1] + f2.b * wts[2];
+            res.iterations = tries + 1;
+            return true;
+        }
+        // The support lies beyond this face. A triangle's plane is tried again the other way
+        // round (the support behind it); else the support replaces the face's side, and the
+        // wedge's other face is tried next.
+        if (!beside) side = away;
+        beside = false;
+        away = w;
+    }
+    md.hint_a = hint_a;
+    md.hint_b = hint_b;
+    md.last_direction = last_direction;
+    return false;
 }
 
 // The polytope of this thread: trivially constructible, so no allocation and no guard.
