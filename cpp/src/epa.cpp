@@ -359,10 +359,13 @@ bool touching_normal(MinkowskiDifference& md, const Simplex& s, double tol, EpaR
         res.iterations = 1;
         return true;
     }
-    // The candidate face (e0, e1, side) with `away` behind it: e0 and e1 are the edge the
-    // wedge turns about (the origin on it, or near).
-    SimplexVertex e0, e1, side, away;
-    bool beside = false;  // `away` is a point beside the triangle, not a vertex
+    // The candidate face (e0, e1, side) with the point `away` behind it (a vertex, or for a
+    // triangle at first a point beside it): e0 and e1 are the edge the wedge turns about
+    // (the origin on it, or near). Pointers into the simplex and `found` (the last three
+    // supports), so that a try copies no vertex.
+    const SimplexVertex *e0, *e1, *side, *away = nullptr;
+    Vec3 away_w;
+    SimplexVertex found[3];
     if (s.size == 4) {
         int low = 0;
         for (int i = 1; i < 4; ++i)
@@ -373,23 +376,25 @@ bool touching_normal(MinkowskiDifference& md, const Simplex& s, double tol, EpaR
         int k = 0, edge[2] = {0, 0};
         for (int i = 0; i < 4; ++i)
             if (i != low && i != low2) edge[k++] = i;
-        e0 = v[edge[0]];
-        e1 = v[edge[1]];
-        side = v[low2];
-        away = v[low];
+        e0 = &v[edge[0]];
+        e1 = &v[edge[1]];
+        side = &v[low2];
+        away = &v[low];
+        away_w = away->w;
     } else {
-        e0 = v[0];
-        e1 = v[1];
-        side = v[2];
-        // No vertex behind a triangle: a point beside it, on the side away from b.
-        away = v[0];
-        const Vec3 n = cross(v[1].w - v[0].w, v[2].w - v[0].w);
-        away.w = v[0].w - (dot(n, line) < 0.0 ? -n : n);
-        beside = true;
+        // The edge opposite the least weight (the origin on it, when it is on an edge).
+        int low = 0;
+        for (int i = 1; i < 3; ++i)
+            if (s.weights[i] < s.weights[low]) low = i;
+        e0 = &v[(low + 1) % 3];
+        e1 = &v[(low + 2) % 3];
+        side = &v[low];
+        const Vec3 n = cross(e1->w - e0->w, side->w - e0->w);
+        away_w = e0->w - (dot(n, line) < 0.0 ? -n : n);  // on the side away from b
     }
     for (int tries = 0; tries < defaults::epa_touching_supports; ++tries) {
-        Vec3 n = cross(e1.w - e0.w, side.w - e0.w);
-        const bool flip = dot(n, away.w - e0.w) > 0.0;
+        Vec3 n = cross(e1->w - e0->w, side->w - e0->w);
+        const bool flip = dot(n, away_w - e0->w) > 0.0;
         if (flip) n = -n;
         const double nn = squared_norm(n);
         if (!(nn > 0.0) || !std::isfinite(nn)) break;
@@ -397,36 +402,37 @@ bool touching_normal(MinkowskiDifference& md, const Simplex& s, double tol, EpaR
         // Only a plane through the origin (within the contact distance) can be a contact
         // plane: a deep pair's tetrahedron, which holds the origin well inside, pays no
         // support here.
-        const double offset = dot(n, e0.w);
+        const double offset = dot(n, e0->w);
         if (!(std::fabs(offset) <= tol * length)) break;
         // The climbs start from the face's vertex highest along n.
-        const SimplexVertex* top = &e0;
-        if (dot(n, e1.w) > dot(n, top->w)) top = &e1;
-        if (dot(n, side.w) > dot(n, top->w)) top = &side;
-        const SimplexVertex w = md.support_from(n, top->index_a, top->index_b);
+        const SimplexVertex* top = e0;
+        if (dot(n, e1->w) > dot(n, top->w)) top = e1;
+        if (dot(n, side->w) > dot(n, top->w)) top = side;
+        SimplexVertex& w = found[tries % 3];
+        w = md.support_from(n, top->index_a, top->index_b);
         const double h = dot(n, w.w) / length;
         if (h <= tol) {
             // As EPA's: the weights of the origin's projection on the face, counter-clockwise
             // about the outward normal.
             const Vec3 normal = n * (1.0 / length);
-            const SimplexVertex& f1 = flip ? side : e1;
-            const SimplexVertex& f2 = flip ? e1 : side;
+            const SimplexVertex& f1 = flip ? *side : *e1;
+            const SimplexVertex& f2 = flip ? *e1 : *side;
             double wts[3];
-            face_weights(e0.w, f1.w, f2.w, normal, offset / length, wts);
+            face_weights(e0->w, f1.w, f2.w, normal, offset / length, wts);
             res.status = Status::CONVERGED;
             res.depth = std::fmax(0.0, h);
             res.normal = normal;
-            res.point_a = e0.a * wts[0] + f1.a * wts[1] + f2.a * wts[2];
-            res.point_b = e0.b * wts[0] + f1.b * wts[1] + f2.b * wts[2];
+            res.point_a = e0->a * wts[0] + f1.a * wts[1] + f2.a * wts[2];
+            res.point_b = e0->b * wts[0] + f1.b * wts[1] + f2.b * wts[2];
             res.iterations = tries + 1;
             return true;
         }
         // The support lies beyond this face. A triangle's plane is tried again the other way
         // round (the support behind it); else the support replaces the face's side, and the
-        // wedge's other face is tried next.
-        if (!beside) side = away;
-        beside = false;
-        away = w;
+        // wedge's other face is tried next (`found` keeps the wedge's two and the new one).
+        if (away != nullptr) side = away;
+        away = &w;
+        away_w = w.w;
     }
     md.hint_a = hint_a;
     md.hint_b = hint_b;
