@@ -174,8 +174,8 @@ struct Polytope {
 
 // Barycentric weights of the projection p of the origin on face f (Ericson 2004, sec. 3.4);
 // `normal` is the face's unit normal, `distance` its plane's distance from the origin.
-void face_weights(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& normal,
-                  double distance, double w[3]) {
+inline void face_weights(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& normal,
+                         double distance, double w[3]) {
     const Vec3 p = normal * distance;
     const double u = dot(cross(b - p, c - p), normal);
     const double v = dot(cross(c - p, a - p), normal);
@@ -596,7 +596,12 @@ EpaResult expand_to_depth(MinkowskiDifference& md, Polytope& poly, const EpaOpti
 EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const EpaOptions& opt) {
     EpaResult res;
     const double tol = opt.contact_tolerance * md.scale;
-    if (touching_normal(md, start, tol, res)) return res;
+    // A tetrahedron holding the origin clear of its faces (every weight above
+    // `defaults::epa_touching_max_weight`: a deep pair's) has no face through it.
+    bool clear = start.size == 4;
+    for (int i = 0; i < start.size && clear; ++i)
+        clear = start.weights[i] > defaults::epa_touching_max_weight;
+    if (!clear && touching_normal(md, start, tol, res)) return res;
     Simplex s = start;
     if (s.size < 4 && !blow_up(md, s, tol)) {
         // The Minkowski difference is flat: the shapes touch, depth zero.

@@ -397,15 +397,6 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
     if (!(squared_norm(dir) > 0.0)) dir = Vec3{1.0, 0.0, 0.0};
     slots[0] = first != nullptr ? *first : md.support(dir);
     points[0] = slots[0].w;
-    // A support within the contact distance of the origin along its direction: |h| <= touch
-    // for h = d.w / |d| (the overlap along d), by squares. Kept for EPA's caller (the last).
-    {
-        const double dw = dot(dir, points[0]);
-        if (dw * dw <= touch2 * squared_norm(dir)) {
-            res.contact_direction = dir;
-            res.contact_support = dw;
-        }
-    }
     features[0] = feature_key(slots[0]);
     Vec3 v = points[0];
     double vv = squared_norm(v);
@@ -418,6 +409,10 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
     // supports).
     int wide = 0;
     int wide_order[4] = {0, 1, 2, 3};
+    // The direction of the last support (minus v before the step) and its dot with that
+    // support, for `contact_direction`: checked once, at the end.
+    Vec3 last_v = -dir;
+    double last_vw = -dot(dir, points[0]);
     while (it < opt.max_iterations) {
         ++it;
         if (vv <= touch2) {
@@ -437,10 +432,6 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
         if (key != kNoFeature)
             for (int i = 0; i < size; ++i) repeated |= features[i] == key;
         const double vw = dot(v, w.w);
-        if (vw * vw <= touch2 * vv) {
-            res.contact_direction = -v;
-            res.contact_support = -vw;
-        }
         if (opt.stop_when_separated && vw > separation_gap * std::sqrt(vv)) {
             // A separating plane with a positive gap: no contact (lower bound > tolerance).
             res.status = Status::CONVERGED;
@@ -459,6 +450,8 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
         if (!closest_feature(points, size, feature, nv)) {
             // Inside: the feature is the whole tetrahedron, in its order.
             for (int k = 0; k < 4; ++k) weights[k] = feature.weight[k];
+            last_v = v;
+            last_vw = vw;
             inside = true;
             res.status = Status::CONVERGED;
             v = Vec3{};
@@ -490,12 +483,21 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
             weights[k] = feature.weight[k];
         }
         size = feature.count;
+        last_v = v;
+        last_vw = vw;
         v = nv;
         vv = nvv;
     }
     Simplex& s = res.simplex;
     res.iterations = it;
     res.overlap = inside || vv <= touch2;
+    // The last support within the contact distance of the origin along its direction d = -v:
+    // |h| <= touch for h = d.w / |d| (the overlap along d), by squares. Then d is a contact
+    // normal of an overlapping pair (a vertex of a - b at the origin, as a rule).
+    if (res.overlap && last_vw * last_vw <= touch2 * squared_norm(last_v)) {
+        res.contact_direction = -last_v;
+        res.contact_support = -last_vw;
+    }
     if (inside && wide > size && hand_over_wide(slots, order, weights, size, wide_order, wide, res)) {
         // Done: the points are the shrunk simplex's, the simplex the wide one.
     } else {
