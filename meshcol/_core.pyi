@@ -43,6 +43,10 @@ class defaults:
 
     epa_blow_up_enough: float = 0.5
 
+    epa_touching_supports: int = 6
+
+    epa_touching_max_weight: float = 1e-08
+
     epa_deep_start_depth: float = 0.05
 
     epa_deep_start_spread: float = 0.65

@@ -176,10 +176,9 @@ struct Polytope {
 
 // Barycentric weights of the projection p of the origin on face f (Ericson 2004, sec. 3.4);
 // `normal` is the face's unit normal, `distance` its plane's distance from the origin.
-void face_weights(const Polytope& poly, const EpaFace& f, const Vec3& normal, double distance,
-                  double w[3]) {
+inline void face_weights(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& normal,
+                         double distance, double w[3]) {
     const Vec3 p = normal * distance;
-    const Vec3 a = poly.vertices[f.v[0]].w, b = poly.vertices[f.v[1]].w, c = poly.vertices[f.v[2]].w;
     const double u = dot(cross(b - p, c - p), normal);
     const double v = dot(cross(c - p, a - p), normal);
     const double x = dot(cross(a - p, b - p), normal);
@@ -191,6 +190,12 @@ void face_weights(const Polytope& poly, const EpaFace& f, const Vec3& normal, do
     } else {
         w[0] = w[1] = w[2] = 1.0 / 3.0;
     }
+}
+
+void face_weights(const Polytope& poly, const EpaFace& f, const Vec3& normal, double distance,
+                  double w[3]) {
+    face_weights(poly.vertices[f.v[0]].w, poly.vertices[f.v[1]].w, poly.vertices[f.v[2]].w,
+                 normal, distance, w);
 }
 
 // Adds support point `w` to the polytope: removes every face it sees, starting from
@@ -306,6 +311,134 @@ bool blow_up(MinkowskiDifference& md, Simplex& s, double tol) {
         s.size = 4;
     }
     return true;
+}
+
+// A touching pair's normal without EPA, from candidate faces through the origin, each checked
+// by one support along its outward normal: true, and `res` set, when the shapes overlap along
+// one by at most `tol` (a contact normal within the contact distance). The first candidate is
+// the simplex's face nearest the origin (a tetrahedron's face opposite its least weight, a
+// triangle's plane oriented towards b); when it fails and the origin lies on an edge of the
+// tetrahedron (a vertex-edge contact, whose normals form a wedge around that edge), the faces
+// of the wedge around the edge follow, each failed support replacing its side, as EPA would
+// expand around that edge (up to `defaults::epa_touching_supports` supports in all). A
+// segment's or point's candidate is the centre line, perpendicular to the segment. False
+// when none holds, with `md`'s climb state as it was (EPA then runs as if this had not).
+bool touching_normal(MinkowskiDifference& md, const Simplex& s, double tol, EpaResult& res) {
+    const SimplexVertex* v = s.vertices;
+    const Vec3 line = md.translation_b;
+    const int hint_a = md.hint_a, hint_b = md.hint_b;
+    const Vec3 last_direction = md.last_direction;
+    if (s.size <= 2) {
+        Vec3 n = line;
+        if (s.size == 2) {
+            const Vec3 d = v[1].w - v[0].w;
+            n = line - d * (dot(line, d) / std::fmax(squared_norm(d), defaults::epa_min_squared_length));
+        }
+        const double nn = squared_norm(n);
+        if (!(nn > 0.0) || !std::isfinite(nn)) return false;
+        const double length = std::sqrt(nn);
+        const double offset = dot(n, v[0].w);
+        if (!(std::fabs(offset) <= tol * length)) return false;
+        const SimplexVertex w = md.support_from(n, v[0].index_a, v[0].index_b);
+        const double h = dot(n, w.w) / length;
+        if (!(h <= tol)) {
+            md.hint_a = hint_a;
+            md.hint_b = hint_b;
+            md.last_direction = last_direction;
+            return false;
+        }
+        Vec3 pa{}, pb{};
+        for (int i = 0; i < s.size; ++i) {
+            pa += v[i].a * s.weights[i];
+            pb += v[i].b * s.weights[i];
+        }
+        res.status = Status::CONVERGED;
+        res.depth = std::fmax(0.0, h);
+        res.normal = n * (1.0 / length);
+        res.point_a = pa;
+        res.point_b = pb;
+        res.iterations = 1;
+        return true;
+    }
+    // The candidate face (e0, e1, side) with the point `away` behind it (a vertex, or for a
+    // triangle at first a point beside it): e0 and e1 are the edge the wedge turns about
+    // (the origin on it, or near). Pointers into the simplex and `found` (the last three
+    // supports), so that a try copies no vertex.
+    const SimplexVertex *e0, *e1, *side, *away = nullptr;
+    Vec3 away_w;
+    SimplexVertex found[3];
+    if (s.size == 4) {
+        int low = 0;
+        for (int i = 1; i < 4; ++i)
+            if (s.weights[i] < s.weights[low]) low = i;
+        int low2 = low == 0 ? 1 : 0;
+        for (int i = 0; i < 4; ++i)
+            if (i != low && s.weights[i] < s.weights[low2]) low2 = i;
+        int k = 0, edge[2] = {0, 0};
+        for (int i = 0; i < 4; ++i)
+            if (i != low && i != low2) edge[k++] = i;
+        e0 = &v[edge[0]];
+        e1 = &v[edge[1]];
+        side = &v[low2];
+        away = &v[low];
+        away_w = away->w;
+    } else {
+        // The edge opposite the least weight (the origin on it, when it is on an edge).
+        int low = 0;
+        for (int i = 1; i < 3; ++i)
+            if (s.weights[i] < s.weights[low]) low = i;
+        e0 = &v[(low + 1) % 3];
+        e1 = &v[(low + 2) % 3];
+        side = &v[low];
+        const Vec3 n = cross(e1->w - e0->w, side->w - e0->w);
+        away_w = e0->w - (dot(n, line) < 0.0 ? -n : n);  // on the side away from b
+    }
+    for (int tries = 0; tries < defaults::epa_touching_supports; ++tries) {
+        Vec3 n = cross(e1->w - e0->w, side->w - e0->w);
+        const bool flip = dot(n, away_w - e0->w) > 0.0;
+        if (flip) n = -n;
+        const double nn = squared_norm(n);
+        if (!(nn > 0.0) || !std::isfinite(nn)) break;
+        const double length = std::sqrt(nn);
+        // Only a plane through the origin (within the contact distance) can be a contact
+        // plane: a deep pair's tetrahedron, which holds the origin well inside, pays no
+        // support here.
+        const double offset = dot(n, e0->w);
+        if (!(std::fabs(offset) <= tol * length)) break;
+        // The climbs start from the face's vertex highest along n.
+        const SimplexVertex* top = e0;
+        if (dot(n, e1->w) > dot(n, top->w)) top = e1;
+        if (dot(n, side->w) > dot(n, top->w)) top = side;
+        SimplexVertex& w = found[tries % 3];
+        w = md.support_from(n, top->index_a, top->index_b);
+        const double h = dot(n, w.w) / length;
+        if (h <= tol) {
+            // As EPA's: the weights of the origin's projection on the face, counter-clockwise
+            // about the outward normal.
+            const Vec3 normal = n * (1.0 / length);
+            const SimplexVertex& f1 = flip ? *side : *e1;
+            const SimplexVertex& f2 = flip ? *e1 : *side;
+            double wts[3];
+            face_weights(e0->w, f1.w, f2.w, normal, offset / length, wts);
+            res.status = Status::CONVERGED;
+            res.depth = std::fmax(0.0, h);
+            res.normal = normal;
+            res.point_a = e0->a * wts[0] + f1.a * wts[1] + f2.a * wts[2];
+            res.point_b = e0->b * wts[0] + f1.b * wts[1] + f2.b * wts[2];
+            res.iterations = tries + 1;
+            return true;
+        }
+        // The support lies beyond this face. A triangle's plane is tried again the other way
+        // round (the support behind it); else the support replaces the face's side, and the
+        // wedge's other face is tried next (`found` keeps the wedge's two and the new one).
+        if (away != nullptr) side = away;
+        away = &w;
+        away_w = w.w;
+    }
+    md.hint_a = hint_a;
+    md.hint_b = hint_b;
+    md.last_direction = last_direction;
+    return false;
 }
 
 // The polytope of this thread: trivially constructible, so no allocation and no guard.
@@ -464,6 +597,12 @@ EpaResult expand_to_depth(MinkowskiDifference& md, Polytope& poly, const EpaOpti
 EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const EpaOptions& opt) {
     EpaResult res;
     const double tol = opt.contact_tolerance * md.scale;
+    // A tetrahedron holding the origin clear of its faces (every weight above
+    // `defaults::epa_touching_max_weight`: a deep pair's) has no face through it.
+    bool clear = start.size == 4;
+    for (int i = 0; i < start.size && clear; ++i)
+        clear = start.weights[i] > defaults::epa_touching_max_weight;
+    if (!clear && touching_normal(md, start, tol, res)) return res;
     Simplex s = start;
     if (s.size < 4 && !blow_up(md, s, tol)) {
         // The Minkowski difference is flat: the shapes touch, depth zero.

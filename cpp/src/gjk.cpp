@@ -409,6 +409,10 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
     // supports).
     int wide = 0;
     int wide_order[4] = {0, 1, 2, 3};
+    // The direction of the last support (minus v before the step) and its dot with that
+    // support, for `contact_direction`: checked once, at the end.
+    Vec3 last_v = -dir;
+    double last_vw = -dot(dir, points[0]);
     while (it < opt.max_iterations) {
         ++it;
         if (vv <= touch2) {
@@ -446,6 +450,8 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
         if (!closest_feature(points, size, feature, nv)) {
             // Inside: the feature is the whole tetrahedron, in its order.
             for (int k = 0; k < 4; ++k) weights[k] = feature.weight[k];
+            last_v = v;
+            last_vw = vw;
             inside = true;
             res.status = Status::CONVERGED;
             v = Vec3{};
@@ -477,12 +483,21 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
             weights[k] = feature.weight[k];
         }
         size = feature.count;
+        last_v = v;
+        last_vw = vw;
         v = nv;
         vv = nvv;
     }
     Simplex& s = res.simplex;
     res.iterations = it;
     res.overlap = inside || vv <= touch2;
+    // The last support within the contact distance of the origin along its direction d = -v:
+    // |h| <= touch for h = d.w / |d| (the overlap along d), by squares. Then d is a contact
+    // normal of an overlapping pair (a vertex of a - b at the origin, as a rule).
+    if (res.overlap && last_vw * last_vw <= touch2 * squared_norm(last_v)) {
+        res.contact_direction = -last_v;
+        res.contact_support = -last_vw;
+    }
     if (inside && wide > size && hand_over_wide(slots, order, weights, size, wide_order, wide, res)) {
         // Done: the points are the shrunk simplex's, the simplex the wide one.
     } else {

@@ -277,6 +277,19 @@ PairResult query_in_range(const ShapeView& a, const Pose& pose_a, const ShapeVie
     r.point_a = g.point_a;
     r.point_b = g.point_a;
     if (kind != QueryKind::PENETRATION) return to_world(r, pose_a);
+    if (squared_norm(g.contact_direction) > 0.0) {
+        // A support of GJK's lay within the contact distance of the origin along its
+        // direction: the shapes overlap along it by at most that distance, so it is a valid
+        // normal of this touching pair and EPA is not needed.
+        const double length = norm(g.contact_direction);
+        EpaResult e;
+        e.status = Status::CONVERGED;
+        e.normal = g.contact_direction * (1.0 / length);
+        e.depth = std::fmax(0.0, g.contact_support / length);
+        e.point_a = g.point_a;
+        e.point_b = g.point_b;
+        return penetration_result(r, e, a, pose_a, b, pose_b, touch);
+    }
 
     // EPA on the cores: for swept shapes the depth of (core_a + ball) - (core_b + ball) is the
     // core depth plus both radii (the support function gains the radii in every direction),

@@ -29,7 +29,10 @@ struct EpaResult {
 };
 
 /// EPA on `difference` (built with margins) starting from `simplex`, a simplex of GJK that
-/// touches or contains the origin. Frame: shape a's local frame.
+/// touches or contains the origin. Frame: shape a's local frame. A touching pair (a face of
+/// the simplex through the origin, up to the contact distance) first gets a few candidate
+/// normals, each checked by one support; the first along which the shapes overlap by at most
+/// the contact distance is the answer (depth that overlap, at least 0), without expansion.
 EpaResult epa_penetration(MinkowskiDifference& difference, const Simplex& simplex,
                           const EpaOptions& options = {});
 

@@ -83,6 +83,13 @@ struct GjkResult {
     Vec3 normal;            ///< unit, from a to b; zero when `overlap`; see above for the frame
     int iterations = 0;
     Simplex simplex;        ///< final simplex (a's local frame), the start of EPA
+    /// On an overlapping pair, the direction of the run's last support (a's frame, not unit;
+    /// zero when none) when that support lay within the contact distance of the origin
+    /// along it (as a rule, a vertex of a - b at the origin): the shapes overlap along it by
+    /// at most that distance, so it is a contact normal (from a to b) and EPA need not run.
+    /// `contact_support` is the support's dot with it.
+    Vec3 contact_direction;
+    double contact_support = 0.0;
 };
 
 /// GJK distance between `a` at `pose_a` and `b` at `pose_b`. Exact on polytopes (terminates
