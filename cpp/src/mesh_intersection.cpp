@@ -11,6 +11,7 @@
 #include "meshcol/mesh_query.hpp"
 #include "meshcol/triangle.hpp"
 #include "mesh_query_detail.hpp"
+#include "predicates.hpp"
 #include "rescale.hpp"
 
 namespace meshcol {
@@ -211,6 +212,75 @@ inline bool planes_separate(const MeshBvh& a, std::int32_t i, const Vec3* ta, co
     return apart(a.triangle_normal(i), ta[0], tb) || apart(rel.rotation * b.triangle_normal(j), tb[0], ta);
 }
 
+// The verdict of triangles_intersect(ta, tb, nullptr) in the one case, the commonest, where no
+// corner of either triangle lies on the other's plane (all six orientation signs non-zero),
+// else kUndecided (a corner on a plane: coplanar, touching at a corner, degenerate; the
+// caller runs triangles_intersect). Then both triangles are proper (a degenerate one has
+// every sign of the other's corners 0), and unless one lies on one side of the other's plane
+// each meets that plane in a closed segment of the line L where the planes cross, between the
+// points where its two edges with corners on both sides cross it; the triangles meet exactly
+// when the two segments overlap (touching counts). As in triangles_cross (triangle_intersect.cpp),
+// for such an edge (u, w) of b (u on the positive side of a's plane, w on the negative) and
+// (x, y) of a, the sign of the right-hand orient3d(u, w, x, y) is the order of their
+// crossing points along L; the segments are apart exactly when all four orders are strictly
+// one sign. Every sign is exact (predicates.hpp), so the verdict is triangles_intersect's: ten
+// orientations at most, where that test's edge-against-triangle form takes up to 24 and two
+// projection axes.
+enum class Verdict { kApart, kMeet, kUndecided };
+
+inline Verdict quick_verdict(const Vec3* a, const Vec3* b) {
+    using predicates::orient3d_sign;
+    // Right-hand sides (Shewchuk's orient3d negated) of t's corners to plane's plane, left at
+    // the first 0.
+    const auto sides = [](const Vec3* plane, const Vec3* t, int s[3]) {
+        for (int k = 0; k < 3; ++k)
+            if ((s[k] = -orient3d_sign(plane[0], plane[1], plane[2], t[k])) == 0) return false;
+        return true;
+    };
+    // A corner of t on plane's plane where that plane is a coordinate plane (its corners share
+    // one coordinate, as a floor's or a box's faces): orient3d's column of differences there is
+    // exactly 0, and so is its sign; the commonest touching pair, undecided with a few compares.
+    const auto flush = [](const Vec3* plane, const Vec3* t) {
+        for (int k = 0; k < 3; ++k) {
+            const double c = plane[0][k];
+            if (plane[1][k] == c && plane[2][k] == c) return t[0][k] == c || t[1][k] == c || t[2][k] == c;
+        }
+        return false;
+    };
+    int sb[3], sa[3];
+    if (flush(a, b) || !sides(a, b, sb)) return Verdict::kUndecided;
+    if (sb[0] == sb[1] && sb[1] == sb[2]) return Verdict::kApart;
+    if (flush(b, a) || !sides(b, a, sa)) return Verdict::kUndecided;
+    if (sa[0] == sa[1] && sa[1] == sa[2]) return Verdict::kApart;
+    // The two edges of t whose corners lie on both sides, each as (positive corner, negative).
+    struct Edge {
+        const Vec3 *u, *w;
+    };
+    const auto crossing_edges = [](const Vec3* t, const int s[3], Edge e[2]) {
+        int n = 0;
+        for (int k = 0; k < 3; ++k) {
+            const int l = k == 2 ? 0 : k + 1;
+            if (s[k] != s[l]) e[n++] = s[k] > 0 ? Edge{&t[k], &t[l]} : Edge{&t[l], &t[k]};
+        }
+    };
+    Edge eb[2], ea[2];
+    crossing_edges(b, sb, eb);
+    crossing_edges(a, sa, ea);
+    // Apart when all four orders are one strict sign: stop at the first that differs or is 0.
+    const int first = -orient3d_sign(*eb[0].u, *eb[0].w, *ea[0].u, *ea[0].w);
+    if (first == 0) return Verdict::kMeet;
+    for (const auto& [p, r] : {std::make_pair(0, 1), std::make_pair(1, 0), std::make_pair(1, 1)})
+        if (-orient3d_sign(*eb[p].u, *eb[p].w, *ea[r].u, *ea[r].w) != first) return Verdict::kMeet;
+    return Verdict::kApart;
+}
+
+// Whether triangles ta and tb (one frame) share a point: triangles_intersect(ta, tb, nullptr),
+// by quick_verdict where that decides.
+inline bool meet(const Vec3* ta, const Vec3* tb) {
+    const Verdict v = quick_verdict(ta, tb);
+    return v == Verdict::kUndecided ? triangles_intersect(ta, tb, nullptr) : v == Verdict::kMeet;
+}
+
 // The near pairs (index into a, index into b) grouped by `side`'s triangle: a counting sort
 // over its near triangles (whose `last` holds their count on entry), each group in the order
 // of the pairs.
@@ -234,12 +304,16 @@ void group_near_pairs(const std::vector<std::pair<std::int32_t, std::int32_t>>& 
 
 namespace mesh_detail {
 
+bool triangles_meet(const Vec3* ta, const Vec3* tb) { return meet(ta, tb); }
+
 bool first_crossing(const MeshBvh& a, const MeshBvh& b, const Relative& rel, std::int32_t* triangle_a,
                     std::int32_t* triangle_b, Vec3* witness, CrossingPair* touching) {
     return for_each_touching_pair(a, b, rel, [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
         if (touching != nullptr && touching->a < 0) *touching = CrossingPair{i, j};
         Vec3 w;
-        if (planes_separate(a, i, ta, b, j, tb, rel) || !triangles_intersect(ta, tb, &w)) return false;
+        if (planes_separate(a, i, ta, b, j, tb, rel) || quick_verdict(ta, tb) == Verdict::kApart ||
+            !triangles_intersect(ta, tb, &w))
+            return false;
         *witness = w;
         *triangle_a = i;
         *triangle_b = j;
@@ -279,7 +353,7 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
             TriangleMarks::Near& near_b = entry(in_b, sj);
             near_pairs.push_back({i, j});
             if (triangle_box_squared_distance(triangle_box(ta), triangle_box(tb)) == 0.0 &&
-                !planes_separate(a, i, ta, b, j, tb, rel) && triangles_intersect(ta, tb, nullptr)) {
+                !planes_separate(a, i, ta, b, j, tb, rel) && meet(ta, tb)) {
                 in_a.crossing[si] = in_b.crossing[sj] = 1;
                 if (near_a.partner < 0) near_a.partner = j;
                 if (near_b.partner < 0) near_b.partner = i;
@@ -302,6 +376,10 @@ bool for_each_crossing_pair(
     for_each_touching_pair(a, b, rel, [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
         if (++*work > max_work) return capped = true;
         if (planes_separate(a, i, ta, b, j, tb, rel)) return false;
+        // The quick verdict where it decides (no shared point: a caller that wants one asks
+        // triangles_intersect again), else the full test, with its point when asked.
+        const Verdict v = quick_verdict(ta, tb);
+        if (v != Verdict::kUndecided) return v == Verdict::kMeet && visit(i, j, ta, tb, kNoPoint);
         if (!witnesses) return triangles_intersect(ta, tb, nullptr) && visit(i, j, ta, tb, kNoPoint);
         Vec3 shared;
         return triangles_intersect(ta, tb, &shared) && visit(i, j, ta, tb, shared);
@@ -339,7 +417,7 @@ bool mesh_intersects(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b, con
     return for_each_touching_pair(
         a, b, rel,
         [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
-            return !planes_separate(a, i, ta, b, j, tb, rel) && triangles_intersect(ta, tb, nullptr);
+            return !planes_separate(a, i, ta, b, j, tb, rel) && meet(ta, tb);
         },
         0.0, true);
 }
