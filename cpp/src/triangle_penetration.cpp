@@ -129,7 +129,19 @@ void triangle_penetration_points(const Vec3 a[3], const Vec3 b[3], TrianglePenet
     const Vec3 shift = p.normal * p.depth;
     const Vec3 moved[3] = {b[0] + shift, b[1] + shift, b[2] + shift};
     Vec3 on_moved;
-    triangle_separated_squared_distance(a, moved, &p.point_a, &on_moved);
+    // a and b moved by the depth touch, up to the rounding of the depth and the move (a few
+    // ulps of the coordinates): the search limited to 1e-10 of the largest coordinate gives the
+    // same value and points (triangle.hpp: triangle_separated_squared_distance_below, its slack
+    // above the 3e-14 it needs) and skips the feature pairs that cannot be the closest. Should
+    // the pair be farther than that after all, the full search.
+    double reach = 0.0;  // plain compares: a NaN corner leaves a NaN limit, and the full search
+    for (int k = 0; k < 3; ++k)
+        for (const Vec3* v : {&a[k], &moved[k]})
+            for (const double c : {std::fabs(v->x), std::fabs(v->y), std::fabs(v->z)}) reach = c > reach ? c : reach;
+    const double limit = 1e-10 * reach;
+    if (!(triangle_separated_squared_distance_below(a, moved, limit * limit, 4e-14 * reach, &p.point_a, &on_moved) <=
+          limit * limit))
+        triangle_separated_squared_distance(a, moved, &p.point_a, &on_moved);
     p.point_b = on_moved - shift;
 }
 
