@@ -226,7 +226,70 @@ inline bool planes_separate(const MeshBvh& a, std::int32_t i, const Vec3* ta, co
 // one sign. Every sign is exact (predicates.hpp), so the verdict is triangles_intersect's: ten
 // orientations at most, where that test's edge-against-triangle form takes up to 24 and two
 // projection axes.
-enum class Verdict { kApart, kMeet, kUndecided };
+// kMeet: a general pair (no corner on the other's plane) that meets; kTouch: one that meets
+// with a corner on the other's plane, decided by flush_verdict.
+enum class Verdict { kApart, kMeet, kTouch, kUndecided };
+
+// The coordinate in which triangle t's corners are equal (it lies in a coordinate plane), else
+// -1: plain compares, as few as a triangle that is not flat needs.
+inline int flat_axis(const Vec3* t) {
+    if (t[1].x == t[0].x && t[2].x == t[0].x) return 0;
+    if (t[1].y == t[0].y && t[2].y == t[0].y) return 1;
+    if (t[1].z == t[0].z && t[2].z == t[0].z) return 2;
+    return -1;
+}
+
+// Where `plane`'s triangle lies in a coordinate plane x_k = c (a floor's, a box's face) and a
+// corner of t lies on it (exactly: orient3d's column of differences is 0 there, and so is its
+// sign): true, with the verdict in *v. If t's other corners lie strictly on one side, t meets
+// the plane in the hull of its corners there (a point or a segment), and the triangles meet iff
+// that hull meets `plane`'s triangle: a question in the coordinate plane, decided by the exact
+// orient2d of the two other coordinates (a point is apart when strictly outside an edge's line;
+// a segment when both ends are, or when the three corners are strictly on one side of its line:
+// the separating axis theorem for convex polygons). kUndecided when t crosses the plane there,
+// lies in it, or `plane`'s triangle is degenerate. False (no verdict) when no corner of t is on
+// it. k: the coordinate, flat_axis(plane).
+bool flush_verdict(const Vec3* plane, int k, const Vec3* t, Verdict* v) {
+    const double c = plane[0][k];
+    const Vec3* on[3];
+    int count = 0, above = 0, below = 0;
+    for (int j = 0; j < 3; ++j) {
+        if (t[j][k] == c) {
+            on[count++] = &t[j];
+        } else {
+            (t[j][k] > c ? above : below) += 1;
+        }
+    }
+    if (count == 0) return false;
+    *v = Verdict::kUndecided;
+    if (count == 3 || (above > 0 && below > 0)) return true;
+    const int x = k == 2 ? 0 : k + 1, y = k == 0 ? 2 : k - 1;
+    const auto turn = [x, y](const Vec3& p, const Vec3& q, const Vec3& r) {
+        return predicates::orient2d_sign(p[x], p[y], q[x], q[y], r[x], r[y]);
+    };
+    const int sense = turn(plane[0], plane[1], plane[2]);
+    if (sense == 0) return true;
+    const Vec3& p = *on[0];
+    const Vec3& q = *on[count - 1];
+    for (int i = 0; i < 3; ++i) {
+        const Vec3& e0 = plane[i];
+        const Vec3& e1 = plane[i == 2 ? 0 : i + 1];
+        if (turn(e0, e1, p) * sense < 0 && (count == 1 || turn(e0, e1, q) * sense < 0)) {
+            *v = Verdict::kApart;
+            return true;
+        }
+    }
+    if (count == 2) {
+        const int s0 = turn(p, q, plane[0]);
+        if (s0 != 0 && turn(p, q, plane[1]) == s0 && turn(p, q, plane[2]) == s0) {
+            *v = Verdict::kApart;
+            return true;
+        }
+    }
+    *v = Verdict::kTouch;
+    return true;
+}
+
 
 inline Verdict quick_verdict(const Vec3* a, const Vec3* b) {
     using predicates::orient3d_sign;
@@ -237,20 +300,15 @@ inline Verdict quick_verdict(const Vec3* a, const Vec3* b) {
             if ((s[k] = -orient3d_sign(plane[0], plane[1], plane[2], t[k])) == 0) return false;
         return true;
     };
-    // A corner of t on plane's plane where that plane is a coordinate plane (its corners share
-    // one coordinate, as a floor's or a box's faces): orient3d's column of differences there is
-    // exactly 0, and so is its sign; the commonest touching pair, undecided with a few compares.
-    const auto flush = [](const Vec3* plane, const Vec3* t) {
-        for (int k = 0; k < 3; ++k) {
-            const double c = plane[0][k];
-            if (plane[1][k] == c && plane[2][k] == c) return t[0][k] == c || t[1][k] == c || t[2][k] == c;
-        }
-        return false;
-    };
     int sb[3], sa[3];
-    if (flush(a, b) || !sides(a, b, sb)) return Verdict::kUndecided;
+    Verdict flush;
+    const int flat_a = flat_axis(a);
+    if (flat_a >= 0 && flush_verdict(a, flat_a, b, &flush)) return flush;
+    if (!sides(a, b, sb)) return Verdict::kUndecided;
     if (sb[0] == sb[1] && sb[1] == sb[2]) return Verdict::kApart;
-    if (flush(b, a) || !sides(b, a, sa)) return Verdict::kUndecided;
+    const int flat_b = flat_axis(b);
+    if (flat_b >= 0 && flush_verdict(b, flat_b, a, &flush)) return flush;
+    if (!sides(b, a, sa)) return Verdict::kUndecided;
     if (sa[0] == sa[1] && sa[1] == sa[2]) return Verdict::kApart;
     // The two edges of t whose corners lie on both sides, each as (positive corner, negative).
     struct Edge {
@@ -278,7 +336,7 @@ inline Verdict quick_verdict(const Vec3* a, const Vec3* b) {
 // by quick_verdict where that decides.
 inline bool meet(const Vec3* ta, const Vec3* tb) {
     const Verdict v = quick_verdict(ta, tb);
-    return v == Verdict::kUndecided ? triangles_intersect(ta, tb, nullptr) : v == Verdict::kMeet;
+    return v == Verdict::kUndecided ? triangles_intersect(ta, tb, nullptr) : v != Verdict::kApart;
 }
 
 // The near pairs (index into a, index into b) grouped by `side`'s triangle: a counting sort
@@ -370,7 +428,7 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
 // screen and exact triangle test, no marks kept.
 bool for_each_crossing_pair(
     const MeshBvh& a, const MeshBvh& b, const Relative& rel, long long max_work, long long* work, bool witnesses,
-    const std::function<bool(std::int32_t, std::int32_t, const Vec3*, const Vec3*, const Vec3&)>& visit) {
+    const std::function<bool(std::int32_t, std::int32_t, const Vec3*, const Vec3*, const Vec3&, bool)>& visit) {
     static const Vec3 kNoPoint{kNaN, kNaN, kNaN};
     bool capped = false;
     for_each_touching_pair(a, b, rel, [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
@@ -379,10 +437,10 @@ bool for_each_crossing_pair(
         // The quick verdict where it decides (no shared point: a caller that wants one asks
         // triangles_intersect again), else the full test, with its point when asked.
         const Verdict v = quick_verdict(ta, tb);
-        if (v != Verdict::kUndecided) return v == Verdict::kMeet && visit(i, j, ta, tb, kNoPoint);
-        if (!witnesses) return triangles_intersect(ta, tb, nullptr) && visit(i, j, ta, tb, kNoPoint);
+        if (v != Verdict::kUndecided) return v != Verdict::kApart && visit(i, j, ta, tb, kNoPoint, v == Verdict::kMeet);
+        if (!witnesses) return triangles_intersect(ta, tb, nullptr) && visit(i, j, ta, tb, kNoPoint, false);
         Vec3 shared;
-        return triangles_intersect(ta, tb, &shared) && visit(i, j, ta, tb, shared);
+        return triangles_intersect(ta, tb, &shared) && visit(i, j, ta, tb, shared, false);
     });
     return capped;
 }

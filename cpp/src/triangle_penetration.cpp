@@ -66,9 +66,10 @@ inline Overlap overlap_on(const Vec3& c, const Vec3 a[3], const Vec3 b[3]) {
     return up <= down ? Overlap{up / length, length, u, false} : Overlap{down / length, length, u, true};
 }
 
-}  // namespace
-
-TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool points) {
+// triangle_penetration without its points, its two kinds of pair each compiled alone (the
+// general one skips the exact tests whose answers it knows; the other keeps its code as it was).
+template <bool general>
+TrianglePenetration penetration(const Vec3 a[3], const Vec3 b[3]) {
     TrianglePenetration out;
     out.normal = out.point_a = out.point_b = Vec3{kNaN, kNaN, kNaN};
     const Vec3 ea[3] = {a[1] - a[0], a[2] - a[1], a[0] - a[2]};
@@ -76,15 +77,16 @@ TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool 
     const Vec3 na = cross(ea[0], a[2] - a[0]), nb = cross(eb[0], b[2] - b[0]);
     const auto nonzero = [](const Vec3& v) { return v.x != 0.0 || v.y != 0.0 || v.z != 0.0; };
     // A triangle with collinear corners (exactly) has no plane; its rounded normal is no axis.
-    const bool a_plane = nonzero(na) && !collinear(a[0], a[1], a[2]);
-    const bool b_plane = nonzero(nb) && !collinear(b[0], b[1], b[2]);
+    // In a general pair neither is collinear (every orientation of its plane would be 0).
+    const bool a_plane = nonzero(na) && (general || !collinear(a[0], a[1], a[2]));
+    const bool b_plane = nonzero(nb) && (general || !collinear(b[0], b[1], b[2]));
     // Exactly coplanar: the difference is flat, the depth 0 (the orientation signs are exact,
     // as in triangles_intersect, where rounded axes would give a few ulps instead).
     const auto on_plane = [](const Vec3* t, const Vec3* other) {
         return orient3d(t[0], t[1], t[2], other[0]) == 0.0 && orient3d(t[0], t[1], t[2], other[1]) == 0.0 &&
                orient3d(t[0], t[1], t[2], other[2]) == 0.0;
     };
-    const bool coplanar = a_plane ? on_plane(a, b) : (b_plane && on_plane(b, a));
+    const bool coplanar = !general && (a_plane ? on_plane(a, b) : (b_plane && on_plane(b, a)));
     if (coplanar) {
         out.depth = 0.0;
         out.axis = a_plane ? 0 : 1;
@@ -111,6 +113,13 @@ TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool 
         // No axis: both are points or segments on one line, a flat difference.
         out.depth = out.axis < 0 ? 0.0 : (best > 0.0 ? best : 0.0);
     }
+    return out;
+}
+
+}  // namespace
+
+TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool points, bool general) {
+    TrianglePenetration out = general ? penetration<true>(a, b) : penetration<false>(a, b);
     if (points) triangle_penetration_points(a, b, out);
     return out;
 }
