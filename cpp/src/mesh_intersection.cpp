@@ -437,7 +437,8 @@ bool for_each_crossing_pair(
         // The quick verdict where it decides (no shared point: a caller that wants one asks
         // triangles_intersect again), else the full test, with its point when asked.
         const Verdict v = quick_verdict(ta, tb);
-        if (v != Verdict::kUndecided) return v != Verdict::kApart && visit(i, j, ta, tb, kNoPoint, v == Verdict::kMeet);
+        if (v != Verdict::kUndecided)
+            return v != Verdict::kApart && visit(i, j, ta, tb, kNoPoint, v == Verdict::kMeet);
         if (!witnesses) return triangles_intersect(ta, tb, nullptr) && visit(i, j, ta, tb, kNoPoint, false);
         Vec3 shared;
         return triangles_intersect(ta, tb, &shared) && visit(i, j, ta, tb, shared, false);

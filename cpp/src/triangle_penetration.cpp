@@ -143,13 +143,16 @@ void triangle_penetration_points(const Vec3 a[3], const Vec3 b[3], TrianglePenet
     // same value and points (triangle.hpp: triangle_separated_squared_distance_below, its slack
     // above the 3e-14 it needs) and skips the feature pairs that cannot be the closest. Should
     // the pair be farther than that after all, the full search.
-    double reach = 0.0;  // plain compares: a NaN corner leaves a NaN limit, and the full search
+    // Plain compares: a NaN corner is passed over, and its NaN distance fails the limit.
+    double reach = 0.0;
     for (int k = 0; k < 3; ++k)
         for (const Vec3* v : {&a[k], &moved[k]})
-            for (const double c : {std::fabs(v->x), std::fabs(v->y), std::fabs(v->z)}) reach = c > reach ? c : reach;
+            for (const double c : {std::fabs(v->x), std::fabs(v->y), std::fabs(v->z)})
+                reach = c > reach ? c : reach;
     const double limit = 1e-10 * reach;
-    if (!(triangle_separated_squared_distance_below(a, moved, limit * limit, 4e-14 * reach, &p.point_a, &on_moved) <=
-          limit * limit))
+    const double found2 =
+        triangle_separated_squared_distance_below(a, moved, limit * limit, 4e-14 * reach, &p.point_a, &on_moved);
+    if (!(found2 <= limit * limit))
         triangle_separated_squared_distance(a, moved, &p.point_a, &on_moved);
     p.point_b = on_moved - shift;
 }

@@ -219,7 +219,8 @@ TEST_CASE("triangle penetration: a general pair gives the same answer told it is
         const TrianglePenetration general = triangle_penetration(a, b, true, true);
         CHECK(general.depth == full.depth);
         CHECK(general.axis == full.axis);
-        CHECK(general.normal.x == full.normal.x && general.normal.y == full.normal.y && general.normal.z == full.normal.z);
+        CHECK(general.normal.x == full.normal.x && general.normal.y == full.normal.y &&
+              general.normal.z == full.normal.z);
         CHECK(general.point_a.x == full.point_a.x && general.point_b.z == full.point_b.z);
     }
     CHECK(checked > 1000);

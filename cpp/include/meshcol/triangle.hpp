@@ -102,7 +102,8 @@ struct TrianglePenetration {
 /// by depth * normal, Ericson 2004, 5.1.9). `general`: the caller has found (exactly) that no
 /// corner of either triangle lies on the other's plane, so neither is degenerate nor are they
 /// coplanar; those tests are then skipped (the same answer).
-TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool points = true, bool general = false);
+TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool points = true,
+                                         bool general = false);
 
 /// The witness points of `p`, a `triangle_penetration(a, b, false)` of the same triangles (its
 /// depth and normal): what `points` adds, for a caller that keeps the penetration and wants
