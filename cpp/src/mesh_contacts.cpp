@@ -94,9 +94,9 @@ MeshContactsOutput mesh_contacts(const MeshContactsInput& input, std::vector<Mes
     long long work = 0;
     const bool capped = for_each_crossing_pair(
         a, b, rel, input.max_work, &work, listed,
-        [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb, const Vec3& shared) {
+        [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb, const Vec3& shared, bool general) {
             ++out.count;
-            const TrianglePenetration p = triangle_penetration(ta, tb, false);
+            const TrianglePenetration p = triangle_penetration(ta, tb, false, general);
             const Found f{p.depth, face_depth(a, i, ta, tb), a.face_index(i), b.face_index(j), i, j, p.normal, shared};
             if (best.i < 0 || deeper(f, best)) best = f;
             out.face_depth = max2(out.face_depth, f.face_depth);

@@ -11,6 +11,7 @@
 #include "meshcol/mesh_query.hpp"
 #include "meshcol/triangle.hpp"
 #include "mesh_query_detail.hpp"
+#include "predicates.hpp"
 #include "rescale.hpp"
 
 namespace meshcol {
@@ -211,6 +212,133 @@ inline bool planes_separate(const MeshBvh& a, std::int32_t i, const Vec3* ta, co
     return apart(a.triangle_normal(i), ta[0], tb) || apart(rel.rotation * b.triangle_normal(j), tb[0], ta);
 }
 
+// The verdict of triangles_intersect(ta, tb, nullptr) in the one case, the commonest, where no
+// corner of either triangle lies on the other's plane (all six orientation signs non-zero),
+// else kUndecided (a corner on a plane: coplanar, touching at a corner, degenerate; the
+// caller runs triangles_intersect). Then both triangles are proper (a degenerate one has
+// every sign of the other's corners 0), and unless one lies on one side of the other's plane
+// each meets that plane in a closed segment of the line L where the planes cross, between the
+// points where its two edges with corners on both sides cross it; the triangles meet exactly
+// when the two segments overlap (touching counts). As in triangles_cross (triangle_intersect.cpp),
+// for such an edge (u, w) of b (u on the positive side of a's plane, w on the negative) and
+// (x, y) of a, the sign of the right-hand orient3d(u, w, x, y) is the order of their
+// crossing points along L; the segments are apart exactly when all four orders are strictly
+// one sign. Every sign is exact (predicates.hpp), so the verdict is triangles_intersect's: ten
+// orientations at most, where that test's edge-against-triangle form takes up to 24 and two
+// projection axes.
+// kMeet: a general pair (no corner on the other's plane) that meets; kTouch: one that meets
+// with a corner on the other's plane, decided by flush_verdict.
+enum class Verdict { kApart, kMeet, kTouch, kUndecided };
+
+// The coordinate in which triangle t's corners are equal (it lies in a coordinate plane), else
+// -1: plain compares, as few as a triangle that is not flat needs.
+inline int flat_axis(const Vec3* t) {
+    if (t[1].x == t[0].x && t[2].x == t[0].x) return 0;
+    if (t[1].y == t[0].y && t[2].y == t[0].y) return 1;
+    if (t[1].z == t[0].z && t[2].z == t[0].z) return 2;
+    return -1;
+}
+
+// Where `plane`'s triangle lies in a coordinate plane x_k = c (a floor's, a box's face) and a
+// corner of t lies on it (exactly: orient3d's column of differences is 0 there, and so is its
+// sign): true, with the verdict in *v. If t's other corners lie strictly on one side, t meets
+// the plane in the hull of its corners there (a point or a segment), and the triangles meet iff
+// that hull meets `plane`'s triangle: a question in the coordinate plane, decided by the exact
+// orient2d of the two other coordinates (a point is apart when strictly outside an edge's line;
+// a segment when both ends are, or when the three corners are strictly on one side of its line:
+// the separating axis theorem for convex polygons). kUndecided when t crosses the plane there,
+// lies in it, or `plane`'s triangle is degenerate. False (no verdict) when no corner of t is on
+// it. k: the coordinate, flat_axis(plane).
+bool flush_verdict(const Vec3* plane, int k, const Vec3* t, Verdict* v) {
+    const double c = plane[0][k];
+    const Vec3* on[3];
+    int count = 0, above = 0, below = 0;
+    for (int j = 0; j < 3; ++j) {
+        if (t[j][k] == c) {
+            on[count++] = &t[j];
+        } else {
+            (t[j][k] > c ? above : below) += 1;
+        }
+    }
+    if (count == 0) return false;
+    *v = Verdict::kUndecided;
+    if (count == 3 || (above > 0 && below > 0)) return true;
+    const int x = k == 2 ? 0 : k + 1, y = k == 0 ? 2 : k - 1;
+    const auto turn = [x, y](const Vec3& p, const Vec3& q, const Vec3& r) {
+        return predicates::orient2d_sign(p[x], p[y], q[x], q[y], r[x], r[y]);
+    };
+    const int sense = turn(plane[0], plane[1], plane[2]);
+    if (sense == 0) return true;
+    const Vec3& p = *on[0];
+    const Vec3& q = *on[count - 1];
+    for (int i = 0; i < 3; ++i) {
+        const Vec3& e0 = plane[i];
+        const Vec3& e1 = plane[i == 2 ? 0 : i + 1];
+        if (turn(e0, e1, p) * sense < 0 && (count == 1 || turn(e0, e1, q) * sense < 0)) {
+            *v = Verdict::kApart;
+            return true;
+        }
+    }
+    if (count == 2) {
+        const int s0 = turn(p, q, plane[0]);
+        if (s0 != 0 && turn(p, q, plane[1]) == s0 && turn(p, q, plane[2]) == s0) {
+            *v = Verdict::kApart;
+            return true;
+        }
+    }
+    *v = Verdict::kTouch;
+    return true;
+}
+
+
+inline Verdict quick_verdict(const Vec3* a, const Vec3* b) {
+    using predicates::orient3d_sign;
+    // Right-hand sides (Shewchuk's orient3d negated) of t's corners to plane's plane, left at
+    // the first 0.
+    const auto sides = [](const Vec3* plane, const Vec3* t, int s[3]) {
+        for (int k = 0; k < 3; ++k)
+            if ((s[k] = -orient3d_sign(plane[0], plane[1], plane[2], t[k])) == 0) return false;
+        return true;
+    };
+    int sb[3], sa[3];
+    Verdict flush;
+    const int flat_a = flat_axis(a);
+    if (flat_a >= 0 && flush_verdict(a, flat_a, b, &flush)) return flush;
+    if (!sides(a, b, sb)) return Verdict::kUndecided;
+    if (sb[0] == sb[1] && sb[1] == sb[2]) return Verdict::kApart;
+    const int flat_b = flat_axis(b);
+    if (flat_b >= 0 && flush_verdict(b, flat_b, a, &flush)) return flush;
+    if (!sides(b, a, sa)) return Verdict::kUndecided;
+    if (sa[0] == sa[1] && sa[1] == sa[2]) return Verdict::kApart;
+    // The two edges of t whose corners lie on both sides, each as (positive corner, negative).
+    struct Edge {
+        const Vec3 *u, *w;
+    };
+    const auto crossing_edges = [](const Vec3* t, const int s[3], Edge e[2]) {
+        int n = 0;
+        for (int k = 0; k < 3; ++k) {
+            const int l = k == 2 ? 0 : k + 1;
+            if (s[k] != s[l]) e[n++] = s[k] > 0 ? Edge{&t[k], &t[l]} : Edge{&t[l], &t[k]};
+        }
+    };
+    Edge eb[2], ea[2];
+    crossing_edges(b, sb, eb);
+    crossing_edges(a, sa, ea);
+    // Apart when all four orders are one strict sign: stop at the first that differs or is 0.
+    const int first = -orient3d_sign(*eb[0].u, *eb[0].w, *ea[0].u, *ea[0].w);
+    if (first == 0) return Verdict::kMeet;
+    for (const auto& [p, r] : {std::make_pair(0, 1), std::make_pair(1, 0), std::make_pair(1, 1)})
+        if (-orient3d_sign(*eb[p].u, *eb[p].w, *ea[r].u, *ea[r].w) != first) return Verdict::kMeet;
+    return Verdict::kApart;
+}
+
+// Whether triangles ta and tb (one frame) share a point: triangles_intersect(ta, tb, nullptr),
+// by quick_verdict where that decides.
+inline bool meet(const Vec3* ta, const Vec3* tb) {
+    const Verdict v = quick_verdict(ta, tb);
+    return v == Verdict::kUndecided ? triangles_intersect(ta, tb, nullptr) : v != Verdict::kApart;
+}
+
 // The near pairs (index into a, index into b) grouped by `side`'s triangle: a counting sort
 // over its near triangles (whose `last` holds their count on entry), each group in the order
 // of the pairs.
@@ -234,12 +362,16 @@ void group_near_pairs(const std::vector<std::pair<std::int32_t, std::int32_t>>& 
 
 namespace mesh_detail {
 
+bool triangles_meet(const Vec3* ta, const Vec3* tb) { return meet(ta, tb); }
+
 bool first_crossing(const MeshBvh& a, const MeshBvh& b, const Relative& rel, std::int32_t* triangle_a,
                     std::int32_t* triangle_b, Vec3* witness, CrossingPair* touching) {
     return for_each_touching_pair(a, b, rel, [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
         if (touching != nullptr && touching->a < 0) *touching = CrossingPair{i, j};
         Vec3 w;
-        if (planes_separate(a, i, ta, b, j, tb, rel) || !triangles_intersect(ta, tb, &w)) return false;
+        if (planes_separate(a, i, ta, b, j, tb, rel) || quick_verdict(ta, tb) == Verdict::kApart ||
+            !triangles_intersect(ta, tb, &w))
+            return false;
         *witness = w;
         *triangle_a = i;
         *triangle_b = j;
@@ -279,7 +411,7 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
             TriangleMarks::Near& near_b = entry(in_b, sj);
             near_pairs.push_back({i, j});
             if (triangle_box_squared_distance(triangle_box(ta), triangle_box(tb)) == 0.0 &&
-                !planes_separate(a, i, ta, b, j, tb, rel) && triangles_intersect(ta, tb, nullptr)) {
+                !planes_separate(a, i, ta, b, j, tb, rel) && meet(ta, tb)) {
                 in_a.crossing[si] = in_b.crossing[sj] = 1;
                 if (near_a.partner < 0) near_a.partner = j;
                 if (near_b.partner < 0) near_b.partner = i;
@@ -296,15 +428,20 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
 // screen and exact triangle test, no marks kept.
 bool for_each_crossing_pair(
     const MeshBvh& a, const MeshBvh& b, const Relative& rel, long long max_work, long long* work, bool witnesses,
-    const std::function<bool(std::int32_t, std::int32_t, const Vec3*, const Vec3*, const Vec3&)>& visit) {
+    const std::function<bool(std::int32_t, std::int32_t, const Vec3*, const Vec3*, const Vec3&, bool)>& visit) {
     static const Vec3 kNoPoint{kNaN, kNaN, kNaN};
     bool capped = false;
     for_each_touching_pair(a, b, rel, [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
         if (++*work > max_work) return capped = true;
         if (planes_separate(a, i, ta, b, j, tb, rel)) return false;
-        if (!witnesses) return triangles_intersect(ta, tb, nullptr) && visit(i, j, ta, tb, kNoPoint);
+        // The quick verdict where it decides (no shared point: a caller that wants one asks
+        // triangles_intersect again), else the full test, with its point when asked.
+        const Verdict v = quick_verdict(ta, tb);
+        if (v != Verdict::kUndecided)
+            return v != Verdict::kApart && visit(i, j, ta, tb, kNoPoint, v == Verdict::kMeet);
+        if (!witnesses) return triangles_intersect(ta, tb, nullptr) && visit(i, j, ta, tb, kNoPoint, false);
         Vec3 shared;
-        return triangles_intersect(ta, tb, &shared) && visit(i, j, ta, tb, shared);
+        return triangles_intersect(ta, tb, &shared) && visit(i, j, ta, tb, shared, false);
     });
     return capped;
 }
@@ -339,7 +476,7 @@ bool mesh_intersects(const MeshBvh& a, const Pose& pose_a, const MeshBvh& b, con
     return for_each_touching_pair(
         a, b, rel,
         [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
-            return !planes_separate(a, i, ta, b, j, tb, rel) && triangles_intersect(ta, tb, nullptr);
+            return !planes_separate(a, i, ta, b, j, tb, rel) && meet(ta, tb);
         },
         0.0, true);
 }

@@ -260,16 +260,23 @@ bool first_crossing(const MeshBvh& a, const MeshBvh& b, const Relative& rel, std
 void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative& rel, TriangleMarks& in_a,
                              TriangleMarks& in_b, std::vector<CrossingPair>& pairs);
 
+/// Whether two triangles (one frame) share a point: triangles_intersect(ta, tb, nullptr), the
+/// same exact verdict, decided by the order of the two planes' crossings along their common
+/// line where no corner lies on the other's plane (mesh_intersection.cpp; the descents' test).
+bool triangles_meet(const Vec3* ta, const Vec3* tb);
+
 /// The descent of mesh_intersects run to the end (mesh_intersection.cpp): calls `visit(i, j,
 /// ta, tb, shared)` for every intersecting triangle pair (leaf order; b's corners mapped into
-/// a's frame), by the same exact test, in descent order; with `witnesses`, `shared` is the
-/// point triangles_intersect(ta, tb, &shared) gives (the same test's exit, a few operations),
-/// else NaN. Counts the triangle pairs whose boxes touch in `*work` and stops once it is above
+/// a's frame), by the same exact verdict (triangles_meet), in descent order; with `witnesses`,
+/// `shared` is the point triangles_intersect(ta, tb, &shared) gives where the descent ran that
+/// test (a pair with a corner on the other's plane: every touching pair), else NaN; `general`
+/// says that no corner of either lies on the other's plane (exactly: triangle_penetration's
+/// `general`). Counts the triangle pairs whose boxes touch in `*work` and stops once it is above
 /// `max_work`: returns whether it stopped there. `visit` returning true stops the descent too
 /// (then the return is false).
 bool for_each_crossing_pair(
     const MeshBvh& a, const MeshBvh& b, const Relative& rel, long long max_work, long long* work, bool witnesses,
-    const std::function<bool(std::int32_t, std::int32_t, const Vec3*, const Vec3*, const Vec3&)>& visit);
+    const std::function<bool(std::int32_t, std::int32_t, const Vec3*, const Vec3*, const Vec3&, bool)>& visit);
 
 /// Parameters along [p, q] (mesh's local frame) where the segment meets the mesh's surface in
 /// isolated points, appended to `out` (mesh_intersection.cpp).

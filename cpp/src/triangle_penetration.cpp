@@ -66,9 +66,10 @@ inline Overlap overlap_on(const Vec3& c, const Vec3 a[3], const Vec3 b[3]) {
     return up <= down ? Overlap{up / length, length, u, false} : Overlap{down / length, length, u, true};
 }
 
-}  // namespace
-
-TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool points) {
+// triangle_penetration without its points, its two kinds of pair each compiled alone (the
+// general one skips the exact tests whose answers it knows; the other keeps its code as it was).
+template <bool general>
+TrianglePenetration penetration(const Vec3 a[3], const Vec3 b[3]) {
     TrianglePenetration out;
     out.normal = out.point_a = out.point_b = Vec3{kNaN, kNaN, kNaN};
     const Vec3 ea[3] = {a[1] - a[0], a[2] - a[1], a[0] - a[2]};
@@ -76,15 +77,16 @@ TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool 
     const Vec3 na = cross(ea[0], a[2] - a[0]), nb = cross(eb[0], b[2] - b[0]);
     const auto nonzero = [](const Vec3& v) { return v.x != 0.0 || v.y != 0.0 || v.z != 0.0; };
     // A triangle with collinear corners (exactly) has no plane; its rounded normal is no axis.
-    const bool a_plane = nonzero(na) && !collinear(a[0], a[1], a[2]);
-    const bool b_plane = nonzero(nb) && !collinear(b[0], b[1], b[2]);
+    // In a general pair neither is collinear (every orientation of its plane would be 0).
+    const bool a_plane = nonzero(na) && (general || !collinear(a[0], a[1], a[2]));
+    const bool b_plane = nonzero(nb) && (general || !collinear(b[0], b[1], b[2]));
     // Exactly coplanar: the difference is flat, the depth 0 (the orientation signs are exact,
     // as in triangles_intersect, where rounded axes would give a few ulps instead).
     const auto on_plane = [](const Vec3* t, const Vec3* other) {
         return orient3d(t[0], t[1], t[2], other[0]) == 0.0 && orient3d(t[0], t[1], t[2], other[1]) == 0.0 &&
                orient3d(t[0], t[1], t[2], other[2]) == 0.0;
     };
-    const bool coplanar = a_plane ? on_plane(a, b) : (b_plane && on_plane(b, a));
+    const bool coplanar = !general && (a_plane ? on_plane(a, b) : (b_plane && on_plane(b, a)));
     if (coplanar) {
         out.depth = 0.0;
         out.axis = a_plane ? 0 : 1;
@@ -111,6 +113,13 @@ TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool 
         // No axis: both are points or segments on one line, a flat difference.
         out.depth = out.axis < 0 ? 0.0 : (best > 0.0 ? best : 0.0);
     }
+    return out;
+}
+
+}  // namespace
+
+TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool points, bool general) {
+    TrianglePenetration out = general ? penetration<true>(a, b) : penetration<false>(a, b);
     if (points) triangle_penetration_points(a, b, out);
     return out;
 }
@@ -129,7 +138,22 @@ void triangle_penetration_points(const Vec3 a[3], const Vec3 b[3], TrianglePenet
     const Vec3 shift = p.normal * p.depth;
     const Vec3 moved[3] = {b[0] + shift, b[1] + shift, b[2] + shift};
     Vec3 on_moved;
-    triangle_separated_squared_distance(a, moved, &p.point_a, &on_moved);
+    // a and b moved by the depth touch, up to the rounding of the depth and the move (a few
+    // ulps of the coordinates): the search limited to 1e-10 of the largest coordinate gives the
+    // same value and points (triangle.hpp: triangle_separated_squared_distance_below, its slack
+    // above the 3e-14 it needs) and skips the feature pairs that cannot be the closest. Should
+    // the pair be farther than that after all, the full search.
+    // Plain compares: a NaN corner is passed over, and its NaN distance fails the limit.
+    double reach = 0.0;
+    for (int k = 0; k < 3; ++k)
+        for (const Vec3* v : {&a[k], &moved[k]})
+            for (const double c : {std::fabs(v->x), std::fabs(v->y), std::fabs(v->z)})
+                reach = c > reach ? c : reach;
+    const double limit = 1e-10 * reach;
+    const double found2 =
+        triangle_separated_squared_distance_below(a, moved, limit * limit, 4e-14 * reach, &p.point_a, &on_moved);
+    if (!(found2 <= limit * limit))
+        triangle_separated_squared_distance(a, moved, &p.point_a, &on_moved);
     p.point_b = on_moved - shift;
 }
 

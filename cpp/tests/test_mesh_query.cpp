@@ -534,3 +534,39 @@ TEST_CASE("mesh query: the ordered crossing descent gives every pair the brute-f
     CHECK(crossing >= 20);
     CHECK(apart >= 20);
 }
+
+TEST_CASE("mesh query: the descents' triangle test gives triangles_intersect's verdict") {
+    // Small integer corners put many corners exactly on the other's plane and many pairs
+    // exactly touching (the verdicts the quick path must leave to triangles_intersect or decide
+    // with closed segments); random reals exercise the quick path on nearly every pair; a
+    // triangle in a coordinate plane with the other's corners on it, or a unit to either side,
+    // the flush pairs (a point or an edge on a floor, in or out of its triangle).
+    std::mt19937_64 rng(11);
+    std::uniform_int_distribution<int> small(-3, 3), side(-1, 1);
+    std::uniform_real_distribution<double> real(-1.0, 1.0);
+    int meets = 0;
+    for (int k = 0; k < 300000; ++k) {
+        Vec3 a[3], b[3];
+        const int axis = k % 3;
+        const double level = small(rng);
+        for (int c = 0; c < 3; ++c) {
+            if (k % 3 == 0) {
+                a[c] = {double(small(rng)), double(small(rng)), double(small(rng))};
+                b[c] = {double(small(rng)), double(small(rng)), double(small(rng))};
+            } else if (k % 3 == 1) {
+                a[c] = {real(rng), real(rng), real(rng)};
+                b[c] = {real(rng), real(rng), real(rng)};
+            } else {
+                a[c] = {double(small(rng)), double(small(rng)), double(small(rng))};
+                b[c] = {double(small(rng)), double(small(rng)), double(small(rng))};
+                a[c][axis] = level;
+                b[c][axis] = level + side(rng);
+            }
+        }
+        const bool expected = triangles_intersect(a, b, nullptr);
+        meets += expected;
+        CHECK(mesh_detail::triangles_meet(a, b) == expected);
+        CHECK(mesh_detail::triangles_meet(b, a) == expected);
+    }
+    CHECK(meets > 20000);
+}

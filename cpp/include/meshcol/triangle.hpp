@@ -99,8 +99,11 @@ struct TrianglePenetration {
 /// (a degenerate triangle) is no axis. Exactly coplanar triangles (orient3d) have depth 0 and
 /// a's normal (b's when a is degenerate). For triangles that do not intersect the result
 /// means nothing. With `points`, the witness points (the closest points of a and of b moved
-/// by depth * normal, Ericson 2004, 5.1.9).
-TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool points = true);
+/// by depth * normal, Ericson 2004, 5.1.9). `general`: the caller has found (exactly) that no
+/// corner of either triangle lies on the other's plane, so neither is degenerate nor are they
+/// coplanar; those tests are then skipped (the same answer).
+TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool points = true,
+                                         bool general = false);
 
 /// The witness points of `p`, a `triangle_penetration(a, b, false)` of the same triangles (its
 /// depth and normal): what `points` adds, for a caller that keeps the penetration and wants
