@@ -192,6 +192,11 @@ SLOW_TESTS = {
     "test_combined_ucx_and_glb_layouts",
     "test_every_profile_meets_its_limits_or_says_which",
     "test_nested_meshes_without_crossing",
+    # session 26: the fast lane took 45-51 s of tests on a quiet 2-core machine; these three
+    # took 3.2-4.8 s each (two wait on timed fake steps in a child process)
+    "test_single_file_line_shows_time_left_on_a_terminal",
+    "test_no_progress_lines_off_a_terminal",
+    "test_results_keep_no_memory_or_references",
 }
 
 
