@@ -323,17 +323,24 @@ bool blow_up(MinkowskiDifference& md, Simplex& s, double tol) {
 // expand around that edge (up to `defaults::epa_touching_supports` supports in all). A
 // segment's or point's candidate is the centre line, perpendicular to the segment. False
 // when none holds, with `md`'s climb state as it was (EPA then runs as if this had not).
+// The part of `line` perpendicular to segment direction d (a flat simplex's normal towards b
+// when the simplex is a segment).
+Vec3 off_segment(const Vec3& line, const Vec3& d) {
+    return line - d * (dot(line, d) / std::fmax(squared_norm(d), defaults::epa_min_squared_length));
+}
+
 bool touching_normal(MinkowskiDifference& md, const Simplex& s, double tol, EpaResult& res) {
     const SimplexVertex* v = s.vertices;
     const Vec3 line = md.translation_b;
     const int hint_a = md.hint_a, hint_b = md.hint_b;
     const Vec3 last_direction = md.last_direction;
+    const auto restore = [&] {
+        md.hint_a = hint_a;
+        md.hint_b = hint_b;
+        md.last_direction = last_direction;
+    };
     if (s.size <= 2) {
-        Vec3 n = line;
-        if (s.size == 2) {
-            const Vec3 d = v[1].w - v[0].w;
-            n = line - d * (dot(line, d) / std::fmax(squared_norm(d), defaults::epa_min_squared_length));
-        }
+        const Vec3 n = s.size == 2 ? off_segment(line, v[1].w - v[0].w) : line;
         const double nn = squared_norm(n);
         if (!(nn > 0.0) || !std::isfinite(nn)) return false;
         const double length = std::sqrt(nn);
@@ -342,21 +349,13 @@ bool touching_normal(MinkowskiDifference& md, const Simplex& s, double tol, EpaR
         const SimplexVertex w = md.support_from(n, v[0].index_a, v[0].index_b);
         const double h = dot(n, w.w) / length;
         if (!(h <= tol)) {
-            md.hint_a = hint_a;
-            md.hint_b = hint_b;
-            md.last_direction = last_direction;
+            restore();
             return false;
-        }
-        Vec3 pa{}, pb{};
-        for (int i = 0; i < s.size; ++i) {
-            pa += v[i].a * s.weights[i];
-            pb += v[i].b * s.weights[i];
         }
         res.status = Status::CONVERGED;
         res.depth = std::fmax(0.0, h);
         res.normal = n * (1.0 / length);
-        res.point_a = pa;
-        res.point_b = pb;
+        weighted_points(s, res.point_a, res.point_b);
         res.iterations = 1;
         return true;
     }
@@ -435,9 +434,7 @@ bool touching_normal(MinkowskiDifference& md, const Simplex& s, double tol, EpaR
         away = &w;
         away_w = w.w;
     }
-    md.hint_a = hint_a;
-    md.hint_b = hint_b;
-    md.last_direction = last_direction;
+    restore();
     return false;
 }
 
@@ -607,22 +604,16 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
     if (s.size < 4 && !blow_up(md, s, tol)) {
         // The Minkowski difference is flat: the shapes touch, depth zero.
         res.status = Status::CONVERGED;
-        Vec3 pa{}, pb{};
-        for (int i = 0; i < s.size; ++i) {
-            pa += s.vertices[i].a * s.weights[i];
-            pb += s.vertices[i].b * s.weights[i];
-        }
-        res.point_a = pa;
-        res.point_b = pa;
+        Vec3 pb;
+        weighted_points(s, res.point_a, pb);
+        res.point_b = res.point_a;
         // The normal of the flat set when it has one, oriented from a to b.
         Vec3 n = md.translation_b;
         if (s.size == 3) {
             const Vec3 c = cross(s.vertices[1].w - s.vertices[0].w, s.vertices[2].w - s.vertices[0].w);
             if (norm(c) > 0.0) n = dot(c, md.translation_b) < 0.0 ? -c : c;
         } else if (s.size == 2) {
-            const Vec3 d = s.vertices[1].w - s.vertices[0].w;
-            const Vec3 c =
-                n - d * (dot(n, d) / std::fmax(squared_norm(d), defaults::epa_min_squared_length));
+            const Vec3 c = off_segment(n, s.vertices[1].w - s.vertices[0].w);
             if (norm(c) > 0.0) n = c;
         }
         const double nn = norm(n);

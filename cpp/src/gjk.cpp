@@ -323,15 +323,6 @@ std::uint64_t feature_key(const SimplexVertex& x) {
            static_cast<std::uint32_t>(x.index_b);
 }
 
-void weighted_points(const Simplex& s, Vec3& pa, Vec3& pb) {
-    pa = Vec3{};
-    pb = Vec3{};
-    for (int i = 0; i < s.size; ++i) {
-        pa += s.vertices[i].a * s.weights[i];
-        pb += s.vertices[i].b * s.weights[i];
-    }
-}
-
 // The end of a GJK run that stopped on a shrunk simplex (`size` points in the slots `order`,
 // with `weights`) touching the origin, when the simplex before that shrink (`wide` points in
 // the slots `wide_order`) is not flat: the result's points are the shrunk simplex's (the same

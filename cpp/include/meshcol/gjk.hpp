@@ -29,6 +29,17 @@ struct Simplex {
     int size = 0;
 };
 
+/// The simplex's witness points: the sums of its vertices' points on a and on b, weighted by
+/// `weights` (GJK's closest points; EPA's on a flat or touching simplex).
+inline void weighted_points(const Simplex& s, Vec3& pa, Vec3& pb) {
+    pa = Vec3{};
+    pb = Vec3{};
+    for (int i = 0; i < s.size; ++i) {
+        pa += s.vertices[i].a * s.weights[i];
+        pb += s.vertices[i].b * s.weights[i];
+    }
+}
+
 /// The Minkowski difference a - b of two posed shapes, expressed in a's local frame.
 struct MinkowskiDifference {
     const ShapeView* a = nullptr;
