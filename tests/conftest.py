@@ -204,13 +204,14 @@ SLOW_TESTS = {
 #: except the files named here, whose tests run on one worker, in order, as one unit. The
 #: Ray tests start Ray clusters on 127.0.0.1 (one at a time: test_ray_cluster.py
 #: joins only its own); the others have a module fixture worth computing once (the whole
-#: corpus inspected and hulled; a CoACD torus).
+#: corpus inspected and hulled; a CoACD torus; the package's import graph).
 XDIST_GROUPS = {
     "test_ray.py": "ray",
     "test_ray_cluster.py": "ray",
     "test_ray_local.py": "ray",
     "test_cli_inspect.py": "test_cli_inspect.py",
     "test_decompose.py": "test_decompose.py",
+    "test_architecture.py": "test_architecture.py",
 }
 
 

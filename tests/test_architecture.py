@@ -8,6 +8,7 @@ function (a lazy import is still a dependency); ``if TYPE_CHECKING:`` blocks do 
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -52,16 +53,22 @@ def _is_type_checking(node: ast.If) -> bool:
     )
 
 
+@functools.cache
+def _tree(path: Path) -> ast.Module:
+    """The parsed source of ``path``, once a run."""
+    return ast.parse(path.read_text(encoding="utf-8"))
+
+
 def _imports(path: Path) -> set[str]:
     """Every meshcol module ``path`` imports (``from meshcol import x`` names ``meshcol.x``
     when x is a module, else ``meshcol``)."""
-    tree = ast.parse(path.read_text(encoding="utf-8"))
     found: set[str] = set()
     skip: set[int] = set()
-    for node in ast.walk(tree):
+    nodes = list(ast.walk(_tree(path)))
+    for node in nodes:
         if isinstance(node, ast.If) and _is_type_checking(node):
             skip.update(id(n) for child in node.body for n in ast.walk(child))
-    for node in ast.walk(tree):
+    for node in nodes:
         if id(node) in skip:
             continue
         if isinstance(node, ast.Import):
@@ -77,9 +84,18 @@ def _imports(path: Path) -> set[str]:
 
 MODULES: dict[str, Path] = {_module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
 MODULES["meshcol._core"] = PACKAGE / "_core"  # the extension: no source to parse
-GRAPH: dict[str, set[str]] = {
-    name: _imports(path) for name, path in MODULES.items() if path.suffix == ".py"
-}
+
+
+#: The modules with a source to parse.
+SOURCES = sorted(name for name, path in MODULES.items() if path.suffix == ".py")
+
+
+@functools.cache
+def graph() -> dict[str, set[str]]:
+    """Module -> the meshcol modules it imports. Parsed on first use, not at import: every
+    xdist worker collects this file, and only the one that runs its tests (one worker:
+    conftest.py's XDIST_GROUPS) parses the package."""
+    return {name: _imports(MODULES[name]) for name in SOURCES}
 
 
 def _layer(module: str) -> str | None:
@@ -89,25 +105,25 @@ def _layer(module: str) -> str | None:
 
 def test_the_graph_is_not_empty() -> None:
     # A broken walker would pass every rule below: make sure it sees the known edges.
-    assert "meshcol.collision.shapes" in GRAPH["meshcol.collision.narrowphase"]
-    assert "meshcol._native" in GRAPH["meshcol.collision.mesh_query"]
-    assert len(GRAPH) > 30
+    assert "meshcol.collision.shapes" in graph()["meshcol.collision.narrowphase"]
+    assert "meshcol._native" in graph()["meshcol.collision.mesh_query"]
+    assert len(graph()) > 30
 
 
-@pytest.mark.parametrize("module", sorted(GRAPH))
+@pytest.mark.parametrize("module", SOURCES)
 def test_layer_rules(module: str) -> None:
     forbidden = FORBIDDEN.get(_layer(module) or "", set())
-    bad = sorted(m for m in GRAPH[module] if _layer(m) in forbidden)
+    bad = sorted(m for m in graph()[module] if _layer(m) in forbidden)
     assert not bad, f"{module} imports {bad}: see the import rules in ARCHITECTURE.md"
 
 
 def test_only_the_native_module_imports_the_core() -> None:
-    importers = sorted(m for m, deps in GRAPH.items() if "meshcol._core" in deps)
+    importers = sorted(m for m, deps in graph().items() if "meshcol._core" in deps)
     assert importers == ["meshcol._native"]
 
 
 def test_only_collision_the_mesh_readers_and_the_report_writer_use_the_native_module() -> None:
-    users = sorted(m for m, deps in GRAPH.items() if "meshcol._native" in deps)
+    users = sorted(m for m, deps in graph().items() if "meshcol._native" in deps)
     io_users = {"meshcol.io.mesh_read", "meshcol.io.polygons", "meshcol.io.report"}
     io_users.add("meshcol.io.scene_native")  # the manifest reader
     assert users and all(_layer(m) == "collision" or m in io_users for m in users), users
@@ -116,9 +132,10 @@ def test_only_collision_the_mesh_readers_and_the_report_writer_use_the_native_mo
 def test_no_import_cycles() -> None:
     # The package root re-exports everything lazily and is imported first by every module;
     # edges into it are not dependencies of the layers.
-    graph = {
-        m: {d for d in deps if d != "meshcol" and d in GRAPH}
-        for m, deps in GRAPH.items()
+    imports = graph()
+    edges = {
+        m: {d for d in deps if d != "meshcol" and d in imports}
+        for m, deps in imports.items()
         if m != "meshcol"
     }
     state: dict[str, int] = {}
@@ -127,7 +144,7 @@ def test_no_import_cycles() -> None:
     def visit(node: str) -> None:
         state[node] = 1
         stack.append(node)
-        for nxt in sorted(graph.get(node, ())):
+        for nxt in sorted(edges.get(node, ())):
             if state.get(nxt) == 1:
                 cycle = stack[stack.index(nxt) :] + [nxt]
                 pytest.fail("import cycle: " + " -> ".join(cycle))
@@ -136,7 +153,7 @@ def test_no_import_cycles() -> None:
         stack.pop()
         state[node] = 2
 
-    for node in sorted(graph):
+    for node in sorted(edges):
         if node not in state:
             visit(node)
 
@@ -160,11 +177,8 @@ def test_one_hull_mechanism() -> None:
     job): no module builds one with scipy's qhull, and only ``collision.hull`` defines the
     hull functions every other module calls."""
     qhull_users, definers = [], []
-    for name, path in MODULES.items():
-        if path.suffix != ".py":
-            continue
-        tree = ast.parse(path.read_text(encoding="utf-8"))
-        for node in ast.walk(tree):
+    for name in SOURCES:
+        for node in ast.walk(_tree(MODULES[name])):
             if (
                 isinstance(node, ast.ImportFrom)
                 and (node.module or "").startswith("scipy")
