@@ -38,6 +38,9 @@ struct Relative {
     Mat3 rotation;
     Mat3 abs_rotation;  // |rotation| element-wise, maps half extents to enclosing half extents
     Vec3 translation;
+    // The first two rows of each column of rotation, (rotation.m[0][k], rotation.m[1][k]): a
+    // column's pair side by side, for the box test's SSE2 lanes (mesh_intersection.cpp).
+    double columns01[3][2];
     // The frames are nearly aligned (b's boxes grow by under 5% when enclosed in a's frame):
     // the axis-aligned boxes are then nearly in a shared frame and bound tighter than the
     // oriented ones for nodes whose orientations differ.
@@ -67,6 +70,10 @@ struct Relative {
         slack = 1e-13 * (max_abs(translation) + a.obb_reach() + b.obb_reach());
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) abs_rotation.m[i][j] = std::fabs(rotation.m[i][j]);
+        for (int k = 0; k < 3; ++k) {
+            columns01[k][0] = rotation.m[0][k];
+            columns01[k][1] = rotation.m[1][k];
+        }
         aligned = true;
         for (int i = 0; i < 3; ++i)
             aligned = aligned && abs_rotation.m[i][0] + abs_rotation.m[i][1] + abs_rotation.m[i][2] < 1.05;
