@@ -272,9 +272,10 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
 /// line where no corner lies on the other's plane (mesh_intersection.cpp; the descents' test).
 bool triangles_meet(const Vec3* ta, const Vec3* tb);
 
-/// The descent of mesh_intersects run to the end (mesh_intersection.cpp): calls `visit(i, j,
-/// ta, tb, shared)` for every intersecting triangle pair (leaf order; b's corners mapped into
-/// a's frame), by the same exact verdict (triangles_meet), in descent order; with `witnesses`,
+/// The descent of mesh_intersects run to the end, its internal node pairs split on both sides
+/// (mesh_intersection.cpp, for_each_touching_pair's split_both): calls `visit(i, j, ta, tb,
+/// shared)` for every intersecting triangle pair (leaf order; b's corners mapped into a's
+/// frame), by the same exact verdict (triangles_meet), in descent order; with `witnesses`,
 /// `shared` is the point triangles_intersect(ta, tb, &shared) gives where the descent ran that
 /// test (a pair with a corner on the other's plane: every touching pair), else NaN; `general`
 /// says that no corner of either lies on the other's plane (exactly: triangle_penetration's
