@@ -305,17 +305,23 @@ bool for_each_touching_pair(const MeshBvh& a, const MeshBvh& b, const Relative& 
     NodePairStack stack;
     stack.push(0, 0);
     MappedLeaf leaf_b;
+    std::int32_t loaded = -1;  // b's leaf in leaf_b
     while (!stack.empty()) {
         const auto [ia, ib] = stack.pop();
         const BvhNode& x = na[static_cast<size_t>(ia)];
         const BvhNode& y = nb[static_cast<size_t>(ib)];
         if (x.is_leaf() && y.is_leaf()) {
-            leaf_b.load(b, y, rel);
+            // A descent meets b's leaf against a's sibling leaves in a row: mapped once.
+            if (ib != loaded) {
+                leaf_b.load(b, y, rel);
+                loaded = ib;
+            }
             for (std::int32_t i = x.index; i < x.index + x.count; ++i) {
                 const Vec3* ta = a.triangle(i);
                 const TriangleBox box_a = triangle_box(ta);
                 for (int j = 0; j < leaf_b.count; ++j)
-                    if (triangle_box_squared_distance(box_a, leaf_b.boxes[j]) <= margin2 &&
+                    if ((margin2 == 0.0 ? triangle_boxes_touch(box_a, leaf_b.boxes[j])
+                                        : triangle_box_squared_distance(box_a, leaf_b.boxes[j]) <= margin2) &&
                         visit(i, y.index + j, ta, leaf_b.corners[j]))
                         return true;
             }

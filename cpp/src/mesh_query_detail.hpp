@@ -122,6 +122,18 @@ inline double triangle_box_squared_distance(const TriangleBox& a, const Triangle
     return d2;
 }
 
+// triangle_box_squared_distance(a, b) == 0.0, stopping at the first axis that decides: the
+// sum is 0 exactly when every positive gap's square is (a sum of non-negative terms is 0 only
+// when each is, and a positive square rounds to a positive sum or to inf).
+inline bool triangle_boxes_touch(const TriangleBox& a, const TriangleBox& b) {
+    for (int k = 0; k < 3; ++k) {
+        double gap = a.lower[k] - b.upper[k];
+        if (gap < 0.0) gap = b.lower[k] - a.upper[k];
+        if (gap > 0.0 && gap * gap > 0.0) return false;
+    }
+    return true;
+}
+
 // b's leaf triangles mapped into a's frame, with their boxes.
 struct MappedLeaf {
     // Left uninitialised (a union member without an initialiser): `load` writes the first
