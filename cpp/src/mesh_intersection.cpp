@@ -320,8 +320,9 @@ bool for_each_touching_pair(const MeshBvh& a, const MeshBvh& b, const Relative& 
                 const Vec3* ta = a.triangle(i);
                 const TriangleBox box_a = triangle_box(ta);
                 for (int j = 0; j < leaf_b.count; ++j)
-                    if ((margin2 == 0.0 ? triangle_boxes_touch(box_a, leaf_b.boxes[j])
-                                        : triangle_box_squared_distance(box_a, leaf_b.boxes[j]) <= margin2) &&
+                    if ((margin2 == 0.0
+                             ? triangle_boxes_touch(box_a, leaf_b.boxes[j])
+                             : triangle_box_squared_distance(box_a, leaf_b.boxes[j]) <= margin2) &&
                         visit(i, y.index + j, ta, leaf_b.corners[j]))
                         return true;
             }
@@ -451,15 +452,39 @@ bool flush_verdict(const Vec3* plane, int k, const Vec3* t, Verdict* v) {
 }
 
 
+// The right-hand sides (Shewchuk's orient3d negated, exactly) of t's corners to plane's
+// plane, left at the first 0: false there. -orient3d(p0, p1, p2, q) is the determinant of the
+// rows q - p0, p1 - p0, p2 - p0, so its expansion along the first row, (q - p0) . n with
+// n = (p1 - p0) x (p2 - p0), shares n between the three corners. That expansion has the shape
+// of Shewchuk's (a row of rounded differences times the 2x2 minors of the other two, each a
+// difference of rounded products), so his forward error bound holds with the permanent formed
+// alike, and a value above it has the exact sign; else orient3d_sign decides (its own filter,
+// then the exact evaluation).
+inline bool plane_sides(const Vec3* plane, const Vec3* t, int s[3]) {
+    const Vec3 e1 = plane[1] - plane[0], e2 = plane[2] - plane[0];
+    const double yz = e1.y * e2.z, zy = e1.z * e2.y, zx = e1.z * e2.x, xz = e1.x * e2.z;
+    const double xy = e1.x * e2.y, yx = e1.y * e2.x;
+    const Vec3 n{yz - zy, zx - xz, xy - yx};
+    const Vec3 minor{std::fabs(yz) + std::fabs(zy), std::fabs(zx) + std::fabs(xz),
+                     std::fabs(xy) + std::fabs(yx)};
+    for (int k = 0; k < 3; ++k) {
+        const Vec3 f = t[k] - plane[0];
+        const double det = f.x * n.x + f.y * n.y + f.z * n.z;
+        const double permanent =
+            std::fabs(f.x) * minor.x + std::fabs(f.y) * minor.y + std::fabs(f.z) * minor.z;
+        const double bound = predicates::detail::kOrient3dBound * permanent;
+        if ((det > bound || -det > bound) && permanent > 0x1p-900) {
+            s[k] = det > 0.0 ? 1 : -1;
+        } else if ((s[k] = -predicates::orient3d_sign(plane[0], plane[1], plane[2], t[k])) == 0) {
+            return false;
+        }
+    }
+    return true;
+}
+
 inline Verdict quick_verdict(const Vec3* a, const Vec3* b) {
     using predicates::orient3d_sign;
-    // Right-hand sides (Shewchuk's orient3d negated) of t's corners to plane's plane, left at
-    // the first 0.
-    const auto sides = [](const Vec3* plane, const Vec3* t, int s[3]) {
-        for (int k = 0; k < 3; ++k)
-            if ((s[k] = -orient3d_sign(plane[0], plane[1], plane[2], t[k])) == 0) return false;
-        return true;
-    };
+    const auto sides = plane_sides;
     int sb[3], sa[3];
     Verdict flush;
     const int flat_a = flat_axis(a);
