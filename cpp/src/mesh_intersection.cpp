@@ -75,8 +75,9 @@ inline bool edge_axes_overlap(const Vec3& half_a, const Vec3& half_b, const Vec3
 // The same test with two of each three components in the lanes of an SSE2 register and the
 // third alone: IEEE's operations round the same in a lane as alone, and each value below is
 // formed by the operations of the scalar form (#else) in its order (products of two factors,
-// sums left to right), so every value and decision is the scalar form's, in about half the
-// instructions. Lanes hold components 0 and 1 of a vector, or rows 0 and 1 of a column of
+// sums left to right), so every value and decision is the scalar form's, in fewer
+// instructions (408 to 369 a test on bench_mesh_query's balls, benchmarks/RESULTS.md, session
+// 27). Lanes hold components 0 and 1 of a vector, or rows 0 and 1 of a column of
 // a_i . b_j; no separating axis is tested before the others, as their order does not change
 // the answer.
 inline bool obb_overlap(const NodeObb& a, const NodeObb& b, const Relative& rel,
@@ -88,7 +89,7 @@ inline bool obb_overlap(const NodeObb& a, const NodeObb& b, const Relative& rel,
     const auto both = [](double x) { return _mm_set1_pd(x); };
     const auto add = [](__m128d x, __m128d y) { return _mm_add_pd(x, y); };
     const auto mul = [](__m128d x, __m128d y) { return _mm_mul_pd(x, y); };
-    // (m x + n y) + o z in the lanes, and its third row alone.
+    // (m x + n y) + o z in the lanes.
     const auto combine = [&](__m128d m, __m128d n, __m128d o, double x, double y, double z) {
         return add(add(mul(m, both(x)), mul(n, both(y))), mul(o, both(z)));
     };
