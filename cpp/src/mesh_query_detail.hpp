@@ -38,6 +38,9 @@ struct Relative {
     Mat3 rotation;
     Mat3 abs_rotation;  // |rotation| element-wise, maps half extents to enclosing half extents
     Vec3 translation;
+    // The first two rows of each column of rotation, (rotation.m[0][k], rotation.m[1][k]): a
+    // column's pair side by side, for the box test's SSE2 lanes (mesh_intersection.cpp).
+    double columns01[3][2];
     // The frames are nearly aligned (b's boxes grow by under 5% when enclosed in a's frame):
     // the axis-aligned boxes are then nearly in a shared frame and bound tighter than the
     // oriented ones for nodes whose orientations differ.
@@ -67,6 +70,10 @@ struct Relative {
         slack = 1e-13 * (max_abs(translation) + a.obb_reach() + b.obb_reach());
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) abs_rotation.m[i][j] = std::fabs(rotation.m[i][j]);
+        for (int k = 0; k < 3; ++k) {
+            columns01[k][0] = rotation.m[0][k];
+            columns01[k][1] = rotation.m[1][k];
+        }
         aligned = true;
         for (int i = 0; i < 3; ++i)
             aligned = aligned && abs_rotation.m[i][0] + abs_rotation.m[i][1] + abs_rotation.m[i][2] < 1.05;
@@ -113,6 +120,18 @@ inline double triangle_box_squared_distance(const TriangleBox& a, const Triangle
         if (gap > 0.0) d2 += gap * gap;
     }
     return d2;
+}
+
+// triangle_box_squared_distance(a, b) == 0.0, stopping at the first axis that decides: the
+// sum is 0 exactly when every positive gap's square is (a sum of non-negative terms is 0 only
+// when each is, and a positive square rounds to a positive sum or to inf).
+inline bool triangle_boxes_touch(const TriangleBox& a, const TriangleBox& b) {
+    for (int k = 0; k < 3; ++k) {
+        double gap = a.lower[k] - b.upper[k];
+        if (gap < 0.0) gap = b.lower[k] - a.upper[k];
+        if (gap > 0.0 && gap * gap > 0.0) return false;
+    }
+    return true;
 }
 
 // b's leaf triangles mapped into a's frame, with their boxes.
@@ -265,9 +284,10 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
 /// line where no corner lies on the other's plane (mesh_intersection.cpp; the descents' test).
 bool triangles_meet(const Vec3* ta, const Vec3* tb);
 
-/// The descent of mesh_intersects run to the end (mesh_intersection.cpp): calls `visit(i, j,
-/// ta, tb, shared)` for every intersecting triangle pair (leaf order; b's corners mapped into
-/// a's frame), by the same exact verdict (triangles_meet), in descent order; with `witnesses`,
+/// The descent of mesh_intersects run to the end, its internal node pairs split on both sides
+/// (mesh_intersection.cpp, for_each_touching_pair's split_both): calls `visit(i, j, ta, tb,
+/// shared)` for every intersecting triangle pair (leaf order; b's corners mapped into a's
+/// frame), by the same exact verdict (triangles_meet), in descent order; with `witnesses`,
 /// `shared` is the point triangles_intersect(ta, tb, &shared) gives where the descent ran that
 /// test (a pair with a corner on the other's plane: every touching pair), else NaN; `general`
 /// says that no corner of either lies on the other's plane (exactly: triangle_penetration's

@@ -13,6 +13,10 @@
 #include <cmath>
 #include <limits>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "meshcol/triangle.hpp"
 #include "predicates.hpp"
 
@@ -49,6 +53,41 @@ struct Overlap {
     Vec3 u;
     bool down;
 };
+
+#if defined(__SSE2__)
+// The corners of a and b relative to a[0] side by side, a's in lane 0 and b's in lane 1:
+// x[k] = (a[k].x, b[k].x), and so y and z, so that one axis projects a corner of each at once.
+struct CornerLanes {
+    __m128d x[3], y[3], z[3];
+    CornerLanes(const Vec3 a[3], const Vec3 b[3]) {
+        for (int k = 0; k < 3; ++k) {
+            x[k] = _mm_set_pd(b[k].x, a[k].x);
+            y[k] = _mm_set_pd(b[k].y, a[k].y);
+            z[k] = _mm_set_pd(b[k].z, a[k].z);
+        }
+    }
+};
+
+// overlap_on below with a's and b's projections in the two lanes: each lane's dot product is
+// dot(u, corner)'s operations in its order, and _mm_min_pd(p, lo) is p < lo ? p : lo (max
+// alike), the scalar form's compares, so every value is the same.
+inline Overlap overlap_on(const Vec3& c, const CornerLanes& t) {
+    const Vec3 u = scaled(c);
+    const __m128d ux = _mm_set1_pd(u.x), uy = _mm_set1_pd(u.y), uz = _mm_set1_pd(u.z);
+    const auto project = [&](int k) {
+        const __m128d xy = _mm_add_pd(_mm_mul_pd(ux, t.x[k]), _mm_mul_pd(uy, t.y[k]));
+        return _mm_add_pd(xy, _mm_mul_pd(uz, t.z[k]));
+    };
+    const __m128d p0 = project(0), p1 = project(1), p2 = project(2);
+    const __m128d lo = _mm_min_pd(p2, _mm_min_pd(p1, p0)), hi = _mm_max_pd(p2, _mm_max_pd(p1, p0));
+    const double a_lo = _mm_cvtsd_f64(lo), b_lo = _mm_cvtsd_f64(_mm_unpackhi_pd(lo, lo));
+    const double a_hi = _mm_cvtsd_f64(hi), b_hi = _mm_cvtsd_f64(_mm_unpackhi_pd(hi, hi));
+    const double length = norm(u);
+    const double up = a_hi - b_lo, down = b_hi - a_lo;
+    return up <= down ? Overlap{up / length, length, u, false}
+                      : Overlap{down / length, length, u, true};
+}
+#endif
 
 inline Overlap overlap_on(const Vec3& c, const Vec3 a[3], const Vec3 b[3]) {
     const Vec3 u = scaled(c);
@@ -96,9 +135,16 @@ TrianglePenetration penetration(const Vec3 a[3], const Vec3 b[3]) {
         Overlap best_axis{};
         const Vec3 ra[3] = {a[0] - a[0], a[1] - a[0], a[2] - a[0]};
         const Vec3 rb[3] = {b[0] - a[0], b[1] - a[0], b[2] - a[0]};
+#if defined(__SSE2__)
+        const CornerLanes corners(ra, rb);
+#endif
         const auto consider = [&](const Vec3& c, int axis) {
             if (!nonzero(c)) return;
+#if defined(__SSE2__)
+            const Overlap o = overlap_on(c, corners);
+#else
             const Overlap o = overlap_on(c, ra, rb);
+#endif
             if (o.depth < best) {
                 best = o.depth;
                 best_axis = o;
