@@ -139,3 +139,53 @@ def test_a_batch_refuses_bad_input_as_before(batch, result_type) -> None:
         batch(shapes, p[:2], pairs)
     with pytest.raises(TypeError, match=r"^shapes must be a ConvexSet"):
         batch(object(), None, pairs)
+
+
+def symmetric_scene() -> tuple[ConvexSet, np.ndarray, np.ndarray]:
+    """Spheres tessellated symmetrically (every plane a triangle, 42-258 vertices: the shapes
+    whose supports climb) at poses on the axes and diagonals, turned by quarter turns: support
+    directions meet exactly tied vertices, and the closest points of parallel edges and faces
+    are not unique, so any start or state that a query keeps from an earlier one shows up."""
+    import trimesh
+
+    meshes = [
+        trimesh.creation.icosphere(subdivisions=1),
+        trimesh.creation.icosphere(subdivisions=2),
+        trimesh.creation.uv_sphere(count=[12, 12]),
+        trimesh.creation.capsule(height=1.0, radius=0.5, count=[10, 10]),
+        trimesh.creation.uv_sphere(count=[8, 16]),
+    ]
+    rng = np.random.default_rng(0)
+    steps = np.array([d for d in np.ndindex(3, 3, 3) if d != (1, 1, 1)], dtype=float) - 1.0
+    shapes, poses = [], []
+    for k in range(300):
+        shapes.append(np.asarray(meshes[k % len(meshes)].vertices))
+        c, s = [(1, 0), (0, 1), (-1, 0), (0, -1)][rng.integers(4)]
+        pose = np.eye(4)
+        pose[:3, :3] = [[c, -s, 0], [s, c, 0], [0, 0, 1]]
+        pose[:3, 3] = steps[rng.integers(len(steps))] * rng.choice([0.5, 1.0, 1.5, 2.0, 3.0])
+        poses.append(pose)
+    pairs = np.array(
+        [(i, j) for i in range(0, 300, 3) for j in range(i + 1, min(i + 30, 300), 2)],
+        dtype=np.int64,
+    )
+    return ConvexSet.from_vertices(shapes), np.stack(poses), pairs
+
+
+@pytest.mark.parametrize(
+    ("batch", "result_type"), BATCHES, ids=lambda x: getattr(x, "__name__", "")
+)
+def test_a_batch_answers_alike_on_every_call_and_thread_count(batch, result_type) -> None:
+    # The answer of a pair is a function of its two shapes and poses only: not of the queries
+    # the set answered before (a set keeps checked radii between calls), nor of the threads.
+    shapes, poses, pairs = symmetric_scene()
+    first = batch(shapes, poses, pairs, threads=1)
+    assert isinstance(first, result_type)
+    for threads in (1, 2, 1, 3):
+        same(batch(shapes, poses, pairs, threads=threads), first)
+    fresh, _, _ = symmetric_scene()
+    reversed_first = batch(fresh, poses, pairs[::-1].copy(), threads=1)
+    for f in dataclasses.fields(first):
+        np.testing.assert_array_equal(
+            getattr(reversed_first, f.name)[::-1], getattr(first, f.name), err_msg=f.name
+        )
