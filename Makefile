@@ -73,9 +73,14 @@ test-cpp: install-test
 # A worker that crashes (a segfault in a native library) fails the run at once: restarted,
 # xdist's load-group scheduling waits forever for the tests the dead worker held.
 XDIST := -n 2 --dist loadgroup --max-worker-restart=0
+# Bytecode, and pytest's rewritten test modules, are kept in the venv (never beside the
+# sources, gone with `make clean`), also when the shell sets PYTHONDONTWRITEBYTECODE: without
+# a cache each worker compiles the package and rewrites every test module on every run, 60%
+# of the collection.
+PYTEST_ENV := env -u PYTHONDONTWRITEBYTECODE PYTHONPYCACHEPREFIX=$(CURDIR)/$(VENV)/pycache
 test: lint test-cpp
 	@test -d ../shared/corpus || echo "WARNING: ../shared/corpus is absent: every corpus test will SKIP (the count is printed at the end)"
-	$(BIN)/pytest -q -p no:cacheprovider $(XDIST)
+	$(PYTEST_ENV) $(BIN)/pytest -q -p no:cacheprovider $(XDIST)
 
 # The stub of the native module, meshcol/_core.pyi (nanobind's stubgen), regenerated from the
 # built extension: run it after changing a binding and commit the stub (mypy reads it;
@@ -85,7 +90,7 @@ stubs: install-test
 
 # The fast lane (at most 40 s): no slow or corpus tests, a sixth of the hypothesis examples.
 test-fast: install-test
-	HYPOTHESIS_PROFILE=fast $(BIN)/pytest -q -p no:cacheprovider -m "not slow" $(XDIST)
+	$(PYTEST_ENV) HYPOTHESIS_PROFILE=fast $(BIN)/pytest -q -p no:cacheprovider -m "not slow" $(XDIST)
 
 # The fast lane with every runtime dependency at the lower end of its range (pyproject.toml),
 # in its own .venv-lowest: run it when a bound changes (it downloads those versions).
