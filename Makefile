@@ -73,11 +73,12 @@ test-cpp: install-test
 # A worker that crashes (a segfault in a native library) fails the run at once: restarted,
 # xdist's load-group scheduling waits forever for the tests the dead worker held.
 XDIST := -n 2 --dist loadgroup --max-worker-restart=0
-# Bytecode, and pytest's rewritten test modules, are kept in the venv (never beside the
-# sources, gone with `make clean`), also when the shell sets PYTHONDONTWRITEBYTECODE: without
-# a cache each worker compiles the package and rewrites every test module on every run, 60%
-# of the collection.
-PYTEST_ENV := env -u PYTHONDONTWRITEBYTECODE PYTHONPYCACHEPREFIX=$(CURDIR)/$(VENV)/pycache
+# Bytecode, and pytest's rewritten test modules, are cached (in __pycache__, git-ignored), also
+# when the shell sets PYTHONDONTWRITEBYTECODE: without a cache each worker and each CLI
+# subprocess compiles the package, and each worker rewrites every test module, on every run.
+# (A PYTHONPYCACHEPREFIX would also hide the bytecode pip wrote for the venv's libraries:
+# the first run then compiles numpy, scipy and trimesh.)
+PYTEST_ENV := env -u PYTHONDONTWRITEBYTECODE
 test: lint test-cpp
 	@test -d ../shared/corpus || echo "WARNING: ../shared/corpus is absent: every corpus test will SKIP (the count is printed at the end)"
 	$(PYTEST_ENV) $(BIN)/pytest -q -p no:cacheprovider $(XDIST)
