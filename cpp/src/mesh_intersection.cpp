@@ -4,6 +4,7 @@
 // segment crosses a surface.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <utility>
 #include <vector>
@@ -199,8 +200,12 @@ inline bool obb_overlap(const NodeObb& a, const NodeObb& b, const Relative& rel,
     }
     return edge_axes_overlap(a.half, b.half, Vec3{lane0(t01), lane1(t01), t2}, c, abs_c, slack);
 }
-#else
-inline bool obb_overlap(const NodeObb& a, const NodeObb& b, const Relative& rel, CentreLineDepth* overlap = nullptr) {
+#endif
+
+// The scalar form: the test itself where SSE2 is absent, and the reference the SSE2 form is
+// checked against everywhere (mesh_detail::box_test_forms_agree, a C++ test).
+inline bool obb_overlap_scalar(const NodeObb& a, const NodeObb& b, const Relative& rel,
+                               CentreLineDepth* overlap = nullptr) {
     const Vec3 d = rel.apply(b.center) - a.center;  // a's local frame
     const Vec3 t = a.axis_aligned ? d : a.axes * d;  // a's box frame
     const double length2 = dot(d, d);
@@ -238,6 +243,11 @@ inline bool obb_overlap(const NodeObb& a, const NodeObb& b, const Relative& rel,
             return false;
     return (!elongated(a.half) && !elongated(b.half)) ||
            edge_axes_overlap(a.half, b.half, t, c, abs_c, rel.slack);
+}
+
+#if !defined(__SSE2__)
+inline bool obb_overlap(const NodeObb& a, const NodeObb& b, const Relative& rel, CentreLineDepth* overlap = nullptr) {
+    return obb_overlap_scalar(a, b, rel, overlap);
 }
 #endif
 
@@ -452,7 +462,6 @@ bool flush_verdict(const Vec3* plane, int k, const Vec3* t, Verdict* v) {
     return true;
 }
 
-
 // The right-hand sides (Shewchuk's orient3d negated, exactly) of t's corners to plane's
 // plane, left at the first 0: false there. -orient3d(p0, p1, p2, q) is the determinant of the
 // rows q - p0, p1 - p0, p2 - p0, so its expansion along the first row, (q - p0) . n with
@@ -485,16 +494,15 @@ inline bool plane_sides(const Vec3* plane, const Vec3* t, int s[3]) {
 
 inline Verdict quick_verdict(const Vec3* a, const Vec3* b) {
     using predicates::orient3d_sign;
-    const auto sides = plane_sides;
     int sb[3], sa[3];
     Verdict flush;
     const int flat_a = flat_axis(a);
     if (flat_a >= 0 && flush_verdict(a, flat_a, b, &flush)) return flush;
-    if (!sides(a, b, sb)) return Verdict::kUndecided;
+    if (!plane_sides(a, b, sb)) return Verdict::kUndecided;
     if (sb[0] == sb[1] && sb[1] == sb[2]) return Verdict::kApart;
     const int flat_b = flat_axis(b);
     if (flat_b >= 0 && flush_verdict(b, flat_b, a, &flush)) return flush;
-    if (!sides(b, a, sa)) return Verdict::kUndecided;
+    if (!plane_sides(b, a, sa)) return Verdict::kUndecided;
     if (sa[0] == sa[1] && sa[1] == sa[2]) return Verdict::kApart;
     // The two edges of t whose corners lie on both sides, each as (positive corner, negative).
     struct Edge {
@@ -549,6 +557,16 @@ void group_near_pairs(const std::vector<std::pair<std::int32_t, std::int32_t>>& 
 namespace mesh_detail {
 
 bool triangles_meet(const Vec3* ta, const Vec3* tb) { return meet(ta, tb); }
+
+bool box_test_forms_agree(const NodeObb& a, const NodeObb& b, const Relative& rel, bool* verdict) {
+    // Filled alike where neither form writes (a pair apart on the centre line, or centres
+    // that coincide); compared as bytes, so that -0.0 and 0.0 or two NaNs would differ.
+    CentreLineDepth fast{-1.0, -1.0}, plain{-1.0, -1.0};
+    *verdict = obb_overlap(a, b, rel, &fast);
+    return *verdict == obb_overlap_scalar(a, b, rel, &plain) &&
+           std::memcmp(&fast.reach, &plain.reach, sizeof(double)) == 0 &&
+           std::memcmp(&fast.length2, &plain.length2, sizeof(double)) == 0;
+}
 
 bool first_crossing(const MeshBvh& a, const MeshBvh& b, const Relative& rel, std::int32_t* triangle_a,
                     std::int32_t* triangle_b, Vec3* witness, CrossingPair* touching) {

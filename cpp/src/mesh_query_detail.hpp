@@ -284,6 +284,12 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
 /// line where no corner lies on the other's plane (mesh_intersection.cpp; the descents' test).
 bool triangles_meet(const Vec3* ta, const Vec3* tb);
 
+/// Whether the box test of the descents (SSE2 lanes where built with SSE2) gives the scalar
+/// form's verdict, written to `*verdict`, and the same centre-line depth bits, for the boxes
+/// of a's node and b's node under `rel` (mesh_intersection.cpp; for a C++ test: the scalar form
+/// is the only one built without SSE2).
+bool box_test_forms_agree(const NodeObb& a, const NodeObb& b, const Relative& rel, bool* verdict);
+
 /// The descent of mesh_intersects run to the end, its internal node pairs split on both sides
 /// (mesh_intersection.cpp, for_each_touching_pair's split_both): calls `visit(i, j, ta, tb,
 /// shared)` for every intersecting triangle pair (leaf order; b's corners mapped into a's

@@ -221,7 +221,10 @@ TEST_CASE("triangle penetration: a general pair gives the same answer told it is
         CHECK(general.axis == full.axis);
         CHECK(general.normal.x == full.normal.x && general.normal.y == full.normal.y &&
               general.normal.z == full.normal.z);
-        CHECK(general.point_a.x == full.point_a.x && general.point_b.z == full.point_b.z);
+        CHECK(general.point_a.x == full.point_a.x && general.point_a.y == full.point_a.y &&
+              general.point_a.z == full.point_a.z);
+        CHECK(general.point_b.x == full.point_b.x && general.point_b.y == full.point_b.y &&
+              general.point_b.z == full.point_b.z);
     }
     CHECK(checked > 1000);
 }

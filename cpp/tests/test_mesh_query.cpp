@@ -547,7 +547,7 @@ TEST_CASE("mesh query: the descents' triangle test gives triangles_intersect's v
     int meets = 0;
     for (int k = 0; k < 300000; ++k) {
         Vec3 a[3], b[3];
-        const int axis = k % 3;
+        const int axis = (k / 3) % 3;  // the flush pairs' plane: x, y and z in turn
         const double level = small(rng);
         for (int c = 0; c < 3; ++c) {
             if (k % 3 == 0) {
@@ -569,4 +569,57 @@ TEST_CASE("mesh query: the descents' triangle test gives triangles_intersect's v
         CHECK(mesh_detail::triangles_meet(b, a) == expected);
     }
     CHECK(meets > 20000);
+}
+
+TEST_CASE("mesh query: the box test's SSE2 form gives the scalar form's verdicts and depths") {
+    // The descents run the SSE2 form of the oriented-box test where the build has SSE2, the
+    // scalar form elsewhere: both must decide alike, to the bit of the centre-line depth that
+    // orders mesh_intersects' descent. Random boxes (axis-aligned or turned, cubes or slabs, so
+    // that the edge axes run), random relative poses, and each pair's translation bisected to
+    // where the verdict flips, where a rounding difference would show.
+    const MeshBvh mesh = unit_cube().bvh();
+    std::uint64_t state = 977;
+    const auto uniform = [&state]() {  // in [-1, 1)
+        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+        return static_cast<double>(state >> 11) * (2.0 / 9007199254740992.0) - 1.0;
+    };
+    const auto box = [&](bool turned) {
+        NodeObb o;
+        o.center = {uniform(), uniform(), uniform()};
+        const double slab = std::fabs(uniform()) < 0.5 ? 0.01 : 1.0;  // elongated or not
+        o.half = {0.1 + std::fabs(uniform()), 0.1 + std::fabs(uniform()), slab * (0.1 + std::fabs(uniform()))};
+        o.axis_aligned = !turned;
+        if (turned) o.axes = posed(uniform(), uniform(), uniform(), uniform(), {0.0, 0.0, 0.0}).rotation;
+        return o;
+    };
+    int overlapping = 0, apart = 0, flips = 0;
+    for (int trial = 0; trial < 4000; ++trial) {
+        const NodeObb a = box(trial % 4 >= 2), b = box(trial % 2 == 1);
+        const Pose pa = posed(uniform(), uniform(), uniform(), uniform(), {uniform(), uniform(), uniform()});
+        const Vec3 direction{uniform(), uniform(), uniform()};
+        const auto verdict_at = [&](double s, bool* agree) {
+            const Pose pb = posed(uniform(), 0.3, -0.2, 0.1, pa.translation + direction * s);
+            bool verdict = false;
+            *agree = mesh_detail::box_test_forms_agree(a, b, mesh_detail::Relative(pa, pb, mesh, mesh), &verdict);
+            return verdict;
+        };
+        bool agree = false;
+        double lo = 0.0, hi = 8.0;
+        const bool near = verdict_at(lo, &agree);
+        CHECK(agree);
+        const bool far = verdict_at(hi, &agree);
+        CHECK(agree);
+        (near ? overlapping : apart) += 1;
+        (far ? overlapping : apart) += 1;
+        if (near == far) continue;
+        ++flips;
+        for (int step = 0; step < 60; ++step) {  // to the flip point, each step checked
+            const double mid = 0.5 * (lo + hi);
+            (verdict_at(mid, &agree) == near ? lo : hi) = mid;
+            CHECK(agree);
+        }
+    }
+    CHECK(overlapping > 1000);
+    CHECK(apart > 1000);
+    CHECK(flips > 1000);
 }
