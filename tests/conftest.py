@@ -81,6 +81,13 @@ PROFILE = os.environ.get("HYPOTHESIS_PROFILE", "ci")
 settings.load_profile(PROFILE)
 
 
+def sized(count: int) -> int:
+    """The input count of a property that does not draw through Hypothesis (a seeded batch
+    checked against an oracle), scaled by the profile as the example counts are: ``count``
+    under ``ci`` (``make test``), three times it under ``nightly``, half under ``fast``."""
+    return max(1, round(count * 3 * EXAMPLE_SCALE.get(PROFILE, 1.0)))
+
+
 def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addoption("--update-golden", action="store_true", help="Rewrite tests/golden/ files.")
 
@@ -197,6 +204,11 @@ SLOW_TESTS = {
     "test_single_file_line_shows_time_left_on_a_terminal",
     "test_no_progress_lines_off_a_terminal",
     "test_results_keep_no_memory_or_references",
+    # session 28: a fresh clone's fast lane took 42-45 s on a quiet 2-core machine (36-40 s
+    # once its bytecode was cached); these run the CLI with a worker pool, 1.1-1.7 s each
+    "test_changed_since_runs_what_a_commit_touched",
+    "test_the_pool_gives_the_report_of_one_process",
+    "test_search_off_only_checks",
 }
 
 
@@ -204,14 +216,17 @@ SLOW_TESTS = {
 #: except the files named here, whose tests run on one worker, in order, as one unit. The
 #: Ray tests start Ray clusters on 127.0.0.1 (one at a time: test_ray_cluster.py
 #: joins only its own); the others have a module fixture worth computing once (the whole
-#: corpus inspected and hulled; a CoACD torus; the package's import graph).
+#: corpus inspected and hulled; a CoACD torus; the package's sources parsed once, for
+#: the files that check rules on them: tests/package_source.py).
 XDIST_GROUPS = {
     "test_ray.py": "ray",
     "test_ray_cluster.py": "ray",
     "test_ray_local.py": "ray",
     "test_cli_inspect.py": "test_cli_inspect.py",
     "test_decompose.py": "test_decompose.py",
-    "test_architecture.py": "test_architecture.py",
+    "test_architecture.py": "package_source",
+    "test_code_size.py": "package_source",
+    "test_inputs.py": "package_source",
 }
 
 

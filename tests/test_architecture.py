@@ -12,8 +12,7 @@ import functools
 from pathlib import Path
 
 import pytest
-
-PACKAGE = Path(__file__).resolve().parent.parent / "meshcol"
+from package_source import PACKAGE, sources, tree
 
 #: layer -> layers it must never import (see ARCHITECTURE.md)
 FORBIDDEN: dict[str, set[str]] = {
@@ -53,18 +52,12 @@ def _is_type_checking(node: ast.If) -> bool:
     )
 
 
-@functools.cache
-def _tree(path: Path) -> ast.Module:
-    """The parsed source of ``path``, once a run."""
-    return ast.parse(path.read_text(encoding="utf-8"))
-
-
 def _imports(path: Path) -> set[str]:
     """Every meshcol module ``path`` imports (``from meshcol import x`` names ``meshcol.x``
     when x is a module, else ``meshcol``)."""
     found: set[str] = set()
     skip: set[int] = set()
-    nodes = list(ast.walk(_tree(path)))
+    nodes = list(ast.walk(tree(path)))
     for node in nodes:
         if isinstance(node, ast.If) and _is_type_checking(node):
             skip.update(id(n) for child in node.body for n in ast.walk(child))
@@ -82,7 +75,7 @@ def _imports(path: Path) -> set[str]:
     return found
 
 
-MODULES: dict[str, Path] = {_module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+MODULES: dict[str, Path] = {_module_name(p): p for p in sources()}
 MODULES["meshcol._core"] = PACKAGE / "_core"  # the extension: no source to parse
 
 
@@ -178,7 +171,7 @@ def test_one_hull_mechanism() -> None:
     hull functions every other module calls."""
     qhull_users, definers = [], []
     for name in SOURCES:
-        for node in ast.walk(_tree(MODULES[name])):
+        for node in ast.walk(tree(MODULES[name])):
             if (
                 isinstance(node, ast.ImportFrom)
                 and (node.module or "").startswith("scipy")

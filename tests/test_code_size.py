@@ -11,8 +11,7 @@ import ast
 from pathlib import Path
 
 import pytest
-
-PACKAGE = Path(__file__).resolve().parent.parent / "meshcol"
+from package_source import PACKAGE, sources, text, tree
 
 MAX_FILE_LINES = 800
 MAX_COMPLEXITY = 25
@@ -20,13 +19,8 @@ LONG_FUNCTION_LINES = 80
 MAX_LONG_FUNCTIONS = 10
 
 
-def _sources() -> list[Path]:
-    return sorted(PACKAGE.rglob("*.py"))
-
-
 def _functions(path: Path) -> list[tuple[str, int]]:
     """Every function of ``path`` as (qualified name, length in lines)."""
-    tree = ast.parse(path.read_text(encoding="utf-8"))
     found: list[tuple[str, int]] = []
 
     def visit(node: ast.AST, prefix: str) -> None:
@@ -38,14 +32,14 @@ def _functions(path: Path) -> list[tuple[str, int]]:
             elif isinstance(child, ast.ClassDef):
                 visit(child, f"{prefix}{child.name}.")
 
-    visit(tree, "")
+    visit(tree(path), "")
     return found
 
 
 def long_functions() -> list[str]:
     """Functions over LONG_FUNCTION_LINES lines, as ``path:name (lines)``."""
     rows = []
-    for path in _sources():
+    for path in sources():
         for name, lines in _functions(path):
             if lines > LONG_FUNCTION_LINES:
                 rows.append(f"{path.relative_to(PACKAGE.parent)}:{name} ({lines})")
@@ -55,8 +49,8 @@ def long_functions() -> list[str]:
 def test_no_python_file_is_over_800_lines() -> None:
     over = [
         f"{path.relative_to(PACKAGE.parent)} ({n})"
-        for path in _sources()
-        if (n := len(path.read_text(encoding="utf-8").splitlines())) > MAX_FILE_LINES
+        for path in sources()
+        if (n := len(text(path).splitlines())) > MAX_FILE_LINES
     ]
     assert not over, f"files over {MAX_FILE_LINES} lines: {over}"
 
@@ -69,8 +63,8 @@ def test_at_most_ten_functions_are_over_80_lines() -> None:
 def test_no_block_is_above_complexity_25() -> None:
     radon = pytest.importorskip("radon.complexity", reason="radon measures complexity")
     over = []
-    for path in _sources():
-        for block in radon.cc_visit(path.read_text(encoding="utf-8")):
+    for path in sources():
+        for block in radon.cc_visit_ast(tree(path)):
             if block.complexity > MAX_COMPLEXITY:
                 over.append(
                     f"{path.relative_to(PACKAGE.parent)}:{block.fullname} ({block.complexity})"

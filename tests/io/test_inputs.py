@@ -6,11 +6,10 @@ import ast
 from pathlib import Path
 
 import pytest
+from package_source import sources, tree
 
 from meshcol.io.inputs import input_kind, is_manifest, is_robot_file, is_whole_scene, root_tag
 from meshcol.vocabulary import INPUT_KINDS
-
-PACKAGE = Path(__file__).resolve().parents[2] / "meshcol"
 
 
 def write(folder: Path, name: str, text: str) -> Path:
@@ -69,10 +68,10 @@ def test_the_robot_loader_asks_the_same_function(tmp_path):
 
 def test_no_module_tests_manifest_extensions_itself():
     # Every "is this a manifest / a robot" question goes through meshcol.io.inputs.
-    for path in sorted(PACKAGE.rglob("*.py")):
+    for path in sources():
         if path.name in ("vocabulary.py", "inputs.py"):
             continue
-        tree = ast.parse(path.read_text(encoding="utf-8"))
-        names = {node.id for node in ast.walk(tree) if isinstance(node, ast.Name)}
-        names |= {node.attr for node in ast.walk(tree) if isinstance(node, ast.Attribute)}
+        nodes = list(ast.walk(tree(path)))
+        names = {node.id for node in nodes if isinstance(node, ast.Name)}
+        names |= {node.attr for node in nodes if isinstance(node, ast.Attribute)}
         assert "MANIFEST_EXTENSIONS" not in names, path
