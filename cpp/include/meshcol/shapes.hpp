@@ -103,7 +103,9 @@ void read_vertices(const ShapeView& shape);
 
 /// Asks the memory system for the data hill climbing reads (the vertices and hull adjacency of
 /// a polytope that `climbs`, when it has at most `defaults::prefetch_max_vertices` vertices)
-/// ahead of a query: no effect on any result, only on how long the climbs wait.
+/// ahead of a query: no effect on any result, only on how long the climbs wait. The neighbour
+/// lists are left out from `defaults::climb_prefetch_min_vertices` vertices on, where the
+/// climbs ask for each list they read themselves.
 void prefetch(const ShapeView& shape);
 
 /// Support point of the full shape (core plus margin) in `direction` (local frame).
