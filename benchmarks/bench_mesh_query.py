@@ -796,8 +796,11 @@ def one_run() -> None:
 
 
 def single_depth_rows() -> dict[str, tuple[trimesh.Trimesh, trimesh.Trimesh, np.ndarray]]:
-    """The three single-pair depth rows: name -> (mesh a, mesh b, b's pose; a at the origin).
-    Shared with depth_identity.py and mesh_query_driver/dump_depth_rows.py."""
+    """The four single-pair depth rows: name -> (mesh a, mesh b, b's pose; a at the origin).
+    Shared with depth_identity.py and mesh_query_driver/dump_depth_rows.py. The first three
+    pairs have equal rotations (b only moved), a case the contacts query descends by
+    axis-aligned boxes; the turned torus is the same dense overlap with b turned 20 degrees
+    about an oblique axis through its centre, which takes the oriented descent."""
     load = lambda name: trimesh.load(MODELS / name, force="mesh")
     torus = load("torus.STL")
     e = float(torus.extents[0])
@@ -811,6 +814,14 @@ def single_depth_rows() -> dict[str, tuple[trimesh.Trimesh, trimesh.Trimesh, np.
             floor,
             torus,
             pose(translation=(0, 0, -float(torus.bounds[0][2]))),
+        ),
+        "torus vs turned copy moved 30%": (
+            torus,
+            torus,
+            pose(
+                trimesh.transformations.rotation_matrix(np.radians(20.0), [1.0, 2.0, 3.0])[:3, :3],
+                (0.3 * e, 0.01 * e, 0),
+            ),
         ),
     }
 
