@@ -417,13 +417,20 @@ bool for_each_touching_pair_aligned(const MeshBvh& a, const MeshBvh& b, const Re
         const BvhNode& x = na[static_cast<size_t>(ia)];
         const BvhNode& y = nb[static_cast<size_t>(ib)];
         if (x.is_leaf() && y.is_leaf()) {
-            if (ib != loaded) {
-                leaf_b.load(b, y, rel);
-                loaded = ib;
-            }
+            // b's leaf box moved holds its mapped triangles' boxes (as aligned_boxes_touch
+            // argues): a triangle of a whose box does not touch it touches none of them.
+            const TriangleBox moved_b{Vec3{static_cast<double>(y.lower[0]) + shift.x, static_cast<double>(y.lower[1]) + shift.y,
+                                           static_cast<double>(y.lower[2]) + shift.z},
+                                      Vec3{static_cast<double>(y.upper[0]) + shift.x, static_cast<double>(y.upper[1]) + shift.y,
+                                           static_cast<double>(y.upper[2]) + shift.z}};
             for (std::int32_t i = x.index; i < x.index + x.count; ++i) {
                 const Vec3* ta = a.triangle(i);
                 const TriangleBox box_a = triangle_box(ta);
+                if (!triangle_boxes_touch(box_a, moved_b)) continue;
+                if (ib != loaded) {
+                    leaf_b.load(b, y, rel);
+                    loaded = ib;
+                }
                 for (int j = 0; j < leaf_b.count; ++j)
                     if (triangle_boxes_touch(box_a, leaf_b.boxes[j]) && visit(i, y.index + j, ta, leaf_b.corners[j]))
                         return true;
