@@ -439,10 +439,12 @@ bool for_each_touching_pair_aligned(const MeshBvh& a, const MeshBvh& b, const Re
         }
         const std::int32_t a_children[2] = {x.is_leaf() ? ia : x.index, x.is_leaf() ? -1 : ia + 1};
         const std::int32_t b_children[2] = {y.is_leaf() ? ib : y.index, y.is_leaf() ? -1 : ib + 1};
-        for (const std::int32_t child_a : a_children) {
-            if (child_a < 0) continue;
-            for (const std::int32_t child_b : b_children)
-                if (child_b >= 0 && aligned_boxes_touch(na[static_cast<size_t>(child_a)],
+        // b's children outermost: the pairs of one child of b come off the stack in a row, so
+        // its leaves, once reached, are mapped once for a's sibling leaves.
+        for (const std::int32_t child_b : b_children) {
+            if (child_b < 0) continue;
+            for (const std::int32_t child_a : a_children)
+                if (child_a >= 0 && aligned_boxes_touch(na[static_cast<size_t>(child_a)],
                                                         nb[static_cast<size_t>(child_b)], shift))
                     stack.push(child_a, child_b);
         }
