@@ -410,15 +410,23 @@ bool for_each_touching_pair_aligned(const MeshBvh& a, const MeshBvh& b, const Re
     if (!aligned_boxes_touch(na[0], nb[0], shift)) return false;
     NodePairStack stack;
     stack.push(0, 0);
-    MappedLeaf leaf_b;
+    // b's leaf in reach: its triangles' boxes in a's frame, each its local box moved (the box
+    // of its corners mapped, by the argument of aligned_boxes_touch: the least of the mapped
+    // coordinates is the least moved), and its corners mapped by rel.apply once a triangle of a
+    // touches that box.
+    struct {
+        TriangleBox boxes[defaults::mesh_bvh_leaf_size];
+        Vec3 corners[defaults::mesh_bvh_leaf_size][3];
+        bool mapped[defaults::mesh_bvh_leaf_size];
+    } leaf_b;
     std::int32_t loaded = -1;  // b's leaf in leaf_b
     while (!stack.empty()) {
         const auto [ia, ib] = stack.pop();
         const BvhNode& x = na[static_cast<size_t>(ia)];
         const BvhNode& y = nb[static_cast<size_t>(ib)];
         if (x.is_leaf() && y.is_leaf()) {
-            // b's leaf box moved holds its mapped triangles' boxes (as aligned_boxes_touch
-            // argues): a triangle of a whose box does not touch it touches none of them.
+            // b's leaf box moved holds its triangles' boxes: a triangle of a whose box does
+            // not touch it touches none of them.
             const TriangleBox moved_b{Vec3{static_cast<double>(y.lower[0]) + shift.x, static_cast<double>(y.lower[1]) + shift.y,
                                            static_cast<double>(y.lower[2]) + shift.z},
                                       Vec3{static_cast<double>(y.upper[0]) + shift.x, static_cast<double>(y.upper[1]) + shift.y,
@@ -428,12 +436,22 @@ bool for_each_touching_pair_aligned(const MeshBvh& a, const MeshBvh& b, const Re
                 const TriangleBox box_a = triangle_box(ta);
                 if (!triangle_boxes_touch(box_a, moved_b)) continue;
                 if (ib != loaded) {
-                    leaf_b.load(b, y, rel);
+                    for (int j = 0; j < y.count; ++j) {
+                        const TriangleBox local = triangle_box(b.triangle(y.index + j));
+                        leaf_b.boxes[j] = {local.lower + shift, local.upper + shift};
+                        leaf_b.mapped[j] = false;
+                    }
                     loaded = ib;
                 }
-                for (int j = 0; j < leaf_b.count; ++j)
-                    if (triangle_boxes_touch(box_a, leaf_b.boxes[j]) && visit(i, y.index + j, ta, leaf_b.corners[j]))
-                        return true;
+                for (int j = 0; j < y.count; ++j) {
+                    if (!triangle_boxes_touch(box_a, leaf_b.boxes[j])) continue;
+                    if (!leaf_b.mapped[j]) {
+                        const Vec3* t = b.triangle(y.index + j);
+                        for (int k = 0; k < 3; ++k) leaf_b.corners[j][k] = rel.apply(t[k]);
+                        leaf_b.mapped[j] = true;
+                    }
+                    if (visit(i, y.index + j, ta, leaf_b.corners[j])) return true;
+                }
             }
             continue;
         }
