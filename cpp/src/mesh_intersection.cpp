@@ -733,7 +733,11 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
 
 // The descent of mesh_intersects to the end for mesh_contacts: the same box tests, plane
 // screen and exact triangle test, no marks kept; internal node pairs split on both sides
-// (split_both: a twelfth fewer box tests on the contacts rows).
+// (split_both: a twelfth fewer box tests on the contacts rows). Under translation_only, by
+// axis-aligned boxes instead (for_each_touching_pair_aligned: the same crossing pairs, about
+// a fifth fewer instructions on bench_mesh_query's balls and torus rows, benchmarks/RESULTS.md,
+// session 28); turned pairs keep the oriented boxes, which their axis-aligned enclosures in
+// a's frame would loosen (+9% to +295% on the benchmark's family rows, the same place).
 bool for_each_crossing_pair(
     const MeshBvh& a, const MeshBvh& b, const Relative& rel, long long max_work, long long* work, bool witnesses,
     const std::function<bool(std::int32_t, std::int32_t, const Vec3*, const Vec3*, const Vec3&, bool)>& visit) {
