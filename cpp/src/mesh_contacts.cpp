@@ -115,12 +115,19 @@ MeshContactsOutput mesh_contacts(const MeshContactsInput& input, std::vector<Mes
     out.triangle_a = deepest.triangle_a;
     out.triangle_b = deepest.triangle_b;
     if (listed) {
-        std::sort(found.begin(), found.end(), [](const Found& x, const Found& y) {
-            return std::tie(x.face_a, x.face_b) < std::tie(y.face_a, y.face_b);
-        });
+        // In order of (face_a, face_b), each pair once: sorted as one key each (a face index is
+        // below 2^31, MeshBvh's limit) beside its place in `found`, not the 88-byte entries.
+        struct Key {
+            std::uint64_t faces;
+            size_t at;
+        };
+        std::vector<Key> order(found.size());
+        for (size_t k = 0; k < found.size(); ++k)
+            order[k] = Key{static_cast<std::uint64_t>(found[k].face_a) << 32 | static_cast<std::uint64_t>(found[k].face_b), k};
+        std::sort(order.begin(), order.end(), [](const Key& x, const Key& y) { return x.faces < y.faces; });
         const auto kept = static_cast<size_t>(std::min<std::int64_t>(input.max_contacts, out.count));
         contacts->reserve(kept);
-        for (size_t k = 0; k < kept; ++k) contacts->push_back(contact_of(found[k], a, b, rel, input.pose_a));
+        for (size_t k = 0; k < kept; ++k) contacts->push_back(contact_of(found[order[k].at], a, b, rel, input.pose_a));
     }
     return out;
 }
