@@ -34,14 +34,19 @@ bool deeper(const Found& x, const Found& y) {
     return std::tie(x.face_a, x.face_b) < std::tie(y.face_a, y.face_b);
 }
 
-// The contact of pair `f` in the world frame (b's triangle mapped into a's frame again, as
-// the descent mapped it, so the depth is the same bits). A depth-0 pair's witness points are
-// the point the exact test shared, when the descent kept it: triangle_penetration_points would
-// run that test again on the same triangles for the same point.
-MeshContact contact_of(const Found& f, const MeshBvh& a, const MeshBvh& b, const Relative& rel, const Pose& pose_a) {
+// A found pair to list, with its triangle of b as the descent mapped it into a's frame.
+struct Listed {
+    Found found;
+    Vec3 tb[3];
+};
+
+// The contact of pair `f` in the world frame, tb its triangle of b mapped into a's frame as
+// the descent mapped it (the same bits, so the points are those of the depth's triangles). A
+// depth-0 pair's witness points are the point the exact test shared, when the descent kept it:
+// triangle_penetration_points would run that test again on the same triangles for the same
+// point.
+MeshContact contact_of(const Found& f, const Vec3* tb, const MeshBvh& a, const Pose& pose_a) {
     const Vec3* ta = a.triangle(f.i);
-    const Vec3* local_b = b.triangle(f.j);
-    const Vec3 tb[3] = {rel.apply(local_b[0]), rel.apply(local_b[1]), rel.apply(local_b[2])};
     TrianglePenetration p;
     p.depth = f.depth;
     p.normal = f.normal;
@@ -89,7 +94,7 @@ MeshContactsOutput mesh_contacts(const MeshContactsInput& input, std::vector<Mes
     }
     const Relative rel(input.pose_a, input.pose_b, a, b);
     const bool listed = contacts != nullptr && input.max_contacts > 0;
-    std::vector<Found> found;
+    std::vector<Listed> found;
     Found best{-1.0, 0.0, -1, -1, -1, -1, Vec3{}, Vec3{kNaN, kNaN, kNaN}};
     long long work = 0;
     const bool capped = for_each_crossing_pair(
@@ -100,7 +105,7 @@ MeshContactsOutput mesh_contacts(const MeshContactsInput& input, std::vector<Mes
             const Found f{p.depth, face_depth(a, i, ta, tb), a.face_index(i), b.face_index(j), i, j, p.normal, shared};
             if (best.i < 0 || deeper(f, best)) best = f;
             out.face_depth = max2(out.face_depth, f.face_depth);
-            if (listed) found.push_back(f);
+            if (listed) found.push_back(Listed{f, {tb[0], tb[1], tb[2]}});
             return false;
         });
     out.status = capped ? Status::MAX_ITERATIONS : Status::CONVERGED;
@@ -108,19 +113,33 @@ MeshContactsOutput mesh_contacts(const MeshContactsInput& input, std::vector<Mes
         out.depth = 0.0;
         return out;
     }
-    const MeshContact deepest = contact_of(best, a, b, rel, input.pose_a);
+    const Vec3* local_b = b.triangle(best.j);
+    const Vec3 best_b[3] = {rel.apply(local_b[0]), rel.apply(local_b[1]), rel.apply(local_b[2])};
+    const MeshContact deepest = contact_of(best, best_b, a, input.pose_a);
     out.depth = deepest.depth;
     out.normal = deepest.normal;
     out.point = deepest.point;
     out.triangle_a = deepest.triangle_a;
     out.triangle_b = deepest.triangle_b;
     if (listed) {
-        std::sort(found.begin(), found.end(), [](const Found& x, const Found& y) {
-            return std::tie(x.face_a, x.face_b) < std::tie(y.face_a, y.face_b);
-        });
+        // In order of (face_a, face_b), each pair once: sorted as one key each (a face index is
+        // below 2^31, MeshBvh's limit) beside its place in `found`, not the 88-byte entries.
+        struct Key {
+            std::uint64_t faces;
+            size_t at;
+        };
+        std::vector<Key> order(found.size());
+        for (size_t k = 0; k < found.size(); ++k)
+            order[k] = Key{static_cast<std::uint64_t>(found[k].found.face_a) << 32 |
+                               static_cast<std::uint64_t>(found[k].found.face_b),
+                           k};
+        std::sort(order.begin(), order.end(), [](const Key& x, const Key& y) { return x.faces < y.faces; });
         const auto kept = static_cast<size_t>(std::min<std::int64_t>(input.max_contacts, out.count));
         contacts->reserve(kept);
-        for (size_t k = 0; k < kept; ++k) contacts->push_back(contact_of(found[k], a, b, rel, input.pose_a));
+        for (size_t k = 0; k < kept; ++k) {
+            const Listed& l = found[order[k].at];
+            contacts->push_back(contact_of(l.found, l.tb, a, input.pose_a));
+        }
     }
     return out;
 }

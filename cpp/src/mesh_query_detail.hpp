@@ -290,8 +290,16 @@ bool triangles_meet(const Vec3* ta, const Vec3* tb);
 /// is the only one built without SSE2).
 bool box_test_forms_agree(const NodeObb& a, const NodeObb& b, const Relative& rel, bool* verdict);
 
+/// Whether the SSE2 form of triangle_penetration's projection (a's and b's corners in the two
+/// lanes, where built with SSE2) gives the scalar form's overlap, to the bit, on each of the
+/// pair's 11 candidate axes (triangle_penetration.cpp; for a C++ test: the scalar form is the
+/// only one built without SSE2). `*down`: the direction the scalar form picks on a's normal.
+bool penetration_axis_forms_agree(const Vec3 a[3], const Vec3 b[3], bool* down);
+
 /// The descent of mesh_intersects run to the end, its internal node pairs split on both sides
-/// (mesh_intersection.cpp, for_each_touching_pair's split_both): calls `visit(i, j, ta, tb,
+/// (mesh_intersection.cpp, for_each_touching_pair's split_both; by axis-aligned boxes in a's
+/// frame when rel's rotation is the identity, for_each_touching_pair_aligned, which reaches
+/// every triangle pair whose boxes touch): calls `visit(i, j, ta, tb,
 /// shared)` for every intersecting triangle pair (leaf order; b's corners mapped into a's
 /// frame), by the same exact verdict (triangles_meet), in descent order; with `witnesses`,
 /// `shared` is the point triangles_intersect(ta, tb, &shared) gives where the descent ran that

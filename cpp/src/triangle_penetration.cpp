@@ -17,7 +17,10 @@
 #include <emmintrin.h>
 #endif
 
+#include <cstring>
+
 #include "meshcol/triangle.hpp"
+#include "mesh_query_detail.hpp"
 #include "predicates.hpp"
 
 namespace meshcol {
@@ -89,6 +92,8 @@ inline Overlap overlap_on(const Vec3& c, const CornerLanes& t) {
 }
 #endif
 
+// The scalar form: the projection where SSE2 is absent, and the reference the SSE2 form is
+// checked against everywhere (mesh_detail::penetration_axis_forms_agree, a C++ test).
 inline Overlap overlap_on(const Vec3& c, const Vec3 a[3], const Vec3 b[3]) {
     const Vec3 u = scaled(c);
     double a_lo = dot(u, a[0]), a_hi = a_lo;
@@ -163,6 +168,41 @@ TrianglePenetration penetration(const Vec3 a[3], const Vec3 b[3]) {
 }
 
 }  // namespace
+
+namespace mesh_detail {
+
+bool penetration_axis_forms_agree(const Vec3 a[3], const Vec3 b[3], bool* down) {
+    // The corners relative to a[0] and the 11 candidate axes, as penetration forms them.
+    const Vec3 ra[3] = {a[0] - a[0], a[1] - a[0], a[2] - a[0]};
+    const Vec3 rb[3] = {b[0] - a[0], b[1] - a[0], b[2] - a[0]};
+    const Vec3 ea[3] = {a[1] - a[0], a[2] - a[1], a[0] - a[2]};
+    const Vec3 eb[3] = {b[1] - b[0], b[2] - b[1], b[0] - b[2]};
+    Vec3 axes[11] = {cross(ea[0], a[2] - a[0]), cross(eb[0], b[2] - b[0])};
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) axes[2 + 3 * i + j] = cross(ea[i], eb[j]);
+#if defined(__SSE2__)
+    const CornerLanes lanes(ra, rb);
+#endif
+    const auto same = [](double x, double y) { return std::memcmp(&x, &y, sizeof(double)) == 0; };
+    bool agree = true;
+    *down = false;
+    for (int k = 0; k < 11; ++k) {
+        const Vec3& c = axes[k];
+        if (c.x == 0.0 && c.y == 0.0 && c.z == 0.0) continue;  // penetration skips it
+        const Overlap plain = overlap_on(c, ra, rb);
+#if defined(__SSE2__)
+        const Overlap fast = overlap_on(c, lanes);
+#else
+        const Overlap fast = plain;
+#endif
+        if (k == 0) *down = plain.down;
+        agree = agree && fast.down == plain.down && same(fast.depth, plain.depth) && same(fast.length, plain.length) &&
+                same(fast.u.x, plain.u.x) && same(fast.u.y, plain.u.y) && same(fast.u.z, plain.u.z);
+    }
+    return agree;
+}
+
+}  // namespace mesh_detail
 
 TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool points, bool general) {
     TrianglePenetration out = general ? penetration<true>(a, b) : penetration<false>(a, b);

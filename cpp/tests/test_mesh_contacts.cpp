@@ -10,6 +10,7 @@
 #include "fixtures.hpp"
 #include "meshcol/mesh_query.hpp"
 #include "meshcol/triangle.hpp"
+#include "mesh_query_detail.hpp"
 
 using namespace meshcol;
 using fixtures::at;
@@ -227,4 +228,56 @@ TEST_CASE("triangle penetration: a general pair gives the same answer told it is
               general.point_b.z == full.point_b.z);
     }
     CHECK(checked > 1000);
+}
+
+TEST_CASE("triangle penetration: the SSE2 projection gives the scalar form's overlaps") {
+    // The contacts run the SSE2 form of the penetration's projection where the build has SSE2,
+    // the scalar form elsewhere: every axis's overlap must be the same bits in both. Random
+    // real pairs over many scales, small-integer pairs (equal projections: the min and max
+    // ties), and each real pair's b moved along a's normal to where the scalar form's
+    // direction on that axis flips (up == down), where a rounding difference would show.
+    std::mt19937_64 rng(29);
+    std::uniform_real_distribution<double> real(-1.0, 1.0);
+    std::uniform_int_distribution<int> small(-2, 2), decade(-30, 30);
+    int flips = 0, pairs = 0;
+    for (int trial = 0; trial < 6000; ++trial) {
+        Vec3 a[3], b[3];
+        const bool integers = trial % 3 == 0;
+        const double scale = integers ? 1.0 : std::ldexp(1.0, decade(rng));
+        for (int c = 0; c < 3; ++c) {
+            a[c] = integers ? Vec3{double(small(rng)), double(small(rng)), double(small(rng))}
+                            : Vec3{real(rng), real(rng), real(rng)} * scale;
+            b[c] = integers ? Vec3{double(small(rng)), double(small(rng)), double(small(rng))}
+                            : Vec3{real(rng), real(rng), real(rng)} * scale;
+        }
+        bool down = false;
+        CHECK(mesh_detail::penetration_axis_forms_agree(a, b, &down));
+        CHECK(mesh_detail::penetration_axis_forms_agree(b, a, &down));
+        ++pairs;
+        if (integers) continue;
+        // b moved by s times a's normal: `down` on that axis flips once as s grows.
+        const Vec3 n = cross(a[1] - a[0], a[2] - a[0]);
+        const auto down_at = [&](double s, bool* agree) {
+            const Vec3 moved[3] = {b[0] + n * s, b[1] + n * s, b[2] + n * s};
+            bool d = false;
+            *agree = mesh_detail::penetration_axis_forms_agree(a, moved, &d);
+            return d;
+        };
+        const double reach = 4.0 * scale / std::max(norm(n), 1e-300);
+        double lo = -reach, hi = reach;
+        bool agree = false;
+        const bool low = down_at(lo, &agree);
+        CHECK(agree);
+        const bool high = down_at(hi, &agree);
+        CHECK(agree);
+        if (low == high) continue;
+        ++flips;
+        for (int step = 0; step < 64; ++step) {  // to the flip point, each step checked
+            const double mid = 0.5 * (lo + hi);
+            (down_at(mid, &agree) == low ? lo : hi) = mid;
+            CHECK(agree);
+        }
+    }
+    CHECK(pairs == 6000);
+    CHECK(flips > 2000);
 }

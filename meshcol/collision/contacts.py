@@ -122,7 +122,8 @@ def mesh_contacts_batch(
     threads : int
         Worker threads; 0 means all cores.
     max_work : int
-        Work cap a pair (>= 0): triangle pairs whose boxes touch, each tested exactly.
+        Work cap a pair (>= 0): triangle pairs whose boxes touch, each tested exactly (those
+        the descent reaches; all of them when the two poses' rotations are equal).
 
     Returns
     -------
@@ -137,8 +138,9 @@ def mesh_contacts_batch(
     Notes
     -----
     The crossing pairs are those of :func:`meshcol.collision.mesh_query.mesh_intersects_batch`'s
-    descent run to the end: overlapping oriented boxes of both hierarchies, then the exact
-    triangle-triangle test (orientation signs, Guigue and Devillers 2003). Each pair's depth is
+    descent run to the end: overlapping oriented boxes of both hierarchies (when the two
+    poses' rotations are equal, axis-aligned boxes in a's frame, b's moved by the
+    translation), then the exact triangle-triangle test (orientation signs, Guigue and Devillers 2003). Each pair's depth is
     the separating axis theorem's over the two face normals and the nine edge-edge cross
     products (Gottschalk, Lin and Manocha 1996; Ericson 2004, 4.4): the facets of the two
     triangles' Minkowski difference have normals among these, so the minimum overlap is the

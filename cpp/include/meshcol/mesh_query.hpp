@@ -114,8 +114,9 @@ struct MeshContactsInput {
     /// Every contact is listed (in `contacts`, when given) up to this many, >= 0; the count
     /// and the deepest contact are over all crossing pairs whatever it is.
     std::int64_t max_contacts = 0;
-    /// Work cap: triangle pairs whose boxes touch (each tested exactly), >= 0; past it the
-    /// pair is MAX_ITERATIONS.
+    /// Work cap: triangle pairs whose boxes touch (each tested exactly; those the descent
+    /// reaches, all of them when the two rotations are equal), >= 0; past it the pair is
+    /// MAX_ITERATIONS.
     long long max_work = defaults::mesh_contacts_max_work;
 };
 
