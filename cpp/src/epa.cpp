@@ -457,14 +457,16 @@ Polytope& thread_polytope() {
     return *scratch_address;
 }
 
-// Starts `poly` from the tetrahedron `v` (any orientation; reordered in place).
-void start_tetrahedron(Polytope& poly, SimplexVertex v[4]) {
+// Starts `poly` from the tetrahedron `v` (any orientation: v[1] and v[2] are added the
+// other way round when it is clockwise).
+void start_tetrahedron(Polytope& poly, const SimplexVertex v[4]) {
     poly.reset();
-    {
-        const Vec3 a = v[0].w, b = v[1].w, c = v[2].w, d = v[3].w;
-        if (dot(cross(b - a, c - a), d - a) > 0.0) std::swap(v[1], v[2]);
-    }
-    for (int i = 0; i < 4; ++i) poly.add_vertex(v[i]);
+    const Vec3 a = v[0].w, b = v[1].w, c = v[2].w, d = v[3].w;
+    const bool swap = dot(cross(b - a, c - a), d - a) > 0.0;
+    poly.add_vertex(v[0]);
+    poly.add_vertex(v[swap ? 2 : 1]);
+    poly.add_vertex(v[swap ? 1 : 2]);
+    poly.add_vertex(v[3]);
     // Outward orientation: (0,1,2) has the opposite vertex 3 behind it. Each edge i -> j of a
     // face meets j -> i of its neighbour.
     poly.add_face(0, 1, 2);
@@ -613,8 +615,14 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
     for (int i = 0; i < start.size && clear; ++i)
         clear = start.weights[i] > defaults::epa_touching_max_weight;
     if (!clear && touching_normal(md, start, tol, res)) return res;
+    Polytope& poly = thread_polytope();
+    if (start.size == 4) {
+        // GJK's tetrahedron as it is: no copy of the simplex.
+        start_tetrahedron(poly, start.vertices);
+        return expand_to_depth(md, poly, opt, tol);
+    }
     Simplex s = start;
-    if (s.size < 4 && !blow_up(md, s, tol)) {
+    if (!blow_up(md, s, tol)) {
         // The Minkowski difference is flat: the shapes touch, depth zero.
         res.status = Status::CONVERGED;
         Vec3 pb;
@@ -633,7 +641,6 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
         res.normal = nn > 0.0 ? n / nn : Vec3{1.0, 0.0, 0.0};
         return res;
     }
-    Polytope& poly = thread_polytope();
     start_tetrahedron(poly, s.vertices);
     return expand_to_depth(md, poly, opt, tol);
 }
