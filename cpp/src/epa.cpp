@@ -615,9 +615,9 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
     for (int i = 0; i < start.size && clear; ++i)
         clear = start.weights[i] > defaults::epa_touching_max_weight;
     if (!clear && touching_normal(md, start, tol, res)) return res;
-    Polytope& poly = thread_polytope();
     if (start.size == 4) {
         // GJK's tetrahedron as it is: no copy of the simplex.
+        Polytope& poly = thread_polytope();
         start_tetrahedron(poly, start.vertices);
         return expand_to_depth(md, poly, opt, tol);
     }
@@ -641,6 +641,7 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
         res.normal = nn > 0.0 ? n / nn : Vec3{1.0, 0.0, 0.0};
         return res;
     }
+    Polytope& poly = thread_polytope();
     start_tetrahedron(poly, s.vertices);
     return expand_to_depth(md, poly, opt, tol);
 }
