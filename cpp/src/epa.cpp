@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <initializer_list>
 #include <limits>
+#include <new>
 #include <utility>
 
 namespace meshcol {
@@ -36,7 +37,9 @@ constexpr int kMaxFaces = 2 * defaults::epa_max_vertices;
 // faces' plane distances sit in their own array, so the search for the closest face reads
 // one contiguous run of doubles.
 struct Polytope {
-    SimplexVertex vertices[defaults::epa_max_vertices];
+    // One slot more: EPA's support call writes its point into the next slot, where
+    // `expand` keeps it without a copy (it is overwritten when the point is not kept).
+    SimplexVertex vertices[defaults::epa_max_vertices + 1];
     // (index_a, index_b) of each vertex packed in one word, for the repeated-point test;
     // kNoKey when a support point came from a curved surface (never equal to another).
     std::uint64_t keys[defaults::epa_max_vertices];
@@ -76,7 +79,12 @@ struct Polytope {
 
     void add_vertex(const SimplexVertex& w) {
         vertices[vertex_count] = w;
-        const std::uint64_t key = key_of(w);
+        keep_next_vertex();
+    }
+
+    // Adds the point already written in the next slot, `vertices[vertex_count]`.
+    void keep_next_vertex() {
+        const std::uint64_t key = key_of(vertices[vertex_count]);
         keys[vertex_count] = key;
         key_bits |= key_bit(key);
         ++vertex_count;
@@ -198,13 +206,15 @@ void face_weights(const Polytope& poly, const EpaFace& f, const Vec3& normal, do
                  normal, distance, w);
 }
 
-// Adds support point `w` to the polytope: removes every face it sees, starting from
-// `visible` (a face it sees), and closes the hole with a fan of faces over the silhouette.
-// False when the silhouette does not close or a new face passes the wrong side of the origin
-// (rounding on a degenerate polytope).
-inline bool expand(Polytope& poly, int visible, const SimplexVertex& w, double tol) {
+// Adds the support point written in the polytope's next vertex slot
+// (`poly.vertices[poly.vertex_count]`): removes every face it sees, starting from `visible`
+// (a face it sees), and closes the hole with a fan of faces over the silhouette. False when
+// the silhouette does not close or a new face passes the wrong side of the origin (rounding
+// on a degenerate polytope).
+inline bool expand(Polytope& poly, int visible, double tol) {
     const int nw = poly.vertex_count;
-    poly.add_vertex(w);
+    const Vec3 w = poly.vertices[nw].w;
+    poly.keep_next_vertex();
     // Remove the faces the new point sees (the closest one does, by construction) and
     // close the hole with a fan of faces over the silhouette, made as the walk finds its
     // edges (no list of them in between): each new face is linked to the living face beyond
@@ -215,7 +225,7 @@ inline bool expand(Polytope& poly, int visible, const SimplexVertex& w, double t
     int count = 0;
     bool ok = true;
     int first = -1, previous = -1, previous_end = -1, first_start = -1;
-    poly.silhouette(visible, w.w, [&](const HorizonEdge& h) {
+    poly.silhouette(visible, w, [&](const HorizonEdge& h) {
         ++count;
         if (!ok) return;
         const EpaFace& beyond = poly.faces[h.face];
@@ -447,14 +457,16 @@ Polytope& thread_polytope() {
     return *scratch_address;
 }
 
-// Starts `poly` from the tetrahedron `v` (any orientation; reordered in place).
-void start_tetrahedron(Polytope& poly, SimplexVertex v[4]) {
+// Starts `poly` from the tetrahedron `v` (any orientation: v[1] and v[2] are added the
+// other way round when it is clockwise).
+void start_tetrahedron(Polytope& poly, const SimplexVertex v[4]) {
     poly.reset();
-    {
-        const Vec3 a = v[0].w, b = v[1].w, c = v[2].w, d = v[3].w;
-        if (dot(cross(b - a, c - a), d - a) > 0.0) std::swap(v[1], v[2]);
-    }
-    for (int i = 0; i < 4; ++i) poly.add_vertex(v[i]);
+    const Vec3 a = v[0].w, b = v[1].w, c = v[2].w, d = v[3].w;
+    const bool swap = dot(cross(b - a, c - a), d - a) > 0.0;
+    poly.add_vertex(v[0]);
+    poly.add_vertex(v[swap ? 2 : 1]);
+    poly.add_vertex(v[swap ? 1 : 2]);
+    poly.add_vertex(v[3]);
     // Outward orientation: (0,1,2) has the opposite vertex 3 behind it. Each edge i -> j of a
     // face meets j -> i of its neighbour.
     poly.add_face(0, 1, 2);
@@ -546,7 +558,10 @@ EpaResult expand_to_depth(MinkowskiDifference& md, Polytope& poly, const EpaOpti
         const EpaFace& closest = poly.faces[best_face];
         // Warm start: the new support point lies near the face's own support points.
         const SimplexVertex& near = poly.vertices[closest.v[0]];
-        const SimplexVertex w = md.support_from(closest.normal, near.index_a, near.index_b);
+        // Made in the next vertex slot, where `expand` keeps it: initialised by the call's
+        // result (no temporary, as an assignment would make, and no copy).
+        const SimplexVertex& w = *new (&poly.vertices[poly.vertex_count])
+            SimplexVertex(md.support_from(closest.normal, near.index_a, near.index_b));
         // Lower (the face's plane) and upper (the support plane) bounds on the depth, both
         // times |normal|: the test needs no normalised normal.
         const double upper = dot(closest.normal, w.w);
@@ -560,7 +575,7 @@ EpaResult expand_to_depth(MinkowskiDifference& md, Polytope& poly, const EpaOpti
             break;
         }
         if (poly.vertex_count >= defaults::epa_max_vertices) break;
-        if (!expand(poly, best_face, w, tol)) {
+        if (!expand(poly, best_face, tol)) {
             res.status = Status::DEGENERATE;
             break;
         }
@@ -600,8 +615,14 @@ EpaResult epa_penetration(MinkowskiDifference& md, const Simplex& start, const E
     for (int i = 0; i < start.size && clear; ++i)
         clear = start.weights[i] > defaults::epa_touching_max_weight;
     if (!clear && touching_normal(md, start, tol, res)) return res;
+    if (start.size == 4) {
+        // GJK's tetrahedron as it is: no copy of the simplex.
+        Polytope& poly = thread_polytope();
+        start_tetrahedron(poly, start.vertices);
+        return expand_to_depth(md, poly, opt, tol);
+    }
     Simplex s = start;
-    if (s.size < 4 && !blow_up(md, s, tol)) {
+    if (!blow_up(md, s, tol)) {
         // The Minkowski difference is flat: the shapes touch, depth zero.
         res.status = Status::CONVERGED;
         Vec3 pb;
@@ -693,7 +714,9 @@ EpaResult epa_penetration_deep(MinkowskiDifference& md, const SimplexVertex& fir
                 visible = f;
             }
         }
-        if (visible >= 0 && !expand(poly, visible, w, tol)) return res;
+        if (visible < 0) continue;
+        poly.vertices[poly.vertex_count] = w;
+        if (!expand(poly, visible, tol)) return res;
     }
     res = expand_to_depth(md, poly, opt, tol);
     res.iterations += 6;
