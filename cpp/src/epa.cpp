@@ -5,7 +5,6 @@
 #include <initializer_list>
 #include <limits>
 #include <new>
-#include <utility>
 
 namespace meshcol {
 
