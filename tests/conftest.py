@@ -204,8 +204,8 @@ SLOW_TESTS = {
     "test_single_file_line_shows_time_left_on_a_terminal",
     "test_no_progress_lines_off_a_terminal",
     "test_results_keep_no_memory_or_references",
-    # session 28: a fresh clone's fast lane took 42-45 s on a quiet 2-core machine (36-40 s
-    # once its bytecode was cached); these run the CLI with a worker pool, 1.1-1.7 s each
+    # session 28: they run the CLI with a worker pool, 1.1-1.7 s each in the fast lane (load
+    # 3.5), where a fresh clone's lane had measured 42-45 s in session 27
     "test_changed_since_runs_what_a_commit_touched",
     "test_the_pool_gives_the_report_of_one_process",
     "test_search_off_only_checks",

@@ -367,17 +367,20 @@ bool for_each_touching_pair(const MeshBvh& a, const MeshBvh& b, const Relative& 
     return false;
 }
 
-// Whether rel maps b's frame into a's by a translation alone: its rotation is the identity,
-// exactly (Relative makes it so for equal rotations). Then rel.apply(p) is p + translation
-// rounded once per coordinate (1 p_k is p_k, a product with 0 is a zero, and adding a zero
-// changes at most the sign of a zero), so adding the translation to b's node boxes, rounded
-// the same way, bounds b's mapped corners: rounding is monotone, and a corner is inside its
-// node's box.
-inline bool translation_only(const Relative& rel) {
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-            if (rel.rotation.m[i][j] != (i == j ? 1.0 : 0.0)) return false;
-    return true;
+// Under rel.translation_only (equal rotations: Relative makes the rotation the identity,
+// exactly), rel.apply(p) is p + translation rounded once per coordinate (1 p_k is p_k, a
+// product with 0 is a zero, and adding a zero changes at most the sign of a zero), so adding
+// the translation to b's node boxes, rounded the same way, bounds b's mapped corners:
+// rounding is monotone, and a corner is inside its node's box.
+
+// Node y's box moved by `shift` (the box of its corners mapped, by the argument above).
+inline TriangleBox moved_box(const BvhNode& y, const Vec3& shift) {
+    TriangleBox box;
+    for (int k = 0; k < 3; ++k) {
+        box.lower[k] = static_cast<double>(y.lower[k]) + shift[k];
+        box.upper[k] = static_cast<double>(y.upper[k]) + shift[k];
+    }
+    return box;
 }
 
 // Whether node x of a and node y of b (moved by `shift`, a's frame) may hold a triangle pair
@@ -396,7 +399,7 @@ inline bool aligned_boxes_touch(const BvhNode& x, const BvhNode& y, const Vec3& 
     return true;
 }
 
-// for_each_touching_pair (no margin, split on both sides) for a pair under translation_only:
+// for_each_touching_pair (no margin, split on both sides) for a pair under rel.translation_only:
 // node pairs bounded by their axis-aligned boxes in a's frame (a's as built, b's moved by the
 // translation), six compares a test where the oriented boxes take about 300 instructions. It
 // visits every triangle pair whose boxes touch (each once; b's corners mapped by rel.apply as
@@ -427,10 +430,7 @@ bool for_each_touching_pair_aligned(const MeshBvh& a, const MeshBvh& b, const Re
         if (x.is_leaf() && y.is_leaf()) {
             // b's leaf box moved holds its triangles' boxes: a triangle of a whose box does
             // not touch it touches none of them.
-            const TriangleBox moved_b{Vec3{static_cast<double>(y.lower[0]) + shift.x, static_cast<double>(y.lower[1]) + shift.y,
-                                           static_cast<double>(y.lower[2]) + shift.z},
-                                      Vec3{static_cast<double>(y.upper[0]) + shift.x, static_cast<double>(y.upper[1]) + shift.y,
-                                           static_cast<double>(y.upper[2]) + shift.z}};
+            const TriangleBox moved_b = moved_box(y, shift);
             for (std::int32_t i = x.index; i < x.index + x.count; ++i) {
                 const Vec3* ta = a.triangle(i);
                 const TriangleBox box_a = triangle_box(ta);
@@ -733,7 +733,7 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
 
 // The descent of mesh_intersects to the end for mesh_contacts: the same box tests, plane
 // screen and exact triangle test, no marks kept; internal node pairs split on both sides
-// (split_both: a twelfth fewer box tests on the contacts rows). Under translation_only, by
+// (split_both: a twelfth fewer box tests on the contacts rows). Under rel.translation_only, by
 // axis-aligned boxes instead (for_each_touching_pair_aligned: the same crossing pairs, about
 // a fifth fewer instructions on bench_mesh_query's balls and torus rows, benchmarks/RESULTS.md,
 // session 28); turned pairs keep the oriented boxes, which their axis-aligned enclosures in
@@ -755,7 +755,7 @@ bool for_each_crossing_pair(
         Vec3 shared;
         return triangles_intersect(ta, tb, &shared) && visit(i, j, ta, tb, shared, false);
     };
-    if (translation_only(rel)) {
+    if (rel.translation_only) {
         for_each_touching_pair_aligned(a, b, rel, crossing);
     } else {
         for_each_touching_pair(a, b, rel, crossing, 0.0, false, true);

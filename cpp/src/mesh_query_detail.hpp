@@ -41,6 +41,9 @@ struct Relative {
     // The first two rows of each column of rotation, (rotation.m[0][k], rotation.m[1][k]): a
     // column's pair side by side, for the box test's SSE2 lanes (mesh_intersection.cpp).
     double columns01[3][2];
+    // The poses' rotations are equal, so `rotation` is the identity exactly (set below): b's
+    // frame maps into a's by the translation alone (the contacts' axis-aligned descent).
+    bool translation_only = false;
     // The frames are nearly aligned (b's boxes grow by under 5% when enclosed in a's frame):
     // the axis-aligned boxes are then nearly in a shared frame and bound tighter than the
     // oriented ones for nodes whose orientations differ.
@@ -60,6 +63,7 @@ struct Relative {
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j)
                 same_rotation = same_rotation && pose_a.rotation.m[i][j] == pose_b.rotation.m[i][j];
+        translation_only = same_rotation;
         if (same_rotation) {
             for (int i = 0; i < 3; ++i)
                 for (int j = 0; j < 3; ++j) rotation.m[i][j] = i == j ? 1.0 : 0.0;
@@ -298,10 +302,10 @@ bool penetration_axis_forms_agree(const Vec3 a[3], const Vec3 b[3], bool* down);
 
 /// The descent of mesh_intersects run to the end, its internal node pairs split on both sides
 /// (mesh_intersection.cpp, for_each_touching_pair's split_both; by axis-aligned boxes in a's
-/// frame when rel's rotation is the identity, for_each_touching_pair_aligned, which reaches
-/// every triangle pair whose boxes touch): calls `visit(i, j, ta, tb,
-/// shared)` for every intersecting triangle pair (leaf order; b's corners mapped into a's
-/// frame), by the same exact verdict (triangles_meet), in descent order; with `witnesses`,
+/// frame when the poses' rotations are equal, rel.translation_only:
+/// for_each_touching_pair_aligned, which reaches every triangle pair whose boxes touch):
+/// calls `visit(i, j, ta, tb, shared)` for every intersecting triangle pair (leaf order; b's
+/// corners mapped into a's frame), by the same exact verdict (triangles_meet), in descent order; with `witnesses`,
 /// `shared` is the point triangles_intersect(ta, tb, &shared) gives where the descent ran that
 /// test (a pair with a corner on the other's plane: every touching pair), else NaN; `general`
 /// says that no corner of either lies on the other's plane (exactly: triangle_penetration's

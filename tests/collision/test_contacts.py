@@ -215,6 +215,43 @@ def test_listed_contacts_match_per_pair_calls_and_the_deepest():
     np.testing.assert_array_equal(few.count, whole.count)
 
 
+def _crossing_pairs_by_brute_force(a: trimesh.Trimesh, b: trimesh.Trimesh, shift):
+    """Every (face of a, face of b) pair that crosses, b moved by ``shift`` (a's frame): each
+    pair whose boxes touch, by the exact one-triangle query; and how many pairs touch."""
+    ta = np.asarray(a.vertices)[a.faces]
+    tb = (np.asarray(b.vertices) + np.asarray(shift, float))[b.faces]
+    lo_a, hi_a, lo_b, hi_b = ta.min(1), ta.max(1), tb.min(1), tb.max(1)
+    touch = ((lo_a[:, None] <= hi_b[None]) & (lo_b[None] <= hi_a[:, None])).all(-1)
+    i, j = np.nonzero(touch)
+    crossing = _triangle_contacts(list(zip(ta[i], tb[j]))).count == 1
+    return set(zip(i[crossing].tolist(), j[crossing].tolist())), len(i)
+
+
+@pytest.mark.parametrize("case", ["tori", "boxes flush"])
+def test_equal_rotations_list_every_crossing_pair(case):
+    """Pairs whose poses' rotations are equal take the axis-aligned descent (b's node boxes
+    moved by the translation): it lists exactly the crossing pairs of every triangle pair whose
+    boxes touch, surfaces resting flush on each other included, and max_work counts each of
+    those pairs once (CHANGELOG, session 28)."""
+    if case == "tori":
+        a = b = trimesh.creation.torus(1.0, 0.3, major_sections=24, minor_sections=12)
+        shift, least = (0.45, 0.1, 0.05), 100
+    else:  # b's bottom face on a's top face: every gap there is exactly 0
+        a, b = _box((0, 0, 0), (2, 2, 1)), _box((0.5, 0.25, 0), (1.5, 1.75, 1))
+        shift, least = (0.0, 0.0, 1.0), 8
+    pose_b = np.eye(4)
+    pose_b[:3, 3] = shift
+    meshes = MeshSet.from_arrays([a, b], np.stack([np.eye(4), pose_b]), orient=False, threads=1)
+    r = mesh_contacts_batch(meshes, None, [[0, 1]], max_contacts=10**6, threads=1)
+    listed = set(zip(r.contact_triangle_a.tolist(), r.contact_triangle_b.tolist()))
+    expected, touching = _crossing_pairs_by_brute_force(a, b, shift)
+    assert len(expected) >= least and listed == expected
+    assert r.count[0] == len(expected)
+    for cap, status in ((touching, Status.CONVERGED), (touching - 1, Status.MAX_ITERATIONS)):
+        capped = mesh_contacts_batch(meshes, None, [[0, 1]], max_work=cap, threads=1)
+        assert capped.status[0] == status
+
+
 def test_every_status():
     box = _box([-1, -1, -1], [1, 1, 1])
     sheared, far, near = np.eye(4), np.eye(4), np.eye(4)
