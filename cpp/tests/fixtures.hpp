@@ -83,6 +83,21 @@ inline ShapeView polytope(const std::vector<Vec3>& points) {
     return v;
 }
 
+/// Bisects [lo, hi] `steps` times towards where `side(s, &agree)` changes value (`low` is its
+/// value at lo, another than at hi), for the tests that compare two forms of a computation at
+/// the flip points of its decision: whether the forms agreed at every probe.
+template <class Side>
+bool bisect_agreeing(Side side, double lo, double hi, bool low, int steps) {
+    bool all = true;
+    for (int step = 0; step < steps; ++step) {
+        const double mid = 0.5 * (lo + hi);
+        bool agree = false;
+        (side(mid, &agree) == low ? lo : hi) = mid;
+        all = all && agree;
+    }
+    return all;
+}
+
 /// A closed, outward-wound triangle mesh: vertices (3 per vertex) and faces (3 per triangle).
 struct TriangleMesh {
     std::vector<double> vertices;

@@ -264,7 +264,7 @@ TEST_CASE("triangle penetration: the SSE2 projection gives the scalar form's ove
             return d;
         };
         const double reach = 4.0 * scale / std::max(norm(n), 1e-300);
-        double lo = -reach, hi = reach;
+        const double lo = -reach, hi = reach;
         bool agree = false;
         const bool low = down_at(lo, &agree);
         CHECK(agree);
@@ -272,11 +272,7 @@ TEST_CASE("triangle penetration: the SSE2 projection gives the scalar form's ove
         CHECK(agree);
         if (low == high) continue;
         ++flips;
-        for (int step = 0; step < 64; ++step) {  // to the flip point, each step checked
-            const double mid = 0.5 * (lo + hi);
-            (down_at(mid, &agree) == low ? lo : hi) = mid;
-            CHECK(agree);
-        }
+        CHECK(fixtures::bisect_agreeing(down_at, lo, hi, low, 64));  // to the flip point
     }
     CHECK(pairs == 6000);
     CHECK(flips > 2000);

@@ -604,7 +604,7 @@ TEST_CASE("mesh query: the box test's SSE2 form gives the scalar form's verdicts
             return verdict;
         };
         bool agree = false;
-        double lo = 0.0, hi = 8.0;
+        const double lo = 0.0, hi = 8.0;
         const bool near = verdict_at(lo, &agree);
         CHECK(agree);
         const bool far = verdict_at(hi, &agree);
@@ -613,11 +613,7 @@ TEST_CASE("mesh query: the box test's SSE2 form gives the scalar form's verdicts
         (far ? overlapping : apart) += 1;
         if (near == far) continue;
         ++flips;
-        for (int step = 0; step < 60; ++step) {  // to the flip point, each step checked
-            const double mid = 0.5 * (lo + hi);
-            (verdict_at(mid, &agree) == near ? lo : hi) = mid;
-            CHECK(agree);
-        }
+        CHECK(fixtures::bisect_agreeing(verdict_at, lo, hi, near, 60));  // to the flip point
     }
     CHECK(overlapping > 1000);
     CHECK(apart > 1000);
