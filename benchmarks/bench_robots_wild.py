@@ -21,9 +21,11 @@ Collections (each skipped, with the reason, when its package is missing):
 For each robot:
 
 1. ``meshcol check ROBOT --report R.json``: exit 0 or 1 (a self-collision finding) counts as
-   checked, exit 2 (refused) does not; a robot whose links have no collision geometry is
-   checked with zero pairs and the finding MC506, and its outputs must load with no collider
-   (yourdfpy loads none, usd-core finds no collision prim);
+   checked, exit 2 (refused) does not, except a URDF refused for having no ``<link>`` at
+   all that pybullet and yourdfpy refuse too: no robot for anyone, listed apart and not
+   counted (a consumer that loads it makes the refusal a failure); a robot whose links have
+   no collision geometry is checked with zero pairs and the finding MC506, and its outputs
+   must load with no collider (yourdfpy loads none, usd-core finds no collision prim);
 2. ``meshcol hull ROBOT --out-dir OUT --to FMT`` for ``urdf`` (URDF inputs), ``mjcf`` and
    ``usd``; then each output is loaded:
    - URDF: ``pybullet.loadURDF`` (DIRECT, from the output folder) and ``yourdfpy.URDF.load``
@@ -291,6 +293,13 @@ def run_robot(collection: str, robot: Path, work: Path) -> dict:
     row["check"] = code
     if code not in (0, 1):
         row["note"] = line
+        if robot.suffix == ".urdf" and any(n in line for n in NOTHING_TO_CHECK):
+            # Refused as no robot: do its consumers load it? If either does, the refusal is
+            # meshcol's failure; if both refuse it too, the file is no robot for anyone.
+            row["consumers"] = {
+                "pybullet": load_pybullet(robot),
+                "yourdfpy": load_yourdfpy(robot, colliders=False),
+            }
         row["seconds"] = round(time.perf_counter() - began, 1)
         return row
     report = json.loads((work / "check.json").read_text())
@@ -325,11 +334,25 @@ def run_robot(collection: str, robot: Path, work: Path) -> dict:
 
 
 #: What meshcol says of a description it refuses because it is no robot: no link at all, as
-#: example-robot-data's empty ur3.urdf (xacro's output of a macro file; pybullet and
-#: yourdfpy refuse it too). A robot with links but no collision geometry is checked (MC506).
+#: example-robot-data's empty ur3.urdf (xacro's output of a macro file). Such a row is an
+#: agreed refusal, not a failure, when pybullet and yourdfpy refuse the file too (the sweep
+#: loads it in both: `agreed_refusal`). A robot with links but no collision geometry is
+#: checked (MC506).
 NOTHING_TO_CHECK = ("the robot has no <link> element",)
 #: The note of an XML that MuJoCo itself does not compile: an include fragment, not a model.
 FRAGMENT = "not a model (MuJoCo does not compile it either)"
+
+
+def agreed_refusal(row: dict) -> bool:
+    """meshcol refused the file as no robot (`NOTHING_TO_CHECK`), and neither pybullet nor
+    yourdfpy loads it (a consumer that loads it, or one not installed, makes it a failure)."""
+    consumers = row.get("consumers")
+    return bool(consumers) and all(v.startswith("FAIL") for v in consumers.values())
+
+
+def counted(row: dict) -> bool:
+    """A row of a model the sweep counts: not an include fragment, not an agreed refusal."""
+    return row["check"] != "fragment" and not agreed_refusal(row)
 
 
 def verdict(row: dict) -> bool:
@@ -370,6 +393,8 @@ def cell(row: dict, fmt: str) -> str:
 def _all_ok(row: dict) -> str:
     if row["check"] == "fragment":
         return "n/a"
+    if agreed_refusal(row):
+        return "n/a (no robot: pybullet and yourdfpy refuse it too)"
     return "yes" if verdict(row) else "NO"
 
 
@@ -389,17 +414,22 @@ def table(rows: list[dict]) -> str:
             f"| {row['seconds']} |"
         )
     fragments = sum(row["check"] == "fragment" for row in rows)
-    models = [row for row in rows if row["check"] != "fragment"]
+    refused = [row["robot"] for row in rows if agreed_refusal(row)]
+    models = [row for row in rows if counted(row)]
     passed = sum(verdict(row) for row in models)
-    empty = sum(any(n in row.get("note", "") for n in NOTHING_TO_CHECK) for row in models)
     visual = sum(bool(row.get("empty")) and verdict(row) for row in models)
     failed = [row["robot"] for row in models if not verdict(row)]
     lines.append("")
     lines.append(
         f"{passed} of {len(models)} robots: checked, and every output loads and simulates "
         f"({visual} of them with no collision geometry: MC506, zero pairs, outputs without "
-        f"colliders); {empty} refused for having no link at all."
+        f"colliders)."
     )
+    if refused:
+        lines.append(
+            f"{len(refused)} refused for having no link at all, as pybullet and yourdfpy "
+            f"refuse them (not counted): {', '.join(refused)}."
+        )
     if failed:
         lines.append(f"Not passed: {', '.join(failed)}.")
     if fragments:
@@ -479,12 +509,13 @@ def main() -> int:
         chosen = robots[: args.limit][shard::shards]
         for robot in reversed(chosen) if args.reverse else chosen:
             row = isolated_row(collection, robot)
-            print(f"{collection} {robot.name}: {'ok' if verdict(row) else 'NO'}", file=sys.stderr)
+            said = "ok" if verdict(row) else "no robot" if agreed_refusal(row) else "NO"
+            print(f"{collection} {robot.name}: {said}", file=sys.stderr)
             rows.append(row)
             if args.json is not None:
                 args.json.write_text(json.dumps(rows, indent=1) + "\n")
     print(table(rows))
-    return 0 if all(verdict(row) or row["check"] == "fragment" for row in rows) else 1
+    return 0 if all(verdict(row) for row in rows if counted(row)) else 1
 
 
 if __name__ == "__main__":
