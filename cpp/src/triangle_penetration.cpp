@@ -12,6 +12,7 @@
 // 0), up to rounding: exact coplanarity is decided first with orient3d so that it is 0 exactly.
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -87,9 +88,11 @@ struct CornerLanes {
 
 // overlap_on below with a's and b's projections in the two lanes: each lane's dot product is
 // dot(u, corner)'s operations in its order, and _mm_min_pd(p, lo) is p < lo ? p : lo (max
-// alike), the scalar form's compares, so every value is the same.
+// alike), the scalar form's compares, so every value is the same. `scale`: false where
+// scaled(c) is known to be c (plain_range).
+template <bool scale = true>
 inline Overlap overlap_on(const Vec3& c, const CornerLanes& t) {
-    const Vec3 u = scaled(c);
+    const Vec3 u = scale ? scaled(c) : c;
     const __m128d ux = _mm_set1_pd(u.x), uy = _mm_set1_pd(u.y), uz = _mm_set1_pd(u.z);
     const auto project = [&](int k) {
         const __m128d xy = _mm_add_pd(_mm_mul_pd(ux, t.x[k]), _mm_mul_pd(uy, t.y[k]));
@@ -105,6 +108,40 @@ inline Overlap overlap_on(const Vec3& c, const CornerLanes& t) {
                       : Overlap{down / length, length, u, true};
 }
 #endif
+
+// Whether every corner coordinate of a and b is 0 or of magnitude in [2^-198, 2^248]. Then each
+// is a multiple of 2^-250 (a double of magnitude 2^-198 or more has an ulp of 2^-250 or more),
+// and so is an edge's difference as rounded (exact below 2^-197, a multiple of its ulp above),
+// at most 2^249; a product of two such is a multiple of 2^-500 at most 2^498, as rounded, and
+// a cross product's component (a rounded difference of two) a multiple of 2^-500 at most 2^499.
+// So every candidate axis (a face normal or an edge-edge cross product) is zero or has its
+// largest component in [2^-500, 2^499]: scaled(c) is c for each, and the axes can skip it.
+inline bool plain_range(const Vec3 a[3], const Vec3 b[3]) {
+#if defined(__SSE2__)
+    const __m128d sign = _mm_set1_pd(-0.0), low = _mm_set1_pd(0x1p-198), high = _mm_set1_pd(0x1p248);
+    __m128d ok = _mm_cmpeq_pd(sign, sign);
+    const auto take = [&](double x, double y) {
+        const __m128d m = _mm_andnot_pd(sign, _mm_set_pd(y, x));
+        ok = _mm_and_pd(ok, _mm_or_pd(_mm_cmpeq_pd(m, _mm_setzero_pd()),
+                                      _mm_and_pd(_mm_cmpge_pd(m, low), _mm_cmple_pd(m, high))));
+    };
+    for (int k = 0; k < 3; ++k) {
+        take(a[k].x, a[k].y);
+        take(a[k].z, b[k].z);
+        take(b[k].x, b[k].y);
+    }
+    return _mm_movemask_pd(ok) == 3;
+#else
+    bool ok = true;
+    for (const Vec3* t : {a, b})
+        for (int k = 0; k < 3; ++k)
+            for (const double x : {t[k].x, t[k].y, t[k].z}) {
+                const double m = std::fabs(x);
+                ok = ok && (m == 0.0 || (m >= 0x1p-198 && m <= 0x1p248));
+            }
+    return ok;
+#endif
+}
 
 // The scalar form: the projection where SSE2 is absent, and the reference the SSE2 form is
 // checked against everywhere (mesh_detail::penetration_axis_forms_agree, a C++ test).
@@ -159,22 +196,31 @@ TrianglePenetration penetration(const Vec3 a[3], const Vec3 b[3]) {
 #endif
         // A zero axis (parallel edges) is none: its overlap is 0 / 0 (scaled leaves it zero),
         // NaN, never below `best`, so it is passed over without a test of its own.
-        const auto consider = [&](const Vec3& c, int axis) {
+        // The 11 axes in order, compiled twice: scaled where plain_range does not hold, left
+        // out (the same axes) where it does.
+        const auto all_axes = [&](auto scale) {
+            const auto consider = [&](const Vec3& c, int axis) {
 #if defined(__SSE2__)
-            const Overlap o = overlap_on(c, corners);
+                const Overlap o = overlap_on<decltype(scale)::value>(c, corners);
 #else
-            const Overlap o = overlap_on(c, ra, rb);
+                const Overlap o = overlap_on(c, ra, rb);
 #endif
-            if (o.depth < best) {
-                best = o.depth;
-                best_axis = o;
-                out.axis = axis;
-            }
+                if (o.depth < best) {
+                    best = o.depth;
+                    best_axis = o;
+                    out.axis = axis;
+                }
+            };
+            if (a_plane) consider(na, 0);
+            if (b_plane) consider(nb, 1);
+            for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j) consider(cross(ea[i], eb[j]), 2 + 3 * i + j);
         };
-        if (a_plane) consider(na, 0);
-        if (b_plane) consider(nb, 1);
-        for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j) consider(cross(ea[i], eb[j]), 2 + 3 * i + j);
+        if (plain_range(a, b)) {
+            all_axes(std::false_type{});
+        } else {
+            all_axes(std::true_type{});
+        }
         if (out.axis >= 0) out.normal = best_axis.down ? -best_axis.u / best_axis.length : best_axis.u / best_axis.length;
         // No axis: both are points or segments on one line, a flat difference.
         out.depth = out.axis < 0 ? 0.0 : (best > 0.0 ? best : 0.0);
@@ -199,6 +245,7 @@ bool penetration_axis_forms_agree(const Vec3 a[3], const Vec3 b[3], bool* down) 
     const CornerLanes lanes(ra, rb);
 #endif
     const auto same = [](double x, double y) { return std::memcmp(&x, &y, sizeof(double)) == 0; };
+    const bool in_range = plain_range(a, b);
     bool agree = true;
     *down = false;
     for (int k = 0; k < 11; ++k) {
@@ -207,12 +254,15 @@ bool penetration_axis_forms_agree(const Vec3 a[3], const Vec3 b[3], bool* down) 
         const Overlap plain = overlap_on(c, ra, rb);
 #if defined(__SSE2__)
         const Overlap fast = overlap_on(c, lanes);
+        // Where plain_range holds, the form that leaves scaled out, too.
+        const Overlap unscaled = in_range ? overlap_on<false>(c, lanes) : fast;
 #else
-        const Overlap fast = plain;
+        const Overlap fast = plain, unscaled = plain;
 #endif
         if (k == 0) *down = plain.down;
-        agree = agree && fast.down == plain.down && same(fast.depth, plain.depth) && same(fast.length, plain.length) &&
-                same(fast.u.x, plain.u.x) && same(fast.u.y, plain.u.y) && same(fast.u.z, plain.u.z);
+        for (const Overlap* o : {&fast, &unscaled})
+            agree = agree && o->down == plain.down && same(o->depth, plain.depth) && same(o->length, plain.length) &&
+                    same(o->u.x, plain.u.x) && same(o->u.y, plain.u.y) && same(o->u.z, plain.u.z);
     }
     return agree;
 }
