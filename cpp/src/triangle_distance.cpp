@@ -199,54 +199,6 @@ bool segments_meet_3d(const Vec3& p, const Vec3& q, const Vec3& a, const Vec3& b
     return true;
 }
 
-// One edge pair of triangle_separated_squared_distance_below: the closest points qa, qb of
-// the edges p1 + s d1 and p2 + t d2 (sa = d1 . d1, e = d2 . d2), segment_closest_points's
-// very expressions; returns |qb - qa|^2.
-inline double edge_pair(const Vec3& p1, const Vec3& d1, double sa, const Vec3& p2, const Vec3& d2, double e,
-                        Vec3* qa, Vec3* qb) {
-    const Vec3 r = p1 - p2;
-    const double f = dot(d2, r);
-    double s = 0.0, t = 0.0;
-    if (sa == 0.0 && e == 0.0) {
-        s = t = 0.0;
-    } else if (sa == 0.0) {
-        t = clamp01(f / e);
-    } else {
-        const double c = dot(d1, r);
-        if (e == 0.0) {
-            s = clamp01(-c / sa);
-        } else {
-            const double bb = dot(d1, d2);
-            const double denom = sa * e - bb * bb;
-            s = denom > 0.0 ? clamp01((bb * f - c * e) / denom) : 0.0;
-            t = (bb * s + f) / e;
-            if (t < 0.0) {
-                t = 0.0;
-                s = clamp01(-c / sa);
-            } else if (t > 1.0) {
-                t = 1.0;
-                s = clamp01((bb - c) / sa);
-            }
-        }
-    }
-    *qa = p1 + d1 * s;
-    *qb = p2 + d2 * t;
-    return squared_norm(*qb - *qa);
-}
-
-// One vertex-face pair of the same search: whether corner p (height h = (p - face[0]) . n
-// over the face's plane, n = e[0] x (face[2] - face[0]), nn = n . n > 0) projects into the
-// closed face (edges e[k] = face[k + 1] - face[k]), and then its foot q; returns |p - q|^2,
-// or +inf when it does not.
-inline double corner_face(const Vec3& p, const Vec3* face, const Vec3 e[3], const Vec3& n, double nn, double h,
-                          Vec3* q) {
-    if (dot(cross(e[0], p - face[0]), n) < 0.0 || dot(cross(e[1], p - face[1]), n) < 0.0 ||
-        dot(cross(e[2], p - face[2]), n) < 0.0)
-        return std::numeric_limits<double>::infinity();
-    *q = p - n * (h / nn);
-    return squared_norm(p - *q);
-}
-
 }  // namespace
 
 SegmentClosestPoints segment_closest_points(const Vec3& p1, const Vec3& q1, const Vec3& p2,
@@ -370,8 +322,33 @@ double triangle_separated_squared_distance_below(const Vec3 a[3], const Vec3 b[3
                 const double rn = dot(r, n), nn = dot(n, n);
                 if (nn > 1e-2 * sa * lb[j] && rn * rn > within2 * nn) continue;
             }
-            Vec3 qa, qb;
-            const double d2ist = edge_pair(p1, d1, sa, p2, d2, lb[j], &qa, &qb);
+            const double e = lb[j], f = dot(d2, r);
+            double s = 0.0, t = 0.0;
+            if (sa == 0.0 && e == 0.0) {
+                s = t = 0.0;
+            } else if (sa == 0.0) {
+                t = clamp01(f / e);
+            } else {
+                const double c = dot(d1, r);
+                if (e == 0.0) {
+                    s = clamp01(-c / sa);
+                } else {
+                    const double bb = dot(d1, d2);
+                    const double denom = sa * e - bb * bb;
+                    s = denom > 0.0 ? clamp01((bb * f - c * e) / denom) : 0.0;
+                    t = (bb * s + f) / e;
+                    if (t < 0.0) {
+                        t = 0.0;
+                        s = clamp01(-c / sa);
+                    } else if (t > 1.0) {
+                        t = 1.0;
+                        s = clamp01((bb - c) / sa);
+                    }
+                }
+            }
+            const Vec3 qa = p1 + d1 * s;
+            const Vec3 qb = p2 + d2 * t;
+            const double d2ist = squared_norm(qb - qa);
             if (d2ist < best) {
                 best = d2ist;
                 best_a = qa;
@@ -386,16 +363,19 @@ double triangle_separated_squared_distance_below(const Vec3 a[3], const Vec3 b[3
     for (int side = 0; side < 2; ++side) {
         const Vec3* face = side == 0 ? b : a;
         const Vec3* verts = side == 0 ? a : b;
-        const Vec3 e[3] = {face[1] - face[0], face[2] - face[1], face[0] - face[2]};
-        const Vec3 n = cross(e[0], face[2] - face[0]);
+        const Vec3 e0 = face[1] - face[0], e1 = face[2] - face[1], e2 = face[0] - face[2];
+        const Vec3 n = cross(e0, face[2] - face[0]);
         const double nn = dot(n, n);
         if (!(nn > 0.0)) continue;
         for (int i = 0; i < 3; ++i) {
             const Vec3& p = verts[i];
             const double h = dot(p - face[0], n);
             if (filter && h * h > within2 * nn) continue;
-            Vec3 q;
-            const double d2 = corner_face(p, face, e, n, nn, h, &q);
+            if (dot(cross(e0, p - face[0]), n) < 0.0 || dot(cross(e1, p - face[1]), n) < 0.0 ||
+                dot(cross(e2, p - face[2]), n) < 0.0)
+                continue;
+            const Vec3 q = p - n * (h / nn);
+            const double d2 = squared_norm(p - q);
             if (d2 < best) {
                 best = d2;
                 best_a = side == 0 ? p : q;
@@ -413,23 +393,26 @@ double triangle_feature_squared_distance(const Vec3 a[3], const Vec3 b[3], int f
                                          Vec3* point_b) {
     constexpr double kInf = std::numeric_limits<double>::infinity();
     if (feature < 9) {
+        // The search's edge pair is segment_closest_points's expressions, operation for operation.
         const int i = feature / 3, j = feature % 3;
-        const Vec3 d1 = a[i == 2 ? 0 : i + 1] - a[i], d2 = b[j == 2 ? 0 : j + 1] - b[j];
-        return edge_pair(a[i], d1, dot(d1, d1), b[j], d2, dot(d2, d2), point_a, point_b);
+        const SegmentClosestPoints s = segment_closest_points(a[i], a[i == 2 ? 0 : i + 1], b[j], b[j == 2 ? 0 : j + 1]);
+        *point_a = s.point_a;
+        *point_b = s.point_b;
+        return s.squared_distance;
     }
-    const bool on_b = feature < 12;  // a's corner against b's face, else b's against a's
+    // A vertex-face pair: the search's values (its edges, normal, height, inside tests, foot).
+    const bool on_b = feature < 12;  // a's corner against b's face, else b's corner against a's
     const Vec3* face = on_b ? b : a;
     const Vec3& p = on_b ? a[feature - 9] : b[feature - 12];
-    const Vec3 e[3] = {face[1] - face[0], face[2] - face[1], face[0] - face[2]};
-    const Vec3 n = cross(e[0], face[2] - face[0]);
+    const Vec3 n = cross(face[1] - face[0], face[2] - face[0]);
     const double nn = dot(n, n);
     if (!(nn > 0.0)) return kInf;
-    Vec3 q;
-    const double d2 = corner_face(p, face, e, n, nn, dot(p - face[0], n), &q);
-    if (d2 == kInf) return kInf;
+    for (int k = 0; k < 3; ++k)
+        if (dot(cross(face[k == 2 ? 0 : k + 1] - face[k], p - face[k]), n) < 0.0) return kInf;
+    const Vec3 q = p - n * (dot(p - face[0], n) / nn);
     *point_a = on_b ? p : q;
     *point_b = on_b ? q : p;
-    return d2;
+    return squared_norm(p - q);
 }
 
 bool triangles_intersect(const Vec3 a[3], const Vec3 b[3], Vec3* witness) {
