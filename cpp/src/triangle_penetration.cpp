@@ -198,7 +198,7 @@ TrianglePenetration penetration(const Vec3 a[3], const Vec3 b[3]) {
         // NaN, never below `best`, so it is passed over without a test of its own.
         // The 11 axes in order, compiled twice: scaled where plain_range does not hold, left
         // out (the same axes) where it does.
-        const auto all_axes = [&](auto scale) {
+        const auto all_axes = [&]([[maybe_unused]] auto scale) {
             const auto consider = [&](const Vec3& c, int axis) {
 #if defined(__SSE2__)
                 const Overlap o = overlap_on<decltype(scale)::value>(c, corners);
@@ -245,7 +245,7 @@ bool penetration_axis_forms_agree(const Vec3 a[3], const Vec3 b[3], bool* down) 
     const CornerLanes lanes(ra, rb);
 #endif
     const auto same = [](double x, double y) { return std::memcmp(&x, &y, sizeof(double)) == 0; };
-    const bool in_range = plain_range(a, b);
+    [[maybe_unused]] const bool in_range = plain_range(a, b);
     bool agree = true;
     *down = false;
     for (int k = 0; k < 11; ++k) {
