@@ -100,10 +100,10 @@ inline Overlap overlap_on(const Vec3& c, const CornerLanes& t) {
     };
     const __m128d p0 = project(0), p1 = project(1), p2 = project(2);
     const __m128d lo = _mm_min_pd(p2, _mm_min_pd(p1, p0)), hi = _mm_max_pd(p2, _mm_max_pd(p1, p0));
-    const double a_lo = _mm_cvtsd_f64(lo), b_lo = _mm_cvtsd_f64(_mm_unpackhi_pd(lo, lo));
-    const double a_hi = _mm_cvtsd_f64(hi), b_hi = _mm_cvtsd_f64(_mm_unpackhi_pd(hi, hi));
+    // up = a_hi - b_lo and down = b_hi - a_lo in one subtraction, lo's lanes swapped.
+    const __m128d gaps = _mm_sub_pd(hi, _mm_shuffle_pd(lo, lo, 1));
     const double length = norm(u);
-    const double up = a_hi - b_lo, down = b_hi - a_lo;
+    const double up = _mm_cvtsd_f64(gaps), down = _mm_cvtsd_f64(_mm_unpackhi_pd(gaps, gaps));
     return up <= down ? Overlap{up / length, length, u, false}
                       : Overlap{down / length, length, u, true};
 }
