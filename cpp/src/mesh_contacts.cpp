@@ -26,6 +26,7 @@ struct Found {
     std::int64_t face_a, face_b;
     std::int32_t i, j;
     Vec3 normal, shared;
+    int axis;  // triangle_penetration's axis of the depth
 };
 
 // Deeper first; of equal depths the lower (face_a, face_b).
@@ -50,6 +51,7 @@ MeshContact contact_of(const Found& f, const Vec3* tb, const MeshBvh& a, const P
     TrianglePenetration p;
     p.depth = f.depth;
     p.normal = f.normal;
+    p.axis = f.axis;
     if (f.depth == 0.0 && !std::isnan(f.shared.x)) {
         p.point_a = p.point_b = f.shared;
     } else {
@@ -95,14 +97,14 @@ MeshContactsOutput mesh_contacts(const MeshContactsInput& input, std::vector<Mes
     const Relative rel(input.pose_a, input.pose_b, a, b);
     const bool listed = contacts != nullptr && input.max_contacts > 0;
     std::vector<Listed> found;
-    Found best{-1.0, 0.0, -1, -1, -1, -1, Vec3{}, Vec3{kNaN, kNaN, kNaN}};
+    Found best{-1.0, 0.0, -1, -1, -1, -1, Vec3{}, Vec3{kNaN, kNaN, kNaN}, -1};
     long long work = 0;
     const bool capped = for_each_crossing_pair(
         a, b, rel, input.max_work, &work, listed,
         [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb, const Vec3& shared, bool general) {
             ++out.count;
             const TrianglePenetration p = triangle_penetration(ta, tb, false, general);
-            const Found f{p.depth, face_depth(a, i, ta, tb), a.face_index(i), b.face_index(j), i, j, p.normal, shared};
+            const Found f{p.depth, face_depth(a, i, ta, tb), a.face_index(i), b.face_index(j), i, j, p.normal, shared, p.axis};
             if (best.i < 0 || deeper(f, best)) best = f;
             out.face_depth = max2(out.face_depth, f.face_depth);
             if (listed) found.push_back(Listed{f, {tb[0], tb[1], tb[2]}});

@@ -389,6 +389,32 @@ double triangle_separated_squared_distance_below(const Vec3 a[3], const Vec3 b[3
     return best;
 }
 
+double triangle_feature_squared_distance(const Vec3 a[3], const Vec3 b[3], int feature, Vec3* point_a,
+                                         Vec3* point_b) {
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    if (feature < 9) {
+        // The search's edge pair is segment_closest_points's expressions, operation for operation.
+        const int i = feature / 3, j = feature % 3;
+        const SegmentClosestPoints s = segment_closest_points(a[i], a[i == 2 ? 0 : i + 1], b[j], b[j == 2 ? 0 : j + 1]);
+        *point_a = s.point_a;
+        *point_b = s.point_b;
+        return s.squared_distance;
+    }
+    // A vertex-face pair: the search's values (its edges, normal, height, inside tests, foot).
+    const bool on_b = feature < 12;  // a's corner against b's face, else b's corner against a's
+    const Vec3* face = on_b ? b : a;
+    const Vec3& p = on_b ? a[feature - 9] : b[feature - 12];
+    const Vec3 n = cross(face[1] - face[0], face[2] - face[0]);
+    const double nn = dot(n, n);
+    if (!(nn > 0.0)) return kInf;
+    for (int k = 0; k < 3; ++k)
+        if (dot(cross(face[k == 2 ? 0 : k + 1] - face[k], p - face[k]), n) < 0.0) return kInf;
+    const Vec3 q = p - n * (dot(p - face[0], n) / nn);
+    *point_a = on_b ? p : q;
+    *point_b = on_b ? q : p;
+    return squared_norm(p - q);
+}
+
 bool triangles_intersect(const Vec3 a[3], const Vec3 b[3], Vec3* witness) {
     const int drop_a = projection_axis(a);
     const int drop_b = projection_axis(b);

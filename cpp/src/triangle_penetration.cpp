@@ -12,6 +12,7 @@
 // 0), up to rounding: exact coplanarity is decided first with orient3d so that it is 0 exactly.
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -34,10 +35,24 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // c made safe to square (vec.hpp: safe_scaled), its largest component found by plain compares
 // (std::fmax's NaN handling costs more, and an axis here is never NaN for a valid mesh). In
 // range, c itself: projections on it as exact as on c, and most of an axis's cost saved.
+// Out of range, the scaling is a call of its own, the in-range test told it is the likely
+// way (without the hint GCC's code for the 11 axes grows by about 40 instructions a pair);
+// a zero c is left as it is there (no scale to take: its overlap is then 0 / 0, NaN, which
+// penetration passes over as no axis, so the axes need no test for zero).
+#if defined(__GNUC__)
+#define MESHCOL_LIKELY(x) __builtin_expect(static_cast<bool>(x), 1)
+#else
+#define MESHCOL_LIKELY(x) (x)
+#endif
+[[gnu::noinline]] Vec3 scaled_out_of_range(const Vec3& c, double m) { return m == 0.0 ? c : safe_scaled(c, m); }
+
 inline Vec3 scaled(const Vec3& c) {
     const double ax = std::fabs(c.x), ay = std::fabs(c.y), az = std::fabs(c.z);
-    return safe_scaled(c, ax > ay ? (ax > az ? ax : az) : (ay > az ? ay : az));
+    const double m = ax > ay ? (ax > az ? ax : az) : (ay > az ? ay : az);
+    if (MESHCOL_LIKELY(m >= 0x1p-500 && m <= 0x1p500)) return c;
+    return scaled_out_of_range(c, m);
 }
+#undef MESHCOL_LIKELY
 
 Vec3 unit(const Vec3& c) {
     const Vec3 s = scaled(c);
@@ -73,9 +88,11 @@ struct CornerLanes {
 
 // overlap_on below with a's and b's projections in the two lanes: each lane's dot product is
 // dot(u, corner)'s operations in its order, and _mm_min_pd(p, lo) is p < lo ? p : lo (max
-// alike), the scalar form's compares, so every value is the same.
+// alike), the scalar form's compares, so every value is the same. `scale`: false where
+// scaled(c) is known to be c (plain_range).
+template <bool scale = true>
 inline Overlap overlap_on(const Vec3& c, const CornerLanes& t) {
-    const Vec3 u = scaled(c);
+    const Vec3 u = scale ? scaled(c) : c;
     const __m128d ux = _mm_set1_pd(u.x), uy = _mm_set1_pd(u.y), uz = _mm_set1_pd(u.z);
     const auto project = [&](int k) {
         const __m128d xy = _mm_add_pd(_mm_mul_pd(ux, t.x[k]), _mm_mul_pd(uy, t.y[k]));
@@ -83,14 +100,48 @@ inline Overlap overlap_on(const Vec3& c, const CornerLanes& t) {
     };
     const __m128d p0 = project(0), p1 = project(1), p2 = project(2);
     const __m128d lo = _mm_min_pd(p2, _mm_min_pd(p1, p0)), hi = _mm_max_pd(p2, _mm_max_pd(p1, p0));
-    const double a_lo = _mm_cvtsd_f64(lo), b_lo = _mm_cvtsd_f64(_mm_unpackhi_pd(lo, lo));
-    const double a_hi = _mm_cvtsd_f64(hi), b_hi = _mm_cvtsd_f64(_mm_unpackhi_pd(hi, hi));
+    // up = a_hi - b_lo and down = b_hi - a_lo in one subtraction, lo's lanes swapped.
+    const __m128d gaps = _mm_sub_pd(hi, _mm_shuffle_pd(lo, lo, 1));
     const double length = norm(u);
-    const double up = a_hi - b_lo, down = b_hi - a_lo;
+    const double up = _mm_cvtsd_f64(gaps), down = _mm_cvtsd_f64(_mm_unpackhi_pd(gaps, gaps));
     return up <= down ? Overlap{up / length, length, u, false}
                       : Overlap{down / length, length, u, true};
 }
 #endif
+
+// Whether every corner coordinate of a and b is 0 or of magnitude in [2^-198, 2^248]. Then each
+// is a multiple of 2^-250 (a double of magnitude 2^-198 or more has an ulp of 2^-250 or more),
+// and so is an edge's difference as rounded (exact below 2^-197, a multiple of its ulp above),
+// at most 2^249; a product of two such is a multiple of 2^-500 at most 2^498, as rounded, and
+// a cross product's component (a rounded difference of two) a multiple of 2^-500 at most 2^499.
+// So every candidate axis (a face normal or an edge-edge cross product) is zero or has its
+// largest component in [2^-500, 2^499]: scaled(c) is c for each, and the axes can skip it.
+inline bool plain_range(const Vec3 a[3], const Vec3 b[3]) {
+#if defined(__SSE2__)
+    const __m128d sign = _mm_set1_pd(-0.0), low = _mm_set1_pd(0x1p-198), high = _mm_set1_pd(0x1p248);
+    __m128d ok = _mm_cmpeq_pd(sign, sign);
+    const auto take = [&](double x, double y) {
+        const __m128d m = _mm_andnot_pd(sign, _mm_set_pd(y, x));
+        ok = _mm_and_pd(ok, _mm_or_pd(_mm_cmpeq_pd(m, _mm_setzero_pd()),
+                                      _mm_and_pd(_mm_cmpge_pd(m, low), _mm_cmple_pd(m, high))));
+    };
+    for (int k = 0; k < 3; ++k) {
+        take(a[k].x, a[k].y);
+        take(a[k].z, b[k].z);
+        take(b[k].x, b[k].y);
+    }
+    return _mm_movemask_pd(ok) == 3;
+#else
+    bool ok = true;
+    for (const Vec3* t : {a, b})
+        for (int k = 0; k < 3; ++k)
+            for (const double x : {t[k].x, t[k].y, t[k].z}) {
+                const double m = std::fabs(x);
+                ok = ok && (m == 0.0 || (m >= 0x1p-198 && m <= 0x1p248));
+            }
+    return ok;
+#endif
+}
 
 // The scalar form: the projection where SSE2 is absent, and the reference the SSE2 form is
 // checked against everywhere (mesh_detail::penetration_axis_forms_agree, a C++ test).
@@ -143,23 +194,33 @@ TrianglePenetration penetration(const Vec3 a[3], const Vec3 b[3]) {
 #if defined(__SSE2__)
         const CornerLanes corners(ra, rb);
 #endif
-        const auto consider = [&](const Vec3& c, int axis) {
-            if (!nonzero(c)) return;
+        // A zero axis (parallel edges) is none: its overlap is 0 / 0 (scaled leaves it zero),
+        // NaN, never below `best`, so it is passed over without a test of its own.
+        // The 11 axes in order, compiled twice: scaled where plain_range does not hold, left
+        // out (the same axes) where it does.
+        const auto all_axes = [&]([[maybe_unused]] auto scale) {
+            const auto consider = [&](const Vec3& c, int axis) {
 #if defined(__SSE2__)
-            const Overlap o = overlap_on(c, corners);
+                const Overlap o = overlap_on<decltype(scale)::value>(c, corners);
 #else
-            const Overlap o = overlap_on(c, ra, rb);
+                const Overlap o = overlap_on(c, ra, rb);
 #endif
-            if (o.depth < best) {
-                best = o.depth;
-                best_axis = o;
-                out.axis = axis;
-            }
+                if (o.depth < best) {
+                    best = o.depth;
+                    best_axis = o;
+                    out.axis = axis;
+                }
+            };
+            if (a_plane) consider(na, 0);
+            if (b_plane) consider(nb, 1);
+            for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j) consider(cross(ea[i], eb[j]), 2 + 3 * i + j);
         };
-        if (a_plane) consider(na, 0);
-        if (b_plane) consider(nb, 1);
-        for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j) consider(cross(ea[i], eb[j]), 2 + 3 * i + j);
+        if (plain_range(a, b)) {
+            all_axes(std::false_type{});
+        } else {
+            all_axes(std::true_type{});
+        }
         if (out.axis >= 0) out.normal = best_axis.down ? -best_axis.u / best_axis.length : best_axis.u / best_axis.length;
         // No axis: both are points or segments on one line, a flat difference.
         out.depth = out.axis < 0 ? 0.0 : (best > 0.0 ? best : 0.0);
@@ -184,6 +245,7 @@ bool penetration_axis_forms_agree(const Vec3 a[3], const Vec3 b[3], bool* down) 
     const CornerLanes lanes(ra, rb);
 #endif
     const auto same = [](double x, double y) { return std::memcmp(&x, &y, sizeof(double)) == 0; };
+    [[maybe_unused]] const bool in_range = plain_range(a, b);
     bool agree = true;
     *down = false;
     for (int k = 0; k < 11; ++k) {
@@ -192,12 +254,15 @@ bool penetration_axis_forms_agree(const Vec3 a[3], const Vec3 b[3], bool* down) 
         const Overlap plain = overlap_on(c, ra, rb);
 #if defined(__SSE2__)
         const Overlap fast = overlap_on(c, lanes);
+        // Where plain_range holds, the form that leaves scaled out, too.
+        const Overlap unscaled = in_range ? overlap_on<false>(c, lanes) : fast;
 #else
-        const Overlap fast = plain;
+        const Overlap fast = plain, unscaled = plain;
 #endif
         if (k == 0) *down = plain.down;
-        agree = agree && fast.down == plain.down && same(fast.depth, plain.depth) && same(fast.length, plain.length) &&
-                same(fast.u.x, plain.u.x) && same(fast.u.y, plain.u.y) && same(fast.u.z, plain.u.z);
+        for (const Overlap* o : {&fast, &unscaled})
+            agree = agree && o->down == plain.down && same(o->depth, plain.depth) && same(o->length, plain.length) &&
+                    same(o->u.x, plain.u.x) && same(o->u.y, plain.u.y) && same(o->u.z, plain.u.z);
     }
     return agree;
 }
@@ -235,6 +300,32 @@ void triangle_penetration_points(const Vec3 a[3], const Vec3 b[3], TrianglePenet
         for (const Vec3* v : {&a[k], &moved[k]})
             for (const double c : {std::fabs(v->x), std::fabs(v->y), std::fabs(v->z)})
                 reach = c > reach ? c : reach;
+    // The feature pair the axis names first: b's corner deepest along a's normal (its least
+    // projection: b moves along the normal) on a's face, a's deepest along b's normal (its
+    // greatest) on b's face, or the axis's two edges. Taken when its points meet within 1e-12
+    // of the largest coordinate (they touch up to the rounding of the depth and the move).
+    if (p.axis >= 0) {
+        int feature = p.axis - 2;
+        if (p.axis < 2) {
+            const Vec3* t = p.axis == 0 ? b : a;
+            const double sense = p.axis == 0 ? 1.0 : -1.0;  // least along the normal, or greatest
+            int deepest = 0;
+            double extreme = sense * dot(p.normal, t[0]);
+            for (int k = 1; k < 3; ++k) {
+                const double s = sense * dot(p.normal, t[k]);
+                if (s < extreme) {
+                    extreme = s;
+                    deepest = k;
+                }
+            }
+            feature = (p.axis == 0 ? 12 : 9) + deepest;
+        }
+        const double tight = 1e-12 * reach;
+        if (triangle_feature_squared_distance(a, moved, feature, &p.point_a, &on_moved) <= tight * tight) {
+            p.point_b = on_moved - shift;
+            return;
+        }
+    }
     const double limit = 1e-10 * reach;
     const double found2 =
         triangle_separated_squared_distance_below(a, moved, limit * limit, 4e-14 * reach, &p.point_a, &on_moved);

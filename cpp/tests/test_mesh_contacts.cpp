@@ -36,6 +36,22 @@ fixtures::TriangleMesh one_triangle(const Vec3 t[3]) {
     return m;
 }
 
+// A random triangle pair for the exactness tests: small integers in [-2, 2] (equal
+// projections, ties) when `integers`, else reals in [-1, 1] times a scale of 2^-30 to 2^30,
+// which it returns (1 for integers).
+double random_pair(std::mt19937_64& rng, bool integers, Vec3 a[3], Vec3 b[3]) {
+    std::uniform_real_distribution<double> real(-1.0, 1.0);
+    std::uniform_int_distribution<int> small(-2, 2), decade(-30, 30);
+    const double scale = integers ? 1.0 : std::ldexp(1.0, decade(rng));
+    for (int c = 0; c < 3; ++c) {
+        a[c] = integers ? Vec3{double(small(rng)), double(small(rng)), double(small(rng))}
+                        : Vec3{real(rng), real(rng), real(rng)} * scale;
+        b[c] = integers ? Vec3{double(small(rng)), double(small(rng)), double(small(rng))}
+                        : Vec3{real(rng), real(rng), real(rng)} * scale;
+    }
+    return scale;
+}
+
 }  // namespace
 
 TEST_CASE("triangle penetration: a spike through a floor leaves along the floor's normal") {
@@ -237,19 +253,11 @@ TEST_CASE("triangle penetration: the SSE2 projection gives the scalar form's ove
     // ties), and each real pair's b moved along a's normal to where the scalar form's
     // direction on that axis flips (up == down), where a rounding difference would show.
     std::mt19937_64 rng(29);
-    std::uniform_real_distribution<double> real(-1.0, 1.0);
-    std::uniform_int_distribution<int> small(-2, 2), decade(-30, 30);
     int flips = 0, pairs = 0;
     for (int trial = 0; trial < 6000; ++trial) {
         Vec3 a[3], b[3];
         const bool integers = trial % 3 == 0;
-        const double scale = integers ? 1.0 : std::ldexp(1.0, decade(rng));
-        for (int c = 0; c < 3; ++c) {
-            a[c] = integers ? Vec3{double(small(rng)), double(small(rng)), double(small(rng))}
-                            : Vec3{real(rng), real(rng), real(rng)} * scale;
-            b[c] = integers ? Vec3{double(small(rng)), double(small(rng)), double(small(rng))}
-                            : Vec3{real(rng), real(rng), real(rng)} * scale;
-        }
+        const double scale = random_pair(rng, integers, a, b);
         bool down = false;
         CHECK(mesh_detail::penetration_axis_forms_agree(a, b, &down));
         CHECK(mesh_detail::penetration_axis_forms_agree(b, a, &down));
@@ -276,4 +284,47 @@ TEST_CASE("triangle penetration: the SSE2 projection gives the scalar form's ove
     }
     CHECK(pairs == 6000);
     CHECK(flips > 2000);
+}
+
+TEST_CASE("triangle distance: one feature pair alone is the search's value and points for it") {
+    // triangle_feature_squared_distance runs one of the search's 15 feature pairs by its own
+    // expressions: the first least over the 15 (a corner outside the face is none) is the full
+    // search's answer, value and points to the bit. Random pairs over many scales, small
+    // integers (ties between features), and the witness points of intersecting pairs (b moved
+    // by the depth: the features touch, the case the contacts take them from).
+    std::mt19937_64 rng(31);
+    const auto same = [](const Vec3& p, const Vec3& q) { return p.x == q.x && p.y == q.y && p.z == q.z; };
+    int fast = 0;
+    for (int trial = 0; trial < 4000; ++trial) {
+        Vec3 a[3], b[3];
+        random_pair(rng, trial % 3 == 0, a, b);
+        Vec3 pa, pb;
+        const double whole = triangle_separated_squared_distance(a, b, &pa, &pb);
+        double least = std::numeric_limits<double>::infinity();
+        Vec3 la = a[0], lb = b[0];
+        for (int feature = 0; feature < 15; ++feature) {
+            Vec3 qa, qb;
+            const double d2 = triangle_feature_squared_distance(a, b, feature, &qa, &qb);
+            if (d2 < least) {
+                least = d2;
+                la = qa;
+                lb = qb;
+            }
+        }
+        CHECK(least == whole);
+        CHECK(same(la, pa) && same(lb, pb));
+        if (!triangles_intersect(a, b, nullptr)) continue;
+        // The witness points: on their triangles, depth * normal apart.
+        const TrianglePenetration p = triangle_penetration(a, b, true);
+        if (!(p.depth > 0.0)) continue;
+        double reach = 0.0;
+        for (int c = 0; c < 3; ++c)
+            reach = std::max({reach, std::fabs(a[c].x), std::fabs(a[c].y), std::fabs(a[c].z), std::fabs(b[c].x),
+                              std::fabs(b[c].y), std::fabs(b[c].z)});
+        const double gap = norm(p.point_a - p.point_b - p.normal * p.depth);
+        fast += gap <= 1e-12 * reach;
+        CHECK(norm(closest_point_on_triangle(p.point_a, a) - p.point_a) <= 1e-12 * reach);
+        CHECK(norm(closest_point_on_triangle(p.point_b, b) - p.point_b) <= 1e-12 * reach);
+    }
+    CHECK(fast > 500);
 }

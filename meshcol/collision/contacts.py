@@ -46,7 +46,8 @@ class MeshContactsBatch:
         for two triangles degenerate to parallel segments or points).
     point : (P, 3) float64
         World frame: midway between the deepest pair's witness points (b's point deepest past
-        a, and where it meets a once b is moved by ``depth * normal``); NaN when count is 0.
+        a, and where it meets a once b is moved by ``depth * normal``; on the features the
+        depth's axis names, see :func:`mesh_contacts_batch`); NaN when count is 0.
     face_depth : (P,) float64
         >= 0: the largest, over the crossing pairs, of how far b's triangle reaches behind a's
         triangle's face along a's unit face normal, ``(p1 - p0) x (p2 - p0)`` normalised:
@@ -147,8 +148,16 @@ def mesh_contacts_batch(
     minimum translation distance (coal 3.0.3 reports another per-pair quantity instead, the
     ``face_depth`` above, never smaller up to rounding). A parallel
     edge pair or a degenerate triangle's normal is no axis; exactly coplanar triangles have
-    depth 0 (orient3d). The contact point is midway between the witness points: the closest
-    points of the two triangles once b is moved by ``depth * normal`` (Ericson 2004, 5.1.9).
+    depth 0 (orient3d). The contact point is midway between the witness points, the closest
+    points of the two triangles once b is moved by ``depth * normal`` to touch a, taken on the
+    features the depth's axis names: for a face normal, the other triangle's corner deepest
+    along it (the first of equally deep corners) and its foot on the face; for an edge pair's
+    cross product, the closest points of the two edges. Where those are not within 1e-12 of
+    the largest coordinate of each other (the corner's foot falls outside the face, or the two
+    edges do not meet: an axis tied with another up to rounding), the closest points over all
+    15 feature pairs (Ericson 2004, 5.1.9). Where equally close points form a segment or
+    polygon (parallel faces or edges), the point is thus one of them, chosen by the axis. A
+    touching pair's (depth 0) point is one the two triangles share.
     """
     if not isinstance(meshes, MeshSet):
         raise TypeError(f"meshes must be a MeshSet, got {type(meshes).__name__}")

@@ -126,7 +126,10 @@ struct MeshContact {
     /// World unit vector from a towards b: moving b by depth along it separates the two
     /// triangles (NaN only for two triangles degenerate to parallel segments or points)
     Vec3 normal;
-    Vec3 point;                    ///< world: midway between the witness points of the pair
+    /// world: midway between the witness points of the pair (`triangle_penetration_points`:
+    /// on the features the depth's axis names, a corner and its foot on a face or two edges'
+    /// closest points)
+    Vec3 point;
     /// >= 0: how far b's triangle reaches behind a's triangle's face, along a's unit face
     /// normal (p1 - p0) x (p2 - p0): max over b's corners q of n . (a's p0 - q). A translation
     /// that separates the two triangles (b moved by it along a's normal), not the shortest:

@@ -60,6 +60,15 @@ double triangle_separated_squared_distance(const Vec3 a[3], const Vec3 b[3], Vec
 double triangle_separated_squared_distance_below(const Vec3 a[3], const Vec3 b[3], double limit2, double slack,
                                                  Vec3* point_a, Vec3* point_b);
 
+/// One feature pair of `triangle_separated_squared_distance`, alone, by the search's very
+/// expressions (so the value and points it computes for that pair): `feature` 3 i + j is edge i
+/// of a against edge j of b (edge k joins corners k and k + 1), 9 + i corner i of a against b's
+/// face, 12 + j corner j of b against a's face. Writes the closest points and returns their
+/// squared distance; a corner whose projection falls outside the face, or a degenerate face,
+/// gives +inf and writes nothing.
+double triangle_feature_squared_distance(const Vec3 a[3], const Vec3 b[3], int feature, Vec3* point_a,
+                                         Vec3* point_b);
+
 /// Distance between two triangles and their closest points.
 struct TriangleDistanceOutput {
     double distance = 0.0;      ///< >= 0; 0 when they intersect (or, rounded, closer than ~1e-16)
@@ -82,6 +91,8 @@ struct TrianglePenetration {
     /// Witness points, caller's frame (only with `points`): point_a on a and point_b on b with
     /// point_a - point_b = depth * normal up to rounding (b's point deepest past a, and where
     /// it meets a once b is moved); one shared point when depth is 0. NaN without `points`.
+    /// They are the closest points of a and of b moved by depth * normal on the features the
+    /// minimum's axis names (`triangle_penetration_points`).
     Vec3 point_a, point_b;
     /// The axis of the minimum: 0 a's face normal, 1 b's, 2 + 3 i + j the cross product of
     /// edge i of a (corners i, i + 1) and edge j of b; -1 when there is none.
@@ -106,8 +117,16 @@ TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool 
                                          bool general = false);
 
 /// The witness points of `p`, a `triangle_penetration(a, b, false)` of the same triangles (its
-/// depth and normal): what `points` adds, for a caller that keeps the penetration and wants
-/// the points of some pairs only.
+/// depth, normal and axis): what `points` adds, for a caller that keeps the penetration and
+/// wants the points of some pairs only. Depth 0: a point the two share (`triangles_intersect`).
+/// Else b is moved by depth * normal, to touch a, and the points are the closest points of the
+/// feature pair the axis names (`triangle_feature_squared_distance`): on a face normal, the
+/// other triangle's corner deepest along it (the first of equally deep corners) and its foot
+/// on the face; on an edge pair's cross product, the closest points of the two edges. Where
+/// that pair is not within 1e-12 of the largest coordinate magnitude (its corner's foot falls
+/// outside the face, or the edges do not meet: an axis tied with another up to rounding), the
+/// closest points of a and moved b over all 15 feature pairs (Ericson 2004, 5.1.9). point_b
+/// is the point on moved b moved back.
 void triangle_penetration_points(const Vec3 a[3], const Vec3 b[3], TrianglePenetration& p);
 
 /// Whether two triangles cross: their relative interiors (the open triangles) share a point.
