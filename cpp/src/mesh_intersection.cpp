@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -306,10 +307,18 @@ private:
 // the end then reaches every crossing triangle pair as before (every box holds its
 // triangles), but through other node pairs, so the triangle pairs whose boxes touch can
 // differ a little among those whose oriented node boxes only nearly meet (a child's box is
-// not inside its parent's). The contacts' descent (for_each_crossing_pair) runs so.
+// not inside its parent's). The contacts' descent (for_each_crossing_pair) runs so. Given
+// `rest`, it stops once it has split `splits_left` pairs so (four box tests each): it then
+// leaves the node pairs still to descend in *rest (the pair at hand among them) and returns
+// false, for another descent to finish from there.
+// Not inlined (nor the axis-aligned descent below): for_each_crossing_pair instantiates three
+// descents, and inlined there they took 0.1% to 1.7% more instructions on the contacts rows.
 template <class Visit>
-bool for_each_touching_pair(const MeshBvh& a, const MeshBvh& b, const Relative& rel, Visit visit,
-                            double margin2 = 0.0, bool ordered = false, bool split_both = false) {
+__attribute__((noinline)) bool for_each_touching_pair(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
+                                                      Visit visit, double margin2 = 0.0, bool ordered = false,
+                                                      bool split_both = false,
+                                                      long long splits_left = std::numeric_limits<long long>::max(),
+                                                      NodePairStack* rest = nullptr) {
     const std::vector<BvhNode>& na = a.nodes();
     const std::vector<BvhNode>& nb = b.nodes();
     if (!boxes_overlap(a, b, {0, 0}, rel)) return false;
@@ -356,6 +365,11 @@ bool for_each_touching_pair(const MeshBvh& a, const MeshBvh& b, const Relative& 
             continue;
         }
         if (split_both && !x.is_leaf() && !y.is_leaf()) {
+            if (--splits_left < 0) {
+                stack.push(ia, ib);
+                *rest = stack;
+                return false;
+            }
             for (const std::int32_t child_a : {x.index, ia + 1})
                 for (const std::int32_t child_b : {y.index, ib + 1})
                     if (boxes_overlap(a, b, {child_a, child_b}, rel)) stack.push(child_a, child_b);
@@ -399,24 +413,113 @@ inline bool aligned_boxes_touch(const BvhNode& x, const BvhNode& y, const Vec3& 
     return true;
 }
 
-// for_each_touching_pair (no margin, split on both sides) for a pair under rel.translation_only:
-// node pairs bounded by their axis-aligned boxes in a's frame (a's as built, b's moved by the
-// translation), six compares a test where the oriented boxes take about 300 instructions. It
-// visits every triangle pair whose boxes touch (each once; b's corners mapped by rel.apply as
-// there), a superset of the pairs that descent visits, which misses only pairs whose node
-// boxes are apart and so cannot meet: the crossing pairs are the same, in another order.
-template <class Visit>
-bool for_each_touching_pair_aligned(const MeshBvh& a, const MeshBvh& b, const Relative& rel, Visit visit) {
+// b's boxes in a's frame under rel.translation_only: its node boxes and triangle boxes as
+// built, moved by the translation; a triangle's corners mapped (rel.apply) once a triangle of a
+// touches its box. Held by value (pointers and the shift), so that a descent keeps them in
+// registers.
+struct MovedB {
+    const BvhNode* nodes;
+    const MeshBvh* b;
+    const Relative* rel;
+    Vec3 shift;
+    MovedB(const MeshBvh& mesh, const Relative& r)
+        : nodes(mesh.nodes().data()), b(&mesh), rel(&r), shift(r.translation) {}
+    bool touches(const BvhNode& x, std::int32_t ib) const { return aligned_boxes_touch(x, nodes[ib], shift); }
+    TriangleBox leaf_box(std::int32_t ib) const { return moved_box(nodes[ib], shift); }
+    // Triangle t's box in a's frame; its corners are mapped later (map) when wanted: false.
+    bool load(std::int32_t t, TriangleBox* box, Vec3*) const {
+        const TriangleBox local = triangle_box(b->triangle(t));
+        *box = {local.lower + shift, local.upper + shift};
+        return false;
+    }
+    void map(std::int32_t t, Vec3* corners) const {
+        const Vec3* c = b->triangle(t);
+        for (int k = 0; k < 3; ++k) corners[k] = rel->apply(c[k]);
+    }
+};
+
+// The box tests of a turned pair's oriented descent after which mesh_contacts refits b in a's
+// frame, at the least (for_each_crossing_pair): the benchmark's family rows take at most 1,104
+// a query, and below this a mesh's slanted patches, not the refit, decide (the 300-face Panda
+// link is looser by axis-aligned boxes on 206 of its 300 touching pairs).
+constexpr long long kRefitBoxTests = 1024;
+
+// b's vertices mapped into a's frame (rel.apply, as the leaves map a triangle's corners, so
+// every corner has the same bits) and its nodes' axis-aligned boxes refitted over them there:
+// the tight boxes of b's tree topology in a's frame, made once a query (O(vertices + nodes) of
+// b). RefitB reads them.
+struct RefitBoxes {
+    std::vector<Vec3> vertices;
+    std::vector<TriangleBox> boxes;
+    RefitBoxes(const MeshBvh& b, const Relative& rel) {
+        const std::vector<Vec3>& local = b.vertices();
+        vertices.resize(local.size());
+        for (size_t v = 0; v < local.size(); ++v) vertices[v] = rel.apply(local[v]);
+        const std::vector<BvhNode>& nodes = b.nodes();
+        boxes.resize(nodes.size());
+        // Depth-first order: both children of a node come after it.
+        for (size_t id = nodes.size(); id-- > 0;) {
+            const BvhNode& n = nodes[id];
+            if (!n.is_leaf()) {
+                const TriangleBox& l = boxes[id + 1];
+                const TriangleBox& r = boxes[static_cast<size_t>(n.index)];
+                boxes[id] = {min3(l.lower, r.lower), max3(l.upper, r.upper)};
+                continue;
+            }
+            const std::int32_t* v = b.triangle_vertices(n.index);
+            TriangleBox box{vertices[static_cast<size_t>(v[0])], vertices[static_cast<size_t>(v[0])]};
+            for (std::int32_t k = 1; k < 3 * n.count; ++k) {
+                const Vec3& p = vertices[static_cast<size_t>(v[k])];
+                box = {min3(box.lower, p), max3(box.upper, p)};
+            }
+            boxes[id] = box;
+        }
+    }
+};
+
+// b's boxes in a's frame for a turned pair: RefitBoxes' node boxes, and a triangle's corners
+// (its mapped vertices) and their box.
+struct RefitB {
+    const TriangleBox* boxes;
+    const Vec3* vertices;
+    const MeshBvh* b;
+    RefitB(const RefitBoxes& refit, const MeshBvh& mesh)
+        : boxes(refit.boxes.data()), vertices(refit.vertices.data()), b(&mesh) {}
+    bool touches(const BvhNode& x, std::int32_t ib) const {
+        const TriangleBox& y = boxes[ib];
+        for (int k = 0; k < 3; ++k) {
+            double gap = static_cast<double>(x.lower[k]) - y.upper[k];
+            if (gap < 0.0) gap = y.lower[k] - static_cast<double>(x.upper[k]);
+            if (gap > 0.0 && gap * gap > 0.0) return false;
+        }
+        return true;
+    }
+    TriangleBox leaf_box(std::int32_t ib) const { return boxes[ib]; }
+    bool load(std::int32_t t, TriangleBox* box, Vec3* corners) const {
+        map(t, corners);
+        *box = triangle_box(corners);
+        return true;
+    }
+    void map(std::int32_t t, Vec3* corners) const {
+        const std::int32_t* v = b->triangle_vertices(t);
+        for (int k = 0; k < 3; ++k) corners[k] = vertices[v[k]];
+    }
+};
+
+// for_each_touching_pair (no margin, split on both sides) by axis-aligned boxes in a's frame:
+// a's as built, b's as `b_in_a` gives them (MovedB under rel.translation_only, RefitB for a
+// turned pair), a few compares a test where the oriented boxes take about 160 instructions,
+// from the node pairs on `stack` (whose boxes may touch). It visits every triangle pair under
+// them whose boxes touch (each once; b's corners mapped by rel.apply as there), a superset of
+// the pairs the oriented descent visits, which misses only pairs whose node boxes are apart
+// and so cannot meet: the crossing pairs are the same, in another order.
+template <class BInA, class Visit>
+__attribute__((noinline)) bool for_each_touching_pair_aligned(const MeshBvh& a, const MeshBvh& b, const BInA b_in_a,
+                                                              Visit visit, NodePairStack& stack) {
     const std::vector<BvhNode>& na = a.nodes();
     const std::vector<BvhNode>& nb = b.nodes();
-    const Vec3& shift = rel.translation;
-    if (!aligned_boxes_touch(na[0], nb[0], shift)) return false;
-    NodePairStack stack;
-    stack.push(0, 0);
-    // b's leaf in reach: its triangles' boxes in a's frame, each its local box moved (the box
-    // of its corners mapped, by the argument of aligned_boxes_touch: the least of the mapped
-    // coordinates is the least moved), and its corners mapped by rel.apply once a triangle of a
-    // touches that box.
+    // b's leaf in reach: its triangles' boxes in a's frame (b_in_a.load), and their corners
+    // mapped, at the latest once a triangle of a touches that box.
     struct {
         TriangleBox boxes[defaults::mesh_bvh_leaf_size];
         Vec3 corners[defaults::mesh_bvh_leaf_size][3];
@@ -428,26 +531,22 @@ bool for_each_touching_pair_aligned(const MeshBvh& a, const MeshBvh& b, const Re
         const BvhNode& x = na[static_cast<size_t>(ia)];
         const BvhNode& y = nb[static_cast<size_t>(ib)];
         if (x.is_leaf() && y.is_leaf()) {
-            // b's leaf box moved holds its triangles' boxes: a triangle of a whose box does
-            // not touch it touches none of them.
-            const TriangleBox moved_b = moved_box(y, shift);
+            // b's leaf box holds its triangles' boxes: a triangle of a whose box does not
+            // touch it touches none of them.
+            const TriangleBox box_y = b_in_a.leaf_box(ib);
             for (std::int32_t i = x.index; i < x.index + x.count; ++i) {
                 const Vec3* ta = a.triangle(i);
                 const TriangleBox box_a = triangle_box(ta);
-                if (!triangle_boxes_touch(box_a, moved_b)) continue;
+                if (!triangle_boxes_touch(box_a, box_y)) continue;
                 if (ib != loaded) {
-                    for (int j = 0; j < y.count; ++j) {
-                        const TriangleBox local = triangle_box(b.triangle(y.index + j));
-                        leaf_b.boxes[j] = {local.lower + shift, local.upper + shift};
-                        leaf_b.mapped[j] = false;
-                    }
+                    for (int j = 0; j < y.count; ++j)
+                        leaf_b.mapped[j] = b_in_a.load(y.index + j, &leaf_b.boxes[j], leaf_b.corners[j]);
                     loaded = ib;
                 }
                 for (int j = 0; j < y.count; ++j) {
                     if (!triangle_boxes_touch(box_a, leaf_b.boxes[j])) continue;
                     if (!leaf_b.mapped[j]) {
-                        const Vec3* t = b.triangle(y.index + j);
-                        for (int k = 0; k < 3; ++k) leaf_b.corners[j][k] = rel.apply(t[k]);
+                        b_in_a.map(y.index + j, leaf_b.corners[j]);
                         leaf_b.mapped[j] = true;
                     }
                     if (visit(i, y.index + j, ta, leaf_b.corners[j])) return true;
@@ -462,8 +561,7 @@ bool for_each_touching_pair_aligned(const MeshBvh& a, const MeshBvh& b, const Re
         for (const std::int32_t child_b : b_children) {
             if (child_b < 0) continue;
             for (const std::int32_t child_a : a_children)
-                if (child_a >= 0 && aligned_boxes_touch(na[static_cast<size_t>(child_a)],
-                                                        nb[static_cast<size_t>(child_b)], shift))
+                if (child_a >= 0 && b_in_a.touches(na[static_cast<size_t>(child_a)], child_b))
                     stack.push(child_a, child_b);
         }
     }
@@ -734,16 +832,26 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
 // The descent of mesh_intersects to the end for mesh_contacts: the same box tests, plane
 // screen and exact triangle test, no marks kept; internal node pairs split on both sides
 // (split_both: a twelfth fewer box tests on the contacts rows). Under rel.translation_only, by
-// axis-aligned boxes instead (for_each_touching_pair_aligned: the same crossing pairs, about
-// a fifth fewer instructions on bench_mesh_query's balls and torus rows, benchmarks/RESULTS.md,
-// session 28); turned pairs keep the oriented boxes, which their axis-aligned enclosures in
-// a's frame would loosen (+9% to +295% on the benchmark's family rows, the same place).
+// axis-aligned boxes instead (for_each_touching_pair_aligned with MovedB: the same crossing
+// pairs, about a fifth fewer instructions on bench_mesh_query's balls and torus rows,
+// benchmarks/RESULTS.md, session 28). A turned pair starts with the oriented boxes, which
+// their axis-aligned enclosures in a's frame would loosen (+9% to +295% on the benchmark's
+// family rows, the same place); a dense one (more box tests than refit_after, by default
+// the greater of kRefitBoxTests and half b's node count) finishes by axis-aligned boxes over
+// b's vertices mapped into a's frame (RefitB), which costs about 70 instructions a face of b
+// and then about a quarter of an oriented test per node pair (benchmarks/RESULTS.md, session
+// 29: the turned torus row 22% fewer instructions when refitted from the root, the family
+// rows 1.2 to 4.2 times more, their slanted patches' boxes being far looser).
 bool for_each_crossing_pair(
     const MeshBvh& a, const MeshBvh& b, const Relative& rel, long long max_work, long long* work, bool witnesses,
-    const std::function<bool(std::int32_t, std::int32_t, const Vec3*, const Vec3*, const Vec3&, bool)>& visit) {
+    const std::function<bool(std::int32_t, std::int32_t, const Vec3*, const Vec3*, const Vec3&, bool)>& visit,
+    long long refit_after) {
     static const Vec3 kNoPoint{kNaN, kNaN, kNaN};
     bool capped = false;
-    const auto crossing = [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
+    // Inlined into each of the three descents, as the compiler did into the two before the
+    // refit: a call a visited pair took 0.3% to 3% more instructions on the contacts rows.
+    const auto crossing = [&](std::int32_t i, std::int32_t j, const Vec3* ta,
+                              const Vec3* tb) __attribute__((always_inline)) {
         if (++*work > max_work) return capped = true;
         if (planes_separate(a, i, ta, b, j, tb, rel)) return false;
         // The quick verdict where it decides (no shared point: a caller that wants one asks
@@ -755,10 +863,19 @@ bool for_each_crossing_pair(
         Vec3 shared;
         return triangles_intersect(ta, tb, &shared) && visit(i, j, ta, tb, shared, false);
     };
+    NodePairStack rest;
     if (rel.translation_only) {
-        for_each_touching_pair_aligned(a, b, rel, crossing);
-    } else {
-        for_each_touching_pair(a, b, rel, crossing, 0.0, false, true);
+        const MovedB moved(b, rel);
+        if (!moved.touches(a.nodes()[0], 0)) return false;
+        rest.push(0, 0);
+        for_each_touching_pair_aligned(a, b, moved, crossing, rest);
+        return capped;
+    }
+    if (refit_after < 0)
+        refit_after = std::max(kRefitBoxTests, static_cast<long long>(b.nodes().size() / 2));
+    if (!for_each_touching_pair(a, b, rel, crossing, 0.0, false, true, refit_after / 4, &rest) && !rest.empty()) {
+        const RefitBoxes refit(b, rel);
+        for_each_touching_pair_aligned(a, b, RefitB(refit, b), crossing, rest);
     }
     return capped;
 }

@@ -311,10 +311,14 @@ bool penetration_axis_forms_agree(const Vec3 a[3], const Vec3 b[3], bool* down);
 /// says that no corner of either lies on the other's plane (exactly: triangle_penetration's
 /// `general`). Counts the triangle pairs whose boxes touch in `*work` and stops once it is above
 /// `max_work`: returns whether it stopped there. `visit` returning true stops the descent too
-/// (then the return is false).
+/// (then the return is false). A turned pair's descent finishes by axis-aligned boxes of b
+/// refitted in a's frame once it has made more than `refit_after` oriented box tests (negative:
+/// the descent's own choice, by the size of b; 0: from the root): the same crossing pairs, and
+/// every triangle pair whose boxes touch under the node pairs it reaches so counts in `*work`.
 bool for_each_crossing_pair(
     const MeshBvh& a, const MeshBvh& b, const Relative& rel, long long max_work, long long* work, bool witnesses,
-    const std::function<bool(std::int32_t, std::int32_t, const Vec3*, const Vec3*, const Vec3&, bool)>& visit);
+    const std::function<bool(std::int32_t, std::int32_t, const Vec3*, const Vec3*, const Vec3&, bool)>& visit,
+    long long refit_after = -1);
 
 /// Parameters along [p, q] (mesh's local frame) where the segment meets the mesh's surface in
 /// isolated points, appended to `out` (mesh_intersection.cpp).

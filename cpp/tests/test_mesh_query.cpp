@@ -1,6 +1,7 @@
 // Mesh hierarchies and mesh-pair queries (mesh_bvh.hpp, mesh_query.hpp) on boxes whose
 // distances, crossings, containment and depths are known.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -618,4 +619,115 @@ TEST_CASE("mesh query: the box test's SSE2 form gives the scalar form's verdicts
     CHECK(overlapping > 1000);
     CHECK(apart > 1000);
     CHECK(flips > 1000);
+}
+
+namespace {
+
+// A torus about z of major radius 1 and minor radius `minor`, `around` x `across` quads of two
+// triangles each.
+fixtures::TriangleMesh torus(int around, int across, double minor) {
+    fixtures::TriangleMesh m;
+    const double kTwoPi = 6.283185307179586;
+    for (int i = 0; i < around; ++i)
+        for (int j = 0; j < across; ++j) {
+            const double u = kTwoPi * i / around, v = kTwoPi * j / across;
+            const double ring = 1.0 + minor * std::cos(v);
+            m.vertices.insert(m.vertices.end(), {ring * std::cos(u), ring * std::sin(u), minor * std::sin(v)});
+        }
+    for (std::int64_t i = 0; i < around; ++i)
+        for (std::int64_t j = 0; j < across; ++j) {
+            const std::int64_t i1 = (i + 1) % around, j1 = (j + 1) % across;
+            const std::int64_t p = i * across + j, q = i1 * across + j, r = i1 * across + j1, s = i * across + j1;
+            m.faces.insert(m.faces.end(), {p, q, r, p, r, s});
+        }
+    return m;
+}
+
+// The crossing pairs of for_each_crossing_pair (leaf order, sorted) and its work count.
+std::pair<std::vector<std::pair<std::int32_t, std::int32_t>>, long long> crossing_pairs(
+    const MeshBvh& a, const MeshBvh& b, const mesh_detail::Relative& rel, long long refit_after) {
+    std::vector<std::pair<std::int32_t, std::int32_t>> pairs;
+    long long work = 0;
+    const bool capped = mesh_detail::for_each_crossing_pair(
+        a, b, rel, std::numeric_limits<long long>::max(), &work, false,
+        [&pairs](std::int32_t i, std::int32_t j, const Vec3*, const Vec3*, const Vec3&, bool) {
+            pairs.push_back({i, j});
+            return false;
+        },
+        refit_after);
+    CHECK(!capped);
+    std::sort(pairs.begin(), pairs.end());
+    return {pairs, work};
+}
+
+}  // namespace
+
+TEST_CASE("mesh query: a turned pair's refitted descent lists every crossing pair") {
+    // The contacts' descent of a turned pair finishes by axis-aligned boxes of b refitted in
+    // a's frame once it is dense: from the root, mid-way (its own choice) and never, it must
+    // list the crossing pairs of all triangle pairs whose boxes touch (b's corners mapped as
+    // the queries map them), and from the root count every such pair as work.
+    const auto brute_force = [](const MeshBvh& a, const MeshBvh& b, const mesh_detail::Relative& rel) {
+        std::vector<mesh_detail::TriangleBox> boxes_b;
+        std::vector<std::array<Vec3, 3>> mapped;
+        for (std::int32_t j = 0; j < b.triangle_count(); ++j) {
+            mapped.push_back({rel.apply(b.triangle(j)[0]), rel.apply(b.triangle(j)[1]), rel.apply(b.triangle(j)[2])});
+            boxes_b.push_back(mesh_detail::triangle_box(mapped.back().data()));
+        }
+        std::vector<std::pair<std::int32_t, std::int32_t>> pairs;
+        long long touching = 0;
+        for (std::int32_t i = 0; i < a.triangle_count(); ++i) {
+            const mesh_detail::TriangleBox box_a = mesh_detail::triangle_box(a.triangle(i));
+            for (std::int32_t j = 0; j < b.triangle_count(); ++j) {
+                if (!mesh_detail::triangle_boxes_touch(box_a, boxes_b[static_cast<size_t>(j)])) continue;
+                ++touching;
+                if (triangles_intersect(a.triangle(i), mapped[static_cast<size_t>(j)].data(), nullptr))
+                    pairs.push_back({i, j});
+            }
+        }
+        return std::make_pair(pairs, touching);
+    };
+    const MeshBvh ring = torus(64, 32, 0.3).bvh();
+    std::uint64_t state = 2929;
+    const auto uniform = [&state]() {  // in [-1, 1)
+        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+        return static_cast<double>(state >> 11) * (2.0 / 9007199254740992.0) - 1.0;
+    };
+    int switched = 0;
+    for (int trial = 0; trial < 4; ++trial) {
+        const Pose pa = posed(uniform(), uniform(), uniform(), uniform(), {0.0, 0.0, 0.0});
+        const Vec3 shift{0.3 * uniform(), 0.3 * uniform(), 0.1 * uniform()};
+        const Pose pb = posed(uniform(), uniform(), uniform(), uniform(), shift);
+        const mesh_detail::Relative rel(pa, pb, ring, ring);
+        REQUIRE(!rel.translation_only);
+        const auto [expected, touching] = brute_force(ring, ring, rel);
+        CHECK(expected.size() >= 200);
+        const auto [from_root, work_root] = crossing_pairs(ring, ring, rel, 0);
+        const auto [chosen, work_chosen] = crossing_pairs(ring, ring, rel, -1);
+        const auto [never, work_never] = crossing_pairs(ring, ring, rel, std::numeric_limits<long long>::max());
+        CHECK(from_root == expected);
+        CHECK(chosen == expected);
+        CHECK(never == expected);
+        CHECK_EQ(work_root, touching);
+        CHECK(work_never <= touching);
+        switched += work_chosen != work_never;
+    }
+    CHECK(switched >= 2);  // the descent's own choice refits these dense pairs mid-way
+    // A box turned a quarter about z (an exact rotation) resting flush on another: every gap
+    // at the shared face is exactly 0, and the refitted boxes must keep those pairs.
+    const MeshBvh base = fixtures::box_mesh({0, 0, 0}, {2, 2, 1}).bvh();
+    const MeshBvh top = fixtures::box_mesh({0.25, -1.5, 0}, {1.75, -0.5, 1}).bvh();
+    Pose quarter;
+    quarter.rotation.m[0][0] = 0.0, quarter.rotation.m[0][1] = -1.0, quarter.rotation.m[0][2] = 0.0;
+    quarter.rotation.m[1][0] = 1.0, quarter.rotation.m[1][1] = 0.0, quarter.rotation.m[1][2] = 0.0;
+    quarter.rotation.m[2][0] = 0.0, quarter.rotation.m[2][1] = 0.0, quarter.rotation.m[2][2] = 1.0;
+    quarter.translation = {0.0, 0.0, 1.0};
+    const mesh_detail::Relative flush(at(0, 0, 0), quarter, base, top);
+    REQUIRE(!flush.translation_only);
+    const auto [expected, touching] = brute_force(base, top, flush);
+    CHECK(expected.size() >= 8);
+    const auto [from_root, work_root] = crossing_pairs(base, top, flush, 0);
+    CHECK(from_root == expected);
+    CHECK_EQ(work_root, touching);
+    CHECK(crossing_pairs(base, top, flush, std::numeric_limits<long long>::max()).first == expected);
 }

@@ -141,7 +141,8 @@ def mesh_contacts_batch(
     The crossing pairs are those of :func:`meshcol.collision.mesh_query.mesh_intersects_batch`'s
     descent run to the end: overlapping oriented boxes of both hierarchies (when the two
     poses' rotations are equal, axis-aligned boxes in a's frame, b's moved by the
-    translation), then the exact triangle-triangle test (orientation signs, Guigue and Devillers 2003). Each pair's depth is
+    translation; a dense turned pair finishes by axis-aligned boxes of b refitted in a's
+    frame), then the exact triangle-triangle test (orientation signs, Guigue and Devillers 2003). Each pair's depth is
     the separating axis theorem's over the two face normals and the nine edge-edge cross
     products (Gottschalk, Lin and Manocha 1996; Ericson 2004, 4.4): the facets of the two
     triangles' Minkowski difference have normals among these, so the minimum overlap is the
