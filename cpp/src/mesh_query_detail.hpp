@@ -129,6 +129,8 @@ inline double triangle_box_squared_distance(const TriangleBox& a, const Triangle
 // triangle_box_squared_distance(a, b) == 0.0, stopping at the first axis that decides: the
 // sum is 0 exactly when every positive gap's square is (a sum of non-negative terms is 0 only
 // when each is, and a positive square rounds to a positive sum or to inf).
+// mesh_intersection.cpp's node tests (aligned_boxes_touch, RefitB::touches) repeat this test
+// on the nodes' floats, for speed: change them together.
 inline bool triangle_boxes_touch(const TriangleBox& a, const TriangleBox& b) {
     for (int k = 0; k < 3; ++k) {
         double gap = a.lower[k] - b.upper[k];
