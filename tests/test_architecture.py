@@ -119,6 +119,7 @@ def test_only_collision_the_mesh_readers_and_the_report_writer_use_the_native_mo
     users = sorted(m for m, deps in graph().items() if "meshcol._native" in deps)
     io_users = {"meshcol.io.mesh_read", "meshcol.io.polygons", "meshcol.io.report"}
     io_users.add("meshcol.io.scene_native")  # the manifest reader
+    io_users.add("meshcol.io.raster")  # the snapshot pictures' triangle fill
     assert users and all(_layer(m) == "collision" or m in io_users for m in users), users
 
 

@@ -16,6 +16,7 @@ void bind_report(nb::module_& m);
 void bind_orientation(nb::module_& m);
 void bind_triangulate(nb::module_& m);
 void bind_manifest(nb::module_& m);
+void bind_raster(nb::module_& m);
 
 NB_MODULE(_core, m) {
     m.doc() = "meshcol native core (private: use the meshcol package API)";
@@ -32,4 +33,5 @@ NB_MODULE(_core, m) {
     bind_orientation(m);
     bind_triangulate(m);
     bind_manifest(m);
+    bind_raster(m);
 }

@@ -1,4 +1,4 @@
-"""A small offscreen rasterizer: triangles to an RGB image with a z-buffer, on the CPU, in numpy.
+"""A small offscreen rasterizer: triangles to an RGB image with a z-buffer, on the CPU.
 
 No display, no OpenGL, no browser: what ``--snapshots`` draws its pictures with on a CI
 machine. An orthographic camera looks at a box from a fixed diagonal direction (so that any
@@ -6,7 +6,8 @@ up axis shows three sides); triangles are flat shaded (two-sided Lambert with an
 term) and depth tested per pixel (edge functions over each triangle's pixel box; triangles
 smaller than a pixel are splatted at their centre, nearest first), which follows the
 standard half-space rasterization of Pineda (1988) as in Akenine-Möller et al., *Real-Time
-Rendering*, 4th ed., 23.1.
+Rendering*, 4th ed., 23.1. The fill, a loop over triangles and their pixels, is the core's
+(``raster_fill_triangles``); shading, projection and the splat of small triangles are numpy.
 """
 
 from __future__ import annotations
@@ -14,6 +15,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from meshcol._native import core
 
 __all__ = ["Camera", "Raster", "hex_rgb", "view_across"]
 
@@ -124,35 +127,18 @@ class Raster:
             order = order[np.argsort(-area[order], kind="stable")[:MAX_FILLED]]
         filled = np.zeros(len(screen), dtype=bool)
         filled[order] = True
-        for k in order:
-            self._fill(screen[k], colors[k], lo[k], hi[k])
+        core.raster_fill_triangles(
+            self.depth,
+            self.pixels,
+            np.ascontiguousarray(screen),
+            np.ascontiguousarray(colors),
+            lo,
+            hi,
+            order.astype(np.int64, copy=False),
+        )
         small = np.flatnonzero(visible & ~filled)
         if len(small):
             self._splat(screen[small].mean(axis=1), colors[small])
-
-    def _fill(self, tri: np.ndarray, color: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:
-        h, w = self.depth.shape
-        x0, y0 = max(int(lo[0]), 0), max(int(lo[1]), 0)
-        x1, y1 = min(int(hi[0]), w - 1), min(int(hi[1]), h - 1)
-        if x1 < x0 or y1 < y0:
-            return
-        xs = np.arange(x0, x1 + 1) + 0.5
-        ys = np.arange(y0, y1 + 1)[:, None] + 0.5
-        (ax, ay, az), (bx, by, bz), (cx, cy, cz) = tri
-        det = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
-        if det == 0:
-            return
-        w0 = ((bx - xs) * (cy - ys) - (by - ys) * (cx - xs)) / det
-        w1 = ((cx - xs) * (ay - ys) - (cy - ys) * (ax - xs)) / det
-        w2 = 1.0 - w0 - w1
-        inside = (w0 >= 0) & (w1 >= 0) & (w2 >= 0)
-        if not inside.any():
-            return
-        z = w0 * az + w1 * bz + w2 * cz
-        region = self.depth[y0 : y1 + 1, x0 : x1 + 1]
-        nearer = inside & (z > region)
-        region[nearer] = z[nearer]
-        self.pixels[y0 : y1 + 1, x0 : x1 + 1][nearer] = color
 
     def _splat(self, centres: np.ndarray, colors: np.ndarray) -> None:
         h, w = self.depth.shape
