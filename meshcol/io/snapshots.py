@@ -100,6 +100,41 @@ def _world(mesh: Mapping[str, Any]) -> np.ndarray:
     return v[np.asarray(mesh["faces"], dtype=np.int64)]
 
 
+def _in_frame(tris: np.ndarray, camera: Camera) -> np.ndarray:
+    """Which of ``tris`` ``(n, 3, 3)`` have a box that meets the camera's."""
+    high = np.maximum(np.maximum(tris[:, 0], tris[:, 1]), tris[:, 2])
+    low = np.minimum(np.minimum(tris[:, 0], tris[:, 1]), tris[:, 2])
+    return np.all((high >= camera.low) & (low <= camera.high), axis=1)
+
+
+class _MeshBoxes:
+    """Each mesh's world box, made once a drawing for each geometry and pose (pictures x
+    meshes would pose every mesh of the scene for every picture): a mesh whose box misses a
+    picture's frame has no triangle in it. The box is of every vertex (NaN left out), so it
+    holds each triangle's."""
+
+    def __init__(self) -> None:
+        self._made: dict[tuple[int, bytes], tuple[Any, np.ndarray, np.ndarray]] = {}
+
+    def far(self, mesh: Mapping[str, Any], camera: Camera) -> bool:
+        if len(mesh["faces"]) == 0:
+            return True
+        vertices = mesh["vertices"]
+        pose = np.asarray(mesh["pose"], dtype=np.float64)
+        key = (id(vertices), pose.tobytes())
+        made = self._made.get(key)
+        if made is None or made[0] is not vertices:  # kept here: its id is not reused
+            world = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+            world = world @ pose[:3, :3].T + pose[:3, 3]
+            made = self._made[key] = (
+                vertices,
+                np.fmin.reduce(world, axis=0, initial=np.inf),
+                np.fmax.reduce(world, axis=0, initial=-np.inf),
+            )
+        _, low, high = made
+        return not bool(np.all((high >= camera.low) & (low <= camera.high)))
+
+
 def _box(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     points = points.reshape(-1, 3)
     return points.min(axis=0), points.max(axis=0)
@@ -152,16 +187,16 @@ def _paint(
     ids: Sequence[int],
     own: Sequence[tuple[Mapping[str, Any], np.ndarray]],
     camera: Camera,
+    boxes: _MeshBoxes,
 ) -> Raster:
     """The triangles: the context faded (where near the frame), then the row's bodies in
     their colours over it, then the row's findings faces."""
     raster = Raster(camera)
     for mesh in meshes:
-        if mesh["group"] != "meshes" or mesh["body"] in ids:
+        if mesh["group"] != "meshes" or mesh["body"] in ids or boxes.far(mesh, camera):
             continue
         tris = _world(mesh)
-        near = np.all((tris.max(axis=1) >= camera.low) & (tris.min(axis=1) <= camera.high), axis=1)
-        raster.triangles(tris[near], hex_rgb(CONTEXT_COLOR), fade=CONTEXT_FADE)
+        raster.triangles(tris[_in_frame(tris, camera)], hex_rgb(CONTEXT_COLOR), fade=CONTEXT_FADE)
     raster.depth[:] = -np.inf  # the row's bodies are drawn over the context, never hidden
     for mesh, tris in own:
         slot = min(list(ids).index(mesh["body"]), len(PAIR_COLORS) - 1)
@@ -237,11 +272,11 @@ def _layout(page: Any, row: Mapping[str, Any], shot: Shot) -> _Layout:
     return _Layout(ids, own, lines, points, Camera(low, high, WIDTH, HEIGHT, view_from=view))
 
 
-def _draw_row(page: Any, row: Mapping[str, Any], shot: Shot, path: str) -> None:
+def _draw_row(page: Any, row: Mapping[str, Any], shot: Shot, path: str, boxes: _MeshBoxes) -> None:
     PIL = pillow()
     layout = _layout(page, row, shot)
     camera = layout.camera
-    raster = _paint(page.meshes(), layout.ids, layout.own, camera)
+    raster = _paint(page.meshes(), layout.ids, layout.own, camera, boxes)
     image = PIL.Image.fromarray(raster.pixels, "RGB")
     draw = PIL.ImageDraw.Draw(image)
     _marks(draw, camera, layout.lines, layout.points, row["normal"])
@@ -249,11 +284,9 @@ def _draw_row(page: Any, row: Mapping[str, Any], shot: Shot, path: str) -> None:
     image.save(path, format="PNG", optimize=False)
 
 
-def _near(mesh: Mapping[str, Any], camera: Camera) -> bool:
+def _near(mesh: Mapping[str, Any], camera: Camera, boxes: _MeshBoxes) -> bool:
     """Whether :func:`_paint` draws any triangle of ``mesh`` as context of ``camera``."""
-    tris = _world(mesh)
-    near = np.all((tris.max(axis=1) >= camera.low) & (tris.min(axis=1) <= camera.high), axis=1)
-    return bool(near.any())
+    return not boxes.far(mesh, camera) and bool(_in_frame(_world(mesh), camera).any())
 
 
 def _feature_edges(mesh: Mapping[str, Any]) -> np.ndarray:
@@ -346,9 +379,10 @@ def render_shots(page: ReviewPage | ShotPage, shots: Sequence[Shot], folder: str
     bodies are no row of the page is skipped."""
     pillow()
     written: dict[str, str] = {}
+    boxes = _MeshBoxes()
     for shot, row in _shot_rows(page, shots):
         path = os.path.join(folder, shot.name)
-        _draw_row(page, row, shot, path)
+        _draw_row(page, row, shot, path, boxes)
         written[shot.name] = path
     return written
 
@@ -430,6 +464,7 @@ def shot_page(page: ReviewPage, shots: Sequence[Shot]) -> ShotPage:
     rows: dict[int, Mapping[str, Any]] = {}
     kept: set[int] = set()
     bodies: set[int] = set()
+    boxes = _MeshBoxes()
     for shot, row in _shot_rows(page, shots):
         rows.setdefault(id(row), row)
         layout = _layout(page, row, shot)
@@ -438,7 +473,9 @@ def shot_page(page: ReviewPage, shots: Sequence[Shot]) -> ShotPage:
         for n, mesh in enumerate(meshes):
             own = mesh["body"] in layout.ids or bool(group and mesh["group"] == group)
             # another body's mesh: kept when the picture shows some of it behind
-            if own or (mesh["group"] == "meshes" and n not in kept and _near(mesh, layout.camera)):
+            if own or (
+                mesh["group"] == "meshes" and n not in kept and _near(mesh, layout.camera, boxes)
+            ):
                 kept.add(n)
     return ShotPage(
         page.command,

@@ -89,6 +89,32 @@ def test_pictures_show_the_pair_framed_with_witnesses_and_normal(level_run):
     assert hue_mask(pixels(picture), NORMAL_COLOR).sum() > 30, name  # the normal's arrow
 
 
+def test_a_picture_poses_only_the_meshes_near_its_frame(tmp_path, monkeypatch):
+    """A scene of many bodies and a few violations: each picture poses the triangles of the
+    meshes whose box meets its frame, not every mesh of the scene (pictures x bodies)."""
+    from meshcol.io import snapshots
+
+    crate = str(SAMPLES / "level" / "props" / "crate.obj")
+    bodies = [
+        {"name": f"far_{k}", "mesh": crate, "position": [4.0 * k, 50.0, 0.0]} for k in range(60)
+    ]
+    bodies += [
+        {"name": f"hit_{k}", "mesh": crate, "position": [10.0 * (k // 2) + 0.5 * (k % 2), 0.0, 0.0]}
+        for k in range(6)
+    ]
+    scene = tmp_path / "scene.json"
+    scene.write_text(json.dumps({"units": "m", "bodies": bodies}))
+    posed = []
+    world = snapshots._world
+    monkeypatch.setattr(snapshots, "_world", lambda mesh: posed.append(mesh["body"]) or world(mesh))
+    code, _, err = run("check", str(scene), "--fail-on", "contact", "--report",
+                       str(tmp_path / "r.json"), "--snapshots", str(tmp_path / "shots"))  # fmt: skip
+    assert code == 1, err
+    pictures = sorted((tmp_path / "shots").iterdir())
+    assert len(pictures) == 3  # hit_0 with hit_1, hit_2 with hit_3, hit_4 with hit_5
+    assert 0 < len(posed) <= 10 * len(pictures)  # the pair and its few neighbours, not 66 a picture
+
+
 def test_inspect_pictures_one_per_failing_asset(samples, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     cube = (samples / "bowl" / "bowl.obj").read_text()
