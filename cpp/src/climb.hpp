@@ -97,24 +97,6 @@ MESHCOL_CLIMB_INLINE int climb_start(const ShapeView& s, const Vec3& d, int hint
     return best;
 }
 
-// `climb_start`, or with `seeds` (`octant_seeds`, not null): from the seed of d's octant when
-// there is no hint or the seed lies higher than the hint. A start nearer the top in fewer
-// steps; the top is the same but where vertices tie exactly (then another of the tied ones).
-MESHCOL_CLIMB_INLINE int seeded_start(const ShapeView& s, const Vec3& d, int hint,
-                                      const int* seeds, double& best_dot) {
-    if (seeds == nullptr) return climb_start(s, d, hint, best_dot);
-    const Vec3* v = s.vertices;
-    const int seed = seeds[(d.x < 0.0 ? 4 : 0) | (d.y < 0.0 ? 2 : 0) | (d.z < 0.0 ? 1 : 0)];
-    const double at_seed = dot(v[seed], d);
-    if (hint < 0 || hint >= s.vertex_count) {
-        best_dot = at_seed;
-        return seed;
-    }
-    const double at_hint = dot(v[hint], d);
-    best_dot = at_seed > at_hint ? at_seed : at_hint;
-    return at_seed > at_hint ? seed : hint;
-}
-
 // One step of steepest ascent from `best`: the best neighbour strictly above `best_dot`
 // (first in list order on ties), or -1 at a local (hence global) maximum. `kPrefetch`: ask
 // for each neighbour's own list as it is read (below).
@@ -165,20 +147,16 @@ MESHCOL_CLIMB_INLINE void advance(const ShapeView& s, const Vec3& d, int& best, 
     best = up ? next : best;
 }
 
-// `climb_pair`'s body, with or without the neighbour lists' prefetch, and with or without
-// octant seeds (`kSeeded`: `seeds_a` and `seeds_b` not null).
-template <bool kPrefetch, bool kSeeded>
+// `climb_pair`'s body, with or without the neighbour lists' prefetch.
+template <bool kPrefetch>
 MESHCOL_CLIMB_INLINE void climb_pair_with(const ShapeView& a, const Vec3& da, int hint_a,
                                           const ShapeView& b, const Vec3& db, int hint_b,
-                                          SupportPoint& out_a, SupportPoint& out_b,
-                                          const int* seeds_a, const int* seeds_b) {
+                                          SupportPoint& out_a, SupportPoint& out_b) {
     // Both climbs advance in one loop: each step is a chain of dependent loads and compares,
     // and two independent chains side by side keep the core busy while either waits.
     double dot_a, dot_b;
-    int best_a = kSeeded ? seeded_start(a, da, hint_a, seeds_a, dot_a)
-                         : climb_start(a, da, hint_a, dot_a);
-    int best_b = kSeeded ? seeded_start(b, db, hint_b, seeds_b, dot_b)
-                         : climb_start(b, db, hint_b, dot_b);
+    int best_a = climb_start(a, da, hint_a, dot_a);
+    int best_b = climb_start(b, db, hint_b, dot_b);
     // Side by side while both go up, then the one still climbing alone. Capped at a
     // shape's vertex count (every step goes up, so never reached).
     bool up_a = true, up_b = true;
@@ -212,24 +190,9 @@ MESHCOL_CLIMB_INLINE void climb_pair(const ShapeView& a, const Vec3& da, int hin
                                      SupportPoint& out_a, SupportPoint& out_b) {
     if (a.vertex_count >= defaults::climb_prefetch_min_vertices ||
         b.vertex_count >= defaults::climb_prefetch_min_vertices)
-        climb_pair_with<true, false>(a, da, hint_a, b, db, hint_b, out_a, out_b, nullptr, nullptr);
+        climb_pair_with<true>(a, da, hint_a, b, db, hint_b, out_a, out_b);
     else
-        climb_pair_with<false, false>(a, da, hint_a, b, db, hint_b, out_a, out_b, nullptr,
-                                      nullptr);
-}
-
-/// `climb_pair` with both shapes' octant seeds (`octant_seeds`, not null): see
-/// `seeded_start`.
-MESHCOL_CLIMB_INLINE void climb_pair_seeded(const ShapeView& a, const Vec3& da, int hint_a,
-                                            const ShapeView& b, const Vec3& db, int hint_b,
-                                            SupportPoint& out_a, SupportPoint& out_b,
-                                            const int* seeds_a, const int* seeds_b) {
-    if (a.vertex_count >= defaults::climb_prefetch_min_vertices ||
-        b.vertex_count >= defaults::climb_prefetch_min_vertices)
-        climb_pair_with<true, true>(a, da, hint_a, b, db, hint_b, out_a, out_b, seeds_a, seeds_b);
-    else
-        climb_pair_with<false, true>(a, da, hint_a, b, db, hint_b, out_a, out_b, seeds_a,
-                                     seeds_b);
+        climb_pair_with<false>(a, da, hint_a, b, db, hint_b, out_a, out_b);
 }
 
 }  // namespace climb

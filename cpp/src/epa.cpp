@@ -658,18 +658,6 @@ EpaResult epa_penetration_deep(MinkowskiDifference& md, const SimplexVertex& fir
     const double length = std::sqrt(nn);
     const double deep = defaults::epa_deep_start_depth * md.scale;
     if (!(dot(first.w, n) > deep * length)) return res;
-    // Deep: the rest climbs from the octant seeds too (the ring's climbs, the far side's,
-    // EPA's). Whoever computed them, they are the same: the answers do not depend on the
-    // batch, its order or its threads. Unset on the way out, whichever way that is.
-    int scratch_a[8], scratch_b[8];
-    md.seeds_a = md.a->seeds != nullptr ? md.a->seeds->get(*md.a, scratch_a)
-                                         : (octant_seeds(*md.a, scratch_a), scratch_a);
-    md.seeds_b = md.b->seeds != nullptr ? md.b->seeds->get(*md.b, scratch_b)
-                                         : (octant_seeds(*md.b, scratch_b), scratch_b);
-    struct Unseed {
-        MinkowskiDifference& md;
-        ~Unseed() { md.seeds_a = md.seeds_b = nullptr; }
-    } unseed{md};
     // Two directions perpendicular to n, each defaults::epa_deep_start_spread times as long:
     // n plus or minus either points that far off the centre line.
     int k = 0;
@@ -691,7 +679,7 @@ EpaResult epa_penetration_deep(MinkowskiDifference& md, const SimplexVertex& fir
         ring[r] = md.support_from(directions[r], first.index_a, first.index_b);
         if (!(dot(ring[r].w, directions[r]) > deep * ring_length)) return res;
     }
-    const SimplexVertex back = md.support_from(-n, -1, -1);  // from the seeds
+    const SimplexVertex back = md.support(-n);
     // The segment back -> first crosses the ring's span near the origin on a deep pair, and
     // the six points' hull is most often the octahedron around that segment: EPA starts there
     // when it holds the origin clear of its faces by more than the contact distance.

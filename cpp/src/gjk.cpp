@@ -86,70 +86,7 @@ SimplexVertex MinkowskiDifference::support(const Vec3& d) {
     return finish_support(*this, d, sa, sb);
 }
 
-void octant_seeds(const ShapeView& shape, int seeds[8]) {
-    const Vec3* v = shape.vertices;
-    const int n = shape.vertex_count;
-    const int stride = n >= 128 ? n / 64 : 1;
-    // Along (1, 1, 1), (1, 1, -1), (1, -1, 1), (1, -1, -1) the highest and the lowest: the
-    // lowest along one is the highest along its opposite.
-    double high[4], low[4];
-    int at_high[4] = {0, 0, 0, 0}, at_low[4] = {0, 0, 0, 0};
-    for (int j = 0; j < 4; ++j) {
-        const double x = v[0].x, y = (j & 2) ? -v[0].y : v[0].y, z = (j & 1) ? -v[0].z : v[0].z;
-        high[j] = low[j] = x + y + z;
-    }
-    for (int i = stride; i < n; i += stride) {
-        const double x = v[i].x, y = v[i].y, z = v[i].z;
-        const double along[4] = {x + y + z, x + y - z, x - y + z, x - y - z};
-        for (int j = 0; j < 4; ++j) {
-            if (along[j] > high[j]) {
-                high[j] = along[j];
-                at_high[j] = i;
-            }
-            if (along[j] < low[j]) {
-                low[j] = along[j];
-                at_low[j] = i;
-            }
-        }
-    }
-    for (int j = 0; j < 4; ++j) {
-        seeds[j] = at_high[j];
-        seeds[7 - j] = at_low[j];
-    }
-}
-
-const int* SeedSlot::get(const ShapeView& shape, int scratch[8]) {
-    if (state_.load(std::memory_order_acquire) == 2) return seeds_;
-    int none = 0;
-    if (state_.compare_exchange_strong(none, 1, std::memory_order_acquire)) {
-        octant_seeds(shape, seeds_);
-        state_.store(2, std::memory_order_release);
-        return seeds_;
-    }
-    octant_seeds(shape, scratch);
-    return scratch;
-}
-
-namespace {
-
-// `support_from` with the octant seeds (the deep start's and its EPA's climbs): from the seed
-// or the start, whichever lies higher; the seed alone without a start. Out of line, so that
-// the unseeded calls keep their short prologue.
-#if defined(__GNUC__) || defined(__clang__)
-__attribute__((noinline))
-#endif
-SimplexVertex seeded_support(MinkowskiDifference& md, const Vec3& d, int start_a, int start_b) {
-    SupportPoint sa, sb;
-    md.last_direction = d;
-    climb::climb_pair_seeded(*md.a, d, start_a, *md.b, md.rotation_b.transpose_times(-d), start_b,
-                             sa, sb, md.seeds_a, md.seeds_b);
-    return finish_support(md, d, sa, sb);
-}
-
-}  // namespace
-
 SimplexVertex MinkowskiDifference::support_from(const Vec3& d, int start_a, int start_b) {
-    if (seeds_a != nullptr && climb_both) return seeded_support(*this, d, start_a, start_b);
     if (start_a >= 0) hint_a = start_a;
     if (start_b >= 0) hint_b = start_b;
     last_direction = d;

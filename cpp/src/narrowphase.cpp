@@ -322,8 +322,7 @@ PairResult query_pair(const ShapeView& a, const Pose& pose_a, const ShapeView& b
     }
     // Far out of range (see rescale.hpp): the same query, moved and scaled by a power of two.
     std::vector<Vec3> storage_a, storage_b;
-    ShapeView sa = rescale::scaled(a, f, storage_a), sb = rescale::scaled(b, f, storage_b);
-    sa.seeds = sb.seeds = nullptr;  // the batch's are the unscaled shapes'
+    const ShapeView sa = rescale::scaled(a, f, storage_a), sb = rescale::scaled(b, f, storage_b);
     Pose pa = pose_a, pb = pose_b;
     pa.translation = Vec3{};
     pb.translation = f.point(pose_b.translation);
@@ -385,9 +384,6 @@ void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t
             }
         });
     }
-    // The shapes' octant seeds (deep penetrating pairs' climbs), computed once a shape.
-    std::unique_ptr<SeedSlot[]> seeds;
-    if (kind == QueryKind::PENETRATION) seeds.reset(new SeedSlot[static_cast<size_t>(slots)]);
     const Pose identity{};
     const int n_threads = resolve_threads(threads, pair_count, defaults::min_pairs_per_thread);
     parallel_for(pair_count, n_threads, [&](long long begin, long long end) {
@@ -402,11 +398,7 @@ void run_batch(const ConvexSetView& set, const double* poses, const std::int64_t
                 r.distance = r.depth = kNaN;
                 r.normal = r.point_a = r.point_b = Vec3{kNaN, kNaN, kNaN};
             } else {
-                ShapeView sa = set.shape(ia), sb = set.shape(ib);
-                if (seeds) {
-                    sa.seeds = &seeds[ka];
-                    sb.seeds = &seeds[kb];
-                }
+                const ShapeView sa = set.shape(ia), sb = set.shape(ib);
                 if (first_meeting(ka)) read_vertices(sa);
                 if (first_meeting(kb)) read_vertices(sb);
                 const Pose& pa = poses == nullptr ? identity : pose[ka];

@@ -40,10 +40,7 @@ EpaResult epa_penetration(MinkowskiDifference& difference, const Simplex& simple
 /// line (`translation_b`, as GJK's first), past the origin. Starts from supports around the
 /// centre line; status NOT_RUN (and nothing else set) when they do not hold the origin clear
 /// of the contact distance, and the caller then runs GJK and `epa_penetration`. Frame: shape
-/// a's local frame. The iterations count the start's six supports. Once the pair is seen
-/// to be deep, every climb of the start and of EPA also starts from the shapes' octant seeds
-/// (`octant_seeds`) where they lie higher than the warm start: kept in the shapes'
-/// `ShapeView::seeds` when set (a batch's, computed once a shape), else computed here.
+/// a's local frame. The iterations count the start's six supports.
 EpaResult epa_penetration_deep(MinkowskiDifference& difference, const SimplexVertex& first,
                                const EpaOptions& options = {});
 

@@ -5,8 +5,6 @@
 /// The query runs in shape a's local frame (shape b is mapped into it once), which keeps
 /// coordinates small and the answer independent of where the pair sits in the world.
 
-#include <atomic>
-
 #include "meshcol/defaults.hpp"
 #include "meshcol/shapes.hpp"
 #include "meshcol/status.hpp"
@@ -42,24 +40,6 @@ inline void weighted_points(const Simplex& s, Vec3& pa, Vec3& pb) {
     }
 }
 
-/// A shape's octant seeds: for each direction (+-1, +-1, +-1), index 4 sx + 2 sy + sz of its
-/// signs (1 for minus), the highest vertex along it among every k-th vertex (k = n / 64 from
-/// 128 vertices on, else every vertex; the first one on ties). A function of the shape alone,
-/// so a climb started from a seed gives the same answer whoever computed it, and when.
-void octant_seeds(const ShapeView& shape, int seeds[8]);
-
-/// One shape's octant seeds, computed at most once a batch: the first thread to ask computes
-/// them into the slot; a thread that asks while another is computing them computes its own
-/// copy in `scratch` (the same numbers).
-class SeedSlot {
-public:
-    const int* get(const ShapeView& shape, int scratch[8]);
-
-private:
-    std::atomic<int> state_{0};  // 0: none, 1: being computed, 2: ready
-    int seeds_[8];
-};
-
 /// The Minkowski difference a - b of two posed shapes, expressed in a's local frame.
 struct MinkowskiDifference {
     const ShapeView* a = nullptr;
@@ -69,11 +49,6 @@ struct MinkowskiDifference {
     bool with_margins = false;  ///< include sphere/capsule radii (else: the cores only)
     int hint_a = -1;       ///< warm start for hill climbing on a
     int hint_b = -1;       ///< warm start for hill climbing on b
-    /// Octant seeds (`octant_seeds`) of a and b, or null: `support_from`'s joint climbs then
-    /// start from the seed of the direction's octant when that lies higher than the given
-    /// start (or when there is none). Set by the deep EPA start only, for its own supports.
-    const int* seeds_a = nullptr;
-    const int* seeds_b = nullptr;
     bool climb_both = false;  ///< both shapes climb (`climbs`): one joint climb per support
     bool scan_both = false;   ///< both shapes scan (`scans`): one joint scan per support
     Vec3 last_direction;      ///< direction of the previous support call (zero: none)
@@ -90,8 +65,7 @@ struct MinkowskiDifference {
     SimplexVertex support(const Vec3& direction);
 
     /// The same, with the climbs starting from vertices `hint_a` and `hint_b` (negative:
-    /// none), known to be near the answer whatever the last direction was. With `seeds_a`
-    /// and `seeds_b` (and `climb_both`): see there; a negative start is then no start.
+    /// none), known to be near the answer whatever the last direction was.
     SimplexVertex support_from(const Vec3& direction, int hint_a, int hint_b);
 
     /// A length scale of the pair (bounding radii plus centre distance) for relative

@@ -14,7 +14,6 @@ namespace meshcol {
 
 struct ConvexSetView;
 struct GaussArc;
-class SeedSlot;
 
 /// Kind of a shape. The numeric values are part of the binary interface (mirrored by the
 /// Python `meshcol.collision.shapes.ShapeKind`; tests/test_native.py checks it): never renumber.
@@ -53,10 +52,6 @@ struct ShapeView {
     const ConvexSetView* set = nullptr;
     std::int64_t set_index = -1;
     double params[4] = {0.0, 0.0, 0.0, 0.0};  ///< see `ShapeKind`
-    /// Where a batch keeps this shape's octant seeds (gjk.hpp: `octant_seeds`, `SeedSlot`),
-    /// computed the first time a deep penetrating pair needs them. Null: computed when
-    /// needed (the same seeds).
-    SeedSlot* seeds = nullptr;
 };
 
 /// Attaches the edge directions of a shape whose classes are computed on first use
