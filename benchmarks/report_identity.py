@@ -2,7 +2,7 @@
 report identical unless a change is on purpose and in the CHANGELOG).
 
 Runs one list of commands (check, sweep, inspect, hull, fit, decompose, collision-matrix in
-every report format, review pages, robot outputs) with each meshcol executable, from the
+every report format, review pages, snapshot pictures, robot outputs) with each meshcol executable, from the
 repository root, writing into the same folder so that paths inside the reports agree, then
 moves each side's outputs aside and compares every file, the exit code, stdout and stderr.
 Only clocks are masked: JSON fields ``generated_at`` and ``*seconds``, JUnit ``time``
@@ -51,6 +51,21 @@ COMMANDS: list[tuple[str, list[str]]] = [
     ),
     ("check-level-github", ["check", "samples/level/scene.json", "--format", "github"]),
     ("check-level-html", ["check", "samples/level/scene.json", "--html", "{out}/level.html"]),
+    (
+        "check-level-snapshots",
+        [
+            "check",
+            "samples/level/scene.json",
+            "--fail-on",
+            "contact",
+            "--format",
+            "markdown",
+            "--report",
+            "{out}/level-shots.md",
+            "--snapshots",
+            "{out}/level-shots",
+        ],
+    ),
     (
         "check-level-margin",
         [
@@ -102,6 +117,19 @@ COMMANDS: list[tuple[str, list[str]]] = [
     ),
     ("sweep-github", ["sweep", "samples/bullet/scene.json", "--format", "github"]),
     ("sweep-html", ["sweep", "samples/bullet/scene.json", "--html", "{out}/sweep.html"]),
+    (
+        "sweep-snapshots",
+        [
+            "sweep",
+            "samples/bullet/scene.json",
+            "--format",
+            "markdown",
+            "--report",
+            "{out}/sweep-shots.md",
+            "--snapshots",
+            "{out}/sweep-shots",
+        ],
+    ),
     ("inspect-props-json", ["inspect", *PROPS, "--report", "{out}/inspect.json"]),
     ("inspect-props-csv", ["inspect", *PROPS, "--format", "csv", "--report", "{out}/inspect.csv"]),
     (
