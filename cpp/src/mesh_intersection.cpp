@@ -338,7 +338,7 @@ __attribute__((noinline)) bool for_each_touching_pair(const MeshBvh& a, const Me
             }
             for (std::int32_t i = x.index; i < x.index + x.count; ++i) {
                 const Vec3* ta = a.triangle(i);
-                const TriangleBox box_a = triangle_box(ta);
+                const TriangleBox box_a = stored_box(a, i);
                 for (int j = 0; j < leaf_b.count; ++j)
                     if ((margin2 == 0.0
                              ? triangle_boxes_touch(box_a, leaf_b.boxes[j])
@@ -433,7 +433,7 @@ struct MovedB {
     TriangleBox leaf_box(std::int32_t ib) const { return moved_box(nodes[ib], shift); }
     // Triangle t's box in a's frame; its corners are mapped later (map) when wanted: false.
     bool load(std::int32_t t, TriangleBox* box, Vec3*) const {
-        const TriangleBox local = triangle_box(b->triangle(t));
+        const TriangleBox local = stored_box(*b, t);
         *box = {local.lower + shift, local.upper + shift};
         return false;
     }
@@ -541,9 +541,9 @@ __attribute__((noinline)) bool for_each_touching_pair_aligned(const MeshBvh& a, 
             // touch it touches none of them.
             const TriangleBox box_y = b_in_a.leaf_box(ib);
             for (std::int32_t i = x.index; i < x.index + x.count; ++i) {
-                const Vec3* ta = a.triangle(i);
-                const TriangleBox box_a = triangle_box(ta);
+                const TriangleBox box_a = stored_box(a, i);
                 if (!triangle_boxes_touch(box_a, box_y)) continue;
+                const Vec3* ta = a.triangle(i);
                 if (ib != loaded) {
                     for (int j = 0; j < y.count; ++j)
                         leaf_b.mapped[j] = b_in_a.load(y.index + j, &leaf_b.boxes[j], leaf_b.corners[j]);
