@@ -583,12 +583,20 @@ __attribute__((noinline)) bool for_each_touching_pair_aligned(const MeshBvh& a, 
 // nothing.
 inline bool planes_separate(const MeshBvh& a, std::int32_t i, const Vec3* ta, const MeshBvh& b, std::int32_t j,
                             const Vec3* tb, const Relative& rel) {
+    // Each corner's side only while the ones before it agree (the same verdicts as forming
+    // all three first).
     const auto apart = [&rel](const Vec3& n, const Vec3& origin, const Vec3* t) {
-        const double s0 = dot(n, t[0] - origin), s1 = dot(n, t[1] - origin), s2 = dot(n, t[2] - origin);
-        return (s0 > rel.slack && s1 > rel.slack && s2 > rel.slack) ||
-               (s0 < -rel.slack && s1 < -rel.slack && s2 < -rel.slack);
+        const double s0 = dot(n, t[0] - origin);
+        if (s0 > rel.slack) return dot(n, t[1] - origin) > rel.slack && dot(n, t[2] - origin) > rel.slack;
+        if (s0 < -rel.slack) return dot(n, t[1] - origin) < -rel.slack && dot(n, t[2] - origin) < -rel.slack;
+        return false;
     };
-    return apart(a.triangle_normal(i), ta[0], tb) || apart(rel.rotation * b.triangle_normal(j), tb[0], ta);
+    if (apart(a.triangle_normal(i), ta[0], tb)) return true;
+    // Under rel.translation_only the rotation is the identity, exactly: its product with b's
+    // normal is that normal but for the sign of a zero component (1 x + 0 y + 0 z), which
+    // changes no comparison with +-rel.slack (a signed zero product adds as a zero).
+    const Vec3& normal_b = b.triangle_normal(j);
+    return apart(rel.translation_only ? normal_b : rel.rotation * normal_b, tb[0], ta);
 }
 
 // The verdict of triangles_intersect(ta, tb, nullptr) in the one case, the commonest, where no
