@@ -159,9 +159,10 @@ def mesh_contacts_batch(
     15 feature pairs (Ericson 2004, 5.1.9). Where equally close points form a segment or
     polygon (parallel faces or edges), the point is thus one of them, chosen by the axis. A
     touching pair's (depth 0) point: where the descent ran the exact triangle test on it (a
-    corner of one triangle on the other's plane), the point that test found the two share;
-    else midway between the closest points of the features its axis names (b not moved) when
-    they are within 1e-12 of the largest coordinate of each other, else a point the two share.
+    corner of one triangle on the other's plane, save where one lies in a coordinate plane
+    that the other only touches), the point that test found the two share; else midway
+    between the closest points of the features its axis names (b not moved) when they are
+    within 1e-12 of the two triangles' largest coordinate magnitude, else a point the two share.
     """
     if not isinstance(meshes, MeshSet):
         raise TypeError(f"meshes must be a MeshSet, got {type(meshes).__name__}")
