@@ -606,13 +606,11 @@ inline bool planes_separate(const MeshBvh& a, std::int32_t i, const Vec3* ta, co
 // every sign of the other's corners 0), and unless one lies on one side of the other's plane
 // each meets that plane in a closed segment of the line L where the planes cross, between the
 // points where its two edges with corners on both sides cross it; the triangles meet exactly
-// when the two segments overlap (touching counts). As in triangles_cross (triangle_intersect.cpp),
-// for such an edge (u, w) of b (u on the positive side of a's plane, w on the negative) and
-// (x, y) of a, the sign of the right-hand orient3d(u, w, x, y) is the order of their
-// crossing points along L; the segments are apart exactly when all four orders are strictly
-// one sign. Every sign is exact (predicates.hpp), so the verdict is triangles_intersect's: ten
-// orientations at most, where that test's edge-against-triangle form takes up to 24 and two
-// projection axes.
+// when the two segments overlap (touching counts), which two orientations of corners decide
+// (Guigue and Devillers 2003, in quick_verdict; triangles_cross, triangle_intersect.cpp, orders
+// the four crossing points along L instead, up to four orientations). Every sign is exact
+// (predicates.hpp), so the verdict is triangles_intersect's: eight orientations at most, where
+// that test's edge-against-triangle form takes up to 24 and two projection axes.
 // kMeet: a general pair (no corner on the other's plane) that meets; kTouch: one that meets
 // with a corner on the other's plane, decided by flush_verdict.
 enum class Verdict { kApart, kMeet, kTouch, kUndecided };
@@ -719,26 +717,24 @@ inline Verdict quick_verdict(const Vec3* a, const Vec3* b) {
     if (flat_b >= 0 && flush_verdict(b, flat_b, a, &flush)) return flush;
     if (!plane_sides(b, a, sa)) return Verdict::kUndecided;
     if (sa[0] == sa[1] && sa[1] == sa[2]) return Verdict::kApart;
-    // The two edges of t whose corners lie on both sides, each as (positive corner, negative).
-    struct Edge {
-        const Vec3 *u, *w;
-    };
-    const auto crossing_edges = [](const Vec3* t, const int s[3], Edge e[2]) {
-        int n = 0;
-        for (int k = 0; k < 3; ++k) {
-            const int l = k == 2 ? 0 : k + 1;
-            if (s[k] != s[l]) e[n++] = s[k] > 0 ? Edge{&t[k], &t[l]} : Edge{&t[l], &t[k]};
-        }
-    };
-    Edge eb[2], ea[2];
-    crossing_edges(b, sb, eb);
-    crossing_edges(a, sa, ea);
-    // Apart when all four orders are one strict sign: stop at the first that differs or is 0.
-    const int first = -orient3d_sign(*eb[0].u, *eb[0].w, *ea[0].u, *ea[0].w);
-    if (first == 0) return Verdict::kMeet;
-    for (const auto& [p, r] : {std::make_pair(0, 1), std::make_pair(1, 0), std::make_pair(1, 1)})
-        if (-orient3d_sign(*eb[p].u, *eb[p].w, *ea[r].u, *ea[r].w) != first) return Verdict::kMeet;
-    return Verdict::kApart;
+    // Guigue and Devillers 2003 (their test for triangles whose planes cross): each triangle's
+    // corners turned (circularly, which keeps its orientation) so that the first, p, is the
+    // one alone on its side of the other's plane; q and r of the other triangle swapped where
+    // p lies on the negative side, which reverses that triangle's plane; then the triangles
+    // meet iff [p1, q1, p2, q2] <= 0 and [p1, r1, r2, p2] <= 0, [.] their bracket, which is
+    // -orient3d. Two exact signs where the four crossing orders took up to four (all four
+    // for every pair apart along the planes' line): the same verdicts.
+    const auto lone = [](const int s[3]) { return s[0] == s[1] ? 2 : (s[0] == s[2] ? 1 : 0); };
+    const int i = lone(sa), j = lone(sb);
+    const Vec3* q1 = &a[i == 2 ? 0 : i + 1];
+    const Vec3* r1 = &a[i == 0 ? 2 : i - 1];
+    const Vec3* q2 = &b[j == 2 ? 0 : j + 1];
+    const Vec3* r2 = &b[j == 0 ? 2 : j - 1];
+    if (sa[i] < 0) std::swap(q2, r2);
+    if (sb[j] < 0) std::swap(q1, r1);
+    if (orient3d_sign(a[i], *q1, b[j], *q2) < 0 || orient3d_sign(a[i], *r1, *r2, b[j]) < 0)
+        return Verdict::kApart;
+    return Verdict::kMeet;
 }
 
 // Whether triangles ta and tb (one frame) share a point: triangles_intersect(ta, tb, nullptr),
