@@ -19,6 +19,7 @@
 #include "meshcol/defaults.hpp"
 #include "meshcol/orientation.hpp"
 #include "meshcol/triangle.hpp"
+#include "mesh_query_detail.hpp"
 
 namespace meshcol {
 namespace {
@@ -395,6 +396,16 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         // Zero for a degenerate triangle, and for one whose normal under- or overflows.
         normals_[static_cast<size_t>(i)] = length > 0.0 && std::isfinite(length) ? normal / length : Vec3{0.0, 0.0, 0.0};
     }
+    // Each triangle's box (mesh_detail::triangle_box, the descents' own), kept: the descents
+    // test a triangle of a against b's leaf box and b's triangles at every leaf pair that
+    // reaches it, and forming the box there was about 3% of bench_mesh_query's balls and torus
+    // contact rows (benchmarks/RESULTS.md, session 30). 48 bytes a triangle.
+    bounds_.resize(2 * static_cast<size_t>(n));
+    for (std::int32_t i = 0; i < n; ++i) {
+        const mesh_detail::TriangleBox box = mesh_detail::triangle_box(triangle(i));
+        bounds_[2 * static_cast<size_t>(i)] = box.lower;
+        bounds_[2 * static_cast<size_t>(i) + 1] = box.upper;
+    }
     capsules_.resize(static_cast<size_t>(n));
     for (std::int32_t i = 0; i < n; ++i) {
         const Vec3* t = triangle(i);
@@ -701,6 +712,14 @@ bool MeshBvh::validate() const {
     for (size_t k = 0; k < corners_.size(); ++k) {
         const std::int32_t v = corner_vertices_[k];
         if (v < 0 || static_cast<size_t>(v) >= vertices_.size() || !same_point(vertices_[static_cast<size_t>(v)], corners_[k]))
+            return false;
+    }
+    // Every triangle's kept box is the descents' box of its corners, to the bit.
+    if (bounds_.size() != 2 * static_cast<size_t>(n)) return false;
+    for (std::int32_t i = 0; i < n; ++i) {
+        const mesh_detail::TriangleBox box = mesh_detail::triangle_box(triangle(i));
+        const Vec3* kept = triangle_bounds(i);
+        if (std::memcmp(&box.lower, &kept[0], sizeof(Vec3)) != 0 || std::memcmp(&box.upper, &kept[1], sizeof(Vec3)) != 0)
             return false;
     }
     if (capsules_.size() != static_cast<size_t>(n)) return false;

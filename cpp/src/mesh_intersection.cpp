@@ -338,7 +338,7 @@ __attribute__((noinline)) bool for_each_touching_pair(const MeshBvh& a, const Me
             }
             for (std::int32_t i = x.index; i < x.index + x.count; ++i) {
                 const Vec3* ta = a.triangle(i);
-                const TriangleBox box_a = triangle_box(ta);
+                const TriangleBox box_a = stored_box(a, i);
                 for (int j = 0; j < leaf_b.count; ++j)
                     if ((margin2 == 0.0
                              ? triangle_boxes_touch(box_a, leaf_b.boxes[j])
@@ -433,7 +433,7 @@ struct MovedB {
     TriangleBox leaf_box(std::int32_t ib) const { return moved_box(nodes[ib], shift); }
     // Triangle t's box in a's frame; its corners are mapped later (map) when wanted: false.
     bool load(std::int32_t t, TriangleBox* box, Vec3*) const {
-        const TriangleBox local = triangle_box(b->triangle(t));
+        const TriangleBox local = stored_box(*b, t);
         *box = {local.lower + shift, local.upper + shift};
         return false;
     }
@@ -541,9 +541,9 @@ __attribute__((noinline)) bool for_each_touching_pair_aligned(const MeshBvh& a, 
             // touch it touches none of them.
             const TriangleBox box_y = b_in_a.leaf_box(ib);
             for (std::int32_t i = x.index; i < x.index + x.count; ++i) {
-                const Vec3* ta = a.triangle(i);
-                const TriangleBox box_a = triangle_box(ta);
+                const TriangleBox box_a = stored_box(a, i);
                 if (!triangle_boxes_touch(box_a, box_y)) continue;
+                const Vec3* ta = a.triangle(i);
                 if (ib != loaded) {
                     for (int j = 0; j < y.count; ++j)
                         leaf_b.mapped[j] = b_in_a.load(y.index + j, &leaf_b.boxes[j], leaf_b.corners[j]);
@@ -583,12 +583,20 @@ __attribute__((noinline)) bool for_each_touching_pair_aligned(const MeshBvh& a, 
 // nothing.
 inline bool planes_separate(const MeshBvh& a, std::int32_t i, const Vec3* ta, const MeshBvh& b, std::int32_t j,
                             const Vec3* tb, const Relative& rel) {
+    // Each corner's side only while the ones before it agree (the same verdicts as forming
+    // all three first).
     const auto apart = [&rel](const Vec3& n, const Vec3& origin, const Vec3* t) {
-        const double s0 = dot(n, t[0] - origin), s1 = dot(n, t[1] - origin), s2 = dot(n, t[2] - origin);
-        return (s0 > rel.slack && s1 > rel.slack && s2 > rel.slack) ||
-               (s0 < -rel.slack && s1 < -rel.slack && s2 < -rel.slack);
+        const double s0 = dot(n, t[0] - origin);
+        if (s0 > rel.slack) return dot(n, t[1] - origin) > rel.slack && dot(n, t[2] - origin) > rel.slack;
+        if (s0 < -rel.slack) return dot(n, t[1] - origin) < -rel.slack && dot(n, t[2] - origin) < -rel.slack;
+        return false;
     };
-    return apart(a.triangle_normal(i), ta[0], tb) || apart(rel.rotation * b.triangle_normal(j), tb[0], ta);
+    if (apart(a.triangle_normal(i), ta[0], tb)) return true;
+    // Under rel.translation_only the rotation is the identity, exactly: its product with b's
+    // normal is that normal but for the sign of a zero component (1 x + 0 y + 0 z), which
+    // changes no comparison with +-rel.slack (a signed zero product adds as a zero).
+    const Vec3& normal_b = b.triangle_normal(j);
+    return apart(rel.translation_only ? normal_b : rel.rotation * normal_b, tb[0], ta);
 }
 
 // The verdict of triangles_intersect(ta, tb, nullptr) in the one case, the commonest, where no
@@ -598,13 +606,11 @@ inline bool planes_separate(const MeshBvh& a, std::int32_t i, const Vec3* ta, co
 // every sign of the other's corners 0), and unless one lies on one side of the other's plane
 // each meets that plane in a closed segment of the line L where the planes cross, between the
 // points where its two edges with corners on both sides cross it; the triangles meet exactly
-// when the two segments overlap (touching counts). As in triangles_cross (triangle_intersect.cpp),
-// for such an edge (u, w) of b (u on the positive side of a's plane, w on the negative) and
-// (x, y) of a, the sign of the right-hand orient3d(u, w, x, y) is the order of their
-// crossing points along L; the segments are apart exactly when all four orders are strictly
-// one sign. Every sign is exact (predicates.hpp), so the verdict is triangles_intersect's: ten
-// orientations at most, where that test's edge-against-triangle form takes up to 24 and two
-// projection axes.
+// when the two segments overlap (touching counts), which two orientations of corners decide
+// (Guigue and Devillers 2003, in quick_verdict; triangles_cross, triangle_intersect.cpp, orders
+// the four crossing points along L instead, up to four orientations). Every sign is exact
+// (predicates.hpp), so the verdict is triangles_intersect's: eight orientations at most, where
+// that test's edge-against-triangle form takes up to 24 and two projection axes.
 // kMeet: a general pair (no corner on the other's plane) that meets; kTouch: one that meets
 // with a corner on the other's plane, decided by flush_verdict.
 enum class Verdict { kApart, kMeet, kTouch, kUndecided };
@@ -711,26 +717,24 @@ inline Verdict quick_verdict(const Vec3* a, const Vec3* b) {
     if (flat_b >= 0 && flush_verdict(b, flat_b, a, &flush)) return flush;
     if (!plane_sides(b, a, sa)) return Verdict::kUndecided;
     if (sa[0] == sa[1] && sa[1] == sa[2]) return Verdict::kApart;
-    // The two edges of t whose corners lie on both sides, each as (positive corner, negative).
-    struct Edge {
-        const Vec3 *u, *w;
-    };
-    const auto crossing_edges = [](const Vec3* t, const int s[3], Edge e[2]) {
-        int n = 0;
-        for (int k = 0; k < 3; ++k) {
-            const int l = k == 2 ? 0 : k + 1;
-            if (s[k] != s[l]) e[n++] = s[k] > 0 ? Edge{&t[k], &t[l]} : Edge{&t[l], &t[k]};
-        }
-    };
-    Edge eb[2], ea[2];
-    crossing_edges(b, sb, eb);
-    crossing_edges(a, sa, ea);
-    // Apart when all four orders are one strict sign: stop at the first that differs or is 0.
-    const int first = -orient3d_sign(*eb[0].u, *eb[0].w, *ea[0].u, *ea[0].w);
-    if (first == 0) return Verdict::kMeet;
-    for (const auto& [p, r] : {std::make_pair(0, 1), std::make_pair(1, 0), std::make_pair(1, 1)})
-        if (-orient3d_sign(*eb[p].u, *eb[p].w, *ea[r].u, *ea[r].w) != first) return Verdict::kMeet;
-    return Verdict::kApart;
+    // Guigue and Devillers 2003 (their test for triangles whose planes cross): each triangle's
+    // corners turned (circularly, which keeps its orientation) so that the first, p, is the
+    // one alone on its side of the other's plane; q and r of the other triangle swapped where
+    // p lies on the negative side, which reverses that triangle's plane; then the triangles
+    // meet iff [p1, q1, p2, q2] <= 0 and [p1, r1, r2, p2] <= 0, [.] their bracket, which is
+    // -orient3d. Two exact signs where the four crossing orders took up to four (all four
+    // for every pair apart along the planes' line): the same verdicts.
+    const auto lone = [](const int s[3]) { return s[0] == s[1] ? 2 : (s[0] == s[2] ? 1 : 0); };
+    const int i = lone(sa), j = lone(sb);
+    const Vec3* q1 = &a[i == 2 ? 0 : i + 1];
+    const Vec3* r1 = &a[i == 0 ? 2 : i - 1];
+    const Vec3* q2 = &b[j == 2 ? 0 : j + 1];
+    const Vec3* r2 = &b[j == 0 ? 2 : j - 1];
+    if (sa[i] < 0) std::swap(q2, r2);
+    if (sb[j] < 0) std::swap(q1, r1);
+    if (orient3d_sign(a[i], *q1, b[j], *q2) < 0 || orient3d_sign(a[i], *r1, *r2, b[j]) < 0)
+        return Verdict::kApart;
+    return Verdict::kMeet;
 }
 
 // Whether triangles ta and tb (one frame) share a point: triangles_intersect(ta, tb, nullptr),

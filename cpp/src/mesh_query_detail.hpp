@@ -116,6 +116,13 @@ inline TriangleBox triangle_box(const Vec3 t[3]) {
     return {min3(t[0], min3(t[1], t[2])), max3(t[0], max3(t[1], t[2]))};
 }
 
+// Triangle i's box as MeshBvh keeps it (triangle_box of its corners, local frame, the same
+// bits: MeshBvh::validate checks them).
+inline TriangleBox stored_box(const MeshBvh& mesh, std::int32_t i) {
+    const Vec3* bounds = mesh.triangle_bounds(i);
+    return {bounds[0], bounds[1]};
+}
+
 inline double triangle_box_squared_distance(const TriangleBox& a, const TriangleBox& b) {
     double d2 = 0.0;
     for (int k = 0; k < 3; ++k) {

@@ -275,6 +275,25 @@ TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool 
     return out;
 }
 
+int triangle_penetration_feature(const Vec3 a[3], const Vec3 b[3], const TrianglePenetration& p) {
+    if (p.axis < 0) return -1;
+    if (p.axis >= 2) return p.axis - 2;
+    // b's corner deepest along a's normal (its least projection: b moves along the normal) on
+    // a's face, or a's deepest along b's normal (its greatest) on b's face.
+    const Vec3* t = p.axis == 0 ? b : a;
+    const double sense = p.axis == 0 ? 1.0 : -1.0;  // least along the normal, or greatest
+    int deepest = 0;
+    double extreme = sense * dot(p.normal, t[0]);
+    for (int k = 1; k < 3; ++k) {
+        const double s = sense * dot(p.normal, t[k]);
+        if (s < extreme) {
+            extreme = s;
+            deepest = k;
+        }
+    }
+    return (p.axis == 0 ? 12 : 9) + deepest;
+}
+
 void triangle_penetration_points(const Vec3 a[3], const Vec3 b[3], TrianglePenetration& p) {
     if (p.depth == 0.0) {
         Vec3 shared;
@@ -300,26 +319,10 @@ void triangle_penetration_points(const Vec3 a[3], const Vec3 b[3], TrianglePenet
         for (const Vec3* v : {&a[k], &moved[k]})
             for (const double c : {std::fabs(v->x), std::fabs(v->y), std::fabs(v->z)})
                 reach = c > reach ? c : reach;
-    // The feature pair the axis names first: b's corner deepest along a's normal (its least
-    // projection: b moves along the normal) on a's face, a's deepest along b's normal (its
-    // greatest) on b's face, or the axis's two edges. Taken when its points meet within 1e-12
-    // of the largest coordinate (they touch up to the rounding of the depth and the move).
-    if (p.axis >= 0) {
-        int feature = p.axis - 2;
-        if (p.axis < 2) {
-            const Vec3* t = p.axis == 0 ? b : a;
-            const double sense = p.axis == 0 ? 1.0 : -1.0;  // least along the normal, or greatest
-            int deepest = 0;
-            double extreme = sense * dot(p.normal, t[0]);
-            for (int k = 1; k < 3; ++k) {
-                const double s = sense * dot(p.normal, t[k]);
-                if (s < extreme) {
-                    extreme = s;
-                    deepest = k;
-                }
-            }
-            feature = (p.axis == 0 ? 12 : 9) + deepest;
-        }
+    // The feature pair the axis names first, taken when its points meet within 1e-12 of the
+    // largest coordinate (they touch up to the rounding of the depth and the move).
+    const int feature = triangle_penetration_feature(a, b, p);
+    if (feature >= 0) {
         const double tight = 1e-12 * reach;
         if (triangle_feature_squared_distance(a, moved, feature, &p.point_a, &on_moved) <= tight * tight) {
             p.point_b = on_moved - shift;

@@ -158,7 +158,10 @@ def mesh_contacts_batch(
     edges do not meet: an axis tied with another up to rounding), the closest points over all
     15 feature pairs (Ericson 2004, 5.1.9). Where equally close points form a segment or
     polygon (parallel faces or edges), the point is thus one of them, chosen by the axis. A
-    touching pair's (depth 0) point is one the two triangles share.
+    touching pair's (depth 0): where the descent ran the exact test on it (a corner of one on
+    the other's plane, save where one lies in a coordinate plane the other only touches) the
+    point that test found both share; else midway between the closest points of the features
+    its axis names (b not moved) if within 1e-12 of the largest coordinate, else a shared point.
     """
     if not isinstance(meshes, MeshSet):
         raise TypeError(f"meshes must be a MeshSet, got {type(meshes).__name__}")

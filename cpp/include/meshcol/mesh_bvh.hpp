@@ -100,6 +100,9 @@ public:
     /// The capsule of triangle `i` (leaf order), local frame: the distance search's bound for
     /// long thin triangles.
     const TriangleCapsule& triangle_capsule(std::int32_t i) const { return capsules_[static_cast<size_t>(i)]; }
+    /// The box of triangle `i` (leaf order), local frame: its lower and upper corner, the
+    /// coordinate-wise least and greatest of its corners (the descents' triangle box, kept).
+    const Vec3* triangle_bounds(std::int32_t i) const { return &bounds_[2 * static_cast<size_t>(i)]; }
     /// The vertices used by at least one face, each once, local frame (input order).
     const std::vector<Vec3>& vertices() const { return vertices_; }
     /// The three corners of triangle `i` (leaf order) as indices into `vertices()`.
@@ -130,6 +133,7 @@ private:
     std::vector<Vec3> corners_;            ///< 3 per triangle, leaf order
     std::vector<Vec3> normals_;            ///< 1 per triangle, leaf order, unit or zero
     std::vector<TriangleCapsule> capsules_;  ///< 1 per triangle, leaf order
+    std::vector<Vec3> bounds_;             ///< 2 per triangle, leaf order: its box's lower, upper
     std::vector<Vec3> vertices_;           ///< vertices referenced by a face, input order
     std::vector<std::int32_t> corner_vertices_;  ///< 3 per triangle, leaf order, into vertices_
     bool closed_ = false;

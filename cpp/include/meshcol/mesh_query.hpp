@@ -128,7 +128,11 @@ struct MeshContact {
     Vec3 normal;
     /// world: midway between the witness points of the pair (`triangle_penetration_points`:
     /// on the features the depth's axis names, a corner and its foot on a face or two edges'
-    /// closest points)
+    /// closest points). A touching pair (depth 0): the point the exact triangle test found the
+    /// two share where the descent ran that test (a corner of one on the other's plane, save
+    /// where one lies in a coordinate plane that the other only touches), else midway between
+    /// the closest points of the features its axis names when they are within 1e-12 of the
+    /// largest coordinate (`triangle_penetration_feature`), else a shared point
     Vec3 point;
     /// >= 0: how far b's triangle reaches behind a's triangle's face, along a's unit face
     /// normal (p1 - p0) x (p2 - p0): max over b's corners q of n . (a's p0 - q). A translation

@@ -129,6 +129,13 @@ TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool 
 /// is the point on moved b moved back.
 void triangle_penetration_points(const Vec3 a[3], const Vec3 b[3], TrianglePenetration& p);
 
+/// The feature pair (`triangle_feature_squared_distance`'s numbering) that the axis of `p`, a
+/// `triangle_penetration(a, b, false)` of the same triangles, names: on a's normal b's corner
+/// least along `p.normal` (the first of equal ones) against a's face, on b's normal a's corner
+/// greatest along it against b's face, on an edge pair's cross product those two edges; -1
+/// when `p.axis` is -1. `triangle_penetration_points` starts from it.
+int triangle_penetration_feature(const Vec3 a[3], const Vec3 b[3], const TrianglePenetration& p);
+
 /// Whether two triangles cross: their relative interiors (the open triangles) share a point.
 ///
 /// Non-coplanar triangles cross when they meet along a segment through both interiors;
