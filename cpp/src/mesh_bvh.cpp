@@ -426,18 +426,6 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         if (!(radius >= 0.0)) radius = kInf;  // NaN
         capsules_[static_cast<size_t>(i)] = {radius, edge, 16.0 * h2 < longest};
     }
-    build_winding_nodes();
-    build_obbs();
-    {
-        const BvhNode& root = nodes_.front();
-        Vec3 corner;
-        for (int k = 0; k < 3; ++k)
-            corner[k] = std::fmax(std::fabs(double(root.lower[k])), std::fabs(double(root.upper[k])));
-        box_reach_ = safe_norm(corner);
-        const NodeObb& obb = obbs_.front();
-        obb_reach_ = max_abs(obb.center) + max_abs(obb.half);
-    }
-    closed_ = closed_and_consistent(faces, face_count, vertex_count);
     // Used vertices renumbered in input order (-1: unused), for the triangles' corner indices.
     std::vector<std::int32_t> compact(static_cast<size_t>(vertex_count), -1);
     for (std::int64_t k = 0; k < 3 * face_count; ++k) compact[static_cast<size_t>(faces[k])] = 0;
@@ -452,6 +440,18 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         for (int k = 0; k < 3; ++k)
             corner_vertices_[3 * static_cast<size_t>(i) + k] = compact[static_cast<size_t>(faces[3 * f + k])];
     }
+    build_winding_nodes();
+    build_obbs();
+    {
+        const BvhNode& root = nodes_.front();
+        Vec3 corner;
+        for (int k = 0; k < 3; ++k)
+            corner[k] = std::fmax(std::fabs(double(root.lower[k])), std::fabs(double(root.upper[k])));
+        box_reach_ = safe_norm(corner);
+        const NodeObb& obb = obbs_.front();
+        obb_reach_ = max_abs(obb.center) + max_abs(obb.half);
+    }
+    closed_ = closed_and_consistent(faces, face_count, vertex_count);
 }
 
 namespace {
@@ -517,9 +517,10 @@ TangentMoments tangent_moments(const Vec3* corner, std::int32_t count, const Vec
     return m;
 }
 
-// The componentwise extremes of axes * p over the corners p (as min3 and max3 take them: the
-// first of equal values kept).
-void projection_extremes(const Vec3* corner, std::int32_t count, const Mat3& axes, Vec3& low, Vec3& high) {
+// The componentwise extremes of axes * p over the points p = point[index[i]], i in [0, count)
+// (as min3 and max3 take them: the first of equal values kept).
+void projection_extremes(const Vec3* point, const std::int32_t* index, std::int32_t count, const Mat3& axes,
+                         Vec3& low, Vec3& high) {
 #if defined(__SSE2__)
     // Rows 0 and 1 in the two lanes, each computed as Mat3 * Vec3 computes it,
     // ((m0 x + m1 y) + m2 z), row 2 scalar. `_mm_min_pd(p, low)` is p < low ? p : low per
@@ -530,7 +531,7 @@ void projection_extremes(const Vec3* corner, std::int32_t count, const Mat3& axe
     __m128d low01 = _mm_set1_pd(kInf), high01 = _mm_set1_pd(-kInf);
     double low2 = kInf, high2 = -kInf;
     for (std::int32_t i = 0; i < count; ++i) {
-        const double* q = &corner[i].x;
+        const double* q = &point[index[i]].x;
         const __m128d x = _mm_set1_pd(q[0]), y = _mm_set1_pd(q[1]), z = _mm_set1_pd(q[2]);
         const __m128d p01 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(c0, x), _mm_mul_pd(c1, y)), _mm_mul_pd(c2, z));
         const double p2 = axes.m[2][0] * q[0] + axes.m[2][1] * q[1] + axes.m[2][2] * q[2];
@@ -548,7 +549,7 @@ void projection_extremes(const Vec3* corner, std::int32_t count, const Mat3& axe
     low = {kInf, kInf, kInf};
     high = {-kInf, -kInf, -kInf};
     for (std::int32_t i = 0; i < count; ++i) {
-        const Vec3 p = axes * corner[i];
+        const Vec3 p = axes * point[index[i]];
         low = min3(low, p);
         high = max3(high, p);
     }
@@ -632,24 +633,61 @@ std::pair<std::int32_t, std::int32_t> MeshBvh::triangle_range(std::int32_t id) c
 }
 
 // Per node: axes from the mean normal (the dipole) and, in the tangent plane, the principal
-// directions of the corners (a 2x2 eigenproblem in closed form); extents by projecting every
-// corner (O(n log n) in all). The axis-aligned box is kept when it is no larger (by volume),
-// as for a node whose normals cancel.
+// directions of the corners (a 2x2 eigenproblem in closed form); extents by projecting the
+// node's distinct vertices. The axis-aligned box is kept when it is no larger (by volume), as
+// for a node whose normals cancel.
+//
+// The nodes are fitted children first (a reverse sweep of the depth-first order), each
+// node's distinct vertices (corner_vertices_, each once, in the order of its corners' first
+// appearance) made from its children's: the left child's list, then the right child's
+// vertices the left one lacks. The lists live on a stack: a reverse depth-first sweep finishes
+// a node's right subtree, then its left one, so the left child's list is on top, the right
+// child's under it. The extremes of the projections over those vertices are the extremes over
+// the corners, bit for bit: a vertex projects alike at each of its corners, and the first
+// corner that reaches an extreme is its vertex's first appearance (so even of a +0 and a -0
+// the same one is kept). A closed mesh has about half as many vertices as triangles, so a
+// node projects about a sixth of its corners, its rim counted in (the corner passes were 16%
+// of a build: benchmarks/RESULTS.md, session 30, branch bvh20).
 void MeshBvh::build_obbs() {
     obbs_.assign(nodes_.size(), NodeObb{});
     // The exact (double) axis-aligned boxes, children before parents.
     std::vector<Box> exact(nodes_.size());
+    std::vector<std::int32_t> distinct;    // the stack of lists, one after another
+    std::vector<std::int32_t> list_start;  // where each list on the stack starts
+    std::vector<std::int32_t> merged;
+    // seen[v] == node: v is already on that node's list.
+    std::vector<std::int32_t> seen(vertices_.size(), -1);
+    distinct.reserve(3 * corner_vertices_.size() / 2);
     for (size_t id = nodes_.size(); id-- > 0;) {
         const BvhNode& node = nodes_[id];
+        const auto mark = static_cast<std::int32_t>(id);
         if (node.is_leaf()) {
             for (std::int32_t t = node.index; t < node.index + node.count; ++t)
                 for (int k = 0; k < 3; ++k) exact[id].grow(triangle(t)[k]);
+            list_start.push_back(static_cast<std::int32_t>(distinct.size()));
+            const std::int32_t* corner = triangle_vertices(node.index);
+            for (std::int32_t k = 0; k < 3 * node.count; ++k) {
+                const std::int32_t v = corner[k];
+                if (seen[static_cast<size_t>(v)] != mark) {
+                    seen[static_cast<size_t>(v)] = mark;
+                    distinct.push_back(v);
+                }
+            }
         } else {
             exact[id].grow(exact[id + 1]);
             exact[id].grow(exact[static_cast<size_t>(node.index)]);
+            const auto left = static_cast<size_t>(list_start.back());
+            list_start.pop_back();
+            const auto right = static_cast<size_t>(list_start.back());
+            merged.assign(distinct.begin() + static_cast<std::ptrdiff_t>(left), distinct.end());
+            for (const std::int32_t v : merged) seen[static_cast<size_t>(v)] = mark;
+            for (size_t k = right; k < left; ++k) {
+                const std::int32_t v = distinct[k];
+                if (seen[static_cast<size_t>(v)] != mark) merged.push_back(v);
+            }
+            distinct.resize(right);
+            distinct.insert(distinct.end(), merged.begin(), merged.end());
         }
-    }
-    for (size_t id = 0; id < nodes_.size(); ++id) {
         NodeObb& box = obbs_[id];
         const Vec3 lo = exact[id].lower, hi = exact[id].upper;
         const double scale = std::fmax(max_abs(lo), max_abs(hi));
@@ -669,9 +707,8 @@ void MeshBvh::build_obbs() {
         u = u / norm(u);
         Vec3 v = cross(n, u);
         const auto [begin, end] = triangle_range(static_cast<std::int32_t>(id));
-        const Vec3* corner = triangle(begin);
         const std::int32_t corners = 3 * (end - begin);
-        const TangentMoments t = tangent_moments(corner, corners, w.center, u, v);
+        const TangentMoments t = tangent_moments(triangle(begin), corners, w.center, u, v);
         const double count = corners;
         const double mu = t.mu / count, mv = t.mv / count;
         const double cuu = t.cuu / count - mu * mu;
@@ -690,7 +727,9 @@ void MeshBvh::build_obbs() {
             axes.m[2][k] = v[k];
         }
         Vec3 low, high;
-        projection_extremes(corner, corners, axes, low, high);
+        const std::int32_t* list = distinct.data() + list_start.back();
+        projection_extremes(vertices_.data(), list,
+                            static_cast<std::int32_t>(distinct.size()) - list_start.back(), axes, low, high);
         const Vec3 half = (high * 0.5 - low * 0.5) + Vec3{pad, pad, pad};
         if (half.x * half.y * half.z < box.half.x * box.half.y * box.half.z) {
             box.axis_aligned = false;
