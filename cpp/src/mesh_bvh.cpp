@@ -10,6 +10,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #if defined(__SSE2__)
@@ -139,6 +140,32 @@ inline void bins_of(const Vec3& c, const double lo[3], const double extent[3], b
     for (int axis = 0; axis < 2; ++axis) bins[axis] = extent[axis] > 0.0 ? bin_of(c[axis], lo[axis], extent[axis]) : 0;
     bins[2] = binned_z ? bin_of(c.z, lo[2], extent[2]) : 0;
 #endif
+}
+
+// The non-empty bins of `count` (mesh_bvh_bins of them), in increasing order, into `used`;
+// returns how many. With SSE2, four counts compared at once and the bits of the non-empty
+// ones walked, rather than a test per bin: most nodes are small and fill few of the bins.
+inline int used_bins(const std::int32_t* count, int* used) {
+    constexpr int kBins = defaults::mesh_bvh_bins;
+    int m = 0;
+#if defined(__SSE2__) && (defined(__GNUC__) || defined(__clang__))
+    if constexpr (kBins % 4 == 0 && kBins < 32) {
+        std::uint32_t empty = 0;
+        for (int b = 0; b < kBins; b += 4) {
+            const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(count + b));
+            const int zero = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(c, _mm_setzero_si128())));
+            empty |= static_cast<std::uint32_t>(zero) << b;
+        }
+        for (std::uint32_t full = ~empty & ((1U << kBins) - 1U); full != 0; full &= full - 1U)
+            used[m++] = __builtin_ctz(full);
+        return m;
+    }
+#endif
+    for (int b = 0; b < kBins; ++b) {
+        used[m] = b;
+        m += count[b] > 0;
+    }
+    return m;
 }
 
 // One triangle's box and the centre of that box (the point the SAH bins), side by side.
@@ -310,28 +337,31 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
             extent[axis] = task.bounds.centroids.upper[axis] - lo[axis];
             binned[axis] = extent[axis] > 0.0;
         }
-        for (std::int32_t i = task.begin; i < task.end; ++i) {
-            const std::int32_t f = order[static_cast<size_t>(i)];
-            const TriangleBounds& t = triangles[static_cast<size_t>(f)];
-            int bins[3];
-            bins_of(t.centroid, lo, extent, binned[2], bins);
-            for (int axis = 0; axis < 3; ++axis) {
-                if (!binned[axis]) continue;
-                const int b = bins[axis];
-                bin_index[3 * static_cast<size_t>(f) + static_cast<size_t>(axis)] = static_cast<std::uint8_t>(b);
-                bin_box[axis][b].grow(t.box);
-                ++bin_count[axis][b];
+        // `every` (all three axes binned, the usual case) drops the per-axis test.
+        const auto bin_range = [&](auto every) {
+            for (std::int32_t i = task.begin; i < task.end; ++i) {
+                const std::int32_t f = order[static_cast<size_t>(i)];
+                const TriangleBounds& t = triangles[static_cast<size_t>(f)];
+                int bins[3];
+                bins_of(t.centroid, lo, extent, binned[2], bins);
+                for (int axis = 0; axis < 3; ++axis) {
+                    if (!every && !binned[axis]) continue;
+                    const int b = bins[axis];
+                    bin_index[3 * static_cast<size_t>(f) + static_cast<size_t>(axis)] = static_cast<std::uint8_t>(b);
+                    bin_box[axis][b].grow(t.box);
+                    ++bin_count[axis][b];
+                }
             }
-        }
+        };
+        if (binned[0] && binned[1] && binned[2])
+            bin_range(std::true_type{});
+        else
+            bin_range(std::false_type{});
         double best_cost = kInf;
         int best_axis = -1, best_bin = -1;
         for (int axis = 0; axis < 3; ++axis) {
             if (!binned[axis]) continue;
-            int m = 0;
-            for (int b = 0; b < kBins; ++b) {
-                used[m] = b;
-                m += bin_count[axis][b] > 0;
-            }
+            const int m = used_bins(bin_count[axis], used);
             Box right;
             std::int32_t right_n = 0;
             for (int k = m - 1; k > 0; --k) {
