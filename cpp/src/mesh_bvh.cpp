@@ -697,26 +697,27 @@ void MeshBvh::build_obbs() {
     obbs_.assign(nodes_.size(), NodeObb{});
     // The exact (double) axis-aligned boxes, children before parents.
     std::vector<Box> exact(nodes_.size());
-    std::vector<std::int32_t> distinct;    // the stack of lists, one after another
-    std::vector<std::int32_t> list_start;  // where each list on the stack starts
-    std::vector<std::int32_t> merged;
+    // The stack of lists, one after another, and where each starts: at most the corners of
+    // disjoint subtrees, so 3n entries; `merged` is a node's list while it is made. The
+    // tests of `seen` pick an entry by advancing past it or not (no branch to mispredict).
+    std::vector<std::int32_t> distinct(corner_vertices_.size()), merged(corner_vertices_.size());
+    std::vector<std::int32_t> list_start;
+    size_t top = 0;
     // seen[v] == node: v is already on that node's list.
     std::vector<std::int32_t> seen(vertices_.size(), -1);
-    distinct.reserve(3 * corner_vertices_.size() / 2);
     for (size_t id = nodes_.size(); id-- > 0;) {
         const BvhNode& node = nodes_[id];
         const auto mark = static_cast<std::int32_t>(id);
         if (node.is_leaf()) {
             for (std::int32_t t = node.index; t < node.index + node.count; ++t)
                 for (int k = 0; k < 3; ++k) exact[id].grow(triangle(t)[k]);
-            list_start.push_back(static_cast<std::int32_t>(distinct.size()));
+            list_start.push_back(static_cast<std::int32_t>(top));
             const std::int32_t* corner = triangle_vertices(node.index);
             for (std::int32_t k = 0; k < 3 * node.count; ++k) {
                 const std::int32_t v = corner[k];
-                if (seen[static_cast<size_t>(v)] != mark) {
-                    seen[static_cast<size_t>(v)] = mark;
-                    distinct.push_back(v);
-                }
+                distinct[top] = v;
+                top += seen[static_cast<size_t>(v)] != mark;
+                seen[static_cast<size_t>(v)] = mark;
             }
         } else {
             exact[id].grow(exact[id + 1]);
@@ -724,14 +725,19 @@ void MeshBvh::build_obbs() {
             const auto left = static_cast<size_t>(list_start.back());
             list_start.pop_back();
             const auto right = static_cast<size_t>(list_start.back());
-            merged.assign(distinct.begin() + static_cast<std::ptrdiff_t>(left), distinct.end());
-            for (const std::int32_t v : merged) seen[static_cast<size_t>(v)] = mark;
+            size_t m = 0;
+            for (size_t k = left; k < top; ++k) {
+                const std::int32_t v = distinct[k];
+                seen[static_cast<size_t>(v)] = mark;
+                merged[m++] = v;
+            }
             for (size_t k = right; k < left; ++k) {
                 const std::int32_t v = distinct[k];
-                if (seen[static_cast<size_t>(v)] != mark) merged.push_back(v);
+                merged[m] = v;
+                m += seen[static_cast<size_t>(v)] != mark;
             }
-            distinct.resize(right);
-            distinct.insert(distinct.end(), merged.begin(), merged.end());
+            for (size_t k = 0; k < m; ++k) distinct[right + k] = merged[k];
+            top = right + m;
         }
         NodeObb& box = obbs_[id];
         const Vec3 lo = exact[id].lower, hi = exact[id].upper;
@@ -773,8 +779,7 @@ void MeshBvh::build_obbs() {
         }
         Vec3 low, high;
         const std::int32_t* list = distinct.data() + list_start.back();
-        projection_extremes(vertices_.data(), list,
-                            static_cast<std::int32_t>(distinct.size()) - list_start.back(), axes, low, high);
+        projection_extremes(vertices_.data(), list, static_cast<std::int32_t>(top) - list_start.back(), axes, low, high);
         const Vec3 half = (high * 0.5 - low * 0.5) + Vec3{pad, pad, pad};
         if (half.x * half.y * half.z < box.half.x * box.half.y * box.half.z) {
             box.axis_aligned = false;
