@@ -88,23 +88,19 @@ TEST_CASE("mesh bvh: oriented boxes and capsules are the all-corner and segment 
     const MeshBvh mesh = sheet.bvh();
     REQUIRE(mesh.validate());
 
+    // Each capsule: its spine the first longest edge, its radius (bits) and sliver flag from
+    // segment_closest_points' distance of the opposite corner.
     for (std::int32_t i = 0; i < mesh.triangle_count(); ++i) {
         const Vec3* t = mesh.triangle(i);
-        std::int32_t edge = 0;
-        double longest = -1.0;
-        for (std::int32_t k = 0; k < 3; ++k) {
-            const double length2 = squared_norm(t[(k + 1) % 3] - t[k]);
-            if (length2 > longest) {
-                longest = length2;
-                edge = k;
-            }
-        }
-        const Vec3& p = t[(edge + 2) % 3];
-        const double h2 = segment_closest_points(p, p, t[edge], t[(edge + 1) % 3]).squared_distance;
         const TriangleCapsule& capsule = mesh.triangle_capsule(i);
-        CHECK_EQ(capsule.edge, edge);
+        const std::int32_t e = capsule.edge;
+        const double spine = squared_norm(t[(e + 1) % 3] - t[e]);
+        for (std::int32_t k = 0; k < 3; ++k)
+            CHECK(k < e ? squared_norm(t[(k + 1) % 3] - t[k]) < spine : squared_norm(t[(k + 1) % 3] - t[k]) <= spine);
+        const Vec3& apex = t[(e + 2) % 3];
+        const double h2 = segment_closest_points(apex, apex, t[e], t[(e + 1) % 3]).squared_distance;
         CHECK(same_bits(capsule.radius, std::sqrt(h2) * (1.0 + 1e-12)));
-        CHECK_EQ(capsule.thin, 16.0 * h2 < longest);
+        CHECK_EQ(capsule.thin, 16.0 * h2 < spine);
     }
 
     // Each turned box: its extents are those of every corner of its node (in leaf order, the
