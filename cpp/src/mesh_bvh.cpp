@@ -10,6 +10,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 #if defined(__SSE2__)
@@ -141,6 +142,32 @@ inline void bins_of(const Vec3& c, const double lo[3], const double extent[3], b
 #endif
 }
 
+// The non-empty bins of `count` (mesh_bvh_bins of them), in increasing order, into `used`;
+// returns how many. With SSE2, four counts compared at once and the bits of the non-empty
+// ones walked, rather than a test per bin: most nodes are small and fill few of the bins.
+inline int used_bins(const std::int32_t* count, int* used) {
+    constexpr int kBins = defaults::mesh_bvh_bins;
+    int m = 0;
+#if defined(__SSE2__) && (defined(__GNUC__) || defined(__clang__))
+    if constexpr (kBins % 4 == 0 && kBins < 32) {
+        std::uint32_t empty = 0;
+        for (int b = 0; b < kBins; b += 4) {
+            const __m128i c = _mm_loadu_si128(reinterpret_cast<const __m128i*>(count + b));
+            const int zero = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(c, _mm_setzero_si128())));
+            empty |= static_cast<std::uint32_t>(zero) << b;
+        }
+        for (std::uint32_t full = ~empty & ((1U << kBins) - 1U); full != 0; full &= full - 1U)
+            used[m++] = __builtin_ctz(full);
+        return m;
+    }
+#endif
+    for (int b = 0; b < kBins; ++b) {
+        used[m] = b;
+        m += count[b] > 0;
+    }
+    return m;
+}
+
 // One triangle's box and the centre of that box (the point the SAH bins), side by side.
 struct TriangleBounds {
     Box box;
@@ -188,6 +215,21 @@ private:
 #endif
     }
 };
+
+// segment_closest_points(p, p, a, b).squared_distance, inlined and step for step: the first
+// segment's direction is zero (p - p, p finite), so it is Ericson's degenerate case, t =
+// clamp01(f / e) (or 0 for a = b), and its closest point is p, bar the sign of a zero, which
+// the square drops. The capsules' call was 2.5% of a build.
+inline double point_segment_squared_distance(const Vec3& p, const Vec3& a, const Vec3& b) {
+    const Vec3 d = b - a, r = p - a;
+    const double e = dot(d, d), f = dot(d, r);
+    double t = 0.0;
+    if (e != 0.0) {
+        const double x = f / e;
+        t = x < 0.0 ? 0.0 : (x > 1.0 ? 1.0 : x);
+    }
+    return squared_norm((a + d * t) - p);
+}
 
 struct BuildTask {
     std::int32_t begin, end;
@@ -310,28 +352,31 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
             extent[axis] = task.bounds.centroids.upper[axis] - lo[axis];
             binned[axis] = extent[axis] > 0.0;
         }
-        for (std::int32_t i = task.begin; i < task.end; ++i) {
-            const std::int32_t f = order[static_cast<size_t>(i)];
-            const TriangleBounds& t = triangles[static_cast<size_t>(f)];
-            int bins[3];
-            bins_of(t.centroid, lo, extent, binned[2], bins);
-            for (int axis = 0; axis < 3; ++axis) {
-                if (!binned[axis]) continue;
-                const int b = bins[axis];
-                bin_index[3 * static_cast<size_t>(f) + static_cast<size_t>(axis)] = static_cast<std::uint8_t>(b);
-                bin_box[axis][b].grow(t.box);
-                ++bin_count[axis][b];
+        // `every` (all three axes binned, the usual case) drops the per-axis test.
+        const auto bin_range = [&](auto every) {
+            for (std::int32_t i = task.begin; i < task.end; ++i) {
+                const std::int32_t f = order[static_cast<size_t>(i)];
+                const TriangleBounds& t = triangles[static_cast<size_t>(f)];
+                int bins[3];
+                bins_of(t.centroid, lo, extent, binned[2], bins);
+                for (int axis = 0; axis < 3; ++axis) {
+                    if (!every && !binned[axis]) continue;
+                    const int b = bins[axis];
+                    bin_index[3 * static_cast<size_t>(f) + static_cast<size_t>(axis)] = static_cast<std::uint8_t>(b);
+                    bin_box[axis][b].grow(t.box);
+                    ++bin_count[axis][b];
+                }
             }
-        }
+        };
+        if (binned[0] && binned[1] && binned[2])
+            bin_range(std::true_type{});
+        else
+            bin_range(std::false_type{});
         double best_cost = kInf;
         int best_axis = -1, best_bin = -1;
         for (int axis = 0; axis < 3; ++axis) {
             if (!binned[axis]) continue;
-            int m = 0;
-            for (int b = 0; b < kBins; ++b) {
-                used[m] = b;
-                m += bin_count[axis][b] > 0;
-            }
+            const int m = used_bins(bin_count[axis], used);
             Box right;
             std::int32_t right_n = 0;
             for (int k = m - 1; k > 0; --k) {
@@ -419,25 +464,13 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
             }
         }
         const Vec3& p = t[(edge + 2) % 3];
-        const double h2 = segment_closest_points(p, p, t[edge], t[(edge + 1) % 3]).squared_distance;
+        const double h2 = point_segment_squared_distance(p, t[edge], t[(edge + 1) % 3]);
         // Rounded up well past the rounding of the square root and of the closest point; an
         // overflow (coordinates beyond 1e154) gives inf, a bound that prunes nothing.
         double radius = std::sqrt(h2) * (1.0 + 1e-12);
         if (!(radius >= 0.0)) radius = kInf;  // NaN
         capsules_[static_cast<size_t>(i)] = {radius, edge, 16.0 * h2 < longest};
     }
-    build_winding_nodes();
-    build_obbs();
-    {
-        const BvhNode& root = nodes_.front();
-        Vec3 corner;
-        for (int k = 0; k < 3; ++k)
-            corner[k] = std::fmax(std::fabs(double(root.lower[k])), std::fabs(double(root.upper[k])));
-        box_reach_ = safe_norm(corner);
-        const NodeObb& obb = obbs_.front();
-        obb_reach_ = max_abs(obb.center) + max_abs(obb.half);
-    }
-    closed_ = closed_and_consistent(faces, face_count, vertex_count);
     // Used vertices renumbered in input order (-1: unused), for the triangles' corner indices.
     std::vector<std::int32_t> compact(static_cast<size_t>(vertex_count), -1);
     for (std::int64_t k = 0; k < 3 * face_count; ++k) compact[static_cast<size_t>(faces[k])] = 0;
@@ -452,6 +485,18 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         for (int k = 0; k < 3; ++k)
             corner_vertices_[3 * static_cast<size_t>(i) + k] = compact[static_cast<size_t>(faces[3 * f + k])];
     }
+    build_winding_nodes();
+    build_obbs();
+    {
+        const BvhNode& root = nodes_.front();
+        Vec3 corner;
+        for (int k = 0; k < 3; ++k)
+            corner[k] = std::fmax(std::fabs(double(root.lower[k])), std::fabs(double(root.upper[k])));
+        box_reach_ = safe_norm(corner);
+        const NodeObb& obb = obbs_.front();
+        obb_reach_ = max_abs(obb.center) + max_abs(obb.half);
+    }
+    closed_ = closed_and_consistent(faces, face_count, vertex_count);
 }
 
 namespace {
@@ -517,9 +562,10 @@ TangentMoments tangent_moments(const Vec3* corner, std::int32_t count, const Vec
     return m;
 }
 
-// The componentwise extremes of axes * p over the corners p (as min3 and max3 take them: the
-// first of equal values kept).
-void projection_extremes(const Vec3* corner, std::int32_t count, const Mat3& axes, Vec3& low, Vec3& high) {
+// The componentwise extremes of axes * p over the points p = point[index[i]], i in [0, count)
+// (as min3 and max3 take them: the first of equal values kept).
+void projection_extremes(const Vec3* point, const std::int32_t* index, std::int32_t count, const Mat3& axes,
+                         Vec3& low, Vec3& high) {
 #if defined(__SSE2__)
     // Rows 0 and 1 in the two lanes, each computed as Mat3 * Vec3 computes it,
     // ((m0 x + m1 y) + m2 z), row 2 scalar. `_mm_min_pd(p, low)` is p < low ? p : low per
@@ -530,7 +576,7 @@ void projection_extremes(const Vec3* corner, std::int32_t count, const Mat3& axe
     __m128d low01 = _mm_set1_pd(kInf), high01 = _mm_set1_pd(-kInf);
     double low2 = kInf, high2 = -kInf;
     for (std::int32_t i = 0; i < count; ++i) {
-        const double* q = &corner[i].x;
+        const double* q = &point[index[i]].x;
         const __m128d x = _mm_set1_pd(q[0]), y = _mm_set1_pd(q[1]), z = _mm_set1_pd(q[2]);
         const __m128d p01 = _mm_add_pd(_mm_add_pd(_mm_mul_pd(c0, x), _mm_mul_pd(c1, y)), _mm_mul_pd(c2, z));
         const double p2 = axes.m[2][0] * q[0] + axes.m[2][1] * q[1] + axes.m[2][2] * q[2];
@@ -548,7 +594,7 @@ void projection_extremes(const Vec3* corner, std::int32_t count, const Mat3& axe
     low = {kInf, kInf, kInf};
     high = {-kInf, -kInf, -kInf};
     for (std::int32_t i = 0; i < count; ++i) {
-        const Vec3 p = axes * corner[i];
+        const Vec3 p = axes * point[index[i]];
         low = min3(low, p);
         high = max3(high, p);
     }
@@ -632,24 +678,67 @@ std::pair<std::int32_t, std::int32_t> MeshBvh::triangle_range(std::int32_t id) c
 }
 
 // Per node: axes from the mean normal (the dipole) and, in the tangent plane, the principal
-// directions of the corners (a 2x2 eigenproblem in closed form); extents by projecting every
-// corner (O(n log n) in all). The axis-aligned box is kept when it is no larger (by volume),
-// as for a node whose normals cancel.
+// directions of the corners (a 2x2 eigenproblem in closed form); extents by projecting the
+// node's distinct vertices. The axis-aligned box is kept when it is no larger (by volume), as
+// for a node whose normals cancel.
+//
+// The nodes are fitted children first (a reverse sweep of the depth-first order), each
+// node's distinct vertices (corner_vertices_, each once, in the order of its corners' first
+// appearance) made from its children's: the left child's list, then the right child's
+// vertices the left one lacks. The lists live on a stack: a reverse depth-first sweep finishes
+// a node's right subtree, then its left one, so the left child's list is on top, the right
+// child's under it. The extremes of the projections over those vertices are the extremes over
+// the corners, bit for bit: a vertex projects alike at each of its corners, and the first
+// corner that reaches an extreme is its vertex's first appearance (so even of a +0 and a -0
+// the same one is kept). A closed mesh has about half as many vertices as triangles, so a
+// node projects about a sixth of its corners, its rim counted in (the corner passes were 16%
+// of a build: benchmarks/RESULTS.md, session 30, branch bvh20).
 void MeshBvh::build_obbs() {
     obbs_.assign(nodes_.size(), NodeObb{});
     // The exact (double) axis-aligned boxes, children before parents.
     std::vector<Box> exact(nodes_.size());
+    // The stack of lists, one after another, and where each starts: at most the corners of
+    // disjoint subtrees, so 3n entries; `merged` is a node's list while it is made. The
+    // tests of `seen` pick an entry by advancing past it or not (no branch to mispredict).
+    std::vector<std::int32_t> distinct(corner_vertices_.size()), merged(corner_vertices_.size());
+    std::vector<std::int32_t> list_start;
+    size_t top = 0;
+    // seen[v] == node: v is already on that node's list.
+    std::vector<std::int32_t> seen(vertices_.size(), -1);
     for (size_t id = nodes_.size(); id-- > 0;) {
         const BvhNode& node = nodes_[id];
+        const auto mark = static_cast<std::int32_t>(id);
         if (node.is_leaf()) {
             for (std::int32_t t = node.index; t < node.index + node.count; ++t)
                 for (int k = 0; k < 3; ++k) exact[id].grow(triangle(t)[k]);
+            list_start.push_back(static_cast<std::int32_t>(top));
+            const std::int32_t* corner = triangle_vertices(node.index);
+            for (std::int32_t k = 0; k < 3 * node.count; ++k) {
+                const std::int32_t v = corner[k];
+                distinct[top] = v;
+                top += seen[static_cast<size_t>(v)] != mark;
+                seen[static_cast<size_t>(v)] = mark;
+            }
         } else {
             exact[id].grow(exact[id + 1]);
             exact[id].grow(exact[static_cast<size_t>(node.index)]);
+            const auto left = static_cast<size_t>(list_start.back());
+            list_start.pop_back();
+            const auto right = static_cast<size_t>(list_start.back());
+            size_t m = 0;
+            for (size_t k = left; k < top; ++k) {
+                const std::int32_t v = distinct[k];
+                seen[static_cast<size_t>(v)] = mark;
+                merged[m++] = v;
+            }
+            for (size_t k = right; k < left; ++k) {
+                const std::int32_t v = distinct[k];
+                merged[m] = v;
+                m += seen[static_cast<size_t>(v)] != mark;
+            }
+            for (size_t k = 0; k < m; ++k) distinct[right + k] = merged[k];
+            top = right + m;
         }
-    }
-    for (size_t id = 0; id < nodes_.size(); ++id) {
         NodeObb& box = obbs_[id];
         const Vec3 lo = exact[id].lower, hi = exact[id].upper;
         const double scale = std::fmax(max_abs(lo), max_abs(hi));
@@ -669,9 +758,8 @@ void MeshBvh::build_obbs() {
         u = u / norm(u);
         Vec3 v = cross(n, u);
         const auto [begin, end] = triangle_range(static_cast<std::int32_t>(id));
-        const Vec3* corner = triangle(begin);
         const std::int32_t corners = 3 * (end - begin);
-        const TangentMoments t = tangent_moments(corner, corners, w.center, u, v);
+        const TangentMoments t = tangent_moments(triangle(begin), corners, w.center, u, v);
         const double count = corners;
         const double mu = t.mu / count, mv = t.mv / count;
         const double cuu = t.cuu / count - mu * mu;
@@ -690,7 +778,8 @@ void MeshBvh::build_obbs() {
             axes.m[2][k] = v[k];
         }
         Vec3 low, high;
-        projection_extremes(corner, corners, axes, low, high);
+        const std::int32_t* list = distinct.data() + list_start.back();
+        projection_extremes(vertices_.data(), list, static_cast<std::int32_t>(top) - list_start.back(), axes, low, high);
         const Vec3 half = (high * 0.5 - low * 0.5) + Vec3{pad, pad, pad};
         if (half.x * half.y * half.z < box.half.x * box.half.y * box.half.z) {
             box.axis_aligned = false;

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <utility>
@@ -50,6 +51,87 @@ TEST_CASE("mesh bvh: a box mesh builds a valid, closed hierarchy") {
     fixtures::TriangleMesh broken = unit_cube();
     broken.vertices[4] = std::numeric_limits<double>::quiet_NaN();
     CHECK(!broken.bvh().valid());
+}
+
+namespace {
+
+bool same_bits(double a, double b) {
+    std::uint64_t x, y;
+    std::memcpy(&x, &a, sizeof(x));
+    std::memcpy(&y, &b, sizeof(y));
+    return x == y;
+}
+bool same_bits(const Vec3& a, const Vec3& b) { return same_bits(a.x, b.x) && same_bits(a.y, b.y) && same_bits(a.z, b.z); }
+
+}  // namespace
+
+TEST_CASE("mesh bvh: oriented boxes and capsules are the all-corner and segment routines' bits") {
+    // A bumpy sheet with coordinates of +0 and -0 (a projection's ties), some heights exactly
+    // zero, and a few degenerate triangles (a repeated corner, three collinear corners).
+    std::mt19937 rng(20);
+    std::uniform_real_distribution<double> bump(-0.05, 0.05);
+    fixtures::TriangleMesh sheet;
+    const int side = 24;
+    for (int j = 0; j < side; ++j)
+        for (int i = 0; i < side; ++i) {
+            const double x = i == side / 2 ? (j % 2 ? -0.0 : 0.0) : (i - side / 2) * 0.1;
+            const double y = j == side / 2 ? (i % 2 ? 0.0 : -0.0) : (j - side / 2) * 0.1;
+            const double z = (i + j) % 5 == 0 ? ((i + j) % 2 ? -0.0 : 0.0) : bump(rng);
+            sheet.vertices.insert(sheet.vertices.end(), {x, y, z});
+        }
+    for (int j = 0; j + 1 < side; ++j)
+        for (int i = 0; i + 1 < side; ++i) {
+            const std::int64_t v = j * side + i;
+            sheet.faces.insert(sheet.faces.end(), {v, v + 1, v + side + 1, v, v + side + 1, v + side});
+        }
+    sheet.faces.insert(sheet.faces.end(), {0, 0, 1, 0, 1, 2});
+    const MeshBvh mesh = sheet.bvh();
+    REQUIRE(mesh.validate());
+
+    // Each capsule: its spine the first longest edge, its radius (bits) and sliver flag from
+    // segment_closest_points' distance of the opposite corner.
+    for (std::int32_t i = 0; i < mesh.triangle_count(); ++i) {
+        const Vec3* t = mesh.triangle(i);
+        const TriangleCapsule& capsule = mesh.triangle_capsule(i);
+        const std::int32_t e = capsule.edge;
+        const double spine = squared_norm(t[(e + 1) % 3] - t[e]);
+        for (std::int32_t k = 0; k < 3; ++k)
+            CHECK(k < e ? squared_norm(t[(k + 1) % 3] - t[k]) < spine : squared_norm(t[(k + 1) % 3] - t[k]) <= spine);
+        const Vec3& apex = t[(e + 2) % 3];
+        const double h2 = segment_closest_points(apex, apex, t[e], t[(e + 1) % 3]).squared_distance;
+        CHECK(same_bits(capsule.radius, std::sqrt(h2) * (1.0 + 1e-12)));
+        CHECK_EQ(capsule.thin, 16.0 * h2 < spine);
+    }
+
+    // Each turned box: its extents are those of every corner of its node (in leaf order, the
+    // first of equal values kept), not only of the distinct vertices the build projects.
+    const std::vector<BvhNode>& nodes = mesh.nodes();
+    std::int32_t turned = 0;
+    for (size_t id = 0; id < nodes.size(); ++id) {
+        const NodeObb& box = mesh.obbs()[id];
+        if (box.axis_aligned) continue;
+        ++turned;
+        size_t first = id, last = id;
+        while (!nodes[first].is_leaf()) ++first;
+        while (!nodes[last].is_leaf()) last = static_cast<size_t>(nodes[last].index);
+        const double inf = std::numeric_limits<double>::infinity();
+        Vec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf}, low = lo, high = hi;
+        for (std::int32_t i = nodes[first].index; i < nodes[last].index + nodes[last].count; ++i)
+            for (int k = 0; k < 3; ++k) {
+                const Vec3& c = mesh.triangle(i)[k];
+                const Vec3 p = box.axes * c;
+                for (int a = 0; a < 3; ++a) {
+                    lo[a] = c[a] < lo[a] ? c[a] : lo[a];
+                    hi[a] = c[a] > hi[a] ? c[a] : hi[a];
+                    low[a] = p[a] < low[a] ? p[a] : low[a];
+                    high[a] = p[a] > high[a] ? p[a] : high[a];
+                }
+            }
+        const double pad = 1e-12 * std::fmax(max_abs(lo), max_abs(hi)) + 1e-300;
+        CHECK(same_bits(box.half, (high * 0.5 - low * 0.5) + Vec3{pad, pad, pad}));
+        CHECK(same_bits(box.center, box.axes.transpose_times(low * 0.5 + high * 0.5)));
+    }
+    CHECK(turned > 100);
 }
 
 TEST_CASE("mesh query: boxes one apart, rotated or not") {
