@@ -413,7 +413,7 @@ inline bool aligned_boxes_touch(const BvhNode& x, const BvhNode& y, const Vec3& 
         const double upper_b = static_cast<double>(y.upper[k]) + shift[k];
         double gap = static_cast<double>(x.lower[k]) - upper_b;
         if (gap < 0.0) gap = lower_b - static_cast<double>(x.upper[k]);
-        if (gap > 0.0 && gap * gap > 0.0) return false;
+        if (gap > kTouchGap) return false;
     }
     return true;
 }
@@ -496,7 +496,7 @@ struct RefitB {
         for (int k = 0; k < 3; ++k) {
             double gap = static_cast<double>(x.lower[k]) - y.upper[k];
             if (gap < 0.0) gap = y.lower[k] - static_cast<double>(x.upper[k]);
-            if (gap > 0.0 && gap * gap > 0.0) return false;
+            if (gap > kTouchGap) return false;
         }
         return true;
     }

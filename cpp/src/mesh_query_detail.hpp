@@ -133,16 +133,23 @@ inline double triangle_box_squared_distance(const TriangleBox& a, const Triangle
     return d2;
 }
 
+// The largest double whose square rounds to 0 (to nearest: a square at most 2^-1075, half the
+// least subnormal, does; this is sqrt(2) 2^-538 rounded down, and the next double's square is
+// 2^-1074): a gap g has g > 0.0 && g * g > 0.0 exactly when g > kTouchGap, one compare for two
+// and a product (a C++ test checks both sides of it).
+inline constexpr double kTouchGap = 0x1.6a09e667f3bccp-538;
+
 // triangle_box_squared_distance(a, b) == 0.0, stopping at the first axis that decides: the
 // sum is 0 exactly when every positive gap's square is (a sum of non-negative terms is 0 only
-// when each is, and a positive square rounds to a positive sum or to inf).
+// when each is, and a positive square rounds to a positive sum or to inf), i.e. when no gap is
+// above kTouchGap.
 // mesh_intersection.cpp's node tests (aligned_boxes_touch, RefitB::touches) repeat this test
 // on the nodes' floats, for speed: change them together.
 inline bool triangle_boxes_touch(const TriangleBox& a, const TriangleBox& b) {
     for (int k = 0; k < 3; ++k) {
         double gap = a.lower[k] - b.upper[k];
         if (gap < 0.0) gap = b.lower[k] - a.upper[k];
-        if (gap > 0.0 && gap * gap > 0.0) return false;
+        if (gap > kTouchGap) return false;
     }
     return true;
 }
