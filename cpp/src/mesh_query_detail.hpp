@@ -329,7 +329,8 @@ bool penetration_axis_forms_agree(const Vec3 a[3], const Vec3 b[3], bool* down);
 /// `max_work`: returns whether it stopped there. `visit` returning true stops the descent too
 /// (then the return is false). A turned pair's descent finishes by axis-aligned boxes of b
 /// refitted in a's frame once it has made more than `refit_after` oriented box tests (negative:
-/// the descent's own choice, by the size of b; 0: from the root): the same crossing pairs, and
+/// the descent's own choice, by the size of b, and not when few node pairs are then left; 0:
+/// from the root): the same crossing pairs, and
 /// every triangle pair whose boxes touch under the node pairs it reaches so counts in `*work`.
 bool for_each_crossing_pair(
     const MeshBvh& a, const MeshBvh& b, const Relative& rel, long long max_work, long long* work, bool witnesses,
