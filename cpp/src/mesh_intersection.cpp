@@ -268,6 +268,7 @@ public:
         std::int32_t a, b;
     };
     bool empty() const { return size_ == 0; }
+    int size() const { return size_; }
     void push(std::int32_t a, std::int32_t b) {
         if (size_ < kInline) {
             inline_[size_] = Item{a, b};
@@ -310,7 +311,9 @@ private:
 // not inside its parent's). The contacts' descent (for_each_crossing_pair) runs so. Given
 // `rest`, it stops once it has split `splits_left` pairs so (four box tests each): it then
 // leaves the node pairs still to descend in *rest (the pair at hand among them) and returns
-// false, for another descent to finish from there.
+// false, for another descent to finish from there. Given `start`, it descends from the node
+// pairs there (such a *rest) instead of from the roots: stopped and started so, it visits the
+// triangle pairs it would have visited uninterrupted, in the same order.
 // Not inlined (nor the axis-aligned descent below): for_each_crossing_pair instantiates three
 // descents, and inlined there they took 0.1% to 1.7% more instructions on the contacts rows.
 template <class Visit>
@@ -318,12 +321,17 @@ __attribute__((noinline)) bool for_each_touching_pair(const MeshBvh& a, const Me
                                                       Visit visit, double margin2 = 0.0, bool ordered = false,
                                                       bool split_both = false,
                                                       long long splits_left = std::numeric_limits<long long>::max(),
-                                                      NodePairStack* rest = nullptr) {
+                                                      NodePairStack* rest = nullptr,
+                                                      const NodePairStack* start = nullptr) {
     const std::vector<BvhNode>& na = a.nodes();
     const std::vector<BvhNode>& nb = b.nodes();
-    if (!boxes_overlap(a, b, {0, 0}, rel)) return false;
     NodePairStack stack;
-    stack.push(0, 0);
+    if (start != nullptr) {
+        stack = *start;
+    } else {
+        if (!boxes_overlap(a, b, {0, 0}, rel)) return false;
+        stack.push(0, 0);
+    }
     MappedLeaf leaf_b;
     std::int32_t loaded = -1;  // b's leaf in leaf_b
     while (!stack.empty()) {
@@ -413,7 +421,7 @@ inline bool aligned_boxes_touch(const BvhNode& x, const BvhNode& y, const Vec3& 
         const double upper_b = static_cast<double>(y.upper[k]) + shift[k];
         double gap = static_cast<double>(x.lower[k]) - upper_b;
         if (gap < 0.0) gap = lower_b - static_cast<double>(x.upper[k]);
-        if (gap > 0.0 && gap * gap > 0.0) return false;
+        if (gap > kTouchGap) return false;
     }
     return true;
 }
@@ -448,6 +456,13 @@ struct MovedB {
 // a query, and below this a mesh's slanted patches, not the refit, decide (the 300-face Panda
 // link is looser by axis-aligned boxes on 206 of its 300 touching pairs).
 constexpr long long kRefitBoxTests = 1024;
+
+// At most this many node pairs left to descend when the refit point comes: the oriented
+// descent goes on instead (a query near its end: the refit's 70 instructions a face of b would
+// not pay). On bench_mesh_query's fandisk rows 3 of 300 queries reach 1,024 box tests with 1
+// to 4 pairs left and end soon after; the turned torus has more left (benchmarks/RESULTS.md,
+// session 30, branch contact20).
+constexpr int kResumePairs = 4;
 
 // b's vertices mapped into a's frame (rel.apply, as the leaves map a triangle's corners, so
 // every corner has the same bits) and its nodes' axis-aligned boxes refitted over them there:
@@ -496,7 +511,7 @@ struct RefitB {
         for (int k = 0; k < 3; ++k) {
             double gap = static_cast<double>(x.lower[k]) - y.upper[k];
             if (gap < 0.0) gap = y.lower[k] - static_cast<double>(x.upper[k]);
-            if (gap > 0.0 && gap * gap > 0.0) return false;
+            if (gap > kTouchGap) return false;
         }
         return true;
     }
@@ -847,11 +862,15 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
 // benchmarks/RESULTS.md, session 28). A turned pair starts with the oriented boxes, which
 // their axis-aligned enclosures in a's frame would loosen (+9% to +295% on the benchmark's
 // family rows, the same place); a dense one (more box tests than refit_after, by default
-// the greater of kRefitBoxTests and half b's node count) finishes by axis-aligned boxes over
-// b's vertices mapped into a's frame (RefitB), which costs about 70 instructions a face of b
-// and then about a quarter of an oriented test per node pair (benchmarks/RESULTS.md, session
-// 29: the turned torus row 22% fewer instructions when refitted from the root, the family
-// rows 1.2 to 4.2 times more, their slanted patches' boxes being far looser).
+// the greater of kRefitBoxTests and a quarter of b's node count, and then more than
+// kResumePairs node pairs left) finishes by axis-aligned boxes over b's vertices mapped into
+// a's frame (RefitB), which costs about 70 instructions a face of b and then about a quarter
+// of an oriented test per node pair (benchmarks/RESULTS.md, session 29: the turned torus row
+// 22% fewer instructions when refitted from the root, the family rows 1.2 to 4.2 times more,
+// their slanted patches' boxes being far looser; session 30, contact20: a quarter of b's
+// nodes, where it was half, 6% fewer on the turned torus). With kResumePairs or fewer pairs
+// left the oriented descent finishes from them (the default only: a refit_after given is
+// obeyed as it is).
 bool for_each_crossing_pair(
     const MeshBvh& a, const MeshBvh& b, const Relative& rel, long long max_work, long long* work, bool witnesses,
     const std::function<bool(std::int32_t, std::int32_t, const Vec3*, const Vec3*, const Vec3&, bool)>& visit,
@@ -881,9 +900,14 @@ bool for_each_crossing_pair(
         for_each_touching_pair_aligned(a, b, moved, crossing, rest);
         return capped;
     }
-    if (refit_after < 0)
-        refit_after = std::max(kRefitBoxTests, static_cast<long long>(b.nodes().size() / 2));
+    const bool own_choice = refit_after < 0;
+    if (own_choice) refit_after = std::max(kRefitBoxTests, static_cast<long long>(b.nodes().size() / 4));
     if (!for_each_touching_pair(a, b, rel, crossing, 0.0, false, true, refit_after / 4, &rest) && !rest.empty()) {
+        if (own_choice && rest.size() <= kResumePairs) {
+            for_each_touching_pair(a, b, rel, crossing, 0.0, false, true, std::numeric_limits<long long>::max(),
+                                   nullptr, &rest);
+            return capped;
+        }
         const RefitBoxes refit(b, rel);
         for_each_touching_pair_aligned(a, b, RefitB(refit, b), crossing, rest);
     }

@@ -133,16 +133,23 @@ inline double triangle_box_squared_distance(const TriangleBox& a, const Triangle
     return d2;
 }
 
+// The largest double whose square rounds to 0 (to nearest: a square at most 2^-1075, half the
+// least subnormal, does; this is sqrt(2) 2^-538 rounded down, and the next double's square is
+// 2^-1074): a gap g has g > 0.0 && g * g > 0.0 exactly when g > kTouchGap, one compare for two
+// and a product (a C++ test checks both sides of it).
+inline constexpr double kTouchGap = 0x1.6a09e667f3bccp-538;
+
 // triangle_box_squared_distance(a, b) == 0.0, stopping at the first axis that decides: the
 // sum is 0 exactly when every positive gap's square is (a sum of non-negative terms is 0 only
-// when each is, and a positive square rounds to a positive sum or to inf).
+// when each is, and a positive square rounds to a positive sum or to inf), i.e. when no gap is
+// above kTouchGap.
 // mesh_intersection.cpp's node tests (aligned_boxes_touch, RefitB::touches) repeat this test
 // on the nodes' floats, for speed: change them together.
 inline bool triangle_boxes_touch(const TriangleBox& a, const TriangleBox& b) {
     for (int k = 0; k < 3; ++k) {
         double gap = a.lower[k] - b.upper[k];
         if (gap < 0.0) gap = b.lower[k] - a.upper[k];
-        if (gap > 0.0 && gap * gap > 0.0) return false;
+        if (gap > kTouchGap) return false;
     }
     return true;
 }
@@ -322,7 +329,8 @@ bool penetration_axis_forms_agree(const Vec3 a[3], const Vec3 b[3], bool* down);
 /// `max_work`: returns whether it stopped there. `visit` returning true stops the descent too
 /// (then the return is false). A turned pair's descent finishes by axis-aligned boxes of b
 /// refitted in a's frame once it has made more than `refit_after` oriented box tests (negative:
-/// the descent's own choice, by the size of b; 0: from the root): the same crossing pairs, and
+/// the descent's own choice, by the size of b, and not when few node pairs are then left; 0:
+/// from the root): the same crossing pairs, and
 /// every triangle pair whose boxes touch under the node pairs it reaches so counts in `*work`.
 bool for_each_crossing_pair(
     const MeshBvh& a, const MeshBvh& b, const Relative& rel, long long max_work, long long* work, bool witnesses,

@@ -744,6 +744,19 @@ std::pair<std::vector<std::pair<std::int32_t, std::int32_t>>, long long> crossin
 
 }  // namespace
 
+TEST_CASE("mesh query: kTouchGap is the largest gap whose square rounds to 0") {
+    // The box tests read gap > kTouchGap for gap > 0.0 && gap * gap > 0.0 (mesh_query_detail.hpp).
+    volatile double gap = mesh_detail::kTouchGap;
+    CHECK(gap > 0.0);
+    CHECK(gap * gap == 0.0);
+    gap = std::nextafter(mesh_detail::kTouchGap, 1.0);
+    CHECK(gap * gap > 0.0);
+    for (const double g : {0.0, -0.0, -1.0, 0x1p-600, 0x1p-537, 1e-300, 1.0, std::numeric_limits<double>::infinity()}) {
+        volatile double v = g;
+        CHECK_EQ(v > 0.0 && v * v > 0.0, v > mesh_detail::kTouchGap);
+    }
+}
+
 TEST_CASE("mesh query: a turned pair's refitted descent lists every crossing pair") {
     // The contacts' descent of a turned pair finishes by axis-aligned boxes of b refitted in
     // a's frame once it is dense: from the root, mid-way (its own choice) and never, it must
