@@ -14,6 +14,17 @@
 
 namespace meshcol::fixtures {
 
+/// A seeded stream of doubles in [-1, 1): a 64-bit linear congruential generator (Knuth's
+/// MMIX constants), its top 53 bits scaled. The tests' random poses and points, the same
+/// sequence on every platform and standard library.
+struct Uniform {
+    std::uint64_t state;
+    double operator()() {
+        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+        return static_cast<double>(state >> 11) * 0x1p-52 - 1.0;
+    }
+};
+
 /// The same bytes: answers compared bit for bit (NaNs of the same pattern compare equal).
 template <class T>
 bool same_bytes(const T* a, const T* b, size_t count) {

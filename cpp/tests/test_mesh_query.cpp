@@ -261,11 +261,7 @@ TEST_CASE("mesh query: the pruned distance search returns the brute-force minimu
     const fixtures::TriangleMesh thin = tube(24, 0.05, 0.5);
     const MeshBvh mesh = thin.bvh();
     REQUIRE(mesh.validate());
-    std::uint64_t state = 12345;
-    const auto uniform = [&state]() {  // in [-1, 1)
-        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-        return static_cast<double>(state >> 11) * (2.0 / 9007199254740992.0) - 1.0;
-    };
+    fixtures::Uniform uniform{12345};  // in [-1, 1)
     int disjoint = 0;
     for (int trial = 0; trial < 60; ++trial) {
         const Pose pa = posed(uniform(), uniform(), uniform(), uniform(), {uniform() * 0.1, 0.0, 0.0});
@@ -301,11 +297,7 @@ TEST_CASE("mesh query: the best pair's axis drops only pairs that cannot win, ti
     REQUIRE(mesh.validate());
     std::vector<std::int32_t> leaf_of(static_cast<size_t>(mesh.triangle_count()));
     for (std::int32_t i = 0; i < mesh.triangle_count(); ++i) leaf_of[static_cast<size_t>(mesh.face_index(i))] = i;
-    std::uint64_t state = 99;
-    const auto uniform = [&state]() {  // in [-1, 1)
-        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-        return static_cast<double>(state >> 11) * (2.0 / 9007199254740992.0) - 1.0;
-    };
+    fixtures::Uniform uniform{99};  // in [-1, 1)
     for (int trial = 0; trial < 24; ++trial) {
         // Aligned (parallel caps, exact ties), slightly tilted, or turned about the axis.
         const double tilt = trial % 3 == 0 ? 0.0 : 0.02 * uniform();
@@ -388,11 +380,7 @@ TEST_CASE("mesh query: the hulls' supporting planes give the node-pair search's 
     const fixtures::TriangleMesh sources[4] = {tube(24, 0.05, 0.5), tray(), gridded_slab(), spike()};
     std::vector<MeshBvh> meshes;
     for (const auto& m : sources) meshes.push_back(m.bvh());
-    std::uint64_t state = 2024;
-    const auto uniform = [&state]() {  // in [-1, 1)
-        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-        return static_cast<double>(state >> 11) * (2.0 / 9007199254740992.0) - 1.0;
-    };
+    fixtures::Uniform uniform{2024};  // in [-1, 1)
     int decided = 0, undecided = 0, tray_decided = 0, tray_refused = 0;
     for (int trial = 0; trial < 180; ++trial) {
         const MeshBvh& a = meshes[static_cast<size_t>(trial % 3)];
@@ -543,11 +531,7 @@ TEST_CASE("triangle distance with a limit: the full distance bit for bit wheneve
     // (triangle_separated_squared_distance_below): whenever the full 15-feature distance is at
     // most the limit, the value and both points must be the very same doubles; otherwise the
     // value must be above the limit (the search then drops the pair, as it drops the full one).
-    std::uint64_t state = 777;
-    const auto uniform = [&state]() {  // in [-1, 1)
-        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-        return static_cast<double>(state >> 11) * (2.0 / 9007199254740992.0) - 1.0;
-    };
+    fixtures::Uniform uniform{777};  // in [-1, 1)
     int counted = 0, skipped = 0;
     for (int trial = 0; trial < 20000; ++trial) {
         Vec3 a[3], b[3];
@@ -590,11 +574,7 @@ TEST_CASE("mesh query: the ordered crossing descent gives every pair the brute-f
     // of the distance query's crossing descent, which keeps the unordered order.
     const fixtures::TriangleMesh thin = tube(16, 0.1, 0.5);
     const MeshBvh mesh = thin.bvh();
-    std::uint64_t state = 4242;
-    const auto uniform = [&state]() {  // in [-1, 1)
-        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-        return static_cast<double>(state >> 11) * (2.0 / 9007199254740992.0) - 1.0;
-    };
+    fixtures::Uniform uniform{4242};  // in [-1, 1)
     int crossing = 0, apart = 0;
     for (int trial = 0; trial < 120; ++trial) {
         const Pose pa = posed(uniform(), uniform(), uniform(), uniform(), {0.0, 0.0, 0.0});
@@ -661,11 +641,7 @@ TEST_CASE("mesh query: the box test's SSE2 form gives the scalar form's verdicts
     // that the edge axes run), random relative poses, and each pair's translation bisected to
     // where the verdict flips, where a rounding difference would show.
     const MeshBvh mesh = unit_cube().bvh();
-    std::uint64_t state = 977;
-    const auto uniform = [&state]() {  // in [-1, 1)
-        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-        return static_cast<double>(state >> 11) * (2.0 / 9007199254740992.0) - 1.0;
-    };
+    fixtures::Uniform uniform{977};  // in [-1, 1)
     const auto box = [&](bool turned) {
         NodeObb o;
         o.center = {uniform(), uniform(), uniform()};
@@ -783,11 +759,7 @@ TEST_CASE("mesh query: a turned pair's refitted descent lists every crossing pai
         return std::make_pair(pairs, touching);
     };
     const MeshBvh ring = torus(64, 32, 0.3).bvh();
-    std::uint64_t state = 2929;
-    const auto uniform = [&state]() {  // in [-1, 1)
-        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-        return static_cast<double>(state >> 11) * (2.0 / 9007199254740992.0) - 1.0;
-    };
+    fixtures::Uniform uniform{2929};  // in [-1, 1)
     int switched = 0;
     for (int trial = 0; trial < 4; ++trial) {
         const Pose pa = posed(uniform(), uniform(), uniform(), uniform(), {0.0, 0.0, 0.0});

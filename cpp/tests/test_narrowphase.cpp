@@ -199,11 +199,7 @@ TEST_CASE("narrow phase: radii kept between batches give each batch the same ans
 TEST_CASE("shapes: valid_bounding_radius is is_valid plus bounding_radius, bit for bit") {
     // Smooth hulls of every size class (the four-vertex loop and its tail), tiny and huge
     // coordinates (squares out of range: the careful path), and invalid data (NaN, inf).
-    std::uint64_t state = 12345;
-    auto uniform = [&state] {
-        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-        return static_cast<double>(state >> 11) * 0x1p-53 * 2.0 - 1.0;
-    };
+    fixtures::Uniform uniform{12345};  // in [-1, 1)
     const double scales[] = {1.0, 1e-3, 1e3, 1e-160, 1e160, 1e300};
     for (int n : {1, 2, 3, 4, 5, 7, 8, 16, 33, 64, 255}) {
         for (double scale : scales) {
@@ -282,11 +278,7 @@ TEST_CASE("shapes: prefetch reads only the shape's own data and changes no answe
 TEST_CASE("shapes: the joint scan of two polytopes is two scans, bit for bit") {
     // Sizes on both sides of each other (the shared loop and either tail), vertices with
     // repeats (ties go to the first), and directions with NaN (no product wins: index 0).
-    std::uint64_t state = 777;
-    auto uniform = [&state] {
-        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-        return static_cast<double>(state >> 11) * 0x1p-53 * 2.0 - 1.0;
-    };
+    fixtures::Uniform uniform{777};  // in [-1, 1)
     const int sizes[] = {1, 2, 5, 16, 17, 31, 32};
     int pairs = 0;
     for (int na : sizes) {

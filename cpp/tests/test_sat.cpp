@@ -69,13 +69,7 @@ SatResult every_axis(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
 
 bool same_bits(double x, double y) { return std::memcmp(&x, &y, sizeof x) == 0; }
 
-struct Random {
-    std::uint64_t state;
-    double uniform() {  // in [-1, 1)
-        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-        return static_cast<double>(state >> 11) * 0x1p-53 * 2.0 - 1.0;
-    }
-};
+using Random = fixtures::Uniform;  // in [-1, 1)
 
 Pose random_pose(Random& r, double spread) {
     // a rotation from a random unit quaternion, placed within `spread` of the origin
@@ -84,7 +78,7 @@ Pose random_pose(Random& r, double spread) {
     do {
         len = 0.0;
         for (double& c : q) {
-            c = r.uniform();
+            c = r();
             len += c * c;
         }
     } while (len < 1e-3);
@@ -100,7 +94,7 @@ Pose random_pose(Random& r, double spread) {
     p.rotation.m[2][0] = 2 * (x * z - w * y);
     p.rotation.m[2][1] = 2 * (y * z + w * x);
     p.rotation.m[2][2] = 1 - 2 * (x * x + y * y);
-    p.translation = Vec3{r.uniform(), r.uniform(), r.uniform()} * spread;
+    p.translation = Vec3{r(), r(), r()} * spread;
     return p;
 }
 
@@ -120,10 +114,10 @@ TEST_CASE("sat: the axes the inner balls skip change no answer, bit for bit") {
     };
     for (int n : {6, 10, 16, 24}) {
         std::vector<Vec3> set;
-        const Vec3 axes{0.4 + 0.4 * std::fabs(r.uniform()), 0.4 + 0.4 * std::fabs(r.uniform()),
-                        0.4 + 0.4 * std::fabs(r.uniform())};
+        const Vec3 axes{0.4 + 0.4 * std::fabs(r()), 0.4 + 0.4 * std::fabs(r()),
+                        0.4 + 0.4 * std::fabs(r())};
         for (int i = 0; i < n; ++i) {
-            Vec3 p{r.uniform(), r.uniform(), r.uniform()};
+            Vec3 p{r(), r(), r()};
             p = p / norm(p);
             set.push_back(Vec3{p.x * axes.x, p.y * axes.y, p.z * axes.z});
         }
@@ -251,7 +245,7 @@ TEST_CASE("sat: shapes that touch get a depth of rounding size from the crossing
     std::vector<std::int64_t> offsets{0};
     for (int s = 0; s < 24; ++s) {
         for (int i = 0; i < 8; ++i) {
-            Vec3 q{r.uniform(), r.uniform(), r.uniform()};
+            Vec3 q{r(), r(), r()};
             points.push_back(q / norm(q) * (0.6 + 0.2 * s / 24.0));
         }
         offsets.push_back(static_cast<std::int64_t>(points.size()));
