@@ -94,10 +94,15 @@ def file_name(index: int, text: str) -> str:
     return f"{index:03d}-{slug}.png"
 
 
-def _world(mesh: Mapping[str, Any]) -> np.ndarray:
+def _posed(mesh: Mapping[str, Any]) -> np.ndarray:
+    """The mesh's vertices in the world frame, ``(n, 3)``."""
     pose = np.asarray(mesh["pose"], dtype=np.float64)
-    v = np.asarray(mesh["vertices"], dtype=np.float64) @ pose[:3, :3].T + pose[:3, 3]
-    return v[np.asarray(mesh["faces"], dtype=np.int64)]
+    vertices = np.asarray(mesh["vertices"], dtype=np.float64).reshape(-1, 3)
+    return vertices @ pose[:3, :3].T + pose[:3, 3]
+
+
+def _world(mesh: Mapping[str, Any]) -> np.ndarray:
+    return _posed(mesh)[np.asarray(mesh["faces"], dtype=np.int64)]
 
 
 def _in_frame(tris: np.ndarray, camera: Camera) -> np.ndarray:
@@ -107,32 +112,26 @@ def _in_frame(tris: np.ndarray, camera: Camera) -> np.ndarray:
     return np.all((high >= camera.low) & (low <= camera.high), axis=1)
 
 
-class _MeshBoxes:
-    """Each mesh's world box, made once a drawing for each geometry and pose (pictures x
-    meshes would pose every mesh of the scene for every picture): a mesh whose box misses a
-    picture's frame has no triangle in it. The box is of every vertex (NaN left out), so it
-    holds each triangle's."""
+class _PageMeshes:
+    """A page's meshes, listed once a drawing, and each one's world box: the meshes a
+    picture's frame can show are then one comparison of arrays, where every picture used to
+    pose every mesh of the scene. A box holds every vertex (NaN left out), so it holds each
+    triangle's; a mesh without faces has an empty box (it draws nothing)."""
 
-    def __init__(self) -> None:
-        self._made: dict[tuple[int, bytes], tuple[Any, np.ndarray, np.ndarray]] = {}
+    def __init__(self, page: Any) -> None:
+        self.meshes: list[Mapping[str, Any]] = page.meshes()
+        self.low = np.full((len(self.meshes), 3), np.inf)
+        self.high = np.full((len(self.meshes), 3), -np.inf)
+        for n, mesh in enumerate(self.meshes):
+            if len(mesh["faces"]):
+                world = _posed(mesh)
+                self.low[n] = np.fmin.reduce(world, axis=0, initial=np.inf)
+                self.high[n] = np.fmax.reduce(world, axis=0, initial=-np.inf)
 
-    def far(self, mesh: Mapping[str, Any], camera: Camera) -> bool:
-        if len(mesh["faces"]) == 0:
-            return True
-        vertices = mesh["vertices"]
-        pose = np.asarray(mesh["pose"], dtype=np.float64)
-        key = (id(vertices), pose.tobytes())
-        made = self._made.get(key)
-        if made is None or made[0] is not vertices:  # kept here: its id is not reused
-            world = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
-            world = world @ pose[:3, :3].T + pose[:3, 3]
-            made = self._made[key] = (
-                vertices,
-                np.fmin.reduce(world, axis=0, initial=np.inf),
-                np.fmax.reduce(world, axis=0, initial=-np.inf),
-            )
-        _, low, high = made
-        return not bool(np.all((high >= camera.low) & (low <= camera.high)))
+    def near(self, camera: Camera) -> np.ndarray:
+        """The indices, in order, of the meshes whose box meets ``camera``'s."""
+        meets = (self.high >= camera.low) & (self.low <= camera.high)
+        return np.flatnonzero(meets.all(axis=1))
 
 
 def _box(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -183,17 +182,18 @@ def _font(size: int) -> Any:
 
 
 def _paint(
-    meshes: Sequence[Mapping[str, Any]],
+    page_meshes: _PageMeshes,
     ids: Sequence[int],
     own: Sequence[tuple[Mapping[str, Any], np.ndarray]],
     camera: Camera,
-    boxes: _MeshBoxes,
 ) -> Raster:
     """The triangles: the context faded (where near the frame), then the row's bodies in
     their colours over it, then the row's findings faces."""
     raster = Raster(camera)
-    for mesh in meshes:
-        if mesh["group"] != "meshes" or mesh["body"] in ids or boxes.far(mesh, camera):
+    meshes = page_meshes.meshes
+    for n in page_meshes.near(camera):
+        mesh = meshes[n]
+        if mesh["group"] != "meshes" or mesh["body"] in ids:
             continue
         tris = _world(mesh)
         raster.triangles(tris[_in_frame(tris, camera)], hex_rgb(CONTEXT_COLOR), fade=CONTEXT_FADE)
@@ -252,9 +252,10 @@ class _Layout:
     camera: Camera
 
 
-def _layout(page: Any, row: Mapping[str, Any], shot: Shot) -> _Layout:
+def _layout(
+    page: Any, row: Mapping[str, Any], shot: Shot, meshes: Sequence[Mapping[str, Any]]
+) -> _Layout:
     ids = list(row["bodies"])
-    meshes = page.meshes()
     own = [(m, _world(m)) for m in _own_meshes(meshes, row)]
     lines = [line for line in page.lines() if line["body"] in ids]
     if shot.outline is not None:
@@ -272,21 +273,18 @@ def _layout(page: Any, row: Mapping[str, Any], shot: Shot) -> _Layout:
     return _Layout(ids, own, lines, points, Camera(low, high, WIDTH, HEIGHT, view_from=view))
 
 
-def _draw_row(page: Any, row: Mapping[str, Any], shot: Shot, path: str, boxes: _MeshBoxes) -> None:
+def _draw_row(
+    page: Any, row: Mapping[str, Any], shot: Shot, path: str, page_meshes: _PageMeshes
+) -> None:
     PIL = pillow()
-    layout = _layout(page, row, shot)
+    layout = _layout(page, row, shot, page_meshes.meshes)
     camera = layout.camera
-    raster = _paint(page.meshes(), layout.ids, layout.own, camera, boxes)
+    raster = _paint(page_meshes, layout.ids, layout.own, camera)
     image = PIL.Image.fromarray(raster.pixels, "RGB")
     draw = PIL.ImageDraw.Draw(image)
     _marks(draw, camera, layout.lines, layout.points, row["normal"])
     _caption(draw, shot, row, page, bool(len(layout.points)))
     image.save(path, format="PNG", optimize=False)
-
-
-def _near(mesh: Mapping[str, Any], camera: Camera, boxes: _MeshBoxes) -> bool:
-    """Whether :func:`_paint` draws any triangle of ``mesh`` as context of ``camera``."""
-    return not boxes.far(mesh, camera) and bool(_in_frame(_world(mesh), camera).any())
 
 
 def _feature_edges(mesh: Mapping[str, Any]) -> np.ndarray:
@@ -379,10 +377,10 @@ def render_shots(page: ReviewPage | ShotPage, shots: Sequence[Shot], folder: str
     bodies are no row of the page is skipped."""
     pillow()
     written: dict[str, str] = {}
-    boxes = _MeshBoxes()
+    page_meshes = _PageMeshes(page)
     for shot, row in _shot_rows(page, shots):
         path = os.path.join(folder, shot.name)
-        _draw_row(page, row, shot, path, boxes)
+        _draw_row(page, row, shot, path, page_meshes)
         written[shot.name] = path
     return written
 
@@ -460,21 +458,27 @@ def _arrays(item: Mapping[str, Any]) -> dict[str, Any]:
 def shot_page(page: ReviewPage, shots: Sequence[Shot]) -> ShotPage:
     """What drawing ``shots`` needs of ``page`` (:class:`ShotPage`): a page of 3,000 bodies
     is kept as the few a failing pair's picture shows."""
-    meshes = page.meshes()
+    page_meshes = _PageMeshes(page)
+    meshes = page_meshes.meshes
+    body = np.array([mesh["body"] for mesh in meshes], dtype=np.int64)
+    group_of = np.array([mesh["group"] for mesh in meshes], dtype=object)
     rows: dict[int, Mapping[str, Any]] = {}
     kept: set[int] = set()
     bodies: set[int] = set()
-    boxes = _MeshBoxes()
     for shot, row in _shot_rows(page, shots):
         rows.setdefault(id(row), row)
-        layout = _layout(page, row, shot)
+        layout = _layout(page, row, shot, meshes)
         bodies.update(layout.ids)
         group = row.get("group")
-        for n, mesh in enumerate(meshes):
-            own = mesh["body"] in layout.ids or bool(group and mesh["group"] == group)
-            # another body's mesh: kept when the picture shows some of it behind
-            if own or (
-                mesh["group"] == "meshes" and n not in kept and _near(mesh, layout.camera, boxes)
+        own = np.isin(body, layout.ids) | (bool(group) & (group_of == group))
+        kept.update(np.flatnonzero(own).tolist())
+        # another body's mesh: kept when the picture shows some of it behind
+        for n in page_meshes.near(layout.camera).tolist():
+            mesh = meshes[n]
+            if (
+                n not in kept
+                and mesh["group"] == "meshes"
+                and _in_frame(_world(mesh), layout.camera).any()
             ):
                 kept.add(n)
     return ShotPage(
