@@ -15,10 +15,6 @@ using namespace meshcol::bindings;
 
 namespace {
 
-/// A writable C-contiguous CPU array of `T` with shape `Shape`, filled in place.
-template <class T, ssize_t... Shape>
-using InOut = nb::ndarray<T, nb::shape<Shape...>, nb::c_contig, nb::device::cpu>;
-
 void fill_triangles(InOut<double, -1, -1> depth, InOut<std::uint8_t, -1, -1, 3> pixels, Triangles corners,
                     In<std::uint8_t, -1, 3> colors, In<std::int64_t, -1, 2> lo, In<std::int64_t, -1, 2> hi,
                     Index64 order) {

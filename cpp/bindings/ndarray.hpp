@@ -38,6 +38,10 @@ using Pairs = In<std::int64_t, -1, 2>;   ///< (P, 2) index pairs
 using Pairs32 = In<std::int32_t, -1, 2>; ///< (P, 2) int32 local index pairs
 using Faces = In<std::int64_t, -1, 3>;   ///< (F, 3) vertex indices
 
+/// A writable C-contiguous CPU array of `T` with shape `Shape`, filled in place (the caller's).
+template <class T, ssize_t... Shape>
+using InOut = nb::ndarray<T, nb::shape<Shape...>, nb::c_contig, nb::device::cpu>;
+
 /// A writable numpy output array of `T` with shape `Shape`.
 template <class T, ssize_t... Shape>
 using Out = nb::ndarray<nb::numpy, T, nb::shape<Shape...>, nb::c_contig>;

@@ -41,31 +41,12 @@ struct Listed {
     Vec3 tb[3];
 };
 
-// A touching pair's (depth 0) witness points from the feature pair its axis names
-// (triangle_penetration_feature), when they meet within 1e-12 of the largest coordinate
-// magnitude of the two triangles: true, with the points in p. Where they do not (the axis's
-// features are not where the triangles touch), false, and a point the two share is wanted.
-bool touching_points(const Vec3* ta, const Vec3* tb, TrianglePenetration& p) {
-    const int feature = triangle_penetration_feature(ta, tb, p);
-    if (feature < 0) return false;
-    double reach = 0.0;
-    for (int k = 0; k < 3; ++k)
-        for (const Vec3* v : {&ta[k], &tb[k]})
-            for (const double c : {std::fabs(v->x), std::fabs(v->y), std::fabs(v->z)})
-                reach = c > reach ? c : reach;
-    const double tight = 1e-12 * reach;
-    const double d2 = triangle_feature_squared_distance(ta, tb, feature, &p.point_a, &p.point_b);
-    return d2 <= tight * tight;
-}
-
 // The contact of pair `f` in the world frame, tb its triangle of b mapped into a's frame as
 // the descent mapped it (the same bits, so the points are those of the depth's triangles). A
-// depth-0 pair's witness points are the point the exact test shared, when the descent kept it;
-// else those of its axis's features when they touch (touching_points), else a shared point
-// (triangle_penetration_points runs the exact test). The features' points cost about an
-// eighth of the exact test's (some 190 instructions against 1,470): on bench_mesh_query's
-// torus moved 30%, 348 of the 394 touching pairs without a kept point take them
-// (benchmarks/RESULTS.md, session 30).
+// depth-0 pair keeps the point the descent's exact test shared, when it kept one; any other
+// pair's points are triangle_penetration_points' (for a touching pair its axis's features
+// when they meet, else a shared point: on bench_mesh_query's torus moved 30%, 348 of the 394
+// touching pairs without a kept point take the features; benchmarks/RESULTS.md, session 30).
 MeshContact contact_of(const Found& f, const Vec3* tb, const MeshBvh& a, const Pose& pose_a) {
     const Vec3* ta = a.triangle(f.i);
     TrianglePenetration p;
@@ -74,7 +55,7 @@ MeshContact contact_of(const Found& f, const Vec3* tb, const MeshBvh& a, const P
     p.axis = f.axis;
     if (f.depth == 0.0 && !std::isnan(f.shared.x)) {
         p.point_a = p.point_b = f.shared;
-    } else if (f.depth != 0.0 || !touching_points(ta, tb, p)) {
+    } else {
         triangle_penetration_points(ta, tb, p);
     }
     MeshContact c;

@@ -407,7 +407,7 @@ inline TriangleBox moved_box(const BvhNode& y, const Vec3& shift) {
 
 // Whether node x of a and node y of b (moved by `shift`, a's frame) may hold a triangle pair
 // whose boxes touch (triangle_boxes_touch): false only when a gap along an axis is positive
-// with a positive square. A triangle box lies inside its node's box, and the differences
+// with a positive square (gap > kTouchGap). A triangle box lies inside its node's box, and the differences
 // round monotonically, so a triangle pair's gap there is at least the nodes' gap: that pair's
 // boxes do not touch either.
 // The axis test is triangle_boxes_touch's (mesh_query_detail.hpp), as is RefitB::touches'

@@ -294,8 +294,37 @@ int triangle_penetration_feature(const Vec3 a[3], const Vec3 b[3], const Triangl
     return (p.axis == 0 ? 12 : 9) + deepest;
 }
 
+namespace {
+
+// The largest coordinate magnitude of a's and c's corners. Plain compares: a NaN corner is
+// passed over (and its NaN distances then fail any limit made of this).
+double largest_magnitude(const Vec3 a[3], const Vec3 c[3]) {
+    double reach = 0.0;
+    for (int k = 0; k < 3; ++k)
+        for (const Vec3* v : {&a[k], &c[k]})
+            for (const double x : {std::fabs(v->x), std::fabs(v->y), std::fabs(v->z)})
+                reach = x > reach ? x : reach;
+    return reach;
+}
+
+// The closest points of the feature pair of a and c that p's axis names (b's feature is c's,
+// c being b or b moved), when they meet within 1e-12 of `reach`: true, with them in *point_a
+// and *on_c.
+bool axis_feature_points(const Vec3 a[3], const Vec3 b[3], const Vec3 c[3], const TrianglePenetration& p,
+                         double reach, Vec3* point_a, Vec3* on_c) {
+    const int feature = triangle_penetration_feature(a, b, p);
+    if (feature < 0) return false;
+    const double tight = 1e-12 * reach;
+    return triangle_feature_squared_distance(a, c, feature, point_a, on_c) <= tight * tight;
+}
+
+}  // namespace
+
 void triangle_penetration_points(const Vec3 a[3], const Vec3 b[3], TrianglePenetration& p) {
     if (p.depth == 0.0) {
+        // Touching: the axis's features, when they meet (a few hundred instructions), else the
+        // exact test's shared point (about 1,500).
+        if (axis_feature_points(a, b, b, p, largest_magnitude(a, b), &p.point_a, &p.point_b)) return;
         Vec3 shared;
         if (!triangles_intersect(a, b, &shared)) {
             // Not intersecting after all (a caller's misuse): the closest points.
@@ -308,32 +337,19 @@ void triangle_penetration_points(const Vec3 a[3], const Vec3 b[3], TrianglePenet
     const Vec3 shift = p.normal * p.depth;
     const Vec3 moved[3] = {b[0] + shift, b[1] + shift, b[2] + shift};
     Vec3 on_moved;
+    const double reach = largest_magnitude(a, moved);
     // a and b moved by the depth touch, up to the rounding of the depth and the move (a few
-    // ulps of the coordinates): the search limited to 1e-10 of the largest coordinate gives the
-    // same value and points (triangle.hpp: triangle_separated_squared_distance_below, its slack
-    // above the 3e-14 it needs) and skips the feature pairs that cannot be the closest. Should
-    // the pair be farther than that after all, the full search.
-    // Plain compares: a NaN corner is passed over, and its NaN distance fails the limit.
-    double reach = 0.0;
-    for (int k = 0; k < 3; ++k)
-        for (const Vec3* v : {&a[k], &moved[k]})
-            for (const double c : {std::fabs(v->x), std::fabs(v->y), std::fabs(v->z)})
-                reach = c > reach ? c : reach;
-    // The feature pair the axis names first, taken when its points meet within 1e-12 of the
-    // largest coordinate (they touch up to the rounding of the depth and the move).
-    const int feature = triangle_penetration_feature(a, b, p);
-    if (feature >= 0) {
-        const double tight = 1e-12 * reach;
-        if (triangle_feature_squared_distance(a, moved, feature, &p.point_a, &on_moved) <= tight * tight) {
-            p.point_b = on_moved - shift;
-            return;
-        }
+    // ulps of the coordinates): first the feature pair the axis names; then the search limited
+    // to 1e-10 of the largest coordinate, which gives the same value and points
+    // (triangle.hpp: triangle_separated_squared_distance_below, its slack above the 3e-14 it
+    // needs) and skips the feature pairs that cannot be the closest; should the pair be
+    // farther than that after all, the full search.
+    if (!axis_feature_points(a, b, moved, p, reach, &p.point_a, &on_moved)) {
+        const double limit = 1e-10 * reach;
+        const double found2 = triangle_separated_squared_distance_below(a, moved, limit * limit, 4e-14 * reach,
+                                                                        &p.point_a, &on_moved);
+        if (!(found2 <= limit * limit)) triangle_separated_squared_distance(a, moved, &p.point_a, &on_moved);
     }
-    const double limit = 1e-10 * reach;
-    const double found2 =
-        triangle_separated_squared_distance_below(a, moved, limit * limit, 4e-14 * reach, &p.point_a, &on_moved);
-    if (!(found2 <= limit * limit))
-        triangle_separated_squared_distance(a, moved, &p.point_a, &on_moved);
     p.point_b = on_moved - shift;
 }
 
