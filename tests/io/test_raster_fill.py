@@ -83,6 +83,6 @@ def test_the_fill_refuses_bad_shapes_and_indices() -> None:
         core.raster_fill_triangles(depth, pixels[:3], tri, color, box, box, np.array([0]))
     with pytest.raises(ValueError, match="one row per triangle"):
         core.raster_fill_triangles(depth, pixels, tri, color[:0], box, box, np.array([0]))
+    depth.flags.writeable = False
     with pytest.raises(TypeError):  # a read-only buffer is not written
-        depth.flags.writeable = False
         core.raster_fill_triangles(depth, pixels, tri, color, box, box, np.array([0]))
