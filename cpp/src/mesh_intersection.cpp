@@ -278,6 +278,18 @@ public:
         }
         ++size_;
     }
+    // push(a, b) if `keep`, with no branch on it while the pairs fit inline: the entry is
+    // written either way and counted only if kept (the axis-aligned descent's child pairs,
+    // whose box tests go either way).
+    void push_if(std::int32_t a, std::int32_t b, bool keep) {
+        if (size_ < kInline) {
+            inline_[size_] = Item{a, b};
+            size_ += keep;
+        } else if (keep) {
+            spill_.push_back(Item{a, b});
+            ++size_;
+        }
+    }
     Item pop() {
         --size_;
         if (size_ < kInline) return inline_[size_];
@@ -561,8 +573,14 @@ __attribute__((noinline)) bool for_each_touching_pair_aligned(const MeshBvh& a, 
                         leaf_b.mapped[j] = b_in_a.load(y.index + j, &leaf_b.boxes[j], leaf_b.corners[j]);
                     loaded = ib;
                 }
-                for (int j = 0; j < y.count; ++j) {
-                    if (!triangle_boxes_touch_at_once(box_a, leaf_b.boxes[j])) continue;
+                // The triangles of b's leaf whose boxes touch box_a, as bits (leaf_size <= 32),
+                // visited in order: one branch a visit, not one a box test.
+                static_assert(defaults::mesh_bvh_leaf_size <= 32, "a leaf's triangles as the bits of an unsigned");
+                unsigned touching = 0;
+                for (int j = 0; j < y.count; ++j)
+                    touching |= static_cast<unsigned>(triangle_boxes_touch_at_once(box_a, leaf_b.boxes[j])) << j;
+                for (; touching != 0; touching &= touching - 1) {
+                    const int j = __builtin_ctz(touching);
                     if (!leaf_b.mapped[j]) {
                         b_in_a.map(y.index + j, leaf_b.corners[j]);
                         leaf_b.mapped[j] = true;
@@ -579,8 +597,7 @@ __attribute__((noinline)) bool for_each_touching_pair_aligned(const MeshBvh& a, 
         for (const std::int32_t child_b : b_children) {
             if (child_b < 0) continue;
             for (const std::int32_t child_a : a_children)
-                if (child_a >= 0 && b_in_a.touches(na[static_cast<size_t>(child_a)], child_b))
-                    stack.push(child_a, child_b);
+                if (child_a >= 0) stack.push_if(child_a, child_b, b_in_a.touches(na[static_cast<size_t>(child_a)], child_b));
         }
     }
     return false;
@@ -714,7 +731,9 @@ inline bool plane_sides(const Vec3* plane, const Vec3* t, int s[3]) {
         const double permanent =
             std::fabs(f.x) * minor.x + std::fabs(f.y) * minor.y + std::fabs(f.z) * minor.z;
         const double bound = predicates::detail::kOrient3dBound * permanent;
-        if ((det > bound || -det > bound) && permanent > 0x1p-900) {
+        // |det| > bound, not det > bound || -det > bound: the same verdict (NaN fails both),
+        // in one branch that is seldom wrong, where det's sign made the first go either way.
+        if (std::fabs(det) > bound && permanent > 0x1p-900) {
             s[k] = det > 0.0 ? 1 : -1;
         } else if ((s[k] = -predicates::orient3d_sign(plane[0], plane[1], plane[2], t[k])) == 0) {
             return false;
