@@ -7,6 +7,7 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -277,6 +278,18 @@ public:
         }
         ++size_;
     }
+    // push(a, b) if `keep`, with no branch on it while the pairs fit inline: the entry is
+    // written either way and counted only if kept (the axis-aligned descent's child pairs,
+    // whose box tests go either way).
+    void push_if(std::int32_t a, std::int32_t b, bool keep) {
+        if (size_ < kInline) {
+            inline_[size_] = Item{a, b};
+            size_ += keep;
+        } else if (keep) {
+            spill_.push_back(Item{a, b});
+            ++size_;
+        }
+    }
     Item pop() {
         --size_;
         if (size_ < kInline) return inline_[size_];
@@ -416,14 +429,13 @@ inline TriangleBox moved_box(const BvhNode& y, const Vec3& shift) {
 // instructions on bench_mesh_query's contact rows (session 29's review, callgrind), the same
 // decisions. Change the three together.
 inline bool aligned_boxes_touch(const BvhNode& x, const BvhNode& y, const Vec3& shift) {
+    double gap[3];
     for (int k = 0; k < 3; ++k) {
         const double lower_b = static_cast<double>(y.lower[k]) + shift[k];
         const double upper_b = static_cast<double>(y.upper[k]) + shift[k];
-        double gap = static_cast<double>(x.lower[k]) - upper_b;
-        if (gap < 0.0) gap = lower_b - static_cast<double>(x.upper[k]);
-        if (gap > kTouchGap) return false;
+        gap[k] = interval_gap(x.lower[k], x.upper[k], lower_b, upper_b);
     }
-    return true;
+    return !(max2(gap[0], max2(gap[1], gap[2])) > kTouchGap);
 }
 
 // b's boxes in a's frame under rel.translation_only: its node boxes and triangle boxes as
@@ -508,12 +520,9 @@ struct RefitB {
     // aligned_boxes_touch's test, on refitted boxes (the same gap logic: see there).
     bool touches(const BvhNode& x, std::int32_t ib) const {
         const TriangleBox& y = boxes[ib];
-        for (int k = 0; k < 3; ++k) {
-            double gap = static_cast<double>(x.lower[k]) - y.upper[k];
-            if (gap < 0.0) gap = y.lower[k] - static_cast<double>(x.upper[k]);
-            if (gap > kTouchGap) return false;
-        }
-        return true;
+        double gap[3];
+        for (int k = 0; k < 3; ++k) gap[k] = interval_gap(x.lower[k], x.upper[k], y.lower[k], y.upper[k]);
+        return !(max2(gap[0], max2(gap[1], gap[2])) > kTouchGap);
     }
     TriangleBox leaf_box(std::int32_t ib) const { return boxes[ib]; }
     bool load(std::int32_t t, TriangleBox* box, Vec3* corners) const {
@@ -557,15 +566,21 @@ __attribute__((noinline)) bool for_each_touching_pair_aligned(const MeshBvh& a, 
             const TriangleBox box_y = b_in_a.leaf_box(ib);
             for (std::int32_t i = x.index; i < x.index + x.count; ++i) {
                 const TriangleBox box_a = stored_box(a, i);
-                if (!triangle_boxes_touch(box_a, box_y)) continue;
+                if (!triangle_boxes_touch_at_once(box_a, box_y)) continue;
                 const Vec3* ta = a.triangle(i);
                 if (ib != loaded) {
                     for (int j = 0; j < y.count; ++j)
                         leaf_b.mapped[j] = b_in_a.load(y.index + j, &leaf_b.boxes[j], leaf_b.corners[j]);
                     loaded = ib;
                 }
-                for (int j = 0; j < y.count; ++j) {
-                    if (!triangle_boxes_touch(box_a, leaf_b.boxes[j])) continue;
+                // The triangles of b's leaf whose boxes touch box_a, as bits (leaf_size <= 32),
+                // visited in order: one branch a visit, not one a box test.
+                static_assert(defaults::mesh_bvh_leaf_size <= 32, "a leaf's triangles as the bits of an unsigned");
+                unsigned touching = 0;
+                for (int j = 0; j < y.count; ++j)
+                    touching |= static_cast<unsigned>(triangle_boxes_touch_at_once(box_a, leaf_b.boxes[j])) << j;
+                for (; touching != 0; touching &= touching - 1) {
+                    const int j = __builtin_ctz(touching);
                     if (!leaf_b.mapped[j]) {
                         b_in_a.map(y.index + j, leaf_b.corners[j]);
                         leaf_b.mapped[j] = true;
@@ -582,8 +597,7 @@ __attribute__((noinline)) bool for_each_touching_pair_aligned(const MeshBvh& a, 
         for (const std::int32_t child_b : b_children) {
             if (child_b < 0) continue;
             for (const std::int32_t child_a : a_children)
-                if (child_a >= 0 && b_in_a.touches(na[static_cast<size_t>(child_a)], child_b))
-                    stack.push(child_a, child_b);
+                if (child_a >= 0) stack.push_if(child_a, child_b, b_in_a.touches(na[static_cast<size_t>(child_a)], child_b));
         }
     }
     return false;
@@ -596,12 +610,18 @@ __attribute__((noinline)) bool for_each_touching_pair_aligned(const MeshBvh& a, 
 // meet, so the exact test would say no: it is skipped, a dozen multiplications against the
 // exact predicates of triangles_intersect. A degenerate triangle (zero normal) separates
 // nothing.
+// `at_once`: each plane's three sides formed and compared together, one branch for six
+// (the contacts' axis-aligned descent, where a pair's outcome is about as likely either way);
+// else each corner's side only while the ones before it agree. The same verdicts.
+template <bool at_once = false>
 inline bool planes_separate(const MeshBvh& a, std::int32_t i, const Vec3* ta, const MeshBvh& b, std::int32_t j,
                             const Vec3* tb, const Relative& rel) {
-    // Each corner's side only while the ones before it agree (the same verdicts as forming
-    // all three first).
-    const auto apart = [&rel](const Vec3& n, const Vec3& origin, const Vec3* t) {
+    const auto apart = [&rel](const Vec3& n, const Vec3& origin, const Vec3* t) -> bool {
         const double s0 = dot(n, t[0] - origin);
+        if constexpr (at_once) {
+            const double s1 = dot(n, t[1] - origin), s2 = dot(n, t[2] - origin);
+            return (min2(s0, min2(s1, s2)) > rel.slack) | (max2(s0, max2(s1, s2)) < -rel.slack);
+        }
         if (s0 > rel.slack) return dot(n, t[1] - origin) > rel.slack && dot(n, t[2] - origin) > rel.slack;
         if (s0 < -rel.slack) return dot(n, t[1] - origin) < -rel.slack && dot(n, t[2] - origin) < -rel.slack;
         return false;
@@ -711,7 +731,9 @@ inline bool plane_sides(const Vec3* plane, const Vec3* t, int s[3]) {
         const double permanent =
             std::fabs(f.x) * minor.x + std::fabs(f.y) * minor.y + std::fabs(f.z) * minor.z;
         const double bound = predicates::detail::kOrient3dBound * permanent;
-        if ((det > bound || -det > bound) && permanent > 0x1p-900) {
+        // |det| > bound, not det > bound || -det > bound: the same verdict (NaN fails both),
+        // in one branch that is seldom wrong, where det's sign made the first go either way.
+        if (std::fabs(det) > bound && permanent > 0x1p-900) {
             s[k] = det > 0.0 ? 1 : -1;
         } else if ((s[k] = -predicates::orient3d_sign(plane[0], plane[1], plane[2], t[k])) == 0) {
             return false;
@@ -879,25 +901,29 @@ bool for_each_crossing_pair(
     bool capped = false;
     // Inlined into each of the three descents, as the compiler did into the two before the
     // refit: a call a visited pair took 0.3% to 3% more instructions on the contacts rows.
-    const auto crossing = [&](std::int32_t i, std::int32_t j, const Vec3* ta,
-                              const Vec3* tb) __attribute__((always_inline)) {
-        if (++*work > max_work) return capped = true;
-        if (planes_separate(a, i, ta, b, j, tb, rel)) return false;
-        // The quick verdict where it decides (no shared point: a caller that wants one asks
-        // triangles_intersect again), else the full test, with its point when asked.
-        const Verdict v = quick_verdict(ta, tb);
-        if (v != Verdict::kUndecided)
-            return v != Verdict::kApart && visit(i, j, ta, tb, kNoPoint, v == Verdict::kMeet);
-        if (!witnesses) return triangles_intersect(ta, tb, nullptr) && visit(i, j, ta, tb, kNoPoint, false);
-        Vec3 shared;
-        return triangles_intersect(ta, tb, &shared) && visit(i, j, ta, tb, shared, false);
+    // `at_once`: the plane screen's form (planes_separate), true in the axis-aligned descents.
+    const auto crossing_by = [&](auto at_once) {
+        return [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) __attribute__((always_inline)) {
+            if (++*work > max_work) return capped = true;
+            if (planes_separate<decltype(at_once)::value>(a, i, ta, b, j, tb, rel)) return false;
+            // The quick verdict where it decides (no shared point: a caller that wants one asks
+            // triangles_intersect again), else the full test, with its point when asked.
+            const Verdict v = quick_verdict(ta, tb);
+            if (v != Verdict::kUndecided)
+                return v != Verdict::kApart && visit(i, j, ta, tb, kNoPoint, v == Verdict::kMeet);
+            if (!witnesses) return triangles_intersect(ta, tb, nullptr) && visit(i, j, ta, tb, kNoPoint, false);
+            Vec3 shared;
+            return triangles_intersect(ta, tb, &shared) && visit(i, j, ta, tb, shared, false);
+        };
     };
+    const auto crossing = crossing_by(std::false_type{});
+    const auto crossing_at_once = crossing_by(std::true_type{});
     NodePairStack rest;
     if (rel.translation_only) {
         const MovedB moved(b, rel);
         if (!moved.touches(a.nodes()[0], 0)) return false;
         rest.push(0, 0);
-        for_each_touching_pair_aligned(a, b, moved, crossing, rest);
+        for_each_touching_pair_aligned(a, b, moved, crossing_at_once, rest);
         return capped;
     }
     const bool own_choice = refit_after < 0;
@@ -909,7 +935,7 @@ bool for_each_crossing_pair(
             return capped;
         }
         const RefitBoxes refit(b, rel);
-        for_each_touching_pair_aligned(a, b, RefitB(refit, b), crossing, rest);
+        for_each_touching_pair_aligned(a, b, RefitB(refit, b), crossing_at_once, rest);
     }
     return capped;
 }

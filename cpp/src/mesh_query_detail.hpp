@@ -154,6 +154,28 @@ inline bool triangle_boxes_touch(const TriangleBox& a, const TriangleBox& b) {
     return true;
 }
 
+// The gap of the intervals [lower_a, upper_a] and [lower_b, upper_b] (finite, each lower <=
+// upper) as triangle_boxes_touch takes it, with no branch: where lower_a - upper_b >= 0
+// (lower_a >= upper_b, the sign of a rounded difference being exact), lower_b - upper_a <=
+// upper_b - lower_a <= 0 and the larger is the first, as there; else the second is taken there,
+// and the larger differs from it only when both are negative, below kTouchGap alike. So
+// interval_gap(...) > kTouchGap is that test's verdict on the axis.
+inline double interval_gap(double lower_a, double upper_a, double lower_b, double upper_b) {
+    return max2(lower_a - upper_b, lower_b - upper_a);
+}
+
+// triangle_boxes_touch's verdict for finite boxes with one branch where it has three, each
+// taken about half the time on a pair of curved surfaces: no axis's gap above kTouchGap, i.e.
+// not the largest. The contacts' axis-aligned descent (mesh_intersection.cpp) takes it, as do
+// its node tests on the nodes' floats (aligned_boxes_touch, RefitB::touches). A C++ test
+// compares the two forms.
+inline bool triangle_boxes_touch_at_once(const TriangleBox& a, const TriangleBox& b) {
+    const double x = interval_gap(a.lower.x, a.upper.x, b.lower.x, b.upper.x);
+    const double y = interval_gap(a.lower.y, a.upper.y, b.lower.y, b.upper.y);
+    const double z = interval_gap(a.lower.z, a.upper.z, b.lower.z, b.upper.z);
+    return !(max2(x, max2(y, z)) > kTouchGap);
+}
+
 // b's leaf triangles mapped into a's frame, with their boxes.
 struct MappedLeaf {
     // Left uninitialised (a union member without an initialiser): `load` writes the first

@@ -733,6 +733,34 @@ TEST_CASE("mesh query: kTouchGap is the largest gap whose square rounds to 0") {
     }
 }
 
+TEST_CASE("mesh query: the one-branch box test gives the three-branch test's verdicts") {
+    // triangle_boxes_touch_at_once (the contacts' axis-aligned descent) against
+    // triangle_boxes_touch, on boxes whose bounds are drawn from values that make the gaps
+    // zero, signed zeros, kTouchGap and its neighbours, tiny and large.
+    const double g = mesh_detail::kTouchGap;
+    const double values[] = {-1.0, -0.5, -g, -0.0, 0.0, g, std::nextafter(g, 1.0), 0x1p-537, 1e-300, 0.5, 1.0,
+                             std::nextafter(1.0, 2.0)};
+    constexpr int kValues = sizeof(values) / sizeof(values[0]);
+    fixtures::Uniform uniform{4141};  // in [-1, 1)
+    const auto pick = [&] { return values[static_cast<int>((uniform() + 1.0) * 0.5 * kValues) % kValues]; };
+    int touching = 0, apart = 0;
+    for (int trial = 0; trial < 20000; ++trial) {
+        mesh_detail::TriangleBox a, b;
+        for (int k = 0; k < 3; ++k) {
+            for (mesh_detail::TriangleBox* box : {&a, &b}) {
+                const double p = pick(), q = pick();
+                box->lower[k] = q < p ? q : p;
+                box->upper[k] = q < p ? p : q;
+            }
+        }
+        const bool expected = mesh_detail::triangle_boxes_touch(a, b);
+        CHECK_EQ(mesh_detail::triangle_boxes_touch_at_once(a, b), expected);
+        (expected ? touching : apart) += 1;
+    }
+    CHECK(touching > 1000);
+    CHECK(apart > 1000);
+}
+
 TEST_CASE("mesh query: a turned pair's refitted descent lists every crossing pair") {
     // The contacts' descent of a turned pair finishes by axis-aligned boxes of b refitted in
     // a's frame once it is dense: from the root, mid-way (its own choice) and never, it must

@@ -76,6 +76,24 @@ def test_coplanar_and_degenerate_pairs():
     assert r.depth[3] == 0.0 and np.isnan(r.normal[3]).all()  # collinear: no axis at all
 
 
+def test_many_contacts_are_listed_in_face_order_and_capped_from_the_front():
+    """346 crossing pairs of two 5,120-face spheres (the core sorts 256 or more by their bytes):
+    listed once each in order of (face a, face b), and a cap keeps the first of that order."""
+    sphere = trimesh.creation.icosphere(subdivisions=4)
+    meshes = MeshSet.from_arrays([sphere, sphere], threads=1)
+    poses = np.stack([np.eye(4), np.eye(4)])
+    poses[1, :3, 3] = [0.7, 0.2, 0.1]
+    every = mesh_contacts_batch(meshes, poses, [[0, 1]], max_contacts=100_000)
+    keys = list(zip(every.contact_triangle_a.tolist(), every.contact_triangle_b.tolist()))
+    assert len(keys) == every.count[0] == 346
+    assert keys == sorted(set(keys))
+    assert max(a for a, _ in keys) > 256 and max(b for _, b in keys) > 256  # more than one byte
+    capped = mesh_contacts_batch(meshes, poses, [[0, 1]], max_contacts=300)
+    assert capped.count[0] == 346
+    kept = list(zip(capped.contact_triangle_a.tolist(), capped.contact_triangle_b.tolist()))
+    assert kept == keys[:300]
+
+
 def test_a_bar_through_a_box_face_is_its_end_deep():
     """The bar's end is 0.1 inside the box; its sides cross only the box's x = 1 face."""
     box, bar = _box([-1, -1, -1], [1, 1, 1]), _box([0.9, -0.5, -0.5], [3, 0.5, 0.5])
