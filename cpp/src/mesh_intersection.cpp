@@ -420,14 +420,11 @@ inline TriangleBox moved_box(const BvhNode& y, const Vec3& shift) {
 
 // Whether node x of a and node y of b (moved by `shift`, a's frame) may hold a triangle pair
 // whose boxes touch (triangle_boxes_touch): false only when a gap along an axis is positive
-// with a positive square (gap > kTouchGap). A triangle box lies inside its node's box, and the differences
-// round monotonically, so a triangle pair's gap there is at least the nodes' gap: that pair's
-// boxes do not touch either.
-// The axis test is triangle_boxes_touch's (mesh_query_detail.hpp), as is RefitB::touches'
-// below, written out on the nodes' floats: the three forms through one shared helper (an
-// interval test on doubles, or node boxes converted to TriangleBox) cost up to 1.0% and 1.6% more
-// instructions on bench_mesh_query's contact rows (session 29's review, callgrind), the same
-// decisions. Change the three together.
+// with a positive square (gap > kTouchGap). A triangle box lies inside its node's box, and the
+// differences round monotonically, so a triangle pair's gap there is at least the nodes' gap:
+// that pair's boxes do not touch either.
+// The test is triangle_boxes_touch_at_once's (interval_gap, gaps_touch: mesh_query_detail.hpp),
+// as is RefitB::touches' below, on the nodes' floats converted where they are read.
 inline bool aligned_boxes_touch(const BvhNode& x, const BvhNode& y, const Vec3& shift) {
     double gap[3];
     for (int k = 0; k < 3; ++k) {
@@ -435,7 +432,7 @@ inline bool aligned_boxes_touch(const BvhNode& x, const BvhNode& y, const Vec3& 
         const double upper_b = static_cast<double>(y.upper[k]) + shift[k];
         gap[k] = interval_gap(x.lower[k], x.upper[k], lower_b, upper_b);
     }
-    return !(max2(gap[0], max2(gap[1], gap[2])) > kTouchGap);
+    return gaps_touch(gap[0], gap[1], gap[2]);
 }
 
 // b's boxes in a's frame under rel.translation_only: its node boxes and triangle boxes as
@@ -522,7 +519,7 @@ struct RefitB {
         const TriangleBox& y = boxes[ib];
         double gap[3];
         for (int k = 0; k < 3; ++k) gap[k] = interval_gap(x.lower[k], x.upper[k], y.lower[k], y.upper[k]);
-        return !(max2(gap[0], max2(gap[1], gap[2])) > kTouchGap);
+        return gaps_touch(gap[0], gap[1], gap[2]);
     }
     TriangleBox leaf_box(std::int32_t ib) const { return boxes[ib]; }
     bool load(std::int32_t t, TriangleBox* box, Vec3* corners) const {

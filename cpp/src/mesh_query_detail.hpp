@@ -142,9 +142,8 @@ inline constexpr double kTouchGap = 0x1.6a09e667f3bccp-538;
 // triangle_box_squared_distance(a, b) == 0.0, stopping at the first axis that decides: the
 // sum is 0 exactly when every positive gap's square is (a sum of non-negative terms is 0 only
 // when each is, and a positive square rounds to a positive sum or to inf), i.e. when no gap is
-// above kTouchGap.
-// mesh_intersection.cpp's node tests (aligned_boxes_touch, RefitB::touches) repeat this test
-// on the nodes' floats, for speed: change them together.
+// above kTouchGap. The oriented descent's form; triangle_boxes_touch_at_once below is the
+// same verdict for the axis-aligned descent.
 inline bool triangle_boxes_touch(const TriangleBox& a, const TriangleBox& b) {
     for (int k = 0; k < 3; ++k) {
         double gap = a.lower[k] - b.upper[k];
@@ -164,16 +163,19 @@ inline double interval_gap(double lower_a, double upper_a, double lower_b, doubl
     return max2(lower_a - upper_b, lower_b - upper_a);
 }
 
-// triangle_boxes_touch's verdict for finite boxes with one branch where it has three, each
-// taken about half the time on a pair of curved surfaces: no axis's gap above kTouchGap, i.e.
-// not the largest. The contacts' axis-aligned descent (mesh_intersection.cpp) takes it, as do
-// its node tests on the nodes' floats (aligned_boxes_touch, RefitB::touches). A C++ test
+// Whether boxes whose interval_gap on the three axes are x, y and z touch: none above
+// kTouchGap, i.e. not the largest, one branch where an axis at a time takes three. Every
+// axis-aligned box test of the contacts' descent ends here (triangle_boxes_touch_at_once, and
+// on the nodes' floats aligned_boxes_touch and RefitB::touches, mesh_intersection.cpp).
+inline bool gaps_touch(double x, double y, double z) { return !(max2(x, max2(y, z)) > kTouchGap); }
+
+// triangle_boxes_touch's verdict for finite boxes in gaps_touch's one branch, where each of
+// that test's three is taken about half the time on a pair of curved surfaces. A C++ test
 // compares the two forms.
 inline bool triangle_boxes_touch_at_once(const TriangleBox& a, const TriangleBox& b) {
-    const double x = interval_gap(a.lower.x, a.upper.x, b.lower.x, b.upper.x);
-    const double y = interval_gap(a.lower.y, a.upper.y, b.lower.y, b.upper.y);
-    const double z = interval_gap(a.lower.z, a.upper.z, b.lower.z, b.upper.z);
-    return !(max2(x, max2(y, z)) > kTouchGap);
+    return gaps_touch(interval_gap(a.lower.x, a.upper.x, b.lower.x, b.upper.x),
+                      interval_gap(a.lower.y, a.upper.y, b.lower.y, b.upper.y),
+                      interval_gap(a.lower.z, a.upper.z, b.lower.z, b.upper.z));
 }
 
 // b's leaf triangles mapped into a's frame, with their boxes.

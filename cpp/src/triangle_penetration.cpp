@@ -278,6 +278,13 @@ TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool 
     return out;
 }
 
+namespace {
+
+// The feature pair (`triangle_feature_squared_distance`'s numbering) that the axis of `p`, a
+// `triangle_penetration(a, b, false)` of the same triangles, names: on a's normal b's corner
+// least along `p.normal` (the first of equal ones) against a's face, on b's normal a's corner
+// greatest along it against b's face, on an edge pair's cross product those two edges; -1
+// when `p.axis` is -1. `triangle_penetration_points` starts from it.
 int triangle_penetration_feature(const Vec3 a[3], const Vec3 b[3], const TrianglePenetration& p) {
     if (p.axis < 0) return -1;
     if (p.axis >= 2) return p.axis - 2;
@@ -296,8 +303,6 @@ int triangle_penetration_feature(const Vec3 a[3], const Vec3 b[3], const Triangl
     }
     return (p.axis == 0 ? 12 : 9) + deepest;
 }
-
-namespace {
 
 // The largest coordinate magnitude of a's and c's corners. Plain compares: a NaN corner is
 // passed over (and its NaN distances then fail any limit made of this).

@@ -132,7 +132,7 @@ struct MeshContact {
     /// two share where the descent ran that test (a corner of one on the other's plane, save
     /// where one lies in a coordinate plane that the other only touches), else midway between
     /// the closest points of the features its axis names when they are within 1e-12 of the
-    /// largest coordinate (`triangle_penetration_feature`), else a shared point
+    /// largest coordinate (`triangle_penetration_points`), else a shared point
     Vec3 point;
     /// >= 0: how far b's triangle reaches behind a's triangle's face, along a's unit face
     /// normal (p1 - p0) x (p2 - p0): max over b's corners q of n . (a's p0 - q). A translation

@@ -119,22 +119,16 @@ TrianglePenetration triangle_penetration(const Vec3 a[3], const Vec3 b[3], bool 
 /// The witness points of `p`, a `triangle_penetration(a, b, false)` of the same triangles (its
 /// depth, normal and axis): what `points` adds, for a caller that keeps the penetration and
 /// wants the points of some pairs only. b is moved by depth * normal (not at all for depth 0),
-/// to touch a, and the points are the closest points of the feature pair the axis names (`triangle_feature_squared_distance`): on a face normal, the
-/// other triangle's corner deepest along it (the first of equally deep corners) and its foot
-/// on the face; on an edge pair's cross product, the closest points of the two edges. Where
+/// to touch a, and the points are the closest points of the feature pair the axis names
+/// (`triangle_feature_squared_distance`): on a face normal, the other triangle's corner
+/// deepest along it (the first of equally deep corners) and its foot on the face; on an edge
+/// pair's cross product, the closest points of the two edges. Where
 /// that pair is not within 1e-12 of the largest coordinate magnitude (its corner's foot falls
 /// outside the face, or the edges do not meet: an axis tied with another up to rounding): for
 /// depth 0 a point the two share (`triangles_intersect`), else the closest points of a and
 /// moved b over all 15 feature pairs (Ericson 2004, 5.1.9). point_b is the point on moved b
 /// moved back.
 void triangle_penetration_points(const Vec3 a[3], const Vec3 b[3], TrianglePenetration& p);
-
-/// The feature pair (`triangle_feature_squared_distance`'s numbering) that the axis of `p`, a
-/// `triangle_penetration(a, b, false)` of the same triangles, names: on a's normal b's corner
-/// least along `p.normal` (the first of equal ones) against a's face, on b's normal a's corner
-/// greatest along it against b's face, on an edge pair's cross product those two edges; -1
-/// when `p.axis` is -1. `triangle_penetration_points` starts from it.
-int triangle_penetration_feature(const Vec3 a[3], const Vec3 b[3], const TrianglePenetration& p);
 
 /// Whether two triangles cross: their relative interiors (the open triangles) share a point.
 ///
