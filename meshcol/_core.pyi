@@ -210,14 +210,23 @@ def shape_pair_object(layout: int, kind_a: int, a: object, kind_b: int, b: objec
     One pair of shapes (primitives, or (n, 3) points by their hull; kind_a, kind_b their ShapeKind) as its single-pair result (layout as query_object; for intersects a bool); None when a shape or pose is not in the core's form, or for an invalid intersects pair.
     """
 
+class PackSeal:
+    """
+    pack_polytopes' word for its own index arrays (PackedConvexSet skips reading them again when handed them in its layout).
+    """
+
 class PackedConvexSet:
     """
     Packed convex shapes (the arrays of meshcol.collision.shapes.ConvexSet).
     """
 
-    def __init__(self, vertices: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], kinds: Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C', device='cpu', writable=False)], params: Annotated[NDArray[numpy.float64], dict(shape=(None, 4), order='C', device='cpu', writable=False)], adjacency_offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)] | None, adjacency: Annotated[NDArray[numpy.int32], dict(shape=(None,), order='C', device='cpu', writable=False)] | None, face_offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)] | None, face_normals: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)] | None, edge_pair_offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)] | None, edge_pairs: Annotated[NDArray[numpy.int32], dict(shape=(None, 2), order='C', device='cpu', writable=False)] | None) -> None: ...
+    def __init__(self, vertices: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], kinds: Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C', device='cpu', writable=False)], params: Annotated[NDArray[numpy.float64], dict(shape=(None, 4), order='C', device='cpu', writable=False)], adjacency_offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)] | None, adjacency: Annotated[NDArray[numpy.int32], dict(shape=(None,), order='C', device='cpu', writable=False)] | None, face_offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)] | None, face_normals: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)] | None, edge_pair_offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)] | None, edge_pairs: Annotated[NDArray[numpy.int32], dict(shape=(None, 2), order='C', device='cpu', writable=False)] | None, seal: PackSeal | None = None) -> None: ...
 
     def __len__(self) -> int: ...
+
+    @property
+    def sealed(self) -> bool:
+        """Whether the seal vouched for the index arrays (not read again)."""
 
     def query_object(self, layout: int, poses: object | None, pairs: object | None, threads: int, result_type: object) -> object:
         """
@@ -457,9 +466,9 @@ def exact_hull(points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), o
     Exact convex hull of (n, 3) points: (status, dimension, vertex indices (k,), faces (m, 3) into the vertices, equations (m, 4), normal (3,), volume, area, diagonal).
     """
 
-def pack_polytopes(points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], threads: int = 0) -> tuple[Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int32], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int32], dict(shape=(None, 2), order='C')]]:
+def pack_polytopes(points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], threads: int = 0) -> tuple[Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int32], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int32], dict(shape=(None, 2), order='C')], object]:
     """
-    Hulls of H point sets (shape h owns points[offsets[h]:offsets[h + 1]]) packed for a ConvexSet: (status (H,), vertices, offsets, adjacency_offsets, adjacency, face_offsets, face_normals, edge_pair_offsets, edge_pairs).
+    Hulls of H point sets (shape h owns points[offsets[h]:offsets[h + 1]]) packed for a ConvexSet: (status (H,), vertices, offsets, adjacency_offsets, adjacency, face_offsets, face_normals, edge_pair_offsets, edge_pairs, seal); the seal, passed to PackedConvexSet with these arrays, spares it reading their indices again.
     """
 
 class FitStatus(enum.Enum):

@@ -3,8 +3,10 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/tuple.h>
+#include <nanobind/stl/unique_ptr.h>
 
 #include <cstdint>
+#include <memory>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -12,6 +14,7 @@
 #include "meshcol/defaults.hpp"
 #include "meshcol/hull.hpp"
 #include "ndarray.hpp"
+#include "packed_convex_set.hpp"
 
 namespace nb = nanobind;
 using namespace nb::literals;
@@ -103,19 +106,40 @@ void bind_hull(nb::module_& m) {
             const size_t v = p.vertices.size() / 3, k = p.adjacency.size();
             const size_t f = p.face_normals.size() / 3, e = p.edge_pairs.size() / 2;
             const size_t hs = static_cast<size_t>(h);
+            // The seal keeps the index arrays it vouches for (packed_convex_set.hpp).
+            auto seal = std::make_unique<PackSeal>();
+            seal->vertex_count = static_cast<std::int64_t>(v);
+            seal->adjacency_count = static_cast<std::int64_t>(k);
+            seal->edge_count = static_cast<std::int64_t>(e);
+            seal->offsets = p.offsets;
+            seal->edge_pair_offsets = p.edge_pair_offsets;
+            auto adjacency_offsets =
+                vector_array<Out<std::int64_t, -1>>(std::move(p.adjacency_offsets), v + 1, 0);
+            auto adjacency = vector_array<Out<std::int32_t, -1>>(std::move(p.adjacency), k, 0);
+            auto edge_pairs = vector_array<Out<std::int32_t, -1, 2>>(std::move(p.edge_pairs), e, 2);
+            seal->adjacency_offsets_data = adjacency_offsets.data();
+            seal->adjacency_data = adjacency.data();
+            seal->edge_pairs_data = edge_pairs.data();
+            // As Python objects (typed for the stub), so that the seal holds the very arrays.
+            auto adjacency_offsets_object = adjacency_offsets.cast();
+            auto adjacency_object = adjacency.cast();
+            auto edge_pairs_object = edge_pairs.cast();
+            seal->adjacency_offsets = adjacency_offsets_object;
+            seal->adjacency = adjacency_object;
+            seal->edge_pairs = edge_pairs_object;
             return std::make_tuple(
                 vector_array<Out<std::int8_t, -1>>(std::move(status), hs, 0),
                 vector_array<Out<double, -1, 3>>(std::move(p.vertices), v, 3),
                 vector_array<Out<std::int64_t, -1>>(std::move(p.offsets), hs + 1, 0),
-                vector_array<Out<std::int64_t, -1>>(std::move(p.adjacency_offsets), v + 1, 0),
-                vector_array<Out<std::int32_t, -1>>(std::move(p.adjacency), k, 0),
+                adjacency_offsets_object, adjacency_object,
                 vector_array<Out<std::int64_t, -1>>(std::move(p.face_offsets), hs + 1, 0),
                 vector_array<Out<double, -1, 3>>(std::move(p.face_normals), f, 3),
                 vector_array<Out<std::int64_t, -1>>(std::move(p.edge_pair_offsets), hs + 1, 0),
-                vector_array<Out<std::int32_t, -1, 2>>(std::move(p.edge_pairs), e, 2));
+                edge_pairs_object, nb::cast(std::move(seal)));
         },
         "points"_a, "offsets"_a, "threads"_a = 0,
         "Hulls of H point sets (shape h owns points[offsets[h]:offsets[h + 1]]) packed for a "
         "ConvexSet: (status (H,), vertices, offsets, adjacency_offsets, adjacency, "
-        "face_offsets, face_normals, edge_pair_offsets, edge_pairs).");
+        "face_offsets, face_normals, edge_pair_offsets, edge_pairs, seal); the seal, passed "
+        "to PackedConvexSet with these arrays, spares it reading their indices again.");
 }

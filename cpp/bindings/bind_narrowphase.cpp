@@ -250,16 +250,21 @@ void bind_narrowphase(nb::module_& m) {
           "ShapeKind) as its single-pair result (layout as query_object; for intersects a "
           "bool); None when a shape or pose is not in the core's form, or for an invalid "
           "intersects pair.");
+    nb::class_<PackSeal>(m, "PackSeal",
+                         "pack_polytopes' word for its own index arrays (PackedConvexSet "
+                         "skips reading them again when handed them in its layout).");
     nb::class_<PackedConvexSet>(m, "PackedConvexSet",
                                 "Packed convex shapes (the arrays of meshcol.collision.shapes."
                                 "ConvexSet).")
         .def(nb::init<Points, Index64, Kinds, Params, std::optional<Index64>,
                       std::optional<Index32>, std::optional<Index64>, std::optional<Points>,
-                      std::optional<Index64>, std::optional<Pairs32>>(),
+                      std::optional<Index64>, std::optional<Pairs32>, const PackSeal*>(),
              "vertices"_a, "offsets"_a, "kinds"_a, "params"_a, "adjacency_offsets"_a.none(),
              "adjacency"_a.none(), "face_offsets"_a.none(), "face_normals"_a.none(),
-             "edge_pair_offsets"_a.none(), "edge_pairs"_a.none())
+             "edge_pair_offsets"_a.none(), "edge_pairs"_a.none(), "seal"_a.none() = nb::none())
         .def("__len__", &PackedConvexSet::size)
+        .def_prop_ro("sealed", &PackedConvexSet::sealed,
+                     "Whether the seal vouched for the index arrays (not read again).")
         .def("query_object", &query_object, "layout"_a, "poses"_a.none(), "pairs"_a.none(),
              "threads"_a, "result_type"_a,
              "One batch as result_type (layout 0 distance, 1 penetration, 2 intersects, 3 "

@@ -462,7 +462,15 @@ def pack_hull_slices(points: np.ndarray, offsets: np.ndarray, threads: int = 0) 
     ``offsets`` (H + 1,) int64 (a reader's arrays, no copy per set)."""
     from meshcol._native import core
 
-    return PackedHulls(*core.pack_polytopes(points, offsets, int(threads)))
+    made = core.pack_polytopes(points, offsets, int(threads))
+    packed, seal = PackedHulls(*made[:9]), made[9]
+    # The core's word that the index arrays are the ones it wrote, which a ConvexSet made from
+    # them passes back instead of reading every index again. Not a field (the fields are the
+    # arrays); the arrays it vouches for are read-only from here on, as a ConvexSet's are.
+    for index in (packed.adjacency_offsets, packed.adjacency, packed.edge_pairs):
+        index.setflags(write=False)
+    object.__setattr__(packed, "_seal", seal)
+    return packed
 
 
 def _flat_hull(exact: ExactHull, max_vertices: int | None) -> HullResult:

@@ -175,14 +175,19 @@ class ConvexSet:
         self._hold(status, {name: _copied(arrays[name]) for name in self._FIELDS})
 
     @classmethod
-    def _adopt(cls, *, hull_status: np.ndarray | None = None, **arrays: np.ndarray) -> ConvexSet:
+    def _adopt(
+        cls, *, hull_status: np.ndarray | None = None, seal: Any = None, **arrays: np.ndarray
+    ) -> ConvexSet:
         """A set over arrays its caller made for it and keeps no other reference to: not
-        copied (a hull packing's arrays can be hundreds of megabytes)."""
+        copied (a hull packing's arrays can be hundreds of megabytes). ``seal``: the packing's
+        (:func:`~meshcol.collision.hull.pack_hull_slices`), when the index arrays are its."""
         self = cls.__new__(cls)
-        self._hold(hull_status, arrays)
+        self._hold(hull_status, arrays, seal)
         return self
 
-    def _hold(self, hull_status: np.ndarray | None, arrays: dict[str, np.ndarray]) -> None:
+    def _hold(
+        self, hull_status: np.ndarray | None, arrays: dict[str, np.ndarray], seal: Any = None
+    ) -> None:
         from meshcol._native import core
 
         for name in self._FIELDS:
@@ -200,6 +205,7 @@ class ConvexSet:
             self.face_normals,
             self.edge_pair_offsets,
             self.edge_pairs,
+            seal,
         )
         self._edge_classes: tuple[np.ndarray, np.ndarray] | None = None
 
@@ -285,6 +291,7 @@ class ConvexSet:
             edge_pair_offsets=spread(packed.edge_pair_offsets),
             edge_pairs=packed.edge_pairs,
             hull_status=status,
+            seal=getattr(packed, "_seal", None),
         )
 
     @classmethod

@@ -247,3 +247,91 @@ def test_a_large_set_checks_every_shape_s_indices(at: int) -> None:
     edges[made.edge_pair_offsets[at], 1] = -1
     with pytest.raises(ValueError, match="edge_pairs holds an index out of range"):
         ConvexSet(**dict(arrays, edge_pairs=edges))
+
+
+def test_a_set_made_from_points_is_vouched_for_by_its_packing() -> None:
+    # ConvexSet.from_vertices / from_shapes hand the packing's own index arrays, in its
+    # layout (primitives between the polytopes own none), with the packing's seal: the set
+    # does not read their indices again. The same arrays copied are checked, and the two
+    # sets answer alike.
+    rng = np.random.default_rng(5)
+    shapes: list[object] = [Sphere(0.5), rng.normal(size=(12, 3)), Box((1.0, 2.0, 0.5))]
+    shapes += [ellipsoid_points(rng, 20), rng.normal(size=(7, 3))]
+    for made in (
+        ConvexSet.from_vertices(rng.normal(size=(30, 16, 3))),
+        ConvexSet.from_shapes(shapes),
+    ):
+        assert made._core.sealed
+        copied = ConvexSet(
+            **{name: getattr(made, name) for name in ConvexSet._FIELDS},
+            hull_status=made.hull_status,
+        )
+        assert not copied._core.sealed
+        count = len(made)
+        poses = np.tile(np.eye(4), (count, 1, 1))
+        poses[:, :3, 3] = rng.uniform(-1.0, 1.0, size=(count, 3))
+        pairs = np.array([(i, j) for i in range(count) for j in range(i + 1, count)])
+        ours, theirs = (
+            penetration_batch(made, poses, pairs),
+            penetration_batch(copied, poses, pairs),
+        )
+        assert ours.depth.tobytes() == theirs.depth.tobytes()
+        assert ours.normal.tobytes() == theirs.normal.tobytes()
+    packed = pack_hulls(rng.normal(size=(3, 10, 3)))
+    for index in (packed.adjacency_offsets, packed.adjacency, packed.edge_pairs):
+        assert not index.flags.writeable
+
+
+def test_a_seal_vouches_only_for_its_own_arrays_in_its_own_layout() -> None:
+    # Anything else is checked as before: another array (a copy with a wrong index), offsets
+    # that move a shape's boundary (its indices then reach past its vertices), a polytope
+    # called a primitive, another packing's seal.
+    from meshcol._native import core
+
+    rng = np.random.default_rng(6)
+    points = rng.normal(size=(4, 10, 3))
+    packed = pack_hulls(points)
+    seal = packed._seal  # type: ignore[attr-defined]
+
+    def made(**changed: np.ndarray) -> object:
+        arrays = dict(
+            vertices=packed.vertices,
+            offsets=packed.offsets,
+            kinds=np.zeros(4, np.int8),
+            params=np.zeros((4, 4)),
+            adjacency_offsets=packed.adjacency_offsets,
+            adjacency=packed.adjacency,
+            face_offsets=packed.face_offsets,
+            face_normals=packed.face_normals,
+            edge_pair_offsets=packed.edge_pair_offsets,
+            edge_pairs=packed.edge_pairs,
+        )
+        arrays.update(changed)
+        return core.PackedConvexSet(**arrays, seal=seal)
+
+    assert made().sealed  # type: ignore[attr-defined]
+    adjacency = packed.adjacency.copy()
+    adjacency[0] = 10
+    with pytest.raises(ValueError, match="adjacency holds an index out of range"):
+        made(adjacency=adjacency)
+    offsets = packed.offsets.copy()
+    offsets[1] -= 1
+    with pytest.raises(ValueError, match="adjacency holds an index out of range"):
+        made(offsets=offsets)
+    kinds = np.zeros(4, np.int8)
+    kinds[2] = 1
+    assert not made(kinds=kinds).sealed  # type: ignore[attr-defined]
+    other = pack_hulls(points)
+    assert not core.PackedConvexSet(
+        packed.vertices,
+        packed.offsets,
+        np.zeros(4, np.int8),
+        np.zeros((4, 4)),
+        packed.adjacency_offsets,
+        packed.adjacency,
+        packed.face_offsets,
+        packed.face_normals,
+        packed.edge_pair_offsets,
+        packed.edge_pairs,
+        other._seal,  # type: ignore[attr-defined]
+    ).sealed
