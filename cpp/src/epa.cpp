@@ -10,12 +10,6 @@ namespace meshcol {
 
 namespace {
 
-#if defined(__GNUC__) && !defined(__clang__)
-#define MESHCOL_EPA_UNROLL_4 _Pragma("GCC unroll 4")
-#else
-#define MESHCOL_EPA_UNROLL_4
-#endif
-
 struct EpaFace {
     int v[3];        // counter-clockwise seen from outside
     int adj[3];      // face across edge (v[e], v[e + 1])
@@ -555,12 +549,9 @@ EpaResult expand_to_depth(MinkowskiDifference& md, Polytope& poly, const EpaOpti
     int last_face = -1;
     int it = 0;
     for (; it < opt.max_iterations; ++it) {
-        // The closest face: a linear scan over a few dozen slots (dead ones hold +inf),
-        // unrolled by GCC (fewer instructions a slot; the same compares in the same order,
-        // without branches: unrolled by hand, GCC branches on three of the four).
+        // The closest face: a linear scan over a few dozen slots (dead ones hold +inf).
         int best_face = -1;
         double best = std::numeric_limits<double>::infinity();
-        MESHCOL_EPA_UNROLL_4
         for (int f = 0; f < poly.face_count; ++f)
             if (poly.distance[f] < best) {
                 best = poly.distance[f];
