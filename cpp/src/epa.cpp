@@ -107,13 +107,21 @@ struct Polytope {
         face.v[1] = j;
         face.v[2] = k;
         face.alive = true;
+        // cross(b - a, c - a), squared_norm and dot written out in their order: the same
+        // numbers, in scalar registers (GCC's vectorised form of the Vec3 code shuffles and
+        // spills).
         const Vec3& a = vertices[i].w;
-        const Vec3 n = cross(vertices[j].w - a, vertices[k].w - a);
-        const double nn = squared_norm(n);
+        const Vec3& b = vertices[j].w;
+        const Vec3& c = vertices[k].w;
+        const double ux = b.x - a.x, uy = b.y - a.y, uz = b.z - a.z;
+        const double vx = c.x - a.x, vy = c.y - a.y, vz = c.z - a.z;
+        const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
+        const double nn = nx * nx + ny * ny + nz * nz;
         if (nn > 0.0 && std::isfinite(nn)) {
-            face.normal = n;
-            face.offset = dot(n, a);
-            distance[f] = face.offset * std::fabs(face.offset) / nn;
+            const double offset = nx * a.x + ny * a.y + nz * a.z;
+            face.normal = Vec3{nx, ny, nz};
+            face.offset = offset;
+            distance[f] = offset * std::fabs(offset) / nn;
         } else {
             face.normal = Vec3{};
             face.offset = 0.0;
