@@ -152,8 +152,9 @@ inline Plane plane_of_normal(const Vec3& n, bool bounded, const Vec3& a) {
     return plane;
 }
 
-/// face_plane's case of a sharp first corner (quickhull.cpp), out of line.
-Plane face_plane_at_widest(const Vec3& a, const Vec3& b, const Vec3& c);
+/// face_plane's case of a sharp first corner (quickhull.cpp), out of line: `uu` and `vv` are
+/// the squared lengths of b - a and c - a, which face_plane's test has just computed.
+Plane face_plane_at_widest(const Vec3& a, const Vec3& b, const Vec3& c, double uu, double vv);
 
 inline Plane face_plane(const Vec3& a, const Vec3& b, const Vec3& c) {
     // triangle_normal's fast case spelled out in scalars (the same operations in the same
@@ -162,8 +163,8 @@ inline Plane face_plane(const Vec3& a, const Vec3& b, const Vec3& c) {
     const double vx = c.x - a.x, vy = c.y - a.y, vz = c.z - a.z;
     const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
     const double nn = nx * nx + ny * ny + nz * nz;
-    if (!(16.0 * nn >= (ux * ux + uy * uy + uz * uz) * (vx * vx + vy * vy + vz * vz)))
-        return face_plane_at_widest(a, b, c);
+    const double uu = ux * ux + uy * uy + uz * uz, vv = vx * vx + vy * vy + vz * vz;
+    if (!(16.0 * nn >= uu * vv)) return face_plane_at_widest(a, b, c, uu, vv);
     constexpr double kPlaneFilter = 1e-13;
     // nn is a sum of squares: never negative, so the square root needs no errno path.
     const double len = __builtin_sqrt(nn);

@@ -70,10 +70,28 @@ Vec3 triangle_normal_at_widest(const Vec3& a, const Vec3& b, const Vec3& c, bool
     return accurate_cross(*o, *p, *q);
 }
 
-Plane face_plane_at_widest(const Vec3& a, const Vec3& b, const Vec3& c) {
-    bool bounded = false;
-    const Vec3 n = triangle_normal_at_widest(a, b, c, bounded);
-    return plane_of_normal(n, bounded, a);
+// triangle_normal_at_widest's choice with the squared lengths face_plane has computed: ab of
+// b - a and ca of c - a (a - c's, the same bits), so only bc is new. At the corner a the plain
+// product is face_plane's own, which failed the test: the compensated one, unbounded.
+Plane face_plane_at_widest(const Vec3& a, const Vec3& b, const Vec3& c, double ab, double ca) {
+    const double bc = squared_norm(c - b);
+    Vec3 u, v;
+    double uu, vv;
+    const Vec3 *o, *p, *q;  // o: the corner; o p q counter-clockwise
+    if (ab >= bc && ab >= ca) {
+        o = &c, p = &a, q = &b;
+        uu = ca, vv = bc;
+    } else if (bc >= ca) {
+        return plane_of_normal(accurate_cross(a, b, c), false, a);
+    } else {
+        o = &b, p = &c, q = &a;
+        uu = bc, vv = ab;
+    }
+    u = *p - *o, v = *q - *o;
+    const Vec3 n = cross(u, v);
+    // sin(angle) >= 1/4: the plain product is within a few ulps of the exact one.
+    const bool bounded = 16.0 * squared_norm(n) >= uu * vv;
+    return plane_of_normal(bounded ? n : accurate_cross(*o, *p, *q), bounded, a);
 }
 
 // The first point of `subset` of least and of greatest x, y and z, into extreme[0 .. 6) in
