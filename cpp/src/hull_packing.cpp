@@ -358,9 +358,15 @@ bool adjacency_from_masks(int count, PackScratch& s, ChunkPack& out) {
     std::int32_t* list = out.adjacency.data() + first;
     for (size_t i = 0; i < n; ++i) {
         std::int32_t* const end = list + counts[i];
+        // The padding (fewer than four) first, as the list's last block whole: the neighbours
+        // then overwrite the part of it they fill (no loop whose length follows the degree).
+        if (counts[i] != 0) {
+            const auto self = static_cast<std::int32_t>(i);
+            end[-4] = self, end[-3] = self, end[-2] = self, end[-1] = self;
+        }
         for (std::uint64_t m = mask[i]; m != 0; m &= m - 1)
             *list++ = static_cast<std::int32_t>(__builtin_ctzll(m));
-        while (list < end) *list++ = static_cast<std::int32_t>(i);
+        list = end;
     }
     return true;
 }
