@@ -8,6 +8,7 @@
 // Quickhull: Barber, Dobkin and Huhdanpaa 1996; the horizon as one depth-first walk,
 // Gregorius 2014, "Implementing Quickhull".
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -371,22 +372,30 @@ Build quickhull_flat(Workspace& w, const std::vector<int>& subset, Triangulation
     // and growing it again for the next hull would zero what is about to be written.
     if (w.edge_scratch.size() < 3 * static_cast<size_t>(m)) w.edge_scratch.resize(3 * static_cast<size_t>(m));
     TriangulationEdge* edges = w.edge_scratch.data();
+    // The arrays through raw pointers (the stores below would otherwise reload each vector's).
+    std::array<int, 3>* tri = out.tri.data();
+    Vec3* normal = out.normal.data();
+    double* offset = out.offset.data();
+    double* area2 = out.area2.data();
+    const int* slot_index = index.data();
     size_t count = 0;
+    int t = 0;  // the triangle of the next live face
     for (size_t i = 0; i < s.face_count; ++i) {
         const FlatFace& f = faces[i];
         if (!f.alive) continue;
-        const int t = index[i];
-        out.tri[t] = {f.v[0], f.v[1], f.v[2]};
-        out.normal[t] = Vec3{f.nx, f.ny, f.nz};
-        out.offset[t] = f.offset;
-        out.area2[t] = f.area2;
+        tri[t] = {f.v[0], f.v[1], f.v[2]};
+        normal[t] = Vec3{f.nx, f.ny, f.nz};
+        offset[t] = f.offset;
+        area2[t] = f.area2;
         for (int e = 0; e < 3; ++e) {
             const int g = f.n[e];
-            if (static_cast<unsigned>(g) >= slots || index[g] < 0) return Build::FAILED;
-            const int j = index[g];
-            edges[count] = {t, e, j, f.s[e]};
+            if (static_cast<unsigned>(g) >= slots || slot_index[g] < 0) return Build::FAILED;
+            const int j = slot_index[g];
+            TriangulationEdge& edge = edges[count];
+            edge.i = t, edge.e = e, edge.j = j, edge.k = f.s[e];
             count += j > t;
         }
+        ++t;
     }
     out.edges.assign(edges, edges + count);
     return Build::OK;
