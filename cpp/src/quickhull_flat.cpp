@@ -167,15 +167,21 @@ bool find_horizon(Flat& s, Workspace& w, int seed, int q, unsigned stamp) {
     w.edge_count = ne;
     const size_t h = ne;
     if (h < 3) return false;
+    // One simple loop: each edge ends where the next begins (the last where the first does),
+    // and no vertex begins two edges. Checked without a branch an edge (a broken loop is rare).
     int* mark = w.mark.data();
     const int current = static_cast<int>(stamp);
-    for (size_t k = 0; k < h; ++k) {
-        const HorizonEdge& following = edges[k + 1 < h ? k + 1 : 0];
-        if (edges[k].b != following.a) return false;
-        if (mark[edges[k].a] == current) return false;
-        mark[edges[k].a] = current;
+    int broken = edges[h - 1].b ^ edges[0].a;
+    int a = edges[0].a;
+    for (size_t k = 1; k < h; ++k) {
+        const int next = edges[k].a;
+        broken |= (edges[k - 1].b ^ next) | (mark[a] == current);
+        mark[a] = current;
+        a = next;
     }
-    return true;
+    broken |= mark[a] == current;
+    mark[a] = current;
+    return broken == 0;
 }
 
 // quickhull.cpp's cone: the visible faces die (their slots to the free list), the horizon is
