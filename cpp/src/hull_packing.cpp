@@ -623,7 +623,9 @@ PackedPolytopes pack_polytopes(const Vec3* points, const std::int64_t* offsets, 
     // On threads: chunks of consecutive shapes of about kChunkPoints points (their arrays stay
     // in the cache until they are committed), and about 8 a thread (handed out dynamically).
     // The result never depends on the chunks or the threads: their arrays are joined in order.
-    constexpr long long kChunkPoints = 1 << 14;
+    // At 64 points a shape a chunk's arrays are about 0.55 MB (2.2 MB at 2^14 points, more than
+    // a core's L2 with the result's room zeroed beside them: 2-4% more CPU, session 32).
+    constexpr long long kChunkPoints = 1 << 12;
     const long long total = shapes > 0 ? offsets[shapes] - offsets[0] : 0;
     const long long per_shape = std::max<long long>(1, total / std::max<long long>(shapes, 1));
     const long long chunk = std::min(std::max<long long>(1, kChunkPoints / per_shape),
