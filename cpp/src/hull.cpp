@@ -253,8 +253,15 @@ const SortKey* sort_points(const Vec3* points, Workspace& w) {
     std::fill(taken, taken + n, 0);
     std::vector<SortKey>& sorted = w.sorted_keys;
     sorted.resize(n);
-    // Points of equal x share a count: they fill its run in index order.
-    for (size_t i = 0; i < n; ++i) sorted[static_cast<size_t>(below[i] + taken[below[i]]++)] = keys[i];
+    // Points of equal x share a count: they fill its run in index order (a count taken twice
+    // says there is such a run; without one, the order is complete).
+    int shared = 0;
+    for (size_t i = 0; i < n; ++i) {
+        const int place = below[i];
+        shared |= taken[place];
+        sorted[static_cast<size_t>(place + taken[place]++)] = keys[i];
+    }
+    if (shared == 0) return sorted.data();
     for (size_t first = 0; first + 1 < n;) {
         size_t last = first + 1;
         while (last < n && sorted[last].x == sorted[first].x) ++last;
