@@ -2,6 +2,7 @@
 // dimension: Quickhull's triangulation (quickhull.cpp) with its coplanar planes merged, a
 // 2-D hull by the monotone chain, a segment or a point.
 #include <algorithm>
+#include <array>
 #include <climits>
 #include <cstring>
 #include <cmath>
@@ -132,12 +133,18 @@ void planes_of(Workspace& w, const Triangulation& t, Planes& out) {
     std::vector<int>& parent = w.parent;
     constexpr int kFar[3] = {2, 0, 1};  // the corner opposite edge e
     bool merged = false;
+    // Raw pointers: the merge's calls would otherwise make the loop reload every vector's.
+    const std::array<int, 3>* tri = t.tri.data();
+    const Vec3* normal = t.normal.data();
+    const double* offset = t.offset.data();
+    const Vec3* p = w.p.data();
+    const double eps = w.eps;
     for (const TriangulationEdge& g : t.edges) {
         if (g.k < 0) continue;
         const int i = g.i, j = g.j;
-        const int far_i = t.tri[i][kFar[g.e]], far_j = t.tri[j][kFar[g.k]];
-        const bool coplanar = std::fabs(dot(t.normal[i], w.p[far_j]) - t.offset[i]) <= w.eps &&
-                              std::fabs(dot(t.normal[j], w.p[far_i]) - t.offset[j]) <= w.eps;
+        const int far_i = tri[i][kFar[g.e]], far_j = tri[j][kFar[g.k]];
+        const bool coplanar = std::fabs(dot(normal[i], p[far_j]) - offset[i]) <= eps &&
+                              std::fabs(dot(normal[j], p[far_i]) - offset[j]) <= eps;
         if (!coplanar) continue;
         if (!merged) {
             parent.resize(m);
