@@ -2,6 +2,7 @@
 // dimension: Quickhull's triangulation (quickhull.cpp) with its coplanar planes merged, a
 // 2-D hull by the monotone chain, a segment or a point.
 #include <algorithm>
+#include <array>
 #include <climits>
 #include <cstring>
 #include <cmath>
@@ -132,12 +133,18 @@ void planes_of(Workspace& w, const Triangulation& t, Planes& out) {
     std::vector<int>& parent = w.parent;
     constexpr int kFar[3] = {2, 0, 1};  // the corner opposite edge e
     bool merged = false;
+    // Raw pointers: the merge's calls would otherwise make the loop reload every vector's.
+    const std::array<int, 3>* tri = t.tri.data();
+    const Vec3* normal = t.normal.data();
+    const double* offset = t.offset.data();
+    const Vec3* p = w.p.data();
+    const double eps = w.eps;
     for (const TriangulationEdge& g : t.edges) {
         if (g.k < 0) continue;
         const int i = g.i, j = g.j;
-        const int far_i = t.tri[i][kFar[g.e]], far_j = t.tri[j][kFar[g.k]];
-        const bool coplanar = std::fabs(dot(t.normal[i], w.p[far_j]) - t.offset[i]) <= w.eps &&
-                              std::fabs(dot(t.normal[j], w.p[far_i]) - t.offset[j]) <= w.eps;
+        const int far_i = tri[i][kFar[g.e]], far_j = tri[j][kFar[g.k]];
+        const bool coplanar = std::fabs(dot(normal[i], p[far_j]) - offset[i]) <= eps &&
+                              std::fabs(dot(normal[j], p[far_i]) - offset[j]) <= eps;
         if (!coplanar) continue;
         if (!merged) {
             parent.resize(m);
@@ -168,19 +175,46 @@ bool lexicographic_less(const Vec3& a, const Vec3& b) {
     return a.z < b.z;
 }
 
-// How many of x[0 .. n) are below each x[i], into below[i]: every pair compared, two x[i] at a
-// time against two x[j] in SSE2 lanes (a lane's compare is the scalar one), no branch on
-// the data.
+// How many of x[0 .. n) are below each x[i], into below[i]: every pair compared, four (then
+// two) x[i] at a time against two x[j] in SSE2 lanes (a lane's compare is the scalar one), no
+// branch on the data.
 void count_below(const double* x, size_t n, int* below) {
     size_t i = 0;
 #if defined(__SSE2__)
     const size_t pairs = n & ~size_t{1};
+    // A true compare is all ones, -1: subtracted, it counts. Four x[i] share each load of x[j].
+    for (; i + 3 < n; i += 4) {
+        const __m128d a = _mm_set1_pd(x[i]), b = _mm_set1_pd(x[i + 1]);
+        const __m128d c = _mm_set1_pd(x[i + 2]), d = _mm_set1_pd(x[i + 3]);
+        __m128i count_a = _mm_setzero_si128(), count_b = _mm_setzero_si128();
+        __m128i count_c = _mm_setzero_si128(), count_d = _mm_setzero_si128();
+        for (size_t j = 0; j < pairs; j += 2) {
+            const __m128d v = _mm_loadu_pd(x + j);
+            count_a = _mm_sub_epi64(count_a, _mm_castpd_si128(_mm_cmplt_pd(v, a)));
+            count_b = _mm_sub_epi64(count_b, _mm_castpd_si128(_mm_cmplt_pd(v, b)));
+            count_c = _mm_sub_epi64(count_c, _mm_castpd_si128(_mm_cmplt_pd(v, c)));
+            count_d = _mm_sub_epi64(count_d, _mm_castpd_si128(_mm_cmplt_pd(v, d)));
+        }
+        std::int64_t ca[2], cb[2], cc[2], cd[2];
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(ca), count_a);
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(cb), count_b);
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(cc), count_c);
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(cd), count_d);
+        std::int64_t ra = ca[0] + ca[1], rb = cb[0] + cb[1], rc = cc[0] + cc[1], rd = cd[0] + cd[1];
+        if (pairs < n) {
+            const double last = x[pairs];
+            ra += last < x[i], rb += last < x[i + 1], rc += last < x[i + 2], rd += last < x[i + 3];
+        }
+        below[i] = static_cast<int>(ra);
+        below[i + 1] = static_cast<int>(rb);
+        below[i + 2] = static_cast<int>(rc);
+        below[i + 3] = static_cast<int>(rd);
+    }
     for (; i + 1 < n; i += 2) {
         const __m128d a = _mm_set1_pd(x[i]), b = _mm_set1_pd(x[i + 1]);
         __m128i count_a = _mm_setzero_si128(), count_b = _mm_setzero_si128();
         for (size_t j = 0; j < pairs; j += 2) {
             const __m128d v = _mm_loadu_pd(x + j);
-            // A true compare is all ones, -1: subtracted, it counts.
             count_a = _mm_sub_epi64(count_a, _mm_castpd_si128(_mm_cmplt_pd(v, a)));
             count_b = _mm_sub_epi64(count_b, _mm_castpd_si128(_mm_cmplt_pd(v, b)));
         }
@@ -226,8 +260,15 @@ const SortKey* sort_points(const Vec3* points, Workspace& w) {
     std::fill(taken, taken + n, 0);
     std::vector<SortKey>& sorted = w.sorted_keys;
     sorted.resize(n);
-    // Points of equal x share a count: they fill its run in index order.
-    for (size_t i = 0; i < n; ++i) sorted[static_cast<size_t>(below[i] + taken[below[i]]++)] = keys[i];
+    // Points of equal x share a count: they fill its run in index order (a count taken twice
+    // says there is such a run; without one, the order is complete).
+    int shared = 0;
+    for (size_t i = 0; i < n; ++i) {
+        const int place = below[i];
+        shared |= taken[place];
+        sorted[static_cast<size_t>(place + taken[place]++)] = keys[i];
+    }
+    if (shared == 0) return sorted.data();
     for (size_t first = 0; first + 1 < n;) {
         size_t last = first + 1;
         while (last < n && sorted[last].x == sorted[first].x) ++last;
@@ -285,6 +326,7 @@ struct Scaled {
     double max_abs = 0.0;  // of the points, before scaling
     int exponent = 0;
     Vec3 lo, hi, sum;  // scaled
+    int extreme[6] = {0, 0, 0, 0, 0, 0};  // axis_extremes of all the points (the box's corners)
 };
 
 // The hull of points already checked finite and in range, w.p holding them scaled.
@@ -328,7 +370,7 @@ void compute(const Vec3* points, long long n, const Scaled& scaled, Workspace& w
     int extreme[6], start[4];
     bool solid = false;
     if (n >= 4 && static_cast<size_t>(n) < kFilterMinPoints) {
-        axis_extremes(w.p, all, extreme);
+        std::copy(scaled.extreme, scaled.extreme + 6, extreme);  // axis_extremes(w.p, all)
         solid = clearly_solid_among(w.p.data(), extreme, 6, diagonal);
     }
     const bool started =
@@ -567,7 +609,8 @@ void hull_with(const Vec3* points, long long n, Workspace& w, Analysis& analysis
     const SortKey* order = sort_points(points, w);
     // The unique points in order, and in the same pass scaled into w.p by a power of two
     // (exact: the hull of the scaled points is the hull of the points; a duplicate has the
-    // largest coordinate of its twin), with their bounding box and sum.
+    // largest coordinate of its twin), with their bounding box, the first point at each of
+    // its sides (axis_extremes's answer) and their sum.
     Scaled scaled;
     scaled.max_abs = largest;
     if (largest > 0.0) std::frexp(largest, &scaled.exponent);
@@ -581,6 +624,7 @@ void hull_with(const Vec3* points, long long n, Workspace& w, Analysis& analysis
     Vec3* p = w.p.data();
     const Vec3 zero{0.0, 0.0, 0.0};
     Vec3 lo = (points[order[0].index] + zero) * to_unit, hi = lo, sum{};
+    int* extreme = scaled.extreme;  // all 0: the first point
     size_t m = 0;
     for (size_t i = 0; i < count; ++i) {
         const int k = order[i].index;
@@ -590,10 +634,18 @@ void hull_with(const Vec3* points, long long n, Workspace& w, Analysis& analysis
         index[m] = k;
         const Vec3 s = q * to_unit;
         p[m] = s;
-        for (int c = 0; c < 3; ++c) {
-            lo[c] = s[c] < lo[c] ? s[c] : lo[c];
-            hi[c] = s[c] > hi[c] ? s[c] : hi[c];
-        }
+        // The components by name (Vec3's operator[] selects among them with compares); a
+        // strict compare keeps the first of equal extremes, as axis_extremes does.
+        const int at = static_cast<int>(m);
+        const bool below_x = s.x < lo.x, above_x = s.x > hi.x;
+        const bool below_y = s.y < lo.y, above_y = s.y > hi.y;
+        const bool below_z = s.z < lo.z, above_z = s.z > hi.z;
+        lo.x = below_x ? s.x : lo.x, extreme[0] = below_x ? at : extreme[0];
+        hi.x = above_x ? s.x : hi.x, extreme[1] = above_x ? at : extreme[1];
+        lo.y = below_y ? s.y : lo.y, extreme[2] = below_y ? at : extreme[2];
+        hi.y = above_y ? s.y : hi.y, extreme[3] = above_y ? at : extreme[3];
+        lo.z = below_z ? s.z : lo.z, extreme[4] = below_z ? at : extreme[4];
+        hi.z = above_z ? s.z : hi.z, extreme[5] = above_z ? at : extreme[5];
         sum += s;
         ++m;
     }

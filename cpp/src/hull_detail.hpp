@@ -107,25 +107,13 @@ struct Triangulation {
 
 enum class Build { OK, DEGENERATE, FAILED };
 
-/// triangle_normal's case of a sharp first corner (quickhull.cpp); `bounded` as there.
-Vec3 triangle_normal_at_widest(const Vec3& a, const Vec3& b, const Vec3& c, bool& bounded);
-
-/// The outward normal (b - a) x (c - a), unnormalised, accurate for thin triangles too: the
-/// plain product when the corner at a is not sharp (the sine of its angle at least 1/4: within
-/// a few ulps of the exact one), else taken at the widest corner or compensated. `bounded`
-/// says the plain product was taken (at a or at the widest corner): then the unit normal's
-/// direction is within 60 ulps of the exact one (the plane filter's premise, quickhull.cpp).
-inline Vec3 triangle_normal(const Vec3& a, const Vec3& b, const Vec3& c, bool& bounded) {
-    const Vec3 u = b - a, v = c - a;
-    const Vec3 n = cross(u, v);
-    if (16.0 * squared_norm(n) >= squared_norm(u) * squared_norm(v)) {
-        bounded = true;
-        return n;
-    }
-    return triangle_normal_at_widest(a, b, c, bounded);
-}
-
 /// The plane of the counter-clockwise triangle a b c, points scaled into (-1, 1)^3.
+///
+/// Its normal is the outward (b - a) x (c - a), accurate for thin triangles too: the plain
+/// product when the corner at a is not sharp (the sine of its angle at least 1/4: within a few
+/// ulps of the exact one), else taken at the widest corner or compensated
+/// (face_plane_at_widest). When the plain product was taken (at a or at the widest corner),
+/// the unit normal's direction is within 60 ulps of the exact one: the plane filter's premise.
 ///
 /// The plane filter (Shewchuk's static filter, on the plane): the side of x decided by its
 // plane distance d = fl(fl(n . x) - offset) when |d| > kPlaneFilter, by the exact orientation
@@ -152,18 +140,18 @@ inline Plane plane_of_normal(const Vec3& n, bool bounded, const Vec3& a) {
     return plane;
 }
 
-/// face_plane's case of a sharp first corner (quickhull.cpp), out of line.
-Plane face_plane_at_widest(const Vec3& a, const Vec3& b, const Vec3& c);
+/// face_plane's case of a sharp first corner (quickhull.cpp), out of line: `uu` and `vv` are
+/// the squared lengths of b - a and c - a, which face_plane's test has just computed.
+Plane face_plane_at_widest(const Vec3& a, const Vec3& b, const Vec3& c, double uu, double vv);
 
 inline Plane face_plane(const Vec3& a, const Vec3& b, const Vec3& c) {
-    // triangle_normal's fast case spelled out in scalars (the same operations in the same
-    // order, so the same bits): a Vec3 passed by reference with a flag spilled it to memory.
+    // The fast case in scalars (a Vec3 passed by reference with a flag spilled it to memory).
     const double ux = b.x - a.x, uy = b.y - a.y, uz = b.z - a.z;
     const double vx = c.x - a.x, vy = c.y - a.y, vz = c.z - a.z;
     const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
     const double nn = nx * nx + ny * ny + nz * nz;
-    if (!(16.0 * nn >= (ux * ux + uy * uy + uz * uz) * (vx * vx + vy * vy + vz * vz)))
-        return face_plane_at_widest(a, b, c);
+    const double uu = ux * ux + uy * uy + uz * uz, vv = vx * vx + vy * vy + vz * vz;
+    if (!(16.0 * nn >= uu * vv)) return face_plane_at_widest(a, b, c, uu, vv);
     constexpr double kPlaneFilter = 1e-13;
     // nn is a sum of squares: never negative, so the square root needs no errno path.
     const double len = __builtin_sqrt(nn);

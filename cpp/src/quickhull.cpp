@@ -49,31 +49,30 @@ Vec3 accurate_cross(const Vec3& a, const Vec3& b, const Vec3& c) {
 
 }  // namespace
 
-// The normal of a triangle whose first corner is sharp (triangle_normal's slow case), taken
-// at the corner opposite the longest edge: its rounding error relative to its length is about
-// one ulp over the sine of that corner's angle, small unless the triangle is a cap (three
-// nearly collinear corners), which gets the compensated product.
-Vec3 triangle_normal_at_widest(const Vec3& a, const Vec3& b, const Vec3& c, bool& bounded) {
-    const double ab = squared_norm(b - a), bc = squared_norm(c - b), ca = squared_norm(a - c);
-    const Vec3 *o = &a, *p = &b, *q = &c;  // o: the corner; o p q counter-clockwise
-    if (ab >= bc && ab >= ca)
+// face_plane's case of a sharp first corner: the normal taken at the corner opposite the
+// longest edge, whose rounding error relative to its length is about one ulp over the sine of
+// that corner's angle, small unless the triangle is a cap (three nearly collinear corners),
+// which gets the compensated product. face_plane has computed the squared lengths ab of b - a
+// and ca of c - a (a - c's, the same bits), so only bc is new; at the corner a the plain
+// product is face_plane's own, which failed the test: the compensated one, unbounded.
+Plane face_plane_at_widest(const Vec3& a, const Vec3& b, const Vec3& c, double ab, double ca) {
+    const double bc = squared_norm(c - b);
+    double uu, vv;
+    const Vec3 *o, *p, *q;  // o: the corner; o p q counter-clockwise
+    if (ab >= bc && ab >= ca) {
         o = &c, p = &a, q = &b;
-    else if (bc >= ca)
-        o = &a, p = &b, q = &c;
-    else
+        uu = ca, vv = bc;
+    } else if (bc >= ca) {
+        return plane_of_normal(accurate_cross(a, b, c), false, a);
+    } else {
         o = &b, p = &c, q = &a;
+        uu = bc, vv = ab;
+    }
     const Vec3 u = *p - *o, v = *q - *o;
     const Vec3 n = cross(u, v);
     // sin(angle) >= 1/4: the plain product is within a few ulps of the exact one.
-    bounded = 16.0 * squared_norm(n) >= squared_norm(u) * squared_norm(v);
-    if (bounded) return n;
-    return accurate_cross(*o, *p, *q);
-}
-
-Plane face_plane_at_widest(const Vec3& a, const Vec3& b, const Vec3& c) {
-    bool bounded = false;
-    const Vec3 n = triangle_normal_at_widest(a, b, c, bounded);
-    return plane_of_normal(n, bounded, a);
+    const bool bounded = 16.0 * squared_norm(n) >= uu * vv;
+    return plane_of_normal(bounded ? n : accurate_cross(*o, *p, *q), bounded, a);
 }
 
 // The first point of `subset` of least and of greatest x, y and z, into extreme[0 .. 6) in

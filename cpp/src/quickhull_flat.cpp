@@ -8,7 +8,9 @@
 // Quickhull: Barber, Dobkin and Huhdanpaa 1996; the horizon as one depth-first walk,
 // Gregorius 2014, "Implementing Quickhull".
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "hull_detail.hpp"
@@ -165,15 +167,21 @@ bool find_horizon(Flat& s, Workspace& w, int seed, int q, unsigned stamp) {
     w.edge_count = ne;
     const size_t h = ne;
     if (h < 3) return false;
+    // One simple loop: each edge ends where the next begins (the last where the first does),
+    // and no vertex begins two edges. Checked without a branch an edge (a broken loop is rare).
     int* mark = w.mark.data();
     const int current = static_cast<int>(stamp);
-    for (size_t k = 0; k < h; ++k) {
-        const HorizonEdge& following = edges[k + 1 < h ? k + 1 : 0];
-        if (edges[k].b != following.a) return false;
-        if (mark[edges[k].a] == current) return false;
-        mark[edges[k].a] = current;
+    int broken = edges[h - 1].b ^ edges[0].a;
+    int a = edges[0].a;
+    for (size_t k = 1; k < h; ++k) {
+        const int next = edges[k].a;
+        broken |= (edges[k - 1].b ^ next) | (mark[a] == current);
+        mark[a] = current;
+        a = next;
     }
-    return true;
+    broken |= mark[a] == current;
+    mark[a] = current;
+    return broken == 0;
 }
 
 // quickhull.cpp's cone: the visible faces die (their slots to the free list), the horizon is
@@ -234,6 +242,10 @@ void cone(Flat& s, Workspace& w, int q) {
     const Vec3* __restrict p = s.p;
     int* __restrict pending = s.pending;
     size_t top = s.top;
+    // The new faces that get points, as bits (a cone of at most 64 faces: nearly all), pushed
+    // below in cone order by their bits instead of a test of every new face.
+    const bool few = h <= 64;
+    std::uint64_t got = 0;
     for (size_t v = 0; v < visible; ++v)
         for (int x = heads[v], after; x >= 0; x = after) {
             after = next[x];  // read before x joins another chain
@@ -248,6 +260,7 @@ void cone(Flat& s, Workspace& w, int q) {
             }
             if (k < h) {
                 add_conflict(s, faces[ids[k]], x, d);
+                got |= std::uint64_t{1} << (k & 63);
                 continue;
             }
             for (size_t k2 = 0; k2 < h; ++k2) {
@@ -260,8 +273,12 @@ void cone(Flat& s, Workspace& w, int q) {
                 }
             }
         }
-    for (size_t k = 0; k < h; ++k)
-        if (faces[ids[k]].head >= 0) pending[top++] = ids[k];
+    if (few) {
+        for (; got != 0; got &= got - 1) pending[top++] = ids[__builtin_ctzll(got)];
+    } else {
+        for (size_t k = 0; k < h; ++k)
+            if (faces[ids[k]].head >= 0) pending[top++] = ids[k];
+    }
     s.top = top;
 }
 
@@ -361,22 +378,30 @@ Build quickhull_flat(Workspace& w, const std::vector<int>& subset, Triangulation
     // and growing it again for the next hull would zero what is about to be written.
     if (w.edge_scratch.size() < 3 * static_cast<size_t>(m)) w.edge_scratch.resize(3 * static_cast<size_t>(m));
     TriangulationEdge* edges = w.edge_scratch.data();
+    // The arrays through raw pointers (the stores below would otherwise reload each vector's).
+    std::array<int, 3>* tri = out.tri.data();
+    Vec3* normal = out.normal.data();
+    double* offset = out.offset.data();
+    double* area2 = out.area2.data();
+    const int* slot_index = index.data();
     size_t count = 0;
+    int t = 0;  // the triangle of the next live face
     for (size_t i = 0; i < s.face_count; ++i) {
         const FlatFace& f = faces[i];
         if (!f.alive) continue;
-        const int t = index[i];
-        out.tri[t] = {f.v[0], f.v[1], f.v[2]};
-        out.normal[t] = Vec3{f.nx, f.ny, f.nz};
-        out.offset[t] = f.offset;
-        out.area2[t] = f.area2;
+        tri[t] = {f.v[0], f.v[1], f.v[2]};
+        normal[t] = Vec3{f.nx, f.ny, f.nz};
+        offset[t] = f.offset;
+        area2[t] = f.area2;
         for (int e = 0; e < 3; ++e) {
             const int g = f.n[e];
-            if (static_cast<unsigned>(g) >= slots || index[g] < 0) return Build::FAILED;
-            const int j = index[g];
-            edges[count] = {t, e, j, f.s[e]};
+            if (static_cast<unsigned>(g) >= slots || slot_index[g] < 0) return Build::FAILED;
+            const int j = slot_index[g];
+            TriangulationEdge& edge = edges[count];
+            edge.i = t, edge.e = e, edge.j = j, edge.k = f.s[e];
             count += j > t;
         }
+        ++t;
     }
     out.edges.assign(edges, edges + count);
     return Build::OK;
