@@ -381,7 +381,7 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
     double weights[4] = {1.0, 0.0, 0.0, 0.0};
     // Each vertex's two feature indices in one word (kNoFeature when either is curved), in
     // the simplex's order: a repeated support point is one equal word.
-    std::uint64_t features[4];
+    std::uint64_t features[4] = {kNoFeature, kNoFeature, kNoFeature, kNoFeature};
     int size = 1;
     // Start from the support in the direction of b's centre as seen from a: a good first guess.
     Vec3 dir = md.translation_b;
@@ -411,17 +411,20 @@ GjkResult gjk_run(MinkowskiDifference& md, const GjkOptions& opt, const SimplexV
             inside = true;
             break;
         }
-        // The slot no vertex of the simplex holds (size < 4 here).
-        unsigned used = 1u << order[0];
-        if (size > 1) used |= 1u << order[1];
-        if (size > 2) used |= 1u << order[2];
-        const int slot = used & 1u ? used & 2u ? used & 4u ? 3 : 2 : 1 : 0;
+        // The slot no vertex of the simplex holds (size < 4 here): the lowest clear bit of the
+        // slots in use, by masks and a table (the size and the slots change at random from
+        // one step to the next, and branches on them mispredict).
+        static constexpr int kFirstFree[8] = {0, 1, 0, 2, 0, 1, 0, 3};
+        const unsigned used = (1u << order[0]) | (static_cast<unsigned>(size > 1) << order[1]) |
+                              (static_cast<unsigned>(size > 2) << order[2]);
+        const int slot = kFirstFree[used & 7u];
         SimplexVertex& w = slots[slot];
         w = md.support(-v);
         const std::uint64_t key = feature_key(w);
         bool repeated = false;
         if (key != kNoFeature)
-            for (int i = 0; i < size; ++i) repeated |= features[i] == key;
+            // Four trips with the size as a mask: no loop exit to mispredict.
+            for (int i = 0; i < 4; ++i) repeated |= (features[i] == key) & (i < size);
         const double vw = dot(v, w.w);
         if (opt.stop_when_separated && vw > separation_gap * std::sqrt(vv)) {
             // A separating plane with a positive gap: no contact (lower bound > tolerance).
