@@ -413,6 +413,13 @@ class PackedHulls:
     edge_pair_offsets: np.ndarray
     edge_pairs: np.ndarray
 
+    def __getstate__(self) -> dict[str, Any]:
+        # The packing's seal (pack_hull_slices) vouches for these arrays in this process only:
+        # a copy or an unpickled packing is checked like any other arrays.
+        state = dict(self.__dict__)
+        state.pop("_seal", None)
+        return state
+
 
 def pack_hulls(point_sets: Sequence[np.ndarray] | np.ndarray, threads: int = 0) -> PackedHulls:
     """Exact hulls of many point sets, packed for the narrow phase in one native call.

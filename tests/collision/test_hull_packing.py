@@ -18,6 +18,7 @@ equal up to sign); and SAT's answers, the same whether a query or a read compute
 from __future__ import annotations
 
 import json
+import pickle
 from pathlib import Path
 
 import numpy as np
@@ -280,6 +281,13 @@ def test_a_set_made_from_points_is_vouched_for_by_its_packing() -> None:
     packed = pack_hulls(rng.normal(size=(3, 10, 3)))
     for index in (packed.adjacency_offsets, packed.adjacency, packed.edge_pairs):
         assert not index.flags.writeable
+    # The seal stays in its process: a pickled packing loads without it, and is checked.
+    loaded = pickle.loads(pickle.dumps(packed))
+    assert not hasattr(loaded, "_seal")
+    assert loaded.adjacency.tobytes() == packed.adjacency.tobytes()
+    kinds, params, rows = np.zeros(3, np.int8), np.zeros((3, 4)), np.arange(3)
+    assert ConvexSet._assemble(kinds, params, rows, packed)._core.sealed
+    assert not ConvexSet._assemble(kinds, params, rows, loaded)._core.sealed
 
 
 def test_a_seal_vouches_only_for_its_own_arrays_in_its_own_layout() -> None:
