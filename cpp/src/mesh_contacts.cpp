@@ -12,6 +12,7 @@
 #include "meshcol/mesh_query.hpp"
 #include "meshcol/triangle.hpp"
 #include "mesh_query_detail.hpp"
+#include "radix_sort.hpp"
 
 namespace meshcol {
 using namespace mesh_detail;
@@ -83,36 +84,18 @@ struct Key {
 };
 
 // `keys` in increasing order of `faces` (all distinct, so the order is the one std::sort
-// gives). From kRadixKeys keys on, least significant digit first, a byte a pass, the passes
-// whose byte is the same in every key skipped (four passes for two meshes below 65,536 faces):
-// no compare of two keys branches, where a comparison sort's branches go either way at random
-// (std::sort's took about 10,000 mispredictions of callgrind's model for the moved torus's
-// 1,555 pairs). Below it, std::sort: the radix passes' fixed cost (2,048 counts) is more
-// than the sort of a few dozen keys.
+// gives): from kRadixKeys keys on by the core's radix sort, a byte a digit (four passes for
+// two meshes below 65,536 faces), whose compares do not branch where a comparison sort's go
+// either way at random (std::sort's took about 10,000 mispredictions of callgrind's model for
+// the moved torus's 1,555 pairs); below it, std::sort.
 constexpr size_t kRadixKeys = 256;
 
 void sort_keys(std::vector<Key>& keys) {
-    const size_t n = keys.size();
-    if (n < kRadixKeys) {
+    if (keys.size() < kRadixKeys) {
         std::sort(keys.begin(), keys.end(), [](const Key& x, const Key& y) { return x.faces < y.faces; });
         return;
     }
-    std::vector<std::uint32_t> counts(8 * 256, 0);
-    for (const Key& k : keys)
-        for (int d = 0; d < 8; ++d) ++counts[static_cast<size_t>(d * 256) + ((k.faces >> (8 * d)) & 255)];
-    std::vector<Key> other(n);
-    for (int d = 0; d < 8; ++d) {
-        std::uint32_t* count = &counts[static_cast<size_t>(d * 256)];
-        if (count[(keys[0].faces >> (8 * d)) & 255] == n) continue;  // one byte value in every key
-        std::uint32_t next = 0;
-        for (int v = 0; v < 256; ++v) {
-            const std::uint32_t c = count[v];
-            count[v] = next;
-            next += c;
-        }
-        for (const Key& k : keys) other[count[(k.faces >> (8 * d)) & 255]++] = k;
-        keys.swap(other);
-    }
+    lsd_radix_sort<8>(keys, [](const Key& k) { return k.faces; });
 }
 
 }  // namespace

@@ -21,6 +21,7 @@
 #include "meshcol/batch.hpp"
 #include "meshcol/broadphase.hpp"
 #include "meshcol/defaults.hpp"
+#include "radix_sort.hpp"
 
 namespace meshcol {
 
@@ -60,30 +61,11 @@ int choose_sweep_axis(const double* lo, const double* hi, std::int64_t n) {
 }
 
 void sort_pair_keys(std::vector<std::uint64_t>& keys) {
-    const size_t n = keys.size();
-    if (n < 1024) {
+    if (keys.size() < 1024) {
         std::sort(keys.begin(), keys.end());
         return;
     }
-    // LSD radix sort on 16-bit digits; digits equal in every key are skipped (pair keys of
-    // n < 2^20 boxes vary in only part of their bits).
-    std::uint64_t varying = 0;
-    for (const std::uint64_t k : keys) varying |= k ^ keys[0];
-    std::vector<std::uint64_t> tmp(n);
-    std::vector<std::uint32_t> count(65536);
-    for (int shift = 0; shift < 64; shift += 16) {
-        if (((varying >> shift) & 0xFFFFu) == 0) continue;
-        std::fill(count.begin(), count.end(), 0u);
-        for (const std::uint64_t k : keys) ++count[(k >> shift) & 0xFFFFu];
-        std::uint32_t sum = 0;
-        for (std::uint32_t& c : count) {
-            const std::uint32_t c0 = c;
-            c = sum;
-            sum += c0;
-        }
-        for (const std::uint64_t k : keys) tmp[count[(k >> shift) & 0xFFFFu]++] = k;
-        keys.swap(tmp);
-    }
+    lsd_radix_sort<16>(keys, [](std::uint64_t k) { return k; });
 }
 
 namespace {
