@@ -343,3 +343,33 @@ def test_a_seal_vouches_only_for_its_own_arrays_in_its_own_layout() -> None:
         packed.edge_pairs,
         other._seal,  # type: ignore[attr-defined]
     ).sealed
+
+
+def test_a_seal_does_not_vouch_for_a_set_of_fewer_shapes_than_it_packed() -> None:
+    # A packing whose last shape is empty (no points) ends its offsets where the shape before
+    # it ends, so a set of only the first three polytopes matches every offset it has: the
+    # seal still refuses it (it vouches for exactly the packed shapes), and the set is checked.
+    from meshcol._native import core
+
+    rng = np.random.default_rng(8)
+    packed = pack_hulls([rng.normal(size=(10, 3)) for _ in range(3)] + [np.zeros((0, 3))])
+    assert packed.offsets[3] == packed.offsets[4]
+    assert packed.edge_pair_offsets[3] == packed.edge_pair_offsets[4]
+
+    def made(count: int) -> object:
+        return core.PackedConvexSet(
+            packed.vertices,
+            packed.offsets[: count + 1],
+            np.zeros(count, np.int8),
+            np.zeros((count, 4)),
+            packed.adjacency_offsets,
+            packed.adjacency,
+            packed.face_offsets[: count + 1],
+            packed.face_normals,
+            packed.edge_pair_offsets[: count + 1],
+            packed.edge_pairs,
+            packed._seal,  # type: ignore[attr-defined]
+        )
+
+    assert made(4).sealed  # type: ignore[attr-defined]
+    assert not made(3).sealed  # type: ignore[attr-defined]
