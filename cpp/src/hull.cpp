@@ -175,57 +175,41 @@ bool lexicographic_less(const Vec3& a, const Vec3& b) {
     return a.z < b.z;
 }
 
+#if defined(__SSE2__)
+// count_below for the W points x[i .. i + W): each load of two x[j] compared with all W, in
+// SSE2 lanes (a lane's compare is the scalar one). A true compare is all ones, -1:
+// subtracted, it counts. W is a constant, so the loops over it unroll.
+template <size_t W>
+void count_below_block(const double* x, size_t n, size_t i, int* below) {
+    const size_t pairs = n & ~size_t{1};
+    __m128d at[W];
+    __m128i count[W];
+    for (size_t w = 0; w < W; ++w) {
+        at[w] = _mm_set1_pd(x[i + w]);
+        count[w] = _mm_setzero_si128();
+    }
+    for (size_t j = 0; j < pairs; j += 2) {
+        const __m128d v = _mm_loadu_pd(x + j);
+        for (size_t w = 0; w < W; ++w)
+            count[w] = _mm_sub_epi64(count[w], _mm_castpd_si128(_mm_cmplt_pd(v, at[w])));
+    }
+    for (size_t w = 0; w < W; ++w) {
+        std::int64_t lanes[2];
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(lanes), count[w]);
+        std::int64_t total = lanes[0] + lanes[1];
+        if (pairs < n) total += x[pairs] < x[i + w];
+        below[i + w] = static_cast<int>(total);
+    }
+}
+#endif
+
 // How many of x[0 .. n) are below each x[i], into below[i]: every pair compared, four (then
-// two) x[i] at a time against two x[j] in SSE2 lanes (a lane's compare is the scalar one), no
-// branch on the data.
+// two) x[i] at a time (count_below_block), no branch on the data.
 void count_below(const double* x, size_t n, int* below) {
     size_t i = 0;
 #if defined(__SSE2__)
-    const size_t pairs = n & ~size_t{1};
-    // A true compare is all ones, -1: subtracted, it counts. Four x[i] share each load of x[j].
-    for (; i + 3 < n; i += 4) {
-        const __m128d a = _mm_set1_pd(x[i]), b = _mm_set1_pd(x[i + 1]);
-        const __m128d c = _mm_set1_pd(x[i + 2]), d = _mm_set1_pd(x[i + 3]);
-        __m128i count_a = _mm_setzero_si128(), count_b = _mm_setzero_si128();
-        __m128i count_c = _mm_setzero_si128(), count_d = _mm_setzero_si128();
-        for (size_t j = 0; j < pairs; j += 2) {
-            const __m128d v = _mm_loadu_pd(x + j);
-            count_a = _mm_sub_epi64(count_a, _mm_castpd_si128(_mm_cmplt_pd(v, a)));
-            count_b = _mm_sub_epi64(count_b, _mm_castpd_si128(_mm_cmplt_pd(v, b)));
-            count_c = _mm_sub_epi64(count_c, _mm_castpd_si128(_mm_cmplt_pd(v, c)));
-            count_d = _mm_sub_epi64(count_d, _mm_castpd_si128(_mm_cmplt_pd(v, d)));
-        }
-        std::int64_t ca[2], cb[2], cc[2], cd[2];
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(ca), count_a);
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(cb), count_b);
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(cc), count_c);
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(cd), count_d);
-        std::int64_t ra = ca[0] + ca[1], rb = cb[0] + cb[1], rc = cc[0] + cc[1], rd = cd[0] + cd[1];
-        if (pairs < n) {
-            const double last = x[pairs];
-            ra += last < x[i], rb += last < x[i + 1], rc += last < x[i + 2], rd += last < x[i + 3];
-        }
-        below[i] = static_cast<int>(ra);
-        below[i + 1] = static_cast<int>(rb);
-        below[i + 2] = static_cast<int>(rc);
-        below[i + 3] = static_cast<int>(rd);
-    }
-    for (; i + 1 < n; i += 2) {
-        const __m128d a = _mm_set1_pd(x[i]), b = _mm_set1_pd(x[i + 1]);
-        __m128i count_a = _mm_setzero_si128(), count_b = _mm_setzero_si128();
-        for (size_t j = 0; j < pairs; j += 2) {
-            const __m128d v = _mm_loadu_pd(x + j);
-            count_a = _mm_sub_epi64(count_a, _mm_castpd_si128(_mm_cmplt_pd(v, a)));
-            count_b = _mm_sub_epi64(count_b, _mm_castpd_si128(_mm_cmplt_pd(v, b)));
-        }
-        std::int64_t ca[2], cb[2];
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(ca), count_a);
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(cb), count_b);
-        std::int64_t ra = ca[0] + ca[1], rb = cb[0] + cb[1];
-        if (pairs < n) ra += x[pairs] < x[i], rb += x[pairs] < x[i + 1];
-        below[i] = static_cast<int>(ra);
-        below[i + 1] = static_cast<int>(rb);
-    }
+    for (; i + 3 < n; i += 4) count_below_block<4>(x, n, i, below);
+    for (; i + 1 < n; i += 2) count_below_block<2>(x, n, i, below);
 #endif
     for (; i < n; ++i) {
         int count = 0;
