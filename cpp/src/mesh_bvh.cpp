@@ -545,7 +545,9 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         const NodeObb& obb = obbs_.front();
         obb_reach_ = max_abs(obb.center) + max_abs(obb.half);
     }
-    closed_ = closed_and_consistent(faces, face_count, vertex_count);
+    // Of the compact corner indices, 32 bits: the same directed edges, each vertex renamed
+    // once (unused vertices carry none), so the same verdict as of the faces given.
+    closed_ = closed_and_consistent(corner_vertices_.data(), n, static_cast<std::int64_t>(vertices_.size()));
 }
 
 namespace {
