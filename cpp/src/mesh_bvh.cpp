@@ -282,42 +282,46 @@ struct BuildTask {
     RangeBounds bounds;
 };
 
-// Hoare's two-ended partition, step for step as libstdc++'s std::partition (bidirectional
-// form), so the leaf order does not depend on the standard library: the triangles of
-// order[begin, end) for which `left` holds first. On the way it grows each side's bounds,
-// each triangle once, as it settles, so neither child needs a pass of its own: the left side
-// settles front to back, the right side back to front, so its bounds take the last of equal
-// coordinates (the sign of a zero as a pass in order gives it). Returns the first index of the
-// right side.
+// Hoare's two-ended partition as libstdc++'s std::partition (bidirectional form) leaves it,
+// so the leaf order does not depend on the standard library: the triangles of order[begin,
+// end) for which `left` holds first, then each side's bounds. Hoare's scans swap the k-th
+// triangle from the front that belongs right with the k-th from the back that belongs left,
+// for every right one before `mid` (the count of left ones past begin), the same number as
+// the left ones from `mid` on; the rest stay. That permutation is made here without a branch
+// on the test (whose outcome a scan mispredicts about once in two triangles): the outcomes
+// into `side`, the misplaced positions listed into `misplaced` (the front's at [begin, mid),
+// the back's at [mid, end)), then the swaps. The left side's bounds grow front to back, the
+// right side's back to front, keeping the last of equal coordinates (add_before), as Hoare's
+// scans grow them, each triangle as it settles. Returns mid, the first index of the right
+// side.
 template <class Left>
 std::int32_t partition_triangles(std::vector<std::int32_t>& order, std::int32_t begin, std::int32_t end,
                                  const std::vector<TriangleBounds>& triangles, Left left, RangeBounds& left_bounds,
-                                 RangeBounds& right_bounds) {
-    std::int32_t* first = order.data() + begin;
-    std::int32_t* last = order.data() + end;
-    const auto bounds = [&](std::int32_t f) -> const TriangleBounds& { return triangles[static_cast<size_t>(f)]; };
-    while (true) {
-        while (true) {
-            if (first == last) return static_cast<std::int32_t>(first - order.data());
-            if (!left(*first)) break;
-            left_bounds.add(bounds(*first));
-            ++first;
-        }
-        --last;
-        while (true) {
-            if (first == last) {
-                right_bounds.add_before(bounds(*first));  // the one that stopped the scan above
-                return static_cast<std::int32_t>(first - order.data());
-            }
-            if (left(*last)) break;
-            right_bounds.add_before(bounds(*last));
-            --last;
-        }
-        std::swap(*first, *last);
-        left_bounds.add(bounds(*first));
-        right_bounds.add_before(bounds(*last));
-        ++first;
+                                 RangeBounds& right_bounds, std::uint8_t* side, std::int32_t* misplaced) {
+    std::int32_t* o = order.data();
+    std::int32_t lefts = 0;
+    for (std::int32_t i = begin; i < end; ++i) {
+        const bool l = left(o[i]);
+        side[i] = static_cast<std::uint8_t>(l);
+        lefts += l;
     }
+    const std::int32_t mid = begin + lefts;
+    std::int32_t front = begin;  // misplaced[begin, front): right ones before mid, in order
+    for (std::int32_t i = begin; i < mid; ++i) {
+        misplaced[front] = i;
+        front += side[i] ^ 1;
+    }
+    std::int32_t back = mid;  // misplaced[mid, back): left ones from mid on, from the back
+    for (std::int32_t i = end; i-- > mid;) {
+        misplaced[back] = i;
+        back += side[i];
+    }
+    for (std::int32_t k = 0; k < front - begin; ++k)
+        std::swap(o[misplaced[begin + k]], o[misplaced[mid + k]]);
+    const auto bounds = [&](std::int32_t f) -> const TriangleBounds& { return triangles[static_cast<size_t>(f)]; };
+    for (std::int32_t i = begin; i < mid; ++i) left_bounds.add(bounds(o[i]));
+    for (std::int32_t i = end; i-- > mid;) right_bounds.add_before(bounds(o[i]));
+    return mid;
 }
 
 }  // namespace
@@ -360,6 +364,9 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
     std::vector<BuildTask> stack{{0, n, -1, true, root}};
     // Each triangle's bin along each axis, written by its node's binning and read by the split.
     std::vector<std::uint8_t> bin_index(3 * static_cast<size_t>(n));
+    // The partition's scratch: each triangle's side, and the positions it swaps.
+    std::vector<std::uint8_t> side(static_cast<size_t>(n));
+    std::vector<std::int32_t> misplaced(static_cast<size_t>(n));
     // Empty between nodes: a node empties the bins it filled once it has read them.
     FlippedBox bin_box[3][kBins];
     std::int32_t bin_count[3][kBins] = {};
@@ -460,7 +467,7 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
             const std::int32_t m = partition_triangles(
                 order, task.begin, task.end, triangles,
                 [&](std::int32_t f) { return bin_index[3 * static_cast<size_t>(f) + axis] <= best_bin; },
-                left_bounds, right_bounds);
+                left_bounds, right_bounds, side.data(), misplaced.data());
             if (m > task.begin && m < task.end) {
                 mid = m;
                 left_task = {task.begin, mid, -1, true, left_bounds};
