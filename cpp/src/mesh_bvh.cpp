@@ -168,16 +168,61 @@ inline int used_bins(const std::int32_t* count, int* used) {
     return m;
 }
 
+// A box kept with its lower corner negated, as the lanes (-lower.x, -lower.y), (upper.x,
+// upper.y), (-lower.z, upper.z): growing it is one max a lane, where a Box takes a min and a
+// max of each corner's x and y and two scalar steps for z. Negation is exact, so the corners
+// are a Box's bits, zeros' signs too: `b > a` of the negated lower is `b < a` of the lower.
+struct FlippedBox {
+    double v[6] = {-kInf, -kInf, -kInf, -kInf, -kInf, -kInf};  // empty
+
+    static FlippedBox of(const Box& b) {
+        FlippedBox f;
+        f.v[0] = -b.lower.x;
+        f.v[1] = -b.lower.y;
+        f.v[2] = b.upper.x;
+        f.v[3] = b.upper.y;
+        f.v[4] = -b.lower.z;
+        f.v[5] = b.upper.z;
+        return f;
+    }
+    Vec3 lower() const { return {-v[0], -v[1], -v[4]}; }
+    Vec3 upper() const { return {v[2], v[3], v[5]}; }
+    // The union, of equal coordinates this box's kept (Box::grow's choice).
+    void grow(const FlippedBox& b) {
+#if defined(__SSE2__)
+        for (int k = 0; k < 6; k += 2)
+            _mm_storeu_pd(v + k, _mm_max_pd(_mm_loadu_pd(b.v + k), _mm_loadu_pd(v + k)));
+#else
+        for (int k = 0; k < 6; ++k) v[k] = b.v[k] > v[k] ? b.v[k] : v[k];
+#endif
+    }
+    // The union, of equal coordinates b's kept.
+    void grow_last(const FlippedBox& b) {
+#if defined(__SSE2__)
+        for (int k = 0; k < 6; k += 2)
+            _mm_storeu_pd(v + k, _mm_max_pd(_mm_loadu_pd(v + k), _mm_loadu_pd(b.v + k)));
+#else
+        for (int k = 0; k < 6; ++k) v[k] = v[k] > b.v[k] ? v[k] : b.v[k];
+#endif
+    }
+    // Box::half_area, to the bit: upper - lower is upper + (-lower).
+    double half_area() const {
+        if (-v[0] > v[2]) return 0.0;  // empty
+        const double dx = v[2] + v[0], dy = v[3] + v[1], dz = v[5] + v[4];
+        return dx * dy + dy * dz + dz * dx;
+    }
+};
+
 // One triangle's box and the centre of that box (the point the SAH bins), side by side.
 struct TriangleBounds {
-    Box box;
+    FlippedBox box;
     Vec3 centroid;
 };
 
 // The bounds of a range of triangles: the union of their boxes and the bounds of their
 // centroids.
 struct RangeBounds {
-    Box boxes;
+    FlippedBox boxes;
     Box centroids;
 
     // Grown in the range's order, the first of equal coordinates kept (Box::grow), so a zero
@@ -189,8 +234,7 @@ struct RangeBounds {
     // Grown against the range's order, the last of equal coordinates kept: the same box, zeros
     // signed alike, as add() in order.
     void add_before(const TriangleBounds& t) {
-        take_lower(boxes.lower, t.box.lower);
-        take_upper(boxes.upper, t.box.upper);
+        boxes.grow_last(t.box);
         take_lower(centroids.lower, t.centroid);
         take_upper(centroids.upper, t.centroid);
     }
@@ -238,42 +282,46 @@ struct BuildTask {
     RangeBounds bounds;
 };
 
-// Hoare's two-ended partition, step for step as libstdc++'s std::partition (bidirectional
-// form), so the leaf order does not depend on the standard library: the triangles of
-// order[begin, end) for which `left` holds first. On the way it grows each side's bounds,
-// each triangle once, as it settles, so neither child needs a pass of its own: the left side
-// settles front to back, the right side back to front, so its bounds take the last of equal
-// coordinates (the sign of a zero as a pass in order gives it). Returns the first index of the
-// right side.
+// Hoare's two-ended partition as libstdc++'s std::partition (bidirectional form) leaves it,
+// so the leaf order does not depend on the standard library: the triangles of order[begin,
+// end) for which `left` holds first, then each side's bounds. Hoare's scans swap the k-th
+// triangle from the front that belongs right with the k-th from the back that belongs left,
+// for every right one before `mid` (the count of left ones past begin), the same number as
+// the left ones from `mid` on; the rest stay. That permutation is made here without a branch
+// on the test (whose outcome a scan mispredicts about once in two triangles): the outcomes
+// into `side`, the misplaced positions listed into `misplaced` (the front's at [begin, mid),
+// the back's at [mid, end)), then the swaps. The left side's bounds grow front to back, the
+// right side's back to front, keeping the last of equal coordinates (add_before), as Hoare's
+// scans grow them, each triangle as it settles. Returns mid, the first index of the right
+// side.
 template <class Left>
 std::int32_t partition_triangles(std::vector<std::int32_t>& order, std::int32_t begin, std::int32_t end,
                                  const std::vector<TriangleBounds>& triangles, Left left, RangeBounds& left_bounds,
-                                 RangeBounds& right_bounds) {
-    std::int32_t* first = order.data() + begin;
-    std::int32_t* last = order.data() + end;
-    const auto bounds = [&](std::int32_t f) -> const TriangleBounds& { return triangles[static_cast<size_t>(f)]; };
-    while (true) {
-        while (true) {
-            if (first == last) return static_cast<std::int32_t>(first - order.data());
-            if (!left(*first)) break;
-            left_bounds.add(bounds(*first));
-            ++first;
-        }
-        --last;
-        while (true) {
-            if (first == last) {
-                right_bounds.add_before(bounds(*first));  // the one that stopped the scan above
-                return static_cast<std::int32_t>(first - order.data());
-            }
-            if (left(*last)) break;
-            right_bounds.add_before(bounds(*last));
-            --last;
-        }
-        std::swap(*first, *last);
-        left_bounds.add(bounds(*first));
-        right_bounds.add_before(bounds(*last));
-        ++first;
+                                 RangeBounds& right_bounds, std::uint8_t* side, std::int32_t* misplaced) {
+    std::int32_t* o = order.data();
+    std::int32_t lefts = 0;
+    for (std::int32_t i = begin; i < end; ++i) {
+        const bool l = left(o[i]);
+        side[i] = static_cast<std::uint8_t>(l);
+        lefts += l;
     }
+    const std::int32_t mid = begin + lefts;
+    std::int32_t front = begin;  // misplaced[begin, front): right ones before mid, in order
+    for (std::int32_t i = begin; i < mid; ++i) {
+        misplaced[front] = i;
+        front += side[i] ^ 1;
+    }
+    std::int32_t back = mid;  // misplaced[mid, back): left ones from mid on, from the back
+    for (std::int32_t i = end; i-- > mid;) {
+        misplaced[back] = i;
+        back += side[i];
+    }
+    for (std::int32_t k = 0; k < front - begin; ++k)
+        std::swap(o[misplaced[begin + k]], o[misplaced[mid + k]]);
+    const auto bounds = [&](std::int32_t f) -> const TriangleBounds& { return triangles[static_cast<size_t>(f)]; };
+    for (std::int32_t i = begin; i < mid; ++i) left_bounds.add(bounds(o[i]));
+    for (std::int32_t i = end; i-- > mid;) right_bounds.add_before(bounds(o[i]));
+    return mid;
 }
 
 }  // namespace
@@ -300,8 +348,10 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
     RangeBounds root;
     for (std::int32_t f = 0; f < n; ++f) {
         TriangleBounds& t = triangles[static_cast<size_t>(f)];
-        for (int k = 0; k < 3; ++k) t.box.grow(vertex(faces[3 * f + k]));
-        t.centroid = (t.box.lower + t.box.upper) * 0.5;
+        Box box;
+        for (int k = 0; k < 3; ++k) box.grow(vertex(faces[3 * f + k]));
+        t.box = FlippedBox::of(box);
+        t.centroid = (box.lower + box.upper) * 0.5;
         root.add(t);
     }
     std::vector<std::int32_t> order(static_cast<size_t>(n));
@@ -314,8 +364,11 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
     std::vector<BuildTask> stack{{0, n, -1, true, root}};
     // Each triangle's bin along each axis, written by its node's binning and read by the split.
     std::vector<std::uint8_t> bin_index(3 * static_cast<size_t>(n));
+    // The partition's scratch: each triangle's side, and the positions it swaps.
+    std::vector<std::uint8_t> side(static_cast<size_t>(n));
+    std::vector<std::int32_t> misplaced(static_cast<size_t>(n));
     // Empty between nodes: a node empties the bins it filled once it has read them.
-    Box bin_box[3][kBins];
+    FlippedBox bin_box[3][kBins];
     std::int32_t bin_count[3][kBins] = {};
     int used[kBins];  // the non-empty bins of one axis, in order
     double right_area[kBins];
@@ -330,9 +383,12 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
             for (std::int32_t i = task.begin; i < task.end; ++i)
                 task.bounds.add(triangles[static_cast<size_t>(order[static_cast<size_t>(i)])]);
         BvhNode node{};
-        for (int k = 0; k < 3; ++k) {
-            node.lower[k] = round_down(task.bounds.boxes.lower[k]);
-            node.upper[k] = round_up(task.bounds.boxes.upper[k]);
+        {
+            const Vec3 lower = task.bounds.boxes.lower(), upper = task.bounds.boxes.upper();
+            for (int k = 0; k < 3; ++k) {
+                node.lower[k] = round_down(lower[k]);
+                node.upper[k] = round_up(upper[k]);
+            }
         }
         const std::int32_t count = task.end - task.begin;
         if (count <= kLeaf) {
@@ -377,7 +433,7 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         for (int axis = 0; axis < 3; ++axis) {
             if (!binned[axis]) continue;
             const int m = used_bins(bin_count[axis], used);
-            Box right;
+            FlippedBox right;
             std::int32_t right_n = 0;
             for (int k = m - 1; k > 0; --k) {
                 right.grow(bin_box[axis][used[k]]);
@@ -385,7 +441,7 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
                 right_area[k] = right.half_area();
                 right_count[k] = right_n;
             }
-            Box left;
+            FlippedBox left;
             std::int32_t left_n = 0;
             for (int k = 0; k + 1 < m; ++k) {
                 left.grow(bin_box[axis][used[k]]);
@@ -398,7 +454,7 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
                 }
             }
             for (int k = 0; k < m; ++k) {
-                bin_box[axis][used[k]] = Box{};
+                bin_box[axis][used[k]] = FlippedBox{};
                 bin_count[axis][used[k]] = 0;
             }
         }
@@ -411,7 +467,7 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
             const std::int32_t m = partition_triangles(
                 order, task.begin, task.end, triangles,
                 [&](std::int32_t f) { return bin_index[3 * static_cast<size_t>(f) + axis] <= best_bin; },
-                left_bounds, right_bounds);
+                left_bounds, right_bounds, side.data(), misplaced.data());
             if (m > task.begin && m < task.end) {
                 mid = m;
                 left_task = {task.begin, mid, -1, true, left_bounds};
@@ -496,7 +552,9 @@ MeshBvh::MeshBvh(const double* vertices, std::int64_t vertex_count, const std::i
         const NodeObb& obb = obbs_.front();
         obb_reach_ = max_abs(obb.center) + max_abs(obb.half);
     }
-    closed_ = closed_and_consistent(faces, face_count, vertex_count);
+    // Of the compact corner indices, 32 bits: the same directed edges, each vertex renamed
+    // once (unused vertices carry none), so the same verdict as of the faces given.
+    closed_ = closed_and_consistent(corner_vertices_.data(), n, static_cast<std::int64_t>(vertices_.size()));
 }
 
 namespace {

@@ -188,18 +188,23 @@ inline Vec3 corner(const double* vertices, const std::int64_t* faces, std::int64
 
 }  // namespace
 
+namespace {
+
 // Every directed edge (u, v), u != v, appears once and so does (v, u). With each vertex's
 // out-edges and in-edges (both by a counting sort): no vertex has an out-edge twice, and each
 // in-edge (w, u) of a vertex u has its reverse among u's out-edges, marked by a stamp per
 // vertex. Then (u, v) has its reverse, as u is an in-edge of v. Linear, whatever the degrees,
-// and every test agrees on a closed mesh, so its branches are predicted.
-bool closed_and_consistent(const std::int64_t* faces, std::int64_t face_count, std::int64_t vertex_count) {
+// and every test agrees on a closed mesh, so its branches are predicted. Face indices are
+// Index, kept as Vertex (which holds vertex_count), edge offsets as Offset (which holds 3
+// face_count): 32 bits where they fit, half the memory of 64.
+template <class Index, class Vertex, class Offset>
+bool closed_and_consistent_as(const Index* faces, std::int64_t face_count, std::int64_t vertex_count) {
     const auto n = static_cast<size_t>(vertex_count);
-    std::vector<std::int64_t> out_first(n + 1, 0), in_first(n + 1, 0);
-    std::int64_t edges = 0;
+    std::vector<Offset> out_first(n + 1, 0), in_first(n + 1, 0);
+    Offset edges = 0;
     for (std::int64_t f = 0; f < face_count; ++f)
         for (int k = 0; k < 3; ++k) {
-            const std::int64_t u = faces[3 * f + k], v = faces[3 * f + (k + 1) % 3];
+            const auto u = static_cast<Vertex>(faces[3 * f + k]), v = static_cast<Vertex>(faces[3 * f + (k + 1) % 3]);
             if (u == v) continue;
             ++out_first[static_cast<size_t>(u) + 1];
             ++in_first[static_cast<size_t>(v) + 1];
@@ -210,27 +215,42 @@ bool closed_and_consistent(const std::int64_t* faces, std::int64_t face_count, s
         out_first[i + 1] += out_first[i];
         in_first[i + 1] += in_first[i];
     }
-    std::vector<std::int64_t> out_to(static_cast<size_t>(edges)), in_from(static_cast<size_t>(edges));
-    std::vector<std::int64_t> out_next(out_first.begin(), out_first.end() - 1), in_next(in_first.begin(), in_first.end() - 1);
+    std::vector<Vertex> out_to(static_cast<size_t>(edges)), in_from(static_cast<size_t>(edges));
+    std::vector<Offset> out_next(out_first.begin(), out_first.end() - 1), in_next(in_first.begin(), in_first.end() - 1);
     for (std::int64_t f = 0; f < face_count; ++f)
         for (int k = 0; k < 3; ++k) {
-            const std::int64_t u = faces[3 * f + k], v = faces[3 * f + (k + 1) % 3];
+            const auto u = static_cast<Vertex>(faces[3 * f + k]), v = static_cast<Vertex>(faces[3 * f + (k + 1) % 3]);
             if (u == v) continue;
             out_to[static_cast<size_t>(out_next[static_cast<size_t>(u)]++)] = v;
             in_from[static_cast<size_t>(in_next[static_cast<size_t>(v)]++)] = u;
         }
-    std::vector<std::int64_t> stamp(n, -1);  // stamp[v] == u: (u, v) is an edge
+    std::vector<Vertex> stamp(n, -1);  // stamp[v] == u: (u, v) is an edge
     for (size_t u = 0; u < n; ++u) {
-        const auto mark = static_cast<std::int64_t>(u);
-        for (std::int64_t e = out_first[u]; e < out_first[u + 1]; ++e) {
-            std::int64_t& s = stamp[static_cast<size_t>(out_to[static_cast<size_t>(e)])];
+        const auto mark = static_cast<Vertex>(u);
+        for (Offset e = out_first[u]; e < out_first[u + 1]; ++e) {
+            Vertex& s = stamp[static_cast<size_t>(out_to[static_cast<size_t>(e)])];
             if (s == mark) return false;  // (u, v) repeated
             s = mark;
         }
-        for (std::int64_t e = in_first[u]; e < in_first[u + 1]; ++e)
+        for (Offset e = in_first[u]; e < in_first[u + 1]; ++e)
             if (stamp[static_cast<size_t>(in_from[static_cast<size_t>(e)])] != mark) return false;  // (w, u) without (u, w)
     }
     return true;
+}
+
+}  // namespace
+
+bool closed_and_consistent(const std::int64_t* faces, std::int64_t face_count, std::int64_t vertex_count) {
+    constexpr std::int64_t kNarrow = std::numeric_limits<std::int32_t>::max();
+    if (vertex_count <= kNarrow && 3 * face_count <= kNarrow)
+        return closed_and_consistent_as<std::int64_t, std::int32_t, std::int32_t>(faces, face_count, vertex_count);
+    return closed_and_consistent_as<std::int64_t, std::int64_t, std::int64_t>(faces, face_count, vertex_count);
+}
+
+bool closed_and_consistent(const std::int32_t* faces, std::int64_t face_count, std::int64_t vertex_count) {
+    if (3 * face_count <= std::numeric_limits<std::int32_t>::max())
+        return closed_and_consistent_as<std::int32_t, std::int32_t, std::int32_t>(faces, face_count, vertex_count);
+    return closed_and_consistent_as<std::int32_t, std::int32_t, std::int64_t>(faces, face_count, vertex_count);
 }
 
 FaceOrientation orient_faces(const double* vertices, std::int64_t vertex_count,

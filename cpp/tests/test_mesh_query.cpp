@@ -520,6 +520,9 @@ TEST_CASE("closed_and_consistent: the sorting definition's verdict on closed and
         }
         const bool expected = closed_by_sorting(faces);
         CHECK_EQ(closed_and_consistent(faces.data(), static_cast<std::int64_t>(faces.size() / 3), vertex_count), expected);
+        // The 32-bit form (a hierarchy's compact corner indices) agrees.
+        const std::vector<std::int32_t> narrow(faces.begin(), faces.end());
+        CHECK_EQ(closed_and_consistent(narrow.data(), static_cast<std::int64_t>(narrow.size() / 3), vertex_count), expected);
         (expected ? closed : not_closed) += 1;
     }
     CHECK(closed > 1000);

@@ -47,6 +47,9 @@ bool closed_mod_two(const double* vertices, std::int64_t vertex_count, const std
 /// among the faces' edges and so does (v, u) (MeshBvh::closed). False without such an edge.
 bool closed_and_consistent(const std::int64_t* faces, std::int64_t face_count,
                            std::int64_t vertex_count);
+/// The same for 32-bit vertex indices (a MeshBvh's compact corner indices).
+bool closed_and_consistent(const std::int32_t* faces, std::int64_t face_count,
+                           std::int64_t vertex_count);
 
 /// What orient_faces did.
 struct FaceOrientation {
