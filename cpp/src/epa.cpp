@@ -161,20 +161,25 @@ struct Polytope {
     }
 
     bool next_border(const Vec3& w, int& top, HorizonEdge& h) {
-        while (top > 0) {
-            h = stack[--top];
+        if (top == 0) return false;
+        h = stack[--top];
+        for (;;) {
             EpaFace& face = faces[h.face];
-            if (!face.alive) continue;
-            // w sees the face when it lies beyond the face's plane (a sliver's zero normal
-            // and offset: never); the stored offset saves loading a vertex.
-            if (!(dot(face.normal, w) > face.offset)) return true;
-            kill(h.face);
-            // Recursion visited edge e+1, then e+2: push e+2 first.
-            const int e2 = kPrev[h.edge], e1 = kNext[h.edge];
-            stack[top++] = {face.adj[e2], face.adj_edge[e2]};
-            stack[top++] = {face.adj[e1], face.adj_edge[e1]};
+            if (face.alive) {
+                // w sees the face when it lies beyond the face's plane (a sliver's zero
+                // normal and offset: never); the stored offset saves loading a vertex.
+                if (!(dot(face.normal, w) > face.offset)) return true;
+                kill(h.face);
+                // Recursion visits edge e+1, then e+2: e+2 waits on the stack, e+1 is next
+                // (what a push and a pop would hand over).
+                const int e2 = kPrev[h.edge], e1 = kNext[h.edge];
+                stack[top++] = {face.adj[e2], face.adj_edge[e2]};
+                h = {face.adj[e1], face.adj_edge[e1]};
+                continue;
+            }
+            if (top == 0) return false;
+            h = stack[--top];
         }
-        return false;
     }
 
     void release() {
