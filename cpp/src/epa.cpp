@@ -143,35 +143,42 @@ struct Polytope {
         dead[dead_count++] = f;
     }
 
-    // Walk over the faces that see w, starting from the edges of face `first` (already
-    // killed), depth first (van den Bergen 2003, sec. 4.3.9): the visible region stays
-    // connected, so its border is one loop, handed to `border` edge by edge in order (each
-    // edge's living face and the edge's index in it), as the walk finds it. An explicit
-    // stack instead of recursion; edges are pushed in reverse so they are visited in the
-    // recursive order. Killed faces are freed only after the new faces are made
-    // (`release`), so none is reused while the walk still reads it, and the closest face
-    // keeps its data. `border` may make faces and link them to living faces: the walk reads
-    // only the adjacency of faces it kills, and a face beyond the border is never killed.
-    template <class Border>
-    void silhouette(int first, const Vec3& w, Border&& border) {
-        int top = 0;
+    // The walk over the faces that see w (van den Bergen 2003, sec. 4.3.9), depth first from
+    // the edges of a killed face (`start_walk`): the visible region stays connected, so its
+    // border is one loop, and `next_border` hands it over edge by edge in order (each edge's
+    // living face and the edge's index in it), killing the visible faces it passes; false
+    // when the walk is over. An explicit stack instead of recursion; edges are pushed in
+    // reverse so they are visited in the recursive order. Killed faces are freed only after
+    // the new faces are made (`release`), so none is reused while the walk still reads it,
+    // and the closest face keeps its data. The caller may make faces and link them to living
+    // faces between the calls: the walk reads only the adjacency of faces it kills, and a
+    // face beyond the border is never killed.
+    int start_walk(int first) {
         const EpaFace& start = faces[first];
+        int top = 0;
         for (int e = 2; e >= 0; --e) stack[top++] = {start.adj[e], start.adj_edge[e]};
-        while (top > 0) {
-            const HorizonEdge h = stack[--top];
+        return top;
+    }
+
+    bool next_border(const Vec3& w, int& top, HorizonEdge& h) {
+        if (top == 0) return false;
+        h = stack[--top];
+        for (;;) {
             EpaFace& face = faces[h.face];
-            if (!face.alive) continue;
-            // w sees the face when it lies beyond the face's plane (a sliver's zero normal
-            // and offset: never); the stored offset saves loading a vertex.
-            if (!(dot(face.normal, w) > face.offset)) {
-                border(h);
+            if (face.alive) {
+                // w sees the face when it lies beyond the face's plane (a sliver's zero
+                // normal and offset: never); the stored offset saves loading a vertex.
+                if (!(dot(face.normal, w) > face.offset)) return true;
+                kill(h.face);
+                // Recursion visits edge e+1, then e+2: e+2 waits on the stack, e+1 is next
+                // (what a push and a pop would hand over).
+                const int e2 = kPrev[h.edge], e1 = kNext[h.edge];
+                stack[top++] = {face.adj[e2], face.adj_edge[e2]};
+                h = {face.adj[e1], face.adj_edge[e1]};
                 continue;
             }
-            kill(h.face);
-            // Recursion visited edge e+1, then e+2: push e+2 first.
-            const int e2 = kPrev[h.edge], e1 = kNext[h.edge];
-            stack[top++] = {face.adj[e2], face.adj_edge[e2]};
-            stack[top++] = {face.adj[e1], face.adj_edge[e1]};
+            if (top == 0) return false;
+            h = stack[--top];
         }
     }
 
@@ -227,38 +234,42 @@ inline bool expand(Polytope& poly, int visible, double tol) {
     // edges (no list of them in between): each new face is linked to the living face beyond
     // its edge and to the previous new face, once the loop is seen to close there (the
     // previous face's edge ends where this one's starts); the last closes on the first.
+    // The first border edge is taken before the loop over the others, so no step asks
+    // whether a fan face exists yet (a branch whose outcome varied with the walk). A failure
+    // ends the walk at once: the polytope is then dropped, and the closest face's slot
+    // (killed, not released) keeps its data.
     poly.dead_count = 0;
     poly.kill(visible);
-    int count = 0;
-    bool ok = true;
-    int first = -1, previous = -1, previous_end = -1, first_start = -1;
-    poly.silhouette(visible, w, [&](const HorizonEdge& h) {
-        ++count;
-        if (!ok) return;
+    int top = poly.start_walk(visible);
+    // Adds the fan face over border edge h (b -> a in the living face, so a -> b in the new
+    // one) and links it to h's face; -1 when out of slots or on the wrong side of the origin.
+    const double limit = -tol * tol;
+    const auto fan_face = [&](const HorizonEdge& h, int& a, int& b) {
         const EpaFace& beyond = poly.faces[h.face];
-        // The edge runs b -> a in the living face, so a -> b in the new one.
-        const int a = beyond.v[kNext[h.edge]], b = beyond.v[h.edge];
+        a = beyond.v[kNext[h.edge]];
+        b = beyond.v[h.edge];
         const int f = poly.add_face(a, b, nw);
-        if (f < 0) {
-            ok = false;
-            return;
-        }
+        if (f < 0) return -1;
         poly.link(f, 0, h.face, h.edge);
-        if (poly.distance[f] < -tol * tol) ok = false;
-        if (previous < 0) {
-            first = f;
-            first_start = a;
-        } else if (previous_end != a) {
-            ok = false;
-        } else {
-            poly.link(previous, 1, f, 2);
-        }
+        return poly.distance[f] < limit ? -1 : f;
+    };
+    HorizonEdge h;
+    if (!poly.next_border(w, top, h)) return false;
+    int first_start, previous_end;
+    const int first = fan_face(h, first_start, previous_end);
+    if (first < 0) return false;
+    int previous = first, count = 1;
+    while (poly.next_border(w, top, h)) {
+        int a, b;
+        const int f = fan_face(h, a, b);
+        if (f < 0 || previous_end != a) return false;
+        poly.link(previous, 1, f, 2);
         previous = f;
         previous_end = b;
-    });
-    if (ok && count >= 3 && previous_end == first_start) poly.link(previous, 1, first, 2);
-    else ok = false;
-    if (!ok) return false;
+        ++count;
+    }
+    if (count < 3 || previous_end != first_start) return false;
+    poly.link(previous, 1, first, 2);
     poly.release();
     return true;
 }
