@@ -309,6 +309,7 @@ public:
                 // among those alone.
                 const Vec3 p = to_other(e.mesh, t[e.k]), q = to_other(e.mesh, t[(e.k + 1) % 3]);
                 const TriangleMarks& marks = *marks_[e.mesh];
+                const std::int32_t partner = marks.near_entry(e.index).partner;  // a seed of the pieces
                 cuts.assign({0.0, 1.0});
                 // A triangle whose box misses the segment's (compared exactly, on the same
                 // coordinates) has no point in common with it: not a cut.
@@ -324,7 +325,8 @@ public:
                 add_pieces(p, q, cuts,
                                 [&](const Vec3& p) {
                                     const Order order{e.mesh, 1, 3 * std::int64_t{e.index} + e.k, piece++};
-                                    if (ok && inside_box(root, p)) ok = try_point(e.mesh, p, Side::UNKNOWN, nullptr, order);
+                                    if (ok && inside_box(root, p))
+                                        ok = try_point(e.mesh, p, Side::UNKNOWN, nullptr, order, {partner, kNaN});
                                 });
             } else {
                 wedges_.clear();
@@ -468,7 +470,6 @@ private:
             push_node(m, node.index, e.near);
             return true;
         }
-        const Vec3* near = other.triangle(e.near);
         for (std::int32_t i = node.index; i < node.index + node.count; ++i)
             for (int k = 0; k < 3; ++k) {
                 const std::int32_t v = self.triangle_vertices(i)[k];
@@ -481,13 +482,17 @@ private:
                 const Vec3 p = to_other(m, self.vertices()[static_cast<size_t>(v)]);
                 // Bounded by the node's triangle and by the triangles near its own; a point at
                 // distance 0 from one (on the surface: the search would find 0) gives nothing.
-                double bound = triangle_distance_of(p, near);
+                // The nearest of them seeds the point's distance search.
+                DistanceSeed seed = seed_of(other, e.near, p);
                 const TriangleMarks& marks = *marks_[m];
                 const auto [first, last] = marks.near_range(i);
-                for (std::int32_t n = first; n < last && bound > 0.0; ++n)
-                    bound = min2(bound, triangle_distance_of(p, other.triangle(marks.others[static_cast<size_t>(n)])));
+                for (std::int32_t n = first; n < last && seed.squared > 0.0; ++n) {
+                    const DistanceSeed next = seed_of(other, marks.others[static_cast<size_t>(n)], p);
+                    if (next.squared < seed.squared) seed = next;
+                }
+                const double bound = std::sqrt(seed.squared);
                 if (bound == 0.0 || !(bound + slack_ > best)) continue;
-                if (!try_point(m, p, side, &side, Order{m, 0, v, 0})) return false;
+                if (!try_point(m, p, side, &side, Order{m, 0, v, 0}, seed)) return false;
             }
         return true;
     }
@@ -505,8 +510,10 @@ private:
     }
 
     // A point of mesh m (other's frame) whose side is `known` (UNKNOWN: an exact test, its
-    // verdict stored in `*store` when given): the new best when inside and deeper.
-    bool try_point(int m, const Vec3& p, Side known, Side* store, const Order& order) {
+    // verdict stored in `*store` when given): the new best when inside and deeper. `seed`, a
+    // triangle of the other mesh near p and p's squared distance to it (NaN: not measured
+    // yet), bounds p's distance searches.
+    bool try_point(int m, const Vec3& p, Side known, Side* store, const Order& order, DistanceSeed seed) {
         const MeshBvh& other = m == 0 ? b_ : a_;
         if (known == Side::UNKNOWN) {  // a recorded ball may say outside before any measuring
             known = recorded_side(m == 0 ? 1 : 0, p);
@@ -515,9 +522,10 @@ private:
                 return true;
             }
         }
+        if (std::isnan(seed.squared)) seed = seed_of(other, seed.triangle, p);
         std::int32_t triangle = -1;
-        double d = distance_beyond(other, p, best, &triangle);
-        if (!beats(d, order, [&] { return distance_beyond(other, p, 0.0, &triangle); })) return true;
+        double d = distance_beyond(other, p, best, &triangle, seed);
+        if (!beats(d, order, [&] { return distance_beyond(other, p, 0.0, &triangle, seed); })) return true;
         if (known == Side::UNKNOWN) {
             // d is p's exact distance to other's surface here (beats measured it in full)
             if (!may_test()) return false;
@@ -544,8 +552,9 @@ private:
         // surface's distance is a minimum over its triangles, these among them): a point that
         // cannot reach the best depth is not measured. Most are, as the points step off the
         // pair's shared points by at most half the shorter triangle's longest edge.
-        const double own = max2(triangle_distance_of(c.point, a_.triangle(pair.a)),
-                                triangle_distance_of(in_b, b_.triangle(pair.b)));
+        // The two seed the point's distance searches.
+        const DistanceSeed seed_a = seed_of(a_, pair.a, c.point), seed_b = seed_of(b_, pair.b, in_b);
+        const double own = max2(std::sqrt(seed_a.squared), std::sqrt(seed_b.squared));
         if (!(own + slack_ > best)) return true;
         // A point a recorded ball puts outside either solid is not measured.
         Side side_a = recorded_side(0, c.point);
@@ -557,8 +566,8 @@ private:
         double da = 0.0, db = 0.0, floor_used = 0.0;
         auto measure = [&](double floor) {
             floor_used = floor;
-            da = distance_beyond(a_, c.point, floor);
-            db = distance_beyond(b_, rel_.apply_inverse(c.point), floor);
+            da = distance_beyond(a_, c.point, floor, nullptr, seed_a);
+            db = distance_beyond(b_, in_b, floor, nullptr, seed_b);
             c.farther_is_a = da >= db;
             return std::fmax(da, db);
         };
