@@ -148,12 +148,22 @@ double distance_beyond(const MeshBvh& mesh, const Vec3& point, double floor, std
 // An upper bound of the distance from `point` (mesh's local frame) to the surface, within
 // `slack` of it: the branch and bound of distance_beyond with boxes pruned once they cannot
 // beat the best distance found by more than `slack`, stopped as it at a triangle within
-// `floor`. Writes the triangle (leaf order) at the returned distance to `*triangle`.
-double distance_within(const MeshBvh& mesh, const Vec3& point, double floor, double slack, std::int32_t* triangle) {
+// `floor`. Writes the triangle (leaf order) at the returned distance to `*triangle`. A `seed`
+// starts it as a triangle found first (its distance sqrt(seed.squared)).
+double distance_within(const MeshBvh& mesh, const Vec3& point, double floor, double slack, std::int32_t* triangle,
+                       const DistanceSeed& seed) {
     const double floor2 = floor * floor;
     const std::vector<BvhNode>& nodes = mesh.nodes();
     double best = kInf, prune2 = kInf;
     bool found = false;
+    if (seed.triangle >= 0) {
+        best = std::sqrt(seed.squared);
+        const double reach = max2(0.0, best - slack);
+        prune2 = reach * reach;
+        found = true;
+        *triangle = seed.triangle;
+        if (best * best <= floor2) return best;
+    }
     thread_local std::vector<std::pair<std::int32_t, double>> stack;  // kept, as distance_beyond's
     stack.assign(1, {0, point_node_squared_distance(mesh, 0, point)});
     while (!stack.empty()) {

@@ -115,7 +115,9 @@ double distance_beyond(const MeshBvh& mesh, const Vec3& point, double floor, std
 
 /// An upper bound of the distance from `point` (mesh's local frame) to the surface, within
 /// `slack` of it, stopped at a triangle within `floor` (mesh_depth.cpp).
-double distance_within(const MeshBvh& mesh, const Vec3& point, double floor, double slack, std::int32_t* triangle);
+/// `seed`, when given, is taken as the first triangle found.
+double distance_within(const MeshBvh& mesh, const Vec3& point, double floor, double slack, std::int32_t* triangle,
+                       const DistanceSeed& seed = DistanceSeed{});
 
 /// Where the search over the points whose other mesh is closed left the depth.
 struct ClosedDepth {

@@ -258,10 +258,12 @@ public:
     }
 
     // Queues the wedge points (both meshes closed) of each crossing pair that gets them, made
-    // when the pair comes up. Every one lies within the pair's reach of a's centroid q: a
-    // step of at most h / 2 from q, b's centroid or a shared point, which lies on an edge of
-    // one of the triangles (triangles_intersect's witnesses), so no farther from q than their
-    // farthest corner. Its depth is then at most q's distances to the two triangles plus that.
+    // when the pair comes up. A point's depth is at most its distances to the pair's two
+    // triangles (each surface's distance is a minimum over its triangles), and every point
+    // steps at most h / 2 (h: the shorter triangle's longest edge) off a point of both
+    // triangles (a shared point: triangles_intersect's witnesses) or off one triangle's
+    // centroid, whose distance to that triangle is 0: its depth is at most h / 2 plus the
+    // larger distance of a centroid to the other triangle.
     void add_wedges(const std::vector<CrossingPair>& pairs) {
         pairs_ = &pairs;
         const size_t stride = wedge_stride(pairs);
@@ -269,13 +271,11 @@ public:
             const Vec3* ta = a_.triangle(pairs[k].a);
             const Vec3* tb_local = b_.triangle(pairs[k].b);
             const Vec3 tb[3] = {rel_.apply(tb_local[0]), rel_.apply(tb_local[1]), rel_.apply(tb_local[2])};
-            const Vec3 q = (ta[0] + ta[1] + ta[2]) / 3.0;
-            double reach = norm((tb[0] + tb[1] + tb[2]) / 3.0 - q);
-            for (int i = 0; i < 3; ++i) reach = max2(reach, max2(norm(ta[i] - q), norm(tb[i] - q)));
-            reach += 0.5 * std::fmin(longest_edge(ta), longest_edge(tb));
-            const double da = triangle_distance_of(q, ta);
-            const double db = triangle_distance_of(rel_.apply_inverse(q), tb_local);
-            push({max2(da, db) + reach * (1.0 + 1e-9) + slack_, kWedge, 2, static_cast<std::int32_t>(k), 0});
+            const Vec3 centroid_a = (ta[0] + ta[1] + ta[2]) / 3.0;
+            const Vec3 centroid_b = (tb[0] + tb[1] + tb[2]) / 3.0;
+            const double reach = max2(triangle_distance_of(centroid_a, tb), triangle_distance_of(centroid_b, ta)) +
+                                 0.5 * std::fmin(longest_edge(ta), longest_edge(tb));
+            push({reach * (1.0 + 1e-9) + slack_, kWedge, 2, static_cast<std::int32_t>(k), 0});
         }
     }
 
@@ -442,14 +442,9 @@ private:
         const double floor = best - w.radius - slack_;
         std::int32_t near = 0;
         const Vec3 center = to_other(e.mesh, w.center);
-        double d = distance_within(other, center, max2(0.0, floor), w.radius, &near);
-        if (e.near >= 0) {  // the parent's triangle may be nearer than the one found
-            const double parent = triangle_distance_of(center, other.triangle(e.near));
-            if (parent < d) {
-                d = parent;
-                near = e.near;
-            }
-        }
+        // The parent's triangle, when known, starts the search (a bound to prune with).
+        const DistanceSeed seed = e.near >= 0 ? seed_of(other, e.near, center) : DistanceSeed{};
+        const double d = distance_within(other, center, max2(0.0, floor), w.radius, &near, seed);
         if (d <= floor) return;
         push({d + w.radius + slack_, kNode, e.mesh, e.index, 0, near, true});
     }
