@@ -559,15 +559,31 @@ private:
         // Each distance is exact when above the floor of its search (then a ball free of
         // that surface, recorded with the point's side of it).
         double da = 0.0, db = 0.0, floor_used = 0.0;
+        bool have_db = false;
         auto measure = [&](double floor) {
             floor_used = floor;
             da = distance_beyond(a_, c.point, floor, nullptr, seed_a);
             db = distance_beyond(b_, in_b, floor, nullptr, seed_b);
+            have_db = true;
             c.farther_is_a = da >= db;
             return std::fmax(da, db);
         };
-        c.distance = measure(best);
-        if (!beats(c.distance, order, [&] { return measure(0.0); })) return true;
+        // The point's distance to b, measured when needed (as measure(best) would): a point
+        // whose distance to a exceeds the best beats it whatever that distance, which then
+        // matters only for a point inside a.
+        auto measure_b = [&] {
+            if (have_db) return;
+            db = distance_beyond(b_, in_b, floor_used, nullptr, seed_b);
+            have_db = true;
+            c.farther_is_a = da >= db;
+            c.distance = std::fmax(da, db);
+        };
+        floor_used = best;
+        da = distance_beyond(a_, c.point, best, nullptr, seed_a);
+        if (!(da > best)) {
+            measure_b();
+            if (!beats(c.distance, order, [&] { return measure(0.0); })) return true;
+        }
         if (side_a == Side::UNKNOWN || (side_a == Side::INSIDE && side_b == Side::UNKNOWN)) {
             if (!may_test()) return false;
             if (side_a == Side::UNKNOWN) {
@@ -575,11 +591,13 @@ private:
                 if (da > floor_used) record_side(0, c.point, da, side_a);
             }
             if (side_a == Side::INSIDE && side_b == Side::UNKNOWN) {
+                measure_b();
                 side_b = inside_mesh(b_, in_b, &work_) ? Side::INSIDE : Side::OUTSIDE;
                 if (db > floor_used) record_side(1, in_b, db, side_b);
             }
         }
         if (side_a == Side::INSIDE && side_b == Side::INSIDE) {
+            measure_b();
             best = c.distance;
             winner = c;
             winner_triangle = -1;
