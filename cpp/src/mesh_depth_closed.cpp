@@ -337,7 +337,7 @@ public:
                 // second allowance for the rounding of those points).
                 add_pair_wedge_points(a_, b_, rel_, *pairs_, static_cast<size_t>(e.index), wedges_, best - 2.0 * slack_);
                 for (size_t k = 0; k < wedges_.size() && ok; ++k)
-                    ok = try_wedge(wedges_[k], pair, Order{2, e.index, static_cast<std::int64_t>(k), 0});
+                    ok = try_wedge(wedges_[k], pair, Order{2, e.index, static_cast<std::int64_t>(k), 0}, k < 6 && k % 2 == 0);
             }
             if (!ok) return false;
         }
@@ -558,7 +558,9 @@ private:
     }
 
     // A wedge point of crossing pair `pair`: the new best when inside both and deeper.
-    bool try_wedge(DepthCandidate& c, const CrossingPair& pair, const Order& order) {
+    // `b_first`: a point stepped from a's centroid into a, whose side of b is the open
+    // question (most such points are outside b): b is tested first.
+    bool try_wedge(DepthCandidate& c, const CrossingPair& pair, const Order& order, bool b_first) {
         // Outside a closed mesh's box is outside it (the test's verdict, without its work).
         const Vec3 in_b = rel_.apply_inverse(c.point);
         if (!inside_box(a_.nodes()[0], c.point) || !inside_box(b_.nodes()[0], in_b)) return true;
@@ -603,16 +605,25 @@ private:
             measure_b();
             if (!beats(c.distance, order, [&] { return measure(0.0); })) return true;
         }
-        if (side_a == Side::UNKNOWN || (side_a == Side::INSIDE && side_b == Side::UNKNOWN)) {
+        // Sides not known yet are tested (one count for the point), the second only when the
+        // first says inside.
+        if (side_a == Side::UNKNOWN || side_b == Side::UNKNOWN) {
             if (!may_test()) return false;
-            if (side_a == Side::UNKNOWN) {
+            auto test_a = [&] {
                 side_a = inside_mesh(a_, c.point, &work_) ? Side::INSIDE : Side::OUTSIDE;
                 if (da > floor_used) record_side(0, c.point, da, side_a);
-            }
-            if (side_a == Side::INSIDE && side_b == Side::UNKNOWN) {
+            };
+            auto test_b = [&] {
                 measure_b();
                 side_b = inside_mesh(b_, in_b, &work_) ? Side::INSIDE : Side::OUTSIDE;
                 if (db > floor_used) record_side(1, in_b, db, side_b);
+            };
+            if (b_first) {
+                if (side_b == Side::UNKNOWN) test_b();
+                if (side_b == Side::INSIDE && side_a == Side::UNKNOWN) test_a();
+            } else {
+                if (side_a == Side::UNKNOWN) test_a();
+                if (side_a == Side::INSIDE && side_b == Side::UNKNOWN) test_b();
             }
         }
         if (side_a == Side::INSIDE && side_b == Side::INSIDE) {
