@@ -103,9 +103,20 @@ void add_pair_wedge_points(const MeshBvh& a, const MeshBvh& b, const Relative& r
 // some value <= floor: the branch and bound of closest_point, stopped at the first triangle
 // within `floor` (such a point cannot raise a maximum that is already `floor`). Writes the
 // triangle (leaf order) at the returned distance to `*triangle` when given.
-double distance_beyond(const MeshBvh& mesh, const Vec3& point, double floor, std::int32_t* triangle) {
+//
+// A `seed` (a triangle and the point's squared distance to it, as closest_point_on_triangle
+// gives it) bounds the answer from above: boxes farther than it are not opened, and when it
+// is within `floor` the search is not run. The triangles that can attain the minimum lie in
+// boxes no farther than the seed, visited in the same order, so the distance and the triangle
+// returned above `floor` are the unseeded search's, bit for bit.
+double distance_beyond(const MeshBvh& mesh, const Vec3& point, double floor, std::int32_t* triangle, const DistanceSeed& seed) {
     const double floor2 = floor * floor;
+    if (seed.triangle >= 0 && floor >= 0.0 && seed.squared <= floor2) {
+        if (triangle != nullptr) *triangle = seed.triangle;
+        return std::sqrt(seed.squared);
+    }
     const std::vector<BvhNode>& nodes = mesh.nodes();
+    const double limit2 = seed.triangle >= 0 ? seed.squared : kInf;
     double best2 = kInf;
     bool found = false;
     // The thread's stack, kept between calls: the depth search runs thousands of these, and
@@ -115,7 +126,7 @@ double distance_beyond(const MeshBvh& mesh, const Vec3& point, double floor, std
     while (!stack.empty()) {
         const auto [index, bound] = stack.back();
         stack.pop_back();
-        if (found && bound >= best2) continue;
+        if ((found && bound >= best2) || bound > limit2) continue;
         const BvhNode& node = nodes[static_cast<size_t>(index)];
         if (node.is_leaf()) {
             for (std::int32_t i = node.index; i < node.index + node.count; ++i) {
@@ -137,12 +148,22 @@ double distance_beyond(const MeshBvh& mesh, const Vec3& point, double floor, std
 // An upper bound of the distance from `point` (mesh's local frame) to the surface, within
 // `slack` of it: the branch and bound of distance_beyond with boxes pruned once they cannot
 // beat the best distance found by more than `slack`, stopped as it at a triangle within
-// `floor`. Writes the triangle (leaf order) at the returned distance to `*triangle`.
-double distance_within(const MeshBvh& mesh, const Vec3& point, double floor, double slack, std::int32_t* triangle) {
+// `floor`. Writes the triangle (leaf order) at the returned distance to `*triangle`. A `seed`
+// starts it as a triangle found first (its distance sqrt(seed.squared)).
+double distance_within(const MeshBvh& mesh, const Vec3& point, double floor, double slack, std::int32_t* triangle,
+                       const DistanceSeed& seed) {
     const double floor2 = floor * floor;
     const std::vector<BvhNode>& nodes = mesh.nodes();
     double best = kInf, prune2 = kInf;
     bool found = false;
+    if (seed.triangle >= 0) {
+        best = std::sqrt(seed.squared);
+        const double reach = max2(0.0, best - slack);
+        prune2 = reach * reach;
+        found = true;
+        *triangle = seed.triangle;
+        if (best * best <= floor2) return best;
+    }
     thread_local std::vector<std::pair<std::int32_t, double>> stack;  // kept, as distance_beyond's
     stack.assign(1, {0, point_node_squared_distance(mesh, 0, point)});
     while (!stack.empty()) {

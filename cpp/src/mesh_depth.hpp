@@ -12,6 +12,7 @@
 
 #include "meshcol/mesh_bvh.hpp"
 #include "meshcol/mesh_query.hpp"
+#include "meshcol/triangle.hpp"
 #include "meshcol/vec.hpp"
 #include "mesh_query_detail.hpp"
 
@@ -92,14 +93,31 @@ void add_pair_wedge_points(const MeshBvh& a, const MeshBvh& b, const Relative& r
                            const std::vector<CrossingPair>& pairs, size_t k, std::vector<DepthCandidate>& out,
                            double floor = -kInf);
 
-/// Distance from `point` (mesh's local frame) to the surface when it exceeds `floor`;
+/// A triangle (leaf order) of a mesh and a point's squared distance to it
+/// (closest_point_on_triangle's): an upper bound of the point's squared distance to the
+/// surface. None when `triangle` is negative.
+struct DistanceSeed {
+    std::int32_t triangle = -1;
+    double squared = kInf;
+};
+
+/// The squared distance from `p` to triangle `i` of `mesh` as a seed.
+inline DistanceSeed seed_of(const MeshBvh& mesh, std::int32_t i, const Vec3& p) {
+    return {i, squared_norm(closest_point_on_triangle(p, mesh.triangle(i)) - p)};
+}
+
+/// Distance from `point` (mesh's local frame) to the surface when it exceeds `floor` (>= 0);
 /// otherwise some value <= floor (mesh_depth.cpp). Writes the triangle (leaf order) at the
-/// returned distance to `*triangle` when given.
-double distance_beyond(const MeshBvh& mesh, const Vec3& point, double floor, std::int32_t* triangle = nullptr);
+/// returned distance to `*triangle` when given. `seed`, when given, prunes the search
+/// (the same answer above `floor`).
+double distance_beyond(const MeshBvh& mesh, const Vec3& point, double floor, std::int32_t* triangle = nullptr,
+                       const DistanceSeed& seed = DistanceSeed{});
 
 /// An upper bound of the distance from `point` (mesh's local frame) to the surface, within
 /// `slack` of it, stopped at a triangle within `floor` (mesh_depth.cpp).
-double distance_within(const MeshBvh& mesh, const Vec3& point, double floor, double slack, std::int32_t* triangle);
+/// `seed`, when given, is taken as the first triangle found.
+double distance_within(const MeshBvh& mesh, const Vec3& point, double floor, double slack, std::int32_t* triangle,
+                       const DistanceSeed& seed = DistanceSeed{});
 
 /// Where the search over the points whose other mesh is closed left the depth.
 struct ClosedDepth {
