@@ -76,7 +76,8 @@ void add_pair_wedge_points(const MeshBvh& a, const MeshBvh& b, const Relative& r
         const Vec3 centroid_b = (tb[0] + tb[1] + tb[2]) / 3.0;
         for (double step : {0.5 * h, 0.125 * h, 0.03125 * h}) {
             // Each triangle's centroid, stepped into its own solid: finds coincident and
-            // coplanar overlaps, whose shared points all lie on edges of both.
+            // coplanar overlaps, whose shared points all lie on edges of both. a's and b's in
+            // turn (wedge_point_from_a reads this order).
             out.push_back({centroid_a - na * (step / la), 0.0, 2, false});
             out.push_back({centroid_b - nb * (step / lb), 0.0, 2, false});
         }

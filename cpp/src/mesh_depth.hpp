@@ -87,11 +87,16 @@ void add_pieces(const Vec3& p, const Vec3& q, std::vector<double>& cuts, Add add
 }
 
 /// The wedge points of crossing pair k (mesh_depth.cpp), appended to `out`: three stepped
-/// from each triangle's centroid, then six from each of two shared points, these left out when
-/// their steps (which bound their distances to both triangles) cannot exceed `floor`.
+/// from each triangle's centroid (a's and b's in turn), then six from each of two shared
+/// points, these left out when their steps (which bound their distances to both triangles)
+/// cannot exceed `floor`.
 void add_pair_wedge_points(const MeshBvh& a, const MeshBvh& b, const Relative& rel,
                            const std::vector<CrossingPair>& pairs, size_t k, std::vector<DepthCandidate>& out,
                            double floor = -kInf);
+
+/// Whether wedge point k of a pair (add_pair_wedge_points' order) is one stepped from a's
+/// centroid into a: of such a point the open question is its side of b.
+inline bool wedge_point_from_a(size_t k) { return k < 6 && k % 2 == 0; }
 
 /// A triangle (leaf order) of a mesh and a point's squared distance to it
 /// (closest_point_on_triangle's): an upper bound of the point's squared distance to the

@@ -337,7 +337,8 @@ public:
                 // second allowance for the rounding of those points).
                 add_pair_wedge_points(a_, b_, rel_, *pairs_, static_cast<size_t>(e.index), wedges_, best - 2.0 * slack_);
                 for (size_t k = 0; k < wedges_.size() && ok; ++k)
-                    ok = try_wedge(wedges_[k], pair, Order{2, e.index, static_cast<std::int64_t>(k), 0}, k < 6 && k % 2 == 0);
+                    ok = try_wedge(wedges_[k], pair, Order{2, e.index, static_cast<std::int64_t>(k), 0},
+                                  wedge_point_from_a(k));
             }
             if (!ok) return false;
         }
