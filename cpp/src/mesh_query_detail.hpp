@@ -318,10 +318,18 @@ bool inside_mesh(const MeshBvh& mesh, const Vec3& p, long long* work);
 bool first_crossing(const MeshBvh& a, const MeshBvh& b, const Relative& rel, std::int32_t* triangle_a,
                     std::int32_t* triangle_b, Vec3* witness, CrossingPair* touching = nullptr);
 
+/// How mark_crossing_triangles finds its triangle pairs: by the contacts' faster descents made
+/// to keep the plain oriented descent's order (kFast, the query's), or by that descent itself
+/// (kPlain, for a test to compare with).
+enum class MarkDescent { kFast, kPlain };
+
 /// The descent of mesh_intersects run to the end: the intersecting triangle pairs in descent
-/// order, and the marks of both meshes' triangles (mesh_intersection.cpp).
+/// order, and the marks of both meshes' triangles (mesh_intersection.cpp). Both forms of
+/// `descent` give the same crossing pairs in the same order, the same crossing marks and
+/// partners; their near triangles differ only among pairs farther apart than rel.slack.
 void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative& rel, TriangleMarks& in_a,
-                             TriangleMarks& in_b, std::vector<CrossingPair>& pairs);
+                             TriangleMarks& in_b, std::vector<CrossingPair>& pairs,
+                             MarkDescent descent = MarkDescent::kFast);
 
 /// Whether two triangles (one frame) share a point: triangles_intersect(ta, tb, nullptr), the
 /// same exact verdict, decided by the order of the two planes' crossings along their common
