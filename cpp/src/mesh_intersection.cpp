@@ -583,7 +583,7 @@ __attribute__((noinline)) bool for_each_touching_pair_aligned(const MeshBvh& a, 
             // touch it touches none of them.
             const TriangleBox box_y = b_in_a.box(ib);
             const auto boxes_meet = [margin2](const TriangleBox& p, const TriangleBox& q) {
-                if constexpr (plain_order) return triangle_box_squared_distance(p, q) <= margin2;
+                if constexpr (plain_order) return boxes_squared_distance_at_once(p, q) <= margin2;
                 return triangle_boxes_touch_at_once(p, q);
             };
             for (std::int32_t i = x.index; i < x.index + x.count; ++i) {
@@ -615,7 +615,7 @@ __attribute__((noinline)) bool for_each_touching_pair_aligned(const MeshBvh& a, 
         if constexpr (plain_order) {
             const bool descend_a = !x.is_leaf() && (y.is_leaf() || node_size(x) >= node_size(y));
             const auto near = [&](std::int32_t child_a, std::int32_t child_b) {
-                return triangle_box_squared_distance(node_box(na[static_cast<size_t>(child_a)]), b_in_a.box(child_b)) <=
+                return boxes_squared_distance_at_once(node_box(na[static_cast<size_t>(child_a)]), b_in_a.box(child_b)) <=
                        margin2;
             };
             const std::int32_t first_a = descend_a ? ia + 1 : ia, first_b = descend_a ? ib : ib + 1;
@@ -930,7 +930,7 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
     };
     std::vector<std::pair<std::int32_t, std::int32_t>> near_pairs;
     const auto mark = [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
-        if (planes_separate(a, i, ta, b, j, tb, rel)) return false;
+        if (planes_separate<true>(a, i, ta, b, j, tb, rel)) return false;
         const auto si = static_cast<size_t>(i), sj = static_cast<size_t>(j);
         TriangleMarks::Near& near_a = entry(in_a, si);
         TriangleMarks::Near& near_b = entry(in_b, sj);

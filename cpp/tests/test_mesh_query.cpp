@@ -890,3 +890,35 @@ TEST_CASE("mesh query: the depth's marks by the fast descents are the plain desc
     CHECK(translated == 8);
     CHECK(crossing >= 12);
 }
+
+TEST_CASE("mesh query: the one-branch squared box distance is the branching one's, bit for bit") {
+    // boxes_squared_distance_at_once (the depth marks' axis-aligned descent) against
+    // triangle_box_squared_distance, on boxes whose bounds make gaps of zero, signed zeros,
+    // kTouchGap, tiny, large and ordinary sizes, compared as bytes.
+    const double g = mesh_detail::kTouchGap;
+    const double values[] = {-1.0, -0.5, -g, -0.0, 0.0, g, 0x1p-537, 1e-300, 1e-13, 0.3, 0.5, 1.0,
+                             std::nextafter(1.0, 2.0), 1e150};
+    constexpr int kValues = sizeof(values) / sizeof(values[0]);
+    fixtures::Uniform uniform{5353};  // in [-1, 1)
+    const auto pick = [&] {
+        const double v = values[static_cast<int>((uniform() + 1.0) * 0.5 * kValues) % kValues];
+        return uniform() < 0.0 ? v : v * (1.0 + uniform());  // exact values, and values near them
+    };
+    int within = 0, apart = 0;
+    for (int trial = 0; trial < 20000; ++trial) {
+        mesh_detail::TriangleBox a, b;
+        for (int k = 0; k < 3; ++k) {
+            for (mesh_detail::TriangleBox* box : {&a, &b}) {
+                const double p = pick(), q = pick();
+                box->lower[k] = q < p ? q : p;
+                box->upper[k] = q < p ? p : q;
+            }
+        }
+        const double expected = mesh_detail::triangle_box_squared_distance(a, b);
+        const double got = mesh_detail::boxes_squared_distance_at_once(a, b);
+        CHECK(std::memcmp(&expected, &got, sizeof(double)) == 0);
+        (expected == 0.0 ? within : apart) += 1;
+    }
+    CHECK(within > 1000);
+    CHECK(apart > 1000);
+}
