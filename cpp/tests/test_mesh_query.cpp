@@ -705,6 +705,20 @@ fixtures::TriangleMesh torus(int around, int across, double minor) {
     return m;
 }
 
+// Two boxes whose bounds on each axis are two draws of `pick`, the smaller the lower.
+template <class Pick>
+std::pair<mesh_detail::TriangleBox, mesh_detail::TriangleBox> random_boxes(Pick& pick) {
+    mesh_detail::TriangleBox a, b;
+    for (int k = 0; k < 3; ++k) {
+        for (mesh_detail::TriangleBox* box : {&a, &b}) {
+            const double p = pick(), q = pick();
+            box->lower[k] = q < p ? q : p;
+            box->upper[k] = q < p ? p : q;
+        }
+    }
+    return {a, b};
+}
+
 // The crossing pairs of for_each_crossing_pair (leaf order, sorted) and its work count.
 std::pair<std::vector<std::pair<std::int32_t, std::int32_t>>, long long> crossing_pairs(
     const MeshBvh& a, const MeshBvh& b, const mesh_detail::Relative& rel, long long refit_after) {
@@ -749,14 +763,7 @@ TEST_CASE("mesh query: the one-branch box test gives the three-branch test's ver
     const auto pick = [&] { return values[static_cast<int>((uniform() + 1.0) * 0.5 * kValues) % kValues]; };
     int touching = 0, apart = 0;
     for (int trial = 0; trial < 20000; ++trial) {
-        mesh_detail::TriangleBox a, b;
-        for (int k = 0; k < 3; ++k) {
-            for (mesh_detail::TriangleBox* box : {&a, &b}) {
-                const double p = pick(), q = pick();
-                box->lower[k] = q < p ? q : p;
-                box->upper[k] = q < p ? p : q;
-            }
-        }
+        const auto [a, b] = random_boxes(pick);
         const bool expected = mesh_detail::triangle_boxes_touch(a, b);
         CHECK_EQ(mesh_detail::triangle_boxes_touch_at_once(a, b), expected);
         (expected ? touching : apart) += 1;
@@ -906,14 +913,7 @@ TEST_CASE("mesh query: the one-branch squared box distance is the branching one'
     };
     int within = 0, apart = 0;
     for (int trial = 0; trial < 20000; ++trial) {
-        mesh_detail::TriangleBox a, b;
-        for (int k = 0; k < 3; ++k) {
-            for (mesh_detail::TriangleBox* box : {&a, &b}) {
-                const double p = pick(), q = pick();
-                box->lower[k] = q < p ? q : p;
-                box->upper[k] = q < p ? p : q;
-            }
-        }
+        const auto [a, b] = random_boxes(pick);
         const double expected = mesh_detail::triangle_box_squared_distance(a, b);
         const double got = mesh_detail::boxes_squared_distance_at_once(a, b);
         CHECK(std::memcmp(&expected, &got, sizeof(double)) == 0);
