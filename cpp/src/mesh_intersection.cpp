@@ -555,9 +555,10 @@ struct RefitB {
 // With `plain_order` (the depth query's marks), it descends as the plain oriented descent
 // does (for_each_touching_pair neither ordered nor split on both sides: the larger node of a
 // pair split, the pairs under its first child first), so that it meets the pairs that both
-// visit in that descent's order, and compares the boxes within sqrt(margin2)
-// (triangle_box_squared_distance, as for_each_touching_pair with a margin): every triangle
-// pair whose boxes are that close is visited. A triangle's box lies in its node's, and the
+// visit in that descent's order, and compares the boxes within sqrt(margin2) (their
+// triangle_box_squared_distance, as for_each_touching_pair with a margin, formed without a
+// branch by boxes_squared_distance_at_once): every triangle pair whose boxes are that close
+// is visited. A triangle's box lies in its node's, and the
 // moved and refitted boxes round monotonically, so a node pair's squared distance is at most
 // that of each triangle pair under it: no pair within the margin is pruned.
 template <bool plain_order = false, class BInA, class Visit>
@@ -906,8 +907,8 @@ bool first_crossing(const MeshBvh& a, const MeshBvh& b, const Relative& rel, std
 // so a triangle pair closer than that is never pruned. A pair that planes_separate puts
 // strictly apart (farther than rel.slack across a plane) is neither crossing nor near: its
 // triangles then stay in the region pass's joins (mesh_depth_closed.cpp), whose vertices are
-// decided a region at a time (on the benchmark's touching family 3-15% fewer inside tests,
-// panda link3's near set 175 -> 19). It runs by the contacts' faster descents made to keep its
+// decided a region at a time (on the benchmark's touching family 1-8% fewer inside tests,
+// on panda link3's near poses 175 -> 19). It runs by the contacts' faster descents made to keep its
 // order (for_each_near_pair_in_order): the same crossing pairs in the same order.
 void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative& rel, TriangleMarks& in_a,
                              TriangleMarks& in_b, std::vector<CrossingPair>& pairs, MarkDescent descent) {
