@@ -7,6 +7,7 @@
 #include <cstring>
 #include <limits>
 #include <random>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -704,6 +705,20 @@ fixtures::TriangleMesh torus(int around, int across, double minor) {
     return m;
 }
 
+// Two boxes whose bounds on each axis are two draws of `pick`, the smaller the lower.
+template <class Pick>
+std::pair<mesh_detail::TriangleBox, mesh_detail::TriangleBox> random_boxes(Pick& pick) {
+    mesh_detail::TriangleBox a, b;
+    for (int k = 0; k < 3; ++k) {
+        for (mesh_detail::TriangleBox* box : {&a, &b}) {
+            const double p = pick(), q = pick();
+            box->lower[k] = q < p ? q : p;
+            box->upper[k] = q < p ? p : q;
+        }
+    }
+    return {a, b};
+}
+
 // The crossing pairs of for_each_crossing_pair (leaf order, sorted) and its work count.
 std::pair<std::vector<std::pair<std::int32_t, std::int32_t>>, long long> crossing_pairs(
     const MeshBvh& a, const MeshBvh& b, const mesh_detail::Relative& rel, long long refit_after) {
@@ -748,14 +763,7 @@ TEST_CASE("mesh query: the one-branch box test gives the three-branch test's ver
     const auto pick = [&] { return values[static_cast<int>((uniform() + 1.0) * 0.5 * kValues) % kValues]; };
     int touching = 0, apart = 0;
     for (int trial = 0; trial < 20000; ++trial) {
-        mesh_detail::TriangleBox a, b;
-        for (int k = 0; k < 3; ++k) {
-            for (mesh_detail::TriangleBox* box : {&a, &b}) {
-                const double p = pick(), q = pick();
-                box->lower[k] = q < p ? q : p;
-                box->upper[k] = q < p ? p : q;
-            }
-        }
+        const auto [a, b] = random_boxes(pick);
         const bool expected = mesh_detail::triangle_boxes_touch(a, b);
         CHECK_EQ(mesh_detail::triangle_boxes_touch_at_once(a, b), expected);
         (expected ? touching : apart) += 1;
@@ -828,4 +836,89 @@ TEST_CASE("mesh query: a turned pair's refitted descent lists every crossing pai
     CHECK(from_root == expected);
     CHECK_EQ(work_root, touching);
     CHECK(crossing_pairs(base, top, flush, std::numeric_limits<long long>::max()).first == expected);
+}
+
+TEST_CASE("mesh query: the depth's marks by the fast descents are the plain descent's") {
+    // mark_crossing_triangles finds its pairs by the contacts' descents (axis-aligned boxes
+    // under a translation, refitted ones for a dense turned pair) and puts them in the plain
+    // oriented descent's order: the crossing pairs must be that descent's in its order, with
+    // the same crossing marks and partners; the near pairs may differ only among those whose
+    // boxes are within rel.slack, and under a translation hold the plain descent's.
+    const MeshBvh ring = torus(64, 32, 0.3).bvh();
+    const MeshBvh base = fixtures::box_mesh({0, 0, 0}, {2, 2, 1}).bvh();
+    const MeshBvh top = fixtures::box_mesh({0.25, 0.5, 1}, {1.75, 1.5, 2}).bvh();
+    fixtures::Uniform uniform{3131};  // in [-1, 1)
+    struct Case {
+        const MeshBvh *a, *b;
+        Pose pa, pb;
+    };
+    std::vector<Case> cases;
+    for (int trial = 0; trial < 6; ++trial) {
+        const Pose pa = posed(uniform(), uniform(), uniform(), uniform(), {0.0, 0.0, 0.0});
+        const Vec3 shift{0.3 * uniform(), 0.3 * uniform(), 0.1 * uniform()};
+        Pose moved = pa;
+        moved.translation = shift;
+        cases.push_back({&ring, &ring, pa, moved});  // translated
+        cases.push_back({&ring, &ring, pa, posed(uniform(), uniform(), uniform(), uniform(), shift)});  // turned
+    }
+    cases.push_back({&base, &top, at(0, 0, 0), at(0, 0, 0)});  // flush faces: every gap exactly 0
+    cases.push_back({&ring, &ring, at(0, 0, 0), at(0, 0, 0)});  // coincident surfaces
+    int translated = 0, crossing = 0;
+    for (const Case& c : cases) {
+        const mesh_detail::Relative rel(c.pa, c.pb, *c.a, *c.b);
+        mesh_detail::TriangleMarks fast_a, fast_b, plain_a, plain_b;
+        std::vector<mesh_detail::CrossingPair> fast, plain;
+        mesh_detail::mark_crossing_triangles(*c.a, *c.b, rel, fast_a, fast_b, fast);
+        mesh_detail::mark_crossing_triangles(*c.a, *c.b, rel, plain_a, plain_b, plain,
+                                             mesh_detail::MarkDescent::kPlain);
+        REQUIRE(fast.size() == plain.size());
+        for (size_t k = 0; k < fast.size(); ++k) {
+            CHECK_EQ(fast[k].a, plain[k].a);
+            CHECK_EQ(fast[k].b, plain[k].b);
+        }
+        crossing += fast.size() >= 8;
+        translated += rel.translation_only;
+        for (const auto& [f, p, mesh] : {std::make_tuple(&fast_a, &plain_a, c.a), std::make_tuple(&fast_b, &plain_b, c.b)}) {
+            CHECK(f->crossing == p->crossing);
+            for (std::int32_t i = 0; i < mesh->triangle_count(); ++i) {
+                if (p->crossing[static_cast<size_t>(i)]) CHECK_EQ(f->near_entry(i).partner, p->near_entry(i).partner);
+                if (rel.translation_only && p->near(i)) {
+                    REQUIRE(f->near(i));
+                    const auto [pf, pl] = p->near_range(i);
+                    const auto [ff, fl] = f->near_range(i);
+                    std::vector<std::int32_t> fast_others(f->others.begin() + ff, f->others.begin() + fl);
+                    for (std::int32_t n = pf; n < pl; ++n)
+                        CHECK(std::find(fast_others.begin(), fast_others.end(), p->others[static_cast<size_t>(n)]) !=
+                              fast_others.end());
+                }
+            }
+        }
+    }
+    CHECK(translated == 8);
+    CHECK(crossing >= 12);
+}
+
+TEST_CASE("mesh query: the one-branch squared box distance is the branching one's, bit for bit") {
+    // boxes_squared_distance_at_once (the depth marks' axis-aligned descent) against
+    // triangle_box_squared_distance, on boxes whose bounds make gaps of zero, signed zeros,
+    // kTouchGap, tiny, large and ordinary sizes, compared as bytes.
+    const double g = mesh_detail::kTouchGap;
+    const double values[] = {-1.0, -0.5, -g, -0.0, 0.0, g, 0x1p-537, 1e-300, 1e-13, 0.3, 0.5, 1.0,
+                             std::nextafter(1.0, 2.0), 1e150};
+    constexpr int kValues = sizeof(values) / sizeof(values[0]);
+    fixtures::Uniform uniform{5353};  // in [-1, 1)
+    const auto pick = [&] {
+        const double v = values[static_cast<int>((uniform() + 1.0) * 0.5 * kValues) % kValues];
+        return uniform() < 0.0 ? v : v * (1.0 + uniform());  // exact values, and values near them
+    };
+    int within = 0, apart = 0;
+    for (int trial = 0; trial < 20000; ++trial) {
+        const auto [a, b] = random_boxes(pick);
+        const double expected = mesh_detail::triangle_box_squared_distance(a, b);
+        const double got = mesh_detail::boxes_squared_distance_at_once(a, b);
+        CHECK(std::memcmp(&expected, &got, sizeof(double)) == 0);
+        (expected == 0.0 ? within : apart) += 1;
+    }
+    CHECK(within > 1000);
+    CHECK(apart > 1000);
 }
