@@ -307,13 +307,12 @@ void cone(Flat& s, Workspace& w, int q) {
         f.s[0] = he.slot, f.s[1] = 2, f.s[2] = 1;
         faces[he.outside].n[he.slot] = id;
         faces[he.outside].s[he.slot] = 0;
+        // The planes of each pair of new faces as its second one is made (in this loop: a
+        // loop of their own would add an exit that mispredicts as the horizon's length varies).
+        if (k & 1) set_planes_two(faces[previous], f, s.p);
         previous = id;
     }
-    {
-        size_t k = 0;
-        for (; k + 1 < h; k += 2) set_planes_two(faces[ids[k]], faces[ids[k + 1]], s.p);
-        if (k < h) set_plane(faces[ids[k]], s.p);
-    }
+    if (h & 1) set_plane(faces[ids[h - 1]], s.p);
     const double eps = s.eps;
     int* __restrict next = s.next;
     const Vec3* __restrict p = s.p;
