@@ -267,14 +267,18 @@ void cone(Flat& s, Workspace& w, int q) {
         w.pending.resize(2 * pushes);
         s.pending = w.pending.data();
     }
-    if (w.chain_heads.size() < visible) w.chain_heads.resize(2 * visible);
-    int* heads = w.chain_heads.data();
     std::vector<int>& free_list = *s.free_faces;
     if (free_list.size() < s.free_top + visible + 1) free_list.resize(2 * (s.free_top + visible + 1));
+    // The visible faces' chains joined into one, in their order (each tail linked to the next
+    // head), walked below as one loop: a loop a chain mispredicted its exit at every chain.
+    int orphans = -1, last = -1;
     for (size_t v = 0; v < visible; ++v) {
         const int fi = w.visible[v];
         FlatFace& f = s.faces[fi];
-        heads[v] = f.head;
+        if (f.head >= 0) {
+            (last >= 0 ? s.next[last] : orphans) = f.head;
+            last = f.tail;
+        }
         f.alive = false;
         free_list[s.free_top++] = fi;
     }
@@ -322,33 +326,32 @@ void cone(Flat& s, Workspace& w, int q) {
     // below in cone order by their bits instead of a test of every new face.
     const bool few = h <= 64;
     std::uint64_t got = 0;
-    for (size_t v = 0; v < visible; ++v)
-        for (int x = heads[v], after; x >= 0; x = after) {
-            after = next[x];  // read before x joins another chain
-            if (x == q) continue;
-            const Vec3 px = p[x];
-            size_t k = 0;
-            double d = 0.0;
-            for (; k < h; ++k) {
-                const FlatFace& e = faces[ids[k]];
-                d = (e.nx * px.x + e.ny * px.y + e.nz * px.z) - e.offset;
-                if (d > eps) break;
-            }
-            if (k < h) {
-                add_conflict(s, faces[ids[k]], x, d);
-                got |= std::uint64_t{1} << (k & 63);
-                continue;
-            }
-            for (size_t k2 = 0; k2 < h; ++k2) {
-                FlatFace& outside = faces[edges[k2].outside];
-                const double dx = distance(outside, px);
-                if (dx > eps) {
-                    add_conflict(s, outside, x, dx);
-                    pending[top++] = edges[k2].outside;
-                    break;
-                }
+    for (int x = orphans, after; x >= 0; x = after) {
+        after = next[x];  // read before x joins another chain
+        if (x == q) continue;
+        const Vec3 px = p[x];
+        size_t k = 0;
+        double d = 0.0;
+        for (; k < h; ++k) {
+            const FlatFace& e = faces[ids[k]];
+            d = (e.nx * px.x + e.ny * px.y + e.nz * px.z) - e.offset;
+            if (d > eps) break;
+        }
+        if (k < h) {
+            add_conflict(s, faces[ids[k]], x, d);
+            got |= std::uint64_t{1} << (k & 63);
+            continue;
+        }
+        for (size_t k2 = 0; k2 < h; ++k2) {
+            FlatFace& outside = faces[edges[k2].outside];
+            const double dx = distance(outside, px);
+            if (dx > eps) {
+                add_conflict(s, outside, x, dx);
+                pending[top++] = edges[k2].outside;
+                break;
             }
         }
+    }
     if (few) {
         for (; got != 0; got &= got - 1) pending[top++] = ids[__builtin_ctzll(got)];
     } else {
