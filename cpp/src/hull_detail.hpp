@@ -87,7 +87,6 @@ struct Workspace {
     // the flat construction's (quickhull_flat.cpp)
     std::vector<FlatFace> flat_faces;
     std::vector<int> next_point;  // per point: the next point of its face's chain, -1 at the end
-    std::vector<int> chain_heads;  // per visible face of a step: its chain
     std::vector<TriangulationEdge> edge_scratch;  // the compaction's edges before their count
 };
 

@@ -13,6 +13,10 @@
 #include <cstdint>
 #include <vector>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "hull_detail.hpp"
 #include "hull_orientation.hpp"
 
@@ -47,16 +51,84 @@ inline void set_plane(FlatFace& f, const Vec3* p) {
     f.area2 = plane.area2;
 }
 
-inline void init_face(Flat& s, int id, int a, int b, int c) {
-    FlatFace& f = s.faces[id];
+// A new face of corners a b c, without points and not yet visited; its plane is set apart
+// (set_plane, set_planes_two).
+inline void start_face(FlatFace& f, int a, int b, int c) {
     f.v[0] = a, f.v[1] = b, f.v[2] = c;
     f.head = f.tail = f.furthest = -1;
     f.furthest_distance = 0.0;
     f.visit = 0;
     f.visible = false;
     f.alive = true;
+}
+
+inline void init_face(Flat& s, int id, int a, int b, int c) {
+    FlatFace& f = s.faces[id];
+    start_face(f, a, b, c);
     set_plane(f, s.p);
 }
+
+// set_plane of two faces at once, face_plane's fast case in the two SSE2 lanes: a lane's
+// IEEE operations are the scalar ones, in the same order, so the planes are the same bits; a
+// face whose first corner is sharp takes set_plane (face_plane_at_widest). A cone's faces
+// are independent: in lanes, their square roots and divisions overlap instead of queueing
+// one face after the other (about a sixth of Quickhull's time was that chain).
+#if defined(__SSE2__)
+void set_planes_two(FlatFace& f, FlatFace& g, const Vec3* p) {
+    const Vec3 &a0 = p[f.v[0]], &b0 = p[f.v[1]], &c0 = p[f.v[2]];
+    const Vec3 &a1 = p[g.v[0]], &b1 = p[g.v[1]], &c1 = p[g.v[2]];
+    const __m128d ax = _mm_set_pd(a1.x, a0.x), ay = _mm_set_pd(a1.y, a0.y),
+                  az = _mm_set_pd(a1.z, a0.z);
+    const __m128d ux = _mm_sub_pd(_mm_set_pd(b1.x, b0.x), ax),
+                  uy = _mm_sub_pd(_mm_set_pd(b1.y, b0.y), ay),
+                  uz = _mm_sub_pd(_mm_set_pd(b1.z, b0.z), az);
+    const __m128d vx = _mm_sub_pd(_mm_set_pd(c1.x, c0.x), ax),
+                  vy = _mm_sub_pd(_mm_set_pd(c1.y, c0.y), ay),
+                  vz = _mm_sub_pd(_mm_set_pd(c1.z, c0.z), az);
+    const __m128d nx = _mm_sub_pd(_mm_mul_pd(uy, vz), _mm_mul_pd(uz, vy));
+    const __m128d ny = _mm_sub_pd(_mm_mul_pd(uz, vx), _mm_mul_pd(ux, vz));
+    const __m128d nz = _mm_sub_pd(_mm_mul_pd(ux, vy), _mm_mul_pd(uy, vx));
+    const __m128d nn =
+        _mm_add_pd(_mm_add_pd(_mm_mul_pd(nx, nx), _mm_mul_pd(ny, ny)), _mm_mul_pd(nz, nz));
+    const __m128d uu =
+        _mm_add_pd(_mm_add_pd(_mm_mul_pd(ux, ux), _mm_mul_pd(uy, uy)), _mm_mul_pd(uz, uz));
+    const __m128d vv =
+        _mm_add_pd(_mm_add_pd(_mm_mul_pd(vx, vx), _mm_mul_pd(vy, vy)), _mm_mul_pd(vz, vz));
+    // face_plane's test of the first corner, lane by lane (false for a NaN, as there).
+    const int fast = _mm_movemask_pd(
+        _mm_cmpge_pd(_mm_mul_pd(_mm_set1_pd(16.0), nn), _mm_mul_pd(uu, vv)));
+    if (fast != 3) {
+        if (!(fast & 1)) set_plane(f, p);
+        if (!(fast & 2)) set_plane(g, p);
+        if (fast == 0) return;
+    }
+    const __m128d len = _mm_sqrt_pd(nn);
+    const __m128d positive = _mm_cmpgt_pd(len, _mm_setzero_pd());  // else a zero normal
+    const __m128d mx = _mm_and_pd(positive, _mm_div_pd(nx, len));
+    const __m128d my = _mm_and_pd(positive, _mm_div_pd(ny, len));
+    const __m128d mz = _mm_and_pd(positive, _mm_div_pd(nz, len));
+    const __m128d offset =
+        _mm_add_pd(_mm_add_pd(_mm_mul_pd(mx, ax), _mm_mul_pd(my, ay)), _mm_mul_pd(mz, az));
+    const __m128d bounded = _mm_cmpge_pd(len, _mm_set1_pd(1e-140));
+    const __m128d filter = _mm_or_pd(_mm_and_pd(bounded, _mm_set1_pd(1e-13)),
+                                     _mm_andnot_pd(bounded, _mm_set1_pd(INFINITY)));
+    if (fast & 1) {
+        _mm_storel_pd(&f.nx, mx), _mm_storel_pd(&f.ny, my), _mm_storel_pd(&f.nz, mz);
+        _mm_storel_pd(&f.offset, offset), _mm_storel_pd(&f.filter, filter);
+        _mm_storel_pd(&f.area2, len);
+    }
+    if (fast & 2) {
+        _mm_storeh_pd(&g.nx, mx), _mm_storeh_pd(&g.ny, my), _mm_storeh_pd(&g.nz, mz);
+        _mm_storeh_pd(&g.offset, offset), _mm_storeh_pd(&g.filter, filter);
+        _mm_storeh_pd(&g.area2, len);
+    }
+}
+#else
+void set_planes_two(FlatFace& f, FlatFace& g, const Vec3* p) {
+    set_plane(f, p);
+    set_plane(g, p);
+}
+#endif
 
 // Appends point x, at distance d, to f's chain (quickhull.cpp's add_conflict).
 inline void add_conflict(Flat& s, FlatFace& f, int x, double d) {
@@ -195,14 +267,18 @@ void cone(Flat& s, Workspace& w, int q) {
         w.pending.resize(2 * pushes);
         s.pending = w.pending.data();
     }
-    if (w.chain_heads.size() < visible) w.chain_heads.resize(2 * visible);
-    int* heads = w.chain_heads.data();
     std::vector<int>& free_list = *s.free_faces;
     if (free_list.size() < s.free_top + visible + 1) free_list.resize(2 * (s.free_top + visible + 1));
+    // The visible faces' chains joined into one, in their order (each tail linked to the next
+    // head), walked below as one loop: a loop a chain mispredicted its exit at every chain.
+    int orphans = -1, last = -1;
     for (size_t v = 0; v < visible; ++v) {
         const int fi = w.visible[v];
         FlatFace& f = s.faces[fi];
-        heads[v] = f.head;
+        if (f.head >= 0) {
+            (last >= 0 ? s.next[last] : orphans) = f.head;
+            last = f.tail;
+        }
         f.alive = false;
         free_list[s.free_top++] = fi;
     }
@@ -229,14 +305,18 @@ void cone(Flat& s, Workspace& w, int q) {
         const HorizonEdge he = edges[k];
         const int id = ids[k];
         const int following = ids[k + 1 < h ? k + 1 : 0];
-        init_face(s, id, he.a, he.b, q);
         FlatFace& f = faces[id];
+        start_face(f, he.a, he.b, q);
         f.n[0] = he.outside, f.n[1] = following, f.n[2] = previous;
         f.s[0] = he.slot, f.s[1] = 2, f.s[2] = 1;
         faces[he.outside].n[he.slot] = id;
         faces[he.outside].s[he.slot] = 0;
+        // The planes of each pair of new faces as its second one is made (in this loop: a
+        // loop of their own would add an exit that mispredicts as the horizon's length varies).
+        if (k & 1) set_planes_two(faces[previous], f, s.p);
         previous = id;
     }
+    if (h & 1) set_plane(faces[ids[h - 1]], s.p);
     const double eps = s.eps;
     int* __restrict next = s.next;
     const Vec3* __restrict p = s.p;
@@ -246,33 +326,32 @@ void cone(Flat& s, Workspace& w, int q) {
     // below in cone order by their bits instead of a test of every new face.
     const bool few = h <= 64;
     std::uint64_t got = 0;
-    for (size_t v = 0; v < visible; ++v)
-        for (int x = heads[v], after; x >= 0; x = after) {
-            after = next[x];  // read before x joins another chain
-            if (x == q) continue;
-            const Vec3 px = p[x];
-            size_t k = 0;
-            double d = 0.0;
-            for (; k < h; ++k) {
-                const FlatFace& e = faces[ids[k]];
-                d = (e.nx * px.x + e.ny * px.y + e.nz * px.z) - e.offset;
-                if (d > eps) break;
-            }
-            if (k < h) {
-                add_conflict(s, faces[ids[k]], x, d);
-                got |= std::uint64_t{1} << (k & 63);
-                continue;
-            }
-            for (size_t k2 = 0; k2 < h; ++k2) {
-                FlatFace& outside = faces[edges[k2].outside];
-                const double dx = distance(outside, px);
-                if (dx > eps) {
-                    add_conflict(s, outside, x, dx);
-                    pending[top++] = edges[k2].outside;
-                    break;
-                }
+    for (int x = orphans, after; x >= 0; x = after) {
+        after = next[x];  // read before x joins another chain
+        if (x == q) continue;
+        const Vec3 px = p[x];
+        size_t k = 0;
+        double d = 0.0;
+        for (; k < h; ++k) {
+            const FlatFace& e = faces[ids[k]];
+            d = (e.nx * px.x + e.ny * px.y + e.nz * px.z) - e.offset;
+            if (d > eps) break;
+        }
+        if (k < h) {
+            add_conflict(s, faces[ids[k]], x, d);
+            got |= std::uint64_t{1} << (k & 63);
+            continue;
+        }
+        for (size_t k2 = 0; k2 < h; ++k2) {
+            FlatFace& outside = faces[edges[k2].outside];
+            const double dx = distance(outside, px);
+            if (dx > eps) {
+                add_conflict(s, outside, x, dx);
+                pending[top++] = edges[k2].outside;
+                break;
             }
         }
+    }
     if (few) {
         for (; got != 0; got &= got - 1) pending[top++] = ids[__builtin_ctzll(got)];
     } else {
