@@ -14,9 +14,6 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
-#if defined(__GNUC__) && defined(__x86_64__)
-#include <immintrin.h>
-#endif
 
 #include "meshcol/batch.hpp"
 #include "meshcol/defaults.hpp"
@@ -206,54 +203,9 @@ void count_below_block(const double* x, size_t n, size_t i, int* below) {
 }
 #endif
 
-#if defined(__GNUC__) && defined(__x86_64__)
-#define MESHCOL_COUNT_BELOW_AVX2 1
-// count_below in AVX2's four lanes, for a CPU that has them (count_below asks): each load of
-// four x[j] compared with four x[i], the rest one by one. A lane's ordered less-than is the
-// scalar `<` (false for a NaN), so the counts are the same; half the instructions of SSE2's.
-__attribute__((target("avx2"))) void count_below_avx2(const double* x, size_t n, int* below) {
-    const size_t quads = n & ~size_t{3};
-    size_t i = 0;
-    for (; i + 3 < n; i += 4) {
-        __m256d at[4];
-        __m256i count[4];
-        for (size_t w = 0; w < 4; ++w) {
-            at[w] = _mm256_set1_pd(x[i + w]);
-            count[w] = _mm256_setzero_si256();
-        }
-        for (size_t j = 0; j < quads; j += 4) {
-            const __m256d v = _mm256_loadu_pd(x + j);
-            for (size_t w = 0; w < 4; ++w)
-                count[w] = _mm256_sub_epi64(
-                    count[w], _mm256_castpd_si256(_mm256_cmp_pd(v, at[w], _CMP_LT_OQ)));
-        }
-        for (size_t w = 0; w < 4; ++w) {
-            std::int64_t lanes[4];
-            _mm256_storeu_si256(reinterpret_cast<__m256i*>(lanes), count[w]);
-            std::int64_t total = lanes[0] + lanes[1] + lanes[2] + lanes[3];
-            for (size_t j = quads; j < n; ++j) total += x[j] < x[i + w];
-            below[i + w] = static_cast<int>(total);
-        }
-    }
-    for (; i < n; ++i) {
-        int count = 0;
-        for (size_t j = 0; j < n; ++j) count += x[j] < x[i];
-        below[i] = count;
-    }
-}
-#endif
-
 // How many of x[0 .. n) are below each x[i], into below[i]: every pair compared, four (then
-// two) x[i] at a time (count_below_block; AVX2's count_below_avx2 where the CPU has it), no
-// branch on the data.
+// two) x[i] at a time (count_below_block), no branch on the data.
 void count_below(const double* x, size_t n, int* below) {
-#if defined(MESHCOL_COUNT_BELOW_AVX2)
-    static const bool avx2 = __builtin_cpu_supports("avx2");
-    if (avx2) {
-        count_below_avx2(x, n, below);
-        return;
-    }
-#endif
     size_t i = 0;
 #if defined(__SSE2__)
     for (; i + 3 < n; i += 4) count_below_block<4>(x, n, i, below);
