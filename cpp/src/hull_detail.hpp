@@ -128,14 +128,20 @@ enum class Build { OK, DEGENERATE, FAILED };
 //   sign is the orientation's (|x - a| < 2 sqrt(3)): |d| > 1e-13 decides it.
 // A normal taken by the compensated product, or of length below 1e-140 (where the squares of
 // the test may lose their relative accuracy to underflow), gets no filter.
+// The bound above, the shortest normal that gets it, and the test of a corner that is not
+// sharp (kSharpCorner |n|^2 >= |u|^2 |v|^2: the sine of its angle at least 1/4), shared by
+// face_plane, face_plane_at_widest (quickhull.cpp) and the two-lane form (quickhull_flat.cpp).
+constexpr double kPlaneFilter = 1e-13;
+constexpr double kPlaneFilterMinLength = 1e-140;
+constexpr double kSharpCorner = 16.0;
+
 inline Plane plane_of_normal(const Vec3& n, bool bounded, const Vec3& a) {
-    constexpr double kPlaneFilter = 1e-13;
     const double len = norm(n);
     Plane plane;
     plane.normal = len > 0.0 ? n / len : Vec3{};
     plane.offset = dot(plane.normal, a);
     plane.area2 = len;
-    plane.filter = bounded && len >= 1e-140 ? kPlaneFilter : INFINITY;
+    plane.filter = bounded && len >= kPlaneFilterMinLength ? kPlaneFilter : INFINITY;
     return plane;
 }
 
@@ -150,7 +156,7 @@ inline Plane face_plane(const Vec3& a, const Vec3& b, const Vec3& c) {
     const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
     const double nn = nx * nx + ny * ny + nz * nz;
     const double uu = ux * ux + uy * uy + uz * uz, vv = vx * vx + vy * vy + vz * vz;
-    if (!(16.0 * nn >= uu * vv)) return face_plane_at_widest(a, b, c, uu, vv);
+    if (!(kSharpCorner * nn >= uu * vv)) return face_plane_at_widest(a, b, c, uu, vv);
     constexpr double kPlaneFilter = 1e-13;
     // nn is a sum of squares: never negative, so the square root needs no errno path.
     const double len = __builtin_sqrt(nn);

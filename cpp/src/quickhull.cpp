@@ -71,7 +71,7 @@ Plane face_plane_at_widest(const Vec3& a, const Vec3& b, const Vec3& c, double a
     const Vec3 u = *p - *o, v = *q - *o;
     const Vec3 n = cross(u, v);
     // sin(angle) >= 1/4: the plain product is within a few ulps of the exact one.
-    const bool bounded = 16.0 * squared_norm(n) >= uu * vv;
+    const bool bounded = kSharpCorner * squared_norm(n) >= uu * vv;
     return plane_of_normal(bounded ? n : accurate_cross(*o, *p, *q), bounded, a);
 }
 

@@ -96,7 +96,7 @@ void set_planes_two(FlatFace& f, FlatFace& g, const Vec3* p) {
         _mm_add_pd(_mm_add_pd(_mm_mul_pd(vx, vx), _mm_mul_pd(vy, vy)), _mm_mul_pd(vz, vz));
     // face_plane's test of the first corner, lane by lane (false for a NaN, as there).
     const int fast = _mm_movemask_pd(
-        _mm_cmpge_pd(_mm_mul_pd(_mm_set1_pd(16.0), nn), _mm_mul_pd(uu, vv)));
+        _mm_cmpge_pd(_mm_mul_pd(_mm_set1_pd(kSharpCorner), nn), _mm_mul_pd(uu, vv)));
     if (fast != 3) {
         if (!(fast & 1)) set_plane(f, p);
         if (!(fast & 2)) set_plane(g, p);
@@ -109,8 +109,8 @@ void set_planes_two(FlatFace& f, FlatFace& g, const Vec3* p) {
     const __m128d mz = _mm_and_pd(positive, _mm_div_pd(nz, len));
     const __m128d offset =
         _mm_add_pd(_mm_add_pd(_mm_mul_pd(mx, ax), _mm_mul_pd(my, ay)), _mm_mul_pd(mz, az));
-    const __m128d bounded = _mm_cmpge_pd(len, _mm_set1_pd(1e-140));
-    const __m128d filter = _mm_or_pd(_mm_and_pd(bounded, _mm_set1_pd(1e-13)),
+    const __m128d bounded = _mm_cmpge_pd(len, _mm_set1_pd(kPlaneFilterMinLength));
+    const __m128d filter = _mm_or_pd(_mm_and_pd(bounded, _mm_set1_pd(kPlaneFilter)),
                                      _mm_andnot_pd(bounded, _mm_set1_pd(INFINITY)));
     if (fast & 1) {
         _mm_storel_pd(&f.nx, mx), _mm_storel_pd(&f.ny, my), _mm_storel_pd(&f.nz, mz);
