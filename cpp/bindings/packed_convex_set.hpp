@@ -8,6 +8,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -122,6 +123,10 @@ class PackedConvexSet {
             }
             view_.adjacency_offsets = adjacency_offsets->data();
             view_.adjacency = adjacency->data();
+            // The climbs' fixed-stride lists, made once with the set (32 bytes a vertex of
+            // each polytope that climbs); its indices are in range, checked or sealed above.
+            climb_lists_ = std::make_unique<ClimbLists>(view_, 0);
+            climb_lists_->attach(view_);
         }
         const bool any_features = face_offsets || face_normals || edge_pair_offsets || edge_pairs;
         if (any_features) {
@@ -222,6 +227,7 @@ class PackedConvexSet {
     bool sealed_ = false;
     mutable ShapeRadii radii_;
     mutable EdgeClasses edge_classes_;  // the view's cache: its pointer, set once
+    std::unique_ptr<ClimbLists> climb_lists_;  // the view's climb lists, or null
     ConvexSetView view_;
 };
 
