@@ -115,8 +115,8 @@ bool climbs(const ShapeView& shape);
 /// that does not climb.
 bool scans(const ShapeView& shape);
 
-/// Reads the vertices of a polytope that `climbs` in order, about one load a cache line, and
-/// does nothing for other shapes: the batches do it on a shape's first pair in each batch,
+/// Reads the vertices (and the fixed-stride lists, when it has them) of a polytope that
+/// `climbs` in order, about one load a cache line, and does nothing for other shapes: the batches do it on a shape's first pair in each batch,
 /// since the shape's check (which reads them too) runs only in the first batch on a set. The
 /// hardware prefetcher follows the loads in order, and the climbs' scattered reads then find
 /// the vertices in cache, which `prefetch` instructions of the same lines did not bring about
