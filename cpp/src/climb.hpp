@@ -114,7 +114,7 @@ MESHCOL_CLIMB_INLINE int best_neighbour(const ShapeView& s, const Vec3& d, const
     int k = 0;
     for (; k + 3 < count; k += 4) {
         for (int l = 0; l < 4; ++l) {
-            int j = list[k + l];
+            std::ptrdiff_t j = list[k + l];
             // An index read from 16 bits made GCC branch on the compare below instead of
             // selecting (1.4 times the time of a 256-vertex penetration); hidden from it
             // this way, it selects as for 32 bits.
@@ -125,7 +125,7 @@ MESHCOL_CLIMB_INLINE int best_neighbour(const ShapeView& s, const Vec3& d, const
             const double dj = dot(v[j], d);
             if (dj > best_dot) {
                 best_dot = dj;
-                next = j;
+                next = static_cast<int>(j);
             }
         }
     }
