@@ -97,7 +97,7 @@ nb::object query_object(const PackedConvexSet& set, int layout, nb::handle poses
     if (form == Layout::SIGNED_DISTANCE) signed_distance = arrays.add(n, &sd);
     arrays.make();
     const auto run = [&] {
-        meshcol::run_batch(set.view(), pose_arg.data(), in.data, in.count, q, threads, out, &set.radii());
+        meshcol::run_batch(set.query_view(), pose_arg.data(), in.data, in.count, q, threads, out, &set.radii());
         for (size_t k = 0; k < (sd != nullptr ? n : 0); ++k) sd[k] = out.distance[k] - out.depth[k];
     };
     if (in.count <= 1) {

@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -123,10 +124,6 @@ class PackedConvexSet {
             }
             view_.adjacency_offsets = adjacency_offsets->data();
             view_.adjacency = adjacency->data();
-            // The climbs' fixed-stride lists, made once with the set (32 bytes a vertex of
-            // each polytope that climbs); its indices are in range, checked or sealed above.
-            climb_lists_ = std::make_unique<ClimbLists>(view_, 0);
-            climb_lists_->attach(view_);
         }
         const bool any_features = face_offsets || face_normals || edge_pair_offsets || edge_pairs;
         if (any_features) {
@@ -160,6 +157,19 @@ class PackedConvexSet {
     /// Whether a PackSeal vouched for the index arrays (their ranges were not read again).
     bool sealed() const { return sealed_; }
     const ConvexSetView& view() const { return view_; }
+    /// The view for the queries that climb (narrow phase, time of impact): `view()` with the
+    /// climbs' fixed-stride lists (32 bytes a vertex of each polytope that climbs), made on
+    /// the first call, on all cores, and kept: a set that is only built (hulls, features)
+    /// never pays for them. Its adjacency's indices are in range, checked or sealed above.
+    const ConvexSetView& query_view() const {
+        std::call_once(climb_once_, [this] {
+            if (view_.adjacency == nullptr) return;
+            climb_lists_ = std::make_unique<ClimbLists>(view_, 0);
+            query_view_ = view_;
+            climb_lists_->attach(query_view_);
+        });
+        return climb_lists_ != nullptr ? query_view_ : view_;
+    }
     /// The shapes' checked radii, kept from the first batch that uses each shape for the
     /// batches after it (the Python ConvexSet makes or copies its arrays and holds them
     /// read-only, so the shapes never change).
@@ -227,7 +237,9 @@ class PackedConvexSet {
     bool sealed_ = false;
     mutable ShapeRadii radii_;
     mutable EdgeClasses edge_classes_;  // the view's cache: its pointer, set once
-    std::unique_ptr<ClimbLists> climb_lists_;  // the view's climb lists, or null
+    mutable std::once_flag climb_once_;
+    mutable std::unique_ptr<ClimbLists> climb_lists_;  // `query_view`'s lists, or null
+    mutable ConvexSetView query_view_;
     ConvexSetView view_;
 };
 
