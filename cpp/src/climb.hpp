@@ -172,9 +172,8 @@ MESHCOL_CLIMB_INLINE void advance(const ShapeView& s, const Vec3& d, int& best, 
     best = up ? next : best;
 }
 
-// `climb_pair`'s body, with or without the neighbour lists' prefetch, over both shapes'
-// fixed-stride lists or both CSR arrays.
-template <bool kPrefetch, bool kLists>
+// `climb_pair`'s body, with or without the neighbour lists' prefetch.
+template <bool kPrefetch>
 MESHCOL_CLIMB_INLINE void climb_pair_with(const ShapeView& a, const Vec3& da, int hint_a,
                                           const ShapeView& b, const Vec3& db, int hint_b,
                                           SupportPoint& out_a, SupportPoint& out_b) {
@@ -188,15 +187,15 @@ MESHCOL_CLIMB_INLINE void climb_pair_with(const ShapeView& a, const Vec3& da, in
     bool up_a = true, up_b = true;
     int steps_a = 0, steps_b = 0;
     while (up_a && up_b && steps_a < a.vertex_count) {
-        advance<kPrefetch, kLists>(a, da, best_a, dot_a, up_a);
-        advance<kPrefetch, kLists>(b, db, best_b, dot_b, up_b);
+        advance<kPrefetch, true>(a, da, best_a, dot_a, up_a);
+        advance<kPrefetch, true>(b, db, best_b, dot_b, up_b);
         ++steps_a;
         ++steps_b;
     }
     for (; up_a && steps_a < a.vertex_count; ++steps_a)
-        advance<kPrefetch, kLists>(a, da, best_a, dot_a, up_a);
+        advance<kPrefetch, true>(a, da, best_a, dot_a, up_a);
     for (; up_b && steps_b < b.vertex_count; ++steps_b)
-        advance<kPrefetch, kLists>(b, db, best_b, dot_b, up_b);
+        advance<kPrefetch, true>(b, db, best_b, dot_b, up_b);
     // A capped climb (never seen: the edge graph is finite and every step goes up) falls
     // back to the scan.
     if (up_a) best_a = scan_support(a.vertices, a.vertex_count, da);
@@ -205,25 +204,20 @@ MESHCOL_CLIMB_INLINE void climb_pair_with(const ShapeView& a, const Vec3& da, in
     out_b = {b.vertices[best_b], best_b};
 }
 
-/// `support_core` of two climbing shapes at once (`climbs` true for both): a in `da` from
-/// `hint_a`, b in `db` from `hint_b` (negative: no hint). Same answers as two calls, faster.
-/// The neighbour lists are prefetched only when a shape has at least
-/// `defaults::climb_prefetch_min_vertices` vertices: a smaller one's lists are already near
-/// (`prefetch` asked for the whole shape), and the prefetch would cost two instructions a
-/// neighbour for nothing.
+/// `support_core` of two climbing shapes with fixed-stride lists at once (`climbs` true and
+/// `climb_lists` set for both): a in `da` from `hint_a`, b in `db` from `hint_b` (negative:
+/// no hint). Same answers as two calls, faster. The neighbour lists are prefetched only when a
+/// shape has at least `defaults::climb_prefetch_min_vertices` vertices: a smaller one's lists
+/// are already near (`prefetch` asked for the whole shape), and the prefetch would cost two
+/// instructions a neighbour for nothing.
 MESHCOL_CLIMB_INLINE void climb_pair(const ShapeView& a, const Vec3& da, int hint_a,
                                      const ShapeView& b, const Vec3& db, int hint_b,
                                      SupportPoint& out_a, SupportPoint& out_b) {
-    const bool ask = a.vertex_count >= defaults::climb_prefetch_min_vertices ||
-                     b.vertex_count >= defaults::climb_prefetch_min_vertices;
-    if (a.climb_lists != nullptr && b.climb_lists != nullptr) {
-        if (ask) climb_pair_with<true, true>(a, da, hint_a, b, db, hint_b, out_a, out_b);
-        else climb_pair_with<false, true>(a, da, hint_a, b, db, hint_b, out_a, out_b);
-    } else if (ask) {
-        climb_pair_with<true, false>(a, da, hint_a, b, db, hint_b, out_a, out_b);
-    } else {
-        climb_pair_with<false, false>(a, da, hint_a, b, db, hint_b, out_a, out_b);
-    }
+    if (a.vertex_count >= defaults::climb_prefetch_min_vertices ||
+        b.vertex_count >= defaults::climb_prefetch_min_vertices)
+        climb_pair_with<true>(a, da, hint_a, b, db, hint_b, out_a, out_b);
+    else
+        climb_pair_with<false>(a, da, hint_a, b, db, hint_b, out_a, out_b);
 }
 
 }  // namespace climb

@@ -362,9 +362,15 @@ TEST_CASE("shapes: climbs over fixed-stride lists are the CSR climbs, bit for bi
     }
     CHECK(lists.size() == climbing);
     CHECK(climbing >= 40 + 64 + 150 + 256);
-    // Pairs through the Minkowski difference's joint climbs: the same answers.
+    // Pairs through the Minkowski difference's joint climbs (over the lists; without them,
+    // each shape's own climb): the same answers.
     for (long long h = 1; h + 1 < count; ++h) {
         const Pose pb = fixtures::turned_about_z(0.4 * h, 0.5, 0.2, -0.1);
+        const ShapeView la = listed.view.shape(h), lb = listed.view.shape(h + 1);
+        const ShapeView ca = csr.view.shape(h), cb = csr.view.shape(h + 1);
+        CHECK(MinkowskiDifference(la, at(0, 0, 0), lb, pb, false).climb_lists_both ==
+              (climbs(la) && climbs(lb)));
+        CHECK(!MinkowskiDifference(ca, at(0, 0, 0), cb, pb, false).climb_lists_both);
         for (QueryKind kind : {QueryKind::PENETRATION, QueryKind::DISTANCE}) {
             const PairResult x = query_pair(csr.view.shape(h), at(0, 0, 0), csr.view.shape(h + 1),
                                             pb, kind);
