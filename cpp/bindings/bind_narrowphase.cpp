@@ -5,6 +5,7 @@
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/pair.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -97,7 +98,7 @@ nb::object query_object(const PackedConvexSet& set, int layout, nb::handle poses
     if (form == Layout::SIGNED_DISTANCE) signed_distance = arrays.add(n, &sd);
     arrays.make();
     const auto run = [&] {
-        meshcol::run_batch(set.query_view(), pose_arg.data(), in.data, in.count, q, threads, out, &set.radii());
+        meshcol::run_batch(set.view(), pose_arg.data(), in.data, in.count, q, threads, out, &set.radii());
         for (size_t k = 0; k < (sd != nullptr ? n : 0); ++k) sd[k] = out.distance[k] - out.depth[k];
     };
     if (in.count <= 1) {
@@ -241,6 +242,29 @@ Column bounding_radii(const PackedConvexSet& set, int threads) {
     return radii;
 }
 
+// The set's climb lists as numpy arrays ((H + 1,) int64 offsets, (M, 16) uint16 rows) when it
+// made them itself (`PackedConvexSet::built_climb_lists`): views of its own, kept alive by
+// `self`; zeros and no rows when no shape has lists.
+std::pair<nb::object, nb::object> climb_arrays(nb::handle self) {
+    const PackedConvexSet& set = nb::cast<const PackedConvexSet&>(self);
+    const size_t h = static_cast<size_t>(set.size());
+    const meshcol::ClimbLists* built = set.built_climb_lists();
+    if (built == nullptr || built->offsets() == nullptr) {
+        auto offsets = new_array<Out<std::int64_t, -1>>({h + 1});
+        std::fill(offsets.data(), offsets.data() + h + 1, std::int64_t{0});
+        auto lists = new_array<Out<std::uint16_t, -1, kClimbRecordWords>>({0, kClimbRecordWords});
+        return {offsets.cast(), lists.cast()};
+    }
+    const size_t offsets_shape[1] = {h + 1};
+    const size_t lists_shape[2] = {static_cast<size_t>(built->size()), kClimbRecordWords};
+    Out<std::int64_t, -1> offsets(const_cast<std::int64_t*>(built->offsets()), 1, offsets_shape,
+                                  self);
+    Out<std::uint16_t, -1, kClimbRecordWords> lists(
+        reinterpret_cast<std::uint16_t*>(const_cast<meshcol::ClimbList*>(built->lists())), 2, lists_shape,
+        self);
+    return {offsets.cast(), lists.cast()};
+}
+
 }  // namespace
 
 void bind_narrowphase(nb::module_& m) {
@@ -258,10 +282,12 @@ void bind_narrowphase(nb::module_& m) {
                                 "ConvexSet).")
         .def(nb::init<Points, Index64, Kinds, Params, std::optional<Index64>,
                       std::optional<Index32>, std::optional<Index64>, std::optional<Points>,
-                      std::optional<Index64>, std::optional<Pairs32>, const PackSeal*>(),
+                      std::optional<Index64>, std::optional<Pairs32>, const PackSeal*,
+                      std::optional<Index64>, std::optional<ClimbRecords>>(),
              "vertices"_a, "offsets"_a, "kinds"_a, "params"_a, "adjacency_offsets"_a.none(),
              "adjacency"_a.none(), "face_offsets"_a.none(), "face_normals"_a.none(),
-             "edge_pair_offsets"_a.none(), "edge_pairs"_a.none(), "seal"_a.none() = nb::none())
+             "edge_pair_offsets"_a.none(), "edge_pairs"_a.none(), "seal"_a.none() = nb::none(),
+             "climb_list_offsets"_a.none() = nb::none(), "climb_lists"_a.none() = nb::none())
         .def("__len__", &PackedConvexSet::size)
         .def_prop_ro("sealed", &PackedConvexSet::sealed,
                      "Whether the seal vouched for the index arrays (not read again).")
@@ -269,6 +295,10 @@ void bind_narrowphase(nb::module_& m) {
              "threads"_a, "result_type"_a,
              "One batch as result_type (layout 0 distance, 1 penetration, 2 intersects, 3 "
              "signed distance); None when poses or pairs are not in the core's form.")
+        .def("climb_arrays", &climb_arrays,
+             "The climb lists the set made from its adjacency (when not handed them): offsets "
+             "(H + 1,) int64 and (M, 16) uint16 rows (count, then 15 neighbour slots), "
+             "read-only views of the set's own.")
         .def("aabbs", &aabbs, "poses"_a.none(), "threads"_a = 0,
              "World AABBs (H, 3), (H, 3) under poses (None: identity).")
         .def("edge_classes", &edge_classes, "threads"_a = 0,

@@ -80,7 +80,7 @@ nb::object time_of_impact_object(const PackedConvexSet& set, nb::handle start_po
     arrays.add(n, &out.status);
     arrays.make();
     const auto run = [&] {
-        meshcol::run_toi_batch(set.query_view(), start.data(), end.data(), turns.data(), centres.data(),
+        meshcol::run_toi_batch(set.view(), start.data(), end.data(), turns.data(), centres.data(),
                                in.data, in.count, options, threads, out);
     };
     if (in.count <= 1) {

@@ -105,6 +105,10 @@ class ClimbLists {
 
     /// Lists held (the vertices of the shapes that have them).
     std::int64_t size() const { return offsets_.empty() ? 0 : offsets_.back(); }
+    /// The (H + 1,) offsets (`ConvexSetView::climb_list_offsets`) and the `size()` lists;
+    /// both null when no shape has lists.
+    const std::int64_t* offsets() const { return offsets_.empty() ? nullptr : offsets_.data(); }
+    const ClimbList* lists() const { return lists_.get(); }
 
   private:
     std::vector<std::int64_t> offsets_;  // (H + 1,), or empty when no shape has lists
