@@ -10,7 +10,8 @@
 // set's checked radii and edge classes, as the extension's batches on one set do (a core
 // without `ShapeRadii`: build with -DNO_SHAPE_RADII; one whose set holds the edge classes
 // themselves, not the edges they are computed from: -DEAGER_EDGES; one whose set makes
-// fixed-stride climb lists, made here as the bindings' set makes them: -DCLIMB_LISTS).
+// fixed-stride climb lists, made here from the case's adjacency as a set built from a
+// caller's arrays makes them, the same bytes as the hull packing writes: -DCLIMB_LISTS).
 // narrowphase_identity.py compares two checkouts' raw results on every case, byte for byte.
 #include <cstdio>
 #include <cstdlib>
