@@ -235,7 +235,7 @@ class PackedConvexSet:
 
     def climb_arrays(self) -> tuple[object, object]:
         """
-        The climb lists the set made from its adjacency (when not handed them): offsets (H + 1,) int64 and (M, 16) uint16 rows (count, then 15 neighbour slots), read-only views of the set's own.
+        The climb lists the core makes from the set's adjacency, as new arrays (not the set's): offsets (H + 1,) int64 and (M, 16) uint16 rows (count, then 15 neighbour slots).
         """
 
     def aabbs(self, poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)] | None, threads: int = 0) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')]]:

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <memory>
 #include <cstdint>
 #include <optional>
 #include <stdexcept>
@@ -242,27 +243,29 @@ Column bounding_radii(const PackedConvexSet& set, int threads) {
     return radii;
 }
 
-// The set's climb lists as numpy arrays ((H + 1,) int64 offsets, (M, 16) uint16 rows) when it
-// made them itself (`PackedConvexSet::built_climb_lists`): views of its own, kept alive by
-// `self`; zeros and no rows when no shape has lists.
-std::pair<nb::object, nb::object> climb_arrays(nb::handle self) {
-    const PackedConvexSet& set = nb::cast<const PackedConvexSet&>(self);
+// The climb lists the core makes from the set's adjacency (`ClimbLists`, all cores), as new
+// numpy arrays ((H + 1,) int64 offsets, (M, 16) uint16 rows); zeros and no rows when no shape
+// has lists. Not attached to the set: what the packing writes, made another way.
+std::pair<nb::object, nb::object> climb_arrays(const PackedConvexSet& set) {
     const size_t h = static_cast<size_t>(set.size());
-    const meshcol::ClimbLists* built = set.built_climb_lists();
-    if (built == nullptr || built->offsets() == nullptr) {
-        auto offsets = new_array<Out<std::int64_t, -1>>({h + 1});
+    auto made = std::make_unique<meshcol::ClimbLists>(set.view(), 0);
+    auto offsets = new_array<Out<std::int64_t, -1>>({h + 1});
+    if (made->offsets() != nullptr)
+        std::copy(made->offsets(), made->offsets() + h + 1, offsets.data());
+    else
         std::fill(offsets.data(), offsets.data() + h + 1, std::int64_t{0});
-        auto lists = new_array<Out<std::uint16_t, -1, kClimbRecordWords>>({0, kClimbRecordWords});
-        return {offsets.cast(), lists.cast()};
+    const auto* lists = made->lists();
+    const size_t shape[2] = {static_cast<size_t>(made->size()), kClimbRecordWords};
+    if (lists == nullptr) {
+        auto none = new_array<Out<std::uint16_t, -1, kClimbRecordWords>>({0, kClimbRecordWords});
+        return {offsets.cast(), none.cast()};
     }
-    const size_t offsets_shape[1] = {h + 1};
-    const size_t lists_shape[2] = {static_cast<size_t>(built->size()), kClimbRecordWords};
-    Out<std::int64_t, -1> offsets(const_cast<std::int64_t*>(built->offsets()), 1, offsets_shape,
-                                  self);
-    Out<std::uint16_t, -1, kClimbRecordWords> lists(
-        reinterpret_cast<std::uint16_t*>(const_cast<meshcol::ClimbList*>(built->lists())), 2, lists_shape,
-        self);
-    return {offsets.cast(), lists.cast()};
+    nb::capsule owner(made.release(), [](void* p) noexcept {
+        delete static_cast<meshcol::ClimbLists*>(p);
+    });
+    Out<std::uint16_t, -1, kClimbRecordWords> rows(
+        reinterpret_cast<std::uint16_t*>(const_cast<meshcol::ClimbList*>(lists)), 2, shape, owner);
+    return {offsets.cast(), rows.cast()};
 }
 
 }  // namespace
@@ -296,9 +299,9 @@ void bind_narrowphase(nb::module_& m) {
              "One batch as result_type (layout 0 distance, 1 penetration, 2 intersects, 3 "
              "signed distance); None when poses or pairs are not in the core's form.")
         .def("climb_arrays", &climb_arrays,
-             "The climb lists the set made from its adjacency (when not handed them): offsets "
-             "(H + 1,) int64 and (M, 16) uint16 rows (count, then 15 neighbour slots), "
-             "read-only views of the set's own.")
+             "The climb lists the core makes from the set's adjacency, as new arrays (not "
+             "the set's): offsets (H + 1,) int64 and (M, 16) uint16 rows (count, then 15 "
+             "neighbour slots).")
         .def("aabbs", &aabbs, "poses"_a.none(), "threads"_a = 0,
              "World AABBs (H, 3), (H, 3) under poses (None: identity).")
         .def("edge_classes", &edge_classes, "threads"_a = 0,

@@ -8,7 +8,6 @@
 
 #include <atomic>
 #include <cstdint>
-#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -192,9 +191,6 @@ class PackedConvexSet {
     /// Whether a PackSeal vouched for the index arrays (their ranges were not read again).
     bool sealed() const { return sealed_; }
     const ConvexSetView& view() const { return view_; }
-    /// The climb lists the set made itself from its adjacency (`ClimbLists`), when it was
-    /// not handed them; null otherwise.
-    const ClimbLists* built_climb_lists() const { return built_climb_lists_.get(); }
     /// The shapes' checked radii, kept from the first batch that uses each shape for the
     /// batches after it (the Python ConvexSet makes or copies its arrays and holds them
     /// read-only, so the shapes never change).
@@ -223,17 +219,14 @@ class PackedConvexSet {
     /// The climbs' fixed-stride lists (shapes.hpp: `ClimbList`) into the view: the arrays
     /// handed over (`climb_list_offsets`, `climb_lists`: what the packing wrote with the
     /// adjacency, or a `take` or concatenation of such), their ranges checked unless the seal
-    /// vouches for them; else, with an adjacency, made here from it (a set made from a
-    /// caller's arrays).
+    /// vouches for them. Without them (a set made from a caller's arrays) the shapes climb on
+    /// the CSR arrays: making the lists here cost more than the copy and checks of the set
+    /// (40,000 hulls of 64 points: 144-150 ms of CPU against 65-69 ms), and the sets the
+    /// pipeline makes from its own arrays (triangle parts) have no shape that climbs.
     void attach_climb_lists(const PackSeal* seal) {
         if (climb_list_offsets_.has_value() != climb_lists_.has_value())
             throw std::invalid_argument("climb_list_offsets and climb_lists go together");
-        if (!climb_lists_) {
-            if (view_.adjacency == nullptr) return;
-            built_climb_lists_ = std::make_unique<ClimbLists>(view_, 0);
-            built_climb_lists_->attach(view_);
-            return;
-        }
+        if (!climb_lists_) return;
         if (view_.adjacency == nullptr)
             throw std::invalid_argument("climb lists need the adjacency");
         const std::int64_t h = view_.shape_count;
@@ -319,7 +312,6 @@ class PackedConvexSet {
     std::optional<Pairs32> edge_pairs_;
     std::optional<Index64> climb_list_offsets_;
     std::optional<ClimbRecords> climb_lists_;
-    std::unique_ptr<ClimbLists> built_climb_lists_;  // made here, or null
     bool sealed_ = false;
     mutable ShapeRadii radii_;
     mutable EdgeClasses edge_classes_;  // the view's cache: its pointer, set once

@@ -148,8 +148,8 @@ class ConvexSet:
         slots, zeros after them. A shape has a row a vertex when it climbs (a polytope of more
         than the core's ``hill_climbing_min_vertices``, 32, vertices) and its lists fit (at most 15 entries each), else none (it climbs on
         the CSR arrays). Written by the hull packing with the adjacency and carried by
-        :meth:`take` and :meth:`concatenate`; made by the core from the adjacency for a set
-        built from a caller's arrays.
+        :meth:`take` and :meth:`concatenate`. A set built from a caller's arrays has none (its
+        shapes climb on the CSR arrays, with the same answers).
     hull_status : (H,) int8
         :class:`meshcol.collision.hull.HullStatus` of each polytope's hull (OK, FLAT,
         COLLINEAR, SINGLE_POINT, or why it has none); 0 (OK) for primitives and for sets
@@ -212,7 +212,7 @@ class ConvexSet:
         copied (a hull packing's arrays can be hundreds of megabytes). ``seal``: the packing's
         (:func:`~meshcol.collision.hull.pack_hull_slices`), when the index arrays are its.
         ``climb_list_offsets`` and ``climb_lists`` may come with them (the packing's, or taken
-        from sets' own); without them the core makes them from the adjacency."""
+        from sets' own); without them the set has none."""
         self = cls.__new__(cls)
         self._hold(hull_status, arrays, seal)
         return self
@@ -246,9 +246,8 @@ class ConvexSet:
             climb_offsets,
             climb,
         )
-        if climb is None or climb_offsets is None:  # made by the core from the adjacency
-            made_offsets, made_lists = self._core.climb_arrays()
-            climb_offsets, climb = np.asarray(made_offsets), np.asarray(made_lists)
+        if climb is None or climb_offsets is None:  # none: the shapes climb on the CSR arrays
+            climb_offsets, climb = np.zeros(len(self.kinds) + 1, np.int64), _climb_rows(0)
         self.climb_list_offsets = _readonly(climb_offsets)
         self.climb_lists = _readonly(climb)
         self._edge_classes: tuple[np.ndarray, np.ndarray] | None = None

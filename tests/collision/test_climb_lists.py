@@ -1,10 +1,11 @@
 """The fixed-stride climb lists a ConvexSet carries beside its CSR adjacency.
 
-Oracle: the lists the core makes from a set's CSR adjacency (``ClimbLists``, what a set built
-from a caller's arrays holds), which the hill climbs were shown to follow bit for bit
-(cpp/tests/test_narrowphase.cpp). The hull packing writes them with the adjacency; ``take``
-and ``concatenate`` carry them; each must hold exactly what the core would make of the
-set's own adjacency, byte for byte, and the queries answer alike either way.
+Oracles: the lists the core makes from a set's CSR adjacency (``ClimbLists``), which the
+hill climbs were shown to follow bit for bit (cpp/tests/test_narrowphase.cpp); and a set of
+the same arrays without lists (built from a caller's arrays), whose shapes climb on the CSR
+arrays. The hull packing writes the lists with the adjacency; ``take`` and ``concatenate``
+carry them; each must hold exactly what the core makes of the set's own adjacency, byte for
+byte, and the queries answer alike with and without them.
 """
 
 from __future__ import annotations
@@ -31,16 +32,15 @@ def bipyramid(ring: int) -> np.ndarray:
     return np.concatenate([points, [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]])
 
 
-def made_from_adjacency(s: ConvexSet) -> ConvexSet:
-    """The same shapes from their arrays: the core makes the climb lists from the CSR ones."""
+def made_from_arrays(s: ConvexSet) -> ConvexSet:
+    """The same shapes from their arrays, as a caller hands them: no climb lists."""
     return ConvexSet(**{name: getattr(s, name) for name in ConvexSet._FIELDS})
 
 
 def assert_lists_are_the_adjacency_s(s: ConvexSet) -> None:
-    oracle = made_from_adjacency(s)
-    assert not oracle._core.sealed
-    assert s.climb_list_offsets.tobytes() == oracle.climb_list_offsets.tobytes()
-    assert s.climb_lists.tobytes() == oracle.climb_lists.tobytes()
+    offsets, lists = s._core.climb_arrays()  # the core's, made from the CSR arrays
+    assert s.climb_list_offsets.tobytes() == np.asarray(offsets).tobytes()
+    assert s.climb_lists.tobytes() == np.asarray(lists).tobytes()
     assert s.climb_lists.dtype == np.uint16 and s.climb_lists.shape[1:] == (16,)
     assert s.climb_lists.ctypes.data % 32 == 0 or len(s.climb_lists) == 0
     assert not s.climb_lists.flags.writeable and not s.climb_list_offsets.flags.writeable
@@ -97,7 +97,11 @@ def test_sets_with_and_without_the_packings_lists_answer_alike() -> None:
     rng = np.random.default_rng(9)
     shapes = [ellipsoid_points(rng, n) for n in (64, 256, 40, 200, 64, 256)]
     made = ConvexSet.from_vertices(shapes)
-    sets = [made, made.take(np.arange(len(made))), made_from_adjacency(made)]
+    plain = made_from_arrays(made)
+    assert not plain._core.sealed and len(plain.climb_lists) == 0
+    assert plain.climb_list_offsets.tolist() == [0] * (len(made) + 1)
+    assert len(made.climb_lists) == 64 + 256 + 40 + 200 + 64 + 256
+    sets = [made, made.take(np.arange(len(made))), plain, plain.take([0, 1, 2, 3, 4, 5])]
     count = len(made)
     poses = np.tile(np.eye(4), (count, 1, 1))
     poses[:, :3, 3] = rng.uniform(-1.0, 1.0, size=(count, 3))
