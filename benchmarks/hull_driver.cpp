@@ -4,7 +4,8 @@
 // HASH=1 prints a hash of the packed arrays and of the edge classes (compare two builds on the
 // same inputs: a build whose packing stores the classes hashes them in the same place as one
 // that computes them from the packed edges, so equal hashes mean equal classes; -DEAGER_EDGES
-// for a core from before the classes were computed lazily).
+// for a core from before the classes were computed lazily; -DCLIMB_LISTS also hashes the
+// climb lists, on a line of their own, for a core that packs them).
 //
 // Build (from the repository's root) and count:
 //   g++ -std=gnu++17 -O3 -g -Icpp/include -Icpp/src benchmarks/hull_driver.cpp
@@ -96,5 +97,12 @@ int main(int argc, char** argv) {
     hsh = 1469598103934665603ull;
     mix(p.edge_pair_offsets.data(), 8*p.edge_pair_offsets.size()); mix(p.edge_pairs.data(), 4*p.edge_pairs.size());
     std::printf("hash %016llx faces %zu edges %zu pairs %016llx\n", (unsigned long long)classes_hash, p.face_normals.size()/3, edge_directions.size()/3, (unsigned long long)hsh);
+#ifdef CLIMB_LISTS
+    // The fixed-stride climb lists (a core that packs them: build with -DCLIMB_LISTS), hashed
+    // on a line of their own so the lines above compare with a core that does not.
+    hsh = 1469598103934665603ull;
+    mix(p.climb_list_offsets.data(), 8*p.climb_list_offsets.size()); mix(p.climb_lists.data(), sizeof(ClimbList)*p.climb_lists.size());
+    std::printf("climb lists %016llx rows %zu\n", (unsigned long long)hsh, p.climb_lists.size());
+#endif
     return 0;
 }

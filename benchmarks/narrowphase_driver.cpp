@@ -9,7 +9,9 @@
 // checksums: the same answers), and writes the raw results when asked. The runs share the
 // set's checked radii and edge classes, as the extension's batches on one set do (a core
 // without `ShapeRadii`: build with -DNO_SHAPE_RADII; one whose set holds the edge classes
-// themselves, not the edges they are computed from: -DEAGER_EDGES).
+// themselves, not the edges they are computed from: -DEAGER_EDGES; one whose set makes
+// fixed-stride climb lists, made here from the case's adjacency as a set built from a
+// caller's arrays makes them, the same bytes as the hull packing writes: -DCLIMB_LISTS).
 // narrowphase_identity.py compares two checkouts' raw results on every case, byte for byte.
 #include <cstdio>
 #include <cstdlib>
@@ -59,6 +61,10 @@ int main(int argc, char** argv) {
     EdgeClasses classes(s.shape_count);
     s.edge_pair_offsets = edge_pair_off.data(); s.edge_pairs = edge_pairs.data();
     s.edge_classes = &classes;
+#endif
+#ifdef CLIMB_LISTS
+    ClimbLists lists(s, 1);
+    lists.attach(s);
 #endif
     long long p = pairs.size() / 2;
     std::vector<double> dist(p), depth(p), normal(3 * p), pa(3 * p), pb(3 * p);

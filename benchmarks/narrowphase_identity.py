@@ -30,6 +30,8 @@ def build(checkout: Path, out: Path) -> Path:
         cmd.append("-DNO_SHAPE_RADII")  # a core from before the radii kept between batches
     if "class EdgeClasses" not in header.read_text():
         cmd.append("-DEAGER_EDGES")  # a core from before the edge classes were computed lazily
+    if "class ClimbLists" in header.read_text():
+        cmd.append("-DCLIMB_LISTS")  # a core whose sets make fixed-stride climb lists
     subprocess.run([*cmd, *sources, "-lpthread", "-o", str(out)], check=True)
     return out
 

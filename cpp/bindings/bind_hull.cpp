@@ -28,6 +28,21 @@ const meshcol::Vec3* as_vec3(const Points& points) {
     return reinterpret_cast<const meshcol::Vec3*>(points.data());
 }
 
+/// The packing's climb lists to numpy as (M, 16) uint16 rows (a `ClimbList` a row: its count,
+/// then its 15 slots), without a copy: the vector's storage keeps the lists' 32-byte alignment.
+auto climb_list_array(std::vector<meshcol::ClimbList>&& lists) {
+    static_assert(sizeof(meshcol::ClimbList) == kClimbRecordWords * sizeof(std::uint16_t),
+                  "a ClimbList is a row of 16 uint16");
+    auto* heap = new std::vector<meshcol::ClimbList>(std::move(lists));
+    if (heap->empty()) heap->reserve(1);  // a non-null, aligned data pointer even for 0 rows
+    nb::capsule owner(heap, [](void* p) noexcept {
+        delete static_cast<std::vector<meshcol::ClimbList>*>(p);
+    });
+    const size_t shape[2] = {heap->size(), kClimbRecordWords};
+    return Out<std::uint16_t, -1, kClimbRecordWords>(
+        reinterpret_cast<std::uint16_t*>(heap->data()), 2, shape, owner);
+}
+
 template <class T>
 std::vector<T> flatten(const std::vector<meshcol::Vec3>& v) {
     std::vector<T> out;
@@ -113,6 +128,8 @@ void bind_hull(nb::module_& m) {
             seal->edge_count = static_cast<std::int64_t>(e);
             seal->offsets = p.offsets;
             seal->edge_pair_offsets = p.edge_pair_offsets;
+            seal->climb_list_offsets = p.climb_list_offsets;
+            seal->climb_list_count = static_cast<std::int64_t>(p.climb_lists.size());
             auto adjacency_offsets =
                 vector_array<Out<std::int64_t, -1>>(std::move(p.adjacency_offsets), v + 1, 0);
             auto adjacency = vector_array<Out<std::int32_t, -1>>(std::move(p.adjacency), k, 0);
@@ -120,13 +137,17 @@ void bind_hull(nb::module_& m) {
             seal->adjacency_offsets_data = adjacency_offsets.data();
             seal->adjacency_data = adjacency.data();
             seal->edge_pairs_data = edge_pairs.data();
+            auto climb_lists = climb_list_array(std::move(p.climb_lists));
+            seal->climb_lists_data = climb_lists.data();
             // As Python objects (typed for the stub), so that the seal holds the very arrays.
             auto adjacency_offsets_object = adjacency_offsets.cast();
             auto adjacency_object = adjacency.cast();
             auto edge_pairs_object = edge_pairs.cast();
+            auto climb_lists_object = climb_lists.cast();
             seal->adjacency_offsets = adjacency_offsets_object;
             seal->adjacency = adjacency_object;
             seal->edge_pairs = edge_pairs_object;
+            seal->climb_lists = climb_lists_object;
             return std::make_tuple(
                 vector_array<Out<std::int8_t, -1>>(std::move(status), hs, 0),
                 vector_array<Out<double, -1, 3>>(std::move(p.vertices), v, 3),
@@ -135,11 +156,14 @@ void bind_hull(nb::module_& m) {
                 vector_array<Out<std::int64_t, -1>>(std::move(p.face_offsets), hs + 1, 0),
                 vector_array<Out<double, -1, 3>>(std::move(p.face_normals), f, 3),
                 vector_array<Out<std::int64_t, -1>>(std::move(p.edge_pair_offsets), hs + 1, 0),
-                edge_pairs_object, nb::cast(std::move(seal)));
+                edge_pairs_object,
+                vector_array<Out<std::int64_t, -1>>(std::move(p.climb_list_offsets), hs + 1, 0),
+                climb_lists_object, nb::cast(std::move(seal)));
         },
         "points"_a, "offsets"_a, "threads"_a = 0,
         "Hulls of H point sets (shape h owns points[offsets[h]:offsets[h + 1]]) packed for a "
         "ConvexSet: (status (H,), vertices, offsets, adjacency_offsets, adjacency, "
-        "face_offsets, face_normals, edge_pair_offsets, edge_pairs, seal); the seal, passed "
-        "to PackedConvexSet with these arrays, spares it reading their indices again.");
+        "face_offsets, face_normals, edge_pair_offsets, edge_pairs, climb_list_offsets, "
+        "climb_lists, seal); the seal, passed to PackedConvexSet with these arrays, spares it "
+        "reading their indices again.");
 }

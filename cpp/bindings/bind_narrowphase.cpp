@@ -5,7 +5,9 @@
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/pair.h>
 
+#include <algorithm>
 #include <array>
+#include <memory>
 #include <cstdint>
 #include <optional>
 #include <stdexcept>
@@ -241,6 +243,31 @@ Column bounding_radii(const PackedConvexSet& set, int threads) {
     return radii;
 }
 
+// The climb lists the core makes from the set's adjacency (`ClimbLists`, all cores), as new
+// numpy arrays ((H + 1,) int64 offsets, (M, 16) uint16 rows); zeros and no rows when no shape
+// has lists. Not attached to the set: what the packing writes, made another way.
+std::pair<nb::object, nb::object> climb_arrays(const PackedConvexSet& set) {
+    const size_t h = static_cast<size_t>(set.size());
+    auto made = std::make_unique<meshcol::ClimbLists>(set.view(), 0);
+    auto offsets = new_array<Out<std::int64_t, -1>>({h + 1});
+    if (made->offsets() != nullptr)
+        std::copy(made->offsets(), made->offsets() + h + 1, offsets.data());
+    else
+        std::fill(offsets.data(), offsets.data() + h + 1, std::int64_t{0});
+    const auto* lists = made->lists();
+    const size_t shape[2] = {static_cast<size_t>(made->size()), kClimbRecordWords};
+    if (lists == nullptr) {
+        auto none = new_array<Out<std::uint16_t, -1, kClimbRecordWords>>({0, kClimbRecordWords});
+        return {offsets.cast(), none.cast()};
+    }
+    nb::capsule owner(made.release(), [](void* p) noexcept {
+        delete static_cast<meshcol::ClimbLists*>(p);
+    });
+    Out<std::uint16_t, -1, kClimbRecordWords> rows(
+        reinterpret_cast<std::uint16_t*>(const_cast<meshcol::ClimbList*>(lists)), 2, shape, owner);
+    return {offsets.cast(), rows.cast()};
+}
+
 }  // namespace
 
 void bind_narrowphase(nb::module_& m) {
@@ -258,10 +285,12 @@ void bind_narrowphase(nb::module_& m) {
                                 "ConvexSet).")
         .def(nb::init<Points, Index64, Kinds, Params, std::optional<Index64>,
                       std::optional<Index32>, std::optional<Index64>, std::optional<Points>,
-                      std::optional<Index64>, std::optional<Pairs32>, const PackSeal*>(),
+                      std::optional<Index64>, std::optional<Pairs32>, const PackSeal*,
+                      std::optional<Index64>, std::optional<ClimbRecords>>(),
              "vertices"_a, "offsets"_a, "kinds"_a, "params"_a, "adjacency_offsets"_a.none(),
              "adjacency"_a.none(), "face_offsets"_a.none(), "face_normals"_a.none(),
-             "edge_pair_offsets"_a.none(), "edge_pairs"_a.none(), "seal"_a.none() = nb::none())
+             "edge_pair_offsets"_a.none(), "edge_pairs"_a.none(), "seal"_a.none() = nb::none(),
+             "climb_list_offsets"_a.none() = nb::none(), "climb_lists"_a.none() = nb::none())
         .def("__len__", &PackedConvexSet::size)
         .def_prop_ro("sealed", &PackedConvexSet::sealed,
                      "Whether the seal vouched for the index arrays (not read again).")
@@ -269,6 +298,10 @@ void bind_narrowphase(nb::module_& m) {
              "threads"_a, "result_type"_a,
              "One batch as result_type (layout 0 distance, 1 penetration, 2 intersects, 3 "
              "signed distance); None when poses or pairs are not in the core's form.")
+        .def("climb_arrays", &climb_arrays,
+             "The climb lists the core makes from the set's adjacency, as new arrays (not "
+             "the set's): offsets (H + 1,) int64 and (M, 16) uint16 rows (count, then 15 "
+             "neighbour slots).")
         .def("aabbs", &aabbs, "poses"_a.none(), "threads"_a = 0,
              "World AABBs (H, 3), (H, 3) under poses (None: identity).")
         .def("edge_classes", &edge_classes, "threads"_a = 0,

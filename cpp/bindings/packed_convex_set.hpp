@@ -20,6 +20,11 @@
 
 namespace meshcol::bindings {
 
+/// The uint16 words of a `ClimbList` (its count, then its slots): a row of a set's
+/// (M, 16) `climb_lists` array.
+constexpr size_t kClimbRecordWords = 16;
+using ClimbRecords = In<std::uint16_t, -1, static_cast<ssize_t>(kClimbRecordWords)>;
+
 /// What `pack_polytopes` made: references to its index arrays (the adjacency, its offsets and
 /// the edge pairs, which stay alive and at their addresses while this lives) and copies of
 /// its per-shape vertex and edge offsets. A PackedConvexSet handed these very arrays, with
@@ -33,6 +38,33 @@ struct PackSeal {
     const std::int32_t* edge_pairs_data = nullptr;
     std::int64_t vertex_count = 0, adjacency_count = 0, edge_count = 0;
     std::vector<std::int64_t> offsets, edge_pair_offsets;  // per packed shape, H + 1 each
+    nb::object climb_lists;  // the climb lists, held, and their offsets' copy (H + 1)
+    const std::uint16_t* climb_lists_data = nullptr;
+    std::int64_t climb_list_count = 0;
+    std::vector<std::int64_t> climb_list_offsets;
+
+    /// Whether the set's climb lists are the sealed ones, its polytopes (kind 0, in order)
+    /// owning exactly the packed shapes' lists and every other shape none (`clo` checked).
+    bool vouches_for_climb_lists(std::int64_t h, const std::int8_t* kinds, const std::int64_t* clo,
+                                 const ClimbRecords& lists) const {
+        if (lists.data() != climb_lists_data ||
+            static_cast<std::int64_t>(lists.shape(0)) != climb_list_count ||
+            climb_list_offsets.size() != offsets.size())
+            return false;
+        const size_t packed = climb_list_offsets.size() - 1;
+        size_t k = 0;
+        for (std::int64_t s = 0; s < h; ++s) {
+            if (kinds[s] == 0) {
+                if (k == packed || clo[s] != climb_list_offsets[k] ||
+                    clo[s + 1] != climb_list_offsets[k + 1])
+                    return false;
+                ++k;
+            } else if (clo[s + 1] != clo[s]) {
+                return false;
+            }
+        }
+        return k == packed;
+    }
 
     /// Whether the set's arrays are the sealed ones and its polytopes (kind 0, in order) own
     /// exactly the packed shapes' vertices and edges, every other shape none; `offsets` and
@@ -70,11 +102,14 @@ class PackedConvexSet {
                     std::optional<Index64> adjacency_offsets, std::optional<Index32> adjacency,
                     std::optional<Index64> face_offsets, std::optional<Points> face_normals,
                     std::optional<Index64> edge_pair_offsets, std::optional<Pairs32> edge_pairs,
-                    const PackSeal* seal = nullptr)
+                    const PackSeal* seal = nullptr,
+                    std::optional<Index64> climb_list_offsets = std::nullopt,
+                    std::optional<ClimbRecords> climb_lists = std::nullopt)
         : vertices_(vertices), offsets_(offsets), kinds_(kinds), params_(params),
           adjacency_offsets_(adjacency_offsets), adjacency_(adjacency),
           face_offsets_(face_offsets), face_normals_(face_normals),
           edge_pair_offsets_(edge_pair_offsets), edge_pairs_(edge_pairs),
+          climb_list_offsets_(climb_list_offsets), climb_lists_(climb_lists),
           radii_(static_cast<std::int64_t>(kinds.shape(0))),
           edge_classes_(static_cast<std::int64_t>(kinds.shape(0))) {
         const std::int64_t v = static_cast<std::int64_t>(vertices.shape(0));
@@ -149,6 +184,7 @@ class PackedConvexSet {
             view_.edge_pairs = edge_pairs->data();
             view_.edge_classes = &edge_classes_;
         }
+        attach_climb_lists(seal);
     }
 
     std::int64_t size() const { return view_.shape_count; }
@@ -180,6 +216,61 @@ class PackedConvexSet {
     }
 
   private:
+    /// The climbs' fixed-stride lists (shapes.hpp: `ClimbList`) into the view: the arrays
+    /// handed over (`climb_list_offsets`, `climb_lists`: what the packing wrote with the
+    /// adjacency, or a `take` or concatenation of such), their ranges checked unless the seal
+    /// vouches for them. Without them (a set made from a caller's arrays) the shapes climb on
+    /// the CSR arrays: making the lists here cost more than the copy and checks of the set
+    /// (40,000 hulls of 64 points: 144-150 ms of CPU against 65-69 ms), and the sets the
+    /// pipeline makes from its own arrays (triangle parts) have no shape that climbs.
+    void attach_climb_lists(const PackSeal* seal) {
+        if (climb_list_offsets_.has_value() != climb_lists_.has_value())
+            throw std::invalid_argument("climb_list_offsets and climb_lists go together");
+        if (!climb_lists_) return;
+        if (view_.adjacency == nullptr)
+            throw std::invalid_argument("climb lists need the adjacency");
+        const std::int64_t h = view_.shape_count;
+        const std::int64_t m = static_cast<std::int64_t>(climb_lists_->shape(0));
+        if (static_cast<std::int64_t>(climb_list_offsets_->shape(0)) != h + 1)
+            throw std::invalid_argument("climb_list_offsets must be (H + 1,)");
+        check_offsets(climb_list_offsets_->data(), climb_list_offsets_->shape(0), m,
+                      "climb_list_offsets");
+        if (m == 0) return;  // no shape has lists: every one climbs on the CSR arrays
+        if (reinterpret_cast<std::uintptr_t>(climb_lists_->data()) % alignof(ClimbList) != 0)
+            throw std::invalid_argument("climb_lists must be 32-byte aligned");
+        const std::int64_t* o = view_.offsets;
+        const std::int64_t* clo = climb_list_offsets_->data();
+        const auto* lists = reinterpret_cast<const ClimbList*>(climb_lists_->data());
+        const bool sealed = sealed_ && seal->vouches_for_climb_lists(h, view_.kinds, clo,
+                                                                    *climb_lists_);
+        if (!sealed) {
+            // A shape has a list a vertex or none; every list's count fits its slots and
+            // names vertices of its shape.
+            constexpr long long kShapesPerThread = 4096;
+            std::atomic<bool> all{true};
+            parallel_for(h, resolve_threads(0, h, kShapesPerThread), [&](long long b, long long e) {
+                bool ok = true;
+                for (long long s = b; s < e && ok; ++s) {
+                    const std::int64_t count = clo[s + 1] - clo[s], n = o[s + 1] - o[s];
+                    if (count == 0) continue;
+                    ok = count == n;
+                    std::uint32_t bad = 0;
+                    for (std::int64_t i = clo[s]; ok && i < clo[s + 1]; ++i) {
+                        const ClimbList& list = lists[i];
+                        bad |= list.count > kClimbListSlots;
+                        for (int k = 0; k < kClimbListSlots; ++k)
+                            bad |= (k < list.count) & (list.neighbours[k] >= n);
+                    }
+                    ok &= bad == 0;
+                }
+                if (!ok) all = false;
+            });
+            if (!all) throw std::invalid_argument("climb_lists hold a list out of range");
+        }
+        view_.climb_list_offsets = clo;
+        view_.climb_lists = lists;
+    }
+
     /// Whether every shape s < h indexes only its own vertices: index[j] in [0, its vertex
     /// count) (offsets o) for j in [first, last) = range(s). On all cores for a large set: the
     /// checks of the adjacency and the edges read every index once (about 21 ms of CPU for
@@ -219,6 +310,8 @@ class PackedConvexSet {
     std::optional<Points> face_normals_;
     std::optional<Index64> edge_pair_offsets_;
     std::optional<Pairs32> edge_pairs_;
+    std::optional<Index64> climb_list_offsets_;
+    std::optional<ClimbRecords> climb_lists_;
     bool sealed_ = false;
     mutable ShapeRadii radii_;
     mutable EdgeClasses edge_classes_;  // the view's cache: its pointer, set once

@@ -68,7 +68,9 @@ inline void scan_pair(const Vec3* va, int na, const Vec3& da, const Vec3* vb, in
 #if defined(__GNUC__) || defined(__clang__)
 #define MESHCOL_CLIMB_INLINE inline __attribute__((always_inline))
 #define MESHCOL_CLIMB_PREFETCH(address) __builtin_prefetch(address)
+#define MESHCOL_CLIMB_OPAQUE(value) asm("" : "+r"(value))
 #else
+#define MESHCOL_CLIMB_OPAQUE(value) ((void)0)
 #define MESHCOL_CLIMB_INLINE inline
 #define MESHCOL_CLIMB_PREFETCH(address) ((void)(address))
 #endif
@@ -97,37 +99,38 @@ MESHCOL_CLIMB_INLINE int climb_start(const ShapeView& s, const Vec3& d, int hint
     return best;
 }
 
-// One step of steepest ascent from `best`: the best neighbour strictly above `best_dot`
-// (first in list order on ties), or -1 at a local (hence global) maximum. `kPrefetch`: ask
-// for each neighbour's own list as it is read (below).
-template <bool kPrefetch = true>
-MESHCOL_CLIMB_INLINE int climb_step(const ShapeView& s, const Vec3& d, int best,
-                                    double& best_dot) {
+// The best of the neighbours `list[0 .. count)` of a climb's vertex strictly above `best_dot`
+// (first in list order on ties), or -1. Blocks of four (meshcol pads each list with the vertex
+// itself to a multiple of four, so the trip count is predictable), then any remainder (lists
+// packed by other means). The body is written out twice on purpose: shared through a lambda,
+// GCC's code for it ran 2% slower (A/B, 64-vertex penetration). With `kPrefetch`, asks for
+// each neighbour's own list (in `s.climb_lists` with `kLists`, else in its CSR arrays) as it
+// is read (`climb_step`).
+template <bool kPrefetch, bool kLists, class Index>
+MESHCOL_CLIMB_INLINE int best_neighbour(const ShapeView& s, const Vec3& d, const Index* list,
+                                        int count, double& best_dot) {
     const Vec3* v = s.vertices;
     int next = -1;
-    const std::int64_t begin = s.adjacency_offsets[best];
-    const std::int64_t end = s.adjacency_offsets[best + 1];
-    // Blocks of four (meshcol pads each list with the vertex itself to a multiple of four,
-    // so the trip count is predictable), then any remainder (lists packed by other means).
-    // The body is written out twice on purpose: shared through a lambda, GCC's code for it
-    // ran 2% slower (A/B, 64-vertex penetration).
-    // With `kPrefetch`, each neighbour's own list is asked for as it is read: the next step's
-    // list is then in the nearest cache whichever neighbour wins, and the step waits on one
-    // load fewer (at 256 vertices a shape, a fifth of a deep pair's time; the same answers).
-    std::int64_t k = begin;
-    for (; k + 3 < end; k += 4) {
+    int k = 0;
+    for (; k + 3 < count; k += 4) {
         for (int l = 0; l < 4; ++l) {
-            const int j = s.adjacency[k + l];
-            if constexpr (kPrefetch) MESHCOL_CLIMB_PREFETCH(s.adjacency + s.adjacency_offsets[j]);
+            std::ptrdiff_t j = list[k + l];
+            // An index read from 16 bits made GCC branch on the compare below instead of
+            // selecting (1.4 times the time of a 256-vertex penetration); hidden from it
+            // this way, it selects as for 32 bits.
+            MESHCOL_CLIMB_OPAQUE(j);
+            if constexpr (kPrefetch && kLists) MESHCOL_CLIMB_PREFETCH(s.climb_lists + j);
+            if constexpr (kPrefetch && !kLists)
+                MESHCOL_CLIMB_PREFETCH(s.adjacency + s.adjacency_offsets[j]);
             const double dj = dot(v[j], d);
             if (dj > best_dot) {
                 best_dot = dj;
-                next = j;
+                next = static_cast<int>(j);
             }
         }
     }
-    for (; k < end; ++k) {
-        const int j = s.adjacency[k];
+    for (; k < count; ++k) {
+        const int j = list[k];
         const double dj = dot(v[j], d);
         if (dj > best_dot) {
             best_dot = dj;
@@ -137,12 +140,34 @@ MESHCOL_CLIMB_INLINE int climb_step(const ShapeView& s, const Vec3& d, int best,
     return next;
 }
 
+// One step of steepest ascent from `best`: the best neighbour strictly above `best_dot`
+// (first in list order on ties), or -1 at a local (hence global) maximum. `kLists`: the
+// neighbours from the shape's fixed-stride `climb_lists` (non-null), else from its CSR arrays;
+// the same lists in the same order, so the same steps. `kPrefetch`: ask for each neighbour's
+// own list as it is read: the next step's list is then in the nearest cache whichever
+// neighbour wins, and the step waits on one load fewer (at 256 vertices a shape, a fifth of a
+// deep pair's time; the same answers). A fixed-stride list's address needs no load, a CSR
+// list's needs the neighbour's offset.
+template <bool kPrefetch = true, bool kLists = false>
+MESHCOL_CLIMB_INLINE int climb_step(const ShapeView& s, const Vec3& d, int best,
+                                    double& best_dot) {
+    if constexpr (kLists) {
+        const ClimbList& at = s.climb_lists[best];
+        return best_neighbour<kPrefetch, true>(s, d, at.neighbours, at.count, best_dot);
+    } else {
+        const std::int64_t begin = s.adjacency_offsets[best];
+        const std::int64_t end = s.adjacency_offsets[best + 1];
+        return best_neighbour<kPrefetch, false>(s, d, s.adjacency + begin,
+                                                static_cast<int>(end - begin), best_dot);
+    }
+}
+
 // A climb's step from `best` when still going up: `best` moves, or `up` turns false at the
 // top.
-template <bool kPrefetch = true>
+template <bool kPrefetch = true, bool kLists = false>
 MESHCOL_CLIMB_INLINE void advance(const ShapeView& s, const Vec3& d, int& best, double& best_dot,
                                   bool& up) {
-    const int next = climb_step<kPrefetch>(s, d, best, best_dot);
+    const int next = climb_step<kPrefetch, kLists>(s, d, best, best_dot);
     up = next >= 0;
     best = up ? next : best;
 }
@@ -162,15 +187,15 @@ MESHCOL_CLIMB_INLINE void climb_pair_with(const ShapeView& a, const Vec3& da, in
     bool up_a = true, up_b = true;
     int steps_a = 0, steps_b = 0;
     while (up_a && up_b && steps_a < a.vertex_count) {
-        advance<kPrefetch>(a, da, best_a, dot_a, up_a);
-        advance<kPrefetch>(b, db, best_b, dot_b, up_b);
+        advance<kPrefetch, true>(a, da, best_a, dot_a, up_a);
+        advance<kPrefetch, true>(b, db, best_b, dot_b, up_b);
         ++steps_a;
         ++steps_b;
     }
     for (; up_a && steps_a < a.vertex_count; ++steps_a)
-        advance<kPrefetch>(a, da, best_a, dot_a, up_a);
+        advance<kPrefetch, true>(a, da, best_a, dot_a, up_a);
     for (; up_b && steps_b < b.vertex_count; ++steps_b)
-        advance<kPrefetch>(b, db, best_b, dot_b, up_b);
+        advance<kPrefetch, true>(b, db, best_b, dot_b, up_b);
     // A capped climb (never seen: the edge graph is finite and every step goes up) falls
     // back to the scan.
     if (up_a) best_a = scan_support(a.vertices, a.vertex_count, da);
@@ -179,12 +204,12 @@ MESHCOL_CLIMB_INLINE void climb_pair_with(const ShapeView& a, const Vec3& da, in
     out_b = {b.vertices[best_b], best_b};
 }
 
-/// `support_core` of two climbing shapes at once (`climbs` true for both): a in `da` from
-/// `hint_a`, b in `db` from `hint_b` (negative: no hint). Same answers as two calls, faster.
-/// The neighbour lists are prefetched only when a shape has at least
-/// `defaults::climb_prefetch_min_vertices` vertices: a smaller one's lists are already near
-/// (`prefetch` asked for the whole shape), and the prefetch would cost two instructions a
-/// neighbour for nothing.
+/// `support_core` of two climbing shapes with fixed-stride lists at once (`climbs` true and
+/// `climb_lists` set for both): a in `da` from `hint_a`, b in `db` from `hint_b` (negative:
+/// no hint). Same answers as two calls, faster. The neighbour lists are prefetched only when a
+/// shape has at least `defaults::climb_prefetch_min_vertices` vertices: a smaller one's lists
+/// are already near (`prefetch` asked for the whole shape), and the prefetch would cost two
+/// instructions a neighbour for nothing.
 MESHCOL_CLIMB_INLINE void climb_pair(const ShapeView& a, const Vec3& da, int hint_a,
                                      const ShapeView& b, const Vec3& db, int hint_b,
                                      SupportPoint& out_a, SupportPoint& out_b) {

@@ -18,6 +18,8 @@ MinkowskiDifference::MinkowskiDifference(const ShapeView& shape_a, const Pose& p
     if (radius_a < 0.0) radius_a = bounding_radius(shape_a);
     if (radius_b < 0.0) radius_b = bounding_radius(shape_b);
     climb_both = climbs(shape_a) && climbs(shape_b);
+    climb_lists_both =
+        climb_both && shape_a.climb_lists != nullptr && shape_b.climb_lists != nullptr;
     scan_both = scans(shape_a) && scans(shape_b);
     scale = radius_a + radius_b + norm(translation_b);
     if (!(scale > 0.0)) scale = 1.0;
@@ -77,7 +79,10 @@ SimplexVertex MinkowskiDifference::support(const Vec3& d) {
     last_direction = d;
     const int start_a = near ? hint_a : -1, start_b = near ? hint_b : -1;
     const Vec3 db = rotation_b.transpose_times(-d);
-    if (climb_both) {
+    // Only the lists' joint climb inline: the CSR arrays' joint climbs inlined beside it made
+    // every support (the scanning pairs' too) pay for their registers, 2-4% of a 16-point
+    // pair; a pair without lists on both sides climbs each shape in `support_core`.
+    if (climb_lists_both) {
         climb::climb_pair(*a, d, start_a, *b, db, start_b, sa, sb);
     } else {
         sa = support_core(*a, d, start_a);

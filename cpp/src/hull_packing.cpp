@@ -83,7 +83,9 @@ struct ChunkPack {
     std::vector<std::int32_t> adjacency;
     std::vector<double> faces;
     std::vector<std::int32_t> edges;  // (from, to) pairs
-    PrefaultAhead ahead[5];            // of vertices, adjacency_counts, adjacency, faces, edges
+    std::vector<std::int64_t> climb_counts;  // per shape: its climb lists, 0 or its vertices
+    std::vector<ClimbList> climb_lists;
+    PrefaultAhead ahead[6];  // of vertices, adjacency_counts, adjacency, faces, edges, climb_lists
 
     // Room for shapes of `points` points in all (a hull of k vertices has at most 2k - 4
     // triangles and 3k - 6 edges), so the arrays never move while they fill (points_to_reserve
@@ -95,11 +97,13 @@ struct ChunkPack {
         vertex_counts.reserve(h);
         face_counts.reserve(h);
         edge_counts.reserve(h);
+        climb_counts.reserve(h);
         vertices.reserve(3 * p);
         adjacency_counts.reserve(p);
         adjacency.reserve(6 * p + 3 * p + 4 * h);
         faces.reserve(3 * (2 * p + 2 * h));
         edges.reserve(2 * (3 * p + h));
+        climb_lists.reserve(p);
     }
 
     /// After a shape: the room of the large arrays prefaulted ahead of their ends (the
@@ -110,6 +114,7 @@ struct ChunkPack {
         ahead[2].keep(adjacency);
         ahead[3].keep(faces);
         ahead[4].keep(edges);
+        ahead[5].keep(climb_lists);
     }
 
     /// Empty, keeping the room (the buffers of the next chunk).
@@ -123,6 +128,8 @@ struct ChunkPack {
         adjacency.clear();
         faces.clear();
         edges.clear();
+        climb_counts.clear();
+        climb_lists.clear();
     }
 };
 
@@ -148,6 +155,9 @@ struct PackScratch {
     std::vector<Vec3> directions;
     std::vector<double> unique;  // pack_one's vertices before they are appended
     std::vector<double> classes;  // edge_direction_class_count's (discarded) classes
+    // The climb lists adjacency_from_masks wrote for the shape (0 or its vertex count), or -1
+    // when it wrote none and left them to append_climb_lists.
+    std::int64_t climb_written = -1;
 };
 
 // The unit direction of d[i] and its grouping key into unit[3 i ..] and key[3 i ..]
@@ -325,10 +335,64 @@ std::vector<double> unique_directions_of(const Vec3* d, size_t count, bool signe
 
 namespace {
 
+// A block of four neighbour indices (each in [0, 65536)) as the 16-bit entries of a
+// `ClimbList` at `to` (unaligned): in SSE2 lanes, biased by 2^15 into the signed pack's range
+// and back, three operations where four scalar stores took their addresses too.
+inline void narrow_block(const std::int32_t* from, std::uint16_t* to) {
+#if defined(__SSE2__)
+    const __m128i v = _mm_sub_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(from)),
+                                    _mm_set1_epi32(0x8000));
+    const __m128i packed = _mm_xor_si128(_mm_packs_epi32(v, v), _mm_set1_epi32(0x80008000));
+    _mm_storel_epi64(reinterpret_cast<__m128i*>(to), packed);
+#else
+    for (int l = 0; l < 4; ++l) to[l] = static_cast<std::uint16_t>(from[l]);
+#endif
+}
+
+// A padded CSR list (`count` a multiple of four, as the packing pads them, at most
+// kClimbListSlots) as `record` (zeroed: its unused slots stay zero), four entries at a time.
+inline void write_climb_list(const std::int32_t* from, std::int64_t count, ClimbList& record) {
+    record.count = static_cast<std::uint16_t>(count);
+    for (std::int64_t k = 0; k < count; k += 4) narrow_block(from + k, record.neighbours + k);
+}
+
 // adjacency_from_edges for at most 64 vertices: each vertex's neighbours as a bit mask,
 // read out lowest bit first (ascending), then padded. The same lists when every edge is listed
 // once (a triangulation's edges are); false, with nothing appended, when an edge repeats (the
-// lists would then hold it twice).
+// lists would then hold it twice). With `kLists`, each list also to its `record` (shapes.hpp:
+// `ClimbList`, zeroed) in the same pass.
+template <bool kLists>
+void write_mask_lists(size_t n, const std::uint64_t* mask, const std::int64_t* counts,
+                      std::int32_t* list, ClimbList* record) {
+    for (size_t i = 0; i < n; ++i) {
+        std::int32_t* const end = list + counts[i];
+        std::uint16_t* slot = nullptr;
+        if constexpr (kLists) {
+            record[i].count = static_cast<std::uint16_t>(counts[i]);
+            slot = record[i].neighbours;
+        }
+        // The padding (fewer than four) first, as the list's last block whole: the neighbours
+        // then overwrite the part of it they fill (no loop whose length follows the degree).
+        if (counts[i] != 0) {
+            const auto self = static_cast<std::int32_t>(i);
+            end[-4] = self, end[-3] = self, end[-2] = self, end[-1] = self;
+            if constexpr (kLists) {
+                std::uint16_t* const last = slot + counts[i];
+                const auto self16 = static_cast<std::uint16_t>(i);
+                last[-4] = self16, last[-3] = self16, last[-2] = self16, last[-1] = self16;
+            }
+        }
+        // Each neighbour to both lists (a second pass over the list, four at a time in SSE2
+        // lanes, took more instructions).
+        for (std::uint64_t m = mask[i]; m != 0; m &= m - 1) {
+            const auto j = __builtin_ctzll(m);
+            *list++ = static_cast<std::int32_t>(j);
+            if constexpr (kLists) *slot++ = static_cast<std::uint16_t>(j);
+        }
+        list = end;
+    }
+}
+
 bool adjacency_from_masks(int count, PackScratch& s, ChunkPack& out) {
     const auto n = static_cast<size_t>(count);
     std::uint64_t mask[64];
@@ -349,24 +413,24 @@ bool adjacency_from_masks(int count, PackScratch& s, ChunkPack& out) {
     out.adjacency_counts.resize(counts_first + n);
     std::int64_t* counts = out.adjacency_counts.data() + counts_first;
     size_t padded_total = 0;
+    std::int64_t longest = 0;
     for (size_t i = 0; i < n; ++i) {
         counts[i] = (degree[i] + 3) / 4 * 4;
         padded_total += static_cast<size_t>(counts[i]);
+        longest = std::max(longest, counts[i]);
     }
     const size_t first = out.adjacency.size();
     out.adjacency.resize(first + padded_total);
     std::int32_t* list = out.adjacency.data() + first;
-    for (size_t i = 0; i < n; ++i) {
-        std::int32_t* const end = list + counts[i];
-        // The padding (fewer than four) first, as the list's last block whole: the neighbours
-        // then overwrite the part of it they fill (no loop whose length follows the degree).
-        if (counts[i] != 0) {
-            const auto self = static_cast<std::int32_t>(i);
-            end[-4] = self, end[-3] = self, end[-2] = self, end[-1] = self;
-        }
-        for (std::uint64_t m = mask[i]; m != 0; m &= m - 1)
-            *list++ = static_cast<std::int32_t>(__builtin_ctzll(m));
-        list = end;
+    // The climb lists too when the shape climbs and its lists fit (append_climb_lists' rule).
+    if (count > defaults::hill_climbing_min_vertices && longest <= kClimbListSlots) {
+        const size_t lists_first = out.climb_lists.size();
+        out.climb_lists.resize(lists_first + n);  // zeroed: the unused slots
+        write_mask_lists<true>(n, mask, counts, list, out.climb_lists.data() + lists_first);
+        s.climb_written = count;
+    } else {
+        write_mask_lists<false>(n, mask, counts, list, nullptr);
+        s.climb_written = 0;
     }
     return true;
 }
@@ -412,6 +476,35 @@ void adjacency_from_edges(int count, PackScratch& s, ChunkPack& out) {
     }
 }
 
+// The climb lists (shapes.hpp: `ClimbList`) of a shape of `count` vertices whose CSR lists
+// were just appended (from `counts_first` in `out.adjacency_counts`, `first` in
+// `out.adjacency`), while they are in the cache: what `make_climb_lists` makes of them, byte
+// for byte (the indices are in range by construction). Appends its count of lists (0 or
+// `count`) to `out.climb_counts`: none for a shape that does not climb (`climbs`: at most
+// `defaults::hill_climbing_min_vertices` vertices) or whose lists do not fit.
+void append_climb_lists(int count, size_t counts_first, size_t first, ChunkPack& out) {
+    if (count <= defaults::hill_climbing_min_vertices || count > 0x10000) {
+        out.climb_counts.push_back(0);
+        return;
+    }
+    const auto n = static_cast<size_t>(count);
+    const std::int64_t* counts = out.adjacency_counts.data() + counts_first;
+    for (size_t i = 0; i < n; ++i)
+        if (counts[i] > kClimbListSlots) {
+            out.climb_counts.push_back(0);
+            return;
+        }
+    const size_t lists_first = out.climb_lists.size();
+    out.climb_lists.resize(lists_first + n);  // zeroed: the unused slots as make_climb_lists
+    ClimbList* list = out.climb_lists.data() + lists_first;
+    const std::int32_t* from = out.adjacency.data() + first;
+    for (size_t i = 0; i < n; ++i) {
+        write_climb_list(from, counts[i], list[i]);
+        from += counts[i];
+    }
+    out.climb_counts.push_back(count);
+}
+
 void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
               PackScratch& s, ChunkPack& out) {
     hull_with(points, n, w, analysis);
@@ -422,7 +515,10 @@ void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
     const size_t vertices_before = out.vertices.size();
     std::int64_t faces = 0;
     const size_t edges_before = out.edges.size();
+    const size_t adjacency_counts_before = out.adjacency_counts.size();
+    const size_t adjacency_before = out.adjacency.size();
     s.pairs.clear();
+    s.climb_written = -1;
     const Vec3 zero{0.0, 0.0, 0.0};
     const int k = static_cast<int>(hull.vertices.size());
     if (hull.dimension < 0) {
@@ -478,7 +574,13 @@ void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,
         const std::vector<Vec3>& normals = own_planes ? t.normal : hull.plane_normals;
         faces = unique_directions(normals.data(), normals.size(), true, s, out.faces);
     }
-    out.vertex_counts.push_back(static_cast<std::int64_t>(out.vertices.size() - vertices_before) / 3);
+    const auto vertex_count = static_cast<std::int64_t>(out.vertices.size() - vertices_before) / 3;
+    if (s.climb_written >= 0)
+        out.climb_counts.push_back(s.climb_written);
+    else
+        append_climb_lists(static_cast<int>(std::min<std::int64_t>(vertex_count, INT_MAX)),
+                           adjacency_counts_before, adjacency_before, out);
+    out.vertex_counts.push_back(vertex_count);
     out.face_counts.push_back(faces);
     out.edge_counts.push_back(static_cast<std::int64_t>(out.edges.size() - edges_before) / 2);
 }
@@ -592,15 +694,18 @@ private:
         prefault(o.adjacency, o.adjacency.size(), o.adjacency.size() + s.adjacency.size());
         prefault(o.face_normals, o.face_normals.size(), o.face_normals.size() + s.faces.size());
         prefault(o.edge_pairs, o.edge_pairs.size(), o.edge_pairs.size() + s.edges.size());
+        prefault(o.climb_lists, o.climb_lists.size(), o.climb_lists.size() + s.climb_lists.size());
         o.status.insert(o.status.end(), s.status.begin(), s.status.end());
         append_offsets(s.vertex_counts, o.offsets);
         append_offsets(s.face_counts, o.face_offsets);
         append_offsets(s.edge_counts, o.edge_pair_offsets);
         append_offsets(s.adjacency_counts, o.adjacency_offsets);
+        append_offsets(s.climb_counts, o.climb_list_offsets);
         o.vertices.insert(o.vertices.end(), s.vertices.begin(), s.vertices.end());
         o.adjacency.insert(o.adjacency.end(), s.adjacency.begin(), s.adjacency.end());
         o.face_normals.insert(o.face_normals.end(), s.faces.begin(), s.faces.end());
         o.edge_pairs.insert(o.edge_pairs.end(), s.edges.begin(), s.edges.end());
+        o.climb_lists.insert(o.climb_lists.end(), s.climb_lists.begin(), s.climb_lists.end());
         s.clear();
     }
 
@@ -644,15 +749,18 @@ PackedPolytopes pack_polytopes(const Vec3* points, const std::int64_t* offsets, 
         out.face_offsets.assign(1, 0);
         out.edge_pair_offsets.assign(1, 0);
         out.adjacency_offsets.assign(1, 0);
+        out.climb_list_offsets.assign(1, 0);
         append_offsets(pack.vertex_counts, out.offsets);
         append_offsets(pack.face_counts, out.face_offsets);
         append_offsets(pack.edge_counts, out.edge_pair_offsets);
         append_offsets(pack.adjacency_counts, out.adjacency_offsets);
+        append_offsets(pack.climb_counts, out.climb_list_offsets);
         out.status = std::move(pack.status);
         out.vertices = std::move(pack.vertices);
         out.adjacency = std::move(pack.adjacency);
         out.face_normals = std::move(pack.faces);
         out.edge_pairs = std::move(pack.edges);
+        out.climb_lists = std::move(pack.climb_lists);
         return out;
     }
     // Room for the whole result, so that it never moves while chunks are copied in.
@@ -666,10 +774,13 @@ PackedPolytopes pack_polytopes(const Vec3* points, const std::int64_t* offsets, 
     out.adjacency.reserve(6 * p + 3 * p + 4 * hs);
     out.face_normals.reserve(3 * (2 * p + 2 * hs));
     out.edge_pairs.reserve(2 * (3 * p + hs));
+    out.climb_list_offsets.reserve(hs + 1);
+    out.climb_lists.reserve(p);
     out.offsets.push_back(0);
     out.face_offsets.push_back(0);
     out.edge_pair_offsets.push_back(0);
     out.adjacency_offsets.push_back(0);
+    out.climb_list_offsets.push_back(0);
     OrderedCommits commits(out, chunks);
     // One packer a thread, which claims the chunks one at a time: the threads finish within
     // a chunk of each other (parallel_for's own blocks of chunks, 9 of 157 at 40,000 shapes of

@@ -29,6 +29,8 @@ ShapeView ConvexSetView::shape(std::int64_t h) const {
     if (adjacency_offsets != nullptr && adjacency != nullptr) {
         s.adjacency_offsets = adjacency_offsets + begin;
         s.adjacency = adjacency;
+        if (climb_list_offsets != nullptr && climb_list_offsets[h + 1] > climb_list_offsets[h])
+            s.climb_lists = climb_lists + climb_list_offsets[h];
     }
     if (face_offsets != nullptr && edge_pair_offsets != nullptr) {
         s.has_features = true;
@@ -42,6 +44,44 @@ ShapeView ConvexSetView::shape(std::int64_t h) const {
     }
     for (int k = 0; k < 4; ++k) s.params[k] = params[4 * h + k];
     return s;
+}
+
+ClimbLists::ClimbLists(const ConvexSetView& set, int threads) {
+    const std::int64_t h_count = set.shape_count;
+    if (set.adjacency_offsets == nullptr || set.adjacency == nullptr || h_count == 0) return;
+    std::vector<std::int64_t> offsets(static_cast<size_t>(h_count) + 1, 0);
+    for (std::int64_t h = 0; h < h_count; ++h) {
+        const ShapeView s = set.shape(h);
+        offsets[h + 1] = offsets[h] + (climbs(s) ? s.vertex_count : 0);
+    }
+    if (offsets.back() == 0) return;
+    std::unique_ptr<ClimbList[]> lists(new ClimbList[static_cast<size_t>(offsets.back())]);
+    std::vector<char> made(static_cast<size_t>(h_count), 0);
+    const int n_threads = resolve_threads(threads, h_count, defaults::min_shapes_per_thread);
+    parallel_for(h_count, n_threads, [&](long long begin, long long end) {
+        for (long long h = begin; h < end; ++h)
+            if (offsets[h + 1] > offsets[h])
+                made[h] = make_climb_lists(set.shape(h), lists.get() + offsets[h]);
+    });
+    // A shape whose lists do not fit keeps none (it climbs on the CSR arrays): the lists
+    // after it move down.
+    std::int64_t kept = 0;
+    for (std::int64_t h = 0; h < h_count; ++h) {
+        const std::int64_t first = offsets[h], count = made[h] ? offsets[h + 1] - first : 0;
+        offsets[h] = kept;
+        if (count > 0 && first != kept)
+            std::copy(lists.get() + first, lists.get() + first + count, lists.get() + kept);
+        kept += count;
+    }
+    offsets[h_count] = kept;
+    if (kept == 0) return;
+    offsets_ = std::move(offsets);
+    lists_ = std::move(lists);
+}
+
+void ClimbLists::attach(ConvexSetView& set) const {
+    set.climb_list_offsets = offsets_.empty() ? nullptr : offsets_.data();
+    set.climb_lists = lists_.get();
 }
 
 struct EdgeClasses::Entry {

@@ -25,7 +25,12 @@ SupportPoint polytope_support(const ShapeView& s, const Vec3& d, int hint) {
         double best_dot;
         int best = climb::climb_start(s, d, hint, best_dot);
         bool up = true;
-        for (int step = 0; up && step < n; ++step) climb::advance(s, d, best, best_dot, up);
+        if (s.climb_lists != nullptr)
+            for (int step = 0; up && step < n; ++step)
+                climb::advance<true, true>(s, d, best, best_dot, up);
+        else
+            for (int step = 0; up && step < n; ++step)
+                climb::advance<true, false>(s, d, best, best_dot, up);
         if (!up) return {v[best], best};
     }
     const int best = climb::scan_support(v, n, d);
@@ -33,6 +38,25 @@ SupportPoint polytope_support(const ShapeView& s, const Vec3& d, int hint) {
 }
 
 }  // namespace
+
+bool make_climb_lists(const ShapeView& s, ClimbList* out) {
+    if (s.vertices == nullptr || s.adjacency_offsets == nullptr || s.adjacency == nullptr ||
+        s.vertex_count > 0x10000)
+        return false;
+    for (int i = 0; i < s.vertex_count; ++i) {
+        const std::int64_t begin = s.adjacency_offsets[i], end = s.adjacency_offsets[i + 1];
+        if (end < begin || end - begin > kClimbListSlots) return false;
+        ClimbList& list = out[i];
+        list = ClimbList{};
+        list.count = static_cast<std::uint16_t>(end - begin);
+        for (std::int64_t k = begin; k < end; ++k) {
+            const std::int32_t j = s.adjacency[k];
+            if (j < 0 || j >= s.vertex_count) return false;
+            list.neighbours[k - begin] = static_cast<std::uint16_t>(j);
+        }
+    }
+    return true;
+}
 
 bool scans(const ShapeView& s) {
     return s.kind == ShapeKind::POLYTOPE && s.vertices != nullptr && s.vertex_count > 0 &&
@@ -102,6 +126,13 @@ void read_vertices(const ShapeView& s) {
     const double* end = begin + 3 * static_cast<std::ptrdiff_t>(s.vertex_count);
     double sum = 0.0;
     for (const double* p = begin; p < end; p += 8) sum += *p;  // about one load a line
+    if (s.climb_lists != nullptr) {
+        // The fixed-stride lists too, one load a line: a climb's next list is then near
+        // (a cold 256-vertex pair waited on them in half its support time).
+        std::uint32_t counts = 0;
+        for (int i = 0; i < s.vertex_count; i += 2) counts += s.climb_lists[i].count;
+        sum += counts;
+    }
 #if defined(__GNUC__) || defined(__clang__)
     asm volatile("" ::"g"(sum));  // the sum is wanted, so the loads stay
 #else
@@ -118,6 +149,12 @@ void prefetch(const ShapeView& s) {
         return;
     const int n = s.vertex_count;
     prefetch_bytes(s.vertices, s.vertices + n);
+    if (s.climb_lists != nullptr) {
+        // Fixed-stride lists need no offsets; as below, the small shapes' lists too.
+        if (n < defaults::climb_prefetch_min_vertices)
+            prefetch_bytes(s.climb_lists, s.climb_lists + n);
+        return;
+    }
     prefetch_bytes(s.adjacency_offsets, s.adjacency_offsets + n + 1);
     // The neighbour lists (half the shape's lines) only where the climbs do not ask for
     // each list they read themselves (`climb::climb_step`): asked for twice, they cost a

@@ -15,6 +15,7 @@
 #include "hull_orientation.hpp"
 #include "meshcol/defaults.hpp"
 #include "meshcol/hull.hpp"
+#include "meshcol/narrowphase.hpp"
 
 using namespace meshcol;
 
@@ -193,6 +194,9 @@ TEST_CASE("hull: packing on threads equals packing one shape at a time, byte for
     for (int threads : {2, 3}) {
         const PackedPolytopes two = pack_polytopes(points.data(), offsets.data(), shapes, threads);
         CHECK(fixtures::same_packing(one, two));
+        CHECK(one.climb_list_offsets == two.climb_list_offsets);
+        REQUIRE(one.climb_lists.size() == two.climb_lists.size());
+        CHECK(same_bytes(one.climb_lists.data(), two.climb_lists.data(), one.climb_lists.size()));
     }
     CHECK(one.status[5] == HullStatus::NON_FINITE);
     CHECK(one.status[6] == HullStatus::EMPTY);
@@ -216,6 +220,56 @@ TEST_CASE("hull: packing on threads equals packing one shape at a time, byte for
                          alone.face_normals.size()));
         CHECK(same_bytes(alone.edge_pairs.data(), one.edge_pairs.data() + 2 * e0,
                          alone.edge_pairs.size()));
+    }
+}
+
+TEST_CASE("hull: the packing's climb lists are those its adjacency makes, byte for byte") {
+    // Every family at sizes on both sides of the climbing threshold, and a bipyramid whose
+    // apexes have 24 neighbours (no lists: its shape climbs on the CSR arrays), on one thread
+    // and on two: the lists ClimbLists makes from the packed CSR arrays, the same bytes.
+    std::vector<Vec3> points;
+    std::vector<std::int64_t> offsets = {0};
+    std::uint64_t state = 11;
+    std::int64_t smooth = 0;  // the points of the climbing ellipsoids, every one a vertex
+    for (int h = 0; h < 140; ++h) {
+        const int n = 4 + (h * 29) % 300;
+        const std::vector<Vec3> p = family_points(h % 7, n, state);
+        if (h % 7 == 0 && n > defaults::hill_climbing_min_vertices) smooth += n;
+        points.insert(points.end(), p.begin(), p.end());
+        offsets.push_back(static_cast<std::int64_t>(points.size()));
+    }
+    for (int i = 0; i < 24; ++i)
+        points.push_back(Vec3{std::cos(2 * kPi * i / 24), std::sin(2 * kPi * i / 24), 0.0});
+    points.push_back(Vec3{0.0, 0.0, 1.0});
+    points.push_back(Vec3{0.0, 0.0, -1.0});
+    offsets.push_back(static_cast<std::int64_t>(points.size()));
+    const long long shapes = static_cast<long long>(offsets.size()) - 1;
+    for (int threads : {1, 2}) {
+        const PackedPolytopes packed = pack_polytopes(points.data(), offsets.data(), shapes, threads);
+        fixtures::PolytopeSet set(packed);
+        const ClimbLists made(set.view, 1);
+        ConvexSetView from_csr = set.view;
+        made.attach(from_csr);
+        REQUIRE(packed.climb_list_offsets.size() == static_cast<size_t>(shapes + 1));
+        REQUIRE(packed.climb_lists.size() == static_cast<size_t>(made.size()));
+        std::int64_t climbing = 0;
+        for (long long h = 0; h < shapes; ++h) {
+            const std::int64_t count = packed.climb_list_offsets[h + 1] - packed.climb_list_offsets[h];
+            const ShapeView s = from_csr.shape(h);
+            CHECK((count > 0) == (s.climb_lists != nullptr));
+            if (count == 0) continue;
+            CHECK(count == s.vertex_count);
+            CHECK(climbs(s));
+            climbing += count;
+            CHECK(std::memcmp(packed.climb_lists.data() + packed.climb_list_offsets[h],
+                              s.climb_lists, sizeof(ClimbList) * static_cast<size_t>(count)) == 0);
+        }
+        CHECK(climbing == made.size());
+        CHECK(climbing >= smooth);  // lists for every smooth hull (and others)
+        CHECK(smooth > 2000);
+        // The bipyramid climbs but keeps no lists.
+        CHECK(packed.offsets[shapes] - packed.offsets[shapes - 1] == 26);
+        CHECK(packed.climb_list_offsets[shapes] == packed.climb_list_offsets[shapes - 1]);
     }
 }
 

@@ -323,6 +323,108 @@ TEST_CASE("shapes: the joint scan of two polytopes is two scans, bit for bit") {
     CHECK(!mixed.scan_both);
 }
 
+TEST_CASE("shapes: climbs over fixed-stride lists are the CSR climbs, bit for bit") {
+    // Hulls of points on ellipsoids (every point on the hull) of sizes on both sides of the
+    // climbing threshold and of the neighbour prefetch's, and a cloud.
+    fixtures::Uniform uniform{4242};
+    const int sizes[] = {24, 40, 64, 150, 256};
+    std::vector<Vec3> points;
+    std::vector<std::int64_t> offsets = {0};
+    for (int n : sizes) {
+        for (int i = 0; i < n; ++i) {
+            Vec3 p{uniform(), uniform(), uniform()};
+            const double r = norm(p);
+            points.push_back(Vec3{p.x / r, 0.6 * p.y / r, 0.3 * p.z / r});
+        }
+        offsets.push_back(static_cast<std::int64_t>(points.size()));
+    }
+    for (int i = 0; i < 100; ++i) points.push_back(Vec3{uniform(), uniform(), uniform()});
+    offsets.push_back(static_cast<std::int64_t>(points.size()));
+    const long long count = static_cast<long long>(offsets.size()) - 1;
+    const PackedPolytopes packed = pack_polytopes(points.data(), offsets.data(), count, 1);
+    fixtures::PolytopeSet csr(packed), listed(packed);
+    const ClimbLists lists(listed.view, 1);
+    lists.attach(listed.view);
+    std::int64_t climbing = 0;
+    for (long long h = 0; h < count; ++h) {
+        const ShapeView a = csr.view.shape(h), b = listed.view.shape(h);
+        CHECK(a.climb_lists == nullptr);
+        CHECK((b.climb_lists != nullptr) == climbs(a));
+        if (!climbs(a)) continue;
+        climbing += a.vertex_count;
+        for (int k = 0; k < 40; ++k) {
+            const Vec3 d{uniform(), uniform(), uniform()};
+            const int hint = k % 3 == 0 ? -1 : (k * 7) % a.vertex_count;
+            const SupportPoint x = support_core(a, d, hint), y = support_core(b, d, hint);
+            CHECK(x.index == y.index);
+            CHECK(fixtures::same_bytes(&x.point, &y.point, 1));
+        }
+    }
+    CHECK(lists.size() == climbing);
+    CHECK(climbing >= 40 + 64 + 150 + 256);
+    // Pairs through the Minkowski difference's joint climbs (over the lists; without them,
+    // each shape's own climb): the same answers.
+    for (long long h = 1; h + 1 < count; ++h) {
+        const Pose pb = fixtures::turned_about_z(0.4 * h, 0.5, 0.2, -0.1);
+        const ShapeView la = listed.view.shape(h), lb = listed.view.shape(h + 1);
+        const ShapeView ca = csr.view.shape(h), cb = csr.view.shape(h + 1);
+        CHECK(MinkowskiDifference(la, at(0, 0, 0), lb, pb, false).climb_lists_both ==
+              (climbs(la) && climbs(lb)));
+        CHECK(!MinkowskiDifference(ca, at(0, 0, 0), cb, pb, false).climb_lists_both);
+        for (QueryKind kind : {QueryKind::PENETRATION, QueryKind::DISTANCE}) {
+            const PairResult x = query_pair(csr.view.shape(h), at(0, 0, 0), csr.view.shape(h + 1),
+                                            pb, kind);
+            const PairResult y = query_pair(listed.view.shape(h), at(0, 0, 0),
+                                            listed.view.shape(h + 1), pb, kind);
+            CHECK(x.status == y.status);
+            CHECK(fixtures::same_bytes(&x.depth, &y.depth, 1));
+            CHECK(fixtures::same_bytes(&x.distance, &y.distance, 1));
+            CHECK(fixtures::same_bytes(&x.normal, &y.normal, 1));
+            CHECK(fixtures::same_bytes(&x.point_a, &y.point_a, 1));
+        }
+    }
+}
+
+TEST_CASE("shapes: a list too long for a fixed-stride record leaves its shape on CSR") {
+    // Two rings that climb; the second's vertex 3 has 16 neighbours (more than
+    // kClimbListSlots): it keeps no lists, the first keeps its own, and both climb alike.
+    const int n = defaults::hill_climbing_min_vertices + 8;
+    std::vector<double> vertices;
+    std::vector<std::int64_t> adjacency_offsets = {0};
+    std::vector<std::int32_t> adjacency;
+    for (int shape = 0; shape < 2; ++shape)
+        for (int i = 0; i < n; ++i) {
+            vertices.insert(vertices.end(), {std::cos(0.1 * i), std::sin(0.1 * i), 0.01 * i});
+            const int entries = shape == 1 && i == 3 ? 16 : 4;
+            for (int k = 0; k < entries; ++k) adjacency.push_back((i + k % 4 + 1) % n);
+            adjacency_offsets.push_back(static_cast<std::int64_t>(adjacency.size()));
+        }
+    const std::vector<std::int64_t> offsets = {0, n, 2 * n};
+    const std::vector<std::int8_t> kinds = {0, 0};
+    const std::vector<double> params(8, 0.0);
+    ConvexSetView set = fixtures::convex_set(offsets.data(), kinds.data(), params.data(), 2,
+                                             &vertices);
+    set.adjacency_offsets = adjacency_offsets.data();
+    set.adjacency = adjacency.data();
+    std::vector<ClimbList> out(static_cast<size_t>(n));
+    CHECK(make_climb_lists(set.shape(0), out.data()));
+    CHECK(!make_climb_lists(set.shape(1), out.data()));
+    const ClimbLists lists(set, 1);
+    CHECK(lists.size() == n);
+    ConvexSetView listed = set;
+    lists.attach(listed);
+    CHECK(listed.shape(0).climb_lists != nullptr);
+    CHECK(listed.shape(1).climb_lists == nullptr);
+    CHECK(listed.shape(0).climb_lists[5].count == 4);
+    CHECK(listed.shape(0).climb_lists[5].neighbours[0] == 6);
+    fixtures::Uniform uniform{99};
+    for (int k = 0; k < 30; ++k) {
+        const Vec3 d{uniform(), uniform(), uniform()};
+        CHECK(support_core(set.shape(0), d, k % n).index ==
+              support_core(listed.shape(0), d, k % n).index);
+    }
+}
+
 namespace {
 
 // Two 64-point ellipsoid hulls (every point on the hull, as the benchmark's smooth family)

@@ -412,6 +412,8 @@ class PackedHulls:
     face_normals: np.ndarray
     edge_pair_offsets: np.ndarray
     edge_pairs: np.ndarray
+    climb_list_offsets: np.ndarray
+    climb_lists: np.ndarray
 
     def __getstate__(self) -> dict[str, Any]:
         # The packing's seal (pack_hull_slices) vouches for these arrays in this process only:
@@ -441,7 +443,8 @@ def pack_hulls(point_sets: Sequence[np.ndarray] | np.ndarray, threads: int = 0) 
     vertex in the hull's triangulation (ascending, padded with the vertex itself to a multiple
     of four for the core's hill climbing), one outward normal per plane, and the true edges
     (triangulation edges between different planes, as local vertex index pairs), the features
-    exact SAT needs. Flat sets give their polygon, its two normals and its edges; collinear
+    exact SAT needs; and the same neighbour lists at a fixed stride for the climbs (the
+    ``climb_lists`` of a :class:`ConvexSet`). Flat sets give their polygon, its two normals and its edges; collinear
     sets their segment; single points the point. The edges' direction classes (one unit
     direction per class of parallel edges, unsigned, grouped at 12 digits) are not packed: a
     :class:`ConvexSet` computes each shape's when SAT first needs them, or all of them when
@@ -470,11 +473,16 @@ def pack_hull_slices(points: np.ndarray, offsets: np.ndarray, threads: int = 0) 
     from meshcol._native import core
 
     made = core.pack_polytopes(points, offsets, int(threads))
-    packed, seal = PackedHulls(*made[:9]), made[9]
+    packed, seal = PackedHulls(*made[:11]), made[11]
     # The core's word that the index arrays are the ones it wrote, which a ConvexSet made from
     # them passes back instead of reading every index again. Not a field (the fields are the
     # arrays); the arrays it vouches for are read-only from here on, as a ConvexSet's are.
-    for index in (packed.adjacency_offsets, packed.adjacency, packed.edge_pairs):
+    for index in (
+        packed.adjacency_offsets,
+        packed.adjacency,
+        packed.edge_pairs,
+        packed.climb_lists,
+    ):
         index.setflags(write=False)
     object.__setattr__(packed, "_seal", seal)
     return packed

@@ -49,7 +49,10 @@ struct MinkowskiDifference {
     bool with_margins = false;  ///< include sphere/capsule radii (else: the cores only)
     int hint_a = -1;       ///< warm start for hill climbing on a
     int hint_b = -1;       ///< warm start for hill climbing on b
-    bool climb_both = false;  ///< both shapes climb (`climbs`): one joint climb per support
+    bool climb_both = false;  ///< both shapes climb (`climbs`)
+    /// Both shapes climb over fixed-stride lists (`ShapeView::climb_lists`): one joint climb
+    /// per support (else each shape's own `support_core`).
+    bool climb_lists_both = false;
     bool scan_both = false;   ///< both shapes scan (`scans`): one joint scan per support
     Vec3 last_direction;      ///< direction of the previous support call (zero: none)
 

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "meshcol/shapes.hpp"
 #include "meshcol/vec.hpp"
 
 namespace meshcol {
@@ -69,6 +70,14 @@ struct PackedPolytopes {
     /// (P, 2) the true edges as local vertex index pairs (from, to), in the order their
     /// directions are grouped (`edge_direction_classes`)
     std::vector<std::int32_t> edge_pairs;
+    /// (H + 1,) offsets into `climb_lists`: shape h's are [climb_list_offsets[h],
+    /// climb_list_offsets[h + 1]), one a vertex for a shape that climbs (more than
+    /// `defaults::hill_climbing_min_vertices` vertices) and whose lists fit (`make_climb_lists`),
+    /// else none
+    std::vector<std::int64_t> climb_list_offsets;
+    /// The adjacency lists of those shapes at a fixed stride (shapes.hpp: `ClimbList`), written
+    /// with them: what `make_climb_lists` makes of each shape's CSR lists, byte for byte
+    std::vector<ClimbList> climb_lists;
 };
 
 /// Hulls of H point sets (shape h owns `points[offsets[h] .. offsets[h + 1])`), packed in one

@@ -30,6 +30,11 @@ struct ConvexSetView {
     /// Optional (V + 1,) CSR offsets into `adjacency` ((K,) local vertex indices), or null.
     const std::int64_t* adjacency_offsets = nullptr;
     const std::int32_t* adjacency = nullptr;
+    /// Optional, with the adjacency: (H + 1,) offsets into `climb_lists`, the fixed-stride
+    /// lists (shapes.hpp: `ClimbList`) of every shape that has them: shape h's are
+    /// [climb_list_offsets[h], climb_list_offsets[h + 1]), its vertex count of them or none.
+    const std::int64_t* climb_list_offsets = nullptr;
+    const ClimbList* climb_lists = nullptr;
     /// Optional SAT features: (H + 1,) offsets into (F, 3) unit face normals and (H + 1,)
     /// offsets into (P, 2) true edges (local vertex indices (from, to), `pack_polytopes`),
     /// or null; with them, the cache of the edges' direction classes.
@@ -84,6 +89,30 @@ class EdgeClasses {
     std::int64_t shape_count_;
     std::atomic<Entry*>* entries_;   // (H,) null until computed
     std::atomic<int>* lower_;        // (H,) lower bound + 1; 0: not yet found
+};
+
+/// The fixed-stride neighbour lists (shapes.hpp: `ClimbList`) of a set's polytopes that climb,
+/// made once from its adjacency: 32 bytes a vertex, for every shape whose lists fit
+/// (`make_climb_lists`); the others climb on the CSR arrays. The set's arrays must not change
+/// while it is attached (the Python `ConvexSet` holds them read-only).
+class ClimbLists {
+  public:
+    /// The lists of `set`'s shapes, made on `threads` threads (0: all cores).
+    ClimbLists(const ConvexSetView& set, int threads);
+
+    /// Points `set` (a view of the same arrays) at these lists.
+    void attach(ConvexSetView& set) const;
+
+    /// Lists held (the vertices of the shapes that have them).
+    std::int64_t size() const { return offsets_.empty() ? 0 : offsets_.back(); }
+    /// The (H + 1,) offsets (`ConvexSetView::climb_list_offsets`) and the `size()` lists;
+    /// both null when no shape has lists.
+    const std::int64_t* offsets() const { return offsets_.empty() ? nullptr : offsets_.data(); }
+    const ClimbList* lists() const { return lists_.get(); }
+
+  private:
+    std::vector<std::int64_t> offsets_;  // (H + 1,), or empty when no shape has lists
+    std::unique_ptr<ClimbList[]> lists_;
 };
 
 /// What a pair query computes.

@@ -15,6 +15,20 @@ namespace meshcol {
 struct ConvexSetView;
 struct GaussArc;
 
+/// Neighbour slots of a `ClimbList`.
+constexpr int kClimbListSlots = 15;
+
+/// One vertex's hull neighbours at a fixed stride, as hill climbing reads them: vertex i's
+/// list is the i-th 32-byte record, so a climb step finds it (and asks for each neighbour's
+/// own list) without reading CSR offsets first. The CSR list's entries, in its order (padding
+/// included), as 16-bit local indices (`make_climb_lists`): climbs over either give the same
+/// answers.
+struct alignas(32) ClimbList {
+    std::uint16_t count = 0;                          ///< entries of `neighbours` in use
+    std::uint16_t neighbours[kClimbListSlots] = {};  ///< local vertex indices
+};
+static_assert(sizeof(ClimbList) == 32, "two lists a cache line");
+
 /// Kind of a shape. The numeric values are part of the binary interface (mirrored by the
 /// Python `meshcol.collision.shapes.ShapeKind`; tests/test_native.py checks it): never renumber.
 enum class ShapeKind : std::int8_t {
@@ -35,6 +49,9 @@ struct ShapeView {
     /// Null when absent: the support function then scans every vertex.
     const std::int64_t* adjacency_offsets = nullptr;
     const std::int32_t* adjacency = nullptr;
+    /// Optional, with the adjacency: the same lists as `vertex_count` fixed-stride records
+    /// (`ClimbList`), which the climbs then read instead. Null: the climbs read the CSR arrays.
+    const ClimbList* climb_lists = nullptr;
     /// Optional data for exact SAT (polytopes and boxes): outward unit face normals and unit
     /// edge directions (one per parallel class, sign arbitrary), local frame.
     bool has_features = false;  ///< true when the two arrays below describe the polytope
@@ -85,6 +102,11 @@ inline double margin(const ShapeView& shape) {
 /// climbing on polytopes with adjacency (pass -1 when none).
 SupportPoint support_core(const ShapeView& shape, const Vec3& direction, int hint = -1);
 
+/// Writes a polytope's CSR adjacency as `vertex_count` `ClimbList` records to `out` and
+/// returns true; returns false (`out` then unusable) when a list has more than
+/// `kClimbListSlots` entries, an index is not one of its vertices, or it has more than 65,536.
+bool make_climb_lists(const ShapeView& shape, ClimbList* out);
+
 /// True when `support_core` of this shape climbs its hull's edge graph (a polytope with
 /// adjacency and more than `defaults::hill_climbing_min_vertices` vertices).
 bool climbs(const ShapeView& shape);
@@ -93,8 +115,8 @@ bool climbs(const ShapeView& shape);
 /// that does not climb.
 bool scans(const ShapeView& shape);
 
-/// Reads the vertices of a polytope that `climbs` in order, about one load a cache line, and
-/// does nothing for other shapes: the batches do it on a shape's first pair in each batch,
+/// Reads the vertices (and the fixed-stride lists, when it has them) of a polytope that
+/// `climbs` in order, about one load a cache line, and does nothing for other shapes: the batches do it on a shape's first pair in each batch,
 /// since the shape's check (which reads them too) runs only in the first batch on a set. The
 /// hardware prefetcher follows the loads in order, and the climbs' scattered reads then find
 /// the vertices in cache, which `prefetch` instructions of the same lines did not bring about
