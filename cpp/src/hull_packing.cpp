@@ -422,8 +422,8 @@ bool adjacency_from_masks(int count, PackScratch& s, ChunkPack& out) {
     const size_t first = out.adjacency.size();
     out.adjacency.resize(first + padded_total);
     std::int32_t* list = out.adjacency.data() + first;
-    // The climb lists too when the shape climbs and its lists fit (append_climb_lists' rule).
-    if (count > defaults::hill_climbing_min_vertices && longest <= kClimbListSlots) {
+    // The climb lists too, in the same pass, when the shape keeps them.
+    if (keeps_climb_lists(count, longest)) {
         const size_t lists_first = out.climb_lists.size();
         out.climb_lists.resize(lists_first + n);  // zeroed: the unused slots
         write_mask_lists<true>(n, mask, counts, list, out.climb_lists.data() + lists_first);
@@ -480,20 +480,21 @@ void adjacency_from_edges(int count, PackScratch& s, ChunkPack& out) {
 // were just appended (from `counts_first` in `out.adjacency_counts`, `first` in
 // `out.adjacency`), while they are in the cache: what `make_climb_lists` makes of them, byte
 // for byte (the indices are in range by construction). Appends its count of lists (0 or
-// `count`) to `out.climb_counts`: none for a shape that does not climb (`climbs`: at most
-// `defaults::hill_climbing_min_vertices` vertices) or whose lists do not fit.
+// `count`) to `out.climb_counts`: none for a shape that keeps none (`keeps_climb_lists`).
 void append_climb_lists(int count, size_t counts_first, size_t first, ChunkPack& out) {
-    if (count <= defaults::hill_climbing_min_vertices || count > 0x10000) {
+    // The vertex count first (most shapes do not climb), then the lists' lengths.
+    if (!keeps_climb_lists(count, 0)) {
         out.climb_counts.push_back(0);
         return;
     }
     const auto n = static_cast<size_t>(count);
     const std::int64_t* counts = out.adjacency_counts.data() + counts_first;
-    for (size_t i = 0; i < n; ++i)
-        if (counts[i] > kClimbListSlots) {
-            out.climb_counts.push_back(0);
-            return;
-        }
+    std::int64_t longest = 0;
+    for (size_t i = 0; i < n; ++i) longest = std::max(longest, counts[i]);
+    if (!keeps_climb_lists(count, longest)) {
+        out.climb_counts.push_back(0);
+        return;
+    }
     const size_t lists_first = out.climb_lists.size();
     out.climb_lists.resize(lists_first + n);  // zeroed: the unused slots as make_climb_lists
     ClimbList* list = out.climb_lists.data() + lists_first;

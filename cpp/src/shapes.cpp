@@ -1,5 +1,6 @@
 #include "meshcol/shapes.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <limits>
@@ -40,12 +41,17 @@ SupportPoint polytope_support(const ShapeView& s, const Vec3& d, int hint) {
 }  // namespace
 
 bool make_climb_lists(const ShapeView& s, ClimbList* out) {
-    if (s.vertices == nullptr || s.adjacency_offsets == nullptr || s.adjacency == nullptr ||
-        s.vertex_count > 0x10000)
+    if (s.vertices == nullptr || s.adjacency_offsets == nullptr || s.adjacency == nullptr)
         return false;
+    std::int64_t longest = 0;
     for (int i = 0; i < s.vertex_count; ++i) {
         const std::int64_t begin = s.adjacency_offsets[i], end = s.adjacency_offsets[i + 1];
-        if (end < begin || end - begin > kClimbListSlots) return false;
+        if (end < begin) return false;
+        longest = std::max(longest, end - begin);
+    }
+    if (!keeps_climb_lists(s.vertex_count, longest)) return false;
+    for (int i = 0; i < s.vertex_count; ++i) {
+        const std::int64_t begin = s.adjacency_offsets[i], end = s.adjacency_offsets[i + 1];
         ClimbList& list = out[i];
         list = ClimbList{};
         list.count = static_cast<std::uint16_t>(end - begin);

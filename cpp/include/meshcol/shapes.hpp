@@ -8,6 +8,7 @@
 
 #include <cstdint>
 
+#include "meshcol/defaults.hpp"
 #include "meshcol/vec.hpp"
 
 namespace meshcol {
@@ -28,6 +29,16 @@ struct alignas(32) ClimbList {
     std::uint16_t neighbours[kClimbListSlots] = {};  ///< local vertex indices
 };
 static_assert(sizeof(ClimbList) == 32, "two lists a cache line");
+
+/// Whether a polytope of `vertex_count` vertices whose longest CSR neighbour list (padding
+/// included) holds `longest` entries keeps `ClimbList`s: it climbs (more than
+/// `defaults::hill_climbing_min_vertices` vertices), every list fits a record's slots and
+/// every index its 16 bits. The one rule of the hull packing and `make_climb_lists`; a shape
+/// that keeps none climbs on the CSR arrays.
+inline bool keeps_climb_lists(std::int64_t vertex_count, std::int64_t longest) {
+    return vertex_count > defaults::hill_climbing_min_vertices && vertex_count <= 0x10000 &&
+           longest <= kClimbListSlots;
+}
 
 /// Kind of a shape. The numeric values are part of the binary interface (mirrored by the
 /// Python `meshcol.collision.shapes.ShapeKind`; tests/test_native.py checks it): never renumber.
@@ -103,8 +114,8 @@ inline double margin(const ShapeView& shape) {
 SupportPoint support_core(const ShapeView& shape, const Vec3& direction, int hint = -1);
 
 /// Writes a polytope's CSR adjacency as `vertex_count` `ClimbList` records to `out` and
-/// returns true; returns false (`out` then unusable) when a list has more than
-/// `kClimbListSlots` entries, an index is not one of its vertices, or it has more than 65,536.
+/// returns true; returns false (`out` then unusable) when the shape keeps no lists
+/// (`keeps_climb_lists`) or an index is not one of its vertices.
 bool make_climb_lists(const ShapeView& shape, ClimbList* out);
 
 /// True when `support_core` of this shape climbs its hull's edge graph (a polytope with
