@@ -7,6 +7,7 @@ import functools
 import click
 
 from meshcol.analysis.fit import DEFAULT_VOLUME_TOLERANCE, SHAPE_CHOICES
+from meshcol.cli import CONTEXT_SETTINGS
 from meshcol.cli.common import (
     FiniteFloat,
     mesh_outputs,
@@ -26,7 +27,7 @@ from meshcol.io.robot import RobotOptions
 @click.command(
     "fit",
     short_help="Enclosing primitive (box, sphere, capsule, cylinder) of each body.",
-    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
+    context_settings=CONTEXT_SETTINGS,
 )
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
 @click.option(

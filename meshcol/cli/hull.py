@@ -6,6 +6,7 @@ from typing import Any
 
 import click
 
+from meshcol.cli import CONTEXT_SETTINGS
 from meshcol.cli.common import (
     finish_outputs,
     html_option,
@@ -31,7 +32,7 @@ from meshcol.io.targets import target_names
 @click.command(
     "hull",
     short_help="Convex hull of each body, optionally within a vertex budget.",
-    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
+    context_settings=CONTEXT_SETTINGS,
 )
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
 @click.option(

@@ -9,6 +9,7 @@ from typing import Any
 
 import click
 
+from meshcol.cli import CONTEXT_SETTINGS
 from meshcol.cli.common import (
     FiniteFloat,
     Progress,
@@ -86,7 +87,7 @@ def _physics_options(command: Callable[..., None]) -> Callable[..., None]:
 @click.command(
     "inspect",
     short_help="Mesh health of each body: fit to be a collider?",
-    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
+    context_settings=CONTEXT_SETTINGS,
 )
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
 @report_options(default="the report on stdout; a summary table on stderr")

@@ -7,6 +7,7 @@ import sys
 import click
 
 from meshcol.analysis.sweep import FAIL_ON
+from meshcol.cli import CONTEXT_SETTINGS
 from meshcol.cli.common import (
     FiniteFloat,
     Progress,
@@ -32,7 +33,7 @@ from meshcol.vocabulary import COLLIDER_KINDS
 @click.command(
     "sweep",
     short_help="First contact of moving bodies (time of impact) and the hits that tunnel.",
-    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
+    context_settings=CONTEXT_SETTINGS,
 )
 @click.argument("manifest", metavar="MANIFEST")
 @click.option(
