@@ -12,6 +12,7 @@ from meshcol.cli.common import (
     FiniteFloat,
     Progress,
     cache_dir_option,
+    collider_option,
     engine_option,
     executor_options,
     html_option,
@@ -61,13 +62,7 @@ def _parse_ignore(
     "check", short_help="Every pair of bodies: apart, clearance, contact, penetrating or contained."
 )
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
-@click.option(
-    "--shape",
-    type=click.Choice(SHAPE_CHOICES),
-    default="hull",
-    show_default=True,
-    help="Collision shape of each body (a manifest's per-body 'shape' overrides it).",
-)
+@collider_option("Collision shape of each body (a manifest's per-body 'shape' overrides it).")
 @click.option(
     "--tolerance",
     type=FiniteFloat(min=0.0),

@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
+from meshcol.vocabulary import COLLIDER_KINDS
+
 if TYPE_CHECKING:
     from meshcol.io.robot import RobotOptions
 
@@ -425,6 +427,20 @@ def _make_robot_options(
     except ValueError as exc:
         raise click.BadParameter(str(exc), param_hint="'--package-path'") from None
     return RobotOptions(joints, keyframe, packages, srdf, include_adjacent)
+
+
+def collider_option(
+    help: str, choices: Sequence[str] = COLLIDER_KINDS
+) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Add ``--shape`` (parameter ``shape``): the collider of each body, one of ``choices``
+    (:data:`meshcol.vocabulary.COLLIDER_KINDS`, or a command's subset), ``hull`` by default."""
+    return click.option(
+        "--shape",
+        type=click.Choice(choices),
+        default="hull",
+        show_default=True,
+        help=help,
+    )
 
 
 def target_option(help: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:

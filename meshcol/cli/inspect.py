@@ -14,6 +14,7 @@ from meshcol.cli.common import (
     FiniteFloat,
     Progress,
     cache_dir_option,
+    collider_option,
     engine_option,
     executor_options,
     finish_outputs,
@@ -33,7 +34,6 @@ from meshcol.cli.common import (
 )
 from meshcol.io.outputs import check_outputs
 from meshcol.io.robot import RobotOptions
-from meshcol.vocabulary import COLLIDER_KINDS
 
 
 def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) -> tuple[str, ...]:
@@ -100,13 +100,9 @@ def _physics_options(command: Callable[..., None]) -> Callable[..., None]:
     "(MC401 or not-watertight; 'meshcol rules' lists them), or all.  "
     "[default: none, the run reports only]",
 )
-@click.option(
-    "--shape",
-    type=click.Choice(COLLIDER_KINDS),
-    default="hull",
-    show_default=True,
-    help="Collider of each body for the physics rules, as in check (a manifest body's "
-    "'shape' overrides it).",
+@collider_option(
+    "Collider of each body for the physics rules, as in check (a manifest body's "
+    "'shape' overrides it)."
 )
 @click.option(
     "--volume-ratio",

@@ -12,6 +12,7 @@ from meshcol.cli.common import (
     FiniteFloat,
     Progress,
     cache_dir_option,
+    collider_option,
     finish_outputs,
     html_option,
     plural,
@@ -27,7 +28,6 @@ from meshcol.cli.common import (
 )
 from meshcol.io.outputs import check_outputs
 from meshcol.io.robot import RobotOptions
-from meshcol.vocabulary import COLLIDER_KINDS
 
 
 @click.command(
@@ -36,13 +36,9 @@ from meshcol.vocabulary import COLLIDER_KINDS
     context_settings=CONTEXT_SETTINGS,
 )
 @click.argument("manifest", metavar="MANIFEST")
-@click.option(
-    "--shape",
-    type=click.Choice(COLLIDER_KINDS),
-    default="hull",
-    show_default=True,
-    help="Collision shape of each body: convex hull, convex decomposition, or the "
-    "triangles of the mesh (surface contact).",
+@collider_option(
+    "Collision shape of each body: convex hull, convex decomposition, or the "
+    "triangles of the mesh (surface contact)."
 )
 @click.option(
     "--tolerance",
