@@ -178,13 +178,7 @@ def check(
       meshcol check props/*.obj --shape decomposed -j 2 --executor ray
     """
     from meshcol.analysis.check import check as run_check
-    from meshcol.cli.common import (
-        emit_report,
-        finish_outputs,
-        render_html,
-        snapshots_written,
-        write_html,
-    )
+    from meshcol.cli.common import write_outputs
     from meshcol.io.outputs import check_outputs
 
     check_outputs(
@@ -211,11 +205,7 @@ def check(
     def review() -> Any:
         return _review_page(result, inputs, shape, decompose_options, robot_options)
 
-    page = render_html(html, review)
-    with snapshots_written(result, snapshots, report, review) as written:
-        emit_report(written, fmt, report)
-    write_html(html, page)
-    finish_outputs()
+    write_outputs(result, review, fmt, report, html, snapshots)
     for warning in result.warnings:
         click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_table(result), err=True)

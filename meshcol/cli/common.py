@@ -571,6 +571,28 @@ def snapshots_written(
     click.echo(f"meshcol: snapshots: {count} in {display_path(folder)}", err=True)
 
 
+def write_outputs(
+    result: Any,
+    build_page: Callable[[], Any],
+    fmt: str,
+    report: str | None,
+    html: str | None,
+    snapshots: str | None,
+    emit: bool = True,
+) -> None:
+    """Every output of a run that writes a report, put in place together
+    (:func:`finish_outputs`): the ``--html`` page rendered first (:func:`render_html`: a page
+    over its limits leaves nothing), the report with its ``--snapshots``
+    (:func:`snapshots_written`; no report when ``emit`` is False, as for meshes written
+    without ``--report``), then the page."""
+    page = render_html(html, build_page)
+    with snapshots_written(result, snapshots, report, build_page) as written:
+        if emit:
+            emit_report(written, fmt, report)
+    write_html(html, page)
+    finish_outputs()
+
+
 def executor_options() -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     """Add ``--executor local|ray`` and ``--ray-address ADDR`` (parameters ``executor`` and
     ``ray_address``): where a command's per-file tasks run

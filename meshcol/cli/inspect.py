@@ -17,20 +17,17 @@ from meshcol.cli.common import (
     collider_option,
     engine_option,
     executor_options,
-    finish_outputs,
     html_option,
     jobs_option,
     plural,
-    render_html,
     report_format,
     report_options,
     robot_options,
     snapshots_option,
-    snapshots_written,
     target_option,
     timeout_option,
     verdict,
-    write_html,
+    write_outputs,
 )
 from meshcol.io.outputs import check_outputs
 from meshcol.io.robot import RobotOptions
@@ -217,7 +214,6 @@ def inspect(
     """
     from meshcol.analysis.inspect import inspect as run_inspect
     from meshcol.analysis.review import inspect_page
-    from meshcol.cli.common import emit_report
 
     check_outputs(
         files={"--report": report, "--html": html},
@@ -244,11 +240,7 @@ def inspect(
     def review() -> Any:
         return inspect_page(result, inputs, robot_options)
 
-    page = render_html(html, review)
-    with snapshots_written(result, snapshots, report, review) as written:
-        emit_report(written, fmt, report)
-    write_html(html, page)
-    finish_outputs()
+    write_outputs(result, review, fmt, report, html, snapshots)
     click.echo("\n".join(summary_lines(result)), err=True)
     sys.exit(result.exit_code)
 

@@ -13,18 +13,15 @@ from meshcol.cli.common import (
     Progress,
     cache_dir_option,
     collider_option,
-    finish_outputs,
     html_option,
     plural,
-    render_html,
     report_format,
     report_options,
     robot_options,
     snapshots_option,
-    snapshots_written,
     threads_option,
     verdict,
-    write_html,
+    write_outputs,
 )
 from meshcol.io.outputs import check_outputs
 from meshcol.io.robot import RobotOptions
@@ -102,7 +99,6 @@ def sweep(
     """
     from meshcol.analysis.review import sweep_page
     from meshcol.analysis.sweep import sweep as run_sweep
-    from meshcol.cli.common import emit_report
 
     check_outputs(
         files={"--report": report, "--html": html},
@@ -124,11 +120,7 @@ def sweep(
         )
     finally:
         progress.done()
-    page = render_html(html, lambda: sweep_page(result))
-    with snapshots_written(result, snapshots, report, lambda: sweep_page(result)) as written:
-        emit_report(written, fmt, report)
-    write_html(html, page)
-    finish_outputs()
+    write_outputs(result, lambda: sweep_page(result), fmt, report, html, snapshots)
     for warning in result.warnings:
         click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_lines(manifest, result), err=True)
