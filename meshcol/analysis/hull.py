@@ -123,8 +123,9 @@ class MeshOutputReport:
         return settings
 
     def case_name(self, row: dict[str, Any]) -> str:
-        """A body's CI case name: ``FILE::BODY``, or the body's name alone without a file."""
-        return f"{row['source']}::{row['name']}" if row["source"] else row["name"]
+        """A body's CI case name: ``FILE::BODY``, or the body's name alone without a file
+        (the snapshots of its failures are named the same: :mod:`meshcol.analysis.snapshots`)."""
+        return f"{row['source']}::{row['name']}" if row["source"] else str(row["name"])
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON report: the common envelope, the summary and one entry per body."""
