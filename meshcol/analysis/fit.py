@@ -357,7 +357,7 @@ class FitReport(MeshOutputReport):
             "bodies": len(self.bodies),
             "shapes": {name: shapes.count(name) for name in (*FIT_SHAPES, "hull")},
             "simpler_primitive": sum(1 for row in self.bodies if row["simpler_primitive"]),
-            "files_written": len({r["output"] for r in self.bodies if r["output"] is not None}),
+            "files_written": self.files_written,
         }
 
     @property

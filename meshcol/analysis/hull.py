@@ -122,6 +122,11 @@ class MeshOutputReport:
             settings.update(description=self.description, to=self.to)
         return settings
 
+    @property
+    def files_written(self) -> int:
+        """How many mesh files the bodies went to (several bodies may share one)."""
+        return len({row["output"] for row in self.bodies if row["output"] is not None})
+
     def case_name(self, row: dict[str, Any]) -> str:
         """A body's CI case name: ``FILE::BODY``, or the body's name alone without a file
         (the snapshots of its failures are named the same: :mod:`meshcol.analysis.snapshots`)."""
@@ -214,12 +219,11 @@ class HullReport(MeshOutputReport):
     @property
     def summary(self) -> dict[str, Any]:
         """Counts: bodies, flat bodies, total hull vertices, files written."""
-        files = {row["output"] for row in self.bodies if row["output"] is not None}
         summary = {
             "bodies": len(self.bodies),
             "flat": sum(1 for row in self.bodies if row["flat"]),
             "hull_vertices": sum(row["hull_vertices"] for row in self.bodies),
-            "files_written": len(files),
+            "files_written": self.files_written,
         }
         if self.target is not None:
             summary["target_violations"] = len(self.violations)
