@@ -44,6 +44,20 @@ double numpy_sum(const At& at, std::size_t n) {
     return 0.0 + pairwise(at, 0, n);
 }
 
+/// The axis of the largest |normal| component, as np.argmax(np.abs(normal)): the first
+/// largest, the first NaN if there is one. The plane's coordinates drop it.
+int dominant_axis(const double normal[3]) {
+    int axis = 0;
+    double best = std::fabs(normal[0]);
+    if (std::isnan(best)) return 0;
+    for (int c = 1; c < 3; ++c) {
+        const double v = std::fabs(normal[c]);
+        if (std::isnan(v)) return c;
+        if (v > best) best = v, axis = c;
+    }
+    return axis;
+}
+
 /// The face's corners in the plane of its Newell normal, the dominant axis dropped and the
 /// second coordinate flipped when that normal component is negative (so a counter-clockwise
 /// turn about the normal is positive).
@@ -60,18 +74,7 @@ void plane_coordinates(const double* vertices, const std::int64_t* corner, std::
         }
         normal[c] = numpy_sum([&](std::size_t i) { return scratch[i]; }, k);
     }
-    // np.argmax(np.abs(normal)): the first largest, the first NaN if there is one
-    int axis = 0;
-    double best = std::fabs(normal[0]);
-    if (!std::isnan(best))
-        for (int c = 1; c < 3; ++c) {
-            const double v = std::fabs(normal[c]);
-            if (std::isnan(v)) {
-                axis = c;
-                break;
-            }
-            if (v > best) best = v, axis = c;
-        }
+    const int axis = dominant_axis(normal);
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;
     const double sign = normal[axis] < 0 ? -1.0 : 1.0;
     uv.resize(k);
@@ -93,17 +96,7 @@ bool convex_quad(const double* vertices, const std::int64_t* corner) {
         }
         normal[c] = 0.0 + sum;
     }
-    int axis = 0;
-    double best = std::fabs(normal[0]);
-    if (!std::isnan(best))
-        for (int c = 1; c < 3; ++c) {
-            const double v = std::fabs(normal[c]);
-            if (std::isnan(v)) {
-                axis = c;
-                break;
-            }
-            if (v > best) best = v, axis = c;
-        }
+    const int axis = dominant_axis(normal);
     const int u = (axis + 1) % 3, v = (axis + 2) % 3;
     const double sign = normal[axis] < 0 ? -1.0 : 1.0;
     double x[4], y[4];

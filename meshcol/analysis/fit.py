@@ -23,10 +23,11 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
+from meshcol.analysis.hull import MeshOutputReport
 from meshcol.analysis.rules import robot_warnings
 from meshcol.collision.fit import FIT_SHAPES, PrimitiveFit, fit_batch
 from meshcol.errors import InvalidMeshError
@@ -308,7 +309,7 @@ def _world(fit_: PrimitiveFit, pose: np.ndarray) -> PrimitiveFit:
 
 
 @dataclass(frozen=True)
-class FitReport:
+class FitReport(MeshOutputReport):
     """What :func:`fit` computed and wrote.
 
     Attributes
@@ -342,6 +343,8 @@ class FitReport:
     description: str | None = None
     to: str | None = None
 
+    command: ClassVar[str] = "fit"
+
     @property
     def exit_code(self) -> int:
         """Always 0: fit has no policy (unusable input raises instead)."""
@@ -354,39 +357,17 @@ class FitReport:
             "bodies": len(self.bodies),
             "shapes": {name: shapes.count(name) for name in (*FIT_SHAPES, "hull")},
             "simpler_primitive": sum(1 for row in self.bodies if row["simpler_primitive"]),
-            "files_written": len({r["output"] for r in self.bodies if r["output"] is not None}),
+            "files_written": self.files_written,
         }
 
     @property
     def settings(self) -> dict[str, Any]:
-        settings = {
+        return {
             "shape": self.shape,
             "volume_tolerance": self.volume_tolerance,
             "gap_samples": GAP_SAMPLES,
-            "frame": self.frame,
-            "output": self.output,
-            "out_dir": self.out_dir,
+            **self.destination_settings(),
         }
-        if self.description is not None:
-            settings.update(description=self.description, to=self.to)
-        return settings
-
-    def to_dict(self) -> dict[str, Any]:
-        from meshcol.io.report import envelope
-
-        report = {
-            **envelope("fit", self.settings, self.units),
-            "summary": self.summary,
-            "bodies": self.bodies,
-        }
-        if self.description is not None:  # a robot rebuilt: what the description leaves out
-            report["warnings"] = list(self.warnings)
-        return report
-
-    def to_json(self) -> str:
-        from meshcol.io.report import dumps_json
-
-        return dumps_json(self.to_dict())
 
     def ci_suite(self) -> Any:
         """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one passed case per body
@@ -422,7 +403,7 @@ class FitReport:
                 message += f"; over the hull's volume by more than {number(self.volume_tolerance)}"
             cases.append(
                 CiCase(
-                    name=f"{row['source']}::{row['name']}" if row["source"] else row["name"],
+                    name=self.case_name(row),
                     classname="meshcol.fit",
                     message=message,
                     file=row["source"],

@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 from meshcol.errors import InvalidMeshError
 from meshcol.io.mesh_write import MESH_OUTPUT_EXTENSIONS, MULTI_MESH_EXTENSIONS, safe_name
@@ -83,8 +83,76 @@ class OutputDestinationError(ValueError):
         )
 
 
+class MeshOutputReport:
+    """What the reports of the commands that write meshes (:class:`HullReport`,
+    :class:`meshcol.analysis.fit.FitReport`) share: where the meshes went in the settings, and
+    the JSON report (the envelope, the summary, one entry per body and, for a robot rebuilt,
+    what the description leaves out).
+
+    A subclass is a frozen dataclass with these fields, and names its command in
+    ``command`` and its options in ``settings``."""
+
+    command: ClassVar[str]
+    bodies: list[dict[str, Any]]
+    output: str | None
+    out_dir: str | None
+    units: str | None
+    warnings: tuple[str, ...]
+    frame: str
+    description: str | None
+    to: str | None
+
+    @property
+    def summary(self) -> dict[str, Any]:
+        raise NotImplementedError
+
+    @property
+    def settings(self) -> dict[str, Any]:
+        raise NotImplementedError
+
+    def destination_settings(self) -> dict[str, Any]:
+        """The settings that say where the meshes went: frame, output, out_dir and, for a
+        robot rebuilt, the description written and its format."""
+        settings: dict[str, Any] = {
+            "frame": self.frame,
+            "output": self.output,
+            "out_dir": self.out_dir,
+        }
+        if self.description is not None:
+            settings.update(description=self.description, to=self.to)
+        return settings
+
+    @property
+    def files_written(self) -> int:
+        """How many mesh files the bodies went to (several bodies may share one)."""
+        return len({row["output"] for row in self.bodies if row["output"] is not None})
+
+    def case_name(self, row: dict[str, Any]) -> str:
+        """A body's CI case name: ``FILE::BODY``, or the body's name alone without a file
+        (the snapshots of its failures are named the same: :mod:`meshcol.analysis.snapshots`)."""
+        return f"{row['source']}::{row['name']}" if row["source"] else str(row["name"])
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON report: the common envelope, the summary and one entry per body."""
+        from meshcol.io.report import envelope
+
+        report = {
+            **envelope(self.command, self.settings, self.units),
+            "summary": self.summary,
+            "bodies": self.bodies,
+        }
+        if self.description is not None:  # a robot rebuilt: what the description leaves out
+            report["warnings"] = list(self.warnings)
+        return report
+
+    def to_json(self) -> str:
+        from meshcol.io.report import dumps_json
+
+        return dumps_json(self.to_dict())
+
+
 @dataclass(frozen=True)
-class HullReport:
+class HullReport(MeshOutputReport):
     """What :func:`hull` computed and wrote.
 
     Attributes
@@ -125,6 +193,8 @@ class HullReport:
     to: str | None = None
     target: Any = None
 
+    command: ClassVar[str] = "hull"
+
     @property
     def violations(self) -> list[tuple[str, Any]]:
         """``(body name, Violation)`` for every target limit a hull could not meet."""
@@ -149,12 +219,11 @@ class HullReport:
     @property
     def summary(self) -> dict[str, Any]:
         """Counts: bodies, flat bodies, total hull vertices, files written."""
-        files = {row["output"] for row in self.bodies if row["output"] is not None}
         summary = {
             "bodies": len(self.bodies),
             "flat": sum(1 for row in self.bodies if row["flat"]),
             "hull_vertices": sum(row["hull_vertices"] for row in self.bodies),
-            "files_written": len(files),
+            "files_written": self.files_written,
         }
         if self.target is not None:
             summary["target_violations"] = len(self.violations)
@@ -164,34 +233,12 @@ class HullReport:
     def settings(self) -> dict[str, Any]:
         settings: dict[str, Any] = {
             "max_vertices": self.max_vertices,
-            "frame": self.frame,
-            "output": self.output,
-            "out_dir": self.out_dir,
+            **self.destination_settings(),
         }
-        if self.description is not None:
-            settings.update(description=self.description, to=self.to)
         if self.target is not None:
             settings["target"] = self.target.name
             settings["target_limits"] = dict(self.target.limits)
         return settings
-
-    def to_dict(self) -> dict[str, Any]:
-        """The JSON report: the common envelope, the summary and one entry per body."""
-        from meshcol.io.report import envelope
-
-        report = {
-            **envelope("hull", self.settings, self.units),
-            "summary": self.summary,
-            "bodies": self.bodies,
-        }
-        if self.description is not None:  # a robot rebuilt: what the description leaves out
-            report["warnings"] = list(self.warnings)
-        return report
-
-    def to_json(self) -> str:
-        from meshcol.io.report import dumps_json
-
-        return dumps_json(self.to_dict())
 
     def to_csv(self) -> str:
         """One row per body (:data:`CSV_COLUMNS`)."""
@@ -236,7 +283,7 @@ class HullReport:
             rules = tuple(dict.fromkeys(v.rule for v in missed))
             cases.append(
                 CiCase(
-                    name=f"{row['source']}::{row['name']}" if row["source"] else row["name"],
+                    name=self.case_name(row),
                     classname="meshcol.hull",
                     outcome="failure" if over or missed else "passed",
                     message=message,

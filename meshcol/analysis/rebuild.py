@@ -449,7 +449,7 @@ def rebuild_hulls(
     """
     from meshcol.analysis.hull import HullReport, hull_row
     from meshcol.geometry.topology import oriented_volume
-    from meshcol.io.robot_write import description_path, part_files, write_robot
+    from meshcol.io.robot_write import write_robot
 
     robot, info = robot_colliders(
         path,
@@ -461,14 +461,12 @@ def rebuild_hulls(
     )
     to = to or robot.kind
     written = write_robot(robot, out_dir, to, protected=reserved)
-    files = part_files(robot) if to in ("urdf", "mjcf") else {}
-    at = {(c.link, c.index): i for i, c in enumerate(robot.colliders)}
+    destination = _destinations(robot, to, out_dir, written)
     rows, hulls, warnings = [], [], _warned(robot, to, warn)
     for entry in info:
         body, result = entry["body"], entry["results"]
-        names = files.get(at[(entry["link"], entry["index"])])
-        destination = os.path.join(os.fspath(out_dir), names[0]) if names else written[0]
-        rows.append(hull_row(body, result, oriented_volume(body.vertices, body.faces), destination))
+        volume = oriented_volume(body.vertices, body.faces)
+        rows.append(hull_row(body, result, volume, destination(entry)))
         if target is not None:
             rows[-1]["target"] = {"name": target.name, **result.target_fit.to_dict()}
         hulls.append(result)
@@ -481,13 +479,7 @@ def rebuild_hulls(
         rows,
         tuple(hulls),
         max_vertices,
-        None,
-        os.fspath(out_dir),
-        "m",
-        tuple(warnings),
-        frame="link",
-        description=description_path(robot.source, out_dir, to),
-        to=to,
+        **_rebuilt_report_fields(robot, out_dir, to, warnings),
         target=target,
     )
 
@@ -630,7 +622,7 @@ def rebuild_fits(
         ``frame="link"``, ``description`` the file written.
     """
     from meshcol.analysis.fit import DEFAULT_VOLUME_TOLERANCE, FitReport, fit_row
-    from meshcol.io.robot_write import description_path, part_files, write_robot
+    from meshcol.io.robot_write import write_robot
 
     tolerance = DEFAULT_VOLUME_TOLERANCE if volume_tolerance is None else float(volume_tolerance)
     robot, info = robot_colliders(
@@ -643,28 +635,56 @@ def rebuild_fits(
     to = to or robot.kind
     written = write_robot(robot, out_dir, to, protected=reserved)
     warnings = _warned(robot, to, warn)
-    files = part_files(robot) if to in ("urdf", "mjcf") else {}
-    at = {(c.link, c.index): i for i, c in enumerate(robot.colliders)}
+    destination = _destinations(robot, to, out_dir, written)
     rows, fits = [], []
     for entry in info:
         result, volume, gap = entry["results"]
-        names = files.get(at[(entry["link"], entry["index"])])
-        destination = os.path.join(os.fspath(out_dir), names[0]) if names else written[0]
-        rows.append(fit_row(entry["body"], result, volume, gap, destination, shape))
+        rows.append(fit_row(entry["body"], result, volume, gap, destination(entry), shape))
         fits.append(result)
     return FitReport(
         rows,
         tuple(fits),
         shape,
         tolerance,
-        None,
-        os.fspath(out_dir),
-        "m",
-        tuple(warnings),
-        frame="link",
-        description=description_path(robot.source, out_dir, to),
-        to=to,
+        **_rebuilt_report_fields(robot, out_dir, to, warnings),
     )
+
+
+def _destinations(
+    robot: Any, to: str, out_dir: str | os.PathLike[str], written: list[str]
+) -> Callable[[dict[str, Any]], str]:
+    """Where each rebuilt element's collider went (``entry`` of :func:`robot_colliders`): its
+    own part file in ``out_dir`` (URDF and MJCF name one per mesh element), else the first
+    file written (the description itself, or a scene of every collider)."""
+    from meshcol.io.robot_write import part_files
+
+    files = part_files(robot) if to in ("urdf", "mjcf") else {}
+    at = {(c.link, c.index): i for i, c in enumerate(robot.colliders)}
+
+    def destination(entry: dict[str, Any]) -> str:
+        names = files.get(at[(entry["link"], entry["index"])])
+        return os.path.join(os.fspath(out_dir), names[0]) if names else written[0]
+
+    return destination
+
+
+def _rebuilt_report_fields(
+    robot: Any, out_dir: str | os.PathLike[str], to: str, warnings: list[str]
+) -> dict[str, Any]:
+    """The fields of a mesh-writing report (:class:`~meshcol.analysis.hull.MeshOutputReport`)
+    for a robot rebuilt: no ``-o`` file, the folder, metres, the link frame and the
+    description written."""
+    from meshcol.io.robot_write import description_path
+
+    return {
+        "output": None,
+        "out_dir": os.fspath(out_dir),
+        "units": "m",
+        "warnings": tuple(warnings),
+        "frame": "link",
+        "description": description_path(robot.source, out_dir, to),
+        "to": to,
+    }
 
 
 def _warned(robot: Any, to: str, warn: Callable[[str], None] | None) -> list[str]:

@@ -84,7 +84,7 @@ def _collider_shots(report: Any, failures: list[tuple[dict, str]]) -> list[tuple
     shots: list[tuple[str, Shot]] = []
     for row, why in failures:
         body = str(row["name"]).split("/")[0]
-        case = f"{row['source']}::{row['name']}" if row["source"] else str(row["name"])
+        case = report.case_name(row)  # the CI case the picture is linked from
         name = file_name(len(shots) + 1, case)
         shots.append((case, Shot((body,), name, case, why, outline="hulls")))
     return shots

@@ -12,6 +12,7 @@ from meshcol.cli.common import (
     FiniteFloat,
     Progress,
     cache_dir_option,
+    collider_option,
     engine_option,
     executor_options,
     html_option,
@@ -61,13 +62,7 @@ def _parse_ignore(
     "check", short_help="Every pair of bodies: apart, clearance, contact, penetrating or contained."
 )
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
-@click.option(
-    "--shape",
-    type=click.Choice(SHAPE_CHOICES),
-    default="hull",
-    show_default=True,
-    help="Collision shape of each body (a manifest's per-body 'shape' overrides it).",
-)
+@collider_option("Collision shape of each body (a manifest's per-body 'shape' overrides it).")
 @click.option(
     "--tolerance",
     type=FiniteFloat(min=0.0),
@@ -183,13 +178,7 @@ def check(
       meshcol check props/*.obj --shape decomposed -j 2 --executor ray
     """
     from meshcol.analysis.check import check as run_check
-    from meshcol.cli.common import (
-        emit_report,
-        finish_outputs,
-        render_html,
-        snapshots_written,
-        write_html,
-    )
+    from meshcol.cli.common import write_outputs
     from meshcol.io.outputs import check_outputs
 
     check_outputs(
@@ -216,11 +205,7 @@ def check(
     def review() -> Any:
         return _review_page(result, inputs, shape, decompose_options, robot_options)
 
-    page = render_html(html, review)
-    with snapshots_written(result, snapshots, report, review) as written:
-        emit_report(written, fmt, report)
-    write_html(html, page)
-    finish_outputs()
+    write_outputs(result, review, fmt, report, html, snapshots)
     for warning in result.warnings:
         click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_table(result), err=True)

@@ -11,6 +11,7 @@ from meshcol.cli.common import (
     FiniteFloat,
     Progress,
     cache_dir_option,
+    collider_option,
     engine_option,
     finish_outputs,
     plural,
@@ -77,12 +78,9 @@ def _at_most_max_samples(value: int) -> int:
     help="Write the report (every pair, its class and rate) to FILE ('-': stdout), JSON or CSV "
     "by its extension (.json, .csv; JSON otherwise).  [default: none]",
 )
-@click.option(
-    "--shape",
-    type=click.Choice(MATRIX_COLLIDERS),
-    default="hull",
-    show_default=True,
-    help="Collision shape of each collision element (primitives are always exact).",
+@collider_option(
+    "Collision shape of each collision element (primitives are always exact).",
+    MATRIX_COLLIDERS,
 )
 @click.option(
     "--padding",

@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
+from meshcol.vocabulary import COLLIDER_KINDS
+
 if TYPE_CHECKING:
     from meshcol.io.robot import RobotOptions
 
@@ -427,6 +429,20 @@ def _make_robot_options(
     return RobotOptions(joints, keyframe, packages, srdf, include_adjacent)
 
 
+def collider_option(
+    help: str, choices: Sequence[str] = COLLIDER_KINDS
+) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
+    """Add ``--shape`` (parameter ``shape``): the collider of each body, one of ``choices``
+    (:data:`meshcol.vocabulary.COLLIDER_KINDS`, or a command's subset), ``hull`` by default."""
+    return click.option(
+        "--shape",
+        type=click.Choice(choices),
+        default="hull",
+        show_default=True,
+        help=help,
+    )
+
+
 def target_option(help: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
     """Add ``--target NAME|FILE.toml`` (parameter ``target``): an engine profile
     (:func:`meshcol.io.targets.load_target`), loaded before any work; an unknown name or a
@@ -553,6 +569,28 @@ def snapshots_written(
         yield written
     count = len(written.snapshots)
     click.echo(f"meshcol: snapshots: {count} in {display_path(folder)}", err=True)
+
+
+def write_outputs(
+    result: Any,
+    build_page: Callable[[], Any],
+    fmt: str,
+    report: str | None,
+    html: str | None,
+    snapshots: str | None,
+    emit: bool = True,
+) -> None:
+    """Every output of a run that writes a report, put in place together
+    (:func:`finish_outputs`): the ``--html`` page rendered first (:func:`render_html`: a page
+    over its limits leaves nothing), the report with its ``--snapshots``
+    (:func:`snapshots_written`; no report when ``emit`` is False, as for meshes written
+    without ``--report``), then the page."""
+    page = render_html(html, build_page)
+    with snapshots_written(result, snapshots, report, build_page) as written:
+        if emit:
+            emit_report(written, fmt, report)
+    write_html(html, page)
+    finish_outputs()
 
 
 def executor_options() -> Callable[[Callable[..., Any]], Callable[..., Any]]:

@@ -7,6 +7,7 @@ import functools
 import click
 
 from meshcol.analysis.fit import DEFAULT_VOLUME_TOLERANCE, SHAPE_CHOICES
+from meshcol.cli import CONTEXT_SETTINGS
 from meshcol.cli.common import (
     FiniteFloat,
     mesh_outputs,
@@ -18,7 +19,7 @@ from meshcol.cli.common import (
     to_option,
     verdict,
 )
-from meshcol.cli.mesh_outputs import run_mesh_command, written_to
+from meshcol.cli.mesh_outputs import report_wanted, run_mesh_command, written_to
 from meshcol.io.outputs import check_outputs
 from meshcol.io.robot import RobotOptions
 
@@ -26,7 +27,7 @@ from meshcol.io.robot import RobotOptions
 @click.command(
     "fit",
     short_help="Enclosing primitive (box, sphere, capsule, cylinder) of each body.",
-    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
+    context_settings=CONTEXT_SETTINGS,
 )
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
 @click.option(
@@ -112,7 +113,6 @@ def fit(
     robot = mesh_outputs(inputs, output, out_dir, to, fmt, report)
 
     from meshcol.analysis.fit import fit as run_fit
-    from meshcol.cli.common import emit_report, finish_outputs
 
     check_outputs(
         files={"-o": output, "--report": report},
@@ -138,15 +138,13 @@ def fit(
     for warning in () if robot else result.warnings:  # a robot rebuilt warned as it went
         click.echo(f"meshcol: warning: {warning}", err=True)
     from meshcol.analysis.review import fit_page
-    from meshcol.cli.common import snapshots_written
+    from meshcol.cli.common import write_outputs
 
     def review() -> object:
         return fit_page(result, inputs, robot_options)
 
-    with snapshots_written(result, snapshots, report, review) as written:
-        if report is not None or not (output or out_dir):
-            emit_report(written, fmt, report)
-    finish_outputs()
+    emit = report_wanted(report, output, out_dir)
+    write_outputs(result, review, fmt, report, None, snapshots, emit)
     s = result.summary
     shapes = ", ".join(f"{count} {name}" for name, count in s["shapes"].items() if count)
     detail = f"{plural(s['bodies'], 'body', 'bodies')} ({shapes or 'none'})"

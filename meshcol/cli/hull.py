@@ -6,23 +6,21 @@ from typing import Any
 
 import click
 
+from meshcol.cli import CONTEXT_SETTINGS
 from meshcol.cli.common import (
-    finish_outputs,
     html_option,
     mesh_outputs,
     plural,
-    render_html,
     report_format,
     report_options,
     robot_options,
     snapshots_option,
-    snapshots_written,
     target_option,
     to_option,
     verdict,
-    write_html,
+    write_outputs,
 )
-from meshcol.cli.mesh_outputs import run_mesh_command, written_to
+from meshcol.cli.mesh_outputs import report_wanted, run_mesh_command, written_to
 from meshcol.io.outputs import check_outputs
 from meshcol.io.robot import RobotOptions
 from meshcol.io.targets import target_names
@@ -31,7 +29,7 @@ from meshcol.io.targets import target_names
 @click.command(
     "hull",
     short_help="Convex hull of each body, optionally within a vertex budget.",
-    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
+    context_settings=CONTEXT_SETTINGS,
 )
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
 @click.option(
@@ -129,7 +127,6 @@ def hull(
 
     from meshcol.analysis.hull import hull as run_hull
     from meshcol.analysis.review import hull_page
-    from meshcol.cli.common import emit_report
 
     check_outputs(
         files={"-o": output, "--report": report, "--html": html},
@@ -155,12 +152,8 @@ def hull(
     def review() -> Any:
         return hull_page(result, inputs, robot_options)
 
-    page = render_html(html, review)
-    with snapshots_written(result, snapshots, report, review) as written:
-        if report is not None or not (output or out_dir):
-            emit_report(written, fmt, report)
-    write_html(html, page)
-    finish_outputs()
+    emit = report_wanted(report, output, out_dir)
+    write_outputs(result, review, fmt, report, html, snapshots, emit)
     _say_violations(result)
     detail = _summary(result, target, output, out_dir, robot)
     click.echo(verdict("hull", result.exit_code == 0, detail), err=True)

@@ -9,30 +9,28 @@ from typing import Any
 
 import click
 
+from meshcol.cli import CONTEXT_SETTINGS
 from meshcol.cli.common import (
     FiniteFloat,
     Progress,
     cache_dir_option,
+    collider_option,
     engine_option,
     executor_options,
-    finish_outputs,
     html_option,
     jobs_option,
     plural,
-    render_html,
     report_format,
     report_options,
     robot_options,
     snapshots_option,
-    snapshots_written,
     target_option,
     timeout_option,
     verdict,
-    write_html,
+    write_outputs,
 )
 from meshcol.io.outputs import check_outputs
 from meshcol.io.robot import RobotOptions
-from meshcol.vocabulary import COLLIDER_KINDS
 
 
 def _parse_rules(ctx: click.Context, param: click.Parameter, value: str | None) -> tuple[str, ...]:
@@ -86,7 +84,7 @@ def _physics_options(command: Callable[..., None]) -> Callable[..., None]:
 @click.command(
     "inspect",
     short_help="Mesh health of each body: fit to be a collider?",
-    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
+    context_settings=CONTEXT_SETTINGS,
 )
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
 @report_options(default="the report on stdout; a summary table on stderr")
@@ -99,13 +97,9 @@ def _physics_options(command: Callable[..., None]) -> Callable[..., None]:
     "(MC401 or not-watertight; 'meshcol rules' lists them), or all.  "
     "[default: none, the run reports only]",
 )
-@click.option(
-    "--shape",
-    type=click.Choice(COLLIDER_KINDS),
-    default="hull",
-    show_default=True,
-    help="Collider of each body for the physics rules, as in check (a manifest body's "
-    "'shape' overrides it).",
+@collider_option(
+    "Collider of each body for the physics rules, as in check (a manifest body's "
+    "'shape' overrides it)."
 )
 @click.option(
     "--volume-ratio",
@@ -220,7 +214,6 @@ def inspect(
     """
     from meshcol.analysis.inspect import inspect as run_inspect
     from meshcol.analysis.review import inspect_page
-    from meshcol.cli.common import emit_report
 
     check_outputs(
         files={"--report": report, "--html": html},
@@ -247,11 +240,7 @@ def inspect(
     def review() -> Any:
         return inspect_page(result, inputs, robot_options)
 
-    page = render_html(html, review)
-    with snapshots_written(result, snapshots, report, review) as written:
-        emit_report(written, fmt, report)
-    write_html(html, page)
-    finish_outputs()
+    write_outputs(result, review, fmt, report, html, snapshots)
     click.echo("\n".join(summary_lines(result)), err=True)
     sys.exit(result.exit_code)
 

@@ -30,6 +30,12 @@ def several_bodies_need_a_scene_file() -> Iterator[None]:
         ) from None
 
 
+def report_wanted(report: str | None, output: str | None, out_dir: str | None) -> bool:
+    """Whether the run writes its report: to ``--report``, or on stdout when no mesh is
+    written (``-o``, ``--out-dir``); meshes written without ``--report`` leave none."""
+    return report is not None or not (output or out_dir)
+
+
 def written_to(result: Any, output: str | None, out_dir: str | None, robot: bool) -> str:
     """The summary clause saying where the meshes went ("" when nowhere): the ``-o`` file, a
     rebuilt robot's description, or the count of files in ``--out-dir``."""

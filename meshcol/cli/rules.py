@@ -7,6 +7,7 @@ import textwrap
 
 import click
 
+from meshcol.cli import CONTEXT_SETTINGS
 from meshcol.cli.common import report_format, report_options
 
 #: What ``meshcol rules`` writes: the registry has no findings to annotate (no CI suite), so
@@ -17,7 +18,7 @@ RULES_FORMATS = ("json", "csv")
 @click.command(
     "rules",
     short_help="The rules findings cite: stable ids, what each measures, how to fix it.",
-    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
+    context_settings=CONTEXT_SETTINGS,
 )
 @click.argument("rule_keys", nargs=-1, metavar="[RULE]...")
 @report_options(default="a table on stdout (JSON with --format json)", formats=RULES_FORMATS)

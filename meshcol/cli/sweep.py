@@ -7,41 +7,35 @@ import sys
 import click
 
 from meshcol.analysis.sweep import FAIL_ON
+from meshcol.cli import CONTEXT_SETTINGS
 from meshcol.cli.common import (
     FiniteFloat,
     Progress,
     cache_dir_option,
-    finish_outputs,
+    collider_option,
     html_option,
     plural,
-    render_html,
     report_format,
     report_options,
     robot_options,
     snapshots_option,
-    snapshots_written,
     threads_option,
     verdict,
-    write_html,
+    write_outputs,
 )
 from meshcol.io.outputs import check_outputs
 from meshcol.io.robot import RobotOptions
-from meshcol.vocabulary import COLLIDER_KINDS
 
 
 @click.command(
     "sweep",
     short_help="First contact of moving bodies (time of impact) and the hits that tunnel.",
-    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
+    context_settings=CONTEXT_SETTINGS,
 )
 @click.argument("manifest", metavar="MANIFEST")
-@click.option(
-    "--shape",
-    type=click.Choice(COLLIDER_KINDS),
-    default="hull",
-    show_default=True,
-    help="Collision shape of each body: convex hull, convex decomposition, or the "
-    "triangles of the mesh (surface contact).",
+@collider_option(
+    "Collision shape of each body: convex hull, convex decomposition, or the "
+    "triangles of the mesh (surface contact)."
 )
 @click.option(
     "--tolerance",
@@ -105,7 +99,6 @@ def sweep(
     """
     from meshcol.analysis.review import sweep_page
     from meshcol.analysis.sweep import sweep as run_sweep
-    from meshcol.cli.common import emit_report
 
     check_outputs(
         files={"--report": report, "--html": html},
@@ -127,11 +120,7 @@ def sweep(
         )
     finally:
         progress.done()
-    page = render_html(html, lambda: sweep_page(result))
-    with snapshots_written(result, snapshots, report, lambda: sweep_page(result)) as written:
-        emit_report(written, fmt, report)
-    write_html(html, page)
-    finish_outputs()
+    write_outputs(result, lambda: sweep_page(result), fmt, report, html, snapshots)
     for warning in result.warnings:
         click.echo(f"meshcol: warning: {warning}", err=True)
     click.echo(summary_lines(manifest, result), err=True)

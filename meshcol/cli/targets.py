@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import click
 
+from meshcol.cli import CONTEXT_SETTINGS
 from meshcol.vocabulary import LIMITS
 
 #: Table columns: (header, limit key).
@@ -13,7 +14,7 @@ _COLUMNS = tuple((header, key) for key, (_, _, header) in LIMITS.items())
 @click.command(
     "targets",
     short_help="Engine target profiles (--target) and their limits, with sources.",
-    context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100},
+    context_settings=CONTEXT_SETTINGS,
 )
 @click.argument("profiles", nargs=-1, metavar="[NAME|FILE.toml]...")
 @click.option(

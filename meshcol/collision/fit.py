@@ -259,37 +259,9 @@ def fit_batch(
     np.cumsum(counts, out=offsets[1:])
     packed = np.concatenate(sets) if sets else np.zeros((0, 3))
     codes = np.array([FIT_SHAPES.index(n) for n in names], dtype=np.int8)
+    # the core's arrays are in the order of FitBatch's fields
     result = core.fit_primitives(np.ascontiguousarray(packed), offsets, codes, int(threads))
-    (
-        hull_status,
-        dimension,
-        hull_volume,
-        vertex_offsets,
-        vertices,
-        face_offsets,
-        faces,
-        status,
-        params,
-        poses,
-        volume,
-        excess,
-    ) = result
-    return FitBatch(
-        tuple(names),
-        hull_status,
-        dimension,
-        hull_volume,
-        vertex_offsets,
-        vertices,
-        face_offsets,
-        faces,
-        status,
-        params,
-        poses,
-        volume,
-        excess,
-        _points=sets,
-    )
+    return FitBatch(tuple(names), *result, _points=sets)
 
 
 def primitive_volume(primitive: Primitive) -> float:
