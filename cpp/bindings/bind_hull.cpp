@@ -28,19 +28,17 @@ const meshcol::Vec3* as_vec3(const Points& points) {
     return reinterpret_cast<const meshcol::Vec3*>(points.data());
 }
 
-/// The packing's climb lists to numpy as (M, 16) uint16 rows (a `ClimbList` a row: its count,
-/// then its 15 slots), without a copy: the vector's storage keeps the lists' 32-byte alignment.
+/// The packing's climb lists to numpy as (M, 16) uint8 rows (a `ClimbList` a row: its count,
+/// then its 15 slots), without a copy: the vector's storage keeps the lists' 16-byte alignment.
 auto climb_list_array(std::vector<meshcol::ClimbList>&& lists) {
-    static_assert(sizeof(meshcol::ClimbList) == kClimbRecordWords * sizeof(std::uint16_t),
-                  "a ClimbList is a row of 16 uint16");
     auto* heap = new std::vector<meshcol::ClimbList>(std::move(lists));
     if (heap->empty()) heap->reserve(1);  // a non-null, aligned data pointer even for 0 rows
     nb::capsule owner(heap, [](void* p) noexcept {
         delete static_cast<std::vector<meshcol::ClimbList>*>(p);
     });
     const size_t shape[2] = {heap->size(), kClimbRecordWords};
-    return Out<std::uint16_t, -1, kClimbRecordWords>(
-        reinterpret_cast<std::uint16_t*>(heap->data()), 2, shape, owner);
+    return Out<meshcol::ClimbIndex, -1, kClimbRecordWords>(
+        reinterpret_cast<meshcol::ClimbIndex*>(heap->data()), 2, shape, owner);
 }
 
 template <class T>

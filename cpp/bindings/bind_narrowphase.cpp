@@ -244,7 +244,7 @@ Column bounding_radii(const PackedConvexSet& set, int threads) {
 }
 
 // The climb lists the core makes from the set's adjacency (`ClimbLists`, all cores), as new
-// numpy arrays ((H + 1,) int64 offsets, (M, 16) uint16 rows); zeros and no rows when no shape
+// numpy arrays ((H + 1,) int64 offsets, (M, 16) uint8 rows); zeros and no rows when no shape
 // has lists. Not attached to the set: what the packing writes, made another way.
 std::pair<nb::object, nb::object> climb_arrays(const PackedConvexSet& set) {
     const size_t h = static_cast<size_t>(set.size());
@@ -257,14 +257,16 @@ std::pair<nb::object, nb::object> climb_arrays(const PackedConvexSet& set) {
     const auto* lists = made->lists();
     const size_t shape[2] = {static_cast<size_t>(made->size()), kClimbRecordWords};
     if (lists == nullptr) {
-        auto none = new_array<Out<std::uint16_t, -1, kClimbRecordWords>>({0, kClimbRecordWords});
+        auto none =
+            new_array<Out<meshcol::ClimbIndex, -1, kClimbRecordWords>>({0, kClimbRecordWords});
         return {offsets.cast(), none.cast()};
     }
     nb::capsule owner(made.release(), [](void* p) noexcept {
         delete static_cast<meshcol::ClimbLists*>(p);
     });
-    Out<std::uint16_t, -1, kClimbRecordWords> rows(
-        reinterpret_cast<std::uint16_t*>(const_cast<meshcol::ClimbList*>(lists)), 2, shape, owner);
+    Out<meshcol::ClimbIndex, -1, kClimbRecordWords> rows(
+        reinterpret_cast<meshcol::ClimbIndex*>(const_cast<meshcol::ClimbList*>(lists)), 2, shape,
+        owner);
     return {offsets.cast(), rows.cast()};
 }
 
@@ -300,7 +302,7 @@ void bind_narrowphase(nb::module_& m) {
              "signed distance); None when poses or pairs are not in the core's form.")
         .def("climb_arrays", &climb_arrays,
              "The climb lists the core makes from the set's adjacency, as new arrays (not "
-             "the set's): offsets (H + 1,) int64 and (M, 16) uint16 rows (count, then 15 "
+             "the set's): offsets (H + 1,) int64 and (M, 16) uint8 rows (count, then 15 "
              "neighbour slots).")
         .def("aabbs", &aabbs, "poses"_a.none(), "threads"_a = 0,
              "World AABBs (H, 3), (H, 3) under poses (None: identity).")

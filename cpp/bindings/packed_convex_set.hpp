@@ -20,10 +20,12 @@
 
 namespace meshcol::bindings {
 
-/// The uint16 words of a `ClimbList` (its count, then its slots): a row of a set's
-/// (M, 16) `climb_lists` array.
-constexpr size_t kClimbRecordWords = 16;
-using ClimbRecords = In<std::uint16_t, -1, static_cast<ssize_t>(kClimbRecordWords)>;
+/// The bytes of a `ClimbList` (its count, then its slots): a row of a set's (M, 16) uint8
+/// `climb_lists` array.
+constexpr size_t kClimbRecordWords = sizeof(ClimbList);
+static_assert(sizeof(ClimbList) == kClimbRecordWords * sizeof(ClimbIndex),
+              "a ClimbList is a row of its index type");
+using ClimbRecords = In<ClimbIndex, -1, static_cast<ssize_t>(kClimbRecordWords)>;
 
 /// What `pack_polytopes` made: references to its index arrays (the adjacency, its offsets and
 /// the edge pairs, which stay alive and at their addresses while this lives) and copies of
@@ -39,7 +41,7 @@ struct PackSeal {
     std::int64_t vertex_count = 0, adjacency_count = 0, edge_count = 0;
     std::vector<std::int64_t> offsets, edge_pair_offsets;  // per packed shape, H + 1 each
     nb::object climb_lists;  // the climb lists, held, and their offsets' copy (H + 1)
-    const std::uint16_t* climb_lists_data = nullptr;
+    const ClimbIndex* climb_lists_data = nullptr;
     std::int64_t climb_list_count = 0;
     std::vector<std::int64_t> climb_list_offsets;
 
@@ -237,15 +239,16 @@ class PackedConvexSet {
                       "climb_list_offsets");
         if (m == 0) return;  // no shape has lists: every one climbs on the CSR arrays
         if (reinterpret_cast<std::uintptr_t>(climb_lists_->data()) % alignof(ClimbList) != 0)
-            throw std::invalid_argument("climb_lists must be 32-byte aligned");
+            throw std::invalid_argument("climb_lists must be 16-byte aligned");
         const std::int64_t* o = view_.offsets;
         const std::int64_t* clo = climb_list_offsets_->data();
         const auto* lists = reinterpret_cast<const ClimbList*>(climb_lists_->data());
         const bool sealed = sealed_ && seal->vouches_for_climb_lists(h, view_.kinds, clo,
                                                                     *climb_lists_);
         if (!sealed) {
-            // A shape has a list a vertex or none; every list's count fits its slots and
-            // names vertices of its shape.
+            // A shape has a list a vertex or none, of its width (`climb_rows` rows: 8-bit
+            // entries up to kNarrowClimbVertices vertices, 16-bit above); every list's count
+            // fits its slots and names vertices of its shape.
             constexpr long long kShapesPerThread = 4096;
             std::atomic<bool> all{true};
             parallel_for(h, resolve_threads(0, h, kShapesPerThread), [&](long long b, long long e) {
@@ -253,15 +256,11 @@ class PackedConvexSet {
                 for (long long s = b; s < e && ok; ++s) {
                     const std::int64_t count = clo[s + 1] - clo[s], n = o[s + 1] - o[s];
                     if (count == 0) continue;
-                    ok = count == n;
-                    std::uint32_t bad = 0;
-                    for (std::int64_t i = clo[s]; ok && i < clo[s + 1]; ++i) {
-                        const ClimbList& list = lists[i];
-                        bad |= list.count > kClimbListSlots;
-                        for (int k = 0; k < kClimbListSlots; ++k)
-                            bad |= (k < list.count) & (list.neighbours[k] >= n);
-                    }
-                    ok &= bad == 0;
+                    ok = n <= 0x10000 && count == n * climb_rows(n);
+                    if (ok && climb_rows(n) == 1)
+                        ok = lists_in_range(lists + clo[s], n);
+                    else if (ok)
+                        ok = lists_in_range(reinterpret_cast<const WideClimbList*>(lists + clo[s]), n);
                 }
                 if (!ok) all = false;
             });
@@ -269,6 +268,19 @@ class PackedConvexSet {
         }
         view_.climb_list_offsets = clo;
         view_.climb_lists = lists;
+    }
+
+    /// Whether the `n` records at `list` each hold at most kClimbListSlots entries, every one
+    /// below `n`.
+    template <class Record>
+    static bool lists_in_range(const Record* list, std::int64_t n) {
+        std::uint32_t bad = 0;
+        for (std::int64_t i = 0; i < n; ++i) {
+            bad |= list[i].count > kClimbListSlots;
+            for (int k = 0; k < kClimbListSlots; ++k)
+                bad |= (k < list[i].count) & (list[i].neighbours[k] >= n);
+        }
+        return bad == 0;
     }
 
     /// Whether every shape s < h indexes only its own vertices: index[j] in [0, its vertex

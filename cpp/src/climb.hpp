@@ -104,9 +104,9 @@ MESHCOL_CLIMB_INLINE int climb_start(const ShapeView& s, const Vec3& d, int hint
 // itself to a multiple of four, so the trip count is predictable), then any remainder (lists
 // packed by other means). The body is written out twice on purpose: shared through a lambda,
 // GCC's code for it ran 2% slower (A/B, 64-vertex penetration). With `kPrefetch`, asks for
-// each neighbour's own list (in `s.climb_lists` with `kLists`, else in its CSR arrays) as it
-// is read (`climb_step`).
-template <bool kPrefetch, bool kLists, class Index>
+// each neighbour's own list (in `s.climb_lists` with `kLists`, `kRows` rows a list, else in
+// its CSR arrays) as it is read (`climb_step`).
+template <bool kPrefetch, bool kLists, int kRows, class Index>
 MESHCOL_CLIMB_INLINE int best_neighbour(const ShapeView& s, const Vec3& d, const Index* list,
                                         int count, double& best_dot) {
     const Vec3* v = s.vertices;
@@ -115,11 +115,11 @@ MESHCOL_CLIMB_INLINE int best_neighbour(const ShapeView& s, const Vec3& d, const
     for (; k + 3 < count; k += 4) {
         for (int l = 0; l < 4; ++l) {
             std::ptrdiff_t j = list[k + l];
-            // An index read from 16 bits made GCC branch on the compare below instead of
+            // An index read from 8 or 16 bits made GCC branch on the compare below instead of
             // selecting (1.4 times the time of a 256-vertex penetration); hidden from it
             // this way, it selects as for 32 bits.
             MESHCOL_CLIMB_OPAQUE(j);
-            if constexpr (kPrefetch && kLists) MESHCOL_CLIMB_PREFETCH(s.climb_lists + j);
+            if constexpr (kPrefetch && kLists) MESHCOL_CLIMB_PREFETCH(s.climb_lists + kRows * j);
             if constexpr (kPrefetch && !kLists)
                 MESHCOL_CLIMB_PREFETCH(s.adjacency + s.adjacency_offsets[j]);
             const double dj = dot(v[j], d);
@@ -147,33 +147,38 @@ MESHCOL_CLIMB_INLINE int best_neighbour(const ShapeView& s, const Vec3& d, const
 // own list as it is read: the next step's list is then in the nearest cache whichever
 // neighbour wins, and the step waits on one load fewer (at 256 vertices a shape, a fifth of a
 // deep pair's time; the same answers). A fixed-stride list's address needs no load, a CSR
-// list's needs the neighbour's offset.
-template <bool kPrefetch = true, bool kLists = false>
+// list's needs the neighbour's offset. `kRows`: the rows of a list (shapes.hpp: `climb_rows`,
+// 1 for 8-bit lists, 2 for 16-bit ones).
+template <bool kPrefetch = true, bool kLists = false, int kRows = 1>
 MESHCOL_CLIMB_INLINE int climb_step(const ShapeView& s, const Vec3& d, int best,
                                     double& best_dot) {
-    if constexpr (kLists) {
+    if constexpr (kLists && kRows == 2) {
+        const WideClimbList& at = reinterpret_cast<const WideClimbList*>(s.climb_lists)[best];
+        return best_neighbour<kPrefetch, true, 2>(s, d, at.neighbours, at.count, best_dot);
+    } else if constexpr (kLists) {
         const ClimbList& at = s.climb_lists[best];
-        return best_neighbour<kPrefetch, true>(s, d, at.neighbours, at.count, best_dot);
+        return best_neighbour<kPrefetch, true, 1>(s, d, at.neighbours, at.count, best_dot);
     } else {
         const std::int64_t begin = s.adjacency_offsets[best];
         const std::int64_t end = s.adjacency_offsets[best + 1];
-        return best_neighbour<kPrefetch, false>(s, d, s.adjacency + begin,
-                                                static_cast<int>(end - begin), best_dot);
+        return best_neighbour<kPrefetch, false, 1>(s, d, s.adjacency + begin,
+                                                   static_cast<int>(end - begin), best_dot);
     }
 }
 
 // A climb's step from `best` when still going up: `best` moves, or `up` turns false at the
 // top.
-template <bool kPrefetch = true, bool kLists = false>
+template <bool kPrefetch = true, bool kLists = false, int kRows = 1>
 MESHCOL_CLIMB_INLINE void advance(const ShapeView& s, const Vec3& d, int& best, double& best_dot,
                                   bool& up) {
-    const int next = climb_step<kPrefetch, kLists>(s, d, best, best_dot);
+    const int next = climb_step<kPrefetch, kLists, kRows>(s, d, best, best_dot);
     up = next >= 0;
     best = up ? next : best;
 }
 
-// `climb_pair`'s body, with or without the neighbour lists' prefetch.
-template <bool kPrefetch>
+// `climb_pair`'s body, with or without the neighbour lists' prefetch, over lists of `kRowsA`
+// and `kRowsB` rows (`climb_rows`).
+template <bool kPrefetch, int kRowsA, int kRowsB>
 MESHCOL_CLIMB_INLINE void climb_pair_with(const ShapeView& a, const Vec3& da, int hint_a,
                                           const ShapeView& b, const Vec3& db, int hint_b,
                                           SupportPoint& out_a, SupportPoint& out_b) {
@@ -187,15 +192,15 @@ MESHCOL_CLIMB_INLINE void climb_pair_with(const ShapeView& a, const Vec3& da, in
     bool up_a = true, up_b = true;
     int steps_a = 0, steps_b = 0;
     while (up_a && up_b && steps_a < a.vertex_count) {
-        advance<kPrefetch, true>(a, da, best_a, dot_a, up_a);
-        advance<kPrefetch, true>(b, db, best_b, dot_b, up_b);
+        advance<kPrefetch, true, kRowsA>(a, da, best_a, dot_a, up_a);
+        advance<kPrefetch, true, kRowsB>(b, db, best_b, dot_b, up_b);
         ++steps_a;
         ++steps_b;
     }
     for (; up_a && steps_a < a.vertex_count; ++steps_a)
-        advance<kPrefetch, true>(a, da, best_a, dot_a, up_a);
+        advance<kPrefetch, true, kRowsA>(a, da, best_a, dot_a, up_a);
     for (; up_b && steps_b < b.vertex_count; ++steps_b)
-        advance<kPrefetch, true>(b, db, best_b, dot_b, up_b);
+        advance<kPrefetch, true, kRowsB>(b, db, best_b, dot_b, up_b);
     // A capped climb (never seen: the edge graph is finite and every step goes up) falls
     // back to the scan.
     if (up_a) best_a = scan_support(a.vertices, a.vertex_count, da);
@@ -209,15 +214,26 @@ MESHCOL_CLIMB_INLINE void climb_pair_with(const ShapeView& a, const Vec3& da, in
 /// no hint). Same answers as two calls, faster. The neighbour lists are prefetched only when a
 /// shape has at least `defaults::climb_prefetch_min_vertices` vertices: a smaller one's lists
 /// are already near (`prefetch` asked for the whole shape), and the prefetch would cost two
-/// instructions a neighbour for nothing.
+/// instructions a neighbour for nothing. A shape of more than `kNarrowClimbVertices` vertices
+/// reads 16-bit lists of two rows (always with the prefetch: it has enough vertices).
 MESHCOL_CLIMB_INLINE void climb_pair(const ShapeView& a, const Vec3& da, int hint_a,
                                      const ShapeView& b, const Vec3& db, int hint_b,
                                      SupportPoint& out_a, SupportPoint& out_b) {
-    if (a.vertex_count >= defaults::climb_prefetch_min_vertices ||
-        b.vertex_count >= defaults::climb_prefetch_min_vertices)
-        climb_pair_with<true>(a, da, hint_a, b, db, hint_b, out_a, out_b);
+    static_assert(defaults::climb_prefetch_min_vertices <= kNarrowClimbVertices,
+                  "shapes without the prefetch keep 8-bit lists");
+    const bool wide_a = climb_rows(a.vertex_count) == 2;
+    const bool wide_b = climb_rows(b.vertex_count) == 2;
+    if (wide_a && wide_b)
+        climb_pair_with<true, 2, 2>(a, da, hint_a, b, db, hint_b, out_a, out_b);
+    else if (wide_a)
+        climb_pair_with<true, 2, 1>(a, da, hint_a, b, db, hint_b, out_a, out_b);
+    else if (wide_b)
+        climb_pair_with<true, 1, 2>(a, da, hint_a, b, db, hint_b, out_a, out_b);
+    else if (a.vertex_count >= defaults::climb_prefetch_min_vertices ||
+             b.vertex_count >= defaults::climb_prefetch_min_vertices)
+        climb_pair_with<true, 1, 1>(a, da, hint_a, b, db, hint_b, out_a, out_b);
     else
-        climb_pair_with<false>(a, da, hint_a, b, db, hint_b, out_a, out_b);
+        climb_pair_with<false, 1, 1>(a, da, hint_a, b, db, hint_b, out_a, out_b);
 }
 
 }  // namespace climb

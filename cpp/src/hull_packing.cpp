@@ -335,9 +335,21 @@ std::vector<double> unique_directions_of(const Vec3* d, size_t count, bool signe
 
 namespace {
 
-// A block of four neighbour indices (each in [0, 65536)) as the 16-bit entries of a
-// `ClimbList` at `to` (unaligned): in SSE2 lanes, biased by 2^15 into the signed pack's range
-// and back, three operations where four scalar stores took their addresses too.
+// A block of four neighbour indices as the entries of a climb list at `to` (unaligned), in
+// SSE2 lanes where four scalar stores took their addresses too: 8-bit entries (each in
+// [0, 256)) by two saturating packs, exact in that range; 16-bit ones (each in [0, 65536))
+// biased by 2^15 into the signed pack's range and back.
+inline void narrow_block(const std::int32_t* from, std::uint8_t* to) {
+#if defined(__SSE2__)
+    const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(from));
+    const __m128i words = _mm_packs_epi32(v, v);
+    const int bytes = _mm_cvtsi128_si32(_mm_packus_epi16(words, words));
+    std::memcpy(to, &bytes, 4);
+#else
+    for (int l = 0; l < 4; ++l) to[l] = static_cast<std::uint8_t>(from[l]);
+#endif
+}
+
 inline void narrow_block(const std::int32_t* from, std::uint16_t* to) {
 #if defined(__SSE2__)
     const __m128i v = _mm_sub_epi32(_mm_loadu_si128(reinterpret_cast<const __m128i*>(from)),
@@ -350,9 +362,12 @@ inline void narrow_block(const std::int32_t* from, std::uint16_t* to) {
 }
 
 // A padded CSR list (`count` a multiple of four, as the packing pads them, at most
-// kClimbListSlots) as `record` (zeroed: its unused slots stay zero), four entries at a time.
-inline void write_climb_list(const std::int32_t* from, std::int64_t count, ClimbList& record) {
-    record.count = static_cast<std::uint16_t>(count);
+// kClimbListSlots) as the `Record` at `at` (zeroed rows: its unused slots stay zero), four
+// entries at a time.
+template <class Record>
+inline void write_climb_list(const std::int32_t* from, std::int64_t count, ClimbList* at) {
+    Record& record = *reinterpret_cast<Record*>(at);
+    record.count = static_cast<decltype(Record::count)>(count);
     for (std::int64_t k = 0; k < count; k += 4) narrow_block(from + k, record.neighbours + k);
 }
 
@@ -366,9 +381,9 @@ void write_mask_lists(size_t n, const std::uint64_t* mask, const std::int64_t* c
                       std::int32_t* list, ClimbList* record) {
     for (size_t i = 0; i < n; ++i) {
         std::int32_t* const end = list + counts[i];
-        std::uint16_t* slot = nullptr;
+        ClimbIndex* slot = nullptr;
         if constexpr (kLists) {
-            record[i].count = static_cast<std::uint16_t>(counts[i]);
+            record[i].count = static_cast<ClimbIndex>(counts[i]);
             slot = record[i].neighbours;
         }
         // The padding (fewer than four) first, as the list's last block whole: the neighbours
@@ -377,9 +392,9 @@ void write_mask_lists(size_t n, const std::uint64_t* mask, const std::int64_t* c
             const auto self = static_cast<std::int32_t>(i);
             end[-4] = self, end[-3] = self, end[-2] = self, end[-1] = self;
             if constexpr (kLists) {
-                std::uint16_t* const last = slot + counts[i];
-                const auto self16 = static_cast<std::uint16_t>(i);
-                last[-4] = self16, last[-3] = self16, last[-2] = self16, last[-1] = self16;
+                ClimbIndex* const last = slot + counts[i];
+                const auto self8 = static_cast<ClimbIndex>(i);
+                last[-4] = self8, last[-3] = self8, last[-2] = self8, last[-1] = self8;
             }
         }
         // Each neighbour to both lists (a second pass over the list, four at a time in SSE2
@@ -387,7 +402,7 @@ void write_mask_lists(size_t n, const std::uint64_t* mask, const std::int64_t* c
         for (std::uint64_t m = mask[i]; m != 0; m &= m - 1) {
             const auto j = __builtin_ctzll(m);
             *list++ = static_cast<std::int32_t>(j);
-            if constexpr (kLists) *slot++ = static_cast<std::uint16_t>(j);
+            if constexpr (kLists) *slot++ = static_cast<ClimbIndex>(j);
         }
         list = end;
     }
@@ -495,15 +510,19 @@ void append_climb_lists(int count, size_t counts_first, size_t first, ChunkPack&
         out.climb_counts.push_back(0);
         return;
     }
+    const auto rows = static_cast<size_t>(climb_rows(count));
     const size_t lists_first = out.climb_lists.size();
-    out.climb_lists.resize(lists_first + n);  // zeroed: the unused slots as make_climb_lists
+    out.climb_lists.resize(lists_first + rows * n);  // zeroed: the unused slots as make_climb_lists
     ClimbList* list = out.climb_lists.data() + lists_first;
     const std::int32_t* from = out.adjacency.data() + first;
     for (size_t i = 0; i < n; ++i) {
-        write_climb_list(from, counts[i], list[i]);
+        if (rows == 1)
+            write_climb_list<ClimbList>(from, counts[i], list + i);
+        else
+            write_climb_list<WideClimbList>(from, counts[i], list + 2 * i);
         from += counts[i];
     }
-    out.climb_counts.push_back(count);
+    out.climb_counts.push_back(static_cast<std::int64_t>(rows * n));
 }
 
 void pack_one(const Vec3* points, long long n, Workspace& w, Analysis& analysis,

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <new>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -26,9 +27,12 @@ SupportPoint polytope_support(const ShapeView& s, const Vec3& d, int hint) {
         double best_dot;
         int best = climb::climb_start(s, d, hint, best_dot);
         bool up = true;
-        if (s.climb_lists != nullptr)
+        if (s.climb_lists != nullptr && climb_rows(n) == 1)
             for (int step = 0; up && step < n; ++step)
-                climb::advance<true, true>(s, d, best, best_dot, up);
+                climb::advance<true, true, 1>(s, d, best, best_dot, up);
+        else if (s.climb_lists != nullptr)
+            for (int step = 0; up && step < n; ++step)
+                climb::advance<true, true, 2>(s, d, best, best_dot, up);
         else
             for (int step = 0; up && step < n; ++step)
                 climb::advance<true, false>(s, d, best, best_dot, up);
@@ -36,6 +40,24 @@ SupportPoint polytope_support(const ShapeView& s, const Vec3& d, int hint) {
     }
     const int best = climb::scan_support(v, n, d);
     return {v[best], best};
+}
+
+// make_climb_lists' records of one width (`Record` a ClimbRecord), made in place in `out`'s
+// rows; false when an index is not one of the shape's vertices.
+template <class Record>
+bool write_climb_lists(const ShapeView& s, ClimbList* out) {
+    using Index = decltype(Record::count);
+    for (int i = 0; i < s.vertex_count; ++i) {
+        const std::int64_t begin = s.adjacency_offsets[i], end = s.adjacency_offsets[i + 1];
+        Record& list = *new (out + i * climb_rows(s.vertex_count)) Record{};
+        list.count = static_cast<Index>(end - begin);
+        for (std::int64_t k = begin; k < end; ++k) {
+            const std::int32_t j = s.adjacency[k];
+            if (j < 0 || j >= s.vertex_count) return false;
+            list.neighbours[k - begin] = static_cast<Index>(j);
+        }
+    }
+    return true;
 }
 
 }  // namespace
@@ -50,18 +72,8 @@ bool make_climb_lists(const ShapeView& s, ClimbList* out) {
         longest = std::max(longest, end - begin);
     }
     if (!keeps_climb_lists(s.vertex_count, longest)) return false;
-    for (int i = 0; i < s.vertex_count; ++i) {
-        const std::int64_t begin = s.adjacency_offsets[i], end = s.adjacency_offsets[i + 1];
-        ClimbList& list = out[i];
-        list = ClimbList{};
-        list.count = static_cast<std::uint16_t>(end - begin);
-        for (std::int64_t k = begin; k < end; ++k) {
-            const std::int32_t j = s.adjacency[k];
-            if (j < 0 || j >= s.vertex_count) return false;
-            list.neighbours[k - begin] = static_cast<std::uint16_t>(j);
-        }
-    }
-    return true;
+    return climb_rows(s.vertex_count) == 1 ? write_climb_lists<ClimbList>(s, out)
+                                           : write_climb_lists<WideClimbList>(s, out);
 }
 
 bool scans(const ShapeView& s) {
@@ -135,8 +147,11 @@ void read_vertices(const ShapeView& s) {
     if (s.climb_lists != nullptr) {
         // The fixed-stride lists too, one load a line: a climb's next list is then near
         // (a cold 256-vertex pair waited on them in half its support time).
+        const auto* bytes = reinterpret_cast<const unsigned char*>(s.climb_lists);
+        const std::ptrdiff_t size = static_cast<std::ptrdiff_t>(sizeof(ClimbList)) *
+                                    s.vertex_count * climb_rows(s.vertex_count);
         std::uint32_t counts = 0;
-        for (int i = 0; i < s.vertex_count; i += 2) counts += s.climb_lists[i].count;
+        for (std::ptrdiff_t k = 0; k < size; k += 64) counts += bytes[k];
         sum += counts;
     }
 #if defined(__GNUC__) || defined(__clang__)
@@ -158,7 +173,7 @@ void prefetch(const ShapeView& s) {
     if (s.climb_lists != nullptr) {
         // Fixed-stride lists need no offsets; as below, the small shapes' lists too.
         if (n < defaults::climb_prefetch_min_vertices)
-            prefetch_bytes(s.climb_lists, s.climb_lists + n);
+            prefetch_bytes(s.climb_lists, s.climb_lists + n * climb_rows(n));
         return;
     }
     prefetch_bytes(s.adjacency_offsets, s.adjacency_offsets + n + 1);

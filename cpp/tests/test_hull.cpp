@@ -224,17 +224,19 @@ TEST_CASE("hull: packing on threads equals packing one shape at a time, byte for
 }
 
 TEST_CASE("hull: the packing's climb lists are those its adjacency makes, byte for byte") {
-    // Every family at sizes on both sides of the climbing threshold, and a bipyramid whose
-    // apexes have 24 neighbours (no lists: its shape climbs on the CSR arrays), on one thread
-    // and on two: the lists ClimbLists makes from the packed CSR arrays, the same bytes.
+    // Every family at sizes on both sides of the climbing threshold and of the 8-bit lists'
+    // (kNarrowClimbVertices: larger shapes keep 16-bit lists, two rows a vertex), and a
+    // bipyramid whose apexes have 24 neighbours (no lists: its shape climbs on the CSR
+    // arrays), on one thread and on two: the lists ClimbLists makes from the packed CSR
+    // arrays, the same bytes.
     std::vector<Vec3> points;
     std::vector<std::int64_t> offsets = {0};
     std::uint64_t state = 11;
-    std::int64_t smooth = 0;  // the points of the climbing ellipsoids, every one a vertex
+    std::int64_t smooth = 0;  // the list rows of the climbing ellipsoids (every point a vertex)
     for (int h = 0; h < 140; ++h) {
         const int n = 4 + (h * 29) % 300;
         const std::vector<Vec3> p = family_points(h % 7, n, state);
-        if (h % 7 == 0 && n > defaults::hill_climbing_min_vertices) smooth += n;
+        if (h % 7 == 0 && n > defaults::hill_climbing_min_vertices) smooth += n * climb_rows(n);
         points.insert(points.end(), p.begin(), p.end());
         offsets.push_back(static_cast<std::int64_t>(points.size()));
     }
@@ -253,12 +255,14 @@ TEST_CASE("hull: the packing's climb lists are those its adjacency makes, byte f
         REQUIRE(packed.climb_list_offsets.size() == static_cast<size_t>(shapes + 1));
         REQUIRE(packed.climb_lists.size() == static_cast<size_t>(made.size()));
         std::int64_t climbing = 0;
+        int wide = 0;  // hulls of more vertices than 8-bit entries index
         for (long long h = 0; h < shapes; ++h) {
             const std::int64_t count = packed.climb_list_offsets[h + 1] - packed.climb_list_offsets[h];
             const ShapeView s = from_csr.shape(h);
             CHECK((count > 0) == (s.climb_lists != nullptr));
             if (count == 0) continue;
-            CHECK(count == s.vertex_count);
+            CHECK(count == s.vertex_count * climb_rows(s.vertex_count));
+            wide += s.vertex_count > kNarrowClimbVertices;
             CHECK(climbs(s));
             climbing += count;
             CHECK(std::memcmp(packed.climb_lists.data() + packed.climb_list_offsets[h],
@@ -267,6 +271,7 @@ TEST_CASE("hull: the packing's climb lists are those its adjacency makes, byte f
         CHECK(climbing == made.size());
         CHECK(climbing >= smooth);  // lists for every smooth hull (and others)
         CHECK(smooth > 2000);
+        CHECK(wide >= 2);
         // The bipyramid climbs but keeps no lists.
         CHECK(packed.offsets[shapes] - packed.offsets[shapes - 1] == 26);
         CHECK(packed.climb_list_offsets[shapes] == packed.climb_list_offsets[shapes - 1]);

@@ -325,9 +325,11 @@ TEST_CASE("shapes: the joint scan of two polytopes is two scans, bit for bit") {
 
 TEST_CASE("shapes: climbs over fixed-stride lists are the CSR climbs, bit for bit") {
     // Hulls of points on ellipsoids (every point on the hull) of sizes on both sides of the
-    // climbing threshold and of the neighbour prefetch's, and a cloud.
+    // climbing threshold, of the neighbour prefetch's and of the 8-bit lists'
+    // (kNarrowClimbVertices), so that the joint climbs below pair 8-bit with 16-bit lists
+    // both ways round and 16-bit with 16-bit, and a cloud.
     fixtures::Uniform uniform{4242};
-    const int sizes[] = {24, 40, 64, 150, 256};
+    const int sizes[] = {24, 40, 64, 150, 256, 300, 700, 120};
     std::vector<Vec3> points;
     std::vector<std::int64_t> offsets = {0};
     for (int n : sizes) {
@@ -351,7 +353,7 @@ TEST_CASE("shapes: climbs over fixed-stride lists are the CSR climbs, bit for bi
         CHECK(a.climb_lists == nullptr);
         CHECK((b.climb_lists != nullptr) == climbs(a));
         if (!climbs(a)) continue;
-        climbing += a.vertex_count;
+        climbing += a.vertex_count * climb_rows(a.vertex_count);
         for (int k = 0; k < 40; ++k) {
             const Vec3 d{uniform(), uniform(), uniform()};
             const int hint = k % 3 == 0 ? -1 : (k * 7) % a.vertex_count;
@@ -361,7 +363,7 @@ TEST_CASE("shapes: climbs over fixed-stride lists are the CSR climbs, bit for bi
         }
     }
     CHECK(lists.size() == climbing);
-    CHECK(climbing >= 40 + 64 + 150 + 256);
+    CHECK(climbing >= 40 + 64 + 150 + 256 + 2 * (300 + 700) + 120);
     // Pairs through the Minkowski difference's joint climbs (over the lists; without them,
     // each shape's own climb): the same answers.
     for (long long h = 1; h + 1 < count; ++h) {

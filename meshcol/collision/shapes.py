@@ -89,18 +89,18 @@ def _readonly(a: np.ndarray) -> np.ndarray:
 
 
 def _climb_rows(count: int) -> np.ndarray:
-    """An uninitialised (count, 16) uint16 array, 32-byte aligned: the core reads each row as
-    a 32-byte record (``ClimbList``) and numpy aligns its buffers to 16 bytes only."""
-    buffer = np.empty(16 * count + 16, dtype=np.uint16)
-    skip = (-buffer.ctypes.data % 32) // 2
+    """An uninitialised (count, 16) uint8 array, 16-byte aligned: the core reads each row as
+    a 16-byte record (``ClimbList``). numpy's buffers are, but the test costs nothing."""
+    buffer = np.empty(16 * count + 16, dtype=np.uint8)
+    skip = -buffer.ctypes.data % 16
     return buffer[skip : skip + 16 * count].reshape(count, 16)
 
 
 def _aligned_climb_lists(lists: np.ndarray) -> np.ndarray:
-    """``lists`` as the core takes them: C-contiguous (M, 16) uint16, 32-byte aligned (a
-    copy only when it is not, as after unpickling)."""
-    lists = np.ascontiguousarray(lists, dtype=np.uint16)
-    if lists.ctypes.data % 32 == 0 or len(lists) == 0:
+    """``lists`` as the core takes them: C-contiguous (M, 16) uint8, 16-byte aligned (a
+    copy only when it is not)."""
+    lists = np.ascontiguousarray(lists, dtype=np.uint8)
+    if lists.ctypes.data % 16 == 0 or len(lists) == 0:
         return lists
     out = _climb_rows(len(lists))
     out[...] = lists
@@ -141,13 +141,15 @@ class ConvexSet:
         computed from the vertices and ``edge_pairs`` when first read (all shapes in one
         native call, then kept; the core computes a shape's when SAT first needs them, with
         the same code and bits, and shares them).
-    climb_list_offsets : (H + 1,) int64, climb_lists : (M, 16) uint16
+    climb_list_offsets : (H + 1,) int64, climb_lists : (M, 16) uint8
         The adjacency lists again, at a fixed stride, as the core's hill climbing reads them:
         row ``climb_list_offsets[h] + i`` holds the count of local vertex ``i``'s list in
         shape ``h`` and then its entries (as in :attr:`adjacency`, padding included) in 15
-        slots, zeros after them. A shape has a row a vertex when it climbs (a polytope of more
-        than the core's ``hill_climbing_min_vertices``, 32, vertices) and its lists fit (at most 15 entries each), else none (it climbs on
-        the CSR arrays). Written by the hull packing with the adjacency and carried by
+        slots, zeros after them, one byte each. A shape of more than 256 vertices takes two
+        rows a vertex instead, read as 16 uint16 (the count, then the 15 slots). A shape has
+        lists when it climbs (a polytope of more than the core's
+        ``hill_climbing_min_vertices``, 32, vertices) and they fit (at most 15 entries each,
+        at most 65,536 vertices), else none (it climbs on the CSR arrays). Written by the hull packing with the adjacency and carried by
         :meth:`take` and :meth:`concatenate`. A set built from a caller's arrays has none (its
         shapes climb on the CSR arrays, with the same answers).
     hull_status : (H,) int8

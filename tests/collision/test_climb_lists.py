@@ -41,8 +41,8 @@ def assert_lists_are_the_adjacency_s(s: ConvexSet) -> None:
     offsets, lists = s._core.climb_arrays()  # the core's, made from the CSR arrays
     assert s.climb_list_offsets.tobytes() == np.asarray(offsets).tobytes()
     assert s.climb_lists.tobytes() == np.asarray(lists).tobytes()
-    assert s.climb_lists.dtype == np.uint16 and s.climb_lists.shape[1:] == (16,)
-    assert s.climb_lists.ctypes.data % 32 == 0 or len(s.climb_lists) == 0
+    assert s.climb_lists.dtype == np.uint8 and s.climb_lists.shape[1:] == (16,)
+    assert s.climb_lists.ctypes.data % 16 == 0 or len(s.climb_lists) == 0
     assert not s.climb_lists.flags.writeable and not s.climb_list_offsets.flags.writeable
 
 
@@ -53,6 +53,8 @@ def mixed_shapes(rng: np.random.Generator) -> list[object]:
     flat = rng.normal(size=(60, 3))
     flat[:, 2] = 0.5 * flat[:, 0]
     shapes += [flat, np.ones((3, 3))]
+    # every point on its hull, more than 8-bit entries index: 16-bit lists, two rows each
+    shapes += [ellipsoid_points(rng, 257)]
     return shapes
 
 
@@ -68,7 +70,11 @@ def test_packed_sets_hold_the_lists_their_adjacency_makes() -> None:
     assert list(counts[2:6]) == list(sizes[2:6])
     assert counts[7] == 0 and sizes[7] == 26
     assert counts[8] == 40  # kept as given: empty lists, as the CSR ones
-    assert (made.climb_lists[:, 0] <= 15).all()
+    assert counts[5] == 256 == sizes[5]  # the largest with 8-bit lists, a row a vertex
+    assert sizes[11] == 257 and counts[11] == 2 * 257  # 16-bit lists, two rows a vertex
+    narrow = made.climb_lists[: made.climb_list_offsets[11]]
+    wide = made.climb_lists[made.climb_list_offsets[11] :].view(np.uint16).reshape(-1, 16)
+    assert (narrow[:, 0] <= 15).all() and (wide[:, 0] <= 15).all() and len(wide) == 257
 
 
 def test_from_point_slices_take_and_concatenate_carry_the_lists() -> None:
@@ -142,6 +148,27 @@ def test_lists_handed_over_are_checked_unless_the_packing_s_own() -> None:
         adopt(np.array([0, 64, 100]), np.array(made.climb_lists[:100]))
     with pytest.raises(ValueError, match="climb_list_offsets"):
         adopt(np.array([0, 64, 200]), np.array(made.climb_lists))
+    # a shape of more than 256 vertices has 16-bit lists, two rows a vertex, checked as such
+    large = ConvexSet.from_vertices([ellipsoid_points(rng, 300)])
+    assert len(large.vertices) == 300 and len(large.climb_lists) == 600
+    wide = large.climb_lists.view(np.uint16).reshape(300, 16)  # count, then 15 entries
+    assert (wide[:, 0] >= 4).all() and (wide[:, 0] <= 15).all()
+    assert (wide[:, 1:].max() > 255) and (wide[:, 1:] < 300).all()
+    fields = {name: getattr(large, name) for name in ConvexSet._FIELDS}
+
+    def adopt_large(offsets: np.ndarray, lists: np.ndarray) -> ConvexSet:
+        return ConvexSet._adopt(**fields, climb_list_offsets=offsets, climb_lists=lists)
+
+    assert adopt_large(
+        large.climb_list_offsets, np.array(large.climb_lists)
+    ).climb_lists.tobytes() == (large.climb_lists.tobytes())
+    bad = np.array(large.climb_lists)
+    bad.view(np.uint16).reshape(300, 16)[7, 1] = 300  # one past the last vertex
+    with pytest.raises(ValueError, match="climb_lists hold a list out of range"):
+        adopt_large(large.climb_list_offsets, bad)
+    # a row a vertex is too few for such a shape
+    with pytest.raises(ValueError, match="climb_lists hold a list out of range"):
+        adopt_large(np.array([0, 300]), np.array(large.climb_lists[:300]))
     with pytest.raises(ValueError, match="go together"):
         made._core.__class__(
             *(getattr(made, name) for name in ConvexSet._FIELDS), None, made.climb_list_offsets
@@ -149,23 +176,23 @@ def test_lists_handed_over_are_checked_unless_the_packing_s_own() -> None:
 
 
 def test_unpickled_packings_lists_are_aligned_for_the_core() -> None:
-    # numpy aligns a buffer to 16 bytes; the core reads each row as a 32-byte record, so a
-    # set copies rows that are not 32-byte aligned (an unpickled packing's may not be).
+    # The core reads each row as a 16-byte record, so a set copies rows that are not 16-byte
+    # aligned (numpy's own buffers are; a view into another buffer may not be).
     rng = np.random.default_rng(11)
     packed = pack_hulls([ellipsoid_points(rng, 64) for _ in range(3)])
     loaded = pickle.loads(pickle.dumps(packed))
     kinds, params, rows = np.zeros(3, np.int8), np.zeros((3, 4)), np.arange(3)
     made = ConvexSet._assemble(kinds, params, rows, loaded)
-    assert made.climb_lists.ctypes.data % 32 == 0
+    assert made.climb_lists.ctypes.data % 16 == 0
     assert made.climb_lists.tobytes() == packed.climb_lists.tobytes()
-    buffer = np.zeros(len(packed.climb_lists) * 16 + 16, np.uint16)
-    skew = (16 - buffer.ctypes.data % 32) % 32 // 2  # 16 bytes past a 32-byte boundary
+    buffer = np.zeros(len(packed.climb_lists) * 16 + 16, np.uint8)
+    skew = (8 - buffer.ctypes.data % 16) % 16  # 8 bytes past a 16-byte boundary
     skewed = buffer[skew : skew + 16 * len(packed.climb_lists)].reshape(-1, 16)
     skewed[...] = packed.climb_lists
-    assert skewed.ctypes.data % 32 != 0
+    assert skewed.ctypes.data % 16 != 0
     arrays = {name: getattr(made, name) for name in ConvexSet._FIELDS}
     again = ConvexSet._adopt(
         **arrays, climb_list_offsets=made.climb_list_offsets, climb_lists=skewed
     )
-    assert again.climb_lists.ctypes.data % 32 == 0
+    assert again.climb_lists.ctypes.data % 16 == 0
     assert again.climb_lists.tobytes() == packed.climb_lists.tobytes()

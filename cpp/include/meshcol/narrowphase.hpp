@@ -92,7 +92,7 @@ class EdgeClasses {
 };
 
 /// The fixed-stride neighbour lists (shapes.hpp: `ClimbList`) of a set's polytopes that climb,
-/// made once from its adjacency: 32 bytes a vertex, for every shape whose lists fit
+/// made once from its adjacency: 16 bytes a vertex (32 above 256 vertices), for every shape whose lists fit
 /// (`make_climb_lists`); the others climb on the CSR arrays. The set's arrays must not change
 /// while it is attached (the Python `ConvexSet` holds them read-only).
 class ClimbLists {
@@ -103,7 +103,8 @@ class ClimbLists {
     /// Points `set` (a view of the same arrays) at these lists.
     void attach(ConvexSetView& set) const;
 
-    /// Lists held (the vertices of the shapes that have them).
+    /// Rows held (`ClimbList`s: a row a vertex of the shapes that have lists, two a vertex
+    /// above `kNarrowClimbVertices` vertices).
     std::int64_t size() const { return offsets_.empty() ? 0 : offsets_.back(); }
     /// The (H + 1,) offsets (`ConvexSetView::climb_list_offsets`) and the `size()` lists;
     /// both null when no shape has lists.

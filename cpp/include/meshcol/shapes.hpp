@@ -16,19 +16,35 @@ namespace meshcol {
 struct ConvexSetView;
 struct GaussArc;
 
-/// Neighbour slots of a `ClimbList`.
+/// Neighbour slots of a climb list.
 constexpr int kClimbListSlots = 15;
 
 /// One vertex's hull neighbours at a fixed stride, as hill climbing reads them: vertex i's
-/// list is the i-th 32-byte record, so a climb step finds it (and asks for each neighbour's
-/// own list) without reading CSR offsets first. The CSR list's entries, in its order (padding
-/// included), as 16-bit local indices (`make_climb_lists`): climbs over either give the same
-/// answers.
-struct alignas(32) ClimbList {
-    std::uint16_t count = 0;                          ///< entries of `neighbours` in use
-    std::uint16_t neighbours[kClimbListSlots] = {};  ///< local vertex indices
+/// list is the i-th record, so a climb step finds it (and asks for each neighbour's own list)
+/// without reading CSR offsets first. The CSR list's entries, in its order (padding
+/// included), as local indices of `Index` (`make_climb_lists`): climbs over either give the
+/// same answers.
+template <class Index>
+struct alignas(16) ClimbRecord {
+    Index count = 0;                          ///< entries of `neighbours` in use
+    Index neighbours[kClimbListSlots] = {};  ///< local vertex indices
 };
-static_assert(sizeof(ClimbList) == 32, "two lists a cache line");
+
+/// A polytope of at most `kNarrowClimbVertices` vertices (the engines' hull budgets: PhysX and
+/// the engines built on it cap a convex hull at 255) keeps 8-bit lists, one 16-byte row a
+/// vertex; a larger one 16-bit lists (`WideClimbList`), two rows a vertex. A set's lists are
+/// rows of `ClimbList` either way.
+using ClimbList = ClimbRecord<std::uint8_t>;
+using WideClimbList = ClimbRecord<std::uint16_t>;
+using ClimbIndex = std::uint8_t;  // the rows' element type, as numpy holds them
+static_assert(sizeof(ClimbList) == 16, "four lists a cache line");
+static_assert(sizeof(WideClimbList) == 2 * sizeof(ClimbList), "a wide list is two rows");
+constexpr std::int64_t kNarrowClimbVertices = 256;
+
+/// Rows of `ClimbList` each vertex's list takes in a polytope of `vertex_count` vertices.
+inline std::int64_t climb_rows(std::int64_t vertex_count) {
+    return vertex_count <= kNarrowClimbVertices ? 1 : 2;
+}
 
 /// Whether a polytope of `vertex_count` vertices whose longest CSR neighbour list (padding
 /// included) holds `longest` entries keeps `ClimbList`s: it climbs (more than
@@ -61,7 +77,8 @@ struct ShapeView {
     const std::int64_t* adjacency_offsets = nullptr;
     const std::int32_t* adjacency = nullptr;
     /// Optional, with the adjacency: the same lists as `vertex_count` fixed-stride records
-    /// (`ClimbList`), which the climbs then read instead. Null: the climbs read the CSR arrays.
+    /// (`climb_rows(vertex_count)` rows each: a `ClimbList`, or a `WideClimbList` over two
+    /// rows), which the climbs then read instead. Null: the climbs read the CSR arrays.
     const ClimbList* climb_lists = nullptr;
     /// Optional data for exact SAT (polytopes and boxes): outward unit face normals and unit
     /// edge directions (one per parallel class, sign arbitrary), local frame.
@@ -113,7 +130,8 @@ inline double margin(const ShapeView& shape) {
 /// climbing on polytopes with adjacency (pass -1 when none).
 SupportPoint support_core(const ShapeView& shape, const Vec3& direction, int hint = -1);
 
-/// Writes a polytope's CSR adjacency as `vertex_count` `ClimbList` records to `out` and
+/// Writes a polytope's CSR adjacency as `vertex_count` records to `out`
+/// (`vertex_count * climb_rows(vertex_count)` rows: `ClimbList`s, or `WideClimbList`s) and
 /// returns true; returns false (`out` then unusable) when the shape keeps no lists
 /// (`keeps_climb_lists`) or an index is not one of its vertices.
 bool make_climb_lists(const ShapeView& shape, ClimbList* out);
