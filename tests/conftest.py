@@ -141,6 +141,17 @@ def _private_user_cache(tmp_path_factory: pytest.TempPathFactory):
         os.environ["XDG_CACHE_HOME"] = previous
 
 
+@pytest.fixture(scope="session")
+def bowl_cache_home(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """An ``XDG_CACHE_HOME`` of the run's own (its decompose cache is
+    ``meshcol/decompose`` in it), shared by the two tests that decompose samples/bowl/bowl.obj
+    with CoACD's default parameters (about 17 s of CPU): the check of the ball in the bowl
+    (tests/analysis/test_check.py) and the README tour's ``meshcol decompose`` line
+    (tests/test_readme.py). Whichever runs first computes the parts, the other reads them
+    from the cache (:data:`XDIST_GROUPS` keeps the two files on one worker)."""
+    return tmp_path_factory.mktemp("bowl-cache-home")
+
+
 #: Tests of more than about two seconds on 2 cores (``--durations``): ``make test-fast``
 #: leaves them out with ``-m "not slow"``; ``make test`` runs everything. Tests on the shared
 #: corpus are slow too (marked from their fixtures below).
@@ -217,7 +228,8 @@ SLOW_TESTS = {
 #: Ray tests start Ray clusters on 127.0.0.1 (one at a time: test_ray_cluster.py
 #: joins only its own); the others have a module fixture worth computing once (the whole
 #: corpus inspected and hulled; a CoACD torus; the package's sources parsed once, for
-#: the files that check rules on them: tests/package_source.py).
+#: the files that check rules on them: tests/package_source.py), or share a session one
+#: (the bowl's CoACD parts: :func:`bowl_cache_home`).
 XDIST_GROUPS = {
     "test_ray.py": "ray",
     "test_ray_cluster.py": "ray",
@@ -227,6 +239,8 @@ XDIST_GROUPS = {
     "test_architecture.py": "package_source",
     "test_code_size.py": "package_source",
     "test_inputs.py": "package_source",
+    "test_check.py": "bowl",
+    "test_readme.py": "bowl",
 }
 
 

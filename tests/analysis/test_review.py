@@ -53,23 +53,18 @@ def run(args: list[str]):
 def chromium(
     page: Path, tmp_path: Path, hash_: str = "", shot: bool = True, dom: bool = True
 ) -> tuple[np.ndarray | None, str]:
-    """Screenshot (H, W, 3) uint8 and DOM after load of ``page`` (``#pair=N`` in hash_); one
-    browser run each (about 3 s), so either can be left out."""
+    """Screenshot (H, W, 3) uint8 and DOM after load of ``page`` (``#pair=N`` in hash_), of
+    one browser run (about 3 s; the DOM on stdout, the PNG to a file: the same bytes as a run
+    for each), so either can be left out."""
     from PIL import Image
 
     url = page.resolve().as_uri() + hash_
     path = tmp_path / f"{page.stem}{hash_.replace('#', '_').replace('=', '')}.png"
-    common = [CHROMIUM, *FLAGS, f"--user-data-dir={tmp_path / 'profile'}"]
-    pixels = None
-    if shot:
-        subprocess.run([*common, f"--screenshot={path}", url], capture_output=True, timeout=120)
-        pixels = np.asarray(Image.open(path).convert("RGB"))
-    text = ""
-    if dom:
-        text = subprocess.run(
-            [*common, "--dump-dom", url], capture_output=True, timeout=120, text=True
-        ).stdout
-    return pixels, text
+    command = [CHROMIUM, *FLAGS, f"--user-data-dir={tmp_path / 'profile'}"]
+    command += [f"--screenshot={path}"] * shot + ["--dump-dom"] * dom
+    done = subprocess.run([*command, url], capture_output=True, timeout=120, text=True)
+    pixels = np.asarray(Image.open(path).convert("RGB")) if shot else None
+    return pixels, done.stdout if dom else ""
 
 
 def assert_drew(pixels: np.ndarray | None, dom: str | None) -> np.ndarray:

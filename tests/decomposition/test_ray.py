@@ -1,8 +1,8 @@
 """The Ray executor: a real local Ray cluster (127.0.0.1, 2 CPUs), started once for the module.
 
 Outputs identical to the local pool; a worker killed by its pid fails only its file; a task
-that sleeps forever is cancelled by force at its timeout; without Ray, ``--executor ray``
-exits 2 with a one-line hint.
+that sleeps forever is cancelled by force at its timeout; a task's engine steps reach the
+driver; without Ray, ``--executor ray`` exits 2 with a one-line hint.
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from test_executor import (
 )
 
 from meshcol.cli import main
+from meshcol.decomposition.steps import stage
 
 # The inputs of tests/test_executor.py (fixtures), for the same scenarios on Ray.
 meshes, batch, stall = test_executor.meshes, test_executor.batch, test_executor.stall
@@ -174,6 +175,28 @@ def test_engine_threads_are_set_per_task(ray_cluster) -> None:
 
 def _environment(_):
     return dict(os.environ)
+
+
+def _stepping(count: int) -> int:
+    with stage("fake step", count) as steps:
+        for _ in range(count):
+            steps.advance()
+    return count
+
+
+@pytest.mark.slow
+def test_ray_tasks_report_their_steps_to_the_driver(ray_cluster) -> None:
+    """On Ray the task is a Ray generator: its steps reach ``on_step`` before its outcome
+    (tests/test_step_progress.py has the local pool's and the progress line's tests)."""
+    from meshcol.decomposition.executor import RayExecutor
+
+    seen: list[tuple[int, object]] = []
+    with RayExecutor(_stepping, 1, timeout=120) as executor:
+        executor.on_step = lambda index, snapshot: seen.append((index, snapshot))
+        outcomes = list(executor.run([3]))
+    assert [(o.status, o.value) for o in outcomes] == [("ok", 3)]
+    assert (0, (("fake step", 1, 3, False, None),)) in seen
+    assert seen[-1] == (0, ())  # the stage ended before the outcome came
 
 
 def test_executor_ray_without_ray_exits_2_with_a_hint(meshes, tmp_path, monkeypatch) -> None:

@@ -35,10 +35,21 @@ meshes, batch = test_executor.meshes, test_executor.batch
 AUTH = {"RAY_AUTH_MODE": "token", "RAY_AUTH_TOKEN": secrets.token_hex(32)}
 
 
+#: Ray's fixed default ports in Linux's range of free ports (32768-60999): the dashboard
+#: agent's HTTP port (ray_constants.DEFAULT_DASHBOARD_AGENT_LISTEN_PORT). A head given it as
+#: its --port fails ("port number 52365 that is used by other components"), as `ray start`
+#: did in a session-36 run of tests/test_ray_start.py.
+RAY_DEFAULT_PORTS = frozenset({52365})
+
+
 def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+    """A port free on 127.0.0.1 now, and none of Ray's own defaults."""
+    while True:
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            port = s.getsockname()[1]
+        if port not in RAY_DEFAULT_PORTS:
+            return port
 
 
 @pytest.fixture(scope="module")

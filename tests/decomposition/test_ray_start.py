@@ -26,6 +26,7 @@ import test_executor
 from click.testing import CliRunner
 from conftest import FAST_DECOMPOSE
 from test_executor import files
+from test_ray_cluster import _free_port
 
 from meshcol.cli import main
 from meshcol.decomposition import ray_start
@@ -120,9 +121,7 @@ def test_a_ray_start_cluster_is_joined_and_outlives_the_run(monkeypatch, tmp_pat
     for key, value in env.items():
         monkeypatch.setenv(key, value)
     monkeypatch.delenv("RAY_ADDRESS", raising=False)
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
+    port = _free_port()
     start = [ray_cli, "start", "--head", f"--port={port}", "--num-cpus=1"]
     start += ["--node-ip-address=127.0.0.1", "--include-dashboard=false"]
     proc = subprocess.Popen(

@@ -1,5 +1,6 @@
 """The engine's own steps on the progress line (issue 29 item 18): a worker reports each step
-to the parent, and a single-file run shows an honest time left on a terminal, none off one."""
+to the parent, and a single-file run shows an honest time left on a terminal, none off one.
+(A Ray task's steps: tests/test_ray.py, on that module's Ray.)"""
 
 from __future__ import annotations
 
@@ -12,8 +13,6 @@ import sys
 import textwrap
 import time
 from pathlib import Path
-
-import pytest
 
 from meshcol.decomposition.steps import (
     ProgressText,
@@ -210,37 +209,3 @@ def test_no_progress_lines_off_a_terminal(tmp_path: Path) -> None:
     assert result.returncode == 0, result.stderr
     assert "fake step" not in result.stderr
     assert "elapsed" not in result.stderr and "left" not in result.stderr
-
-
-def _stepping(count: int) -> int:
-    with stage("fake step", count) as steps:
-        for _ in range(count):
-            steps.advance()
-    return count
-
-
-@pytest.mark.slow
-def test_ray_tasks_report_their_steps_to_the_driver() -> None:
-    """On Ray the task is a Ray generator: its steps reach ``on_step`` before its outcome."""
-    ray = pytest.importorskip("ray", reason="Ray is not installed (pip install 'meshcol[ray]')")
-    from meshcol.decomposition.executor import RayExecutor
-
-    ray.init(
-        address="local",
-        num_cpus=1,
-        include_dashboard=False,
-        _node_ip_address="127.0.0.1",
-        log_to_driver=False,
-        logging_level="ERROR",
-    )
-    ray.cloudpickle.register_pickle_by_value(sys.modules[__name__])  # workers cannot import it
-    seen: list[tuple[int, object]] = []
-    try:
-        with RayExecutor(_stepping, 1, timeout=120) as executor:
-            executor.on_step = lambda index, snapshot: seen.append((index, snapshot))
-            outcomes = list(executor.run([3]))
-    finally:
-        ray.shutdown()
-    assert [(o.status, o.value) for o in outcomes] == [("ok", 3)]
-    assert (0, (("fake step", 1, 3, False, None),)) in seen
-    assert seen[-1] == (0, ())  # the stage ended before the outcome came

@@ -619,13 +619,20 @@ def test_split_rigid_rejects_zero_scale():
 def _canonical(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Triangles as sorted rows of corner coordinates, each rotated to start at its least corner
     (winding kept): equal for equal geometry whatever the vertex and face order."""
-    corners = np.asarray(vertices, dtype=np.float64)[np.asarray(faces)]
-    keys = [tuple(map(tuple, t)) for t in corners]
-    rotated = []
-    for t in keys:
-        k = t.index(min(t))
-        rotated.append(t[k:] + t[:k])
-    return np.array(sorted(rotated))
+    corners = np.asarray(vertices, dtype=np.float64)[np.asarray(faces)].reshape(-1, 3, 3)
+    rows = np.arange(len(corners))
+    # The first least corner in (x, y, z) order: a corner replaces the best so far only when
+    # strictly less, as min() then tuple.index() pick it.
+    first = np.zeros(len(corners), dtype=np.intp)
+    for k in (1, 2):
+        a, b = corners[:, k], corners[rows, first]
+        less = (a[:, 0] < b[:, 0]) | (a[:, 0] == b[:, 0]) & (
+            (a[:, 1] < b[:, 1]) | (a[:, 1] == b[:, 1]) & (a[:, 2] < b[:, 2])
+        )
+        first = np.where(less, k, first)
+    rotated = corners[rows[:, None], (first[:, None] + np.arange(3)) % 3].reshape(-1, 9)
+    # Rows in lexicographic order of their nine coordinates (a stable sort, as sorted()).
+    return rotated[np.lexsort(rotated.T[::-1])].reshape(-1, 3, 3)
 
 
 def _trimesh_geometry(path: Path) -> list[np.ndarray]:
