@@ -36,8 +36,8 @@ auto climb_list_array(std::vector<meshcol::ClimbList>&& lists) {
     nb::capsule owner(heap, [](void* p) noexcept {
         delete static_cast<std::vector<meshcol::ClimbList>*>(p);
     });
-    const size_t shape[2] = {heap->size(), kClimbRecordWords};
-    return Out<meshcol::ClimbIndex, -1, kClimbRecordWords>(
+    const size_t shape[2] = {heap->size(), kClimbRowBytes};
+    return Out<meshcol::ClimbIndex, -1, kClimbRowBytes>(
         reinterpret_cast<meshcol::ClimbIndex*>(heap->data()), 2, shape, owner);
 }
 

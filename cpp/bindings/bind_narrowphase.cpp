@@ -7,8 +7,8 @@
 
 #include <algorithm>
 #include <array>
-#include <memory>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -255,16 +255,16 @@ std::pair<nb::object, nb::object> climb_arrays(const PackedConvexSet& set) {
     else
         std::fill(offsets.data(), offsets.data() + h + 1, std::int64_t{0});
     const auto* lists = made->lists();
-    const size_t shape[2] = {static_cast<size_t>(made->size()), kClimbRecordWords};
+    const size_t shape[2] = {static_cast<size_t>(made->size()), kClimbRowBytes};
     if (lists == nullptr) {
         auto none =
-            new_array<Out<meshcol::ClimbIndex, -1, kClimbRecordWords>>({0, kClimbRecordWords});
+            new_array<Out<meshcol::ClimbIndex, -1, kClimbRowBytes>>({0, kClimbRowBytes});
         return {offsets.cast(), none.cast()};
     }
     nb::capsule owner(made.release(), [](void* p) noexcept {
         delete static_cast<meshcol::ClimbLists*>(p);
     });
-    Out<meshcol::ClimbIndex, -1, kClimbRecordWords> rows(
+    Out<meshcol::ClimbIndex, -1, kClimbRowBytes> rows(
         reinterpret_cast<meshcol::ClimbIndex*>(const_cast<meshcol::ClimbList*>(lists)), 2, shape,
         owner);
     return {offsets.cast(), rows.cast()};

@@ -22,10 +22,9 @@ namespace meshcol::bindings {
 
 /// The bytes of a `ClimbList` (its count, then its slots): a row of a set's (M, 16) uint8
 /// `climb_lists` array.
-constexpr size_t kClimbRecordWords = sizeof(ClimbList);
-static_assert(sizeof(ClimbList) == kClimbRecordWords * sizeof(ClimbIndex),
-              "a ClimbList is a row of its index type");
-using ClimbRecords = In<ClimbIndex, -1, static_cast<ssize_t>(kClimbRecordWords)>;
+constexpr size_t kClimbRowBytes = sizeof(ClimbList);
+static_assert(sizeof(ClimbIndex) == 1, "a row's elements are its bytes");
+using ClimbRecords = In<ClimbIndex, -1, static_cast<ssize_t>(kClimbRowBytes)>;
 
 /// What `pack_polytopes` made: references to its index arrays (the adjacency, its offsets and
 /// the edge pairs, which stay alive and at their addresses while this lives) and copies of
@@ -257,10 +256,11 @@ class PackedConvexSet {
                     const std::int64_t count = clo[s + 1] - clo[s], n = o[s + 1] - o[s];
                     if (count == 0) continue;
                     ok = n <= 0x10000 && count == n * climb_rows(n);
+                    const ClimbList* first = lists + clo[s];
                     if (ok && climb_rows(n) == 1)
-                        ok = lists_in_range(lists + clo[s], n);
+                        ok = lists_in_range(first, n);
                     else if (ok)
-                        ok = lists_in_range(reinterpret_cast<const WideClimbList*>(lists + clo[s]), n);
+                        ok = lists_in_range(reinterpret_cast<const WideClimbList*>(first), n);
                 }
                 if (!ok) all = false;
             });

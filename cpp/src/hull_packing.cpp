@@ -494,8 +494,9 @@ void adjacency_from_edges(int count, PackScratch& s, ChunkPack& out) {
 // The climb lists (shapes.hpp: `ClimbList`) of a shape of `count` vertices whose CSR lists
 // were just appended (from `counts_first` in `out.adjacency_counts`, `first` in
 // `out.adjacency`), while they are in the cache: what `make_climb_lists` makes of them, byte
-// for byte (the indices are in range by construction). Appends its count of lists (0 or
-// `count`) to `out.climb_counts`: none for a shape that keeps none (`keeps_climb_lists`).
+// for byte (the indices are in range by construction). Appends its count of rows (0, or
+// `count` times `climb_rows(count)`) to `out.climb_counts`: none for a shape that keeps none
+// (`keeps_climb_lists`).
 void append_climb_lists(int count, size_t counts_first, size_t first, ChunkPack& out) {
     // The vertex count first (most shapes do not climb), then the lists' lengths.
     if (!keeps_climb_lists(count, 0)) {
@@ -512,7 +513,8 @@ void append_climb_lists(int count, size_t counts_first, size_t first, ChunkPack&
     }
     const auto rows = static_cast<size_t>(climb_rows(count));
     const size_t lists_first = out.climb_lists.size();
-    out.climb_lists.resize(lists_first + rows * n);  // zeroed: the unused slots as make_climb_lists
+    // Zeroed: the unused slots as make_climb_lists leaves them.
+    out.climb_lists.resize(lists_first + rows * n);
     ClimbList* list = out.climb_lists.data() + lists_first;
     const std::int32_t* from = out.adjacency.data() + first;
     for (size_t i = 0; i < n; ++i) {

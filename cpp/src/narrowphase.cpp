@@ -52,7 +52,8 @@ ClimbLists::ClimbLists(const ConvexSetView& set, int threads) {
     std::vector<std::int64_t> offsets(static_cast<size_t>(h_count) + 1, 0);
     for (std::int64_t h = 0; h < h_count; ++h) {
         const ShapeView s = set.shape(h);
-        offsets[h + 1] = offsets[h] + (climbs(s) ? s.vertex_count * climb_rows(s.vertex_count) : 0);
+        const std::int64_t rows = climbs(s) ? s.vertex_count * climb_rows(s.vertex_count) : 0;
+        offsets[h + 1] = offsets[h] + rows;
     }
     if (offsets.back() == 0) return;
     std::unique_ptr<ClimbList[]> lists(new ClimbList[static_cast<size_t>(offsets.back())]);

@@ -47,9 +47,10 @@ SupportPoint polytope_support(const ShapeView& s, const Vec3& d, int hint) {
 template <class Record>
 bool write_climb_lists(const ShapeView& s, ClimbList* out) {
     using Index = decltype(Record::count);
+    constexpr int kRows = sizeof(Record) / sizeof(ClimbList);
     for (int i = 0; i < s.vertex_count; ++i) {
         const std::int64_t begin = s.adjacency_offsets[i], end = s.adjacency_offsets[i + 1];
-        Record& list = *new (out + i * climb_rows(s.vertex_count)) Record{};
+        Record& list = *new (out + kRows * i) Record{};
         list.count = static_cast<Index>(end - begin);
         for (std::int64_t k = begin; k < end; ++k) {
             const std::int32_t j = s.adjacency[k];

@@ -159,9 +159,8 @@ def test_lists_handed_over_are_checked_unless_the_packing_s_own() -> None:
     def adopt_large(offsets: np.ndarray, lists: np.ndarray) -> ConvexSet:
         return ConvexSet._adopt(**fields, climb_list_offsets=offsets, climb_lists=lists)
 
-    assert adopt_large(
-        large.climb_list_offsets, np.array(large.climb_lists)
-    ).climb_lists.tobytes() == (large.climb_lists.tobytes())
+    same = adopt_large(large.climb_list_offsets, np.array(large.climb_lists))
+    assert same.climb_lists.tobytes() == large.climb_lists.tobytes()
     bad = np.array(large.climb_lists)
     bad.view(np.uint16).reshape(300, 16)[7, 1] = 300  # one past the last vertex
     with pytest.raises(ValueError, match="climb_lists hold a list out of range"):

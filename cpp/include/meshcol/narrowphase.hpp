@@ -92,8 +92,8 @@ class EdgeClasses {
 };
 
 /// The fixed-stride neighbour lists (shapes.hpp: `ClimbList`) of a set's polytopes that climb,
-/// made once from its adjacency: 16 bytes a vertex (32 above 256 vertices), for every shape whose lists fit
-/// (`make_climb_lists`); the others climb on the CSR arrays. The set's arrays must not change
+/// made once from its adjacency: 16 bytes a vertex (32 above `kNarrowClimbVertices`), for
+/// every shape whose lists fit (`make_climb_lists`); the others climb on the CSR arrays. The set's arrays must not change
 /// while it is attached (the Python `ConvexSet` holds them read-only).
 class ClimbLists {
   public:
