@@ -125,13 +125,18 @@ def test_sets_with_and_without_the_packings_lists_answer_alike() -> None:
         assert sd.point_b.tobytes() == first_sd.point_b.tobytes()
 
 
+def adopted(s: ConvexSet, offsets: np.ndarray, lists: np.ndarray) -> ConvexSet:
+    """A set of ``s``'s arrays handed ``offsets`` and ``lists`` (not the packing's: checked)."""
+    arrays = {name: getattr(s, name) for name in ConvexSet._FIELDS}
+    return ConvexSet._adopt(**arrays, climb_list_offsets=offsets, climb_lists=lists)
+
+
 def test_lists_handed_over_are_checked_unless_the_packing_s_own() -> None:
     rng = np.random.default_rng(10)
     made = ConvexSet.from_vertices([ellipsoid_points(rng, 64), ellipsoid_points(rng, 40)])
-    arrays = {name: getattr(made, name) for name in ConvexSet._FIELDS}
 
     def adopt(offsets: np.ndarray, lists: np.ndarray) -> ConvexSet:
-        return ConvexSet._adopt(**arrays, climb_list_offsets=offsets, climb_lists=lists)
+        return adopted(made, offsets, lists)
 
     good = adopt(made.climb_list_offsets, np.array(made.climb_lists))
     assert good.climb_lists.tobytes() == made.climb_lists.tobytes()
@@ -154,20 +159,15 @@ def test_lists_handed_over_are_checked_unless_the_packing_s_own() -> None:
     wide = large.climb_lists.view(np.uint16).reshape(300, 16)  # count, then 15 entries
     assert (wide[:, 0] >= 4).all() and (wide[:, 0] <= 15).all()
     assert (wide[:, 1:].max() > 255) and (wide[:, 1:] < 300).all()
-    fields = {name: getattr(large, name) for name in ConvexSet._FIELDS}
-
-    def adopt_large(offsets: np.ndarray, lists: np.ndarray) -> ConvexSet:
-        return ConvexSet._adopt(**fields, climb_list_offsets=offsets, climb_lists=lists)
-
-    same = adopt_large(large.climb_list_offsets, np.array(large.climb_lists))
+    same = adopted(large, large.climb_list_offsets, np.array(large.climb_lists))
     assert same.climb_lists.tobytes() == large.climb_lists.tobytes()
     bad = np.array(large.climb_lists)
     bad.view(np.uint16).reshape(300, 16)[7, 1] = 300  # one past the last vertex
     with pytest.raises(ValueError, match="climb_lists hold a list out of range"):
-        adopt_large(large.climb_list_offsets, bad)
+        adopted(large, large.climb_list_offsets, bad)
     # a row a vertex is too few for such a shape
     with pytest.raises(ValueError, match="climb_lists hold a list out of range"):
-        adopt_large(np.array([0, 300]), np.array(large.climb_lists[:300]))
+        adopted(large, np.array([0, 300]), np.array(large.climb_lists[:300]))
     with pytest.raises(ValueError, match="go together"):
         made._core.__class__(
             *(getattr(made, name) for name in ConvexSet._FIELDS), None, made.climb_list_offsets
@@ -189,9 +189,6 @@ def test_unpickled_packings_lists_are_aligned_for_the_core() -> None:
     skewed = buffer[skew : skew + 16 * len(packed.climb_lists)].reshape(-1, 16)
     skewed[...] = packed.climb_lists
     assert skewed.ctypes.data % 16 != 0
-    arrays = {name: getattr(made, name) for name in ConvexSet._FIELDS}
-    again = ConvexSet._adopt(
-        **arrays, climb_list_offsets=made.climb_list_offsets, climb_lists=skewed
-    )
+    again = adopted(made, made.climb_list_offsets, skewed)
     assert again.climb_lists.ctypes.data % 16 == 0
     assert again.climb_lists.tobytes() == packed.climb_lists.tobytes()
