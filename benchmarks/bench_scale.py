@@ -348,7 +348,8 @@ UNIQUE_STAGES = [
     ("meshcol.analysis.bulk_colliders", "_first_equal"),
     ("meshcol.collision.shapes", "pack_hull_slices"),
     ("meshcol.collision.shapes", "pack_hulls"),
-    ("meshcol.analysis.colliders", "_geometry_key"),
+    ("meshcol.analysis.geometry_cache", "geometry_key"),
+    ("meshcol.analysis.colliders", "_geometry_key"),  # where builds before session 37 keep it
 ]
 
 _STAGE_RUN = (

@@ -15,7 +15,7 @@ import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -24,6 +24,7 @@ __all__ = [
     "Box",
     "Capsule",
     "Cylinder",
+    "PartPrimitive",
     "Primitive",
     "Scene",
     "Sphere",
@@ -292,6 +293,13 @@ class Spin:
 SPIN_ROTATION_TOLERANCE = 1e-6
 
 
+class PartPrimitive(NamedTuple):
+    """A part of a body that is an analytic shape (:attr:`Body.part_primitives`)."""
+
+    primitive: Primitive
+    pose: np.ndarray  # (4, 4) rigid: the body's frame from the primitive's own
+
+
 @dataclass(frozen=True, eq=False)
 class Body:
     """One rigid body: a triangle mesh (or primitive) and its pose.
@@ -328,6 +336,11 @@ class Body:
     part_faces : (len(parts) + 1,) int64 or None
         Part ``i`` is ``faces[part_faces[i]:part_faces[i + 1]]``; None when ``parts`` is
         empty.
+    part_primitives : tuple of PartPrimitive or None
+        Per part, when some part is an analytic shape (a robot link's box, sphere, cylinder
+        or capsule element): that shape and its pose in the body's frame, which queries use
+        exactly (its triangles in ``faces`` are its tessellation, for outputs); None for a
+        mesh part. Empty when no part is one.
     """
 
     name: str
@@ -341,10 +354,11 @@ class Body:
     parts: tuple[str, ...] = ()
     part_faces: np.ndarray | None = None
     spin: Spin | None = None
+    part_primitives: tuple[PartPrimitive | None, ...] = ()
 
     def __post_init__(self) -> None:
         # the common body (one part, no spin) skips both calls: a scene can hold 300,000
-        if self.parts or self.part_faces is not None:
+        if self.parts or self.part_faces is not None or self.part_primitives:
             self._check_parts()
         if self.spin is not None:
             self._check_spin()
@@ -365,6 +379,11 @@ class Body:
             object.__setattr__(self, "part_faces", offsets)
         elif self.part_faces is not None:
             raise ValueError(f"body {self.name!r}: part_faces given without parts")
+        if self.part_primitives and len(self.part_primitives) != len(self.parts):
+            raise ValueError(
+                f"body {self.name!r}: part_primitives must have one entry per part "
+                f"({len(self.parts)}), got {len(self.part_primitives)}"
+            )
 
     def part_meshes(self) -> list[tuple[str | None, np.ndarray, np.ndarray]]:
         """``(name, vertices, faces)`` of each part, local frame, faces indexing the part's
@@ -449,6 +468,7 @@ class Body:
             parts=(),
             part_faces=None,
             spin=None,
+            part_primitives=(),
         )
         return body
 

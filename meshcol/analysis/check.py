@@ -50,8 +50,9 @@ import numpy as np
 
 from meshcol.analysis.check_policy import FAIL_ON, CheckOptions, apply_policy
 from meshcol.analysis.check_report import CheckReport, check_report
-from meshcol.analysis.colliders import _geometry_key, build_colliders
+from meshcol.analysis.colliders import build_colliders
 from meshcol.analysis.depth_bounds import depth_bounds
+from meshcol.analysis.geometry_cache import geometry_key
 from meshcol.analysis.mesh_phase import mesh_phase
 from meshcol.analysis.pairs import (
     PairTable,
@@ -268,7 +269,7 @@ def _check_file(task: tuple[str, list[Any] | None, str, dict]) -> tuple[Any, Any
     parts: dict[bytes, list[np.ndarray]] = {}
 
     def record(mesh: Any, **options: Any) -> list[np.ndarray]:
-        parts[_geometry_key(*mesh)] = found = convex_parts(mesh, **options)
+        parts[geometry_key(*mesh)] = found = convex_parts(mesh, **options)
         return found
 
     if any(b.primitive is None and (b.collider or kind) == "decomposed" for b in bodies):
@@ -337,7 +338,7 @@ def _prepare_files(
         scene = Scene(bodies=tuple(bodies), units=declared_units(inputs), source=source)
 
     def decompose(mesh: Any, **options: Any) -> list[np.ndarray]:
-        found = parts.get(_geometry_key(*mesh))
+        found = parts.get(geometry_key(*mesh))
         return convex_parts(mesh, **options) if found is None else found
 
     return scene, decompose

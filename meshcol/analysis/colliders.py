@@ -1,8 +1,8 @@
 """From bodies to colliders: the convex parts every analysis queries, built one way.
 
 A body's collider is chosen by its collider kind (:data:`COLLIDER_KINDS`; a manifest body's
-own ``shape`` overrides the run's default, and a primitive is always exact), part by part for
-a body of several parts (``Body.parts``):
+own ``shape`` overrides the run's default, and a primitive, a body or a part of one, is always
+exact), part by part for a body of several parts (``Body.parts``):
 
 - ``hull``: the convex hull of each of its parts;
 - ``decomposed``: each part's ``UCX_<part>_NN`` collision parts when the input has them
@@ -39,9 +39,8 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import hashlib
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from itertools import chain
 from typing import Any
@@ -49,6 +48,7 @@ from typing import Any
 import numpy as np
 
 from meshcol.analysis.bulk_colliders import bulk_colliders
+from meshcol.analysis.geometry_cache import geometry_key
 from meshcol.analysis.triangle_parts import _triangle_parts, triangle_parts
 from meshcol.collision.hull import exact_hull
 from meshcol.collision.shapes import ConvexSet
@@ -100,7 +100,7 @@ class Colliders:
         decomposed.
     part_offsets : (n_parts, 4, 4) float64 or None
         Pose of each part in its body's frame, when some part is not at the body's origin
-        (a ``fit`` primitive); None when every part is.
+        (a ``fit`` primitive, a part that is a primitive); None when every part is.
     """
 
     bodies: Sequence[Body]
@@ -206,6 +206,9 @@ def _restrict(body: Body, keep: list[int]) -> Body:
         faces=np.ascontiguousarray(np.concatenate(faces)),
         parts=tuple(body.parts[k] for k in keep),
         part_faces=np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
+        part_primitives=tuple(body.part_primitives[k] for k in keep)
+        if body.part_primitives
+        else (),
     )
 
 
@@ -373,23 +376,6 @@ def _in_owner_frame(owner: Body, parts: list[Body]) -> list[np.ndarray]:
     return out
 
 
-def _geometry_key(vertices: np.ndarray, faces: np.ndarray | None = None) -> bytes:
-    """Content key of a point set, or of a mesh when ``faces`` are given: equal keys, the same
-    float64 vertices to the bit (and the same int64 faces), so what the geometry alone decides
-    (a hull, a fit; inspect's health and local mass properties) is computed once per key, not
-    per instance. A 128-bit blake2b digest; 0.0 and -0.0 differ, which only costs a second
-    computation."""
-    h = hashlib.blake2b(digest_size=16)
-    v = np.ascontiguousarray(vertices, dtype=np.float64)
-    if faces is not None:
-        # the vertex count first: one split only of the bytes into vertices and faces
-        h.update(np.int64(len(v)).tobytes())
-    h.update(v.tobytes())
-    if faces is not None:
-        h.update(np.ascontiguousarray(faces, dtype=np.int64).tobytes())
-    return h.digest()
-
-
 def convex_parts(mesh: Any, **options: Any) -> list[np.ndarray]:
     """Vertices of the convex parts of ``mesh`` (its frame), for collision queries.
 
@@ -433,8 +419,8 @@ def _fits_of(
         if body.primitive is not None or shape is None:
             continue
         sets = wanted.setdefault(shape, {})
-        for name, v, _ in body.part_meshes():
-            key = _geometry_key(v)
+        for _, name, v, _ in _part_meshes(body):
+            key = geometry_key(v)
             if key not in sets and not _flat(v):
                 sets[key] = (v, f"body {body.name!r}" + ("" if name is None else f" part {name!r}"))
     if not wanted:
@@ -519,6 +505,8 @@ def build_colliders(
             body_kind = "primitive"
         else:
             body_kind = _BUILDERS[body.collider or kind](build, body, block)
+            if body.part_primitives and all(body.part_primitives) and block.triangles < 0:
+                body_kind = "primitive"  # every part an exact primitive (_part_meshes)
         build.pool.close(block, body_kind)
     return build.pool.colliders(kept, warnings)
 
@@ -562,10 +550,10 @@ class _Pool:
         return row
 
     def hull(self, vertices: np.ndarray) -> int:
-        return self.add(("hull", _geometry_key(vertices)), vertices)
+        return self.add(("hull", geometry_key(vertices)), vertices)
 
     def part(self, vertices: np.ndarray) -> int:
-        return self.add(("part", _geometry_key(vertices)), vertices)
+        return self.add(("part", geometry_key(vertices)), vertices)
 
     def add_triangles(self, body: Body, block: _Block) -> None:
         """Every triangle of ``body`` as a part (one triangle set)."""
@@ -682,17 +670,25 @@ class _Build:
     pool: _Pool = dataclasses.field(default_factory=_Pool)
 
 
-def _part_meshes(body: Body) -> list[tuple[int, str | None, np.ndarray, np.ndarray]]:
-    """(label, name for messages, vertices, faces) of each part: one unlabelled part (-1) for
-    a body of one part."""
-    return [
-        (k if body.parts else -1, name, v, f) for k, (name, v, f) in enumerate(body.part_meshes())
-    ]
+def _part_meshes(
+    body: Body, build: _Build | None = None, block: _Block | None = None
+) -> Iterator[tuple[int, str | None, np.ndarray, np.ndarray]]:
+    """(label, name for messages, vertices, faces) of each part, one unlabelled part (-1) for
+    a body of one part. A part that is a primitive (``Body.part_primitives``) is exact
+    whatever the kind, as a primitive body is: it goes into ``block`` as that primitive,
+    placed by its pose, in its turn (none without a block), instead of being yielded."""
+    exact = body.part_primitives or (None,) * len(body.parts or (0,))
+    for k, ((name, v, f), part) in enumerate(zip(body.part_meshes(), exact)):
+        if part is None:
+            yield k if body.parts else -1, name, v, f
+        elif build is not None and block is not None:
+            build.pool.part_poses[(block.body_number, len(block.singles))] = part.pose
+            block.put(build.pool.add(("primitive", part.primitive), part.primitive), k)
 
 
 def _hull_parts(build: _Build, body: Body, block: _Block) -> str:
     """``hull``: the convex hull of each part."""
-    for label, _, vertices, _ in _part_meshes(body):
+    for label, _, vertices, _ in _part_meshes(body, build, block):
         block.put(build.pool.hull(vertices), label)
     return "hull"
 
@@ -711,8 +707,8 @@ def _fitted_parts(build: _Build, body: Body, block: _Block, kind: str = "fit") -
     :data:`FIT_KIND_SHAPES`), placed by its pose; a flat part, or one whose fit kept the hull,
     is its hull."""
     shape = FIT_KIND_SHAPES[kind]
-    for label, _, vertices, _ in _part_meshes(body):
-        chosen = None if _flat(vertices) else build.fits[(shape, _geometry_key(vertices))]
+    for label, _, vertices, _ in _part_meshes(body, build, block):
+        chosen = None if _flat(vertices) else build.fits[(shape, geometry_key(vertices))]
         if chosen is None:  # flat: its polygon (a primitive would add a thickness)
             block.put(build.pool.hull(vertices), label)
             continue
@@ -729,9 +725,9 @@ def _decomposed_parts(build: _Build, body: Body, block: _Block) -> str:
     covered = set() if own is None else {label for label, _ in own.parts}
     for (label, vertices), kind in zip(own.parts, own.kinds) if own is not None else ():
         _collision_part(build, block, label, vertices, kind)
-    meshes = _part_meshes(body)
-    decomposed = False
-    for label, name, vertices, faces in meshes:
+    decomposed, names = False, []
+    for label, name, vertices, faces in _part_meshes(body, build, block):
+        names.append(name)
         if own is not None and (own.whole or label in covered):
             continue  # its UCX parts stand for it
         named = collision_part(name) if name is not None else None
@@ -750,7 +746,7 @@ def _decomposed_parts(build: _Build, body: Body, block: _Block) -> str:
         decomposed = True
         for part in build.parts_of((vertices, faces), **build.decompose_options):
             block.put(build.pool.part(part), label)
-    all_ucx = all(n is not None and collision_part(n) is not None for _, n, _, _ in meshes)
+    all_ucx = all(n is not None and collision_part(n) is not None for n in names)
     return "ucx" if not decomposed and (own is not None or all_ucx) else "decomposed"
 
 

@@ -10,6 +10,7 @@ guess, every finding's names) each body computes itself.
 
 from __future__ import annotations
 
+import hashlib
 from functools import cached_property
 
 import numpy as np
@@ -25,7 +26,24 @@ from meshcol.geometry.topology import (
 )
 from meshcol.geometry.triangles import face_heights
 
-__all__ = ["GeometryCache", "LocalGeometry"]
+__all__ = ["GeometryCache", "LocalGeometry", "geometry_key"]
+
+
+def geometry_key(vertices: np.ndarray, faces: np.ndarray | None = None) -> bytes:
+    """Content key of a point set, or of a mesh when ``faces`` are given: equal keys, the same
+    float64 vertices to the bit (and the same int64 faces), so what the geometry alone decides
+    (a hull, a fit; inspect's health and local mass properties) is computed once per key, not
+    per instance. A 128-bit blake2b digest; 0.0 and -0.0 differ, which only costs a second
+    computation."""
+    h = hashlib.blake2b(digest_size=16)
+    v = np.ascontiguousarray(vertices, dtype=np.float64)
+    if faces is not None:
+        # the vertex count first: one split only of the bytes into vertices and faces
+        h.update(np.int64(len(v)).tobytes())
+    h.update(v.tobytes())
+    if faces is not None:
+        h.update(np.ascontiguousarray(faces, dtype=np.int64).tobytes())
+    return h.digest()
 
 
 class LocalGeometry:
@@ -108,7 +126,7 @@ class GeometryCache:
     """The :class:`LocalGeometry` of each mesh of one inspect run, shared by the bodies (and
     the health and physics phases) that use it: found by the arrays themselves first (a file's
     instances share their arrays), else by content
-    (:func:`meshcol.analysis.colliders._geometry_key`: the same bits), so each pair of
+    (:func:`geometry_key`: the same bits), so each pair of
     arrays is hashed once."""
 
     def __init__(self) -> None:
@@ -121,9 +139,7 @@ class GeometryCache:
         seen = self._by_arrays.get((id(vertices), id(faces)))
         if seen is not None:
             return seen[0]
-        from meshcol.analysis.colliders import _geometry_key
-
-        key = _geometry_key(vertices, faces)
+        key = geometry_key(vertices, faces)
         geometry = self._by_key.get(key)
         if geometry is None:
             geometry = self._by_key[key] = LocalGeometry(vertices, faces)

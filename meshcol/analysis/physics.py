@@ -406,7 +406,7 @@ def _collider_mass(item: _ColliderBody) -> list[Finding]:
 def _part_mass(item: _ColliderBody, part: int) -> tuple[MassProperties | None, list[Finding]]:
     """One convex part's mass properties in its body's frame (None when it has no volume)
     and its MC202 finding, if flat."""
-    from meshcol.analysis.colliders import _geometry_key
+    from meshcol.analysis.geometry_cache import geometry_key
     from meshcol.collision.shapes import ShapeKind
     from meshcol.geometry.mass import primitive_mass_properties
 
@@ -420,7 +420,7 @@ def _part_mass(item: _ColliderBody, part: int) -> tuple[MassProperties | None, l
             "" if part_name is None else f" of part {part_name!r}"
         )
         points = shapes.vertices[int(shapes.offsets[part]) : int(shapes.offsets[part + 1])]
-        key = _geometry_key(points)
+        key = geometry_key(points)
         measured_hull = run.hulls.get(key)
         if measured_hull is None:
             measured_hull = run.hulls[key] = _hull_mass(points)

@@ -3,8 +3,9 @@
 A link whose only collision element is a box, sphere, cylinder or capsule stays that exact
 primitive (:func:`primitive_body`); a link of several elements is a body of parts
 (:func:`parts_body`), every element's origin baked into its vertices and every primitive
-tessellated (:func:`meshcol.io.primitives.primitive_mesh`, the tessellation manifests use),
-since a body of parts is a mesh. :class:`CollisionElement` records the element behind each
+tessellated (:func:`meshcol.io.primitives.primitive_mesh`, the tessellation manifests use)
+for what draws or exports the body, and kept with its origin (``Body.part_primitives``) for
+the queries, which use it exactly. :class:`CollisionElement` records the element behind each
 part, for the writers that rebuild a description (:mod:`meshcol.io.robot_write`).
 """
 
@@ -16,7 +17,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from meshcol.types import Body, Primitive
+from meshcol.types import Body, PartPrimitive, Primitive
 
 __all__ = [
     "JOINT_TOLERANCE",
@@ -101,12 +102,24 @@ def primitive_body(name: str, source: str, primitive: Primitive, pose: np.ndarra
     return Body.of_primitive(name, source, primitive, pose=pose)
 
 
-def parts_body(name: str, source: str, pose: np.ndarray, elements: Sequence[LinkElement]) -> Body:
-    """One body of parts in the link frame: every element's origin (and tessellation) baked.
+def parts_body(
+    name: str,
+    source: str,
+    pose: np.ndarray,
+    elements: Sequence[LinkElement],
+    exact: Sequence[PartPrimitive | None] | None = None,
+) -> Body:
+    """One body of parts in the link frame: every element's origin (and tessellation) baked,
+    and each primitive element kept exact with its origin (``Body.part_primitives``), or
+    each part's exact shape as ``exact`` gives it (elements baked by their reader).
 
     Parts are named after their elements, ``#2``, ``#3``... appended to a name already
     taken; a link of one element is a plain mesh body (no parts)."""
     blocks_v, blocks_f, counts, names = [], [], [], []
+    if exact is None:
+        exact = [
+            None if e.primitive is None else PartPrimitive(e.primitive, e.origin) for e in elements
+        ]
     base = 0
     used: set[str] = set()
     for part, origin, primitive, vertices, faces in elements:
@@ -142,4 +155,5 @@ def parts_body(name: str, source: str, pose: np.ndarray, elements: Sequence[Link
         pose=pose,
         parts=tuple(names),
         part_faces=np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
+        part_primitives=tuple(exact) if any(p is not None for p in exact) else (),
     )

@@ -35,7 +35,7 @@ from meshcol.io.mesh_formats import (
     mesh_format,
 )
 from meshcol.io.physics_bodies import BodyGroup, axis_turn, choose_collider, scaled_primitive
-from meshcol.types import Body, Scene
+from meshcol.types import Body, PartPrimitive, Scene
 
 __all__ = [
     "MAX_COORDINATE",
@@ -218,8 +218,9 @@ def _group_body(
     pose, _ = split_rigid(group.world)
     inverse = np.linalg.inv(pose)
     elements = []
+    exact_parts: list[PartPrimitive | None] = []  # the queries' shape of each part
     for element in group.elements:
-        origin = inverse @ element.world
+        origin, exact = inverse @ element.world, None
         if element.primitive is not None:
             origin = origin @ axis_turn(element.axis)
             exact = scaled_primitive(element.primitive, origin)
@@ -240,7 +241,8 @@ def _group_body(
         if merge:
             vertices, faces = merge_vertices(vertices, faces)
         elements.append(LinkElement(element.name, np.eye(4), None, vertices, faces))
-    body = parts_body(name, source, pose, elements)
+        exact_parts.append(None if exact is None else PartPrimitive(*exact))
+    body = parts_body(name, source, pose, elements, exact_parts)
     collider = choose_collider([e.collider for e in group.elements], warnings, name)
     return body if collider is None else dataclasses.replace(body, collider=collider)
 

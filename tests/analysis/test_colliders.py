@@ -6,6 +6,7 @@ The same collider rules in ``check`` and ``sweep`` (both build their colliders w
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 
@@ -19,6 +20,7 @@ from meshcol.analysis.colliders import build_colliders
 from meshcol.cli import main
 from meshcol.io.mesh_write import obj_text
 from meshcol.io.scene import load_inputs
+from meshcol.types import Body, PartPrimitive, Sphere, primitive_mesh
 
 
 def _box(size, centre) -> tuple[np.ndarray, np.ndarray]:
@@ -221,6 +223,65 @@ def stick(tmp_path):
     (tmp_path / "stick.obj").write_text("v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\nf 3 2 1\n")
     _write_obj(tmp_path / "wall.obj", [("wall", _box((0.2, 4, 4), (0, 0, 0)))])
     return tmp_path
+
+
+def _body_with_exact_parts(name="crate", ucx=True) -> Body:
+    """A body of a box mesh ``crate``, its ``UCX_crate_00`` part (optional) and ``ball``, a
+    sphere of radius 0.25 at (2, 0, 0) given exact (``Body.part_primitives``) beside its
+    tessellation."""
+    crate = _box((1, 1, 1), (0, 0, 0))
+    hull = _box((1.1, 1.1, 1.1), (0, 0, 0))
+    ball_v, ball_f = primitive_mesh(Sphere(0.25))
+    blocks = (
+        [crate, hull, (ball_v + (2, 0, 0), ball_f)]
+        if ucx
+        else [crate, (ball_v + (2, 0, 0), ball_f)]
+    )
+    names = ("crate", "UCX_crate_00", "ball") if ucx else ("crate", "ball")
+    vertices, faces, counts, base = [], [], [], 0
+    for v, f in blocks:
+        vertices.append(v)
+        faces.append(f + base)
+        counts.append(len(f))
+        base += len(v)
+    exact = PartPrimitive(
+        Sphere(0.25), np.array([[1, 0, 0, 2], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])
+    )
+    return Body(
+        name,
+        None,
+        np.concatenate(vertices),
+        np.concatenate(faces),
+        parts=names,
+        part_faces=np.concatenate([[0], np.cumsum(counts)]),
+        part_primitives=(None, None, exact) if ucx else (None, exact),
+    )
+
+
+@pytest.mark.parametrize("kind", ["hull", "decomposed", "fit", "box", "sphere", "mesh"])
+def test_a_primitive_part_is_exact_in_its_turn_beside_ucx_parts(kind):
+    """``UCX_`` matching drops a part and keeps each remaining part's primitive with it; the
+    sphere is the exact primitive, placed by its pose, after the crate's collider."""
+    body = _body_with_exact_parts()
+    probe = Body.of_primitive("probe", None, Sphere(0.5), pose=np.eye(4))
+    colliders = build_colliders([body, probe], kind)
+    start, stop = colliders.body_part_offsets[:2]
+    labels = colliders.part_label[start:stop].tolist()
+    assert colliders.bodies[0].parts == ("crate", "ball")  # the UCX part became the crate's
+    assert labels[-1] == 1 and labels[:-1] == [0] * (len(labels) - 1)
+    ball = stop - 1
+    assert colliders.shapes.kinds[ball] == 1 and colliders.shapes.params[ball][0] == 0.25
+    np.testing.assert_array_equal(colliders.part_poses()[ball][:3, 3], (2, 0, 0))
+    if kind == "decomposed":
+        assert colliders.kinds[0] == "ucx" and stop - start == 2
+
+
+def test_part_primitives_must_match_the_parts():
+    body = _body_with_exact_parts(ucx=False)
+    with pytest.raises(ValueError, match="one entry per part"):
+        dataclasses.replace(body, part_primitives=body.part_primitives[:1])
+    with pytest.raises(ValueError, match="one entry per part"):
+        Body("x", None, body.vertices, body.faces, part_primitives=body.part_primitives)
 
 
 @pytest.mark.parametrize("shape", ["hull", "mesh", "decomposed"])

@@ -21,6 +21,7 @@ import pytest
 import trimesh
 from click.testing import CliRunner
 
+from meshcol.analysis.colliders import build_colliders
 from meshcol.cli import main
 from meshcol.io.gltf_physics_write import physics_schema_problems
 from meshcol.io.scene import load_inputs
@@ -321,6 +322,12 @@ def test_khronos_bodies_shapes_triggers_and_filters(tmp_path: Path) -> None:
     assert cart.pose[:3, 3] == pytest.approx([0, 0, 5])
     lows = cart.world_vertices().min(axis=0)
     assert lows == pytest.approx([-0.5, -1.0, 3.5])  # the box; the bin cube is at x = 2
+    # the box shape stays exact for the queries beside the bin's mesh (its triangles drawn)
+    chassis, bin_ = cart.part_primitives
+    assert chassis.primitive == Box((1.0, 2.0, 3.0)) and bin_ is None
+    np.testing.assert_array_equal(chassis.pose, np.eye(4))
+    colliders = build_colliders([cart], "mesh")
+    assert colliders.shapes.kinds.tolist() == [2, 0] and colliders.part_label.tolist() == [0, 1]
     assert bodies["level/floor"].primitive == Sphere(0.5)
     pole = bodies["level/pole"]
     assert pole.primitive == Capsule(0.25, 2.0)

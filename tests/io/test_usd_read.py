@@ -15,7 +15,7 @@ import pytest
 from click.testing import CliRunner
 
 from meshcol.cli import main
-from meshcol.types import Box, Capsule, Cylinder, Sphere
+from meshcol.types import Box, Capsule, Cylinder, Sphere, primitive_mesh
 
 pxr = pytest.importorskip("pxr")
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdPhysics  # noqa: E402
@@ -409,6 +409,11 @@ def test_hull_to_usd_reads_back_to_the_same_colliders(tmp_path: Path) -> None:
         for j, want in zip(range(start, stop), expected[name]):
             shapes = colliders.shapes
             local = shapes.vertices[shapes.offsets[j] : shapes.offsets[j + 1]]
+            if shapes.kinds[j] != 0:  # the box element, read back exact: its corners
+                exact = colliders.bodies[k].part_primitives[colliders.part_label[j]]
+                assert shapes.kinds[j] == 2 and isinstance(exact.primitive, Box)
+                np.testing.assert_allclose(exact.primitive.size, (0.05, 0.06, 0.07), atol=1e-7)
+                local = primitive_mesh(exact.primitive)[0]
             world = local @ poses[j][:3, :3].T + poses[j][:3, 3]
             assert rw.same_points(want, world, 1e-6)
 
