@@ -17,14 +17,11 @@ import importlib.util
 import json
 from pathlib import Path
 
-import numpy as np
 import pytest
 from click.testing import CliRunner
+from mujoco_oracle import collision_geoms, has_ellipsoid, least_distance, matrix_qpos
 
 from meshcol.cli import main
-from meshcol.io.kinematics import apply_mjcf_followers, mjcf_followers
-from meshcol.io.mjcf import read_mjcf
-from meshcol.io.robot import RobotOptions
 
 mujoco = pytest.importorskip(
     "mujoco", reason="MJCF reading needs mujoco (pip install meshcol[robots])"
@@ -38,40 +35,17 @@ def mujoco_counts(path: Path, report: dict, pairs: list[dict]) -> tuple[list[int
     any pair's geoms."""
     model = mujoco.MjModel.from_xml_path(str(path))
     data = mujoco.MjData(model)
-    joints = report["joints"]
-    lower = np.array([j["lower"] for j in joints])
-    upper = np.array([j["upper"] for j in joints])
-    samples = report["settings"]["samples"]
-    rng = np.random.default_rng(report["settings"]["seed"])
-    q = lower + (upper - lower) * rng.random((samples, len(joints)))
-    joint = mujoco.mjtObj.mjOBJ_JOINT
-    adrs = [model.jnt_qposadr[mujoco.mj_name2id(model, joint, j["name"])] for j in joints]
-    _, _, kinematics = read_mjcf(str(path), RobotOptions())
-    qpos = np.repeat(np.asarray(kinematics.qpos)[None], samples, axis=0)
-    qpos[:, adrs] = q
-    apply_mjcf_followers(model, qpos, mjcf_followers(model))
-    solid = (model.geom_contype != 0) | (model.geom_conaffinity != 0)
-    skip = {int(mujoco.mjtGeom.mjGEOM_PLANE), int(mujoco.mjtGeom.mjGEOM_HFIELD)}
-    geoms: dict[str, list[int]] = {}
-    for g in range(model.ngeom):
-        if solid[g] and int(model.geom_type[g]) not in skip:
-            body = int(model.geom_bodyid[g])
-            name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, body) or f"body{body}"
-            geoms.setdefault(name, []).append(g)
-    ellipsoid = int(mujoco.mjtGeom.mjGEOM_ELLIPSOID)
-    has_ellipsoid = any(int(model.geom_type[g]) == ellipsoid for gs in geoms.values() for g in gs)
+    qpos = matrix_qpos(mujoco, model, path, report)
+    geoms = collision_geoms(mujoco, model)
+    ellipsoid = any(has_ellipsoid(mujoco, model, gs) for gs in geoms.values())
     counts = [0] * len(pairs)
-    for i in range(samples):
-        data.qpos[:] = qpos[i]
+    for configuration in qpos:
+        data.qpos[:] = configuration
         mujoco.mj_forward(model, data)
         for k, pair in enumerate(pairs):
-            distance = min(
-                mujoco.mj_geomDistance(model, data, a, b, 1.0, None)
-                for a in geoms[pair["link_a"]]
-                for b in geoms[pair["link_b"]]
-            )
-            counts[k] += distance <= 1e-6
-    return counts, has_ellipsoid
+            a, b = geoms[pair["link_a"]], geoms[pair["link_b"]]
+            counts[k] += least_distance(mujoco, model, data, a, b, 1.0) <= 1e-6
+    return counts, ellipsoid
 
 
 def matrix_report(path: Path, tmp_path: Path, samples: int) -> dict:
