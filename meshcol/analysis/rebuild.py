@@ -32,6 +32,7 @@ import numpy as np
 from meshcol.decomposition.options import DecomposeOptions, RunOptions
 from meshcol.errors import InvalidMeshError, MeshcolError
 from meshcol.io.robot import RobotOptions
+from meshcol.io.urdf_write import parse_xml
 from meshcol.types import Body
 
 __all__ = ["robot_colliders", "rebuild_hulls", "rebuild_decomposition", "rebuild_fits"]
@@ -74,9 +75,7 @@ def _element_names(path: str, kind: str) -> dict[tuple[str, int], str]:
     """URDF ``<collision name>`` per (link, element), for the report rows."""
     if kind != "urdf":
         return {}
-    from lxml import etree
-
-    root = etree.parse(path, etree.XMLParser(resolve_entities=False)).getroot()
+    root = parse_xml(path).getroot()  # as the reader read it
     return {
         (link.get("name"), i): c.get("name") or ""
         for link in root.findall("link")

@@ -155,15 +155,27 @@ class UrdfKinematics(Kinematics):
         free = [
             j for j in joints if j.type in ("revolute", "continuous", "prismatic") and not j.mimic
         ]
+        # a prismatic joint without a finite range is not sampled: it keeps its value
+        constant = {
+            j.name: float(loaded.get(j.name, 0.0))
+            for j in free
+            if j.type == "prismatic" and not all(map(math.isfinite, limits(j) or (math.inf,)))
+        }
+        free = [j for j in free if j.name not in constant]
         self.space = _urdf_joint_space(free, limits, given, source)
         self.loaded = np.asarray([float(loaded.get(j.name, 0.0)) for j in free], np.float64)
         self.held = tuple(
             f"joint {j.name!r} is {j.type}: kept at identity"
             for j in joints
             if j.type in ("floating", "planar")
+        ) + tuple(
+            f"joint {name!r} is a prismatic joint without limits: kept at {value:g}"
+            for name, value in constant.items()
         )
         column = {j.name: k for k, j in enumerate(free)}
-        self._steps = [_urdf_step(j, index, column, source) for j in _parents_first(joints, root)]
+        self._steps = [
+            _urdf_step(j, index, column, source, constant) for j in _parents_first(joints, root)
+        ]
         self.edges = np.array(
             [(index[j.parent], index[j.child]) for j in joints], dtype=np.int64
         ).reshape(-1, 2)
@@ -227,13 +239,7 @@ def _urdf_joint_space(
     for j in free:
         bounds = limits(j) if j.type != "continuous" else None
         if bounds is None or not all(math.isfinite(b) for b in bounds):
-            if j.type == "prismatic":
-                raise SceneError(
-                    f"joint {j.name!r}: prismatic joint without limits: its range cannot be "
-                    "sampled",
-                    source,
-                )
-            bounds = (-math.pi, math.pi)
+            bounds = (-math.pi, math.pi)  # prismatic joints without a range are held
         lower.append(bounds[0])
         upper.append(bounds[1])
         default.append(float(given[j.name]) if j.name in given else default_joint_value(*bounds))
@@ -262,10 +268,12 @@ def _parents_first(joints: Sequence[Any], root: str) -> list[Any]:
     return ordered
 
 
-def _urdf_step(j: Any, index: dict[str, int], column: dict[str, int], source: str) -> _Step:
+def _urdf_step(
+    j: Any, index: dict[str, int], column: dict[str, int], source: str, constant: dict[str, float]
+) -> _Step:
     """What :meth:`UrdfKinematics.link_poses` does for joint ``j`` (floating and planar
     joints held fixed; the axis made a unit vector; a mimic joint reads its leader's
-    column)."""
+    column; a held joint, or the mimic of one, its ``constant`` value)."""
     origin = np.eye(4) if j.origin is None else np.asarray(j.origin, dtype=np.float64)
     axis = np.array([1.0, 0.0, 0.0]) if j.axis is None else np.asarray(j.axis, float)
     kind = "fixed" if j.type in ("fixed", "floating", "planar") else j.type
@@ -274,11 +282,12 @@ def _urdf_step(j: Any, index: dict[str, int], column: dict[str, int], source: st
         if not math.isfinite(norm) or norm == 0.0:
             raise SceneError(f"joint {j.name!r}: axis must be a finite non-zero vector", source)
         axis = axis / norm
-    col, multiplier, offset = column.get(j.name, -1), 1.0, 0.0
+    col, multiplier, offset = column.get(j.name, -1), 1.0, constant.get(j.name, 0.0)
     if j.mimic is not None and kind != "fixed":
         col = column.get(j.mimic.joint, -1)
         multiplier = 1.0 if j.mimic.multiplier is None else float(j.mimic.multiplier)
         offset = 0.0 if j.mimic.offset is None else float(j.mimic.offset)
+        offset += multiplier * constant.get(j.mimic.joint, 0.0)
     return (index[j.parent], index[j.child], origin, kind, axis, col, multiplier, offset)
 
 

@@ -1,7 +1,8 @@
 """URDF read as a scene: one body per link, posed by forward kinematics of the joint tree.
 
 The file is parsed strictly first (``lxml``: malformed XML is an error, never silently
-repaired), then by ``yourdfpy`` for the model. Forward kinematics is computed here from the
+repaired; what pybullet reads past is read so with a warning, :mod:`meshcol.io.urdf_lenient`),
+then by ``yourdfpy`` for the model. Forward kinematics is computed here from the
 joints (origin, axis, type, mimic; :class:`meshcol.io.kinematics.UrdfKinematics`), and joint
 values are checked against the limits. URDF has no capsule, but many tools write
 ``<capsule radius length>``: it is read as one. Mesh references are resolved by
@@ -38,6 +39,7 @@ from meshcol.io.links import (
 )
 from meshcol.io.packages import PackageResolver
 from meshcol.io.paths import confine
+from meshcol.io.urdf_lenient import read_description_xml
 from meshcol.io.xacro_leftovers import resolve_xacro_leftovers
 from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere
 
@@ -73,10 +75,10 @@ def read_urdf(
         link name, and the kinematics of the joint tree.
     """
     yourdfpy, etree = _urdf_modules(source)
-    root = _parse_strictly(etree, source)
+    warnings: list[str] = []
+    root = _parse_strictly(source, warnings)
     if options.keyframe:
         raise SceneError("--keyframe: a URDF has no keyframes (MJCF only)", source)
-    warnings: list[str] = []
     resolve_xacro_leftovers(root, source, warnings)
     if root.find("link") is None:  # before yourdfpy, whose words would be "invalid URDF: 'name'"
         raise SceneError("the robot has no <link> element", source)
@@ -140,17 +142,10 @@ def _urdf_modules(source: str) -> tuple[Any, Any]:
     return yourdfpy, etree
 
 
-def _parse_strictly(etree: Any, source: str) -> Any:
-    """The root element of a well-formed file whose root is ``<robot>``."""
-    from meshcol.io.safe_read import read_input
-
-    data = read_input(source, "robot")  # the guarded read: never a pipe or a device, capped
-    try:
-        root = etree.fromstring(
-            data, etree.XMLParser(remove_blank_text=True, resolve_entities=False)
-        )
-    except etree.XMLSyntaxError as exc:
-        raise SceneError(f"malformed XML: {one_line(str(exc))}", source) from None
+def _parse_strictly(source: str, warnings: list[str]) -> Any:
+    """The root element of a well-formed file whose root is ``<robot>`` (read as pybullet
+    reads what it reads past, with warnings: :func:`read_description_xml`)."""
+    root = read_description_xml(source, warnings, keep_blank_text=False)
     if root.tag != "robot":
         raise SceneError(f"not a URDF: the root element is <{root.tag}>, not <robot>", source)
     return root

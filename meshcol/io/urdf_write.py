@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from meshcol.errors import MissingDependencyError, SceneError
+from meshcol.io.urdf_lenient import read_description_xml
 from meshcol.types import Box, Capsule, Cylinder, Sphere
 
 if TYPE_CHECKING:
@@ -26,20 +27,15 @@ __all__ = ["format_numbers", "missing_visuals", "parse_xml", "urdf_text"]
 
 
 def parse_xml(source: str) -> Any:
-    """The description's XML tree (lxml), or one line saying why it cannot be read."""
+    """The description's XML tree (lxml), read as the reader reads it (what pybullet reads
+    past repaired: the reader has warned of it), or one line saying why it cannot be read."""
     try:
         from lxml import etree
     except ImportError:
         raise MissingDependencyError(
             "writing URDF needs lxml (pip install 'meshcol[robots]')", source
         ) from None
-    from meshcol.io.safe_read import read_input
-
-    data = read_input(source, "robot")  # the guarded read: never a pipe or a device, capped
-    try:
-        return etree.ElementTree(etree.fromstring(data, etree.XMLParser(resolve_entities=False)))
-    except etree.XMLSyntaxError as exc:
-        raise SceneError(f"cannot read the XML: {' '.join(str(exc).split())}", source) from None
+    return etree.ElementTree(read_description_xml(source, []))
 
 
 def urdf_text(
