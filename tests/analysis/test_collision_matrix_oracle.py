@@ -13,13 +13,13 @@ and dm_control's humanoids, manipulator and cheetah: every count equal (session 
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
 from mujoco_oracle import collision_geoms, has_ellipsoid, least_distance, matrix_qpos
+from wild_collections import collection_file
 
 from meshcol.cli import main
 
@@ -81,16 +81,6 @@ def test_our_model_collides_as_mujoco_says_on_the_same_samples(tmp_path):
     assert compare(PARTS, tmp_path, 200) >= 50
 
 
-def collection_model(package: str, *parts: str) -> Path:
-    spec = importlib.util.find_spec(package)
-    if spec is None or not spec.submodule_search_locations:
-        pytest.skip(f"{package} is not installed (pip install 'meshcol[robots-wild]')")
-    path = Path(next(iter(spec.submodule_search_locations)), *parts)
-    if not path.is_file():
-        pytest.skip(f"{package} has no {'/'.join(parts)}")
-    return path
-
-
 MENAGERIE = ("mujoco", "playground", "assets", "mujoco_menagerie")
 
 
@@ -104,4 +94,4 @@ MENAGERIE = ("mujoco", "playground", "assets", "mujoco_menagerie")
     ],
 )
 def test_collection_robots_collide_as_mujoco_says(tmp_path, package, parts, collisions):
-    assert compare(collection_model(package, *parts), tmp_path, 60) >= collisions
+    assert compare(collection_file(package, *parts), tmp_path, 60) >= collisions

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from wild_collections import collection_file
 
 from meshcol.cli import main
 from meshcol.io.robot import RobotOptions, load_robot
@@ -550,26 +551,6 @@ def test_an_unranged_slide_joint_is_held_not_refused(tmp_path):
 
 
 # --- a few robots of the real collections (benchmarks/bench_robots_wild.py runs them all) -----
-
-
-def collection_file(package: str, *parts: str) -> Path:
-    """A file of an installed collection; the test skips when the package is missing."""
-    import importlib.util
-    import site
-
-    if package == "example-robot-data":
-        for base in site.getsitepackages():
-            path = Path(base, "cmeel.prefix", "share", "example-robot-data", "robots", *parts)
-            if path.is_file():
-                return path
-        pytest.skip("example-robot-data is not installed (pip install 'meshcol[robots-wild]')")
-    spec = importlib.util.find_spec(package)
-    if spec is None or not spec.submodule_search_locations:
-        pytest.skip(f"{package} is not installed (pip install 'meshcol[robots-wild]')")
-    path = Path(next(iter(spec.submodule_search_locations)), *parts)
-    if not path.is_file():
-        pytest.skip(f"{package} has no {'/'.join(parts)}")
-    return path
 
 
 @pytest.mark.slow
