@@ -11,9 +11,9 @@ limits that exclude zero):
   MuJoCo's mesh distances can stop early on large meshes, and its penetration depths are its
   contact solver's, not the translation that separates the pair: penetrating pairs are compared
   by sign only.
-- URDF: yourdfpy's forward kinematics, trimesh's reading of each mesh (its URDF scale; one
-  hull per object of an OBJ file, as meshcol makes a part of each) and coal (its hull of each,
-  GJK at a 1e-12 tolerance; its own primitives).
+- URDF: yourdfpy's forward kinematics, trimesh's reading of each mesh (its URDF scale; an OBJ
+  file's ``o`` and ``g`` blocks read here, one hull each, as pybullet and meshcol take them)
+  and coal (its hull of each, GJK at a 1e-12 tolerance; its own primitives).
 
 Columns: the pairs compared, the separated ones' largest difference (m), the pairs whose sign
 differs, and the pairs left out (MJCF ellipsoids, which meshcol tessellates; pairs the oracle
@@ -140,17 +140,52 @@ def _coal_shapes(coal, trimesh, model, geometry, world: np.ndarray):
     if geometry.mesh is None:
         return []
     file = model._filename_handler(geometry.mesh.filename)
-    scene = trimesh.load(file, force="scene", split_object=True, group_material=False)
+    if str(file).lower().endswith(".obj"):
+        pieces = _obj_pieces(Path(file))
+    else:
+        pieces = [np.asarray(m.vertices) for m in trimesh.load(file, force="scene").dump()]
     given = 1.0 if geometry.mesh.scale is None else geometry.mesh.scale
     scale = np.broadcast_to(np.asarray(given, dtype=np.float64), (3,))
     out = []
-    for mesh in scene.dump():
-        points = (np.asarray(mesh.vertices, dtype=np.float64) * scale) @ world[:3, :3].T
+    for vertices in pieces:
+        points = (np.asarray(vertices, dtype=np.float64) * scale) @ world[:3, :3].T
+        points = _thickened(points + world[:3, 3])
         vec = coal.StdVec_Vec3s()
-        for point in points + world[:3, 3]:
+        for point in points:
             vec.append(point)
         out.append((coal.ConvexBase.convexHull(vec, False, ""), coal.Transform3s()))
     return out
+
+
+def _thickened(points: np.ndarray) -> np.ndarray:
+    """A flat point set moved 1e-7 of its size to each side of its plane (coal cannot hull a
+    flat set; meshcol's part is its convex polygon, the distances then agree to that)."""
+    centred = points - points.mean(axis=0)
+    _, sizes, axes = np.linalg.svd(centred, full_matrices=False)
+    if len(points) >= 4 and sizes[-1] > 1e-9 * max(sizes[0], 1e-300):
+        return points
+    shift = axes[-1] * 1e-7 * max(float(np.ptp(points, axis=0).max()), 1e-300)
+    return np.concatenate([points + shift, points - shift])
+
+
+def _obj_pieces(path: Path) -> list[np.ndarray]:
+    """The vertices each ``o`` or ``g`` block of an OBJ file's faces uses: the pieces pybullet
+    hulls one by one (a VHACD file's convex parts) and meshcol makes parts of. trimesh
+    groups them otherwise (by material; laikago's 48 ``o`` blocks as one)."""
+    vertices: list[list[float]] = []
+    pieces: list[set[int]] = [set()]
+    for line in path.read_text(errors="replace").splitlines():
+        head, _, rest = line.strip().partition(" ")
+        if head == "v":
+            vertices.append([float(x) for x in rest.split()[:3]])
+        elif head in ("o", "g") and pieces[-1]:
+            pieces.append(set())
+        elif head == "f":
+            for corner in rest.split():
+                index = int(corner.split("/")[0])
+                pieces[-1].add(index - 1 if index > 0 else len(vertices) + index)
+    points = np.asarray(vertices, dtype=np.float64)
+    return [points[sorted(piece)] for piece in pieces if piece]
 
 
 def robot_row(collection: str, robot: Path) -> dict:

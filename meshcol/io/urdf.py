@@ -40,7 +40,6 @@ from meshcol.io.links import (
 from meshcol.io.packages import PackageResolver
 from meshcol.io.paths import confine
 from meshcol.io.urdf_lenient import read_description_xml
-from meshcol.io.xacro_leftovers import resolve_xacro_leftovers
 from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere
 
 if TYPE_CHECKING:
@@ -76,10 +75,9 @@ def read_urdf(
     """
     yourdfpy, etree = _urdf_modules(source)
     warnings: list[str] = []
-    root = _parse_strictly(source, warnings)
+    root = _parse_strictly(source, warnings)  # xacro leftovers resolved, as pybullet reads
     if options.keyframe:
         raise SceneError("--keyframe: a URDF has no keyframes (MJCF only)", source)
-    resolve_xacro_leftovers(root, source, warnings)
     if root.find("link") is None:  # before yourdfpy, whose words would be "invalid URDF: 'name'"
         raise SceneError("the robot has no <link> element", source)
     if not root.get("name"):  # required by the format; pybullet does without it

@@ -65,9 +65,10 @@ _DECLARATION = re.compile(rb"^<\?xml\s+version\s*=\s*([\"'])(?P<version>[^\"']*)
 
 def read_description_xml(source: str, warnings: list[str], *, keep_blank_text: bool = True) -> Any:
     """The root element (lxml) of a robot description, by the guarded read. A URDF (a
-    ``<robot>`` root) is read as pybullet reads it where a strict parse refuses it or its
-    values (:func:`lenient_text`, :func:`relax_tree`), with warnings; the one reading of the
-    reader and of the writers that rewrite the file.
+    ``<robot>`` root) has its xacro leftovers resolved (:mod:`meshcol.io.xacro_leftovers`) and
+    is read as pybullet reads it where a strict parse refuses it or its values
+    (:func:`lenient_text`, :func:`relax_tree`), with warnings; the one reading of the reader
+    and of the writers that rewrite the file, which so write what the reader read.
 
     Raises
     ------
@@ -91,6 +92,9 @@ def read_description_xml(source: str, warnings: list[str], *, keep_blank_text: b
         if root is None:
             raise SceneError(f"malformed XML: {' '.join(str(exc).split())}", source) from None
     if root.tag == "robot":
+        from meshcol.io.xacro_leftovers import resolve_xacro_leftovers
+
+        resolve_xacro_leftovers(root, source, warnings)
         relax_tree(root, warnings)
     return root
 

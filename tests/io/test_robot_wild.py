@@ -166,6 +166,23 @@ def test_xacro_leftovers_warn_and_read_as_xacro_or_the_urdf_default(tmp_path, mo
     assert code == 0 and "xacro leftover" in err
 
 
+def test_rebuilt_urdf_and_mjcf_of_xacro_leftovers_are_what_was_read(tmp_path, monkeypatch):
+    """``hull --to urdf|mjcf`` rewrites the file as the reader read it (pybullet_data's husky
+    kept its ``$(optenv ...)`` in the rebuilt URDF, which yourdfpy and MuJoCo refused)."""
+    monkeypatch.delenv("ARM_X", raising=False)
+    robot = write(tmp_path, "r.urdf", urdf(XACRO_BODY))
+    for target in ("urdf", "mjcf"):
+        code, _, err = run("hull", str(robot), "--out-dir", str(tmp_path / target), "--to", target)
+        assert code == 0, err
+    text = (tmp_path / "urdf" / "r.urdf").read_text()
+    assert "$(" not in text and "${" not in text
+    yourdfpy = pytest.importorskip("yourdfpy")
+    model = yourdfpy.URDF.load(str(tmp_path / "urdf" / "r.urdf"), load_meshes=False)
+    assert model.joint_map["j"].origin[:3, 3] == pytest.approx([1.0, 0.0, 0.0])
+    mujoco = pytest.importorskip("mujoco")
+    mujoco.MjModel.from_xml_path(str(tmp_path / "mjcf" / "r.xml"))
+
+
 def test_xacro_leftover_without_a_default_names_the_attribute(tmp_path):
     body = XACRO_BODY.replace('<sphere radius="0.1"/>', '<sphere radius="${r}"/>')
     robot = write(tmp_path, "r.urdf", urdf(body))
