@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from strategies import pose_matrix, rotation_from_quaternion
 
 from meshcol import (
     Box,
@@ -47,23 +48,11 @@ KINDS = ("sphere", "box", "capsule", "cylinder", "polytope", "ellipsoid")
 
 
 def rotation(rng: np.random.Generator) -> np.ndarray:
-    q = rng.normal(size=4)
-    w, x, y, z = q / np.linalg.norm(q)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
+    return rotation_from_quaternion(rng.normal(size=4))
 
 
 def pose(turn: np.ndarray | None = None, at=(0.0, 0.0, 0.0)) -> np.ndarray:
-    m = np.eye(4)
-    if turn is not None:
-        m[:3, :3] = turn
-    m[:3, 3] = at
-    return m
+    return pose_matrix(np.eye(3) if turn is None else turn, at)
 
 
 def random_shape(rng: np.random.Generator, kind: str):
@@ -201,7 +190,7 @@ def test_world_box_is_exact(axes, quaternion, at):
     q = np.asarray(quaternion)
     if np.linalg.norm(q) < 1e-3:
         q = np.array([1.0, 0.0, 0.0, 0.0])
-    turn = _quaternion_matrix(q)
+    turn = rotation_from_quaternion(q)
     world = pose(turn, at)
     shapes = ConvexSet.from_shapes([Ellipsoid(axes)])
     low, high = shapes.aabbs(world[None])
@@ -213,17 +202,6 @@ def test_world_box_is_exact(axes, quaternion, at):
         assert high[0][k] == pytest.approx(support(Ellipsoid(axes), world, e), abs=1e-12)
 
 
-def _quaternion_matrix(q: np.ndarray) -> np.ndarray:
-    w, x, y, z = q / np.linalg.norm(q)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
-
-
 # --- known answers ----------------------------------------------------------------------------
 
 
@@ -232,7 +210,7 @@ def test_distance_to_a_box_face_is_the_reach_along_its_normal(phi):
     """Turned by phi about z, the ellipsoid reaches sqrt((a cos)^2 + (b sin)^2) along x."""
     a, b = 0.5, 2.0
     e, box = Ellipsoid((a, b, 1.25)), Box((2.0, 10.0, 10.0))
-    turn = _quaternion_matrix(np.array([math.cos(phi / 2), 0.0, 0.0, math.sin(phi / 2)]))
+    turn = rotation_from_quaternion(np.array([math.cos(phi / 2), 0.0, 0.0, math.sin(phi / 2)]))
     reach = math.hypot(a * math.cos(phi), b * math.sin(phi))
     r = distance(e, box, pose(turn), pose(None, (4.0, 0.1, -0.2)))
     assert r.status == Status.CONVERGED
@@ -419,7 +397,7 @@ def test_time_of_impact_of_a_turning_ellipsoid_is_where_dense_sampling_finds_con
         a=Ellipsoid((2.0, 0.15, 0.2)),
         b=Box((0.5, 0.5, 0.5)),
         start_pose_a=pose(None, (0.0, -0.6, 0.0)),
-        end_pose_a=pose(_quaternion_matrix(np.array([1.0, 0.0, 0.0, 1.0])), (0.3, -0.6, 0.0)),
+        end_pose_a=pose(rotation_from_quaternion(np.array([1.0, 0.0, 0.0, 1.0])), (0.3, -0.6, 0.0)),
         start_pose_b=pose(None, (1.4, 0.9, 0.0)),
         end_pose_b=pose(None, (1.4, 0.9, 0.0)),
     )
