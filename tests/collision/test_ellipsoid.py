@@ -281,6 +281,18 @@ def test_flat_and_degenerate_ellipsoids():
     )
 
 
+@pytest.mark.parametrize("scale", [1e-300, 1e-150, 1e150, 1e300])
+def test_huge_and_tiny_ellipsoids_answer_as_the_unit_sized_pair(scale):
+    """The core rescales a pair by a power of two; the semi-axes are lengths like the rest."""
+    e, s = Ellipsoid((1.0, 2.0, 0.5)), Sphere(0.25)
+    big_e, big_s = Ellipsoid((scale, 2.0 * scale, 0.5 * scale)), Sphere(0.25 * scale)
+    for at, rel in [((3.0, 0.5, 0.2), 1e-12), ((1.0, 0.5, 0.2), 2e-7)]:  # apart, overlapping
+        unit = signed_distance(e, s, None, pose(None, at))
+        scaled = signed_distance(big_e, big_s, None, pose(None, np.asarray(at) * scale))
+        assert scaled.status == Status.CONVERGED
+        assert scaled.signed_distance / scale == pytest.approx(unit.signed_distance, rel=rel)
+
+
 # --- certificates -----------------------------------------------------------------------------
 
 
