@@ -30,6 +30,7 @@ _LAZY: dict[str, str] = {
     "Box": "meshcol.types",
     "Capsule": "meshcol.types",
     "Cylinder": "meshcol.types",
+    "Ellipsoid": "meshcol.types",
     "Primitive": "meshcol.types",
     "Scene": "meshcol.types",
     "Sphere": "meshcol.types",

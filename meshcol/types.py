@@ -24,6 +24,7 @@ __all__ = [
     "Box",
     "Capsule",
     "Cylinder",
+    "Ellipsoid",
     "PartPrimitive",
     "Primitive",
     "Scene",
@@ -147,8 +148,29 @@ class Cylinder:
         object.__setattr__(self, "length", _check_length("length", self.length))
 
 
+@dataclass(frozen=True)
+class Ellipsoid:
+    """Solid ellipsoid centred on its local origin, axes along the local axes (MJCF's
+    ``type="ellipsoid"``).
+
+    Attributes
+    ----------
+    semi_axes : (3,) float
+        Semi-axes (HALF lengths) along local x, y, z. A zero semi-axis makes a flat ellipse,
+        still a convex set, queried exactly.
+    """
+
+    semi_axes: tuple[float, float, float]
+
+    def __post_init__(self) -> None:
+        axes = np.asarray(self.semi_axes, dtype=np.float64)
+        if axes.shape != (3,):
+            raise ValueError(f"semi_axes must be (3,), got {axes.shape}")
+        object.__setattr__(self, "semi_axes", tuple(_check_length("semi_axes", a) for a in axes))
+
+
 #: An analytic shape, used exactly by every query (a manifest's ``primitive`` becomes one).
-Primitive = Sphere | Box | Capsule | Cylinder
+Primitive = Sphere | Box | Capsule | Cylinder | Ellipsoid
 
 
 _SPHERE_SUBDIVISIONS = 3  # icosphere: 642 vertices
@@ -159,9 +181,10 @@ def primitive_mesh(primitive: Primitive) -> tuple[np.ndarray, np.ndarray]:
     """Vertices (n, 3) float64 and faces (m, 3) int64 of a primitive, centred, axis along z:
     made once per distinct primitive (the last 1,024 kept), the caller's own copies.
 
-    Sphere: an icosphere of 642 vertices; capsule and cylinder: 32 sections around the axis;
-    box: 8 vertices. The vertices lie on the surface (the polytope is inscribed). Queries never
-    need it (they use the primitive exactly): it is for what draws or exports triangles."""
+    Sphere: an icosphere of 642 vertices; ellipsoid: the unit sphere's icosphere scaled by the
+    semi-axes; capsule and cylinder: 32 sections around the axis; box: 8 vertices. The
+    vertices lie on the surface (the polytope is inscribed). Queries never need it (they use
+    the primitive exactly): it is for what draws or exports triangles."""
     vertices, faces = _tessellation(primitive)
     return vertices.copy(), faces.copy()
 
@@ -171,6 +194,13 @@ def _tessellation(primitive: Primitive) -> tuple[np.ndarray, np.ndarray]:
     """:func:`primitive_mesh`, cached, read-only."""
     import trimesh
 
+    if isinstance(primitive, Ellipsoid):
+        # The unit sphere's vertices times the semi-axes, its faces (what the MJCF reader
+        # made of an ellipsoid geom before ellipsoids were exact).
+        unit, faces = _tessellation(Sphere(1.0))
+        vertices = unit * np.asarray(primitive.semi_axes, dtype=np.float64)
+        vertices.flags.writeable = False
+        return vertices, faces
     if isinstance(primitive, Box):
         mesh = trimesh.creation.box(extents=np.asarray(primitive.size, dtype=np.float64))
     elif isinstance(primitive, Sphere):
@@ -204,6 +234,8 @@ def primitive_reach(primitive: Primitive) -> float:
         reach = 0.5 * math.hypot(*primitive.size)
     elif isinstance(primitive, Capsule):
         reach = primitive.radius + 0.5 * primitive.length
+    elif isinstance(primitive, Ellipsoid):
+        reach = max(primitive.semi_axes)
     else:
         reach = math.hypot(primitive.radius, 0.5 * primitive.length)
     return reach * (1.0 + 1e-12)
@@ -213,7 +245,13 @@ def primitive_reach(primitive: Primitive) -> float:
 #: its type (trimesh merges the vertices of tinier or more elongated ones), and those counts;
 #: ``tests/test_primitive_bodies.py`` checks both against the tessellation.
 REGULAR_LENGTHS = (1e-2, 1e5)
-REGULAR_VERTEX_COUNTS: dict[type, int] = {Sphere: 642, Box: 8, Capsule: 1026, Cylinder: 66}
+REGULAR_VERTEX_COUNTS: dict[type, int] = {
+    Sphere: 642,
+    Box: 8,
+    Capsule: 1026,
+    Cylinder: 66,
+    Ellipsoid: 642,
+}
 
 
 def primitive_vertex_count(primitive: Primitive) -> int:
@@ -225,6 +263,8 @@ def primitive_vertex_count(primitive: Primitive) -> int:
     elif isinstance(primitive, Box):
         x, y, z = primitive.size
         regular = low <= x <= high and low <= y <= high and low <= z <= high
+    elif isinstance(primitive, Ellipsoid):
+        return REGULAR_VERTEX_COUNTS[Ellipsoid]  # the unit sphere's, scaled: never merged
     else:
         regular = low <= primitive.radius <= high and low <= primitive.length <= high
     if regular:

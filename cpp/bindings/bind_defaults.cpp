@@ -48,5 +48,6 @@ void bind_defaults(nb::module_& m) {
         .value("SPHERE", K::SPHERE)
         .value("BOX", K::BOX)
         .value("CAPSULE", K::CAPSULE)
-        .value("CYLINDER", K::CYLINDER);
+        .value("CYLINDER", K::CYLINDER)
+        .value("ELLIPSOID", K::ELLIPSOID);
 }

@@ -1,8 +1,9 @@
 #pragma once
-// Two shapes (meshcol.types Sphere, Box, Capsule, Cylinder, or (n, 3) float64 points whose
-// hull is taken) as the two-shape set ConvexSet.from_shapes packs for a single-pair query,
-// read from the Python objects and packed without a Python array: the single-pair calls
-// (distance, time_of_impact, ...) then cost about their query (and the hulls they build).
+// Two shapes (meshcol.types Sphere, Box, Capsule, Cylinder, Ellipsoid, or (n, 3) float64
+// points whose hull is taken) as the two-shape set ConvexSet.from_shapes packs for a
+// single-pair query, read from the Python objects and packed without a Python array: the
+// single-pair calls (distance, time_of_impact, ...) then cost about their query (and the
+// hulls they build).
 // Bindings only: no nanobind code outside cpp/bindings/.
 #include <nanobind/nanobind.h>
 
@@ -27,7 +28,7 @@ namespace meshcol::bindings {
 /// and the view the core reads.
 class ShapePair {
   public:
-    /// Reads shape `k` (0, then 1) of ShapeKind `kind`: a primitive (1..4) as
+    /// Reads shape `k` (0, then 1) of ShapeKind `kind`: a primitive (1..5) as
     /// `meshcol.collision.shapes._primitive` reads it (a box's half sizes, a capsule's and a
     /// cylinder's half length), or (0) an (n, 3) float64 C-contiguous array of points
     /// (copied). False when a field or the array is in another form (the caller declines and
@@ -39,27 +40,19 @@ class ShapePair {
         static PyObject* const radius = interned("radius");
         static PyObject* const length = interned("length");
         static PyObject* const size = interned("size");
+        static PyObject* const semi_axes = interned("semi_axes");
         switch (static_cast<ShapeKind>(kind)) {
             case ShapeKind::POLYTOPE: return read_points(shape);
             case ShapeKind::SPHERE: return float_attr(shape, radius, &p[0]);
-            case ShapeKind::BOX: {
-                nb::object sides = nb::steal(PyObject_GetAttr(shape, size));
-                if (!sides.is_valid()) throw nb::python_error();
-                if (!PyTuple_CheckExact(sides.ptr()) || PyTuple_Size(sides.ptr()) != 3) return false;
-                for (Py_ssize_t c = 0; c < 3; ++c) {
-                    PyObject* side = PyTuple_GetItem(sides.ptr(), c);
-                    if (!PyFloat_CheckExact(side)) return false;
-                    p[c] = PyFloat_AsDouble(side) / 2.0;
-                }
-                return true;
-            }
+            case ShapeKind::BOX: return float_triple(shape, size, 0.5, p);
+            case ShapeKind::ELLIPSOID: return float_triple(shape, semi_axes, 1.0, p);
             case ShapeKind::CAPSULE:
             case ShapeKind::CYLINDER:
                 if (!float_attr(shape, radius, &p[0]) || !float_attr(shape, length, &p[1])) return false;
                 p[1] /= 2.0;
                 return true;
             default:
-                throw std::invalid_argument("kind must be a shape kind (0..4), got " +
+                throw std::invalid_argument("kind must be a shape kind (0..5), got " +
                                             std::to_string(kind));
         }
     }
@@ -133,6 +126,21 @@ class ShapePair {
         if (!v.is_valid()) throw nb::python_error();
         if (!PyFloat_CheckExact(v.ptr())) return false;
         *value = PyFloat_AsDouble(v.ptr());
+        return true;
+    }
+
+    /// Reads a tuple of three floats (a box's sides, an ellipsoid's semi-axes) into
+    /// `value[0..2]`, each times `factor` (a power of two: exact). False when the field is in
+    /// another form.
+    static bool float_triple(PyObject* shape, PyObject* name, double factor, double* value) {
+        nb::object items = nb::steal(PyObject_GetAttr(shape, name));
+        if (!items.is_valid()) throw nb::python_error();
+        if (!PyTuple_CheckExact(items.ptr()) || PyTuple_Size(items.ptr()) != 3) return false;
+        for (Py_ssize_t c = 0; c < 3; ++c) {
+            PyObject* item = PyTuple_GetItem(items.ptr(), c);
+            if (!PyFloat_CheckExact(item)) return false;
+            value[c] = PyFloat_AsDouble(item) * factor;
+        }
         return true;
     }
 

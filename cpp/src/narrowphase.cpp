@@ -264,7 +264,10 @@ PairResult query_in_range(const ShapeView& a, const Pose& pose_a, const ShapeVie
     MinkowskiDifference core(a, pose_a, b, pose_b, false, radius_a, radius_b);
     const double touch = defaults::contact_tolerance * core.scale;
     EpaOptions eopt;
-    if (a.kind == ShapeKind::CYLINDER || b.kind == ShapeKind::CYLINDER)
+    const auto curved = [](const ShapeView& s) {
+        return s.kind == ShapeKind::CYLINDER || s.kind == ShapeKind::ELLIPSOID;
+    };
+    if (curved(a) || curved(b))
         eopt.relative_tolerance = defaults::epa_curved_relative_tolerance;
     // Two polytopes whose supports along and around the centre line lie well past the origin
     // overlap deeply, as a rule: EPA then starts from those supports and GJK is not run. The
@@ -334,7 +337,8 @@ PairResult query_in_range(const ShapeView& a, const Pose& pose_a, const ShapeVie
 
     // EPA on the cores: for swept shapes the depth of (core_a + ball) - (core_b + ball) is the
     // core depth plus both radii (the support function gains the radii in every direction),
-    // so spheres and capsules stay exact and EPA only meets curved surfaces on cylinders.
+    // so spheres and capsules stay exact and EPA only meets curved surfaces on cylinders and
+    // ellipsoids.
     const EpaResult e = epa_penetration(core, g.simplex, eopt);
     return penetration_result(r, e, a, pose_a, b, pose_b, touch);
 }

@@ -42,6 +42,31 @@ SupportPoint polytope_support(const ShapeView& s, const Vec3& d, int hint) {
     return {v[best], best};
 }
 
+// Support point of the ellipsoid sum_i (x_i / a_i)^2 <= 1 in direction d: the image under
+// x = A u (A = diag(a)) of the unit ball's support along A d, x_i = a_i^2 d_i / |A d| (the
+// point whose normal, x_i / a_i^2, is parallel to d). Each coordinate is formed as
+// a_i (a_i d_i / |A d|), a semi-axis times a number in [-1, 1], so it cannot overflow; when
+// |A d|^2 leaves the range where squares are safe, d and then A d are scaled by their
+// largest component first (the point does not depend on the length of d). A zero A d (a zero
+// direction, or one along a zero semi-axis, where every point of the set is a support)
+// gives the centre.
+Vec3 ellipsoid_support(const double* a, const Vec3& d) {
+    Vec3 u{a[0] * d.x, a[1] * d.y, a[2] * d.z};
+    double n2 = squared_norm(u);
+    if (!(n2 >= 0x1p-1000 && n2 <= 0x1p1000)) {
+        const double largest = max_abs(d);
+        if (!(largest > 0.0) || !std::isfinite(largest)) return Vec3{};
+        const Vec3 e = d * (1.0 / largest);  // the largest component +-1
+        u = Vec3{a[0] * e.x, a[1] * e.y, a[2] * e.z};
+        const double most = max_abs(u);
+        if (!(most > 0.0)) return Vec3{};
+        u = u * (1.0 / most);  // the largest component +-1: |u|^2 in [1, 3]
+        n2 = squared_norm(u);
+    }
+    const double inverse = 1.0 / std::sqrt(n2);
+    return {a[0] * (u.x * inverse), a[1] * (u.y * inverse), a[2] * (u.z * inverse)};
+}
+
 // make_climb_lists' records of one width (`Record` a ClimbRecord), made in place in `out`'s
 // rows; false when an index is not one of the shape's vertices.
 template <class Record>
@@ -111,6 +136,8 @@ SupportPoint support_core(const ShapeView& s, const Vec3& d, int hint) {
             if (planar <= 1e-300) return {Vec3{0.0, 0.0, z}, -1};
             return {Vec3{r * d.x / planar, r * d.y / planar, z}, -1};
         }
+        case ShapeKind::ELLIPSOID:
+            return {ellipsoid_support(s.params, d), -1};
     }
     return {Vec3{}, -1};
 }
@@ -219,6 +246,9 @@ void local_aabb(const ShapeView& s, Vec3& lo, Vec3& hi) {
         case ShapeKind::CYLINDER:
             hi = {s.params[0], s.params[0], s.params[1]};
             break;
+        case ShapeKind::ELLIPSOID:
+            hi = {s.params[0], s.params[1], s.params[2]};
+            break;
     }
     lo = -hi;
 }
@@ -230,6 +260,18 @@ void world_aabb(const ShapeView& s, const Pose& pose, Vec3& lo, Vec3& hi) {
             const Vec3 p = pose.apply(s.vertices[i]);
             lo = component_min(lo, p);
             hi = component_max(hi, p);
+        }
+        return;
+    }
+    if (s.kind == ShapeKind::ELLIPSOID) {
+        // The ellipsoid R A B + t (B the unit ball) reaches |A R^T e_k| along world axis k:
+        // sqrt(sum_j (R_kj a_j)^2), formed without overflow.
+        for (int k = 0; k < 3; ++k) {
+            const Vec3 row = pose.rotation.row(k);
+            const double half =
+                safe_norm(Vec3{row.x * s.params[0], row.y * s.params[1], row.z * s.params[2]});
+            hi[k] = pose.translation[k] + half;
+            lo[k] = pose.translation[k] - half;
         }
         return;
     }
@@ -260,6 +302,8 @@ double bounding_radius(const ShapeView& s) {
             return s.params[0] + s.params[1];
         case ShapeKind::CYLINDER:
             return std::hypot(s.params[0], s.params[1]);
+        case ShapeKind::ELLIPSOID:
+            return std::fmax(s.params[0], std::fmax(s.params[1], s.params[2]));
     }
     return 0.0;
 }
@@ -276,6 +320,7 @@ bool is_valid(const ShapeView& s) {
         case ShapeKind::SPHERE:
             return s.params[0] >= 0.0;
         case ShapeKind::BOX:
+        case ShapeKind::ELLIPSOID:
             return s.params[0] >= 0.0 && s.params[1] >= 0.0 && s.params[2] >= 0.0;
         case ShapeKind::CAPSULE:
         case ShapeKind::CYLINDER:

@@ -132,6 +132,15 @@ double turning_radius(const ShapeView& s, const Motion& m) {
             // line is on a rim.
             return std::fmax(off_axis(Vec3{0, 0, s.params[1]}), off_axis(Vec3{0, 0, -s.params[1]})) +
                    s.params[0];
+        case ShapeKind::ELLIPSOID: {
+            // It lies in its box (+-a) and in the ball of radius max(a) about its centre:
+            // the lesser of the two bounds.
+            for (int i = 0; i < 8; ++i)
+                arm = std::fmax(arm, off_axis(Vec3{(i & 1 ? 1 : -1) * s.params[0],
+                                                   (i & 2 ? 1 : -1) * s.params[1],
+                                                   (i & 4 ? 1 : -1) * s.params[2]}));
+            return std::fmin(arm, off_axis(Vec3{}) + bounding_radius(s));
+        }
     }
     return bounding_radius(s) + m.pivot_offset;
 }

@@ -77,6 +77,15 @@ inline ShapeView capsule(double radius, double half_length) {
     return v;
 }
 
+inline ShapeView ellipsoid(double a, double b, double c) {
+    ShapeView v;
+    v.kind = ShapeKind::ELLIPSOID;
+    v.params[0] = a;
+    v.params[1] = b;
+    v.params[2] = c;
+    return v;
+}
+
 /// The eight corners of the box [-h, h]^3 (x fastest).
 inline std::vector<Vec3> cube_corners(double h) {
     std::vector<Vec3> corners;

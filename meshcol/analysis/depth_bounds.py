@@ -22,7 +22,7 @@ from meshcol.analysis.pairs import NO_ANSWER, PairTable, PlacedColliders
 
 __all__ = ["depth_bounds", "support", "supports"]
 
-_SPHERE, _BOX, _CAPSULE, _CYLINDER = 1, 2, 3, 4
+_SPHERE, _BOX, _CAPSULE, _CYLINDER, _ELLIPSOID = 1, 2, 3, 4, 5
 
 
 def depth_bounds(table: PairTable, placed: PlacedColliders, threads: int = 0) -> PairTable:
@@ -98,6 +98,7 @@ def _part_points(shapes: Any, part: int, pose: np.ndarray) -> np.ndarray:
             _BOX: tuple(shapes.params[part, :3]),
             _CAPSULE: (r, r, h + r),
             _CYLINDER: (r, r, h),
+            _ELLIPSOID: tuple(shapes.params[part, :3]),
         }[kind]
         signs = np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1], indexing="ij")).reshape(3, -1).T
         local = signs * np.asarray(half, dtype=np.float64)
@@ -137,9 +138,16 @@ def supports(
     along = np.abs(local[:, 2])
     box = np.matmul(np.abs(local)[:, None, :], p[:, :3, None])[:, 0, 0]
     radial = np.sqrt(np.maximum(length * length - along * along, 0.0))
+    stretched = local * p[:, :3]  # an ellipsoid's: |A R^T d|
+    ellipsoid = np.sqrt(np.matmul(stretched[:, None, :], stretched[:, :, None])[:, 0, 0])
     primitive = np.select(
-        [kind == _SPHERE, kind == _BOX, kind == _CAPSULE],
-        [base + p[:, 0] * length, base + box, base + p[:, 1] * along + p[:, 0] * length],
+        [kind == _SPHERE, kind == _BOX, kind == _CAPSULE, kind == _ELLIPSOID],
+        [
+            base + p[:, 0] * length,
+            base + box,
+            base + p[:, 1] * along + p[:, 0] * length,
+            base + ellipsoid,
+        ],
         base + p[:, 1] * along + p[:, 0] * radial,
     )
     out[:] = primitive

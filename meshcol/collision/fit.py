@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from meshcol.errors import InvalidMeshError
-from meshcol.types import Box, Capsule, Cylinder, Primitive, Sphere
+from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, Primitive, Sphere
 
 __all__ = [
     "BOX_NORMALS",
@@ -273,6 +273,9 @@ def primitive_volume(primitive: Primitive) -> float:
     if isinstance(primitive, Capsule):
         r = primitive.radius
         return math.pi * r * r * primitive.length + 4.0 / 3.0 * math.pi * r**3
+    if isinstance(primitive, Ellipsoid):  # a body's own primitive (fit never makes one)
+        a, b, c = primitive.semi_axes
+        return 4.0 / 3.0 * math.pi * a * b * c
     return math.pi * primitive.radius**2 * primitive.length
 
 
@@ -282,12 +285,22 @@ def signed_distances(primitive: Primitive, local_points: np.ndarray) -> np.ndarr
     Positive outside, <= 0 inside. Exact for the sphere, capsule and cylinder's radial part;
     for the box and the cylinder's caps, the largest excess over one face (a lower bound of
     the Euclidean distance outside, exact inside and on faces): zero exactly on the surface.
+    For an ellipsoid a lower bound outside, scaled by its smallest semi-axis.
     The core's growth evaluates the same expressions."""
     p = np.asarray(local_points, dtype=np.float64).reshape(-1, 3)
     if isinstance(primitive, Sphere):
         return np.linalg.norm(p, axis=1) - primitive.radius
     if isinstance(primitive, Box):
         return np.max(np.abs(p) - 0.5 * np.asarray(primitive.size), axis=1)
+    if isinstance(primitive, Ellipsoid):
+        # (|p / a| - 1) min(a): the point is on the boundary of the ellipsoid scaled by
+        # k = |p / a|, which lies (k - 1) min(a) or more outside it (a body's own primitive:
+        # fit never makes one; a flat one gives 0)
+        axes = np.asarray(primitive.semi_axes)
+        smallest = float(axes.min())
+        if smallest == 0.0:
+            return np.zeros(len(p))
+        return (np.linalg.norm(p / axes, axis=1) - 1.0) * smallest
     radial = np.hypot(p[:, 0], p[:, 1])
     half = 0.5 * primitive.length
     if isinstance(primitive, Capsule):

@@ -45,7 +45,7 @@ import numpy as np
 from meshcol._native import core
 from meshcol.collision.arrays import as_pairs, as_pose, as_poses
 from meshcol.collision.shapes import ConvexSet, ShapeKind, _item, as_convex_set
-from meshcol.types import Body, Box, Capsule, Cylinder, Sphere, Status
+from meshcol.types import Body, Box, Capsule, Cylinder, Ellipsoid, Sphere, Status
 
 __all__ = [
     "DistanceBatch",
@@ -300,6 +300,7 @@ PRIMITIVE_KINDS: dict[type, int] = {
     Box: int(ShapeKind.BOX),
     Capsule: int(ShapeKind.CAPSULE),
     Cylinder: int(ShapeKind.CYLINDER),
+    Ellipsoid: int(ShapeKind.ELLIPSOID),
 }
 # Status members by value, for the core to hand out (calling the enum costs more than a query).
 _STATUSES = tuple(Status(v) for v in range(len(Status)))
@@ -384,7 +385,7 @@ def distance(a: Any, b: Any, pose_a: Any = None, pose_b: Any = None) -> Distance
 
     Parameters
     ----------
-    a, b : Sphere, Box, Capsule, Cylinder, trimesh.Trimesh, Body or (n, 3) float
+    a, b : Sphere, Box, Capsule, Cylinder, Ellipsoid, trimesh.Trimesh, Body or (n, 3) float
         Shapes in their local frames (meshes and point sets by their convex hull).
     pose_a, pose_b : (4, 4) float or None
         Rigid world-from-local poses. None: a Body's own ``pose``, identity for the rest.

@@ -1,8 +1,9 @@
 """Convex shapes and the packed :class:`ConvexSet` the native narrow phase runs on.
 
 A shape is a primitive (:class:`Sphere`, :class:`Box`, :class:`Capsule`, :class:`Cylinder`,
-exact) or a polytope, the convex hull of points (:func:`meshcol.collision.hull.exact_hull`;
-:class:`ConvexSet` packs all its polytopes in one native call, :func:`~meshcol.collision.hull.pack_hulls`).
+:class:`Ellipsoid`, exact) or a polytope, the convex hull of points
+(:func:`meshcol.collision.hull.exact_hull`; :class:`ConvexSet` packs all its polytopes in one
+native call, :func:`~meshcol.collision.hull.pack_hulls`).
 Shapes live in their local frames; queries take one rigid world-from-local pose per shape.
 """
 
@@ -16,7 +17,7 @@ import numpy as np
 
 from meshcol.collision.arrays import as_points, as_poses
 from meshcol.collision.hull import PackedHulls, pack_hull_slices, pack_hulls
-from meshcol.types import Body, Box, Capsule, Cylinder, Sphere
+from meshcol.types import Body, Box, Capsule, Cylinder, Ellipsoid, Sphere
 
 __all__ = [
     "ShapeKind",
@@ -24,6 +25,7 @@ __all__ = [
     "Box",
     "Capsule",
     "Cylinder",
+    "Ellipsoid",
     "ConvexSet",
     "as_convex_set",
 ]
@@ -41,9 +43,10 @@ class ShapeKind(enum.IntEnum):
     BOX = 2  #: params[0:3] half extents
     CAPSULE = 3  #: params[0] radius, params[1] half length of the segment along local z
     CYLINDER = 4  #: params[0] radius, params[1] half length along local z
+    ELLIPSOID = 5  #: params[0:3] semi-axes along local x, y, z
 
 
-_PRIMITIVES = (Sphere, Box, Capsule, Cylinder)
+_PRIMITIVES = (Sphere, Box, Capsule, Cylinder, Ellipsoid)
 
 
 def _primitive(shape: Any) -> tuple[int, tuple[float, float, float, float]]:
@@ -57,6 +60,8 @@ def _primitive(shape: Any) -> tuple[int, tuple[float, float, float, float]]:
         return ShapeKind.CAPSULE, (shape.radius, shape.length / 2.0, 0.0, 0.0)
     if isinstance(shape, Cylinder):
         return ShapeKind.CYLINDER, (shape.radius, shape.length / 2.0, 0.0, 0.0)
+    if isinstance(shape, Ellipsoid):
+        return ShapeKind.ELLIPSOID, (*shape.semi_axes, 0.0)
     raise TypeError(type(shape).__name__)  # pragma: no cover - callers dispatch
 
 
@@ -74,7 +79,7 @@ def _item(shape: Any, name: str) -> tuple[int, Any, np.ndarray | None]:
         arr = np.asarray(shape, dtype=np.float64)
     except (TypeError, ValueError):
         raise ValueError(
-            f"{name} must be a Sphere, Box, Capsule, Cylinder, mesh or (n, 3) array, "
+            f"{name} must be a Sphere, Box, Capsule, Cylinder, Ellipsoid, mesh or (n, 3) array, "
             f"got {type(shape).__name__}"
         ) from None
     if arr.ndim != 2 or arr.shape[1] != 3:
@@ -277,7 +282,7 @@ class ConvexSet:
     def __len__(self) -> int:
         return len(self.kinds)
 
-    def primitive(self, h: int) -> Sphere | Box | Capsule | Cylinder | None:
+    def primitive(self, h: int) -> Sphere | Box | Capsule | Cylinder | Ellipsoid | None:
         """Shape ``h`` as the primitive it packs (the inverse of packing one), or None for a
         polytope."""
         kind, p = int(self.kinds[h]), self.params[h]
@@ -289,6 +294,8 @@ class ConvexSet:
             return Capsule(float(p[0]), float(p[1]) * 2.0)
         if kind == ShapeKind.CYLINDER:
             return Cylinder(float(p[0]), float(p[1]) * 2.0)
+        if kind == ShapeKind.ELLIPSOID:
+            return Ellipsoid((float(p[0]), float(p[1]), float(p[2])))
         return None
 
     def __repr__(self) -> str:
@@ -384,9 +391,9 @@ class ConvexSet:
 
     @classmethod
     def from_shapes(cls, shapes: Sequence[Any], names: Sequence[str] | None = None) -> ConvexSet:
-        """Primitives (:class:`Sphere`, :class:`Box`, :class:`Capsule`, :class:`Cylinder`),
-        :class:`meshcol.types.Body` objects, meshes and (n, 3) point arrays (convex hulls), in
-        any mix; ``names`` (default ``shapes[i]``) name them in errors."""
+        """Primitives (:class:`Sphere`, :class:`Box`, :class:`Capsule`, :class:`Cylinder`,
+        :class:`Ellipsoid`), :class:`meshcol.types.Body` objects, meshes and (n, 3) point
+        arrays (convex hulls), in any mix; ``names`` (default ``shapes[i]``) name them in errors."""
         labels = names if names is not None else [f"shapes[{i}]" for i in range(len(shapes))]
         return cls._from_items([_item(s, n) for s, n in zip(shapes, labels)])
 
@@ -397,7 +404,7 @@ class ConvexSet:
         Parameters
         ----------
         kinds : (H,) int
-            :class:`ShapeKind` of each shape, SPHERE to CYLINDER.
+            :class:`ShapeKind` of each shape, SPHERE to ELLIPSOID.
         params : (H, 4) float
             Each one's parameters as :attr:`params` holds them (half extents, half lengths),
             finite and >= 0.
@@ -406,8 +413,8 @@ class ConvexSet:
         p = _copied(params, np.float64)
         if p.shape != (len(k), 4):
             raise ValueError(f"params must be ({len(k)}, 4), got {p.shape}")
-        if len(k) and (k.min() < ShapeKind.SPHERE or k.max() > ShapeKind.CYLINDER):
-            raise ValueError("kinds must be primitive shape kinds (SPHERE to CYLINDER)")
+        if len(k) and (k.min() < ShapeKind.SPHERE or k.max() > ShapeKind.ELLIPSOID):
+            raise ValueError("kinds must be primitive shape kinds (SPHERE to ELLIPSOID)")
         if not (np.isfinite(p) & (p >= 0.0)).all():
             raise ValueError("params must be finite and >= 0")
         return cls._assemble(k, p, np.zeros(0, dtype=np.int64), pack_hulls([]))

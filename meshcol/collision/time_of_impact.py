@@ -298,7 +298,7 @@ def time_of_impact(
 
     Parameters
     ----------
-    a, b : Sphere, Box, Capsule, Cylinder, trimesh.Trimesh, Body or (n, 3) float
+    a, b : Sphere, Box, Capsule, Cylinder, Ellipsoid, trimesh.Trimesh, Body or (n, 3) float
         Shapes in their local frames (meshes and point sets by their convex hull).
     start_pose_a, end_pose_a, start_pose_b, end_pose_b : (4, 4) float or None
         Rigid world-from-local poses (None: a Body's own pose and end pose, else identity).

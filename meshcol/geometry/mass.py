@@ -7,12 +7,13 @@ in the frame of the vertices.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from meshcol.types import Box, Capsule, Cylinder, Primitive, Sphere
+from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, Primitive, Sphere
 
 __all__ = [
     "MassProperties",
@@ -188,12 +189,82 @@ def combine_mass_properties(parts: Sequence[MassProperties]) -> MassProperties:
     return MassProperties(volume, center, inertia, area, shell_center, shell_inertia)
 
 
+#: Quadrature of an ellipsoid's shell moments: Gauss-Legendre nodes in cos(polar angle) on
+#: each half, equally spaced azimuths (the trapezoid rule, spectrally accurate for a periodic
+#: integrand). tests/geometry/test_mass_ellipsoid.py measures its accuracy.
+_ELLIPSOID_NODES, _ELLIPSOID_AZIMUTHS = 128, 256
+
+
+@functools.lru_cache(maxsize=1)
+def _ellipsoid_rule() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(cos polar angle (n, 1), its weights (n, 1), cos azimuth (1, m), sin azimuth (1, m)).
+
+    The nodes are in the polar angle (theta in [0, pi/2] and [pi/2, pi]), where the features
+    of a long ellipsoid near its poles are wider than in cos(theta); du = sin(theta) dtheta."""
+    nodes, weights = np.polynomial.legendre.leggauss(_ELLIPSOID_NODES)
+    theta = np.concatenate([(nodes + 1.0) * (np.pi / 4.0), (nodes + 3.0) * (np.pi / 4.0)])
+    u = np.cos(theta)[:, None]
+    w = (np.concatenate([weights, weights]) * np.sin(theta) * (np.pi / 4.0))[:, None] * (
+        2.0 * np.pi / _ELLIPSOID_AZIMUTHS
+    )
+    phi = np.arange(_ELLIPSOID_AZIMUTHS) * (2.0 * np.pi / _ELLIPSOID_AZIMUTHS)
+    return u, w, np.cos(phi)[None, :], np.sin(phi)[None, :]
+
+
+def _ellipsoid_surface(semi_axes: Sequence[float]) -> tuple[float, np.ndarray]:
+    """Area and second moments (integrals of x^2, y^2, z^2 over the surface) of the ellipsoid
+    surface with these semi-axes; both sides of a flat one."""
+    from scipy.special import elliprg
+
+    axes = np.asarray(semi_axes, dtype=np.float64)
+    a, b, c = axes
+    # Carlson's symmetric form (Carlson 1995; DLMF 19.33.1), exact also for a flat ellipse.
+    area = 4.0 * np.pi * float(elliprg((b * c) ** 2, (a * c) ** 2, (a * b) ** 2))
+    if np.any(axes == 0.0):  # a flat ellipse, both sides: 2 (pi a b) a^2 / 4 about its centre
+        flat = np.argmin(axes)
+        u_axis, w_axis = (k for k in range(3) if k != flat)
+        moments = np.zeros(3)
+        plate = np.pi * axes[u_axis] * axes[w_axis]
+        moments[u_axis] = plate * axes[u_axis] ** 2 / 2.0
+        moments[w_axis] = plate * axes[w_axis] ** 2 / 2.0
+        return area, moments
+    # The polar axis is the semi-axis farthest (in ratio) from the middle one: a long
+    # (prolate) or short (oblate) axis, whose near-singular parts of the integrand, at the
+    # poles or the equator, the Gauss nodes crowd; the azimuth then runs over the two closer
+    # axes.
+    middle = np.median(axes)
+    polar = int(np.argmax(np.abs(np.log(axes / middle))))
+    x_axis, y_axis = (k for k in range(3) if k != polar)
+    a, b, c = axes[x_axis], axes[y_axis], axes[polar]
+    u, w, cos_phi, sin_phi = _ellipsoid_rule()
+    sin2 = np.maximum(1.0 - u * u, 0.0)
+    # x = (a s cos phi, b s sin phi, c u), s = sqrt(1 - u^2): dA = |x_u x x_phi| du dphi
+    element = w * np.sqrt(
+        sin2 * ((b * c * cos_phi) ** 2 + (a * c * sin_phi) ** 2) + (a * b * u) ** 2
+    )
+    moments = np.empty(3)
+    moments[x_axis] = (element * (a * a * sin2 * cos_phi**2)).sum()
+    moments[y_axis] = (element * (b * b * sin2 * sin_phi**2)).sum()
+    moments[polar] = (element * (c * c * u * u)).sum()
+    return area, moments
+
+
+def _ellipsoid_mass(primitive: Ellipsoid) -> tuple[float, float, np.ndarray, np.ndarray]:
+    """(volume, area, solid principal moments, shell principal moments) of an ellipsoid."""
+    axes = np.asarray(primitive.semi_axes, dtype=np.float64)
+    volume = 4.0 / 3.0 * np.pi * float(np.prod(axes))
+    sq = axes**2
+    solid = volume * (sq.sum() - sq) / 5.0
+    area, second = _ellipsoid_surface(primitive.semi_axes)
+    return volume, area, solid, second.sum() - second
+
+
 def primitive_mass_properties(primitive: Primitive) -> MassProperties:
     """Exact mass properties of a primitive, centred at the origin, axis along z (density 1).
 
     Parameters
     ----------
-    primitive : Sphere, Box, Capsule or Cylinder
+    primitive : Sphere, Box, Capsule, Cylinder or Ellipsoid
 
     Returns
     -------
@@ -204,10 +275,12 @@ def primitive_mass_properties(primitive: Primitive) -> MassProperties:
     Closed forms: solid ball ``2/5 m r^2``; box ``m (b^2 + c^2) / 12``; cylinder ``m r^2 / 2``
     about its axis and ``m (3 r^2 + h^2) / 12`` across; capsule, its cylinder plus two
     hemispheres moved by the parallel-axis theorem from their own centres of mass
-    (``3 r / 8`` from the flat face). Shells: a spherical shell ``2/3 A r^2``; a box's six
-    plates; a cylinder's side ``A r^2`` (axis) and ``A (r^2 / 2 + h^2 / 12)`` (across) and
-    its two discs; a capsule's side and two hemispherical shells (``r / 2`` from the flat
-    face).
+    (``3 r / 8`` from the flat face); ellipsoid ``m (b^2 + c^2) / 5``. Shells: a spherical
+    shell ``2/3 A r^2``; a box's six plates; a cylinder's side ``A r^2`` (axis) and
+    ``A (r^2 / 2 + h^2 / 12)`` (across) and its two discs; a capsule's side and two hemispherical shells (``r / 2`` from the flat
+    face). An ellipsoid's area is Carlson's elliptic integral ``4 pi R_G(b^2 c^2, a^2 c^2,
+    a^2 b^2)``; its shell moments, which have no such form in scipy, a product quadrature over
+    the surface (a flat one's, both sides of its ellipse, in closed form).
     """
     zero = np.zeros(3)
     if isinstance(primitive, Sphere):
@@ -232,6 +305,8 @@ def primitive_mass_properties(primitive: Primitive) -> MassProperties:
             moments[u] = plate * (sq[w] / 12.0 + sq[axis] / 4.0)
             moments[w] = plate * (sq[u] / 12.0 + sq[axis] / 4.0)
             shell += 2.0 * moments
+    elif isinstance(primitive, Ellipsoid):
+        volume, area, solid, shell = _ellipsoid_mass(primitive)
     elif isinstance(primitive, (Cylinder, Capsule)):
         r, h = primitive.radius, primitive.length
         cylinder = np.pi * r**2 * h

@@ -46,7 +46,7 @@ from meshcol.io.gltf_physics import (
     node_worlds,
 )
 from meshcol.io.physics_bodies import axis_turn
-from meshcol.types import Box, Capsule, Cylinder, Primitive, Sphere
+from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, Primitive, Sphere
 
 __all__ = ["NodeColliders", "gltf_physics_path", "physics_schema_problems", "write_gltf_physics"]
 
@@ -324,7 +324,8 @@ class _Builder:
             local = inverse @ np.asarray(b, dtype=np.float64)
             if isinstance(a, (Capsule, Cylinder)):
                 local = local @ np.linalg.inv(axis_turn("Y"))  # meshcol's z onto the node's Y
-            if _is_trs(local):  # its world, parent's scale undone, is the rigid pose
+            # KHR_implicit_shapes has no ellipsoid: one is written as its enclosing mesh
+            if _is_trs(local) and not isinstance(a, Ellipsoid):
                 if not np.array_equal(local, np.eye(4)):
                     node["matrix"] = local.T.reshape(-1).tolist()
                 self.khr_shapes.append(_khr_shape(a))

@@ -5,8 +5,8 @@ mean what MuJoCo says; geom poses come from ``mj_kinematics`` at the configurati
 or the first keyframe with ``keyframe``, then the joint values given; a joint coupled by
 ``<equality><joint>`` follows its polynomial, as a URDF mimic joint). A body's collision
 geoms (``contype`` or ``conaffinity`` non-zero, or named by a ``<contact><pair>``) are its
-parts; planes and height fields are
-skipped (not solids), ellipsoids are tessellated.
+parts; planes and height fields are skipped (not solids). Spheres, capsules, cylinders, boxes
+and ellipsoids are exact primitives.
 
 :func:`read_mjcf` is the reader :func:`meshcol.io.robot.load_robot_model` dispatches to.
 """
@@ -32,10 +32,9 @@ from meshcol.io.links import (
     one_line,
     parts_body,
     primitive_body,
-    tessellate,
 )
 from meshcol.io.paths import confine_mjcf
-from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere
+from meshcol.types import Body, Box, Capsule, Cylinder, Ellipsoid, Primitive, Scene, Sphere
 
 if TYPE_CHECKING:
     from meshcol.io.robot import RobotOptions
@@ -52,7 +51,7 @@ class _Geom(NamedTuple):
     name: str
     world: np.ndarray  # (4, 4) world from geom
     primitive: Primitive | None
-    vertices: np.ndarray | None  # a mesh or ellipsoid in the geom frame
+    vertices: np.ndarray | None  # a mesh in the geom frame
     faces: np.ndarray | None
     geom_id: int
 
@@ -270,8 +269,7 @@ def _geom_shape(
     if kind == "mjGEOM_BOX":
         return Box((2.0 * float(size[0]), 2.0 * float(size[1]), 2.0 * float(size[2]))), None, None
     if kind == "mjGEOM_ELLIPSOID":
-        vertices, faces = tessellate(Sphere(1.0))
-        return None, vertices * np.asarray(size[:3], dtype=np.float64), faces
+        return Ellipsoid((float(size[0]), float(size[1]), float(size[2]))), None, None
     if kind == "mjGEOM_MESH":
         mesh = int(model.geom_dataid[g])
         v0, nv = int(model.mesh_vertadr[mesh]), int(model.mesh_vertnum[mesh])

@@ -22,7 +22,7 @@ import numpy as np
 from meshcol.errors import MeshcolError, MissingDependencyError, SceneError
 from meshcol.io.packages import resolve_mesh_reference
 from meshcol.io.urdf_write import format_numbers, urdf_text
-from meshcol.types import Box, Capsule, Cylinder, Sphere
+from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, Sphere
 
 if TYPE_CHECKING:
     from meshcol.io.robot_write import Collider, RobotColliders
@@ -358,6 +358,7 @@ def _imported_primitives(mujoco: Any, spec: Any, robot: RobotColliders) -> list[
         Sphere: mujoco.mjtGeom.mjGEOM_SPHERE,
         Cylinder: mujoco.mjtGeom.mjGEOM_CYLINDER,
         Capsule: mujoco.mjtGeom.mjGEOM_CAPSULE,
+        Ellipsoid: mujoco.mjtGeom.mjGEOM_ELLIPSOID,
     }
     found, taken = [], set()
     for collider in robot.colliders:
@@ -382,7 +383,11 @@ def _mark(mujoco: Any, spec: Any, geoms: list[Any]) -> dict[str, tuple[bool, dic
     and keep its size, pos and quat at full precision: MuJoCo writes numbers with 6
     significant digits, which can shrink a fitted primitive below what it must enclose."""
     taken = {g.name for g in spec.geoms if g.name}
-    used = {mujoco.mjtGeom.mjGEOM_SPHERE: 1, mujoco.mjtGeom.mjGEOM_BOX: 3}
+    used = {
+        mujoco.mjtGeom.mjGEOM_SPHERE: 1,
+        mujoco.mjtGeom.mjGEOM_BOX: 3,
+        mujoco.mjtGeom.mjGEOM_ELLIPSOID: 3,
+    }
     markers: dict[str, tuple[bool, dict[str, str]]] = {}
     for k, geom in enumerate(geoms):
         own = bool(geom.name)
@@ -436,6 +441,9 @@ def _mjcf_primitive(
     elif isinstance(p, Cylinder):
         geom.type = mujoco.mjtGeom.mjGEOM_CYLINDER
         geom.size = [p.radius, p.length / 2.0, 0.0]
+    elif isinstance(p, Ellipsoid):
+        geom.type = mujoco.mjtGeom.mjGEOM_ELLIPSOID
+        geom.size = list(p.semi_axes)
     else:
         assert isinstance(p, Capsule)
         geom.type = mujoco.mjtGeom.mjGEOM_CAPSULE

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from meshcol.types import Box, Capsule, Primitive, Sphere, primitive_mesh
+from meshcol.types import Box, Capsule, Ellipsoid, Primitive, Sphere, primitive_mesh
 
 __all__ = ["enclosing_primitive_mesh", "primitive_mesh"]
 
@@ -23,6 +23,8 @@ def _support(primitive: Primitive, directions: np.ndarray) -> np.ndarray:
         return np.full(len(n), primitive.radius)
     if isinstance(primitive, Box):
         return np.abs(n) @ (0.5 * np.asarray(primitive.size))
+    if isinstance(primitive, Ellipsoid):
+        return np.linalg.norm(n * np.asarray(primitive.semi_axes), axis=1)
     half = 0.5 * primitive.length
     if isinstance(primitive, Capsule):
         return primitive.radius + half * np.abs(n[:, 2])

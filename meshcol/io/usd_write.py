@@ -3,7 +3,8 @@
 One ``Xform`` per link with its world pose at the joint configuration; one ``Mesh`` per part
 with ``UsdPhysics.CollisionAPI`` and ``UsdPhysics.MeshCollisionAPI`` (approximation
 ``convexHull``: every part is convex), and primitives as ``Cube``/``Sphere``/``Cylinder``/
-``Capsule`` prims with ``CollisionAPI``; Z up, metres. The format module of
+``Capsule`` prims with ``CollisionAPI`` (USD has no ellipsoid: one is written as its
+tessellation, a convex ``Mesh``); Z up, metres. The format module of
 :func:`meshcol.io.robot_write.write_robot`.
 """
 
@@ -16,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from meshcol.errors import MissingDependencyError
-from meshcol.types import Box, Capsule, Cylinder, Sphere
+from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, Sphere
 
 if TYPE_CHECKING:
     from meshcol.io.robot_write import Collider, RobotColliders
@@ -64,13 +65,16 @@ def write_usd(robot: RobotColliders, labels: list[list[str]], path: str) -> None
                 xform.GetPrim().SetCustomDataByKey("meshcol:link", collider.link)
                 links[collider.link] = xform
             parent = xform.GetPath()
-            if collider.primitive is not None:
+            parts = list(zip(names, collider.parts))
+            if isinstance(collider.primitive, Ellipsoid):
+                parts = [(names[0], _ellipsoid_part(collider))]
+            elif collider.primitive is not None:
                 prim = _usd_primitive(
                     stage, UsdGeom, Gf, parent.AppendChild(_usd_name(names[0])), collider
                 )
                 UsdPhysics.CollisionAPI.Apply(prim)
                 continue
-            for label, (v, f) in zip(names, collider.parts):
+            for label, (v, f) in parts:
                 mesh = UsdGeom.Mesh.Define(stage, parent.AppendChild(_usd_name(label)))
                 mesh.CreatePointsAttr([Gf.Vec3f(*p) for p in np.asarray(v, dtype=float).tolist()])
                 mesh.CreateFaceVertexCountsAttr([3] * len(f))
@@ -82,6 +86,16 @@ def write_usd(robot: RobotColliders, labels: list[list[str]], path: str) -> None
                     UsdPhysics.Tokens.convexHull
                 )
         stage.GetRootLayer().Export(tmp, args={"format": "usda"})
+
+
+def _ellipsoid_part(collider: Collider) -> tuple[np.ndarray, np.ndarray]:
+    """An ellipsoid collider's tessellation in the link frame (USD has no ellipsoid prim)."""
+    from meshcol.io.primitives import primitive_mesh
+
+    assert collider.primitive is not None
+    vertices, faces = primitive_mesh(collider.primitive)
+    origin = collider.origin
+    return vertices @ origin[:3, :3].T + origin[:3, 3], faces
 
 
 def _unique(taken: dict[str, Any], name: str) -> str:

@@ -190,7 +190,9 @@ def test_bad_inputs_keep_their_messages() -> None:
             single(sphere, box, np.eye(3), None)
         with pytest.raises(ValueError, match=r"^pose_b must be \(4, 4\), got \(16,\)$"):
             single(sphere, box, None, np.eye(4).ravel())
-        with pytest.raises(ValueError, match=r"^b must be a Sphere, Box, Capsule, Cylinder, mesh"):
+        with pytest.raises(
+            ValueError, match=r"^b must be a Sphere, Box, Capsule, Cylinder, Ellipsoid, mesh"
+        ):
             single(sphere, "box", None, None)
         with pytest.raises(ValueError, match=r"^a must be \(n, 3\), got \(2, 2\)$"):
             single(np.zeros((2, 2)), box, np.eye(3), None)  # the shape first, then the pose

@@ -64,6 +64,10 @@ enum class ShapeKind : std::int8_t {
     BOX = 2,       ///< params[0..2] = half extents along local x, y, z, centred
     CAPSULE = 3,   ///< params[0] = radius, params[1] = half length of the segment along z
     CYLINDER = 4,  ///< params[0] = radius, params[1] = half length along z, centred
+    /// params[0..2] = semi-axes along local x, y, z, centred. A zero semi-axis is a flat
+    /// ellipse (a disc when the other two are equal), two zeros a segment, three a point:
+    /// each is still a convex set, queried exactly.
+    ELLIPSOID = 5,
 };
 
 /// Non-owning view of one convex shape (local frame). Polytope data belong to the caller.
@@ -165,8 +169,8 @@ Vec3 support(const ShapeView& shape, const Vec3& direction);
 /// Local axis-aligned bounding box of the full shape: (min, max).
 void local_aabb(const ShapeView& shape, Vec3& aabb_min, Vec3& aabb_max);
 
-/// World AABB of the full shape under `pose` (exact for boxes, spheres, capsules and
-/// cylinders; tight for polytopes: computed from the rotated vertices).
+/// World AABB of the full shape under `pose` (exact for boxes, spheres, capsules, cylinders
+/// and ellipsoids; tight for polytopes: computed from the rotated vertices).
 void world_aabb(const ShapeView& shape, const Pose& pose, Vec3& aabb_min, Vec3& aabb_max);
 
 /// Radius of a ball centred on the local origin that holds the whole shape.
