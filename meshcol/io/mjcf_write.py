@@ -197,12 +197,16 @@ def _inertia_from_geoms(spec: Any) -> list[str]:
         matrix = np.array(
             [[full[0], full[3], full[4]], [full[3], full[1], full[5]], [full[4], full[5], full[2]]]
         )
-        if np.linalg.eigvalsh(matrix).min() <= 0.0:
+        if np.linalg.eigvalsh(matrix).min() <= _MJMINVAL:  # MuJoCo's test of the eigenvalues
             body.explicitinertial = False
             body.fullinertia = [np.nan] * 6
             names.append(body.name)
     return names
 
+
+#: MuJoCo's ``mjMINVAL``: its compiler refuses a full inertia with an eigenvalue at or below
+#: it (pybullet_data's biped2d gives one of 2e-18, positive in numpy).
+_MJMINVAL = 1e-15
 
 #: Words of MuJoCo's compiler errors about a body's mass or inertia.
 _INERTIA_ERRORS = ("mjMINVAL", "A + B >= C", "positive eigenvalues", "mesh volume is too small")
@@ -564,6 +568,11 @@ def _spec_from_urdf(
     converted: dict[str, str] = {}
     for link in root.findall("link"):
         for visual in link.findall("visual"):
+            empty = _empty_primitive(visual)
+            if empty is not None:  # MuJoCo refuses a geom of size 0: nothing to draw either
+                link.remove(visual)
+                notes.append(f"link {link.get('name')!r}: visual {empty} left out")
+                continue
             for mesh in visual.iter("mesh"):
                 reference = mesh.get("filename") or ""
                 path = resolve_mesh_reference(robot.source, reference, robot.package_paths)
@@ -592,6 +601,28 @@ def _spec_from_urdf(
     compiler.set("strippath", "false")
     xml = etree.tostring(root, encoding="unicode")
     return _spec(mujoco, robot.source, lambda: mujoco.MjSpec.from_string(xml))
+
+
+def _empty_primitive(visual: Any) -> str | None:
+    """``"sphere of radius 0"`` and the like for a visual primitive with a size that is not
+    positive (pybullet_data's laikago_toes draws each toe as a sphere of radius 0); None
+    otherwise."""
+    for shape, names in (("sphere", ("radius",)), ("cylinder", ("radius", "length"))):
+        for element in visual.iter(shape):
+            for name in names:
+                if _not_positive(element.get(name)):
+                    return f"{shape} of {name} {element.get(name)}"
+    for element in visual.iter("box"):
+        if any(_not_positive(x) for x in (element.get("size") or "").split()):
+            return f"box of size {element.get('size')!r}"
+    return None
+
+
+def _not_positive(text: str | None) -> bool:
+    try:
+        return text is not None and not float(text) > 0.0
+    except ValueError:
+        return False  # not a number: the importer says so
 
 
 def _convert_visual(path: str, stage: str, converted: dict[str, str]) -> str:

@@ -364,21 +364,33 @@ def test_mjcf_written_excludes_what_meshcol_excludes(samples, tmp_path, name):
 
 
 @pytest.mark.parametrize(
-    "base_inertia, words",
+    "base, base_inertia, words",
     [
-        ('ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"', "mjMINVAL"),
+        ("base", 'ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"', "mjMINVAL"),
         # a full inertia that is not positive definite (anymal's base in example-robot-data)
-        ('ixx="0.01" ixy="0.05" ixz="0" iyy="0.01" iyz="0" izz="0.01"', "positive eigenvalues"),
+        (
+            "base",
+            'ixx="0.01" ixy="0.05" ixz="0" iyy="0.01" iyz="0" izz="0.01"',
+            "positive eigenvalues",
+        ),
+        # singular, its least eigenvalue 2e-18, on a root link named "world" (MuJoCo's world
+        # body, which no bound reaches): positive in numpy, not above MuJoCo's mjMINVAL
+        # (pybullet_data's biped2d)
+        (
+            "world",
+            'ixx="0.2125" ixy="-0.005" ixz="0.0225" iyy="0.205" iyz="0.045" izz="0.0125"',
+            "positive eigenvalues",
+        ),
     ],
 )
-def test_near_zero_inertia_links_are_bounded_as_converters_do(tmp_path, base_inertia, words):
+def test_near_zero_inertia_links_are_bounded_as_converters_do(tmp_path, base, base_inertia, words):
     mujoco = pytest.importorskip("mujoco")
     body = f"""
-<link name="base"><inertial><mass value="1"/><inertia {base_inertia}/></inertial>
+<link name="{base}"><inertial><mass value="1"/><inertia {base_inertia}/></inertial>
   <collision><geometry><box size="0.2 0.2 0.2"/></geometry></collision></link>
 <link name="motor"><inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial>
   <collision><origin xyz="0 0 0.3"/><geometry><sphere radius="0.05"/></geometry></collision></link>
-<joint name="j" type="revolute"><parent link="base"/><child link="motor"/><axis xyz="0 1 0"/>
+<joint name="j" type="revolute"><parent link="{base}"/><child link="motor"/><axis xyz="0 1 0"/>
   <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
 """
     robot = write(tmp_path, "quad.urdf", urdf(body))
@@ -390,6 +402,29 @@ def test_near_zero_inertia_links_are_bounded_as_converters_do(tmp_path, base_ine
     model = mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "quad.xml"))
     motor = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "motor")
     assert model.body_mass[motor] == pytest.approx(1e-3)
+
+
+def test_a_visual_primitive_of_size_zero_is_left_out_of_the_mjcf(tmp_path):
+    """pybullet_data's laikago_toes draws each toe as a sphere of radius 0: MuJoCo refuses a
+    geom of size 0, so the MJCF leaves that visual out, with a note (it draws nothing)."""
+    mujoco = pytest.importorskip("mujoco")
+    body = """
+<link name="base"><collision><geometry><box size="0.2 0.2 0.2"/></geometry></collision></link>
+<link name="toe"><visual><geometry><sphere radius="0.0"/></geometry></visual>
+  <visual><geometry><box size="0.1 0 0.1"/></geometry></visual>
+  <visual><geometry><sphere radius="0.02"/></geometry></visual>
+  <collision><geometry><sphere radius="0.03"/></geometry></collision></link>
+<joint name="j" type="fixed"><parent link="base"/><child link="toe"/><origin xyz="0 0 0.3"/></joint>
+"""
+    robot = write(tmp_path, "toes.urdf", urdf(body))
+    code, _, err = run("hull", str(robot), "--out-dir", str(tmp_path / "out"), "--to", "mjcf")
+    assert code == 0, err
+    text = (tmp_path / "out" / "toes.xml").read_text()
+    assert "link 'toe': visual sphere of radius 0.0 left out" in text
+    assert "link 'toe': visual box of size '0.1 0 0.1' left out" in text
+    model = mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "toes.xml"))
+    sizes = [model.geom_size[g][0] for g in range(model.ngeom) if model.geom_group[g] == 2]
+    assert sizes == [pytest.approx(0.02)]  # the one visual with a size
 
 
 # --- item 8: a rebuilt URDF whose visuals came through a package path --------------------------
