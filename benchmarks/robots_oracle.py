@@ -16,8 +16,8 @@ limits that exclude zero):
   and coal (its hull of each, GJK at a 1e-12 tolerance; its own primitives).
 
 Columns: the pairs compared, the separated ones' largest difference (m), the pairs whose sign
-differs, and the pairs left out (MJCF ellipsoids, which meshcol tessellates; pairs the oracle
-fails on). Each robot runs in a process of its own (an oracle's crash is that robot's row).
+differs, and the pairs left out (those the oracle fails on: coal's EPA on touching
+cylinders). Each robot runs in a process of its own (an oracle's crash is that robot's row).
 
 Run:  .venv/bin/python benchmarks/robots_oracle.py [--only COLLECTION] [--limit N]
       [--match NAME] [--json F]   (make robots-wild / robots-menagerie install the collections)
@@ -61,21 +61,21 @@ def check_pairs(robot: Path) -> list[dict] | str:
 
 
 def mjcf_oracle(robot: Path) -> tuple[dict, set]:
-    """MuJoCo's least distance of each body pair, and the bodies with an ellipsoid."""
+    """MuJoCo's least distance of each body pair (ellipsoids included: exact on both sides
+    since session 37), and no body to leave out."""
     import mujoco
-    from mujoco_oracle import check_qpos, collision_geoms, has_ellipsoid, least_distance
+    from mujoco_oracle import check_qpos, collision_geoms, least_distance
 
     model = mujoco.MjModel.from_xml_path(str(robot))
     data = mujoco.MjData(model)
     data.qpos[:] = check_qpos(robot)
     mujoco.mj_forward(model, data)
     geoms = collision_geoms(mujoco, model)
-    ellipsoids = {name for name, gs in geoms.items() if has_ellipsoid(mujoco, model, gs)}
 
     def distance(a: str, b: str) -> float:
         return least_distance(mujoco, model, data, geoms[a], geoms[b], 1e6)
 
-    return _Lazy(distance, geoms), ellipsoids
+    return _Lazy(distance, geoms), set()
 
 
 class _Lazy(dict):
