@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from meshcol.types import Box, Capsule, Cylinder, Primitive, Sphere
+from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, Primitive, Sphere
 
 __all__ = [
     "FAITHFUL_ORDER",
@@ -139,7 +139,8 @@ def scaled_primitive(
     primitive: Primitive, origin: np.ndarray
 ) -> tuple[Primitive, np.ndarray] | None:
     """The primitive as ``origin`` (4, 4) scales it, and ``origin``'s rigid part; None when
-    the scale makes it another shape (a sphere squashed, a capsule stretched, a shear)."""
+    the scale makes it no primitive (a capsule stretched, a cylinder squashed, a shear). A
+    sphere scaled unevenly is an ellipsoid, exactly."""
     linear = origin[:3, :3]
     scale = np.linalg.norm(linear, axis=0)
     if scale.min() <= 0:
@@ -158,7 +159,11 @@ def scaled_primitive(
     if isinstance(primitive, Box):
         return Box(tuple(np.asarray(primitive.size) * scale)), rigid
     if isinstance(primitive, Sphere):
-        return (Sphere(primitive.radius * scale[0]), rigid) if even(0, 1) and even(0, 2) else None
+        if even(0, 1) and even(0, 2):
+            return Sphere(primitive.radius * scale[0]), rigid
+        return Ellipsoid(tuple(primitive.radius * scale)), rigid
+    if isinstance(primitive, Ellipsoid):
+        return Ellipsoid(tuple(np.asarray(primitive.semi_axes) * scale)), rigid
     if not even(0, 1):
         return None
     if isinstance(primitive, Capsule):

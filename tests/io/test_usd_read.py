@@ -15,7 +15,7 @@ import pytest
 from click.testing import CliRunner
 
 from meshcol.cli import main
-from meshcol.types import Box, Capsule, Cylinder, Sphere, primitive_mesh
+from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, Sphere, primitive_mesh
 
 pxr = pytest.importorskip("pxr")
 from pxr import Gf, Sdf, Usd, UsdGeom, UsdPhysics  # noqa: E402
@@ -231,8 +231,8 @@ def test_primitives_stay_exact_under_their_transforms(tmp_path: Path) -> None:
     assert bodies["pill"].pose[:3, 2] == pytest.approx([1, 0, 0], abs=1e-15)  # axis x
     assert bodies["can"].primitive == Cylinder(0.2, 0.6)
     assert bodies["can"].pose[:3, 2] == pytest.approx([0, 1, 0], abs=1e-15)  # axis y
-    # a squashed sphere is no sphere: its tessellation, stretched
-    assert bodies["egg"].primitive is None
+    # a squashed sphere is an ellipsoid, exact; its tessellation stretched as before
+    assert bodies["egg"].primitive == Ellipsoid((1.0, 1.0, 2.0))
     assert np.ptp(bodies["egg"].world_vertices(), axis=0) == pytest.approx([2, 2, 4], rel=1e-2)
 
 
