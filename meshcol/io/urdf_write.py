@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 from meshcol.errors import MissingDependencyError, SceneError
 from meshcol.io.urdf_lenient import read_description_xml
-from meshcol.types import Box, Capsule, Cylinder, Sphere
+from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, Sphere
 
 if TYPE_CHECKING:
     from meshcol.io.robot_write import Collider, RobotColliders
@@ -67,7 +67,7 @@ def urdf_text(
             )
         element = elements[collider.index]
         if collider.fitted:
-            _urdf_primitive(element, collider)
+            _urdf_primitive(element, collider, robot.source)
             continue
         name = element.get("name")
         names = files[i]
@@ -177,9 +177,21 @@ def format_numbers(values: Any) -> str:
     return " ".join(repr(float(v)) if abs(float(v)) >= 1e-15 else "0" for v in values)
 
 
-def _urdf_primitive(element: Any, collider: Collider) -> None:
+def no_ellipsoid(source: str) -> SceneError:
+    """The error of an ellipsoid collider for a URDF, which has no ellipsoid element (and no
+    importer reads one): the fit goes to a format that has one, or is another shape."""
+    return SceneError(
+        "URDF has no ellipsoid: write the fits with --to mjcf, usd or glb, or fit another --shape",
+        source,
+    )
+
+
+def _urdf_primitive(element: Any, collider: Collider, source: str) -> None:
     """Make a ``<collision>`` element the fitted primitive at the collider's origin."""
     from lxml import etree
+
+    if isinstance(collider.primitive, Ellipsoid):
+        raise no_ellipsoid(source)
 
     from meshcol.geometry.rotations import rpy_from_matrix
 
