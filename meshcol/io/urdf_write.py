@@ -43,11 +43,16 @@ def urdf_text(
     files: dict[int, list[str]],
     prefix: dict[str, str],
     out_dir: str | None = None,
+    ellipsoid_placeholders: bool = False,
 ) -> str:
     """The input URDF with each rebuilt ``<collision>`` pointing at its part files
     (``prefix``: folder prepended to the part file names, for MuJoCo's importer). With
     ``out_dir``, the other mesh references (visuals) are rewritten by
-    :func:`_references_from` so that they name the input's files from there."""
+    :func:`_references_from` so that they name the input's files from there.
+
+    URDF has no ellipsoid: a fitted one is refused (:func:`no_ellipsoid`), or with
+    ``ellipsoid_placeholders`` (for MuJoCo's importer, whose geom is then made the
+    ellipsoid) written as a ``<sphere>`` of its largest semi-axis at its origin."""
     from lxml import etree
 
     tree = parse_xml(robot.source)
@@ -67,7 +72,7 @@ def urdf_text(
             )
         element = elements[collider.index]
         if collider.fitted:
-            _urdf_primitive(element, collider, robot.source)
+            _urdf_primitive(element, collider, robot.source, ellipsoid_placeholders)
             continue
         name = element.get("name")
         names = files[i]
@@ -186,11 +191,12 @@ def no_ellipsoid(source: str) -> SceneError:
     )
 
 
-def _urdf_primitive(element: Any, collider: Collider, source: str) -> None:
-    """Make a ``<collision>`` element the fitted primitive at the collider's origin."""
+def _urdf_primitive(element: Any, collider: Collider, source: str, placeholder: bool) -> None:
+    """Make a ``<collision>`` element the fitted primitive at the collider's origin (an
+    ellipsoid: refused, or its ``placeholder`` sphere)."""
     from lxml import etree
 
-    if isinstance(collider.primitive, Ellipsoid):
+    if isinstance(collider.primitive, Ellipsoid) and not placeholder:
         raise no_ellipsoid(source)
 
     from meshcol.geometry.rotations import rpy_from_matrix
@@ -203,7 +209,9 @@ def _urdf_primitive(element: Any, collider: Collider, source: str) -> None:
     origin.tail = before.tail if before is not None else element.text
     geometry.addprevious(origin)
     p = collider.primitive
-    if isinstance(p, Box):
+    if isinstance(p, Ellipsoid):
+        shape = etree.SubElement(geometry, "sphere", radius=format_numbers([max(p.semi_axes)]))
+    elif isinstance(p, Box):
         shape = etree.SubElement(geometry, "box", size=format_numbers(p.size))
     elif isinstance(p, Sphere):
         shape = etree.SubElement(geometry, "sphere", radius=format_numbers([p.radius]))
