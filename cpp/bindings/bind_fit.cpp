@@ -123,9 +123,9 @@ void bind_fit(nb::module_& m) {
         },
         "points"_a, "offsets"_a, "shapes"_a, "threads"_a = 0,
         "Enclosing primitives of H point sets (set h owns points[offsets[h]:offsets[h + 1]]), "
-        "shapes (K,) codes (0 sphere, 1 capsule, 2 box, 3 cylinder, 4 ellipsoid): (hull_status (H,), "
-        "dimension (H,), hull_volume (H,), hull_vertex_offsets (H + 1,), hull_vertices (V,) "
-        "indices into each set, hull_face_offsets (H + 1,), hull_faces (F, 3) into each set's "
+        "shapes (K,) codes (0 sphere, 1 capsule, 2 box, 3 cylinder, 4 ellipsoid): "
+        "(hull_status (H,), dimension (H,), hull_volume (H,), hull_vertex_offsets (H + 1,), "
+        "hull_vertices (V,) indices into each set, hull_face_offsets (H + 1,), hull_faces (F, 3) into each set's "
         "hull vertices, status (H, K), params (H, K, 3), poses (H, K, 4, 4), volume (H, K), "
         "excess (H, K)).");
 }

@@ -684,9 +684,10 @@ void finish_ellipsoid(PrimitiveFit& f, const Vec3* points, long long n, double s
     const double margin = defaults::fit_containment_margin * scale;
     f.excess = 0.0;  // a flat search's: 0, as Python's `signed_distances`
     if (std::min({a[0], a[1], a[2]}) > 0.0) {
-        for (long long i = 0; i < n; ++i)
-            f.excess = std::max(f.excess, outside(FitShape::ELLIPSOID, a,
-                                                  f.rotation.transpose_times(points[i] - f.center)));
+        for (long long i = 0; i < n; ++i) {
+            const Vec3 l = f.rotation.transpose_times(points[i] - f.center);
+            f.excess = std::max(f.excess, outside(FitShape::ELLIPSOID, a, l));
+        }
     }
     for (int k = 0; k < 3; ++k) a[k] += margin;
     double k = largest();

@@ -276,7 +276,8 @@ EllipsoidSearch minimum_ellipsoid(const Vec3* points, long long n, int dimension
         std::vector<double> y(static_cast<size_t>(n * d));
         for (long long i = 0; i < n; ++i) {
             const Vec3 l = axes.transpose_times(points[i] - mean);
-            for (int k = 0; k < d; ++k) y[static_cast<size_t>(i * d + k)] = (l[k] - mid[k]) / half[k];
+            for (int k = 0; k < d; ++k)
+                y[static_cast<size_t>(i * d + k)] = (l[k] - mid[k]) / half[k];
         }
         Khachiyan k{y, n, d, std::vector<double>(static_cast<size_t>(n)),
                     std::vector<double>(static_cast<size_t>(n))};
@@ -286,10 +287,11 @@ EllipsoidSearch minimum_ellipsoid(const Vec3* points, long long n, int dimension
         double c[3] = {}, s[4][4] = {}, s_inverse[4][4];
         for (long long i = 0; i < n; ++i)
             for (int r = 0; r < d; ++r) c[r] += k.u[static_cast<size_t>(i)] * k.q(i, r);
-        for (long long i = 0; i < n; ++i)
+        for (long long i = 0; i < n; ++i) {
+            const double w = k.u[static_cast<size_t>(i)];
             for (int r = 0; r < d; ++r)
-                for (int t = 0; t < d; ++t)
-                    s[r][t] += k.u[static_cast<size_t>(i)] * (k.q(i, r) - c[r]) * (k.q(i, t) - c[t]);
+                for (int t = 0; t < d; ++t) s[r][t] += w * (k.q(i, r) - c[r]) * (k.q(i, t) - c[t]);
+        }
         if (!invert_spd(d, s, s_inverse)) {  // never for a spanning set: the box instead
             for (int r = 0; r < d; ++r) shape[r][r] = d * half[r] * half[r];
             out.converged = false;

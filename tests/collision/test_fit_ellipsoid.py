@@ -285,3 +285,12 @@ def test_rigid_motions_scaling_and_linear_maps_move_the_ellipsoid_with_the_point
         assert fit.volume == pytest.approx(primitive_volume(fit.primitive), rel=1e-12)
         assert fit.volume <= enclosing_sphere(cloud).volume * (1 + ELLIPSOID_TOLERANCE)
         assert isinstance(fit.primitive, Ellipsoid)
+
+
+def test_the_tolerance_mirrors_the_core() -> None:
+    from meshcol._native import core
+    from meshcol.collision.fit import AUTO_SHAPES, FIT_SHAPES
+
+    assert core.defaults.fit_ellipsoid_tolerance == ELLIPSOID_TOLERANCE
+    assert FIT_SHAPES.index("ellipsoid") == 4  # the core's FitShape::ELLIPSOID
+    assert "ellipsoid" not in AUTO_SHAPES

@@ -56,13 +56,14 @@ bool minimum_ball(const double* points, long long n, int dimension, double cente
 /// What `minimum_ellipsoid` found: an ellipsoid `{x : |diag(1 / semi_axes) R^T (x - center)|
 /// <= 1}` that holds every point (up to the rounding of its evaluation).
 struct EllipsoidSearch {
-    Vec3 center;                          ///< the points' frame
-    Mat3 rotation;                        ///< columns: the ellipsoid's axes (right-handed)
-    double semi_axes[3] = {0.0, 0.0, 0.0};  ///< along the columns, descending, >= 0 (0 across a flat set)
-    int dimension = -1;     ///< the set's affine dimension the search ran in (0 to 3)
+    Vec3 center;    ///< the points' frame
+    Mat3 rotation;  ///< columns: the ellipsoid's axes (right-handed)
+    /// Along the columns of `rotation`, descending, >= 0 (0 across a flat or collinear set).
+    double semi_axes[3] = {0.0, 0.0, 0.0};
+    int dimension = -1;        ///< the set's affine dimension the search ran in (0 to 3)
     double ratio_bound = 1.0;  ///< certified: volume (in `dimension`) <= this x the minimum
-    int iterations = 0;     ///< Khachiyan steps taken
-    bool converged = false;  ///< `ratio_bound` <= 1 + tolerance (false: the cap stopped it)
+    int iterations = 0;        ///< Khachiyan steps taken
+    bool converged = false;    ///< `ratio_bound` <= 1 + tolerance (false: the cap stopped it)
 };
 
 /// The minimum-volume enclosing ellipsoid of `n` points (all of them searched: pass a
