@@ -1,6 +1,12 @@
 """Enclosing fits per body: the core (1 and 2 threads) against the Python fits it replaced
 (tests/fit_oracle.py) and trimesh's peers (oriented_bounds for the box, minimum_nsphere for
 the sphere), A/B alternated in one run, ranges over the repeats, volume ratios to the peers.
+("all" is the four shapes the Python fits have, as before the ellipsoid.)
+
+Then the ellipsoid row: every shape's time per set (1 thread, µs) on sets of 64 and 1,024
+points that are ALL hull vertices (points on random ellipsoids' surfaces, the minimum
+ellipsoid's worst case: every point may carry weight), and the ellipsoid's volume against
+the sphere's and the box's.
 
     .venv/bin/python benchmarks/bench_fit.py --bodies 20 --points 300 --repeats 3
 """
@@ -37,6 +43,7 @@ def main() -> None:
     parser.add_argument("--bodies", type=int, default=20)
     parser.add_argument("--points", type=int, default=300)
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--ellipsoid-sets", type=int, default=20, help="sets per size")
     args = parser.parse_args()
     import trimesh
 
@@ -56,8 +63,9 @@ def main() -> None:
 
     for _ in range(args.repeats):
         for shape in shapes:
-            timed((shape, "core 1 thread"), lambda: fit_batch(sets, shape, threads=1))
-            timed((shape, "core 2 threads"), lambda: fit_batch(sets, shape, threads=2))
+            asked = oracle.FIT_SHAPES if shape == "all" else shape
+            timed((shape, "core 1 thread"), lambda: fit_batch(sets, asked, threads=1))
+            timed((shape, "core 2 threads"), lambda: fit_batch(sets, asked, threads=2))
             if shape == "all":
                 timed(
                     (shape, "python"), lambda: [oracle.fit_all(h.vertices, h.faces) for h in hulls]
@@ -87,6 +95,42 @@ def main() -> None:
     for name, peer in (("box", box), ("sphere", sphere)):
         ratio = core.volume[:, core.shapes.index(name)] / peer
         print(f"  volume {name} core / trimesh: {ratio.min():.6f} .. {ratio.max():.6f}")
+    _ellipsoid_row(args.ellipsoid_sets, args.repeats)
+
+
+def _on_hull(count: int, n: int) -> list[np.ndarray]:
+    """Sets of n points on random ellipsoids' surfaces (every point a hull vertex)."""
+    rng = np.random.default_rng(1)
+    sets = []
+    for _ in range(count):
+        d = rng.normal(size=(n, 3))
+        d /= np.linalg.norm(d, axis=1)[:, None]
+        q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        sets.append((d * rng.uniform(0.1, 2.0, 3)) @ q.T + rng.normal(size=3))
+    return sets
+
+
+def _ellipsoid_row(count: int, repeats: int) -> None:
+    from meshcol.collision.fit import FIT_SHAPES, fit_batch
+    from meshcol.collision.hull import exact_hull
+
+    print(f"µs per set, 1 thread ({count} sets of all-on-hull points, {repeats} repeats)")
+    for n in (64, 1024):
+        sets = _on_hull(count, n)
+        assert all(len(exact_hull(p).vertices) == n for p in sets)
+        times: dict[str, list[float]] = {}
+        for _ in range(repeats):
+            for shape in FIT_SHAPES:  # each includes the set's exact hull, as a run's does
+                start = time.perf_counter()
+                batch = fit_batch(sets, shape, threads=1)
+                times.setdefault(shape, []).append((time.perf_counter() - start) / count * 1e6)
+                assert np.all(batch.status == 0)
+        line = "  ".join(f"{s} {min(v):8.0f} .. {max(v):8.0f}" for s, v in times.items())
+        print(f"  n={n:5d}  {line}")
+        batch = fit_batch(sets, ("sphere", "box", "ellipsoid"), threads=1)
+        for other in ("sphere", "box"):
+            ratio = batch.volume[:, 2] / batch.volume[:, batch.shapes.index(other)]
+            print(f"    volume ellipsoid / {other}: {ratio.min():.4f} .. {ratio.max():.4f}")
 
 
 if __name__ == "__main__":
