@@ -370,9 +370,9 @@ def _imported_primitives(mujoco: Any, spec: Any, robot: RobotColliders) -> list[
     for collider in robot.colliders:
         if not collider.fitted:
             continue
-        want = types[type(collider.primitive)]
-        ellipsoid = isinstance(collider.primitive, Ellipsoid)
-        written = mujoco.mjtGeom.mjGEOM_SPHERE if ellipsoid else want
+        primitive = collider.primitive
+        want = types[type(primitive)]
+        written = mujoco.mjtGeom.mjGEOM_SPHERE if isinstance(primitive, Ellipsoid) else want
         for geom in spec.geoms:
             if (
                 id(geom) not in taken
@@ -380,9 +380,9 @@ def _imported_primitives(mujoco: Any, spec: Any, robot: RobotColliders) -> list[
                 and geom.parent.name == collider.link
                 and np.allclose(geom.pos, collider.origin[:3, 3], rtol=0, atol=1e-12)
             ):
-                if ellipsoid:
+                if isinstance(primitive, Ellipsoid):
                     geom.type = want
-                    geom.size = list(collider.primitive.semi_axes)
+                    geom.size = list(primitive.semi_axes)
                 taken.add(id(geom))
                 found.append(geom)
                 break
