@@ -6,7 +6,9 @@ the sphere), A/B alternated in one run, ranges over the repeats, volume ratios t
 Then the ellipsoid row: every shape's time per set (1 thread, µs) on sets of 64 and 1,024
 points that are ALL hull vertices (points on random ellipsoids' surfaces, the minimum
 ellipsoid's worst case: every point may carry weight), and the ellipsoid's volume against
-the sphere's and the box's.
+the sphere's and the box's; with --reference, against SciPy's SLSQP on the primal problem
+(tests/collision/test_fit_ellipsoid.py's reference, made to enclose): how near the
+certificate's 1 + 1e-6 the fits end.
 
     .venv/bin/python benchmarks/bench_fit.py --bodies 20 --points 300 --repeats 3
 """
@@ -44,6 +46,7 @@ def main() -> None:
     parser.add_argument("--points", type=int, default=300)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--ellipsoid-sets", type=int, default=20, help="sets per size")
+    parser.add_argument("--reference", action="store_true", help="ellipsoids against SLSQP")
     args = parser.parse_args()
     import trimesh
 
@@ -95,7 +98,7 @@ def main() -> None:
     for name, peer in (("box", box), ("sphere", sphere)):
         ratio = core.volume[:, core.shapes.index(name)] / peer
         print(f"  volume {name} core / trimesh: {ratio.min():.6f} .. {ratio.max():.6f}")
-    _ellipsoid_row(args.ellipsoid_sets, args.repeats)
+    _ellipsoid_row(args.ellipsoid_sets, args.repeats, args.reference)
 
 
 def _on_hull(count: int, n: int) -> list[np.ndarray]:
@@ -110,7 +113,16 @@ def _on_hull(count: int, n: int) -> list[np.ndarray]:
     return sets
 
 
-def _ellipsoid_row(count: int, repeats: int) -> None:
+def _slsqp():
+    path = ROOT / "tests" / "collision" / "test_fit_ellipsoid.py"
+    spec = importlib.util.spec_from_file_location("test_fit_ellipsoid", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module._slsqp
+
+
+def _ellipsoid_row(count: int, repeats: int, reference: bool) -> None:
     from meshcol.collision.fit import FIT_SHAPES, fit_batch
     from meshcol.collision.hull import exact_hull
 
@@ -120,10 +132,13 @@ def _ellipsoid_row(count: int, repeats: int) -> None:
         assert all(len(exact_hull(p).vertices) == n for p in sets)
         times: dict[str, list[float]] = {}
         for _ in range(repeats):
-            for shape in FIT_SHAPES:  # each includes the set's exact hull, as a run's does
+            # each includes the set's exact hull, as a run's does; the last, less the sphere's
+            # time, is the ellipsoid's own
+            for shape in (*FIT_SHAPES, ("sphere", "ellipsoid")):
                 start = time.perf_counter()
                 batch = fit_batch(sets, shape, threads=1)
-                times.setdefault(shape, []).append((time.perf_counter() - start) / count * 1e6)
+                key = shape if isinstance(shape, str) else "sphere+ellipsoid"
+                times.setdefault(key, []).append((time.perf_counter() - start) / count * 1e6)
                 assert np.all(batch.status == 0)
         line = "  ".join(f"{s} {min(v):8.0f} .. {max(v):8.0f}" for s, v in times.items())
         print(f"  n={n:5d}  {line}")
@@ -131,6 +146,10 @@ def _ellipsoid_row(count: int, repeats: int) -> None:
         for other in ("sphere", "box"):
             ratio = batch.volume[:, 2] / batch.volume[:, batch.shapes.index(other)]
             print(f"    volume ellipsoid / {other}: {ratio.min():.4f} .. {ratio.max():.4f}")
+        if reference:
+            slsqp = _slsqp()
+            ratio = batch.volume[:, 2] / np.array([slsqp(p) for p in sets]) - 1.0
+            print(f"    volume ellipsoid / SLSQP's - 1: {ratio.min():.2e} .. {ratio.max():.2e}")
 
 
 if __name__ == "__main__":
