@@ -1,22 +1,21 @@
 """Enclosing primitive fits of a scene's bodies: ``meshcol fit`` and the ``fit`` collider.
 
 Each body (each of its parts, for the collider) gets the sphere, box, capsule, cylinder or
-ellipsoid of :mod:`meshcol.collision.fit` around its exact convex hull, which contains every vertex and
-so the whole mesh. The report gives each fit's parameters and pose, its volume against the
-mesh's and the hull's, and the largest gap: how far the primitive's surface strays from the
-mesh (the largest distance from a sampled point of the primitive's surface to the mesh's
-surface, :data:`GAP_SAMPLES` points).
+ellipsoid of :mod:`meshcol.collision.fit` around its exact convex hull, which contains every
+vertex and so the whole mesh. The report gives each fit's parameters and pose, its volume
+against the mesh's and the hull's, and the largest gap: how far the primitive's surface
+strays from the mesh (the largest distance from a sampled point of the primitive's surface
+to the mesh's surface, :data:`GAP_SAMPLES` points).
 
 ``auto`` fits four and takes the simplest primitive (in the order of
 :data:`meshcol.collision.fit.AUTO_SHAPES`: never the ellipsoid, which not every engine has)
-whose volume is within ``volume_tolerance`` of the
-hull's; when none is, the body keeps its convex hull ("hull"), and the report says which
-primitive came nearest.
+whose volume is within ``volume_tolerance`` of the hull's; when none is, the body keeps its
+convex hull ("hull"), and the report says which primitive came nearest.
 
 Fits are written as Unreal's collision parts (``UBX_``, ``USP_``, ``UCP_``; a cylinder, an
-ellipsoid or a hull, which Unreal has no primitive for, as a ``UCX_`` convex part), as meshes that contain
-the primitive (:func:`meshcol.io.primitives.enclosing_primitive_mesh`), so the file encloses
-what the fit encloses.
+ellipsoid or a hull, which Unreal has no primitive for, as a ``UCX_`` convex part), as meshes
+that contain the primitive (:func:`meshcol.io.primitives.enclosing_primitive_mesh`), so the
+file encloses what the fit encloses.
 """
 
 from __future__ import annotations

@@ -92,11 +92,12 @@ def fit(
     search so that it contains every vertex.
 
     The report (JSON or CSV, one row per body) gives the primitive's parameters (radius,
-    length, full size; an ellipsoid's size is twice its semi-axes), its centre and rotation (quaternion w, x, y, z; capsule and cylinder
-    along local z), its volume, volume_ratio = volume / mesh volume (closed meshes only),
-    hull_ratio = volume / hull volume, and max_gap, the largest distance from the primitive's
-    surface to the mesh (sampled). With --shape auto, simpler_primitive says a primitive is
-    within the tolerance ("could use a simpler primitive") and candidates lists all four.
+    length, full size; an ellipsoid's size is twice its semi-axes), its centre and rotation
+    (quaternion w, x, y, z; capsule and cylinder along local z), its volume, volume_ratio =
+    volume / mesh volume (closed meshes only), hull_ratio = volume / hull volume, and
+    max_gap, the largest distance from the primitive's surface to the mesh (sampled). With
+    --shape auto, simpler_primitive says a primitive is within the tolerance ("could use a
+    simpler primitive") and candidates lists all four.
 
     A robot description (URDF, or MJCF) with --out-dir is rebuilt: each collision mesh
     element becomes its fit, written as the description's own primitive (URDF <box>,
