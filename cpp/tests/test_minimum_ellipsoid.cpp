@@ -90,3 +90,30 @@ TEST_CASE("minimum ellipsoid: the iteration cap leaves a valid certificate and s
     CHECK(full.semi_axes[0] * full.semi_axes[1] * full.semi_axes[2] <=
           capped.semi_axes[0] * capped.semi_axes[1] * capped.semi_axes[2]);
 }
+
+TEST_CASE("fit: the ellipsoid of a set holds every point, flat and collinear sets included") {
+    const FitShape shapes[2] = {FitShape::ELLIPSOID, FitShape::SPHERE};
+    fixtures::Uniform u{23};
+    std::vector<Vec3> cloud, flat, line;
+    for (int i = 0; i < 60; ++i) {
+        cloud.push_back({2.0 * u() + 5.0, u(), 0.3 * u()});
+        flat.push_back({u(), 2.0 * u(), 1.0});
+        line.push_back(Vec3{1, 2, 2} * u());
+    }
+    for (const auto* set : {&cloud, &flat, &line}) {
+        const FitSet s = fit_point_set(set->data(), static_cast<long long>(set->size()), shapes, 2);
+        const PrimitiveFit& e = s.fits[0];
+        REQUIRE(e.status == FitStatus::OK);
+        CHECK(e.volume <= s.fits[1].volume);  // never more than the minimum sphere
+        for (const Vec3& p : *set) {
+            const Vec3 l = e.rotation.transpose_times(p - e.center);
+            double k = 0.0;
+            for (int j = 0; j < 3; ++j) k += (l[j] / e.params[j]) * (l[j] / e.params[j]);
+            CHECK(k <= 1.0);
+        }
+    }
+    const Vec3 bad[4] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, std::nan("")}};
+    const FitSet s = fit_point_set(bad, 4, shapes, 1);
+    CHECK(s.fits[0].status == FitStatus::INVALID_INPUT);
+    CHECK(std::isnan(s.fits[0].params[0]));
+}
