@@ -8,7 +8,10 @@ points that are ALL hull vertices (points on random ellipsoids' surfaces, the mi
 ellipsoid's worst case: every point may carry weight), and the ellipsoid's volume against
 the sphere's and the box's; with --reference, against SciPy's SLSQP on the primal problem
 (tests/collision/test_fit_ellipsoid.py's reference, made to enclose): how near the
-certificate's 1 + 1e-6 the fits end.
+certificate's 1 + 1e-6 the fits end; with --mujoco, against the ellipsoid MuJoCo's compiler
+fits to the hull's mesh (a geom of type ellipsoid with a mesh: its inertia's, or with
+``fitaabb`` its box's), which need not enclose: how far its points stray (the largest
+Mahalanobis norm), how many do, and its volume once scaled to hold them, over ours.
 
     .venv/bin/python benchmarks/bench_fit.py --bodies 20 --points 300 --repeats 3
 """
@@ -47,6 +50,7 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--ellipsoid-sets", type=int, default=20, help="sets per size")
     parser.add_argument("--reference", action="store_true", help="ellipsoids against SLSQP")
+    parser.add_argument("--mujoco", action="store_true", help="against MuJoCo's fitted ellipsoid")
     args = parser.parse_args()
     import trimesh
 
@@ -98,7 +102,7 @@ def main() -> None:
     for name, peer in (("box", box), ("sphere", sphere)):
         ratio = core.volume[:, core.shapes.index(name)] / peer
         print(f"  volume {name} core / trimesh: {ratio.min():.6f} .. {ratio.max():.6f}")
-    _ellipsoid_row(args.ellipsoid_sets, args.repeats, args.reference)
+    _ellipsoid_row(args.ellipsoid_sets, args.repeats, args.reference, args.mujoco)
 
 
 def _on_hull(count: int, n: int) -> list[np.ndarray]:
@@ -122,7 +126,31 @@ def _slsqp():
     return module._slsqp
 
 
-def _ellipsoid_row(count: int, repeats: int, reference: bool) -> None:
+def _mujoco_ellipsoid(points: np.ndarray, aabb: bool) -> tuple[float, float, float]:
+    """MuJoCo's ellipsoid fitted to the hull mesh of ``points``: (its volume, the largest
+    Mahalanobis norm of a point, the fraction of points outside)."""
+    import mujoco
+    from scipy.spatial import ConvexHull
+
+    spec = mujoco.MjSpec()
+    spec.compiler.fitaabb = aabb
+    mesh = spec.add_mesh()
+    mesh.name = "hull"
+    mesh.uservert = points.reshape(-1).tolist()
+    mesh.userface = ConvexHull(points).simplices.reshape(-1).tolist()
+    geom = spec.worldbody.add_geom()
+    geom.type = mujoco.mjtGeom.mjGEOM_ELLIPSOID
+    geom.meshname = "hull"
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    size = np.asarray(model.geom_size[0])
+    local = (points - data.geom_xpos[0]) @ data.geom_xmat[0].reshape(3, 3)
+    norms = np.linalg.norm(local / size, axis=1)
+    return 4.0 / 3.0 * np.pi * float(np.prod(size)), float(norms.max()), float(np.mean(norms > 1))
+
+
+def _ellipsoid_row(count: int, repeats: int, reference: bool, mujoco: bool) -> None:
     from meshcol.collision.fit import FIT_SHAPES, fit_batch
     from meshcol.collision.hull import exact_hull
 
@@ -150,6 +178,15 @@ def _ellipsoid_row(count: int, repeats: int, reference: bool) -> None:
             slsqp = _slsqp()
             ratio = batch.volume[:, 2] / np.array([slsqp(p) for p in sets]) - 1.0
             print(f"    volume ellipsoid / SLSQP's - 1: {ratio.min():.2e} .. {ratio.max():.2e}")
+        for aabb in (False, True) if mujoco else ():
+            fits = np.array([_mujoco_ellipsoid(p, aabb) for p in sets])
+            scaled = fits[:, 0] * fits[:, 1] ** 3 / batch.volume[:, 2]
+            print(
+                f"    MuJoCo's {'fitaabb' if aabb else 'inertia'} ellipsoid: largest norm "
+                f"{fits[:, 1].min():.3f} .. {fits[:, 1].max():.3f}, points outside "
+                f"{fits[:, 2].mean():.1%}, scaled to enclose / ours {scaled.min():.3f} .. "
+                f"{scaled.max():.3f}"
+            )
 
 
 if __name__ == "__main__":
