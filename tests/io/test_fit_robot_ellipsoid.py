@@ -119,3 +119,40 @@ def test_fit_urdf_to_usd_writes_a_containing_mesh(urdf: Path, tmp_path: Path) ->
     stage = Usd.Stage.Open(str(out / "small.usda"))
     names = sorted(p.GetName() for p in stage.Traverse() if p.IsA(UsdGeom.Mesh))
     assert names == ["arm_ellipsoid0", "base_ellipsoid0", "finger_ellipsoid0"]
+
+
+def test_fit_urdf_to_mjcf_keeps_a_sphere_where_the_ellipsoid_is(tmp_path: Path) -> None:
+    """A link whose own sphere sits where the fitted ellipsoid's centre falls, listed first:
+    MuJoCo's importer sees two spheres there (the URDF's and the ellipsoid's placeholder),
+    and the ellipsoid is made of the placeholder, by its radius, not of the first found."""
+    import trimesh
+
+    corners = np.array([[x, y, z] for x in (-0.3, 0.3) for y in (-0.1, 0.1) for z in (-0.05, 0.05)])
+    trimesh.Trimesh(corners, trimesh.convex.convex_hull(corners).faces).export(tmp_path / "box.obj")
+
+    def fit(sphere_at: str) -> tuple[dict, dict]:
+        (tmp_path / "one.urdf").write_text(
+            f'<robot name="one"><link name="base"><collision><origin xyz="{sphere_at}"/>'
+            '<geometry><sphere radius="0.02"/></geometry></collision><collision>'
+            '<geometry><mesh filename="box.obj"/></geometry></collision></link></robot>'
+        )
+        out, report = tmp_path / "out", tmp_path / "fits.json"
+        args = ["fit", str(tmp_path / "one.urdf"), "--out-dir", str(out), "--to", "mjcf"]
+        code, _, stderr = run(*args, "--shape", "ellipsoid", "--report", str(report))
+        assert code == 0, stderr
+        (row,) = json.loads(report.read_text())["bodies"]
+        model = mujoco.MjModel.from_xml_path(str(out / "one.xml"))
+        geoms = {int(model.geom_type[g]): model.geom_size[g].copy() for g in range(model.ngeom)}
+        return row, geoms
+
+    row, _ = fit("1 1 1")
+    # the fit's centre is the box's to its tolerance, not exactly 0: put the sphere there
+    row, geoms = fit(" ".join(repr(float(c)) for c in row["center"]))
+    assert sorted(geoms) == [mujoco.mjtGeom.mjGEOM_SPHERE, mujoco.mjtGeom.mjGEOM_ELLIPSOID]
+    assert geoms[mujoco.mjtGeom.mjGEOM_SPHERE][0] == 0.02
+    ellipsoid = geoms[mujoco.mjtGeom.mjGEOM_ELLIPSOID]
+    np.testing.assert_allclose(ellipsoid, np.asarray(row["size"]) / 2.0, rtol=1e-12)
+    # the box's minimum ellipsoid has its corners on it: sqrt(3) times the half sides
+    np.testing.assert_allclose(
+        sorted(ellipsoid), np.sqrt(3) * np.array([0.05, 0.1, 0.3]), rtol=1e-5
+    )
