@@ -379,7 +379,7 @@ def _imported_primitives(mujoco: Any, spec: Any, robot: RobotColliders) -> list[
                 and geom.type == written
                 and geom.parent.name == collider.link
                 and np.allclose(geom.pos, collider.origin[:3, 3], rtol=0, atol=1e-12)
-                and (written == want or _placeholder_of(geom, primitive))
+                and (not isinstance(primitive, Ellipsoid) or _placeholder_of(geom, primitive))
             ):
                 if isinstance(primitive, Ellipsoid):
                     geom.type = want
