@@ -157,6 +157,10 @@ class defaults:
 
     fit_capsule_golden_steps: int = 40
 
+    fit_ellipsoid_tolerance: float = 1e-06
+
+    fit_ellipsoid_max_iterations: int = 100000
+
     fit_min_sets_per_thread: int = 1
 
     max_mesh_file_bytes: int = 4294967296
@@ -496,7 +500,7 @@ def minimum_ball(points: Annotated[NDArray[numpy.float64], dict(shape=(None, Non
 
 def fit_primitives(points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], shapes: Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C', device='cpu', writable=False)], threads: int = 0) -> tuple[Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int8], dict(shape=(None, None), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, None, 3), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, None, 4, 4), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, None), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, None), order='C')]]:
     """
-    Enclosing primitives of H point sets (set h owns points[offsets[h]:offsets[h + 1]]), shapes (K,) codes (0 sphere, 1 capsule, 2 box, 3 cylinder): (hull_status (H,), dimension (H,), hull_volume (H,), hull_vertex_offsets (H + 1,), hull_vertices (V,) indices into each set, hull_face_offsets (H + 1,), hull_faces (F, 3) into each set's hull vertices, status (H, K), params (H, K, 3), poses (H, K, 4, 4), volume (H, K), excess (H, K)).
+    Enclosing primitives of H point sets (set h owns points[offsets[h]:offsets[h + 1]]), shapes (K,) codes (0 sphere, 1 capsule, 2 box, 3 cylinder, 4 ellipsoid): (hull_status (H,), dimension (H,), hull_volume (H,), hull_vertex_offsets (H + 1,), hull_vertices (V,) indices into each set, hull_face_offsets (H + 1,), hull_faces (F, 3) into each set's hull vertices, status (H, K), params (H, K, 3), poses (H, K, 4, 4), volume (H, K), excess (H, K)).
     """
 
 def dumps_indented(document: object | None, builtin: object) -> str | None:

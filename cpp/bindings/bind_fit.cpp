@@ -57,7 +57,7 @@ void bind_fit(nb::module_& m) {
             std::vector<meshcol::FitShape> kinds(static_cast<size_t>(k));
             for (int i = 0; i < k; ++i) {
                 const std::int8_t s = shapes.data()[i];
-                if (s < 0 || s > 3) throw std::invalid_argument("shapes must be codes 0 to 3");
+                if (s < 0 || s > 4) throw std::invalid_argument("shapes must be codes 0 to 4");
                 kinds[static_cast<size_t>(i)] = static_cast<meshcol::FitShape>(s);
             }
             std::vector<meshcol::FitSet> sets;
@@ -123,9 +123,9 @@ void bind_fit(nb::module_& m) {
         },
         "points"_a, "offsets"_a, "shapes"_a, "threads"_a = 0,
         "Enclosing primitives of H point sets (set h owns points[offsets[h]:offsets[h + 1]]), "
-        "shapes (K,) codes (0 sphere, 1 capsule, 2 box, 3 cylinder): (hull_status (H,), "
-        "dimension (H,), hull_volume (H,), hull_vertex_offsets (H + 1,), hull_vertices (V,) "
-        "indices into each set, hull_face_offsets (H + 1,), hull_faces (F, 3) into each set's "
+        "shapes (K,) codes (0 sphere, 1 capsule, 2 box, 3 cylinder, 4 ellipsoid): "
+        "(hull_status (H,), dimension (H,), hull_volume (H,), hull_vertex_offsets (H + 1,), "
+        "hull_vertices (V,) indices into each set, hull_face_offsets (H + 1,), hull_faces (F, 3) into each set's "
         "hull vertices, status (H, K), params (H, K, 3), poses (H, K, 4, 4), volume (H, K), "
         "excess (H, K)).");
 }

@@ -606,6 +606,12 @@ RoundFit along_best_axis(const std::vector<Vec3>& p, const std::vector<Vec3>& ax
 
 /// How far the point (local frame) lies outside the primitive (as Python's
 /// `signed_distances`).
+/// |diag(1 / a) l|: 1 on the surface of the ellipsoid of semi-axes a (all > 0).
+double mahalanobis(const double* a, const Vec3& l) {
+    return std::sqrt((l.x / a[0]) * (l.x / a[0]) + (l.y / a[1]) * (l.y / a[1]) +
+                     (l.z / a[2]) * (l.z / a[2]));
+}
+
 double outside(FitShape shape, const double* q, const Vec3& l) {
     switch (shape) {
         case FitShape::SPHERE:
@@ -619,6 +625,10 @@ double outside(FitShape shape, const double* q, const Vec3& l) {
         }
         case FitShape::CYLINDER:
             return std::max(std::hypot(l.x, l.y) - q[0], std::fabs(l.z) - 0.5 * q[1]);
+        case FitShape::ELLIPSOID:  // (|l / a| - 1) min(a), as Python's; 0 for a flat one
+            return std::min({q[0], q[1], q[2]}) > 0.0
+                       ? (mahalanobis(q, l) - 1.0) * std::min({q[0], q[1], q[2]})
+                       : 0.0;
     }
     return 0.0;
 }
@@ -636,6 +646,9 @@ void grow(FitShape shape, double* q, double amount) {
             q[0] += amount;
             q[1] += 2.0 * amount;
             break;
+        case FitShape::ELLIPSOID:  // grown by scaling instead (`finish_ellipsoid`)
+            for (int k = 0; k < 3; ++k) q[k] += amount;
+            break;
     }
 }
 
@@ -649,8 +662,46 @@ double volume_of(FitShape shape, const double* q) {
             return kPi * q[0] * q[0] * q[1] + 4.0 / 3.0 * kPi * q[0] * q[0] * q[0];
         case FitShape::CYLINDER:
             return kPi * q[0] * q[0] * q[1];
+        case FitShape::ELLIPSOID:
+            return 4.0 / 3.0 * kPi * q[0] * q[1] * q[2];
     }
     return 0.0;
+}
+
+/// The ellipsoid's growth: every semi-axis first gets the margin (a flat or collinear set's
+/// thickness), then the ellipsoid is SCALED by the largest Mahalanobis norm of any input
+/// point (so the farthest lies on it) and gets the margin again; checked again (rounding of
+/// the growth itself), at most 4 times. Scaling keeps the shape the search found: the
+/// ellipsoid stays within (1 + tolerance) of the minimum's volume, plus the margin.
+void finish_ellipsoid(PrimitiveFit& f, const Vec3* points, long long n, double scale) {
+    double* a = f.params;
+    auto largest = [&]() {
+        double k = 0.0;
+        for (long long i = 0; i < n; ++i)
+            k = std::max(k, mahalanobis(a, f.rotation.transpose_times(points[i] - f.center)));
+        return k;
+    };
+    const double margin = defaults::fit_containment_margin * scale;
+    f.excess = 0.0;  // a flat search's: 0, as Python's `signed_distances`
+    if (std::min({a[0], a[1], a[2]}) > 0.0) {
+        for (long long i = 0; i < n; ++i) {
+            const Vec3 l = f.rotation.transpose_times(points[i] - f.center);
+            f.excess = std::max(f.excess, outside(FitShape::ELLIPSOID, a, l));
+        }
+    }
+    for (int k = 0; k < 3; ++k) a[k] += margin;
+    double k = largest();
+    for (int j = 0; j < 3; ++j) a[j] = a[j] * k + margin;
+    for (int round = 0; round < 4 && (k = largest()) > 1.0; ++round)
+        for (int j = 0; j < 3; ++j) a[j] = a[j] * k + margin;
+    f.volume = volume_of(FitShape::ELLIPSOID, a);
+    bool finite = std::isfinite(f.volume) && std::isfinite(f.excess) && is_finite(f.center);
+    for (int j = 0; j < 3; ++j) finite = finite && std::isfinite(a[j]) && a[j] > 0.0;
+    if (!finite || largest() > 1.0) {
+        f.status = FitStatus::FAILED;
+        for (double& x : f.params) x = kNaN;
+        f.volume = kNaN;
+    }
 }
 
 /// Grows a searched fit (input units) by the largest excess of every input point, evaluated
@@ -662,6 +713,7 @@ void finish(PrimitiveFit& f, FitShape shape, const Vec3* points, long long n, do
             e = std::max(e, outside(shape, f.params, f.rotation.transpose_times(points[i] - f.center)));
         return e;
     };
+    if (shape == FitShape::ELLIPSOID) return finish_ellipsoid(f, points, n, scale);
     const double margin = defaults::fit_containment_margin * scale;
     double e = excess_of();
     f.excess = std::max(e, 0.0);
@@ -783,6 +835,16 @@ FitSet fit_point_set(const Vec3* points, long long n, const FitShape* shapes, in
                 f.params[0] = r.radius;
                 f.params[1] = r.length;
                 center = r.center;
+                break;
+            }
+            case FitShape::ELLIPSOID: {
+                const EllipsoidSearch e = minimum_ellipsoid(
+                    p.data(), static_cast<long long>(p.size()), hull.dimension,
+                    defaults::fit_ellipsoid_tolerance, defaults::fit_ellipsoid_max_iterations);
+                if (!e.converged) f.status = FitStatus::MAX_ITERATIONS;
+                f.rotation = e.rotation;
+                for (int j = 0; j < 3; ++j) f.params[j] = e.semi_axes[j];
+                center = e.center;
                 break;
             }
         }

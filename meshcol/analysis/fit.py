@@ -1,21 +1,21 @@
 """Enclosing primitive fits of a scene's bodies: ``meshcol fit`` and the ``fit`` collider.
 
-Each body (each of its parts, for the collider) gets the sphere, box, capsule or cylinder of
-:mod:`meshcol.collision.fit` around its exact convex hull, which contains every vertex and
-so the whole mesh. The report gives each fit's parameters and pose, its volume against the
-mesh's and the hull's, and the largest gap: how far the primitive's surface strays from the
-mesh (the largest distance from a sampled point of the primitive's surface to the mesh's
-surface, :data:`GAP_SAMPLES` points).
+Each body (each of its parts, for the collider) gets the sphere, box, capsule, cylinder or
+ellipsoid of :mod:`meshcol.collision.fit` around its exact convex hull, which contains every
+vertex and so the whole mesh. The report gives each fit's parameters and pose, its volume
+against the mesh's and the hull's, and the largest gap: how far the primitive's surface
+strays from the mesh (the largest distance from a sampled point of the primitive's surface
+to the mesh's surface, :data:`GAP_SAMPLES` points).
 
-``auto`` fits all four and takes the simplest primitive (in the order of
-:data:`meshcol.collision.fit.FIT_SHAPES`) whose volume is within ``volume_tolerance`` of the
-hull's; when none is, the body keeps its convex hull ("hull"), and the report says which
-primitive came nearest.
+``auto`` fits four and takes the simplest primitive (in the order of
+:data:`meshcol.collision.fit.AUTO_SHAPES`: never the ellipsoid, which not every engine has)
+whose volume is within ``volume_tolerance`` of the hull's; when none is, the body keeps its
+convex hull ("hull"), and the report says which primitive came nearest.
 
-Fits are written as Unreal's collision parts (``UBX_``, ``USP_``, ``UCP_``; a cylinder or
-a hull, which Unreal has no primitive for, as a ``UCX_`` convex part), as meshes that contain
-the primitive (:func:`meshcol.io.primitives.enclosing_primitive_mesh`), so the file encloses
-what the fit encloses.
+Fits are written as Unreal's collision parts (``UBX_``, ``USP_``, ``UCP_``; a cylinder, an
+ellipsoid or a hull, which Unreal has no primitive for, as a ``UCX_`` convex part), as meshes
+that contain the primitive (:func:`meshcol.io.primitives.enclosing_primitive_mesh`), so the
+file encloses what the fit encloses.
 """
 
 from __future__ import annotations
@@ -29,12 +29,12 @@ import numpy as np
 
 from meshcol.analysis.hull import MeshOutputReport
 from meshcol.analysis.rules import robot_warnings
-from meshcol.collision.fit import FIT_SHAPES, PrimitiveFit, fit_batch
+from meshcol.collision.fit import AUTO_SHAPES, FIT_SHAPES, PrimitiveFit, fit_batch
 from meshcol.errors import InvalidMeshError
 from meshcol.geometry.rotations import quaternion_from_matrix
 from meshcol.io.robot import RobotOptions
 from meshcol.io.scene import as_scene
-from meshcol.types import Body, Box, Capsule, Cylinder, Sphere
+from meshcol.types import Body, Box, Capsule, Cylinder, Ellipsoid, Sphere
 
 __all__ = [
     "CSV_COLUMNS",
@@ -62,7 +62,14 @@ DEFAULT_VOLUME_TOLERANCE = 0.15
 GAP_SAMPLES = 4096
 
 #: Unreal's name prefix of each collider a fit can become.
-UNREAL_PREFIX = {"box": "UBX", "sphere": "USP", "capsule": "UCP", "cylinder": "UCX", "hull": "UCX"}
+UNREAL_PREFIX = {
+    "box": "UBX",
+    "sphere": "USP",
+    "capsule": "UCP",
+    "cylinder": "UCX",
+    "ellipsoid": "UCX",
+    "hull": "UCX",
+}
 
 #: Columns of :meth:`FitReport.to_csv`, one row per body.
 CSV_COLUMNS = (
@@ -100,7 +107,7 @@ class BodyFit:
     Attributes
     ----------
     fits : dict of str to PrimitiveFit
-        The primitives fitted (one, or all four for ``auto``).
+        The primitives fitted (one, or the four of ``AUTO_SHAPES`` for ``auto``).
     chosen : str
         The shape taken: a key of ``fits``, or ``"hull"`` when ``auto`` found no primitive
         within the volume tolerance.
@@ -167,7 +174,7 @@ def fit_point_sets(
     if not volume_tolerance >= 0:
         raise ValueError(f"volume_tolerance must be >= 0, got {volume_tolerance}")
     sets = [np.ascontiguousarray(p, dtype=np.float64) for p in point_sets]
-    batch = fit_batch(sets, "all" if shape == "auto" else shape, threads=threads)
+    batch = fit_batch(sets, AUTO_SHAPES if shape == "auto" else shape, threads=threads)
     out: list[BodyFit | InvalidMeshError] = []
     for h, points in enumerate(sets):
         dimension = int(batch.dimension[h])
@@ -188,7 +195,7 @@ def fit_point_sets(
         fits = batch.fits(h)
         if shape == "auto":
             limit = (1.0 + volume_tolerance) * hull_volume
-            chosen = next((n for n in FIT_SHAPES if fits[n].volume <= limit), "hull")
+            chosen = next((n for n in AUTO_SHAPES if fits[n].volume <= limit), "hull")
             if dimension == 2:
                 chosen = "box"  # a flat body: its box (as thin as the margin) is its collider
         else:
@@ -277,10 +284,20 @@ def _parameters(fit_: PrimitiveFit) -> dict[str, Any]:
     return {
         "radius": p.radius if isinstance(p, (Sphere, Capsule, Cylinder)) else None,
         "length": p.length if isinstance(p, (Capsule, Cylinder)) else None,
-        "size": list(p.size) if isinstance(p, Box) else None,
+        "size": _size(p),
         "center": [float(v) for v in fit_.pose[:3, 3]],
         "quaternion": quaternion_from_matrix(fit_.pose[:3, :3]),
     }
+
+
+def _size(primitive: Any) -> list[float] | None:
+    """The row's ``size``: a box's sides, an ellipsoid's full extents (twice its semi-axes)
+    along its local axes; None for the round primitives."""
+    if isinstance(primitive, Box):
+        return list(primitive.size)
+    if isinstance(primitive, Ellipsoid):
+        return [2.0 * a for a in primitive.semi_axes]
+    return None
 
 
 def _max_gap(fit_: PrimitiveFit, body: Body, hull: BodyFit, pose: np.ndarray) -> float:
@@ -353,9 +370,11 @@ class FitReport(MeshOutputReport):
     @property
     def summary(self) -> dict[str, Any]:
         shapes = [row["shape"] for row in self.bodies]
+        # the ellipsoid is counted when asked for: auto never takes one
+        names = (*AUTO_SHAPES, "hull") + (("ellipsoid",) if self.shape == "ellipsoid" else ())
         return {
             "bodies": len(self.bodies),
-            "shapes": {name: shapes.count(name) for name in (*FIT_SHAPES, "hull")},
+            "shapes": {name: shapes.count(name) for name in names},
             "simpler_primitive": sum(1 for row in self.bodies if row["simpler_primitive"]),
             "files_written": self.files_written,
         }
@@ -531,9 +550,9 @@ def fit(
     Parameters
     ----------
     inputs : Scene, sequence of Body, or path(s) of meshes / one scene manifest
-    shape : {"sphere", "capsule", "box", "cylinder", "auto"}
-        The primitive; ``auto`` fits all four and takes the simplest within
-        ``volume_tolerance`` of the hull's volume (else the hull).
+    shape : {"sphere", "capsule", "box", "cylinder", "ellipsoid", "auto"}
+        The primitive; ``auto`` fits the four of ``AUTO_SHAPES`` and takes the simplest
+        within ``volume_tolerance`` of the hull's volume (else the hull).
     volume_tolerance : float
         For ``auto``: a primitive is taken when its volume is at most (1 + this) times the
         hull's.

@@ -10,9 +10,10 @@ collision element, and the description is written back around them
   decomposed on its own, as ``meshcol check --shape decomposed`` does, so the two share
   cache entries), through the content cache and ``jobs`` worker processes, one mesh a task;
 - ``fit``: ONE enclosing primitive per collision element (:func:`meshcol.analysis.fit.fit_body`:
-  box, sphere, capsule or cylinder, or the hull when ``auto`` finds none within its volume
-  tolerance), written as the description's own primitive element (``<box>``, ``<sphere>``,
-  ``<cylinder>``, ``<capsule>``; MJCF geom types) at its pose.
+  box, sphere, capsule, cylinder or ellipsoid, or the hull when ``auto`` finds none within its
+  volume tolerance), written as the description's own primitive element (``<box>``,
+  ``<sphere>``, ``<cylinder>``, ``<capsule>``; MJCF geom types, the ellipsoid included) at its
+  pose. URDF has no ellipsoid: ``--shape ellipsoid`` to a URDF is refused before any fit.
 
 Primitive elements (box, sphere, cylinder, capsule) are kept as they are: they are already
 exact convex colliders. Colliders are computed in the link frame (the element's origin and
@@ -621,9 +622,14 @@ def rebuild_fits(
         ``frame="link"``, ``description`` the file written.
     """
     from meshcol.analysis.fit import DEFAULT_VOLUME_TOLERANCE, FitReport, fit_row
+    from meshcol.io.robot import description_kind
     from meshcol.io.robot_write import write_robot
 
     tolerance = DEFAULT_VOLUME_TOLERANCE if volume_tolerance is None else float(volume_tolerance)
+    if shape == "ellipsoid" and (to or description_kind(path)) == "urdf":
+        from meshcol.io.urdf_write import no_ellipsoid
+
+        raise no_ellipsoid(os.fspath(path))  # before any fit: URDF cannot take one
     robot, info = robot_colliders(
         path,
         "fit",

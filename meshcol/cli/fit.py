@@ -1,4 +1,4 @@
-"""``meshcol fit``: the enclosing sphere, box, capsule or cylinder of each body."""
+"""``meshcol fit``: the enclosing sphere, box, capsule, cylinder or ellipsoid of each body."""
 
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ from meshcol.io.robot import RobotOptions
 
 @click.command(
     "fit",
-    short_help="Enclosing primitive (box, sphere, capsule, cylinder) of each body.",
+    short_help="Enclosing primitive (box, sphere, capsule, cylinder, ellipsoid) of each body.",
     context_settings=CONTEXT_SETTINGS,
 )
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
@@ -35,8 +35,9 @@ from meshcol.io.robot import RobotOptions
     type=click.Choice(SHAPE_CHOICES),
     default="auto",
     show_default=True,
-    help="The primitive; auto fits all four and takes the simplest (sphere, capsule, box, "
-    "cylinder) within --volume-tolerance of the hull's volume, else keeps the hull.",
+    help="The primitive; auto fits four and takes the simplest (sphere, capsule, box, "
+    "cylinder; never the ellipsoid, which not every engine has) within --volume-tolerance of "
+    "the hull's volume, else keeps the hull.",
 )
 @click.option(
     "--volume-tolerance",
@@ -53,8 +54,8 @@ from meshcol.io.robot import RobotOptions
     "output",
     metavar="FILE",
     help="Write the fits to FILE as Unreal collision parts (UBX_, USP_, UCP_; UCX_ for a "
-    "cylinder or a kept hull), meshes that contain the primitive; several bodies need .obj "
-    "or .glb.  [default: no mesh file]",
+    "cylinder, an ellipsoid or a kept hull), meshes that contain the primitive; several "
+    "bodies need .obj or .glb.  [default: no mesh file]",
 )
 @click.option(
     "--out-dir",
@@ -85,21 +86,25 @@ def fit(
 
     sphere: the minimum enclosing sphere. box: a near-minimal oriented box (hull face
     normals and principal axes tried, then polished). cylinder and capsule: along the best
-    axis found, radius by the smallest circle across it. Each is grown by the rounding of its
+    axis found, radius by the smallest circle across it. ellipsoid: the minimum-volume
+    enclosing ellipsoid (Khachiyan's method), its volume certified within 1e-6 of the
+    minimum's, then scaled so that no vertex is outside. Each is grown by the rounding of its
     search so that it contains every vertex.
 
     The report (JSON or CSV, one row per body) gives the primitive's parameters (radius,
-    length, full size), its centre and rotation (quaternion w, x, y, z; capsule and cylinder
-    along local z), its volume, volume_ratio = volume / mesh volume (closed meshes only),
-    hull_ratio = volume / hull volume, and max_gap, the largest distance from the primitive's
-    surface to the mesh (sampled). With --shape auto, simpler_primitive says a primitive is
-    within the tolerance ("could use a simpler primitive") and candidates lists all four.
+    length, full size; an ellipsoid's size is twice its semi-axes), its centre and rotation
+    (quaternion w, x, y, z; capsule and cylinder along local z), its volume, volume_ratio =
+    volume / mesh volume (closed meshes only), hull_ratio = volume / hull volume, and
+    max_gap, the largest distance from the primitive's surface to the mesh (sampled). With
+    --shape auto, simpler_primitive says a primitive is within the tolerance ("could use a
+    simpler primitive") and candidates lists all four.
 
     A robot description (URDF, or MJCF) with --out-dir is rebuilt: each collision mesh
     element becomes its fit, written as the description's own primitive (URDF <box>,
     <sphere>, <cylinder>, and <capsule>, which MuJoCo's importer and meshcol read but ROS's
-    urdfdom does not; MJCF geom types) with an <origin> in the link frame; a hull kept by
-    --shape auto goes to OUT/<link>_NN.obj. Visuals, inertials, joints and existing primitive
+    urdfdom does not; MJCF geom types, ellipsoid included) with an <origin> in the link
+    frame; a hull kept by --shape auto goes to OUT/<link>_NN.obj. URDF has no ellipsoid:
+    --shape ellipsoid needs --to mjcf, usd or glb. Visuals, inertials, joints and existing primitive
     elements are untouched. --to mjcf, glb and usd as for meshcol hull.
 
     \b
@@ -108,6 +113,7 @@ def fit(
       meshcol fit props/*.obj --shape box --report boxes.csv
       meshcol fit level.json -o level_colliders.obj --report fits.json
       meshcol fit panda.urdf --out-dir panda_fits/ --to mjcf --shape capsule
+      meshcol fit parts/*.obj --shape ellipsoid --report ellipsoids.csv
       meshcol fit props/*.obj --shape box --format markdown --snapshots pr/
     """
     robot = mesh_outputs(inputs, output, out_dir, to, fmt, report)

@@ -1,4 +1,5 @@
-"""Enclosing primitives of point sets: the sphere, box, cylinder and capsule that contain them.
+"""Enclosing primitives of point sets: the sphere, box, cylinder, capsule and ellipsoid that
+contain them.
 
 Arrays in, primitives out. The fits run in the C++ core (``cpp/src/fit.cpp``), batched over
 point sets (:func:`fit_batch`: one native call, threads over sets, GIL released, a status per
@@ -24,7 +25,19 @@ How near to the smallest each fit is:
   extent along it (exact for its axis);
 - **capsule**: along the best axis as for the cylinder; for a radius r the shortest segment
   that keeps every point within r is exact, and r is searched (a grid, then golden-section
-  steps) between the projected circle's radius and the radius of a ball centred on the axis.
+  steps) between the projected circle's radius and the radius of a ball centred on the axis;
+- **ellipsoid**: the minimum-volume enclosing ellipsoid of the hull's vertices, by
+  Khachiyan's method (1996) with Kumar and Yildirim's start (2005) and Todd and Yildirim's
+  drop steps (2007), run on the vertices mapped to a unit box along their principal axes
+  (the problem is affine-equivariant). It stops on a certificate: the dual bound (Todd 2016)
+  proves the volume within (1 + :data:`ELLIPSOID_TOLERANCE`) of the minimum's. The ellipsoid
+  is then SCALED by the largest Mahalanobis norm of any input point (so the farthest lies on
+  its surface, none outside) and gets the margin on each semi-axis: within (1 + tolerance) of
+  the minimum volume plus that margin. A flat set's ellipsoid is its plane's minimum
+  ellipse, a collinear set's its segment, both as thick as the margin.
+
+:data:`AUTO_SHAPES` are the four ``auto`` chooses among (``meshcol fit --shape auto``):
+not every engine has an ellipsoid, so ``auto`` never takes one.
 """
 
 from __future__ import annotations
@@ -40,8 +53,10 @@ from meshcol.errors import InvalidMeshError
 from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, Primitive, Sphere
 
 __all__ = [
+    "AUTO_SHAPES",
     "BOX_NORMALS",
     "CONTAINMENT_MARGIN",
+    "ELLIPSOID_TOLERANCE",
     "FIT_SHAPES",
     "FitBatch",
     "FitStatus",
@@ -49,6 +64,7 @@ __all__ = [
     "enclosing_box",
     "enclosing_capsule",
     "enclosing_cylinder",
+    "enclosing_ellipsoid",
     "enclosing_sphere",
     "fit_all",
     "fit_batch",
@@ -60,7 +76,11 @@ __all__ = [
 
 #: The primitives :func:`fit_primitive` fits, simplest first (the order ``auto`` prefers);
 #: their index is the core's ``FitShape`` code.
-FIT_SHAPES = ("sphere", "capsule", "box", "cylinder")
+FIT_SHAPES = ("sphere", "capsule", "box", "cylinder", "ellipsoid")
+
+#: The primitives ``auto`` chooses among, in its order of preference: every engine has them
+#: (an ellipsoid is MuJoCo's, not PhysX's, Unreal's or URDF's).
+AUTO_SHAPES = FIT_SHAPES[:4]
 
 #: Relative margin (times the points' extent) every fit keeps beyond its farthest point.
 #: Mirrors the core's ``defaults.fit_containment_margin`` (``tests/test_fit.py`` checks).
@@ -69,6 +89,10 @@ CONTAINMENT_MARGIN = 1e-9
 #: How many hull plane normals (the largest by area) the box search tries as an axis.
 #: Mirrors the core's ``defaults.fit_box_normals``.
 BOX_NORMALS = 200
+
+#: The ellipsoid's volume is certified within (1 + this) of the minimum enclosing
+#: ellipsoid's (before the containment margin). Mirrors ``defaults.fit_ellipsoid_tolerance``.
+ELLIPSOID_TOLERANCE = 1e-6
 
 
 class FitStatus(enum.IntEnum):
@@ -86,8 +110,9 @@ class PrimitiveFit:
 
     Attributes
     ----------
-    primitive : Sphere, Box, Capsule or Cylinder
-        Centred on its local origin; capsule and cylinder along local z.
+    primitive : Sphere, Box, Capsule, Cylinder or Ellipsoid
+        Centred on its local origin; capsule and cylinder along local z; an ellipsoid's
+        semi-axes along local x, y, z (descending).
     pose : (4, 4) float64
         Local to the points' frame (rigid): ``points = R @ local + t``.
     volume : float
@@ -135,7 +160,7 @@ class FitBatch:
         :class:`FitStatus` of each fit.
     params : (H, K, 3) float64
         sphere: radius; box: sizes along local x, y, z; capsule and cylinder: radius,
-        length. NaN without a fit.
+        length; ellipsoid: semi-axes along local x, y, z. NaN without a fit.
     poses : (H, K, 4, 4) float64
         Local to the set's frame.
     volume, excess : (H, K) float64
@@ -182,6 +207,8 @@ class FitBatch:
             primitive = Box((float(p[0]), float(p[1]), float(p[2])))
         elif shape == "capsule":
             primitive = Capsule(float(p[0]), float(p[1]))
+        elif shape == "ellipsoid":
+            primitive = Ellipsoid((float(p[0]), float(p[1]), float(p[2])))
         else:
             primitive = Cylinder(float(p[0]), float(p[1]))
         pose = self.poses[h, k].copy()
@@ -273,7 +300,7 @@ def primitive_volume(primitive: Primitive) -> float:
     if isinstance(primitive, Capsule):
         r = primitive.radius
         return math.pi * r * r * primitive.length + 4.0 / 3.0 * math.pi * r**3
-    if isinstance(primitive, Ellipsoid):  # a body's own primitive (fit never makes one)
+    if isinstance(primitive, Ellipsoid):
         a, b, c = primitive.semi_axes
         return 4.0 / 3.0 * math.pi * a * b * c
     return math.pi * primitive.radius**2 * primitive.length
@@ -294,8 +321,8 @@ def signed_distances(primitive: Primitive, local_points: np.ndarray) -> np.ndarr
         return np.max(np.abs(p) - 0.5 * np.asarray(primitive.size), axis=1)
     if isinstance(primitive, Ellipsoid):
         # (|p / a| - 1) min(a): the point is on the boundary of the ellipsoid scaled by
-        # k = |p / a|, which lies (k - 1) min(a) or more outside it (a body's own primitive:
-        # fit never makes one; a flat one gives 0)
+        # k = |p / a|, which lies (k - 1) min(a) or more outside it (a flat one gives 0; the
+        # core's growth of a fitted ellipsoid evaluates the same)
         axes = np.asarray(primitive.semi_axes)
         smallest = float(axes.min())
         if smallest == 0.0:
@@ -361,6 +388,20 @@ def enclosing_capsule(points: np.ndarray, faces: np.ndarray | None = None) -> Pr
     """A capsule around points (n, 3) along the best axis, as :func:`enclosing_cylinder`;
     radius and segment searched together for that axis."""
     return _one("capsule", points).fit(0, "capsule")
+
+
+def enclosing_ellipsoid(points: np.ndarray) -> PrimitiveFit:
+    """The minimum-volume enclosing ellipsoid of points (n, 3), within (1 +
+    :data:`ELLIPSOID_TOLERANCE`) of the minimum volume, scaled to contain every point (status
+    MAX_ITERATIONS when the iteration cap stopped it before the certificate: it still
+    contains every point).
+
+    Notes
+    -----
+    Khachiyan (1996); Kumar and Yildirim (2005); Todd and Yildirim (2007); the stopping
+    certificate is the dual bound of Todd (2016), *Minimum-Volume Ellipsoids*.
+    """
+    return _one("ellipsoid", points).fit(0, "ellipsoid")
 
 
 def fit_primitive(shape: str, points: np.ndarray, faces: np.ndarray | None = None) -> PrimitiveFit:

@@ -356,7 +356,9 @@ def _part_geoms(
 
 def _imported_primitives(mujoco: Any, spec: Any, robot: RobotColliders) -> list[Any]:
     """The geoms MuJoCo's URDF importer made of the fitted primitives: on the link's body, of
-    the primitive's type, size and position (the URDF carries them at full precision)."""
+    the primitive's type, at its position (the URDF carries it at full precision). A fitted
+    ellipsoid came as its placeholder sphere (URDF has none), told from a sphere of the
+    description's at the same place by its radius: its geom is made the ellipsoid here."""
     types = {
         Box: mujoco.mjtGeom.mjGEOM_BOX,
         Sphere: mujoco.mjtGeom.mjGEOM_SPHERE,
@@ -368,18 +370,30 @@ def _imported_primitives(mujoco: Any, spec: Any, robot: RobotColliders) -> list[
     for collider in robot.colliders:
         if not collider.fitted:
             continue
-        want = types[type(collider.primitive)]
+        primitive = collider.primitive
+        want = types[type(primitive)]
+        written = mujoco.mjtGeom.mjGEOM_SPHERE if isinstance(primitive, Ellipsoid) else want
         for geom in spec.geoms:
             if (
                 id(geom) not in taken
-                and geom.type == want
+                and geom.type == written
                 and geom.parent.name == collider.link
                 and np.allclose(geom.pos, collider.origin[:3, 3], rtol=0, atol=1e-12)
+                and (not isinstance(primitive, Ellipsoid) or _placeholder_of(geom, primitive))
             ):
+                if isinstance(primitive, Ellipsoid):
+                    geom.type = want
+                    geom.size = list(primitive.semi_axes)
                 taken.add(id(geom))
                 found.append(geom)
                 break
     return found
+
+
+def _placeholder_of(geom: Any, ellipsoid: Ellipsoid) -> bool:
+    """Whether a sphere geom is the placeholder of ``ellipsoid`` (its largest semi-axis as
+    the radius, the URDF's own number): not a sphere the description had at the same place."""
+    return bool(np.isclose(geom.size[0], max(ellipsoid.semi_axes), rtol=1e-12, atol=0))
 
 
 def _mark(mujoco: Any, spec: Any, geoms: list[Any]) -> dict[str, tuple[bool, dict[str, str]]]:
@@ -563,7 +577,7 @@ def _spec_from_urdf(
     with a note."""
     from lxml import etree
 
-    text = urdf_text(robot, files, {"collider": stage + os.sep})
+    text = urdf_text(robot, files, {"collider": stage + os.sep}, ellipsoid_placeholders=True)
     root = etree.fromstring(text.encode("utf-8"))
     converted: dict[str, str] = {}
     for link in root.findall("link"):

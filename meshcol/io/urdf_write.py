@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 from meshcol.errors import MissingDependencyError, SceneError
 from meshcol.io.urdf_lenient import read_description_xml
-from meshcol.types import Box, Capsule, Cylinder, Sphere
+from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, Sphere
 
 if TYPE_CHECKING:
     from meshcol.io.robot_write import Collider, RobotColliders
@@ -43,11 +43,16 @@ def urdf_text(
     files: dict[int, list[str]],
     prefix: dict[str, str],
     out_dir: str | None = None,
+    ellipsoid_placeholders: bool = False,
 ) -> str:
     """The input URDF with each rebuilt ``<collision>`` pointing at its part files
     (``prefix``: folder prepended to the part file names, for MuJoCo's importer). With
     ``out_dir``, the other mesh references (visuals) are rewritten by
-    :func:`_references_from` so that they name the input's files from there."""
+    :func:`_references_from` so that they name the input's files from there.
+
+    URDF has no ellipsoid: a fitted one is refused (:func:`no_ellipsoid`), or with
+    ``ellipsoid_placeholders`` (for MuJoCo's importer, whose geom is then made the
+    ellipsoid) written as a ``<sphere>`` of its largest semi-axis at its origin."""
     from lxml import etree
 
     tree = parse_xml(robot.source)
@@ -67,7 +72,7 @@ def urdf_text(
             )
         element = elements[collider.index]
         if collider.fitted:
-            _urdf_primitive(element, collider)
+            _urdf_primitive(element, collider, robot.source, ellipsoid_placeholders)
             continue
         name = element.get("name")
         names = files[i]
@@ -177,9 +182,22 @@ def format_numbers(values: Any) -> str:
     return " ".join(repr(float(v)) if abs(float(v)) >= 1e-15 else "0" for v in values)
 
 
-def _urdf_primitive(element: Any, collider: Collider) -> None:
-    """Make a ``<collision>`` element the fitted primitive at the collider's origin."""
+def no_ellipsoid(source: str) -> SceneError:
+    """The error of an ellipsoid collider for a URDF, which has no ellipsoid element (and no
+    importer reads one): the fit goes to a format that has one, or is another shape."""
+    return SceneError(
+        "URDF has no ellipsoid: write the fits with --to mjcf, usd or glb, or fit another --shape",
+        source,
+    )
+
+
+def _urdf_primitive(element: Any, collider: Collider, source: str, placeholder: bool) -> None:
+    """Make a ``<collision>`` element the fitted primitive at the collider's origin (an
+    ellipsoid: refused, or its ``placeholder`` sphere)."""
     from lxml import etree
+
+    if isinstance(collider.primitive, Ellipsoid) and not placeholder:
+        raise no_ellipsoid(source)
 
     from meshcol.geometry.rotations import rpy_from_matrix
 
@@ -191,7 +209,9 @@ def _urdf_primitive(element: Any, collider: Collider) -> None:
     origin.tail = before.tail if before is not None else element.text
     geometry.addprevious(origin)
     p = collider.primitive
-    if isinstance(p, Box):
+    if isinstance(p, Ellipsoid):
+        shape = etree.SubElement(geometry, "sphere", radius=format_numbers([max(p.semi_axes)]))
+    elif isinstance(p, Box):
         shape = etree.SubElement(geometry, "box", size=format_numbers(p.size))
     elif isinstance(p, Sphere):
         shape = etree.SubElement(geometry, "sphere", radius=format_numbers([p.radius]))

@@ -89,11 +89,14 @@ def write_usd(robot: RobotColliders, labels: list[list[str]], path: str) -> None
 
 
 def _ellipsoid_part(collider: Collider) -> tuple[np.ndarray, np.ndarray]:
-    """An ellipsoid collider's tessellation in the link frame (USD has no ellipsoid prim)."""
-    from meshcol.io.primitives import primitive_mesh
+    """An ellipsoid collider's tessellation in the link frame (USD has no ellipsoid prim):
+    the description's own ellipsoid inscribed, as read; a fitted one (``meshcol fit``) by
+    the mesh that contains it, so that the file encloses what the fit enclosed."""
+    from meshcol.io.primitives import enclosing_primitive_mesh, primitive_mesh
 
     assert collider.primitive is not None
-    vertices, faces = primitive_mesh(collider.primitive)
+    tessellate = enclosing_primitive_mesh if collider.fitted else primitive_mesh
+    vertices, faces = tessellate(collider.primitive)
     origin = collider.origin
     return vertices @ origin[:3, :3].T + origin[:3, 3], faces
 

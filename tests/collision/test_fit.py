@@ -394,7 +394,7 @@ def _compare_with_oracle(point_sets: list[np.ndarray]) -> None:
     from meshcol.collision.fit import fit_batch
     from meshcol.collision.hull import exact_hull
 
-    batch = fit_batch(point_sets, "all", threads=1)
+    batch = fit_batch(point_sets, fit_oracle.FIT_SHAPES, threads=1)  # the four it has
     for h, points in enumerate(point_sets):
         hull = exact_hull(points)
         oracle = fit_oracle.fit_all(hull.vertices, hull.faces if hull.dimension == 3 else None)
