@@ -1,8 +1,8 @@
 """A manifest of primitive bodies kept as columns, from the manifest to the packed shapes.
 
-A manifest of 1,000,000 spheres, boxes, capsules, cylinders and ellipsoids needs no Python object per
-body to be checked: its names, primitive types, lengths and poses are arrays already
-(:class:`meshcol.io.scene_columns.Columns`). :class:`PrimitiveBodies` keeps them so: a
+A manifest of 1,000,000 spheres, boxes, capsules, cylinders and ellipsoids needs no Python
+object per body to be checked: its names, primitive types, lengths and poses are arrays
+already (:class:`meshcol.io.scene_columns.Columns`). :class:`PrimitiveBodies` keeps them so: a
 sequence of :class:`~meshcol.types.Body` that makes a body only when one is asked for by
 index (a writer, a pair that needs its triangles), each the body the body loop builds, to the
 bit. The check reads its columns instead (the readers of
