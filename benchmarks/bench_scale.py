@@ -14,8 +14,9 @@ end; and a 300,000-body manifest (instances of 16 assets) loaded (``load_inputs`
 fresh process).
 
 Primitive rows (issue 32): manifests of N primitive bodies and no mesh file (``--primitives``):
-``spheres`` (every body a sphere) and ``mixed`` (spheres, boxes, capsules and cylinders in
-turn, a third of them turned), on a jittered 3-D grid of pitch 0.8 m with sizes 0.2-0.45 m, so
+``spheres`` (every body a sphere), ``mixed`` (spheres, boxes, capsules and cylinders in
+turn, a third of them turned) and ``ellipsoids`` (as mixed, with an ellipsoid of semi-axes
+(r, 0.2, 0.25) fifth in turn), on a jittered 3-D grid of pitch 0.8 m with sizes 0.2-0.45 m, so
 a few bodies in a hundred touch or overlap a neighbour; ``pile`` (spheres all within 0.1 m of
 the origin: N(N-1)/2 candidate pairs, the memory a pair costs); ``meshcol check`` from the command
 line, report written, with its wall and CPU time and peak memory.
@@ -33,7 +34,8 @@ side of each case (:func:`warm_up`: bytecode compiled, files in the page cache).
 loading included, and are skipped with a printed reason when missing or past ``--peer-max``.
 
 Run: .venv/bin/python benchmarks/bench_scale.py [--sizes 1000 10000 100000] [--peer-max 10000]
-     [--extras] [--threads 0] [--primitives 100000 1000000] [--primitive-kinds spheres mixed]
+     [--extras] [--threads 0] [--primitives 100000 1000000]
+     [--primitive-kinds spheres mixed ellipsoids]
      [--stages]
 Reader alone: .venv/bin/python benchmarks/bench_scale.py --reader --sizes 100000 --repeat 3
      [--baseline ../main/.venv/bin/meshcol]   (the core's read_mesh_files over the unique-asset
@@ -208,8 +210,8 @@ def instances_folder(n: int = 300_000) -> Path:
 
 
 def primitives_folder(n: int, kind: str) -> Path:
-    """A manifest of ``n`` primitive bodies (``kind``: spheres, mixed, or pile: spheres all
-    overlapping), no mesh file."""
+    """A manifest of ``n`` primitive bodies (``kind``: spheres, mixed, ellipsoids (mixed with
+    ellipsoids), or pile: spheres all overlapping), no mesh file."""
     folder = CACHE / f"primitives-{kind}{n}"
     manifest = folder / "scene.json"
     if manifest.exists():
@@ -227,7 +229,7 @@ def primitives_folder(n: int, kind: str) -> Path:
     bodies = []
     for i in range(n):
         r = size[i]
-        k = 0 if kind == "spheres" else i % 4
+        k = 0 if kind == "spheres" else i % 5 if kind == "ellipsoids" else i % 4
         body: dict = {
             "name": f"p{i:07d}",
             "primitive": [
@@ -235,10 +237,11 @@ def primitives_folder(n: int, kind: str) -> Path:
                 {"type": "box", "size": [2 * r, 0.4, 0.5]},
                 {"type": "capsule", "radius": r / 2, "length": 0.4},
                 {"type": "cylinder", "radius": r / 2, "length": 0.5},
+                {"type": "ellipsoid", "semi_axes": [r, 0.2, 0.25]},
             ][k],
             "position": position[i],
         }
-        if kind == "mixed" and i % 3 == 0:
+        if kind in ("mixed", "ellipsoids") and i % 3 == 0:
             body["rotation"] = {"quaternion": quaternion[i]}
         bodies.append(body)
     manifest.write_text(json.dumps({"units": "m", "bodies": bodies}))
@@ -548,7 +551,7 @@ def main() -> None:
         "--primitive-kinds",
         nargs="+",
         default=["spheres", "mixed"],
-        choices=["spheres", "mixed", "pile"],
+        choices=["spheres", "mixed", "ellipsoids", "pile"],
         help="pile: N spheres within 0.1 m of the origin, N(N-1)/2 candidate pairs",
     )
     parser.add_argument(

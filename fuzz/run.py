@@ -70,6 +70,7 @@ def _manifest_seeds(folder: Path) -> int:
         '{"size": [1, 2.5e-1, 3E0], "type": "box"}',
         '{"type": "capsule", "radius": 1, "length": 0.25}',
         '{"length": 2, "type": "cylinder", "radius": 0.1000000000000000055511151231257827}',
+        '{"semi_axes": [0.5, 2e-1, 1E0], "type": "ellipsoid"}',
     ]
     extras = [
         ', "shape": "hull"',
@@ -77,7 +78,7 @@ def _manifest_seeds(folder: Path) -> int:
         ', "rotation": {"euler_deg": [90, -0, 45.5], "order": "zyx"}',
     ]
     bodies = [
-        f'{{"name": "bNAME{i}", "primitive": {kinds[i % 4]}, "position": [{i}, -0, 1e-3]'
+        f'{{"name": "bNAME{i}", "primitive": {kinds[i % len(kinds)]}, "position": [{i}, -0, 1e-3]'
         + extras[i % 3]
         + "}"
         for i in range(12)

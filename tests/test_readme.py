@@ -38,7 +38,7 @@ def test_readme_manifest_is_complete_and_loads(tmp_path, monkeypatch: pytest.Mon
     manifest = tmp_path / "scene.json"
     manifest.write_text(block.replace('"samples/', f'"{REPO}/samples/'))
     scene = load_scene(manifest)
-    assert len(scene.bodies) == 6 and scene.units == "m" and scene.duration == 0.5
+    assert len(scene.bodies) == 7 and scene.units == "m" and scene.duration == 0.5
     schema = json.loads(SCHEMA_PATH.read_text())
     document = json.loads(block)
     assert set(schema["properties"]) <= set(document)
@@ -46,7 +46,7 @@ def test_readme_manifest_is_complete_and_loads(tmp_path, monkeypatch: pytest.Mon
     used = set().union(*(b.keys() for b in document["bodies"]))
     assert body_fields <= used, f"README manifest lacks {sorted(body_fields - used)}"
     kinds = {b["primitive"]["type"] for b in document["bodies"] if "primitive" in b}
-    assert kinds == {"sphere", "box", "capsule", "cylinder"}
+    assert kinds == {"sphere", "box", "capsule", "cylinder", "ellipsoid"}
 
 
 def test_readme_has_a_ci_recipe() -> None:

@@ -83,5 +83,5 @@ void bind_manifest(nb::module_& m) {
           "-1 where absent), lengths (zeros for a mesh body) and positions (N, 3), "
           "position_count, quaternions (NQ, 4), euler (NE, 3) and orders (NE,) of the bodies "
           "so rotated, in order. type_fields: per type, its fields besides type (bits: 1 "
-          "radius, 2 length, 4 size).");
+          "radius, 2 length, 4 size, 8 semi_axes).");
 }

@@ -278,9 +278,10 @@ class Reader {
             } else if (key == "length") {
                 bit = kLength;
                 length = positive();
-            } else if (key == "size") {
-                bit = kSize;
-                if (given & bit) not_plain();
+            } else if (key == "size" || key == "semi_axes") {
+                // a box's full sizes or an ellipsoid's semi-axes: the body's three lengths
+                bit = key == "size" ? kSize : kSemiAxes;
+                if (given & (kSize | kSemiAxes)) not_plain();
                 numbers(3, size);
                 for (double v : size)
                     if (!(v > 0)) not_plain();
@@ -292,7 +293,7 @@ class Reader {
         });
         if (!type || given != words_.type_fields[static_cast<size_t>(kind)]) not_plain();
         out.kinds.push_back(static_cast<std::int8_t>(kind));
-        if (given & kSize) {
+        if (given & (kSize | kSemiAxes)) {
             out.lengths.insert(out.lengths.end(), size.begin(), size.end());
         } else {
             out.lengths.push_back(radius);

@@ -11,8 +11,8 @@ using namespace meshcol;
 
 namespace {
 
-const ManifestWords kWords{{"sphere", "box", "capsule", "cylinder"},
-                           {kRadius, kSize, kRadius | kLength, kRadius | kLength},
+const ManifestWords kWords{{"sphere", "box", "capsule", "cylinder", "ellipsoid"},
+                           {kRadius, kSize, kRadius | kLength, kRadius | kLength, kSemiAxes},
                            {"xyz", "zyx"},
                            {"decomposed", "hull", "mesh"}};
 
@@ -71,6 +71,29 @@ TEST_CASE("manifest_read: anything else is passed over") {
     CHECK(!read("{\"bodies\": [{\"name\": \"\xED\xA0\x80\", \"primitive\": {\"type\": "
                 "\"sphere\", \"radius\": 1}}]}")
                .plain);  // a UTF-8 surrogate, as Python's codec refuses it
+}
+
+TEST_CASE("manifest_read: an ellipsoid's semi-axes are its three lengths") {
+    const std::string head = "{\"bodies\": [{\"name\": \"a\", \"primitive\": {\"type\": ";
+    const ManifestColumns c = read(head + "\"ellipsoid\", \"semi_axes\": [0.5, 2, 3e-1]}}]}");
+    CHECK(c.plain);
+    CHECK_EQ(int(c.kinds[0]), 4);
+    CHECK_EQ(c.lengths.size(), size_t(3));
+    CHECK_EQ(c.lengths[0], 0.5);
+    CHECK_EQ(c.lengths[1], 2.0);
+    CHECK_EQ(c.lengths[2], 0.3);
+    for (const char* rest : {
+             "\"ellipsoid\", \"semi_axes\": [1, 0, 1]}}]}",   // zero: Python says so
+             "\"ellipsoid\", \"semi_axes\": [1, -1, 1]}}]}",  // negative
+             "\"ellipsoid\", \"semi_axes\": [1, 1]}}]}",      // two
+             "\"ellipsoid\", \"size\": [1, 1, 1]}}]}",        // a box's field
+             "\"ellipsoid\", \"radius\": 1}}]}",
+             "\"box\", \"semi_axes\": [1, 1, 1]}}]}",         // an ellipsoid's field
+             "\"ellipsoid\", \"semi_axes\": [1, 1, 1], \"size\": [1, 1, 1]}}]}",
+             "\"ellipsoid\", \"semi_axes\": [1, 1, 1], \"semi_axes\": [1, 1, 1]}}]}",
+             "\"ellipsoid\"}}]}"}) {
+        CHECK(!read(head + rest).plain);
+    }
 }
 
 TEST_CASE("manifest_read: numbers as Python reads them") {

@@ -29,17 +29,21 @@ _SHAPE_KINDS = np.array(
     [ShapeKind[name.upper()] for name in PRIMITIVE_TYPES], dtype=np.int8
 ).reshape(len(PRIMITIVE_TYPES))
 _BOX = PRIMITIVE_TYPES.index("box")
+_ELLIPSOID = PRIMITIVE_TYPES.index("ellipsoid")
 
 
 def primitive_params(types: np.ndarray, lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The core's ``(kinds, params)`` of primitives given by their manifest type indices and
     lengths: a sphere ``(r, 0, 0, 0)``, a box its half sizes, a capsule or cylinder ``(r,
-    length / 2, 0, 0)``, each the same float operation as the packing of one primitive."""
+    length / 2, 0, 0)``, an ellipsoid its semi-axes, each the same float operation as the
+    packing of one primitive."""
     kinds = _SHAPE_KINDS[types.astype(np.int64)]
     params = np.zeros((len(types), 4))
     params[:, 0] = lengths[:, 0]
     box = types == _BOX
     params[box, :3] = lengths[box] / 2.0
+    ellipsoid = types == _ELLIPSOID
+    params[ellipsoid, :3] = lengths[ellipsoid]
     round_ = (kinds == ShapeKind.CAPSULE) | (kinds == ShapeKind.CYLINDER)
     params[round_, 1] = lengths[round_, 1] / 2.0
     return kinds, params

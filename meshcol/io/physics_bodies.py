@@ -7,9 +7,10 @@ transform, with the collider kind the file asks for), gathers them in :class:`Bo
 (the rigid body they belong to, or a static collider on its own) and returns a
 :class:`FileScene`; :func:`meshcol.io.mesh_read.load_file_scene` makes each group one
 :class:`~meshcol.types.Body`. A group of one primitive stays that exact primitive when its
-transform scales it into one (:func:`scaled_primitive`: a box by any scale along its axes; a
-sphere uniformly; a capsule or cylinder evenly across its axis); anything else becomes a body
-of parts (:func:`meshcol.io.links.parts_body`, primitives tessellated, as robot links are).
+transform scales it into one (:func:`scaled_primitive`, which a manifest's ``scale`` takes
+too: a box or an ellipsoid by any scale along its axes; a sphere uniformly, or unevenly into
+an ellipsoid; a capsule or cylinder evenly across its axis); anything else becomes a body of
+parts (:func:`meshcol.io.links.parts_body`, primitives tessellated, as robot links are).
 """
 
 from __future__ import annotations

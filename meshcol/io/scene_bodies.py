@@ -20,7 +20,9 @@ import numpy as np
 from meshcol.errors import MeshcolError, SceneError
 from meshcol.io.mesh_read import MAX_COORDINATE, check_magnitude, load_mesh, split_rigid
 from meshcol.io.paths import confine_all, joined_paths
-from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Sphere, Spin, primitive_reach
+from meshcol.io.physics_bodies import scaled_primitive
+from meshcol.io.scene_primitives import manifest_primitive
+from meshcol.types import Body, Spin, primitive_reach
 
 __all__ = [
     "AXES",
@@ -373,23 +375,18 @@ def _is_identity(matrix: np.ndarray) -> bool:
 def _primitive_body(
     spec: dict, source: str, label: str, motion: _Motion, scale: np.ndarray
 ) -> Body:
+    """A primitive body: its primitive scaled as :func:`scaled_primitive` scales a USD or glTF
+    one (a box or an ellipsoid per axis, a sphere scaled unevenly an ellipsoid); a capsule or
+    a cylinder takes a uniform scale only."""
     options = spec["primitive"]
     kind = options["type"]
-    if kind == "box":
-        size = np.asarray(options["size"], dtype=np.float64) * scale
-        primitive: Primitive = Box((float(size[0]), float(size[1]), float(size[2])))
-    else:
-        if not np.all(scale == scale[0]):
+    primitive = manifest_primitive(options)
+    if np.any(scale != 1.0):
+        if kind in ("capsule", "cylinder") and not np.all(scale == scale[0]):
             raise SceneError(f"{label}: a {kind} takes a uniform scale only", source)
-        radius = float(options["radius"] * scale[0])
-        length = float(options.get("length", 0.0) * scale[0])
-        primitive = (
-            Sphere(radius)
-            if kind == "sphere"
-            else Capsule(radius, length)
-            if kind == "capsule"
-            else Cylinder(radius, length)
-        )
+        scaled = scaled_primitive(primitive, np.diag([*scale, 1.0]))
+        assert scaled is not None  # a positive diagonal: no shear, no primitive refused
+        primitive = scaled[0]
     return Body.of_primitive(
         spec["name"],
         source,

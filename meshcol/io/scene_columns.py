@@ -34,6 +34,7 @@ from meshcol.io.scene_schema import (
     MAX_TURN,
     ORDERS,
     PRIMITIVE_KEYS,
+    PRIMITIVE_TRIPLES,
     PRIMITIVE_TYPES,
     SHAPES,
     VECTOR_FIELDS,
@@ -69,8 +70,8 @@ class Columns:
         The index of a primitive body's type in :data:`PRIMITIVE_TYPES`, -1 elsewhere.
     primitive_lengths : (n, 3) float64
         A primitive body's lengths as the manifest gives them: a box's size, a sphere's
-        ``(radius, 0, 0)``, a capsule's or cylinder's ``(radius, length, 0)``; zeros
-        elsewhere.
+        ``(radius, 0, 0)``, a capsule's or cylinder's ``(radius, length, 0)``, an
+        ellipsoid's semi-axes; zeros elsewhere.
     vectors : dict of str to (n, 3) float64
         ``position``, ``end_position``, ``velocity``, ``angular_velocity``, zeros where
         absent; a field no body has is not in it.
@@ -225,8 +226,9 @@ def _primitives(table: _Table) -> tuple[np.ndarray, np.ndarray]:
         if set(map(len, group)) != {len(fields)}:  # with every field there: exactly them
             raise _Unplain
         try:
-            if kind == "box":
-                block, width = _rows(list(map(operator.itemgetter("size"), group)), 3), 3
+            if kind in PRIMITIVE_TRIPLES:
+                field = PRIMITIVE_TRIPLES[kind]
+                block, width = _rows(list(map(operator.itemgetter(field), group)), 3), 3
             else:
                 block, width = np.zeros((len(group), 3)), 1 if kind == "sphere" else 2
                 block[:, 0] = _numbers(list(map(operator.itemgetter("radius"), group)))
@@ -460,15 +462,15 @@ def _primitive_reach(kinds: np.ndarray, lengths: np.ndarray) -> np.ndarray:
     radius, length = lengths[:, 0], lengths[:, 1]
     box = 0.5 * np.sqrt((lengths * lengths).sum(axis=1))
     reach = np.select(
-        [kinds == _SPHERE, kinds == _BOX, kinds == _CAPSULE],
-        [radius, box, radius + 0.5 * length],
+        [kinds == _SPHERE, kinds == _BOX, kinds == _CAPSULE, kinds == _ELLIPSOID],
+        [radius, box, radius + 0.5 * length, lengths.max(axis=1)],
         np.hypot(radius, 0.5 * length),
     )
     return reach * (1.0 + 1e-12)
 
 
-_SPHERE, _BOX, _CAPSULE, _CYLINDER = (
-    PRIMITIVE_TYPES.index(k) for k in ("sphere", "box", "capsule", "cylinder")
+_SPHERE, _BOX, _CAPSULE, _ELLIPSOID = (
+    PRIMITIVE_TYPES.index(k) for k in ("sphere", "box", "capsule", "ellipsoid")
 )
 
 

@@ -65,7 +65,7 @@ __all__ = [
 ]
 
 #: The fields the core knows a primitive by, each a bit of its ``type_fields``.
-_FIELD_BITS = {"radius": 1, "length": 2, "size": 4}
+_FIELD_BITS = {"radius": 1, "length": 2, "size": 4, "semi_axes": 8}
 _ORDER_WORDS = sorted(ORDERS)
 _SHAPE_WORDS = sorted(SHAPES)
 _WORDS = (

@@ -1,8 +1,8 @@
 """A manifest of primitive bodies kept as columns, from the manifest to the packed shapes.
 
-A manifest of 1,000,000 spheres, boxes, capsules and cylinders needs no Python object per
-body to be checked: its names, primitive types, lengths and poses are arrays already
-(:class:`meshcol.io.scene_columns.Columns`). :class:`PrimitiveBodies` keeps them so: a
+A manifest of 1,000,000 spheres, boxes, capsules, cylinders and ellipsoids needs no Python
+object per body to be checked: its names, primitive types, lengths and poses are arrays
+already (:class:`meshcol.io.scene_columns.Columns`). :class:`PrimitiveBodies` keeps them so: a
 sequence of :class:`~meshcol.types.Body` that makes a body only when one is asked for by
 index (a writer, a pair that needs its triangles), each the body the body loop builds, to the
 bit. The check reads its columns instead (the readers of
@@ -21,7 +21,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from meshcol.io.column_bodies import ColumnBodies
-from meshcol.io.scene_schema import PRIMITIVE_TYPES
+from meshcol.io.scene_schema import PRIMITIVE_TRIPLES, PRIMITIVE_TYPES
 from meshcol.types import (
     REGULAR_LENGTHS,
     REGULAR_VERTEX_COUNTS,
@@ -29,30 +29,49 @@ from meshcol.types import (
     Box,
     Capsule,
     Cylinder,
+    Ellipsoid,
     Primitive,
     Sphere,
     primitive_vertex_count,
 )
 
-__all__ = ["PrimitiveBodies", "primitive_of"]
+__all__ = ["PrimitiveBodies", "manifest_primitive", "primitive_of"]
 
-_SPHERE, _BOX, _CAPSULE, _CYLINDER = (
-    PRIMITIVE_TYPES.index(k) for k in ("sphere", "box", "capsule", "cylinder")
+_SPHERE, _BOX, _CAPSULE, _CYLINDER, _ELLIPSOID = (
+    PRIMITIVE_TYPES.index(k) for k in ("sphere", "box", "capsule", "cylinder", "ellipsoid")
 )
 #: The :class:`~meshcol.types.Primitive` class of each index of :data:`PRIMITIVE_TYPES`.
-_CLASSES: dict[int, type] = {_SPHERE: Sphere, _BOX: Box, _CAPSULE: Capsule, _CYLINDER: Cylinder}
+_CLASSES: dict[int, type] = {
+    _SPHERE: Sphere,
+    _BOX: Box,
+    _CAPSULE: Capsule,
+    _CYLINDER: Cylinder,
+    _ELLIPSOID: Ellipsoid,
+}
 
 
 def primitive_of(kind: int, lengths: Sequence[float]) -> Primitive:
     """The primitive of a type index (:data:`PRIMITIVE_TYPES`) and the manifest's lengths
     (a box's size, a sphere's ``(radius, 0, 0)``, a capsule's or cylinder's ``(radius,
-    length, 0)``), as the body loop builds it from the same numbers."""
+    length, 0)``, an ellipsoid's semi-axes), as the body loop builds it from the same
+    numbers."""
     a, b, c = (float(x) for x in lengths)
     if kind == _BOX:
         return Box((a, b, c))
+    if kind == _ELLIPSOID:
+        return Ellipsoid((a, b, c))
     if kind == _SPHERE:
         return Sphere(a)
     return Capsule(a, b) if kind == _CAPSULE else Cylinder(a, b)
+
+
+def manifest_primitive(options: dict) -> Primitive:
+    """The primitive of a valid manifest ``primitive`` object, before any scale: what
+    :func:`primitive_of` makes of its columns."""
+    kind = options["type"]
+    field = PRIMITIVE_TRIPLES.get(kind)
+    lengths = options[field] if field else (options["radius"], options.get("length", 0.0), 0.0)
+    return primitive_of(PRIMITIVE_TYPES.index(kind), lengths)
 
 
 class PrimitiveBodies(ColumnBodies):
@@ -117,6 +136,7 @@ class PrimitiveBodies(ColumnBodies):
         used[:, 0] = True
         used[self.kinds == _BOX] = True
         used[(self.kinds == _CAPSULE) | (self.kinds == _CYLINDER), 1] = True
+        used[self.kinds == _ELLIPSOID] = False  # the unit sphere's, scaled: never merged
         inside = (self.lengths >= low) & (self.lengths <= high)
         regular = (inside | ~used).all(axis=1)
         by_kind = np.zeros(len(_CLASSES), dtype=np.int64)

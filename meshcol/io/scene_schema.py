@@ -24,6 +24,7 @@ __all__ = [
     "PRIMITIVE_FIELDS",
     "PRIMITIVE_KEYS",
     "PRIMITIVE_REQUIRED",
+    "PRIMITIVE_TRIPLES",
     "PRIMITIVE_TYPES",
     "ROTATION_FIELDS",
     "SCHEMA_PATH",
@@ -64,6 +65,14 @@ PRIMITIVE_REQUIRED = {
     rule["if"]["properties"]["type"]["const"]: tuple(rule["then"]["required"])
     for rule in _PRIMITIVE["allOf"]
 }
+#: The primitive types given by one array of three positive numbers (a box's ``size``, an
+#: ellipsoid's ``semi_axes``), and that field.
+PRIMITIVE_TRIPLES = {
+    kind: field
+    for kind, fields in PRIMITIVE_REQUIRED.items()
+    for field in fields
+    if _PRIMITIVE["properties"][field].get("type") == "array"
+}
 #: Axis orders of Euler angles.
 ORDERS = frozenset(_EULER["properties"]["order"]["enum"])
 #: Collider shapes a body may ask for.
@@ -83,11 +92,12 @@ EXPECTED = {
     "duration": "a positive number (seconds)",
     "name": "a non-empty string",
     "mesh": "a non-empty string (a file path)",
-    "primitive": 'an object with a "type" (sphere, box, capsule or cylinder)',
-    "type": "one of sphere, box, capsule, cylinder",
+    "primitive": 'an object with a "type" (sphere, box, capsule, cylinder or ellipsoid)',
+    "type": "one of sphere, box, capsule, cylinder, ellipsoid",
     "radius": "a positive number",
     "length": "a positive number",
     "size": "an array of 3 positive numbers",
+    "semi_axes": "an array of 3 positive numbers",
     "position": "an array of 3 numbers",
     "end_position": "an array of 3 numbers",
     "velocity": "an array of 3 numbers",
@@ -147,8 +157,8 @@ def is_primitive(p: Any) -> bool:
     fields = PRIMITIVE_KEYS.get(kind) if type(kind) is str else None
     if fields is None or p.keys() != fields:
         return False
-    if kind == "box":
-        return is_numbers(p["size"], 3, positive=True)
+    if kind in PRIMITIVE_TRIPLES:
+        return is_numbers(p[PRIMITIVE_TRIPLES[kind]], 3, positive=True)
     if not is_positive(p["radius"]):
         return False
     return kind == "sphere" or is_positive(p["length"])

@@ -210,7 +210,7 @@ def _primitive_problems(primitive: Any, path: list, label: str) -> Iterator[Prob
         yield path, _OTHER, f"{label}: primitive must be {EXPECTED['primitive']}"
         return
     checks = {"type": lambda t: t in PRIMITIVE_TYPES, "radius": is_positive}
-    checks.update(size=lambda s: is_numbers(s, 3, positive=True), length=is_positive)
+    checks.update(size=_is_positive_triple, length=is_positive, semi_axes=_is_positive_triple)
     for field, check in checks.items():
         if field in primitive and not check(primitive[field]):
             yield [*path, field], _OTHER, f"{label}: primitive.{field} must be {EXPECTED[field]}"
@@ -229,6 +229,10 @@ def _primitive_problems(primitive: Any, path: list, label: str) -> Iterator[Prob
         extra = sorted(set(primitive) - fields)
         if extra:
             yield path, _UNKNOWN, f"{label}: {_unknown(extra, ['primitive'])}"
+
+
+def _is_positive_triple(x: Any) -> bool:
+    return is_numbers(x, 3, positive=True)
 
 
 def _rotation_message(rotation: Any, field: str, label: str) -> str:
@@ -289,7 +293,7 @@ def body_label(document: Any, index: int) -> str:
 
 #: Manifest fields that are lengths or positions (checked against MAX_COORDINATE).
 _LENGTH_FIELDS = ("position", "end_position", "scale")
-_PRIMITIVE_FIELDS = ("size", "radius", "length")
+_PRIMITIVE_FIELDS = ("size", "radius", "length", "semi_axes")
 
 
 def check_magnitudes(document: dict, source: str, found: Columns | None = None) -> None:

@@ -14,7 +14,7 @@ import meshcol.analysis.colliders as colliders_module
 from meshcol.analysis.bulk_colliders import bulk_colliders
 from meshcol.analysis.colliders import Colliders, build_colliders
 from meshcol.collision.shapes import ConvexSet
-from meshcol.types import Body, Box, Capsule, Sphere
+from meshcol.types import Body, Box, Capsule, Ellipsoid, Sphere
 
 
 def _body(name: str, vertices, faces=None, **fields) -> Body:
@@ -68,6 +68,9 @@ def _scene() -> list[Body]:
         _body("single", clouds[8].astype(np.float32)),
         _body("mesh", clouds[9].copy(), collider="mesh"),
         Body.of_primitive("pill", None, Capsule(0.2, 1.0)),
+        Body.of_primitive("egg", None, Ellipsoid((0.3, 0.2, 0.1))),
+        _body("after-egg", clouds[11].copy()),
+        Body.of_primitive("egg-2", None, Ellipsoid((0.3, 0.2, 0.1))),
         _body("last-copy", clouds[29].copy()),
     ]
     return bodies

@@ -31,7 +31,7 @@ from meshcol.io.scene import load_scene
 from meshcol.io.scene_primitives import PrimitiveBodies
 from meshcol.types import Cylinder, primitive_vertex_count
 
-KINDS = ("sphere", "box", "capsule", "cylinder")
+KINDS = ("sphere", "box", "capsule", "cylinder", "ellipsoid")
 
 
 def primitive(kind: str, r: float) -> dict:
@@ -40,6 +40,7 @@ def primitive(kind: str, r: float) -> dict:
         "box": {"type": "box", "size": [2 * r, 0.5, 0.7]},
         "capsule": {"type": "capsule", "radius": r / 2, "length": 0.5},
         "cylinder": {"type": "cylinder", "radius": r / 2, "length": 0.6},
+        "ellipsoid": {"type": "ellipsoid", "semi_axes": [r, 0.3, 0.2]},
     }[kind]
 
 
@@ -49,7 +50,7 @@ def document(n: int = 64, seed: int = 3) -> dict:
     rng = np.random.default_rng(seed)
     bodies = []
     for i in range(n):
-        kind = KINDS[i % 4]
+        kind = "ellipsoid" if i % 8 == 7 else KINDS[i % 4]
         body: dict = {
             "name": f"{kind}{i:03d}",
             "primitive": primitive(kind, float(rng.uniform(0.2, 0.45))),

@@ -53,13 +53,14 @@ def manifest(folder: Path, n: int = 60) -> Path:
     rng = np.random.default_rng(3)
     bodies = []
     for i in range(n):
-        kind = ("sphere", "box", "capsule", "cylinder")[i % 4]
+        kind = "ellipsoid" if i % 9 == 4 else ("sphere", "box", "capsule", "cylinder")[i % 4]
         r = float(rng.uniform(0.2, 0.45))
         primitive = {
             "sphere": {"type": "sphere", "radius": r},
             "box": {"type": "box", "size": [2 * r, 0.5, 0.7]},
             "capsule": {"type": "capsule", "radius": r / 2, "length": 0.5},
             "cylinder": {"type": "cylinder", "radius": r / 2, "length": 0.6},
+            "ellipsoid": {"type": "ellipsoid", "semi_axes": [r, 0.3, 0.2]},
         }[kind]
         body: dict = {
             "name": f"{kind}{i}",
@@ -70,6 +71,8 @@ def manifest(folder: Path, n: int = 60) -> Path:
             body["rotation"] = {"quaternion": rng.normal(size=4).tolist()}
         if i % 7 == 0:
             body["scale"] = 1.5
+        elif i % 8 == 0 or (kind == "ellipsoid" and i % 3 == 1):
+            body["scale"] = [1.2, 0.8, 1.0]  # a sphere so scaled is an ellipsoid
         if i % 11 == 0:
             body["end_position"] = [0.7 * (i % 5) + 0.3, 0.0, 0.0]
         if i % 13 == 0:

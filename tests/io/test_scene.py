@@ -342,6 +342,9 @@ def edit(change):
 
 TET_BODY = 0
 BALL_BODY = 1
+CAPSULE = {"type": "capsule", "radius": 1, "length": 2}
+CYLINDER = {"type": "cylinder", "radius": 1, "length": 2}
+EGG = {"type": "ellipsoid", "semi_axes": [1, 2, 3]}
 
 
 def body(index, **fields):
@@ -384,7 +387,7 @@ def drop(index, field):
         ),
         (
             edit(body(BALL_BODY, primitive={"type": "cone", "radius": 1})),
-            "body 'ball': primitive.type must be one of sphere, box, capsule, cylinder",
+            "body 'ball': primitive.type must be one of sphere, box, capsule, cylinder, ellipsoid",
         ),
         (
             edit(body(BALL_BODY, primitive={"type": "capsule", "radius": 1})),
@@ -395,8 +398,36 @@ def drop(index, field):
             "body 'ball': primitive.radius must be a positive number",
         ),
         (
-            edit(body(BALL_BODY, scale=[1, 2, 1])),
-            "body 'ball': a sphere takes a uniform scale only",
+            edit(body(BALL_BODY, primitive=CAPSULE, scale=[1, 2, 1])),
+            "body 'ball': a capsule takes a uniform scale only",
+        ),
+        (
+            edit(body(BALL_BODY, primitive=CYLINDER, scale=[1, 1, 2])),
+            "body 'ball': a cylinder takes a uniform scale only",
+        ),
+        (
+            edit(body(BALL_BODY, primitive={"type": "ellipsoid", "semi_axes": [1, 0, 1]})),
+            "body 'ball': primitive.semi_axes must be an array of 3 positive numbers",
+        ),
+        (
+            edit(body(BALL_BODY, primitive={"type": "ellipsoid", "semi_axes": [1, -2, 1]})),
+            "body 'ball': primitive.semi_axes must be an array of 3 positive numbers",
+        ),
+        (
+            edit(body(BALL_BODY, primitive={"type": "ellipsoid", "semi_axes": [1, 2]})),
+            "body 'ball': primitive.semi_axes must be an array of 3 positive numbers",
+        ),
+        (
+            edit(body(BALL_BODY, primitive={"type": "ellipsoid"})),
+            "body 'ball': missing field 'primitive.semi_axes'",
+        ),
+        (
+            edit(body(BALL_BODY, primitive={"type": "ellipsoid", "radius": 1})),
+            "body 'ball': unknown field 'primitive.radius'",
+        ),
+        (
+            edit(body(BALL_BODY, primitive={**EGG, "size": [1, 1, 1]})),
+            "body 'ball': unknown field 'primitive.size'",
         ),
         (
             edit(body(TET_BODY, rotation={"quaternion": [0, 0, 0, 0]})),

@@ -195,6 +195,9 @@ primitives = st.one_of(
     st.fixed_dictionaries(
         {"type": st.sampled_from(["capsule", "cylinder"]), "radius": positive, "length": positive}
     ),
+    st.fixed_dictionaries(
+        {"type": st.just("ellipsoid"), "semi_axes": st.lists(positive, min_size=3, max_size=3)}
+    ),
 )
 
 
@@ -281,6 +284,13 @@ def test_the_first_error_in_manifest_order_is_the_one_reported(assets):
         {"type": "capsule", "radius": 1},
         {"type": "capsule", "radius": 1, "size": 1},
         {"type": "cylinder", "radius": 1, "length": 0},
+        {"type": "ellipsoid", "semi_axes": [0.5, 2, 1e-300]},
+        {"type": "ellipsoid", "semi_axes": [1, 0, 1]},
+        {"type": "ellipsoid", "semi_axes": [1, 2]},
+        {"type": "ellipsoid", "semi_axes": [1, 2, True]},
+        {"type": "ellipsoid", "size": [1, 2, 3]},
+        {"type": "ellipsoid", "semi_axes": [1, 2, 3], "radius": 1},
+        {"type": "box", "semi_axes": [1, 2, 3]},
         {"type": "box", "size": [1, 2]},
         {"type": "box", "size": [1, 0, 2]},
         {"type": "box", "size": [1, 2, False]},
@@ -308,7 +318,8 @@ def test_the_columns_take_a_primitive_exactly_when_the_body_check_does(primitive
     assert (found is not None) == plain
     if found is not None:
         p = primitive
-        row = p["size"] if p["type"] == "box" else [p["radius"], p.get("length", 0.0), 0.0]
+        triple = {"box": "size", "ellipsoid": "semi_axes"}.get(p["type"])
+        row = p[triple] if triple else [p["radius"], p.get("length", 0.0), 0.0]
         assert found.primitive_lengths.tolist() == [[0.5, 0, 0], row, [1.0, 2.0, 3.0]]
         assert found.primitive_type.tolist() == [
             PRIMITIVE_TYPES.index(t) for t in ("sphere", p["type"], "box")

@@ -83,6 +83,7 @@ KINDS = {
     "box": '{"size": [%s, 0.5, 2], "type": "box"}',
     "capsule": '{"type": "capsule", "length": 0.4, "radius": %s}',
     "cylinder": '{"radius": %s, "type": "cylinder", "length": 3}',
+    "ellipsoid": '{"semi_axes": [0.5, %s, 2e-1], "type": "ellipsoid"}',
 }
 ORDERS = ["xyz", "zyx", "zxz", "yxy", "xzy", "yzx", "zyz", "xyx"]
 
@@ -93,7 +94,7 @@ def plain_text(n: int = 40) -> str:
     spellings = ["0.25", "1", "2.5e-1", "1E0", "0.1000000000000000055511151231257827", "7"]
     bodies = []
     for i in range(n):
-        kind = list(KINDS)[i % 4]
+        kind = list(KINDS)[i % len(KINDS)]
         fields = [f'"name": "b{i}"', f'"primitive": {KINDS[kind] % spellings[i % 6]}']
         if i % 5:
             fields.append(f'"position": [{i}, -0, {spellings[(i + 1) % 6]}]')
@@ -289,17 +290,20 @@ def strings(draw, plain: bool) -> str:
 
 @st.composite
 def primitive_text(draw, plain: bool) -> str:
-    kind = draw(st.sampled_from(["sphere", "box", "capsule", "cylinder"]))
+    kind = draw(st.sampled_from(["sphere", "box", "capsule", "cylinder", "ellipsoid"]))
     value = positive_numbers if plain else st.one_of(positive_numbers, numbers)
     fields = {"type": f'"{kind}"'}
     if kind == "box":
         fields["size"] = array(draw, value, 3)
+    elif kind == "ellipsoid":
+        fields["semi_axes"] = array(draw, value, 3)
     else:
         fields["radius"] = draw(value)
     if kind in ("capsule", "cylinder"):
         fields["length"] = draw(value)
     if not plain and draw(st.integers(0, 5)) == 0:
-        fields[draw(st.sampled_from(["type", "radius", "length", "size", "height"]))] = "1"
+        field = draw(st.sampled_from(["type", "radius", "length", "size", "semi_axes", "height"]))
+        fields[field] = draw(st.sampled_from(["1", "[1, 1, 1]"]))
     items = list(fields.items())
     items = draw(st.permutations(items))
     return "{" + ", ".join(f'"{k}": {v}' for k, v in items) + "}"

@@ -56,11 +56,12 @@ rotations = st.one_of(
     ),
 )
 primitives = st.fixed_dictionaries(
-    {"type": st.sampled_from(["sphere", "box", "capsule", "cylinder", "cone", 3])},
+    {"type": st.sampled_from(["sphere", "box", "capsule", "cylinder", "ellipsoid", "cone", 3])},
     optional={
         "radius": numbers,
         "length": numbers,
         "size": st.lists(numbers, min_size=2, max_size=4),
+        "semi_axes": st.lists(numbers, min_size=2, max_size=4),
     },
 )
 vectors = st.lists(numbers, min_size=2, max_size=4)
@@ -108,6 +109,9 @@ valid_primitives = st.one_of(
     ),
     st.fixed_dictionaries(
         {"type": st.sampled_from(["capsule", "cylinder"]), "radius": positive, "length": positive}
+    ),
+    st.fixed_dictionaries(
+        {"type": st.just("ellipsoid"), "semi_axes": st.lists(positive, min_size=3, max_size=3)}
     ),
 )
 

@@ -21,8 +21,8 @@
 namespace meshcol {
 
 /// The manifest's words, from its schema (Python passes them): the primitive types and the
-/// fields each has besides `type` (bits: 1 radius, 2 length, 4 size), the Euler orders and
-/// the collider shapes. A body's codes index these lists.
+/// fields each has besides `type` (bits: 1 radius, 2 length, 4 size, 8 semi_axes), the Euler
+/// orders and the collider shapes. A body's codes index these lists.
 struct ManifestWords {
     std::vector<std::string> types;
     std::vector<int> type_fields;
@@ -31,7 +31,7 @@ struct ManifestWords {
 };
 
 /// Bits of `ManifestWords::type_fields`.
-enum PrimitiveField : int { kRadius = 1, kLength = 2, kSize = 4 };
+enum PrimitiveField : int { kRadius = 1, kLength = 2, kSize = 4, kSemiAxes = 8 };
 
 /// The columns of a plain manifest (n bodies), index-aligned.
 struct ManifestColumns {
@@ -43,8 +43,8 @@ struct ManifestColumns {
     std::vector<std::string_view> meshes; ///< UTF-8 views into the text, empty: a primitive body
     std::size_t mesh_count = 0;          ///< mesh bodies
     std::vector<std::int8_t> kinds;      ///< index into `types`, -1 for a mesh body
-    std::vector<double> lengths;         ///< 3 a body: size, (radius, 0, 0), (radius, length, 0);
-                                         ///< zeros for a mesh body
+    std::vector<double> lengths;         ///< 3 a body: size, (radius, 0, 0), (radius, length, 0),
+                                         ///< semi_axes; zeros for a mesh body
     std::vector<double> positions;       ///< 3 a body, zeros where absent
     std::size_t position_count = 0;      ///< bodies that give a position
     std::vector<std::int8_t> rotation;   ///< 0 none, 1 quaternion, 2 Euler angles
