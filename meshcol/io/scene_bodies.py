@@ -376,16 +376,17 @@ def _primitive_body(
     spec: dict, source: str, label: str, motion: _Motion, scale: np.ndarray
 ) -> Body:
     """A primitive body: its primitive scaled as :func:`scaled_primitive` scales a USD or glTF
-    one (a box or an ellipsoid per axis, a sphere scaled unevenly an ellipsoid); a capsule or
-    a cylinder takes a uniform scale only."""
+    one (a box or an ellipsoid per axis, a sphere scaled unevenly an ellipsoid, a cylinder
+    along its axis); a capsule takes a uniform scale only (its caps would stretch), a cylinder
+    the same scale in x and y (else its section is an ellipse)."""
     options = spec["primitive"]
     kind = options["type"]
     primitive = manifest_primitive(options)
     if np.any(scale != 1.0):
-        if kind in ("capsule", "cylinder") and not np.all(scale == scale[0]):
-            raise SceneError(f"{label}: a {kind} takes a uniform scale only", source)
         scaled = scaled_primitive(primitive, np.diag([*scale, 1.0]))
-        assert scaled is not None  # a positive diagonal: no shear, no primitive refused
+        if scaled is None:  # a positive diagonal: no shear, so a capsule or a cylinder
+            need = "a uniform scale" if kind == "capsule" else "the same scale in x and y"
+            raise SceneError(f"{label}: a {kind} takes {need} only", source)
         primitive = scaled[0]
     return Body.of_primitive(
         spec["name"],

@@ -109,8 +109,8 @@ def test_a_sphere_scaled_unevenly_is_the_exact_ellipsoid(tmp_path):
         ),
         (
             {"type": "cylinder", "radius": 0.1, "length": 1},
-            {"scale": [1, 1, 2]},
-            "body 'egg': a cylinder takes a uniform scale only",
+            {"scale": [2, 1, 1]},
+            "body 'egg': a cylinder takes the same scale in x and y only",
         ),
     ],
 )

@@ -281,6 +281,12 @@ def test_end_pose_from_velocities(folder):
             meshcol.Cylinder(0.5, 2.0),
             [1, 1, 2],
         ),
+        (  # along its axis: still a cylinder, exactly
+            {"type": "cylinder", "radius": 0.5, "length": 2},
+            [3, 3, 0.5],
+            meshcol.Cylinder(1.5, 1.0),
+            [3, 3, 1],
+        ),
     ],
 )
 def test_primitives(folder, primitive, scale, expected, extent):
@@ -402,8 +408,8 @@ def drop(index, field):
             "body 'ball': a capsule takes a uniform scale only",
         ),
         (
-            edit(body(BALL_BODY, primitive=CYLINDER, scale=[1, 1, 2])),
-            "body 'ball': a cylinder takes a uniform scale only",
+            edit(body(BALL_BODY, primitive=CYLINDER, scale=[1, 2, 1])),
+            "body 'ball': a cylinder takes the same scale in x and y only",
         ),
         (
             edit(body(BALL_BODY, primitive={"type": "ellipsoid", "semi_axes": [1, 0, 1]})),
