@@ -14,6 +14,7 @@ format module of :func:`meshcol.io.robot_write.write_robot`.
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -593,7 +594,16 @@ def _spec_from_urdf(
                 try:
                     if path is None or not os.path.isfile(path):
                         raise SceneError("not found", robot.source)
-                    if Path(path).suffix.lower() not in _MUJOCO_MESH_FORMATS:
+                    suffix = Path(path).suffix.lower()
+                    if suffix not in _MUJOCO_MESH_FORMATS or (
+                        suffix == ".obj" and _obj_normals_incomplete(path)
+                    ):
+                        if suffix == ".obj" and path not in converted:
+                            notes.append(
+                                f"link {link.get('name')!r}: visual mesh {reference!r} "
+                                "converted (faces without normals beside faces with them, "
+                                "which MuJoCo's OBJ reader refuses)"
+                            )
                         path = converted.get(path) or _convert_visual(path, stage, converted)
                 except MeshcolError as error:
                     link.remove(visual)  # what a link looks like: no collider depends on it
@@ -603,6 +613,7 @@ def _spec_from_urdf(
                     )
                     break
                 mesh.set("filename", path)
+    _ball_ranges(root, notes)
     extension = root.find("mujoco")
     if extension is None:
         extension = etree.SubElement(root, "mujoco")
@@ -615,6 +626,43 @@ def _spec_from_urdf(
     compiler.set("strippath", "false")
     xml = etree.tostring(root, encoding="unicode")
     return _spec(mujoco, robot.source, lambda: mujoco.MjSpec.from_string(xml))
+
+
+def _ball_ranges(root: Any, notes: list[str]) -> None:
+    """A spherical joint's ``<limit>`` whose lower bound is not 0 loses its bounds, with a
+    note. MuJoCo's importer makes ``lower upper`` a ball joint's range, which MuJoCo bounds
+    by one angle (``0 r``) and refuses otherwise; pybullet reads the same attributes as
+    swing ranges about two axes, ``twist`` the third (``btMultiBodySphericalJointLimit``),
+    which MuJoCo cannot state: the ball is written unlimited."""
+    for joint in root.iter("joint"):
+        limit = joint.find("limit")
+        if joint.get("type") != "spherical" or limit is None:
+            continue
+        lower = limit.get("lower")
+        if lower is None or float(lower) == 0.0:
+            continue
+        bounds = f"lower {lower}, upper {limit.get('upper')}"
+        for name in ("lower", "upper"):
+            limit.attrib.pop(name, None)
+        notes.append(
+            f"joint {joint.get('name')!r}: spherical limits ({bounds}) have no MuJoCo form "
+            "(a ball joint's range is one angle from 0): the ball joint is unlimited"
+        )
+
+
+def _obj_normals_incomplete(path: str) -> bool:
+    """Whether an OBJ file has normals (``vn``) and a face corner without a normal index:
+    MuJoCo's reader refuses it ("mesh_facenormal normal index out of bounds";
+    pybullet_data's table_square), where pybullet and trimesh compute the missing normals."""
+    from meshcol.io.safe_read import read_input
+
+    data = read_input(path)
+    if not re.search(rb"^[ \t]*vn[ \t]", data, re.MULTILINE):
+        return False
+    for face in re.finditer(rb"^[ \t]*f[ \t]+([^\r\n#]*)", data, re.MULTILINE):
+        if any(corner.count(b"/") != 2 or corner.endswith(b"/") for corner in face[1].split()):
+            return True
+    return False
 
 
 def _empty_primitive(visual: Any) -> str | None:

@@ -13,8 +13,10 @@ and named in a warning (nothing is repaired silently):
    the root element; anything else stays an error;
 2. the tree (:func:`relax_tree`): a number of a numeric attribute followed by other
    characters (``0.07,``) is its leading number; a ``<limit>`` whose lower bound is above its
-   upper bound loses both (no limits, as URDF2Bullet skips such a limit); a mesh ``scale`` of
-   more than three numbers keeps the first three.
+   upper bound loses both (no limits, as URDF2Bullet skips such a limit); a mesh ``scale``,
+   an ``xyz`` or an ``rpy`` of more than three numbers keeps the first three (microtaur's
+   ``rpy="0 1.57079 0 0"``); a joint's second ``<axis>`` (or origin, limit...) is left out,
+   pybullet reading the first (spirit40newer's ``RL_lower_joint``).
 """
 
 from __future__ import annotations
@@ -56,6 +58,20 @@ NUMERIC_ATTRIBUTES = frozenset(
         "falling",
     ]
 )
+#: A joint's children that URDF has at most once; pybullet reads the first of several
+#: (tinyxml's ``FirstChildElement``), MuJoCo's importer refuses a repeated one.
+_JOINT_SINGLETONS = (
+    "origin",
+    "parent",
+    "child",
+    "axis",
+    "limit",
+    "dynamics",
+    "calibration",
+    "mimic",
+    "safety_controller",
+)
+
 #: A number and what follows it in one space-separated token.
 _LEADING_NUMBER = re.compile(r"^([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)(.+)$")
 
@@ -121,8 +137,9 @@ def lenient_text(data: bytes, warnings: list[str]) -> bytes | None:
 
 def relax_tree(root: Any, warnings: list[str]) -> None:
     """Numbers followed by other characters, read as their leading number; joint limits
-    whose lower bound is above the upper one, dropped; mesh scales of more than three
-    numbers, cut to three; in place, a warning for each."""
+    whose lower bound is above the upper one, dropped; scales, positions and angles of more
+    than three numbers, cut to three; a joint's repeated elements, the first kept; in place,
+    a warning for each."""
     for element in root.iter():
         if isinstance(element.tag, str):  # not a comment
             _leading_numbers(element, warnings)
@@ -135,14 +152,38 @@ def relax_tree(root: Any, warnings: list[str]) -> None:
                 f"joint {joint.get('name')!r}: lower limit {lower:g} is above upper limit "
                 f"{upper:g}, Bullet's way of saying none: read without limits"
             )
-    for mesh in root.iter("mesh"):
-        numbers = (mesh.get("scale") or "").split()
-        if len(numbers) > 3:
-            mesh.set("scale", " ".join(numbers[:3]))
-            warnings.append(
-                f"mesh {mesh.get('filename')!r}: scale {' '.join(numbers)!r} has "
-                f"{len(numbers)} numbers: the first three are read"
-            )
+    for element in root.iter("mesh", "origin", "axis"):
+        for name in ("scale", "xyz", "rpy"):
+            numbers = (element.get(name) or "").split()
+            if len(numbers) > 3:
+                element.set(name, " ".join(numbers[:3]))
+                warnings.append(
+                    f"{_place(element)}: {name} {' '.join(numbers)!r} has {len(numbers)} "
+                    "numbers: the first three are read"
+                )
+    for joint in root.iter("joint"):
+        for tag in _JOINT_SINGLETONS:
+            repeated = joint.findall(tag)[1:]
+            for element in repeated:
+                joint.remove(element)
+            if repeated:
+                warnings.append(
+                    f"joint {joint.get('name')!r}: {len(repeated) + 1} <{tag}> elements: "
+                    "the first is read"
+                )
+
+
+def _place(element: Any) -> str:
+    """Where an element is, for a warning: a mesh by its file, else the element and the name
+    of the link or joint it is in."""
+    if element.tag == "mesh":
+        return f"mesh {element.get('filename')!r}"
+    owner = next((e for e in element.iterancestors("link", "joint")), None)
+    return (
+        f"<{element.tag}> of {owner.tag} {owner.get('name')!r}"
+        if owner is not None
+        else (f"<{element.tag}>")
+    )
 
 
 def _leading_numbers(element: Any, warnings: list[str]) -> None:

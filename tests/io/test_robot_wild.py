@@ -427,6 +427,60 @@ def test_a_visual_primitive_of_size_zero_is_left_out_of_the_mjcf(tmp_path):
     assert sizes == [pytest.approx(0.02)]  # the one visual with a size
 
 
+def test_a_spherical_limit_mujoco_cannot_state_is_left_out_of_the_mjcf(tmp_path):
+    """pybullet_data's spherical_joint_limit: ``<limit lower="0.2" upper=".8" twist=".3">``,
+    pybullet's swing and twist ranges; MuJoCo's importer would make ``0.2 0.8`` a ball
+    range and refuses any that does not start at 0. The ball is unlimited, with a note; a
+    limit from 0 (MuJoCo's own reading of the importer's input) is kept."""
+    mujoco = pytest.importorskip("mujoco")
+    inertial = '<inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>'
+    body = f"""
+<link name="chest">{inertial}<collision><geometry><box size="0.2 0.2 0.2"/></geometry></collision></link>
+<link name="neck">{inertial}<collision><geometry><sphere radius="0.05"/></geometry></collision></link>
+<link name="head">{inertial}<collision><geometry><sphere radius="0.05"/></geometry></collision></link>
+<joint name="neck" type="spherical"><parent link="chest"/><child link="neck"/>
+  <origin xyz="0 0 0.5"/><limit effort="1000.0" lower="0.2" upper=".8" twist=".3"/></joint>
+<joint name="nod" type="spherical"><parent link="neck"/><child link="head"/>
+  <origin xyz="0 0 0.5"/><limit effort="10" lower="0" upper="0.5"/></joint>
+"""
+    robot = write(tmp_path, "ball.urdf", urdf(body))
+    code, _, err = run("hull", str(robot), "--out-dir", str(tmp_path / "out"), "--to", "mjcf")
+    assert code == 0, err
+    text = (tmp_path / "out" / "ball.xml").read_text()
+    assert "joint 'neck': spherical limits (lower 0.2, upper .8) have no MuJoCo form" in text
+    model = mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "ball.xml"))
+    neck, nod = (model.joint(n).id for n in ("neck", "nod"))
+    assert model.jnt_type[neck] == model.jnt_type[nod] == mujoco.mjtJoint.mjJNT_BALL
+    assert not model.jnt_limited[neck]
+    assert model.jnt_limited[nod] and list(model.jnt_range[nod]) == [0.0, 0.5]
+
+
+def test_an_obj_visual_with_faces_without_normals_is_converted_for_mujoco(tmp_path):
+    """pybullet_data's table_square draws an OBJ whose faces give normals, but for some:
+    MuJoCo's reader refuses it ("normal index out of bounds"), so the MJCF draws a
+    converted copy, with a note; an OBJ whose every face gives its normals is used as is."""
+    mujoco = pytest.importorskip("mujoco")
+    corners = [f"v {x} {y} {z}" for x in (0, 1) for y in (0, 1) for z in (0, 1)]
+    mixed = "\n".join([*corners, "vn 0 0 -1", "f 1//1 3//1 4//1", "f 1 4 2", "f 5 6 8", "f 1 2 6"])
+    whole = "\n".join([*corners, "vn 0 0 -1", "f 1//1 3//1 4//1", "f 1//1 4//1 2//1"])
+    write(tmp_path, "mixed.obj", mixed)
+    write(tmp_path, "whole.obj", whole)
+    body = """
+<link name="top"><visual><geometry><mesh filename="mixed.obj"/></geometry></visual>
+  <visual><geometry><mesh filename="whole.obj"/></geometry></visual>
+  <collision><geometry><box size="0.2 0.2 0.2"/></geometry></collision></link>
+"""
+    robot = write(tmp_path, "table.urdf", urdf(body))
+    code, _, err = run("hull", str(robot), "--out-dir", str(tmp_path / "out"), "--to", "mjcf")
+    assert code == 0, err
+    text = (tmp_path / "out" / "table.xml").read_text()
+    assert "visual mesh 'mixed.obj' converted (faces without normals" in text
+    assert "'whole.obj' converted" not in text
+    model = mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "table.xml"))
+    assert model.nmesh == 2
+    assert sorted(int(model.mesh_facenum[m]) for m in range(2)) == [2, 4]
+
+
 # --- item 8: a rebuilt URDF whose visuals came through a package path --------------------------
 
 

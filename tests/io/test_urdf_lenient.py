@@ -3,8 +3,9 @@ pybullet reads it, each repair named in a warning, anything else still refused.
 
 The cases are pybullet_data's own robots (minitaur, quadruped, bike, table_square: XML version
 "0.0"; biped2d, diff_ring: blank lines first; humanoid: a NUL byte last; cube_no_rotation:
-lower above upper; racecar_differential: a scale of four numbers; bike and biped2d: ``0.07,``
-and ``-1.57.``), written small here; the last test reads the real files when pybullet is
+lower above upper; racecar_differential: a scale of four numbers, microtaur: an ``rpy`` of four;
+spirit40newer: a joint's second ``<axis>``; bike and biped2d: ``0.07,`` and ``-1.57.``),
+written small here; the last test reads the real files when pybullet is
 installed, and compares the link frames with pybullet's own.
 """
 
@@ -78,6 +79,7 @@ def poses(path: Path, **options) -> dict[str, np.ndarray]:
         ({"arm_xyz": "0, 0, 0.2"}, "xyz='0, 0, 0.2' read as '0 0 0.2'"),
         ({"lower": "-1.0.", "upper": "1,"}, "lower='-1.0.' read as '-1.0'"),
         ({"scale": "0.1 0.1 0.1 0.1"}, "scale '0.1 0.1 0.1 0.1' has 4 numbers"),
+        ({"arm_xyz": "0 0 0.2 0"}, "<origin> of link 'arm': xyz '0 0 0.2 0' has 4 numbers"),
     ],
 )
 def test_what_pybullet_reads_past_is_read_with_a_warning(tmp_path, changes, words):
@@ -105,6 +107,23 @@ def test_what_pybullet_reads_past_is_read_with_a_warning(tmp_path, changes, word
 def test_anything_else_malformed_is_still_refused(tmp_path, changes, words):
     with pytest.raises(SceneError, match=words):
         load_robot(robot(tmp_path, **changes))
+
+
+def test_a_joints_second_axis_is_left_out_as_pybullet_reads_the_first(tmp_path):
+    """spirit40newer's ``RL_lower_joint`` has two ``<axis>`` (MuJoCo's importer refuses a
+    repeated element); pybullet reads the first, and so does meshcol, with a warning."""
+    plain = robot(tmp_path / "plain")
+    twice = tmp_path / "twice" / "bot.urdf"
+    robot(tmp_path / "twice")
+    text = plain.read_text().replace(
+        '<axis xyz="0 1 0"/>', '<axis xyz="0 1 0"/><axis xyz="1 0 0"/>'
+    )
+    twice.write_text(text)
+    scene = load_robot(twice, RobotOptions(joints={"hinge": 0.7}))
+    assert "joint 'hinge': 2 <axis> elements: the first is read" in scene.warnings
+    expected = poses(plain, joints={"hinge": 0.7})
+    for body in scene.bodies:
+        np.testing.assert_array_equal(body.pose, expected[body.name])
 
 
 def test_lower_above_upper_is_no_limit_as_bullet_reads_it(tmp_path):
@@ -153,6 +172,8 @@ def pybullet_data_robots() -> list[Path]:
         "humanoid/humanoid.urdf",
         "cube_no_rotation.urdf",
         "racecar/racecar_differential.urdf",
+        "quadruped/microtaur/microtaur.urdf",
+        "quadruped/spirit40newer.urdf",
     )
     return [root / name for name in names]
 
