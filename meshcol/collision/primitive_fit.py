@@ -77,7 +77,9 @@ __all__ = [
 SPHERE, CAPSULE, BOX, CYLINDER, ELLIPSOID = range(5)  # FIT_SHAPES' order
 
 #: Unit directions of :func:`largest_gaps`' coarse search (before its refinement).
-GAP_DIRECTIONS = 642
+GAP_DIRECTIONS = 256
+
+_GAP_SEARCH_STEPS = 200  # pattern-search steps at most (27 halvings reach 1e-9, moves add)
 
 _KIND_OF_TYPE = {
     Sphere: SPHERE,
@@ -252,7 +254,7 @@ def support(kind: int, params: np.ndarray, m: np.ndarray) -> np.ndarray:
     if kind == SPHERE:
         return np.broadcast_to(p[..., 0], m.shape[:2]).copy()
     if kind == BOX:
-        return np.einsum("ndk,nk->nd", np.abs(m), 0.5 * params)
+        return (np.abs(m) @ (0.5 * params)[:, :, None])[..., 0]
     if kind == ELLIPSOID:
         return np.linalg.norm(m * p, axis=2)
     half = 0.5 * p[..., 1]
@@ -263,16 +265,19 @@ def support(kind: int, params: np.ndarray, m: np.ndarray) -> np.ndarray:
 
 
 def _directions() -> np.ndarray:
-    """The coarse search's unit directions: an icosphere's vertices and the 26 of the
-    lattice (axes, face and body diagonals), where the boxes' and most forms' gaps lie."""
-    from meshcol.types import primitive_mesh
-
-    sphere = primitive_mesh(Sphere(1.0))[0]
+    """The coarse search's unit directions: :data:`GAP_DIRECTIONS` of a Fibonacci lattice
+    on the sphere (near uniform) and the 26 of the cubic lattice (axes, face and body
+    diagonals), where the boxes' and most forms' largest gaps lie."""
+    k = np.arange(GAP_DIRECTIONS) + 0.5
+    z = 1.0 - 2.0 * k / GAP_DIRECTIONS
+    angle = np.pi * (3.0 - np.sqrt(5.0)) * k
+    rho = np.sqrt(1.0 - z * z)
+    fibonacci = np.stack([rho * np.cos(angle), rho * np.sin(angle), z], axis=1)
     lattice = np.array(
         [(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1) if i or j or k],
         dtype=np.float64,
     )
-    both = np.concatenate([sphere, lattice])
+    both = np.concatenate([fibonacci, lattice])
     return both / np.linalg.norm(both, axis=1, keepdims=True)
 
 
@@ -285,8 +290,8 @@ def _gap(
     m: np.ndarray,
 ) -> np.ndarray:
     """h_F(m) - h_K(m) for directions m (n, d, 3) in K's frame; F posed by ``poses``."""
-    local = np.einsum("ndk,nkj->ndj", m, poses[:, :3, :3])  # R^T m, row-wise
-    offset = np.einsum("ndk,nk->nd", m, poses[:, :3, 3])
+    local = m @ poses[:, :3, :3]  # R^T m, row-wise
+    offset = (m @ poses[:, :3, 3:])[..., 0]
     return support(fit_kind, fit_params, local) + offset - support(kind, params, m)
 
 
@@ -304,25 +309,38 @@ def _largest_gap_of(
     rows = np.arange(n)
     m, value = coarse[best], values[rows, best]
     pattern = np.array([(1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)])
-    step = 0.1
-    while step > 1e-9:
+    step = np.full(n, 0.1)  # per row: a row's answer does not depend on its batch
+    for _ in range(_GAP_SEARCH_STEPS):
+        active = step > 1e-9
+        if not active.any():
+            break
         # a tangent basis at m: u across the axis m is least along, v = m x u
         helper = np.eye(3)[np.abs(m).argmin(axis=1)]
         u = np.cross(m, helper)
         u /= np.linalg.norm(u, axis=1, keepdims=True)
         v = np.cross(m, u)
-        trial = m[:, None, :] + step * (
+        trial = m[:, None, :] + step[:, None, None] * (
             pattern[None, :, :1] * u[:, None, :] + pattern[None, :, 1:] * v[:, None, :]
         )
         trial /= np.linalg.norm(trial, axis=2, keepdims=True)
         tried = _gap(kind, params, fit_kind, fit_params, poses, trial)
         pick = tried.argmax(axis=1)
-        better = tried[rows, pick] > value
+        better = active & (tried[rows, pick] > value)
         m = np.where(better[:, None], trial[rows, pick], m)
         value = np.where(better, tried[rows, pick], value)
-        if not better.any():
-            step *= 0.5
+        step = np.where(better | ~active, step, 0.5 * step)
     return np.maximum(value, 0.0)
+
+
+def _least_half_width(kind: np.ndarray, params: np.ndarray) -> np.ndarray:
+    """min over unit m of h_K(m) per primitive: a box's least half side, a capsule's radius,
+    a cylinder's least of radius and half length (r sqrt(1 - t^2) + h t is concave in t, so
+    least at t = 0 or 1), an ellipsoid's least semi-axis."""
+    p = params
+    return np.select(
+        [kind == SPHERE, kind == CAPSULE, kind == BOX, kind == CYLINDER, kind == ELLIPSOID],
+        [p[:, 0], p[:, 0], 0.5 * p.min(axis=1), np.minimum(p[:, 0], 0.5 * p[:, 1]), p.min(axis=1)],
+    )
 
 
 def largest_gaps(
@@ -359,9 +377,15 @@ def largest_gaps(
     kind = np.asarray(kind)
     fit_kind = np.asarray(fit_kind)
     out = np.zeros(len(kind))
+    # a primitive fitted by itself (same kind and numbers, unmoved) has no gap
+    itself = (kind == fit_kind) & np.all(params == fit_params, axis=1)
+    itself &= np.all(poses.reshape(-1, 16) == np.eye(4).ravel(), axis=1)
+    # a ball centred on K: max_m r - h_K(m) = r - min_m h_K(m), K's least half width
+    centred = (fit_kind == SPHERE) & np.all(poses[:, :3, 3] == 0.0, axis=1) & ~itself
+    out[centred] = np.maximum(fit_params[centred, 0] - _least_half_width(kind, params)[centred], 0)
     for k in np.unique(kind):
         for f in np.unique(fit_kind[kind == k]):
-            index = np.flatnonzero((kind == k) & (fit_kind == f))
+            index = np.flatnonzero((kind == k) & (fit_kind == f) & ~itself & ~centred)
             for start in range(0, len(index), chunk):
                 i = index[start : start + chunk]
                 out[i] = _largest_gap_of(int(k), params[i], int(f), fit_params[i], poses[i])
