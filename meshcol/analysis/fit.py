@@ -8,9 +8,10 @@ strays from the mesh (the largest distance from a sampled point of the primitive
 to the mesh's surface, :data:`GAP_SAMPLES` points).
 
 ``auto`` fits four and takes the simplest primitive (in the order of
-:data:`meshcol.collision.fit.AUTO_SHAPES`: never the ellipsoid, which not every engine has)
-whose volume is within ``volume_tolerance`` of the hull's; when none is, the body keeps its
-convex hull ("hull"), and the report says which primitive came nearest.
+:data:`meshcol.collision.fit.AUTO_SHAPES`: never the ellipsoid, which not every engine has,
+but for a body that is one, below) whose volume is within ``volume_tolerance`` of the hull's;
+when none is, the body keeps its convex hull ("hull"), and the report says which primitive
+came nearest.
 
 A body that IS a primitive (``Body.primitive``, of positive volume) is fitted from its
 parameters in closed form where one exists (:mod:`meshcol.collision.primitive_fit`: exact,
@@ -633,6 +634,14 @@ def _fit_mesh(name: str, result: Any) -> tuple[str, np.ndarray, np.ndarray]:
     return part_name, vertices @ chosen.pose[:3, :3].T + chosen.pose[:3, 3], faces
 
 
+def _fit_meshes(bodies: Sequence[Body], results: Sequence[BodyFit], written: bool) -> list[Any]:
+    """:func:`_fit_mesh` of each body, made only when ``written`` (a manifest may hold a
+    million primitives)."""
+    if not written:
+        return []
+    return [_fit_mesh(body.name, result) for body, result in zip(bodies, results)]
+
+
 def fit(
     inputs: Any,
     *,
@@ -701,9 +710,7 @@ def fit(
         results.append(world)
         rows_input.append((body, world, volume, gap))
 
-    parts = []  # tessellated only when written: a manifest may hold a million primitives
-    if output is not None or out_dir is not None:
-        parts = [_fit_mesh(body.name, result) for body, result in zip(bodies, results)]
+    parts = _fit_meshes(bodies, results, output is not None or out_dir is not None)
     destinations = write_body_meshes(bodies, parts, output, out_dir, reserved)
 
     rows = [
