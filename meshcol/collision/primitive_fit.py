@@ -152,10 +152,10 @@ def solid_primitives(kind: np.ndarray, params: np.ndarray) -> np.ndarray:
     kind = np.asarray(kind)
     p = np.asarray(params, dtype=np.float64).reshape(-1, 3)
     positive = p > 0
+    radius, every = positive[:, 0], positive.all(axis=1)
     return np.select(
         [kind == SPHERE, kind == CAPSULE, kind == CYLINDER, kind == BOX, kind == ELLIPSOID],
-        [positive[:, 0], positive[:, 0], positive[:, 0] & positive[:, 1], positive.all(axis=1)]
-        + [positive.all(axis=1)],
+        [radius, radius, radius & positive[:, 1], every, every],
         False,
     )
 
