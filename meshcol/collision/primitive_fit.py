@@ -343,6 +343,19 @@ def _least_half_width(kind: np.ndarray, params: np.ndarray) -> np.ndarray:
     )
 
 
+def _corner_distance(kind: np.ndarray, params: np.ndarray, corner: np.ndarray) -> np.ndarray:
+    """Distance from the point ``corner`` (n, 3) to a centred sphere, capsule or cylinder."""
+    r, h = params[:, 0], 0.5 * params[:, 1]
+    radial = np.hypot(corner[:, 0], corner[:, 1])
+    beyond = np.maximum(corner[:, 2] - h, 0.0)
+    distance = np.select(
+        [kind == SPHERE, kind == CAPSULE],
+        [np.linalg.norm(corner, axis=1) - r, np.hypot(radial, beyond) - r],
+        np.hypot(np.maximum(radial - r, 0.0), beyond),
+    )
+    return np.maximum(distance, 0.0)
+
+
 def largest_gaps(
     kind: np.ndarray,
     params: np.ndarray,
@@ -354,7 +367,9 @@ def largest_gaps(
     """The largest distance from a point of each fitted primitive F to the primitive K it
     encloses: max over unit m of h_F(m) - h_K(m) (for p outside a convex K,
     dist(p, K) = max_m m . p - h_K(m); its largest over F is that, and K inside F makes it
-    >= 0), by the :data:`GAP_DIRECTIONS` (and 26 lattice) directions then a pattern search
+    >= 0); for a ball centred on K, r - K's least half width, for an unturned box centred on
+    a sphere, capsule or cylinder, its corner's distance (exact); else by the
+    :data:`GAP_DIRECTIONS` (and 26 lattice) directions then a pattern search
     from the best: a lower bound, equal to it where the largest gap is at a lattice
     direction (a primitive in its own kind: 0) and within rounding elsewhere but where the
     search stops at another local maximum.
@@ -383,9 +398,14 @@ def largest_gaps(
     # a ball centred on K: max_m r - h_K(m) = r - min_m h_K(m), K's least half width
     centred = (fit_kind == SPHERE) & np.all(poses[:, :3, 3] == 0.0, axis=1) & ~itself
     out[centred] = np.maximum(fit_params[centred, 0] - _least_half_width(kind, params)[centred], 0)
+    # an unturned box centred on a round K: the distance is convex, so largest at a corner
+    unmoved = np.all(poses.reshape(-1, 16) == np.eye(4).ravel(), axis=1)
+    round_ = (kind == SPHERE) | (kind == CAPSULE) | (kind == CYLINDER)
+    boxed = (fit_kind == BOX) & unmoved & round_ & ~itself
+    out[boxed] = _corner_distance(kind[boxed], params[boxed], 0.5 * fit_params[boxed])
     for k in np.unique(kind):
         for f in np.unique(fit_kind[kind == k]):
-            index = np.flatnonzero((kind == k) & (fit_kind == f) & ~itself & ~centred)
+            index = np.flatnonzero((kind == k) & (fit_kind == f) & ~itself & ~centred & ~boxed)
             for start in range(0, len(index), chunk):
                 i = index[start : start + chunk]
                 out[i] = _largest_gap_of(int(k), params[i], int(f), fit_params[i], poses[i])
