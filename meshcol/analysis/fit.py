@@ -8,9 +8,18 @@ strays from the mesh (the largest distance from a sampled point of the primitive
 to the mesh's surface, :data:`GAP_SAMPLES` points).
 
 ``auto`` fits four and takes the simplest primitive (in the order of
-:data:`meshcol.collision.fit.AUTO_SHAPES`: never the ellipsoid, which not every engine has)
-whose volume is within ``volume_tolerance`` of the hull's; when none is, the body keeps its
-convex hull ("hull"), and the report says which primitive came nearest.
+:data:`meshcol.collision.fit.AUTO_SHAPES`: never the ellipsoid, which not every engine has,
+but for a body that is one, below) whose volume is within ``volume_tolerance`` of the hull's;
+when none is, the body keeps its convex hull ("hull"), and the report says which primitive
+came nearest.
+
+A body that IS a primitive (``Body.primitive``, of positive volume) is fitted from its
+parameters in closed form where one exists (:mod:`meshcol.collision.primitive_fit`: exact,
+no tessellation, no margin), batched by kind; the other pairs (a capsule around a box, a
+cylinder or an ellipsoid; a cylinder around a box or an ellipsoid) by the point-set fits
+around a polytope that contains it. Its ``hull_volume`` is the primitive's own volume, its
+largest gap measured to the exact primitive by support functions, and ``auto`` keeps it as
+it is, an ellipsoid too (the input has one: the collider is exact).
 
 Fits are written as Unreal's collision parts (``UBX_``, ``USP_``, ``UCP_``; a cylinder, an
 ellipsoid or a hull, which Unreal has no primitive for, as a ``UCX_`` convex part), as meshes
@@ -234,39 +243,127 @@ def fit_bodies(
     threads: int = 0,
 ) -> list[tuple[BodyFit, float | None, float | None] | InvalidMeshError]:
     """:func:`fit_body` of many bodies, the fits in ONE native call; per body its result
-    or the error that it has no volume to enclose (the message does not name the body)."""
-    from meshcol.collision.fit import primitive_volume
-    from meshcol.geometry.topology import oriented_volume
+    or the error that it has no volume to enclose (the message does not name the body).
 
-    fitted = fit_point_sets(
-        [_fit_vertices(b) for b in bodies],
+    A body that is a primitive of positive volume is fitted in closed form where one exists
+    (:mod:`meshcol.collision.primitive_fit`, batched by kind, exact, no margin), its
+    ``hull_volume`` the primitive's own volume; ``auto`` keeps it as it is (an ellipsoid
+    too: volume ratio 1); its largest gap is to the exact primitive. The pairs without a
+    closed form go to the point-set fits with the mesh bodies, around a polytope that
+    contains the primitive (:func:`_fit_vertices`)."""
+    from meshcol.collision.primitive_fit import (
+        closed_form_fits,
+        primitive_parameters,
+        solid_primitives,
+    )
+
+    if shape not in SHAPE_CHOICES:
+        raise ValueError(f"shape must be one of {', '.join(SHAPE_CHOICES)}, got {shape!r}")
+    kind, params = primitive_parameters([b.primitive for b in bodies])
+    solid = solid_primitives(kind, params)
+    names = (*AUTO_SHAPES, "ellipsoid") if shape == "auto" else (shape,)
+    closed = {name: closed_form_fits(kind, params, name) for name in names}
+    needed = AUTO_SHAPES if shape == "auto" else (shape,)  # an ellipsoid's own is exact
+    batch_index = np.flatnonzero(~np.logical_and.reduce([closed[n].exact for n in needed]))
+    batched = fit_point_sets(
+        [_fit_vertices(bodies[i]) for i in batch_index.tolist()],
         shape,
         volume_tolerance=volume_tolerance,
         threads=threads,
     )
+    local: list[BodyFit | InvalidMeshError | None] = [None] * len(bodies)
+    for i, batched_fit in zip(batch_index.tolist(), batched):
+        local[i] = batched_fit
+    for i in np.flatnonzero(solid).tolist():
+        local[i] = _primitive_body_fit(bodies[i], i, closed, local[i], shape)
+    gaps = _primitive_gaps(bodies, local, kind, params, solid)
     out: list[tuple[BodyFit, float | None, float | None] | InvalidMeshError] = []
-    for body, local in zip(bodies, fitted):
-        if isinstance(local, InvalidMeshError):
-            out.append(local)
-            continue
-        pose = np.asarray(body.pose, dtype=np.float64)
-        world = BodyFit(
-            {name: _world(f, pose) for name, f in local.fits.items()},
-            local.chosen,
-            local.hull_vertices @ pose[:3, :3].T + pose[:3, 3],
-            local.hull_faces,
-            local.hull_volume,
+    for i, (body, fitted) in enumerate(zip(bodies, local)):
+        assert fitted is not None  # every body is batched or solid
+        out.append(
+            fitted
+            if isinstance(fitted, InvalidMeshError)
+            else _world_fit(body, fitted, gaps.get(i))
         )
-        chosen = world.primitive_fit
-        gap = None if chosen is None else _max_gap(chosen, body, local, pose)
-        volume = None
-        if body.primitive is None:
-            oriented = oriented_volume(body.vertices, body.faces)
-            volume = None if oriented is None else abs(oriented[0])
-        else:
-            volume = primitive_volume(body.primitive)
-        out.append((world, volume, gap))
     return out
+
+
+def _primitive_body_fit(
+    body: Body, i: int, closed: dict[str, Any], batched: Any, shape: str
+) -> BodyFit:
+    """The fits of primitive body ``i``: closed forms where they exist, else the point-set
+    fit of ``batched``; auto keeps the primitive itself."""
+    from meshcol.collision.fit import PrimitiveFit, primitive_from_params, primitive_volume
+
+    assert body.primitive is not None
+    own = type(body.primitive).__name__.lower()
+    wanted: tuple[str, ...] = (shape,)
+    if shape == "auto":  # the four candidates, and an ellipsoid's own kind
+        wanted = (*AUTO_SHAPES, "ellipsoid") if own == "ellipsoid" else AUTO_SHAPES
+    fits = {}
+    for name in wanted:
+        form = closed[name]
+        if form.exact[i]:
+            pose = np.eye(4)
+            pose[:3, :3] = form.rotation[i]
+            primitive = primitive_from_params(name, form.params[i])
+            fits[name] = PrimitiveFit(primitive, pose, float(form.volume[i]), 0.0)
+        else:
+            fits[name] = batched.fits[name]
+    chosen = own if shape == "auto" else shape
+    if batched is None:
+        hull_vertices, hull_faces = np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
+    else:
+        hull_vertices, hull_faces = batched.hull_vertices, batched.hull_faces
+    return BodyFit(fits, chosen, hull_vertices, hull_faces, primitive_volume(body.primitive))
+
+
+def _primitive_gaps(
+    bodies: Sequence[Body],
+    local: Sequence[Any],
+    kind: np.ndarray,
+    params: np.ndarray,
+    solid: np.ndarray,
+) -> dict[int, float]:
+    """The largest gap of each solid primitive body's chosen fit, all in one batch of
+    support functions (:func:`meshcol.collision.primitive_fit.largest_gaps`)."""
+    from meshcol.collision.primitive_fit import largest_gaps, primitive_parameters
+
+    index = [i for i in np.flatnonzero(solid).tolist() if local[i].primitive_fit is not None]
+    if not index:
+        return {}
+    chosen = [local[i].primitive_fit for i in index]
+    fit_kind, fit_params = primitive_parameters([f.primitive for f in chosen])
+    poses = np.stack([f.pose for f in chosen])
+    gaps = largest_gaps(kind[index], params[index], fit_kind, fit_params, poses)
+    return dict(zip(index, gaps.tolist()))
+
+
+def _world_fit(
+    body: Body, local: BodyFit, gap: float | None
+) -> tuple[BodyFit, float | None, float | None]:
+    """One body's fits posed in the world, its own volume and the largest gap (computed
+    here for a mesh body; ``gap`` for a primitive body)."""
+    from meshcol.collision.fit import primitive_volume
+    from meshcol.geometry.topology import oriented_volume
+
+    pose = np.asarray(body.pose, dtype=np.float64)
+    world = BodyFit(
+        {name: _world(f, pose) for name, f in local.fits.items()},
+        local.chosen,
+        local.hull_vertices @ pose[:3, :3].T + pose[:3, 3],
+        local.hull_faces,
+        local.hull_volume,
+    )
+    chosen = world.primitive_fit
+    if gap is None and chosen is not None:
+        gap = _max_gap(chosen, body, local, pose)
+    if body.primitive is None:
+        oriented = oriented_volume(body.vertices, body.faces)
+        volume = None if oriented is None else abs(oriented[0])
+    else:
+        volume = primitive_volume(body.primitive)
+    return world, volume, gap
 
 
 def _fit_vertices(body: Body) -> np.ndarray:
@@ -370,8 +467,10 @@ class FitReport(MeshOutputReport):
     @property
     def summary(self) -> dict[str, Any]:
         shapes = [row["shape"] for row in self.bodies]
-        # the ellipsoid is counted when asked for: auto never takes one
-        names = (*AUTO_SHAPES, "hull") + (("ellipsoid",) if self.shape == "ellipsoid" else ())
+        # the ellipsoid is counted when asked for or kept (auto takes one only when the
+        # body is one)
+        ellipsoid = self.shape == "ellipsoid" or "ellipsoid" in shapes
+        names = (*AUTO_SHAPES, "hull") + (("ellipsoid",) if ellipsoid else ())
         return {
             "bodies": len(self.bodies),
             "shapes": {name: shapes.count(name) for name in names},
@@ -491,6 +590,7 @@ def fit_row(
                 "hull_ratio": _ratio(f.volume, result.hull_volume),
             }
             for name, f in result.fits.items()
+            if name in AUTO_SHAPES  # an ellipsoid body's own ellipsoid is no candidate
         }
     if chosen is None:
         parameters: dict[str, Any] = {
@@ -532,6 +632,14 @@ def _fit_mesh(name: str, result: Any) -> tuple[str, np.ndarray, np.ndarray]:
         return part_name, result.hull_vertices, result.hull_faces
     vertices, faces = enclosing_primitive_mesh(chosen.primitive)
     return part_name, vertices @ chosen.pose[:3, :3].T + chosen.pose[:3, 3], faces
+
+
+def _fit_meshes(bodies: Sequence[Body], results: Sequence[BodyFit], written: bool) -> list[Any]:
+    """:func:`_fit_mesh` of each body, made only when ``written`` (a manifest may hold a
+    million primitives)."""
+    if not written:
+        return []
+    return [_fit_mesh(body.name, result) for body, result in zip(bodies, results)]
 
 
 def fit(
@@ -602,7 +710,7 @@ def fit(
         results.append(world)
         rows_input.append((body, world, volume, gap))
 
-    parts = [_fit_mesh(body.name, result) for body, result in zip(bodies, results)]
+    parts = _fit_meshes(bodies, results, output is not None or out_dir is not None)
     destinations = write_body_meshes(bodies, parts, output, out_dir, reserved)
 
     rows = [

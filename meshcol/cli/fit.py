@@ -37,7 +37,8 @@ from meshcol.io.robot import RobotOptions
     show_default=True,
     help="The primitive; auto fits four and takes the simplest (sphere, capsule, box, "
     "cylinder; never the ellipsoid, which not every engine has) within --volume-tolerance of "
-    "the hull's volume, else keeps the hull.",
+    "the hull's volume, else keeps the hull; a body that is a primitive (an ellipsoid too) "
+    "keeps itself, exactly.",
 )
 @click.option(
     "--volume-tolerance",

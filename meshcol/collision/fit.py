@@ -70,6 +70,7 @@ __all__ = [
     "fit_batch",
     "fit_primitive",
     "minimum_ball",
+    "primitive_from_params",
     "primitive_volume",
     "signed_distances",
 ]
@@ -199,18 +200,7 @@ class FitBatch:
         status = FitStatus(int(self.status[h, k]))
         if status > FitStatus.MAX_ITERATIONS:
             raise self.error(h)
-        p = self.params[h, k]
-        primitive: Primitive
-        if shape == "sphere":
-            primitive = Sphere(float(p[0]))
-        elif shape == "box":
-            primitive = Box((float(p[0]), float(p[1]), float(p[2])))
-        elif shape == "capsule":
-            primitive = Capsule(float(p[0]), float(p[1]))
-        elif shape == "ellipsoid":
-            primitive = Ellipsoid((float(p[0]), float(p[1]), float(p[2])))
-        else:
-            primitive = Cylinder(float(p[0]), float(p[1]))
+        primitive = primitive_from_params(shape, self.params[h, k])
         pose = self.poses[h, k].copy()
         return PrimitiveFit(
             primitive, pose, float(self.volume[h, k]), float(self.excess[h, k]), status
@@ -236,6 +226,19 @@ class FitBatch:
         return _no_hull(status, self._points[h] if self._points is not None else np.zeros((0, 3)))
 
     _points: Sequence[np.ndarray] | None = field(default=None, repr=False)
+
+
+def primitive_from_params(shape: str, p: np.ndarray) -> Primitive:
+    """The primitive of one row of :attr:`FitBatch.params` (the same layout)."""
+    if shape == "sphere":
+        return Sphere(float(p[0]))
+    if shape == "box":
+        return Box((float(p[0]), float(p[1]), float(p[2])))
+    if shape == "capsule":
+        return Capsule(float(p[0]), float(p[1]))
+    if shape == "ellipsoid":
+        return Ellipsoid((float(p[0]), float(p[1]), float(p[2])))
+    return Cylinder(float(p[0]), float(p[1]))
 
 
 def fit_batch(
