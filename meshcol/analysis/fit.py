@@ -608,7 +608,7 @@ def fit_row(
         "name": body.name,
         "source": body.source,
         "shape": result.chosen,
-        "simpler_primitive": shape == "auto" and chosen is not None,
+        "simpler_primitive": shape == "auto" and chosen is not None and body.primitive is None,
         **parameters,
         "volume": volume,
         "hull_volume": result.hull_volume,

@@ -74,6 +74,8 @@ def test_auto_keeps_each_primitive(tmp_path: Path) -> None:
         assert auto[name]["hull_ratio"] == 1.0 and auto[name]["volume_ratio"] == 1.0
         assert auto[name]["max_gap"] == 0.0
         assert set(auto[name]["candidates"]) == {"sphere", "capsule", "box", "cylinder"}
+        assert auto[name]["simpler_primitive"] is False  # already a primitive: no advice
+    assert auto["summary"]["simpler_primitive"] == 0
     assert auto["summary"]["shapes"] == {
         "sphere": 1,
         "capsule": 0,
