@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "meshcol/batch.hpp"
+#include "jacobi.hpp"
 
 namespace meshcol {
 
@@ -39,25 +40,7 @@ void jacobi(int m, double a[3][3], double w[3], double v[3][3]) {
         for (int p = 0; p < m; ++p)
             for (int q = p + 1; q < m; ++q) {
                 if (a[p][q] == 0.0) continue;
-                const double theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
-                const double t = (theta >= 0 ? 1.0 : -1.0) /
-                                 (std::fabs(theta) + std::sqrt(theta * theta + 1.0));
-                const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
-                for (int k = 0; k < m; ++k) {
-                    const double akp = a[k][p], akq = a[k][q];
-                    a[k][p] = c * akp - s * akq;
-                    a[k][q] = s * akp + c * akq;
-                }
-                for (int k = 0; k < m; ++k) {
-                    const double apk = a[p][k], aqk = a[q][k];
-                    a[p][k] = c * apk - s * aqk;
-                    a[q][k] = s * apk + c * aqk;
-                }
-                for (int k = 0; k < 3; ++k) {
-                    const double vkp = v[k][p], vkq = v[k][q];
-                    v[k][p] = c * vkp - s * vkq;
-                    v[k][q] = s * vkp + c * vkq;
-                }
+                jacobi_rotate(a, v, p, q, m);
             }
     }
     for (int i = 0; i < m; ++i) w[i] = a[i][i];

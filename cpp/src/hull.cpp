@@ -19,6 +19,7 @@
 #include "meshcol/defaults.hpp"
 #include "meshcol/hull.hpp"
 #include "hull_detail.hpp"
+#include "jacobi.hpp"
 
 namespace meshcol {
 namespace hull_detail {
@@ -41,26 +42,7 @@ void principal_axes(const Vec3* p, long long n, const Vec3& centre, Vec3 axes[3]
         for (int r = 0; r < 2; ++r)
             for (int c = r + 1; c < 3; ++c) {
                 if (a[r][c] == 0.0) continue;
-                // Classic Jacobi rotation zeroing a[r][c] (Golub and Van Loan, sec. 8.5).
-                const double theta = (a[c][c] - a[r][r]) / (2.0 * a[r][c]);
-                const double t = (theta >= 0 ? 1.0 : -1.0) /
-                                 (std::fabs(theta) + std::sqrt(theta * theta + 1.0));
-                const double cs = 1.0 / std::sqrt(t * t + 1.0), sn = t * cs;
-                for (int k = 0; k < 3; ++k) {
-                    const double akr = a[k][r], akc = a[k][c];
-                    a[k][r] = cs * akr - sn * akc;
-                    a[k][c] = sn * akr + cs * akc;
-                }
-                for (int k = 0; k < 3; ++k) {
-                    const double ark = a[r][k], ack = a[c][k];
-                    a[r][k] = cs * ark - sn * ack;
-                    a[c][k] = sn * ark + cs * ack;
-                }
-                for (int k = 0; k < 3; ++k) {
-                    const double vkr = v[k][r], vkc = v[k][c];
-                    v[k][r] = cs * vkr - sn * vkc;
-                    v[k][c] = sn * vkr + cs * vkc;
-                }
+                jacobi_rotate(a, v, r, c, 3);
             }
     }
     int order[3] = {0, 1, 2};

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "meshcol/fit.hpp"
+#include "jacobi.hpp"
 
 namespace meshcol {
 
@@ -38,25 +39,7 @@ void relative_jacobi(double a[3][3], double w[3], double v[3][3]) {
                 if (!(std::fabs(a[p][q]) > 1e-16 * std::sqrt(std::fabs(a[p][p] * a[q][q]))))
                     continue;
                 rotated = true;
-                const double theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
-                const double t = (theta >= 0 ? 1.0 : -1.0) /
-                                 (std::fabs(theta) + std::sqrt(theta * theta + 1.0));
-                const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
-                for (int k = 0; k < 3; ++k) {
-                    const double akp = a[k][p], akq = a[k][q];
-                    a[k][p] = c * akp - s * akq;
-                    a[k][q] = s * akp + c * akq;
-                }
-                for (int k = 0; k < 3; ++k) {
-                    const double apk = a[p][k], aqk = a[q][k];
-                    a[p][k] = c * apk - s * aqk;
-                    a[q][k] = s * apk + c * aqk;
-                }
-                for (int k = 0; k < 3; ++k) {
-                    const double vkp = v[k][p], vkq = v[k][q];
-                    v[k][p] = c * vkp - s * vkq;
-                    v[k][q] = s * vkp + c * vkq;
-                }
+                jacobi_rotate(a, v, p, q, 3);
             }
         if (!rotated) break;
     }
