@@ -31,7 +31,8 @@ from meshcol.types import Box, Capsule, Cylinder, Sphere
 RNG = np.random.default_rng(7)
 
 
-def _rotation(seed: int) -> np.ndarray:
+def random_rotation(seed: int) -> np.ndarray:
+    """A proper rotation drawn from ``seed`` (QR of a Gaussian matrix, signs fixed)."""
     q, r = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))
     q = q * np.sign(np.diag(r))
     if np.linalg.det(q) < 0:
@@ -74,7 +75,7 @@ def test_box_of_a_rotated_cuboid_is_the_cuboid(seed: int) -> None:
     size = np.array([3.0, 1.0, 0.4])
     corners = np.array(np.meshgrid(*[[-0.5, 0.5]] * 3)).reshape(3, -1).T * size
     inside = RNG.uniform(-0.5, 0.5, (200, 3)) * size
-    r = _rotation(seed)
+    r = random_rotation(seed)
     points = np.concatenate([corners, inside]) @ r.T + [5.0, 0.0, -1.0]
     v, f = _hull_faces(points)
     fit = fit_primitive("box", v, f)
@@ -84,7 +85,7 @@ def test_box_of_a_rotated_cuboid_is_the_cuboid(seed: int) -> None:
 
 @pytest.mark.parametrize("seed", range(3))
 def test_cylinder_and_capsule_of_their_own_tessellations(seed: int) -> None:
-    r = _rotation(seed)
+    r = random_rotation(seed)
     for primitive in (Cylinder(0.5, 3.0), Capsule(0.5, 2.0)):
         v, _ = primitive_mesh(primitive)
         points = v @ r.T + [0.0, 1.0, 2.0]
@@ -103,7 +104,7 @@ def test_auto_takes_the_simplest_primitive_within_the_tolerance(samples: Path) -
 
     sphere, _ = primitive_mesh(Sphere(1.0))
     assert fit_points(sphere).chosen == "sphere"
-    cube = np.array(np.meshgrid(*[[0.0, 1.0]] * 3)).reshape(3, -1).T @ _rotation(3).T
+    cube = np.array(np.meshgrid(*[[0.0, 1.0]] * 3)).reshape(3, -1).T @ random_rotation(3).T
     assert fit_points(cube).chosen == "box"
     # A thin rod: a capsule hugs it better than any box once its ends are round.
     rod, _ = primitive_mesh(Capsule(0.1, 4.0))
@@ -383,9 +384,9 @@ ORACLE_VOLUME_TOLERANCE = 2e-3
 
 def _cloud(seed: int, n: int) -> np.ndarray:
     rng = np.random.default_rng(seed)
-    return (rng.normal(size=(n, 3)) * rng.uniform(0.05, 2.0, 3)) @ _rotation(seed).T + rng.normal(
-        size=3
-    )
+    return (rng.normal(size=(n, 3)) * rng.uniform(0.05, 2.0, 3)) @ random_rotation(
+        seed
+    ).T + rng.normal(size=3)
 
 
 def _compare_with_oracle(point_sets: list[np.ndarray]) -> None:
@@ -568,7 +569,7 @@ def test_every_core_fit_contains_every_point_of_any_cloud(
         points[:, 1:] *= 10.0 ** rng.uniform(-13, -6)
     elif kind == "duplicates":
         points = points[rng.integers(0, max(1, n // 4), n)]
-    points = points @ _rotation(seed % 1000).T * scale + rng.normal(size=3) * scale
+    points = points @ random_rotation(seed % 1000).T * scale + rng.normal(size=3) * scale
     batch = fit_batch([points], "all")
     assert np.all(batch.status[0] == FitStatus.OK)
     for name, fit in batch.fits(0).items():

@@ -20,6 +20,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import minimize
 from scipy.spatial import ConvexHull
+from test_fit import random_rotation
 
 from meshcol.collision.fit import (
     CONTAINMENT_MARGIN,
@@ -32,14 +33,6 @@ from meshcol.collision.fit import (
     signed_distances,
 )
 from meshcol.types import Ellipsoid
-
-
-def _rotation(seed: int) -> np.ndarray:
-    q, r = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))
-    q = q * np.sign(np.diag(r))
-    if np.linalg.det(q) < 0:
-        q[:, 0] *= -1
-    return q
 
 
 def _norms(fit, points: np.ndarray) -> np.ndarray:
@@ -127,7 +120,7 @@ def _cloud(seed: int, n: int) -> np.ndarray:
     """Hull vertices of a random elongated cloud, rotated and moved."""
     rng = np.random.default_rng(seed)
     points = rng.normal(size=(n, 3)) * rng.uniform(0.2, 3.0, 3)
-    points = points @ _rotation(seed).T + rng.normal(size=3) * 5
+    points = points @ random_rotation(seed).T + rng.normal(size=3) * 5
     return points[ConvexHull(points).vertices]
 
 
@@ -139,7 +132,7 @@ def _cloud(seed: int, n: int) -> np.ndarray:
 def test_points_on_a_known_ellipsoid_give_that_ellipsoid(seed: int) -> None:
     rng = np.random.default_rng(seed)
     axes = np.sort(rng.uniform(0.05, 4.0, 3))[::-1]
-    rotation, center = _rotation(100 + seed), rng.normal(size=3) * 10
+    rotation, center = random_rotation(100 + seed), rng.normal(size=3) * 10
     directions = rng.normal(size=(300, 3))
     directions /= np.linalg.norm(directions, axis=1)[:, None]
     # +-e_i with weights 1/6 satisfy John's conditions: no smaller ellipsoid holds them
@@ -161,7 +154,7 @@ def test_points_on_a_known_ellipsoid_give_that_ellipsoid(seed: int) -> None:
 def test_a_box_has_its_ellipsoid_scaled_by_root_three() -> None:
     size = np.array([3.0, 1.0, 0.4])
     corners = np.array(np.meshgrid(*[[-0.5, 0.5]] * 3)).reshape(3, -1).T * size
-    rotation = _rotation(9)
+    rotation = random_rotation(9)
     fit = enclosing_ellipsoid(corners @ rotation.T + [1.0, 2.0, -3.0])
     expected = 0.5 * np.sqrt(3.0) * size
     assert np.asarray(fit.primitive.semi_axes) == pytest.approx(expected, rel=1e-3)
@@ -205,7 +198,7 @@ def test_a_flat_set_has_its_plane_ellipse_as_thin_as_the_margin(seed: int) -> No
     rng = np.random.default_rng(seed)
     flat = rng.normal(size=(25, 2)) * [2.0, 0.5]
     flat = flat[ConvexHull(flat).vertices]
-    rotation, center = _rotation(seed), rng.normal(size=3)
+    rotation, center = random_rotation(seed), rng.normal(size=3)
     points = np.c_[flat, np.zeros(len(flat))] @ rotation.T + center
     fit = enclosing_ellipsoid(points)
     a, b, c = fit.primitive.semi_axes
@@ -259,7 +252,7 @@ def test_rigid_motions_scaling_and_linear_maps_move_the_ellipsoid_with_the_point
 ) -> None:
     rng = np.random.default_rng(seed)
     points = rng.normal(size=(n, 3)) * rng.uniform(0.1, 2.0, 3)
-    rotation, shift = _rotation(seed % 997), rng.normal(size=3) * 10
+    rotation, shift = random_rotation(seed % 997), rng.normal(size=3) * 10
     base = enclosing_ellipsoid(points)
     moved = enclosing_ellipsoid(points @ rotation.T + shift)
     scaled = enclosing_ellipsoid(points * scale)

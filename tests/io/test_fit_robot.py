@@ -114,6 +114,7 @@ def mujoco_geoms(xml: Path, qpos: dict) -> tuple[dict, dict]:
         int(mujoco.mjtGeom.mjGEOM_SPHERE): "sphere",
         int(mujoco.mjtGeom.mjGEOM_CYLINDER): "cylinder",
         int(mujoco.mjtGeom.mjGEOM_CAPSULE): "capsule",
+        int(mujoco.mjtGeom.mjGEOM_ELLIPSOID): "ellipsoid",
     }
     meshes: dict[str, list] = {}
     primitives: dict[str, list] = {}

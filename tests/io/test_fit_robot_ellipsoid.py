@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_fit_robot import TOL, local, urdf_input_meshes
+from test_fit_robot import TOL, local, mujoco_geoms, urdf_input_meshes
 from test_robot_write import mjcf, run, urdf  # noqa: F401 - the fixtures
 
 pytest.importorskip("yourdfpy")
@@ -25,30 +25,14 @@ mujoco = pytest.importorskip("mujoco")
 
 
 def ellipsoid_geoms(xml: Path, qpos: dict) -> tuple[dict, dict]:
-    """MuJoCo's compiled model at qpos: collision meshes' world vertices, and ellipsoid
-    collision geoms' (semi-axes, world pose), by body name."""
-    model = mujoco.MjModel.from_xml_path(str(xml))
-    data = mujoco.MjData(model)
-    for name, value in qpos.items():
-        data.qpos[model.jnt_qposadr[model.joint(name).id]] = value
-    mujoco.mj_forward(model, data)
-    meshes: dict[str, list] = {}
-    ellipsoids: dict[str, list] = {}
-    for g in range(model.ngeom):
-        if model.geom_contype[g] == 0 and model.geom_conaffinity[g] == 0:
-            continue
-        body = model.body(model.geom_bodyid[g]).name
-        pose = np.eye(4)
-        pose[:3, :3] = data.geom_xmat[g].reshape(3, 3)
-        pose[:3, 3] = data.geom_xpos[g]
-        if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_MESH:
-            m = model.geom_dataid[g]
-            start = model.mesh_vertadr[m]
-            v = model.mesh_vert[start : start + model.mesh_vertnum[m]]
-            meshes.setdefault(body, []).append(v @ pose[:3, :3].T + pose[:3, 3])
-        elif model.geom_type[g] == mujoco.mjtGeom.mjGEOM_ELLIPSOID:
-            ellipsoids.setdefault(body, []).append((np.array(model.geom_size[g]), pose))
-    return meshes, ellipsoids
+    """MuJoCo's compiled model at qpos (:func:`mujoco_geoms`): collision meshes' world
+    vertices, and ellipsoid collision geoms' (semi-axes, world pose), by body name."""
+    meshes, primitives = mujoco_geoms(xml, qpos)
+    ellipsoids = {
+        body: [(size, pose) for kind, size, pose in found if kind == "ellipsoid"]
+        for body, found in primitives.items()
+    }
+    return meshes, {body: found for body, found in ellipsoids.items() if found}
 
 
 def assert_inside(meshes: dict, ellipsoids: dict, count: int) -> None:
