@@ -62,7 +62,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from meshcol.collision.fit import FIT_SHAPES
-from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, Primitive, Sphere
+from meshcol.collision.shapes import ShapeKind, primitive_params
+from meshcol.types import Primitive
 
 __all__ = [
     "GAP_DIRECTIONS",
@@ -81,14 +82,6 @@ GAP_DIRECTIONS = 256
 
 _GAP_SEARCH_STEPS = 200  # pattern-search steps at most (27 halvings reach 1e-9, moves add)
 
-_KIND_OF_TYPE = {
-    Sphere: SPHERE,
-    Capsule: CAPSULE,
-    Box: BOX,
-    Cylinder: CYLINDER,
-    Ellipsoid: ELLIPSOID,
-}
-
 
 def primitive_parameters(
     primitives: Sequence[Primitive | None],
@@ -103,21 +96,23 @@ def primitive_parameters(
         As :class:`meshcol.collision.fit.FitBatch`'s: sphere radius; box sides; capsule and
         cylinder radius, length; ellipsoid semi-axes (unused entries 0).
     """
+    fit_kind: dict[int, int] = {
+        ShapeKind.SPHERE: SPHERE,
+        ShapeKind.BOX: BOX,
+        ShapeKind.CAPSULE: CAPSULE,
+        ShapeKind.CYLINDER: CYLINDER,
+        ShapeKind.ELLIPSOID: ELLIPSOID,
+    }
     kind = np.full(len(primitives), -1, dtype=np.int8)
     params = np.zeros((len(primitives), 3))
     for i, p in enumerate(primitives):
-        if p is None:
-            continue
-        k = _KIND_OF_TYPE[type(p)]
-        kind[i] = k
-        if k == SPHERE:
-            params[i, 0] = p.radius  # type: ignore[union-attr]
-        elif k == BOX:
-            params[i] = p.size  # type: ignore[union-attr]
-        elif k == ELLIPSOID:
-            params[i] = p.semi_axes  # type: ignore[union-attr]
-        else:
-            params[i, :2] = (p.radius, p.length)  # type: ignore[union-attr]
+        if p is not None:
+            core_kind, core_params = primitive_params(p)  # the core's packing, halves
+            kind[i] = fit_kind[core_kind]
+            params[i] = core_params[:3]
+    # full lengths (doubling a half is exact): a box's sides, a capsule's or cylinder's length
+    params[kind == BOX] *= 2.0
+    params[(kind == CAPSULE) | (kind == CYLINDER), 1] *= 2.0
     return kind, params
 
 

@@ -49,8 +49,9 @@ class ShapeKind(enum.IntEnum):
 _PRIMITIVES = (Sphere, Box, Capsule, Cylinder, Ellipsoid)
 
 
-def _primitive(shape: Any) -> tuple[int, tuple[float, float, float, float]]:
-    """(kind, params) of a primitive; plain floats: a scene may pack 1,000,000 of them."""
+def primitive_params(shape: Any) -> tuple[int, tuple[float, float, float, float]]:
+    """(:class:`ShapeKind`, core params: half extents and half lengths) of a primitive; plain
+    floats: a scene may pack 1,000,000 of them."""
     if isinstance(shape, Sphere):
         return ShapeKind.SPHERE, (shape.radius, 0.0, 0.0, 0.0)
     if isinstance(shape, Box):
@@ -68,10 +69,10 @@ def _primitive(shape: Any) -> tuple[int, tuple[float, float, float, float]]:
 def _item(shape: Any, name: str) -> tuple[int, Any, np.ndarray | None]:
     """(kind, params, points or None) of a primitive, a Body, a trimesh mesh or an (n, 3) array."""
     if isinstance(shape, _PRIMITIVES):
-        return (*_primitive(shape), None)
+        return (*primitive_params(shape), None)
     if isinstance(shape, Body):
         if shape.primitive is not None:
-            return (*_primitive(shape.primitive), None)
+            return (*primitive_params(shape.primitive), None)
         return 0, np.zeros(4), as_points(shape.vertices, name)
     if hasattr(shape, "vertices") and hasattr(shape, "faces"):  # trimesh.Trimesh and alike
         return 0, np.zeros(4), as_points(np.asarray(shape.vertices), name)
