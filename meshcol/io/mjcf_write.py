@@ -596,7 +596,7 @@ def _spec_from_urdf(
                         raise SceneError("not found", robot.source)
                     suffix = Path(path).suffix.lower()
                     if suffix not in _MUJOCO_MESH_FORMATS or (
-                        suffix == ".obj" and _obj_normals_incomplete(path)
+                        suffix == ".obj" and (path in converted or _obj_normals_incomplete(path))
                     ):
                         if suffix == ".obj" and path not in converted:
                             notes.append(

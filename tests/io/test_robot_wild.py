@@ -59,6 +59,13 @@ def run(*args: str) -> tuple[int, str, str]:
     return result.exit_code, result.stdout, result.stderr
 
 
+def hull_to_mjcf(robot: Path, out: Path) -> Path:
+    """``meshcol hull ROBOT --out-dir OUT --to mjcf``, which must pass; the MJCF written."""
+    code, _, err = run("hull", str(robot), "--out-dir", str(out), "--to", "mjcf")
+    assert code == 0, err
+    return out / f"{robot.stem}.xml"
+
+
 def mesh_link(name: str, reference: str) -> str:
     return (
         f'<link name="{name}"><visual><geometry><mesh filename="{reference}"/></geometry></visual>'
@@ -394,9 +401,7 @@ def test_near_zero_inertia_links_are_bounded_as_converters_do(tmp_path, base, ba
   <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
 """
     robot = write(tmp_path, "quad.urdf", urdf(body))
-    code, _, err = run("hull", str(robot), "--out-dir", str(tmp_path / "out"), "--to", "mjcf")
-    assert code == 0, err
-    text = (tmp_path / "out" / "quad.xml").read_text()
+    text = hull_to_mjcf(robot, tmp_path / "out").read_text()
     assert 'boundmass="0.001"' in text and 'boundinertia="1e-06"' in text
     assert "meshcol: MuJoCo rejected the model as written" in text and words in text
     model = mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "quad.xml"))
@@ -417,9 +422,7 @@ def test_a_visual_primitive_of_size_zero_is_left_out_of_the_mjcf(tmp_path):
 <joint name="j" type="fixed"><parent link="base"/><child link="toe"/><origin xyz="0 0 0.3"/></joint>
 """
     robot = write(tmp_path, "toes.urdf", urdf(body))
-    code, _, err = run("hull", str(robot), "--out-dir", str(tmp_path / "out"), "--to", "mjcf")
-    assert code == 0, err
-    text = (tmp_path / "out" / "toes.xml").read_text()
+    text = hull_to_mjcf(robot, tmp_path / "out").read_text()
     assert "link 'toe': visual sphere of radius 0.0 left out" in text
     assert "link 'toe': visual box of size '0.1 0 0.1' left out" in text
     model = mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "toes.xml"))
@@ -444,9 +447,7 @@ def test_a_spherical_limit_mujoco_cannot_state_is_left_out_of_the_mjcf(tmp_path)
   <origin xyz="0 0 0.5"/><limit effort="10" lower="0" upper="0.5"/></joint>
 """
     robot = write(tmp_path, "ball.urdf", urdf(body))
-    code, _, err = run("hull", str(robot), "--out-dir", str(tmp_path / "out"), "--to", "mjcf")
-    assert code == 0, err
-    text = (tmp_path / "out" / "ball.xml").read_text()
+    text = hull_to_mjcf(robot, tmp_path / "out").read_text()
     assert "joint 'neck': spherical limits (lower 0.2, upper .8) have no MuJoCo form" in text
     model = mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "ball.xml"))
     neck, nod = (model.joint(n).id for n in ("neck", "nod"))
@@ -471,9 +472,7 @@ def test_an_obj_visual_with_faces_without_normals_is_converted_for_mujoco(tmp_pa
   <collision><geometry><box size="0.2 0.2 0.2"/></geometry></collision></link>
 """
     robot = write(tmp_path, "table.urdf", urdf(body))
-    code, _, err = run("hull", str(robot), "--out-dir", str(tmp_path / "out"), "--to", "mjcf")
-    assert code == 0, err
-    text = (tmp_path / "out" / "table.xml").read_text()
+    text = hull_to_mjcf(robot, tmp_path / "out").read_text()
     assert "visual mesh 'mixed.obj' converted (faces without normals" in text
     assert "'whole.obj' converted" not in text
     model = mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "table.xml"))
@@ -630,9 +629,7 @@ def test_mjcf_of_a_urdf_leaves_out_a_visual_without_triangles(tmp_path):
         "<child link='toe'/><origin xyz='0.1 0 0'/></joint>"
     )
     robot = write(tmp_path, "leg.urdf", urdf(body))
-    code, _, err = run("hull", str(robot), "--out-dir", str(tmp_path / "out"), "--to", "mjcf")
-    assert code == 0, err
-    text = (tmp_path / "out" / "leg.xml").read_text()
+    text = hull_to_mjcf(robot, tmp_path / "out").read_text()
     assert "link 'foot': visual mesh 'foot.dae' left out" in text
     assert "link 'toe': visual mesh 'file:///nowhere/Toe.mesh' left out (not found)" in text
     mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "leg.xml"))
@@ -696,8 +693,6 @@ def test_a_visual_mesh_too_thin_for_a_volume_inertia_gets_a_shell_inertia(tmp_pa
         "<collision><geometry><sphere radius='0.05'/></geometry></collision></link>"
     )
     robot = write(tmp_path, "hand.urdf", urdf(body))
-    code, _, err = run("hull", str(robot), "--out-dir", str(tmp_path / "out"), "--to", "mjcf")
-    assert code == 0, err
-    text = (tmp_path / "out" / "hand.xml").read_text()
+    text = hull_to_mjcf(robot, tmp_path / "out").read_text()
     assert "mesh volume is too small" in text and 'with inertia="shell"' in text
     mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "hand.xml"))
