@@ -178,12 +178,12 @@ def _place(element: Any) -> str:
     of the link or joint it is in."""
     if element.tag == "mesh":
         return f"mesh {element.get('filename')!r}"
-    owner = next((e for e in element.iterancestors("link", "joint")), None)
-    return (
-        f"<{element.tag}> of {owner.tag} {owner.get('name')!r}"
-        if owner is not None
-        else (f"<{element.tag}>")
-    )
+    if element.tag in ("link", "joint"):
+        return f"{element.tag} {element.get('name')!r}"
+    owner = next(element.iterancestors("link", "joint"), None)
+    if owner is None:
+        return f"<{element.tag}>"
+    return f"<{element.tag}> of {owner.tag} {owner.get('name')!r}"
 
 
 def _leading_numbers(element: Any, warnings: list[str]) -> None:
@@ -201,10 +201,8 @@ def _leading_numbers(element: Any, warnings: list[str]) -> None:
         if fixed != tokens:
             read = " ".join(fixed)
             element.set(name, read)
-            parent = element.getparent()
-            where = element.get("name") or (parent is not None and parent.get("name")) or "robot"
             warnings.append(
-                f"<{element.tag}> of {where!r}: {name}={text!r} read as {read!r} "
+                f"{_place(element)}: {name}={text!r} read as {read!r} "
                 "(the numbers, as pybullet reads them)"
             )
 

@@ -76,7 +76,7 @@ def poses(path: Path, **options) -> dict[str, np.ndarray]:
         ({"head": "<?xml version='2.0'?>"}, "the XML declaration gives version '2.0'"),
         ({"head": '\n\n  \n<?xml version="1.0"?>\n'}, "blank lines before the XML declaration"),
         ({"tail": "\r\n@NUL@"}, "NUL bytes after the root element"),
-        ({"arm_xyz": "0, 0, 0.2"}, "xyz='0, 0, 0.2' read as '0 0 0.2'"),
+        ({"arm_xyz": "0, 0, 0.2"}, "<origin> of link 'arm': xyz='0, 0, 0.2' read as '0 0 0.2'"),
         ({"lower": "-1.0.", "upper": "1,"}, "lower='-1.0.' read as '-1.0'"),
         ({"scale": "0.1 0.1 0.1 0.1"}, "scale '0.1 0.1 0.1 0.1' has 4 numbers"),
         ({"arm_xyz": "0 0 0.2 0"}, "<origin> of link 'arm': xyz '0 0 0.2 0' has 4 numbers"),
