@@ -5,7 +5,7 @@ worker killed by its pid mid-task failing only its file while the others finish.
 The inputs and helpers here are shared with tests/test_ray.py, which runs the same scenarios
 on a real local Ray.
 
-A stuck file is a regular mesh that keeps its worker busy for real (:func:`stall`: half a
+A stuck file is a regular mesh that keeps its worker busy for real (:func:`stall`: 1.5
 million triangles, seconds of CPU to inspect, minutes for CoACD to decompose); nothing in the
 code under test waits on purpose. The killed-worker tests learn which worker runs that file's
 task (a spy on the pool's assignment here, the task itself on Ray) and kill it once it has
@@ -37,17 +37,20 @@ linux_only = pytest.mark.skipif(
 )
 
 
-#: Faces of the stalling input (:func:`stall`). Inspecting it takes about 7 s of CPU here
-#: (the self-intersection candidates, the edge table, manifold3d) and 600 MB; CoACD takes
-#: minutes on it. Its worker is stopped (a timeout of 3-4 s, or killed) long before the end.
-STALL_FACES = 500_000
+#: Faces of the stalling input (:func:`stall`). `meshcol inspect` takes 13 s and 1 GB on it
+#: on the Intel Xeon of RESULTS' session 38 (the self-intersection candidates, the edge table,
+#: manifold3d, the hull); CoACD takes minutes. Its worker is stopped (a timeout of 2-8 s, or
+#: killed) long before the end. Half a million faces were too few: a faster CI machine
+#: inspected them within the 3 s timeout of
+#: :func:`test_an_inspect_timeout_on_the_local_pool_fails_only_its_file`.
+STALL_FACES = 1_500_000
 
 
 @pytest.fixture(scope="module")
 def stall(tmp_path_factory) -> Path:
     """A regular mesh file whose task keeps a worker busy many seconds: a torus of
-    :data:`STALL_FACES` faces (binary PLY, 9.5 MB), watertight and consistently wound."""
-    mesh = trimesh.creation.torus(1.0, 0.3, major_sections=1000, minor_sections=250)
+    :data:`STALL_FACES` faces (binary PLY, 28.5 MB), watertight and consistently wound."""
+    mesh = trimesh.creation.torus(1.0, 0.3, major_sections=2000, minor_sections=375)
     assert len(mesh.faces) == STALL_FACES
     path = tmp_path_factory.mktemp("executor-stall") / "stall.ply"
     mesh.export(path)
