@@ -178,6 +178,23 @@ def _inscribed_ball(normals: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarra
     return np.asarray(result.x[:3]), float(max(result.x[3], 0.0))
 
 
+#: Doubles of one block of :func:`_widths`' projections (32 MB).
+WIDTH_BLOCK = 1 << 22
+
+
+def _widths(normals: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Width of ``points`` along each unit normal (largest minus smallest projection), the
+    projections made a block of normals at a time: memory stays at :data:`WIDTH_BLOCK`
+    doubles however large the hull (all at once, a hull of 7,000 vertices and 13,000 polygons
+    took 740 MB). Each row's values are the same whatever the blocks."""
+    rows = max(1, WIDTH_BLOCK // max(len(points), 1))
+    widths = np.empty(len(normals))
+    for start in range(0, len(normals), rows):
+        projections = normals[start : start + rows] @ points.T
+        widths[start : start + rows] = projections.max(axis=1) - projections.min(axis=1)
+    return widths
+
+
 def measure_hull(hull: ExactHull) -> dict[str, Any]:
     """The measures of one exact hull (:class:`PartMeasures`' fields, plus ``normals``:
     the unit normals of its polygons, and ``thin_normal``: the direction of its thickness).
@@ -214,8 +231,7 @@ def measure_hull(hull: ExactHull) -> dict[str, Any]:
     lead = order[np.r_[True, labels[order][1:] != labels[order][:-1]]]
     planes = hull.equations[lead]
     normals, offsets = planes[:, :3], planes[:, 3]
-    projections = normals @ v.T
-    widths = projections.max(axis=1) - projections.min(axis=1)
+    widths = _widths(normals, v)
     thinnest = int(np.argmin(widths))
     centre, radius = _inscribed_ball(normals, offsets)
     reach = float(np.linalg.norm(v - centre, axis=1).max())
