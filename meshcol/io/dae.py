@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import io
 import math
+import re
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,7 +47,7 @@ __all__ = ["MAX_NODE_VISITS", "MAX_VERTICES", "UNITS", "DaeHeader", "read_dae", 
 UNITS = "m"
 
 #: Most scene nodes walked in one file, ``<instance_node>`` expansions included.
-MAX_NODE_VISITS = 1_000_000
+MAX_NODE_VISITS = 100_000
 
 #: Most vertices of one file's bodies together, instanced geometry counted per instance
 #: (1.2 GB of float64).
@@ -158,15 +159,48 @@ def _document(data: bytes, source: str) -> Any:
         _geomnode_mat_xpath = "{meshcol}geometry-only"
 
     try:
-        return GeometryOnly(
+        document = GeometryOnly(
             io.BytesIO(data), ignore=[collada.common.DaeError], aux_file_loader=_no_file
         )
-    except collada.common.DaeError as error:
+    except (collada.common.DaeError, collada.scene.DaeInstanceNotLoadedError) as error:
         raise _error(_detail(error), source) from None
     except RecursionError:
         raise _error("elements nested too deeply", source) from None
     except (*PARSE_ERRORS, SyntaxError) as error:  # lxml's XMLSyntaxError is a SyntaxError
         raise _error(_detail(error), source) from None
+    for problem in document.errors:
+        if not isinstance(problem, collada.common.DaeUnsupportedError) and not (
+            isinstance(problem, collada.common.DaeBrokenRefError)
+            and problem.msg.startswith(_BESIDE)
+        ):
+            raise _error(_detail(problem), source)
+    return document
+
+
+#: The beginnings of pycollada's messages of broken references to what meshcol does not read
+#: (materials, effects, images, cameras, lights, skins and morphs, auxiliary files): skipped.
+#: Any other error (a geometry or node missing, indices beyond a source, a primitive without
+#: its inputs) refuses the file: a collider that silently loses a part is a wrong answer.
+_BESIDE = (
+    "Effect",
+    "Material",
+    "Missing surface",
+    "Missing image",
+    "Camera",
+    "Light",
+    "Controller",
+    "Auxiliar",
+    "Trying to load",
+    "Input in",
+    "Weights input",
+    "Base source of morph",
+    "Targeted geometry",
+    "Source geometry for skin",
+    "Invalid source attribute of skin",
+)
+
+#: A float that is not finite, as C's strtod reads it (pycollada turns NaN into 0).
+_NON_FINITE = re.compile(r"(?i)nan|inf")
 
 
 def _mesh_nodes(document: Any, meter: float, source: str) -> list[MeshNode]:
@@ -181,6 +215,7 @@ def _mesh_nodes(document: Any, meter: float, source: str) -> list[MeshNode]:
     roots = [] if scene is None else list(scene.nodes)
     stack: list[tuple[Any, np.ndarray]] = [(node, np.eye(4)) for node in reversed(roots)]
     visits = vertex_count = 0
+    finite: dict[int, bool] = {}
     while stack:
         node, parent = stack.pop()
         if not isinstance(node, Node):
@@ -189,9 +224,11 @@ def _mesh_nodes(document: Any, meter: float, source: str) -> list[MeshNode]:
         if visits > MAX_NODE_VISITS:
             raise _error(f"the scene expands to over {MAX_NODE_VISITS:,} nodes", source)
         try:
-            matrix = parent @ np.asarray(node.matrix, dtype=np.float64).reshape(4, 4)
+            matrix = parent @ _node_matrix(node.node if isinstance(node, NodeNode) else node)
             geometry = [child for child in node.children if isinstance(child, GeometryNode)]
-            vertices, faces = _triangles(geometry)
+            vertices, faces = _triangles(geometry, finite, source)
+        except InvalidMeshError:
+            raise
         except PARSE_ERRORS as error:
             raise _error(_detail(error), source) from None
         if len(faces):
@@ -208,10 +245,46 @@ def _mesh_nodes(document: Any, meter: float, source: str) -> list[MeshNode]:
     return nodes
 
 
-def _triangles(geometry_nodes: list[Any]) -> tuple[np.ndarray, np.ndarray]:
+def _node_matrix(node: Any) -> np.ndarray:
+    """The (4, 4) transform of a ``<node>``, its transforms multiplied in document order, in
+    double precision: pycollada's own ``matrix`` is single (a 90-degree ``<rotate>`` there
+    has a cosine of -4.4e-8 and a 0.99999994 on its axis, which is not a rotation)."""
+    from collada.scene import RotateTransform, ScaleTransform, TranslateTransform
+
+    matrix = np.eye(4)
+    for transform in node.transforms:
+        step = np.eye(4)
+        if isinstance(transform, TranslateTransform):
+            step[:3, 3] = (transform.x, transform.y, transform.z)
+        elif isinstance(transform, ScaleTransform):
+            step[:3, :3] = np.diag([transform.x, transform.y, transform.z])
+        elif isinstance(transform, RotateTransform):
+            step[:3, :3] = _rotation([transform.x, transform.y, transform.z], transform.angle)
+        else:  # <matrix> (its own 16 numbers), <lookat>, <skew>: pycollada's matrix
+            step = np.asarray(transform.matrix, dtype=np.float64).reshape(4, 4)
+        matrix = matrix @ step
+    return matrix
+
+
+def _rotation(axis: list[float], degrees: float) -> np.ndarray:
+    """The rotation of ``degrees`` about ``axis`` (normalised; zero: none), Rodrigues'
+    formula."""
+    axis_array = np.asarray(axis, dtype=np.float64)
+    norm = float(np.linalg.norm(axis_array))
+    if not norm > 0.0:
+        return np.eye(3)
+    x, y, z = axis_array / norm
+    angle = math.radians(float(degrees))
+    cross = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+    return np.eye(3) + math.sin(angle) * cross + (1.0 - math.cos(angle)) * (cross @ cross)
+
+
+def _triangles(
+    geometry_nodes: list[Any], finite: dict[int, bool], source: str
+) -> tuple[np.ndarray, np.ndarray]:
     """The triangles of every primitive of ``geometry_nodes`` (triangles, polylists and
     polygons fan-triangulated by pycollada; lines skipped): ``(vertices (n, 3), faces (m, 3))``
-    in the node's frame."""
+    in the node's frame. ``finite``: :func:`_finite`'s answers so far."""
     from collada.polylist import Polylist
     from collada.triangleset import TriangleSet
 
@@ -227,12 +300,28 @@ def _triangles(geometry_nodes: list[Any]) -> tuple[np.ndarray, np.ndarray]:
             index = np.asarray(primitive.vertex_index, dtype=np.int64).reshape(-1, 3)
             if len(index) == 0:
                 continue
+            if not _finite(primitive.sources["VERTEX"][0][4], finite):
+                raise InvalidMeshError("mesh has non-finite vertex coordinates", source)
             vertices.append(np.asarray(primitive.vertex, dtype=np.float64).reshape(-1, 3))
             faces.append(index + base)
             base += len(vertices[-1])
     if not faces:
         return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
     return np.concatenate(vertices), np.concatenate(faces)
+
+
+def _finite(positions: Any, finite: dict[int, bool]) -> bool:
+    """Whether the text of the ``<float_array>`` of a positions source has only finite
+    numbers (pycollada reads NaN as 0, silently), remembered in ``finite`` by source."""
+    key = id(positions)
+    if key not in finite:
+        arrays = [child for child in positions.xmlnode if str(child.tag).endswith("float_array")]
+        texts = [array.text or "" for array in arrays]
+        # every spelling of NaN and infinity has an n: the plain search is at memory speed
+        finite[key] = not any(
+            ("n" in text or "N" in text) and _NON_FINITE.search(text) for text in texts
+        )
+    return finite[key]
 
 
 def _meter(value: str | None, source: str) -> float:
@@ -254,7 +343,7 @@ def _no_file(name: str) -> None:
 
 
 def _detail(error: BaseException) -> str:
-    text = str(error).strip()
+    text = str(getattr(error, "msg", error)).strip()  # pycollada's without its class name
     return (text.splitlines()[0] if text else type(error).__name__)[:200]
 
 
