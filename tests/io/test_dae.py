@@ -267,6 +267,7 @@ def _deep(levels: int) -> str:
             _deep(3000).encode(),
             "cannot parse DAE file: XML Parsing Error: Excessive depth in document: 2048, use XML_PARSE_HUGE option, line 6, column 38876 (<string>, line 6)",
         ),
+        (_deep(1000).encode(), "cannot parse DAE file: elements nested too deeply"),
     ],
     ids=[
         "empty",
@@ -282,6 +283,7 @@ def _deep(levels: int) -> str:
         "nan",
         "index-out-of-range",
         "too-deep",
+        "deeper-than-python",
     ],
 )
 def test_a_bad_dae_is_one_line_naming_the_file(tmp_path, content, message):
