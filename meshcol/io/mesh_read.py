@@ -387,8 +387,8 @@ def _core_path(path: str) -> bool:
 
 
 def _formats_of(sources: Sequence[str]) -> list[MeshFormat | None]:
-    """The format of each of ``sources``, as :func:`mesh_format` finds it with nothing opted
-    in (None where it raises): each extension looked up once, and each extension found from
+    """The format of each of ``sources``, as :func:`mesh_format` finds it (None where it
+    raises): each extension looked up once, and each extension found from
     the distinct ends of the paths (:func:`_extension_of_end`), not a ``splitext`` per path,
     for 100,000 files."""
     ends = list(map(_END, sources))

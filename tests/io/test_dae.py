@@ -80,6 +80,8 @@ def test_up_axis_is_not_applied_as_rviz(tmp_path):
     x_up = world(load_mesh(write(tmp_path, "x.dae", placed_cube(up_axis="X_UP"))))
     np.testing.assert_array_equal(z_up, y_up)
     np.testing.assert_array_equal(z_up, x_up)
+    header = dae.read_header((tmp_path / "y.dae").read_bytes(), "y.dae")
+    assert header == dae.DaeHeader(meter=1.0, up_axis="Y_UP")  # read, and left unapplied
 
 
 def test_reports_say_metres(tmp_path):
@@ -100,6 +102,16 @@ def test_a_unit_that_is_not_a_length_is_one_line(tmp_path, meter):
     path = write(tmp_path, "bad.dae", placed_cube(meter))
     assert inspect_error(path) == (
         f"cannot parse DAE file: <unit meter={meter!r}> is not a positive finite length"
+    )
+
+
+def test_without_pycollada_the_command_says_how_to_install_it(tmp_path, monkeypatch):
+    from meshcol.io import mesh_formats
+
+    path = write(tmp_path, "arm.dae", placed_cube())
+    monkeypatch.setattr(mesh_formats.importlib.util, "find_spec", lambda name: None)
+    assert inspect_error(path) == (
+        "reading COLLADA (.dae) needs pycollada: pip install 'meshcol[robots]'"
     )
 
 
