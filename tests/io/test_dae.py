@@ -358,3 +358,18 @@ def test_a_urdf_collision_mesh_in_centimetres_is_posed_at_its_size(tmp_path):
     np.testing.assert_allclose(points.max(axis=0), [3.3, 0.35, 0.9], atol=1e-12)
     result = CliRunner().invoke(main, ["check", str(tmp_path / "r.urdf")])
     assert result.exit_code == 0, result.output  # 2.2 m apart in x: no pair touches
+
+
+def test_a_manifest_places_centimetre_dae_bodies_in_metres(tmp_path):
+    import json
+
+    write(tmp_path, "cm.dae", placed_cube("0.01"))  # a 1 m cube
+    bodies = [
+        {"name": "a", "mesh": "cm.dae"},
+        {"name": "b", "mesh": "cm.dae", "position": [1.5, 0, 0]},
+    ]
+    scene = write(tmp_path, "scene.json", json.dumps({"units": "m", "bodies": bodies}))
+    result = CliRunner().invoke(main, ["check", str(scene), "--format", "json", "--clearance", "1"])
+    assert result.exit_code == 0, result.output
+    (pair,) = json.loads(result.stdout)["pairs"]
+    assert pair["distance"] == pytest.approx(0.5, abs=1e-12) and pair["status"] == "clearance"
