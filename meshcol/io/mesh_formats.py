@@ -2,8 +2,7 @@
 
 Each :class:`MeshFormat` says how a format is read and the conventions it carries: the core's
 parallel reader (OBJ, STL) or a Python reader that returns the file's mesh nodes, what an
-unnamed object is called, whether a caller must ask for it (COLLADA, for robot descriptions)
-and what it needs installed. :func:`meshcol.io.mesh_read.load_mesh` and ``load_meshes`` look a
+unnamed object is called, the units it returns and what it needs installed. :func:`meshcol.io.mesh_read.load_mesh` and ``load_meshes`` look a
 file up here and nowhere else; so do the manifests, the robot loaders and the fuzz target.
 
 Adding a format is one module with a reader (``read(file, source) -> list[MeshNode]``, see
@@ -23,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from meshcol.errors import InputFileError, MeshcolError, MissingDependencyError
-from meshcol.io import fbx, gltf, gltf_physics, mesh_trimesh, off, usd_read
+from meshcol.io import dae, fbx, gltf, gltf_physics, mesh_trimesh, off, usd_read
 from meshcol.io.physics_bodies import FileScene
 from meshcol.io.safe_read import check_input
 
@@ -64,14 +63,11 @@ class MeshFormat:
     unnamed : str or None
         The name of an object the file leaves unnamed, in a file of several (OBJ:
         ``default``); None: the file's stem.
-    opt_in : str or None
-        A keyword of :func:`meshcol.io.mesh_read.load_mesh` that must be true to read the
-        format (``collada``); such a format is not one of the commands' own inputs.
     requires : tuple of str or None
         ``(module, install hint)``: a module the reader needs, checked before reading.
     units : str or None
         The length unit the reader returns vertices in, whatever the file's own (FBX: ``m``,
-        converted from its ``UnitScaleFactor``): reported in the envelope's ``units`` when
+        converted from its ``UnitScaleFactor``; COLLADA: ``m``, from its ``<unit meter>``): reported in the envelope's ``units`` when
         every input says the same. None: the format does not say.
     godot_hints : bool
         Node names may end in Godot's import hints (``-col``, ``-convcol``, ``-colonly``,
@@ -94,7 +90,6 @@ class MeshFormat:
     read: Callable[[Path, str], list] | None = None
     native: int | None = None
     unnamed: str | None = None
-    opt_in: str | None = None
     requires: tuple[str, str] | None = None
     units: str | None = None
     godot_hints: bool = False
@@ -130,12 +125,12 @@ FORMATS: tuple[MeshFormat, ...] = (
     MeshFormat(
         "dae",
         (".dae",),
-        read=mesh_trimesh.read_dae,
-        opt_in="collada",
+        read=dae.read_dae,
         requires=(
-            "collada",  # trimesh reads COLLADA with pycollada
+            "collada",  # pycollada
             "reading COLLADA (.dae) needs pycollada: pip install 'meshcol[robots]'",
         ),
+        units=dae.UNITS,
     ),
     MeshFormat(
         "usd",
@@ -148,17 +143,14 @@ FORMATS: tuple[MeshFormat, ...] = (
 _BY_EXTENSION = {extension: fmt for fmt in FORMATS for extension in fmt.extensions}
 
 #: File extensions (lower case) that :func:`meshcol.io.mesh_read.load_mesh` reads, mapped to
-#: the format's name (the commands' inputs: formats a caller opts in to are not listed).
-MESH_EXTENSIONS: dict[str, str] = {
-    extension: fmt.name for fmt in FORMATS if fmt.opt_in is None for extension in fmt.extensions
-}
+#: the format's name.
+MESH_EXTENSIONS: dict[str, str] = {ext: fmt.name for fmt in FORMATS for ext in fmt.extensions}
 
 
-def mesh_format(source: str, opted_in: frozenset[str] = frozenset()) -> MeshFormat:
-    """The format of ``source`` by its extension (InputFileError when unknown, or when the
-    format needs an ``opt_in`` keyword that is not among ``opted_in``)."""
+def mesh_format(source: str) -> MeshFormat:
+    """The format of ``source`` by its extension (InputFileError when unknown)."""
     fmt = _BY_EXTENSION.get(os.path.splitext(source)[1].lower())
-    if fmt is None or (fmt.opt_in is not None and fmt.opt_in not in opted_in):
+    if fmt is None:
         known = ", ".join(MESH_EXTENSIONS)
         suffix = os.path.splitext(source)[1] or "(none)"
         raise InputFileError(f"unknown mesh file extension {suffix!r} (expected {known})", source)
@@ -201,7 +193,7 @@ def read_natively(source: str) -> bool:
     return fmt is not None and fmt.native is not None
 
 
-def check_file(source: str, opted_in: frozenset[str] = frozenset()) -> MeshFormat:
+def check_file(source: str) -> MeshFormat:
     """The format of ``source``, once it is known to be a readable file: missing, a directory,
     an unknown extension, a missing dependency or an unreadable file raise, in that order."""
     file = Path(source)
@@ -211,7 +203,7 @@ def check_file(source: str, opted_in: frozenset[str] = frozenset()) -> MeshForma
         raise InputFileError("file not found", source)
     if file.is_dir():
         raise InputFileError("is a directory, not a mesh file", source)
-    fmt = mesh_format(source, opted_in)
+    fmt = mesh_format(source)
     if fmt.requires is not None:
         module, hint = fmt.requires
         if importlib.util.find_spec(module) is None:

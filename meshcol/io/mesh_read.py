@@ -1,4 +1,4 @@
-"""Load mesh files (OBJ, STL, PLY, OFF, glTF, GLB) as rigid bodies, geometry only.
+"""Load mesh files (OBJ, STL, PLY, OFF, glTF, GLB, FBX, COLLADA, USD) as rigid bodies, geometry only.
 
 A file may hold several bodies: OBJ objects (or groups, when the file has no objects), STL
 solids, glTF mesh nodes. Each becomes one :class:`meshcol.types.Body` whose vertices are in its
@@ -85,23 +85,19 @@ def check_magnitude(values: np.ndarray, what: str, source: str | None) -> None:
 _MERGE_DIGITS = 8
 
 
-def load_mesh(
-    path: str | os.PathLike[str], *, merge: bool = True, collada: bool = False
-) -> list[Body]:
+def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]:
     """Load every body of one mesh file.
 
     Parameters
     ----------
     path : str or path-like
-        An ``.obj``, ``.stl`` (ascii or binary), ``.ply``, ``.off``, ``.glb`` or ``.gltf``
-        file. Kept verbatim as each body's ``source``.
+        A mesh file of a format :data:`MESH_EXTENSIONS` lists (``.obj``, ``.stl`` ascii or
+        binary, ``.ply``, ``.off``, ``.glb``, ``.gltf``, ``.fbx``, ``.dae``, USD). Kept
+        verbatim as each body's ``source``.
     merge : bool, optional
         Merge vertices at the same position (to 1e-8, per coordinate), also across UV and
         normal seams, and drop unreferenced vertices. On by default: topology checks
         (watertight, manifold) are only meaningful after it.
-    collada : bool, optional
-        Also accept ``.dae`` (COLLADA, read by trimesh with pycollada), as robot descriptions
-        reference it (:mod:`meshcol.io.robot`); off for the commands' own mesh inputs.
 
     Returns
     -------
@@ -129,7 +125,7 @@ def load_mesh(
     flipped so that outward normals stay outward.
     """
     source = os.fspath(path)
-    fmt = check_file(source, frozenset({"collada"}) if collada else frozenset())
+    fmt = check_file(source)
     file = Path(source)
     if fmt.scene is not None:
         scene = load_file_scene(source, merge=merge)
@@ -391,8 +387,8 @@ def _core_path(path: str) -> bool:
 
 
 def _formats_of(sources: Sequence[str]) -> list[MeshFormat | None]:
-    """The format of each of ``sources``, as :func:`mesh_format` finds it with nothing opted
-    in (None where it raises): each extension looked up once, and each extension found from
+    """The format of each of ``sources``, as :func:`mesh_format` finds it (None where it
+    raises): each extension looked up once, and each extension found from
     the distinct ends of the paths (:func:`_extension_of_end`), not a ``splitext`` per path,
     for 100,000 files."""
     ends = list(map(_END, sources))

@@ -1,4 +1,4 @@
-"""Mesh formats read by trimesh's loaders (PLY, glTF/GLB, COLLADA): a file's scene graph as
+"""Mesh formats read by trimesh's loaders (PLY, glTF/GLB): a file's scene graph as
 mesh nodes, with trimesh's exceptions turned into one line that names the file.
 
 Only geometry is loaded (``process=False``, no materials kept): a textured file loads
@@ -23,11 +23,11 @@ from meshcol.io.safe_read import read_input
 if TYPE_CHECKING:
     from meshcol.io.mesh_formats import MeshNode
 
-__all__ = ["read_bytes", "read_dae", "read_ply", "scene_nodes"]
+__all__ = ["PARSE_ERRORS", "read_bytes", "read_ply", "scene_nodes"]
 
-# What trimesh's parsers raise on corrupt content. Listed explicitly rather than catching
-# Exception, so programming errors still surface with a traceback.
-_PARSE_ERRORS = (
+#: What trimesh's (and pycollada's) parsers raise on corrupt content. Listed explicitly
+#: rather than catching Exception, so programming errors still surface with a traceback.
+PARSE_ERRORS = (
     ValueError,  # includes json.JSONDecodeError and UnicodeDecodeError
     IndexError,
     KeyError,
@@ -48,11 +48,6 @@ def read_ply(file: Path, source: str) -> list[MeshNode]:
     header = _ply_bytes(file, source)
     stream = None if header is None else io.BytesIO(header)
     return scene_nodes(load_scene(file, "ply", source, stream), by_geometry=True)
-
-
-def read_dae(file: Path, source: str) -> list[MeshNode]:
-    """The mesh nodes of a COLLADA file (robot descriptions reference them)."""
-    return scene_nodes(load_scene(file, "dae", source))
 
 
 def scene_nodes(scene: Any, by_geometry: bool = False) -> list[MeshNode]:
@@ -76,7 +71,7 @@ def load_scene(file: Path, file_type: str, source: str, stream: io.BytesIO | Non
     as :class:`InvalidMeshError` ``cannot parse <TYPE> file: ...``.
 
     trimesh never opens a file itself: the file's bytes come from the guarded read, and the
-    files it refers to (glTF buffers, COLLADA images) from :func:`local_resolver`'s."""
+    files it refers to (glTF buffers and images) from :func:`local_resolver`'s."""
     import trimesh
 
     if stream is None:
@@ -94,7 +89,7 @@ def load_scene(file: Path, file_type: str, source: str, stream: io.BytesIO | Non
             f"cannot parse {file_type.upper()} file: referenced file {error.args[-1]!r} not found",
             source,
         ) from None
-    except _PARSE_ERRORS as error:
+    except PARSE_ERRORS as error:
         detail = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
         raise InvalidMeshError(
             f"cannot parse {file_type.upper()} file: {detail[:200]}", source

@@ -693,7 +693,7 @@ def _convert_visual(path: str, stage: str, converted: dict[str, str]) -> str:
     from meshcol.io.mesh_read import load_mesh
     from meshcol.io.mesh_write import safe_name, write_meshes
 
-    bodies = load_mesh(path, collada=True)
+    bodies = load_mesh(path)
     vertices, faces, base = [], [], 0
     for body in bodies:
         vertices.append(body.vertices @ body.pose[:3, :3].T + body.pose[:3, 3])

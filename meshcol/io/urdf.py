@@ -569,7 +569,7 @@ class _LinkMeshes:
         loaded = self.loaded.get(key)
         if loaded is None:
             try:
-                loaded = load_mesh(path, collada=True)
+                loaded = load_mesh(path)
             except MeshcolError as error:
                 raise SceneError(f"{label}: mesh {reference!r}: {error.message}", source) from None
             self.loaded[key] = loaded

@@ -271,7 +271,7 @@ BAD_MESHES = {
     "unknown.xyz": (
         "x\n",
         "unknown mesh file extension '.xyz' "
-        "(expected .obj, .stl, .ply, .off, .glb, .gltf, .fbx, .usd, .usda, .usdc, .usdz)",
+        "(expected .obj, .stl, .ply, .off, .glb, .gltf, .fbx, .dae, .usd, .usda, .usdc, .usdz)",
     ),
 }
 

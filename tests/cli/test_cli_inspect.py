@@ -174,10 +174,10 @@ def test_broken_manifest(tmp_path: Path, name: str) -> None:
             "cannot parse OBJ file: line 2: non-finite vertex coordinate",
         ),
         (
-            "mesh.dae",
+            "mesh.3ds",
             "<xml/>\n",
-            "unknown mesh file extension '.dae' "
-            "(expected .obj, .stl, .ply, .off, .glb, .gltf, .fbx, .usd, .usda, .usdc, .usdz)",
+            "unknown mesh file extension '.3ds' "
+            "(expected .obj, .stl, .ply, .off, .glb, .gltf, .fbx, .dae, .usd, .usda, .usdc, .usdz)",
         ),
     ],
 )

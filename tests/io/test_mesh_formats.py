@@ -32,19 +32,20 @@ def test_every_extension_is_lower_case_and_belongs_to_one_format():
 def test_the_commands_read_what_they_always_read():
     # the unknown-extension message lists these, in this order
     assert list(MESH_EXTENSIONS) == [
-        *(".obj", ".stl", ".ply", ".off", ".glb", ".gltf", ".fbx"),
+        *(".obj", ".stl", ".ply", ".off", ".glb", ".gltf", ".fbx", ".dae"),
         *(".usd", ".usda", ".usdc", ".usdz"),
     ]
     assert read_natively("a.OBJ") and read_natively("b.stl") and not read_natively("c.ply")
     assert not read_natively("d.dae") and not read_natively("noextension")
 
 
-def test_an_opt_in_format_is_unknown_until_asked_for(tmp_path):
-    with pytest.raises(InputFileError, match=r"unknown mesh file extension '\.dae' \(expected"):
-        mesh_format("arm.dae")
-    assert mesh_format("arm.DAE", frozenset({"collada"})).name == "dae"
+def test_collada_is_one_of_the_commands_inputs(tmp_path):
+    # it was read for robot descriptions only (a load_mesh keyword), now by every command
+    with pytest.raises(InputFileError, match=r"unknown mesh file extension '\.3ds' \(expected"):
+        mesh_format("arm.3ds")
+    assert mesh_format("arm.DAE").name == "dae" and mesh_format("arm.dae").units == "m"
     with pytest.raises(InputFileError, match="file not found"):
-        check_file(str(tmp_path / "missing.dae"), frozenset({"collada"}))
+        check_file(str(tmp_path / "missing.dae"))
 
 
 def test_a_format_that_needs_a_module_says_how_to_install_it(tmp_path, monkeypatch):
@@ -52,7 +53,7 @@ def test_a_format_that_needs_a_module_says_how_to_install_it(tmp_path, monkeypat
     path.write_text("<COLLADA/>")
     monkeypatch.setattr(mesh_formats.importlib.util, "find_spec", lambda name: None)
     with pytest.raises(MissingDependencyError, match="needs pycollada"):
-        load_mesh(path, collada=True)
+        load_mesh(path)
 
 
 def read_xyz(file: Path, source: str) -> list:

@@ -458,14 +458,14 @@ TRIANGLE = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"
             TRIANGLE,
             InputFileError,
             "unknown mesh file extension '.xyz' "
-            "(expected .obj, .stl, .ply, .off, .glb, .gltf, .fbx, .usd, .usda, .usdc, .usdz)",
+            "(expected .obj, .stl, .ply, .off, .glb, .gltf, .fbx, .dae, .usd, .usda, .usdc, .usdz)",
         ),
         (
             "noext",
             TRIANGLE,
             InputFileError,
             "unknown mesh file extension '(none)' "
-            "(expected .obj, .stl, .ply, .off, .glb, .gltf, .fbx, .usd, .usda, .usdc, .usdz)",
+            "(expected .obj, .stl, .ply, .off, .glb, .gltf, .fbx, .dae, .usd, .usda, .usdc, .usdz)",
         ),
         ("empty.obj", "", InvalidMeshError, "mesh has no faces"),
         ("points.obj", "v 0 0 0\nv 1 0 0\n", InvalidMeshError, "mesh has no faces"),

@@ -519,7 +519,7 @@ def test_broken_mesh_in_manifest(folder):
         load_scene(path)
     assert info.value.message == (
         "body 'f': mesh file 'bad.foo': unknown mesh file extension '.foo' "
-        "(expected .obj, .stl, .ply, .off, .glb, .gltf, .fbx, .usd, .usda, .usdc, .usdz)"
+        "(expected .obj, .stl, .ply, .off, .glb, .gltf, .fbx, .dae, .usd, .usda, .usdc, .usdz)"
     )
 
 
