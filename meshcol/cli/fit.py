@@ -82,8 +82,8 @@ def fit(
 ) -> None:
     """Enclosing primitive of each body: it contains every vertex of the mesh.
 
-    INPUT is mesh files (OBJ, STL, PLY, OFF, glTF, GLB), one scene manifest or a robot
-    description; fits are in the WORLD frame, like hulls.
+    INPUT is mesh files (OBJ, STL, PLY, OFF, glTF/GLB, FBX, COLLADA, USD), one scene manifest
+    or a robot description; fits are in the WORLD frame, like hulls.
 
     sphere: the minimum enclosing sphere. box: a near-minimal oriented box (hull face
     normals and principal axes tried, then polished). cylinder and capsule: along the best

@@ -79,8 +79,8 @@ def hull(
 ) -> None:
     """Convex hull of each body, optionally within a vertex budget.
 
-    INPUT is mesh files (OBJ, STL, PLY, OFF, glTF, GLB; every object, solid or mesh node is
-    a body) or one scene manifest. Hulls are in the WORLD frame: each body's scene transform
+    INPUT is mesh files (OBJ, STL, PLY, OFF, glTF/GLB, FBX, COLLADA, USD; every object, solid
+    or mesh node is a body), one scene manifest or a robot description. Hulls are in the WORLD frame: each body's scene transform
     is applied, so exported colliders sit in place over the input.
 
     With --max-vertices the hull keeps at most N vertices and still contains every input

@@ -172,8 +172,8 @@ def inspect(
 ) -> None:
     """Health check of each body's mesh: fit to be a collider?
 
-    INPUT is mesh files (OBJ, STL, PLY, OFF, glTF, GLB; every object, solid or mesh node is
-    a body) or one scene manifest. Per body: vertices, faces, connected components,
+    INPUT is mesh files (OBJ, STL, PLY, OFF, glTF/GLB, FBX, COLLADA, USD; every object, solid
+    or mesh node is a body), one scene manifest or a robot description. Per body: vertices, faces, connected components,
     watertight, consistent winding, signed volume (closed meshes only), world-frame bounding
     box and size, degenerate (zero-area) faces, duplicate faces, boundary and non-manifold
     edges (more than two faces), self-intersections (pairs of crossing faces), manifold3d's
