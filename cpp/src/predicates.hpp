@@ -22,6 +22,7 @@
 #include <cmath>
 #include <vector>
 
+#include "hull_orientation.hpp"
 #include "meshcol/vec.hpp"
 
 namespace meshcol {
@@ -32,87 +33,6 @@ namespace detail {
 constexpr double kEpsilon = 1.1102230246251565e-16;  // 2^-53, half an ulp of 1
 constexpr double kOrient2dBound = (3.0 + 16.0 * kEpsilon) * kEpsilon;
 constexpr double kOrient3dBound = (7.0 + 56.0 * kEpsilon) * kEpsilon;
-
-// A nonoverlapping expansion, components in increasing magnitude, zeros removed.
-using Expansion = std::vector<double>;
-
-inline void two_sum(double a, double b, double& x, double& y) {
-    x = a + b;
-    const double bv = x - a;
-    const double av = x - bv;
-    y = (a - av) + (b - bv);
-}
-
-inline Expansion difference(double a, double b) {
-    const double x = a - b;
-    const double bv = a - x;
-    const double av = x + bv;
-    const double y = (a - av) + (bv - b);
-    Expansion e;
-    if (y != 0.0) e.push_back(y);
-    if (x != 0.0) e.push_back(x);
-    return e;
-}
-
-// e + b (Shewchuk's GROW-EXPANSION with zero elimination).
-inline Expansion grow(const Expansion& e, double b) {
-    Expansion h;
-    h.reserve(e.size() + 1);
-    double q = b;
-    for (double component : e) {
-        double sum, error;
-        two_sum(q, component, sum, error);
-        if (error != 0.0) h.push_back(error);
-        q = sum;
-    }
-    if (q != 0.0 || h.empty()) h.push_back(q);
-    return h;
-}
-
-inline Expansion add(const Expansion& e, const Expansion& f) {
-    Expansion h = e;
-    for (double component : f) h = grow(h, component);
-    return h;
-}
-
-inline Expansion negate(Expansion e) {
-    for (double& component : e) component = -component;
-    return e;
-}
-
-// e * b (Shewchuk's SCALE-EXPANSION with zero elimination; fma gives the exact product error).
-inline Expansion scale(const Expansion& e, double b) {
-    Expansion h;
-    if (e.empty() || b == 0.0) return h;
-    h.reserve(2 * e.size());
-    double q = e[0] * b;
-    double low = std::fma(e[0], b, -q);
-    if (low != 0.0) h.push_back(low);
-    for (size_t i = 1; i < e.size(); ++i) {
-        const double product = e[i] * b;
-        const double product_low = std::fma(e[i], b, -product);
-        double sum, error;
-        two_sum(q, product_low, sum, error);
-        if (error != 0.0) h.push_back(error);
-        two_sum(product, sum, q, error);
-        if (error != 0.0) h.push_back(error);
-    }
-    if (q != 0.0) h.push_back(q);
-    return h;
-}
-
-inline Expansion multiply(const Expansion& e, const Expansion& f) {
-    Expansion h;
-    for (double component : f) h = add(h, scale(e, component));
-    return h;
-}
-
-// The sign of an expansion is the sign of its largest (last) component.
-inline double sign_of(const Expansion& e) {
-    for (auto it = e.rbegin(); it != e.rend(); ++it)
-        if (*it != 0.0) return *it > 0.0 ? 1.0 : -1.0;
-    return 0.0;
-}
 
 // The power of two (its exponent) that brings the largest magnitude `m` near 1 when it is tiny,
 // so that products of differences stay clear of the denormal range; 0 otherwise. Applied by
@@ -125,14 +45,26 @@ inline int rescale_exponent(double m) {
     return -exponent;
 }
 
+// The exact evaluations use the stack-held expansion arithmetic of hull_orientation.hpp
+// (Shewchuk's Fast-Expansion-Sum and Scale-Expansion with zero elimination): no allocation,
+// which a pile of exactly degenerate faces (inspect's worst case) calls millions of times.
 inline double orient2d_exact(double ax, double ay, double bx, double by, double cx, double cy) {
+    namespace h = hull_detail;
     const double m = std::max({std::fabs(ax), std::fabs(ay), std::fabs(bx), std::fabs(by),
                                std::fabs(cx), std::fabs(cy)});
     if (const int k = rescale_exponent(m); k != 0)
         for (double* x : {&ax, &ay, &bx, &by, &cx, &cy}) *x = std::ldexp(*x, k);
-    const Expansion acx = difference(ax, cx), acy = difference(ay, cy);
-    const Expansion bcx = difference(bx, cx), bcy = difference(by, cy);
-    return sign_of(add(multiply(acx, bcy), negate(multiply(acy, bcx))));
+    // Two slots per difference, plus the spare one the merge reads past the end.
+    double acx[3], acy[3], bcx[3], bcy[3], left[16], right[16], det[32];
+    const int nacx = h::difference(ax, cx, acx), nacy = h::difference(ay, cy, acy);
+    const int nbcx = h::difference(bx, cx, bcx), nbcy = h::difference(by, cy, bcy);
+    const int nl = h::expansion_product(acx, nacx, bcy, nbcy, left);
+    const int nr = h::expansion_product(acy, nacy, bcx, nbcx, right);
+    for (int l = 0; l < nr; ++l) right[l] = -right[l];
+    const int n = h::expansion_sum(left, nl, right, nr, det);
+    for (int l = n - 1; l >= 0; --l)
+        if (det[l] != 0.0) return det[l] > 0.0 ? 1.0 : -1.0;
+    return 0.0;
 }
 
 inline double orient3d_exact(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
@@ -141,13 +73,62 @@ inline double orient3d_exact(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
         m = std::max({m, std::fabs(p->x), std::fabs(p->y), std::fabs(p->z)});
     if (const int k = rescale_exponent(m); k != 0)
         for (Vec3* p : {&a, &b, &c, &d}) *p = {std::ldexp(p->x, k), std::ldexp(p->y, k), std::ldexp(p->z, k)};
-    const Expansion adx = difference(a.x, d.x), ady = difference(a.y, d.y), adz = difference(a.z, d.z);
-    const Expansion bdx = difference(b.x, d.x), bdy = difference(b.y, d.y), bdz = difference(b.z, d.z);
-    const Expansion cdx = difference(c.x, d.x), cdy = difference(c.y, d.y), cdz = difference(c.z, d.z);
-    const Expansion m_bc = add(multiply(bdx, cdy), negate(multiply(cdx, bdy)));
-    const Expansion m_ca = add(multiply(cdx, ady), negate(multiply(adx, cdy)));
-    const Expansion m_ab = add(multiply(adx, bdy), negate(multiply(bdx, ady)));
-    return sign_of(add(add(multiply(adz, m_bc), multiply(bdz, m_ca)), multiply(cdz, m_ab)));
+    // Shewchuk's orient3d is det[a - d, b - d, c - d], the opposite sign of the right-hand
+    // (b - a) x (c - a) . (d - a) that hull_orientation.hpp evaluates.
+    return -static_cast<double>(hull_detail::orientation_exact(a, b, c, d));
+}
+
+// Shewchuk's orient3dadapt before its last stage: the determinant of the rounded differences
+// evaluated exactly (stage B), then corrected by the differences' rounding errors to first
+// order (stage C), each accepted past its error bound (o3derrboundB, o3derrboundC and
+// resulterrbound of the paper); the exact evaluation only when neither decides. Near-coplanar
+// points that are not exactly coplanar (the faces of a fan in general position) stop at C.
+// `permanent` is the filter's, not in the denormal range.
+inline double orient3d_adaptive(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
+                                double permanent) {
+    namespace h = hull_detail;
+    const double adx = a.x - d.x, ady = a.y - d.y, adz = a.z - d.z;
+    const double bdx = b.x - d.x, bdy = b.y - d.y, bdz = b.z - d.z;
+    const double cdx = c.x - d.x, cdy = c.y - d.y, cdz = c.z - d.z;
+    // minor = p * q - r * s of doubles, exactly (at most 4 components, one spare slot).
+    const auto minor = [](double p, double q, double r, double s, double* out) {
+        double x[3], y[3];
+        h::two_product(p, q, x[1], x[0]);
+        h::two_product(r, s, y[1], y[0]);
+        y[0] = -y[0], y[1] = -y[1];
+        return h::expansion_sum(x, 2, y, 2, out);
+    };
+    double bc[5], ca[5], ab[5], adet[9], bdet[9], cdet[9], abdet[17], fin[25];
+    const int nbc = minor(bdx, cdy, cdx, bdy, bc);
+    const int nca = minor(cdx, ady, adx, cdy, ca);
+    const int nab = minor(adx, bdy, bdx, ady, ab);
+    const int na = h::scale_expansion(bc, nbc, adz, adet);
+    const int nb = h::scale_expansion(ca, nca, bdz, bdet);
+    const int nc = h::scale_expansion(ab, nab, cdz, cdet);
+    const int nabd = h::expansion_sum(adet, na, bdet, nb, abdet);
+    const int nfin = h::expansion_sum(abdet, nabd, cdet, nc, fin);
+    double det = 0.0;
+    for (int l = 0; l < nfin; ++l) det += fin[l];
+    const double bound_b = (3.0 + 28.0 * kEpsilon) * kEpsilon * permanent;
+    if (det >= bound_b || -det >= bound_b) return det;
+    const auto tail = [](double p, double q, double rounded) {
+        const double bv = p - rounded;
+        const double av = rounded + bv;
+        return (p - av) + (bv - q);
+    };
+    const double adxt = tail(a.x, d.x, adx), adyt = tail(a.y, d.y, ady), adzt = tail(a.z, d.z, adz);
+    const double bdxt = tail(b.x, d.x, bdx), bdyt = tail(b.y, d.y, bdy), bdzt = tail(b.z, d.z, bdz);
+    const double cdxt = tail(c.x, d.x, cdx), cdyt = tail(c.y, d.y, cdy), cdzt = tail(c.z, d.z, cdz);
+    if (adxt == 0.0 && adyt == 0.0 && adzt == 0.0 && bdxt == 0.0 && bdyt == 0.0 && bdzt == 0.0 &&
+        cdxt == 0.0 && cdyt == 0.0 && cdzt == 0.0)
+        return det;  // the differences were exact: stage B's value is the determinant
+    const double bound_c = (26.0 + 288.0 * kEpsilon) * kEpsilon * kEpsilon * permanent +
+                           (3.0 + 8.0 * kEpsilon) * kEpsilon * std::fabs(det);
+    det += (adz * ((bdx * cdyt + cdy * bdxt) - (bdy * cdxt + cdx * bdyt)) + adzt * (bdx * cdy - bdy * cdx)) +
+           (bdz * ((cdx * adyt + ady * cdxt) - (cdy * adxt + adx * cdyt)) + bdzt * (cdx * ady - cdy * adx)) +
+           (cdz * ((adx * bdyt + bdy * adxt) - (ady * bdxt + bdx * adyt)) + cdzt * (adx * bdy - ady * bdx));
+    if (det >= bound_c || -det >= bound_c) return det;
+    return orient3d_exact(a, b, c, d);
 }
 
 }  // namespace detail
@@ -193,6 +174,7 @@ inline double orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& 
     if ((adx == 0.0 && bdx == 0.0 && cdx == 0.0) || (ady == 0.0 && bdy == 0.0 && cdy == 0.0) ||
         (adz == 0.0 && bdz == 0.0 && cdz == 0.0))
         return 0.0;
+    if (permanent > 0x1p-900) return detail::orient3d_adaptive(a, b, c, d, permanent);
     return detail::orient3d_exact(a, b, c, d);
 }
 
