@@ -78,12 +78,25 @@ inline double orient3d_exact(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
     return -static_cast<double>(hull_detail::orientation_exact(a, b, c, d));
 }
 
+// Whether every coordinate is 0 or at least 2^-200 in magnitude: then every difference, tail,
+// product and partial product of the adaptive stages is a multiple of 2^-756 or more (at least
+// 2^-252 per difference), so no error-free step underflows and the stages are exact where
+// Shewchuk's analysis assumes it (it ignores underflow). Tinier coordinates go exact, rescaled.
+inline bool clear_of_underflow(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+    for (const Vec3* p : {&a, &b, &c, &d})
+        for (int k = 0; k < 3; ++k) {
+            const double x = std::fabs((*p)[k]);
+            if (x != 0.0 && x < 0x1p-200) return false;
+        }
+    return true;
+}
+
 // Shewchuk's orient3dadapt before its last stage: the determinant of the rounded differences
 // evaluated exactly (stage B), then corrected by the differences' rounding errors to first
 // order (stage C), each accepted past its error bound (o3derrboundB, o3derrboundC and
 // resulterrbound of the paper); the exact evaluation only when neither decides. Near-coplanar
 // points that are not exactly coplanar (the faces of a fan in general position) stop at C.
-// `permanent` is the filter's, not in the denormal range.
+// `permanent` is the filter's; the coordinates are clear of underflow (clear_of_underflow).
 inline double orient3d_adaptive(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
                                 double permanent) {
     namespace h = hull_detail;
@@ -174,7 +187,7 @@ inline double orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& 
     if ((adx == 0.0 && bdx == 0.0 && cdx == 0.0) || (ady == 0.0 && bdy == 0.0 && cdy == 0.0) ||
         (adz == 0.0 && bdz == 0.0 && cdz == 0.0))
         return 0.0;
-    if (permanent > 0x1p-900) return detail::orient3d_adaptive(a, b, c, d, permanent);
+    if (detail::clear_of_underflow(a, b, c, d)) return detail::orient3d_adaptive(a, b, c, d, permanent);
     return detail::orient3d_exact(a, b, c, d);
 }
 
