@@ -42,14 +42,18 @@ void check_faces(const Points& vertices, const Faces& faces) {
 void bind_inspect(nb::module_& m) {
     m.def(
         "self_intersecting_pairs",
-        [](const Points& vertices, const Faces& faces, std::int64_t max_candidate_pairs,
-           std::int64_t max_kept_pairs, std::int64_t block_pairs, int threads) {
+        [](const Points& vertices, const Faces& faces, std::int64_t max_work, std::int64_t slow_cost,
+           std::int64_t exact_cost, std::int64_t max_kept_pairs, std::int64_t block_pairs, int threads) {
             check_faces(vertices, faces);
             if (block_pairs < 1)
                 throw std::invalid_argument("block_pairs must be >= 1, got " + std::to_string(block_pairs));
+            if (slow_cost < 0 || exact_cost < 0)
+                throw std::invalid_argument("slow_cost and exact_cost must be >= 0");
             const auto n_faces = static_cast<std::int64_t>(faces.shape(0));
             meshcol::SelfIntersectionOptions options;
-            options.max_candidate_pairs = max_candidate_pairs;
+            options.max_work = max_work;
+            options.slow_cost = slow_cost;
+            options.exact_cost = exact_cost;
             options.max_kept_pairs = max_kept_pairs;
             options.block_pairs = block_pairs;
             options.threads = threads;
@@ -60,16 +64,18 @@ void bind_inspect(nb::module_& m) {
             }
             const size_t k = found.pairs.size() / 2;
             return std::make_tuple(vector_array<PairsOut>(std::move(found.pairs), k, 2), found.crossing_count,
-                                   found.candidate_count, found.complete);
+                                   found.candidate_count, found.work, found.complete);
         },
-        "vertices"_a, "faces"_a,
-        "max_candidate_pairs"_a = meshcol::defaults::self_intersection_max_candidate_pairs,
+        "vertices"_a, "faces"_a, "max_work"_a = meshcol::defaults::self_intersection_max_work,
+        "slow_cost"_a = meshcol::defaults::self_intersection_slow_cost,
+        "exact_cost"_a = meshcol::defaults::self_intersection_exact_cost,
         "max_kept_pairs"_a = meshcol::defaults::self_intersection_max_kept_pairs,
         "block_pairs"_a = meshcol::defaults::self_intersection_block_pairs, "threads"_a = 0,
         "Crossing face pairs of a mesh, streamed from the sweep of the face boxes into the exact "
         "test: (pairs (K, 2) int64 i < j sorted, at most max_kept_pairs (< 0: all); crossing "
-        "count; candidate pairs decided; complete). At most max_candidate_pairs (< 0: no "
-        "budget) candidates are decided: past it complete is False and the count a lower bound.");
+        "count; candidate pairs decided; work units spent; complete). At most max_work (< 0: no "
+        "budget) units are spent (one per candidate, slow_cost per orientation past its filter, "
+        "exact_cost more per exact one): past it complete is False and the count a lower bound.");
     m.def(
         "face_pairs_cross",
         [](const Points& vertices, const Faces& faces, const Pairs& pairs, int threads) {

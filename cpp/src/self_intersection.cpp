@@ -8,7 +8,9 @@
 // entries, a block per thread and the crossing pairs kept.
 //
 // The work budget is deterministic: blocks come in a fixed order that depends on the mesh
-// alone, and the pass counts the longest prefix of whole blocks whose candidates fit in the
+// alone, a block's work (its candidates, and the orientations of their tests that the filters
+// could not decide, counted per thread by predicates::work_counters) is the same on any
+// thread, and the pass counts the longest prefix of whole blocks whose work fits in the
 // budget. Threads may run a block or two past it (they finish the blocks they took); those
 // are left out, so the verdict, the counts and the pairs kept do not depend on the threads.
 #include <algorithm>
@@ -19,6 +21,7 @@
 #include "meshcol/broadphase.hpp"
 #include "meshcol/self_intersection.hpp"
 #include "meshcol/triangle.hpp"
+#include "predicates.hpp"
 
 namespace meshcol {
 namespace {
@@ -28,6 +31,7 @@ struct BlockTally {
     std::int64_t block;       ///< the block's place in the sweep's order
     std::int64_t candidates;  ///< candidate pairs it held
     std::int64_t crossings;   ///< of which cross
+    std::int64_t work;        ///< its work units
 };
 
 /// A crossing pair with its block: kept pairs are the first in (block, key) order, the order
@@ -70,10 +74,10 @@ SelfIntersectionOutput self_intersecting_pairs(const double* vertices, const std
     if (face_count < 2) return out;
     std::vector<double> lo, hi;
     face_boxes(vertices, faces, face_count, lo, hi);
-    const std::int64_t budget = options.max_candidate_pairs;
+    const std::int64_t budget = options.max_work;
     const size_t keep = options.max_kept_pairs < 0 ? std::numeric_limits<size_t>::max()
                                                    : static_cast<size_t>(options.max_kept_pairs);
-    std::atomic<std::int64_t> decided{0};
+    std::atomic<std::int64_t> spent{0};
     std::mutex lock;
     std::vector<BlockTally> tallies;
     std::vector<Crossing> crossings;
@@ -82,6 +86,7 @@ SelfIntersectionOutput self_intersecting_pairs(const double* vertices, const std
         [&](std::int64_t block, const std::uint64_t* keys, std::int64_t count) {
             thread_local std::vector<std::uint64_t> found;
             found.clear();
+            const predicates::WorkCounters before = predicates::work_counters;
             for (std::int64_t k = 0; k < count; ++k) {
                 const std::uint64_t key = keys[k];
                 if (face_pair_crosses(vertices, faces + 3 * static_cast<std::int64_t>(key >> 32),
@@ -89,31 +94,35 @@ SelfIntersectionOutput self_intersecting_pairs(const double* vertices, const std
                     found.push_back(key);
             }
             const auto crossed = static_cast<std::int64_t>(found.size());
+            const predicates::WorkCounters& after = predicates::work_counters;
+            const std::int64_t work = count + options.slow_cost * (after.slow - before.slow) +
+                                      options.exact_cost * (after.exact - before.exact);
             if (found.size() > keep) {  // the first `keep` of this block in key order
                 std::nth_element(found.begin(), found.begin() + static_cast<std::ptrdiff_t>(keep), found.end());
                 found.resize(keep);
             }
             {
                 const std::lock_guard<std::mutex> hold(lock);
-                tallies.push_back({block, count, crossed});
+                tallies.push_back({block, count, crossed, work});
                 // Past the pairs a cut could keep (the first `keep` of the blocks counted),
                 // a block's crossings matter only for its tally.
                 for (const std::uint64_t key : found) crossings.push_back({block, key});
                 if (crossings.size() > 2 * keep + 1024) keep_first(crossings, keep);
             }
-            const std::int64_t total = decided.fetch_add(count) + count;
+            const std::int64_t total = spent.fetch_add(work) + work;
             return budget < 0 || total <= budget;
         });
     // The blocks consumed are a prefix of the order: count the longest run within the budget.
     std::sort(tallies.begin(), tallies.end(), [](const BlockTally& x, const BlockTally& y) { return x.block < y.block; });
     std::int64_t cut = std::numeric_limits<std::int64_t>::max();
     for (const BlockTally& t : tallies) {
-        if (budget >= 0 && out.candidate_count + t.candidates > budget) {
+        if (budget >= 0 && out.work + t.work > budget) {
             cut = t.block;
             out.complete = false;
             break;
         }
         out.candidate_count += t.candidates;
+        out.work += t.work;
         out.crossing_count += t.crossings;
     }
     crossings.erase(std::remove_if(crossings.begin(), crossings.end(), [&](const Crossing& c) { return c.block >= cut; }),

@@ -95,8 +95,8 @@ class MeshInspection:
         Two faces cross: their open triangles share a point (see
         :mod:`meshcol.collision.self_intersection`; decided exactly). Faces that only touch,
         along shared vertices and edges or elsewhere, do not cross. None: undecided, the test
-        stopped at its budget of candidate pairs
-        (:data:`~meshcol.collision.self_intersection.MAX_CANDIDATE_PAIRS`) without finding a
+        stopped at its work budget
+        (:data:`~meshcol.collision.self_intersection.MAX_WORK`) without finding a
         crossing (the ``undecided`` finding).
     self_intersecting_pairs : int
         Pairs of faces that cross (degenerate faces left out): exact, unless the
@@ -332,7 +332,7 @@ def health_findings(result: MeshInspection, body: str, part: str | None) -> list
         units_limit = TINY_EXTENT
     else:
         units_limit = MILLIMETRE_EXTENT
-    from meshcol.collision.self_intersection import MAX_CANDIDATE_PAIRS as budget
+    from meshcol.collision.self_intersection import MAX_WORK as budget
 
     r = result
     measures: dict[str, tuple[Any, Any, str]] = {
@@ -365,7 +365,7 @@ def health_findings(result: MeshInspection, body: str, part: str | None) -> list
 
 def _undecided_message(result: MeshInspection, budget: int) -> str:
     """The ``undecided`` finding's line: what the self-intersection test could not decide."""
-    stop = f"the self-intersection test stopped at its budget of {budget:,} candidate face pairs"
+    stop = f"the self-intersection test stopped at its work budget ({budget:,} units)"
     if result.self_intersecting_pairs:
         return f"{stop}: at least {result.self_intersecting_pairs} pairs of faces cross"
     return f"{stop} with no crossing found: undecided"

@@ -405,16 +405,16 @@ RULES: tuple[Rule, ...] = (
         "nest, and no inside test decides it: a mesh that cannot be wound consistently "
         "(non-orientable), whose ray parity splits over the directions tried. Neither a "
         "contact nor a penetration is claimed. inspect: the self-intersection test stopped at "
-        "its budget of candidate face pairs (a fan or a pile of faces whose boxes all "
+        "its work budget (a fan or a pile of faces whose boxes all "
         "overlap): with no crossing found, the mesh is called neither self-intersecting nor "
         "clean (self_intersecting null); with crossings found it is self-intersecting "
         "(MC402) and their count is a lower bound.",
         "check: measured: depth_upper, the most the pair can penetrate; limit: --tolerance. "
-        "inspect: measured: the crossing face pairs found (a lower bound); limit: the "
-        "budget of candidate face pairs decided.",
+        "inspect: measured: the crossing face pairs found (a lower bound); limit: the work "
+        "budget (units of one candidate face pair, MAX_WORK).",
         "check: repair the mesh's winding (inspect reports MC403), or check the pair as hull. "
         "inspect: remesh the fan (rings of faces around its centre) or split the pile into "
-        "its pieces; the budget is meshcol.collision.self_intersection.MAX_CANDIDATE_PAIRS.",
+        "its pieces; the budget is meshcol.collision.self_intersection.MAX_WORK.",
     ),
     Rule(
         "MC506",

@@ -12,8 +12,8 @@ bound and exactly when the bound cannot decide (Shewchuk 1997). There is no tole
 
 :func:`self_intersections` finds them with a work budget: candidate pairs (faces whose boxes
 overlap) stream from the core's sort and sweep into the exact test without being collected, and
-at most :data:`MAX_CANDIDATE_PAIRS` are decided. Past it the answer is a lower bound ("at least
-K pairs cross"), or undecided when none was found; never a clean verdict.
+the work is bounded by :data:`MAX_WORK`. Past it the answer is a lower bound ("at least K pairs
+cross"), or undecided when none was found; never a clean verdict.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from meshcol._native import core, defaults
 from meshcol.collision.arrays import as_mesh
 
 __all__ = [
-    "MAX_CANDIDATE_PAIRS",
+    "MAX_WORK",
     "MAX_KEPT_PAIRS",
     "SelfIntersections",
     "face_pairs_cross",
@@ -85,10 +85,13 @@ def face_pairs_cross(vertices: Any, faces: Any, pairs: Any, *, threads: int = 0)
     return core.face_pairs_cross(v, f, np.ascontiguousarray(p, dtype=np.int64), threads)
 
 
-#: At most this many candidate face pairs (bounding boxes overlap) are decided per mesh
-#: (``defaults.inc``: ordinary assets, a cylinder of 20,000 sections included, are decided in
-#: full; a pile of faces through one point stops at about a minute on 2 cores).
-MAX_CANDIDATE_PAIRS: int = defaults.self_intersection_max_candidate_pairs
+#: The work budget per mesh, in units of one candidate face pair (bounding boxes overlap)
+#: decided by the floating-point filters; an orientation past a filter costs
+#: ``defaults.self_intersection_slow_cost`` more, one evaluated exactly
+#: ``defaults.self_intersection_exact_cost`` more again (``defaults.inc``). Ordinary assets, a
+#: cylinder of 20,000 sections included, are decided in full; a pile of faces through one
+#: point stops after about a minute on 2 cores (benchmarks/RESULTS.md).
+MAX_WORK: int = defaults.self_intersection_max_work
 #: At most this many crossing pairs are returned (their count is not capped): the review page
 #: draws the faces of these.
 MAX_KEPT_PAIRS: int = defaults.self_intersection_max_kept_pairs
@@ -108,6 +111,8 @@ class SelfIntersections:
         mesh's exact count when ``complete``, else a lower bound.
     candidates : int
         Candidate pairs decided.
+    work : int
+        Work units spent on them (see :data:`MAX_WORK`).
     complete : bool
         Every candidate pair was decided (the work budget was not reached).
     """
@@ -115,6 +120,7 @@ class SelfIntersections:
     pairs: np.ndarray
     count: int
     candidates: int
+    work: int
     complete: bool
 
     @property
@@ -131,7 +137,7 @@ def self_intersections(
     faces: Any,
     skip: Any = None,
     *,
-    max_candidate_pairs: int | None = None,
+    max_work: int | None = None,
     max_kept_pairs: int | None = None,
     threads: int = 0,
 ) -> SelfIntersections:
@@ -143,9 +149,8 @@ def self_intersections(
     faces : (m, 3) int
     skip : (m,) bool, optional
         Faces to leave out (``meshcol inspect`` skips the faces it reports as degenerate).
-    max_candidate_pairs : int, optional
-        Candidate pairs decided at most (default :data:`MAX_CANDIDATE_PAIRS`; negative: no
-        budget).
+    max_work : int, optional
+        Work units spent at most (default :data:`MAX_WORK`; negative: no budget).
     max_kept_pairs : int, optional
         Crossing pairs returned at most (default :data:`MAX_KEPT_PAIRS`; negative: all).
     threads : int
@@ -161,9 +166,12 @@ def self_intersections(
     native sort and sweep; it streams them in blocks to the exact test (:func:`face_pairs_cross`'s
     verdict, with exact shortcuts for faces that share vertices), so the memory held is the
     faces' and the crossing pairs kept, never every candidate (a fan of n faces around one
-    vertex has n^2 / 2). The blocks come in an order fixed by the mesh alone; past the budget
-    the pass keeps the longest run of whole blocks within it, so the result does not depend on
-    ``threads``.
+    vertex has n^2 / 2). The blocks come in an order fixed by the mesh alone and a block's work
+    is the same on any thread; past the budget the pass keeps the longest run of whole blocks
+    within it, so the result does not depend on ``threads``. The work counts the orientation
+    tests the floating-point filters could not decide because they cost up to 30 times a
+    filtered one: a budget of candidates alone would let a pile of exactly degenerate faces run
+    30 times longer than a fan of as many candidates.
     """
     v, f = _mesh(vertices, faces)
     keep = np.ones(len(f), bool) if skip is None else ~np.asarray(skip, bool).reshape(-1)
@@ -171,21 +179,21 @@ def self_intersections(
         raise ValueError(f"skip must be ({len(f)},) like faces, got ({len(keep)},)")
     index = np.nonzero(keep)[0]
     if len(index) < 2:
-        return SelfIntersections(np.zeros((0, 2), np.int64), 0, 0, True)
+        return SelfIntersections(np.zeros((0, 2), np.int64), 0, 0, 0, True)
     kept = f[index]
     if kept.min() < 0 or kept.max() >= len(v):
         raise ValueError(f"faces index vertices out of range [0, {len(v)})")
-    budget = MAX_CANDIDATE_PAIRS if max_candidate_pairs is None else int(max_candidate_pairs)
+    budget = MAX_WORK if max_work is None else int(max_work)
     cap = MAX_KEPT_PAIRS if max_kept_pairs is None else int(max_kept_pairs)
-    pairs, count, candidates, complete = core.self_intersecting_pairs(
+    pairs, count, candidates, work, complete = core.self_intersecting_pairs(
         v,
         np.ascontiguousarray(kept),
-        max_candidate_pairs=budget,
+        max_work=budget,
         max_kept_pairs=cap,
         threads=threads,
     )
     # index is increasing, so the pairs stay i < j and sorted
-    return SelfIntersections(index[pairs], int(count), int(candidates), bool(complete))
+    return SelfIntersections(index[pairs], int(count), int(candidates), int(work), bool(complete))
 
 
 def self_intersecting_pairs(

@@ -13,10 +13,15 @@ namespace meshcol {
 
 /// What the pass may spend and keep.
 struct SelfIntersectionOptions {
-    /// Candidate pairs decided at most (< 0: no budget). The candidates come in a fixed order
-    /// (the sweep's blocks, which depend on the mesh alone); when there are more than this,
-    /// the pass decides the longest run of whole blocks within it and stops.
-    std::int64_t max_candidate_pairs = defaults::self_intersection_max_candidate_pairs;
+    /// Work units spent at most (< 0: no budget): one per candidate pair, plus `slow_cost` per
+    /// orientation its filter could not decide and `exact_cost` more per one evaluated
+    /// exactly (predicates::work_counters), so the budget bounds the time, whatever the mesh.
+    /// The candidates come in a fixed order (the sweep's blocks, which depend on the mesh
+    /// alone) and each block's work is the same on any thread; past the budget the pass keeps
+    /// the longest run of whole blocks within it and stops.
+    std::int64_t max_work = defaults::self_intersection_max_work;
+    std::int64_t slow_cost = defaults::self_intersection_slow_cost;    ///< units, >= 0
+    std::int64_t exact_cost = defaults::self_intersection_exact_cost;  ///< units, >= 0
     /// Crossing pairs returned at most (< 0: all): the first found in the candidates' order.
     std::int64_t max_kept_pairs = defaults::self_intersection_max_kept_pairs;
     /// Candidate pairs per block of the sweep (>= 1).
@@ -30,6 +35,7 @@ struct SelfIntersectionOutput {
     std::vector<std::int64_t> pairs;
     std::int64_t crossing_count = 0;   ///< crossing pairs among the candidates decided (not capped)
     std::int64_t candidate_count = 0;  ///< candidate pairs decided
+    std::int64_t work = 0;             ///< work units of the blocks counted (<= max_work)
     /// Every candidate pair was decided: crossing_count is the mesh's exact count. Otherwise
     /// it is a lower bound (and with 0 the verdict is undecided).
     bool complete = true;
