@@ -8,7 +8,6 @@
 #include "check.hpp"
 #include "meshcol/triangle.hpp"
 #include "predicates.hpp"
-#include "predicates_reference.hpp"
 
 using namespace meshcol;
 using predicates::orient2d_sign;
@@ -122,8 +121,10 @@ std::vector<Vec3> near_plane_points(std::uint64_t seed, const Vec3& origin, doub
 
 }  // namespace
 
-TEST_CASE("predicates: adaptive orient3d and orient2d agree with the plain exact evaluation") {
-    namespace ref = predicates_reference;
+TEST_CASE("predicates: adaptive orient3d and orient2d agree with the allocating exact evaluation") {
+    // the allocating evaluation (differences from d, products by fma, grow-expansion sums)
+    // is a second route to the exact sign, independent of the stack-held one and the stages
+    namespace ref = predicates::detail;
     long long checked = 0, zeros = 0;
     for (const double scale : {1.0, 1e-3, 1e6})
         for (const Vec3 origin : {Vec3{0, 0, 0}, Vec3{0.3, -0.7, 0.1}, Vec3{1e3, 2e3, -5e2}}) {
@@ -134,10 +135,10 @@ TEST_CASE("predicates: adaptive orient3d and orient2d agree with the plain exact
                     for (int k = 2; k < n; k += 7)
                         for (int l = 0; l < n; l += 2) {
                             const int sign = orient3d_sign(p[i], p[j], p[k], p[l]);
-                            const double expected = ref::orient3d_exact(p[i], p[j], p[k], p[l]);
+                            const double expected = ref::orient3d_expansions(p[i], p[j], p[k], p[l]);
                             CHECK_EQ(sign, static_cast<int>(expected));
                             const int sign2 = orient2d_sign(p[i].x, p[i].y, p[j].x, p[j].y, p[l].x, p[l].y);
-                            CHECK_EQ(sign2, static_cast<int>(ref::orient2d_exact(p[i].x, p[i].y, p[j].x, p[j].y,
+                            CHECK_EQ(sign2, static_cast<int>(ref::orient2d_expansions(p[i].x, p[i].y, p[j].x, p[j].y,
                                                                                 p[l].x, p[l].y)));
                             ++checked;
                             zeros += sign == 0;
