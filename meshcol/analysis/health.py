@@ -315,7 +315,7 @@ def _units_suspect(guess: str, declared: str | None) -> bool:
 
 
 def health_findings(result: MeshInspection, body: str, part: str | None) -> list[Finding]:
-    """The mesh-health findings of one inspection as records (rules MC401..MC409).
+    """The mesh-health findings of one inspection as records (rules MC401..MC409, MC505).
 
     Parameters
     ----------
