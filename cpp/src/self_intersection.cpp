@@ -77,6 +77,8 @@ SelfIntersectionOutput self_intersecting_pairs(const double* vertices, const std
     const std::int64_t budget = options.max_work;
     const size_t keep = options.max_kept_pairs < 0 ? std::numeric_limits<size_t>::max()
                                                    : static_cast<size_t>(options.max_kept_pairs);
+    // With every pair kept (keep = SIZE_MAX) nothing is pruned: 2 * keep would wrap.
+    const size_t max_pruned = (std::numeric_limits<size_t>::max() - 1024) / 2;
     std::atomic<std::int64_t> spent{0};
     std::mutex lock;
     std::vector<BlockTally> tallies;
@@ -107,7 +109,7 @@ SelfIntersectionOutput self_intersecting_pairs(const double* vertices, const std
                 // Past the pairs a cut could keep (the first `keep` of the blocks counted),
                 // a block's crossings matter only for its tally.
                 for (const std::uint64_t key : found) crossings.push_back({block, key});
-                if (crossings.size() > 2 * keep + 1024) keep_first(crossings, keep);
+                if (keep < max_pruned && crossings.size() > 2 * keep + 1024) keep_first(crossings, keep);
             }
             const std::int64_t total = spent.fetch_add(work) + work;
             return budget < 0 || total <= budget;
