@@ -151,7 +151,7 @@ TSAN_RUNTIME = $(shell $(CXX) -print-file-name=libtsan.so)
 TSAN_OPTIONS_RUN := TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$(CURDIR)/cpp/tests/tsan.supp"
 TSAN_PYTHON_TESTS := tests/collision/test_hull_packing.py tests/collision/test_narrowphase_batch_forms.py \
 	tests/collision/test_mesh_distance_batch_forms.py tests/collision/test_time_of_impact_batch_forms.py \
-	tests/io/test_mesh_files.py tests/collision/test_contacts.py
+	tests/io/test_mesh_files.py tests/collision/test_contacts.py tests/collision/test_self_intersection.py
 # pytest on those files, once the instrumented copy (argv[1]) is the module that loaded
 TSAN_PYTEST := import sys, pytest, meshcol._core as c; assert c.__file__.startswith(sys.argv[1]), c.__file__; sys.exit(pytest.main(sys.argv[2:]))
 test-tsan: install-test

@@ -21,6 +21,16 @@ class defaults:
 
     triangle_min_pairs_per_thread: int = 4096
 
+    self_intersection_max_work: int = 1000000000
+
+    self_intersection_slow_cost: int = 3
+
+    self_intersection_exact_cost: int = 12
+
+    self_intersection_max_kept_pairs: int = 100000
+
+    self_intersection_block_pairs: int = 65536
+
     hill_climbing_min_vertices: int = 32
 
     prefetch_max_vertices: int = 512
@@ -448,6 +458,11 @@ def point_set_fingerprints(points: Annotated[NDArray[numpy.float64], dict(shape=
 def merge_vertices(vertices: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], faces: Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], digits: int = 8) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C')]]:
     """
     Merges vertices equal after rounding to `digits` decimals (trimesh's rule), drops unused ones, renumbers faces. Returns (vertices, faces).
+    """
+
+def self_intersecting_pairs(vertices: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], faces: Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], max_work: int = 1000000000, slow_cost: int = 3, exact_cost: int = 12, max_kept_pairs: int = 100000, block_pairs: int = 65536, threads: int = 0) -> tuple[Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C')], int, int, int, bool]:
+    """
+    Crossing face pairs of a mesh, streamed from the sweep of the face boxes into the exact test: (pairs (K, 2) int64 i < j sorted, at most max_kept_pairs (< 0: all); crossing count; candidate pairs decided; work units spent; complete). At most max_work (< 0: no budget) units are spent (one per candidate, slow_cost per orientation past its filter, exact_cost more per exact one): past it complete is False and the count a lower bound.
     """
 
 def face_pairs_cross(vertices: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], faces: Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], pairs: Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', device='cpu', writable=False)], threads: int = 0) -> Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')]:

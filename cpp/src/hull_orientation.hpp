@@ -50,7 +50,13 @@ inline void two_product(double a, double b, double& x, double& y) {
     y = std::fma(a, b, -x);
 #else
     // Without hardware FMA (the default x86-64 target) std::fma is a library call: Dekker's
-    // product is exact too and inlines.
+    // product is exact too and inlines, unless its partial products underflow (a product
+    // under 2^-900): there the correctly rounded fma is the closer one (exact whenever the
+    // error is a double at all).
+    if (std::fabs(x) < 0x1p-900) {
+        y = std::fma(a, b, -x);
+        return;
+    }
     double ah, al, bh, bl;
     split(a, ah, al);
     split(b, bh, bl);

@@ -22,10 +22,20 @@
 #include <cmath>
 #include <vector>
 
+#include "hull_orientation.hpp"
 #include "meshcol/vec.hpp"
 
 namespace meshcol {
 namespace predicates {
+
+/// The calling thread's count of evaluations the floating-point filter could not decide: a
+/// measure of work for callers that budget it (the self-intersection pass), since such an
+/// evaluation costs 5 to 30 times a filtered one. Read the difference around the work.
+struct WorkCounters {
+    long long slow = 0;   ///< evaluations past the filter (the adaptive stages or exact)
+    long long exact = 0;  ///< of which evaluated exactly (the costliest)
+};
+inline thread_local WorkCounters work_counters;
 
 namespace detail {
 
@@ -33,6 +43,11 @@ constexpr double kEpsilon = 1.1102230246251565e-16;  // 2^-53, half an ulp of 1
 constexpr double kOrient2dBound = (3.0 + 16.0 * kEpsilon) * kEpsilon;
 constexpr double kOrient3dBound = (7.0 + 56.0 * kEpsilon) * kEpsilon;
 
+// The exact evaluation with std::vector expansions (one allocation per operation): the one the
+// core used alone before the stack-held one below, kept for coordinates in the underflow
+// range (clear_of_underflow false). There neither is exact for every input (a product's
+// rounding error under 2^-1074 is lost, even by fma), and this one's verdicts are those the
+// tests have long pinned (tests/collision/test_self_intersection.py's rational oracle).
 // A nonoverlapping expansion, components in increasing magnitude, zeros removed.
 using Expansion = std::vector<double>;
 
@@ -125,7 +140,7 @@ inline int rescale_exponent(double m) {
     return -exponent;
 }
 
-inline double orient2d_exact(double ax, double ay, double bx, double by, double cx, double cy) {
+inline double orient2d_expansions(double ax, double ay, double bx, double by, double cx, double cy) {
     const double m = std::max({std::fabs(ax), std::fabs(ay), std::fabs(bx), std::fabs(by),
                                std::fabs(cx), std::fabs(cy)});
     if (const int k = rescale_exponent(m); k != 0)
@@ -135,7 +150,7 @@ inline double orient2d_exact(double ax, double ay, double bx, double by, double 
     return sign_of(add(multiply(acx, bcy), negate(multiply(acy, bcx))));
 }
 
-inline double orient3d_exact(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
+inline double orient3d_expansions(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
     double m = 0.0;
     for (const Vec3* p : {&a, &b, &c, &d})
         m = std::max({m, std::fabs(p->x), std::fabs(p->y), std::fabs(p->z)});
@@ -148,6 +163,108 @@ inline double orient3d_exact(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
     const Expansion m_ca = add(multiply(cdx, ady), negate(multiply(adx, cdy)));
     const Expansion m_ab = add(multiply(adx, bdy), negate(multiply(bdx, ady)));
     return sign_of(add(add(multiply(adz, m_bc), multiply(bdz, m_ca)), multiply(cdz, m_ab)));
+}
+
+// The exact evaluations of coordinates clear of underflow use the stack-held expansion
+// arithmetic of hull_orientation.hpp (Shewchuk's Fast-Expansion-Sum and Scale-Expansion with
+// zero elimination): no allocation, which a pile of exactly degenerate faces (inspect's worst
+// case) calls millions of times.
+inline double orient2d_exact(double ax, double ay, double bx, double by, double cx, double cy) {
+    namespace h = hull_detail;
+    const double m = std::max({std::fabs(ax), std::fabs(ay), std::fabs(bx), std::fabs(by),
+                               std::fabs(cx), std::fabs(cy)});
+    if (const int k = rescale_exponent(m); k != 0)
+        for (double* x : {&ax, &ay, &bx, &by, &cx, &cy}) *x = std::ldexp(*x, k);
+    // Two slots per difference, plus the spare one the merge reads past the end.
+    double acx[3], acy[3], bcx[3], bcy[3], left[16], right[16], det[32];
+    const int nacx = h::difference(ax, cx, acx), nacy = h::difference(ay, cy, acy);
+    const int nbcx = h::difference(bx, cx, bcx), nbcy = h::difference(by, cy, bcy);
+    const int nl = h::expansion_product(acx, nacx, bcy, nbcy, left);
+    const int nr = h::expansion_product(acy, nacy, bcx, nbcx, right);
+    for (int l = 0; l < nr; ++l) right[l] = -right[l];
+    const int n = h::expansion_sum(left, nl, right, nr, det);
+    for (int l = n - 1; l >= 0; --l)
+        if (det[l] != 0.0) return det[l] > 0.0 ? 1.0 : -1.0;
+    return 0.0;
+}
+
+inline double orient3d_exact(Vec3 a, Vec3 b, Vec3 c, Vec3 d) {
+    double m = 0.0;
+    for (const Vec3* p : {&a, &b, &c, &d})
+        m = std::max({m, std::fabs(p->x), std::fabs(p->y), std::fabs(p->z)});
+    if (const int k = rescale_exponent(m); k != 0)
+        for (Vec3* p : {&a, &b, &c, &d}) *p = {std::ldexp(p->x, k), std::ldexp(p->y, k), std::ldexp(p->z, k)};
+    // Shewchuk's orient3d is det[a - d, b - d, c - d], the opposite sign of the right-hand
+    // (b - a) x (c - a) . (d - a) that hull_orientation.hpp evaluates.
+    return -static_cast<double>(hull_detail::orientation_exact(a, b, c, d));
+}
+
+// Whether every coordinate is 0 or at least 2^-200 in magnitude: then every difference, tail,
+// product and partial product of the adaptive stages is a multiple of 2^-756 or more (at least
+// 2^-252 per difference), so no error-free step underflows and the stages are exact where
+// Shewchuk's analysis assumes it (it ignores underflow). Tinier coordinates go to the
+// allocating evaluation above.
+inline bool clear_of_underflow(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+    for (const Vec3* p : {&a, &b, &c, &d})
+        for (int k = 0; k < 3; ++k) {
+            const double x = std::fabs((*p)[k]);
+            if (x != 0.0 && x < 0x1p-200) return false;
+        }
+    return true;
+}
+
+// Shewchuk's orient3dadapt before its last stage: the determinant of the rounded differences
+// evaluated exactly (stage B), then corrected by the differences' rounding errors to first
+// order (stage C), each accepted past its error bound (o3derrboundB, o3derrboundC and
+// resulterrbound of the paper); the exact evaluation only when neither decides. Near-coplanar
+// points that are not exactly coplanar (the faces of a fan in general position) stop at C.
+// `permanent` is the filter's; the coordinates are clear of underflow (clear_of_underflow).
+inline double orient3d_adaptive(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
+                                double permanent) {
+    namespace h = hull_detail;
+    const double adx = a.x - d.x, ady = a.y - d.y, adz = a.z - d.z;
+    const double bdx = b.x - d.x, bdy = b.y - d.y, bdz = b.z - d.z;
+    const double cdx = c.x - d.x, cdy = c.y - d.y, cdz = c.z - d.z;
+    // minor = p * q - r * s of doubles, exactly (at most 4 components, one spare slot).
+    const auto minor = [](double p, double q, double r, double s, double* out) {
+        double x[3], y[3];
+        h::two_product(p, q, x[1], x[0]);
+        h::two_product(r, s, y[1], y[0]);
+        y[0] = -y[0], y[1] = -y[1];
+        return h::expansion_sum(x, 2, y, 2, out);
+    };
+    double bc[5], ca[5], ab[5], adet[9], bdet[9], cdet[9], abdet[17], fin[25];
+    const int nbc = minor(bdx, cdy, cdx, bdy, bc);
+    const int nca = minor(cdx, ady, adx, cdy, ca);
+    const int nab = minor(adx, bdy, bdx, ady, ab);
+    const int na = h::scale_expansion(bc, nbc, adz, adet);
+    const int nb = h::scale_expansion(ca, nca, bdz, bdet);
+    const int nc = h::scale_expansion(ab, nab, cdz, cdet);
+    const int nabd = h::expansion_sum(adet, na, bdet, nb, abdet);
+    const int nfin = h::expansion_sum(abdet, nabd, cdet, nc, fin);
+    double det = 0.0;
+    for (int l = 0; l < nfin; ++l) det += fin[l];
+    const double bound_b = (3.0 + 28.0 * kEpsilon) * kEpsilon * permanent;
+    if (det >= bound_b || -det >= bound_b) return det;
+    const auto tail = [](double p, double q, double rounded) {
+        const double bv = p - rounded;
+        const double av = rounded + bv;
+        return (p - av) + (bv - q);
+    };
+    const double adxt = tail(a.x, d.x, adx), adyt = tail(a.y, d.y, ady), adzt = tail(a.z, d.z, adz);
+    const double bdxt = tail(b.x, d.x, bdx), bdyt = tail(b.y, d.y, bdy), bdzt = tail(b.z, d.z, bdz);
+    const double cdxt = tail(c.x, d.x, cdx), cdyt = tail(c.y, d.y, cdy), cdzt = tail(c.z, d.z, cdz);
+    if (adxt == 0.0 && adyt == 0.0 && adzt == 0.0 && bdxt == 0.0 && bdyt == 0.0 && bdzt == 0.0 &&
+        cdxt == 0.0 && cdyt == 0.0 && cdzt == 0.0)
+        return det;  // the differences were exact: stage B's value is the determinant
+    const double bound_c = (26.0 + 288.0 * kEpsilon) * kEpsilon * kEpsilon * permanent +
+                           (3.0 + 8.0 * kEpsilon) * kEpsilon * std::fabs(det);
+    det += (adz * ((bdx * cdyt + cdy * bdxt) - (bdy * cdxt + cdx * bdyt)) + adzt * (bdx * cdy - bdy * cdx)) +
+           (bdz * ((cdx * adyt + ady * cdxt) - (cdy * adxt + adx * cdyt)) + bdzt * (cdx * ady - cdy * adx)) +
+           (cdz * ((adx * bdyt + bdy * adxt) - (ady * bdxt + bdx * adyt)) + cdzt * (adx * bdy - ady * bdx));
+    if (det >= bound_c || -det >= bound_c) return det;
+    ++work_counters.exact;
+    return orient3d_exact(a, b, c, d);
 }
 
 }  // namespace detail
@@ -167,7 +284,14 @@ inline double orient2d(double ax, double ay, double bx, double by, double cx, do
     // exactly zero (the difference of two doubles is zero only when they are equal). Common in
     // axis-aligned contacts, where the filter cannot decide; it saves the exact evaluation.
     if ((ax == cx && bx == cx) || (ay == cy && by == cy)) return 0.0;
-    return detail::orient2d_exact(ax, ay, bx, by, cx, cy);
+    // A repeated point (two faces' shared vertex) makes a row of the determinant zero.
+    if ((ax == cx && ay == cy) || (bx == cx && by == cy) || (ax == bx && ay == by)) return 0.0;
+    ++work_counters.slow;
+    ++work_counters.exact;
+    const auto clear = [](double x) { return x == 0.0 || std::fabs(x) >= 0x1p-200; };
+    if (clear(ax) && clear(ay) && clear(bx) && clear(by) && clear(cx) && clear(cy))
+        return detail::orient2d_exact(ax, ay, bx, by, cx, cy);
+    return detail::orient2d_expansions(ax, ay, bx, by, cx, cy);
 }
 
 /// dot(a - d, cross(b - d, c - d)): six times the signed volume of the tetrahedron (a, b, c, d);
@@ -193,7 +317,15 @@ inline double orient3d(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& 
     if ((adx == 0.0 && bdx == 0.0 && cdx == 0.0) || (ady == 0.0 && bdy == 0.0 && cdy == 0.0) ||
         (adz == 0.0 && bdz == 0.0 && cdz == 0.0))
         return 0.0;
-    return detail::orient3d_exact(a, b, c, d);
+    // A repeated point (faces that share a vertex) makes the determinant exactly zero too.
+    if ((adx == 0.0 && ady == 0.0 && adz == 0.0) || (bdx == 0.0 && bdy == 0.0 && bdz == 0.0) ||
+        (cdx == 0.0 && cdy == 0.0 && cdz == 0.0) || (a.x == b.x && a.y == b.y && a.z == b.z) ||
+        (a.x == c.x && a.y == c.y && a.z == c.z) || (b.x == c.x && b.y == c.y && b.z == c.z))
+        return 0.0;
+    ++work_counters.slow;
+    if (detail::clear_of_underflow(a, b, c, d)) return detail::orient3d_adaptive(a, b, c, d, permanent);
+    ++work_counters.exact;
+    return detail::orient3d_expansions(a, b, c, d);
 }
 
 /// -1, 0 or +1.

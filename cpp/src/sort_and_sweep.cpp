@@ -262,11 +262,15 @@ struct KeyBuffer {
 ///
 /// Stops once the buffer holds more than `limit` keys (the caller's cap on pairs: a pile of
 /// boxes in one cell would otherwise fill memory with quadratically many), returning false.
+///
+/// Only the rows [first, last) are swept (the pairs whose first entry in sweep order is one of
+/// them; -1: to the end): a cell's rows may be shared out between threads.
 bool sweep_cell(const Entry* e, std::int64_t count, KeyBuffer& out, const std::int64_t* groups = nullptr,
-                size_t limit = SIZE_MAX) {
+                size_t limit = SIZE_MAX, std::int64_t first = 0, std::int64_t last = -1) {
     size_t k = out.size;  // a local: the key stores could alias the member
     const Entry* const end = e + count;
-    for (const Entry* a = e; a < end; ++a) {
+    const Entry* const rows_end = e + (last < 0 ? count : last);
+    for (const Entry* a = e + first; a < rows_end; ++a) {
         if (k > limit) {
             out.size = k;
             return false;
@@ -388,6 +392,22 @@ inline Entry make_entry(const double* lo, const double* hi, const Grid& g, const
     return {a[g.axis], b[g.axis], a[g.u], b[g.u], a[g.v], b[g.v], s.id, static_cast<std::uint8_t>(s.home)};
 }
 
+/// Sorts the `count` slots of one cell by lo_a and writes their entries, in that order, to
+/// `out`.
+void sort_cell(const double* lo, const double* hi, const Grid& g, Slot* first, std::int64_t count,
+               Entry* out) {
+    std::sort(first, first + count, [](const Slot& x, const Slot& y) { return x.lo_a < y.lo_a; });
+    // The boxes of a cell are scattered over the input: fetch a few ahead.
+    constexpr std::int64_t ahead = 8;
+    for (std::int64_t q = 0; q < count; ++q) {
+        if (q + ahead < count) {
+            prefetch(lo + 3 * static_cast<size_t>(first[q + ahead].id));
+            prefetch(hi + 3 * static_cast<size_t>(first[q + ahead].id));
+        }
+        out[q] = make_entry(lo, hi, g, first[q]);
+    }
+}
+
 /// Sorts the slots of every cell, builds the cell's entries in a per-thread buffer (one cell
 /// at a time: it stays in cache) and sweeps it, on `threads` threads; returns the sorted
 /// pairs. With `keep`, each sorted cell is also copied to (*keep)[c]. With `max_pairs` >= 0,
@@ -418,17 +438,7 @@ std::vector<std::int64_t> sort_and_sweep_cells(const double* lo, const double* h
                 if (over.load(std::memory_order_relaxed)) return;
                 const std::int64_t count = offsets[c + 1] - offsets[c];
                 if (static_cast<std::int64_t>(sorted.size()) < count) sorted.resize(static_cast<size_t>(count));
-                Slot* first = slots + offsets[c];
-                std::sort(first, first + count, [](const Slot& x, const Slot& y) { return x.lo_a < y.lo_a; });
-                // The boxes of a cell are scattered over the input: fetch a few ahead.
-                constexpr std::int64_t ahead = 8;
-                for (std::int64_t q = 0; q < count; ++q) {
-                    if (q + ahead < count) {
-                        prefetch(lo + 3 * static_cast<size_t>(first[q + ahead].id));
-                        prefetch(hi + 3 * static_cast<size_t>(first[q + ahead].id));
-                    }
-                    sorted[q] = make_entry(lo, hi, g, first[q]);
-                }
+                sort_cell(lo, hi, g, slots + offsets[c], count, sorted.data());
                 const size_t before = out.size;
                 if (!sweep_cell(sorted.data(), count, out, groups, limit) ||
                     total.fetch_add(out.size - before) + (out.size - before) > limit) {
@@ -478,6 +488,62 @@ std::vector<std::int64_t> sort_and_sweep(const double* lo, const double* hi, std
     fill_cells(lo, n, g, span, slots, offsets);
     return sort_and_sweep_cells(lo, hi, g, slots.get(), offsets, n, threads, nullptr, groups, max_pairs,
                                 exceeded);
+}
+
+std::int64_t sort_and_sweep_stream(const double* lo, const double* hi, std::int64_t n, int axis,
+                                   int threads, std::int64_t block_pairs, const PairBlockConsumer& consume) {
+    check_axis(axis);
+    check_count(n);
+    validate_boxes(lo, hi, n);
+    if (axis < 0) axis = choose_sweep_axis(lo, hi, n);
+    const int sort_threads = resolve_threads(threads, n, defaults::broadphase_min_boxes_per_thread);
+    std::vector<std::uint16_t> span;
+    const Grid g = make_grid(lo, hi, n, axis, span);
+    std::unique_ptr<Slot[]> slots;
+    std::vector<std::int64_t> offsets;
+    fill_cells(lo, n, g, span, slots, offsets);
+    // Every cell sorted and its entries built once, before any sweep: the rows of one cell
+    // (the whole mesh, for a fan whose faces all meet at one point) go to several threads.
+    const int cells = g.cells();
+    std::unique_ptr<Entry[]> entries(new Entry[static_cast<size_t>(offsets[cells])]);
+    parallel_for(cells, sort_threads, [&](long long c0, long long c1) {
+        for (long long c = c0; c < c1; ++c)
+            sort_cell(lo, hi, g, slots.get() + offsets[c], offsets[c + 1] - offsets[c], entries.get() + offsets[c]);
+    });
+    slots.reset();
+    // Blocks: runs of rows of one cell with at most about block_pairs candidates (a row of a
+    // cell of `count` entries has fewer than `count`), in cell order; fixed by the boxes alone.
+    std::vector<std::int64_t> block_cell, block_row;
+    const std::int64_t per_block = std::max<std::int64_t>(1, block_pairs);
+    for (int c = 0; c < cells; ++c) {
+        const std::int64_t count = offsets[c + 1] - offsets[c];
+        const std::int64_t rows = std::clamp<std::int64_t>(per_block / std::max<std::int64_t>(1, count - 1), 1,
+                                                           std::max<std::int64_t>(1, count));
+        for (std::int64_t r = 0; r < count; r += rows) {
+            block_cell.push_back(c);
+            block_row.push_back(r);
+        }
+    }
+    const auto blocks = static_cast<std::int64_t>(block_cell.size());
+    const int workers = resolve_threads(threads, blocks, 1);
+    std::atomic<std::int64_t> next{0};
+    std::atomic<bool> stop{false};
+    // One worker per index: each takes the next block until none is left, so the blocks
+    // handed out are always a prefix of the order.
+    parallel_for(workers, workers, [&](long long, long long) {
+        KeyBuffer out;
+        while (!stop.load(std::memory_order_relaxed)) {
+            const std::int64_t b = next.fetch_add(1);
+            if (b >= blocks) return;
+            const std::int64_t c = block_cell[b];
+            const std::int64_t count = offsets[c + 1] - offsets[c];
+            const std::int64_t last = b + 1 < blocks && block_cell[b + 1] == c ? block_row[b + 1] : count;
+            out.size = 0;
+            sweep_cell(entries.get() + offsets[c], count, out, nullptr, SIZE_MAX, block_row[b], last);
+            if (!consume(b, out.data.get(), static_cast<std::int64_t>(out.size))) stop.store(true);
+        }
+    });
+    return blocks;
 }
 
 /// The incremental sweep's memory between steps: the grid of the first step (or of the last

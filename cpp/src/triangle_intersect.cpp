@@ -62,9 +62,10 @@ inline int orientation(const Point2& a, const Point2& b, const Point2& c) {
 }
 
 // Whether a line through an edge of t (orientation `turn` = +1 or -1) has every vertex of
-// `other` on its closed outer side.
-bool edge_separates(const Point2 t[3], int turn, const Point2 other[3]) {
+// `other` on its closed outer side. Edge i joins t[i] and t[i + 1]; edge `skip` is not tried.
+bool edge_separates(const Point2 t[3], int turn, const Point2 other[3], int skip = -1) {
     for (int i = 0; i < 3; ++i) {
+        if (i == skip) continue;
         const Point2& p = t[i];
         const Point2& q = t[(i + 1) % 3];
         bool all_outside = true;
@@ -75,8 +76,9 @@ bool edge_separates(const Point2 t[3], int turn, const Point2 other[3]) {
     return false;
 }
 
-// Coplanar triangles: positive-area overlap of their interiors.
-bool coplanar_cross(const Vec3 a[3], const Vec3 b[3]) {
+// Coplanar triangles: positive-area overlap of their interiors. Edges `skip_a` of a and
+// `skip_b` of b are not tried as separating lines (see face_pair_crosses: they cannot be).
+bool coplanar_cross(const Vec3 a[3], const Vec3 b[3], int skip_a = -1, int skip_b = -1) {
     // Any coordinate plane onto which a projects with non-zero area maps the common plane
     // one-to-one, so orientations there are the 3-D ones up to one common sign.
     for (int axis = 0; axis < 3; ++axis) {
@@ -86,7 +88,7 @@ bool coplanar_cross(const Vec3 a[3], const Vec3 b[3]) {
         const Point2 pb[3] = {drop_axis(b[0], axis), drop_axis(b[1], axis), drop_axis(b[2], axis)};
         const int turn_b = orientation(pb[0], pb[1], pb[2]);
         if (turn_b == 0) return false;  // b is a segment or a point: no interior
-        return !edge_separates(pa, turn_a, pb) && !edge_separates(pb, turn_b, pa);
+        return !edge_separates(pa, turn_a, pb, skip_a) && !edge_separates(pb, turn_b, pa, skip_b);
     }
     return false;  // a is a segment or a point
 }
@@ -121,16 +123,12 @@ inline bool straddles(const int s[3]) {
     return positive && negative;
 }
 
-}  // namespace
-
-bool triangles_cross(const Vec3 a[3], const Vec3 b[3]) {
-    int side_b[3];  // sides of b's vertices w.r.t. a's plane
-    for (int j = 0; j < 3; ++j) side_b[j] = sign_of(orient3d(a[0], a[1], a[2], b[j]));
-    if (side_b[0] == 0 && side_b[1] == 0 && side_b[2] == 0)
-        return coplanar_cross(a, b);  // also a degenerate a: every point is "on its plane"
+// triangles_cross once the sides of b's vertices w.r.t. a's plane are known, not all zero.
+// Bit i of `on_b`: a[i] is one of b's corners, so its side is 0 without a determinant.
+bool cross_given_sides(const Vec3 a[3], const Vec3 b[3], const int side_b[3], int on_b = 0) {
     if (!straddles(side_b)) return false;
     int side_a[3];
-    for (int i = 0; i < 3; ++i) side_a[i] = sign_of(orient3d(b[0], b[1], b[2], a[i]));
+    for (int i = 0; i < 3; ++i) side_a[i] = on_b >> i & 1 ? 0 : sign_of(orient3d(b[0], b[1], b[2], a[i]));
     if (!straddles(side_a)) return false;  // including a degenerate b (all zero)
     Endpoint ends_b[2], ends_a[2];
     if (segment_ends(b, side_b, ends_b) != 2 || segment_ends(a, side_a, ends_a) != 2)
@@ -145,6 +143,53 @@ bool triangles_cross(const Vec3 a[3], const Vec3 b[3]) {
             b_not_before = b_not_before && order >= 0;
         }
     return !b_not_after && !b_not_before;
+}
+
+inline bool distinct(const std::int64_t* f) {
+    return f[0] != f[1] && f[1] != f[2] && f[0] != f[2];
+}
+
+}  // namespace
+
+bool triangles_cross(const Vec3 a[3], const Vec3 b[3]) {
+    int side_b[3];  // sides of b's vertices w.r.t. a's plane
+    for (int j = 0; j < 3; ++j) side_b[j] = sign_of(orient3d(a[0], a[1], a[2], b[j]));
+    if (side_b[0] == 0 && side_b[1] == 0 && side_b[2] == 0)
+        return coplanar_cross(a, b);  // also a degenerate a: every point is "on its plane"
+    return cross_given_sides(a, b, side_b);
+}
+
+bool face_pair_crosses(const double* vertices, const std::int64_t* fa, const std::int64_t* fb) {
+    const auto corner = [&](std::int64_t index) {
+        const double* p = vertices + 3 * index;
+        return Vec3{p[0], p[1], p[2]};
+    };
+    int shared = 0, ia = -1, ib = -1;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            if (fa[i] == fb[j]) ++shared, ia = i, ib = j;
+    if (shared >= 3) return false;  // the same three vertices: a duplicate face, not a crossing
+    const Vec3 a[3] = {corner(fa[0]), corner(fa[1]), corner(fa[2])};
+    const Vec3 b[3] = {corner(fb[0]), corner(fb[1]), corner(fb[2])};
+    if (shared == 0 || !distinct(fa) || !distinct(fb)) return triangles_cross(a, b);
+    // A shared vertex is the same point in both: orient3d of a's corners and it is exactly 0,
+    // so b's sides need only its other corners (the sign is the same under a's cyclic order).
+    int side_b[3];
+    for (int j = 0; j < 3; ++j)
+        side_b[j] = fb[j] == fa[0] || fb[j] == fa[1] || fb[j] == fa[2] ? 0 : sign_of(orient3d(a[0], a[1], a[2], b[j]));
+    const bool coplanar = side_b[0] == 0 && side_b[1] == 0 && side_b[2] == 0;
+    // A shared edge: b's third corner off a's plane leaves b's sides without both signs, which
+    // triangles_cross answers "no" (the triangles meet only on the line of the edge).
+    if (!coplanar) {
+        int on_b = 0;  // a's corners that are b's: exactly on b's plane
+        for (int i = 0; i < 3; ++i) on_b |= (fa[i] == fb[0] || fa[i] == fb[1] || fa[i] == fb[2]) << i;
+        return cross_given_sides(a, b, side_b, on_b);
+    }
+    if (shared == 2) return coplanar_cross(a, b);
+    // One shared vertex u, coplanar (a fan's faces): the edge of a opposite u (edge ia + 1)
+    // has u strictly inside a's side (a's turn), and u is a corner of b, so it never
+    // separates; the same for b's edge ib + 1. Only the edges through u are tried.
+    return coplanar_cross(a, b, (ia + 1) % 3, (ib + 1) % 3);
 }
 
 void face_pairs_cross(const double* vertices, const std::int64_t* faces, const std::int64_t* pairs,

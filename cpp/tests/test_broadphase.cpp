@@ -1,7 +1,9 @@
 // Broad phase (broadphase.hpp): sort and sweep and the AABB tree against brute force.
 #include <cstdint>
+#include <mutex>
 #include <random>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "check.hpp"
@@ -144,4 +146,48 @@ TEST_CASE("broad phase: a cap on pairs stops the sweep, exactly at the count") {
         }
     }
     CHECK(brute_force(pile).size() / 2 == 400 * 399 / 2);
+}
+
+TEST_CASE("broad phase: the streamed sweep hands out brute force's pairs in a prefix of blocks") {
+    // a pile of large boxes (one crowded cell, split into many blocks) and a spread cloud
+    for (const auto& [n, extent] : {std::pair<int, double>{300, 60.0}, std::pair<int, double>{3000, 3.0}}) {
+        const Boxes b = random_boxes(n, 100.0, extent, 11u);
+        const std::vector<std::int64_t> expected = brute_force(b);
+        for (const int threads : {1, 2})
+            for (const std::int64_t block_pairs : {std::int64_t{1}, std::int64_t{50}, std::int64_t{65536}}) {
+                std::mutex lock;
+                std::vector<std::vector<std::uint64_t>> blocks;
+                const std::int64_t count = sort_and_sweep_stream(
+                    b.lo.data(), b.hi.data(), b.size(), -1, threads, block_pairs,
+                    [&](std::int64_t block, const std::uint64_t* keys, std::int64_t k) {
+                        const std::lock_guard<std::mutex> hold(lock);
+                        if (static_cast<std::int64_t>(blocks.size()) <= block) blocks.resize(block + 1);
+                        blocks[block].assign(keys, keys + k);
+                        return true;
+                    });
+                CHECK_EQ(static_cast<std::int64_t>(blocks.size()), count);
+                std::vector<std::uint64_t> keys;
+                for (const auto& block : blocks) keys.insert(keys.end(), block.begin(), block.end());
+                sort_pair_keys(keys);
+                std::vector<std::int64_t> pairs;
+                for (const std::uint64_t key : keys)
+                    pairs.insert(pairs.end(), {static_cast<std::int64_t>(key >> 32),
+                                               static_cast<std::int64_t>(key & 0xFFFFFFFFu)});
+                CHECK(pairs == expected);
+                // stopping at a block: the blocks consumed are a prefix of the order
+                std::vector<char> seen(static_cast<size_t>(count), 0);
+                const std::int64_t stop_at = count / 3;
+                sort_and_sweep_stream(b.lo.data(), b.hi.data(), b.size(), -1, threads, block_pairs,
+                                      [&](std::int64_t block, const std::uint64_t*, std::int64_t) {
+                                          const std::lock_guard<std::mutex> hold(lock);
+                                          seen[static_cast<size_t>(block)] = 1;
+                                          return block != stop_at;
+                                      });
+                std::int64_t prefix = 0;
+                while (prefix < count && seen[static_cast<size_t>(prefix)]) ++prefix;
+                CHECK(prefix > stop_at);
+                for (std::int64_t k = prefix; k < count; ++k) CHECK(!seen[static_cast<size_t>(k)]);
+                if (block_pairs == 1) CHECK(count > 100);
+            }
+    }
 }

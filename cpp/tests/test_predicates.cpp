@@ -1,7 +1,9 @@
 // Exact orientation predicates (src/predicates.hpp) and the exact triangle tests built on them
 // (triangle.hpp): the degenerate cases a floating-point determinant gets wrong.
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <vector>
 
 #include "check.hpp"
 #include "meshcol/triangle.hpp"
@@ -93,4 +95,55 @@ TEST_CASE("predicates: a segment through a triangle's edge crosses it") {
     CHECK_NEAR(s, 0.25, 1e-15);
     CHECK(!segment_crosses_triangle({0.6, 0.6, -1}, {0.6, 0.6, 1}, t, nullptr));  // beside it
     CHECK(!segment_crosses_triangle({-1, 0.2, 0}, {2, 0.2, 0}, t, nullptr));  // in its plane
+}
+
+namespace {
+
+/// Points near one plane through `origin` (spanned by u and v, rounded to doubles: seldom
+/// exactly coplanar), some exactly symmetric about the origin (d and -d: exact zeros), the
+/// cases that leave the filter undecided and reach the adaptive stages.
+std::vector<Vec3> near_plane_points(std::uint64_t seed, const Vec3& origin, double scale) {
+    std::uint64_t state = seed;
+    const auto uniform = [&]() {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return static_cast<double>(state >> 11) * 0x1p-53 * 2.0 - 1.0;
+    };
+    const Vec3 u{0.36, 0.48, 0.8}, v{-0.8, 0.6, 0.0};
+    std::vector<Vec3> points;
+    for (int k = 0; k < 24; ++k) {
+        const Vec3 p = origin + (u * uniform() + v * uniform()) * scale;
+        points.push_back(p);
+        points.push_back(origin * 2.0 - p);  // its mirror through the origin
+    }
+    for (int k = 0; k < 8; ++k) points.push_back(origin + Vec3{uniform(), uniform(), uniform()} * (1e-12 * scale));
+    return points;
+}
+
+}  // namespace
+
+TEST_CASE("predicates: adaptive orient3d and orient2d agree with the allocating exact evaluation") {
+    // the allocating evaluation (differences from d, products by fma, grow-expansion sums)
+    // is a second route to the exact sign, independent of the stack-held one and the stages
+    namespace ref = predicates::detail;
+    long long checked = 0, zeros = 0;
+    for (const double scale : {1.0, 1e-3, 1e6})
+        for (const Vec3 origin : {Vec3{0, 0, 0}, Vec3{0.3, -0.7, 0.1}, Vec3{1e3, 2e3, -5e2}}) {
+            const std::vector<Vec3> p = near_plane_points(static_cast<std::uint64_t>(scale * 7 + origin.x), origin, scale);
+            const auto n = static_cast<int>(p.size());
+            for (int i = 0; i < n; i += 3)
+                for (int j = 1; j < n; j += 5)
+                    for (int k = 2; k < n; k += 7)
+                        for (int l = 0; l < n; l += 2) {
+                            const int sign = orient3d_sign(p[i], p[j], p[k], p[l]);
+                            const double expected = ref::orient3d_expansions(p[i], p[j], p[k], p[l]);
+                            CHECK_EQ(sign, static_cast<int>(expected));
+                            const int sign2 = orient2d_sign(p[i].x, p[i].y, p[j].x, p[j].y, p[l].x, p[l].y);
+                            CHECK_EQ(sign2, static_cast<int>(ref::orient2d_expansions(p[i].x, p[i].y, p[j].x, p[j].y,
+                                                                                p[l].x, p[l].y)));
+                            ++checked;
+                            zeros += sign == 0;
+                        }
+        }
+    CHECK(checked > 100000);
+    CHECK(zeros > 1000);  // the mirrored points give exact zeros: the last stage is reached
 }

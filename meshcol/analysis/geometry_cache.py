@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import hashlib
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -25,6 +26,9 @@ from meshcol.geometry.topology import (
     oriented_volume,
 )
 from meshcol.geometry.triangles import face_heights
+
+if TYPE_CHECKING:
+    from meshcol.collision.self_intersection import SelfIntersections
 
 __all__ = ["GeometryCache", "LocalGeometry", "geometry_key"]
 
@@ -54,7 +58,7 @@ class LocalGeometry:
         self.vertices = vertices
         self.faces = faces
         # crossing face pairs per degenerate-face mask (a mask follows the body's diagonal)
-        self._crossings: dict[bytes, int] = {}
+        self._crossings: dict[bytes, SelfIntersections] = {}
 
     @cached_property
     def used(self) -> np.ndarray:
@@ -110,16 +114,17 @@ class LocalGeometry:
 
         return mass_properties(self.vertices, self.faces)
 
-    def crossings(self, skip: np.ndarray) -> int:
-        """Pairs of faces that cross, the faces of ``skip`` ((m,) bool) left out."""
+    def crossings(self, skip: np.ndarray) -> SelfIntersections:
+        """The pairs of faces that cross, the faces of ``skip`` ((m,) bool) left out
+        (:func:`meshcol.collision.self_intersection.self_intersections`: a count, and whether
+        the work budget let every candidate pair be decided)."""
         key = skip.tobytes()
-        count = self._crossings.get(key)
-        if count is None:
-            from meshcol.collision.self_intersection import self_intersecting_pairs
+        found = self._crossings.get(key)
+        if found is None:
+            from meshcol.collision.self_intersection import self_intersections
 
-            pairs = self_intersecting_pairs(self.vertices, self.faces, skip=skip)
-            count = self._crossings[key] = len(pairs)
-        return count
+            found = self._crossings[key] = self_intersections(self.vertices, self.faces, skip=skip)
+        return found
 
 
 class GeometryCache:

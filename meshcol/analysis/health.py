@@ -3,7 +3,7 @@
 :func:`inspect_body` answers "is this mesh fit to be a collider?": is it closed, consistently
 wound, free of degenerate, duplicate and non-manifold faces and of self-intersections, in one
 piece, and plausibly in metres. :func:`health_findings` turns the answer into finding records
-(MC401..MC409).
+(MC401..MC409, and MC505 when the self-intersection test stopped at its budget).
 """
 
 from __future__ import annotations
@@ -34,7 +34,8 @@ __all__ = [
 ]
 
 #: The mesh-health findings of :func:`inspect_body`, by name (ids MC401..MC409 in
-#: :mod:`meshcol.analysis.rules`, in this order).
+#: :mod:`meshcol.analysis.rules`, in this order, then ``undecided``, MC505: the
+#: self-intersection test stopped at its work budget).
 RULES: tuple[str, ...] = (
     "not-watertight",
     "self-intersecting",
@@ -45,6 +46,7 @@ RULES: tuple[str, ...] = (
     "duplicate-faces",
     "multiple-components",
     "suspect-units",
+    "undecided",
 )
 #: The rule id of each mesh-health finding.
 HEALTH_IDS = {name: get_rule(name).id for name in RULES}
@@ -89,12 +91,16 @@ class MeshInspection:
         Edges with one face; edges with more than two faces.
     inconsistent_edges : int
         Edges with two faces that traverse them in the same direction.
-    self_intersecting : bool
+    self_intersecting : bool or None
         Two faces cross: their open triangles share a point (see
         :mod:`meshcol.collision.self_intersection`; decided exactly). Faces that only touch,
-        along shared vertices and edges or elsewhere, do not cross.
+        along shared vertices and edges or elsewhere, do not cross. None: undecided, the test
+        stopped at its work budget
+        (:data:`~meshcol.collision.self_intersection.MAX_WORK`) without finding a
+        crossing (the ``undecided`` finding).
     self_intersecting_pairs : int
-        Pairs of faces that cross (degenerate faces left out).
+        Pairs of faces that cross (degenerate faces left out): exact, unless the
+        ``undecided`` finding says the test stopped at its budget, where it is a lower bound.
     manifold_status : str
         ``manifold3d.Manifold``'s verdict on the mesh (``NoError``, ``NotManifold``, ...).
     units_guess : str
@@ -122,7 +128,7 @@ class MeshInspection:
     boundary_edges: int
     non_manifold_edges: int
     inconsistent_edges: int
-    self_intersecting: bool
+    self_intersecting: bool | None
     self_intersecting_pairs: int
     manifold_status: str
     units_guess: str
@@ -213,7 +219,7 @@ def inspect_mesh(
 
     broken = {
         "not-watertight": not watertight,
-        "self-intersecting": crossings > 0,
+        "self-intersecting": crossings.count > 0,
         "inconsistent-winding": not winding_consistent,
         "inverted": measured is not None and measured[1] < 0,
         "degenerate-faces": bool(degenerate.any()),
@@ -221,6 +227,7 @@ def inspect_mesh(
         "duplicate-faces": mesh.duplicates > 0,
         "multiple-components": mesh.components > 1,
         "suspect-units": _units_suspect(units, declared_units),
+        "undecided": not crossings.complete,
     }
     return MeshInspection(
         name=body.name,
@@ -238,8 +245,8 @@ def inspect_mesh(
         boundary_edges=boundary,
         non_manifold_edges=non_manifold,
         inconsistent_edges=inconsistent,
-        self_intersecting=bool(crossings),
-        self_intersecting_pairs=crossings,
+        self_intersecting=crossings.crossing,
+        self_intersecting_pairs=crossings.count,
         manifold_status=mesh.manifold_status,
         units_guess=units,
         units_reason=reason,
@@ -308,7 +315,7 @@ def _units_suspect(guess: str, declared: str | None) -> bool:
 
 
 def health_findings(result: MeshInspection, body: str, part: str | None) -> list[Finding]:
-    """The mesh-health findings of one inspection as records (rules MC401..MC409).
+    """The mesh-health findings of one inspection as records (rules MC401..MC409, MC505).
 
     Parameters
     ----------
@@ -325,6 +332,8 @@ def health_findings(result: MeshInspection, body: str, part: str | None) -> list
         units_limit = TINY_EXTENT
     else:
         units_limit = MILLIMETRE_EXTENT
+    from meshcol.collision.self_intersection import MAX_WORK as budget
+
     r = result
     measures: dict[str, tuple[Any, Any, str]] = {
         "not-watertight": (
@@ -335,6 +344,7 @@ def health_findings(result: MeshInspection, body: str, part: str | None) -> list
         "self-intersecting": (
             r.self_intersecting_pairs,
             0,
+            f"{'at least ' if 'undecided' in r.findings else ''}"
             f"{r.self_intersecting_pairs} pairs of faces cross",
         ),
         "inconsistent-winding": (
@@ -348,8 +358,17 @@ def health_findings(result: MeshInspection, body: str, part: str | None) -> list
         "duplicate-faces": (r.duplicate_faces, 0, f"{r.duplicate_faces} duplicate faces"),
         "multiple-components": (r.components, 1, f"{r.components} disconnected pieces"),
         "suspect-units": (extent, units_limit, r.units_reason),
+        "undecided": (r.self_intersecting_pairs, budget, _undecided_message(r, budget)),
     }
     return [finding(HEALTH_IDS[name], body, part, *measures[name]) for name in r.findings]
+
+
+def _undecided_message(result: MeshInspection, budget: int) -> str:
+    """The ``undecided`` finding's line: what the self-intersection test could not decide."""
+    stop = f"the self-intersection test stopped at its work budget ({budget:,} units)"
+    if result.self_intersecting_pairs:
+        return f"{stop}: at least {result.self_intersecting_pairs} pairs of faces cross"
+    return f"{stop} with no crossing found: undecided"
 
 
 # ---------------------------------------------------------------------------------------------

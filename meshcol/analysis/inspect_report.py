@@ -339,7 +339,8 @@ def _finding_text(rule: str, row: dict[str, Any]) -> str:
     measure = {
         "not-watertight": f"{row['boundary_edges']} boundary edges, "
         f"{row['non_manifold_edges']} non-manifold",
-        "self-intersecting": f"{row['self_intersecting_pairs']} crossing face pairs",
+        "self-intersecting": f"{'at least ' if 'undecided' in row['findings'] else ''}"
+        f"{row['self_intersecting_pairs']} crossing face pairs",
         "inconsistent-winding": "neighbouring faces disagree on their winding",
         "inverted": f"volume {row['volume']:.6g}" if row["volume"] is not None else "inside out",
         "degenerate-faces": f"{row['degenerate_faces']} faces",
@@ -347,5 +348,11 @@ def _finding_text(rule: str, row: dict[str, Any]) -> str:
         "duplicate-faces": f"{row['duplicate_faces']} faces",
         "multiple-components": f"{row['components']} components",
         "suspect-units": f"looks like {row['units_guess']}: {row['units_reason']}",
+        "undecided": "self-intersection test stopped at its budget, "
+        + (
+            f"at least {row['self_intersecting_pairs']} crossing face pairs"
+            if row["self_intersecting_pairs"]
+            else "no crossing found"
+        ),
     }.get(rule)
     return rule if measure is None else f"{rule} ({measure})"

@@ -425,7 +425,9 @@ def _add_parts(
 
 def _findings(page: ReviewPage, body: Body, index: int) -> dict[str, int]:
     """Open edges, non-manifold edges, self-intersecting faces and inverted regions of a
-    body, drawn on its mesh; returns their counts."""
+    body, drawn on its mesh; returns their counts. The self-intersecting faces are those of
+    the crossing pairs :func:`~meshcol.collision.self_intersection.self_intersecting_pairs`
+    returns: at most ``MAX_KEPT_PAIRS`` pairs, found within its work budget."""
     from meshcol.collision.self_intersection import self_intersecting_pairs
     from meshcol.geometry.topology import edge_table, oriented_volume
 

@@ -4,7 +4,8 @@ Every finding meshcol reports names a rule of :data:`RULES` by its id (``MC401``
 (``not-watertight``); ids are stable forever (a rule that goes keeps its id retired, never
 reused). Ranges: 1xx engine limits of a ``--target`` profile, 2xx physics readiness and mass,
 3xx colliders present and named, 4xx mesh health, 5xx pair findings of check and sweep
-(and MC506, a robot with no collision geometry: nothing to pair).
+(and MC506, a robot with no collision geometry: nothing to pair; MC505, undecided, is also
+inspect's undecided self-intersection verdict: one rule for "no exact test decided").
 
 :func:`finding` is the one way to make a finding, so nothing can cite an unregistered rule;
 :func:`select_rules` is the one parser of ``--fail-on`` lists (ids, names, ``all``).
@@ -399,12 +400,21 @@ RULES: tuple[Rule, ...] = (
         "MC505",
         "undecided",
         "warning",
-        ("check",),
-        "The pair's surfaces meet or may nest, and no inside test decides it: a mesh that "
-        "cannot be wound consistently (non-orientable), whose ray parity splits over the "
-        "directions tried. Neither a contact nor a penetration is claimed.",
-        "measured: depth_upper, the most the pair can penetrate; limit: --tolerance.",
-        "Repair the mesh's winding (inspect reports MC403), or check the pair as hull.",
+        ("inspect", "check"),
+        "An exact test could not reach its verdict. check: the pair's surfaces meet or may "
+        "nest, and no inside test decides it: a mesh that cannot be wound consistently "
+        "(non-orientable), whose ray parity splits over the directions tried. Neither a "
+        "contact nor a penetration is claimed. inspect: the self-intersection test stopped at "
+        "its work budget (a fan or a pile of faces whose boxes all "
+        "overlap): with no crossing found, the mesh is called neither self-intersecting nor "
+        "clean (self_intersecting null); with crossings found it is self-intersecting "
+        "(MC402) and their count is a lower bound.",
+        "check: measured: depth_upper, the most the pair can penetrate; limit: --tolerance. "
+        "inspect: measured: the crossing face pairs found (a lower bound); limit: the work "
+        "budget (units of one candidate face pair, MAX_WORK).",
+        "check: repair the mesh's winding (inspect reports MC403), or check the pair as hull. "
+        "inspect: remesh the fan (rings of faces around its centre) or split the pile into "
+        "its pieces; the budget is meshcol.collision.self_intersection.MAX_WORK.",
     ),
     Rule(
         "MC506",

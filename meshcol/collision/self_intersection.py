@@ -9,19 +9,31 @@ Faces on the same three vertices are duplicates, not crossings.
 The verdict is exact for finite coordinates: every decision is the sign of an orientation
 determinant of input points (orient2d, orient3d), evaluated in floating point with an error
 bound and exactly when the bound cannot decide (Shewchuk 1997). There is no tolerance.
+
+:func:`self_intersections` finds them with a work budget: candidate pairs (faces whose boxes
+overlap) stream from the core's sort and sweep into the exact test without being collected, and
+the work is bounded by :data:`MAX_WORK`. Past it the answer is a lower bound ("at least K pairs
+cross"), or undecided when none was found; never a clean verdict.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from meshcol._native import core
+from meshcol._native import core, defaults
 from meshcol.collision.arrays import as_mesh
-from meshcol.collision.broadphase import sort_and_sweep
 
-__all__ = ["face_pairs_cross", "self_intersecting_pairs"]
+__all__ = [
+    "MAX_WORK",
+    "MAX_KEPT_PAIRS",
+    "SelfIntersections",
+    "face_pairs_cross",
+    "self_intersecting_pairs",
+    "self_intersections",
+]
 
 
 def _mesh(vertices: Any, faces: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -73,10 +85,63 @@ def face_pairs_cross(vertices: Any, faces: Any, pairs: Any, *, threads: int = 0)
     return core.face_pairs_cross(v, f, np.ascontiguousarray(p, dtype=np.int64), threads)
 
 
-def self_intersecting_pairs(
-    vertices: Any, faces: Any, skip: Any = None, *, threads: int = 0
-) -> np.ndarray:
-    """Pairs of faces of a mesh that cross each other.
+#: The work budget per mesh, in units of one candidate face pair (bounding boxes overlap)
+#: decided by the floating-point filters; an orientation past a filter costs
+#: ``defaults.self_intersection_slow_cost`` more, one evaluated exactly
+#: ``defaults.self_intersection_exact_cost`` more again (``defaults.inc``). Ordinary assets, a
+#: cylinder of 20,000 sections included, are decided in full; a pile of faces through one
+#: point stops after about a minute on 2 cores (benchmarks/RESULTS.md).
+MAX_WORK: int = defaults.self_intersection_max_work
+#: At most this many crossing pairs are returned (their count is not capped): the review page
+#: draws the faces of these.
+MAX_KEPT_PAIRS: int = defaults.self_intersection_max_kept_pairs
+
+
+@dataclass(frozen=True)
+class SelfIntersections:
+    """The crossing face pairs of a mesh, and whether every candidate pair was decided.
+
+    Attributes
+    ----------
+    pairs : (k, 2) int64
+        Crossing face pairs ``i < j``, sorted lexicographically; at most ``max_kept_pairs``
+        of them (the first the sweep found).
+    count : int
+        Crossing pairs among the candidates decided (not capped by ``max_kept_pairs``): the
+        mesh's exact count when ``complete``, else a lower bound.
+    candidates : int
+        Candidate pairs decided.
+    work : int
+        Work units spent on them (see :data:`MAX_WORK`).
+    complete : bool
+        Every candidate pair was decided (the work budget was not reached).
+    """
+
+    pairs: np.ndarray
+    count: int
+    candidates: int
+    work: int
+    complete: bool
+
+    @property
+    def crossing(self) -> bool | None:
+        """True when two faces cross, False when none does, None (undecided) when none was
+        found before the budget ran out."""
+        if self.count:
+            return True
+        return False if self.complete else None
+
+
+def self_intersections(
+    vertices: Any,
+    faces: Any,
+    skip: Any = None,
+    *,
+    max_work: int | None = None,
+    max_kept_pairs: int | None = None,
+    threads: int = 0,
+) -> SelfIntersections:
+    """The pairs of faces of a mesh that cross each other, within a work budget.
 
     Parameters
     ----------
@@ -84,19 +149,29 @@ def self_intersecting_pairs(
     faces : (m, 3) int
     skip : (m,) bool, optional
         Faces to leave out (``meshcol inspect`` skips the faces it reports as degenerate).
+    max_work : int, optional
+        Work units spent at most (default :data:`MAX_WORK`; negative: no budget).
+    max_kept_pairs : int, optional
+        Crossing pairs returned at most (default :data:`MAX_KEPT_PAIRS`; negative: all).
     threads : int
         0 uses every core.
 
     Returns
     -------
-    (k, 2) int64
-        Face index pairs ``i < j``, sorted lexicographically.
+    SelfIntersections
 
     Notes
     -----
-    Candidates are the faces whose bounding boxes overlap (touching counts), from the native
-    :func:`meshcol.collision.broadphase.sort_and_sweep`; :func:`face_pairs_cross` decides each
-    candidate exactly in one native call.
+    Candidates are the face pairs whose bounding boxes overlap (touching counts), from the
+    native sort and sweep; it streams them in blocks to the exact test (:func:`face_pairs_cross`'s
+    verdict, with exact shortcuts for faces that share vertices), so the memory held is the
+    faces' and the crossing pairs kept, never every candidate (a fan of n faces around one
+    vertex has n^2 / 2). The blocks come in an order fixed by the mesh alone and a block's work
+    is the same on any thread; past the budget the pass keeps the longest run of whole blocks
+    within it, so the result does not depend on ``threads``. The work counts the orientation
+    tests the floating-point filters could not decide because they cost up to 30 times a
+    filtered one: a budget of candidates alone would let a pile of exactly degenerate faces run
+    30 times longer than a fan of as many candidates.
     """
     v, f = _mesh(vertices, faces)
     keep = np.ones(len(f), bool) if skip is None else ~np.asarray(skip, bool).reshape(-1)
@@ -104,12 +179,42 @@ def self_intersecting_pairs(
         raise ValueError(f"skip must be ({len(f)},) like faces, got ({len(keep)},)")
     index = np.nonzero(keep)[0]
     if len(index) < 2:
-        return np.zeros((0, 2), np.int64)
+        return SelfIntersections(np.zeros((0, 2), np.int64), 0, 0, 0, True)
     kept = f[index]
     if kept.min() < 0 or kept.max() >= len(v):
         raise ValueError(f"faces index vertices out of range [0, {len(v)})")
-    a, b, c = v[kept[:, 0]], v[kept[:, 1]], v[kept[:, 2]]
-    candidates = sort_and_sweep(np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c))
+    budget = MAX_WORK if max_work is None else int(max_work)
+    cap = MAX_KEPT_PAIRS if max_kept_pairs is None else int(max_kept_pairs)
+    pairs, count, candidates, work, complete = core.self_intersecting_pairs(
+        v,
+        np.ascontiguousarray(kept),
+        max_work=budget,
+        max_kept_pairs=cap,
+        threads=threads,
+    )
     # index is increasing, so the pairs stay i < j and sorted
-    candidates = index[candidates]
-    return candidates[face_pairs_cross(v, f, candidates, threads=threads)]
+    return SelfIntersections(index[pairs], int(count), int(candidates), int(work), bool(complete))
+
+
+def self_intersecting_pairs(
+    vertices: Any, faces: Any, skip: Any = None, *, threads: int = 0
+) -> np.ndarray:
+    """Pairs of faces of a mesh that cross each other: :func:`self_intersections`' pairs.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+    faces : (m, 3) int
+    skip : (m,) bool, optional
+        Faces to leave out.
+    threads : int
+        0 uses every core.
+
+    Returns
+    -------
+    (k, 2) int64
+        Face index pairs ``i < j``, sorted lexicographically: every crossing pair when the
+        pass was complete and found at most :data:`MAX_KEPT_PAIRS`; otherwise the first
+        :data:`MAX_KEPT_PAIRS` found within the budget (:func:`self_intersections` says which).
+    """
+    return self_intersections(vertices, faces, skip, threads=threads).pairs

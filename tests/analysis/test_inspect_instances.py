@@ -147,7 +147,7 @@ def test_inspect_measures_each_unique_mesh_once(tmp_path, monkeypatch) -> None:
 
         monkeypatch.setattr(module, name, count)
 
-    counted(crossing_module, "self_intersecting_pairs")
+    counted(crossing_module, "self_intersections")
     counted(geometry_module, "_manifold_status")
     counted(geometry_module, "component_count")
     counted(mass_module, "mass_properties")
@@ -158,7 +158,7 @@ def test_inspect_measures_each_unique_mesh_once(tmp_path, monkeypatch) -> None:
     report = inspect(write_level(tmp_path, 60, meshes, scales=False))
     assert len(report.inspections) == 60
     unique = len(meshes)
-    assert calls["self_intersecting_pairs"] == unique
+    assert calls["self_intersections"] == unique
     assert calls["_manifold_status"] == unique
     assert calls["component_count"] == unique
     # the visual meshes' and the hulls' (the open box's hull is the cube's)
@@ -170,13 +170,13 @@ def test_each_degenerate_mask_is_crossed_once(tmp_path, monkeypatch) -> None:
     import meshcol.collision.self_intersection as crossing_module
 
     seen: list[bytes] = []
-    original = crossing_module.self_intersecting_pairs
+    original = crossing_module.self_intersections
 
     def count(vertices, faces, skip=None):
         seen.append(np.asarray(skip).tobytes())
         return original(vertices, faces, skip=skip)
 
-    monkeypatch.setattr(crossing_module, "self_intersecting_pairs", count)
+    monkeypatch.setattr(crossing_module, "self_intersections", count)
     write_meshes(tmp_path)
     report = inspect(write_level(tmp_path, 30, ["sliver.obj"], scales=False))
     assert {r.degenerate_faces for r in report.inspections} == {0, 1}

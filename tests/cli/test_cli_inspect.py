@@ -333,3 +333,82 @@ def test_corpus_hull_within_64_vertices_encloses(corpus_run) -> None:
     assert cube["hull_volume"] == pytest.approx(1.0) and cube["max_distance"] == 0.0
     (triangle,) = by_file(report, "notenoughindices.obj")
     assert triangle["flat"] is True
+
+
+# ------------------------------------------------------------------------------ work budget
+
+
+def crossing_pairs_obj(count: int) -> str:
+    """``count`` pairs of triangles, each pair crossing like an X, spaced apart in a row: the
+    sweep's grid splits them into many blocks, so a budget can stop between them."""
+    lines = []
+    for i in range(count):
+        x = 3.0 * i
+        for p in ((x, -1, 0), (x + 1, -1, 0), (x, 1, 0), (x, 0, -1), (x + 1, 0, -1), (x, 0, 1)):
+            lines.append("v {} {} {}".format(*p))
+    lines += [f"f {6 * i + 1} {6 * i + 2} {6 * i + 3}" for i in range(count)]
+    lines += [f"f {6 * i + 4} {6 * i + 5} {6 * i + 6}" for i in range(count)]
+    return "\n".join(lines) + "\n"
+
+
+def test_budget_run_out_with_no_crossing_is_undecided(tmp_path: Path, monkeypatch) -> None:
+    import meshcol.collision.self_intersection as crossing_module
+
+    monkeypatch.setattr(crossing_module, "MAX_WORK", 0)
+    cube = write(tmp_path, "cube.obj", CUBE_OBJ)
+    result = run("inspect", cube)
+    assert result.exit_code == 0, result.output  # a warning unless --fail-on lists it
+    report = json.loads(result.stdout)
+    jsonschema = pytest.importorskip("jsonschema")
+    schema = Path(crossing_module.__file__).parents[1] / "schemas" / "inspect_report.schema.json"
+    jsonschema.Draft202012Validator(json.loads(schema.read_text())).validate(report)
+    (body,) = report["bodies"]
+    assert body["self_intersecting"] is None and body["self_intersecting_pairs"] == 0
+    assert body["findings"] == ["undecided"]
+    assert "cube  12     yes     1       1 x 1 x 1  m      undecided" in result.stderr
+    failing = run("inspect", cube, "--fail-on", "undecided")
+    assert failing.exit_code == 1
+    assert (
+        f"meshcol: fail: {cube}: body 'cube': MC505 undecided: the self-intersection test "
+        "stopped at its work budget (0 units) with no crossing found: undecided"
+    ) in failing.stderr.splitlines()
+    csv = run("inspect", cube, "--format", "csv").stdout.splitlines()
+    row = dict(zip(csv[0].split(","), csv[1].split(",")))
+    assert row["self_intersecting"] == "" and row["findings"] == "undecided"
+
+
+def test_budget_run_out_after_crossings_is_at_least_k(tmp_path: Path, monkeypatch) -> None:
+    import meshcol.collision.self_intersection as crossing_module
+
+    source = write(tmp_path, "crossing.obj", crossing_pairs_obj(400))
+    full = run("inspect", source)
+    (body,) = json.loads(full.stdout)["bodies"]
+    assert body["self_intersecting"] is True and body["self_intersecting_pairs"] == 400
+    assert "undecided" not in body["findings"]
+    from meshcol.io.mesh_read import load_mesh
+
+    (mesh,) = load_mesh(source)
+    work = crossing_module.self_intersections(mesh.vertices, mesh.faces).work
+    monkeypatch.setattr(crossing_module, "MAX_WORK", work // 2)
+    result = run("inspect", source, "--fail-on", "self-intersecting,undecided")
+    assert result.exit_code == 1
+    report = json.loads(result.stdout)
+    (body,) = report["bodies"]
+    k = body["self_intersecting_pairs"]
+    assert body["self_intersecting"] is True and 0 < k < 400
+    assert {"self-intersecting", "undecided"} <= set(body["findings"])
+    messages = {f["rule"]: f["message"] for f in report["findings"]}
+    assert messages["MC402"] == f"at least {k} pairs of faces cross"
+    assert messages["MC505"] == (
+        f"the self-intersection test stopped at its work budget ({work // 2:,} units): "
+        f"at least {k} pairs of faces cross"
+    )
+    assert report["summary"]["findings"]["undecided"] == 1
+    # the same K on every run and thread count
+    assert json.loads(run("inspect", source).stdout)["bodies"][0]["self_intersecting_pairs"] == k
+    sarif = json.loads(run("inspect", source, "--format", "sarif").stdout)
+    (sarif_run,) = sarif["runs"]
+    assert {"MC402", "MC505"} <= {rule["id"] for rule in sarif_run["tool"]["driver"]["rules"]}
+    github = run("inspect", source, "--format", "github").stdout
+    assert f"self-intersecting (at least {k} crossing face pairs)" in github
+    assert f"undecided (self-intersection test stopped at its budget, at least {k}" in github

@@ -318,3 +318,201 @@ def test_batch_equals_the_oracle_on_a_random_soup() -> None:
     assert 0 < sum(expected) < len(expected)
     # self_intersecting_pairs (broad phase + this) finds exactly the crossing pairs
     assert self_intersecting_pairs(points, faces).tolist() == pairs[verdict].tolist()
+
+
+# ------------------------------------------------------------------------------ streamed pass
+#
+# self_intersections streams the sweep's candidates into the exact test, with shortcuts for
+# faces that share vertex indices and a work budget. Its oracle is the two-step pass it
+# replaced: every candidate pair collected by sort_and_sweep, then face_pairs_cross (the plain
+# triangles_cross on every pair, no shortcut).
+
+
+def two_step(vertices, faces) -> tuple[np.ndarray, int]:
+    """The crossing pairs and the candidate count, as inspect found them before the stream."""
+    from meshcol.collision.broadphase import sort_and_sweep
+
+    v = np.asarray(vertices, float)
+    f = np.asarray(faces, np.int64)
+    a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
+    candidates = sort_and_sweep(np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c))
+    return candidates[face_pairs_cross(v, f, candidates)], len(candidates)
+
+
+def assert_streamed_equals_two_step(vertices, faces) -> int:
+    expected, candidates = two_step(vertices, faces)
+    for threads in (1, 2):
+        for block_pairs in (1, 7, 65536):
+            found = core_pass(vertices, faces, threads=threads, block_pairs=block_pairs)
+            assert found.complete and found.crossing is (len(expected) > 0)
+            assert found.candidates == candidates
+            assert found.count == len(expected)
+            assert found.pairs.tolist() == expected.tolist()
+    return len(expected)
+
+
+def core_pass(vertices, faces, *, threads=0, block_pairs=65536, max_work=-1, keep=-1):
+    """self_intersections with the core's block size and cost weights exposed."""
+    from meshcol._native import core
+    from meshcol.collision.self_intersection import SelfIntersections
+
+    pairs, count, candidates, work, complete = core.self_intersecting_pairs(
+        np.ascontiguousarray(vertices, float),
+        np.ascontiguousarray(faces, np.int64),
+        max_work=max_work,
+        max_kept_pairs=keep,
+        block_pairs=block_pairs,
+        threads=threads,
+    )
+    return SelfIntersections(pairs, count, candidates, work, complete)
+
+
+def fan(sections: int, *, overlap: bool = False, rotate: bool = False):
+    """A flat fan of triangles around vertex 0 (a cylinder cap); with ``overlap`` every
+    triangle spans two sectors, so neighbours overlap; rotated off the axes on request."""
+    angles = np.linspace(0.0, 2 * np.pi, sections, endpoint=False)
+    rim = np.stack([np.cos(angles), np.sin(angles), np.full(sections, 0.5)], axis=1)
+    vertices = np.vstack([[0.0, 0.0, 0.5], rim])
+    step = 2 if overlap else 1
+    faces = [[0, 1 + i, 1 + (i + step) % sections] for i in range(sections)]
+    if rotate:
+        c, s = np.cos(0.7), np.sin(0.7)
+        turn = np.array([[1, 0, 0], [0, c, -s], [0, s, c]]) @ np.array(
+            [[c, 0, s], [0, 1, 0], [-s, 0, c]]
+        )
+        vertices = vertices @ turn.T
+    return vertices, np.asarray(faces, np.int64)
+
+
+def pile(count: int, seed: int = 0):
+    """Long thin triangles (d, -d, e) through the origin: every pair's boxes overlap, and
+    d, -d of two faces are exactly coplanar (exact zeros)."""
+    rng = np.random.default_rng(seed)
+    d = rng.normal(size=(count, 3))
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    e = 0.01 * rng.normal(size=(count, 3))
+    return np.stack([d, -d, e], axis=1).reshape(-1, 3), np.arange(3 * count).reshape(count, 3)
+
+
+def test_streamed_pass_equals_two_step_on_fans_and_piles() -> None:
+    assert assert_streamed_equals_two_step(*fan(300)) == 0
+    assert assert_streamed_equals_two_step(*fan(300, rotate=True)) == 0
+    # each triangle spans two sectors: it overlaps its neighbours on both sides
+    assert assert_streamed_equals_two_step(*fan(300, overlap=True)) == 300
+    # rotated, the rounded rim leaves the plane by ulps: overlapping neighbours cross only
+    # where one's far corners straddle the other's plane
+    assert 0 < assert_streamed_equals_two_step(*fan(300, overlap=True, rotate=True)) <= 300
+    assert assert_streamed_equals_two_step(*pile(200)) > 1000
+
+
+def test_streamed_pass_equals_two_step_on_closed_and_crossing_meshes() -> None:
+    import trimesh
+
+    sphere = trimesh.creation.uv_sphere(radius=1.0, count=[24, 24])
+    assert assert_streamed_equals_two_step(sphere.vertices, sphere.faces) == 0
+    cylinder = trimesh.creation.cylinder(radius=1.0, height=1.0, sections=256)
+    assert assert_streamed_equals_two_step(cylinder.vertices, cylinder.faces) == 0
+    # two boxes through each other (crossing), and two touching at a corner (not crossing)
+    box = trimesh.creation.box()
+    for shift, crossing in (((0.5, 0.5, 0.5), True), ((1.0, 1.0, 1.0), False)):
+        vertices = np.vstack([box.vertices, box.vertices + shift])
+        faces = np.vstack([box.faces, box.faces + len(box.vertices)])
+        assert (assert_streamed_equals_two_step(vertices, faces) > 0) is crossing
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_streamed_pass_equals_two_step_on_random_soups(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    # grid points: shared vertices and edges, coplanar, collinear and touching faces
+    points = rng.integers(-2, 3, size=(40, 3)).astype(float)
+    if seed % 2:
+        points += rng.normal(scale=1e-13, size=points.shape) * (rng.random(points.shape) < 0.3)
+    faces = rng.integers(0, 40, size=(300, 3))
+    assert_streamed_equals_two_step(points, faces)
+
+
+@st.composite
+def small_meshes(draw):
+    """A few faces on a few points: grid, coplanar (dyadic plane) or float coordinates, so
+    that faces share vertex indices, edges and planes, and touch."""
+    count = draw(st.integers(3, 9))
+    kind = draw(st.sampled_from(["grid", "plane", "float"]))
+    if kind == "plane":
+        alpha, beta = (draw(st.integers(-4, 4)) / 4 for _ in range(2))
+        xy = [draw(st.tuples(GRID, GRID)) for _ in range(count)]
+        points = [[x, y, alpha * x + beta * y] for x, y in xy]
+    else:
+        coordinate = GRID if kind == "grid" else FLOAT
+        points = [list(draw(st.tuples(coordinate, coordinate, coordinate))) for _ in range(count)]
+    index = st.integers(0, count - 1)
+    faces = draw(st.lists(st.tuples(index, index, index), min_size=2, max_size=12))
+    return np.asarray(points, float), np.asarray(faces, np.int64)
+
+
+@given(small_meshes())
+def test_streamed_pass_equals_two_step_on_generated_meshes(mesh) -> None:
+    assert_streamed_equals_two_step(*mesh)
+
+
+@given(triangle_pairs())
+def test_shared_vertex_shortcuts_equal_the_exact_oracle(pair) -> None:
+    # the same points merged into shared vertex indices: the shortcuts decide such pairs
+    a, b = pair
+    points, faces = np.unique(np.asarray(a + b, float), axis=0, return_inverse=True)
+    faces = faces.reshape(2, 3)
+    duplicate = sorted(faces[0].tolist()) == sorted(faces[1].tolist())
+    found = core_pass(points, faces)
+    assert found.complete
+    assert (found.count == 1) is (not duplicate and exact_cross(a, b))
+
+
+def test_budget_stops_deterministically_at_whole_blocks() -> None:
+    vertices, faces = fan(400, overlap=True)
+    full = core_pass(vertices, faces, block_pairs=64)
+    assert full.complete and full.count == 400
+    # the budget is the whole work: complete; one unit less: not
+    assert core_pass(vertices, faces, block_pairs=64, max_work=full.work).complete
+    short = core_pass(vertices, faces, block_pairs=64, max_work=full.work - 1)
+    assert not short.complete and short.work <= full.work - 1
+    for budget in (0, 500, 5_000, full.work // 3):
+        runs = [
+            core_pass(vertices, faces, block_pairs=64, max_work=budget, threads=t)
+            for t in (1, 2, 2)
+        ]
+        first = runs[0]
+        assert not first.complete and first.work <= budget and first.candidates < full.candidates
+        for other in runs[1:]:  # the same on any thread, every time
+            assert (other.count, other.candidates, other.work) == (
+                first.count,
+                first.candidates,
+                first.work,
+            )
+            assert other.pairs.tolist() == first.pairs.tolist()
+        # a lower bound: the pairs found are crossing pairs of the full answer
+        assert first.count <= full.count
+        assert set(map(tuple, first.pairs.tolist())) <= set(map(tuple, full.pairs.tolist()))
+        assert first.crossing is (True if first.count else None)
+
+
+def test_kept_pairs_are_capped_but_not_their_count() -> None:
+    vertices, faces = pile(120)
+    full = core_pass(vertices, faces)
+    capped = core_pass(vertices, faces, keep=25)
+    assert full.complete and capped.complete and capped.count == full.count > 25
+    assert len(capped.pairs) == 25
+    assert set(map(tuple, capped.pairs.tolist())) <= set(map(tuple, full.pairs.tolist()))
+    assert capped.pairs.tolist() == sorted(capped.pairs.tolist())
+
+
+def test_self_intersections_skips_faces_and_maps_indices_back() -> None:
+    from meshcol.collision.self_intersection import self_intersections
+
+    vertices, faces = fan(40, overlap=True)
+    skip = np.zeros(len(faces), bool)
+    skip[::2] = True
+    found = self_intersections(vertices, faces, skip)
+    expected, _ = two_step(vertices, faces)
+    keep = [p for p in expected.tolist() if not skip[p[0]] and not skip[p[1]]]
+    assert found.complete and found.pairs.tolist() == keep and found.count == len(keep)
+    undecided = self_intersections(vertices, faces, skip, max_work=0)
+    assert not undecided.complete and undecided.count == 0 and undecided.crossing is None

@@ -14,6 +14,7 @@
 /// out as a flat vector [i0, j0, i1, j1, ...] with i < j, sorted lexicographically.
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -42,6 +43,23 @@ std::vector<std::int64_t> sort_and_sweep(const double* lo, const double* hi, std
                                          int axis, int threads,
                                          const std::int64_t* groups = nullptr,
                                          std::int64_t max_pairs = -1, bool* exceeded = nullptr);
+
+/// Receives one block of candidate pairs from `sort_and_sweep_stream`: the block's place in
+/// the sweep's order, its pair keys ((i << 32) | j, i < j, in sweep order, not sorted) and
+/// their count. Returns false to stop the sweep. Called on the worker threads.
+using PairBlockConsumer = std::function<bool(std::int64_t block, const std::uint64_t* keys, std::int64_t count)>;
+
+/// The pairs `sort_and_sweep` finds (no groups, no cap), streamed instead of collected: the
+/// memory held is the boxes' entries and, per thread, one block of keys, never every pair.
+/// The rows of each grid cell are cut into blocks of at most about `block_pairs` candidate
+/// pairs (one row may hold more), numbered in cell and row order: the blocks depend on the
+/// boxes alone, not on `threads`. Each block is handed to `consume` once, on one of `threads`
+/// threads (<= 0: all cores), and blocks are handed out in increasing order, so the blocks
+/// consumed are always a prefix of the order: all of them unless a call returned false, after
+/// which no thread takes a new block (those under way finish). Returns the number of blocks.
+/// Validates the boxes first (std::invalid_argument).
+std::int64_t sort_and_sweep_stream(const double* lo, const double* hi, std::int64_t n, int axis,
+                                   int threads, std::int64_t block_pairs, const PairBlockConsumer& consume);
 
 /// Incremental sort and sweep for a moving scene: keeps the grid of the first step and the
 /// sorted order of every grid cell, so a step where boxes move a little costs an insertion

@@ -140,6 +140,15 @@ void triangle_penetration_points(const Vec3 a[3], const Vec3 b[3], TrianglePenet
 /// fallback, Shewchuk 1997); no tolerance is involved.
 bool triangles_cross(const Vec3 a[3], const Vec3 b[3]);
 
+/// Whether faces `fa` and `fb` (three vertex indices each into `vertices`, (n, 3)) of one mesh
+/// cross: false for a duplicate face (the same three indices), else `triangles_cross` of their
+/// corners, the same verdict on every pair, found faster when the faces share vertex indices
+/// (most of the candidates of a fan of faces around one vertex): a shared vertex lies exactly
+/// on the other face's plane without an orientation determinant (whose exact evaluation is
+/// the slow one), and coplanar faces sharing one vertex try only the edges through it as
+/// separating lines (the opposite edges have the shared vertex strictly inside).
+bool face_pair_crosses(const double* vertices, const std::int64_t* fa, const std::int64_t* fb);
+
 /// `triangles_cross` for each pair (pairs[2k], pairs[2k + 1]) of faces of one mesh, written to
 /// crossing[k] (1 or 0); a pair of faces on the same three vertex indices (a duplicate face)
 /// does not cross. `vertices` is (n, 3), `faces` (m, 3) indices into it, `pairs` (k, 2)
