@@ -244,7 +244,7 @@ Vec3 patch_point(const SurfacePatch& patch, std::int64_t i, std::int64_t j);
 /// blocks: a block of nodes whose centre node is at distance d, its nodes within r of it (the
 /// derivative bounds), cannot raise a maximum that is already above d + r (the distance is
 /// 1-Lipschitz), so it is skipped after one search (stopped at that floor); the others are
-/// halved, and blocks of at most 16 nodes measure every node as largest_distance does. The
+/// halved, and blocks of at most 4 nodes measure every node as largest_distance does. The
 /// result is the maximum over every node, as largest_distance of the same points; `point`
 /// counts the nodes patch after patch, row by row (i, then j), and names a node at the maximum.
 LargestDistanceOutput largest_distance_to_patches(const MeshBvh& mesh, const SurfacePatch* patches,
