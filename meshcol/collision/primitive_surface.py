@@ -18,7 +18,9 @@ point (its distance to a mesh) thus has its maximum over the samples within ``sp
 its maximum over the surface, never above it. The number of samples is about ``count`` for a
 box, about ``pi / 2`` times it for a sphere (a longitude grid crowds at the poles), at most a
 few times it for a flat ellipsoid; never a random draw: the same parameters give the same
-points.
+points. The patches are made here with numpy over all primitives at once (a few per
+primitive); their nodes are made by the core (``patch_point``), which measures a mesh's
+largest distance to them without making them all (:meth:`MeshSet.largest_distances_to_patches`).
 """
 
 from __future__ import annotations
