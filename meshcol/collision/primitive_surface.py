@@ -13,7 +13,8 @@ from a grid node along each parameter, so within ``h / 2 + h / 2 = h`` of a samp
     every point of the surface is within ``spacing = sqrt(area / count)`` of a sample
 
 (``area`` the primitive's surface area, Thomsen's approximation for an ellipsoid, which
-only sets the density: the bound holds whatever ``h`` is). A 1-Lipschitz function of the
+only sets the density: the bound holds whatever ``h`` is; ``h`` is the primitive's diameter
+over ``count`` when that is larger, for a needle or a primitive of no area, a segment). A 1-Lipschitz function of the
 point (its distance to a mesh) thus has its maximum over the samples within ``spacing`` of
 its maximum over the surface, never above it. The number of samples is about ``count`` for a
 box, about ``pi / 2`` times it for a sphere (a longitude grid crowds at the poles), at most a
@@ -110,7 +111,8 @@ def surface_patches(kind: np.ndarray, params: np.ndarray, count: int) -> Surface
     """
     kind = np.asarray(kind, dtype=np.int64).reshape(-1)
     p = np.asarray(params, dtype=np.float64).reshape(-1, 3)
-    spacing = np.sqrt(surface_areas(kind, p) / count)
+    # the diameter's share too: a primitive of no area (a segment) still gets nodes along it
+    spacing = np.maximum(np.sqrt(surface_areas(kind, p) / count), _diameters(kind, p) / count)
     patches = _patches(kind, p)
     step = spacing[patches["body"]]
     safe = np.where(step > 0, step, np.inf)  # a point primitive: one node a patch
@@ -142,6 +144,22 @@ def surface_samples(
     patches = surface_patches(kind, params, count)
     points, offsets = patches.points()
     return points, offsets, patches.spacing
+
+
+def _diameters(kind: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """The largest distance between two points of each primitive (0 for a kind of -1)."""
+    r, length = p[:, 0], p[:, 1]
+    return np.select(
+        [kind == SPHERE, kind == BOX, kind == CAPSULE, kind == CYLINDER, kind == ELLIPSOID],
+        [
+            2 * r,
+            np.linalg.norm(p, axis=1),
+            length + 2 * r,
+            np.hypot(length, 2 * r),
+            2 * p.max(axis=1),
+        ],
+        0.0,
+    )
 
 
 def _patches(kind: np.ndarray, p: np.ndarray) -> dict[str, np.ndarray]:

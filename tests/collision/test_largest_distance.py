@@ -120,7 +120,8 @@ def _on_surface(kind: int, p: np.ndarray, rng: np.random.Generator, n: int) -> n
 @pytest.mark.parametrize("kind", KINDS)
 def test_every_surface_point_is_within_the_spacing_of_a_sample(kind: int) -> None:
     rng = np.random.default_rng(kind)
-    for params in ([1.0, 2.0, 0.5], [0.3, 0.05, 1.7], [2.0, 1.0, 1.0], [0.02, 3.0, 0.2]):
+    cases = ([1.0, 2.0, 0.5], [0.3, 0.05, 1.7], [2.0, 1.0, 1.0], [0.02, 3.0, 0.2], [0, 3.0, 0])
+    for params in cases:  # the last a segment (no area) but for the sphere, a point
         p = np.array(params)
         for count in (50, 700):
             points, offsets, spacing = surface_samples([kind], [p], count)
