@@ -71,7 +71,8 @@ SHAPE_CHOICES = (*FIT_SHAPES, "auto")
 DEFAULT_VOLUME_TOLERANCE = 0.15
 
 #: Points sampled on a primitive's surface to measure its largest gap to the mesh (about:
-#: the grid's spacing is sqrt(area / GAP_SAMPLES), 1.6% of sqrt(area)).
+#: the grid's spacing is sqrt(area / GAP_SAMPLES), 1.6% of sqrt(area), or the diameter over
+#: GAP_SAMPLES when that is larger: a needle's).
 GAP_SAMPLES = 4096
 
 #: Bodies whose gaps are measured in one native call: their hierarchies (about 20 kB for a
