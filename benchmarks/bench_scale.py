@@ -42,6 +42,11 @@ Reader alone: .venv/bin/python benchmarks/bench_scale.py --reader --sizes 100000
      files, one thread, user and system CPU seconds of the call in a fresh process: the system
      part is the kernel's opening and reading, which a loaded machine inflates; with
      --baseline, alternated)
+Fit rows (session 39): .venv/bin/python benchmarks/bench_scale.py --baseline
+     ../main/.venv/bin/meshcol --repeat 3 --sizes 1000 10000 --fit box auto   (``meshcol fit
+     --shape S scene.json --report``, A/B alternated as below; the two sides' reports compared
+     field by field: how many max_gap values moved and by how much, and any other field that
+     differs)
 A/B: .venv/bin/python benchmarks/bench_scale.py --baseline ../main/.venv/bin/meshcol --repeat 3
      [--sizes 10000 100000] [--extras] [--primitives 10000] [--stages]   (runs alternated, each
      side first every other round; wall, CPU and peak RSS ranges; the two sides' last reports
@@ -310,6 +315,29 @@ def meshcol_check(
     return rc, seconds, rss, data
 
 
+def meshcol_fit(
+    folder: Path, shape: str, threads: int, meshcol: str, report_name: str
+) -> tuple[int, float, float, dict]:
+    """``meshcol fit --shape shape`` of the folder's manifest, its report written to
+    ``folder / report_name`` (the first run of each side is untimed: :func:`ab`)."""
+    report = folder / report_name
+    command = [meshcol, "fit", "--shape", shape, str(folder / "scene.json")]
+    rc, seconds, rss = timed([*command, "--report", str(report)])  # fit has no --threads
+    return rc, seconds, rss, json.loads(report.read_text()) if report.exists() else {}
+
+
+def fit_reports_change(folder: Path, sides: list[str]) -> str:
+    """How the sides' last fit reports differ: rows whose max_gap moved, the largest move,
+    and the other body fields that differ (none expected)."""
+    this, base = (json.loads((folder / f"report-{s}.json").read_text())["bodies"] for s in sides)
+    moved = [
+        abs(a["max_gap"] - b["max_gap"]) for a, b in zip(this, base) if a["max_gap"] != b["max_gap"]
+    ]
+    others = sum(1 for a, b in zip(this, base) for k in a if k != "max_gap" and a[k] != b.get(k))
+    largest = f", largest move {max(moved):.3g}" if moved else ""
+    return f"max_gap moved in {len(moved)} of {len(this)} rows{largest}; other fields differing: {others}"
+
+
 def warm_up(folder: Path, threads: int, meshcol: str | None = None) -> None:
     """One untimed ``meshcol check`` of the folder's manifest: the timed runs then find the
     package's bytecode compiled and the files in the page cache. The first run after a build
@@ -560,6 +588,13 @@ def main() -> None:
         help="another meshcol executable (e.g. main's .venv/bin/meshcol): its runs alternate "
         "with this one's, --repeat times each, and only meshcol is timed (A/B)",
     )
+    parser.add_argument(
+        "--fit",
+        nargs="+",
+        default=[],
+        choices=["sphere", "capsule", "box", "cylinder", "ellipsoid", "auto"],
+        help="with --baseline: meshcol fit --shape S of each unique-asset size, not check",
+    )
     args = parser.parse_args()
     if args.reader:
         reader_rows(args)
@@ -679,23 +714,34 @@ def ab(args: argparse.Namespace) -> None:
         for n in args.primitives
         for kind in args.primitive_kinds
     ]
+    if args.fit:
+        cases = [(f"fit {s}, {n} unique", scene_folder(n)) for n in args.sizes for s in args.fit]
     for case, folder in cases:
         figures: dict[str, list[tuple[float, ...]]] = {side: [] for side in sides}
-        for meshcol in sides.values():
-            warm_up(folder, args.threads, meshcol)
+        shape = case.split(",")[0].split()[1] if case.startswith("fit ") else None
+        for side, meshcol in sides.items():
+            if shape is None:
+                warm_up(folder, args.threads, meshcol)
+            else:
+                meshcol_fit(folder, shape, args.threads, meshcol, f"report-{side}.json")
         for round_ in range(args.repeat):
             # each side first every other round (the first run of a round may find the files
             # out of the page cache)
             order = list(sides.items())
             for side, meshcol in order[::-1] if round_ % 2 else order:
-                rc, seconds, rss, _ = meshcol_check(
-                    folder, args.threads, meshcol, f"report-{side}.json"
-                )
+                name = f"report-{side}.json"
+                if shape is None:
+                    rc, seconds, rss, _ = meshcol_check(folder, args.threads, meshcol, name)
+                else:
+                    rc, seconds, rss, _ = meshcol_fit(folder, shape, args.threads, meshcol, name)
                 if rc != 0:  # --fail-on none: anything else is a crash (a traceback is 1)
-                    raise SystemExit(f"{side} meshcol check exited {rc} on {folder}")
+                    raise SystemExit(f"{side} meshcol {case} exited {rc} on {folder}")
                 figures[side].append((seconds, LAST_CPU[0], rss, LAST_CPU[1]))
         show(case, figures)
-        print(f"{'':>24} reports: {same_reports(folder, list(sides))}")
+        if shape is None:
+            print(f"{'':>24} reports: {same_reports(folder, list(sides))}")
+        else:
+            print(f"{'':>24} reports: {fit_reports_change(folder, list(sides))}")
         if args.stages and "unique" in case:  # CPU seconds per stage, one run a side
             for side, meshcol in sides.items():
                 print(f"{'':>24} {side} stages:")

@@ -400,6 +400,16 @@ class MeshBvhSet:
         Exact distances (N,), closest surface points (N, 3) and faces (N,) of points (N, 3) to mesh i (its local frame); NaN and -1 for a non-finite point or an invalid mesh.
         """
 
+    def largest_distance_batch(self, meshes: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], point_offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], threads: int = 0) -> dict:
+        """
+        Item k: the largest distance from points[point_offsets[k]:point_offsets[k + 1]] (mesh meshes[k]'s local frame) to that mesh's surface, the maximum of closest_points' distances bit for bit, by a search pruned at the largest found: {distance, point (index in the item's block), status}; items on threads.
+        """
+
+    def largest_distance_to_patches_batch(self, meshes: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], patch_map: Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C', device='cpu', writable=False)], patch_nodes: Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', device='cpu', writable=False)], patch_numbers: Annotated[NDArray[numpy.float64], dict(shape=(None, 13), order='C', device='cpu', writable=False)], patch_offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], threads: int = 0) -> dict:
+        """
+        Item k: the largest distance from the grid nodes of patches [patch_offsets[k], patch_offsets[k + 1]) (SurfacePatch: map (P,) int8, nodes (P, 2) n_u, n_v, numbers (P, 13) g[9], v0, v1, lu, lv) to mesh meshes[k], the maximum over every node by a search that skips the blocks that cannot raise it: {distance, point (the node, counted patch after patch), status}; items on threads.
+        """
+
     def set_poses(self, poses: Annotated[NDArray[numpy.float64], dict(shape=(None, 4, 4), order='C', device='cpu', writable=False)]) -> None:
         """
         Sets the default poses (M, 4, 4) that queries with poses=None use (read and checked for rigidity once).
@@ -434,6 +444,11 @@ class MeshBvhSet:
         """
         Mesh-pair surface intersection tests as result_type(intersecting, status); None when poses is not None or a C-contiguous (M, 4, 4) float64 array, or pairs not a C-contiguous (P, 2) int64 array or a non-empty list of (i, j) Python ints (convert them and call again).
         """
+
+def patch_points(patch_map: Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C', device='cpu', writable=False)], patch_nodes: Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', device='cpu', writable=False)], patch_numbers: Annotated[NDArray[numpy.float64], dict(shape=(None, 13), order='C', device='cpu', writable=False)]) -> Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')]:
+    """
+    The grid nodes (P, 3) of surface patches (as largest_distance_to_patches_batch takes them), patch after patch, row by row (i, then j).
+    """
 
 def triangle_distance_batch(a: Annotated[NDArray[numpy.float64], dict(shape=(None, 3, 3), order='C', device='cpu', writable=False)], b: Annotated[NDArray[numpy.float64], dict(shape=(None, 3, 3), order='C', device='cpu', writable=False)]) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')]]:
     """

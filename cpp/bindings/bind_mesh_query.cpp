@@ -384,6 +384,99 @@ nb::dict ray_cast_batch(const MeshBvhSet& set, Index64 meshes, Points origins, P
     return columns.dict();
 }
 
+const auto kLargestColumns = std::make_tuple(
+    field("distance", &meshcol::LargestDistanceOutput::distance), field("point", &meshcol::LargestDistanceOutput::point),
+    field_as<std::int8_t>("status", &meshcol::LargestDistanceOutput::status));
+
+// Item k: the largest distance from points[point_offsets[k]:point_offsets[k + 1]] (mesh
+// meshes[k]'s local frame) to that mesh's surface; `point` is the index into the item's block.
+nb::dict largest_distance_batch(const MeshBvhSet& set, Index64 meshes, Points points, Index64 point_offsets,
+                                int threads) {
+    const size_t n = meshes.shape(0), m = set.meshes.size();
+    if (point_offsets.shape(0) != n + 1)
+        throw std::invalid_argument("point_offsets must have one more entry than meshes, got " +
+                                    std::to_string(point_offsets.shape(0)) + " for " + std::to_string(n));
+    const std::int64_t* index = meshes.data();
+    const std::int64_t* offsets = point_offsets.data();
+    const auto total = static_cast<std::int64_t>(points.shape(0));
+    if (offsets[0] != 0 || offsets[n] != total)
+        throw std::invalid_argument("point_offsets must run from 0 to the number of points, " + std::to_string(total));
+    for (size_t k = 0; k < n; ++k) {
+        if (index[k] < 0 || index[k] >= static_cast<std::int64_t>(m))
+            throw std::invalid_argument("meshes: index " + std::to_string(index[k]) + " out of range for " +
+                                        std::to_string(m) + " meshes");
+        if (offsets[k + 1] < offsets[k]) throw std::invalid_argument("point_offsets must not decrease");
+    }
+    const auto* p = reinterpret_cast<const Vec3*>(points.data());
+    auto columns = columns_of<meshcol::LargestDistanceOutput>(n, kLargestColumns);
+    run_items(static_cast<long long>(n), threads, meshcol::defaults::mesh_min_pairs_per_thread, columns,
+              [&](long long k) {
+                  return meshcol::largest_distance(set.meshes[static_cast<size_t>(index[k])], p + offsets[k],
+                                                   offsets[k + 1] - offsets[k]);
+              });
+    return columns.dict();
+}
+
+using PatchNumbers = In<double, -1, 13>;  // g[9], v0, v1, lu, lv (SurfacePatch)
+
+// The patches of arrays (SurfacePatch's fields), checked: a known map, at least one node.
+std::vector<meshcol::SurfacePatch> read_patches(Kinds map, Pairs nodes, PatchNumbers numbers) {
+    const size_t n = map.shape(0);
+    if (nodes.shape(0) != n || numbers.shape(0) != n)
+        throw std::invalid_argument("patch_map, patch_nodes and patch_numbers must have one row per patch, got " +
+                                    std::to_string(n) + ", " + std::to_string(nodes.shape(0)) + " and " +
+                                    std::to_string(numbers.shape(0)));
+    std::vector<meshcol::SurfacePatch> out(n);
+    const double* x = numbers.data();
+    for (size_t k = 0; k < n; ++k) {
+        meshcol::SurfacePatch& p = out[k];
+        if (map.data()[k] < 0 || map.data()[k] > 3)
+            throw std::invalid_argument("patch_map: unknown map " + std::to_string(map.data()[k]));
+        p.map = static_cast<meshcol::PatchMap>(map.data()[k]);
+        p.n_u = nodes.data()[2 * k];
+        p.n_v = nodes.data()[2 * k + 1];
+        if (p.n_u < 1 || p.n_v < 1) throw std::invalid_argument("patch_nodes must be >= 1");
+        const int polar = static_cast<int>(x[13 * k + 5]);
+        if (p.map == meshcol::PatchMap::SPHEROID && (polar < 0 || polar > 2))
+            throw std::invalid_argument("patch_numbers: a spheroid's polar axis must be 0, 1 or 2");
+        std::copy(x + 13 * k, x + 13 * k + 9, p.g);
+        p.v0 = x[13 * k + 9];
+        p.v1 = x[13 * k + 10];
+        p.lu = x[13 * k + 11];
+        p.lv = x[13 * k + 12];
+    }
+    return out;
+}
+
+// Item k: largest_distance_to_patches of patches[patch_offsets[k]:patch_offsets[k + 1]] to
+// mesh meshes[k].
+nb::dict largest_distance_to_patches_batch(const MeshBvhSet& set, Index64 meshes, Kinds patch_map, Pairs patch_nodes,
+                                           PatchNumbers patch_numbers, Index64 patch_offsets, int threads) {
+    const size_t n = meshes.shape(0), m = set.meshes.size();
+    const std::vector<meshcol::SurfacePatch> patches = read_patches(patch_map, patch_nodes, patch_numbers);
+    if (patch_offsets.shape(0) != n + 1)
+        throw std::invalid_argument("patch_offsets must have one more entry than meshes, got " +
+                                    std::to_string(patch_offsets.shape(0)) + " for " + std::to_string(n));
+    const std::int64_t* index = meshes.data();
+    const std::int64_t* offsets = patch_offsets.data();
+    if (offsets[0] != 0 || offsets[n] != static_cast<std::int64_t>(patches.size()))
+        throw std::invalid_argument("patch_offsets must run from 0 to the number of patches, " +
+                                    std::to_string(patches.size()));
+    for (size_t k = 0; k < n; ++k) {
+        if (index[k] < 0 || index[k] >= static_cast<std::int64_t>(m))
+            throw std::invalid_argument("meshes: index " + std::to_string(index[k]) + " out of range for " +
+                                        std::to_string(m) + " meshes");
+        if (offsets[k + 1] < offsets[k]) throw std::invalid_argument("patch_offsets must not decrease");
+    }
+    auto columns = columns_of<meshcol::LargestDistanceOutput>(n, kLargestColumns);
+    run_items(static_cast<long long>(n), threads, meshcol::defaults::mesh_min_pairs_per_thread, columns,
+              [&](long long k) {
+                  return meshcol::largest_distance_to_patches(set.meshes[static_cast<size_t>(index[k])],
+                                                              patches.data() + offsets[k], offsets[k + 1] - offsets[k]);
+              });
+    return columns.dict();
+}
+
 // Whether the surfaces of posed mesh pairs intersect, as a `result_type(intersecting, status)`
 // (meshcol.collision.mesh_query.MeshIntersectsBatch). `poses` (None: the set's defaults) and
 // `pairs` are taken as plain objects and read in place when they are already in the core's
@@ -715,6 +808,19 @@ void bind_mesh_query(nb::module_& m) {
         }, "i"_a, "points"_a, "threads"_a = 0,
            "Exact distances (N,), closest surface points (N, 3) and faces (N,) of points (N, 3) "
            "to mesh i (its local frame); NaN and -1 for a non-finite point or an invalid mesh.")
+        .def("largest_distance_batch", &largest_distance_batch, "meshes"_a, "points"_a, "point_offsets"_a,
+             "threads"_a = 0,
+             "Item k: the largest distance from points[point_offsets[k]:point_offsets[k + 1]] (mesh "
+             "meshes[k]'s local frame) to that mesh's surface, the maximum of closest_points' "
+             "distances bit for bit, by a search pruned at the largest found: {distance, point "
+             "(index in the item's block), status}; items on threads.")
+        .def("largest_distance_to_patches_batch", &largest_distance_to_patches_batch, "meshes"_a, "patch_map"_a,
+             "patch_nodes"_a, "patch_numbers"_a, "patch_offsets"_a, "threads"_a = 0,
+             "Item k: the largest distance from the grid nodes of patches "
+             "[patch_offsets[k], patch_offsets[k + 1]) (SurfacePatch: map (P,) int8, nodes (P, 2) "
+             "n_u, n_v, numbers (P, 13) g[9], v0, v1, lu, lv) to mesh meshes[k], the maximum over "
+             "every node by a search that skips the blocks that cannot raise it: {distance, point "
+             "(the node, counted patch after patch), status}; items on threads.")
         .def("set_poses", &set_poses, "poses"_a,
              "Sets the default poses (M, 4, 4) that queries with poses=None use (read and "
              "checked for rigidity once).")
@@ -752,6 +858,26 @@ void bind_mesh_query(nb::module_& m) {
              "when poses is not None or a C-contiguous (M, 4, 4) float64 array, or pairs not a "
              "C-contiguous (P, 2) int64 array or a non-empty list of (i, j) Python ints "
              "(convert them and call again).");
+
+    m.def("patch_points", [](Kinds patch_map, Pairs patch_nodes, PatchNumbers patch_numbers) {
+        const std::vector<meshcol::SurfacePatch> patches = read_patches(patch_map, patch_nodes, patch_numbers);
+        size_t total = 0;
+        for (const auto& p : patches) total += static_cast<size_t>(p.n_u * p.n_v);
+        auto arr = new_array<Out<double, -1, 3>>({total, 3});
+        double* out = arr.data();
+        {
+            nb::gil_scoped_release release;
+            for (const auto& p : patches)
+                for (std::int64_t i = 0; i < p.n_u; ++i)
+                    for (std::int64_t j = 0; j < p.n_v; ++j) {
+                        const Vec3 q = meshcol::patch_point(p, i, j);
+                        for (int c = 0; c < 3; ++c) *out++ = q[c];
+                    }
+        }
+        return arr;
+    }, "patch_map"_a, "patch_nodes"_a, "patch_numbers"_a,
+       "The grid nodes (P, 3) of surface patches (as largest_distance_to_patches_batch takes them), "
+       "patch after patch, row by row (i, then j).");
 
     m.def("triangle_distance_batch", [](Triangles a, Triangles b) {
         if (a.shape(0) != b.shape(0))

@@ -365,6 +365,50 @@ class MeshSet:
         distances, closest, faces = self._handle.closest_points(int(i), points, int(threads))
         return distances, closest, faces
 
+    def largest_distances(
+        self, points: Any, point_offsets: Any, meshes: Any = None, *, threads: int = 0
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Per item k, the largest distance from its block of points to its mesh's surface.
+
+        ``points`` (P, 3): item ``k``'s are ``points[point_offsets[k]:point_offsets[k + 1]]``
+        (offsets (K + 1,) from 0 to P), in the local frame of mesh ``meshes[k]`` (``meshes``
+        (K,), default one item per mesh); ``threads`` over the items, 0 all cores.
+
+        Returns ``(distances (K,), point (K,) int64, status (K,) int8)``: the largest of the
+        block's :meth:`closest_points` distances bit for bit (non-finite points skipped),
+        NaN for an invalid mesh (``Status.INVALID_INPUT``) or no finite point; the index in
+        the block of a point at it (-1 where NaN). The max of the min in one native call:
+        each point's branch and bound stops at the first triangle within the largest
+        distance found so far for its item (it cannot raise it); a point beyond it runs the
+        whole search, so the maximum is the unpruned one exactly.
+        """
+        points = np.ascontiguousarray(as_points(points, "points"))
+        offsets = np.ascontiguousarray(point_offsets, dtype=np.int64).reshape(-1)
+        index = _items(meshes, len(offsets) - 1)
+        out = self._handle.largest_distance_batch(index, points, offsets, int(threads))
+        return out["distance"], out["point"], out["status"]
+
+    def largest_distances_to_patches(
+        self, patches: Any, meshes: Any = None, *, threads: int = 0
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`largest_distances` of the grid nodes of surface patches
+        (:class:`meshcol.collision.primitive_surface.SurfacePatches`, item ``k`` its primitive
+        ``k``'s), without making the points: a block of nodes whose centre is at distance d,
+        every node within r of it, is skipped once the maximum is above d + r. The same
+        maximum as :meth:`largest_distances` of ``patches.points()``; ``point`` a node at it.
+        """
+        index = _items(meshes, len(patches.offsets) - 1)
+        out = self._handle.largest_distance_to_patches_batch(
+            index, patches.map, patches.nodes, patches.numbers, patches.offsets, int(threads)
+        )
+        return out["distance"], out["point"], out["status"]
+
+
+def _items(meshes: Any, count: int) -> np.ndarray:
+    """The mesh of each of ``count`` items: ``meshes`` as int64, or one item per mesh."""
+    index = np.arange(count) if meshes is None else meshes
+    return np.ascontiguousarray(index, dtype=np.int64).reshape(-1)
+
 
 @dataclass(frozen=True, eq=False)
 class MeshDistanceBatch:

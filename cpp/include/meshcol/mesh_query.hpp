@@ -195,6 +195,61 @@ struct PointDistanceOutput {
 /// A non-finite point or an invalid mesh gives NaN.
 PointDistanceOutput closest_point(const MeshBvh& mesh, const Vec3& point);
 
+/// Result of `largest_distance`.
+struct LargestDistanceOutput {
+    /// >= 0: the largest over the finite points of their distance to the surface, the same
+    /// bits as the largest `closest_point(...).distance`; NaN when the mesh is invalid or no
+    /// point is finite
+    double distance = 0.0;
+    std::int64_t point = -1;  ///< index of the first point at that distance, -1 when NaN
+    Status status = Status::NOT_RUN;  ///< CONVERGED; INVALID_INPUT for an invalid mesh
+};
+
+/// The largest distance from `count` points (mesh local frame) to the mesh's surface: the
+/// maximum of the minima (a one-sided Hausdorff distance from the points to the surface).
+/// Each point runs closest_point's branch and bound, stopped as soon as it finds a triangle
+/// within the largest distance found so far: that point cannot raise the maximum, and a
+/// point that does raise it ran the whole search, so the result is the maximum of
+/// closest_point's distances bit for bit (mesh_detail::distance_beyond). Non-finite points
+/// are skipped.
+LargestDistanceOutput largest_distance(const MeshBvh& mesh, const Vec3* points, std::int64_t count);
+
+/// How a surface patch maps its parameters (u, v) to a point, in the primitive's frame.
+enum class PatchMap : std::int8_t {
+    FLAT = 0,      ///< origin + u edge_u + v edge_v, u and v in [0, 1] (a box's face)
+    SPHEROID = 1,  ///< (a sin v cos u, b sin v sin u, z0 + c cos v), u a longitude (a ball, part of one)
+    SIDE = 2,      ///< (a cos u, b sin u, c v) (a capsule's or cylinder's side, v in [-1, 1])
+    DISK = 3,      ///< (a v cos u, b v sin u, z0) (a cylinder's end, v in [0, 1])
+};
+
+/// A patch of a primitive's surface sampled on a grid of n_u x n_v nodes: u at i / (n_u - 1)
+/// (FLAT) or the longitude 2 pi i / n_u (round, periodic), v at v0 + (v1 - v0) j / (n_v - 1).
+/// |df/du| <= lu and |df/dv| <= lv over the patch, so two nodes (i, j), (i', j') are at most
+/// lu |u - u'| + lv |v - v'| apart, which bounds how far a distance can rise within a block.
+struct SurfacePatch {
+    PatchMap map = PatchMap::FLAT;
+    std::int64_t n_u = 1, n_v = 1;  ///< nodes along u and v, >= 1
+    /// FLAT: origin (0-2), edge_u (3-5), edge_v (6-8). Round: a, b, c, z0 (0-3) and, for a
+    /// SPHEROID, the primitive's axis its map's z is (5: 2 unless a turned ellipsoid's; the
+    /// map's x is the axis after it, its y the one after that)
+    double g[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+    double v0 = 0.0, v1 = 1.0;
+    double lu = 0.0, lv = 0.0;  ///< the derivative bounds
+};
+
+/// Node (i, j) of a patch (0 <= i < n_u, 0 <= j < n_v), the primitive's frame.
+Vec3 patch_point(const SurfacePatch& patch, std::int64_t i, std::int64_t j);
+
+/// `largest_distance` of the nodes of `count` patches (their grid points, patch_point), by
+/// blocks: a block of nodes whose centre node is at distance d, its nodes within r of it (the
+/// derivative bounds), cannot raise a maximum that is already above d + r (the distance is
+/// 1-Lipschitz), so it is skipped after one search (stopped at that floor); the others are
+/// halved, and blocks of at most 4 nodes measure every node as largest_distance does. The
+/// result is the maximum over every node, as largest_distance of the same points; `point`
+/// counts the nodes patch after patch, row by row (i, then j), and names a node at the maximum.
+LargestDistanceOutput largest_distance_to_patches(const MeshBvh& mesh, const SurfacePatch* patches,
+                                                  std::int64_t count);
+
 /// A ray against a posed mesh.
 struct MeshRayInput {
     const MeshBvh* mesh = nullptr;  ///< the mesh (local frame)
