@@ -123,6 +123,8 @@ class defaults:
 
     mesh_depth_max_work: int = 200000000
 
+    mesh_depth_max_near_pairs: int = 24000000
+
     mesh_contacts_max_work: int = 200000000
 
     flat_relative_tolerance: float = 1e-09

@@ -207,7 +207,10 @@ MeshDepthOutput mesh_penetration_depth(const MeshDistanceInput& input) {
     const Relative rel(input.pose_a, input.pose_b, *input.a, *input.b);  // b's frame -> a's frame
     TriangleMarks marks_a, marks_b;
     std::vector<CrossingPair> crossing_pairs;
-    mark_crossing_triangles(a, b, rel, marks_a, marks_b, crossing_pairs);
+    if (!mark_crossing_triangles(a, b, rel, marks_a, marks_b, crossing_pairs)) {
+        out.status = Status::MAX_ITERATIONS;  // too many near pairs to mark: nothing decided
+        return out;
+    }
 
     // The points of a mesh whose other mesh is closed: regions and branch and bound.
     out.status = Status::CONVERGED;

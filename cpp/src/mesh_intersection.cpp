@@ -910,8 +910,9 @@ bool first_crossing(const MeshBvh& a, const MeshBvh& b, const Relative& rel, std
 // decided a region at a time (on the benchmark's touching family 1-8% fewer inside tests,
 // on panda link3's near poses 175 -> 19). It runs by the contacts' faster descents made to keep its
 // order (for_each_near_pair_in_order): the same crossing pairs in the same order.
-void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative& rel, TriangleMarks& in_a,
-                             TriangleMarks& in_b, std::vector<CrossingPair>& pairs, MarkDescent descent) {
+bool mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative& rel, TriangleMarks& in_a,
+                             TriangleMarks& in_b, std::vector<CrossingPair>& pairs, MarkDescent descent,
+                             long long max_near_pairs) {
     pairs.clear();
     for (auto [marks, mesh] : {std::make_pair(&in_a, &a), std::make_pair(&in_b, &b)}) {
         marks->crossing.assign(static_cast<size_t>(mesh->triangle_count()), 0);
@@ -930,8 +931,11 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
         return n;
     };
     std::vector<std::pair<std::int32_t, std::int32_t>> near_pairs;
+    bool capped = false;
     const auto mark = [&](std::int32_t i, std::int32_t j, const Vec3* ta, const Vec3* tb) {
         if (planes_separate<true>(a, i, ta, b, j, tb, rel)) return false;
+        // A stop the descents obey (a visit that returns true ends them).
+        if (static_cast<long long>(near_pairs.size()) >= max_near_pairs) return capped = true;
         const auto si = static_cast<size_t>(i), sj = static_cast<size_t>(j);
         TriangleMarks::Near& near_a = entry(in_a, si);
         TriangleMarks::Near& near_b = entry(in_b, sj);
@@ -949,8 +953,10 @@ void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative&
     } else {
         for_each_near_pair_in_order(a, b, rel, mark);
     }
+    if (capped) return false;
     group_near_pairs(near_pairs, 0, in_a);
     group_near_pairs(near_pairs, 1, in_b);
+    return true;
 }
 
 // The descent of mesh_intersects to the end for mesh_contacts: the same box tests, plane

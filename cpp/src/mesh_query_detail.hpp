@@ -342,9 +342,11 @@ enum class MarkDescent { kFast, kPlain };
 /// order, and the marks of both meshes' triangles (mesh_intersection.cpp). Both forms of
 /// `descent` give the same crossing pairs in the same order, the same crossing marks and
 /// partners; their near triangles differ only among pairs farther apart than rel.slack.
-void mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative& rel, TriangleMarks& in_a,
+/// False, the marks unfinished, when more than `max_near_pairs` triangle pairs are near.
+bool mark_crossing_triangles(const MeshBvh& a, const MeshBvh& b, const Relative& rel, TriangleMarks& in_a,
                              TriangleMarks& in_b, std::vector<CrossingPair>& pairs,
-                             MarkDescent descent = MarkDescent::kFast);
+                             MarkDescent descent = MarkDescent::kFast,
+                             long long max_near_pairs = defaults::mesh_depth_max_near_pairs);
 
 /// Whether two triangles (one frame) share a point: triangles_intersect(ta, tb, nullptr), the
 /// same exact verdict, decided by the order of the two planes' crossings along their common

@@ -838,6 +838,27 @@ TEST_CASE("mesh query: a turned pair's refitted descent lists every crossing pai
     CHECK(crossing_pairs(base, top, flush, std::numeric_limits<long long>::max()).first == expected);
 }
 
+TEST_CASE("mesh query: the depth's marks stop past their cap of near pairs") {
+    // Flush faces: every gap between the two boxes' facing triangles is exactly 0, so their
+    // pairs are near. Marked in full, `others` holds each near pair once per side; a cap of
+    // exactly that many keeps the marks, one fewer stops them (and the depth query then
+    // answers MAX_ITERATIONS, mesh_depth.cpp).
+    const MeshBvh base = fixtures::box_mesh({0, 0, 0}, {2, 2, 1}).bvh();
+    const MeshBvh top = fixtures::box_mesh({0.25, 0.5, 1}, {1.75, 1.5, 2}).bvh();
+    const mesh_detail::Relative rel(at(0, 0, 0), at(0, 0, 0), base, top);
+    for (const auto descent : {mesh_detail::MarkDescent::kFast, mesh_detail::MarkDescent::kPlain}) {
+        mesh_detail::TriangleMarks in_a, in_b;
+        std::vector<mesh_detail::CrossingPair> pairs;
+        REQUIRE(mesh_detail::mark_crossing_triangles(base, top, rel, in_a, in_b, pairs, descent));
+        const auto near = static_cast<long long>(in_a.others.size());
+        REQUIRE(near >= 2);
+        CHECK_EQ(static_cast<long long>(in_b.others.size()), near);
+        CHECK(mesh_detail::mark_crossing_triangles(base, top, rel, in_a, in_b, pairs, descent, near));
+        CHECK(!mesh_detail::mark_crossing_triangles(base, top, rel, in_a, in_b, pairs, descent, near - 1));
+        CHECK(!mesh_detail::mark_crossing_triangles(base, top, rel, in_a, in_b, pairs, descent, 0));
+    }
+}
+
 TEST_CASE("mesh query: the depth's marks by the fast descents are the plain descent's") {
     // mark_crossing_triangles finds its pairs by the contacts' descents (axis-aligned boxes
     // under a translation, refitted ones for a dense turned pair) and puts them in the plain

@@ -624,8 +624,10 @@ class MeshDepthBatch:
         nearer to it than that point is to the surface). Otherwise one per point.
     status : (P,) int8
         :class:`meshcol.types.Status`: ``CONVERGED``; ``MAX_ITERATIONS`` when the pair used
-        ``defaults.mesh_depth_max_work`` triangle visits (depth is then that of the points
-        decided, still a lower bound); ``INVALID_INPUT`` as in :class:`MeshDistanceBatch`.
+        ``defaults.mesh_depth_max_work`` triangle visits, or has more triangle pairs within
+        rounding of each other than ``defaults.mesh_depth_max_near_pairs`` (depth is then
+        that of the points decided, still a lower bound: 0 for the second);
+        ``INVALID_INPUT`` as in :class:`MeshDistanceBatch`.
     """
 
     depth: np.ndarray

@@ -333,3 +333,28 @@ def test_sample_ball_lowered_onto_the_bowl_is_contact(offset: float) -> None:
     (touching,) = check_scene(Scene(tuple(bodies)), CheckOptions(collider="mesh")).pairs
     assert touching["status"] == "contact", touching
     assert touching["depth"] <= max(0.0, -offset) + 1e-12
+
+
+@pytest.mark.slow
+def test_fans_stacked_face_to_face_stop_at_the_near_pair_cap() -> None:
+    """Two cylinders of 5,000 sections stacked cap to cap: every triangle of one cap touches
+    every triangle of the other at the centre, 25 million near pairs, past the core's
+    ``mesh_depth_max_near_pairs`` (24 million; 8,000 sections took 1.6 GB and 21 s). The depth
+    is MAX_ITERATIONS with depth 0 (nothing decided: still a lower bound), and ``check``
+    reports the pair as a failed query, not a clean contact; 1,000 sections, 1e6 near pairs,
+    are decided: a contact, depth 0."""
+    from meshcol._native import core
+
+    assert core.defaults.mesh_depth_max_near_pairs == 24_000_000
+    for sections, status in ((5000, Status.MAX_ITERATIONS), (1000, Status.CONVERGED)):
+        cylinder = trimesh.creation.cylinder(radius=1.0, height=1.0, sections=sections)
+        meshes = MeshSet.from_arrays([cylinder, cylinder])
+        poses = np.stack([np.eye(4), np.eye(4)])
+        poses[1, 2, 3] = 1.0
+        r = mesh_penetration_depth_batch(meshes, poses, [[0, 1]])
+        assert r.status[0] == status and r.depth[0] == 0.0
+        v, f = np.asarray(cylinder.vertices), np.asarray(cylinder.faces)
+        scene = Scene(tuple(Body(name, None, v, f, pose) for name, pose in zip("ab", poses)))
+        (pair,) = check_scene(scene, CheckOptions(collider="mesh")).pairs
+        assert pair["query_failed"] == (status == Status.MAX_ITERATIONS), pair
+        assert pair["status"] == "contact" and pair["distance"] == 0.0, pair
