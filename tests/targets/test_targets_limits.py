@@ -132,6 +132,7 @@ def test_an_oblong_ratio_four_vertices_cannot_meet_is_left_unmet_not_inflated() 
     assert fit_hull(sphere, {"max_hull_vertices": 4}).met  # the budget alone is met
 
 
+@pytest.mark.slow
 def test_widths_by_blocks_are_the_full_products_and_bounded_in_memory(monkeypatch) -> None:
     """The thickness comes from every polygon normal's width, made a block of normals at a
     time: the same bits as the whole product, and a hull of 6,000 vertices on a sphere (about
