@@ -42,6 +42,16 @@ f 4 1 5
 f 4 5 8
 """
 
+
+def centred_cube_obj(half: float) -> str:
+    """The cube [-half, half]^3 as OBJ text (no final newline), closed and wound outward."""
+    return "\n".join(
+        [f"v {x} {y} {z}" for x in (-half, half) for y in (-half, half) for z in (-half, half)]
+        + ["f 1 2 4", "f 1 4 3", "f 5 7 8", "f 5 8 6", "f 1 5 6", "f 1 6 2"]
+        + ["f 3 4 8", "f 3 8 7", "f 1 3 7", "f 1 7 5", "f 2 6 8", "f 2 8 4"]
+    )
+
+
 #: The tests mirror the package, a folder a room; the shared helpers (oracles.py,
 #: strategies.py, ...) are here. A test imports a helper or another test module (its fixtures
 #: and inputs: test_executor, test_cli_hull) by name: every folder is on sys.path, whichever

@@ -10,27 +10,12 @@ from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
+from conftest import centred_cube_obj
 
 from meshcol.analysis.fit import GAP_SAMPLES
 from meshcol.cli import main
 
-CUBE_OBJ = "\n".join(
-    [f"v {x} {y} {z}" for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
-    + [
-        "f 1 2 4",
-        "f 1 4 3",
-        "f 5 7 8",
-        "f 5 8 6",
-        "f 1 5 6",
-        "f 1 6 2",
-        "f 3 4 8",
-        "f 3 8 7",
-        "f 1 3 7",
-        "f 1 7 5",
-        "f 2 6 8",
-        "f 2 8 4",
-    ]
-)
+CUBE_OBJ = centred_cube_obj(1)
 
 
 def _rows(tmp_path: Path, shape: str) -> dict[str, dict]:

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from click.testing import CliRunner
+from conftest import centred_cube_obj
 from wild_collections import collection_file
 
 from meshcol.cli import main
@@ -24,23 +25,7 @@ from meshcol.io.robot import RobotOptions, load_robot
 
 pytest.importorskip("yourdfpy", reason="URDF reading needs yourdfpy (pip install meshcol[robots])")
 
-CUBE_OBJ = "\n".join(
-    [f"v {x} {y} {z}" for x in (-0.05, 0.05) for y in (-0.05, 0.05) for z in (-0.05, 0.05)]
-    + [
-        "f 1 2 4",
-        "f 1 4 3",
-        "f 5 7 8",
-        "f 5 8 6",
-        "f 1 5 6",
-        "f 1 6 2",
-        "f 3 4 8",
-        "f 3 8 7",
-        "f 1 3 7",
-        "f 1 7 5",
-        "f 2 6 8",
-        "f 2 8 4",
-    ]
-)
+CUBE_OBJ = centred_cube_obj(0.05)
 
 
 def urdf(body: str, name: str = "bot") -> str:
