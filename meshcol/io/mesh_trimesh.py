@@ -37,6 +37,7 @@ PARSE_ERRORS = (
     EOFError,
     OverflowError,
     NotImplementedError,
+    UnboundLocalError,  # trimesh 5.2's PLY reader, on a face element it cannot read
     struct.error,
     zlib.error,
 )
