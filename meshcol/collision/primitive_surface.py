@@ -14,8 +14,8 @@ from a grid node along each parameter, so within ``h / 2 + h / 2 = h`` of a samp
 
 (``area`` the primitive's surface area, Thomsen's approximation for an ellipsoid, which
 only sets the density: the bound holds whatever ``h`` is; ``h`` is the primitive's diameter
-over ``count`` when that is larger, for a needle or a primitive of no area, a segment). A 1-Lipschitz function of the
-point (its distance to a mesh) thus has its maximum over the samples within ``spacing`` of
+over ``count`` when that is larger, for a needle or a primitive of no area, a segment). A
+1-Lipschitz function of the point (its distance to a mesh) thus has its maximum over the samples within ``spacing`` of
 its maximum over the surface, never above it. The number of samples is about ``count`` for a
 box, about ``pi / 2`` times it for a sphere (a longitude grid crowds at the poles), at most a
 few times it for a flat ellipsoid; never a random draw: the same parameters give the same

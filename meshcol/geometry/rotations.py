@@ -1,5 +1,5 @@
-"""Rotation matrices to the parameters description formats write: quaternions and URDF's
-roll-pitch-yaw."""
+"""Rotation matrices to and from the parameters description formats use: quaternions, URDF's
+roll-pitch-yaw, an angle about an axis."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-__all__ = ["quaternion_from_matrix", "rpy_from_matrix"]
+__all__ = ["axis_angle_matrix", "quaternion_from_matrix", "rpy_from_matrix"]
 
 
 def quaternion_from_matrix(rotation: np.ndarray) -> list[float]:
@@ -48,3 +48,15 @@ def rpy_from_matrix(rotation: np.ndarray) -> list[float]:
         roll = 0.0
         yaw = math.atan2(-float(m[0, 1]), float(m[1, 1]))
     return [roll, pitch, yaw]
+
+
+def axis_angle_matrix(axis: np.ndarray | list[float], radians: float) -> np.ndarray:
+    """The (3, 3) rotation of ``radians`` about ``axis`` (any length; a zero or non-finite
+    axis: no rotation), Rodrigues' formula."""
+    axis_array = np.asarray(axis, dtype=np.float64)
+    norm = float(np.linalg.norm(axis_array))
+    if not norm > 0.0 or not math.isfinite(norm):
+        return np.eye(3)
+    x, y, z = axis_array / norm
+    cross = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+    return np.eye(3) + math.sin(radians) * cross + (1.0 - math.cos(radians)) * (cross @ cross)

@@ -35,6 +35,7 @@ from xml.parsers import expat
 import numpy as np
 
 from meshcol.errors import InvalidMeshError
+from meshcol.geometry.rotations import axis_angle_matrix
 from meshcol.io.mesh_trimesh import PARSE_ERRORS
 from meshcol.io.safe_read import read_input
 
@@ -259,24 +260,12 @@ def _node_matrix(node: Any) -> np.ndarray:
         elif isinstance(transform, ScaleTransform):
             step[:3, :3] = np.diag([transform.x, transform.y, transform.z])
         elif isinstance(transform, RotateTransform):
-            step[:3, :3] = _rotation([transform.x, transform.y, transform.z], transform.angle)
+            axis = [transform.x, transform.y, transform.z]
+            step[:3, :3] = axis_angle_matrix(axis, math.radians(float(transform.angle)))
         else:  # <matrix> (its own 16 numbers), <lookat>, <skew>: pycollada's matrix
             step = np.asarray(transform.matrix, dtype=np.float64).reshape(4, 4)
         matrix = matrix @ step
     return matrix
-
-
-def _rotation(axis: list[float], degrees: float) -> np.ndarray:
-    """The rotation of ``degrees`` about ``axis`` (normalised; zero: none), Rodrigues'
-    formula."""
-    axis_array = np.asarray(axis, dtype=np.float64)
-    norm = float(np.linalg.norm(axis_array))
-    if not norm > 0.0:
-        return np.eye(3)
-    x, y, z = axis_array / norm
-    angle = math.radians(float(degrees))
-    cross = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-    return np.eye(3) + math.sin(angle) * cross + (1.0 - math.cos(angle)) * (cross @ cross)
 
 
 def _triangles(

@@ -2,8 +2,9 @@
 
 Each :class:`MeshFormat` says how a format is read and the conventions it carries: the core's
 parallel reader (OBJ, STL) or a Python reader that returns the file's mesh nodes, what an
-unnamed object is called, the units it returns and what it needs installed. :func:`meshcol.io.mesh_read.load_mesh` and ``load_meshes`` look a
-file up here and nowhere else; so do the manifests, the robot loaders and the fuzz target.
+unnamed object is called, the units it returns and what it needs installed.
+:func:`meshcol.io.mesh_read.load_mesh` and ``load_meshes`` look a file up here and nowhere
+else; so do the manifests, the robot loaders and the fuzz target.
 
 Adding a format is one module with a reader (``read(file, source) -> list[MeshNode]``, see
 :data:`MeshNode`; corrupt content raises :class:`meshcol.errors.InvalidMeshError` worded
@@ -67,8 +68,9 @@ class MeshFormat:
         ``(module, install hint)``: a module the reader needs, checked before reading.
     units : str or None
         The length unit the reader returns vertices in, whatever the file's own (FBX: ``m``,
-        converted from its ``UnitScaleFactor``; COLLADA: ``m``, from its ``<unit meter>``): reported in the envelope's ``units`` when
-        every input says the same. None: the format does not say.
+        converted from its ``UnitScaleFactor``; COLLADA: ``m``, from its ``<unit meter>``):
+        reported in the envelope's ``units`` when every input says the same. None: the format
+        does not say.
     godot_hints : bool
         Node names may end in Godot's import hints (``-col``, ``-convcol``, ``-colonly``,
         ``-convcolonly``, ``-rigid``: :mod:`meshcol.io.collision_names`), as in the glTF and

@@ -1,4 +1,5 @@
-"""Load mesh files (OBJ, STL, PLY, OFF, glTF, GLB, FBX, COLLADA, USD) as rigid bodies, geometry only.
+"""Load mesh files (OBJ, STL, PLY, OFF, glTF, GLB, FBX, COLLADA, USD) as rigid bodies,
+geometry only.
 
 A file may hold several bodies: OBJ objects (or groups, when the file has no objects), STL
 solids, glTF mesh nodes. Each becomes one :class:`meshcol.types.Body` whose vertices are in its
