@@ -122,6 +122,7 @@ def test_bad_ellipsoids_and_scales_are_one_line_and_exit_2(tmp_path, primitive, 
         assert result.stderr == f"meshcol: error: {path}: {message}\n", command
 
 
+@pytest.mark.slow  # 3-8 s: the fast lane (make test-fast) stays under 40 s
 def test_every_command_that_reads_manifests_takes_ellipsoids(tmp_path):
     bodies = [
         {"name": "egg", "primitive": EGG, "rotation": {"euler_deg": [0, 0, 90], "order": "xyz"}},

@@ -97,6 +97,7 @@ def test_pairs_without_a_closed_form_keep_the_point_fit(tmp_path: Path) -> None:
     assert cylinder["b"]["max_gap"] > 0
 
 
+@pytest.mark.slow  # 3-8 s: the fast lane (make test-fast) stays under 40 s
 def test_many_primitives_in_one_batch_match_one_by_one(tmp_path: Path) -> None:
     rng = np.random.default_rng(3)
     kinds = ["sphere", "box", "capsule", "cylinder", "ellipsoid"]

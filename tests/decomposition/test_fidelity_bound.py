@@ -95,6 +95,7 @@ def _check_bound(mesh: trimesh.Trimesh, parts, count: int) -> None:
     assert reported <= LOOSE * dense + BOUND_ABSOLUTE_FRACTION * diagonal
 
 
+@pytest.mark.slow  # 3-8 s: the fast lane (make test-fast) stays under 40 s
 def test_parts_to_mesh_bounds_a_dense_sampling() -> None:
     from dirty_meshes import torus
 
