@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import ctypes
 import gc
-import os
 import struct
 from collections.abc import Callable
 from pathlib import Path
@@ -37,6 +36,7 @@ import numpy as np
 
 from meshcol.errors import InvalidMeshError
 from meshcol.io.polygons import triangulate_polygons
+from meshcol.io.safe_read import read_input
 
 if TYPE_CHECKING:
     from meshcol.io.mesh_formats import MeshNode
@@ -62,12 +62,15 @@ MAX_INDICES = 200_000_000
 
 
 def _load(file: Path, source: str, **options: Any) -> Any:
-    """The ufbx scene of ``file``, converted to metres and :data:`FRAME`."""
+    """The ufbx scene of ``file``, converted to metres and :data:`FRAME`. The bytes are read
+    once by the guarded reader (a pipe, a device or a file over the cap is refused before
+    ufbx sees it; ufbx opening the path itself would block on a pipe) and parsed in memory."""
     import ufbx
 
+    data = read_input(file, "mesh")
     try:
-        return ufbx.load_file(
-            os.fspath(file),
+        return ufbx.load_memory(
+            data,
             file_format=ufbx.FileFormat.FBX,  # never OBJ, which ufbx also reads
             no_format_from_content=True,
             target_axes=ufbx.axes_right_handed_z_up,
@@ -79,7 +82,7 @@ def _load(file: Path, source: str, **options: Any) -> Any:
             **({"ignore_animation": True} | options),
         )
     except ufbx.UfbxError as error:
-        reason = _truncation(file) or _reason(error)
+        reason = _truncation(data) or _reason(error)
         raise InvalidMeshError(f"cannot parse FBX file: {reason}", source) from None
 
 
@@ -92,13 +95,10 @@ def _reason(error: Exception) -> str:
 _BINARY_MAGIC = b"Kaydara FBX Binary  \x00"
 
 
-def _truncation(file: Path) -> str | None:
-    """How a binary FBX file is cut short, when it is: the first top-level record that ends
-    past the end of the file (ufbx says only ``failed to load``); None otherwise."""
-    try:
-        data = file.read_bytes()
-    except OSError:
-        return None
+def _truncation(data: bytes) -> str | None:
+    """How a binary FBX file's bytes ``data`` are cut short, when they are: the first
+    top-level record that ends past their end (ufbx says only ``failed to load``); None
+    otherwise."""
     if not data.startswith(_BINARY_MAGIC) or len(data) < 27:
         return None
     version = int.from_bytes(data[23:27], "little")

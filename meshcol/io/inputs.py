@@ -37,14 +37,26 @@ def input_kind(path: PathLike) -> str:
     A ``.json`` or ``.toml`` file is a scene manifest; a ``.urdf`` or ``.mjcf`` file, or an
     ``.xml`` file whose root element is ``<mujoco>`` or ``<robot>``, a robot description;
     anything else a mesh file (the mesh reader says when it is not one). Only an ``.xml``
-    file is opened (its first 64 KiB).
+    file is opened (its first 64 KiB); one that cannot be read (a pipe, a link that loops) is
+    a robot description, whose reader names the problem.
     """
     suffix = Path(os.fspath(path)).suffix.lower()
     if suffix in MANIFEST_EXTENSIONS:
         return "manifest"
-    if suffix in ROBOT_EXTENSIONS and (suffix != ".xml" or root_tag(path) in ROBOT_ROOTS):
+    if suffix in ROBOT_EXTENSIONS and (suffix != ".xml" or _robot_root(path)):
         return "robot"
     return "mesh"
+
+
+def _robot_root(path: PathLike) -> bool:
+    """True when the existing file ``path``'s root element is a robot's, or the file cannot
+    be read at all."""
+    from meshcol.errors import InputFileError
+
+    try:
+        return _head_root(path) in ROBOT_ROOTS
+    except InputFileError:
+        return os.path.lexists(path)
 
 
 def is_manifest(path: PathLike) -> bool:
@@ -65,12 +77,19 @@ def is_whole_scene(inputs: Sequence[PathLike]) -> bool:
 def root_tag(path: PathLike) -> str | None:
     """The root element's name, from the file's first 64 KiB (None if unreadable)."""
     from meshcol.errors import InputFileError
-    from meshcol.io.safe_read import read_input
 
-    try:  # never blocks on a pipe, never reads a device
-        head = read_input(path, "robot", limit=65536).decode("utf-8", errors="replace")
+    try:
+        return _head_root(path)
     except InputFileError:
         return None
+
+
+def _head_root(path: PathLike) -> str | None:
+    """The root element's name from the file's first 64 KiB; InputFileError when unreadable."""
+    from meshcol.io.safe_read import read_input
+
+    # never blocks on a pipe, never reads a device
+    head = read_input(path, "robot", limit=65536).decode("utf-8", errors="replace")
     head = re.sub(r"<\?.*?\?>|<!--.*?-->|<!DOCTYPE[^>]*>", "", head, flags=re.S)
     match = re.search(r"<\s*([A-Za-z_][\w.-]*)", head)
     return match.group(1) if match else None

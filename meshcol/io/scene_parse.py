@@ -20,7 +20,7 @@ from typing import Any
 
 from meshcol.errors import InputFileError, SceneError
 from meshcol.io.inputs import is_manifest
-from meshcol.io.safe_read import read_input
+from meshcol.io.safe_read import check_exists, read_input
 
 __all__ = [
     "KEPT_OF_DOCUMENTS",
@@ -119,8 +119,7 @@ def _to_oldest_generation() -> None:
 
 
 def _check_manifest_file(file: Path, source: str) -> None:
-    if not file.exists():
-        raise InputFileError("file not found", source)
+    check_exists(source, "manifest")
     if file.is_dir():
         raise InputFileError("is a directory, not a scene manifest", source)
     if not is_manifest(file):

@@ -100,6 +100,10 @@ def _robot(folder: Path) -> None:
         ("mesh", ["hull", "f.obj"], r"f\.obj: is a named pipe, not a regular file"),
         ("gltf", ["inspect", "f.gltf"], r"f\.gltf: is a named pipe, not a regular file"),
         ("ply", ["inspect", "f.ply"], r"f\.ply: is a named pipe, not a regular file"),
+        # inspect reads an FBX file twice (its bodies, then what it left out): both guarded
+        ("fbx", ["inspect", "f.fbx"], r"f\.fbx: is a named pipe, not a regular file"),
+        ("fbx", ["hull", "f.fbx"], r"f\.fbx: is a named pipe, not a regular file"),
+        ("dae", ["inspect", "f.dae"], r"f\.dae: is a named pipe, not a regular file"),
         ("manifest", ["check", "f.json"], r"f\.json: is a named pipe, not a regular file"),
         (
             "manifest_mesh",
@@ -117,6 +121,8 @@ def _robot(folder: Path) -> None:
             r".*f\.json: is a named pipe, not a regular file.*",
         ),
         ("urdf", ["check", "f.urdf"], r"f\.urdf: is a named pipe, not a regular file"),
+        # an .xml file is a robot or not by its root element, which a pipe does not give
+        ("xml", ["check", "f.xml"], r"f\.xml: is a named pipe, not a regular file"),
     ],
     ids=lambda v: v if isinstance(v, str) else None,
 )
@@ -126,12 +132,12 @@ def test_a_named_pipe_is_refused_without_blocking(tmp_path, monkeypatch, setup, 
     pipes = []
     if setup == "mesh" or setup == "manifest_mesh":
         pipes.append(_pipe(tmp_path, "f.obj"))
-    elif setup in ("gltf", "ply"):
+    elif setup in ("gltf", "ply", "fbx", "dae"):
         pipes.append(_pipe(tmp_path, f"f.{setup}"))
     elif setup in ("manifest", "baseline", "joints"):
         pipes.append(_pipe(tmp_path, "f.json"))
-    elif setup == "urdf":
-        pipes.append(_pipe(tmp_path, "f.urdf"))
+    elif setup in ("urdf", "xml"):
+        pipes.append(_pipe(tmp_path, f"f.{setup}"))
     if setup == "manifest_mesh":
         (tmp_path / "scene.json").write_text(
             json.dumps(
@@ -156,11 +162,20 @@ def test_an_mjcf_include_that_is_a_pipe_is_refused(tmp_path, monkeypatch):
     _one_line(result, r"part\.xml: is a named pipe, not a regular file")
 
 
-def test_symbolic_link_loop_is_named(tmp_path, monkeypatch):
+@pytest.mark.parametrize(
+    ("command", "name"),
+    [
+        ("inspect", "loop.obj"),
+        ("check", "loop.urdf"),  # a robot description, a manifest: the same words
+        ("check", "loop.xml"),
+        ("check", "loop.json"),
+    ],
+)
+def test_symbolic_link_loop_is_named(tmp_path, monkeypatch, command, name):
     monkeypatch.chdir(tmp_path)
-    os.symlink("loop.obj", "loop.obj")
-    result, _ = _run(["inspect", "loop.obj"])
-    _one_line(result, r"loop\.obj: cannot read file: Too many levels of symbolic links")
+    os.symlink(name, name)
+    result, _ = _run([command, name])
+    _one_line(result, rf"{re.escape(name)}: cannot read file: Too many levels of symbolic links")
 
 
 def _capped_child(args: list[str], folder: Path) -> subprocess.CompletedProcess:
