@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from meshcol.errors import InputFileError, MeshcolError, SceneError
-from meshcol.io.inputs import input_kind, root_tag
+from meshcol.io.inputs import is_robot_file, root_tag
 from meshcol.io.links import CollisionElement
 from meshcol.io.report import read_json_file
 from meshcol.io.safe_read import check_exists, check_input, check_mjcf_files
@@ -183,12 +183,6 @@ def parse_package_paths(assignments: Sequence[str] = ()) -> dict[str, str]:
             raise ValueError(f"must look like NAME=DIR, got {item!r}")
         folders[name] = folder
     return folders
-
-
-def is_robot_file(path: str | os.PathLike[str]) -> bool:
-    """True for a ``.urdf`` or ``.mjcf`` file, or an ``.xml`` file whose root is ``<mujoco>``
-    (or ``<robot>``): :func:`meshcol.io.inputs.input_kind` says ``"robot"``."""
-    return input_kind(path) == "robot"
 
 
 def description_kind(path: str | os.PathLike[str]) -> str:
