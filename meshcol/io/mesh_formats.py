@@ -25,7 +25,7 @@ import numpy as np
 from meshcol.errors import InputFileError, MeshcolError, MissingDependencyError
 from meshcol.io import dae, fbx, gltf, gltf_physics, mesh_trimesh, off, usd_read
 from meshcol.io.physics_bodies import FileScene
-from meshcol.io.safe_read import check_exists, check_input
+from meshcol.io.safe_read import check_input
 
 __all__ = [
     "FORMATS",
@@ -199,7 +199,8 @@ def check_file(source: str) -> MeshFormat:
     """The format of ``source``, once it is known to be a readable file: missing, a directory,
     an unknown extension, a missing dependency or an unreadable file raise, in that order."""
     file = Path(source)
-    check_exists(source, "mesh")
+    if not file.exists():  # says which: not found, a link that dangles or loops
+        check_input(source, "mesh")
     if file.is_dir():
         raise InputFileError("is a directory, not a mesh file", source)
     fmt = mesh_format(source)

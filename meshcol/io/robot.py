@@ -38,7 +38,7 @@ from meshcol.errors import InputFileError, MeshcolError, SceneError
 from meshcol.io.inputs import is_robot_file, root_tag
 from meshcol.io.links import CollisionElement
 from meshcol.io.report import read_json_file
-from meshcol.io.safe_read import check_exists, check_input, check_mjcf_files
+from meshcol.io.safe_read import check_input, check_mjcf_files
 from meshcol.types import Body, Scene, primitive_reach
 
 if TYPE_CHECKING:
@@ -279,7 +279,8 @@ def load_robot_model(
     options = RobotOptions() if options is None else options
     source = os.fspath(path)
     file = Path(source)
-    check_exists(source, "robot")
+    if not file.exists():  # says which: not found, a link that dangles or loops
+        check_input(source, "robot")
     if file.is_dir():
         raise InputFileError("is a directory, not a robot description", source)
     check_input(source, "robot")  # a regular file within the cap: never a pipe or a device

@@ -26,7 +26,6 @@ from meshcol.errors import InputFileError
 __all__ = [
     "MAX_BYTES",
     "InputKind",
-    "check_exists",
     "check_input",
     "file_kind",
     "read_input",
@@ -188,17 +187,6 @@ def _read_upto(f: BinaryIO, first: int, most: int) -> bytes:
         parts.append(chunk)
         total += len(chunk)
     return b"".join(parts) if len(parts) > 1 else parts[0]
-
-
-def check_exists(path: str | os.PathLike[str], kind: InputKind = "mesh") -> None:
-    """Raise :class:`InputFileError` when nothing is at ``path``: ``file not found``, or for
-    a symbolic link that dangles or loops, what opening it says (``symbolic link to a
-    missing file``, ``cannot read file: Too many levels of symbolic links``)."""
-    source = os.fspath(path)
-    if not os.path.exists(source):
-        if os.path.lexists(source):
-            check_input(source, kind)
-        raise InputFileError("file not found", source)
 
 
 def refuse_special(path: str | os.PathLike[str], kind: InputKind = "robot") -> None:

@@ -20,7 +20,7 @@ from typing import Any
 
 from meshcol.errors import InputFileError, SceneError
 from meshcol.io.inputs import is_manifest
-from meshcol.io.safe_read import check_exists, read_input
+from meshcol.io.safe_read import check_input, read_input
 
 __all__ = [
     "KEPT_OF_DOCUMENTS",
@@ -119,7 +119,8 @@ def _to_oldest_generation() -> None:
 
 
 def _check_manifest_file(file: Path, source: str) -> None:
-    check_exists(source, "manifest")
+    if not file.exists():  # says which: not found, a link that dangles or loops
+        check_input(source, "manifest")
     if file.is_dir():
         raise InputFileError("is a directory, not a scene manifest", source)
     if not is_manifest(file):
