@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.analysis.geometry_cache import GeometryCache
+from meshcol.analysis.geometry_cache import GeometryCache, measure_geometries
 from meshcol.analysis.rules import Finding, get_rule
 from meshcol.errors import InvalidMeshError
 from meshcol.geometry.triangles import degenerate_faces
@@ -191,14 +191,7 @@ def inspect_mesh(
 ) -> MeshInspection:
     """:func:`inspect_body`, with what the mesh alone decides shared through ``geometries``
     by the bodies that instance it."""
-    vertices = np.asarray(body.vertices, dtype=np.float64)
-    faces = np.asarray(body.faces, dtype=np.int64)
-    if len(faces) == 0:
-        raise InvalidMeshError(f"body '{body.name}': mesh has no faces", body.source)
-    if not np.isfinite(vertices).all():
-        raise InvalidMeshError(
-            f"body '{body.name}': vertices contain NaN or infinite coordinates", body.source
-        )
+    vertices, faces = _mesh_arrays(body)
     mesh = geometries.get(vertices, faces)
 
     used = body.world_vertices()[mesh.used]
@@ -253,6 +246,20 @@ def inspect_mesh(
         declared_units=declared_units,
         findings=[name for name in RULES if broken[name]],
     )
+
+
+def _mesh_arrays(body: Body) -> tuple[np.ndarray, np.ndarray]:
+    """The body's vertices (float64) and faces (int64); InvalidMeshError when it has no faces
+    or a non-finite coordinate."""
+    vertices = np.asarray(body.vertices, dtype=np.float64)
+    faces = np.asarray(body.faces, dtype=np.int64)
+    if len(faces) == 0:
+        raise InvalidMeshError(f"body '{body.name}': mesh has no faces", body.source)
+    if not np.isfinite(vertices).all():
+        raise InvalidMeshError(
+            f"body '{body.name}': vertices contain NaN or infinite coordinates", body.source
+        )
+    return vertices, faces
 
 
 def guess_units(largest_extent: float) -> tuple[str, str]:
@@ -397,8 +404,16 @@ def inspect_meshes(
 ) -> list[MeshInspection | InvalidMeshError]:
     """:func:`inspect_body` of each mesh, or the InvalidMeshError that stopped it; what a
     mesh alone decides is measured once for all the meshes that instance it (a level's
-    props), so the work follows the unique meshes, not the bodies."""
+    props), so the work follows the unique meshes, not the bodies, and for all the unique
+    meshes at once (:func:`~meshcol.analysis.geometry_cache.measure_geometries`)."""
     geometries = geometries if geometries is not None else GeometryCache()
+    usable = []
+    for mesh in meshes:
+        try:
+            usable.append(geometries.get(*_mesh_arrays(mesh)))
+        except InvalidMeshError:
+            pass  # reported below, in order
+    measure_geometries(usable, mass=False)
     out: list[MeshInspection | InvalidMeshError] = []
     for done, mesh in enumerate(meshes, start=1):
         try:

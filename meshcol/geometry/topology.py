@@ -3,6 +3,7 @@ duplicates."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -18,6 +19,10 @@ __all__ = [
     "is_balanced",
     "is_closed_manifold",
     "manifold_solid",
+    "MeshTopologyBatch",
+    "mesh_topology_batch",
+    "oriented_volume_batch",
+    "segment_sums",
     "orient_outward",
     "oriented_volume",
     "unique_rows",
@@ -241,7 +246,7 @@ def is_balanced(faces: np.ndarray) -> bool:
     return bool((balance == 0).all())
 
 
-def manifold_solid(vertices: np.ndarray, faces: np.ndarray) -> Any:
+def manifold_solid(vertices: np.ndarray, faces: np.ndarray, balanced: bool | None = None) -> Any:
     """manifold3d's ``Manifold`` of a mesh (check its ``status()``), the one way meshcol
     builds one.
 
@@ -254,7 +259,8 @@ def manifold_solid(vertices: np.ndarray, faces: np.ndarray) -> Any:
     which is what manifold3d makes of every such mesh (the same status on 4,500 random open,
     flipped, duplicated, finned, doubled and degenerate meshes; valgrind saw no read of
     unwritten memory on the three balanced ones tried: a closed sphere, the sphere doubled
-    inside out, two overlapping spheres)."""
+    inside out, two overlapping spheres). ``balanced``, when the caller knows it
+    (:attr:`MeshTopologyBatch.balanced`), spares measuring it again."""
     import manifold3d
 
     faces = np.asarray(faces).reshape(-1, 3)
@@ -262,7 +268,7 @@ def manifold_solid(vertices: np.ndarray, faces: np.ndarray) -> Any:
         (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])
     )
     faces = faces[kept] if not kept.all() else faces
-    if not is_balanced(faces):
+    if not (is_balanced(faces) if balanced is None else balanced):
         faces = faces[:0]
     return manifold3d.Manifold(
         manifold3d.Mesh64(
@@ -270,3 +276,222 @@ def manifold_solid(vertices: np.ndarray, faces: np.ndarray) -> Any:
             tri_verts=np.ascontiguousarray(faces, dtype=np.uint64),
         )
     )
+
+
+# ---------------------------------------------------------------------------------------------
+# Many meshes at once: the counts above of each mesh, from one pass over all their faces
+
+
+@dataclass(frozen=True, eq=False)
+class MeshTopologyBatch:
+    """The topology of many meshes, one entry per mesh (:func:`mesh_topology_batch`).
+
+    Attributes
+    ----------
+    boundary_edges, non_manifold_edges, inconsistent_edges : (n,) int64
+        :func:`edge_table`'s counts: edges with one face, with more than two, with two that
+        traverse them the same way.
+    closed : (n,) bool
+        :func:`is_closed_manifold`.
+    balanced : (n,) bool
+        :func:`is_balanced` of the faces without a repeated corner (what
+        :func:`manifold_solid` gives manifold3d).
+    duplicate_faces : (n,) int64
+        :func:`duplicate_face_count`.
+    components : (n,) int64
+        :func:`component_count`.
+    used : list of (k_i,) int64
+        Each mesh's used vertices, ascending (``np.unique(faces)``).
+    """
+
+    boundary_edges: np.ndarray
+    non_manifold_edges: np.ndarray
+    inconsistent_edges: np.ndarray
+    closed: np.ndarray
+    balanced: np.ndarray
+    duplicate_faces: np.ndarray
+    components: np.ndarray
+    used: list
+
+
+def _offsets(counts: np.ndarray) -> np.ndarray:
+    offsets = np.zeros(len(counts) + 1, dtype=np.int64)
+    np.cumsum(counts, out=offsets[1:])
+    return offsets
+
+
+def mesh_topology_batch(
+    faces: Sequence[np.ndarray], vertex_counts: Sequence[int]
+) -> MeshTopologyBatch:
+    """Edge counts, closedness, balance, duplicates, components and used vertices of many
+    meshes, equal to the single-mesh functions of this module on each.
+
+    Parameters
+    ----------
+    faces : sequence of (m_i, 3) int
+        Each mesh's faces, indices into its own vertices.
+    vertex_counts : sequence of int
+        Each mesh's vertex count.
+
+    Returns
+    -------
+    MeshTopologyBatch
+
+    Notes
+    -----
+    The meshes' vertex indices are shifted apart (mesh ``i``'s by the vertices before it), so
+    one edge table, one sort of the faces and one connected-components pass over all the
+    faces give every mesh's answer: no edge, face or component of one mesh meets another's.
+    Integer counts throughout, so nothing differs from the mesh-by-mesh answer.
+    """
+    n = len(faces)
+    vertex_offsets = _offsets(np.asarray(vertex_counts, dtype=np.int64).reshape(n))
+    face_counts = np.fromiter((len(f) for f in faces), dtype=np.int64, count=n)
+    mesh_of_face = np.repeat(np.arange(n, dtype=np.int64), face_counts)
+    every = (
+        np.concatenate([np.asarray(f, dtype=np.int64).reshape(-1, 3) for f in faces])
+        if n
+        else np.zeros((0, 3), np.int64)
+    ) + vertex_offsets[:-1][mesh_of_face][:, None]
+    total = max(int(vertex_offsets[-1]), 1)
+    mesh_of_vertex = np.repeat(np.arange(n, dtype=np.int64), np.diff(vertex_offsets))
+
+    directed = every[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    whole = np.repeat(
+        (every[:, 0] != every[:, 1]) & (every[:, 1] != every[:, 2]) & (every[:, 0] != every[:, 2]),
+        3,
+    )
+    real = directed[:, 0] != directed[:, 1]
+    directed, whole = directed[real], whole[real]
+    low, high = directed.min(axis=1), directed.max(axis=1)
+    keys, inverse, counts = np.unique(low * total + high, return_inverse=True, return_counts=True)
+    inverse = inverse.reshape(-1)
+    edge_mesh = mesh_of_vertex[keys // total]
+    direction = np.where(directed[:, 0] < directed[:, 1], 1, -1)
+    balance = np.bincount(inverse, weights=direction, minlength=len(keys))
+
+    def per_mesh(edge_mask: np.ndarray) -> np.ndarray:
+        return np.bincount(edge_mesh[edge_mask], minlength=n).astype(np.int64)
+
+    boundary = per_mesh(counts == 1)
+    non_manifold = per_mesh(counts > 2)
+    inconsistent = per_mesh((counts == 2) & (balance != 0))
+    real_edges = np.bincount(edge_mesh, minlength=n)
+    closed = (boundary == 0) & (non_manifold == 0) & (inconsistent == 0) & (real_edges > 0)
+
+    # is_balanced over the faces without a repeated corner
+    kept_balance = np.bincount(inverse[whole], weights=direction[whole], minlength=len(keys))
+    kept_present = np.bincount(inverse[whole], minlength=len(keys)) > 0
+    unbalanced = per_mesh(kept_present & (kept_balance != 0))
+    balanced = (unbalanced == 0) & (np.bincount(edge_mesh[kept_present], minlength=n) > 0)
+
+    ordered = np.sort(every, axis=1)
+    order = np.lexsort(ordered.T[::-1])
+    repeat = np.zeros(len(ordered), dtype=bool)
+    repeat[1:] = (ordered[order][1:] == ordered[order][:-1]).all(axis=1)
+    duplicates = np.bincount(mesh_of_face[order][repeat], minlength=n).astype(np.int64)
+
+    from meshcol.geometry.graph import connected_components
+
+    used_all = np.unique(every)
+    _, labels = connected_components(total, every[:, [0, 1, 1, 2]].reshape(-1, 2))
+    _, first = np.unique(labels[used_all], return_index=True)
+    components = np.bincount(mesh_of_vertex[used_all[first]], minlength=n).astype(np.int64)
+    cuts = np.searchsorted(used_all, vertex_offsets)
+    used = [used_all[cuts[i] : cuts[i + 1]] - vertex_offsets[i] for i in range(n)]
+    return MeshTopologyBatch(
+        boundary, non_manifold, inconsistent, closed, balanced, duplicates, components, used
+    )
+
+
+def segment_sums(values: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """``values[offsets[i]:offsets[i + 1]].sum()`` for each ``i``, bit for bit.
+
+    Parameters
+    ----------
+    values : (N,) float64
+    offsets : (n + 1,) int64
+        Ascending, from 0 to N.
+
+    Returns
+    -------
+    (n,) float64
+
+    Notes
+    -----
+    numpy sums a float array pairwise (blocks of eight partial sums), so
+    ``np.add.reduceat``, a sum from left to right, can differ in the last bits. The segments
+    of one length are stacked into rows and summed along the last axis, which numpy sums
+    row by row with the same pairwise sum as one segment alone.
+    """
+    lengths = np.diff(offsets)
+    out = np.zeros(len(lengths), dtype=np.float64)
+    order = np.argsort(lengths, kind="stable")
+    starts = np.flatnonzero(np.diff(lengths[order], prepend=-1))
+    for group in np.split(order, starts[1:]):
+        length = int(lengths[group[0]])
+        if length == 0:
+            continue
+        rows = offsets[group][:, None] + np.arange(length)
+        out[group] = values[rows].sum(axis=1)
+    return out
+
+
+def oriented_volume_batch(
+    vertices: np.ndarray, faces: np.ndarray, face_offsets: np.ndarray, closed: np.ndarray
+) -> list[tuple[float, int] | None]:
+    """:func:`oriented_volume` of many meshes, bit for bit.
+
+    Parameters
+    ----------
+    vertices : (V, 3) float64
+        Every mesh's vertices, one after the other.
+    faces : (F, 3) int64
+        Every mesh's faces, indices into ``vertices`` (shifted by the vertices before it).
+    face_offsets : (n + 1,) int64
+        Mesh ``i``'s faces are ``faces[face_offsets[i]:face_offsets[i + 1]]``.
+    closed : (n,) bool
+        :func:`is_closed_manifold` of each (:func:`mesh_topology_batch`).
+
+    Returns
+    -------
+    list of (float, int) or None
+        One per mesh, as :func:`oriented_volume`.
+    """
+    n = len(closed)
+    counts = np.diff(face_offsets)
+    mesh_of_face = np.repeat(np.arange(n, dtype=np.int64), counts)
+    a, b, c = vertices[faces[:, 0]], vertices[faces[:, 1]], vertices[faces[:, 2]]
+    lowest = np.minimum(np.minimum(a, b), c)
+    highest = np.maximum(np.maximum(a, b), c)
+    nonempty = counts > 0
+    centre = np.zeros((n, 3))
+    if nonempty.any():
+        starts = face_offsets[:-1][nonempty]
+        centre[nonempty] = (
+            np.minimum.reduceat(lowest, starts, axis=0)
+            + np.maximum.reduceat(highest, starts, axis=0)
+        ) / 2
+    ab, ac = b - a, c - a
+    normals = np.stack(
+        [
+            ab[:, 1] * ac[:, 2] - ab[:, 2] * ac[:, 1],
+            ab[:, 2] * ac[:, 0] - ab[:, 0] * ac[:, 2],
+            ab[:, 0] * ac[:, 1] - ab[:, 1] * ac[:, 0],
+        ],
+        axis=1,
+    )
+    cones = np.einsum("ij,ij->i", a - centre[mesh_of_face], normals)
+    volumes = segment_sums(cones, face_offsets) / 6.0
+    magnitudes = segment_sums(np.abs(cones), face_offsets) / 6.0
+    out: list[tuple[float, int] | None] = []
+    for i in range(n):
+        if not closed[i]:
+            out.append(None)
+            continue
+        volume, magnitude = float(volumes[i]), float(magnitudes[i])
+        orientation = 0
+        if abs(volume) > ORIENTATION_RELATIVE_VOLUME * magnitude:
+            orientation = 1 if volume > 0 else -1
+        out.append((volume, orientation))
+    return out
