@@ -111,8 +111,7 @@ class LocalGeometry:
     @cached_property
     def manifold_status(self) -> str:
         """manifold3d's verdict on the mesh (``NoError``, ``NotManifold``, ...)."""
-        status = manifold_solid(self.vertices, self.faces, balanced=self.balanced).status()
-        return str(getattr(status, "name", status)).split(".")[-1]
+        return _manifold_status(self.vertices, self.faces, self.balanced)
 
     @cached_property
     def hull_volume(self) -> float | None:
@@ -167,6 +166,11 @@ class GeometryCache:
             geometry = self._by_key[key] = LocalGeometry(vertices, faces)
         self._by_arrays[id(vertices), id(faces)] = (geometry, vertices, faces)
         return geometry
+
+
+def _manifold_status(vertices: np.ndarray, faces: np.ndarray, balanced: bool | None = None) -> str:
+    status = manifold_solid(vertices, faces, balanced=balanced).status()
+    return str(getattr(status, "name", status)).split(".")[-1]
 
 
 def measure_geometries(geometries: Iterable[LocalGeometry], mass: bool = True) -> None:

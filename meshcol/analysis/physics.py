@@ -186,9 +186,11 @@ def physics_readiness(
     rows: list[dict[str, Any]] = []
     items = [_ColliderBody.of(run, index) for index in range(len(colliders.bodies))]
     _measure_all(run, items)
-    for item in items:
-        for check in BODY_CHECKS:
-            findings.extend(check(item))
+    found = [[f for check in BODY_CHECKS for f in check(item)] for item in items]
+    _mass_rows(items)
+    for item, item_findings in zip(items, found):
+        findings.extend(item_findings)
+        findings.extend(_comparisons(item))
         rows.append(item.row)
     if visuals is not None:
         findings.extend(_links_without_collision(visuals, colliders))
@@ -289,6 +291,10 @@ class _ColliderBody:
     grouped: bool  # loose UCX_ parts naming nothing, grouped into a body of their own
     row: dict[str, Any]
     collider: MassProperties | None = None  # world frame, set by _collider_mass
+    visual: MassProperties | None = None  # world frame, set by _visual_mass
+    # (visual mesh closed, its world bounding-box diagonal): set by _visual_mass when the
+    # collider is to be compared with it (_comparisons)
+    compare: tuple[bool, float] | None = None
 
     @classmethod
     def of(cls, run: _Readiness, index: int) -> _ColliderBody:
@@ -398,7 +404,6 @@ def _collider_mass(item: _ColliderBody) -> list[Finding]:
             masses.append(mass)
     collider = combine_mass_properties(masses).transformed(body.pose) if masses else None
     item.collider = collider
-    item.row["collider_mass"] = _mass_dict(collider)
     min_volume = run.options.min_volume
     if collider is not None and 0.0 < collider.volume < min_volume:
         message = f"collider volume {collider.volume:.3g} is below {min_volume:g}"
@@ -518,27 +523,56 @@ def _measure_all(run: _Readiness, items: list[_ColliderBody]) -> None:
     measure_geometries(meshes)
 
 
-def _mass_dict(properties: MassProperties | None) -> dict[str, Any] | None:
-    """JSON-ready mass properties (non-finite numbers as None)."""
-    if properties is None:
-        return None
+def _mass_rows(items: list[_ColliderBody]) -> None:
+    """Each body's ``collider_mass`` and ``visual_mass`` in its row, from ``item.collider``
+    and ``item.visual``: :func:`_mass_dicts` of all of them at once."""
+    rows = _mass_dicts([m for item in items for m in (item.collider, item.visual)])
+    for item, collider, visual in zip(items, rows[0::2], rows[1::2]):
+        item.row["collider_mass"] = collider
+        item.row["visual_mass"] = visual
 
-    def clean(values: np.ndarray) -> Any:
-        values = np.asarray(values, dtype=np.float64)
-        if not np.all(np.isfinite(values)):
-            return None
-        return values.tolist()
 
-    return {
-        "volume": properties.volume,
-        "center_of_mass": clean(properties.center_of_mass),
-        "inertia": clean(properties.inertia),
-        "principal_inertia": clean(properties.principal_inertia()),
-        "area": properties.area,
-        "shell_center_of_mass": clean(properties.shell_center_of_mass),
-        "shell_inertia": clean(properties.shell_inertia),
-        "shell_principal_inertia": clean(properties.principal_inertia(shell=True)),
-    }
+def _mass_dicts(masses: list[MassProperties | None]) -> list[dict[str, Any] | None]:
+    """JSON-ready mass properties (non-finite numbers as None; None for None), the principal
+    moments of all of them from one stacked ``eigvalsh`` (the same LAPACK call per matrix as
+    :meth:`MassProperties.principal_inertia`)."""
+    present = [m for m in masses if m is not None]
+    if not present:
+        return [None] * len(masses)
+    vectors = np.array(
+        [(m.center_of_mass, m.shell_center_of_mass, np.zeros(3), np.zeros(3)) for m in present],
+        dtype=np.float64,
+    )
+    tensors = np.array([(m.inertia, m.shell_inertia) for m in present], dtype=np.float64)
+    finite = np.isfinite(tensors).all(axis=(2, 3))
+    if finite.any():
+        chosen = tensors[finite]
+        vectors[:, 2:][finite] = np.linalg.eigvalsh(0.5 * (chosen + chosen.transpose(0, 2, 1)))
+    vectors[:, 2:][~finite] = np.nan
+    vector_ok = np.isfinite(vectors).all(axis=2).tolist()
+    tensor_ok = finite.tolist()
+    vector_lists, tensor_lists = vectors.tolist(), tensors.tolist()
+    out: list[dict[str, Any] | None] = []
+    k = 0
+    for properties in masses:
+        if properties is None:
+            out.append(None)
+            continue
+        v, v_ok, t, t_ok = vector_lists[k], vector_ok[k], tensor_lists[k], tensor_ok[k]
+        k += 1
+        out.append(
+            {
+                "volume": properties.volume,
+                "center_of_mass": v[0] if v_ok[0] else None,
+                "inertia": t[0] if t_ok[0] else None,
+                "principal_inertia": v[2] if v_ok[2] else None,
+                "area": properties.area,
+                "shell_center_of_mass": v[1] if v_ok[1] else None,
+                "shell_inertia": t[1] if t_ok[1] else None,
+                "shell_principal_inertia": v[3] if v_ok[3] else None,
+            }
+        )
+    return out
 
 
 # ---------------------------------------------------------------------------------------------
@@ -552,15 +586,15 @@ class _Comparison:
     body: str
     collider: MassProperties
     visual: MassProperties
-    collider_row: dict[str, Any]  # their _mass_dict
+    collider_row: dict[str, Any]  # their _mass_dicts
     visual_row: dict[str, Any]
     solid: bool  # the visual mesh is closed and the collider has a volume: compare solids
     diagonal: float  # of the visual mesh's world bounding box
 
 
-def _visual_comparison(item: _ColliderBody) -> list[Finding]:
-    """The visual mesh's mass properties and each of :data:`COMPARISONS` with the
-    collider's, into the row; MC301 when the visual mesh has no area."""
+def _visual_mass(item: _ColliderBody) -> list[Finding]:
+    """The visual mesh's mass properties (``item.visual``), and whether and how the collider
+    is compared with it (``item.compare``); MC301 when the visual mesh has no area."""
     run, body = item.run, item.body
     visual_body, item.row["visual_source"] = _visual_of(item)
     collider = item.collider
@@ -576,20 +610,31 @@ def _visual_comparison(item: _ColliderBody) -> list[Finding]:
         measured = geometry.oriented_volume
         closed = measured is not None and measured[1] != 0
         visual = geometry.mass.transformed(visual_body.pose)
-    item.row["visual_mass"] = _mass_dict(visual)
+    item.visual = visual
     if visual.area == 0.0:
         message = "the body has no area (every face degenerate): nothing to collide with"
         return [finding("MC301", body.name, None, 0.0, 0.0, message)]
     world = visual_body.world_vertices()[geometry.used]
+    item.compare = closed, float(np.linalg.norm(world.max(axis=0) - world.min(axis=0)))
+    return []
+
+
+def _comparisons(item: _ColliderBody) -> list[Finding]:
+    """Each of :data:`COMPARISONS` of the collider with the visual mesh, into the row (its
+    mass rows filled in: :func:`_mass_rows`)."""
+    if item.compare is None or item.collider is None or item.visual is None:
+        return []
+    closed, diagonal = item.compare
+    run, body = item.run, item.body
     item.row["comparison"] = "solid" if closed else "shell"
     comparison = _Comparison(
         body=body.name,
-        collider=collider,
-        visual=visual,
+        collider=item.collider,
+        visual=item.visual,
         collider_row=item.row["collider_mass"],
         visual_row=item.row["visual_mass"],
-        solid=closed and collider.volume > 0,
-        diagonal=float(np.linalg.norm(world.max(axis=0) - world.min(axis=0))),
+        solid=closed and item.collider.volume > 0,
+        diagonal=diagonal,
     )
     findings = []
     for row_field, measure in COMPARISONS:
@@ -658,7 +703,7 @@ def _center_of_mass_offset(c: _Comparison, options: PhysicsOptions) -> tuple[Any
 
 def _moment_ratio(a: dict[str, Any], b: dict[str, Any]) -> float | None:
     """Largest ratio (>= 1) of the sorted principal moments per unit mass of two solids,
-    from their :func:`_mass_dict` (whose principal moments are already computed)."""
+    from their :func:`_mass_dicts` (whose principal moments are already computed)."""
     if a["volume"] == 0 or b["volume"] == 0:
         return None
     if a["principal_inertia"] is None or b["principal_inertia"] is None:
@@ -684,12 +729,13 @@ COMPARISONS: tuple[
 )
 
 #: The checks of each collider body, in the order their findings are listed; each returns
-#: its findings and fills its fields of the body's row.
+#: its findings and fills its fields of the body's row; then, once the mass rows of every
+#: body are filled in (:func:`_mass_rows`), :func:`_comparisons`.
 BODY_CHECKS: tuple[Callable[[_ColliderBody], list[Finding]], ...] = (
     _orphan_ucx_parts,
     _parts_without_ucx,
     _collider_mass,
-    _visual_comparison,
+    _visual_mass,
 )
 
 

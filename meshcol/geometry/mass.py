@@ -170,6 +170,8 @@ def mass_properties_batch(
     order the single-mesh code uses: ``tests/geometry/test_mass_batch.py`` compares the bits.
     A mesh alone of its face count (a big one) takes :func:`mass_properties` itself.
     """
+    if not meshes:
+        return []
     out: list[MassProperties | None] = [None] * len(meshes)
     counts = np.fromiter((len(faces) for _, faces in meshes), dtype=np.int64, count=len(meshes))
     order = np.argsort(counts, kind="stable")

@@ -426,6 +426,8 @@ def segment_sums(values: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     """
     lengths = np.diff(offsets)
     out = np.zeros(len(lengths), dtype=np.float64)
+    if not len(lengths):
+        return out
     order = np.argsort(lengths, kind="stable")
     starts = np.flatnonzero(np.diff(lengths[order], prepend=-1))
     for group in np.split(order, starts[1:]):
