@@ -25,7 +25,6 @@ from meshcol.geometry.topology import (
     edge_table,
     is_balanced,
     manifold_solid,
-    mesh_topology_batch,
     oriented_volume,
     oriented_volume_batch,
 )
@@ -178,7 +177,7 @@ def measure_geometries(geometries: Iterable[LocalGeometry], mass: bool = True) -
     geometry, for all of them at once, where not measured yet.
 
     The values are those each :class:`LocalGeometry` property computes on first use, bit for
-    bit (:func:`~meshcol.geometry.topology.mesh_topology_batch`,
+    bit (:func:`~meshcol.collision.mesh_topology.mesh_topology_batch`, in the core,
     :func:`~meshcol.geometry.topology.oriented_volume_batch`,
     :func:`~meshcol.geometry.mass.mass_properties_batch`; the face heights are per-face
     arithmetic, the same on the faces of all meshes one after the other): some fifty numpy
@@ -200,9 +199,16 @@ def measure_geometries(geometries: Iterable[LocalGeometry], mass: bool = True) -
 
 def _measure_topology(todo: list[LocalGeometry]) -> None:
     """Fill the topology, face heights and oriented volume of each geometry (every one with
-    faces)."""
+    faces; one a face of which names a vertex it lacks is left to its own properties)."""
+    from meshcol.collision.mesh_topology import face_heights as native_face_heights
+    from meshcol.collision.mesh_topology import mesh_topology_batch
+
     faces = [np.asarray(g.faces, dtype=np.int64) for g in todo]
     topology = mesh_topology_batch(faces, [len(g.vertices) for g in todo])
+    if not topology.valid.all():
+        keep = np.flatnonzero(topology.valid).tolist()
+        todo, faces = [todo[i] for i in keep], [faces[i] for i in keep]
+        topology = mesh_topology_batch(faces, [len(g.vertices) for g in todo])
     vertex_offsets = np.zeros(len(todo) + 1, dtype=np.int64)
     np.cumsum([len(g.vertices) for g in todo], out=vertex_offsets[1:])
     face_offsets = np.zeros(len(todo) + 1, dtype=np.int64)
@@ -210,7 +216,7 @@ def _measure_topology(todo: list[LocalGeometry]) -> None:
     vertices = np.concatenate([np.asarray(g.vertices, dtype=np.float64) for g in todo])
     shift = np.repeat(vertex_offsets[:-1], np.diff(face_offsets))
     every = np.concatenate(faces) + shift[:, None]
-    heights, repeated = face_heights(vertices, every)
+    heights, repeated = native_face_heights(vertices, every)
     volumes = oriented_volume_batch(vertices, every, face_offsets, topology.closed)
     for i, geometry in enumerate(todo):
         lo, hi = int(face_offsets[i]), int(face_offsets[i + 1])

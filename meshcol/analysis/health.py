@@ -192,6 +192,17 @@ def inspect_mesh(
     """:func:`inspect_body`, with what the mesh alone decides shared through ``geometries``
     by the bodies that instance it."""
     vertices, faces = _mesh_arrays(body)
+    return _inspect_arrays(body, vertices, faces, declared_units, geometries)
+
+
+def _inspect_arrays(
+    body: Body,
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    declared_units: str | None,
+    geometries: GeometryCache,
+) -> MeshInspection:
+    """:func:`inspect_mesh` of the body's checked arrays (:func:`_mesh_arrays`)."""
     mesh = geometries.get(vertices, faces)
 
     used = body.world_vertices()[mesh.used]
@@ -407,19 +418,22 @@ def inspect_meshes(
     props), so the work follows the unique meshes, not the bodies, and for all the unique
     meshes at once (:func:`~meshcol.analysis.geometry_cache.measure_geometries`)."""
     geometries = geometries if geometries is not None else GeometryCache()
-    usable = []
+    checked: list[tuple[np.ndarray, np.ndarray] | InvalidMeshError] = []
     for mesh in meshes:
         try:
-            usable.append(geometries.get(*_mesh_arrays(mesh)))
-        except InvalidMeshError:
-            pass  # reported below, in order
-    measure_geometries(usable, mass=False)
-    out: list[MeshInspection | InvalidMeshError] = []
-    for done, mesh in enumerate(meshes, start=1):
-        try:
-            out.append(inspect_mesh(mesh, units, geometries))
+            checked.append(_mesh_arrays(mesh))
         except InvalidMeshError as error:
-            out.append(error)
+            checked.append(error)
+    measure_geometries(
+        [geometries.get(*arrays) for arrays in checked if not isinstance(arrays, Exception)],
+        mass=False,
+    )
+    out: list[MeshInspection | InvalidMeshError] = []
+    for done, (mesh, arrays) in enumerate(zip(meshes, checked), start=1):
+        if isinstance(arrays, InvalidMeshError):
+            out.append(arrays)
+        else:
+            out.append(_inspect_arrays(mesh, *arrays, units, geometries))
         if progress is not None:
             progress(f"inspect: {done}/{len(meshes)} bodies")
     return out

@@ -539,11 +539,13 @@ def _mass_dicts(masses: list[MassProperties | None]) -> list[dict[str, Any] | No
     present = [m for m in masses if m is not None]
     if not present:
         return [None] * len(masses)
-    vectors = np.array(
-        [(m.center_of_mass, m.shell_center_of_mass, np.zeros(3), np.zeros(3)) for m in present],
-        dtype=np.float64,
-    )
-    tensors = np.array([(m.inertia, m.shell_inertia) for m in present], dtype=np.float64)
+    vectors = np.zeros((len(present), 4, 3))
+    vectors[:, 0] = np.stack([m.center_of_mass for m in present])
+    vectors[:, 1] = np.stack([m.shell_center_of_mass for m in present])
+    tensors = np.stack(
+        [np.stack([m.inertia for m in present]), np.stack([m.shell_inertia for m in present])],
+        axis=1,
+    ).astype(np.float64, copy=False)
     finite = np.isfinite(tensors).all(axis=(2, 3))
     if finite.any():
         chosen = tensors[finite]

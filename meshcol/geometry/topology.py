@@ -3,7 +3,6 @@ duplicates."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -19,8 +18,6 @@ __all__ = [
     "is_balanced",
     "is_closed_manifold",
     "manifold_solid",
-    "MeshTopologyBatch",
-    "mesh_topology_batch",
     "oriented_volume_batch",
     "segment_sums",
     "orient_outward",
@@ -260,7 +257,8 @@ def manifold_solid(vertices: np.ndarray, faces: np.ndarray, balanced: bool | Non
     flipped, duplicated, finned, doubled and degenerate meshes; valgrind saw no read of
     unwritten memory on the three balanced ones tried: a closed sphere, the sphere doubled
     inside out, two overlapping spheres). ``balanced``, when the caller knows it
-    (:attr:`MeshTopologyBatch.balanced`), spares measuring it again."""
+    (:attr:`meshcol.collision.mesh_topology.MeshTopologyBatch.balanced`), spares measuring it
+    again."""
     import manifold3d
 
     faces = np.asarray(faces).reshape(-1, 3)
@@ -279,129 +277,8 @@ def manifold_solid(vertices: np.ndarray, faces: np.ndarray, balanced: bool | Non
 
 
 # ---------------------------------------------------------------------------------------------
-# Many meshes at once: the counts above of each mesh, from one pass over all their faces
-
-
-@dataclass(frozen=True, eq=False)
-class MeshTopologyBatch:
-    """The topology of many meshes, one entry per mesh (:func:`mesh_topology_batch`).
-
-    Attributes
-    ----------
-    boundary_edges, non_manifold_edges, inconsistent_edges : (n,) int64
-        :func:`edge_table`'s counts: edges with one face, with more than two, with two that
-        traverse them the same way.
-    closed : (n,) bool
-        :func:`is_closed_manifold`.
-    balanced : (n,) bool
-        :func:`is_balanced` of the faces without a repeated corner (what
-        :func:`manifold_solid` gives manifold3d).
-    duplicate_faces : (n,) int64
-        :func:`duplicate_face_count`.
-    components : (n,) int64
-        :func:`component_count`.
-    used : list of (k_i,) int64
-        Each mesh's used vertices, ascending (``np.unique(faces)``).
-    """
-
-    boundary_edges: np.ndarray
-    non_manifold_edges: np.ndarray
-    inconsistent_edges: np.ndarray
-    closed: np.ndarray
-    balanced: np.ndarray
-    duplicate_faces: np.ndarray
-    components: np.ndarray
-    used: list
-
-
-def _offsets(counts: np.ndarray) -> np.ndarray:
-    offsets = np.zeros(len(counts) + 1, dtype=np.int64)
-    np.cumsum(counts, out=offsets[1:])
-    return offsets
-
-
-def mesh_topology_batch(
-    faces: Sequence[np.ndarray], vertex_counts: Sequence[int]
-) -> MeshTopologyBatch:
-    """Edge counts, closedness, balance, duplicates, components and used vertices of many
-    meshes, equal to the single-mesh functions of this module on each.
-
-    Parameters
-    ----------
-    faces : sequence of (m_i, 3) int
-        Each mesh's faces, indices into its own vertices.
-    vertex_counts : sequence of int
-        Each mesh's vertex count.
-
-    Returns
-    -------
-    MeshTopologyBatch
-
-    Notes
-    -----
-    The meshes' vertex indices are shifted apart (mesh ``i``'s by the vertices before it), so
-    one edge table, one sort of the faces and one connected-components pass over all the
-    faces give every mesh's answer: no edge, face or component of one mesh meets another's.
-    Integer counts throughout, so nothing differs from the mesh-by-mesh answer.
-    """
-    n = len(faces)
-    vertex_offsets = _offsets(np.asarray(vertex_counts, dtype=np.int64).reshape(n))
-    face_counts = np.fromiter((len(f) for f in faces), dtype=np.int64, count=n)
-    mesh_of_face = np.repeat(np.arange(n, dtype=np.int64), face_counts)
-    every = (
-        np.concatenate([np.asarray(f, dtype=np.int64).reshape(-1, 3) for f in faces])
-        if n
-        else np.zeros((0, 3), np.int64)
-    ) + vertex_offsets[:-1][mesh_of_face][:, None]
-    total = max(int(vertex_offsets[-1]), 1)
-    mesh_of_vertex = np.repeat(np.arange(n, dtype=np.int64), np.diff(vertex_offsets))
-
-    directed = every[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-    whole = np.repeat(
-        (every[:, 0] != every[:, 1]) & (every[:, 1] != every[:, 2]) & (every[:, 0] != every[:, 2]),
-        3,
-    )
-    real = directed[:, 0] != directed[:, 1]
-    directed, whole = directed[real], whole[real]
-    low, high = directed.min(axis=1), directed.max(axis=1)
-    keys, inverse, counts = np.unique(low * total + high, return_inverse=True, return_counts=True)
-    inverse = inverse.reshape(-1)
-    edge_mesh = mesh_of_vertex[keys // total]
-    direction = np.where(directed[:, 0] < directed[:, 1], 1, -1)
-    balance = np.bincount(inverse, weights=direction, minlength=len(keys))
-
-    def per_mesh(edge_mask: np.ndarray) -> np.ndarray:
-        return np.bincount(edge_mesh[edge_mask], minlength=n).astype(np.int64)
-
-    boundary = per_mesh(counts == 1)
-    non_manifold = per_mesh(counts > 2)
-    inconsistent = per_mesh((counts == 2) & (balance != 0))
-    real_edges = np.bincount(edge_mesh, minlength=n)
-    closed = (boundary == 0) & (non_manifold == 0) & (inconsistent == 0) & (real_edges > 0)
-
-    # is_balanced over the faces without a repeated corner
-    kept_balance = np.bincount(inverse[whole], weights=direction[whole], minlength=len(keys))
-    kept_present = np.bincount(inverse[whole], minlength=len(keys)) > 0
-    unbalanced = per_mesh(kept_present & (kept_balance != 0))
-    balanced = (unbalanced == 0) & (np.bincount(edge_mesh[kept_present], minlength=n) > 0)
-
-    ordered = np.sort(every, axis=1)
-    order = np.lexsort(ordered.T[::-1])
-    repeat = np.zeros(len(ordered), dtype=bool)
-    repeat[1:] = (ordered[order][1:] == ordered[order][:-1]).all(axis=1)
-    duplicates = np.bincount(mesh_of_face[order][repeat], minlength=n).astype(np.int64)
-
-    from meshcol.geometry.graph import connected_components
-
-    used_all = np.unique(every)
-    _, labels = connected_components(total, every[:, [0, 1, 1, 2]].reshape(-1, 2))
-    _, first = np.unique(labels[used_all], return_index=True)
-    components = np.bincount(mesh_of_vertex[used_all[first]], minlength=n).astype(np.int64)
-    cuts = np.searchsorted(used_all, vertex_offsets)
-    used = [used_all[cuts[i] : cuts[i + 1]] - vertex_offsets[i] for i in range(n)]
-    return MeshTopologyBatch(
-        boundary, non_manifold, inconsistent, closed, balanced, duplicates, components, used
-    )
+# Many meshes at once: float sums of each mesh, in numpy's own order (the integer counts of
+# many meshes are the core's: meshcol.collision.mesh_topology)
 
 
 def segment_sums(values: np.ndarray, offsets: np.ndarray) -> np.ndarray:
@@ -453,7 +330,8 @@ def oriented_volume_batch(
     face_offsets : (n + 1,) int64
         Mesh ``i``'s faces are ``faces[face_offsets[i]:face_offsets[i + 1]]``.
     closed : (n,) bool
-        :func:`is_closed_manifold` of each (:func:`mesh_topology_batch`).
+        :func:`is_closed_manifold` of each
+        (:func:`meshcol.collision.mesh_topology.mesh_topology_batch`).
 
     Returns
     -------

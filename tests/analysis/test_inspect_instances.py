@@ -133,6 +133,7 @@ def test_instances_are_reported_as_each_body_alone(tmp_path) -> None:
 def test_inspect_measures_each_unique_mesh_once(tmp_path, monkeypatch) -> None:
     import meshcol.analysis.geometry_cache as geometry_module
     import meshcol.collision.hull as hull_module
+    import meshcol.collision.mesh_topology as topology_module
     import meshcol.collision.self_intersection as crossing_module
     import meshcol.geometry.mass as mass_module
 
@@ -150,7 +151,7 @@ def test_inspect_measures_each_unique_mesh_once(tmp_path, monkeypatch) -> None:
 
     counted(crossing_module, "self_intersections")
     counted(geometry_module, "_manifold_status")
-    counted(geometry_module, "mesh_topology_batch", batch=True)
+    counted(topology_module, "mesh_topology_batch", batch=True)
     counted(mass_module, "mass_properties_batch", batch=True)
     counted(hull_module, "exact_hull")
 

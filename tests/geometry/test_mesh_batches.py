@@ -19,12 +19,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from meshcol.analysis.geometry_cache import LocalGeometry, measure_geometries
+from meshcol.collision.mesh_topology import mesh_topology_batch
 from meshcol.geometry.mass import mass_properties, mass_properties_batch
-from meshcol.geometry.topology import (
-    mesh_topology_batch,
-    oriented_volume,
-    segment_sums,
-)
+from meshcol.geometry.topology import oriented_volume, segment_sums
 
 TETRA = np.array([[0, 1, 2], [0, 3, 1], [1, 3, 2], [2, 3, 0]])
 OCTA = np.array(
@@ -122,6 +119,25 @@ def test_batched_topology_counts_are_each_meshs_own(seed: int, count: int) -> No
         }
         assert got == expected, i
         assert np.array_equal(batch.used[i], np.unique(faces))
+    assert batch.valid.all()
+
+
+def test_a_mesh_naming_a_vertex_it_lacks_is_left_to_itself() -> None:
+    """The core counts nothing of it (and says so); the others are counted as ever, and
+    measure_geometries leaves its properties to be measured alone."""
+    rng = np.random.default_rng(6)
+    good = dirty_mesh(rng)
+    bad = (np.zeros((3, 3)), np.array([[0, 1, 3]]))
+    batch = mesh_topology_batch([good[1], bad[1], good[1]], [len(good[0]), 3, len(good[0])])
+    assert batch.valid.tolist() == [True, False, True]
+    assert batch.boundary_edges[1] == 0 and len(batch.used[1]) == 0
+    assert (
+        batch.boundary_edges[0] == batch.boundary_edges[2] == reference_counts(good[1])["boundary"]
+    )
+    geometries = [LocalGeometry(*good), LocalGeometry(*bad)]
+    measure_geometries(geometries, mass=False)
+    assert "edges" in geometries[0].__dict__ and "edges" not in geometries[1].__dict__
+    assert mesh_topology_batch([], []).valid.shape == (0,)
 
 
 def _same(a: object, b: object) -> bool:
@@ -224,3 +240,28 @@ def test_mass_rows_are_each_bodys_own() -> None:
             assert repr(row) == repr(alone(p))  # the same floats, -0.0 and all
     assert any(row is not None and row["principal_inertia"] is None for row in rows)
     assert _mass_dicts([None]) == [None]
+
+
+def test_native_face_heights_are_numpys_bits() -> None:
+    """The core's face heights against numpy's face_heights: random, tiny, huge and far
+    triangles, slivers, repeated corners, zero-length edges and NaN corners."""
+    from meshcol.collision.mesh_topology import face_heights as native_face_heights
+    from meshcol.geometry.triangles import face_heights
+
+    rng = np.random.default_rng(8)
+    n = 20_000
+    vertices = rng.normal(size=(n, 3)) * 10.0 ** rng.uniform(-8, 8, (n, 1)) + rng.normal(
+        size=(n, 3)
+    ) * 10.0 ** rng.uniform(-3, 6, (n, 1))
+    vertices[:50] = vertices[50:100]  # coincident corners
+    vertices[100:110] = np.nan
+    faces = rng.integers(0, n, size=(60_000, 3))
+    faces[:200, 1] = faces[:200, 0]  # repeated corners
+    faces[200:400] = rng.integers(0, 110, size=(200, 3))  # coincident and NaN corners
+    slivers = np.column_stack([faces[400:600, 0], faces[400:600, 0] + 1, faces[400:600, 0] + 2])
+    vertices[slivers[:, 2] % n] = 0.5 * (vertices[slivers[:, 0] % n] + vertices[slivers[:, 1] % n])
+    faces[400:600] = slivers % n
+    expected = face_heights(vertices, faces)
+    got = native_face_heights(vertices, faces)
+    assert _same(got[0], expected[0])
+    assert np.array_equal(got[1], expected[1])
