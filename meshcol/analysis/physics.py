@@ -295,6 +295,7 @@ class _ColliderBody:
     # (visual mesh closed, its world bounding-box diagonal): set by _visual_mass when the
     # collider is to be compared with it (_comparisons)
     compare: tuple[bool, float] | None = None
+    moment_ratio: float | None = None  # set by _mass_rows (_moment_ratios)
 
     @classmethod
     def of(cls, run: _Readiness, index: int) -> _ColliderBody:
@@ -527,9 +528,11 @@ def _mass_rows(items: list[_ColliderBody]) -> None:
     """Each body's ``collider_mass`` and ``visual_mass`` in its row, from ``item.collider``
     and ``item.visual``: :func:`_mass_dicts` of all of them at once."""
     rows = _mass_dicts([m for item in items for m in (item.collider, item.visual)])
-    for item, collider, visual in zip(items, rows[0::2], rows[1::2]):
+    pairs = list(zip(rows[0::2], rows[1::2]))
+    for item, (collider, visual), ratio in zip(items, pairs, _moment_ratios(pairs)):
         item.row["collider_mass"] = collider
         item.row["visual_mass"] = visual
+        item.moment_ratio = ratio
 
 
 def _mass_dicts(masses: list[MassProperties | None]) -> list[dict[str, Any] | None]:
@@ -592,6 +595,7 @@ class _Comparison:
     visual_row: dict[str, Any]
     solid: bool  # the visual mesh is closed and the collider has a volume: compare solids
     diagonal: float  # of the visual mesh's world bounding box
+    moment_ratio: float | None  # of their principal moments per unit mass (_moment_ratios)
 
 
 def _visual_mass(item: _ColliderBody) -> list[Finding]:
@@ -637,6 +641,7 @@ def _comparisons(item: _ColliderBody) -> list[Finding]:
         visual_row=item.row["visual_mass"],
         solid=closed and item.collider.volume > 0,
         diagonal=diagonal,
+        moment_ratio=item.moment_ratio,
     )
     findings = []
     for row_field, measure in COMPARISONS:
@@ -679,7 +684,7 @@ def _inertia_ratio(c: _Comparison, options: PhysicsOptions) -> tuple[Any, list[F
     ``inertia_ratio``."""
     if not c.solid:
         return None, []
-    ratio = _moment_ratio(c.collider_row, c.visual_row)
+    ratio = c.moment_ratio
     if ratio is None or not ratio > options.inertia_ratio:
         return ratio, []
     message = f"principal moments of inertia per unit mass differ by up to {ratio:.3g} x"
@@ -703,21 +708,41 @@ def _center_of_mass_offset(c: _Comparison, options: PhysicsOptions) -> tuple[Any
     return offset, [finding("MC206", c.body, None, offset, options.com_offset, message)]
 
 
-def _moment_ratio(a: dict[str, Any], b: dict[str, Any]) -> float | None:
-    """Largest ratio (>= 1) of the sorted principal moments per unit mass of two solids,
-    from their :func:`_mass_dicts` (whose principal moments are already computed)."""
-    if a["volume"] == 0 or b["volume"] == 0:
-        return None
-    if a["principal_inertia"] is None or b["principal_inertia"] is None:
-        return None  # not finite
-    per_mass_a = np.asarray(a["principal_inertia"], dtype=np.float64) / a["volume"]
-    per_mass_b = np.asarray(b["principal_inertia"], dtype=np.float64) / b["volume"]
-    if not (np.all(np.isfinite(per_mass_a)) and np.all(np.isfinite(per_mass_b))):
-        return None
-    per_mass_a, per_mass_b = np.sort(np.abs(per_mass_a)), np.sort(np.abs(per_mass_b))
-    if np.any(per_mass_a <= 0) or np.any(per_mass_b <= 0):
-        return None
-    return float(np.max(np.maximum(per_mass_a / per_mass_b, per_mass_b / per_mass_a)))
+def _moment_ratios(pairs: list[tuple[Any, Any]]) -> list[float | None]:
+    """Per pair of :func:`_mass_dicts` rows (collider, visual; None allowed): the largest
+    ratio (>= 1) of the sorted principal moments per unit mass of the two solids, None when
+    a volume is 0 or a moment not finite or not positive. One numpy pass over all the pairs;
+    each pair's number is the one numpy gives it alone (elementwise, then a sort and a max
+    of three)."""
+    out: list[float | None] = [None] * len(pairs)
+    index = [
+        i
+        for i, (a, b) in enumerate(pairs)
+        if a is not None
+        and b is not None
+        and a["volume"] != 0
+        and b["volume"] != 0
+        and a["principal_inertia"] is not None  # not finite
+        and b["principal_inertia"] is not None
+    ]
+    if not index:
+        return out
+
+    def per_mass(side: int) -> np.ndarray:
+        moments = np.array([pairs[i][side]["principal_inertia"] for i in index], dtype=np.float64)
+        volumes = np.array([pairs[i][side]["volume"] for i in index], dtype=np.float64)
+        return moments / volumes[:, None]
+
+    with np.errstate(all="ignore"):
+        per_mass_a, per_mass_b = per_mass(0), per_mass(1)
+        ok = np.isfinite(per_mass_a).all(axis=1) & np.isfinite(per_mass_b).all(axis=1)
+        per_mass_a, per_mass_b = np.sort(np.abs(per_mass_a)), np.sort(np.abs(per_mass_b))
+        ok &= (per_mass_a > 0).all(axis=1) & (per_mass_b > 0).all(axis=1)
+        ratios = np.maximum(per_mass_a / per_mass_b, per_mass_b / per_mass_a).max(axis=1)
+    for k, i in enumerate(index):
+        if ok[k]:
+            out[i] = float(ratios[k])
+    return out
 
 
 #: The measures of a collider against its visual mesh, in the order their findings are

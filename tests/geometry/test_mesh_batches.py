@@ -265,3 +265,32 @@ def test_native_face_heights_are_numpys_bits() -> None:
     got = native_face_heights(vertices, faces)
     assert _same(got[0], expected[0])
     assert np.array_equal(got[1], expected[1])
+
+
+def test_moment_ratios_are_each_pairs_own() -> None:
+    """physics' moment ratios of all pairs at once against the pair alone (the old per-body
+    code), with zero volumes, inside-out solids, NaN and missing rows among them."""
+    from meshcol.analysis.physics import _mass_dicts, _moment_ratios
+
+    def alone(a, b):
+        if a is None or b is None or a["volume"] == 0 or b["volume"] == 0:
+            return None
+        if a["principal_inertia"] is None or b["principal_inertia"] is None:
+            return None
+        per_mass_a = np.asarray(a["principal_inertia"], dtype=np.float64) / a["volume"]
+        per_mass_b = np.asarray(b["principal_inertia"], dtype=np.float64) / b["volume"]
+        if not (np.all(np.isfinite(per_mass_a)) and np.all(np.isfinite(per_mass_b))):
+            return None
+        per_mass_a, per_mass_b = np.sort(np.abs(per_mass_a)), np.sort(np.abs(per_mass_b))
+        if np.any(per_mass_a <= 0) or np.any(per_mass_b <= 0):
+            return None
+        return float(np.max(np.maximum(per_mass_a / per_mass_b, per_mass_b / per_mass_a)))
+
+    rows = _mass_dicts([mass_properties(v, f) for v, f in meshes_of(9, 120)])
+    rows[5] = None
+    pairs = list(zip(rows[0::2], rows[1::2]))
+    pairs.append((rows[0], rows[0]))  # equal: ratio 1
+    got = _moment_ratios(pairs)
+    expected = [alone(a, b) for a, b in pairs]
+    assert repr(got) == repr(expected)
+    assert got[-1] == 1.0 and any(r is None for r in got) and sum(r is not None for r in got) > 5
