@@ -554,9 +554,10 @@ def _mass_dicts(masses: list[MassProperties | None]) -> list[dict[str, Any] | No
         chosen = tensors[finite]
         vectors[:, 2:][finite] = np.linalg.eigvalsh(0.5 * (chosen + chosen.transpose(0, 2, 1)))
     vectors[:, 2:][~finite] = np.nan
-    vector_ok = np.isfinite(vectors).all(axis=2).tolist()
-    tensor_ok = finite.tolist()
-    vector_lists, tensor_lists = vectors.tolist(), tensors.tolist()
+    vector_ok: list[Any] = np.asarray(np.isfinite(vectors).all(axis=2)).tolist()
+    tensor_ok: list[Any] = np.asarray(finite).tolist()
+    vector_lists: list[Any] = vectors.tolist()
+    tensor_lists: list[Any] = tensors.tolist()
     out: list[dict[str, Any] | None] = []
     k = 0
     for properties in masses:
