@@ -16,6 +16,7 @@ import numpy as np
 from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, Primitive, Sphere
 
 __all__ = [
+    "MASS_BATCH_TRIANGLES",
     "MassProperties",
     "combine_mass_properties",
     "mass_properties",
@@ -168,17 +169,16 @@ def mass_properties_batch(
     same operation on the same numbers, and every reduction over a mesh's faces runs along
     the last axis (numpy's pairwise sum per row, one BLAS product per stacked matrix), in the
     order the single-mesh code uses: ``tests/geometry/test_mass_batch.py`` compares the bits.
-    A mesh alone of its face count (a big one) takes :func:`mass_properties` itself.
+    A mesh alone of its face count (a big one) takes :func:`mass_properties` itself; at most
+    :data:`MASS_BATCH_TRIANGLES` triangles are stacked at once (bounded memory).
     """
     if not meshes:
         return []
     out: list[MassProperties | None] = [None] * len(meshes)
     counts = np.fromiter((len(faces) for _, faces in meshes), dtype=np.int64, count=len(meshes))
-    order = np.argsort(counts, kind="stable")
-    starts = np.flatnonzero(np.diff(counts[order], prepend=-1))
-    for group in np.split(order, starts[1:]):
-        if len(group) == 1 or counts[group[0]] == 0:
-            for index in group.tolist():
+    for chunk in _stacks(counts):
+        if len(chunk) == 1 or counts[chunk[0]] == 0:
+            for index in chunk.tolist():
                 out[index] = mass_properties(*meshes[index])
             continue
         triangles = np.stack(
@@ -186,12 +186,30 @@ def mass_properties_batch(
                 np.asarray(meshes[index][0], dtype=np.float64)[
                     np.asarray(meshes[index][1], dtype=np.int64)
                 ]
-                for index in group.tolist()
+                for index in chunk.tolist()
             ]
         )
-        for index, properties in zip(group.tolist(), _stacked_mass_properties(triangles)):
+        for index, properties in zip(chunk.tolist(), _stacked_mass_properties(triangles)):
             out[index] = properties
     return out  # type: ignore[return-value]
+
+
+#: At most this many triangles are stacked at once by :func:`mass_properties_batch` (the
+#: meshes of one face count beyond it go in several stacks): each of its temporaries is then
+#: at most some 20 MB, whatever the library's size.
+MASS_BATCH_TRIANGLES = 1 << 18
+
+
+def _stacks(counts: np.ndarray) -> list[np.ndarray]:
+    """Mesh indices in stacks of one face count each, of at most
+    :data:`MASS_BATCH_TRIANGLES` triangles (or one mesh)."""
+    order = np.argsort(counts, kind="stable")
+    starts = np.flatnonzero(np.diff(counts[order], prepend=-1))
+    stacks: list[np.ndarray] = []
+    for group in np.split(order, starts[1:]):
+        step = max(1, MASS_BATCH_TRIANGLES // max(int(counts[group[0]]), 1))
+        stacks.extend(group[start : start + step] for start in range(0, len(group), step))
+    return stacks
 
 
 def _stacked_tensor(second: np.ndarray, mass: np.ndarray, center: np.ndarray) -> np.ndarray:

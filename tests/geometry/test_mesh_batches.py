@@ -177,6 +177,20 @@ def test_batched_mass_properties_of_many_equal_face_counts_and_none() -> None:
     assert mass_properties_batch([]) == []
 
 
+def test_stacks_past_the_triangle_bound_give_the_same_bits(monkeypatch) -> None:
+    """A face count's meshes split into several stacks (bounded memory): the same numbers."""
+    import meshcol.geometry.mass as mass_module
+
+    meshes = meshes_of(10, 40)
+    expected = mass_properties_batch(meshes)
+    monkeypatch.setattr(mass_module, "MASS_BATCH_TRIANGLES", 20)
+    assert max(len(s) for s in mass_module._stacks(np.array([12] * 9))) == 1
+    assert [len(s) for s in mass_module._stacks(np.array([4] * 11))] == [5, 5, 1]
+    for got, want in zip(mass_properties_batch(meshes), expected):
+        for name in MASS_FIELDS + SHELL_FIELDS:
+            assert _same(getattr(got, name), getattr(want, name)), name
+
+
 def test_segment_sums_are_numpys_sum_of_each_segment() -> None:
     rng = np.random.default_rng(4)
     lengths = rng.integers(0, 300, 200)
