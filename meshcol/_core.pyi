@@ -482,6 +482,16 @@ def self_intersecting_pairs(vertices: Annotated[NDArray[numpy.float64], dict(sha
     Crossing face pairs of a mesh, streamed from the sweep of the face boxes into the exact test: (pairs (K, 2) int64 i < j sorted, at most max_kept_pairs (< 0: all); crossing count; candidate pairs decided; work units spent; complete). At most max_work (< 0: no budget) units are spent (one per candidate, slow_cost per orientation past its filter, exact_cost more per exact one): past it complete is False and the count a lower bound.
     """
 
+def mesh_topology_batch(faces: Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], face_offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], vertex_offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], threads: int = 0) -> tuple[Annotated[NDArray[numpy.int64], dict(shape=(None, 5), order='C')], Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')]]:
+    """
+    Topology of each mesh of a batch (mesh i: faces[face_offsets[i]:face_offsets[i + 1]], indices into its own vertices, vertex_offsets[i + 1] - vertex_offsets[i] of them): (counts (n, 5) int64: boundary, non-manifold and inconsistently wound edges, duplicate faces, connected pieces; closed (n,) bool; balanced (n,) bool, of the faces without a repeated corner; used (V,) bool per vertex; status (n,) int8, 1 when a face index is out of its mesh's range and nothing was counted).
+    """
+
+def face_heights(vertices: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], faces: Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], threads: int = 0) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')]]:
+    """
+    Per face: (height on its longest edge (F,) float64, 0 when that edge has length 0; names a vertex twice (F,) bool), the bits of numpy's face_heights.
+    """
+
 def face_pairs_cross(vertices: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], faces: Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], pairs: Annotated[NDArray[numpy.int64], dict(shape=(None, 2), order='C', device='cpu', writable=False)], threads: int = 0) -> Annotated[NDArray[numpy.bool_], dict(shape=(None,), order='C')]:
     """Per face pair (K,) bool: the open triangles share a point (exact)."""
 

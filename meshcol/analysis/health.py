@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.analysis.geometry_cache import GeometryCache
+from meshcol.analysis.geometry_cache import GeometryCache, measure_geometries
 from meshcol.analysis.rules import Finding, get_rule
 from meshcol.errors import InvalidMeshError
 from meshcol.geometry.triangles import degenerate_faces
@@ -191,14 +191,18 @@ def inspect_mesh(
 ) -> MeshInspection:
     """:func:`inspect_body`, with what the mesh alone decides shared through ``geometries``
     by the bodies that instance it."""
-    vertices = np.asarray(body.vertices, dtype=np.float64)
-    faces = np.asarray(body.faces, dtype=np.int64)
-    if len(faces) == 0:
-        raise InvalidMeshError(f"body '{body.name}': mesh has no faces", body.source)
-    if not np.isfinite(vertices).all():
-        raise InvalidMeshError(
-            f"body '{body.name}': vertices contain NaN or infinite coordinates", body.source
-        )
+    vertices, faces = _mesh_arrays(body)
+    return _inspect_arrays(body, vertices, faces, declared_units, geometries)
+
+
+def _inspect_arrays(
+    body: Body,
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    declared_units: str | None,
+    geometries: GeometryCache,
+) -> MeshInspection:
+    """:func:`inspect_mesh` of the body's checked arrays (:func:`_mesh_arrays`)."""
     mesh = geometries.get(vertices, faces)
 
     used = body.world_vertices()[mesh.used]
@@ -253,6 +257,20 @@ def inspect_mesh(
         declared_units=declared_units,
         findings=[name for name in RULES if broken[name]],
     )
+
+
+def _mesh_arrays(body: Body) -> tuple[np.ndarray, np.ndarray]:
+    """The body's vertices (float64) and faces (int64); InvalidMeshError when it has no faces
+    or a non-finite coordinate."""
+    vertices = np.asarray(body.vertices, dtype=np.float64)
+    faces = np.asarray(body.faces, dtype=np.int64)
+    if len(faces) == 0:
+        raise InvalidMeshError(f"body '{body.name}': mesh has no faces", body.source)
+    if not np.isfinite(vertices).all():
+        raise InvalidMeshError(
+            f"body '{body.name}': vertices contain NaN or infinite coordinates", body.source
+        )
+    return vertices, faces
 
 
 def guess_units(largest_extent: float) -> tuple[str, str]:
@@ -397,14 +415,25 @@ def inspect_meshes(
 ) -> list[MeshInspection | InvalidMeshError]:
     """:func:`inspect_body` of each mesh, or the InvalidMeshError that stopped it; what a
     mesh alone decides is measured once for all the meshes that instance it (a level's
-    props), so the work follows the unique meshes, not the bodies."""
+    props), so the work follows the unique meshes, not the bodies, and for all the unique
+    meshes at once (:func:`~meshcol.analysis.geometry_cache.measure_geometries`)."""
     geometries = geometries if geometries is not None else GeometryCache()
-    out: list[MeshInspection | InvalidMeshError] = []
-    for done, mesh in enumerate(meshes, start=1):
+    checked: list[tuple[np.ndarray, np.ndarray] | InvalidMeshError] = []
+    for mesh in meshes:
         try:
-            out.append(inspect_mesh(mesh, units, geometries))
+            checked.append(_mesh_arrays(mesh))
         except InvalidMeshError as error:
-            out.append(error)
+            checked.append(error)
+    measure_geometries(
+        [geometries.get(*arrays) for arrays in checked if not isinstance(arrays, Exception)],
+        mass=False,
+    )
+    out: list[MeshInspection | InvalidMeshError] = []
+    for done, (mesh, arrays) in enumerate(zip(meshes, checked), start=1):
+        if isinstance(arrays, InvalidMeshError):
+            out.append(arrays)
+        else:
+            out.append(_inspect_arrays(mesh, *arrays, units, geometries))
         if progress is not None:
             progress(f"inspect: {done}/{len(meshes)} bodies")
     return out

@@ -184,10 +184,13 @@ def physics_readiness(
         ucx_owners=split_ucx(bodies)[1],
     )
     rows: list[dict[str, Any]] = []
-    for index in range(len(colliders.bodies)):
-        item = _ColliderBody.of(run, index)
-        for check in BODY_CHECKS:
-            findings.extend(check(item))
+    items = [_ColliderBody.of(run, index) for index in range(len(colliders.bodies))]
+    _measure_all(run, items)
+    found = [[f for check in BODY_CHECKS for f in check(item)] for item in items]
+    _mass_rows(items)
+    for item, item_findings in zip(items, found):
+        findings.extend(item_findings)
+        findings.extend(_comparisons(item))
         rows.append(item.row)
     if visuals is not None:
         findings.extend(_links_without_collision(visuals, colliders))
@@ -270,6 +273,8 @@ class _Readiness:
     hulls: dict[bytes, tuple[int, tuple[MassProperties, float] | None]] = field(
         default_factory=dict
     )
+    # convex part (index in colliders) -> its geometry key, for the polytopes
+    part_keys: dict[int, bytes] = field(default_factory=dict)
 
 
 @dataclass
@@ -286,6 +291,11 @@ class _ColliderBody:
     grouped: bool  # loose UCX_ parts naming nothing, grouped into a body of their own
     row: dict[str, Any]
     collider: MassProperties | None = None  # world frame, set by _collider_mass
+    visual: MassProperties | None = None  # world frame, set by _visual_mass
+    # (visual mesh closed, its world bounding-box diagonal): set by _visual_mass when the
+    # collider is to be compared with it (_comparisons)
+    compare: tuple[bool, float] | None = None
+    moment_ratio: float | None = None  # set by _mass_rows (_moment_ratios)
 
     @classmethod
     def of(cls, run: _Readiness, index: int) -> _ColliderBody:
@@ -395,7 +405,6 @@ def _collider_mass(item: _ColliderBody) -> list[Finding]:
             masses.append(mass)
     collider = combine_mass_properties(masses).transformed(body.pose) if masses else None
     item.collider = collider
-    item.row["collider_mass"] = _mass_dict(collider)
     min_volume = run.options.min_volume
     if collider is not None and 0.0 < collider.volume < min_volume:
         message = f"collider volume {collider.volume:.3g} is below {min_volume:g}"
@@ -419,11 +428,12 @@ def _part_mass(item: _ColliderBody, part: int) -> tuple[MassProperties | None, l
         what = f"convex part {int(colliders.part_index[part])}" + (
             "" if part_name is None else f" of part {part_name!r}"
         )
-        points = shapes.vertices[int(shapes.offsets[part]) : int(shapes.offsets[part + 1])]
-        key = geometry_key(points)
+        key = run.part_keys.get(part)
+        if key is None:
+            key = run.part_keys[part] = geometry_key(_part_points(run, part))
         measured_hull = run.hulls.get(key)
         if measured_hull is None:
-            measured_hull = run.hulls[key] = _hull_mass(points)
+            measured_hull = run.hulls[key] = _hull_mass(_part_points(run, part))
         dimension, solid = measured_hull
         min_relative = run.options.min_relative_volume
         if solid is None:
@@ -446,43 +456,129 @@ def _part_mass(item: _ColliderBody, part: int) -> tuple[MassProperties | None, l
     return mass, findings
 
 
+def _part_points(run: _Readiness, part: int) -> np.ndarray:
+    """A polytope part's points, in its body's frame (or its part offset's)."""
+    shapes = run.colliders.shapes
+    return shapes.vertices[int(shapes.offsets[part]) : int(shapes.offsets[part + 1])]
+
+
 def _hull_mass(points: np.ndarray) -> tuple[int, tuple[MassProperties, float] | None]:
     """A convex part's hull dimension (0 when the points have no hull) and, in 3-D, its mass
     properties (the points' frame) and its volume over its diagonal cubed (MC202)."""
-    from meshcol.collision.hull import exact_hull
     from meshcol.geometry.mass import mass_properties
+
+    dimension, hull = _solid_hull(points)
+    if hull is None:
+        return dimension, None
+    mass = mass_properties(hull.vertices, hull.faces)
+    return dimension, (mass, mass.volume / hull.diagonal**3)
+
+
+def _solid_hull(points: np.ndarray) -> tuple[int, Any]:
+    """The points' hull dimension (0 when they have none) and, in 3-D, their exact hull."""
+    from meshcol.collision.hull import exact_hull
 
     try:
         hull = exact_hull(points)
     except InvalidMeshError:
         return 0, None
-    if hull.dimension < 3:
-        return hull.dimension, None
-    mass = mass_properties(hull.vertices, hull.faces)
-    return hull.dimension, (mass, mass.volume / hull.diagonal**3)
+    return hull.dimension, (hull if hull.dimension == 3 else None)
 
 
-def _mass_dict(properties: MassProperties | None) -> dict[str, Any] | None:
-    """JSON-ready mass properties (non-finite numbers as None)."""
-    if properties is None:
-        return None
+def _measure_all(run: _Readiness, items: list[_ColliderBody]) -> None:
+    """Measure, for all the bodies at once, what their checks read: each unique convex part's
+    hull mass (``run.hulls``), each ``mesh`` collider's and each visual mesh's mass
+    properties and topology (:func:`~meshcol.analysis.geometry_cache.measure_geometries`).
+    The same numbers as measured one body at a time, in a few numpy calls per group of
+    meshes of one face count."""
+    from meshcol.analysis.geometry_cache import geometry_key, measure_geometries
+    from meshcol.collision.shapes import ShapeKind
+    from meshcol.geometry.mass import mass_properties_batch
 
-    def clean(values: np.ndarray) -> Any:
-        values = np.asarray(values, dtype=np.float64)
-        if not np.all(np.isfinite(values)):
-            return None
-        return values.tolist()
+    kinds = run.colliders.shapes.kinds
+    solids: dict[bytes, Any] = {}
+    meshes = []
+    for item in items:
+        if item.kind == "mesh":
+            meshes.append(run.geometries.get(item.body.vertices, item.body.faces))
+            continue
+        for part in item.parts:
+            if int(kinds[part]) != ShapeKind.POLYTOPE:
+                continue
+            points = _part_points(run, part)
+            key = run.part_keys[part] = geometry_key(points)
+            if key in run.hulls or key in solids:
+                continue
+            dimension, hull = _solid_hull(points)
+            if hull is None:
+                run.hulls[key] = (dimension, None)
+            else:
+                solids[key] = hull
+    masses = mass_properties_batch([(hull.vertices, hull.faces) for hull in solids.values()])
+    for (key, hull), mass in zip(solids.items(), masses):
+        run.hulls[key] = (3, (mass, mass.volume / hull.diagonal**3))
+    for item in items:
+        visual_body = _visual_of(item)[0]
+        if visual_body is not None and visual_body.primitive is None:
+            meshes.append(run.geometries.get(visual_body.vertices, visual_body.faces))
+    measure_geometries(meshes)
 
-    return {
-        "volume": properties.volume,
-        "center_of_mass": clean(properties.center_of_mass),
-        "inertia": clean(properties.inertia),
-        "principal_inertia": clean(properties.principal_inertia()),
-        "area": properties.area,
-        "shell_center_of_mass": clean(properties.shell_center_of_mass),
-        "shell_inertia": clean(properties.shell_inertia),
-        "shell_principal_inertia": clean(properties.principal_inertia(shell=True)),
-    }
+
+def _mass_rows(items: list[_ColliderBody]) -> None:
+    """Each body's ``collider_mass`` and ``visual_mass`` in its row, from ``item.collider``
+    and ``item.visual``: :func:`_mass_dicts` of all of them at once."""
+    rows = _mass_dicts([m for item in items for m in (item.collider, item.visual)])
+    pairs = list(zip(rows[0::2], rows[1::2]))
+    for item, (collider, visual), ratio in zip(items, pairs, _moment_ratios(pairs)):
+        item.row["collider_mass"] = collider
+        item.row["visual_mass"] = visual
+        item.moment_ratio = ratio
+
+
+def _mass_dicts(masses: list[MassProperties | None]) -> list[dict[str, Any] | None]:
+    """JSON-ready mass properties (non-finite numbers as None; None for None), the principal
+    moments of all of them from one stacked ``eigvalsh`` (the same LAPACK call per matrix as
+    :meth:`MassProperties.principal_inertia`)."""
+    present = [m for m in masses if m is not None]
+    if not present:
+        return [None] * len(masses)
+    vectors = np.zeros((len(present), 4, 3))
+    vectors[:, 0] = np.stack([m.center_of_mass for m in present])
+    vectors[:, 1] = np.stack([m.shell_center_of_mass for m in present])
+    tensors = np.stack(
+        [np.stack([m.inertia for m in present]), np.stack([m.shell_inertia for m in present])],
+        axis=1,
+    ).astype(np.float64, copy=False)
+    finite = np.isfinite(tensors).all(axis=(2, 3))
+    if finite.any():
+        chosen = tensors[finite]
+        vectors[:, 2:][finite] = np.linalg.eigvalsh(0.5 * (chosen + chosen.transpose(0, 2, 1)))
+    vectors[:, 2:][~finite] = np.nan
+    vector_ok: list[Any] = np.asarray(np.isfinite(vectors).all(axis=2)).tolist()
+    tensor_ok: list[Any] = np.asarray(finite).tolist()
+    vector_lists: list[Any] = vectors.tolist()
+    tensor_lists: list[Any] = tensors.tolist()
+    out: list[dict[str, Any] | None] = []
+    k = 0
+    for properties in masses:
+        if properties is None:
+            out.append(None)
+            continue
+        v, v_ok, t, t_ok = vector_lists[k], vector_ok[k], tensor_lists[k], tensor_ok[k]
+        k += 1
+        out.append(
+            {
+                "volume": properties.volume,
+                "center_of_mass": v[0] if v_ok[0] else None,
+                "inertia": t[0] if t_ok[0] else None,
+                "principal_inertia": v[2] if v_ok[2] else None,
+                "area": properties.area,
+                "shell_center_of_mass": v[1] if v_ok[1] else None,
+                "shell_inertia": t[1] if t_ok[1] else None,
+                "shell_principal_inertia": v[3] if v_ok[3] else None,
+            }
+        )
+    return out
 
 
 # ---------------------------------------------------------------------------------------------
@@ -496,15 +592,16 @@ class _Comparison:
     body: str
     collider: MassProperties
     visual: MassProperties
-    collider_row: dict[str, Any]  # their _mass_dict
+    collider_row: dict[str, Any]  # their _mass_dicts
     visual_row: dict[str, Any]
     solid: bool  # the visual mesh is closed and the collider has a volume: compare solids
     diagonal: float  # of the visual mesh's world bounding box
+    moment_ratio: float | None  # of their principal moments per unit mass (_moment_ratios)
 
 
-def _visual_comparison(item: _ColliderBody) -> list[Finding]:
-    """The visual mesh's mass properties and each of :data:`COMPARISONS` with the
-    collider's, into the row; MC301 when the visual mesh has no area."""
+def _visual_mass(item: _ColliderBody) -> list[Finding]:
+    """The visual mesh's mass properties (``item.visual``), and whether and how the collider
+    is compared with it (``item.compare``); MC301 when the visual mesh has no area."""
     run, body = item.run, item.body
     visual_body, item.row["visual_source"] = _visual_of(item)
     collider = item.collider
@@ -520,20 +617,32 @@ def _visual_comparison(item: _ColliderBody) -> list[Finding]:
         measured = geometry.oriented_volume
         closed = measured is not None and measured[1] != 0
         visual = geometry.mass.transformed(visual_body.pose)
-    item.row["visual_mass"] = _mass_dict(visual)
+    item.visual = visual
     if visual.area == 0.0:
         message = "the body has no area (every face degenerate): nothing to collide with"
         return [finding("MC301", body.name, None, 0.0, 0.0, message)]
     world = visual_body.world_vertices()[geometry.used]
+    item.compare = closed, float(np.linalg.norm(world.max(axis=0) - world.min(axis=0)))
+    return []
+
+
+def _comparisons(item: _ColliderBody) -> list[Finding]:
+    """Each of :data:`COMPARISONS` of the collider with the visual mesh, into the row (its
+    mass rows filled in: :func:`_mass_rows`)."""
+    if item.compare is None or item.collider is None or item.visual is None:
+        return []
+    closed, diagonal = item.compare
+    run, body = item.run, item.body
     item.row["comparison"] = "solid" if closed else "shell"
     comparison = _Comparison(
         body=body.name,
-        collider=collider,
-        visual=visual,
+        collider=item.collider,
+        visual=item.visual,
         collider_row=item.row["collider_mass"],
         visual_row=item.row["visual_mass"],
-        solid=closed and collider.volume > 0,
-        diagonal=float(np.linalg.norm(world.max(axis=0) - world.min(axis=0))),
+        solid=closed and item.collider.volume > 0,
+        diagonal=diagonal,
+        moment_ratio=item.moment_ratio,
     )
     findings = []
     for row_field, measure in COMPARISONS:
@@ -576,7 +685,7 @@ def _inertia_ratio(c: _Comparison, options: PhysicsOptions) -> tuple[Any, list[F
     ``inertia_ratio``."""
     if not c.solid:
         return None, []
-    ratio = _moment_ratio(c.collider_row, c.visual_row)
+    ratio = c.moment_ratio
     if ratio is None or not ratio > options.inertia_ratio:
         return ratio, []
     message = f"principal moments of inertia per unit mass differ by up to {ratio:.3g} x"
@@ -600,21 +709,41 @@ def _center_of_mass_offset(c: _Comparison, options: PhysicsOptions) -> tuple[Any
     return offset, [finding("MC206", c.body, None, offset, options.com_offset, message)]
 
 
-def _moment_ratio(a: dict[str, Any], b: dict[str, Any]) -> float | None:
-    """Largest ratio (>= 1) of the sorted principal moments per unit mass of two solids,
-    from their :func:`_mass_dict` (whose principal moments are already computed)."""
-    if a["volume"] == 0 or b["volume"] == 0:
-        return None
-    if a["principal_inertia"] is None or b["principal_inertia"] is None:
-        return None  # not finite
-    per_mass_a = np.asarray(a["principal_inertia"], dtype=np.float64) / a["volume"]
-    per_mass_b = np.asarray(b["principal_inertia"], dtype=np.float64) / b["volume"]
-    if not (np.all(np.isfinite(per_mass_a)) and np.all(np.isfinite(per_mass_b))):
-        return None
-    per_mass_a, per_mass_b = np.sort(np.abs(per_mass_a)), np.sort(np.abs(per_mass_b))
-    if np.any(per_mass_a <= 0) or np.any(per_mass_b <= 0):
-        return None
-    return float(np.max(np.maximum(per_mass_a / per_mass_b, per_mass_b / per_mass_a)))
+def _moment_ratios(pairs: list[tuple[Any, Any]]) -> list[float | None]:
+    """Per pair of :func:`_mass_dicts` rows (collider, visual; None allowed): the largest
+    ratio (>= 1) of the sorted principal moments per unit mass of the two solids, None when
+    a volume is 0 or a moment not finite or not positive. One numpy pass over all the pairs;
+    each pair's number is the one numpy gives it alone (elementwise, then a sort and a max
+    of three)."""
+    out: list[float | None] = [None] * len(pairs)
+    index = [
+        i
+        for i, (a, b) in enumerate(pairs)
+        if a is not None
+        and b is not None
+        and a["volume"] != 0
+        and b["volume"] != 0
+        and a["principal_inertia"] is not None  # not finite
+        and b["principal_inertia"] is not None
+    ]
+    if not index:
+        return out
+
+    def per_mass(side: int) -> np.ndarray:
+        moments = np.array([pairs[i][side]["principal_inertia"] for i in index], dtype=np.float64)
+        volumes = np.array([pairs[i][side]["volume"] for i in index], dtype=np.float64)
+        return moments / volumes[:, None]
+
+    with np.errstate(all="ignore"):
+        per_mass_a, per_mass_b = per_mass(0), per_mass(1)
+        ok = np.isfinite(per_mass_a).all(axis=1) & np.isfinite(per_mass_b).all(axis=1)
+        per_mass_a, per_mass_b = np.sort(np.abs(per_mass_a)), np.sort(np.abs(per_mass_b))
+        ok &= (per_mass_a > 0).all(axis=1) & (per_mass_b > 0).all(axis=1)
+        ratios = np.maximum(per_mass_a / per_mass_b, per_mass_b / per_mass_a).max(axis=1)
+    for k, i in enumerate(index):
+        if ok[k]:
+            out[i] = float(ratios[k])
+    return out
 
 
 #: The measures of a collider against its visual mesh, in the order their findings are
@@ -628,12 +757,13 @@ COMPARISONS: tuple[
 )
 
 #: The checks of each collider body, in the order their findings are listed; each returns
-#: its findings and fills its fields of the body's row.
+#: its findings and fills its fields of the body's row; then, once the mass rows of every
+#: body are filled in (:func:`_mass_rows`), :func:`_comparisons`.
 BODY_CHECKS: tuple[Callable[[_ColliderBody], list[Finding]], ...] = (
     _orphan_ucx_parts,
     _parts_without_ucx,
     _collider_mass,
-    _visual_comparison,
+    _visual_mass,
 )
 
 

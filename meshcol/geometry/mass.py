@@ -16,9 +16,11 @@ import numpy as np
 from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, Primitive, Sphere
 
 __all__ = [
+    "MASS_BATCH_TRIANGLES",
     "MassProperties",
     "combine_mass_properties",
     "mass_properties",
+    "mass_properties_batch",
     "primitive_mass_properties",
 ]
 
@@ -142,6 +144,124 @@ def mass_properties(vertices: np.ndarray, faces: np.ndarray) -> MassProperties:
     return MassProperties(
         volume, center + origin, inertia, area, shell_center + origin, shell_inertia
     )
+
+
+def mass_properties_batch(
+    meshes: Sequence[tuple[np.ndarray, np.ndarray]],
+) -> list[MassProperties]:
+    """:func:`mass_properties` of many meshes, bit for bit, at the cost of a few numpy calls
+    per group of meshes with as many faces instead of some forty per mesh.
+
+    Parameters
+    ----------
+    meshes : sequence of ((n_i, 3) float, (m_i, 3) int)
+        Each mesh's vertices and faces.
+
+    Returns
+    -------
+    list of MassProperties
+        One per mesh, in order: equal to :func:`mass_properties` of it to the last bit.
+
+    Notes
+    -----
+    The meshes with ``m`` faces are stacked into one ``(k, m, 3, 3)`` array of triangles and
+    :func:`mass_properties`' formulas run with that leading axis. Every per-face step is the
+    same operation on the same numbers, and every reduction over a mesh's faces runs along
+    the last axis (numpy's pairwise sum per row, one BLAS product per stacked matrix), in the
+    order the single-mesh code uses: ``tests/geometry/test_mass_batch.py`` compares the bits.
+    A mesh alone of its face count (a big one) takes :func:`mass_properties` itself; at most
+    :data:`MASS_BATCH_TRIANGLES` triangles are stacked at once (bounded memory).
+    """
+    if not meshes:
+        return []
+    out: list[MassProperties | None] = [None] * len(meshes)
+    counts = np.fromiter((len(faces) for _, faces in meshes), dtype=np.int64, count=len(meshes))
+    for chunk in _stacks(counts):
+        if len(chunk) == 1 or counts[chunk[0]] == 0:
+            for index in chunk.tolist():
+                out[index] = mass_properties(*meshes[index])
+            continue
+        triangles = np.stack(
+            [
+                np.asarray(meshes[index][0], dtype=np.float64)[
+                    np.asarray(meshes[index][1], dtype=np.int64)
+                ]
+                for index in chunk.tolist()
+            ]
+        )
+        for index, properties in zip(chunk.tolist(), _stacked_mass_properties(triangles)):
+            out[index] = properties
+    return out  # type: ignore[return-value]
+
+
+#: At most this many triangles are stacked at once by :func:`mass_properties_batch` (the
+#: meshes of one face count beyond it go in several stacks): each of its temporaries is then
+#: at most some 20 MB, whatever the library's size.
+MASS_BATCH_TRIANGLES = 1 << 18
+
+
+def _stacks(counts: np.ndarray) -> list[np.ndarray]:
+    """Mesh indices in stacks of one face count each, of at most
+    :data:`MASS_BATCH_TRIANGLES` triangles (or one mesh)."""
+    order = np.argsort(counts, kind="stable")
+    starts = np.flatnonzero(np.diff(counts[order], prepend=-1))
+    stacks: list[np.ndarray] = []
+    for group in np.split(order, starts[1:]):
+        step = max(1, MASS_BATCH_TRIANGLES // max(int(counts[group[0]]), 1))
+        stacks.extend(group[start : start + step] for start in range(0, len(group), step))
+    return stacks
+
+
+def _stacked_tensor(second: np.ndarray, mass: np.ndarray, center: np.ndarray) -> np.ndarray:
+    """:func:`_tensor` of each of a stack: (k, 3, 3), (k,), (k, 3)."""
+    covariance = second - mass[:, None, None] * (center[:, :, None] * center[:, None, :])
+    return np.trace(covariance, axis1=1, axis2=2)[:, None, None] * np.eye(3) - covariance
+
+
+def _stacked_mass_properties(triangles: np.ndarray) -> list[MassProperties]:
+    """:func:`mass_properties` of each mesh of a stack of triangles (k, m, 3, 3), m > 0."""
+    k = len(triangles)
+    corners_all = triangles.reshape(k, -1, 3)
+    origin = 0.5 * (corners_all.min(axis=1) + corners_all.max(axis=1))
+    tri = triangles - origin[:, None, None, :]
+    a, b, c = tri[:, :, 0], tri[:, :, 1], tri[:, :, 2]
+    s = a + b + c
+    corners = np.einsum("nmki,nmkj->nmij", tri, tri)
+    sums = np.einsum("nmi,nmj->nmij", s, s)
+    moments = corners + sums
+
+    six_volumes = np.einsum("nmi,nmi->nm", a, np.cross(b, c))
+    volume = six_volumes.sum(axis=1) / 6.0
+    second = np.einsum("nm,nmij->nij", six_volumes, moments) / 120.0
+    solid = volume != 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        center = (six_volumes[:, None, :] @ s)[:, 0] / (24.0 * volume)[:, None]
+        inertia = _stacked_tensor(second, volume, center)
+    center[~solid] = np.nan
+    inertia[~solid] = np.nan
+
+    areas = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=-1)
+    area = areas.sum(axis=1)
+    shell = area > 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        shell_center = (areas[:, None, :] @ s)[:, 0] / (3.0 * area)[:, None]
+        shell_second = np.einsum("nm,nmij->nij", areas, moments) / 12.0
+        shell_inertia = _stacked_tensor(shell_second, area, shell_center)
+    shell_center[~shell] = np.nan
+    shell_inertia[~shell] = np.nan
+    center += origin
+    shell_center += origin
+    return [
+        MassProperties(
+            float(volume[i]),
+            center[i],
+            inertia[i],
+            float(area[i]),
+            shell_center[i],
+            shell_inertia[i],
+        )
+        for i in range(k)
+    ]
 
 
 def combine_mass_properties(parts: Sequence[MassProperties]) -> MassProperties:

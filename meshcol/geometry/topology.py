@@ -18,6 +18,8 @@ __all__ = [
     "is_balanced",
     "is_closed_manifold",
     "manifold_solid",
+    "oriented_volume_batch",
+    "segment_sums",
     "orient_outward",
     "oriented_volume",
     "unique_rows",
@@ -241,7 +243,7 @@ def is_balanced(faces: np.ndarray) -> bool:
     return bool((balance == 0).all())
 
 
-def manifold_solid(vertices: np.ndarray, faces: np.ndarray) -> Any:
+def manifold_solid(vertices: np.ndarray, faces: np.ndarray, balanced: bool | None = None) -> Any:
     """manifold3d's ``Manifold`` of a mesh (check its ``status()``), the one way meshcol
     builds one.
 
@@ -254,7 +256,9 @@ def manifold_solid(vertices: np.ndarray, faces: np.ndarray) -> Any:
     which is what manifold3d makes of every such mesh (the same status on 4,500 random open,
     flipped, duplicated, finned, doubled and degenerate meshes; valgrind saw no read of
     unwritten memory on the three balanced ones tried: a closed sphere, the sphere doubled
-    inside out, two overlapping spheres)."""
+    inside out, two overlapping spheres). ``balanced``, when the caller knows it
+    (:attr:`meshcol.collision.mesh_topology.MeshTopologyBatch.balanced`), spares measuring it
+    again."""
     import manifold3d
 
     faces = np.asarray(faces).reshape(-1, 3)
@@ -262,7 +266,7 @@ def manifold_solid(vertices: np.ndarray, faces: np.ndarray) -> Any:
         (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])
     )
     faces = faces[kept] if not kept.all() else faces
-    if not is_balanced(faces):
+    if not (is_balanced(faces) if balanced is None else balanced):
         faces = faces[:0]
     return manifold3d.Manifold(
         manifold3d.Mesh64(
@@ -270,3 +274,104 @@ def manifold_solid(vertices: np.ndarray, faces: np.ndarray) -> Any:
             tri_verts=np.ascontiguousarray(faces, dtype=np.uint64),
         )
     )
+
+
+# ---------------------------------------------------------------------------------------------
+# Many meshes at once: float sums of each mesh, in numpy's own order (the integer counts of
+# many meshes are the core's: meshcol.collision.mesh_topology)
+
+
+def segment_sums(values: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """``values[offsets[i]:offsets[i + 1]].sum()`` for each ``i``, bit for bit.
+
+    Parameters
+    ----------
+    values : (N,) float64
+    offsets : (n + 1,) int64
+        Ascending, from 0 to N.
+
+    Returns
+    -------
+    (n,) float64
+
+    Notes
+    -----
+    numpy sums a float array pairwise (blocks of eight partial sums), so
+    ``np.add.reduceat``, a sum from left to right, can differ in the last bits. The segments
+    of one length are stacked into rows and summed along the last axis, which numpy sums
+    row by row with the same pairwise sum as one segment alone.
+    """
+    lengths = np.diff(offsets)
+    out = np.zeros(len(lengths), dtype=np.float64)
+    if not len(lengths):
+        return out
+    order = np.argsort(lengths, kind="stable")
+    starts = np.flatnonzero(np.diff(lengths[order], prepend=-1))
+    for group in np.split(order, starts[1:]):
+        length = int(lengths[group[0]])
+        if length == 0:
+            continue
+        rows = offsets[group][:, None] + np.arange(length)
+        out[group] = values[rows].sum(axis=1)
+    return out
+
+
+def oriented_volume_batch(
+    vertices: np.ndarray, faces: np.ndarray, face_offsets: np.ndarray, closed: np.ndarray
+) -> list[tuple[float, int] | None]:
+    """:func:`oriented_volume` of many meshes, bit for bit.
+
+    Parameters
+    ----------
+    vertices : (V, 3) float64
+        Every mesh's vertices, one after the other.
+    faces : (F, 3) int64
+        Every mesh's faces, indices into ``vertices`` (shifted by the vertices before it).
+    face_offsets : (n + 1,) int64
+        Mesh ``i``'s faces are ``faces[face_offsets[i]:face_offsets[i + 1]]``.
+    closed : (n,) bool
+        :func:`is_closed_manifold` of each
+        (:func:`meshcol.collision.mesh_topology.mesh_topology_batch`).
+
+    Returns
+    -------
+    list of (float, int) or None
+        One per mesh, as :func:`oriented_volume`.
+    """
+    n = len(closed)
+    counts = np.diff(face_offsets)
+    mesh_of_face = np.repeat(np.arange(n, dtype=np.int64), counts)
+    a, b, c = vertices[faces[:, 0]], vertices[faces[:, 1]], vertices[faces[:, 2]]
+    lowest = np.minimum(np.minimum(a, b), c)
+    highest = np.maximum(np.maximum(a, b), c)
+    nonempty = counts > 0
+    centre = np.zeros((n, 3))
+    if nonempty.any():
+        starts = face_offsets[:-1][nonempty]
+        centre[nonempty] = (
+            np.minimum.reduceat(lowest, starts, axis=0)
+            + np.maximum.reduceat(highest, starts, axis=0)
+        ) / 2
+    ab, ac = b - a, c - a
+    normals = np.stack(
+        [
+            ab[:, 1] * ac[:, 2] - ab[:, 2] * ac[:, 1],
+            ab[:, 2] * ac[:, 0] - ab[:, 0] * ac[:, 2],
+            ab[:, 0] * ac[:, 1] - ab[:, 1] * ac[:, 0],
+        ],
+        axis=1,
+    )
+    cones = np.einsum("ij,ij->i", a - centre[mesh_of_face], normals)
+    volumes = segment_sums(cones, face_offsets) / 6.0
+    magnitudes = segment_sums(np.abs(cones), face_offsets) / 6.0
+    out: list[tuple[float, int] | None] = []
+    for i in range(n):
+        if not closed[i]:
+            out.append(None)
+            continue
+        volume, magnitude = float(volumes[i]), float(magnitudes[i])
+        orientation = 0
+        if abs(volume) > ORIENTATION_RELATIVE_VOLUME * magnitude:
+            orientation = 1 if volume > 0 else -1
+        out.append((volume, orientation))
+    return out

@@ -133,24 +133,26 @@ def test_instances_are_reported_as_each_body_alone(tmp_path) -> None:
 def test_inspect_measures_each_unique_mesh_once(tmp_path, monkeypatch) -> None:
     import meshcol.analysis.geometry_cache as geometry_module
     import meshcol.collision.hull as hull_module
+    import meshcol.collision.mesh_topology as topology_module
     import meshcol.collision.self_intersection as crossing_module
     import meshcol.geometry.mass as mass_module
 
     calls: dict[str, int] = {}
 
-    def counted(module, name: str) -> None:
+    def counted(module, name: str, batch: bool = False) -> None:
         original = getattr(module, name)
 
         def count(*args, **kwargs):
-            calls[name] = calls.get(name, 0) + 1
+            # a batch counts the meshes it is given
+            calls[name] = calls.get(name, 0) + (len(args[0]) if batch else 1)
             return original(*args, **kwargs)
 
         monkeypatch.setattr(module, name, count)
 
     counted(crossing_module, "self_intersections")
     counted(geometry_module, "_manifold_status")
-    counted(geometry_module, "component_count")
-    counted(mass_module, "mass_properties")
+    counted(topology_module, "mesh_topology_batch", batch=True)
+    counted(mass_module, "mass_properties_batch", batch=True)
     counted(hull_module, "exact_hull")
 
     write_meshes(tmp_path)
@@ -160,9 +162,9 @@ def test_inspect_measures_each_unique_mesh_once(tmp_path, monkeypatch) -> None:
     unique = len(meshes)
     assert calls["self_intersections"] == unique
     assert calls["_manifold_status"] == unique
-    assert calls["component_count"] == unique
+    assert calls["mesh_topology_batch"] == unique
     # the visual meshes' and the hulls' (the open box's hull is the cube's)
-    assert calls["mass_properties"] <= 2 * unique
+    assert calls["mass_properties_batch"] <= 2 * unique
     assert calls["exact_hull"] <= unique
 
 
