@@ -541,7 +541,11 @@ public:
 private:
     double cylinder_bound(double length) const;
     void keep_support(const double c2[3]);
-    double piece_bound(double r1, double r2) const;
+    struct SegmentAt {
+        double r, top, bottom, slope;
+    };
+    SegmentAt segment_at(double r) const;
+    double piece_bound(const SegmentAt& a, const SegmentAt& b) const;
     bool capsule_above(double r_low, double r_high, double bound, double& lowest) const;
     void segment(double r, double& top, double& bottom) const;
     double volume_at(double r) const;
@@ -625,63 +629,81 @@ double RoundSearch::volume_at(double r) const {
     return kPi * r * r * std::max(top - bottom, 0.0) + 4.0 / 3.0 * kPi * r * r * r;
 }
 
-/// A lower bound of `volume_at(r)` over r in [r1, r2], the larger of two:
-/// - the segment is at least as long as at r2 and the radius at least r1, and every operation
-///   of `volume_at` is monotone in those under rounding: a bound of the doubles as computed;
-/// - the segment's length is convex in r (the top end a maximum of convex a - sqrt(r^2 - q),
-///   the bottom end a minimum of concave ones), so at least its tangent at r2 through the end
-///   points reached there; the volume's cubic in r then has its least value at r1 or r2. It
-///   holds for exact arithmetic: it is lowered by the rounding of a computed square root near
-///   r^2 = q (about 2e-8 r) and of its own terms.
-double RoundSearch::piece_bound(double r1, double r2) const {
-    double top = -INFINITY, bottom = INFINITY, top_reach = 0.0, bottom_reach = 0.0;
+/// The segment's ends at radius r, and the slope of its length there (the end points reached
+/// at r: d(length)/dr = -r (1 / reach_top + 1 / reach_bottom); 0 when one reach is 0).
+RoundSearch::SegmentAt RoundSearch::segment_at(double r) const {
+    SegmentAt e{r, -INFINITY, INFINITY, 0.0};
+    double top_reach = 0.0, bottom_reach = 0.0;
     for (const Reach& x : top_) {
-        const double reach = std::sqrt(std::max(r2 * r2 - x.radial2, 0.0));
-        if (x.along - reach > top) {
-            top = x.along - reach;
+        const double reach = std::sqrt(std::max(r * r - x.radial2, 0.0));
+        if (x.along - reach > e.top) {
+            e.top = x.along - reach;
             top_reach = reach;
         }
     }
     for (const Reach& x : bottom_) {
-        const double reach = std::sqrt(std::max(r2 * r2 - x.radial2, 0.0));
-        if (x.along + reach < bottom) {
-            bottom = x.along + reach;
+        const double reach = std::sqrt(std::max(r * r - x.radial2, 0.0));
+        if (x.along + reach < e.bottom) {
+            e.bottom = x.along + reach;
             bottom_reach = reach;
         }
     }
-    const double box = kPi * r1 * r1 * std::max(top - bottom, 0.0) + 4.0 / 3.0 * kPi * r1 * r1 * r1;
-    const double length = top - bottom;
-    if (!(length > 0.0 && top_reach > 0.0 && bottom_reach > 0.0)) return box;
-    // d(length)/dr = -r (1 / reach_top + 1 / reach_bottom) at r2.
-    const double slope = r2 * (1.0 / top_reach + 1.0 / bottom_reach);
-    const double at_low = length + slope * (r2 - r1);
-    const double tangent = std::min(kPi * r1 * r1 * at_low + 4.0 / 3.0 * kPi * r1 * r1 * r1,
-                                    kPi * r2 * r2 * length + 4.0 / 3.0 * kPi * r2 * r2 * r2);
-    const double rounding =
-        kPi * r2 * r2 * (1e-7 * r2 + 1e-12 * (std::fabs(top) + std::fabs(bottom) + slope * (r2 - r1)));
+    if (top_reach > 0.0 && bottom_reach > 0.0) e.slope = -r * (1.0 / top_reach + 1.0 / bottom_reach);
+    return e;
+}
+
+/// A lower bound of `volume_at(r)` over r in [a.r, b.r], the larger of two:
+/// - the segment is at least as long as at b.r and the radius at least a.r, and every
+///   operation of `volume_at` is monotone in those under rounding: a bound of the doubles as
+///   computed;
+/// - the segment's length is convex in r (the top end a maximum of convex along - sqrt(r^2 -
+///   radial2), the bottom end a minimum of concave ones), so at least the larger of its
+///   tangents at both ends; on each tangent's part the volume is a cubic a r^2 + b r^3 with
+///   a >= 0, least at an end of the part: at a.r, b.r or where the tangents cross. It holds
+///   for exact arithmetic: it is lowered by the rounding of a computed square root near
+///   r^2 = radial2 (about 2e-8 r) and of its own terms.
+double RoundSearch::piece_bound(const SegmentAt& a, const SegmentAt& b) const {
+    const double r1 = a.r, r2 = b.r;
+    const double box =
+        kPi * r1 * r1 * std::max(b.top - b.bottom, 0.0) + 4.0 / 3.0 * kPi * r1 * r1 * r1;
+    const double la = a.top - a.bottom, lb = b.top - b.bottom;
+    if (!(la > 0.0 && lb > 0.0 && a.slope < 0.0 && b.slope < 0.0)) return box;
+    // Where the tangents cross (in [r1, r2] but for rounding); the lower of them there.
+    double rx = a.slope < b.slope ? (lb - la + a.slope * r1 - b.slope * r2) / (a.slope - b.slope) : r1;
+    rx = std::min(std::max(rx, r1), r2);
+    const double lx = std::min(la + a.slope * (rx - r1), lb + b.slope * (rx - r2));
+    if (!(lx >= 0.0)) return box;
+    auto cubic = [](double r, double length) {
+        return kPi * r * r * length + 4.0 / 3.0 * kPi * r * r * r;
+    };
+    const double tangent = std::min({cubic(r1, la), cubic(rx, lx), cubic(r2, lb)});
+    const double rounding = kPi * r2 * r2 *
+                            (1e-7 * r2 + 1e-12 * (std::fabs(a.top) + std::fabs(a.bottom) +
+                                                  std::fabs(b.top) + std::fabs(b.bottom) -
+                                                  a.slope * (r2 - r1)));
     return std::max(box, tangent - rounding);
 }
 
 /// Whether `volume_at(r)` >= `bound` for every r in [r_low, r_high] is proven by branch and
-/// bound on halves (`piece_bound`); gives up after a budget of pieces. `lowest`: the least
-/// bound of the pieces (>= `bound` when proven).
+/// bound on halves (`piece_bound`; each split measures the segment once, at its middle); gives
+/// up after a budget of splits. `lowest`: the least bound of the pieces (>= `bound` when proven).
 bool RoundSearch::capsule_above(double r_low, double r_high, double bound, double& lowest) const {
     constexpr int kPieces = 40;
-    std::array<std::array<double, 2>, kPieces> pieces;
+    std::array<std::array<SegmentAt, 2>, kPieces> pieces;
     int stack = 0, budget = defaults::fit_capsule_bound_pieces;
     lowest = INFINITY;
-    pieces[stack++] = {r_low, r_high};
+    pieces[stack++] = {segment_at(r_low), segment_at(r_high)};
     while (stack > 0) {
-        const auto [r1, r2] = pieces[--stack];
-        const double piece = piece_bound(r1, r2);
+        const auto [a, b] = pieces[--stack];
+        const double piece = piece_bound(a, b);
         if (piece >= bound) {
             lowest = std::min(lowest, piece);
             continue;
         }
         if (--budget <= 0 || stack + 2 > kPieces) return false;
-        const double middle = 0.5 * (r1 + r2);  // in [r1, r2]: the halves cover the piece
-        pieces[stack++] = {middle, r2};
-        pieces[stack++] = {r1, middle};
+        const SegmentAt middle = segment_at(0.5 * (a.r + b.r));  // in [a.r, b.r]: the halves cover it
+        pieces[stack++] = {middle, b};
+        pieces[stack++] = {a, middle};
     }
     return true;
 }
