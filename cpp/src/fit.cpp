@@ -156,7 +156,8 @@ std::vector<long long> shuffle_order(long long n) {
     std::iota(order.begin(), order.end(), 0LL);
     std::uint64_t state = defaults::fit_ball_seed;
     for (long long i = n - 1; i > 0; --i) {
-        const long long j = static_cast<long long>(splitmix64(state) % static_cast<std::uint64_t>(i + 1));
+        const long long j =
+            static_cast<long long>(splitmix64(state) % static_cast<std::uint64_t>(i + 1));
         std::swap(order[static_cast<size_t>(i)], order[static_cast<size_t>(j)]);
     }
     return order;
@@ -191,11 +192,13 @@ bool ball_of_shuffled(const double* rows, long long n, int d, double center[3], 
 }
 
 /// Welzl on rows of `d` doubles, taken in `shuffle_order` (a fixed seed: deterministic).
-bool ball_of(const std::vector<double>& rows, long long n, int d, double center[3], double& radius) {
+bool ball_of(const std::vector<double>& rows, long long n, int d, double center[3],
+             double& radius) {
     const std::vector<long long> order = shuffle_order(n);
     std::vector<double> shuffled(rows.size());
     for (long long i = 0; i < n; ++i)
-        for (int k = 0; k < d; ++k) shuffled[i * d + k] = rows[order[static_cast<size_t>(i)] * d + k];
+        for (int k = 0; k < d; ++k)
+            shuffled[i * d + k] = rows[order[static_cast<size_t>(i)] * d + k];
     return ball_of_shuffled(shuffled.data(), n, d, center, radius);
 }
 
@@ -489,7 +492,8 @@ struct RoundFit {
     Mat3 rotation;
     Vec3 center;
     bool capped = false;
-    bool bounded = false;  ///< only `volume` is set: a proven lower bound of the fit's, >= the bound asked
+    /// Only `volume` is set: a proven lower bound of the fit's volume, >= the bound asked.
+    bool bounded = false;
 };
 
 /// A point's height along the axis and squared distance from it (one side of a capsule's segment).
@@ -580,10 +584,12 @@ double RoundSearch::cylinder_bound(double length) const {
         for (size_t j = i + 1; j < k; ++j)
             for (size_t l = j + 1; l < k; ++l) {
                 std::array<double, 2> v[3] = {at(i), at(j), at(l)};
-                double side[3] = {distance2(v[1], v[2]), distance2(v[0], v[2]), distance2(v[0], v[1])};
+                const double side[3] = {distance2(v[1], v[2]), distance2(v[0], v[2]),
+                                        distance2(v[0], v[1])};
                 const int c = static_cast<int>(std::max_element(side, side + 3) - side);
                 const double a2 = side[(c + 1) % 3], b2 = side[(c + 2) % 3], c2 = side[c];
-                if (!(a2 + b2 - c2 > 1e-6 * c2)) continue;  // not clearly acute: the pair bound holds
+                // Not clearly acute: the pairs' bound holds.
+                if (!(a2 + b2 - c2 > 1e-6 * c2)) continue;
                 // Twice the area from the sides at the largest angle (60 to 90 degrees: well
                 // conditioned); circumradius^2 = a^2 b^2 c^2 / (4 (2 area)^2).
                 const auto& o = v[c];
@@ -618,7 +624,8 @@ void RoundSearch::keep_support(const double c2[3]) {
 void RoundSearch::segment(double r, double& top, double& bottom) const {
     top = -INFINITY;
     bottom = INFINITY;
-    for (const Reach& x : top_) top = std::max(top, x.along - std::sqrt(std::max(r * r - x.radial2, 0.0)));
+    for (const Reach& x : top_)
+        top = std::max(top, x.along - std::sqrt(std::max(r * r - x.radial2, 0.0)));
     for (const Reach& x : bottom_)
         bottom = std::min(bottom, x.along + std::sqrt(std::max(r * r - x.radial2, 0.0)));
 }
@@ -648,7 +655,8 @@ RoundSearch::SegmentAt RoundSearch::segment_at(double r) const {
             bottom_reach = reach;
         }
     }
-    if (top_reach > 0.0 && bottom_reach > 0.0) e.slope = -r * (1.0 / top_reach + 1.0 / bottom_reach);
+    if (top_reach > 0.0 && bottom_reach > 0.0)
+        e.slope = -r * (1.0 / top_reach + 1.0 / bottom_reach);
     return e;
 }
 
@@ -657,7 +665,8 @@ RoundSearch::SegmentAt RoundSearch::segment_at(double r) const {
 ///   operation of `volume_at` is monotone in those under rounding: a bound of the doubles as
 ///   computed;
 /// - the segment's length is convex in r (the top end a maximum of convex along - sqrt(r^2 -
-///   radial2), the bottom end a minimum of concave ones), so at least the larger of its
+///   radial2), the bottom end a minimum of concave ones, each from r = sqrt(radial2) <=
+///   r_min on: every radius the search tries is >= r_min), so at least the larger of its
 ///   tangents at both ends; on each tangent's part the volume is a cubic a r^2 + b r^3 with
 ///   a >= 0, least at an end of the part: at a.r, b.r or where the tangents cross. It holds
 ///   for exact arithmetic: it is lowered by the rounding of a computed square root near
@@ -669,7 +678,8 @@ double RoundSearch::piece_bound(const SegmentAt& a, const SegmentAt& b) const {
     const double la = a.top - a.bottom, lb = b.top - b.bottom;
     if (!(la > 0.0 && lb > 0.0 && a.slope < 0.0 && b.slope < 0.0)) return box;
     // Where the tangents cross (in [r1, r2] but for rounding); the lower of them there.
-    double rx = a.slope < b.slope ? (lb - la + a.slope * r1 - b.slope * r2) / (a.slope - b.slope) : r1;
+    double rx =
+        a.slope < b.slope ? (lb - la + a.slope * r1 - b.slope * r2) / (a.slope - b.slope) : r1;
     rx = std::min(std::max(rx, r1), r2);
     const double lx = std::min(la + a.slope * (rx - r1), lb + b.slope * (rx - r2));
     if (!(lx >= 0.0)) return box;
@@ -701,7 +711,8 @@ bool RoundSearch::capsule_above(double r_low, double r_high, double bound, doubl
             continue;
         }
         if (--budget <= 0 || stack + 2 > kPieces) return false;
-        const SegmentAt middle = segment_at(0.5 * (a.r + b.r));  // in [a.r, b.r]: the halves cover it
+        // The middle is in [a.r, b.r]: the halves cover the piece.
+        const SegmentAt middle = segment_at(0.5 * (a.r + b.r));
         pieces[stack++] = {middle, b};
         pieces[stack++] = {a, middle};
     }
@@ -766,7 +777,8 @@ void RoundSearch::capsule(RoundFit& out, const Vec3& fx, const Vec3& fy, const V
     // Every radius the search tries lies in [r_min, r_max] (a relative pad over the rounding
     // of the grid and golden points): a bound over that range bounds the answer.
     double lowest = 0.0;
-    if (bound < INFINITY && capsule_above(r_min * (1 - 1e-12), r_max * (1 + 1e-12), bound, lowest)) {
+    if (bound < INFINITY &&
+        capsule_above(r_min * (1 - 1e-12), r_max * (1 + 1e-12), bound, lowest)) {
         out.volume = lowest;
         out.bounded = true;
         return;
@@ -825,7 +837,8 @@ Vec3 tilted(const Mat3& chart, const std::array<double, 2>& uv) {
 RoundFit along_best_axis(const std::vector<Vec3>& p, const std::vector<Vec3>& axes, bool capsule) {
     RoundSearch search(p, capsule);
     std::vector<std::pair<double, size_t>> starts;
-    for (size_t i = 0; i < axes.size(); ++i) starts.push_back({search.fit(axes[i], INFINITY).volume, i});
+    for (size_t i = 0; i < axes.size(); ++i)
+        starts.push_back({search.fit(axes[i], INFINITY).volume, i});
     std::stable_sort(starts.begin(), starts.end(),
                      [](const auto& a, const auto& b) { return a.first < b.first; });
     RoundFit best;
