@@ -169,6 +169,8 @@ class defaults:
 
     fit_capsule_golden_steps: int = 40
 
+    fit_capsule_bound_pieces: int = 24
+
     fit_ellipsoid_tolerance: float = 1e-06
 
     fit_ellipsoid_max_iterations: int = 100000

@@ -25,8 +25,10 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // least-squares centre of a degenerate Welzl support.
 
 /// Eigen-decomposition of a symmetric m x m matrix (m <= 3): a = V diag(w) V^T, columns of
-/// `v` the eigenvectors. Capped at 64 sweeps (it converges quadratically in a handful).
-void jacobi(int m, double a[3][3], double w[3], double v[3][3]) {
+/// `v` the eigenvectors. Capped at 64 sweeps (it converges quadratically in a handful). The
+/// size is a template argument: Welzl solves thousands of these a fit.
+template <int m>
+void jacobi(double a[3][3], double w[3], double v[3][3]) {
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) v[i][j] = i == j ? 1.0 : 0.0;
     for (int sweep = 0; sweep < 64; ++sweep) {
@@ -49,10 +51,10 @@ void jacobi(int m, double a[3][3], double w[3], double v[3][3]) {
 // ---------------------------------------------------------------------------------------------
 // Minimum enclosing ball (Welzl 1991), any dimension up to 3
 
+template <int d>
 struct BallSearch {
     const double* p;  // n rows of d doubles, shuffled
     long long n;
-    int d;
     double tolerance;  // squared-distance slack of "outside" (rounding of one distance)
     long long work = 0, max_work = 0;
     bool capped = false;
@@ -69,33 +71,44 @@ struct BallSearch {
     /// The smallest ball with the support points on its boundary: centre in their affine
     /// hull (the least-squares, minimum-norm solution when they are degenerate).
     void through(const long long* support, int k, double c[3], double& r2) const {
+        switch (k) {  // the support's size as a template argument (unrolled loops, same sums)
+            case 1: return through_fixed<1>(support, c, r2);
+            case 2: return through_fixed<2>(support, c, r2);
+            case 3: return through_fixed<3>(support, c, r2);
+            default: return through_fixed<4>(support, c, r2);
+        }
+    }
+
+    template <int k>
+    void through_fixed(const long long* support, double c[3], double& r2) const {
         const double* p0 = p + support[0] * d;
         for (int j = 0; j < 3; ++j) c[j] = j < d ? p0[j] : 0.0;
         r2 = 0.0;
-        if (k == 1) return;
-        const int m = k - 1;
-        double a[3][3] = {}, gram[3][3] = {}, rhs[3] = {};
-        for (int i = 0; i < m; ++i) {
-            for (int j = 0; j < d; ++j) a[i][j] = p[support[i + 1] * d + j] - p0[j];
-            for (int j = 0; j < d; ++j) rhs[i] += 0.5 * a[i][j] * a[i][j];
+        if constexpr (k > 1) {
+            constexpr int m = k - 1;
+            double a[3][3] = {}, gram[3][3] = {}, rhs[3] = {};
+            for (int i = 0; i < m; ++i) {
+                for (int j = 0; j < d; ++j) a[i][j] = p[support[i + 1] * d + j] - p0[j];
+                for (int j = 0; j < d; ++j) rhs[i] += 0.5 * a[i][j] * a[i][j];
+            }
+            for (int i = 0; i < m; ++i)
+                for (int j = 0; j < m; ++j)
+                    for (int t = 0; t < d; ++t) gram[i][j] += a[i][t] * a[j][t];
+            double w[3], v[3][3];
+            jacobi<m>(gram, w, v);
+            double largest = 0.0;
+            for (int i = 0; i < m; ++i) largest = std::max(largest, std::fabs(w[i]));
+            double coefficient[3] = {0.0, 0.0, 0.0};
+            for (int e = 0; e < m; ++e) {
+                if (!(std::fabs(w[e]) > 1e-12 * largest)) continue;  // pseudo-inverse
+                double proj = 0.0;
+                for (int i = 0; i < m; ++i) proj += v[i][e] * rhs[i];
+                for (int i = 0; i < m; ++i) coefficient[i] += v[i][e] * proj / w[e];
+            }
+            for (int i = 0; i < m; ++i)
+                for (int j = 0; j < d; ++j) c[j] += coefficient[i] * a[i][j];
+            for (int i = 0; i < k; ++i) r2 = std::max(r2, squared_distance(support[i], c));
         }
-        for (int i = 0; i < m; ++i)
-            for (int j = 0; j < m; ++j)
-                for (int t = 0; t < d; ++t) gram[i][j] += a[i][t] * a[j][t];
-        double w[3], v[3][3];
-        jacobi(m, gram, w, v);
-        double largest = 0.0;
-        for (int i = 0; i < m; ++i) largest = std::max(largest, std::fabs(w[i]));
-        double coefficient[3] = {0.0, 0.0, 0.0};
-        for (int e = 0; e < m; ++e) {
-            if (!(std::fabs(w[e]) > 1e-12 * largest)) continue;  // pseudo-inverse
-            double proj = 0.0;
-            for (int i = 0; i < m; ++i) proj += v[i][e] * rhs[i];
-            for (int i = 0; i < m; ++i) coefficient[i] += v[i][e] * proj / w[e];
-        }
-        for (int i = 0; i < m; ++i)
-            for (int j = 0; j < d; ++j) c[j] += coefficient[i] * a[i][j];
-        for (int i = 0; i < k; ++i) r2 = std::max(r2, squared_distance(support[i], c));
     }
 
     long long first_outside(const double c[3], double r2, long long start, long long end) {
@@ -136,18 +149,24 @@ std::uint64_t splitmix64(std::uint64_t& state) {
     return z ^ (z >> 31);
 }
 
-/// Welzl on rows of `d` doubles (copied and shuffled with the fixed seed).
-bool ball_of(std::vector<double> rows, long long n, int d, double center[3], double& radius) {
+/// The order the fixed-seed shuffle (Fisher-Yates) leaves `n` rows in: shuffled row i is
+/// input row order[i]. Made once for a set whose projections are searched again and again.
+std::vector<long long> shuffle_order(long long n) {
+    std::vector<long long> order(static_cast<size_t>(std::max<long long>(n, 0)));
+    std::iota(order.begin(), order.end(), 0LL);
     std::uint64_t state = defaults::fit_ball_seed;
     for (long long i = n - 1; i > 0; --i) {
-        const long long j = static_cast<long long>(splitmix64(state) % static_cast<std::uint64_t>(i + 1));
-        for (int k = 0; k < d; ++k) std::swap(rows[i * d + k], rows[j * d + k]);
+        const long long j =
+            static_cast<long long>(splitmix64(state) % static_cast<std::uint64_t>(i + 1));
+        std::swap(order[static_cast<size_t>(i)], order[static_cast<size_t>(j)]);
     }
-    double scale = 0.0;
-    for (long long i = 0; i < n; ++i)
-        for (int k = 0; k < d; ++k) scale = std::max(scale, std::fabs(rows[i * d + k] - rows[k]));
-    if (!(scale > 0.0)) scale = 1.0;
-    BallSearch s{rows.data(), n, d, (1e-12 * scale) * (1e-12 * scale)};
+    return order;
+}
+
+template <int d>
+bool ball_search(const double* rows, long long n, double tolerance, double center[3],
+                 double& radius) {
+    BallSearch<d> s{rows, n, tolerance};
     s.max_work = std::max<long long>(1, n) * defaults::fit_ball_max_work_per_point;
     long long support[4];
     double r2 = 0.0;
@@ -156,6 +175,31 @@ bool ball_of(std::vector<double> rows, long long n, int d, double center[3], dou
     for (long long i = 0; i < n; ++i) largest = std::max(largest, s.squared_distance(i, center));
     radius = std::sqrt(largest);
     return !s.capped;
+}
+
+/// Welzl on `n` rows of `d` doubles already in `shuffle_order`.
+bool ball_of_shuffled(const double* rows, long long n, int d, double center[3], double& radius) {
+    double scale = 0.0;
+    for (long long i = 0; i < n; ++i)
+        for (int k = 0; k < d; ++k) scale = std::max(scale, std::fabs(rows[i * d + k] - rows[k]));
+    if (!(scale > 0.0)) scale = 1.0;
+    const double tolerance = (1e-12 * scale) * (1e-12 * scale);
+    switch (d) {
+        case 1: return ball_search<1>(rows, n, tolerance, center, radius);
+        case 2: return ball_search<2>(rows, n, tolerance, center, radius);
+        default: return ball_search<3>(rows, n, tolerance, center, radius);
+    }
+}
+
+/// Welzl on rows of `d` doubles, taken in `shuffle_order` (a fixed seed: deterministic).
+bool ball_of(const std::vector<double>& rows, long long n, int d, double center[3],
+             double& radius) {
+    const std::vector<long long> order = shuffle_order(n);
+    std::vector<double> shuffled(rows.size());
+    for (long long i = 0; i < n; ++i)
+        for (int k = 0; k < d; ++k)
+            shuffled[i * d + k] = rows[order[static_cast<size_t>(i)] * d + k];
+    return ball_of_shuffled(shuffled.data(), n, d, center, radius);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -216,7 +260,7 @@ Mat3 principal_axes(const std::vector<Vec3>& p) {
             for (int j = 0; j < 3; ++j) a[i][j] += e[i] * e[j];
     }
     double w[3], v[3][3];
-    jacobi(3, a, w, v);
+    jacobi<3>(a, w, v);
     int order[3] = {0, 1, 2};
     std::sort(order, order + 3, [&](int i, int j) { return w[i] > w[j]; });
     Vec3 c[3];
@@ -226,17 +270,19 @@ Mat3 principal_axes(const std::vector<Vec3>& p) {
 }
 
 /// A derivative-free, monotone pattern search (coordinate steps, halved on failure) from x.
+/// `cost(x, bound)` is the cost at x, or any value >= `bound` when the cost is >= `bound` (a
+/// trial is only taken below the best so far: a proven lower bound can stand for it).
 template <int K, class Cost>
 std::array<double, K> polish(const Cost& cost, std::array<double, K> x, double step,
                              int iterations, double smallest, double& best) {
-    best = cost(x);
+    best = cost(x, INFINITY);
     for (int it = 0; it < iterations; ++it) {
         bool improved = false;
         for (int k = 0; k < K; ++k)
             for (double sign : {1.0, -1.0}) {
                 auto trial = x;
                 trial[k] += sign * step;
-                const double value = cost(trial);
+                const double value = cost(trial, best);
                 if (value < best) {
                     x = trial;
                     best = value;
@@ -409,7 +455,7 @@ Mat3 box_frame(const std::vector<Vec3>& p, const Hull& hull) {
     const size_t starts = std::min<size_t>(order.size(), defaults::fit_box_polish_starts);
     for (size_t s = 0; s < starts; ++s) {
         const Mat3 start = candidates[order[s]];
-        auto cost = [&](const std::array<double, 3>& w) {
+        auto cost = [&](const std::array<double, 3>& w, double) {
             return box_volume(p, turned(start, w.data()));
         };
         double value = 0.0;
@@ -446,59 +492,297 @@ struct RoundFit {
     Mat3 rotation;
     Vec3 center;
     bool capped = false;
+    /// Only `volume` is set: a proven lower bound of the fit's volume, >= the bound asked.
+    bool bounded = false;
 };
 
-/// The cylinder (capsule = false) or capsule around the points along `axis`: the axis
-/// through the minimum circle of the projected points; cylinder length by their extent
-/// along it; capsule radius searched, its shortest segment exact for each radius.
-RoundFit round_on(const std::vector<Vec3>& p, const Vec3& axis, bool capsule) {
+/// A point's height along the axis and squared distance from it (one side of a capsule's segment).
+struct Reach {
+    double along, radial2;
+};
+
+/// The points that can set a capsule's segment ends. The top end max(along - sqrt(r^2 -
+/// radial2)) is reached on the points no other has both a larger `along` and a larger
+/// `radial2` (rounding is monotone, so the maximum over them is the same double for every r);
+/// the bottom end's min(along + ...) likewise with a smaller `along`. One sort by `along`
+/// (`sorted` is scratch); a tie may keep a dominated point, which changes no maximum.
+void segment_fronts(const std::vector<Reach>& points, std::vector<Reach>& top,
+                    std::vector<Reach>& bottom, std::vector<Reach>& sorted) {
+    sorted = points;
+    std::sort(sorted.begin(), sorted.end(), [](const Reach& a, const Reach& b) {
+        return a.along < b.along || (a.along == b.along && a.radial2 > b.radial2);
+    });
+    bottom.clear();
+    double widest = -INFINITY;
+    for (const Reach& x : sorted)
+        if (x.radial2 > widest) {
+            bottom.push_back(x);
+            widest = x.radial2;
+        }
+    top.clear();
+    widest = -INFINITY;
+    for (auto x = sorted.rbegin(); x != sorted.rend(); ++x)
+        if (x->radial2 > widest) {
+            top.push_back(*x);
+            widest = x->radial2;
+        }
+}
+
+/// The cylinders (`capsule` false) or capsules around one point set along axis after axis:
+/// the axis through the minimum circle of the projected points; cylinder length by their
+/// extent along it; capsule radius searched, its shortest segment exact for each radius.
+/// Keeps its buffers, the circle search's order and what the last accepted fit's bound needs
+/// across axes. A fit asked with a `bound` may stop at a proven lower bound >= `bound`:
+/// every other answer is the one the full search gives, to the bit.
+class RoundSearch {
+public:
+    RoundSearch(const std::vector<Vec3>& p, bool capsule)
+        : p_(p), capsule_(capsule), order_(shuffle_order(static_cast<long long>(p.size()))),
+          rows_(2 * p.size()), along_(p.size()) {}
+
+    RoundFit fit(const Vec3& axis, double bound);
+
+private:
+    double cylinder_bound(double length) const;
+    void keep_support(const double c2[3]);
+    struct SegmentAt {
+        double r, top, bottom, slope;
+    };
+    SegmentAt segment_at(double r) const;
+    double piece_bound(const SegmentAt& a, const SegmentAt& b) const;
+    bool capsule_above(double r_low, double r_high, double bound, double& lowest) const;
+    void segment(double r, double& top, double& bottom) const;
+    double volume_at(double r) const;
+    void capsule(RoundFit& out, const Vec3& fx, const Vec3& fy, const Vec3& z, double lo,
+                 double hi, double bound, const double c2[3], double r_min);
+
+    const std::vector<Vec3>& p_;
+    bool capsule_;
+    std::vector<long long> order_;  // shuffled point k is p_[order_[k]]
+    std::vector<double> rows_;      // the projection across the axis, shuffled (Welzl's rows)
+    std::vector<double> along_;     // heights along the axis, shuffled
+    std::vector<Reach> reach_, sorted_, top_, bottom_;
+    std::vector<long long> support_;  // the last accepted cylinder's farthest points (shuffled)
+};
+
+/// A lower bound of the squared radius of any circle holding the projections of the support
+/// points kept from the last accepted cylinder: half their largest distance, or the
+/// circumradius of a clearly acute triangle of them (its own smallest circle).
+double RoundSearch::cylinder_bound(double length) const {
+    const size_t k = support_.size();
+    double r2 = 0.0;
+    auto at = [&](size_t i) {
+        const long long s = support_[i];
+        return std::array<double, 2>{rows_[2 * s], rows_[2 * s + 1]};
+    };
+    auto distance2 = [](const std::array<double, 2>& a, const std::array<double, 2>& b) {
+        return (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]);
+    };
+    for (size_t i = 0; i < k; ++i)
+        for (size_t j = i + 1; j < k; ++j) r2 = std::max(r2, 0.25 * distance2(at(i), at(j)));
+    for (size_t i = 0; i < k; ++i)
+        for (size_t j = i + 1; j < k; ++j)
+            for (size_t l = j + 1; l < k; ++l) {
+                std::array<double, 2> v[3] = {at(i), at(j), at(l)};
+                const double side[3] = {distance2(v[1], v[2]), distance2(v[0], v[2]),
+                                        distance2(v[0], v[1])};
+                const int c = static_cast<int>(std::max_element(side, side + 3) - side);
+                const double a2 = side[(c + 1) % 3], b2 = side[(c + 2) % 3], c2 = side[c];
+                // Not clearly acute: the pairs' bound holds.
+                if (!(a2 + b2 - c2 > 1e-6 * c2)) continue;
+                // Twice the area from the sides at the largest angle (60 to 90 degrees: well
+                // conditioned); circumradius^2 = a^2 b^2 c^2 / (4 (2 area)^2).
+                const auto& o = v[c];
+                const auto& u = v[(c + 1) % 3];
+                const auto& w = v[(c + 2) % 3];
+                const double twice = (u[0] - o[0]) * (w[1] - o[1]) - (u[1] - o[1]) * (w[0] - o[0]);
+                r2 = std::max(r2, a2 * b2 * c2 / (4.0 * twice * twice));
+            }
+    return kPi * r2 * length;
+}
+
+/// Keeps (up to) the four projected points farthest from the accepted circle's centre: the
+/// circle's support, whose smallest circle bounds the next axes' circles from below.
+void RoundSearch::keep_support(const double c2[3]) {
+    const size_t n = p_.size(), keep = std::min<size_t>(n, 4);
+    std::array<std::pair<double, long long>, 4> far{};
+    size_t count = 0;
+    for (size_t i = 0; i < n; ++i) {
+        const double dx = rows_[2 * i] - c2[0], dy = rows_[2 * i + 1] - c2[1];
+        const std::pair<double, long long> item{dx * dx + dy * dy, static_cast<long long>(i)};
+        if (count < keep) {
+            far[count++] = item;
+        } else {
+            auto least = std::min_element(far.begin(), far.begin() + count);
+            if (item.first > least->first) *least = item;
+        }
+    }
+    support_.clear();
+    for (size_t i = 0; i < count; ++i) support_.push_back(far[i].second);
+}
+
+void RoundSearch::segment(double r, double& top, double& bottom) const {
+    top = -INFINITY;
+    bottom = INFINITY;
+    for (const Reach& x : top_)
+        top = std::max(top, x.along - std::sqrt(std::max(r * r - x.radial2, 0.0)));
+    for (const Reach& x : bottom_)
+        bottom = std::min(bottom, x.along + std::sqrt(std::max(r * r - x.radial2, 0.0)));
+}
+
+double RoundSearch::volume_at(double r) const {
+    double top, bottom;
+    segment(r, top, bottom);
+    return kPi * r * r * std::max(top - bottom, 0.0) + 4.0 / 3.0 * kPi * r * r * r;
+}
+
+/// The segment's ends at radius r, and the slope of its length there (the end points reached
+/// at r: d(length)/dr = -r (1 / reach_top + 1 / reach_bottom); 0 when one reach is 0).
+RoundSearch::SegmentAt RoundSearch::segment_at(double r) const {
+    SegmentAt e{r, -INFINITY, INFINITY, 0.0};
+    double top_reach = 0.0, bottom_reach = 0.0;
+    for (const Reach& x : top_) {
+        const double reach = std::sqrt(std::max(r * r - x.radial2, 0.0));
+        if (x.along - reach > e.top) {
+            e.top = x.along - reach;
+            top_reach = reach;
+        }
+    }
+    for (const Reach& x : bottom_) {
+        const double reach = std::sqrt(std::max(r * r - x.radial2, 0.0));
+        if (x.along + reach < e.bottom) {
+            e.bottom = x.along + reach;
+            bottom_reach = reach;
+        }
+    }
+    if (top_reach > 0.0 && bottom_reach > 0.0)
+        e.slope = -r * (1.0 / top_reach + 1.0 / bottom_reach);
+    return e;
+}
+
+/// A lower bound of `volume_at(r)` over r in [a.r, b.r], the larger of two:
+/// - the segment is at least as long as at b.r and the radius at least a.r, and every
+///   operation of `volume_at` is monotone in those under rounding: a bound of the doubles as
+///   computed;
+/// - the segment's length is convex in r (the top end a maximum of convex along - sqrt(r^2 -
+///   radial2), the bottom end a minimum of concave ones, each from r = sqrt(radial2) <=
+///   r_min on: every radius the search tries is >= r_min), so at least the larger of its
+///   tangents at both ends; on each tangent's part the volume is a cubic a r^2 + b r^3 with
+///   a >= 0, least at an end of the part: at a.r, b.r or where the tangents cross. It holds
+///   for exact arithmetic: it is lowered by the rounding of a computed square root near
+///   r^2 = radial2 (about 2e-8 r) and of its own terms.
+double RoundSearch::piece_bound(const SegmentAt& a, const SegmentAt& b) const {
+    const double r1 = a.r, r2 = b.r;
+    const double box =
+        kPi * r1 * r1 * std::max(b.top - b.bottom, 0.0) + 4.0 / 3.0 * kPi * r1 * r1 * r1;
+    const double la = a.top - a.bottom, lb = b.top - b.bottom;
+    if (!(la > 0.0 && lb > 0.0 && a.slope < 0.0 && b.slope < 0.0)) return box;
+    // Where the tangents cross (in [r1, r2] but for rounding); the lower of them there.
+    double rx =
+        a.slope < b.slope ? (lb - la + a.slope * r1 - b.slope * r2) / (a.slope - b.slope) : r1;
+    rx = std::min(std::max(rx, r1), r2);
+    const double lx = std::min(la + a.slope * (rx - r1), lb + b.slope * (rx - r2));
+    if (!(lx >= 0.0)) return box;
+    auto cubic = [](double r, double length) {
+        return kPi * r * r * length + 4.0 / 3.0 * kPi * r * r * r;
+    };
+    const double tangent = std::min({cubic(r1, la), cubic(rx, lx), cubic(r2, lb)});
+    const double rounding = kPi * r2 * r2 *
+                            (1e-7 * r2 + 1e-12 * (std::fabs(a.top) + std::fabs(a.bottom) +
+                                                  std::fabs(b.top) + std::fabs(b.bottom) -
+                                                  a.slope * (r2 - r1)));
+    return std::max(box, tangent - rounding);
+}
+
+/// Whether `volume_at(r)` >= `bound` for every r in [r_low, r_high] is proven by branch and
+/// bound on halves (`piece_bound`; each split measures the segment once, at its middle); gives
+/// up after a budget of splits. `lowest`: the least bound of the pieces (>= `bound` when proven).
+bool RoundSearch::capsule_above(double r_low, double r_high, double bound, double& lowest) const {
+    constexpr int kPieces = 40;
+    std::array<std::array<SegmentAt, 2>, kPieces> pieces;
+    int stack = 0, budget = defaults::fit_capsule_bound_pieces;
+    lowest = INFINITY;
+    pieces[stack++] = {segment_at(r_low), segment_at(r_high)};
+    while (stack > 0) {
+        const auto [a, b] = pieces[--stack];
+        const double piece = piece_bound(a, b);
+        if (piece >= bound) {
+            lowest = std::min(lowest, piece);
+            continue;
+        }
+        if (--budget <= 0 || stack + 2 > kPieces) return false;
+        // The middle is in [a.r, b.r]: the halves cover the piece.
+        const SegmentAt middle = segment_at(0.5 * (a.r + b.r));
+        pieces[stack++] = {middle, b};
+        pieces[stack++] = {a, middle};
+    }
+    return true;
+}
+
+RoundFit RoundSearch::fit(const Vec3& axis, double bound) {
     RoundFit out;
     out.rotation = frame_of(axis);
     const Vec3 fx = out.rotation.column(0), fy = out.rotation.column(1),
                z = out.rotation.column(2);
-    const size_t n = p.size();
-    std::vector<double> plane(2 * n), along(n);
+    const size_t n = p_.size();
     double lo = INFINITY, hi = -INFINITY;
-    for (size_t i = 0; i < n; ++i) {
-        plane[2 * i] = dot(p[i], fx);
-        plane[2 * i + 1] = dot(p[i], fy);
-        along[i] = dot(p[i], z);
-        lo = std::min(lo, along[i]);
-        hi = std::max(hi, along[i]);
+    for (size_t k = 0; k < n; ++k) {
+        const Vec3& x = p_[static_cast<size_t>(order_[k])];
+        rows_[2 * k] = dot(x, fx);
+        rows_[2 * k + 1] = dot(x, fy);
+        along_[k] = dot(x, z);
+        lo = std::min(lo, along_[k]);
+        hi = std::max(hi, along_[k]);
+    }
+    // A cylinder's volume is at least the last support's smallest circle times this length
+    // (a relative pad over the rounding of both circles).
+    if (!capsule_ && !support_.empty()) {
+        const double lower = cylinder_bound(hi - lo);
+        if (lower > bound * (1 + 1e-9)) {
+            out.volume = lower;
+            out.bounded = true;
+            return out;
+        }
     }
     double c2[3], r_min = 0.0;
-    out.capped = !ball_of(plane, static_cast<long long>(n), 2, c2, r_min);
-    if (!capsule) {
-        out.radius = r_min;
-        out.length = hi - lo;
-        out.volume = kPi * r_min * r_min * out.length;
-        out.center = c2[0] * fx + c2[1] * fy + 0.5 * (lo + hi) * z;
+    out.capped = !ball_of_shuffled(rows_.data(), static_cast<long long>(n), 2, c2, r_min);
+    if (capsule_) {
+        capsule(out, fx, fy, z, lo, hi, bound, c2, r_min);
         return out;
     }
-    std::vector<double> radial2(n);
+    out.radius = r_min;
+    out.length = hi - lo;
+    out.volume = kPi * r_min * r_min * out.length;
+    out.center = c2[0] * fx + c2[1] * fy + 0.5 * (lo + hi) * z;
+    if (out.volume < bound) keep_support(c2);
+    return out;
+}
+
+/// The capsule about the circle's axis: for a radius r the shortest segment keeping every
+/// point within r is exact (`segment`), r searched on a grid over [r_min, r_max], then by
+/// golden-section steps between the best's neighbours.
+void RoundSearch::capsule(RoundFit& out, const Vec3& fx, const Vec3& fy, const Vec3& z,
+                          double lo, double hi, double bound, const double c2[3], double r_min) {
+    const size_t n = p_.size();
+    reach_.resize(n);
     const double middle = 0.5 * (lo + hi);
     double r_max2 = 0.0;
     for (size_t i = 0; i < n; ++i) {
-        const double dx = plane[2 * i] - c2[0], dy = plane[2 * i + 1] - c2[1];
-        radial2[i] = dx * dx + dy * dy;
-        r_max2 = std::max(r_max2, radial2[i] + (along[i] - middle) * (along[i] - middle));
+        const double dx = rows_[2 * i] - c2[0], dy = rows_[2 * i + 1] - c2[1];
+        reach_[i] = {along_[i], dx * dx + dy * dy};
+        r_max2 = std::max(r_max2, reach_[i].radial2 + (along_[i] - middle) * (along_[i] - middle));
     }
     const double r_max = std::max(std::sqrt(r_max2), r_min);
-    auto segment = [&](double r, double& top, double& bottom) {
-        top = -INFINITY;
-        bottom = INFINITY;
-        for (size_t i = 0; i < n; ++i) {
-            const double reach = std::sqrt(std::max(r * r - radial2[i], 0.0));
-            top = std::max(top, along[i] - reach);
-            bottom = std::min(bottom, along[i] + reach);
-        }
-    };
-    auto volume_at = [&](double r) {
-        double top, bottom;
-        segment(r, top, bottom);
-        return kPi * r * r * std::max(top - bottom, 0.0) + 4.0 / 3.0 * kPi * r * r * r;
-    };
-    // A grid over [r_min, r_max], then golden-section search between the best's neighbours.
+    segment_fronts(reach_, top_, bottom_, sorted_);
+    // Every radius the search tries lies in [r_min, r_max] (a relative pad over the rounding
+    // of the grid and golden points): a bound over that range bounds the answer.
+    double lowest = 0.0;
+    if (bound < INFINITY &&
+        capsule_above(r_min * (1 - 1e-12), r_max * (1 + 1e-12), bound, lowest)) {
+        out.volume = lowest;
+        out.bounded = true;
+        return;
+    }
     const int g = defaults::fit_capsule_radius_grid;
     int best = 0;
     double best_volume = INFINITY;
@@ -538,7 +822,6 @@ RoundFit round_on(const std::vector<Vec3>& p, const Vec3& axis, bool capsule) {
     out.length = std::max(top - bottom, 0.0);
     out.volume = kPi * radius * radius * out.length + 4.0 / 3.0 * kPi * radius * radius * radius;
     out.center = c2[0] * fx + c2[1] * fy + 0.5 * (top + bottom) * z;
-    return out;
 }
 
 /// The axis `a` turned in its tangent plane by (u, v) (a chart about a: no pole to stall at).
@@ -549,19 +832,21 @@ Vec3 tilted(const Mat3& chart, const std::array<double, 2>& uv) {
 
 /// The best axis: the candidates' best few, each polished by a pattern search on its polar
 /// angles, then twice more in a chart about where it ended, with smaller first steps (a
-/// restart escapes the stalls of a non-smooth volume); the smallest volume wins (earliest start on ties).
+/// restart escapes the stalls of a non-smooth volume); the smallest volume wins (earliest
+/// start on ties). Trials the search would turn down anyway stop at a lower bound.
 RoundFit along_best_axis(const std::vector<Vec3>& p, const std::vector<Vec3>& axes, bool capsule) {
+    RoundSearch search(p, capsule);
     std::vector<std::pair<double, size_t>> starts;
     for (size_t i = 0; i < axes.size(); ++i)
-        starts.push_back({round_on(p, axes[i], capsule).volume, i});
+        starts.push_back({search.fit(axes[i], INFINITY).volume, i});
     std::stable_sort(starts.begin(), starts.end(),
                      [](const auto& a, const auto& b) { return a.first < b.first; });
     RoundFit best;
     const size_t count = std::min<size_t>(starts.size(), defaults::fit_axis_polish_starts);
     for (size_t s = 0; s < count; ++s) {
         // First on the axis's polar angles (their uneven steps explore more), then in charts.
-        auto polar = [&](const std::array<double, 2>& tp) {
-            return round_on(p, direction(tp), capsule).volume;
+        auto polar = [&](const std::array<double, 2>& tp, double bound) {
+            return search.fit(direction(tp), bound).volume;
         };
         double value = 0.0;
         Vec3 axis = direction(polish<2>(polar, angles(axes[starts[s].second]),
@@ -571,15 +856,15 @@ RoundFit along_best_axis(const std::vector<Vec3>& p, const std::vector<Vec3>& ax
         double step = 0.25 * defaults::fit_axis_polish_step;
         for (int pass = 0; pass < 2; ++pass, step *= 0.25) {
             const Mat3 chart = frame_of(axis);
-            auto cost = [&](const std::array<double, 2>& uv) {
-                return round_on(p, tilted(chart, uv), capsule).volume;
+            auto cost = [&](const std::array<double, 2>& uv, double bound) {
+                return search.fit(tilted(chart, uv), bound).volume;
             };
             const auto uv = polish<2>(cost, {0.0, 0.0}, step,
                                       defaults::fit_axis_polish_iterations,
                                       defaults::fit_axis_polish_smallest, value);
             axis = tilted(chart, uv);
         }
-        if (value < best.volume * (1 - 1e-12)) best = round_on(p, axis, capsule);
+        if (value < best.volume * (1 - 1e-12)) best = search.fit(axis, INFINITY);
     }
     return best;
 }

@@ -25,7 +25,11 @@ How near to the smallest each fit is:
   extent along it (exact for its axis);
 - **capsule**: along the best axis as for the cylinder; for a radius r the shortest segment
   that keeps every point within r is exact, and r is searched (a grid, then golden-section
-  steps) between the projected circle's radius and the radius of a ball centred on the axis;
+  steps) between the projected circle's radius and the radius of a ball centred on the axis.
+  The axis polish of both only takes a trial axis better than its best so far, so a trial
+  that a lower bound proves no better is not fitted: the cylinder's from the last best
+  circle's support points, the capsule's by branch and bound over its radius range (the
+  segment's length is convex in the radius); the answer is the full search's, to the bit;
 - **ellipsoid**: the minimum-volume enclosing ellipsoid of the hull's vertices, by
   Khachiyan's method (1996) with Kumar and Yildirim's start (2005) and Todd and Yildirim's
   drop steps (2007), run on the vertices mapped to a unit box along their principal axes
