@@ -747,21 +747,28 @@ def _distances_to_hull(points, facets, equations):
     a box and the two triangles of a face); searching only the first would give that facet's
     distance instead of 0. A facet searched in excess is harmless: its closest point is on the
     surface, never nearer than the true one.
+
+    3-D facets are searched in the core (``core.distances_to_facets``: the arithmetic of
+    :func:`closest_points_on_triangles`, step for step, without the candidate pairs' arrays);
+    segments (a flat hull's edges) here.
     """
     dim = points.shape[1]
     signed = points @ equations[0] + equations[1]
     outside = signed.max(axis=1, initial=-np.inf) > 0.0
     scale = max(float(np.abs(facets).max(initial=0.0)), float(np.abs(points).max(initial=0.0)))
     in_front = (signed > -_ROUNDING * max(scale, 1e-300)) & outside[:, None]
+    if dim == 3:
+        from meshcol._native import core
+
+        return core.distances_to_facets(
+            np.ascontiguousarray(points), np.ascontiguousarray(facets), in_front
+        )
     distances = np.zeros(len(points))
     closest = points.copy()
     p_index, f_index = np.nonzero(in_front)
     if len(p_index) == 0:
         return distances, closest
-    if dim == 3:
-        candidates = closest_points_on_triangles(points[p_index], facets[f_index])
-    else:
-        candidates = _closest_points_on_segments(points[p_index], facets[f_index])
+    candidates = _closest_points_on_segments(points[p_index], facets[f_index])
     d2 = ((candidates - points[p_index]) ** 2).sum(axis=1)
     order = np.lexsort((d2, p_index))
     first = np.ones(len(order), bool)

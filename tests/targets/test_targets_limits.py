@@ -134,22 +134,25 @@ def test_an_oblong_ratio_four_vertices_cannot_meet_is_left_unmet_not_inflated() 
 
 @pytest.mark.slow
 def test_widths_by_blocks_are_the_full_products_and_bounded_in_memory(monkeypatch) -> None:
-    """The thickness comes from every polygon normal's width, made a block of normals at a
-    time: the same bits as the whole product, and a hull of 6,000 vertices on a sphere (about
-    12,000 polygons: 576 MB as one product) measured within a few blocks of memory (the aloha
-    d405 camera of Menagerie, 7,003 hull vertices, took 840 MB under ``--target physx``)."""
+    """The thickness comes from every polygon normal's width: by products a block of normals
+    at a time (the same bits as the whole product), or above ``WIDTH_CLIMB_MIN_VERTICES``
+    by the core's support climbs; either way a hull of 6,000 vertices on a sphere (about
+    12,000 polygons: 576 MB as one product) is measured within a few blocks of memory (the
+    aloha d405 camera of Menagerie, 7,003 hull vertices, took 840 MB under ``--target
+    physx``)."""
     import tracemalloc
 
     import meshcol.collision.limits as limits
     from meshcol.collision.hull import exact_hull
 
     hull = exact_hull(sphere(6000, seed=4))
-    whole = measure_parts([(hull.vertices, None)])
+    climbed = measure_parts([(hull.vertices, None)])
     normals = np.random.default_rng(5).normal(size=(300, 3))
     full = normals @ hull.vertices.T
+    monkeypatch.setattr(limits, "WIDTH_CLIMB_MIN_VERTICES", len(hull.vertices))
     monkeypatch.setattr(limits, "WIDTH_BLOCK", 7 * len(hull.vertices) + 3)  # 7 rows a block
     assert np.array_equal(
-        limits._widths(normals, hull.vertices), full.max(axis=1) - full.min(axis=1)
+        limits._widths(normals, hull.vertices, hull.faces), full.max(axis=1) - full.min(axis=1)
     )
     tracemalloc.start()
     try:
@@ -158,5 +161,5 @@ def test_widths_by_blocks_are_the_full_products_and_bounded_in_memory(monkeypatc
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
-    assert blocked.thickness[0] == whole.thickness[0] and blocked.polygons[0] > 10_000
+    assert blocked.thickness[0] == climbed.thickness[0] and blocked.polygons[0] > 10_000
     assert peak < 64e6, peak
