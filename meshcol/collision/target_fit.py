@@ -9,6 +9,7 @@ limit cost is measured against the exact hull of the input (:class:`LimitCost`).
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -196,6 +197,26 @@ def _null_axes(points: np.ndarray, dimension: int) -> np.ndarray:
     return vt[dimension:]
 
 
+class _Hulls:
+    """:func:`convex_hull` of one fit, each distinct call computed once: a fit and the fits
+    of its costs (:class:`LimitCost`) ask for the same budgeted hulls of the same points
+    (under ``--target physx`` three of four fits of a scanned part ask for the same 255
+    vertices), and the hull is a function of its arguments, so the answers are the same."""
+
+    def __init__(self) -> None:
+        self._made: dict[tuple[Any, ...], Any] = {}
+
+    def __call__(
+        self, points: np.ndarray, max_vertices: int | None = None, max_planes: int | None = None
+    ):
+        pts = np.ascontiguousarray(points, dtype=np.float64)
+        digest = hashlib.blake2b(pts.data, digest_size=16).digest()
+        key = (pts.shape, digest, max_vertices, max_planes)
+        if key not in self._made:
+            self._made[key] = convex_hull(pts, max_vertices=max_vertices, max_planes=max_planes)
+        return self._made[key]
+
+
 def _grow(points: np.ndarray, limits: Mapping[str, float], notes: list[str]) -> np.ndarray:
     """The points grown (never shrunk) until their hull meets ``min_thickness``,
     ``min_volume`` and ``max_oblong_ratio``, or :data:`GROWTH_ROUNDS` are spent."""
@@ -247,13 +268,13 @@ def _grow(points: np.ndarray, limits: Mapping[str, float], notes: list[str]) -> 
     return pts
 
 
-def _budgeted(points: np.ndarray, limits: Mapping[str, float], notes: list[str]):
+def _budgeted(points: np.ndarray, limits: Mapping[str, float], notes: list[str], hulls: _Hulls):
     """The exact hull of ``points`` if it meets the count limits, else the supporting-plane
     hull within them (budgets tightened until the measures agree)."""
     vertices = budget_vertices(limits)
     planes = limits.get("max_hull_polygons")
     per_vertex = limits.get("max_faces_per_vertex")
-    result = convex_hull(points, max_vertices=vertices)
+    result = hulls(points, max_vertices=vertices)
     if result.flat:
         return result
     m = measure_hull(exact_hull(result.vertices))
@@ -272,14 +293,14 @@ def _budgeted(points: np.ndarray, limits: Mapping[str, float], notes: list[str])
         plane_budget = max(int(current), 4)
         if too_many_vertices and vertices is not None:
             vertices = max(vertices - 1, 4)
-        result = convex_hull(points, max_vertices=vertices, max_planes=plane_budget)
+        result = hulls(points, max_vertices=vertices, max_planes=plane_budget)
         m = measure_hull(exact_hull(result.vertices))
     if _counts_met(m, limits):
         return result
     # the last resort always meets every count limit a profile may set (>= 4 vertices, >= 4
     # polygons, >= 3 per vertex, >= 4 triangles): the smallest supporting tetrahedron
     notes.append("reduced to the enclosing tetrahedron (no larger hull met the budgets)")
-    return convex_hull(points, max_vertices=4, max_planes=4)
+    return hulls(points, max_vertices=4, max_planes=4)
 
 
 def _counts_met(m: Mapping[str, Any], limits: Mapping[str, float]) -> bool:
@@ -299,7 +320,7 @@ def _growth_met(m: Mapping[str, Any], limits: Mapping[str, float]) -> bool:
     )
 
 
-def _fit_one(points: np.ndarray, limits: Mapping[str, float], notes: list[str]):
+def _fit_one(points: np.ndarray, limits: Mapping[str, float], notes: list[str], hulls: _Hulls):
     """Grow, then simplify; simplification can lengthen a part (its far vertices move out),
     so a part whose growth limits it broke is grown again from the simplified hull."""
     pts = points
@@ -308,7 +329,7 @@ def _fit_one(points: np.ndarray, limits: Mapping[str, float], notes: list[str]):
     others = {key: value for key, value in limits.items() if key != "max_oblong_ratio"}
     for _ in range(3):
         written = len(notes)
-        result = _budgeted(_grow(pts, limits, notes), limits, notes)
+        result = _budgeted(_grow(pts, limits, notes), limits, notes, hulls)
         if result.flat:
             return result
         m = measure_hull(exact_hull(result.vertices))
@@ -390,11 +411,14 @@ def fit_parts(
     if max_hulls is not None and len(groups) > max_hulls:
         groups = merge_groups(inputs, int(max_hulls))
         notes.append(f"merged {len(inputs)} parts into {len(groups)} (max_hulls)")
-    out_parts, added, distance = _fit_groups(inputs, exacts, groups, limits, notes)
+    hulls = _Hulls()
+    out_parts, added, distance = _fit_groups(inputs, exacts, groups, limits, notes, hulls)
     after = measure_parts(out_parts)
     violations = limit_violations(limits, after, len(out_parts))
 
-    costs = _costs(inputs, exacts, groups, limits, before, after, violations, added, distance)
+    costs = _costs(
+        inputs, exacts, groups, limits, before, after, violations, (added, distance), hulls
+    )
     return TargetFit(
         parts=tuple(out_parts),
         measures=after,
@@ -406,9 +430,11 @@ def fit_parts(
     )
 
 
-def _costs(inputs, exacts, groups, limits, before, after, violations, added, distance):
+def _costs(inputs, exacts, groups, limits, before, after, violations, fitted, hulls):
     """The :class:`LimitCost` of every limit: marginal (cumulative fits in
-    :data:`APPLY_ORDER`, the last one being the fit itself) and standalone."""
+    :data:`APPLY_ORDER`, the last one being the fit itself, whose added volume and distance
+    are ``fitted``) and standalone."""
+    added, distance = fitted
     count = len(inputs)
     singles = [[i] for i in range(count)]
     binding = {v.limit for v in limit_violations(limits, before, count)}
@@ -424,7 +450,7 @@ def _costs(inputs, exacts, groups, limits, before, after, violations, added, dis
         elif previous_parts is None or _violated(key, applied, previous_parts):
             prefix_groups = groups if "max_hulls" in applied else singles
             previous_parts, cost_added, cost_distance = _fit_groups(
-                inputs, exacts, prefix_groups, applied, []
+                inputs, exacts, prefix_groups, applied, [], hulls
             )
             previous = (cost_added, cost_distance)
         cumulative.append(previous)
@@ -437,7 +463,7 @@ def _costs(inputs, exacts, groups, limits, before, after, violations, added, dis
         else:
             alone_groups = groups if key == "max_hulls" else singles
             _, alone_added, alone_distance = _fit_groups(
-                inputs, exacts, alone_groups, {key: limits[key]}, []
+                inputs, exacts, alone_groups, {key: limits[key]}, [], hulls
             )
         costs.append(
             LimitCost(
@@ -470,7 +496,7 @@ def fit_hull(points: Any, target: Any, length_scale: float = 1.0) -> TargetFit:
     return fit_parts([(pts, np.zeros((0, 3), dtype=np.int64))], target, length_scale)
 
 
-def _fit_groups(inputs, exacts, groups, limits, notes):
+def _fit_groups(inputs, exacts, groups, limits, notes, hulls):
     """Fit each group of parts (the hull of their union) to the per-part limits: the parts,
     the volume they add over the exact hulls of their members, and the largest distance
     from a part to the exact hull of its members' points (for a merged group that hull
@@ -479,7 +505,7 @@ def _fit_groups(inputs, exacts, groups, limits, notes):
     parts, added, distance = [], 0.0, 0.0
     for group in groups:
         points = np.vstack([inputs[i] for i in group])
-        result = _fit_one(points, limits, notes)
+        result = _fit_one(points, limits, notes, hulls)
         parts.append((result.vertices, result.faces))
         union = exacts[group[0]] if len(group) == 1 else exact_hull(points)
         added += max(float(result.volume) - sum(float(exacts[i].volume) for i in group), 0.0)
