@@ -201,10 +201,13 @@ class _Hulls:
     """:func:`convex_hull` of one fit, each distinct call computed once: a fit and the fits
     of its costs (:class:`LimitCost`) ask for the same budgeted hulls of the same points
     (under ``--target physx`` three of four fits of a scanned part ask for the same 255
-    vertices), and the hull is a function of its arguments, so the answers are the same."""
+    vertices), and the hull is a function of its arguments, so the answers are the same.
+    Likewise the distance from a hull made here to an exact hull (:func:`_outside_distance`),
+    by the two objects (held here, so that their ids stay theirs)."""
 
     def __init__(self) -> None:
         self._made: dict[tuple[Any, ...], Any] = {}
+        self._distances: dict[tuple[int, int], tuple[float, Any, Any]] = {}
 
     def __call__(
         self, points: np.ndarray, max_vertices: int | None = None, max_planes: int | None = None
@@ -215,6 +218,12 @@ class _Hulls:
         if key not in self._made:
             self._made[key] = convex_hull(pts, max_vertices=max_vertices, max_planes=max_planes)
         return self._made[key]
+
+    def outside_distance(self, points: np.ndarray, hull: ExactHull) -> float:
+        key = (id(points), id(hull))
+        if key not in self._distances:
+            self._distances[key] = (_outside_distance(points, hull), points, hull)
+        return self._distances[key][0]
 
 
 def _grow(points: np.ndarray, limits: Mapping[str, float], notes: list[str]) -> np.ndarray:
@@ -510,7 +519,7 @@ def _fit_groups(inputs, exacts, groups, limits, notes, hulls):
         union = exacts[group[0]] if len(group) == 1 else exact_hull(points)
         added += max(float(result.volume) - sum(float(exacts[i].volume) for i in group), 0.0)
         if len(result.vertices):
-            distance = max(distance, _outside_distance(result.vertices, union))
+            distance = max(distance, hulls.outside_distance(result.vertices, union))
     return parts, added, distance
 
 
