@@ -36,6 +36,7 @@ __all__ = [
     "convex_hull",
     "distance_to_hull",
     "exact_hull",
+    "hull_within_budget",
     "pack_hulls",
 ]
 
@@ -182,7 +183,15 @@ def convex_hull(
     its maximum over the polytope is reached at one of its vertices.
     """
     pts = _checked_points(points, max_vertices, max_planes)
-    exact = exact_hull(pts)
+    return hull_within_budget(exact_hull(pts), max_vertices, max_planes)
+
+
+def hull_within_budget(
+    exact: ExactHull, max_vertices: int | None = None, max_planes: int | None = None
+) -> HullResult:
+    """:func:`convex_hull` of points whose exact hull is ``exact`` (budgets as there): for a
+    caller that holds the exact hull already."""
+    _check_budgets(max_vertices, max_planes)
     if exact.dimension == 0:
         raise InvalidMeshError("all vertices coincide: there is no meaningful hull")
     if exact.dimension == 1:
@@ -202,11 +211,15 @@ def _checked_points(
     pts = np.asarray(points, dtype=np.float64)
     if pts.ndim != 2 or pts.shape[1] != 3:
         raise ValueError(f"points must be (n, 3), got {pts.shape}")
+    _check_budgets(max_vertices, max_planes)
+    return pts
+
+
+def _check_budgets(max_vertices: int | None, max_planes: int | None) -> None:
     if max_vertices is not None and int(max_vertices) < MIN_MAX_VERTICES:
         raise ValueError(f"max_vertices must be >= {MIN_MAX_VERTICES}, got {max_vertices}")
     if max_planes is not None and int(max_planes) < MIN_MAX_VERTICES:
         raise ValueError(f"max_planes must be >= {MIN_MAX_VERTICES}, got {max_planes}")
-    return pts
 
 
 def _budgets(

@@ -214,10 +214,12 @@ def _widths(normals: np.ndarray, points: np.ndarray, faces: np.ndarray) -> np.nd
     return widths
 
 
-def measure_hull(hull: ExactHull) -> dict[str, Any]:
+def measure_hull(hull: ExactHull, ball: bool = True) -> dict[str, Any]:
     """The measures of one exact hull (:class:`PartMeasures`' fields, plus ``normals``:
     the unit normals of its polygons, and ``thin_normal``: the direction of its thickness).
-    Lower-dimensional hulls (flat, collinear, a point) get thickness and volume 0."""
+    Lower-dimensional hulls (flat, collinear, a point) get thickness and volume 0. Without
+    ``ball``, a 3-D hull's in-sphere (a linear programme over its polygons, the costliest
+    measure of a big hull) is not sought: ``inradius`` and ``oblong_ratio`` are NaN."""
     k = len(hull.vertices)
     if hull.dimension < 3:
         thin = hull.normal if hull.dimension == 2 else np.zeros(3)
@@ -252,14 +254,18 @@ def measure_hull(hull: ExactHull) -> dict[str, Any]:
     normals, offsets = planes[:, :3], planes[:, 3]
     widths = _widths(normals, v, hull.faces)
     thinnest = int(np.argmin(widths))
-    centre, radius = _inscribed_ball(normals, offsets)
-    reach = float(np.linalg.norm(v - centre, axis=1).max())
+    if ball:
+        centre, radius = _inscribed_ball(normals, offsets)
+        reach = float(np.linalg.norm(v - centre, axis=1).max())
+        oblong = reach / radius if radius > 0 else np.inf
+    else:
+        radius = oblong = np.nan
     return {
         "vertices": k,
         "triangles": len(hull.faces),
         "polygons": polygons,
         "max_faces_per_vertex": int(per_vertex.max()),
-        "oblong_ratio": reach / radius if radius > 0 else np.inf,
+        "oblong_ratio": oblong,
         "inradius": radius,
         "thickness": float(widths[thinnest]),
         "volume": float(hull.volume),
@@ -280,7 +286,7 @@ _MEASURE_FIELDS = (
 )
 
 
-def measure_parts(parts: Sequence[tuple[Any, Any]]) -> PartMeasures:
+def measure_parts(parts: Sequence[tuple[Any, Any]], ball: bool = True) -> PartMeasures:
     """Measure convex parts as an engine sees them: the exact hull of each part's vertices.
 
     Parameters
@@ -288,6 +294,9 @@ def measure_parts(parts: Sequence[tuple[Any, Any]]) -> PartMeasures:
     parts : sequence of ((n_i, 3) float, (m_i, 3) int)
         The parts' vertices and faces (the faces are not used: engines cook the hull of the
         points, and so does this).
+    ball : bool
+        Seek each part's in-sphere (``inradius``, ``oblong_ratio``; else NaN for a 3-D part):
+        what a measure without ``max_oblong_ratio`` can skip (:func:`measure_hull`).
 
     Returns
     -------
@@ -308,7 +317,7 @@ def measure_parts(parts: Sequence[tuple[Any, Any]]) -> PartMeasures:
     thinnest direction is face-to-vertex (slabs, boxes, plates) and an upper bound, at most
     about 15% above, when it is edge-to-edge (a tetrahedron).
     """
-    rows = [measure_hull(exact_hull(np.asarray(v, dtype=np.float64))) for v, _ in parts]
+    rows = [measure_hull(exact_hull(np.asarray(v, dtype=np.float64)), ball) for v, _ in parts]
     columns = {
         name: np.array(
             [row[name] for row in rows],

@@ -16,7 +16,12 @@ from typing import Any
 
 import numpy as np
 
-from meshcol.collision.hull import ExactHull, convex_hull, distance_to_hull, exact_hull
+from meshcol.collision.hull import (
+    ExactHull,
+    distance_to_hull,
+    exact_hull,
+    hull_within_budget,
+)
 from meshcol.collision.limits import (
     GROWTH_SLACK,
     PART_MEASURES,
@@ -198,25 +203,42 @@ def _null_axes(points: np.ndarray, dimension: int) -> np.ndarray:
 
 
 class _Hulls:
-    """:func:`convex_hull` of one fit, each distinct call computed once: a fit and the fits
-    of its costs (:class:`LimitCost`) ask for the same budgeted hulls of the same points
-    (under ``--target physx`` three of four fits of a scanned part ask for the same 255
-    vertices), and the hull is a function of its arguments, so the answers are the same.
-    Likewise the distance from a hull made here to an exact hull (:func:`_outside_distance`),
-    by the two objects (held here, so that their ids stay theirs)."""
+    """The hulls of one fit, each computed once: a fit and the fits of its costs
+    (:class:`LimitCost`) ask for the same exact hulls and the same budgeted hulls
+    (:func:`convex_hull`) of the same points (under ``--target physx`` three of four fits of
+    a scanned part ask for the same 255 vertices), and a hull is a function of its points and
+    budgets, so the answers are the same. Likewise the distance from a hull made here to an
+    exact hull (:func:`_outside_distance`), by the two objects (held here, so that their ids
+    stay theirs)."""
 
     def __init__(self) -> None:
+        self._exact: dict[tuple[Any, ...], ExactHull] = {}
         self._made: dict[tuple[Any, ...], Any] = {}
         self._distances: dict[tuple[int, int], tuple[float, Any, Any]] = {}
+
+    @staticmethod
+    def _key(points: np.ndarray) -> tuple[Any, ...]:
+        return (points.shape, hashlib.blake2b(points.data, digest_size=16).digest())
+
+    def exact(self, points: np.ndarray) -> ExactHull:
+        """:func:`exact_hull` of ``points``."""
+        pts = np.ascontiguousarray(points, dtype=np.float64)
+        if pts.ndim != 2 or pts.shape[1] != 3:
+            return exact_hull(pts)  # the error it raises
+        key = self._key(pts)
+        if key not in self._exact:
+            self._exact[key] = exact_hull(pts)
+        return self._exact[key]
 
     def __call__(
         self, points: np.ndarray, max_vertices: int | None = None, max_planes: int | None = None
     ):
-        pts = np.ascontiguousarray(points, dtype=np.float64)
-        digest = hashlib.blake2b(pts.data, digest_size=16).digest()
-        key = (pts.shape, digest, max_vertices, max_planes)
+        """:func:`convex_hull` of ``points`` within the budgets."""
+        exact = self.exact(points)
+        key = (*self._key(np.ascontiguousarray(points, dtype=np.float64)), max_vertices)
+        key += (max_planes,)
         if key not in self._made:
-            self._made[key] = convex_hull(pts, max_vertices=max_vertices, max_planes=max_planes)
+            self._made[key] = hull_within_budget(exact, max_vertices, max_planes)
         return self._made[key]
 
     def outside_distance(self, points: np.ndarray, hull: ExactHull) -> float:
@@ -226,7 +248,9 @@ class _Hulls:
         return self._distances[key][0]
 
 
-def _grow(points: np.ndarray, limits: Mapping[str, float], notes: list[str]) -> np.ndarray:
+def _grow(
+    points: np.ndarray, limits: Mapping[str, float], notes: list[str], hulls: _Hulls
+) -> np.ndarray:
     """The points grown (never shrunk) until their hull meets ``min_thickness``,
     ``min_volume`` and ``max_oblong_ratio``, or :data:`GROWTH_ROUNDS` are spent."""
     thickness = float(limits.get("min_thickness", 0.0))
@@ -236,7 +260,7 @@ def _grow(points: np.ndarray, limits: Mapping[str, float], notes: list[str]) -> 
         return points
     pts = points
     for _ in range(GROWTH_ROUNDS):
-        hull = exact_hull(pts)
+        hull = hulls.exact(pts)
         if hull.dimension < 3:
             if thickness <= 0 and volume <= 0:
                 # only the oblong ratio asks for a volume: give it the least one that meets it
@@ -286,7 +310,7 @@ def _budgeted(points: np.ndarray, limits: Mapping[str, float], notes: list[str],
     result = hulls(points, max_vertices=vertices)
     if result.flat:
         return result
-    m = measure_hull(exact_hull(result.vertices))
+    m = measure_hull(hulls.exact(result.vertices))
     plane_budget = None if planes is None else int(planes)
     for _ in range(BUDGET_ROUNDS):
         too_many_planes = planes is not None and m["polygons"] > planes
@@ -303,7 +327,7 @@ def _budgeted(points: np.ndarray, limits: Mapping[str, float], notes: list[str],
         if too_many_vertices and vertices is not None:
             vertices = max(vertices - 1, 4)
         result = hulls(points, max_vertices=vertices, max_planes=plane_budget)
-        m = measure_hull(exact_hull(result.vertices))
+        m = measure_hull(hulls.exact(result.vertices))
     if _counts_met(m, limits):
         return result
     # the last resort always meets every count limit a profile may set (>= 4 vertices, >= 4
@@ -338,10 +362,10 @@ def _fit_one(points: np.ndarray, limits: Mapping[str, float], notes: list[str], 
     others = {key: value for key, value in limits.items() if key != "max_oblong_ratio"}
     for _ in range(3):
         written = len(notes)
-        result = _budgeted(_grow(pts, limits, notes), limits, notes, hulls)
+        result = _budgeted(_grow(pts, limits, notes, hulls), limits, notes, hulls)
         if result.flat:
             return result
-        m = measure_hull(exact_hull(result.vertices))
+        m = measure_hull(hulls.exact(result.vertices))
         if _growth_met(m, limits):
             return result
         rounder = kept is None or m["oblong_ratio"] < kept[1] * (1 - OBLONG_PROGRESS)
@@ -407,20 +431,24 @@ def fit_parts(
     inputs = [np.asarray(v, dtype=np.float64) for v, _ in parts]
     if not inputs:
         raise InvalidMeshError("no parts to fit to the target")
-    exacts = [exact_hull(p) for p in inputs]
+    hulls = _Hulls()
+    exacts = [hulls.exact(p) for p in inputs]
     for e in exacts:
         if e.dimension < 2 and not (limits.get("min_thickness", 0) or limits.get("min_volume", 0)):
             raise InvalidMeshError(
                 "all vertices are collinear or coincide: there is no meaningful hull"
             )
-    before = measure_parts([(e.vertices, e.faces) for e in exacts])
+    # the exact hulls' measures are compared with the limits only (LimitCost.before): their
+    # in-sphere, a linear programme over every polygon of a scanned part, only for the ratio
+    before = measure_parts(
+        [(e.vertices, e.faces) for e in exacts], ball="max_oblong_ratio" in limits
+    )
     notes: list[str] = []
     groups = [[i] for i in range(len(inputs))]
     max_hulls = limits.get("max_hulls")
     if max_hulls is not None and len(groups) > max_hulls:
         groups = merge_groups(inputs, int(max_hulls))
         notes.append(f"merged {len(inputs)} parts into {len(groups)} (max_hulls)")
-    hulls = _Hulls()
     out_parts, added, distance = _fit_groups(inputs, exacts, groups, limits, notes, hulls)
     after = measure_parts(out_parts)
     violations = limit_violations(limits, after, len(out_parts))
@@ -516,7 +544,7 @@ def _fit_groups(inputs, exacts, groups, limits, notes, hulls):
         points = np.vstack([inputs[i] for i in group])
         result = _fit_one(points, limits, notes, hulls)
         parts.append((result.vertices, result.faces))
-        union = exacts[group[0]] if len(group) == 1 else exact_hull(points)
+        union = exacts[group[0]] if len(group) == 1 else hulls.exact(points)
         added += max(float(result.volume) - sum(float(exacts[i].volume) for i in group), 0.0)
         if len(result.vertices):
             distance = max(distance, hulls.outside_distance(result.vertices, union))
