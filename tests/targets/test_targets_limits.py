@@ -163,3 +163,28 @@ def test_widths_by_blocks_are_the_full_products_and_bounded_in_memory(monkeypatc
         tracemalloc.stop()
     assert blocked.thickness[0] == climbed.thickness[0] and blocked.polygons[0] > 10_000
     assert peak < 64e6, peak
+
+
+def test_measures_without_the_ball_are_the_same_but_the_ball() -> None:
+    """``measure_parts(ball=False)``, for a fit's exact hulls under a target without
+    ``max_oblong_ratio``: every other measure the same bits, in-sphere and ratio NaN."""
+    parts = [(sphere(300, seed=s), None) for s in range(3)] + [(cone(40), None)]
+    full = measure_parts(parts)
+    lean = measure_parts(parts, ball=False)
+    for name in ("vertices", "triangles", "polygons", "max_faces_per_vertex", "thickness"):
+        assert np.array_equal(getattr(full, name), getattr(lean, name)), name
+    assert np.array_equal(full.volume, lean.volume)
+    assert np.isnan(lean.inradius).all() and np.isnan(lean.oblong_ratio).all()
+
+
+def test_hull_within_budget_is_convex_hull_of_the_points() -> None:
+    from meshcol.collision.hull import convex_hull, exact_hull, hull_within_budget
+
+    points = sphere(500, seed=9) * [1.0, 2.0, 0.5]
+    for budget, planes in ((None, None), (40, None), (40, 30), (600, None)):
+        a = convex_hull(points, budget, max_planes=planes)
+        b = hull_within_budget(exact_hull(points), budget, planes)
+        assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
+        assert (a.volume, a.max_distance) == (b.volume, b.max_distance)
+    with pytest.raises(ValueError, match="max_vertices must be >= 4"):
+        hull_within_budget(exact_hull(points), 3)
