@@ -438,11 +438,9 @@ def fit_parts(
             raise InvalidMeshError(
                 "all vertices are collinear or coincide: there is no meaningful hull"
             )
-    # the exact hulls' measures are compared with the limits only (LimitCost.before): their
-    # in-sphere, a linear programme over every polygon of a scanned part, only for the ratio
-    before = measure_parts(
-        [(e.vertices, e.faces) for e in exacts], ball="max_oblong_ratio" in limits
-    )
+    # only compared with the limits: the in-sphere (a linear programme) only for the ratio
+    ball = "max_oblong_ratio" in limits
+    before = measure_parts([(e.vertices, e.faces) for e in exacts], ball)
     notes: list[str] = []
     groups = [[i] for i in range(len(inputs))]
     max_hulls = limits.get("max_hulls")
