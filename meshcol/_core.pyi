@@ -33,6 +33,8 @@ class defaults:
 
     hill_climbing_min_vertices: int = 32
 
+    width_plateau_relative: float = 1e-12
+
     prefetch_max_vertices: int = 512
 
     climb_prefetch_min_vertices: int = 128
@@ -524,6 +526,16 @@ def exact_hull(points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), o
 def pack_polytopes(points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], threads: int = 0) -> tuple[Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int32], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int32], dict(shape=(None, 2), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.uint8], dict(shape=(None, 16), order='C')], object]:
     """
     Hulls of H point sets (shape h owns points[offsets[h]:offsets[h + 1]]) packed for a ConvexSet: (status (H,), vertices, offsets, adjacency_offsets, adjacency, face_offsets, face_normals, edge_pair_offsets, edge_pairs, climb_list_offsets, climb_lists, seal); the seal, passed to PackedConvexSet with these arrays, spares it reading their indices again.
+    """
+
+def hull_widths(vertices: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], faces: Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], directions: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)]) -> Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')]:
+    """
+    Width of a 3-D polytope (vertices (k, 3), triangles faces (m, 3)) across each of the directions (n, 3): the largest minus the smallest vertex projection fma(d.z, p.z, fma(d.y, p.y, d.x * p.x)), by support climbs; (n,) float64.
+    """
+
+def distances_to_facets(points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], facets: Annotated[NDArray[numpy.float64], dict(shape=(None, 3, 3), order='C', device='cpu', writable=False)], in_front: Annotated[NDArray[numpy.bool_], dict(shape=(None, None), order='C', device='cpu', writable=False)]) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')]]:
+    """
+    Distance (q,) and closest point (q, 3) from each point (q, 3) to a convex polytope, searching the facets (m, 3, 3) in_front (q, m) marks for it (none: 0 and the point itself); numpy's arithmetic of closest_points_on_triangles, step for step.
     """
 
 class FitStatus(enum.Enum):

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -164,4 +165,58 @@ void bind_hull(nb::module_& m) {
         "face_offsets, face_normals, edge_pair_offsets, edge_pairs, climb_list_offsets, "
         "climb_lists, seal); the seal, passed to PackedConvexSet with these arrays, spares it "
         "reading their indices again.");
+
+    m.def(
+        "hull_widths",
+        [](Points vertices, Faces faces, Points directions) {
+            const size_t k = vertices.shape(0), count = directions.shape(0);
+            if (k < 1 || k > 0x7fffffff)
+                throw std::invalid_argument("vertices must be (k, 3) with 1 <= k < 2**31, got (" +
+                                            std::to_string(k) + ", 3)");
+            auto widths = new_array<Out<double, -1>>({count});
+            bool ok;
+            {
+                nb::gil_scoped_release release;
+                ok = meshcol::hull_widths(
+                    as_vec3(vertices), static_cast<int>(k), faces.data(),
+                    static_cast<long long>(faces.shape(0)),
+                    reinterpret_cast<const meshcol::Vec3*>(directions.data()),
+                    static_cast<long long>(count), widths.data());
+            }
+            if (!ok) throw std::invalid_argument("faces must index the vertices");
+            return widths;
+        },
+        "vertices"_a, "faces"_a, "directions"_a,
+        "Width of a 3-D polytope (vertices (k, 3), triangles faces (m, 3)) across each of the "
+        "directions (n, 3): the largest minus the smallest vertex projection "
+        "fma(d.z, p.z, fma(d.y, p.y, d.x * p.x)), by support climbs; (n,) float64.");
+
+    m.def(
+        "distances_to_facets",
+        [](Points points, Triangles facets,
+           nb::ndarray<const bool, nb::shape<-1, -1>, nb::c_contig, nb::device::cpu> in_front) {
+            const size_t q = points.shape(0), f = facets.shape(0);
+            if (in_front.shape(0) != q || in_front.shape(1) != f)
+                throw std::invalid_argument(
+                    "in_front must be (points, facets) = (" + std::to_string(q) + ", " +
+                    std::to_string(f) + "), got (" + std::to_string(in_front.shape(0)) + ", " +
+                    std::to_string(in_front.shape(1)) + ")");
+            auto distances = new_array<Out<double, -1>>({q});
+            auto closest = new_array<Out<double, -1, 3>>({q, 3});
+            {
+                nb::gil_scoped_release release;
+                static_assert(sizeof(bool) == sizeof(std::uint8_t), "bool is one byte");
+                meshcol::distances_to_facets(
+                    as_vec3(points), static_cast<long long>(q),
+                    reinterpret_cast<const meshcol::Vec3*>(facets.data()),
+                    static_cast<long long>(f),
+                    reinterpret_cast<const std::uint8_t*>(in_front.data()), distances.data(),
+                    reinterpret_cast<meshcol::Vec3*>(closest.data()));
+            }
+            return std::make_tuple(distances, closest);
+        },
+        "points"_a, "facets"_a, "in_front"_a,
+        "Distance (q,) and closest point (q, 3) from each point (q, 3) to a convex polytope, "
+        "searching the facets (m, 3, 3) in_front (q, m) marks for it (none: 0 and the point "
+        "itself); numpy's arithmetic of closest_points_on_triangles, step for step.");
 }

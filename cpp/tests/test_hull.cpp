@@ -23,6 +23,8 @@ namespace {
 
 const double kPi = std::acos(-1.0);
 
+Vec3 unit(const Vec3& v) { return v / norm(v); }
+
 // Every face's plane has every vertex on its inner side (or on it).
 bool faces_enclose(const Hull& h, const std::vector<Vec3>& points) {
     for (size_t f = 0; f < h.faces.size(); ++f)
@@ -78,6 +80,46 @@ TEST_CASE("hull: points on a sphere are all vertices (V - E + F = 2)") {
     CHECK_EQ(h.faces.size(), size_t{2 * 200 - 4});  // a triangulated sphere
     CHECK(h.volume < 4.0 / 3.0 * kPi && h.volume > 0.97 * 4.0 / 3.0 * kPi);
     CHECK(faces_enclose(h, points));
+}
+
+TEST_CASE("hull: widths by support climbs are the largest minus smallest projection, exactly") {
+    // a cube of a grid (whole faces of coplanar vertices: ties) and a random round hull
+    std::mt19937_64 rng(7);
+    std::normal_distribution<double> normal;
+    for (int shape = 0; shape < 2; ++shape) {
+        std::vector<Vec3> points;
+        for (int i = 0; i < 600; ++i) {
+            if (shape == 0)
+                points.push_back({double(rng() % 5), double(rng() % 5), double(rng() % 5)});
+            else
+                points.push_back(unit({normal(rng), normal(rng), normal(rng)}) * 3.0 +
+                                 Vec3{100.0, -20.0, 5.0});
+        }
+        const Hull h = exact_hull(points.data(), static_cast<long long>(points.size()));
+        REQUIRE(h.status == HullStatus::OK);
+        std::vector<Vec3> v;
+        for (int i : h.vertices) v.push_back(points[i]);
+        std::vector<std::int64_t> faces;
+        for (const auto& t : h.faces) faces.insert(faces.end(), {t[0], t[1], t[2]});
+        std::vector<Vec3> directions(h.face_normals);
+        for (int i = 0; i < 200; ++i)
+            directions.push_back(unit({normal(rng), normal(rng), normal(rng)}));
+        std::vector<double> widths(directions.size());
+        REQUIRE(hull_widths(v.data(), int(v.size()), faces.data(), (long long)h.faces.size(),
+                            directions.data(), (long long)directions.size(), widths.data()));
+        for (size_t i = 0; i < directions.size(); ++i) {
+            double top = -INFINITY, bottom = INFINITY;
+            for (const Vec3& p : v) {
+                top = std::max(top, width_projection(p, directions[i]));
+                bottom = std::min(bottom, width_projection(p, directions[i]));
+            }
+            CHECK_EQ(widths[i], top - bottom);
+        }
+    }
+    std::vector<std::int64_t> bad = {0, 1, 9};
+    Vec3 one{0.0, 0.0, 0.0}, axis{1.0, 0.0, 0.0};
+    double w = 0.0;
+    CHECK(!hull_widths(&one, 1, bad.data(), 1, &axis, 1, &w));
 }
 
 TEST_CASE("hull: flat, collinear, single-point and empty inputs say so") {

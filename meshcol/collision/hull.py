@@ -36,6 +36,7 @@ __all__ = [
     "convex_hull",
     "distance_to_hull",
     "exact_hull",
+    "hull_within_budget",
     "pack_hulls",
 ]
 
@@ -182,7 +183,15 @@ def convex_hull(
     its maximum over the polytope is reached at one of its vertices.
     """
     pts = _checked_points(points, max_vertices, max_planes)
-    exact = exact_hull(pts)
+    return hull_within_budget(exact_hull(pts), max_vertices, max_planes)
+
+
+def hull_within_budget(
+    exact: ExactHull, max_vertices: int | None = None, max_planes: int | None = None
+) -> HullResult:
+    """:func:`convex_hull` of points whose exact hull is ``exact`` (budgets as there): for a
+    caller that holds the exact hull already."""
+    _check_budgets(max_vertices, max_planes)
     if exact.dimension == 0:
         raise InvalidMeshError("all vertices coincide: there is no meaningful hull")
     if exact.dimension == 1:
@@ -202,11 +211,15 @@ def _checked_points(
     pts = np.asarray(points, dtype=np.float64)
     if pts.ndim != 2 or pts.shape[1] != 3:
         raise ValueError(f"points must be (n, 3), got {pts.shape}")
+    _check_budgets(max_vertices, max_planes)
+    return pts
+
+
+def _check_budgets(max_vertices: int | None, max_planes: int | None) -> None:
     if max_vertices is not None and int(max_vertices) < MIN_MAX_VERTICES:
         raise ValueError(f"max_vertices must be >= {MIN_MAX_VERTICES}, got {max_vertices}")
     if max_planes is not None and int(max_planes) < MIN_MAX_VERTICES:
         raise ValueError(f"max_planes must be >= {MIN_MAX_VERTICES}, got {max_planes}")
-    return pts
 
 
 def _budgets(
@@ -747,21 +760,28 @@ def _distances_to_hull(points, facets, equations):
     a box and the two triangles of a face); searching only the first would give that facet's
     distance instead of 0. A facet searched in excess is harmless: its closest point is on the
     surface, never nearer than the true one.
+
+    3-D facets are searched in the core (``core.distances_to_facets``: the arithmetic of
+    :func:`closest_points_on_triangles`, step for step, without the candidate pairs' arrays);
+    segments (a flat hull's edges) here.
     """
     dim = points.shape[1]
     signed = points @ equations[0] + equations[1]
     outside = signed.max(axis=1, initial=-np.inf) > 0.0
     scale = max(float(np.abs(facets).max(initial=0.0)), float(np.abs(points).max(initial=0.0)))
     in_front = (signed > -_ROUNDING * max(scale, 1e-300)) & outside[:, None]
+    if dim == 3:
+        from meshcol._native import core
+
+        return core.distances_to_facets(
+            np.ascontiguousarray(points), np.ascontiguousarray(facets), in_front
+        )
     distances = np.zeros(len(points))
     closest = points.copy()
     p_index, f_index = np.nonzero(in_front)
     if len(p_index) == 0:
         return distances, closest
-    if dim == 3:
-        candidates = closest_points_on_triangles(points[p_index], facets[f_index])
-    else:
-        candidates = _closest_points_on_segments(points[p_index], facets[f_index])
+    candidates = _closest_points_on_segments(points[p_index], facets[f_index])
     d2 = ((candidates - points[p_index]) ** 2).sum(axis=1)
     order = np.lexsort((d2, p_index))
     first = np.ones(len(order), bool)

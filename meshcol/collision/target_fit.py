@@ -9,13 +9,19 @@ limit cost is measured against the exact hull of the input (:class:`LimitCost`).
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from meshcol.collision.hull import ExactHull, convex_hull, distance_to_hull, exact_hull
+from meshcol.collision.hull import (
+    ExactHull,
+    distance_to_hull,
+    exact_hull,
+    hull_within_budget,
+)
 from meshcol.collision.limits import (
     GROWTH_SLACK,
     PART_MEASURES,
@@ -196,7 +202,55 @@ def _null_axes(points: np.ndarray, dimension: int) -> np.ndarray:
     return vt[dimension:]
 
 
-def _grow(points: np.ndarray, limits: Mapping[str, float], notes: list[str]) -> np.ndarray:
+class _Hulls:
+    """The hulls of one fit, each computed once: a fit and the fits of its costs
+    (:class:`LimitCost`) ask for the same exact hulls and the same budgeted hulls
+    (:func:`convex_hull`) of the same points (under ``--target physx`` three of four fits of
+    a scanned part ask for the same 255 vertices), and a hull is a function of its points and
+    budgets, so the answers are the same. Likewise the distance from a hull made here to an
+    exact hull (:func:`_outside_distance`), by the two objects (held here, so that their ids
+    stay theirs)."""
+
+    def __init__(self) -> None:
+        self._exact: dict[tuple[Any, ...], ExactHull] = {}
+        self._made: dict[tuple[Any, ...], Any] = {}
+        self._distances: dict[tuple[int, int], tuple[float, Any, Any]] = {}
+
+    @staticmethod
+    def _key(points: np.ndarray) -> tuple[Any, ...]:
+        return (points.shape, hashlib.blake2b(points.data, digest_size=16).digest())
+
+    def exact(self, points: np.ndarray) -> ExactHull:
+        """:func:`exact_hull` of ``points``."""
+        pts = np.ascontiguousarray(points, dtype=np.float64)
+        if pts.ndim != 2 or pts.shape[1] != 3:
+            return exact_hull(pts)  # the error it raises
+        key = self._key(pts)
+        if key not in self._exact:
+            self._exact[key] = exact_hull(pts)
+        return self._exact[key]
+
+    def __call__(
+        self, points: np.ndarray, max_vertices: int | None = None, max_planes: int | None = None
+    ):
+        """:func:`convex_hull` of ``points`` within the budgets."""
+        exact = self.exact(points)
+        key = (*self._key(np.ascontiguousarray(points, dtype=np.float64)), max_vertices)
+        key += (max_planes,)
+        if key not in self._made:
+            self._made[key] = hull_within_budget(exact, max_vertices, max_planes)
+        return self._made[key]
+
+    def outside_distance(self, points: np.ndarray, hull: ExactHull) -> float:
+        key = (id(points), id(hull))
+        if key not in self._distances:
+            self._distances[key] = (_outside_distance(points, hull), points, hull)
+        return self._distances[key][0]
+
+
+def _grow(
+    points: np.ndarray, limits: Mapping[str, float], notes: list[str], hulls: _Hulls
+) -> np.ndarray:
     """The points grown (never shrunk) until their hull meets ``min_thickness``,
     ``min_volume`` and ``max_oblong_ratio``, or :data:`GROWTH_ROUNDS` are spent."""
     thickness = float(limits.get("min_thickness", 0.0))
@@ -206,7 +260,7 @@ def _grow(points: np.ndarray, limits: Mapping[str, float], notes: list[str]) -> 
         return points
     pts = points
     for _ in range(GROWTH_ROUNDS):
-        hull = exact_hull(pts)
+        hull = hulls.exact(pts)
         if hull.dimension < 3:
             if thickness <= 0 and volume <= 0:
                 # only the oblong ratio asks for a volume: give it the least one that meets it
@@ -247,16 +301,16 @@ def _grow(points: np.ndarray, limits: Mapping[str, float], notes: list[str]) -> 
     return pts
 
 
-def _budgeted(points: np.ndarray, limits: Mapping[str, float], notes: list[str]):
+def _budgeted(points: np.ndarray, limits: Mapping[str, float], notes: list[str], hulls: _Hulls):
     """The exact hull of ``points`` if it meets the count limits, else the supporting-plane
     hull within them (budgets tightened until the measures agree)."""
     vertices = budget_vertices(limits)
     planes = limits.get("max_hull_polygons")
     per_vertex = limits.get("max_faces_per_vertex")
-    result = convex_hull(points, max_vertices=vertices)
+    result = hulls(points, max_vertices=vertices)
     if result.flat:
         return result
-    m = measure_hull(exact_hull(result.vertices))
+    m = measure_hull(hulls.exact(result.vertices))
     plane_budget = None if planes is None else int(planes)
     for _ in range(BUDGET_ROUNDS):
         too_many_planes = planes is not None and m["polygons"] > planes
@@ -272,14 +326,14 @@ def _budgeted(points: np.ndarray, limits: Mapping[str, float], notes: list[str])
         plane_budget = max(int(current), 4)
         if too_many_vertices and vertices is not None:
             vertices = max(vertices - 1, 4)
-        result = convex_hull(points, max_vertices=vertices, max_planes=plane_budget)
-        m = measure_hull(exact_hull(result.vertices))
+        result = hulls(points, max_vertices=vertices, max_planes=plane_budget)
+        m = measure_hull(hulls.exact(result.vertices))
     if _counts_met(m, limits):
         return result
     # the last resort always meets every count limit a profile may set (>= 4 vertices, >= 4
     # polygons, >= 3 per vertex, >= 4 triangles): the smallest supporting tetrahedron
     notes.append("reduced to the enclosing tetrahedron (no larger hull met the budgets)")
-    return convex_hull(points, max_vertices=4, max_planes=4)
+    return hulls(points, max_vertices=4, max_planes=4)
 
 
 def _counts_met(m: Mapping[str, Any], limits: Mapping[str, float]) -> bool:
@@ -299,7 +353,7 @@ def _growth_met(m: Mapping[str, Any], limits: Mapping[str, float]) -> bool:
     )
 
 
-def _fit_one(points: np.ndarray, limits: Mapping[str, float], notes: list[str]):
+def _fit_one(points: np.ndarray, limits: Mapping[str, float], notes: list[str], hulls: _Hulls):
     """Grow, then simplify; simplification can lengthen a part (its far vertices move out),
     so a part whose growth limits it broke is grown again from the simplified hull."""
     pts = points
@@ -308,10 +362,10 @@ def _fit_one(points: np.ndarray, limits: Mapping[str, float], notes: list[str]):
     others = {key: value for key, value in limits.items() if key != "max_oblong_ratio"}
     for _ in range(3):
         written = len(notes)
-        result = _budgeted(_grow(pts, limits, notes), limits, notes)
+        result = _budgeted(_grow(pts, limits, notes, hulls), limits, notes, hulls)
         if result.flat:
             return result
-        m = measure_hull(exact_hull(result.vertices))
+        m = measure_hull(hulls.exact(result.vertices))
         if _growth_met(m, limits):
             return result
         rounder = kept is None or m["oblong_ratio"] < kept[1] * (1 - OBLONG_PROGRESS)
@@ -377,24 +431,29 @@ def fit_parts(
     inputs = [np.asarray(v, dtype=np.float64) for v, _ in parts]
     if not inputs:
         raise InvalidMeshError("no parts to fit to the target")
-    exacts = [exact_hull(p) for p in inputs]
+    hulls = _Hulls()
+    exacts = [hulls.exact(p) for p in inputs]
     for e in exacts:
         if e.dimension < 2 and not (limits.get("min_thickness", 0) or limits.get("min_volume", 0)):
             raise InvalidMeshError(
                 "all vertices are collinear or coincide: there is no meaningful hull"
             )
-    before = measure_parts([(e.vertices, e.faces) for e in exacts])
+    # only compared with the limits: the in-sphere (a linear programme) only for the ratio
+    ball = "max_oblong_ratio" in limits
+    before = measure_parts([(e.vertices, e.faces) for e in exacts], ball)
     notes: list[str] = []
     groups = [[i] for i in range(len(inputs))]
     max_hulls = limits.get("max_hulls")
     if max_hulls is not None and len(groups) > max_hulls:
         groups = merge_groups(inputs, int(max_hulls))
         notes.append(f"merged {len(inputs)} parts into {len(groups)} (max_hulls)")
-    out_parts, added, distance = _fit_groups(inputs, exacts, groups, limits, notes)
+    out_parts, added, distance = _fit_groups(inputs, exacts, groups, limits, notes, hulls)
     after = measure_parts(out_parts)
     violations = limit_violations(limits, after, len(out_parts))
 
-    costs = _costs(inputs, exacts, groups, limits, before, after, violations, added, distance)
+    costs = _costs(
+        inputs, exacts, groups, limits, before, after, violations, (added, distance), hulls
+    )
     return TargetFit(
         parts=tuple(out_parts),
         measures=after,
@@ -406,9 +465,11 @@ def fit_parts(
     )
 
 
-def _costs(inputs, exacts, groups, limits, before, after, violations, added, distance):
+def _costs(inputs, exacts, groups, limits, before, after, violations, fitted, hulls):
     """The :class:`LimitCost` of every limit: marginal (cumulative fits in
-    :data:`APPLY_ORDER`, the last one being the fit itself) and standalone."""
+    :data:`APPLY_ORDER`, the last one being the fit itself, whose added volume and distance
+    are ``fitted``) and standalone."""
+    added, distance = fitted
     count = len(inputs)
     singles = [[i] for i in range(count)]
     binding = {v.limit for v in limit_violations(limits, before, count)}
@@ -424,7 +485,7 @@ def _costs(inputs, exacts, groups, limits, before, after, violations, added, dis
         elif previous_parts is None or _violated(key, applied, previous_parts):
             prefix_groups = groups if "max_hulls" in applied else singles
             previous_parts, cost_added, cost_distance = _fit_groups(
-                inputs, exacts, prefix_groups, applied, []
+                inputs, exacts, prefix_groups, applied, [], hulls
             )
             previous = (cost_added, cost_distance)
         cumulative.append(previous)
@@ -437,7 +498,7 @@ def _costs(inputs, exacts, groups, limits, before, after, violations, added, dis
         else:
             alone_groups = groups if key == "max_hulls" else singles
             _, alone_added, alone_distance = _fit_groups(
-                inputs, exacts, alone_groups, {key: limits[key]}, []
+                inputs, exacts, alone_groups, {key: limits[key]}, [], hulls
             )
         costs.append(
             LimitCost(
@@ -470,7 +531,7 @@ def fit_hull(points: Any, target: Any, length_scale: float = 1.0) -> TargetFit:
     return fit_parts([(pts, np.zeros((0, 3), dtype=np.int64))], target, length_scale)
 
 
-def _fit_groups(inputs, exacts, groups, limits, notes):
+def _fit_groups(inputs, exacts, groups, limits, notes, hulls):
     """Fit each group of parts (the hull of their union) to the per-part limits: the parts,
     the volume they add over the exact hulls of their members, and the largest distance
     from a part to the exact hull of its members' points (for a merged group that hull
@@ -479,12 +540,12 @@ def _fit_groups(inputs, exacts, groups, limits, notes):
     parts, added, distance = [], 0.0, 0.0
     for group in groups:
         points = np.vstack([inputs[i] for i in group])
-        result = _fit_one(points, limits, notes)
+        result = _fit_one(points, limits, notes, hulls)
         parts.append((result.vertices, result.faces))
-        union = exacts[group[0]] if len(group) == 1 else exact_hull(points)
+        union = exacts[group[0]] if len(group) == 1 else hulls.exact(points)
         added += max(float(result.volume) - sum(float(exacts[i].volume) for i in group), 0.0)
         if len(result.vertices):
-            distance = max(distance, _outside_distance(result.vertices, union))
+            distance = max(distance, hulls.outside_distance(result.vertices, union))
     return parts, added, distance
 
 

@@ -134,22 +134,25 @@ def test_an_oblong_ratio_four_vertices_cannot_meet_is_left_unmet_not_inflated() 
 
 @pytest.mark.slow
 def test_widths_by_blocks_are_the_full_products_and_bounded_in_memory(monkeypatch) -> None:
-    """The thickness comes from every polygon normal's width, made a block of normals at a
-    time: the same bits as the whole product, and a hull of 6,000 vertices on a sphere (about
-    12,000 polygons: 576 MB as one product) measured within a few blocks of memory (the aloha
-    d405 camera of Menagerie, 7,003 hull vertices, took 840 MB under ``--target physx``)."""
+    """The thickness comes from every polygon normal's width: by products a block of normals
+    at a time (the same bits as the whole product), or above ``WIDTH_CLIMB_MIN_VERTICES``
+    by the core's support climbs; either way a hull of 6,000 vertices on a sphere (about
+    12,000 polygons: 576 MB as one product) is measured within a few blocks of memory (the
+    aloha d405 camera of Menagerie, 7,003 hull vertices, took 840 MB under ``--target
+    physx``)."""
     import tracemalloc
 
     import meshcol.collision.limits as limits
     from meshcol.collision.hull import exact_hull
 
     hull = exact_hull(sphere(6000, seed=4))
-    whole = measure_parts([(hull.vertices, None)])
+    climbed = measure_parts([(hull.vertices, None)])
     normals = np.random.default_rng(5).normal(size=(300, 3))
     full = normals @ hull.vertices.T
+    monkeypatch.setattr(limits, "WIDTH_CLIMB_MIN_VERTICES", len(hull.vertices))
     monkeypatch.setattr(limits, "WIDTH_BLOCK", 7 * len(hull.vertices) + 3)  # 7 rows a block
     assert np.array_equal(
-        limits._widths(normals, hull.vertices), full.max(axis=1) - full.min(axis=1)
+        limits._widths(normals, hull.vertices, hull.faces), full.max(axis=1) - full.min(axis=1)
     )
     tracemalloc.start()
     try:
@@ -158,5 +161,30 @@ def test_widths_by_blocks_are_the_full_products_and_bounded_in_memory(monkeypatc
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
-    assert blocked.thickness[0] == whole.thickness[0] and blocked.polygons[0] > 10_000
+    assert blocked.thickness[0] == climbed.thickness[0] and blocked.polygons[0] > 10_000
     assert peak < 64e6, peak
+
+
+def test_measures_without_the_ball_are_the_same_but_the_ball() -> None:
+    """``measure_parts(ball=False)``, for a fit's exact hulls under a target without
+    ``max_oblong_ratio``: every other measure the same bits, in-sphere and ratio NaN."""
+    parts = [(sphere(300, seed=s), None) for s in range(3)] + [(cone(40), None)]
+    full = measure_parts(parts)
+    lean = measure_parts(parts, ball=False)
+    for name in ("vertices", "triangles", "polygons", "max_faces_per_vertex", "thickness"):
+        assert np.array_equal(getattr(full, name), getattr(lean, name)), name
+    assert np.array_equal(full.volume, lean.volume)
+    assert np.isnan(lean.inradius).all() and np.isnan(lean.oblong_ratio).all()
+
+
+def test_hull_within_budget_is_convex_hull_of_the_points() -> None:
+    from meshcol.collision.hull import convex_hull, exact_hull, hull_within_budget
+
+    points = sphere(500, seed=9) * [1.0, 2.0, 0.5]
+    for budget, planes in ((None, None), (40, None), (40, 30), (600, None)):
+        a = convex_hull(points, budget, max_planes=planes)
+        b = hull_within_budget(exact_hull(points), budget, planes)
+        assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
+        assert (a.volume, a.max_distance) == (b.volume, b.max_distance)
+    with pytest.raises(ValueError, match="max_vertices must be >= 4"):
+        hull_within_budget(exact_hull(points), 3)

@@ -112,4 +112,35 @@ std::int64_t edge_direction_classes(const Vec3* vertices, const std::int32_t* pa
 std::int64_t edge_direction_class_count(const Vec3* vertices, const std::int32_t* pairs,
                                         size_t count);
 
+/// The width of a 3-D polytope across each of `count` directions: its largest minus its
+/// smallest vertex projection, each projection the correctly rounded chain
+/// `fma(d.z, p.z, fma(d.y, p.y, d.x * p.x))` (`width_projection`), the order a fused
+/// matrix product takes. `faces` ((face_count, 3) indices of `vertices`) is the hull's
+/// triangulation, whose edges the supports climb. Writes `widths` ((count,)) and returns
+/// true; false (`widths` unset) when an index is out of range or `vertex_count` < 1.
+///
+/// Each support climbs the edge graph from the previous direction's (steepest ascent, as
+/// `support_core`), then reads every vertex joined to the top by vertices projecting within
+/// `defaults::width_plateau_relative` of it: the exact largest projection of a convex
+/// polytope is in that connected set whatever the rounding, so each width is the same double
+/// as the maximum and minimum over all vertices (`width_projection` on each). Thread-safe.
+bool hull_widths(const Vec3* vertices, int vertex_count, const std::int64_t* faces,
+                 long long face_count, const Vec3* directions, long long count,
+                 double* widths);
+
+/// The projection `hull_widths` measures: `fma(d.z, p.z, fma(d.y, p.y, d.x * p.x))`.
+double width_projection(const Vec3& p, const Vec3& d);
+
+/// Distance from each of `count` points to a convex polytope, searching for each point the
+/// facets `in_front` marks: `facets` ((facet_count, 3) corners a triangle), `in_front`
+/// ((count, facet_count), row-major, nonzero: search). Writes the smallest distance to a
+/// marked facet and its closest point (a point with no marked facet: 0 and the point itself).
+/// The closest point on a triangle is Ericson's (2004, 5.1.5) with numpy's arithmetic, step
+/// for step, as `meshcol.geometry.triangles.closest_points_on_triangles` takes it (each
+/// three-term dot product summed as einsum does, (x + z) + y; a tie goes to the first
+/// facet): the same doubles as the budget loop's numpy code. Thread-safe.
+void distances_to_facets(const Vec3* points, long long count, const Vec3* facets,
+                         long long facet_count, const std::uint8_t* in_front, double* distances,
+                         Vec3* closest);
+
 }  // namespace meshcol
