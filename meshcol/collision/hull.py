@@ -644,7 +644,14 @@ def distance_to_hull(points: np.ndarray, hull: ExactHull) -> np.ndarray:
             np.ascontiguousarray(hull.equations[:, :3].T),
             np.ascontiguousarray(hull.equations[:, 3]),
         )
-        return _distances_to_hull(pts, v[hull.faces], equations)[0]
+        facets, step = v[hull.faces], rows_per_block(len(hull.faces))
+        if len(pts) <= step:
+            return _distances_to_hull(pts, facets, equations)[0]
+        parts = [
+            _distances_to_hull(pts[start : start + step], facets, equations)[0]
+            for start in range(0, len(pts), step)
+        ]
+        return np.concatenate(parts)
     if hull.dimension == 2:
         triangles = v[hull.faces]
         best = np.full(len(pts), np.inf)
@@ -656,6 +663,17 @@ def distance_to_hull(points: np.ndarray, hull: ExactHull) -> np.ndarray:
         segment = np.broadcast_to(v[:2], (len(pts), 2, 3))
         return np.linalg.norm(_closest_points_on_segments(pts, segment) - pts, axis=1)
     return np.linalg.norm(pts - v[0], axis=1)
+
+
+#: Doubles of one block of a points x facets product (32 MB): a bigger product (a part's
+#: 12,388 vertices against its exact hull's 24,772 facets took 4.9 GB) goes a block of
+#: points at a time.
+PRODUCT_BLOCK = 1 << 22
+
+
+def rows_per_block(columns: int) -> int:
+    """How many rows of ``columns`` doubles make one :data:`PRODUCT_BLOCK`."""
+    return max(1, PRODUCT_BLOCK // max(columns, 1))
 
 
 def _update_distances(old, old_distances, old_closest, new, facets, equations, scale):

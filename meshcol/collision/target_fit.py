@@ -21,6 +21,7 @@ from meshcol.collision.hull import (
     distance_to_hull,
     exact_hull,
     hull_within_budget,
+    rows_per_block,
 )
 from meshcol.collision.limits import (
     GROWTH_SLACK,
@@ -64,6 +65,12 @@ GROWTH_ROUNDS = 12
 #: fraction has made no progress: the fit keeps the previous round's (smaller) part.
 OBLONG_PROGRESS = 0.01
 BUDGET_ROUNDS = 8
+#: Most planes a budget round gives the supporting-plane hull. Its loop adds a plane a cut and
+#: intersects them all again at each one, so its work grows with the square of the budget:
+#: a big hull fitted to ``max_faces_per_vertex`` alone (one polygon fewer than the exact
+#: hull's 23,841, Menagerie's ``robotiq_fts300_top.stl``) ran for hours. A hull of planes in
+#: general position has three polygons at a vertex, so a few hundred planes meet that limit.
+MAX_PLANE_BUDGET = 256
 
 
 # ---------------------------------------------------------------------------------------
@@ -323,6 +330,9 @@ def _budgeted(points: np.ndarray, limits: Mapping[str, float], notes: list[str],
             current = min(current, int(planes)) - max(m["polygons"] - int(planes), 0)  # type: ignore[arg-type]
         if too_many_per_vertex:
             current = min(current, m["polygons"] - 1)
+        if current > MAX_PLANE_BUDGET:
+            notes.append(f"plane budget capped at {MAX_PLANE_BUDGET} (from {int(current)})")
+            current = MAX_PLANE_BUDGET
         plane_budget = max(int(current), 4)
         if too_many_vertices and vertices is not None:
             vertices = max(vertices - 1, 4)
@@ -554,8 +564,15 @@ def _outside_distance(points: np.ndarray, hull: ExactHull) -> float:
     (within rounding: ``1e-12`` of its diagonal in front of every face plane), so that a
     part's own vertices report 0 rather than a rounding error."""
     if hull.dimension == 3:
-        signed = points @ hull.equations[:, :3].T + hull.equations[:, 3]
-        outside = signed.max(axis=1) > 1e-12 * max(hull.diagonal, 1e-300)
+        normals, offsets = hull.equations[:, :3].T, hull.equations[:, 3]
+        step = rows_per_block(len(offsets))  # a big part's vertices: by blocks of rows
+        highest = np.concatenate(
+            [
+                (points[start : start + step] @ normals + offsets).max(axis=1)
+                for start in range(0, max(len(points), 1), step)
+            ]
+        )
+        outside = highest > 1e-12 * max(hull.diagonal, 1e-300)
         if not outside.any():
             return 0.0
         points = points[outside]
