@@ -87,14 +87,7 @@ def oriented_volume(vertices: np.ndarray, faces: np.ndarray) -> tuple[float, int
     highest = np.maximum(np.maximum(a, b), c).max(axis=0)
     centre = (lowest + highest) / 2  # of the bounding box of the used vertices
     ab, ac = b - a, c - a
-    normals = np.stack(
-        [
-            ab[:, 1] * ac[:, 2] - ab[:, 2] * ac[:, 1],
-            ab[:, 2] * ac[:, 0] - ab[:, 0] * ac[:, 2],
-            ab[:, 0] * ac[:, 1] - ab[:, 1] * ac[:, 0],
-        ],
-        axis=1,
-    )
+    normals = _cross(ab, ac)
     cones = np.einsum("ij,ij->i", a - centre, normals)
     volume = float(cones.sum() / 6.0)
     magnitude = float(np.abs(cones).sum() / 6.0)
@@ -353,14 +346,7 @@ def oriented_volume_batch(
             + np.maximum.reduceat(highest, starts, axis=0)
         ) / 2
     ab, ac = b - a, c - a
-    normals = np.stack(
-        [
-            ab[:, 1] * ac[:, 2] - ab[:, 2] * ac[:, 1],
-            ab[:, 2] * ac[:, 0] - ab[:, 0] * ac[:, 2],
-            ab[:, 0] * ac[:, 1] - ab[:, 1] * ac[:, 0],
-        ],
-        axis=1,
-    )
+    normals = _cross(ab, ac)
     cones = np.einsum("ij,ij->i", a - centre[mesh_of_face], normals)
     volumes = segment_sums(cones, face_offsets) / 6.0
     magnitudes = segment_sums(np.abs(cones), face_offsets) / 6.0
@@ -375,3 +361,15 @@ def oriented_volume_batch(
             orientation = 1 if volume > 0 else -1
         out.append((volume, orientation))
     return out
+
+
+def _cross(ab: np.ndarray, ac: np.ndarray) -> np.ndarray:
+    """Row-wise ``ab x ac``, written out (the oriented volumes' bits depend on this order)."""
+    return np.stack(
+        [
+            ab[:, 1] * ac[:, 2] - ab[:, 2] * ac[:, 1],
+            ab[:, 2] * ac[:, 0] - ab[:, 0] * ac[:, 2],
+            ab[:, 0] * ac[:, 1] - ab[:, 1] * ac[:, 0],
+        ],
+        axis=1,
+    )
