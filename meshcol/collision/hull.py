@@ -22,6 +22,11 @@ from typing import Any
 
 import numpy as np
 
+from meshcol.collision.facet_distance import (
+    closest_points_on_segments,
+    distances_to_facets,
+    rows_per_block,
+)
 from meshcol.errors import InvalidMeshError
 from meshcol.geometry.triangles import closest_points_on_triangles
 
@@ -588,7 +593,7 @@ def _simplify(hull_vertices, facets, equations, budget, scale, max_planes=None):
     polytope = _intersect(normals, offsets, interior, scale)
     if polytope is None:  # qhull failed on four planes: not seen, but never crash on it
         raise InvalidMeshError(f"could not build a hull within {budget} vertices")
-    distances, closest = _distances_to_hull(polytope, facets, equations)
+    distances, closest = distances_to_facets(polytope, facets, equations)
     for _ in range(4 * budget + 16):
         if max_planes is not None and len(normals) >= max_planes:
             break
@@ -612,7 +617,7 @@ def _simplify(hull_vertices, facets, equations, budget, scale, max_planes=None):
         if not accepted:
             break
     # the loop reused distances of vertices that survived a cut; report a fresh, exact one
-    distances, _ = _distances_to_hull(polytope, facets, equations)
+    distances, _ = distances_to_facets(polytope, facets, equations)
     return polytope, float(distances.max())
 
 
@@ -646,9 +651,9 @@ def distance_to_hull(points: np.ndarray, hull: ExactHull) -> np.ndarray:
         )
         facets, step = v[hull.faces], rows_per_block(len(hull.faces))
         if len(pts) <= step:
-            return _distances_to_hull(pts, facets, equations)[0]
+            return distances_to_facets(pts, facets, equations)[0]
         parts = [
-            _distances_to_hull(pts[start : start + step], facets, equations)[0]
+            distances_to_facets(pts[start : start + step], facets, equations)[0]
             for start in range(0, len(pts), step)
         ]
         return np.concatenate(parts)
@@ -661,19 +666,8 @@ def distance_to_hull(points: np.ndarray, hull: ExactHull) -> np.ndarray:
         return best
     if hull.dimension == 1:
         segment = np.broadcast_to(v[:2], (len(pts), 2, 3))
-        return np.linalg.norm(_closest_points_on_segments(pts, segment) - pts, axis=1)
+        return np.linalg.norm(closest_points_on_segments(pts, segment) - pts, axis=1)
     return np.linalg.norm(pts - v[0], axis=1)
-
-
-#: Doubles of one block of a points x facets product (32 MB): a bigger product (a part's
-#: 12,388 vertices against its exact hull's 24,772 facets took 4.9 GB) goes a block of
-#: points at a time.
-PRODUCT_BLOCK = 1 << 22
-
-
-def rows_per_block(columns: int) -> int:
-    """How many rows of ``columns`` doubles make one :data:`PRODUCT_BLOCK`."""
-    return max(1, PRODUCT_BLOCK // max(columns, 1))
 
 
 def _update_distances(old, old_distances, old_closest, new, facets, equations, scale):
@@ -687,7 +681,7 @@ def _update_distances(old, old_distances, old_closest, new, facets, equations, s
     distances[known] = old_distances[match[known]]
     closest[known] = old_closest[match[known]]
     if (~known).any():
-        distances[~known], closest[~known] = _distances_to_hull(new[~known], facets, equations)
+        distances[~known], closest[~known] = distances_to_facets(new[~known], facets, equations)
     return distances, closest
 
 
@@ -760,58 +754,3 @@ def _merge_close(points: np.ndarray, radius: float) -> np.ndarray:
     first = np.ones(n, bool)
     first[1:] = labels[order][1:] != labels[order][:-1]
     return points[order[first]]
-
-
-#: Relative rounding allowed in a facet plane's signed distance (:func:`_distances_to_hull`).
-_ROUNDING = 1e-12
-
-
-def _distances_to_hull(points, facets, equations):
-    """Exact distance (and closest point) from each point to a convex polytope.
-
-    A point outside the polytope has its closest point on a facet whose plane it lies in
-    front of, so only those facets are searched; points inside get distance 0.
-    ``equations`` is ``(normals.T, offsets)``, the transpose contiguous for a fast product.
-
-    "In front" allows a rounding error: a point on the surface can lie a rounding error in
-    front of a coplanar facet that does not hold it and behind the one that does (a vertex of
-    a box and the two triangles of a face); searching only the first would give that facet's
-    distance instead of 0. A facet searched in excess is harmless: its closest point is on the
-    surface, never nearer than the true one.
-
-    3-D facets are searched in the core (``core.distances_to_facets``: the arithmetic of
-    :func:`closest_points_on_triangles`, step for step, without the candidate pairs' arrays);
-    segments (a flat hull's edges) here.
-    """
-    dim = points.shape[1]
-    signed = points @ equations[0] + equations[1]
-    outside = signed.max(axis=1, initial=-np.inf) > 0.0
-    scale = max(float(np.abs(facets).max(initial=0.0)), float(np.abs(points).max(initial=0.0)))
-    in_front = (signed > -_ROUNDING * max(scale, 1e-300)) & outside[:, None]
-    if dim == 3:
-        from meshcol._native import core
-
-        return core.distances_to_facets(
-            np.ascontiguousarray(points), np.ascontiguousarray(facets), in_front
-        )
-    distances = np.zeros(len(points))
-    closest = points.copy()
-    p_index, f_index = np.nonzero(in_front)
-    if len(p_index) == 0:
-        return distances, closest
-    candidates = _closest_points_on_segments(points[p_index], facets[f_index])
-    d2 = ((candidates - points[p_index]) ** 2).sum(axis=1)
-    order = np.lexsort((d2, p_index))
-    first = np.ones(len(order), bool)
-    first[1:] = p_index[order][1:] != p_index[order][:-1]
-    best = order[first]
-    distances[p_index[best]] = np.sqrt(d2[best])
-    closest[p_index[best]] = candidates[best]
-    return distances, closest
-
-
-def _closest_points_on_segments(p: np.ndarray, segments: np.ndarray) -> np.ndarray:
-    a, b = segments[:, 0], segments[:, 1]
-    ab = b - a
-    t = np.einsum("ij,ij->i", p - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
-    return a + np.clip(t, 0.0, 1.0)[:, None] * ab

@@ -16,12 +16,12 @@ from typing import Any
 
 import numpy as np
 
+from meshcol.collision.facet_distance import rows_per_block
 from meshcol.collision.hull import (
     ExactHull,
     distance_to_hull,
     exact_hull,
     hull_within_budget,
-    rows_per_block,
 )
 from meshcol.collision.limits import (
     GROWTH_SLACK,

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-import meshcol.collision.hull as hull_module
+import meshcol.collision.facet_distance as facet_distance
 from meshcol.collision.hull import distance_to_hull, exact_hull
 from meshcol.collision.limits import measure_parts
 from meshcol.collision.target_fit import MAX_PLANE_BUDGET, fit_hull
@@ -44,6 +44,6 @@ def test_distances_by_blocks_equal_one_product(monkeypatch) -> None:
     points = rng.normal(size=(3000, 3)) * 1.5  # inside and outside
     whole = distance_to_hull(points, sphere)
     assert (whole > 0).any() and (whole == 0).any()
-    monkeypatch.setattr(hull_module, "PRODUCT_BLOCK", 10 * len(sphere.faces))  # 10 rows
-    assert hull_module.rows_per_block(len(sphere.faces)) == 10
+    monkeypatch.setattr(facet_distance, "PRODUCT_BLOCK", 10 * len(sphere.faces))  # 10 rows
+    assert facet_distance.rows_per_block(len(sphere.faces)) == 10
     np.testing.assert_array_equal(distance_to_hull(points, sphere), whole)
