@@ -166,6 +166,14 @@ def bowl_cache_home(tmp_path_factory: pytest.TempPathFactory) -> Path:
 #: leaves them out with ``-m "not slow"``; ``make test`` runs everything. Tests on the shared
 #: corpus are slow too (marked from their fixtures below).
 SLOW_TESTS = {
+    # 0.6-1.3 s each in the fast lane (session 40: a fresh clone's took 39.4-41.4 s, at its
+    # 40 s, after the helpers' tests): the full lane keeps them
+    "test_a_many_polygon_vertex_is_fitted_within_the_plane_cap",
+    "test_workers_never_import_a_meshcol_folder_of_the_working_folder",
+    "test_resume_with_other_options_or_no_manifest_is_an_error",
+    "test_pictures_show_the_pair_framed_with_witnesses_and_normal",
+    "test_check_target_findings_are_cases_as_the_exit_code_counts_them",
+    "test_help_uri_points_into_the_rules_page_under_the_configured_base",
     # 1.45 s in the fast lane (session 39, which had reached 40.25 s): the full lane keeps it
     "test_no_module_tests_manifest_extensions_itself",
     # over 1.4 s each in the fast lane (session 5): kept in the full lane
