@@ -5,9 +5,17 @@ to (a product of many points and many facets goes a block of points at a time)."
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
-__all__ = ["PRODUCT_BLOCK", "closest_points_on_segments", "distances_to_facets", "rows_per_block"]
+__all__ = [
+    "PRODUCT_BLOCK",
+    "closest_points_on_segments",
+    "distances_to_facets",
+    "nearest_on_facets",
+    "rows_per_block",
+]
 
 #: Doubles of one block of a points x facets product (32 MB): a bigger product (a part's
 #: 12,388 vertices against its exact hull's 24,772 facets took 4.9 GB) goes a block of
@@ -38,8 +46,9 @@ def distances_to_facets(points, facets, equations):
     surface, never nearer than the true one.
 
     3-D facets are searched in the core (``core.distances_to_facets``: the arithmetic of
-    :func:`meshcol.geometry.triangles.closest_points_on_triangles`, step for step, without the candidate pairs' arrays);
-    segments (a flat hull's edges) here.
+    :func:`meshcol.geometry.triangles.closest_points_on_triangles` and
+    :func:`nearest_on_facets`, step for step, without the candidate pairs' arrays); segments
+    (a flat hull's edges) by :func:`nearest_on_facets` here.
     """
     dim = points.shape[1]
     signed = points @ equations[0] + equations[1]
@@ -52,12 +61,24 @@ def distances_to_facets(points, facets, equations):
         return core.distances_to_facets(
             np.ascontiguousarray(points), np.ascontiguousarray(facets), in_front
         )
+    return nearest_on_facets(points, facets, in_front, closest_points_on_segments)
+
+
+def nearest_on_facets(
+    points: np.ndarray,
+    facets: np.ndarray,
+    in_front: np.ndarray,
+    closest_on: Callable[[np.ndarray, np.ndarray], np.ndarray],
+) -> tuple[np.ndarray, np.ndarray]:
+    """Distance and closest point of each point over the facets ``in_front`` marks for it
+    (``closest_on(points, facets)`` pairs rows; ties go to the first facet); 0 and the point
+    itself for a point with none."""
     distances = np.zeros(len(points))
     closest = points.copy()
     p_index, f_index = np.nonzero(in_front)
     if len(p_index) == 0:
         return distances, closest
-    candidates = closest_points_on_segments(points[p_index], facets[f_index])
+    candidates = closest_on(points[p_index], facets[f_index])
     d2 = ((candidates - points[p_index]) ** 2).sum(axis=1)
     order = np.lexsort((d2, p_index))
     first = np.ones(len(order), bool)

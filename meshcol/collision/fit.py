@@ -88,7 +88,7 @@ FIT_SHAPES = ("sphere", "capsule", "box", "cylinder", "ellipsoid")
 AUTO_SHAPES = FIT_SHAPES[:4]
 
 #: Relative margin (times the points' extent) every fit keeps beyond its farthest point.
-#: Mirrors the core's ``defaults.fit_containment_margin`` (``tests/test_fit.py`` checks).
+#: Mirrors the core's ``defaults.fit_containment_margin`` (``tests/collision/test_fit.py`` checks).
 CONTAINMENT_MARGIN = 1e-9
 
 #: How many hull plane normals (the largest by area) the box search tries as an axis.

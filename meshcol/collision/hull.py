@@ -384,7 +384,7 @@ def exact_hull(points: Any) -> ExactHull:
     convex and its topology consistent on any input; a point within
     ``defaults.hull_relative_tolerance`` times the largest absolute coordinate of a face's
     plane is on the hull (qhull's coplanar points), and vertices left on an edge or inside a
-    face by such ties are removed. The vertex set matches qhull's (``tests/test_exact_hull.py``).
+    face by such ties are removed. The vertex set matches qhull's (``tests/collision/test_exact_hull.py``).
     """
     from meshcol._native import core
 

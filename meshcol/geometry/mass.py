@@ -168,7 +168,7 @@ def mass_properties_batch(
     :func:`mass_properties`' formulas run with that leading axis. Every per-face step is the
     same operation on the same numbers, and every reduction over a mesh's faces runs along
     the last axis (numpy's pairwise sum per row, one BLAS product per stacked matrix), in the
-    order the single-mesh code uses: ``tests/geometry/test_mass_batch.py`` compares the bits.
+    order the single-mesh code uses: ``tests/geometry/test_mesh_batches.py`` compares the bits.
     A mesh alone of its face count (a big one) takes :func:`mass_properties` itself; at most
     :data:`MASS_BATCH_TRIANGLES` triangles are stacked at once (bounded memory).
     """

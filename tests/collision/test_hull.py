@@ -8,6 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+from meshcol.collision.facet_distance import nearest_on_facets
 from meshcol.collision.hull import HullResult, closest_points_on_triangles, convex_hull
 from meshcol.errors import InvalidMeshError
 
@@ -251,20 +252,7 @@ def test_closest_points_on_triangles_match_dense_sampling() -> None:
 def _numpy_facet_search(points, facets, in_front):
     """The budget loop's search as numpy code: every marked (point, facet) pair's closest
     point (:func:`closest_points_on_triangles`), the nearest per point, ties to the first."""
-    distances = np.zeros(len(points))
-    closest = points.copy()
-    p_index, f_index = np.nonzero(in_front)
-    if len(p_index) == 0:
-        return distances, closest
-    candidates = closest_points_on_triangles(points[p_index], facets[f_index])
-    d2 = ((candidates - points[p_index]) ** 2).sum(axis=1)
-    order = np.lexsort((d2, p_index))
-    first = np.ones(len(order), bool)
-    first[1:] = p_index[order][1:] != p_index[order][:-1]
-    best = order[first]
-    distances[p_index[best]] = np.sqrt(d2[best])
-    closest[p_index[best]] = candidates[best]
-    return distances, closest
+    return nearest_on_facets(points, facets, in_front, closest_points_on_triangles)
 
 
 @settings(max_examples=60, deadline=None)
