@@ -7,6 +7,8 @@ the ellipsoid's Khachiyan fit of the inscribed tessellation, which cannot be lar
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pytest
 
@@ -40,6 +42,11 @@ BODIES = [
     Ellipsoid((0.1, 0.7, 0.4)),
 ]
 
+_LATTICE = np.array(
+    [(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1) if i or j or k],
+    dtype=np.float64,
+)
+
 #: (fit shape, body type) pairs with a closed form.
 CLOSED = {
     "sphere": (Sphere, Box, Capsule, Cylinder, Ellipsoid),
@@ -71,27 +78,37 @@ def _boundary_scale(primitive, d: np.ndarray) -> np.ndarray:
     return np.where(side * z <= h, side, ball)
 
 
-def _surface(primitive, seed: int = 0) -> np.ndarray:
-    """Points of the primitive's exact surface: random directions, a fine meridian (the round
-    ones' extremes lie on one by symmetry), the 26 lattice directions and, for a box, its
-    corners."""
+@functools.lru_cache(maxsize=1)
+def _directions(seed: int) -> np.ndarray:
+    """The directions every surface shares: random ones, a fine meridian (the round ones'
+    extremes lie on one by symmetry) in two planes and the 26 lattice directions."""
     rng = np.random.default_rng(seed)
     theta = np.linspace(0.0, np.pi, 1_000_001)
     meridian = np.stack([np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=1)
-    lattice = np.array(
-        [(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1) if i or j or k],
-        dtype=np.float64,
+    directions = np.concatenate(
+        [rng.normal(size=(100_000, 3)), meridian, _LATTICE, meridian[:, [1, 0, 2]]]
     )
-    directions = [rng.normal(size=(100_000, 3)), meridian, lattice, meridian[:, [1, 0, 2]]]
+    directions.flags.writeable = False
+    return directions
+
+
+@functools.lru_cache(maxsize=4)
+def _surface(primitive, seed: int = 0) -> np.ndarray:
+    """Points of the primitive's exact surface: the shared directions and, for a box, an
+    ellipsoid or a cylinder, the lattice stretched to its corners or rims. Cached (read-only):
+    several fits of one body read the same two million points."""
+    directions = [_directions(seed)]
     if isinstance(primitive, Box):
-        directions.append(lattice * np.asarray(primitive.size))
+        directions.append(_LATTICE * np.asarray(primitive.size))
     if isinstance(primitive, Ellipsoid):
-        directions.append(lattice * np.asarray(primitive.semi_axes))
+        directions.append(_LATTICE * np.asarray(primitive.semi_axes))
     if isinstance(primitive, Cylinder):  # its rims
         r, h = primitive.radius, 0.5 * primitive.length
-        directions.append(lattice * np.array([r, r, h]))
+        directions.append(_LATTICE * np.array([r, r, h]))
     d = np.concatenate(directions)
-    return d * _boundary_scale(primitive, d)[:, None]
+    points = d * _boundary_scale(primitive, d)[:, None]
+    points.flags.writeable = False
+    return points
 
 
 def _fit(shape: str, primitive):
