@@ -16,6 +16,7 @@ sink in.
 from __future__ import annotations
 
 import enum
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -688,6 +689,18 @@ def _update_distances(old, old_distances, old_closest, new, facets, equations, s
 def _start_simplex(hull_vertices: np.ndarray) -> np.ndarray:
     """Unit normals (d + 1, d) of the smallest of several supporting regular-simplex shapes."""
     dim = hull_vertices.shape[1]
+    normals, skips = _start_orientations(dim)
+    offsets = (normals @ hull_vertices.T).max(axis=2)  # (orientations, d + 1)
+    # each simplex's corners at once: corner k solves the planes but plane k
+    corners = np.linalg.solve(normals[:, skips], offsets[:, skips, None])[..., 0]
+    sizes = np.abs(np.linalg.det(corners[:, 1:] - corners[:, :1]))
+    return normals[int(np.argmin(sizes))]
+
+
+@functools.cache
+def _start_orientations(dim: int) -> tuple[np.ndarray, np.ndarray]:
+    """The ``START_ORIENTATIONS`` turned regular simplices' unit normals (orientations, d + 1,
+    d), the first unturned, and the planes (d + 1, d) each corner lies on (all but one)."""
     rng = np.random.default_rng(0)
     if dim == 3:
         base = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]], float) / np.sqrt(3)
@@ -702,23 +715,10 @@ def _start_simplex(hull_vertices: np.ndarray) -> np.ndarray:
         for t in np.linspace(0, 2 * np.pi / 3, START_ORIENTATIONS, endpoint=False):
             c, s = np.cos(t), np.sin(t)
             rotations.append(np.array([[c, -s], [s, c]]))
-    best, best_size = base, np.inf
-    for rotation in rotations:
-        normals = base @ rotation.T
-        offsets = (normals @ hull_vertices.T).max(axis=1)
-        corners = np.array(
-            [
-                np.linalg.solve(
-                    normals[[i for i in range(dim + 1) if i != skip]],
-                    offsets[[i for i in range(dim + 1) if i != skip]],
-                )
-                for skip in range(dim + 1)
-            ]
-        )
-        size = abs(np.linalg.det(corners[1:] - corners[0]))
-        if size < best_size:
-            best, best_size = normals, size
-    return best
+    normals = np.stack([base @ rotation.T for rotation in rotations])
+    skips = np.array([[i for i in range(dim + 1) if i != skip] for skip in range(dim + 1)])
+    normals.flags.writeable = False
+    return normals, skips
 
 
 def _intersect(normals, offsets, interior, scale):
