@@ -9,6 +9,7 @@ import click
 
 from meshcol.analysis.check_policy import FAIL_ON, MAX_PAIRS
 from meshcol.cli.common import (
+    TABLE_ROWS,
     FiniteFloat,
     Progress,
     cache_dir_option,
@@ -21,6 +22,7 @@ from meshcol.cli.common import (
     report_format,
     report_options,
     robot_options,
+    rows_left,
     snapshots_option,
     target_option,
     threads_option,
@@ -233,10 +235,6 @@ def _decompose_options(engine: str, threshold: float | None, cache_dir: str | No
     return options
 
 
-#: Rows of the summary table: the most penetrating pairs that are not separated.
-TABLE_ROWS = 10
-
-
 def summary_table(result: Any) -> str:
     """A short human summary: counts per status, the worst pairs, the failing findings, the
     verdict line."""
@@ -273,9 +271,7 @@ def _worst_lines(result: Any) -> list[str]:
         lines.append(f"  {p['status']:<12} {value:>12}{units}  {a} <-> {b}{flag}")
     by_status = result.summary["pairs_by_status"]
     touching = sum(count for name, count in by_status.items() if name != "separated")
-    if touching > len(worst):
-        lines.append(f"  ... {touching - len(worst)} more (every pair is in the report)")
-    return lines
+    return lines + rows_left(len(worst), touching)
 
 
 def _finding_lines(failed: list[dict]) -> list[str]:

@@ -8,6 +8,7 @@ import click
 
 from meshcol.analysis.collision_matrix import MATRIX_CLASSES
 from meshcol.cli.common import (
+    TABLE_ROWS,
     FiniteFloat,
     Progress,
     cache_dir_option,
@@ -17,15 +18,12 @@ from meshcol.cli.common import (
     plural,
     report_format,
     robot_options,
+    rows_left,
     threads_option,
     verdict,
 )
 from meshcol.io.robot import RobotOptions
 from meshcol.vocabulary import MATRIX_COLLIDERS
-
-#: Rows of the summary table: the pairs that stay checked, most often colliding first.
-TABLE_ROWS = 10
-
 
 #: Most joint configurations one run samples (MoveIt's default is 10,000; each sample's link
 #: poses are held at once).
@@ -213,8 +211,7 @@ def summary_table(result) -> str:
         lines.append(f"  {'rate':>8}  sometimes colliding (still checked)")
         for p in checked[:TABLE_ROWS]:
             lines.append(f"  {p['rate']:8.4f}  {p['link_a']} <-> {p['link_b']}")
-        if len(checked) > TABLE_ROWS:
-            lines.append(f"  ... {len(checked) - TABLE_ROWS} more (every pair is in the report)")
+        lines += rows_left(TABLE_ROWS, len(checked))
     detail = (
         f"{plural(s['disabled_pairs'], 'pair')} disabled, "
         f"{plural(s['pairs_by_class']['sometimes'], 'pair')} still checked"

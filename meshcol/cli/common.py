@@ -318,6 +318,19 @@ def plural(count: int, noun: str, plural_form: str | None = None) -> str:
     return f"{count} {plural_form}"
 
 
+#: Rows of a summary table on stderr (the most penetrating pairs, the earliest contacts, the
+#: pairs still checked): every row is in the report, the summary shows the first ones.
+TABLE_ROWS = 10
+
+
+def rows_left(shown: int, total: int) -> list[str]:
+    """The line under a summary table that shows ``shown`` of ``total`` pairs, none when it
+    shows them all."""
+    if total <= shown:
+        return []
+    return [f"  ... {total - shown} more (every pair is in the report)"]
+
+
 def verdict(command: str, passed: bool, detail: str) -> str:
     """The last summary line of every command: ``meshcol: check: PASS: ...`` or
     ``meshcol: check: FAIL: ...``."""

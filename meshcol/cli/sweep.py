@@ -9,6 +9,7 @@ import click
 from meshcol.analysis.sweep import FAIL_ON
 from meshcol.cli import CONTEXT_SETTINGS
 from meshcol.cli.common import (
+    TABLE_ROWS,
     FiniteFloat,
     Progress,
     cache_dir_option,
@@ -18,6 +19,7 @@ from meshcol.cli.common import (
     report_format,
     report_options,
     robot_options,
+    rows_left,
     snapshots_option,
     threads_option,
     verdict,
@@ -25,6 +27,7 @@ from meshcol.cli.common import (
 )
 from meshcol.io.outputs import check_outputs
 from meshcol.io.robot import RobotOptions
+from meshcol.types import TimeOfImpactStatus
 
 
 @click.command(
@@ -128,8 +131,9 @@ def sweep(
 
 
 def summary_lines(manifest: str, result) -> str:
-    """The summary on stderr: counts, one ``meshcol: fail:`` line per pair that is not
-    separated, and the verdict line."""
+    """The summary on stderr: counts, one ``meshcol: fail:`` line for each of the first
+    :data:`~meshcol.cli.common.TABLE_ROWS` pairs that are not separated (the undecided ones,
+    then by time of impact), and the verdict line."""
     s = result.summary
     lines = [
         f"meshcol: sweep: {plural(s['bodies'], 'body')} ({s['moving_bodies']} moving), "
@@ -137,7 +141,11 @@ def summary_lines(manifest: str, result) -> str:
         f"({s['tunnelled']} tunnelled), {s['overlapped_at_start']} overlapped at start, "
         f"{s['failed']} undecided"
     ]
-    for h in result.hits:
+    # the undecided pairs first, then the earliest contacts
+    first = sorted(
+        result.hits, key=lambda h: (h.status != TimeOfImpactStatus.FAILED, h.time_of_impact)
+    )[:TABLE_ROWS]
+    for h in first:
         when = "" if h.time is None else f" (t = {h.time:.6g} s)"
         extra = ", tunnelled" if h.tunnelled else ""
         kind = "fail" if result.exit_code else "note"
@@ -145,6 +153,7 @@ def summary_lines(manifest: str, result) -> str:
             f"meshcol: {kind}: {manifest}: '{h.body_a}' and '{h.body_b}': {h.status.name} at time of "
             f"impact {h.time_of_impact:.6g}{when}{extra}"
         )
+    lines += rows_left(len(first), len(result.hits))
     if not result.hits:
         detail = "no pair touches during the motion"
     else:

@@ -296,3 +296,41 @@ def test_sweep_decomposed_uses_the_decompose_cache(tmp_path, samples) -> None:
     assert hit["time_of_impact"] == pytest.approx(
         hull["pairs"][0]["time_of_impact"], abs=1e-6
     )  # convex wall: same parts
+
+
+def test_cli_summary_lists_the_earliest_ten_contacts_and_counts_the_rest(tmp_path):
+    """A library-size sweep prints a summary, not a line per pair: the first ten contacts by
+    time of impact (a pair overlapping at the start, time 0, first), then how many more the
+    report holds."""
+    wall = {
+        "name": "wall",
+        "primitive": {"type": "box", "size": [0.2, 40, 1]},
+        "position": [5, 0, 0],
+    }
+    resting = {
+        "name": "resting",  # inside the wall from the start
+        "primitive": {"type": "sphere", "radius": 0.5},
+        "position": [5, 15, 0],
+        "velocity": [0, 0, 0.01],
+    }
+    # ball i, 4.4 from the wall's face, reaches it at 4.4 / (1.25 + 0.25 i) s
+    balls = [
+        {
+            "name": f"ball{i:02d}",
+            "primitive": {"type": "sphere", "radius": 0.5},
+            "position": [0, 2 * i - 13, 0],
+            "velocity": [1.25 + 0.25 * i, 0, 0],
+        }
+        for i in range(13)
+    ]
+    path = _write_manifest(tmp_path, [wall, resting, *balls], duration=4.0)
+    out = tmp_path / "sweep.json"
+    result = CliRunner().invoke(main, ["sweep", str(path), "--report", str(out)])
+    assert result.exit_code == 1, result.output
+    assert len(json.loads(out.read_text())["pairs"]) == 14  # every contact is in the report
+    lines = [line for line in result.stderr.splitlines() if line.startswith("meshcol: fail:")]
+    assert len(lines) == 10
+    assert "'wall' and 'resting': OVERLAPPED_AT_START" in lines[0]
+    for line, i in zip(lines[1:], range(12, 3, -1), strict=True):
+        assert f"'wall' and 'ball{i:02d}': HIT" in line
+    assert "  ... 4 more (every pair is in the report)" in result.stderr.splitlines()
