@@ -173,10 +173,12 @@ def _body(case: CiCase) -> str:
     return name.split(" <-> ")[0].split("/")[0]
 
 
-def body_line(path: str, body: str, lines: dict[str, list[str] | None]) -> int | None:
+def body_line(path: str, body: str, lines: dict[str, _TextIndex | None]) -> int | None:
     """The first line (1-based) of the text file ``path`` that names ``body`` as a name
-    (``"name": "crate"``, ``name = "crate"``, ``name="crate"``); None when none does or the
-    file is not a text input. ``lines`` caches each file's lines."""
+    (``"name": "crate"``, ``name = "crate"``, ``name="crate"``): a line holding "name" and
+    the body's JSON string or its single-quoted spelling; None when none does or the file is
+    not a text input. ``lines`` caches each file's lines and their quoted texts, so a run
+    of many bodies reads and searches each file once."""
     if not path.lower().endswith(TEXT_INPUTS) or not body:
         return None
     if path not in lines:
@@ -184,21 +186,39 @@ def body_line(path: str, body: str, lines: dict[str, list[str] | None]) -> int |
             if os.path.getsize(path) > MAX_REGION_BYTES:
                 raise OSError
             with open(path, encoding="utf-8", errors="replace") as handle:
-                lines[path] = handle.read().splitlines()
+                lines[path] = _TextIndex(handle.read().splitlines())
         except OSError:
             lines[path] = None
     text = lines[path]
-    if text is None:
-        return None
-    quoted = (json.dumps(body), f"'{body}'")
-    for number, line in enumerate(text, 1):
-        if "name" in line and any(q in line for q in quoted):
-            return number
-    return None
+    return None if text is None else text.first_line(body)
+
+
+class _TextIndex:
+    """A text file's lines that hold "name", and the first of them (1-based) holding each
+    text between two neighbouring equal quotes, the quotes included. A spelling with no
+    quote inside it (``"crate"``, ``'crate'``) is in a line exactly when it lies between two
+    neighbouring quotes of that line, so one lookup finds its first line."""
+
+    def __init__(self, text: list[str]) -> None:
+        self.named = [(number, line) for number, line in enumerate(text, 1) if "name" in line]
+        self.first: dict[str, int] = {}
+        for number, line in self.named:
+            for quote in ('"', "'"):
+                for inner in line.split(quote)[1:-1]:
+                    self.first.setdefault(f"{quote}{inner}{quote}", number)
+
+    def first_line(self, body: str) -> int | None:
+        quoted = (json.dumps(body), f"'{body}'")
+        if '"' in body or "'" in body:  # a quote inside a spelling: search the lines
+            return next(
+                (number for number, line in self.named if any(q in line for q in quoted)), None
+            )
+        found = [self.first[q] for q in quoted if q in self.first]
+        return min(found) if found else None
 
 
 def _location(
-    case: CiCase, root: str, lines: dict[str, list[str] | None] | None = None
+    case: CiCase, root: str, lines: dict[str, _TextIndex | None] | None = None
 ) -> dict[str, Any]:
     location: dict[str, Any] = {}
     if case.file:
@@ -234,7 +254,7 @@ def _result(
     level: str,
     suite: CiSuite,
     root: str,
-    lines: dict[str, list[str] | None],
+    lines: dict[str, _TextIndex | None],
 ) -> dict[str, Any]:
     several = len(_case_rules(case)) > 1
     rule = suite.rules.get(rule_id)
@@ -285,7 +305,7 @@ def sarif_log(suite: CiSuite, root: str | None = None) -> dict[str, Any]:
     index = {d["id"]: k for k, d in enumerate(descriptors)}
     results: list[dict[str, Any]] = []
     notes: list[dict[str, Any]] = []
-    lines: dict[str, list[str] | None] = {}  # each text input read once
+    lines: dict[str, _TextIndex | None] = {}  # each text input read and indexed once
     for case in suite.cases:
         if case.outcome == "error":
             notes.append(_notification(case, root))

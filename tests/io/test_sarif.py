@@ -12,11 +12,14 @@ import copy
 import json
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import jsonschema
 import pytest
 from click.testing import CliRunner
+from hypothesis import example, given, settings
+from hypothesis import strategies as st
 
 from meshcol.analysis.rules import RULES
 from meshcol.cli import main
@@ -261,3 +264,39 @@ def test_dumps_sarif_is_the_registry_writer(samples, monkeypatch):
 
     assert FORMATS["sarif"].render is dumps_sarif
     assert FORMATS["sarif"].extension == ".sarif"
+
+
+def _first_naming_line(text: list[str], body: str) -> int | None:
+    """The definition body_line keeps: the first line holding "name" and the body's JSON
+    string or its single-quoted spelling, searched line by line."""
+    quoted = (json.dumps(body), f"'{body}'")
+    for number, line in enumerate(text, 1):
+        if "name" in line and any(q in line for q in quoted):
+            return number
+    return None
+
+
+_PIECES = ['"name": ', "name=", '"crate"', "'crate'", '"a"', "'a'", '"', "'", " ", "x", "é"]
+_PIECES += ['\\"', ", ", '"a\\"b"', '"\\u00e9"', "'é'"]
+
+
+@settings(max_examples=400, deadline=None)
+@given(
+    text=st.lists(
+        st.lists(st.sampled_from(_PIECES), max_size=10).map("".join), min_size=0, max_size=8
+    ),
+    body=st.sampled_from(["crate", "a", 'a"b', "x", "crate'", "é", "'", "a b"]),
+)
+@example(text=["'crate' name", '"name": "crate"', "name='crate'"], body="crate")
+def test_the_indexed_line_search_finds_the_line_the_plain_search_finds(text, body) -> None:
+    """One index per file (each text between neighbouring quotes), looked up per body, where
+    a scan of every line per body took 3.9 s for the 7,036 results of a 10,000-body manifest
+    of one line."""
+    from meshcol.io.sarif import body_line
+
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder, "scene.json")
+        path.write_text("\n".join(text), encoding="utf-8")
+        lines = path.read_text(encoding="utf-8").splitlines()
+        expected = _first_naming_line(lines, body)
+        assert body_line(str(path), body, {}) == expected
