@@ -35,6 +35,7 @@ __all__ = [
     "primitive_mesh",
     "primitive_reach",
     "primitive_vertex_count",
+    "unique_name",
 ]
 
 
@@ -587,3 +588,24 @@ class Scene:
     duration: float | None = None
     excluded_pairs: tuple[tuple[str, str, str], ...] = ()
     warnings: tuple[str, ...] = ()
+
+
+def unique_name(name: str, used: dict[str, int]) -> str:
+    """``name``, or ``name#2``, ``name#3``... when taken: the first not in ``used``, which
+    records it. The one rule for the names of bodies (of several files, of a file's nodes and
+    groups) and of a body's parts.
+
+    ``used`` maps each name to the suffix to try next for it, so ``n`` bodies of one name
+    cost ``n`` steps, not ``n * n / 2`` (a USD stage of 10,000 prims named ``mesh`` spent
+    17 s here).
+    """
+    if name not in used:
+        used[name] = 2
+        return name
+    k = used[name]
+    while f"{name}#{k}" in used:
+        k += 1
+    unique = f"{name}#{k}"
+    used[name] = k + 1
+    used[unique] = 2
+    return unique

@@ -66,7 +66,7 @@ from meshcol.analysis.primitive_colliders import primitive_colliders
 from meshcol.errors import TooManyPairsError
 from meshcol.io.column_bodies import body_names
 from meshcol.io.robot import RobotOptions
-from meshcol.types import Scene
+from meshcol.types import Scene, unique_name
 from meshcol.vocabulary import PAIR_STATUSES
 
 __all__ = [
@@ -287,7 +287,7 @@ def _prepare_files(
     **run: Any,
 ) -> tuple[Scene, Callable[..., list[np.ndarray]]]:
     """:func:`load_inputs` and the decompositions with one executor task per file: the scene
-    (names given here, in input order, by :func:`meshcol.io.scene.unique_name`) and the
+    (names given here, in input order, by :func:`meshcol.types.unique_name`) and the
     convex parts the tasks made, for ``check_scene(decompose=)``. Errors are the sequential
     run's: the first unreadable file in input order (decomposition errors are met again by
     ``check_scene``, as in a sequential run); a file whose task failed or ran over the
@@ -299,7 +299,7 @@ def _prepare_files(
     from meshcol.errors import MeshcolError
     from meshcol.io.inputs import is_whole_scene
     from meshcol.io.mesh_formats import declared_units
-    from meshcol.io.scene import is_scene_file, iter_inputs, load_inputs, unique_name
+    from meshcol.io.scene import is_scene_file, iter_inputs, load_inputs
 
     kind, decompose_options = options.collider, options.decompose_options
     # a USD stage or glTF physics file carries excluded pairs and units: read it here, whole
@@ -329,7 +329,7 @@ def _prepare_files(
         parts.update(found)
     if scene is None:
         bodies: list[Any] = []
-        used: set[str] = set()
+        used: dict[str, int] = {}
         for index in range(len(tasks)):
             for body in outcomes[index].value[0]:
                 name = unique_name(body.name, used)

@@ -55,7 +55,7 @@ from meshcol.collision.shapes import ConvexSet
 from meshcol.errors import InvalidMeshError
 from meshcol.io.collision_names import UNREAL_PREFIXES, collision_part
 from meshcol.io.column_bodies import ColumnBodies, MeshBodies, body_names
-from meshcol.types import Body
+from meshcol.types import Body, unique_name
 from meshcol.vocabulary import COLLIDER_KINDS
 
 __all__ = [
@@ -239,7 +239,7 @@ def split_ucx(bodies: Sequence[Body]) -> tuple[Sequence[Body], dict[str, _Ucx], 
             return bodies, {}, []
         if not any(b.parts for b in bodies):
             return list(bodies), {}, []
-    names = {b.name for b in bodies}
+    names = dict.fromkeys((b.name for b in bodies), 2)
     by_name = {b.name: b for b in bodies}
     ucx: dict[str, _Ucx] = {}
     orphans: dict[str, list[Body]] = {}
@@ -268,12 +268,7 @@ def split_ucx(bodies: Sequence[Body]) -> tuple[Sequence[Body], dict[str, _Ucx], 
             entry.parts[:] = [(-1, v) for _, v in entry.parts]
     for owner_name, parts in orphans.items():
         parts.sort(key=lambda b: _ucx_index(b.name.rpartition("/")[2]))
-        name = owner_name
-        k = 2
-        while name in names:
-            name = f"{owner_name}#{k}"
-            k += 1
-        names.add(name)
+        name = unique_name(owner_name, names)
         listed = _listing([b.name for b in parts])
         warnings.append(
             f"{listed} name no body {owner_name.rpartition('/')[2]!r} in the inputs: checked as "

@@ -154,11 +154,11 @@ def _scene_inspected(
 def _files_inspected(values: list[TaskValue | None]) -> tuple[list[Body], list[Inspected]]:
     """The bodies the tasks read, renamed as one process names them (``name#2`` for a name
     seen in an earlier file), and their meshes' inspections under those names."""
-    from meshcol.io.scene import unique_name
+    from meshcol.types import unique_name
 
     bodies: list[Body] = []
     inspected: list[Inspected] = []
-    used_names: set[str] = set()
+    used_names: dict[str, int] = {}
     for value in values:
         if value is None:
             continue

@@ -17,7 +17,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from meshcol.types import Body, PartPrimitive, Primitive
+from meshcol.types import Body, PartPrimitive, Primitive, unique_name
 
 __all__ = [
     "JOINT_TOLERANCE",
@@ -121,7 +121,7 @@ def parts_body(
             None if e.primitive is None else PartPrimitive(e.primitive, e.origin) for e in elements
         ]
     base = 0
-    used: set[str] = set()
+    used: dict[str, int] = {}
     for part, origin, primitive, vertices, faces in elements:
         if primitive is not None:
             vertices, faces = tessellate(primitive)
@@ -133,12 +133,7 @@ def parts_body(
         blocks_f.append(faces + base if base or primitive is not None else faces)
         counts.append(len(faces))
         base += len(vertices)
-        unique, k = part, 2
-        while unique in used:
-            unique = f"{part}#{k}"
-            k += 1
-        used.add(unique)
-        names.append(unique)
+        names.append(unique_name(part, used))
     if len(elements) == 1:
         return Body(
             name=name,

@@ -36,7 +36,7 @@ from meshcol.io.mesh_formats import (
     mesh_format,
 )
 from meshcol.io.physics_bodies import BodyGroup, axis_turn, choose_collider, scaled_primitive
-from meshcol.types import Body, PartPrimitive, Scene
+from meshcol.types import Body, PartPrimitive, Scene, unique_name
 
 __all__ = [
     "MAX_COORDINATE",
@@ -153,13 +153,15 @@ def node_body_names(
     """The name :func:`load_mesh` gives the body of each mesh node named ``names`` of
     ``file`` (the stem alone for one node, else ``<stem>/<node>``, a Godot hint cut when the
     format has them, ``#2``... for a name taken), with the node's hint (None: none)."""
-    used: set[str] = set()
+    used: dict[str, int] = {}
     out = []
     for name in names:
         hint = godot_hint(name) if godot_hints else None
         if hint is not None:
             name = hint.name
-        out.append((_unique(file.stem if len(names) == 1 else f"{file.stem}/{name}", used), hint))
+        out.append(
+            (unique_name(file.stem if len(names) == 1 else f"{file.stem}/{name}", used), hint)
+        )
     return out
 
 
@@ -183,13 +185,13 @@ def load_file_scene(path: str | os.PathLike[str], *, merge: bool = True) -> Scen
     if not found.groups:
         raise InvalidMeshError("mesh has no faces", source)
     stem = Path(source).stem
-    used: set[str] = set()
+    used: dict[str, int] = {}
     warnings = list(found.warnings)
     names: dict[str, str] = {}
     bodies = []
     for group in found.groups:
         full = stem if len(found.groups) == 1 else f"{stem}/{group.name}"
-        names[group.key] = name = _unique(full, used)
+        names[group.key] = name = unique_name(full, used)
         bodies.append(_group_body(name, source, group, warnings, merge))
     excluded = sorted(
         {(*sorted((names[a], names[b])), reason) for a, b, reason in found.excluded if a != b}
@@ -503,14 +505,14 @@ def _checked_files(
         if not objects:
             raise InvalidMeshError("mesh has no faces", source)
         file_stem = _stem(source)
-        used: set[str] = set()
+        used: dict[str, int] = {}
         bodies = []
         for k in objects:
             if k + 1 in big:
                 check_magnitude(read.vertices[read.v_off[k] : read.v_off[k + 1]], "vertex", source)
             name = names[k] or (fmt.unnamed or file_stem)
             full = file_stem if len(objects) == 1 else f"{file_stem}/{name}"
-            bodies.append(read.body(k, _unique(full, used), source))
+            bodies.append(read.body(k, unique_name(full, used), source))
         out.append(bodies)
     return out
 
@@ -786,12 +788,3 @@ def merge_vertices(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray,
     vertices = np.ascontiguousarray(vertices, dtype=np.float64).reshape(-1, 3)
     faces = np.ascontiguousarray(faces, dtype=np.int64).reshape(-1, 3)
     return core.merge_vertices(vertices, faces, _MERGE_DIGITS)
-
-
-def _unique(name: str, used: set[str]) -> str:
-    candidate, k = name, 2
-    while candidate in used:
-        candidate = f"{name}#{k}"
-        k += 1
-    used.add(candidate)
-    return candidate

@@ -44,7 +44,7 @@ from meshcol.io.scene_validate import (
     document_columns,
     validate,
 )
-from meshcol.types import Body, Scene
+from meshcol.types import Body, Scene, unique_name
 
 __all__ = [
     "SCHEMA_PATH",
@@ -213,7 +213,7 @@ def _file_scenes(paths: Sequence[str | os.PathLike[str]], source: str | None) ->
     their warnings, and their units when every file declares the same."""
     from meshcol.io.mesh_read import load_file_scene
 
-    used: set[str] = set()
+    used: dict[str, int] = {}
     bodies: list[Body] = []
     pairs: list[tuple[str, str, str]] = []
     warnings: list[str] = []
@@ -280,7 +280,7 @@ def iter_inputs(
             groups.setdefault(body.source or scene.source or body.name, []).append(body)
         yield from groups.items()
         return
-    used: set[str] = set()
+    used: dict[str, int] = {}
     for path in paths:
         bodies: list[Body] = []
         try:
@@ -294,18 +294,6 @@ def iter_inputs(
             name = unique_name(body.name, used)
             bodies.append(body if name == body.name else dataclasses.replace(body, name=name))
         yield os.fspath(path), bodies
-
-
-def unique_name(name: str, used: set[str]) -> str:
-    """``name``, or ``name#2``, ``name#3``... when taken: the one rule of :func:`load_inputs`
-    for bodies of several files, for callers that read files elsewhere (worker processes) and
-    name their bodies here, in input order. The name returned is added to ``used``."""
-    unique, k = name, 2
-    while unique in used:
-        unique = f"{name}#{k}"
-        k += 1
-    used.add(unique)
-    return unique
 
 
 def manifest_mesh_files(path: str | os.PathLike[str]) -> list[str]:
