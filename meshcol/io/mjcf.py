@@ -361,27 +361,38 @@ def _colliding_geoms(model: Any) -> np.ndarray:
 
 
 def _filtered_pairs(model: Any, names: list[str]) -> list[tuple[str, str, str]]:
-    """Body pairs MuJoCo's weld and bitmask filters leave untested (see :func:`_exclusions`)."""
+    """Body pairs MuJoCo's weld and bitmask filters leave untested (see :func:`_exclusions`),
+    in body order.
+
+    Two bodies' geoms pass the bitmask test when some geom's ``contype`` shares a bit with
+    some geom's ``conaffinity`` of the other body, that is when the OR of one body's
+    ``contype`` shares a bit with the OR of the other's ``conaffinity``: each body is one
+    pair of masks, and each body's row of pairs one array expression (a loop over pairs
+    took 15 s for a bin of 2,000 free bodies)."""
     contype = np.asarray(model.geom_contype, dtype=np.int64)
     conaffinity = np.asarray(model.geom_conaffinity, dtype=np.int64)
     colliding = _colliding_geoms(model)
-    geom_body = np.asarray(model.geom_bodyid, dtype=np.int64)
-    bodies = sorted({int(b) for b in geom_body[colliding]})
-    weld = np.asarray(model.body_weldid, dtype=np.int64)
-    explicit = _explicit_body_pairs(model)
-    geoms_of = {b: colliding[geom_body[colliding] == b] for b in bodies}
+    geom_body = np.asarray(model.geom_bodyid, dtype=np.int64)[colliding]
+    bodies = np.unique(geom_body)
+    row = np.searchsorted(bodies, geom_body)
+    body_contype = np.zeros(len(bodies), dtype=np.int64)
+    body_conaffinity = np.zeros(len(bodies), dtype=np.int64)
+    np.bitwise_or.at(body_contype, row, contype[colliding])
+    np.bitwise_or.at(body_conaffinity, row, conaffinity[colliding])
+    weld = np.asarray(model.body_weldid, dtype=np.int64)[bodies]
+    explicit: dict[int, set[int]] = {}
+    for a, b in _explicit_body_pairs(model):
+        explicit.setdefault(a, set()).add(b)
     pairs: list[tuple[str, str, str]] = []
-    for i, a in enumerate(bodies):
-        for b in bodies[i + 1 :]:
-            if (a, b) in explicit:
-                continue
-            if weld[a] == weld[b]:
-                pairs.append((names[a], names[b], "mjcf welded"))
-                continue
-            ga, gb = geoms_of[a], geoms_of[b]
-            passes = (contype[ga][:, None] & conaffinity[gb][None, :]) | (
-                contype[gb][None, :] & conaffinity[ga][:, None]
-            )
-            if not passes.any():
-                pairs.append((names[a], names[b], "mjcf contype/conaffinity"))
+    for i, a in enumerate(bodies.tolist()):
+        later = slice(i + 1, None)
+        welded = weld[later] == weld[i]
+        passes = ((body_contype[i] & body_conaffinity[later]) != 0) | (
+            (body_contype[later] & body_conaffinity[i]) != 0
+        )
+        for k in np.flatnonzero(welded | ~passes).tolist():
+            b = int(bodies[i + 1 + k])
+            if b not in explicit.get(a, ()):
+                reason = "mjcf welded" if welded[k] else "mjcf contype/conaffinity"
+                pairs.append((names[a], names[b], reason))
     return pairs
