@@ -98,6 +98,10 @@ CSV_COLUMNS = [
 BATCH_VERTICES = 1 << 18
 #: Configurations per native call, at most.
 MAX_BATCH = 1024
+#: Link pairs x configurations of one call's broad phase (its box tests are arrays of that
+#: many rows): 2 million, about 50 MB an array, however many links (a chain of 500 links
+#: asked 1,024 configurations x 124,750 pairs, 7 GB, before this bound).
+BATCH_PAIRS = 1 << 21
 
 
 @dataclass(frozen=True)
@@ -123,8 +127,9 @@ class MatrixOptions:
     threads : int
         Threads for the native queries; 0 means all cores.
     batch : int or None
-        Configurations per native call; None: as many as :data:`BATCH_VERTICES` allows (at
-        most :data:`MAX_BATCH`). The results never depend on it.
+        Configurations per native call; None: as many as :data:`BATCH_VERTICES` and
+        :data:`BATCH_PAIRS` allow (at most :data:`MAX_BATCH`). The results never depend on
+        it.
     decompose_options : dict
         Options of the convex decomposition for ``decomposed``.
     """
@@ -521,7 +526,7 @@ def _sampler(links: _RobotLinks, options: MatrixOptions) -> _Sampler:
         links.body_link,
         links.offsets,
         options.padding + options.tolerance,
-        _batch(options, len(colliders.shapes.vertices)),
+        _batch(options, len(colliders.shapes.vertices), len(i)),
         options.threads,
         skip,
     )
@@ -671,8 +676,9 @@ def _warnings(links: _RobotLinks) -> list[str]:
     return warnings
 
 
-def _batch(options: MatrixOptions, vertices: int) -> int:
+def _batch(options: MatrixOptions, vertices: int, pairs: int) -> int:
     """Configurations per native call (see :attr:`MatrixOptions.batch`)."""
     if options.batch is not None:
         return min(options.batch, options.samples)
-    return max(1, min(options.samples, MAX_BATCH, BATCH_VERTICES // max(vertices, 1)))
+    most = min(MAX_BATCH, BATCH_VERTICES // max(vertices, 1), BATCH_PAIRS // max(pairs, 1))
+    return max(1, min(options.samples, most))

@@ -238,6 +238,18 @@ def test_same_seed_same_matrix_whatever_the_batch(arm: Path) -> None:
     assert [p["collisions"] for p in one.pairs] != [p["collisions"] for p in other.pairs]
 
 
+def test_a_robot_of_many_links_takes_fewer_configurations_a_call() -> None:
+    """A call's broad phase holds configurations x link pairs boxes: a chain of 500 links
+    (124,750 pairs) took 1,024 configurations a call, 7 GB, before BATCH_PAIRS bounded it."""
+    from meshcol.analysis.collision_matrix import BATCH_PAIRS, MatrixOptions, _batch
+
+    options = MatrixOptions()
+    assert _batch(options, 1_000, 21) == 262  # an arm: the vertices bound it, as before
+    assert _batch(options, 1_000, 124_750) * 124_750 <= BATCH_PAIRS
+    assert _batch(options, 1_000, 10**8) == 1  # never none
+    assert _batch(MatrixOptions(batch=37), 1_000, 124_750) == 37  # the caller's choice wins
+
+
 # ---------------------------------------------------------------------------------------------
 # CLI, SRDF written and read back
 
