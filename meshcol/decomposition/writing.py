@@ -60,7 +60,8 @@ class OutputGuard:
         self.parts = parts
         self.out_dir = parts.out_dir
         self.patterns: list[tuple[str, re.Pattern[str]]] = []
-        self.protected: list[str] = []
+        self.protected: set[str] = set()
+        self.inside: list[str] = []  # the protected files in the output folder, in order
         self.names: dict[str, str] = {}  # safe name -> the file of the body that has it
         for path in protected:
             self.protect(path)
@@ -84,18 +85,20 @@ class OutputGuard:
         return self._same_file(os.path.dirname(os.path.abspath(path)), self.out_dir)
 
     def protect(self, path: str) -> None:
+        """Each file is placed once (in or out of the output folder): a library of n files
+        checks each body's pattern against the few files inside, not n resolved paths."""
         if path in self.protected:
             return
-        self.protected.append(path)
+        self.protected.add(path)
         if self._in_out_dir(path):
+            self.inside.append(path)
             for body, pattern in self.patterns:
                 self._check(body, pattern, path)
 
     def plan(self, body: str, pattern: re.Pattern[str]) -> None:
         self.patterns.append((body, pattern))
-        for path in self.protected:
-            if self._in_out_dir(path):
-                self._check(body, pattern, path)
+        for path in self.inside:
+            self._check(body, pattern, path)
 
     def _check(self, body: str, pattern: re.Pattern[str], path: str) -> None:
         if pattern.fullmatch(os.path.basename(path)):
