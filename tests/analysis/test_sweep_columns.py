@@ -228,3 +228,36 @@ def test_columns_write_what_the_hits_write(parts: bool, time: bool) -> None:
 
     assert report.to_csv() == dumps_csv(rows, CSV_COLUMNS)
     assert columns == hits and list(columns) == list(hits) and columns[-1] is hits[-1]
+
+
+def test_a_sweep_writes_from_columns_what_its_hits_write() -> None:
+    """A sweep of 40 moving boxes (several hits, some overlapping at the start): its JSON
+    (streamed through the core's row writer) and CSV are those its SweepHit objects write
+    one by one, its hits sorted by names, its first contacts those of the loop."""
+    import trimesh
+
+    import meshcol
+    from meshcol.analysis.sweep import CSV_COLUMNS
+    from meshcol.io.report import dumps_csv, split_vectors
+
+    rng = np.random.default_rng(7)
+    box = trimesh.creation.box((0.5, 0.5, 0.5))
+    bodies = []
+    for k in range(40):
+        start, end = np.eye(4), np.eye(4)
+        start[:3, 3] = [k % 8, k // 8, 0.0] + rng.normal(0, 0.1, 3)
+        end[:3, 3] = start[:3, 3] + rng.uniform(-1.5, 1.5, 3) * [1, 1, 0]
+        name = f"b{(k * 17) % 40:02d}"  # names not in scene order
+        bodies.append(Body(name, None, box.vertices, box.faces, start, end))
+    report = meshcol.sweep(Scene(tuple(bodies), units="m", duration=2.0), fail_on="none")
+    hits = list(report.hits)
+    assert len(hits) >= 5 and [(h.body_a, h.body_b) for h in hits] == sorted(
+        (h.body_a, h.body_b) for h in hits
+    )
+    whole = dict(report.to_dict(), pairs=[h.to_dict() for h in hits])
+    assert report.to_json() == dumps_json(whole)
+    sizes = {"point": 3, "normal": 3, "pose_a": 16, "pose_b": 16}
+    rows = [split_vectors(dict(h.to_dict(), units="m"), sizes) for h in hits]
+    assert report.to_csv() == dumps_csv(rows, CSV_COLUMNS)
+    assert list(report.separated) == sorted(report.separated)
+    assert len(report.separated) + len(hits) == report.candidate_pairs
