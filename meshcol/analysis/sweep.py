@@ -422,7 +422,7 @@ def first_contacts(
         body_pairs[order[starts[appear]]],
         np.where(best >= 0, order[np.maximum(best, 0)], -1),
         chosen[appear],
-        (hit & ~touching)[appear] & (chosen[appear] == S.HIT),
+        ((chosen == S.HIT) & ~touching)[appear],
         invalid,
     )
 
