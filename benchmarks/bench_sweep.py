@@ -10,12 +10,28 @@ about a microsecond of call overhead). A second set adds random rotations (meshc
 motion models interpolate rotation differently, so its TOI is not comparable there).
 
 Run: .venv/bin/python benchmarks/bench_sweep.py [--pairs 128] [--samples 1000]
+
+Library rows (``--library N [N ...]``): ``meshcol sweep`` of a moving version of bench_scale's
+N-prop scene (:func:`moving_scene`), the baseline build (``--baseline``, the lead's unchanged
+meshcol) and this one alternating (B A A B), CPU seconds, wall and peak RSS of each process and
+whether their JSON reports are byte-identical; then this build's stages in one process
+(CPU seconds: load and colliders, broad phase, the core's time of impact and overlap tests,
+the first contact per body pair, the JSON report written).
+
+    .venv/bin/python benchmarks/bench_sweep.py --library 10000 100000 \
+        --baseline /work/base41/.venv/bin/meshcol
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
+import json
+import random
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -178,12 +194,139 @@ def ground_truth_start_free(cs, start):
     return distance_batch(cs, start, np.array([[0, 1]]), threads=1).distance[0] > TOLERANCE
 
 
+#: The sizes whose moving scenes draw from one ``random.seed(1)`` stream, in this order
+#: (three draws a body), as the lead made ``moving.json`` of 1,000 and 10,000 props.
+MOVING_SIZES = (1000, 10000, 100000)
+
+
+def moving_scene(n: int) -> Path:
+    """``benchmarks/.cache/scale/<n>/moving.json``: bench_scale's N-prop scene, every body
+    with ``velocity`` [U(-2, 2), U(-2, 2), 0] and ``angular_velocity`` [0, 0, U(-3, 3)],
+    ``duration`` 1.0 (``random.seed(1)``, drawn for the sizes of :data:`MOVING_SIZES` in
+    turn); written once."""
+    sys.path.insert(0, str(Path(__file__).parent))
+    from bench_scale import scene_folder
+
+    path = scene_folder(n) / "moving.json"
+    if path.exists():
+        return path
+    rng = random.Random(1)
+    for size in MOVING_SIZES:
+        draws = [(rng.uniform(-2, 2), rng.uniform(-2, 2), rng.uniform(-3, 3)) for _ in range(size)]
+        if size == n:
+            break
+    else:
+        raise SystemExit(f"--library sizes are {MOVING_SIZES}")
+    scene = json.loads((path.parent / "scene.json").read_text())
+    for body, (vx, vy, w) in zip(scene["bodies"], draws):
+        body["velocity"] = [vx, vy, 0]
+        body["angular_velocity"] = [0, 0, w]
+    scene["duration"] = 1.0
+    path.with_suffix(".tmp").write_text(json.dumps(scene))
+    path.with_suffix(".tmp").rename(path)
+    return path
+
+
+def library_rows(sizes: list[int], baseline: str | None, rounds: int) -> None:
+    """The library rows: base and new ``meshcol sweep`` alternating, then the new stages."""
+    import os
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from bench_scale import LAST_CPU, timed
+
+    new = str(Path(sys.executable).parent / "meshcol")
+    sides = [("new", new)] + ([("base", baseline)] if baseline else [])
+    print(f"load {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f}")
+    with tempfile.TemporaryDirectory() as tmp:
+        for n in sizes:
+            moving = moving_scene(n)
+            figures: dict[str, list[tuple[float, float, float]]] = {name: [] for name, _ in sides}
+            order = [sides[-1], sides[0], sides[0], sides[-1]] * max(1, rounds // 2)
+            for name, program in order:
+                report = Path(tmp) / f"{name}.json"
+                code, wall, rss = timed(
+                    [program, "sweep", str(moving), "--report", str(report), "--fail-on", "none"]
+                )
+                if code != 0:
+                    raise SystemExit(f"{name}: meshcol sweep exit {code}")
+                figures[name].append((LAST_CPU[0], wall, rss))
+            print(f"moving {n}-prop scene ({moving}), load {os.getloadavg()[0]:.2f}:")
+            for name, rows in figures.items():
+                cpu, wall, rss = zip(*rows)
+                print(
+                    f"  {name:<4} CPU {min(cpu):6.2f}-{max(cpu):6.2f} s  wall {min(wall):6.2f}-"
+                    f"{max(wall):6.2f} s  peak RSS {max(rss):7.0f} MiB  ({len(rows)} runs)"
+                )
+            if baseline:
+                same = (Path(tmp) / "new.json").read_bytes() == (
+                    Path(tmp) / "base.json"
+                ).read_bytes()
+                print(f"  JSON reports byte-identical: {same}")
+            print(f"  stages (this build, one process): {sweep_stages(moving, Path(tmp))}")
+
+
+def sweep_stages(moving: Path, tmp: Path) -> str:
+    """CPU seconds of the stages of :func:`meshcol.analysis.sweep.sweep` in this process, and
+    of writing its JSON report (the garbage collector at the command line's threshold)."""
+    import gc
+
+    from meshcol.cli import GC_THRESHOLD
+
+    gc.set_threshold(GC_THRESHOLD, *gc.get_threshold()[1:])
+    from meshcol.analysis import sweep as sw
+    from meshcol.analysis.colliders import build_colliders
+    from meshcol.io.formats import write_report
+
+    marks = [("start", time.process_time())]
+
+    def mark(name: str) -> None:
+        marks.append((name, time.process_time()))
+
+    scene = sw._moving_scene(str(moving), "hull", "none")
+    colliders = build_colliders(scene.bodies, "hull", mesh_parts="triangles")
+    motion = sw._Motion.of(colliders)
+    mark("load+colliders")
+    lo, hi, tol = sw._swept_boxes(colliders, motion, scene, None, 0)
+    pairs = sw._candidates(lo, hi, tol, colliders.part_body, motion.moving)
+    mark("broad")
+    contacts = sw._Contacts.of(colliders, motion, pairs, tol, None, 0)
+    mark("time of impact+overlaps")
+    hits, separated, count = sw._first_contacts(colliders, motion, pairs, contacts, scene)
+    mark("first contacts")
+    report = sw.SweepReport(
+        scene,
+        tuple(colliders.bodies),
+        "hull",
+        tol,
+        hits,
+        count,
+        len(pairs),
+        tuple(bool(m) for m in motion.moving),
+        "none",
+        colliders.warnings,
+        separated,
+    )
+    write_report(report, "json", str(tmp / "stages.json"))
+    mark("JSON report")
+    steps = [f"{b[0]} {b[1] - a[1]:.2f}" for a, b in itertools.pairwise(marks)]
+    return (
+        ", ".join(steps)
+        + f" s CPU; {len(pairs)} part pairs, {count} candidate pairs, {len(hits)} hits"
+    )
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--pairs", type=int, default=128)
     parser.add_argument("--samples", type=int, default=1000)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--library", type=int, nargs="+", metavar="N", default=None)
+    parser.add_argument("--baseline", default=None, help="the baseline build's meshcol")
+    parser.add_argument("--rounds", type=int, default=2, help="library runs per side")
     args = parser.parse_args()
+    if args.library:
+        library_rows(args.library, args.baseline, args.rounds)
+        return
     try:
         import fcl
     except ImportError:

@@ -566,12 +566,17 @@ def dumps_indented(document: object | None, builtin: object) -> str | None:
 
 def dumps_rows(columns: list, count: int, start: int, stop: int, level: int) -> str:
     """
-    The rows start..stop of a list of `count` dicts of one set of keys, as dumps_indented writes them inside a list at nesting `level`: each row ',' (but the first of the list), a newline, the dict. columns: (key, kind, array[, table]) in key order; kind number (n,) float64, vector (n, 3) and box (n, 6) float64 (a non-finite row null), integer (n,) int64, index (n,) int64 (negative null), boolean (n,) bool, string and raw (n,) int64 codes into a list of str (negative null; raw: JSON text as given).
+    The rows start..stop of a list of `count` dicts of one set of keys, as dumps_indented writes them inside a list at nesting `level`: each row ',' (but the first of the list), a newline, the dict. columns: (key, kind, array[, table]) in key order; kind number (n,) float64, vector (n, 3) and box (n, 6) float64 (a non-finite row null), numbers3 (n, 3) float64 (a list of 3) and matrix4 (n, 16) float64 (a 4x4 list of lists, row-major), each non-finite entry null, integer (n,) int64, index (n,) int64 (negative null), boolean (n,) bool, string and raw (n,) int64 codes into a list of str (negative null; raw: JSON text as given).
     """
 
 def write_rows(fd: int, columns: list, count: int, level: int) -> None:
     """
     dumps_rows's text of all `count` rows as a list ('[', the rows, a newline and ']'; '[]' when empty) written to the open file descriptor `fd` at its offset, formatted on the core's threads and written in blocks of a few megabytes, never whole in memory. OSError (errno set) when a write fails: the file then holds part of the text.
+    """
+
+def round_significant(values: Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C', device='cpu', writable=False)], digits: int) -> Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')]:
+    """
+    float(f'{x:.{digits}g}') + 0.0 of each value (digits 1..17): correctly rounded to `digits` significant digits, negative zero made 0.0, non-finite values as they are.
     """
 
 def float_reprs(values: Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C', device='cpu', writable=False)]) -> list[str]:

@@ -245,6 +245,7 @@ meshcol::RowColumn::Kind column_kind(const std::string& name) {
     using C = meshcol::RowColumn;
     static const std::pair<const char*, C::Kind> kinds[] = {
         {"number", C::kNumber},   {"vector", C::kVector}, {"box", C::kBox},
+        {"numbers3", C::kNumbers3}, {"matrix4", C::kMatrix4},
         {"integer", C::kInteger}, {"index", C::kIndex},   {"boolean", C::kBoolean},
         {"string", C::kString},   {"raw", C::kRaw},
     };
@@ -310,6 +311,8 @@ struct Rows {
                 case C::kNumber: c.reals = column_array<double>(b, spec[2], count, 1); break;
                 case C::kVector: c.reals = column_array<double>(b, spec[2], count, 3); break;
                 case C::kBox: c.reals = column_array<double>(b, spec[2], count, 6); break;
+                case C::kNumbers3: c.reals = column_array<double>(b, spec[2], count, 3); break;
+                case C::kMatrix4: c.reals = column_array<double>(b, spec[2], count, 16); break;
                 case C::kBoolean: c.flags = column_array<bool>(b, spec[2], count, 1); break;
                 default: c.integers = column_array<std::int64_t>(b, spec[2], count, 1);
             }
@@ -405,6 +408,8 @@ void bind_report(nb::module_& m) {
           "writes them inside a list at nesting `level`: each row ',' (but the first of the "
           "list), a newline, the dict. columns: (key, kind, array[, table]) in key order; kind "
           "number (n,) float64, vector (n, 3) and box (n, 6) float64 (a non-finite row null), "
+          "numbers3 (n, 3) float64 (a list of 3) and matrix4 (n, 16) float64 (a 4x4 list of "
+          "lists, row-major), each non-finite entry null, "
           "integer (n,) int64, index (n,) int64 (negative null), boolean (n,) bool, string and "
           "raw (n,) int64 codes into a list of str (negative null; raw: JSON text as given).");
     m.def("write_rows", &write_rows_fd, "fd"_a, "columns"_a, "count"_a, "level"_a,
@@ -413,6 +418,23 @@ void bind_report(nb::module_& m) {
           "formatted on the core's threads and written in blocks of a few megabytes, never "
           "whole in memory. OSError (errno set) when a write fails: the file then holds "
           "part of the text.");
+    m.def(
+        "round_significant",
+        [](const Values& values, int digits) {
+            if (digits < 1 || digits > 17) throw nb::value_error("digits must be in 1..17");
+            const size_t n = values.shape(0);
+            auto out = new_array<Out<double, -1>>({n});
+            const double* v = values.data();
+            double* r = out.data();
+            {
+                nb::gil_scoped_release unlocked;
+                for (size_t i = 0; i < n; ++i) r[i] = meshcol::round_significant(v[i], digits);
+            }
+            return out;
+        },
+        "values"_a, "digits"_a,
+        "float(f'{x:.{digits}g}') + 0.0 of each value (digits 1..17): correctly rounded to "
+        "`digits` significant digits, negative zero made 0.0, non-finite values as they are.");
     m.def(
         "float_reprs",
         [](const Values& values) {

@@ -71,4 +71,18 @@ std::size_t format_double_repr(double value, char* out) {
     return static_cast<std::size_t>(o - out);
 }
 
+double round_significant(double value, int digits) {
+    if (!std::isfinite(value)) return value;
+    // scientific with digits - 1 after the point: `digits` significant digits, as %.*g keeps
+    // them (the layout differs, the digits and so the value read back do not)
+    char buf[64];
+    const auto written =
+        std::to_chars(buf, buf + sizeof buf, value, std::chars_format::scientific, digits - 1);
+    double rounded = value;
+    const auto read = std::from_chars(buf, written.ptr, rounded, std::chars_format::scientific);
+    if (read.ec == std::errc::result_out_of_range)  // past the largest double (few digits)
+        rounded = std::abs(value) > 1.0 ? std::copysign(HUGE_VAL, value) : 0.0;
+    return rounded + 0.0;  // -0.0 + 0.0 is 0.0, as in Python
+}
+
 }  // namespace meshcol

@@ -57,15 +57,42 @@ void vector_at(char*& p, const double* v, int level) {
     *p++ = ']';
 }
 
+/// A list of `count` numbers at nesting `level`, each non-finite one null.
+void numbers_at(char*& p, const double* v, int count, int level) {
+    *p++ = '[';
+    for (int k = 0; k < count; ++k) {
+        if (k) *p++ = ',';
+        newline_at(p, level + 1);
+        real_at(p, v[k]);
+    }
+    newline_at(p, level);
+    *p++ = ']';
+}
+
+/// A 4x4 matrix (16 numbers, row-major) as a list of its 4 rows at nesting `level`.
+void matrix_at(char*& p, const double* v, int level) {
+    *p++ = '[';
+    for (int row = 0; row < 4; ++row) {
+        if (row) *p++ = ',';
+        newline_at(p, level + 1);
+        numbers_at(p, v + 4 * row, 4, level + 1);
+    }
+    newline_at(p, level);
+    *p++ = ']';
+}
+
 /// The most chars `cell` writes for a column at nesting `level`.
 std::size_t cell_bound(const RowColumn& c, int level) {
     const std::size_t number = kDoubleReprSize;
     auto line = [](int l) { return 1 + 2 * static_cast<std::size_t>(l); };
     auto vector = [&](int l) { return 2 + 3 * (1 + line(l + 1) + number) + line(l); };
+    auto numbers = [&](int count, int l) { return 2 + count * (1 + line(l + 1) + number) + line(l); };
     switch (c.kind) {
         case RowColumn::kNumber: return number;
         case RowColumn::kVector: return vector(level);
         case RowColumn::kBox: return 3 + 2 * (line(level + 1) + vector(level + 1)) + line(level);
+        case RowColumn::kNumbers3: return numbers(3, level);
+        case RowColumn::kMatrix4: return 2 + 4 * (1 + line(level + 1) + numbers(4, level + 1)) + line(level);
         case RowColumn::kString:
         case RowColumn::kRaw: {
             std::size_t most = 4;
@@ -91,6 +118,8 @@ void cell(char*& p, const RowColumn& c, std::size_t i, int level) {
             newline_at(p, level);
             *p++ = ']';
             return;
+        case RowColumn::kNumbers3: return numbers_at(p, c.reals + 3 * i, 3, level);
+        case RowColumn::kMatrix4: return matrix_at(p, c.reals + 16 * i, level);
         case RowColumn::kIndex:
             if (c.integers[i] < 0) return put(p, "null", 4);
             [[fallthrough]];

@@ -55,3 +55,25 @@ TEST_CASE("format: every text reads back to the same double") {
         x *= 1.4142135623730951;
     }
 }
+
+TEST_CASE("format: round_significant is Python's float(f'{x:.12g}') + 0.0") {
+    // expected values from CPython 3.11: float(f"{x:.12g}") + 0.0
+    CHECK_EQ(round_significant(0.1 + 0.2, 12), 0.3);
+    CHECK_EQ(round_significant(1.0000000000005, 12), 1.0);  // the double is below the half
+    CHECK_EQ(round_significant(2.5, 1), 2.0);               // an exact half: to even
+    CHECK_EQ(round_significant(3.5, 1), 4.0);
+    CHECK_EQ(round_significant(123456789012.5, 12), 123456789012.0);
+    CHECK_EQ(round_significant(1e308, 12), 1e308);
+    CHECK_EQ(round_significant(5e-324, 12), 5e-324);
+    CHECK_EQ(round_significant(2.225073858507201e-308, 12), 2.22507385851e-308);
+    CHECK_EQ(round_significant(1.7976931348623157e308, 12), 1.79769313486e308);
+    CHECK(!std::signbit(round_significant(-0.0, 12)));
+    CHECK(std::isnan(round_significant(std::numeric_limits<double>::quiet_NaN(), 12)));
+    CHECK_EQ(round_significant(-std::numeric_limits<double>::infinity(), 12),
+             -std::numeric_limits<double>::infinity());
+}
+
+TEST_CASE("format: round_significant past the largest double is infinite, as in Python") {
+    CHECK_EQ(round_significant(1.7976931348623157e308, 1), std::numeric_limits<double>::infinity());
+    CHECK_EQ(round_significant(-1.7976931348623157e308, 2), -std::numeric_limits<double>::infinity());
+}

@@ -105,3 +105,26 @@ TEST_CASE("report rows: a write that fails stops the writer with its errno") {
         ::close(full);
     }
 }
+
+TEST_CASE("report rows: a list of 3 numbers and a 4x4 matrix, each non-finite entry null") {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const std::vector<double> matrix = {1.0, 2.0, 3.0, 4.0, 0.5, nan, 0.0, -1.0,
+                                        1e-5, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0};
+    const std::vector<double> numbers = {1.0, nan, -0.0};
+    std::vector<RowColumn> columns(2);
+    columns[0].kind = RowColumn::kMatrix4, columns[0].key = "\"m\"", columns[0].reals = matrix.data();
+    columns[1].kind = RowColumn::kNumbers3, columns[1].key = "\"v\"", columns[1].reals = numbers.data();
+    const RowWriter w(std::move(columns), 1);
+    // json.dumps({"x": [row]}, indent=2, sort_keys=True)'s list, NaN as None
+    const std::string expected =
+        "[\n    {\n      \"m\": [\n        [\n          1.0,\n          2.0,\n          3.0,\n"
+        "          4.0\n        ],\n        [\n          0.5,\n          null,\n          0.0,\n"
+        "          -1.0\n        ],\n        [\n          1e-05,\n          0.0,\n          1.0,\n"
+        "          0.0\n        ],\n        [\n          0.0,\n          0.0,\n          0.0,\n"
+        "          1.0\n        ]\n      ],\n      \"v\": [\n        1.0,\n        null,\n"
+        "        -0.0\n      ]\n    }\n  ]";
+    CHECK(in_memory(w, 1) == expected);
+    int failed = -1;
+    CHECK(through_file(w, 1, 2, &failed) == expected);
+    CHECK_EQ(failed, 0);
+}

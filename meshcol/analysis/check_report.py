@@ -193,26 +193,11 @@ class CheckReport:
         between, which a file gets straight from the core's row writer
         (:func:`meshcol.io.report.emit`); the same bytes as the whole document encoded at
         once."""
-        from meshcol.io.report import RowsPiece, dumps_json
+        from meshcol.io.report import document_pieces
 
         document = self._document()
-        streamed = {}
-        for key in ("bodies", "pairs"):
-            rows = document[key]
-            if isinstance(rows, ReportRows):
-                document[key] = marker = f"\x00meshcol rows: {key}\x00"
-                streamed[f'\n  "{key}": {dumps_json(marker)[:-1]},'] = (key, rows)
-        text = dumps_json(document)
-        start = 0
-        for line, (key, rows) in sorted(streamed.items(), key=lambda item: text.find(item[0])):
-            at = text.find(line, start)
-            if at < 0:  # cannot happen: a top-level key's line is unique
-                raise AssertionError(f"report text lost its {key}")
-            yield text[start:at] + f'\n  "{key}": '
-            yield RowsPiece(rows.columns(), len(rows), 1)
-            yield ","
-            start = at + len(line)
-        yield text[start:]
+        streamed = [k for k in ("bodies", "pairs") if isinstance(document[k], ReportRows)]
+        return document_pieces(document, streamed)
 
     def ci_suite(self) -> Any:
         """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one case per candidate pair

@@ -8,311 +8,45 @@ statuses and their guarantees are those of :mod:`meshcol.collision.time_of_impac
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from meshcol.analysis.colliders import build_colliders
 from meshcol.analysis.pairs import overlapping_pairs
+from meshcol.analysis.sweep_report import (
+    CSV_COLUMNS,
+    MOTION,
+    NamePairs,
+    SweepHit,
+    SweepHits,
+    SweepReport,
+)
 from meshcol.errors import MeshcolError, SceneError
-from meshcol.io.report import vector_columns
+from meshcol.io.column_bodies import body_names
 from meshcol.io.robot import RobotOptions
 from meshcol.io.scene import as_scene
 from meshcol.types import Body, Scene, TimeOfImpactStatus
 from meshcol.vocabulary import COLLIDER_KINDS
 
-__all__ = ["FAIL_ON", "SweepHit", "SweepReport", "sweep"]
+__all__ = [
+    "CSV_COLUMNS",
+    "FAIL_ON",
+    "MOTION",
+    "FirstContacts",
+    "SweepHit",
+    "SweepHits",
+    "SweepReport",
+    "first_contacts",
+    "sweep",
+]
 
 #: ``fail_on`` policies: ``hit`` fails the run on any pair that is not separated.
 FAIL_ON = ("hit", "none")
-#: The motion model, as the report states it.
-MOTION = (
-    "pivot (local origin unless given) moves linearly; constant angular velocity about it, "
-    "the whole angle (shortest way to an end_rotation)"
-)
-#: Columns of :meth:`SweepReport.to_csv`, one row per pair (poses flattened row-major).
-CSV_COLUMNS = (
-    "body_a",
-    "body_b",
-    "part_a",
-    "part_b",
-    "status",
-    "time_of_impact",
-    "time",
-    *vector_columns("point"),
-    *vector_columns("normal"),
-    "tunnelled",
-    *vector_columns("pose_a", 16),
-    *vector_columns("pose_b", 16),
-    "iterations",
-    "units",
-)
-
 
 #: Scene-relative default tolerance of :func:`sweep`: this times the scene's bounding diagonal.
 RELATIVE_TOLERANCE = 1e-6
-
-
-# ---------------------------------------------------------------------------------------------
-# Scene sweep
-
-
-@dataclass(frozen=True)
-class SweepHit:
-    """One body pair that is not separated during the motion.
-
-    Attributes
-    ----------
-    body_a, body_b : str
-        Body names (``body_a`` comes first in the scene).
-    part_a, part_b : str or None
-        The parts of a body of several parts (``Body.parts``) that meet first; None for a
-        body of one part.
-    status : TimeOfImpactStatus
-        ``HIT``, ``OVERLAPPED_AT_START`` or ``FAILED``.
-    time_of_impact : float
-        Fraction of the motion (for ``FAILED``: the last safe lower bound).
-    time : float or None
-        ``time_of_impact * duration`` in seconds, when the scene has a duration.
-    point : (3,) float64
-        World contact point at the time of impact.
-    normal : (3,) float64
-        World unit normal from a towards b at the time of impact.
-    pose_a, pose_b : (4, 4) float64
-        Both bodies' world-from-local poses at the time of impact.
-    tunnelled : bool
-        True for a hit that a discrete check at the start and end poses alone misses (the
-        bodies overlap neither at the start nor at the end).
-    iterations : int
-        Steps of the pair query that decided the pair.
-    """
-
-    body_a: str
-    body_b: str
-    part_a: str | None
-    part_b: str | None
-    status: TimeOfImpactStatus
-    time_of_impact: float
-    time: float | None
-    point: np.ndarray
-    normal: np.ndarray
-    pose_a: np.ndarray
-    pose_b: np.ndarray
-    tunnelled: bool
-    iterations: int
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready fields (lists for arrays, the status by name), numbers rounded to 12
-        significant digits (far below the tolerance) so reports compare across machines."""
-        return {
-            "body_a": self.body_a,
-            "body_b": self.body_b,
-            "part_a": self.part_a,
-            "part_b": self.part_b,
-            "status": self.status.name,
-            "time_of_impact": _round(self.time_of_impact),
-            "time": _round(self.time),
-            "point": _round(self.point),
-            "normal": _round(self.normal),
-            "pose_a": _round(self.pose_a),
-            "pose_b": _round(self.pose_b),
-            "tunnelled": self.tunnelled,
-            "iterations": self.iterations,
-        }
-
-
-def _round(value: Any) -> Any:
-    """Floats (or nested arrays of them) to 12 significant digits, -0.0 as 0.0."""
-    if value is None:
-        return None
-    if isinstance(value, np.ndarray):
-        return [_round(v) for v in value.tolist()]
-    if isinstance(value, list):
-        return [_round(v) for v in value]
-    value = float(value)
-    return float(f"{value:.12g}") + 0.0 if np.isfinite(value) else value
-
-
-@dataclass(frozen=True)
-class SweepReport:
-    """What :func:`sweep` found.
-
-    Attributes
-    ----------
-    scene : Scene
-    bodies : tuple of Body
-        The scene's bodies less the ``UCX_`` parts that became colliders.
-    collider : str
-        Default collider kind (``hull``, ``decomposed`` or ``mesh``).
-    tolerance : float
-        Contact distance used (world units).
-    hits : tuple of SweepHit
-        Every body pair that is not ``SEPARATED``, sorted by (body_a, body_b) names.
-    candidate_pairs : int
-        Body pairs whose swept bounds overlap (the pairs the narrow phase ran on).
-    part_pairs : int
-        Pairs of convex parts the narrow phase ran on.
-    moving : tuple of bool
-        Per body of ``bodies``: whether it moves.
-    fail_on : str
-        ``hit`` (any pair that is not separated fails the run) or ``none``.
-    separated : tuple of (str, str)
-        The candidate body pairs (moving, swept bounds overlapping) that stay separated, as
-        ``(body_a, body_b)`` names.
-    """
-
-    scene: Scene
-    bodies: tuple[Body, ...]
-    collider: str
-    tolerance: float
-    hits: tuple[SweepHit, ...]
-    candidate_pairs: int
-    part_pairs: int
-    moving: tuple[bool, ...] = field(default=())
-    fail_on: str = "hit"
-    warnings: tuple[str, ...] = ()
-    separated: tuple[tuple[str, str], ...] = ()
-
-    @property
-    def failed(self) -> bool:
-        """True when any pair hits, overlaps at the start or could not be decided."""
-        return bool(self.hits)
-
-    @property
-    def exit_code(self) -> int:
-        """1 when ``fail_on`` is ``hit`` and a pair is not separated, else 0."""
-        return 1 if self.fail_on == "hit" and self.failed else 0
-
-    @property
-    def summary(self) -> dict[str, int]:
-        """Counts: bodies, moving bodies, candidate and part pairs, hits by status."""
-        count = {s: sum(h.status == s for h in self.hits) for s in TimeOfImpactStatus}
-        return {
-            "bodies": len(self.bodies),
-            "moving_bodies": int(sum(self.moving)),
-            "candidate_pairs": self.candidate_pairs,
-            "part_pairs": self.part_pairs,
-            "hits": count[TimeOfImpactStatus.HIT],
-            "tunnelled": sum(h.tunnelled for h in self.hits),
-            "overlapped_at_start": count[TimeOfImpactStatus.OVERLAPPED_AT_START],
-            "failed": count[TimeOfImpactStatus.FAILED],
-        }
-
-    @property
-    def settings(self) -> dict[str, Any]:
-        """The options of the run, as the report states them."""
-        return {
-            "shape": self.collider,
-            "tolerance": float(f"{self.tolerance:.12g}"),
-            "fail_on": self.fail_on,
-            "motion": MOTION,
-            "frame": "world",
-        }
-
-    def to_dict(self) -> dict[str, Any]:
-        """The JSON report: the common envelope, ``failed`` (the policy verdict), duration,
-        bodies, summary and one entry per pair that is not separated."""
-        from meshcol.io.report import envelope
-
-        return {
-            **envelope("sweep", self.settings, self.scene.units),
-            "failed": self.exit_code == 1,
-            "warnings": list(self.warnings),
-            "duration": self.scene.duration,
-            "bodies": [
-                {"name": b.name, "source": b.source, "parts": list(b.parts), "moving": m}
-                for b, m in zip(self.bodies, self.moving)
-            ],
-            "summary": self.summary,
-            "pairs": [h.to_dict() for h in self.hits],
-        }
-
-    def to_json(self) -> str:
-        from meshcol.io.report import dumps_json
-
-        return dumps_json(self.to_dict())
-
-    def ci_suite(self) -> Any:
-        """The run as a CI suite (:class:`meshcol.io.ci.CiSuite`): one case per candidate
-        pair (``body_a <-> body_b``); a pair that hits, overlaps at the start or cannot be
-        decided is a failure under ``--fail-on hit`` (a warning under ``none``), with its
-        time of impact, point and normal; the pairs that stay separated pass."""
-        from meshcol.io.ci import CiCase, CiSuite, collapse_passed, details, number
-
-        units = self.scene.units
-        source = self.scene.source
-        fail = self.fail_on == "hit"
-        cases = []
-        for hit in self.hits:
-            if hit.status == TimeOfImpactStatus.HIT:
-                message = f"HIT at time of impact {number(hit.time_of_impact)}"
-            elif hit.status == TimeOfImpactStatus.OVERLAPPED_AT_START:
-                message = "OVERLAPPED_AT_START: the bodies overlap before they move"
-            else:
-                message = (
-                    f"FAILED: undecided, no contact before time of impact "
-                    f"{number(hit.time_of_impact)}"
-                )
-            if hit.time is not None and hit.status != TimeOfImpactStatus.OVERLAPPED_AT_START:
-                message += f" (t = {number(hit.time, 's')})"
-            if hit.tunnelled:
-                message += ", tunnelled (missed at the start and end poses)"
-            cases.append(
-                CiCase(
-                    name=f"{hit.body_a} <-> {hit.body_b}",
-                    classname="meshcol.sweep",
-                    outcome="failure" if fail else "passed",
-                    message=message,
-                    file=source,
-                    kind=hit.status.name,
-                    details=details(
-                        [
-                            ("part_a", hit.part_a),
-                            ("part_b", hit.part_b),
-                            ("point", _round(hit.point)),
-                            ("normal", _round(hit.normal)),
-                            ("iterations", hit.iterations),
-                            ("units", units),
-                        ]
-                    )
-                    if fail
-                    else "",
-                    warn=not fail,
-                )
-            )
-        for a, b in self.separated:
-            cases.append(
-                CiCase(
-                    name=f"{a} <-> {b}",
-                    classname="meshcol.sweep",
-                    message="separated during the whole motion",
-                    file=source,
-                )
-            )
-        cases.sort(key=lambda case: case.name)
-        s = self.summary
-        return CiSuite(
-            "sweep",
-            tuple(collapse_passed(cases, "pairs", "meshcol.sweep")),
-            self.settings,
-            warnings=tuple(self.warnings),
-            verdict=f"{s['hits']} hits, {s['overlapped_at_start']} overlapped at start, "
-            f"{s['failed']} undecided of {s['candidate_pairs']} candidate pairs",
-            units=units,
-        )
-
-    def to_csv(self) -> str:
-        """One row per pair (:data:`CSV_COLUMNS`): vectors split into ``_x/_y/_z`` columns,
-        poses into 16 columns ``_00`` ... ``_33`` (row-major), as every command's CSV."""
-        from meshcol.io.report import dumps_csv, split_vectors
-
-        sizes = {"point": 3, "normal": 3, "pose_a": 16, "pose_b": 16}
-        units = self.scene.units
-        return dumps_csv(
-            [split_vectors(dict(h.to_dict(), units=units), sizes) for h in self.hits], CSV_COLUMNS
-        )
 
 
 def _is_moving(body: Body) -> bool:
@@ -415,13 +149,13 @@ def sweep(
         bodies=tuple(colliders.bodies),
         collider=collider,
         tolerance=tol,
-        hits=tuple(hits),
+        hits=hits,
         candidate_pairs=candidate_pairs,
         part_pairs=len(pairs),
         moving=tuple(bool(m) for m in motion.moving),
         fail_on=fail_on,
         warnings=colliders.warnings,
-        separated=tuple(sorted(separated)),
+        separated=separated,
     )
 
 
@@ -583,93 +317,201 @@ class _Contacts:
         return cls(toi, at_start, at_end)
 
 
+@dataclass(frozen=True, eq=False)
+class FirstContacts:
+    """The first contact of every body pair of a table of part pairs
+    (:func:`first_contacts`), the body pairs in the order the table first names them.
+
+    Attributes
+    ----------
+    body_pairs : (G, 2) int64
+        The body pairs.
+    row : (G,) int64
+        The part pair (row of the table) that decides each: the first overlapping at the
+        start, else the earliest not separated; -1 for a pair that stays separated.
+    status : (G,) int64
+        :class:`TimeOfImpactStatus` of each pair: that row's, ``FAILED`` for a ``HIT`` when an
+        undecided row of the pair could come earlier, ``SEPARATED`` when every row is.
+    tunnelled : (G,) bool
+        A ``HIT`` none of whose rows overlaps at the start or at the end.
+    invalid : int
+        The first pair (in that order) with an ``INVALID_INPUT`` row, or -1.
+    """
+
+    body_pairs: np.ndarray
+    row: np.ndarray
+    status: np.ndarray
+    tunnelled: np.ndarray
+    invalid: int
+
+
+def first_contacts(
+    body_pairs: np.ndarray,
+    status: np.ndarray,
+    fraction: np.ndarray,
+    at_start: np.ndarray,
+    at_end: np.ndarray,
+) -> FirstContacts:
+    """Per body pair, the first contact of its part pairs, by segment operations over the
+    rows sorted by body pair (no loop over pairs): overlapping at the start wins (the first
+    such row), else the earliest row that is not separated (the first of equal fractions; a
+    NaN fraction first, as ``np.argmin``), made ``FAILED`` when that row is a ``HIT`` and a
+    ``FAILED`` row of the pair has a smaller fraction.
+
+    Parameters
+    ----------
+    body_pairs : (P, 2) int
+        Each row's bodies.
+    status : (P,) int
+        Each row's :class:`TimeOfImpactStatus`.
+    fraction : (P,) float
+        Each row's time of impact.
+    at_start, at_end : (P,) bool
+        Whether each row overlaps at the start and at the end poses.
+
+    Returns
+    -------
+    FirstContacts
+    """
+    S = TimeOfImpactStatus
+    count = len(status)
+    body_pairs = np.asarray(body_pairs, dtype=np.int64).reshape(-1, 2)
+    if count == 0:
+        none = np.zeros(0, dtype=np.int64)
+        return FirstContacts(body_pairs, none, none, np.zeros(0, dtype=bool), -1)
+    key = body_pairs[:, 0] * (int(body_pairs.max()) + 1) + body_pairs[:, 1]
+    order = np.argsort(key, kind="stable")  # each pair's rows together, in table order
+    new = np.ones(count, dtype=bool)
+    new[1:] = key[order[1:]] != key[order[:-1]]
+    starts = np.flatnonzero(new)
+    seg = np.cumsum(new) - 1
+    groups = len(starts)
+    st = np.asarray(status, dtype=np.int64)[order]
+    fr = np.asarray(fraction, dtype=np.float64)[order]
+
+    best = np.full(groups, -1, dtype=np.int64)  # a sorted position per pair
+    live = np.flatnonzero(st != S.SEPARATED)
+    nan = np.isnan(fr[live])
+    ranked = live[np.lexsort((live, np.where(nan, 0.0, fr[live]), ~nan, seg[live]))]
+    found, first = np.unique(seg[ranked], return_index=True)
+    best[found] = ranked[first]
+    chosen = np.full(groups, int(S.SEPARATED), dtype=np.int64)
+    chosen[found] = st[best[found]]
+    overlapped = np.flatnonzero(st == S.OVERLAPPED_AT_START)
+    found, first = np.unique(seg[overlapped], return_index=True)
+    best[found] = overlapped[first]
+    chosen[found] = int(S.OVERLAPPED_AT_START)
+    failed = np.flatnonzero(st == S.FAILED)
+    earliest_failed = np.full(groups, np.inf)
+    with np.errstate(invalid="ignore"):  # a NaN fraction stays NaN (as ndarray.min)
+        np.minimum.at(earliest_failed, seg[failed], fr[failed])
+    hit = chosen == S.HIT
+    chosen[hit & (earliest_failed < np.where(best >= 0, fr[best], np.inf))] = int(S.FAILED)
+    touching = np.zeros(groups, dtype=bool)
+    touching[
+        seg[np.asarray(at_start, dtype=bool)[order] | np.asarray(at_end, dtype=bool)[order]]
+    ] = True
+    invalid_groups = np.unique(seg[st == S.INVALID_INPUT])
+
+    appear = np.argsort(order[starts], kind="stable")  # the pairs as the table names them
+    place = np.empty(groups, dtype=np.int64)
+    place[appear] = np.arange(groups)
+    invalid = int(place[invalid_groups].min()) if len(invalid_groups) else -1
+    best = best[appear]
+    return FirstContacts(
+        body_pairs[order[starts[appear]]],
+        np.where(best >= 0, order[np.maximum(best, 0)], -1),
+        chosen[appear],
+        ((chosen == S.HIT) & ~touching)[appear],
+        invalid,
+    )
+
+
 def _first_contacts(
     colliders: Any, motion: _Motion, pairs: np.ndarray, contacts: _Contacts, scene: Scene
-) -> tuple[list[SweepHit], list[tuple[str, str]], int]:
-    """Per candidate body pair, its first contact: ``(hits sorted by names, the pairs that
-    stay separated, the number of candidate body pairs)``."""
+) -> tuple[SweepHits, NamePairs, int]:
+    """Per candidate body pair, its first contact (:func:`first_contacts`): ``(the hits as
+    columns sorted by names, the pairs that stay separated sorted by names, the number of
+    candidate body pairs)``; MeshcolError naming the first body pair with an invalid part
+    pair."""
+    from meshcol.analysis.check_report import _name_ranks
+
+    toi = contacts.toi
     owner = colliders.part_body
     body_pairs = owner[pairs] if len(pairs) else np.zeros((0, 2), np.int64)
-    groups: dict[tuple[int, int], list[int]] = {}
-    for k, (i, j) in enumerate(body_pairs.tolist()):
-        groups.setdefault((i, j), []).append(k)
-    hits = []
-    separated: list[tuple[str, str]] = []
-    for (i, j), members in groups.items():
-        hit = _first_contact(colliders, motion, pairs, contacts, scene, (i, j), members)
-        if hit is None:
-            separated.append((colliders.bodies[i].name, colliders.bodies[j].name))
-        else:
-            hits.append(hit)
-    hits.sort(key=lambda h: (h.body_a, h.body_b))
-    return hits, separated, len(groups)
+    first = first_contacts(
+        body_pairs, toi.status, toi.time_of_impact, contacts.at_start, contacts.at_end
+    )
+    names = body_names(colliders.bodies)
+    if first.invalid >= 0:
+        i, j = first.body_pairs[first.invalid].tolist()
+        raise MeshcolError(
+            f"bodies '{names[i]}' and '{names[j]}': invalid shape or pose", scene.source
+        )
+    rank = _name_ranks(names)
+    hit = first.status != TimeOfImpactStatus.SEPARATED
+    apart = first.body_pairs[~hit]
+    apart = apart[np.lexsort((rank[apart[:, 1]], rank[apart[:, 0]]))]
+    separated = NamePairs(names, apart[:, 0], apart[:, 1])
+    touching = np.flatnonzero(hit)
+    touching = touching[
+        np.lexsort((rank[first.body_pairs[touching, 1]], rank[first.body_pairs[touching, 0]]))
+    ]
+    hits = _hit_columns(colliders, motion, pairs, toi, scene, first, touching, names)
+    return hits, separated, len(first.status)
 
 
-def _first_contact(
+def _hit_columns(
     colliders: Any,
     motion: _Motion,
     pairs: np.ndarray,
-    contacts: _Contacts,
+    toi: Any,
     scene: Scene,
-    body_pair: tuple[int, int],
-    members: Sequence[int],
-) -> SweepHit | None:
-    """The first contact of body pair ``(i, j)`` from its part pairs ``members`` (None when
-    it stays separated): overlapping at the start wins, else the earliest hit, ``FAILED`` when
-    an undecided part pair could come earlier."""
+    first: FirstContacts,
+    index: np.ndarray,
+    names: list[str],
+) -> SweepHits:
+    """The hits ``index`` of ``first`` as columns: their part names, the poses of both
+    bodies at the time of impact (one batched interpolation), point, normal, iterations."""
+    from meshcol.analysis.sweep_report import codes_of
     from meshcol.collision.time_of_impact import interpolate_pose
 
-    i, j = body_pair
-    bodies, toi = colliders.bodies, contacts.toi
-    ks = np.asarray(members)
-    status = toi.status[ks]
-    if np.any(status == TimeOfImpactStatus.INVALID_INPUT):
-        raise MeshcolError(
-            f"bodies '{bodies[i].name}' and '{bodies[j].name}': invalid shape or pose",
-            scene.source,
-        )
-    live = ks[status != TimeOfImpactStatus.SEPARATED]
-    if len(live) == 0:
-        return None
-    fraction = toi.time_of_impact
-    best = live[np.argmin(fraction[live])]
-    best_status = TimeOfImpactStatus(int(toi.status[best]))
-    if np.any(status == TimeOfImpactStatus.OVERLAPPED_AT_START):
-        best = ks[np.argmax(status == TimeOfImpactStatus.OVERLAPPED_AT_START)]
-        best_status = TimeOfImpactStatus.OVERLAPPED_AT_START
-    elif best_status == TimeOfImpactStatus.HIT:
-        failed = live[toi.status[live] == TimeOfImpactStatus.FAILED]
-        if len(failed) and fraction[failed].min() < fraction[best]:
-            best_status = TimeOfImpactStatus.FAILED
-    t = float(fraction[best])
-    part_a, part_b = colliders.part_names(
-        [i, j], colliders.part_label[[pairs[best, 0], pairs[best, 1]]]
-    )
+    k = len(index)
+    a, b = first.body_pairs[index, 0], first.body_pairs[index, 1]
+    rows = first.row[index]
+    t = toi.time_of_impact[rows]
+    labels = colliders.part_label[pairs[rows]] if k else np.zeros((0, 2), np.int64)
+    both = np.concatenate([a, b])
+    labels = np.concatenate([labels[:, 0], labels[:, 1]])
+    part_codes, parts = np.full(2 * k, -1, dtype=np.int64), list[str]()
+    if (labels >= 0).any():  # some body of several parts
+        part_codes, parts = codes_of(colliders.part_names(both, labels))
     rotations, pivots = motion.body_rotations, motion.body_pivots
-    poses = interpolate_pose(
-        np.stack([motion.start_body[i], motion.start_body[j]]),
-        np.stack([motion.end_body[i], motion.end_body[j]]),
-        [t, t],
-        rotation=None if rotations is None else rotations[[i, j]],
-        pivot=None if pivots is None else pivots[[i, j]],
+    poses = (
+        interpolate_pose(
+            motion.start_body[both],
+            motion.end_body[both],
+            np.concatenate([t, t]),
+            rotation=None if rotations is None else rotations[both],
+            pivot=None if pivots is None else pivots[both],
+        )
+        if k
+        else np.zeros((0, 4, 4))
     )
-    tunnelled = (
-        best_status == TimeOfImpactStatus.HIT
-        and not np.any(contacts.at_start[ks])
-        and not np.any(contacts.at_end[ks])
-    )
-    return SweepHit(
-        body_a=bodies[i].name,
-        body_b=bodies[j].name,
-        part_a=part_a,
-        part_b=part_b,
-        status=best_status,
+    return SweepHits(
+        names=names,
+        body_a=a,
+        body_b=b,
+        parts=parts,
+        part_a=part_codes[:k],
+        part_b=part_codes[k:],
+        status=first.status[index],
         time_of_impact=t,
         time=None if scene.duration is None else t * float(scene.duration),
-        point=toi.point[best].copy(),
-        normal=toi.normal[best].copy(),
-        pose_a=poses[0],
-        pose_b=poses[1],
-        tunnelled=bool(tunnelled),
-        iterations=int(toi.iterations[best]),
+        point=toi.point[rows],
+        normal=toi.normal[rows],
+        pose_a=poses[:k],
+        pose_b=poses[k:],
+        tunnelled=first.tunnelled[index],
+        iterations=np.asarray(toi.iterations[rows], dtype=np.int64),
     )

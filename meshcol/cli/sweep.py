@@ -27,7 +27,6 @@ from meshcol.cli.common import (
 )
 from meshcol.io.outputs import check_outputs
 from meshcol.io.robot import RobotOptions
-from meshcol.types import TimeOfImpactStatus
 
 
 @click.command(
@@ -142,9 +141,7 @@ def summary_lines(manifest: str, result) -> str:
         f"{s['failed']} undecided"
     ]
     # the undecided pairs first, then the earliest contacts
-    first = sorted(
-        result.hits, key=lambda h: (h.status != TimeOfImpactStatus.FAILED, h.time_of_impact)
-    )[:TABLE_ROWS]
+    first = result.first_hits(TABLE_ROWS)
     for h in first:
         when = "" if h.time is None else f" (t = {h.time:.6g} s)"
         extra = ", tunnelled" if h.tunnelled else ""

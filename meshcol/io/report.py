@@ -32,7 +32,9 @@ __all__ = [
     "dumps_csv",
     "dumps_json",
     "dumps_rows",
+    "document_pieces",
     "emit",
+    "round_significant",
     "rows_chunks",
     "RowsPiece",
     "text_pieces",
@@ -557,6 +559,44 @@ class RowsPiece:
         from meshcol._native import core
 
         core.write_rows(fd, self.columns, self.count, self.level)
+
+
+def document_pieces(document: dict[str, Any], streamed: Sequence[str]) -> Iterator[str | RowsPiece]:
+    """A report's JSON (:func:`dumps_json` of ``document``) in pieces, in order: the text of
+    the rest, and the value of each top-level key of ``streamed`` (rows kept as columns: an
+    object with ``columns()`` for the core's row writer and a length) as a
+    :class:`RowsPiece` between, which a file gets straight from the core's row writer
+    (:func:`emit`); the same bytes as the whole document encoded at once."""
+    document = dict(document)
+    markers = {}
+    for key in streamed:
+        rows = document[key]
+        document[key] = marker = f"\x00meshcol rows: {key}\x00"
+        markers[f'\n  "{key}": {dumps_json(marker)[:-1]},'] = (key, rows)
+    text = dumps_json(document)
+    start = 0
+    for line, (key, rows) in sorted(markers.items(), key=lambda item: text.find(item[0])):
+        at = text.find(line, start)
+        if at < 0:  # cannot happen: a top-level key's line is unique
+            raise AssertionError(f"report text lost its {key}")
+        yield text[start:at] + f'\n  "{key}": '
+        yield RowsPiece(rows.columns(), len(rows), 1)
+        yield ","
+        start = at + len(line)
+    yield text[start:]
+
+
+def round_significant(values: Any, digits: int = 12) -> Any:
+    """``float(f"{v:.{digits}g}") + 0.0`` of every number of ``values`` (an array of any
+    shape, as float64; non-finite values as they are, -0.0 as 0.0), by the core in one call:
+    the rounding of the numbers a report compares across machines (a sweep's 12 digits)."""
+    import numpy as np
+
+    from meshcol._native import core
+
+    array = np.asarray(values, dtype=np.float64)
+    flat = np.ascontiguousarray(array.reshape(-1))
+    return np.asarray(core.round_significant(flat, digits)).reshape(array.shape)
 
 
 def text_pieces(pieces: Iterable[str | RowsPiece]) -> Iterator[str]:

@@ -18,4 +18,10 @@ inline constexpr std::size_t kDoubleReprSize = 32;
 /// writers turn those into null themselves).
 std::size_t format_double_repr(double value, char* out);
 
+/// Python's float(f"{value:.{digits}g}") + 0.0: `value` correctly rounded to `digits`
+/// significant decimal digits (1..17) and read back correctly rounded (std::to_chars,
+/// std::from_chars), negative zero made 0.0; a non-finite value as it is. The reports'
+/// rounding of numbers that compare across machines (a sweep's 12 digits).
+double round_significant(double value, int digits);
+
 }  // namespace meshcol

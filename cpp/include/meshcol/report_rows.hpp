@@ -16,9 +16,11 @@ namespace meshcol {
 
 /// One column of rows: its key (JSON-escaped, quotes included) and where a row's value is.
 struct RowColumn {
-    enum Kind { kNumber, kVector, kBox, kInteger, kIndex, kBoolean, kString, kRaw } kind = kNumber;
+    enum Kind { kNumber, kVector, kBox, kNumbers3, kMatrix4, kInteger, kIndex, kBoolean, kString, kRaw } kind =
+        kNumber;
     std::string key;
-    const double* reals = nullptr;           ///< kNumber (n), kVector (n x 3), kBox (n x 6)
+    /// kNumber (n), kVector and kNumbers3 (n x 3), kBox (n x 6), kMatrix4 (n x 16, row-major)
+    const double* reals = nullptr;
     const std::int64_t* integers = nullptr;  ///< kInteger, kIndex, and the codes of kString, kRaw
     const bool* flags = nullptr;             ///< kBoolean
     /// kString: escaped entries; kRaw: JSON text (shared: the columns of body_a and body_b
@@ -28,7 +30,9 @@ struct RowColumn {
 
 /// Rows of `columns` (in key order) as a list's items at nesting `level`: row i is ',' (but
 /// for i = 0), a newline, the object; a number column's non-finite value and a vector or box
-/// with one is null, a negative index or code is null.
+/// with one is null, a negative index or code is null. kNumbers3 is a list of 3 numbers and
+/// kMatrix4 a list of 4 lists of 4 (a 4x4 pose), each non-finite entry null on its own (as
+/// json writes a list of floats).
 class RowWriter {
 public:
     RowWriter(std::vector<RowColumn> columns, int level);
