@@ -155,6 +155,5 @@ TEST_CASE("hull budget: the loop on a cube's hull keeps within the budget, plane
             for (const Vec3& v : c) support = std::max(support, meshcol::dot(n, v));
             CHECK_NEAR(planes[i + 3], support, 1e-12);  // touches the cube, cube inside
         }
-        if (budget >= 8) CHECK(count == 8);  // the cube itself fits: the loop finds it
     }
 }
