@@ -125,15 +125,17 @@ def main() -> None:
                     c, w, out = _child_cpu([python, "-c", _MESH_CHILD, what, str(n)])
                     result = json.loads(out)
                     c = result["cpu"]
-                    detail += f" {build}: {result['vertices']} vertices, max_distance "
-                    detail += f"{result['max_distance']:.4g};" if r == 0 else ""
+                    if r == 0:
+                        detail += f" {build}: {result['vertices']} vertices, max_distance "
+                        detail += f"{result['max_distance']:.4g};"
                 cpu[build].append(c)
                 wall[build].append(w)
         label = f"{what}-prop scene" if kind == "scene" else Path(what).name
         times = "  ".join(f"{b}: CPU {_range(cpu[b])} s, wall {_range(wall[b])} s" for b in builds)
         print(f"{label} N={n}: {times}  (load {_range(loads)})")
         if kind == "scene" and args.baseline:
-            print("    reports: " + _compare(str(tmp / f"base_{what}_{n}.json"), report))
+            base, new = (str(tmp / f"{b}_{what}_{n}.json") for b in ("base", "new"))
+            print("    reports: " + _compare(base, new))
         elif detail:
             print("   " + detail)
 
