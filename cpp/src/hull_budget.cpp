@@ -166,6 +166,58 @@ bool tetrahedron_polytope(const Vec3 normals[4], const double offsets[4], PlaneP
     return true;
 }
 
+// Appends to `out` the crossing of `plane` (signed distances `s`, sides `side`) with each
+// edge of `in` from a kept vertex to a cut one (source -1).
+static void add_crossings(const PlanePolytope& in, const std::vector<Vec3>& normals, int plane,
+                   const std::vector<double>& s, const std::vector<signed char>& side,
+                   PlanePolytope& out, std::vector<int>& source) {
+    const std::size_t n = in.size();
+    const auto planes_of = [&](std::size_t i) {
+        return std::make_pair(in.plane_ids.data() + in.plane_offsets[i],
+                              in.plane_ids.data() + in.plane_offsets[i + 1]);
+    };
+    std::vector<int> ids;
+    // The kept vertices on each plane of a cut vertex: a cut vertex's edges end there.
+    std::vector<int> slot(static_cast<std::size_t>(plane), -1);
+    std::vector<std::vector<int>> on_plane;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (side[i] <= 0) continue;
+        const auto [b, e] = planes_of(i);
+        for (const int* q = b; q != e; ++q) {
+            if (slot[*q] >= 0) continue;
+            slot[*q] = static_cast<int>(on_plane.size());
+            on_plane.emplace_back();
+        }
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+        if (side[i] >= 0) continue;
+        const auto [b, e] = planes_of(i);
+        for (const int* q = b; q != e; ++q)
+            if (slot[*q] >= 0) on_plane[slot[*q]].push_back(static_cast<int>(i));
+    }
+    std::vector<int> seen(n, -1);
+    for (std::size_t r = 0; r < n; ++r) {
+        if (side[r] <= 0) continue;
+        const auto [rb, re] = planes_of(r);
+        for (const int* q = rb; q != re; ++q) {
+            for (const int u : on_plane[slot[*q]]) {
+                if (seen[u] == static_cast<int>(r)) continue;
+                seen[u] = static_cast<int>(r);
+                // an edge: the two vertices share two planes at least (the edge's line)
+                const auto [ub, ue] = planes_of(static_cast<std::size_t>(u));
+                ids.clear();
+                std::set_intersection(rb, re, ub, ue, std::back_inserter(ids));
+                if (!spans_line(ids, normals)) continue;
+                ids.push_back(plane);
+                const double t = s[u] / (s[u] - s[r]);
+                const Vec3 v = in.vertices[u] + t * (in.vertices[r] - in.vertices[u]);
+                push_vertex(out, v, ids.data(), ids.data() + ids.size());
+                source.push_back(-1);
+            }
+        }
+    }
+}
+
 bool clip_polytope(const PlanePolytope& in, const std::vector<Vec3>& normals, double offset,
                    int plane, double merge_distance, PlanePolytope& out,
                    std::vector<int>& source) {
@@ -209,46 +261,8 @@ bool clip_polytope(const PlanePolytope& in, const std::vector<Vec3>& normals, do
         source.push_back(static_cast<int>(i));
     }
     if (!any_cut) return true;
-    // The kept vertices on each plane of a cut vertex: a cut vertex's edges end there.
-    std::vector<int> slot(static_cast<std::size_t>(plane), -1);
-    std::vector<std::vector<int>> on_plane;
-    for (std::size_t i = 0; i < n; ++i) {
-        if (side[i] <= 0) continue;
-        const auto [b, e] = planes_of(i);
-        for (const int* q = b; q != e; ++q) {
-            if (slot[*q] >= 0) continue;
-            slot[*q] = static_cast<int>(on_plane.size());
-            on_plane.emplace_back();
-        }
-    }
-    for (std::size_t i = 0; i < n; ++i) {
-        if (side[i] >= 0) continue;
-        const auto [b, e] = planes_of(i);
-        for (const int* q = b; q != e; ++q)
-            if (slot[*q] >= 0) on_plane[slot[*q]].push_back(static_cast<int>(i));
-    }
     const std::size_t first_new = out.size();
-    std::vector<int> seen(n, -1);
-    for (std::size_t r = 0; r < n; ++r) {
-        if (side[r] <= 0) continue;
-        const auto [rb, re] = planes_of(r);
-        for (const int* q = rb; q != re; ++q) {
-            for (const int u : on_plane[slot[*q]]) {
-                if (seen[u] == static_cast<int>(r)) continue;
-                seen[u] = static_cast<int>(r);
-                // an edge: the two vertices share two planes at least (the edge's line)
-                const auto [ub, ue] = planes_of(static_cast<std::size_t>(u));
-                ids.clear();
-                std::set_intersection(rb, re, ub, ue, std::back_inserter(ids));
-                if (!spans_line(ids, normals)) continue;
-                ids.push_back(plane);
-                const double t = s[u] / (s[u] - s[r]);
-                const Vec3 v = in.vertices[u] + t * (in.vertices[r] - in.vertices[u]);
-                push_vertex(out, v, ids.data(), ids.data() + ids.size());
-                source.push_back(-1);
-            }
-        }
-    }
+    add_crossings(in, normals, plane, s, side, out, source);
     merge_new_vertices(out, source, first_new, merge_distance);
     return true;
 }
