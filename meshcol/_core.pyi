@@ -538,6 +538,16 @@ def distances_to_facets(points: Annotated[NDArray[numpy.float64], dict(shape=(No
     Distance (q,) and closest point (q, 3) from each point (q, 3) to a convex polytope, searching the facets (m, 3, 3) in_front (q, m) marks for it (none: 0 and the point itself); numpy's arithmetic of closest_points_on_triangles, step for step.
     """
 
+def budget_hull_planes(hull_vertices: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], vertex_offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], facets: Annotated[NDArray[numpy.float64], dict(shape=(None, 3, 3), order='C', device='cpu', writable=False)], equations: Annotated[NDArray[numpy.float64], dict(shape=(None, 4), order='C', device='cpu', writable=False)], facet_offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], starts: Annotated[NDArray[numpy.float64], dict(shape=(None, 4), order='C', device='cpu', writable=False)], budgets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], max_planes: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], converged_distances: Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C', device='cpu', writable=False)], merge_distances: Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C', device='cpu', writable=False)], candidates: int, threads: int = 0) -> tuple[Annotated[NDArray[numpy.float64], dict(shape=(None, 4), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')]]:
+    """
+    The budgeted hull's cut loop for B bodies (body i: exact hull vertices hull_vertices[vertex_offsets[i]:vertex_offsets[i + 1]], facets (m, 3, 3) and their outward planes (m, 4) by facet_offsets, start tetrahedron starts[4i:4i + 4] as (n, offset), budgets, max_planes (-1: none), tolerances): (planes (P, 4) as (n, offset), plane_offsets (B + 1,), vertex counts (B,), status (B,): 0 ok, 1 a degenerate start).
+    """
+
+def clip_planes(planes: Annotated[NDArray[numpy.float64], dict(shape=(None, 4), order='C', device='cpu', writable=False)], merge_distance: float) -> tuple[bool, Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')]]:
+    """
+    The polytope {x : n . x <= offset} of planes (P, 4) as (n, offset): the tetrahedron of the first four, clipped by each further plane in turn (near-duplicate vertices merged within merge_distance): (ok, vertices (V, 3)); ok False when a clip left nothing or the first four bound no tetrahedron.
+    """
+
 class FitStatus(enum.Enum):
     """Outcome of one enclosing fit (fit.hpp)."""
 

@@ -11,6 +11,7 @@ void bind_mesh_query(nb::module_& m);
 void bind_io(nb::module_& m);
 void bind_inspect(nb::module_& m);
 void bind_hull(nb::module_& m);
+void bind_hull_budget(nb::module_& m);
 void bind_fit(nb::module_& m);
 void bind_report(nb::module_& m);
 void bind_orientation(nb::module_& m);
@@ -28,6 +29,7 @@ NB_MODULE(_core, m) {
     bind_io(m);
     bind_inspect(m);
     bind_hull(m);
+    bind_hull_budget(m);
     bind_fit(m);
     bind_report(m);
     bind_orientation(m);

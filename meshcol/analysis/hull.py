@@ -494,7 +494,6 @@ def _body_hulls(
     mesh volume of each (None when not closed), and the warnings (flat, inside-out bodies),
     each also given to ``warn`` as it is found."""
     from meshcol.analysis.rules import robot_warnings
-    from meshcol.collision.hull import convex_hull
     from meshcol.geometry.topology import oriented_volume
 
     limits = None if target is None else target_limits(target, max_vertices)
@@ -508,23 +507,60 @@ def _body_hulls(
 
     for empty in robot_warnings(scene):  # a robot with no collision geometry (MC506)
         say(empty)
+    if limits is None:
+        hulls = _budget_hulls(scene.bodies, max_vertices, progress)
     for done, body in enumerate(scene.bodies, start=1):
-        if progress is not None:
-            progress(f"hull: {done}/{len(scene.bodies)} bodies")
-        try:
-            if limits is None:
-                result = convex_hull(body.world_vertices(), max_vertices=max_vertices)
-            else:
-                result = target_hull(body.world_vertices(), limits, length_scale)
-        except InvalidMeshError as exc:
-            raise InvalidMeshError(f"body '{body.name}': {exc.message}", body.source) from exc
-        if result.flat:
+        if limits is not None:
+            if progress is not None:
+                progress(f"hull: {done}/{len(scene.bodies)} bodies")
+            try:
+                hulls.append(target_hull(body.world_vertices(), limits, length_scale))
+            except InvalidMeshError as exc:
+                raise _body_error(body, exc) from exc
+        if hulls[done - 1].flat:
             say(f"{body.source}: body '{body.name}' is flat: the hull is a 2-D polygon")
-        hulls.append(result)
         volumes.append(oriented_volume(body.vertices, body.faces))
         if volumes[-1] is not None and volumes[-1][1] < 0:
             say(f"{body.source}: body '{body.name}' is inside out: {INVERTED_NOTE}")
     return hulls, volumes, warnings
+
+
+def _body_error(body: Body, exc: InvalidMeshError) -> InvalidMeshError:
+    return InvalidMeshError(f"body '{body.name}': {exc.message}", body.source)
+
+
+def _budget_hulls(
+    bodies: Sequence[Body], max_vertices: int | None, progress: Callable[[str], None] | None
+) -> list[Any]:
+    """:func:`meshcol.collision.hull.convex_hull` of every body's world vertices, the budget
+    loops of all in one native call (threads over bodies); the first body without a hull
+    raises, named."""
+    from meshcol.collision.hull import (
+        convex_hull,
+        exact_hull,
+        hull_within_budget,
+        hulls_within_budget,
+    )
+
+    exacts = []
+    for done, body in enumerate(bodies, start=1):
+        if progress is not None:
+            progress(f"hull: {done}/{len(bodies)} bodies")
+        try:
+            exacts.append(exact_hull(body.world_vertices()))
+            if exacts[-1].dimension < 2:
+                hull_within_budget(exacts[-1], max_vertices)  # raises: no meaningful hull
+        except InvalidMeshError as exc:
+            raise _body_error(body, exc) from exc
+    try:
+        return hulls_within_budget(exacts, max_vertices)
+    except InvalidMeshError:  # a budget loop failed (never seen): find the body, one by one
+        for body in bodies:
+            try:
+                convex_hull(body.world_vertices(), max_vertices=max_vertices)
+            except InvalidMeshError as exc:
+                raise _body_error(body, exc) from exc
+        raise
 
 
 def target_limits(target: Any, max_vertices: int | None) -> dict[str, Any]:

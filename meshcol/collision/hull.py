@@ -16,7 +16,6 @@ sink in.
 from __future__ import annotations
 
 import enum
-import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -28,6 +27,7 @@ from meshcol.collision.facet_distance import (
     distances_to_facets,
     rows_per_block,
 )
+from meshcol.collision.hull_budget import _simplify, simplify_many
 from meshcol.errors import InvalidMeshError
 from meshcol.geometry.triangles import closest_points_on_triangles
 
@@ -43,6 +43,7 @@ __all__ = [
     "distance_to_hull",
     "exact_hull",
     "hull_within_budget",
+    "hulls_within_budget",
     "pack_hulls",
 ]
 
@@ -77,15 +78,6 @@ FLAT_RELATIVE_TOLERANCE = 1e-9
 #: volumes, products of three coordinates, would overflow double precision. Mirrors the
 #: core's ``defaults.hull_max_abs_coordinate``.
 MAX_ABS_COORDINATE = 1e100
-#: The budget loop stops early once the simplified hull is within this fraction of the
-#: diagonal of the exact hull.
-CONVERGED_RELATIVE_DISTANCE = 1e-9
-#: Simplified-hull vertices closer than this fraction of the diagonal are merged.
-MERGE_RELATIVE_DISTANCE = 1e-11
-#: Orientations tried for the starting simplex (the smallest enclosing one is kept).
-START_ORIENTATIONS = 64
-#: Far vertices tried per step before the budget loop gives up.
-CUT_CANDIDATES = 8
 
 
 @dataclass(frozen=True, eq=False)
@@ -282,6 +274,13 @@ def _simplified_result(
         exact.diagonal,
         max_planes=plane_budget,
     )
+    return _budgeted_result(exact, vertex_budget, q_vertices, distance)
+
+
+def _budgeted_result(
+    exact: ExactHull, vertex_budget: int, q_vertices: np.ndarray, distance: float
+) -> HullResult:
+    """The result of a simplified 3-D hull: the hull of ``q_vertices`` and what it added."""
     q = exact_hull(q_vertices)
     added = max(q.volume - exact.volume, 0.0)
     return HullResult(
@@ -294,6 +293,32 @@ def _simplified_result(
         max_distance=distance,
         **_exact_summary(exact, vertex_budget),
     )
+
+
+def hulls_within_budget(
+    exacts: Sequence[ExactHull], max_vertices: int | None, threads: int = 0
+) -> list[HullResult]:
+    """:func:`hull_within_budget` of many exact hulls (a vertex budget only), in order: the
+    3-D hulls over the budget simplified in one native call, ``threads`` over them (0: all
+    cores). Raises as :func:`hull_within_budget` does for the first hull that has none."""
+    _check_budgets(max_vertices, None)
+    results: list[HullResult | None] = []
+    over: list[int] = []
+    for i, exact in enumerate(exacts):
+        if exact.dimension == 3 and max_vertices is not None and len(exact.vertices) > max_vertices:
+            over.append(i)
+            results.append(None)
+        else:
+            results.append(hull_within_budget(exact, max_vertices))
+    if over:
+        budget = int(max_vertices)  # type: ignore[arg-type]
+        bodies = [
+            (e.vertices, e.vertices[e.faces], e.equations, budget, e.diagonal, None)
+            for e in (exacts[i] for i in over)
+        ]
+        for i, (q_vertices, distance) in zip(over, simplify_many(bodies, threads)):
+            results[i] = _budgeted_result(exacts[i], budget, q_vertices, distance)
+    return results  # type: ignore[return-value]
 
 
 # ---------------------------------------------------------------------------------------
@@ -554,74 +579,6 @@ def _fan(n: int) -> np.ndarray:
     return np.stack([np.zeros_like(i), i, i + 1], axis=1)
 
 
-# ---------------------------------------------------------------------------------------
-# budgeted hulls (dimension-generic: 3-D, or 2-D for flat input)
-
-
-def _simplify(hull_vertices, facets, equations, budget, scale, max_planes=None):
-    """Supporting-plane polytope with <= ``budget`` vertices (and, with ``max_planes``, at
-    most that many planes) around the exact hull.
-
-    ``hull_vertices`` (k, d) are the exact hull's vertices, ``facets`` (m, d, d) its facet
-    simplices and ``equations`` (m, d + 1) their outward planes ``n . x + c = 0``.
-    Returns the polytope's vertices (q, d) and its exact distance to the hull.
-
-    The steps, with H the exact hull and Q the polytope:
-
-    1. Start from the smallest of ``START_ORIENTATIONS`` simplices (tetrahedron, or triangle
-       when flat) whose faces are supporting planes of H.
-    2. Find the vertex v of Q farthest from H, with its closest point p on H (exact
-       point-to-facet distances over the facets of H that v sees).
-    3. Add the supporting plane at p with normal ``(v - p) / |v - p|``: it is the cut that
-       removes v most deeply. Recompute Q as the intersection of the half-spaces
-       (``scipy.spatial.HalfspaceIntersection``, interior point: the centroid of H's vertices).
-    4. Keep the cut if Q still has at most ``budget`` vertices (else try the next farthest
-       vertices, up to ``CUT_CANDIDATES``), and repeat from 2 until no cut fits or Q is within
-       ``CONVERGED_RELATIVE_DISTANCE`` of H.
-
-    Each step reduces the largest deviation where it is. The loop runs in Python on top of
-    the native exact hull (a few cuts, each a half-space intersection).
-    """
-    interior = hull_vertices.mean(axis=0)
-    dim = hull_vertices.shape[1]
-    equations = (
-        np.ascontiguousarray(equations[:, :dim].T),
-        np.ascontiguousarray(equations[:, dim]),
-    )
-    tolerance = CONVERGED_RELATIVE_DISTANCE * scale
-    normals = _start_simplex(hull_vertices)
-    offsets = (normals @ hull_vertices.T).max(axis=1)
-    polytope = _intersect(normals, offsets, interior, scale)
-    if polytope is None:  # qhull failed on four planes: not seen, but never crash on it
-        raise InvalidMeshError(f"could not build a hull within {budget} vertices")
-    distances, closest = distances_to_facets(polytope, facets, equations)
-    for _ in range(4 * budget + 16):
-        if max_planes is not None and len(normals) >= max_planes:
-            break
-        order = np.argsort(-distances, kind="stable")
-        accepted = False
-        for index in order[:CUT_CANDIDATES]:
-            if distances[index] <= tolerance:
-                break
-            normal = (polytope[index] - closest[index]) / distances[index]
-            offset = float((hull_vertices @ normal).max())
-            trial_normals = np.vstack([normals, normal])
-            trial_offsets = np.append(offsets, offset)
-            trial = _intersect(trial_normals, trial_offsets, interior, scale)
-            if trial is not None and len(trial) <= budget:
-                distances, closest = _update_distances(
-                    polytope, distances, closest, trial, facets, equations, scale
-                )
-                normals, offsets, polytope = trial_normals, trial_offsets, trial
-                accepted = True
-                break
-        if not accepted:
-            break
-    # the loop reused distances of vertices that survived a cut; report a fresh, exact one
-    distances, _ = distances_to_facets(polytope, facets, equations)
-    return polytope, float(distances.max())
-
-
 def distance_to_hull(points: np.ndarray, hull: ExactHull) -> np.ndarray:
     """Distance from each point to the solid of an exact hull (0 inside).
 
@@ -669,88 +626,3 @@ def distance_to_hull(points: np.ndarray, hull: ExactHull) -> np.ndarray:
         segment = np.broadcast_to(v[:2], (len(pts), 2, 3))
         return np.linalg.norm(closest_points_on_segments(pts, segment) - pts, axis=1)
     return np.linalg.norm(pts - v[0], axis=1)
-
-
-def _update_distances(old, old_distances, old_closest, new, facets, equations, scale):
-    """Distances of ``new`` vertices, reusing those of vertices ``old`` already had."""
-    from scipy.spatial import cKDTree
-
-    gap, match = cKDTree(old).query(new, distance_upper_bound=MERGE_RELATIVE_DISTANCE * scale)
-    known = np.isfinite(gap)
-    distances = np.empty(len(new))
-    closest = np.empty_like(new)
-    distances[known] = old_distances[match[known]]
-    closest[known] = old_closest[match[known]]
-    if (~known).any():
-        distances[~known], closest[~known] = distances_to_facets(new[~known], facets, equations)
-    return distances, closest
-
-
-def _start_simplex(hull_vertices: np.ndarray) -> np.ndarray:
-    """Unit normals (d + 1, d) of the smallest of several supporting regular-simplex shapes."""
-    dim = hull_vertices.shape[1]
-    normals, skips = _start_orientations(dim)
-    offsets = (normals @ hull_vertices.T).max(axis=2)  # (orientations, d + 1)
-    # each simplex's corners at once: corner k solves the planes but plane k
-    corners = np.linalg.solve(normals[:, skips], offsets[:, skips, None])[..., 0]
-    sizes = np.abs(np.linalg.det(corners[:, 1:] - corners[:, :1]))
-    return normals[int(np.argmin(sizes))]
-
-
-@functools.cache
-def _start_orientations(dim: int) -> tuple[np.ndarray, np.ndarray]:
-    """The ``START_ORIENTATIONS`` turned regular simplices' unit normals (orientations, d + 1,
-    d), the first unturned, and the planes (d + 1, d) each corner lies on (all but one)."""
-    rng = np.random.default_rng(0)
-    if dim == 3:
-        base = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]], float) / np.sqrt(3)
-        rotations = [np.eye(3)]
-        for _ in range(START_ORIENTATIONS - 1):
-            q, r = np.linalg.qr(rng.normal(size=(3, 3)))
-            rotations.append(q * np.sign(np.diag(r)))
-    else:
-        angles = np.pi / 2 + np.array([0, 2, 4]) * np.pi / 3
-        base = np.stack([np.cos(angles), np.sin(angles)], axis=1)
-        rotations = []
-        for t in np.linspace(0, 2 * np.pi / 3, START_ORIENTATIONS, endpoint=False):
-            c, s = np.cos(t), np.sin(t)
-            rotations.append(np.array([[c, -s], [s, c]]))
-    normals = np.stack([base @ rotation.T for rotation in rotations])
-    skips = np.array([[i for i in range(dim + 1) if i != skip] for skip in range(dim + 1)])
-    normals.flags.writeable = False
-    return normals, skips
-
-
-def _intersect(normals, offsets, interior, scale):
-    """Vertices of ``{x : normals @ x <= offsets}``, near-duplicates merged; None on failure."""
-    from scipy.spatial import HalfspaceIntersection, QhullError
-
-    halfspaces = np.hstack([normals, -offsets[:, None]])
-    try:
-        points = HalfspaceIntersection(halfspaces, interior).intersections
-    except QhullError:
-        return None
-    if not np.isfinite(points).all():
-        return None
-    return _merge_close(points, MERGE_RELATIVE_DISTANCE * scale)
-
-
-def _merge_close(points: np.ndarray, radius: float) -> np.ndarray:
-    """One representative per cluster of points closer than ``radius`` (the farthest out)."""
-    from scipy.spatial import cKDTree
-
-    from meshcol.geometry.graph import connected_components
-
-    pairs = cKDTree(points).query_pairs(radius, output_type="ndarray")
-    if len(pairs) == 0:
-        return points
-    n = len(points)
-    _, labels = connected_components(n, pairs)
-    # keep, per cluster, the point farthest from the centroid: the merged polytope then
-    # still contains the cluster up to ``radius``
-    centroid = points.mean(axis=0)
-    reach = np.linalg.norm(points - centroid, axis=1)
-    order = np.lexsort((-reach, labels))
-    first = np.ones(n, bool)
-    first[1:] = labels[order][1:] != labels[order][:-1]
-    return points[order[first]]
