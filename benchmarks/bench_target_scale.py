@@ -21,6 +21,7 @@ import argparse
 import json
 import math
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -55,9 +56,11 @@ def scene(size: int) -> Path:
     return path
 
 
-def run(meshcol: str, scene_path: Path, profile: str, report: Path) -> float:
-    """Wall seconds of one ``meshcol hull --target`` run (bytecode written, as users run)."""
+def run(meshcol: str, scene_path: Path, profile: str, report: Path) -> tuple[float, float]:
+    """Wall and CPU (user + system) seconds of one ``meshcol hull --target`` run (bytecode
+    written, as users run)."""
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     subprocess.run(
         [meshcol, "hull", str(scene_path), "--target", profile, "--report", str(report)],
@@ -67,7 +70,9 @@ def run(meshcol: str, scene_path: Path, profile: str, report: Path) -> float:
         stderr=subprocess.DEVNULL,
         cwd=HERE.parent,
     )
-    return time.perf_counter() - start
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
 
 
 def _walk(a: Any, b: Any, path: str) -> Iterator[tuple[str, float | None]]:
@@ -123,12 +128,13 @@ def main() -> None:
     keep = Path(args.keep or tempfile.mkdtemp(prefix="bench_target_scale_"))
     keep.mkdir(parents=True, exist_ok=True)
     print(f"reports in {keep}")
-    print("size   profile     base s (B A A B)   this s       load      differing fields")
+    print("size   profile   base wall s  this wall s   base cpu s   this cpu s  load       fields")
     for size in (int(s) for s in args.sizes.split(",")):
         for profile in args.profiles.split(","):
             base_report = keep / f"base-{size}-{profile}.json"
             this_report = keep / f"this-{size}-{profile}.json"
             times: dict[str, list[float]] = {"base": [], "this": []}
+            cpu: dict[str, list[float]] = {"base": [], "this": []}
             loads: list[float] = []
             if not args.compare_only:
                 path = scene(size)
@@ -137,7 +143,9 @@ def main() -> None:
                         exe = args.baseline if side == "base" else args.this
                         out = base_report if side == "base" else this_report
                         loads.append(os.getloadavg()[0])
-                        times[side].append(run(exe, path, profile, out))
+                        wall, used = run(exe, path, profile, out)
+                        times[side].append(wall)
+                        cpu[side].append(used)
             fields = compare_reports(base_report, this_report)
             text = (
                 ", ".join(
@@ -150,8 +158,8 @@ def main() -> None:
                 else "byte-identical"
             )
             print(
-                f"{size:<6} {profile:<11} {_span(times['base']):>17}  {_span(times['this']):>11}"
-                f"  {_span(loads):>9}  {text}",
+                f"{size:<6} {profile:<9} {_span(times['base']):>11}  {_span(times['this']):>11}"
+                f"  {_span(cpu['base']):>11}  {_span(cpu['this']):>11}  {_span(loads):>9}  {text}",
                 flush=True,
             )
 
