@@ -567,8 +567,10 @@ def _costs(inputs, exacts, groups, limits, before, after, violations, fitted, hu
     previous_parts: list[tuple[np.ndarray, np.ndarray]] | None = None
     for n, key in enumerate(keys):
         applied[key] = limits[key]
-        if n == len(keys) - 1:
-            previous = (added, distance)  # every limit: the fit itself
+        if n == len(keys) - 1 or (not binding and groups == singles):
+            # every limit: the fit itself; or exact hulls that meet every limit, which each
+            # prefix of the limits fits as the whole does (no growth, no budget, no merge)
+            previous = (added, distance)
         elif previous_parts is None or _violated(key, applied, previous_parts, hulls):
             prefix_groups = groups if "max_hulls" in applied else singles
             previous_parts, cost_added, cost_distance = _fit_groups(
