@@ -69,7 +69,8 @@ class PartMeasures:
         The most polygons meeting at one vertex.
     oblong_ratio : (p,) float64
         Largest distance from the in-sphere centre to a vertex over the in-sphere radius
-        (>= 1; ``inf`` for a part without volume).
+        (>= 1; ``inf`` for a part without volume). Where the largest ball can slide (a box
+        longer than wide), the centre is the lexicographic one (:func:`inscribed_balls`).
     inradius : (p,) float64
         Radius of the largest ball inside the part (Chebyshev centre of its half-spaces).
     thickness : (p,) float64
@@ -203,8 +204,11 @@ def inscribed_balls(
     ``n_i . x + r <= -d_i``, a linear programme in 4 unknowns, solved for every polytope in
     one threaded call of the core (``core.inscribed_balls``, an active-set simplex with
     Bland's rule, ``cpp/src/inscribed_ball.cpp``). The radius is the least distance from the
-    centre found to a plane. Where the ball is not unique (a box longer than wide), the
-    centre is one of the optimal ones, as HiGHS's is.
+    centre found to a plane. Where the largest ball can slide (a box longer than wide, a
+    prism, a plate), the centre is the lexicographic one: the planes it must touch are held
+    and the least distance to the others is maximised in turn, so that the centre (and the
+    oblong ratio read from it) is the polytope's own, not a solver's pivot (HiGHS, which
+    this replaced, gave one of the optimal centres, by its pivots).
     """
     from meshcol._native import core
 
