@@ -3,7 +3,7 @@
 For every packaged profile and scene size (the props of :mod:`bench_scale`, about 27
 vertices each, ``benchmarks/.cache/scale/<n>/scene.json``), the wall time of the whole
 command with the baseline build (``--baseline``, another venv's ``meshcol``) and this one,
-alternated B A A B (``--repeats`` rounds), with the load average before each run: the
+alternated B A A B (``--repeats`` rounds; ``--order BA`` for one run of each), with the load average before each run: the
 machine is shared, so read the ranges.
 
 The last report of each side is then compared field by field (:func:`compare_reports`):
@@ -121,7 +121,10 @@ def main() -> None:
     parser.add_argument("--this", default=str(Path(sys.executable).parent / "meshcol"))
     parser.add_argument("--sizes", default="1000,10000")
     parser.add_argument("--profiles", default=",".join(PROFILES))
-    parser.add_argument("--repeats", type=int, default=1, help="B A A B rounds")
+    parser.add_argument("--repeats", type=int, default=1, help="rounds of --order")
+    parser.add_argument(
+        "--order", default="BAAB", help="the runs of a round: B the baseline, A this build"
+    )
     parser.add_argument("--keep", default="", help="folder for both sides' reports")
     parser.add_argument("--compare-only", action="store_true")
     args = parser.parse_args()
@@ -139,7 +142,7 @@ def main() -> None:
             if not args.compare_only:
                 path = scene(size)
                 for _ in range(args.repeats):
-                    for side in ("base", "this", "this", "base"):
+                    for side in ("base" if c == "B" else "this" for c in args.order):
                         exe = args.baseline if side == "base" else args.this
                         out = base_report if side == "base" else this_report
                         loads.append(os.getloadavg()[0])

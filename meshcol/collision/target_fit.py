@@ -467,10 +467,7 @@ def _fit_one(points: np.ndarray, limits: Mapping[str, float], notes: list[str], 
 
 
 def fit_parts(
-    parts: Sequence[tuple[Any, Any]],
-    target: Any,
-    length_scale: float = 1.0,
-    cache: FitCache | None = None,
+    parts: Sequence[tuple[Any, Any]], target: Any, length_scale: float = 1.0, cache=None
 ) -> TargetFit:
     """Parts that meet every limit of ``target``, each enclosing the input it replaces.
 
@@ -483,8 +480,7 @@ def fit_parts(
     length_scale : float
         Input units per metre, for ``min_thickness`` and ``min_volume``.
     cache : FitCache, optional
-        The hulls and measures of these parts made already (:func:`fit_caches`); a cache
-        serves one fit (its entries are of these points).
+        These parts' hulls and measures made already (:func:`fit_caches`), for one fit.
 
     Returns
     -------
@@ -518,7 +514,7 @@ def fit_parts(
     inputs = [np.asarray(v, dtype=np.float64) for v, _ in parts]
     if not inputs:
         raise InvalidMeshError("no parts to fit to the target")
-    hulls = FitCache() if cache is None else cache
+    hulls = cache or FitCache()
     exacts = [hulls.exact(p) for p in inputs]
     for e in exacts:
         if e.dimension < 2 and not (limits.get("min_thickness", 0) or limits.get("min_volume", 0)):
