@@ -19,11 +19,11 @@ struct InscribedBall {
     Status status = Status::NOT_RUN;  ///< CONVERGED: the centre (where the largest ball can
                                       ///< slide, the lexicographic one); DEGENERATE: radius
                                       ///< 0 (empty or flat), a slab, no largest ball
-                                      ///< (unbounded) or a ball touching over
-                                      ///< `inscribed_ball_max_touching` planes: a best
-                                      ///< effort; MAX_ITERATIONS: the step cap was hit;
+                                      ///< (unbounded), or still sliding after
+                                      ///< `inscribed_ball_max_stages`: a best effort;
+                                      ///< MAX_ITERATIONS: a stage hit the step cap;
                                       ///< INVALID_INPUT: no plane, or a NaN/inf
-    int steps = 0;       ///< active-set steps taken
+    int steps = 0;       ///< active-set steps taken (every stage)
 };
 
 /// The in-sphere of the polytope `{x : n_i . x + d_i <= 0}`, `planes` ((count, 4) row-major
