@@ -517,7 +517,7 @@ def _body_hulls(
                 result = convex_hull(body.world_vertices(), max_vertices=max_vertices)
             else:
                 if done - 1 not in caches:  # the next bodies' hulls, measured at once
-                    caches = _fit_caches(scene.bodies, done - 1)
+                    caches = _fit_caches(scene.bodies, done - 1, limits)
                 result = target_hull(
                     body.world_vertices(), limits, length_scale, caches.pop(done - 1)
                 )
@@ -536,13 +536,13 @@ def _body_hulls(
 FIT_BATCH = 512
 
 
-def _fit_caches(bodies: Any, start: int) -> dict[int, Any]:
+def _fit_caches(bodies: Any, start: int, limits: dict) -> dict[int, Any]:
     """Body index -> :class:`~meshcol.collision.target_fit.FitCache` of the bodies from
     ``start`` (:data:`FIT_BATCH` of them), made in one batch."""
     from meshcol.collision.target_fit import fit_caches
 
     indices = range(start, min(start + FIT_BATCH, len(bodies)))
-    caches = fit_caches([bodies[i].world_vertices() for i in indices])
+    caches = fit_caches([bodies[i].world_vertices() for i in indices], limits)
     return dict(zip(indices, caches, strict=True))
 
 

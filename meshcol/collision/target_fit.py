@@ -310,20 +310,28 @@ def _measure_batch(
     return [cache._measures[key] for (cache, _), key in zip(requests, keys, strict=True)]
 
 
-def fit_caches(point_sets: Sequence[Any]) -> list[FitCache]:
+def fit_caches(
+    point_sets: Sequence[Any], limits: Mapping[str, float] | None = None
+) -> list[FitCache]:
     """One :class:`FitCache` per point set for :func:`fit_hull`, holding what its fit reads
     first: the exact hull of the points and the measures, in-sphere included, of the exact
     hull of that hull's vertices (the ``before`` measure, and the ``after`` one of a hull
-    that meets the limits as it is), all measured in one batch. A set whose hull cannot be
-    made is left for its fit to raise about."""
+    that meets the limits as it is), and with a growth limit in ``limits`` the measures of
+    the points' own hull (what growing reads first), all measured in one batch. A set whose
+    hull cannot be made is left for its fit to raise about."""
     caches = [FitCache() for _ in point_sets]
+    grows = any(key in (limits or {}) for key in ("min_thickness", "min_volume"))
+    grows = grows or "max_oblong_ratio" in (limits or {})
     requests = []
     for cache, points in zip(caches, point_sets, strict=True):
+        pts = np.asarray(points, dtype=np.float64)
         try:
-            exact = cache.exact(np.asarray(points, dtype=np.float64))
+            exact = cache.exact(pts)
         except (InvalidMeshError, ValueError):
             continue
         requests.append((cache, exact.vertices))
+        if grows and exact.dimension == 3:
+            requests.append((cache, pts))
     _measure_batch(requests, ball=True)
     return caches
 
