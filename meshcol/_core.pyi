@@ -181,6 +181,14 @@ class defaults:
 
     max_mesh_file_bytes: int = 4294967296
 
+    inscribed_ball_steps_per_plane: int = 8
+
+    inscribed_ball_zero: float = 1e-12
+
+    inscribed_ball_max_stages: int = 8
+
+    inscribed_ball_min_planes_per_thread: int = 4096
+
 def hardware_threads() -> int:
     """Number of hardware threads (at least 1)."""
 
@@ -526,6 +534,11 @@ def exact_hull(points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), o
 def pack_polytopes(points: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], threads: int = 0) -> tuple[Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int32], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.int32], dict(shape=(None, 2), order='C')], Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.uint8], dict(shape=(None, 16), order='C')], object]:
     """
     Hulls of H point sets (shape h owns points[offsets[h]:offsets[h + 1]]) packed for a ConvexSet: (status (H,), vertices, offsets, adjacency_offsets, adjacency, face_offsets, face_normals, edge_pair_offsets, edge_pairs, climb_list_offsets, climb_lists, seal); the seal, passed to PackedConvexSet with these arrays, spares it reading their indices again.
+    """
+
+def inscribed_balls(planes: Annotated[NDArray[numpy.float64], dict(shape=(None, 4), order='C', device='cpu', writable=False)], offsets: Annotated[NDArray[numpy.int64], dict(shape=(None,), order='C', device='cpu', writable=False)], threads: int = 0) -> tuple[Annotated[NDArray[numpy.int8], dict(shape=(None,), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C')], Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')]]:
+    """
+    In-sphere of H polytopes {x : n . x + d <= 0}, polytope h owning the unit-normal planes (n_x, n_y, n_z, d) planes[offsets[h]:offsets[h + 1]] (P, 4): (status (H,) int8 Status codes, centres (H, 3), radii (H,)); the Chebyshev centre's linear programme by an active-set simplex (inscribed_ball.hpp).
     """
 
 def hull_widths(vertices: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], faces: Annotated[NDArray[numpy.int64], dict(shape=(None, 3), order='C', device='cpu', writable=False)], directions: Annotated[NDArray[numpy.float64], dict(shape=(None, 3), order='C', device='cpu', writable=False)]) -> Annotated[NDArray[numpy.float64], dict(shape=(None,), order='C')]:

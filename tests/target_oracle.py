@@ -2,7 +2,8 @@
 
 Nothing here uses :mod:`meshcol.collision.limits`: each part's hull is scipy's (Qhull),
 polygons are its facets grouped by plane equation, the in-sphere is a linear programme on
-those planes (scipy.optimize.linprog). The tests compare these counts with a profile's
+those planes (scipy.optimize.linprog; where the largest ball can slide, the lexicographic
+centre, as meshcol's, by linear programmes of their own). The tests compare these counts with a profile's
 limits, so a bug in meshcol's own measurement cannot hide a violated limit.
 """
 
@@ -63,14 +64,7 @@ def count(vertices: Any, plane_tol: float = PLANE_TOL) -> dict[str, float]:
     normals = np.array([p[:3] for p in planes])
     offsets = np.array([p[3] for p in planes])
     widths = (normals @ v.T).max(axis=1) - (normals @ v.T).min(axis=1)
-    lp = linprog(
-        c=[0, 0, 0, -1],
-        A_ub=np.hstack([normals, np.ones((len(normals), 1))]),
-        b_ub=-offsets,
-        bounds=[(None, None)] * 3 + [(0, None)],
-        method="highs",
-    )
-    centre, radius = lp.x[:3], lp.x[3]
+    centre, radius = inscribed_ball(normals, offsets)
     reach = float(np.linalg.norm(v[hull.vertices] - centre, axis=1).max())
     return {
         "vertices": len(hull.vertices),
@@ -81,6 +75,49 @@ def count(vertices: Any, plane_tol: float = PLANE_TOL) -> dict[str, float]:
         "thickness": float(widths.min()),
         "volume": float(hull.volume),
     }
+
+
+def inscribed_ball(normals: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, float]:
+    """Centre and radius of the largest ball in ``{x : normals @ x + offsets <= 0}``, the
+    centre the lexicographic one where the ball can slide, by HiGHS (linprog) stage by
+    stage: each stage maximises the least distance ``t`` to the planes not yet held (the
+    held ones kept at their distance); the planes of positive dual value are then held at
+    ``base + t`` (they are there in every optimum), until no direction keeps every held plane
+    as far (:func:`_slides`, itself six linear programmes)."""
+    m = len(normals)
+    level = np.full(m, np.nan)
+    base, radius, centre = 0.0, 0.0, np.zeros(3)
+    for stage in range(8):
+        free = np.isnan(level)
+        lp = linprog(
+            c=[0, 0, 0, -1],
+            A_ub=np.hstack([normals, free[:, None].astype(np.float64)]),
+            b_ub=-offsets - np.where(free, base, level),
+            bounds=[(None, None)] * 4,
+            method="highs",
+        )
+        centre, reached = lp.x[:3], base + lp.x[3]
+        if stage == 0:
+            radius = max(reached, 0.0)
+            if radius == 0.0:
+                break
+        level[free & (-lp.ineqlin.marginals > 1e-9)] = reached
+        if not _slides(normals[~np.isnan(level)]):
+            break
+        base = reached
+    return centre, radius
+
+
+def _slides(held: np.ndarray) -> bool:
+    """Whether some unit-box direction ``u != 0`` has ``held @ u <= 0``."""
+    for axis in range(3):
+        for sign in (1.0, -1.0):
+            c = np.zeros(3)
+            c[axis] = -sign
+            lp = linprog(c=c, A_ub=held, b_ub=np.zeros(len(held)), bounds=[(-1, 1)] * 3)
+            if lp.status == 0 and -lp.fun > 1e-9:
+                return True
+    return False
 
 
 def _flat_frame(points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:

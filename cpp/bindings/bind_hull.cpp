@@ -14,6 +14,7 @@
 
 #include "meshcol/defaults.hpp"
 #include "meshcol/hull.hpp"
+#include "meshcol/inscribed_ball.hpp"
 #include "ndarray.hpp"
 #include "packed_convex_set.hpp"
 
@@ -165,6 +166,37 @@ void bind_hull(nb::module_& m) {
         "face_offsets, face_normals, edge_pair_offsets, edge_pairs, climb_list_offsets, "
         "climb_lists, seal); the seal, passed to PackedConvexSet with these arrays, spares it "
         "reading their indices again.");
+
+    m.def(
+        "inscribed_balls",
+        [](Params planes, Index64 offsets, int threads) {
+            const long long h = static_cast<long long>(offsets.shape(0)) - 1;
+            if (h < 0) throw std::invalid_argument("offsets must be (H + 1,), got (0,)");
+            check_offsets(offsets.data(), offsets.shape(0),
+                          static_cast<std::int64_t>(planes.shape(0)), "offsets");
+            const size_t hs = static_cast<size_t>(h);
+            auto status = new_array<Out<std::int8_t, -1>>({hs});
+            auto centres = new_array<Out<double, -1, 3>>({hs, 3});
+            auto radii = new_array<Out<double, -1>>({hs});
+            {
+                nb::gil_scoped_release release;
+                std::vector<meshcol::InscribedBall> balls(hs);
+                meshcol::inscribed_balls(planes.data(), offsets.data(), h, threads, balls.data());
+                for (size_t i = 0; i < hs; ++i) {
+                    status.data()[i] = static_cast<std::int8_t>(balls[i].status);
+                    centres.data()[3 * i] = balls[i].centre.x;
+                    centres.data()[3 * i + 1] = balls[i].centre.y;
+                    centres.data()[3 * i + 2] = balls[i].centre.z;
+                    radii.data()[i] = balls[i].radius;
+                }
+            }
+            return std::make_tuple(status, centres, radii);
+        },
+        "planes"_a, "offsets"_a, "threads"_a = 0,
+        "In-sphere of H polytopes {x : n . x + d <= 0}, polytope h owning the unit-normal "
+        "planes (n_x, n_y, n_z, d) planes[offsets[h]:offsets[h + 1]] (P, 4): (status (H,) "
+        "int8 Status codes, centres (H, 3), radii (H,)); the Chebyshev centre's linear "
+        "programme by an active-set simplex (inscribed_ball.hpp).");
 
     m.def(
         "hull_widths",

@@ -509,12 +509,17 @@ def _body_hulls(
         say(empty)
     if limits is None:
         hulls = _budget_hulls(scene.bodies, max_vertices, progress)
+    caches: dict[int, Any] = {}
     for done, body in enumerate(scene.bodies, start=1):
         if limits is not None:
             if progress is not None:
                 progress(f"hull: {done}/{len(scene.bodies)} bodies")
             try:
-                hulls.append(target_hull(body.world_vertices(), limits, length_scale))
+                if done - 1 not in caches:  # the next bodies' hulls, measured at once
+                    caches = _fit_caches(scene.bodies, done - 1, limits)
+                hulls.append(
+                    target_hull(body.world_vertices(), limits, length_scale, caches.pop(done - 1))
+                )
             except InvalidMeshError as exc:
                 raise _body_error(body, exc) from exc
         if hulls[done - 1].flat:
@@ -563,6 +568,20 @@ def _budget_hulls(
         raise
 
 
+#: Bodies whose target fits start from one batch of hulls and measures (:func:`_fit_caches`).
+FIT_BATCH = 512
+
+
+def _fit_caches(bodies: Any, start: int, limits: dict) -> dict[int, Any]:
+    """Body index -> :class:`~meshcol.collision.target_fit.FitCache` of the bodies from
+    ``start`` (:data:`FIT_BATCH` of them), made in one batch."""
+    from meshcol.collision.target_fit import fit_caches
+
+    indices = range(start, min(start + FIT_BATCH, len(bodies)))
+    caches = fit_caches([bodies[i].world_vertices() for i in indices], limits)
+    return dict(zip(indices, caches, strict=True))
+
+
 def target_limits(target: Any, max_vertices: int | None) -> dict[str, Any]:
     """A target's limits with ``--max-vertices`` applied: the tighter vertex count wins."""
     limits = dict(target.limits)
@@ -573,17 +592,19 @@ def target_limits(target: Any, max_vertices: int | None) -> dict[str, Any]:
     return limits
 
 
-def target_hull(points: Any, limits: dict, length_scale: float) -> Any:
+def target_hull(points: Any, limits: dict, length_scale: float, cache: Any = None) -> Any:
     """The hull of ``points`` fitted to ``limits``, as a :class:`HullResult` (its exact-hull
-    fields from the input) that also carries the fit (``target_fit``)."""
-    from meshcol.collision.hull import HullResult, exact_hull
+    fields from the input) that also carries the fit (``target_fit``); ``cache``: the
+    points' :class:`~meshcol.collision.target_fit.FitCache`, made already."""
+    from meshcol.collision.hull import HullResult
     from meshcol.collision.limits import budget_vertices
-    from meshcol.collision.target_fit import fit_hull
+    from meshcol.collision.target_fit import FitCache, fit_hull
 
-    fit = fit_hull(points, limits, length_scale)
+    cache = FitCache() if cache is None else cache
+    fit = fit_hull(points, limits, length_scale, cache)
     vertices, faces = fit.parts[0]
-    exact = exact_hull(points)
-    out = exact_hull(vertices)
+    exact = cache.exact(points)
+    out = cache.exact(vertices)
     flat = out.dimension < 3
     exact_volume = exact.volume if exact.dimension == 3 else 0.0
     result = HullResult(

@@ -23,13 +23,17 @@ from meshcol.collision.hull import ExactHull, exact_hull
 from meshcol.vocabulary import LIMITS
 
 __all__ = [
+    "add_balls",
     "COPLANAR_RELATIVE_TOLERANCE",
     "RULES",
     "PartMeasures",
     "Violation",
     "budget_vertices",
+    "inscribed_balls",
     "limit_violations",
+    "measures_table",
     "measure_hull",
+    "measure_hulls",
     "measure_parts",
     "polygon_labels",
     "scaled_limits",
@@ -65,7 +69,8 @@ class PartMeasures:
         The most polygons meeting at one vertex.
     oblong_ratio : (p,) float64
         Largest distance from the in-sphere centre to a vertex over the in-sphere radius
-        (>= 1; ``inf`` for a part without volume).
+        (>= 1; ``inf`` for a part without volume). Where the largest ball can slide (a box
+        longer than wide), the centre is the lexicographic one (:func:`inscribed_balls`).
     inradius : (p,) float64
         Radius of the largest ball inside the part (Chebyshev centre of its half-spaces).
     thickness : (p,) float64
@@ -126,12 +131,20 @@ def polygon_labels(vertices: np.ndarray, faces: np.ndarray, tolerance: float) ->
     normals point the same way. Polygons are the connected components of the coplanar pairs
     (:func:`meshcol.geometry.graph.connected_components`), all vectorised.
     """
+    return _polygon_labels(vertices, faces, tolerance)[0]
+
+
+def _polygon_labels(
+    vertices: np.ndarray, faces: np.ndarray, tolerance: Any
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`polygon_labels`, and each triangle's doubled area (the length of its
+    unnormalised normal)."""
     from meshcol.geometry.graph import connected_components
 
     faces = np.asarray(faces, dtype=np.int64)
     m = len(faces)
     if m == 0:
-        return np.zeros(0, dtype=np.int64)
+        return np.zeros(0, dtype=np.int64), np.zeros(0)
     v = np.asarray(vertices, dtype=np.float64)
     a, b, c = v[faces[:, 0]], v[faces[:, 1]], v[faces[:, 2]]
     normals = np.cross(b - a, c - a)
@@ -157,14 +170,67 @@ def polygon_labels(vertices: np.ndarray, faces: np.ndarray, tolerance: float) ->
         (d12 <= limit) & (d21 <= limit) & (np.einsum("ij,ij->i", normals[f1], normals[f2]) > 0)
     )
     _, labels = connected_components(m, np.stack([f1[coplanar], f2[coplanar]], axis=1))
-    return labels.astype(np.int64)
+    return labels.astype(np.int64), lengths
 
 
-def _inscribed_ball(normals: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, float]:
-    """Centre and radius of the largest ball in ``{x : normals @ x + offsets <= 0}`` (unit
-    normals): the Chebyshev centre, a linear programme (HiGHS)."""
+def inscribed_balls(
+    planes: np.ndarray, offsets: np.ndarray, threads: int = 0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Centre and radius of the largest ball in each polytope ``{x : n . x + d <= 0}``.
+
+    Parameters
+    ----------
+    planes : (p, 4) float
+        Unit-normal planes ``(n_x, n_y, n_z, d)``; polytope ``h`` owns
+        ``planes[offsets[h]:offsets[h + 1]]``.
+    offsets : (h + 1,) int
+    threads : int
+        Threads of the core's call (0: all).
+
+    Returns
+    -------
+    centres : (h, 3) float64
+    radii : (h,) float64
+        >= 0; 0 for an empty polytope.
+    status : (h,) int8
+        :class:`meshcol.types.Status` codes: ``CONVERGED`` (0) where the core settled the
+        linear programme. Any other polytope (the step cap, an unbounded or non-finite one)
+        is settled again by HiGHS (``scipy.optimize.linprog``), the reference, and keeps the
+        core's code, so that callers and tests see which ones it was.
+
+    Notes
+    -----
+    The Chebyshev centre (Boyd and Vandenberghe 2004, 8.5.1): maximise ``r`` subject to
+    ``n_i . x + r <= -d_i``, a linear programme in 4 unknowns, solved for every polytope in
+    one threaded call of the core (``core.inscribed_balls``, an active-set simplex with
+    Bland's rule, ``cpp/src/inscribed_ball.cpp``). The radius is the least distance from the
+    centre found to a plane. Where the largest ball can slide (a box longer than wide, a
+    prism, a plate), the centre is the lexicographic one: the planes it must touch are held
+    and the least distance to the others is maximised in turn, so that the centre (and the
+    oblong ratio read from it) is the polytope's own, not a solver's pivot (HiGHS, which
+    this replaced, gave one of the optimal centres, by its pivots).
+    """
+    from meshcol._native import core
+
+    status, centres, radii = core.inscribed_balls(
+        np.ascontiguousarray(planes, dtype=np.float64),
+        np.ascontiguousarray(offsets, dtype=np.int64),
+        threads,
+    )
+    for h in np.nonzero(status != 0)[0]:
+        rows = planes[offsets[h] : offsets[h + 1]]
+        centres[h], radii[h] = _inscribed_ball_highs(rows[:, :3], rows[:, 3])
+    return centres, radii, status
+
+
+def _inscribed_ball_highs(normals: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarray, float]:
+    """:func:`inscribed_balls` of one polytope by HiGHS (``scipy.optimize.linprog``): the
+    reference the core's answer is tested against, and what settles a polytope the core
+    could not (origin and 0 where HiGHS cannot either)."""
     from scipy.optimize import linprog
 
+    if len(normals) == 0 or not (np.isfinite(normals).all() and np.isfinite(offsets).all()):
+        return np.zeros(3), 0.0
     a_ub = np.hstack([normals, np.ones((len(normals), 1))])
     result = linprog(
         c=[0.0, 0.0, 0.0, -1.0],
@@ -215,63 +281,117 @@ def _widths(normals: np.ndarray, points: np.ndarray, faces: np.ndarray) -> np.nd
 
 
 def measure_hull(hull: ExactHull, ball: bool = True) -> dict[str, Any]:
-    """The measures of one exact hull (:class:`PartMeasures`' fields, plus ``normals``:
-    the unit normals of its polygons, and ``thin_normal``: the direction of its thickness).
-    Lower-dimensional hulls (flat, collinear, a point) get thickness and volume 0. Without
-    ``ball``, a 3-D hull's in-sphere (a linear programme over its polygons, the costliest
-    measure of a big hull) is not sought: ``inradius`` and ``oblong_ratio`` are NaN."""
-    k = len(hull.vertices)
-    if hull.dimension < 3:
-        thin = hull.normal if hull.dimension == 2 else np.zeros(3)
-        return {
-            "vertices": k,
-            "triangles": len(hull.faces),
-            "polygons": 1 if hull.dimension == 2 else 0,
-            "max_faces_per_vertex": 1 if hull.dimension == 2 else 0,
-            "oblong_ratio": np.inf,
-            "inradius": 0.0,
-            "thickness": 0.0,
-            "volume": 0.0,
-            "normals": thin[None, :] if hull.dimension == 2 else np.zeros((0, 3)),
-            "thin_normal": thin,
-        }
-    tolerance = COPLANAR_RELATIVE_TOLERANCE * max(hull.diagonal, 1e-300)
-    labels = polygon_labels(hull.vertices, hull.faces, tolerance)
-    polygons = int(labels.max()) + 1
-    pairs = np.unique(np.stack([hull.faces.reshape(-1), np.repeat(labels, 3)], axis=1), axis=0)
-    per_vertex = np.bincount(pairs[:, 0], minlength=k)
-    # one plane per polygon: its largest triangle's equation (the most accurate normal)
-    v = hull.vertices
-    areas = np.linalg.norm(
-        np.cross(
-            v[hull.faces[:, 1]] - v[hull.faces[:, 0]], v[hull.faces[:, 2]] - v[hull.faces[:, 0]]
-        ),
-        axis=1,
+    """The measures of one exact hull (:class:`PartMeasures`' fields, plus ``normals`` and
+    ``offsets``: the unit normals and offsets of its polygons' planes, and ``thin_normal``:
+    the direction of its thickness). Lower-dimensional hulls (flat, collinear, a point) get
+    thickness and volume 0. Without ``ball``, a 3-D hull's in-sphere (a linear programme
+    over its polygons) is not sought: ``inradius`` and ``oblong_ratio`` are NaN."""
+    return measure_hulls([hull], ball)[0]
+
+
+def measure_hulls(hulls: Sequence[ExactHull], ball: bool = True) -> list[dict[str, Any]]:
+    """:func:`measure_hull` of each hull: the polygons of all 3-D hulls labelled in one
+    vectorised pass (:func:`polygon_labels` on their union), the in-spheres in one call of
+    the core (:func:`inscribed_balls`); each hull's measures are the ones it has alone."""
+    rows: list[dict[str, Any]] = [{} for _ in hulls]
+    for n, hull in enumerate(hulls):
+        if hull.dimension < 3:
+            rows[n] = _flat_measures(hull)
+    solids = [n for n, hull in enumerate(hulls) if hull.dimension == 3]
+    for n, row in zip(solids, _solid_measures([hulls[n] for n in solids]), strict=True):
+        rows[n] = row
+    if ball:
+        add_balls(hulls, rows)
+    return rows
+
+
+def add_balls(hulls: Sequence[ExactHull], rows: Sequence[dict[str, Any]]) -> None:
+    """Set ``inradius`` and ``oblong_ratio`` of the :func:`measure_hull` rows of 3-D
+    ``hulls`` (measured without ``ball``), every in-sphere in one call of the core."""
+    solids = [n for n, hull in enumerate(hulls) if hull.dimension == 3]
+    if solids:
+        planes = np.vstack(
+            [np.hstack([rows[n]["normals"], rows[n]["offsets"][:, None]]) for n in solids]
+        )
+        offsets = np.zeros(len(solids) + 1, dtype=np.int64)
+        np.cumsum([len(rows[n]["offsets"]) for n in solids], out=offsets[1:])
+        centres, radii, _ = inscribed_balls(planes, offsets)
+        for n, centre, radius in zip(solids, centres, radii, strict=True):
+            reach = float(np.linalg.norm(hulls[n].vertices - centre, axis=1).max())
+            rows[n]["inradius"] = float(radius)
+            rows[n]["oblong_ratio"] = reach / radius if radius > 0 else np.inf
+
+
+def _flat_measures(hull: ExactHull) -> dict[str, Any]:
+    """:func:`measure_hull` of a hull below 3-D: thickness and volume 0, no in-sphere."""
+    thin = hull.normal if hull.dimension == 2 else np.zeros(3)
+    return {
+        "vertices": len(hull.vertices),
+        "triangles": len(hull.faces),
+        "polygons": 1 if hull.dimension == 2 else 0,
+        "max_faces_per_vertex": 1 if hull.dimension == 2 else 0,
+        "oblong_ratio": np.inf,
+        "inradius": 0.0,
+        "thickness": 0.0,
+        "volume": 0.0,
+        "normals": thin[None, :] if hull.dimension == 2 else np.zeros((0, 3)),
+        "offsets": np.zeros(1 if hull.dimension == 2 else 0),
+        "thin_normal": thin,
+    }
+
+
+def _solid_measures(hulls: Sequence[ExactHull]) -> list[dict[str, Any]]:
+    """:func:`measure_hull` of 3-D hulls without the in-sphere (NaN), all at once.
+
+    The hulls are stacked with disjoint vertex ranges: a polygon never spans two of them,
+    and the union's labels number each hull's polygons in the order its own would (by
+    smallest triangle), so every per-hull figure is the one it has alone. One plane per
+    polygon: its largest triangle's equation (the most accurate normal). Widths are taken
+    hull by hull (:func:`_widths`)."""
+    if not hulls:
+        return []
+    vertex_counts = np.array([len(h.vertices) for h in hulls], dtype=np.int64)
+    face_counts = np.array([len(h.faces) for h in hulls], dtype=np.int64)
+    vertex_starts = np.concatenate([[0], np.cumsum(vertex_counts)[:-1]])
+    face_starts = np.concatenate([[0], np.cumsum(face_counts)[:-1]])
+    vertices = np.vstack([h.vertices for h in hulls])
+    faces = np.vstack([h.faces for h in hulls]) + np.repeat(vertex_starts, face_counts)[:, None]
+    tolerance = np.repeat(
+        [COPLANAR_RELATIVE_TOLERANCE * max(h.diagonal, 1e-300) for h in hulls], face_counts
     )
+    labels, areas = _polygon_labels(vertices, faces, tolerance)
+    first_label = labels[face_starts]
+    polygons = np.maximum.reduceat(labels, face_starts) - first_label + 1
+    # polygons meeting at each vertex: the distinct (vertex, polygon) pairs
+    span = int(labels.max()) + 1
+    keys = np.unique(faces.reshape(-1) * span + np.repeat(labels, 3))
+    per_vertex = np.bincount(keys // span, minlength=len(vertices))
+    most = np.maximum.reduceat(per_vertex, vertex_starts)
     order = np.lexsort((-areas, labels))
     lead = order[np.r_[True, labels[order][1:] != labels[order][:-1]]]
-    planes = hull.equations[lead]
-    normals, offsets = planes[:, :3], planes[:, 3]
-    widths = _widths(normals, v, hull.faces)
-    thinnest = int(np.argmin(widths))
-    if ball:
-        centre, radius = _inscribed_ball(normals, offsets)
-        reach = float(np.linalg.norm(v - centre, axis=1).max())
-        oblong = reach / radius if radius > 0 else np.inf
-    else:
-        radius = oblong = np.nan
-    return {
-        "vertices": k,
-        "triangles": len(hull.faces),
-        "polygons": polygons,
-        "max_faces_per_vertex": int(per_vertex.max()),
-        "oblong_ratio": oblong,
-        "inradius": radius,
-        "thickness": float(widths[thinnest]),
-        "volume": float(hull.volume),
-        "normals": normals,
-        "thin_normal": normals[thinnest],
-    }
+    planes = np.vstack([h.equations for h in hulls])[lead]
+    rows = []
+    for n, hull in enumerate(hulls):
+        own = planes[first_label[n] : first_label[n] + polygons[n]]
+        normals, offsets = own[:, :3], own[:, 3]
+        widths = _widths(normals, hull.vertices, hull.faces)
+        thinnest = int(np.argmin(widths))
+        rows.append(
+            {
+                "vertices": int(vertex_counts[n]),
+                "triangles": int(face_counts[n]),
+                "polygons": int(polygons[n]),
+                "max_faces_per_vertex": int(most[n]),
+                "oblong_ratio": np.nan,
+                "inradius": np.nan,
+                "thickness": float(widths[thinnest]),
+                "volume": float(hull.volume),
+                "normals": normals,
+                "offsets": offsets,
+                "thin_normal": normals[thinnest],
+            }
+        )
+    return rows
 
 
 _MEASURE_FIELDS = (
@@ -311,13 +431,18 @@ def measure_parts(parts: Sequence[tuple[Any, Any]], ball: bool = True) -> PartMe
     -----
     Each part's hull is the core's exact hull (:func:`meshcol.collision.hull.exact_hull`);
     polygons by :func:`polygon_labels`; the in-sphere is the Chebyshev centre of the
-    polygons' half-spaces (a linear programme, ``scipy.optimize.linprog``); the oblong ratio
+    polygons' half-spaces (a linear programme, :func:`inscribed_balls`); the oblong ratio
     is the farthest vertex from that centre over its radius; the thickness is the smallest
     width over the polygons' normals, which is the exact minimum width of a part whose
     thinnest direction is face-to-vertex (slabs, boxes, plates) and an upper bound, at most
     about 15% above, when it is edge-to-edge (a tetrahedron).
     """
-    rows = [measure_hull(exact_hull(np.asarray(v, dtype=np.float64)), ball) for v, _ in parts]
+    hulls = [exact_hull(np.asarray(v, dtype=np.float64)) for v, _ in parts]
+    return measures_table(measure_hulls(hulls, ball))
+
+
+def measures_table(rows: Sequence[Mapping[str, Any]]) -> PartMeasures:
+    """:class:`PartMeasures` of :func:`measure_hull` rows, one a part."""
     columns = {
         name: np.array(
             [row[name] for row in rows],

@@ -29,18 +29,21 @@ from meshcol.collision.limits import (
     RULES,
     PartMeasures,
     Violation,
+    add_balls,
     budget_vertices,
     limit_violations,
-    measure_hull,
-    measure_parts,
+    measure_hulls,
+    measures_table,
     scaled_limits,
 )
 from meshcol.errors import InvalidMeshError
 
 __all__ = [
     "APPLY_ORDER",
+    "FitCache",
     "LimitCost",
     "TargetFit",
+    "fit_caches",
     "fit_hull",
     "fit_parts",
     "merge_groups",
@@ -209,18 +212,23 @@ def _null_axes(points: np.ndarray, dimension: int) -> np.ndarray:
     return vt[dimension:]
 
 
-class _Hulls:
+class FitCache:
     """The hulls of one fit, each computed once: a fit and the fits of its costs
     (:class:`LimitCost`) ask for the same exact hulls and the same budgeted hulls
     (:func:`convex_hull`) of the same points (under ``--target physx`` three of four fits of
     a scanned part ask for the same 255 vertices), and a hull is a function of its points and
-    budgets, so the answers are the same. Likewise the distance from a hull made here to an
-    exact hull (:func:`_outside_distance`), by the two objects (held here, so that their ids
-    stay theirs)."""
+    budgets, so the answers are the same. Likewise the measures of an exact hull
+    (:func:`meshcol.collision.limits.measure_hull`: a small part's fit asked for the same
+    six times, each seeking its in-sphere), with the in-sphere added only when a caller
+    reads it, and the distance from a hull made here to an exact hull
+    (:func:`_outside_distance`), by the two objects (held here, so that their ids stay
+    theirs)."""
 
     def __init__(self) -> None:
         self._exact: dict[tuple[Any, ...], ExactHull] = {}
         self._made: dict[tuple[Any, ...], Any] = {}
+        self._measures: dict[tuple[Any, ...], dict[str, Any]] = {}
+        self._balls: set[tuple[Any, ...]] = set()
         self._distances: dict[tuple[int, int], tuple[float, Any, Any]] = {}
 
     @staticmethod
@@ -248,6 +256,19 @@ class _Hulls:
             self._made[key] = hull_within_budget(exact, max_vertices, max_planes)
         return self._made[key]
 
+    def measure(self, points: np.ndarray, ball: bool) -> dict[str, Any]:
+        """:func:`measure_hull` of the exact hull of ``points`` (the in-sphere when ``ball``;
+        a row measured with it serves callers without)."""
+        return self.measures([points], ball)[0]
+
+    def measures(self, point_sets: Sequence[np.ndarray], ball: bool) -> list[dict[str, Any]]:
+        """:meth:`measure` of each point set, the missing ones in one batch."""
+        return _measure_batch([(self, p) for p in point_sets], ball)
+
+    def measure_parts(self, point_sets: Sequence[np.ndarray], ball: bool) -> PartMeasures:
+        """:func:`meshcol.collision.limits.measure_parts` of parts with these points."""
+        return measures_table(self.measures(point_sets, ball))
+
     def outside_distance(self, points: np.ndarray, hull: ExactHull) -> float:
         key = (id(points), id(hull))
         if key not in self._distances:
@@ -255,8 +276,68 @@ class _Hulls:
         return self._distances[key][0]
 
 
+def _measure_batch(
+    requests: Sequence[tuple[FitCache, np.ndarray]], ball: bool
+) -> list[dict[str, Any]]:
+    """The measures of the exact hull of each request's points, from its cache or measured
+    now: every missing one in one :func:`measure_hulls` call, every missing in-sphere (when
+    ``ball``) in one :func:`add_balls` call."""
+    sets = [np.ascontiguousarray(p, dtype=np.float64) for _, p in requests]
+    for p in sets:
+        if p.ndim != 2 or p.shape[1] != 3:
+            exact_hull(p)  # the error it raises
+    keys = [cache._key(p) for (cache, _), p in zip(requests, sets, strict=True)]
+    missing: dict[tuple[int, Any], tuple[FitCache, np.ndarray]] = {}
+    for (cache, _), key, p in zip(requests, keys, sets, strict=True):
+        if key not in cache._measures:
+            missing[(id(cache), key)] = (cache, p)
+    if missing:
+        rows = measure_hulls([cache.exact(p) for cache, p in missing.values()], ball=False)
+        for ((_, key), (cache, _)), row in zip(missing.items(), rows, strict=True):
+            cache._measures[key] = row
+    if ball:
+        unballed: dict[tuple[int, Any], tuple[FitCache, np.ndarray]] = {}
+        for (cache, _), key, p in zip(requests, keys, sets, strict=True):
+            if key not in cache._balls:
+                unballed[(id(cache), key)] = (cache, p)
+        if unballed:
+            add_balls(
+                [cache.exact(p) for cache, p in unballed.values()],
+                [cache._measures[key] for (_, key), (cache, _) in unballed.items()],
+            )
+        for (_, key), (cache, _) in unballed.items():
+            cache._balls.add(key)
+    return [cache._measures[key] for (cache, _), key in zip(requests, keys, strict=True)]
+
+
+def fit_caches(
+    point_sets: Sequence[Any], limits: Mapping[str, float] | None = None
+) -> list[FitCache]:
+    """One :class:`FitCache` per point set for :func:`fit_hull`, holding what its fit reads
+    first: the exact hull of the points and the measures, in-sphere included, of the exact
+    hull of that hull's vertices (the ``before`` measure, and the ``after`` one of a hull
+    that meets the limits as it is), and with a growth limit in ``limits`` the measures of
+    the points' own hull (what growing reads first), all measured in one batch. A set whose
+    hull cannot be made is left for its fit to raise about."""
+    caches = [FitCache() for _ in point_sets]
+    grows = any(key in (limits or {}) for key in ("min_thickness", "min_volume"))
+    grows = grows or "max_oblong_ratio" in (limits or {})
+    requests = []
+    for cache, points in zip(caches, point_sets, strict=True):
+        pts = np.asarray(points, dtype=np.float64)
+        try:
+            exact = cache.exact(pts)
+        except (InvalidMeshError, ValueError):
+            continue
+        requests.append((cache, exact.vertices))
+        if grows and exact.dimension == 3:
+            requests.append((cache, pts))
+    _measure_batch(requests, ball=True)
+    return caches
+
+
 def _grow(
-    points: np.ndarray, limits: Mapping[str, float], notes: list[str], hulls: _Hulls
+    points: np.ndarray, limits: Mapping[str, float], notes: list[str], hulls: FitCache
 ) -> np.ndarray:
     """The points grown (never shrunk) until their hull meets ``min_thickness``,
     ``min_volume`` and ``max_oblong_ratio``, or :data:`GROWTH_ROUNDS` are spent."""
@@ -289,7 +370,7 @@ def _grow(
             notes.append(f"gave a {hull.dimension}-D input a thickness of {length:.6g}")
             pts = base
             continue
-        m = measure_hull(hull)
+        m = hulls.measure(pts, ball=oblong is not None)
         normal = m["thin_normal"]
         if thickness > 0 and m["thickness"] < thickness * (1 - GROWTH_SLACK):
             grow = thickness - m["thickness"]
@@ -308,7 +389,7 @@ def _grow(
     return pts
 
 
-def _budgeted(points: np.ndarray, limits: Mapping[str, float], notes: list[str], hulls: _Hulls):
+def _budgeted(points: np.ndarray, limits: Mapping[str, float], notes: list[str], hulls: FitCache):
     """The exact hull of ``points`` if it meets the count limits, else the supporting-plane
     hull within them (budgets tightened until the measures agree)."""
     vertices = budget_vertices(limits)
@@ -317,7 +398,7 @@ def _budgeted(points: np.ndarray, limits: Mapping[str, float], notes: list[str],
     result = hulls(points, max_vertices=vertices)
     if result.flat:
         return result
-    m = measure_hull(hulls.exact(result.vertices))
+    m = hulls.measure(result.vertices, ball=False)
     plane_budget = None if planes is None else int(planes)
     for _ in range(BUDGET_ROUNDS):
         too_many_planes = planes is not None and m["polygons"] > planes
@@ -337,7 +418,7 @@ def _budgeted(points: np.ndarray, limits: Mapping[str, float], notes: list[str],
         if too_many_vertices and vertices is not None:
             vertices = max(vertices - 1, 4)
         result = hulls(points, max_vertices=vertices, max_planes=plane_budget)
-        m = measure_hull(hulls.exact(result.vertices))
+        m = hulls.measure(result.vertices, ball=False)
     if _counts_met(m, limits):
         return result
     # the last resort always meets every count limit a profile may set (>= 4 vertices, >= 4
@@ -363,7 +444,7 @@ def _growth_met(m: Mapping[str, Any], limits: Mapping[str, float]) -> bool:
     )
 
 
-def _fit_one(points: np.ndarray, limits: Mapping[str, float], notes: list[str], hulls: _Hulls):
+def _fit_one(points: np.ndarray, limits: Mapping[str, float], notes: list[str], hulls: FitCache):
     """Grow, then simplify; simplification can lengthen a part (its far vertices move out),
     so a part whose growth limits it broke is grown again from the simplified hull."""
     pts = points
@@ -375,7 +456,7 @@ def _fit_one(points: np.ndarray, limits: Mapping[str, float], notes: list[str], 
         result = _budgeted(_grow(pts, limits, notes, hulls), limits, notes, hulls)
         if result.flat:
             return result
-        m = measure_hull(hulls.exact(result.vertices))
+        m = hulls.measure(result.vertices, ball="max_oblong_ratio" in limits)
         if _growth_met(m, limits):
             return result
         rounder = kept is None or m["oblong_ratio"] < kept[1] * (1 - OBLONG_PROGRESS)
@@ -394,9 +475,7 @@ def _fit_one(points: np.ndarray, limits: Mapping[str, float], notes: list[str], 
 
 
 def fit_parts(
-    parts: Sequence[tuple[Any, Any]],
-    target: Any,
-    length_scale: float = 1.0,
+    parts: Sequence[tuple[Any, Any]], target: Any, length_scale: float = 1.0, cache=None
 ) -> TargetFit:
     """Parts that meet every limit of ``target``, each enclosing the input it replaces.
 
@@ -408,6 +487,8 @@ def fit_parts(
         The limits (:class:`meshcol.io.targets.Target` or its ``limits``).
     length_scale : float
         Input units per metre, for ``min_thickness`` and ``min_volume``.
+    cache : FitCache, optional
+        These parts' hulls and measures made already (:func:`fit_caches`), for one fit.
 
     Returns
     -------
@@ -430,7 +511,7 @@ def fit_parts(
     3. Each part's hull is then simplified by supporting planes
        (:func:`meshcol.collision.hull.convex_hull`) within the vertex budget
        (:func:`budget_vertices`) and, when the polygons or the polygons per vertex are over,
-       a plane budget, tightened until :func:`measure_hull` agrees.
+       a plane budget, tightened until :func:`meshcol.collision.limits.measure_hull` agrees.
     4. The result is re-measured and compared (:func:`limit_violations`). What each limit
        cost (``costs``, :class:`LimitCost`) is measured twice: marginally, by fitting the
        limits of :data:`APPLY_ORDER` one more at a time (a limit the previous cumulative
@@ -441,7 +522,7 @@ def fit_parts(
     inputs = [np.asarray(v, dtype=np.float64) for v, _ in parts]
     if not inputs:
         raise InvalidMeshError("no parts to fit to the target")
-    hulls = _Hulls()
+    hulls = cache or FitCache()
     exacts = [hulls.exact(p) for p in inputs]
     for e in exacts:
         if e.dimension < 2 and not (limits.get("min_thickness", 0) or limits.get("min_volume", 0)):
@@ -450,7 +531,7 @@ def fit_parts(
             )
     # only compared with the limits: the in-sphere (a linear programme) only for the ratio
     ball = "max_oblong_ratio" in limits
-    before = measure_parts([(e.vertices, e.faces) for e in exacts], ball)
+    before = hulls.measure_parts([e.vertices for e in exacts], ball)
     notes: list[str] = []
     groups = [[i] for i in range(len(inputs))]
     max_hulls = limits.get("max_hulls")
@@ -458,7 +539,7 @@ def fit_parts(
         groups = merge_groups(inputs, int(max_hulls))
         notes.append(f"merged {len(inputs)} parts into {len(groups)} (max_hulls)")
     out_parts, added, distance = _fit_groups(inputs, exacts, groups, limits, notes, hulls)
-    after = measure_parts(out_parts)
+    after = hulls.measure_parts([v for v, _ in out_parts], ball=True)
     violations = limit_violations(limits, after, len(out_parts))
 
     costs = _costs(
@@ -490,9 +571,11 @@ def _costs(inputs, exacts, groups, limits, before, after, violations, fitted, hu
     previous_parts: list[tuple[np.ndarray, np.ndarray]] | None = None
     for n, key in enumerate(keys):
         applied[key] = limits[key]
-        if n == len(keys) - 1:
-            previous = (added, distance)  # every limit: the fit itself
-        elif previous_parts is None or _violated(key, applied, previous_parts):
+        if n == len(keys) - 1 or (not binding and groups == singles):
+            # every limit: the fit itself; or exact hulls that meet every limit, which each
+            # prefix of the limits fits as the whole does (no growth, no budget, no merge)
+            previous = (added, distance)
+        elif previous_parts is None or _violated(key, applied, previous_parts, hulls):
             prefix_groups = groups if "max_hulls" in applied else singles
             previous_parts, cost_added, cost_distance = _fit_groups(
                 inputs, exacts, prefix_groups, applied, [], hulls
@@ -528,17 +611,19 @@ def _costs(inputs, exacts, groups, limits, before, after, violations, fitted, hu
     return costs
 
 
-def _violated(key: str, limits: Mapping[str, float], parts) -> bool:
+def _violated(key: str, limits: Mapping[str, float], parts, hulls: FitCache) -> bool:
     """Whether ``parts`` miss the limit ``key`` (so that applying it changes the fit)."""
-    measures = measure_parts(parts)
+    measures = hulls.measure_parts([v for v, _ in parts], "max_oblong_ratio" in limits)
     return any(v.limit == key for v in limit_violations(limits, measures, len(parts)))
 
 
-def fit_hull(points: Any, target: Any, length_scale: float = 1.0) -> TargetFit:
+def fit_hull(
+    points: Any, target: Any, length_scale: float = 1.0, cache: FitCache | None = None
+) -> TargetFit:
     """One enclosing hull of ``points`` (n, 3) that meets ``target``: :func:`fit_parts`
-    with one part."""
+    with one part (``cache``: from :func:`fit_caches`, for many hulls at once)."""
     pts = np.asarray(points, dtype=np.float64)
-    return fit_parts([(pts, np.zeros((0, 3), dtype=np.int64))], target, length_scale)
+    return fit_parts([(pts, np.zeros((0, 3), dtype=np.int64))], target, length_scale, cache)
 
 
 def _fit_groups(inputs, exacts, groups, limits, notes, hulls):
