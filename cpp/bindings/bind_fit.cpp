@@ -49,10 +49,9 @@ void bind_fit(nb::module_& m) {
     m.def(
         "fit_primitives",
         [](Points points, Index64 offsets, In<std::int8_t, -1> shapes, int threads) {
-            const long long h = static_cast<long long>(offsets.shape(0)) - 1;
-            if (h < 0) throw std::invalid_argument("offsets must be (H + 1,), got (0,)");
-            check_offsets(offsets.data(), offsets.shape(0),
-                          static_cast<std::int64_t>(points.shape(0)), "offsets");
+            const long long h =
+                group_count(offsets.data(), offsets.shape(0),
+                            static_cast<std::int64_t>(points.shape(0)), "offsets");
             const int k = static_cast<int>(shapes.shape(0));
             std::vector<meshcol::FitShape> kinds(static_cast<size_t>(k));
             for (int i = 0; i < k; ++i) {

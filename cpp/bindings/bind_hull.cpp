@@ -106,10 +106,9 @@ void bind_hull(nb::module_& m) {
     m.def(
         "pack_polytopes",
         [](Points points, Index64 offsets, int threads) {
-            const long long h = static_cast<long long>(offsets.shape(0)) - 1;
-            if (h < 0) throw std::invalid_argument("offsets must be (H + 1,), got (0,)");
-            check_offsets(offsets.data(), offsets.shape(0),
-                          static_cast<std::int64_t>(points.shape(0)), "offsets");
+            const long long h =
+                group_count(offsets.data(), offsets.shape(0),
+                            static_cast<std::int64_t>(points.shape(0)), "offsets");
             meshcol::PackedPolytopes p;
             {
                 nb::gil_scoped_release release;
@@ -170,10 +169,9 @@ void bind_hull(nb::module_& m) {
     m.def(
         "inscribed_balls",
         [](Params planes, Index64 offsets, int threads) {
-            const long long h = static_cast<long long>(offsets.shape(0)) - 1;
-            if (h < 0) throw std::invalid_argument("offsets must be (H + 1,), got (0,)");
-            check_offsets(offsets.data(), offsets.shape(0),
-                          static_cast<std::int64_t>(planes.shape(0)), "offsets");
+            const long long h =
+                group_count(offsets.data(), offsets.shape(0),
+                            static_cast<std::int64_t>(planes.shape(0)), "offsets");
             const size_t hs = static_cast<size_t>(h);
             auto status = new_array<Out<std::int8_t, -1>>({hs});
             auto centres = new_array<Out<double, -1, 3>>({hs, 3});

@@ -479,4 +479,13 @@ inline void check_offsets(const std::int64_t* offsets, size_t n, std::int64_t to
             throw std::invalid_argument(std::string(name) + " must be non-decreasing");
 }
 
+/// The count H of the groups that `offsets` (H + 1 entries) delimits over `total` rows,
+/// checked as check_offsets checks them: how every binding that takes groups opens.
+inline long long group_count(const std::int64_t* offsets, size_t n, std::int64_t total,
+                             const char* name) {
+    if (n == 0) throw std::invalid_argument(std::string(name) + " must be (H + 1,), got (0,)");
+    check_offsets(offsets, n, total, name);
+    return static_cast<long long>(n) - 1;
+}
+
 }  // namespace meshcol::bindings
