@@ -528,10 +528,6 @@ class SweepReport:
             "frame": "world",
         }
 
-    def first_hits(self, count: int) -> list[SweepHit]:
-        """Up to ``count`` hits, the undecided (``FAILED``) first, then by time of impact."""
-        return self.columns.first(count)
-
     def _document(self, pairs: Any) -> dict[str, Any]:
         from meshcol.io.report import envelope
 

@@ -141,7 +141,7 @@ def summary_lines(manifest: str, result) -> str:
         f"{s['failed']} undecided"
     ]
     # the undecided pairs first, then the earliest contacts
-    first = result.first_hits(TABLE_ROWS)
+    first = result.columns.first(TABLE_ROWS)
     for h in first:
         when = "" if h.time is None else f" (t = {h.time:.6g} s)"
         extra = ", tunnelled" if h.tunnelled else ""

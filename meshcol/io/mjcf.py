@@ -361,8 +361,9 @@ def _colliding_geoms(model: Any) -> np.ndarray:
 
 
 def _filtered_pairs(model: Any, names: list[str]) -> list[tuple[str, str, str]]:
-    """Body pairs MuJoCo's weld and bitmask filters leave untested (see :func:`_exclusions`),
-    in body order.
+    """Body pairs MuJoCo's weld and bitmask filters leave untested, in body order (a pair a
+    ``<contact><pair>`` names among them too: :func:`_exclusions` takes those out of every
+    kind of exclusion at once).
 
     Two bodies' geoms pass the bitmask test when some geom's ``contype`` shares a bit with
     some geom's ``conaffinity`` of the other body, that is when the OR of one body's
@@ -380,9 +381,6 @@ def _filtered_pairs(model: Any, names: list[str]) -> list[tuple[str, str, str]]:
     np.bitwise_or.at(body_contype, row, contype[colliding])
     np.bitwise_or.at(body_conaffinity, row, conaffinity[colliding])
     weld = np.asarray(model.body_weldid, dtype=np.int64)[bodies]
-    explicit: dict[int, set[int]] = {}
-    for a, b in _explicit_body_pairs(model):
-        explicit.setdefault(a, set()).add(b)
     pairs: list[tuple[str, str, str]] = []
     for i, a in enumerate(bodies.tolist()):
         later = slice(i + 1, None)
@@ -391,8 +389,6 @@ def _filtered_pairs(model: Any, names: list[str]) -> list[tuple[str, str, str]]:
             (body_contype[later] & body_conaffinity[i]) != 0
         )
         for k in np.flatnonzero(welded | ~passes).tolist():
-            b = int(bodies[i + 1 + k])
-            if b not in explicit.get(a, ()):
-                reason = "mjcf welded" if welded[k] else "mjcf contype/conaffinity"
-                pairs.append((names[a], names[b], reason))
+            reason = "mjcf welded" if welded[k] else "mjcf contype/conaffinity"
+            pairs.append((names[a], names[int(bodies[i + 1 + k])], reason))
     return pairs

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 mujoco = pytest.importorskip("mujoco", reason="MuJoCo compiles the models (the test extras)")
 
-from meshcol.io.mjcf import _colliding_geoms, _explicit_body_pairs, _filtered_pairs  # noqa: E402
+from meshcol.io.mjcf import _colliding_geoms, _exclusions, _explicit_body_pairs, _filtered_pairs  # noqa: E402
 
 
 def _reference(model, names):
@@ -23,12 +23,9 @@ def _reference(model, names):
     geom_body = np.asarray(model.geom_bodyid, dtype=np.int64)
     bodies = sorted({int(b) for b in geom_body[colliding]})
     weld = np.asarray(model.body_weldid, dtype=np.int64)
-    explicit = _explicit_body_pairs(model)
     pairs = []
     for i, a in enumerate(bodies):
         for b in bodies[i + 1 :]:
-            if (a, b) in explicit:
-                continue
             if weld[a] == weld[b]:
                 pairs.append((names[a], names[b], "mjcf welded"))
                 continue
@@ -84,4 +81,10 @@ def test_filtered_pairs_are_the_geom_pair_loops(bodies, world_geoms, explicit) -
     )
     model = mujoco.MjModel.from_xml_string(xml)
     names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) for b in range(model.nbody)]
-    assert _filtered_pairs(model, names) == _reference(model, names)
+    filtered = _filtered_pairs(model, names)
+    assert filtered == _reference(model, names)
+    # a pair a <contact><pair> names is collided: out of every exclusion, these included
+    explicit = {frozenset((names[a], names[b])) for a, b in _explicit_body_pairs(model)}
+    excluded = _exclusions(model, names, include_adjacent=True)
+    kept = [p for p in filtered if frozenset(p[:2]) not in explicit]
+    assert [p for p in excluded if p[2].startswith("mjcf w") or p[2].endswith("affinity")] == kept
