@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["as_mesh", "as_points", "as_pose", "as_poses", "as_pairs"]
+__all__ = ["as_mesh", "as_offsets", "as_points", "as_pose", "as_poses", "as_pairs"]
 
 
 def as_mesh(vertices: Any, faces: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -93,3 +93,11 @@ def as_pairs(pairs: Any, h: int, items: str = "shapes") -> np.ndarray:
             bad = arr[(arr < 0) | (arr >= h)][0]
             raise ValueError(f"pairs: index {bad} out of range for {h} {items}")
     return arr
+
+
+def as_offsets(counts: Any) -> np.ndarray:
+    """(n + 1,) int64 group offsets of ``n`` groups of ``counts`` rows (``[0, c0, c0 + c1,
+    ...]``): how the core's batched calls take their groups."""
+    offsets = np.zeros(len(counts) + 1, dtype=np.int64)
+    np.cumsum(counts, out=offsets[1:])
+    return offsets

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from meshcol.collision.arrays import as_offsets
 from meshcol.collision.facet_distance import distances_to_facets
 from meshcol.errors import InvalidMeshError
 
@@ -99,10 +100,10 @@ def simplify_many(
     scales = np.array([float(b[4]) for b in bodies])
     planes, plane_offsets, _, status = core.budget_hull_planes(
         np.concatenate(vertices),
-        _offsets([len(v) for v in vertices]),
+        as_offsets([len(v) for v in vertices]),
         np.concatenate(facets),
         np.concatenate(equations),
-        _offsets([len(f) for f in facets]),
+        as_offsets([len(f) for f in facets]),
         np.ascontiguousarray(np.concatenate(starts)),
         np.array([int(b[3]) for b in bodies], dtype=np.int64),
         np.array([-1 if b[5] is None else int(b[5]) for b in bodies], dtype=np.int64),
@@ -128,12 +129,6 @@ def simplify_many(
         distances, _ = distances_to_facets(polytope, facets[i], split)
         results.append((polytope, float(distances.max())))
     return results
-
-
-def _offsets(counts: list[int]) -> np.ndarray:
-    offsets = np.zeros(len(counts) + 1, dtype=np.int64)
-    np.cumsum(counts, out=offsets[1:])
-    return offsets
 
 
 def _simplify_qhull(hull_vertices, facets, equations, budget, scale, max_planes=None):

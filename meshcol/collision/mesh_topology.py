@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from meshcol._native import core
+from meshcol.collision.arrays import as_offsets
 
 __all__ = ["MeshTopologyBatch", "face_heights", "mesh_topology_batch"]
 
@@ -57,12 +58,6 @@ class MeshTopologyBatch:
     valid: np.ndarray
 
 
-def _offsets(counts: list[int]) -> np.ndarray:
-    offsets = np.zeros(len(counts) + 1, dtype=np.int64)
-    np.cumsum(counts, out=offsets[1:])
-    return offsets
-
-
 def mesh_topology_batch(
     faces: Sequence[np.ndarray], vertex_counts: Sequence[int], *, threads: int = 0
 ) -> MeshTopologyBatch:
@@ -91,8 +86,8 @@ def mesh_topology_batch(
     """
     n = len(faces)
     arrays = [np.asarray(f, dtype=np.int64).reshape(-1, 3) for f in faces]
-    face_offsets = _offsets([len(f) for f in arrays])
-    vertex_offsets = _offsets([int(c) for c in vertex_counts])
+    face_offsets = as_offsets([len(f) for f in arrays])
+    vertex_offsets = as_offsets([int(c) for c in vertex_counts])
     if len(vertex_offsets) != n + 1:
         raise ValueError(
             f"vertex_counts must have one count per mesh ({n}), got {len(vertex_offsets) - 1}"
