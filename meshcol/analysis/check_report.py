@@ -23,7 +23,7 @@ from meshcol.io.report import RowsPiece, vector_columns
 from meshcol.types import Scene
 from meshcol.vocabulary import PAIR_STATUSES
 
-__all__ = ["CSV_COLUMNS", "CheckReport", "ReportRows", "check_report"]
+__all__ = ["CSV_COLUMNS", "CheckReport", "ReportRows", "check_report", "name_ranks"]
 
 
 class ReportRows(Sequence[dict]):
@@ -404,7 +404,7 @@ def check_report(
     bodies stay columns (:class:`ReportRows`) until a reader asks for their dicts."""
     colliders = placed.colliders
     names = body_names(colliders.bodies)
-    rank = _name_ranks(names)
+    rank = name_ranks(names)
     table = table.take(_report_order(table, rank))
     files = _files(colliders.bodies)
     findings = _findings(colliders, options, scene)
@@ -438,8 +438,9 @@ def _baseline_pairs(baseline: dict | None) -> dict | None:
     return {tuple(sorted((p["body_a"], p["body_b"]))): p for p in baseline.get("pairs", [])}
 
 
-def _name_ranks(names: Sequence[str]) -> np.ndarray:
-    """(n,) int64: each body's place in name order, equal names equal ranks."""
+def name_ranks(names: Sequence[str]) -> np.ndarray:
+    """(n,) int64: each body's place in name order, equal names equal ranks: the order of
+    a report's rows (check's pairs and bodies, sweep's hits)."""
     if all(map(operator.lt, names, itertools.islice(names, 1, None))):
         return np.arange(len(names), dtype=np.int64)  # in name order already (generated scenes)
     order = sorted(range(len(names)), key=names.__getitem__)

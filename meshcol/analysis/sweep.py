@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from meshcol.analysis.check_report import name_ranks
 from meshcol.analysis.colliders import build_colliders
 from meshcol.analysis.pairs import overlapping_pairs
 from meshcol.analysis.sweep_report import (
@@ -434,8 +435,6 @@ def _first_contacts(
     columns sorted by names, the pairs that stay separated sorted by names, the number of
     candidate body pairs)``; MeshcolError naming the first body pair with an invalid part
     pair."""
-    from meshcol.analysis.check_report import _name_ranks
-
     toi = contacts.toi
     owner = colliders.part_body
     body_pairs = owner[pairs] if len(pairs) else np.zeros((0, 2), np.int64)
@@ -448,7 +447,7 @@ def _first_contacts(
         raise MeshcolError(
             f"bodies '{names[i]}' and '{names[j]}': invalid shape or pose", scene.source
         )
-    rank = _name_ranks(names)
+    rank = name_ranks(names)
     hit = first.status != TimeOfImpactStatus.SEPARATED
     apart = first.body_pairs[~hit]
     apart = apart[np.lexsort((rank[apart[:, 1]], rank[apart[:, 0]]))]

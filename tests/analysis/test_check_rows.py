@@ -219,7 +219,7 @@ def test_the_json_report_is_written_in_pieces_and_never_half(
 
 def test_name_ranks_of_names_in_order_and_not() -> None:
     """Each body's place among the distinct names (names already in order take a shortcut)."""
-    from meshcol.analysis.check_report import _name_ranks
+    from meshcol.analysis.check_report import name_ranks
 
     rng = np.random.default_rng(7)
     cases = [[], ["a"], ["a", "b", "c"], ["a", "a", "b"], ["b", "a"], ["a", "b", "b", "c"]]
@@ -227,4 +227,4 @@ def test_name_ranks_of_names_in_order_and_not() -> None:
     cases += [[str(x) for x in rng.integers(0, 6, 12)] for _ in range(20)]
     for names in cases:
         distinct = sorted(set(names))
-        assert _name_ranks(names).tolist() == [distinct.index(n) for n in names], names
+        assert name_ranks(names).tolist() == [distinct.index(n) for n in names], names
