@@ -44,7 +44,7 @@ def least_distance(
 
 def check_qpos(path: Path, options: RobotOptions | None = None) -> np.ndarray:
     """The configuration check reads the robot at (followers applied)."""
-    _, _, kinematics = read_mjcf(str(path), options or RobotOptions())
+    kinematics = read_mjcf(str(path), options or RobotOptions()).kinematics
     return np.asarray(kinematics.qpos)
 
 

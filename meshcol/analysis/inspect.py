@@ -229,19 +229,17 @@ def _read_inputs(
 
 
 def _read_robot(path: Any, robot_options: RobotOptions | None = None) -> _Inputs:
-    """A robot's links (their collision geometry) and its visual geometry per link, read with
-    ``robot_options``."""
+    """A robot's links (their collision geometry) and its visual geometry per link, from one
+    read of the description with ``robot_options``."""
     from meshcol.analysis.rules import robot_findings
-    from meshcol.io.robot import load_robot
+    from meshcol.io.robot import load_robot_views
 
-    scene = load_robot(path, robot_options)
+    scene, visual = load_robot_views(path, robot_options)
     warnings, findings = list(scene.warnings), robot_findings(scene)  # MC506: nothing collides
-    try:
-        visual = load_robot(path, robot_options, visual=True)
-        visuals = {body.name: body for body in visual.bodies}
-    except MeshcolError as error:
-        warning = f"visual geometry not read, links compared with their collision meshes: {error}"
+    if isinstance(visual, MeshcolError):
+        warning = f"visual geometry not read, links compared with their collision meshes: {visual}"
         return _Inputs(list(scene.bodies), scene.units, {}, [*warnings, warning], findings)
+    visuals = {body.name: body for body in visual.bodies}
     return _Inputs(list(scene.bodies), scene.units, visuals, warnings, findings)
 
 

@@ -20,7 +20,6 @@ import numpy as np
 
 from meshcol.errors import MissingDependencyError, SceneError
 from meshcol.io.kinematics import (
-    Kinematics,
     MjcfKinematics,
     apply_mjcf_followers,
     mjcf_followers,
@@ -39,7 +38,7 @@ from meshcol.types import Body, Box, Capsule, Cylinder, Ellipsoid, Primitive, Sc
 if TYPE_CHECKING:
     from meshcol.io.robot import RobotOptions
 
-__all__ = ["read_mjcf"]
+__all__ = ["MjcfRead", "read_mjcf"]
 
 #: Followers of ``<equality><joint>``: joint id -> (leader id or -1, polynomial).
 Followers = dict[int, tuple[int, np.ndarray]]
@@ -56,13 +55,9 @@ class _Geom(NamedTuple):
     geom_id: int
 
 
-def read_mjcf(
-    source: str,
-    options: RobotOptions,
-    sink: list[CollisionElement] | None = None,
-    visual: bool = False,
-) -> tuple[Scene, set[str], Kinematics]:
-    """An MJCF file as a scene at the options' configuration.
+def read_mjcf(source: str, options: RobotOptions) -> MjcfRead:
+    """An MJCF file compiled by MuJoCo once, at the options' configuration: its scenes of
+    collision or visual geoms are made from it (:meth:`MjcfRead.scene`).
 
     Parameters
     ----------
@@ -71,17 +66,6 @@ def read_mjcf(
     options : RobotOptions
         Joint values, keyframe and adjacency (package folders do not apply: MuJoCo finds
         its assets).
-    sink : list, optional
-        Filled with one :class:`~meshcol.io.links.CollisionElement` per body part.
-    visual : bool
-        Read the geoms that collide with nothing (``contype`` and ``conaffinity`` 0) instead.
-
-    Returns
-    -------
-    (Scene, set of str, MjcfKinematics)
-        The scene (body order; parent and child bodies excluded unless
-        ``include_adjacent``, and the model's ``<contact><exclude>`` pairs), every body
-        name, and the model's kinematics.
     """
     mujoco = _import_mujoco(source)
     confine_mjcf(source)  # every included and asset file inside --root (io.paths)
@@ -96,16 +80,53 @@ def read_mjcf(
         mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) or f"body{b}"
         for b in range(model.nbody)
     ]
-    geoms = _geoms_by_body(mujoco, model, data, visual)
-    bodies = _bodies(model, data, names, geoms, source, sink)
-    scene = Scene(
-        bodies=tuple(bodies),
-        units="m",
-        source=source,
-        excluded_pairs=tuple(_exclusions(model, names, options.include_adjacent)),
-        warnings=tuple(warnings),
-    )
-    return scene, set(names), MjcfKinematics(model, np.array(data.qpos), source)
+    return MjcfRead(mujoco, model, data, names, options, warnings, source)
+
+
+class MjcfRead:
+    """A compiled MJCF model at one configuration (:func:`read_mjcf`).
+
+    Attributes
+    ----------
+    source : str
+        The description's path.
+    links : set of str
+        Every body name.
+    kinematics : MjcfKinematics
+        The model's kinematics (link poses of any configuration).
+    """
+
+    def __init__(
+        self,
+        mujoco: Any,
+        model: Any,
+        data: Any,
+        names: list[str],
+        options: RobotOptions,
+        warnings: list[str],
+        source: str,
+    ) -> None:
+        self._mujoco, self._model, self._data, self._names = mujoco, model, data, names
+        self._options, self._warnings, self.source = options, warnings, source
+        self.links = set(names)
+        self.kinematics = MjcfKinematics(model, np.array(data.qpos), source)
+
+    def scene(self, visual: bool = False, sink: list[CollisionElement] | None = None) -> Scene:
+        """The scene (body order; parent and child bodies excluded unless
+        ``include_adjacent``, and the model's ``<contact><exclude>`` pairs). ``visual``: of
+        the geoms that collide with nothing (``contype`` and ``conaffinity`` 0) instead of
+        the colliding ones; ``sink`` filled with one
+        :class:`~meshcol.io.links.CollisionElement` per body part."""
+        model, names = self._model, self._names
+        geoms = _geoms_by_body(self._mujoco, model, self._data, visual)
+        bodies = _bodies(model, self._data, names, geoms, self.source, sink)
+        return Scene(
+            bodies=tuple(bodies),
+            units="m",
+            source=self.source,
+            excluded_pairs=tuple(_exclusions(model, names, self._options.include_adjacent)),
+            warnings=tuple(self._warnings),
+        )
 
 
 def _import_mujoco(source: str) -> Any:

@@ -51,6 +51,7 @@ __all__ = [
     "RobotModel",
     "load_robot",
     "load_robot_model",
+    "load_robot_views",
     "parse_joint_values",
     "parse_package_paths",
     "description_kind",
@@ -277,6 +278,29 @@ def load_robot_model(
     """:func:`load_robot`, with the robot's kinematics (batched link poses of configurations,
     :mod:`meshcol.io.kinematics`) for commands that move the links."""
     options = RobotOptions() if options is None else options
+    read = _read(path, options)
+    return RobotModel(_scene(read, options, visual, elements), read.kinematics)
+
+
+def load_robot_views(
+    path: str | os.PathLike[str], options: RobotOptions | None = None
+) -> tuple[Scene, Scene | MeshcolError]:
+    """The robot's collision scene (:func:`load_robot`) and its visual one (``visual=True``)
+    from one read of the description (an MJCF compiled once, a mesh file both use read
+    once): ``meshcol inspect`` compares them. The visual scene is the error that stopped
+    it when only it fails."""
+    options = RobotOptions() if options is None else options
+    read = _read(path, options)
+    scene = _scene(read, options, False, None)
+    try:
+        return scene, _scene(read, options, True, None)
+    except MeshcolError as error:
+        return scene, error
+
+
+def _read(path: str | os.PathLike[str], options: RobotOptions) -> Any:
+    """The description parsed (URDF) or compiled (MJCF) at the options' configuration: a
+    :class:`meshcol.io.urdf.UrdfRead` or :class:`meshcol.io.mjcf.MjcfRead`."""
     source = os.fspath(path)
     file = Path(source)
     if not file.exists():  # says which: not found, a link that dangles or loops
@@ -286,13 +310,21 @@ def load_robot_model(
     check_input(source, "robot")  # a regular file within the cap: never a pipe or a device
     if description_kind(source) == "mjcf":
         check_mjcf_files(source)  # its includes and meshes, before MuJoCo opens them
-    read = _reader(description_kind(source))
-    scene, links, kinematics = read(source, options, elements, visual)
+    return _reader(description_kind(source))(source, options)
+
+
+def _scene(
+    read: Any, options: RobotOptions, visual: bool, elements: list[CollisionElement] | None
+) -> Scene:
+    """One scene of a read description (its collision or visual geometry), checked, with
+    the exclusions of the reader and the SRDF."""
+    source = read.source
+    scene = read.scene(visual, elements)
     if not scene.bodies and not visual:
-        scene = _without_colliders(scene, links, kinematics, source)
+        scene = _without_colliders(scene, read.links, read.kinematics, source)
     for body in scene.bodies:
         _check_body(body, source)
-    return RobotModel(_with_exclusions(scene, links, options.srdf), kinematics)
+    return _with_exclusions(scene, read.links, options.srdf)
 
 
 #: The start of the warning a robot without collision geometry gets (rule MC506, whose

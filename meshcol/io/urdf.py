@@ -24,7 +24,6 @@ import numpy as np
 
 from meshcol.errors import MeshcolError, MissingDependencyError, SceneError
 from meshcol.io.kinematics import (
-    Kinematics,
     UrdfKinematics,
     adjacent_links,
     default_joint_value,
@@ -45,16 +44,12 @@ from meshcol.types import Body, Box, Capsule, Cylinder, Primitive, Scene, Sphere
 if TYPE_CHECKING:
     from meshcol.io.robot import RobotOptions
 
-__all__ = ["read_urdf"]
+__all__ = ["UrdfRead", "read_urdf"]
 
 
-def read_urdf(
-    source: str,
-    options: RobotOptions,
-    sink: list[CollisionElement] | None = None,
-    visual: bool = False,
-) -> tuple[Scene, set[str], Kinematics]:
-    """A URDF file as a scene at the options' joint values.
+def read_urdf(source: str, options: RobotOptions) -> UrdfRead:
+    """A URDF file parsed once, at the options' joint values: its scenes of collision or
+    visual elements are made from it (:meth:`UrdfRead.scene`).
 
     Parameters
     ----------
@@ -62,16 +57,6 @@ def read_urdf(
         The ``.urdf`` (or ``.xml`` with a ``<robot>`` root) file.
     options : RobotOptions
         Joint values, package folders and adjacency (no keyframes: an error here).
-    sink : list, optional
-        Filled with one :class:`~meshcol.io.links.CollisionElement` per body part.
-    visual : bool
-        Read ``<visual>`` elements instead of ``<collision>`` ones.
-
-    Returns
-    -------
-    (Scene, set of str, UrdfKinematics)
-        The scene (link order, adjacent pairs excluded unless ``include_adjacent``), every
-        link name, and the kinematics of the joint tree.
     """
     yourdfpy, etree = _urdf_modules(source)
     warnings: list[str] = []
@@ -83,7 +68,7 @@ def read_urdf(
     if not root.get("name"):  # required by the format; pybullet does without it
         warnings.append("the <robot> element has no name: named after the file")
         root.set("name", Path(source).stem)
-    capsules = {} if visual else _take_capsules(root, source)
+    capsules = _take_capsules(root, source)
     robot = _yourdfpy_robot(yourdfpy, etree, root, source)
     links = [link.name for link in robot.links]
     parent_joint = _joint_tree(robot, links, source)
@@ -102,25 +87,65 @@ def read_urdf(
         source,
         name=robot.name or "",
     )
-    link_poses = kinematics.link_poses(kinematics.loaded[None])[0]
-    meshes = _LinkMeshes(PackageResolver(source, options.package_paths))
-    meshes.preload(_mesh_references(robot.links, visual))
-    bodies = []
-    for position, link in enumerate(robot.links):
-        body = _link_body(link, link_poses[position], capsules, meshes, source, sink, visual)
-        if body is not None:
-            bodies.append(body)
-    excluded: list[tuple[str, str, str]] = []
-    if not options.include_adjacent:
-        excluded = _adjacent_pairs(links, parent_joint, bodies)
-    scene = Scene(
-        bodies=tuple(bodies),
-        units="m",
-        source=source,
-        excluded_pairs=tuple(excluded),
-        warnings=tuple(warnings),
-    )
-    return scene, set(links), kinematics
+    return UrdfRead(robot, kinematics, parent_joint, capsules, options, warnings, source)
+
+
+class UrdfRead:
+    """A parsed URDF at one configuration (:func:`read_urdf`); its mesh files are read once
+    for both of its scenes.
+
+    Attributes
+    ----------
+    source : str
+        The description's path.
+    links : set of str
+        Every link name.
+    kinematics : UrdfKinematics
+        The kinematics of the joint tree.
+    """
+
+    def __init__(
+        self,
+        robot: Any,
+        kinematics: UrdfKinematics,
+        parent_joint: dict[str, Any],
+        capsules: dict[tuple[str, int], Capsule],
+        options: RobotOptions,
+        warnings: list[str],
+        source: str,
+    ) -> None:
+        self._robot, self._parent_joint, self._capsules = robot, parent_joint, capsules
+        self._options, self._warnings, self.source = options, warnings, source
+        self.links = set(kinematics.links)
+        self.kinematics = kinematics
+        self._meshes = _LinkMeshes(PackageResolver(source, options.package_paths))
+
+    def scene(self, visual: bool = False, sink: list[CollisionElement] | None = None) -> Scene:
+        """The scene of the links' ``<collision>`` elements (``visual``: ``<visual>``), in
+        link order, adjacent pairs excluded unless ``include_adjacent``; ``sink`` filled with
+        one :class:`~meshcol.io.links.CollisionElement` per body part."""
+        robot, source = self._robot, self.source
+        link_poses = self.kinematics.link_poses(self.kinematics.loaded[None])[0]
+        self._meshes.preload(_mesh_references(robot.links, visual))
+        capsules = {} if visual else self._capsules  # the <collision> elements' capsules
+        bodies = []
+        for position, link in enumerate(robot.links):
+            body = _link_body(
+                link, link_poses[position], capsules, self._meshes, source, sink, visual
+            )
+            if body is not None:
+                bodies.append(body)
+        excluded: list[tuple[str, str, str]] = []
+        if not self._options.include_adjacent:
+            links = [link.name for link in robot.links]
+            excluded = _adjacent_pairs(links, self._parent_joint, bodies)
+        return Scene(
+            bodies=tuple(bodies),
+            units="m",
+            source=source,
+            excluded_pairs=tuple(excluded),
+            warnings=tuple(self._warnings),
+        )
 
 
 # --- the file and its joint tree --------------------------------------------------------------
@@ -534,8 +559,9 @@ class _LinkMeshes:
         self.loaded: dict[str, list[Body]] = {}  # by normalised path
 
     def preload(self, references: Iterable[str]) -> None:
-        """Read the OBJ and STL files of ``references`` at once, in parallel (the core's
-        readers); a file that fails is left for :meth:`read` to name with its link."""
+        """Read the OBJ and STL files of ``references`` not read yet at once, in parallel
+        (the core's readers); a file that fails is left for :meth:`read` to name with its
+        link."""
         from meshcol.io.mesh_formats import read_natively
         from meshcol.io.mesh_read import load_meshes
 
@@ -545,7 +571,7 @@ class _LinkMeshes:
             if path is None or not read_natively(path):
                 continue
             key = os.path.normpath(path)
-            if key not in paths and Path(key).is_file():
+            if key not in self.loaded and key not in paths and Path(key).is_file():
                 paths.append(key)
         if not paths:
             return

@@ -23,7 +23,7 @@ MODEL = Path(__file__).resolve().parents[1] / "data" / "mjcf_ellipsoids.xml"
 def read() -> dict:
     from meshcol.io.mjcf import read_mjcf
 
-    scene, _, _ = read_mjcf(str(MODEL), RobotOptions())
+    scene = read_mjcf(str(MODEL), RobotOptions()).scene()
     return {b.name: b for b in scene.bodies}
 
 
