@@ -8,6 +8,7 @@ piece, and plausibly in metres. :func:`health_findings` turns the answer into fi
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, fields
 from typing import Any
@@ -31,6 +32,7 @@ __all__ = [
     "inspect_body",
     "inspect_mesh",
     "inspect_meshes",
+    "units_by_body",
 ]
 
 #: The mesh-health findings of :func:`inspect_body`, by name (ids MC401..MC409 in
@@ -405,6 +407,38 @@ def body_meshes(bodies: Sequence[Body]) -> list[tuple[str, str | None, Body]]:
         for body in bodies
         for name, part in zip(body.parts or (None,), body.part_bodies())
     ]
+
+
+def units_by_body(inspected: Sequence[Inspected]) -> list[Inspected]:
+    """``inspected`` with ``suspect-units`` taken off the parts that only their own size makes
+    suspect: a part under a centimetre (:data:`TINY_EXTENT`) of a body whose parts together
+    are a plausible size in the declared units is a detail of that body (a finger pad, a
+    screw head), not a file in other units. A body of one mesh, a body tiny as a whole and a
+    part too large keep the finding; the part's ``units_guess`` and ``units_reason`` stay its
+    own."""
+    extents: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    for body, part, _, outcome in inspected:
+        if part is not None and isinstance(outcome, MeshInspection):
+            lo, hi = np.asarray(outcome.bounds, dtype=np.float64)
+            seen = extents.get(body)
+            extents[body] = (
+                (lo, hi) if seen is None else (np.minimum(seen[0], lo), np.maximum(seen[1], hi))
+            )
+    out = []
+    for body, part, mesh, outcome in inspected:
+        if (
+            body in extents
+            and isinstance(outcome, MeshInspection)
+            and "suspect-units" in outcome.findings
+            and max(outcome.size) < TINY_EXTENT
+        ):
+            lo, hi = extents[body]
+            whole, _ = guess_units(float((hi - lo).max()))
+            if not _units_suspect(whole, outcome.declared_units):
+                kept = [name for name in outcome.findings if name != "suspect-units"]
+                outcome = dataclasses.replace(outcome, findings=kept)
+        out.append((body, part, mesh, outcome))
+    return out
 
 
 def inspect_meshes(

@@ -33,6 +33,7 @@ from meshcol.analysis.health import (
     health_findings,
     inspect_body,
     inspect_meshes,
+    units_by_body,
 )
 from meshcol.analysis.inspect_report import InspectReport
 from meshcol.analysis.inspect_tasks import inspect_in_tasks
@@ -273,7 +274,7 @@ def _health(
     inspections: list[MeshInspection] = []
     findings: list[Finding] = []
     unusable: set[str] = set()
-    for body_name, part_name, part, outcome in inspected:
+    for body_name, part_name, part, outcome in units_by_body(inspected):
         if isinstance(outcome, InvalidMeshError):
             errors.add(outcome.path or part.source or "", outcome, part.name)
             unusable.add(body_name)

@@ -355,7 +355,8 @@ RULES: tuple[Rule, ...] = (
         "warning",
         ("inspect",),
         "The size suggests other units than declared (a 400-unit chair is millimetres), or "
-        "no plausible unit at all.",
+        "no plausible unit at all. A part under 0.01 units of a body whose parts together "
+        "are a plausible size is a detail of it (a finger pad), not suspect.",
         "measured: the largest extent; limit: the edge of the plausible band crossed (100 "
         "units for metres, 0.01 below, 10,000 for any unit).",
         "Scale the mesh or declare its units in the scene manifest.",
