@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from meshcol.collision.arrays import as_offsets
 from meshcol.errors import InvalidMeshError
 from meshcol.geometry.mass import MassProperties
 from meshcol.geometry.topology import (
@@ -209,10 +210,8 @@ def _measure_topology(todo: list[LocalGeometry]) -> None:
         keep = np.flatnonzero(topology.valid).tolist()
         todo, faces = [todo[i] for i in keep], [faces[i] for i in keep]
         topology = mesh_topology_batch(faces, [len(g.vertices) for g in todo])
-    vertex_offsets = np.zeros(len(todo) + 1, dtype=np.int64)
-    np.cumsum([len(g.vertices) for g in todo], out=vertex_offsets[1:])
-    face_offsets = np.zeros(len(todo) + 1, dtype=np.int64)
-    np.cumsum([len(f) for f in faces], out=face_offsets[1:])
+    vertex_offsets = as_offsets([len(g.vertices) for g in todo])
+    face_offsets = as_offsets([len(f) for f in faces])
     vertices = np.concatenate([np.asarray(g.vertices, dtype=np.float64) for g in todo])
     shift = np.repeat(vertex_offsets[:-1], np.diff(face_offsets))
     every = np.concatenate(faces) + shift[:, None]

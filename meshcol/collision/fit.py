@@ -53,6 +53,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from meshcol.collision.arrays import as_offsets
 from meshcol.errors import InvalidMeshError
 from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, Primitive, Sphere
 
@@ -289,8 +290,7 @@ def fit_batch(
             raise ValueError(f"points must be (n, 3), got {pts.shape}")
         sets.append(pts)
     counts = np.fromiter((len(p) for p in sets), dtype=np.int64, count=len(sets))
-    offsets = np.zeros(len(sets) + 1, dtype=np.int64)
-    np.cumsum(counts, out=offsets[1:])
+    offsets = as_offsets(counts)
     packed = np.concatenate(sets) if sets else np.zeros((0, 3))
     codes = np.array([FIT_SHAPES.index(n) for n in names], dtype=np.int8)
     # the core's arrays are in the order of FitBatch's fields

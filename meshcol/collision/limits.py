@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from meshcol.collision.arrays import as_offsets
 from meshcol.collision.hull import ExactHull, exact_hull
 from meshcol.vocabulary import LIMITS
 
@@ -313,8 +314,7 @@ def add_balls(hulls: Sequence[ExactHull], rows: Sequence[dict[str, Any]]) -> Non
         planes = np.vstack(
             [np.hstack([rows[n]["normals"], rows[n]["offsets"][:, None]]) for n in solids]
         )
-        offsets = np.zeros(len(solids) + 1, dtype=np.int64)
-        np.cumsum([len(rows[n]["offsets"]) for n in solids], out=offsets[1:])
+        offsets = as_offsets([len(rows[n]["offsets"]) for n in solids])
         centres, radii, _ = inscribed_balls(planes, offsets)
         for n, centre, radius in zip(solids, centres, radii, strict=True):
             reach = float(np.linalg.norm(hulls[n].vertices - centre, axis=1).max())
@@ -352,8 +352,8 @@ def _solid_measures(hulls: Sequence[ExactHull]) -> list[dict[str, Any]]:
         return []
     vertex_counts = np.array([len(h.vertices) for h in hulls], dtype=np.int64)
     face_counts = np.array([len(h.faces) for h in hulls], dtype=np.int64)
-    vertex_starts = np.concatenate([[0], np.cumsum(vertex_counts)[:-1]])
-    face_starts = np.concatenate([[0], np.cumsum(face_counts)[:-1]])
+    vertex_starts = as_offsets(vertex_counts)[:-1]
+    face_starts = as_offsets(face_counts)[:-1]
     vertices = np.vstack([h.vertices for h in hulls])
     faces = np.vstack([h.faces for h in hulls]) + np.repeat(vertex_starts, face_counts)[:, None]
     tolerance = np.repeat(

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from meshcol._native import core
-from meshcol.collision.arrays import as_mesh, as_pairs, as_points, as_poses
+from meshcol.collision.arrays import as_mesh, as_offsets, as_pairs, as_points, as_poses
 from meshcol.collision.orientation import orient_consistently
 from meshcol.geometry.topology import is_closed_manifold, manifold_solid
 from meshcol.types import Body, Status
@@ -197,10 +197,8 @@ class MeshSet:
             for name in ("reoriented", "orientable", "closed")
         )
         count = len(arrays)
-        vertex_offsets = np.zeros(count + 1, dtype=np.int64)
-        face_offsets = np.zeros(count + 1, dtype=np.int64)
-        vertex_offsets[1:] = np.cumsum([len(v) for v, _ in arrays], dtype=np.int64)
-        face_offsets[1:] = np.cumsum([len(f) for _, f in arrays], dtype=np.int64)
+        vertex_offsets = as_offsets([len(v) for v, _ in arrays])
+        face_offsets = as_offsets([len(f) for _, f in arrays])
         vertices = (
             np.concatenate([v for v, _ in arrays]) if count else np.zeros((0, 3), dtype=np.float64)
         )

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from meshcol._native import core
+from meshcol.collision.arrays import as_offsets
 from meshcol.collision.primitive_fit import BOX, CAPSULE, CYLINDER, ELLIPSOID, SPHERE
 
 __all__ = ["SurfacePatches", "surface_areas", "surface_patches", "surface_samples"]
@@ -91,8 +92,7 @@ class SurfacePatches:
         """Every node: ``(points (P, 3), offsets (N + 1,))``, primitive ``i``'s nodes
         ``points[offsets[i]:offsets[i + 1]]``, patch after patch, row by row."""
         sizes = self.nodes[:, 0] * self.nodes[:, 1]
-        per_patch = np.zeros(len(sizes) + 1, dtype=np.int64)
-        np.cumsum(sizes, out=per_patch[1:])
+        per_patch = as_offsets(sizes)
         return core.patch_points(self.map, self.nodes, self.numbers), per_patch[self.offsets]
 
 
@@ -122,8 +122,7 @@ def surface_patches(kind: np.ndarray, params: np.ndarray, count: int) -> Surface
         np.maximum(np.ceil(2 * math.pi * patches["lu"] / safe), 1),
     )
     n_v = np.ceil(patches["lv"] * (patches["v1"] - patches["v0"]) / safe) + 1
-    offsets = np.zeros(len(kind) + 1, dtype=np.int64)
-    np.cumsum(np.bincount(patches["body"], minlength=len(kind)), out=offsets[1:])
+    offsets = as_offsets(np.bincount(patches["body"], minlength=len(kind)))
     numbers = np.column_stack(
         [patches["g"], patches["v0"], patches["v1"], patches["lu"], patches["lv"]]
     )

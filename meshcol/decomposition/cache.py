@@ -31,6 +31,7 @@ import zipfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from meshcol.collision.arrays import as_offsets
 from meshcol.io.report import atomic_path
 
 if TYPE_CHECKING:  # numpy and the results load with an entry: a warm `meshcol ci` needs neither
@@ -216,8 +217,8 @@ def store(result: Decomposition, cache_dir: str | os.PathLike[str] | None = None
         header=np.frombuffer(json.dumps(header, sort_keys=True).encode(), dtype=np.uint8),
         vertices=np.concatenate([v for v, _ in result.parts]),
         faces=np.concatenate([f for _, f in result.parts]),
-        vertex_offsets=np.concatenate([[0], np.cumsum(vcount)]).astype(np.int64),
-        face_offsets=np.concatenate([[0], np.cumsum(fcount)]).astype(np.int64),
+        vertex_offsets=as_offsets(vcount),
+        face_offsets=as_offsets(fcount),
     )
     return write_bytes(_entry_name(result.cache_key), buf.getvalue(), cache_dir)
 
