@@ -1,5 +1,5 @@
-"""Wild meshes through ``meshcol hull`` and ``meshcol fit``, against oracles that share none of
-their code: every STL file of the real collections installed from the registries (the
+"""Wild meshes through ``meshcol hull``, ``fit`` and ``inspect``, against oracles that share
+none of their code: every STL file of the real collections installed from the registries (the
 Menagerie wheels, example-robot-data, pybullet_data, dm_control; the folders
 ``bench_robots_wild.py`` reads its robots from), 150 files a command as a user runs it, each
 command's JSON report read.
@@ -19,7 +19,12 @@ by numpy here; the largest excess over all bodies, relative to the body's extent
 most 0 (fits are grown by their search's rounding, 1e-9 of the extent: the worst is about
 -1e-10).
 
-Run:  .venv/bin/python benchmarks/meshes_wild.py [--limit N] [--only hulls|fits]
+Inspect: each body's ``watertight``, ``winding_consistent`` (when watertight) and ``volume``
+(when both) against trimesh's ``is_watertight``, ``is_winding_consistent`` and ``volume`` of
+its own reading of the file (``process=True``: positions merged to 8 decimals, as meshcol
+merges); every disagreement is listed (the volume to 1e-9, relative).
+
+Run:  .venv/bin/python benchmarks/meshes_wild.py [--limit N] [--only hulls|fits|inspect]
       (make robots-wild / robots-menagerie install the collections)
 """
 
@@ -167,23 +172,53 @@ def check_fits(name: str, files: list[Path], work: Path) -> float:
     return worst
 
 
+def disagreements(row: dict) -> list[str]:
+    """What trimesh says otherwise of one body's topology and volume."""
+    import trimesh
+
+    mesh = trimesh.load(row["source"], force="mesh")
+    if row["watertight"] != mesh.is_watertight:
+        return [f"watertight {row['watertight']}, trimesh {mesh.is_watertight}"]
+    if row["watertight"] and row["winding_consistent"] != mesh.is_winding_consistent:
+        return [f"winding {row['winding_consistent']}, trimesh {mesh.is_winding_consistent}"]
+    volume = row["volume"]
+    if volume is not None and abs(volume - mesh.volume) > 1e-9 * abs(mesh.volume):
+        return [f"volume {volume!r}, trimesh {mesh.volume!r}"]
+    return []
+
+
+def check_inspect(name: str, files: list[Path], work: Path) -> int:
+    """Print one collection's inspect comparison; the number of disagreements."""
+    rows, failed = reports(files, work, "inspect")
+    found = [(row["source"], line) for row in rows for line in disagreements(row)]
+    print(
+        f"{name}: inspect of {len(files)} STL files, {len(rows)} bodies; disagreements "
+        f"with trimesh: {len(found)}; commands failed: {len(failed)}"
+    )
+    for source, line in found + [("", line) for line in failed]:
+        print(f"  {source}: {line}")
+    return len(found) + len(failed)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--limit", type=int, default=None, help="files per collection")
     parser.add_argument("--tolerance", type=float, default=1e-12, help="hull volumes")
-    parser.add_argument("--only", choices=("hulls", "fits"), default=None)
+    parser.add_argument("--only", choices=("hulls", "fits", "inspect"), default=None)
     args = parser.parse_args()
-    hulls, fits = 0.0, -float("inf")
+    hulls, fits, inspected = 0.0, -float("inf"), 0
     with tempfile.TemporaryDirectory() as scratch:
         for name, root in collection_roots().items():
             files = stl_files(root)[: args.limit]
             if not files:
                 print(f"{name}: no STL file")
                 continue
-            if args.only != "fits":
+            if args.only in (None, "hulls"):
                 hulls = max(hulls, check_hulls(name, files, Path(scratch)))
-            if args.only != "hulls":
+            if args.only in (None, "fits"):
                 fits = max(fits, check_fits(name, files, Path(scratch)))
+            if args.only in (None, "inspect"):
+                inspected += check_inspect(name, files, Path(scratch))
     print(
         f"hulls: largest volume difference on the same vertices {hulls:.2e} (tolerance "
         f"{args.tolerance:g}); fits: farthest vertex at {fits:.2e} of the extent"
