@@ -221,9 +221,10 @@ def main() -> int:
                 inspected += check_inspect(name, files, Path(scratch))
     print(
         f"hulls: largest volume difference on the same vertices {hulls:.2e} (tolerance "
-        f"{args.tolerance:g}); fits: farthest vertex at {fits:.2e} of the extent"
+        f"{args.tolerance:g}); fits: farthest vertex at {fits:.2e} of the extent; inspect: "
+        f"{inspected} disagreements"
     )
-    return 0 if hulls <= args.tolerance and fits <= 0 else 1
+    return 0 if hulls <= args.tolerance and fits <= 0 and inspected == 0 else 1
 
 
 if __name__ == "__main__":
