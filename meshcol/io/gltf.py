@@ -63,7 +63,50 @@ def _read_indexed(file: Path, source: str, kind: str) -> list[IndexedNode]:
     check_references(document, kind.upper(), source)
     scene = load_scene(file, kind, source, io.BytesIO(data))
     nodes = _file_order(document, scene_nodes(scene))
-    return list(zip(_node_indices(document, scene, [n[0] for n in nodes], source), nodes))
+    indices = _node_indices(document, scene, [n[0] for n in nodes], source)
+    names, parent = _node_names(document), _parents(document)
+    return [
+        (k, (_own_name(document, k) or node[0], *node[1:4], node_ancestors(k, parent, names)))
+        for k, node in zip(indices, nodes)
+    ]
+
+
+def _own_name(document: Any, k: int) -> str | None:
+    """The name document node ``k`` has (None: none): a mesh node's body is named so, not as
+    trimesh renames a repeated name (``mesh_1``) or the frame of each of a node's primitives
+    (``<name>_<hash>``); an unnamed node keeps trimesh's name."""
+    node = document.get("nodes", [])[k]
+    name = node.get("name") if isinstance(node, dict) else None
+    return name if isinstance(name, str) and name else None
+
+
+def _node_names(document: Any) -> list[str]:
+    """Each document node's name, its index for one without (as trimesh names its frame)."""
+    out = []
+    for k, node in enumerate(document.get("nodes", [])):
+        name = node.get("name") if isinstance(node, dict) else None
+        out.append(name if isinstance(name, str) and name else str(k))
+    return out
+
+
+def _parents(document: Any) -> dict[int, int]:
+    """Each document node's parent (checked: one each, no cycle)."""
+    parent = {}
+    for k, node in enumerate(document.get("nodes", [])):
+        for child in node.get("children", []) if isinstance(node, dict) else []:
+            parent[child] = k
+    return parent
+
+
+def node_ancestors(k: int, parent: dict[int, int], names: list[str]) -> tuple[str, ...]:
+    """The names (``names``, one per node) of node ``k``'s ancestors (``parent``: each
+    node's), from the root down."""
+    above = []
+    current = parent.get(k)
+    while current is not None:
+        above.append(names[current])
+        current = parent.get(current)
+    return tuple(reversed(above))
 
 
 def _node_indices(document: Any, scene: Any, frames: list[str], source: str) -> list[int]:

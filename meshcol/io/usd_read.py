@@ -258,7 +258,8 @@ class _Reader:
         group = self.groups.get(key)
         if group is None:
             body_world = world if body_prim == prim else self.world(body_prim)
-            group = self.groups[key] = BodyGroup(key, name, body_world)
+            above = _ancestors(body_prim)
+            group = self.groups[key] = BodyGroup(key, name, body_world, ancestors=above)
         relative = str(prim.GetPath())[len(str(body_prim.GetPath())) :].lstrip("/")
         group.elements.append(self._element(prim, relative or prim.GetName(), world))
 
@@ -349,10 +350,19 @@ class _Reader:
                 inside = _matrix(self.cache.ComputeRelativeTransform(prim, root.GetParent())[0])
                 key = f"{instancer.GetPath()}/{k}"
                 if key not in self.groups:
-                    self.groups[key] = BodyGroup(key, f"{instancer.GetName()}_{k}", placed)
+                    self.groups[key] = BodyGroup(
+                        key, f"{instancer.GetName()}_{k}", placed, ancestors=_ancestors(instancer)
+                    )
                 world = placed @ inside
                 name = str(prim.GetPath())[len(str(root.GetPath().GetParentPath())) :]
                 self.groups[key].elements.append(self._element(prim, name.lstrip("/"), world))
+
+
+def _ancestors(prim: Any) -> tuple[str, ...]:
+    """The names of the prims above ``prim``, from the root down (``/World/crate_01/mesh``:
+    ``("World", "crate_01")``)."""
+    parent = str(prim.GetPath().GetParentPath())
+    return tuple(parent.strip("/").split("/")) if parent != "/" else ()
 
 
 def _primitive(prim: Any, kind: str, UsdGeom: Any, time: Any) -> Primitive:
