@@ -206,9 +206,9 @@ _NON_FINITE = re.compile(r"(?i)nan|inf")
 
 def _mesh_nodes(document: Any, meter: float, source: str) -> list[MeshNode]:
     """Every scene node of ``document`` with triangles, depth first in document order, as
-    ``(name, world matrix, vertices, faces, ancestors' names)``, its translation and vertices scaled by
-    ``meter`` (the file's unit in metres: a scale applied outermost, so the node matrix keeps
-    its rotation and the loader bakes nothing)."""
+    ``(name, world matrix, vertices, faces, ancestors' names)``, its translation and vertices
+    scaled by ``meter`` (the file's unit in metres: a scale applied outermost, so the node
+    matrix keeps its rotation and the loader bakes nothing)."""
     from collada.scene import GeometryNode, Node, NodeNode
 
     nodes: list[MeshNode] = []
