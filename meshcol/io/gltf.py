@@ -13,6 +13,7 @@ import io
 import json
 import struct
 from collections.abc import Callable
+from operator import itemgetter
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -62,12 +63,14 @@ def _read_indexed(file: Path, source: str, kind: str) -> list[IndexedNode]:
     document = _glb_json(data, source) if kind == "glb" else _gltf_json(data, source)
     check_references(document, kind.upper(), source)
     scene = load_scene(file, kind, source, io.BytesIO(data))
-    nodes = _file_order(document, scene_nodes(scene))
+    nodes = scene_nodes(scene)
     indices = _node_indices(document, scene, [n[0] for n in nodes], source)
     names, parent = _node_names(document), _parents(document)
+    # the document's node order (a node's primitives in trimesh's order): trimesh's graph
+    # order differs, and its frame names (mesh_1, <name>_<hash>) are not the nodes'
     return [
         (k, (_own_name(document, k) or node[0], *node[1:4], node_ancestors(k, parent, names)))
-        for k, node in zip(indices, nodes)
+        for k, node in sorted(zip(indices, nodes), key=itemgetter(0))
     ]
 
 
@@ -373,15 +376,6 @@ _CHECKS: tuple[Callable[[_Document], None], ...] = (
     _check_accessors,
     _check_buffers,
 )
-
-
-def _file_order(document: Any, nodes: list) -> list:
-    """Order glTF mesh nodes as the file's node list does (trimesh's graph order differs)."""
-    index: dict[str, int] = {}
-    for k, node in enumerate(document.get("nodes", [])):
-        index.setdefault(str(node.get("name", "")), k)
-    # unnamed nodes keep trimesh's relative order, after the named ones
-    return sorted(nodes, key=lambda item: index.get(item[0], len(index)))
 
 
 def read_document(file: Path, source: str) -> tuple[Any, bytes | None]:
