@@ -351,3 +351,73 @@ def test_every_permutation_of_a_file_names_each_prim_alike(tmp_path: Path) -> No
         assert set(named) == set(expected.values())
         for prim_path, offset in placed:
             np.testing.assert_allclose(named[expected[prim_path]], np.asarray(offset) - 0.5)
+
+
+# -- the robot writers: link names of the same shape ----------------------------------------
+
+ROBOT = """<robot name="shelf">
+  <link name="level/World/crate_01/mesh"><collision>
+    <geometry><mesh filename="box.obj"/></geometry></collision></link>
+  <link name="level/crate_02/mesh"><collision><origin xyz="0.5 0 0"/>
+    <geometry><mesh filename="box.obj"/></geometry></collision></link>
+  <link name="level/bay_1/crate_01/mesh"><collision><origin xyz="3 0 0"/>
+    <geometry><box size="1 1 1"/></geometry></collision></link>
+  <joint name="turn" type="revolute">
+    <parent link="level/World/crate_01/mesh"/><child link="level/crate_02/mesh"/>
+    <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+  <joint name="weld" type="fixed">
+    <parent link="level/World/crate_01/mesh"/><child link="level/bay_1/crate_01/mesh"/></joint>
+</robot>
+"""
+LINKS = ["level/World/crate_01/mesh", "level/crate_02/mesh", "level/bay_1/crate_01/mesh"]
+
+
+def test_names_of_this_shape_survive_every_robot_writer_and_its_consumer(tmp_path: Path) -> None:
+    """Link names holding ``/`` (as these body names do) through --to urdf, mjcf, usd and
+    collision-matrix's SRDF, each read by the tool that consumes it."""
+    mujoco = pytest.importorskip("mujoco")
+    yourdfpy = pytest.importorskip("yourdfpy")
+    CUBE.export(tmp_path / "box.obj")
+    robot = tmp_path / "shelf.urdf"
+    robot.write_text(ROBOT)
+    for to in ("urdf", "mjcf", "usd"):
+        code, _, err = run("hull", str(robot), "--out-dir", str(tmp_path / to), "--to", to)
+        assert code == 0, err
+    model = mujoco.MjModel.from_xml_path(str(tmp_path / "mjcf" / "shelf.xml"))
+    assert [model.body(i).name for i in range(1, model.nbody)] == LINKS
+    assert list(yourdfpy.URDF.load(str(tmp_path / "urdf" / "shelf.urdf")).link_map) == LINKS
+    stage = Usd.Stage.Open(str(tmp_path / "usd" / "shelf.usda"))
+    prims = [p for p in stage.Traverse() if p.GetCustomDataByKey("meshcol:link")]
+    assert [p.GetName() for p in prims] == [n.replace("/", "_") for n in LINKS]  # valid names
+    assert [p.GetCustomDataByKey("meshcol:link") for p in prims] == LINKS
+    assert [b.name for b in load_mesh(tmp_path / "usd" / "shelf.usda")] == [
+        f"shelf/{n}" for n in LINKS
+    ]
+    srdf = tmp_path / "shelf.srdf"
+    code, _, err = run("collision-matrix", str(robot), "--samples", "20", "-o", str(srdf))
+    assert code == 0, err
+    assert 'link1="level/bay_1/crate_01/mesh" link2="level/crate_02/mesh"' in srdf.read_text()
+    code, out, err = run("check", str(robot), "--srdf", str(srdf), "--report", "-")
+    assert code == 0, err
+    excluded = json.loads(out)["settings"]["excluded_pairs"]
+    assert {"body_a": LINKS[2], "body_b": LINKS[1], "reason": "srdf: Never"} in excluded
+
+
+def test_pybullet_loads_the_written_urdf(tmp_path: Path) -> None:
+    pybullet = pytest.importorskip("pybullet")
+    CUBE.export(tmp_path / "box.obj")
+    robot = tmp_path / "shelf.urdf"
+    robot.write_text(ROBOT)
+    code, _, err = run("hull", str(robot), "--out-dir", str(tmp_path / "out"), "--to", "urdf")
+    assert code == 0, err
+    client = pybullet.connect(pybullet.DIRECT)
+    try:
+        body = pybullet.loadURDF(str(tmp_path / "out" / "shelf.urdf"), physicsClientId=client)
+        links = [
+            pybullet.getJointInfo(body, j, physicsClientId=client)[12].decode()
+            for j in range(pybullet.getNumJoints(body, physicsClientId=client))
+        ]
+        base = pybullet.getBodyInfo(body, physicsClientId=client)[0].decode()
+    finally:
+        pybullet.disconnect(client)
+    assert [base, *links] == LINKS
