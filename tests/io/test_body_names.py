@@ -316,7 +316,29 @@ def test_a_node_of_several_primitives_has_the_same_names_every_read(tmp_path: Pa
     path.write_text(json.dumps(gltf_document(nodes, [0, 1], primitives=2)))
     first, again = ([b.name for b in load_mesh(path)] for _ in range(2))
     assert first == again
-    assert sorted(first) == ["rack/bin", "rack/rack", "rack/rack#2"]
+    assert first == ["rack/rack", "rack/rack#2", "rack/bin"]  # the document's node order
+    # --to gltf-physics finds each body's node again by its name (it could not: exit 2)
+    code, _, err = run(
+        "hull", str(path), "--out-dir", str(tmp_path / "out"), "--to", "gltf-physics"
+    )
+    assert code == 0, err
+    assert sorted(b.name for b in load_mesh(tmp_path / "out" / "rack.glb")) == [
+        "rack/bin",
+        "rack/rack",
+    ]
+
+
+def test_the_fbx_reader_gives_each_nodes_ancestors() -> None:
+    pytest.importorskip("ufbx")
+    from meshcol.io.fbx import read_fbx
+
+    rig = Path(__file__).parent.parent / "data" / "fbx" / "rig_yup.fbx"
+    nodes = read_fbx(rig, str(rig))
+    assert [(node[0], node[4]) for node in nodes] == [
+        ("Crate", ()),
+        ("Shelf", ("Rack",)),
+        ("Bin", ("Rack", "Shelf")),
+    ]
 
 
 def test_gltf_physics_bodies_of_one_name_are_named_by_their_parents(tmp_path: Path) -> None:
