@@ -7,6 +7,10 @@ What one body is:
   parts;
 - any other collision prim (``UsdPhysics.CollisionAPI``) is a static body of its own.
 
+A body is named after its prim (``--to usd``'s link name; ``<instancer>_<k>`` for a point
+instance) and, where several have one name (every prim ``mesh`` under its own ``Xform``), by
+the end of its prim path that tells them apart (:mod:`meshcol.io.body_names`).
+
 When the stage has no ``CollisionAPI`` at all, every ``Mesh`` and primitive prim is a body of
 its own, as the objects of an OBJ file are (``purpose = "guide"`` prims skipped); when it has
 some, geometry without ``CollisionAPI`` is render geometry and not read (a warning counts it).
