@@ -22,6 +22,9 @@ Rules:
 - A body whose path is a suffix of another's (a root prim ``/mesh`` beside ``/a/mesh``) has
   no suffix of its own: it is named by its full path (``level/mesh``).
 - The names do not depend on the order of the bodies, except for the ``#k`` of equal paths.
+- A name takes at most :data:`MAX_ANCESTORS` ancestors: paths deeper than that are told apart
+  by their last ones, then by ``#k`` (a hostile chain of 10,000 nodes of one name would
+  otherwise make names of 10,000 parts, and count their suffixes in ``n * d * d``).
 - Formats without a hierarchy (OBJ groups and objects, STL solids, PLY, OFF) give no
   ancestors: their repeated leaves keep ``#2``, ``#3``...
 
@@ -36,10 +39,12 @@ from collections.abc import Sequence
 
 from meshcol.types import unique_name
 
-__all__ = ["SEPARATOR", "file_body_names"]
+__all__ = ["MAX_ANCESTORS", "SEPARATOR", "file_body_names"]
 
 #: What joins the stem and the names of a body's path.
 SEPARATOR = "/"
+#: Most ancestors a body's name takes (the readers keep no more): the nearest ones.
+MAX_ANCESTORS = 15
 
 
 def file_body_names(
@@ -55,7 +60,8 @@ def file_body_names(
         Each body's own name, in file order.
     ancestors : sequence of sequence of str, optional
         Each body's ancestors' names, from the root down to its parent (empty: at the root, or
-        a format without a hierarchy). None: no body has any.
+        a format without a hierarchy; only the last :data:`MAX_ANCESTORS` are read). None: no
+        body has any.
 
     Returns
     -------
@@ -64,13 +70,13 @@ def file_body_names(
 
     Notes
     -----
-    Linear in the total length of the paths of the bodies whose leaf repeats: every suffix of
-    those paths is counted once in a :class:`collections.Counter`, and each body takes its
-    first suffix counted once.
+    Linear in the bodies whose leaf repeats: every suffix of their paths (at most
+    ``MAX_ANCESTORS + 1`` names) is counted once in a :class:`collections.Counter`, and each
+    body takes its first suffix counted once.
     """
     if len(leaves) == 1:
         return [stem]
-    lineage: Sequence[Sequence[str]] = ancestors or [()] * len(leaves)
+    lineage = [tuple(above[-MAX_ANCESTORS:]) for above in ancestors or [()] * len(leaves)]
     if len(lineage) != len(leaves):
         raise ValueError(f"ancestors has {len(lineage)} items, leaves {len(leaves)}")
     repeated = {leaf for leaf, n in Counter(leaves).items() if n > 1}

@@ -36,6 +36,7 @@ import numpy as np
 
 from meshcol.errors import InvalidMeshError
 from meshcol.geometry.rotations import axis_angle_matrix
+from meshcol.io.body_names import MAX_ANCESTORS
 from meshcol.io.mesh_trimesh import PARSE_ERRORS
 from meshcol.io.safe_read import read_input
 
@@ -244,7 +245,7 @@ def _mesh_nodes(document: Any, meter: float, source: str) -> list[MeshNode]:
             world[:3, 3] *= meter
             nodes.append((str(name or "node"), world, vertices * meter, faces, above))
         children = [child for child in node.children if isinstance(child, Node)]
-        inside = (*above, str(named.name or named.id or "node"))
+        inside = (*above, str(named.name or named.id or "node"))[-MAX_ANCESTORS:]
         stack.extend((child, matrix, inside) for child in reversed(children))
     return nodes
 

@@ -35,6 +35,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from meshcol.errors import InvalidMeshError
+from meshcol.io.body_names import MAX_ANCESTORS
 from meshcol.io.polygons import triangulate_polygons
 from meshcol.io.safe_read import read_input
 
@@ -232,10 +233,11 @@ def _mesh_nodes(
 
 
 def _above(k: int, parents: list[int], labels: list[str]) -> tuple[str, ...]:
-    """The names of node ``k``'s ancestors below the root, from the top down."""
-    above = []
+    """The names of node ``k``'s ancestors below the root, from the top down: the nearest
+    :data:`~meshcol.io.body_names.MAX_ANCESTORS`."""
+    above: list[str] = []
     current = parents[k]
-    while current >= 0:
+    while current >= 0 and len(above) < MAX_ANCESTORS:
         above.append(labels[current])
         current = parents[current]
     return tuple(reversed(above))

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from meshcol.errors import InvalidMeshError
+from meshcol.io.body_names import MAX_ANCESTORS
 from meshcol.io.mesh_trimesh import load_scene, local_uri, scene_nodes
 from meshcol.io.paths import confine_uris
 from meshcol.io.safe_read import read_input
@@ -103,10 +104,10 @@ def _parents(document: Any) -> dict[int, int]:
 
 def node_ancestors(k: int, parent: dict[int, int], names: list[str]) -> tuple[str, ...]:
     """The names (``names``, one per node) of node ``k``'s ancestors (``parent``: each
-    node's), from the root down."""
-    above = []
+    node's), from the root down: the nearest :data:`~meshcol.io.body_names.MAX_ANCESTORS`."""
+    above: list[str] = []
     current = parent.get(k)
-    while current is not None:
+    while current is not None and len(above) < MAX_ANCESTORS:
         above.append(names[current])
         current = parent.get(current)
     return tuple(reversed(above))

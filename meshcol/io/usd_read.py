@@ -54,6 +54,7 @@ from typing import Any
 import numpy as np
 
 from meshcol.errors import InvalidMeshError
+from meshcol.io.body_names import MAX_ANCESTORS
 from meshcol.io.physics_bodies import BodyGroup, FileScene, ShapeElement
 from meshcol.types import Box, Capsule, Cylinder, Primitive, Sphere
 
@@ -364,9 +365,9 @@ class _Reader:
 
 def _ancestors(prim: Any) -> tuple[str, ...]:
     """The names of the prims above ``prim``, from the root down (``/World/crate_01/mesh``:
-    ``("World", "crate_01")``)."""
+    ``("World", "crate_01")``), the nearest :data:`~meshcol.io.body_names.MAX_ANCESTORS`."""
     parent = str(prim.GetPath().GetParentPath())
-    return tuple(parent.strip("/").split("/")) if parent != "/" else ()
+    return tuple(parent.strip("/").split("/")[-MAX_ANCESTORS:]) if parent != "/" else ()
 
 
 def _primitive(prim: Any, kind: str, UsdGeom: Any, time: Any) -> Primitive:

@@ -17,6 +17,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from meshcol.cli import main
+from meshcol.io import body_names
 from meshcol.io.body_names import file_body_names
 from meshcol.io.mesh_read import load_mesh
 
@@ -29,10 +30,11 @@ def run(*args: str) -> tuple[int, str, str]:
 # -- the rule ---------------------------------------------------------------------------------
 
 
-def reference(stem: str, paths: list[tuple[str, ...]]) -> list[str]:
+def reference(stem: str, paths: list[tuple[str, ...]], limit: int = 15) -> list[str]:
     """The rule read literally, in O(n^2 d): a unique leaf is the name; else the shortest
-    suffix (two names or more) that no other path ends with; else the whole path; then
-    ``#k`` in order for a name taken."""
+    suffix (two names or more) that no other path ends with; else the whole path (its last
+    ``limit`` ancestors); then ``#k`` in order for a name taken."""
+    paths = [path[-limit - 1 :] for path in paths]
     out = []
     for i, path in enumerate(paths):
         others = [p for j, p in enumerate(paths) if j != i]
@@ -76,6 +78,27 @@ def test_the_names_are_the_rule_read_literally(paths: list[tuple[str, ...]]) -> 
     names = names_of(paths)
     assert names == reference("level", paths)
     assert len(set(names)) == len(names)
+
+
+@given(_PATHS)
+def test_deep_paths_are_cut_to_their_nearest_ancestors(paths: list[tuple[str, ...]]) -> None:
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(body_names, "MAX_ANCESTORS", 1)
+        names = names_of(paths)
+    assert names == reference("level", paths, limit=1)
+    assert len(set(names)) == len(names)
+
+
+def test_a_chain_of_one_name_makes_names_of_at_most_sixteen_parts() -> None:
+    """A hostile chain of nodes all named ``mesh``: every path a suffix of the next, so each
+    would be named whole (20,000 parts, and d * d suffixes each to count)."""
+    paths = [("mesh",) * k for k in range(1, 20_001)]
+    names = names_of(paths)
+    assert len(set(names)) == len(names)
+    assert max(n.split("#")[0].count("/") for n in names) == body_names.MAX_ANCESTORS + 1
+    assert names[:2] == ["level/mesh", "level/mesh/mesh"]
+    deep = "level" + "/mesh" * 16
+    assert names[15] == deep and names[16] == f"{deep}#2" and names[-1] == f"{deep}#19985"
 
 
 @given(_PATHS, st.randoms(use_true_random=False))
@@ -443,3 +466,13 @@ def test_pybullet_loads_the_written_urdf(tmp_path: Path) -> None:
     finally:
         pybullet.disconnect(client)
     assert [base, *links] == LINKS
+
+
+def test_a_deep_gltf_chain_is_named_by_its_nearest_nodes(tmp_path: Path) -> None:
+    nodes = [{"name": "mesh", "mesh": 0, "children": [k + 1]} for k in range(29)]
+    path = tmp_path / "chain.gltf"
+    path.write_text(json.dumps(gltf_document([*nodes, {"name": "mesh", "mesh": 0}], [0])))
+    names = [b.name for b in load_mesh(path)]
+    deep = "chain" + "/mesh" * 16
+    assert names[:2] == ["chain/mesh", "chain/mesh/mesh"]
+    assert names[15:17] == [deep, f"{deep}#2"] and names[-1] == f"{deep}#15"
