@@ -28,8 +28,11 @@ Rules:
 - Formats without a hierarchy (OBJ groups and objects, STL solids, PLY, OFF) give no
   ancestors: their repeated leaves keep ``#2``, ``#3``...
 
-Writers make these names valid where they go (URDF and MJCF names, SRDF, USD prim names,
-glTF node names: ``/`` is replaced where a format forbids it); reports carry them as they are.
+Where the names go: reports carry them as they are; ``hull -o`` and ``fit -o`` write them as
+OBJ object and glTF node names (any string); file names made from them (``--out-dir``,
+snapshots) replace ``/`` and every other unsafe character. The robot writers (URDF, MJCF,
+SRDF, ``--to usd``) write link names, never these; a link name holding ``/`` passes through
+them too (``--to usd`` makes a valid prim name and keeps the name in ``meshcol:link``).
 """
 
 from __future__ import annotations
