@@ -164,7 +164,9 @@ def check(
     limits that exclude zero, as collision-matrix), their collision elements
     the parts; links joined by a joint are left out (--include-adjacent keeps them), and so
     are the --srdf file's <disable_collisions> pairs. Files given directly give one body per
-    object; a manifest body is its whole file, whose objects are its parts (never checked
+    object, named <stem>/<object> (where names repeat in a USD, glTF, FBX or COLLADA file, by
+    the end of the prim or node path that tells them apart: level/crate_01/mesh; else #2, #3);
+    a manifest body is its whole file, whose objects are its parts (never checked
     against each other; pairs name them as part_a, part_b). Statuses per pair: separated,
     clearance, contact, penetrating, contained. The report (JSON or CSV) goes to --report FILE
     or to stdout; a short summary goes to stderr. Exit 0 when the policy passes, 1 when it

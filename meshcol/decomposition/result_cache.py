@@ -38,7 +38,7 @@ __all__ = [
 ]
 
 #: The version of the entries' layout (and of what ci keeps of a report); a new one misses.
-FORMAT_VERSION = 2  # 2: check suites carry body findings as cases
+FORMAT_VERSION = 3  # 2: check suites carry body findings as cases; 3: bodies named by path
 #: Seconds before an index was written within which a file's stat is not trusted.
 RACY_SECONDS = 2.0
 _CHUNK = 1 << 20

@@ -36,6 +36,7 @@ import numpy as np
 
 from meshcol.errors import InvalidMeshError
 from meshcol.geometry.rotations import axis_angle_matrix
+from meshcol.io.body_names import MAX_ANCESTORS
 from meshcol.io.mesh_trimesh import PARSE_ERRORS
 from meshcol.io.safe_read import read_input
 
@@ -206,19 +207,21 @@ _NON_FINITE = re.compile(r"(?i)nan|inf")
 
 def _mesh_nodes(document: Any, meter: float, source: str) -> list[MeshNode]:
     """Every scene node of ``document`` with triangles, depth first in document order, as
-    ``(name, world matrix, vertices, faces)``, its translation and vertices scaled by
-    ``meter`` (the file's unit in metres: a scale applied outermost, so the node matrix keeps
-    its rotation and the loader bakes nothing)."""
+    ``(name, world matrix, vertices, faces, ancestors' names)``, its translation and vertices
+    scaled by ``meter`` (the file's unit in metres: a scale applied outermost, so the node
+    matrix keeps its rotation and the loader bakes nothing)."""
     from collada.scene import GeometryNode, Node, NodeNode
 
     nodes: list[MeshNode] = []
     scene = document.scene
     roots = [] if scene is None else list(scene.nodes)
-    stack: list[tuple[Any, np.ndarray]] = [(node, np.eye(4)) for node in reversed(roots)]
+    stack: list[tuple[Any, np.ndarray, tuple[str, ...]]] = [
+        (node, np.eye(4), ()) for node in reversed(roots)
+    ]
     visits = vertex_count = 0
     finite: dict[int, bool] = {}
     while stack:
-        node, parent = stack.pop()
+        node, parent, above = stack.pop()
         if not isinstance(node, Node):
             continue  # cameras, lights, controllers
         visits += 1
@@ -232,17 +235,18 @@ def _mesh_nodes(document: Any, meter: float, source: str) -> list[MeshNode]:
             raise
         except PARSE_ERRORS as error:
             raise _error(_detail(error), source) from None
+        named = node.node if isinstance(node, NodeNode) else node
         if len(faces):
             vertex_count += len(vertices)
             if vertex_count > MAX_VERTICES:
                 raise _error(f"the scene expands to over {MAX_VERTICES:,} vertices", source)
-            named = node.node if isinstance(node, NodeNode) else node
             name = named.name or named.id or (geometry[0].geometry.name or geometry[0].geometry.id)
             world = matrix.copy()
             world[:3, 3] *= meter
-            nodes.append((str(name or "node"), world, vertices * meter, faces))
+            nodes.append((str(name or "node"), world, vertices * meter, faces, above))
         children = [child for child in node.children if isinstance(child, Node)]
-        stack.extend((child, matrix) for child in reversed(children))
+        inside = (*above, str(named.name or named.id or "node"))[-MAX_ANCESTORS:]
+        stack.extend((child, matrix, inside) for child in reversed(children))
     return nodes
 
 

@@ -35,6 +35,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from meshcol.errors import InvalidMeshError
+from meshcol.io.body_names import MAX_ANCESTORS
 from meshcol.io.polygons import triangulate_polygons
 from meshcol.io.safe_read import read_input
 
@@ -132,9 +133,10 @@ def read_fbx(file: Path, source: str) -> list[MeshNode]:
     Returns
     -------
     list of MeshNode
-        ``(name, matrix, vertices, faces)`` per node with a mesh of at least one polygon:
-        ``matrix`` the node's geometry-to-world transform (in metres, :data:`FRAME`),
-        ``vertices`` (n, 3) float64 and ``faces`` (m, 3) int64 in the node's geometry frame.
+        ``(name, matrix, vertices, faces, ancestors)`` per node with a mesh of at least one
+        polygon: ``matrix`` the node's geometry-to-world transform (in metres, :data:`FRAME`),
+        ``vertices`` (n, 3) float64 and ``faces`` (m, 3) int64 in the node's geometry frame,
+        ``ancestors`` the names of the nodes above it (the root's children down).
 
     Raises
     ------
@@ -147,9 +149,9 @@ def read_fbx(file: Path, source: str) -> list[MeshNode]:
         for key, (vertices, polygons, indices) in geometry.items()
     }
     out: list[MeshNode] = []
-    for name, matrix, key in nodes:
+    for name, matrix, key, ancestors in nodes:
         if len(triangles[key]):
-            out.append((name, matrix, geometry[key][0], triangles[key]))
+            out.append((name, matrix, geometry[key][0], triangles[key], ancestors))
     return out
 
 
@@ -196,14 +198,24 @@ def _kept(element: Any) -> Any:
     return element
 
 
-def _mesh_nodes(scene: Any) -> tuple[list[tuple[str, np.ndarray, int]], dict[int, tuple]]:
-    """``(name, geometry-to-world matrix, mesh key)`` of every node with a mesh, and per mesh
-    key its vertices, polygons ``(begin, count)`` and polygon-vertex indices, copied out."""
-    nodes: list[tuple[str, np.ndarray, int]] = []
+def _mesh_nodes(
+    scene: Any,
+) -> tuple[list[tuple[str, np.ndarray, int, tuple[str, ...]]], dict[int, tuple]]:
+    """``(name, geometry-to-world matrix, mesh key, ancestors' names)`` of every node with a
+    mesh, and per mesh key its vertices, polygons ``(begin, count)`` and polygon-vertex
+    indices, copied out."""
+    nodes: list[tuple[str, np.ndarray, int, tuple[str, ...]]] = []
     geometry: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
     total = 0
+    # each node's name and parent (index in scene.nodes, its typed_id; -1: none or the root),
+    # known before its children's: ufbx lists parents first
+    labels: list[str] = []
+    parents: list[int] = []
     # one pass over the nodes only: iterating ufbx's mesh list as well crashes ufbx 0.0.5
     for k, node in enumerate(map(_kept, scene.nodes)):
+        up = _kept(node.parent)
+        parents.append(-1 if up is None or up.is_root else int(up.typed_id))
+        labels.append(str(node.name or f"node{k}"))
         mesh = _kept(node.mesh)
         if mesh is None or mesh.num_faces == 0:
             continue
@@ -215,10 +227,20 @@ def _mesh_nodes(scene: Any) -> tuple[list[tuple[str, np.ndarray, int]], dict[int
                     f"cannot parse FBX file: over {MAX_INDICES} polygon-vertex indices"
                 )
             geometry[key] = _arrays(mesh)
-        nodes.append(
-            (str(node.name or mesh.name or f"node{k}"), _matrix(node.geometry_to_world), key)
-        )
+        name = str(node.name or mesh.name or f"node{k}")
+        nodes.append((name, _matrix(node.geometry_to_world), key, _above(k, parents, labels)))
     return nodes, geometry
+
+
+def _above(k: int, parents: list[int], labels: list[str]) -> tuple[str, ...]:
+    """The names of node ``k``'s ancestors below the root, from the top down: the nearest
+    :data:`~meshcol.io.body_names.MAX_ANCESTORS`."""
+    above: list[str] = []
+    current = parents[k]
+    while current >= 0 and len(above) < MAX_ANCESTORS:
+        above.append(labels[current])
+        current = parents[current]
+    return tuple(reversed(above))
 
 
 def _matrix(m: Any) -> np.ndarray:

@@ -13,10 +13,12 @@ import io
 import json
 import struct
 from collections.abc import Callable
+from operator import itemgetter
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from meshcol.errors import InvalidMeshError
+from meshcol.io.body_names import MAX_ANCESTORS
 from meshcol.io.mesh_trimesh import load_scene, local_uri, scene_nodes
 from meshcol.io.paths import confine_uris
 from meshcol.io.safe_read import read_input
@@ -62,8 +64,53 @@ def _read_indexed(file: Path, source: str, kind: str) -> list[IndexedNode]:
     document = _glb_json(data, source) if kind == "glb" else _gltf_json(data, source)
     check_references(document, kind.upper(), source)
     scene = load_scene(file, kind, source, io.BytesIO(data))
-    nodes = _file_order(document, scene_nodes(scene))
-    return list(zip(_node_indices(document, scene, [n[0] for n in nodes], source), nodes))
+    nodes = scene_nodes(scene)
+    indices = _node_indices(document, scene, [n[0] for n in nodes], source)
+    names, parent = _node_names(document), _parents(document)
+    # the document's node order (a node's primitives in trimesh's order): trimesh's graph
+    # order differs, and its frame names (mesh_1, <name>_<hash>) are not the nodes'
+    return [
+        (k, (_own_name(document, k) or node[0], *node[1:4], node_ancestors(k, parent, names)))
+        for k, node in sorted(zip(indices, nodes), key=itemgetter(0))
+    ]
+
+
+def _own_name(document: Any, k: int) -> str | None:
+    """The name document node ``k`` has (None: none): a mesh node's body is named so, not as
+    trimesh renames a repeated name (``mesh_1``) or the frame of each of a node's primitives
+    (``<name>_<hash>``); an unnamed node keeps trimesh's name."""
+    node = document.get("nodes", [])[k]
+    name = node.get("name") if isinstance(node, dict) else None
+    return name if isinstance(name, str) and name else None
+
+
+def _node_names(document: Any) -> list[str]:
+    """Each document node's name, its index for one without (as trimesh names its frame)."""
+    out = []
+    for k, node in enumerate(document.get("nodes", [])):
+        name = node.get("name") if isinstance(node, dict) else None
+        out.append(name if isinstance(name, str) and name else str(k))
+    return out
+
+
+def _parents(document: Any) -> dict[int, int]:
+    """Each document node's parent (checked: one each, no cycle)."""
+    parent = {}
+    for k, node in enumerate(document.get("nodes", [])):
+        for child in node.get("children", []) if isinstance(node, dict) else []:
+            parent[child] = k
+    return parent
+
+
+def node_ancestors(k: int, parent: dict[int, int], names: list[str]) -> tuple[str, ...]:
+    """The names (``names``, one per node) of node ``k``'s ancestors (``parent``: each
+    node's), from the root down: the nearest :data:`~meshcol.io.body_names.MAX_ANCESTORS`."""
+    above: list[str] = []
+    current = parent.get(k)
+    while current is not None and len(above) < MAX_ANCESTORS:
+        above.append(names[current])
+        current = parent.get(current)
+    return tuple(reversed(above))
 
 
 def _node_indices(document: Any, scene: Any, frames: list[str], source: str) -> list[int]:
@@ -330,15 +377,6 @@ _CHECKS: tuple[Callable[[_Document], None], ...] = (
     _check_accessors,
     _check_buffers,
 )
-
-
-def _file_order(document: Any, nodes: list) -> list:
-    """Order glTF mesh nodes as the file's node list does (trimesh's graph order differs)."""
-    index: dict[str, int] = {}
-    for k, node in enumerate(document.get("nodes", [])):
-        index.setdefault(str(node.get("name", "")), k)
-    # unnamed nodes keep trimesh's relative order, after the named ones
-    return sorted(nodes, key=lambda item: index.get(item[0], len(index)))
 
 
 def read_document(file: Path, source: str) -> tuple[Any, bytes | None]:

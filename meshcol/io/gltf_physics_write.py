@@ -193,7 +193,7 @@ def _render_nodes(gltf: GltfFile, bodies: list[str]) -> list[int]:
     from meshcol.io.mesh_read import node_body_names
 
     indexed = mesh_node_indices(gltf.file, gltf.source)
-    names = node_body_names(gltf.file, [node[0] for _, node in indexed], godot_hints=True)
+    names = node_body_names(gltf.file, [node for _, node in indexed], godot_hints=True)
     index_of = {name: index for (name, _), (index, _) in zip(names, indexed)}
     found = []
     for body in bodies:

@@ -39,10 +39,12 @@ __all__ = [
     "read_natively",
 ]
 
-#: One mesh node of a file: ``(name, matrix, vertices, faces)``; ``matrix`` (4, 4) is the
-#: node's world transform (scale, shear and mirror allowed: the loader splits them off),
-#: ``vertices`` (n, 3) and ``faces`` (m, 3) array-likes in the node's frame.
-MeshNode = tuple[str, np.ndarray, object, object]
+#: One mesh node of a file: ``(name, matrix, vertices, faces, ancestors)``; ``matrix`` (4, 4)
+#: is the node's world transform (scale, shear and mirror allowed: the loader splits them off),
+#: ``vertices`` (n, 3) and ``faces`` (m, 3) array-likes in the node's frame, ``ancestors`` the
+#: names of the nodes above it from the root down (empty: at the root, or a format without a
+#: hierarchy), which tell apart nodes of one name (:mod:`meshcol.io.body_names`).
+MeshNode = tuple[str, np.ndarray, object, object, tuple[str, ...]]
 
 
 @dataclass(frozen=True)

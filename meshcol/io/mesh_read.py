@@ -28,10 +28,12 @@ from pathlib import Path
 import numpy as np
 
 from meshcol.errors import InputFileError, InvalidMeshError
+from meshcol.io.body_names import file_body_names
 from meshcol.io.collision_names import GodotHint, godot_hint
 from meshcol.io.mesh_formats import (
     MESH_EXTENSIONS,
     MeshFormat,
+    MeshNode,
     check_file,
     mesh_format,
 )
@@ -104,7 +106,9 @@ def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]
     -------
     list of Body
         In file order (glTF: scene-graph order). Named after the file stem when the file holds
-        one body, else ``<stem>/<object, solid or node name>``; names are unique. In glTF
+        one body, else ``<stem>/<object, solid or node name>``; a name several bodies share
+        is told apart by the path of parent nodes (``<stem>/crate_01/mesh``,
+        :mod:`meshcol.io.body_names`), or by ``#2``... in OBJ, STL, PLY and OFF. In glTF
         and FBX, a Godot hint ending a node name (``Floor-col``) is cut from it and sets the
         body's ``collider`` (:mod:`meshcol.io.collision_names`).
         ``vertices`` (n, 3) float64 are in the body's local frame with scale baked in;
@@ -138,8 +142,8 @@ def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]
     if not nodes:
         raise InvalidMeshError("mesh has no faces", source)
     bodies = []
-    names = node_body_names(file, [node[0] for node in nodes], fmt.godot_hints)
-    for (full, hint), (_, matrix, vertices, faces) in zip(names, nodes):
+    names = node_body_names(file, nodes, fmt.godot_hints)
+    for (full, hint), (_, matrix, vertices, faces, _) in zip(names, nodes):
         body = _node_body(full, matrix, vertices, faces, source, merge)
         if hint is not None and hint.collider is not None:
             body = dataclasses.replace(body, collider=hint.collider)
@@ -148,21 +152,15 @@ def load_mesh(path: str | os.PathLike[str], *, merge: bool = True) -> list[Body]
 
 
 def node_body_names(
-    file: Path, names: Sequence[str], godot_hints: bool
+    file: Path, nodes: Sequence[MeshNode], godot_hints: bool
 ) -> list[tuple[str, GodotHint | None]]:
-    """The name :func:`load_mesh` gives the body of each mesh node named ``names`` of
-    ``file`` (the stem alone for one node, else ``<stem>/<node>``, a Godot hint cut when the
-    format has them, ``#2``... for a name taken), with the node's hint (None: none)."""
-    used: dict[str, int] = {}
-    out = []
-    for name in names:
-        hint = godot_hint(name) if godot_hints else None
-        if hint is not None:
-            name = hint.name
-        out.append(
-            (unique_name(file.stem if len(names) == 1 else f"{file.stem}/{name}", used), hint)
-        )
-    return out
+    """The name :func:`load_mesh` gives the body of each mesh node (its name and its
+    ancestors', :data:`meshcol.io.mesh_formats.MeshNode`) of ``file``, by
+    :func:`meshcol.io.body_names.file_body_names` (a Godot hint cut from the node's name when
+    the format has them), with the node's hint (None: none)."""
+    hints = [godot_hint(node[0]) if godot_hints else None for node in nodes]
+    leaves = [node[0] if hint is None else hint.name for node, hint in zip(nodes, hints)]
+    return list(zip(file_body_names(file.stem, leaves, [node[4] for node in nodes]), hints))
 
 
 def load_file_scene(path: str | os.PathLike[str], *, merge: bool = True) -> Scene | None:
@@ -174,7 +172,8 @@ def load_file_scene(path: str | os.PathLike[str], *, merge: bool = True) -> Scen
     -------
     Scene or None
         One body per group the reader found, named as :func:`load_mesh` names bodies
-        (``<stem>`` alone for one, else ``<stem>/<name>``, ``#2``... for a name taken); the
+        (``<stem>`` alone for one, else ``<stem>/<name>``, by the prim or node path where
+        several share a name: :mod:`meshcol.io.body_names`); the
         reader's excluded pairs, units and warnings; ``source`` the path.
     """
     source = os.fspath(path)
@@ -184,15 +183,13 @@ def load_file_scene(path: str | os.PathLike[str], *, merge: bool = True) -> Scen
         return None
     if not found.groups:
         raise InvalidMeshError("mesh has no faces", source)
-    stem = Path(source).stem
-    used: dict[str, int] = {}
     warnings = list(found.warnings)
-    names: dict[str, str] = {}
-    bodies = []
-    for group in found.groups:
-        full = stem if len(found.groups) == 1 else f"{stem}/{group.name}"
-        names[group.key] = name = unique_name(full, used)
-        bodies.append(_group_body(name, source, group, warnings, merge))
+    groups = found.groups
+    named = file_body_names(
+        Path(source).stem, [g.name for g in groups], [g.ancestors for g in groups]
+    )
+    names = {group.key: name for group, name in zip(groups, named)}
+    bodies = [_group_body(names[g.key], source, g, warnings, merge) for g in groups]
     excluded = sorted(
         {(*sorted((names[a], names[b])), reason) for a, b, reason in found.excluded if a != b}
     )

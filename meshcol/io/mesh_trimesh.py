@@ -52,10 +52,10 @@ def read_ply(file: Path, source: str) -> list[MeshNode]:
 
 
 def scene_nodes(scene: Any, by_geometry: bool = False) -> list[MeshNode]:
-    """``(name, matrix, vertices, faces)`` of every mesh node of a trimesh scene, in graph
+    """``(name, matrix, vertices, faces, ())`` of every mesh node of a trimesh scene, in graph
     order, named by node (or by geometry); point clouds, paths and faceless meshes are not
-    bodies."""
-    nodes = []
+    bodies. No ancestors: glTF's are the document's (:mod:`meshcol.io.gltf`)."""
+    nodes: list[MeshNode] = []
     for node in scene.graph.nodes_geometry:
         matrix, geometry_name = scene.graph[node]
         geometry = scene.geometry[geometry_name]
@@ -63,7 +63,7 @@ def scene_nodes(scene: Any, by_geometry: bool = False) -> list[MeshNode]:
         if faces is None or len(faces) == 0:
             continue
         name = geometry_name if by_geometry else str(node)
-        nodes.append((name, np.asarray(matrix, dtype=np.float64), geometry.vertices, faces))
+        nodes.append((name, np.asarray(matrix, dtype=np.float64), geometry.vertices, faces, ()))
     return nodes
 
 

@@ -47,7 +47,7 @@ def read_off_file(file: Path, source: str) -> list[MeshNode]:
     """The one mesh node of an OFF file, named after the file (none when it has no faces):
     the reader of :data:`meshcol.io.mesh_formats.FORMATS`."""
     vertices, faces = read_off(read_bytes(file, source), source)
-    return [(file.stem, np.eye(4), vertices, faces)] if len(faces) else []
+    return [(file.stem, np.eye(4), vertices, faces, ())] if len(faces) else []
 
 
 def read_off(data: bytes, source: str) -> tuple[np.ndarray, np.ndarray]:

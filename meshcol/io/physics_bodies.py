@@ -80,12 +80,17 @@ class BodyGroup:
     world : (4, 4) float64
         World from the body's frame (its rigid part becomes the body's pose).
     elements : list of ShapeElement
+    ancestors : tuple of str
+        The names of the body's ancestors in the file, from the root down to its parent (a
+        prim path's, a node's parents'): what tells apart bodies of one name
+        (:mod:`meshcol.io.body_names`). Empty: at the root.
     """
 
     key: str
     name: str
     world: np.ndarray
     elements: list[ShapeElement] = field(default_factory=list)
+    ancestors: tuple[str, ...] = ()
 
 
 @dataclass

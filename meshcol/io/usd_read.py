@@ -7,6 +7,10 @@ What one body is:
   parts;
 - any other collision prim (``UsdPhysics.CollisionAPI``) is a static body of its own.
 
+A body is named after its prim (``--to usd``'s link name; ``<instancer>_<k>`` for a point
+instance) and, where several have one name (every prim ``mesh`` under its own ``Xform``), by
+the end of its prim path that tells them apart (:mod:`meshcol.io.body_names`).
+
 When the stage has no ``CollisionAPI`` at all, every ``Mesh`` and primitive prim is a body of
 its own, as the objects of an OBJ file are (``purpose = "guide"`` prims skipped); when it has
 some, geometry without ``CollisionAPI`` is render geometry and not read (a warning counts it).
@@ -50,6 +54,7 @@ from typing import Any
 import numpy as np
 
 from meshcol.errors import InvalidMeshError
+from meshcol.io.body_names import MAX_ANCESTORS
 from meshcol.io.physics_bodies import BodyGroup, FileScene, ShapeElement
 from meshcol.types import Box, Capsule, Cylinder, Primitive, Sphere
 
@@ -258,7 +263,8 @@ class _Reader:
         group = self.groups.get(key)
         if group is None:
             body_world = world if body_prim == prim else self.world(body_prim)
-            group = self.groups[key] = BodyGroup(key, name, body_world)
+            above = _ancestors(body_prim)
+            group = self.groups[key] = BodyGroup(key, name, body_world, ancestors=above)
         relative = str(prim.GetPath())[len(str(body_prim.GetPath())) :].lstrip("/")
         group.elements.append(self._element(prim, relative or prim.GetName(), world))
 
@@ -349,10 +355,19 @@ class _Reader:
                 inside = _matrix(self.cache.ComputeRelativeTransform(prim, root.GetParent())[0])
                 key = f"{instancer.GetPath()}/{k}"
                 if key not in self.groups:
-                    self.groups[key] = BodyGroup(key, f"{instancer.GetName()}_{k}", placed)
+                    self.groups[key] = BodyGroup(
+                        key, f"{instancer.GetName()}_{k}", placed, ancestors=_ancestors(instancer)
+                    )
                 world = placed @ inside
                 name = str(prim.GetPath())[len(str(root.GetPath().GetParentPath())) :]
                 self.groups[key].elements.append(self._element(prim, name.lstrip("/"), world))
+
+
+def _ancestors(prim: Any) -> tuple[str, ...]:
+    """The names of the prims above ``prim``, from the root down (``/World/crate_01/mesh``:
+    ``("World", "crate_01")``), the nearest :data:`~meshcol.io.body_names.MAX_ANCESTORS`."""
+    parent = str(prim.GetPath().GetParentPath())
+    return tuple(parent.strip("/").split("/")[-MAX_ANCESTORS:]) if parent != "/" else ()
 
 
 def _primitive(prim: Any, kind: str, UsdGeom: Any, time: Any) -> Primitive:

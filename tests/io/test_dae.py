@@ -154,7 +154,8 @@ def test_instance_node_places_a_library_node_each_time(tmp_path):
     )
     text = document(nodes, geometry("cube", 0.5), library_nodes=library)
     bodies = load_mesh(write(tmp_path, "two.dae", text))
-    assert [b.name for b in bodies] == ["two/part", "two/part#2"]
+    # one library node instanced under two nodes: named by the instancing node
+    assert [b.name for b in bodies] == ["two/left/part", "two/right/part"]
     np.testing.assert_allclose([b.pose[0, 3] for b in bodies], [-2, 2])
 
 

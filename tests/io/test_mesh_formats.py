@@ -66,7 +66,7 @@ def read_xyz(file: Path, source: str) -> list:
             "cannot parse XYZ file: expected nine numbers a line", source
         ) from None
     faces = np.arange(len(corners)).reshape(-1, 3)
-    return [(file.stem, np.eye(4), corners, faces)] if len(faces) else []
+    return [(file.stem, np.eye(4), corners, faces, ())] if len(faces) else []
 
 
 def test_a_new_format_is_one_reader_and_one_entry(tmp_path, monkeypatch):
@@ -91,7 +91,12 @@ def test_off_reads_through_its_registry_entry(tmp_path):
     off = next(fmt for fmt in FORMATS if fmt.name == "off")
     path = tmp_path / "quad.off"
     path.write_text("OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n")
-    ((name, matrix, vertices, faces),) = off.read(path, str(path))
-    assert name == "quad" and np.array_equal(matrix, np.eye(4)) and faces.shape == (2, 3)
+    ((name, matrix, vertices, faces, ancestors),) = off.read(path, str(path))
+    assert (
+        name == "quad"
+        and ancestors == ()
+        and np.array_equal(matrix, np.eye(4))
+        and faces.shape == (2, 3)
+    )
     (body,) = load_mesh(path)
     assert body.faces.tolist() == faces.tolist()

@@ -362,7 +362,14 @@ def test_references_instances_and_point_instancers(tmp_path: Path) -> None:
     stage.GetRootLayer().Save()
     scene = load(path)
     names = [b.name for b in scene.bodies]
-    assert names == ["yard/geo", "yard/geo#2", "yard/scatter_0", "yard/scatter_1", "yard/scatter_2"]
+    # the two references' prims are both /copyK/geo: named by the prim path (instance proxies too)
+    assert names == [
+        "yard/copy0/geo",
+        "yard/copy1/geo",
+        "yard/scatter_0",
+        "yard/scatter_1",
+        "yard/scatter_2",
+    ]
     lows = [b.world_vertices().min(axis=0).tolist() for b in scene.bodies]
     assert lows == [[0, 0, 0], [5, 0, 0], [0, 10, 0], [0, 20, 0], [0, 30, 0]]
 
