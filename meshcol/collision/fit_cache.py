@@ -66,10 +66,17 @@ class FitCache:
         self._measures: dict[tuple[Any, ...], dict[str, Any]] = {}
         self._balls: set[tuple[Any, ...]] = set()
         self._distances: dict[tuple[int, int], tuple[float, Any, Any]] = {}
+        self._keys: dict[int, tuple[np.ndarray, tuple[Any, ...]]] = {}
 
-    @staticmethod
-    def _key(points: np.ndarray) -> tuple[Any, ...]:
-        return (points.shape, hashlib.blake2b(points.data, digest_size=16).digest())
+    def _key(self, points: np.ndarray) -> tuple[Any, ...]:
+        """The key of a (contiguous) array: its shape and a hash of its bytes, hashed once
+        per array object (held here, so that its id stays its own; a fit never writes into
+        an array it has asked about)."""
+        held = self._keys.get(id(points))
+        if held is None:
+            key = (points.shape, hashlib.blake2b(points.data, digest_size=16).digest())
+            held = self._keys[id(points)] = (points, key)
+        return held[1]
 
     def exact(self, points: np.ndarray) -> ExactHull:
         """:func:`exact_hull` of ``points``."""
