@@ -60,13 +60,14 @@ def scene(size: int) -> Path:
 
 def run(meshcol: str, scene_path: Path, profile: str, report: Path) -> tuple[float, float]:
     """Wall and CPU (user + system) seconds of one ``meshcol hull --target`` run (bytecode
-    written, as users run), its hulls written beside ``report`` (:func:`hulls_path`)."""
+    written, as users run), its hulls written beside ``report`` (:func:`hulls_path`; both
+    builds write them under one name, then renamed, so that the reports name the same file)."""
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     subprocess.run(
         [meshcol, "hull", str(scene_path), "--target", profile, "--report", str(report)]
-        + ["--output", str(hulls_path(report))],
+        + ["--output", str(report.parent / "hulls.obj")],
         check=True,
         env=env,
         stdout=subprocess.DEVNULL,
@@ -74,6 +75,7 @@ def run(meshcol: str, scene_path: Path, profile: str, report: Path) -> tuple[flo
         cwd=HERE.parent,
     )
     wall = time.perf_counter() - start
+    (report.parent / "hulls.obj").replace(hulls_path(report))
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return wall, after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
 
