@@ -63,6 +63,7 @@ DECOMPOSE_MESH = "trimesh-models/fandisk.obj"
 BIG_HULLS = [
     "robotiq_2f85_v4/assets/robotiq_fts300_top.stl",  # 12,388 hull vertices, 23,841 polygons
     "aloha/assets/d405_solid.stl",  # 7,003 hull vertices, 13,188 polygons
+    "robotiq_2f85_v4/assets/robotiq_fts300.stl",  # session 41's big single part
 ]
 #: The fit alone, timed in a child process of either build (argv: file, target).
 FIT_ONLY = """
