@@ -599,7 +599,7 @@ def target_limits(target: Any, max_vertices: int | None) -> dict[str, Any]:
 def target_hull(points: Any, limits: dict, length_scale: float, cache: Any = None) -> Any:
     """The hull of ``points`` fitted to ``limits``, as a :class:`HullResult` (its exact-hull
     fields from the input) that also carries the fit (``target_fit``); ``cache``: the
-    points' :class:`~meshcol.collision.target_fit.FitCache`, made already."""
+    points' :class:`~meshcol.collision.fit_cache.FitCache`, made already."""
     from meshcol.collision.target_fit import FitCache, fit_hull
 
     cache = FitCache() if cache is None else cache

@@ -57,8 +57,8 @@ class FitCache:
     of an exact hull (:func:`meshcol.collision.limits.measure_hull`: a small part's fit
     asked for the same six times, each seeking its in-sphere), with the in-sphere added only
     when a caller reads it, and the distance from a hull made here to an exact hull
-    (:func:`meshcol.collision.target_fit._outside_distance`), by the two objects (held here,
-    so that their ids stay theirs)."""
+    (:func:`outside_distance`), by the two objects (held here, so that their ids stay
+    theirs)."""
 
     def __init__(self) -> None:
         self._exact: dict[tuple[Any, ...], ExactHull] = {}
