@@ -106,6 +106,19 @@ def test_one_vertex_over_is_cut_flat_is_kept_and_an_unmet_ratio_is_said() -> Non
         _same(fit, fit_hull(points, target, 1.0, FitCache()))
 
 
+def test_a_budget_that_cannot_be_met_is_reported_for_each_body_as_alone() -> None:
+    # four vertices cannot have an oblong ratio under 3 (a regular tetrahedron's)
+    limits = {"max_hull_vertices": 4, "max_oblong_ratio": 2.0}
+    rng = np.random.default_rng(11)
+    clouds = [rng.normal(size=(50, 3)), rng.normal(size=(90, 3)) * [3.0, 1.0, 0.2]]
+    clouds.append(np.column_stack([rng.uniform(-1, 1, (30, 2)), np.zeros(30)]))
+    for points, fit in zip(clouds, fit_hulls(clouds, limits), strict=True):
+        assert [v.limit for v in fit.violations] == ["max_oblong_ratio"]
+        assert fit.notes[-1].startswith("max_oblong_ratio 2 not reached")
+        assert len(fit.parts[0][0]) == 4
+        _same(fit, fit_hull(points, limits, 1.0, FitCache()))
+
+
 def test_hull_target_names_the_first_body_without_a_fit(tmp_path) -> None:
     rng = np.random.default_rng(5)
     bodies = []
