@@ -25,10 +25,9 @@ from meshcol.collision.hull import (
     ExactHull,
     distance_to_hull,
     exact_hull,
-    hull_within_budget,
     hulls_within_budgets,
 )
-from meshcol.collision.limits import PartMeasures, add_balls, measure_hulls, measures_table
+from meshcol.collision.limits import add_balls, measure_hulls, measures_table
 from meshcol.errors import InvalidMeshError
 
 __all__ = [
@@ -88,34 +87,11 @@ class FitCache:
             self._exact[key] = exact_hull(pts)
         return self._exact[key]
 
-    def __call__(
-        self, points: np.ndarray, max_vertices: int | None = None, max_planes: int | None = None
-    ):
-        """:func:`convex_hull` of ``points`` within the budgets."""
-        exact = self.exact(points)
-        key = self._hull_key(points, max_vertices, max_planes)
-        if key not in self._made:
-            self._made[key] = hull_within_budget(exact, max_vertices, max_planes)
-        return self._made[key]
-
     def _hull_key(
         self, points: np.ndarray, max_vertices: int | None, max_planes: int | None
     ) -> tuple[Any, ...]:
         key = (*self._key(np.ascontiguousarray(points, dtype=np.float64)), max_vertices)
         return key + (max_planes,)
-
-    def measure(self, points: np.ndarray, ball: bool) -> dict[str, Any]:
-        """:func:`measure_hull` of the exact hull of ``points`` (the in-sphere when ``ball``;
-        a row measured with it serves callers without)."""
-        return self.measures([points], ball)[0]
-
-    def measures(self, point_sets: Sequence[np.ndarray], ball: bool) -> list[dict[str, Any]]:
-        """:meth:`measure` of each point set, the missing ones in one batch."""
-        return measure_batch([(self, p) for p in point_sets], ball)
-
-    def measure_parts(self, point_sets: Sequence[np.ndarray], ball: bool) -> PartMeasures:
-        """:func:`meshcol.collision.limits.measure_parts` of parts with these points."""
-        return measures_table(self.measures(point_sets, ball))
 
     def outside_distance(self, points: np.ndarray, hull: ExactHull) -> float:
         """:func:`outside_distance` of ``points`` to ``hull``, once per pair of objects."""
@@ -185,8 +161,9 @@ def ask_hull(
     max_vertices: int | None = None,
     max_planes: int | None = None,
 ) -> FitSteps:
-    """``cache(points, max_vertices, max_planes)`` asked of :func:`run_steps` (``yield
-    from``); raises what :func:`hull_within_budget` raises."""
+    """:func:`~meshcol.collision.hull.hull_within_budget` of the exact hull of ``points``
+    (each made once in ``cache``), asked of :func:`run_steps` (``yield from``); raises what
+    that raises."""
     (answer,) = yield [("hull", cache, points, max_vertices, max_planes)]
     if isinstance(answer, Exception):
         raise answer
@@ -194,18 +171,20 @@ def ask_hull(
 
 
 def ask_measures(cache: FitCache, point_sets: Sequence[np.ndarray], ball: bool) -> FitSteps:
-    """``cache.measures(point_sets, ball)`` asked of :func:`run_steps` (``yield from``)."""
+    """:func:`~meshcol.collision.limits.measure_hull` rows of the exact hulls of
+    ``point_sets`` (the in-sphere when ``ball``; a row measured with it serves callers
+    without; each made once in ``cache``), asked of :func:`run_steps` (``yield from``)."""
     (answer,) = yield [("measures", cache, list(point_sets), ball)]
     return answer
 
 
 def ask_measure(cache: FitCache, points: np.ndarray, ball: bool) -> FitSteps:
-    """``cache.measure(points, ball)`` asked of :func:`run_steps`."""
+    """:func:`ask_measures` of one point set."""
     return (yield from ask_measures(cache, [points], ball))[0]
 
 
 def ask_measure_parts(cache: FitCache, point_sets: Sequence[np.ndarray], ball: bool) -> FitSteps:
-    """``cache.measure_parts(point_sets, ball)`` asked of :func:`run_steps`."""
+    """:func:`ask_measures` as :class:`~meshcol.collision.limits.PartMeasures` (a part a set)."""
     return measures_table((yield from ask_measures(cache, point_sets, ball)))
 
 
@@ -248,8 +227,9 @@ def _answer(questions: dict[int, list[tuple[Any, ...]]]) -> dict[int, list[Any]]
 
 
 def _hulls(questions: Sequence[tuple[Any, ...]]) -> list[Any]:
-    """``cache(points, max_vertices, max_planes)`` of each question, or the error it
-    raises: the hulls no cache holds made in one :func:`hulls_within_budgets`."""
+    """:func:`ask_hull`'s answer to each question (the hull, or the error
+    :func:`~meshcol.collision.hull.hull_within_budget` raises): the hulls no cache holds
+    made in one :func:`hulls_within_budgets`."""
     made: list[Any] = [None] * len(questions)
     todo: dict[tuple[int, Any], tuple[FitCache, Any, ExactHull, tuple[Any, Any]]] = {}
     failed: dict[tuple[int, Any], InvalidMeshError] = {}
