@@ -9,7 +9,9 @@ machine is shared, so read the ranges.
 The last report of each side is then compared field by field (:func:`compare_reports`):
 every number that differs is counted under its field's path (list indices left out), with
 the largest relative difference; any other difference (a key, a length, a string, a null)
-is counted as structural. ``--compare-only`` compares the reports ``--keep`` holds.
+is counted as structural. The hulls each side wrote (``--output``, one OBJ of every body's
+hull) are compared byte for byte (``hulls``: ``same`` or ``DIFFER``). ``--compare-only``
+compares the files ``--keep`` holds.
 
 Run:  .venv/bin/python benchmarks/bench_target_scale.py --baseline ../base/.venv/bin/meshcol
       [--sizes 1000,10000] [--profiles physx,isaac] [--repeats 1] [--keep DIR]
@@ -58,12 +60,14 @@ def scene(size: int) -> Path:
 
 def run(meshcol: str, scene_path: Path, profile: str, report: Path) -> tuple[float, float]:
     """Wall and CPU (user + system) seconds of one ``meshcol hull --target`` run (bytecode
-    written, as users run)."""
+    written, as users run), its hulls written beside ``report`` (:func:`hulls_path`; both
+    builds write them under one name, then renamed, so that the reports name the same file)."""
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     subprocess.run(
-        [meshcol, "hull", str(scene_path), "--target", profile, "--report", str(report)],
+        [meshcol, "hull", str(scene_path), "--target", profile, "--report", str(report)]
+        + ["--output", str(report.parent / "hulls.obj")],
         check=True,
         env=env,
         stdout=subprocess.DEVNULL,
@@ -71,8 +75,14 @@ def run(meshcol: str, scene_path: Path, profile: str, report: Path) -> tuple[flo
         cwd=HERE.parent,
     )
     wall = time.perf_counter() - start
+    (report.parent / "hulls.obj").replace(hulls_path(report))
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return wall, after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
+
+
+def hulls_path(report: Path) -> Path:
+    """The OBJ of the hulls written with ``report``."""
+    return report.with_suffix(".hulls.obj")
 
 
 def _walk(a: Any, b: Any, path: str) -> Iterator[tuple[str, float | None]]:
@@ -160,9 +170,11 @@ def main() -> None:
                 if base_report.read_bytes() != this_report.read_bytes()
                 else "byte-identical"
             )
+            same = hulls_path(base_report).read_bytes() == hulls_path(this_report).read_bytes()
             print(
                 f"{size:<6} {profile:<9} {_span(times['base']):>11}  {_span(times['this']):>11}"
-                f"  {_span(cpu['base']):>11}  {_span(cpu['this']):>11}  {_span(loads):>9}  {text}",
+                f"  {_span(cpu['base']):>11}  {_span(cpu['this']):>11}  {_span(loads):>9}  {text}"
+                f", hulls {'same' if same else 'DIFFER'}",
                 flush=True,
             )
 

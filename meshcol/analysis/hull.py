@@ -9,7 +9,7 @@ so a bad body stops the run before any file is written.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -508,20 +508,15 @@ def _body_hulls(
     for empty in robot_warnings(scene):  # a robot with no collision geometry (MC506)
         say(empty)
     if limits is None:
-        hulls = _budget_hulls(scene.bodies, max_vertices, progress)
-    caches: dict[int, Any] = {}
+        made = iter(_budget_hulls(scene.bodies, max_vertices, progress))
+    else:
+        made = _target_hulls(scene.bodies, limits, length_scale)
     for done, body in enumerate(scene.bodies, start=1):
-        if limits is not None:
-            if progress is not None:
-                progress(f"hull: {done}/{len(scene.bodies)} bodies")
-            try:
-                if done - 1 not in caches:  # the next bodies' hulls, measured at once
-                    caches = _fit_caches(scene.bodies, done - 1, limits)
-                hulls.append(
-                    target_hull(body.world_vertices(), limits, length_scale, caches.pop(done - 1))
-                )
-            except InvalidMeshError as exc:
-                raise _body_error(body, exc) from exc
+        if limits is not None and progress is not None:
+            progress(f"hull: {done}/{len(scene.bodies)} bodies")
+        hulls.append(next(made))
+        if isinstance(hulls[-1], InvalidMeshError):
+            raise _body_error(body, hulls[-1]) from hulls[-1]
         if hulls[done - 1].flat:
             say(f"{body.source}: body '{body.name}' is flat: the hull is a 2-D polygon")
         volumes.append(oriented_volume(body.vertices, body.faces))
@@ -568,18 +563,27 @@ def _budget_hulls(
         raise
 
 
-#: Bodies whose target fits start from one batch of hulls and measures (:func:`_fit_caches`).
+#: Bodies whose target fits run side by side (:func:`_target_hulls`), their hulls and
+#: measures asked for in one batch a round.
 FIT_BATCH = 512
 
 
-def _fit_caches(bodies: Any, start: int, limits: dict) -> dict[int, Any]:
-    """Body index -> :class:`~meshcol.collision.target_fit.FitCache` of the bodies from
-    ``start`` (:data:`FIT_BATCH` of them), made in one batch."""
-    from meshcol.collision.target_fit import fit_caches
+def _target_hulls(bodies: Any, limits: dict, length_scale: float) -> Iterator[Any]:
+    """:func:`target_hull` of each body's world vertices, in order (or the
+    :class:`InvalidMeshError` of a body without one), made :data:`FIT_BATCH` bodies at a
+    time by :func:`meshcol.collision.target_fit.fit_hulls`."""
+    from meshcol.collision.target_fit import fit_caches, fit_hulls
 
-    indices = range(start, min(start + FIT_BATCH, len(bodies)))
-    caches = fit_caches([bodies[i].world_vertices() for i in indices], limits)
-    return dict(zip(indices, caches, strict=True))
+    for start in range(0, len(bodies), FIT_BATCH):
+        chunk = range(start, min(start + FIT_BATCH, len(bodies)))
+        points = [bodies[i].world_vertices() for i in chunk]
+        caches = fit_caches(points, limits)
+        fits = fit_hulls(points, limits, length_scale, caches)
+        for pts, cache, fit in zip(points, caches, fits, strict=True):
+            if isinstance(fit, InvalidMeshError):
+                yield fit
+            else:
+                yield _target_result(pts, limits, fit, cache)
 
 
 def target_limits(target: Any, max_vertices: int | None) -> dict[str, Any]:
@@ -595,13 +599,18 @@ def target_limits(target: Any, max_vertices: int | None) -> dict[str, Any]:
 def target_hull(points: Any, limits: dict, length_scale: float, cache: Any = None) -> Any:
     """The hull of ``points`` fitted to ``limits``, as a :class:`HullResult` (its exact-hull
     fields from the input) that also carries the fit (``target_fit``); ``cache``: the
-    points' :class:`~meshcol.collision.target_fit.FitCache`, made already."""
-    from meshcol.collision.hull import HullResult
-    from meshcol.collision.limits import budget_vertices
+    points' :class:`~meshcol.collision.fit_cache.FitCache`, made already."""
     from meshcol.collision.target_fit import FitCache, fit_hull
 
     cache = FitCache() if cache is None else cache
-    fit = fit_hull(points, limits, length_scale, cache)
+    return _target_result(points, limits, fit_hull(points, limits, length_scale, cache), cache)
+
+
+def _target_result(points: Any, limits: dict, fit: Any, cache: Any) -> Any:
+    """:func:`target_hull`'s result of the fit ``fit`` of ``points`` (its cache ``cache``)."""
+    from meshcol.collision.hull import HullResult
+    from meshcol.collision.limits import budget_vertices
+
     vertices, faces = fit.parts[0]
     exact = cache.exact(points)
     out = cache.exact(vertices)

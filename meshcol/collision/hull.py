@@ -44,6 +44,7 @@ __all__ = [
     "exact_hull",
     "hull_within_budget",
     "hulls_within_budget",
+    "hulls_within_budgets",
     "pack_hulls",
 ]
 
@@ -302,22 +303,56 @@ def hulls_within_budget(
     3-D hulls over the budget simplified in one native call, ``threads`` over them (0: all
     cores). Raises as :func:`hull_within_budget` does for the first hull that has none."""
     _check_budgets(max_vertices, None)
-    results: list[HullResult | None] = []
-    over: list[int] = []
-    for i, exact in enumerate(exacts):
-        if exact.dimension == 3 and max_vertices is not None and len(exact.vertices) > max_vertices:
-            over.append(i)
-            results.append(None)
+    results = hulls_within_budgets(exacts, [(max_vertices, None)] * len(exacts), threads)
+    for result in results:
+        if isinstance(result, InvalidMeshError):
+            raise result
+    return results  # type: ignore[return-value]
+
+
+def hulls_within_budgets(
+    exacts: Sequence[ExactHull],
+    budgets: Sequence[tuple[int | None, int | None]],
+    threads: int = 0,
+) -> list[HullResult | InvalidMeshError]:
+    """:func:`hull_within_budget` of many exact hulls, each with its own ``(max_vertices,
+    max_planes)``, in order: the 3-D hulls past their budgets simplified in one native call
+    (:func:`simplify_many`, ``threads`` over them; 0: all cores), the others as
+    :func:`hull_within_budget` makes them. A hull that has none gets its error in its place
+    (a budget under :data:`MIN_MAX_VERTICES` raises ``ValueError``, as there)."""
+    results: list[HullResult | InvalidMeshError | None] = []
+    over: list[tuple[int, int, int | None]] = []
+    for i, (exact, (max_vertices, max_planes)) in enumerate(zip(exacts, budgets, strict=True)):
+        _check_budgets(max_vertices, max_planes)
+        if exact.dimension == 3:
+            vertex_budget, plane_budget = _budgets(exact, max_vertices, max_planes)
+            if vertex_budget is not None and not _fits(exact, vertex_budget, plane_budget):
+                over.append((i, vertex_budget, plane_budget))
+                results.append(None)
+                continue
+        try:
+            results.append(hull_within_budget(exact, max_vertices, max_planes))
+        except InvalidMeshError as exc:
+            results.append(exc)
+    bodies = [
+        (e.vertices, e.vertices[e.faces], e.equations, budget, e.diagonal, planes)
+        for e, budget, planes in ((exacts[i], b, p) for i, b, p in over)
+    ]
+    simplified: list[Any]
+    try:
+        simplified = simplify_many(bodies, threads)
+    except InvalidMeshError:  # a loop that failed (never seen): the bodies one by one
+        simplified = []
+        for body in bodies:
+            try:
+                simplified.append(simplify_many([body], threads)[0])
+            except InvalidMeshError as exc:
+                simplified.append(exc)
+    for (i, budget, _), made in zip(over, simplified, strict=True):
+        if isinstance(made, InvalidMeshError):
+            results[i] = made
         else:
-            results.append(hull_within_budget(exact, max_vertices))
-    if over:
-        budget = int(max_vertices)  # type: ignore[arg-type]
-        bodies = [
-            (e.vertices, e.vertices[e.faces], e.equations, budget, e.diagonal, None)
-            for e in (exacts[i] for i in over)
-        ]
-        for i, (q_vertices, distance) in zip(over, simplify_many(bodies, threads)):
-            results[i] = _budgeted_result(exacts[i], budget, q_vertices, distance)
+            results[i] = _budgeted_result(exacts[i], budget, *made)
     return results  # type: ignore[return-value]
 
 

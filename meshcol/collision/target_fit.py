@@ -9,31 +9,30 @@ limit cost is measured against the exact hull of the input (:class:`LimitCost`).
 
 from __future__ import annotations
 
-import hashlib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from meshcol.collision.facet_distance import rows_per_block
-from meshcol.collision.hull import (
-    ExactHull,
-    distance_to_hull,
-    exact_hull,
-    hull_within_budget,
+from meshcol.collision.fit_cache import (
+    FitCache,
+    FitSteps,
+    ask_hull,
+    ask_measure,
+    ask_measure_parts,
+    measure_batch,
+    run_steps,
 )
+from meshcol.collision.hull import exact_hull
 from meshcol.collision.limits import (
     GROWTH_SLACK,
     PART_MEASURES,
     RULES,
     PartMeasures,
     Violation,
-    add_balls,
     budget_vertices,
     limit_violations,
-    measure_hulls,
-    measures_table,
     scaled_limits,
 )
 from meshcol.errors import InvalidMeshError
@@ -45,6 +44,7 @@ __all__ = [
     "TargetFit",
     "fit_caches",
     "fit_hull",
+    "fit_hulls",
     "fit_parts",
     "merge_groups",
 ]
@@ -212,104 +212,6 @@ def _null_axes(points: np.ndarray, dimension: int) -> np.ndarray:
     return vt[dimension:]
 
 
-class FitCache:
-    """The hulls of one fit, each computed once: a fit and the fits of its costs
-    (:class:`LimitCost`) ask for the same exact hulls and the same budgeted hulls
-    (:func:`convex_hull`) of the same points (under ``--target physx`` three of four fits of
-    a scanned part ask for the same 255 vertices), and a hull is a function of its points and
-    budgets, so the answers are the same. Likewise the measures of an exact hull
-    (:func:`meshcol.collision.limits.measure_hull`: a small part's fit asked for the same
-    six times, each seeking its in-sphere), with the in-sphere added only when a caller
-    reads it, and the distance from a hull made here to an exact hull
-    (:func:`_outside_distance`), by the two objects (held here, so that their ids stay
-    theirs)."""
-
-    def __init__(self) -> None:
-        self._exact: dict[tuple[Any, ...], ExactHull] = {}
-        self._made: dict[tuple[Any, ...], Any] = {}
-        self._measures: dict[tuple[Any, ...], dict[str, Any]] = {}
-        self._balls: set[tuple[Any, ...]] = set()
-        self._distances: dict[tuple[int, int], tuple[float, Any, Any]] = {}
-
-    @staticmethod
-    def _key(points: np.ndarray) -> tuple[Any, ...]:
-        return (points.shape, hashlib.blake2b(points.data, digest_size=16).digest())
-
-    def exact(self, points: np.ndarray) -> ExactHull:
-        """:func:`exact_hull` of ``points``."""
-        pts = np.ascontiguousarray(points, dtype=np.float64)
-        if pts.ndim != 2 or pts.shape[1] != 3:
-            return exact_hull(pts)  # the error it raises
-        key = self._key(pts)
-        if key not in self._exact:
-            self._exact[key] = exact_hull(pts)
-        return self._exact[key]
-
-    def __call__(
-        self, points: np.ndarray, max_vertices: int | None = None, max_planes: int | None = None
-    ):
-        """:func:`convex_hull` of ``points`` within the budgets."""
-        exact = self.exact(points)
-        key = (*self._key(np.ascontiguousarray(points, dtype=np.float64)), max_vertices)
-        key += (max_planes,)
-        if key not in self._made:
-            self._made[key] = hull_within_budget(exact, max_vertices, max_planes)
-        return self._made[key]
-
-    def measure(self, points: np.ndarray, ball: bool) -> dict[str, Any]:
-        """:func:`measure_hull` of the exact hull of ``points`` (the in-sphere when ``ball``;
-        a row measured with it serves callers without)."""
-        return self.measures([points], ball)[0]
-
-    def measures(self, point_sets: Sequence[np.ndarray], ball: bool) -> list[dict[str, Any]]:
-        """:meth:`measure` of each point set, the missing ones in one batch."""
-        return _measure_batch([(self, p) for p in point_sets], ball)
-
-    def measure_parts(self, point_sets: Sequence[np.ndarray], ball: bool) -> PartMeasures:
-        """:func:`meshcol.collision.limits.measure_parts` of parts with these points."""
-        return measures_table(self.measures(point_sets, ball))
-
-    def outside_distance(self, points: np.ndarray, hull: ExactHull) -> float:
-        key = (id(points), id(hull))
-        if key not in self._distances:
-            self._distances[key] = (_outside_distance(points, hull), points, hull)
-        return self._distances[key][0]
-
-
-def _measure_batch(
-    requests: Sequence[tuple[FitCache, np.ndarray]], ball: bool
-) -> list[dict[str, Any]]:
-    """The measures of the exact hull of each request's points, from its cache or measured
-    now: every missing one in one :func:`measure_hulls` call, every missing in-sphere (when
-    ``ball``) in one :func:`add_balls` call."""
-    sets = [np.ascontiguousarray(p, dtype=np.float64) for _, p in requests]
-    for p in sets:
-        if p.ndim != 2 or p.shape[1] != 3:
-            exact_hull(p)  # the error it raises
-    keys = [cache._key(p) for (cache, _), p in zip(requests, sets, strict=True)]
-    missing: dict[tuple[int, Any], tuple[FitCache, np.ndarray]] = {}
-    for (cache, _), key, p in zip(requests, keys, sets, strict=True):
-        if key not in cache._measures:
-            missing[(id(cache), key)] = (cache, p)
-    if missing:
-        rows = measure_hulls([cache.exact(p) for cache, p in missing.values()], ball=False)
-        for ((_, key), (cache, _)), row in zip(missing.items(), rows, strict=True):
-            cache._measures[key] = row
-    if ball:
-        unballed: dict[tuple[int, Any], tuple[FitCache, np.ndarray]] = {}
-        for (cache, _), key, p in zip(requests, keys, sets, strict=True):
-            if key not in cache._balls:
-                unballed[(id(cache), key)] = (cache, p)
-        if unballed:
-            add_balls(
-                [cache.exact(p) for cache, p in unballed.values()],
-                [cache._measures[key] for (_, key), (cache, _) in unballed.items()],
-            )
-        for (_, key), (cache, _) in unballed.items():
-            cache._balls.add(key)
-    return [cache._measures[key] for (cache, _), key in zip(requests, keys, strict=True)]
-
-
 def fit_caches(
     point_sets: Sequence[Any], limits: Mapping[str, float] | None = None
 ) -> list[FitCache]:
@@ -332,13 +234,13 @@ def fit_caches(
         requests.append((cache, exact.vertices))
         if grows and exact.dimension == 3:
             requests.append((cache, pts))
-    _measure_batch(requests, ball=True)
+    measure_batch(requests, ball=True)
     return caches
 
 
 def _grow(
     points: np.ndarray, limits: Mapping[str, float], notes: list[str], hulls: FitCache
-) -> np.ndarray:
+) -> FitSteps:
     """The points grown (never shrunk) until their hull meets ``min_thickness``,
     ``min_volume`` and ``max_oblong_ratio``, or :data:`GROWTH_ROUNDS` are spent."""
     thickness = float(limits.get("min_thickness", 0.0))
@@ -370,7 +272,7 @@ def _grow(
             notes.append(f"gave a {hull.dimension}-D input a thickness of {length:.6g}")
             pts = base
             continue
-        m = hulls.measure(pts, ball=oblong is not None)
+        m = yield from ask_measure(hulls, pts, oblong is not None)
         normal = m["thin_normal"]
         if thickness > 0 and m["thickness"] < thickness * (1 - GROWTH_SLACK):
             grow = thickness - m["thickness"]
@@ -389,16 +291,18 @@ def _grow(
     return pts
 
 
-def _budgeted(points: np.ndarray, limits: Mapping[str, float], notes: list[str], hulls: FitCache):
+def _budgeted(
+    points: np.ndarray, limits: Mapping[str, float], notes: list[str], hulls: FitCache
+) -> FitSteps:
     """The exact hull of ``points`` if it meets the count limits, else the supporting-plane
     hull within them (budgets tightened until the measures agree)."""
     vertices = budget_vertices(limits)
     planes = limits.get("max_hull_polygons")
     per_vertex = limits.get("max_faces_per_vertex")
-    result = hulls(points, max_vertices=vertices)
+    result = yield from ask_hull(hulls, points, vertices)
     if result.flat:
         return result
-    m = hulls.measure(result.vertices, ball=False)
+    m = yield from ask_measure(hulls, result.vertices, False)
     plane_budget = None if planes is None else int(planes)
     for _ in range(BUDGET_ROUNDS):
         too_many_planes = planes is not None and m["polygons"] > planes
@@ -417,14 +321,14 @@ def _budgeted(points: np.ndarray, limits: Mapping[str, float], notes: list[str],
         plane_budget = max(int(current), 4)
         if too_many_vertices and vertices is not None:
             vertices = max(vertices - 1, 4)
-        result = hulls(points, max_vertices=vertices, max_planes=plane_budget)
-        m = hulls.measure(result.vertices, ball=False)
+        result = yield from ask_hull(hulls, points, vertices, plane_budget)
+        m = yield from ask_measure(hulls, result.vertices, False)
     if _counts_met(m, limits):
         return result
     # the last resort always meets every count limit a profile may set (>= 4 vertices, >= 4
     # polygons, >= 3 per vertex, >= 4 triangles): the smallest supporting tetrahedron
     notes.append("reduced to the enclosing tetrahedron (no larger hull met the budgets)")
-    return hulls(points, max_vertices=4, max_planes=4)
+    return (yield from ask_hull(hulls, points, 4, 4))
 
 
 def _counts_met(m: Mapping[str, Any], limits: Mapping[str, float]) -> bool:
@@ -444,7 +348,9 @@ def _growth_met(m: Mapping[str, Any], limits: Mapping[str, float]) -> bool:
     )
 
 
-def _fit_one(points: np.ndarray, limits: Mapping[str, float], notes: list[str], hulls: FitCache):
+def _fit_one(
+    points: np.ndarray, limits: Mapping[str, float], notes: list[str], hulls: FitCache
+) -> FitSteps:
     """Grow, then simplify; simplification can lengthen a part (its far vertices move out),
     so a part whose growth limits it broke is grown again from the simplified hull."""
     pts = points
@@ -453,10 +359,11 @@ def _fit_one(points: np.ndarray, limits: Mapping[str, float], notes: list[str], 
     others = {key: value for key, value in limits.items() if key != "max_oblong_ratio"}
     for _ in range(3):
         written = len(notes)
-        result = _budgeted(_grow(pts, limits, notes, hulls), limits, notes, hulls)
+        grown = yield from _grow(pts, limits, notes, hulls)
+        result = yield from _budgeted(grown, limits, notes, hulls)
         if result.flat:
             return result
-        m = hulls.measure(result.vertices, ball="max_oblong_ratio" in limits)
+        m = yield from ask_measure(hulls, result.vertices, "max_oblong_ratio" in limits)
         if _growth_met(m, limits):
             return result
         rounder = kept is None or m["oblong_ratio"] < kept[1] * (1 - OBLONG_PROGRESS)
@@ -518,6 +425,16 @@ def fit_parts(
        fit already meets adds nothing and is not refitted), so the marginal costs sum to
        the total; and standalone, each limit the exact hulls were past fitted alone.
     """
+    (fit,) = run_steps([_fit_parts(parts, target, length_scale, cache)])
+    if isinstance(fit, InvalidMeshError):
+        raise fit
+    return fit
+
+
+def _fit_parts(
+    parts: Sequence[tuple[Any, Any]], target: Any, length_scale: float, cache: FitCache | None
+) -> FitSteps:
+    """:func:`fit_parts`'s steps (:func:`meshcol.collision.fit_cache.run_steps`)."""
     limits = scaled_limits(target, length_scale)
     inputs = [np.asarray(v, dtype=np.float64) for v, _ in parts]
     if not inputs:
@@ -531,18 +448,20 @@ def fit_parts(
             )
     # only compared with the limits: the in-sphere (a linear programme) only for the ratio
     ball = "max_oblong_ratio" in limits
-    before = hulls.measure_parts([e.vertices for e in exacts], ball)
+    before = yield from ask_measure_parts(hulls, [e.vertices for e in exacts], ball)
     notes: list[str] = []
     groups = [[i] for i in range(len(inputs))]
     max_hulls = limits.get("max_hulls")
     if max_hulls is not None and len(groups) > max_hulls:
         groups = merge_groups(inputs, int(max_hulls))
         notes.append(f"merged {len(inputs)} parts into {len(groups)} (max_hulls)")
-    out_parts, added, distance = _fit_groups(inputs, exacts, groups, limits, notes, hulls)
-    after = hulls.measure_parts([v for v, _ in out_parts], ball=True)
+    out_parts, added, distance = yield from _fit_groups(
+        inputs, exacts, groups, limits, notes, hulls
+    )
+    after = yield from ask_measure_parts(hulls, [v for v, _ in out_parts], True)
     violations = limit_violations(limits, after, len(out_parts))
 
-    costs = _costs(
+    costs = yield from _costs(
         inputs, exacts, groups, limits, before, after, violations, (added, distance), hulls
     )
     return TargetFit(
@@ -556,7 +475,7 @@ def fit_parts(
     )
 
 
-def _costs(inputs, exacts, groups, limits, before, after, violations, fitted, hulls):
+def _costs(inputs, exacts, groups, limits, before, after, violations, fitted, hulls) -> FitSteps:
     """The :class:`LimitCost` of every limit: marginal (cumulative fits in
     :data:`APPLY_ORDER`, the last one being the fit itself, whose added volume and distance
     are ``fitted``) and standalone."""
@@ -575,9 +494,9 @@ def _costs(inputs, exacts, groups, limits, before, after, violations, fitted, hu
             # every limit: the fit itself; or exact hulls that meet every limit, which each
             # prefix of the limits fits as the whole does (no growth, no budget, no merge)
             previous = (added, distance)
-        elif previous_parts is None or _violated(key, applied, previous_parts, hulls):
+        elif previous_parts is None or (yield from _violated(key, applied, previous_parts, hulls)):
             prefix_groups = groups if "max_hulls" in applied else singles
-            previous_parts, cost_added, cost_distance = _fit_groups(
+            previous_parts, cost_added, cost_distance = yield from _fit_groups(
                 inputs, exacts, prefix_groups, applied, [], hulls
             )
             previous = (cost_added, cost_distance)
@@ -590,7 +509,7 @@ def _costs(inputs, exacts, groups, limits, before, after, violations, fitted, hu
             alone_added, alone_distance = added, distance
         else:
             alone_groups = groups if key == "max_hulls" else singles
-            _, alone_added, alone_distance = _fit_groups(
+            _, alone_added, alone_distance = yield from _fit_groups(
                 inputs, exacts, alone_groups, {key: limits[key]}, [], hulls
             )
         costs.append(
@@ -611,9 +530,11 @@ def _costs(inputs, exacts, groups, limits, before, after, violations, fitted, hu
     return costs
 
 
-def _violated(key: str, limits: Mapping[str, float], parts, hulls: FitCache) -> bool:
+def _violated(key: str, limits: Mapping[str, float], parts, hulls: FitCache) -> FitSteps:
     """Whether ``parts`` miss the limit ``key`` (so that applying it changes the fit)."""
-    measures = hulls.measure_parts([v for v, _ in parts], "max_oblong_ratio" in limits)
+    measures = yield from ask_measure_parts(
+        hulls, [v for v, _ in parts], "max_oblong_ratio" in limits
+    )
     return any(v.limit == key for v in limit_violations(limits, measures, len(parts)))
 
 
@@ -621,12 +542,36 @@ def fit_hull(
     points: Any, target: Any, length_scale: float = 1.0, cache: FitCache | None = None
 ) -> TargetFit:
     """One enclosing hull of ``points`` (n, 3) that meets ``target``: :func:`fit_parts`
-    with one part (``cache``: from :func:`fit_caches`, for many hulls at once)."""
-    pts = np.asarray(points, dtype=np.float64)
-    return fit_parts([(pts, np.zeros((0, 3), dtype=np.int64))], target, length_scale, cache)
+    with one part (``cache``: from :func:`fit_caches`)."""
+    (fit,) = fit_hulls([points], target, length_scale, [cache or FitCache()])
+    if isinstance(fit, InvalidMeshError):
+        raise fit
+    return fit
 
 
-def _fit_groups(inputs, exacts, groups, limits, notes, hulls):
+def fit_hulls(
+    point_sets: Sequence[Any],
+    target: Any,
+    length_scale: float = 1.0,
+    caches: Sequence[FitCache] | None = None,
+) -> list[TargetFit | InvalidMeshError]:
+    """:func:`fit_hull` of each point set, the fits run side by side
+    (:func:`meshcol.collision.fit_cache.run_steps`: each round's hulls and measures of all
+    in one batch); a set that has no fit gets the error :func:`fit_hull` raises in its
+    place. ``caches``: one :class:`FitCache` per set (default: :func:`fit_caches`)."""
+    sets = [np.asarray(points, dtype=np.float64) for points in point_sets]
+    if caches is None:
+        caches = fit_caches(sets, scaled_limits(target, length_scale))
+    empty = np.zeros((0, 3), dtype=np.int64)
+    return run_steps(
+        [
+            _fit_parts([(pts, empty)], target, length_scale, cache)
+            for pts, cache in zip(sets, caches, strict=True)
+        ]
+    )
+
+
+def _fit_groups(inputs, exacts, groups, limits, notes, hulls) -> FitSteps:
     """Fit each group of parts (the hull of their union) to the per-part limits: the parts,
     the volume they add over the exact hulls of their members, and the largest distance
     from a part to the exact hull of its members' points (for a merged group that hull
@@ -635,33 +580,13 @@ def _fit_groups(inputs, exacts, groups, limits, notes, hulls):
     parts, added, distance = [], 0.0, 0.0
     for group in groups:
         points = np.vstack([inputs[i] for i in group])
-        result = _fit_one(points, limits, notes, hulls)
+        result = yield from _fit_one(points, limits, notes, hulls)
         parts.append((result.vertices, result.faces))
         union = exacts[group[0]] if len(group) == 1 else hulls.exact(points)
         added += max(float(result.volume) - sum(float(exacts[i].volume) for i in group), 0.0)
         if len(result.vertices):
             distance = max(distance, hulls.outside_distance(result.vertices, union))
     return parts, added, distance
-
-
-def _outside_distance(points: np.ndarray, hull: ExactHull) -> float:
-    """Largest distance from ``points`` to the solid ``hull``, 0 for points on or inside it
-    (within rounding: ``1e-12`` of its diagonal in front of every face plane), so that a
-    part's own vertices report 0 rather than a rounding error."""
-    if hull.dimension == 3:
-        normals, offsets = hull.equations[:, :3].T, hull.equations[:, 3]
-        step = rows_per_block(len(offsets))  # a big part's vertices: by blocks of rows
-        highest = np.concatenate(
-            [
-                (points[start : start + step] @ normals + offsets).max(axis=1)
-                for start in range(0, max(len(points), 1), step)
-            ]
-        )
-        outside = highest > 1e-12 * max(hull.diagonal, 1e-300)
-        if not outside.any():
-            return 0.0
-        points = points[outside]
-    return float(distance_to_hull(points, hull).max())
 
 
 def merge_groups(inputs: list[np.ndarray], count: int) -> list[list[int]]:

@@ -3,13 +3,21 @@ qhull's half-space intersection, its hulls against the numpy loop and exact orac
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from meshcol._native import core
-from meshcol.collision.hull import convex_hull, exact_hull, hull_within_budget, hulls_within_budget
+from meshcol.collision.hull import (
+    convex_hull,
+    exact_hull,
+    hull_within_budget,
+    hulls_within_budget,
+    hulls_within_budgets,
+)
 from meshcol.collision.hull_budget import (
     MERGE_RELATIVE_DISTANCE,
     _merge_close,
@@ -17,6 +25,7 @@ from meshcol.collision.hull_budget import (
     _simplify_qhull,
     simplify_many,
 )
+from meshcol.errors import InvalidMeshError
 from meshcol.geometry.triangles import closest_points_on_triangles
 
 # ---------------------------------------------------------------------------------------
@@ -207,3 +216,31 @@ def test_many_keeps_flat_and_small_hulls_as_single_calls_do() -> None:
         single = hull_within_budget(exact, 4)
         assert result.vertices.tobytes() == single.vertices.tobytes()
         assert result.flat == single.flat and result.max_distance == single.max_distance
+
+
+def test_many_with_their_own_budgets_are_the_singles_and_keep_their_errors() -> None:
+    line = np.outer(np.linspace(0, 1, 5), [1.0, 2.0, 3.0])
+    square = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0.5, 1.2, 0]], float)
+    exacts = [exact_hull(_cloud(10 + i, 40 + 30 * i)) for i in range(6)]
+    exacts += [exact_hull(line), exact_hull(square)]
+    budgets = [(9, None), (None, 12), (20, 8), (4, 4), (None, None), (200, 300)]
+    budgets += [(9, None), (4, None)]
+    for made, exact, (vertices, planes) in zip(
+        hulls_within_budgets(exacts, budgets), exacts, budgets, strict=True
+    ):
+        if exact.dimension == 1:
+            assert isinstance(made, InvalidMeshError)
+            with pytest.raises(InvalidMeshError, match=re.escape(made.message)):
+                hull_within_budget(exact, vertices, planes)
+            continue
+        single = hull_within_budget(exact, vertices, planes)
+        assert made.vertices.tobytes() == single.vertices.tobytes()
+        assert made.faces.tobytes() == single.faces.tobytes()
+        assert (made.volume, made.max_distance, made.added_volume, made.max_vertices) == (
+            single.volume,
+            single.max_distance,
+            single.added_volume,
+            single.max_vertices,
+        )
+    with pytest.raises(ValueError, match="max_planes must be >= 4"):
+        hulls_within_budgets(exacts[:1], [(9, 3)])
