@@ -393,7 +393,7 @@ def robot_options(exclusions: bool = False) -> Callable[[Callable[..., Any]], Ca
     ``--package-path NAME=DIR`` (repeatable) and, with ``exclusions``, ``--srdf FILE`` and
     ``--include-adjacent``. The command gets them as one parameter, ``robot_options`` (a
     :class:`meshcol.io.robot.RobotOptions`), to pass to the library; they do nothing for
-    other inputs."""
+    other inputs, and a warning on stderr says so when some were given."""
     import functools
 
     flags = _ROBOT_FLAGS + (_EXCLUSION_FLAGS if exclusions else ())
@@ -409,6 +409,7 @@ def robot_options(exclusions: bool = False) -> Callable[[Callable[..., Any]], Ca
                 kwargs.pop("srdf", None),
                 kwargs.pop("include_adjacent", False),
             )
+            _warn_unused_robot_flags(made, kwargs.get("inputs") or [kwargs.get("manifest")])
             return func(*args, robot_options=made, **kwargs)
 
         wrapped: Callable[..., Any] = run
@@ -417,6 +418,38 @@ def robot_options(exclusions: bool = False) -> Callable[[Callable[..., Any]], Ca
         return wrapped
 
     return decorate
+
+
+def _warn_unused_robot_flags(options: RobotOptions, inputs: Sequence[Any]) -> None:
+    """A warning on stderr naming the robot flags given when no input is a robot description
+    (they would be ignored without a word)."""
+    from meshcol.errors import MeshcolError
+    from meshcol.io.inputs import is_robot_file
+
+    given = [
+        flag
+        for flag, used in (
+            ("--joint/--joints", bool(options.joints)),
+            ("--keyframe", options.keyframe),
+            ("--package-path", bool(options.package_paths)),
+            ("--srdf", options.srdf is not None),
+            ("--include-adjacent", options.include_adjacent),
+        )
+        if used
+    ]
+    paths = [path for path in inputs if path]
+    if not given or not paths:
+        return
+    try:
+        if any(is_robot_file(path) for path in paths):
+            return
+    except MeshcolError:
+        return  # the command names what is wrong with its inputs
+    click.echo(
+        f"meshcol: warning: {', '.join(given)}: for a robot description (URDF, MJCF); no "
+        "input is one, so ignored",
+        err=True,
+    )
 
 
 def _make_robot_options(

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
@@ -113,3 +114,30 @@ def test_a_run_collects_garbage_less_often_then_restores_the_rate() -> None:
     assert gc.get_threshold() == before
     assert CliRunner().invoke(main, ["--version"]).exit_code == 0
     assert gc.get_threshold() == before
+
+
+SAMPLES = Path(__file__).resolve().parents[2] / "samples"
+
+
+@pytest.mark.parametrize(
+    ("inputs", "flags", "named"),
+    [
+        (["level/props/crate.obj", "level/props/barrel.obj"], ["--srdf", "x.srdf"], "--srdf"),
+        (["level/scene.json"], ["--joint", "elbow=1", "--include-adjacent"], "--joint/--joints"),
+        (["robot/arm.urdf"], ["--joint", "elbow=1"], None),
+        (["level/props/crate.obj"], [], None),
+    ],
+)
+def test_robot_flags_without_a_robot_are_said_to_be_ignored(
+    inputs: list[str], flags: list[str], named: str | None
+) -> None:
+    pytest.importorskip("yourdfpy")
+    paths = [str(SAMPLES / path) for path in inputs]
+    result = CliRunner().invoke(main, ["check", *paths, *flags, "--format", "json"])
+    assert result.exit_code in (0, 1), result.stderr  # 1: the samples' props overlap
+    warned = [line for line in result.stderr.splitlines() if "no input is one" in line]
+    if named is None:
+        assert not warned
+    else:
+        assert len(warned) == 1 and named in warned[0], result.stderr
+        assert all(flag in warned[0] for flag in flags if flag.startswith("--"))
