@@ -31,7 +31,6 @@ import zipfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from meshcol.collision.arrays import as_offsets
 from meshcol.io.report import atomic_path
 
 if TYPE_CHECKING:  # numpy and the results load with an entry: a warm `meshcol ci` needs neither
@@ -197,6 +196,7 @@ def store(result: Decomposition, cache_dir: str | os.PathLike[str] | None = None
     entry is (a Path, or the entry's URL)."""
     import numpy as np
 
+    from meshcol.collision.arrays import as_offsets
     from meshcol.decomposition.fidelity import METRICS_VERSION
 
     header = {
