@@ -331,7 +331,13 @@ def _part_geoms(
             name += "_"
         mesh_names.add(name)
         added.append(name)
-        spec.add_mesh(name=name, file=os.path.join(stage, file))
+        mesh = spec.add_mesh(name=name, file=os.path.join(stage, file))
+        # The part file is in metres in the body frame: a <default><mesh scale refpos
+        # refquat> of the input (Menagerie's op3 writes its STL in millimetres) must not
+        # scale or move it (written only where the default differs).
+        mesh.scale = [1.0, 1.0, 1.0]
+        mesh.refpos = [0.0, 0.0, 0.0]
+        mesh.refquat = [1.0, 0.0, 0.0, 0.0]
         target = geom if k == 0 else geom.parent.add_geom()
         if k > 0:
             for attribute in _GEOM_ATTRIBUTES:
