@@ -524,7 +524,7 @@ def failures(row: dict) -> list[str]:
         if value is None:
             continue
         if isinstance(value, str):
-            if not value.startswith(("ok", "skip")):
+            if not value.startswith(("ok", "skip")) and not _refusal(value):
                 out.append(f"fit --to {fmt}: {value[:60]}")
         elif fmt == "urdf":
             out += [
@@ -541,7 +541,7 @@ def failures(row: dict) -> list[str]:
     if contain and (contain.get("error") or contain["outside"]):
         out.append(f"fit containment: {contain.get('error') or 'vertices outside'}")
     matrix = row["matrix"]
-    if matrix["exit"] != 0:
+    if matrix["exit"] != 0 and not _refusal(f"exit {matrix['exit']}: {matrix['line']}"):
         out.append(f"collision-matrix exit {matrix['exit']}: {matrix['line'][:60]}")
     elif matrix.get("oracle", {}).get("missed"):
         out.append("collision-matrix: Never pair colliding at its own samples")
@@ -549,6 +549,27 @@ def failures(row: dict) -> list[str]:
         out.append(
             f"SRDF: {matrix['srdf'] if isinstance(matrix['srdf'], str) else matrix['srdf'][0]}"
         )
+    return out
+
+
+def _refusal(said: str) -> bool:
+    """An exit 2 with its one-line reason (no traceback): bad input refused, not a failure
+    (the table lists each reason, to be judged true)."""
+    return "exit 2: " in said and "TRACEBACK" not in said
+
+
+def refusals(row: dict) -> list[str]:
+    """The commands of a row that refused the robot (exit 2), with the reason."""
+    if row["inspect"] == "fragment":
+        return []
+    out = [f"inspect: {row['inspect']['line']}"] * (row["inspect"]["exit"] == 2)
+    out += [
+        f"fit --to {fmt}: {value.partition('exit 2: ')[2]}"
+        for fmt, value in row["fit"].items()
+        if isinstance(value, str) and _refusal(value)
+    ]
+    matrix = row["matrix"]
+    out += [f"collision-matrix: {matrix['line']}"] * (matrix["exit"] == 2)
     return out
 
 
@@ -564,7 +585,7 @@ def cells(row: dict) -> tuple[str, str, str, str]:
         elif isinstance(value, dict):
             value = wild.cell({"mjcf": value}, "mjcf").replace(" among excluded pairs", "")
         if value is not None:
-            parts.append(f"{fmt} {value}")
+            parts.append(f"{fmt} {'refused (exit 2)' if _refusal(value) else value}")
     contain = fit.get("contain")
     if contain:
         parts.append(
@@ -600,7 +621,9 @@ def table(rows: list[dict]) -> str:
         if row["inspect"] == "fragment":
             continue
         said, fit, srdf, hits = cells(row)
-        ok = "yes" if not failures(row) else "NO: " + ", ".join(failures(row))
+        ok = "NO: " + ", ".join(failures(row)) if failures(row) else "yes"
+        if refusals(row) and not failures(row):
+            ok = "refused (exit 2): " + refusals(row)[0].split(": ", 1)[1][-90:]
         lines.append(
             f"| {row['collection']} | {row['robot']} | {said} | {fit} | {srdf} | {hits} | {ok} "
             f"| {row['seconds']} |"
@@ -612,8 +635,9 @@ def table(rows: list[dict]) -> str:
 def summary(rows: list[dict]) -> str:
     """Per collection: robots run, passed, each failure class with its count."""
     lines = [
-        "| collection | robots | passed | failures (class: count) | Never pairs hit |",
-        "| --- | --- | --- | --- | --- |",
+        "| collection | robots | passed | refused (exit 2) | failures (class: count) "
+        "| Never pairs hit |",
+        "| --- | --- | --- | --- | --- | --- |",
     ]
     by: dict[str, list[dict]] = {}
     for row in rows:
@@ -628,7 +652,9 @@ def summary(rows: list[dict]) -> str:
         hit = sum(len(o["hit"]) for o in oracles)
         pairs = sum(o["pairs"] for o in oracles)
         lines.append(
-            f"| {collection} | {len(group)} | {sum(not failures(r) for r in group)} | "
+            f"| {collection} | {len(group)} | "
+            f"{sum(not failures(r) and not refusals(r) for r in group)} | "
+            f"{sum(bool(refusals(r)) and not failures(r) for r in group)} | "
             f"{', '.join(f'{k}: {v}' for k, v in sorted(classes.items())) or '-'} | "
             f"{hit} of {pairs} ({len(oracles)} MJCF robots) |"
         )
