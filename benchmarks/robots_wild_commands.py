@@ -677,7 +677,9 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--only", choices=sorted(wild.COLLECTIONS), action="append")
     parser.add_argument("--limit", type=int, default=None, help="robots per collection")
-    parser.add_argument("--match", action="append", help="only robots of this file name")
+    parser.add_argument(
+        "--match", action="append", help="only robots of this file name (or FOLDER/NAME)"
+    )
     parser.add_argument("--json", type=Path, default=None, help="every row, as JSON")
     parser.add_argument("--samples", type=int, default=1000, help="collision-matrix samples")
     parser.add_argument("--configs", type=int, default=300, help="Never oracle configurations")
@@ -697,7 +699,11 @@ def main() -> int:
     for collection in args.only or wild.COLLECTIONS:
         robots = wild.COLLECTIONS[collection]()
         if args.match:
-            robots = [r for r in robots if r.name in args.match]
+            robots = [
+                r
+                for r in robots
+                if r.name in args.match or f"{r.parent.name}/{r.name}" in args.match
+            ]
         for robot in robots[: args.limit]:
             row = isolated_row(collection, robot, args.samples, args.configs)
             said = "ok" if not failures(row) else "NO: " + ", ".join(failures(row))
