@@ -424,7 +424,13 @@ def _mark(mujoco: Any, spec: Any, geoms: list[Any]) -> dict[str, tuple[bool, dic
             taken.add(name)
         size = np.asarray(geom.size, dtype=np.float64)[: used.get(geom.type, 2)]
         values = {"size": size, "pos": geom.pos, "quat": geom.quat}
-        markers[geom.name] = (own, {key: format_numbers(v) for key, v in values.items()})
+        exact = {key: format_numbers(v) for key, v in values.items()}
+        if geom.classname is not None and geom.classname.geom.meshname:
+            # its class names a mesh (Menagerie's leap_hand: <default class="tip"><geom
+            # mesh="tip">): the primitive must not inherit it, which MuJoCo fits the
+            # primitive to, or refuses once that mesh asset is gone
+            exact["mesh"] = ""
+        markers[geom.name] = (own, exact)
     return markers
 
 

