@@ -74,12 +74,13 @@ def run_inspect(robot: Path, work: Path) -> dict:
     return out
 
 
-def run_fit(robot: Path, work: Path, excluded: set, empty: bool) -> dict:
+def run_fit(robot: Path, work: Path, excluded: set, empty: bool, shape: str = "auto") -> dict:
     formats = ["urdf", "mjcf", "usd"] if robot.suffix == ".urdf" else ["mjcf", "usd"]
     out: dict = {}
     for fmt in formats:
         folder = work / f"fit_{fmt}"
-        code, line = wild.meshcol("fit", str(robot), "--out-dir", str(folder), "--to", fmt)
+        args = ("--out-dir", str(folder), "--to", fmt, "--shape", shape)
+        code, line = wild.meshcol("fit", str(robot), *args)
         if code != 0:
             out[fmt] = f"FAIL fit exit {code}: {line[:100]}"
             continue
@@ -487,7 +488,9 @@ def never_oracle(robot: Path, never: list[tuple[str, str]], count: int, report: 
 # -- the rows -----------------------------------------------------------------------------------
 
 
-def run_robot(collection: str, robot: Path, work: Path, samples: int, configs: int) -> dict:
+def run_robot(
+    collection: str, robot: Path, work: Path, samples: int, configs: int, shape: str = "auto"
+) -> dict:
     began = time.perf_counter()
     row: dict = {
         "collection": wild.collection_label(collection),
@@ -504,7 +507,8 @@ def run_robot(collection: str, robot: Path, work: Path, samples: int, configs: i
     row["inspect"] = run_inspect(robot, work)
     empty = "MC506" in row["inspect"].get("rules", [])
     excluded = wild.excluded_pairs(robot)
-    row["fit"] = run_fit(robot, work, excluded, empty)
+    row["fit"] = run_fit(robot, work, excluded, empty, shape)
+    row["fit"]["shape"] = shape
     row["matrix"] = run_matrix(robot, work, samples, configs)
     row["seconds"] = round(time.perf_counter() - began, 1)
     return row
@@ -661,16 +665,20 @@ def summary(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
-def _row_in_scratch(collection: str, robot: Path, samples: int, configs: int) -> dict:
+def _row_in_scratch(
+    collection: str, robot: Path, samples: int, configs: int, shape: str = "auto"
+) -> dict:
     with tempfile.TemporaryDirectory() as work:
-        return run_robot(collection, robot, Path(work), samples, configs)
+        return run_robot(collection, robot, Path(work), samples, configs, shape)
 
 
-def isolated_row(collection: str, robot: Path, samples: int, configs: int) -> dict:
+def isolated_row(
+    collection: str, robot: Path, samples: int, configs: int, shape: str = "auto"
+) -> dict:
     from concurrent.futures import ProcessPoolExecutor
 
     with ProcessPoolExecutor(max_workers=1, max_tasks_per_child=1) as pool:
-        return pool.submit(_row_in_scratch, collection, robot, samples, configs).result()
+        return pool.submit(_row_in_scratch, collection, robot, samples, configs, shape).result()
 
 
 def main() -> int:
@@ -683,6 +691,12 @@ def main() -> int:
     parser.add_argument("--json", type=Path, default=None, help="every row, as JSON")
     parser.add_argument("--samples", type=int, default=1000, help="collision-matrix samples")
     parser.add_argument("--configs", type=int, default=300, help="Never oracle configurations")
+    parser.add_argument(
+        "--shape",
+        default="auto",
+        choices=["auto", "capsule", "box", "sphere", "cylinder"],
+        help="fit's --shape",
+    )
     parser.add_argument("--timeout", type=float, default=300.0, help="seconds per command")
     parser.add_argument("--table", type=Path, nargs="+", default=None)
     args = parser.parse_args()
@@ -705,7 +719,7 @@ def main() -> int:
                 if r.name in args.match or f"{r.parent.name}/{r.name}" in args.match
             ]
         for robot in robots[: args.limit]:
-            row = isolated_row(collection, robot, args.samples, args.configs)
+            row = isolated_row(collection, robot, args.samples, args.configs, args.shape)
             said = "ok" if not failures(row) else "NO: " + ", ".join(failures(row))
             print(f"{collection} {robot.name}: {said} ({row['seconds']} s)", file=sys.stderr)
             rows.append(row)
