@@ -169,7 +169,8 @@ COLLECTIONS: dict[str, Callable[[], list[Path]]] = {
 
 
 def meshcol(*args: str) -> tuple[int, str]:
-    """Exit code and last stderr line of one meshcol command (124 on timeout)."""
+    """Exit code and last stderr line of one meshcol command (124 on timeout; the line starts
+    with ``TRACEBACK:`` when the command raised, whatever its exit code)."""
     try:
         done = subprocess.run(
             [sys.executable, "-m", "meshcol", *args],
@@ -181,6 +182,8 @@ def meshcol(*args: str) -> tuple[int, str]:
         return 124, f"timeout after {TIMEOUT} s"
     lines = [line for line in done.stderr.splitlines() if line.strip()]
     last = lines[-1] if lines else ""
+    if "Traceback (most recent call last)" in done.stderr:  # exit 1 too: never a finding
+        return done.returncode, f"TRACEBACK: {last}"
     # "meshcol: error: /long/path/robot.urdf: what" -> "what"
     return done.returncode, last.split(".urdf: ", 1)[-1].split(".xml: ", 1)[-1]
 
@@ -307,8 +310,8 @@ def run_robot(collection: str, robot: Path, work: Path) -> dict:
             row["seconds"] = round(time.perf_counter() - began, 1)
             return row
     code, line = meshcol("check", str(robot), "--report", str(work / "check.json"))
-    row["check"] = code
-    if code not in (0, 1):
+    row["check"] = 3 if line.startswith("TRACEBACK") else code  # a raise is no verdict
+    if row["check"] not in (0, 1):
         row["note"] = line
         if robot.suffix == ".urdf" and any(n in line for n in NOTHING_TO_CHECK):
             # Refused as no robot: do its consumers load it? If either does, the refusal is

@@ -22,7 +22,7 @@ import numpy as np
 
 from meshcol.errors import MeshcolError, MissingDependencyError, SceneError
 from meshcol.io.packages import resolve_mesh_reference
-from meshcol.io.urdf_write import format_numbers, urdf_text
+from meshcol.io.urdf_write import format_numbers, is_ball, urdf_text
 from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, Sphere
 
 if TYPE_CHECKING:
@@ -331,7 +331,13 @@ def _part_geoms(
             name += "_"
         mesh_names.add(name)
         added.append(name)
-        spec.add_mesh(name=name, file=os.path.join(stage, file))
+        mesh = spec.add_mesh(name=name, file=os.path.join(stage, file))
+        # The part file is in metres in the body frame: a <default><mesh scale refpos
+        # refquat> of the input (Menagerie's op3 writes its STL in millimetres) must not
+        # scale or move it (written only where the default differs).
+        mesh.scale = [1.0, 1.0, 1.0]
+        mesh.refpos = [0.0, 0.0, 0.0]
+        mesh.refquat = [1.0, 0.0, 0.0, 0.0]
         target = geom if k == 0 else geom.parent.add_geom()
         if k > 0:
             for attribute in _GEOM_ATTRIBUTES:
@@ -373,7 +379,7 @@ def _imported_primitives(mujoco: Any, spec: Any, robot: RobotColliders) -> list[
             continue
         primitive = collider.primitive
         want = types[type(primitive)]
-        written = mujoco.mjtGeom.mjGEOM_SPHERE if isinstance(primitive, Ellipsoid) else want
+        written = mujoco.mjtGeom.mjGEOM_SPHERE if _as_sphere(primitive) else want
         for geom in spec.geoms:
             if (
                 id(geom) not in taken
@@ -389,6 +395,12 @@ def _imported_primitives(mujoco: Any, spec: Any, robot: RobotColliders) -> list[
                 found.append(geom)
                 break
     return found
+
+
+def _as_sphere(primitive: Any) -> bool:
+    """Written as a sphere in the URDF: an ellipsoid's placeholder, or a capsule of length 0
+    (the same solid as its sphere; MuJoCo refuses a capsule of half-length 0)."""
+    return isinstance(primitive, Ellipsoid) or is_ball(primitive)
 
 
 def _placeholder_of(geom: Any, ellipsoid: Ellipsoid) -> bool:
@@ -418,7 +430,13 @@ def _mark(mujoco: Any, spec: Any, geoms: list[Any]) -> dict[str, tuple[bool, dic
             taken.add(name)
         size = np.asarray(geom.size, dtype=np.float64)[: used.get(geom.type, 2)]
         values = {"size": size, "pos": geom.pos, "quat": geom.quat}
-        markers[geom.name] = (own, {key: format_numbers(v) for key, v in values.items()})
+        exact = {key: format_numbers(v) for key, v in values.items()}
+        if geom.classname is not None and geom.classname.geom.meshname:
+            # its class names a mesh (Menagerie's leap_hand: <default class="tip"><geom
+            # mesh="tip">): the primitive must not inherit it, which MuJoCo fits the
+            # primitive to, or refuses once that mesh asset is gone
+            exact["mesh"] = ""
+        markers[geom.name] = (own, exact)
     return markers
 
 
@@ -454,8 +472,8 @@ def _mjcf_primitive(
     if isinstance(p, Box):
         geom.type = mujoco.mjtGeom.mjGEOM_BOX
         geom.size = [s / 2.0 for s in p.size]
-    elif isinstance(p, Sphere):
-        geom.type = mujoco.mjtGeom.mjGEOM_SPHERE
+    elif isinstance(p, Sphere) or is_ball(p):
+        geom.type = mujoco.mjtGeom.mjGEOM_SPHERE  # a capsule of length 0 is its sphere
         geom.size = [p.radius, 0.0, 0.0]
     elif isinstance(p, Cylinder):
         geom.type = mujoco.mjtGeom.mjGEOM_CYLINDER

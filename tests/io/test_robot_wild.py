@@ -681,3 +681,55 @@ def test_a_visual_mesh_too_thin_for_a_volume_inertia_gets_a_shell_inertia(tmp_pa
     text = hull_to_mjcf(robot, tmp_path / "out").read_text()
     assert "mesh volume is too small" in text and 'with inertia="shell"' in text
     mujoco.MjModel.from_xml_path(str(tmp_path / "out" / "hand.xml"))
+
+
+BALL_URDF = """<robot name="r">
+  <link name="base"><collision><geometry><mesh filename="ball.obj"/></geometry></collision></link>
+  <link name="arm"><collision><origin xyz="0.5 0 0"/>
+    <geometry><mesh filename="ball.obj"/></geometry></collision></link>
+  <joint name="j" type="revolute"><parent link="base"/><child link="arm"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+</robot>
+"""
+
+
+@pytest.mark.parametrize("fmt", ["urdf", "mjcf"])
+def test_a_capsule_fit_of_length_zero_is_written_as_its_sphere(tmp_path, fmt):
+    """The capsule fit of a ball has length 0: MuJoCo refused the rebuilt model ("size 1 must
+    be positive"), as it did example-robot-data's borinot_flying_arm_2. The same solid is
+    written as a sphere; MuJoCo's reading of it holds every vertex of the ball."""
+    mujoco = pytest.importorskip("mujoco")
+    import trimesh
+
+    ball = trimesh.creation.icosphere(subdivisions=2, radius=0.1)
+    ball.export(tmp_path / "ball.obj")
+    (tmp_path / "r.urdf").write_text(BALL_URDF)
+    out = tmp_path / "out"
+    args = ["fit", str(tmp_path / "r.urdf"), "--out-dir", str(out), "--to", fmt]
+    code, _, err = run(*args, "--shape", "capsule")
+    assert code == 0, err
+    if fmt == "urdf":
+        assert "<capsule" not in (out / "r.urdf").read_text()
+        model = mujoco.MjModel.from_xml_string((out / "r.urdf").read_text())
+    else:
+        model = mujoco.MjModel.from_xml_path(str(out / "r.xml"))
+    spheres = [g for g in range(model.ngeom) if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_SPHERE]
+    assert len(spheres) == 2
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    for g, at in zip(sorted(spheres, key=lambda g: data.geom_xpos[g][0]), (0.0, 0.5)):
+        centre = data.geom_xpos[g]
+        reach = np.linalg.norm(ball.vertices + [at, 0, 0] - centre, axis=1).max()
+        assert reach <= model.geom_size[g][0] + 1e-12
+
+
+def test_capsule_fit_of_borinot_compiles_in_mujoco(tmp_path):
+    pytest.importorskip("mujoco")
+    robot = collection_file(
+        "example-robot-data", "borinot_description", "urdf", "borinot_flying_arm_2.urdf"
+    )
+    out = tmp_path / "out"
+    code, _, err = run(
+        "fit", str(robot), "--out-dir", str(out), "--to", "mjcf", "--shape", "capsule"
+    )
+    assert code == 0, err
