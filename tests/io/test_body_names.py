@@ -5,7 +5,6 @@ configuration's allow list, and through the mesh writers and back."""
 
 from __future__ import annotations
 
-import base64
 import json
 from pathlib import Path
 
@@ -13,6 +12,7 @@ import numpy as np
 import pytest
 import trimesh
 from click.testing import CliRunner
+from gltf_documents import CUBE, cube_document
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -153,8 +153,6 @@ def test_ten_thousand_clashing_leaves_are_named_in_one_pass() -> None:
 pxr = pytest.importorskip("pxr")
 from pxr import Gf, Usd, UsdGeom  # noqa: E402
 
-CUBE = trimesh.creation.box(extents=[1.0, 1.0, 1.0])
-
 #: (prim path of the Xform, translation) of each body; the mesh prim is named last.
 PLACED = [
     ("/World/crate_01/mesh", (0.0, 0.0, 0.0)),
@@ -269,43 +267,6 @@ def test_the_names_survive_the_mesh_writers(tmp_path: Path) -> None:
 # -- glTF: nodes of one name under different parents --------------------------------------
 
 
-def gltf_document(nodes: list, roots: list, primitives: int = 1) -> dict:
-    """A glTF document whose mesh 0 (a unit cube, data URI) nodes may use; mesh 1 has the
-    cube ``primitives`` times."""
-    points = np.asarray(CUBE.vertices, dtype="<f4").tobytes()
-    indices = np.asarray(CUBE.faces, dtype="<u4").tobytes()
-    blob = points + indices
-    primitive = {"attributes": {"POSITION": 0}, "indices": 1}
-    return {
-        "asset": {"version": "2.0"},
-        "scene": 0,
-        "scenes": [{"nodes": roots}],
-        "nodes": nodes,
-        "meshes": [{"primitives": [primitive]}, {"primitives": [primitive] * primitives}],
-        "accessors": [
-            {
-                "bufferView": 0,
-                "componentType": 5126,
-                "count": len(CUBE.vertices),
-                "type": "VEC3",
-                "min": [-0.5] * 3,
-                "max": [0.5] * 3,
-            },
-            {"bufferView": 1, "componentType": 5125, "count": CUBE.faces.size, "type": "SCALAR"},
-        ],
-        "bufferViews": [
-            {"buffer": 0, "byteOffset": 0, "byteLength": len(points)},
-            {"buffer": 0, "byteOffset": len(points), "byteLength": len(indices)},
-        ],
-        "buffers": [
-            {
-                "byteLength": len(blob),
-                "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode(),
-            }
-        ],
-    }
-
-
 SHELF = [
     {"name": "Shelf", "children": [1, 3, 5, 6]},
     {"name": "crate_01", "children": [2], "translation": [0, 0, 0]},
@@ -319,7 +280,7 @@ SHELF = [
 
 def test_gltf_nodes_of_one_name_are_named_by_their_parents(tmp_path: Path) -> None:
     path = tmp_path / "shelf.gltf"
-    path.write_text(json.dumps(gltf_document(SHELF, [0])))
+    path.write_text(json.dumps(cube_document(SHELF, [0])))
     names = ["shelf/crate_01/mesh", "shelf/crate_02/mesh", "shelf/Shelf/lid", "shelf/Shelf/lid#2"]
     assert sorted(b.name for b in load_mesh(path)) == sorted(names)
     by_name = {b.name: b.world_vertices().min(axis=0)[0] for b in load_mesh(path)}
@@ -337,7 +298,7 @@ def test_a_node_of_several_primitives_has_the_same_names_every_read(tmp_path: Pa
     a different name each read (and --to gltf-physics could not find them again)."""
     nodes = [{"name": "rack", "mesh": 1}, {"name": "bin", "mesh": 0, "translation": [3, 0, 0]}]
     path = tmp_path / "rack.gltf"
-    path.write_text(json.dumps(gltf_document(nodes, [0, 1], primitives=2)))
+    path.write_text(json.dumps(cube_document(nodes, [0, 1], primitives=2)))
     first, again = ([b.name for b in load_mesh(path)] for _ in range(2))
     assert first == again
     assert first == ["rack/rack", "rack/rack#2", "rack/bin"]  # the document's node order
@@ -376,7 +337,7 @@ def test_gltf_physics_bodies_of_one_name_are_named_by_their_parents(tmp_path: Pa
         {"name": "crate", "extensions": {khr: {"motion": {}}}, "children": [5]},
         {"name": "hull", "mesh": 0, "extensions": {khr: {"collider": {"geometry": {"node": 5}}}}},
     ]
-    document = gltf_document(nodes, [0, 3])
+    document = cube_document(nodes, [0, 3])
     document["extensionsUsed"] = [khr]
     path = tmp_path / "bays.gltf"
     path.write_text(json.dumps(document))
@@ -472,7 +433,7 @@ def test_pybullet_loads_the_written_urdf(tmp_path: Path) -> None:
 def test_a_deep_gltf_chain_is_named_by_its_nearest_nodes(tmp_path: Path) -> None:
     nodes = [{"name": "mesh", "mesh": 0, "children": [k + 1]} for k in range(29)]
     path = tmp_path / "chain.gltf"
-    path.write_text(json.dumps(gltf_document([*nodes, {"name": "mesh", "mesh": 0}], [0])))
+    path.write_text(json.dumps(cube_document([*nodes, {"name": "mesh", "mesh": 0}], [0])))
     names = [b.name for b in load_mesh(path)]
     deep = "chain" + "/mesh" * 16
     assert names[:2] == ["chain/mesh", "chain/mesh/mesh"]

@@ -8,7 +8,6 @@ primitives, triggers, planes and collision filters; broken ones exit 2 with one 
 
 from __future__ import annotations
 
-import base64
 import json
 import os
 import shutil
@@ -20,6 +19,7 @@ import numpy as np
 import pytest
 import trimesh
 from click.testing import CliRunner
+from gltf_documents import cube_document
 
 from meshcol.analysis.colliders import build_colliders
 from meshcol.cli import main
@@ -222,40 +222,7 @@ def test_the_schemas_catch_what_the_specifications_forbid() -> None:
 
 def gltf_file(path: Path, nodes: list, extensions: dict, used: list, scene_nodes: list) -> Path:
     """A .gltf whose one mesh (a unit cube, data URI) nodes may use."""
-    cube = trimesh.creation.box(extents=[1, 1, 1])
-    points = np.asarray(cube.vertices, dtype="<f4").tobytes()
-    indices = np.asarray(cube.faces, dtype="<u4").tobytes()
-    blob = points + indices
-    document = {
-        "asset": {"version": "2.0"},
-        "scene": 0,
-        "scenes": [{"nodes": scene_nodes}],
-        "nodes": nodes,
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
-        "accessors": [
-            {
-                "bufferView": 0,
-                "componentType": 5126,
-                "count": 8,
-                "type": "VEC3",
-                "min": [-0.5] * 3,
-                "max": [0.5] * 3,
-            },
-            {"bufferView": 1, "componentType": 5125, "count": 36, "type": "SCALAR"},
-        ],
-        "bufferViews": [
-            {"buffer": 0, "byteOffset": 0, "byteLength": len(points)},
-            {"buffer": 0, "byteOffset": len(points), "byteLength": len(indices)},
-        ],
-        "buffers": [
-            {
-                "byteLength": len(blob),
-                "uri": "data:application/octet-stream;base64," + base64.b64encode(blob).decode(),
-            }
-        ],
-        "extensions": extensions,
-        "extensionsUsed": used,
-    }
+    document = cube_document(nodes, scene_nodes, extensions=extensions, used=used)
     path.write_text(json.dumps(document))
     return path
 
