@@ -167,10 +167,14 @@ TEXT_INPUTS = (".json", ".toml", ".urdf", ".xml", ".mjcf", ".srdf")
 MAX_REGION_BYTES = 8 * 1024 * 1024
 
 
-def _body(case: CiCase) -> str:
-    """The (first) body a case is about: ``a`` of ``a <-> b``, ``body`` of ``file::body``."""
+def _bodies(case: CiCase) -> list[str]:
+    """The names the (first) body a case is about may have in its file, longest first: ``a``
+    of ``a <-> b`` or ``body`` of ``file::body``, then that name cut at each ``/`` from the
+    right (``arm/link/part``: the part of link ``arm/link``, or of body ``arm``)."""
     name = case.name.split("::")[-1] if "::" in case.name else case.name
-    return name.split(" <-> ")[0].split("/")[0]
+    name = name.split(" <-> ")[0]
+    pieces = name.split("/")
+    return ["/".join(pieces[:k]) for k in range(len(pieces), 0, -1)]
 
 
 def body_line(path: str, body: str, lines: dict[str, _TextIndex | None]) -> int | None:
@@ -225,7 +229,9 @@ def _location(
         uri, base = _uri(case.file, root)
         artifact = {"uri": uri, **({"uriBaseId": base} if base else {})}
         location["physicalLocation"] = {"artifactLocation": artifact}
-        line = body_line(case.file, _body(case), lines if lines is not None else {})
+        cache = lines if lines is not None else {}
+        found = (body_line(case.file, body, cache) for body in _bodies(case))
+        line = next((number for number in found if number is not None), None)
         if line is not None:
             location["physicalLocation"]["region"] = {"startLine": line}
     location["logicalLocations"] = [{"fullyQualifiedName": case.name, "kind": "object"}]

@@ -300,3 +300,24 @@ def test_the_indexed_line_search_finds_the_line_the_plain_search_finds(text, bod
         lines = path.read_text(encoding="utf-8").splitlines()
         expected = _first_naming_line(lines, body)
         assert body_line(str(path), body, {}) == expected
+
+
+def test_a_body_whose_name_holds_a_slash_is_found_on_its_own_line(tmp_path) -> None:
+    """A link named ``arm/upper`` (and a part of it) gets the line naming ``arm/upper``, not
+    the line of a link ``arm`` before it; a part of link ``arm`` still gets ``arm``'s line."""
+    urdf = tmp_path / "r.urdf"
+    urdf.write_text(
+        '<robot name="r">\n  <link name="arm"/>\n  <link name="arm/upper"/>\n'
+        '  <link name="base"/>\n</robot>\n'
+    )
+
+    def line(name: str) -> int | None:
+        case = CiCase(name, "meshcol.check", "failure", "penetrating", str(urdf), "penetrating")
+        (result,) = only_run(sarif_log(CiSuite("check", (case,)), str(tmp_path)))["results"]
+        return result["locations"][0]["physicalLocation"].get("region", {}).get("startLine")
+
+    assert line("arm/upper <-> base") == 3
+    assert line("arm/upper/part_1 <-> base") == 3
+    assert line("arm/part_1 <-> base") == 2
+    assert line("base <-> arm") == 4
+    assert line("missing <-> base") is None
