@@ -102,7 +102,18 @@ def test_a_chain_of_one_name_makes_names_of_at_most_sixteen_parts() -> None:
     assert names[15] == deep and names[16] == f"{deep}#2" and names[-1] == f"{deep}#1985"
 
 
-@given(_PATHS, st.randoms(use_true_random=False))
+#: Paths of names without the separator: a name holding ``/`` can spell another path, and
+#: the two then take ``#k`` in file order (the module's rules; ``test_known_names``).
+_PLAIN_PATHS = st.lists(
+    st.lists(
+        st.sampled_from(["World", "a", "b", "mesh", "geo", "x", "y"]), min_size=1, max_size=4
+    ).map(tuple),
+    min_size=1,
+    max_size=12,
+)
+
+
+@given(_PLAIN_PATHS, st.randoms(use_true_random=False))
 def test_names_do_not_depend_on_the_order_of_distinct_paths(paths, random) -> None:
     paths = list(dict.fromkeys(paths))  # equal full paths take #k in order: left out here
     order = list(range(len(paths)))
@@ -150,8 +161,11 @@ def test_ten_thousand_clashing_leaves_are_named_in_one_pass() -> None:
 
 # -- a USD stage as a DCC tool exports it ---------------------------------------------------
 
-pxr = pytest.importorskip("pxr")
-from pxr import Gf, Usd, UsdGeom  # noqa: E402
+try:
+    from pxr import Gf, Usd, UsdGeom
+except ImportError:  # the rule's, glTF's and FBX's tests still run
+    Gf = Usd = UsdGeom = None
+needs_usd = pytest.mark.skipif(Usd is None, reason="usd-core is not installed (meshcol[usd])")
 
 #: (prim path of the Xform, translation) of each body; the mesh prim is named last.
 PLACED = [
@@ -201,6 +215,7 @@ def penetrating(report: dict) -> set[frozenset[str]]:
     }
 
 
+@needs_usd
 def test_a_stage_of_repeated_prim_names_names_bodies_by_prim_path(tmp_path: Path) -> None:
     level = write_level(tmp_path / "level.usda")
     bodies = load_mesh(level)
@@ -223,6 +238,7 @@ def test_a_stage_of_repeated_prim_names_names_bodies_by_prim_path(tmp_path: Path
     assert code == 1 and "level/World/crate_01/mesh" in out
 
 
+@needs_usd
 def test_an_allow_list_names_the_bodies_by_their_paths(tmp_path: Path, monkeypatch) -> None:
     write_level(tmp_path / "level.usda")
     monkeypatch.chdir(tmp_path)
@@ -246,6 +262,7 @@ def test_an_allow_list_names_the_bodies_by_their_paths(tmp_path: Path, monkeypat
     assert len(ignored) == 2
 
 
+@needs_usd
 def test_the_names_survive_the_mesh_writers(tmp_path: Path) -> None:
     level = write_level(tmp_path / "level.usda")
     for out in ("hulls.glb", "hulls.obj"):
@@ -346,6 +363,7 @@ def test_gltf_physics_bodies_of_one_name_are_named_by_their_parents(tmp_path: Pa
     assert penetrating(json.loads(out)) == {frozenset(("bays/bay_1/crate", "bays/bay_2/crate"))}
 
 
+@needs_usd
 def test_every_permutation_of_a_file_names_each_prim_alike(tmp_path: Path) -> None:
     """The names of the stage's bodies whatever order its prims are written in."""
     expected = dict(zip((p for p, _ in PLACED), NAMES))
@@ -379,6 +397,7 @@ ROBOT = """<robot name="shelf">
 LINKS = ["level/World/crate_01/mesh", "level/crate_02/mesh", "level/bay_1/crate_01/mesh"]
 
 
+@needs_usd
 def test_names_of_this_shape_survive_every_robot_writer_and_its_consumer(tmp_path: Path) -> None:
     """Link names holding ``/`` (as these body names do) through --to urdf, mjcf, usd and
     collision-matrix's SRDF, each read by the tool that consumes it."""
