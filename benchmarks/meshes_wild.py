@@ -15,7 +15,7 @@ Hulls: each body's ``exact_hull_volume`` compared with scipy's qhull
 
 Fits (``--shape`` sphere, box, cylinder, capsule and ellipsoid, one command each): every vertex
 meshcol read is inside the primitive of the report (centre, quaternion, radius, length, size),
-by numpy here; the largest excess over all bodies, relative to the body's extent, must be at
+by the tests' oracle (``fit_oracle.signed_distances``, numpy); the largest excess over all bodies, relative to the body's extent, must be at
 most 0 (fits are grown by their search's rounding, 1e-9 of the extent: the worst is about
 -1e-10).
 
@@ -32,14 +32,15 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
-from bench_robots_wild import MENAGERIE_PACKAGES, example_robot_data, package_folder
+from bench_robots_wild import MENAGERIE_PACKAGES, example_robot_data, meshcol, package_folder
 from scipy.spatial import ConvexHull
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the oracles
 
 #: Files a ``meshcol hull`` command reads.
 CHUNK = 150
@@ -62,19 +63,17 @@ def stl_files(root: Path) -> list[Path]:
 
 def reports(files: list[Path], work: Path, *command: str) -> tuple[list[dict], list[str]]:
     """Every body row of ``meshcol COMMAND...`` over ``files``, and the commands that
-    failed."""
+    failed (run by ``bench_robots_wild.meshcol``: a timeout, a traceback whatever the exit
+    code, or an exit outside 0 and 1). Each run writes a report of its own, removed first, so
+    a run that wrote none is never read from an earlier one."""
     rows, failed = [], []
     for start in range(0, len(files), CHUNK):
-        report = work / f"{command[0]}{start}.json"
+        report = work / f"{'-'.join(command).replace('--', '')}-{start}.json"
+        report.unlink(missing_ok=True)
         chunk = [str(f) for f in files[start : start + CHUNK]]
-        run = subprocess.run(
-            [sys.executable, "-m", "meshcol", *command, *chunk, "--report", str(report)],
-            capture_output=True,
-            text=True,
-        )
-        if run.returncode not in (0, 1) or not report.is_file():
-            last = (run.stderr.strip().splitlines() or [""])[-1]
-            failed.append(f"files {start}-{start + len(chunk)}: exit {run.returncode}: {last}")
+        code, last = meshcol(*command, *chunk, "--report", str(report))
+        if code not in (0, 1) or last.startswith("TRACEBACK") or not report.is_file():
+            failed.append(f"files {start}-{start + len(chunk)}: exit {code}: {last}")
             continue
         rows.extend(json.loads(report.read_text())["bodies"])
     return rows, failed
@@ -100,36 +99,26 @@ def compare(row: dict) -> tuple[float, float]:
     return abs(ours - same) / same, abs(ours - other) / other
 
 
-def rotation(q: list[float]) -> np.ndarray:
-    """The rotation matrix of a unit quaternion ``(w, x, y, z)``."""
-    w, x, y, z = q
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
-
-
 def excess(shape: str, row: dict, vertices: np.ndarray) -> float:
     """How far the farthest vertex is outside the fitted primitive (negative: inside), in
-    the body's units; capsules and cylinders along their local z."""
-    local = (vertices - np.asarray(row["center"])) @ rotation(row["quaternion"])
-    if shape == "sphere":
-        return float((np.linalg.norm(local, axis=1) - row["radius"]).max())
-    if shape == "box":
-        return float((np.abs(local) - np.asarray(row["size"]) / 2).max())
-    half = (row["length"] or 0.0) / 2
-    if shape == "cylinder":
-        radial = np.hypot(local[:, 0], local[:, 1]) - row["radius"]
-        return float(max(radial.max(), (np.abs(local[:, 2]) - half).max()))
-    if shape == "capsule":
-        axis = np.zeros_like(local)
-        axis[:, 2] = np.clip(local[:, 2], -half, half)
-        return float((np.linalg.norm(local - axis, axis=1) - row["radius"]).max())
-    semi = np.asarray(row["size"]) / 2  # ellipsoid: a radial excess, scaled to the least axis
-    return float((np.sqrt(((local / semi) ** 2).sum(axis=1)).max() - 1) * semi.min())
+    the body's units; capsules and cylinders along their local z (the tests' oracle,
+    ``fit_oracle.signed_distances``, for all but the ellipsoid)."""
+    from fit_oracle import signed_distances
+    from oracles import quaternion_rotation
+
+    from meshcol.types import Box, Capsule, Cylinder, Sphere
+
+    local = (vertices - np.asarray(row["center"])) @ quaternion_rotation(row["quaternion"])
+    if shape == "ellipsoid":  # a radial excess, scaled to the least semi-axis
+        semi = np.asarray(row["size"]) / 2
+        return float((np.sqrt(((local / semi) ** 2).sum(axis=1)).max() - 1) * semi.min())
+    primitive = {
+        "sphere": lambda: Sphere(row["radius"]),
+        "box": lambda: Box(tuple(row["size"])),
+        "capsule": lambda: Capsule(row["radius"], row["length"] or 0.0),
+        "cylinder": lambda: Cylinder(row["radius"], row["length"]),
+    }[shape]()
+    return float(signed_distances(primitive, local).max())
 
 
 #: The primitives of ``meshcol fit --shape``.
