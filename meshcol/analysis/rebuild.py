@@ -264,8 +264,21 @@ def _fit(
         hull = ((fitted[0].hull_vertices, fitted[0].hull_faces),)
         collider = Collider(link, index, hull, None, np.eye(4), name)
     else:
-        collider = Collider(link, index, (), chosen.primitive, chosen.pose, name, fitted=True)
+        solid = _as_written(chosen.primitive)
+        collider = Collider(link, index, (), solid, chosen.pose, name, fitted=True)
     return collider, element.entry(fitted)
+
+
+def _as_written(primitive: Any) -> Any:
+    """The primitive a rebuilt description holds for a fit: a capsule of length 0 (under
+    1e-15, the writers' zero; the capsule fit of a ball) is its sphere, the same solid, for
+    every format (MuJoCo refuses a capsule of half-length 0); any other fit as it is. The
+    report keeps the fit itself."""
+    from meshcol.types import Capsule, Sphere
+
+    if isinstance(primitive, Capsule) and primitive.length < 1e-15:
+        return Sphere(primitive.radius)
+    return primitive
 
 
 def _hull(

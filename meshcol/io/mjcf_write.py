@@ -22,7 +22,7 @@ import numpy as np
 
 from meshcol.errors import MeshcolError, MissingDependencyError, SceneError
 from meshcol.io.packages import resolve_mesh_reference
-from meshcol.io.urdf_write import format_numbers, is_ball, urdf_text
+from meshcol.io.urdf_write import format_numbers, urdf_text
 from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, Sphere
 
 if TYPE_CHECKING:
@@ -379,7 +379,8 @@ def _imported_primitives(mujoco: Any, spec: Any, robot: RobotColliders) -> list[
             continue
         primitive = collider.primitive
         want = types[type(primitive)]
-        written = mujoco.mjtGeom.mjGEOM_SPHERE if _as_sphere(primitive) else want
+        # an ellipsoid's URDF placeholder is a sphere
+        written = mujoco.mjtGeom.mjGEOM_SPHERE if isinstance(primitive, Ellipsoid) else want
         for geom in spec.geoms:
             if (
                 id(geom) not in taken
@@ -395,12 +396,6 @@ def _imported_primitives(mujoco: Any, spec: Any, robot: RobotColliders) -> list[
                 found.append(geom)
                 break
     return found
-
-
-def _as_sphere(primitive: Any) -> bool:
-    """Written as a sphere in the URDF: an ellipsoid's placeholder, or a capsule of length 0
-    (the same solid as its sphere; MuJoCo refuses a capsule of half-length 0)."""
-    return isinstance(primitive, Ellipsoid) or is_ball(primitive)
 
 
 def _placeholder_of(geom: Any, ellipsoid: Ellipsoid) -> bool:
@@ -472,8 +467,8 @@ def _mjcf_primitive(
     if isinstance(p, Box):
         geom.type = mujoco.mjtGeom.mjGEOM_BOX
         geom.size = [s / 2.0 for s in p.size]
-    elif isinstance(p, Sphere) or is_ball(p):
-        geom.type = mujoco.mjtGeom.mjGEOM_SPHERE  # a capsule of length 0 is its sphere
+    elif isinstance(p, Sphere):
+        geom.type = mujoco.mjtGeom.mjGEOM_SPHERE
         geom.size = [p.radius, 0.0, 0.0]
     elif isinstance(p, Cylinder):
         geom.type = mujoco.mjtGeom.mjGEOM_CYLINDER

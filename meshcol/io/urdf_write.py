@@ -14,7 +14,7 @@ from __future__ import annotations
 import copy
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypeGuard
+from typing import TYPE_CHECKING, Any
 
 from meshcol.errors import MissingDependencyError, SceneError
 from meshcol.io.urdf_lenient import read_description_xml
@@ -23,7 +23,7 @@ from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, Sphere
 if TYPE_CHECKING:
     from meshcol.io.robot_write import Collider, RobotColliders
 
-__all__ = ["format_numbers", "is_ball", "missing_visuals", "parse_xml", "urdf_text"]
+__all__ = ["format_numbers", "missing_visuals", "parse_xml", "urdf_text"]
 
 
 def parse_xml(source: str) -> Any:
@@ -176,13 +176,6 @@ def _cleared(element: Any) -> tuple[Any, str | None]:
     return geometry, tail
 
 
-def is_ball(primitive: Any) -> TypeGuard[Capsule]:
-    """A capsule of length 0 as written (under 1e-15, :func:`format_numbers`' zero): the
-    capsule fit of a ball, the same solid as its sphere, which the writers write instead
-    (MuJoCo refuses a capsule of half-length 0)."""
-    return isinstance(primitive, Capsule) and primitive.length < 1e-15
-
-
 def format_numbers(values: Any) -> str:
     """Numbers as written in a URDF attribute: shortest round-trip text, rounding noise
     below 1e-15 (and -0) written as 0."""
@@ -220,9 +213,7 @@ def _urdf_primitive(element: Any, collider: Collider, source: str, placeholder: 
         shape = etree.SubElement(geometry, "sphere", radius=format_numbers([max(p.semi_axes)]))
     elif isinstance(p, Box):
         shape = etree.SubElement(geometry, "box", size=format_numbers(p.size))
-    elif isinstance(p, Sphere) or is_ball(p):
-        # a capsule of length 0 (the capsule fit of a ball) is its sphere, the same solid:
-        # MuJoCo refuses a capsule of half-length 0
+    elif isinstance(p, Sphere):
         shape = etree.SubElement(geometry, "sphere", radius=format_numbers([p.radius]))
     elif isinstance(p, Cylinder):
         shape = etree.SubElement(

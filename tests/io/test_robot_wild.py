@@ -693,7 +693,7 @@ BALL_URDF = """<robot name="r">
 """
 
 
-@pytest.mark.parametrize("fmt", ["urdf", "mjcf"])
+@pytest.mark.parametrize("fmt", ["urdf", "mjcf", "usd"])
 def test_a_capsule_fit_of_length_zero_is_written_as_its_sphere(tmp_path, fmt):
     """The capsule fit of a ball has length 0: MuJoCo refused the rebuilt model ("size 1 must
     be positive"), as it did example-robot-data's borinot_flying_arm_2. The same solid is
@@ -708,6 +708,13 @@ def test_a_capsule_fit_of_length_zero_is_written_as_its_sphere(tmp_path, fmt):
     args = ["fit", str(tmp_path / "r.urdf"), "--out-dir", str(out), "--to", fmt]
     code, _, err = run(*args, "--shape", "capsule")
     assert code == 0, err
+    if fmt == "usd":  # the rebuilt robot holds the sphere whatever the format
+        pxr = pytest.importorskip("pxr")
+        (stage_file,) = out.glob("*.usd*")
+        stage = pxr.Usd.Stage.Open(str(stage_file))
+        kinds = [prim.GetTypeName() for prim in stage.Traverse()]
+        assert kinds.count("Sphere") == 2 and "Capsule" not in kinds, kinds
+        return
     if fmt == "urdf":
         assert "<capsule" not in (out / "r.urdf").read_text()
         model = mujoco.MjModel.from_xml_string((out / "r.urdf").read_text())
