@@ -15,8 +15,8 @@ Hulls: each body's ``exact_hull_volume`` compared with scipy's qhull
 
 Fits (``--shape`` sphere, box, cylinder, capsule and ellipsoid, one command each): every vertex
 meshcol read is inside the primitive of the report (centre, quaternion, radius, length, size),
-by the tests' oracle (``fit_oracle.signed_distances``, numpy); the largest excess over all bodies, relative to the body's extent, must be at
-most 0 (fits are grown by their search's rounding, 1e-9 of the extent: the worst is about
+by the tests' oracle (``fit_oracle.signed_distances``, numpy); the largest excess over all
+bodies, relative to the body's extent, must be at most 0 (fits are grown by their search's rounding, 1e-9 of the extent: the worst is about
 -1e-10).
 
 Inspect: each body's ``watertight``, ``winding_consistent`` (when watertight) and ``volume``

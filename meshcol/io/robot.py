@@ -308,9 +308,10 @@ def _read(path: str | os.PathLike[str], options: RobotOptions) -> Any:
     if file.is_dir():
         raise InputFileError("is a directory, not a robot description", source)
     check_input(source, "robot")  # a regular file within the cap: never a pipe or a device
-    if description_kind(source) == "mjcf":
+    kind = description_kind(source)
+    if kind == "mjcf":
         check_mjcf_files(source)  # its includes and meshes, before MuJoCo opens them
-    return _reader(description_kind(source))(source, options)
+    return _reader(kind)(source, options)
 
 
 def _scene(
