@@ -169,27 +169,46 @@ def test_budget_hull_encloses_and_reports_the_exact_distance(seed: int, budget: 
 
 @pytest.mark.parametrize("seed", range(8))
 @pytest.mark.parametrize("budget", [5, 12])
-def test_core_loop_picks_the_numpy_loops_planes(seed: int, budget: int) -> None:
+def test_core_loop_picks_the_numpy_loops_planes(seed: int, budget: int, monkeypatch) -> None:
     # random clouds have no ties between vertex distances: both loops make the same cuts,
     # so their polytopes differ by rounding only. (Longer loops, that go on cutting at the
     # budget, meet planes through vertices that the clip and qhull count differently by a
     # vertex now and then, and go separate ways from there: RESULTS.md gives how often.)
     exact = exact_hull(_cloud(100 + seed, 400))
     args = (exact.vertices, exact.vertices[exact.faces], exact.equations, budget, exact.diagonal)
+    fallbacks = _count_fallbacks(monkeypatch)
     vertices, distance = _simplify(*args)
+    assert not fallbacks  # the core's loop answered: a fallback would compare qhull's to itself
     reference, reference_distance = _simplify_qhull(*args)
     _assert_same_points(vertices, reference, 1e-9 * exact.diagonal)
     assert distance == pytest.approx(reference_distance, rel=1e-9)
 
 
+def _count_fallbacks(monkeypatch) -> list:
+    """The calls of the numpy loop made from now on (the core's fallback), recorded."""
+    import meshcol.collision.hull_budget as hull_budget
+
+    calls: list = []
+    numpy_loop = hull_budget._simplify_qhull
+
+    def counted(*args, **kwargs):
+        calls.append(args)
+        return numpy_loop(*args, **kwargs)
+
+    monkeypatch.setattr(hull_budget, "_simplify_qhull", counted)
+    return calls
+
+
 @pytest.mark.parametrize("max_planes", [4, 6, 11, 20])
-def test_plane_budget_is_kept(max_planes: int) -> None:
+def test_plane_budget_is_kept(max_planes: int, monkeypatch) -> None:
     exact = exact_hull(_cloud(7, 500))
     result = hull_within_budget(exact, 64, max_planes)
     normals = np.round(exact_hull(result.vertices).equations[:, :3], 9)
     assert len(np.unique(normals, axis=0)) <= max_planes
     args = (exact.vertices, exact.vertices[exact.faces], exact.equations, 64, exact.diagonal)
+    fallbacks = _count_fallbacks(monkeypatch)
     vertices, _ = _simplify(*args, max_planes=max_planes)
+    assert not fallbacks
     reference, _ = _simplify_qhull(*args, max_planes=max_planes)
     _assert_same_points(vertices, reference, 1e-9 * exact.diagonal)
 
