@@ -89,7 +89,7 @@ def test_a_body_without_a_fit_keeps_its_error_in_its_place() -> None:
     _same(fits[3], fit_hull(good * 2, target, 1.0))
 
 
-def test_one_vertex_over_is_cut_flat_is_kept_and_an_unmet_ratio_is_said() -> None:
+def test_one_vertex_over_is_cut_flat_is_kept_and_a_needle_is_thickened() -> None:
     target = load_target("isaac")
     rng = np.random.default_rng(11)
     over = rng.normal(size=(65, 3))
@@ -99,9 +99,9 @@ def test_one_vertex_over_is_cut_flat_is_kept_and_an_unmet_ratio_is_said() -> Non
     fits = fit_hulls([over, flat, needle], target, 1.0)
     assert len(fits[0].parts[0][0]) <= 64 and fits[0].met
     assert fits[1].added_volume > 0  # given a thickness, then fitted
-    assert {v.limit for v in fits[2].violations} == {
-        v.limit for v in fit_hull(needle, target, 1.0).violations
-    }
+    # isaac's max_oblong_ratio 100: the needle (1e-4 thick) is thickened to it, and says so
+    assert fits[2].met and not fits[2].violations
+    assert any(n.startswith("thickened by") and "max_oblong_ratio" in n for n in fits[2].notes)
     for points, fit in zip([over, flat, needle], fits, strict=True):
         _same(fit, fit_hull(points, target, 1.0, FitCache()))
 
