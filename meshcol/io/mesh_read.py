@@ -38,7 +38,7 @@ from meshcol.io.mesh_formats import (
     mesh_format,
 )
 from meshcol.io.physics_bodies import BodyGroup, axis_turn, choose_collider, scaled_primitive
-from meshcol.types import Body, PartPrimitive, Scene, unique_name
+from meshcol.types import Body, PartPrimitive, Scene
 
 __all__ = [
     "MAX_COORDINATE",
@@ -502,14 +502,12 @@ def _checked_files(
         if not objects:
             raise InvalidMeshError("mesh has no faces", source)
         file_stem = _stem(source)
-        used: dict[str, int] = {}
+        leaves = [names[k] or (fmt.unnamed or file_stem) for k in objects]
         bodies = []
-        for k in objects:
+        for k, name in zip(objects, file_body_names(file_stem, leaves)):
             if k + 1 in big:
                 check_magnitude(read.vertices[read.v_off[k] : read.v_off[k + 1]], "vertex", source)
-            name = names[k] or (fmt.unnamed or file_stem)
-            full = file_stem if len(objects) == 1 else f"{file_stem}/{name}"
-            bodies.append(read.body(k, unique_name(full, used), source))
+            bodies.append(read.body(k, name, source))
         out.append(bodies)
     return out
 

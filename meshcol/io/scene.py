@@ -55,7 +55,6 @@ __all__ = [
     "collector_paused",
     "load_scene",
     "manifest_mesh_files",
-    "unique_name",
     "rotation_from_euler",
     "rotation_from_quaternion",
 ]
