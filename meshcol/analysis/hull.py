@@ -535,12 +535,7 @@ def _budget_hulls(
     """:func:`meshcol.collision.hull.convex_hull` of every body's world vertices, the budget
     loops of all in one native call (threads over bodies); the first body without a hull
     raises, named."""
-    from meshcol.collision.hull import (
-        convex_hull,
-        exact_hull,
-        hull_within_budget,
-        hulls_within_budget,
-    )
+    from meshcol.collision.hull import exact_hull, hull_within_budget, hulls_within_budgets
 
     exacts = []
     for done, body in enumerate(bodies, start=1):
@@ -552,15 +547,11 @@ def _budget_hulls(
                 hull_within_budget(exacts[-1], max_vertices)  # raises: no meaningful hull
         except InvalidMeshError as exc:
             raise _body_error(body, exc) from exc
-    try:
-        return hulls_within_budget(exacts, max_vertices)
-    except InvalidMeshError:  # a budget loop failed (never seen): find the body, one by one
-        for body in bodies:
-            try:
-                convex_hull(body.world_vertices(), max_vertices=max_vertices)
-            except InvalidMeshError as exc:
-                raise _body_error(body, exc) from exc
-        raise
+    results = hulls_within_budgets(exacts, [(max_vertices, None)] * len(exacts))
+    for body, result in zip(bodies, results, strict=True):
+        if isinstance(result, InvalidMeshError):  # a budget loop failed (never seen)
+            raise _body_error(body, result) from result
+    return results
 
 
 #: Bodies whose target fits run side by side (:func:`_target_hulls`), their hulls and

@@ -43,7 +43,6 @@ __all__ = [
     "distance_to_hull",
     "exact_hull",
     "hull_within_budget",
-    "hulls_within_budget",
     "hulls_within_budgets",
     "pack_hulls",
 ]
@@ -294,20 +293,6 @@ def _budgeted_result(
         max_distance=distance,
         **_exact_summary(exact, vertex_budget),
     )
-
-
-def hulls_within_budget(
-    exacts: Sequence[ExactHull], max_vertices: int | None, threads: int = 0
-) -> list[HullResult]:
-    """:func:`hull_within_budget` of many exact hulls (a vertex budget only), in order: the
-    3-D hulls over the budget simplified in one native call, ``threads`` over them (0: all
-    cores). Raises as :func:`hull_within_budget` does for the first hull that has none."""
-    _check_budgets(max_vertices, None)
-    results = hulls_within_budgets(exacts, [(max_vertices, None)] * len(exacts), threads)
-    for result in results:
-        if isinstance(result, InvalidMeshError):
-            raise result
-    return results  # type: ignore[return-value]
 
 
 def hulls_within_budgets(

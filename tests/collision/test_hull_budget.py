@@ -15,7 +15,6 @@ from meshcol.collision.hull import (
     convex_hull,
     exact_hull,
     hull_within_budget,
-    hulls_within_budget,
     hulls_within_budgets,
 )
 from meshcol.collision.hull_budget import (
@@ -221,7 +220,7 @@ def test_batch_on_threads_is_the_loop_of_singles() -> None:
         batch = simplify_many(bodies, threads=threads)
         for (v, d), (v1, d1) in zip(batch, singles):
             assert v.tobytes() == v1.tobytes() and d == d1
-    results = hulls_within_budget(exacts, 9, threads=2)
+    results = hulls_within_budgets(exacts, [(9, None)] * len(exacts), threads=2)
     for result, exact in zip(results, exacts):
         single = hull_within_budget(exact, 9)
         assert result.vertices.tobytes() == single.vertices.tobytes()
@@ -231,7 +230,12 @@ def test_batch_on_threads_is_the_loop_of_singles() -> None:
 def test_many_keeps_flat_and_small_hulls_as_single_calls_do() -> None:
     square = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0.5, 1.2, 0]], float)
     exacts = [exact_hull(square), exact_hull(_cloud(1, 6)), exact_hull(_cloud(2, 100))]
-    for result, exact in zip(hulls_within_budget(exacts, 4), exacts):
+    results = hulls_within_budgets(exacts, [(4, None)] * len(exacts))
+    # independent of the single call the batch uses for these: the square stays flat, four
+    # of its corners; the 6-point cloud and the 100-point cloud are cut to 4 vertices
+    assert results[0].flat and len(results[0].vertices) == 4
+    assert all(len(r.vertices) <= 4 for r in results)
+    for result, exact in zip(results, exacts):
         single = hull_within_budget(exact, 4)
         assert result.vertices.tobytes() == single.vertices.tobytes()
         assert result.flat == single.flat and result.max_distance == single.max_distance
