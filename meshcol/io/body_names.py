@@ -38,16 +38,28 @@ them too (``--to usd`` makes a valid prim name and keeps the name in ``meshcol:l
 from __future__ import annotations
 
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 from meshcol.types import unique_name
 
-__all__ = ["MAX_ANCESTORS", "SEPARATOR", "file_body_names"]
+__all__ = ["MAX_ANCESTORS", "SEPARATOR", "ancestor_names", "file_body_names"]
 
 #: What joins the stem and the names of a body's path.
 SEPARATOR = "/"
 #: Most ancestors a body's name takes (the readers keep no more): the nearest ones.
 MAX_ANCESTORS = 15
+
+
+def ancestor_names(k: int, parent: Mapping[int, int], names: Sequence[str]) -> tuple[str, ...]:
+    """The names (``names``, one per node) of node ``k``'s ancestors (``parent``: each
+    node's, none for a root), from the top down: the nearest :data:`MAX_ANCESTORS` (a cycle
+    ends there too). One walk for the readers of node hierarchies (glTF, FBX)."""
+    above: list[str] = []
+    current = parent.get(k)
+    while current is not None and len(above) < MAX_ANCESTORS:
+        above.append(names[current])
+        current = parent.get(current)
+    return tuple(reversed(above))
 
 
 def file_body_names(

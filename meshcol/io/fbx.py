@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from meshcol.errors import InvalidMeshError
-from meshcol.io.body_names import MAX_ANCESTORS
+from meshcol.io.body_names import ancestor_names
 from meshcol.io.polygons import triangulate_polygons
 from meshcol.io.safe_read import read_input
 
@@ -207,14 +207,15 @@ def _mesh_nodes(
     nodes: list[tuple[str, np.ndarray, int, tuple[str, ...]]] = []
     geometry: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
     total = 0
-    # each node's name and parent (index in scene.nodes, its typed_id; -1: none or the root),
-    # known before its children's: ufbx lists parents first
+    # each node's name and parent (index in scene.nodes, its typed_id; none for the root and
+    # its children), known before its children's: ufbx lists parents first
     labels: list[str] = []
-    parents: list[int] = []
+    parents: dict[int, int] = {}
     # one pass over the nodes only: iterating ufbx's mesh list as well crashes ufbx 0.0.5
     for k, node in enumerate(map(_kept, scene.nodes)):
         up = _kept(node.parent)
-        parents.append(-1 if up is None or up.is_root else int(up.typed_id))
+        if up is not None and not up.is_root:
+            parents[k] = int(up.typed_id)
         labels.append(str(node.name or f"node{k}"))
         mesh = _kept(node.mesh)
         if mesh is None or mesh.num_faces == 0:
@@ -228,19 +229,10 @@ def _mesh_nodes(
                 )
             geometry[key] = _arrays(mesh)
         name = str(node.name or mesh.name or f"node{k}")
-        nodes.append((name, _matrix(node.geometry_to_world), key, _above(k, parents, labels)))
+        nodes.append(
+            (name, _matrix(node.geometry_to_world), key, ancestor_names(k, parents, labels))
+        )
     return nodes, geometry
-
-
-def _above(k: int, parents: list[int], labels: list[str]) -> tuple[str, ...]:
-    """The names of node ``k``'s ancestors below the root, from the top down: the nearest
-    :data:`~meshcol.io.body_names.MAX_ANCESTORS`."""
-    above: list[str] = []
-    current = parents[k]
-    while current >= 0 and len(above) < MAX_ANCESTORS:
-        above.append(labels[current])
-        current = parents[current]
-    return tuple(reversed(above))
 
 
 def _matrix(m: Any) -> np.ndarray:

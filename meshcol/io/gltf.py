@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from meshcol.errors import InvalidMeshError
-from meshcol.io.body_names import MAX_ANCESTORS
+from meshcol.io.body_names import ancestor_names
 from meshcol.io.mesh_trimesh import load_scene, local_uri, scene_nodes
 from meshcol.io.paths import confine_uris
 from meshcol.io.safe_read import read_input
@@ -70,7 +70,7 @@ def _read_indexed(file: Path, source: str, kind: str) -> list[IndexedNode]:
     # the document's node order (a node's primitives in trimesh's order): trimesh's graph
     # order differs, and its frame names (mesh_1, <name>_<hash>) are not the nodes'
     return [
-        (k, (_own_name(document, k) or node[0], *node[1:4], node_ancestors(k, parent, names)))
+        (k, (_own_name(document, k) or node[0], *node[1:4], ancestor_names(k, parent, names)))
         for k, node in sorted(zip(indices, nodes), key=itemgetter(0))
     ]
 
@@ -100,17 +100,6 @@ def _parents(document: Any) -> dict[int, int]:
         for child in node.get("children", []) if isinstance(node, dict) else []:
             parent[child] = k
     return parent
-
-
-def node_ancestors(k: int, parent: dict[int, int], names: list[str]) -> tuple[str, ...]:
-    """The names (``names``, one per node) of node ``k``'s ancestors (``parent``: each
-    node's), from the root down: the nearest :data:`~meshcol.io.body_names.MAX_ANCESTORS`."""
-    above: list[str] = []
-    current = parent.get(k)
-    while current is not None and len(above) < MAX_ANCESTORS:
-        above.append(names[current])
-        current = parent.get(current)
-    return tuple(reversed(above))
 
 
 def _node_indices(document: Any, scene: Any, frames: list[str], source: str) -> list[int]:

@@ -37,7 +37,8 @@ from urllib.parse import unquote
 import numpy as np
 
 from meshcol.errors import InvalidMeshError
-from meshcol.io.gltf import check_references, node_ancestors, read_document
+from meshcol.io.body_names import ancestor_names
+from meshcol.io.gltf import check_references, read_document
 from meshcol.io.gltf_godot import hint_conflict, hint_groups, hinted_name
 from meshcol.io.physics_bodies import BodyGroup, FileScene, ShapeElement
 from meshcol.io.safe_read import read_input
@@ -340,7 +341,7 @@ def _scene(
     _add_hinted(gltf, drawn, parent, worlds, groups, colliders_of)
     names = [_node_name(nodes, k) for k in range(len(nodes))]
     for k, group in groups.items():
-        group.ancestors = node_ancestors(k, parent, names)
+        group.ancestors = ancestor_names(k, parent, names)
     warnings.extend(sorted(conflicts))
     render = sum(
         1
