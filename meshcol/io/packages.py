@@ -10,7 +10,8 @@
    first: a folder ``NAME`` beside the description, as pybullet's URDF importer finds it (the
    reference without ``package://``, relative to the description's folder), or beside an
    ancestor (the same rule a folder up at a time). ``package://meshes/base.stl`` is so
-   ``meshes/base.stl`` beside the file;
+   ``meshes/base.stl`` beside the file, and ``package://wheel.obj`` (no REST, a form pybullet
+   and Genesis read) the file ``wheel.obj`` beside it;
 5. ``FOLDER/REST`` for the description's folder and its ancestors: yourdfpy's
    ``filename_handler_magic`` (``package://NAME/`` dropped, the rest relative to the folder
    and to each of its parents), which finds a package checked out under another name, as the
@@ -69,8 +70,11 @@ class PackageResolver:
             if name and folder.name == name:
                 return os.fspath(folder / rest), None
         for folder in ancestors:
-            if rest and (folder / name / rest).is_file():
-                return os.fspath(folder / name / rest), None
+            # without a REST, pybullet's reading is the file NAME itself (Genesis's wheel.urdf
+            # names its mesh ``package://wheel.obj``, beside the file)
+            candidate = folder / name / rest if rest else folder / name
+            if name and candidate.is_file():
+                return os.fspath(candidate), None
         for folder in ancestors:
             if rest and (folder / rest).is_file():
                 return os.fspath(folder / rest), None

@@ -284,6 +284,28 @@ def test_package_uris(tmp_path, monkeypatch):
     assert len(load_robot(outside).bodies) == 1
 
 
+def test_a_package_uri_of_a_file_alone_is_the_file_beside_the_description(tmp_path):
+    """``package://cube.obj`` (no folder after the package: Genesis's wheel.urdf) is read as
+    pybullet reads it, the file ``cube.obj`` beside the description; a file that is not
+    there is still an unknown package."""
+    write(tmp_path, "wheel/cube.obj", CUBE_OBJ)
+    mesh = '<link name="a"><collision><geometry><mesh filename="package://{}"/></geometry></collision></link>'
+    path = write(tmp_path, "wheel/w.urdf", urdf(mesh.format("cube.obj")))
+    (body,) = load_robot(path).bodies
+    assert body.vertices.shape == (8, 3)
+    missing = write(tmp_path, "wheel/m.urdf", urdf(mesh.format("gone.obj")))
+    assert "unknown package 'gone.obj'" in error_line("check", str(missing))
+    pybullet = pytest.importorskip("pybullet", reason="pybullet reads the file too (robots-wild)")
+    client = pybullet.connect(pybullet.DIRECT)
+    try:
+        shapes = pybullet.getCollisionShapeData(
+            pybullet.loadURDF(str(path), physicsClientId=client), -1, physicsClientId=client
+        )
+        assert shapes[0][4].decode().endswith("cube.obj")
+    finally:
+        pybullet.disconnect(client)
+
+
 @pytest.mark.parametrize(
     "body, words",
     [
