@@ -1,5 +1,6 @@
 """glTF 2.0 files (``.gltf`` JSON, ``.glb`` binary): their references checked, their mesh nodes
-read by trimesh and put back in the file's node order.
+read by trimesh and put back in the file's node order, one body per node (its primitives
+together).
 
 trimesh indexes the file's lists with its references: a negative index silently takes an
 object from the end, a missing one fails with an unnamed IndexError or KeyError. Every
@@ -13,9 +14,12 @@ import io
 import json
 import struct
 from collections.abc import Callable
+from itertools import groupby
 from operator import itemgetter
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+
+import numpy as np
 
 from meshcol.errors import InvalidMeshError
 from meshcol.io.body_names import ancestor_names
@@ -45,9 +49,9 @@ def read_glb(file: Path, source: str) -> list[MeshNode]:
 
 def mesh_node_indices(file: Path, source: str) -> list[IndexedNode]:
     """Each mesh node :func:`read_glb`/:func:`read_gltf` return, in the same order, with the
-    index of the document's node it comes from (a node of several primitives gives several
-    mesh nodes, one index): what a body read from the file is matched back to (``--to
-    gltf-physics``), whatever the nodes' names (missing, repeated)."""
+    index of the document's node it comes from (one per node, its primitives together): what
+    a body read from the file is matched back to (``--to gltf-physics``), whatever the
+    nodes' names (missing, repeated)."""
     kind = "glb" if file.suffix.lower() == ".glb" else "gltf"
     return _read_indexed(file, source, kind)
 
@@ -69,10 +73,43 @@ def _read_indexed(file: Path, source: str, kind: str) -> list[IndexedNode]:
     names, parent = _node_names(document), _parents(document)
     # the document's node order (a node's primitives in trimesh's order): trimesh's graph
     # order differs, and its frame names (mesh_1, <name>_<hash>) are not the nodes'
+    ordered = sorted(zip(indices, nodes), key=itemgetter(0))
     return [
-        (k, (_own_name(document, k) or node[0], *node[1:4], ancestor_names(k, parent, names)))
-        for k, node in sorted(zip(indices, nodes), key=itemgetter(0))
+        (
+            k,
+            (
+                _own_name(document, k) or group[0][0],
+                *_one_mesh(group),
+                ancestor_names(k, parent, names),
+            ),
+        )
+        for k, group in (
+            (k, [node for _, node in run]) for k, run in groupby(ordered, itemgetter(0))
+        )
     ]
+
+
+def _one_mesh(primitives: list[MeshNode]) -> tuple[np.ndarray, object, object]:
+    """``(matrix, vertices, faces)`` of one node's primitives (trimesh's frames of them) as
+    one mesh: a node is one object, its primitives the parts drawn with different
+    materials. So a node is one body, as a COLLADA node of several geometries is, as a rigid
+    body's collider is in the physics extensions, and as engines import a node (a mesh of
+    submeshes); the two primitives of Genesis's camera.glb were checked as two bodies
+    penetrating each other. trimesh gives the primitives the node's frame; frames that
+    differ are baked (the body then in world coordinates, no inverse of a flat scale)."""
+    matrix = primitives[0][1]
+    if len(primitives) == 1:
+        return matrix, primitives[0][2], primitives[0][3]
+    same = all(np.array_equal(node[1], matrix) for node in primitives)
+    blocks_v, blocks_f, base = [], [], 0
+    for _, frame, points, triangles, _ in primitives:
+        points = np.asarray(points, dtype=np.float64)
+        if not same:
+            points = points @ frame[:3, :3].T + frame[:3, 3]
+        blocks_v.append(points)
+        blocks_f.append(np.asarray(triangles, dtype=np.int64) + base)
+        base += len(points)
+    return (matrix if same else np.eye(4)), np.concatenate(blocks_v), np.concatenate(blocks_f)
 
 
 def _own_name(document: Any, k: int) -> str | None:

@@ -310,15 +310,23 @@ def test_gltf_nodes_of_one_name_are_named_by_their_parents(tmp_path: Path) -> No
     }
 
 
-def test_a_node_of_several_primitives_has_the_same_names_every_read(tmp_path: Path) -> None:
+def test_a_node_of_several_primitives_is_one_body_named_the_same_every_read(
+    tmp_path: Path,
+) -> None:
     """trimesh names each primitive's frame ``<node>_<random hash>``: bodies were named so,
-    a different name each read (and --to gltf-physics could not find them again)."""
+    a different name each read (and --to gltf-physics could not find them again). A node is
+    one object: its primitives (material groups) are one body, never a pair of their own,
+    and the body keeps its name through --to gltf-physics."""
     nodes = [{"name": "rack", "mesh": 1}, {"name": "bin", "mesh": 0, "translation": [3, 0, 0]}]
     path = tmp_path / "rack.gltf"
     path.write_text(json.dumps(cube_document(nodes, [0, 1], primitives=2)))
     first, again = ([b.name for b in load_mesh(path)] for _ in range(2))
     assert first == again
-    assert first == ["rack/rack", "rack/rack#2", "rack/bin"]  # the document's node order
+    assert first == ["rack/rack", "rack/bin"]  # the document's node order
+    rack = load_mesh(path)[0]
+    assert len(rack.faces) == 24  # both primitives (their equal corners merged on reading)
+    code, out, err = run("check", str(path), "--report", "-")
+    assert code == 0 and penetrating(json.loads(out)) == set(), err  # the two cubes: one body
     # --to gltf-physics finds each body's node again by its name (it could not: exit 2)
     code, _, err = run(
         "hull", str(path), "--out-dir", str(tmp_path / "out"), "--to", "gltf-physics"
