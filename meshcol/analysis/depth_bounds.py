@@ -22,7 +22,10 @@ from meshcol.analysis.pairs import NO_ANSWER, PairTable, PlacedColliders
 
 __all__ = ["depth_bounds", "support", "supports"]
 
-_SPHERE, _BOX, _CAPSULE, _CYLINDER, _ELLIPSOID = 1, 2, 3, 4, 5
+_SPHERE, _BOX, _CAPSULE, _CYLINDER, _ELLIPSOID, _HALFSPACE = 1, 2, 3, 4, 5, 6
+#: How far off its normal (relative) a direction still reads a half-space's support as its
+#: plane's height: the narrow phase's normal is the plane's, rotated there and back.
+_NORMAL_SLACK = 1e-9
 
 
 def depth_bounds(table: PairTable, placed: PlacedColliders, threads: int = 0) -> PairTable:
@@ -151,6 +154,11 @@ def supports(
         base + p[:, 1] * along + p[:, 0] * radial,
     )
     out[:] = primitive
+    half_space = np.flatnonzero(kind == _HALFSPACE)
+    if len(half_space):  # bounded only along its normal (local +z): its plane's height there
+        sideways = np.hypot(local[half_space, 0], local[half_space, 1])
+        normal = (local[half_space, 2] > 0.0) & (sideways <= _NORMAL_SLACK * length[half_space])
+        out[half_space] = np.where(normal, base[half_space], np.inf)
     polytope = np.flatnonzero(kind == 0)
     if len(polytope):
         out[polytope] = base[polytope] + _vertex_maxima(shapes, index[polytope], local[polytope])
