@@ -300,3 +300,55 @@ def test_reports_of_every_format_take_a_plane(tmp_path) -> None:
         Path(__file__).resolve().parents[2] / "meshcol" / "schemas" / "check_report.schema.json"
     )
     jsonschema.validate(data, json.loads(schema.read_text()))
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    boxes=st.lists(
+        st.tuples(st.floats(-5, 5), st.floats(-5, 5), st.floats(-5, 5), st.floats(0, 2)),
+        min_size=1,
+        max_size=12,
+    ),
+    unbounded=st.lists(st.tuples(st.integers(0, 11), st.integers(0, 5)), max_size=3),
+    margin=st.floats(0.0, 1.0),
+    grouped=st.booleans(),
+)
+def test_unbounded_boxes_pair_as_brute_force(boxes, unbounded, margin, grouped) -> None:
+    """The sweep with unbounded boxes beside it (half-spaces') == every pair whose grown
+    intervals meet, in the sweep's lexicographic order, groups never paired."""
+    from meshcol.analysis.pairs import overlapping_pairs
+
+    lo = np.array([[x - s, y - s, z - s] for x, y, z, s in boxes])
+    hi = np.array([[x + s, y + s, z + s] for x, y, z, s in boxes])
+    for index, sides in unbounded:  # a box made unbounded on some of its sides
+        if index < len(boxes):
+            lo[index, : sides % 3 + 1] = -np.inf
+            if sides > 2:
+                hi[index, 2] = np.inf
+    groups = np.arange(len(boxes)) // 2 if grouped else None
+    found = overlapping_pairs(lo, hi, margin, groups=groups)
+    expected = [
+        (i, j)
+        for i in range(len(boxes))
+        for j in range(i + 1, len(boxes))
+        if np.all(
+            (lo[i] - margin / 2 <= hi[j] + margin / 2) & (lo[j] - margin / 2 <= hi[i] + margin / 2)
+        )
+        and (groups is None or groups[i] != groups[j])
+    ]
+    assert sorted(map(tuple, found.tolist())) == expected
+    if groups is None:
+        assert found.tolist() == [list(p) for p in expected]  # sorted as the sweep sorts
+
+
+def test_review_page_draws_the_floor_as_a_patch(tmp_path) -> None:
+    from meshcol.analysis.review import check_page
+
+    path = _scene(tmp_path, {"sphere": -0.02})
+    page = check_page(check(str(path)), [str(path)], "hull", {})
+    floor = [m for m in page.meshes() if m.get("name") == "world/floor"]
+    assert floor and "world/floor" in page.to_html()
+    body = load_robot(path, RobotOptions(half_spaces=True)).bodies[1]
+    assert body.name == "world/floor" and len(body.vertices) == 4 and len(body.faces) == 2
+    extent = 2.0 * float(mujoco.MjModel.from_xml_path(str(path)).stat.extent)
+    assert body.primitive == HalfSpace((extent, extent))  # size 0: twice the model's extent
