@@ -131,7 +131,7 @@ def test_every_shape_against_a_tilted_plane_is_its_lowest_point(tmp_path, height
         assert row["status"] == expected, name
         if height < 0:
             assert row["depth"] == pytest.approx(-height, abs=exact)
-            assert row["depth_upper"] >= row["depth"]
+            assert row["depth_upper"] == row["depth"]  # exact: the lowest point's depth
 
 
 def test_the_plane_body_is_reported_as_a_plane(tmp_path) -> None:
