@@ -235,6 +235,8 @@ class ShapeKind(enum.Enum):
 
     ELLIPSOID = 5
 
+    HALFSPACE = 6
+
 def shape_pair_object(layout: int, kind_a: int, a: object, kind_b: int, b: object, pose_a: object | None, pose_b: object | None, result_type: object | None, statuses: object) -> object:
     """
     One pair of shapes (primitives, or (n, 3) points by their hull; kind_a, kind_b their ShapeKind) as its single-pair result (layout as query_object; for intersects a bool); None when a shape or pose is not in the core's form, or for an invalid intersects pair.

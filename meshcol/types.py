@@ -25,6 +25,7 @@ __all__ = [
     "Capsule",
     "Cylinder",
     "Ellipsoid",
+    "HalfSpace",
     "PartPrimitive",
     "Primitive",
     "Scene",
@@ -170,8 +171,35 @@ class Ellipsoid:
         object.__setattr__(self, "semi_axes", tuple(_check_length("semi_axes", a) for a in axes))
 
 
-#: An analytic shape, used exactly by every query (a manifest's ``primitive`` becomes one).
-Primitive = Sphere | Box | Capsule | Cylinder | Ellipsoid
+@dataclass(frozen=True)
+class HalfSpace:
+    """The half-space ``z <= 0`` of its local frame: an MJCF ``<geom type="plane">``, which
+    MuJoCo collides as the solid below the plane (its top face, normal local +z).
+
+    Unbounded: queries measure it exactly (a body's lowest point along the normal,
+    ``meshcol._core``'s ``half_space_pair``), never by its tessellation, which is only the
+    finite patch drawn for it (review pages).
+
+    Attributes
+    ----------
+    patch : (2,) float
+        FULL side lengths along local x and y of the patch drawn for it (MuJoCo's ``size``
+        doubled, or twice the model's extent where the size is 0, drawn infinite by MuJoCo).
+        Not part of the collision shape.
+    """
+
+    patch: tuple[float, float] = (1.0, 1.0)
+
+    def __post_init__(self) -> None:
+        patch = np.asarray(self.patch, dtype=np.float64)
+        if patch.shape != (2,):
+            raise ValueError(f"patch must be (2,), got {patch.shape}")
+        object.__setattr__(self, "patch", tuple(_check_length("patch", s) for s in patch))
+
+
+#: An analytic shape, used exactly by every query (a manifest's ``primitive`` becomes one;
+#: an MJCF plane is a :class:`HalfSpace`, read by ``check`` alone).
+Primitive = Sphere | Box | Capsule | Cylinder | Ellipsoid | HalfSpace
 
 
 _SPHERE_SUBDIVISIONS = 3  # icosphere: 642 vertices
@@ -201,6 +229,13 @@ def _tessellation(primitive: Primitive) -> tuple[np.ndarray, np.ndarray]:
         unit, faces = _tessellation(Sphere(1.0))
         vertices = unit * np.asarray(primitive.semi_axes, dtype=np.float64)
         vertices.flags.writeable = False
+        return vertices, faces
+    if isinstance(primitive, HalfSpace):  # the patch drawn: two triangles facing +z
+        x, y = 0.5 * primitive.patch[0], 0.5 * primitive.patch[1]
+        vertices = np.array([[-x, -y, 0.0], [x, -y, 0.0], [x, y, 0.0], [-x, y, 0.0]])
+        faces = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.int64)
+        vertices.flags.writeable = False
+        faces.flags.writeable = False
         return vertices, faces
     if isinstance(primitive, Box):
         mesh = trimesh.creation.box(extents=np.asarray(primitive.size, dtype=np.float64))
@@ -237,6 +272,8 @@ def primitive_reach(primitive: Primitive) -> float:
         reach = primitive.radius + 0.5 * primitive.length
     elif isinstance(primitive, Ellipsoid):
         reach = max(primitive.semi_axes)
+    elif isinstance(primitive, HalfSpace):  # its patch's (the half-space is unbounded)
+        reach = 0.5 * math.hypot(*primitive.patch)
     else:
         reach = math.hypot(primitive.radius, 0.5 * primitive.length)
     return reach * (1.0 + 1e-12)
@@ -252,6 +289,7 @@ REGULAR_VERTEX_COUNTS: dict[type, int] = {
     Capsule: 1026,
     Cylinder: 66,
     Ellipsoid: 642,
+    HalfSpace: 4,
 }
 
 
@@ -264,8 +302,8 @@ def primitive_vertex_count(primitive: Primitive) -> int:
     elif isinstance(primitive, Box):
         x, y, z = primitive.size
         regular = low <= x <= high and low <= y <= high and low <= z <= high
-    elif isinstance(primitive, Ellipsoid):
-        return REGULAR_VERTEX_COUNTS[Ellipsoid]  # the unit sphere's, scaled: never merged
+    elif isinstance(primitive, Ellipsoid | HalfSpace):  # never merged
+        return REGULAR_VERTEX_COUNTS[type(primitive)]
     else:
         regular = low <= primitive.radius <= high and low <= primitive.length <= high
     if regular:

@@ -12,6 +12,7 @@ from __future__ import annotations
 __all__ = [
     "COLLIDER_KINDS",
     "COUNT_LIMITS",
+    "HALF_SPACE_COLLIDER",
     "INPUT_KINDS",
     "LIMITS",
     "LIMIT_KEYS",
@@ -30,6 +31,9 @@ __all__ = [
 #: box or minimum sphere, the simple colliders engines offer and USD's ``boundingCube`` and
 #: ``boundingSphere`` approximations).
 COLLIDER_KINDS = ("hull", "decomposed", "mesh", "fit", "box", "sphere")
+#: The collider kind reported for the body of an MJCF plane (``<geom type="plane">``), the
+#: half-space below it, measured exactly against every body (not a ``--shape`` choice).
+HALF_SPACE_COLLIDER = "plane"
 #: The collider kinds a scene manifest may name per body (``"shape"``).
 SCENE_SHAPES = ("hull", "decomposed", "mesh")
 #: The collider kinds of a robot's self-collision matrix (``mesh`` needs the exact mesh

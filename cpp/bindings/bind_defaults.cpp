@@ -49,5 +49,6 @@ void bind_defaults(nb::module_& m) {
         .value("BOX", K::BOX)
         .value("CAPSULE", K::CAPSULE)
         .value("CYLINDER", K::CYLINDER)
-        .value("ELLIPSOID", K::ELLIPSOID);
+        .value("ELLIPSOID", K::ELLIPSOID)
+        .value("HALFSPACE", K::HALFSPACE);
 }

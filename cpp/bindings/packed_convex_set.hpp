@@ -121,8 +121,8 @@ class PackedConvexSet {
             throw std::invalid_argument("params must be (H, 4) with H = len(kinds)");
         check_offsets(offsets.data(), offsets.shape(0), v, "offsets");
         for (std::int64_t i = 0; i < h; ++i)
-            if (kinds.data()[i] < 0 || kinds.data()[i] > 5)
-                throw std::invalid_argument("kinds must be in 0..5, got " +
+            if (kinds.data()[i] < 0 || kinds.data()[i] > static_cast<std::int8_t>(ShapeKind::HALFSPACE))
+                throw std::invalid_argument("kinds must be in 0..6, got " +
                                             std::to_string(int(kinds.data()[i])));
         view_.vertices = vertices.data();
         view_.vertex_count = v;

@@ -51,8 +51,9 @@ class ShapePair {
                 if (!float_attr(shape, radius, &p[0]) || !float_attr(shape, length, &p[1])) return false;
                 p[1] /= 2.0;
                 return true;
+            case ShapeKind::HALFSPACE: return true;  // no parameters
             default:
-                throw std::invalid_argument("kind must be a shape kind (0..5), got " +
+                throw std::invalid_argument("kind must be a shape kind (0..6), got " +
                                             std::to_string(kind));
         }
     }

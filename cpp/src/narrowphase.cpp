@@ -349,6 +349,8 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 PairResult query_pair(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
                       const Pose& pose_b, QueryKind kind, double radius_a, double radius_b) {
+    if (a.kind == ShapeKind::HALFSPACE || b.kind == ShapeKind::HALFSPACE)
+        return half_space_pair(a, pose_a, b, pose_b, kind);
     // The climbs' reads are dependent loads; fetched up front, their misses overlap.
     prefetch(a);
     prefetch(b);

@@ -138,8 +138,11 @@ SupportPoint support_core(const ShapeView& s, const Vec3& d, int hint) {
         }
         case ShapeKind::ELLIPSOID:
             return {ellipsoid_support(s.params, d), -1};
+        case ShapeKind::HALFSPACE:
+            break;  // unbounded: no support point
     }
-    return {Vec3{}, -1};
+    constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+    return {Vec3{kNaN, kNaN, kNaN}, -1};
 }
 
 namespace {
@@ -249,11 +252,31 @@ void local_aabb(const ShapeView& s, Vec3& lo, Vec3& hi) {
         case ShapeKind::ELLIPSOID:
             hi = {s.params[0], s.params[1], s.params[2]};
             break;
+        case ShapeKind::HALFSPACE: {
+            constexpr double kInf = std::numeric_limits<double>::infinity();
+            lo = {-kInf, -kInf, -kInf};
+            hi = {kInf, kInf, 0.0};
+            return;
+        }
     }
     lo = -hi;
 }
 
 void world_aabb(const ShapeView& s, const Pose& pose, Vec3& lo, Vec3& hi) {
+    if (s.kind == ShapeKind::HALFSPACE) {
+        // Unbounded along every world axis but the one its normal is exactly (a floor whose
+        // normal is +z bounds z from above at its height; a tilted one bounds nothing).
+        constexpr double kInf = std::numeric_limits<double>::infinity();
+        const Vec3 n = pose.rotation.column(2);
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = -kInf;
+            hi[k] = kInf;
+            const bool alone = n[(k + 1) % 3] == 0.0 && n[(k + 2) % 3] == 0.0;
+            if (alone && n[k] > 0.0) hi[k] = pose.translation[k];
+            if (alone && n[k] < 0.0) lo[k] = pose.translation[k];
+        }
+        return;
+    }
     if (s.kind == ShapeKind::POLYTOPE) {
         lo = hi = pose.apply(s.vertices[0]);
         for (int i = 1; i < s.vertex_count; ++i) {
@@ -304,6 +327,8 @@ double bounding_radius(const ShapeView& s) {
             return std::hypot(s.params[0], s.params[1]);
         case ShapeKind::ELLIPSOID:
             return std::fmax(s.params[0], std::fmax(s.params[1], s.params[2]));
+        case ShapeKind::HALFSPACE:
+            return std::numeric_limits<double>::infinity();
     }
     return 0.0;
 }
@@ -325,6 +350,8 @@ bool is_valid(const ShapeView& s) {
         case ShapeKind::CAPSULE:
         case ShapeKind::CYLINDER:
             return s.params[0] >= 0.0 && s.params[1] >= 0.0;
+        case ShapeKind::HALFSPACE:
+            return true;
     }
     return false;
 }

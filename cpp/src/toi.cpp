@@ -141,6 +141,8 @@ double turning_radius(const ShapeView& s, const Motion& m) {
                                                    (i & 4 ? 1 : -1) * s.params[2]}));
             return std::fmin(arm, off_axis(Vec3{}) + bounding_radius(s));
         }
+        case ShapeKind::HALFSPACE:
+            return std::numeric_limits<double>::infinity();  // unbounded: any turn sweeps far
     }
     return bounding_radius(s) + m.pivot_offset;
 }

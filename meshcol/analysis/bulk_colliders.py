@@ -21,7 +21,8 @@ import numpy as np
 from meshcol.collision.point_sets import point_set_fingerprints
 from meshcol.collision.shapes import ConvexSet, _item
 from meshcol.io.column_bodies import MeshBodies
-from meshcol.types import Body
+from meshcol.types import Body, HalfSpace
+from meshcol.vocabulary import HALF_SPACE_COLLIDER
 
 __all__ = ["bulk_colliders"]
 
@@ -62,7 +63,7 @@ def bulk_colliders(
         meshes = [i for i, p in enumerate(given) if p is None]
         primitives: dict[object, int] = {}
         for i in primitive_rows:
-            kinds[i] = "primitive"
+            kinds[i] = HALF_SPACE_COLLIDER if isinstance(given[i], HalfSpace) else "primitive"
             first[i] = primitives.setdefault(given[i], i)
     if not {kinds[i] for i in meshes} <= hulled:
         return None

@@ -149,6 +149,18 @@ def narrow_phase(table: PairTable, placed: PlacedColliders, options: CheckOption
     return measured
 
 
+#: The robot options of a check given none: every default, and an MJCF's planes read.
+_HALF_SPACES = RobotOptions(half_spaces=True)
+
+
+def with_half_spaces(robot_options: RobotOptions | None) -> RobotOptions:
+    """The robot options a check reads a description with: an MJCF's planes as half-space
+    bodies (``RobotOptions.half_spaces``), the floor a robot stands on checked with it."""
+    if robot_options is None:
+        return _HALF_SPACES
+    return dataclasses.replace(robot_options, half_spaces=True)
+
+
 def check(
     inputs: Sequence[str | os.PathLike[str]] | str | os.PathLike[str],
     *,
@@ -215,7 +227,7 @@ def check(
     opts = CheckOptions.from_keywords(**options)
     started = time.perf_counter()
     run = {"jobs": jobs, "timeout": timeout, "executor": executor, "address": ray_address}
-    scene, decompose = _load(paths, opts, progress, robot_options, **run)
+    scene, decompose = _load(paths, opts, progress, with_half_spaces(robot_options), **run)
     forget_documents()  # loaded: its manifest's decoded text is not read again
     notes = format_notes(paths)  # what the readers left out (an FBX's lights...), as inspect
     if notes:

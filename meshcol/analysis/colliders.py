@@ -55,8 +55,8 @@ from meshcol.collision.shapes import ConvexSet
 from meshcol.errors import InvalidMeshError
 from meshcol.io.collision_names import UNREAL_PREFIXES, collision_part
 from meshcol.io.column_bodies import ColumnBodies, MeshBodies, body_names
-from meshcol.types import Body, unique_name
-from meshcol.vocabulary import COLLIDER_KINDS
+from meshcol.types import Body, HalfSpace, unique_name
+from meshcol.vocabulary import COLLIDER_KINDS, HALF_SPACE_COLLIDER
 
 __all__ = [
     "COLLIDER_KINDS",
@@ -498,6 +498,8 @@ def build_colliders(
         if body.primitive is not None:
             block.put(build.pool.add(("primitive", body.primitive), body.primitive), -1)
             body_kind = "primitive"
+            if isinstance(body.primitive, HalfSpace):
+                body_kind = HALF_SPACE_COLLIDER
         else:
             body_kind = _BUILDERS[body.collider or kind](build, body, block)
             if body.part_primitives and all(body.part_primitives) and block.triangles < 0:
@@ -601,6 +603,11 @@ class _Pool:
         rows = np.fromiter(keys, dtype=np.int64, count=len(bodies))
         self.unique = [key[1] for key in index]
         self.kinds = ["primitive"] * len(bodies)
+        if any(isinstance(shape, HalfSpace) for shape in self.unique):  # a plane's body
+            self.kinds = [
+                HALF_SPACE_COLLIDER if isinstance(b.primitive, HalfSpace) else "primitive"
+                for b in bodies
+            ]
         ones = np.ones(len(bodies), dtype=np.int64)
         return self.colliders(bodies, warnings, (rows, -ones, ones))
 

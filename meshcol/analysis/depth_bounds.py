@@ -9,6 +9,8 @@ bodies: a translation that separates them separates the bodies, so it bounds the
 translation distance from above. The stage runs after :func:`~meshcol.analysis.mesh_phase.
 mesh_phase` and before :func:`~meshcol.analysis.pairs.classify`, and lowers a ``depth`` above
 ``depth_upper`` to it (an open mesh's depth can exceed it), so that the interval always holds.
+A row with an MJCF plane's half-space has ``depth_upper = depth``: the depth of the body's
+deepest part below the plane is the minimum translation distance itself.
 """
 
 from __future__ import annotations
@@ -19,10 +21,14 @@ from typing import Any
 import numpy as np
 
 from meshcol.analysis.pairs import NO_ANSWER, PairTable, PlacedColliders
+from meshcol.vocabulary import HALF_SPACE_COLLIDER
 
 __all__ = ["depth_bounds", "support", "supports"]
 
-_SPHERE, _BOX, _CAPSULE, _CYLINDER, _ELLIPSOID = 1, 2, 3, 4, 5
+_SPHERE, _BOX, _CAPSULE, _CYLINDER, _ELLIPSOID, _HALFSPACE = 1, 2, 3, 4, 5, 6
+#: How far off its normal (relative) a direction still reads a half-space's support as its
+#: plane's height: the narrow phase's normal is the plane's, rotated there and back.
+_NORMAL_SLACK = 1e-9
 
 
 def depth_bounds(table: PairTable, placed: PlacedColliders, threads: int = 0) -> PairTable:
@@ -39,6 +45,10 @@ def depth_bounds(table: PairTable, placed: PlacedColliders, threads: int = 0) ->
         return dataclasses.replace(table, depth_upper=np.zeros(0))
     upper = np.zeros(len(table))
     rows = np.flatnonzero(~(table.distance > 0.0) | table.contained | table.undecided)
+    exact = _half_space_rows(table, placed)[rows]
+    if exact.any():  # the depth of a body's deepest part below a plane is its own: exact
+        upper[rows[exact]] = table.depth[rows[exact]]
+        rows = rows[~exact]
     if len(rows):
         upper[rows] = _enclosing_depths(table, placed, rows, threads)
     depth = table.depth.copy()
@@ -47,6 +57,15 @@ def depth_bounds(table: PairTable, placed: PlacedColliders, threads: int = 0) ->
     signed = table.signed_distance.copy()
     signed[over] = table.distance[over] - depth[over]
     return dataclasses.replace(table, depth=depth, depth_upper=upper, signed_distance=signed)
+
+
+def _half_space_rows(table: PairTable, placed: PlacedColliders) -> np.ndarray:
+    """Mask of the rows with a half-space's body (an MJCF plane: collider ``plane``)."""
+    kinds = placed.colliders.kinds
+    if HALF_SPACE_COLLIDER not in kinds:
+        return np.zeros(len(table), dtype=bool)
+    plane = np.array([kind == HALF_SPACE_COLLIDER for kind in kinds], dtype=bool)
+    return plane[table.body_a] | plane[table.body_b]
 
 
 def _enclosing_sets(
@@ -151,6 +170,11 @@ def supports(
         base + p[:, 1] * along + p[:, 0] * radial,
     )
     out[:] = primitive
+    half_space = np.flatnonzero(kind == _HALFSPACE)
+    if len(half_space):  # bounded only along its normal (local +z): its plane's height there
+        sideways = np.hypot(local[half_space, 0], local[half_space, 1])
+        normal = (local[half_space, 2] > 0.0) & (sideways <= _NORMAL_SLACK * length[half_space])
+        out[half_space] = np.where(normal, base[half_space], np.inf)
     polytope = np.flatnonzero(kind == 0)
     if len(polytope):
         out[polytope] = base[polytope] + _vertex_maxima(shapes, index[polytope], local[polytope])

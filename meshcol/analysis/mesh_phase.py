@@ -21,6 +21,7 @@ import numpy as np
 
 from meshcol.analysis.pairs import MEASURES, NO_ANSWER, PairTable, PlacedColliders
 from meshcol.types import Status
+from meshcol.vocabulary import HALF_SPACE_COLLIDER
 
 __all__ = ["mesh_phase"]
 
@@ -29,7 +30,9 @@ def _exact_rows(
     table: PairTable, placed: PlacedColliders, tolerance: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """``(mesh, exact)`` row masks: rows with a ``mesh`` body, and those plus the convex rows
-    that may nest (touching or overlapping, one body's box inside the other's)."""
+    that may nest (touching or overlapping, one body's box inside the other's). A row with a
+    plane's half-space is neither: the convex phase measured it exactly (a mesh body's
+    lowest point is its hull's), and a body below a floor is penetrating it, never nested."""
     a, b = table.body_a, table.body_b
     kinds = placed.colliders.kinds  # compared in a C loop (a million bodies)
     mesh_bodies = np.fromiter(map(operator.eq, kinds, itertools.repeat("mesh")), bool, len(kinds))
@@ -38,6 +41,12 @@ def _exact_rows(
     a_in_b = np.all((lo[a] >= lo[b]) & (hi[a] <= hi[b]), axis=1)
     b_in_a = np.all((lo[b] >= lo[a]) & (hi[b] <= hi[a]), axis=1)
     nested = (table.signed_distance <= tolerance) & ~mesh & (a_in_b | b_in_a)
+    if HALF_SPACE_COLLIDER in kinds:
+        plane = np.fromiter(
+            map(operator.eq, kinds, itertools.repeat(HALF_SPACE_COLLIDER)), bool, len(kinds)
+        )
+        measured = ~(plane[a] | plane[b])
+        mesh, nested = mesh & measured, nested & measured
     return mesh, mesh | nested
 
 

@@ -323,11 +323,79 @@ def overlapping_pairs(
     from meshcol.collision.broadphase import sort_and_sweep
 
     half = 0.5 * margin
-    pairs = sort_and_sweep(aabb_min - half, aabb_max + half, groups=groups, max_pairs=max_pairs)
+    unbounded = _unbounded(aabb_min, aabb_max)
+    if unbounded is not None:
+        pairs = _with_unbounded(aabb_min - half, aabb_max + half, unbounded, groups, max_pairs)
+    else:
+        pairs = sort_and_sweep(aabb_min - half, aabb_max + half, groups=groups, max_pairs=max_pairs)
     if groups is not None and len(pairs):
         swap = groups[pairs[:, 0]] > groups[pairs[:, 1]]
         pairs[swap] = pairs[swap][:, ::-1]
     return pairs
+
+
+def _above_half_spaces(placed: PlacedColliders, pairs: np.ndarray, margin: float) -> np.ndarray:
+    """Mask of the body pairs of a half-space (an MJCF plane's body: one part of kind
+    ``HALFSPACE``) whose other body's box lies more than ``margin`` above its plane: a
+    tilted plane's box is unbounded along every axis, so the boxes' sweep pairs it with
+    everything. The box's lowest corner along the normal is at most the body's lowest point,
+    so no pair within the margin is dropped."""
+    from meshcol.collision.shapes import ShapeKind
+
+    colliders = placed.colliders
+    drop = np.zeros(len(pairs), dtype=bool)
+    half = colliders.shapes.kinds == ShapeKind.HALFSPACE
+    if len(pairs) == 0 or not half.any():
+        return drop
+    plane = np.zeros(len(placed.body_min), dtype=bool)
+    plane[colliders.part_body[half]] = True
+    first = plane[pairs[:, 0]]
+    rows = np.flatnonzero(first ^ plane[pairs[:, 1]])
+    owner = np.where(first[rows], pairs[rows, 0], pairs[rows, 1])
+    other = np.where(first[rows], pairs[rows, 1], pairs[rows, 0])
+    pose = placed.part_poses[colliders.body_part_offsets[owner]]
+    normal, origin = pose[:, :3, 2], pose[:, :3, 3]
+    lowest = np.where(normal > 0.0, placed.body_min[other], placed.body_max[other])
+    drop[rows] = np.einsum("ij,ij->i", normal, lowest - origin) > margin
+    return drop
+
+
+def _unbounded(aabb_min: np.ndarray, aabb_max: np.ndarray) -> np.ndarray | None:
+    """The indices of the boxes with an infinite side and no NaN (a half-space's,
+    ``ShapeKind.HALFSPACE``), or None when there is none (a NaN box is the sweep's error)."""
+    infinite = np.isinf(aabb_min).any(axis=1) | np.isinf(aabb_max).any(axis=1)
+    if not infinite.any():
+        return None
+    infinite &= ~(np.isnan(aabb_min).any(axis=1) | np.isnan(aabb_max).any(axis=1))
+    return np.flatnonzero(infinite) if infinite.any() else None
+
+
+def _with_unbounded(
+    lo: np.ndarray,
+    hi: np.ndarray,
+    unbounded: np.ndarray,
+    groups: np.ndarray | None,
+    max_pairs: int | None,
+) -> np.ndarray:
+    """:func:`overlapping_pairs`' pairs (boxes grown already) when some boxes are unbounded:
+    the bounded ones by the sweep, each unbounded one against every box by the same
+    interval test (an array expression per unbounded box: a scene has a floor or a few),
+    lexicographically sorted as the sweep sorts its own."""
+    from meshcol.collision.broadphase import sort_and_sweep
+
+    bounded = np.setdiff1d(np.arange(len(lo)), unbounded)
+    own = None if groups is None else groups[bounded]
+    found = [bounded[sort_and_sweep(lo[bounded], hi[bounded], groups=own, max_pairs=max_pairs)]]
+    for u in unbounded.tolist():
+        meets = np.all((lo <= hi[u]) & (lo[u] <= hi), axis=1)
+        meets[u] = False
+        meets[unbounded[unbounded < u]] = False  # a pair of two unbounded boxes once
+        if groups is not None:
+            meets &= groups != groups[u]
+        others = np.flatnonzero(meets)
+        found.append(np.stack([np.minimum(others, u), np.maximum(others, u)], axis=1))
+    pairs = np.concatenate(found).reshape(-1, 2)
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
 
 def excluded_mask(
@@ -418,7 +486,8 @@ def broad_phase(
     except TooManyPairsError:
         raise _too_many(f"more than {max_pairs:,}", len(names), max_pairs) from None
     left_out = excluded_mask(names, excluded, body_pairs)
-    body_pairs = body_pairs[~left_out]
+    above = _above_half_spaces(placed, body_pairs, margin)
+    body_pairs = body_pairs[~(left_out | above)]
     if max_pairs is not None and len(body_pairs) > max_pairs:
         raise _too_many(f"{len(body_pairs):,}", len(names), max_pairs)
     if len(body_pairs) == 0:
@@ -432,7 +501,7 @@ def broad_phase(
     key = body_pairs[:, 0] * n + body_pairs[:, 1]
     part_pairs = overlapping_pairs(placed.part_min, placed.part_max, margin, groups=owner)
     part_key = owner[part_pairs[:, 0]] * n + owner[part_pairs[:, 1]]
-    if left_out.any():  # part pairs of excluded body pairs
+    if left_out.any() or above.any():  # part pairs of excluded body pairs
         keep = np.isin(part_key, key)
         part_pairs, part_key = part_pairs[keep], part_key[keep]
     # Body pairs whose parts' boxes never meet are still measured: all their part pairs.

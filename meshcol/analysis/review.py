@@ -119,10 +119,11 @@ def check_page(
     """The page of ``meshcol check``: bodies, colliders, and the pairs sorted by severity
     (violations first); choosing a pair frames both bodies, marks the witness points, draws
     the normal and labels the depth or gap."""
+    from meshcol.analysis.check import with_half_spaces
     from meshcol.analysis.colliders import build_colliders
     from meshcol.io.scene import load_inputs
 
-    scene = load_inputs(list(inputs), robot_options=robot_options)
+    scene = load_inputs(list(inputs), robot_options=with_half_spaces(robot_options))
     colliders = build_colliders(
         scene.bodies, collider, mesh_parts="hull", decompose_options=decompose_options
     )

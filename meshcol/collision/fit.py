@@ -55,7 +55,7 @@ import numpy as np
 
 from meshcol.collision.arrays import as_offsets
 from meshcol.errors import InvalidMeshError
-from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, Primitive, Sphere
+from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, HalfSpace, Primitive, Sphere
 
 __all__ = [
     "AUTO_SHAPES",
@@ -310,6 +310,8 @@ def primitive_volume(primitive: Primitive) -> float:
     if isinstance(primitive, Ellipsoid):
         a, b, c = primitive.semi_axes
         return 4.0 / 3.0 * math.pi * a * b * c
+    if isinstance(primitive, HalfSpace):
+        return math.inf
     return math.pi * primitive.radius**2 * primitive.length
 
 
@@ -335,6 +337,8 @@ def signed_distances(primitive: Primitive, local_points: np.ndarray) -> np.ndarr
         if smallest == 0.0:
             return np.zeros(len(p))
         return (np.linalg.norm(p / axes, axis=1) - 1.0) * smallest
+    if isinstance(primitive, HalfSpace):  # the height above its plane, exact
+        return p[:, 2].copy()
     radial = np.hypot(p[:, 0], p[:, 1])
     half = 0.5 * primitive.length
     if isinstance(primitive, Capsule):

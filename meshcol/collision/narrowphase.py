@@ -45,7 +45,7 @@ import numpy as np
 from meshcol._native import core
 from meshcol.collision.arrays import as_pairs, as_pose, as_poses
 from meshcol.collision.shapes import ConvexSet, ShapeKind, _item, as_convex_set
-from meshcol.types import Body, Box, Capsule, Cylinder, Ellipsoid, Sphere, Status
+from meshcol.types import Body, Box, Capsule, Cylinder, Ellipsoid, HalfSpace, Sphere, Status
 
 __all__ = [
     "DistanceBatch",
@@ -301,6 +301,7 @@ PRIMITIVE_KINDS: dict[type, int] = {
     Capsule: int(ShapeKind.CAPSULE),
     Cylinder: int(ShapeKind.CYLINDER),
     Ellipsoid: int(ShapeKind.ELLIPSOID),
+    HalfSpace: int(ShapeKind.HALFSPACE),
 }
 # Status members by value, for the core to hand out (calling the enum costs more than a query).
 _STATUSES = tuple(Status(v) for v in range(len(Status)))

@@ -17,7 +17,7 @@ import numpy as np
 
 from meshcol.collision.arrays import as_points, as_poses
 from meshcol.collision.hull import PackedHulls, pack_hull_slices, pack_hulls
-from meshcol.types import Body, Box, Capsule, Cylinder, Ellipsoid, Sphere
+from meshcol.types import Body, Box, Capsule, Cylinder, Ellipsoid, HalfSpace, Sphere
 
 __all__ = [
     "ShapeKind",
@@ -44,9 +44,12 @@ class ShapeKind(enum.IntEnum):
     CAPSULE = 3  #: params[0] radius, params[1] half length of the segment along local z
     CYLINDER = 4  #: params[0] radius, params[1] half length along local z
     ELLIPSOID = 5  #: params[0:3] semi-axes along local x, y, z
+    #: the half-space z <= 0 of its frame (an MJCF plane); params[0:2] the half sides of the
+    #: patch drawn for it, read by no query
+    HALFSPACE = 6
 
 
-_PRIMITIVES = (Sphere, Box, Capsule, Cylinder, Ellipsoid)
+_PRIMITIVES = (Sphere, Box, Capsule, Cylinder, Ellipsoid, HalfSpace)
 
 
 def primitive_params(shape: Any) -> tuple[int, tuple[float, float, float, float]]:
@@ -63,6 +66,8 @@ def primitive_params(shape: Any) -> tuple[int, tuple[float, float, float, float]
         return ShapeKind.CYLINDER, (shape.radius, shape.length / 2.0, 0.0, 0.0)
     if isinstance(shape, Ellipsoid):
         return ShapeKind.ELLIPSOID, (*shape.semi_axes, 0.0)
+    if isinstance(shape, HalfSpace):
+        return ShapeKind.HALFSPACE, (shape.patch[0] / 2.0, shape.patch[1] / 2.0, 0.0, 0.0)
     raise TypeError(type(shape).__name__)  # pragma: no cover - callers dispatch
 
 
@@ -283,7 +288,7 @@ class ConvexSet:
     def __len__(self) -> int:
         return len(self.kinds)
 
-    def primitive(self, h: int) -> Sphere | Box | Capsule | Cylinder | Ellipsoid | None:
+    def primitive(self, h: int) -> Sphere | Box | Capsule | Cylinder | Ellipsoid | HalfSpace | None:
         """Shape ``h`` as the primitive it packs (the inverse of packing one), or None for a
         polytope."""
         kind, p = int(self.kinds[h]), self.params[h]
@@ -297,6 +302,8 @@ class ConvexSet:
             return Cylinder(float(p[0]), float(p[1]) * 2.0)
         if kind == ShapeKind.ELLIPSOID:
             return Ellipsoid((float(p[0]), float(p[1]), float(p[2])))
+        if kind == ShapeKind.HALFSPACE:
+            return HalfSpace((float(p[0]) * 2.0, float(p[1]) * 2.0))
         return None
 
     def __repr__(self) -> str:
@@ -393,7 +400,7 @@ class ConvexSet:
     @classmethod
     def from_shapes(cls, shapes: Sequence[Any], names: Sequence[str] | None = None) -> ConvexSet:
         """Primitives (:class:`Sphere`, :class:`Box`, :class:`Capsule`, :class:`Cylinder`,
-        :class:`Ellipsoid`), :class:`meshcol.types.Body` objects, meshes and (n, 3) point
+        :class:`Ellipsoid`, :class:`HalfSpace`), :class:`meshcol.types.Body` objects, meshes and (n, 3) point
         arrays (convex hulls), in any mix; ``names`` (default ``shapes[i]``) name them in errors."""
         labels = names if names is not None else [f"shapes[{i}]" for i in range(len(shapes))]
         return cls._from_items([_item(s, n) for s, n in zip(shapes, labels)])
@@ -405,7 +412,7 @@ class ConvexSet:
         Parameters
         ----------
         kinds : (H,) int
-            :class:`ShapeKind` of each shape, SPHERE to ELLIPSOID.
+            :class:`ShapeKind` of each shape, SPHERE to HALFSPACE.
         params : (H, 4) float
             Each one's parameters as :attr:`params` holds them (half extents, half lengths),
             finite and >= 0.
@@ -414,8 +421,8 @@ class ConvexSet:
         p = _copied(params, np.float64)
         if p.shape != (len(k), 4):
             raise ValueError(f"params must be ({len(k)}, 4), got {p.shape}")
-        if len(k) and (k.min() < ShapeKind.SPHERE or k.max() > ShapeKind.ELLIPSOID):
-            raise ValueError("kinds must be primitive shape kinds (SPHERE to ELLIPSOID)")
+        if len(k) and (k.min() < ShapeKind.SPHERE or k.max() > ShapeKind.HALFSPACE):
+            raise ValueError("kinds must be primitive shape kinds (SPHERE to HALFSPACE)")
         if not (np.isfinite(p) & (p >= 0.0)).all():
             raise ValueError("params must be finite and >= 0")
         return cls._assemble(k, p, np.zeros(0, dtype=np.int64), pack_hulls([]))

@@ -5,8 +5,15 @@ mean what MuJoCo says; geom poses come from ``mj_kinematics`` at the configurati
 or the first keyframe with ``keyframe``, then the joint values given; a joint coupled by
 ``<equality><joint>`` follows its polynomial, as a URDF mimic joint). A body's collision
 geoms (``contype`` or ``conaffinity`` non-zero, or named by a ``<contact><pair>``) are its
-parts; planes and height fields are skipped (not solids). Spheres, capsules, cylinders, boxes
-and ellipsoids are exact primitives.
+parts; height fields are skipped. Spheres, capsules, cylinders, boxes and ellipsoids are exact
+primitives.
+
+A plane (``<geom type="plane">``) is what MuJoCo collides it as, the half-space below it (its
+``size`` only draws it): with ``RobotOptions.half_spaces`` (``meshcol check``) each is a body
+of its own, a static :class:`~meshcol.types.HalfSpace` named ``<body>/<geom>``, filtered as
+``mj_collision`` filters it (:func:`_plane_exclusions`: never against a body welded to its
+own, the bitmasks of the plane geom itself, ``<exclude>``, a ``<contact><pair>`` naming it
+collided whatever else says); without, planes are left out (the other commands).
 
 :func:`read_mjcf` is the reader :func:`meshcol.io.robot.load_robot_model` dispatches to.
 """
@@ -33,7 +40,18 @@ from meshcol.io.links import (
     primitive_body,
 )
 from meshcol.io.paths import confine_mjcf
-from meshcol.types import Body, Box, Capsule, Cylinder, Ellipsoid, Primitive, Scene, Sphere
+from meshcol.types import (
+    Body,
+    Box,
+    Capsule,
+    Cylinder,
+    Ellipsoid,
+    HalfSpace,
+    Primitive,
+    Scene,
+    Sphere,
+    unique_name,
+)
 
 if TYPE_CHECKING:
     from meshcol.io.robot import RobotOptions
@@ -120,11 +138,16 @@ class MjcfRead:
         model, names = self._model, self._names
         geoms = _geoms_by_body(self._mujoco, model, self._data, visual)
         bodies = _bodies(model, self._data, names, geoms, self.source, sink)
+        excluded = _exclusions(model, names, self._options.include_adjacent)
+        if self._options.half_spaces and not visual:
+            planes = _planes(self._mujoco, model, self._data, names, bodies, self.source)
+            bodies.extend(body for body, _ in planes)
+            excluded.extend(_plane_exclusions(model, names, bodies, planes))
         return Scene(
             bodies=tuple(bodies),
             units="m",
             source=self.source,
-            excluded_pairs=tuple(_exclusions(model, names, self._options.include_adjacent)),
+            excluded_pairs=tuple(excluded),
             warnings=tuple(self._warnings),
         )
 
@@ -381,6 +404,88 @@ def _colliding_geoms(model: Any) -> np.ndarray:
     return np.flatnonzero(colliding)
 
 
+def _plane_geoms(model: Any) -> np.ndarray:
+    """The ids of the model's colliding plane geoms (:func:`_colliding_geoms`), in order."""
+    import mujoco
+
+    colliding = _colliding_geoms(model)
+    types = np.asarray(model.geom_type, dtype=np.int64)[colliding]
+    return colliding[types == int(mujoco.mjtGeom.mjGEOM_PLANE)]
+
+
+def _planes(
+    mujoco: Any, model: Any, data: Any, names: list[str], bodies: list[Body], source: str
+) -> list[tuple[Body, int]]:
+    """Each colliding plane geom as a :class:`~meshcol.types.HalfSpace` body at its world
+    pose, named ``<body>/<geom>`` (``<body>/plane<id>`` when unnamed; ``#2``... when taken),
+    with its geom id. The patch drawn is MuJoCo's ``size`` doubled, or twice the model's
+    extent (``stat.extent``) along a side whose size is 0 (drawn infinite by MuJoCo)."""
+    used: dict[str, int] = {}
+    for body in bodies:
+        unique_name(body.name, used)
+    extent = 2.0 * float(model.stat.extent)
+    planes = []
+    for g in _plane_geoms(model).tolist():
+        geom = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g) or f"plane{g}"
+        name = unique_name(f"{names[int(model.geom_bodyid[g])]}/{geom}", used)
+        world = np.eye(4)
+        world[:3, :3] = np.asarray(data.geom_xmat[g], dtype=np.float64).reshape(3, 3)
+        world[:3, 3] = data.geom_xpos[g]
+        x, y = (float(v) for v in model.geom_size[g][:2])
+        patch = (2.0 * x if x > 0.0 else extent, 2.0 * y if y > 0.0 else extent)
+        planes.append((Body.of_primitive(name, source, HalfSpace(patch), pose=world), g))
+    return planes
+
+
+def _plane_exclusions(
+    model: Any, names: list[str], bodies: list[Body], planes: list[tuple[Body, int]]
+) -> list[tuple[str, str, str]]:
+    """The pairs of each plane body (:func:`_planes`) with every other body that
+    ``mj_collision`` never tests, with their reasons, as :func:`_exclusions` words them:
+    ``mjcf welded`` (a body welded to the plane's own, the world's when static: MuJoCo never
+    collides two static geoms; every other plane), ``mjcf contype/conaffinity`` (the plane
+    geom's own masks against the OR of the body's), ``mjcf <exclude>`` (the plane's body and
+    the other), ``adjacent`` never (a plane lives in a static body, MuJoCo's own rule), and
+    none for a body a ``<contact><pair>`` pairs with the plane geom."""
+    contype = np.asarray(model.geom_contype, dtype=np.int64)
+    conaffinity = np.asarray(model.geom_conaffinity, dtype=np.int64)
+    geom_body = np.asarray(model.geom_bodyid, dtype=np.int64)
+    weld = np.asarray(model.body_weldid, dtype=np.int64)
+    solids = np.setdiff1d(_colliding_geoms(model), _plane_geoms(model))
+    mj_body = {name: b for b, name in enumerate(names)}
+    excluded_bodies = {
+        frozenset((int(sig) >> 16, int(sig) & 0xFFFF)) for sig in model.exclude_signature
+    }
+    explicit = {frozenset((int(g1), int(g2))) for g1, g2 in zip(model.pair_geom1, model.pair_geom2)}
+    plane_ids = {body.name: g for body, g in planes}
+    excluded: list[tuple[str, str, str]] = []
+    for plane, g in planes:
+        home = int(geom_body[g])
+        for other in bodies:
+            if other.name == plane.name:
+                continue
+            if other.name in plane_ids:
+                excluded.append((plane.name, other.name, "mjcf welded"))
+                continue
+            b = mj_body[other.name]
+            own = solids[geom_body[solids] == b]
+            if any(frozenset((g, int(h))) in explicit for h in own.tolist()):
+                continue
+            if weld[b] == weld[home]:
+                reason = "mjcf welded"
+            elif not (
+                (contype[g] & np.bitwise_or.reduce(conaffinity[own], initial=0))
+                or (conaffinity[g] & np.bitwise_or.reduce(contype[own], initial=0))
+            ):
+                reason = "mjcf contype/conaffinity"
+            elif frozenset((home, b)) in excluded_bodies:
+                reason = "mjcf <exclude>"
+            else:
+                continue
+            excluded.append((plane.name, other.name, reason))
+    return excluded
+
+
 def _filtered_pairs(model: Any, names: list[str]) -> list[tuple[str, str, str]]:
     """Body pairs MuJoCo's weld and bitmask filters leave untested, in body order (a pair a
     ``<contact><pair>`` names among them too: :func:`_exclusions` takes those out of every
@@ -393,7 +498,7 @@ def _filtered_pairs(model: Any, names: list[str]) -> list[tuple[str, str, str]]:
     took 15 s for a bin of 2,000 free bodies)."""
     contype = np.asarray(model.geom_contype, dtype=np.int64)
     conaffinity = np.asarray(model.geom_conaffinity, dtype=np.int64)
-    colliding = _colliding_geoms(model)
+    colliding = np.setdiff1d(_colliding_geoms(model), _plane_geoms(model))  # planes: bodies
     geom_body = np.asarray(model.geom_bodyid, dtype=np.int64)[colliding]
     bodies = np.unique(geom_body)
     row = np.searchsorted(bodies, geom_body)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from meshcol.types import Box, Capsule, Ellipsoid, Primitive, Sphere, primitive_mesh
+from meshcol.types import Box, Capsule, Ellipsoid, HalfSpace, Primitive, Sphere, primitive_mesh
 
 __all__ = ["enclosing_primitive_mesh", "primitive_mesh"]
 
@@ -19,6 +19,8 @@ def _support(primitive: Primitive, directions: np.ndarray) -> np.ndarray:
     """The primitive's support function h(n) = max over the primitive of n . x, per unit
     direction (k, 3)."""
     n = directions
+    if isinstance(primitive, HalfSpace):
+        raise TypeError("a half-space is unbounded: no mesh encloses it")
     if isinstance(primitive, Sphere):
         return np.full(len(n), primitive.radius)
     if isinstance(primitive, Box):

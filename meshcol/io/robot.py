@@ -76,6 +76,10 @@ class RobotOptions:
         SRDF file whose ``<disable_collisions>`` pairs are excluded from self-collision.
     include_adjacent : bool
         Keep pairs of links joined by a joint (left out by default).
+    half_spaces : bool
+        MJCF: read each ``<geom type="plane">`` as a body of its own, a static
+        :class:`~meshcol.types.HalfSpace` (``meshcol check``); left out by default (the
+        commands that rebuild, fit, inspect or sweep colliders have nothing to do with one).
 
     Raises
     ------
@@ -83,7 +87,7 @@ class RobotOptions:
         A joint name that is not a string or a value that is not a finite number, an empty
         package name or folder.
     TypeError
-        ``keyframe`` or ``include_adjacent`` not a bool.
+        ``keyframe``, ``include_adjacent`` or ``half_spaces`` not a bool.
 
     Notes
     -----
@@ -96,9 +100,10 @@ class RobotOptions:
     package_paths: Mapping[str, str] = field(default_factory=dict)
     srdf: str | None = None
     include_adjacent: bool = False
+    half_spaces: bool = False
 
     def __post_init__(self) -> None:
-        for flag in ("keyframe", "include_adjacent"):
+        for flag in ("keyframe", "include_adjacent", "half_spaces"):
             if not isinstance(getattr(self, flag), bool):
                 raise TypeError(f"{flag} must be True or False, got {getattr(self, flag)!r}")
         joints = MappingProxyType(_joint_values(self.joints))
@@ -111,7 +116,7 @@ class RobotOptions:
     def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
         # The read-only mappings do not pickle: the options travel as the dicts they copy.
         fields = (dict(self.joints), self.keyframe, dict(self.package_paths), self.srdf)
-        return (RobotOptions, (*fields, self.include_adjacent))
+        return (RobotOptions, (*fields, self.include_adjacent, self.half_spaces))
 
 
 def _joint_values(joints: Mapping[str, Any]) -> dict[str, float]:

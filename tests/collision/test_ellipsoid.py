@@ -173,8 +173,8 @@ def test_packed_as_its_kind_and_semi_axes():
     assert shapes.primitive(0) == e
     again = ConvexSet.from_primitives([5], [[0.5, 0.25, 2.0, 0.0]])
     assert again.primitive(0) == e
-    with pytest.raises(ValueError, match="SPHERE to ELLIPSOID"):
-        ConvexSet.from_primitives([6], [[1.0, 1.0, 1.0, 0.0]])
+    with pytest.raises(ValueError, match="SPHERE to HALFSPACE"):  # 6 is an MJCF plane's
+        ConvexSet.from_primitives([7], [[1.0, 1.0, 1.0, 0.0]])
     low, high = shapes.aabbs(np.stack([pose(), pose()]))
     assert low[0].tolist() == [-0.5, -0.25, -2.0] and high[0].tolist() == [0.5, 0.25, 2.0]
 

@@ -135,6 +135,16 @@ struct PairResult {
     int iterations = 0;       ///< GJK plus EPA iterations
 };
 
+/// A pair with a half-space (`ShapeKind::HALFSPACE`, either side), measured exactly without
+/// GJK: the other shape's support point against the plane's normal n (world) is its lowest
+/// point, and its height n.(x - plane point) the signed distance (Ericson 2004, 5.2.3: a
+/// convex shape against a plane). `point_b` (of the other shape) is that support point,
+/// `point_a` its foot on the plane; the normal is n, or -n when the half-space is `b`. Two
+/// half-spaces: `Status::DEGENERATE`, NaN fields (MuJoCo never collides static geoms).
+/// `query_pair` sends every such pair here.
+PairResult half_space_pair(const ShapeView& a, const Pose& pose_a, const ShapeView& b,
+                           const Pose& pose_b, QueryKind kind);
+
 /// One pair query. Shapes must be valid and poses rigid (the batch checks both).
 /// `radius_a`/`radius_b`: the shapes' `bounding_radius` if known (negative: computed).
 PairResult query_pair(const ShapeView& a, const Pose& pose_a, const ShapeView& b,

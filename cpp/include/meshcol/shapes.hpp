@@ -68,6 +68,13 @@ enum class ShapeKind : std::int8_t {
     /// ellipse (a disc when the other two are equal), two zeros a segment, three a point:
     /// each is still a convex set, queried exactly.
     ELLIPSOID = 5,
+    /// The half-space z <= 0 of its frame (an MJCF plane: the floor is its top face, the
+    /// solid below it); params[0..1] the half sides of the patch drawn for it, not read by any
+    /// query. Unbounded: no support point, an unbounded box
+    /// (`world_aabb`: infinite sides but the one its normal bounds when it is a world axis),
+    /// an infinite bounding radius; the narrow phase measures it apart (`half_space_pair`,
+    /// narrowphase.hpp), never by GJK or EPA.
+    HALFSPACE = 6,
 };
 
 /// Non-owning view of one convex shape (local frame). Polytope data belong to the caller.
@@ -130,7 +137,7 @@ inline double margin(const ShapeView& shape) {
 }
 
 /// Support point of the shape's core in `direction` (local frame, need not be unit): a point
-/// of the core maximising dot(point, direction). `hint` is a warm-start vertex for hill
+/// of the core maximising dot(point, direction); NaN for a half-space (it has none). `hint` is a warm-start vertex for hill
 /// climbing on polytopes with adjacency (pass -1 when none).
 SupportPoint support_core(const ShapeView& shape, const Vec3& direction, int hint = -1);
 
