@@ -126,11 +126,14 @@ def measure_batch(
 ) -> list[dict[str, Any]]:
     """The measures of the exact hull of each request's points, from its cache or measured
     now: every missing one in one :func:`measure_hulls` call, every missing in-sphere (when
-    ``ball``) in one :func:`add_balls` call."""
+    ``ball``) in one :func:`add_balls` call. A hull is measured once, as the hull of its
+    vertices: points and the vertices of their hull (a fit's input and its ``before``
+    parts) share one row."""
     sets = [np.ascontiguousarray(p, dtype=np.float64) for _, p in requests]
     for p in sets:
         if p.ndim != 2 or p.shape[1] != 3:
             exact_hull(p)  # the error it raises
+    sets = [cache.exact(p).vertices for (cache, _), p in zip(requests, sets, strict=True)]
     keys = [cache._key(p) for (cache, _), p in zip(requests, sets, strict=True)]
     missing: dict[tuple[int, Any], tuple[FitCache, np.ndarray]] = {}
     for (cache, _), key, p in zip(requests, keys, sets, strict=True):
