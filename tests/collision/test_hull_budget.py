@@ -335,6 +335,12 @@ def test_a_plane_through_an_edge_keeps_the_cores_polytope(monkeypatch) -> None:
     qhull = _intersect(planes[:, :3], planes[:, 3], points.mean(axis=0), exact.diagonal)
     assert len(qhull) > budget
     _assert_hull_of_own_vertices(corners, planes, points, budget, exact.diagonal)
+    # qhull's point that is not a vertex: on three planes through one line, refused
+    gaps = np.linalg.norm(qhull[:, None] - corners[None], axis=2).min(axis=1)
+    extra = qhull[np.argmax(gaps)]
+    assert gaps.max() > 1e-3 * exact.diagonal
+    assert _checked_polytope(corners, planes, budget, exact.diagonal) is not None
+    assert _checked_polytope(np.vstack([corners, extra]), planes, 99, exact.diagonal) is None
     fallbacks = _count_fallbacks(monkeypatch)
     result = hull_within_budget(exact, budget, max_planes)
     assert not fallbacks
