@@ -11,8 +11,9 @@ before), so a body whose planes the core picks as the loop in numpy did gets the
 vertices up to rounding. Where that intersection breaks the budget, it is the core's own
 polytope, checked (:func:`_checked_polytope`): a cut plane that touches the polytope along an
 edge meets two planes of that edge in the edge's line, and qhull reports one more point, on
-the edge (116 of the 10,000 props of ``bench_scale`` under ``--target isaac``; RESULTS.md,
-session 43). Only a body the core could not serve (a degenerate start, a polytope that fails
+the edge, or it splits a vertex of four planes or more into points a little farther apart
+than the merge radius (94 and 22 of the 10,000 props of ``bench_scale`` under ``--target
+isaac``; RESULTS.md, session 43). Only a body the core could not serve (a degenerate start, a polytope that fails
 the check) is simplified again by the loop in numpy (:func:`_simplify_qhull`), which also
 simplifies flat input (2-D).
 """
@@ -133,8 +134,8 @@ def simplify_many(
         interior = vertices[i].mean(axis=0)
         polytope = _intersect(body_planes[:, :3], body_planes[:, 3], interior, scales[i])
         if polytope is None or len(polytope) > int(body[3]):
-            # qhull's points of planes through one line (an edge both touch) include one
-            # on the edge: the core's own polytope, checked
+            # qhull's points include one on an edge (planes through one line) or a split
+            # vertex: the core's own polytope, checked
             polytope = _checked_polytope(
                 corners[corner_offsets[i] : corner_offsets[i + 1]], body_planes, body[3], scales[i]
             )
