@@ -10,7 +10,8 @@ The last report of each side is then compared field by field (:func:`compare_rep
 every number that differs is counted under its field's path (list indices left out), with
 the largest relative difference; any other difference (a key, a length, a string, a null)
 is counted as structural. The hulls each side wrote (``--output``, one OBJ of every body's
-hull) are compared byte for byte (``hulls``: ``same`` or ``DIFFER``). ``--compare-only``
+hull) are compared byte for byte (``hulls``: ``same``, or ``DIFFER`` with the objects that
+differ and the largest coordinate difference, :func:`compare_hulls`). ``--compare-only``
 compares the files ``--keep`` holds.
 
 Run:  .venv/bin/python benchmarks/bench_target_scale.py --baseline ../base/.venv/bin/meshcol
@@ -31,6 +32,8 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 HERE = Path(__file__).resolve().parent
 PROFILES = (
@@ -121,6 +124,49 @@ def compare_reports(a: Path, b: Path) -> dict[str, tuple[int, float | None]]:
     return found
 
 
+def _obj_vertices(path: Path) -> dict[str, list[str]]:
+    """Per object (``o`` line) of an OBJ the lines of its vertices (its faces index the
+    file's vertices, so a count that changes shifts every later object's faces)."""
+    objects: dict[str, list[str]] = {}
+    rows: list[str] = []
+    for line in path.read_text().splitlines():
+        if line.startswith("o "):
+            rows = objects.setdefault(line[2:], [])
+        elif line.startswith("v "):
+            rows.append(line)
+    return objects
+
+
+def compare_hulls(a: Path, b: Path) -> str:
+    """What differs between two OBJs of hulls: the objects whose vertices differ, those of
+    them with another vertex count, and over the others the largest absolute and relative
+    difference between a vertex and the nearest vertex of the other side."""
+    if a.read_bytes() == b.read_bytes():
+        return "same"
+    left, right = _obj_vertices(a), _obj_vertices(b)
+    if left.keys() != right.keys():
+        return "DIFFER (objects)"
+    changed = [name for name in left if left[name] != right[name]]
+    counts = 0
+    worst_abs = worst_rel = 0.0
+    for name in changed:
+        if len(left[name]) != len(right[name]):
+            counts += 1
+            continue
+        u = np.array([r.split()[1:] for r in left[name]], dtype=np.float64)
+        w = np.array([r.split()[1:] for r in right[name]], dtype=np.float64)
+        nearest = np.linalg.norm(u[:, None] - w[None], axis=2).argmin(axis=1)
+        gap = np.abs(u - w[nearest])
+        worst_abs = max(worst_abs, float(gap.max()))
+        worst_rel = max(worst_rel, float((gap / np.maximum(np.abs(u), 1e-300)).max()))
+    if not changed:
+        return "same vertices (faces renumbered)"
+    return (
+        f"DIFFER: {len(changed)} objects' vertices ({counts} with another count; the rest: "
+        f"max abs {worst_abs:.1e}, max rel {worst_rel:.1e})"
+    )
+
+
 def _span(values: list[float]) -> str:
     return f"{min(values):.2f}-{max(values):.2f}" if values else "-"
 
@@ -170,11 +216,11 @@ def main() -> None:
                 if base_report.read_bytes() != this_report.read_bytes()
                 else "byte-identical"
             )
-            same = hulls_path(base_report).read_bytes() == hulls_path(this_report).read_bytes()
+            hulls = compare_hulls(hulls_path(base_report), hulls_path(this_report))
             print(
                 f"{size:<6} {profile:<9} {_span(times['base']):>11}  {_span(times['this']):>11}"
                 f"  {_span(cpu['base']):>11}  {_span(cpu['this']):>11}  {_span(loads):>9}  {text}"
-                f", hulls {'same' if same else 'DIFFER'}",
+                f", hulls {hulls}",
                 flush=True,
             )
 

@@ -55,7 +55,7 @@ void bind_hull_budget(nb::module_& m) {
                 if (budgets.data()[i] < 4 || budgets.data()[i] > 0x7fffffff)
                     throw std::invalid_argument("budgets must be in [4, 2**31)");
             std::vector<std::vector<double>> planes(b);
-            std::vector<std::int64_t> counts(b, 0);
+            std::vector<std::vector<meshcol::Vec3>> polytopes(b);
             std::vector<std::int8_t> status(b, 0);
             const auto* vertices = reinterpret_cast<const meshcol::Vec3*>(hull_vertices.data());
             const auto* corners = reinterpret_cast<const meshcol::Vec3*>(facets.data());
@@ -80,10 +80,8 @@ void bind_hull_budget(nb::module_& m) {
                         in.converged_distance = converged_distances.data()[i];
                         in.merge_distance = merge_distances.data()[i];
                         in.candidates = candidates;
-                        int count = 0;
                         status[i] = static_cast<std::int8_t>(
-                            meshcol::budget_planes(in, planes[i], count));
-                        counts[i] = count;
+                            meshcol::budget_planes(in, planes[i], polytopes[i]));
                     }
                 });
             }
@@ -94,10 +92,21 @@ void bind_hull_budget(nb::module_& m) {
             packed.reserve(4 * static_cast<size_t>(offsets[b]));
             for (const auto& p : planes) packed.insert(packed.end(), p.begin(), p.end());
             const size_t total = static_cast<size_t>(offsets[b]);
-            return std::make_tuple(vector_array<Out<double, -1, 4>>(std::move(packed), total, 4),
-                                   vector_array<Out<std::int64_t, -1>>(std::move(offsets), b + 1, 0),
-                                   vector_array<Out<std::int64_t, -1>>(std::move(counts), b, 0),
-                                   vector_array<Out<std::int8_t, -1>>(std::move(status), b, 0));
+            std::vector<std::int64_t> vertex_starts(b + 1, 0);
+            for (size_t i = 0; i < b; ++i)
+                vertex_starts[i + 1] =
+                    vertex_starts[i] + static_cast<std::int64_t>(polytopes[i].size());
+            std::vector<double> corners_out;
+            corners_out.reserve(3 * static_cast<size_t>(vertex_starts[b]));
+            for (const auto& p : polytopes)
+                for (const meshcol::Vec3& v : p) corners_out.insert(corners_out.end(), {v.x, v.y, v.z});
+            const size_t vertex_total = static_cast<size_t>(vertex_starts[b]);
+            return std::make_tuple(
+                vector_array<Out<double, -1, 4>>(std::move(packed), total, 4),
+                vector_array<Out<std::int64_t, -1>>(std::move(offsets), b + 1, 0),
+                vector_array<Out<double, -1, 3>>(std::move(corners_out), vertex_total, 3),
+                vector_array<Out<std::int64_t, -1>>(std::move(vertex_starts), b + 1, 0),
+                vector_array<Out<std::int8_t, -1>>(std::move(status), b, 0));
         },
         "hull_vertices"_a, "vertex_offsets"_a, "facets"_a, "equations"_a, "facet_offsets"_a,
         "starts"_a, "budgets"_a, "max_planes"_a, "converged_distances"_a, "merge_distances"_a,
@@ -106,8 +115,8 @@ void bind_hull_budget(nb::module_& m) {
         "hull_vertices[vertex_offsets[i]:vertex_offsets[i + 1]], facets (m, 3, 3) and their "
         "outward planes (m, 4) by facet_offsets, start tetrahedron starts[4i:4i + 4] as "
         "(n, offset), budgets, max_planes (-1: none), tolerances): (planes (P, 4) as "
-        "(n, offset), plane_offsets (B + 1,), vertex counts (B,), status (B,): 0 ok, 1 a "
-        "degenerate start).");
+        "(n, offset), plane_offsets (B + 1,), the final polytopes' vertices (V, 3) and "
+        "polytope_offsets (B + 1,), status (B,): 0 ok, 1 a degenerate start).");
 
     m.def(
         "clip_planes",

@@ -268,7 +268,7 @@ bool clip_polytope(const PlanePolytope& in, const std::vector<Vec3>& normals, do
 }
 
 BudgetStatus budget_planes(const BudgetInput& in, std::vector<double>& planes,
-                           int& vertex_count) {
+                           std::vector<Vec3>& vertices) {
     Vec3 normals[4];
     double offsets[4];
     for (int k = 0; k < 4; ++k) {
@@ -276,7 +276,6 @@ BudgetStatus budget_planes(const BudgetInput& in, std::vector<double>& planes,
         offsets[k] = in.start[4 * k + 3];
     }
     PlanePolytope polytope, trial;
-    vertex_count = 0;
     if (!tetrahedron_polytope(normals, offsets, polytope)) return BudgetStatus::FAILED;
     std::vector<Vec3> plane_normals(normals, normals + 4);
     planes.insert(planes.end(), in.start, in.start + 16);
@@ -323,7 +322,7 @@ BudgetStatus budget_planes(const BudgetInput& in, std::vector<double>& planes,
         }
         if (!accepted) break;
     }
-    vertex_count = static_cast<int>(polytope.size());
+    vertices.insert(vertices.end(), polytope.vertices.begin(), polytope.vertices.end());
     return BudgetStatus::OK;
 }
 

@@ -145,15 +145,25 @@ TEST_CASE("hull budget: the loop on a cube's hull keeps within the budget, plane
         in.converged_distance = 1e-9 * std::sqrt(12.0);
         in.merge_distance = 1e-11 * std::sqrt(12.0);
         std::vector<double> planes;
-        int count = 0;
-        REQUIRE(meshcol::budget_planes(in, planes, count) == meshcol::BudgetStatus::OK);
-        CHECK(count <= budget);
+        std::vector<Vec3> vertices;
+        REQUIRE(meshcol::budget_planes(in, planes, vertices) == meshcol::BudgetStatus::OK);
+        CHECK(vertices.size() >= 4);
+        CHECK(vertices.size() <= static_cast<std::size_t>(budget));
         CHECK(planes.size() % 4 == 0);
         for (std::size_t i = 0; i < planes.size(); i += 4) {
             const Vec3 n{planes[i], planes[i + 1], planes[i + 2]};
             double support = -1e300;
             for (const Vec3& v : c) support = std::max(support, meshcol::dot(n, v));
             CHECK_NEAR(planes[i + 3], support, 1e-12);  // touches the cube, cube inside
+            // the polytope returned is the planes' intersection: inside each, on three
+            for (const Vec3& v : vertices) CHECK(meshcol::dot(n, v) <= planes[i + 3] + 1e-12);
+        }
+        for (const Vec3& v : vertices) {
+            int on = 0;
+            for (std::size_t i = 0; i < planes.size(); i += 4)
+                on += std::abs(planes[i] * v.x + planes[i + 1] * v.y + planes[i + 2] * v.z -
+                               planes[i + 3]) <= 1e-9;
+            CHECK(on >= 3);
         }
     }
 }

@@ -66,6 +66,7 @@ class FitCache:
         self._balls: set[tuple[Any, ...]] = set()
         self._distances: dict[tuple[int, int], tuple[float, Any, Any]] = {}
         self._keys: dict[int, tuple[np.ndarray, tuple[Any, ...]]] = {}
+        self._hulls_of: dict[tuple[Any, ...], tuple[tuple[Any, ...], np.ndarray]] = {}
 
     def _key(self, points: np.ndarray) -> tuple[Any, ...]:
         """The key of a (contiguous) array: its shape and a hash of its bytes, hashed once
@@ -86,6 +87,16 @@ class FitCache:
         if key not in self._exact:
             self._exact[key] = exact_hull(pts)
         return self._exact[key]
+
+    def _hull_vertices(self, points: np.ndarray) -> tuple[tuple[Any, ...], np.ndarray]:
+        """The key and the array of the vertices of the exact hull of (contiguous)
+        ``points``, found once per distinct ``points``."""
+        key = self._key(points)
+        found = self._hulls_of.get(key)
+        if found is None:
+            vertices = self.exact(points).vertices
+            found = self._hulls_of[key] = (self._key(vertices), vertices)
+        return found
 
     def _hull_key(
         self, points: np.ndarray, max_vertices: int | None, max_planes: int | None
@@ -126,12 +137,16 @@ def measure_batch(
 ) -> list[dict[str, Any]]:
     """The measures of the exact hull of each request's points, from its cache or measured
     now: every missing one in one :func:`measure_hulls` call, every missing in-sphere (when
-    ``ball``) in one :func:`add_balls` call."""
+    ``ball``) in one :func:`add_balls` call. A hull is measured once, as the hull of its
+    vertices: points and the vertices of their hull (a fit's input and its ``before``
+    parts) share one row."""
     sets = [np.ascontiguousarray(p, dtype=np.float64) for _, p in requests]
     for p in sets:
         if p.ndim != 2 or p.shape[1] != 3:
             exact_hull(p)  # the error it raises
-    keys = [cache._key(p) for (cache, _), p in zip(requests, sets, strict=True)]
+    hulls = [cache._hull_vertices(p) for (cache, _), p in zip(requests, sets, strict=True)]
+    keys = [key for key, _ in hulls]
+    sets = [vertices for _, vertices in hulls]
     missing: dict[tuple[int, Any], tuple[FitCache, np.ndarray]] = {}
     for (cache, _), key, p in zip(requests, keys, sets, strict=True):
         if key not in cache._measures:

@@ -27,7 +27,7 @@ from meshcol.collision.facet_distance import (
     distances_to_facets,
     rows_per_block,
 )
-from meshcol.collision.hull_budget import _simplify, simplify_many
+from meshcol.collision.hull_budget import CONTAINS_RELATIVE_DISTANCE, _simplify, simplify_many
 from meshcol.errors import InvalidMeshError
 from meshcol.geometry.triangles import closest_points_on_triangles
 
@@ -280,8 +280,18 @@ def _simplified_result(
 def _budgeted_result(
     exact: ExactHull, vertex_budget: int, q_vertices: np.ndarray, distance: float
 ) -> HullResult:
-    """The result of a simplified 3-D hull: the hull of ``q_vertices`` and what it added."""
+    """The result of a simplified 3-D hull: the hull of ``q_vertices`` and what it added.
+    Raises :class:`InvalidMeshError` when that hull does not contain the exact hull (to
+    :data:`CONTAINS_RELATIVE_DISTANCE` of its diagonal): never a hull within the budget that
+    lets the input out."""
     q = exact_hull(q_vertices)
+    if (
+        q.dimension != 3
+        or _outside(exact.vertices, q) > CONTAINS_RELATIVE_DISTANCE * exact.diagonal
+    ):
+        raise InvalidMeshError(
+            f"could not build a hull within {vertex_budget} vertices that contains the input"
+        )
     added = max(q.volume - exact.volume, 0.0)
     return HullResult(
         vertices=q.vertices,
@@ -293,6 +303,11 @@ def _budgeted_result(
         max_distance=distance,
         **_exact_summary(exact, vertex_budget),
     )
+
+
+def _outside(points: np.ndarray, hull: ExactHull) -> float:
+    """How far the farthest of ``points`` lies in front of a face plane of the 3-D ``hull``."""
+    return float((points @ hull.equations[:, :3].T + hull.equations[:, 3]).max())
 
 
 def hulls_within_budgets(
@@ -334,10 +349,12 @@ def hulls_within_budgets(
             except InvalidMeshError as exc:
                 simplified.append(exc)
     for (i, budget, _), made in zip(over, simplified, strict=True):
-        if isinstance(made, InvalidMeshError):
-            results[i] = made
-        else:
+        try:
+            if isinstance(made, InvalidMeshError):
+                raise made
             results[i] = _budgeted_result(exacts[i], budget, *made)
+        except InvalidMeshError as exc:
+            results[i] = exc
     return results  # type: ignore[return-value]
 
 

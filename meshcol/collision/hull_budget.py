@@ -5,12 +5,17 @@ steps of :func:`meshcol.collision.hull.convex_hull` with ``max_vertices``).
 In 3-D the loop runs in the C++ core (``cpp/src/hull_budget.cpp``, many bodies a call on
 threads, :func:`simplify_many`): it keeps the polytope as its vertices and the planes through
 each, so a trial cut is a clip of the vertices, not a new half-space intersection. The core
-returns the accepted planes; the polytope handed back is qhull's intersection of those planes
-(:func:`_intersect`, the call the loop made for every trial before), so a body whose planes
-the core picks as the loop in numpy did gets the same vertices up to rounding. A body whose
-final intersection would break the budget (a clip that counted vertices differently from
-qhull: not seen on the corpora of RESULTS.md) is simplified again by that loop in numpy
-(:func:`_simplify_qhull`), which also simplifies flat input (2-D).
+returns the accepted planes and its final polytope. The polytope handed back is qhull's
+intersection of those planes (:func:`_intersect`, the call the loop made for every trial
+before), so a body whose planes the core picks as the loop in numpy did gets the same
+vertices up to rounding. Where that intersection breaks the budget, it is the core's own
+polytope, checked (:func:`_checked_polytope`): a cut plane that touches the polytope along an
+edge meets two planes of that edge in the edge's line, and qhull reports one more point, on
+the edge, or it splits a vertex of four planes or more into points a little farther apart
+than the merge radius (94 and 22 of the 10,000 props of ``bench_scale`` under ``--target
+isaac``; RESULTS.md, session 43). Only a body the core could not serve (a degenerate start, a polytope that fails
+the check) is simplified again by the loop in numpy (:func:`_simplify_qhull`), which also
+simplifies flat input (2-D).
 """
 
 from __future__ import annotations
@@ -26,6 +31,7 @@ from meshcol.collision.facet_distance import distances_to_facets
 from meshcol.errors import InvalidMeshError
 
 __all__ = [
+    "CONTAINS_RELATIVE_DISTANCE",
     "CONVERGED_RELATIVE_DISTANCE",
     "CUT_CANDIDATES",
     "MERGE_RELATIVE_DISTANCE",
@@ -38,6 +44,12 @@ __all__ = [
 CONVERGED_RELATIVE_DISTANCE = 1e-9
 #: Simplified-hull vertices closer than this fraction of the diagonal are merged.
 MERGE_RELATIVE_DISTANCE = 1e-11
+#: A budgeted hull contains the exact hull to this fraction of its diagonal (a merge of
+#: near-duplicate vertices moves one by up to :data:`MERGE_RELATIVE_DISTANCE`), and a vertex
+#: of the core's polytope lies inside each of its planes to it.
+CONTAINS_RELATIVE_DISTANCE = MERGE_RELATIVE_DISTANCE
+#: A vertex of the core's polytope lies on a plane when within this fraction of the diagonal.
+ON_PLANE_RELATIVE_DISTANCE = 1e-9
 #: Orientations tried for the starting simplex (the smallest enclosing one is kept).
 START_ORIENTATIONS = 64
 #: Far vertices tried per step before the budget loop gives up.
@@ -81,10 +93,11 @@ def simplify_many(
     Notes
     -----
     The core runs each body's loop (the steps of :func:`_simplify_qhull`, every trial a clip
-    of the current polytope) and returns its accepted planes; the polytope is their
-    half-space intersection by qhull (:func:`_intersect`) and its distance the exact one of
-    ``distances_to_facets``. A body whose start is degenerate or whose intersection breaks
-    the budget goes through :func:`_simplify_qhull` instead.
+    of the current polytope) and returns its accepted planes and final polytope; the
+    polytope is their half-space intersection by qhull (:func:`_intersect`), or where that
+    breaks the budget the core's own (:func:`_checked_polytope`), and its distance the exact
+    one of ``distances_to_facets``. A body whose start is degenerate or whose polytope fails
+    the check goes through :func:`_simplify_qhull` instead.
     """
     from meshcol._native import core
 
@@ -98,7 +111,7 @@ def simplify_many(
         normals = _start_simplex(v)
         starts.append(np.hstack([normals, (normals @ v.T).max(axis=1)[:, None]]))
     scales = np.array([float(b[4]) for b in bodies])
-    planes, plane_offsets, _, status = core.budget_hull_planes(
+    planes, plane_offsets, corners, corner_offsets, status = core.budget_hull_planes(
         np.concatenate(vertices),
         as_offsets([len(v) for v in vertices]),
         np.concatenate(facets),
@@ -114,12 +127,19 @@ def simplify_many(
     )
     results = []
     for i, body in enumerate(bodies):
+        if status[i] != 0:
+            results.append(_simplify_qhull(*body))
+            continue
         body_planes = planes[plane_offsets[i] : plane_offsets[i + 1]]
-        polytope = None
-        if status[i] == 0:
-            interior = vertices[i].mean(axis=0)
-            polytope = _intersect(body_planes[:, :3], body_planes[:, 3], interior, scales[i])
+        interior = vertices[i].mean(axis=0)
+        polytope = _intersect(body_planes[:, :3], body_planes[:, 3], interior, scales[i])
         if polytope is None or len(polytope) > int(body[3]):
+            # qhull's points include one on an edge (planes through one line) or a split
+            # vertex: the core's own polytope, checked
+            polytope = _checked_polytope(
+                corners[corner_offsets[i] : corner_offsets[i + 1]], body_planes, body[3], scales[i]
+            )
+        if polytope is None:
             results.append(_simplify_qhull(*body))
             continue
         split = (
@@ -129,6 +149,32 @@ def simplify_many(
         distances, _ = distances_to_facets(polytope, facets[i], split)
         results.append((polytope, float(distances.max())))
     return results
+
+
+def _checked_polytope(
+    corners: np.ndarray, planes: np.ndarray, budget: int, scale: float
+) -> np.ndarray | None:
+    """The core's polytope of one body when it is one of its ``planes`` (P, 4) as (n, offset):
+    within the budget, finite, every vertex inside every plane and on three of them not
+    through one line (:data:`CONTAINS_RELATIVE_DISTANCE`, :data:`ON_PLANE_RELATIVE_DISTANCE`
+    of ``scale``); else None. Whether it contains the exact hull is checked with its faces
+    (:func:`meshcol.collision.hull.hulls_within_budgets`)."""
+    if not 4 <= len(corners) <= budget or not np.isfinite(corners).all():
+        return None
+    tolerance = CONTAINS_RELATIVE_DISTANCE * scale
+    signed = corners @ planes[:, :3].T - planes[:, 3]
+    if signed.max() > tolerance:
+        return None
+    # on three planes not through one line: the normals of the planes through a vertex span
+    # 3-D, the least eigenvalue of the sum of their outer products above 1e-12 (rounding
+    # leaves about 1e-16 for normals of planes through one line; the vertices of the 116
+    # scale props of RESULTS.md, session 43, have 5e-6 and more)
+    on = (np.abs(signed) <= ON_PLANE_RELATIVE_DISTANCE * scale).astype(np.float64)
+    normals = planes[:, :3]
+    spans = np.einsum("vp,pi,pj->vij", on, normals, normals)
+    if np.linalg.eigvalsh(spans)[:, 0].min() <= 1e-12:
+        return None
+    return np.array(corners)
 
 
 def _simplify_qhull(hull_vertices, facets, equations, budget, scale, max_planes=None):

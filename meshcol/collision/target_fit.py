@@ -216,14 +216,13 @@ def fit_caches(
     point_sets: Sequence[Any], limits: Mapping[str, float] | None = None
 ) -> list[FitCache]:
     """One :class:`FitCache` per point set for :func:`fit_hull`, holding what its fit reads
-    first: the exact hull of the points and the measures, in-sphere included, of the exact
-    hull of that hull's vertices (the ``before`` measure, and the ``after`` one of a hull
-    that meets the limits as it is), and with a growth limit in ``limits`` the measures of
-    the points' own hull (what growing reads first), all measured in one batch. A set whose
-    hull cannot be made is left for its fit to raise about."""
+    first: the exact hull of the points and its measures (the ``before`` measure, the
+    ``after`` one of a hull that meets the limits as it is, and what growing reads first:
+    one row, :func:`measure_batch` measures a hull once), all measured in one batch. The
+    in-sphere only with ``max_oblong_ratio`` in ``limits`` (the ``before`` measure reads it
+    then); otherwise a fit's later round adds it where it is asked for. A set whose hull
+    cannot be made is left for its fit to raise about."""
     caches = [FitCache() for _ in point_sets]
-    grows = any(key in (limits or {}) for key in ("min_thickness", "min_volume"))
-    grows = grows or "max_oblong_ratio" in (limits or {})
     requests = []
     for cache, points in zip(caches, point_sets, strict=True):
         pts = np.asarray(points, dtype=np.float64)
@@ -232,9 +231,7 @@ def fit_caches(
         except (InvalidMeshError, ValueError):
             continue
         requests.append((cache, exact.vertices))
-        if grows and exact.dimension == 3:
-            requests.append((cache, pts))
-    measure_batch(requests, ball=True)
+    measure_batch(requests, ball="max_oblong_ratio" in (limits or {}))
     return caches
 
 

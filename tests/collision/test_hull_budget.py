@@ -3,7 +3,9 @@ qhull's half-space intersection, its hulls against the numpy loop and exact orac
 
 from __future__ import annotations
 
+import json
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,10 +20,16 @@ from meshcol.collision.hull import (
     hulls_within_budgets,
 )
 from meshcol.collision.hull_budget import (
+    CONTAINS_RELATIVE_DISTANCE,
+    CONVERGED_RELATIVE_DISTANCE,
+    CUT_CANDIDATES,
     MERGE_RELATIVE_DISTANCE,
+    _checked_polytope,
+    _intersect,
     _merge_close,
     _simplify,
     _simplify_qhull,
+    _start_simplex,
     simplify_many,
 )
 from meshcol.errors import InvalidMeshError
@@ -267,3 +275,105 @@ def test_many_with_their_own_budgets_are_the_singles_and_keep_their_errors() -> 
         )
     with pytest.raises(ValueError, match="max_planes must be >= 4"):
         hulls_within_budgets(exacts[:1], [(9, 3)])
+
+
+# ---------------------------------------------------------------------------------------
+# the core's own polytope: where qhull's intersection of its planes breaks the budget
+
+DATA = Path(__file__).resolve().parent.parent / "data"
+
+
+def _core_loop(exact, budget: int, max_planes: int | None):
+    """The core's loop on one exact hull: its planes (P, 4), its polytope (V, 3), status."""
+    v = exact.vertices
+    normals = _start_simplex(v)
+    start = np.hstack([normals, (normals @ v.T).max(axis=1)[:, None]])
+    planes, _, corners, _, status = core.budget_hull_planes(
+        v,
+        np.array([0, len(v)]),
+        v[exact.faces],
+        exact.equations,
+        np.array([0, len(exact.faces)]),
+        start,
+        np.array([budget]),
+        np.array([-1 if max_planes is None else max_planes]),
+        np.array([CONVERGED_RELATIVE_DISTANCE * exact.diagonal]),
+        np.array([MERGE_RELATIVE_DISTANCE * exact.diagonal]),
+        CUT_CANDIDATES,
+        1,
+    )
+    return planes, corners, int(status[0])
+
+
+def _assert_hull_of_own_vertices(corners, planes, points, budget, scale) -> None:
+    """``corners`` is a convex polytope within ``budget`` that contains ``points``, each face
+    of scipy's hull of it on one of ``planes`` (the polytope is their intersection)."""
+    from scipy.spatial import ConvexHull
+
+    assert 4 <= len(corners) <= budget
+    hull = ConvexHull(corners)
+    assert len(hull.vertices) == len(corners)  # every vertex extreme: convex position
+    tolerance = CONTAINS_RELATIVE_DISTANCE * scale
+    assert (points @ hull.equations[:, :3].T + hull.equations[:, 3]).max() <= tolerance
+    assert (corners @ planes[:, :3].T - planes[:, 3]).max() <= tolerance
+    # a face's plane n . x + c = 0 is a plane of the loop (n, offset = -c)
+    gaps = np.abs(hull.equations[:, None, :3] - planes[None, :, :3]).sum(axis=2)
+    gaps += np.abs(hull.equations[:, None, 3] + planes[None, :, 3]) / scale
+    assert gaps.min(axis=1).max() <= 1e-6
+
+
+def test_a_plane_through_an_edge_keeps_the_cores_polytope(monkeypatch) -> None:
+    # one of the 116 props of the 10,000-prop scale scene under --target isaac that fell back
+    # to the numpy loop: a cut plane through an edge meets its two planes in one line, and
+    # qhull's intersection of the planes has a 65th point, on that edge
+    data = json.loads((DATA / "hull_budget_edge_plane.json").read_text())
+    points = np.array(data["points"])
+    budget, max_planes = data["max_vertices"], data["max_planes"]
+    exact = exact_hull(points)
+    planes, corners, status = _core_loop(exact, budget, max_planes)
+    assert status == 0
+    qhull = _intersect(planes[:, :3], planes[:, 3], points.mean(axis=0), exact.diagonal)
+    assert len(qhull) > budget
+    _assert_hull_of_own_vertices(corners, planes, points, budget, exact.diagonal)
+    # qhull's point that is not a vertex: on three planes through one line, refused
+    gaps = np.linalg.norm(qhull[:, None] - corners[None], axis=2).min(axis=1)
+    extra = qhull[np.argmax(gaps)]
+    assert gaps.max() > 1e-3 * exact.diagonal
+    assert _checked_polytope(corners, planes, budget, exact.diagonal) is not None
+    assert _checked_polytope(np.vstack([corners, extra]), planes, 99, exact.diagonal) is None
+    fallbacks = _count_fallbacks(monkeypatch)
+    result = hull_within_budget(exact, budget, max_planes)
+    assert not fallbacks
+    assert sorted(map(tuple, result.vertices)) == sorted(map(tuple, corners))
+    expected = _brute_distances(result.vertices, exact).max()
+    assert result.max_distance == pytest.approx(expected, rel=1e-12, abs=1e-15 * exact.diagonal)
+    normals = np.round(exact_hull(result.vertices).equations[:, :3], 9)
+    assert len(np.unique(normals, axis=0)) <= max_planes
+
+
+def _ellipsoid_prop(seed: int) -> np.ndarray:
+    """``bench_scale.convex_prop``'s points: 24-48 on an ellipsoid of semi-axes 0.4-0.8."""
+    rng = np.random.default_rng(seed)
+    p = rng.normal(size=(int(rng.integers(24, 49)), 3))
+    p /= np.linalg.norm(p, axis=1)[:, None]
+    return p * rng.uniform(0.4, 0.8, size=3)
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.sampled_from(["ellipsoid", "cloud"]),
+    st.integers(4, 64),
+    st.one_of(st.none(), st.integers(4, 64)),
+)
+def test_core_polytope_is_qhulls_hull_of_its_vertices(
+    seed: int, kind: str, budget: int, max_planes: int | None
+) -> None:
+    points = _ellipsoid_prop(seed) if kind == "ellipsoid" else _cloud(seed, 60)
+    exact = exact_hull(points)
+    planes, corners, status = _core_loop(exact, budget, max_planes)
+    assert status == 0
+    if max_planes is not None:
+        assert len(planes) <= max(max_planes, 4)
+    _assert_hull_of_own_vertices(corners, planes, exact.vertices, budget, exact.diagonal)
+    assert _checked_polytope(corners, planes, budget, exact.diagonal) is not None

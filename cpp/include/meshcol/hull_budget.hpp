@@ -75,8 +75,9 @@ enum class BudgetStatus : std::int8_t {
 /// when the clipped polytope has at most `budget` vertices (else the next farthest, up to
 /// `candidates`), until no cut fits, the planes reach `max_planes` or every vertex is within
 /// `converged_distance`. Appends the accepted planes (n, offset), start planes first, to
-/// `planes`; `vertex_count` receives the final polytope's vertex count. Thread-safe.
+/// `planes`, and the final polytope's vertices (the clips' own, at most `budget`; empty when
+/// FAILED) to `vertices`. Thread-safe.
 BudgetStatus budget_planes(const BudgetInput& input, std::vector<double>& planes,
-                           int& vertex_count);
+                           std::vector<Vec3>& vertices);
 
 }  // namespace meshcol
