@@ -1,6 +1,6 @@
 """Wild meshes through ``meshcol hull``, ``fit`` and ``inspect``, against oracles that share
 none of their code: every STL file of the real collections installed from the registries (the
-Menagerie wheels, example-robot-data, pybullet_data, dm_control; the folders
+Menagerie wheels, example-robot-data, pybullet_data, dm_control, genesis-world; the folders
 ``bench_robots_wild.py`` reads its robots from), 150 files a command as a user runs it, each
 command's JSON report read.
 
@@ -51,6 +51,8 @@ def collection_roots() -> dict[str, Path]:
     roots = {name: package_folder(module) for name, (module, _) in MENAGERIE_PACKAGES.items()}
     roots.update(pybullet_data=package_folder("pybullet_data"))
     roots.update(dm_control=package_folder("dm_control"))
+    genesis = package_folder("genesis")
+    roots.update({"genesis-world": None if genesis is None else genesis / "assets"})
     robots = example_robot_data()  # under <site>/cmeel.prefix/share/example-robot-data/robots
     if robots:
         roots["example-robot-data"] = next(p for p in robots[0].parents if p.name == "robots")
@@ -194,10 +196,13 @@ def main() -> int:
     parser.add_argument("--limit", type=int, default=None, help="files per collection")
     parser.add_argument("--tolerance", type=float, default=1e-12, help="hull volumes")
     parser.add_argument("--only", choices=("hulls", "fits", "inspect"), default=None)
+    parser.add_argument("--collection", action="append", help="only these (repeatable)")
     args = parser.parse_args()
     hulls, fits, inspected = 0.0, -float("inf"), 0
     with tempfile.TemporaryDirectory() as scratch:
         for name, root in collection_roots().items():
+            if args.collection and name not in args.collection:
+                continue
             files = stl_files(root)[: args.limit]
             if not files:
                 print(f"{name}: no STL file")
