@@ -23,6 +23,8 @@ from meshcol.cli.common import (
     target_option,
     timeout_option,
     to_option,
+    urdf_capsules_of,
+    urdf_capsules_option,
     verdict,
     write_html,
 )
@@ -206,6 +208,7 @@ class _MeshFormat(click.Choice):
     help="Output format (glb: one node per part; not with ucx).",
 )
 @to_option("the parts", gltf=True)
+@urdf_capsules_option
 @click.option(
     "--report",
     type=click.Path(dir_okay=False),
@@ -295,6 +298,7 @@ def decompose_command(
     layout: str,
     fmt: str,
     to: str | None,
+    urdf_capsules: str | None,
     report: str | None,
     report_fmt: str | None,
     max_hausdorff: float | None,
@@ -319,10 +323,11 @@ def decompose_command(
     # a folder, and never replaces one of its inputs.
     _check_destinations(inputs, outputs, run)
     robot = _robot_input(ctx, inputs, options, run, outputs)
+    capsules = urdf_capsules_of(urdf_capsules, inputs, robot, to)
     progress = Progress(command="decompose", heartbeat=True)
     try:
         result = _decompose(
-            inputs, options, run, outputs, target, robot, progress.message, robot_options
+            inputs, options, run, outputs, target, robot, progress.message, robot_options, capsules
         )
     finally:
         progress.done()
@@ -467,6 +472,7 @@ def _decompose(
     robot: bool,
     progress: Callable[[str], None],
     robot_options: RobotOptions,
+    urdf_capsules: str = "standard",
 ) -> Any:
     """The one library call: a robot's rebuild, or the run over files."""
     from meshcol.analysis.rebuild import rebuild_decomposition
@@ -498,6 +504,7 @@ def _decompose(
             target=target,
             robot_options=robot_options,
             warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
+            urdf_capsules=urdf_capsules,
         )
     return decompose_files(
         inputs,

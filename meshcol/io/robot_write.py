@@ -44,6 +44,7 @@ __all__ = [
     "description_path",
     "output_warnings",
     "write_robot",
+    "written_primitive",
 ]
 
 #: What ``--to`` accepts.
@@ -124,6 +125,18 @@ class RobotColliders:
     warnings: tuple[str, ...] = ()
 
 
+def written_primitive(primitive: Primitive) -> Primitive:
+    """The primitive a description written holds for ``primitive``: a capsule of length 0
+    (under 1e-15, the writers' zero; the capsule fit of a ball) is its sphere, the same
+    solid, for every format (MuJoCo refuses a capsule of half-length 0; a URDF's standard
+    capsule would be a cylinder of length 0 between two equal spheres); any other as it is."""
+    from meshcol.types import Capsule, Sphere
+
+    if isinstance(primitive, Capsule) and primitive.length < 1e-15:
+        return Sphere(primitive.radius)
+    return primitive
+
+
 def output_warnings(robot: RobotColliders, to: str) -> list[str]:
     """What the user of the description written in format ``to`` must know, one line each:
     the reading's warnings, then (URDF or MJCF written from a URDF) each visual whose mesh
@@ -181,6 +194,7 @@ def write_robot(
     out_dir: str | os.PathLike[str],
     to: str | None = None,
     protected: Sequence[tuple[str, str]] = (),
+    urdf_capsules: str = "standard",
 ) -> list[str]:
     """Write the colliders and the description that uses them into ``out_dir``.
 
@@ -193,6 +207,10 @@ def write_robot(
         Output format; default the input's (``urdf`` or ``mjcf``).
     protected : sequence of (description, path)
         Files that must not be replaced (the input and the meshes it references are always).
+    urdf_capsules : {"standard", "extension"}
+        How a URDF written holds a capsule (:data:`meshcol.vocabulary.URDF_CAPSULES`):
+        a cylinder and two spheres, or the ``<capsule>`` element
+        (:func:`meshcol.io.urdf_write.urdf_text`).
 
     Returns
     -------
@@ -236,7 +254,7 @@ def write_robot(
             for name, (vertices, faces) in zip(names, c.parts):
                 write_meshes(os.path.join(stage, name), [(Path(name).stem, vertices, faces)])
         if to == "urdf":
-            atomic_write(target, urdf_text(robot, files, {}, out_dir))
+            atomic_write(target, urdf_text(robot, files, {}, out_dir, capsules=urdf_capsules))
         elif to == "mjcf":
             atomic_write(target, mjcf_text(robot, files, stage, out_dir))
         elif to == "glb":
