@@ -253,7 +253,8 @@ def _fit(
 ) -> tuple[Any, dict[str, Any]]:
     """One enclosing primitive for the element (or its hull, when ``auto`` kept it)."""
     from meshcol.analysis.fit import fit_body
-    from meshcol.io.robot_write import Collider, written_primitive
+    from meshcol.io.primitives import written_primitive
+    from meshcol.io.robot_write import Collider
 
     report(element)
     try:

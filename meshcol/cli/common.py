@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from meshcol.vocabulary import COLLIDER_KINDS, URDF_CAPSULES
+from meshcol.vocabulary import COLLIDER_KINDS
 
 if TYPE_CHECKING:
     from meshcol.io.robot import RobotOptions
@@ -747,35 +747,6 @@ def to_option(what: str, gltf: bool = False) -> Callable[[Callable[..., Any]], C
         help=f"Robot input (URDF, MJCF) with --out-dir: the format of the description written "
         f"with {what}, OUT/<robot>.urdf|.xml|.glb|.usda (usd needs meshcol[usd]){extra}.  "
         "[default: the input's]",
-    )
-
-
-def urdf_capsules_option(fn: Callable[..., Any]) -> Callable[..., Any]:
-    """Add ``--urdf-capsules standard|extension`` (parameter ``urdf_capsules``, None when
-    not given): how a URDF written holds a capsule (:data:`meshcol.vocabulary.URDF_CAPSULES`)."""
-    return click.option(
-        "--urdf-capsules",
-        type=click.Choice(URDF_CAPSULES),
-        default=None,
-        help="A URDF written (--to urdf): each capsule as a <cylinder> and two <sphere>s, "
-        "the same solid in elements every URDF reader knows (standard), or as one "
-        "<capsule>, which only pybullet and MuJoCo read (extension).  [default: standard]",
-    )(fn)
-
-
-def urdf_capsules_of(value: str | None, inputs: Sequence[str], robot: bool, to: str | None) -> str:
-    """The ``--urdf-capsules`` form of the run (``standard`` when not given); a usage error
-    when it is given and no URDF is written (not one URDF input with --out-dir and --to urdf,
-    the default for a URDF)."""
-    if value is None:
-        return "standard"
-    if robot and to in (None, "urdf"):
-        from meshcol.io.robot import description_kind
-
-        if description_kind(inputs[0]) == "urdf":
-            return value
-    raise click.UsageError(
-        "--urdf-capsules applies to a URDF written: one URDF input, --out-dir and --to urdf"
     )
 
 

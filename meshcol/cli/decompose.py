@@ -23,11 +23,10 @@ from meshcol.cli.common import (
     target_option,
     timeout_option,
     to_option,
-    urdf_capsules_of,
-    urdf_capsules_option,
     verdict,
     write_html,
 )
+from meshcol.cli.mesh_outputs import urdf_capsules_of, urdf_capsules_option
 from meshcol.decomposition.engines import ENGINES
 from meshcol.decomposition.options import (
     DEFAULT_SEARCH_STEPS,

@@ -17,11 +17,15 @@ from meshcol.cli.common import (
     robot_options,
     snapshots_option,
     to_option,
-    urdf_capsules_of,
-    urdf_capsules_option,
     verdict,
 )
-from meshcol.cli.mesh_outputs import report_wanted, run_mesh_command, written_to
+from meshcol.cli.mesh_outputs import (
+    report_wanted,
+    run_mesh_command,
+    urdf_capsules_of,
+    urdf_capsules_option,
+    written_to,
+)
 from meshcol.io.outputs import check_outputs
 from meshcol.io.robot import RobotOptions
 

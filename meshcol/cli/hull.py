@@ -18,12 +18,16 @@ from meshcol.cli.common import (
     snapshots_option,
     target_option,
     to_option,
-    urdf_capsules_of,
-    urdf_capsules_option,
     verdict,
     write_outputs,
 )
-from meshcol.cli.mesh_outputs import report_wanted, run_mesh_command, written_to
+from meshcol.cli.mesh_outputs import (
+    report_wanted,
+    run_mesh_command,
+    urdf_capsules_of,
+    urdf_capsules_option,
+    written_to,
+)
 from meshcol.io.outputs import check_outputs
 from meshcol.io.robot import RobotOptions
 from meshcol.io.targets import target_names

@@ -44,7 +44,6 @@ __all__ = [
     "description_path",
     "output_warnings",
     "write_robot",
-    "written_primitive",
 ]
 
 #: What ``--to`` accepts.
@@ -123,18 +122,6 @@ class RobotColliders:
     package_paths: dict[str, str] = field(default_factory=dict)
     excluded_pairs: tuple[tuple[str, str, str], ...] = ()
     warnings: tuple[str, ...] = ()
-
-
-def written_primitive(primitive: Primitive) -> Primitive:
-    """The primitive a description written holds for ``primitive``: a capsule of length 0
-    (under 1e-15, the writers' zero; the capsule fit of a ball) is its sphere, the same
-    solid, for every format (MuJoCo refuses a capsule of half-length 0; a URDF's standard
-    capsule would be a cylinder of length 0 between two equal spheres); any other as it is."""
-    from meshcol.types import Capsule, Sphere
-
-    if isinstance(primitive, Capsule) and primitive.length < 1e-15:
-        return Sphere(primitive.radius)
-    return primitive
 
 
 def output_warnings(robot: RobotColliders, to: str) -> list[str]:

@@ -265,11 +265,11 @@ def _written_capsule(element: Any, capsule: Capsule, origin: Any, form: str) -> 
     the orientation kept, a sphere has none to lose). A named element's three become
     ``NAME_00`` (the cylinder), ``NAME_01`` and ``NAME_02`` (the spheres at -z and +z), as
     the parts of a decomposition are named. ``extension``: the element as it is. In both, a
-    capsule of length 0 (:func:`meshcol.io.robot_write.written_primitive`) is its sphere, one
+    capsule of length 0 (:func:`meshcol.io.primitives.written_primitive`) is its sphere, one
     element (MuJoCo's importer refuses a capsule of length 0)."""
     import numpy as np
 
-    from meshcol.io.robot_write import written_primitive
+    from meshcol.io.primitives import written_primitive
 
     shape = element.find("geometry/capsule")
     if shape is None:  # not a capsule in the file (refused by the reader before this)
