@@ -2,9 +2,10 @@
 solid in standard elements, a ``<cylinder>`` and a ``<sphere>`` at each end
 (:mod:`meshcol.io.urdf_write`), or as ``<capsule>`` with ``--urdf-capsules extension``.
 
-The oracles are the consumers themselves (yourdfpy, urdf_parser_py, the ROS Python parser,
-pybullet, MuJoCo's URDF importer; each skipped with the reason when missing: yourdfpy and
-urdf_parser_py refuse ``<capsule>``) and the geometry: meshcol's reading of the file written
+The oracles are the consumers themselves (urdfdom's ``check_urdf``, yourdfpy, urdf_parser_py,
+the ROS Python parser, pybullet, MuJoCo's URDF importer; each skipped with the reason when
+missing: urdfdom drops a ``<capsule>`` element, yourdfpy and urdf_parser_py refuse the file)
+and the geometry: meshcol's reading of the file written
 holds a cylinder and two spheres whose union is the fitted capsule (the fit oracles' signed
 distances of tests/fit_oracle.py), so it holds every vertex the capsule held.
 """
@@ -103,7 +104,22 @@ def _mujoco(path: Path) -> None:
     assert model.ngeom > 0
 
 
+def _urdfdom(path: Path) -> None:
+    """ROS's own parser, urdfdom, by its ``check_urdf`` (Debian's liburdfdom-tools): version
+    3.0.1 drops a ``<capsule>`` collision element with "Unknown geometry type 'capsule'"."""
+    import shutil
+    import subprocess
+
+    if shutil.which("check_urdf") is None:
+        pytest.skip("check_urdf is not installed (liburdfdom-tools)")
+    done = subprocess.run(["check_urdf", str(path)], capture_output=True, text=True, check=False)
+    said = done.stdout + done.stderr
+    assert done.returncode == 0 and "Successfully Parsed XML" in said, said
+    assert "Error" not in said, said
+
+
 CONSUMERS = {
+    "urdfdom": _urdfdom,
     "yourdfpy": _yourdfpy,
     "urdf_parser_py": _urdf_parser_py,
     "pybullet": _pybullet,
