@@ -288,3 +288,30 @@ def test_urdf_capsules_needs_a_urdf_written(rods: Path, tmp_path: Path) -> None:
     ):
         code, _, err = run(*args, "--urdf-capsules", "extension")
         assert (code, err.splitlines()) == (2, [message.format(args[0])])
+
+
+def test_check_sees_the_same_solid_in_both_forms(tmp_path: Path) -> None:
+    """``meshcol check`` of the sample arm's URDF written both ways (every link pair, the
+    adjacent ones too): the same pairs, statuses and signed distances (a capsule against a
+    neighbour and its cylinder-and-spheres against it are the same solid)."""
+    import json
+
+    reports = []
+    for form in ("standard", "extension"):
+        written = fitted(ARM, tmp_path / form, *ELBOW, "--urdf-capsules", form)
+        report = tmp_path / f"{form}.json"
+        code, _, err = run(
+            "check", str(written), *ELBOW, "--include-adjacent", "--report", str(report)
+        )
+        assert code in (0, 1), err
+        pairs = json.loads(report.read_text())["pairs"]
+        reports.append({(p["body_a"], p["body_b"]): p for p in pairs})
+    standard, extension = reports
+    assert sorted(standard) == sorted(extension) and len(standard) >= 5
+    capsules = {"upper_arm", "forearm"}
+    assert any(capsules & set(key) for key in standard)
+    for key, pair in standard.items():
+        assert pair["status"] == extension[key]["status"], key
+        assert pair["signed_distance"] == pytest.approx(
+            extension[key]["signed_distance"], abs=1e-12
+        )
