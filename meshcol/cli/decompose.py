@@ -57,7 +57,9 @@ A robot description (URDF, or MJCF) is rebuilt: the parts of each collision elem
 meshes (in parallel with --jobs, one mesh a task) go to OUT/<link>_NN.obj in the link's
 frame, and a copy of the description, OUT/<robot>.urdf, has one <collision> element per
 part (visuals, inertials, joints, comments and unknown tags untouched; box, sphere,
-cylinder and capsule elements kept, being exact). --to mjcf writes OUT/<robot>.xml in
+cylinder and capsule elements kept, being exact; URDF has no capsule: a <capsule> is
+written as a <cylinder> and two <sphere>s, or kept with --urdf-capsules extension). --to
+mjcf writes OUT/<robot>.xml in
 MuJoCo Menagerie's convention; --to glb and --to usd the parts at the joint
 configuration. --layout and --format do not apply. --target fits each mesh object's
 parts (an element of k objects gives each max_hulls // k; more objects than max_hulls
