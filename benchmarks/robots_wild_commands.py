@@ -206,11 +206,15 @@ def contained_mjcf(source: Path, fitted: Path) -> dict:
     return _containment({b: (c, shapes.get(b, [])) for b, c in clouds.items()})
 
 
-def urdf_model(path: Path):
+def urdf_model(path: Path, capsules: bool = False):
     """yourdfpy's model of a URDF (links, joints, collision elements, its own ``package://``
     and relative file handler), the XML read first as pybullet reads it
     (:func:`meshcol.io.urdf_lenient.read_description_xml`: pybullet_data's numbers such as
-    "0.07," and its misplaced declarations), so that every URDF row has a reading."""
+    "0.07," and its misplaced declarations), so that every URDF row has a reading. With
+    ``capsules`` (an INPUT, which pybullet's ``<capsule>`` may be in: pybullet_data's
+    humanoid), each capsule is read as a sphere, as meshcol's reader stands one in for
+    yourdfpy: the oracle takes the input's meshes and its tree, not its primitives; an
+    output's capsule stays an error."""
     import yourdfpy
     from lxml import etree
 
@@ -218,6 +222,8 @@ def urdf_model(path: Path):
 
     root = read_description_xml(str(path), [])
     etree.strip_tags(root, etree.Comment)
+    for capsule in root.iter("capsule") if capsules else ():
+        capsule.tag = "sphere"
     return yourdfpy.URDF(
         robot=yourdfpy.URDF._parse_robot(xml_element=root),
         build_scene_graph=False,
@@ -256,7 +262,7 @@ def contained_urdf(source: Path, fitted: Path) -> dict:
     with its scale, in the link frame) in the output URDF's colliders (yourdfpy's reading of
     it: a ``<capsule>``, which it does not know, is an error)."""
     try:
-        model = urdf_model(source)
+        model = urdf_model(source, capsules=True)
         per_body: dict[str, tuple[list, list]] = {}
         for link in model.robot.links:
             for element in link.collisions:
@@ -351,7 +357,7 @@ def _joined(a: str, b: str, neighbours: dict, solid: set) -> bool:
 
 
 def _urdf_tree(robot: Path) -> tuple[set, set, set]:
-    robot_model = urdf_model(robot).robot
+    robot_model = urdf_model(robot, capsules=True).robot
     links = {link.name for link in robot_model.links}
     solid = {link.name for link in robot_model.links if link.collisions}
     edges = {(joint.parent, joint.child) for joint in robot_model.joints}
