@@ -315,3 +315,30 @@ def test_check_sees_the_same_solid_in_both_forms(tmp_path: Path) -> None:
         assert pair["signed_distance"] == pytest.approx(
             extension[key]["signed_distance"], abs=1e-12
         )
+
+
+def test_a_kept_capsule_at_the_link_origin_exact_text(tmp_path: Path) -> None:
+    """A kept capsule with no ``<origin>``: the spheres get one each, on lines of their own
+    as the file is indented (the exact text written)."""
+    (tmp_path / "n.urdf").write_text(
+        '<robot name="n">\n  <link name="a">\n    <collision name="c">\n      <geometry>\n'
+        '        <capsule radius="0.1" length="0.4"/>\n      </geometry>\n    </collision>\n'
+        "  </link>\n</robot>\n"
+    )
+    code, _, err = run("hull", str(tmp_path / "n.urdf"), "--out-dir", str(tmp_path / "o"))
+    assert code == 0, err
+    element = (
+        '    <collision name="c_{k}">\n{origin}      <geometry>\n        {shape}\n'
+        "      </geometry>\n    </collision>\n"
+    )
+    assert (tmp_path / "o" / "n.urdf").read_text() == (
+        '<?xml version="1.0" encoding="utf-8"?>\n<robot name="n">\n  <link name="a">\n'
+        + element.format(k="00", origin="", shape='<cylinder radius="0.1" length="0.4"/>')
+        + element.format(
+            k="01", origin='      <origin xyz="0 0 -0.2"/>\n', shape='<sphere radius="0.1"/>'
+        )
+        + element.format(
+            k="02", origin='      <origin xyz="0 0 0.2"/>\n', shape='<sphere radius="0.1"/>'
+        )
+        + "  </link>\n</robot>\n"
+    )
