@@ -9,8 +9,9 @@ For each robot, every command under a time cap (``--timeout``; 124 when over it)
    other exit code is a failure;
 2. ``meshcol fit ROBOT --out-dir OUT --to FMT`` for ``urdf`` (URDF inputs), ``mjcf`` and
    ``usd``, each output loaded by the consumers exactly as the hull sweep loads hull's
-   (pybullet and yourdfpy; MuJoCo: compiled, ``mj_forward`` at rest, 100 steps finite, no
-   contact at rest between the pairs meshcol excludes; usd-core: collision prims). Then
+   (pybullet and yourdfpy, and urdfdom's ``check_urdf`` where installed; MuJoCo: compiled,
+   ``mj_forward`` at rest, 100 steps finite, no contact at rest between the pairs meshcol
+   excludes; usd-core: collision prims). Then
    containment, independent of meshcol: every vertex of each collision mesh of the input (MJCF:
    MuJoCo's reading, ``mesh_vert`` in the body frame; URDF: yourdfpy's elements, on the XML
    as pybullet reads it, and trimesh's reading of each mesh with its ``scale``, in the link
@@ -90,6 +91,7 @@ def run_fit(robot: Path, work: Path, excluded: set, empty: bool, shape: str = "a
             out["urdf"] = {
                 "pybullet": wild.load_pybullet(description),
                 "yourdfpy": wild.load_yourdfpy(description, not empty),
+                "urdfdom": wild.load_urdfdom(description),
             }
             out["contain"] = contained_urdf(robot, description)
         elif fmt == "mjcf":
