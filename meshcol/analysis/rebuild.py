@@ -18,8 +18,9 @@ collision element, and the description is written back around them
   as the ``<capsule>`` extension (``"extension"``: :func:`meshcol.io.urdf_write.urdf_text`).
 
 Primitive elements (box, sphere, cylinder, capsule) are kept as they are: they are already
-exact convex colliders (a URDF's ``<capsule>`` is written in the form ``urdf_capsules`` says). Colliders are computed in the link frame (the element's origin and
-mesh scale baked in), so the description places them with an identity origin.
+exact convex colliders (a URDF's ``<capsule>`` is written in the form ``urdf_capsules``
+says). Colliders are computed in the link frame (the element's origin and mesh scale baked
+in), so the description places them with an identity origin.
 """
 
 from __future__ import annotations

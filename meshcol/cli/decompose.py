@@ -59,9 +59,8 @@ frame, and a copy of the description, OUT/<robot>.urdf, has one <collision> elem
 part (visuals, inertials, joints, comments and unknown tags untouched; box, sphere,
 cylinder and capsule elements kept, being exact; URDF has no capsule: a <capsule> is
 written as a <cylinder> and two <sphere>s, or kept with --urdf-capsules extension). --to
-mjcf writes OUT/<robot>.xml in
-MuJoCo Menagerie's convention; --to glb and --to usd the parts at the joint
-configuration. --layout and --format do not apply. --target fits each mesh object's
+mjcf writes OUT/<robot>.xml in MuJoCo Menagerie's convention; --to glb and --to usd the
+parts at the joint configuration. --layout and --format do not apply. --target fits each mesh object's
 parts (an element of k objects gives each max_hulls // k; more objects than max_hulls
 is an MC106 finding on the element).
 

@@ -114,8 +114,8 @@ def fit(
     frame; a hull kept by --shape auto goes to OUT/<link>_NN.obj. URDF has no capsule: one
     is written as a <cylinder> and a <sphere> at each end, three <collision> elements
     (NAME_00, NAME_01, NAME_02), which ROS (urdfdom), yourdfpy, pybullet and MuJoCo all read;
-    --urdf-capsules extension writes <capsule> instead, for pybullet and MuJoCo only. URDF has no ellipsoid:
-    --shape ellipsoid needs --to mjcf, usd or glb. Visuals, inertials, joints and existing primitive
+    --urdf-capsules extension writes <capsule> instead, for pybullet and MuJoCo only. URDF
+    has no ellipsoid: --shape ellipsoid needs --to mjcf, usd or glb. Visuals, inertials, joints and existing primitive
     elements are untouched. --to mjcf, glb and usd as for meshcol hull.
 
     \b
