@@ -241,6 +241,25 @@ def load_pybullet(urdf: Path) -> str:
         pybullet.disconnect(client)
 
 
+def load_urdfdom(urdf: Path) -> str:
+    """ROS's URDF parser, urdfdom, by its ``check_urdf`` (Debian's liburdfdom-tools): "ok"
+    when it parses with no error line (it drops an element it cannot read, with an error)."""
+    import shutil
+
+    if shutil.which("check_urdf") is None:
+        return "skip (no check_urdf)"
+    try:
+        done = subprocess.run(
+            ["check_urdf", str(urdf)], capture_output=True, text=True, timeout=TIMEOUT
+        )
+    except subprocess.TimeoutExpired:
+        return f"FAIL (timeout after {TIMEOUT} s)"
+    errors = [line for line in (done.stdout + done.stderr).splitlines() if "rror" in line]
+    if done.returncode != 0 or errors:
+        return f"FAIL ({' '.join((errors or [f'exit {done.returncode}'])[0].split())[:80]})"
+    return "ok"
+
+
 def load_yourdfpy(urdf: Path, colliders: bool = True) -> str:
     """yourdfpy loads the URDF with every collision mesh (``colliders``: at least one; a
     robot with no collision geometry, MC506, has none to load)."""

@@ -238,6 +238,20 @@ COMMANDS: list[tuple[str, list[str]]] = [
     ),
     ("rules", ["rules"]),
     ("targets", ["targets"]),
+    # the sample arm's links fit capsules: the URDF written holds them (session 43)
+    (
+        "fit-arm-urdf",
+        [
+            "fit",
+            "samples/robot/arm.urdf",
+            "--joint",
+            "elbow=1.0",
+            "--out-dir",
+            "{out}/arm-urdf",
+            "--report",
+            "{out}/fit-arm.json",
+        ],
+    ),
 ]
 ROBOT_COMMANDS: list[tuple[str, list[str]]] = [
     ("check-panda", ["check", str(PANDA), "--report", "{out}/panda.json"]),

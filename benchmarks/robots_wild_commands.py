@@ -9,15 +9,17 @@ For each robot, every command under a time cap (``--timeout``; 124 when over it)
    other exit code is a failure;
 2. ``meshcol fit ROBOT --out-dir OUT --to FMT`` for ``urdf`` (URDF inputs), ``mjcf`` and
    ``usd``, each output loaded by the consumers exactly as the hull sweep loads hull's
-   (pybullet and yourdfpy; MuJoCo: compiled, ``mj_forward`` at rest, 100 steps finite, no
-   contact at rest between the pairs meshcol excludes; usd-core: collision prims). Then
+   (pybullet and yourdfpy, and urdfdom's ``check_urdf`` where installed; MuJoCo: compiled,
+   ``mj_forward`` at rest, 100 steps finite, no contact at rest between the pairs meshcol
+   excludes; usd-core: collision prims). Then
    containment, independent of meshcol: every vertex of each collision mesh of the input (MJCF:
-   MuJoCo's reading, ``mesh_vert`` in the body frame; URDF: yourdfpy's elements and trimesh's
-   reading of each mesh in the link frame) must lie in one of the fitted colliders of its
-   body in the output (MJCF: MuJoCo's geoms; URDF: the output's XML read here), within
+   MuJoCo's reading, ``mesh_vert`` in the body frame; URDF: yourdfpy's elements, on the XML
+   as pybullet reads it, and trimesh's reading of each mesh with its ``scale``, in the link
+   frame) must lie in one of the fitted colliders of its body in the output (MJCF: MuJoCo's
+   geoms; URDF: yourdfpy's elements, a capsule's cylinder and spheres among them), within
    1e-6 of the body's size: "outside" counts the vertices that do not;
 3. ``meshcol collision-matrix ROBOT --samples S --seed 0 -o M.srdf --report M.json``; the SRDF
-   read here with ``xml.etree`` against the description's own links (URDF: its XML; MJCF:
+   read here with ``xml.etree`` against the description's own links (URDF: yourdfpy's; MJCF:
    MuJoCo's bodies): every link named exists, no pair twice, every ``Adjacent`` pair joined by
    a chain of the kinematic tree whose inner links have no collision geometry (MoveIt's
    rule); then, for MJCF robots, MuJoCo as the oracle of the ``Never`` pairs: ``--configs``
@@ -36,7 +38,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import re
 import sys
 import tempfile
 import time
@@ -90,6 +91,7 @@ def run_fit(robot: Path, work: Path, excluded: set, empty: bool, shape: str = "a
             out["urdf"] = {
                 "pybullet": wild.load_pybullet(description),
                 "yourdfpy": wild.load_yourdfpy(description, not empty),
+                "urdfdom": wild.load_urdfdom(description),
             }
             out["contain"] = contained_urdf(robot, description)
         elif fmt == "mjcf":
@@ -206,92 +208,76 @@ def contained_mjcf(source: Path, fitted: Path) -> dict:
     return _containment({b: (c, shapes.get(b, [])) for b, c in clouds.items()})
 
 
-#: A number as strtod reads it from the front of a token (pybullet's reading of "0.07," or
-#: "-1.57.", which pybullet_data's files hold).
-NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
-
-
-def numbers(text: str | None, default: str) -> list[float]:
-    return [float(NUMBER.match(token).group()) for token in (text or default).split()]
-
-
-def read_urdf(path: Path):
-    """The URDF's XML as a forgiving reader takes it (lxml recovering, a declaration after
-    leading blank lines or comments dropped, as pybullet reads pybullet_data's files)."""
+def urdf_model(path: Path, capsules: bool = False):
+    """yourdfpy's model of a URDF (links, joints, collision elements, its own ``package://``
+    and relative file handler), the XML read first as pybullet reads it
+    (:func:`meshcol.io.urdf_lenient.read_description_xml`: pybullet_data's numbers such as
+    "0.07," and its misplaced declarations), so that every URDF row has a reading. With
+    ``capsules`` (an INPUT, which pybullet's ``<capsule>`` may be in: pybullet_data's
+    humanoid), each capsule is read as a sphere, as meshcol's reader stands one in for
+    yourdfpy: the oracle takes the input's meshes and its tree, not its primitives; an
+    output's capsule stays an error."""
+    import yourdfpy
     from lxml import etree
 
-    text = re.sub(rb"<\?xml[^>]*\?>", b"", path.read_bytes())
-    return etree.fromstring(text, etree.XMLParser(recover=True, remove_comments=True))
+    from meshcol.io.urdf_lenient import read_description_xml
 
-
-def mesh_file(source: Path, reference: str) -> Path:
-    """A mesh reference resolved here: relative to the file, or ``package://NAME/rest`` under
-    a folder NAME above it (or ``rest`` under the file's folder, as pybullet finds it)."""
-    if not reference.startswith("package://"):
-        return source.parent / reference.removeprefix("file://")
-    package, _, rest = reference.removeprefix("package://").partition("/")
-    for folder in [source.parent, *source.parents]:
-        for candidate in (folder / package / rest, folder / rest, folder.parent / package / rest):
-            if candidate.is_file():
-                return candidate
-    return source.parent / package / rest
-
-
-def _urdf_pose(element) -> np.ndarray:
-    from scipy.spatial.transform import Rotation
-
-    pose = np.eye(4)
-    origin = element.find("origin")
-    if origin is not None:
-        pose[:3, 3] = numbers(origin.get("xyz"), "0 0 0")[:3]
-        rpy = numbers(origin.get("rpy"), "0 0 0")[:3]
-        pose[:3, :3] = Rotation.from_euler("xyz", rpy).as_matrix()
-    return pose
-
-
-def _urdf_shape(geometry: ET.Element, folder: Path, pose: np.ndarray):
-    import trimesh
-
-    child = next(iter(geometry))
-    number = lambda key: float(child.get(key))
-    if child.tag == "box":
-        return ("box", np.array([float(x) / 2 for x in child.get("size").split()]), pose)
-    if child.tag == "sphere":
-        return ("sphere", np.array([number("radius")]), pose)
-    if child.tag in ("cylinder", "capsule"):
-        return (child.tag, np.array([number("radius"), number("length") / 2]), pose)
-    mesh = trimesh.load(folder / child.get("filename"), force="mesh")
-    return (
-        "hull",
-        _hull_planes(np.asarray(mesh.vertices) @ pose[:3, :3].T + pose[:3, 3]),
-        np.eye(4),
+    root = read_description_xml(str(path), [])
+    etree.strip_tags(root, etree.Comment)
+    for capsule in root.iter("capsule") if capsules else ():
+        capsule.tag = "sphere"
+    return yourdfpy.URDF(
+        robot=yourdfpy.URDF._parse_robot(xml_element=root),
+        build_scene_graph=False,
+        load_meshes=False,
+        mesh_dir=str(path.parent),
     )
 
 
-def contained_urdf(source: Path, fitted: Path) -> dict:
-    """The input's collision mesh vertices (its XML read here, each mesh by trimesh, in the
-    link frame) in the output URDF's colliders (its XML read here too)."""
+def _mesh_vertices(model, mesh, pose: np.ndarray) -> np.ndarray:
+    """A ``<mesh>``'s vertices (trimesh's reading of the file yourdfpy's handler names, every
+    object), its ``scale`` applied, at ``pose``."""
     import trimesh
 
+    loaded = trimesh.load(model._filename_handler(mesh.filename), force="mesh")
+    vertices = np.asarray(loaded.vertices, dtype=np.float64)
+    if mesh.scale is not None:
+        vertices = vertices * np.broadcast_to(np.asarray(mesh.scale, dtype=np.float64), (3,))
+    return vertices @ pose[:3, :3].T + pose[:3, 3]
+
+
+def _urdf_shape(model, element) -> tuple[str, np.ndarray, np.ndarray]:
+    """A collision element of the output as ``outside`` takes it (link frame)."""
+    g = element.geometry
+    pose = np.eye(4) if element.origin is None else np.asarray(element.origin, dtype=np.float64)
+    if g.box is not None:
+        return ("box", np.asarray(g.box.size, dtype=np.float64) / 2, pose)
+    if g.sphere is not None:
+        return ("sphere", np.array([g.sphere.radius]), pose)
+    if g.cylinder is not None:
+        return ("cylinder", np.array([g.cylinder.radius, g.cylinder.length / 2]), pose)
+    return ("hull", _hull_planes(_mesh_vertices(model, g.mesh, pose)), np.eye(4))
+
+
+def contained_urdf(source: Path, fitted: Path) -> dict:
+    """The input's collision mesh vertices (yourdfpy's elements, each mesh read by trimesh
+    with its scale, in the link frame) in the output URDF's colliders (yourdfpy's reading of
+    it: a ``<capsule>``, which it does not know, is an error)."""
     try:
+        model = urdf_model(source, capsules=True)
         per_body: dict[str, tuple[list, list]] = {}
-        for link in read_urdf(source).iter("link"):
-            for element in link.iter("collision"):
-                mesh = element.find("geometry/mesh")
-                if mesh is None:
+        for link in model.robot.links:
+            for element in link.collisions:
+                if element.geometry.mesh is None:
                     continue
-                scale = np.broadcast_to(numbers(mesh.get("scale"), "1")[:3], (3,))
-                loaded = trimesh.load(mesh_file(source, mesh.get("filename")), force="mesh")
-                pose = _urdf_pose(element)
-                vertices = (np.asarray(loaded.vertices) * scale) @ pose[:3, :3].T + pose[:3, 3]
-                per_body.setdefault(link.get("name"), ([], []))[0].append(vertices)
-        for link in read_urdf(fitted).iter("link"):
-            if link.get("name") in per_body:
-                for element in link.iter("collision"):
-                    shape = _urdf_shape(
-                        element.find("geometry"), fitted.parent, _urdf_pose(element)
-                    )
-                    per_body[link.get("name")][1].append(shape)
+                pose = np.eye(4) if element.origin is None else np.asarray(element.origin)
+                vertices = _mesh_vertices(model, element.geometry.mesh, pose)
+                per_body.setdefault(link.name, ([], []))[0].append(vertices)
+        output = urdf_model(fitted)
+        for link in output.robot.links:
+            if link.name in per_body:
+                shapes = [_urdf_shape(output, element) for element in link.collisions]
+                per_body[link.name][1].extend(shapes)
     except Exception as exc:  # noqa: BLE001 - the row says why the oracle could not run
         return {"error": " ".join(str(exc).split())[:80]}
     return _containment(per_body)
@@ -373,15 +359,10 @@ def _joined(a: str, b: str, neighbours: dict, solid: set) -> bool:
 
 
 def _urdf_tree(robot: Path) -> tuple[set, set, set]:
-    root = read_urdf(robot)
-    links = {link.get("name") for link in root.findall("link")}
-    solid = {
-        link.get("name") for link in root.findall("link") if link.find("collision") is not None
-    }
-    edges = {
-        (joint.find("parent").get("link"), joint.find("child").get("link"))
-        for joint in root.findall("joint")
-    }
+    robot_model = urdf_model(robot, capsules=True).robot
+    links = {link.name for link in robot_model.links}
+    solid = {link.name for link in robot_model.links if link.collisions}
+    edges = {(joint.parent, joint.child) for joint in robot_model.joints}
     return links, edges, solid
 
 

@@ -22,6 +22,7 @@ __all__ = [
     "ROBOT_EXTENSIONS",
     "SCENE_SHAPES",
     "SEVERITY_ORDER",
+    "URDF_CAPSULES",
 ]
 
 # -- colliders --------------------------------------------------------------------------------
@@ -39,6 +40,12 @@ SCENE_SHAPES = ("hull", "decomposed", "mesh")
 #: The collider kinds of a robot's self-collision matrix (``mesh`` needs the exact mesh
 #: queries, which are not batched over configurations).
 MATRIX_COLLIDERS = ("hull", "decomposed", "fit")
+
+#: How a URDF written (``--to urdf``) holds a capsule (``--urdf-capsules``): ``standard``, a
+#: ``<cylinder>`` and two ``<sphere>`` elements, the same solid in elements every URDF reader
+#: knows (urdfdom and so ROS, yourdfpy); ``extension``, one ``<capsule radius length>``, which
+#: only pybullet and MuJoCo's importer read (:mod:`meshcol.io.urdf_write`).
+URDF_CAPSULES = ("standard", "extension")
 
 # -- engine targets ---------------------------------------------------------------------------
 

@@ -12,12 +12,15 @@ collision element, and the description is written back around them
 - ``fit``: ONE enclosing primitive per collision element (:func:`meshcol.analysis.fit.fit_body`:
   box, sphere, capsule, cylinder or ellipsoid, or the hull when ``auto`` finds none within its
   volume tolerance), written as the description's own primitive element (``<box>``,
-  ``<sphere>``, ``<cylinder>``, ``<capsule>``; MJCF geom types, the ellipsoid included) at its
-  pose. URDF has no ellipsoid: ``--shape ellipsoid`` to a URDF is refused before any fit.
+  ``<sphere>``, ``<cylinder>``; MJCF geom types, the ellipsoid included) at its pose. URDF
+  has no ellipsoid: ``--shape ellipsoid`` to a URDF is refused before any fit; nor a capsule:
+  one is written as a cylinder and two spheres (``urdf_capsules="standard"``, the default) or
+  as the ``<capsule>`` extension (``"extension"``: :func:`meshcol.io.urdf_write.urdf_text`).
 
 Primitive elements (box, sphere, cylinder, capsule) are kept as they are: they are already
-exact convex colliders. Colliders are computed in the link frame (the element's origin and
-mesh scale baked in), so the description places them with an identity origin.
+exact convex colliders (a URDF's ``<capsule>`` is written in the form ``urdf_capsules``
+says). Colliders are computed in the link frame (the element's origin and mesh scale baked
+in), so the description places them with an identity origin.
 """
 
 from __future__ import annotations
@@ -251,6 +254,7 @@ def _fit(
 ) -> tuple[Any, dict[str, Any]]:
     """One enclosing primitive for the element (or its hull, when ``auto`` kept it)."""
     from meshcol.analysis.fit import fit_body
+    from meshcol.io.primitives import written_primitive
     from meshcol.io.robot_write import Collider
 
     report(element)
@@ -264,21 +268,9 @@ def _fit(
         hull = ((fitted[0].hull_vertices, fitted[0].hull_faces),)
         collider = Collider(link, index, hull, None, np.eye(4), name)
     else:
-        solid = _as_written(chosen.primitive)
+        solid = written_primitive(chosen.primitive)  # the report keeps the fit itself
         collider = Collider(link, index, (), solid, chosen.pose, name, fitted=True)
     return collider, element.entry(fitted)
-
-
-def _as_written(primitive: Any) -> Any:
-    """The primitive a rebuilt description holds for a fit: a capsule of length 0 (under
-    1e-15, the writers' zero; the capsule fit of a ball) is its sphere, the same solid, for
-    every format (MuJoCo refuses a capsule of half-length 0); any other fit as it is. The
-    report keeps the fit itself."""
-    from meshcol.types import Capsule, Sphere
-
-    if isinstance(primitive, Capsule) and primitive.length < 1e-15:
-        return Sphere(primitive.radius)
-    return primitive
 
 
 def _hull(
@@ -447,6 +439,7 @@ def rebuild_hulls(
     progress: Callable[[str], None] | None = None,
     target: Any = None,
     robot_options: RobotOptions | None = None,
+    urdf_capsules: str = "standard",
 ) -> Any:
     """``meshcol hull ROBOT --out-dir OUT``: one hull per collision element, and the description.
 
@@ -473,7 +466,7 @@ def rebuild_hulls(
         robot_options=robot_options,
     )
     to = to or robot.kind
-    written = write_robot(robot, out_dir, to, protected=reserved)
+    written = write_robot(robot, out_dir, to, protected=reserved, urdf_capsules=urdf_capsules)
     destination = _destinations(robot, to, out_dir, written)
     rows, hulls, warnings = [], [], _warned(robot, to, warn)
     for entry in info:
@@ -509,6 +502,7 @@ def rebuild_decomposition(
     target: Any = None,
     robot_options: RobotOptions | None = None,
     warn: Callable[[str], None] | None = None,
+    urdf_capsules: str = "standard",
 ) -> Any:
     """``meshcol decompose ROBOT --out-dir OUT``: the convex parts of every collision element
     and the description that uses them.
@@ -544,7 +538,7 @@ def rebuild_decomposition(
         robot_options=robot_options,
     )
     to = to or robot.kind
-    write_robot(robot, out_dir, to, protected=reserved)
+    write_robot(robot, out_dir, to, protected=reserved, urdf_capsules=urdf_capsules)
     warnings = _warned(robot, to, warn)
     description = description_path(robot.source, out_dir, to)
     bodies, rows = _decomposed_bodies(robot, info, to, description, options, target)
@@ -623,6 +617,7 @@ def rebuild_fits(
     progress: Callable[[str], None] | None = None,
     robot_options: RobotOptions | None = None,
     warn: Callable[[str], None] | None = None,
+    urdf_capsules: str = "standard",
 ) -> Any:
     """``meshcol fit ROBOT --out-dir OUT``: one enclosing primitive per collision element,
     written into the description as its own primitive element.
@@ -651,7 +646,7 @@ def rebuild_fits(
         robot_options=robot_options,
     )
     to = to or robot.kind
-    written = write_robot(robot, out_dir, to, protected=reserved)
+    written = write_robot(robot, out_dir, to, protected=reserved, urdf_capsules=urdf_capsules)
     warnings = _warned(robot, to, warn)
     destination = _destinations(robot, to, out_dir, written)
     rows, fits = [], []

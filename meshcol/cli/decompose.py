@@ -26,6 +26,7 @@ from meshcol.cli.common import (
     verdict,
     write_html,
 )
+from meshcol.cli.mesh_outputs import urdf_capsules_of, urdf_capsules_option
 from meshcol.decomposition.engines import ENGINES
 from meshcol.decomposition.options import (
     DEFAULT_SEARCH_STEPS,
@@ -56,9 +57,10 @@ A robot description (URDF, or MJCF) is rebuilt: the parts of each collision elem
 meshes (in parallel with --jobs, one mesh a task) go to OUT/<link>_NN.obj in the link's
 frame, and a copy of the description, OUT/<robot>.urdf, has one <collision> element per
 part (visuals, inertials, joints, comments and unknown tags untouched; box, sphere,
-cylinder and capsule elements kept, being exact). --to mjcf writes OUT/<robot>.xml in
-MuJoCo Menagerie's convention; --to glb and --to usd the parts at the joint
-configuration. --layout and --format do not apply. --target fits each mesh object's
+cylinder and capsule elements kept, being exact; URDF has no capsule: a <capsule> is
+written as a <cylinder> and two <sphere>s, or kept with --urdf-capsules extension). --to
+mjcf writes OUT/<robot>.xml in MuJoCo Menagerie's convention; --to glb and --to usd the
+parts at the joint configuration. --layout and --format do not apply. --target fits each mesh object's
 parts (an element of k objects gives each max_hulls // k; more objects than max_hulls
 is an MC106 finding on the element).
 
@@ -206,6 +208,7 @@ class _MeshFormat(click.Choice):
     help="Output format (glb: one node per part; not with ucx).",
 )
 @to_option("the parts", gltf=True)
+@urdf_capsules_option
 @click.option(
     "--report",
     type=click.Path(dir_okay=False),
@@ -295,6 +298,7 @@ def decompose_command(
     layout: str,
     fmt: str,
     to: str | None,
+    urdf_capsules: str | None,
     report: str | None,
     report_fmt: str | None,
     max_hausdorff: float | None,
@@ -319,10 +323,11 @@ def decompose_command(
     # a folder, and never replaces one of its inputs.
     _check_destinations(inputs, outputs, run)
     robot = _robot_input(ctx, inputs, options, run, outputs)
+    capsules = urdf_capsules_of(urdf_capsules, inputs, robot, to)
     progress = Progress(command="decompose", heartbeat=True)
     try:
         result = _decompose(
-            inputs, options, run, outputs, target, robot, progress.message, robot_options
+            inputs, options, run, outputs, target, robot, progress.message, robot_options, capsules
         )
     finally:
         progress.done()
@@ -467,6 +472,7 @@ def _decompose(
     robot: bool,
     progress: Callable[[str], None],
     robot_options: RobotOptions,
+    urdf_capsules: str = "standard",
 ) -> Any:
     """The one library call: a robot's rebuild, or the run over files."""
     from meshcol.analysis.rebuild import rebuild_decomposition
@@ -498,6 +504,7 @@ def _decompose(
             target=target,
             robot_options=robot_options,
             warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
+            urdf_capsules=urdf_capsules,
         )
     return decompose_files(
         inputs,

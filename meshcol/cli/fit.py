@@ -19,7 +19,13 @@ from meshcol.cli.common import (
     to_option,
     verdict,
 )
-from meshcol.cli.mesh_outputs import report_wanted, run_mesh_command, written_to
+from meshcol.cli.mesh_outputs import (
+    report_wanted,
+    run_mesh_command,
+    urdf_capsules_of,
+    urdf_capsules_option,
+    written_to,
+)
 from meshcol.io.outputs import check_outputs
 from meshcol.io.robot import RobotOptions
 
@@ -65,6 +71,7 @@ from meshcol.io.robot import RobotOptions
     "rebuilt with primitive colliders.  [default: no mesh files]",
 )
 @to_option("the fits", gltf=True)
+@urdf_capsules_option
 @report_options(default="stdout when no mesh is written, else no report")
 @robot_options()
 @snapshots_option
@@ -75,6 +82,7 @@ def fit(
     output: str | None,
     out_dir: str | None,
     to: str | None,
+    urdf_capsules: str | None,
     report: str | None,
     fmt: str | None,
     robot_options: RobotOptions,
@@ -102,10 +110,12 @@ def fit(
 
     A robot description (URDF, or MJCF) with --out-dir is rebuilt: each collision mesh
     element becomes its fit, written as the description's own primitive (URDF <box>,
-    <sphere>, <cylinder>, and <capsule>, which MuJoCo's importer and meshcol read but ROS's
-    urdfdom does not; MJCF geom types, ellipsoid included) with an <origin> in the link
-    frame; a hull kept by --shape auto goes to OUT/<link>_NN.obj. URDF has no ellipsoid:
-    --shape ellipsoid needs --to mjcf, usd or glb. Visuals, inertials, joints and existing primitive
+    <sphere>, <cylinder>; MJCF geom types, ellipsoid included) with an <origin> in the link
+    frame; a hull kept by --shape auto goes to OUT/<link>_NN.obj. URDF has no capsule: one
+    is written as a <cylinder> and a <sphere> at each end, three <collision> elements
+    (NAME_00, NAME_01, NAME_02), which ROS (urdfdom), yourdfpy, pybullet and MuJoCo all read;
+    --urdf-capsules extension writes <capsule> instead, for pybullet and MuJoCo only. URDF
+    has no ellipsoid: --shape ellipsoid needs --to mjcf, usd or glb. Visuals, inertials, joints and existing primitive
     elements are untouched. --to mjcf, glb and usd as for meshcol hull.
 
     \b
@@ -118,6 +128,7 @@ def fit(
       meshcol fit props/*.obj --shape box --format markdown --snapshots pr/
     """
     robot = mesh_outputs(inputs, output, out_dir, to, fmt, report)
+    capsules = urdf_capsules_of(urdf_capsules, inputs, robot, to)
 
     from meshcol.analysis.fit import fit as run_fit
 
@@ -136,7 +147,9 @@ def fit(
         (output, out_dir, to, report),
         run_fit,
         functools.partial(
-            rebuild_fits, warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True)
+            rebuild_fits,
+            warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),
+            urdf_capsules=capsules,
         ),
         shape=shape,
         volume_tolerance=volume_tolerance,

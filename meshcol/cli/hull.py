@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from typing import Any
 
 import click
@@ -20,7 +21,13 @@ from meshcol.cli.common import (
     verdict,
     write_outputs,
 )
-from meshcol.cli.mesh_outputs import report_wanted, run_mesh_command, written_to
+from meshcol.cli.mesh_outputs import (
+    report_wanted,
+    run_mesh_command,
+    urdf_capsules_of,
+    urdf_capsules_option,
+    written_to,
+)
 from meshcol.io.outputs import check_outputs
 from meshcol.io.robot import RobotOptions
 from meshcol.io.targets import target_names
@@ -60,6 +67,7 @@ from meshcol.io.targets import target_names
     "a tighter --max-vertices still wins. Exit 1 when a limit cannot be met."
 )
 @to_option("the hulls", gltf=True)
+@urdf_capsules_option
 @report_options(default="stdout when no mesh is written, else no report")
 @robot_options()
 @html_option
@@ -71,6 +79,7 @@ def hull(
     max_vertices: int | None,
     target: Any,
     to: str | None,
+    urdf_capsules: str | None,
     report: str | None,
     fmt: str | None,
     html: str | None,
@@ -107,7 +116,8 @@ def hull(
     frame, and a copy of the description, OUT/<robot>.urdf, whose <collision> elements use
     them (no <origin>: the element's origin and scale are in the hull); visuals, inertials,
     joints, comments and unknown tags are untouched, and box, sphere, cylinder and capsule
-    elements are kept as they are (already exact). --to mjcf writes OUT/<robot>.xml in
+    elements are kept as they are (already exact; URDF has no capsule: a <capsule> is
+    written as a <cylinder> and two <sphere>s, or kept with --urdf-capsules extension). --to mjcf writes OUT/<robot>.xml in
     MuJoCo Menagerie's convention (visual geoms group 2, contype/conaffinity 0; collision
     geoms group 3); --to glb and --to usd write the colliders at the joint configuration.
     --target fits each element's hull as it fits a mesh's (the description is in metres).
@@ -124,6 +134,7 @@ def hull(
       meshcol hull props/*.obj --target physx-gpu --format markdown --snapshots pr/
     """
     robot = mesh_outputs(inputs, output, out_dir, to, fmt, report)
+    capsules = urdf_capsules_of(urdf_capsules, inputs, robot, to)
 
     from meshcol.analysis.hull import hull as run_hull
     from meshcol.analysis.review import hull_page
@@ -142,7 +153,7 @@ def hull(
         robot,
         (output, out_dir, to, report),
         run_hull,
-        rebuild_hulls,
+        functools.partial(rebuild_hulls, urdf_capsules=capsules),
         max_vertices=max_vertices,
         target=target,
         warn=lambda message: click.echo(f"meshcol: warning: {message}", err=True),

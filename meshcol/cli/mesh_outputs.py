@@ -1,6 +1,6 @@
 """What the commands that write meshes (``hull``, ``fit``) share after their usage checks
 (:func:`meshcol.cli.common.mesh_outputs`): the error of a single-mesh file given several
-bodies, and the summary's "written to" clause."""
+bodies, the summary's "written to" clause, and (``decompose`` too) ``--urdf-capsules``."""
 
 from __future__ import annotations
 
@@ -12,6 +12,7 @@ import click
 
 from meshcol.cli.common import Progress, plural
 from meshcol.io.paths import display_path
+from meshcol.vocabulary import URDF_CAPSULES
 
 
 @contextmanager
@@ -89,3 +90,32 @@ def run_mesh_command(
             )
         finally:
             progress.done()
+
+
+def urdf_capsules_option(fn: Callable[..., Any]) -> Callable[..., Any]:
+    """Add ``--urdf-capsules standard|extension`` (parameter ``urdf_capsules``, None when
+    not given): how a URDF written holds a capsule (:data:`meshcol.vocabulary.URDF_CAPSULES`)."""
+    return click.option(
+        "--urdf-capsules",
+        type=click.Choice(URDF_CAPSULES),
+        default=None,
+        help="A URDF written (--to urdf): each capsule as a <cylinder> and two <sphere>s, "
+        "the same solid in elements every URDF reader knows (standard), or as one "
+        "<capsule>, which only pybullet and MuJoCo read (extension).  [default: standard]",
+    )(fn)
+
+
+def urdf_capsules_of(value: str | None, inputs: Sequence[str], robot: bool, to: str | None) -> str:
+    """The ``--urdf-capsules`` form of the run (``standard`` when not given); a usage error
+    when it is given and no URDF is written (not one URDF input with --out-dir and --to urdf,
+    the default for a URDF)."""
+    if value is None:
+        return "standard"
+    if robot and to in (None, "urdf"):
+        from meshcol.io.robot import description_kind
+
+        if description_kind(inputs[0]) == "urdf":
+            return value
+    raise click.UsageError(
+        "--urdf-capsules applies to a URDF written: one URDF input, --out-dir and --to urdf"
+    )

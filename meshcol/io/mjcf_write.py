@@ -591,7 +591,13 @@ def _spec_from_urdf(
     with a note."""
     from lxml import etree
 
-    text = urdf_text(robot, files, {"collider": stage + os.sep}, ellipsoid_placeholders=True)
+    text = urdf_text(
+        robot,
+        files,
+        {"collider": stage + os.sep},
+        ellipsoid_placeholders=True,
+        capsules="extension",  # MuJoCo reads it: a capsule geom, not three
+    )
     root = etree.fromstring(text.encode("utf-8"))
     converted: dict[str, str] = {}
     for link in root.findall("link"):

@@ -4,6 +4,8 @@ Queries use a primitive exactly (``Body.primitive``); its triangles are for what
 the review page, exporters, mass properties of a mesh, and the parts of a body that mixes
 primitives with meshes. :func:`primitive_mesh` (made in :mod:`meshcol.types`, where a primitive
 body makes its tessellation on first use) caches one tessellation per distinct primitive.
+:func:`written_primitive` is the one rule of what a rebuilt robot description holds for a
+primitive, whatever its format.
 """
 
 from __future__ import annotations
@@ -12,7 +14,7 @@ import numpy as np
 
 from meshcol.types import Box, Capsule, Ellipsoid, HalfSpace, Primitive, Sphere, primitive_mesh
 
-__all__ = ["enclosing_primitive_mesh", "primitive_mesh"]
+__all__ = ["enclosing_primitive_mesh", "primitive_mesh", "written_primitive"]
 
 
 def _support(primitive: Primitive, directions: np.ndarray) -> np.ndarray:
@@ -53,3 +55,13 @@ def enclosing_primitive_mesh(primitive: Primitive) -> tuple[np.ndarray, np.ndarr
     need = _support(primitive, normals[outward]) / offsets[outward]
     scale = max(1.0, float(np.max(need))) * (1.0 + 1e-12) if len(need) else 1.0
     return vertices * scale, faces
+
+
+def written_primitive(primitive: Primitive) -> Primitive:
+    """The primitive a description written holds for ``primitive``: a capsule of length 0
+    (under 1e-15, the writers' zero; the capsule fit of a ball) is its sphere, the same
+    solid, for every format (MuJoCo refuses a capsule of half-length 0; a URDF's standard
+    capsule would be a cylinder of length 0 between two equal spheres); any other as it is."""
+    if isinstance(primitive, Capsule) and primitive.length < 1e-15:
+        return Sphere(primitive.radius)
+    return primitive

@@ -181,6 +181,7 @@ def write_robot(
     out_dir: str | os.PathLike[str],
     to: str | None = None,
     protected: Sequence[tuple[str, str]] = (),
+    urdf_capsules: str = "standard",
 ) -> list[str]:
     """Write the colliders and the description that uses them into ``out_dir``.
 
@@ -193,6 +194,10 @@ def write_robot(
         Output format; default the input's (``urdf`` or ``mjcf``).
     protected : sequence of (description, path)
         Files that must not be replaced (the input and the meshes it references are always).
+    urdf_capsules : {"standard", "extension"}
+        How a URDF written holds a capsule (:data:`meshcol.vocabulary.URDF_CAPSULES`):
+        a cylinder and two spheres, or the ``<capsule>`` element
+        (:func:`meshcol.io.urdf_write.urdf_text`).
 
     Returns
     -------
@@ -236,7 +241,7 @@ def write_robot(
             for name, (vertices, faces) in zip(names, c.parts):
                 write_meshes(os.path.join(stage, name), [(Path(name).stem, vertices, faces)])
         if to == "urdf":
-            atomic_write(target, urdf_text(robot, files, {}, out_dir))
+            atomic_write(target, urdf_text(robot, files, {}, out_dir, capsules=urdf_capsules))
         elif to == "mjcf":
             atomic_write(target, mjcf_text(robot, files, stage, out_dir))
         elif to == "glb":

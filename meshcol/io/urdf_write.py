@@ -4,9 +4,19 @@ Visual elements, inertials, joints, comments and unknown tags survive: each rebu
 ``<collision>`` keeps its name and attributes, loses its ``<origin>``, and its geometry becomes
 ``<mesh filename="<link>_NN.obj"/>`` (a decomposition of several parts repeats the element,
 ``NAME_NN``, once per part); a fitted primitive becomes the element's own ``<box>``,
-``<sphere>``, ``<cylinder>`` or ``<capsule>`` at its ``<origin>``. The format module of
+``<sphere>`` or ``<cylinder>`` at its ``<origin>``. The format module of
 :func:`meshcol.io.robot_write.write_robot`; MuJoCo's URDF importer reads this text too
 (:mod:`meshcol.io.mjcf_write`).
+
+URDF has no capsule. By default (``capsules="standard"``) each capsule, fitted or kept from
+the input, is written as the same solid in elements every URDF reader knows: the element
+repeated three times (``NAME_00``, ``NAME_01``, ``NAME_02`` when it has a name), a
+``<cylinder>`` of the capsule's radius and length at its origin (the axis is z in both) and
+a ``<sphere>`` of its radius at each end of the axis; urdfdom (robot_state_publisher, MoveIt,
+RViz, Gazebo's import) and yourdfpy refuse ``<capsule>``. ``capsules="extension"`` writes
+one ``<capsule radius length>`` instead, the element pybullet and MuJoCo's importer read as a
+single exact shape (pybullet makes a URDF cylinder a polygonal hull inside it, unless loaded
+with ``URDF_USE_IMPLICIT_CYLINDER``); the MJCF writer uses it, MuJoCo having capsules.
 """
 
 from __future__ import annotations
@@ -19,6 +29,7 @@ from typing import TYPE_CHECKING, Any
 from meshcol.errors import MissingDependencyError, SceneError
 from meshcol.io.urdf_lenient import read_description_xml
 from meshcol.types import Box, Capsule, Cylinder, Ellipsoid, Sphere
+from meshcol.vocabulary import URDF_CAPSULES
 
 if TYPE_CHECKING:
     from meshcol.io.robot_write import Collider, RobotColliders
@@ -44,6 +55,7 @@ def urdf_text(
     prefix: dict[str, str],
     out_dir: str | None = None,
     ellipsoid_placeholders: bool = False,
+    capsules: str = "standard",
 ) -> str:
     """The input URDF with each rebuilt ``<collision>`` pointing at its part files
     (``prefix``: folder prepended to the part file names, for MuJoCo's importer). With
@@ -52,27 +64,37 @@ def urdf_text(
 
     URDF has no ellipsoid: a fitted one is refused (:func:`no_ellipsoid`), or with
     ``ellipsoid_placeholders`` (for MuJoCo's importer, whose geom is then made the
-    ellipsoid) written as a ``<sphere>`` of its largest semi-axis at its origin."""
+    ellipsoid) written as a ``<sphere>`` of its largest semi-axis at its origin.
+
+    ``capsules`` (:data:`meshcol.vocabulary.URDF_CAPSULES`): ``standard`` writes every
+    capsule, fitted or kept, as a cylinder and two spheres; ``extension`` as ``<capsule>``,
+    kept capsules as the input wrote them; in both a capsule of length 0 is its sphere
+    (:func:`_written_capsule`)."""
     from lxml import etree
 
+    if capsules not in URDF_CAPSULES:
+        raise ValueError(f"unknown capsule form {capsules!r} (expected {', '.join(URDF_CAPSULES)})")
     tree = parse_xml(robot.source)
     root = tree.getroot()
     if out_dir is not None:
         _references_from(root, robot, out_dir)
-    links = {link.get("name"): link for link in root.findall("link")}
+    # Each link's elements as read: an element repeated below does not move the next ones.
+    read = {link.get("name"): link.findall("collision") for link in root.findall("link")}
     for i, collider in enumerate(robot.colliders):
-        if collider.kept:
-            continue
-        link = links.get(collider.link)
-        elements = link.findall("collision") if link is not None else []
+        elements = read.get(collider.link, [])
         if collider.index >= len(elements):
+            if collider.kept:
+                continue
             raise SceneError(
                 f"link {collider.link!r}: collision {collider.index} is not in the file",
                 robot.source,
             )
         element = elements[collider.index]
-        if collider.fitted:
-            _urdf_primitive(element, collider, robot.source, ellipsoid_placeholders)
+        if collider.primitive is not None:
+            if collider.fitted:
+                _urdf_primitive(element, collider, robot.source, ellipsoid_placeholders)
+            if isinstance(collider.primitive, Capsule):
+                _written_capsule(element, collider.primitive, collider.origin, capsules)
             continue
         name = element.get("name")
         names = files[i]
@@ -222,7 +244,7 @@ def _urdf_primitive(element: Any, collider: Collider, source: str, placeholder: 
             radius=format_numbers([p.radius]),
             length=format_numbers([p.length]),
         )
-    else:  # URDF has no capsule; this is the element MuJoCo's importer and meshcol read
+    else:  # the extension pybullet, MuJoCo's importer and meshcol read (_written_capsule)
         assert isinstance(p, Capsule)
         shape = etree.SubElement(
             geometry,
@@ -231,3 +253,57 @@ def _urdf_primitive(element: Any, collider: Collider, source: str, placeholder: 
             length=format_numbers([p.length]),
         )
     shape.tail = tail
+
+
+def _written_capsule(element: Any, capsule: Capsule, origin: Any, form: str) -> None:
+    """Write a ``<collision>`` element holding ``<capsule>`` (at ``origin``, the capsule's
+    frame in the link frame, its axis z) in the ``form`` of :func:`urdf_text`.
+
+    ``standard``: the same solid in standard URDF, the element itself a ``<cylinder>`` of the
+    capsule's radius and length (the attributes' text as it was), then two copies of it, each
+    a ``<sphere>`` of that radius at one end of the axis (``origin`` +- length/2 along its z;
+    the orientation kept, a sphere has none to lose). A named element's three become
+    ``NAME_00`` (the cylinder), ``NAME_01`` and ``NAME_02`` (the spheres at -z and +z), as
+    the parts of a decomposition are named. ``extension``: the element as it is. In both, a
+    capsule of length 0 (:func:`meshcol.io.primitives.written_primitive`) is its sphere, one
+    element (MuJoCo's importer refuses a capsule of length 0)."""
+    import numpy as np
+
+    from meshcol.io.primitives import written_primitive
+
+    shape = element.find("geometry/capsule")
+    if shape is None:  # not a capsule in the file (refused by the reader before this)
+        return
+    if isinstance(written_primitive(capsule), Sphere):
+        shape.tag = "sphere"
+        shape.attrib.pop("length", None)
+        return
+    if form == "extension":
+        return
+    shape.tag = "cylinder"
+    pose = np.asarray(origin, dtype=np.float64)
+    name = element.get("name")
+    before = element.getprevious()
+    indent = before.tail if before is not None else element.getparent().text
+    previous, tail = element, element.tail
+    for k, sign in enumerate((-1.0, 1.0), start=1):
+        end = copy.deepcopy(element)
+        previous.tail = indent  # each on a line of its own, as the element was
+        previous.addnext(end)
+        previous = end
+        end.tail = tail
+        if name:
+            end.set("name", f"{name}_{k:02d}")
+        ball = end.find("geometry/cylinder")
+        ball.tag = "sphere"
+        ball.attrib.pop("length")
+        at = end.find("origin")
+        if at is None:  # the capsule sat at the link's origin
+            from lxml import etree
+
+            at = etree.Element("origin")
+            at.tail = end.text
+            end.insert(0, at)
+        at.set("xyz", format_numbers(pose[:3, 3] + sign * 0.5 * capsule.length * pose[:3, 2]))
+    if name:
+        element.set("name", f"{name}_00")

@@ -1,7 +1,7 @@
 """Fits written into robot descriptions (``meshcol fit ROBOT --out-dir OUT``).
 
-Every description written is read back by a reader that is not meshcol's (yourdfpy for URDF
-boxes, spheres and cylinders; MuJoCo's compiler for MJCF and for URDF capsules) and every
+Every description written is read back by a reader that is not meshcol's (yourdfpy for URDF;
+MuJoCo's compiler for MJCF and for the URDF written) and every
 collision mesh of the INPUT, posed by that reader at a joint configuration, must lie inside
 the primitive the OUTPUT puts on its link.
 """
@@ -136,15 +136,15 @@ def mujoco_geoms(xml: Path, qpos: dict) -> tuple[dict, dict]:
     return meshes, primitives
 
 
-def assert_enclosed(meshes: dict, primitives: dict, new: int) -> None:
-    """Each input mesh lies inside one of its link's primitives, and ``new`` primitives are
-    used that way, one per mesh."""
+def assert_enclosed(meshes: dict, primitives: dict, new: int, union: bool = False) -> None:
+    """Each input mesh lies inside one of its link's primitives (``union``: each of its
+    vertices inside one of them, as a capsule written as a cylinder and two spheres holds
+    it), and ``new`` primitives are used that way, one per mesh."""
     used = 0
     for link, clouds in meshes.items():
         for cloud in clouds:
-            hits = [
-                p for p in primitives.get(link, []) if inside(local(cloud, p[2]), p[0], p[1]).all()
-            ]
+            held = [inside(local(cloud, p[2]), p[0], p[1]) for p in primitives.get(link, [])]
+            hits = np.any(held, axis=0).all() if union else any(h.all() for h in held)
             assert hits, f"{link}: an input mesh is not inside any primitive of the output"
             used += 1
     assert used == new
@@ -241,10 +241,10 @@ def test_fit_urdf_to_mjcf_and_capsules_through_mujoco(urdf: Path, tmp_path: Path
         for xml in (mj / "small.xml",):
             _, primitives = mujoco_geoms(xml, qpos)
             assert_enclosed(meshes, primitives, new=3)
-        # the URDF written (capsules included) through MuJoCo's own URDF importer, every
-        # link kept a body
+        # the URDF written (a capsule as a cylinder and two spheres) through MuJoCo's own
+        # URDF importer, every link kept a body
         _, primitives = mujoco_geoms(unfused, qpos)
-        assert_enclosed(meshes, primitives, new=3)
+        assert_enclosed(meshes, primitives, new=3, union=True)
     root = etree.fromstring((mj / "small.xml").read_bytes())
     groups = {g.get("group") for g in root.iter("geom") if g.get("contype") != "0"}
     assert groups == {"3"}

@@ -318,6 +318,51 @@ def test_decompose_urdf_parts_cache_and_jobs(urdf: Path, tmp_path: Path) -> None
     assert (again / "arm_00.obj").read_bytes() == (out / "arm_00.obj").read_bytes()
 
 
+def test_two_elements_of_one_link_each_get_their_parts(tmp_path: Path) -> None:
+    """Two mesh elements of one link, each rebuilt as several parts (a decomposition): the
+    second's parts replace the second element, not a copy of the first (the writer once
+    looked the element up after the first's copies had shifted the link's elements, and the
+    second kept its input mesh)."""
+    import dataclasses
+
+    import trimesh
+
+    from meshcol.analysis.rebuild import robot_colliders
+    from meshcol.io.robot import load_robot
+    from meshcol.io.robot_write import write_robot
+
+    trimesh.creation.box([0.1, 0.1, 0.1]).export(tmp_path / "cube.obj")
+    (tmp_path / "two.urdf").write_text(
+        '<robot name="two"><link name="base">'
+        '<collision name="first"><geometry><mesh filename="cube.obj"/></geometry></collision>'
+        '<collision name="second"><origin xyz="0 0 1"/>'
+        '<geometry><mesh filename="cube.obj"/></geometry></collision>'
+        "</link></robot>"
+    )
+    robot, _ = robot_colliders(tmp_path / "two.urdf", "hull")
+    # each hull split in two halves along x: two parts per element, as a decomposition gives
+    halves = []
+    for c in robot.colliders:
+        v, f = c.parts[0]
+        low, high = v.copy(), v.copy()
+        low[:, 0] = np.minimum(v[:, 0], v[:, 0].mean())
+        high[:, 0] = np.maximum(v[:, 0], v[:, 0].mean())
+        halves.append(dataclasses.replace(c, parts=((low, f), (high, f))))
+    robot = dataclasses.replace(robot, colliders=tuple(halves))
+    write_robot(robot, tmp_path / "out")
+    root = etree.fromstring((tmp_path / "out" / "two.urdf").read_bytes())
+    elements = root.findall("link/collision")
+    names = ["first_00", "first_01", "second_00", "second_01"]
+    assert [e.get("name") for e in elements] == names
+    assert not root.findall("link/collision/origin")  # the second's origin is in its parts
+    files = [e.find("geometry/mesh").get("filename") for e in elements]
+    assert files == [f"base_{k:02d}.obj" for k in range(4)]
+    (body,) = load_robot(tmp_path / "out" / "two.urdf").bodies
+    found = [v @ body.pose[:3, :3].T + body.pose[:3, 3] for _, v, _ in body.part_meshes()]
+    expected = [v for c in robot.colliders for v, _ in c.parts]
+    match_all({"base": expected}, {"base": found}, 1e-12)
+
+
 # --- MJCF out -------------------------------------------------------------------------------
 
 
