@@ -170,8 +170,10 @@ def _configure(mujoco: Any, model: Any, data: Any, options: RobotOptions, source
 
     ``qpos0`` (or the first keyframe), then the values given; a joint whose ``qpos0`` is
     outside its limits is set to their middle (not with a keyframe); followers of
-    ``<equality><joint>`` are set from their leaders; then every value must be within its
-    joint's limits."""
+    ``<equality><joint>`` are set from their leaders; then every value given must be within
+    its joint's limits. A keyframe's own value outside them is kept with a warning: it is
+    the model's data, and MuJoCo starts from it (Menagerie's tetheria hand is 0.0026 rad
+    past a finger's limit in its keyframe)."""
     if options.keyframe:
         if model.nkey == 0:
             raise SceneError("--keyframe: the model has no <keyframe>", source)
@@ -184,8 +186,10 @@ def _configure(mujoco: Any, model: Any, data: Any, options: RobotOptions, source
     configuration = np.array(data.qpos, dtype=np.float64)[None]
     apply_mjcf_followers(model, configuration, followers)
     data.qpos[:] = configuration[0]
-    _check_limits(mujoco, model, data, followers, source)
-    return warnings
+    kept = _check_limits(
+        mujoco, model, data, followers, given if options.keyframe else None, source
+    )
+    return warnings + kept
 
 
 def _scalar_joint(mujoco: Any, model: Any, jid: int) -> bool:
@@ -257,22 +261,38 @@ def _clamp_defaults(
     return warnings
 
 
-def _check_limits(mujoco: Any, model: Any, data: Any, followers: Followers, source: str) -> None:
-    """Every limited hinge and slide joint's value is within its limits (a follower's too)."""
+def _check_limits(
+    mujoco: Any,
+    model: Any,
+    data: Any,
+    followers: Followers,
+    given: set[int] | None,
+    source: str,
+) -> list[str]:
+    """Every limited hinge and slide joint's value is within its limits (a follower's too).
+    ``given``: the joints given on a keyframe (None: no keyframe); a value outside its
+    limits that the keyframe set (a joint not given, a follower of one) is a warning."""
+    warnings: list[str] = []
     for jid in range(model.njnt):
         if not model.jnt_limited[jid] or not _scalar_joint(mujoco, model, jid):
             continue
         lower, upper = (float(x) for x in model.jnt_range[jid])
         value = float(data.qpos[model.jnt_qposadr[jid]])
-        if not lower - JOINT_TOLERANCE <= value <= upper + JOINT_TOLERANCE:
-            how = ""
-            if jid in followers and followers[jid][0] >= 0:
-                how = f" (following {_joint_name(mujoco, model, followers[jid][0])!r})"
-            raise SceneError(
-                f"joint {_joint_name(mujoco, model, jid)!r}: value {value:g}{how} outside its "
-                f"limits [{lower:g}, {upper:g}]",
-                source,
+        if lower - JOINT_TOLERANCE <= value <= upper + JOINT_TOLERANCE:
+            continue
+        leader = followers[jid][0] if jid in followers else -1
+        name, limits = _joint_name(mujoco, model, jid), f"[{lower:g}, {upper:g}]"
+        if given is not None and jid not in given and leader not in given:
+            warnings.append(
+                f"joint {name!r}: the keyframe's value {value:g} is outside its limits "
+                f"{limits}; checked there, as MuJoCo starts from it"
             )
+            continue
+        how = f" (following {_joint_name(mujoco, model, leader)!r})" if leader >= 0 else ""
+        raise SceneError(
+            f"joint {name!r}: value {value:g}{how} outside its limits {limits}", source
+        )
+    return warnings
 
 
 # --- geoms and bodies -------------------------------------------------------------------------

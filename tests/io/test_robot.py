@@ -635,6 +635,33 @@ def test_mjcf_keyframe_and_limits(mjcf):
     assert "joint 'nope' does not exist" in error_line("check", str(mjcf), "--joint", "nope=0")
 
 
+def test_a_keyframe_past_a_limit_is_checked_where_mujoco_starts(mjcf):
+    """A keyframe is the model's own data and MuJoCo starts from it even past a joint's
+    limits (Menagerie's tetheria hand: 0.0026 rad past a finger's), so --keyframe keeps the
+    value with a warning; a value given past a limit is still refused, keyframe or not."""
+    import mujoco
+
+    text = mjcf.read_text().replace('qpos="0.7 0.1"', 'qpos="1.2 0.1"')
+    mjcf.write_text(text)
+    scene = load_robot(mjcf, RobotOptions(keyframe=True))
+    assert any(
+        "joint 'hinge': the keyframe's value 1.2 is outside its limits [-1, 1]" in w
+        for w in scene.warnings
+    )
+    model = mujoco.MjModel.from_xml_path(str(mjcf))
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, 0)
+    mujoco.mj_forward(model, data)
+    lower = model.body("lower").id
+    (body,) = [b for b in scene.bodies if b.name == "lower"]
+    np.testing.assert_allclose(body.pose[:3, 3], data.xpos[lower], atol=1e-12)
+    np.testing.assert_allclose(body.pose[:3, :3], data.xmat[lower].reshape(3, 3), atol=1e-12)
+    line = error_line("check", str(mjcf), "--keyframe", "--joint", "slider=0.5")
+    assert "joint 'slider'" in line and "outside its limits [0, 0.3]" in line
+    code, _, err = run("check", str(mjcf), "--keyframe")
+    assert code in (0, 1) and "the keyframe's value 1.2" in err
+
+
 def test_mjcf_mujoco_rejects(tmp_path):
     pytest.importorskip("mujoco")
     path = write(
