@@ -53,6 +53,18 @@ inline Pose turned_about_z(double angle, double x, double y, double z) {
     return p;
 }
 
+/// Rotation by `angle` radians about x, placed at (x, y, z): its local +z is
+/// (0, -sin, cos).
+inline Pose turned_about_x(double angle, double x, double y, double z) {
+    Pose p = at(x, y, z);
+    const double c = std::cos(angle), s = std::sin(angle);
+    p.rotation.m[1][1] = c;
+    p.rotation.m[1][2] = -s;
+    p.rotation.m[2][1] = s;
+    p.rotation.m[2][2] = c;
+    return p;
+}
+
 inline ShapeView box(double hx, double hy, double hz) {
     ShapeView v;
     v.kind = ShapeKind::BOX;

@@ -10,6 +10,7 @@
 
 using namespace meshcol;
 using fixtures::at;
+using fixtures::turned_about_x;
 
 namespace {
 
@@ -17,18 +18,6 @@ ShapeView half_space() {
     ShapeView s;
     s.kind = ShapeKind::HALFSPACE;
     return s;
-}
-
-// The frame turned by `angle` about x, placed at `t`: its normal (local +z) is
-// (0, -sin, cos).
-Pose tilted(double angle, const Vec3& t) {
-    Pose p = at(t.x, t.y, t.z);
-    const double c = std::cos(angle), s = std::sin(angle);
-    p.rotation.m[1][1] = c;
-    p.rotation.m[1][2] = -s;
-    p.rotation.m[2][1] = s;
-    p.rotation.m[2][2] = c;
-    return p;
 }
 
 }  // namespace
@@ -42,7 +31,7 @@ TEST_CASE("half-space: valid, unbounded, its box bounded only along an axis norm
     CHECK_EQ(hi.z, 0.25);
     CHECK(std::isinf(lo.x) && std::isinf(hi.x) && std::isinf(lo.y) && std::isinf(hi.y));
     CHECK(std::isinf(lo.z) && lo.z < 0.0);
-    world_aabb(h, tilted(0.3, Vec3{0, 0, 0}), lo, hi);
+    world_aabb(h, turned_about_x(0.3, 0, 0, 0), lo, hi);
     CHECK(std::isinf(hi.z) && std::isinf(hi.y) && std::isinf(lo.z));
     CHECK(std::isnan(support_core(h, Vec3{0, 0, 1}).point.x));
 }
@@ -63,7 +52,7 @@ TEST_CASE("half-space: a sphere above, touching and below a floor") {
 
 TEST_CASE("half-space: a turned box against a tilted plane, either order") {
     const double angle = 0.4;
-    const Pose plane = tilted(angle, Vec3{0.0, 1.0, -0.5});
+    const Pose plane = turned_about_x(angle, 0.0, 1.0, -0.5);
     const Vec3 n{0.0, -std::sin(angle), std::cos(angle)};
     const ShapeView box = fixtures::box(0.5, 0.25, 1.0);
     const Pose pose = fixtures::turned_about_z(0.7, 0.2, 0.3, 0.4);

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from strategies import rotation_from_quaternion
 
 mujoco = pytest.importorskip("mujoco", reason="MuJoCo compiles the models (the test extras)")
 
@@ -38,17 +39,6 @@ MESH = np.array(
 def _text(values) -> str:
     """Numbers as MJCF reads them, to the bit."""
     return " ".join(repr(float(v)) for v in np.ravel(values))
-
-
-def _rotation(quat: np.ndarray) -> np.ndarray:
-    w, x, y, z = quat / np.linalg.norm(quat)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
 
 
 #: name -> (MJCF geom attributes, the lowest point's height below the centre along n, given
@@ -78,7 +68,7 @@ QUAT = np.array([0.9, 0.2, -0.3, 0.25])
 def _scene(tmp_path: Path, heights: dict[str, float], extra: str = "", contact: str = "") -> Path:
     """A plane and one free body per shape, each placed so that its lowest point lies
     ``heights[name]`` above the plane (closed form)."""
-    rotation = _rotation(QUAT)
+    rotation = rotation_from_quaternion(QUAT)
     bodies = []
     for k, (name, height) in enumerate(heights.items()):
         attributes, below = SHAPES[name]
@@ -174,11 +164,11 @@ def test_moving_a_body_along_the_normal_moves_its_signed_distance(
     name, axis, quat, where, t, plane_first
 ) -> None:
     plane = np.eye(4)
-    plane[:3, :3] = _rotation(np.array([0.8, *axis]))
+    plane[:3, :3] = rotation_from_quaternion(np.array([0.8, *axis]))
     plane[:3, 3] = [0.2, -0.1, 0.05]
     n = plane[:3, 2]
     body = np.eye(4)
-    body[:3, :3] = _rotation(np.array(quat))
+    body[:3, :3] = rotation_from_quaternion(np.array(quat))
     body[:3, 3] = where
     moved = body.copy()
     moved[:3, 3] += t * n
