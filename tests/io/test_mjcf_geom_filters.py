@@ -266,3 +266,31 @@ def test_unitree_g1_knee_against_the_floor_is_mujocos() -> None:
     ]
     assert row["signed_distance"] == pytest.approx(min(dists), abs=1e-9)
     assert row["signed_distance"] == pytest.approx(0.152, abs=1e-3)
+
+
+def test_a_trimmed_row_is_not_judged_on_the_whole_triangles(tmp_path) -> None:
+    """A ball inside a shell it must not collide with (masks 0, paired with another body
+    only), 0.8 from a knob of the same body: with ``mesh`` colliders too the row is the
+    knob's distance, as MuJoCo's, never the ball ``contained`` in the body's triangles."""
+    corners = " ".join(f"{x} {y} {z}" for x in (-1, 1) for y in (-1, 1) for z in (-1, 1))
+    xml = (
+        f'<mujoco><asset><mesh name="cube" vertex="{corners}"/></asset><worldbody>'
+        '<body name="a"><freejoint/>'
+        '<geom name="shell" type="mesh" mesh="cube" contype="0" conaffinity="0"/>'
+        '<geom name="knob" type="sphere" size="0.1" pos="-0.5 0 0"/></body>'
+        '<body name="b"><freejoint/><geom name="ball" type="sphere" size="0.1" pos="0.5 0 0"/>'
+        "</body>"
+        '<body name="c" pos="5 0 0"><freejoint/>'
+        '<geom name="far" type="sphere" size="0.1" contype="0" conaffinity="0"/></body>'
+        '</worldbody><contact><pair geom1="shell" geom2="far"/></contact></mujoco>'
+    )
+    path = tmp_path / "shell.xml"
+    path.write_text(xml)
+    theirs = _mujoco_contacts(path)
+    assert set(theirs) == {frozenset(("knob", "ball")), frozenset(("shell", "far"))}
+    for collider in ("hull", "mesh"):
+        report = check(str(path), clearance=1.0, collider=collider).to_dict()
+        (row,) = [r for r in report["pairs"] if {r["body_a"], r["body_b"]} == {"a", "b"}]
+        assert row["status"] == "clearance", collider
+        expected = theirs[frozenset(("knob", "ball"))]
+        assert row["signed_distance"] == pytest.approx(expected, abs=1e-9), collider
