@@ -596,12 +596,31 @@ class PartPairIndex:
     starts: np.ndarray
 
     @classmethod
-    def of(cls, body_pairs: np.ndarray, offsets: np.ndarray) -> PartPairIndex:
+    def of(
+        cls,
+        body_pairs: np.ndarray,
+        offsets: np.ndarray,
+        colliders: Any = None,
+        part_filter: PartFilter | None = None,
+    ) -> PartPairIndex:
+        """The index; with ``part_filter`` (and the ``colliders`` it names parts of), only
+        the part pairs it allows (:func:`filter_parts`' rule)."""
         a, b = body_pairs[:, 0], body_pairs[:, 1]
         sizes = ((offsets[a + 1] - offsets[a]) * (offsets[b + 1] - offsets[b])).astype(np.int64)
+        part_pairs = cartesian_part_pairs(body_pairs, offsets)
+        if part_filter is not None and len(part_pairs):
+            from meshcol.analysis.part_filter import part_geoms
+
+            owner = colliders.part_body
+            names = body_names(colliders.bodies)
+            ok = part_geoms(part_filter, names, owner, colliders.part_label).allowed(
+                part_pairs, owner
+            )
+            row = np.repeat(np.arange(len(body_pairs)), sizes)
+            part_pairs, sizes = part_pairs[ok], np.bincount(row[ok], minlength=len(body_pairs))
         starts = np.zeros(len(sizes), dtype=np.int64)
         np.cumsum(sizes[:-1], out=starts[1:])
-        return cls(body_pairs, cartesian_part_pairs(body_pairs, offsets), sizes, starts)
+        return cls(body_pairs, part_pairs, sizes.astype(np.int64), starts)
 
     def expand(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The part pairs of the body pairs ``rows`` (repeats allowed), in order: ``(owner,

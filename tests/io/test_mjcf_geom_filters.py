@@ -294,3 +294,30 @@ def test_a_trimmed_row_is_not_judged_on_the_whole_triangles(tmp_path) -> None:
         assert row["status"] == "clearance", collider
         expected = theirs[frozenset(("knob", "ball"))]
         assert row["signed_distance"] == pytest.approx(expected, abs=1e-9), collider
+
+
+def test_the_collision_matrix_pairs_geoms_as_mujoco(tmp_path) -> None:
+    """A shield of the arm that overlaps the post at every angle, masks 0 and paired with
+    a far body only: MuJoCo never collides arm and post (their allowed geoms are 1 m
+    apart), so the sampled matrix says ``never``, not ``default`` (colliding at qpos0)."""
+    xml = (
+        "<mujoco><worldbody>"
+        '<body name="post" pos="0 0 0"><geom name="pole" type="sphere" size="0.2"/></body>'
+        '<body name="arm" pos="0 0 0"><joint type="hinge" axis="0 0 1"/>'
+        '<geom name="shield" type="sphere" size="0.5" contype="0" conaffinity="0"/>'
+        '<geom name="tip" type="sphere" size="0.1" pos="1.3 0 0"/></body>'
+        '<body name="far" pos="9 0 0"><geom name="rock" type="sphere" size="0.1" '
+        'contype="0" conaffinity="0"/></body>'
+        '</worldbody><contact><pair geom1="shield" geom2="rock"/></contact></mujoco>'
+    )
+    path = tmp_path / "arm.xml"
+    path.write_text(xml)
+    from meshcol.analysis.collision_matrix import collision_matrix
+
+    report = collision_matrix(path, samples=50, seed=1)
+    classes = {frozenset((p["link_a"], p["link_b"])): p["class"] for p in report.pairs}
+    assert classes[frozenset(("arm", "post"))] == "never"
+    assert set(_mujoco_contacts(path)) == {
+        frozenset(("tip", "pole")),
+        frozenset(("shield", "rock")),
+    }
