@@ -76,9 +76,9 @@ def part_geoms(
         if body is not None and ids:
             starts[body] = len(flat)
             flat.extend(ids)
-    table = np.asarray(flat + [-1], dtype=np.int64)
+    table = np.asarray(flat + [-1], dtype=np.int64)  # the last: no geom
     first = starts[part_body]
-    geom = np.where(first >= 0, table[np.maximum(first, 0) + np.maximum(part_label, 0)], -1)
+    geom = table[np.where(first >= 0, first + np.maximum(part_label, 0), len(flat))]
     n_geoms = len(part_filter.contype)
     pairs = np.asarray(part_filter.explicit, dtype=np.int64).reshape(-1, 2)
     explicit = np.unique(pairs.min(axis=1) * n_geoms + pairs.max(axis=1))

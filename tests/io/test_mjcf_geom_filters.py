@@ -321,3 +321,18 @@ def test_the_collision_matrix_pairs_geoms_as_mujoco(tmp_path) -> None:
         frozenset(("tip", "pole")),
         frozenset(("shield", "rock")),
     }
+
+
+def test_bodies_the_filter_does_not_name_are_not_filtered() -> None:
+    """A body of many parts the filter does not name (another reader's): its parts have no
+    geom, and every pair with them is allowed; the named body's parts are theirs."""
+    from meshcol.analysis.part_filter import part_geoms
+    from meshcol.types import PartFilter
+
+    masks = PartFilter(geoms=(("a", (0, 1)),), contype=(1, 0), conaffinity=(1, 0))
+    geoms = part_geoms(
+        masks, ["a", "mesh"], np.array([0, 0, 1, 1, 1, 1]), np.array([0, 1, 0, 1, 2, 3])
+    )
+    assert geoms.geom.tolist() == [0, 1, -1, -1, -1, -1]
+    pairs = np.array([[0, 2], [1, 5], [1, 3]])
+    assert geoms.allowed(pairs, np.array([0, 0, 1, 1, 1, 1])).tolist() == [True] * 3
