@@ -17,6 +17,7 @@ every contact (MuJoCo collides nothing there; meshcol checks the geometry), plan
 largest |difference| of the pairs in both (by the other body's geom kinds).
 
     .venv/bin/python benchmarks/plane_wild.py [--meshcol .venv/bin/meshcol] [--show 10]
+        [--only unitree_g1 --only apollo]
 """
 
 from __future__ import annotations
@@ -136,6 +137,9 @@ def main() -> int:
     parser.add_argument("--meshcol", default=str(Path(sys.executable).parent / "meshcol"))
     parser.add_argument("--site", default=str(Path(np.__file__).parents[1]))
     parser.add_argument("--show", type=int, default=10, help="worst differences listed")
+    parser.add_argument(
+        "--only", action="append", default=[], help="scenes whose path holds this (repeatable)"
+    )
     args = parser.parse_args()
     site = Path(args.site)
     exits: Counter[str] = Counter()
@@ -144,6 +148,8 @@ def main() -> int:
     by_kind: dict[str, float] = {}
     misses: list[str] = []
     for path in scenes(site):
+        if args.only and not any(part in str(path) for part in args.only):
+            continue
         keyframe = compiles(path) and mujoco.MjModel.from_xml_path(str(path)).nkey > 0
         run, report = _check(args.meshcol, path, keyframe)
         code = run.returncode

@@ -26,6 +26,7 @@ __all__ = [
     "Cylinder",
     "Ellipsoid",
     "HalfSpace",
+    "PartFilter",
     "PartPrimitive",
     "Primitive",
     "Scene",
@@ -596,6 +597,36 @@ for _name in ("vertices", "faces"):
     setattr(Body, _name, _Tessellation(_name))
 
 
+@dataclass(frozen=True)
+class PartFilter:
+    """Which part pairs of two bodies may collide, geom by geom, as MuJoCo filters them
+    (an MJCF's ``contype``/``conaffinity`` and ``<contact><pair>``; :mod:`meshcol.io.mjcf`).
+
+    Two parts collide when they are an explicit pair, or when their masks pass the bitmask
+    rule (``contype_1 & conaffinity_2 || contype_2 & conaffinity_1``) and their bodies are
+    not one of ``explicit_only``. Bodies it does not name are not filtered.
+
+    Attributes
+    ----------
+    geoms : tuple of (str, tuple of int)
+        Per body name, the geom id of each named part (``Body.parts`` order; one for a body
+        of one part).
+    contype, conaffinity : tuple of int
+        Per geom id, its masks.
+    explicit : tuple of (int, int)
+        The geom pairs ``<contact><pair>`` names: collided whatever their masks.
+    explicit_only : tuple of (str, str)
+        Body pairs whose geoms collide only as explicit pairs (welded, parent and child,
+        ``<exclude>``: filters a ``<pair>`` overrides for its own two geoms only).
+    """
+
+    geoms: tuple[tuple[str, tuple[int, ...]], ...]
+    contype: tuple[int, ...]
+    conaffinity: tuple[int, ...]
+    explicit: tuple[tuple[int, int], ...] = ()
+    explicit_only: tuple[tuple[str, str], ...] = ()
+
+
 @dataclass(frozen=True, eq=False)
 class Scene:
     """Bodies to analyse together.
@@ -618,6 +649,9 @@ class Scene:
         (:mod:`meshcol.io.robot`). Empty for manifests and mesh files.
     warnings : tuple of str
         What reading the scene could not do as asked, one line each (reports repeat them).
+    part_filter : PartFilter or None
+        Which part pairs of a measured body pair may collide (an MJCF's geom filters);
+        None: every one.
     """
 
     bodies: Sequence[Body]
@@ -626,6 +660,7 @@ class Scene:
     duration: float | None = None
     excluded_pairs: tuple[tuple[str, str, str], ...] = ()
     warnings: tuple[str, ...] = ()
+    part_filter: PartFilter | None = None
 
 
 def unique_name(name: str, used: dict[str, int]) -> str:

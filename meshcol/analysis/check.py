@@ -122,7 +122,7 @@ def check_scene(
     report(f"{len(colliders.bodies)} bodies, {len(colliders.part_body)} convex parts")
     # the broad phase pairs bodies within the clearance band and the contact tolerance
     margin = options.clearance + options.tolerance
-    table = broad_phase(placed, margin, scene.excluded_pairs, options.max_pairs)
+    table = broad_phase(placed, margin, scene.excluded_pairs, options.max_pairs, scene.part_filter)
     table = narrow_phase(table, placed, options)
     table = classify(table, options.tolerance, options.clearance)
     table = apply_policy(table, body_names(colliders.bodies), options)

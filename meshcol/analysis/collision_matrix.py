@@ -352,6 +352,7 @@ class _Sampler:
         batch: int,
         threads: int,
         skip: np.ndarray | None = None,
+        part_filter: Any = None,
     ) -> None:
         self.kinematics = kinematics
         self.colliders = colliders
@@ -366,8 +367,11 @@ class _Sampler:
         self.pairs = np.stack([i, j], axis=1).astype(np.int64)
         # pairs never measured (adjacent links: never checked, as MoveIt's setup assistant)
         self.skip = np.zeros(len(self.pairs), bool) if skip is None else np.asarray(skip, bool)
-        # Every part pair of every link pair, grouped by link pair (computed once).
-        self.index = PartPairIndex.of(self.pairs, colliders.body_part_offsets)
+        # Every part pair of every link pair, grouped by link pair (computed once); an MJCF's
+        # only those its geom filters let collide (Scene.part_filter)
+        self.index = PartPairIndex.of(
+            self.pairs, colliders.body_part_offsets, colliders, part_filter
+        )
         self.tiled = colliders.shapes.take(np.tile(np.arange(self.h), batch))
         local_lo, local_hi = colliders.shapes.aabbs(None)
         self.local_centre = 0.5 * (local_lo + local_hi)
@@ -529,6 +533,7 @@ def _sampler(links: _RobotLinks, options: MatrixOptions) -> _Sampler:
         _batch(options, len(colliders.shapes.vertices), len(i)),
         options.threads,
         skip,
+        links.scene.part_filter,
     )
 
 

@@ -32,7 +32,8 @@ def _exact_rows(
     """``(mesh, exact)`` row masks: rows with a ``mesh`` body, and those plus the convex rows
     that may nest (touching or overlapping, one body's box inside the other's). A row with a
     plane's half-space is neither: the convex phase measured it exactly (a mesh body's
-    lowest point is its hull's), and a body below a floor is penetrating it, never nested."""
+    lowest point is its hull's), and a body below a floor is penetrating it, never nested.
+    Nor is a ``partial`` row: its bodies' whole triangles hold parts it must not measure."""
     a, b = table.body_a, table.body_b
     kinds = placed.colliders.kinds  # compared in a C loop (a million bodies)
     mesh_bodies = np.fromiter(map(operator.eq, kinds, itertools.repeat("mesh")), bool, len(kinds))
@@ -41,6 +42,8 @@ def _exact_rows(
     a_in_b = np.all((lo[a] >= lo[b]) & (hi[a] <= hi[b]), axis=1)
     b_in_a = np.all((lo[b] >= lo[a]) & (hi[b] <= hi[a]), axis=1)
     nested = (table.signed_distance <= tolerance) & ~mesh & (a_in_b | b_in_a)
+    if table.partial.any():  # some part pairs filtered out: the allowed ones' answer stands
+        mesh, nested = mesh & ~table.partial, nested & ~table.partial
     if HALF_SPACE_COLLIDER in kinds:
         plane = np.fromiter(
             map(operator.eq, kinds, itertools.repeat(HALF_SPACE_COLLIDER)), bool, len(kinds)

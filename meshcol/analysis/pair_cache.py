@@ -11,6 +11,9 @@ pairs this cache has no answer for. Each pair's answer is keyed by (:func:`pair_
 - both bodies' world poses (the parts' world poses, to the bit);
 - the settings the narrow phase reads: the tolerance and the broad-phase margin (which part
   pairs are measured), in the pair's orientation (a normal points from ``a`` to ``b``);
+- for a row the scene's part filter trimmed (``PairTable.partial``: an MJCF's geom
+  filters), the part pairs it measures (their indices within the bodies): a change of
+  ``contype``, ``conaffinity`` or ``<pair>`` leaves geometry and poses as they were;
 - meshcol's version and :data:`FORMAT_VERSION`.
 
 So a body that moved, was reshaped, added or removed changes the keys of exactly the pairs it
@@ -104,11 +107,30 @@ def pair_keys(table: PairTable, placed: PlacedColliders, settings: bytes) -> np.
     """(k,) ``S32``: each row's key, SHA-256 of ``settings`` and the digests of body ``a``
     then body ``b`` (the orientation is part of the answer)."""
     digests = body_digests(placed, np.concatenate([table.body_a, table.body_b]))
+    trimmed = _trimmed_parts(table, placed)
     keys = [
-        hashlib.sha256(settings + digests[a] + digests[b]).digest()
-        for a, b in zip(table.body_a.tolist(), table.body_b.tolist())
+        hashlib.sha256(settings + digests[a] + digests[b] + trimmed.get(row, b"")).digest()
+        for row, (a, b) in enumerate(zip(table.body_a.tolist(), table.body_b.tolist()))
     ]
     return np.array(keys, dtype=f"S{KEY_BYTES}") if keys else np.zeros(0, f"S{KEY_BYTES}")
+
+
+def _trimmed_parts(table: PairTable, placed: PlacedColliders) -> dict[int, bytes]:
+    """``row -> bytes`` of each ``partial`` row's part pairs (indices within their bodies,
+    sorted), the part filter's choice, which geometry and poses do not fix."""
+    rows = np.flatnonzero(table.partial)
+    if len(rows) == 0:
+        return {}
+    index = placed.colliders.part_index
+    mine = np.isin(table.part_row, rows)
+    row, pairs = table.part_row[mine], index[table.part_pairs[mine]]
+    order = np.lexsort((pairs[:, 1], pairs[:, 0], row))
+    row, pairs = row[order], np.ascontiguousarray(pairs[order], dtype=np.int64)
+    bounds = np.searchsorted(row, rows, side="left"), np.searchsorted(row, rows, side="right")
+    return {
+        r: b"partial\0" + pairs[start:end].tobytes()
+        for r, start, end in zip(rows.tolist(), bounds[0].tolist(), bounds[1].tolist())
+    }
 
 
 def select_rows(table: PairTable, rows: np.ndarray) -> PairTable:

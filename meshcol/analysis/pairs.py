@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from meshcol.io.column_bodies import body_names
-from meshcol.types import Status
+from meshcol.types import PartFilter, Status
 from meshcol.vocabulary import PAIR_STATUSES
 
 __all__ = [
@@ -54,6 +54,7 @@ __all__ = [
     "classify",
     "convex_phase",
     "excluded_mask",
+    "filter_parts",
     "overlapping_pairs",
     "place",
 ]
@@ -117,6 +118,10 @@ class PairTable:
         status -1 until measured. For two bodies of one convex part each, that pair is the
         bodies' enclosing sets, whose depth :func:`~meshcol.analysis.depth_bounds.
         depth_bounds` then reads here instead of measuring it again.
+    partial : (k,) bool
+        The scene's part filter (:class:`~meshcol.types.PartFilter`) left some of the row's
+        part pairs out: it is measured on its allowed convex part pairs only, never on the
+        bodies' whole triangles (:func:`~meshcol.analysis.mesh_phase.mesh_phase`).
     """
 
     body_a: np.ndarray
@@ -145,6 +150,7 @@ class PairTable:
     convex_depth: np.ndarray
     convex_normal: np.ndarray
     convex_status: np.ndarray
+    partial: np.ndarray
 
     @classmethod
     def of_candidates(
@@ -183,6 +189,7 @@ class PairTable:
             convex_depth=np.full(k, np.nan),
             convex_normal=np.full((k, 3), np.nan),
             convex_status=np.full(k, -1, dtype=np.int64),
+            partial=np.zeros(k, dtype=bool),
         )
 
     def __len__(self) -> int:
@@ -458,13 +465,15 @@ def broad_phase(
     margin: float,
     excluded: Sequence[tuple[str, str, str]] = (),
     max_pairs: int | None = None,
+    part_filter: PartFilter | None = None,
 ) -> PairTable:
     """Candidate body pairs and the part pairs to measure for each.
 
     Body pairs whose boxes, grown by ``margin``, overlap (:func:`overlapping_pairs`), less
     those ``excluded`` names; for each, the part pairs whose boxes overlap the same way (parts
     of one body never pair), or every part pair when none does (so that every candidate gets
-    a distance).
+    a distance). With a ``part_filter`` (an MJCF's geom filters), only the part pairs it
+    allows (:func:`filter_parts`).
 
     Raises
     ------
@@ -474,6 +483,19 @@ def broad_phase(
         per ``excluded`` entry (the most the exclusions could remove), so that a pile of
         bodies never fills memory with its pairs; within that, the exact count is named.
     """
+    table = _candidates(placed, margin, excluded, max_pairs)
+    if part_filter is None or len(table) == 0:
+        return table
+    return filter_parts(table, placed.colliders, part_filter)
+
+
+def _candidates(
+    placed: PlacedColliders,
+    margin: float,
+    excluded: Sequence[tuple[str, str, str]],
+    max_pairs: int | None,
+) -> PairTable:
+    """:func:`broad_phase` without a part filter."""
     from meshcol.errors import TooManyPairsError
 
     colliders = placed.colliders
@@ -515,6 +537,45 @@ def broad_phase(
     return PairTable.of_candidates(body_pairs, part_pairs, part_row, int(left_out.sum()))
 
 
+def filter_parts(table: PairTable, colliders: Any, part_filter: PartFilter) -> PairTable:
+    """The candidates with only the part pairs ``part_filter`` allows (MuJoCo's per-geom
+    test). A row whose box-overlapping part pairs are all left out gets every allowed one
+    (as a row whose boxes never meet gets every one); a row with none allowed is dropped and
+    counted excluded (an MJCF's reader excludes such body pairs already, with their reason);
+    ``partial`` marks the rows some part pair of which is left out."""
+    from meshcol.analysis.part_filter import part_geoms
+
+    owner = colliders.part_body
+    filt = part_geoms(part_filter, body_names(colliders.bodies), owner, colliders.part_label)
+    body_pairs = table.body_pairs
+    every = cartesian_part_pairs(body_pairs, colliders.body_part_offsets)
+    offsets = colliders.body_part_offsets
+    sizes = (offsets[body_pairs[:, 0] + 1] - offsets[body_pairs[:, 0]]) * (
+        offsets[body_pairs[:, 1] + 1] - offsets[body_pairs[:, 1]]
+    )
+    every_row = np.repeat(np.arange(len(table)), sizes)
+    every_ok = filt.allowed(every, owner)
+    allowed = np.bincount(every_row[every_ok], minlength=len(table))
+    partial = np.bincount(every_row[~every_ok], minlength=len(table)) > 0
+    if not partial.any():
+        return table
+    ok = filt.allowed(table.part_pairs, owner)
+    part_pairs, part_row = table.part_pairs[ok], table.part_row[ok]
+    bare = np.bincount(part_row, minlength=len(table)) == 0
+    refill = every_ok & bare[every_row]  # rows whose overlapping pairs were all left out
+    part_pairs = np.concatenate([part_pairs, every[refill]])
+    part_row = np.concatenate([part_row, every_row[refill]])
+    kept = allowed > 0
+    renumber = np.cumsum(kept) - 1
+    out = PairTable.of_candidates(
+        body_pairs[kept],
+        part_pairs,
+        renumber[part_row],
+        table.excluded_pairs + int((~kept).sum()),
+    )
+    return dataclasses.replace(out, partial=partial[kept])
+
+
 @dataclass(frozen=True, eq=False)
 class PartPairIndex:
     """Every part pair of every listed body pair, grouped by body pair (computed once, for
@@ -535,12 +596,31 @@ class PartPairIndex:
     starts: np.ndarray
 
     @classmethod
-    def of(cls, body_pairs: np.ndarray, offsets: np.ndarray) -> PartPairIndex:
+    def of(
+        cls,
+        body_pairs: np.ndarray,
+        offsets: np.ndarray,
+        colliders: Any = None,
+        part_filter: PartFilter | None = None,
+    ) -> PartPairIndex:
+        """The index; with ``part_filter`` (and the ``colliders`` it names parts of), only
+        the part pairs it allows (:func:`filter_parts`' rule)."""
         a, b = body_pairs[:, 0], body_pairs[:, 1]
         sizes = ((offsets[a + 1] - offsets[a]) * (offsets[b + 1] - offsets[b])).astype(np.int64)
+        part_pairs = cartesian_part_pairs(body_pairs, offsets)
+        if part_filter is not None and len(part_pairs):
+            from meshcol.analysis.part_filter import part_geoms
+
+            owner = colliders.part_body
+            names = body_names(colliders.bodies)
+            ok = part_geoms(part_filter, names, owner, colliders.part_label).allowed(
+                part_pairs, owner
+            )
+            row = np.repeat(np.arange(len(body_pairs)), sizes)
+            part_pairs, sizes = part_pairs[ok], np.bincount(row[ok], minlength=len(body_pairs))
         starts = np.zeros(len(sizes), dtype=np.int64)
         np.cumsum(sizes[:-1], out=starts[1:])
-        return cls(body_pairs, cartesian_part_pairs(body_pairs, offsets), sizes, starts)
+        return cls(body_pairs, part_pairs, sizes.astype(np.int64), starts)
 
     def expand(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The part pairs of the body pairs ``rows`` (repeats allowed), in order: ``(owner,

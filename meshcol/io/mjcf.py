@@ -47,6 +47,7 @@ from meshcol.types import (
     Cylinder,
     Ellipsoid,
     HalfSpace,
+    PartFilter,
     Primitive,
     Scene,
     Sphere,
@@ -138,17 +139,20 @@ class MjcfRead:
         model, names = self._model, self._names
         geoms = _geoms_by_body(self._mujoco, model, self._data, visual)
         bodies = _bodies(model, self._data, names, geoms, self.source, sink)
-        excluded = _exclusions(model, names, self._options.include_adjacent)
+        overridden: list[tuple[str, str]] = []
+        excluded = _exclusions(model, names, self._options.include_adjacent, overridden)
+        planes: list[tuple[Body, int]] = []
         if self._options.half_spaces and not visual:
             planes = _planes(self._mujoco, model, self._data, names, bodies, self.source)
             bodies.extend(body for body, _ in planes)
-            excluded.extend(_plane_exclusions(model, names, bodies, planes))
+            excluded.extend(_plane_exclusions(model, names, bodies, planes, overridden))
         return Scene(
             bodies=tuple(bodies),
             units="m",
             source=self.source,
             excluded_pairs=tuple(excluded),
             warnings=tuple(self._warnings),
+            part_filter=None if visual else _part_filter(model, names, geoms, planes, overridden),
         )
 
 
@@ -376,7 +380,12 @@ def _bodies(
     return bodies
 
 
-def _exclusions(model: Any, names: list[str], include_adjacent: bool) -> list[tuple[str, str, str]]:
+def _exclusions(
+    model: Any,
+    names: list[str],
+    include_adjacent: bool,
+    overridden: list[tuple[str, str]] | None = None,
+) -> list[tuple[str, str, str]]:
     """The body pairs MuJoCo never collides (``mj_collision``'s filters), each with its reason:
 
     - ``adjacent``: parent and child bodies (never the world body's children), unless
@@ -387,6 +396,9 @@ def _exclusions(model: Any, names: list[str], include_adjacent: bool) -> list[tu
     - ``mjcf contype/conaffinity``: bodies no geom pair of which passes MuJoCo's bitmask rule
       (``contype_a & conaffinity_b || contype_b & conaffinity_a``, after the compiler resolved
       defaults and classes), unless a ``<contact><pair>`` names two of their geoms.
+
+    A pair a ``<contact><pair>`` brings back goes to ``overridden`` (once): only its explicit
+    geom pairs collide there (:func:`_part_filter`).
     """
     excluded: list[tuple[str, str, str]] = []
     if not include_adjacent:
@@ -400,6 +412,9 @@ def _exclusions(model: Any, names: list[str], include_adjacent: bool) -> list[tu
     excluded.extend(_filtered_pairs(model, names))
     # An explicit <contact><pair> is collided whatever else says (parent and child, <exclude>).
     explicit = {frozenset((names[a], names[b])) for a, b in _explicit_body_pairs(model)}
+    if overridden is not None:
+        back = {frozenset(pair[:2]) for pair in excluded} & explicit
+        overridden.extend(sorted((min(pair), max(pair)) for pair in back))
     return [pair for pair in excluded if frozenset(pair[:2]) not in explicit]
 
 
@@ -458,7 +473,11 @@ def _planes(
 
 
 def _plane_exclusions(
-    model: Any, names: list[str], bodies: list[Body], planes: list[tuple[Body, int]]
+    model: Any,
+    names: list[str],
+    bodies: list[Body],
+    planes: list[tuple[Body, int]],
+    overridden: list[tuple[str, str]] | None = None,
 ) -> list[tuple[str, str, str]]:
     """The pairs of each plane body (:func:`_planes`) with every other body that
     ``mj_collision`` never tests, with their reasons, as :func:`_exclusions` words them:
@@ -466,7 +485,8 @@ def _plane_exclusions(
     collides two static geoms; every other plane), ``mjcf contype/conaffinity`` (the plane
     geom's own masks against the OR of the body's), ``mjcf <exclude>`` (the plane's body and
     the other), ``adjacent`` never (a plane lives in a static body, MuJoCo's own rule), and
-    none for a body a ``<contact><pair>`` pairs with the plane geom."""
+    none for a body a ``<contact><pair>`` pairs with the plane geom (to ``overridden`` when
+    a filter would have left it out, as :func:`_exclusions` does)."""
     contype = np.asarray(model.geom_contype, dtype=np.int64)
     conaffinity = np.asarray(model.geom_conaffinity, dtype=np.int64)
     geom_body = np.asarray(model.geom_bodyid, dtype=np.int64)
@@ -489,8 +509,7 @@ def _plane_exclusions(
                 continue
             b = mj_body[other.name]
             own = solids[geom_body[solids] == b]
-            if any(frozenset((g, int(h))) in explicit for h in own.tolist()):
-                continue
+            reason = None
             if weld[b] == weld[home]:
                 reason = "mjcf welded"
             elif not (
@@ -500,9 +519,11 @@ def _plane_exclusions(
                 reason = "mjcf contype/conaffinity"
             elif frozenset((home, b)) in excluded_bodies:
                 reason = "mjcf <exclude>"
-            else:
-                continue
-            excluded.append((plane.name, other.name, reason))
+            if any(frozenset((g, int(h))) in explicit for h in own.tolist()):
+                if reason is not None and overridden is not None:
+                    overridden.append((plane.name, other.name))
+            elif reason is not None:
+                excluded.append((plane.name, other.name, reason))
     return excluded
 
 
@@ -538,3 +559,27 @@ def _filtered_pairs(model: Any, names: list[str]) -> list[tuple[str, str, str]]:
             reason = "mjcf welded" if welded[k] else "mjcf contype/conaffinity"
             pairs.append((names[a], names[int(bodies[i + 1 + k])], reason))
     return pairs
+
+
+def _part_filter(
+    model: Any,
+    names: list[str],
+    geoms: dict[int, list[_Geom]],
+    planes: list[tuple[Body, int]],
+    overridden: list[tuple[str, str]],
+) -> PartFilter:
+    """The scene's per-geom filter (:class:`~meshcol.types.PartFilter`): each body's parts'
+    geom ids (a plane's body its plane geom), every geom's masks, the explicit geom pairs,
+    and the body pairs only those collide in (``overridden``). Within a measured body pair,
+    MuJoCo tests a geom pair only when its masks pass or a ``<pair>`` names it: a body's
+    other geoms are not measured against a geom it pairs with (unitree_g1's knee braces
+    against the floor paired with its shin)."""
+    owned = [(names[b], tuple(geom.geom_id for geom in geoms[b])) for b in sorted(geoms)]
+    owned.extend((body.name, (g,)) for body, g in planes)
+    return PartFilter(
+        geoms=tuple(owned),
+        contype=tuple(int(v) for v in model.geom_contype),
+        conaffinity=tuple(int(v) for v in model.geom_conaffinity),
+        explicit=tuple((int(a), int(b)) for a, b in zip(model.pair_geom1, model.pair_geom2)),
+        explicit_only=tuple(overridden),
+    )
