@@ -42,27 +42,27 @@ inline Pose at(double x, double y, double z) {
     return p;
 }
 
-/// Rotation by `angle` radians about z, placed at (x, y, z).
-inline Pose turned_about_z(double angle, double x, double y, double z) {
+/// Rotation by `angle` radians in the plane of axes `i` and `j` (from i towards j), placed
+/// at (x, y, z).
+inline Pose turned(int i, int j, double angle, double x, double y, double z) {
     Pose p = at(x, y, z);
     const double c = std::cos(angle), s = std::sin(angle);
-    p.rotation.m[0][0] = c;
-    p.rotation.m[0][1] = -s;
-    p.rotation.m[1][0] = s;
-    p.rotation.m[1][1] = c;
+    p.rotation.m[i][i] = c;
+    p.rotation.m[i][j] = -s;
+    p.rotation.m[j][i] = s;
+    p.rotation.m[j][j] = c;
     return p;
+}
+
+/// Rotation by `angle` radians about z, placed at (x, y, z).
+inline Pose turned_about_z(double angle, double x, double y, double z) {
+    return turned(0, 1, angle, x, y, z);
 }
 
 /// Rotation by `angle` radians about x, placed at (x, y, z): its local +z is
 /// (0, -sin, cos).
 inline Pose turned_about_x(double angle, double x, double y, double z) {
-    Pose p = at(x, y, z);
-    const double c = std::cos(angle), s = std::sin(angle);
-    p.rotation.m[1][1] = c;
-    p.rotation.m[1][2] = -s;
-    p.rotation.m[2][1] = s;
-    p.rotation.m[2][2] = c;
-    return p;
+    return turned(1, 2, angle, x, y, z);
 }
 
 inline ShapeView box(double hx, double hy, double hz) {
