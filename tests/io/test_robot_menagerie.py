@@ -170,6 +170,7 @@ def test_rebuilt_mesh_colliders_ignore_the_mjcf_default_mesh_scale(tmp_path, com
     assert "boundmass" not in (out / "mm.xml").read_text()  # its masses were 1e9 too small
 
 
+@pytest.mark.slow  # 6.5 s where the Menagerie wheel is installed: make test runs it
 def test_hull_of_robotis_op3_contains_its_collision_meshes(tmp_path):
     """Menagerie's op3 (STL in millimetres, ``<default><mesh scale="0.001 ...">``): every
     collision mesh vertex (MuJoCo's reading of the input) lies in one of its body's hulls
