@@ -90,26 +90,23 @@ def _read_indexed(file: Path, source: str, kind: str) -> list[IndexedNode]:
 
 
 def _one_mesh(primitives: list[MeshNode]) -> tuple[np.ndarray, object, object]:
-    """``(matrix, vertices, faces)`` of one node's primitives (trimesh's frames of them) as
-    one mesh: a node is one object, its primitives the parts drawn with different
-    materials. So a node is one body, as a COLLADA node of several geometries is, as a rigid
-    body's collider is in the physics extensions, and as engines import a node (a mesh of
-    submeshes); the two primitives of Genesis's camera.glb were checked as two bodies
-    penetrating each other. trimesh gives the primitives the node's frame; frames that
-    differ are baked (the body then in world coordinates, no inverse of a flat scale)."""
+    """``(matrix, vertices, faces)`` of one node's primitives as one mesh: a node is one
+    object, its primitives the parts drawn with different materials. So a node is one body,
+    as a COLLADA node of several geometries is, as a rigid body's collider is in the
+    physics extensions, and as engines import a node (a mesh of submeshes); the two
+    primitives of Genesis's camera.glb were checked as two bodies penetrating each other.
+    trimesh hangs each primitive under the node with an identity matrix, so all share the
+    node's frame (the first's)."""
     matrix = primitives[0][1]
     if len(primitives) == 1:
         return matrix, primitives[0][2], primitives[0][3]
-    same = all(np.array_equal(node[1], matrix) for node in primitives)
     blocks_v, blocks_f, base = [], [], 0
-    for _, frame, points, triangles, _ in primitives:
+    for _, _, points, triangles, _ in primitives:
         points = np.asarray(points, dtype=np.float64)
-        if not same:
-            points = points @ frame[:3, :3].T + frame[:3, 3]
         blocks_v.append(points)
         blocks_f.append(np.asarray(triangles, dtype=np.int64) + base)
         base += len(points)
-    return (matrix if same else np.eye(4)), np.concatenate(blocks_v), np.concatenate(blocks_f)
+    return matrix, np.concatenate(blocks_v), np.concatenate(blocks_f)
 
 
 def _own_name(document: Any, k: int) -> str | None:

@@ -317,7 +317,10 @@ def test_a_node_of_several_primitives_is_one_body_named_the_same_every_read(
     a different name each read (and --to gltf-physics could not find them again). A node is
     one object: its primitives (material groups) are one body, never a pair of their own,
     and the body keeps its name through --to gltf-physics."""
-    nodes = [{"name": "rack", "mesh": 1}, {"name": "bin", "mesh": 0, "translation": [3, 0, 0]}]
+    nodes = [
+        {"name": "rack", "mesh": 1, "translation": [0, 2, 0]},
+        {"name": "bin", "mesh": 0, "translation": [3, 0, 0]},
+    ]
     path = tmp_path / "rack.gltf"
     path.write_text(json.dumps(cube_document(nodes, [0, 1], primitives=2)))
     first, again = ([b.name for b in load_mesh(path)] for _ in range(2))
@@ -325,6 +328,10 @@ def test_a_node_of_several_primitives_is_one_body_named_the_same_every_read(
     assert first == ["rack/rack", "rack/bin"]  # the document's node order
     rack = load_mesh(path)[0]
     assert len(rack.faces) == 24  # both primitives (their equal corners merged on reading)
+    world = rack.world_vertices()  # in the node's frame: the unit cube moved up by 2
+    np.testing.assert_allclose(
+        [world.min(axis=0), world.max(axis=0)], [[-0.5, 1.5, -0.5], [0.5, 2.5, 0.5]]
+    )
     code, out, err = run("check", str(path), "--report", "-")
     assert code == 0 and penetrating(json.loads(out)) == set(), err  # the two cubes: one body
     # --to gltf-physics finds each body's node again by its name (it could not: exit 2)
